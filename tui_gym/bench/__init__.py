@@ -1,0 +1,1 @@
+"""Benchmarks behind `tui-gym bench`: they print figures, never assert."""

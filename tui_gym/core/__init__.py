@@ -1,0 +1,1 @@
+"""Everything that is not drawing: no textual import anywhere below here."""

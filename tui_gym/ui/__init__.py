@@ -1,0 +1,1 @@
+"""Textual front end: the app, its screens and widgets. Never imports gymnasium."""
