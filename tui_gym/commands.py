@@ -1,0 +1,302 @@
+"""The headless sub-commands of `tui-gym`, each a thin call into the core.
+
+`COMMANDS` maps a sub-command name to a function `(args, console) -> exit code`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections.abc import Callable
+from typing import Any
+
+from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TaskProgressColumn,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+from rich.table import Table
+
+from tui_gym.cli import CliError, _env_kwargs, key_value_table, print_json
+from tui_gym.core.agent import Hyperparameters
+from tui_gym.core.evaluation import EvalReport
+from tui_gym.core.profiles import PROFILES, profile_for, resolve_env_id
+from tui_gym.core.session import Session
+
+HP_FLAGS = (
+    "learning_rate",
+    "discount",
+    "epsilon_start",
+    "epsilon_final",
+    "epsilon_decay_fraction",
+    "episodes",
+)
+
+
+def cmd_envs(args: argparse.Namespace, out: Console) -> int:
+    table = Table(title="Games", title_justify="left")
+    table.add_column("alias", style="bold cyan")
+    table.add_column("Gymnasium id", no_wrap=True)
+    table.add_column("actions")
+    table.add_column("about")
+    for p in PROFILES:
+        ids = "\n".join((p.env_id, *p.other_ids))
+        table.add_row(p.name, ids, ", ".join(p.action_names), p.description)
+    out.print(table)
+    return 0
+
+
+def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.core.wrappers import CATALOG
+
+    table = Table(title="Wrapper catalog", title_justify="left", show_lines=True)
+    table.add_column("name", style="bold cyan", no_wrap=True)
+    table.add_column("what it changes and teaches")
+    table.add_column("parameters (default, range)")
+    for spec in CATALOG.values():
+        params = "\n".join(
+            f"{p.name}={p.default} ({p.describe_range()})" for p in spec.params
+        ) or "-"
+        table.add_row(spec.name, spec.summary, params)
+    out.print(table)
+    out.print(
+        "Use with [bold]--wrapper NAME[/] or [bold]--wrapper NAME:key=value,key=value[/], "
+        "repeatable; the first is innermost.\n"
+        "Example: tui-gym train gridworld --wrapper TimeLimit:max_episode_steps=50 "
+        "--wrapper StepPenalty:penalty=0.01"
+    )
+    return 0
+
+
+def _hyperparameters(args: argparse.Namespace, base: Hyperparameters) -> Hyperparameters:
+    changes: dict[str, Any] = {}
+    for name in HP_FLAGS:
+        value = getattr(args, name, None)
+        if value is not None:
+            changes[name] = value
+    try:
+        return base.replace(**changes)
+    except ValueError as exc:
+        # Name the flag, not the field, so the user knows what to fix.
+        text = str(exc)
+        for name in HP_FLAGS:
+            text = text.replace(name, "--" + name.replace("_", "-"))
+        raise CliError(text) from None
+
+
+def _session_from_args(args: argparse.Namespace) -> Session:
+    from tui_gym.core.wrappers import parse_wrapper_spec
+
+    env_id = resolve_env_id(args.env)
+    choices = tuple(parse_wrapper_spec(text) for text in args.wrapper)
+    session = Session(
+        env_id=env_id,
+        env_kwargs=_env_kwargs(args, env_id),
+        choices=choices,
+        hp=_hyperparameters(args, profile_for(env_id).default_hyperparameters()),
+        seed=args.train_seed,
+    )
+    if session.skipped:
+        reasons = "; ".join(reason for _, reason in session.skipped)
+        raise CliError(f"wrapper does not fit {env_id}: {reasons}")
+    return session
+
+
+def eval_dict(session: Session, report: EvalReport) -> dict[str, Any]:
+    """The JSON object `eval --json` prints (and `train --json` nests)."""
+    data: dict[str, Any] = {"env_id": session.env_id, **report.to_dict()}
+    ref = session.reference()
+    if ref is not None:
+        data.update(ref.figures)
+    return data
+
+
+def _eval_rows(data: dict[str, Any]) -> list[tuple[str, str]]:
+    rows = [
+        ("greedy episodes", f"{data['episodes']:,}"),
+        ("mean return", f"{data['mean_return']:+.4f}"),
+        ("std of return", f"{data['std_return']:.4f}"),
+    ]
+    percent = ("win_rate", "draw_rate", "loss_rate", "success_rate", "optimal_pair_fraction")
+    for key, value in data.items():
+        if key in ("env_id", "episodes", "mean_return", "std_return"):
+            continue
+        label = key.replace("_", " ")
+        if value is None:
+            rows.append((label, "n/a"))
+        elif key in percent:
+            rows.append((label, f"{value:.2%}"))
+        elif isinstance(value, float):
+            rows.append((label, f"{value:+.4f}" if key != "gap" else f"{value:.4f}"))
+        else:
+            rows.append((label, str(value)))
+    return rows
+
+
+def _train_with_bar(session: Session, out: Console) -> None:
+    trainer = session.trainer
+    budget = session.hp.episodes
+    columns = (
+        TextColumn("[bold]training[/]"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TaskProgressColumn(),
+        TextColumn("{task.fields[rate]:>9,.0f} ep/s"),
+        TextColumn("mean return {task.fields[mean]:+.3f}"),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+    )
+    with Progress(*columns, console=out, transient=False) as progress:
+        task = progress.add_task("train", total=budget, rate=0.0, mean=0.0)
+        while trainer.episodes < budget:
+            trainer.run(episodes=budget - trainer.episodes, seconds=0.2)
+            snap = trainer.latest
+            progress.update(
+                task,
+                completed=trainer.episodes,
+                rate=snap.episodes / snap.seconds if snap.seconds else 0.0,
+                mean=snap.mean_return,
+            )
+
+
+def cmd_train(args: argparse.Namespace, out: Console) -> int:
+    session = _session_from_args(args)
+    trainer = session.trainer
+    budget = session.hp.episodes
+    started = time.perf_counter()
+    if args.json or not out.is_terminal:
+        trainer.run(episodes=budget)
+    else:
+        _train_with_bar(session, out)
+    seconds = time.perf_counter() - started
+    report = session.evaluate(args.eval_episodes, seed=args.train_seed + 1)
+    evaluation = eval_dict(session, report)
+    saved = str(session.save(args.save)) if args.save else None
+    data = {
+        "env_id": session.env_id,
+        "env_kwargs": session.env_kwargs,
+        "wrappers": [c.name for c in session.applied],
+        "engine": trainer.engine,
+        "episodes": trainer.episodes,
+        "steps": trainer.steps,
+        "seconds": seconds,
+        "episodes_per_second": trainer.episodes / seconds if seconds else None,
+        "hyperparameters": session.hp.to_dict(),
+        "rolling_mean_return": trainer.latest.mean_return,
+        "eval": evaluation,
+        "saved": saved,
+    }
+    if args.json:
+        print_json(data)
+        return 0
+    rows = [
+        ("env", f"{session.env_id} {session.env_kwargs or ''}".strip()),
+        ("wrappers", session.chain_repr()),
+        ("episodes", f"{trainer.episodes:,}"),
+        ("steps", f"{trainer.steps:,}"),
+        ("seconds", f"{seconds:.2f}"),
+        ("episodes/s", f"{data['episodes_per_second']:,.0f}"),
+        (f"rolling mean return ({trainer.latest.window})", f"{trainer.latest.mean_return:+.4f}"),
+        *_eval_rows(evaluation),
+    ]
+    if saved:
+        rows.append(("saved to", saved))
+    out.print(key_value_table("Training summary", rows))
+    return 0
+
+
+def cmd_eval(args: argparse.Namespace, out: Console) -> int:
+    session = Session.load(args.path)
+    seed = args.eval_seed
+    report = session.evaluate(args.episodes, seed=seed)
+    data = eval_dict(session, report)
+    if args.json:
+        print_json(data)
+        return 0
+    rows = [("file", args.path), ("env", session.env_id), ("wrappers", session.chain_repr())]
+    rows += _eval_rows(data)
+    out.print(key_value_table("Evaluation", rows))
+    return 0
+
+
+def cmd_optimal(args: argparse.Namespace, out: Console) -> int:
+    env_id = resolve_env_id(args.env)
+    kwargs = profile_for(env_id).normalize_kwargs(_env_kwargs(args, env_id))
+    if env_id == "Blackjack-v1":
+        return _optimal_blackjack(kwargs, args.json, out)
+    return _optimal_gridworld(env_id, kwargs, args.json, out)
+
+
+def _optimal_blackjack(kwargs: dict[str, Any], as_json: bool, out: Console) -> int:
+    from tui_gym.core.profiles.blackjack import CHART_SUMS, DEALER_CARDS, DEALER_LABELS
+    from tui_gym.core.reference.blackjack import BlackjackRules, optimal_policy, optimal_value
+
+    rules = BlackjackRules.from_env_kwargs(kwargs)
+    policy = optimal_policy(rules)
+    value = optimal_value(rules)
+    if as_json:
+        entries = [
+            {
+                "player_sum": s,
+                "dealer_card": d,
+                "usable_ace": bool(u),
+                "action": "hit" if policy[s, d, u] else "stick",
+            }
+            for u in (0, 1)
+            for s in range(12, 22)
+            for d in DEALER_CARDS
+        ]
+        print_json({"env_id": "Blackjack-v1", "rules": kwargs, "optimal_value": value,
+                    "policy": entries})
+        return 0
+    for usable, title in ((0, "No usable ace (hard hands)"), (1, "Usable ace (soft hands)")):
+        table = Table(title=title, title_justify="left")
+        table.add_column("sum", justify="right", style="bold")
+        for label in DEALER_LABELS:
+            table.add_column(label, justify="center")
+        for s in CHART_SUMS:
+            cells = [
+                "[black on green] H [/]" if policy[s, d, usable] else "[black on red] S [/]"
+                for d in DEALER_CARDS
+            ]
+            table.add_row(str(s), *cells)
+        out.print(table)
+    out.print("H hit, S stick; columns are the dealer's up card. Hit on every sum below 12.")
+    rules_text = ", ".join(f"{k}={v}" for k, v in kwargs.items())
+    out.print(f"Exact value of this strategy ({rules_text}): [bold]{value:+.5f}[/] per hand")
+    return 0
+
+
+def _optimal_gridworld(env_id: str, kwargs: dict[str, Any], as_json: bool, out: Console) -> int:
+    import numpy as np
+
+    size = kwargs["size"]
+    coords = np.arange(size)
+    diffs = np.abs(coords[:, None] - coords[None, :])
+    # Mean Manhattan distance over ordered pairs of distinct cells.
+    total = 2 * diffs.sum() * size * size
+    mean_steps = float(total) / (size * size * (size * size - 1))
+    if as_json:
+        print_json({"env_id": env_id, "size": size, "optimal_mean_steps": mean_steps,
+                    "rule": "move along any shortest (Manhattan) path"})
+        return 0
+    out.print(
+        f"GridWorld {size}x{size}: the optimal policy walks any shortest path, so an "
+        f"episode takes the Manhattan distance from agent to target.\n"
+        f"Mean optimal episode length over random starts: [bold]{mean_steps:.4f}[/] steps"
+    )
+    return 0
+
+
+COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {
+    "envs": cmd_envs,
+    "wrappers": cmd_wrappers,
+    "train": cmd_train,
+    "eval": cmd_eval,
+    "optimal": cmd_optimal,
+}

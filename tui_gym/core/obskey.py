@@ -1,0 +1,218 @@
+"""Observation keys: turning any observation our envs produce into a table key.
+
+A tabular agent needs a hashable key per state. `ObservationKeyer` is built
+from an observation space and turns observations of that space into keys:
+
+- spaces made only of bounded integers (`Discrete`, `MultiDiscrete`,
+  `MultiBinary`, integer `Box`, and `Tuple`/`Dict` of those) are *dense*: every
+  observation maps to an `int` in `range(keyer.n_states)` (mixed-radix over the
+  leaves in space order), so the Q-table can be one numpy array;
+- spaces with floats (the time `TimeAwareObservation` adds, a flattened
+  one-hot) are *sparse*: keys are tuples of Python numbers, with floats rounded
+  so that equal values give equal keys;
+- spaces that cannot be tabulated (text, graphs, unbounded integers, huge
+  float vectors) raise `NotTabularError` with the reason.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Hashable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+
+# Above this many states a dense table is not worth it: keys go sparse.
+DENSE_STATE_LIMIT = 2_000_000
+# Float leaves are rounded to this many decimals to form keys.
+FLOAT_DECIMALS = 6
+# A float Box wider than this is not a table (e.g. an image).
+MAX_SPARSE_WIDTH = 4096
+
+
+class NotTabularError(ValueError):
+    """The observation space cannot be used as the keys of a table."""
+
+
+@dataclass(frozen=True)
+class _Leaf:
+    """One integer leaf of a dense space: its value range and width."""
+
+    low: np.ndarray  # int64, flat
+    radix: np.ndarray  # int64, flat: number of values each element takes
+
+
+def _is_int_dtype(dtype: Any) -> bool:
+    return np.issubdtype(np.dtype(dtype), np.integer) or np.dtype(dtype) == np.bool_
+
+
+def _leaves(space: spaces.Space, path: str = "observation") -> list[tuple[spaces.Space, str]]:
+    if isinstance(space, spaces.Tuple):
+        out: list[tuple[spaces.Space, str]] = []
+        for i, sub in enumerate(space.spaces):
+            out.extend(_leaves(sub, f"{path}[{i}]"))
+        return out
+    if isinstance(space, spaces.Dict):
+        out = []
+        for name, sub in space.spaces.items():
+            out.extend(_leaves(sub, f"{path}[{name!r}]"))
+        return out
+    if isinstance(space, spaces.Discrete | spaces.MultiDiscrete | spaces.MultiBinary | spaces.Box):
+        return [(space, path)]
+    raise NotTabularError(
+        f"{path} is a {type(space).__name__} space; a Q-table needs Discrete, MultiDiscrete, "
+        "MultiBinary, Box, or Tuple/Dict of those"
+    )
+
+
+def _dense_leaf(space: spaces.Space) -> _Leaf | None:
+    """The integer range of a leaf, or None when it is not bounded integers."""
+    if isinstance(space, spaces.Discrete):
+        return _Leaf(np.array([int(space.start)]), np.array([int(space.n)]))
+    if isinstance(space, spaces.MultiDiscrete):
+        nvec = np.asarray(space.nvec, dtype=np.int64).ravel()
+        return _Leaf(np.asarray(space.start, dtype=np.int64).ravel(), nvec)
+    if isinstance(space, spaces.MultiBinary):
+        n = int(np.prod(space.shape))
+        return _Leaf(np.zeros(n, dtype=np.int64), np.full(n, 2, dtype=np.int64))
+    if isinstance(space, spaces.Box) and _is_int_dtype(space.dtype):
+        if not (space.is_bounded("both")):
+            return None
+        low = np.asarray(space.low, dtype=np.int64).ravel()
+        high = np.asarray(space.high, dtype=np.int64).ravel()
+        return _Leaf(low, high - low + 1)
+    return None
+
+
+def _python_scalar(value: Any) -> Hashable:
+    if isinstance(value, float | np.floating):
+        rounded = round(float(value), FLOAT_DECIMALS)
+        return 0.0 if rounded == 0 else rounded  # -0.0 and 0.0 are one key
+    if isinstance(value, bool | np.bool_):
+        return int(value)
+    if isinstance(value, int | np.integer):
+        return int(value)
+    raise NotTabularError(f"cannot use a {type(value).__name__} as part of a table key")
+
+
+def _leaf_flattener(space: spaces.Space) -> Callable[[Any], list[Hashable]]:
+    if isinstance(space, spaces.Discrete):
+        return lambda x: [int(x)]
+    if isinstance(space, spaces.Box) and space.dtype.kind == "f":
+        def floats(x: Any) -> list[Hashable]:
+            arr = np.round(np.asarray(x, dtype=np.float64).ravel(), FLOAT_DECIMALS)
+            return [_python_scalar(v) for v in arr.tolist()]
+        return floats
+    return lambda x: [int(v) for v in np.asarray(x).ravel().tolist()]
+
+
+def _flattener(space: spaces.Space) -> Callable[[Any], list[Hashable]]:
+    """A function giving every scalar of an observation, in space order, as Python numbers."""
+    if isinstance(space, spaces.Tuple):
+        parts = [_flattener(sub) for sub in space.spaces]
+        if all(isinstance(sub, spaces.Discrete) for sub in space.spaces):
+            return lambda obs: [int(v) for v in obs]
+
+        def flat_tuple(obs: Any) -> list[Hashable]:
+            out: list[Hashable] = []
+            for part, value in zip(parts, obs, strict=True):
+                out.extend(part(value))
+            return out
+        return flat_tuple
+    if isinstance(space, spaces.Dict):
+        named = [(name, _flattener(sub)) for name, sub in space.spaces.items()]
+
+        def flat_dict(obs: Any) -> list[Hashable]:
+            out: list[Hashable] = []
+            for name, part in named:
+                out.extend(part(obs[name]))
+            return out
+        return flat_dict
+    return _leaf_flattener(space)
+
+
+class ObservationKeyer:
+    """Turns observations of one space into hashable table keys.
+
+    `key(obs)` is the key; for dense spaces it is an `int` in
+    `range(n_states)` and `decode(index)` gives back the flat tuple of values.
+    `signature` identifies what keys mean: two keyers with the same signature
+    map the same observation to the same key.
+    """
+
+    def __init__(self, space: spaces.Space) -> None:
+        self.space = space
+        leaves = _leaves(space)
+        self._flat = _flattener(space)
+        dense = [_dense_leaf(leaf) for leaf, _ in leaves]
+        self.signature = repr(space)
+        self.n_states: int | None = None
+        self._low = np.zeros(0, dtype=np.int64)
+        self._radix = np.zeros(0, dtype=np.int64)
+        self._strides = np.zeros(0, dtype=np.int64)
+        if all(d is not None for d in dense):
+            low = np.concatenate([d.low for d in dense])  # type: ignore[union-attr]
+            radix = np.concatenate([d.radix for d in dense])  # type: ignore[union-attr]
+            total = 1
+            for r in radix.tolist():
+                total *= int(r)
+            if total <= DENSE_STATE_LIMIT:
+                self.n_states = total
+                self._low = low
+                self._radix = radix
+                # Row-major: the last element varies fastest.
+                strides = np.ones_like(radix)
+                for i in range(len(radix) - 2, -1, -1):
+                    strides[i] = strides[i + 1] * radix[i + 1]
+                self._strides = strides
+                self._low_list = low.tolist()
+                self._stride_list = strides.tolist()
+                return
+        for (leaf, path), d in zip(leaves, dense, strict=True):
+            if d is None and isinstance(leaf, spaces.Box):
+                width = int(np.prod(leaf.shape))
+                if width > MAX_SPARSE_WIDTH:
+                    raise NotTabularError(
+                        f"{path} is a Box of {width} floats; too many for a Q-table "
+                        f"(at most {MAX_SPARSE_WIDTH})"
+                    )
+            elif d is None:
+                raise NotTabularError(f"{path} ({leaf}) has no finite range of values")
+
+    @property
+    def dense(self) -> bool:
+        """True when keys are integers in `range(n_states)`."""
+        return self.n_states is not None
+
+    def key(self, obs: Any) -> Hashable:
+        """The table key of one observation."""
+        values = self._flat(obs)
+        if self.n_states is None:
+            return tuple(values)
+        index = 0
+        for v, lo, stride in zip(values, self._low_list, self._stride_list, strict=True):
+            index += (v - lo) * stride
+        return index
+
+    def keys(self, observations: np.ndarray) -> np.ndarray:
+        """Dense keys for a batch: `observations` is (batch, n_elements) integers."""
+        if self.n_states is None:
+            raise NotTabularError("batched keys need a dense (all-integer) observation space")
+        obs = np.asarray(observations, dtype=np.int64)
+        return (obs - self._low) @ self._strides
+
+    def decode(self, index: int) -> tuple[int, ...]:
+        """The flat observation values behind a dense key."""
+        if self.n_states is None:
+            raise NotTabularError("only dense keys can be decoded")
+        rest = int(index)
+        out = []
+        for stride, lo in zip(self._stride_list, self._low_list, strict=True):
+            digit, rest = divmod(rest, stride)
+            out.append(digit + lo)
+        return tuple(out)
+
+    def __repr__(self) -> str:
+        kind = f"dense, {self.n_states} states" if self.dense else "sparse"
+        return f"ObservationKeyer({kind}, {self.signature})"

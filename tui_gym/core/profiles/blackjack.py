@@ -1,0 +1,152 @@
+"""The Blackjack profile: Gymnasium's `Blackjack-v1` as the app sees it.
+
+Actions are stick (0) and hit (1). Base states are every decision state
+(player sum 4-21, dealer card A-10, usable ace); the exact reference scores
+the greedy policy with `reference.blackjack.policy_value`, and the heatmaps
+are the two halves of a basic-strategy chart.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from tui_gym.core.heatmap import Heatmap
+from tui_gym.core.profiles.base import EvalOutcome, GameProfile, ReferenceMetrics, greedy_policy
+from tui_gym.core.reference.blackjack import (
+    POLICY_SHAPE,
+    BlackjackRules,
+    optimal_policy,
+    optimal_value,
+    policy_value,
+)
+
+CHART_SUMS = tuple(range(21, 11, -1))  # rows of the chart, top to bottom
+DEALER_CARDS = tuple(range(1, 11))  # columns: A, 2 .. 10
+DEALER_LABELS = ("A", "2", "3", "4", "5", "6", "7", "8", "9", "10")
+ACTION_LETTERS = ("S", "H")
+
+
+@lru_cache(maxsize=1)
+def _base_states() -> tuple[tuple[int, int, int], ...]:
+    states = []
+    for usable in (0, 1):
+        low = 12 if usable else 4
+        for player in range(low, 22):
+            for dealer in DEALER_CARDS:
+                states.append((player, dealer, usable))
+    return tuple(states)
+
+
+@lru_cache(maxsize=1)
+def _row_of() -> dict[tuple[int, int, int], int]:
+    return {s: i for i, s in enumerate(_base_states())}
+
+
+class BlackjackProfile(GameProfile):
+    """Hit or stick against a dealer who stands on 17."""
+
+    name = "blackjack"
+    title = "Blackjack"
+    env_id = "Blackjack-v1"
+    action_names = ("stick", "hit")
+    description = "Hit or stick; beat the dealer without going over 21 (infinite deck)."
+
+    def default_kwargs(self) -> dict[str, Any]:
+        return {"natural": False, "sab": False}
+
+    def normalize_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+        out = self.default_kwargs()
+        for key, value in kwargs.items():
+            if key not in out:
+                raise ValueError(f"Blackjack takes natural and sab, not {key!r}")
+            if not isinstance(value, bool | int) or value not in (0, 1):
+                raise ValueError(f"Blackjack {key} must be true or false, got {value!r}")
+            out[key] = bool(value)
+        return out
+
+    def rules(self, env_kwargs: Mapping[str, Any]) -> BlackjackRules:
+        return BlackjackRules.from_env_kwargs(env_kwargs)
+
+    def base_observations(self, env_kwargs: Mapping[str, Any]) -> list[Any]:
+        return list(_base_states())
+
+    def policy_array(self, q: np.ndarray) -> np.ndarray:
+        """The greedy policy of `q` (rows = base states) as a (32, 11, 2) table."""
+        policy = np.zeros(POLICY_SHAPE, dtype=np.int8)
+        actions = greedy_policy(q)
+        for (player, dealer, usable), action in zip(_base_states(), actions.tolist(), strict=True):
+            policy[player, dealer, usable] = action
+        return policy
+
+    def reference(self, q: np.ndarray, env_kwargs: Mapping[str, Any]) -> ReferenceMetrics:
+        rules = self.rules(env_kwargs)
+        exact = policy_value(self.policy_array(q), rules)
+        best = optimal_value(rules)
+        return ReferenceMetrics(
+            figures={"exact_value": exact, "optimal_value": best, "gap": best - exact},
+            summary=f"exact value {exact:+.4f}  optimum {best:+.4f}  gap {best - exact:.4f}",
+        )
+
+    def heatmaps(
+        self, q: np.ndarray, env_kwargs: Mapping[str, Any], focus: Any = None
+    ) -> list[Heatmap]:
+        best = optimal_policy(self.rules(env_kwargs))
+        row_of = _row_of()
+        panels = []
+        for usable, title in ((1, "usable ace"), (0, "no usable ace")):
+            values = np.full((len(CHART_SUMS), len(DEALER_CARDS)), np.nan)
+            marked = np.zeros(values.shape, dtype=bool)
+            labels = []
+            for r, player in enumerate(CHART_SUMS):
+                row_labels = []
+                for c, dealer in enumerate(DEALER_CARDS):
+                    qs = q[row_of[(player, dealer, usable)]]
+                    action = int(np.argmax(qs))
+                    values[r, c] = float(qs.max())
+                    row_labels.append(ACTION_LETTERS[action])
+                    marked[r, c] = action != int(best[player, dealer, usable])
+                labels.append(tuple(row_labels))
+            panels.append(
+                Heatmap(
+                    title=f"Q-values, {title}",
+                    row_labels=tuple(str(s) for s in CHART_SUMS),
+                    col_labels=DEALER_LABELS,
+                    values=values,
+                    labels=tuple(labels),
+                    marked=marked,
+                    legend="rows: player sum  cols: dealer card  H hit  S stick  * not optimal",
+                )
+            )
+        return panels
+
+    def describe(self, observation: Any) -> str:
+        player, dealer, usable = (int(v) for v in observation)
+        card = "A" if dealer == 1 else str(dealer)
+        ace = "usable ace" if usable else "no usable ace"
+        return f"sum {player} vs dealer {card}, {ace}"
+
+    def eval_outcome(
+        self, returns: Sequence[float], details: Sequence[dict[str, Any]]
+    ) -> EvalOutcome:
+        n = max(1, len(returns))
+        r = np.asarray(returns, dtype=np.float64)
+        return EvalOutcome(
+            figures={
+                "win_rate": float(np.count_nonzero(r > 0)) / n,
+                "draw_rate": float(np.count_nonzero(r == 0)) / n,
+                "loss_rate": float(np.count_nonzero(r < 0)) / n,
+            }
+        )
+
+
+def outcome_word(reward: float) -> str:
+    """'win', 'draw' or 'loss' for a finished hand's reward."""
+    if reward > 0:
+        return "win"
+    if reward < 0:
+        return "loss"
+    return "draw"

@@ -1,0 +1,147 @@
+"""The GridWorld profile: our `tui_gym/GridWorld-v0` as the app sees it.
+
+Actions are right, up, left, down (the tutorial's mapping). Base states are
+every (agent, target) pair; the exact reference is the share of pairs the
+greedy policy solves in the Manhattan number of steps, and the heatmap shows
+max Q over the grid for one target with the greedy move in each cell.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from tui_gym.core.agent import Hyperparameters
+from tui_gym.core.heatmap import Heatmap
+from tui_gym.core.profiles.base import EvalOutcome, GameProfile, ReferenceMetrics, greedy_policy
+from tui_gym.core.reference.gridworld import optimal_actions, optimal_pair_fraction
+
+ARROWS = ("→", "↑", "←", "↓")
+MIN_SIZE, MAX_SIZE = 2, 12
+
+
+@lru_cache(maxsize=16)
+def _pairs(size: int) -> np.ndarray:
+    """All (ax, ay, tx, ty) in row-major order: shape (size**4, 4)."""
+    grid = np.indices((size,) * 4).reshape(4, -1).T
+    return grid.astype(np.int64)
+
+
+class GridWorldProfile(GameProfile):
+    """Walk the agent to the target on a square grid."""
+
+    name = "gridworld"
+    title = "GridWorld"
+    env_id = "tui_gym/GridWorld-v0"
+    other_ids = ("gymnasium_env/GridWorld-v0",)
+    action_names = ("right", "up", "left", "down")
+    description = "Reach the target on a square grid; the tutorial's custom environment."
+
+    def default_kwargs(self) -> dict[str, Any]:
+        return {"size": 5}
+
+    def default_hyperparameters(self) -> Hyperparameters:
+        # Reward only at the target: without discounting every path is worth 1
+        # and the greedy policy would have no reason to take the shortest one.
+        return Hyperparameters(discount=0.95, learning_rate=0.1, episodes=20_000,
+                               epsilon_decay_fraction=0.5)
+
+    def normalize_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+        out = self.default_kwargs()
+        allowed = {"size", "reward_scale", "step_penalty"}
+        for key, value in kwargs.items():
+            if key not in allowed:
+                raise ValueError(f"GridWorld takes {', '.join(sorted(allowed))}, not {key!r}")
+            out[key] = value
+        size = out["size"]
+        if isinstance(size, bool) or not isinstance(size, int | np.integer):
+            raise ValueError(f"GridWorld size must be an integer in [{MIN_SIZE}, {MAX_SIZE}]")
+        if not MIN_SIZE <= int(size) <= MAX_SIZE:
+            raise ValueError(
+                f"GridWorld size must be an integer in [{MIN_SIZE}, {MAX_SIZE}], got {size}"
+            )
+        out["size"] = int(size)
+        return out
+
+    def base_observations(self, env_kwargs: Mapping[str, Any]) -> list[Any]:
+        size = int(env_kwargs.get("size", 5))
+        return [
+            {"agent": row[:2].copy(), "target": row[2:].copy()} for row in _pairs(size)
+        ]
+
+    def policy_array(self, q: np.ndarray, size: int) -> np.ndarray:
+        return greedy_policy(q).reshape((size,) * 4)
+
+    def reference(self, q: np.ndarray, env_kwargs: Mapping[str, Any]) -> ReferenceMetrics:
+        size = int(env_kwargs.get("size", 5))
+        frac = optimal_pair_fraction(size, self.policy_array(q, size))
+        return ReferenceMetrics(
+            figures={"optimal_pair_fraction": frac},
+            summary=f"{frac:.1%} of (agent, target) pairs solved in the fewest steps",
+        )
+
+    def heatmaps(
+        self, q: np.ndarray, env_kwargs: Mapping[str, Any], focus: Any = None
+    ) -> list[Heatmap]:
+        size = int(env_kwargs.get("size", 5))
+        tx, ty = focus if focus is not None else (size - 1, size - 1)
+        q4 = q.reshape(size, size, size, size, q.shape[1])
+        values = np.full((size, size), np.nan)
+        marked = np.zeros((size, size), dtype=bool)
+        labels = []
+        for r in range(size):
+            y = size - 1 - r  # +y is up: the top row is y = size-1
+            row = []
+            for x in range(size):
+                if (x, y) == (tx, ty):
+                    row.append("T")
+                    continue
+                qs = q4[x, y, tx, ty]
+                action = int(np.argmax(qs))
+                values[r, x] = float(qs.max())
+                row.append(ARROWS[action])
+                marked[r, x] = action not in optimal_actions((x, y), (tx, ty))
+            labels.append(tuple(row))
+        return [
+            Heatmap(
+                title=f"max Q with the target at ({tx}, {ty})",
+                row_labels=tuple(str(size - 1 - r) for r in range(size)),
+                col_labels=tuple(str(x) for x in range(size)),
+                values=values,
+                labels=tuple(labels),
+                marked=marked,
+                legend="arrow: greedy move  T target  * off every shortest path",
+            )
+        ]
+
+    def describe(self, observation: Any) -> str:
+        ax, ay = (int(v) for v in observation["agent"])
+        tx, ty = (int(v) for v in observation["target"])
+        dist = abs(ax - tx) + abs(ay - ty)
+        return f"agent ({ax}, {ay})  target ({tx}, {ty})  distance {dist}"
+
+    def episode_detail(
+        self, first_info: Mapping[str, Any], length: int, total: float, terminated: bool
+    ) -> dict[str, Any]:
+        return {
+            "length": length,
+            "return": total,
+            "terminated": terminated,
+            "optimal": int(first_info.get("distance", 0)),
+        }
+
+    def eval_outcome(
+        self, returns: Sequence[float], details: Sequence[dict[str, Any]]
+    ) -> EvalOutcome:
+        n = max(1, len(details))
+        solved = [d for d in details if d["terminated"]]
+        extra = [d["length"] - d["optimal"] for d in solved]
+        return EvalOutcome(
+            figures={
+                "success_rate": len(solved) / n,
+                "mean_steps_over_optimal": float(np.mean(extra)) if extra else float("nan"),
+            }
+        )

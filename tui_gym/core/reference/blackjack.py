@@ -1,0 +1,407 @@
+"""Exact dynamic programming for Gymnasium's ``Blackjack-v1``.
+
+Provides the yardsticks the app shows beside a learning agent, with no sampling
+noise:
+
+- `policy_value(policy, rules)`: the exact expected return of any deterministic
+  hit/stick policy from the initial deal (fast enough to call on a UI timer);
+- `optimal_action_values(rules)`: Q*(observation, action) for every reachable
+  decision state, for a coach ("your hit cost X in expected value");
+- `optimal_policy(rules)` and `optimal_value(rules)`: the best policy over
+  observations and its exact value;
+- `BlackjackRules`: the env's ``natural`` / ``sab`` reward variants;
+- `policy_from_function(fn)`: build a policy array from a Python function.
+
+The model follows the env's source exactly: an infinite deck (cards 1..10, a 10
+with probability 4/13, each other value 1/13); two cards each at reset; an ace
+counts 11 while that does not bust the hand; the dealer draws while below 17
+(so a soft 17 stands). Observations are ``(player_sum, dealer_card,
+usable_ace)``; a policy is an int8 array of shape `POLICY_SHAPE` indexed the
+same way, 0 = stick, 1 = hit.
+
+One piece of state is hidden from the observation and changes the pay-off:
+whether a soft 21 is the opening two-card natural or was drawn to. Under
+``natural=True`` a natural win pays 1.5, and under ``sab=True`` a natural beats
+any dealer hand but a dealer natural. The DP keeps the natural as a state of its
+own while every policy stays a function of the observation alone, so both kinds
+of soft 21 share one action. Nothing else about the player's cards matters with
+an infinite deck, and the dealer's hole card (independent of the player's cards,
+never revealed before the player stops) enters only through the distribution of
+the dealer's final hand given the up card, computed once per rule set.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from functools import cache
+from typing import Any, Literal
+
+import numpy as np
+
+__all__ = [
+    "DEFAULT_RULES",
+    "DECISION_MASK",
+    "HIT",
+    "POLICY_SHAPE",
+    "STICK",
+    "BlackjackRules",
+    "optimal_action_values",
+    "optimal_policy",
+    "optimal_value",
+    "policy_from_function",
+    "policy_value",
+]
+
+
+@dataclass(frozen=True)
+class BlackjackRules:
+    """The reward variant of ``Blackjack-v1`` (the env's keyword arguments).
+
+    ``natural``: a winning two-card 21 pays 1.5 instead of 1.
+    ``sab``: Sutton & Barto's rules: a player natural beats every dealer hand but
+    a dealer natural (+1), two naturals draw; ``natural`` is then ignored.
+    """
+
+    natural: bool = False
+    sab: bool = False
+
+    @classmethod
+    def from_env_kwargs(cls, kwargs: Mapping[str, Any]) -> BlackjackRules:
+        """The rules of ``gym.make("Blackjack-v1", **kwargs)`` (other keys ignored)."""
+        return cls(natural=bool(kwargs.get("natural", False)), sab=bool(kwargs.get("sab", False)))
+
+    def env_kwargs(self) -> dict[str, bool]:
+        """Keyword arguments for ``gym.make("Blackjack-v1", ...)`` with these rules."""
+        return {"natural": self.natural, "sab": self.sab}
+
+
+DEFAULT_RULES = BlackjackRules()
+
+STICK = 0
+HIT = 1
+POLICY_SHAPE = (32, 11, 2)
+
+# Infinite deck: index i holds the probability of a card of value i + 1.
+_CARD_PROBS = np.array([1.0] * 9 + [4.0], dtype=np.float64) / 13.0
+_CARDS = range(1, 11)
+
+# A hit strictly better than a stick by less than this counts as a tie (-> stick),
+# so float rounding in two sums of the same number cannot flip an action.
+_TIE_TOLERANCE = 1e-12
+
+# Player states. Hard totals 4..21, soft (usable-ace) totals 12..21, the opening
+# natural (observed as a soft 21), and bust. The hidden "still two cards" fact
+# matters only for the natural: every other hand's future and pay-off depend on
+# its total and whether it holds a usable ace.
+_STATE_OBS: list[tuple[int, int]] = (
+    [(t, 0) for t in range(4, 22)] + [(t, 1) for t in range(12, 22)] + [(21, 1)]
+)
+_N_LIVE = len(_STATE_OBS)  # 29 states where the player still decides
+_NATURAL = _N_LIVE - 1
+_BUST = _N_LIVE
+_HARD = {t: i for i, (t, u) in enumerate(_STATE_OBS[:_NATURAL]) if u == 0}
+_SOFT = {t: i for i, (t, u) in enumerate(_STATE_OBS[:_NATURAL]) if u == 1}
+_SOFT_21 = _SOFT[21]
+_STATE_SUM = np.array([t for t, _ in _STATE_OBS], dtype=np.intp)
+_STATE_USABLE = np.array([u for _, u in _STATE_OBS], dtype=np.intp)
+_STATE_TOTAL = _STATE_SUM  # the score if the player sticks (never bust while deciding)
+
+
+def _add_card(total: int, soft: bool, card: int) -> int:
+    """The state index after drawing ``card`` to a hand of ``total`` (soft or hard)."""
+    if soft:
+        # Recounting the ace as 1 takes 10 off, so one card never busts a soft hand.
+        return _SOFT[total + card] if total + card <= 21 else _HARD[total + card - 10]
+    if card == 1 and total + 11 <= 21:
+        return _SOFT[total + 11]
+    return _HARD[total + card] if total + card <= 21 else _BUST
+
+
+def _build_hit_matrix() -> np.ndarray:
+    """Row s: the distribution of the next state (incl. bust) after hitting from s."""
+    matrix = np.zeros((_N_LIVE, _N_LIVE + 1))
+    for s, (total, usable) in enumerate(_STATE_OBS):
+        for card, p in zip(_CARDS, _CARD_PROBS, strict=True):
+            matrix[s, _add_card(total, bool(usable), card)] += p
+    return matrix
+
+
+def _build_initial() -> np.ndarray:
+    """The distribution of the player's state after the two-card deal."""
+    initial = np.zeros(_N_LIVE)
+    for c1, p1 in zip(_CARDS, _CARD_PROBS, strict=True):
+        for c2, p2 in zip(_CARDS, _CARD_PROBS, strict=True):
+            if {c1, c2} == {1, 10}:
+                initial[_NATURAL] += p1 * p2
+            elif c1 == 1 or c2 == 1:
+                initial[_SOFT[c1 + c2 + 10]] += p1 * p2
+            else:
+                initial[_HARD[c1 + c2]] += p1 * p2
+    return initial
+
+
+_HIT_MATRIX = _build_hit_matrix()
+_INITIAL = _build_initial()
+
+# Every hit leads to a state that comes earlier in this order, so one backward
+# sweep evaluates a policy: hard 21..12 (they stay hard), soft 21..12 (they stay
+# soft or turn hard >= 12), hard 11..4 (they go up, or soft via an ace), and the
+# natural (a hit turns it into a hard 12..21).
+_ORDER: tuple[int, ...] = (
+    tuple(_HARD[t] for t in range(21, 11, -1))
+    + tuple(_SOFT[t] for t in range(21, 11, -1))
+    + tuple(_HARD[t] for t in range(11, 3, -1))
+    + (_NATURAL,)
+)
+assert sorted(_ORDER) == list(range(_N_LIVE))
+assert all(_HIT_MATRIX[s, nxt] == 0.0 for i, s in enumerate(_ORDER) for nxt in _ORDER[i:]), (
+    "hit transitions must point to states evaluated earlier"
+)
+
+DECISION_MASK = np.zeros(POLICY_SHAPE, dtype=bool)
+DECISION_MASK[_STATE_SUM[:, None], np.arange(1, 11)[None, :], _STATE_USABLE[:, None]] = True
+DECISION_MASK.setflags(write=False)
+"""True at every observation where the player can be asked to act."""
+
+# ---------------------------------------------------------------------------
+# The dealer
+
+
+# Columns of the dealer's final-hand distribution.
+_D17, _D18, _D19, _D20, _D21, _DNAT, _DBUST = range(7)
+
+
+@cache
+def _dealer_draws_from(raw: int, has_ace: bool) -> tuple[float, ...]:
+    """Final (17, 18, 19, 20, 21, natural, bust) probabilities from a hand of raw
+    (aces as 1) total ``raw`` that is not a natural, the dealer drawing while the
+    hand's best total is below 17."""
+    best = raw + 10 if has_ace and raw + 10 <= 21 else raw
+    out = [0.0] * 7
+    if best > 21:
+        out[_DBUST] = 1.0
+    elif best >= 17:
+        out[best - 17] = 1.0
+    else:
+        for card, p in zip(_CARDS, _CARD_PROBS, strict=True):
+            sub = _dealer_draws_from(raw + card, has_ace or card == 1)
+            for k in range(7):
+                out[k] += p * sub[k]
+    return tuple(out)
+
+
+@cache
+def _dealer_final() -> np.ndarray:
+    """Row ``up - 1``: the dealer's final hand given the up card, over
+    (17, 18, 19, 20, 21 drawn, natural, bust). Same for every rule set."""
+    table = np.zeros((10, 7))
+    for up in _CARDS:
+        for hole, p in zip(_CARDS, _CARD_PROBS, strict=True):
+            if {up, hole} == {1, 10}:
+                table[up - 1, _DNAT] += p
+            else:
+                table[up - 1] += p * np.array(_dealer_draws_from(up + hole, 1 in (up, hole)))
+    table.setflags(write=False)
+    return table
+
+
+@cache
+def _stick_rewards(rules: BlackjackRules) -> np.ndarray:
+    """Expected reward of sticking, shape (29 states, 10 dealer up cards)."""
+    final = _dealer_final()
+    dealer_21 = final[:, _D21] + final[:, _DNAT]
+    scores = np.array([17, 18, 19, 20, 21])
+    made = np.column_stack([final[:, :4], dealer_21])  # dealer ends on 17..21
+    rewards = np.empty((_N_LIVE, 10))
+    for s in range(_N_LIVE):
+        t = _STATE_TOTAL[s]
+        # cmp(player, dealer): a bust dealer scores 0, below any standing player.
+        rewards[s] = (
+            final[:, _DBUST] + made[:, scores < t].sum(axis=1) - made[:, scores > t].sum(axis=1)
+        )
+    if rules.sab:
+        # Player natural: +1 unless the dealer has a natural too (then cmp gives 0).
+        rewards[_NATURAL] = 1.0 - final[:, _DNAT]
+    elif rules.natural:
+        # A natural that wins (dealer not on 21) pays 1.5; against 21 it draws.
+        rewards[_NATURAL] = 1.5 * (1.0 - dealer_21)
+    rewards.setflags(write=False)
+    return rewards
+
+
+# ---------------------------------------------------------------------------
+# Policy evaluation
+
+
+def _check_policy(policy: np.ndarray) -> np.ndarray:
+    """The hit mask (29 states, 10 up cards) of a policy array, after checks."""
+    pol = np.asarray(policy)
+    if pol.shape != POLICY_SHAPE:
+        raise ValueError(f"policy must have shape {POLICY_SHAPE}, got {pol.shape}")
+    acts = pol[_STATE_SUM[:, None], np.arange(1, 11)[None, :], _STATE_USABLE[:, None]]
+    if not np.isin(acts, (STICK, HIT)).all():
+        raise ValueError("policy entries at decision states must be 0 (stick) or 1 (hit)")
+    return acts == HIT
+
+
+def _evaluate(hit: np.ndarray, rules: BlackjackRules) -> np.ndarray:
+    """State values (30 incl. bust, 10 up cards) of the policy whose hit mask is ``hit``."""
+    stick = _stick_rewards(rules)
+    values = np.zeros((_N_LIVE + 1, 10))
+    values[_BUST] = -1.0
+    for s in _ORDER:
+        row = hit[s]
+        if row.any():
+            values[s] = np.where(row, _HIT_MATRIX[s] @ values, stick[s])
+        else:
+            values[s] = stick[s]
+    return values
+
+
+def _start_value(values: np.ndarray) -> float:
+    """Expected return from the deal, given state values per up card."""
+    return float(_INITIAL @ values[:_N_LIVE] @ _CARD_PROBS)
+
+
+def policy_value(policy: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> float:
+    """The exact expected return of a deterministic policy from the initial deal.
+
+    ``policy`` has shape `POLICY_SHAPE`, indexed ``[player_sum, dealer_card,
+    usable_ace]`` with 0 = stick, 1 = hit; only decision states (`DECISION_MASK`)
+    are read. The policy's action at ``(21, d, 1)`` applies to a natural too.
+    """
+    return _start_value(_evaluate(_check_policy(policy), rules))
+
+
+# ---------------------------------------------------------------------------
+# Optimal control
+
+
+@dataclass(frozen=True)
+class _Solution:
+    hit: np.ndarray  # (29, 10) the optimal hit mask
+    q: np.ndarray  # (29, 10, 2) Q* per hidden state
+    values: np.ndarray  # (30, 10) V* per hidden state
+    occupancy: np.ndarray  # (29, 10) P(visit state | up card) under the optimal policy
+
+
+def _greedy_solve(rules: BlackjackRules, hit_at_21: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Backward induction with the soft-21 observation's action fixed per up card.
+
+    Every other observation is one hidden state, so acting greedily there is
+    optimal given the fixed choice. Returns (hit mask, Q, V).
+    """
+    stick = _stick_rewards(rules)
+    values = np.zeros((_N_LIVE + 1, 10))
+    values[_BUST] = -1.0
+    q = np.empty((_N_LIVE, 10, 2))
+    hit = np.zeros((_N_LIVE, 10), dtype=bool)
+    for s in _ORDER:
+        q_hit = _HIT_MATRIX[s] @ values
+        q[s, :, STICK] = stick[s]
+        q[s, :, HIT] = q_hit
+        if s in (_SOFT_21, _NATURAL):
+            hit[s] = hit_at_21
+        else:
+            hit[s] = q_hit > stick[s] + _TIE_TOLERANCE
+        values[s] = np.where(hit[s], q_hit, stick[s])
+    return hit, q, values
+
+
+def _occupancy(hit: np.ndarray) -> np.ndarray:
+    """P(the hand passes through each state | up card) under the hit mask."""
+    occ = np.repeat(_INITIAL[:, None], 10, axis=1)
+    for s in reversed(_ORDER):  # predecessors first
+        occ += _HIT_MATRIX[s, :_N_LIVE, None] * (occ[s] * hit[s])[None, :]
+    return occ
+
+
+@cache
+def _solve(rules: BlackjackRules) -> _Solution:
+    # The only aliased observation is (21, d, 1): a natural or a drawn soft 21.
+    # Try both actions there (per up card, as up cards never mix) and keep the
+    # better start value; all else is ordinary backward induction.
+    never = np.zeros(10, dtype=bool)
+    always = np.ones(10, dtype=bool)
+    stick_start = _greedy_solve(rules, never)[2][:_N_LIVE].T @ _INITIAL
+    hit_start = _greedy_solve(rules, always)[2][:_N_LIVE].T @ _INITIAL
+    hit, q, values = _greedy_solve(rules, hit_start > stick_start + _TIE_TOLERANCE)
+    for arr in (hit, q, values):
+        arr.setflags(write=False)
+    occupancy = _occupancy(hit)
+    occupancy.setflags(write=False)
+    return _Solution(hit=hit, q=q, values=values, occupancy=occupancy)
+
+
+Soft21 = Literal["observation", "natural", "drawn"]
+
+
+def optimal_action_values(
+    rules: BlackjackRules = DEFAULT_RULES, *, soft_21: Soft21 = "observation"
+) -> np.ndarray:
+    """Q*(observation, action), shape ``(32, 11, 2, 2)`` indexed
+    ``[player_sum, dealer_card, usable_ace, action]``.
+
+    The value of taking ``action`` and then playing the optimal policy. Filled
+    for decision states (player sum 4..21 without, 12..21 with a usable ace;
+    dealer card 1..10), NaN elsewhere.
+
+    ``(21, d, 1)`` is either the opening natural or a soft 21 drawn to, and they
+    pay differently under ``natural`` or ``sab`` rules. ``soft_21`` picks which
+    value that entry holds: ``"observation"`` (default) averages the two by how
+    often the optimal policy meets each behind that observation, i.e. the
+    expected value given only what the player sees; ``"natural"`` is the
+    two-card natural (so the deal's value is the initial-distribution-weighted
+    max over actions); ``"drawn"`` is a soft 21 of three or more cards. Under
+    default rules all three coincide.
+    """
+    sol = _solve(rules)
+    if soft_21 == "natural":
+        at_21 = sol.q[_NATURAL]
+    elif soft_21 == "drawn":
+        at_21 = sol.q[_SOFT_21]
+    elif soft_21 == "observation":
+        w_nat = sol.occupancy[_NATURAL][:, None]
+        w_drawn = sol.occupancy[_SOFT_21][:, None]
+        at_21 = (w_nat * sol.q[_NATURAL] + w_drawn * sol.q[_SOFT_21]) / (w_nat + w_drawn)
+    else:
+        raise ValueError(f"soft_21 must be 'observation', 'natural' or 'drawn', not {soft_21!r}")
+    q = np.full((*POLICY_SHAPE, 2), np.nan)
+    live = slice(0, _NATURAL)
+    q[_STATE_SUM[live], 1:, _STATE_USABLE[live]] = sol.q[live]
+    q[21, 1:, 1] = at_21
+    return q
+
+
+def optimal_policy(rules: BlackjackRules = DEFAULT_RULES) -> np.ndarray:
+    """An optimal deterministic policy over observations, `POLICY_SHAPE` int8.
+
+    Hit (1) / stick (0) at every decision state, ties broken towards sticking;
+    0 at states that never need a decision.
+    """
+    sol = _solve(rules)
+    policy = np.zeros(POLICY_SHAPE, dtype=np.int8)
+    policy[_STATE_SUM[:, None], np.arange(1, 11)[None, :], _STATE_USABLE[:, None]] = sol.hit
+    return policy
+
+
+def optimal_value(rules: BlackjackRules = DEFAULT_RULES) -> float:
+    """The exact expected return of an optimal policy from the initial deal."""
+    return _start_value(_solve(rules).values)
+
+
+def policy_from_function(fn: Callable[[int, int, int], int]) -> np.ndarray:
+    """A policy array from ``fn(player_sum, dealer_card, usable_ace) -> 0 | 1``.
+
+    ``fn`` is called once per decision state (`DECISION_MASK`); other entries are 0.
+    """
+    policy = np.zeros(POLICY_SHAPE, dtype=np.int8)
+    for player_sum, dealer_card, usable_ace in zip(*np.nonzero(DECISION_MASK), strict=True):
+        action = fn(int(player_sum), int(dealer_card), int(usable_ace))
+        if action not in (STICK, HIT):
+            raise ValueError(
+                f"fn({player_sum}, {dealer_card}, {usable_ace}) returned {action!r}, not 0 or 1"
+            )
+        policy[player_sum, dealer_card, usable_ace] = int(action)
+    return policy

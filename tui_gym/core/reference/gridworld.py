@@ -1,0 +1,142 @@
+"""Exact answers for GridWorld: shortest paths, and how often a policy takes one.
+
+GridWorld (``tui_gym/GridWorld-v0``) is a square grid of ``size`` cells a side
+with four moves, 0 right (+x), 1 up (+y), 2 left (-x), 3 down (-y), positions
+clipped at the walls, and an episode that ends when the agent reaches the
+target. With no obstacles the shortest path is the Manhattan distance, and a
+move is optimal exactly when it shortens that distance.
+
+Provides:
+
+- `shortest_path_length(agent, target)`: the Manhattan distance;
+- `optimal_actions(agent, target)`: every action that starts a shortest path;
+- `shortest_path_policy(size)`: one optimal greedy policy as an array;
+- `all_pairs(size)`: every (agent, target) placement the env can start from;
+- `optimal_pair_fraction(size, policy)`: the share of start placements from
+  which a deterministic policy reaches the target in the fewest possible steps.
+
+A policy here is an int array of shape ``(size, size, size, size)`` indexed
+``[agent_x, agent_y, target_x, target_y]`` holding the action taken there.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import lru_cache
+
+import numpy as np
+
+__all__ = [
+    "GRID_ACTION_DELTAS",
+    "all_pairs",
+    "optimal_actions",
+    "optimal_pair_fraction",
+    "shortest_path_length",
+    "shortest_path_policy",
+]
+
+GRID_ACTION_DELTAS = np.array([[1, 0], [0, 1], [-1, 0], [0, -1]], dtype=np.int64)
+"""Row ``a``: the (dx, dy) of action ``a`` (right, up, left, down)."""
+GRID_ACTION_DELTAS.setflags(write=False)
+
+
+def _xy(position: Sequence[int] | np.ndarray) -> tuple[int, int]:
+    x, y = (int(v) for v in np.asarray(position).reshape(2))
+    return x, y
+
+
+def shortest_path_length(
+    agent: Sequence[int] | np.ndarray, target: Sequence[int] | np.ndarray
+) -> int:
+    """The fewest steps from ``agent`` to ``target``: their Manhattan distance."""
+    (ax, ay), (tx, ty) = _xy(agent), _xy(target)
+    return abs(tx - ax) + abs(ty - ay)
+
+
+def optimal_actions(
+    agent: Sequence[int] | np.ndarray, target: Sequence[int] | np.ndarray
+) -> tuple[int, ...]:
+    """Every action that starts some shortest path, ascending; ``()`` at the target."""
+    (ax, ay), (tx, ty) = _xy(agent), _xy(target)
+    actions = []
+    if tx > ax:
+        actions.append(0)
+    if ty > ay:
+        actions.append(1)
+    if tx < ax:
+        actions.append(2)
+    if ty < ay:
+        actions.append(3)
+    return tuple(actions)
+
+
+def all_pairs(size: int) -> np.ndarray:
+    """Every start placement: shape ``(size**2 * (size**2 - 1), 4)`` rows of
+    ``[agent_x, agent_y, target_x, target_y]`` with agent != target."""
+    _check_size(size)
+    grid = np.indices((size, size, size, size)).reshape(4, -1).T
+    distinct = (grid[:, 0] != grid[:, 2]) | (grid[:, 1] != grid[:, 3])
+    return grid[distinct]
+
+
+def shortest_path_policy(size: int) -> np.ndarray:
+    """An optimal policy array (int8, ``(size,) * 4``): the lowest-numbered
+    optimal action, so horizontal moves first; 0 where agent == target."""
+    _check_size(size)
+    ax, ay, tx, ty = np.indices((size, size, size, size))
+    policy = np.zeros((size,) * 4, dtype=np.int8)
+    # Fill in reverse preference order so the preferred action wins.
+    policy[ty < ay] = 3
+    policy[tx < ax] = 2
+    policy[ty > ay] = 1
+    policy[tx > ax] = 0
+    return policy
+
+
+def optimal_pair_fraction(size: int, policy: np.ndarray) -> float:
+    """The fraction of start placements (agent != target) from which following
+    ``policy`` deterministically reaches the target in exactly the Manhattan
+    number of steps.
+
+    All placements are simulated at once. Every step changes the distance by at
+    most one, so standing on the target after exactly that many steps means
+    every step was a shortest-path step and the target was not reached sooner.
+    """
+    _check_size(size)
+    pol = np.asarray(policy)
+    if pol.shape != (size,) * 4:
+        raise ValueError(f"policy must have shape {(size,) * 4}, got {pol.shape}")
+    pairs, distance, walking = _placements_by_distance(int(size))
+    used = pol[pairs[:, 0], pairs[:, 1], pairs[:, 2], pairs[:, 3]]
+    if not np.issubdtype(pol.dtype, np.integer) or used.min() < 0 or used.max() > 3:
+        raise ValueError("policy actions must be integers in 0..3 wherever agent != target")
+    agent = pairs[:, :2].copy()
+    target = pairs[:, 2:]
+    reached = np.zeros(len(pairs), dtype=bool)
+    for step in range(1, int(distance[0]) + 1):
+        n, done = walking[step], walking[step + 1]  # rows [done, n) arrive now if ever
+        here = agent[:n]
+        actions = pol[here[:, 0], here[:, 1], target[:n, 0], target[:n, 1]]
+        np.clip(here + GRID_ACTION_DELTAS[actions], 0, size - 1, out=here)
+        reached[done:n] = (here[done:n] == target[done:n]).all(axis=1)
+    return float(reached.mean())
+
+
+@lru_cache(maxsize=16)
+def _placements_by_distance(size: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`all_pairs` sorted farthest first, their distances, and ``walking[k]``: how
+    many placements are at distance >= k (a prefix, so the ones still walking at
+    step k are the first ``walking[k]`` rows)."""
+    pairs = all_pairs(size)
+    distance = np.abs(pairs[:, 2:] - pairs[:, :2]).sum(axis=1)
+    order = np.argsort(-distance, kind="stable")
+    pairs, distance = pairs[order], distance[order]
+    walking = np.searchsorted(-distance, -np.arange(distance.max() + 2), side="right")
+    for arr in (pairs, distance, walking):
+        arr.setflags(write=False)
+    return pairs, distance, walking
+
+
+def _check_size(size: int) -> None:
+    if int(size) != size or size < 2:
+        raise ValueError(f"size must be an integer >= 2, got {size!r}")

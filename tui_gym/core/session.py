@@ -1,0 +1,260 @@
+"""The session: one env, a choice of wrappers, one agent and its trainer.
+
+`Session` is the object every front end drives (the Textual app, the CLI,
+tests, the JSON-lines protocol). It builds the env through the wrapper
+catalog, keeps the agent when a rebuild leaves the observation keys meaning
+the same thing (and says so when it cannot), projects the Q-table onto the
+game's base states for heatmaps and the exact reference, evaluates, saves and
+loads.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Hashable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from tui_gym.core.agent import Hyperparameters, QAgent
+from tui_gym.core.evaluation import EvalReport, evaluate
+from tui_gym.core.heatmap import Heatmap
+from tui_gym.core.obskey import ObservationKeyer
+from tui_gym.core.profiles import GameProfile, ReferenceMetrics, profile_for, resolve_env_id
+from tui_gym.core.training import Trainer, TrainingSnapshot
+from tui_gym.core.wrappers import (
+    CATALOG,
+    WrapperChoice,
+    build_env,
+    build_env_lenient,
+)
+
+# Observation wrappers whose `observation()` is a pure function of the bare
+# observation: the heatmaps and the exact reference can see through them.
+STATELESS_OBSERVATION_WRAPPERS = frozenset({"FlattenObservation"})
+
+
+@dataclass(frozen=True)
+class RebuildReport:
+    """What a rebuild did: whether the agent survived, and why not."""
+
+    kept_agent: bool
+    notice: str
+    skipped: tuple[tuple[WrapperChoice, str], ...] = ()
+
+
+@dataclass
+class _Built:
+    env: gym.Env
+    applied: tuple[WrapperChoice, ...]
+    skipped: tuple[tuple[WrapperChoice, str], ...]
+    keyer: ObservationKeyer
+    n_actions: int
+    meaning: tuple[str, ...]  # what keys mean: the space and the observation-changing wrappers
+
+
+def _build(env_id: str, env_kwargs: Mapping[str, Any], choices: Sequence[WrapperChoice]) -> _Built:
+    env, skipped = build_env_lenient(env_id, env_kwargs, choices)
+    skipped_set = {id(c) for c, _ in skipped}
+    applied = tuple(c for c in choices if id(c) not in skipped_set)
+    if not isinstance(env.action_space, gym.spaces.Discrete):
+        env.close()
+        raise ValueError(
+            f"{env_id} has a {type(env.action_space).__name__} action space; "
+            "a Q-table needs Discrete actions"
+        )
+    keyer = ObservationKeyer(env.observation_space)
+    meaning = (keyer.signature, *(c.name for c in applied if CATALOG[c.name].changes_observation))
+    return _Built(env, applied, tuple(skipped), keyer, int(env.action_space.n), meaning)
+
+
+@dataclass
+class Session:
+    """One game with its wrappers, agent and trainer; what every front end drives."""
+
+    env_id: str = "Blackjack-v1"
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
+    choices: tuple[WrapperChoice, ...] = ()
+    hp: Hyperparameters | None = None  # None: the game's own defaults
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        self.env_id = resolve_env_id(self.env_id)
+        self.profile: GameProfile = profile_for(self.env_id)
+        self.env_kwargs = self.profile.normalize_kwargs(self.env_kwargs)
+        if self.hp is None:
+            self.hp = self.profile.default_hyperparameters()
+        self.choices = tuple(self.choices)
+        self._install(_build(self.env_id, self.env_kwargs, self.choices))
+        self.agent = self._new_agent()
+        self.trainer = self._new_trainer()
+
+    # --- building ---------------------------------------------------------
+    def _install(self, built: _Built) -> None:
+        self._built = built
+        self.env = built.env
+        self.keyer = built.keyer
+        self._base_keys: list[Hashable] | None | bool = False  # False: not computed yet
+
+    def _new_agent(self) -> QAgent:
+        return QAgent(self._built.n_actions, self.hp, n_states=self.keyer.n_states, seed=self.seed)
+
+    def _new_trainer(self) -> Trainer:
+        return Trainer(self.env, self.agent, self.keyer, seed=self.seed)
+
+    @property
+    def applied(self) -> tuple[WrapperChoice, ...]:
+        """The chosen wrappers that fit and are in the env."""
+        return self._built.applied
+
+    @property
+    def skipped(self) -> tuple[tuple[WrapperChoice, str], ...]:
+        """The chosen wrappers that do not fit, each with the reason."""
+        return self._built.skipped
+
+    def chain_repr(self) -> str:
+        """The env's wrapper chain as Gymnasium prints it."""
+        return str(self.env)
+
+    def make_env(self, render_mode: str | None = None) -> gym.Env:
+        """A new env like the training one (same game, same wrappers), e.g. to play on."""
+        return build_env(self.env_id, self.env_kwargs, self.applied, render_mode=render_mode)
+
+    def rebuild(
+        self,
+        env_id: str | None = None,
+        env_kwargs: Mapping[str, Any] | None = None,
+        choices: Sequence[WrapperChoice] | None = None,
+    ) -> RebuildReport:
+        """Change game, env arguments or wrappers; keep the agent when keys keep their meaning.
+
+        Raises ValueError (and changes nothing) for an unknown env or bad arguments.
+        """
+        new_id = resolve_env_id(env_id) if env_id is not None else self.env_id
+        profile = profile_for(new_id)
+        if env_kwargs is None:
+            kwargs = self.env_kwargs if new_id == self.env_id else profile.default_kwargs()
+        else:
+            kwargs = env_kwargs
+        kwargs = profile.normalize_kwargs(kwargs)
+        new_choices = tuple(self.choices if choices is None else choices)
+        built = _build(new_id, kwargs, new_choices)
+        keep = built.meaning == self._built.meaning and built.n_actions == self._built.n_actions
+        old_trainer = self.trainer
+        self.env.close()
+        self.env_id, self.env_kwargs, self.choices, self.profile = (
+            new_id,
+            kwargs,
+            new_choices,
+            profile,
+        )
+        self._install(built)
+        if keep:
+            self.trainer = self._new_trainer()
+            self.trainer.adopt_progress(old_trainer)
+            notice = "Env rebuilt; the agent is kept (observations mean the same)."
+        else:
+            self.agent = self._new_agent()
+            self.trainer = self._new_trainer()
+            notice = "Observations changed meaning, so the agent was reset."
+        if built.skipped:
+            notice += " Not applied: " + "; ".join(reason for _, reason in built.skipped)
+        return RebuildReport(keep, notice, built.skipped)
+
+    def reset_agent(self) -> None:
+        """A fresh agent (same seed) and fresh statistics."""
+        self.env.close()
+        self._install(_build(self.env_id, self.env_kwargs, self.choices))
+        self.agent = self._new_agent()
+        self.trainer = self._new_trainer()
+
+    def set_hyperparameters(self, hp: Hyperparameters) -> None:
+        """New hyperparameters for the rest of the run (the table is kept)."""
+        self.hp = hp
+        self.agent.set_hyperparameters(hp)
+
+    # --- seeing the table -------------------------------------------------
+    def base_keys(self) -> list[Hashable] | None:
+        """Table keys of the profile's base states, or None when wrappers hide them."""
+        if self._base_keys is False:
+            self._base_keys = self._compute_base_keys()
+        return self._base_keys  # type: ignore[return-value]
+
+    def _compute_base_keys(self) -> list[Hashable] | None:
+        for choice in self.applied:
+            spec = CATALOG[choice.name]
+            if spec.changes_observation and choice.name not in STATELESS_OBSERVATION_WRAPPERS:
+                return None
+        layers = []
+        env: Any = self.env
+        while isinstance(env, gym.Wrapper):
+            if isinstance(env, gym.ObservationWrapper):
+                layers.append(env)
+            env = env.env
+        layers.reverse()  # innermost first
+        keys = []
+        for obs in self.profile.base_observations(self.env_kwargs):
+            for layer in layers:
+                obs = layer.observation(obs)
+            keys.append(self.keyer.key(obs))
+        return keys
+
+    def hidden_reason(self) -> str:
+        """Why heatmaps and the exact reference are unavailable (empty when they are)."""
+        if self.base_keys() is not None:
+            return ""
+        names = [
+            c.name
+            for c in self.applied
+            if CATALOG[c.name].changes_observation and c.name not in STATELESS_OBSERVATION_WRAPPERS
+        ]
+        return f"{', '.join(names)} makes observations depend on history; no per-state view"
+
+    def base_q(self, snapshot: TrainingSnapshot | None = None) -> np.ndarray | None:
+        """Q-values of the base states (from a snapshot, or the live agent)."""
+        keys = self.base_keys()
+        if keys is None:
+            return None
+        if snapshot is not None:
+            return snapshot.values(keys)
+        return self.agent.values(keys)
+
+    def reference(self, snapshot: TrainingSnapshot | None = None) -> ReferenceMetrics | None:
+        """The exact comparison of the greedy policy with the optimum."""
+        q = self.base_q(snapshot)
+        return None if q is None else self.profile.reference(q, self.env_kwargs)
+
+    def heatmaps(
+        self, snapshot: TrainingSnapshot | None = None, focus: Any = None
+    ) -> list[Heatmap] | None:
+        q = self.base_q(snapshot)
+        return None if q is None else self.profile.heatmaps(q, self.env_kwargs, focus)
+
+    # --- evaluating, saving -----------------------------------------------
+    def evaluate(
+        self, episodes: int = 10_000, seed: int | None = None, progress=None
+    ) -> EvalReport:
+        """Greedy play on a fresh env; `seed` defaults to one derived from the session's."""
+        env = self.make_env()
+        try:
+            eval_seed = self.seed + 1_000_003 if seed is None else seed
+            return evaluate(
+                env, self.agent, self.keyer, self.profile, episodes, eval_seed, progress
+            )
+        finally:
+            env.close()
+
+    def save(self, path: str | Path) -> Path:
+        """Write the agent and everything needed to rebuild this session (atomically)."""
+        from tui_gym.core.storage import save_session
+
+        return save_session(self, path)
+
+    @classmethod
+    def load(cls, path: str | Path) -> Session:
+        """A session rebuilt from a saved file; StorageError names the file when it cannot."""
+        from tui_gym.core.storage import load_session
+
+        return load_session(path)

@@ -1,0 +1,282 @@
+"""The trainer: episodes of Q-learning in chunks, with bounded live statistics.
+
+`Trainer` drives one env and one `QAgent`. A front end calls `run(episodes=…)`
+or `run(seconds=…)` in chunks (or `step()` one move at a time to animate),
+so it can interleave drawing, pausing and changing settings. Per-episode
+return, length, mean |TD error| and epsilon go into `RollingWindow`s and
+whole-run `Series`, so memory is fixed however long it runs. `snapshot()`
+returns an immutable `TrainingSnapshot` (numpy copies) for viewers on other
+threads; `latest` holds the most recent one, refreshed while `run` works.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable, Hashable
+from dataclasses import dataclass, field
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from tui_gym.core.agent import QAgent
+from tui_gym.core.obskey import ObservationKeyer
+from tui_gym.core.stats import EpisodeStats, RollingWindow, Series
+
+SERIES_NAMES = ("return", "length", "td_error", "epsilon")
+
+
+@dataclass(frozen=True)
+class TrainingSnapshot:
+    """What a viewer needs to draw one frame of training; never changes."""
+
+    engine: str
+    episodes: int
+    steps: int
+    seconds: float  # time spent training
+    episodes_per_second: float  # recent rate
+    epsilon: float
+    mean_return: float  # over the rolling window
+    mean_length: float
+    mean_abs_td: float
+    window: int
+    series: dict[str, tuple[float, ...]]  # whole-run history per quantity
+    q: np.ndarray  # copy of the Q-table (rows used)
+    keys: list[Hashable] | None  # the key of each row for sparse tables, None when dense
+    budget: int  # the episode budget from the hyperparameters
+    last: EpisodeStats | None = None
+    version: int = 0  # increases with every snapshot of a run
+    _lookup: dict[Hashable, int] | None = field(default=None, repr=False, compare=False)
+
+    def values(self, keys: list[Hashable]) -> np.ndarray:
+        """Q-values for the given keys (zeros for unseen states), like `QAgent.values`."""
+        out = np.zeros((len(keys), self.q.shape[1]))
+        if self.keys is None:
+            if keys:
+                out[:] = self.q[np.asarray(keys, dtype=np.int64)]
+            return out
+        lookup = self._lookup
+        if lookup is None:
+            lookup = {k: i for i, k in enumerate(self.keys)}
+            object.__setattr__(self, "_lookup", lookup)
+        for i, key in enumerate(keys):
+            row = lookup.get(key)
+            if row is not None:
+                out[i] = self.q[row]
+        return out
+
+    @property
+    def progress(self) -> float:
+        return min(1.0, self.episodes / self.budget) if self.budget else 0.0
+
+
+@dataclass(frozen=True)
+class StepEvent:
+    """One move of the agent, for animated training."""
+
+    observation: Any
+    action: int
+    reward: float
+    next_observation: Any
+    terminated: bool
+    truncated: bool
+    episode_done: EpisodeStats | None
+
+
+class Trainer:
+    """Runs Q-learning on one env, a step, an episode or a chunk at a time."""
+
+    engine = "scalar"
+
+    def __init__(
+        self,
+        env: gym.Env,
+        agent: QAgent,
+        keyer: ObservationKeyer,
+        *,
+        seed: int | None = None,
+        window: int = 1000,
+        series_capacity: int = 256,
+        publish_interval: float = 0.1,
+    ) -> None:
+        self.env = env
+        self.agent = agent
+        self.keyer = keyer
+        self.seed = seed
+        self.publish_interval = publish_interval
+        self.episodes = 0
+        self.steps = 0
+        self.seconds = 0.0
+        self.windows = {name: RollingWindow(window) for name in SERIES_NAMES}
+        self.series = {name: Series(series_capacity) for name in SERIES_NAMES}
+        self.last: EpisodeStats | None = None
+        self._obs: Any = None
+        self._key: Hashable | None = None
+        self._ep_return = 0.0
+        self._ep_len = 0
+        self._ep_td = 0.0
+        self._rate_mark = (0.0, 0)  # (seconds, episodes) at the last rate sample
+        self._rate = 0.0
+        self._version = 0
+        self.latest: TrainingSnapshot = self.snapshot()
+
+    # --- one move --------------------------------------------------------
+    def _begin_episode(self) -> None:
+        if self.episodes == 0 and self._obs is None and self.seed is not None:
+            obs, _ = self.env.reset(seed=self.seed)
+        else:
+            obs, _ = self.env.reset()
+        self._obs = obs
+        self._key = self.keyer.key(obs)
+        self._ep_return = 0.0
+        self._ep_len = 0
+        self._ep_td = 0.0
+
+    def step(self) -> StepEvent:
+        """Take one environment step (starting an episode if none is running)."""
+        if self._obs is None:
+            self._begin_episode()
+        obs, key = self._obs, self._key
+        agent = self.agent
+        action = agent.act(key)
+        next_obs, reward, terminated, truncated, _ = self.env.step(action)
+        next_key = self.keyer.key(next_obs)
+        td = agent.update(key, action, float(reward), bool(terminated), next_key)
+        self.steps += 1
+        self._ep_return += float(reward)
+        self._ep_len += 1
+        self._ep_td += abs(td)
+        done_stats = None
+        if terminated or truncated:
+            done_stats = self._finish_episode()
+        else:
+            self._obs, self._key = next_obs, next_key
+        return StepEvent(obs, action, float(reward), next_obs, bool(terminated),
+                         bool(truncated), done_stats)
+
+    def _finish_episode(self) -> EpisodeStats:
+        stats = EpisodeStats(
+            episode_return=self._ep_return,
+            length=self._ep_len,
+            mean_abs_td=self._ep_td / max(1, self._ep_len),
+            epsilon=self.agent.epsilon,
+        )
+        self.agent.end_episode()
+        self.episodes += 1
+        self.last = stats
+        windows, series = self.windows, self.series
+        for name, value in zip(
+            SERIES_NAMES,
+            (stats.episode_return, stats.length, stats.mean_abs_td, stats.epsilon),
+            strict=True,
+        ):
+            window = windows[name]
+            window.push(value)
+            series[name].push(window.mean)
+        self._obs = None
+        return stats
+
+    def run_episode(self) -> EpisodeStats:
+        """Play one whole episode (finishing the one in progress, if any)."""
+        while True:
+            event = self.step()
+            if event.episode_done is not None:
+                return event.episode_done
+
+    # --- chunks ----------------------------------------------------------
+    def run(
+        self,
+        episodes: int | None = None,
+        seconds: float | None = None,
+        stop: threading.Event | None = None,
+        on_publish: Callable[[TrainingSnapshot], None] | None = None,
+    ) -> int:
+        """Run until `episodes` more episodes, `seconds` elapse, or `stop` is set.
+
+        Returns the number of episodes finished. Publishes a fresh snapshot
+        to `latest` (and `on_publish`) every `publish_interval` seconds.
+        """
+        if episodes is None and seconds is None and stop is None:
+            raise ValueError("run() needs episodes, seconds or a stop event")
+        start = time.perf_counter()
+        next_publish = start + self.publish_interval
+        done = 0
+        check_every = 16
+        while episodes is None or done < episodes:
+            self.run_episode()
+            done += 1
+            if done % check_every:
+                continue
+            now = time.perf_counter()
+            if seconds is not None and now - start >= seconds:
+                break
+            if stop is not None and stop.is_set():
+                break
+            if now >= next_publish:
+                self.seconds += now - start
+                start = now
+                self.publish(on_publish)
+                next_publish = now + self.publish_interval
+        self.seconds += time.perf_counter() - start
+        self.publish(on_publish)
+        return done
+
+    def publish(self, callback: Callable[[TrainingSnapshot], None] | None = None) -> None:
+        snap = self.snapshot()
+        self.latest = snap
+        if callback is not None:
+            callback(snap)
+
+    def _update_rate(self) -> float:
+        t0, e0 = self._rate_mark
+        dt = self.seconds - t0
+        if dt >= 0.5:
+            self._rate = (self.episodes - e0) / dt
+            self._rate_mark = (self.seconds, self.episodes)
+        elif self._rate == 0.0 and dt > 0:
+            return (self.episodes - e0) / dt
+        return self._rate
+
+    def snapshot(self) -> TrainingSnapshot:
+        """An immutable copy of the current statistics and Q-table."""
+        q, keys = self.agent.table()
+        self._version += 1
+        w = self.windows
+        return TrainingSnapshot(
+            engine=self.engine,
+            episodes=self.episodes,
+            steps=self.steps,
+            seconds=self.seconds,
+            episodes_per_second=self._update_rate(),
+            epsilon=self.agent.epsilon,
+            mean_return=w["return"].mean,
+            mean_length=w["length"].mean,
+            mean_abs_td=w["td_error"].mean,
+            window=w["return"].size,
+            series={name: s.points() for name, s in self.series.items()},
+            q=q,
+            keys=keys,
+            budget=self.agent.hp.episodes,
+            last=self.last,
+            version=self._version,
+        )
+
+    def adopt_progress(self, other: Trainer) -> None:
+        """Carry on another trainer's counts and statistics (the agent is shared)."""
+        self.episodes, self.steps, self.seconds = other.episodes, other.steps, other.seconds
+        self.windows, self.series, self.last = other.windows, other.series, other.last
+        self._rate_mark, self._rate = other._rate_mark, other._rate
+        self._version = other._version
+        self.publish()
+
+    def episode_in_progress(self) -> bool:
+        return self._obs is not None
+
+    def current_observation(self) -> Any:
+        """The observation the agent is about to act on (None between episodes)."""
+        return self._obs
+
+    @property
+    def remaining(self) -> int:
+        return max(0, self.agent.hp.episodes - self.episodes)

@@ -1,0 +1,142 @@
+"""Building an env from an id and a list of wrapper choices.
+
+Provides `build_env` (strict: a choice that does not fit raises
+`WrapperMismatchError`), `build_env_lenient` (applies what fits, returns what it
+skipped and why), `check_choices` (the same verdicts without keeping the env)
+and `UnknownEnvError`.
+
+Choices apply in order, the first innermost. A `TimeLimit` put directly on
+top of another replaces it (see `catalog.replace_time_limit`), so choosing
+`TimeLimit:max_episode_steps=500` first on GridWorld gives 500-step episodes,
+just as `gym.make(..., max_episode_steps=500)` would, not a second limit that
+could only shorten the registered 300.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import gymnasium as gym
+
+import tui_gym.envs
+from tui_gym.core.wrappers.catalog import (
+    WrapperChoice,
+    WrapperMismatchError,
+    WrapperSpec,
+    get_spec,
+)
+from tui_gym.core.wrappers.fits import env_label
+
+__all__ = ["UnknownEnvError", "build_env", "build_env_lenient", "check_choices"]
+
+
+class UnknownEnvError(ValueError):
+    """An env id Gymnasium does not know (one line, with the nearest known ids)."""
+
+    def __init__(self, env_id: str) -> None:
+        near = difflib.get_close_matches(env_id, list(gym.registry), n=3, cutoff=0.75)
+        hint = f"; did you mean {' or '.join(repr(n) for n in near)}?" if near else ""
+        super().__init__(f"unknown environment {env_id!r}{hint}")
+        self.env_id = env_id
+
+
+@dataclass
+class _Planned:
+    index: int
+    choice: WrapperChoice
+    spec: WrapperSpec
+    values: dict[str, Any]
+
+
+def _make(env_id: str, kwargs: Mapping[str, Any], render_mode: str | None) -> gym.Env:
+    tui_gym.envs.register_envs()  # our ids exist even if `tui_gym` was imported oddly
+    try:
+        return gym.make(env_id, render_mode=render_mode, **kwargs)
+    except gym.error.UnregisteredEnv as error:
+        raise UnknownEnvError(env_id) from error
+
+
+def _assemble(
+    env_id: str,
+    env_kwargs: Mapping[str, Any] | None,
+    choices: Sequence[WrapperChoice],
+    render_mode: str | None,
+    *,
+    strict: bool,
+) -> tuple[gym.Env, list[str | None]]:
+    """The env, and per choice None (applied) or the reason it was skipped."""
+    reasons: list[str | None] = [None] * len(choices)
+    planned: list[_Planned] = []
+    for index, choice in enumerate(choices):
+        try:
+            spec = get_spec(choice.name)
+            planned.append(_Planned(index, choice, spec, spec.validate(choice.values())))
+        except ValueError as error:
+            if strict:
+                raise
+            reasons[index] = str(error)
+
+    env = _make(env_id, env_kwargs or {}, render_mode)
+
+    for item in planned:
+        reason = item.spec.fits(env, item.values)
+        if reason is None:
+            try:
+                env = item.spec.factory(env, **item.values)
+                continue
+            except (ValueError, TypeError, NotImplementedError, gym.error.Error) as error:
+                reason = f"{item.spec.name} could not wrap {env_label(env)}: {error}"
+        if strict:
+            env.close()
+            raise WrapperMismatchError(reason, item.choice)
+        reasons[item.index] = reason
+    return env, reasons
+
+
+def build_env(
+    env_id: str,
+    env_kwargs: Mapping[str, Any] | None = None,
+    choices: Sequence[WrapperChoice] = (),
+    render_mode: str | None = None,
+) -> gym.Env:
+    """`gym.make(env_id, render_mode=..., **env_kwargs)` wrapped by `choices`, first innermost.
+
+    Raises `UnknownEnvError` for an unknown id, `UnknownWrapperError` or
+    `ValueError` for a bad choice, and `WrapperMismatchError` when a choice
+    does not fit the env as built so far.
+    """
+    env, _ = _assemble(env_id, env_kwargs, choices, render_mode, strict=True)
+    return env
+
+
+def build_env_lenient(
+    env_id: str,
+    env_kwargs: Mapping[str, Any] | None = None,
+    choices: Sequence[WrapperChoice] = (),
+    render_mode: str | None = None,
+) -> tuple[gym.Env, list[tuple[WrapperChoice, str]]]:
+    """Like `build_env`, but skips the choices that do not fit (or are invalid).
+
+    Returns the env and the skipped choices, each with the reason.
+    """
+    env, reasons = _assemble(env_id, env_kwargs, choices, render_mode, strict=False)
+    skipped = [(c, r) for c, r in zip(choices, reasons, strict=True) if r is not None]
+    return env, skipped
+
+
+def check_choices(
+    env_id: str,
+    env_kwargs: Mapping[str, Any] | None = None,
+    choices: Sequence[WrapperChoice] = (),
+) -> list[tuple[WrapperChoice, str | None]]:
+    """For each choice, None if it would apply, else why not.
+
+    The env is built progressively, leaving out the misfits, as
+    `build_env_lenient` would, then closed.
+    """
+    env, reasons = _assemble(env_id, env_kwargs, choices, None, strict=False)
+    env.close()
+    return list(zip(choices, reasons, strict=True))

@@ -1,0 +1,363 @@
+"""GridWorld: Gymnasium's quick-start custom environment, made correct.
+
+Provides `GridWorldEnv` (registered as `tui_gym/GridWorld-v0` and
+`gymnasium_env/GridWorld-v0`), the action tables `ACTION_NAMES` and
+`ACTION_DELTAS`, the `manhattan` distance helper, and the colours and cell size
+the `rgb_array` renderer draws with. Rendering needs no pygame: text for
+"ansi"/"human", a numpy-drawn image for "rgb_array".
+
+Differences from the tutorial's version: every observation is a new array (the
+tutorial hands back the same objects each step, which Gymnasium's checker
+flags), arguments are validated, reset can place the agent and target
+explicitly, and the reward can be scaled or given a per-step penalty.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Iterable, Sequence
+from typing import Any, SupportsInt
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from gymnasium.error import ResetNeeded
+from numpy.typing import NDArray
+
+__all__ = [
+    "ACTION_DELTAS",
+    "ACTION_NAMES",
+    "AGENT_COLOR",
+    "BACKGROUND_COLOR",
+    "CELL_PIXELS",
+    "GRID_LINE_COLOR",
+    "TARGET_COLOR",
+    "GridWorldEnv",
+    "manhattan",
+]
+
+Position = tuple[int, int]
+ObsType = dict[str, NDArray[np.int64]]
+
+# The tutorial's mapping: x grows to the right, y grows upwards.
+ACTION_NAMES: tuple[str, ...] = ("right", "up", "left", "down")
+ACTION_DELTAS: tuple[Position, ...] = ((1, 0), (0, 1), (-1, 0), (0, -1))
+
+# rgb_array drawing: each cell is CELL_PIXELS square, with a one-pixel grid line
+# on every cell boundary (the image is size * CELL_PIXELS + 1 pixels a side).
+CELL_PIXELS = 32
+BACKGROUND_COLOR: tuple[int, int, int] = (255, 255, 255)
+GRID_LINE_COLOR: tuple[int, int, int] = (190, 190, 190)
+AGENT_COLOR: tuple[int, int, int] = (40, 90, 220)
+TARGET_COLOR: tuple[int, int, int] = (220, 40, 40)
+
+_RENDER_MODES: tuple[str | None, ...] = (None, "ansi", "human", "rgb_array")
+_DELTAS = np.array(ACTION_DELTAS, dtype=np.int64)
+_DELTAS.flags.writeable = False
+
+
+def manhattan(a: Iterable[SupportsInt], b: Iterable[SupportsInt]) -> int:
+    """Manhattan (L1) distance between two grid positions, as a Python int."""
+    return sum(abs(int(p) - int(q)) for p, q in zip(a, b, strict=True))
+
+
+def _is_int(value: object) -> bool:
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool | np.bool_)
+
+
+def _is_real(value: object) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)
+
+
+class GridWorldEnv(gym.Env[ObsType, int]):
+    """
+    An agent walks a square grid to reach a target.
+
+    ## Description
+    The grid is `size` x `size` cells. An agent and a target are placed on two
+    different cells at random; the agent moves one cell at a time until it stands
+    on the target. Moves into a wall leave the agent where it was (`np.clip`).
+    The shortest episode takes exactly the Manhattan distance between the two.
+
+    This is the environment of Gymnasium's "Create a custom environment"
+    tutorial, with the same spaces and action mapping, but every observation is
+    a new array, so keeping or mutating one never affects the environment.
+
+    ## Action Space
+    The action is an `int` in `{0, 3}` (`Discrete(4)`) naming the direction to
+    move. `x` grows to the right and `y` grows upwards:
+
+    - 0: Move right (`x + 1`)
+    - 1: Move up (`y + 1`)
+    - 2: Move left (`x - 1`)
+    - 3: Move down (`y - 1`)
+
+    ## Observation Space
+    A dict of two `np.int64` arrays of shape `(2,)` holding `(x, y)` positions,
+    each coordinate in `[0, size - 1]`:
+
+    - `"agent"`: where the agent stands.
+    - `"target"`: where the target is.
+
+    `reset()` and `step()` also return `info = {"distance": d}`, the Manhattan
+    distance (a Python `int`) from the agent to the target.
+
+    ## Rewards
+    - Reaching the target: `+reward_scale` (default `+1`).
+    - Any other step: `-step_penalty` (default `0`).
+
+    ## Starting State
+    The agent is placed uniformly at random; the target uniformly at random on a
+    different cell (resampled until it differs from the agent). Either or both
+    can be placed explicitly with
+    `reset(options={"agent": (x, y), "target": (x, y)})`; they must differ.
+
+    ## Episode End
+    The episode ends if the following happens:
+
+    - Termination:
+        1. The agent stands on the target.
+
+    - Truncation (using the time_limit wrapper):
+        1. The length of the episode is 300 (`max_episode_steps` of the
+           registered ids). The environment itself never truncates.
+
+    ## Arguments
+    ```python
+    import gymnasium as gym
+    import tui_gym  # registers the ids
+
+    gym.make(
+        "tui_gym/GridWorld-v0",
+        render_mode=None,
+        size=5,
+        reward_scale=1.0,
+        step_penalty=0.0,
+    )
+    ```
+
+    * `render_mode=None`: one of `None`, `"ansi"` (`render()` returns the grid as
+      text), `"human"` (the text is printed on every reset and step) or
+      `"rgb_array"` (`render()` returns a `uint8` image of shape `(H, W, 3)`).
+      In the text, `y = size - 1` is the top row, so "up" moves up on screen;
+      `A` is the agent, `T` the target, `*` the agent on the target, `.` empty.
+    * `size=5`: cells per side, an integer `>= 2`.
+    * `reward_scale=1.0`: reward for reaching the target; any finite number.
+    * `step_penalty=0.0`: cost of every step that does not reach the target;
+      finite and `>= 0`.
+    """
+
+    metadata: dict[str, Any] = {"render_modes": ["ansi", "human", "rgb_array"], "render_fps": 4}
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        size: int = 5,
+        reward_scale: float = 1.0,
+        step_penalty: float = 0.0,
+    ) -> None:
+        if not _is_int(size) or size < 2:
+            raise ValueError(f"GridWorld size must be an integer >= 2, got {size!r}")
+        if not _is_real(reward_scale) or not math.isfinite(reward_scale):
+            raise ValueError(
+                f"GridWorld reward_scale must be a finite number, got {reward_scale!r}"
+            )
+        if not _is_real(step_penalty) or not math.isfinite(step_penalty) or step_penalty < 0:
+            raise ValueError(
+                f"GridWorld step_penalty must be a finite number >= 0, got {step_penalty!r}"
+            )
+        if render_mode not in _RENDER_MODES:
+            valid = ", ".join(repr(mode) for mode in _RENDER_MODES)
+            raise ValueError(f"GridWorld render_mode must be one of {valid}, got {render_mode!r}")
+
+        self.size = int(size)
+        self.reward_scale = float(reward_scale)
+        self.step_penalty = float(step_penalty)
+        self.render_mode = render_mode
+
+        self.observation_space = spaces.Dict(
+            {
+                "agent": spaces.Box(0, self.size - 1, shape=(2,), dtype=np.int64),
+                "target": spaces.Box(0, self.size - 1, shape=(2,), dtype=np.int64),
+            }
+        )
+        self.action_space = spaces.Discrete(len(ACTION_NAMES))
+
+        # Positions are kept as tuples of Python ints, so nothing returned to a
+        # caller can alias the environment's state.
+        self._agent: Position | None = None
+        self._target: Position | None = None
+        self._background: NDArray[np.uint8] | None = None
+
+    # -- state -------------------------------------------------------------
+
+    @property
+    def agent_position(self) -> Position:
+        """The agent's `(x, y)`; raises `ResetNeeded` before the first reset."""
+        return self._require_state()[0]
+
+    @property
+    def target_position(self) -> Position:
+        """The target's `(x, y)`; raises `ResetNeeded` before the first reset."""
+        return self._require_state()[1]
+
+    def _require_state(self) -> tuple[Position, Position]:
+        if self._agent is None or self._target is None:
+            raise ResetNeeded("GridWorld: call reset() before step() or render()")
+        return self._agent, self._target
+
+    def _get_obs(self) -> ObsType:
+        agent, target = self._require_state()
+        return {
+            "agent": np.array(agent, dtype=np.int64),
+            "target": np.array(target, dtype=np.int64),
+        }
+
+    def _get_info(self) -> dict[str, Any]:
+        agent, target = self._require_state()
+        return {"distance": manhattan(agent, target)}
+
+    def _random_position(self) -> Position:
+        x, y = self.np_random.integers(0, self.size, size=2, dtype=np.int64)
+        return int(x), int(y)
+
+    def _option_position(self, options: dict[str, Any], key: str) -> Position | None:
+        if key not in options or options[key] is None:
+            return None
+        value = options[key]
+        array = np.asarray(value)
+        if (
+            array.shape != (2,)
+            or not np.issubdtype(array.dtype, np.integer)
+            or np.any(array < 0)
+            or np.any(array >= self.size)
+        ):
+            raise ValueError(
+                f"GridWorld reset option {key!r} must be two integers (x, y) in "
+                f"[0, {self.size - 1}], got {value!r}"
+            )
+        return int(array[0]), int(array[1])
+
+    # -- gymnasium API -----------------------------------------------------
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[ObsType, dict[str, Any]]:
+        super().reset(seed=seed)
+        options = {} if options is None else options
+        unknown = set(options) - {"agent", "target"}
+        if unknown:
+            raise ValueError(
+                f"GridWorld reset options accept 'agent' and 'target', got {sorted(unknown)!r}"
+            )
+        agent = self._option_position(options, "agent")
+        target = self._option_position(options, "target")
+        if agent is not None and agent == target:
+            raise ValueError(
+                f"GridWorld reset options put the agent and the target on the same cell "
+                f"{agent}; they must differ"
+            )
+
+        # The tutorial's order: the agent first, then resample the target until
+        # it differs (uniform over the other cells).
+        if agent is None:
+            agent = self._random_position()
+            while agent == target:
+                agent = self._random_position()
+        while target is None or target == agent:
+            target = self._random_position()
+
+        self._agent, self._target = agent, target
+        if self.render_mode == "human":
+            self.render()
+        return self._get_obs(), self._get_info()
+
+    def step(self, action: int) -> tuple[ObsType, float, bool, bool, dict[str, Any]]:
+        agent, target = self._require_state()
+        if not self.action_space.contains(action):
+            raise ValueError(
+                f"GridWorld action must be an integer in [0, {len(ACTION_NAMES) - 1}] "
+                f"{ACTION_NAMES}, got {action!r}"
+            )
+        moved = np.clip(np.add(agent, _DELTAS[int(action)]), 0, self.size - 1)
+        self._agent = (int(moved[0]), int(moved[1]))
+
+        terminated = self._agent == target
+        # `0.0 - penalty` rather than `-penalty`, so no penalty gives 0.0 and not -0.0.
+        reward = self.reward_scale if terminated else 0.0 - self.step_penalty
+        if self.render_mode == "human":
+            self.render()
+        return self._get_obs(), reward, terminated, False, self._get_info()
+
+    def render(self) -> str | NDArray[np.uint8] | None:
+        if self.render_mode is None:
+            env_id = self.spec.id if self.spec is not None else "tui_gym/GridWorld-v0"
+            gym.logger.warn(
+                "You are calling render method without specifying any render mode. "
+                "You can specify the render_mode at initialization, "
+                f'e.g. gym.make("{env_id}", render_mode="rgb_array")'
+            )
+            return None
+        if self.render_mode == "ansi":
+            return self._render_text()
+        if self.render_mode == "human":
+            print(self._render_text(), flush=True)
+            return None
+        return self._render_rgb()
+
+    def close(self) -> None:
+        self._background = None
+
+    # -- drawing -----------------------------------------------------------
+
+    def _render_text(self) -> str:
+        agent, target = self._require_state()
+        border = "+" + "-" * (2 * self.size + 1) + "+"
+        lines = [border]
+        for y in range(self.size - 1, -1, -1):
+            cells = []
+            for x in range(self.size):
+                if (x, y) == agent:
+                    cells.append("*" if agent == target else "A")
+                elif (x, y) == target:
+                    cells.append("T")
+                else:
+                    cells.append(".")
+            lines.append("| " + " ".join(cells) + " |")
+        lines.append(border)
+        return "\n".join(lines)
+
+    def _cell_origin(self, position: Sequence[int]) -> tuple[int, int]:
+        """Top-left pixel (row, col) inside the cell at `position`; y grows upwards."""
+        x, y = position
+        return (self.size - 1 - y) * CELL_PIXELS + 1, x * CELL_PIXELS + 1
+
+    def _grid_image(self) -> NDArray[np.uint8]:
+        if self._background is None:
+            side = self.size * CELL_PIXELS + 1
+            image = np.empty((side, side, 3), dtype=np.uint8)
+            image[:] = BACKGROUND_COLOR
+            image[::CELL_PIXELS, :] = GRID_LINE_COLOR
+            image[:, ::CELL_PIXELS] = GRID_LINE_COLOR
+            self._background = image
+        return self._background.copy()
+
+    def _render_rgb(self) -> NDArray[np.uint8]:
+        agent, target = self._require_state()
+        image = self._grid_image()
+        inner = CELL_PIXELS - 1  # pixels inside a cell, between its grid lines
+
+        margin = inner // 6
+        row, col = self._cell_origin(target)
+        image[row + margin : row + inner - margin, col + margin : col + inner - margin] = (
+            TARGET_COLOR
+        )
+
+        # The agent is drawn last, so on the target it shows as a disc on red.
+        row, col = self._cell_origin(agent)
+        centre = (inner - 1) / 2
+        yy, xx = np.mgrid[0:inner, 0:inner]
+        disc = (yy - centre) ** 2 + (xx - centre) ** 2 <= (0.36 * inner) ** 2
+        image[row : row + inner, col : col + inner][disc] = AGENT_COLOR
+        return image
