@@ -84,7 +84,8 @@ class Hyperparameters:
     epsilon_final: float = 0.05  # exploration rate once the decay is over
     epsilon_decay_fraction: float = 0.5  # share of the episode budget spent decaying, linearly
     episodes: int = 200_000  # the training budget, in episodes
-    learning_rate_schedule: str = "visits"  # "constant" (the tutorial's) or "visits": max(lr, 1/n(s,a))
+    # "constant" (the tutorial's) or "visits": max(learning_rate, 1/n(s, a))
+    learning_rate_schedule: str = "visits"
 
     def __post_init__(self) -> None:
         for rng in HYPERPARAMETER_FIELDS:
@@ -169,7 +170,7 @@ class QAgent:
         rows = n_states if n_states is not None else 256
         self.q = np.zeros((rows, self.n_actions), dtype=np.float64)
         self.visits = np.zeros(rows, dtype=np.int64)  # updates per state
-        self.counts = np.zeros((rows, self.n_actions), dtype=np.int64)  # updates per (state, action)
+        self.counts = np.zeros((rows, self.n_actions), dtype=np.int64)  # per (state, action)
         self._rows_used = rows if n_states is not None else 0
 
     # --- the table -------------------------------------------------------
@@ -229,16 +230,30 @@ class QAgent:
             keys[row] = key
         return self.q[: self._rows_used].copy(), keys
 
-    def load_table(self, q: np.ndarray, keys: list[Hashable] | None) -> None:
-        """Replace the table (the inverse of `table()`)."""
+    def update_counts(self) -> np.ndarray:
+        """A copy of the per-(state, action) update counts, rows as in `table()`."""
+        rows = len(self.q) if self._index is None else self._rows_used
+        return self.counts[:rows].copy()
+
+    def load_table(
+        self, q: np.ndarray, keys: list[Hashable] | None, counts: np.ndarray | None = None
+    ) -> None:
+        """Replace the table (the inverse of `table()` and `update_counts()`)."""
         q = np.asarray(q, dtype=np.float64)
+        if counts is None:
+            # Unknown history: treat every learned value as well established.
+            counts = np.where(q != 0, 1_000_000, 0)
+        counts = np.asarray(counts, dtype=np.int64)
+        if counts.shape != q.shape:
+            raise ValueError(f"update counts have shape {counts.shape}, Q-table {q.shape}")
         if q.ndim != 2 or q.shape[1] != self.n_actions:
             raise ValueError(f"Q-table must have shape (states, {self.n_actions}), got {q.shape}")
         if keys is None:
             if self.n_states is None or q.shape[0] != self.n_states:
                 raise ValueError("a dense Q-table must have one row per state")
             self.q = q.copy()
-            self.visits = np.where(np.any(q != 0, axis=1), 1, 0).astype(np.int64)
+            self.counts = counts.copy()
+            self.visits = counts.sum(axis=1)
             return
         if self.n_states is not None:
             raise ValueError("this agent has a dense table; the saved one is sparse")
@@ -247,8 +262,9 @@ class QAgent:
         self._index = {key: i for i, key in enumerate(keys)}
         self.q = np.zeros((max(256, len(q)), self.n_actions))
         self.q[: len(q)] = q
-        self.visits = np.zeros(len(self.q), dtype=np.int64)
-        self.visits[: len(q)] = 1
+        self.counts = np.zeros(self.q.shape, dtype=np.int64)
+        self.counts[: len(q)] = counts
+        self.visits = self.counts.sum(axis=1)
         self._rows_used = len(q)
 
     # --- acting ----------------------------------------------------------

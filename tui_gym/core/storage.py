@@ -86,6 +86,9 @@ def save_session(session: Session, path: str | Path) -> Path:
         qbuf = io.BytesIO()
         np.save(qbuf, q, allow_pickle=False)
         zf.writestr("q.npy", qbuf.getvalue())
+        cbuf = io.BytesIO()
+        np.save(cbuf, session.agent.update_counts(), allow_pickle=False)
+        zf.writestr("counts.npy", cbuf.getvalue())
         if keys is not None:
             zf.writestr("keys.json", json.dumps([_key_to_json(k) for k in keys]))
     try:
@@ -95,8 +98,10 @@ def save_session(session: Session, path: str | Path) -> Path:
     return path
 
 
-def read_file(path: str | Path) -> tuple[dict[str, Any], np.ndarray, list[Any] | None]:
-    """Meta, Q-table and sparse keys of a save file; StorageError when it is not one."""
+def read_file(
+    path: str | Path,
+) -> tuple[dict[str, Any], np.ndarray, list[Any] | None, np.ndarray | None]:
+    """Meta, Q-table, sparse keys and update counts of a save file; StorageError if not one."""
     path = Path(path)
     try:
         raw = path.read_bytes()
@@ -123,6 +128,9 @@ def read_file(path: str | Path) -> tuple[dict[str, Any], np.ndarray, list[Any] |
                     f"this one reads up to {FORMAT_VERSION}); upgrade tui-gym to open it"
                 )
             q = np.load(io.BytesIO(zf.read("q.npy")), allow_pickle=False)
+            counts = None
+            if "counts.npy" in names:
+                counts = np.load(io.BytesIO(zf.read("counts.npy")), allow_pickle=False)
             keys = None
             if "keys.json" in names:
                 keys = [_key_from_json(k) for k in json.loads(zf.read("keys.json"))]
@@ -132,7 +140,7 @@ def read_file(path: str | Path) -> tuple[dict[str, Any], np.ndarray, list[Any] |
         raise StorageError(f"{path}: not a tui-gym save file (corrupt or truncated)") from None
     except (KeyError, ValueError, UnicodeDecodeError, zipfile.LargeZipFile, OSError) as exc:
         raise StorageError(f"{path}: corrupt save file ({exc})") from None
-    return meta, q, keys
+    return meta, q, keys, counts
 
 
 def load_session(path: str | Path) -> Session:
@@ -140,7 +148,7 @@ def load_session(path: str | Path) -> Session:
     from tui_gym.core.session import Session
     from tui_gym.core.wrappers import parse_wrapper_spec
 
-    meta, q, keys = read_file(path)
+    meta, q, keys, counts = read_file(path)
     try:
         session = Session(
             env_id=str(meta["env_id"]),
@@ -151,7 +159,7 @@ def load_session(path: str | Path) -> Session:
         )
         if q.ndim != 2 or q.shape[1] != session.agent.n_actions:
             raise ValueError(f"Q-table shape {q.shape} does not fit {session.env_id}")
-        session.agent.load_table(q, keys)
+        session.agent.load_table(q, keys, counts)
         session.agent.episode = int(meta.get("agent_episode", meta.get("episodes_trained", 0)))
         session.agent.set_hyperparameters(session.hp)
         session.trainer.episodes = int(meta.get("episodes_trained", 0))

@@ -80,7 +80,7 @@ class GameProfile(ABC):
 
     @abstractmethod
     def reference(self, q: np.ndarray, env_kwargs: Mapping[str, Any]) -> ReferenceMetrics:
-        """Exact comparison of the greedy policy of `q` (rows = base_observations) to the optimum."""
+        """Exact comparison of the greedy policy of `q` (rows: base states) with the optimum."""
 
     @abstractmethod
     def heatmaps(
