@@ -11,6 +11,7 @@ from collections.abc import Callable
 from typing import Any
 
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import (
     BarColumn,
     MofNCompleteColumn,
@@ -62,7 +63,7 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
         params = "\n".join(
             f"{p.name}={p.default} ({p.describe_range()})" for p in spec.params
         ) or "-"
-        table.add_row(spec.name, spec.summary, params)
+        table.add_row(spec.name, escape(spec.summary), escape(params))
     out.print(table)
     out.print(
         "Use with [bold]--wrapper NAME[/] or [bold]--wrapper NAME:key=value,key=value[/], "

@@ -79,9 +79,17 @@ def _dense_leaf(space: spaces.Space) -> _Leaf | None:
     if isinstance(space, spaces.Box) and _is_int_dtype(space.dtype):
         if not (space.is_bounded("both")):
             return None
-        low = np.asarray(space.low, dtype=np.int64).ravel()
-        high = np.asarray(space.high, dtype=np.int64).ravel()
-        return _Leaf(low, high - low + 1)
+        # Python ints: `high - low + 1` in int64 overflows for ranges near the dtype's
+        # limits. A radix is only used when the whole space is small, so capping it
+        # just past the dense limit keeps such spaces sparse without changing any
+        # dense key.
+        lows = np.asarray(space.low).ravel().tolist()
+        highs = np.asarray(space.high).ravel().tolist()
+        radix = [
+            min(int(h) - int(lo) + 1, DENSE_STATE_LIMIT + 1)
+            for lo, h in zip(lows, highs, strict=True)
+        ]
+        return _Leaf(np.array(lows, dtype=np.int64), np.array(radix, dtype=np.int64))
     return None
 
 
@@ -170,7 +178,7 @@ class ObservationKeyer:
                 self._stride_list = strides.tolist()
                 return
         for (leaf, path), d in zip(leaves, dense, strict=True):
-            if d is None and isinstance(leaf, spaces.Box):
+            if d is None and isinstance(leaf, spaces.Box) and leaf.dtype.kind == "f":
                 width = int(np.prod(leaf.shape))
                 if width > MAX_SPARSE_WIDTH:
                     raise NotTabularError(

@@ -16,6 +16,7 @@ import numpy as np
 
 from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.heatmap import Heatmap
+from tui_gym.core.wrappers.params import Param
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,7 @@ class GameProfile(ABC):
 
     def default_kwargs(self) -> dict[str, Any]:
         """Env arguments the game starts with."""
-        return {}
+        return {p.name: p.default for p in self.env_params}
 
     def default_hyperparameters(self) -> Hyperparameters:
         """Hyperparameters that learn this game well (see the README)."""
@@ -56,7 +57,14 @@ class GameProfile(ABC):
 
     def normalize_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         """Check and complete env arguments; ValueError with a clear message when wrong."""
-        return {**self.default_kwargs(), **dict(kwargs)}
+        params = {p.name: p for p in self.env_params}
+        out = self.default_kwargs()
+        for key, value in kwargs.items():
+            if key not in params:
+                known = ", ".join(params) or "no arguments"
+                raise ValueError(f"{self.title} takes {known}, not {key!r}")
+            out[key] = params[key].parse(value)
+        return out
 
     def action_index(self, action: int | str) -> int:
         """An action given as its number or its name (case-insensitive)."""
@@ -103,6 +111,21 @@ class GameProfile(ABC):
     ) -> dict[str, Any]:
         """What eval_outcome needs to remember of one episode."""
         return {"length": length, "return": total, "terminated": terminated}
+
+    env_params: tuple[Param, ...] = ()  # the env's arguments a person may change
+    board: str = ""  # which kind of board draws this game's scene ("cards", "grid")
+    action_keys: dict[str, str] = {}  # keyboard key -> action name, for people
+
+    render_mode: str | None = None  # the env's text render mode, if it has one
+
+    @abstractmethod
+    def scene(self, env: Any) -> dict[str, Any]:
+        """What a board needs to draw the env's current state (plain data, a copy)."""
+
+    def text(self, env: Any, reveal: bool = True) -> str:
+        """A plain-text picture of the env's state."""
+        picture = env.render() if self.render_mode == "ansi" else None
+        return picture if isinstance(picture, str) else ""
 
     def json_observation(self, observation: Any) -> Any:
         """The observation as JSON-friendly data."""

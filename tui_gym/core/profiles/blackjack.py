@@ -23,6 +23,7 @@ from tui_gym.core.reference.blackjack import (
     optimal_value,
     policy_value,
 )
+from tui_gym.core.wrappers.params import Param
 
 CHART_SUMS = tuple(range(21, 11, -1))  # rows of the chart, top to bottom
 DEALER_CARDS = tuple(range(1, 11))  # columns: A, 2 .. 10
@@ -54,19 +55,6 @@ class BlackjackProfile(GameProfile):
     env_id = "Blackjack-v1"
     action_names = ("stick", "hit")
     description = "Hit or stick; beat the dealer without going over 21 (infinite deck)."
-
-    def default_kwargs(self) -> dict[str, Any]:
-        return {"natural": False, "sab": False}
-
-    def normalize_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
-        out = self.default_kwargs()
-        for key, value in kwargs.items():
-            if key not in out:
-                raise ValueError(f"Blackjack takes natural and sab, not {key!r}")
-            if not isinstance(value, bool | int) or value not in (0, 1):
-                raise ValueError(f"Blackjack {key} must be true or false, got {value!r}")
-            out[key] = bool(value)
-        return out
 
     def rules(self, env_kwargs: Mapping[str, Any]) -> BlackjackRules:
         return BlackjackRules.from_env_kwargs(env_kwargs)
@@ -123,6 +111,29 @@ class BlackjackProfile(GameProfile):
             )
         return panels
 
+    env_params = (
+        Param("natural", bool, False, help="a natural blackjack pays 1.5", owner="Blackjack"),
+        Param("sab", bool, False, help="Sutton & Barto's rules", owner="Blackjack"),
+    )
+    board = "cards"
+    action_keys = {"h": "hit", "s": "stick"}
+
+    def scene(self, env: Any) -> dict[str, Any]:
+        """The hands: `player` and `dealer` card lists (1 = ace, 10 = ten or face)."""
+        game = env.unwrapped
+        return {"player": list(getattr(game, "player", [])),
+                "dealer": list(getattr(game, "dealer", []))}
+
+    def text(self, env: Any, reveal: bool = True) -> str:
+        """Both hands as text; the dealer's hole card shows only with `reveal`."""
+        hands = self.scene(env)
+        dealer = hands["dealer"]
+        shown = [card_label(c) for c in (dealer if reveal else dealer[:1])]
+        if not reveal and len(dealer) > 1:
+            shown.append("??")
+        player = " ".join(card_label(c) for c in hands["player"])
+        return f"dealer: {' '.join(shown)}\nplayer: {player}"
+
     def describe(self, observation: Any) -> str:
         player, dealer, usable = (int(v) for v in observation)
         card = "A" if dealer == 1 else str(dealer)
@@ -141,6 +152,11 @@ class BlackjackProfile(GameProfile):
                 "loss_rate": float(np.count_nonzero(r < 0)) / n,
             }
         )
+
+
+def card_label(card: int) -> str:
+    """'A' for an ace, else the card's value."""
+    return "A" if card == 1 else str(card)
 
 
 def outcome_word(reward: float) -> str:

@@ -18,6 +18,7 @@ from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.profiles.base import EvalOutcome, GameProfile, ReferenceMetrics, greedy_policy
 from tui_gym.core.reference.gridworld import optimal_actions, optimal_pair_fraction
+from tui_gym.core.wrappers.params import Param
 
 ARROWS = ("→", "↑", "←", "↓")
 MIN_SIZE, MAX_SIZE = 2, 12
@@ -40,31 +41,11 @@ class GridWorldProfile(GameProfile):
     action_names = ("right", "up", "left", "down")
     description = "Reach the target on a square grid; the tutorial's custom environment."
 
-    def default_kwargs(self) -> dict[str, Any]:
-        return {"size": 5}
-
     def default_hyperparameters(self) -> Hyperparameters:
         # Reward only at the target: without discounting every path is worth 1
         # and the greedy policy would have no reason to take the shortest one.
         return Hyperparameters(discount=0.95, learning_rate=0.1, episodes=20_000,
                                epsilon_decay_fraction=0.5)
-
-    def normalize_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
-        out = self.default_kwargs()
-        allowed = {"size", "reward_scale", "step_penalty"}
-        for key, value in kwargs.items():
-            if key not in allowed:
-                raise ValueError(f"GridWorld takes {', '.join(sorted(allowed))}, not {key!r}")
-            out[key] = value
-        size = out["size"]
-        if isinstance(size, bool) or not isinstance(size, int | np.integer):
-            raise ValueError(f"GridWorld size must be an integer in [{MIN_SIZE}, {MAX_SIZE}]")
-        if not MIN_SIZE <= int(size) <= MAX_SIZE:
-            raise ValueError(
-                f"GridWorld size must be an integer in [{MIN_SIZE}, {MAX_SIZE}], got {size}"
-            )
-        out["size"] = int(size)
-        return out
 
     def base_observations(self, env_kwargs: Mapping[str, Any]) -> list[Any]:
         size = int(env_kwargs.get("size", 5))
@@ -116,6 +97,29 @@ class GridWorldProfile(GameProfile):
                 legend="arrow: greedy move  T target  * off every shortest path",
             )
         ]
+
+    env_params = (
+        Param("size", int, 5, MIN_SIZE, MAX_SIZE, help="cells a side", owner="GridWorld"),
+        Param("reward_scale", float, 1.0, -100.0, 100.0, help="reward for reaching the target",
+              owner="GridWorld"),
+        Param("step_penalty", float, 0.0, 0.0, 10.0, help="subtracted every other step",
+              owner="GridWorld"),
+    )
+    board = "grid"
+    render_mode = "ansi"
+    action_keys = {
+        "right": "right", "up": "up", "left": "left", "down": "down",
+        "d": "right", "w": "up", "a": "left", "s": "down",
+    }
+
+    def scene(self, env: Any) -> dict[str, Any]:
+        """The grid: `size`, `agent` and `target` positions as (x, y)."""
+        game = env.unwrapped
+        try:
+            agent, target = game.agent_position, game.target_position
+        except Exception:  # before the first reset
+            agent = target = None
+        return {"size": int(game.size), "agent": agent, "target": target}
 
     def describe(self, observation: Any) -> str:
         ax, ay = (int(v) for v in observation["agent"])

@@ -1,0 +1,146 @@
+"""Human play: one game a person (or a program) plays move by move.
+
+`HumanGame` plays on its own env, built like the session's (same game, same
+wrappers), so playing never disturbs training. It remembers the current
+episode (steps, return, how it ended) and keeps a running `Tally` of finished
+episodes in constant memory.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from tui_gym.core.session import Session
+
+
+class PlayError(ValueError):
+    """A move that cannot be made now (bad action, no episode running)."""
+
+
+@dataclass
+class Tally:
+    """Finished episodes so far: counts, wins/draws/losses and return moments."""
+
+    episodes: int = 0
+    wins: int = 0
+    draws: int = 0
+    losses: int = 0
+    total: float = 0.0
+    total_sq: float = 0.0
+
+    def add(self, episode_return: float) -> None:
+        self.episodes += 1
+        self.total += episode_return
+        self.total_sq += episode_return * episode_return
+        if episode_return > 0:
+            self.wins += 1
+        elif episode_return < 0:
+            self.losses += 1
+        else:
+            self.draws += 1
+
+    @property
+    def mean(self) -> float:
+        return self.total / self.episodes if self.episodes else 0.0
+
+    @property
+    def std(self) -> float:
+        """Sample standard deviation of the returns."""
+        n = self.episodes
+        if n < 2:
+            return float("nan")
+        var = (self.total_sq - n * self.mean**2) / (n - 1)
+        return math.sqrt(max(0.0, var))
+
+    def confidence_interval(self, z: float = 1.96) -> tuple[float, float]:
+        """Normal-approximation interval for the mean return (NaN below 2 episodes)."""
+        n = self.episodes
+        if n < 2:
+            return (float("nan"), float("nan"))
+        half = z * self.std / math.sqrt(n)
+        return (self.mean - half, self.mean + half)
+
+
+@dataclass(frozen=True)
+class PlayStep:
+    """The state after a reset or a move."""
+
+    observation: Any
+    reward: float
+    terminated: bool
+    truncated: bool
+    info: dict[str, Any]
+    episode_return: float
+    steps: int
+    action: int | None = None
+
+    @property
+    def done(self) -> bool:
+        return self.terminated or self.truncated
+
+
+@dataclass
+class HumanGame:
+    """A game played move by move on its own env."""
+
+    session: Session
+    seed: int | None = None
+    tally: Tally = field(default_factory=Tally)
+
+    def __post_init__(self) -> None:
+        self.profile = self.session.profile
+        self.env = self.session.make_env(render_mode=self.profile.render_mode)
+        self.last: PlayStep | None = None
+        self.first_info: dict[str, Any] = {}
+        self._seeded = False
+
+    def close(self) -> None:
+        self.env.close()
+
+    @property
+    def done(self) -> bool:
+        return self.last is None or self.last.done
+
+    def reset(self, seed: int | None = None) -> PlayStep:
+        """Start a new episode (the first one uses the game's seed)."""
+        if seed is None and not self._seeded:
+            seed = self.seed
+        self._seeded = True
+        obs, info = self.env.reset(seed=seed)
+        self.first_info = dict(info)
+        self.last = PlayStep(obs, 0.0, False, False, dict(info), 0.0, 0)
+        return self.last
+
+    def step(self, action: int | str) -> PlayStep:
+        """Make a move; PlayError when the action is invalid or no episode is running."""
+        if self.last is None:
+            raise PlayError("no episode running: reset first")
+        if self.last.done:
+            raise PlayError("the episode is over: reset to play again")
+        try:
+            index = self.profile.action_index(action)
+        except ValueError as exc:
+            raise PlayError(str(exc)) from None
+        obs, reward, terminated, truncated, info = self.env.step(index)
+        total = self.last.episode_return + float(reward)
+        self.last = PlayStep(
+            obs, float(reward), bool(terminated), bool(truncated), dict(info), total,
+            self.last.steps + 1, index,
+        )
+        if self.last.done:
+            self.tally.add(total)
+        return self.last
+
+    def scene(self) -> dict[str, Any]:
+        """What the board draws (see the profile's `scene`)."""
+        return self.profile.scene(self.env)
+
+    def text(self) -> str:
+        """A text picture of the state (hidden cards stay hidden until the end)."""
+        return self.profile.text(self.env, reveal=self.done)
+
+    def observation_json(self) -> Any:
+        return None if self.last is None else self.profile.json_observation(self.last.observation)

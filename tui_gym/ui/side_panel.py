@@ -1,0 +1,287 @@
+"""The side panel: pick the game, tick wrappers, edit their parameters, see the chain.
+
+`SidePanel` shows the game picker with the game's own arguments, the whole
+wrapper catalog as checkboxes (each with its one-line lesson, its parameter
+fields and, when it does not fit the game, the reason), and the resulting
+wrapper chain in Gymnasium's repr form. It never rebuilds anything itself: it
+posts `SidePanel.Changed` and the app asks the Session, then calls `reload()`.
+Invalid parameter text marks its field, says why, and is not applied.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rich.text import Text
+from textual import on
+from textual.app import ComposeResult
+from textual.containers import Horizontal, Vertical, VerticalScroll
+from textual.message import Message
+from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet, Static
+
+from tui_gym.core.profiles import PROFILES
+from tui_gym.core.wrappers import CATALOG, Param, WrapperChoice
+
+
+def _value_text(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+class ParamField(Horizontal):
+    """One labelled parameter input with its own error line."""
+
+    DEFAULT_CSS = """
+    ParamField { height: auto; padding-left: 2; }
+    ParamField Label { width: 1fr; padding-top: 1; color: $text-muted; }
+    ParamField Input { width: 12; }
+    ParamField .param-error { display: none; }
+    """
+
+    def __init__(self, param: Param, value: Any, group: str) -> None:
+        super().__init__(classes="param-field")
+        self.param = param
+        self.group = group  # "env" or a wrapper name
+        self._value = value
+
+    def compose(self) -> ComposeResult:
+        yield Label(self.param.name, id=f"label-{self.group}-{self.param.name}")
+        field = Input(value=_value_text(self._value), compact=True)
+        field.tooltip = f"{self.param.help} ({self.param.describe_range()})".strip()
+        yield field
+
+    @property
+    def input(self) -> Input:
+        return self.query_one(Input)
+
+    def read(self) -> tuple[Any, str | None]:
+        """(value, None) when the text is valid, else (None, the reason)."""
+        try:
+            return self.param.parse(self.input.value), None
+        except ValueError as exc:
+            return None, str(exc)
+
+
+class WrapperRow(Vertical):
+    """A catalog entry: a checkbox, its lesson, its parameters, and why it may not fit."""
+
+    DEFAULT_CSS = """
+    WrapperRow { height: auto; margin-bottom: 1; }
+    WrapperRow .summary { color: $text-muted; padding-left: 4; }
+    WrapperRow .reason { color: $error; padding-left: 4; display: none; }
+    WrapperRow.-misfit .reason { display: block; }
+    WrapperRow.-misfit Checkbox { color: $text-disabled; }
+    Screen.compact WrapperRow .summary { display: none; }
+    """
+
+    def __init__(self, name: str, choice: WrapperChoice | None) -> None:
+        super().__init__(id=f"wrapper-{name}")
+        self.spec = CATALOG[name]
+        self.choice = choice
+
+    def compose(self) -> ComposeResult:
+        spec = self.spec
+        box = Checkbox(spec.name, value=self.choice is not None, compact=True)
+        box.tooltip = spec.summary
+        yield box
+        yield Static(spec.summary, classes="summary", markup=False)
+        values = self.choice.values() if self.choice else spec.defaults()
+        for param in spec.params:
+            yield ParamField(param, values.get(param.name, param.default), spec.name)
+        yield Static("", classes="reason")
+
+    @property
+    def ticked(self) -> bool:
+        return self.query_one(Checkbox).value
+
+    def show_reason(self, reason: str | None) -> None:
+        self.set_class(bool(reason), "-misfit")
+        self.query_one(".reason", Static).update(Text(f"✗ {reason}") if reason else "")
+
+    def read(self) -> tuple[WrapperChoice | None, str | None]:
+        """The choice this row stands for (None when unticked), or the reason it is invalid."""
+        if not self.ticked:
+            return None, None
+        values: dict[str, Any] = {}
+        for field in self.query(ParamField):
+            value, error = field.read()
+            if error:
+                return None, error
+            values[field.param.name] = value
+        try:
+            return WrapperChoice.make(self.spec.name, **values), None
+        except ValueError as exc:
+            return None, str(exc)
+
+
+class SidePanel(VerticalScroll):
+    """Game, wrappers and the resulting chain; posts `Changed` when a person edits them."""
+
+    DEFAULT_CSS = """
+    SidePanel { width: 44; border-left: tall $primary-background; padding: 0 1; }
+    Screen.compact SidePanel { width: 34; }
+    SidePanel .section { text-style: bold; color: $accent; margin-top: 1; }
+    SidePanel #chain { color: $success; padding: 0 0 1 0; }
+    SidePanel #game-picker { width: 100%; height: auto; }
+    SidePanel .field-error { color: $error; display: none; }
+    SidePanel .field-error.-shown { display: block; }
+    SidePanel Input.-invalid { border: tall $error; }
+    """
+
+    class Changed(Message):
+        """The person asked for a different game, env arguments or wrappers."""
+
+        def __init__(
+            self, env_id: str, env_kwargs: dict[str, Any], choices: tuple[WrapperChoice, ...]
+        ) -> None:
+            super().__init__()
+            self.env_id = env_id
+            self.env_kwargs = env_kwargs
+            self.choices = choices
+
+    def compose(self) -> ComposeResult:
+        yield Static("Game", classes="section")
+        with RadioSet(id="game-picker"):
+            for profile in PROFILES:
+                yield RadioButton(profile.title, id=f"game-{profile.name}")
+        yield Vertical(id="env-params")
+        yield Static("", id="env-error", classes="field-error")
+        yield Static("Wrappers  (first ticked = innermost)", classes="section")
+        yield Vertical(id="wrapper-list")
+        yield Static("", id="wrapper-error", classes="field-error")
+        yield Static("Wrapper chain", classes="section")
+        yield Static("", id="chain")
+
+    def on_mount(self) -> None:
+        self.reload()
+
+    @property
+    def session(self):  # the app's Session
+        return self.app.session  # type: ignore[attr-defined]
+
+    def reload(self) -> None:
+        """Show the session as it is now (after a rebuild, or to undo an invalid edit)."""
+        session = self.session
+        picker = self.query_one("#game-picker", RadioSet)
+        with picker.prevent(RadioSet.Changed, RadioButton.Changed):
+            for button in picker.query(RadioButton):
+                button.value = button.id == f"game-{session.profile.name}"
+        env_box = self.query_one("#env-params", Vertical)
+        env_box.remove_children()
+        env_box.mount_all(
+            ParamField(p, session.env_kwargs.get(p.name, p.default), "env")
+            for p in session.profile.env_params
+        )
+        chosen = {c.name: c for c in session.choices}
+        reasons = {c.name: reason for c, reason in session.skipped}
+        wrapper_box = self.query_one("#wrapper-list", Vertical)
+        wrapper_box.remove_children()
+        rows = [WrapperRow(name, chosen.get(name)) for name in CATALOG]
+        wrapper_box.mount_all(rows)
+        for row in rows:
+            reason = reasons.get(row.spec.name)
+            if reason is None and row.spec.name not in chosen:
+                reason = row.spec.fits(session.env)
+            row.show_reason(reason)
+        self._show_error("#env-error", None)
+        self._show_error("#wrapper-error", None)
+        self.query_one("#chain", Static).update(Text(self._chain_text()))
+
+    def _chain_text(self) -> str:
+        session = self.session
+        text = session.chain_repr()
+        if session.skipped:
+            names = ", ".join(c.name for c, _ in session.skipped)
+            text += f"\n(not applied: {names})"
+        return text
+
+    def focus_wrappers(self) -> None:
+        """Move the keyboard focus to the first wrapper checkbox."""
+        boxes = self.query(Checkbox)
+        if boxes:
+            boxes.first().focus()
+            self.scroll_to_widget(boxes.first())
+
+    # --- reading what the person asked for -----------------------------------
+    def _show_error(self, selector: str, message: str | None) -> None:
+        error = self.query_one(selector, Static)
+        error.update(Text(message or ""))
+        error.set_class(bool(message), "-shown")
+
+    def _selected_env_id(self) -> str:
+        picker = self.query_one("#game-picker", RadioSet)
+        pressed = picker.pressed_button
+        if pressed is None or pressed.id is None:
+            return self.session.env_id
+        name = pressed.id.removeprefix("game-")
+        return next(p.env_id for p in PROFILES if p.name == name)
+
+    def _mark(self, field: ParamField, error: str | None) -> None:
+        field.input.set_class(bool(error), "-invalid")
+
+    def _read_env_kwargs(self) -> dict[str, Any] | None:
+        values: dict[str, Any] = {}
+        first_error = None
+        for field in self.query_one("#env-params").query(ParamField):
+            value, error = field.read()
+            self._mark(field, error)
+            if error:
+                first_error = first_error or error
+            else:
+                values[field.param.name] = value
+        self._show_error("#env-error", first_error)
+        return None if first_error else values
+
+    def _read_choices(self) -> tuple[WrapperChoice, ...] | None:
+        choices = []
+        first_error = None
+        for row in self.query(WrapperRow):
+            for field in row.query(ParamField):
+                self._mark(field, field.read()[1])
+            choice, error = row.read()
+            if error:
+                first_error = first_error or error
+            elif choice is not None:
+                choices.append(choice)
+        self._show_error("#wrapper-error", first_error)
+        return None if first_error else tuple(choices)
+
+    # --- events ----------------------------------------------------------------
+    @on(RadioSet.Changed, "#game-picker")
+    def _game_picked(self, event: RadioSet.Changed) -> None:
+        env_id = self._selected_env_id()
+        if env_id != self.session.env_id:
+            self.post_message(self.Changed(env_id, {}, self.session.choices))
+
+    @on(Checkbox.Changed)
+    def _wrapper_ticked(self, event: Checkbox.Changed) -> None:
+        event.stop()
+        self._request()
+
+    @on(Input.Submitted)
+    def _param_submitted(self, event: Input.Submitted) -> None:
+        event.stop()
+        self._request()
+
+    @on(Input.Changed)
+    def _param_typed(self, event: Input.Changed) -> None:
+        """Mark an invalid value as it is typed (applied on enter)."""
+        field = next((a for a in event.input.ancestors if isinstance(a, ParamField)), None)
+        if field is not None:
+            error = field.read()[1]
+            self._mark(field, error)
+            target = "#env-error" if field.group == "env" else "#wrapper-error"
+            self._show_error(target, error)
+
+    def _request(self) -> None:
+        kwargs = self._read_env_kwargs()
+        choices = self._read_choices()
+        if kwargs is None or choices is None:
+            self.app.notify("Not applied: fix the marked field.", severity="error", timeout=4)
+            return
+        session = self.session
+        env_id = self._selected_env_id()
+        if env_id == session.env_id and kwargs == session.env_kwargs and choices == session.choices:
+            return
+        self.post_message(self.Changed(env_id, kwargs, choices))
