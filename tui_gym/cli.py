@@ -113,6 +113,18 @@ def build_parser() -> argparse.ArgumentParser:
     opt.add_argument("--natural", action="store_true", help="1.5 for a natural blackjack")
     opt.add_argument("--size", type=_positive_int, help="GridWorld size (default 5)")
     opt.add_argument("--json", action="store_true")
+    play = sub.add_parser("play", help="play a game from a program (JSON lines on stdin/stdout)")
+    play.add_argument("env", metavar="ENV")
+    play.add_argument("--jsonl", action="store_true", required=True,
+                      help="read one JSON request a line, write one JSON response a line")
+    play.add_argument("--seed", type=_seed, default=None, dest="play_seed")
+    play.add_argument("--size", type=_positive_int, help="GridWorld size (default 5)")
+    play.add_argument("--sab", action="store_true", help="Blackjack: Sutton & Barto rules")
+    play.add_argument("--natural", action="store_true", help="Blackjack: 1.5 for a natural")
+    play.add_argument("--wrapper", action="append", default=[], metavar="SPEC")
+
+    screenshots = sub.add_parser("screenshots", help="write the app's SVG screenshots")
+    screenshots.add_argument("directory", nargs="?", default="screenshots", metavar="DIR")
     return parser
 
 

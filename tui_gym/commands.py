@@ -294,10 +294,39 @@ def _optimal_gridworld(env_id: str, kwargs: dict[str, Any], as_json: bool, out: 
     return 0
 
 
+def cmd_play(args: argparse.Namespace, out: Console) -> int:
+    import sys
+
+    from tui_gym.core.protocol import JsonlPlayer, serve
+    from tui_gym.core.wrappers import parse_wrapper_spec
+
+    env_id = resolve_env_id(args.env)
+    session = Session(
+        env_id=env_id,
+        env_kwargs=_env_kwargs(args, env_id),
+        choices=tuple(parse_wrapper_spec(text) for text in args.wrapper),
+        seed=args.play_seed or 0,
+    )
+    if session.skipped:
+        reasons = "; ".join(reason for _, reason in session.skipped)
+        raise CliError(f"wrapper does not fit {env_id}: {reasons}")
+    return serve(JsonlPlayer(session, seed=args.play_seed), sys.stdin, sys.stdout)
+
+
+def cmd_screenshots(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.ui.screenshots import write_screenshots
+
+    for path in write_screenshots(args.directory):
+        out.print(f"wrote {path}")
+    return 0
+
+
 COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {
     "envs": cmd_envs,
     "wrappers": cmd_wrappers,
     "train": cmd_train,
     "eval": cmd_eval,
     "optimal": cmd_optimal,
+    "play": cmd_play,
+    "screenshots": cmd_screenshots,
 }

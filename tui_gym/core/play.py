@@ -104,12 +104,12 @@ class HumanGame:
     def done(self) -> bool:
         return self.last is None or self.last.done
 
-    def reset(self, seed: int | None = None) -> PlayStep:
-        """Start a new episode (the first one uses the game's seed)."""
+    def reset(self, seed: int | None = None, options: dict[str, Any] | None = None) -> PlayStep:
+        """Start a new episode (the first one uses the game's seed); `options` go to the env."""
         if seed is None and not self._seeded:
             seed = self.seed
         self._seeded = True
-        obs, info = self.env.reset(seed=seed)
+        obs, info = self.env.reset(seed=seed, options=options)
         self.first_info = dict(info)
         self.last = PlayStep(obs, 0.0, False, False, dict(info), 0.0, 0)
         return self.last

@@ -28,6 +28,15 @@ class ReferenceMetrics:
 
 
 @dataclass(frozen=True)
+class Advice:
+    """What the exact optimum would do in the env's current state."""
+
+    optimal: tuple[int, ...]  # every optimal action (empty when there is no decision)
+    values: dict[int, float] | None = None  # exact expected return per action, when known
+    note: str = ""  # one line for people
+
+
+@dataclass(frozen=True)
 class EvalOutcome:
     """Per-game extras of a greedy evaluation, beside mean and std of return."""
 
@@ -121,6 +130,10 @@ class GameProfile(ABC):
     @abstractmethod
     def scene(self, env: Any) -> dict[str, Any]:
         """What a board needs to draw the env's current state (plain data, a copy)."""
+
+    @abstractmethod
+    def advice(self, env: Any, env_kwargs: Mapping[str, Any]) -> Advice:
+        """The optimal action(s) in the env's current (bare) state."""
 
     def text(self, env: Any, reveal: bool = True) -> str:
         """A plain-text picture of the env's state."""

@@ -15,10 +15,17 @@ from typing import Any
 import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
-from tui_gym.core.profiles.base import EvalOutcome, GameProfile, ReferenceMetrics, greedy_policy
+from tui_gym.core.profiles.base import (
+    Advice,
+    EvalOutcome,
+    GameProfile,
+    ReferenceMetrics,
+    greedy_policy,
+)
 from tui_gym.core.reference.blackjack import (
     POLICY_SHAPE,
     BlackjackRules,
+    optimal_action_values,
     optimal_policy,
     optimal_value,
     policy_value,
@@ -121,8 +128,32 @@ class BlackjackProfile(GameProfile):
     def scene(self, env: Any) -> dict[str, Any]:
         """The hands: `player` and `dealer` card lists (1 = ace, 10 = ten or face)."""
         game = env.unwrapped
-        return {"player": list(getattr(game, "player", [])),
-                "dealer": list(getattr(game, "dealer", []))}
+        return {
+            "player": list(getattr(game, "player", [])),
+            "dealer": list(getattr(game, "dealer", [])),
+        }
+
+    def advice(self, env: Any, env_kwargs: Mapping[str, Any]) -> Advice:
+        hands = self.scene(env)
+        player, dealer = hands["player"], hands["dealer"]
+        if not player or not dealer:
+            return Advice((), None, "no hand dealt")
+        total, usable = hand_value(player)
+        if total > 21:
+            return Advice((), None, "bust: no decision left")
+        soft_21 = "natural" if len(player) == 2 and total == 21 else "drawn"
+        q = optimal_action_values(self.rules(env_kwargs), soft_21=soft_21)[
+            total, dealer[0], int(usable)
+        ]
+        values = {a: float(q[a]) for a in range(2)}
+        best = max(values.values())
+        optimal = tuple(a for a, v in values.items() if v >= best - 1e-12)
+        names = " or ".join(self.action_names[a] for a in optimal)
+        return Advice(
+            optimal,
+            values,
+            f"optimal: {names}  (stick {values[0]:+.3f}, hit {values[1]:+.3f} expected)",
+        )
 
     def text(self, env: Any, reveal: bool = True) -> str:
         """Both hands as text; the dealer's hole card shows only with `reveal`."""
@@ -152,6 +183,13 @@ class BlackjackProfile(GameProfile):
                 "loss_rate": float(np.count_nonzero(r < 0)) / n,
             }
         )
+
+
+def hand_value(cards: list[int]) -> tuple[int, bool]:
+    """The hand's total and whether it holds a usable ace (an ace counted as 11)."""
+    total = sum(cards)
+    usable = 1 in cards and total + 10 <= 21
+    return (total + 10 if usable else total), usable
 
 
 def card_label(card: int) -> str:

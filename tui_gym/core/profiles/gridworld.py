@@ -16,7 +16,13 @@ import numpy as np
 
 from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.heatmap import Heatmap
-from tui_gym.core.profiles.base import EvalOutcome, GameProfile, ReferenceMetrics, greedy_policy
+from tui_gym.core.profiles.base import (
+    Advice,
+    EvalOutcome,
+    GameProfile,
+    ReferenceMetrics,
+    greedy_policy,
+)
 from tui_gym.core.reference.gridworld import optimal_actions, optimal_pair_fraction
 from tui_gym.core.wrappers.params import Param
 
@@ -44,14 +50,13 @@ class GridWorldProfile(GameProfile):
     def default_hyperparameters(self) -> Hyperparameters:
         # Reward only at the target: without discounting every path is worth 1
         # and the greedy policy would have no reason to take the shortest one.
-        return Hyperparameters(discount=0.95, learning_rate=0.1, episodes=20_000,
-                               epsilon_decay_fraction=0.5)
+        return Hyperparameters(
+            discount=0.95, learning_rate=0.1, episodes=20_000, epsilon_decay_fraction=0.5
+        )
 
     def base_observations(self, env_kwargs: Mapping[str, Any]) -> list[Any]:
         size = int(env_kwargs.get("size", 5))
-        return [
-            {"agent": row[:2].copy(), "target": row[2:].copy()} for row in _pairs(size)
-        ]
+        return [{"agent": row[:2].copy(), "target": row[2:].copy()} for row in _pairs(size)]
 
     def policy_array(self, q: np.ndarray, size: int) -> np.ndarray:
         return greedy_policy(q).reshape((size,) * 4)
@@ -100,16 +105,36 @@ class GridWorldProfile(GameProfile):
 
     env_params = (
         Param("size", int, 5, MIN_SIZE, MAX_SIZE, help="cells a side", owner="GridWorld"),
-        Param("reward_scale", float, 1.0, -100.0, 100.0, help="reward for reaching the target",
-              owner="GridWorld"),
-        Param("step_penalty", float, 0.0, 0.0, 10.0, help="subtracted every other step",
-              owner="GridWorld"),
+        Param(
+            "reward_scale",
+            float,
+            1.0,
+            -100.0,
+            100.0,
+            help="reward for reaching the target",
+            owner="GridWorld",
+        ),
+        Param(
+            "step_penalty",
+            float,
+            0.0,
+            0.0,
+            10.0,
+            help="subtracted every other step",
+            owner="GridWorld",
+        ),
     )
     board = "grid"
     render_mode = "ansi"
     action_keys = {
-        "right": "right", "up": "up", "left": "left", "down": "down",
-        "d": "right", "w": "up", "a": "left", "s": "down",
+        "right": "right",
+        "up": "up",
+        "left": "left",
+        "down": "down",
+        "d": "right",
+        "w": "up",
+        "a": "left",
+        "s": "down",
     }
 
     def scene(self, env: Any) -> dict[str, Any]:
@@ -120,6 +145,18 @@ class GridWorldProfile(GameProfile):
         except Exception:  # before the first reset
             agent = target = None
         return {"size": int(game.size), "agent": agent, "target": target}
+
+    def advice(self, env: Any, env_kwargs: Mapping[str, Any]) -> Advice:
+        scene = self.scene(env)
+        agent, target = scene["agent"], scene["target"]
+        if agent is None:
+            return Advice((), None, "no episode running")
+        optimal = optimal_actions(agent, target)
+        if not optimal:
+            return Advice((), None, "at the target")
+        names = " or ".join(self.action_names[a] for a in optimal)
+        steps = abs(agent[0] - target[0]) + abs(agent[1] - target[1])
+        return Advice(optimal, None, f"optimal: {names}  ({steps} steps to go)")
 
     def describe(self, observation: Any) -> str:
         ax, ay = (int(v) for v in observation["agent"])
