@@ -122,6 +122,24 @@ class GameProfile(ABC):
         return {"length": length, "return": total, "terminated": terminated}
 
     env_params: tuple[Param, ...] = ()  # the env's arguments a person may change
+    # Heatmaps that follow a chosen cell (GridWorld: the target). Games without
+    # one keep the defaults below; a front end asks before offering to move it.
+    heatmap_focus: bool = False
+
+    def default_heatmap_focus(self, env_kwargs: Mapping[str, Any]) -> Any:
+        """The focus the heatmaps start with (None when the game has no focus)."""
+        return None
+
+    def heatmap_focus_at(self, row: int, col: int, env_kwargs: Mapping[str, Any]) -> Any:
+        """The focus that heatmap cell (row, col) stands for (None when there is none)."""
+        return None
+
+    def heatmap_focus_cell(
+        self, focus: Any, env_kwargs: Mapping[str, Any]
+    ) -> tuple[int, int] | None:
+        """The heatmap cell (row, col) of a focus; the inverse of `heatmap_focus_at`."""
+        return None
+
     board: str = ""  # which kind of board draws this game's scene ("cards", "grid")
     action_keys: dict[str, str] = {}  # keyboard key -> action name, for people
 

@@ -124,6 +124,25 @@ class GridWorldProfile(GameProfile):
             owner="GridWorld",
         ),
     )
+    heatmap_focus = True  # the heatmap shows one target at a time
+
+    def default_heatmap_focus(self, env_kwargs: Mapping[str, Any]) -> Any:
+        size = int(env_kwargs.get("size", 5))
+        return (size - 1, size - 1)
+
+    def heatmap_focus_at(self, row: int, col: int, env_kwargs: Mapping[str, Any]) -> Any:
+        """The target (x, y) of a heatmap cell: the top row is y = size - 1."""
+        size = int(env_kwargs.get("size", 5))
+        row, col = min(size - 1, max(0, row)), min(size - 1, max(0, col))
+        return (col, size - 1 - row)
+
+    def heatmap_focus_cell(
+        self, focus: Any, env_kwargs: Mapping[str, Any]
+    ) -> tuple[int, int] | None:
+        size = int(env_kwargs.get("size", 5))
+        x, y = focus if focus is not None else self.default_heatmap_focus(env_kwargs)
+        return (size - 1 - int(y), int(x))
+
     board = "grid"
     render_mode = "ansi"
     action_keys = {

@@ -1,0 +1,120 @@
+"""The JSON-lines protocol, driven as a program would: through a subprocess."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from tui_gym.core.protocol import JsonlPlayer
+from tui_gym.core.reference.blackjack import BlackjackRules, optimal_policy
+from tui_gym.core.session import Session
+
+
+def run_protocol(env: str, lines: list[str], *extra: str) -> tuple[list[dict], str, int]:
+    proc = subprocess.run(
+        [sys.executable, "-m", "tui_gym", "play", env, "--jsonl", *extra],
+        input="".join(line + "\n" for line in lines),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    responses = [json.loads(line) for line in proc.stdout.splitlines()]
+    return responses, proc.stderr, proc.returncode
+
+
+def test_blackjack_session_with_bad_lines_goes_on():
+    lines = [
+        '{"cmd": "spaces"}',
+        '{"cmd": "step", "action": "hit"}',  # before reset
+        "this is not json",
+        "[1, 2]",
+        '{"cmd": "fly", "id": 7}',
+        '{"cmd": "reset", "seed": 5}',
+        '{"cmd": "hint"}',
+        '{"cmd": "step", "action": "jump"}',
+        '{"cmd": "step"}',
+        '{"cmd": "render"}',
+        '{"cmd": "step", "action": "stick"}',
+        '{"cmd": "step", "action": 1}',  # after the end
+    ]
+    responses, stderr, code = run_protocol("blackjack", lines, "--seed", "3")
+    assert code == 0, stderr
+    assert "Traceback" not in stderr
+    assert len(responses) == len(lines)  # one response a line
+    spaces = responses[0]
+    assert spaces["actions"] == ["stick", "hit"]
+    assert spaces["action_space"] == "Discrete(2)"
+    for bad in (1, 2, 3, 7, 8, 11):
+        assert set(responses[bad]) == {"error"}, responses[bad]
+    assert responses[4] == {"id": 7, "error": responses[4]["error"]}
+    reset = responses[5]
+    assert set(reset) >= {"observation", "reward", "terminated", "truncated", "info"}
+    player, dealer, usable = reset["observation"]
+    hint = responses[6]
+    best = optimal_policy(BlackjackRules())[player, dealer, usable]
+    assert hint["optimal_actions"] == [("stick", "hit")[best]]
+    assert set(hint["action_values"]) == {"stick", "hit"}
+    assert "dealer" in responses[9]["text"] and "??" in responses[9]["text"]
+    final = responses[10]
+    assert final["terminated"] is True
+    assert final["reward"] in (-1.0, 0.0, 1.0)
+
+
+def test_gridworld_program_walks_to_the_target():
+    # Reset first to learn the positions, then plan the walk in-process with the same seed.
+    session = Session("gridworld", seed=0)
+    probe = JsonlPlayer(session, seed=11)
+    start = probe.handle('{"cmd": "reset"}')["observation"]
+    (ax, ay), (tx, ty) = start["agent"], start["target"]
+    moves = ["right" if tx > ax else "left"] * abs(tx - ax)
+    moves += ["up" if ty > ay else "down"] * abs(ty - ay)
+    lines = ['{"cmd": "reset"}']
+    lines += [json.dumps({"cmd": "step", "action": m}) for m in moves]
+    lines += ['{"cmd": "hint"}']
+    responses, stderr, code = run_protocol("gridworld", lines, "--seed", "11")
+    assert code == 0, stderr
+    assert responses[0]["observation"] == start
+    assert responses[-2]["terminated"] is True and responses[-2]["reward"] == 1.0
+    assert responses[-2]["info"]["distance"] == 0
+    assert "error" in responses[-1]  # no hint after the end
+
+
+def test_integer_actions_and_wrappers_apply():
+    lines = ['{"cmd": "spaces"}', '{"cmd": "reset", "seed": 1}', '{"cmd": "step", "action": 0}']
+    responses, stderr, code = run_protocol(
+        "gridworld", lines, "--wrapper", "StepPenalty:penalty=0.5"
+    )
+    assert code == 0, stderr
+    assert responses[0]["wrappers"] == ["StepPenalty:penalty=0.5"]
+    assert responses[1]["observation"] == {"agent": [2, 2], "target": [3, 4]}
+    assert responses[2]["observation"]["agent"] == [3, 2]  # 0 is right: +x
+    assert responses[2]["reward"] == pytest.approx(-0.5)
+
+
+def test_bad_arguments_exit_2_with_one_line():
+    proc = subprocess.run(
+        [sys.executable, "-m", "tui_gym", "play", "chess", "--jsonl"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        input="",
+    )
+    assert proc.returncode == 2
+    assert len(proc.stderr.strip().splitlines()) == 1
+    assert "chess" in proc.stderr
+
+
+def test_end_of_input_exits_zero():
+    responses, stderr, code = run_protocol("blackjack", [])
+    assert code == 0 and responses == [] and stderr == ""
+
+
+@pytest.mark.parametrize(
+    "request_line", ['{"cmd": "reset", "seed": -1}', '{"cmd": "reset", "seed": "x"}']
+)
+def test_bad_seed_is_an_error_response(request_line):
+    player = JsonlPlayer(Session("blackjack"), seed=0)
+    assert "error" in player.handle(request_line)

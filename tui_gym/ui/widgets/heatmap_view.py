@@ -1,0 +1,427 @@
+"""A heatmap of Q-values: panels of coloured cells with labels, marks and a legend.
+
+`HeatmapView` draws a list of `tui_gym.core.heatmap.Heatmap` panels side by
+side (stacked when the widget is too narrow). Every cell's background comes
+from one colour scale shared by all panels (diverging around zero when the
+values have both signs, sequential otherwise; NaN cells stay blank), the
+cell's label is centred in it and marked cells carry a `*`. A legend line
+shows the scale with its range.
+
+When the view has a *focus cell* (e.g. GridWorld's target), the arrow keys
+or hjkl move it and a click on a cell sets it; either way the view posts
+`HeatmapView.FocusChanged` with the (row, col) of the new cell and leaves
+it to the owner to say what that cell means (it asks the game's profile).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+from rich.style import Style
+from rich.text import Text
+from textual import events
+from textual.binding import Binding, BindingType
+from textual.geometry import Size
+from textual.message import Message
+from textual.reactive import reactive
+from textual.widget import Widget
+
+from tui_gym.core.heatmap import Heatmap
+
+RGB = tuple[int, int, int]
+
+# Sequential scale (viridis), for values of one sign.
+SEQUENTIAL: tuple[RGB, ...] = (
+    (68, 1, 84), (59, 82, 139), (33, 145, 140), (94, 201, 98), (253, 231, 37),
+)
+# Diverging scale with a dark middle: losses red, zero dim, gains green.
+DIVERGING: tuple[RGB, ...] = (
+    (215, 48, 39), (160, 70, 60), (58, 58, 66), (50, 140, 90), (90, 210, 120),
+)
+MAX_CELL_WIDTH = 6
+PANEL_GAP = 4
+LEGEND_WIDTH = 24
+
+
+def _interpolate(stops: Sequence[RGB], t: float) -> RGB:
+    """The colour at `t` in [0, 1] along evenly spaced stops."""
+    t = min(1.0, max(0.0, t))
+    pos = t * (len(stops) - 1)
+    i = min(int(pos), len(stops) - 2)
+    frac = pos - i
+    a, b = stops[i], stops[i + 1]
+    return tuple(round(a[k] + (b[k] - a[k]) * frac) for k in range(3))  # type: ignore[return-value]
+
+
+def _hex(rgb: RGB) -> str:
+    return "#{:02x}{:02x}{:02x}".format(*rgb)
+
+
+def _ink(rgb: RGB) -> str:
+    """Black or white, whichever reads better on `rgb`."""
+    r, g, b = rgb
+    luminance = (0.299 * r + 0.587 * g + 0.114 * b) / 255
+    return "#101010" if luminance > 0.55 else "#f0f0f0"
+
+
+@dataclass(frozen=True)
+class ColourScale:
+    """Maps values onto colours: diverging around 0 when the range crosses it."""
+
+    low: float
+    high: float
+
+    @classmethod
+    def over(cls, panels: Sequence[Heatmap]) -> ColourScale:
+        lows, highs = [], []
+        for panel in panels:
+            lo, hi = panel.value_range()
+            if np.isfinite(panel.values).any():
+                lows.append(lo)
+                highs.append(hi)
+        if not lows:
+            return cls(0.0, 0.0)
+        return cls(min(lows), max(highs))
+
+    @property
+    def diverging(self) -> bool:
+        return self.low < 0.0 < self.high
+
+    @property
+    def bounds(self) -> tuple[float, float]:
+        """The values at the two ends of the scale."""
+        if self.diverging:
+            m = max(-self.low, self.high)
+            return -m, m
+        return self.low, self.high
+
+    def position(self, value: float) -> float:
+        lo, hi = self.bounds
+        if hi <= lo:
+            return 0.5
+        return (value - lo) / (hi - lo)
+
+    def colour(self, value: float) -> RGB:
+        stops = DIVERGING if self.diverging else SEQUENTIAL
+        return _interpolate(stops, self.position(value))
+
+    def colour_at(self, t: float) -> RGB:
+        stops = DIVERGING if self.diverging else SEQUENTIAL
+        return _interpolate(stops, t)
+
+
+@dataclass(frozen=True)
+class _Placement:
+    """Where one panel's cells sit in the rendered text."""
+
+    index: int
+    x: int  # column of the first cell
+    y: int  # line of the first row of cells
+    rows: int
+    cols: int
+
+
+@dataclass(frozen=True)
+class _Layout:
+    side_by_side: bool
+    cell_width: int
+    cell_height: int
+    row_label_width: int
+    panel_width: int
+
+
+class HeatmapView(Widget, can_focus=True):
+    """Heatmap panels of a Q-table, with a movable focus cell for games that have one."""
+
+    DEFAULT_CSS = """
+    HeatmapView {
+        width: 1fr;
+        height: auto;
+        text-wrap: nowrap;
+        text-overflow: clip;
+        padding: 0 1;
+        &:focus {
+            background-tint: $foreground 3%;
+        }
+        &.-empty {
+            color: $text-muted;
+            text-style: italic;
+            content-align: center middle;
+            height: 5;
+        }
+    }
+    """
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("up,k", "move(-1, 0)", "Target up", show=False),
+        Binding("down,j", "move(1, 0)", "Target down", show=False),
+        Binding("left,h", "move(0, -1)", "Target left", show=False),
+        Binding("right,l", "move(0, 1)", "Target right", show=False),
+    ]
+
+    class FocusChanged(Message):
+        """The focus cell was moved (keys) or picked (click)."""
+
+        def __init__(self, view: HeatmapView, cell: tuple[int, int]) -> None:
+            super().__init__()
+            self.view = view
+            self.cell = cell  # (row, col) in the first panel
+
+        @property
+        def control(self) -> HeatmapView:
+            return self.view
+
+    focus_cell: reactive[tuple[int, int] | None] = reactive(None, init=False)
+    """(row, col) of the focus cell, or None when the game has no focus concept."""
+
+    def __init__(
+        self,
+        panels: Sequence[Heatmap] = (),
+        *,
+        name: str | None = None,
+        id: str | None = None,
+        classes: str | None = None,
+    ) -> None:
+        super().__init__(name=name, id=id, classes=classes)
+        self._panels: tuple[Heatmap, ...] = tuple(panels)
+        self._message = ""
+        self._placements: list[_Placement] = []
+        self._cell_geometry = (3, 1)
+        self.plain = ""  # the text of the last render, for tests and screenshots
+
+    # --- data in -----------------------------------------------------------
+    @property
+    def panels(self) -> tuple[Heatmap, ...]:
+        return self._panels
+
+    def show(self, panels: Sequence[Heatmap]) -> None:
+        """Draw these panels (replacing any message)."""
+        old = self._panels
+        self._panels = tuple(panels)
+        self._message = ""
+        self.remove_class("-empty")
+        same_shape = len(old) == len(self._panels) and all(
+            a.shape == b.shape and len(a.legend) == len(b.legend)
+            for a, b in zip(old, self._panels, strict=True)
+        )
+        self.refresh(layout=not same_shape)
+
+    def show_message(self, text: str) -> None:
+        """Show a line of text instead of panels (e.g. why there is no per-state view)."""
+        self._panels = ()
+        self._message = text
+        self.add_class("-empty")
+        self.refresh(layout=True)
+
+    def watch_focus_cell(self) -> None:
+        self.refresh()
+        self.refresh_bindings()
+
+    # --- keys and clicks ---------------------------------------------------
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action == "move":
+            return self.focus_cell is not None and bool(self._panels)
+        return True
+
+    def action_move(self, d_row: int, d_col: int) -> None:
+        if self.focus_cell is None or not self._panels:
+            return
+        rows, cols = self._panels[0].shape
+        row, col = self.focus_cell
+        cell = (min(rows - 1, max(0, row + d_row)), min(cols - 1, max(0, col + d_col)))
+        if cell != self.focus_cell:
+            self.focus_cell = cell
+            self.post_message(self.FocusChanged(self, cell))
+
+    def cell_at(self, x: int, y: int) -> tuple[int, int, int] | None:
+        """(panel, row, col) under content offset (x, y), or None."""
+        cell_w, cell_h = self._cell_geometry
+        for place in self._placements:
+            dx, dy = x - place.x, y - place.y
+            if 0 <= dx < place.cols * cell_w and 0 <= dy < place.rows * cell_h:
+                return place.index, dy // cell_h, dx // cell_w
+        return None
+
+    def on_click(self, event: events.Click) -> None:
+        offset = event.get_content_offset(self)
+        if offset is None or self.focus_cell is None:
+            return
+        hit = self.cell_at(offset.x, offset.y)
+        if hit is None or hit[0] != 0:
+            return
+        cell = (hit[1], hit[2])
+        event.stop()
+        self.focus()
+        if cell != self.focus_cell:
+            self.focus_cell = cell
+            self.post_message(self.FocusChanged(self, cell))
+
+    def on_resize(self) -> None:
+        self.refresh(layout=True)
+
+    # --- layout ------------------------------------------------------------
+    def _compact(self) -> bool:
+        try:
+            return self.screen.has_class("compact")
+        except Exception:
+            return False
+
+    def _layout(self, width: int) -> _Layout:
+        panels = self._panels
+        rows = max(p.shape[0] for p in panels)
+        cols = max(p.shape[1] for p in panels)
+        row_label_width = max((len(label) for p in panels for label in p.row_labels), default=0)
+        longest = max(
+            (len(text) for p in panels for line in p.labels for text in line), default=1
+        )
+        min_cell = max(3, longest + 2, *(len(c) + 1 for p in panels for c in p.col_labels))
+        fixed = row_label_width + 1
+        n = len(panels)
+        side = (width - n * fixed - PANEL_GAP * (n - 1)) // max(1, n * cols)
+        side_by_side = n == 1 or side >= min_cell
+        if side_by_side:
+            cell_width = max(min_cell, min(MAX_CELL_WIDTH, side))
+        else:
+            cell_width = max(min_cell, min(MAX_CELL_WIDTH, (width - fixed) // max(1, cols)))
+        # Tall cells look square when there is room: few rows, wide cells, not compact.
+        cell_height = 2 if (rows <= 8 and cell_width >= 5 and not self._compact()) else 1
+        panel_width = fixed + cols * cell_width
+        return _Layout(side_by_side, cell_width, cell_height, row_label_width, panel_width)
+
+    def _panel_height(self, panel: Heatmap, layout: _Layout) -> int:
+        return 2 + panel.shape[0] * layout.cell_height  # title, column labels, cells
+
+    def _legend_lines(self) -> list[str]:
+        seen: list[str] = []
+        for panel in self._panels:
+            if panel.legend and panel.legend not in seen:
+                seen.append(panel.legend)
+        return seen
+
+    def get_content_width(self, container: Size, viewport: Size) -> int:
+        if not self._panels:
+            return len(self._message)
+        layout = self._layout(container.width)
+        n = len(self._panels) if layout.side_by_side else 1
+        return n * layout.panel_width + PANEL_GAP * (n - 1)
+
+    def get_content_height(self, container: Size, viewport: Size, width: int) -> int:
+        if not self._panels:
+            return max(1, len(self._message) // max(1, width) + 1)
+        layout = self._layout(width)
+        heights = [self._panel_height(p, layout) for p in self._panels]
+        body = max(heights) if layout.side_by_side else sum(heights) + len(heights) - 1
+        return body + 2 + len(self._legend_lines())  # a blank line, the scale, the legends
+
+    # --- drawing -----------------------------------------------------------
+    def render(self) -> Text:
+        if not self._panels:
+            self.plain = self._message
+            self._placements = []
+            return Text(self._message, justify="center")
+        width = self.content_region.width or self.size.width or 80
+        layout = self._layout(width)
+        scale = ColourScale.over(self._panels)
+        blocks = [self._panel_lines(i, p, layout, scale) for i, p in enumerate(self._panels)]
+        lines: list[Text] = []
+        placements: list[_Placement] = []
+        if layout.side_by_side:
+            height = max(len(b) for b in blocks)
+            for y in range(height):
+                line = Text()
+                for i, block in enumerate(blocks):
+                    if i:
+                        line.append(" " * PANEL_GAP)
+                    part = block[y] if y < len(block) else Text()
+                    line.append_text(part)
+                    line.append(" " * max(0, layout.panel_width - part.cell_len))
+                lines.append(line)
+            for i, panel in enumerate(self._panels):
+                x = i * (layout.panel_width + PANEL_GAP) + layout.row_label_width + 1
+                placements.append(_Placement(i, x, 2, *panel.shape))
+        else:
+            y = 0
+            for i, (panel, block) in enumerate(zip(self._panels, blocks, strict=True)):
+                if i:
+                    lines.append(Text())
+                    y += 1
+                placements.append(_Placement(i, layout.row_label_width + 1, y + 2, *panel.shape))
+                lines.extend(block)
+                y += len(block)
+        lines.append(Text())
+        lines.append(self._scale_line(scale, layout))
+        indent = " " * (layout.row_label_width + 1)
+        lines.extend(Text(indent + legend, style="dim") for legend in self._legend_lines())
+        self._placements = placements
+        self._cell_geometry = (layout.cell_width, layout.cell_height)
+        text = Text("\n").join(lines)
+        text.no_wrap = True
+        text.overflow = "crop"
+        self.plain = text.plain
+        return text
+
+    def _panel_lines(
+        self, index: int, panel: Heatmap, layout: _Layout, scale: ColourScale
+    ) -> list[Text]:
+        cw, ch, rlw = layout.cell_width, layout.cell_height, layout.row_label_width
+        rows, cols = panel.shape
+        grid_width = cols * cw
+        title = panel.title[: layout.panel_width]
+        lines = [Text(" " * (rlw + 1)) + Text(title.center(grid_width)[:grid_width], style="bold")]
+        header = Text(" " * (rlw + 1))
+        for label in panel.col_labels:
+            header.append(label.center(cw), style="dim")
+        lines.append(header)
+        focus = self.focus_cell if index == 0 else None
+        has_focus = self.has_focus
+        for r in range(rows):
+            for sub in range(ch):
+                row_label = panel.row_labels[r] if sub == 0 else ""
+                line = Text(row_label.rjust(rlw) + " ", style="dim")
+                for c in range(cols):
+                    value = float(panel.values[r, c])
+                    label = panel.labels[r][c] if sub == 0 else ""
+                    marked = bool(panel.marked[r, c]) and sub == 0
+                    line.append_text(
+                        self._cell(value, label, marked, cw, focus == (r, c), has_focus, scale)
+                    )
+                lines.append(line)
+        return lines
+
+    @staticmethod
+    def _cell(
+        value: float,
+        label: str,
+        marked: bool,
+        width: int,
+        is_focus: bool,
+        has_focus: bool,
+        scale: ColourScale,
+    ) -> Text:
+        pad = (width - len(label)) // 2
+        body = " " * pad + label + ("*" if marked else "")
+        body = body.ljust(width)[:width]
+        if is_focus:
+            style = Style(bold=True, reverse=has_focus, color="#ffd75f" if not has_focus else None)
+            if not has_focus:
+                style += Style(bgcolor="#303030")
+            return Text(body, style=style)
+        if not math.isfinite(value):
+            return Text(body, style=Style(color="#808080"))
+        rgb = scale.colour(value)
+        style = Style(bgcolor=_hex(rgb), color=_ink(rgb), bold=marked, underline=marked)
+        return Text(body, style=style)
+
+    def _scale_line(self, scale: ColourScale, layout: _Layout) -> Text:
+        lo, hi = scale.bounds
+        line = Text(" " * (layout.row_label_width + 1))
+        line.append(f"{lo:+.2f} ", style="dim")
+        for i in range(LEGEND_WIDTH):
+            rgb = scale.colour_at((i + 0.5) / LEGEND_WIDTH)
+            line.append(" ", style=Style(bgcolor=_hex(rgb)))
+        line.append(f" {hi:+.2f}", style="dim")
+        return line
