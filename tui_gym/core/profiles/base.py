@@ -10,13 +10,16 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.wrappers.params import Param
+
+if TYPE_CHECKING:
+    from tui_gym.core.play import PlayStep
 
 
 @dataclass(frozen=True)
@@ -144,6 +147,21 @@ class GameProfile(ABC):
     action_keys: dict[str, str] = {}  # keyboard key -> action name, for people
 
     render_mode: str | None = None  # the env's text render mode, if it has one
+    episode_noun: str = "episode"  # what people call one episode, e.g. "hand"
+
+    def outcome_text(
+        self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]
+    ) -> str:
+        """How a finished episode ended, in plain words (truncation told apart)."""
+        steps = f"{last.steps} step{'' if last.steps == 1 else 's'}"
+        total = format_reward(last.episode_return)
+        if last.terminated:
+            return f"Episode over after {steps}, return {total}"
+        return f"Truncated by the time limit after {steps}, return {total}"
+
+    def progress_text(self, last: PlayStep, first_info: Mapping[str, Any]) -> str:
+        """How far the running episode has got, for people ('' when nothing to say)."""
+        return ""
 
     @abstractmethod
     def scene(self, env: Any) -> dict[str, Any]:
@@ -174,6 +192,14 @@ def to_jsonable(value: Any) -> Any:
     if isinstance(value, list | tuple):
         return [to_jsonable(v) for v in value]
     return value
+
+
+def format_reward(value: float) -> str:
+    """A reward for people: '+1', '−1' (a true minus sign), '0', '+1.5'."""
+    if value == 0:
+        return "0"
+    text = f"{abs(value):.4g}"
+    return ("+" if value > 0 else "\u2212") + text
 
 
 def greedy_policy(q: np.ndarray) -> np.ndarray:

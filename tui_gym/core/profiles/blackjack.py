@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from functools import lru_cache
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -20,6 +20,7 @@ from tui_gym.core.profiles.base import (
     EvalOutcome,
     GameProfile,
     ReferenceMetrics,
+    format_reward,
     greedy_policy,
 )
 from tui_gym.core.reference.blackjack import (
@@ -31,6 +32,9 @@ from tui_gym.core.reference.blackjack import (
     policy_value,
 )
 from tui_gym.core.wrappers.params import Param
+
+if TYPE_CHECKING:
+    from tui_gym.core.play import PlayStep
 
 CHART_SUMS = tuple(range(21, 11, -1))  # rows of the chart, top to bottom
 DEALER_CARDS = tuple(range(1, 11))  # columns: A, 2 .. 10
@@ -164,6 +168,27 @@ class BlackjackProfile(GameProfile):
             shown.append("??")
         player = " ".join(card_label(c) for c in hands["player"])
         return f"dealer: {' '.join(shown)}\nplayer: {player}"
+
+    episode_noun = "hand"
+
+    def outcome_text(
+        self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]
+    ) -> str:
+        """'You win +1', 'Dealer wins −1 (you bust)', 'Push 0' from the final reward."""
+        if not last.terminated:
+            steps = f"{last.steps} move{'' if last.steps == 1 else 's'}"
+            total = format_reward(last.episode_return)
+            return f"Hand cut short by the time limit after {steps}, return {total}"
+        player, _ = hand_value(list(scene.get("player", [])))
+        dealer, _ = hand_value(list(scene.get("dealer", [])))
+        reward = format_reward(last.reward)
+        if last.reward > 0:
+            natural = len(scene.get("player", [])) == 2 and player == 21
+            why = " (blackjack!)" if natural else " (dealer busts)" if dealer > 21 else ""
+            return f"You win {reward}{why}"
+        if last.reward < 0:
+            return f"Dealer wins {reward}" + (" (you bust)" if player > 21 else "")
+        return f"Push {reward}"
 
     def describe(self, observation: Any) -> str:
         player, dealer, usable = (int(v) for v in observation)

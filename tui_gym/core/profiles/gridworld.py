@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from functools import lru_cache
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -21,10 +21,14 @@ from tui_gym.core.profiles.base import (
     EvalOutcome,
     GameProfile,
     ReferenceMetrics,
+    format_reward,
     greedy_policy,
 )
 from tui_gym.core.reference.gridworld import optimal_actions, optimal_pair_fraction
 from tui_gym.core.wrappers.params import Param
+
+if TYPE_CHECKING:
+    from tui_gym.core.play import PlayStep
 
 ARROWS = ("→", "↑", "←", "↓")
 MIN_SIZE, MAX_SIZE = 2, 12
@@ -176,6 +180,22 @@ class GridWorldProfile(GameProfile):
         names = " or ".join(self.action_names[a] for a in optimal)
         steps = abs(agent[0] - target[0]) + abs(agent[1] - target[1])
         return Advice(optimal, None, f"optimal: {names}  ({steps} steps to go)")
+
+    def outcome_text(
+        self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]
+    ) -> str:
+        """'Reached the target in 7 steps (optimal 7)' or 'Truncated by the time limit ...'."""
+        steps = f"{last.steps} step{'' if last.steps == 1 else 's'}"
+        total = format_reward(last.episode_return)
+        if last.terminated:
+            optimal = int(first_info.get("distance", 0))
+            verdict = "optimal!" if last.steps <= optimal else f"{last.steps - optimal} extra"
+            return f"Reached the target in {steps} (optimal {optimal}): {verdict}, return {total}"
+        return f"Truncated by the time limit after {steps}, target not reached, return {total}"
+
+    def progress_text(self, last: PlayStep, first_info: Mapping[str, Any]) -> str:
+        optimal = int(first_info.get("distance", 0))
+        return f"{last.steps} step{'' if last.steps == 1 else 's'} taken, optimal {optimal}"
 
     def describe(self, observation: Any) -> str:
         ax, ay = (int(v) for v in observation["agent"])

@@ -1,0 +1,131 @@
+"""`tui-gym screenshots`: deterministic SVG screenshots of the app.
+
+Each scenario builds a seeded Session, drives the real app headless with
+Textual's pilot (keys a person would press), trains synchronously where a
+training picture is wanted (so the picture does not depend on thread timing),
+and saves an SVG. Timing figures (episodes/s, seconds) are pinned to nominal
+values in these pictures only, so the files change only when the app does.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from tui_gym.core.agent import Hyperparameters
+from tui_gym.core.session import Session
+from tui_gym.core.wrappers import WrapperChoice
+
+SIZE = (120, 40)
+NOMINAL_EPISODES_PER_SECOND = 50_000.0
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One picture: a file name, a session to open and what to do before the shot."""
+
+    filename: str
+    title: str
+    make_session: Callable[[], Session]
+    drive: Callable[..., Awaitable[None]]
+    size: tuple[int, int] = SIZE
+
+
+def _pin_timing(session: Session) -> None:
+    trainer = session.trainer
+    trainer.seconds = trainer.episodes / NOMINAL_EPISODES_PER_SECOND
+    trainer._rate = NOMINAL_EPISODES_PER_SECOND
+    trainer._rate_mark = (trainer.seconds, trainer.episodes)
+    trainer.publish()
+
+
+async def _train_view(app, pilot, episodes: int) -> None:
+    app.session.trainer.run(episodes=episodes)
+    _pin_timing(app.session)
+    await pilot.press("t")
+    await pilot.pause()
+    app.train_view.show_snapshot(app.runner.latest, app.runner)
+    await pilot.pause()
+
+
+async def _blackjack_play(app, pilot) -> None:
+    await pilot.press("h")
+    await pilot.pause()
+
+
+async def _gridworld_play(app, pilot) -> None:
+    for key in ("right", "up"):
+        await pilot.press(key)
+    await pilot.pause()
+
+
+async def _blackjack_train(app, pilot) -> None:
+    await _train_view(app, pilot, 60_000)
+
+
+async def _gridworld_train(app, pilot) -> None:
+    await _train_view(app, pilot, 2_000)
+
+
+async def _wrappers(app, pilot) -> None:
+    await pilot.press("w")
+    await pilot.pause()
+
+
+async def _help(app, pilot) -> None:
+    await pilot.press("question_mark")
+    await pilot.pause()
+
+
+SCENARIOS: tuple[Scenario, ...] = (
+    Scenario("blackjack-play.svg", "Blackjack: play a hand",
+             lambda: Session("blackjack", seed=4), _blackjack_play),
+    Scenario("gridworld-play.svg", "GridWorld: walk to the target",
+             lambda: Session("gridworld", seed=2), _gridworld_play),
+    Scenario("blackjack-train.svg", "Blackjack: Q-learning mid-run",
+             lambda: Session("blackjack", seed=0), _blackjack_train),
+    Scenario("gridworld-train.svg", "GridWorld: Q-learning mid-run",
+             lambda: Session("gridworld", hp=Hyperparameters(
+                 discount=0.95, learning_rate=0.1, episodes=20_000), seed=0),
+             _gridworld_train),
+    Scenario("wrappers.svg", "The wrapper panel in use",
+             lambda: Session("gridworld", choices=(
+                 WrapperChoice.make("TimeLimit", max_episode_steps=50),
+                 WrapperChoice.make("StepPenalty", penalty=0.01),
+                 WrapperChoice.make("DistanceShaping"),
+             ), seed=1), _wrappers),
+    Scenario("help.svg", "Every key", lambda: Session("blackjack", seed=0), _help),
+    Scenario("compact-80x24.svg", "The compact layout at 80x24",
+             lambda: Session("blackjack", seed=4), _blackjack_play, size=(80, 24)),
+)
+
+
+async def _shoot(scenario: Scenario, directory: Path) -> Path:
+    from tui_gym.ui.app import TuiGymApp
+
+    app = TuiGymApp(scenario.make_session())
+    async with app.run_test(size=scenario.size) as pilot:
+        await pilot.pause()
+        await scenario.drive(app, pilot)
+        await pilot.pause()
+        app.title = f"tui-gym — {scenario.title}"
+        await pilot.pause()
+        path = directory / scenario.filename
+        svg = app.export_screenshot(title=scenario.title)
+    tmp = path.with_suffix(".svg.tmp")
+    tmp.write_text(svg, encoding="utf-8")
+    tmp.replace(path)
+    return path
+
+
+def write_screenshots(directory: str | Path = "screenshots") -> list[Path]:
+    """Write every scenario's SVG into `directory` (created if needed)."""
+    folder = Path(directory)
+    folder.mkdir(parents=True, exist_ok=True)
+
+    async def shoot_all() -> list[Path]:
+        return [await _shoot(s, folder) for s in SCENARIOS]
+
+    return asyncio.run(shoot_all())

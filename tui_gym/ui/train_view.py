@@ -1,0 +1,464 @@
+"""The Train view: watch tabular Q-learning learn the current game, live.
+
+`TrainView` lays out the controls (start/pause, one episode, reset, slower,
+faster: buttons for the mouse, the same keys live on the app), a progress
+bar toward the episode budget, the run's numbers (`StatsPanel`) beside the
+hyperparameter fields (`HyperparameterForm`), the learning curves
+(`TrainingCharts`) with, at animated speeds, the game's board replaying the
+agent's moves, and the Q-table heatmaps (`HeatmapView`).
+
+It never trains anything: the app's timer hands it the runner's latest
+snapshot through `show_snapshot()`, which redraws only what changed and
+recomputes heatmaps and the exact reference only for a new snapshot. It asks
+the session's profile whether the heatmaps follow a focus (GridWorld's
+target) and what a heatmap cell means; it never branches on a game's name.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, ClassVar
+
+from textual import on
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Horizontal, Vertical, VerticalScroll
+from textual.widget import Widget
+from textual.widgets import Button, Label, ProgressBar
+
+from tui_gym.core.agent import Hyperparameters
+from tui_gym.core.training import TrainingSnapshot
+from tui_gym.ui.widgets.heatmap_view import HeatmapView
+from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
+from tui_gym.ui.widgets.stats_panel import StatsPanel, format_duration
+from tui_gym.ui.widgets.training_charts import TrainingCharts
+
+if TYPE_CHECKING:
+    from tui_gym.core.runner import TrainingRunner
+    from tui_gym.core.session import Session
+
+STATE_POLL_SECONDS = 0.25  # how often the view checks for a pause with no new snapshot
+
+
+class TrainView(VerticalScroll):
+    """Controls, live statistics, learning curves and Q-table heatmaps."""
+
+    DEFAULT_CSS = """
+    TrainView {
+        height: 1fr;
+        padding: 0 0 0 1;
+        scrollbar-size-vertical: 1;
+    }
+    TrainView #train-controls {
+        height: 1;
+        margin-bottom: 0;
+    }
+    TrainView #train-controls Button {
+        min-width: 0;
+        margin-right: 1;
+        padding: 0 1;
+    }
+    TrainView #train-speed {
+        width: auto;
+        min-width: 8;
+        padding: 0 1;
+        color: $text-accent;
+        text-style: bold;
+    }
+    TrainView #train-controls .spacer {
+        width: 1fr;
+    }
+    TrainView #train-controls #train-state {
+        width: auto;
+        color: $text-muted;
+    }
+    TrainView #train-progress-row {
+        height: 1;
+    }
+    TrainView #train-progress {
+        width: 1fr;
+    }
+    TrainView #train-progress Bar {
+        width: 1fr;
+    }
+    TrainView #train-progress-text {
+        width: auto;
+        color: $text-muted;
+        padding-left: 1;
+    }
+    TrainView #train-top {
+        height: auto;
+    }
+    TrainView #train-middle {
+        height: auto;
+    }
+    TrainView #train-charts {
+        width: 1fr;
+    }
+    TrainView #train-board-box {
+        display: none;
+        width: 36;
+        height: auto;
+        margin-left: 1;
+    }
+    TrainView #train-board-box > Board {
+        width: 100%;
+        height: 9;
+    }
+    TrainView #train-board-box.-shown {
+        display: block;
+    }
+    TrainView #train-board-caption {
+        color: $text-muted;
+        width: 100%;
+        height: 3;
+    }
+    TrainView #train-heatmap-box {
+        height: auto;
+        border: round $primary-background-lighten-2;
+        border-title-color: $text-muted;
+        border-subtitle-color: $text-disabled;
+    }
+    TrainView #train-heatmap-box:focus-within {
+        border: round $primary;
+    }
+
+    Screen.compact TrainView #train-top {
+        layout: vertical;
+    }
+    Screen.compact TrainView #train-speed,
+    Screen.compact TrainView #train-state {
+        display: none;
+    }
+    Screen.compact TrainView #train-heatmap-box {
+        border: none;
+    }
+    Screen.compact TrainView #train-board-box {
+        width: 24;
+    }
+    Screen.compact TrainView #train-board-box > Board {
+        height: 7;
+    }
+    """
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("e", "edit_hyperparameters", "Edit", tooltip="Edit the hyperparameters"),
+    ]
+
+    def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
+        super().__init__(id=id, classes=classes)
+        self.focus_target: Any = None  # what the heatmaps follow (GridWorld: the target)
+        self._snapshot: TrainingSnapshot | None = None
+        self._version = -1
+        self._state = ""
+        self._board: Widget | None = None
+        self._board_kind = ""
+        self._scene: Any = None
+        self._scene_event: Any = None
+        self._layout_key: Any = None  # (profile, env kwargs) the focus belongs to
+
+    # --- the app and its session ---------------------------------------------
+    @property
+    def session(self) -> Session:
+        return self.app.session  # type: ignore[attr-defined]
+
+    @property
+    def runner(self) -> TrainingRunner:
+        return self.app.runner  # type: ignore[attr-defined]
+
+    # --- layout ------------------------------------------------------------
+    def compose(self) -> ComposeResult:
+        session = self.session
+        with Horizontal(id="train-controls"):
+            yield Button("▶ Start", id="btn-toggle", variant="success", compact=True,
+                         tooltip="Start or pause training (space)")
+            yield Button("1 episode", id="btn-episode", compact=True,
+                         tooltip="Train for exactly one episode (.)")
+            yield Button("Reset", id="btn-reset", variant="error", compact=True,
+                         tooltip="A fresh agent: empty Q-table, fresh statistics (x)")
+            yield Button("−", id="btn-slower", compact=True, tooltip="Slower (-)")
+            yield Label("", id="train-speed")
+            yield Button("+", id="btn-faster", compact=True, tooltip="Faster (+)")
+            yield Label("", classes="spacer")
+            yield Label("", id="train-state")
+        with Horizontal(id="train-progress-row"):
+            yield ProgressBar(total=session.hp.episodes if session.hp else 1, show_eta=False,
+                              id="train-progress")
+            yield Label("", id="train-progress-text")
+        with Horizontal(id="train-top"):
+            yield StatsPanel(id="train-stats")
+            yield HyperparameterForm(session.hp, id="train-form")
+        with Horizontal(id="train-middle"):
+            yield TrainingCharts(id="train-charts")
+            with Vertical(id="train-board-box"):
+                yield Label("", id="train-board-caption")
+        with Vertical(id="train-heatmap-box"):
+            yield HeatmapView(id="train-heatmaps")
+
+    def on_mount(self) -> None:
+        self.query_one("#train-heatmap-box").border_title = "Q-table"
+        self.set_interval(STATE_POLL_SECONDS, self._poll_state)
+        self.reload()
+
+    # --- parts -------------------------------------------------------------
+    @property
+    def stats(self) -> StatsPanel:
+        return self.query_one(StatsPanel)
+
+    @property
+    def charts(self) -> TrainingCharts:
+        return self.query_one(TrainingCharts)
+
+    @property
+    def heatmap(self) -> HeatmapView:
+        return self.query_one(HeatmapView)
+
+    @property
+    def form(self) -> HyperparameterForm:
+        return self.query_one(HyperparameterForm)
+
+    @property
+    def progress(self) -> ProgressBar:
+        return self.query_one("#train-progress", ProgressBar)
+
+    @property
+    def speed_name(self) -> str:
+        return str(self.query_one("#train-speed", Label).content)
+
+    # --- what the app calls ------------------------------------------------
+    def reload(self) -> None:
+        """Start over from the session (after a rebuild or an agent reset)."""
+        session, runner = self.session, self.runner
+        profile = session.profile
+        layout_key = (profile.name, tuple(sorted(session.env_kwargs.items())))
+        if layout_key != self._layout_key:
+            self._layout_key = layout_key
+            self.focus_target = profile.default_heatmap_focus(session.env_kwargs)
+        if profile.board != self._board_kind:
+            self._drop_board()
+        self._scene = self._scene_event = None
+        if session.hp is not None:
+            self.form.load(session.hp)
+        self.charts.clear()
+        box = self.query_one("#train-heatmap-box")
+        box.border_subtitle = (
+            "←↑↓→ / hjkl / click: move the target" if profile.heatmap_focus else ""
+        )
+        self._version = -1
+        self._state = ""
+        self.show_speed(runner.speed.name)
+        self.show_snapshot(runner.latest, runner)
+
+    def show_snapshot(self, snapshot: TrainingSnapshot, runner: TrainingRunner) -> None:
+        """Draw a snapshot; cheap when it is the one already shown."""
+        if snapshot.version != self._version:
+            self._version = snapshot.version
+            self._snapshot = snapshot
+            self.stats.show_snapshot(snapshot)
+            self.charts.update_from(snapshot)
+            self._show_progress(snapshot, runner)
+            self._show_heatmaps()
+            self._show_reference()
+        self._show_state(runner)
+        self._show_board(runner)
+
+    def show_speed(self, name: str) -> None:
+        """Show the training speed's name (and the board only at animated speeds)."""
+        label = self.query_one("#train-speed", Label)
+        if str(label.content) != name:
+            label.update(name)
+        self.stats.show_speed(name)
+        self._show_board(self.runner)
+
+    def read_hyperparameters(self) -> Hyperparameters | None:
+        """The hyperparameters in the form, or None (with the bad fields marked)."""
+        return self.form.read()
+
+    def focus_default(self) -> None:
+        """Give the keyboard to the heatmap (its keys move GridWorld's target)."""
+        self.heatmap.focus()
+
+    def key_help(self) -> list[tuple[str, str]]:
+        """The keys this view adds to the app's own training keys."""
+        keys = [
+            ("e", "edit the hyperparameters (enter or esc: back)"),
+            ("tab / shift+tab", "move between fields and buttons"),
+        ]
+        if self.session.profile.heatmap_focus:
+            keys.append(("←↑↓→ / hjkl / click", "move the heatmap's target"))
+        return keys
+
+    # --- drawing pieces ----------------------------------------------------
+    def _show_progress(self, snapshot: TrainingSnapshot, runner: TrainingRunner) -> None:
+        budget = max(1, snapshot.budget)
+        self.progress.update(total=budget, progress=min(snapshot.episodes, budget))
+        text = f"{snapshot.episodes:,} / {snapshot.budget:,} episodes"
+        rate = snapshot.episodes_per_second
+        remaining = max(0, snapshot.budget - snapshot.episodes)
+        if runner.running and rate > 0 and remaining:
+            text += f" · eta {format_duration(remaining / rate)}"
+        label = self.query_one("#train-progress-text", Label)
+        if str(label.content) != text:
+            label.update(text)
+
+    def _show_heatmaps(self) -> None:
+        session, snapshot = self.session, self._snapshot
+        if snapshot is None:
+            return
+        profile = session.profile
+        panels = session.heatmaps(snapshot, focus=self.focus_target)
+        view = self.heatmap
+        if panels is None:
+            view.focus_cell = None
+            view.show_message(session.hidden_reason() or "No per-state view of this table.")
+            return
+        view.focus_cell = (
+            profile.heatmap_focus_cell(self.focus_target, session.env_kwargs)
+            if profile.heatmap_focus
+            else None
+        )
+        view.show(panels)
+
+    def _show_reference(self) -> None:
+        session, snapshot = self.session, self._snapshot
+        if snapshot is None:
+            return
+        reference = session.reference(snapshot)
+        note = "" if reference is not None else session.hidden_reason()
+        self.stats.show_reference(reference, note)
+
+    def _show_state(self, runner: TrainingRunner) -> None:
+        snapshot = self._snapshot
+        if runner.running:
+            state = "running"
+        elif runner.finished or (snapshot is not None and snapshot.episodes >= snapshot.budget):
+            state = "finished"
+        elif snapshot is None or snapshot.episodes == 0:
+            state = "idle"
+        else:
+            state = "paused"
+        if state == self._state:
+            return
+        self._state = state
+        self.stats.show_state(state)
+        button = self.query_one("#btn-toggle", Button)
+        running = state == "running"
+        button.label = "‖ Pause" if running else "▶ Start"
+        button.variant = "warning" if running else "success"
+        words = {"running": "training…", "paused": "paused", "finished": "budget reached",
+                 "idle": "ready"}
+        self.query_one("#train-state", Label).update(words.get(state, state))
+
+    def _poll_state(self) -> None:
+        if self.display and self.is_attached:
+            self._show_state(self.runner)
+
+    # --- the board at animated speeds --------------------------------------
+    def _board_class(self) -> type[Widget] | None:
+        try:
+            from tui_gym.ui.widgets.boards import BOARDS  # written beside this view
+        except ImportError:
+            return None
+        return BOARDS.get(self.session.profile.board)
+
+    def _drop_board(self) -> None:
+        if self._board is not None:
+            self._board.remove()
+        self._board = None
+        self._board_kind = ""
+
+    def _ensure_board(self) -> Widget | None:
+        if self._board is not None:
+            return self._board
+        cls = self._board_class()
+        if cls is None:
+            return None
+        try:
+            board = cls(interactive=False)  # type: ignore[call-arg]
+        except TypeError:
+            board = cls()
+        board.can_focus = False
+        self._board = board
+        self._board_kind = self.session.profile.board
+        self.query_one("#train-board-box").mount(board, before=0)
+        return board
+
+    def _show_board(self, runner: TrainingRunner) -> None:
+        box = self.query_one("#train-board-box")
+        scene = runner.last_scene
+        animated = runner.speed.animated and getattr(self._snapshot, "engine", "") == "scalar"
+        if not animated or scene is None:
+            box.set_class(False, "-shown")
+            return
+        board = self._ensure_board()
+        box.set_class(True, "-shown")
+        event = runner.last_event
+        if board is not None and scene != self._scene:
+            self._scene = scene
+            try:
+                board.show_scene(scene, reveal=True)  # type: ignore[attr-defined]
+            except Exception as exc:  # a board that cannot draw must not stop the view
+                self.log.error(f"board could not show the scene: {exc!r}")
+        if event is not self._scene_event:
+            self._scene_event = event
+            self.query_one("#train-board-caption", Label).update(self._describe(event))
+
+    def _describe(self, event: Any) -> str:
+        if event is None:
+            return ""
+        profile = self.session.profile
+        names = profile.action_names
+        action = names[event.action] if 0 <= event.action < len(names) else str(event.action)
+        try:
+            state = profile.describe(event.observation)
+        except Exception:  # wrappers may change what an observation looks like
+            state = ""
+        text = f"{state}\n→ {action}, reward {event.reward:+g}" if state else f"→ {action}"
+        if event.episode_done is not None:
+            text += f"\nepisode over: return {event.episode_done.episode_return:+g}"
+        return text
+
+    # --- events ------------------------------------------------------------
+    @on(Button.Pressed)
+    async def _button(self, event: Button.Pressed) -> None:
+        actions = {
+            "btn-toggle": "toggle_training",
+            "btn-episode": "one_episode",
+            "btn-reset": "reset_agent",
+            "btn-slower": "slower",
+            "btn-faster": "faster",
+        }
+        action = actions.get(event.button.id or "")
+        if action is not None:
+            event.stop()
+            await self.app.run_action(action)
+
+    @on(HeatmapView.FocusChanged)
+    def _heatmap_focus(self, event: HeatmapView.FocusChanged) -> None:
+        event.stop()
+        session = self.session
+        row, col = event.cell
+        self.focus_target = session.profile.heatmap_focus_at(row, col, session.env_kwargs)
+        self._show_heatmaps()
+
+    @on(HyperparameterForm.Submitted)
+    def _form_submitted(self, event: HyperparameterForm.Submitted) -> None:
+        event.stop()
+        hp = event.hyperparameters
+        if hp is None:
+            self.app.notify("Fix the highlighted fields first.", severity="error", timeout=3)
+            return
+        if not self.runner.running:
+            self.session.set_hyperparameters(hp)
+            self.progress.update(total=max(1, hp.episodes))
+            self.app.notify("Hyperparameters set.", timeout=2)
+        else:
+            self.app.notify("They apply when training starts again.", timeout=3)
+        self.focus_default()
+
+    @on(HyperparameterForm.Left)
+    def _form_left(self, event: HyperparameterForm.Left) -> None:
+        event.stop()
+        self.focus_default()
+
+    def action_edit_hyperparameters(self) -> None:
+        self.form.input("learning_rate").focus()

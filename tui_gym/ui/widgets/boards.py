@@ -1,0 +1,227 @@
+"""The board every game is drawn on: the `Board` base, its messages, and `BOARDS`.
+
+A board draws a game's *scene* (plain data from `profile.scene(env)`) and,
+when `interactive`, turns keys and clicks into messages that bubble up:
+`Board.Act(action_name)` for a move and `Board.NewEpisode()` for a new
+episode. It never touches an env or a game itself: the Play view owns the
+game and answers the messages; the Train view shows the agent's moves on a
+non-interactive board. `BOARDS` maps a profile's `board` kind to its class.
+
+A board is a small vertical stack: a `BoardCanvas` that renders the board's
+`picture()` at whatever size it is given (a board picks the largest drawing
+that fits), and, when interactive, a row of compact buttons for the mouse.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+from rich.text import Text
+from textual import events
+from textual.app import ComposeResult
+from textual.containers import Horizontal
+from textual.geometry import Offset
+from textual.message import Message
+from textual.widget import Widget
+from textual.widgets import Button
+
+
+class BoardCanvas(Widget):
+    """The drawing area of a board: renders `board.picture(width, height)`."""
+
+    DEFAULT_CSS = """
+    BoardCanvas { width: 1fr; height: 1fr; }
+    """
+
+    def __init__(self, board: Board) -> None:
+        super().__init__(classes="board-canvas")
+        self.board = board
+
+    def render(self) -> Text:
+        size = self.content_size
+        return self.board.picture(size.width, size.height)
+
+    def on_click(self, event: events.Click) -> None:
+        offset = event.get_content_offset(self)
+        if offset is not None and self.board.interactive:
+            self.board.canvas_clicked(offset)
+
+
+class BoardButton(Button, can_focus=False):
+    """A compact button under a board; the board keeps the focus when it is clicked."""
+
+
+class Board(Widget):
+    """Base of the game boards: draws a scene, posts moves when interactive."""
+
+    DEFAULT_CSS = """
+    Board {
+        width: 1fr;
+        height: 1fr;
+        layout: vertical;
+        border: round $foreground 25%;
+        border-title-color: $text-muted;
+        border-subtitle-color: $text-muted;
+    }
+    Board:focus {
+        border: round $accent;
+        border-title-color: $accent;
+        border-title-style: bold;
+        border-subtitle-color: $text;
+    }
+    Board > .board-buttons {
+        width: 1fr;
+        height: 1;
+        align-horizontal: center;
+    }
+    Board > .board-buttons > BoardButton {
+        margin: 0 1;
+        min-width: 10;
+    }
+    Board > .board-buttons > BoardButton.-suggested {
+        text-style: bold;
+    }
+    """
+
+    BUTTONS: ClassVar[tuple[tuple[str, str], ...]] = ()
+    """Buttons under the board: (label markup, action string run on the board)."""
+
+    RESTART_ANYTIME: ClassVar[bool] = True
+    """May a new episode start before the current one ends?"""
+
+    class Act(Message):
+        """A person asked for a move, by the profile's action name."""
+
+        def __init__(self, action: str) -> None:
+            super().__init__()
+            self.action = action
+
+    class NewEpisode(Message):
+        """A person asked for a new episode (deal, reset)."""
+
+    def __init__(
+        self,
+        *,
+        interactive: bool = True,
+        name: str | None = None,
+        id: str | None = None,  # noqa: A002 - Textual's own name for it
+        classes: str | None = None,
+    ) -> None:
+        super().__init__(name=name, id=id, classes=classes)
+        self.interactive = interactive
+        self.scene: dict[str, Any] = {}
+        self.reveal = True
+        self.episode_over = False
+        self.set_class(interactive, "-interactive")
+
+    # --- structure ---------------------------------------------------------
+    def compose(self) -> ComposeResult:
+        yield BoardCanvas(self)
+        if self.interactive and self.BUTTONS:
+            with Horizontal(classes="board-buttons"):
+                for index, (label, _action) in enumerate(self.BUTTONS):
+                    yield BoardButton(label, compact=True, name=str(index))
+
+    def allow_focus(self) -> bool:
+        return self.interactive
+
+    @property
+    def canvas(self) -> BoardCanvas:
+        return self.query_one(BoardCanvas)
+
+    # --- what the owner calls ------------------------------------------------
+    def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
+        """Draw a scene; `reveal` shows what is hidden during an episode (a hole card)."""
+        self.scene = dict(scene)
+        self.reveal = reveal
+        self.redraw()
+
+    def start_episode(self) -> None:
+        """The next scene begins a new episode (a board may forget what it remembers)."""
+
+    def set_episode_over(self, over: bool) -> None:
+        """Tell the board whether the episode has ended (buttons follow)."""
+        self.episode_over = over
+        self.set_class(over, "-over")
+        self._update_buttons()
+
+    def redraw(self) -> None:
+        if self.is_mounted:
+            for canvas in self.query(BoardCanvas):
+                canvas.refresh()
+
+    def key_help(self) -> list[tuple[str, str]]:
+        """(key, what it does) for every key and click the board answers to."""
+        return []
+
+    @property
+    def prompt(self) -> str:
+        """What a person can do now, in a few words."""
+        return ""
+
+    @property
+    def over_hint(self) -> str:
+        """What to do once the episode is over."""
+        return "The episode is over: start a new one."
+
+    @property
+    def unfinished_hint(self) -> str:
+        """Why a new episode cannot start yet (only when not RESTART_ANYTIME)."""
+        return "Finish this episode first."
+
+    # --- drawing (subclasses) ----------------------------------------------
+    def picture(self, width: int, height: int) -> Text:
+        """The board drawn to fit `width` x `height` cells."""
+        return Text("")
+
+    def canvas_clicked(self, offset: Offset) -> None:
+        """A click on the drawing, at `offset` inside the canvas."""
+
+    def button_enabled(self, action: str) -> bool:
+        """Whether the button that runs `action` can be pressed now."""
+        return True
+
+    def button_suggested(self, action: str) -> bool:
+        """Whether the button that runs `action` is the obvious next step."""
+        return False
+
+    # --- actions and buttons -----------------------------------------------
+    def action_act(self, action: str) -> None:
+        if self.interactive:
+            self.post_message(self.Act(action))
+
+    def action_new_episode(self) -> None:
+        if self.interactive:
+            self.post_message(self.NewEpisode())
+
+    def on_mount(self) -> None:
+        self._update_buttons()
+
+    def _update_buttons(self) -> None:
+        if not self.is_mounted:
+            return
+        for button in self.query(BoardButton):
+            action = self.BUTTONS[int(button.name or 0)][1]
+            button.disabled = not self.button_enabled(action)
+            suggested = self.button_suggested(action)
+            button.variant = "primary" if suggested else "default"
+            button.set_class(suggested, "-suggested")
+
+    async def on_button_pressed(self, event: Button.Pressed) -> None:
+        if not isinstance(event.button, BoardButton):
+            return
+        event.stop()
+        self.focus()
+        await self.run_action(self.BUTTONS[int(event.button.name or 0)][1])
+
+
+# The registry comes last: the board modules import `Board` from here. The
+# package's __init__ imports this module first, so the import order is safe.
+from tui_gym.ui.widgets.cards_board import CardsBoard  # noqa: E402
+from tui_gym.ui.widgets.grid_board import GridBoard  # noqa: E402
+
+BOARDS: dict[str, type[Board]] = {"cards": CardsBoard, "grid": GridBoard}
+"""Board class for each `profile.board` kind."""
+
+__all__ = ["BOARDS", "Board", "BoardButton", "BoardCanvas", "CardsBoard", "GridBoard"]

@@ -1,0 +1,247 @@
+"""`CardsBoard`: a card table that draws the dealer's and the player's hands.
+
+The scene is `{"player": [cards], "dealer": [cards]}` with 1 for an ace and 10
+for a ten or a face card. The dealer's second card lies face down until the
+scene is shown with `reveal=True`. Cards are drawn as little boxes in one of
+three sizes, the largest that fits; suits are decorative (the game has none)
+and follow the card's place in the hand, so a redraw never reshuffles them.
+Keys: h hit, s stick, n or Enter deals the next hand; the buttons under the
+table do the same with the mouse.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import ClassVar
+
+from rich.style import Style
+from rich.text import Text
+from textual.binding import Binding, BindingType
+
+from tui_gym.core.profiles.blackjack import card_label, hand_value
+from tui_gym.ui.widgets.boards import Board
+
+SUITS = ("♠", "♥", "♦", "♣")
+RED_SUITS = frozenset({"♥", "♦"})
+
+
+def suit_for(hand: int, position: int, card: int) -> str:
+    """A decorative suit, fixed by the hand (0 dealer, 1 player), place and card."""
+    return SUITS[(3 * position + card + hand) % len(SUITS)]
+
+
+@dataclass(frozen=True)
+class CardSize:
+    """How big a card is drawn: `width` x `height` cells (height 1: a chip of text)."""
+
+    width: int
+    height: int
+
+
+LARGE = CardSize(7, 5)
+MEDIUM = CardSize(5, 3)
+MINI = CardSize(5, 1)
+SIZES = (LARGE, MEDIUM, MINI)
+
+
+class CardsBoard(Board):
+    """The Blackjack table: the dealer's hand above, the player's below."""
+
+    DEFAULT_CSS = """
+    CardsBoard > BoardCanvas { background: $success 12%; }
+    CardsBoard > .board-buttons { background: $success 12%; }
+    CardsBoard .cards--face { background: #f5f1e6; color: #1b1b1b; }
+    CardsBoard .cards--red { background: #f5f1e6; color: #c0282d; }
+    CardsBoard .cards--edge { background: #f5f1e6; color: #8d8778; }
+    CardsBoard .cards--back { background: #22508f; color: #d9e3f2; }
+    CardsBoard .cards--back-fill { background: #22508f; color: #7ea2d6; }
+    CardsBoard .cards--label { color: $text; text-style: bold; }
+    CardsBoard .cards--muted { color: $text-muted; }
+    CardsBoard .cards--total { color: $text; text-style: bold; }
+    CardsBoard .cards--bust { color: $text-error; text-style: bold; }
+    CardsBoard .cards--best { color: $text-success; text-style: bold; }
+    CardsBoard .cards--tag { background: $warning 70%; color: #1b1b1b; text-style: bold; }
+    """
+
+    COMPONENT_CLASSES: ClassVar[set[str]] = {
+        "cards--face",
+        "cards--red",
+        "cards--edge",
+        "cards--back",
+        "cards--back-fill",
+        "cards--label",
+        "cards--muted",
+        "cards--total",
+        "cards--bust",
+        "cards--best",
+        "cards--tag",
+    }
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("h", "act('hit')", "Hit", tooltip="Take another card"),
+        Binding("s", "act('stick')", "Stick", tooltip="Keep your hand; the dealer plays"),
+        Binding("n,enter", "new_episode", "Deal", key_display="n", tooltip="Deal the next hand"),
+    ]
+
+    BUTTONS = (
+        ("Hit [dim]h[/]", "act('hit')"),
+        ("Stick [dim]s[/]", "act('stick')"),
+        ("Deal [dim]n[/]", "new_episode"),
+    )
+    RESTART_ANYTIME = False
+
+    def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
+        self.border_title = "Table" if self.interactive else "Table (the agent plays)"
+
+    # --- what the board says ---------------------------------------------------
+    def key_help(self) -> list[tuple[str, str]]:
+        return [
+            ("h", "hit: take another card"),
+            ("s", "stick: keep your hand, the dealer plays"),
+            ("n / enter", "deal the next hand"),
+            ("click", "the Hit / Stick / Deal buttons under the table"),
+        ]
+
+    @property
+    def prompt(self) -> str:
+        return "Hit (h) or stick (s)?"
+
+    @property
+    def over_hint(self) -> str:
+        return "This hand is over: press n or Enter (or click Deal) for the next one."
+
+    @property
+    def unfinished_hint(self) -> str:
+        return "Finish this hand first: hit (h) or stick (s)."
+
+    def button_enabled(self, action: str) -> bool:
+        return self.episode_over if action == "new_episode" else not self.episode_over
+
+    def button_suggested(self, action: str) -> bool:
+        return self.episode_over and action == "new_episode"
+
+    # --- drawing ---------------------------------------------------------------
+    def _style(self, name: str) -> Style:
+        return self.get_component_rich_style(f"cards--{name}")
+
+    def _card(self, hand: int, position: int, card: int, size: CardSize, face_up: bool) -> list[Text]:
+        """The lines of one card, each `size.width` cells wide (MINI: as wide as it needs)."""
+        if not face_up:
+            back, fill = self._style("back"), self._style("back-fill")
+            if size.height == 1:
+                return [Text(" ░░░ ", fill)]
+            inner = size.width - 2
+            lines = [Text("╭" + "─" * inner + "╮", back)]
+            for _ in range(size.height - 2):
+                line = Text("│", back)
+                line.append("░" * inner, fill)
+                line.append("│", back)
+                lines.append(line)
+            lines.append(Text("╰" + "─" * inner + "╯", back))
+            return lines
+        rank = card_label(card)
+        suit = suit_for(hand, position, card)
+        ink = self._style("red" if suit in RED_SUITS else "face")
+        edge = self._style("edge")
+        if size.height == 1:
+            return [Text(f" {rank}{suit} ".ljust(size.width), ink)]
+        inner = size.width - 2
+        if size.height == 3:
+            middle = [f"{rank:<2}{suit}".ljust(inner)]
+        else:
+            middle = [f"{rank:<{inner}}", f"{suit:^{inner}}", f"{rank:>{inner}}"]
+        lines = [Text("╭" + "─" * inner + "╮", edge)]
+        for text in middle:
+            line = Text("│", edge)
+            line.append(text, ink)
+            line.append("│", edge)
+            lines.append(line)
+        lines.append(Text("╰" + "─" * inner + "╯", edge))
+        return lines
+
+    def _hand(self, hand: int, cards: Sequence[int], size: CardSize, hidden: int) -> list[Text]:
+        """A hand's rows of cards side by side; cards from index `hidden` on lie face down."""
+        drawn = [
+            self._card(hand, i, card, size, face_up=i < hidden) for i, card in enumerate(cards)
+        ]
+        rows = []
+        for r in range(size.height):
+            row = Text()
+            for i, card_lines in enumerate(drawn):
+                if i:
+                    row.append(" ")
+                row.append_text(card_lines[r])
+            rows.append(row)
+        return rows
+
+    def _dealer_label(self, dealer: Sequence[int], hidden: bool) -> Text:
+        label = Text("Dealer", self._style("label"))
+        if not dealer:
+            return label
+        label.append("  ")
+        if hidden:
+            label.append("showing ", self._style("muted"))
+            label.append(card_label(dealer[0]), self._style("total"))
+            return label
+        total, _ = hand_value(list(dealer))
+        if total > 21:
+            label.append(f"{total} bust", self._style("bust"))
+        else:
+            label.append(str(total), self._style("total"))
+        return label
+
+    def _player_label(self, player: Sequence[int]) -> Text:
+        label = Text("You" if self.interactive else "Agent", self._style("label"))
+        if not player:
+            return label
+        total, usable = hand_value(list(player))
+        label.append("  ")
+        if total > 21:
+            label.append(f"{total} bust", self._style("bust"))
+        elif total == 21:
+            natural = len(player) == 2
+            label.append("21" + (" blackjack!" if natural else ""), self._style("best"))
+        else:
+            label.append(str(total), self._style("total"))
+        if usable:
+            label.append("  ")
+            label.append(" usable ace ", self._style("tag"))
+        return label
+
+    def picture(self, width: int, height: int) -> Text:
+        player = list(self.scene.get("player", []))
+        dealer = list(self.scene.get("dealer", []))
+        if not player and not dealer:
+            hint = "No cards on the table."
+            if self.interactive:
+                hint += " Press n to deal."
+            return _centered([Text(hint, self._style("muted"))], width, height)
+        hidden = not self.reveal and len(dealer) > 1
+        dealer_label = self._dealer_label(dealer, hidden)
+        player_label = self._player_label(player)
+        for size in SIZES:
+            dealer_rows = self._hand(0, dealer, size, hidden=1 if hidden else len(dealer))
+            player_rows = self._hand(1, player, size, hidden=len(player))
+            lines = [dealer_label, *dealer_rows, Text(), player_label, *player_rows]
+            if size.height > 1 and len(lines) + 1 <= height:
+                lines.insert(len(dealer_rows) + 1, Text())  # a little more air
+            fits_width = max(line.cell_len for line in lines) <= width
+            if fits_width and len(lines) <= height:
+                break
+        return _centered(lines, width, height)
+
+
+def _centered(lines: list[Text], width: int, height: int) -> Text:
+    """Lines as one block (left-aligned among themselves) centred in `width` x `height`."""
+    block = max((line.cell_len for line in lines), default=0)
+    left = " " * max(0, (width - block) // 2)
+    top = max(0, (height - len(lines)) // 2)
+    out = Text(no_wrap=True, overflow="crop", end="")
+    out.append("\n" * top)
+    for i, line in enumerate(lines):
+        if i:
+            out.append("\n")
+        out.append(left)
+        out.append_text(line)
+    return out

@@ -1,0 +1,282 @@
+"""`GridBoard`: a square grid with the agent, the target and the agent's trail.
+
+The scene is `{"size": n, "agent": (x, y), "target": (x, y)}` in the
+tutorial's coordinates: x grows to the right and y grows *upwards*, so y = 0
+is the bottom row on screen. The board remembers the cells the agent left
+this episode and draws each with the arrow of the move that left it, a trail
+that shows the path taken. Cells are drawn as large as the space allows.
+Keys: arrows or WASD move, r resets; a click on a cell steps the agent one
+cell towards it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+from rich.style import Style
+from rich.text import Text
+from textual.binding import Binding, BindingType
+from textual.geometry import Offset
+
+from tui_gym.ui.widgets.boards import Board
+
+Cell = tuple[int, int]
+
+MOVES: dict[Cell, tuple[str, str]] = {  # (dx, dy) -> (action name, trail arrow)
+    (1, 0): ("right", "→"),
+    (0, 1): ("up", "↑"),
+    (-1, 0): ("left", "←"),
+    (0, -1): ("down", "↓"),
+}
+AGENT, TARGET, HOME = "●", "◎", "◉"  # HOME: the agent stands on the target
+
+MOVE_GROUP = Binding.Group("move", compact=True)
+
+
+@dataclass(frozen=True)
+class GridLayout:
+    """Where the drawn grid sits in the canvas, to map clicks back to cells."""
+
+    n: int
+    cell_w: int
+    cell_h: int
+    lines: bool  # box-drawing lines between cells
+    axes: bool  # coordinates to the left and below
+    left: int = 0  # canvas column of the grid's left edge (after the y labels)
+    top: int = 0  # canvas row of the grid's top edge
+
+    @property
+    def label_w(self) -> int:
+        return len(str(self.n - 1)) + 1 if self.axes else 0
+
+    @property
+    def grid_w(self) -> int:
+        return self.n * (self.cell_w + 1) + 1 if self.lines else self.n * self.cell_w
+
+    @property
+    def grid_h(self) -> int:
+        return self.n * (self.cell_h + 1) + 1 if self.lines else self.n * self.cell_h
+
+    @property
+    def width(self) -> int:
+        return self.label_w + self.grid_w
+
+    @property
+    def height(self) -> int:
+        return self.grid_h + (1 if self.axes else 0)
+
+    def cell_at(self, offset: Offset) -> Cell | None:
+        """The grid cell (x, y) under a canvas offset, or None off the grid."""
+        gap = 1 if self.lines else 0
+        col = (offset.x - self.left - gap) // (self.cell_w + gap)
+        row = (offset.y - self.top - gap) // (self.cell_h + gap)
+        if not (0 <= col < self.n and 0 <= row < self.n):
+            return None
+        return col, self.n - 1 - row
+
+
+CELL_SHAPES = ((7, 3, True), (5, 2, True), (5, 1, True), (3, 1, True), (3, 1, False),
+               (2, 1, False), (1, 1, False))
+
+
+def choose_layout(n: int, width: int, height: int) -> GridLayout:
+    """The largest drawing of an n x n grid that fits (the smallest one if none does)."""
+    layout = GridLayout(n, 1, 1, False, False)
+    for cell_w, cell_h, lines in CELL_SHAPES:
+        for axes in (True, False):
+            if axes and cell_w < len(str(n - 1)):
+                continue
+            candidate = GridLayout(n, cell_w, cell_h, lines, axes)
+            if candidate.width <= width and candidate.height <= height:
+                layout = candidate
+                break
+        else:
+            continue
+        break
+    left = max(0, (width - layout.width) // 2) + layout.label_w
+    top = max(0, (height - layout.height) // 2)
+    return GridLayout(n, layout.cell_w, layout.cell_h, layout.lines, layout.axes, left, top)
+
+
+def _cell(value: Any) -> Cell | None:
+    if value is None:
+        return None
+    x, y = value
+    return int(x), int(y)
+
+
+class GridBoard(Board):
+    """GridWorld: walk the agent (●) to the target (◎); +y is up."""
+
+    DEFAULT_CSS = """
+    GridBoard .grid--line { color: $foreground 30%; }
+    GridBoard .grid--empty { color: $foreground 25%; }
+    GridBoard .grid--trail { color: $text-primary; }
+    GridBoard .grid--agent { background: $primary; color: #ffffff; text-style: bold; }
+    GridBoard .grid--target { background: $error 75%; color: #ffffff; text-style: bold; }
+    GridBoard .grid--home { background: $success; color: #ffffff; text-style: bold; }
+    GridBoard .grid--axis { color: $text-muted; }
+    """
+
+    COMPONENT_CLASSES: ClassVar[set[str]] = {
+        "grid--line",
+        "grid--empty",
+        "grid--trail",
+        "grid--agent",
+        "grid--target",
+        "grid--home",
+        "grid--axis",
+    }
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("up,w", "act('up')", "up", key_display="↑/w", group=MOVE_GROUP),
+        Binding("down,s", "act('down')", "down", key_display="↓/s", group=MOVE_GROUP),
+        Binding("left,a", "act('left')", "left", key_display="←/a", group=MOVE_GROUP),
+        Binding("right,d", "act('right')", "right", key_display="→/d", group=MOVE_GROUP),
+        Binding("r", "new_episode", "Reset", tooltip="Start a new episode"),
+    ]
+
+    BUTTONS = (("↺ Reset [dim]r[/]", "new_episode"),)
+    RESTART_ANYTIME = True
+
+    def __init__(
+        self,
+        *,
+        interactive: bool = True,
+        name: str | None = None,
+        id: str | None = None,  # noqa: A002 - Textual's own name for it
+        classes: str | None = None,
+    ) -> None:
+        super().__init__(interactive=interactive, name=name, id=id, classes=classes)
+        self.trail: dict[Cell, str] = {}  # cell the agent left -> arrow of that move
+        self._agent: Cell | None = None
+        self._target: Cell | None = None
+        self._size = 0
+        self._fresh = True
+        self._layout: GridLayout | None = None
+
+    def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
+        self.border_title = "Grid" if self.interactive else "Grid (the agent moves)"
+
+    # --- what the board says ---------------------------------------------------
+    def key_help(self) -> list[tuple[str, str]]:
+        return [
+            ("↑ ↓ ← →  or  w a s d", "move up, down, left, right (+y is up)"),
+            ("r", "reset: a new episode"),
+            ("click a cell", "step one cell towards it"),
+        ]
+
+    @property
+    def prompt(self) -> str:
+        return "Move with the arrows or WASD, or click a cell; r resets."
+
+    @property
+    def over_hint(self) -> str:
+        return "This episode is over: press r (or click Reset) for a new one."
+
+    def button_suggested(self, action: str) -> bool:
+        return self.episode_over
+
+    # --- the scene and the trail -----------------------------------------------
+    def start_episode(self) -> None:
+        """The next scene begins a new episode: forget the trail."""
+        self._fresh = True
+
+    def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
+        agent, target = _cell(scene.get("agent")), _cell(scene.get("target"))
+        size = int(scene.get("size", 0))
+        previous = self._agent
+        jumped = (
+            previous is None
+            or agent is None
+            or abs(agent[0] - previous[0]) + abs(agent[1] - previous[1]) > 1
+        )
+        if self._fresh or jumped or target != self._target or size != self._size:
+            self.trail = {}
+        elif agent != previous and previous is not None and agent is not None:
+            move = (agent[0] - previous[0], agent[1] - previous[1])
+            self.trail[previous] = MOVES[move][1]
+        self._fresh = False
+        self._agent, self._target, self._size = agent, target, size
+        super().show_scene(scene, reveal)
+
+    # --- drawing ---------------------------------------------------------------
+    def _style(self, name: str) -> Style:
+        return self.get_component_rich_style(f"grid--{name}")
+
+    def _cell_look(self, cell: Cell, lines: bool) -> tuple[str, Style]:
+        """The glyph and style of one cell."""
+        if cell == self._agent and cell == self._target:
+            return HOME, self._style("home")
+        if cell == self._agent:
+            return AGENT, self._style("agent")
+        if cell == self._target:
+            return TARGET, self._style("target")
+        if cell in self.trail:
+            return self.trail[cell], self._style("trail")
+        return (" " if lines else "·"), self._style("empty")
+
+    def picture(self, width: int, height: int) -> Text:
+        n = self._size
+        out = Text(no_wrap=True, overflow="crop", end="")
+        if n <= 0:
+            self._layout = None
+            out.append("No grid yet.", self._style("axis"))
+            return out
+        layout = choose_layout(n, width, height)
+        self._layout = layout
+        line, axis = self._style("line"), self._style("axis")
+        cw, ch = layout.cell_w, layout.cell_h
+        margin = " " * (layout.left - layout.label_w)
+        rows: list[Text] = []
+
+        def rule(first: str, middle: str, last: str) -> Text:
+            return Text(first + middle.join("─" * cw for _ in range(n)) + last, line)
+
+        for r in range(n):
+            y = n - 1 - r
+            if layout.lines:
+                rows.append(rule("┌", "┬", "┐") if r == 0 else rule("├", "┼", "┤"))
+            for k in range(ch):
+                row = Text()
+                if layout.axes:
+                    label = str(y) if k == ch // 2 else ""
+                    row.append(f"{label:>{layout.label_w - 1}} ", axis)
+                if layout.lines:
+                    row.append("│", line)
+                for x in range(n):
+                    glyph, style = self._cell_look((x, y), layout.lines)
+                    row.append((glyph if k == ch // 2 else " ").center(cw), style)
+                    if layout.lines:
+                        row.append("│", line)
+                rows.append(row)
+        if layout.lines:
+            rows.append(rule("└", "┴", "┘"))
+        if layout.axes:
+            labels = Text(" " * layout.label_w + (" " if layout.lines else ""))
+            for x in range(n):
+                labels.append(str(x).center(cw) + (" " if layout.lines else ""), axis)
+            rows.append(labels)
+        out.append("\n" * layout.top)
+        for i, row in enumerate(rows):
+            if i:
+                out.append("\n")
+            out.append(margin)
+            out.append_text(row)
+        return out
+
+    def canvas_clicked(self, offset: Offset) -> None:
+        """Step one cell towards the clicked cell (the longer way first)."""
+        if self._layout is None or self._agent is None:
+            return
+        cell = self._layout.cell_at(offset)
+        if cell is None or cell == self._agent:
+            return
+        dx, dy = cell[0] - self._agent[0], cell[1] - self._agent[1]
+        if abs(dx) >= abs(dy):
+            step = (1 if dx > 0 else -1, 0)
+        else:
+            step = (0, 1 if dy > 0 else -1)
+        self.action_act(MOVES[step][0])

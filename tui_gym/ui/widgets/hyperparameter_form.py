@@ -1,0 +1,259 @@
+"""The hyperparameter form: one checked field per Q-learning knob.
+
+`HyperparameterForm` has an `Input` for every entry of
+`tui_gym.core.agent.HYPERPARAMETER_FIELDS` (learning rate, discount,
+epsilon start / final / decay fraction, episodes), each with its label and
+the range it accepts. Every keystroke is checked with the field's own
+`FieldRange.parse`: a bad value turns the field red and says why under it.
+`read()` returns the `Hyperparameters` the fields describe, or None (with
+every problem marked, including ones between fields such as epsilon final
+above epsilon start); `load(hp)` fills the fields. Enter posts `Submitted`
+so the owner can hand the keyboard back to the view; Escape does the same
+without checking.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+from textual import on
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Horizontal, Vertical
+from textual.message import Message
+from textual.validation import ValidationResult, Validator
+from textual.widgets import Input, Label, Static
+
+from tui_gym.core.agent import HYPERPARAMETER_FIELDS, FieldRange, Hyperparameters
+
+
+def format_value(field: FieldRange, value: float) -> str:
+    """A field's value as the text a person would type."""
+    if field.kind is int:
+        return str(int(value))
+    return f"{value:g}"
+
+
+def range_hint(field: FieldRange) -> str:
+    """'(0, 1]' from 'a number in (0, 1]'."""
+    return field.describe().split(" in ", 1)[-1]
+
+
+def field_error(field: FieldRange, text: str) -> str | None:
+    """Why `text` is not a valid value of the field (None when it is)."""
+    if not text.strip():
+        return f"{field.label} is empty; it needs {field.describe()}"
+    try:
+        field.parse(text)
+    except ValueError:
+        return f"{field.label} needs {field.describe()}, not {text.strip()!r}"
+    return None
+
+
+class FieldValidator(Validator):
+    """Checks an Input against one hyperparameter's range."""
+
+    def __init__(self, field: FieldRange) -> None:
+        super().__init__()
+        self.field = field
+
+    def validate(self, value: str) -> ValidationResult:
+        problem = field_error(self.field, value)
+        return self.success() if problem is None else self.failure(problem, value)
+
+
+class HyperparameterForm(Vertical):
+    """Labelled, range-checked inputs for the agent's hyperparameters."""
+
+    DEFAULT_CSS = """
+    HyperparameterForm {
+        width: 38;
+        height: auto;
+        border: round $primary-background-lighten-2;
+        border-title-color: $text-muted;
+        padding: 0 1;
+    }
+    HyperparameterForm .hp-row {
+        height: 1;
+    }
+    HyperparameterForm .hp-label {
+        width: 15;
+        color: $text-muted;
+    }
+    HyperparameterForm Input {
+        width: 1fr;
+        min-width: 8;
+    }
+    HyperparameterForm Input.-invalid {
+        color: $text-error;
+        text-style: bold;
+    }
+    HyperparameterForm .hp-hint {
+        width: 9;
+        padding-left: 1;
+        color: $text-disabled;
+    }
+    HyperparameterForm .hp-error {
+        display: none;
+        color: $text-error;
+        padding-left: 2;
+    }
+    HyperparameterForm .hp-error.-shown {
+        display: block;
+    }
+    HyperparameterForm .hp-row.-invalid .hp-label {
+        color: $text-error;
+        text-style: bold;
+    }
+    Screen.compact HyperparameterForm {
+        width: 1fr;
+        border: none;
+        padding: 0;
+    }
+    Screen.compact HyperparameterForm .hp-hint {
+        display: none;
+    }
+    """
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("escape", "leave", "Leave the fields", show=False),
+    ]
+
+    class Submitted(Message):
+        """Enter in a field: `hyperparameters` is None when some field is wrong."""
+
+        def __init__(self, form: HyperparameterForm, hyperparameters: Hyperparameters | None):
+            super().__init__()
+            self.form = form
+            self.hyperparameters = hyperparameters
+
+        @property
+        def control(self) -> HyperparameterForm:
+            return self.form
+
+    class Left(Message):
+        """Escape in a field: the person wants the keyboard back for the view."""
+
+    def __init__(
+        self,
+        hyperparameters: Hyperparameters | None = None,
+        *,
+        id: str | None = None,
+        classes: str | None = None,
+    ) -> None:
+        super().__init__(id=id, classes=classes)
+        self._initial = hyperparameters or Hyperparameters()
+        self._base = self._initial
+        self._between: set[str] = set()  # fields marked by a rule between fields
+        self.border_title = "Hyperparameters"
+
+    def compose(self) -> ComposeResult:
+        for field in HYPERPARAMETER_FIELDS:
+            with Horizontal(classes="hp-row", id=f"hp-row-{field.name}"):
+                yield Label(field.label, classes="hp-label")
+                box = Input(
+                    format_value(field, getattr(self._initial, field.name)),
+                    id=f"hp-{field.name}",
+                    compact=True,
+                    validators=[FieldValidator(field)],
+                    select_on_focus=True,
+                )
+                box.tooltip = f"{field.help}: {field.describe()}"
+                yield box
+                yield Label(range_hint(field), classes="hp-hint")
+            yield Static("", id=f"hp-error-{field.name}", classes="hp-error", markup=False)
+
+    # --- the fields --------------------------------------------------------
+    def input(self, name: str) -> Input:
+        """The Input of one hyperparameter, e.g. `input("learning_rate")`."""
+        return self.query_one(f"#hp-{name}", Input)
+
+    def error(self, name: str) -> str:
+        """The problem shown under a field ('' when none)."""
+        widget = self.query_one(f"#hp-error-{name}", Static)
+        return str(widget.content) if widget.has_class("-shown") else ""
+
+    def is_invalid(self, name: str) -> bool:
+        return self.input(name).has_class("-invalid")
+
+    def _mark(self, name: str, problem: str | None) -> None:
+        self.input(name).set_class(problem is not None, "-invalid")
+        self.input(name).set_class(problem is None, "-valid")
+        self.query_one(f"#hp-row-{name}").set_class(problem is not None, "-invalid")
+        note = self.query_one(f"#hp-error-{name}", Static)
+        note.update(problem or "")
+        note.set_class(bool(problem), "-shown")
+
+    @on(Input.Changed)
+    def _changed(self, event: Input.Changed) -> None:
+        event.stop()
+        name = (event.input.id or "").removeprefix("hp-")
+        result = event.validation_result
+        problem = None
+        if result is not None and not result.is_valid:
+            problem = "; ".join(result.failure_descriptions) or "invalid value"
+        self._mark(name, problem)
+        if problem is None and self._between:
+            # any fix may settle a rule between fields; read() checks it again
+            for other in self._between:
+                if other != name:
+                    self._mark(other, None)
+            self._between.clear()
+
+    @on(Input.Submitted)
+    def _submitted(self, event: Input.Submitted) -> None:
+        event.stop()
+        self.post_message(self.Submitted(self, self.read()))
+
+    def action_leave(self) -> None:
+        self.post_message(self.Left())
+
+    # --- reading and loading -----------------------------------------------
+    def read(self) -> Hyperparameters | None:
+        """The hyperparameters in the fields, or None with every problem marked.
+
+        Settings the form has no field for (the learning-rate schedule) come
+        from the hyperparameters last loaded.
+        """
+        values: dict[str, int | float] = {}
+        ok = True
+        for field in HYPERPARAMETER_FIELDS:
+            text = self.input(field.name).value
+            problem = field_error(field, text)
+            self._mark(field.name, problem)
+            if problem is None:
+                values[field.name] = field.parse(text)
+            else:
+                ok = False
+        if not ok:
+            return None
+        try:
+            return self._base.replace(**values)
+        except ValueError as exc:
+            # A rule between fields (epsilon final above epsilon start): mark the
+            # fields the message names, with the message in people's words.
+            reason = str(exc)
+            named = [f for f in HYPERPARAMETER_FIELDS if f.name in reason]
+            for field in HYPERPARAMETER_FIELDS:
+                reason = reason.replace(field.name, field.label.lower())
+            reason = reason[:1].upper() + reason[1:]
+            marked = named or list(HYPERPARAMETER_FIELDS[:1])
+            for field in marked:  # the reason once, under the last field it names
+                self._mark(field.name, reason if field is marked[-1] else "")
+                self._between.add(field.name)
+            return None
+
+    def load(self, hyperparameters: Hyperparameters) -> None:
+        """Fill every field from `hyperparameters` and clear the marks."""
+        self._base = hyperparameters
+        for field in HYPERPARAMETER_FIELDS:
+            box = self.input(field.name)
+            text = format_value(field, getattr(hyperparameters, field.name))
+            if box.value != text:
+                box.value = text
+            self._mark(field.name, None)
+
+    @property
+    def valid(self) -> bool:
+        """True when no field is marked."""
+        return not any(self.is_invalid(f.name) for f in HYPERPARAMETER_FIELDS)

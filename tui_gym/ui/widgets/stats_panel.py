@@ -1,0 +1,192 @@
+"""The training stats table: counts, rates, rolling means and the exact yardstick.
+
+`StatsPanel` shows the state of the run (running, paused, finished), the
+speed and the engine, then episodes, steps, episodes per second, time,
+epsilon and the rolling means of return, length and |TD error|, then the
+reference figures the game's profile computes for the current greedy policy
+(Blackjack: its exact value beside the optimum and the gap; GridWorld: the
+share of (agent, target) pairs solved in the fewest steps). The figures are
+shown generically, by name, so a new game needs no change here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from rich.console import Group, RenderableType
+from rich.table import Table
+from rich.text import Text
+from textual.widget import Widget
+
+from tui_gym.core.profiles import ReferenceMetrics
+from tui_gym.core.training import TrainingSnapshot
+
+STATE_STYLES = {
+    "running": ("● running", "bold green"),
+    "paused": ("‖ paused", "bold yellow"),
+    "finished": ("✓ finished", "bold cyan"),
+    "idle": ("○ ready", "bold"),
+}
+
+
+def figure_name(key: str) -> str:
+    """'optimal_pair_fraction' -> 'optimal pair fraction'."""
+    return key.replace("_", " ")
+
+
+def format_figure(key: str, value: float) -> str:
+    """A reference figure as text: shares as percentages, values signed."""
+    if key.endswith(("fraction", "rate", "share")):
+        return f"{value:.1%}"
+    if key == "gap" or key.endswith("_gap"):
+        return f"{value:.4f}"
+    return f"{value:+.4f}"
+
+
+def format_duration(seconds: float) -> str:
+    seconds = int(seconds)
+    hours, rest = divmod(seconds, 3600)
+    minutes, secs = divmod(rest, 60)
+    return f"{hours}:{minutes:02d}:{secs:02d}" if hours else f"{minutes}:{secs:02d}"
+
+
+def format_rate(rate: float) -> str:
+    if rate >= 100:
+        return f"{rate:,.0f}"
+    return f"{rate:.1f}"
+
+
+class StatsPanel(Widget):
+    """A clean two-column table of the run's numbers."""
+
+    DEFAULT_CSS = """
+    StatsPanel {
+        width: 1fr;
+        height: auto;
+        border: round $primary-background-lighten-2;
+        border-title-color: $text-muted;
+        border-subtitle-color: $text-disabled;
+        padding: 0 1;
+    }
+    Screen.compact StatsPanel {
+        border: none;
+        padding: 0;
+        min-height: 0;
+    }
+    """
+
+    def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
+        super().__init__(id=id, classes=classes)
+        self.border_title = "Training"
+        self._rows: list[tuple[str, str, str]] = []  # (name, value, style)
+        self._reference: list[tuple[str, str]] = []
+        self._reference_note = ""
+        self._state = "idle"
+        self._speed = ""
+        self._engine = ""
+        self._window = 0
+        self.plain = ""  # what the panel says, as plain text (tests, screen readers)
+
+    # --- data in -----------------------------------------------------------
+    def show_state(self, state: str) -> None:
+        """'running', 'paused', 'finished' or 'idle'."""
+        if state != self._state:
+            self._state = state
+            self._changed()
+
+    def show_speed(self, name: str) -> None:
+        if name != self._speed:
+            self._speed = name
+            self._changed()
+
+    def show_snapshot(self, snapshot: TrainingSnapshot) -> None:
+        episodes = snapshot.episodes
+        seen = episodes > 0
+        rows = [
+            ("episodes", f"{episodes:,}", "bold"),
+            ("steps", f"{snapshot.steps:,}", ""),
+            ("eps/s", format_rate(snapshot.episodes_per_second), ""),
+            ("time", format_duration(snapshot.seconds), ""),
+            ("epsilon", f"{snapshot.epsilon:.3f}", ""),
+            ("return", f"{snapshot.mean_return:+.4f}" if seen else "–", "bold"),
+            ("length", f"{snapshot.mean_length:.2f}" if seen else "–", ""),
+            ("|TD|", f"{snapshot.mean_abs_td:.4f}" if seen else "–", ""),
+        ]
+        window = min(snapshot.window, episodes)
+        if rows != self._rows or snapshot.engine != self._engine or window != self._window:
+            self._rows = rows
+            self._engine = snapshot.engine
+            self._window = window
+            self._changed()
+
+    def show_reference(self, reference: ReferenceMetrics | None, note: str = "") -> None:
+        """The exact comparison with the optimum, or a note on why there is none."""
+        figures: Mapping[str, float] = reference.figures if reference else {}
+        items = [(figure_name(k), format_figure(k, v)) for k, v in figures.items()]
+        if reference is not None and not items:
+            items = [("reference", reference.summary)]
+        if items != self._reference or note != self._reference_note:
+            self._reference = items
+            self._reference_note = note
+            self._changed()
+
+    # --- drawing -----------------------------------------------------------
+    def on_resize(self) -> None:
+        self.refresh(layout=True)  # the compact class may have come or gone
+
+    def _compact(self) -> bool:
+        try:
+            return self.screen.has_class("compact")
+        except Exception:
+            return False
+
+    def _changed(self) -> None:
+        self.plain = self._plain()
+        label, style = STATE_STYLES.get(self._state, (self._state, "bold"))
+        self.border_title = Text.assemble("Training  ", (label, style))
+        parts = [f"means of last {self._window:,}"] if self._window else []
+        if self._engine:
+            parts.append(f"engine: {self._engine}")
+        self.border_subtitle = " · ".join(parts)
+        self.refresh(layout=True)
+
+    def _plain(self) -> str:
+        label, _ = STATE_STYLES.get(self._state, (self._state, ""))
+        lines = [f"{label}  speed {self._speed}  engine {self._engine}"]
+        lines += [f"{name} {value}" for name, value, _ in self._rows]
+        lines += [f"{name} {value}" for name, value in self._reference]
+        if self._reference_note:
+            lines.append(self._reference_note)
+        return "\n".join(lines)
+
+    def render(self) -> RenderableType:
+        label, style = STATE_STYLES.get(self._state, (self._state, "bold"))
+        table = Table.grid(padding=(0, 1), expand=True)
+        for _ in range(2):
+            table.add_column(style="dim", no_wrap=True)
+            table.add_column(justify="right", no_wrap=True, ratio=1)
+        compact = self._compact()
+        if compact:  # no border to carry the state, speed and engine: rows of their own
+            table.add_row(
+                Text(label, style=style), "",
+                "speed", Text(self._speed or "–", style="bold magenta"),
+            )
+        rows = self._rows
+        for i in range(0, len(rows), 2):
+            cells: list[RenderableType] = []
+            for name, value, value_style in rows[i : i + 2]:
+                cells += [name, Text(value, style=value_style)]
+            table.add_row(*cells)
+        if compact:
+            table.add_row("engine", Text(self._engine or "–"), "", "")
+        parts: list[RenderableType] = [table]
+        if self._reference:
+            ref = Table.grid(padding=(0, 1), expand=True)
+            ref.add_column(style="dim", no_wrap=True)
+            ref.add_column(justify="right", ratio=1)
+            for name, value in self._reference:
+                ref.add_row(name, Text(value, style="bold"))
+            parts.append(ref)
+        elif self._reference_note:
+            parts.append(Text(self._reference_note, style="italic dim"))
+        return Group(*parts)
