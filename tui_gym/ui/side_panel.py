@@ -17,6 +17,7 @@ from textual import on
 from textual.app import ComposeResult
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.message import Message
+from textual.validation import ValidationResult, Validator
 from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet, Static
 
 from tui_gym.core.profiles import PROFILES
@@ -27,6 +28,21 @@ def _value_text(value: Any) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+class ParamValidator(Validator):
+    """Checks field text with a `Param`, so the Input marks itself valid or invalid."""
+
+    def __init__(self, param: Param) -> None:
+        super().__init__()
+        self.param = param
+
+    def validate(self, value: str) -> ValidationResult:
+        try:
+            self.param.parse(value)
+        except ValueError as exc:
+            return self.failure(str(exc))
+        return self.success()
 
 
 class ParamField(Horizontal):
@@ -46,14 +62,24 @@ class ParamField(Horizontal):
         self._value = value
 
     def compose(self) -> ComposeResult:
-        yield Label(self.param.name, id=f"label-{self.group}-{self.param.name}")
-        field = Input(value=_value_text(self._value), compact=True)
+        yield Label(self.param.name)
+        field = Input(
+            value=_value_text(self._value),
+            compact=True,
+            validators=[ParamValidator(self.param)],
+            validate_on=["changed", "submitted"],
+        )
         field.tooltip = f"{self.param.help} ({self.param.describe_range()})".strip()
         yield field
 
     @property
     def input(self) -> Input:
         return self.query_one(Input)
+
+    def set_value(self, value: Any) -> None:
+        """Show a value (without counting as an edit)."""
+        with self.input.prevent(Input.Changed):
+            self.input.value = _value_text(value)
 
     def read(self) -> tuple[Any, str | None]:
         """(value, None) when the text is valid, else (None, the reason)."""
@@ -75,10 +101,11 @@ class WrapperRow(Vertical):
     Screen.compact WrapperRow .summary { display: none; }
     """
 
-    def __init__(self, name: str, choice: WrapperChoice | None) -> None:
+    def __init__(self, name: str, choice: WrapperChoice | None, reason: str | None) -> None:
         super().__init__(id=f"wrapper-{name}")
         self.spec = CATALOG[name]
         self.choice = choice
+        self.reason = reason
 
     def compose(self) -> ComposeResult:
         spec = self.spec
@@ -89,15 +116,33 @@ class WrapperRow(Vertical):
         values = self.choice.values() if self.choice else spec.defaults()
         for param in spec.params:
             yield ParamField(param, values.get(param.name, param.default), spec.name)
-        yield Static("", classes="reason")
+        yield Static(self._reason_text(), classes="reason")
+
+    def on_mount(self) -> None:
+        self.set_class(bool(self.reason), "-misfit")
+
+    def _reason_text(self) -> Text:
+        return Text(f"✗ {self.reason}" if self.reason else "")
+
+    def set_state(self, choice: WrapperChoice | None, reason: str | None) -> None:
+        """Show the session's choice for this wrapper and why it does not fit, if so."""
+        self.choice = choice
+        box = self.query_one(Checkbox)
+        with box.prevent(Checkbox.Changed):
+            box.value = choice is not None
+        values = choice.values() if choice else self.spec.defaults()
+        for field in self.query(ParamField):
+            field.set_value(values.get(field.param.name, field.param.default))
+        self.show_reason(reason)
 
     @property
     def ticked(self) -> bool:
         return self.query_one(Checkbox).value
 
     def show_reason(self, reason: str | None) -> None:
+        self.reason = reason
         self.set_class(bool(reason), "-misfit")
-        self.query_one(".reason", Static).update(Text(f"✗ {reason}") if reason else "")
+        self.query_one(".reason", Static).update(self._reason_text())
 
     def read(self) -> tuple[WrapperChoice | None, str | None]:
         """The choice this row stands for (None when unticked), or the reason it is invalid."""
@@ -145,16 +190,42 @@ class SidePanel(VerticalScroll):
         with RadioSet(id="game-picker"):
             for profile in PROFILES:
                 yield RadioButton(profile.title, id=f"game-{profile.name}")
-        yield Vertical(id="env-params")
+        yield Vertical(*self._env_fields(), id="env-params")
         yield Static("", id="env-error", classes="field-error")
         yield Static("Wrappers  (first ticked = innermost)", classes="section")
-        yield Vertical(id="wrapper-list")
+        chosen, reasons = self._wrapper_states()
+        with Vertical(id="wrapper-list"):
+            for name in CATALOG:
+                yield WrapperRow(name, chosen.get(name), reasons.get(name))
         yield Static("", id="wrapper-error", classes="field-error")
         yield Static("Wrapper chain", classes="section")
-        yield Static("", id="chain")
+        yield Static(Text(self._chain_text()), id="chain")
 
     def on_mount(self) -> None:
-        self.reload()
+        self._check_game()
+
+    def _env_fields(self) -> list[ParamField]:
+        session = self.session
+        return [
+            ParamField(p, session.env_kwargs.get(p.name, p.default), "env")
+            for p in session.profile.env_params
+        ]
+
+    def _wrapper_states(self) -> tuple[dict[str, WrapperChoice], dict[str, str | None]]:
+        """Each chosen wrapper by name, and for every wrapper why it does not fit (if so)."""
+        session = self.session
+        chosen = {c.name: c for c in session.choices}
+        reasons: dict[str, str | None] = {c.name: reason for c, reason in session.skipped}
+        for name, spec in CATALOG.items():
+            if name not in reasons and name not in chosen:
+                reasons[name] = spec.fits(session.env)
+        return chosen, reasons
+
+    def _check_game(self) -> None:
+        picker = self.query_one("#game-picker", RadioSet)
+        with picker.prevent(RadioSet.Changed, RadioButton.Changed):
+            for button in picker.query(RadioButton):
+                button.value = button.id == f"game-{self.session.profile.name}"
 
     @property
     def session(self):  # the app's Session
@@ -162,28 +233,19 @@ class SidePanel(VerticalScroll):
 
     def reload(self) -> None:
         """Show the session as it is now (after a rebuild, or to undo an invalid edit)."""
-        session = self.session
-        picker = self.query_one("#game-picker", RadioSet)
-        with picker.prevent(RadioSet.Changed, RadioButton.Changed):
-            for button in picker.query(RadioButton):
-                button.value = button.id == f"game-{session.profile.name}"
+        self._check_game()
         env_box = self.query_one("#env-params", Vertical)
-        env_box.remove_children()
-        env_box.mount_all(
-            ParamField(p, session.env_kwargs.get(p.name, p.default), "env")
-            for p in session.profile.env_params
-        )
-        chosen = {c.name: c for c in session.choices}
-        reasons = {c.name: reason for c, reason in session.skipped}
-        wrapper_box = self.query_one("#wrapper-list", Vertical)
-        wrapper_box.remove_children()
-        rows = [WrapperRow(name, chosen.get(name)) for name in CATALOG]
-        wrapper_box.mount_all(rows)
-        for row in rows:
-            reason = reasons.get(row.spec.name)
-            if reason is None and row.spec.name not in chosen:
-                reason = row.spec.fits(session.env)
-            row.show_reason(reason)
+        fields = list(env_box.query(ParamField))
+        wanted = self.session.profile.env_params
+        if [f.param for f in fields] == list(wanted):
+            for field in fields:
+                field.set_value(self.session.env_kwargs.get(field.param.name))
+        else:
+            env_box.remove_children()
+            env_box.mount_all(self._env_fields())
+        chosen, reasons = self._wrapper_states()
+        for row in self.query(WrapperRow):
+            row.set_state(chosen.get(row.spec.name), reasons.get(row.spec.name))
         self._show_error("#env-error", None)
         self._show_error("#wrapper-error", None)
         self.query_one("#chain", Static).update(Text(self._chain_text()))
@@ -218,7 +280,7 @@ class SidePanel(VerticalScroll):
         return next(p.env_id for p in PROFILES if p.name == name)
 
     def _mark(self, field: ParamField, error: str | None) -> None:
-        field.input.set_class(bool(error), "-invalid")
+        field.input.validate(field.input.value)
 
     def _read_env_kwargs(self) -> dict[str, Any] | None:
         values: dict[str, Any] = {}

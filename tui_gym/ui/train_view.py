@@ -42,6 +42,8 @@ STATE_POLL_SECONDS = 0.25  # how often the view checks for a pause with no new s
 class TrainView(VerticalScroll):
     """Controls, live statistics, learning curves and Q-table heatmaps."""
 
+    # Not scoped: the `Screen.compact ...` rules must match from the screen down.
+    SCOPED_CSS = False
     DEFAULT_CSS = """
     TrainView {
         height: 1fr;
@@ -55,7 +57,7 @@ class TrainView(VerticalScroll):
     TrainView #train-controls Button {
         min-width: 0;
         margin-right: 1;
-        padding: 0 1;
+        padding: 0;
     }
     TrainView #train-speed {
         width: auto;
@@ -63,13 +65,6 @@ class TrainView(VerticalScroll):
         padding: 0 1;
         color: $text-accent;
         text-style: bold;
-    }
-    TrainView #train-controls .spacer {
-        width: 1fr;
-    }
-    TrainView #train-controls #train-state {
-        width: auto;
-        color: $text-muted;
     }
     TrainView #train-progress-row {
         height: 1;
@@ -88,6 +83,10 @@ class TrainView(VerticalScroll):
     TrainView #train-top {
         height: auto;
     }
+    TrainView #train-top > * {
+        height: auto;
+        min-height: 9;  /* the two boxes line up for both games */
+    }
     TrainView #train-middle {
         height: auto;
     }
@@ -102,7 +101,10 @@ class TrainView(VerticalScroll):
     }
     TrainView #train-board-box > Board {
         width: 100%;
-        height: 9;
+        height: 8;
+    }
+    TrainView.-animated TrainingCharts .chart-range {
+        display: none;
     }
     TrainView #train-board-box.-shown {
         display: block;
@@ -110,7 +112,8 @@ class TrainView(VerticalScroll):
     TrainView #train-board-caption {
         color: $text-muted;
         width: 100%;
-        height: 3;
+        height: 2;
+        padding: 0 1;
     }
     TrainView #train-heatmap-box {
         height: auto;
@@ -125,9 +128,21 @@ class TrainView(VerticalScroll):
     Screen.compact TrainView #train-top {
         layout: vertical;
     }
-    Screen.compact TrainView #train-speed,
-    Screen.compact TrainView #train-state {
+    Screen.compact TrainView #train-top > * {
+        min-height: 0;
+    }
+    Screen.compact TrainView #train-speed {
         display: none;
+    }
+    Screen.compact TrainView #train-controls Button {
+        margin-right: 0;
+    }
+    /* At 80x24 the form hides until `e` (or a bad value) asks for it. */
+    Screen.compact TrainView #train-form {
+        display: none;
+    }
+    Screen.compact TrainView.-editing #train-form {
+        display: block;
     }
     Screen.compact TrainView #train-heatmap-box {
         border: none;
@@ -178,8 +193,6 @@ class TrainView(VerticalScroll):
             yield Button("−", id="btn-slower", compact=True, tooltip="Slower (-)")
             yield Label("", id="train-speed")
             yield Button("+", id="btn-faster", compact=True, tooltip="Faster (+)")
-            yield Label("", classes="spacer")
-            yield Label("", id="train-state")
         with Horizontal(id="train-progress-row"):
             yield ProgressBar(total=session.hp.episodes if session.hp else 1, show_eta=False,
                               id="train-progress")
@@ -270,8 +283,12 @@ class TrainView(VerticalScroll):
         self._show_board(self.runner)
 
     def read_hyperparameters(self) -> Hyperparameters | None:
-        """The hyperparameters in the form, or None (with the bad fields marked)."""
-        return self.form.read()
+        """The hyperparameters in the form, or None (with the bad fields marked and shown)."""
+        hp = self.form.read()
+        if hp is None:
+            self.add_class("-editing")
+            self.call_after_refresh(self.form.scroll_visible)
+        return hp
 
     def focus_default(self) -> None:
         """Give the keyboard to the heatmap (its keys move GridWorld's target)."""
@@ -344,9 +361,6 @@ class TrainView(VerticalScroll):
         running = state == "running"
         button.label = "‖ Pause" if running else "▶ Start"
         button.variant = "warning" if running else "success"
-        words = {"running": "training…", "paused": "paused", "finished": "budget reached",
-                 "idle": "ready"}
-        self.query_one("#train-state", Label).update(words.get(state, state))
 
     def _poll_state(self) -> None:
         if self.display and self.is_attached:
@@ -386,11 +400,12 @@ class TrainView(VerticalScroll):
         box = self.query_one("#train-board-box")
         scene = runner.last_scene
         animated = runner.speed.animated and getattr(self._snapshot, "engine", "") == "scalar"
-        if not animated or scene is None:
-            box.set_class(False, "-shown")
+        shown = animated and scene is not None
+        box.set_class(shown, "-shown")
+        self.set_class(shown, "-animated")
+        if not shown:
             return
         board = self._ensure_board()
-        box.set_class(True, "-shown")
         event = runner.last_event
         if board is not None and scene != self._scene:
             self._scene = scene
@@ -412,10 +427,10 @@ class TrainView(VerticalScroll):
             state = profile.describe(event.observation)
         except Exception:  # wrappers may change what an observation looks like
             state = ""
-        text = f"{state}\n→ {action}, reward {event.reward:+g}" if state else f"→ {action}"
+        step = f"→ {action}, reward {event.reward:+g}"
         if event.episode_done is not None:
-            text += f"\nepisode over: return {event.episode_done.episode_return:+g}"
-        return text
+            step += f" · return {event.episode_done.episode_return:+g}"
+        return f"{state}\n{step}" if state else step
 
     # --- events ------------------------------------------------------------
     @on(Button.Pressed)
@@ -453,12 +468,22 @@ class TrainView(VerticalScroll):
             self.app.notify("Hyperparameters set.", timeout=2)
         else:
             self.app.notify("They apply when training starts again.", timeout=3)
-        self.focus_default()
+        self._leave_form()
 
     @on(HyperparameterForm.Left)
     def _form_left(self, event: HyperparameterForm.Left) -> None:
         event.stop()
+        self._leave_form()
+
+    def _leave_form(self) -> None:
+        if self.form.valid:
+            self.remove_class("-editing")
         self.focus_default()
 
     def action_edit_hyperparameters(self) -> None:
-        self.form.input("learning_rate").focus()
+        self.add_class("-editing")
+        self.call_after_refresh(self.form.input("learning_rate").focus)
+
+    def on_resize(self) -> None:
+        compact = self.screen.has_class("compact")
+        self.query_one("#btn-episode", Button).label = "1 ep" if compact else "1 episode"

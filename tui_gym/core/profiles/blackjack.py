@@ -183,12 +183,16 @@ class BlackjackProfile(GameProfile):
         dealer, _ = hand_value(list(scene.get("dealer", [])))
         reward = format_reward(last.reward)
         if last.reward > 0:
-            natural = len(scene.get("player", [])) == 2 and player == 21
-            why = " (blackjack!)" if natural else " (dealer busts)" if dealer > 21 else ""
-            return f"You win {reward}{why}"
+            if len(scene.get("player", [])) == 2 and player == 21:
+                return f"You win {reward} (blackjack!)"
+            if dealer > 21:
+                return f"You win {reward} (the dealer busts with {dealer})"
+            return f"You win {reward} (your {player} beats the dealer's {dealer})"
         if last.reward < 0:
-            return f"Dealer wins {reward}" + (" (you bust)" if player > 21 else "")
-        return f"Push {reward}"
+            if player > 21:
+                return f"Dealer wins {reward} (you bust with {player})"
+            return f"Dealer wins {reward} (the dealer's {dealer} beats your {player})"
+        return f"Push {reward} (both have {player})"
 
     def describe(self, observation: Any) -> str:
         player, dealer, usable = (int(v) for v in observation)

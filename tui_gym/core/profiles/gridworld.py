@@ -189,8 +189,9 @@ class GridWorldProfile(GameProfile):
         total = format_reward(last.episode_return)
         if last.terminated:
             optimal = int(first_info.get("distance", 0))
-            verdict = "optimal!" if last.steps <= optimal else f"{last.steps - optimal} extra"
-            return f"Reached the target in {steps} (optimal {optimal}): {verdict}, return {total}"
+            extra = last.steps - optimal
+            verdict = "a shortest path" if extra <= 0 else f"{extra} more than needed"
+            return f"Reached the target in {steps} (optimal {optimal}), {verdict}; return {total}"
         return f"Truncated by the time limit after {steps}, target not reached, return {total}"
 
     def progress_text(self, last: PlayStep, first_info: Mapping[str, Any]) -> str:

@@ -55,16 +55,19 @@ class BoardButton(Button, can_focus=False):
 class Board(Widget):
     """Base of the game boards: draws a scene, posts moves when interactive."""
 
+    SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
     DEFAULT_CSS = """
     Board {
         width: 1fr;
         height: 1fr;
         layout: vertical;
+    }
+    Board.-interactive {
         border: round $foreground 25%;
         border-title-color: $text-muted;
         border-subtitle-color: $text-muted;
     }
-    Board:focus {
+    Board.-interactive:focus {
         border: round $accent;
         border-title-color: $accent;
         border-title-style: bold;
@@ -197,6 +200,17 @@ class Board(Widget):
 
     def on_mount(self) -> None:
         self._update_buttons()
+        self._update_subtitle(focused=self.has_focus)
+
+    def on_focus(self) -> None:
+        self._update_subtitle(focused=True)
+
+    def on_blur(self) -> None:
+        self._update_subtitle(focused=False)
+
+    def _update_subtitle(self, focused: bool) -> None:
+        if self.interactive:
+            self.border_subtitle = "" if focused else "click here to play"
 
     def _update_buttons(self) -> None:
         if not self.is_mounted:

@@ -24,11 +24,12 @@ from tui_gym.ui.widgets.boards import Board
 
 SUITS = ("♠", "♥", "♦", "♣")
 RED_SUITS = frozenset({"♥", "♦"})
+ON_FELT = frozenset({"label", "muted", "total", "bust", "best"})
 
 
 def suit_for(hand: int, position: int, card: int) -> str:
     """A decorative suit, fixed by the hand (0 dealer, 1 player), place and card."""
-    return SUITS[(3 * position + card + hand) % len(SUITS)]
+    return SUITS[(3 * position + 2 * card + hand) % len(SUITS)]  # neighbours always differ
 
 
 @dataclass(frozen=True)
@@ -41,13 +42,14 @@ class CardSize:
 
 LARGE = CardSize(7, 5)
 MEDIUM = CardSize(5, 3)
-MINI = CardSize(5, 1)
+MINI = CardSize(4, 1)
 SIZES = (LARGE, MEDIUM, MINI)
 
 
 class CardsBoard(Board):
     """The Blackjack table: the dealer's hand above, the player's below."""
 
+    SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
     DEFAULT_CSS = """
     CardsBoard > BoardCanvas { background: $success 12%; }
     CardsBoard > .board-buttons { background: $success 12%; }
@@ -92,7 +94,7 @@ class CardsBoard(Board):
     RESTART_ANYTIME = False
 
     def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
-        self.border_title = "Table" if self.interactive else "Table (the agent plays)"
+        self.border_title = "Table"
 
     # --- what the board says ---------------------------------------------------
     def key_help(self) -> list[tuple[str, str]]:
@@ -123,14 +125,19 @@ class CardsBoard(Board):
 
     # --- drawing ---------------------------------------------------------------
     def _style(self, name: str) -> Style:
-        return self.get_component_rich_style(f"cards--{name}")
+        style = self.get_component_rich_style(f"cards--{name}")
+        if name in ON_FELT:  # text straight on the table: keep the canvas's background
+            return Style.from_color(style.color) + style.without_color
+        return style
 
-    def _card(self, hand: int, position: int, card: int, size: CardSize, face_up: bool) -> list[Text]:
-        """The lines of one card, each `size.width` cells wide (MINI: as wide as it needs)."""
+    def _card(
+        self, hand: int, position: int, card: int, size: CardSize, face_up: bool
+    ) -> list[Text]:
+        """The lines of one card, each `size.width` cells wide."""
         if not face_up:
             back, fill = self._style("back"), self._style("back-fill")
             if size.height == 1:
-                return [Text(" ░░░ ", fill)]
+                return [Text("░" * size.width, fill)]
             inner = size.width - 2
             lines = [Text("╭" + "─" * inner + "╮", back)]
             for _ in range(size.height - 2):
@@ -145,7 +152,7 @@ class CardsBoard(Board):
         ink = self._style("red" if suit in RED_SUITS else "face")
         edge = self._style("edge")
         if size.height == 1:
-            return [Text(f" {rank}{suit} ".ljust(size.width), ink)]
+            return [Text(f"{rank:>2}{suit} ", ink)]
         inner = size.width - 2
         if size.height == 3:
             middle = [f"{rank:<2}{suit}".ljust(inner)]

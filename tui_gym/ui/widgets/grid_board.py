@@ -32,7 +32,7 @@ MOVES: dict[Cell, tuple[str, str]] = {  # (dx, dy) -> (action name, trail arrow)
 }
 AGENT, TARGET, HOME = "●", "◎", "◉"  # HOME: the agent stands on the target
 
-MOVE_GROUP = Binding.Group("move", compact=True)
+MOVE_GROUP = Binding.Group("Move")
 
 
 @dataclass(frozen=True)
@@ -66,6 +66,16 @@ class GridLayout:
     @property
     def height(self) -> int:
         return self.grid_h + (1 if self.axes else 0)
+
+    def cell_center(self, cell: Cell) -> Offset:
+        """The canvas offset of the middle of grid cell (x, y); the inverse of `cell_at`."""
+        gap = 1 if self.lines else 0
+        x, y = cell
+        row = self.n - 1 - y
+        return Offset(
+            self.left + gap + x * (self.cell_w + gap) + self.cell_w // 2,
+            self.top + gap + row * (self.cell_h + gap) + self.cell_h // 2,
+        )
 
     def cell_at(self, offset: Offset) -> Cell | None:
         """The grid cell (x, y) under a canvas offset, or None off the grid."""
@@ -110,6 +120,7 @@ def _cell(value: Any) -> Cell | None:
 class GridBoard(Board):
     """GridWorld: walk the agent (●) to the target (◎); +y is up."""
 
+    SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
     DEFAULT_CSS = """
     GridBoard .grid--line { color: $foreground 30%; }
     GridBoard .grid--empty { color: $foreground 25%; }
@@ -151,14 +162,14 @@ class GridBoard(Board):
     ) -> None:
         super().__init__(interactive=interactive, name=name, id=id, classes=classes)
         self.trail: dict[Cell, str] = {}  # cell the agent left -> arrow of that move
-        self._agent: Cell | None = None
-        self._target: Cell | None = None
-        self._size = 0
-        self._fresh = True
-        self._layout: GridLayout | None = None
+        self._grid_agent: Cell | None = None
+        self._grid_target: Cell | None = None
+        self._grid_size = 0
+        self._grid_fresh = True
+        self._grid_layout: GridLayout | None = None
 
     def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
-        self.border_title = "Grid" if self.interactive else "Grid (the agent moves)"
+        self.border_title = "Grid"
 
     # --- what the board says ---------------------------------------------------
     def key_help(self) -> list[tuple[str, str]]:
@@ -179,27 +190,32 @@ class GridBoard(Board):
     def button_suggested(self, action: str) -> bool:
         return self.episode_over
 
+    @property
+    def layout_drawn(self) -> GridLayout | None:
+        """The geometry of the last drawing (None before the first)."""
+        return self._grid_layout
+
     # --- the scene and the trail -----------------------------------------------
     def start_episode(self) -> None:
         """The next scene begins a new episode: forget the trail."""
-        self._fresh = True
+        self._grid_fresh = True
 
     def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
         agent, target = _cell(scene.get("agent")), _cell(scene.get("target"))
         size = int(scene.get("size", 0))
-        previous = self._agent
+        previous = self._grid_agent
         jumped = (
             previous is None
             or agent is None
             or abs(agent[0] - previous[0]) + abs(agent[1] - previous[1]) > 1
         )
-        if self._fresh or jumped or target != self._target or size != self._size:
+        if self._grid_fresh or jumped or target != self._grid_target or size != self._grid_size:
             self.trail = {}
         elif agent != previous and previous is not None and agent is not None:
             move = (agent[0] - previous[0], agent[1] - previous[1])
             self.trail[previous] = MOVES[move][1]
-        self._fresh = False
-        self._agent, self._target, self._size = agent, target, size
+        self._grid_fresh = False
+        self._grid_agent, self._grid_target, self._grid_size = agent, target, size
         super().show_scene(scene, reveal)
 
     # --- drawing ---------------------------------------------------------------
@@ -208,32 +224,34 @@ class GridBoard(Board):
 
     def _cell_look(self, cell: Cell, lines: bool) -> tuple[str, Style]:
         """The glyph and style of one cell."""
-        if cell == self._agent and cell == self._target:
+        if cell == self._grid_agent and cell == self._grid_target:
             return HOME, self._style("home")
-        if cell == self._agent:
+        if cell == self._grid_agent:
             return AGENT, self._style("agent")
-        if cell == self._target:
+        if cell == self._grid_target:
             return TARGET, self._style("target")
         if cell in self.trail:
             return self.trail[cell], self._style("trail")
         return (" " if lines else "·"), self._style("empty")
 
     def picture(self, width: int, height: int) -> Text:
-        n = self._size
+        n = self._grid_size
         out = Text(no_wrap=True, overflow="crop", end="")
         if n <= 0:
-            self._layout = None
+            self._grid_layout = None
             out.append("No grid yet.", self._style("axis"))
             return out
         layout = choose_layout(n, width, height)
-        self._layout = layout
+        self._grid_layout = layout
         line, axis = self._style("line"), self._style("axis")
         cw, ch = layout.cell_w, layout.cell_h
         margin = " " * (layout.left - layout.label_w)
         rows: list[Text] = []
 
+        gutter = " " * layout.label_w
+
         def rule(first: str, middle: str, last: str) -> Text:
-            return Text(first + middle.join("─" * cw for _ in range(n)) + last, line)
+            return Text(gutter + first + middle.join("─" * cw for _ in range(n)) + last, line)
 
         for r in range(n):
             y = n - 1 - r
@@ -269,14 +287,12 @@ class GridBoard(Board):
 
     def canvas_clicked(self, offset: Offset) -> None:
         """Step one cell towards the clicked cell (the longer way first)."""
-        if self._layout is None or self._agent is None:
+        if self._grid_layout is None or self._grid_agent is None:
             return
-        cell = self._layout.cell_at(offset)
-        if cell is None or cell == self._agent:
+        cell = self._grid_layout.cell_at(offset)
+        if cell is None or cell == self._grid_agent:
             return
-        dx, dy = cell[0] - self._agent[0], cell[1] - self._agent[1]
-        if abs(dx) >= abs(dy):
-            step = (1 if dx > 0 else -1, 0)
-        else:
-            step = (0, 1 if dy > 0 else -1)
+        dx, dy = cell[0] - self._grid_agent[0], cell[1] - self._grid_agent[1]
+        horizontal = abs(dx) >= abs(dy)
+        step = (1 if dx > 0 else -1, 0) if horizontal else (0, 1 if dy > 0 else -1)
         self.action_act(MOVES[step][0])

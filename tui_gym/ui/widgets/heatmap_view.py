@@ -315,7 +315,7 @@ class HeatmapView(Widget, can_focus=True):
         layout = self._layout(width)
         heights = [self._panel_height(p, layout) for p in self._panels]
         body = max(heights) if layout.side_by_side else sum(heights) + len(heights) - 1
-        return body + 2 + len(self._legend_lines())  # a blank line, the scale, the legends
+        return body + 1 + len(self._legend_lines())  # the scale, then the legends
 
     # --- drawing -----------------------------------------------------------
     def render(self) -> Text:
@@ -326,7 +326,12 @@ class HeatmapView(Widget, can_focus=True):
         width = self.content_region.width or self.size.width or 80
         layout = self._layout(width)
         scale = ColourScale.over(self._panels)
-        blocks = [self._panel_lines(i, p, layout, scale) for i, p in enumerate(self._panels)]
+        several = layout.side_by_side and len(self._panels) > 1
+        title_width = layout.panel_width if several else width
+        blocks = [
+            self._panel_lines(i, p, layout, scale, title_width)
+            for i, p in enumerate(self._panels)
+        ]
         lines: list[Text] = []
         placements: list[_Placement] = []
         if layout.side_by_side:
@@ -352,7 +357,6 @@ class HeatmapView(Widget, can_focus=True):
                 placements.append(_Placement(i, layout.row_label_width + 1, y + 2, *panel.shape))
                 lines.extend(block)
                 y += len(block)
-        lines.append(Text())
         lines.append(self._scale_line(scale, layout))
         indent = " " * (layout.row_label_width + 1)
         lines.extend(Text(indent + legend, style="dim") for legend in self._legend_lines())
@@ -365,13 +369,15 @@ class HeatmapView(Widget, can_focus=True):
         return text
 
     def _panel_lines(
-        self, index: int, panel: Heatmap, layout: _Layout, scale: ColourScale
+        self, index: int, panel: Heatmap, layout: _Layout, scale: ColourScale, title_width: int
     ) -> list[Text]:
         cw, ch, rlw = layout.cell_width, layout.cell_height, layout.row_label_width
         rows, cols = panel.shape
         grid_width = cols * cw
-        title = panel.title[: layout.panel_width]
-        lines = [Text(" " * (rlw + 1)) + Text(title.center(grid_width)[:grid_width], style="bold")]
+        title = panel.title
+        if len(title) <= grid_width:
+            title = " " * (rlw + 1) + title.center(grid_width).rstrip()
+        lines = [Text(title[:title_width], style="bold")]
         header = Text(" " * (rlw + 1))
         for label in panel.col_labels:
             header.append(label.center(cw), style="dim")

@@ -35,7 +35,10 @@ def format_value(field: FieldRange, value: float) -> str:
 
 
 def range_hint(field: FieldRange) -> str:
-    """'(0, 1]' from 'a number in (0, 1]'."""
+    """The accepted range, short: '(0, 1]', or '≥ 1' when the top is out of sight."""
+    if field.maximum >= 1e6:
+        low = f"{int(field.minimum)}" if field.kind is int else f"{field.minimum:g}"
+        return f"≥ {low}" if field.min_inclusive else f"> {low}"
     return field.describe().split(" in ", 1)[-1]
 
 
@@ -65,12 +68,15 @@ class FieldValidator(Validator):
 class HyperparameterForm(Vertical):
     """Labelled, range-checked inputs for the agent's hyperparameters."""
 
+    # Not scoped: the `Screen.compact ...` rules must match from the screen down.
+    SCOPED_CSS = False
     DEFAULT_CSS = """
     HyperparameterForm {
         width: 38;
         height: auto;
         border: round $primary-background-lighten-2;
         border-title-color: $text-muted;
+        border-subtitle-color: $text-disabled;
         padding: 0 1;
     }
     HyperparameterForm .hp-row {
@@ -83,13 +89,14 @@ class HyperparameterForm(Vertical):
     HyperparameterForm Input {
         width: 1fr;
         min-width: 8;
+        max-width: 14;
     }
     HyperparameterForm Input.-invalid {
         color: $text-error;
         text-style: bold;
     }
     HyperparameterForm .hp-hint {
-        width: 9;
+        width: 8;
         padding-left: 1;
         color: $text-disabled;
     }
@@ -146,6 +153,7 @@ class HyperparameterForm(Vertical):
         self._base = self._initial
         self._between: set[str] = set()  # fields marked by a rule between fields
         self.border_title = "Hyperparameters"
+        self.border_subtitle = "↵ set · esc back"
 
     def compose(self) -> ComposeResult:
         for field in HYPERPARAMETER_FIELDS:

@@ -59,6 +59,8 @@ def format_rate(rate: float) -> str:
 class StatsPanel(Widget):
     """A clean two-column table of the run's numbers."""
 
+    # Not scoped: the `Screen.compact ...` rules must match from the screen down.
+    SCOPED_CSS = False
     DEFAULT_CSS = """
     StatsPanel {
         width: 1fr;
@@ -143,10 +145,13 @@ class StatsPanel(Widget):
     def _changed(self) -> None:
         self.plain = self._plain()
         label, style = STATE_STYLES.get(self._state, (self._state, "bold"))
-        self.border_title = Text.assemble("Training  ", (label, style))
-        parts = [f"means of last {self._window:,}"] if self._window else []
+        title = Text.assemble((label, style))
+        if self._speed:
+            title.append_text(Text.assemble((" · ", "dim"), (self._speed, "bold")))
+        self.border_title = title
+        parts = [f"last {self._window:,}"] if self._window else []
         if self._engine:
-            parts.append(f"engine: {self._engine}")
+            parts.append(f"{self._engine} engine")
         self.border_subtitle = " · ".join(parts)
         self.refresh(layout=True)
 
@@ -168,7 +173,7 @@ class StatsPanel(Widget):
         compact = self._compact()
         if compact:  # no border to carry the state, speed and engine: rows of their own
             table.add_row(
-                Text(label, style=style), "",
+                Text(label, style=style), Text(self._engine, style="dim"),
                 "speed", Text(self._speed or "–", style="bold magenta"),
             )
         rows = self._rows
@@ -177,8 +182,6 @@ class StatsPanel(Widget):
             for name, value, value_style in rows[i : i + 2]:
                 cells += [name, Text(value, style=value_style)]
             table.add_row(*cells)
-        if compact:
-            table.add_row("engine", Text(self._engine or "–"), "", "")
         parts: list[RenderableType] = [table]
         if self._reference:
             ref = Table.grid(padding=(0, 1), expand=True)

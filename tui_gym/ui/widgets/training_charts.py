@@ -44,6 +44,8 @@ CURVES: tuple[Curve, ...] = (
 class TrainingCharts(Vertical):
     """Four sparklines with names, current values and ranges."""
 
+    # Not scoped: the `Screen.compact ...` rules must match from the screen down.
+    SCOPED_CSS = False
     DEFAULT_CSS = """
     TrainingCharts {
         height: auto;
@@ -137,7 +139,7 @@ class TrainingCharts(Vertical):
         """Show a snapshot's curves, redrawing only the ones that changed."""
         window = min(snapshot.window, max(1, snapshot.episodes))
         self.border_title = (
-            f"Learning curves · whole run · rolling mean of {window:,}"
+            f"Learning curves · rolling mean of {window:,}"
             if snapshot.episodes
             else "Learning curves"
         )

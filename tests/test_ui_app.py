@@ -1,0 +1,233 @@
+"""The app as a whole: views, game switching, help, the wrapper panel, sizes, key storms."""
+
+from __future__ import annotations
+
+import random
+
+from textual.widgets import Checkbox, ContentSwitcher, Input, RadioButton, Static
+
+from tui_gym.core.agent import Hyperparameters
+from tui_gym.core.session import Session
+from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.ui.app import TuiGymApp
+from tui_gym.ui.help_screen import HelpScreen
+from tui_gym.ui.side_panel import ParamField, SidePanel, WrapperRow
+
+from .screen import screen_text
+
+
+def chain_text(app: TuiGymApp) -> str:
+    return str(app.query_one("#chain", Static).render())
+
+
+def row(app: TuiGymApp, name: str) -> WrapperRow:
+    return app.query_one(f"#wrapper-{name}", WrapperRow)
+
+
+async def test_views_and_games_switch_by_key():
+    app = TuiGymApp(Session("blackjack", seed=0))
+    async with app.run_test(size=(120, 40)) as pilot:
+        switcher = app.query_one("#views", ContentSwitcher)
+        assert switcher.current == "play"
+        await pilot.press("t")
+        assert switcher.current == "train"
+        await pilot.press("p")
+        assert switcher.current == "play"
+        await pilot.press("g")
+        await pilot.pause()
+        assert app.session.profile.name == "gridworld"
+        assert app.sub_title == "GridWorld"
+        await pilot.press("b")
+        await pilot.pause()
+        assert app.session.profile.name == "blackjack"
+
+
+async def test_help_lists_every_app_key_and_closes():
+    app = TuiGymApp(Session("blackjack", seed=0))
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.press("f1")
+        assert isinstance(app.screen, HelpScreen)
+        text = screen_text(app)
+        for words in (
+            "Play view",
+            "Blackjack",
+            "wrapper panel",
+            "quit",
+            "start / pause",
+            "reset the agent",
+            "faster",
+        ):
+            assert words in text, words
+        await pilot.press("escape")
+        assert not isinstance(app.screen, HelpScreen)
+        await pilot.press("question_mark")
+        assert isinstance(app.screen, HelpScreen)
+        await pilot.press("question_mark")
+        assert not isinstance(app.screen, HelpScreen)
+
+
+async def test_ticking_a_wrapper_rebuilds_and_keeps_the_agent():
+    app = TuiGymApp(Session("gridworld", seed=0))
+    async with app.run_test(size=(120, 40)) as pilot:
+        agent = app.session.agent
+        assert "StepPenalty" not in chain_text(app)
+        await pilot.press("w")
+        box = row(app, "StepPenalty").query_one(Checkbox)
+        box.value = True
+        await pilot.pause()
+        assert "StepPenalty" in chain_text(app)
+        assert app.session.chain_repr().startswith("<StepPenalty<")
+        assert app.session.agent is agent  # rewards changed, observations did not
+        # Human play uses the wrapped env too.
+        assert "StepPenalty" in str(app.play_view.game.env)
+
+
+async def test_a_wrapper_that_changes_observations_resets_the_agent_with_a_notice():
+    app = TuiGymApp(Session("blackjack", seed=0))
+    async with app.run_test(size=(120, 40)) as pilot:
+        agent = app.session.agent
+        row(app, "FlattenObservation").query_one(Checkbox).value = True
+        await pilot.pause()
+        assert app.session.agent is not agent
+        assert any("reset" in n.message for n in app._notifications)
+
+
+async def test_a_misfit_wrapper_shows_its_reason_and_is_not_applied():
+    app = TuiGymApp(Session("blackjack", seed=0))
+    async with app.run_test(size=(120, 40)) as pilot:
+        shaping = row(app, "DistanceShaping")
+        assert shaping.has_class("-misfit")  # the reason shows before it is ticked
+        shaping.query_one(Checkbox).value = True
+        await pilot.pause()
+        shaping = row(app, "DistanceShaping")
+        assert shaping.has_class("-misfit")
+        assert "GridWorld" in str(shaping.query_one(".reason", Static).render())
+        assert "DistanceShaping" not in app.session.chain_repr()
+        assert "not applied" in chain_text(app)
+
+
+async def test_an_invalid_parameter_is_marked_and_not_applied():
+    session = Session("gridworld", choices=(WrapperChoice.make("TimeLimit", max_episode_steps=50),))
+    app = TuiGymApp(session)
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.pause()  # let the app settle its initial focus
+        before = app.session.chain_repr()
+        field = row(app, "TimeLimit").query_one(ParamField)
+        field.input.focus()
+        field.input.value = "lots"
+        await pilot.press("enter")
+        await pilot.pause()
+        assert field.input.has_class("-invalid")
+        error = str(app.query_one("#wrapper-error", Static).render())
+        assert "max_episode_steps" in error and "integer" in error
+        assert app.session.chain_repr() == before
+        field.input.value = "20"
+        await pilot.press("enter")
+        await pilot.pause()
+        assert app.session.applied[0].values()["max_episode_steps"] == 20
+
+
+async def test_gridworld_size_changes_from_the_panel():
+    app = TuiGymApp(Session("gridworld", seed=0))
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.pause()
+        size_field = app.query_one("#env-params").query_one(ParamField)
+        size_field.input.value = "7"
+        size_field.input.focus()
+        await pilot.press("enter")
+        await pilot.pause()
+        assert app.session.env_kwargs["size"] == 7
+        assert app.play_view.game.scene()["size"] == 7
+
+
+async def test_game_picker_switches_game():
+    app = TuiGymApp(Session("blackjack", seed=0))
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.click("#game-gridworld")
+        await pilot.pause()
+        assert app.session.profile.name == "gridworld"
+        assert app.query_one("#game-gridworld", RadioButton).value
+
+
+async def test_too_small_terminal_shows_a_message():
+    app = TuiGymApp(Session("blackjack", seed=0))
+    async with app.run_test(size=(60, 20)) as pilot:
+        await pilot.pause()
+        assert app.screen.has_class("too-small")
+        message = app.query_one("#too-small", Static)
+        assert message.display and "80×24" in str(message.render())
+        await pilot.resize_terminal(120, 40)
+        await pilot.pause()
+        assert not app.screen.has_class("too-small")
+
+
+async def test_compact_layout_at_80_by_24():
+    app = TuiGymApp(Session("blackjack", seed=0))
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.pause()
+        assert app.screen.has_class("compact") and not app.screen.has_class("too-small")
+        assert app.query_one(SidePanel).region.width > 0
+        await pilot.press("t")
+        await pilot.pause()
+
+
+async def test_random_keys_in_every_view_never_break_the_app():
+    keys = [
+        "h",
+        "s",
+        "n",
+        "enter",
+        "up",
+        "down",
+        "left",
+        "right",
+        "w",
+        "a",
+        "d",
+        "r",
+        "space",
+        "full_stop",
+        "plus",
+        "minus",
+        "x",
+        "tab",
+        "shift+tab",
+        "escape",
+        "t",
+        "p",
+        "question_mark",
+        "1",
+        "z",
+        "backspace",
+    ]
+    rng = random.Random(1234)
+    for name in ("blackjack", "gridworld"):
+        # A small budget: space may start training, which should end soon.
+        app = TuiGymApp(Session(name, hp=Hyperparameters(episodes=2_000), seed=0))
+        async with app.run_test(size=(100, 30)) as pilot:
+            for view in ("p", "t"):
+                await pilot.press("escape", view)
+                for _ in range(20):
+                    await pilot.press(rng.choice(keys))
+                await pilot.pause()
+            # Still answering: the views switch on request.
+            await pilot.press("escape", "escape", "t")
+            await pilot.pause()
+            if isinstance(app.screen, HelpScreen):
+                await pilot.press("escape")
+            await pilot.press("p")
+            await pilot.pause()
+            assert app.query_one("#views", ContentSwitcher).current == "play"
+            app.runner.pause()
+
+
+async def test_inputs_capture_typing_instead_of_app_keys():
+    app = TuiGymApp(Session("gridworld", seed=0))
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.pause()
+        field = row(app, "StepPenalty").query_one(Input)
+        field.focus()
+        field.value = ""
+        await pilot.press("q", "t", "p")  # would quit / switch views if not typed
+        assert field.value == "qtp"
+        assert app.query_one("#views", ContentSwitcher).current == "play"

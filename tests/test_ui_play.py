@@ -1,0 +1,400 @@
+"""The Play view through the real app: play Blackjack hands and walk GridWorld.
+
+Every test drives `TuiGymApp` with Textual's pilot the way a person would
+(keys, clicks) and checks both the game's state and the words on screen.
+Sessions are seeded, so the hands dealt and the grids drawn are the same on
+every run; no test sleeps.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from textual.app import App, ComposeResult
+from textual.widgets import Static
+
+from tui_gym.core.profiles.blackjack import card_label
+from tui_gym.core.session import Session
+from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.ui.app import TuiGymApp
+from tui_gym.ui.play_view import PlayView
+from tui_gym.ui.widgets.boards import BOARDS, BoardButton
+from tui_gym.ui.widgets.cards_board import CardsBoard
+from tui_gym.ui.widgets.grid_board import GridBoard
+
+BIG = (120, 40)
+SMALL = (80, 24)
+
+
+def make_app(env: str = "blackjack", choices: Sequence[WrapperChoice] = (), seed: int = 0):
+    return TuiGymApp(Session(env_id=env, seed=seed, choices=tuple(choices)))
+
+
+def shown(view: PlayView, selector: str) -> str:
+    """The plain text a Static of the Play view shows."""
+    return str(view.query_one(selector, Static).render())
+
+
+def drawing(view: PlayView) -> str:
+    """The plain text of the board's drawing."""
+    assert view.board is not None
+    return str(view.board.canvas.render())
+
+
+def path_keys(view: PlayView, keys: dict[str, str]) -> list[str]:
+    """Keys that walk the agent to the target by a shortest path (x first)."""
+    assert view.game is not None
+    scene = view.game.scene()
+    (ax, ay), (tx, ty) = scene["agent"], scene["target"]
+    dx, dy = tx - ax, ty - ay
+    return (
+        [keys["right"] if dx > 0 else keys["left"]] * abs(dx)
+        + [keys["up"] if dy > 0 else keys["down"]] * abs(dy)
+    )
+
+
+ARROWS = {"right": "right", "left": "left", "up": "up", "down": "down"}
+WASD = {"right": "d", "left": "a", "up": "w", "down": "s"}
+
+
+# --- Blackjack ------------------------------------------------------------------
+
+
+async def test_blackjack_hand_played_to_the_end() -> None:
+    app = make_app("blackjack")
+    async with app.run_test(size=BIG) as pilot:
+        await pilot.pause()
+        view = app.play_view
+        game = view.game
+        assert game is not None and isinstance(view.board, CardsBoard)
+        assert app.focused is view.board, "the board has the keyboard from the start"
+        assert not game.done
+        picture = drawing(view)
+        assert "░" in picture and "showing" in picture, "the hole card lies face down"
+        assert "New hand" in shown(view, "#play-headline")
+
+        for _ in range(12):  # hit until the hand ends (a bust), or stick at 17+
+            if game.done:
+                break
+            total = game.last.observation[0]
+            await pilot.press("h" if total < 17 else "s")
+            await pilot.pause()
+        assert game.done and game.last is not None
+
+        headline = shown(view, "#play-headline")
+        reward = game.last.reward
+        if reward > 0:
+            assert headline.startswith("You win +")
+        elif reward < 0:
+            assert headline.startswith("Dealer wins −")
+        else:
+            assert headline.startswith("Push 0")
+        assert game.tally.episodes == 1
+        assert "Hands 1" in shown(view, "#play-tally")
+
+        picture = drawing(view)
+        dealer = game.scene()["dealer"]
+        assert "░" not in picture and "showing" not in picture, "the hole card is revealed"
+        assert card_label(dealer[1]) in picture
+
+        # A move after the end only says what to do.
+        await pilot.press("h")
+        await pilot.pause()
+        assert "This hand is over" in shown(view, "#play-hint")
+        assert game.tally.episodes == 1
+
+        # n deals the next hand; the tally keeps the first.
+        await pilot.press("n")
+        await pilot.pause()
+        assert not game.done and game.last.steps == 0
+        assert "░" in drawing(view)
+        assert "New hand" in shown(view, "#play-headline")
+        assert "Hands 1" in shown(view, "#play-tally")
+
+
+async def test_blackjack_stick_enter_and_running_tally() -> None:
+    app = make_app("blackjack", seed=3)
+    async with app.run_test(size=BIG) as pilot:
+        await pilot.pause()
+        view = app.play_view
+        game = view.game
+        assert game is not None
+
+        player = list(game.scene()["player"])
+        await pilot.press("enter")  # dealing in the middle of a hand is refused gently
+        await pilot.pause()
+        assert "Finish this hand first" in shown(view, "#play-hint")
+        assert game.scene()["player"] == player and not game.done
+
+        returns = []
+        for _ in range(5):
+            await pilot.press("s")
+            await pilot.pause()
+            assert game.done
+            returns.append(game.last.reward)
+            await pilot.press("enter")
+            await pilot.pause()
+        tally = game.tally
+        assert tally.episodes == 5
+        assert tally.wins == sum(r > 0 for r in returns)
+        assert tally.losses == sum(r < 0 for r in returns)
+        assert tally.draws == sum(r == 0 for r in returns)
+        text = shown(view, "#play-tally")
+        assert "Hands 5" in text and f"wins {tally.wins}" in text
+        assert f"losses {tally.losses}" in text and "95% CI" in text
+
+
+async def test_blackjack_buttons_work_with_the_mouse() -> None:
+    app = make_app("blackjack")
+    async with app.run_test(size=BIG) as pilot:
+        await pilot.pause()
+        view = app.play_view
+        game = view.game
+        assert game is not None and view.board is not None
+        hit, stick, deal = view.board.query(BoardButton)
+        assert deal.disabled and not hit.disabled
+
+        cards = len(game.scene()["player"])
+        await pilot.click(hit)
+        await pilot.pause()
+        assert game.last.steps == 1
+        assert game.done or len(game.scene()["player"]) == cards + 1
+        if not game.done:
+            await pilot.click(stick)
+            await pilot.pause()
+        assert game.done
+        assert hit.disabled and stick.disabled and not deal.disabled
+        assert app.focused is view.board, "clicking a button leaves the keyboard on the board"
+
+        await pilot.click(deal)
+        await pilot.pause()
+        assert not game.done and game.tally.episodes == 1
+
+
+async def test_clicking_the_table_focuses_the_board() -> None:
+    app = make_app("blackjack")
+    async with app.run_test(size=BIG) as pilot:
+        await pilot.pause()
+        view = app.play_view
+        app.set_focus(None)
+        await pilot.pause()
+        assert view.board.border_subtitle == "click here to play"
+        await pilot.click(view.board.canvas)
+        await pilot.pause()
+        assert app.focused is view.board
+        assert not view.board.border_subtitle
+        await pilot.press("s")
+        await pilot.pause()
+        assert view.game.done
+
+
+# --- GridWorld ------------------------------------------------------------------
+
+
+async def test_gridworld_walk_to_the_target_with_arrows_then_wasd() -> None:
+    app = make_app("gridworld")
+    async with app.run_test(size=BIG) as pilot:
+        await pilot.pause()
+        view = app.play_view
+        game = view.game
+        assert game is not None and isinstance(view.board, GridBoard)
+        assert app.focused is view.board
+
+        for keys in (ARROWS, WASD):
+            optimal = game.first_info["distance"]
+            assert "optimal" in shown(view, "#play-detail")
+            path = path_keys(view, keys)
+            assert len(path) == optimal
+            for key in path:
+                await pilot.press(key)
+            await pilot.pause()
+            assert game.done and game.last.terminated and not game.last.truncated
+            steps = f"{optimal} step{'' if optimal == 1 else 's'}"
+            assert shown(view, "#play-headline").startswith(
+                f"Reached the target in {steps} (optimal {optimal})"
+            )
+            assert app.focused is view.board, "w moved the agent; it did not leave the board"
+            await pilot.press("r")
+            await pilot.pause()
+            assert not game.done and game.last.steps == 0
+        assert game.tally.episodes == 2 and game.tally.wins == 2
+        assert "Episodes 2" in shown(view, "#play-tally")
+
+
+async def test_gridworld_up_is_up_on_screen_and_the_trail_shows() -> None:
+    app = make_app("gridworld")
+    async with app.run_test(size=BIG) as pilot:
+        await pilot.pause()
+        view = app.play_view
+        game = view.game
+        start = game.scene()["agent"]
+        key = "up" if start[1] < game.scene()["size"] - 1 else "down"
+        row_before = _agent_row(drawing(view))
+        await pilot.press(key)
+        await pilot.pause()
+        assert game.scene()["agent"][1] == start[1] + (1 if key == "up" else -1)
+        row_after = _agent_row(drawing(view))
+        assert (row_after < row_before) == (key == "up"), "+y is drawn upwards"
+        assert ("↑" if key == "up" else "↓") in drawing(view), "the cell left shows the move"
+
+
+def _agent_row(picture: str) -> int:
+    return next(i for i, line in enumerate(picture.splitlines()) if "●" in line)
+
+
+async def test_gridworld_r_resets_mid_episode() -> None:
+    app = make_app("gridworld")
+    async with app.run_test(size=BIG) as pilot:
+        await pilot.pause()
+        view = app.play_view
+        game = view.game
+        await pilot.press(path_keys(view, ARROWS)[0])
+        await pilot.pause()
+        assert game.last.steps == 1
+        await pilot.press("r")
+        await pilot.pause()
+        assert game.last.steps == 0 and not game.done
+        assert game.tally.episodes == 0, "an unfinished episode is not counted"
+        assert "New episode" in shown(view, "#play-headline")
+
+
+async def test_gridworld_time_limit_truncates() -> None:
+    app = make_app("gridworld", choices=(WrapperChoice.make("TimeLimit", max_episode_steps=3),))
+    async with app.run_test(size=BIG) as pilot:
+        await pilot.pause()
+        view = app.play_view
+        game = view.game
+        assert "TimeLimit(3)" in shown(view, "#play-title")
+        (ax, _), (tx, _) = game.scene()["agent"], game.scene()["target"]
+        away = "left" if tx >= ax else "right"  # away from the target, into the wall
+        for _ in range(3):
+            await pilot.press(away)
+        await pilot.pause()
+        assert game.done and game.last.truncated and not game.last.terminated
+        headline = shown(view, "#play-headline")
+        assert headline.startswith("Truncated by the time limit after 3 steps")
+        assert "Reached" not in headline
+        assert "-even" in view.query_one("#play-status").classes
+        assert "truncated 1" in shown(view, "#play-tally")
+
+        await pilot.press(away)  # a move after the end is refused gently
+        await pilot.pause()
+        assert "This episode is over" in shown(view, "#play-hint")
+
+
+async def test_gridworld_click_a_cell_steps_towards_it() -> None:
+    app = make_app("gridworld")
+    async with app.run_test(size=BIG) as pilot:
+        await pilot.pause()
+        view = app.play_view
+        game = view.game
+        board = view.board
+        assert isinstance(board, GridBoard)
+        optimal = game.first_info["distance"]
+        for _ in range(optimal):
+            layout = board.layout_drawn
+            assert layout is not None
+            await pilot.click(board.canvas, offset=layout.cell_center(game.scene()["target"]))
+            await pilot.pause()
+        assert game.done and game.last.terminated and game.last.steps == optimal
+
+        await pilot.click(board.query_one(BoardButton))  # ↺ Reset
+        await pilot.pause()
+        assert not game.done and game.last.steps == 0
+
+
+async def test_advice_shows_the_optimum_and_judges_moves() -> None:
+    for env, keys in (("blackjack", ("s",)), ("gridworld", None)):
+        app = make_app(env)
+        async with app.run_test(size=BIG) as pilot:
+            await pilot.pause()
+            view = app.play_view
+            assert "optimal:" not in shown(view, "#play-detail")
+            await pilot.press("i")
+            await pilot.pause()
+            assert view.show_advice and "optimal:" in shown(view, "#play-detail")
+            await pilot.press(*(keys or path_keys(view, ARROWS)[:1]))
+            await pilot.pause()
+            detail = shown(view, "#play-detail")
+            assert "✓ optimal move" in detail or "✗ the optimum:" in detail
+            if env == "gridworld":
+                assert "✓ optimal move" in detail, "a step along a shortest path is optimal"
+
+
+# --- switching, wrappers, sizes ------------------------------------------------
+
+
+async def test_switching_games_swaps_the_board_and_keeps_focus() -> None:
+    app = make_app("blackjack")
+    async with app.run_test(size=BIG) as pilot:
+        await pilot.pause()
+        await pilot.press("g")
+        await pilot.pause()
+        view = app.play_view
+        assert isinstance(view.board, GridBoard) and len(view.query(GridBoard)) == 1
+        assert not view.query(CardsBoard)
+        assert view.game.profile.board == "grid"
+        assert app.focused is view.board
+        assert "GridWorld" in shown(view, "#play-title")
+        keys = [key for key, _ in view.key_help()]
+        assert "r" in keys
+
+        await pilot.press("b")
+        await pilot.pause()
+        assert isinstance(view.board, CardsBoard) and app.focused is view.board
+        assert view.game.tally.episodes == 0
+
+
+async def test_observation_wrappers_show_the_raw_observation() -> None:
+    app = make_app("blackjack", choices=(WrapperChoice.make("FlattenObservation"),))
+    async with app.run_test(size=BIG) as pilot:
+        await pilot.pause()
+        view = app.play_view
+        assert "observation: [" in shown(view, "#play-detail")
+        await pilot.press("s")
+        await pilot.pause()
+        assert view.game.done
+
+
+async def test_compact_layout_at_80x24() -> None:
+    for env, key in (("blackjack", "h"), ("gridworld", "up")):
+        app = make_app(env)
+        async with app.run_test(size=SMALL) as pilot:
+            await pilot.pause()
+            assert app.screen.has_class("compact")
+            view = app.play_view
+            board = view.board
+            assert board is not None and board.region.height >= 7
+            canvas = board.canvas.region
+            assert canvas.height > 0 and canvas.width > 0
+            assert app.screen.region.contains_region(view.query_one("#play-tally").region)
+            picture = drawing(view)
+            assert ("░" in picture) if env == "blackjack" else ("●" in picture)
+            await pilot.press(key)
+            await pilot.pause()
+            assert view.game.last.steps == 1 or view.game.done
+
+
+# --- the boards on their own (as the Train view uses them) ---------------------
+
+
+class PassiveBoards(App[None]):
+    def compose(self) -> ComposeResult:
+        yield BOARDS["cards"](interactive=False)
+        yield BOARDS["grid"](interactive=False)
+
+
+async def test_passive_boards_draw_but_never_take_keys() -> None:
+    app = PassiveBoards()
+    async with app.run_test(size=(60, 30)) as pilot:
+        cards, grid = app.query_one(CardsBoard), app.query_one(GridBoard)
+        cards.show_scene({"player": [1, 6], "dealer": [10, 7]}, reveal=True)
+        grid.show_scene({"size": 4, "agent": (0, 0), "target": (3, 3)}, reveal=True)
+        await pilot.pause()
+        assert not cards.focusable and not grid.focusable
+        assert not cards.query(BoardButton)
+        await pilot.press("h", "up")
+        await pilot.pause()
+        text = str(cards.canvas.render())
+        assert "usable ace" in text and "17" in text and "Agent" in text
+        assert "●" in str(grid.canvas.render()) and "◎" in str(grid.canvas.render())

@@ -1,0 +1,332 @@
+"""The Train view, driven like a person would: keys, clicks, and what the screen says.
+
+Every wait polls a condition with a deadline (`wait_for`); nothing sleeps.
+Training runs on the runner's worker thread, so these tests also check that
+the view follows it without ever training on the event loop.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import pytest
+
+from tui_gym.core.agent import Hyperparameters
+from tui_gym.core.profiles import profile_for
+from tui_gym.core.session import Session
+from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.ui.app import TuiGymApp
+from tui_gym.ui.train_view import TrainView
+from tui_gym.ui.widgets.heatmap_view import HeatmapView
+from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
+
+DEADLINE = 20.0  # seconds; generous for slow CI machines, never reached when things work
+
+
+async def wait_for(pilot, predicate: Callable[[], bool], what: str, timeout: float = DEADLINE):
+    """Let the app run until `predicate()` holds; fail with `what` after `timeout`."""
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out waiting for {what}")
+        await pilot.pause()
+
+
+async def open_train(pilot) -> TrainView:
+    await pilot.pause()
+    await pilot.press("t")
+    await pilot.pause()
+    view = pilot.app.query_one(TrainView)
+    assert view.display
+    return view
+
+
+async def paused(pilot) -> None:
+    """Pause training and wait until the worker has stopped."""
+    app = pilot.app
+    if app.runner.running:
+        await pilot.press("space")
+    await wait_for(pilot, lambda: not app.runner.running, "training to pause")
+    assert app.runner.wait_idle(DEADLINE)
+    await wait_for(
+        pilot,
+        lambda: app.query_one(TrainView)._version == app.runner.latest.version,
+        "the view to show the last snapshot",
+    )
+
+
+def blackjack_app(episodes: int = 1_000_000) -> TuiGymApp:
+    return TuiGymApp(Session("blackjack", seed=0, hp=Hyperparameters(episodes=episodes)))
+
+
+def gridworld_app(episodes: int = 1_000_000, **kwargs) -> TuiGymApp:
+    hp = profile_for("gridworld").default_hyperparameters().replace(episodes=episodes)
+    return TuiGymApp(Session("gridworld", seed=0, hp=hp, **kwargs))
+
+
+async def test_training_runs_live_and_pauses() -> None:
+    app = blackjack_app()
+    async with app.run_test(size=(120, 40)) as pilot:
+        view = await open_train(pilot)
+        untrained = view.heatmap.plain
+        assert "usable ace" in untrained and "A  2  3" in untrained
+        assert "episodes 0" in view.stats.plain
+        assert app.runner.speed.name == "max"
+
+        await pilot.press("space")
+        await wait_for(pilot, lambda: app.runner.latest.episodes > 500, "500 episodes")
+        await wait_for(pilot, lambda: len(view.charts.sparkline("return").data or ()) > 1,
+                       "the return sparkline")
+        first = {k: tuple(view.charts.sparkline(k).data or ())
+                 for k in ("return", "length", "td_error", "epsilon")}
+        assert all(first.values()), first
+        seen = app.runner.latest.episodes
+
+        await wait_for(pilot, lambda: view._snapshot.episodes > seen + 2000, "more episodes")
+        later = tuple(view.charts.sparkline("epsilon").data or ())
+        assert later != first["epsilon"]  # the curves follow the run
+        shown = view._snapshot.episodes
+        assert f"episodes {shown:,}" in view.stats.plain
+        assert "running" in view.stats.plain
+        assert "exact value" in view.stats.plain and "optimal value" in view.stats.plain
+        assert view.heatmap.plain != untrained  # the greedy policy has moved
+        assert "scalar" in view.stats.plain and "max" in view.stats.plain
+
+        await paused(pilot)
+        stopped = app.runner.latest.episodes
+        for _ in range(5):
+            await pilot.pause()
+            assert app.runner.latest.episodes == stopped
+        assert "paused" in view.stats.plain
+        assert view._snapshot.episodes == stopped
+        assert f"{stopped:,} / 1,000,000 episodes" in str(
+            view.query_one("#train-progress-text").content
+        )
+
+
+async def test_one_episode_and_reset() -> None:
+    app = blackjack_app(episodes=1000)
+    async with app.run_test(size=(120, 40)) as pilot:
+        view = await open_train(pilot)
+        await pilot.press("full_stop")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 1, "one episode")
+        assert app.runner.wait_idle(DEADLINE)
+        for _ in range(5):
+            await pilot.pause()
+        assert app.runner.latest.episodes == 1
+        assert not app.runner.running
+        await wait_for(pilot, lambda: "episodes 1\n" in view.stats.plain, "the stats to say 1")
+
+        await pilot.press("full_stop")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 2, "a second episode")
+
+        await pilot.press("space")
+        await wait_for(pilot, lambda: app.runner.latest.episodes > 200, "some training")
+        await pilot.press("x")  # while it may still run: the reset pauses first
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
+        assert not app.runner.running
+        await wait_for(pilot, lambda: "episodes 0\n" in view.stats.plain, "fresh stats")
+        assert not view.charts.sparkline("return").data
+
+
+async def test_speed_keys_change_the_speed() -> None:
+    app = blackjack_app()
+    async with app.run_test(size=(120, 40)) as pilot:
+        view = await open_train(pilot)
+        assert view.speed_name == "max"
+        await pilot.press("minus")
+        assert app.runner.speed.name == view.speed_name == "animated (fast)"
+        await pilot.press("minus", "minus")
+        assert view.speed_name == "animated (slow)"
+        await pilot.press("minus")  # already the slowest
+        assert view.speed_name == "animated (slow)"
+        await pilot.press("plus")
+        assert view.speed_name == "animated"
+        assert "speed animated" in view.stats.plain
+        await pilot.press("plus", "plus")
+        assert view.speed_name == "max"
+
+
+async def test_animated_training_shows_the_agent_on_a_board() -> None:
+    app = blackjack_app()
+    async with app.run_test(size=(120, 40)) as pilot:
+        view = await open_train(pilot)
+        await pilot.press("minus")  # animated (fast)
+        await pilot.press("space")
+        await wait_for(pilot, lambda: app.runner.last_scene is not None, "an animated step")
+        box = view.query_one("#train-board-box")
+        await wait_for(pilot, lambda: box.has_class("-shown"), "the board")
+        await paused(pilot)
+        await pilot.press("plus")  # max: no board
+        assert not box.has_class("-shown")
+
+
+@pytest.mark.parametrize("bad", ["abc", "5", ""])
+async def test_invalid_learning_rate_is_marked_and_blocks_training(bad: str) -> None:
+    app = blackjack_app(episodes=300)
+    async with app.run_test(size=(120, 40)) as pilot:
+        view = await open_train(pilot)
+        form = view.query_one(HyperparameterForm)
+        await pilot.press("e")  # edit the hyperparameters
+        await wait_for(pilot, lambda: app.focused is form.input("learning_rate"), "the field")
+        await pilot.press("backspace", *bad)  # the text is selected on focus: replace it
+        await wait_for(pilot, lambda: form.is_invalid("learning_rate"), "the mark")
+        assert "Learning rate" in form.error("learning_rate")
+        assert "(0, 1]" in form.error("learning_rate")
+
+        await pilot.press("escape")  # the keyboard goes back to the view
+        assert app.focused is view.heatmap
+        await pilot.press("space")
+        await pilot.pause()
+        assert not app.runner.running
+        assert app.runner.latest.episodes == 0
+        assert form.is_invalid("learning_rate")
+
+        await pilot.press("e")
+        await wait_for(pilot, lambda: app.focused is form.input("learning_rate"), "the field")
+        await pilot.press("backspace", *"0.01", "enter")
+        await wait_for(pilot, lambda: not form.is_invalid("learning_rate"), "the fix")
+        assert form.error("learning_rate") == ""
+        assert app.focused is view.heatmap
+        await pilot.press("space")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 300, "the whole budget")
+        assert app.session.hp.learning_rate == pytest.approx(0.01)
+
+
+async def test_fields_are_checked_together_and_loaded() -> None:
+    app = blackjack_app(episodes=1234)
+    async with app.run_test(size=(120, 40)) as pilot:
+        view = await open_train(pilot)
+        form = view.form
+        assert form.input("episodes").value == "1234"
+        form.input("epsilon_start").value = "0.1"
+        form.input("epsilon_final").value = "0.5"
+        await pilot.pause()
+        assert view.read_hyperparameters() is None
+        await pilot.pause()
+        assert form.is_invalid("epsilon_final")
+        assert "must not exceed" in form.error("epsilon_final")
+        form.input("epsilon_final").value = "0.05"
+        await wait_for(pilot, lambda: form.valid, "the fields to settle")
+        hp = view.read_hyperparameters()
+        assert hp is not None and hp.epsilon_start == 0.1 and hp.episodes == 1234
+        form.load(Hyperparameters(episodes=77))
+        assert form.input("episodes").value == "77"
+
+
+async def test_gridworld_target_moves_with_keys_and_clicks() -> None:
+    app = gridworld_app()
+    async with app.run_test(size=(120, 40)) as pilot:
+        view = await open_train(pilot)
+        heatmap = view.query_one(HeatmapView)
+        assert app.focused is heatmap
+        assert view.focus_target == (4, 4)
+        assert heatmap.focus_cell == (0, 4)
+        assert "target at (4, 4)" in heatmap.plain
+
+        await pilot.press("left")
+        assert view.focus_target == (3, 4)
+        await pilot.press("j")  # down
+        assert view.focus_target == (3, 3)
+        await pilot.press("up", "up", "up")  # clipped at the top edge
+        assert view.focus_target == (3, 4)
+        await pilot.pause()
+        assert "target at (3, 4)" in heatmap.plain
+        assert heatmap.focus_cell == (0, 3)
+
+        # a click on the bottom-left cell puts the target at (0, 0)
+        place = heatmap._placements[0]
+        cell_w, cell_h = heatmap._cell_geometry
+        x = heatmap.styles.padding.left + place.x + cell_w // 2
+        y = place.y + 4 * cell_h
+        assert await pilot.click(HeatmapView, offset=(x, y))
+        assert view.focus_target == (0, 0)
+        await pilot.pause()
+        assert "target at (0, 0)" in heatmap.plain
+        assert "optimal pair fraction" in view.stats.plain
+
+
+async def test_gridworld_training_fills_the_heatmap() -> None:
+    app = gridworld_app(episodes=300)
+    async with app.run_test(size=(120, 40)) as pilot:
+        view = await open_train(pilot)
+        before = view.heatmap.plain
+        await pilot.press("space")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 300, "the whole budget")
+        await paused(pilot)
+        assert view.heatmap.plain != before
+        assert "finished" in view.stats.plain
+
+
+async def test_hidden_heatmaps_say_why() -> None:
+    app = TuiGymApp(
+        Session("blackjack", seed=0, choices=(WrapperChoice("DelayObservation"),))
+    )
+    async with app.run_test(size=(120, 40)) as pilot:
+        view = await open_train(pilot)
+        reason = app.session.hidden_reason()
+        assert reason
+        assert view.heatmap.plain == reason
+        assert reason in view.stats.plain
+
+
+async def test_compact_layout_at_80x24() -> None:
+    app = blackjack_app(episodes=500)
+    async with app.run_test(size=(80, 24)) as pilot:
+        view = await open_train(pilot)
+        assert app.screen.has_class("compact")
+        assert not view.form.region.height  # hidden until `e`
+        await pilot.press("space")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 500, "the whole budget")
+        await paused(pilot)
+        assert "episodes" in view.stats.plain
+        assert "A  2  3" in view.heatmap.plain
+        await pilot.press("e")
+        await wait_for(pilot, lambda: app.focused is view.form.input("learning_rate"),
+                       "the form")
+        await pilot.press("escape")
+        assert app.focused is view.heatmap
+
+
+async def test_gridworld_compact() -> None:
+    app = gridworld_app(episodes=100)
+    async with app.run_test(size=(80, 24)) as pilot:
+        view = await open_train(pilot)
+        await pilot.press("space")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 100, "the whole budget")
+        await paused(pilot)
+        assert "target at" in view.heatmap.plain
+
+
+async def test_buttons_do_what_the_keys_do() -> None:
+    app = blackjack_app(episodes=400)
+    async with app.run_test(size=(120, 40)) as pilot:
+        view = await open_train(pilot)
+        assert await pilot.click("#btn-slower")
+        assert view.speed_name == "animated (fast)"
+        assert await pilot.click("#btn-faster")
+        assert view.speed_name == "max"
+        assert await pilot.click("#btn-episode")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 1, "one episode")
+        assert await pilot.click("#btn-toggle")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 400, "the whole budget")
+        await paused(pilot)
+        assert "finished" in view.stats.plain
+        assert await pilot.click("#btn-reset")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
+
+
+async def test_switching_game_reloads_the_view() -> None:
+    app = blackjack_app()
+    async with app.run_test(size=(120, 40)) as pilot:
+        view = await open_train(pilot)
+        assert view.heatmap.focus_cell is None
+        await pilot.press("g")
+        await wait_for(pilot, lambda: app.session.profile.name == "gridworld", "GridWorld")
+        await pilot.pause()
+        assert "target at (4, 4)" in view.heatmap.plain
+        assert view.heatmap.focus_cell == (0, 4)
+        assert any("target" in text for _, text in view.key_help())
+        hp = app.session.hp
+        assert view.form.input("episodes").value == str(hp.episodes)

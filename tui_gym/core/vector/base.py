@@ -1,0 +1,65 @@
+"""What every batched environment shares: the result of one batched step.
+
+A batched env holds the state of `num_envs` copies of one game in numpy
+arrays and steps any subset of them at once. `BatchStep` is what a step
+returns, one row per stepped env; `Selection` is how callers name the subset
+(None for all of them, else an int array of env indices).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["BatchStep", "Selection", "check_actions", "check_num_envs", "selection_size"]
+
+Selection = np.ndarray | None
+"""The envs a call applies to: None for all, else an int array of distinct env indices."""
+
+
+@dataclass(frozen=True)
+class BatchStep:
+    """One batched step: row `i` belongs to the `i`-th stepped env.
+
+    `next_obs` is the observation after the action; for an env whose episode
+    just ended it is the final observation (the one to bootstrap from after a
+    truncation). `obs` is what each env will act on next: `next_obs`, except
+    that envs reset automatically show their new starting observation.
+    `distance` is GridWorld's `info["distance"]` after the move (None for
+    games without one).
+    """
+
+    next_obs: np.ndarray  # int64 (k, obs_width)
+    reward: np.ndarray  # float64 (k,)
+    terminated: np.ndarray  # bool (k,)
+    truncated: np.ndarray  # bool (k,)
+    obs: np.ndarray  # int64 (k, obs_width)
+    distance: np.ndarray | None = None  # int64 (k,)
+
+    @property
+    def done(self) -> np.ndarray:
+        """Episodes that ended on this step (terminated or truncated)."""
+        return self.terminated | self.truncated
+
+
+def check_num_envs(num_envs: int) -> int:
+    if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
+        raise ValueError(f"num_envs must be an integer >= 1, got {num_envs!r}")
+    return int(num_envs)
+
+
+def selection_size(index: Selection, num_envs: int) -> int:
+    return num_envs if index is None else len(index)
+
+
+def check_actions(actions: np.ndarray, expected: int, n_actions: int) -> np.ndarray:
+    """The actions as an int64 array of `expected` values in `range(n_actions)`."""
+    acts = np.asarray(actions)
+    if acts.shape != (expected,):
+        raise ValueError(f"expected {expected} actions, got an array of shape {acts.shape}")
+    if not np.issubdtype(acts.dtype, np.integer):
+        raise ValueError(f"actions must be integers, got dtype {acts.dtype}")
+    if expected and (acts.min() < 0 or acts.max() >= n_actions):
+        raise ValueError(f"actions must be in [0, {n_actions - 1}]")
+    return acts.astype(np.int64, copy=False)

@@ -1,0 +1,212 @@
+"""Reading a built env's wrapper stack as a recipe for the batched engine.
+
+`plan_for_env(env)` walks the wrappers of an env built by the catalog
+(`tui_gym.core.wrappers.build_env`) from the inside out and returns a
+`VectorPlan`: which game and arguments, the time limit in force, and the
+reward transforms in the order they apply. It raises `NoBatchedForm`, with a
+sentence a person can read, for anything it cannot reproduce exactly.
+
+Reading the built stack, rather than the list of choices, means the batched
+engine sees exactly what the scalar one does: the same choices skipped as
+misfits, a first `TimeLimit` replacing the registered one, later ones only
+able to shorten it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.envs.toy_text.blackjack import BlackjackEnv
+from gymnasium.wrappers import (
+    ClipReward,
+    DelayObservation,
+    FlattenObservation,
+    OrderEnforcing,
+    PassiveEnvChecker,
+    StickyAction,
+    TimeAwareObservation,
+    TimeLimit,
+)
+
+from tui_gym.core.reference.blackjack import BlackjackRules
+from tui_gym.core.vector.blackjack import BatchedBlackjack
+from tui_gym.core.vector.gridworld import BatchedGridWorld
+from tui_gym.core.wrappers.custom import DistanceShaping, ScaleReward, StepPenalty
+from tui_gym.envs.gridworld import GridWorldEnv
+
+__all__ = ["BatchedEnv", "NoBatchedForm", "RewardTransform", "VectorPlan", "plan_for_env"]
+
+BatchedEnv = BatchedBlackjack | BatchedGridWorld
+
+# Wrappers gym.make adds that change nothing about the dynamics.
+_TRANSPARENT = (OrderEnforcing, PassiveEnvChecker)
+
+# Why the catalog's other wrappers have no batched form.
+_UNBATCHABLE: dict[type, str] = {
+    FlattenObservation: "its one-hot observations make sparse table keys",
+    TimeAwareObservation: "it adds the step count to every observation",
+    DelayObservation: "its observations come from a queue of past ones",
+    StickyAction: "it repeats past actions with a random stream of its own",
+}
+
+
+class NoBatchedForm(ValueError):
+    """The env (its game or one of its wrappers) has no batched form; `reason` says why."""
+
+    def __init__(self, reason: str) -> None:
+        super().__init__(reason)
+        self.reason = reason
+
+
+@dataclass(frozen=True)
+class RewardTransform:
+    """One reward wrapper as a function of batched rewards (and distances)."""
+
+    name: str
+    apply: Callable[[np.ndarray, np.ndarray | None], np.ndarray] = field(compare=False)
+    params: tuple[tuple[str, Any], ...] = ()
+
+
+def _scale(factor: float) -> RewardTransform:
+    return RewardTransform("ScaleReward", lambda r, d: factor * r, (("factor", factor),))
+
+
+def _penalty(penalty: float) -> RewardTransform:
+    return RewardTransform("StepPenalty", lambda r, d: r - penalty, (("penalty", penalty),))
+
+
+def _clip(low: float | None, high: float | None) -> RewardTransform:
+    return RewardTransform(
+        "ClipReward",
+        lambda r, d: np.clip(r, low, high),
+        (("max_reward", high), ("min_reward", low)),
+    )
+
+
+def _shaping(k: float) -> RewardTransform:
+    def shaped(reward: np.ndarray, distance: np.ndarray | None) -> np.ndarray:
+        if distance is None:
+            raise ValueError("DistanceShaping needs the distance to the target of every step")
+        return reward - k * distance
+
+    return RewardTransform("DistanceShaping", shaped, (("k", k),))
+
+
+@dataclass(frozen=True)
+class VectorPlan:
+    """What the batched engine needs to reproduce one built env.
+
+    `game` is "blackjack" or "gridworld"; `game_kwargs` the env's own
+    arguments; `max_episode_steps` the tightest `TimeLimit` in the stack
+    (None without one); `rewards` the reward wrappers, innermost first;
+    `wrappers` the names of the wrappers that matter, innermost first, for
+    messages.
+    """
+
+    game: str
+    game_kwargs: tuple[tuple[str, Any], ...]
+    max_episode_steps: int | None
+    rewards: tuple[RewardTransform, ...]
+    wrappers: tuple[str, ...]
+
+    @property
+    def title(self) -> str:
+        kwargs = dict(self.game_kwargs)
+        if self.game == "gridworld":
+            return f"GridWorld {kwargs['size']}x{kwargs['size']}"
+        return "Blackjack"
+
+    def describe(self) -> str:
+        """E.g. "vector engine: Blackjack with StepPenalty"."""
+        text = f"vector engine: {self.title}"
+        if self.wrappers:
+            text += " with " + ", ".join(self.wrappers)
+        return text
+
+    def make_env(
+        self, num_envs: int, seed: int | np.random.SeedSequence | None = None
+    ) -> BatchedEnv:
+        """The batched env this plan describes (reward wrappers are applied separately)."""
+        kwargs = dict(self.game_kwargs)
+        if self.game == "blackjack":
+            return BatchedBlackjack(
+                num_envs,
+                BlackjackRules(natural=kwargs["natural"], sab=kwargs["sab"]),
+                seed=seed,
+                max_episode_steps=self.max_episode_steps,
+            )
+        return BatchedGridWorld(
+            num_envs,
+            size=kwargs["size"],
+            reward_scale=kwargs["reward_scale"],
+            step_penalty=kwargs["step_penalty"],
+            max_episode_steps=self.max_episode_steps,
+            seed=seed,
+        )
+
+    def transform_rewards(
+        self, reward: np.ndarray, distance: np.ndarray | None = None
+    ) -> np.ndarray:
+        """The rewards the wrapped env would return, from the bare env's."""
+        for transform in self.rewards:
+            reward = transform.apply(reward, distance)
+        return reward
+
+
+def _base_game(env: gym.Env) -> tuple[str, tuple[tuple[str, Any], ...]]:
+    if type(env) is BlackjackEnv:
+        return "blackjack", (("natural", bool(env.natural)), ("sab", bool(env.sab)))
+    if type(env) is GridWorldEnv:
+        return "gridworld", (
+            ("reward_scale", env.reward_scale),
+            ("size", env.size),
+            ("step_penalty", env.step_penalty),
+        )
+    raise NoBatchedForm(f"scalar engine: {type(env).__name__} has no batched form")
+
+
+def plan_for_env(env: gym.Env) -> VectorPlan:
+    """The batched recipe of a built env; raises `NoBatchedForm` when there is none."""
+    layers: list[gym.Wrapper] = []
+    inner: gym.Env = env
+    while isinstance(inner, gym.Wrapper):
+        layers.append(inner)
+        inner = inner.env
+    layers.reverse()  # innermost first
+    game, game_kwargs = _base_game(inner)
+    registered = inner.spec.max_episode_steps if inner.spec is not None else None
+
+    limit: int | None = None
+    rewards: list[RewardTransform] = []
+    names: list[str] = []
+    for position, layer in enumerate(layers):
+        kind = type(layer)
+        if kind in _TRANSPARENT:
+            continue
+        if kind is TimeLimit:
+            steps = int(layer._max_episode_steps)
+            limit = steps if limit is None else min(limit, steps)
+            below = layers[position - 1] if position else None
+            from_make = isinstance(below, _TRANSPARENT) and steps == registered
+            if not from_make:
+                names.append("TimeLimit")
+            continue
+        if kind is ScaleReward:
+            rewards.append(_scale(layer.factor))
+        elif kind is StepPenalty:
+            rewards.append(_penalty(layer.penalty))
+        elif kind is ClipReward:
+            saved = getattr(layer, "_saved_kwargs", {})
+            rewards.append(_clip(saved.get("min_reward"), saved.get("max_reward")))
+        elif kind is DistanceShaping and game == "gridworld":
+            rewards.append(_shaping(layer.k))
+        else:
+            why = _UNBATCHABLE.get(kind)
+            reason = f"scalar engine: {kind.__name__} has no batched form"
+            raise NoBatchedForm(f"{reason} ({why})" if why else reason)
+        names.append(kind.__name__)
+    return VectorPlan(game, game_kwargs, limit, tuple(rewards), tuple(names))

@@ -1,0 +1,338 @@
+"""The vector engine: Q-learning on many envs at once, a drop-in for `Trainer`.
+
+`VectorTrainer` trains the same `QAgent` the scalar `Trainer` does (its
+table, update counts, episode count and epsilon schedule) but plays
+`num_envs` games side by side on a batched env (`BatchedBlackjack`,
+`BatchedGridWorld`), so every numpy call serves hundreds of steps. Build it
+like a `Trainer`, from an env built by the wrapper catalog:
+
+    trainer = VectorTrainer(env, agent, keyer, seed=0)
+    trainer.run(episodes=200_000)
+
+or with `make_vector_trainer(env_id, env_kwargs, choices, agent, keyer)`.
+`plan_for_env` reads the env's wrappers; an env with no batched form raises
+`NoBatchedForm` (ask `vector_support` first).
+
+One batch step, top to bottom:
+
+1. Envs without an episode start one, as long as the episode quota of
+   `run(episodes=...)` leaves room (so a run finishes exactly that many).
+2. Epsilon-greedy actions for every stepping env: a random action with
+   probability `agent.epsilon`, else the best-valued one, ties broken
+   uniformly at random (the highest of independent uniform draws among the
+   tied actions wins).
+3. One batched env step; the wrappers' reward transforms; keys of the next
+   observations.
+4. The batched Q-learning update (`batched_q_update`).
+5. Finished episodes go into the rolling statistics; the agent's episode
+   count and epsilon move on (epsilon is thus updated once per batch).
+
+Episodes in progress survive between `run` calls, and a call stops only
+between batch steps, so how a run is cut into time slices does not change
+the run: the same seed and the same agent seed give the same Q-table.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from tui_gym.core.agent import QAgent
+from tui_gym.core.obskey import ObservationKeyer
+from tui_gym.core.stats import EpisodeStats
+from tui_gym.core.training import SERIES_NAMES, StepEvent, Trainer, TrainingSnapshot
+from tui_gym.core.vector.plan import VectorPlan, plan_for_env
+from tui_gym.core.vector.stats import push_series_many, push_window_many
+from tui_gym.core.wrappers import WrapperChoice, build_env_lenient
+
+__all__ = ["DEFAULT_NUM_ENVS", "VectorTrainer", "batched_q_update", "make_vector_trainer"]
+
+DEFAULT_NUM_ENVS = 512  # measured: see the module's report in the issue; 256-1024 are close
+
+# 1 - lr is floored here before taking logs: a step size of 1 wipes out what came before.
+_TINY = 1e-300
+
+
+def batched_q_update(
+    agent: QAgent,
+    keys: np.ndarray,
+    actions: np.ndarray,
+    rewards: np.ndarray,
+    terminated: np.ndarray,
+    next_keys: np.ndarray,
+) -> np.ndarray:
+    """Q-learning updates for a batch of transitions; returns each TD error.
+
+    Targets `r + discount * max_a' Q(s', a')` (0 after termination) are all
+    read from the table as it is before the batch. Transitions that share a
+    (state, action) are then applied one after the other, in batch order,
+    each with its own step size (`max(lr, 1/n)` for the "visits" schedule,
+    n counting this update), exactly as `QAgent.update` would apply them if
+    the targets stayed fixed. This is done in closed form: after updates
+    1..m with step sizes a_i, Q = prod(1 - a_i) Q_0 + sum_i a_i prod_{j>i}(1 - a_j) t_i,
+    the products taken as sums of logs within each group of a sorted batch.
+    So a batch is sequential Q-learning whose bootstrap values lag by at
+    most one batch. The TD errors returned (for the |TD| statistic) are
+    measured against the table before the batch.
+
+    `keys` and `next_keys` are dense row numbers of `agent.q`; the agent's
+    `counts` and `visits` grow by one per transition.
+    """
+    hp = agent.hp
+    n_actions = agent.n_actions
+    q_flat = agent.q.reshape(-1)
+    counts_flat = agent.counts.reshape(-1)
+    future = agent.q[next_keys].max(axis=1)
+    future[terminated] = 0.0
+    targets = rewards + hp.discount * future
+    flat = keys * n_actions + actions
+    td = targets - q_flat[flat]
+
+    order = np.argsort(flat, kind="stable")
+    cells = flat[order]
+    goals = targets[order]
+    m = len(cells)
+    first = np.ones(m, dtype=bool)
+    first[1:] = cells[1:] != cells[:-1]
+    starts = np.flatnonzero(first)
+    group = np.cumsum(first) - 1
+    sizes = np.diff(np.append(starts, m))
+    if hp.learning_rate_schedule == "visits":
+        rank = np.arange(1, m + 1) - starts[group]
+        alpha = np.maximum(hp.learning_rate, 1.0 / (counts_flat[cells] + rank))
+    else:
+        alpha = np.full(m, hp.learning_rate)
+    log_keep = np.log(np.maximum(1.0 - alpha, _TINY))
+    running = np.cumsum(log_keep)
+    ends = starts + sizes - 1
+    weights = alpha * np.exp(running[ends][group] - running)
+    keep_all = np.exp(running[ends] - running[starts] + log_keep[starts])
+    unique = cells[starts]
+    q_flat[unique] = keep_all * q_flat[unique] + np.add.reduceat(weights * goals, starts)
+    counts_flat[unique] += sizes
+    np.add.at(agent.visits, unique // n_actions, sizes)
+    return td
+
+
+class VectorTrainer(Trainer):
+    """Runs Q-learning on `num_envs` copies of an env at once; the `Trainer` API.
+
+    Args:
+        env: an env built by the wrapper catalog (`build_env`); its game and
+            wrappers are read with `plan_for_env` and played in batches (the
+            env itself is never stepped).
+        agent: the dense-table `QAgent` to train (shared, as with `Trainer`).
+        keyer: the keyer of `env`'s observation space.
+        seed: seeds the batched env; the agent's own seed drives exploration.
+        num_envs: games played side by side.
+        window, series_capacity, publish_interval: as for `Trainer`.
+    """
+
+    engine = "vector"
+
+    def __init__(
+        self,
+        env: gym.Env,
+        agent: QAgent,
+        keyer: ObservationKeyer,
+        *,
+        seed: int | None = None,
+        num_envs: int = DEFAULT_NUM_ENVS,
+        window: int = 1000,
+        series_capacity: int = 256,
+        publish_interval: float = 0.1,
+    ) -> None:
+        self.plan: VectorPlan = plan_for_env(env)
+        if not (keyer.dense and agent.dense):
+            raise ValueError("the vector engine needs a dense observation keyer and Q-table")
+        if keyer.n_states != agent.n_states or agent.n_actions != env.action_space.n:
+            raise ValueError("the agent's table does not match the env's states and actions")
+        if keyer.signature != repr(env.observation_space):
+            raise ValueError("the keyer was not built from this env's observation space")
+        self.venv = self.plan.make_env(num_envs, seed)
+        self.num_envs = self.venv.num_envs
+        n = self.num_envs
+        self._live = np.zeros(n, dtype=bool)  # has an episode in progress
+        self._n_live = 0
+        self._keys = np.zeros(n, dtype=np.int64)
+        self._returns = np.zeros(n, dtype=np.float64)
+        self._lengths = np.zeros(n, dtype=np.int64)
+        self._abs_td = np.zeros(n, dtype=np.float64)
+        super().__init__(
+            env,
+            agent,
+            keyer,
+            seed=seed,
+            window=window,
+            series_capacity=series_capacity,
+            publish_interval=publish_interval,
+        )
+
+    # --- the Trainer surface ---------------------------------------------
+    def step(self) -> StepEvent:
+        """Not available: the vector engine moves many envs at once (animate with `Trainer`)."""
+        raise NotImplementedError(
+            "the vector engine steps many envs at once; use the scalar Trainer to animate moves"
+        )
+
+    def run_episode(self) -> EpisodeStats:
+        """Finish one more episode (the others in progress wait) and return its statistics."""
+        self.run(episodes=1)
+        assert self.last is not None
+        return self.last
+
+    def episode_in_progress(self) -> bool:
+        return self._n_live > 0
+
+    def current_observation(self) -> Any:
+        return None  # many games are in progress, none of them "the" current one
+
+    def run(
+        self,
+        episodes: int | None = None,
+        seconds: float | None = None,
+        stop: threading.Event | None = None,
+        on_publish: Callable[[TrainingSnapshot], None] | None = None,
+    ) -> int:
+        """Run until `episodes` more episodes finish, `seconds` elapse, or `stop` is set.
+
+        Exactly `episodes` finish when that limit is what stops the run;
+        `seconds` and `stop` are checked between batch steps. Returns the
+        number of episodes finished, and publishes a snapshot to `latest`
+        (and `on_publish`) every `publish_interval` seconds and at the end.
+        """
+        if episodes is None and seconds is None and stop is None:
+            raise ValueError("run() needs episodes, seconds or a stop event")
+        start = mark = time.perf_counter()
+        next_publish = start + self.publish_interval
+        done = 0
+        while episodes is None or done < episodes:
+            done += self._batch(None if episodes is None else episodes - done)
+            now = time.perf_counter()
+            if seconds is not None and now - start >= seconds:
+                break
+            if stop is not None and stop.is_set():
+                break
+            if now >= next_publish:
+                self.seconds += now - mark
+                mark = now
+                self.publish(on_publish)
+                next_publish = now + self.publish_interval
+        self.seconds += time.perf_counter() - mark
+        self.publish(on_publish)
+        return done
+
+    # --- one batch step --------------------------------------------------
+    def _start_episodes(self, quota: int | None) -> None:
+        """Start episodes in idle envs, lowest first, while the quota has room."""
+        idle_count = self.num_envs - self._n_live
+        room = idle_count if quota is None else min(idle_count, quota - self._n_live)
+        if room <= 0:
+            return
+        idle = np.flatnonzero(~self._live)[:room]
+        self._keys[idle] = self.keyer.keys(self.venv.reset(idle))
+        self._live[idle] = True
+        self._n_live += len(idle)
+        self._returns[idle] = 0.0
+        self._lengths[idle] = 0
+        self._abs_td[idle] = 0.0
+
+    def _choose(self, keys: np.ndarray) -> np.ndarray:
+        """Epsilon-greedy actions, ties among the best broken uniformly at random."""
+        agent = self.agent
+        rng = agent.rng
+        k, n_actions = len(keys), agent.n_actions
+        values = agent.q[keys]
+        tied = values == values.max(axis=1, keepdims=True)
+        draws = rng.random((k, n_actions))
+        actions = np.argmax(np.where(tied, draws, -1.0), axis=1)
+        explore = np.flatnonzero(rng.random(k) < agent.epsilon)
+        if explore.size:
+            actions[explore] = rng.integers(n_actions, size=explore.size)
+        return actions
+
+    def _batch(self, quota: int | None) -> int:
+        """One batched step of every stepping env; returns the episodes it finished."""
+        self._start_episodes(quota)
+        if self._n_live == 0:
+            return 0
+        index: np.ndarray | None = None
+        if self._n_live < self.num_envs or (quota is not None and quota < self.num_envs):
+            index = np.flatnonzero(self._live)
+            if quota is not None:
+                index = index[:quota]  # the others wait, so no more than the quota finish
+        sel: Any = slice(None) if index is None else index
+
+        keys = self._keys[sel]
+        actions = self._choose(keys)
+        epsilon = self.agent.epsilon
+        result = self.venv.step(actions, index, autoreset=False)
+        rewards = self.plan.transform_rewards(result.reward, result.distance)
+        next_keys = self.keyer.keys(result.next_obs)
+        td = batched_q_update(
+            self.agent, keys, actions, rewards, result.terminated, next_keys
+        )
+        self.steps += len(keys)
+        self._keys[sel] = next_keys
+        self._returns[sel] += rewards
+        self._lengths[sel] += 1
+        self._abs_td[sel] += np.abs(td)
+
+        finished = np.flatnonzero(result.terminated | result.truncated)
+        if finished.size == 0:
+            return 0
+        envs = finished if index is None else index[finished]
+        self._live[envs] = False
+        self._n_live -= len(envs)
+        self._record(envs, epsilon)
+        return len(envs)
+
+    def _record(self, envs: np.ndarray, epsilon: float) -> None:
+        """Push finished episodes into the statistics and move the agent's schedule on."""
+        returns = self._returns[envs]
+        lengths = self._lengths[envs].astype(np.float64)
+        mean_td = self._abs_td[envs] / np.maximum(lengths, 1.0)
+        count = len(envs)
+        columns = (returns, lengths, mean_td, np.full(count, epsilon))
+        for name, values in zip(SERIES_NAMES, columns, strict=True):
+            means = push_window_many(self.windows[name], values)
+            push_series_many(self.series[name], means)
+        self.last = EpisodeStats(
+            episode_return=float(returns[-1]),
+            length=int(lengths[-1]),
+            mean_abs_td=float(mean_td[-1]),
+            epsilon=float(epsilon),
+        )
+        self.episodes += count
+        agent = self.agent
+        agent.episode += count
+        agent.epsilon = agent.hp.epsilon_at(agent.episode)
+
+
+def make_vector_trainer(
+    env_id: str,
+    env_kwargs: Mapping[str, Any] | None,
+    choices: Sequence[WrapperChoice],
+    agent: QAgent,
+    keyer: ObservationKeyer | None = None,
+    *,
+    seed: int | None = None,
+    num_envs: int = DEFAULT_NUM_ENVS,
+    **options: Any,
+) -> VectorTrainer:
+    """A `VectorTrainer` for a game and wrapper choice, built as a `Session` builds its env.
+
+    Choices that do not fit are skipped, as `build_env_lenient` skips them.
+    `keyer` defaults to one for the built env. `options` go to `VectorTrainer`
+    (`window`, `series_capacity`, `publish_interval`). Raises `NoBatchedForm`
+    when the game or a wrapper has no batched form.
+    """
+    env, _ = build_env_lenient(env_id, env_kwargs, choices)
+    if keyer is None:
+        keyer = ObservationKeyer(env.observation_space)
+    return VectorTrainer(env, agent, keyer, seed=seed, num_envs=num_envs, **options)
