@@ -118,7 +118,7 @@ async def test_an_invalid_parameter_is_marked_and_not_applied():
         await pilot.press("enter")
         await pilot.pause()
         assert field.input.has_class("-invalid")
-        error = str(app.query_one("#wrapper-error", Static).render())
+        error = str(row(app, "TimeLimit").query_one(".param-error", Static).render())
         assert "max_episode_steps" in error and "integer" in error
         assert app.session.chain_repr() == before
         field.input.value = "20"

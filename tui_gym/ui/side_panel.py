@@ -49,10 +49,10 @@ class ParamField(Horizontal):
     """One labelled parameter input with its own error line."""
 
     DEFAULT_CSS = """
-    ParamField { height: auto; padding-left: 2; }
-    ParamField Label { width: 1fr; padding-top: 1; color: $text-muted; }
+    ParamField { height: 1; padding-left: 4; }
+    ParamField Label { width: 1fr; color: $text-muted; }
     ParamField Input { width: 12; }
-    ParamField .param-error { display: none; }
+    ParamField Checkbox { width: 12; }
     """
 
     def __init__(self, param: Param, value: Any, group: str) -> None:
@@ -63,13 +63,19 @@ class ParamField(Horizontal):
 
     def compose(self) -> ComposeResult:
         yield Label(self.param.name)
+        tooltip = f"{self.param.help} ({self.param.describe_range()})".strip()
+        if self.param.kind is bool:
+            box = Checkbox("", value=bool(self._value), compact=True)
+            box.tooltip = tooltip
+            yield box
+            return
         field = Input(
             value=_value_text(self._value),
             compact=True,
             validators=[ParamValidator(self.param)],
             validate_on=["changed", "submitted"],
         )
-        field.tooltip = f"{self.param.help} ({self.param.describe_range()})".strip()
+        field.tooltip = tooltip
         yield field
 
     @property
@@ -78,11 +84,18 @@ class ParamField(Horizontal):
 
     def set_value(self, value: Any) -> None:
         """Show a value (without counting as an edit)."""
+        if self.param.kind is bool:
+            box = self.query_one(Checkbox)
+            with box.prevent(Checkbox.Changed):
+                box.value = bool(value)
+            return
         with self.input.prevent(Input.Changed):
             self.input.value = _value_text(value)
 
     def read(self) -> tuple[Any, str | None]:
         """(value, None) when the text is valid, else (None, the reason)."""
+        if self.param.kind is bool:
+            return self.query_one(Checkbox).value, None
         try:
             return self.param.parse(self.input.value), None
         except ValueError as exc:
@@ -96,6 +109,8 @@ class WrapperRow(Vertical):
     WrapperRow { height: auto; margin-bottom: 1; }
     WrapperRow .summary { color: $text-muted; padding-left: 4; }
     WrapperRow .reason { color: $error; padding-left: 4; display: none; }
+    WrapperRow .param-error { color: $error; padding-left: 4; display: none; }
+    WrapperRow .param-error.-shown { display: block; }
     WrapperRow.-misfit .reason { display: block; }
     WrapperRow.-misfit Checkbox { color: $text-disabled; }
     Screen.compact WrapperRow .summary { display: none; }
@@ -116,6 +131,7 @@ class WrapperRow(Vertical):
         values = self.choice.values() if self.choice else spec.defaults()
         for param in spec.params:
             yield ParamField(param, values.get(param.name, param.default), spec.name)
+        yield Static("", classes="param-error")
         yield Static(self._reason_text(), classes="reason")
 
     def on_mount(self) -> None:
@@ -133,11 +149,18 @@ class WrapperRow(Vertical):
         values = choice.values() if choice else self.spec.defaults()
         for field in self.query(ParamField):
             field.set_value(values.get(field.param.name, field.param.default))
+        self.show_error(None)
         self.show_reason(reason)
 
     @property
     def ticked(self) -> bool:
         return self.query_one(Checkbox).value
+
+    def show_error(self, error: str | None) -> None:
+        """Say why a parameter's text is not valid (or clear the message)."""
+        widget = self.query_one(".param-error", Static)
+        widget.update(Text(error or ""))
+        widget.set_class(bool(error), "-shown")
 
     def show_reason(self, reason: str | None) -> None:
         self.reason = reason
@@ -169,6 +192,7 @@ class SidePanel(VerticalScroll):
     SidePanel .section { text-style: bold; color: $accent; margin-top: 1; }
     SidePanel #chain { color: $success; padding: 0 0 1 0; }
     SidePanel #game-picker { width: 100%; height: auto; }
+    SidePanel #env-params, SidePanel #wrapper-list { height: auto; }
     SidePanel .field-error { color: $error; display: none; }
     SidePanel .field-error.-shown { display: block; }
     SidePanel Input.-invalid { border: tall $error; }
@@ -192,14 +216,13 @@ class SidePanel(VerticalScroll):
                 yield RadioButton(profile.title, id=f"game-{profile.name}")
         yield Vertical(*self._env_fields(), id="env-params")
         yield Static("", id="env-error", classes="field-error")
+        yield Static("Wrapper chain", classes="section")
+        yield Static(Text(self._chain_text()), id="chain")
         yield Static("Wrappers  (first ticked = innermost)", classes="section")
         chosen, reasons = self._wrapper_states()
         with Vertical(id="wrapper-list"):
             for name in CATALOG:
                 yield WrapperRow(name, chosen.get(name), reasons.get(name))
-        yield Static("", id="wrapper-error", classes="field-error")
-        yield Static("Wrapper chain", classes="section")
-        yield Static(Text(self._chain_text()), id="chain")
 
     def on_mount(self) -> None:
         self._check_game()
@@ -247,7 +270,6 @@ class SidePanel(VerticalScroll):
         for row in self.query(WrapperRow):
             row.set_state(chosen.get(row.spec.name), reasons.get(row.spec.name))
         self._show_error("#env-error", None)
-        self._show_error("#wrapper-error", None)
         self.query_one("#chain", Static).update(Text(self._chain_text()))
 
     def _chain_text(self) -> str:
@@ -280,7 +302,8 @@ class SidePanel(VerticalScroll):
         return next(p.env_id for p in PROFILES if p.name == name)
 
     def _mark(self, field: ParamField, error: str | None) -> None:
-        field.input.validate(field.input.value)
+        if field.param.kind is not bool:
+            field.input.validate(field.input.value)
 
     def _read_env_kwargs(self) -> dict[str, Any] | None:
         values: dict[str, Any] = {}
@@ -302,11 +325,11 @@ class SidePanel(VerticalScroll):
             for field in row.query(ParamField):
                 self._mark(field, field.read()[1])
             choice, error = row.read()
+            row.show_error(error)
             if error:
                 first_error = first_error or error
             elif choice is not None:
                 choices.append(choice)
-        self._show_error("#wrapper-error", first_error)
         return None if first_error else tuple(choices)
 
     # --- events ----------------------------------------------------------------
@@ -333,8 +356,11 @@ class SidePanel(VerticalScroll):
         if field is not None:
             error = field.read()[1]
             self._mark(field, error)
-            target = "#env-error" if field.group == "env" else "#wrapper-error"
-            self._show_error(target, error)
+            row = next((a for a in field.ancestors if isinstance(a, WrapperRow)), None)
+            if row is None:
+                self._show_error("#env-error", error)
+            else:
+                row.show_error(error)
 
     def _request(self) -> None:
         kwargs = self._read_env_kwargs()
