@@ -47,10 +47,9 @@ def path_keys(view: PlayView, keys: dict[str, str]) -> list[str]:
     scene = view.game.scene()
     (ax, ay), (tx, ty) = scene["agent"], scene["target"]
     dx, dy = tx - ax, ty - ay
-    return (
-        [keys["right"] if dx > 0 else keys["left"]] * abs(dx)
-        + [keys["up"] if dy > 0 else keys["down"]] * abs(dy)
-    )
+    return [keys["right"] if dx > 0 else keys["left"]] * abs(dx) + [
+        keys["up"] if dy > 0 else keys["down"]
+    ] * abs(dy)
 
 
 ARROWS = {"right": "right", "left": "left", "up": "up", "down": "down"}

@@ -21,6 +21,8 @@ from tui_gym.ui.train_view import TrainView
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
 
+from .screen import screen_text
+
 DEADLINE = 20.0  # seconds; generous for slow CI machines, never reached when things work
 
 
@@ -100,9 +102,11 @@ async def test_training_runs_live_and_pauses() -> None:
             assert app.runner.latest.episodes == stopped
         assert "paused" in view.stats.plain
         assert view._snapshot.episodes == stopped
-        assert f"{stopped:,} / 1,000,000 episodes" in str(
-            view.query_one("#train-progress-text").content
-        )
+        await pilot.pause()
+        on_screen = screen_text(app)
+        assert f"{stopped:,} / 1,000,000 episodes" in on_screen
+        assert "paused" in on_screen and "mean return" in on_screen
+        assert "Q-values, usable ace" in on_screen and "exact value" in on_screen
 
 
 async def test_one_episode_and_reset() -> None:
@@ -172,8 +176,8 @@ async def test_invalid_learning_rate_is_marked_and_blocks_training(bad: str) -> 
         await wait_for(pilot, lambda: app.focused is form.input("learning_rate"), "the field")
         await pilot.press("backspace", *bad)  # the text is selected on focus: replace it
         await wait_for(pilot, lambda: form.is_invalid("learning_rate"), "the mark")
-        assert "Learning rate" in form.error("learning_rate")
-        assert "(0, 1]" in form.error("learning_rate")
+        assert "a number in (0, 1]" in form.error("learning_rate")
+        assert form.error("learning_rate") in screen_text(app)  # said under the field
 
         await pilot.press("escape")  # the keyboard goes back to the view
         assert app.focused is view.heatmap

@@ -249,7 +249,7 @@ class TuiGymApp(App[int]):
             ("Everywhere", [
                 ("p / t", "Play view / Train view"),
                 ("b / g", "switch to Blackjack / GridWorld"),
-                ("w", "focus the wrapper panel"),
+                ("w / W", "focus the wrapper panel (W while the GridWorld board has focus)"),
                 ("? / F1", "this help"),
                 ("ctrl+p", "command palette"),
                 ("q", "quit"),

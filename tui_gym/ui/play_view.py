@@ -61,7 +61,11 @@ class PlayView(Vertical):
     ]
 
     def __init__(
-        self, *, name: str | None = None, id: str | None = None, classes: str | None = None  # noqa: A002
+        self,
+        *,
+        name: str | None = None,
+        id: str | None = None,
+        classes: str | None = None,  # noqa: A002
     ) -> None:
         super().__init__(name=name, id=id, classes=classes)
         self.game: HumanGame | None = None
@@ -201,9 +205,8 @@ class PlayView(Vertical):
     def _show_title(self) -> None:
         session = self.app.session
         chain = " → ".join(_short(choice.name, choice.params) for choice in session.applied)
-        title = (
-            f"[b]{escape(session.profile.title)}[/]  [$text-muted]wrappers:[/] "
-            + (f"[i $text-accent]{escape(chain)}[/]" if chain else "[$text-muted]none[/]")
+        title = f"[b]{escape(session.profile.title)}[/]  [$text-muted]wrappers:[/] " + (
+            f"[i $text-accent]{escape(chain)}[/]" if chain else "[$text-muted]none[/]"
         )
         self.query_one("#play-title", Static).update(Content.from_markup(title))
 
@@ -250,7 +253,8 @@ class PlayView(Vertical):
         self._show_status()
         self.notify(
             "Advice on: the exact optimum's move is shown and your moves are judged."
-            if self.show_advice else "Advice off.",
+            if self.show_advice
+            else "Advice off.",
             timeout=3,
         )
 
@@ -268,8 +272,10 @@ class PlayView(Vertical):
         if game is None:
             return
         tally = game.tally
-        parts = [f"[$text-muted]{escape(game.profile.episode_noun.capitalize())}s[/] "
-                 f"[b]{tally.episodes}[/]"]
+        parts = [
+            f"[$text-muted]{escape(game.profile.episode_noun.capitalize())}s[/] "
+            f"[b]{tally.episodes}[/]"
+        ]
         for label, count, colour in (
             ("wins", tally.wins, "$text-success"),
             ("draws", tally.draws, "$text-warning"),

@@ -105,6 +105,7 @@ class ParamField(Horizontal):
 class WrapperRow(Vertical):
     """A catalog entry: a checkbox, its lesson, its parameters, and why it may not fit."""
 
+    SCOPED_CSS = False  # the compact rule below starts at Screen
     DEFAULT_CSS = """
     WrapperRow { height: auto; margin-bottom: 1; }
     WrapperRow .summary { color: $text-muted; padding-left: 4; }
@@ -186,6 +187,7 @@ class WrapperRow(Vertical):
 class SidePanel(VerticalScroll):
     """Game, wrappers and the resulting chain; posts `Changed` when a person edits them."""
 
+    SCOPED_CSS = False  # the compact rule below starts at Screen
     DEFAULT_CSS = """
     SidePanel { width: 44; border-left: tall $primary-background; padding: 0 1; }
     Screen.compact SidePanel { width: 34; }

@@ -101,7 +101,7 @@ class TrainView(VerticalScroll):
     }
     TrainView #train-board-box > Board {
         width: 100%;
-        height: 8;
+        height: 7;
     }
     TrainView.-animated TrainingCharts .chart-range {
         display: none;
@@ -112,7 +112,7 @@ class TrainView(VerticalScroll):
     TrainView #train-board-caption {
         color: $text-muted;
         width: 100%;
-        height: 2;
+        height: 3;
         padding: 0 1;
     }
     TrainView #train-heatmap-box {
@@ -183,59 +183,75 @@ class TrainView(VerticalScroll):
     # --- layout ------------------------------------------------------------
     def compose(self) -> ComposeResult:
         session = self.session
+        # The parts the view updates, kept at hand: a timer tick never has to
+        # search the DOM (and cannot miss while the app shuts down).
+        self._toggle = Button("▶ Start", id="btn-toggle", variant="success", compact=True,
+                              tooltip="Start or pause training (space)")
+        self._episode = Button("1 episode", id="btn-episode", compact=True,
+                               tooltip="Train for exactly one episode (.)")
+        self._speed = Label("", id="train-speed")
+        self._progress = ProgressBar(
+            total=session.hp.episodes if session.hp else 1, show_eta=False, id="train-progress"
+        )
+        self._progress_text = Label("", id="train-progress-text")
+        self._stats = StatsPanel(id="train-stats")
+        self._form = HyperparameterForm(session.hp, id="train-form")
+        self._charts = TrainingCharts(id="train-charts")
+        self._board_box = Vertical(id="train-board-box")
+        self._caption = Label("", id="train-board-caption")
+        self._heatmap_box = Vertical(id="train-heatmap-box")
+        self._heatmap = HeatmapView(id="train-heatmaps")
+
         with Horizontal(id="train-controls"):
-            yield Button("▶ Start", id="btn-toggle", variant="success", compact=True,
-                         tooltip="Start or pause training (space)")
-            yield Button("1 episode", id="btn-episode", compact=True,
-                         tooltip="Train for exactly one episode (.)")
+            yield self._toggle
+            yield self._episode
             yield Button("Reset", id="btn-reset", variant="error", compact=True,
                          tooltip="A fresh agent: empty Q-table, fresh statistics (x)")
             yield Button("−", id="btn-slower", compact=True, tooltip="Slower (-)")
-            yield Label("", id="train-speed")
+            yield self._speed
             yield Button("+", id="btn-faster", compact=True, tooltip="Faster (+)")
         with Horizontal(id="train-progress-row"):
-            yield ProgressBar(total=session.hp.episodes if session.hp else 1, show_eta=False,
-                              id="train-progress")
-            yield Label("", id="train-progress-text")
+            yield self._progress
+            yield self._progress_text
         with Horizontal(id="train-top"):
-            yield StatsPanel(id="train-stats")
-            yield HyperparameterForm(session.hp, id="train-form")
+            yield self._stats
+            yield self._form
         with Horizontal(id="train-middle"):
-            yield TrainingCharts(id="train-charts")
-            with Vertical(id="train-board-box"):
-                yield Label("", id="train-board-caption")
-        with Vertical(id="train-heatmap-box"):
-            yield HeatmapView(id="train-heatmaps")
+            yield self._charts
+            with self._board_box:
+                yield self._caption
+        with self._heatmap_box:
+            yield self._heatmap
 
     def on_mount(self) -> None:
-        self.query_one("#train-heatmap-box").border_title = "Q-table"
+        self._heatmap_box.border_title = "Q-table"
         self.set_interval(STATE_POLL_SECONDS, self._poll_state)
         self.reload()
 
     # --- parts -------------------------------------------------------------
     @property
     def stats(self) -> StatsPanel:
-        return self.query_one(StatsPanel)
+        return self._stats
 
     @property
     def charts(self) -> TrainingCharts:
-        return self.query_one(TrainingCharts)
+        return self._charts
 
     @property
     def heatmap(self) -> HeatmapView:
-        return self.query_one(HeatmapView)
+        return self._heatmap
 
     @property
     def form(self) -> HyperparameterForm:
-        return self.query_one(HyperparameterForm)
+        return self._form
 
     @property
     def progress(self) -> ProgressBar:
-        return self.query_one("#train-progress", ProgressBar)
+        return self._progress
 
     @property
     def speed_name(self) -> str:
-        return str(self.query_one("#train-speed", Label).content)
+        return str(self._speed.content)
 
     # --- what the app calls ------------------------------------------------
     def reload(self) -> None:
@@ -252,8 +268,7 @@ class TrainView(VerticalScroll):
         if session.hp is not None:
             self.form.load(session.hp)
         self.charts.clear()
-        box = self.query_one("#train-heatmap-box")
-        box.border_subtitle = (
+        self._heatmap_box.border_subtitle = (
             "←↑↓→ / hjkl / click: move the target" if profile.heatmap_focus else ""
         )
         self._version = -1
@@ -276,9 +291,8 @@ class TrainView(VerticalScroll):
 
     def show_speed(self, name: str) -> None:
         """Show the training speed's name (and the board only at animated speeds)."""
-        label = self.query_one("#train-speed", Label)
-        if str(label.content) != name:
-            label.update(name)
+        if str(self._speed.content) != name:
+            self._speed.update(name)
         self.stats.show_speed(name)
         self._show_board(self.runner)
 
@@ -308,14 +322,15 @@ class TrainView(VerticalScroll):
     def _show_progress(self, snapshot: TrainingSnapshot, runner: TrainingRunner) -> None:
         budget = max(1, snapshot.budget)
         self.progress.update(total=budget, progress=min(snapshot.episodes, budget))
-        text = f"{snapshot.episodes:,} / {snapshot.budget:,} episodes"
+        text = f"{snapshot.episodes:,} / {snapshot.budget:,}"
+        if not self.screen.has_class("compact"):
+            text += " episodes"
         rate = snapshot.episodes_per_second
         remaining = max(0, snapshot.budget - snapshot.episodes)
         if runner.running and rate > 0 and remaining:
             text += f" · eta {format_duration(remaining / rate)}"
-        label = self.query_one("#train-progress-text", Label)
-        if str(label.content) != text:
-            label.update(text)
+        if str(self._progress_text.content) != text:
+            self._progress_text.update(text)
 
     def _show_heatmaps(self) -> None:
         session, snapshot = self.session, self._snapshot
@@ -357,7 +372,7 @@ class TrainView(VerticalScroll):
             return
         self._state = state
         self.stats.show_state(state)
-        button = self.query_one("#btn-toggle", Button)
+        button = self._toggle
         running = state == "running"
         button.label = "‖ Pause" if running else "▶ Start"
         button.variant = "warning" if running else "success"
@@ -393,11 +408,11 @@ class TrainView(VerticalScroll):
         board.can_focus = False
         self._board = board
         self._board_kind = self.session.profile.board
-        self.query_one("#train-board-box").mount(board, before=0)
+        self._board_box.mount(board, before=0)
         return board
 
     def _show_board(self, runner: TrainingRunner) -> None:
-        box = self.query_one("#train-board-box")
+        box = self._board_box
         scene = runner.last_scene
         animated = runner.speed.animated and getattr(self._snapshot, "engine", "") == "scalar"
         shown = animated and scene is not None
@@ -415,7 +430,7 @@ class TrainView(VerticalScroll):
                 self.log.error(f"board could not show the scene: {exc!r}")
         if event is not self._scene_event:
             self._scene_event = event
-            self.query_one("#train-board-caption", Label).update(self._describe(event))
+            self._caption.update(self._describe(event))
 
     def _describe(self, event: Any) -> str:
         if event is None:
@@ -486,4 +501,4 @@ class TrainView(VerticalScroll):
 
     def on_resize(self) -> None:
         compact = self.screen.has_class("compact")
-        self.query_one("#btn-episode", Button).label = "1 ep" if compact else "1 episode"
+        self._episode.label = "1 ep" if compact else "1 episode"

@@ -70,7 +70,9 @@ class BatchedGridWorld:
         if not math.isfinite(reward_scale):
             raise ValueError(f"GridWorld reward_scale must be finite, got {reward_scale!r}")
         if not math.isfinite(step_penalty) or step_penalty < 0:
-            raise ValueError(f"GridWorld step_penalty must be finite and >= 0, got {step_penalty!r}")
+            raise ValueError(
+                f"GridWorld step_penalty must be finite and >= 0, got {step_penalty!r}"
+            )
         if max_episode_steps is not None and max_episode_steps < 1:
             raise ValueError(f"max_episode_steps must be >= 1, got {max_episode_steps}")
         self.size = int(size)

@@ -178,7 +178,9 @@ def plan_for_env(env: gym.Env) -> VectorPlan:
         inner = inner.env
     layers.reverse()  # innermost first
     game, game_kwargs = _base_game(inner)
-    registered = inner.spec.max_episode_steps if inner.spec is not None else None
+    registered = None  # the limit gym.make puts on the id, which goes without saying
+    if inner.spec is not None and inner.spec.id in gym.registry:
+        registered = gym.registry[inner.spec.id].max_episode_steps
 
     limit: int | None = None
     rewards: list[RewardTransform] = []

@@ -274,9 +274,7 @@ class VectorTrainer(Trainer):
         result = self.venv.step(actions, index, autoreset=False)
         rewards = self.plan.transform_rewards(result.reward, result.distance)
         next_keys = self.keyer.keys(result.next_obs)
-        td = batched_q_update(
-            self.agent, keys, actions, rewards, result.terminated, next_keys
-        )
+        td = batched_q_update(self.agent, keys, actions, rewards, result.terminated, next_keys)
         self.steps += len(keys)
         self._keys[sel] = next_keys
         self._returns[sel] += rewards

@@ -87,8 +87,15 @@ class GridLayout:
         return col, self.n - 1 - row
 
 
-CELL_SHAPES = ((7, 3, True), (5, 2, True), (5, 1, True), (3, 1, True), (3, 1, False),
-               (2, 1, False), (1, 1, False))
+CELL_SHAPES = (
+    (7, 3, True),
+    (5, 2, True),
+    (5, 1, True),
+    (3, 1, True),
+    (3, 1, False),
+    (2, 1, False),
+    (1, 1, False),
+)
 
 
 def choose_layout(n: int, width: int, height: int) -> GridLayout:

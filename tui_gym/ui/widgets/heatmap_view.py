@@ -16,6 +16,7 @@ it to the owner to say what that cell means (it asks the game's profile).
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import ClassVar
@@ -150,6 +151,7 @@ class HeatmapView(Widget, can_focus=True):
         &.-empty {
             color: $text-muted;
             text-style: italic;
+            text-wrap: wrap;
             content-align: center middle;
             height: 5;
         }
@@ -295,12 +297,14 @@ class HeatmapView(Widget, can_focus=True):
     def _panel_height(self, panel: Heatmap, layout: _Layout) -> int:
         return 2 + panel.shape[0] * layout.cell_height  # title, column labels, cells
 
-    def _legend_lines(self) -> list[str]:
+    def _legend_lines(self, width: int, indent: int) -> list[str]:
+        """The panels' legends (each once), wrapped to fit beside the indent."""
         seen: list[str] = []
         for panel in self._panels:
             if panel.legend and panel.legend not in seen:
                 seen.append(panel.legend)
-        return seen
+        room = max(12, width - indent)
+        return [line for legend in seen for line in textwrap.wrap(legend, room)]
 
     def get_content_width(self, container: Size, viewport: Size) -> int:
         if not self._panels:
@@ -315,7 +319,8 @@ class HeatmapView(Widget, can_focus=True):
         layout = self._layout(width)
         heights = [self._panel_height(p, layout) for p in self._panels]
         body = max(heights) if layout.side_by_side else sum(heights) + len(heights) - 1
-        return body + 1 + len(self._legend_lines())  # the scale, then the legends
+        legends = self._legend_lines(width, layout.row_label_width + 1)
+        return body + 1 + len(legends)  # the scale, then the legends
 
     # --- drawing -----------------------------------------------------------
     def render(self) -> Text:
@@ -357,9 +362,12 @@ class HeatmapView(Widget, can_focus=True):
                 placements.append(_Placement(i, layout.row_label_width + 1, y + 2, *panel.shape))
                 lines.extend(block)
                 y += len(block)
-        lines.append(self._scale_line(scale, layout))
-        indent = " " * (layout.row_label_width + 1)
-        lines.extend(Text(indent + legend, style="dim") for legend in self._legend_lines())
+        lines.append(self._scale_line(scale, layout, width))
+        indent = layout.row_label_width + 1
+        lines.extend(
+            Text(" " * indent + legend, style="dim")
+            for legend in self._legend_lines(width, indent)
+        )
         self._placements = placements
         self._cell_geometry = (layout.cell_width, layout.cell_height)
         text = Text("\n").join(lines)
@@ -411,23 +419,24 @@ class HeatmapView(Widget, can_focus=True):
         pad = (width - len(label)) // 2
         body = " " * pad + label + ("*" if marked else "")
         body = body.ljust(width)[:width]
-        if is_focus:
-            style = Style(bold=True, reverse=has_focus, color="#ffd75f" if not has_focus else None)
-            if not has_focus:
-                style += Style(bgcolor="#303030")
-            return Text(body, style=style)
+        if is_focus:  # bright while the keys move it, quiet otherwise
+            if has_focus:
+                return Text(body, style=Style(bold=True, color="#000000", bgcolor="#f5f5f5"))
+            return Text(body, style=Style(bold=True, color="#f5f5f5", bgcolor="#5a5a5a"))
         if not math.isfinite(value):
             return Text(body, style=Style(color="#808080"))
         rgb = scale.colour(value)
         style = Style(bgcolor=_hex(rgb), color=_ink(rgb), bold=marked, underline=marked)
         return Text(body, style=style)
 
-    def _scale_line(self, scale: ColourScale, layout: _Layout) -> Text:
+    def _scale_line(self, scale: ColourScale, layout: _Layout, width: int) -> Text:
         lo, hi = scale.bounds
-        line = Text(" " * (layout.row_label_width + 1))
+        indent = layout.row_label_width + 1
+        bar = max(4, min(LEGEND_WIDTH, width - indent - 12))
+        line = Text(" " * indent)
         line.append(f"{lo:+.2f} ", style="dim")
-        for i in range(LEGEND_WIDTH):
-            rgb = scale.colour_at((i + 0.5) / LEGEND_WIDTH)
+        for i in range(bar):
+            rgb = scale.colour_at((i + 0.5) / bar)
             line.append(" ", style=Style(bgcolor=_hex(rgb)))
         line.append(f" {hi:+.2f}", style="dim")
         return line

@@ -45,11 +45,11 @@ def range_hint(field: FieldRange) -> str:
 def field_error(field: FieldRange, text: str) -> str | None:
     """Why `text` is not a valid value of the field (None when it is)."""
     if not text.strip():
-        return f"{field.label} is empty; it needs {field.describe()}"
+        return f"empty: needs {field.describe()}"
     try:
         field.parse(text)
     except ValueError:
-        return f"{field.label} needs {field.describe()}, not {text.strip()!r}"
+        return f"{text.strip()!r} is not {field.describe()}"
     return None
 
 

@@ -107,7 +107,7 @@ class StatsPanel(Widget):
         rows = [
             ("episodes", f"{episodes:,}", "bold"),
             ("steps", f"{snapshot.steps:,}", ""),
-            ("eps/s", format_rate(snapshot.episodes_per_second), ""),
+            ("eps/s", format_rate(snapshot.episodes_per_second) if seen else "–", ""),
             ("time", format_duration(snapshot.seconds), ""),
             ("epsilon", f"{snapshot.epsilon:.3f}", ""),
             ("return", f"{snapshot.mean_return:+.4f}" if seen else "–", "bold"),

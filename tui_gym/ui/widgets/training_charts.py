@@ -83,10 +83,10 @@ class TrainingCharts(Vertical):
     TrainingCharts #chart-return Sparkline > .sparkline--min-color { color: $error 70%; }
     TrainingCharts #chart-length Sparkline > .sparkline--max-color { color: $accent; }
     TrainingCharts #chart-length Sparkline > .sparkline--min-color { color: $accent 40%; }
-    TrainingCharts #chart-td_error Sparkline > .sparkline--max-color { color: $warning; }
-    TrainingCharts #chart-td_error Sparkline > .sparkline--min-color { color: $warning 40%; }
-    TrainingCharts #chart-epsilon Sparkline > .sparkline--max-color { color: $secondary; }
-    TrainingCharts #chart-epsilon Sparkline > .sparkline--min-color { color: $secondary 40%; }
+    TrainingCharts #chart-td_error Sparkline > .sparkline--max-color { color: $error; }
+    TrainingCharts #chart-td_error Sparkline > .sparkline--min-color { color: $error 40%; }
+    TrainingCharts #chart-epsilon Sparkline > .sparkline--max-color { color: $primary; }
+    TrainingCharts #chart-epsilon Sparkline > .sparkline--min-color { color: $primary 40%; }
 
     Screen.compact TrainingCharts {
         border: none;
@@ -105,21 +105,31 @@ class TrainingCharts(Vertical):
         super().__init__(id=id, classes=classes)
         self._shown: dict[str, tuple[float, ...]] = {}
         self._values: dict[str, str] = {}
+        self._sparks: dict[str, Sparkline] = {}
+        self._labels: dict[str, tuple[Label, Label, Label]] = {}
         self.border_title = "Learning curves"
 
     def compose(self) -> ComposeResult:
         for curve in CURVES:
-            with Horizontal(classes="chart", id=f"chart-{curve.key}"):
+            key = curve.key
+            self._sparks[key] = Sparkline([], summary_function=_mean, id=f"spark-{key}")
+            self._labels[key] = (
+                Label("–", classes="chart-value", id=f"value-{key}"),
+                Label("", id=f"high-{key}"),
+                Label("", id=f"low-{key}"),
+            )
+            value, high, low = self._labels[key]
+            with Horizontal(classes="chart", id=f"chart-{key}"):
                 yield Label(curve.name, classes="chart-name")
-                yield Label("–", classes="chart-value", id=f"value-{curve.key}")
-                yield Sparkline([], summary_function=_mean, id=f"spark-{curve.key}")
+                yield value
+                yield self._sparks[key]
                 with Vertical(classes="chart-range"):
-                    yield Label("", id=f"high-{curve.key}")
-                    yield Label("", id=f"low-{curve.key}")
+                    yield high
+                    yield low
 
     def sparkline(self, key: str) -> Sparkline:
         """The sparkline of one series ("return", "length", "td_error", "epsilon")."""
-        return self.query_one(f"#spark-{key}", Sparkline)
+        return self._sparks[key]
 
     def value_text(self, key: str) -> str:
         """The current value shown beside a sparkline."""
@@ -129,33 +139,37 @@ class TrainingCharts(Vertical):
         """Forget every curve (after an agent reset)."""
         self._shown.clear()
         self._values.clear()
+        self.border_title = "Learning curves"
         for curve in CURVES:
-            self.sparkline(curve.key).data = []
-            self.query_one(f"#value-{curve.key}", Label).update("–")
-            self.query_one(f"#high-{curve.key}", Label).update("")
-            self.query_one(f"#low-{curve.key}", Label).update("")
+            self._sparks[curve.key].data = []
+            value, high, low = self._labels[curve.key]
+            value.update("–")
+            high.update("")
+            low.update("")
 
     def update_from(self, snapshot: TrainingSnapshot) -> None:
         """Show a snapshot's curves, redrawing only the ones that changed."""
         window = min(snapshot.window, max(1, snapshot.episodes))
-        self.border_title = (
+        title = (
             f"Learning curves · rolling mean of {window:,}"
             if snapshot.episodes
             else "Learning curves"
         )
+        if title != self.border_title:
+            self.border_title = title
         for curve in CURVES:
-            data = tuple(snapshot.series.get(curve.key, ()))
-            if self._shown.get(curve.key) != data:
-                self._shown[curve.key] = data
-                self.sparkline(curve.key).data = data
-                high = f"max {curve.fmt.format(max(data))}" if data else ""
-                low = f"min {curve.fmt.format(min(data))}" if data else ""
-                self.query_one(f"#high-{curve.key}", Label).update(high)
-                self.query_one(f"#low-{curve.key}", Label).update(low)
+            key = curve.key
+            value, high, low = self._labels[key]
+            data = tuple(snapshot.series.get(key, ()))
+            if self._shown.get(key) != data:
+                self._shown[key] = data
+                self._sparks[key].data = data
+                high.update(f"max {curve.fmt.format(max(data))}" if data else "")
+                low.update(f"min {curve.fmt.format(min(data))}" if data else "")
             text = curve.fmt.format(curve.current(snapshot)) if snapshot.episodes else "–"
-            if self._values.get(curve.key) != text:
-                self._values[curve.key] = text
-                self.query_one(f"#value-{curve.key}", Label).update(text)
+            if self._values.get(key) != text:
+                self._values[key] = text
+                value.update(text)
 
 
 __all__ = ["CURVES", "Curve", "TrainingCharts"]

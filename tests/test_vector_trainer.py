@@ -1,0 +1,243 @@
+"""Tests for `tui_gym.core.vector.trainer`: batched Q-learning on the shared agent.
+
+The batched update is checked against `QAgent.update` applied one transition
+at a time; the batched statistics against one-by-one pushes; then the
+trainer itself: it learns Blackjack to within 0.005 of the exact optimum and
+GridWorld to shortest paths, finishes exactly the episodes asked for, gives
+the same table for the same seeds however a run is sliced, and keeps its
+memory fixed.
+"""
+
+from __future__ import annotations
+
+import threading
+import tracemalloc
+
+import numpy as np
+import pytest
+
+from tui_gym.core.agent import Hyperparameters, QAgent
+from tui_gym.core.obskey import ObservationKeyer
+from tui_gym.core.profiles import profile_for
+from tui_gym.core.stats import RollingWindow, Series
+from tui_gym.core.training import Trainer
+from tui_gym.core.vector import (
+    NoBatchedForm,
+    VectorTrainer,
+    batched_q_update,
+    make_vector_trainer,
+)
+from tui_gym.core.vector.stats import push_series_many, push_window_many
+from tui_gym.core.wrappers import WrapperChoice, build_env
+
+BLACKJACK = "Blackjack-v1"
+GRID = "tui_gym/GridWorld-v0"
+
+
+def _agent(env_id: str, hp: Hyperparameters | None = None, seed: int = 0, **kwargs):
+    env = build_env(env_id, kwargs)
+    keyer = ObservationKeyer(env.observation_space)
+    agent = QAgent(int(env.action_space.n), hp, n_states=keyer.n_states, seed=seed)
+    return env, agent, keyer
+
+
+# --- the batched update ---------------------------------------------------------
+
+
+@pytest.mark.parametrize("schedule", ["visits", "constant"])
+@pytest.mark.parametrize("learning_rate", [0.001, 0.3, 1.0])
+def test_batched_update_equals_sequential_updates(schedule: str, learning_rate: float) -> None:
+    """With fixed targets (terminal steps) a batch is QAgent.update in batch order."""
+    hp = Hyperparameters(learning_rate=learning_rate, learning_rate_schedule=schedule)
+    rng = np.random.default_rng(1)
+    batched = QAgent(3, hp, n_states=6, seed=0)
+    sequential = QAgent(3, hp, n_states=6, seed=0)
+    for _ in range(20):  # many duplicates: 40 transitions over 18 (state, action) cells
+        keys = rng.integers(0, 6, size=40)
+        actions = rng.integers(0, 3, size=40)
+        rewards = rng.normal(size=40)
+        done = np.ones(40, dtype=bool)
+        expected_td = [
+            sequential.q[k, a] for k, a in zip(keys, actions, strict=True)
+        ]  # TD errors are against the table before the batch
+        expected_td = rewards - np.array(expected_td)
+        for k, a, r in zip(keys, actions, rewards, strict=True):
+            sequential.update(int(k), int(a), float(r), True, 0)
+        td = batched_q_update(batched, keys, actions, rewards, done, keys)
+        np.testing.assert_allclose(batched.q, sequential.q, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(td, expected_td, rtol=1e-12, atol=1e-12)
+    assert (batched.counts == sequential.counts).all()
+    assert (batched.visits == sequential.visits).all()
+
+
+def test_batched_update_bootstraps_from_the_table_before_the_batch() -> None:
+    hp = Hyperparameters(learning_rate=0.5, discount=0.9, learning_rate_schedule="constant")
+    agent = QAgent(2, hp, n_states=4, seed=0)
+    agent.q[:] = [[0.0, 0.0], [1.0, 3.0], [2.0, -1.0], [0.0, 0.0]]
+    keys, actions = np.array([0, 0, 3]), np.array([1, 1, 0])
+    rewards, terminated = np.array([1.0, 0.0, 5.0]), np.array([False, False, True])
+    next_keys = np.array([1, 2, 1])
+    td = batched_q_update(agent, keys, actions, rewards, terminated, next_keys)
+    targets = np.array([1.0 + 0.9 * 3.0, 0.9 * 2.0, 5.0])
+    np.testing.assert_allclose(td, targets - [0.0, 0.0, 0.0])
+    q01 = 0.5 * (0.5 * targets[0]) + 0.5 * targets[1]  # two updates of (0, 1) in order
+    assert agent.q[0, 1] == pytest.approx(q01)
+    assert agent.q[3, 0] == pytest.approx(2.5)
+    assert agent.counts[0, 1] == 2 and agent.visits[0] == 2 and agent.visits[3] == 1
+
+
+# --- batched statistics ----------------------------------------------------------
+
+
+@pytest.mark.parametrize("size", [1, 7, 100])
+def test_window_many_equals_pushing_one_by_one(size: int) -> None:
+    rng = np.random.default_rng(size)
+    one, many = RollingWindow(size), RollingWindow(size)
+    for chunk in (3, 0, 1, 250, 5, 99, 1000, 2):
+        values = rng.normal(size=chunk)
+        expected = []
+        for v in values:
+            one.push(float(v))
+            expected.append(one.mean)
+        means = push_window_many(many, values)
+        np.testing.assert_allclose(means, expected, rtol=1e-9, atol=1e-12)
+        assert many.count == one.count and many.filled == one.filled
+        np.testing.assert_allclose(many.values(), one.values())
+        assert many.mean == pytest.approx(one.mean, abs=1e-12)
+
+
+def test_series_many_equals_pushing_one_by_one() -> None:
+    rng = np.random.default_rng(0)
+    one, many = Series(8), Series(8)
+    for chunk in (1, 3, 0, 17, 2, 64, 5, 300, 1, 1000):
+        values = rng.normal(size=chunk)
+        for v in values:
+            one.push(float(v))
+        push_series_many(many, values)
+        assert many.span == one.span
+        np.testing.assert_allclose(many.points(), one.points(), rtol=1e-9, atol=1e-12)
+        assert many._acc_n == one._acc_n
+        assert many._acc == pytest.approx(one._acc, abs=1e-9)
+
+
+# --- training -------------------------------------------------------------------
+
+
+def _blackjack_gap(agent: QAgent, keyer: ObservationKeyer) -> float:
+    profile = profile_for(BLACKJACK)
+    keys = [keyer.key(obs) for obs in profile.base_observations({})]
+    return profile.reference(agent.values(keys), {}).figures["gap"]
+
+
+def test_learns_blackjack_to_within_0_005_of_the_optimum() -> None:
+    env, agent, keyer = _agent(BLACKJACK, Hyperparameters(episodes=500_000), seed=3)
+    trainer = VectorTrainer(env, agent, keyer, seed=3)
+    assert trainer.run(episodes=500_000) == 500_000
+    assert agent.episode == 500_000 and trainer.episodes == 500_000
+    assert agent.epsilon == agent.hp.epsilon_at(500_000)
+    assert _blackjack_gap(agent, keyer) < 0.005
+    assert trainer.latest.engine == "vector" and trainer.latest.episodes == 500_000
+    assert -0.2 < trainer.latest.mean_return < 0.1
+
+
+def test_learns_gridworld_shortest_paths() -> None:
+    profile = profile_for(GRID)
+    hp = profile.default_hyperparameters()
+    env, agent, keyer = _agent(GRID, hp, seed=1, size=5)
+    trainer = VectorTrainer(env, agent, keyer, seed=1)
+    trainer.run(episodes=hp.episodes)
+    keys = [keyer.key(obs) for obs in profile.base_observations({"size": 5})]
+    fraction = profile.reference(agent.values(keys), {"size": 5}).figures["optimal_pair_fraction"]
+    assert fraction > 0.95
+    assert trainer.windows["length"].mean < 8  # shortest paths on 5x5 average 3.3 steps
+
+
+def test_same_seeds_give_the_same_table_however_the_run_is_sliced() -> None:
+    def train(seconds: float | None) -> VectorTrainer:
+        env, agent, keyer = _agent(BLACKJACK, Hyperparameters(episodes=30_000), seed=5)
+        trainer = VectorTrainer(env, agent, keyer, seed=5, num_envs=256)
+        while trainer.remaining:  # as the runner does: time slices of what remains
+            trainer.run(episodes=trainer.remaining, seconds=seconds)
+        return trainer
+
+    whole, sliced = train(None), train(0.001)
+    assert whole.episodes == sliced.episodes == 30_000
+    assert (whole.agent.q == sliced.agent.q).all()
+    assert (whole.agent.counts == sliced.agent.counts).all()
+    assert whole.windows["return"].mean == sliced.windows["return"].mean
+    env, agent, keyer = _agent(BLACKJACK, Hyperparameters(episodes=30_000), seed=6)
+    VectorTrainer(env, agent, keyer, seed=6, num_envs=256).run(episodes=30_000)
+    assert not (agent.q == whole.agent.q).all()
+
+
+def test_runs_finish_exactly_the_episodes_asked_for() -> None:
+    env, agent, keyer = _agent(GRID, size=4)
+    trainer = VectorTrainer(env, agent, keyer, seed=0, num_envs=64)
+    assert trainer.run(episodes=1) == 1
+    assert trainer.run(episodes=10) == 10
+    assert not trainer.episode_in_progress()  # a quota never leaves games half played
+    assert trainer.run(episodes=1000) == 1000
+    assert trainer.run_episode() is trainer.last
+    assert trainer.episodes == agent.episode == 1012
+    assert trainer.windows["return"].count == 1012
+    stop = threading.Event()
+    stop.set()
+    finished = trainer.run(stop=stop)  # one batch step: all 64 grids start, few finish
+    assert finished < 64 and trainer.episode_in_progress()
+    assert trainer.run(episodes=5) == 5  # the games in progress count towards a quota
+    assert trainer.episodes == agent.episode == 1017 + finished
+    with pytest.raises(ValueError):
+        trainer.run()
+
+
+def test_memory_stays_bounded() -> None:
+    env, agent, keyer = _agent(BLACKJACK, seed=2)
+    trainer = VectorTrainer(env, agent, keyer, seed=2, num_envs=1024, series_capacity=64)
+    trainer.run(episodes=50_000)
+    tracemalloc.start()
+    before, _ = tracemalloc.get_traced_memory()
+    trainer.run(episodes=100_000)
+    after, _ = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    assert after - before < 200_000  # bytes: snapshots and buffers, nothing per episode
+    assert all(len(s.points()) < 64 for s in trainer.series.values())
+    assert all(w.filled == 1000 for w in trainer.windows.values())
+
+
+def test_a_drop_in_for_the_scalar_trainer() -> None:
+    env, agent, keyer = _agent(BLACKJACK, seed=4)
+    scalar = Trainer(env, agent, keyer, seed=4)
+    scalar.run(episodes=200)
+    vector = VectorTrainer(env, agent, keyer, seed=4, num_envs=128)
+    vector.adopt_progress(scalar)
+    assert vector.episodes == 200 and vector.latest.episodes == 200
+    published = []
+    vector.publish_interval = 0.0
+    vector.run(episodes=5_000, on_publish=published.append)
+    assert vector.episodes == agent.episode == 5_200
+    assert published and published[-1] is vector.latest
+    assert [s.version for s in published] == sorted(s.version for s in published)
+    assert vector.remaining == agent.hp.episodes - 5_200
+    assert vector.current_observation() is None
+    with pytest.raises(NotImplementedError):
+        vector.step()
+    back = Trainer(env, agent, keyer, seed=4)
+    back.adopt_progress(vector)
+    back.run(episodes=10)
+    assert back.episodes == 5_210 and back.windows["return"].count == 5_210
+
+
+def test_wrappers_shape_the_rewards_and_unbatchable_ones_refuse() -> None:
+    env, agent, keyer = _agent(BLACKJACK, seed=0)
+    choices = [WrapperChoice.make("StepPenalty", penalty=1.0)]
+    trainer = make_vector_trainer(BLACKJACK, {}, choices, agent, keyer, seed=0, num_envs=256)
+    trainer.run(episodes=20_000)
+    # Every step costs 1, on top of a Blackjack return in [-1, 1].
+    returns = trainer.windows["return"].values()
+    lengths = trainer.windows["length"].values()
+    assert (returns <= 1.0 - lengths + 1e-9).all() and (returns >= -1.0 - lengths - 1e-9).all()
+    with pytest.raises(NoBatchedForm, match="StickyAction"):
+        make_vector_trainer(BLACKJACK, {}, [WrapperChoice.make("StickyAction")], agent, keyer)
+    sparse = QAgent(2, seed=0)
+    with pytest.raises(ValueError, match="dense"):
+        VectorTrainer(env, sparse, keyer)
