@@ -328,6 +328,14 @@ class QAgent:
         self.episode += 1
         self.epsilon = self.hp.epsilon_at(self.episode)
 
+    def assign_from(self, other: QAgent) -> None:
+        """Become a copy of `other` (table, counts, schedule, generator), keeping identity."""
+        if other is self:
+            return
+        if other.n_actions != self.n_actions or other.n_states != self.n_states:
+            raise ValueError("cannot take over an agent of a different shape")
+        vars(self).update(vars(other))
+
     def set_hyperparameters(self, hp: Hyperparameters) -> None:
         """New knobs for the rest of the run; the table and episode count stay."""
         self.hp = hp

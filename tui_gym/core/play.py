@@ -3,12 +3,15 @@
 `HumanGame` plays on its own env, built like the session's (same game, same
 wrappers), so playing never disturbs training. It remembers the current
 episode (steps, return, how it ended) and keeps a running `Tally` of finished
-episodes in constant memory.
+episodes in constant memory. A `Scorecard` sets a player's record beside the
+exact optimum: how many moves agreed with it, and per-episode figures (such as
+steps over optimal) as running means.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -62,6 +65,52 @@ class Tally:
             return (float("nan"), float("nan"))
         half = z * self.std / math.sqrt(n)
         return (self.mean - half, self.mean + half)
+
+
+@dataclass
+class Scorecard:
+    """One player's record beside the optimum, in constant memory.
+
+    `tally` counts finished episodes (usually the game's own `Tally`);
+    `decisions` counts moves made where the optimum had a say and `agreed`
+    those among them that the optimum would also make; `figures` holds running
+    sums of per-episode figures (`profile.episode_figures`), e.g. steps over
+    optimal, each with the number of episodes it was measured on.
+    """
+
+    tally: Tally = field(default_factory=Tally)
+    decisions: int = 0
+    agreed: int = 0
+    figures: dict[str, tuple[float, int]] = field(default_factory=dict)  # name -> (sum, count)
+
+    def judge_move(self, optimal: tuple[int, ...], action: int | None) -> bool | None:
+        """Count a move against the optimal actions before it; None when there was no decision."""
+        if not optimal or action is None:
+            return None
+        agreed = int(action) in optimal
+        self.decisions += 1
+        self.agreed += agreed
+        return agreed
+
+    def add_figures(self, figures: Mapping[str, float]) -> None:
+        """Add one finished episode's figures to the running sums."""
+        for name, value in figures.items():
+            total, count = self.figures.get(name, (0.0, 0))
+            self.figures[name] = (total + float(value), count + 1)
+
+    def figure_mean(self, name: str) -> float | None:
+        """The mean of a per-episode figure (None before it was ever measured)."""
+        total, count = self.figures.get(name, (0.0, 0))
+        return total / count if count else None
+
+    def figure_count(self, name: str) -> int:
+        """How many episodes a figure was measured on."""
+        return self.figures.get(name, (0.0, 0))[1]
+
+    @property
+    def agreement(self) -> float | None:
+        """The share of decisions that matched the optimum (None before the first)."""
+        return self.agreed / self.decisions if self.decisions else None
 
 
 @dataclass(frozen=True)

@@ -72,6 +72,21 @@ class TrainingSnapshot:
 
 
 @dataclass(frozen=True)
+class TrainerProgress:
+    """A trainer's counts and bounded statistics, to hand to another trainer."""
+
+    episodes: int
+    steps: int
+    seconds: float
+    windows: dict[str, RollingWindow]
+    series: dict[str, Series]
+    last: EpisodeStats | None
+    rate_mark: tuple[float, int]
+    rate: float
+    version: int
+
+
+@dataclass(frozen=True)
 class StepEvent:
     """One move of the agent, for animated training."""
 
@@ -262,13 +277,24 @@ class Trainer:
             version=self._version,
         )
 
+    def progress(self) -> TrainerProgress:
+        """Counts and statistics so far (to carry on elsewhere)."""
+        return TrainerProgress(
+            self.episodes, self.steps, self.seconds, self.windows, self.series, self.last,
+            self._rate_mark, self._rate, self._version,
+        )
+
+    def restore(self, progress: TrainerProgress) -> None:
+        """Carry on from `progress` (this trainer's agent is the one that made it)."""
+        self.episodes, self.steps, self.seconds = progress.episodes, progress.steps, progress.seconds
+        self.windows, self.series, self.last = progress.windows, progress.series, progress.last
+        self._rate_mark, self._rate = progress.rate_mark, progress.rate
+        self._version = progress.version
+        self.publish()
+
     def adopt_progress(self, other: Trainer) -> None:
         """Carry on another trainer's counts and statistics (the agent is shared)."""
-        self.episodes, self.steps, self.seconds = other.episodes, other.steps, other.seconds
-        self.windows, self.series, self.last = other.windows, other.series, other.last
-        self._rate_mark, self._rate = other._rate_mark, other._rate
-        self._version = other._version
-        self.publish()
+        self.restore(other.progress())
 
     def episode_in_progress(self) -> bool:
         return self._obs is not None

@@ -6,25 +6,50 @@ game's profile asks for (`BOARDS[profile.board]`). The board turns keys and
 clicks into `Board.Act` / `Board.NewEpisode` messages; this view answers them,
 states what happened in plain words (the profile words outcomes, so nothing
 here knows which game it is) and keeps a running tally of finished episodes.
+
+Beside the game:
+
+- the coach (`c`): after each move, one line from the profile on whether it
+  was optimal and what it cost (judged on the advice taken *before* the move);
+- advice (`i`): what the exact optimum and the agent's greedy policy would do
+  in the current state (and, with the coach off, a ✓/✗ after each move);
+- the `Scoreboard`: the person, the agent and the optimum as the profile words
+  them; the person's agreement with the optimum is counted whether or not the
+  coach is on; the agent's exact figures are recomputed when the view is shown
+  and after each episode, never per frame;
+- watching the agent (`a`, or `A` where the board uses `a`): the greedy agent
+  plays fresh episodes of its own game on the board, one move every
+  `watch_interval` seconds (ties broken by a seeded generator); any key stops
+  it and is swallowed, and the person's own game comes back as it was. The
+  agent's episodes never count in the person's tally.
+
 The app calls `reload()` after a rebuild, `focus_board()` and `key_help()`.
 """
 
 from __future__ import annotations
 
+import random
 from typing import Any, ClassVar
 
+from textual import events
 from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Vertical
 from textual.content import Content
 from textual.markup import escape
+from textual.timer import Timer
 from textual.widgets import Static
 
-from tui_gym.core.play import HumanGame, PlayError, PlayStep
-from tui_gym.core.profiles.base import Advice, format_reward, to_jsonable
+from tui_gym.core.play import HumanGame, PlayError, PlayStep, Scorecard
+from tui_gym.core.profiles.base import Advice, format_reward, plural, signed, to_jsonable
 from tui_gym.ui.widgets.boards import BOARDS, Board
+from tui_gym.ui.widgets.scoreboard import Scoreboard
 
 OBSERVATION_CHARS = 64  # a raw observation longer than this is cut short
+WATCH_INTERVAL = 0.4  # seconds between the watched agent's moves: slow enough to follow
+WATCH_PAUSE_TICKS = 3  # moves' worth of time a finished episode stays on the board
+WATCH_SEED_OFFSET = 1  # the watched agent's game: seeded apart from the person's deals
+WATCHING = "Agent playing — press any key to take over"
 
 
 class PlayView(Vertical):
@@ -43,6 +68,10 @@ class PlayView(Vertical):
     }
     PlayView #play-headline { text-style: bold; }
     PlayView #play-detail { color: $text-muted; }
+    PlayView #play-coach { display: none; }
+    PlayView #play-status.-coach #play-coach { display: block; }
+    PlayView #play-coach.-good { color: $text-success; }
+    PlayView #play-coach.-bad { color: $text-error; }
     PlayView #play-hint { color: $text-warning; text-style: italic; display: none; }
     PlayView #play-status.-hint #play-hint { display: block; }
     PlayView #play-status.-good { border-left: outer $success; }
@@ -51,13 +80,20 @@ class PlayView(Vertical):
     PlayView #play-status.-bad #play-headline { color: $text-error; }
     PlayView #play-status.-even { border-left: outer $warning; }
     PlayView #play-status.-even #play-headline { color: $text-warning; }
+    PlayView #play-status.-agent { border-left: outer $warning; }
+    PlayView #play-status.-agent #play-headline { color: $text-warning; }
     PlayView #play-tally { height: auto; width: 1fr; padding: 0 1; margin-top: 1; }
     Screen.compact PlayView { padding: 0; }
     Screen.compact PlayView #play-tally { margin-top: 0; }
     """
 
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("i", "toggle_advice", "Advice", tooltip="Show what the exact optimum would do"),
+        Binding("c", "toggle_coach", "Coach", tooltip="Judge each move against the optimum"),
+        Binding(
+            "i", "toggle_advice", "Advice", tooltip="What the exact optimum and the agent would do"
+        ),
+        # "a" where the board leaves it free (the grid board walks left on it): "A" always.
+        Binding("a,A", "watch_agent", "Watch agent", tooltip="Let the greedy agent play"),
     ]
 
     def __init__(
@@ -74,8 +110,22 @@ class PlayView(Vertical):
         self._headline = Content()
         self._tone = ""
         self._hint = ""
-        self.show_advice = False  # say what the exact optimum would do, and judge each move
-        self._verdict = ""
+        self.show_advice = False  # say what the exact optimum and the agent would do
+        self._verdict = ""  # advice's short judgement of the last move (coach off)
+        self.coach_on = False  # judge each move in words
+        self._coach = ""  # the coach's line on the last move
+        self._coach_tone = ""
+        self.scorecard = Scorecard()  # the person's record (tally, agreement, figures)
+        self._agent_figures: dict[str, float] | None = None  # exact, for the scoreboard
+        # Watching the agent play on the board.
+        self.watch_interval = WATCH_INTERVAL
+        self.watch_pause_ticks = WATCH_PAUSE_TICKS
+        self.watching = False
+        self.agent_game: HumanGame | None = None  # the watched agent's own game
+        self.agent_card = Scorecard()  # the watched agent's record, apart from the person's
+        self._watch_timer: Timer | None = None
+        self._watch_rng = random.Random(0)
+        self._watch_wait = 0  # ticks left to show a finished episode
 
     # --- layout ------------------------------------------------------------
     def compose(self) -> ComposeResult:
@@ -84,20 +134,36 @@ class PlayView(Vertical):
         yield self.board
         with Vertical(id="play-status"):
             yield Static(id="play-headline")
+            yield Static(id="play-coach")
             yield Static(id="play-detail")
             yield Static(id="play-hint")
         yield Static(id="play-tally")
+        yield Scoreboard(id="play-scoreboard")
 
     def on_mount(self) -> None:
         self.reload()
+
+    def on_show(self) -> None:
+        """Shown again (e.g. back from the Train view): the agent may have learned."""
+        self.refresh_agent_figures()
+
+    def on_hide(self) -> None:
+        self.stop_watching(restore=True)
 
     # --- what the app calls --------------------------------------------------
     def reload(self) -> None:
         """Start afresh on the session's current game and wrappers: new game, tally, board."""
         session = self.app.session
+        self.stop_watching(restore=False)
         if self.game is not None:
             self.game.close()
+        if self.agent_game is not None:
+            self.agent_game.close()
         self.game = HumanGame(session, seed=self.app.play_seed)
+        self.scorecard = Scorecard(tally=self.game.tally)
+        self.agent_game = None
+        self.agent_card = Scorecard()
+        self._watch_rng = random.Random(self.app.play_seed)
         self.truncated = 0
         kind = BOARDS[session.profile.board]
         if type(self.board) is not kind:
@@ -111,6 +177,7 @@ class PlayView(Vertical):
                 self.call_after_refresh(self.focus_board)
         self._show_title()
         self._start_episode()
+        self.refresh_agent_figures()
 
     def focus_board(self) -> None:
         if self.board is not None and self.board.is_mounted:
@@ -119,16 +186,32 @@ class PlayView(Vertical):
     def key_help(self) -> list[tuple[str, str]]:
         """(key, what it does) for playing the current game."""
         keys = self.board.key_help() if self.board is not None else []
-        return [*keys, ("i", "advice: show the exact optimum's move and judge yours")]
+        if self.board is not None and self.board.takes_key("a"):
+            watch = ("A", "watch the agent play (a is a move here); any key takes over")
+        else:
+            watch = ("a / A", "watch the agent play; any key takes over")
+        return [
+            *keys,
+            ("c", "coach: after each move, was it optimal and what did it cost"),
+            ("i", "advice: what the exact optimum and the agent would do here"),
+            watch,
+        ]
 
     # --- playing -------------------------------------------------------------
     def on_board_act(self, message: Board.Act) -> None:
         message.stop()
-        self.act(message.action)
+        if not self.watching:
+            self.act(message.action)
 
     def on_board_new_episode(self, message: Board.NewEpisode) -> None:
         message.stop()
-        self.new_episode()
+        if not self.watching:
+            self.new_episode()
+
+    def on_board_take_over(self, message: Board.TakeOver) -> None:
+        """A click on the board while the agent plays: control comes back, nothing moves."""
+        message.stop()
+        self.stop_watching()
 
     def act(self, action: str) -> None:
         """Make a move by its action name; a move that cannot be made now only says why."""
@@ -138,7 +221,8 @@ class PlayView(Vertical):
         if game.done:
             self._say_hint(board.over_hint)
             return
-        before = self._advice() if self.show_advice else None
+        before = self._advice(game)  # always: agreement counts whether or not the coach is on
+        scene_before = game.scene()
         try:
             step = game.step(action)
         except PlayError as exc:
@@ -148,11 +232,22 @@ class PlayView(Vertical):
             self._say_hint(f"The env refused the move: {exc}")
             return
         self._hint = ""
-        self._verdict = _verdict(before, step, game.profile.action_names)
+        profile = game.profile
+        agreed = self.scorecard.judge_move(before.optimal if before else (), step.action)
+        self._verdict = ""
+        if self.show_advice and not self.coach_on:
+            self._verdict = _verdict(before, step, profile.action_names)
+        self._coach, self._coach_tone = "", ""
+        if before is not None and step.action is not None and agreed is not None:
+            try:
+                self._coach = profile.coach_text(before, step.action, scene_before, game.scene())
+            except Exception:  # coaching is a help, never a reason to fail
+                self._coach = ""
+            self._coach_tone = "-good" if agreed else "-bad"
         if step.done:
             if step.truncated and not step.terminated:
                 self.truncated += 1
-            profile = game.profile
+            self.scorecard.add_figures(profile.episode_figures(step, game.first_info))
             self._headline = Content(profile.outcome_text(step, game.first_info, game.scene()))
             self._tone = "-even" if not step.terminated else _tone(step.reward)
         else:
@@ -161,6 +256,10 @@ class PlayView(Vertical):
         self._show_board()
         self._show_status()
         self._show_tally()
+        if step.done:
+            self.refresh_agent_figures()
+        else:
+            self._show_scoreboard()
 
     def new_episode(self) -> None:
         """Deal or reset; not in the middle of an episode when the board says so."""
@@ -189,6 +288,7 @@ class PlayView(Vertical):
             )
             self._tone = ""
         self._verdict = ""
+        self._coach, self._coach_tone = "", ""
         board.start_episode()
         self._show_board()
         self._show_status()
@@ -208,6 +308,11 @@ class PlayView(Vertical):
         title = f"[b]{escape(session.profile.title)}[/]  [$text-muted]wrappers:[/] " + (
             f"[i $text-accent]{escape(chain)}[/]" if chain else "[$text-muted]none[/]"
         )
+        modes = [
+            name for name, on in (("coach", self.coach_on), ("advice", self.show_advice)) if on
+        ]
+        if modes:
+            title += "  [$text-success]" + escape(" · ".join(f"{m} on" for m in modes)) + "[/]"
         self.query_one("#play-title", Static).update(Content.from_markup(title))
 
     def _say_hint(self, hint: str) -> None:
@@ -227,36 +332,219 @@ class PlayView(Vertical):
             if last.steps:
                 parts.append(f"return {format_reward(last.episode_return)}")
             if self.show_advice and not game.done:
-                advice = self._advice()
+                advice = self._advice(game)
                 parts.append(advice.note if advice is not None else "no advice here")
+                parts.append(self.agent_note(last.observation))
             detail = "  ·  ".join(parts)
+        coach = self._coach if self.coach_on else ""
+        self._update_status(self._headline, detail, coach, self._coach_tone, self._tone)
+
+    def _update_status(
+        self, headline: Content, detail: str, coach: str, coach_tone: str, tone: str
+    ) -> None:
         status = self.query_one("#play-status")
-        self.query_one("#play-headline", Static).update(self._headline)
+        self.query_one("#play-headline", Static).update(headline)
+        coach_line = self.query_one("#play-coach", Static)
+        coach_line.update(Content(coach))
+        coach_line.set_classes(coach_tone)
         self.query_one("#play-detail", Static).update(Content(detail))
         self.query_one("#play-hint", Static).update(Content(self._hint))
-        status.set_classes(self._tone)
+        status.set_classes(tone)
         status.set_class(bool(self._hint), "-hint")
+        status.set_class(bool(coach), "-coach")
 
-    def _advice(self) -> Advice | None:
-        """What the exact optimum would do now (None when the game cannot say)."""
-        game = self.game
-        if game is None or game.done:
+    def _advice(self, game: HumanGame) -> Advice | None:
+        """What the exact optimum would do now in `game` (None when the game cannot say)."""
+        if game.done:
             return None
         try:
             return game.profile.advice(game.env, self.app.session.env_kwargs)
         except Exception:  # advice is a help, never a reason to fail
             return None
 
+    def agent_note(self, observation: Any) -> str:
+        """'agent: hit (Q stick −0.310, hit −0.402)': the greedy agent's choice here."""
+        names = self.app.session.profile.action_names
+        choice = self.app.session.greedy_actions_for(observation)
+        if choice is None:
+            return "agent: has never seen this state (it would pick at random)"
+        ties, q = choice
+
+        def name(a: int) -> str:
+            return names[a] if a < len(names) else str(a)
+
+        values = ", ".join(f"{name(a)} {signed(float(v), 3)}" for a, v in enumerate(q))
+        return f"agent: {' or '.join(name(a) for a in ties)} (Q {values})"
+
     def action_toggle_advice(self) -> None:
         self.show_advice = not self.show_advice
         self._verdict = ""
-        self._show_status()
+        self._show_title()
+        if not self.watching:
+            self._show_status()
         self.notify(
-            "Advice on: the exact optimum's move is shown and your moves are judged."
+            "Advice on: what the exact optimum and the agent would do here."
             if self.show_advice
             else "Advice off.",
             timeout=3,
         )
+
+    def action_toggle_coach(self) -> None:
+        self.coach_on = not self.coach_on
+        self._verdict = ""
+        self._show_title()
+        if not self.watching:
+            self._show_status()
+        self.notify(
+            "Coach on: each move is judged against the exact optimum."
+            if self.coach_on
+            else "Coach off.",
+            timeout=3,
+        )
+
+    # --- the scoreboard --------------------------------------------------------
+    def refresh_agent_figures(self) -> None:
+        """Recompute the agent's exact figures (a few ms) and redraw the scoreboard."""
+        try:
+            self._agent_figures = self.app.session.agent_figures()
+        except Exception:  # a table that does not fit the reference: no figures
+            self._agent_figures = None
+        self._show_scoreboard()
+
+    def score_rows(self) -> list[Any]:
+        """The scoreboard's rows as the profile words them."""
+        session = self.app.session
+        watched = self.agent_card if self.agent_card.tally.episodes else None
+        return session.profile.scoreboard(
+            self.scorecard, self._agent_figures, watched, session.hidden_reason()
+        )
+
+    def _show_scoreboard(self) -> None:
+        if self.is_mounted:
+            self.query_one(Scoreboard).show_rows(self.score_rows())
+
+    # --- watching the agent ----------------------------------------------------
+    def action_watch_agent(self) -> None:
+        if not self.watching:
+            self.start_watching()
+
+    def start_watching(self) -> None:
+        """Let the greedy agent play fresh episodes on the board until a key is pressed."""
+        board = self.board
+        if board is None or self.watching:
+            return
+        session = self.app.session
+        if self.agent_game is None:
+            try:
+                self.agent_game = HumanGame(session, seed=self.app.play_seed + WATCH_SEED_OFFSET)
+            except Exception as exc:
+                self._say_hint(f"The agent cannot play here: {exc}")
+                return
+            self.agent_card = Scorecard(tally=self.agent_game.tally)
+        self.watching = True
+        self._hint = ""
+        board.set_agent_playing(True)
+        self.focus_board()
+        if not self._agent_new_episode():
+            return
+        self._watch_timer = self.set_interval(self.watch_interval, self._watch_tick)
+
+    def stop_watching(self, restore: bool = True) -> None:
+        """Stop the agent; with `restore`, the person's game comes back on the board."""
+        if self._watch_timer is not None:
+            self._watch_timer.stop()
+            self._watch_timer = None
+        if not self.watching:
+            return
+        self.watching = False
+        board, game = self.board, self.game
+        if board is None:
+            return
+        board.set_agent_playing(False)
+        board.start_episode()
+        if not restore or game is None:
+            return
+        noun = escape(game.profile.episode_noun)
+        hint = board.over_hint if game.done else board.prompt
+        self._headline = Content.from_markup(
+            f"Back to your {noun}.  [not bold $text-muted]{escape(hint)}[/]"
+        )
+        self._tone = ""
+        self._show_board()
+        self._show_status()
+
+    def on_key(self, event: events.Key) -> None:
+        """While the agent plays, any key takes over (and does nothing else)."""
+        if self.watching:
+            event.stop()
+            event.prevent_default()
+            self.stop_watching()
+
+    def on_descendant_blur(self, event: events.DescendantBlur) -> None:
+        if self.watching and event.widget is self.board:  # the keyboard went elsewhere
+            self.stop_watching()
+
+    def _agent_new_episode(self) -> bool:
+        game, board = self.agent_game, self.board
+        if game is None or board is None:
+            return False
+        try:
+            game.reset()
+        except Exception as exc:
+            self.stop_watching()
+            self._say_hint(f"The agent's episode could not start: {exc}")
+            return False
+        board.start_episode()
+        self._show_agent(f"New {game.profile.episode_noun} for the agent.")
+        return True
+
+    def _watch_tick(self) -> None:
+        """One move of the watched agent (or the pause after an episode, or a new one)."""
+        game = self.agent_game
+        if not self.watching or game is None:
+            return
+        if game.done:
+            if self._watch_wait > 0:
+                self._watch_wait -= 1
+            else:
+                self._agent_new_episode()
+            return
+        session = self.app.session
+        before = self._advice(game)
+        assert game.last is not None
+        choice = session.greedy_actions_for(game.last.observation)
+        ties = choice[0] if choice is not None else tuple(range(session.agent.n_actions))
+        action = ties[0] if len(ties) == 1 else ties[self._watch_rng.randrange(len(ties))]
+        note = self.agent_note(game.last.observation)
+        try:
+            step = game.step(action)
+        except Exception as exc:  # a wrapper or env refused: stop and say why
+            self.stop_watching()
+            self._say_hint(f"The env refused the agent's move: {exc}")
+            return
+        self.agent_card.judge_move(before.optimal if before else (), step.action)
+        name = game.profile.action_names[action]
+        if step.done:
+            self.agent_card.add_figures(game.profile.episode_figures(step, game.first_info))
+            self._watch_wait = self.watch_pause_ticks
+            moves = plural(step.steps, "move")
+            self._show_agent(
+                f"The agent's {game.profile.episode_noun} is over: "
+                f"return {format_reward(step.episode_return)} after {moves}.",
+                tone=_tone(step.episode_return) if step.terminated else "-even",
+            )
+            self.refresh_agent_figures()
+        else:
+            self._show_agent(f"The agent chose {name}: {note.removeprefix('agent: ')}.")
+
+    def _show_agent(self, detail: str, tone: str = "-agent") -> None:
+        game, board = self.agent_game, self.board
+        if game is None or board is None:
+            return
+        board.show_scene(game.scene(), reveal=game.done)
+        board.set_episode_over(game.done)
+        self._hint = ""
+        self._update_status(Content(WATCHING), detail, "", "", tone)
 
     def _observation_text(self, last: PlayStep) -> str:
         """The observation in the profile's words, or raw when wrappers reshaped it."""

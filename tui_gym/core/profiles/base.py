@@ -2,7 +2,8 @@
 
 Front ends never branch on a game's name; they ask the profile: action names
 and keys, how a state reads as text, which base states the heatmaps and the
-exact reference look at, and how a finished episode is scored.
+exact reference look at, how a finished episode is scored, how a coach words
+a move, and what a scoreboard says about a player, the agent and the optimum.
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -19,7 +20,7 @@ from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.wrappers.params import Param
 
 if TYPE_CHECKING:
-    from tui_gym.core.play import PlayStep
+    from tui_gym.core.play import PlayStep, Scorecard, Tally
 
 
 @dataclass(frozen=True)
@@ -37,6 +38,15 @@ class Advice:
     optimal: tuple[int, ...]  # every optimal action (empty when there is no decision)
     values: dict[int, float] | None = None  # exact expected return per action, when known
     note: str = ""  # one line for people
+
+
+class ScoreRow(NamedTuple):
+    """One line of a scoreboard: who ("You", "Agent", "Optimum", "Watched") and how,
+    in full and in a few words (`short`, for narrow screens; the full text if empty)."""
+
+    who: str
+    text: str
+    short: str = ""
 
 
 @dataclass(frozen=True)
@@ -171,6 +181,69 @@ class GameProfile(ABC):
     def advice(self, env: Any, env_kwargs: Mapping[str, Any]) -> Advice:
         """The optimal action(s) in the env's current (bare) state."""
 
+    # --- coaching and the scoreboard ----------------------------------------
+    def coach_text(
+        self,
+        before: Advice,
+        action: int,
+        scene_before: Mapping[str, Any],
+        scene_after: Mapping[str, Any],
+    ) -> str:
+        """One line judging `action`, taken where `before` was the advice ('' without a decision).
+
+        The default words it by the exact values when the advice has them
+        ("✗ hit cost 0.123 in expected return (stick: −0.290, hit: −0.413)").
+        """
+        if not before.optimal:
+            return ""
+        name = self.action_names[action]
+        if action in before.optimal:
+            return f"✓ {name} was optimal"
+        if before.values and action in before.values:
+            cost = max(before.values.values()) - before.values[action]
+            values = ", ".join(
+                f"{self.action_names[a]}: {signed(v, 3)}" for a, v in sorted(before.values.items())
+            )
+            return f"✗ {name} cost {cost:.3f} in expected return ({values})"
+        best = " or ".join(self.action_names[a] for a in before.optimal)
+        return f"✗ {name} was not optimal (the optimum: {best})"
+
+    def episode_figures(self, last: PlayStep, first_info: Mapping[str, Any]) -> dict[str, float]:
+        """Figures of one finished episode that a scoreboard averages (none by default)."""
+        return {}
+
+    def agent_figures(
+        self, q: np.ndarray | None, env_kwargs: Mapping[str, Any]
+    ) -> dict[str, float]:
+        """Exact figures for the scoreboard: of the greedy policy of `q` (rows = base
+        states; None when wrappers hide them) and of the optimum. A few ms at most."""
+        return {}
+
+    def scoreboard(
+        self,
+        you: Scorecard,
+        figures: Mapping[str, float] | None,
+        watched: Scorecard | None = None,
+        agent_note: str = "",
+    ) -> list[ScoreRow]:
+        """The scoreboard's rows: the person (`you`), the agent (exact `figures` from
+        `agent_figures`, or `agent_note` saying why there are none), the optimum,
+        and the agent's episodes watched on the board."""
+        rows = [
+            ScoreRow(
+                "You",
+                join_parts(return_summary(you.tally, self.episode_noun), agreement_summary(you)),
+                join_parts(
+                    return_summary(you.tally, self.episode_noun, short=True),
+                    agreement_summary(you, short=True),
+                ),
+            ),
+            ScoreRow("Agent", agent_note or "no exact figures for this game", "–"),
+        ]
+        if watched is not None and watched.tally.episodes:
+            rows.append(watched_row(watched, self.episode_noun))
+        return rows
+
     def text(self, env: Any, reveal: bool = True) -> str:
         """A plain-text picture of the env's state."""
         picture = env.render() if self.render_mode == "ansi" else None
@@ -200,6 +273,61 @@ def format_reward(value: float) -> str:
         return "0"
     text = f"{abs(value):.4g}"
     return ("+" if value > 0 else "\u2212") + text
+
+
+def signed(value: float, places: int) -> str:
+    """A number with its sign for people: '+0.125', '−0.290' (a true minus), '0.000'."""
+    text = f"{abs(value):.{places}f}"
+    if float(text) == 0:
+        return text
+    return ("+" if value > 0 else "\u2212") + text
+
+
+def plural(count: int, noun: str) -> str:
+    """'1 hand', '3 hands'."""
+    return f"{count} {noun}{'' if count == 1 else 's'}"
+
+
+def return_summary(tally: Tally, noun: str, short: bool = False) -> str:
+    """'mean return −0.125 ± 0.412 (95% CI) over 8 hands' or 'no hands played yet';
+    `short`: '−0.125 ± 0.412 over 8 hands'."""
+    if not tally.episodes:
+        return f"no {noun}s yet" if short else f"no {noun}s played yet"
+    text = signed(tally.mean, 3) if short else f"mean return {signed(tally.mean, 3)}"
+    low, high = tally.confidence_interval()
+    if low == low:  # NaN below two episodes
+        text += f" ± {(high - low) / 2:.3f}" + ("" if short else " (95% CI)")
+    return f"{text} over {plural(tally.episodes, noun)}"
+
+
+def agreement_summary(
+    card: Scorecard, words: str = "moves as the optimum", short: bool = False
+) -> str:
+    """'9/11 moves as the optimum (82%)', `short` '82% optimal' ('' before a decision)."""
+    if card.agreement is None:
+        return ""
+    if short:
+        return f"{card.agreement:.0%} optimal"
+    return f"{card.agreed}/{card.decisions} {words} ({card.agreement:.0%})"
+
+
+def watched_row(
+    card: Scorecard, noun: str, words: str = "moves as the optimum", extra: str = ""
+) -> ScoreRow:
+    """What the agent did while a person watched: episodes, mean return, agreement."""
+    tally = card.tally
+    text = f"the agent played {plural(tally.episodes, noun)}, mean return {signed(tally.mean, 3)}"
+    short = f"agent: {plural(tally.episodes, noun)}, {signed(tally.mean, 3)}"
+    return ScoreRow(
+        "Watched",
+        join_parts(text, agreement_summary(card, words), extra),
+        join_parts(short, extra),
+    )
+
+
+def join_parts(*parts: str) -> str:
+    """Non-empty parts joined with " · "."""
+    return " · ".join(part for part in parts if part)
 
 
 def greedy_policy(q: np.ndarray) -> np.ndarray:

@@ -20,8 +20,14 @@ from tui_gym.core.profiles.base import (
     EvalOutcome,
     GameProfile,
     ReferenceMetrics,
+    ScoreRow,
+    agreement_summary,
     format_reward,
     greedy_policy,
+    join_parts,
+    return_summary,
+    signed,
+    watched_row,
 )
 from tui_gym.core.reference.blackjack import (
     POLICY_SHAPE,
@@ -34,12 +40,13 @@ from tui_gym.core.reference.blackjack import (
 from tui_gym.core.wrappers.params import Param
 
 if TYPE_CHECKING:
-    from tui_gym.core.play import PlayStep
+    from tui_gym.core.play import PlayStep, Scorecard
 
 CHART_SUMS = tuple(range(21, 11, -1))  # rows of the chart, top to bottom
 DEALER_CARDS = tuple(range(1, 11))  # columns: A, 2 .. 10
 DEALER_LABELS = ("A", "2", "3", "4", "5", "6", "7", "8", "9", "10")
 ACTION_LETTERS = ("S", "H")
+AGREEMENT = "optimal decisions"  # how a scoreboard words moves that match the optimum
 
 
 @lru_cache(maxsize=1)
@@ -193,6 +200,49 @@ class BlackjackProfile(GameProfile):
                 return f"Dealer wins {reward} (you bust with {player})"
             return f"Dealer wins {reward} (the dealer's {dealer} beats your {player})"
         return f"Push {reward} (both have {player})"
+
+    def agent_figures(
+        self, q: np.ndarray | None, env_kwargs: Mapping[str, Any]
+    ) -> dict[str, float]:
+        """`exact_value` of the greedy policy (as `reference` has it) and `optimal_value`."""
+        if q is None:
+            return {"optimal_value": optimal_value(self.rules(env_kwargs))}
+        return dict(self.reference(q, env_kwargs).figures)
+
+    def scoreboard(
+        self,
+        you: Scorecard,
+        figures: Mapping[str, float] | None,
+        watched: Scorecard | None = None,
+        agent_note: str = "",
+    ) -> list[ScoreRow]:
+        """You: mean return ± CI and agreement; the agent's and the optimum's exact values."""
+        figures = figures or {}
+        noun = self.episode_noun
+        rows = [
+            ScoreRow(
+                "You",
+                join_parts(return_summary(you.tally, noun), agreement_summary(you, AGREEMENT)),
+                join_parts(
+                    return_summary(you.tally, noun, short=True),
+                    agreement_summary(you, short=True),
+                ),
+            )
+        ]
+        if "exact_value" in figures:
+            value = signed(figures["exact_value"], 4)
+            text = f"exact value {value} with its greedy policy"
+            if "gap" in figures:
+                text += f" ({figures['gap']:.4f} below the optimum)"
+            rows.append(ScoreRow("Agent", text, f"{value} exact"))
+        else:
+            rows.append(ScoreRow("Agent", agent_note or "no exact value", "–"))
+        if "optimal_value" in figures:
+            value = signed(figures["optimal_value"], 4)
+            rows.append(ScoreRow("Optimum", f"exact value {value}", f"{value} exact"))
+        if watched is not None and watched.tally.episodes:
+            rows.append(watched_row(watched, noun, AGREEMENT))
+        return rows
 
     def describe(self, observation: Any) -> str:
         player, dealer, usable = (int(v) for v in observation)

@@ -21,17 +21,27 @@ from tui_gym.core.profiles.base import (
     EvalOutcome,
     GameProfile,
     ReferenceMetrics,
+    ScoreRow,
+    agreement_summary,
     format_reward,
     greedy_policy,
+    join_parts,
+    plural,
+    watched_row,
 )
-from tui_gym.core.reference.gridworld import optimal_actions, optimal_pair_fraction
+from tui_gym.core.reference.gridworld import (
+    optimal_actions,
+    optimal_pair_fraction,
+    policy_steps_over_optimal,
+)
 from tui_gym.core.wrappers.params import Param
 
 if TYPE_CHECKING:
-    from tui_gym.core.play import PlayStep
+    from tui_gym.core.play import PlayStep, Scorecard
 
 ARROWS = ("→", "↑", "←", "↓")
 MIN_SIZE, MAX_SIZE = 2, 12
+AGREEMENT = "moves on a shortest path"  # how a scoreboard words moves that match the optimum
 
 
 @lru_cache(maxsize=16)
@@ -198,6 +208,85 @@ class GridWorldProfile(GameProfile):
         optimal = int(first_info.get("distance", 0))
         return f"{last.steps} step{'' if last.steps == 1 else 's'} taken, optimal {optimal}"
 
+    # --- coaching and the scoreboard ----------------------------------------
+    def coach_text(
+        self,
+        before: Advice,
+        action: int,
+        scene_before: Mapping[str, Any],
+        scene_after: Mapping[str, Any],
+    ) -> str:
+        """'✓ right is on a shortest path (3 steps to go)' or
+        '✗ left is off every shortest path (now 5 steps away, was 4)'."""
+        if not before.optimal:
+            return ""
+        name = self.action_names[action]
+        was, now = _distance(scene_before), _distance(scene_after)
+        if action in before.optimal:
+            to_go = f"{plural(now, 'step')} to go" if now else "target reached"
+            return f"✓ {name} is on a shortest path ({to_go})"
+        return f"✗ {name} is off every shortest path (now {plural(now, 'step')} away, was {was})"
+
+    def episode_figures(self, last: PlayStep, first_info: Mapping[str, Any]) -> dict[str, float]:
+        """`steps_over_optimal` of an episode that reached the target."""
+        if not last.terminated or "distance" not in first_info:
+            return {}
+        return {"steps_over_optimal": float(last.steps - int(first_info["distance"]))}
+
+    def agent_figures(
+        self, q: np.ndarray | None, env_kwargs: Mapping[str, Any]
+    ) -> dict[str, float]:
+        """Exact, over every placement: the greedy policy's mean `steps_over_optimal`
+        where it reaches the target, and the `solved_fraction` of placements it reaches."""
+        if q is None:
+            return {}
+        size = int(env_kwargs.get("size", 5))
+        extra, solved = policy_steps_over_optimal(size, self.policy_array(q, size))
+        return {"steps_over_optimal": extra, "solved_fraction": solved}
+
+    def scoreboard(
+        self,
+        you: Scorecard,
+        figures: Mapping[str, float] | None,
+        watched: Scorecard | None = None,
+        agent_note: str = "",
+    ) -> list[ScoreRow]:
+        """Steps over optimal: yours over the episodes you finished, the agent's exactly."""
+        figures = figures or {}
+        reached = you.figure_count("steps_over_optimal")
+        mean = you.figure_mean("steps_over_optimal")
+        if mean is None:
+            mine, mine_short = "no episode reached the target yet", "no target reached yet"
+        else:
+            mine = f"{mean:.2f} steps over optimal (mean of {plural(reached, 'episode')} reached)"
+            mine_short = f"{mean:.2f} extra steps ({reached} reached)"
+        rows = [
+            ScoreRow(
+                "You",
+                join_parts(mine, agreement_summary(you, AGREEMENT)),
+                join_parts(mine_short, agreement_summary(you, short=True)),
+            )
+        ]
+        solved = figures.get("solved_fraction")
+        if solved is None:
+            rows.append(ScoreRow("Agent", agent_note or "no exact figures", "–"))
+        elif solved == 0:
+            text = "its greedy policy reaches the target from no placement yet (exact)"
+            rows.append(ScoreRow("Agent", text, "reaches no target yet"))
+        else:
+            extra = figures["steps_over_optimal"]
+            text = (
+                f"{extra:.2f} steps over optimal, exact mean over "
+                f"the {solved:.1%} of placements its greedy policy reaches"
+            )
+            rows.append(ScoreRow("Agent", text, f"{extra:.2f} extra steps, reaches {solved:.0%}"))
+        rows.append(ScoreRow("Optimum", "0 steps over optimal from every placement", "0 extra"))
+        if watched is not None and watched.tally.episodes:
+            extra = watched.figure_mean("steps_over_optimal")
+            more = "" if extra is None else f"{extra:.2f} extra steps"
+            rows.append(watched_row(watched, self.episode_noun, AGREEMENT, more))
+        return rows
+
     def describe(self, observation: Any) -> str:
         ax, ay = (int(v) for v in observation["agent"])
         tx, ty = (int(v) for v in observation["target"])
@@ -226,3 +315,11 @@ class GridWorldProfile(GameProfile):
                 "mean_steps_over_optimal": float(np.mean(extra)) if extra else float("nan"),
             }
         )
+
+
+def _distance(scene: Mapping[str, Any]) -> int:
+    """Steps from the scene's agent to its target (0 when either is missing)."""
+    agent, target = scene.get("agent"), scene.get("target")
+    if agent is None or target is None:
+        return 0
+    return abs(int(agent[0]) - int(target[0])) + abs(int(agent[1]) - int(target[1]))

@@ -2,8 +2,8 @@
 
 - `blackjack`: exact DP for Gymnasium's ``Blackjack-v1``: the value of any
   deterministic policy, Q*, the optimal policy and its value, per reward rules.
-- `gridworld`: GridWorld shortest paths, and the share of start placements from
-  which a policy takes one.
+- `gridworld`: GridWorld shortest paths, the share of start placements from
+  which a policy takes one, and the steps a policy takes over the fewest.
 """
 
 from tui_gym.core.reference.blackjack import (
@@ -24,6 +24,7 @@ from tui_gym.core.reference.gridworld import (
     all_pairs,
     optimal_actions,
     optimal_pair_fraction,
+    policy_steps_over_optimal,
     shortest_path_length,
     shortest_path_policy,
 )
@@ -43,6 +44,7 @@ __all__ = [
     "optimal_policy",
     "optimal_value",
     "policy_from_function",
+    "policy_steps_over_optimal",
     "policy_value",
     "shortest_path_length",
     "shortest_path_policy",

@@ -3,9 +3,12 @@
 A board draws a game's *scene* (plain data from `profile.scene(env)`) and,
 when `interactive`, turns keys and clicks into messages that bubble up:
 `Board.Act(action_name)` for a move and `Board.NewEpisode()` for a new
-episode. It never touches an env or a game itself: the Play view owns the
+episode (`Board.TakeOver()` instead while the agent plays on it). It never touches an env or a game itself: the Play view owns the
 game and answers the messages; the Train view shows the agent's moves on a
-non-interactive board. `BOARDS` maps a profile's `board` kind to its class.
+non-interactive board. While the Play view lets the agent play on an
+interactive board, `set_agent_playing(True)` says so on the board (the
+player's hand is the agent's, the border changes colour). `BOARDS` maps a
+profile's `board` kind to its class.
 
 A board is a small vertical stack: a `BoardCanvas` that renders the board's
 `picture()` at whatever size it is given (a board picks the largest drawing
@@ -20,6 +23,7 @@ from typing import Any, ClassVar
 from rich.text import Text
 from textual import events
 from textual.app import ComposeResult
+from textual.binding import Binding
 from textual.containers import Horizontal
 from textual.geometry import Offset
 from textual.message import Message
@@ -44,8 +48,13 @@ class BoardCanvas(Widget):
 
     def on_click(self, event: events.Click) -> None:
         offset = event.get_content_offset(self)
-        if offset is not None and self.board.interactive:
-            self.board.canvas_clicked(offset)
+        board = self.board
+        if offset is None or not board.interactive:
+            return
+        if board.agent_playing:
+            board.post_message(board.TakeOver())
+        else:
+            board.canvas_clicked(offset)
 
 
 class BoardButton(Button, can_focus=False):
@@ -72,6 +81,11 @@ class Board(Widget):
         border-title-color: $accent;
         border-title-style: bold;
         border-subtitle-color: $text;
+    }
+    Board.-interactive.-agent, Board.-interactive.-agent:focus {
+        border: round $warning;
+        border-title-color: $text-warning;
+        border-subtitle-color: $text-warning;
     }
     Board > .board-buttons {
         width: 1fr;
@@ -103,6 +117,9 @@ class Board(Widget):
     class NewEpisode(Message):
         """A person asked for a new episode (deal, reset)."""
 
+    class TakeOver(Message):
+        """A person clicked or pressed a move while the agent plays: hand control back."""
+
     def __init__(
         self,
         *,
@@ -116,6 +133,7 @@ class Board(Widget):
         self.scene: dict[str, Any] = {}
         self.reveal = True
         self.episode_over = False
+        self.agent_playing = False  # the agent, not a person, makes the moves drawn
         self.set_class(interactive, "-interactive")
 
     # --- structure ---------------------------------------------------------
@@ -148,6 +166,22 @@ class Board(Widget):
         self.episode_over = over
         self.set_class(over, "-over")
         self._update_buttons()
+
+    def set_agent_playing(self, playing: bool) -> None:
+        """Say on the board whether the agent (not a person) is playing on it."""
+        self.agent_playing = playing
+        self.set_class(playing, "-agent")
+        self._update_subtitle(focused=self.has_focus)
+        self.redraw()
+
+    @property
+    def player_name(self) -> str:
+        """Who the drawn player is: 'You', or 'Agent' on a passive board or while it plays."""
+        return "Agent" if self.agent_playing or not self.interactive else "You"
+
+    def takes_key(self, key: str) -> bool:
+        """Whether one of the board's own bindings answers to `key` (e.g. "a")."""
+        return any(binding.key == key for binding in Binding.make_bindings(self.BINDINGS))
 
     def redraw(self) -> None:
         if self.is_mounted:
@@ -191,11 +225,15 @@ class Board(Widget):
 
     # --- actions and buttons -----------------------------------------------
     def action_act(self, action: str) -> None:
-        if self.interactive:
+        if self.agent_playing:
+            self.post_message(self.TakeOver())
+        elif self.interactive:
             self.post_message(self.Act(action))
 
     def action_new_episode(self) -> None:
-        if self.interactive:
+        if self.agent_playing:
+            self.post_message(self.TakeOver())
+        elif self.interactive:
             self.post_message(self.NewEpisode())
 
     def on_mount(self) -> None:
@@ -209,7 +247,11 @@ class Board(Widget):
         self._update_subtitle(focused=False)
 
     def _update_subtitle(self, focused: bool) -> None:
-        if self.interactive:
+        if not self.interactive:
+            return
+        if self.agent_playing:
+            self.border_subtitle = "agent playing: any key takes over"
+        else:
             self.border_subtitle = "" if focused else "click here to play"
 
     def _update_buttons(self) -> None:

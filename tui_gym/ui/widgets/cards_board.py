@@ -199,7 +199,7 @@ class CardsBoard(Board):
         return label
 
     def _player_label(self, player: Sequence[int]) -> Text:
-        label = Text("You" if self.interactive else "Agent", self._style("label"))
+        label = Text(self.player_name, self._style("label"))
         if not player:
             return label
         total, usable = hand_value(list(player))

@@ -72,7 +72,9 @@ class HyperparameterForm(Vertical):
     SCOPED_CSS = False
     DEFAULT_CSS = """
     HyperparameterForm {
-        width: 38;
+        width: 1fr;
+        min-width: 38;
+        max-width: 48;
         height: auto;
         border: round $primary-background-lighten-2;
         border-title-color: $text-muted;
@@ -114,6 +116,8 @@ class HyperparameterForm(Vertical):
     }
     Screen.compact HyperparameterForm {
         width: 1fr;
+        min-width: 0;
+        max-width: 100%;
         border: none;
         padding: 0;
     }

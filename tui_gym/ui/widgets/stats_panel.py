@@ -64,6 +64,7 @@ class StatsPanel(Widget):
     DEFAULT_CSS = """
     StatsPanel {
         width: 1fr;
+        max-width: 60;
         height: auto;
         border: round $primary-background-lighten-2;
         border-title-color: $text-muted;
@@ -71,6 +72,7 @@ class StatsPanel(Widget):
         padding: 0 1;
     }
     Screen.compact StatsPanel {
+        max-width: 100%;
         border: none;
         padding: 0;
         min-height: 0;

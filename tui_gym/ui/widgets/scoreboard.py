@@ -1,0 +1,103 @@
+"""`Scoreboard`: the person, the agent and the exact optimum, one row each.
+
+The rows come from the game's profile (`profile.scoreboard(...)`, a list of
+`ScoreRow(who, text, short)`), so nothing here knows which game it is: the
+widget lays them out as two columns, the name on the left and the words
+wrapping beside it. On a compact screen it shows each row's `short` words
+and drops its border, so it stays a few lines tall.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import ClassVar
+
+from rich.console import RenderableType
+from rich.table import Table
+from rich.text import Text
+from textual.widget import Widget
+
+from tui_gym.core.profiles.base import ScoreRow
+
+
+class Scoreboard(Widget):
+    """You, the agent and the optimum side by side, as the profile words them."""
+
+    SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
+    DEFAULT_CSS = """
+    Scoreboard {
+        width: 1fr;
+        height: auto;
+        padding: 0 1;
+        border: round $foreground 25%;
+        border-title-color: $text-muted;
+    }
+    Scoreboard .scoreboard--who { text-style: bold; }
+    Scoreboard .scoreboard--you { color: $text-primary; }
+    Scoreboard .scoreboard--agent { color: $text-accent; }
+    Scoreboard .scoreboard--optimum { color: $text-success; }
+    Scoreboard .scoreboard--other { color: $text-muted; }
+    Screen.compact Scoreboard { border: none; padding: 0 1; }
+    """
+
+    COMPONENT_CLASSES: ClassVar[set[str]] = {
+        "scoreboard--who",
+        "scoreboard--you",
+        "scoreboard--agent",
+        "scoreboard--optimum",
+        "scoreboard--other",
+    }
+
+    WHO_STYLES: ClassVar[dict[str, str]] = {
+        "You": "you",
+        "Agent": "agent",
+        "Optimum": "optimum",
+    }
+
+    def __init__(
+        self,
+        *,
+        name: str | None = None,
+        id: str | None = None,  # noqa: A002 - Textual's own name for it
+        classes: str | None = None,
+    ) -> None:
+        super().__init__(name=name, id=id, classes=classes)
+        self.rows: tuple[ScoreRow, ...] = ()
+
+    def on_mount(self) -> None:
+        self.border_title = "Scoreboard"
+
+    def show_rows(self, rows: Sequence[ScoreRow]) -> None:
+        """Show these rows (redraws only when they changed)."""
+        rows = tuple(rows)
+        if rows != self.rows:
+            self.rows = rows
+            self.refresh(layout=True)
+
+    @property
+    def compact(self) -> bool:
+        return self.screen.has_class("compact") if self.is_attached else False
+
+    def text(self, compact: bool | None = None) -> str:
+        """The rows as plain lines ('You  …'), as they read on screen."""
+        short = self.compact if compact is None else compact
+        width = max((len(row.who) for row in self.rows), default=0)
+        return "\n".join(
+            f"{row.who:<{width}}  {(row.short or row.text) if short else row.text}"
+            for row in self.rows
+        )
+
+    def render(self) -> RenderableType:
+        if not self.rows:
+            return Text("")
+        short = self.compact
+        who_style = self.get_component_rich_style("scoreboard--who")
+        grid = Table.grid(padding=(0, 2 if not short else 1), expand=True)
+        grid.add_column(no_wrap=True)
+        grid.add_column(ratio=1)
+        for row in self.rows:
+            kind = self.WHO_STYLES.get(row.who, "other")
+            style = self.get_component_rich_style(f"scoreboard--{kind}")
+            words = (row.short or row.text) if short else row.text
+            grid.add_row(Text(row.who, who_style + style), Text(words))
+        return grid
