@@ -20,15 +20,25 @@ from tui_gym.core.session import Session
 TOLERANCE = 0.005
 
 
-@pytest.mark.slow
+@pytest.mark.parametrize(
+    "engine",
+    [
+        "auto",  # what `tui-gym train blackjack` runs: the vector engine, well under a second
+        # The whole default budget on the scalar trainer: about 20 s, so opt-in (TUI_GYM_SLOW=1).
+        pytest.param("scalar", marks=pytest.mark.slow),
+    ],
+)
 def test_default_blackjack_training_is_within_tolerance_of_the_optimum(
-    capsys: pytest.CaptureFixture[str],
+    engine: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    # The whole default budget on the scalar trainer: about 20 s, so opt-in (TUI_GYM_SLOW=1).
-    code = main(["train", "blackjack", "--json", "--eval-episodes", "1000"])
+    args = ["train", "blackjack", "--json", "--eval-episodes", "1000"]
+    if engine != "auto":
+        args += ["--engine", engine]
+    code = main(args)
     out, err = capsys.readouterr()
     assert code == 0, err
     data = json.loads(out)
+    assert data["engine"] == ("vector" if engine == "auto" else engine)
     assert data["episodes"] == Hyperparameters().episodes  # the default budget, all of it
     evaluation = data["eval"]
     assert evaluation["optimal_value"] == pytest.approx(-0.0466, abs=5e-5)

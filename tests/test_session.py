@@ -204,7 +204,7 @@ def test_heatmaps_and_reference_of_bare_envs() -> None:
 def test_flatten_observation_shows_the_same_table_as_the_bare_env(name: str) -> None:
     # FlattenObservation only reshapes: the same seed learns the same values, and the
     # heatmaps and the reference see through the wrapper to them.
-    bare = _trained(name, episodes=150)
+    bare = _trained(name, episodes=150, engine="scalar")
     flat = _trained(name, episodes=150, choices=(W("FlattenObservation"),))
     assert flat.hidden_reason() == ""
     assert np.array_equal(flat.base_q(), bare.base_q())

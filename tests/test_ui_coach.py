@@ -226,7 +226,7 @@ async def test_scoreboard_matches_the_tally_and_the_exact_reference() -> None:
         game = view.game
         text = scoreboard_text(view)
         reference = session.reference().figures
-        assert view._agent_figures["exact_value"] == reference["exact_value"]
+        assert view.agent_figures["exact_value"] == reference["exact_value"]
         assert f"exact value {signed(reference['exact_value'], 4)} with its greedy policy" in text
         assert f"Optimum  exact value {signed(reference['optimal_value'], 4)}" in text
         assert "no hands played yet" in text
@@ -250,22 +250,22 @@ async def test_scoreboard_matches_the_tally_and_the_exact_reference() -> None:
         mean = f"mean return {signed(tally.mean, 3)} ± {(high - low) / 2:.3f} (95% CI) over 6 hands"
         card = view.scorecard
         assert card.tally is tally and card.agreed == optimal_moves
-        share = f"{card.agreed}/{card.decisions} optimal decisions ({card.agreed / card.decisions:.0%})"
+        share = f"{card.agreed}/{card.decisions} optimal decisions ({card.agreement:.0%})"
         text = scoreboard_text(view)
         assert f"You      {mean} · {share}" in text
         assert f"± {(high - low) / 2:.3f}" in screen_text(app)
 
         # The agent learns on: the figures follow when the Play view is shown again.
         session.trainer.run(episodes=500)
+        exact = session.reference().figures["exact_value"]
+        assert view.agent_figures["exact_value"] != exact, "500 more hands moved the value"
         await pilot.press("t")
         await pilot.pause()
         await pilot.press("p")
         await wait_for(
-            pilot,
-            lambda: view._agent_figures["exact_value"]
-            == session.reference().figures["exact_value"],
-            "the agent's figures to refresh",
+            pilot, lambda: view.agent_figures["exact_value"] == exact, "fresh agent figures"
         )
+        assert f"exact value {signed(exact, 4)}" in scoreboard_text(view)
 
 
 async def test_gridworld_scoreboard_scores_the_agent_exactly() -> None:
@@ -276,7 +276,7 @@ async def test_gridworld_scoreboard_scores_the_agent_exactly() -> None:
         view = app.play_view
         policy = greedy_policy(session.base_q()).reshape((4,) * 4)
         extra, solved = policy_steps_over_optimal(4, policy)
-        assert view._agent_figures == {"steps_over_optimal": extra, "solved_fraction": solved}
+        assert view.agent_figures == {"steps_over_optimal": extra, "solved_fraction": solved}
         text = scoreboard_text(view)
         assert "no episode reached the target yet" in text
         assert "Optimum  0 steps over optimal from every placement" in text
@@ -366,7 +366,7 @@ async def test_a_click_on_the_board_also_takes_over() -> None:
     async with app.run_test(size=BIG) as pilot:
         await pilot.pause()
         view = app.play_view
-        view.watch_interval = FAST
+        view.watch_interval = 60.0  # the agent's first hand stays put: buttons hold still
         for target in ("canvas", "button"):
             await pilot.press("A")
             await pilot.pause()

@@ -58,13 +58,29 @@ async def paused(pilot) -> None:
     )
 
 
-def blackjack_app(episodes: int = 1_000_000) -> TuiGymApp:
-    return TuiGymApp(Session("blackjack", seed=0, hp=Hyperparameters(episodes=episodes)))
+def blackjack_app(episodes: int = 1_000_000, engine: str = "scalar") -> TuiGymApp:
+    # The scalar engine by default: slow enough to watch a run between two checks.
+    hp = Hyperparameters(episodes=episodes)
+    return TuiGymApp(Session("blackjack", seed=0, hp=hp, engine=engine))
 
 
-def gridworld_app(episodes: int = 1_000_000, **kwargs) -> TuiGymApp:
+def gridworld_app(episodes: int = 1_000_000, engine: str = "scalar", **kwargs) -> TuiGymApp:
     hp = profile_for("gridworld").default_hyperparameters().replace(episodes=episodes)
-    return TuiGymApp(Session("gridworld", seed=0, hp=hp, **kwargs))
+    return TuiGymApp(Session("gridworld", seed=0, hp=hp, engine=engine, **kwargs))
+
+
+async def test_the_vector_engine_reaches_near_optimal_play_live() -> None:
+    app = blackjack_app(episodes=1_000_000, engine="auto")
+    async with app.run_test(size=(120, 40)) as pilot:
+        view = await open_train(pilot)
+        await pilot.press("space")
+        await wait_for(pilot, lambda: not app.runner.running and app.runner.finished,
+                       "the budget to finish", timeout=60)
+        await wait_for(pilot, lambda: view._snapshot.episodes == 1_000_000, "the last frame")
+        assert "vector" in view.stats.plain
+        gap = app.session.reference().figures["gap"]
+        assert gap < 0.002
+        assert "gap" in screen_text(app)
 
 
 async def test_training_runs_live_and_pauses() -> None:

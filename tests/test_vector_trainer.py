@@ -27,7 +27,6 @@ from tui_gym.core.vector import (
     batched_q_update,
     make_vector_trainer,
 )
-from tui_gym.core.vector.stats import push_series_many, push_window_many
 from tui_gym.core.wrappers import WrapperChoice, build_env
 
 BLACKJACK = "Blackjack-v1"
@@ -99,7 +98,7 @@ def test_window_many_equals_pushing_one_by_one(size: int) -> None:
         for v in values:
             one.push(float(v))
             expected.append(one.mean)
-        means = push_window_many(many, values)
+        means = many.push_many(values)
         np.testing.assert_allclose(means, expected, rtol=1e-9, atol=1e-12)
         assert many.count == one.count and many.filled == one.filled
         np.testing.assert_allclose(many.values(), one.values())
@@ -113,7 +112,7 @@ def test_series_many_equals_pushing_one_by_one() -> None:
         values = rng.normal(size=chunk)
         for v in values:
             one.push(float(v))
-        push_series_many(many, values)
+        many.push_many(values)
         assert many.span == one.span
         np.testing.assert_allclose(many.points(), one.points(), rtol=1e-9, atol=1e-12)
         assert many._acc_n == one._acc_n

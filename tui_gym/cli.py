@@ -97,6 +97,15 @@ def build_parser() -> argparse.ArgumentParser:
         "--wrapper", action="append", default=[], metavar="SPEC",
         help="add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable, in order)",
     )
+    train.add_argument(
+        "--engine", choices=("auto", "scalar", "vector"), default="auto",
+        help="auto: the vector engine when the wrappers have a batched form (default)",
+    )
+    train.add_argument(
+        "--target-gap", type=_finite, metavar="G",
+        help="Blackjack: stop once the greedy policy's exact gap to the optimum is <= G "
+        "(budget defaults to 1,000,000 episodes then)",
+    )
     train.add_argument("--eval-episodes", type=_positive_int, default=10_000)
     train.add_argument("--save", metavar="PATH", help="save the trained agent here")
     train.add_argument("--json", action="store_true", help="print one JSON object, no bar")

@@ -90,6 +90,17 @@ def _hyperparameters(args: argparse.Namespace, base: Hyperparameters) -> Hyperpa
         raise CliError(text) from None
 
 
+TARGET_GAP_BUDGET = 1_000_000  # episodes, when --target-gap is given without --episodes
+
+
+def _base_hyperparameters(args: argparse.Namespace, env_id: str) -> Hyperparameters:
+    hp = profile_for(env_id).default_hyperparameters()
+    if getattr(args, "target_gap", None) is not None and args.episodes is None:
+        # A longer budget decays epsilon more slowly; the run stops at the target anyway.
+        hp = hp.replace(episodes=TARGET_GAP_BUDGET)
+    return hp
+
+
 def _session_from_args(args: argparse.Namespace) -> Session:
     from tui_gym.core.wrappers import parse_wrapper_spec
 
@@ -99,8 +110,9 @@ def _session_from_args(args: argparse.Namespace) -> Session:
         env_id=env_id,
         env_kwargs=_env_kwargs(args, env_id),
         choices=choices,
-        hp=_hyperparameters(args, profile_for(env_id).default_hyperparameters()),
+        hp=_hyperparameters(args, _base_hyperparameters(args, env_id)),
         seed=args.train_seed,
+        engine=args.engine,
     )
     if session.skipped:
         reasons = "; ".join(reason for _, reason in session.skipped)
@@ -139,42 +151,41 @@ def _eval_rows(data: dict[str, Any]) -> list[tuple[str, str]]:
     return rows
 
 
-def _train_with_bar(session: Session, out: Console) -> None:
-    trainer = session.trainer
-    budget = session.hp.episodes
+def _progress_bar(out: Console, budget: int) -> tuple[Progress, Callable[..., None]]:
     columns = (
         TextColumn("[bold]training[/]"),
         BarColumn(),
         MofNCompleteColumn(),
         TaskProgressColumn(),
-        TextColumn("{task.fields[rate]:>9,.0f} ep/s"),
+        TextColumn("{task.fields[rate]:>11,.0f} ep/s"),
         TextColumn("mean return {task.fields[mean]:+.3f}"),
         TimeElapsedColumn(),
         TimeRemainingColumn(),
     )
-    with Progress(*columns, console=out, transient=False) as progress:
-        task = progress.add_task("train", total=budget, rate=0.0, mean=0.0)
-        while trainer.episodes < budget:
-            trainer.run(episodes=budget - trainer.episodes, seconds=0.2)
-            snap = trainer.latest
-            progress.update(
-                task,
-                completed=trainer.episodes,
-                rate=snap.episodes / snap.seconds if snap.seconds else 0.0,
-                mean=snap.mean_return,
-            )
+    progress = Progress(*columns, console=out, transient=False)
+    task = progress.add_task("train", total=budget, rate=0.0, mean=0.0)
+
+    def update(snap: Any) -> None:
+        rate = snap.episodes / snap.seconds if snap.seconds else 0.0
+        progress.update(task, completed=snap.episodes, rate=rate, mean=snap.mean_return)
+
+    return progress, update
 
 
 def cmd_train(args: argparse.Namespace, out: Console) -> int:
+    if args.target_gap is not None and args.target_gap <= 0:
+        raise CliError(f"--target-gap must be a positive number, got {args.target_gap:g}")
     session = _session_from_args(args)
     trainer = session.trainer
-    budget = session.hp.episodes
     started = time.perf_counter()
     if args.json or not out.is_terminal:
-        trainer.run(episodes=budget)
+        outcome = session.train(target_gap=args.target_gap)
     else:
-        _train_with_bar(session, out)
+        progress, update = _progress_bar(out, session.hp.episodes)
+        with progress:
+            outcome = session.train(target_gap=args.target_gap, on_chunk=update)
     seconds = time.perf_counter() - started
+    trainer = session.trainer
     report = session.evaluate(args.eval_episodes, seed=args.train_seed + 1)
     evaluation = eval_dict(session, report)
     saved = str(session.save(args.save)) if args.save else None
@@ -183,6 +194,7 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
         "env_kwargs": session.env_kwargs,
         "wrappers": [c.name for c in session.applied],
         "engine": trainer.engine,
+        "engine_reason": session.engine_reason,
         "episodes": trainer.episodes,
         "steps": trainer.steps,
         "seconds": seconds,
@@ -192,19 +204,26 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
         "eval": evaluation,
         "saved": saved,
     }
+    if args.target_gap is not None:
+        data.update(target_gap=args.target_gap, reached_target=outcome.reached_target,
+                    checked_gap=outcome.gap)
     if args.json:
         print_json(data)
         return 0
     rows = [
         ("env", f"{session.env_id} {session.env_kwargs or ''}".strip()),
         ("wrappers", session.chain_repr()),
+        ("engine", session.engine_reason),
         ("episodes", f"{trainer.episodes:,}"),
         ("steps", f"{trainer.steps:,}"),
         ("seconds", f"{seconds:.2f}"),
         ("episodes/s", f"{data['episodes_per_second']:,.0f}"),
         (f"rolling mean return ({trainer.latest.window})", f"{trainer.latest.mean_return:+.4f}"),
-        *_eval_rows(evaluation),
     ]
+    if args.target_gap is not None:
+        verdict = "reached" if outcome.reached_target else "NOT reached"
+        rows.append(("target gap", f"{args.target_gap:g} {verdict} (gap {outcome.gap:.4f})"))
+    rows += _eval_rows(evaluation)
     if saved:
         rows.append(("saved to", saved))
     out.print(key_value_table("Training summary", rows))

@@ -15,6 +15,7 @@ them over, so saving, evaluating or watching the agent see every episode.
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing as mp
 import threading
 import time
@@ -176,10 +177,8 @@ class ProcessRunner:
         if self._closed:
             return
         self._closed = True
-        try:
+        with contextlib.suppress(OSError, ValueError):
             self._send(("quit",))
-        except (OSError, ValueError):
-            pass
         self._process.join(timeout=3.0)
         if self._process.is_alive():
             self._process.terminate()

@@ -56,6 +56,7 @@ class TrainingRunner:
         self.last_scene: dict | None = None  # the board after the last animated step
         self.error: BaseException | None = None
         self.finished = False  # the episode budget was reached
+        self._anim_mark = 0.0  # when the last animated step was taken
         self._want_run = threading.Event()
         self._idle = threading.Event()
         self._idle.set()
@@ -154,9 +155,9 @@ class TrainingRunner:
         self._idle.set()
 
     def _episode_once(self) -> None:
-        trainer = self.session.trainer
         speed = self.speed
-        if speed.animated and hasattr(trainer, "step") and trainer.engine == "scalar":
+        trainer = self.session.trainer_for(speed.animated)
+        if speed.animated:
             while not self._quit.is_set():
                 self._animated_step(trainer)
                 if self.last_event.episode_done is not None:
@@ -166,21 +167,29 @@ class TrainingRunner:
             trainer.run(episodes=1)
 
     def _animated_step(self, trainer) -> None:
-        """One agent step, remembered (with the board's scene) for viewers."""
+        """One agent step, remembered (with the board's scene) for viewers.
+
+        The time between animated steps (the pause that makes them readable)
+        counts as training time, so episodes/s tells the pace being shown.
+        """
+        now = time.perf_counter()
+        if now - self._anim_mark < 2.0:
+            trainer.seconds += now - self._anim_mark
+        self._anim_mark = now
         event = trainer.step()
         self.last_event = event
         self.last_scene = self.session.profile.scene(trainer.env)
         trainer.publish()
 
     def _chunk(self) -> None:
-        trainer = self.session.trainer
+        speed = self.speed
+        trainer = self.session.trainer_for(speed.animated)
         if trainer.remaining == 0:
             self.finished = True
             self._want_run.clear()
             trainer.publish()
             return
-        speed = self.speed
-        if speed.animated and trainer.engine == "scalar":
+        if speed.animated:
             self._animated_step(trainer)
             time.sleep(speed.step_delay or 0.0)
             return

@@ -10,7 +10,7 @@ loads.
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Mapping, Sequence
+from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -24,12 +24,15 @@ from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.profiles import GameProfile, ReferenceMetrics, profile_for, resolve_env_id
 from tui_gym.core.training import Trainer, TrainingSnapshot
+from tui_gym.core.vector import NoBatchedForm, VectorTrainer
 from tui_gym.core.wrappers import (
     CATALOG,
     WrapperChoice,
     build_env,
     build_env_lenient,
 )
+
+ENGINES = ("auto", "scalar", "vector")
 
 # Observation wrappers whose `observation()` is a pure function of the bare
 # observation: the heatmaps and the exact reference can see through them.
@@ -43,6 +46,14 @@ class RebuildReport:
     kept_agent: bool
     notice: str
     skipped: tuple[tuple[WrapperChoice, str], ...] = ()
+
+
+@dataclass(frozen=True)
+class TrainOutcome:
+    """How a headless run ended: whether it met its target gap, and the last gap checked."""
+
+    reached_target: bool | None  # None: no target was set
+    gap: float | None
 
 
 @dataclass
@@ -79,6 +90,7 @@ class Session:
     choices: tuple[WrapperChoice, ...] = ()
     hp: Hyperparameters | None = None  # None: the game's own defaults
     seed: int = 0
+    engine: str = "auto"  # "auto" (vector when the wrappers allow), "scalar" or "vector"
 
     def __post_init__(self) -> None:
         self.env_id = resolve_env_id(self.env_id)
@@ -87,6 +99,8 @@ class Session:
         if self.hp is None:
             self.hp = self.profile.default_hyperparameters()
         self.choices = tuple(self.choices)
+        if self.engine not in ENGINES:
+            raise ValueError(f"engine must be one of {', '.join(ENGINES)}, got {self.engine!r}")
         self._install(_build(self.env_id, self.env_kwargs, self.choices))
         self.agent = self._new_agent()
         self.trainer = self._new_trainer()
@@ -102,7 +116,39 @@ class Session:
         return QAgent(self._built.n_actions, self.hp, n_states=self.keyer.n_states, seed=self.seed)
 
     def _new_trainer(self) -> Trainer:
-        return Trainer(self.env, self.agent, self.keyer, seed=self.seed)
+        """The trainer for the chosen engine; `engine_reason` says which and why."""
+        self._scalar: Trainer | None = None
+        self._vector: Trainer | None = None
+        if self.engine != "scalar":
+            try:
+                self._vector = VectorTrainer(self.env, self.agent, self.keyer, seed=self.seed)
+            except (NoBatchedForm, ValueError) as exc:
+                reason = str(exc).removeprefix("scalar engine: ")
+                if self.engine == "vector":
+                    raise ValueError(f"the vector engine cannot run this: {reason}") from None
+                self.engine_reason = f"scalar engine: {reason}"
+            else:
+                self.engine_reason = self._vector.plan.describe()
+                return self._vector
+        else:
+            self.engine_reason = "scalar engine: chosen"
+        self._scalar = Trainer(self.env, self.agent, self.keyer, seed=self.seed)
+        return self._scalar
+
+    def trainer_for(self, animated: bool) -> Trainer:
+        """The trainer to use now: animation needs single steps, so the scalar engine.
+
+        Switching hands the counts and statistics over, so the run reads as one.
+        """
+        if animated and self.trainer.engine != "scalar":
+            if self._scalar is None:
+                self._scalar = Trainer(self.env, self.agent, self.keyer, seed=self.seed + 1)
+            self._scalar.adopt_progress(self.trainer)
+            self.trainer = self._scalar
+        elif not animated and self._vector is not None and self.trainer is not self._vector:
+            self._vector.adopt_progress(self.trainer)
+            self.trainer = self._vector
+        return self.trainer
 
     @property
     def applied(self) -> tuple[WrapperChoice, ...]:
@@ -141,6 +187,9 @@ class Session:
         kwargs = profile.normalize_kwargs(kwargs)
         new_choices = tuple(self.choices if choices is None else choices)
         built = _build(new_id, kwargs, new_choices)
+        if profile is not self.profile:
+            # Each game learns with its own defaults (GridWorld needs discounting).
+            self.hp = profile.default_hyperparameters()
         keep = built.meaning == self._built.meaning and built.n_actions == self._built.n_actions
         old_trainer = self.trainer
         self.env.close()
@@ -256,6 +305,45 @@ class Session:
             return None
         best = q.max()
         return tuple(int(a) for a in np.flatnonzero(q == best)), q
+
+    # --- headless training ------------------------------------------------
+    def train(
+        self,
+        target_gap: float | None = None,
+        check_every: int = 10_000,
+        chunk_seconds: float = 0.2,
+        on_chunk: Callable[[TrainingSnapshot], None] | None = None,
+    ) -> TrainOutcome:
+        """Train to the end of the budget, or until the exact gap is at most `target_gap`.
+
+        The gap is checked every `check_every` episodes (exactly, from the
+        reference: no sampling noise). `on_chunk` sees a snapshot after each
+        chunk of about `chunk_seconds`, e.g. to draw a progress bar.
+        """
+        if target_gap is not None:
+            ref = self.reference()
+            if ref is None or "gap" not in ref.figures:
+                raise ValueError(f"--target-gap needs a game with an exact optimum; "
+                                 f"{self.profile.title} has none here")
+        trainer = self.trainer
+        next_check = trainer.episodes + check_every
+        gap = None
+        while trainer.remaining > 0:
+            limit = trainer.remaining
+            if target_gap is not None:
+                limit = min(limit, max(1, next_check - trainer.episodes))
+            trainer.run(episodes=limit, seconds=chunk_seconds)
+            if on_chunk is not None:
+                on_chunk(trainer.latest)
+            if target_gap is not None and trainer.episodes >= next_check:
+                next_check = trainer.episodes + check_every
+                gap = self.reference().figures["gap"]  # type: ignore[union-attr]
+                if gap <= target_gap:
+                    return TrainOutcome(True, gap)
+        if target_gap is not None:
+            gap = self.reference().figures["gap"]  # type: ignore[union-attr]
+            return TrainOutcome(gap <= target_gap, gap)
+        return TrainOutcome(None, None)
 
     # --- evaluating, saving -----------------------------------------------
     def evaluate(

@@ -39,6 +39,25 @@ class RollingWindow:
             # Re-sum once per lap so floating-point drift cannot build up.
             self._sum = float(self._values.sum())
 
+    def push_many(self, values: np.ndarray) -> np.ndarray:
+        """Push `values` in order (as many `push` calls would); returns the mean after each."""
+        values = np.asarray(values, dtype=np.float64)
+        k = len(values)
+        if k == 0:
+            return values
+        old = self.values()
+        history = np.concatenate([[0.0], old, values]).cumsum()
+        totals = len(old) + np.arange(1, k + 1)  # values seen after each push
+        lengths = np.minimum(totals, self.size)
+        means = (history[totals] - history[totals - lengths]) / lengths
+        last = values[-self.size :]  # only the newest `size` values can stay
+        slots = (self._next + np.arange(k - len(last), k)) % self.size
+        self._values[slots] = last
+        self._next = (self._next + k) % self.size
+        self.count += k
+        self._sum = float(self._values.sum())  # slots not yet filled hold zeros
+        return means
+
     @property
     def filled(self) -> int:
         return min(self.count, self.size)
@@ -84,6 +103,30 @@ class Series:
             pts = self._points
             self._points = [(pts[i] + pts[i + 1]) / 2 for i in range(0, len(pts), 2)]
             self.span *= 2
+
+    def push_many(self, values: np.ndarray) -> None:
+        """Push `values` in order, merging points as `push` does when full."""
+        values = np.asarray(values, dtype=np.float64)
+        i, k = 0, len(values)
+        while i < k:
+            need = self.span - self._acc_n
+            if k - i < need:  # not enough to close a point
+                self._acc += float(values[i:].sum())
+                self._acc_n += k - i
+                return
+            self._points.append((self._acc + float(values[i : i + need].sum())) / self.span)
+            self._acc, self._acc_n = 0.0, 0
+            i += need
+            room = self.capacity - len(self._points)
+            whole = min((k - i) // self.span, max(room, 0))
+            if whole:
+                block = values[i : i + whole * self.span].reshape(whole, self.span)
+                self._points.extend(block.mean(axis=1).tolist())
+                i += whole * self.span
+            if len(self._points) >= self.capacity:
+                pts = self._points
+                self._points = [(pts[j] + pts[j + 1]) / 2 for j in range(0, len(pts), 2)]
+                self.span *= 2
 
     def points(self) -> tuple[float, ...]:
         return tuple(self._points)

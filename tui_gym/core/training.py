@@ -214,7 +214,7 @@ class Trainer:
         """
         if episodes is None and seconds is None and stop is None:
             raise ValueError("run() needs episodes, seconds or a stop event")
-        start = time.perf_counter()
+        start = began = time.perf_counter()
         next_publish = start + self.publish_interval
         done = 0
         check_every = 16
@@ -224,7 +224,7 @@ class Trainer:
             if done % check_every:
                 continue
             now = time.perf_counter()
-            if seconds is not None and now - start >= seconds:
+            if seconds is not None and now - began >= seconds:
                 break
             if stop is not None and stop.is_set():
                 break
@@ -286,8 +286,9 @@ class Trainer:
 
     def restore(self, progress: TrainerProgress) -> None:
         """Carry on from `progress` (this trainer's agent is the one that made it)."""
-        self.episodes, self.steps, self.seconds = progress.episodes, progress.steps, progress.seconds
-        self.windows, self.series, self.last = progress.windows, progress.series, progress.last
+        self.episodes, self.steps = progress.episodes, progress.steps
+        self.seconds, self.windows = progress.seconds, progress.windows
+        self.series, self.last = progress.series, progress.last
         self._rate_mark, self._rate = progress.rate_mark, progress.rate
         self._version = progress.version
         self.publish()

@@ -41,7 +41,14 @@ from textual.timer import Timer
 from textual.widgets import Static
 
 from tui_gym.core.play import HumanGame, PlayError, PlayStep, Scorecard
-from tui_gym.core.profiles.base import Advice, format_reward, plural, signed, to_jsonable
+from tui_gym.core.profiles.base import (
+    Advice,
+    ScoreRow,
+    format_reward,
+    plural,
+    signed,
+    to_jsonable,
+)
 from tui_gym.ui.widgets.boards import BOARDS, Board
 from tui_gym.ui.widgets.scoreboard import Scoreboard
 
@@ -116,7 +123,8 @@ class PlayView(Vertical):
         self._coach = ""  # the coach's line on the last move
         self._coach_tone = ""
         self.scorecard = Scorecard()  # the person's record (tally, agreement, figures)
-        self._agent_figures: dict[str, float] | None = None  # exact, for the scoreboard
+        # The agent's exact scoreboard figures, as of the last refresh (not per frame).
+        self.agent_figures: dict[str, float] | None = None
         # Watching the agent play on the board.
         self.watch_interval = WATCH_INTERVAL
         self.watch_pause_ticks = WATCH_PAUSE_TICKS
@@ -406,17 +414,17 @@ class PlayView(Vertical):
     def refresh_agent_figures(self) -> None:
         """Recompute the agent's exact figures (a few ms) and redraw the scoreboard."""
         try:
-            self._agent_figures = self.app.session.agent_figures()
+            self.agent_figures = self.app.session.agent_figures()
         except Exception:  # a table that does not fit the reference: no figures
-            self._agent_figures = None
+            self.agent_figures = None
         self._show_scoreboard()
 
-    def score_rows(self) -> list[Any]:
+    def score_rows(self) -> list[ScoreRow]:
         """The scoreboard's rows as the profile words them."""
         session = self.app.session
         watched = self.agent_card if self.agent_card.tally.episodes else None
         return session.profile.scoreboard(
-            self.scorecard, self._agent_figures, watched, session.hidden_reason()
+            self.scorecard, self.agent_figures, watched, session.hidden_reason()
         )
 
     def _show_scoreboard(self) -> None:

@@ -49,7 +49,6 @@ from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.stats import EpisodeStats
 from tui_gym.core.training import SERIES_NAMES, StepEvent, Trainer, TrainingSnapshot
 from tui_gym.core.vector.plan import VectorPlan, plan_for_env
-from tui_gym.core.vector.stats import push_series_many, push_window_many
 from tui_gym.core.wrappers import WrapperChoice, build_env_lenient
 
 __all__ = ["DEFAULT_NUM_ENVS", "VectorTrainer", "batched_q_update", "make_vector_trainer"]
@@ -310,8 +309,8 @@ class VectorTrainer(Trainer):
         count = len(envs)
         columns = (returns, lengths, mean_td, np.full(count, epsilon))
         for name, values in zip(SERIES_NAMES, columns, strict=True):
-            means = push_window_many(self.windows[name], values)
-            push_series_many(self.series[name], means)
+            means = self.windows[name].push_many(values)
+            self.series[name].push_many(means)
         self.last = EpisodeStats(
             episode_return=float(returns[-1]),
             length=int(lengths[-1]),
