@@ -174,7 +174,7 @@ def test_runs_finish_exactly_the_episodes_asked_for() -> None:
     trainer = VectorTrainer(env, agent, keyer, seed=0, num_envs=64)
     assert trainer.run(episodes=1) == 1
     assert trainer.run(episodes=10) == 10
-    assert not trainer.episode_in_progress()  # a quota never leaves games half played
+    assert trainer.episode_in_progress()  # envs keep playing: games carry over to the next run
     assert trainer.run(episodes=1000) == 1000
     assert trainer.run_episode() is trainer.last
     assert trainer.episodes == agent.episode == 1012
@@ -240,3 +240,16 @@ def test_wrappers_shape_the_rewards_and_unbatchable_ones_refuse() -> None:
     sparse = QAgent(2, seed=0)
     with pytest.raises(ValueError, match="dense"):
         VectorTrainer(env, sparse, keyer)
+
+
+def test_the_last_window_is_not_skewed_towards_long_episodes() -> None:
+    # A run must not end by waiting for its longest games: the rolling window
+    # of the last 1,000 episodes should look like the run as a whole.
+    env, agent, keyer = _agent(BLACKJACK, Hyperparameters(episodes=60_000), seed=0)
+    trainer = VectorTrainer(env, agent, keyer, seed=0)
+    trainer.run(episodes=60_000)
+    lengths = trainer.windows["length"].values()
+    overall = trainer.steps / trainer.episodes
+    # Within 5 standard errors of the window mean (from the window's own spread).
+    bound = 5 * lengths.std(ddof=1) / np.sqrt(len(lengths))
+    assert abs(lengths.mean() - overall) < bound

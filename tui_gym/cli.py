@@ -76,6 +76,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--env", default="blackjack", help="game to open (default: blackjack)")
     parser.add_argument("--seed", type=_seed, default=0, help="seed for every random thing")
     parser.add_argument("--load", metavar="PATH", help="open a saved agent")
+    parser.add_argument(
+        "--runner", choices=("process", "thread"), default="process",
+        help="train in a child process (default) or on a thread of the app's process",
+    )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
     sub.add_parser("envs", help="list the games")
@@ -188,7 +192,7 @@ def _run_app(args: argparse.Namespace) -> int:
         from tui_gym.ui.app import run_app
     except ImportError as exc:  # pragma: no cover - only without the UI installed
         raise CliError(f"the app is not available ({exc}); try `tui-gym --help`") from None
-    return run_app(env_id=env_id, seed=args.seed, load=args.load)
+    return run_app(env_id=env_id, seed=args.seed, load=args.load, runner=args.runner)
 
 
 def print_json(data: dict[str, Any]) -> None:

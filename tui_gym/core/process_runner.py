@@ -247,7 +247,8 @@ def child_main(conn: Connection) -> None:
                             runner.close()
                         s = handover.spec
                         session = Session(env_id=s.env_id, env_kwargs=s.env_kwargs,
-                                          choices=s.choices, hp=handover.hp, seed=s.seed)
+                                          choices=s.choices, hp=handover.hp, seed=s.seed,
+                                          engine=s.engine)
                         spec = handover.spec
                         runner = TrainingRunner(session)
                     session.set_hyperparameters(handover.hp)

@@ -206,3 +206,17 @@ class _Inverted:
 
     def is_set(self) -> bool:
         return not self._event.is_set()
+
+
+RUNNERS = ("thread", "process")
+
+
+def make_runner(session: Session, kind: str = "thread", speed: int = DEFAULT_SPEED):
+    """A runner of the given kind: "thread" (this process) or "process" (a child process)."""
+    if kind == "thread":
+        return TrainingRunner(session, speed)
+    if kind == "process":
+        from tui_gym.core.process_runner import ProcessRunner
+
+        return ProcessRunner(session, speed)
+    raise ValueError(f"runner must be one of {', '.join(RUNNERS)}, got {kind!r}")

@@ -20,7 +20,7 @@ from textual.screen import Screen
 from textual.widgets import ContentSwitcher, Footer, Header, Static
 
 from tui_gym.core.profiles import PROFILES
-from tui_gym.core.runner import TrainingRunner
+from tui_gym.core.runner import make_runner
 from tui_gym.core.session import Session
 from tui_gym.core.storage import StorageError
 from tui_gym.core.wrappers import WrapperChoice
@@ -56,10 +56,17 @@ class TuiGymApp(App[int]):
     ]
     TRAIN_ACTIONS = frozenset({"toggle_training", "one_episode", "reset_agent", "faster", "slower"})
 
-    def __init__(self, session: Session | None = None, *, play_seed: int | None = None) -> None:
+    def __init__(
+        self,
+        session: Session | None = None,
+        *,
+        play_seed: int | None = None,
+        runner: str = "thread",
+    ) -> None:
+        """`runner` is "thread" (train on a worker thread) or "process" (a child process)."""
         super().__init__()
         self.session = session or Session()
-        self.runner = TrainingRunner(self.session)
+        self.runner = make_runner(self.session, runner)
         self.play_seed = self.session.seed if play_seed is None else play_seed
         self._last_version = -1
         self._was_running = False
@@ -107,7 +114,8 @@ class TuiGymApp(App[int]):
 
     @property
     def current_view(self) -> str:
-        return self.query_one("#views", ContentSwitcher).current or "play"
+        switchers = self.query("#views")  # empty while the app is being taken apart
+        return (switchers.first(ContentSwitcher).current if switchers else None) or "play"
 
     # --- the timer: pull the latest snapshot --------------------------------
     def _tick(self) -> None:
@@ -302,9 +310,11 @@ class TuiGymApp(App[int]):
         self.runner.close()
 
 
-def run_app(env_id: str = "Blackjack-v1", seed: int = 0, load: str | None = None) -> int:
+def run_app(
+    env_id: str = "Blackjack-v1", seed: int = 0, load: str | None = None, runner: str = "process"
+) -> int:
     """Open the app (from a saved agent with `load`); returns the exit code."""
     session = Session.load(load) if load else Session(env_id=env_id, seed=seed)
-    app = TuiGymApp(session)
+    app = TuiGymApp(session, runner=runner)
     result = app.run()
     return int(result or 0)

@@ -239,13 +239,18 @@ class VectorTrainer(Trainer):
         return done
 
     # --- one batch step --------------------------------------------------
-    def _start_episodes(self, quota: int | None) -> None:
-        """Start episodes in idle envs, lowest first, while the quota has room."""
-        idle_count = self.num_envs - self._n_live
-        room = idle_count if quota is None else min(idle_count, quota - self._n_live)
-        if room <= 0:
+    def _start_episodes(self) -> None:
+        """Start an episode in every idle env.
+
+        Every env always has an episode in progress (a steady state): near the
+        end of a quota only some envs step, and the rest carry their episodes
+        over to the next call. Waiting instead for the last in-progress
+        episodes to finish would end every run on its longest episodes and
+        skew the rolling statistics.
+        """
+        if self._n_live == self.num_envs:
             return
-        idle = np.flatnonzero(~self._live)[:room]
+        idle = np.flatnonzero(~self._live)
         self._keys[idle] = self.keyer.keys(self.venv.reset(idle))
         self._live[idle] = True
         self._n_live += len(idle)
@@ -269,7 +274,7 @@ class VectorTrainer(Trainer):
 
     def _batch(self, quota: int | None) -> int:
         """One batched step of every stepping env; returns the episodes it finished."""
-        self._start_episodes(quota)
+        self._start_episodes()
         if self._n_live == 0:
             return 0
         index: np.ndarray | None = None
