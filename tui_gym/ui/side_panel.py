@@ -22,6 +22,7 @@ from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet, Stati
 
 from tui_gym.core.profiles import PROFILES
 from tui_gym.core.wrappers import CATALOG, Param, WrapperChoice
+from tui_gym.ui.widgets.tick_box import TickBox
 
 
 def _value_text(value: Any) -> str:
@@ -65,7 +66,7 @@ class ParamField(Horizontal):
         yield Label(self.param.name)
         tooltip = f"{self.param.help} ({self.param.describe_range()})".strip()
         if self.param.kind is bool:
-            box = Checkbox("", value=bool(self._value), compact=True)
+            box = TickBox("", value=bool(self._value), compact=True)
             box.tooltip = tooltip
             yield box
             return
@@ -125,7 +126,7 @@ class WrapperRow(Vertical):
 
     def compose(self) -> ComposeResult:
         spec = self.spec
-        box = Checkbox(spec.name, value=self.choice is not None, compact=True)
+        box = TickBox(spec.name, value=self.choice is not None, compact=True)
         box.tooltip = spec.summary
         yield box
         yield Static(spec.summary, classes="summary", markup=False)

@@ -357,6 +357,10 @@ class TrainView(VerticalScroll):
         reference = session.reference(snapshot)
         note = "" if reference is not None else session.hidden_reason()
         self.stats.show_reference(reference, note)
+        reason = session.engine_reason
+        if snapshot.engine == "scalar" and reason.startswith("vector"):
+            reason = "scalar engine while animating (the vector engine runs at max speed)"
+        self.stats.show_engine_reason(reason)
 
     def _show_state(self, runner: TrainingRunner) -> None:
         snapshot = self._snapshot

@@ -84,6 +84,7 @@ class StatsPanel(Widget):
         self.border_title = "Training"
         self._rows: list[tuple[str, str, str]] = []  # (name, value, style)
         self._reference: list[tuple[str, str]] = []
+        self._engine_reason = ""
         self._reference_note = ""
         self._state = "idle"
         self._speed = ""
@@ -121,6 +122,12 @@ class StatsPanel(Widget):
             self._rows = rows
             self._engine = snapshot.engine
             self._window = window
+            self._changed()
+
+    def show_engine_reason(self, reason: str) -> None:
+        """Say which engine trains and why (e.g. a wrapper with no batched form)."""
+        if reason != self._engine_reason:
+            self._engine_reason = reason
             self._changed()
 
     def show_reference(self, reference: ReferenceMetrics | None, note: str = "") -> None:
@@ -164,6 +171,8 @@ class StatsPanel(Widget):
         lines += [f"{name} {value}" for name, value in self._reference]
         if self._reference_note:
             lines.append(self._reference_note)
+        if self._engine_reason:
+            lines.append(self._engine_reason)
         return "\n".join(lines)
 
     def render(self) -> RenderableType:
@@ -194,4 +203,6 @@ class StatsPanel(Widget):
             parts.append(ref)
         elif self._reference_note:
             parts.append(Text(self._reference_note, style="italic dim"))
+        if self._engine_reason:
+            parts.append(Text(self._engine_reason, style="italic dim"))
         return Group(*parts)
