@@ -71,6 +71,14 @@ def build_parser() -> argparse.ArgumentParser:
         prog="tui-gym",
         description="A terminal playground for reinforcement learning. "
         "With no command, opens the app.",
+        epilog="examples:\n"
+        "  tui-gym --env gridworld          open the app on GridWorld (? lists every key)\n"
+        "  tui-gym train blackjack --save bj.tgym\n"
+        "  tui-gym eval bj.tgym --json\n"
+        "  tui-gym optimal blackjack --sab\n"
+        "  tui-gym play gridworld --jsonl   a program plays through JSON lines\n"
+        "  tui-gym COMMAND --help           the options of one command",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"tui-gym {__version__}")
     parser.add_argument("--env", default="blackjack", help="game to open (default: blackjack)")
