@@ -194,6 +194,11 @@ class QAgent:
             self._rows_used += 1
         return row
 
+    def seen(self, key: Hashable) -> bool:
+        """Whether the agent has updated this state at least once."""
+        row = self._find(key)
+        return row is not None and bool(self.visits[row])
+
     def _find(self, key: Hashable) -> int | None:
         """The table row of a key, or None when it was never seen."""
         if self._index is None:

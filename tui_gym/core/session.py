@@ -281,26 +281,35 @@ class Session:
         q = self.base_q(snapshot)
         return None if q is None else self.profile.heatmaps(q, self.env_kwargs, focus)
 
-    def agent_figures(self) -> dict[str, float]:
-        """Exact scoreboard figures of the live agent's greedy policy and of the optimum
-        (`profile.agent_figures`); only the optimum's when wrappers hide the base states."""
-        return self.profile.agent_figures(self.base_q(), self.env_kwargs)
+    def agent_figures(self, snapshot: TrainingSnapshot | None = None) -> dict[str, float]:
+        """Exact scoreboard figures of the agent's greedy policy (the live agent's, or a
+        snapshot's) and of the optimum (`profile.agent_figures`); only the optimum's
+        when wrappers hide the base states."""
+        return self.profile.agent_figures(self.base_q(snapshot), self.env_kwargs)
 
-    def greedy_actions_for(self, observation: Any) -> tuple[tuple[int, ...], np.ndarray] | None:
+    def greedy_actions_for(
+        self, observation: Any, snapshot: TrainingSnapshot | None = None
+    ) -> tuple[tuple[int, ...], np.ndarray] | None:
         """What the agent's greedy policy does on an observation of this env (wrappers
         applied): every action tied for the best value, and the state's Q-values.
 
-        None when the agent has never updated that state (its values are all the
-        initial 0), or the observation does not fit the env's space. Only reads the
-        table, so it is safe while the trainer writes it on another thread.
+        Reads the live agent, or `snapshot` (e.g. the runner's latest while a child
+        process trains). None when the agent has never updated that state (with a
+        snapshot, which keeps no visit counts: when its values are all still 0), or
+        the observation does not fit the env's space. Only reads the table, so it is
+        safe while the trainer writes it on another thread.
         """
         agent = self.agent
         try:
             key = self.keyer.key(observation)
-            row = agent._find(key)  # the O(1) lookup; QAgent has no public "seen" query
-            if row is None or agent.visits[row] == 0:
-                return None
-            q = np.array(agent.q[row], dtype=np.float64)
+            if snapshot is not None:
+                q = snapshot.values([key])[0]
+                if not q.any():
+                    return None
+            else:
+                if not agent.seen(key):
+                    return None
+                q = agent.values([key])[0]
         except (IndexError, KeyError, TypeError, ValueError):  # a mismatched or moving table
             return None
         best = q.max()

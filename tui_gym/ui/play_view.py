@@ -49,6 +49,7 @@ from tui_gym.core.profiles.base import (
     signed,
     to_jsonable,
 )
+from tui_gym.core.training import TrainingSnapshot
 from tui_gym.ui.widgets.boards import BOARDS, Board
 from tui_gym.ui.widgets.scoreboard import Scoreboard
 
@@ -373,7 +374,7 @@ class PlayView(Vertical):
     def agent_note(self, observation: Any) -> str:
         """'agent: hit (Q stick −0.310, hit −0.402)': the greedy agent's choice here."""
         names = self.app.session.profile.action_names
-        choice = self.app.session.greedy_actions_for(observation)
+        choice = self.app.session.greedy_actions_for(observation, self._training_snapshot())
         if choice is None:
             return "agent: has never seen this state (it would pick at random)"
         ties, q = choice
@@ -414,10 +415,16 @@ class PlayView(Vertical):
     def refresh_agent_figures(self) -> None:
         """Recompute the agent's exact figures (a few ms) and redraw the scoreboard."""
         try:
-            self.agent_figures = self.app.session.agent_figures()
+            self.agent_figures = self.app.session.agent_figures(self._training_snapshot())
         except Exception:  # a table that does not fit the reference: no figures
             self.agent_figures = None
         self._show_scoreboard()
+
+    def _training_snapshot(self) -> TrainingSnapshot | None:
+        """While training runs, its latest snapshot: the freshest table whatever the
+        runner (a child process hands the agent itself back only when paused)."""
+        runner = getattr(self.app, "runner", None)
+        return runner.latest if runner is not None and runner.running else None
 
     def score_rows(self) -> list[ScoreRow]:
         """The scoreboard's rows as the profile words them."""
@@ -520,7 +527,7 @@ class PlayView(Vertical):
         session = self.app.session
         before = self._advice(game)
         assert game.last is not None
-        choice = session.greedy_actions_for(game.last.observation)
+        choice = session.greedy_actions_for(game.last.observation, self._training_snapshot())
         ties = choice[0] if choice is not None else tuple(range(session.agent.n_actions))
         action = ties[0] if len(ties) == 1 else ties[self._watch_rng.randrange(len(ties))]
         note = self.agent_note(game.last.observation)
