@@ -70,6 +70,7 @@ class TuiGymApp(App[int]):
         self.play_seed = self.session.seed if play_seed is None else play_seed
         self._last_version = -1
         self._was_running = False
+        self._switcher: ContentSwitcher | None = None
 
     # --- layout ------------------------------------------------------------
     def compose(self) -> ComposeResult:
@@ -87,6 +88,7 @@ class TuiGymApp(App[int]):
         yield Footer()
 
     def on_mount(self) -> None:
+        self._switcher = self.query_one("#views", ContentSwitcher)
         self.sub_title = self.session.profile.title
         self.set_interval(1 / REFRESH_HZ, self._tick)
         self._apply_size(self.size.width, self.size.height)
@@ -114,8 +116,11 @@ class TuiGymApp(App[int]):
 
     @property
     def current_view(self) -> str:
-        switchers = self.query("#views")  # empty while the app is being taken apart
-        return (switchers.first(ContentSwitcher).current if switchers else None) or "play"
+        """"play" or "train" (asked often: by every binding check and every tick)."""
+        switcher = self._switcher
+        if switcher is None or not switcher.is_attached:  # not yet, or being taken apart
+            return "play"
+        return switcher.current or "play"
 
     # --- the timer: pull the latest snapshot --------------------------------
     def _tick(self) -> None:
@@ -126,7 +131,6 @@ class TuiGymApp(App[int]):
         running = runner.running
         if running != self._was_running:
             self._was_running = running
-            self.refresh_bindings()
             if not running and runner.finished:
                 self.notify("Training reached its episode budget.", title="Done")
         if self.current_view != "train":
@@ -143,14 +147,19 @@ class TuiGymApp(App[int]):
         return True
 
     def action_show_view(self, view: str) -> None:
-        self.query_one("#views", ContentSwitcher).current = view
-        self.refresh_bindings()
+        if self._switcher is None:
+            return
+        self._switcher.current = view
+        before = self.focused
         if view == "play":
             self.play_view.focus_board()
         else:
             self._last_version = -1
             self.train_view.focus_default()
             self._tick()
+        if self.focused is before:
+            # A focus change refreshes the Footer by itself (and the Footer is costly).
+            self.refresh_bindings()
 
     def action_switch_game(self, name: str) -> None:
         profile = next(p for p in PROFILES if p.name == name)

@@ -219,9 +219,10 @@ class HeatmapView(Widget, can_focus=True):
         self.add_class("-empty")
         self.refresh(layout=True)
 
-    def watch_focus_cell(self) -> None:
+    def watch_focus_cell(self, old: object, new: object) -> None:
         self.refresh()
-        self.refresh_bindings()
+        if (old is None) != (new is None):  # the move keys come or go
+            self.refresh_bindings()
 
     # --- keys and clicks ---------------------------------------------------
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
