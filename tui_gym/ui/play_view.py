@@ -66,7 +66,7 @@ class PlayView(Vertical):
     SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
     DEFAULT_CSS = """
     PlayView { width: 1fr; height: 1fr; padding: 0 1; }
-    PlayView #play-title { height: 1; width: 1fr; padding: 0 1; }
+    PlayView #play-title { height: auto; max-height: 3; width: 1fr; padding: 0 1; }
     PlayView > Board { height: 1fr; min-height: 7; }
     PlayView #play-status {
         height: auto;

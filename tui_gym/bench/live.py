@@ -1,0 +1,323 @@
+"""Live training: what the real app does to training speed, its refresh rate and key latency.
+
+For each runner ("thread": training on a worker thread of the app's process;
+"process": training in a child process, the app's default), one repeat is:
+
+1. Headless: a Blackjack `Session` (engine "auto", i.e. the vector engine)
+   trains in this process with `trainer.run(seconds=W)`, after a warm-up:
+   headless episodes per second.
+2. Live: the real `TuiGymApp(session, runner=...)` on a session like it runs
+   headless with Textual's `app.run_test(size=(120, 40))`. The Train view is
+   opened (`t`) and training started at max speed (`space`, the default
+   speed); after a warm-up, over W seconds of wall time:
+   - episodes per second: the episode counts of the runner's latest snapshot
+     at both ends, each taken the moment a new snapshot shows up (so both ends
+     lag the trainer equally), over the wall time between them;
+   - `ui_refresh_hz`: how many times `TrainView.show_snapshot` ran per second
+     (the method is wrapped with a counter; the app's 15 Hz timer calls it);
+   - `frames_hz`: how many screen updates the app handed to its driver.
+   `live_ratio` = live episodes/s / headless episodes/s of the same repeat.
+3. Key latency, with training still at max speed: the view is toggled
+   (`p` to the Play view, `t` back to the Train view) `presses` times, with a
+   random pause of 30-120 ms (seeded) before each press so that presses land
+   at every phase of the app's timer. What is timed, per press:
+   - start: just before the key event is handed to the driver
+     (`driver.send_message(Key)`), which is exactly how `Pilot.press` delivers
+     a key and what a terminal driver's input thread does on a keystroke;
+   - end: the moment the first screen update made after the view switched is
+     handed to the driver (`App._display`), including encoding it into the
+     terminal's byte string (`render_segments`, which a real terminal pays and
+     the headless driver would skip). Not included: the terminal emulator's
+     own parsing and painting.
+   `Pilot.press` itself is not awaited: after delivering the key it waits for
+   the process to go idle (`wait_for_idle`, up to 1 s), which never happens
+   while a training thread keeps the process busy. Each press is also split
+   into queue (key sent -> the view action starts), action (the action's own
+   time: switching views and, for `t`, drawing the latest snapshot) and frame
+   (action done -> the update is handed to the driver), medians per key.
+
+The app's default runner is named in `DEFAULT_RUNNER`.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import gc
+import random
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from tui_gym.bench.figures import median, percentile
+from tui_gym.core.agent import Hyperparameters
+from tui_gym.core.session import Session
+
+RUNNERS = ("thread", "process")
+DEFAULT_RUNNER = "process"  # what `tui-gym` (run_app) opens the app with
+LIVE_BUDGET = 1_000_000_000  # episodes: never reached, so training stays at max speed
+WARMUP_SECONDS = 1.0
+SIZE = (120, 40)
+WAIT_TIMEOUT = 20.0  # seconds; only reached when something is broken
+PAUSE_RANGE = (0.03, 0.12)  # seconds before each key press
+
+
+@dataclass(frozen=True)
+class KeySample:
+    """One key press: what it was and where its time went (milliseconds)."""
+
+    key: str
+    total_ms: float
+    queue_ms: float
+    action_ms: float
+    frame_ms: float
+
+
+@dataclass(frozen=True)
+class LiveRepeat:
+    """One headless + live + key-latency repeat for one runner."""
+
+    headless_eps: float
+    live_eps: float
+    refresh_hz: float
+    frames_hz: float
+    engine: str
+    keys: tuple[KeySample, ...]
+
+    @property
+    def ratio(self) -> float:
+        return self.live_eps / self.headless_eps if self.headless_eps else float("nan")
+
+
+@dataclass(frozen=True)
+class LiveResult:
+    """One runner's figures: medians over repeats; latency percentiles over all presses."""
+
+    runner: str
+    repeats: tuple[LiveRepeat, ...]
+    seconds: float  # the measuring window
+    errors: tuple[str, ...] = field(default=())
+
+    @property
+    def live_ratio(self) -> float:
+        return median([r.ratio for r in self.repeats])
+
+    @property
+    def headless_eps(self) -> float:
+        return median([r.headless_eps for r in self.repeats])
+
+    @property
+    def live_eps(self) -> float:
+        return median([r.live_eps for r in self.repeats])
+
+    @property
+    def refresh_hz(self) -> float:
+        return median([r.refresh_hz for r in self.repeats])
+
+    @property
+    def frames_hz(self) -> float:
+        return median([r.frames_hz for r in self.repeats])
+
+    @property
+    def engine(self) -> str:
+        return self.repeats[0].engine if self.repeats else ""
+
+    def _latencies(self, key: str | None = None) -> list[KeySample]:
+        return [k for r in self.repeats for k in r.keys if key is None or k.key == key]
+
+    def key_latency_ms(self, q: float, key: str | None = None) -> float:
+        return percentile([k.total_ms for k in self._latencies(key)], q)
+
+    @property
+    def presses(self) -> int:
+        return len(self._latencies())
+
+    def breakdown_ms(self) -> dict[str, dict[str, float]]:
+        """Median queue / action / frame milliseconds per key."""
+        out = {}
+        for key in sorted({k.key for k in self._latencies()}):
+            samples = self._latencies(key)
+            out[key] = {
+                "p50": median([k.total_ms for k in samples]),
+                "p95": percentile([k.total_ms for k in samples], 95),
+                "queue_p50": median([k.queue_ms for k in samples]),
+                "action_p50": median([k.action_ms for k in samples]),
+                "frame_p50": median([k.frame_ms for k in samples]),
+            }
+        return out
+
+
+def _hyperparameters() -> Hyperparameters:
+    return Hyperparameters(episodes=LIVE_BUDGET)
+
+
+def headless_rate(seconds: float, seed: int = 0) -> tuple[float, str]:
+    """Episodes per second of the default engine trained headless here, and its name."""
+    session = Session("Blackjack-v1", hp=_hyperparameters(), seed=seed)
+    trainer = session.trainer
+    trainer.run(seconds=0.2)
+    start = time.perf_counter()
+    done = trainer.run(seconds=seconds)
+    elapsed = time.perf_counter() - start
+    session.env.close()
+    return done / elapsed, trainer.engine
+
+
+# --- instrumenting the app ------------------------------------------------------
+class _Instruments:
+    """Counters and clocks hooked onto one app instance (never onto its class)."""
+
+    def __init__(self, app: Any) -> None:
+        self.app = app
+        self.frames: list[tuple[float, str | None]] = []  # (time, view shown) per update
+        self.snapshot_calls = 0
+        self.action_marks: list[tuple[float, float]] = []  # (start, end) of show_view
+        display = app._display
+        show_view = app.action_show_view
+
+        def timed_display(screen: Any, renderable: Any) -> None:
+            display(screen, renderable)
+            if renderable is None:
+                return
+            render = getattr(renderable, "render_segments", None)
+            if render is not None:
+                render(app.console)  # what a real terminal's write costs
+            self.frames.append((time.perf_counter(), _current_view(app)))
+
+        def timed_show_view(view: str) -> None:
+            start = time.perf_counter()
+            show_view(view)
+            self.action_marks.append((start, time.perf_counter()))
+
+        app._display = timed_display
+        app.action_show_view = timed_show_view
+
+    def count_snapshots(self, view: Any) -> None:
+        show = view.show_snapshot
+
+        def counted(snapshot: Any, runner: Any) -> None:
+            self.snapshot_calls += 1
+            show(snapshot, runner)
+
+        view.show_snapshot = counted
+
+
+def _current_view(app: Any) -> str | None:
+    try:
+        return app.current_view
+    except Exception:  # while the app is being taken apart
+        return None
+
+
+def _send_key(app: Any, key: str) -> None:
+    """Deliver a key the way `Pilot.press` does (and a terminal's input thread)."""
+    from textual import events
+
+    char = " " if key == "space" else key if len(key) == 1 else None
+    event = events.Key(key, char)
+    event.set_sender(app)
+    app._driver.send_message(event)
+
+
+async def _until(predicate: Callable[[], bool], what: str, timeout: float = WAIT_TIMEOUT) -> None:
+    deadline = time.perf_counter() + timeout
+    while not predicate():
+        if time.perf_counter() > deadline:
+            raise TimeoutError(f"timed out waiting for {what}")
+        await asyncio.sleep(0.002)
+
+
+async def _fresh_snapshot(runner: Any) -> tuple[int, float]:
+    """Wait for the next snapshot; its episode count and when it showed up."""
+    version = runner.latest.version
+    await _until(lambda: runner.latest.version != version, "a new snapshot")
+    return runner.latest.episodes, time.perf_counter()
+
+
+async def _key_latencies(
+    app: Any, tools: _Instruments, presses: int, rng: random.Random
+) -> list[KeySample]:
+    samples = []
+    for _ in range(presses):
+        await asyncio.sleep(rng.uniform(*PAUSE_RANGE))
+        key, target = ("p", "play") if _current_view(app) == "train" else ("t", "train")
+        frames_before = len(tools.frames)
+        actions_before = len(tools.action_marks)
+        sent = time.perf_counter()
+        _send_key(app, key)
+
+        def shown(frames_before: int = frames_before, target: str = target) -> bool:
+            return any(view == target for _, view in tools.frames[frames_before:])
+
+        await _until(shown, f"the {target} view on screen")
+        frame_at = next(t for t, view in tools.frames[frames_before:] if view == target)
+        began, ended = tools.action_marks[actions_before] if len(
+            tools.action_marks) > actions_before else (sent, sent)
+        samples.append(KeySample(
+            key=key,
+            total_ms=(frame_at - sent) * 1000,
+            queue_ms=(began - sent) * 1000,
+            action_ms=(ended - began) * 1000,
+            frame_ms=(frame_at - ended) * 1000,
+        ))
+    return samples
+
+
+async def _live_once(
+    runner_kind: str, seconds: float, presses: int, seed: int
+) -> tuple[float, float, float, str, list[KeySample]]:
+    from tui_gym.ui.app import TuiGymApp
+
+    session = Session("Blackjack-v1", hp=_hyperparameters(), seed=seed)
+    app = TuiGymApp(session, runner=runner_kind)
+    tools = _Instruments(app)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("t")  # idle still, so the pilot's own waits are short
+        await _until(lambda: _current_view(app) == "train", "the Train view")
+        tools.count_snapshots(app.train_view)
+        runner = app.runner
+        _send_key(app, "space")
+        await _until(lambda: runner.running and runner.latest.episodes > 0, "training to start")
+        await asyncio.sleep(WARMUP_SECONDS)
+        episodes0, t0 = await _fresh_snapshot(runner)
+        calls0, frames0 = tools.snapshot_calls, len(tools.frames)
+        await asyncio.sleep(seconds)
+        episodes1, t1 = await _fresh_snapshot(runner)
+        elapsed = t1 - t0
+        live_eps = (episodes1 - episodes0) / elapsed
+        refresh_hz = (tools.snapshot_calls - calls0) / elapsed
+        frames_hz = (len(tools.frames) - frames0) / elapsed
+        engine = runner.latest.engine
+        keys = await _key_latencies(app, tools, presses, random.Random(seed))
+        if not runner.running:
+            raise RuntimeError(f"training stopped during the measurement: {runner.error}")
+        runner.pause()
+    return live_eps, refresh_hz, frames_hz, engine, keys
+
+
+def measure_runner(runner_kind: str, seconds: float, presses: int, repeats: int) -> LiveResult:
+    """`repeats` headless + live pairs for one runner."""
+    done = []
+    for seed in range(repeats):
+        gc.collect()
+        headless, _ = headless_rate(seconds, seed)
+        gc.collect()
+        live, hz, fps, engine, keys = asyncio.run(_live_once(runner_kind, seconds, presses, seed))
+        done.append(LiveRepeat(headless, live, hz, fps, engine, tuple(keys)))
+    return LiveResult(runner_kind, tuple(done), seconds)
+
+
+def measure(
+    seconds: float, presses: int, repeats: int, runners: Sequence[str] = RUNNERS,
+    progress: Callable[[str], None] | None = None,
+) -> dict[str, LiveResult]:
+    """Every runner in turn; a runner that fails is reported with its error, not raised."""
+    results = {}
+    for kind in runners:
+        if progress is not None:
+            progress(f"live training, {kind} runner")
+        try:
+            results[kind] = measure_runner(kind, seconds, presses, repeats)
+        except Exception as exc:  # one broken runner must not hide the other's figures
+            results[kind] = LiveResult(kind, (), seconds, (f"{type(exc).__name__}: {exc}",))
+    return results

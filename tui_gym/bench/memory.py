@@ -1,0 +1,108 @@
+"""Memory: how much the resident set grows over a long training run.
+
+A fresh Python process (so nothing else measured in this run shares its heap)
+builds a Blackjack `Session` on the vector engine, trains a warm-up (the
+table, numpy's buffers and the rolling statistics reach their working size),
+reads its resident set size (RSS, from /proc/self/statm; the peak from
+`resource` where /proc is missing), then trains `episodes` more the way the
+app's runner does (chunks of `trainer.run(seconds=0.05)`, each publishing a
+snapshot), sampling RSS after every chunk. The growth is the RSS at the end
+minus the RSS after the warm-up; the largest sample is reported beside it.
+"""
+
+from __future__ import annotations
+
+import gc
+import json
+import os
+import subprocess
+import sys
+from dataclasses import dataclass
+
+MB = 1024 * 1024
+CHUNK_SECONDS = 0.05  # as the app's runner (`core.runner.CHUNK_SECONDS`)
+
+
+@dataclass(frozen=True)
+class MemoryResult:
+    """RSS growth over `episodes` training episodes after `warmup` episodes."""
+
+    episodes: int
+    warmup: int
+    engine: str
+    rss_start_mb: float
+    rss_end_mb: float
+    rss_peak_mb: float
+    seconds: float
+
+    @property
+    def growth_mb(self) -> float:
+        return self.rss_end_mb - self.rss_start_mb
+
+
+def rss_bytes() -> int:
+    """This process's resident set size now (its peak where /proc is missing)."""
+    try:
+        with open("/proc/self/statm") as f:
+            resident_pages = int(f.read().split()[1])
+        return resident_pages * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        import resource
+
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+        return peak if sys.platform == "darwin" else peak * 1024
+
+
+def train_and_watch(episodes: int, warmup: int, engine: str = "vector") -> dict[str, float]:
+    """The measurement itself (run in the child process); figures as a dict."""
+    import time
+
+    from tui_gym.core.agent import Hyperparameters
+    from tui_gym.core.session import Session
+
+    hp = Hyperparameters(episodes=warmup + episodes)
+    session = Session("Blackjack-v1", hp=hp, seed=0, engine=engine)
+    trainer = session.trainer
+    trainer.run(episodes=warmup)
+    gc.collect()
+    start = rss_bytes()
+    peak = start
+    began = time.perf_counter()
+    while trainer.remaining > 0:
+        trainer.run(episodes=trainer.remaining, seconds=CHUNK_SECONDS)
+        peak = max(peak, rss_bytes())
+    seconds = time.perf_counter() - began
+    gc.collect()
+    end = rss_bytes()
+    return {
+        "episodes": trainer.episodes - warmup,
+        "engine": trainer.engine,
+        "rss_start_mb": start / MB,
+        "rss_end_mb": end / MB,
+        "rss_peak_mb": max(peak, end) / MB,
+        "seconds": seconds,
+    }
+
+
+def measure(episodes: int, warmup: int, engine: str = "vector") -> MemoryResult:
+    """Run `train_and_watch` in a fresh interpreter and read its figures."""
+    code = (
+        "import json, sys; from tui_gym.bench.memory import train_and_watch; "
+        f"print(json.dumps(train_and_watch({episodes}, {warmup}, {engine!r})))"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=False
+    )
+    if proc.returncode != 0:
+        last = (proc.stderr.strip().splitlines() or ["no output"])[-1]
+        raise RuntimeError(f"the memory run failed: {last}")
+    data = json.loads(proc.stdout.strip().splitlines()[-1])
+    return MemoryResult(
+        episodes=int(data["episodes"]),
+        warmup=warmup,
+        engine=str(data["engine"]),
+        rss_start_mb=float(data["rss_start_mb"]),
+        rss_end_mb=float(data["rss_end_mb"]),
+        rss_peak_mb=float(data["rss_peak_mb"]),
+        seconds=float(data["seconds"]),
+    )
