@@ -211,7 +211,7 @@ def test_hyperparameter_errors_name_the_field_and_its_range(name: str, value: ob
         Hyperparameters(**changes)  # type: ignore[arg-type]
     message = str(caught.value)
     assert message.startswith(f"{name} must be ")
-    assert FIELD_BY_NAME[name].describe() in message
+    assert FIELD_BY_NAME[name].expected() in message
     assert repr(value) in message
 
 

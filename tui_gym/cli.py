@@ -146,6 +146,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     screenshots = sub.add_parser("screenshots", help="write the app's SVG screenshots")
     screenshots.add_argument("directory", nargs="?", default="screenshots", metavar="DIR")
+
+    bench = sub.add_parser("bench", help="measure speed, live training, memory and start-up")
+    bench.add_argument("--quick", action="store_true", help="a shorter run (under a minute)")
+    bench.add_argument("--json", action="store_true", help="print one JSON object")
     return parser
 
 

@@ -340,6 +340,27 @@ def cmd_screenshots(args: argparse.Namespace, out: Console) -> int:
     return 0
 
 
+def cmd_bench(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.bench.report import notes, table, to_json
+    from tui_gym.bench.run import run_bench
+
+    if args.json:
+        print_json(to_json(run_bench(quick=args.quick)))
+        return 0
+    # Plain lines, not a spinner: a spinner's refresh thread would share the GIL
+    # with the thread runner being measured.
+    err = Console(stderr=True)
+    started = time.perf_counter()
+    results = run_bench(
+        quick=args.quick,
+        progress=lambda text: err.print(f"[dim]{time.perf_counter() - started:5.1f} s[/] {text}"),
+    )
+    out.print(table(results))
+    for line in notes(results):
+        out.print(line)
+    return 0
+
+
 COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {
     "envs": cmd_envs,
     "wrappers": cmd_wrappers,
@@ -348,4 +369,5 @@ COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {
     "optimal": cmd_optimal,
     "play": cmd_play,
     "screenshots": cmd_screenshots,
+    "bench": cmd_bench,
 }

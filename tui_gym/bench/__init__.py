@@ -1,1 +1,20 @@
-"""Benchmarks behind `tui-gym bench`: they print figures, never assert."""
+"""Benchmarks behind `tui-gym bench`: they print figures, never assert.
+
+Speeds are quoted as ratios against a baseline measured in the same run (the
+machine is small and shared), each figure a median over repeats.
+
+- `tutorial`: the baseline, a tutorial-style Q-learning loop on Gymnasium's
+  `Blackjack-v1` with our default hyperparameters, and its exact gap.
+- `throughput`: episodes/s of the tutorial loop, the scalar and the vector engine.
+- `gap`: time to a greedy policy within 0.002 of the optimum, ours (as
+  `tui-gym train blackjack --target-gap 0.002`) against the tutorial loop.
+- `live`: episodes/s while the real app shows training at max speed, against
+  headless; how often the Train view draws; key press to screen latency;
+  for the thread and the process runner.
+- `memory`: RSS growth over 2,000,000 training episodes (vector engine).
+- `startup`: launching `python -m tui_gym` to its first frame on a terminal.
+- `figures`: medians, percentiles, ratios, the machine's load.
+- `results`: `BenchResults`, what one run found.
+- `report`: the table (figure, target, PASS/MISS) and the JSON object.
+- `run`: `run_bench(quick)`, every stage with the quick or the full plan.
+"""

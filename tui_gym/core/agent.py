@@ -13,57 +13,13 @@ states at once for heatmaps and exact evaluation.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Hashable, Iterable, Mapping
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
 import numpy as np
 
-
-@dataclass(frozen=True)
-class FieldRange:
-    """The valid range of one numeric hyperparameter, for checks and for forms."""
-
-    name: str
-    label: str
-    kind: type
-    minimum: float
-    maximum: float
-    help: str
-    min_inclusive: bool = True
-
-    def describe(self) -> str:
-        left = "[" if self.min_inclusive else "("
-        lo = f"{self.minimum:g}" if self.kind is float else f"{int(self.minimum)}"
-        hi = f"{self.maximum:g}" if self.kind is float else f"{int(self.maximum)}"
-        noun = "an integer" if self.kind is int else "a number"
-        return f"{noun} in {left}{lo}, {hi}]"
-
-    def parse(self, raw: Any) -> int | float:
-        """Convert text or a number to this field's type, checking the range."""
-        text = raw.strip() if isinstance(raw, str) else raw
-        try:
-            if self.kind is int:
-                if isinstance(text, str):
-                    text = text.replace("_", "").replace(",", "")
-                    value: int | float = int(float(text)) if "e" in text.lower() else int(text)
-                    if "e" in text.lower() and float(text) != value:
-                        raise ValueError
-                elif isinstance(text, float) and not text.is_integer():
-                    raise ValueError
-                else:
-                    value = int(text)
-            else:
-                value = float(text)
-        except (TypeError, ValueError):
-            raise ValueError(f"{self.name} must be {self.describe()}, got {raw!r}") from None
-        if isinstance(value, float) and not math.isfinite(value):
-            raise ValueError(f"{self.name} must be {self.describe()}, got {raw!r}")
-        below = value < self.minimum if self.min_inclusive else value <= self.minimum
-        if below or value > self.maximum:
-            raise ValueError(f"{self.name} must be {self.describe()}, got {raw!r}")
-        return value
+from tui_gym.core.params import Param
 
 
 @dataclass(frozen=True)
@@ -126,21 +82,20 @@ class Hyperparameters:
 
 LEARNING_RATE_SCHEDULES = ("constant", "visits")
 
-HYPERPARAMETER_FIELDS: tuple[FieldRange, ...] = (
-    FieldRange(
-        "learning_rate", "Learning rate", float, 0.0, 1.0,
-        "step size of each update", min_inclusive=False,
-    ),
-    FieldRange("discount", "Discount", float, 0.0, 1.0, "weight of the next state's value"),
-    FieldRange("epsilon_start", "Epsilon start", float, 0.0, 1.0, "exploration at the start"),
-    FieldRange("epsilon_final", "Epsilon final", float, 0.0, 1.0, "exploration after decay"),
-    FieldRange(
-        "epsilon_decay_fraction", "Decay fraction", float, 0.0, 1.0,
-        "share of the budget spent decaying epsilon",
-    ),
-    FieldRange("episodes", "Episodes", int, 1, 1e9, "training budget"),
+_DEFAULTS = {f.name: f.default for f in fields(Hyperparameters)}
+HYPERPARAMETER_FIELDS: tuple[Param, ...] = tuple(
+    Param(name, kind, _DEFAULTS[name], low, high, help_text, title=title, min_inclusive=closed)
+    for name, title, kind, low, high, closed, help_text in (
+        ("learning_rate", "Learning rate", float, 0.0, 1.0, False, "step size of each update"),
+        ("discount", "Discount", float, 0.0, 1.0, True, "weight of the next state's value"),
+        ("epsilon_start", "Epsilon start", float, 0.0, 1.0, True, "exploration at the start"),
+        ("epsilon_final", "Epsilon final", float, 0.0, 1.0, True, "exploration after decay"),
+        ("epsilon_decay_fraction", "Decay fraction", float, 0.0, 1.0, True,
+         "share of the budget spent decaying epsilon"),
+        ("episodes", "Episodes", int, 1, 1_000_000_000, True, "training budget"),
+    )
 )
-FIELD_BY_NAME: dict[str, FieldRange] = {f.name: f for f in HYPERPARAMETER_FIELDS}
+FIELD_BY_NAME: dict[str, Param] = {f.name: f for f in HYPERPARAMETER_FIELDS}
 
 
 class QAgent:

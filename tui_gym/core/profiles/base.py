@@ -17,7 +17,7 @@ import numpy as np
 
 from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.heatmap import Heatmap
-from tui_gym.core.wrappers.params import Param
+from tui_gym.core.params import Param
 
 if TYPE_CHECKING:
     from tui_gym.core.play import PlayStep, Scorecard, Tally

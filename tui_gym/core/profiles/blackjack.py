@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
+from tui_gym.core.params import Param
 from tui_gym.core.profiles.base import (
     Advice,
     EvalOutcome,
@@ -37,7 +38,6 @@ from tui_gym.core.reference.blackjack import (
     optimal_value,
     policy_value,
 )
-from tui_gym.core.wrappers.params import Param
 
 if TYPE_CHECKING:
     from tui_gym.core.play import PlayStep, Scorecard

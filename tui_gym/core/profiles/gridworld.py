@@ -16,6 +16,7 @@ import numpy as np
 
 from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.heatmap import Heatmap
+from tui_gym.core.params import Param
 from tui_gym.core.profiles.base import (
     Advice,
     EvalOutcome,
@@ -34,7 +35,6 @@ from tui_gym.core.reference.gridworld import (
     optimal_pair_fraction,
     policy_steps_over_optimal,
 )
-from tui_gym.core.wrappers.params import Param
 
 if TYPE_CHECKING:
     from tui_gym.core.play import PlayStep, Scorecard

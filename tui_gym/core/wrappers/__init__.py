@@ -13,6 +13,7 @@
     <StepPenalty<OrderEnforcing<PassiveEnvChecker<BlackjackEnv<Blackjack-v1>>>>>
 """
 
+from tui_gym.core.params import Param
 from tui_gym.core.wrappers.build import (
     UnknownEnvError,
     build_env,
@@ -30,7 +31,6 @@ from tui_gym.core.wrappers.catalog import (
     parse_wrapper_spec,
 )
 from tui_gym.core.wrappers.custom import DistanceShaping, ScaleReward, StepPenalty
-from tui_gym.core.wrappers.params import Param
 
 __all__ = [
     "CATALOG",

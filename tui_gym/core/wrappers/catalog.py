@@ -28,6 +28,7 @@ from gymnasium.wrappers import (
     TimeLimit,
 )
 
+from tui_gym.core.params import Param, ParamValue
 from tui_gym.core.wrappers.custom import DistanceShaping, ScaleReward, StepPenalty
 from tui_gym.core.wrappers.fits import (
     fits_any,
@@ -37,7 +38,6 @@ from tui_gym.core.wrappers.fits import (
     fits_time_aware,
     fits_time_limit,
 )
-from tui_gym.core.wrappers.params import Param, ParamValue
 
 __all__ = [
     "CATALOG",

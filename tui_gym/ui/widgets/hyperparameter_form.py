@@ -4,7 +4,7 @@
 `tui_gym.core.agent.HYPERPARAMETER_FIELDS` (learning rate, discount,
 epsilon start / final / decay fraction, episodes), each with its label and
 the range it accepts. Every keystroke is checked with the field's own
-`FieldRange.parse`: a bad value turns the field red and says why under it.
+`Param.parse`: a bad value turns the field red and says why under it.
 `read()` returns the `Hyperparameters` the fields describe, or None (with
 every problem marked, including ones between fields such as epsilon final
 above epsilon start); `load(hp)` fills the fields. Enter posts `Submitted`
@@ -24,39 +24,39 @@ from textual.message import Message
 from textual.validation import ValidationResult, Validator
 from textual.widgets import Input, Label, Static
 
-from tui_gym.core.agent import HYPERPARAMETER_FIELDS, FieldRange, Hyperparameters
+from tui_gym.core.agent import HYPERPARAMETER_FIELDS, Hyperparameters, Param
 
 
-def format_value(field: FieldRange, value: float) -> str:
+def format_value(field: Param, value: float) -> str:
     """A field's value as the text a person would type."""
     if field.kind is int:
         return str(int(value))
     return f"{value:g}"
 
 
-def range_hint(field: FieldRange) -> str:
+def range_hint(field: Param) -> str:
     """The accepted range, short: '(0, 1]', or '≥ 1' when the top is out of sight."""
     if field.maximum >= 1e6:
         low = f"{int(field.minimum)}" if field.kind is int else f"{field.minimum:g}"
         return f"≥ {low}" if field.min_inclusive else f"> {low}"
-    return field.describe().split(" in ", 1)[-1]
+    return field.expected().split(" in ", 1)[-1]
 
 
-def field_error(field: FieldRange, text: str) -> str | None:
+def field_error(field: Param, text: str) -> str | None:
     """Why `text` is not a valid value of the field (None when it is)."""
     if not text.strip():
-        return f"empty: needs {field.describe()}"
+        return f"empty: needs {field.expected()}"
     try:
         field.parse(text)
     except ValueError:
-        return f"{text.strip()!r} is not {field.describe()}"
+        return f"{text.strip()!r} is not {field.expected()}"
     return None
 
 
 class FieldValidator(Validator):
     """Checks an Input against one hyperparameter's range."""
 
-    def __init__(self, field: FieldRange) -> None:
+    def __init__(self, field: Param) -> None:
         super().__init__()
         self.field = field
 
@@ -162,7 +162,7 @@ class HyperparameterForm(Vertical):
     def compose(self) -> ComposeResult:
         for field in HYPERPARAMETER_FIELDS:
             with Horizontal(classes="hp-row", id=f"hp-row-{field.name}"):
-                yield Label(field.label, classes="hp-label")
+                yield Label(field.title, classes="hp-label")
                 box = Input(
                     format_value(field, getattr(self._initial, field.name)),
                     id=f"hp-{field.name}",
@@ -170,7 +170,7 @@ class HyperparameterForm(Vertical):
                     validators=[FieldValidator(field)],
                     select_on_focus=True,
                 )
-                box.tooltip = f"{field.help}: {field.describe()}"
+                box.tooltip = f"{field.help}: {field.expected()}"
                 yield box
                 yield Label(range_hint(field), classes="hp-hint")
             yield Static("", id=f"hp-error-{field.name}", classes="hp-error", markup=False)
@@ -247,7 +247,7 @@ class HyperparameterForm(Vertical):
             reason = str(exc)
             named = [f for f in HYPERPARAMETER_FIELDS if f.name in reason]
             for field in HYPERPARAMETER_FIELDS:
-                reason = reason.replace(field.name, field.label.lower())
+                reason = reason.replace(field.name, field.title.lower())
             reason = reason[:1].upper() + reason[1:]
             marked = named or list(HYPERPARAMETER_FIELDS[:1])
             for field in marked:  # the reason once, under the last field it names

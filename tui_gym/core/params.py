@@ -1,6 +1,7 @@
-"""`Param`: one typed, ranged wrapper parameter that parses what a person types.
+"""`Param`: one typed, ranged parameter that parses what a person types.
 
-A CLI argument and a UI input field both arrive as text; `Param.parse` turns
+Wrapper parameters, env arguments and hyperparameters are all `Param`s. A
+CLI argument and a UI input field both arrive as text; `Param.parse` turns
 that text into an `int`, `float` or `bool`, checks the inclusive range, and
 otherwise raises a `ValueError` that names the field and what it accepts.
 """
@@ -28,10 +29,12 @@ def _number_text(value: float) -> str:
 
 @dataclass(frozen=True)
 class Param:
-    """One parameter of a wrapper: its type, default, inclusive range and help.
+    """One parameter: its type, default, range and help.
 
-    `owner` is the wrapper's name, filled in by `WrapperSpec`, so that error
-    messages say `TimeLimit.max_episode_steps` rather than a bare field name.
+    `owner` is e.g. the wrapper's name, filled in by `WrapperSpec`, so that
+    error messages say `TimeLimit.max_episode_steps` rather than a bare field
+    name. `title` is how a form labels it; `min_inclusive=False` makes the
+    lower bound exclusive (a learning rate must be above 0).
     """
 
     name: str
@@ -41,6 +44,8 @@ class Param:
     maximum: float | None = None
     help: str = ""
     owner: str = ""
+    title: str = ""
+    min_inclusive: bool = True
 
     def __post_init__(self) -> None:
         if self.kind not in (int, float, bool):
@@ -58,11 +63,13 @@ class Param:
         """The valid values, as shown in help and errors: `[1, 100000]`, `true or false`."""
         if self.kind is bool:
             return "true or false"
-        low = "(-inf" if self.minimum is None else f"[{_number_text(self.minimum)}"
+        bracket = "[" if self.min_inclusive else "("
+        low = "(-inf" if self.minimum is None else f"{bracket}{_number_text(self.minimum)}"
         high = "inf)" if self.maximum is None else f"{_number_text(self.maximum)}]"
         return f"{low}, {high}"
 
-    def _expected(self) -> str:
+    def expected(self) -> str:
+        """What a valid value is, in words: `an integer in [1, 100000]`."""
         if self.kind is bool:
             return "true or false"
         noun = "an integer" if self.kind is int else "a number"
@@ -79,10 +86,11 @@ class Param:
             self.kind is not bool
             and (
                 (self.minimum is not None and value < self.minimum)
+                or (self.minimum is not None and not self.min_inclusive and value == self.minimum)
                 or (self.maximum is not None and value > self.maximum)
             )
         ):
-            raise ValueError(f"{self.label} must be {self._expected()}, got {raw!r}")
+            raise ValueError(f"{self.label} must be {self.expected()}, got {raw!r}")
         return value
 
     def _convert(self, raw: object) -> ParamValue | None:

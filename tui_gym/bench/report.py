@@ -1,0 +1,259 @@
+"""The bench's output: one table (each figure, its target, PASS or MISS) or one JSON object.
+
+Targets (issue #4):
+- time to gap <= 0.002 at most 1/8 of the tutorial loop's (a speed-up >= 8);
+- live episodes/s >= 80% of headless with the same engine, per runner;
+- the UI draws snapshots at >= 10 Hz;
+- key press to screen update p95 <= 50 ms while training at max speed;
+- RSS growth < 20 MB over 2,000,000 training episodes;
+- app start to first frame <= 1.0 s.
+
+A verdict is PASS or MISS; "?" when a lower bound cannot decide it, "n/a"
+when the figure is missing (its stage failed: see `errors`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from rich.table import Table
+
+from tui_gym.bench.live import RUNNERS
+from tui_gym.bench.results import BenchResults
+
+GAP_SPEEDUP_TARGET = 8.0
+LIVE_RATIO_TARGET = 0.8
+REFRESH_HZ_TARGET = 10.0
+KEY_P95_MS_TARGET = 50.0
+RSS_GROWTH_MB_TARGET = 20.0
+RSS_EPISODES_TARGET = 2_000_000
+STARTUP_S_TARGET = 1.0
+
+PASS, MISS, UNDECIDED, MISSING = "PASS", "MISS", "?", "n/a"
+
+
+def _ok(value: float | None, good: bool) -> str:
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return MISSING
+    return PASS if good else MISS
+
+
+def verdicts(results: BenchResults) -> dict[str, str]:
+    """Each target's verdict, keyed like the JSON's figures."""
+    out: dict[str, str] = {}
+    gap = results.gap
+    if gap is None or gap.speedup is None:
+        out["time_to_gap"] = MISSING
+    elif not gap.reached:
+        out["time_to_gap"] = MISS
+    elif gap.speedup >= GAP_SPEEDUP_TARGET:
+        out["time_to_gap"] = PASS  # a lower bound above the target decides it too
+    else:
+        out["time_to_gap"] = MISS if gap.tutorial_reached else UNDECIDED
+    for runner in RUNNERS:
+        live = results.live_for(runner)
+        if live is None:
+            for name in ("live_ratio", "ui_refresh_hz", "key_latency_p95_ms"):
+                out[f"{name}[{runner}]"] = MISSING
+            continue
+        out[f"live_ratio[{runner}]"] = _ok(live.live_ratio, live.live_ratio >= LIVE_RATIO_TARGET)
+        out[f"ui_refresh_hz[{runner}]"] = _ok(live.refresh_hz, live.refresh_hz >= REFRESH_HZ_TARGET)
+        p95 = live.key_latency_ms(95)
+        out[f"key_latency_p95_ms[{runner}]"] = _ok(p95, p95 <= KEY_P95_MS_TARGET)
+    memory = results.memory
+    if memory is None:
+        out["rss_growth_mb"] = MISSING
+    else:
+        good = memory.growth_mb < RSS_GROWTH_MB_TARGET and memory.episodes >= RSS_EPISODES_TARGET
+        out["rss_growth_mb"] = _ok(memory.growth_mb, good)
+    startup = results.startup
+    seconds = startup.seconds if startup is not None else None
+    out["startup_s"] = _ok(seconds, seconds is not None and seconds <= STARTUP_S_TARGET)
+    return out
+
+
+# --- JSON --------------------------------------------------------------------
+def _runner_dict(results: BenchResults, runner: str) -> dict[str, Any]:
+    live = results.live.get(runner)
+    if live is None or not live.repeats:
+        return {"error": "; ".join(live.errors) if live is not None else "not measured"}
+    return {
+        "engine": live.engine,
+        "live_ratio": live.live_ratio,
+        "headless_episodes_per_second": live.headless_eps,
+        "live_episodes_per_second": live.live_eps,
+        "ui_refresh_hz": live.refresh_hz,
+        "frames_hz": live.frames_hz,
+        "key_latency_p50_ms": live.key_latency_ms(50),
+        "key_latency_p95_ms": live.key_latency_ms(95),
+        "key_presses": live.presses,
+        "key_latency_by_key_ms": live.breakdown_ms(),
+        "repeats": len(live.repeats),
+        "window_s": live.seconds,
+        "ratios": [r.ratio for r in live.repeats],
+    }
+
+
+def to_json(results: BenchResults) -> dict[str, Any]:
+    """The JSON object `tui-gym bench --json` prints (NaN and missing figures are null)."""
+    tp, gap, memory, startup = results.throughput, results.gap, results.memory, results.startup
+    default = results.live_for(results.default_runner)
+    machine = results.machine
+    data: dict[str, Any] = {
+        "quick": results.quick,
+        "seconds": results.seconds,
+        "machine": {
+            "cpus": machine.cpus,
+            "load_average_before": list(machine.load_before) if machine.load_before else None,
+            "load_average_after": list(machine.load_after) if machine.load_after else None,
+        },
+        "tutorial_episodes_per_second": tp.tutorial if tp else None,
+        "engine_episodes_per_second": (
+            {"scalar": tp.scalar, "vector": tp.vector} if tp else {"scalar": None, "vector": None}
+        ),
+        "engine_speedup_vs_tutorial": (
+            {"scalar": tp.scalar_speedup, "vector": tp.vector_speedup} if tp else None
+        ),
+        "throughput_repeats": tp.repeats if tp else None,
+        "target_gap": gap.target if gap else None,
+        "time_to_gap_s": gap.time_to_gap_s if gap else None,
+        "time_to_gap_reached": gap.reached if gap else None,
+        "time_to_gap_episodes": [r.episodes for r in gap.ours] if gap else None,
+        "tutorial_time_to_gap_s": gap.tutorial_time_to_gap_s if gap else None,
+        "tutorial_reached": gap.tutorial_reached if gap else None,
+        "tutorial_time_to_gap_episodes": [r.episodes for r in gap.tutorial] if gap else None,
+        "time_to_gap_speedup": gap.speedup if gap else None,
+        "time_to_gap_speedup_is_lower_bound": (not gap.tutorial_reached) if gap else None,
+        "default_runner": results.default_runner,
+        "live_ratio": default.live_ratio if default else None,
+        "ui_refresh_hz": default.refresh_hz if default else None,
+        "key_latency_p50_ms": default.key_latency_ms(50) if default else None,
+        "key_latency_p95_ms": default.key_latency_ms(95) if default else None,
+        "runners": {runner: _runner_dict(results, runner) for runner in RUNNERS},
+        "rss_growth_mb": memory.growth_mb if memory else None,
+        "rss": (
+            {
+                "episodes": memory.episodes,
+                "warmup_episodes": memory.warmup,
+                "engine": memory.engine,
+                "start_mb": memory.rss_start_mb,
+                "end_mb": memory.rss_end_mb,
+                "peak_mb": memory.rss_peak_mb,
+            }
+            if memory
+            else None
+        ),
+        "startup_s": startup.seconds if startup else None,
+        "startup_samples_s": list(startup.samples) if startup else None,
+        "verdicts": verdicts(results),
+        "errors": dict(results.errors),
+    }
+    return data
+
+
+# --- the table -----------------------------------------------------------------
+def _num(value: float | None, fmt: str, suffix: str = "") -> str:
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "n/a"
+    return f"{value:{fmt}}{suffix}"
+
+
+_STYLE = {PASS: "[bold green]PASS[/]", MISS: "[bold red]MISS[/]", UNDECIDED: "[yellow]?[/]",
+          MISSING: "[dim]n/a[/]"}
+
+
+def table(results: BenchResults) -> Table:
+    """Every figure beside its target and verdict."""
+    verdict = verdicts(results)
+    mode = "quick" if results.quick else "full"
+    machine = results.machine
+    load = ""
+    if machine.load_before and machine.load_after:
+        load = (f"; load average {machine.load_before[0]:.2f} before, "
+                f"{machine.load_after[0]:.2f} after")
+    out = Table(
+        title=f"tui-gym bench ({mode}, {results.seconds:.0f} s, "
+        f"{machine.cpus or '?'} CPUs{load})",
+        title_justify="left",
+    )
+    out.add_column("figure", style="bold")
+    out.add_column("measured", justify="right")
+    out.add_column("target", justify="right")
+    out.add_column("", justify="center")
+
+    def row(label: str, value: str, target: str = "", key: str | None = None) -> None:
+        out.add_row(label, value, target, _STYLE[verdict[key]] if key else "")
+
+    tp = results.throughput
+    if tp is not None:
+        row("tutorial loop on gym Blackjack-v1, ep/s", _num(tp.tutorial, ",.0f"), "baseline")
+        row("scalar engine, ep/s",
+            f"{_num(tp.scalar, ',.0f')} ({_num(tp.scalar_speedup, '.2f', '×')})")
+        row("vector engine, ep/s",
+            f"{_num(tp.vector, ',.0f')} ({_num(tp.vector_speedup, '.0f', '×')})")
+    gap = results.gap
+    if gap is not None:
+        ours_eps = sorted(r.episodes for r in gap.ours)
+        mark = "" if gap.reached else " (not reached)"
+        row(f"time to gap ≤ {gap.target:g}, ours",
+            f"{_num(gap.time_to_gap_s, '.2f', ' s')}{mark}, "
+            f"{ours_eps[len(ours_eps) // 2]:,} ep")
+        theirs_eps = sorted(r.episodes for r in gap.tutorial)
+        prefix = "" if gap.tutorial_reached else "≥ "
+        mark = "" if gap.tutorial_reached else " (capped)"
+        row(f"time to gap ≤ {gap.target:g}, tutorial loop",
+            f"{prefix}{_num(gap.tutorial_time_to_gap_s, '.1f', ' s')}{mark}, "
+            f"{theirs_eps[len(theirs_eps) // 2]:,} ep" if theirs_eps else "n/a")
+        row("  tutorial time / ours", prefix + _num(gap.speedup, ".0f", "×"),
+            f"≥ {GAP_SPEEDUP_TARGET:g}×", "time_to_gap")
+    for runner in RUNNERS:
+        name = f"{runner} runner" + (" (default)" if runner == results.default_runner else "")
+        live = results.live_for(runner)
+        if live is None:
+            error = results.live.get(runner)
+            text = "; ".join(error.errors) if error is not None else "not measured"
+            out.add_row(f"live, {name}", f"[red]{text}[/]", "", _STYLE[MISSING])
+            continue
+        row(f"live ep/s ÷ headless, {name}",
+            f"{live.live_ratio:.2f} ({live.live_eps:,.0f} / {live.headless_eps:,.0f})",
+            f"≥ {LIVE_RATIO_TARGET:.2f}", f"live_ratio[{runner}]")
+        row(f"  snapshots drawn, {runner}", f"{live.refresh_hz:.1f} Hz",
+            f"≥ {REFRESH_HZ_TARGET:g} Hz", f"ui_refresh_hz[{runner}]")
+        row(f"  key → screen p95, {runner}",
+            f"{live.key_latency_ms(95):.0f} ms (p50 {live.key_latency_ms(50):.0f}, "
+            f"n={live.presses})",
+            f"≤ {KEY_P95_MS_TARGET:g} ms", f"key_latency_p95_ms[{runner}]")
+    memory = results.memory
+    if memory is not None:
+        row(f"RSS growth over {memory.episodes:,} ep ({memory.engine})",
+            f"{memory.growth_mb:+.1f} MB", f"< {RSS_GROWTH_MB_TARGET:g} MB", "rss_growth_mb")
+    if results.startup is not None:
+        samples = ", ".join(f"{s:.2f}" for s in results.startup.samples)
+        row("start to first frame", f"{results.startup.seconds:.2f} s ({samples})",
+            f"≤ {STARTUP_S_TARGET:g} s", "startup_s")
+    for stage, error in results.errors.items():
+        out.add_row(f"{stage} failed", f"[red]{error}[/]", "", _STYLE[MISSING])
+    return out
+
+
+def notes(results: BenchResults) -> list[str]:
+    """Lines to print under the table: what the figures are, and any lower bounds."""
+    lines = [
+        "Ratios are taken between figures measured in this run; speeds are medians over "
+        "repeats, key latency percentiles over all presses.",
+    ]
+    gap = results.gap
+    if gap is not None and not gap.tutorial_reached:
+        lines.append(
+            "The tutorial loop was stopped by its time cap before reaching the gap: its time "
+            "and the speed-up are lower bounds (run without --quick for the full figure)."
+        )
+    load = results.machine.load_before
+    cpus = results.machine.cpus or 1
+    if load is not None and load[0] > 0.5 * cpus:
+        lines.append(
+            f"The machine was busy when the run started (load {load[0]:.2f} on {cpus} CPUs): "
+            "absolute speeds are low, ratios less affected."
+        )
+    return lines

@@ -1,0 +1,41 @@
+"""What one `tui-gym bench` run found: every stage's result, and where a stage failed."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from tui_gym.bench.gap import GapResult
+from tui_gym.bench.live import DEFAULT_RUNNER, LiveResult
+from tui_gym.bench.memory import MemoryResult
+from tui_gym.bench.startup import StartupResult
+from tui_gym.bench.throughput import ThroughputResult
+
+
+@dataclass(frozen=True)
+class MachineInfo:
+    """The machine the figures were measured on, and how busy it was."""
+
+    cpus: int | None
+    load_before: tuple[float, float, float] | None
+    load_after: tuple[float, float, float] | None
+
+
+@dataclass(frozen=True)
+class BenchResults:
+    """Every stage's result (None when it failed: `errors` says why)."""
+
+    quick: bool
+    seconds: float  # the whole run
+    machine: MachineInfo
+    throughput: ThroughputResult | None = None
+    gap: GapResult | None = None
+    live: dict[str, LiveResult] = field(default_factory=dict)  # by runner
+    memory: MemoryResult | None = None
+    startup: StartupResult | None = None
+    errors: dict[str, str] = field(default_factory=dict)  # stage -> what went wrong
+    default_runner: str = DEFAULT_RUNNER
+
+    def live_for(self, runner: str) -> LiveResult | None:
+        """A runner's live figures, or None when it has none (not run, or failed)."""
+        result = self.live.get(runner)
+        return result if result is not None and result.repeats else None

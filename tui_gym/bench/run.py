@@ -1,0 +1,95 @@
+"""One bench run: every stage in turn, with the sizes of the quick or the full plan.
+
+`run_bench(quick, progress)` measures throughput, time to the target gap,
+live training (both runners), memory and start-up, and returns
+`BenchResults`. A stage that fails is recorded in `errors` and the others
+still run. `progress` (if given) hears the name of each stage as it starts.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from tui_gym.bench import gap, live, memory, startup, throughput
+from tui_gym.bench.figures import load_average
+from tui_gym.bench.results import BenchResults, MachineInfo
+
+
+@dataclass(frozen=True)
+class Plan:
+    """How much of each measurement a run does."""
+
+    throughput_seconds: float  # window per engine per repeat
+    throughput_repeats: int
+    gap_seeds: tuple[int, ...]  # ours runs every seed
+    tutorial_cap_s: float  # one tutorial run stops here (a lower bound then)
+    tutorial_stage_s: float  # no new tutorial run starts past this
+    live_seconds: float  # the measuring window, headless and live
+    live_repeats: int
+    key_presses: int  # per repeat
+    memory_episodes: int
+    memory_warmup: int
+    startup_repeats: int
+
+
+# About 50 s on an idle 2-CPU machine; the tutorial gets one capped run.
+QUICK = Plan(
+    throughput_seconds=0.75, throughput_repeats=3,
+    gap_seeds=(0, 1, 2), tutorial_cap_s=20.0, tutorial_stage_s=0.0,
+    live_seconds=1.5, live_repeats=1, key_presses=30,
+    memory_episodes=2_000_000, memory_warmup=100_000,
+    startup_repeats=3,
+)
+# About 2.5 minutes on an idle 2-CPU machine.
+FULL = Plan(
+    throughput_seconds=2.0, throughput_repeats=3,
+    gap_seeds=(0, 1, 2), tutorial_cap_s=90.0, tutorial_stage_s=60.0,
+    live_seconds=3.0, live_repeats=3, key_presses=30,
+    memory_episodes=2_000_000, memory_warmup=100_000,
+    startup_repeats=5,
+)
+
+
+def run_bench(quick: bool = False, progress: Callable[[str], None] | None = None) -> BenchResults:
+    """Measure everything (see the module docstring)."""
+    plan = QUICK if quick else FULL
+    say = progress or (lambda _text: None)
+    errors: dict[str, str] = {}
+    found: dict[str, Any] = {}
+
+    def stage(name: str, text: str, measure: Callable[[], Any]) -> None:
+        say(text)
+        try:
+            found[name] = measure()
+        except Exception as exc:  # one broken stage must not hide the others' figures
+            errors[name] = f"{type(exc).__name__}: {exc}"
+
+    started = time.perf_counter()
+    load_before = load_average()
+    stage("throughput", "throughput: the tutorial loop, the scalar and the vector engine",
+          lambda: throughput.measure(plan.throughput_seconds, plan.throughput_repeats))
+    cap = f"capped at {plan.tutorial_cap_s:.0f} s"
+    stage("gap", f"time to gap ≤ {gap.TARGET_GAP}: ours, then the tutorial loop ({cap})",
+          lambda: gap.measure(plan.gap_seeds, plan.tutorial_cap_s, plan.tutorial_stage_s))
+    stage("live", "live training in the app",
+          lambda: live.measure(plan.live_seconds, plan.key_presses, plan.live_repeats,
+                               progress=say))
+    stage("memory", f"memory over {plan.memory_episodes:,} episodes",
+          lambda: memory.measure(plan.memory_episodes, plan.memory_warmup))
+    stage("startup", "start-up to the first frame",
+          lambda: startup.measure(plan.startup_repeats))
+    return BenchResults(
+        quick=quick,
+        seconds=time.perf_counter() - started,
+        machine=MachineInfo(os.cpu_count(), load_before, load_average()),
+        throughput=found.get("throughput"),
+        gap=found.get("gap"),
+        live=found.get("live", {}),
+        memory=found.get("memory"),
+        startup=found.get("startup"),
+        errors=errors,
+    )
