@@ -209,20 +209,19 @@ class Trainer:
     ) -> int:
         """Run until `episodes` more episodes, `seconds` elapse, or `stop` is set.
 
-        Returns the number of episodes finished. Publishes a fresh snapshot
-        to `latest` (and `on_publish`) every `publish_interval` seconds.
+        Exactly `episodes` finish when that limit is what stops the run;
+        `seconds` and `stop` are checked between small pieces of work (see
+        `_advance`). Returns the number of episodes finished, and publishes a
+        snapshot to `latest` (and `on_publish`) every `publish_interval`
+        seconds and at the end.
         """
         if episodes is None and seconds is None and stop is None:
             raise ValueError("run() needs episodes, seconds or a stop event")
         start = began = time.perf_counter()
         next_publish = start + self.publish_interval
         done = 0
-        check_every = 16
         while episodes is None or done < episodes:
-            self.run_episode()
-            done += 1
-            if done % check_every:
-                continue
+            done += self._advance(None if episodes is None else episodes - done)
             now = time.perf_counter()
             if seconds is not None and now - began >= seconds:
                 break
@@ -236,6 +235,13 @@ class Trainer:
         self.seconds += time.perf_counter() - start
         self.publish(on_publish)
         return done
+
+    def _advance(self, limit: int | None) -> int:
+        """A small piece of work between clock checks: a few episodes (at most `limit`)."""
+        count = 16 if limit is None else min(16, limit)
+        for _ in range(count):
+            self.run_episode()
+        return count
 
     def publish(self, callback: Callable[[TrainingSnapshot], None] | None = None) -> None:
         snap = self.snapshot()

@@ -36,9 +36,7 @@ for exploration), one `run(episodes=n)` and any number of
 
 from __future__ import annotations
 
-import threading
-import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -47,7 +45,7 @@ import numpy as np
 from tui_gym.core.agent import QAgent
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.stats import EpisodeStats
-from tui_gym.core.training import SERIES_NAMES, StepEvent, Trainer, TrainingSnapshot
+from tui_gym.core.training import SERIES_NAMES, StepEvent, Trainer
 from tui_gym.core.vector.plan import VectorPlan, plan_for_env
 from tui_gym.core.wrappers import WrapperChoice, build_env_lenient
 
@@ -203,41 +201,6 @@ class VectorTrainer(Trainer):
     def current_observation(self) -> Any:
         return None  # many games are in progress, none of them "the" current one
 
-    def run(
-        self,
-        episodes: int | None = None,
-        seconds: float | None = None,
-        stop: threading.Event | None = None,
-        on_publish: Callable[[TrainingSnapshot], None] | None = None,
-    ) -> int:
-        """Run until `episodes` more episodes finish, `seconds` elapse, or `stop` is set.
-
-        Exactly `episodes` finish when that limit is what stops the run;
-        `seconds` and `stop` are checked between batch steps. Returns the
-        number of episodes finished, and publishes a snapshot to `latest`
-        (and `on_publish`) every `publish_interval` seconds and at the end.
-        """
-        if episodes is None and seconds is None and stop is None:
-            raise ValueError("run() needs episodes, seconds or a stop event")
-        start = mark = time.perf_counter()
-        next_publish = start + self.publish_interval
-        done = 0
-        while episodes is None or done < episodes:
-            done += self._batch(None if episodes is None else episodes - done)
-            now = time.perf_counter()
-            if seconds is not None and now - start >= seconds:
-                break
-            if stop is not None and stop.is_set():
-                break
-            if now >= next_publish:
-                self.seconds += now - mark
-                mark = now
-                self.publish(on_publish)
-                next_publish = now + self.publish_interval
-        self.seconds += time.perf_counter() - mark
-        self.publish(on_publish)
-        return done
-
     # --- one batch step --------------------------------------------------
     def _start_episodes(self) -> None:
         """Start an episode in every idle env.
@@ -271,6 +234,9 @@ class VectorTrainer(Trainer):
         if explore.size:
             actions[explore] = rng.integers(n_actions, size=explore.size)
         return actions
+
+    def _advance(self, limit: int | None) -> int:
+        return self._batch(limit)
 
     def _batch(self, quota: int | None) -> int:
         """One batched step of every stepping env; returns the episodes it finished."""
