@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from tui_gym.bench import tutorial
 from tui_gym.bench.figures import median
 from tui_gym.commands import TARGET_GAP_BUDGET
+from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.profiles import profile_for
 from tui_gym.core.session import Session
 
@@ -77,7 +78,7 @@ class GapResult:
         return self.tutorial_time_to_gap_s / ours
 
 
-def default_hyperparameters():
+def default_hyperparameters() -> Hyperparameters:
     """The hyperparameters `tui-gym train blackjack --target-gap G` uses."""
     return profile_for(ENV_ID).default_hyperparameters().replace(episodes=TARGET_GAP_BUDGET)
 

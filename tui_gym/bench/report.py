@@ -253,7 +253,7 @@ def notes(results: BenchResults) -> list[str]:
     cpus = results.machine.cpus or 1
     if load is not None and load[0] > 0.5 * cpus:
         lines.append(
-            f"The machine was busy when the run started (load {load[0]:.2f} on {cpus} CPUs): "
-            "absolute speeds are low, ratios less affected."
+            f"Load average {load[0]:.2f} on {cpus} CPUs when the run started (other work, or "
+            "a run just before): absolute speeds may be low; ratios are less affected."
         )
     return lines

@@ -38,9 +38,9 @@ class Plan:
 
 # About 50 s on an idle 2-CPU machine; the tutorial gets one capped run.
 QUICK = Plan(
-    throughput_seconds=0.75, throughput_repeats=3,
-    gap_seeds=(0, 1, 2), tutorial_cap_s=20.0, tutorial_stage_s=0.0,
-    live_seconds=1.5, live_repeats=1, key_presses=30,
+    throughput_seconds=0.5, throughput_repeats=3,
+    gap_seeds=(0, 1, 2), tutorial_cap_s=15.0, tutorial_stage_s=0.0,
+    live_seconds=1.0, live_repeats=1, key_presses=30,
     memory_episodes=2_000_000, memory_warmup=100_000,
     startup_repeats=3,
 )
