@@ -271,7 +271,7 @@ async def _live_once(
     from tui_gym.ui.app import TuiGymApp
 
     session = Session("Blackjack-v1", hp=_hyperparameters(), seed=seed)
-    app = TuiGymApp(session, runner=runner_kind)
+    app = TuiGymApp(session, runner=runner_kind, tune_gc=True)  # as `tui-gym` runs it
     tools = _Instruments(app)
     async with app.run_test(size=SIZE) as pilot:
         await pilot.press("t")  # idle still, so the pilot's own waits are short

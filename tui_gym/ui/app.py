@@ -8,6 +8,7 @@ for rebuilds through a message; nothing in the trainer calls into widgets.
 
 from __future__ import annotations
 
+import gc
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any, ClassVar
@@ -17,7 +18,7 @@ from textual.binding import Binding, BindingType
 from textual.containers import Horizontal
 from textual.events import Resize
 from textual.screen import Screen
-from textual.widgets import ContentSwitcher, Footer, Header, Static
+from textual.widgets import ContentSwitcher, Header, Static
 
 from tui_gym.core.profiles import PROFILES
 from tui_gym.core.runner import make_runner
@@ -28,6 +29,7 @@ from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.play_view import PlayView
 from tui_gym.ui.side_panel import SidePanel
 from tui_gym.ui.train_view import TrainView
+from tui_gym.ui.widgets.key_bar import KeyBar
 
 MIN_WIDTH, MIN_HEIGHT = 80, 24  # below this: a message instead of the layout
 COMPACT_WIDTH, COMPACT_HEIGHT = 120, 36  # below this: the compact layout
@@ -40,19 +42,20 @@ class TuiGymApp(App[int]):
     TITLE = "tui-gym"
     CSS_PATH = "app.tcss"
 
+    # The order is the key bar's: what the view does first, then where to go.
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("p", "show_view('play')", "Play", tooltip="Play the game yourself"),
-        Binding("t", "show_view('train')", "Train", tooltip="Watch Q-learning train"),
-        Binding("b", "switch_game('blackjack')", "Blackjack"),
-        Binding("g", "switch_game('gridworld')", "GridWorld"),
-        Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
         Binding("space", "toggle_training", "Start/Pause", key_display="space"),
         Binding("full_stop", "one_episode", "1 episode", key_display="."),
         Binding("x", "reset_agent", "Reset agent"),
         Binding("plus,equals_sign", "faster", "Faster", key_display="+"),
         Binding("minus,underscore", "slower", "Slower", key_display="-"),
+        Binding("p", "show_view('play')", "Play", tooltip="Play the game yourself"),
+        Binding("t", "show_view('train')", "Train", tooltip="Watch Q-learning train"),
         Binding("question_mark,f1", "help", "Help", key_display="?"),
         Binding("q", "quit", "Quit"),
+        Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
+        Binding("b", "switch_game('blackjack')", "Blackjack"),
+        Binding("g", "switch_game('gridworld')", "GridWorld"),
     ]
     TRAIN_ACTIONS = frozenset({"toggle_training", "one_episode", "reset_agent", "faster", "slower"})
 
@@ -62,9 +65,13 @@ class TuiGymApp(App[int]):
         *,
         play_seed: int | None = None,
         runner: str = "thread",
+        tune_gc: bool = False,
     ) -> None:
-        """`runner` is "thread" (train on a worker thread) or "process" (a child process)."""
+        """`runner` is "thread" (train on a worker thread) or "process" (a child process;
+        what `tui-gym` opens). `tune_gc` applies `tune_gc_for_ui` at mount (for a
+        process that runs this one app, as `tui-gym` does; not for test suites)."""
         super().__init__()
+        self.tune_gc = tune_gc
         self.session = session or Session()
         self.runner = make_runner(self.session, runner)
         self.play_seed = self.session.seed if play_seed is None else play_seed
@@ -85,9 +92,11 @@ class TuiGymApp(App[int]):
             f"It needs at least {MIN_WIDTH}×{MIN_HEIGHT}; make the window larger.",
             id="too-small",
         )
-        yield Footer()
+        yield KeyBar()
 
     def on_mount(self) -> None:
+        if self.tune_gc:
+            tune_gc_for_ui()
         self._switcher = self.query_one("#views", ContentSwitcher)
         self.sub_title = self.session.profile.title
         self.set_interval(1 / REFRESH_HZ, self._tick)
@@ -319,11 +328,24 @@ class TuiGymApp(App[int]):
         self.runner.close()
 
 
+def tune_gc_for_ui() -> None:
+    """Keep Python's full garbage collections from stalling keys.
+
+    Textual keeps many long-lived objects; a full collection over them took
+    about 100 ms, more than once a second. What is alive once the app is up
+    moves to the permanent generation, and the old generations are collected
+    less often. Objects frozen here are never collected, hence one app a process.
+    """
+    gc.collect()
+    gc.freeze()
+    gc.set_threshold(50_000, 50, 1000)
+
+
 def run_app(
     env_id: str = "Blackjack-v1", seed: int = 0, load: str | None = None, runner: str = "process"
 ) -> int:
     """Open the app (from a saved agent with `load`); returns the exit code."""
     session = Session.load(load) if load else Session(env_id=env_id, seed=seed)
-    app = TuiGymApp(session, runner=runner)
+    app = TuiGymApp(session, runner=runner, tune_gc=True)
     result = app.run()
     return int(result or 0)

@@ -329,8 +329,10 @@ class TrainView(VerticalScroll):
         remaining = max(0, snapshot.budget - snapshot.episodes)
         if runner.running and rate > 0 and remaining:
             text += f" · eta {format_duration(remaining / rate)}"
-        if str(self._progress_text.content) != text:
-            self._progress_text.update(text)
+        old = str(self._progress_text.content)
+        if old != text:
+            # A layout pass (costly) only when the text's width changes.
+            self._progress_text.update(text, layout=len(old) != len(text))
 
     def _show_heatmaps(self) -> None:
         session, snapshot = self.session, self._snapshot

@@ -189,6 +189,7 @@ class HeatmapView(Widget, can_focus=True):
         classes: str | None = None,
     ) -> None:
         super().__init__(name=name, id=id, classes=classes)
+        self._drawn: tuple | None = None  # (key, panels, text) of the last picture
         self._panels: tuple[Heatmap, ...] = tuple(panels)
         self._message = ""
         self._placements: list[_Placement] = []
@@ -325,6 +326,19 @@ class HeatmapView(Widget, can_focus=True):
 
     # --- drawing -----------------------------------------------------------
     def render(self) -> Text:
+        # Drawing 200 coloured cells takes milliseconds; a view switch or a
+        # focus change asks again for the same picture, so keep the last one.
+        width = self.content_region.width or self.size.width or 80
+        key = (id(self._panels), self._message, width, self.focus_cell, self.has_focus,
+               self.screen.has_class("compact"))
+        drawn = self._drawn
+        if drawn is not None and drawn[0] == key and drawn[1] is self._panels:
+            return drawn[2]
+        text = self._draw()
+        self._drawn = (key, self._panels, text)
+        return text
+
+    def _draw(self) -> Text:
         if not self._panels:
             self.plain = self._message
             self._placements = []

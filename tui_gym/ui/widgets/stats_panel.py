@@ -85,6 +85,7 @@ class StatsPanel(Widget):
         self._rows: list[tuple[str, str, str]] = []  # (name, value, style)
         self._reference: list[tuple[str, str]] = []
         self._engine_reason = ""
+        self._shape: tuple = ()
         self._reference_note = ""
         self._state = "idle"
         self._speed = ""
@@ -162,7 +163,11 @@ class StatsPanel(Widget):
         if self._engine:
             parts.append(f"{self._engine} engine")
         self.border_subtitle = " · ".join(parts)
-        self.refresh(layout=True)
+        # A layout pass only when the panel's height may change (new rows or notes).
+        shape = (len(self._rows), len(self._reference), bool(self._reference_note),
+                 self._engine_reason, self._compact())
+        self.refresh(layout=shape != self._shape)
+        self._shape = shape
 
     def _plain(self) -> str:
         label, _ = STATE_STYLES.get(self._state, (self._state, ""))

@@ -164,12 +164,13 @@ class TrainingCharts(Vertical):
             if self._shown.get(key) != data:
                 self._shown[key] = data
                 self._sparks[key].data = data
-                high.update(f"max {curve.fmt.format(max(data))}" if data else "")
-                low.update(f"min {curve.fmt.format(min(data))}" if data else "")
+                # Fixed-size labels: no layout pass needed (it would cost a whole frame).
+                high.update(f"max {curve.fmt.format(max(data))}" if data else "", layout=False)
+                low.update(f"min {curve.fmt.format(min(data))}" if data else "", layout=False)
             text = curve.fmt.format(curve.current(snapshot)) if snapshot.episodes else "–"
             if self._values.get(key) != text:
                 self._values[key] = text
-                value.update(text)
+                value.update(text, layout=False)
 
 
 __all__ = ["CURVES", "Curve", "TrainingCharts"]

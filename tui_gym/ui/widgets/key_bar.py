@@ -1,0 +1,123 @@
+"""`KeyBar`: the live key bindings along the bottom, drawn as one line of text.
+
+It shows what Textual's `Footer` shows (the bindings active for the focused
+widget and the app, grouped keys together, the command palette key on the
+right) and a click on a key presses it. Unlike `Footer`, which rebuilds a
+widget per key on every focus change (three times per view switch here, the
+largest part of a switch's cost), it redraws one line of text.
+"""
+
+from __future__ import annotations
+
+from itertools import groupby
+
+from rich.cells import cell_len
+from rich.text import Text
+from textual import events
+from textual.binding import Binding
+from textual.screen import Screen
+from textual.widget import Widget
+
+
+class KeyBar(Widget):
+    """One line listing the active key bindings; click a key to press it."""
+
+    COMPONENT_CLASSES = {"keybar--key"}
+    DEFAULT_CSS = """
+    KeyBar {
+        dock: bottom;
+        height: 1;
+        background: $footer-background;
+        color: $footer-foreground;
+    }
+    KeyBar > .keybar--key {
+        color: $footer-key-foreground;
+        background: $footer-key-background;
+        text-style: bold;
+    }
+    """
+
+    def __init__(self, *, id: str | None = None) -> None:
+        super().__init__(id=id)
+        self._spans: list[tuple[int, int, str]] = []  # (start, end, key) for clicks
+        self._entries: list[tuple[str, str, bool, str]] = []  # (keys shown, text, enabled, key)
+        self._palette: tuple[str, str] | None = None
+        self._drawn: tuple[int, Text] | None = None  # (width, text) of the last picture
+
+    def on_mount(self) -> None:
+        self.screen.bindings_updated_signal.subscribe(self, self._bindings_changed)
+        self._bindings_changed(self.screen)
+
+    def _bindings_changed(self, screen: Screen) -> None:
+        if not self.is_attached or screen is not self.screen:
+            return
+        active = screen.active_bindings
+        shown: list[tuple[Binding, bool]] = []
+        seen_actions: set[str] = set()
+        for _node, binding, enabled, _tooltip in active.values():
+            if binding.show and binding.action not in seen_actions:
+                seen_actions.add(binding.action)
+                shown.append((binding, enabled))
+        entries: list[tuple[str, str, bool, str]] = []
+        app = self.app
+        for group, items in groupby(shown, lambda item: item[0].group):
+            members = list(items)
+            if group is not None and len(members) > 1:
+                keys = " ".join(app.get_key_display(b) for b, _ in members)
+                entries.append((keys, group.description, any(e for _, e in members),
+                                members[0][0].key))
+            else:
+                for binding, enabled in members:
+                    entries.append((app.get_key_display(binding), binding.description, enabled,
+                                    binding.key))
+        palette = None
+        if app.ENABLE_COMMAND_PALETTE:
+            found = active.get(app.COMMAND_PALETTE_BINDING)
+            if found is not None:
+                palette = (app.get_key_display(found.binding), found.binding.description)
+        if entries != self._entries or palette != self._palette:
+            self._entries, self._palette = entries, palette
+            self._drawn = None
+            self.refresh()
+
+    def render(self) -> Text:
+        width = self.size.width
+        if self._drawn is not None and self._drawn[0] == width:
+            return self._drawn[1]
+        text = self._draw(width)
+        self._drawn = (width, text)
+        return text
+
+    def _draw(self, width: int) -> Text:
+        key_style = self.get_component_rich_style("keybar--key", partial=True)
+        text = Text(no_wrap=True, overflow="ellipsis", end="")
+        spans: list[tuple[int, int, str]] = []
+        for keys, description, enabled, key in self._entries:
+            start = text.cell_len
+            text.append(f" {keys} ", style=key_style)
+            text.append(f"{description} " if description else "",
+                        style="" if enabled else "dim")
+            if not enabled:
+                text.stylize("dim", start)
+            spans.append((start, text.cell_len, key))
+        if self._palette is not None and width:
+            keys, description = self._palette
+            tail = f"▏{keys} {description} "
+            room = width - cell_len(tail)
+            if text.cell_len > room:
+                text.truncate(max(0, room), overflow="ellipsis")
+                spans = [s for s in spans if s[1] <= room]
+            text.append(" " * max(0, room - text.cell_len))
+            text.append(tail[0], style="dim")
+            text.append(f"{keys} ", style=key_style)
+            text.append(description + " ")
+            spans.append((room, width, "ctrl+p"))
+        self._spans = spans
+        return text
+
+    def on_click(self, event: events.Click) -> None:
+        for start, end, key in self._spans:
+            if start <= event.x < end:
+                event.stop()
+                self.app.simulate_key(key)
+                return
