@@ -54,7 +54,10 @@ class ParamField(Horizontal):
     ParamField Label { width: 1fr; color: $text-muted; }
     ParamField Input { width: 12; }
     ParamField Checkbox { width: 12; }
+    Screen.compact ParamField { padding-left: 2; }
+    Screen.compact ParamField Input, Screen.compact ParamField Checkbox { width: 7; }
     """
+    SCOPED_CSS = False  # the compact rules start at Screen
 
     def __init__(self, param: Param, value: Any, group: str) -> None:
         super().__init__(classes="param-field")
