@@ -8,11 +8,19 @@ returns, one row per stepped env; `Selection` is how callers name the subset
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["BatchStep", "Selection", "check_actions", "check_num_envs", "selection_size"]
+__all__ = [
+    "BatchStep",
+    "Selection",
+    "after_step",
+    "check_actions",
+    "check_num_envs",
+    "selection_size",
+]
 
 Selection = np.ndarray | None
 """The envs a call applies to: None for all, else an int array of distinct env indices."""
@@ -63,3 +71,32 @@ def check_actions(actions: np.ndarray, expected: int, n_actions: int) -> np.ndar
     if expected and (acts.min() < 0 or acts.max() >= n_actions):
         raise ValueError(f"actions must be in [0, {n_actions - 1}]")
     return acts.astype(np.int64, copy=False)
+
+
+def after_step(
+    next_obs: np.ndarray,
+    terminated: np.ndarray,
+    elapsed: np.ndarray,
+    max_episode_steps: int | None,
+    index: Selection,
+    reset: Callable[[np.ndarray], np.ndarray],
+    autoreset: bool,
+) -> tuple[np.ndarray, np.ndarray]:
+    """What every batched game does after a move: truncation, then auto-reset.
+
+    Returns `truncated` (episodes at the time limit) and `obs`: `next_obs`,
+    with the new starting observation in place for envs that `reset` started
+    again (only with `autoreset`).
+    """
+    if max_episode_steps is None:
+        truncated = np.zeros(len(next_obs), dtype=bool)
+    else:
+        truncated = elapsed >= max_episode_steps
+    obs = next_obs
+    if autoreset:
+        done = np.flatnonzero(terminated | truncated)
+        if done.size:
+            obs = next_obs.copy()
+            envs = done if index is None else np.asarray(index)[done]
+            obs[done] = reset(envs)
+    return truncated, obs

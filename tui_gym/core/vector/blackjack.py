@@ -30,6 +30,7 @@ from tui_gym.core.reference.blackjack import DEFAULT_RULES, BlackjackRules
 from tui_gym.core.vector.base import (
     BatchStep,
     Selection,
+    after_step,
     check_actions,
     check_num_envs,
     selection_size,
@@ -162,18 +163,9 @@ class BatchedBlackjack:
         self.natural[sel] = natural
         elapsed = self.elapsed[sel] + 1
         self.elapsed[sel] = elapsed
-        if self.max_episode_steps is None:
-            truncated = np.zeros(k, dtype=bool)
-        else:
-            truncated = elapsed >= self.max_episode_steps
         next_obs = self._observe(raw, ace, up)
-        obs = next_obs
-        if autoreset:
-            done = np.flatnonzero(terminated | truncated)
-            if done.size:
-                obs = next_obs.copy()
-                envs = done if index is None else np.asarray(index)[done]
-                obs[done] = self.reset(envs)
+        truncated, obs = after_step(next_obs, terminated, elapsed, self.max_episode_steps,
+                                    index, self.reset, autoreset)
         return BatchStep(next_obs, reward, terminated, truncated, obs)
 
     def _settle(

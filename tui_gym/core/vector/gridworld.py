@@ -24,6 +24,7 @@ import numpy as np
 from tui_gym.core.vector.base import (
     BatchStep,
     Selection,
+    after_step,
     check_actions,
     check_num_envs,
     selection_size,
@@ -140,16 +141,7 @@ class BatchedGridWorld:
             self.state[index] = rows
             elapsed = self.elapsed[index] + 1
             self.elapsed[index] = elapsed
-        if self.max_episode_steps is None:
-            truncated = np.zeros(k, dtype=bool)
-        else:
-            truncated = elapsed >= self.max_episode_steps
         distance = np.abs(rows[:, :2] - rows[:, 2:]).sum(axis=1)
-        obs = rows
-        if autoreset:
-            done = np.flatnonzero(terminated | truncated)
-            if done.size:
-                obs = rows.copy()
-                envs = done if index is None else np.asarray(index)[done]
-                obs[done] = self.reset(envs)
+        truncated, obs = after_step(rows, terminated, elapsed, self.max_episode_steps,
+                                    index, self.reset, autoreset)
         return BatchStep(rows, reward, terminated, truncated, obs, distance)
