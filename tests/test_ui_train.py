@@ -94,15 +94,15 @@ async def test_training_runs_live_and_pauses() -> None:
 
         await pilot.press("space")
         await wait_for(pilot, lambda: app.runner.latest.episodes > 500, "500 episodes")
-        await wait_for(pilot, lambda: len(view.charts.sparkline("return").data or ()) > 1,
+        await wait_for(pilot, lambda: len(view.charts.data("return")) > 1,
                        "the return sparkline")
-        first = {k: tuple(view.charts.sparkline(k).data or ())
+        first = {k: view.charts.data(k)
                  for k in ("return", "length", "td_error", "epsilon")}
         assert all(first.values()), first
         seen = app.runner.latest.episodes
 
         await wait_for(pilot, lambda: view._snapshot.episodes > seen + 2000, "more episodes")
-        later = tuple(view.charts.sparkline("epsilon").data or ())
+        later = view.charts.data("epsilon")
         assert later != first["epsilon"]  # the curves follow the run
         shown = view._snapshot.episodes
         assert f"episodes {shown:,}" in view.stats.plain
@@ -147,7 +147,7 @@ async def test_one_episode_and_reset() -> None:
         await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
         assert not app.runner.running
         await wait_for(pilot, lambda: "episodes 0\n" in view.stats.plain, "fresh stats")
-        assert not view.charts.sparkline("return").data
+        assert not view.charts.data("return")
 
 
 async def test_speed_keys_change_the_speed() -> None:

@@ -17,7 +17,9 @@ from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal
 from textual.events import Resize
+from textual.reactive import Reactive
 from textual.screen import Screen
+from textual.widget import Widget
 from textual.widgets import ContentSwitcher, Header, Static
 
 from tui_gym.core.profiles import PROFILES
@@ -34,6 +36,14 @@ from tui_gym.ui.widgets.key_bar import KeyBar
 MIN_WIDTH, MIN_HEIGHT = 80, 24  # below this: a message instead of the layout
 COMPACT_WIDTH, COMPACT_HEIGHT = 120, 36  # below this: the compact layout
 REFRESH_HZ = 15
+
+
+class MainScreen(Screen):
+    """The app's screen. A focus change repaints the widgets whose look it changes
+    (their `:focus` styles), not the whole screen as Textual's `Screen` does: a
+    view switch moves the focus, and a whole-screen repaint doubled its cost."""
+
+    focused: Reactive[Widget | None] = Reactive(None, repaint=False)
 
 
 class TuiGymApp(App[int]):
@@ -80,6 +90,9 @@ class TuiGymApp(App[int]):
         self._switcher: ContentSwitcher | None = None
 
     # --- layout ------------------------------------------------------------
+    def get_default_screen(self) -> Screen:
+        return MainScreen(id="_default")
+
     def compose(self) -> ComposeResult:
         yield Header()
         with Horizontal(id="body"):
@@ -96,7 +109,7 @@ class TuiGymApp(App[int]):
 
     def on_mount(self) -> None:
         if self.tune_gc:
-            tune_gc_for_ui()
+            tune_gc_for_ui(self)
         self._switcher = self.query_one("#views", ContentSwitcher)
         self.sub_title = self.session.profile.title
         self.set_interval(1 / REFRESH_HZ, self._tick)
@@ -159,16 +172,22 @@ class TuiGymApp(App[int]):
         if self._switcher is None:
             return
         self._switcher.current = view
-        before = self.focused
+        if view == "train":
+            self._last_version = -1
+            self._tick()
+        # The view is drawn first and the focus (with the key bar) follows a
+        # frame later: restyling the widgets that gain and lose the focus and
+        # redrawing the full-width key bar would double the first frame's cost.
+        self.call_after_refresh(self._focus_view, view)
+
+    def _focus_view(self, view: str) -> None:
+        if self.current_view != view:  # switched again in the meantime
+            return
         if view == "play":
             self.play_view.focus_board()
         else:
-            self._last_version = -1
             self.train_view.focus_default()
-            self._tick()
-        if self.focused is before:
-            # A focus change refreshes the Footer by itself (and the Footer is costly).
-            self.refresh_bindings()
+        self.refresh_bindings()  # the view's keys, even when the focus stays put
 
     def action_switch_game(self, name: str) -> None:
         profile = next(p for p in PROFILES if p.name == name)
@@ -326,19 +345,31 @@ class TuiGymApp(App[int]):
 
     def on_unmount(self) -> None:
         self.runner.close()
+        if self.tune_gc:
+            gc.enable()  # the timers that collected are gone with the app
 
 
-def tune_gc_for_ui() -> None:
-    """Keep Python's full garbage collections from stalling keys.
+YOUNG_GC_SECONDS = 0.5  # collect the young generations this often
+FULL_GC_SECONDS = 20.0  # and everything this often
 
-    Textual keeps many long-lived objects; a full collection over them took
-    about 100 ms, more than once a second. What is alive once the app is up
-    moves to the permanent generation, and the old generations are collected
-    less often. Objects frozen here are never collected, hence one app a process.
+
+def tune_gc_for_ui(app: App[Any]) -> None:
+    """Collect garbage between frames, on the app's own timers.
+
+    Python's collector runs whenever enough objects have been allocated, so
+    it often ran in the middle of drawing a frame, when the frame's own
+    objects made the collection take up to 25 ms. Here what is alive once the
+    app is up moves to the permanent generation (`gc.freeze`: never collected
+    again, hence one app a process), automatic collection is off, and timers
+    collect the young generations every `YOUNG_GC_SECONDS` (about a
+    millisecond) and everything every `FULL_GC_SECONDS`; a timer callback
+    never runs in the middle of a frame.
     """
     gc.collect()
     gc.freeze()
-    gc.set_threshold(50_000, 50, 1000)
+    gc.disable()
+    app.set_interval(YOUNG_GC_SECONDS, lambda: gc.collect(1), name="young-gc")
+    app.set_interval(FULL_GC_SECONDS, gc.collect, name="full-gc")
 
 
 def run_app(

@@ -18,7 +18,7 @@ that fits), and, when interactive, a row of compact buttons for the mouse.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Hashable, Mapping
 from typing import Any, ClassVar
 
 from rich.text import Text
@@ -31,9 +31,12 @@ from textual.message import Message
 from textual.widget import Widget
 from textual.widgets import Button
 
+from tui_gym.ui.widgets.strip_widget import Line, StripWidget, segments_of
 
-class BoardCanvas(Widget):
-    """The drawing area of a board: renders `board.picture(width, height)`."""
+
+class BoardCanvas(StripWidget):
+    """The drawing area of a board: draws `board.picture(width, height)`, again only
+    after `Board.redraw()` or a change of size or colours."""
 
     DEFAULT_CSS = """
     BoardCanvas { width: 1fr; height: 1fr; }
@@ -43,9 +46,12 @@ class BoardCanvas(Widget):
         super().__init__(classes="board-canvas")
         self.board = board
 
-    def render(self) -> Text:
-        size = self.content_size
-        return self.board.picture(size.width, size.height)
+    def picture_key(self) -> Hashable:
+        return (self._version, self.content_size.height, self.board.rich_style)
+
+    def draw(self, width: int) -> list[Line]:
+        picture = self.board.picture(width, self.content_size.height)
+        return segments_of(picture, self.app.console)
 
     def on_click(self, event: events.Click) -> None:
         offset = event.get_content_offset(self)
@@ -187,7 +193,7 @@ class Board(Widget):
     def redraw(self) -> None:
         if self.is_mounted:
             for canvas in self.query(BoardCanvas):
-                canvas.refresh()
+                canvas.redraw()
 
     def key_help(self) -> list[tuple[str, str]]:
         """(key, what it does) for every key and click the board answers to."""

@@ -17,11 +17,12 @@ from __future__ import annotations
 
 import math
 import textwrap
-from collections.abc import Sequence
+from collections.abc import Hashable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
+from rich.segment import Segment
 from rich.style import Style
 from rich.text import Text
 from textual import events
@@ -29,9 +30,9 @@ from textual.binding import Binding, BindingType
 from textual.geometry import Size
 from textual.message import Message
 from textual.reactive import reactive
-from textual.widget import Widget
 
 from tui_gym.core.heatmap import Heatmap
+from tui_gym.ui.widgets.strip_widget import Line, StripWidget, line_text, segments_of
 
 RGB = tuple[int, int, int]
 
@@ -135,7 +136,7 @@ class _Layout:
     panel_width: int
 
 
-class HeatmapView(Widget, can_focus=True):
+class HeatmapView(StripWidget, can_focus=True):
     """Heatmap panels of a Q-table, with a movable focus cell for games that have one."""
 
     DEFAULT_CSS = """
@@ -189,7 +190,6 @@ class HeatmapView(Widget, can_focus=True):
         classes: str | None = None,
     ) -> None:
         super().__init__(name=name, id=id, classes=classes)
-        self._drawn: tuple | None = None  # (key, panels, text) of the last picture
         self._panels: tuple[Heatmap, ...] = tuple(panels)
         self._message = ""
         self._placements: list[_Placement] = []
@@ -211,14 +211,14 @@ class HeatmapView(Widget, can_focus=True):
             a.shape == b.shape and len(a.legend) == len(b.legend)
             for a, b in zip(old, self._panels, strict=True)
         )
-        self.refresh(layout=not same_shape)
+        self.redraw(layout=not same_shape)
 
     def show_message(self, text: str) -> None:
         """Show a line of text instead of panels (e.g. why there is no per-state view)."""
         self._panels = ()
         self._message = text
         self.add_class("-empty")
-        self.refresh(layout=True)
+        self.redraw(layout=True)
 
     def watch_focus_cell(self, old: object, new: object) -> None:
         self.refresh()
@@ -325,25 +325,18 @@ class HeatmapView(Widget, can_focus=True):
         return body + 1 + len(legends)  # the scale, then the legends
 
     # --- drawing -----------------------------------------------------------
-    def render(self) -> Text:
-        # Drawing 200 coloured cells takes milliseconds; a view switch or a
-        # focus change asks again for the same picture, so keep the last one.
-        width = self.content_region.width or self.size.width or 80
-        key = (id(self._panels), self._message, width, self.focus_cell, self.has_focus,
-               self.screen.has_class("compact"))
-        drawn = self._drawn
-        if drawn is not None and drawn[0] == key and drawn[1] is self._panels:
-            return drawn[2]
-        text = self._draw()
-        self._drawn = (key, self._panels, text)
-        return text
+    def picture_key(self) -> Hashable:
+        height = 0 if self._panels else self.content_size.height  # a message is centred
+        return (self._version, self.focus_cell, self.has_focus, self._compact(), height)
 
-    def _draw(self) -> Text:
+    def draw(self, width: int) -> list[Line]:
         if not self._panels:
             self.plain = self._message
             self._placements = []
-            return Text(self._message, justify="center")
-        width = self.content_region.width or self.size.width or 80
+            console = self.app.console
+            wrapped = Text(self._message).wrap(console, max(1, width), justify="center")
+            top = max(0, (self.content_size.height - len(wrapped)) // 2)
+            return [[] for _ in range(top)] + [segments_of(t, console)[0] for t in wrapped]
         layout = self._layout(width)
         scale = ColourScale.over(self._panels)
         several = layout.side_by_side and len(self._panels) > 1
@@ -352,18 +345,18 @@ class HeatmapView(Widget, can_focus=True):
             self._panel_lines(i, p, layout, scale, title_width)
             for i, p in enumerate(self._panels)
         ]
-        lines: list[Text] = []
+        lines: list[_Line] = []
         placements: list[_Placement] = []
         if layout.side_by_side:
             height = max(len(b) for b in blocks)
             for y in range(height):
-                line = Text()
+                line = _Line()
                 for i, block in enumerate(blocks):
                     if i:
-                        line.append(" " * PANEL_GAP)
-                    part = block[y] if y < len(block) else Text()
-                    line.append_text(part)
-                    line.append(" " * max(0, layout.panel_width - part.cell_len))
+                        line.add(" " * PANEL_GAP)
+                    part = block[y] if y < len(block) else _Line()
+                    line.add_line(part)
+                    line.add(" " * max(0, layout.panel_width - part.width))
                 lines.append(line)
             for i, panel in enumerate(self._panels):
                 x = i * (layout.panel_width + PANEL_GAP) + layout.row_label_width + 1
@@ -372,86 +365,120 @@ class HeatmapView(Widget, can_focus=True):
             y = 0
             for i, (panel, block) in enumerate(zip(self._panels, blocks, strict=True)):
                 if i:
-                    lines.append(Text())
+                    lines.append(_Line())
                     y += 1
                 placements.append(_Placement(i, layout.row_label_width + 1, y + 2, *panel.shape))
                 lines.extend(block)
                 y += len(block)
         lines.append(self._scale_line(scale, layout, width))
         indent = layout.row_label_width + 1
-        lines.extend(
-            Text(" " * indent + legend, style="dim")
-            for legend in self._legend_lines(width, indent)
-        )
+        for legend in self._legend_lines(width, indent):
+            lines.append(_Line().add(" " * indent + legend, DIM))
         self._placements = placements
         self._cell_geometry = (layout.cell_width, layout.cell_height)
-        text = Text("\n").join(lines)
-        text.no_wrap = True
-        text.overflow = "crop"
-        self.plain = text.plain
-        return text
+        cropped = [line.cropped(width) for line in lines]
+        self.plain = "\n".join(line_text(line).rstrip() for line in cropped)
+        return cropped
 
     def _panel_lines(
         self, index: int, panel: Heatmap, layout: _Layout, scale: ColourScale, title_width: int
-    ) -> list[Text]:
+    ) -> list[_Line]:
         cw, ch, rlw = layout.cell_width, layout.cell_height, layout.row_label_width
         rows, cols = panel.shape
         grid_width = cols * cw
         title = panel.title
         if len(title) <= grid_width:
             title = " " * (rlw + 1) + title.center(grid_width).rstrip()
-        lines = [Text(title[:title_width], style="bold")]
-        header = Text(" " * (rlw + 1))
+        lines = [_Line().add(title[:title_width], BOLD)]
+        header = _Line().add(" " * (rlw + 1))
         for label in panel.col_labels:
-            header.append(label.center(cw), style="dim")
+            header.add(label.center(cw), DIM)
         lines.append(header)
         focus = self.focus_cell if index == 0 else None
         has_focus = self.has_focus
+        values = panel.values.tolist()
+        marked_cells = panel.marked.tolist()
+        styles = _CellStyles(scale)
         for r in range(rows):
             for sub in range(ch):
                 row_label = panel.row_labels[r] if sub == 0 else ""
-                line = Text(row_label.rjust(rlw) + " ", style="dim")
+                line = _Line().add(row_label.rjust(rlw) + " ", DIM)
                 for c in range(cols):
-                    value = float(panel.values[r, c])
                     label = panel.labels[r][c] if sub == 0 else ""
-                    marked = bool(panel.marked[r, c]) and sub == 0
-                    line.append_text(
-                        self._cell(value, label, marked, cw, focus == (r, c), has_focus, scale)
-                    )
+                    marked = bool(marked_cells[r][c]) and sub == 0
+                    pad = (cw - len(label)) // 2
+                    body = (" " * pad + label + ("*" if marked else "")).ljust(cw)[:cw]
+                    if focus == (r, c):  # bright while the keys move it, quiet otherwise
+                        style = FOCUS_ACTIVE if has_focus else FOCUS_QUIET
+                    else:
+                        style = styles.cell(float(values[r][c]), marked)
+                    line.add(body, style)
                 lines.append(line)
         return lines
 
-    @staticmethod
-    def _cell(
-        value: float,
-        label: str,
-        marked: bool,
-        width: int,
-        is_focus: bool,
-        has_focus: bool,
-        scale: ColourScale,
-    ) -> Text:
-        pad = (width - len(label)) // 2
-        body = " " * pad + label + ("*" if marked else "")
-        body = body.ljust(width)[:width]
-        if is_focus:  # bright while the keys move it, quiet otherwise
-            if has_focus:
-                return Text(body, style=Style(bold=True, color="#000000", bgcolor="#f5f5f5"))
-            return Text(body, style=Style(bold=True, color="#f5f5f5", bgcolor="#5a5a5a"))
-        if not math.isfinite(value):
-            return Text(body, style=Style(color="#808080"))
-        rgb = scale.colour(value)
-        style = Style(bgcolor=_hex(rgb), color=_ink(rgb), bold=marked, underline=marked)
-        return Text(body, style=style)
-
-    def _scale_line(self, scale: ColourScale, layout: _Layout, width: int) -> Text:
+    def _scale_line(self, scale: ColourScale, layout: _Layout, width: int) -> _Line:
         lo, hi = scale.bounds
         indent = layout.row_label_width + 1
         bar = max(4, min(LEGEND_WIDTH, width - indent - 12))
-        line = Text(" " * indent)
-        line.append(f"{lo:+.2f} ", style="dim")
+        line = _Line().add(" " * indent)
+        line.add(f"{lo:+.2f} ", DIM)
         for i in range(bar):
             rgb = scale.colour_at((i + 0.5) / bar)
-            line.append(" ", style=Style(bgcolor=_hex(rgb)))
-        line.append(f" {hi:+.2f}", style="dim")
+            line.add(" ", Style(bgcolor=_hex(rgb)))
+        line.add(f" {hi:+.2f}", DIM)
         return line
+
+
+DIM = Style(dim=True)
+BOLD = Style(bold=True)
+FOCUS_ACTIVE = Style(bold=True, color="#000000", bgcolor="#f5f5f5")
+FOCUS_QUIET = Style(bold=True, color="#f5f5f5", bgcolor="#5a5a5a")
+BLANK_CELL = Style(color="#808080")
+
+
+class _CellStyles:
+    """The style of a cell by value, one `Style` per colour (cells share few)."""
+
+    def __init__(self, scale: ColourScale) -> None:
+        self.scale = scale
+        self._made: dict[tuple[RGB, bool], Style] = {}
+
+    def cell(self, value: float, marked: bool) -> Style:
+        if not math.isfinite(value):
+            return BLANK_CELL
+        rgb = self.scale.colour(value)
+        style = self._made.get((rgb, marked))
+        if style is None:
+            style = Style(bgcolor=_hex(rgb), color=_ink(rgb), bold=marked, underline=marked)
+            self._made[(rgb, marked)] = style
+        return style
+
+
+class _Line(list):
+    """Segments of one line, with their width (every character is one cell wide)."""
+
+    width = 0
+
+    def add(self, text: str, style: Style | None = None) -> _Line:
+        if text:
+            self.append(Segment(text, style))
+            self.width += len(text)
+        return self
+
+    def add_line(self, other: Iterable[Segment]) -> None:
+        for segment in other:
+            self.add(segment.text, segment.style)
+
+    def cropped(self, width: int) -> Line:
+        """The segments within the first `width` cells."""
+        if self.width <= width:
+            return list(self)
+        out: Line = []
+        room = width
+        for segment in self:
+            if room <= 0:
+                break
+            text = segment.text[:room]
+            out.append(Segment(text, segment.style))
+            room -= len(text)
+        return out

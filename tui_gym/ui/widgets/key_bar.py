@@ -4,11 +4,13 @@ It shows what Textual's `Footer` shows (the bindings active for the focused
 widget and the app, grouped keys together, the command palette key on the
 right) and a click on a key presses it. Unlike `Footer`, which rebuilds a
 widget per key on every focus change (three times per view switch here, the
-largest part of a switch's cost), it redraws one line of text.
+largest part of a switch's cost), it draws one line, and keeps the last few
+lines drawn: a view switch flips between the same two sets of keys.
 """
 
 from __future__ import annotations
 
+from collections.abc import Hashable
 from itertools import groupby
 
 from rich.cells import cell_len
@@ -16,11 +18,14 @@ from rich.text import Text
 from textual import events
 from textual.binding import Binding
 from textual.screen import Screen
-from textual.widget import Widget
+
+from tui_gym.ui.widgets.strip_widget import Line, StripWidget, segments_of
 
 
-class KeyBar(Widget):
+class KeyBar(StripWidget):
     """One line listing the active key bindings; click a key to press it."""
+
+    PICTURES = 6
 
     COMPONENT_CLASSES = {"keybar--key"}
     DEFAULT_CSS = """
@@ -39,10 +44,8 @@ class KeyBar(Widget):
 
     def __init__(self, *, id: str | None = None) -> None:
         super().__init__(id=id)
-        self._spans: list[tuple[int, int, str]] = []  # (start, end, key) for clicks
         self._entries: list[tuple[str, str, bool, str]] = []  # (keys shown, text, enabled, key)
         self._palette: tuple[str, str] | None = None
-        self._drawn: tuple[int, Text] | None = None  # (width, text) of the last picture
 
     def on_mount(self) -> None:
         self.screen.bindings_updated_signal.subscribe(self, self._bindings_changed)
@@ -77,18 +80,18 @@ class KeyBar(Widget):
                 palette = (app.get_key_display(found.binding), found.binding.description)
         if entries != self._entries or palette != self._palette:
             self._entries, self._palette = entries, palette
-            self._drawn = None
             self.refresh()
 
-    def render(self) -> Text:
-        width = self.size.width
-        if self._drawn is not None and self._drawn[0] == width:
-            return self._drawn[1]
-        text = self._draw(width)
-        self._drawn = (width, text)
-        return text
+    def picture_key(self) -> Hashable:
+        key_style = self.get_component_rich_style("keybar--key", partial=True)
+        return (tuple(self._entries), self._palette, key_style)
 
-    def _draw(self, width: int) -> Text:
+    def draw(self, width: int) -> list[Line]:
+        text, _spans = self._line(width)
+        return segments_of(text, self.app.console)[:1]
+
+    def _line(self, width: int) -> tuple[Text, list[tuple[int, int, str]]]:
+        """The line and the (start, end, key) of each key on it, for clicks."""
         key_style = self.get_component_rich_style("keybar--key", partial=True)
         text = Text(no_wrap=True, overflow="ellipsis", end="")
         spans: list[tuple[int, int, str]] = []
@@ -112,11 +115,11 @@ class KeyBar(Widget):
             text.append(f"{keys} ", style=key_style)
             text.append(description + " ")
             spans.append((room, width, "ctrl+p"))
-        self._spans = spans
-        return text
+        return text, spans
 
     def on_click(self, event: events.Click) -> None:
-        for start, end, key in self._spans:
+        _text, spans = self._line(self.size.width)
+        for start, end, key in spans:
             if start <= event.x < end:
                 event.stop()
                 self.app.simulate_key(key)

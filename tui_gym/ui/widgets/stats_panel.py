@@ -11,15 +11,17 @@ shown generically, by name, so a new game needs no change here.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import textwrap
+from collections.abc import Hashable, Mapping
+from functools import lru_cache
 
-from rich.console import Group, RenderableType
-from rich.table import Table
+from rich.segment import Segment
+from rich.style import Style
 from rich.text import Text
-from textual.widget import Widget
 
 from tui_gym.core.profiles import ReferenceMetrics
 from tui_gym.core.training import TrainingSnapshot
+from tui_gym.ui.widgets.strip_widget import Line, StripWidget
 
 STATE_STYLES = {
     "running": ("● running", "bold green"),
@@ -56,7 +58,7 @@ def format_rate(rate: float) -> str:
     return f"{rate:.1f}"
 
 
-class StatsPanel(Widget):
+class StatsPanel(StripWidget):
     """A clean two-column table of the run's numbers."""
 
     # Not scoped: the `Screen.compact ...` rules must match from the screen down.
@@ -166,7 +168,7 @@ class StatsPanel(Widget):
         # A layout pass only when the panel's height may change (new rows or notes).
         shape = (len(self._rows), len(self._reference), bool(self._reference_note),
                  self._engine_reason, self._compact())
-        self.refresh(layout=shape != self._shape)
+        self.redraw(layout=shape != self._shape)
         self._shape = shape
 
     def _plain(self) -> str:
@@ -180,34 +182,68 @@ class StatsPanel(Widget):
             lines.append(self._engine_reason)
         return "\n".join(lines)
 
-    def render(self) -> RenderableType:
+    def picture_key(self) -> Hashable:
+        return (self._version, self._compact())
+
+    def get_content_height(self, container: object, viewport: object, width: int) -> int:
+        return len(self.picture(width))
+
+    def draw(self, width: int) -> list[Line]:
         label, style = STATE_STYLES.get(self._state, (self._state, "bold"))
-        table = Table.grid(padding=(0, 1), expand=True)
-        for _ in range(2):
-            table.add_column(style="dim", no_wrap=True)
-            table.add_column(justify="right", no_wrap=True, ratio=1)
-        compact = self._compact()
-        if compact:  # no border to carry the state, speed and engine: rows of their own
-            table.add_row(
-                Text(label, style=style), Text(self._engine, style="dim"),
-                "speed", Text(self._speed or "–", style="bold magenta"),
-            )
-        rows = self._rows
-        for i in range(0, len(rows), 2):
-            cells: list[RenderableType] = []
-            for name, value, value_style in rows[i : i + 2]:
-                cells += [name, Text(value, style=value_style)]
-            table.add_row(*cells)
-        parts: list[RenderableType] = [table]
+        rows: list[list[tuple[str, str]]] = []  # four (text, style) cells a row
+        if self._compact():  # no border to carry the state, speed and engine: rows of their own
+            rows.append([(label, style), (self._engine, "dim"),
+                         ("speed", "dim"), (self._speed or "–", "bold magenta")])
+        figures = self._rows
+        for i in range(0, len(figures), 2):
+            row = []
+            for name, value, value_style in figures[i : i + 2]:
+                row += [(name, "dim"), (value, value_style)]
+            rows.append(row)
+        lines = _grid(rows, width)
         if self._reference:
-            ref = Table.grid(padding=(0, 1), expand=True)
-            ref.add_column(style="dim", no_wrap=True)
-            ref.add_column(justify="right", ratio=1)
-            for name, value in self._reference:
-                ref.add_row(name, Text(value, style="bold"))
-            parts.append(ref)
+            lines += _grid([[(name, "dim"), (value, "bold")] for name, value in self._reference],
+                           width)
         elif self._reference_note:
-            parts.append(Text(self._reference_note, style="italic dim"))
+            lines += _note(self._reference_note, width)
         if self._engine_reason:
-            parts.append(Text(self._engine_reason, style="italic dim"))
-        return Group(*parts)
+            lines += _note(self._engine_reason, width)
+        return lines
+
+
+GAP = 2  # cells between columns
+
+
+@lru_cache(maxsize=64)
+def _style(name: str) -> Style:
+    return Style.parse(name) if name else Style()
+
+
+def _grid(rows: list[list[tuple[str, str]]], width: int) -> list[Line]:
+    """Rows of (name, value) pairs: names left-aligned, values right-aligned, the
+    value columns sharing the width left over."""
+    pairs = max((len(row) // 2 for row in rows), default=0)
+    if not pairs:
+        return []
+    names = [max((len(row[2 * p][0]) for row in rows if len(row) > 2 * p), default=0)
+             for p in range(pairs)]
+    room = max(0, width - sum(names) - GAP * (2 * pairs - 1))
+    values = [room // pairs + (1 if p < room % pairs else 0) for p in range(pairs)]
+    lines = []
+    for row in rows:
+        line: Line = []
+        for p in range(len(row) // 2):
+            (name, name_style), (value, value_style) = row[2 * p], row[2 * p + 1]
+            if p:
+                line.append(Segment(" " * GAP))
+            line.append(Segment(name, _style(name_style)))
+            pad = names[p] + GAP + values[p] - len(name) - len(value)
+            line.append(Segment(" " * max(1, pad)))
+            line.append(Segment(value, _style(value_style)))
+        lines.append(line)
+    return lines
+
+
+def _note(text: str, width: int) -> list[Line]:
+    return [[Segment(part, _style("italic dim"))]
+            for part in textwrap.wrap(text, max(1, width))]

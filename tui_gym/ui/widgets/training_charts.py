@@ -1,26 +1,34 @@
 """Learning curves: four labelled text sparklines of a training run.
 
 `TrainingCharts` shows the rolling mean return, episode length, mean |TD
-error| and epsilon as Textual `Sparkline`s over the whole run (the trainer's
-bounded `series`), each with its name, its current value and the range the
-curve spans. `update_from(snapshot)` touches a sparkline only when its data
-changed, so a paused run costs nothing to redraw.
+error| and epsilon as sparklines over the whole run (the trainer's bounded
+`series`), each with its name, its current value and the range the curve
+spans. The whole box is one widget drawn from cached lines: a snapshot that
+changes nothing costs nothing, and one that does costs a single drawing
+rather than a dozen widgets' (`update_from`).
+
+A sparkline divides its width into buckets of the series, averages each and
+draws bars of eighths of a cell, `height` cells tall, coloured from the
+curve's low colour to its high colour (each curve's two colours are CSS
+component classes, e.g. `charts--return-high`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass
+from typing import ClassVar
 
-from textual.app import ComposeResult
-from textual.containers import Horizontal, Vertical
-from textual.widgets import Label, Sparkline
+from rich.color import Color as RichColor
+from rich.segment import Segment
+from rich.style import Style
 
 from tui_gym.core.training import TrainingSnapshot
+from tui_gym.ui.widgets.strip_widget import Line, StripWidget
 
-
-def _mean(values: Sequence[float]) -> float:
-    return sum(values) / len(values) if values else 0.0
+BARS = "▁▂▃▄▅▆▇█"
+NAME_WIDTH, VALUE_WIDTH, RANGE_WIDTH = 12, 9, 13
+COLOUR_STEPS = 32  # bar colours are blended in this many steps
 
 
 @dataclass(frozen=True)
@@ -41,11 +49,78 @@ CURVES: tuple[Curve, ...] = (
 )
 
 
-class TrainingCharts(Vertical):
+def bucket_means(data: Sequence[float], width: int) -> list[float]:
+    """`width` values summarising `data`: bucket means, or samples when data is short."""
+    n = len(data)
+    if n == 0 or width <= 0:
+        return []
+    if n < width:
+        return [float(data[i * n // width]) for i in range(width)]
+    sums = [0.0]
+    for value in data:
+        sums.append(sums[-1] + value)
+    out = []
+    for i in range(width):
+        start, end = i * n // width, (i + 1) * n // width
+        out.append((sums[end] - sums[start]) / (end - start))
+    return out
+
+
+def sparkline_rows(
+    data: Sequence[float], width: int, height: int, low: RichColor, high: RichColor
+) -> list[Line]:
+    """A sparkline of `data`, `width` x `height` cells, as lines of segments (top first)."""
+    if not data:
+        blank = [[Segment(" " * width)] for _ in range(height - 1)]
+        return [*blank, [Segment("▁" * width, Style(color=low))]]
+    values = bucket_means(data, width)
+    lo, hi = min(values), max(values)
+    extent = hi - lo
+    levels = len(BARS) * height - 1
+    styles: dict[int, Style] = {}
+    cells: list[tuple[int, Style]] = []  # (eighths filled, style) per column
+    for value in values:
+        ratio = (value - lo) / extent if extent else 0.5  # a flat curve: a level line
+        step = round(ratio * COLOUR_STEPS)
+        style = styles.get(step)
+        if style is None:
+            style = Style(color=_blend(low, high, step / COLOUR_STEPS))
+            styles[step] = style
+        cells.append((int(ratio * levels), style))
+    rows: list[Line] = []
+    for row in reversed(range(height)):
+        floor, top = row * len(BARS), (row + 1) * len(BARS)
+        line: Line = []
+        for filled, style in cells:
+            if filled < floor:
+                glyph, glyph_style = " ", None
+            elif filled >= top:
+                glyph, glyph_style = "█", style
+            else:
+                glyph, glyph_style = BARS[filled - floor], style
+            if line and line[-1].style is glyph_style:
+                line[-1] = Segment(line[-1].text + glyph, glyph_style)
+            else:
+                line.append(Segment(glyph, glyph_style))
+        rows.append(line)
+    return rows
+
+
+def _blend(a: RichColor, b: RichColor, t: float) -> RichColor:
+    ra, ga, ba = a.get_truecolor()
+    rb, gb, bb = b.get_truecolor()
+    return RichColor.from_rgb(ra + (rb - ra) * t, ga + (gb - ga) * t, ba + (bb - ba) * t)
+
+
+class TrainingCharts(StripWidget):
     """Four sparklines with names, current values and ranges."""
 
     # Not scoped: the `Screen.compact ...` rules must match from the screen down.
     SCOPED_CSS = False
+    COMPONENT_CLASSES: ClassVar[set[str]] = {
+        "charts--name", "charts--value", "charts--range",
+        *(f"charts--{curve.key}-{end}" for curve in CURVES for end in ("low", "high")),
+    }
     DEFAULT_CSS = """
     TrainingCharts {
         height: auto;
@@ -53,83 +128,34 @@ class TrainingCharts(Vertical):
         border-title-color: $text-muted;
         padding: 0 1;
     }
-    TrainingCharts > .chart {
-        height: 2;
-    }
-    TrainingCharts .chart-name {
-        width: 12;
-        color: $text-muted;
-    }
-    TrainingCharts .chart-value {
-        width: 9;
-        text-align: right;
-        text-style: bold;
-    }
-    TrainingCharts .chart-range {
-        width: 13;
-        height: 2;
-    }
-    TrainingCharts .chart-range Label {
-        width: 100%;
-        color: $text-disabled;
-        text-align: right;
-    }
-    TrainingCharts Sparkline {
-        width: 1fr;
-        height: 2;
-        margin: 0 1;
-    }
-    TrainingCharts #chart-return Sparkline > .sparkline--max-color { color: $success; }
-    TrainingCharts #chart-return Sparkline > .sparkline--min-color { color: $error 70%; }
-    TrainingCharts #chart-length Sparkline > .sparkline--max-color { color: $accent; }
-    TrainingCharts #chart-length Sparkline > .sparkline--min-color { color: $accent 40%; }
-    TrainingCharts #chart-td_error Sparkline > .sparkline--max-color { color: $error; }
-    TrainingCharts #chart-td_error Sparkline > .sparkline--min-color { color: $error 40%; }
-    TrainingCharts #chart-epsilon Sparkline > .sparkline--max-color { color: $primary; }
-    TrainingCharts #chart-epsilon Sparkline > .sparkline--min-color { color: $primary 40%; }
+    TrainingCharts > .charts--name { color: $text-muted; }
+    TrainingCharts > .charts--value { text-style: bold; }
+    TrainingCharts > .charts--range { color: $text-disabled; }
+    TrainingCharts > .charts--return-high { color: $success; }
+    TrainingCharts > .charts--return-low { color: $error 70%; }
+    TrainingCharts > .charts--length-high { color: $accent; }
+    TrainingCharts > .charts--length-low { color: $accent 40%; }
+    TrainingCharts > .charts--td_error-high { color: $error; }
+    TrainingCharts > .charts--td_error-low { color: $error 40%; }
+    TrainingCharts > .charts--epsilon-high { color: $primary; }
+    TrainingCharts > .charts--epsilon-low { color: $primary 40%; }
 
     Screen.compact TrainingCharts {
         border: none;
         padding: 0;
     }
-    Screen.compact TrainingCharts > .chart,
-    Screen.compact TrainingCharts Sparkline {
-        height: 1;
-    }
-    Screen.compact TrainingCharts .chart-range {
-        display: none;
-    }
     """
 
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
         super().__init__(id=id, classes=classes)
-        self._shown: dict[str, tuple[float, ...]] = {}
+        self._data: dict[str, tuple[float, ...]] = {}
         self._values: dict[str, str] = {}
-        self._sparks: dict[str, Sparkline] = {}
-        self._labels: dict[str, tuple[Label, Label, Label]] = {}
         self.border_title = "Learning curves"
 
-    def compose(self) -> ComposeResult:
-        for curve in CURVES:
-            key = curve.key
-            self._sparks[key] = Sparkline([], summary_function=_mean, id=f"spark-{key}")
-            self._labels[key] = (
-                Label("–", classes="chart-value", id=f"value-{key}"),
-                Label("", id=f"high-{key}"),
-                Label("", id=f"low-{key}"),
-            )
-            value, high, low = self._labels[key]
-            with Horizontal(classes="chart", id=f"chart-{key}"):
-                yield Label(curve.name, classes="chart-name")
-                yield value
-                yield self._sparks[key]
-                with Vertical(classes="chart-range"):
-                    yield high
-                    yield low
-
-    def sparkline(self, key: str) -> Sparkline:
-        """The sparkline of one series ("return", "length", "td_error", "epsilon")."""
-        return self._sparks[key]
+    # --- data in -----------------------------------------------------------
+    def data(self, key: str) -> tuple[float, ...]:
+        """The series one sparkline draws ("return", "length", "td_error", "epsilon")."""
+        return self._data.get(key, ())
 
     def value_text(self, key: str) -> str:
         """The current value shown beside a sparkline."""
@@ -137,18 +163,13 @@ class TrainingCharts(Vertical):
 
     def clear(self) -> None:
         """Forget every curve (after an agent reset)."""
-        self._shown.clear()
+        self._data.clear()
         self._values.clear()
         self.border_title = "Learning curves"
-        for curve in CURVES:
-            self._sparks[curve.key].data = []
-            value, high, low = self._labels[curve.key]
-            value.update("–")
-            high.update("")
-            low.update("")
+        self.redraw()
 
     def update_from(self, snapshot: TrainingSnapshot) -> None:
-        """Show a snapshot's curves, redrawing only the ones that changed."""
+        """Show a snapshot's curves; nothing is drawn when nothing changed."""
         window = min(snapshot.window, max(1, snapshot.episodes))
         title = (
             f"Learning curves · rolling mean of {window:,}"
@@ -157,20 +178,72 @@ class TrainingCharts(Vertical):
         )
         if title != self.border_title:
             self.border_title = title
+        changed = False
         for curve in CURVES:
             key = curve.key
-            value, high, low = self._labels[key]
             data = tuple(snapshot.series.get(key, ()))
-            if self._shown.get(key) != data:
-                self._shown[key] = data
-                self._sparks[key].data = data
-                # Fixed-size labels: no layout pass needed (it would cost a whole frame).
-                high.update(f"max {curve.fmt.format(max(data))}" if data else "", layout=False)
-                low.update(f"min {curve.fmt.format(min(data))}" if data else "", layout=False)
             text = curve.fmt.format(curve.current(snapshot)) if snapshot.episodes else "–"
-            if self._values.get(key) != text:
-                self._values[key] = text
-                value.update(text, layout=False)
+            if self._data.get(key) != data or self._values.get(key) != text:
+                self._data[key], self._values[key] = data, text
+                changed = True
+        if changed:
+            self.redraw()
+
+    # --- drawing -----------------------------------------------------------
+    def _compact(self) -> bool:
+        try:
+            return self.screen.has_class("compact")
+        except Exception:
+            return False
+
+    def on_resize(self) -> None:
+        self.refresh(layout=True)  # the compact class may have come or gone
+
+    def picture_key(self) -> Hashable:
+        return (self._version, self._compact(), self.rich_style)
+
+    def get_content_height(self, container: object, viewport: object, width: int) -> int:
+        return len(CURVES) * (1 if self._compact() else 2)
+
+    def draw(self, width: int) -> list[Line]:
+        compact = self._compact()
+        height = 1 if compact else 2
+        style = self.get_component_rich_style
+        name_style, value_style = style("charts--name"), style("charts--value")
+        range_style = style("charts--range")
+        range_width = 0 if compact else RANGE_WIDTH + 1
+        spark_width = max(1, width - NAME_WIDTH - VALUE_WIDTH - 2 - range_width)
+        lines: list[Line] = []
+        for curve in CURVES:
+            data = self._data.get(curve.key, ())
+            low = style(f"charts--{curve.key}-low").color or RichColor.default()
+            high = style(f"charts--{curve.key}-high").color or RichColor.default()
+            spark = sparkline_rows(data, spark_width, height, low, high)
+            value = self._values.get(curve.key, "–") or "–"
+            ends = (
+                [f"max {curve.fmt.format(max(data))}", f"min {curve.fmt.format(min(data))}"]
+                if data else ["", ""]
+            )
+            for row in range(height):
+                line: Line = [
+                    *_cell(curve.name if row == 0 else "", NAME_WIDTH, name_style),
+                    *_cell(value if row == 0 else "", VALUE_WIDTH, value_style, right=True),
+                    Segment(" "),
+                    *spark[row],
+                    Segment(" "),
+                ]
+                if range_width:
+                    line += _cell(ends[row], range_width, range_style, right=True)
+                lines.append(line)
+        return lines
 
 
-__all__ = ["CURVES", "Curve", "TrainingCharts"]
+def _cell(text: str, width: int, style: Style, right: bool = False) -> Line:
+    """`text` in a column `width` cells wide, the padding left unstyled."""
+    text = text[:width]
+    pad = Segment(" " * (width - len(text)))
+    body = Segment(text, style)
+    return [pad, body] if right else [body, pad]
+
+
+__all__ = ["CURVES", "Curve", "TrainingCharts", "bucket_means", "sparkline_rows"]

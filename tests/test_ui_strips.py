@@ -1,0 +1,184 @@
+"""Widgets drawn from kept lines: what they show, and when they draw again.
+
+`StripWidget` keeps its picture between frames; these tests pin down that a
+refresh that changes nothing draws nothing, that `redraw()` and a new width
+do draw again, and that what reaches the screen is the picture. Then the
+widgets built on it: the key bar follows the view, the sparklines summarise
+their series, and the stats table lines its numbers up.
+"""
+
+from __future__ import annotations
+
+from rich.segment import Segment
+from textual.app import App, ComposeResult
+
+from tui_gym.core.session import Session
+from tui_gym.ui.app import TuiGymApp
+from tui_gym.ui.widgets.stats_panel import _grid
+from tui_gym.ui.widgets.strip_widget import Line, StripWidget, line_text
+from tui_gym.ui.widgets.training_charts import BARS, bucket_means, sparkline_rows
+
+from .screen import screen_lines
+
+
+class Counter(StripWidget):
+    """Draws `word` on every line and counts its drawings."""
+
+    DEFAULT_CSS = "Counter { height: 3; }"
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.word = "alpha"
+        self.draws = 0
+
+    def draw(self, width: int) -> list[Line]:
+        self.draws += 1
+        return [[Segment(f"{self.word} {width}")] for _ in range(3)]
+
+
+def drawn_lines(app: App[None], word: str) -> list[str]:
+    """The screen's rows that start with `word`, without trailing blanks."""
+    return [line.rstrip() for line in screen_lines(app) if line.startswith(word)]
+
+
+class OneWidget(App[None]):
+    def compose(self) -> ComposeResult:
+        yield Counter()
+
+
+async def test_a_strip_widget_draws_once_until_its_picture_changes() -> None:
+    app = OneWidget()
+    async with app.run_test(size=(40, 5)) as pilot:
+        widget = app.query_one(Counter)
+        await pilot.pause()
+        assert drawn_lines(app, "alpha") == ["alpha 40"] * 3
+        drawn = widget.draws
+        assert drawn == 1
+
+        widget.refresh()  # what a focus change or a view switch does
+        await pilot.pause()
+        assert widget.draws == drawn, "a plain refresh drew the same picture again"
+
+        widget.word = "beta"
+        widget.redraw()
+        await pilot.pause()
+        assert widget.draws == drawn + 1
+        assert drawn_lines(app, "beta") == ["beta 40"] * 3
+
+        await pilot.resize_terminal(30, 5)
+        await pilot.pause()
+        assert drawn_lines(app, "beta") == ["beta 30"] * 3, "a new width is a new picture"
+
+
+async def test_a_strip_widget_pads_and_crops_to_its_width() -> None:
+    app = OneWidget()
+    async with app.run_test(size=(6, 5)) as pilot:
+        await pilot.pause()
+        assert drawn_lines(app, "alpha") == ["alpha"] * 3  # "alpha 6" cropped to 6 cells
+
+
+async def test_the_key_bar_follows_the_view() -> None:
+    app = TuiGymApp(Session("blackjack", seed=0))
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.pause()
+        play_keys = screen_lines(app)[-1]
+        assert "Deal" in play_keys and "Start/Pause" not in play_keys
+        await pilot.press("t")
+        await pilot.pause()
+        train_keys = screen_lines(app)[-1]
+        assert "Start/Pause" in train_keys and "Deal" not in train_keys
+        assert app.focused is app.train_view.heatmap
+        await pilot.press("p")
+        await pilot.pause()
+        assert screen_lines(app)[-1] == play_keys  # the kept picture, and the right one
+        assert app.focused is app.play_view.board
+
+
+def test_bucket_means_average_each_bucket_and_sample_short_series() -> None:
+    assert bucket_means([1, 3, 5, 7], 2) == [2.0, 6.0]
+    assert bucket_means(list(range(10)), 3) == [1.0, 4.0, 7.5]  # buckets of 3, 3, 4
+    assert bucket_means([4.0, 8.0], 4) == [4.0, 4.0, 8.0, 8.0]
+    assert bucket_means([], 5) == []
+
+
+def test_a_sparkline_rises_with_its_data() -> None:
+    from rich.color import Color
+
+    low, high = Color.from_rgb(0, 0, 0), Color.from_rgb(255, 255, 255)
+    rows = sparkline_rows([0, 1, 2, 3, 4, 5, 6, 7], 8, 2, low, high)
+    assert len(rows) == 2 and all(len(line_text(r)) == 8 for r in rows)
+    top, bottom = line_text(rows[0]), line_text(rows[1])
+
+    def height(col: int) -> int:  # eighths filled in a column, 0..16
+        cell = lambda ch: 0 if ch == " " else 8 if ch == "█" else BARS.index(ch) + 1  # noqa: E731
+        return cell(bottom[col]) + cell(top[col])
+
+    heights = [height(c) for c in range(8)]
+    assert heights == sorted(heights) and heights[0] < heights[-1]
+    assert top[-1] == "█" and bottom[-1] == "█"  # the highest value fills both rows
+    assert top[0] == " "  # the lowest value stays in the bottom row
+    # the high end takes the high colour, the low end the low one
+    assert rows[1][-1].style.color.get_truecolor() == (255, 255, 255)
+    assert rows[1][0].style.color.get_truecolor() == (0, 0, 0)
+
+
+def test_a_flat_or_empty_sparkline_is_a_level_line() -> None:
+    from rich.color import Color
+
+    c = Color.from_rgb(9, 9, 9)
+    flat = [line_text(r) for r in sparkline_rows([2.0] * 5, 5, 2, c, c)]
+    assert len(set(flat[0])) == 1 and len(set(flat[1])) == 1  # every column alike
+    empty = [line_text(r) for r in sparkline_rows([], 4, 2, c, c)]
+    assert empty == ["    ", "▁▁▁▁"]
+
+
+def test_the_stats_grid_lines_up_its_columns() -> None:
+    rows = [
+        [("episodes", "dim"), ("60,000", "bold"), ("steps", "dim"), ("85,356", "")],
+        [("eps/s", "dim"), ("50,000", ""), ("time", "dim"), ("0:01", "")],
+    ]
+    lines = [line_text(line) for line in _grid(rows, 40)]
+    assert [len(text) for text in lines] == [40, 40]
+    first, second = lines
+    assert first.startswith("episodes") and second.startswith("eps/s")
+    # the values end in the same columns: right-aligned in their halves
+    assert first.index("60,000") + 6 == second.index("50,000") + 6
+    assert first.endswith("85,356") and second.endswith("0:01")
+    assert first.index("steps") == second.index("time")
+
+
+def test_the_app_collects_garbage_on_its_own_timers() -> None:
+    import gc
+
+    from tui_gym.ui import app as app_module
+
+    class Timers:
+        def __init__(self) -> None:
+            self.made: list[tuple[float, object]] = []
+
+        def set_interval(self, seconds: float, callback: object, name: str = "") -> None:
+            self.made.append((seconds, callback))
+
+    timers = Timers()
+    try:
+        app_module.tune_gc_for_ui(timers)  # type: ignore[arg-type]
+        assert not gc.isenabled(), "collections would still land in the middle of frames"
+        periods = sorted(seconds for seconds, _ in timers.made)
+        assert periods == [app_module.YOUNG_GC_SECONDS, app_module.FULL_GC_SECONDS]
+
+        collected: list[int] = []
+
+        def heard(phase: str, info: dict) -> None:
+            if phase == "stop":
+                collected.append(info["generation"])
+
+        gc.callbacks.append(heard)
+        try:
+            for _seconds, callback in sorted(timers.made, key=lambda made: made[0]):
+                callback()  # type: ignore[operator]
+        finally:
+            gc.callbacks.remove(heard)
+        assert collected == [1, 2], "young generations first, then everything"
+    finally:
+        gc.enable()
+        gc.unfreeze()

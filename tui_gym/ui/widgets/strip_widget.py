@@ -1,0 +1,122 @@
+"""Widgets that keep their drawing between frames: `StripWidget` and `segments_of`.
+
+Textual turns a widget's `render()` result into lines of segments again
+whenever the widget is refreshed, and a focus change or a view switch
+refreshes the whole screen; for a heatmap of 200 coloured cells or a table of
+figures that costs milliseconds a frame, most of a key press's budget.
+
+A `StripWidget` draws through Textual's line API instead. A subclass says
+what its picture depends on (`picture_key()`; by default a counter that
+`redraw()` bumps) and draws it as lines of Rich segments (`draw(width)`).
+Lines are drawn once per key and width (the last `PICTURES` pictures are
+kept, for widgets that flip between a few), and styled with the widget's own
+colours once per style, so a frame that finds nothing changed costs a lookup.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from collections.abc import Hashable, Iterable
+from typing import ClassVar
+
+from rich.console import Console
+from rich.segment import Segment
+from rich.style import Style
+from rich.text import Text
+from textual.geometry import Region
+from textual.strip import Strip
+from textual.widget import Widget
+
+Line = list[Segment]
+
+
+def segments_of(text: Text, console: Console) -> list[Line]:
+    """A Rich `Text` as lines of segments (no wrapping: one line per newline)."""
+    lines: list[Line] = [[]]
+    for segment in text.render(console, end=""):
+        parts = segment.text.split("\n")
+        for i, part in enumerate(parts):
+            if i:
+                lines.append([])
+            if part:
+                lines[-1].append(Segment(part, segment.style))
+    return lines
+
+
+def line_text(line: Iterable[Segment]) -> str:
+    """The characters of a line of segments."""
+    return "".join(segment.text for segment in line)
+
+
+class StripWidget(Widget):
+    """A widget drawn as cached lines of segments (see the module docstring)."""
+
+    PICTURES: ClassVar[int] = 1
+    """How many (key, width) pictures to keep."""
+
+    def __init__(
+        self, *, name: str | None = None, id: str | None = None, classes: str | None = None
+    ) -> None:
+        super().__init__(name=name, id=id, classes=classes)
+        self._version = 0
+        self._pictures: OrderedDict[Hashable, list[Line]] = OrderedDict()
+        self._strips: list[Strip] = []
+        self._strips_of: tuple[int, Style, int] | None = None  # (id(lines), style, width)
+        self._strips_lines: list[Line] | None = None  # keeps id(lines) valid
+
+    # --- what subclasses give ------------------------------------------------
+    def picture_key(self) -> Hashable:
+        """What the picture depends on, besides its width (`redraw()` changes it)."""
+        return self._version
+
+    def draw(self, width: int) -> list[Line]:
+        """The picture, `width` cells wide, as lines of segments."""
+        raise NotImplementedError
+
+    # --- what owners call --------------------------------------------------
+    def redraw(self, layout: bool = False) -> None:
+        """The picture changed: draw it again on the next frame."""
+        self._version += 1
+        self.refresh(layout=layout)
+
+    def picture(self, width: int) -> list[Line]:
+        """The lines for `width` (drawn now unless kept from before)."""
+        key = (self.picture_key(), width)
+        lines = self._pictures.get(key)
+        if lines is None:
+            lines = self.draw(width)
+            self._pictures[key] = lines
+            while len(self._pictures) > self.PICTURES:
+                self._pictures.popitem(last=False)
+        else:
+            self._pictures.move_to_end(key)
+        return lines
+
+    def render(self) -> Text:
+        """The current picture as Rich text (Textual draws through `render_line`)."""
+        lines = self.picture(self.content_size.width)
+        return Text("\n").join(
+            Text.assemble(*((s.text, s.style) for s in line)) for line in lines
+        )
+
+    # --- Textual's line API ----------------------------------------------------
+    def render_lines(self, crop: Region) -> list[Strip]:
+        width = self.content_size.width
+        style = self.rich_style
+        lines = self.picture(width)
+        if self._strips_of != (id(lines), style, width) or self._strips_lines is not lines:
+            self._strips = [
+                Strip(line).apply_style(style).adjust_cell_length(width, style)
+                for line in lines
+            ]
+            self._strips_of = (id(lines), style, width)
+            self._strips_lines = lines
+        return super().render_lines(crop)
+
+    def render_line(self, y: int) -> Strip:
+        if 0 <= y < len(self._strips):
+            return self._strips[y]
+        return Strip.blank(self.content_size.width, self.rich_style)
+
+
+__all__ = ["Line", "StripWidget", "line_text", "segments_of"]
