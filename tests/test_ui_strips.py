@@ -146,39 +146,3 @@ def test_the_stats_grid_lines_up_its_columns() -> None:
     assert first.endswith("85,356") and second.endswith("0:01")
     assert first.index("steps") == second.index("time")
 
-
-def test_the_app_collects_garbage_on_its_own_timers() -> None:
-    import gc
-
-    from tui_gym.ui import app as app_module
-
-    class Timers:
-        def __init__(self) -> None:
-            self.made: list[tuple[float, object]] = []
-
-        def set_interval(self, seconds: float, callback: object, name: str = "") -> None:
-            self.made.append((seconds, callback))
-
-    timers = Timers()
-    try:
-        app_module.tune_gc_for_ui(timers)  # type: ignore[arg-type]
-        assert not gc.isenabled(), "collections would still land in the middle of frames"
-        periods = sorted(seconds for seconds, _ in timers.made)
-        assert periods == [app_module.YOUNG_GC_SECONDS, app_module.FULL_GC_SECONDS]
-
-        collected: list[int] = []
-
-        def heard(phase: str, info: dict) -> None:
-            if phase == "stop":
-                collected.append(info["generation"])
-
-        gc.callbacks.append(heard)
-        try:
-            for _seconds, callback in sorted(timers.made, key=lambda made: made[0]):
-                callback()  # type: ignore[operator]
-        finally:
-            gc.callbacks.remove(heard)
-        assert collected == [1, 2], "young generations first, then everything"
-    finally:
-        gc.enable()
-        gc.unfreeze()
