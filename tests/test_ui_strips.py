@@ -146,3 +146,31 @@ def test_the_stats_grid_lines_up_its_columns() -> None:
     assert first.endswith("85,356") and second.endswith("0:01")
     assert first.index("steps") == second.index("time")
 
+
+
+def test_heatmap_cells_take_their_colour_from_their_place_on_the_scale() -> None:
+    import numpy as np
+
+    from tui_gym.ui.widgets.heatmap_view import (
+        COLOUR_STEPS,
+        DIVERGING,
+        SEQUENTIAL,
+        ColourScale,
+        _cell_style,
+        _hex,
+    )
+
+    top = COLOUR_STEPS - 1
+    diverging = ColourScale(-0.5, 1.0)  # both signs: symmetric around zero
+    steps = diverging.steps(np.array([-1.0, 0.0, 1.0, np.nan, 2.0]))
+    assert steps.tolist() == [0, round(top / 2), top, -1, top]  # clipped at the ends
+    sequential = ColourScale(0.2, 0.6)
+    assert sequential.steps(np.array([0.2, 0.4, 0.6])).tolist() == [0, round(top / 2), top]
+    flat = ColourScale(0.3, 0.3)
+    assert flat.steps(np.array([0.3])).tolist() == [round(top / 2)]
+
+    assert _cell_style(True, 0, False).bgcolor.name == _hex(DIVERGING[0])
+    assert _cell_style(True, top, False).bgcolor.name == _hex(DIVERGING[-1])
+    assert _cell_style(False, top, False).bgcolor.name == _hex(SEQUENTIAL[-1])
+    assert _cell_style(False, 5, True).bold and _cell_style(False, 5, True).underline
+    assert _cell_style(False, -1, False).bgcolor is None  # no value: no colour

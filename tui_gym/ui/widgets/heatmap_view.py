@@ -15,10 +15,10 @@ it to the owner to say what that cell means (it asks the game's profile).
 
 from __future__ import annotations
 
-import math
 import textwrap
 from collections.abc import Hashable, Iterable, Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import ClassVar
 
 import numpy as np
@@ -45,6 +45,7 @@ DIVERGING: tuple[RGB, ...] = (
     (215, 48, 39), (160, 70, 60), (58, 58, 66), (50, 140, 90), (90, 210, 120),
 )
 MAX_CELL_WIDTH = 6
+COLOUR_STEPS = 128  # cell colours are drawn from this many steps along the scale
 PANEL_GAP = 4
 LEGEND_WIDTH = 24
 
@@ -101,19 +102,21 @@ class ColourScale:
             return -m, m
         return self.low, self.high
 
-    def position(self, value: float) -> float:
-        lo, hi = self.bounds
-        if hi <= lo:
-            return 0.5
-        return (value - lo) / (hi - lo)
-
-    def colour(self, value: float) -> RGB:
-        stops = DIVERGING if self.diverging else SEQUENTIAL
-        return _interpolate(stops, self.position(value))
-
     def colour_at(self, t: float) -> RGB:
         stops = DIVERGING if self.diverging else SEQUENTIAL
         return _interpolate(stops, t)
+
+    def steps(self, values: np.ndarray) -> np.ndarray:
+        """Each value's step on the scale, 0 .. COLOUR_STEPS - 1 (-1 where not finite)."""
+        lo, hi = self.bounds
+        finite = np.isfinite(values)
+        if hi <= lo:
+            position = np.full(values.shape, 0.5)
+        else:
+            with np.errstate(invalid="ignore"):
+                position = np.clip((values - lo) / (hi - lo), 0.0, 1.0)
+        steps = np.rint(np.where(finite, position, 0.0) * (COLOUR_STEPS - 1)).astype(int)
+        return np.where(finite, steps, -1)
 
 
 @dataclass(frozen=True)
@@ -396,9 +399,8 @@ class HeatmapView(StripWidget, can_focus=True):
         lines.append(header)
         focus = self.focus_cell if index == 0 else None
         has_focus = self.has_focus
-        values = panel.values.tolist()
+        steps = scale.steps(np.asarray(panel.values, dtype=float)).tolist()
         marked_cells = panel.marked.tolist()
-        styles = _CellStyles(scale)
         for r in range(rows):
             for sub in range(ch):
                 row_label = panel.row_labels[r] if sub == 0 else ""
@@ -411,7 +413,7 @@ class HeatmapView(StripWidget, can_focus=True):
                     if focus == (r, c):  # bright while the keys move it, quiet otherwise
                         style = FOCUS_ACTIVE if has_focus else FOCUS_QUIET
                     else:
-                        style = styles.cell(float(values[r][c]), marked)
+                        style = _cell_style(scale.diverging, steps[r][c], marked)
                     line.add(body, style)
                 lines.append(line)
         return lines
@@ -436,22 +438,13 @@ FOCUS_QUIET = Style(bold=True, color="#f5f5f5", bgcolor="#5a5a5a")
 BLANK_CELL = Style(color="#808080")
 
 
-class _CellStyles:
-    """The style of a cell by value, one `Style` per colour (cells share few)."""
-
-    def __init__(self, scale: ColourScale) -> None:
-        self.scale = scale
-        self._made: dict[tuple[RGB, bool], Style] = {}
-
-    def cell(self, value: float, marked: bool) -> Style:
-        if not math.isfinite(value):
-            return BLANK_CELL
-        rgb = self.scale.colour(value)
-        style = self._made.get((rgb, marked))
-        if style is None:
-            style = Style(bgcolor=_hex(rgb), color=_ink(rgb), bold=marked, underline=marked)
-            self._made[(rgb, marked)] = style
-        return style
+@lru_cache(maxsize=4 * COLOUR_STEPS + 1)
+def _cell_style(diverging: bool, step: int, marked: bool) -> Style:
+    """A cell's style by its step on the scale (-1: no value); kept, as cells share them."""
+    if step < 0:
+        return BLANK_CELL
+    rgb = _interpolate(DIVERGING if diverging else SEQUENTIAL, step / (COLOUR_STEPS - 1))
+    return Style(bgcolor=_hex(rgb), color=_ink(rgb), bold=marked, underline=marked)
 
 
 class _Line(list):
