@@ -140,6 +140,12 @@ def test_the_table_shows_each_figure_its_target_and_verdict() -> None:
         assert words in text, words
 
 
+def test_a_comparison_runner_that_misses_is_explained() -> None:
+    text = rendered(fake_results())  # the default (process) passes, the thread runner misses
+    assert "The app trains with the process runner" in text
+    assert "process runner" not in " ".join(notes(fake_results(failed_live=True)))
+
+
 def test_a_capped_tutorial_gives_a_lower_bound() -> None:
     decided = fake_results(tutorial_reached=False, tutorial_seconds=15.0)
     assert verdicts(decided)["time_to_gap"] == PASS  # >= 136x already beats 8x

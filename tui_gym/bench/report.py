@@ -243,6 +243,16 @@ def notes(results: BenchResults) -> list[str]:
         "Ratios are taken between figures measured in this run; speeds are medians over "
         "repeats, key latency percentiles over all presses.",
     ]
+    verdict = verdicts(results)
+    others = [r for r in RUNNERS if r != results.default_runner]
+    if verdict.get(f"live_ratio[{results.default_runner}]") == PASS and any(
+        verdict.get(f"live_ratio[{r}]") == MISS for r in others
+    ):
+        lines.append(
+            f"The app trains with the {results.default_runner} runner; the others are measured "
+            "for comparison (a thread runner shares one interpreter lock with the UI, so the UI's "
+            "drawing comes out of training time)."
+        )
     gap = results.gap
     if gap is not None and not gap.tutorial_reached:
         lines.append(

@@ -1,9 +1,11 @@
 """The Textual app: a Play view, a Train view and a wrapper side panel over one Session.
 
-`TuiGymApp` owns the `Session` (env, wrappers, agent, trainer) and the
-`TrainingRunner` that trains it on a worker thread. A timer pulls the
-runner's latest snapshot and hands it to the Train view; the side panel asks
-for rebuilds through a message; nothing in the trainer calls into widgets.
+`TuiGymApp` owns the `Session` (env, wrappers, agent, trainer) and the runner
+that trains it (in a child process, as `tui-gym` opens it, or on a worker
+thread). A timer pulls the runner's latest snapshot and hands it to the Train
+view; the side panel asks for rebuilds through a message; nothing in the
+trainer calls into widgets. `MainScreen` is the app's screen, and
+`tune_gc_for_ui` paces the garbage collector for an app that owns its process.
 """
 
 from __future__ import annotations
