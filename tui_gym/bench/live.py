@@ -26,11 +26,13 @@ For each runner ("thread": training on a worker thread of the app's process;
    - start: just before the key event is handed to the driver
      (`driver.send_message(Key)`), which is exactly how `Pilot.press` delivers
      a key and what a terminal driver's input thread does on a keystroke;
-   - end: the moment the first screen update made after the view switched is
-     handed to the driver (`App._display`), including encoding it into the
-     terminal's byte string (`render_segments`, which a real terminal pays and
-     the headless driver would skip). Not included: the terminal emulator's
-     own parsing and painting.
+   - end: the moment the first screen update that shows the new view with
+     the focus in it (so the key bar lists the new view's keys: the whole
+     answer to the key, not a part of it) is handed to the driver
+     (`App._display`), including encoding it into the terminal's byte string
+     (`render_segments`, which a real terminal pays and the headless driver
+     would skip). Not included: the terminal emulator's own parsing and
+     painting.
    `Pilot.press` itself is not awaited: after delivering the key it waits for
    the process to go idle (`wait_for_idle`, up to 1 s), which never happens
    while a training thread keeps the process busy. Each press is also split
@@ -171,7 +173,7 @@ class _Instruments:
 
     def __init__(self, app: Any) -> None:
         self.app = app
-        self.frames: list[tuple[float, str | None]] = []  # (time, view shown) per update
+        self.frames: list[tuple[float, str | None, str | None]] = []  # (time, view, focus's view)
         self.snapshot_calls = 0
         self.action_marks: list[tuple[float, float]] = []  # (start, end) of show_view
         display = app._display
@@ -184,7 +186,7 @@ class _Instruments:
             render = getattr(renderable, "render_segments", None)
             if render is not None:
                 render(app.console)  # what a real terminal's write costs
-            self.frames.append((time.perf_counter(), _current_view(app)))
+            self.frames.append((time.perf_counter(), _current_view(app), _focus_view(app)))
 
         def timed_show_view(view: str) -> None:
             start = time.perf_counter()
@@ -209,6 +211,18 @@ def _current_view(app: Any) -> str | None:
         return app.current_view
     except Exception:  # while the app is being taken apart
         return None
+
+
+def _focus_view(app: Any) -> str | None:
+    """"play" or "train": the view that holds the focused widget (None: neither)."""
+    try:
+        focused = app.focused
+        for view in ("play", "train"):
+            if focused is not None and app.query_one(f"#{view}") in focused.ancestors_with_self:
+                return view
+    except Exception:  # while the app is being taken apart
+        pass
+    return None
 
 
 def _send_key(app: Any, key: str) -> None:
@@ -249,10 +263,12 @@ async def _key_latencies(
         _send_key(app, key)
 
         def shown(frames_before: int = frames_before, target: str = target) -> bool:
-            return any(view == target for _, view in tools.frames[frames_before:])
+            return any(view == focus == target for _, view, focus in tools.frames[frames_before:])
 
-        await _until(shown, f"the {target} view on screen")
-        frame_at = next(t for t, view in tools.frames[frames_before:] if view == target)
+        await _until(shown, f"the {target} view on screen, with the focus")
+        frame_at = next(
+            t for t, view, focus in tools.frames[frames_before:] if view == focus == target
+        )
         marks = tools.action_marks[actions_before:]
         began, ended = marks[0] if marks else (sent, sent)
         samples.append(KeySample(

@@ -174,21 +174,12 @@ class TuiGymApp(App[int]):
         if self._switcher is None:
             return
         self._switcher.current = view
-        if view == "train":
-            self._last_version = -1
-            self._tick()
-        # The view is drawn first and the focus (with the key bar) follows a
-        # frame later: restyling the widgets that gain and lose the focus and
-        # redrawing the full-width key bar would double the first frame's cost.
-        self.call_after_refresh(self._focus_view, view)
-
-    def _focus_view(self, view: str) -> None:
-        if self.current_view != view:  # switched again in the meantime
-            return
         if view == "play":
             self.play_view.focus_board()
         else:
+            self._last_version = -1
             self.train_view.focus_default()
+            self._tick()
         self.refresh_bindings()  # the view's keys, even when the focus stays put
 
     def action_switch_game(self, name: str) -> None:

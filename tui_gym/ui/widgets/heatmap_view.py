@@ -267,16 +267,7 @@ class HeatmapView(StripWidget, can_focus=True):
             self.focus_cell = cell
             self.post_message(self.FocusChanged(self, cell))
 
-    def on_resize(self) -> None:
-        self.refresh(layout=True)
-
     # --- layout ------------------------------------------------------------
-    def _compact(self) -> bool:
-        try:
-            return self.screen.has_class("compact")
-        except Exception:
-            return False
-
     def _layout(self, width: int) -> _Layout:
         panels = self._panels
         rows = max(p.shape[0] for p in panels)

@@ -145,15 +145,6 @@ class StatsPanel(StripWidget):
             self._changed()
 
     # --- drawing -----------------------------------------------------------
-    def on_resize(self) -> None:
-        self.refresh(layout=True)  # the compact class may have come or gone
-
-    def _compact(self) -> bool:
-        try:
-            return self.screen.has_class("compact")
-        except Exception:
-            return False
-
     def _changed(self) -> None:
         self.plain = self._plain()
         label, style = STATE_STYLES.get(self._state, (self._state, "bold"))

@@ -23,6 +23,7 @@ from rich.console import Console
 from rich.segment import Segment
 from rich.style import Style
 from rich.text import Text
+from textual import events
 from textual.geometry import Region
 from textual.strip import Strip
 from textual.widget import Widget
@@ -63,6 +64,7 @@ class StripWidget(Widget):
         self._strips: list[Strip] = []
         self._strips_of: tuple[int, Style, int] | None = None  # (id(lines), style, width)
         self._strips_lines: list[Line] | None = None  # keeps id(lines) valid
+        self._laid_out: tuple[int, bool] | None = None  # (width, compact) at the last layout
 
     # --- what subclasses give ------------------------------------------------
     def picture_key(self) -> Hashable:
@@ -98,6 +100,22 @@ class StripWidget(Widget):
         return Text("\n").join(
             Text.assemble(*((s.text, s.style) for s in line)) for line in lines
         )
+
+    # --- size ------------------------------------------------------------------
+    def _compact(self) -> bool:
+        """Whether the app shows its compact layout (a class on the screen)."""
+        try:
+            return self.screen.has_class("compact")
+        except Exception:  # not on a screen (yet)
+            return False
+
+    def on_resize(self, event: events.Resize) -> None:
+        # A new width, or the compact layout coming or going, may change the height
+        # (an auto-height picture); a view shown again at its old size does not.
+        shape = (event.size.width, self._compact())
+        if shape != self._laid_out:
+            self._laid_out = shape
+            self.refresh(layout=True)
 
     # --- Textual's line API ----------------------------------------------------
     def render_lines(self, crop: Region) -> list[Strip]:

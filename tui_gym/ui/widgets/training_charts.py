@@ -190,15 +190,6 @@ class TrainingCharts(StripWidget):
             self.redraw()
 
     # --- drawing -----------------------------------------------------------
-    def _compact(self) -> bool:
-        try:
-            return self.screen.has_class("compact")
-        except Exception:
-            return False
-
-    def on_resize(self) -> None:
-        self.refresh(layout=True)  # the compact class may have come or gone
-
     def picture_key(self) -> Hashable:
         return (self._version, self._compact(), self.rich_style)
 
