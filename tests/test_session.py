@@ -284,3 +284,27 @@ def test_set_hyperparameters_keeps_the_table() -> None:
     session.reset_agent()
     assert session.agent.states_seen == 0 and session.trainer.episodes == 0
     assert session.agent.hp.learning_rate == 0.5
+
+
+def test_blackjack_heatmap_cells_read_the_q_table() -> None:
+    from tui_gym.core.profiles.blackjack import (
+        ACTION_LETTERS,
+        CHART_SUMS,
+        DEALER_CARDS,
+        BlackjackProfile,
+        _row_of,
+    )
+    from tui_gym.core.reference.blackjack import BlackjackRules, optimal_policy
+
+    rows = len(_row_of())
+    q = np.random.default_rng(3).normal(size=(rows, 2))
+    panels = BlackjackProfile().heatmaps(q, {})
+    best = optimal_policy(BlackjackRules())
+    for panel, usable in zip(panels, (1, 0), strict=True):
+        for r, player in enumerate(CHART_SUMS):
+            for c, dealer in enumerate(DEALER_CARDS):
+                qs = q[_row_of()[(player, dealer, usable)]]
+                action = int(np.argmax(qs))
+                assert panel.labels[r][c] == ACTION_LETTERS[action]
+                assert panel.values[r, c] == qs.max()
+                assert panel.marked[r, c] == (action != best[player, dealer, usable])

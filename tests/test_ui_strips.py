@@ -174,3 +174,19 @@ def test_heatmap_cells_take_their_colour_from_their_place_on_the_scale() -> None
     assert _cell_style(False, top, False).bgcolor.name == _hex(SEQUENTIAL[-1])
     assert _cell_style(False, 5, True).bold and _cell_style(False, 5, True).underline
     assert _cell_style(False, -1, False).bgcolor is None  # no value: no colour
+
+
+async def test_kept_component_styles_follow_a_theme_change() -> None:
+    app = TuiGymApp(Session("blackjack", seed=0))
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.press("t")
+        await pilot.pause()
+        charts = app.train_view.charts
+        name = "charts--return-high"
+        before = charts.component_styles()[name]
+        assert before == charts.get_component_rich_style(name)
+        app.theme = "textual-light"
+        await pilot.pause()
+        after = charts.component_styles()[name]
+        assert after == charts.get_component_rich_style(name)
+        assert after != before, "the light theme's colours never reached the charts"

@@ -65,6 +65,14 @@ def _row_of() -> dict[tuple[int, int, int], int]:
     return {s: i for i, s in enumerate(_base_states())}
 
 
+@lru_cache(maxsize=2)
+def _chart_rows(usable: int) -> np.ndarray:
+    """The Q-table row of each chart cell (player sum x dealer card), for one ace state."""
+    row_of = _row_of()
+    return np.array([[row_of[(player, dealer, usable)] for dealer in DEALER_CARDS]
+                     for player in CHART_SUMS])
+
+
 class BlackjackProfile(GameProfile):
     """Hit or stick against a dealer who stands on 17."""
 
@@ -101,21 +109,15 @@ class BlackjackProfile(GameProfile):
         self, q: np.ndarray, env_kwargs: Mapping[str, Any], focus: Any = None
     ) -> list[Heatmap]:
         best = optimal_policy(self.rules(env_kwargs))
-        row_of = _row_of()
+        players = np.array(CHART_SUMS)[:, None]
+        dealers = np.array(DEALER_CARDS)[None, :]
         panels = []
         for usable, title in ((1, "usable ace"), (0, "no usable ace")):
-            values = np.full((len(CHART_SUMS), len(DEALER_CARDS)), np.nan)
-            marked = np.zeros(values.shape, dtype=bool)
-            labels = []
-            for r, player in enumerate(CHART_SUMS):
-                row_labels = []
-                for c, dealer in enumerate(DEALER_CARDS):
-                    qs = q[row_of[(player, dealer, usable)]]
-                    action = int(np.argmax(qs))
-                    values[r, c] = float(qs.max())
-                    row_labels.append(ACTION_LETTERS[action])
-                    marked[r, c] = action != int(best[player, dealer, usable])
-                labels.append(tuple(row_labels))
+            qs = q[_chart_rows(usable)]  # (sums, cards, actions)
+            actions = qs.argmax(axis=-1)
+            values = qs.max(axis=-1).astype(float)
+            marked = actions != best[players, dealers, usable]
+            labels = tuple(tuple(ACTION_LETTERS[a] for a in row) for row in actions.tolist())
             panels.append(
                 Heatmap(
                     title=f"Q-values, {title}",

@@ -65,6 +65,7 @@ class StripWidget(Widget):
         self._strips_of: tuple[int, Style, int] | None = None  # (id(lines), style, width)
         self._strips_lines: list[Line] | None = None  # keeps id(lines) valid
         self._laid_out: tuple[int, bool] | None = None  # (width, compact) at the last layout
+        self._components: tuple[Style, dict[str, Style]] | None = None
 
     # --- what subclasses give ------------------------------------------------
     def picture_key(self) -> Hashable:
@@ -101,6 +102,14 @@ class StripWidget(Widget):
             Text.assemble(*((s.text, s.style) for s in line)) for line in lines
         )
 
+    def component_styles(self) -> dict[str, Style]:
+        """Every component class's Rich style, kept while the widget's own style holds."""
+        base = self.rich_style
+        if self._components is None or self._components[0] != base:
+            styles = {name: self.get_component_rich_style(name) for name in self.COMPONENT_CLASSES}
+            self._components = (base, styles)
+        return self._components[1]
+
     # --- size ------------------------------------------------------------------
     def _compact(self) -> bool:
         """Whether the app shows its compact layout (a class on the screen)."""
@@ -123,10 +132,18 @@ class StripWidget(Widget):
         style = self.rich_style
         lines = self.picture(width)
         if self._strips_of != (id(lines), style, width) or self._strips_lines is not lines:
-            self._strips = [
-                Strip(line).apply_style(style).adjust_cell_length(width, style)
-                for line in lines
-            ]
+            combined: dict[Style | None, Style] = {}  # a picture uses a few styles, many times
+            strips = []
+            for line in lines:
+                segments = []
+                for segment in line:
+                    own = segment.style
+                    full = combined.get(own)
+                    if full is None:
+                        full = combined[own] = style + own
+                    segments.append(Segment(segment.text, full))
+                strips.append(Strip(segments).adjust_cell_length(width, style))
+            self._strips = strips
             self._strips_of = (id(lines), style, width)
             self._strips_lines = lines
         return super().render_lines(crop)

@@ -199,16 +199,16 @@ class TrainingCharts(StripWidget):
     def draw(self, width: int) -> list[Line]:
         compact = self._compact()
         height = 1 if compact else 2
-        style = self.get_component_rich_style
-        name_style, value_style = style("charts--name"), style("charts--value")
-        range_style = style("charts--range")
+        styles = self.component_styles()
+        name_style, value_style = styles["charts--name"], styles["charts--value"]
+        range_style = styles["charts--range"]
         range_width = 0 if compact else RANGE_WIDTH + 1
         spark_width = max(1, width - NAME_WIDTH - VALUE_WIDTH - 2 - range_width)
         lines: list[Line] = []
         for curve in CURVES:
             data = self._data.get(curve.key, ())
-            low = style(f"charts--{curve.key}-low").color or RichColor.default()
-            high = style(f"charts--{curve.key}-high").color or RichColor.default()
+            low = styles[f"charts--{curve.key}-low"].color or RichColor.default()
+            high = styles[f"charts--{curve.key}-high"].color or RichColor.default()
             spark = sparkline_rows(data, spark_width, height, low, high)
             value = self._values.get(curve.key, "–") or "–"
             ends = (
