@@ -190,3 +190,34 @@ async def test_kept_component_styles_follow_a_theme_change() -> None:
         after = charts.component_styles()[name]
         assert after == charts.get_component_rich_style(name)
         assert after != before, "the light theme's colours never reached the charts"
+
+
+class OneProgress(App[None]):
+    def compose(self) -> ComposeResult:
+        from tui_gym.ui.widgets.progress_line import ProgressLine
+
+        yield ProgressLine()
+
+
+async def test_the_progress_line_fills_toward_the_budget() -> None:
+    from tui_gym.ui.widgets.progress_line import DONE, HALF, ProgressLine
+
+    app = OneProgress()
+    async with app.run_test(size=(60, 3)) as pilot:
+        line = app.query_one(ProgressLine)
+        line.show(30_000, 200_000, eta="0:04")
+        await pilot.pause()
+        text = line.render().plain
+        assert text.endswith(" 15% 30,000 / 200,000 episodes · eta 0:04")
+        assert len(text) == 60
+        bar = text.split(" ")[0]
+        assert set(bar) <= {DONE, HALF} and len(bar) == 60 - len(" 15% 30,000 / 200,000 "
+                                                               "episodes · eta 0:04") - 1
+        done = line.render().spans[0]  # the done part has a colour of its own
+        assert done.end - done.start == -(-round(0.15 * len(bar) * 2) // 2)  # halves round up
+        line.show(200_000, 200_000)
+        await pilot.pause()
+        assert line.render().plain.endswith("100% 200,000 / 200,000 episodes")
+        await pilot.resize_terminal(20, 3)
+        await pilot.pause()
+        assert DONE not in line.render().plain  # too narrow for a bar: the numbers only

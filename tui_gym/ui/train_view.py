@@ -23,12 +23,13 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widget import Widget
-from textual.widgets import Button, Label, ProgressBar
+from textual.widgets import Button, Label
 
 from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.training import TrainingSnapshot
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
+from tui_gym.ui.widgets.progress_line import ProgressLine
 from tui_gym.ui.widgets.stats_panel import StatsPanel, format_duration
 from tui_gym.ui.widgets.training_charts import TrainingCharts
 
@@ -65,20 +66,6 @@ class TrainView(VerticalScroll):
         padding: 0 1;
         color: $text-accent;
         text-style: bold;
-    }
-    TrainView #train-progress-row {
-        height: 1;
-    }
-    TrainView #train-progress {
-        width: 1fr;
-    }
-    TrainView #train-progress Bar {
-        width: 1fr;
-    }
-    TrainView #train-progress-text {
-        width: auto;
-        color: $text-muted;
-        padding-left: 1;
     }
     TrainView #train-top {
         height: auto;
@@ -190,10 +177,7 @@ class TrainView(VerticalScroll):
         self._episode = Button("1 episode", id="btn-episode", compact=True,
                                tooltip="Train for exactly one episode (.)")
         self._speed = Label("", id="train-speed")
-        self._progress = ProgressBar(
-            total=session.hp.episodes if session.hp else 1, show_eta=False, id="train-progress"
-        )
-        self._progress_text = Label("", id="train-progress-text")
+        self._progress = ProgressLine(id="train-progress")
         self._stats = StatsPanel(id="train-stats")
         self._form = HyperparameterForm(session.hp, id="train-form")
         self._charts = TrainingCharts(id="train-charts")
@@ -210,9 +194,7 @@ class TrainView(VerticalScroll):
             yield Button("−", id="btn-slower", compact=True, tooltip="Slower (-)")
             yield self._speed
             yield Button("+", id="btn-faster", compact=True, tooltip="Faster (+)")
-        with Horizontal(id="train-progress-row"):
-            yield self._progress
-            yield self._progress_text
+        yield self._progress
         with Horizontal(id="train-top"):
             yield self._stats
             yield self._form
@@ -246,7 +228,7 @@ class TrainView(VerticalScroll):
         return self._form
 
     @property
-    def progress(self) -> ProgressBar:
+    def progress(self) -> ProgressLine:
         return self._progress
 
     @property
@@ -320,19 +302,10 @@ class TrainView(VerticalScroll):
 
     # --- drawing pieces ----------------------------------------------------
     def _show_progress(self, snapshot: TrainingSnapshot, runner: TrainingRunner) -> None:
-        budget = max(1, snapshot.budget)
-        self.progress.update(total=budget, progress=min(snapshot.episodes, budget))
-        text = f"{snapshot.episodes:,} / {snapshot.budget:,}"
-        if not self.screen.has_class("compact"):
-            text += " episodes"
         rate = snapshot.episodes_per_second
         remaining = max(0, snapshot.budget - snapshot.episodes)
-        if runner.running and rate > 0 and remaining:
-            text += f" · eta {format_duration(remaining / rate)}"
-        old = str(self._progress_text.content)
-        if old != text:
-            # A layout pass (costly) only when the text's width changes.
-            self._progress_text.update(text, layout=len(old) != len(text))
+        eta = format_duration(remaining / rate) if runner.running and rate > 0 and remaining else ""
+        self.progress.show(snapshot.episodes, snapshot.budget, eta)
 
     def _show_heatmaps(self) -> None:
         session, snapshot = self.session, self._snapshot
@@ -485,7 +458,7 @@ class TrainView(VerticalScroll):
             return
         if not self.runner.running:
             self.session.set_hyperparameters(hp)
-            self.progress.update(total=max(1, hp.episodes))
+            self.progress.show(self.progress.done, hp.episodes)
             self.app.notify("Hyperparameters set.", timeout=2)
         else:
             self.app.notify("They apply when training starts again.", timeout=3)

@@ -1,0 +1,83 @@
+"""`ProgressLine`: one line with a bar toward the episode budget and its numbers.
+
+It shows what a Textual `ProgressBar` beside a label showed (the bar, the
+percentage, "60,000 / 200,000 episodes" and, while training runs, the time
+left), drawn as one widget from kept lines: the Train view updates it on
+every snapshot, and three widgets with reactive attributes cost more than a
+line of text (`show(done, total, eta)`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Hashable
+from typing import ClassVar
+
+from rich.segment import Segment
+
+from tui_gym.ui.widgets.strip_widget import Line, StripWidget
+
+DONE, HALF = "━", "╸"
+MIN_BAR = 4  # cells: narrower than this, the bar is left out
+
+
+class ProgressLine(StripWidget):
+    """A bar toward the episode budget, the percentage, the counts and the time left."""
+
+    COMPONENT_CLASSES: ClassVar[set[str]] = {
+        "progress--done", "progress--left", "progress--percent", "progress--text",
+    }
+    DEFAULT_CSS = """
+    ProgressLine {
+        height: 1;
+        width: 1fr;
+    }
+    ProgressLine > .progress--done { color: $accent; }
+    ProgressLine > .progress--left { color: $foreground 10%; }
+    ProgressLine > .progress--percent { color: $text; }
+    ProgressLine > .progress--text { color: $text-muted; }
+    """
+
+    def __init__(self, *, id: str | None = None) -> None:
+        super().__init__(id=id)
+        self.done = 0
+        self.total = 1
+        self.eta = ""
+
+    @property
+    def fraction(self) -> float:
+        return min(1.0, max(0.0, self.done / self.total)) if self.total > 0 else 0.0
+
+    def text(self) -> str:
+        """The words after the bar: '60,000 / 200,000 episodes · eta 0:03'."""
+        words = f"{self.done:,} / {self.total:,}"
+        if not self._compact():
+            words += " episodes"
+        return words + (f" · eta {self.eta}" if self.eta else "")
+
+    def show(self, done: int, total: int, eta: str = "") -> None:
+        """`done` of `total` episodes, and the time left while training runs ("" if not)."""
+        if (done, total, eta) != (self.done, self.total, self.eta):
+            self.done, self.total, self.eta = done, total, eta
+            self.redraw()
+
+    def picture_key(self) -> Hashable:
+        return (self._version, self._compact(), self.rich_style)
+
+    def draw(self, width: int) -> list[Line]:
+        styles = self.component_styles()
+        percent = f"{self.fraction:.0%}".rjust(4)
+        words = " " + self.text()
+        bar = width - 1 - len(percent) - len(words)
+        line: Line = []
+        if bar >= MIN_BAR:
+            full, half = divmod(round(self.fraction * bar * 2), 2)
+            done = DONE * full + (HALF if half else "")
+            line += [Segment(done, styles["progress--done"]),
+                     Segment(DONE * (bar - len(done)), styles["progress--left"]),
+                     Segment(" ")]
+        line += [Segment(percent, styles["progress--percent"]),
+                 Segment(words, styles["progress--text"])]
+        return [line]
+
+
+__all__ = ["ProgressLine"]
