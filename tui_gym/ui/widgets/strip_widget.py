@@ -11,6 +11,10 @@ what its picture depends on (`picture_key()`; by default a counter that
 Lines are drawn once per key and width (the last `PICTURES` pictures are
 kept, for widgets that flip between a few), and styled with the widget's own
 colours once per style, so a frame that finds nothing changed costs a lookup.
+`component_styles()` keeps the Rich styles of the widget's component classes
+until its own style changes (a theme switch), and a resize asks for a layout
+pass only when the width or the compact layout changed, not when a view is
+shown again at its old size.
 """
 
 from __future__ import annotations
