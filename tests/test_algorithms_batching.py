@@ -146,3 +146,15 @@ def test_monte_carlo_keeps_one_trajectory_per_env_and_forgets_on_request() -> No
     learner.update(Transitions.one(1, 1, 2.0, 4, True, env=3))
     # env 3's episode: G = 3 for (0,0), 2 for (1,1); env 0's step was dropped
     assert learner.q[0, 0] == 3.0 and learner.q[1, 1] == 2.0 and learner.q[2, 1] == 0.0
+
+
+@pytest.mark.parametrize("name", [cls.name for cls in ALGORITHMS])
+def test_an_empty_batch_changes_nothing(name: str) -> None:
+    learner = _make(name, "visits")
+    before = _tables(learner)
+    empty = np.zeros(0, dtype=np.int64)
+    td = learner.update(Transitions(empty, empty, np.zeros(0), empty, np.zeros(0, dtype=bool),
+                                    np.zeros(0, dtype=bool), empty, empty))
+    assert td.shape == (0,) and learner.last_update is None
+    for key, array in _tables(learner).items():
+        assert np.array_equal(array, before[key]), key

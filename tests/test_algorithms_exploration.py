@@ -5,7 +5,8 @@ best one, ties broken uniformly: the frequencies from a fixed seed sit within
 a few standard errors of those probabilities, in both draw orders, and match
 `policy_probabilities`. The epsilon schedule is the old `Hyperparameters`
 one. Each algorithm's schema has valid defaults and refuses bad values with
-a message that names the field.
+a message that names the field. The package stays free of the UI and of
+Gymnasium.
 """
 
 from __future__ import annotations
@@ -124,3 +125,20 @@ def test_the_registry() -> None:
         assert len(fields) == len(set(fields)) and all(f.help for f in cls.params)
         assert isinstance(cls.settings(), Settings)
     assert [cls.name for cls in ALGORITHMS if cls.needs_next_action] == ["sarsa"]
+
+
+def test_the_package_imports_neither_textual_nor_gymnasium() -> None:
+    import ast
+    from pathlib import Path
+
+    import tui_gym.algorithms as package
+
+    for path in Path(package.__file__).parent.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module:
+                names = [node.module]
+            for name in names:
+                assert name.split(".")[0] not in {"textual", "gymnasium"}, (path.name, name)

@@ -95,9 +95,10 @@ class DoubleQLearning(Learner):
         mine, other = _NAMES[int(which)], _NAMES[1 - int(which)]
         r = float(batch.reward[0])
         terms: tuple[tuple[str, float], ...] = (("r", r),)
-        formula = "r"
+        formula, picked = "r", None
         if not batch.terminated[0]:
             formula = f"r + γ·Q_{other}(s', a*), a* = argmax Q_{mine}(s',·)"
             terms = (("r", r), ("γ", self.hp.discount), (f"Q_{other}(s',a*)", float(future)))
+            picked = int(best)
         return self._record(batch, formula, terms, target, before, after, int(n), table=mine,
-                            target_action=int(best))
+                            target_action=picked)

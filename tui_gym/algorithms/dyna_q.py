@@ -61,6 +61,8 @@ class DynaQ(QLearning):
 
     def update(self, batch: Transitions) -> np.ndarray:
         td = super().update(batch)
+        if not len(batch):
+            return td
         self._learn_model(batch)
         planned = self._plan(len(batch), batch.sequential)
         if self._last is not None:

@@ -52,7 +52,7 @@ class MonteCarlo(Learner):
 
     # --- episodes in progress -------------------------------------------------------
     def forget_episodes(self, envs: Sequence[int] | np.ndarray | None = None) -> None:
-        if envs is None or not hasattr(self, "_length"):
+        if envs is None:
             self._states = np.zeros((0, 16), dtype=np.int64)
             self._actions = np.zeros((0, 16), dtype=np.int64)
             self._rewards = np.zeros((0, 16), dtype=np.float64)
@@ -91,6 +91,9 @@ class MonteCarlo(Learner):
         episode's updates (so an engine's per-episode mean |TD| is their mean
         per step); other rows carry 0.
         """
+        if not len(batch):
+            self._last = None
+            return np.zeros(0)
         envs = batch.envs()
         self._make_room(envs)
         t = self._length[envs]

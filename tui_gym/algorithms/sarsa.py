@@ -56,5 +56,6 @@ class Sarsa(Learner):
             formula = self.formula
             terms = (("r", r), ("γ", self.hp.discount), ("Q(s',a')", float(future)))
         assert batch.next_action is not None  # checked by update
+        picked = None if batch.terminated[0] else int(batch.next_action[0])
         return self._record(batch, formula, terms, target, before, after, int(n),
-                            target_action=int(batch.next_action[0]))
+                            target_action=picked)
