@@ -10,9 +10,10 @@ steps) with a word on what they take into account. The figures are shown
 generically, by name, so a new game needs no change here.
 
 A figure with nothing behind it yet (no episode in the statistics, e.g. just
-after loading a saved agent) reads "–". No number is ever cut: each has a
-compact form ("5.50M") for when the full one does not fit, and the table
-drops to one figure a row before anything is cropped.
+after loading a saved agent) reads "–". No number is ever cut: where the
+full forms do not fit, the widest column takes shorter forms ("5.50M",
+"-1.23e+03") as far as it must, and when that is not enough the table drops
+to one figure a row.
 """
 
 from __future__ import annotations
@@ -71,9 +72,6 @@ def figure_forms(key: str, value: float) -> Forms:
         return (full,)
     sign = "" if key == "gap" or key.endswith("_gap") else "+"
     return number_forms(full, value, sign)
-
-
-
 
 
 def format_duration(seconds: float) -> str:
@@ -152,11 +150,11 @@ class StatsPanel(StripWidget):
             ("eps/s", (format_rate(rate), compact_count(rate)) if rate > 0 else none, ""),
             ("time", (format_duration(snapshot.seconds),) if snapshot.seconds > 0 else none, ""),
             ("epsilon", (f"{snapshot.epsilon:.3f}",), ""),
-            ("return", _forms(f"{snapshot.mean_return:+.4f}", snapshot.mean_return, "+")
+            ("return", number_forms(f"{snapshot.mean_return:+.4f}", snapshot.mean_return, "+")
              if recorded else none, "bold"),
-            ("length", _forms(f"{snapshot.mean_length:.2f}", snapshot.mean_length)
+            ("length", number_forms(f"{snapshot.mean_length:.2f}", snapshot.mean_length)
              if recorded else none, ""),
-            ("|TD|", _forms(f"{snapshot.mean_abs_td:.4f}", snapshot.mean_abs_td)
+            ("|TD|", number_forms(f"{snapshot.mean_abs_td:.4f}", snapshot.mean_abs_td)
              if recorded else none, ""),
         ]
         window = min(snapshot.window, snapshot.recorded)
@@ -251,10 +249,6 @@ Cell = tuple[str | Forms, str]  # a name (one text) or a value (its forms), and 
 @lru_cache(maxsize=64)
 def _style(name: str) -> Style:
     return Style.parse(name) if name else Style()
-
-
-def _forms(full: str, value: float, sign: str = "") -> Forms:
-    return number_forms(full, value, sign)
 
 
 def _grid(rows: list[list[Cell]], width: int, per_row: int = 0) -> list[Line]:
