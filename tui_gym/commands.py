@@ -126,6 +126,8 @@ def eval_dict(session: Session, report: EvalReport) -> dict[str, Any]:
     ref = session.reference()
     if ref is not None:
         data.update(ref.figures)
+        if ref.scope.note:  # what the exact figures take into account, or that they cannot
+            data["reference_note"] = ref.scope.note
     return data
 
 

@@ -10,7 +10,8 @@ Requests (an optional `"id"` is echoed back in the response):
 - `{"cmd": "reset"}` (optional `"seed"`): a new episode;
 - `{"cmd": "step", "action": A}`: A as the integer or the action's name;
 - `{"cmd": "render"}`: the text picture (hidden cards stay hidden);
-- `{"cmd": "hint"}`: the exact optimal action(s) in the current state;
+- `{"cmd": "hint"}`: the exact optimal action(s) in the current state, in the
+  game as its wrappers make it;
 - `{"cmd": "help"}`: the list of commands.
 
 Reset and step answer with `observation` (JSON-friendly), `reward`,
@@ -135,6 +136,8 @@ class JsonlPlayer:
         }
         if advice.values is not None:
             response["action_values"] = {names[a]: v for a, v in advice.values.items()}
+        if advice.unwrapped_optimal:  # the wrappers change the game beyond exact figures
+            response["unwrapped_optimal_actions"] = [names[a] for a in advice.unwrapped_optimal]
         return response
 
     def _help(self, request: dict[str, Any]) -> dict[str, Any]:
