@@ -419,7 +419,17 @@ CRAFTED: dict[str, tuple[str, object, str]] = {
                        "keys.json must be a list"),
     "keys.json on a dense table": (
         "dense", lambda good: _with_entries(good, keys_json=json.dumps(list(range(704))).encode()),
-        "cannot restore the saved agent",
+        "keys.json is for a sparse table; Blackjack-v1's is dense",
+    ),
+    "a row short": (
+        "dense",
+        lambda good: _with_entries(_with_table(good, lambda q: q[:-1]),
+                                   counts_npy=_npy(np.zeros((703, 2), np.int64))),
+        "q.npy has 703 rows; Blackjack-v1 has 704",
+    ),
+    "sparse table without keys": (
+        "sparse", lambda good: _zip({k: v for k, v in _entries(good).items() if k != "keys.json"}),
+        "keys.json is missing",
     ),
     "keys miscounted": (
         "sparse", lambda good: _with_entries(good, keys_json=b"[[1, 2]]"), "keys.json has 1 keys",

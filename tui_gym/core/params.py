@@ -76,7 +76,7 @@ def shown_value(raw: object) -> str:
         if value.bit_length() <= 128:
             return repr(value)
         digits = int(value.bit_length() * math.log10(2)) + 1
-        return f"{'-' if value < 0 else ''}an integer of about {digits:,} digits"
+        return f"{'a negative' if value < 0 else 'an'} integer of about {digits:,} digits"
     if raw is None:
         return "None"
     # Lists and dicts from files and requests: their repr can be huge or nested deeply.

@@ -34,6 +34,7 @@ import re
 import secrets
 import signal
 import stat
+import struct
 import threading
 import time
 import zipfile
@@ -510,7 +511,8 @@ def read_file(
                 keys = _keys(reader, _json(reader, "keys.json", keys_bytes), len(q))
     except StorageError:
         raise
-    except (zipfile.BadZipFile, zlib.error, EOFError):
+    except (zipfile.BadZipFile, zlib.error, EOFError, ValueError, struct.error):
+        # ValueError: zipfile's own, on offsets a damaged directory points past the start.
         raise reader.error("not a tui-gym save file (corrupt or truncated)") from None
     except (NotImplementedError, RuntimeError, zipfile.LargeZipFile, OSError) as exc:
         # Unsupported compression, encryption, ZIP64 oddities: not a file we wrote.
@@ -627,6 +629,13 @@ def load_session(path: str | Path) -> Session:
             "q.npy", f"has {q.shape[1]} columns; {session.env_id} has "
             f"{session.agent.n_actions} actions"
         )
+    dense_rows = session.agent.n_states
+    if dense_rows is not None and keys is not None:
+        raise reader.field("keys.json", f"is for a sparse table; {session.env_id}'s is dense")
+    if dense_rows is not None and len(q) != dense_rows:
+        raise reader.field("q.npy", f"has {len(q):,} rows; {session.env_id} has {dense_rows:,}")
+    if dense_rows is None and keys is None:
+        raise reader.field("keys.json", "is missing (the states of the sparse table's rows)")
     try:
         session.agent.load_table(q, keys, counts)
     except (KeyError, TypeError, ValueError) as exc:
