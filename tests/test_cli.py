@@ -89,13 +89,21 @@ def test_envs_lists_the_games(capsys: pytest.CaptureFixture[str]) -> None:
         assert text in out
 
 
-def test_wrappers_lists_the_catalog_and_the_syntax(capsys: pytest.CaptureFixture[str]) -> None:
+@pytest.mark.parametrize("columns", ["60", "80", "120"])
+def test_wrappers_lists_the_catalog_and_the_syntax(
+    columns: str, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("COLUMNS", columns)
     code, out, err = run(capsys, "wrappers")
     assert code == 0 and err == ""
-    assert "--wrapper NAME:key=value" in out
-    for name in CATALOG:
-        assert name in out
-    assert "max_episode_steps=100" in out  # parameters with their defaults
+    assert "NAME:key=value,key=value" in out
+    words = set(re.findall(r"[\w.]+", out))
+    for name, spec in CATALOG.items():
+        assert name in words
+        for param in spec.params:  # whole, as they must be typed
+            assert param.name in words
+    assert "=100 [1, 100000]" in out  # parameters with their defaults and ranges
+    assert "…" not in out
 
 
 def test_envs_json(capsys: pytest.CaptureFixture[str]) -> None:

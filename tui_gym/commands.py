@@ -99,16 +99,15 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
             "syntax": WRAPPER_SYNTAX,
         })
         return 0
-    table = Table(title="Wrapper catalog", title_justify="left", show_lines=True)
-    table.add_column("name", style="bold cyan", no_wrap=True)
-    table.add_column("what it changes and teaches")
-    table.add_column("parameters (default, range)")
-    for spec in CATALOG.values():
-        params = "\n".join(
-            f"{p.name}={p.default} ({p.describe_range()})" for p in spec.params
-        ) or "-"
-        table.add_row(spec.name, escape(spec.summary), escape(params))
-    out.print(table)
+    if out.width < 80:  # too narrow for three columns: one block a wrapper
+        out.print("[bold]Wrapper catalog[/]")
+        for spec in CATALOG.values():
+            out.print(f"\n[bold cyan]{spec.name}[/]")
+            out.print(escape(spec.summary), overflow="fold")
+            for p in spec.params:
+                out.print(f"  {p.name}={p.default} {escape(p.describe_range())}", overflow="fold")
+    else:
+        out.print(_wrapper_table(CATALOG))
     out.print(
         "Use with [bold]--wrapper NAME[/] or [bold]--wrapper NAME:key=value,key=value[/], "
         "repeatable; the first is innermost.\n"
@@ -116,6 +115,21 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
         "--wrapper StepPenalty:penalty=0.01"
     )
     return 0
+
+
+def _wrapper_table(catalog: dict[str, Any]) -> Table:
+    table = Table(title="Wrapper catalog", title_justify="left", show_lines=True)
+    longest = max((len(p.name) for spec in catalog.values() for p in spec.params), default=1)
+    table.add_column("name", style="bold cyan", no_wrap=True)
+    table.add_column("what it changes and teaches", ratio=1, overflow="fold")
+    # Parameter names are typed after --wrapper: never cut, each on a line of its own.
+    table.add_column("parameters (default, range)", min_width=longest, overflow="fold")
+    for spec in catalog.values():
+        params = "\n".join(
+            f"{p.name}\n  ={p.default} {p.describe_range()}" for p in spec.params
+        ) or "-"
+        table.add_row(spec.name, escape(spec.summary), escape(params))
+    return table
 
 
 def _hyperparameters(args: argparse.Namespace, base: Hyperparameters) -> Hyperparameters:
