@@ -258,12 +258,14 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
     # Before training: a run is not lost to a save path that cannot be written.
     save_path = check_save_path(args.save) if args.save is not None else None
     session = _session_from_args(args)
+    hp = session.hp
+    assert hp is not None  # a built session has its hyperparameters
     trainer = session.trainer
     started = time.perf_counter()
     if args.json or not out.is_terminal:
         outcome = session.train(target_gap=args.target_gap)
     else:
-        progress, update = _progress_bar(out, session.hp.episodes)
+        progress, update = _progress_bar(out, hp.episodes)
         with progress:
             outcome = session.train(target_gap=args.target_gap, on_chunk=update)
     seconds = time.perf_counter() - started
@@ -281,7 +283,7 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
         "steps": trainer.steps,
         "seconds": seconds,
         "episodes_per_second": trainer.episodes / seconds if seconds else None,
-        "hyperparameters": session.hp.to_dict(),
+        "hyperparameters": hp.to_dict(),
         "rolling_mean_return": trainer.latest.mean_return,
         "eval": evaluation,
         "saved": saved,

@@ -26,7 +26,7 @@ from __future__ import annotations
 import json
 import math
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import IO, Any
 
 from tui_gym.core.play import HumanGame, PlayError
@@ -228,7 +228,7 @@ class JsonlPlayer:
         return {"commands": list(COMMANDS), "actions": list(self.profile.action_names)}
 
 
-def read_lines(stdin: IO[bytes], limit: int = MAX_LINE_BYTES):
+def read_lines(stdin: IO[bytes], limit: int = MAX_LINE_BYTES) -> Iterator[bytes | None]:
     """Each line of `stdin` as bytes, as soon as it is complete; a line longer than
     `limit` comes back as None (its bytes are read and dropped, not held)."""
     while True:

@@ -41,6 +41,7 @@ import zipfile
 import zlib
 from collections.abc import Callable, Hashable, Iterator
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -143,7 +144,7 @@ def remove_stale_temp_files(path: Path) -> list[Path]:
     """
     pattern = _temp_pattern(path.name)
     folder = path.parent if str(path.parent) else Path(".")
-    removed = []
+    removed: list[Path] = []
     try:
         entries = list(os.scandir(folder))
     except OSError:
@@ -598,7 +599,7 @@ def load_session(path: str | Path) -> Session:
                 f"wrappers[{i}]", f"must be a spec like 'TimeLimit:max_episode_steps=50', "
                 f"got {shown_value(spec)}"
             )
-        choices.append(_checked(reader, f"wrappers[{i}]", lambda s=spec: parse_wrapper_spec(s)))
+        choices.append(_checked(reader, f"wrappers[{i}]", partial(parse_wrapper_spec, spec)))
     hp_data = meta.get("hyperparameters")
     if not isinstance(hp_data, dict):
         raise reader.field("hyperparameters", f"must be an object, got {shown_value(hp_data)}")
