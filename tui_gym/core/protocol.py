@@ -29,6 +29,7 @@ import re
 from collections.abc import Callable, Iterator
 from typing import IO, Any
 
+from tui_gym.core.params import shown_value
 from tui_gym.core.play import HumanGame, PlayError
 from tui_gym.core.profiles.base import to_jsonable
 from tui_gym.core.session import Session
@@ -56,12 +57,8 @@ def _parse_int(text: str) -> int:
 def _parse_float(text: str) -> float:
     value = float(text)
     if not math.isfinite(value):
-        raise _BadNumber(f"{_short_text(text)} is beyond the range of a number")
+        raise _BadNumber(f"{shown_value(text)} is beyond the range of a number")
     return value
-
-
-def _short_text(text: str) -> str:
-    return text if len(text) <= 24 else f"{text[:12]}…{text[-6:]} ({len(text):,} characters)"
 
 
 def _parse_constant(name: str) -> float:
@@ -108,13 +105,6 @@ def _clean(value: Any) -> Any:
     return value
 
 
-def _short(value: Any) -> str:
-    """A request's value as a message quotes it (never its full length)."""
-    from tui_gym.core.params import shown_value
-
-    return shown_value(value)
-
-
 class JsonlPlayer:
     """Answers protocol requests for one game (with the session's wrappers)."""
 
@@ -150,7 +140,7 @@ class JsonlPlayer:
         cmd = request.get("cmd")
         handler = self._handlers.get(cmd) if isinstance(cmd, str) else None
         if handler is None:
-            response = {"error": f"unknown cmd {_short(cmd)}; commands: {', '.join(COMMANDS)}"}
+            response = {"error": f"unknown cmd {shown_value(cmd)}; commands: {', '.join(COMMANDS)}"}
         else:
             try:
                 response = handler(request)
@@ -189,7 +179,7 @@ class JsonlPlayer:
         if seed is not None and (
             isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED
         ):
-            raise ValueError(f"seed must be an integer in [0, {MAX_SEED}], got {_short(seed)}")
+            raise ValueError(f"seed must be an integer in [0, {MAX_SEED}], got {shown_value(seed)}")
         self.game.reset(seed=seed)
         return self._transition()
 
@@ -200,7 +190,7 @@ class JsonlPlayer:
         action = request["action"]
         if not isinstance(action, int | str) or len(str(action)) > 32:
             valid = ", ".join(f"{i}={n}" for i, n in enumerate(self.profile.action_names))
-            raise ValueError(f"invalid action {_short(action)}; valid actions: {valid}")
+            raise ValueError(f"invalid action {shown_value(action)}; valid actions: {valid}")
         self.game.step(action)
         return self._transition()
 

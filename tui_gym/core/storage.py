@@ -612,9 +612,12 @@ def load_session(path: str | Path) -> Session:
         if name in meta and not isinstance(meta[name], str):
             raise reader.field(name, f"must be text, got {shown_value(meta[name])}")
 
-    session = _checked(reader, "env_id", lambda: Session(
-        env_id=env_id, env_kwargs=env_kwargs, choices=tuple(choices), hp=hp, seed=seed
-    ))
+    try:
+        session = Session(
+            env_id=env_id, env_kwargs=env_kwargs, choices=tuple(choices), hp=hp, seed=seed
+        )
+    except (ValueError, TypeError, KeyError) as exc:
+        raise reader.error(f"cannot rebuild the saved game ({_short_reason(exc)})") from None
     if session.skipped:
         choice, reason = session.skipped[0]
         index = list(choices).index(choice)
