@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from tui_gym.algorithms import ALGORITHMS
 from tui_gym.cli import CliError, _env_kwargs, build_parser
 from tui_gym.commands import HP_FLAGS, _hyperparameters
 from tui_gym.core.agent import HYPERPARAMETER_FIELDS, Hyperparameters
@@ -105,9 +106,15 @@ def nasty_value(rng: random.Random, depth: int = 0) -> Any:
 
 
 def all_params() -> list[Param]:
+    """Every numeric or yes/no field a person or a file fills in, each once."""
     params = [p for spec in CATALOG.values() for p in spec.params]
     params += [p for profile in PROFILES for p in profile.env_params]
-    return params + list(HYPERPARAMETER_FIELDS)
+    params += list(HYPERPARAMETER_FIELDS)
+    params += [p for learner in ALGORITHMS for p in learner.params if isinstance(p, Param)]
+    unique: dict[tuple[str, str], Param] = {}
+    for param in params:
+        unique.setdefault((param.label, param.describe_range()), param)
+    return list(unique.values())
 
 
 def inputs(seed: int, count: int) -> Iterator[Any]:
@@ -126,7 +133,9 @@ def check_one_line(message: str, *labels: str) -> None:
         assert any(label in message for label in labels), message
 
 
-@pytest.mark.parametrize("param", all_params(), ids=lambda p: p.label)
+@pytest.mark.parametrize(
+    "param", all_params(), ids=lambda p: f"{p.label} {p.describe_range()}"
+)
 def test_every_field_answers_every_value(param: Param) -> None:
     for raw in inputs(SEED, CASES):
         try:
