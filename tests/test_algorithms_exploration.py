@@ -101,7 +101,7 @@ def test_settings_parse_text_and_refuse_bad_values() -> None:
     assert settings["learning_rate_schedule"] == "constant"
     assert settings.replace(discount=0.5).discount == 0.5 and settings.discount == 1.0
     assert pickle.loads(pickle.dumps(settings)) == settings
-    with pytest.raises(ValueError, match=r"learning_rate must be a number in \(0, 1\]"):
+    with pytest.raises(ValueError, match=r"learning_rate is out of range: 0 is not in \(0, 1\]"):
         settings.replace(learning_rate=0)
     with pytest.raises(ValueError, match="learning_rate_schedule must be one of constant, visits"):
         settings.replace(learning_rate_schedule="cosine")

@@ -123,7 +123,8 @@ class GameProfile(ABC):
             text = action.strip().lower()
             if text in self.action_names:
                 return self.action_names.index(text)
-            if text.isdigit() and int(text) < len(self.action_names):
+            # ASCII digits only ('١' and '²' are digits to Python, not to the protocol).
+            if text.isascii() and text.isdigit() and int(text) < len(self.action_names):
                 return int(text)
         names = ", ".join(f"{i}={n}" for i, n in enumerate(self.action_names))
         raise ValueError(f"invalid action {action!r}; valid actions: {names}")
