@@ -7,10 +7,12 @@ return, length, mean |TD error| and epsilon go into `RollingWindow`s and
 whole-run `Series`, so memory is fixed however long it runs. `snapshot()`
 returns an immutable `TrainingSnapshot` (numpy copies) for viewers on other
 threads; `latest` holds the most recent one, refreshed while `run` works.
+`continue_run` decides how new hyperparameters apply to a run under way.
 """
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections.abc import Callable, Hashable
@@ -20,7 +22,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from tui_gym.core.agent import QAgent
+from tui_gym.core.agent import Hyperparameters, QAgent
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.stats import EpisodeStats, RollingWindow, Series
 
@@ -97,6 +99,8 @@ class StepEvent:
     terminated: bool
     truncated: bool
     episode_done: EpisodeStats | None
+    episode: int = 0  # the 1-based number of the episode this step belongs to
+    step: int = 0  # the 1-based number of this step within its episode
 
 
 class Trainer:
@@ -162,13 +166,14 @@ class Trainer:
         self._ep_return += float(reward)
         self._ep_len += 1
         self._ep_td += abs(td)
+        episode, step = self.episodes + 1, self._ep_len
         done_stats = None
         if terminated or truncated:
             done_stats = self._finish_episode()
         else:
             self._obs, self._key = next_obs, next_key
         return StepEvent(obs, action, float(reward), next_obs, bool(terminated),
-                         bool(truncated), done_stats)
+                         bool(truncated), done_stats, episode, step)
 
     def _finish_episode(self) -> EpisodeStats:
         stats = EpisodeStats(
@@ -313,3 +318,38 @@ class Trainer:
     @property
     def remaining(self) -> int:
         return max(0, self.agent.hp.episodes - self.episodes)
+
+
+def continue_run(
+    current: Hyperparameters, wanted: Hyperparameters, episodes_done: int
+) -> tuple[Hyperparameters, str | None]:
+    """The hyperparameters to train on with, and what to tell the person, if anything.
+
+    Raising the episode budget of an agent that has trained continues its run:
+    the epsilon decay keeps its length in episodes (the decay fraction is scaled
+    down to match), so epsilon carries on from where it is instead of jumping
+    back up. When the decay fraction or the epsilons are changed too, they are
+    taken as asked; if that sends epsilon back up, the note says so plainly.
+    """
+    if episodes_done <= 0:
+        return wanted, None
+    hp, note = wanted, None
+    same_fraction = math.isclose(
+        wanted.epsilon_decay_fraction, current.epsilon_decay_fraction, rel_tol=1e-5, abs_tol=1e-9
+    )
+    if wanted.episodes > current.episodes and same_fraction:
+        decay_episodes = current.epsilon_decay_fraction * current.episodes
+        hp = wanted.replace(epsilon_decay_fraction=min(1.0, decay_episodes / wanted.episodes))
+        note = (
+            f"Budget raised to {wanted.episodes:,} episodes: the run goes on from episode "
+            f"{episodes_done:,} with epsilon on its schedule (decay fraction "
+            f"{hp.epsilon_decay_fraction:.4g}: the decay still ends at episode "
+            f"{decay_episodes:,.0f})."
+        )
+    before, after = current.epsilon_at(episodes_done), hp.epsilon_at(episodes_done)
+    if after > before + 1e-6:
+        note = (
+            f"Exploration restarts: with these settings epsilon goes back up from "
+            f"{before:.3g} to {after:.3g} at episode {episodes_done:,}."
+        )
+    return hp, note
