@@ -105,7 +105,8 @@ class _Request:
 class _Child:
     """One training process, with a thread that sends to it and one that listens."""
 
-    def __init__(self, inbox: collections.deque, wake: threading.Event) -> None:
+    def __init__(self, inbox: collections.deque[tuple[_Child, tuple]],
+                 wake: threading.Event) -> None:
         ctx = mp.get_context("spawn")
         self.conn, child_conn = ctx.Pipe()
         self.process = ctx.Process(
@@ -216,10 +217,10 @@ class ProcessRunner:
         self._numbers = 0
         self._last_sent_agent: Any = None  # to tell the child when the agent is a new one
         self._shown: tuple[Any, dict | None, StepEvent | None] = (None, None, None)
-        self._inbox: collections.deque = collections.deque()
+        self._inbox: collections.deque[tuple[_Child, tuple]] = collections.deque()
         self._heard = threading.Event()
         self._deaths: collections.deque[float] = collections.deque()
-        self._broken = False  # the child kept dying: no new one is started
+        self._broken = ""  # why no new child is started (it kept dying), or empty
         self._closed = False
         self._ended: _Child | None = None  # the child `close()` ended
         self._child: _Child | None = _Child(self._inbox, self._heard)
@@ -297,6 +298,7 @@ class ProcessRunner:
         (or no training process can run: `error` says why)."""
         self.update()
         if self._broken:
+            self._error = RuntimeError(self._broken)
             return False
         if self.session.trainer.remaining == 0 and self._pending is None:
             self._finished = True
@@ -333,7 +335,10 @@ class ProcessRunner:
     def run_one_episode(self) -> None:
         """Play one training episode in the child (ignored while running or busy)."""
         self.update()
-        if self._want_run or self._pending is not None or self._broken:
+        if self._broken:
+            self._error = RuntimeError(self._broken)
+            return
+        if self._want_run or self._pending is not None:
             return
         self._error = None
         self._want_one = True
@@ -448,15 +453,25 @@ class ProcessRunner:
         episodes = self.session.trainer.episodes
         kept = (f"the agent is kept as last handed back ({episodes:,} episodes)"
                 if was_training else "the agent is kept")
+        if request is not None and request.latest is not None and self._current(request):
+            lost = request.latest.episodes - episodes
+            if lost > 0:
+                kept += f"; the {lost:,} trained since are lost"
         if len(self._deaths) >= RESPAWN_LIMIT:
-            self._broken = True
-            self._error = RuntimeError(
+            self._broken = (
                 f"the training process {how}, {len(self._deaths)} times within "
                 f"{RESPAWN_WINDOW:g} s; {kept}, but training is off for this session "
                 "(save the agent, or restart tui-gym with --runner thread)"
             )
+            self._error = RuntimeError(self._broken)
             return
-        self._child = _Child(self._inbox, self._heard)
+        try:
+            self._child = _Child(self._inbox, self._heard)
+        except OSError as exc:
+            self._broken = (f"the training process {how}, and a new one could not start "
+                            f"({exc}); {kept}, but training is off for this session")
+            self._error = RuntimeError(self._broken)
+            return
         self._error = RuntimeError(
             f"the training process {how}; a new one is ready and {kept}"
         )

@@ -193,9 +193,12 @@ class TrainingRunner:
                     self._working = False
                     self._cond.notify_all()
             if delay:
-                # The pause that makes animated steps readable; any control ends it.
-                with self._cond:
-                    self._cond.wait_for(lambda seen=controls: self._controls != seen, delay)
+                self._pause_between_steps(controls, delay)
+
+    def _pause_between_steps(self, controls: int, delay: float) -> None:
+        """The pause that makes animated steps readable; any control ends it."""
+        with self._cond:
+            self._cond.wait_for(lambda: self._controls != controls, delay)
 
     def _piece(self) -> float | None:
         """One piece of work; returns how long to pause before the next one."""

@@ -13,11 +13,10 @@ threads; `latest` holds the most recent one, refreshed while `run` works.
 from __future__ import annotations
 
 import math
-import threading
 import time
 from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import gymnasium as gym
 import numpy as np
@@ -27,6 +26,12 @@ from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.stats import EpisodeStats, RollingWindow, Series
 
 SERIES_NAMES = ("return", "length", "td_error", "epsilon")
+
+
+class StopFlag(Protocol):
+    """What `Trainer.run` checks between pieces of work (a `threading.Event` will do)."""
+
+    def is_set(self) -> bool: ...
 
 
 @dataclass(frozen=True)
@@ -209,7 +214,7 @@ class Trainer:
         self,
         episodes: int | None = None,
         seconds: float | None = None,
-        stop: threading.Event | None = None,
+        stop: StopFlag | None = None,
         on_publish: Callable[[TrainingSnapshot], None] | None = None,
     ) -> int:
         """Run until `episodes` more episodes, `seconds` elapse, or `stop` is set.
@@ -321,7 +326,7 @@ class Trainer:
 
 
 def continue_run(
-    current: Hyperparameters, wanted: Hyperparameters, episodes_done: int
+    current: Hyperparameters | None, wanted: Hyperparameters, episodes_done: int
 ) -> tuple[Hyperparameters, str | None]:
     """The hyperparameters to train on with, and what to tell the person, if anything.
 
@@ -331,7 +336,7 @@ def continue_run(
     back up. When the decay fraction or the epsilons are changed too, they are
     taken as asked; if that sends epsilon back up, the note says so plainly.
     """
-    if episodes_done <= 0:
+    if current is None or episodes_done <= 0:
         return wanted, None
     hp, note = wanted, None
     same_fraction = math.isclose(

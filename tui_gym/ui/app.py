@@ -226,15 +226,16 @@ class TuiGymApp(App[int]):
             return
         if not self._apply_form():
             return
-        if not runner.start():
-            if runner.error is not None:  # no training process can run
-                error, runner.error = runner.error, None
-                self.notify(f"Cannot train: {error}", severity="error", timeout=10)
-                return
+        if runner.start():
+            return
+        if runner.finished:
             self.notify(
                 "The episode budget is used up: raise Episodes or reset the agent (x).",
                 severity="warning",
             )
+        else:  # no training process can run
+            error, runner.error = runner.error, None
+            self.notify(f"Cannot train: {error}", severity="error", timeout=10)
 
     def action_one_episode(self) -> None:
         if self.runner.running:
@@ -511,7 +512,7 @@ def run_standalone(app: TuiGymApp) -> int:
     threading.excepthook = thread_failed
     try:
         app.run()
-        error = app.crash
+        error = app.crash or app.thread_crash
         code = app.return_code or 0
     except Exception as exc:  # outside the app's own handling: the same treatment
         error, code = exc, EXIT_CRASH
