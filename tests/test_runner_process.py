@@ -37,17 +37,6 @@ def reaped(pid: int) -> bool:
     return not Path(f"/proc/{pid}").exists()
 
 
-def test_a_pause_hands_every_episode_back(blackjack_runner) -> None:
-    runner = blackjack_runner
-    assert runner.start()
-    assert wait_for(lambda: runner.latest.episodes > 2000, DEADLINE)
-    seen = runner.latest.episodes
-    assert runner.pause(wait=True)
-    assert not runner.running and not runner.busy
-    assert runner.session.trainer.episodes >= seen
-    assert runner.session.agent.episode == runner.session.trainer.episodes
-
-
 def test_a_stopped_child_is_replaced_and_the_agent_kept(blackjack_runner, monkeypatch) -> None:
     monkeypatch.setattr(process_runner, "HANG_SECONDS", 0.5)
     runner = blackjack_runner

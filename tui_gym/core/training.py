@@ -26,6 +26,7 @@ from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.stats import EpisodeStats, RollingWindow, Series
 
 SERIES_NAMES = ("return", "length", "td_error", "epsilon")
+ADVANCE_STEPS = 256  # steps after which `Trainer.run` checks the clock and its stop flag
 
 
 class StopFlag(Protocol):
@@ -247,10 +248,15 @@ class Trainer:
         return done
 
     def _advance(self, limit: int | None) -> int:
-        """A small piece of work between clock checks: a few episodes (at most `limit`)."""
+        """A small piece of work between clock checks: a few episodes (at most `limit`),
+        fewer once they add up to `ADVANCE_STEPS` steps, so a stop is seen within
+        milliseconds however long the episodes are."""
         count = 16 if limit is None else min(16, limit)
-        for _ in range(count):
+        first_step = self.steps
+        for done in range(1, count + 1):
             self.run_episode()
+            if self.steps - first_step >= ADVANCE_STEPS:
+                return done
         return count
 
     def publish(self, callback: Callable[[TrainingSnapshot], None] | None = None) -> None:
