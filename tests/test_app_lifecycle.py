@@ -75,6 +75,8 @@ async def test_the_real_app_outlives_the_first_firing_of_every_periodic_job() ->
             for timer in timers:  # a built-in here is what crashed the app at 20 s
                 if timer._callback is not None:
                     count_parameters(timer._callback)
+            for command in app.get_system_commands(app.screen):  # the palette's, likewise
+                count_parameters(command.callback)
             longest = max(t._interval for t in timers)
             assert longest <= 1.0, "every periodic job must fire within the test"
             pacer = app.gc_pacer
