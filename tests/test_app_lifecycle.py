@@ -4,7 +4,7 @@ Pilot tests run the real app with its real timers (the garbage collector's
 periods shortened so every periodic job fires within a second or two); the
 pseudo-terminal tests launch the installed `tui-gym` console script (or the
 same `run_standalone` path) as a person would, and read what reaches the
-terminal. Every wait polls a condition with a deadline; nothing sleeps.
+terminal. Every wait polls a condition with a deadline.
 """
 
 from __future__ import annotations
