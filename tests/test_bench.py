@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from rich.console import Console
 
+from tui_gym.algorithms import QLearning
 from tui_gym.bench import tutorial
 from tui_gym.bench.gap import GapResult, GapRun
 from tui_gym.bench.live import KeySample, LiveRepeat, LiveResult
@@ -22,7 +23,6 @@ from tui_gym.bench.startup import StartupResult
 from tui_gym.bench.throughput import ThroughputResult
 from tui_gym.cli import _clean, build_parser
 from tui_gym.commands import COMMANDS
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.reference.blackjack import DECISION_MASK, optimal_policy
 
 REQUIRED_KEYS = (
@@ -40,18 +40,18 @@ REQUIRED_KEYS = (
 
 # --- the tutorial baseline ------------------------------------------------------
 def test_the_tutorial_loop_learns() -> None:
-    agent = tutorial.make_agent(Hyperparameters(episodes=10_000), seed=0)
+    agent = tutorial.make_agent(QLearning.hyperparameters(episodes=10_000), seed=0)
     untrained = agent.gap()  # sticks everywhere: about 0.14 below the optimum
     tutorial.train_episodes(agent, 10_000)
     trained = agent.gap()
     assert agent.episode == 10_000
-    assert agent.epsilon == pytest.approx(Hyperparameters(episodes=10_000).epsilon_final)
+    assert agent.epsilon == pytest.approx(QLearning.hyperparameters(episodes=10_000).epsilon_final)
     # 10,000 episodes bring it to about 0.015-0.03 (seeds 0-5); half the start is a wide margin.
     assert 0 <= trained < untrained / 2
 
 
 def test_the_tutorial_gap_is_exact_for_the_optimal_policy() -> None:
-    agent = tutorial.make_agent(Hyperparameters(), seed=0)
+    agent = tutorial.make_agent(QLearning.hyperparameters(), seed=0)
     best = optimal_policy()
     for player, dealer, usable in zip(*np.nonzero(DECISION_MASK), strict=True):
         values = np.zeros(2)
@@ -61,7 +61,8 @@ def test_the_tutorial_gap_is_exact_for_the_optimal_policy() -> None:
 
 
 def test_a_capped_tutorial_run_says_it_did_not_reach_the_target() -> None:
-    run = tutorial.time_to_gap(1e-9, Hyperparameters(episodes=2_000), seed=0, check_every=1_000)
+    hp = QLearning.hyperparameters(episodes=2_000)
+    run = tutorial.time_to_gap(1e-9, hp, seed=0, check_every=1_000)
     assert not run.reached
     assert run.episodes == 2_000
     assert run.gap > 1e-9

@@ -17,10 +17,9 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tui_gym.algorithms import ALGORITHMS
+from tui_gym.algorithms import ALGORITHMS, ALL_PARAMS, QLearning
 from tui_gym.cli import CliError, _env_kwargs, build_parser
 from tui_gym.commands import HP_FLAGS, _hyperparameters
-from tui_gym.core.agent import HYPERPARAMETER_FIELDS, Hyperparameters
 from tui_gym.core.params import Param, ParamError
 from tui_gym.core.profiles import PROFILES
 from tui_gym.core.wrappers import CATALOG, parse_wrapper_spec
@@ -109,7 +108,6 @@ def all_params() -> list[Param]:
     """Every numeric or yes/no field a person or a file fills in, each once."""
     params = [p for spec in CATALOG.values() for p in spec.params]
     params += [p for profile in PROFILES for p in profile.env_params]
-    params += list(HYPERPARAMETER_FIELDS)
     params += [p for learner in ALGORITHMS for p in learner.params if isinstance(p, Param)]
     unique: dict[tuple[str, str], Param] = {}
     for param in params:
@@ -180,7 +178,7 @@ def test_the_app_fields_answer_every_value() -> None:
     from tui_gym.ui.widgets.hyperparameter_form import field_error
 
     texts = [t for t in inputs(SEED + 1, CASES) if isinstance(t, str)]
-    for field in HYPERPARAMETER_FIELDS:
+    for field in (p for p in ALL_PARAMS if isinstance(p, Param) and p.kind is not bool):
         for text in texts:
             problem = field_error(field, text)
             if problem is not None:
@@ -218,7 +216,7 @@ def test_wrapper_specs_answer_every_value() -> None:
 def test_the_command_line_answers_every_value(capsys: pytest.CaptureFixture[str]) -> None:
     rng = random.Random(SEED + 3)
     parser = build_parser()
-    base = Hyperparameters()
+    base = QLearning
     for _ in range(CASES // 2):
         text = nasty_text(rng).replace("\0", "")
         flag = rng.choice(["--episodes", "--learning-rate", "--discount", "--epsilon-start",
@@ -237,5 +235,5 @@ def test_the_command_line_answers_every_value(capsys: pytest.CaptureFixture[str]
                 _env_kwargs(args, "tui_gym/GridWorld-v0")
         except CliError as exc:
             check_one_line(str(exc), flag)
-    assert set(HP_FLAGS) == {f.name for f in HYPERPARAMETER_FIELDS}
+    assert set(HP_FLAGS) == {f.name for f in ALL_PARAMS}
     assert isinstance(parser, argparse.ArgumentParser)

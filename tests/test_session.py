@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 import tui_gym  # noqa: F401  (registers GridWorld)
-from tui_gym.core.agent import Hyperparameters
+from tui_gym.algorithms import QLearning
 from tui_gym.core.profiles import BlackjackProfile, GridWorldProfile
-from tui_gym.core.session import Session
+from tui_gym.core.session import Session, default_settings
 from tui_gym.core.wrappers import WrapperChoice
 
 W = WrapperChoice.make
@@ -38,7 +38,7 @@ def test_session_for_each_game_and_alias(
     assert isinstance(session.profile, profile)
     assert session.agent.n_actions == n_actions
     assert session.keyer.dense
-    assert session.hp == session.profile.default_hyperparameters()
+    assert session.hp == default_settings(session.profile, "q-learning")
     assert session.trainer.run(episodes=20) == 20
 
 
@@ -279,7 +279,7 @@ def test_short_gridworld_training_solves_the_grid() -> None:
 def test_set_hyperparameters_keeps_the_table() -> None:
     session = _trained(episodes=100)
     q = session.agent.q.copy()
-    session.set_hyperparameters(Hyperparameters(learning_rate=0.5, episodes=1000))
+    session.set_hyperparameters(QLearning.hyperparameters(learning_rate=0.5, episodes=1000))
     assert session.agent.hp.learning_rate == 0.5 and np.array_equal(session.agent.q, q)
     session.reset_agent()
     assert session.agent.states_seen == 0 and session.trainer.episodes == 0

@@ -6,7 +6,7 @@ import random
 
 from textual.widgets import Checkbox, ContentSwitcher, Input, RadioButton, Static
 
-from tui_gym.core.agent import Hyperparameters
+from tui_gym.algorithms import QLearning
 from tui_gym.core.session import Session
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.ui.app import TuiGymApp
@@ -203,7 +203,7 @@ async def test_random_keys_in_every_view_never_break_the_app():
     rng = random.Random(1234)
     for name in ("blackjack", "gridworld"):
         # A small budget: space may start training, which should end soon.
-        app = TuiGymApp(Session(name, hp=Hyperparameters(episodes=2_000), seed=0))
+        app = TuiGymApp(Session(name, hp=QLearning.hyperparameters(episodes=2_000), seed=0))
         async with app.run_test(size=(100, 30)) as pilot:
             for view in ("p", "t"):
                 await pilot.press("escape", view)

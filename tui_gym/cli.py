@@ -1,7 +1,7 @@
 """The `tui-gym` command: the app with no sub-command, and headless sub-commands.
 
 Every sub-command is a thin call into `tui_gym.core`: `envs`, `wrappers`,
-`train`, `eval`, `optimal`, `screenshots` and `bench` print rich tables or
+`algorithms`, `train`, `eval`, `optimal`, `screenshots` and `bench` print rich tables or
 lines (or one JSON object with `--json`); `play --jsonl` speaks JSON lines.
 Bad arguments, an unknown env or wrapper, or an unreadable file exit with
 code 2 and one clear line on stderr, never a traceback. Numbers are read as
@@ -26,7 +26,7 @@ from rich.console import Console
 from rich.table import Table
 
 from tui_gym import __version__
-from tui_gym.core.agent import HYPERPARAMETER_FIELDS
+from tui_gym.algorithms import ALGORITHMS, ALL_PARAMS, DEFAULT_ALGORITHM
 from tui_gym.core.params import read_number, shown_value
 
 EXIT_USAGE = 2
@@ -135,6 +135,7 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="examples:\n"
         "  tui-gym --env gridworld          open the app on GridWorld (? lists every key)\n"
         "  tui-gym train blackjack --save bj.tgym\n"
+        "  tui-gym train gridworld --algorithm sarsa\n"
         "  tui-gym eval bj.tgym --json\n"
         "  tui-gym optimal blackjack --sab\n"
         "  tui-gym play gridworld --jsonl   a program plays through JSON lines\n"
@@ -155,14 +156,25 @@ def build_parser() -> argparse.ArgumentParser:
     envs.add_argument("--json", action="store_true", help="print one JSON object")
     wrappers = sub.add_parser("wrappers", help="list the wrapper catalog and the --wrapper syntax")
     wrappers.add_argument("--json", action="store_true", help="print one JSON object")
+    algorithms = sub.add_parser("algorithms", help="list the learners and their parameters")
+    algorithms.add_argument("--json", action="store_true", help="print one JSON object")
+    names = ", ".join(cls.name for cls in ALGORITHMS)
 
-    train = sub.add_parser("train", help="train a Q-learning agent headless")
+    train = sub.add_parser("train", help="train an agent headless")
     train.add_argument("env", metavar="ENV", help="blackjack, gridworld or a Gymnasium id")
-    for field in HYPERPARAMETER_FIELDS:
+    train.add_argument(
+        "--algorithm", default=DEFAULT_ALGORITHM, metavar="NAME",
+        help=f"the learner: {names} (default {DEFAULT_ALGORITHM}; `tui-gym algorithms`)",
+    )
+    for field in ALL_PARAMS:
         # Read as text here and parsed by the field itself, so errors say "out of range".
+        kind = getattr(field, "kind", str)
+        metavar = {int: "N", float: "X", bool: "BOOL"}.get(kind, "WORD")
+        owners = [cls.name for cls in ALGORITHMS if field in cls.params]
+        only = "" if len(owners) == len(ALGORITHMS) else f"; {', '.join(owners)}"
         train.add_argument(
-            _flag(field.name), metavar="N" if field.kind is int else "X",
-            help=f"{field.help} ({field.describe_range()})",
+            _flag(field.name), metavar=metavar,
+            help=f"{field.help} ({field.describe_range()}{only})",
         )
     train.add_argument("--seed", type=_seed, default=0, dest="train_seed")
     train.add_argument("--size", metavar="N", help="GridWorld size (default 5)")
@@ -218,6 +230,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     bench = sub.add_parser("bench", help="measure speed, live training, memory and start-up")
     bench.add_argument("--quick", action="store_true", help="a shorter run (under a minute)")
+    bench.add_argument(
+        "--algorithm", metavar="NAME", default=None,
+        help=f"measure the per-algorithm figures for this learner only ({names}; default all)",
+    )
     bench.add_argument("--json", action="store_true", help="print one JSON object")
     return parser
 

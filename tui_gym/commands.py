@@ -23,9 +23,9 @@ from rich.progress import (
 )
 from rich.table import Table
 
+from tui_gym.algorithms import ALGORITHMS, ALL_PARAMS, COMMON_PARAMS, Field, Learner, algorithm
 from tui_gym.cli import CliError, _env_kwargs, key_value_table, print_json
 from tui_gym.core import evaluation
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.evaluation import EvalReport
 from tui_gym.core.params import Param, ParamError
 from tui_gym.core.profiles import PROFILES, profile_for, resolve_env_id
@@ -34,17 +34,19 @@ from tui_gym.core.session import Session
 WRAPPER_SYNTAX = "--wrapper NAME or --wrapper NAME:key=value,key=value, repeatable; " \
     "the first is innermost"
 
-HP_FLAGS = (
-    "learning_rate",
-    "discount",
-    "epsilon_start",
-    "epsilon_final",
-    "epsilon_decay_fraction",
-    "episodes",
-)
+HP_FLAGS = tuple(field.name for field in ALL_PARAMS)  # `train --learning-rate X`, ...
 
 
-def _param_dict(param: Param) -> dict[str, Any]:
+def _param_dict(param: Field) -> dict[str, Any]:
+    if not isinstance(param, Param):  # a Choice: one word out of a few
+        return {
+            "name": param.name,
+            "type": "choice",
+            "default": param.default,
+            "choices": list(param.choices),
+            "range": param.describe_range(),
+            "help": param.help,
+        }
     return {
         "name": param.name,
         "type": param.kind.__name__,
@@ -132,33 +134,67 @@ def _wrapper_table(catalog: dict[str, Any]) -> Table:
     return table
 
 
-def _hyperparameters(args: argparse.Namespace, base: Hyperparameters) -> Hyperparameters:
+def cmd_algorithms(args: argparse.Namespace, out: Console) -> int:
+    if args.json:
+        print_json({"algorithms": [
+            {
+                "name": cls.name,
+                "title": cls.title,
+                "summary": cls.summary,
+                "target": cls.formula,
+                "params": [_param_dict(field) for field in cls.params],
+            }
+            for cls in ALGORITHMS
+        ]})
+        return 0
+    table = Table(title="Algorithms", title_justify="left", show_lines=True)
+    table.add_column("name", style="bold cyan", no_wrap=True)
+    table.add_column("what it teaches", ratio=1, overflow="fold")
+    table.add_column("target", overflow="fold")
+    table.add_column("its own parameters (default, range)", overflow="fold")
+    common = {field.name for field in COMMON_PARAMS}
+    for cls in ALGORITHMS:
+        own = "\n".join(
+            f"{f.name}\n  ={f.default} {f.describe_range()}" for f in cls.params
+            if f.name not in common
+        ) or "-"
+        table.add_row(cls.name, escape(f"{cls.title}: {cls.summary}"), escape(cls.formula),
+                      escape(own))
+    out.print(table)
+    shared = ", ".join(field.name for field in COMMON_PARAMS)
+    out.print(f"Every algorithm also takes {shared}.", overflow="fold")
+    out.print("Use with [bold]tui-gym train ENV --algorithm NAME[/]; each game has its own "
+              "defaults per algorithm (see the README).")
+    return 0
+
+
+def _flag_name(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def _hyperparameters(args: argparse.Namespace, cls: type[Learner]) -> dict[str, Any]:
+    """The hyperparameter flags given, checked against the algorithm's schema."""
     changes: dict[str, Any] = {}
+    own = {field.name: field for field in cls.params}
     for name in HP_FLAGS:
         value = getattr(args, name, None)
-        if value is not None:
-            changes[name] = value
-    try:
-        return base.replace(**changes)
-    except ParamError as exc:
-        # Name the flag, not the field, so the user knows what to fix.
-        raise CliError(f"--{exc.param.name.replace('_', '-')} {exc.reason}") from None
-    except ValueError as exc:
-        text = str(exc)
-        for name in HP_FLAGS:
-            text = text.replace(name, "--" + name.replace("_", "-"))
-        raise CliError(text) from None
+        if value is None:
+            continue
+        field = own.get(name)
+        if field is None:
+            takers = ", ".join(c.name for c in ALGORITHMS if any(f.name == name for f in c.params))
+            raise CliError(f"{_flag_name(name)} applies to {takers}, not {cls.name}")
+        try:
+            changes[name] = field.parse(value)
+        except ParamError as exc:
+            # Name the flag, not the field, so the user knows what to fix.
+            raise CliError(f"{_flag_name(name)} {exc.reason}") from None
+        except ValueError as exc:
+            raise CliError(str(exc).replace(name, _flag_name(name), 1)) from None
+    return changes
 
 
 TARGET_GAP_BUDGET = 1_000_000  # episodes, when --target-gap is given without --episodes
-
-
-def _base_hyperparameters(args: argparse.Namespace, env_id: str) -> Hyperparameters:
-    hp = profile_for(env_id).default_hyperparameters()
-    if getattr(args, "target_gap", None) is not None and args.episodes is None:
-        # A longer budget decays epsilon more slowly; the run stops at the target anyway.
-        hp = hp.replace(episodes=TARGET_GAP_BUDGET)
-    return hp
 
 
 def _session_from_args(args: argparse.Namespace) -> Session:
@@ -166,14 +202,29 @@ def _session_from_args(args: argparse.Namespace) -> Session:
 
     env_id = resolve_env_id(args.env)
     choices = tuple(parse_wrapper_spec(text) for text in args.wrapper)
-    session = Session(
-        env_id=env_id,
-        env_kwargs=_env_kwargs(args, env_id),
-        choices=choices,
-        hp=_hyperparameters(args, _base_hyperparameters(args, env_id)),
-        seed=args.train_seed,
-        engine=args.engine,
-    )
+    try:
+        cls = algorithm(args.algorithm)
+    except ValueError as exc:
+        raise CliError(f"--algorithm: {exc}") from None
+    hp = _hyperparameters(args, cls)
+    if getattr(args, "target_gap", None) is not None and "episodes" not in hp:
+        # A longer budget decays epsilon more slowly; the run stops at the target anyway.
+        hp["episodes"] = TARGET_GAP_BUDGET
+    try:
+        session = Session(
+            env_id=env_id,
+            env_kwargs=_env_kwargs(args, env_id),
+            choices=choices,
+            hp=hp,
+            seed=args.train_seed,
+            engine=args.engine,
+            algorithm=cls.name,
+        )
+    except ValueError as exc:
+        text = str(exc)
+        for name in hp:  # e.g. epsilon_final above epsilon_start: say it with the flags
+            text = text.replace(name, _flag_name(name))
+        raise CliError(text) from None
     if session.skipped:
         reasons = "; ".join(reason for _, reason in session.skipped)
         raise CliError(f"wrapper does not fit {env_id}: {reasons}")
@@ -182,7 +233,9 @@ def _session_from_args(args: argparse.Namespace) -> Session:
 
 def eval_dict(session: Session, report: EvalReport) -> dict[str, Any]:
     """The JSON object `eval --json` prints (and `train --json` nests)."""
-    data: dict[str, Any] = {"env_id": session.env_id, **report.to_dict()}
+    data: dict[str, Any] = {
+        "env_id": session.env_id, "algorithm": session.algorithm, **report.to_dict()
+    }
     ref = session.reference()
     if ref is not None:
         data.update(ref.figures)
@@ -278,6 +331,7 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
     data = {
         "env_id": session.env_id,
         "env_kwargs": session.env_kwargs,
+        "algorithm": session.algorithm,
         "wrappers": _wrapper_dicts(session),
         "engine": trainer.engine,
         "engine_reason": session.engine_reason,
@@ -298,6 +352,7 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
         return 0
     rows = [
         ("env", f"{session.env_id} {session.env_kwargs or ''}".strip()),
+        ("algorithm", session.learner_class.title),
         ("wrappers", session.chain_repr()),
         ("engine", session.engine_reason),
         ("episodes", f"{trainer.episodes:,}"),
@@ -324,7 +379,8 @@ def cmd_eval(args: argparse.Namespace, out: Console) -> int:
     if args.json:
         print_json(data)
         return 0
-    rows = [("file", args.path), ("env", session.env_id), ("wrappers", session.chain_repr())]
+    rows = [("file", args.path), ("env", session.env_id),
+            ("algorithm", session.learner_class.title), ("wrappers", session.chain_repr())]
     rows += _eval_rows(data)
     out.print(key_value_table("Evaluation", rows))
     return 0
@@ -454,6 +510,7 @@ def cmd_bench(args: argparse.Namespace, out: Console) -> int:
 COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {
     "envs": cmd_envs,
     "wrappers": cmd_wrappers,
+    "algorithms": cmd_algorithms,
     "train": cmd_train,
     "eval": cmd_eval,
     "optimal": cmd_optimal,

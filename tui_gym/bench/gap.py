@@ -23,12 +23,12 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from tui_gym.algorithms import Settings
 from tui_gym.bench import tutorial
 from tui_gym.bench.figures import median
 from tui_gym.commands import TARGET_GAP_BUDGET
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.profiles import profile_for
-from tui_gym.core.session import Session
+from tui_gym.core.session import Session, default_settings
 
 TARGET_GAP = 0.002
 ENV_ID = "Blackjack-v1"
@@ -78,9 +78,11 @@ class GapResult:
         return self.tutorial_time_to_gap_s / ours
 
 
-def default_hyperparameters() -> Hyperparameters:
+def default_hyperparameters() -> Settings:
     """The hyperparameters `tui-gym train blackjack --target-gap G` uses."""
-    return profile_for(ENV_ID).default_hyperparameters().replace(episodes=TARGET_GAP_BUDGET)
+    return default_settings(profile_for(ENV_ID), "q-learning").replace(
+        episodes=TARGET_GAP_BUDGET
+    )
 
 
 def ours_once(seed: int, target: float = TARGET_GAP) -> GapRun:

@@ -16,9 +16,9 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
+from tui_gym.algorithms import QLearning
 from tui_gym.bench import tutorial
 from tui_gym.bench.figures import median, ratio
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.session import Session
 
 WINDOW_BUDGET = 1_000_000_000  # episodes: never reached in a window, so epsilon barely moves
@@ -46,7 +46,7 @@ class ThroughputResult:
 
 def engine_rate(engine: str, seconds: float, seed: int = 0) -> float:
     """Episodes per second of a fresh Blackjack session on `engine` ("scalar" or "vector")."""
-    hp = Hyperparameters(episodes=WINDOW_BUDGET)
+    hp = QLearning.hyperparameters(episodes=WINDOW_BUDGET)
     session = Session("Blackjack-v1", hp=hp, seed=seed, engine=engine)
     trainer = session.trainer
     trainer.run(seconds=WARMUP_SECONDS)
@@ -59,7 +59,7 @@ def engine_rate(engine: str, seconds: float, seed: int = 0) -> float:
 
 def measure(seconds: float, repeats: int) -> ThroughputResult:
     """Interleaved repeats of the tutorial loop and both engines; medians."""
-    hp = Hyperparameters(episodes=WINDOW_BUDGET)
+    hp = QLearning.hyperparameters(episodes=WINDOW_BUDGET)
     rates: dict[str, list[float]] = {"tutorial": [], "scalar": [], "vector": []}
     for seed in range(repeats):
         rates["tutorial"].append(tutorial.episodes_per_second(seconds, hp, seed=seed))

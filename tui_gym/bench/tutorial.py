@@ -6,7 +6,7 @@ written the tutorial's way: one `gym.make("Blackjack-v1")`, a
 tuple, epsilon-greedy with `env.action_space.sample()` and `np.argmax`, one
 Python-level update per step. Only the hyperparameters are ours, so that the
 comparison is about speed, not about settings: the same ones as the default
-Blackjack agent (`Hyperparameters()`: discount 1, the "visits" step size
+Blackjack agent (`QLearning.hyperparameters()`: discount 1, the "visits" step size
 `max(lr, 1/n(s, a))`, epsilon from 1.0 to 0.05 linearly over the first half of
 the budget).
 
@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import gymnasium as gym
 import numpy as np
 
-from tui_gym.core.agent import Hyperparameters
+from tui_gym.algorithms import QLearning, Settings
 from tui_gym.core.reference.blackjack import (
     POLICY_SHAPE,
     BlackjackRules,
@@ -43,7 +43,7 @@ GAP_CHECK_EVERY = 10_000  # episodes between exact gap checks (as `Session.train
 class TutorialAgent:
     """The tutorial's `BlackjackAgent`, with our default schedules (see the module docstring)."""
 
-    def __init__(self, env: gym.Env, hp: Hyperparameters, seed: int = 0) -> None:
+    def __init__(self, env: gym.Env, hp: Settings, seed: int = 0) -> None:
         self.env = env
         self.hp = hp
         self.n_actions = int(env.action_space.n)
@@ -108,14 +108,14 @@ def train_episodes(agent: TutorialAgent, episodes: int) -> None:
         agent.decay_epsilon()
 
 
-def make_agent(hp: Hyperparameters | None = None, seed: int = 0) -> TutorialAgent:
+def make_agent(hp: Settings | None = None, seed: int = 0) -> TutorialAgent:
     """A fresh tutorial agent on a fresh `gym.make("Blackjack-v1")`, seeded."""
     env = gym.make("Blackjack-v1")
     env.reset(seed=seed)
-    return TutorialAgent(env, hp or Hyperparameters(), seed=seed)
+    return TutorialAgent(env, hp or QLearning.hyperparameters(), seed=seed)
 
 
-def episodes_per_second(seconds: float, hp: Hyperparameters | None = None, seed: int = 0) -> float:
+def episodes_per_second(seconds: float, hp: Settings | None = None, seed: int = 0) -> float:
     """Train a fresh agent for about `seconds`; its episodes per second."""
     agent = make_agent(hp, seed)
     done = 0
@@ -142,7 +142,7 @@ class GapRun:
 
 def time_to_gap(
     target: float,
-    hp: Hyperparameters,
+    hp: Settings,
     seed: int = 0,
     cap_seconds: float | None = None,
     check_every: int = GAP_CHECK_EVERY,

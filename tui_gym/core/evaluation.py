@@ -22,7 +22,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from tui_gym.core.agent import QAgent
+from tui_gym.algorithms import Learner
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.profiles.base import GameProfile
 
@@ -58,7 +58,7 @@ class EvalReport:
 
 def evaluate(
     env: gym.Env,
-    agent: QAgent,
+    agent: Learner,
     keyer: ObservationKeyer,
     profile: GameProfile,
     episodes: int,

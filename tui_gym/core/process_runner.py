@@ -6,8 +6,8 @@ finished, update, close), but the training runs in a separate process, so the
 trainer and the event loop never compete for one interpreter lock.
 
 Ownership: while paused, the parent's `Session` is the truth. A start (or
-one episode) hands the child the session's spec (game, wrappers, seed,
-hyperparameters), its agent and its trainer's progress; while the child
+one episode) hands the child the session's spec (game, wrappers, seed, engine, algorithm),
+its hyperparameters, its agent (the learner, pickled) and its trainer's progress; while the child
 trains it streams snapshots back; a pause asks for the agent back. Every
 request has a number, and what comes back lands in the agent object the
 request was made from: after a reset (a new agent) or a game switch, a late
@@ -62,6 +62,7 @@ class SessionSpec:
     choices: tuple[Any, ...]
     seed: int
     engine: str
+    algorithm: str
 
     @classmethod
     def of(cls, session: Session) -> SessionSpec:
@@ -71,6 +72,7 @@ class SessionSpec:
             tuple(session.choices),
             session.seed,
             getattr(session, "engine", "auto"),
+            session.algorithm,
         )
 
 
@@ -79,8 +81,8 @@ class Handover:
     """Everything that moves between the processes at a start or a pause."""
 
     spec: SessionSpec
-    hp: Any  # Hyperparameters
-    agent: Any  # QAgent
+    hp: Any  # the algorithm's Settings
+    agent: Any  # the learner (any tui_gym.algorithms.Learner)
     progress: TrainerProgress
     engine: str = ""  # the engine that trained last ("scalar" while animating)
 
@@ -553,7 +555,8 @@ def child_main(conn: Connection) -> None:
                 runner.close()
             s = handover.spec
             session = Session(env_id=s.env_id, env_kwargs=s.env_kwargs, choices=s.choices,
-                              hp=handover.hp, seed=s.seed, engine=s.engine)
+                              hp=handover.hp, seed=s.seed, engine=s.engine,
+                              algorithm=s.algorithm)
             spec = handover.spec
             runner = TrainingRunner(session)
         session.hp = handover.hp

@@ -1,11 +1,13 @@
-"""The session: one env, a choice of wrappers, one agent and its trainer.
+"""The session: one env, a choice of wrappers, one learner (the agent) and its trainer.
 
 `Session` is the object every front end drives (the Textual app, the CLI,
 tests, the JSON-lines protocol). It builds the env through the wrapper
-catalog, keeps the agent when a rebuild leaves the observation keys meaning
-the same thing (and says so when it cannot), projects the Q-table onto the
-game's base states for heatmaps and the exact reference, evaluates, saves and
-loads.
+catalog and the learner from the `ALGORITHMS` registry, with the game's
+defaults for that algorithm; it keeps the agent when a rebuild leaves the
+observation keys meaning the same thing (and says so when it cannot),
+changes hyperparameters live (only a change of algorithm needs a fresh
+learner), projects the learner's values onto the game's base states for
+heatmaps and the exact reference, evaluates, saves and loads.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from tui_gym.core.agent import Hyperparameters, QAgent
+from tui_gym.algorithms import DEFAULT_ALGORITHM, Learner, Settings, algorithm
 from tui_gym.core.evaluation import EvalReport, evaluate
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.obskey import ObservationKeyer
@@ -82,23 +84,39 @@ def _build(env_id: str, env_kwargs: Mapping[str, Any], choices: Sequence[Wrapper
     return _Built(env, applied, tuple(skipped), keyer, int(env.action_space.n), meaning)
 
 
+def default_settings(profile: GameProfile, name: str) -> Settings:
+    """The hyperparameters algorithm `name` starts with on a game: its own defaults with
+    the game's overrides for it (those of its parameters the game sets)."""
+    cls = algorithm(name)
+    fields = {f.name for f in cls.params}
+    overrides = profile.default_hyperparameters(cls.name)
+    return cls.settings({k: v for k, v in overrides.items() if k in fields})
+
+
 @dataclass
 class Session:
-    """One game with its wrappers, agent and trainer; what every front end drives."""
+    """One game with its wrappers, learner and trainer; what every front end drives.
+
+    `hp` is a mapping of hyperparameters over the game's defaults for the
+    algorithm (None: those defaults); `Settings` of another algorithm's
+    schema give the values the two schemas share.
+    """
 
     env_id: str = "Blackjack-v1"
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     choices: tuple[WrapperChoice, ...] = ()
-    hp: Hyperparameters | None = None  # None: the game's own defaults
+    hp: Settings | Mapping[str, Any] | None = None  # None: the game's own defaults
     seed: int = 0
     engine: str = "auto"  # "auto" (vector when the wrappers allow), "scalar" or "vector"
+    algorithm: str = DEFAULT_ALGORITHM  # a name in the ALGORITHMS registry
 
     def __post_init__(self) -> None:
         self.env_id = resolve_env_id(self.env_id)
         self.profile: GameProfile = profile_for(self.env_id)
         self.env_kwargs = self.profile.normalize_kwargs(self.env_kwargs)
-        if self.hp is None:
-            self.hp = self.profile.default_hyperparameters()
+        self.learner_class: type[Learner] = algorithm(self.algorithm)
+        self.algorithm = self.learner_class.name
+        self.hp = self._settings(self.hp)
         self.choices = tuple(self.choices)
         if self.engine not in ENGINES:
             raise ValueError(f"engine must be one of {', '.join(ENGINES)}, got {self.engine!r}")
@@ -114,8 +132,20 @@ class Session:
         self.changes = GameChanges.of(built.env)  # what the exact figures must take into account
         self._base_keys: list[Hashable] | None | bool = False  # False: not computed yet
 
-    def _new_agent(self) -> QAgent:
-        return QAgent(self._built.n_actions, self.hp, n_states=self.keyer.n_states, seed=self.seed)
+    def _settings(self, hp: Settings | Mapping[str, Any] | None) -> Settings:
+        """`hp` as this algorithm's settings over the game's defaults (see the class)."""
+        base = default_settings(self.profile, self.algorithm)
+        if hp is None:
+            return base
+        values = dict(hp)
+        if isinstance(hp, Settings) and hp.schema != self.learner_class.params:
+            values = {k: v for k, v in values.items() if k in base}
+        return base.replace(**values)
+
+    def _new_agent(self) -> Learner:
+        return self.learner_class(
+            self._built.n_actions, self.hp, n_states=self.keyer.n_states, seed=self.seed
+        )
 
     def _new_trainer(self) -> Trainer:
         """The trainer for the chosen engine; `engine_reason` says which and why."""
@@ -191,7 +221,7 @@ class Session:
         built = _build(new_id, kwargs, new_choices)
         if profile is not self.profile:
             # Each game learns with its own defaults (GridWorld needs discounting).
-            self.hp = profile.default_hyperparameters()
+            self.hp = default_settings(profile, self.algorithm)
         keep = built.meaning == self._built.meaning and built.n_actions == self._built.n_actions
         old_trainer = self.trainer
         self.env.close()
@@ -221,10 +251,26 @@ class Session:
         self.agent = self._new_agent()
         self.trainer = self._new_trainer()
 
-    def set_hyperparameters(self, hp: Hyperparameters) -> None:
-        """New hyperparameters for the rest of the run (the table is kept)."""
-        self.hp = hp
-        self.agent.set_hyperparameters(hp)
+    def set_hyperparameters(self, hp: Settings | Mapping[str, Any]) -> None:
+        """New hyperparameters for the rest of the run, taking effect at once (the
+        learner and its tables are kept). A mapping may name some values only: the
+        others stay as they are. ValueError, changing nothing, for a bad value."""
+        current = self.hp
+        assert current is not None  # set when the session is built
+        settings = hp if isinstance(hp, Settings) and hp.schema == current.schema else (
+            current.replace(**dict(hp))
+        )
+        self.agent.set_hyperparameters(settings)
+        self.hp = settings
+
+    def set_algorithm(self, name: str) -> None:
+        """Train with another algorithm: a fresh learner with the game's defaults for it,
+        and fresh statistics (nothing of the old learner carries over). ValueError for
+        an unknown name, changing nothing."""
+        cls = algorithm(name)
+        self.learner_class, self.algorithm = cls, cls.name
+        self.hp = default_settings(self.profile, cls.name)
+        self.reset_agent()
 
     # --- seeing the table -------------------------------------------------
     def base_keys(self) -> list[Hashable] | None:

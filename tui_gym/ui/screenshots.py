@@ -14,7 +14,7 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from tui_gym.core.agent import Hyperparameters
+from tui_gym.algorithms import QLearning
 from tui_gym.core.session import Session
 from tui_gym.core.wrappers import WrapperChoice
 
@@ -87,7 +87,7 @@ SCENARIOS: tuple[Scenario, ...] = (
     Scenario("blackjack-train.svg", "Blackjack: Q-learning mid-run",
              lambda: Session("blackjack", seed=0), _blackjack_train),
     Scenario("gridworld-train.svg", "GridWorld: Q-learning mid-run",
-             lambda: Session("gridworld", hp=Hyperparameters(
+             lambda: Session("gridworld", hp=QLearning.hyperparameters(
                  discount=0.95, learning_rate=0.1, episodes=20_000), seed=0),
              _gridworld_train),
     Scenario("wrappers.svg", "The wrapper panel in use",

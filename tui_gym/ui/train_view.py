@@ -25,7 +25,7 @@ from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widget import Widget
 from textual.widgets import Button, Label
 
-from tui_gym.core.agent import Hyperparameters
+from tui_gym.algorithms import Settings
 from tui_gym.core.training import TrainingSnapshot, continue_run
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
@@ -278,7 +278,7 @@ class TrainView(VerticalScroll):
         self.stats.show_speed(name)
         self._show_board(self.runner)
 
-    def read_hyperparameters(self) -> Hyperparameters | None:
+    def read_hyperparameters(self) -> Settings | None:
         """The hyperparameters in the form, or None (with the bad fields marked and shown)."""
         hp = self.form.read()
         if hp is None:

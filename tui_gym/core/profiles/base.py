@@ -11,11 +11,10 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
 
 import numpy as np
 
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.params import Param
 from tui_gym.core.reference.changes import NO_CHANGES, GameChanges
@@ -89,6 +88,9 @@ class GameProfile(ABC):
     other_ids: tuple[str, ...] = ()  # further ids of the same game
     action_names: tuple[str, ...] = ()
     description: str = ""
+    # Hyperparameters that learn this game well, over each algorithm's own defaults:
+    # "*" for every algorithm, then an algorithm's registry name for its own (see the README).
+    hyperparameters: ClassVar[Mapping[str, Mapping[str, Any]]] = {}
 
     def matches(self, env_id: str) -> bool:
         return env_id in (self.env_id, *self.other_ids)
@@ -97,9 +99,11 @@ class GameProfile(ABC):
         """Env arguments the game starts with."""
         return {p.name: p.default for p in self.env_params}
 
-    def default_hyperparameters(self) -> Hyperparameters:
-        """Hyperparameters that learn this game well (see the README)."""
-        return Hyperparameters()
+    def default_hyperparameters(self, algorithm: str) -> dict[str, Any]:
+        """The values this game sets for an algorithm (by registry name), over the
+        algorithm's own defaults; parameters the algorithm lacks are left to the caller."""
+        table = self.hyperparameters
+        return {**table.get("*", {}), **table.get(algorithm, {})}
 
     def normalize_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         """Check and complete env arguments; ValueError with a clear message when wrong."""

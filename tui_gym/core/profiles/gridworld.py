@@ -22,7 +22,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.params import Param
 from tui_gym.core.profiles.base import (
@@ -76,12 +75,12 @@ class GridWorldProfile(GameProfile):
     action_names = ("right", "up", "left", "down")
     description = "Reach the target on a square grid; the tutorial's custom environment."
 
-    def default_hyperparameters(self) -> Hyperparameters:
-        # Reward only at the target: without discounting every path is worth 1
-        # and the greedy policy would have no reason to take the shortest one.
-        return Hyperparameters(
-            discount=0.95, learning_rate=0.1, episodes=20_000, epsilon_decay_fraction=0.5
-        )
+    # Reward only at the target: without discounting every path is worth 1
+    # and the greedy policy would have no reason to take the shortest one.
+    hyperparameters = {
+        "*": {"discount": 0.95, "learning_rate": 0.1, "episodes": 20_000,
+              "epsilon_decay_fraction": 0.5},
+    }
 
     def base_observations(self, env_kwargs: Mapping[str, Any]) -> list[Any]:
         size = int(env_kwargs.get("size", 5))

@@ -1,12 +1,12 @@
-"""The vector engine: many games stepped at once with numpy, Q-learning in batches.
+"""The vector engine: many games stepped at once with numpy, any learner in batches.
 
 - `blackjack.BatchedBlackjack`, `gridworld.BatchedGridWorld`: the games'
   rules on arrays of states, any subset stepped in one call;
 - `plan.plan_for_env`: reads a built env's wrappers as a `VectorPlan`
   (game, time limit, reward transforms) or says why it has no batched form;
-- `trainer.VectorTrainer`: a drop-in for `Trainer` (engine "vector") that
-  trains the same `QAgent`; `make_vector_trainer` builds one from a game id
-  and wrapper choices;
+- `trainer.VectorTrainer`: an engine beside the scalar `Trainer` (engine
+  "vector") that trains the same learner; `make_vector_trainer` builds one
+  from a game id and wrapper choices;
 - `vector_support(env_id, env_kwargs, choices)`: whether the vector engine
   can run a game with those wrappers, and a sentence saying so.
 
@@ -31,7 +31,6 @@ from tui_gym.core.vector.plan import NoBatchedForm, VectorPlan, plan_for_env
 from tui_gym.core.vector.trainer import (
     DEFAULT_NUM_ENVS,
     VectorTrainer,
-    batched_q_update,
     make_vector_trainer,
 )
 from tui_gym.core.wrappers import WrapperChoice, build_env_lenient
@@ -44,7 +43,6 @@ __all__ = [
     "NoBatchedForm",
     "VectorPlan",
     "VectorTrainer",
-    "batched_q_update",
     "make_vector_trainer",
     "plan_for_env",
     "vector_support",
