@@ -180,3 +180,49 @@ def test_the_parser_accepts_bench_quick_json() -> None:
     args = build_parser().parse_args(["bench"])
     assert (args.quick, args.json) == (False, False)
     assert "bench" in COMMANDS
+
+
+# --- per-algorithm figures ----------------------------------------------------------
+
+
+def test_every_algorithm_has_a_tutorial_loop_that_learns() -> None:
+    import gymnasium as gym
+
+    from tui_gym.algorithms import ALGORITHMS
+    from tui_gym.bench.tutorial_learners import TutorialLearner
+
+    for cls in ALGORITHMS:
+        env = gym.make("Blackjack-v1")
+        env.reset(seed=0)
+        hp = cls.settings({"episodes": 200})
+        learner = TutorialLearner(env, cls.name, hp, seed=0)
+        for _ in range(200):
+            learner.train_episode()
+        assert learner.episode == 200 and learner.epsilon == hp.epsilon_final
+        assert any(v.any() for v in learner.q.values()), cls.name  # it updated its table
+        env.close()
+
+
+def test_the_algorithm_figures_have_targets_and_verdicts() -> None:
+    from dataclasses import replace
+
+    from tui_gym.bench.learners import AlgorithmSpeed, PlanningResult, PlanningRun
+
+    speeds = (AlgorithmSpeed("blackjack", "sarsa", 1_000_000.0, 10_000.0, 3),
+              AlgorithmSpeed("gridworld", "dyna-q", 8_000.0, 200.0, 3))
+    planning = PlanningResult(
+        "gridworld", "share of pairs", 0.02,
+        (PlanningRun("q-learning", 0, 3_000, True),),
+        (PlanningRun("dyna-q", 0, 500, True),),
+    )
+    results = replace(fake_results(), algorithms=speeds, planning=planning)
+    verdict = verdicts(results)
+    assert verdict["algorithm_speedup[blackjack/sarsa]"] == PASS
+    assert verdict["algorithm_speedup[gridworld/dyna-q]"] == MISS  # 40x
+    assert verdict["planning"] == PASS
+    data = to_json(results)
+    assert data["algorithms"][0]["speedup"] == pytest.approx(100.0)
+    assert (data["planning"]["q_learning_episodes"], data["planning"]["dyna_q_episodes"]) == (
+        3_000, 500)
+    text = rendered(results)
+    assert "sarsa on blackjack" in text and "3,000 / 500" in text and "≥ 50×" in text

@@ -490,8 +490,14 @@ def cmd_bench(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.bench.report import notes, table, to_json
     from tui_gym.bench.run import run_bench
 
+    names = None
+    if args.algorithm is not None:
+        try:
+            names = (algorithm(args.algorithm).name,)
+        except ValueError as exc:
+            raise CliError(f"--algorithm: {exc}") from None
     if args.json:
-        print_json(to_json(run_bench(quick=args.quick)))
+        print_json(to_json(run_bench(quick=args.quick, algorithms=names)))
         return 0
     # Plain lines, not a spinner: a spinner's refresh thread would share the GIL
     # with the thread runner being measured.
@@ -500,6 +506,7 @@ def cmd_bench(args: argparse.Namespace, out: Console) -> int:
     results = run_bench(
         quick=args.quick,
         progress=lambda text: err.print(f"[dim]{time.perf_counter() - started:5.1f} s[/] {text}"),
+        algorithms=names,
     )
     out.print(table(results))
     for line in notes(results):

@@ -6,7 +6,11 @@ Targets (issue #4):
 - the UI draws snapshots at >= 10 Hz;
 - key press to screen update p95 <= 50 ms while training at max speed;
 - RSS growth < 20 MB over 2,000,000 training episodes;
-- app start to first frame <= 1.0 s.
+- app start to first frame <= 1.0 s;
+- every algorithm on the vector engine >= 50x the episodes/s of a tutorial
+  loop of the same algorithm on the same env (Blackjack and a grid game);
+- Dyna-Q (planning_steps = 10) reaches the bound on a grid game in fewer
+  real episodes than Q-learning.
 
 A verdict is PASS or MISS; "?" when a lower bound cannot decide it, "n/a"
 when the figure is missing (its stage failed: see `errors`).
@@ -29,6 +33,7 @@ KEY_P95_MS_TARGET = 50.0
 RSS_GROWTH_MB_TARGET = 20.0
 RSS_EPISODES_TARGET = 2_000_000
 STARTUP_S_TARGET = 1.0
+ALGORITHM_SPEEDUP_TARGET = 50.0
 
 PASS, MISS, UNDECIDED, MISSING = "PASS", "MISS", "?", "n/a"
 
@@ -70,6 +75,19 @@ def verdicts(results: BenchResults) -> dict[str, str]:
     startup = results.startup
     seconds = startup.seconds if startup is not None else None
     out["startup_s"] = _ok(seconds, seconds is not None and seconds <= STARTUP_S_TARGET)
+    for speed in results.algorithms or ():
+        up = speed.speedup
+        out[f"algorithm_speedup[{speed.game}/{speed.algorithm}]"] = _ok(
+            up, up is not None and up >= ALGORITHM_SPEEDUP_TARGET
+        )
+    if "algorithms" in results.errors:
+        out["algorithm_speedup"] = MISSING
+    planning = results.planning
+    if planning is None:
+        out["planning"] = MISSING
+    else:
+        fewer = planning.dyna_q_episodes < planning.q_learning_episodes
+        out["planning"] = PASS if fewer and all(r.reached for r in planning.dyna_q) else MISS
     return out
 
 
@@ -92,6 +110,23 @@ def _runner_dict(results: BenchResults, runner: str) -> dict[str, Any]:
         "repeats": len(live.repeats),
         "window_s": live.seconds,
         "ratios": [r.ratio for r in live.repeats],
+    }
+
+
+def _planning_dict(results: BenchResults) -> dict[str, Any] | None:
+    planning = results.planning
+    if planning is None:
+        return None
+    return {
+        "game": planning.game,
+        "measure": planning.measure,
+        "bound": planning.bound,
+        "q_learning_episodes": planning.q_learning_episodes,
+        "dyna_q_episodes": planning.dyna_q_episodes,
+        "q_learning_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
+                            for r in planning.q_learning],
+        "dyna_q_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
+                        for r in planning.dyna_q],
     }
 
 
@@ -146,6 +181,14 @@ def to_json(results: BenchResults) -> dict[str, Any]:
         ),
         "startup_s": startup.seconds if startup else None,
         "startup_samples_s": list(startup.samples) if startup else None,
+        "algorithms": [
+            {"game": a.game, "algorithm": a.algorithm,
+             "vector_episodes_per_second": a.vector,
+             "tutorial_episodes_per_second": a.tutorial, "speedup": a.speedup,
+             "repeats": a.repeats}
+            for a in results.algorithms or ()
+        ],
+        "planning": _planning_dict(results),
         "verdicts": verdicts(results),
         "errors": dict(results.errors),
     }
@@ -232,9 +275,30 @@ def table(results: BenchResults) -> Table:
         samples = ", ".join(f"{s:.2f}" for s in results.startup.samples)
         row("start to first frame", f"{results.startup.seconds:.2f} s ({samples})",
             f"≤ {STARTUP_S_TARGET:g} s", "startup_s")
+    for speed in results.algorithms or ():
+        key = f"algorithm_speedup[{speed.game}/{speed.algorithm}]"
+        row(f"{speed.algorithm} on {speed.game}: vector ÷ tutorial loop",
+            f"{_num(speed.speedup, '.0f', '×')} ({_num(speed.vector, ',.0f')} / "
+            f"{_num(speed.tutorial, ',.0f')} ep/s)",
+            f"≥ {ALGORITHM_SPEEDUP_TARGET:g}×", key)
+    planning = results.planning
+    if planning is not None:
+        def runs(items: tuple) -> str:
+            return _num(median_of(items), ",.0f") + ("" if all(r.reached for r in items)
+                                                       else " (not all reached)")
+        row(f"real episodes to ≤ {planning.bound:g} on {planning.game}: Q-learning / Dyna-Q",
+            f"{runs(planning.q_learning)} / {runs(planning.dyna_q)}",
+            "Dyna-Q fewer", "planning")
     for stage, error in results.errors.items():
         out.add_row(f"{stage} failed", f"[red]{error}[/]", "", _STYLE[MISSING])
     return out
+
+
+def median_of(runs: tuple) -> float:
+    """The median episode count of planning runs."""
+    from tui_gym.bench.figures import median
+
+    return median([r.episodes for r in runs])
 
 
 def notes(results: BenchResults) -> list[str]:
@@ -252,6 +316,11 @@ def notes(results: BenchResults) -> list[str]:
             f"The app trains with the {results.default_runner} runner; the others are measured "
             "for comparison (a thread runner shares one interpreter lock with the UI, so the UI's "
             "drawing comes out of training time)."
+        )
+    if results.planning is not None:
+        lines.append(
+            f"Planning: the bound is on the {results.planning.measure}; episodes are real "
+            "ones (Dyna-Q's simulated updates are not counted), medians over seeds."
         )
     gap = results.gap
     if gap is not None and not gap.tutorial_reached:

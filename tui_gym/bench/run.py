@@ -1,7 +1,9 @@
 """One bench run: every stage in turn, with the sizes of the quick or the full plan.
 
-`run_bench(quick, progress)` measures throughput, time to the target gap,
-live training (both runners), memory and start-up, and returns
+`run_bench(quick, progress, algorithms)` measures throughput, time to the
+target gap, every algorithm's vector-engine speed against its tutorial loop
+(or the named ones'), Dyna-Q's planning against Q-learning, live training
+(both runners), memory and start-up, and returns
 `BenchResults`. A stage that fails is recorded in `errors` and the others
 still run. `progress` (if given) hears the name of each stage as it starts.
 """
@@ -14,7 +16,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from tui_gym.bench import gap, live, memory, startup, throughput
+from tui_gym.algorithms import ALGORITHMS
+from tui_gym.bench import gap, learners, live, memory, startup, throughput
 from tui_gym.bench.figures import load_average
 from tui_gym.bench.results import BenchResults, MachineInfo
 
@@ -34,6 +37,9 @@ class Plan:
     memory_episodes: int
     memory_warmup: int
     startup_repeats: int
+    algorithm_seconds: float  # window per side per repeat, each (game, algorithm)
+    algorithm_repeats: int
+    planning_seeds: tuple[int, ...]
 
 
 # About 50 s on an idle 2-CPU machine; the tutorial gets one capped run.
@@ -43,6 +49,7 @@ QUICK = Plan(
     live_seconds=1.0, live_repeats=1, key_presses=30,
     memory_episodes=2_000_000, memory_warmup=100_000,
     startup_repeats=3,
+    algorithm_seconds=0.3, algorithm_repeats=3, planning_seeds=(0,),
 )
 # About 2.5 minutes on an idle 2-CPU machine.
 FULL = Plan(
@@ -51,11 +58,17 @@ FULL = Plan(
     live_seconds=3.0, live_repeats=3, key_presses=30,
     memory_episodes=2_000_000, memory_warmup=100_000,
     startup_repeats=5,
+    algorithm_seconds=1.0, algorithm_repeats=3, planning_seeds=(0, 1, 2),
 )
 
 
-def run_bench(quick: bool = False, progress: Callable[[str], None] | None = None) -> BenchResults:
-    """Measure everything (see the module docstring)."""
+def run_bench(
+    quick: bool = False,
+    progress: Callable[[str], None] | None = None,
+    algorithms: tuple[str, ...] | None = None,
+) -> BenchResults:
+    """Measure everything (see the module docstring); `algorithms` (registry names)
+    limits the per-algorithm speeds to those (default: every one)."""
     plan = QUICK if quick else FULL
     say = progress or (lambda _text: None)
     errors: dict[str, str] = {}
@@ -75,6 +88,13 @@ def run_bench(quick: bool = False, progress: Callable[[str], None] | None = None
     cap = f"capped at {plan.tutorial_cap_s:.0f} s"
     stage("gap", f"time to gap ≤ {gap.TARGET_GAP}: ours, then the tutorial loop ({cap})",
           lambda: gap.measure(plan.gap_seeds, plan.tutorial_cap_s, plan.tutorial_stage_s))
+    names = algorithms or tuple(cls.name for cls in ALGORITHMS)
+    stage("algorithms", f"each algorithm's vector engine against its tutorial loop "
+          f"({', '.join(names)})",
+          lambda: learners.measure_speed(names, plan.algorithm_seconds, plan.algorithm_repeats))
+    stage("planning", f"real episodes to the bound: Q-learning, then Dyna-Q "
+          f"(planning_steps = {learners.PLANNING_STEPS}) on {learners.PLANNING_GAME}",
+          lambda: learners.measure_planning(plan.planning_seeds, learners.PLANNING_BOUND))
     stage("live", "live training in the app",
           lambda: live.measure(plan.live_seconds, plan.key_presses, plan.live_repeats,
                                progress=say))
@@ -91,5 +111,7 @@ def run_bench(quick: bool = False, progress: Callable[[str], None] | None = None
         live=found.get("live", {}),
         memory=found.get("memory"),
         startup=found.get("startup"),
+        algorithms=found.get("algorithms"),
+        planning=found.get("planning"),
         errors=errors,
     )

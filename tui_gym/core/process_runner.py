@@ -2,8 +2,9 @@
 
 `ProcessRunner` has the same surface as `TrainingRunner` (start, pause,
 toggle, run_one_episode, run_one_step, speeds, set_hyperparameters, latest,
-last_scene, last_event, error, finished, update, close), but the training runs in a separate process, so the
-trainer and the event loop never compete for one interpreter lock.
+last_scene, last_event, error, finished, update, close), but the training
+runs in a separate process, so the trainer and the event loop never compete
+for one interpreter lock.
 
 Ownership: while paused, the parent's `Session` is the truth. A start (or
 one episode) hands the child the session's spec (game, wrappers, seed, engine, algorithm),
