@@ -23,6 +23,7 @@ from tui_gym.core.profiles.base import (
     GameProfile,
     ReferenceMetrics,
     ScoreRow,
+    TallyWord,
     agreement_summary,
     format_reward,
     greedy_policy,
@@ -190,6 +191,11 @@ class GridWorldProfile(GameProfile):
         names = " or ".join(self.action_names[a] for a in optimal)
         steps = abs(agent[0] - target[0]) + abs(agent[1] - target[1])
         return Advice(optimal, None, f"optimal: {names}  ({steps} steps to go)")
+
+    tally_words = (TallyWord("reached", "good"), TallyWord("timed out", "bad"))
+
+    def tally_word(self, last: PlayStep) -> str:
+        return "reached" if last.terminated else "timed out"
 
     def outcome_text(
         self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]
