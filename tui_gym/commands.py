@@ -56,14 +56,14 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.core.wrappers import CATALOG
 
     table = Table(title="Wrapper catalog", title_justify="left", show_lines=True)
-    table.add_column("name", style="bold cyan", no_wrap=True)
+    # Names and parameters are what people type: one unwrapped column, never cut.
+    table.add_column("name, parameters=default (range)", no_wrap=True)
     table.add_column("what it changes and teaches")
-    table.add_column("parameters (default, range)")
     for spec in CATALOG.values():
-        params = "\n".join(
-            f"{p.name}={p.default} ({p.describe_range()})" for p in spec.params
-        ) or "-"
-        table.add_row(spec.name, escape(spec.summary), escape(params))
+        params = "".join(
+            f"\n  {p.name}={p.default}\n    ({p.describe_range()})" for p in spec.params
+        )
+        table.add_row(f"[bold cyan]{spec.name}[/]{escape(params)}", escape(spec.summary))
     out.print(table)
     out.print(
         "Use with [bold]--wrapper NAME[/] or [bold]--wrapper NAME:key=value,key=value[/], "
