@@ -1,0 +1,194 @@
+"""The layout holds while people use it, at 120×40 and at 80×24.
+
+The Train view's controls stay in sight whatever the engine note says; the
+GridWorld board keeps its cell size while a person plays; the game picker
+highlights the game shown; parameter names are never cut where a person must
+type them; escape leaves a text field; the wrapper chain shows its order and
+parameters and can be reordered from the keyboard.
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+
+import pytest
+from rich.console import Console
+from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet
+
+from tui_gym.commands import cmd_wrappers
+from tui_gym.core.agent import Hyperparameters
+from tui_gym.core.session import Session
+from tui_gym.core.wrappers import CATALOG
+from tui_gym.ui.app import TuiGymApp
+from tui_gym.ui.help_screen import HelpScreen
+from tui_gym.ui.side_panel import ParamField
+
+from .screen import screen_text
+from .test_ui_train import DEADLINE, wait_for
+
+SIZES = [(120, 40), (80, 24)]
+
+
+def app_for(game: str, episodes: int | None = None) -> TuiGymApp:
+    hp = None if episodes is None else Hyperparameters(episodes=episodes)
+    return TuiGymApp(Session(game, hp=hp, seed=0))
+
+
+def inside(app: TuiGymApp, selector: str) -> bool:
+    """Whether the widget is wholly on screen."""
+    region = app.query_one(selector).region
+    return bool(region.height) and app.screen.region.contains_region(region)
+
+
+@pytest.mark.parametrize("size", SIZES)
+async def test_train_controls_stay_in_sight_whatever_the_engine_says(size):
+    app = app_for("blackjack", episodes=1_000_000)
+    async with app.run_test(size=size) as pilot:
+        await pilot.press("t")
+        app.query_one("#wrapper-FlattenObservation").query_one(Checkbox).value = True
+        await pilot.press("escape", "space")  # back to the view, and train
+        await wait_for(pilot, lambda: app.runner.latest.episodes > 0, "some training")
+        view = app.train_view
+        note = view.engine_note
+        assert "FlattenObservation has no batched form" in note
+        assert "batched form" not in view.stats.plain  # no longer wrapped over five lines
+        assert view.stats.tooltip == note
+        if size == (120, 40):
+            assert inside(app, "#train-engine")
+            assert app.query_one("#train-engine").region.height == 1
+            assert app.query_one("#train-engine").tooltip == note
+        view.heatmap.focus()  # the body scrolls to the heatmap; the controls stay
+        await pilot.pause()
+        for selector in ("#train-controls", "#btn-toggle", "#btn-reset", "#train-progress"):
+            assert inside(app, selector), selector
+        assert "Pause" in screen_text(app)
+        await pilot.press("space")
+        await wait_for(pilot, lambda: not app.runner.running, "the pause")
+        assert app.runner.wait_idle(DEADLINE)
+        await pilot.press("f1")  # the whole note is in the help too
+        assert isinstance(app.screen, HelpScreen)
+        assert any(note == text for _, rows in app.screen.sections for _, text in rows)
+
+
+@pytest.mark.parametrize("size", SIZES)
+async def test_the_gridworld_board_keeps_its_cell_size_while_playing(size):
+    app = app_for("gridworld")
+    async with app.run_test(size=size) as pilot:
+        await pilot.pause()
+        board = app.play_view.board
+        shapes = set()
+
+        def shape() -> tuple:
+            layout = board.layout_drawn
+            return (layout.cell_w, layout.cell_h, layout.lines, layout.axes)
+
+        shapes.add(shape())
+        for key in ("i", "right", "up", "c", "left", "down", "down", "down", "down", "down",
+                    "r", "up", "A", "x", "i", "c", "left"):
+            await pilot.press(key)
+            await pilot.pause()
+            shapes.add(shape())
+        assert len(shapes) == 1, shapes
+        await pilot.resize_terminal(100, 40)  # a new terminal size may pick afresh
+        await pilot.pause()
+        assert board.layout_drawn is not None
+
+
+async def test_the_game_picker_highlights_the_game_shown():
+    app = app_for("gridworld")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.pause()
+        picker = app.query_one("#game-picker", RadioSet)
+
+        def highlighted() -> list[str]:
+            return [b.id for b in picker.query(RadioButton) if b.has_class("-selected")]
+
+        assert picker.pressed_button.id == "game-gridworld"
+        assert highlighted() == ["game-gridworld"]
+        assert not app.query_one("#game-blackjack", RadioButton).value
+        await pilot.press("b")
+        await pilot.pause()
+        assert picker.pressed_button.id == "game-blackjack"
+        assert highlighted() == ["game-blackjack"]
+        assert not app.query_one("#game-gridworld", RadioButton).value
+
+
+@pytest.mark.parametrize("size", SIZES)
+async def test_parameter_names_are_never_cut(size):
+    app = app_for("gridworld")
+    async with app.run_test(size=size) as pilot:
+        await pilot.pause()
+        fields = list(app.query(ParamField))
+        names = {field.param.name for field in fields}
+        assert "repeat_action_probability" in names and "step_penalty" in names
+        for field in fields:
+            label = field.query_one(Label)
+            assert str(label.render()) == field.param.name
+            assert label.region.width >= len(field.param.name), field.param.name
+            box = field.query_one(Input) if field.param.kind is not bool else field.query_one(
+                Checkbox)
+            assert box.region.width >= 7
+
+
+@pytest.mark.parametrize("width", [80, 60])
+def test_the_wrappers_command_never_cuts_a_parameter_name(width):
+    out = io.StringIO()
+    assert cmd_wrappers(argparse.Namespace(json=False), Console(file=out, width=width)) == 0
+    text = out.getvalue()
+    for spec in CATALOG.values():
+        for param in spec.params:
+            assert f"{param.name}=" in text, param.name
+
+
+async def test_escape_leaves_a_text_field_and_drops_the_edit():
+    app = app_for("gridworld")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.pause()
+        size = app.query_one("#env-params").query_one(Input)
+        await pilot.click(size)
+        assert app.focused is size
+        await pilot.press("end", "backspace", "9")  # typed, not applied with enter
+        await pilot.press("escape")
+        assert app.focused is app.play_view.board
+        assert size.value == "5" and app.session.env_kwargs["size"] == 5
+        await pilot.press("t", "W")  # from the wrapper panel in the Train view
+        assert app.focused is not app.train_view.heatmap
+        await pilot.press("escape")
+        assert app.focused is app.train_view.heatmap
+        await pilot.press("f1")
+        assert any(key == "esc" and "text field" in text
+                   for _, rows in app.screen.sections for key, text in rows)
+
+
+async def test_the_wrapper_chain_shows_order_and_parameters_and_reorders():
+    app = app_for("gridworld")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.press("W", "space")  # the wrapper panel (w walks up here): TimeLimit
+        app.query_one("#wrapper-StepPenalty").query_one(Checkbox).value = True
+        await pilot.pause()
+        assert [c.name for c in app.session.choices] == ["TimeLimit", "StepPenalty"]
+        chain = str(app.query_one("#chain").render())
+        assert "1 TimeLimit:max_episode_steps=100" in chain
+        assert "2 StepPenalty:penalty=0.01" in chain
+        assert "StepPenalty  #2" in str(
+            app.query_one("#wrapper-StepPenalty").query_one(Checkbox).label)
+
+        app.query_one("#wrapper-StepPenalty").query_one(Checkbox).focus()
+        await pilot.press("left_square_bracket")
+        await pilot.pause()
+        assert [c.name for c in app.session.choices] == ["StepPenalty", "TimeLimit"]
+        assert app.session.chain_repr().startswith("<TimeLimit<StepPenalty<")
+        chain = str(app.query_one("#chain").render())
+        assert chain.index("1 StepPenalty") < chain.index("2 TimeLimit")
+        await pilot.press("left_square_bracket")  # already innermost: said, nothing changes
+        await pilot.pause()
+        assert any("already innermost" in n.message for n in app._notifications)
+        await pilot.press("right_square_bracket")
+        await pilot.pause()
+        assert [c.name for c in app.session.choices] == ["TimeLimit", "StepPenalty"]
+        app.query_one("#wrapper-ClipReward").query_one(Checkbox).focus()
+        await pilot.press("right_square_bracket")  # not in the chain: said, nothing changes
+        await pilot.pause()
+        assert any("Tick ClipReward first" in n.message for n in app._notifications)
+        assert [c.name for c in app.session.choices] == ["TimeLimit", "StepPenalty"]
