@@ -23,6 +23,7 @@ from tui_gym.core.wrappers import CATALOG
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.side_panel import ParamField
+from tui_gym.ui.widgets.grid_board import choose_layout
 
 from .screen import screen_text
 from .test_ui_train import DEADLINE, wait_for
@@ -90,9 +91,14 @@ async def test_the_gridworld_board_keeps_its_cell_size_while_playing(size):
             await pilot.pause()
             shapes.add(shape())
         assert len(shapes) == 1, shapes
-        await pilot.resize_terminal(100, 40)  # a new terminal size may pick afresh
-        await pilot.pause()
-        assert board.layout_drawn is not None
+        # A new terminal size picks the largest shape that fits, whichever way it went.
+        for width, height in (*[s for s in SIZES if s != size], size):
+            await pilot.resize_terminal(width, height)
+            await pilot.pause()
+            canvas = board.canvas.content_size
+            best = choose_layout(5, canvas.width, canvas.height)
+            assert shape() == (best.cell_w, best.cell_h, best.lines, best.axes)
+        assert shape() in shapes
 
 
 async def test_the_game_picker_highlights_the_game_shown():
@@ -112,6 +118,8 @@ async def test_the_game_picker_highlights_the_game_shown():
         assert picker.pressed_button.id == "game-blackjack"
         assert highlighted() == ["game-blackjack"]
         assert not app.query_one("#game-gridworld", RadioButton).value
+        await pilot.press("w")  # the wrappers, not Blackjack's own check boxes above them
+        assert app.focused is app.query_one("#wrapper-TimeLimit").query_one(Checkbox)
 
 
 @pytest.mark.parametrize("size", SIZES)
@@ -169,8 +177,7 @@ async def test_the_wrapper_chain_shows_order_and_parameters_and_reorders():
         await pilot.pause()
         assert [c.name for c in app.session.choices] == ["TimeLimit", "StepPenalty"]
         chain = str(app.query_one("#chain").render())
-        assert "1 TimeLimit:max_episode_steps=100" in chain
-        assert "2 StepPenalty:penalty=0.01" in chain
+        assert "1 TimeLimit\n    max_episode_steps=100\n2 StepPenalty\n    penalty=0.01" in chain
         assert "StepPenalty  #2" in str(
             app.query_one("#wrapper-StepPenalty").query_one(Checkbox).label)
 

@@ -330,18 +330,23 @@ class SidePanel(VerticalScroll):
         self.query_one("#chain", Static).update(self._chain_text())
 
     def _chain_text(self) -> Text:
-        """The game, then each chosen wrapper in order with its parameters (as
-        `--wrapper` takes them), then Gymnasium's repr of the env."""
+        """The game, then each chosen wrapper in order with its parameters (`key=value`,
+        as `--wrapper` takes them), then Gymnasium's repr of the env."""
         session = self.session
         skipped = {id(choice) for choice, _ in session.skipped}
         text = Text(session.env_id, style="bold")
         if not session.choices:
             text.append("  (no wrappers)", style="dim")
         for place, choice in enumerate(session.choices, 1):
+            applied = id(choice) not in skipped
             text.append(f"\n{place} ", style="dim")
-            text.append(format_wrapper_spec(choice), style="" if id(choice) in skipped else "green")
-            if id(choice) in skipped:
+            text.append(choice.name, style="bold green" if applied else "")
+            if not applied:
                 text.append("  ✗ not applied", style="red")
+            # One line a parameter, as `--wrapper` writes it: names are never cut.
+            for pair in format_wrapper_spec(choice).partition(":")[2].split(","):
+                if pair:
+                    text.append(f"\n    {pair}", style="green" if applied else "")
         text.append("\n" + session.chain_repr(), style="dim")
         if session.skipped:
             names = ", ".join(c.name for c, _ in session.skipped)
@@ -350,7 +355,7 @@ class SidePanel(VerticalScroll):
 
     def focus_wrappers(self) -> None:
         """Move the keyboard focus to the first wrapper checkbox."""
-        boxes = self.query(Checkbox)
+        boxes = self.query_one("#wrapper-list").query(Checkbox)  # not the game's own
         if boxes:
             boxes.first().focus()
             self.scroll_to_widget(boxes.first())

@@ -20,6 +20,7 @@ from typing import Any, ClassVar
 
 from rich.style import Style
 from rich.text import Text
+from textual import events
 from textual.binding import Binding, BindingType
 from textual.geometry import Offset
 
@@ -187,10 +188,21 @@ class GridBoard(Board):
         self._grid_size = 0
         self._grid_fresh = True
         self._grid_layout: GridLayout | None = None
-        self._layout_for: tuple[int, Any] | None = None  # (grid size, terminal size) drawn for
+        self._layout_n = 0  # the grid size the kept cell shape is for (0: choose afresh)
+        self._laid_out: tuple[Any, int] | None = None  # (terminal size, board width) last seen
 
     def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
         self.border_title = "Grid"
+
+    def on_resize(self, event: events.Resize) -> None:
+        # A new terminal size, or a new width (the layout around the board changed, or
+        # is settling after a resize): the cell shape is chosen afresh. Lines of text
+        # coming and going above or below change only the board's height.
+        laid_out = (self.app.size, event.size.width)
+        if laid_out != self._laid_out:
+            self._laid_out = laid_out
+            self._layout_n = 0
+            self.redraw()
 
     # --- what the board says ---------------------------------------------------
     def key_help(self) -> list[tuple[str, str]]:
@@ -310,11 +322,10 @@ class GridBoard(Board):
         """The cell shape stays while the space around the board changes (status lines
         wrapping, a scoreboard row coming): it is chosen afresh for a new grid size or
         terminal size, and otherwise only gives way when it no longer fits."""
-        key = (n, self.app.size if self.is_attached else None)
         kept = self._grid_layout
-        if kept is not None and self._layout_for == key and fits(kept, width, height):
+        if kept is not None and self._layout_n == n and fits(kept, width, height):
             return place_layout(kept, width, height)
-        self._layout_for = key
+        self._layout_n = n
         return choose_layout(n, width, height)
 
     def canvas_clicked(self, offset: Offset) -> None:
