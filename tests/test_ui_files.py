@@ -46,7 +46,7 @@ async def type_name(pilot, name: str) -> FileScreen:
     return screen
 
 
-async def test_save_asks_for_a_name_and_before_replacing(in_tmp: Path):
+async def test_save_asks_for_a_name_and_before_replacing_and_the_palette_has_it(in_tmp: Path):
     app = blackjack()
     async with app.run_test(size=(120, 40)) as pilot:
         await pilot.press("t")
@@ -62,8 +62,8 @@ async def test_save_asks_for_a_name_and_before_replacing(in_tmp: Path):
         assert "Type a file name" in screen.error
         await type_name(pilot, "nope/a")
         assert "There is no folder" in screen.error and str(in_tmp) in screen.error
-        (in_tmp / "folder").mkdir()
-        await type_name(pilot, "folder")
+        (in_tmp / "f").mkdir()
+        await type_name(pilot, "f")
         assert "is a folder" in screen.error
         assert app.screen is screen and not list(in_tmp.glob("*.tgym"))
 
@@ -80,7 +80,7 @@ async def test_save_asks_for_a_name_and_before_replacing(in_tmp: Path):
         await pilot.press("ctrl+s")
         await pilot.pause()
         assert app.screen.query_one(Input).value == "bj.tgym"  # the last name used
-        await type_name(pilot, "bj.tgym")
+        await pilot.press("enter")  # the suggestion: the file saved just now
         assert isinstance(app.screen, ConfirmScreen)
         assert "bj.tgym" in str(app.screen.query_one("#confirm-title").render())
         await pilot.press("n")
@@ -91,22 +91,43 @@ async def test_save_asks_for_a_name_and_before_replacing(in_tmp: Path):
         assert not isinstance(app.screen, FileScreen | ConfirmScreen)
         assert Session.load(saved).trainer.episodes == 0
 
+        # The command palette: one Keys entry, files, and a Screenshot that works.
+        titles = [c.title for c in app.get_system_commands(app.screen)]
+        assert titles.count("Keys") == 1 and titles.count("Screenshot") == 1
+        assert "Save agent…" in titles and "Load agent…" in titles
+        await pilot.press("ctrl+p", *"Screens")
+        await wait_for(pilot, lambda: palette_first(app).startswith("Screenshot"),
+                       "the palette to list Screenshot")
+        await pilot.press("down", "enter")
+        await wait_for(pilot, lambda: list(in_tmp.glob("*.svg")), "the screenshot")
+        svg = next(in_tmp.glob("*.svg")).read_text(encoding="utf-8")
+        assert "Q-table" in svg and "Screenshot" not in svg  # the app, not the palette
+        await wait_for(pilot, lambda: any("Screenshot saved to" in n.message
+                                          for n in app._notifications), "the notice")
+        await pilot.press("ctrl+p", *"Save ag")
+        await wait_for(pilot, lambda: palette_first(app).startswith("Save agent"),
+                       "the palette to list Save agent")
+        await pilot.press("down", "enter")
+        await wait_for(pilot, lambda: isinstance(app.screen, FileScreen), "the save dialog")
+        await type_name(pilot, "p")
+        assert (in_tmp / "p.tgym").is_file()
+
 
 async def test_load_says_what_is_wrong_and_asks_before_replacing_a_trained_agent(in_tmp: Path):
     grid = Session("gridworld", hp=Hyperparameters(episodes=50, discount=0.95), seed=3)
     grid.train()
-    grid.save(in_tmp / "grid.tgym")
-    (in_tmp / "junk.tgym").write_bytes(b"not a save file")
+    grid.save(in_tmp / "g.tgym")
+    (in_tmp / "j.tgym").write_bytes(b"not a save file")
     app = blackjack()
     async with app.run_test(size=(80, 24)) as pilot:
         await pilot.press("ctrl+o")
         await pilot.pause()
         screen = app.screen
         assert isinstance(screen, FileScreen)
-        await type_name(pilot, "gone")
+        await type_name(pilot, "no")
         assert "no such file" in screen.error
-        await type_name(pilot, "junk")
-        assert "not a tui-gym save file" in screen.error and "junk.tgym" in screen.error
+        await type_name(pilot, "j")
+        assert "not a tui-gym save file" in screen.error and "j.tgym" in screen.error
         await pilot.press("escape")
         await pilot.pause()
         assert not isinstance(app.screen, FileScreen)
@@ -117,7 +138,7 @@ async def test_load_says_what_is_wrong_and_asks_before_replacing_a_trained_agent
         blackjack_agent = app.session.agent
         await pilot.press("ctrl+o")
         await pilot.pause()
-        await type_name(pilot, "grid")  # .tgym found
+        await type_name(pilot, "g")  # .tgym found
         assert app.session.profile.name == "gridworld"
         assert app.session.trainer.episodes == 50 and app.session.seed == 3
         assert any("Loaded" in n.message for n in app._notifications)
@@ -128,48 +149,14 @@ async def test_load_says_what_is_wrong_and_asks_before_replacing_a_trained_agent
         # Loading over a GridWorld agent that has trained asks first.
         await pilot.press("g", "ctrl+o")
         await pilot.pause()
-        assert app.screen.query_one(Input).value == "grid.tgym"
-        await type_name(pilot, "grid")
+        assert app.screen.query_one(Input).value == "g.tgym"  # the file it came from
+        await pilot.press("enter")
         assert isinstance(app.screen, ConfirmScreen)
         assert "50 episodes" in str(app.screen.query_one("#confirm-detail").render())
         kept = app.session
         await pilot.press("escape")
         await pilot.pause()
         assert app.session is kept
-        await pilot.press("ctrl+o")
-        await pilot.pause()
-        await type_name(pilot, "grid")
-        await pilot.press("y")
+        await pilot.press("ctrl+o", "enter", "y")
         await pilot.pause()
         assert app.session is not kept and app.session.trainer.episodes == 50
-
-
-async def test_the_palette_saves_loads_shoots_and_lists_keys_once(in_tmp: Path):
-    app = blackjack()
-    async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.pause()
-        titles = [c.title for c in app.get_system_commands(app.screen)]
-        assert titles.count("Keys") == 1 and titles.count("Screenshot") == 1
-        assert "Save agent…" in titles and "Load agent…" in titles
-
-        await pilot.press("ctrl+p")
-        await pilot.pause()
-        await pilot.press(*"Screens")
-        await wait_for(pilot, lambda: palette_first(app).startswith("Screenshot"),
-                       "the palette to list Screenshot")
-        await pilot.press("down", "enter")
-        await wait_for(pilot, lambda: list(in_tmp.glob("*.svg")), "the screenshot")
-        svg = next(in_tmp.glob("*.svg")).read_text(encoding="utf-8")
-        assert "Dealer" in svg and "Screenshot" not in svg  # the app, not the palette
-        await wait_for(pilot, lambda: any("Screenshot saved to" in n.message
-                                          for n in app._notifications), "the notice")
-
-        await pilot.press("ctrl+p")
-        await pilot.pause()
-        await pilot.press(*"Save ag")
-        await wait_for(pilot, lambda: palette_first(app).startswith("Save agent"),
-                       "the palette to list Save agent")
-        await pilot.press("down", "enter")
-        await wait_for(pilot, lambda: isinstance(app.screen, FileScreen), "the save dialog")
-        await type_name(pilot, "pal")
-        assert (in_tmp / "pal.tgym").is_file()

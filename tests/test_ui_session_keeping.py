@@ -116,89 +116,78 @@ async def test_each_game_keeps_its_agent_settings_wrappers_curves_and_play():
 
 
 async def test_the_child_process_trains_the_restored_agent():
-    app = blackjack(episodes=400, runner="process")
+    session = Session("blackjack", hp=Hyperparameters(episodes=1_000_000), seed=0,
+                      engine="scalar")  # slow enough to be mid-run at the switch
+    app = TuiGymApp(session, runner="process")
     async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.press("t")
-        await train_to_the_end(pilot)
-        agent = app.session.agent
-        await pilot.press("g", "full_stop")
+        await pilot.press("t", "space")
+        await wait_for(pilot, lambda: app.runner.latest.episodes > 500, "some training")
+        agent = session.agent
+        await pilot.press("g")  # while the child trains: it pauses and hands back
+        await wait_for(pilot, lambda: app.session.profile.name == "gridworld", "the switch")
+        assert not app.runner.running
+        trained = session.trainer.episodes
+        assert trained > 500 and agent.episode == trained  # every episode came back
+        assert any("Training paused" in n.message for n in app._notifications)
+        await pilot.press("full_stop")
         await wait_for(pilot, lambda: app.runner.latest.episodes == 1, "a GridWorld episode")
         assert app.runner.wait_idle(DEADLINE)
         await pilot.press("b")
-        await pilot.pause()
-        assert app.runner.latest.episodes == 400
-        # A higher budget, and training carries on from the restored agent's 400.
-        app.train_view.form.input("episodes").value = "600"
-        await pilot.press("space")
-        await wait_for(pilot, lambda: app.runner.finished and not app.runner.running,
-                       "the raised budget to finish")
+        assert app.session is session and app.runner.latest.episodes == trained
+        # The child trains the restored agent on from where it stopped.
+        await pilot.press("full_stop")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == trained + 1,
+                       "one more Blackjack episode")
         assert app.runner.wait_idle(DEADLINE)
-        assert app.session.agent is agent and app.session.trainer.episodes == 600
-        assert agent.episode == 600
+        assert app.session.agent is agent and agent.episode == trained + 1
 
 
-async def test_reset_asks_first_once_the_agent_has_trained():
+async def test_resetting_a_trained_agent_asks_first():
     app = blackjack()
     async with app.run_test(size=(80, 24)) as pilot:
         await pilot.press("t")
-        await pilot.pause()
         untrained = app.session.agent
         await pilot.press("x")  # nothing to lose yet: it resets at once
-        await pilot.pause()
         assert not isinstance(app.screen, ConfirmScreen)
         assert app.session.agent is not untrained
-        await train_to_the_end(pilot)
-        agent = app.session.agent
-
-        await pilot.press("x")
-        await pilot.pause()
-        assert isinstance(app.screen, ConfirmScreen)
-        assert "300 episodes" in str(app.screen.query_one("#confirm-detail").render())
-        await pilot.press("escape")
-        await pilot.pause()
-        assert not isinstance(app.screen, ConfirmScreen)
-        assert app.session.agent is agent and app.runner.latest.episodes == 300
-        await pilot.press("x", "enter")  # the focus starts on Cancel
-        await pilot.pause()
-        assert app.session.agent is agent
-        await pilot.click("#btn-reset")
-        await pilot.pause()
-        assert isinstance(app.screen, ConfirmScreen)
-        await pilot.press("n")
-        await pilot.pause()
-        assert app.session.agent is agent
-        await pilot.press("x", "y")
-        await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
-        assert app.session.agent is not agent
-
-
-async def test_a_wrapper_change_that_resets_a_trained_agent_asks_first():
-    app = blackjack()
-    async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.press("t")
-        await pilot.pause()
         await tick(pilot, "FlattenObservation")  # untrained: applied without a question
         assert not isinstance(app.screen, ConfirmScreen)
         assert [c.name for c in app.session.choices] == ["FlattenObservation"]
         app.query_one("#wrapper-FlattenObservation").query_one(Checkbox).value = False
         await pilot.pause()
+        await pilot.press("escape")  # back to the view from the panel
         await train_to_the_end(pilot)
         agent = app.session.agent
 
-        await tick(pilot, "TimeLimit")  # keeps the agent: no question
+        await pilot.press("x")
+        assert isinstance(app.screen, ConfirmScreen)
+        assert "300 episodes" in str(app.screen.query_one("#confirm-detail").render())
+        await pilot.press("escape")
         assert not isinstance(app.screen, ConfirmScreen)
+        assert app.session.agent is agent and app.runner.latest.episodes == 300
+        await pilot.press("x", "enter")  # the focus starts on Cancel
+        assert app.session.agent is agent
+        await pilot.click("#btn-reset")
+        assert isinstance(app.screen, ConfirmScreen)
+        await pilot.press("n")
         assert app.session.agent is agent
 
+        # A wrapper change that keeps the agent does not ask; one that resets it does.
+        await tick(pilot, "TimeLimit")
+        assert not isinstance(app.screen, ConfirmScreen) and app.session.agent is agent
         await tick(pilot, "FlattenObservation")
         assert isinstance(app.screen, ConfirmScreen)
         await pilot.press("escape")
-        await pilot.pause()
         assert app.session.agent is agent
         assert [c.name for c in app.session.choices] == ["TimeLimit"]
         assert not app.query_one("#wrapper-FlattenObservation").query_one(Checkbox).value
         assert any("Not applied" in n.message for n in app._notifications)
+        await tick(pilot, "FlattenObservation")
+        await pilot.press("y")
+        assert [c.name for c in app.session.choices] == ["TimeLimit", "FlattenObservation"]
+        assert app.session.agent is not agent and app.runner.latest.episodes == 0
 
-        # An environment argument that changes the states asks too.
+        # So does an environment argument that changes the states.
         await pilot.press("g", "t", "full_stop")
         await wait_for(pilot, lambda: app.runner.latest.episodes == 1, "a GridWorld episode")
         assert app.runner.wait_idle(DEADLINE)
@@ -206,8 +195,6 @@ async def test_a_wrapper_change_that_resets_a_trained_agent_asks_first():
         size.focus()
         size.value = "6"
         await pilot.press("enter")
-        await pilot.pause()
         assert isinstance(app.screen, ConfirmScreen)
         await pilot.press("y")
-        await pilot.pause()
         assert app.session.env_kwargs["size"] == 6 and app.session.trainer.episodes == 0

@@ -17,7 +17,8 @@ below the minimum size `TooSmallScreen` covers it and takes every key; and
 from __future__ import annotations
 
 import gc
-from collections.abc import Iterable, Sequence
+import time
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -47,6 +48,8 @@ from tui_gym.ui.widgets.key_bar import KeyBar
 MIN_WIDTH, MIN_HEIGHT = 80, 24  # below this: a message instead of the layout
 COMPACT_WIDTH, COMPACT_HEIGHT = 120, 36  # below this: the compact layout
 REFRESH_HZ = 15
+IDLE_POLL = 0.02  # seconds between looks for the agent handed back before a change
+IDLE_TIMEOUT = 10.0  # and how long to look before giving up
 
 
 class MainScreen(Screen):
@@ -231,12 +234,18 @@ class TuiGymApp(App[int]):
         self.action_focus_view()
 
     # --- one session per game -------------------------------------------------
-    def switch_game(self, profile: GameProfile) -> bool:
+    def switch_game(
+        self, profile: GameProfile, otherwise: Callable[[], None] | None = None
+    ) -> None:
         """Play `profile`'s game: its session from earlier in this run (agent, settings,
-        wrappers, curves) or a new one. Training pauses; False when it cannot yet."""
+        wrappers, curves) or a new one. Training pauses first; `otherwise` runs if the
+        runner never hands the agent back."""
         was_running = self.runner.running
-        if not self._pause_for_change():
-            return False
+        self._when_idle(lambda: self._switch_now(profile, was_running), otherwise)
+
+    def _switch_now(self, profile: GameProfile, was_running: bool) -> None:
+        if profile is self.session.profile:  # two switches asked for in a row
+            return
         session = self._sessions.get(profile.name)
         fresh = session is None
         if session is None:
@@ -254,17 +263,35 @@ class TuiGymApp(App[int]):
         if was_running:
             notice = "Training paused. " + notice
         self.notify(notice, timeout=5)
-        return True
 
-    def _pause_for_change(self) -> bool:
-        """Pause training and have the agent back before the session changes; False
-        (and a message) when the runner has not handed it back."""
+    def _when_idle(
+        self,
+        then: Callable[[], None],
+        otherwise: Callable[[], None] | None = None,
+        deadline: float | None = None,
+    ) -> None:
+        """Pause training and run `then` once the runner has the agent back: at once
+        when it is idle, else as soon as it hands the agent back, never blocking the
+        UI meanwhile. After `IDLE_TIMEOUT` it gives up, says so and runs `otherwise`."""
+        runner = self.runner
+        if deadline is None:
+            runner.pause(wait=False)
+            deadline = time.monotonic() + IDLE_TIMEOUT
+        if runner.wait_idle(0):
+            then()
+        elif time.monotonic() > deadline:
+            self.notify("Training did not hand the agent back; nothing was changed.",
+                        severity="error")
+            if otherwise is not None:
+                otherwise()
+        else:
+            self.set_timer(IDLE_POLL, lambda: self._when_idle(then, otherwise, deadline))
+
+    def _pause_now(self) -> bool:
+        """Pause training and wait for the agent (to save it); False when the runner
+        has not handed it back."""
         self.runner.pause()
-        if not self.runner.wait_idle(0):
-            self.notify("Training has not handed the agent back yet; try again in a moment.",
-                        severity="warning")
-            return False
-        return True
+        return self.runner.wait_idle(0)
 
     def _use_session(self, session: Session) -> None:
         """Make `session` the one shown and trained (the runner is paused)."""
@@ -378,7 +405,7 @@ class TuiGymApp(App[int]):
     def _save_to(self, path: Path) -> str | None:
         """Save to `path` (the dialog asked before replacing a file); an error or None."""
         was_running = self.runner.running
-        if not self._pause_for_change():
+        if not self._pause_now():
             return "Training has not handed the agent back yet; try again in a moment."
         try:
             self.session.save(path)
@@ -429,8 +456,9 @@ class TuiGymApp(App[int]):
         )
 
     def _install_loaded(self, session: Session, path: Path) -> None:
-        if not self._pause_for_change():
-            return
+        self._when_idle(lambda: self._install_now(session, path))
+
+    def _install_now(self, session: Session, path: Path) -> None:
         if session.profile is not self.session.profile:
             self.play_view.put_away()
         self._sessions[session.profile.name] = session
@@ -485,8 +513,7 @@ class TuiGymApp(App[int]):
         """A new game switches sessions; a change that would reset a trained agent asks."""
         profile = profile_for(message.env_id)
         if profile is not self.session.profile:
-            if not self.switch_game(profile):
-                self.side_panel.reload()
+            self.switch_game(profile, otherwise=self.side_panel.reload)
             return
         change: dict[str, Any] = {
             "env_id": message.env_id, "env_kwargs": message.env_kwargs, "choices": message.choices,
