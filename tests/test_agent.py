@@ -210,15 +210,16 @@ def test_hyperparameter_errors_name_the_field_and_its_range(name: str, value: ob
     with pytest.raises(ValueError) as caught:
         Hyperparameters(**changes)  # type: ignore[arg-type]
     message = str(caught.value)
-    assert message.startswith(f"{name} must be ")
-    assert FIELD_BY_NAME[name].expected() in message
+    field = FIELD_BY_NAME[name]
+    assert message.startswith((f"{name} must be {field.expected()}", f"{name} is out of range: "))
+    assert field.describe_range() in message
     assert repr(value) in message
 
 
 def test_hyperparameter_messages_read_well() -> None:
     with pytest.raises(ValueError) as caught:
         Hyperparameters(learning_rate=0)
-    assert str(caught.value) == "learning_rate must be a number in (0, 1], got 0"
+    assert str(caught.value) == "learning_rate is out of range: 0 is not in (0, 1]"
     with pytest.raises(ValueError) as caught:
         Hyperparameters(episodes="many")  # type: ignore[arg-type]
     assert str(caught.value) == "episodes must be an integer in [1, 1000000000], got 'many'"

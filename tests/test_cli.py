@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import io
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -12,7 +14,8 @@ from typing import Any
 import pytest
 
 from tui_gym import __version__
-from tui_gym.cli import main
+from tui_gym.cli import attach_negative_values, build_parser, main
+from tui_gym.commands import _eval_rows
 from tui_gym.core.wrappers import CATALOG
 
 REPO = Path(__file__).resolve().parents[1]
@@ -47,6 +50,21 @@ def run_json(capsys: pytest.CaptureFixture[str], *args: str) -> dict[str, Any]:
     return json.loads(lines[0])
 
 
+def console_script() -> list[str]:
+    """The installed `tui-gym` script beside this interpreter (`python -m tui_gym` without one)."""
+    script = Path(sys.executable).with_name("tui-gym")
+    return [str(script)] if script.exists() else [sys.executable, "-m", "tui_gym"]
+
+
+def run_script(*args: str, **kwargs: Any) -> subprocess.CompletedProcess[str]:
+    """The real `tui-gym` command, as a person runs it."""
+    env = {**os.environ, "COLUMNS": "120"}
+    return subprocess.run(
+        [*console_script(), *args], capture_output=True, text=True, timeout=120, env=env,
+        cwd=REPO, **kwargs,
+    )
+
+
 def run_module(*args: str) -> subprocess.CompletedProcess[str]:
     """`python -m tui_gym ...` in a fresh interpreter."""
     env = {**os.environ, "PYTHONPATH": str(REPO), "COLUMNS": "120"}
@@ -71,13 +89,72 @@ def test_envs_lists_the_games(capsys: pytest.CaptureFixture[str]) -> None:
         assert text in out
 
 
-def test_wrappers_lists_the_catalog_and_the_syntax(capsys: pytest.CaptureFixture[str]) -> None:
+@pytest.mark.parametrize("columns", ["60", "80", "120"])
+def test_wrappers_lists_the_catalog_and_the_syntax(
+    columns: str, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("COLUMNS", columns)
     code, out, err = run(capsys, "wrappers")
     assert code == 0 and err == ""
-    assert "--wrapper NAME:key=value" in out
-    for name in CATALOG:
-        assert name in out
-    assert "max_episode_steps=100" in out  # parameters with their defaults
+    assert "NAME:key=value,key=value" in out
+    words = set(re.findall(r"[\w.]+", out))
+    for name, spec in CATALOG.items():
+        assert name in words
+        for param in spec.params:  # whole, as they must be typed
+            assert param.name in words
+    assert "=100 [1, 100000]" in out  # parameters with their defaults and ranges
+    assert "…" not in out
+
+
+def test_envs_json(capsys: pytest.CaptureFixture[str]) -> None:
+    data = run_json(capsys, "envs", "--json")
+    games = {game["name"]: game for game in data["envs"]}
+    assert set(games) == {"blackjack", "gridworld"}
+    assert games["blackjack"]["env_id"] == "Blackjack-v1"
+    assert games["blackjack"]["actions"] == ["stick", "hit"]
+    assert "gymnasium_env/GridWorld-v0" in games["gridworld"]["other_ids"]
+    size = {p["name"]: p for p in games["gridworld"]["params"]}["size"]
+    assert size["type"] == "int" and size["default"] == 5 and size["range"] == "[2, 12]"
+
+
+def test_wrappers_json(capsys: pytest.CaptureFixture[str]) -> None:
+    data = run_json(capsys, "wrappers", "--json")
+    entries = {w["name"]: w for w in data["wrappers"]}
+    assert list(entries) == list(CATALOG)
+    limit = entries["TimeLimit"]["params"][0]
+    assert limit["name"] == "max_episode_steps" and limit["default"] == 100
+    assert (limit["minimum"], limit["maximum"]) == (1, 100000)
+    assert entries["FlattenObservation"]["params"] == []
+    assert entries["FlattenObservation"]["changes_observation"] is True
+    assert "--wrapper NAME:key=value" in data["syntax"]
+
+
+def _readme_json_commands() -> list[str]:
+    text = " ".join((REPO / "README.md").read_text().split())
+    match = re.search(r"((?:`\w+`,? (?:and )?)+)take `--json`", text)
+    assert match, "the README says which sub-commands take --json"
+    return re.findall(r"`(\w+)`", match.group(1))
+
+
+def test_every_sub_command_the_readme_names_takes_json() -> None:
+    commands = _readme_json_commands()
+    assert {"envs", "wrappers", "train", "eval", "optimal", "bench"} <= set(commands)
+    parser = build_parser()
+    positional = {"train": ["blackjack"], "eval": ["x.tgym"], "optimal": ["blackjack"]}
+    for command in commands:
+        args = parser.parse_args([command, *positional.get(command, []), "--json"])
+        assert args.json is True, command
+
+
+def test_screenshots_json(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch,
+                          tmp_path: Path) -> None:
+    import tui_gym.ui.screenshots as screenshots
+
+    written = [tmp_path / "a.svg", tmp_path / "b.svg"]
+    monkeypatch.setattr(screenshots, "write_screenshots", lambda directory: written)
+    assert run_json(capsys, "screenshots", str(tmp_path), "--json") == {
+        "written": [str(p) for p in written]
+    }
 
 
 def test_version(capsys: pytest.CaptureFixture[str]) -> None:
@@ -157,6 +234,32 @@ def test_train_and_eval_print_tables_without_json(
     assert code == 0 and err == "" and "Evaluation" in out and "win rate" in out
 
 
+def test_train_json_lists_wrappers_with_their_parameters(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    data = run_json(
+        capsys, "train", "gridworld", "--size", "3", "--episodes", "50", "--eval-episodes", "10",
+        "--wrapper", "TimeLimit:max_episode_steps=40", "--wrapper", "StepPenalty", "--json",
+    )
+    assert data["wrappers"] == [
+        {"name": "TimeLimit", "params": {"max_episode_steps": 40},
+         "spec": "TimeLimit:max_episode_steps=40"},
+        {"name": "StepPenalty", "params": {"penalty": 0.01}, "spec": "StepPenalty:penalty=0.01"},
+    ]
+
+
+def test_a_negative_value_after_its_flag_is_a_value(capsys: pytest.CaptureFixture[str]) -> None:
+    assert attach_negative_values(["train", "x", "--discount", "-0.5", "-h"]) == [
+        "train", "x", "--discount=-0.5", "-h",
+    ]
+    assert attach_negative_values(["--lr", "-inf", "--", "--a", "-1"]) == [
+        "--lr=-inf", "--", "--a", "-1",
+    ]
+    data = run_json(capsys, "train", "gridworld", "--size", "2", "--episodes", "20",
+                    "--eval-episodes", "5", "--wrapper", "ScaleReward:factor=-2", "--json")
+    assert data["wrappers"][0]["params"] == {"factor": -2.0}
+
+
 def test_hyperparameter_flags_reach_the_run(capsys: pytest.CaptureFixture[str]) -> None:
     data = run_json(capsys, "train", "blackjack", "--episodes", "50", "--eval-episodes", "10",
                     "--learning-rate", "0.2", "--discount", "0.9", "--epsilon-final", "0.3",
@@ -212,8 +315,51 @@ ERRORS = {
     "misfit wrapper": (["train", "blackjack", "--wrapper", "DistanceShaping"], "does not fit"),
     "learning rate out of range": (
         ["train", "blackjack", "--learning-rate", "2"],
-        "--learning-rate must be a number in (0, 1]",
+        "--learning-rate is out of range: '2' is not in (0, 1]",
     ),
+    "learning rate -inf": (
+        ["train", "blackjack", "--learning-rate", "-inf"],
+        "--learning-rate is out of range: '-inf' is not in (0, 1]",
+    ),
+    "discount -1e5": (
+        ["train", "blackjack", "--discount", "-1e5"],
+        "--discount is out of range: '-1e5' is not in [0, 1]",
+    ),
+    "learning rate 1e400": (
+        ["train", "blackjack", "--learning-rate", "1e400"],
+        "--learning-rate is out of range: '1e400'",
+    ),
+    "learning rate nan": (
+        ["train", "blackjack", "--learning-rate", "nan"],
+        "--learning-rate must be a number in (0, 1], got 'nan'",
+    ),
+    "episodes too many": (
+        ["train", "blackjack", "--episodes", "1e10"],
+        "--episodes is out of range: '1e10' is not in [1, 1000000000]",
+    ),
+    "wrapper param out of range": (
+        ["train", "gridworld", "--wrapper", "TimeLimit:max_episode_steps=0"],
+        "TimeLimit.max_episode_steps is out of range: '0' is not in [1, 100000]",
+    ),
+    "wrapper param of 309 digits": (
+        ["train", "blackjack", "--wrapper", "ScaleReward:factor=1" + "0" * 309],
+        "ScaleReward.factor is out of range: '100000000000…000000' (310 characters)",
+    ),
+    "wrapper param of 5000 digits": (
+        ["train", "blackjack", "--wrapper", "ScaleReward:factor=-" + "9" * 5000],
+        "ScaleReward.factor is out of range",
+    ),
+    "arabic-indic episodes": (["train", "blackjack", "--episodes", "\u0663"], "'\u0663'"),
+    "arabic-indic eval episodes": (["train", "blackjack", "--eval-episodes", "\u0663"], "'\u0663'"),
+    "arabic-indic seed": (["--seed", "\u0663", "envs"], "--seed"),
+    "arabic-indic size": (["optimal", "gridworld", "--size", "\u0663"], "--size must be an"),
+    "superscript wrapper param": (
+        ["train", "gridworld", "--wrapper", "TimeLimit:max_episode_steps=\u00b2"],
+        "must be an integer in [1, 100000], got '\u00b2'",
+    ),
+    "target gap -inf": (["train", "blackjack", "--target-gap", "-inf"], "out of range"),
+    "seed too large": (["train", "blackjack", "--seed", "9" * 40], "out of range"),
+    "empty save path": (["train", "blackjack", "--save", ""], "--save: expected a file name"),
     "learning rate not a number": (["train", "blackjack", "--learning-rate", "fast"], "'fast'"),
     "epsilon final above start": (
         ["train", "blackjack", "--epsilon-start", "0.1", "--epsilon-final", "0.5"],
@@ -224,7 +370,9 @@ ERRORS = {
     "train seed not a number": (["train", "blackjack", "--seed", "x1"], "--seed"),
     "size for blackjack": (["train", "blackjack", "--size", "4"], "--size"),
     "sab for gridworld": (["optimal", "gridworld", "--sab"], "--sab"),
-    "gridworld too big": (["train", "gridworld", "--size", "50"], "size"),
+    "gridworld too big": (
+        ["train", "gridworld", "--size", "50"], "--size is out of range: '50' is not in [2, 12]"
+    ),
     "unknown sub-command": (["frobnicate"], "'frobnicate'"),
 }
 
@@ -240,6 +388,9 @@ def test_errors_exit_2_with_one_line(case: str, capsys: pytest.CaptureFixture[st
     assert len(lines) == 1 and err.endswith("\n"), err
     assert lines[0].startswith("tui-gym")
     assert fragment in lines[0]
+    for internal in ("invalid literal", "could not convert", "Exceeds the limit", "Error:"):
+        assert internal not in lines[0]
+    assert len(lines[0]) < 300
 
 
 @pytest.mark.parametrize("kind", ["missing", "corrupt", "folder", "json"])
@@ -260,6 +411,117 @@ def test_unreadable_files_exit_2_naming_the_file(
     assert "Traceback" not in err
     lines = err.splitlines()
     assert len(lines) == 1 and str(path) in lines[0]
+
+
+# -- saving and evaluating -------------------------------------------------------
+
+
+def test_the_save_folder_is_checked_before_training(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    # A billion episodes would take hours: the refusal must come before any of them.
+    path = tmp_path / "missing" / "bj.tgym"
+    code, out, err = run(capsys, "train", "blackjack", "--episodes", "1000000000",
+                         "--save", str(path))
+    assert (code, out) == (2, "")
+    assert err == f"tui-gym: error: {path}: the folder {path.parent} does not exist\n"
+
+
+def test_save_through_a_symlink_writes_its_target(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    target = tmp_path / "agents" / "bj.tgym"
+    target.parent.mkdir()
+    link = tmp_path / "latest.tgym"
+    link.symlink_to(target)
+    for _ in range(2):
+        data = run_json(capsys, "train", "blackjack", "--episodes", "100", "--eval-episodes",
+                        "10", "--save", str(link), "--json")
+        assert data["saved"] == str(link)
+        assert link.is_symlink() and target.is_file()
+    assert run_json(capsys, "eval", str(link), "--episodes", "10", "--json")["episodes"] == 10
+
+
+def test_the_evaluation_stops_at_its_step_budget(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from tui_gym.core import evaluation
+
+    # An agent trained for 50 episodes on a 12x12 grid loops until the 300-step time limit.
+    monkeypatch.setattr(evaluation, "EVAL_STEP_BUDGET", 3_000)
+    data = run_json(capsys, "train", "gridworld", "--size", "12", "--episodes", "50", "--json")
+    report = data["eval"]
+    assert report["episodes_requested"] == 10_000
+    assert 3_000 / 300 <= report["episodes"] < 3_000 / 12
+    rows = dict(_eval_rows(report))  # what the summary table shows without --json
+    assert rows["greedy episodes"] == (
+        f"{report['episodes']} of 10,000 (stopped at the 3,000-step budget)"
+    )
+    small = run_json(capsys, "train", "gridworld", "--size", "2", "--episodes", "500",
+                     "--eval-episodes", "300", "--json")
+    assert small["eval"]["episodes"] == small["eval"]["episodes_requested"] == 300
+
+
+def test_bad_save_files_are_one_line_and_exit_2(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    bad = _corrupt(tmp_path)
+    for args in (["eval", "/dev/zero"], ["--load", str(bad)], ["eval", str(tmp_path)]):
+        code, out, err = run(capsys, *args)
+        assert (code, out) == (2, ""), args
+        assert err.count("\n") == 1 and err.startswith(f"tui-gym: error: {args[1]}: ")
+
+
+def test_eval_of_a_fifo_through_the_console_script(tmp_path: Path) -> None:
+    fifo = tmp_path / "fifo.tgym"
+    os.mkfifo(fifo)  # nobody writes to it: reading it would wait forever
+    result = run_script("eval", str(fifo))
+    assert (result.returncode, result.stdout) == (2, "")
+    assert result.stderr == f"tui-gym: error: {fifo}: is a named pipe, not a save file\n"
+
+
+class _ClosedPipe(io.TextIOWrapper):
+    """A stdout whose reader is gone: every write and flush fails as on a closed pipe."""
+
+    def __init__(self) -> None:
+        super().__init__(io.BytesIO())
+
+    def write(self, text: str) -> int:
+        raise BrokenPipeError(32, "Broken pipe")
+
+    def flush(self) -> None:
+        raise BrokenPipeError(32, "Broken pipe")
+
+    def fileno(self) -> int:
+        raise io.UnsupportedOperation("fileno")
+
+
+@pytest.mark.parametrize(
+    "args", [["envs"], ["wrappers"], ["optimal", "blackjack"], ["optimal", "gridworld", "--json"],
+             ["--help"], ["train", "--help"], ["--version"], ["play", "blackjack", "--jsonl"]]
+)
+def test_a_closed_pipe_ends_commands_quietly(
+    args: list[str], monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setattr(sys, "stdout", _ClosedPipe())
+    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(b'{"cmd": "help"}\n')))
+    try:
+        code = main(args)
+    except SystemExit as exit_:
+        code = exit_.code
+    assert code == 141
+    assert capsys.readouterr().err == ""
+
+
+def test_a_closed_pipe_through_the_console_script() -> None:
+    read_end, write_end = os.pipe()
+    os.close(read_end)  # `tui-gym wrappers | head -1`, the reader gone before the first line
+    try:
+        result = subprocess.run([*console_script(), "wrappers"], stdout=write_end,
+                                stderr=subprocess.PIPE, timeout=120, cwd=REPO)
+    finally:
+        os.close(write_end)
+    assert (result.returncode, result.stderr) == (141, b"")
 
 
 # -- python -m tui_gym ----------------------------------------------------------

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 
@@ -118,3 +119,94 @@ def test_end_of_input_exits_zero():
 def test_bad_seed_is_an_error_response(request_line):
     player = JsonlPlayer(Session("blackjack"), seed=0)
     assert "error" in player.handle(request_line)
+
+
+# -- hostile input: every line is answered, and the session goes on ---------------------------
+
+
+def run_protocol_bytes(env: str, data: bytes, *extra: str) -> tuple[list[bytes], str, int]:
+    """The real command, fed raw bytes under a strict UTF-8 locale; raw response lines."""
+    proc = subprocess.run(
+        [sys.executable, "-m", "tui_gym", "play", env, "--jsonl", *extra],
+        input=data,
+        capture_output=True,
+        timeout=60,
+        env={**os.environ, "LC_ALL": "C.UTF-8", "PYTHONIOENCODING": "utf-8:strict"},
+    )
+    return proc.stdout.splitlines(), proc.stderr.decode(errors="replace"), proc.returncode
+
+
+def strict_json(line: bytes) -> dict:
+    """A response as a strict reader reads it: ASCII, no NaN, no lone surrogates."""
+    text = line.decode("ascii")
+
+    def refuse(name: str) -> None:
+        raise AssertionError(f"{name} in {text}")
+
+    value = json.loads(text, parse_constant=refuse)
+    stack = [value]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, str):
+            item.encode("utf-8")  # raises on a lone surrogate
+        elif isinstance(item, dict):
+            stack.extend(item.keys())
+            stack.extend(item.values())
+        elif isinstance(item, list):
+            stack.extend(item)
+    assert isinstance(value, dict)
+    return value
+
+
+def test_a_bad_byte_costs_one_line_and_earlier_lines_are_answered():
+    data = b'{"cmd":"help","id":1}\n\xff\n{"cmd":"help","id":3}\n'
+    lines, stderr, code = run_protocol_bytes("blackjack", data)
+    assert code == 0, stderr
+    responses = [strict_json(line) for line in lines]
+    assert [r.get("id") for r in responses] == [1, None, 3]
+    assert responses[1] == {"error": "not UTF-8: byte 0xff at column 1 cannot be decoded"}
+
+
+HOSTILE = {
+    "nested 1000 deep": b"[" * 1000 + b"]" * 1000,
+    "nested 500 deep in id": b'{"cmd": "help", "id": ' + b"[" * 500 + b"]" * 500 + b"}",
+    "5000-digit action": b'{"cmd": "step", "action": ' + b"7" * 5000 + b"}",
+    "5000-digit seed": b'{"cmd": "reset", "seed": ' + b"7" * 5000 + b"}",
+    "5000-digit id": b'{"cmd": "help", "id": ' + b"7" * 5000 + b"}",
+    "NaN id": b'{"cmd": "help", "id": NaN}',
+    "1e999 seed": b'{"cmd": "reset", "seed": 1e999}',
+    "lone surrogates": b'{"cmd": "\\ud800", "id": "\\udcff"}',
+    "invalid UTF-8 in a string": b'{"cmd": "help", "id": "\xc3\x28"}',
+    "overlong line": b'{"cmd": "help", "id": "' + b"x" * (2 << 20) + b'"}',
+    "seed beyond 64 bits": b'{"cmd": "reset", "seed": 18446744073709551616}',
+}
+AFTER_RESET = {
+    "arabic-indic digit action": '{"cmd": "step", "action": "\u0661"}'.encode(),
+    "superscript action": '{"cmd": "step", "action": "\u00b2"}'.encode(),
+    "5000-character digit action": b'{"cmd": "step", "action": "' + b"0" * 5000 + b'1"}',
+    "action a list": b'{"cmd": "step", "action": [1]}',
+}
+
+
+def test_hostile_lines_get_errors_and_the_session_goes_on():
+    lines = [*HOSTILE.values(), b'{"cmd": "reset", "seed": 7}', *AFTER_RESET.values(),
+             b'{"cmd": "step", "action": "stick", "id": "last"}']
+    raw, stderr, code = run_protocol_bytes("blackjack", b"".join(line + b"\n" for line in lines))
+    assert code == 0, stderr
+    assert stderr == ""
+    responses = [strict_json(line) for line in raw]
+    assert len(responses) == len(lines)
+    for name, response in zip([*HOSTILE, "reset", *AFTER_RESET], responses, strict=False):
+        if name != "reset":
+            assert set(response) <= {"error", "id"} and response["error"], (name, response)
+            for internal in ("Exceeds the limit", "invalid literal", "Traceback", "recursion"):
+                assert internal not in response["error"], (name, response)
+    reset = responses[len(HOSTILE)]
+    assert reset["observation"] == [19, 10, 0]  # as in the README's transcript
+    assert responses[-1]["id"] == "last" and responses[-1]["terminated"] is True
+    named = dict(zip(HOSTILE, responses, strict=False))
+    assert "nested deeper than" in named["nested 500 deep in id"]["error"]
+    assert "5,000 digits is too long" in named["5000-digit seed"]["error"]
+    assert named["lone surrogates"]["id"] == "\ufffd"
+    assert "longer than 1,048,576 bytes" in named["overlong line"]["error"]
+    assert "invalid action" in responses[len(HOSTILE) + 1]["error"]

@@ -18,8 +18,9 @@ import pytest
 
 from tests.screen import screen_text
 from tui_gym.core.play import HumanGame
-from tui_gym.core.profiles.base import greedy_policy, plural, signed
+from tui_gym.core.profiles.base import plural, signed
 from tui_gym.core.reference.gridworld import (
+    mixed_steps_over_optimal,
     policy_steps_over_optimal,
     shortest_path_policy,
 )
@@ -181,19 +182,20 @@ async def test_coach_flags_moves_off_every_shortest_path() -> None:
         assert "2.00 steps over optimal (mean of 1 episode reached)" in text
         assert f"{start + 1}/{start + 2} moves on a shortest path" in text
 
-        # The agent has learned nothing: advice says so, and its exact score is that
-        # of a table of zeros (always "right": it reaches the targets to its right).
+        # The agent has learned nothing: advice says so, and its exact score is that of
+        # what it does, a random walk (every action ties), cut off by the time limit.
         await pilot.press("r", "i")
         await pilot.pause()
         detail = shown(view, "#play-detail")
         assert "optimal: " in detail and "agent: has never seen this state" in detail
         size = game.scene()["size"]
-        policy = greedy_policy(app.session.base_q()).reshape((size,) * 4)
-        extra, solved = policy_steps_over_optimal(size, policy)
+        uniform = np.full((size,) * 4 + (4,), 0.25)
+        extra, solved = mixed_steps_over_optimal(size, uniform, 300)
         assert view.agent_figures == {"steps_over_optimal": extra, "solved_fraction": solved}
-        assert (extra, solved) == (0.0, pytest.approx(size * 10 / (size**2 * (size**2 - 1))))
+        assert extra > 10 and 0.9 < solved < 1.0
         text = scoreboard_text(view)
-        assert f"0.00 steps over optimal, exact mean over the {solved:.1%} of placements" in text
+        assert (f"{extra:.2f} steps over optimal, exact mean over the episodes its greedy "
+                f"policy brings to the target ({solved:.1%} of them)") in text
         assert "Optimum  0 steps over optimal from every placement" in text
 
 
@@ -253,14 +255,14 @@ async def test_scoreboard_matches_the_tally_and_the_exact_reference() -> None:
                 await pilot.pause()
         tally = game.tally
         assert tally.episodes == 4
-        low, high = tally.confidence_interval()
-        mean = f"mean return {signed(tally.mean, 3)} ± {(high - low) / 2:.3f} (95% CI) over 4 hands"
+        # Four hands say little about the interval's width: it shows as "–" (from 30 on).
+        mean = f"mean return {signed(tally.mean, 3)} ± – (95% CI) over 4 hands"
         card = view.scorecard
         assert card.tally is tally and card.agreed == optimal_moves
         share = f"{card.agreed}/{card.decisions} optimal decisions ({card.agreement:.0%})"
         text = scoreboard_text(view)
         assert f"You      {mean} · {share}" in text
-        assert f"± {(high - low) / 2:.3f}" in screen_text(app)
+        assert "± – (95% CI)" in screen_text(app)
 
         # The agent learns on: the figures follow when the Play view is shown again.
         session.trainer.run(episodes=500)

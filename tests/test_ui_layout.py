@@ -2,24 +2,19 @@
 
 The Train view's controls stay in sight whatever the engine note says; the
 GridWorld board keeps its cell size while a person plays; the game picker
-highlights the game shown; parameter names are never cut where a person must
-type them; escape leaves a text field; the wrapper chain shows its order and
+highlights the game shown; parameter names are never cut in the side panel,
+where a person types them (the `wrappers` command's table is tested with the
+CLI); escape leaves a text field; the wrapper chain shows its order and
 parameters and can be reordered from the keyboard.
 """
 
 from __future__ import annotations
 
-import argparse
-import io
-
 import pytest
-from rich.console import Console
 from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet
 
-from tui_gym.commands import cmd_wrappers
 from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.session import Session
-from tui_gym.core.wrappers import CATALOG
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.side_panel import ParamField
@@ -173,13 +168,3 @@ async def test_the_side_panel_by_keyboard():
         rows = [row for _, rows in app.screen.sections for row in rows]
         assert any(key == "esc" and "text field" in text for key, text in rows)
         assert any(key == "[ / ]" for key, _ in rows)
-
-
-@pytest.mark.parametrize("width", [80, 60])
-def test_the_wrappers_command_never_cuts_a_parameter_name(width):
-    out = io.StringIO()
-    assert cmd_wrappers(argparse.Namespace(json=False), Console(file=out, width=width)) == 0
-    text = out.getvalue()
-    for spec in CATALOG.values():
-        for param in spec.params:
-            assert f"{param.name}=" in text, param.name

@@ -176,9 +176,10 @@ def test_runs_finish_exactly_the_episodes_asked_for() -> None:
     assert trainer.run(episodes=10) == 10
     assert trainer.episode_in_progress()  # envs keep playing: games carry over to the next run
     assert trainer.run(episodes=1000) == 1000
-    assert trainer.run_episode() is trainer.last
+    assert trainer.run_episode().length >= 1
     assert trainer.episodes == agent.episode == 1012
-    assert trainer.windows["return"].count == 1012
+    # The quota steps the oldest episodes, so no result waits on an older one.
+    assert trainer.held == 0 and trainer.windows["return"].count == 1012
     stop = threading.Event()
     stop.set()
     finished = trainer.run(stop=stop)  # one batch step: all 64 grids start, few finish
@@ -253,3 +254,43 @@ def test_the_last_window_is_not_skewed_towards_long_episodes() -> None:
     # Within 5 standard errors of the window mean (from the window's own spread).
     bound = 5 * lengths.std(ddof=1) / np.sqrt(len(lengths))
     assert abs(lengths.mean() - overall) < bound
+
+
+# --- curves in the order episodes start -------------------------------------------------
+
+
+@pytest.mark.parametrize(("env_id", "kwargs"), [(GRID, {"size": 5}), (BLACKJACK, {})])
+def test_curves_begin_with_an_unbiased_sample(env_id: str, kwargs: dict) -> None:
+    """Thousands of games start at once and the short ones finish first; a curve that
+    took them in that order would begin on the shortest episodes. Under a random
+    policy every episode is alike, so the first thousand recorded must look like
+    the rest."""
+    hp = Hyperparameters(episodes=100_000, epsilon_start=1.0, epsilon_final=1.0)
+    env, agent, keyer = _agent(env_id, hp, **kwargs)
+    trainer = VectorTrainer(env, agent, keyer, seed=0, num_envs=2048, window=1,
+                            series_capacity=1 << 16)  # one point per episode, in order
+    trainer.run(episodes=30_000)
+    lengths = np.array(trainer.series["length"].points())
+    assert len(lengths) + trainer.held == trainer.episodes == 30_000
+    first, rest = lengths[:1000], lengths[5000:]
+    tolerance = 5 * rest.std() / np.sqrt(len(first))
+    assert abs(first.mean() - rest.mean()) < tolerance, (first.mean(), rest.mean())
+    returns = np.array(trainer.series["return"].points())
+    assert abs(returns[:1000].mean() - returns[5000:].mean()) < 5 * returns.std() / np.sqrt(1000)
+
+
+def test_results_wait_for_earlier_episodes_and_one_episode_is_the_oldest() -> None:
+    env, agent, keyer = _agent(GRID, size=5)
+    trainer = VectorTrainer(env, agent, keyer, seed=1, num_envs=64)
+    stop = threading.Event()
+    stop.set()
+    finished = 0
+    while trainer.held == 0 or finished == 0:  # a short episode finishes before an older one
+        finished += trainer.run(stop=stop)
+    assert trainer.windows["return"].count + trainer.held == trainer.episodes
+    recorded = trainer.windows["return"].count
+    while trainer.held:  # one episode at a time: always the oldest, which releases the rest
+        trainer.run(episodes=1)
+        assert trainer.windows["return"].count > recorded
+        recorded = trainer.windows["return"].count
+    assert recorded == trainer.episodes

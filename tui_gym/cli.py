@@ -1,9 +1,14 @@
 """The `tui-gym` command: the app with no sub-command, and headless sub-commands.
 
 Every sub-command is a thin call into `tui_gym.core`: `envs`, `wrappers`,
-`train`, `eval` and `optimal` print rich tables (or one JSON object with
-`--json`). Bad arguments, an unknown env or wrapper, or an unreadable file
-exit with code 2 and one clear line on stderr, never a traceback.
+`train`, `eval`, `optimal`, `screenshots` and `bench` print rich tables or
+lines (or one JSON object with `--json`); `play --jsonl` speaks JSON lines.
+Bad arguments, an unknown env or wrapper, or an unreadable file exit with
+code 2 and one clear line on stderr, never a traceback. Numbers are read as
+`Param`s read them (ASCII digits only; a value out of range says so), and a
+negative value may follow its flag (`--learning-rate -inf` is a value, not a
+flag). A reader that closes the pipe early (`| head -1`) ends the command
+quietly with status 141, as it would end `cat`.
 """
 
 from __future__ import annotations
@@ -11,20 +16,34 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
+import re
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any, NoReturn
 
 from rich.console import Console
 from rich.table import Table
 
 from tui_gym import __version__
+from tui_gym.core.agent import HYPERPARAMETER_FIELDS
+from tui_gym.core.params import read_number, shown_value
 
 EXIT_USAGE = 2
+EXIT_BROKEN_PIPE = 128 + 13  # what a shell reports for a command ended by SIGPIPE
+MAX_SEED = 2**63 - 2**32  # room for the seeds derived from it (evaluation adds to it)
 
 
 class CliError(Exception):
     """A user-facing error: printed as one line, exit code 2."""
+
+
+class _Console(Console):
+    """rich's Console, but a closed pipe ends the command the way every other write does."""
+
+    def on_broken_pipe(self) -> None:
+        self.quiet = True
+        raise BrokenPipeError
 
 
 class _Parser(argparse.ArgumentParser):
@@ -34,34 +53,77 @@ class _Parser(argparse.ArgumentParser):
         sys.stderr.write(f"{self.prog}: error: {message}\n")
         raise SystemExit(EXIT_USAGE)
 
+    def _print_message(self, message: str, file: Any = None) -> None:
+        # argparse drops write errors, so `--help | head -1` would end unlike every other
+        # command; let a closed pipe reach `main`.
+        if message:
+            (file or sys.stderr).write(message)
 
-def _int_at_least(minimum: int, noun: str):
-    """An argparse type: an integer (underscores allowed) no smaller than `minimum`."""
+
+def _int_in(minimum: int, maximum: int, noun: str) -> Callable[[str], int]:
+    """An argparse type: an integer (ASCII digits, `_` allowed) in [minimum, maximum]."""
 
     def parse(text: str) -> int:
-        try:
-            value = int(text.replace("_", ""))
-        except ValueError:
-            value = minimum - 1
-        if value < minimum:
-            raise argparse.ArgumentTypeError(f"expected {noun}, got {text!r}")
-        return value
+        value = read_number(text)
+        if value is None or math.isnan(value) or (math.isfinite(value) and value % 1):
+            raise argparse.ArgumentTypeError(f"expected {noun}, got {shown_value(text)}")
+        if not minimum <= value <= maximum:
+            raise argparse.ArgumentTypeError(
+                f"{shown_value(text)} is out of range: expected {noun}"
+            )
+        return int(value)
 
     return parse
 
 
-_positive_int = _int_at_least(1, "a positive integer")
-_seed = _int_at_least(0, "a non-negative integer")
+_positive_int = _int_in(1, 10**9, "a positive integer up to 1,000,000,000")
+_seed = _int_in(0, MAX_SEED, f"an integer in [0, {MAX_SEED}]")
 
 
-def _finite(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
-    return value
+def _number(text: str) -> float:
+    """An argparse type: a finite number (ASCII digits)."""
+    value = read_number(text)
+    if value is None or math.isnan(value):
+        raise argparse.ArgumentTypeError(f"expected a number, got {shown_value(text)}")
+    if math.isinf(value):
+        raise argparse.ArgumentTypeError(
+            f"{shown_value(text)} is out of range: expected a finite number"
+        )
+    return float(value)
+
+
+def _path(text: str) -> str:
+    """An argparse type: a file name, which cannot be empty."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a file name, got an empty one")
+    return text
+
+
+def _flag(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+# A negative number, `-inf` or `-nan` after a long option is that option's value; argparse
+# would take `-inf` (or `-1e5`) for an option of its own and say "expected one argument".
+_NEGATIVE_VALUE = re.compile(r"-(?:inf(?:inity)?|nan|[0-9.].*)", re.IGNORECASE)
+
+
+def attach_negative_values(argv: Sequence[str]) -> list[str]:
+    """`["--learning-rate", "-inf"]` as `["--learning-rate=-inf"]`, so argparse reads a value."""
+    out: list[str] = []
+    args = iter(argv)
+    for arg in args:
+        if arg == "--":
+            out.append(arg)
+            out.extend(args)
+            break
+        if out and out[-1].startswith("--") and "=" not in out[-1] and _NEGATIVE_VALUE.fullmatch(
+            arg
+        ):
+            out[-1] = f"{out[-1]}={arg}"
+        else:
+            out.append(arg)
+    return out
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -89,19 +151,21 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
-    sub.add_parser("envs", help="list the games")
-    sub.add_parser("wrappers", help="list the wrapper catalog and the --wrapper syntax")
+    envs = sub.add_parser("envs", help="list the games")
+    envs.add_argument("--json", action="store_true", help="print one JSON object")
+    wrappers = sub.add_parser("wrappers", help="list the wrapper catalog and the --wrapper syntax")
+    wrappers.add_argument("--json", action="store_true", help="print one JSON object")
 
     train = sub.add_parser("train", help="train a Q-learning agent headless")
     train.add_argument("env", metavar="ENV", help="blackjack, gridworld or a Gymnasium id")
-    train.add_argument("--episodes", type=_positive_int, help="episode budget")
-    train.add_argument("--learning-rate", type=_finite)
-    train.add_argument("--discount", type=_finite)
-    train.add_argument("--epsilon-start", type=_finite)
-    train.add_argument("--epsilon-final", type=_finite)
-    train.add_argument("--epsilon-decay-fraction", type=_finite)
+    for field in HYPERPARAMETER_FIELDS:
+        # Read as text here and parsed by the field itself, so errors say "out of range".
+        train.add_argument(
+            _flag(field.name), metavar="N" if field.kind is int else "X",
+            help=f"{field.help} ({field.describe_range()})",
+        )
     train.add_argument("--seed", type=_seed, default=0, dest="train_seed")
-    train.add_argument("--size", type=_positive_int, help="GridWorld size (default 5)")
+    train.add_argument("--size", metavar="N", help="GridWorld size (default 5)")
     train.add_argument("--sab", action="store_true", help="Blackjack: Sutton & Barto rules")
     train.add_argument("--natural", action="store_true", help="Blackjack: 1.5 for a natural")
     train.add_argument(
@@ -113,17 +177,22 @@ def build_parser() -> argparse.ArgumentParser:
         help="auto: the vector engine when the wrappers have a batched form (default)",
     )
     train.add_argument(
-        "--target-gap", type=_finite, metavar="G",
+        "--target-gap", type=_number, metavar="G",
         help="Blackjack: stop once the greedy policy's exact gap to the optimum is <= G "
         "(budget defaults to 1,000,000 episodes then)",
     )
-    train.add_argument("--eval-episodes", type=_positive_int, default=10_000)
-    train.add_argument("--save", metavar="PATH", help="save the trained agent here")
+    train.add_argument(
+        "--eval-episodes", type=_positive_int, default=10_000, metavar="N",
+        help="greedy episodes to evaluate with (default 10,000; a long-looping policy "
+        "stops at the evaluation's step budget)",
+    )
+    train.add_argument("--save", type=_path, metavar="PATH",
+                       help="save the trained agent here (the folder is checked first)")
     train.add_argument("--json", action="store_true", help="print one JSON object, no bar")
 
     ev = sub.add_parser("eval", help="evaluate a saved agent (greedy play + exact reference)")
     ev.add_argument("path", metavar="PATH")
-    ev.add_argument("--episodes", type=_positive_int, default=10_000)
+    ev.add_argument("--episodes", type=_positive_int, default=10_000, metavar="N")
     ev.add_argument("--seed", type=_seed, default=None, dest="eval_seed")
     ev.add_argument("--json", action="store_true")
 
@@ -131,20 +200,21 @@ def build_parser() -> argparse.ArgumentParser:
     opt.add_argument("env", metavar="ENV")
     opt.add_argument("--sab", action="store_true", help="Sutton & Barto rules")
     opt.add_argument("--natural", action="store_true", help="1.5 for a natural blackjack")
-    opt.add_argument("--size", type=_positive_int, help="GridWorld size (default 5)")
+    opt.add_argument("--size", metavar="N", help="GridWorld size (default 5)")
     opt.add_argument("--json", action="store_true")
     play = sub.add_parser("play", help="play a game from a program (JSON lines on stdin/stdout)")
     play.add_argument("env", metavar="ENV")
     play.add_argument("--jsonl", action="store_true", required=True,
                       help="read one JSON request a line, write one JSON response a line")
     play.add_argument("--seed", type=_seed, default=None, dest="play_seed")
-    play.add_argument("--size", type=_positive_int, help="GridWorld size (default 5)")
+    play.add_argument("--size", metavar="N", help="GridWorld size (default 5)")
     play.add_argument("--sab", action="store_true", help="Blackjack: Sutton & Barto rules")
     play.add_argument("--natural", action="store_true", help="Blackjack: 1.5 for a natural")
     play.add_argument("--wrapper", action="append", default=[], metavar="SPEC")
 
     screenshots = sub.add_parser("screenshots", help="write the app's SVG screenshots")
     screenshots.add_argument("directory", nargs="?", default="screenshots", metavar="DIR")
+    screenshots.add_argument("--json", action="store_true", help="print one JSON object")
 
     bench = sub.add_parser("bench", help="measure speed, live training, memory and start-up")
     bench.add_argument("--quick", action="store_true", help="a shorter run (under a minute)")
@@ -164,28 +234,50 @@ def _env_kwargs(args: argparse.Namespace, env_id: str) -> dict[str, Any]:
     if getattr(args, "size", None) is not None:
         if env_id == "Blackjack-v1":
             raise CliError("--size applies to GridWorld only")
-        kwargs["size"] = args.size
+        from tui_gym.core.params import ParamError
+        from tui_gym.core.profiles import profile_for
+
+        size = next(p for p in profile_for(env_id).env_params if p.name == "size")
+        try:
+            kwargs["size"] = size.parse(args.size)
+        except ParamError as exc:
+            raise CliError(f"--size {exc.reason}") from None
     return kwargs
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the `tui-gym` command; returns the exit code."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    out = Console()
+    argv = attach_negative_values(sys.argv[1:] if argv is None else argv)
     err = Console(stderr=True)
     try:
+        args = build_parser().parse_args(argv)
+        out = _Console()
         if args.command is None:
             return _run_app(args)
         from tui_gym.commands import COMMANDS
 
-        return COMMANDS[args.command](args, out)
+        code = COMMANDS[args.command](args, out)
+        sys.stdout.flush()  # a closed pipe shows here, not at exit
+        return code
+    except BrokenPipeError:
+        _quiet_stdout()
+        return EXIT_BROKEN_PIPE
     except KeyboardInterrupt:
         err.print("interrupted", style="yellow")
         return 130
     except (CliError, ValueError, OSError) as exc:
         sys.stderr.write(f"tui-gym: error: {_one_line(exc)}\n")
         return EXIT_USAGE
+
+
+def _quiet_stdout() -> None:
+    """Point stdout at /dev/null so the interpreter's own flush at exit finds no pipe."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):  # no real stdout (captured): nothing to flush at exit
+        pass
 
 
 def _one_line(exc: BaseException) -> str:

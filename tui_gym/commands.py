@@ -24,10 +24,15 @@ from rich.progress import (
 from rich.table import Table
 
 from tui_gym.cli import CliError, _env_kwargs, key_value_table, print_json
+from tui_gym.core import evaluation
 from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.evaluation import EvalReport
+from tui_gym.core.params import Param, ParamError
 from tui_gym.core.profiles import PROFILES, profile_for, resolve_env_id
 from tui_gym.core.session import Session
+
+WRAPPER_SYNTAX = "--wrapper NAME or --wrapper NAME:key=value,key=value, repeatable; " \
+    "the first is innermost"
 
 HP_FLAGS = (
     "learning_rate",
@@ -39,7 +44,32 @@ HP_FLAGS = (
 )
 
 
+def _param_dict(param: Param) -> dict[str, Any]:
+    return {
+        "name": param.name,
+        "type": param.kind.__name__,
+        "default": param.default,
+        "minimum": param.minimum,
+        "maximum": param.maximum,
+        "range": param.describe_range(),
+        "help": param.help,
+    }
+
+
 def cmd_envs(args: argparse.Namespace, out: Console) -> int:
+    if args.json:
+        print_json({"envs": [
+            {
+                "name": p.name,
+                "env_id": p.env_id,
+                "other_ids": list(p.other_ids),
+                "actions": list(p.action_names),
+                "description": p.description,
+                "params": [_param_dict(param) for param in p.env_params],
+            }
+            for p in PROFILES
+        ]})
+        return 0
     table = Table(title="Games", title_justify="left")
     table.add_column("alias", style="bold cyan")
     table.add_column("Gymnasium id", no_wrap=True)
@@ -55,16 +85,29 @@ def cmd_envs(args: argparse.Namespace, out: Console) -> int:
 def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.core.wrappers import CATALOG
 
-    table = Table(title="Wrapper catalog", title_justify="left", show_lines=True)
-    # Names and parameters are what people type: one unwrapped column, never cut.
-    table.add_column("name, parameters=default (range)", no_wrap=True)
-    table.add_column("what it changes and teaches")
-    for spec in CATALOG.values():
-        params = "".join(
-            f"\n  {p.name}={p.default}\n    ({p.describe_range()})" for p in spec.params
-        )
-        table.add_row(f"[bold cyan]{spec.name}[/]{escape(params)}", escape(spec.summary))
-    out.print(table)
+    if args.json:
+        print_json({
+            "wrappers": [
+                {
+                    "name": spec.name,
+                    "summary": spec.summary,
+                    "changes_observation": spec.changes_observation,
+                    "params": [_param_dict(param) for param in spec.params],
+                }
+                for spec in CATALOG.values()
+            ],
+            "syntax": WRAPPER_SYNTAX,
+        })
+        return 0
+    if out.width < 80:  # too narrow for three columns: one block a wrapper
+        out.print("[bold]Wrapper catalog[/]")
+        for spec in CATALOG.values():
+            out.print(f"\n[bold cyan]{spec.name}[/]")
+            out.print(escape(spec.summary), overflow="fold")
+            for p in spec.params:
+                out.print(f"  {p.name}={p.default} {escape(p.describe_range())}", overflow="fold")
+    else:
+        out.print(_wrapper_table(CATALOG))
     out.print(
         "Use with [bold]--wrapper NAME[/] or [bold]--wrapper NAME:key=value,key=value[/], "
         "repeatable; the first is innermost.\n"
@@ -72,6 +115,21 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
         "--wrapper StepPenalty:penalty=0.01"
     )
     return 0
+
+
+def _wrapper_table(catalog: dict[str, Any]) -> Table:
+    table = Table(title="Wrapper catalog", title_justify="left", show_lines=True)
+    longest = max((len(p.name) for spec in catalog.values() for p in spec.params), default=1)
+    table.add_column("name", style="bold cyan", no_wrap=True)
+    table.add_column("what it changes and teaches", ratio=1, overflow="fold")
+    # Parameter names are typed after --wrapper: never cut, each on a line of its own.
+    table.add_column("parameters (default, range)", min_width=longest, overflow="fold")
+    for spec in catalog.values():
+        params = "\n".join(
+            f"{p.name}\n  ={p.default} {p.describe_range()}" for p in spec.params
+        ) or "-"
+        table.add_row(spec.name, escape(spec.summary), escape(params))
+    return table
 
 
 def _hyperparameters(args: argparse.Namespace, base: Hyperparameters) -> Hyperparameters:
@@ -82,8 +140,10 @@ def _hyperparameters(args: argparse.Namespace, base: Hyperparameters) -> Hyperpa
             changes[name] = value
     try:
         return base.replace(**changes)
-    except ValueError as exc:
+    except ParamError as exc:
         # Name the flag, not the field, so the user knows what to fix.
+        raise CliError(f"--{exc.param.name.replace('_', '-')} {exc.reason}") from None
+    except ValueError as exc:
         text = str(exc)
         for name in HP_FLAGS:
             text = text.replace(name, "--" + name.replace("_", "-"))
@@ -126,18 +186,24 @@ def eval_dict(session: Session, report: EvalReport) -> dict[str, Any]:
     ref = session.reference()
     if ref is not None:
         data.update(ref.figures)
+        if ref.scope.note:  # what the exact figures take into account, or that they cannot
+            data["reference_note"] = ref.scope.note
     return data
 
 
 def _eval_rows(data: dict[str, Any]) -> list[tuple[str, str]]:
+    played = f"{data['episodes']:,}"
+    requested = data.get("episodes_requested", data["episodes"])
+    if requested != data["episodes"]:
+        played += f" of {requested:,} (stopped at the {evaluation.EVAL_STEP_BUDGET:,}-step budget)"
     rows = [
-        ("greedy episodes", f"{data['episodes']:,}"),
+        ("greedy episodes", played),
         ("mean return", f"{data['mean_return']:+.4f}"),
         ("std of return", f"{data['std_return']:.4f}"),
     ]
     percent = ("win_rate", "draw_rate", "loss_rate", "success_rate", "optimal_pair_fraction")
     for key, value in data.items():
-        if key in ("env_id", "episodes", "mean_return", "std_return"):
+        if key in ("env_id", "episodes", "episodes_requested", "mean_return", "std_return"):
             continue
         label = key.replace("_", " ")
         if value is None:
@@ -172,34 +238,54 @@ def _progress_bar(out: Console, budget: int) -> tuple[Progress, Callable[..., No
     return progress, update
 
 
+def _wrapper_dicts(session: Session) -> list[dict[str, Any]]:
+    """Each applied wrapper with all its parameters (defaults filled in), innermost first."""
+    from tui_gym.core.wrappers import format_wrapper_spec, get_spec
+
+    return [
+        {
+            "name": choice.name,
+            "params": get_spec(choice.name).validate(choice.values()),
+            "spec": format_wrapper_spec(choice),
+        }
+        for choice in session.applied
+    ]
+
+
 def cmd_train(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.core.storage import check_save_path
+
     if args.target_gap is not None and args.target_gap <= 0:
         raise CliError(f"--target-gap must be a positive number, got {args.target_gap:g}")
+    # Before training: a run is not lost to a save path that cannot be written.
+    save_path = check_save_path(args.save) if args.save is not None else None
     session = _session_from_args(args)
+    hp = session.hp
+    assert hp is not None  # a built session has its hyperparameters
     trainer = session.trainer
     started = time.perf_counter()
     if args.json or not out.is_terminal:
         outcome = session.train(target_gap=args.target_gap)
     else:
-        progress, update = _progress_bar(out, session.hp.episodes)
+        progress, update = _progress_bar(out, hp.episodes)
         with progress:
             outcome = session.train(target_gap=args.target_gap, on_chunk=update)
     seconds = time.perf_counter() - started
     trainer = session.trainer
     report = session.evaluate(args.eval_episodes, seed=args.train_seed + 1)
     evaluation = eval_dict(session, report)
-    saved = str(session.save(args.save)) if args.save else None
+    saved = str(session.save(save_path)) if save_path is not None else None
     data = {
         "env_id": session.env_id,
         "env_kwargs": session.env_kwargs,
-        "wrappers": [c.name for c in session.applied],
+        "wrappers": _wrapper_dicts(session),
         "engine": trainer.engine,
         "engine_reason": session.engine_reason,
         "episodes": trainer.episodes,
         "steps": trainer.steps,
         "seconds": seconds,
         "episodes_per_second": trainer.episodes / seconds if seconds else None,
-        "hyperparameters": session.hp.to_dict(),
+        "hyperparameters": hp.to_dict(),
         "rolling_mean_return": trainer.latest.mean_return,
         "eval": evaluation,
         "saved": saved,
@@ -329,13 +415,17 @@ def cmd_play(args: argparse.Namespace, out: Console) -> int:
     if session.skipped:
         reasons = "; ".join(reason for _, reason in session.skipped)
         raise CliError(f"wrapper does not fit {env_id}: {reasons}")
-    return serve(JsonlPlayer(session, seed=args.play_seed), sys.stdin, sys.stdout)
+    return serve(JsonlPlayer(session, seed=args.play_seed), sys.stdin.buffer, sys.stdout)
 
 
 def cmd_screenshots(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.ui.screenshots import write_screenshots
 
-    for path in write_screenshots(args.directory):
+    paths = [str(path) for path in write_screenshots(args.directory)]
+    if args.json:
+        print_json({"written": paths})
+        return 0
+    for path in paths:
         out.print(f"wrote {path}")
     return 0
 

@@ -5,6 +5,11 @@ actions broken by its own seeded generator, so the agent's generator is left
 alone) and reports mean and standard deviation of the return plus the game's
 own figures (Blackjack win/draw/loss rates, GridWorld success rate and steps
 over the optimum).
+
+The cost of an evaluation follows the game, not only N: it also stops once a
+step budget is spent (at the end of the episode that spends it), so a policy
+that walks in circles until a long time limit is measured on fewer episodes
+instead of for minutes. The report says how many were played and asked for.
 """
 
 from __future__ import annotations
@@ -21,15 +26,21 @@ from tui_gym.core.agent import QAgent
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.profiles.base import GameProfile
 
+# Steps one evaluation may spend: 10,000 Blackjack hands take about 15,000 and a
+# good GridWorld policy about 80,000, while one that loops until a 300-step time
+# limit would take 3,000,000 for the same 10,000 episodes.
+EVAL_STEP_BUDGET = 200_000
+
 
 @dataclass(frozen=True)
 class EvalReport:
     """The result of a greedy evaluation."""
 
-    episodes: int
+    episodes: int  # played
     mean_return: float
     std_return: float
     figures: dict[str, float] = field(default_factory=dict)
+    requested: int | None = None  # asked for, when the step budget stopped it sooner
 
     @property
     def standard_error(self) -> float:
@@ -38,6 +49,7 @@ class EvalReport:
     def to_dict(self) -> dict[str, Any]:
         return {
             "episodes": self.episodes,
+            "episodes_requested": self.requested or self.episodes,
             "mean_return": self.mean_return,
             "std_return": self.std_return,
             **self.figures,
@@ -52,14 +64,21 @@ def evaluate(
     episodes: int,
     seed: int | None = 0,
     progress: Callable[[int], None] | None = None,
+    max_steps: int | None = None,
 ) -> EvalReport:
-    """Play `episodes` greedy episodes on `env` and summarise them."""
+    """Play `episodes` greedy episodes on `env` (fewer once `max_steps` steps are
+    spent, `EVAL_STEP_BUDGET` by default; always at least one) and summarise them."""
     if episodes < 1:
         raise ValueError(f"episodes must be >= 1, got {episodes}")
+    if max_steps is None:
+        max_steps = EVAL_STEP_BUDGET
     rng = np.random.default_rng(seed)
     returns: list[float] = []
     details: list[dict[str, Any]] = []
+    steps = 0
     for i in range(episodes):
+        if steps >= max_steps:
+            break
         obs, info = env.reset(seed=seed if i == 0 else None)
         first_info = dict(info)
         total, length = 0.0, 0
@@ -71,15 +90,18 @@ def evaluate(
             length += 1
             if terminated or truncated:
                 break
+        steps += length
         returns.append(total)
         details.append(profile.episode_detail(first_info, length, total, bool(terminated)))
         if progress is not None:
             progress(i + 1)
     r = np.asarray(returns)
+    played = len(returns)
     outcome = profile.eval_outcome(returns, details)
     return EvalReport(
-        episodes=episodes,
+        episodes=played,
         mean_return=float(r.mean()),
-        std_return=float(r.std(ddof=1)) if episodes > 1 else 0.0,
+        std_return=float(r.std(ddof=1)) if played > 1 else 0.0,
         figures=outcome.figures,
+        requested=episodes if played < episodes else None,
     )

@@ -3,28 +3,108 @@
 Wrapper parameters, env arguments and hyperparameters are all `Param`s. A
 CLI argument and a UI input field both arrive as text; `Param.parse` turns
 that text into an `int`, `float` or `bool`, checks the inclusive range, and
-otherwise raises a `ValueError` that names the field and what it accepts.
+otherwise raises a `ParamError` (a `ValueError`) that names the field and
+says whether the text is not a number of the right kind or a number out of
+range.
+
+`read_number` is the reader behind it, for any text that must be a number:
+ASCII digits only (a person's `١` or `²` is not read as a digit), an optional
+sign, decimal point, exponent and `_` between digits, or `inf` / `nan`.
+Numbers too large for a float read as infinite instead of raising.
 """
 
 from __future__ import annotations
 
 import math
 import numbers
+import re
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Param", "ParamValue"]
+__all__ = ["Param", "ParamError", "ParamValue", "read_number", "shown_value"]
 
 ParamValue = int | float | bool
 
 _TRUE_WORDS = frozenset({"true", "t", "yes", "y", "on", "1"})
 _FALSE_WORDS = frozenset({"false", "f", "no", "n", "off", "0"})
 
+_DIGITS = r"[0-9]+(?:_[0-9]+)*"
+_INTEGER = re.compile(rf"[+-]?{_DIGITS}", re.ASCII)
+_DECIMAL = re.compile(
+    rf"[+-]?(?:{_DIGITS}(?:\.(?:{_DIGITS})?)?|\.{_DIGITS})(?:[eE][+-]?{_DIGITS})?", re.ASCII
+)
+_WORDS = {"inf": math.inf, "infinity": math.inf, "nan": math.nan}
+# Beyond every float, and far below the 4,300 digits Python refuses to convert to an int.
+_MAX_INT_DIGITS = 400
+_FLOAT_MAX = float(np.finfo(np.float64).max)
+
+
+def read_number(text: str) -> int | float | None:
+    """The number `text` spells, or None when it is not one.
+
+    Integers come back as `int` (±inf when they are beyond every float, so that
+    any result converts to a float), other numbers as `float` (possibly inf or
+    nan). Only ASCII digits count.
+    """
+    text = text.strip()
+    if _INTEGER.fullmatch(text):
+        negative = text.startswith("-")
+        digits = text.lstrip("+-").replace("_", "").lstrip("0") or "0"
+        if len(digits) > _MAX_INT_DIGITS or int(digits) > _FLOAT_MAX:
+            return -math.inf if negative else math.inf
+        return -int(digits) if negative else int(digits)
+    if _DECIMAL.fullmatch(text):
+        return float(text)  # huge exponents read as inf, tiny ones as 0.0
+    word = text.lower()
+    sign = -1.0 if word.startswith("-") else 1.0
+    value = _WORDS.get(word.lstrip("+-"))
+    return None if value is None else sign * value
+
+
+def shown_value(raw: object) -> str:
+    """`raw` as an error message quotes it: its repr, shortened when long."""
+    if isinstance(raw, bool | np.bool_ | str | float | np.floating):
+        text = repr(raw if not isinstance(raw, np.generic) else raw.item())
+        if len(text) <= 40:
+            return text
+        if isinstance(raw, str):
+            return f"{raw[:12] + '…' + raw[-6:]!r} ({len(raw):,} characters)"
+        return text[:40] + "…"
+    if isinstance(raw, numbers.Integral):
+        value = int(raw)
+        if value.bit_length() <= 128:
+            return repr(value)
+        digits = int(value.bit_length() * math.log10(2)) + 1
+        return f"{'a negative' if value < 0 else 'an'} integer of about {digits:,} digits"
+    if raw is None:
+        return "None"
+    # Lists and dicts from files and requests: their repr can be huge or nested deeply.
+    return f"a {type(raw).__name__}"
+
 
 def _number_text(value: float) -> str:
     """`1` for 1.0, `0.25` for 0.25: how bounds read in messages."""
     return str(int(value)) if float(value).is_integer() else repr(float(value))
+
+
+class ParamError(ValueError):
+    """A value a `Param` refuses; `out_of_range` tells a number out of range from not a number.
+
+    The message is one line: `label must be an integer in [1, 100], got 'abc'`, or
+    `label is out of range: 500 is not in [1, 100]`.
+    """
+
+    def __init__(self, param: Param, raw: object, out_of_range: bool) -> None:
+        self.param = param
+        self.raw = raw
+        self.out_of_range = out_of_range
+        self.shown = shown_value(raw)
+        if out_of_range:
+            self.reason = f"is out of range: {self.shown} is not in {param.describe_range()}"
+        else:
+            self.reason = f"must be {param.expected()}, got {self.shown}"
+        super().__init__(f"{param.label} {self.reason}")
 
 
 @dataclass(frozen=True)
@@ -75,26 +155,36 @@ class Param:
         noun = "an integer" if self.kind is int else "a number"
         return f"{noun} in {self.describe_range()}"
 
-    def parse(self, raw: str | int | float | bool) -> ParamValue:
+    def parse(self, raw: object) -> ParamValue:
         """Convert `raw` (text or a number) to this param's type and check its range.
 
-        Raises `ValueError` naming the field and its valid values, e.g.
-        `TimeLimit.max_episode_steps must be an integer in [1, 100000], got 'abc'`.
+        Raises `ParamError` naming the field and its valid values, e.g.
+        `TimeLimit.max_episode_steps must be an integer in [1, 100000], got 'abc'` or
+        `TimeLimit.max_episode_steps is out of range: 0 is not in [1, 100000]`.
         """
         value = self._convert(raw)
-        if value is None or (
-            self.kind is not bool
-            and (
-                (self.minimum is not None and value < self.minimum)
-                or (self.minimum is not None and not self.min_inclusive and value == self.minimum)
-                or (self.maximum is not None and value > self.maximum)
-            )
-        ):
-            raise ValueError(f"{self.label} must be {self.expected()}, got {raw!r}")
+        if value is None:
+            raise ParamError(self, raw, out_of_range=False)
+        if self.kind is not bool and not self._in_range(value):
+            raise ParamError(self, raw, out_of_range=True)
+        if self.kind is float:
+            return float(value)
         return value
 
+    def _in_range(self, value: int | float) -> bool:
+        if isinstance(value, float) and not math.isfinite(value):
+            return False
+        if abs(value) > _FLOAT_MAX:  # an int beyond every float: no setting is that large
+            return False
+        if self.minimum is not None and (
+            value < self.minimum or (not self.min_inclusive and value == self.minimum)
+        ):
+            return False
+        return self.maximum is None or value <= self.maximum
+
     def _convert(self, raw: object) -> ParamValue | None:
-        """`raw` as `kind`, or None when it does not read as one."""
+        """`raw` as `kind` (±inf for numbers too large to hold), or None when it does not
+        read as one."""
         if self.kind is bool:
             if isinstance(raw, bool | np.bool_):
                 return bool(raw)
@@ -109,28 +199,19 @@ class Param:
             return None
         if isinstance(raw, bool | np.bool_):
             return None  # True is an int to Python, not to a person typing a step count
-        number: float | int
+        number: int | float | None
         if isinstance(raw, numbers.Integral):
             number = int(raw)
         elif isinstance(raw, numbers.Real):
             number = float(raw)
         elif isinstance(raw, str):
-            text = raw.strip()
-            try:
-                number = int(text)
-            except ValueError:
-                try:
-                    number = float(text)
-                except ValueError:
-                    return None
+            number = read_number(raw)
         else:
             return None
-        if isinstance(number, float) and not math.isfinite(number):
+        if number is None or (isinstance(number, float) and math.isnan(number)):
             return None
-        if self.kind is int:
-            if isinstance(number, float):
-                if not number.is_integer():
-                    return None
-                number = int(number)
-            return number
-        return float(number)
+        if self.kind is int and isinstance(number, float) and math.isfinite(number):
+            if not number.is_integer():
+                return None
+            number = int(number)
+        return number

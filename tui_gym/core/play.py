@@ -58,10 +58,13 @@ class Tally:
         var = (self.total_sq - n * self.mean**2) / (n - 1)
         return math.sqrt(max(0.0, var))
 
-    def confidence_interval(self, z: float = 1.96) -> tuple[float, float]:
-        """Normal-approximation interval for the mean return (NaN below 2 episodes)."""
+    def confidence_interval(
+        self, z: float = 1.96, min_episodes: int = 2
+    ) -> tuple[float, float]:
+        """Normal-approximation interval for the mean return (NaN below `min_episodes`,
+        and never below 2)."""
         n = self.episodes
-        if n < 2:
+        if n < max(2, min_episodes):
             return (float("nan"), float("nan"))
         half = z * self.std / math.sqrt(n)
         return (self.mean - half, self.mean + half)

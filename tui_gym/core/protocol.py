@@ -10,35 +10,99 @@ Requests (an optional `"id"` is echoed back in the response):
 - `{"cmd": "reset"}` (optional `"seed"`): a new episode;
 - `{"cmd": "step", "action": A}`: A as the integer or the action's name;
 - `{"cmd": "render"}`: the text picture (hidden cards stay hidden);
-- `{"cmd": "hint"}`: the exact optimal action(s) in the current state;
+- `{"cmd": "hint"}`: the exact optimal action(s) in the current state, in the
+  game as its wrappers make it;
 - `{"cmd": "help"}`: the list of commands.
 
 Reset and step answer with `observation` (JSON-friendly), `reward`,
 `terminated`, `truncated`, `info`. Any bad line gets `{"error": "..."}` and
-the session goes on.
+the session goes on: bytes that are not UTF-8 (each line is decoded on its
+own), JSON nested too deeply, numbers too long to read, lines too long to
+hold. Every response is plain ASCII JSON with no lone surrogates, so any
+strict reader can read it.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable
+import re
+from collections.abc import Callable, Iterator
 from typing import IO, Any
 
+from tui_gym.core.params import shown_value
 from tui_gym.core.play import HumanGame, PlayError
 from tui_gym.core.profiles.base import to_jsonable
 from tui_gym.core.session import Session
 
 COMMANDS = ("spaces", "reset", "step", "render", "hint", "help")
 
+MAX_LINE_BYTES = 1 << 20  # a request is a few dozen bytes; longer lines are refused, not held
+MAX_DEPTH = 32  # nesting of arrays and objects in a request
+MAX_INT_DIGITS = 64  # integer literals in a request (ids, seeds, actions)
+MAX_SEED = 2**64 - 1
+_SURROGATE = re.compile("[\ud800-\udfff]")
 
-def _finite(value: Any) -> Any:
+
+class _BadNumber(ValueError):
+    """A number in a request that is not read (too many digits, NaN, Infinity)."""
+
+
+def _parse_int(text: str) -> int:
+    if len(text.lstrip("-")) > MAX_INT_DIGITS:
+        raise _BadNumber(f"an integer of {len(text.lstrip('-')):,} digits is too long "
+                         f"(at most {MAX_INT_DIGITS})")
+    return int(text)
+
+
+def _parse_float(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise _BadNumber(f"{shown_value(text)} is beyond the range of a number")
+    return value
+
+
+def _parse_constant(name: str) -> float:
+    raise _BadNumber(f"{name} is not a JSON number")
+
+
+def _decode(line: str) -> Any:
+    """`line` as JSON; ValueError (no internals in its message) when it is not a request's."""
+    try:
+        return json.loads(
+            line, parse_int=_parse_int, parse_float=_parse_float, parse_constant=_parse_constant
+        )
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"not JSON: {exc.msg} at column {exc.colno}") from None
+    except _BadNumber as exc:
+        raise ValueError(f"not a usable request: {exc}") from None
+    except RecursionError:
+        raise ValueError(f"not a usable request: nested deeper than {MAX_DEPTH} levels") from None
+
+
+def _too_deep(value: Any, limit: int = MAX_DEPTH) -> bool:
+    """Whether arrays and objects nest deeper than `limit` (checked without recursion)."""
+    stack = [(value, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, dict | list):
+            if depth > limit:
+                return True
+            children = item.values() if isinstance(item, dict) else item
+            stack.extend((child, depth + 1) for child in children)
+    return False
+
+
+def _clean(value: Any) -> Any:
+    """JSON-safe data: NaN and infinities as null, lone surrogates as U+FFFD."""
     if isinstance(value, float) and not math.isfinite(value):
         return None
+    if isinstance(value, str):
+        return _SURROGATE.sub("\ufffd", value)
     if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [_finite(v) for v in value]
+        return {_clean(str(k)): _clean(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_clean(v) for v in value]
     return value
 
 
@@ -58,18 +122,26 @@ class JsonlPlayer:
             "help": self._help,
         }
 
-    def handle(self, line: str) -> dict[str, Any]:
+    def handle(self, line: str | bytes) -> dict[str, Any]:
         """One request line in, one response object out (never raises for bad input)."""
+        if isinstance(line, bytes):
+            try:
+                line = line.decode("utf-8")
+            except UnicodeDecodeError as exc:
+                return {"error": f"not UTF-8: byte 0x{line[exc.start]:02x} at column "
+                                 f"{exc.start + 1} cannot be decoded"}
         try:
-            request = json.loads(line)
-        except json.JSONDecodeError as exc:
-            return {"error": f"not JSON: {exc.msg} at column {exc.colno}"}
+            request = _decode(line)
+        except ValueError as exc:
+            return {"error": str(exc)}
         if not isinstance(request, dict):
             return {"error": 'a request must be a JSON object like {"cmd": "reset"}'}
+        if _too_deep(request):
+            return {"error": f"not a usable request: nested deeper than {MAX_DEPTH} levels"}
         cmd = request.get("cmd")
         handler = self._handlers.get(cmd) if isinstance(cmd, str) else None
         if handler is None:
-            response = {"error": f"unknown cmd {cmd!r}; commands: {', '.join(COMMANDS)}"}
+            response = {"error": f"unknown cmd {shown_value(cmd)}; commands: {', '.join(COMMANDS)}"}
         else:
             try:
                 response = handler(request)
@@ -79,7 +151,7 @@ class JsonlPlayer:
                 response = {"error": str(exc)}
         if "id" in request:
             response = {"id": request["id"], **response}
-        return _finite(response)
+        return _clean(response)
 
     def _transition(self) -> dict[str, Any]:
         step = self.game.last
@@ -105,16 +177,22 @@ class JsonlPlayer:
 
     def _reset(self, request: dict[str, Any]) -> dict[str, Any]:
         seed = request.get("seed")
-        if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int) or seed < 0):
-            raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+        if seed is not None and (
+            isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED
+        ):
+            raise ValueError(f"seed must be an integer in [0, {MAX_SEED}], got {shown_value(seed)}")
         self.game.reset(seed=seed)
         return self._transition()
 
     def _step(self, request: dict[str, Any]) -> dict[str, Any]:
+        names = ", ".join(self.profile.action_names)
         if "action" not in request:
-            names = ", ".join(self.profile.action_names)
             raise ValueError(f'step needs an "action": an integer or one of {names}')
-        self.game.step(request["action"])
+        action = request["action"]
+        if not isinstance(action, int | str) or len(str(action)) > 32:
+            valid = ", ".join(f"{i}={n}" for i, n in enumerate(self.profile.action_names))
+            raise ValueError(f"invalid action {shown_value(action)}; valid actions: {valid}")
+        self.game.step(action)
         return self._transition()
 
     def _render(self, request: dict[str, Any]) -> dict[str, Any]:
@@ -135,17 +213,43 @@ class JsonlPlayer:
         }
         if advice.values is not None:
             response["action_values"] = {names[a]: v for a, v in advice.values.items()}
+        if advice.unwrapped_optimal:  # the wrappers change the game beyond exact figures
+            response["unwrapped_optimal_actions"] = [names[a] for a in advice.unwrapped_optimal]
         return response
 
     def _help(self, request: dict[str, Any]) -> dict[str, Any]:
         return {"commands": list(COMMANDS), "actions": list(self.profile.action_names)}
 
 
-def serve(player: JsonlPlayer, stdin: IO[str], stdout: IO[str]) -> int:
-    """Answer every line of `stdin` on `stdout`; blank lines are skipped. Returns 0."""
-    for line in stdin:
-        if not line.strip():
+def read_lines(stdin: IO[bytes], limit: int = MAX_LINE_BYTES) -> Iterator[bytes | None]:
+    """Each line of `stdin` as bytes, as soon as it is complete; a line longer than
+    `limit` comes back as None (its bytes are read and dropped, not held)."""
+    while True:
+        line = stdin.readline(limit + 1)
+        if not line:
+            return
+        if len(line) > limit:
+            while line and not line.endswith(b"\n"):
+                line = stdin.readline(limit)
+            yield None
             continue
-        stdout.write(json.dumps(player.handle(line)) + "\n")
+        yield line
+
+
+def serve(player: JsonlPlayer, stdin: IO[bytes], stdout: IO[str]) -> int:
+    """Answer every line of `stdin` (bytes) on `stdout`; blank lines are skipped. Returns 0.
+
+    Lines are read as bytes and decoded one by one, so a bad byte is one bad line.
+    """
+    for line in read_lines(stdin):
+        if line is None:
+            response: dict[str, Any] = {
+                "error": f"line longer than {MAX_LINE_BYTES:,} bytes: not read"
+            }
+        elif not line.strip():
+            continue
+        else:
+            response = player.handle(line)
+        stdout.write(json.dumps(response) + "\n")
         stdout.flush()
     return 0

@@ -23,6 +23,7 @@ from tui_gym.core.evaluation import EvalReport, evaluate
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.profiles import GameProfile, ReferenceMetrics, profile_for, resolve_env_id
+from tui_gym.core.reference.changes import GameChanges
 from tui_gym.core.training import Trainer, TrainingSnapshot
 from tui_gym.core.vector import NoBatchedForm, VectorTrainer
 from tui_gym.core.wrappers import (
@@ -110,6 +111,7 @@ class Session:
         self._built = built
         self.env = built.env
         self.keyer = built.keyer
+        self.changes = GameChanges.of(built.env)  # what the exact figures must take into account
         self._base_keys: list[Hashable] | None | bool = False  # False: not computed yet
 
     def _new_agent(self) -> QAgent:
@@ -303,19 +305,20 @@ class Session:
     def reference(self, snapshot: TrainingSnapshot | None = None) -> ReferenceMetrics | None:
         """The exact comparison of the greedy policy with the optimum."""
         q = self.base_q(snapshot)
-        return None if q is None else self.profile.reference(q, self.env_kwargs)
+        return None if q is None else self.profile.reference(q, self.env_kwargs, self.changes)
 
     def heatmaps(
         self, snapshot: TrainingSnapshot | None = None, focus: Any = None
     ) -> list[Heatmap] | None:
         q = self.base_q(snapshot)
-        return None if q is None else self.profile.heatmaps(q, self.env_kwargs, focus)
+        return None if q is None else self.profile.heatmaps(q, self.env_kwargs, focus,
+                                                            self.changes)
 
     def agent_figures(self, snapshot: TrainingSnapshot | None = None) -> dict[str, float]:
         """Exact scoreboard figures of the agent's greedy policy (the live agent's, or a
         snapshot's) and of the optimum (`profile.agent_figures`); only the optimum's
         when wrappers hide the base states."""
-        return self.profile.agent_figures(self.base_q(snapshot), self.env_kwargs)
+        return self.profile.agent_figures(self.base_q(snapshot), self.env_kwargs, self.changes)
 
     def greedy_actions_for(
         self, observation: Any, snapshot: TrainingSnapshot | None = None

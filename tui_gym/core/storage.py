@@ -1,26 +1,54 @@
-"""Saving and loading agents: one versioned file, written atomically.
+"""Saving and loading agents: one versioned file, written atomically, read with care.
 
 The file is a zip archive (numpy's `.npz`) holding `meta.json` (format name
 and version, env id and arguments, wrapper choices, hyperparameters, seed,
-training counts) and `q.npy` (the Q-table); sparse tables add `keys.json`.
-It is written to a temporary file in the same folder and renamed into place,
-so a crash never leaves half a file. Anything that is not such a file (corrupt,
-truncated, foreign, or from a newer version) raises `StorageError` naming it.
+training counts), `q.npy` (the Q-table) and `counts.npy` (updates per state
+and action); sparse tables add `keys.json`.
+
+Writing (`save_session`, `atomic_write_bytes`) goes through a temporary file
+in the target's folder (`.NAME.PID.RANDOM.tmp`), flushed to disk and renamed
+into place, so a crash never leaves half a file. A path that is a symbolic
+link writes the file it points to; a new file gets the permissions the umask
+gives, a replaced one keeps its own. Termination signals that arrive during
+the write wait until it is done, and temporary files that a killed writer
+left behind are removed by the next save to the same name. `check_save_path`
+says before a long run whether a path can be written at all.
+
+Reading (`read_file`, `load_session`) trusts nothing in the file: only a
+regular file of bounded size is read, every archive member's unpacked size is
+capped before and while it is unpacked, numpy headers are checked against the
+bytes that follow before any array is built, JSON nesting is bounded, and
+every field is validated. Anything that is not a save this version can open
+raises `StorageError`: one line naming the file and, where one is at fault,
+the field.
 """
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
+import math
 import os
-import tempfile
+import re
+import secrets
+import signal
+import stat
+import struct
+import threading
+import time
 import zipfile
+import zlib
+from collections.abc import Callable, Hashable, Iterator
+from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from tui_gym.core.agent import Hyperparameters
+from tui_gym.core.params import shown_value
 
 if TYPE_CHECKING:
     from tui_gym.core.session import Session
@@ -28,38 +56,214 @@ if TYPE_CHECKING:
 FORMAT_NAME = "tui-gym-agent"
 FORMAT_VERSION = 1
 
+MAX_FILE_BYTES = 256 << 20  # the archive on disk
+MAX_META_BYTES = 1 << 20  # meta.json unpacked
+MAX_TABLE_BYTES = 128 << 20  # q.npy, counts.npy and keys.json, each unpacked
+MAX_ROWS = 4_000_000  # table rows (the largest dense table has 2,000,000)
+MAX_JSON_DEPTH = 8
+MAX_COUNT = 2**62  # episodes, steps and update counts
+MAX_SEED = 2**63 - 1
+_COUNTERS = ("episodes_trained", "steps_trained", "agent_episode")
+_STALE_AFTER = 60.0  # seconds: a temporary file without a writer's pid this old is left over
+
 
 class StorageError(ValueError):
     """A save file that cannot be written or read; the message names the file."""
+
+
+# -- writing --------------------------------------------------------------------------------
 
 
 def _key_to_json(key: Any) -> Any:
     return list(key) if isinstance(key, tuple) else key
 
 
-def _key_from_json(value: Any) -> Any:
-    return tuple(value) if isinstance(value, list) else value
+def _real_target(path: Path) -> Path:
+    """Where writing `path` should land: through symbolic links to the file they name."""
+    return Path(os.path.realpath(path)) if path.is_symlink() else path
+
+
+def check_save_path(path: str | Path) -> Path:
+    """`path` as a `Path` when a save can be written there; else `StorageError` saying why.
+
+    Checks what can be known before any work is done: a file name is given, its
+    folder exists and is writable, and the name is not a folder or something
+    other than a file.
+    """
+    text = str(path)
+    if not text.strip():
+        raise StorageError("the save path is empty: give a file name")
+    given = Path(path)
+    if text.endswith(os.sep):
+        raise StorageError(f"{given}: a file name is needed, not a folder")
+    target = _real_target(given)
+    folder = target.parent
+    try:
+        folder_stat = folder.stat()
+    except FileNotFoundError:
+        raise StorageError(f"{given}: the folder {folder} does not exist") from None
+    except OSError as exc:
+        raise StorageError(f"{given}: cannot use the folder {folder} ({exc.strerror})") from None
+    if not stat.S_ISDIR(folder_stat.st_mode):
+        raise StorageError(f"{given}: {folder} is not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise StorageError(f"{given}: the folder {folder} is not writable")
+    try:
+        mode = target.stat().st_mode
+    except FileNotFoundError:
+        return given
+    except OSError as exc:
+        raise StorageError(f"{given}: cannot use this path ({exc.strerror})") from None
+    if stat.S_ISDIR(mode):
+        raise StorageError(f"{given}: is a folder; give a file name")
+    if not stat.S_ISREG(mode):
+        raise StorageError(f"{given}: is not a regular file; will not write over it")
+    return given
+
+
+def _temp_pattern(name: str) -> re.Pattern[str]:
+    # `.NAME.PID.HEX.tmp` (ours) and `.NAME.XXXXXXXX.tmp` (from tempfile, by earlier versions).
+    return re.compile(rf"\.{re.escape(name)}\.(?:(\d+)\.[0-9a-f]+|[a-z0-9_]{{8}})\.tmp")
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError, ValueError):
+        return True  # someone else's process, or not a pid at all: leave its file alone
+    return True
+
+
+def remove_stale_temp_files(path: Path) -> list[Path]:
+    """Remove temporary files a killed writer left beside `path`; returns what was removed.
+
+    Only names of our own pattern go: those whose writer's pid is gone, and
+    older unnamed ones.
+    """
+    pattern = _temp_pattern(path.name)
+    folder = path.parent if str(path.parent) else Path(".")
+    removed: list[Path] = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    now = time.time()
+    for entry in entries:
+        match = pattern.fullmatch(entry.name)
+        if match is None:
+            continue
+        try:
+            info = entry.stat(follow_symlinks=False)
+            if not stat.S_ISREG(info.st_mode):
+                continue
+            pid = match.group(1)
+            stale = (
+                not _pid_alive(int(pid)) if pid is not None
+                else now - info.st_mtime > _STALE_AFTER
+            )
+            if stale:
+                os.unlink(entry.path)
+                removed.append(Path(entry.path))
+        except OSError:
+            continue
+    return removed
+
+
+@contextlib.contextmanager
+def _signals_deferred() -> Iterator[None]:
+    """Hold SIGTERM, SIGHUP and SIGINT until the block is done, then deliver them.
+
+    A write takes milliseconds; finishing it (or removing its temporary file) first
+    means a signal never leaves one behind. Only signals that still have their
+    default action are held (a program's own handlers stay as they are), and only
+    the main thread can set handlers; elsewhere the block runs as is.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[int] = []
+    previous: dict[int, Any] = {}
+    for name in ("SIGTERM", "SIGHUP", "SIGINT"):
+        sig = getattr(signal, name, None)
+        if sig is None:
+            continue
+        try:
+            handler = signal.getsignal(sig)
+            if handler not in (signal.SIG_DFL, signal.default_int_handler):
+                continue
+            previous[sig] = handler
+            signal.signal(sig, lambda signum, frame: caught.append(signum))
+        except (ValueError, OSError):
+            continue
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        for sig in dict.fromkeys(caught):
+            signal.raise_signal(sig)
 
 
 def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write `data` to `path` through a temporary file and a rename."""
-    folder = path.parent if str(path.parent) else Path(".")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    """Write `data` to `path` through a temporary file, fsync and a rename.
+
+    Through a symbolic link the file it points to is written. A new file's mode
+    comes from the umask; a file that is replaced keeps its mode.
+    """
+    target = _real_target(Path(path))
+    folder = target.parent if str(target.parent) else Path(".")
+    remove_stale_temp_files(target)
     try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+        mode = stat.S_IMODE(target.stat().st_mode)
+    except FileNotFoundError:
+        mode = None
+    with _signals_deferred():
+        tmp, fd = _create_temp(folder, target.name)
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(data)
+                fh.flush()
+                if mode is not None:
+                    os.fchmod(fh.fileno(), mode)
+                os.fsync(fh.fileno())
+            os.replace(tmp, target)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
+    _fsync_folder(folder)
+
+
+def _create_temp(folder: Path, name: str) -> tuple[Path, int]:
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0)
+    while True:
+        tmp = folder / f".{name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
+        try:
+            return tmp, os.open(tmp, flags, 0o666)  # the umask applies, as for any new file
+        except FileExistsError:
+            continue
+
+
+def _fsync_folder(folder: Path) -> None:
+    """Make the rename itself durable (where the platform allows it)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
 
 
 def session_meta(session: Session) -> dict[str, Any]:
     """Everything but the table, as JSON data."""
     from tui_gym.core.wrappers import format_wrapper_spec
 
+    assert session.hp is not None  # set when the session is built
     return {
         "format": FORMAT_NAME,
         "version": FORMAT_VERSION,
@@ -76,21 +280,32 @@ def session_meta(session: Session) -> dict[str, Any]:
     }
 
 
+def _npy_bytes(array: np.ndarray) -> bytes:
+    buf = io.BytesIO()
+    np.save(buf, array, allow_pickle=False)
+    return buf.getvalue()
+
+
 def save_session(session: Session, path: str | Path) -> Path:
-    """Save a session's agent and settings to `path` (atomically)."""
-    path = Path(path)
+    """Save a session's agent and settings to `path` (atomically); returns `path`."""
+    path = check_save_path(path)
     q, keys = session.agent.table()
+    members = {
+        "meta.json": json.dumps(session_meta(session), indent=2).encode(),
+        "q.npy": _npy_bytes(q),
+        "counts.npy": _npy_bytes(session.agent.update_counts()),
+    }
+    if keys is not None:
+        members["keys.json"] = json.dumps([_key_to_json(k) for k in keys]).encode()
+    for name, data in members.items():
+        cap = MAX_META_BYTES if name == "meta.json" else MAX_TABLE_BYTES
+        if len(data) > cap or len(q) > MAX_ROWS:
+            # Never write a file this version would refuse to read.
+            raise StorageError(f"{path}: cannot save: the table is too large ({len(q):,} rows)")
     buf = io.BytesIO()
     with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-        zf.writestr("meta.json", json.dumps(session_meta(session), indent=2))
-        qbuf = io.BytesIO()
-        np.save(qbuf, q, allow_pickle=False)
-        zf.writestr("q.npy", qbuf.getvalue())
-        cbuf = io.BytesIO()
-        np.save(cbuf, session.agent.update_counts(), allow_pickle=False)
-        zf.writestr("counts.npy", cbuf.getvalue())
-        if keys is not None:
-            zf.writestr("keys.json", json.dumps([_key_to_json(k) for k in keys]))
+        for name, data in members.items():
+            zf.writestr(name, data)
     try:
         atomic_write_bytes(path, buf.getvalue())
     except OSError as exc:
@@ -98,75 +313,340 @@ def save_session(session: Session, path: str | Path) -> Path:
     return path
 
 
+# -- reading --------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class _Reader:
+    """Messages for one file: every refusal names it."""
+
+    path: Path
+
+    def error(self, text: str) -> StorageError:
+        return StorageError(f"{self.path}: {text}")
+
+    def field(self, name: str, problem: str) -> StorageError:
+        return StorageError(f"{self.path}: not a valid save file: {name} {problem}")
+
+
+_FILE_KINDS = (
+    (stat.S_ISFIFO, "a named pipe"),
+    (stat.S_ISCHR, "a device"),
+    (stat.S_ISBLK, "a device"),
+    (stat.S_ISSOCK, "a socket"),
+)
+
+
+def _read_regular_file(reader: _Reader) -> bytes:
+    """The bytes of a regular file of at most MAX_FILE_BYTES; pipes and devices are refused
+    without reading (or waiting on) them."""
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
+    try:
+        fd = os.open(reader.path, flags)
+    except FileNotFoundError:
+        raise reader.error("no such file") from None
+    except IsADirectoryError:
+        raise reader.error("is a folder, not a save file") from None
+    except OSError as exc:
+        raise reader.error(f"cannot read ({exc.strerror or exc})") from None
+    try:
+        info = os.fstat(fd)
+        if stat.S_ISDIR(info.st_mode):
+            raise reader.error("is a folder, not a save file")
+        if not stat.S_ISREG(info.st_mode):
+            kind = next((name for test, name in _FILE_KINDS if test(info.st_mode)), "not a file")
+            raise reader.error(f"is {kind}, not a save file")
+        if info.st_size > MAX_FILE_BYTES:
+            raise reader.error(
+                f"not a tui-gym save file ({info.st_size:,} bytes; "
+                f"saves are at most {MAX_FILE_BYTES:,})"
+            )
+        chunks = []
+        total = 0
+        while total <= MAX_FILE_BYTES:
+            chunk = os.read(fd, min(1 << 20, MAX_FILE_BYTES + 1 - total))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            total += len(chunk)
+        if total > MAX_FILE_BYTES:
+            raise reader.error(f"not a tui-gym save file (over {MAX_FILE_BYTES:,} bytes)")
+        return b"".join(chunks)
+    except OSError as exc:
+        raise reader.error(f"cannot read ({exc.strerror or exc})") from None
+    finally:
+        os.close(fd)
+
+
+def _member(reader: _Reader, zf: zipfile.ZipFile, name: str, cap: int) -> bytes | None:
+    """One archive member, unpacked to at most `cap` bytes; None when it is absent."""
+    try:
+        info = zf.getinfo(name)
+    except KeyError:
+        return None
+    if info.file_size > cap:
+        raise reader.field(name, f"would unpack to {info.file_size:,} bytes (at most {cap:,})")
+    with zf.open(info) as fh:
+        data = fh.read(cap + 1)  # the declared size can lie: never unpack more than the cap
+    if len(data) > cap:
+        raise reader.field(name, f"unpacks to over {cap:,} bytes")
+    return data
+
+
+def _json(reader: _Reader, name: str, data: bytes) -> Any:
+    try:
+        value = json.loads(data.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise reader.field(name, "is not UTF-8 text") from None
+    except json.JSONDecodeError as exc:
+        raise reader.field(name, f"is not JSON ({exc.msg} at line {exc.lineno})") from None
+    except RecursionError:
+        raise reader.field(name, f"nests deeper than {MAX_JSON_DEPTH} levels") from None
+    except ValueError:  # an integer too long to read
+        raise reader.field(name, "holds a number too long to read") from None
+    if _depth_over(value, MAX_JSON_DEPTH):
+        raise reader.field(name, f"nests deeper than {MAX_JSON_DEPTH} levels")
+    return value
+
+
+def _depth_over(value: Any, limit: int) -> bool:
+    """Whether lists and objects nest deeper than `limit` (checked without recursion)."""
+    stack = [(value, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, dict | list):
+            if depth > limit:
+                return True
+            stack.extend((child, depth + 1) for child in (
+                item.values() if isinstance(item, dict) else item
+            ))
+    return False
+
+
+def _array(reader: _Reader, name: str, data: bytes, kinds: str) -> np.ndarray:
+    """A 2-D `.npy` array whose header agrees with its bytes, of a dtype kind in `kinds`."""
+    buf = io.BytesIO(data)
+    try:
+        major, _minor = np.lib.format.read_magic(buf)
+        if major == 1:
+            shape, fortran, dtype = np.lib.format.read_array_header_1_0(buf)
+        elif major in (2, 3):
+            shape, fortran, dtype = np.lib.format.read_array_header_2_0(buf)
+        else:
+            raise ValueError("unknown .npy version")
+    except (ValueError, EOFError, SyntaxError, TypeError):
+        raise reader.field(name, "is not a numpy array file") from None
+    if dtype.hasobject or dtype.kind not in kinds or dtype.itemsize == 0:
+        raise reader.field(name, f"holds {dtype} values")
+    if len(shape) != 2:
+        raise reader.field(name, f"must be a 2-D table, has shape {shape}")
+    rows, columns = shape
+    if rows > MAX_ROWS or columns > 1024:
+        raise reader.field(name, f"declares {rows:,} x {columns:,} entries (too large)")
+    needed = rows * columns * dtype.itemsize
+    if len(data) - buf.tell() != needed:
+        raise reader.field(
+            name, f"declares {rows:,} x {columns:,} entries but holds "
+            f"{len(data) - buf.tell():,} bytes of data, not {needed:,}"
+        )
+    array = np.frombuffer(data, dtype=dtype, count=rows * columns, offset=buf.tell())
+    return array.reshape(shape, order="F" if fortran else "C")
+
+
+def _key_from_json(reader: _Reader, index: int, value: Any) -> Hashable:
+    """A saved sparse key: a number, a string, or a flat list of numbers (made a tuple)."""
+    if isinstance(value, list):
+        if all(_plain_number(v) for v in value):
+            return tuple(value)
+    elif _plain_number(value) or isinstance(value, str):
+        return value
+    raise reader.field(f"keys.json[{index}]", f"is not a state key (got {shown_value(value)})")
+
+
+def _plain_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and (
+        isinstance(value, int) or math.isfinite(value)
+    )
+
+
 def read_file(
     path: str | Path,
 ) -> tuple[dict[str, Any], np.ndarray, list[Any] | None, np.ndarray | None]:
-    """Meta, Q-table, sparse keys and update counts of a save file; StorageError if not one."""
-    path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise StorageError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise StorageError(f"{path}: is a folder, not a save file") from None
-    except OSError as exc:
-        raise StorageError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    """Meta, Q-table, sparse keys and update counts of a save file; StorageError if not one.
+
+    The meta's format and version are checked here, the table's values and shape
+    and the keys' form too; `load_session` checks the rest of the meta against the
+    game it names.
+    """
+    reader = _Reader(Path(path))
+    raw = _read_regular_file(reader)
     try:
         with zipfile.ZipFile(io.BytesIO(raw)) as zf:
-            names = set(zf.namelist())
-            if "meta.json" not in names:
-                raise StorageError(f"{path}: not a tui-gym save file (no meta.json inside)")
-            meta = json.loads(zf.read("meta.json").decode("utf-8"))
+            meta_bytes = _member(reader, zf, "meta.json", MAX_META_BYTES)
+            if meta_bytes is None:
+                raise reader.error("not a tui-gym save file (no meta.json inside)")
+            meta = _json(reader, "meta.json", meta_bytes)
             if not isinstance(meta, dict) or meta.get("format") != FORMAT_NAME:
-                raise StorageError(f"{path}: not a tui-gym save file (format is not {FORMAT_NAME})")
-            version = meta.get("version")
-            if not isinstance(version, int):
-                raise StorageError(f"{path}: save file has no valid format version")
-            if version > FORMAT_VERSION:
-                raise StorageError(
-                    f"{path}: saved by a newer tui-gym (format {version}; "
-                    f"this one reads up to {FORMAT_VERSION}); upgrade tui-gym to open it"
-                )
-            q = np.load(io.BytesIO(zf.read("q.npy")), allow_pickle=False)
+                raise reader.error(f"not a tui-gym save file (format is not {FORMAT_NAME})")
+            _check_version(reader, meta.get("version"))
+            q_bytes = _member(reader, zf, "q.npy", MAX_TABLE_BYTES)
+            if q_bytes is None:
+                raise reader.field("q.npy", "is missing (the Q-table)")
+            q = _array(reader, "q.npy", q_bytes, "f").astype(np.float64)
+            if not np.isfinite(q).all():
+                raise reader.field("q.npy", "holds NaN or infinite Q-values")
             counts = None
-            if "counts.npy" in names:
-                counts = np.load(io.BytesIO(zf.read("counts.npy")), allow_pickle=False)
+            counts_bytes = _member(reader, zf, "counts.npy", MAX_TABLE_BYTES)
+            if counts_bytes is not None:
+                counts = _array(reader, "counts.npy", counts_bytes, "iu")
+                if counts.shape != q.shape:
+                    raise reader.field(
+                        "counts.npy", f"has shape {counts.shape}, the Q-table {q.shape}"
+                    )
+                if counts.size and (counts.min() < 0 or counts.max() > MAX_COUNT):
+                    raise reader.field("counts.npy", "holds negative or impossible counts")
+                counts = counts.astype(np.int64)
             keys = None
-            if "keys.json" in names:
-                keys = [_key_from_json(k) for k in json.loads(zf.read("keys.json"))]
+            keys_bytes = _member(reader, zf, "keys.json", MAX_TABLE_BYTES)
+            if keys_bytes is not None:
+                keys = _keys(reader, _json(reader, "keys.json", keys_bytes), len(q))
     except StorageError:
         raise
-    except (zipfile.BadZipFile, EOFError):
-        raise StorageError(f"{path}: not a tui-gym save file (corrupt or truncated)") from None
-    except (KeyError, ValueError, UnicodeDecodeError, zipfile.LargeZipFile, OSError) as exc:
-        raise StorageError(f"{path}: corrupt save file ({exc})") from None
+    except (zipfile.BadZipFile, zlib.error, EOFError, ValueError, struct.error):
+        # ValueError: zipfile's own, on offsets a damaged directory points past the start.
+        raise reader.error("not a tui-gym save file (corrupt or truncated)") from None
+    except (NotImplementedError, RuntimeError, zipfile.LargeZipFile, OSError) as exc:
+        # Unsupported compression, encryption, ZIP64 oddities: not a file we wrote.
+        raise reader.error(f"not a tui-gym save file ({_short_reason(exc)})") from None
+    except MemoryError:
+        raise reader.error("not a tui-gym save file (too large to read)") from None
     return meta, q, keys, counts
+
+
+def _short_reason(exc: BaseException) -> str:
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def _check_version(reader: _Reader, version: Any) -> None:
+    if version is None or isinstance(version, bool) or not isinstance(version, int):
+        raise reader.error(
+            f"save file has no valid format version (got {shown_value(version)})"
+        )
+    if version < 1:
+        raise reader.field("version", f"must be positive, got {shown_value(version)}")
+    if version > FORMAT_VERSION:
+        raise reader.error(
+            f"saved by a newer tui-gym (format {shown_value(version)}; "
+            f"this one reads up to {FORMAT_VERSION}); upgrade tui-gym to open it"
+        )
+
+
+def _keys(reader: _Reader, value: Any, rows: int) -> list[Hashable]:
+    if not isinstance(value, list):
+        raise reader.field("keys.json", f"must be a list of state keys, got {shown_value(value)}")
+    if len(value) != rows:
+        raise reader.field("keys.json", f"has {len(value):,} keys for {rows:,} table rows")
+    keys = [_key_from_json(reader, i, k) for i, k in enumerate(value)]
+    if len(set(keys)) != len(keys):
+        raise reader.field("keys.json", "names a state twice")
+    return keys
+
+
+def _int_field(
+    reader: _Reader, meta: dict[str, Any], name: str, default: int, low: int, high: int
+) -> int:
+    value = meta.get(name, default)
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise reader.field(name, f"must be an integer in [{low}, {high}], got {shown_value(value)}")
+    return value
+
+
+def _checked(reader: _Reader, name: str, build: Callable[[], Any]) -> Any:
+    """`build()`, with a ValueError or TypeError it raises refused under the field's name."""
+    try:
+        return build()
+    except StorageError:
+        raise
+    except (ValueError, TypeError, KeyError) as exc:
+        raise reader.field(name, f"is not valid: {_short_reason(exc)}") from None
 
 
 def load_session(path: str | Path) -> Session:
     """Rebuild a session (env, wrappers, hyperparameters, agent) from a save file."""
+    from tui_gym.core.profiles import profile_for
     from tui_gym.core.session import Session
     from tui_gym.core.wrappers import parse_wrapper_spec
 
+    reader = _Reader(Path(path))
     meta, q, keys, counts = read_file(path)
+
+    env_id = meta.get("env_id")
+    if not isinstance(env_id, str):
+        raise reader.field("env_id", f"must be a game id, got {shown_value(env_id)}")
+    profile = _checked(reader, "env_id", lambda: profile_for(env_id))
+    env_kwargs = meta.get("env_kwargs", {})
+    if not isinstance(env_kwargs, dict):
+        raise reader.field("env_kwargs", f"must be an object, got {shown_value(env_kwargs)}")
+    env_kwargs = _checked(reader, "env_kwargs", lambda: profile.normalize_kwargs(env_kwargs))
+    wrappers = meta.get("wrappers", [])
+    if not isinstance(wrappers, list):
+        raise reader.field("wrappers", f"must be a list of specs, got {shown_value(wrappers)}")
+    choices = []
+    for i, spec in enumerate(wrappers):
+        if not isinstance(spec, str):
+            raise reader.field(
+                f"wrappers[{i}]", f"must be a spec like 'TimeLimit:max_episode_steps=50', "
+                f"got {shown_value(spec)}"
+            )
+        choices.append(_checked(reader, f"wrappers[{i}]", partial(parse_wrapper_spec, spec)))
+    hp_data = meta.get("hyperparameters")
+    if not isinstance(hp_data, dict):
+        raise reader.field("hyperparameters", f"must be an object, got {shown_value(hp_data)}")
+    hp = _checked(reader, "hyperparameters", lambda: Hyperparameters.from_dict(hp_data))
+    seed = _int_field(reader, meta, "seed", 0, 0, MAX_SEED)
+    episodes = _int_field(reader, meta, "episodes_trained", 0, 0, MAX_COUNT)
+    steps = _int_field(reader, meta, "steps_trained", 0, 0, MAX_COUNT)
+    agent_episode = _int_field(reader, meta, "agent_episode", episodes, 0, MAX_COUNT)
+    for name in ("observation_space",):
+        if name in meta and not isinstance(meta[name], str):
+            raise reader.field(name, f"must be text, got {shown_value(meta[name])}")
+
     try:
         session = Session(
-            env_id=str(meta["env_id"]),
-            env_kwargs=dict(meta.get("env_kwargs", {})),
-            choices=tuple(parse_wrapper_spec(s) for s in meta.get("wrappers", [])),
-            hp=Hyperparameters.from_dict(meta["hyperparameters"]),
-            seed=int(meta.get("seed", 0)),
+            env_id=env_id, env_kwargs=env_kwargs, choices=tuple(choices), hp=hp, seed=seed
         )
-        if q.ndim != 2 or q.shape[1] != session.agent.n_actions:
-            raise ValueError(f"Q-table shape {q.shape} does not fit {session.env_id}")
+    except (ValueError, TypeError, KeyError) as exc:
+        raise reader.error(f"cannot rebuild the saved game ({_short_reason(exc)})") from None
+    if session.skipped:
+        choice, reason = session.skipped[0]
+        index = list(choices).index(choice)
+        raise reader.field(f"wrappers[{index}]", f"does not fit {session.env_id}: {reason}")
+    n_actions = _int_field(reader, meta, "n_actions", session.agent.n_actions, 1, 1 << 20)
+    if n_actions != session.agent.n_actions:
+        raise reader.field(
+            "n_actions", f"is {n_actions}; {session.env_id} with these wrappers has "
+            f"{session.agent.n_actions}"
+        )
+    if q.shape[1] != session.agent.n_actions:
+        raise reader.field(
+            "q.npy", f"has {q.shape[1]} columns; {session.env_id} has "
+            f"{session.agent.n_actions} actions"
+        )
+    dense_rows = session.agent.n_states
+    if dense_rows is not None and keys is not None:
+        raise reader.field("keys.json", f"is for a sparse table; {session.env_id}'s is dense")
+    if dense_rows is not None and len(q) != dense_rows:
+        raise reader.field("q.npy", f"has {len(q):,} rows; {session.env_id} has {dense_rows:,}")
+    if dense_rows is None and keys is None:
+        raise reader.field("keys.json", "is missing (the states of the sparse table's rows)")
+    try:
         session.agent.load_table(q, keys, counts)
-        session.agent.episode = int(meta.get("agent_episode", meta.get("episodes_trained", 0)))
-        session.agent.set_hyperparameters(session.hp)
-        session.trainer.episodes = int(meta.get("episodes_trained", 0))
-        session.trainer.steps = int(meta.get("steps_trained", 0))
-        session.trainer.publish()
-    except StorageError:
-        raise
     except (KeyError, TypeError, ValueError) as exc:
-        raise StorageError(f"{path}: cannot restore the saved agent ({exc})") from None
+        raise reader.error(f"cannot restore the saved agent ({_short_reason(exc)})") from None
+    session.agent.episode = agent_episode
+    session.agent.set_hyperparameters(hp)
+    session.trainer.episodes = episodes
+    session.trainer.steps = steps
+    session.trainer.publish()
     return session

@@ -47,6 +47,7 @@ class TrainingSnapshot:
     budget: int  # the episode budget from the hyperparameters
     last: EpisodeStats | None = None
     version: int = 0  # increases with every snapshot of a run
+    recorded: int = 0  # episodes in the statistics (fewer than `episodes` after a load)
     _lookup: dict[Hashable, int] | None = field(default=None, repr=False, compare=False)
 
     def values(self, keys: list[Hashable]) -> np.ndarray:
@@ -281,6 +282,7 @@ class Trainer:
             budget=self.agent.hp.episodes,
             last=self.last,
             version=self._version,
+            recorded=w["return"].count,
         )
 
     def progress(self) -> TrainerProgress:

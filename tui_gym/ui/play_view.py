@@ -48,6 +48,7 @@ from tui_gym.core.profiles.base import (
     Advice,
     ScoreRow,
     format_reward,
+    interval_text,
     plural,
     signed,
     to_jsonable,
@@ -192,8 +193,11 @@ class PlayView(Vertical):
         self.reload()
 
     def on_show(self) -> None:
-        """Shown again (e.g. back from the Train view): the agent may have learned."""
+        """Shown again (e.g. back from the Train view): the agent may have learned, so
+        the scoreboard and the advice's word on the agent are read afresh, together."""
         self.refresh_agent_figures()
+        if not self.watching:
+            self._show_status()
 
     def on_hide(self) -> None:
         self.stop_watching(restore=True)
@@ -328,6 +332,8 @@ class PlayView(Vertical):
             except Exception:  # coaching is a help, never a reason to fail
                 self._coach = ""
             self._coach_tone = "-good" if agreed else "-bad"
+        elif before is not None and before.unwrapped_optimal:  # no optimum to judge against
+            self._coach = "no verdict: " + before.note
         if step.done:
             word = profile.tally_word(step)
             self.outcomes[word] = self.outcomes.get(word, 0) + 1
@@ -456,6 +462,8 @@ class PlayView(Vertical):
         if choice is None:
             return "agent: has never seen this state (it would pick at random)"
         ties, q = choice
+        if len(ties) == len(q) > 1:  # every action ties: what it does is a coin toss
+            return "agent: no preference here (it would pick at random)"
 
         def name(a: int) -> str:
             return names[a] if a < len(names) else str(a)
@@ -508,8 +516,9 @@ class PlayView(Vertical):
         """The scoreboard's rows as the profile words them."""
         session = self.app.session
         watched = self.agent_card if self.agent_card.tally.episodes else None
+        scope = session.profile.scope(session.env_kwargs, session.changes)
         return session.profile.scoreboard(
-            self.scorecard, self.agent_figures, watched, session.hidden_reason()
+            self.scorecard, self.agent_figures, watched, session.hidden_reason(), scope
         )
 
     def _show_scoreboard(self) -> None:
@@ -667,9 +676,7 @@ class PlayView(Vertical):
         mean = "[$text-muted]–[/]"
         if tally.episodes:
             mean = f"[b]{format_reward(round(tally.mean, 3))}[/]"
-            low, high = tally.confidence_interval()
-            if low == low:  # NaN below two episodes
-                mean += f" ± {(high - low) / 2:.3f} [$text-muted](95% CI)[/]"
+            mean += f" ± {interval_text(tally)} [$text-muted](95% CI)[/]"
         parts.append(f"[$text-muted]mean return[/] {mean}")
         self.query_one("#play-tally", Static).update(Content.from_markup("   ".join(parts)))
 

@@ -33,7 +33,7 @@ from tui_gym.core.training import TrainingSnapshot
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
 from tui_gym.ui.widgets.progress_line import ProgressLine
-from tui_gym.ui.widgets.stats_panel import StatsPanel, format_duration
+from tui_gym.ui.widgets.stats_panel import StatsPanel, format_duration, run_state
 from tui_gym.ui.widgets.training_charts import TrainingCharts
 
 if TYPE_CHECKING:
@@ -369,15 +369,15 @@ class TrainView(Vertical):
             self._stats.tooltip = reason  # the compact layout hides the line
 
     def _show_state(self, runner: TrainingRunner) -> None:
+        """The badge, from what is shown: running (a run, or one episode, under way),
+        finished (the budget in force used up), paused (training has begun, even
+        mid-way through its first episode) or ready."""
         snapshot = self._snapshot
-        if runner.running:
-            state = "running"
-        elif runner.finished or (snapshot is not None and snapshot.episodes >= snapshot.budget):
-            state = "finished"
-        elif snapshot is None or snapshot.episodes == 0:
-            state = "idle"
-        else:
-            state = "paused"
+        busy = runner.running or not runner.wait_idle(0)
+        episodes = snapshot.episodes if snapshot is not None else 0
+        steps = snapshot.steps if snapshot is not None else 0
+        budget = self.session.agent.hp.episodes
+        state = run_state(busy, episodes, steps, budget)
         if state == self._state:
             return
         self._state = state

@@ -18,9 +18,25 @@ import numpy as np
 from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.params import Param
+from tui_gym.core.reference.changes import NO_CHANGES, GameChanges
 
 if TYPE_CHECKING:
     from tui_gym.core.play import PlayStep, Scorecard, Tally
+
+
+@dataclass(frozen=True)
+class Scope:
+    """Whether a game's exact figures describe the game as it is played (with its
+    wrappers), and a note for people when there is something to say: which
+    wrappers they take into account, or that they are figures of the unwrapped
+    game because a wrapper changes it in a way they cannot follow."""
+
+    exact: bool = True
+    note: str = ""
+
+
+EXACT = Scope()
+MIN_CI_EPISODES = 30  # episodes before a mean's 95% interval is shown (normal approximation)
 
 
 @dataclass(frozen=True)
@@ -29,15 +45,23 @@ class ReferenceMetrics:
 
     figures: dict[str, float]  # e.g. exact_value / optimal_value / gap, or optimal_pair_fraction
     summary: str  # one line for people
+    scope: Scope = EXACT  # whether the figures are of the game as played
 
 
 @dataclass(frozen=True)
 class Advice:
-    """What the exact optimum would do in the env's current state."""
+    """What the exact optimum would do in the env's current state.
+
+    `optimal` and `values` are for the game as played, wrappers included;
+    when the wrappers change it in a way the exact figures cannot follow,
+    both are empty and `unwrapped_optimal` holds the unwrapped game's optimum
+    (the note says so), so nothing claims an optimum that may not be one.
+    """
 
     optimal: tuple[int, ...]  # every optimal action (empty when there is no decision)
     values: dict[int, float] | None = None  # exact expected return per action, when known
     note: str = ""  # one line for people
+    unwrapped_optimal: tuple[int, ...] = ()  # the unwrapped game's optimum, when not exact
 
 
 class TallyWord(NamedTuple):
@@ -108,7 +132,8 @@ class GameProfile(ABC):
             text = action.strip().lower()
             if text in self.action_names:
                 return self.action_names.index(text)
-            if text.isdigit() and int(text) < len(self.action_names):
+            # ASCII digits only ('١' and '²' are digits to Python, not to the protocol).
+            if text.isascii() and text.isdigit() and int(text) < len(self.action_names):
                 return int(text)
         names = ", ".join(f"{i}={n}" for i, n in enumerate(self.action_names))
         raise ValueError(f"invalid action {action!r}; valid actions: {names}")
@@ -118,14 +143,30 @@ class GameProfile(ABC):
         """Every state of the bare env that heatmaps and the exact reference look at."""
 
     @abstractmethod
-    def reference(self, q: np.ndarray, env_kwargs: Mapping[str, Any]) -> ReferenceMetrics:
-        """Exact comparison of the greedy policy of `q` (rows: base states) with the optimum."""
+    def reference(
+        self, q: np.ndarray, env_kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> ReferenceMetrics:
+        """Exact comparison of the greedy policy of `q` (rows: base states) with the optimum,
+        in the game as the wrappers (`changes`) make it where `scope` says it can be.
+
+        The greedy policy breaks ties at random, as the agent does: a state whose
+        actions tie (an unvisited one, all zeros) counts as a uniform choice."""
 
     @abstractmethod
     def heatmaps(
-        self, q: np.ndarray, env_kwargs: Mapping[str, Any], focus: Any = None
+        self,
+        q: np.ndarray,
+        env_kwargs: Mapping[str, Any],
+        focus: Any = None,
+        changes: GameChanges = NO_CHANGES,
     ) -> list[Heatmap]:
         """Heatmap panels for `q` (rows = base_observations); `focus` picks e.g. a target."""
+
+    def scope(self, env_kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> Scope:
+        """Whether the exact figures can follow what the wrappers change (see `Scope`)."""
+        if changes.others:
+            return Scope(False, unwrapped_note(changes.others))
+        return EXACT
 
     @abstractmethod
     def describe(self, observation: Any) -> str:
@@ -204,7 +245,8 @@ class GameProfile(ABC):
 
     @abstractmethod
     def advice(self, env: Any, env_kwargs: Mapping[str, Any]) -> Advice:
-        """The optimal action(s) in the env's current (bare) state."""
+        """The optimal action(s) in the env's current state, in the game as its
+        wrappers make it (read from `env`); see `Advice` for when they cannot say."""
 
     # --- coaching and the scoreboard ----------------------------------------
     def coach_text(
@@ -238,10 +280,14 @@ class GameProfile(ABC):
         return {}
 
     def agent_figures(
-        self, q: np.ndarray | None, env_kwargs: Mapping[str, Any]
+        self,
+        q: np.ndarray | None,
+        env_kwargs: Mapping[str, Any],
+        changes: GameChanges = NO_CHANGES,
     ) -> dict[str, float]:
         """Exact figures for the scoreboard: of the greedy policy of `q` (rows = base
-        states; None when wrappers hide them) and of the optimum. A few ms at most."""
+        states; None when wrappers hide them; ties broken at random, as the agent
+        does) and of the optimum. A few ms at most."""
         return {}
 
     def scoreboard(
@@ -250,10 +296,12 @@ class GameProfile(ABC):
         figures: Mapping[str, float] | None,
         watched: Scorecard | None = None,
         agent_note: str = "",
+        scope: Scope = EXACT,
     ) -> list[ScoreRow]:
         """The scoreboard's rows: the person (`you`), the agent (exact `figures` from
         `agent_figures`, or `agent_note` saying why there are none), the optimum,
-        and the agent's episodes watched on the board."""
+        and the agent's episodes watched on the board; `scope` says whether the
+        exact figures are of the game as played."""
         rows = [
             ScoreRow(
                 "You",
@@ -314,15 +362,21 @@ def plural(count: int, noun: str) -> str:
 
 
 def return_summary(tally: Tally, noun: str, short: bool = False) -> str:
-    """'mean return −0.125 ± 0.412 (95% CI) over 8 hands' or 'no hands played yet';
-    `short`: '−0.125 ± 0.412 over 8 hands'."""
+    """'mean return −0.125 ± 0.412 (95% CI) over 38 hands' or 'no hands played yet';
+    `short`: '−0.125 ± 0.412 over 38 hands'. Below `MIN_CI_EPISODES` the
+    interval shows as '–' (a handful of hands says little about its width)."""
     if not tally.episodes:
         return f"no {noun}s yet" if short else f"no {noun}s played yet"
     text = signed(tally.mean, 3) if short else f"mean return {signed(tally.mean, 3)}"
-    low, high = tally.confidence_interval()
-    if low == low:  # NaN below two episodes
-        text += f" ± {(high - low) / 2:.3f}" + ("" if short else " (95% CI)")
+    text += " ± " + interval_text(tally) + ("" if short else " (95% CI)")
     return f"{text} over {plural(tally.episodes, noun)}"
+
+
+def interval_text(tally: Tally) -> str:
+    """The half-width of the 95% interval of the mean return ('0.412'), or '–' while
+    fewer than `MIN_CI_EPISODES` episodes make it."""
+    low, high = tally.confidence_interval(min_episodes=MIN_CI_EPISODES)
+    return "–" if low != low else f"{(high - low) / 2:.3f}"  # NaN: too few episodes
 
 
 def agreement_summary(
@@ -358,3 +412,23 @@ def join_parts(*parts: str) -> str:
 def greedy_policy(q: np.ndarray) -> np.ndarray:
     """Greedy action per row; ties go to the lowest action (deterministic, for exact scoring)."""
     return np.argmax(q, axis=1).astype(np.int64)
+
+
+def greedy_probabilities(q: np.ndarray) -> np.ndarray:
+    """Each action's chance per row under the greedy policy as the agent plays it:
+    ties (e.g. an unvisited state's zeros) broken uniformly at random."""
+    q = np.asarray(q, dtype=np.float64)
+    tied = q == q.max(axis=1, keepdims=True)
+    return tied / tied.sum(axis=1, keepdims=True)
+
+
+def all_tied(q: np.ndarray) -> np.ndarray:
+    """Per row: whether every action ties (the agent has no preference there)."""
+    q = np.asarray(q)
+    return (q == q[:, :1]).all(axis=1)
+
+
+def unwrapped_note(names: tuple[str, ...] | list[str]) -> str:
+    """'figures of the unwrapped game: StickyAction changes it'."""
+    verb = "changes" if len(names) == 1 else "change"
+    return f"figures of the unwrapped game: {', '.join(names)} {verb} it"

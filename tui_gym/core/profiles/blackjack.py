@@ -2,8 +2,15 @@
 
 Actions are stick (0) and hit (1). Base states are every decision state
 (player sum 4-21, dealer card A-10, usable ace); the exact reference scores
-the greedy policy with `reference.blackjack.policy_value`, and the heatmaps
-are the two halves of a basic-strategy chart.
+the greedy policy with `reference.blackjack.policy_value` (ties broken at
+random, as the agent breaks them), and the heatmaps are the two halves of a
+basic-strategy chart.
+
+Reward wrappers (`ScaleReward`, `StepPenalty`, `ClipReward`, any function of
+a step's reward) and a `TimeLimit` too long to cut a hand short are taken into
+account exactly: the dynamic programme runs on the rewards the wrapped env
+hands out. Anything else that changes the game (`StickyAction`, a shorter
+`TimeLimit`) leaves the figures those of the unwrapped game, and they say so.
 """
 
 from __future__ import annotations
@@ -17,27 +24,32 @@ import numpy as np
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.params import Param
 from tui_gym.core.profiles.base import (
+    EXACT,
     Advice,
     EvalOutcome,
     GameProfile,
     ReferenceMetrics,
+    Scope,
     ScoreRow,
     agreement_summary,
     format_reward,
-    greedy_policy,
+    greedy_probabilities,
     join_parts,
     return_summary,
     signed,
+    unwrapped_note,
     watched_row,
 )
 from tui_gym.core.reference.blackjack import (
     POLICY_SHAPE,
     BlackjackRules,
+    mixed_policy_value,
     optimal_action_values,
     optimal_policy,
     optimal_value,
     policy_value,
 )
+from tui_gym.core.reference.changes import NO_CHANGES, GameChanges
 
 if TYPE_CHECKING:
     from tui_gym.core.play import PlayStep, Scorecard
@@ -47,6 +59,7 @@ DEALER_CARDS = tuple(range(1, 11))  # columns: A, 2 .. 10
 DEALER_LABELS = ("A", "2", "3", "4", "5", "6", "7", "8", "9", "10")
 ACTION_LETTERS = ("S", "H")
 AGREEMENT = "optimal decisions"  # how a scoreboard words moves that match the optimum
+LONGEST_HAND = 20  # steps: 19 hits from two aces to 21 aces-as-one, then a stick or a bust
 
 
 @lru_cache(maxsize=1)
@@ -82,33 +95,63 @@ class BlackjackProfile(GameProfile):
     action_names = ("stick", "hit")
     description = "Hit or stick; beat the dealer without going over 21 (infinite deck)."
 
-    def rules(self, env_kwargs: Mapping[str, Any]) -> BlackjackRules:
-        return BlackjackRules.from_env_kwargs(env_kwargs)
+    def rules(
+        self, env_kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> BlackjackRules:
+        """The rules the exact figures use: the wrapped game's where `scope` is exact."""
+        rules = BlackjackRules.from_env_kwargs(env_kwargs)
+        if changes.changes_rewards and self.scope(env_kwargs, changes).exact:
+            rules = rules.with_rewards(changes.reward)
+        return rules
+
+    def scope(self, env_kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> Scope:
+        """Exact for reward wrappers and a TimeLimit that never cuts a hand short."""
+        others = list(changes.others)
+        if changes.time_limit is not None and changes.time_limit < LONGEST_HAND:
+            others.append(f"TimeLimit(max_episode_steps={changes.time_limit})")
+        if others:
+            return Scope(False, unwrapped_note(others))
+        if changes.changes_rewards:
+            return Scope(True, f"exact with {changes.reward_names()}")
+        return EXACT
 
     def base_observations(self, env_kwargs: Mapping[str, Any]) -> list[Any]:
         return list(_base_states())
 
-    def policy_array(self, q: np.ndarray) -> np.ndarray:
-        """The greedy policy of `q` (rows = base states) as a (32, 11, 2) table."""
-        policy = np.zeros(POLICY_SHAPE, dtype=np.int8)
-        actions = greedy_policy(q)
-        for (player, dealer, usable), action in zip(_base_states(), actions.tolist(), strict=True):
-            policy[player, dealer, usable] = action
-        return policy
+    def hit_probability(self, q: np.ndarray) -> np.ndarray:
+        """The greedy policy of `q` (rows = base states) as a (32, 11, 2) table of the
+        chance to hit: 0 or 1, or 0.5 where the two actions tie (the agent picks at random)."""
+        table = np.zeros(POLICY_SHAPE, dtype=np.float64)
+        table[_base_index()] = greedy_probabilities(q)[:, 1]
+        return table
 
-    def reference(self, q: np.ndarray, env_kwargs: Mapping[str, Any]) -> ReferenceMetrics:
-        rules = self.rules(env_kwargs)
-        exact = policy_value(self.policy_array(q), rules)
+    def policy_value(self, q: np.ndarray, rules: BlackjackRules) -> float:
+        """The exact value of the greedy policy of `q` as the agent plays it."""
+        hit = self.hit_probability(q)
+        if ((hit == 0.0) | (hit == 1.0)).all():
+            return policy_value(hit.astype(np.int8), rules)
+        return mixed_policy_value(hit, rules)
+
+    def reference(
+        self, q: np.ndarray, env_kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> ReferenceMetrics:
+        rules = self.rules(env_kwargs, changes)
+        exact = self.policy_value(q, rules)
         best = optimal_value(rules)
         return ReferenceMetrics(
             figures={"exact_value": exact, "optimal_value": best, "gap": best - exact},
             summary=f"exact value {exact:+.4f}  optimum {best:+.4f}  gap {best - exact:.4f}",
+            scope=self.scope(env_kwargs, changes),
         )
 
     def heatmaps(
-        self, q: np.ndarray, env_kwargs: Mapping[str, Any], focus: Any = None
+        self,
+        q: np.ndarray,
+        env_kwargs: Mapping[str, Any],
+        focus: Any = None,
+        changes: GameChanges = NO_CHANGES,
     ) -> list[Heatmap]:
-        best = optimal_policy(self.rules(env_kwargs))
+        best = optimal_policy(self.rules(env_kwargs, changes))
         players = np.array(CHART_SUMS)[:, None]
         dealers = np.array(DEALER_CARDS)[None, :]
         panels = []
@@ -116,8 +159,12 @@ class BlackjackProfile(GameProfile):
             qs = q[_chart_rows(usable)]  # (sums, cards, actions)
             actions = qs.argmax(axis=-1)
             values = qs.max(axis=-1).astype(float)
-            marked = actions != best[players, dealers, usable]
-            labels = tuple(tuple(ACTION_LETTERS[a] for a in row) for row in actions.tolist())
+            tied = qs[..., 0] == qs[..., 1]  # no preference: the agent picks at random
+            marked = (actions != best[players, dealers, usable]) & ~tied
+            labels = tuple(
+                tuple(TIED if t else ACTION_LETTERS[a] for a, t in zip(row, ties, strict=True))
+                for row, ties in zip(actions.tolist(), tied.tolist(), strict=True)
+            )
             panels.append(
                 Heatmap(
                     title=f"Q-values, {title}",
@@ -126,7 +173,8 @@ class BlackjackProfile(GameProfile):
                     values=values,
                     labels=tuple(labels),
                     marked=marked,
-                    legend="rows: player sum  cols: dealer card  H hit  S stick  * not optimal",
+                    legend="rows: player sum  cols: dealer card  H hit  S stick  "
+                    f"{TIED} tie  * not optimal",
                 )
             )
         return panels
@@ -154,19 +202,22 @@ class BlackjackProfile(GameProfile):
         total, usable = hand_value(player)
         if total > 21:
             return Advice((), None, "bust: no decision left")
+        changes = GameChanges.of(env)
+        scope = self.scope(env_kwargs, changes)
         soft_21 = "natural" if len(player) == 2 and total == 21 else "drawn"
-        q = optimal_action_values(self.rules(env_kwargs), soft_21=soft_21)[
+        q = optimal_action_values(self.rules(env_kwargs, changes), soft_21=soft_21)[
             total, dealer[0], int(usable)
         ]
         values = {a: float(q[a]) for a in range(2)}
         best = max(values.values())
         optimal = tuple(a for a, v in values.items() if v >= best - 1e-12)
         names = " or ".join(self.action_names[a] for a in optimal)
-        return Advice(
-            optimal,
-            values,
-            f"optimal: {names}  (stick {values[0]:+.3f}, hit {values[1]:+.3f} expected)",
-        )
+        expected = f"stick {values[0]:+.3f}, hit {values[1]:+.3f} expected"
+        if not scope.exact:
+            return Advice((), None, f"the unwrapped game's optimum: {names}  ({expected} "
+                          f"there; {scope.note.removeprefix('figures of the unwrapped game: ')})",
+                          unwrapped_optimal=optimal)
+        return Advice(optimal, values, f"optimal: {names}  ({expected})")
 
     def text(self, env: Any, reveal: bool = True) -> str:
         """Both hands as text; the dealer's hole card shows only with `reveal`."""
@@ -204,12 +255,15 @@ class BlackjackProfile(GameProfile):
         return f"Push {reward} (both have {player})"
 
     def agent_figures(
-        self, q: np.ndarray | None, env_kwargs: Mapping[str, Any]
+        self,
+        q: np.ndarray | None,
+        env_kwargs: Mapping[str, Any],
+        changes: GameChanges = NO_CHANGES,
     ) -> dict[str, float]:
         """`exact_value` of the greedy policy (as `reference` has it) and `optimal_value`."""
         if q is None:
-            return {"optimal_value": optimal_value(self.rules(env_kwargs))}
-        return dict(self.reference(q, env_kwargs).figures)
+            return {"optimal_value": optimal_value(self.rules(env_kwargs, changes))}
+        return dict(self.reference(q, env_kwargs, changes).figures)
 
     def scoreboard(
         self,
@@ -217,8 +271,10 @@ class BlackjackProfile(GameProfile):
         figures: Mapping[str, float] | None,
         watched: Scorecard | None = None,
         agent_note: str = "",
+        scope: Scope = EXACT,
     ) -> list[ScoreRow]:
-        """You: mean return ± CI and agreement; the agent's and the optimum's exact values."""
+        """You: mean return ± CI and agreement; the agent's and the optimum's exact values
+        (with a word on whether they are of the game as played: `scope`)."""
         figures = figures or {}
         noun = self.episode_noun
         rows = [
@@ -241,7 +297,12 @@ class BlackjackProfile(GameProfile):
             rows.append(ScoreRow("Agent", agent_note or "no exact value", "–"))
         if "optimal_value" in figures:
             value = signed(figures["optimal_value"], 4)
-            rows.append(ScoreRow("Optimum", f"exact value {value}", f"{value} exact"))
+            text, short = f"exact value {value}", f"{value} exact"
+            if scope.note:
+                text += f" ({scope.note})"
+            if not scope.exact:
+                short = f"{value} unwrapped"
+            rows.append(ScoreRow("Optimum", text, short))
         if watched is not None and watched.tally.episodes:
             rows.append(watched_row(watched, noun, AGREEMENT))
         return rows
@@ -264,6 +325,16 @@ class BlackjackProfile(GameProfile):
                 "loss_rate": float(np.count_nonzero(r < 0)) / n,
             }
         )
+
+
+TIED = "·"  # a heatmap cell whose actions tie
+
+
+@lru_cache(maxsize=1)
+def _base_index() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where each base state sits in a (32, 11, 2) policy table."""
+    states = np.array(_base_states())
+    return states[:, 0], states[:, 1], states[:, 2]
 
 
 def hand_value(cards: list[int]) -> tuple[int, bool]:

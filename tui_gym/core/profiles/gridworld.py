@@ -2,8 +2,16 @@
 
 Actions are right, up, left, down (the tutorial's mapping). Base states are
 every (agent, target) pair; the exact reference is the share of pairs the
-greedy policy solves in the Manhattan number of steps, and the heatmap shows
-max Q over the grid for one target with the greedy move in each cell.
+greedy policy solves in the Manhattan number of steps (ties broken at random,
+as the agent breaks them), and the heatmap shows max Q over the grid for one
+target with the greedy move in each cell.
+
+The optimum is a shortest path. That holds whenever reaching the target pays
+(its reward is positive) and no other step does (rewards of at most zero, no
+better farther away): then every step a route wastes costs, and the target
+comes later. The wrappers' rewards are checked against that (`scope`); when
+they break it, the figures are shortest-path figures and say so, and the
+advice claims no optimum.
 """
 
 from __future__ import annotations
@@ -18,20 +26,27 @@ from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.params import Param
 from tui_gym.core.profiles.base import (
+    EXACT,
     Advice,
     EvalOutcome,
     GameProfile,
     ReferenceMetrics,
+    Scope,
     ScoreRow,
     TallyWord,
     agreement_summary,
     format_reward,
     greedy_policy,
+    greedy_probabilities,
     join_parts,
     plural,
+    unwrapped_note,
     watched_row,
 )
+from tui_gym.core.reference.changes import NO_CHANGES, GameChanges
 from tui_gym.core.reference.gridworld import (
+    mixed_pair_fraction,
+    mixed_steps_over_optimal,
     optimal_actions,
     optimal_pair_fraction,
     policy_steps_over_optimal,
@@ -76,16 +91,47 @@ class GridWorldProfile(GameProfile):
     def policy_array(self, q: np.ndarray, size: int) -> np.ndarray:
         return greedy_policy(q).reshape((size,) * 4)
 
-    def reference(self, q: np.ndarray, env_kwargs: Mapping[str, Any]) -> ReferenceMetrics:
+    def _policy(self, q: np.ndarray, size: int) -> tuple[np.ndarray, bool]:
+        """The greedy policy of `q` as the agent plays it: an action array when no
+        state ties (True), else action probabilities (ties broken at random; False)."""
+        probs = greedy_probabilities(q)
+        if (probs.max(axis=1) == 1.0).all():
+            return self.policy_array(q, size), True
+        return probs.reshape((size,) * 4 + (q.shape[1],)), False
+
+    def scope(self, env_kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> Scope:
+        """Exact while the rewards keep a shortest path optimal (the module docstring)."""
+        if changes.others:
+            return Scope(False, unwrapped_note(changes.others))
+        if _shortest_pays(env_kwargs, changes):
+            return EXACT
+        if changes.changes_rewards and _shortest_pays(env_kwargs, NO_CHANGES):
+            return Scope(False, f"figures of the unwrapped game: with {changes.reward_names()} "
+                         "a shortest path need not pay best")
+        return Scope(False, "shortest-path figures: with these rewards a shortest path "
+                     "need not pay best")
+
+    def reference(
+        self, q: np.ndarray, env_kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> ReferenceMetrics:
         size = int(env_kwargs.get("size", 5))
-        frac = optimal_pair_fraction(size, self.policy_array(q, size))
+        policy, deterministic = self._policy(q, size)
+        if deterministic:
+            frac = optimal_pair_fraction(size, policy)
+        else:
+            frac = mixed_pair_fraction(size, policy)
         return ReferenceMetrics(
             figures={"optimal_pair_fraction": frac},
             summary=f"{frac:.1%} of (agent, target) pairs solved in the fewest steps",
+            scope=self.scope(env_kwargs, changes),
         )
 
     def heatmaps(
-        self, q: np.ndarray, env_kwargs: Mapping[str, Any], focus: Any = None
+        self,
+        q: np.ndarray,
+        env_kwargs: Mapping[str, Any],
+        focus: Any = None,
+        changes: GameChanges = NO_CHANGES,
     ) -> list[Heatmap]:
         size = int(env_kwargs.get("size", 5))
         tx, ty = focus if focus is not None else (size - 1, size - 1)
@@ -103,6 +149,9 @@ class GridWorldProfile(GameProfile):
                 qs = q4[x, y, tx, ty]
                 action = int(np.argmax(qs))
                 values[r, x] = float(qs.max())
+                if (qs == qs[0]).all():  # no preference: the agent picks at random
+                    row.append(TIED)
+                    continue
                 row.append(ARROWS[action])
                 marked[r, x] = action not in optimal_actions((x, y), (tx, ty))
             labels.append(tuple(row))
@@ -114,7 +163,7 @@ class GridWorldProfile(GameProfile):
                 values=values,
                 labels=tuple(labels),
                 marked=marked,
-                legend="arrow: greedy move  T target  * off every shortest path",
+                legend=f"arrow: greedy move  {TIED} tie  T target  * off every shortest path",
             )
         ]
 
@@ -190,6 +239,10 @@ class GridWorldProfile(GameProfile):
             return Advice((), None, "at the target")
         names = " or ".join(self.action_names[a] for a in optimal)
         steps = abs(agent[0] - target[0]) + abs(agent[1] - target[1])
+        scope = self.scope(env_kwargs, GameChanges.of(env))
+        if not scope.exact:
+            return Advice((), None, f"shortest path: {names}  ({steps} steps to go; "
+                          f"{scope.note.split(': ', 1)[-1]})", unwrapped_optimal=optimal)
         return Advice(optimal, None, f"optimal: {names}  ({steps} steps to go)")
 
     tally_words = (TallyWord("reached", "good"), TallyWord("timed out", "bad"))
@@ -240,14 +293,23 @@ class GridWorldProfile(GameProfile):
         return {"steps_over_optimal": float(last.steps - int(first_info["distance"]))}
 
     def agent_figures(
-        self, q: np.ndarray | None, env_kwargs: Mapping[str, Any]
+        self,
+        q: np.ndarray | None,
+        env_kwargs: Mapping[str, Any],
+        changes: GameChanges = NO_CHANGES,
     ) -> dict[str, float]:
         """Exact, over every placement: the greedy policy's mean `steps_over_optimal`
-        where it reaches the target, and the `solved_fraction` of placements it reaches."""
+        where it reaches the target, and the `solved_fraction` of placements it reaches
+        (within the time limit in force; with ties broken at random, a chance)."""
         if q is None:
             return {}
         size = int(env_kwargs.get("size", 5))
-        extra, solved = policy_steps_over_optimal(size, self.policy_array(q, size))
+        policy, deterministic = self._policy(q, size)
+        limit = changes.time_limit
+        if deterministic:
+            extra, solved = policy_steps_over_optimal(size, policy, limit)
+        else:
+            extra, solved = mixed_steps_over_optimal(size, policy, limit)
         return {"steps_over_optimal": extra, "solved_fraction": solved}
 
     def scoreboard(
@@ -256,6 +318,7 @@ class GridWorldProfile(GameProfile):
         figures: Mapping[str, float] | None,
         watched: Scorecard | None = None,
         agent_note: str = "",
+        scope: Scope = EXACT,
     ) -> list[ScoreRow]:
         """Steps over optimal: yours over the episodes you finished, the agent's exactly."""
         figures = figures or {}
@@ -282,11 +345,16 @@ class GridWorldProfile(GameProfile):
         else:
             extra = figures["steps_over_optimal"]
             text = (
-                f"{extra:.2f} steps over optimal, exact mean over "
-                f"the {solved:.1%} of placements its greedy policy reaches"
+                f"{extra:.2f} steps over optimal, exact mean over the episodes "
+                f"its greedy policy brings to the target ({solved:.1%} of them)"
             )
             rows.append(ScoreRow("Agent", text, f"{extra:.2f} extra steps, reaches {solved:.0%}"))
-        rows.append(ScoreRow("Optimum", "0 steps over optimal from every placement", "0 extra"))
+        if scope.exact:
+            rows.append(ScoreRow("Optimum", "0 steps over optimal from every placement",
+                                 "0 extra"))
+        else:
+            rows.append(ScoreRow("Optimum", f"a shortest path from every placement ({scope.note})",
+                                 "shortest path (unwrapped)"))
         if watched is not None and watched.tally.episodes:
             extra = watched.figure_mean("steps_over_optimal")
             more = "" if extra is None else f"{extra:.2f} extra steps"
@@ -321,6 +389,21 @@ class GridWorldProfile(GameProfile):
                 "mean_steps_over_optimal": float(np.mean(extra)) if extra else float("nan"),
             }
         )
+
+
+TIED = "·"  # a heatmap cell whose actions tie
+
+
+def _shortest_pays(env_kwargs: Mapping[str, Any], changes: GameChanges) -> bool:
+    """Whether a shortest path is optimal with these rewards: reaching the target
+    pays, and no other step does, nor pays more farther from the target."""
+    size = int(env_kwargs.get("size", 5))
+    goal = changes.reward(float(env_kwargs.get("reward_scale", 1.0)), 0.0)
+    miss = -float(env_kwargs.get("step_penalty", 0.0))
+    others = [changes.reward(miss, d) for d in range(1, 2 * size - 1)]
+    never_pays = all(r <= 0.0 for r in others)
+    farther_no_better = all(b <= a for a, b in zip(others, others[1:], strict=False))
+    return goal > 0.0 and never_pays and farther_no_better
 
 
 def _distance(scene: Mapping[str, Any]) -> int:

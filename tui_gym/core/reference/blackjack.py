@@ -4,12 +4,15 @@ Provides the yardsticks the app shows beside a learning agent, with no sampling
 noise:
 
 - `policy_value(policy, rules)`: the exact expected return of any deterministic
-  hit/stick policy from the initial deal (fast enough to call on a UI timer);
+  hit/stick policy from the initial deal (fast enough to call on a UI timer),
+  and `mixed_policy_value(hit_probability, rules)` for a policy that hits with
+  a given probability (e.g. an agent breaking ties at random);
 - `optimal_action_values(rules)`: Q*(observation, action) for every reachable
   decision state, for a coach ("your hit cost X in expected value");
 - `optimal_policy(rules)` and `optimal_value(rules)`: the best policy over
   observations and its exact value;
-- `BlackjackRules`: the env's ``natural`` / ``sab`` reward variants;
+- `BlackjackRules`: the env's ``natural`` / ``sab`` reward variants, and what
+  reward wrappers make of each step's reward (`with_rewards`);
 - `policy_from_function(fn)`: build a policy array from a Python function.
 
 The model follows the env's source exactly: an infinite deck (cards 1..10, a 10
@@ -48,10 +51,15 @@ __all__ = [
     "BlackjackRules",
     "optimal_action_values",
     "optimal_policy",
+    "mixed_policy_value",
     "optimal_value",
     "policy_from_function",
     "policy_value",
 ]
+
+
+# The bare env's step rewards: a loss or bust, a push or a hit, a win, a paid natural.
+BARE_PAYOFFS: tuple[float, float, float, float] = (-1.0, 0.0, 1.0, 1.5)
 
 
 @dataclass(frozen=True)
@@ -61,10 +69,20 @@ class BlackjackRules:
     ``natural``: a winning two-card 21 pays 1.5 instead of 1.
     ``sab``: Sutton & Barto's rules: a player natural beats every dealer hand but
     a dealer natural (+1), two naturals draw; ``natural`` is then ignored.
+    ``payoffs``: the reward handed out for a step whose bare reward is -1 (a
+    loss or a bust), 0 (a push, or a hit that does not bust), +1 (a win) and
+    +1.5 (a natural under ``natural``), in that order: the bare game's rewards
+    unless reward wrappers change them (`with_rewards`).
     """
 
     natural: bool = False
     sab: bool = False
+    payoffs: tuple[float, float, float, float] = BARE_PAYOFFS
+
+    def with_rewards(self, reward: Callable[[float], float]) -> BlackjackRules:
+        """These rules with every step's reward passed through `reward` (a wrapper's)."""
+        payoffs = tuple(float(reward(base)) for base in BARE_PAYOFFS)
+        return BlackjackRules(self.natural, self.sab, payoffs)  # type: ignore[arg-type]
 
     @classmethod
     def from_env_kwargs(cls, kwargs: Mapping[str, Any]) -> BlackjackRules:
@@ -142,6 +160,7 @@ def _build_initial() -> np.ndarray:
 
 
 _HIT_MATRIX = _build_hit_matrix()
+_NO_BUST = 1.0 - _HIT_MATRIX[:, _BUST]  # chance that a hit leaves the hand alive
 _INITIAL = _build_initial()
 
 # Every hit leads to a state that comes earlier in this order, so one backward
@@ -209,6 +228,7 @@ def _dealer_final() -> np.ndarray:
 @cache
 def _stick_rewards(rules: BlackjackRules) -> np.ndarray:
     """Expected reward of sticking, shape (29 states, 10 dealer up cards)."""
+    lose, push, win, natural = rules.payoffs
     final = _dealer_final()
     dealer_21 = final[:, _D21] + final[:, _DNAT]
     scores = np.array([17, 18, 19, 20, 21])
@@ -217,45 +237,66 @@ def _stick_rewards(rules: BlackjackRules) -> np.ndarray:
     for s in range(_N_LIVE):
         t = _STATE_TOTAL[s]
         # cmp(player, dealer): a bust dealer scores 0, below any standing player.
-        rewards[s] = (
-            final[:, _DBUST] + made[:, scores < t].sum(axis=1) - made[:, scores > t].sum(axis=1)
-        )
+        p_win = final[:, _DBUST] + made[:, scores < t].sum(axis=1)
+        p_lose = made[:, scores > t].sum(axis=1)
+        rewards[s] = win * p_win + lose * p_lose + push * (1.0 - p_win - p_lose)
     if rules.sab:
         # Player natural: +1 unless the dealer has a natural too (then cmp gives 0).
-        rewards[_NATURAL] = 1.0 - final[:, _DNAT]
+        rewards[_NATURAL] = win * (1.0 - final[:, _DNAT]) + push * final[:, _DNAT]
     elif rules.natural:
         # A natural that wins (dealer not on 21) pays 1.5; against 21 it draws.
-        rewards[_NATURAL] = 1.5 * (1.0 - dealer_21)
+        rewards[_NATURAL] = natural * (1.0 - dealer_21) + push * dealer_21
     rewards.setflags(write=False)
     return rewards
+
+
+def _terminal_values(rules: BlackjackRules) -> np.ndarray:
+    """State values before any policy: only the bust state's reward is known."""
+    values = np.zeros((_N_LIVE + 1, 10))
+    values[_BUST] = rules.payoffs[0]
+    return values
+
+
+def _hit_values(s: int, values: np.ndarray, rules: BlackjackRules) -> np.ndarray:
+    """Expected return of hitting in state ``s`` (per up card), then following ``values``:
+    the reward of a hit that does not bust, or of the bust, plus what follows."""
+    return _HIT_MATRIX[s] @ values + rules.payoffs[1] * _NO_BUST[s]
 
 
 # ---------------------------------------------------------------------------
 # Policy evaluation
 
 
-def _check_policy(policy: np.ndarray) -> np.ndarray:
-    """The hit mask (29 states, 10 up cards) of a policy array, after checks."""
+def _decisions(policy: np.ndarray) -> np.ndarray:
+    """A policy array's entries at the decision states, shape (29 states, 10 up cards)."""
     pol = np.asarray(policy)
     if pol.shape != POLICY_SHAPE:
         raise ValueError(f"policy must have shape {POLICY_SHAPE}, got {pol.shape}")
-    acts = pol[_STATE_SUM[:, None], np.arange(1, 11)[None, :], _STATE_USABLE[:, None]]
+    return pol[_STATE_SUM[:, None], np.arange(1, 11)[None, :], _STATE_USABLE[:, None]]
+
+
+def _check_policy(policy: np.ndarray) -> np.ndarray:
+    """The hit mask (29 states, 10 up cards) of a policy array, after checks."""
+    acts = _decisions(policy)
     if not np.isin(acts, (STICK, HIT)).all():
         raise ValueError("policy entries at decision states must be 0 (stick) or 1 (hit)")
     return acts == HIT
 
 
 def _evaluate(hit: np.ndarray, rules: BlackjackRules) -> np.ndarray:
-    """State values (30 incl. bust, 10 up cards) of the policy whose hit mask is ``hit``."""
+    """State values (30 incl. bust, 10 up cards) of the policy that hits with
+    probability ``hit`` (a bool mask for a deterministic policy)."""
     stick = _stick_rewards(rules)
-    values = np.zeros((_N_LIVE + 1, 10))
-    values[_BUST] = -1.0
+    values = _terminal_values(rules)
+    mixed = hit.dtype != bool
     for s in _ORDER:
         row = hit[s]
-        if row.any():
-            values[s] = np.where(row, _HIT_MATRIX[s] @ values, stick[s])
-        else:
+        if not row.any():
             values[s] = stick[s]
+        elif mixed:
+            values[s] = row * _hit_values(s, values, rules) + (1.0 - row) * stick[s]
+        else:
+            values[s] = np.where(row, _hit_values(s, values, rules), stick[s])
     return values
 
 
@@ -272,6 +313,21 @@ def policy_value(policy: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> f
     are read. The policy's action at ``(21, d, 1)`` applies to a natural too.
     """
     return _start_value(_evaluate(_check_policy(policy), rules))
+
+
+def mixed_policy_value(
+    hit_probability: np.ndarray, rules: BlackjackRules = DEFAULT_RULES
+) -> float:
+    """The exact expected return of a policy that hits with the given probability.
+
+    ``hit_probability`` has shape `POLICY_SHAPE` like a policy array, with a
+    probability in [0, 1] at every decision state (e.g. 0.5 where an agent's
+    two actions tie and it breaks the tie at random).
+    """
+    p = np.asarray(_decisions(hit_probability), dtype=np.float64)
+    if not ((p >= 0.0) & (p <= 1.0)).all():
+        raise ValueError("hit probabilities at decision states must be in [0, 1]")
+    return _start_value(_evaluate(p, rules))
 
 
 # ---------------------------------------------------------------------------
@@ -293,12 +349,11 @@ def _greedy_solve(rules: BlackjackRules, hit_at_21: np.ndarray) -> tuple[np.ndar
     optimal given the fixed choice. Returns (hit mask, Q, V).
     """
     stick = _stick_rewards(rules)
-    values = np.zeros((_N_LIVE + 1, 10))
-    values[_BUST] = -1.0
+    values = _terminal_values(rules)
     q = np.empty((_N_LIVE, 10, 2))
     hit = np.zeros((_N_LIVE, 10), dtype=bool)
     for s in _ORDER:
-        q_hit = _HIT_MATRIX[s] @ values
+        q_hit = _hit_values(s, values, rules)
         q[s, :, STICK] = stick[s]
         q[s, :, HIT] = q_hit
         if s in (_SOFT_21, _NATURAL):

@@ -16,10 +16,15 @@ Provides:
   which a deterministic policy reaches the target in the fewest possible steps;
 - `policy_steps_over_optimal(size, policy)`: how many steps more than the
   fewest a deterministic policy takes on average, and from how many placements
-  it reaches the target at all.
+  it reaches the target at all;
+- `mixed_pair_fraction` and `mixed_steps_over_optimal`: the same two figures,
+  exactly, for a policy that picks among actions at random (e.g. an agent
+  breaking ties between equal values).
 
 A policy here is an int array of shape ``(size, size, size, size)`` indexed
-``[agent_x, agent_y, target_x, target_y]`` holding the action taken there.
+``[agent_x, agent_y, target_x, target_y]`` holding the action taken there; a
+random policy is a float array of shape ``(size, size, size, size, 4)``
+holding each action's probability there.
 """
 
 from __future__ import annotations
@@ -32,6 +37,8 @@ import numpy as np
 __all__ = [
     "GRID_ACTION_DELTAS",
     "all_pairs",
+    "mixed_pair_fraction",
+    "mixed_steps_over_optimal",
     "optimal_actions",
     "optimal_pair_fraction",
     "policy_steps_over_optimal",
@@ -176,6 +183,116 @@ def policy_steps_over_optimal(
     distance = np.abs(x[:, None] - x[None, :]) + np.abs(y[:, None] - y[None, :])
     extra = (steps - distance)[off_target][solved]
     return float(extra.mean()), float(solved.mean())
+
+
+def mixed_pair_fraction(size: int, probabilities: np.ndarray) -> float:
+    """The chance that following a random policy takes a shortest path, averaged
+    over every start placement (agent != target): `optimal_pair_fraction` for a
+    policy given as action probabilities, shape ``(size,) * 4 + (4,)``.
+
+    Filled in by distance: from a cell at distance d the chance is the sum, over
+    the moves that shorten the distance, of the move's probability times the
+    chance from where it leads (at distance d - 1).
+    """
+    size = int(size)
+    probs = _check_probabilities(size, probabilities)
+    following, shortens, distance = _moves(size)
+    cells = size * size
+    chance = np.eye(cells)  # rows: the agent's cell; columns: the target's
+    weights = [probs[..., a] * shortens[a] for a in range(4)]
+    for d in range(1, int(distance.max()) + 1):
+        at = distance == d
+        step = np.zeros((cells, cells))
+        for a in range(4):
+            step += weights[a] * chance[following[a]]
+        chance[at] = step[at]
+    return float(chance[~np.eye(cells, dtype=bool)].mean())
+
+
+def mixed_steps_over_optimal(
+    size: int, probabilities: np.ndarray, max_steps: int | None = None
+) -> tuple[float, float]:
+    """``(mean extra steps, fraction solved)`` of a random policy, exactly:
+    `policy_steps_over_optimal` for a policy given as action probabilities,
+    shape ``(size,) * 4 + (4,)``.
+
+    The fraction solved is the chance of reaching the target (within
+    ``max_steps`` steps, if given) averaged over every start placement; the
+    mean counts the steps beyond the Manhattan distance over the episodes that
+    reach it. With ``h_k`` the chance of arriving within k steps (``h_k =
+    sum_a p(a) h_{k-1}(next)``, 1 at the target), the expected steps of those
+    that arrive within L are ``L h_L - sum_{k<L} h_k``. The walk stops early
+    once ``h`` no longer moves (the rest adds nothing); NaN when no placement
+    can be solved.
+    """
+    size = int(size)
+    probs = _check_probabilities(size, probabilities)
+    following, _, distance = _moves(size)
+    cells = size * size
+    on_target = np.eye(cells, dtype=bool)
+    reach = on_target.astype(np.float64)  # h_0; rows: the agent's cell, columns: the target's
+    earlier = np.zeros((cells, cells))  # sum of h_k for k below the current step
+    weights = [np.ascontiguousarray(probs[..., a]) for a in range(4)]
+    moves = [a for a in range(4) if weights[a].any()]
+    nxt, term = np.empty((cells, cells)), np.empty((cells, cells))
+    limit = _NO_LIMIT if max_steps is None else int(max_steps)
+    k = 0
+    while k < limit:
+        nxt.fill(0.0)
+        for a in moves:  # a row gather: where action a leads, for every target at once
+            np.multiply(weights[a], np.take(reach, following[a], axis=0), out=term)
+            nxt += term
+        nxt[on_target] = 1.0
+        earlier += reach
+        k += 1
+        np.subtract(nxt, reach, out=term)
+        moved = float(np.abs(term).max())
+        reach, nxt = nxt, reach
+        if moved <= _SETTLED:
+            break
+    steps = k * reach - earlier
+    off = ~on_target
+    solved = reach[off]
+    total = float(solved.sum())
+    fraction = float(solved.mean())
+    if total <= _SETTLED:
+        return float("nan"), 0.0
+    extra = float((steps[off] - distance[off] * solved).sum()) / total
+    return extra, fraction
+
+
+_NO_LIMIT = 1_000_000  # steps: far past where any chance left to arrive still counts
+_SETTLED = 1e-13  # a change in the chance of arriving smaller than this is no change
+
+
+def _check_probabilities(size: int, probabilities: np.ndarray) -> np.ndarray:
+    """The probabilities as (agent cell, target cell, action), after checks."""
+    _check_size(size)
+    probs = np.asarray(probabilities, dtype=np.float64)
+    if probs.shape != (size,) * 4 + (4,):
+        raise ValueError(f"probabilities must have shape {(size,) * 4 + (4,)}, got {probs.shape}")
+    if (probs < 0).any() or not np.allclose(probs.sum(axis=-1), 1.0):
+        raise ValueError("each state's action probabilities must be >= 0 and sum to 1")
+    cells = size * size
+    return probs.reshape(cells, cells, 4)
+
+
+@lru_cache(maxsize=16)
+def _moves(size: int) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...], np.ndarray]:
+    """Per action, the cell each cell moves to (cells as x * size + y), and whether
+    the move shortens the way to each target; and the distance of every
+    (agent cell, target cell)."""
+    cells = size * size
+    x, y = np.divmod(np.arange(cells), size)
+    distance = np.abs(x[:, None] - x[None, :]) + np.abs(y[:, None] - y[None, :])
+    following, shortens = [], []
+    for dx, dy in GRID_ACTION_DELTAS.tolist():
+        to = np.clip(x + dx, 0, size - 1) * size + np.clip(y + dy, 0, size - 1)
+        following.append(to)
+        shortens.append(distance[to, :] < distance)
+    for arr in (distance, *following, *shortens):
+        arr.setflags(write=False)
+    return tuple(following), tuple(shortens), distance
 
 
 @lru_cache(maxsize=16)

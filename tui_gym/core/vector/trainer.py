@@ -15,8 +15,10 @@ or with `make_vector_trainer(env_id, env_kwargs, choices, agent, keyer)`.
 
 One batch step, top to bottom:
 
-1. Envs without an episode start one, as long as the episode quota of
-   `run(episodes=...)` leaves room (so a run finishes exactly that many).
+1. Envs without an episode start one, each numbered in the order episodes
+   start. When the episode quota of `run(episodes=...)` is smaller than the
+   number of games in progress, only the oldest episodes step (so a run
+   finishes exactly that many).
 2. Epsilon-greedy actions for every stepping env: a random action with
    probability `agent.epsilon`, else the best-valued one, ties broken
    uniformly at random (the highest of independent uniform draws among the
@@ -24,8 +26,15 @@ One batch step, top to bottom:
 3. One batched env step; the wrappers' reward transforms; keys of the next
    observations.
 4. The batched Q-learning update (`batched_q_update`).
-5. Finished episodes go into the rolling statistics; the agent's episode
-   count and epsilon move on (epsilon is thus updated once per batch).
+5. The agent's episode count and epsilon move on for the finished episodes
+   (epsilon is thus updated once per batch). Their statistics go into the
+   rolling windows and curves in the order the episodes *started*: a result
+   waits until every episode that started before it has finished. Many games
+   started at once finish shortest first, so recording them as they finish
+   would begin every curve on the shortest episodes (a biased sample); in
+   start order every stretch of a curve is an unbiased sample of the episodes
+   of its time. What waits is bounded by the games in progress times the
+   longest episode.
 
 Episodes in progress survive between `run` calls, and `seconds` and `stop`
 end a call only between batch steps, so cutting a run into time slices does
@@ -172,6 +181,13 @@ class VectorTrainer(Trainer):
         self._returns = np.zeros(n, dtype=np.float64)
         self._lengths = np.zeros(n, dtype=np.int64)
         self._abs_td = np.zeros(n, dtype=np.float64)
+        # Episode results held until every earlier-started episode has finished: a ring
+        # indexed by start number, `_released` the first start number not yet recorded.
+        self._start_seq = np.zeros(n, dtype=np.int64)  # start number of each env's episode
+        self._next_seq = 0
+        self._released = 0
+        self._held = np.zeros((_ring_size(2 * n), len(SERIES_NAMES)), dtype=np.float64)
+        self._last_finished: EpisodeStats | None = None
         super().__init__(
             env,
             agent,
@@ -190,10 +206,20 @@ class VectorTrainer(Trainer):
         )
 
     def run_episode(self) -> EpisodeStats:
-        """Finish one more episode (the others in progress wait) and return its statistics."""
+        """Finish one more episode (the oldest in progress; the others wait) and
+        return its statistics."""
         self.run(episodes=1)
-        assert self.last is not None
-        return self.last
+        assert self._last_finished is not None
+        return self._last_finished
+
+    @property
+    def held(self) -> int:
+        """Finished episodes whose statistics wait for an earlier-started one to finish."""
+        return self.episodes_started - self._released - self._n_live
+
+    @property
+    def episodes_started(self) -> int:
+        return self._next_seq
 
     def episode_in_progress(self) -> bool:
         return self._n_live > 0
@@ -215,6 +241,7 @@ class VectorTrainer(Trainer):
             return
         idle = np.flatnonzero(~self._live)
         self._keys[idle] = self.keyer.keys(self.venv.reset(idle))
+        self._number(idle)
         self._live[idle] = True
         self._n_live += len(idle)
         self._returns[idle] = 0.0
@@ -246,8 +273,11 @@ class VectorTrainer(Trainer):
         index: np.ndarray | None = None
         if self._n_live < self.num_envs or (quota is not None and quota < self.num_envs):
             index = np.flatnonzero(self._live)
-            if quota is not None:
-                index = index[:quota]  # the others wait, so no more than the quota finish
+            if quota is not None and quota < len(index):
+                # The oldest episodes step and the others wait, so no more than the quota
+                # finish, and what finishes is what the statistics wait for.
+                oldest = np.argsort(self._start_seq[index], kind="stable")[:quota]
+                index = np.sort(index[oldest])
         sel: Any = slice(None) if index is None else index
 
         keys = self._keys[sel]
@@ -272,26 +302,59 @@ class VectorTrainer(Trainer):
         self._record(envs, epsilon)
         return len(envs)
 
+    def _number(self, envs: np.ndarray) -> None:
+        """Give the episodes starting in `envs` the next start numbers."""
+        first = self._next_seq
+        self._next_seq += len(envs)
+        while self._next_seq - self._released > len(self._held):
+            self._grow()
+        self._start_seq[envs] = np.arange(first, self._next_seq)
+
+    def _grow(self) -> None:
+        """Double the ring of held results, keeping each at its start number's place."""
+        old = self._held
+        seqs = np.arange(self._released, self._next_seq)
+        self._held = np.zeros((2 * len(old), old.shape[1]), dtype=np.float64)
+        self._held[seqs % len(self._held)] = old[seqs % len(old)]
+
     def _record(self, envs: np.ndarray, epsilon: float) -> None:
-        """Push finished episodes into the statistics and move the agent's schedule on."""
-        returns = self._returns[envs]
+        """Hold finished episodes' statistics, release those whose turn has come, and
+        move the agent's schedule on."""
         lengths = self._lengths[envs].astype(np.float64)
-        mean_td = self._abs_td[envs] / np.maximum(lengths, 1.0)
+        columns = np.column_stack([
+            self._returns[envs],
+            lengths,
+            self._abs_td[envs] / np.maximum(lengths, 1.0),
+            np.full(len(envs), epsilon),
+        ])
+        self._held[self._start_seq[envs] % len(self._held)] = columns
+        ret, length, td, eps = columns[-1].tolist()
+        self._last_finished = EpisodeStats(ret, int(length), td, eps)
         count = len(envs)
-        columns = (returns, lengths, mean_td, np.full(count, epsilon))
-        for name, values in zip(SERIES_NAMES, columns, strict=True):
-            means = self.windows[name].push_many(values)
-            self.series[name].push_many(means)
-        self.last = EpisodeStats(
-            episode_return=float(returns[-1]),
-            length=int(lengths[-1]),
-            mean_abs_td=float(mean_td[-1]),
-            epsilon=float(epsilon),
-        )
         self.episodes += count
         agent = self.agent
         agent.episode += count
         agent.epsilon = agent.hp.epsilon_at(agent.episode)
+        self._release()
+
+    def _release(self) -> None:
+        """Record, in start order, every held result with no earlier episode in progress."""
+        live = self._start_seq[self._live]
+        frontier = int(live.min()) if live.size else self._next_seq
+        if frontier <= self._released:
+            return
+        rows = self._held[np.arange(self._released, frontier) % len(self._held)]
+        self._released = frontier
+        for name, values in zip(SERIES_NAMES, rows.T, strict=True):
+            means = self.windows[name].push_many(values)
+            self.series[name].push_many(means)
+        ret, length, td, eps = rows[-1].tolist()
+        self.last = EpisodeStats(ret, int(length), td, eps)
+
+
+def _ring_size(at_least: int) -> int:
+    """The smallest power of two that is at least `at_least` (and at least 2)."""
+    return 1 << max(1, (at_least - 1).bit_length())
 
 
 def make_vector_trainer(

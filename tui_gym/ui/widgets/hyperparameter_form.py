@@ -25,6 +25,7 @@ from textual.validation import ValidationResult, Validator
 from textual.widgets import Input, Label, Static
 
 from tui_gym.core.agent import HYPERPARAMETER_FIELDS, Hyperparameters, Param
+from tui_gym.core.params import ParamError
 
 
 def format_value(field: Param, value: float) -> str:
@@ -47,9 +48,11 @@ def field_error(field: Param, text: str) -> str | None:
     if not text.strip():
         return f"empty: needs {field.expected()}"
     try:
-        field.parse(text)
-    except ValueError:
-        return f"{text.strip()!r} is not {field.expected()}"
+        field.parse(text.strip())
+    except ParamError as exc:
+        if exc.out_of_range:
+            return f"{exc.shown} is out of range {field.describe_range()}"
+        return f"{exc.shown} is not {field.expected()}"
     return None
 
 

@@ -4,7 +4,9 @@ It shows what a Textual `ProgressBar` beside a label showed (the bar, the
 percentage, "60,000 / 200,000 episodes" and, while training runs, the time
 left), drawn as one widget from kept lines: the Train view updates it on
 every snapshot, and three widgets with reactive attributes cost more than a
-line of text (`show(done, total, eta)`).
+line of text (`show(done, total, eta)`). Where the words do not fit they lose
+"episodes", then take compact counts ("1.23M / 5.00M"), then the time left:
+the counts are never cut.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from typing import ClassVar
 
 from rich.segment import Segment
 
+from tui_gym.ui.widgets.numbers import compact_count
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget
 
 DONE, HALF = "━", "╸"
@@ -47,12 +50,18 @@ class ProgressLine(StripWidget):
     def fraction(self) -> float:
         return min(1.0, max(0.0, self.done / self.total)) if self.total > 0 else 0.0
 
-    def text(self) -> str:
-        """The words after the bar: '60,000 / 200,000 episodes · eta 0:03'."""
-        words = f"{self.done:,} / {self.total:,}"
+    def text(self, width: int | None = None) -> str:
+        """The words after the bar: '60,000 / 200,000 episodes · eta 0:03'; with a
+        `width`, the fullest form of them that fits in it."""
+        eta = f" · eta {self.eta}" if self.eta else ""
+        full = f"{self.done:,} / {self.total:,}"
+        short = f"{compact_count(self.done)} / {compact_count(self.total)}"
+        forms = [f"{full}{eta}", f"{short}{eta}", short]  # the time left goes last
         if not self._compact():
-            words += " episodes"
-        return words + (f" · eta {self.eta}" if self.eta else "")
+            forms.insert(0, f"{full} episodes{eta}")
+        if width is None:
+            return forms[0]
+        return next((words for words in forms if len(words) <= width), forms[-1])
 
     def show(self, done: int, total: int, eta: str = "") -> None:
         """`done` of `total` episodes, and the time left while training runs ("" if not)."""
@@ -66,7 +75,7 @@ class ProgressLine(StripWidget):
     def draw(self, width: int) -> list[Line]:
         styles = self.component_styles()
         percent = f"{self.fraction:.0%}".rjust(4)
-        words = " " + self.text()
+        words = " " + self.text(width - 1 - len(percent))
         bar = width - 1 - len(percent) - len(words)
         line: Line = []
         if bar >= MIN_BAR:

@@ -1,12 +1,19 @@
 """The training stats table: counts, rates, rolling means and the exact yardstick.
 
-`StatsPanel` shows the state of the run (running, paused, finished), the
-speed and the engine, then episodes, steps, episodes per second, time,
-epsilon and the rolling means of return, length and |TD error|, then the
-reference figures the game's profile computes for the current greedy policy
-(Blackjack: its exact value beside the optimum and the gap; GridWorld: the
-share of (agent, target) pairs solved in the fewest steps). The figures are
-shown generically, by name, so a new game needs no change here.
+`StatsPanel` shows the state of the run (`run_state`: running, paused,
+finished or ready), the speed and the engine, then episodes, steps, episodes
+per second, time, epsilon and the rolling means of return, length and |TD
+error|, then the reference figures the game's profile computes for the
+current greedy policy (Blackjack: its exact value beside the optimum and the
+gap; GridWorld: the share of (agent, target) pairs solved in the fewest
+steps) with a word on what they take into account. The figures are shown
+generically, by name, so a new game needs no change here.
+
+A figure with nothing behind it yet (no episode in the statistics, e.g. just
+after loading a saved agent) reads "–". No number is ever cut: where the
+full forms do not fit, the widest column takes shorter forms ("5.50M",
+"-1.23e+03") as far as it must, and when that is not enough the table drops
+to one figure a row.
 """
 
 from __future__ import annotations
@@ -21,6 +28,7 @@ from rich.text import Text
 
 from tui_gym.core.profiles import ReferenceMetrics
 from tui_gym.core.training import TrainingSnapshot
+from tui_gym.ui.widgets.numbers import Forms, compact_count, count_forms, fit, number_forms
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget
 
 STATE_STYLES = {
@@ -36,6 +44,18 @@ def figure_name(key: str) -> str:
     return key.replace("_", " ")
 
 
+def run_state(running: bool, episodes: int, steps: int, budget: int) -> str:
+    """'running', 'finished' (a budget of `budget` episodes was used up), 'paused'
+    (training has begun: an episode, or a step of one) or 'idle' (nothing yet)."""
+    if running:
+        return "running"
+    if episodes > 0 and episodes >= budget:
+        return "finished"
+    if episodes > 0 or steps > 0:
+        return "paused"
+    return "idle"
+
+
 def format_figure(key: str, value: float) -> str:
     """A reference figure as text: shares as percentages, values signed."""
     if key.endswith(("fraction", "rate", "share")):
@@ -43,6 +63,15 @@ def format_figure(key: str, value: float) -> str:
     if key == "gap" or key.endswith("_gap"):
         return f"{value:.4f}"
     return f"{value:+.4f}"
+
+
+def figure_forms(key: str, value: float) -> Forms:
+    """`format_figure`, then shorter forms of the same number (for narrow screens)."""
+    full = format_figure(key, value)
+    if key.endswith(("fraction", "rate", "share")):
+        return (full,)
+    sign = "" if key == "gap" or key.endswith("_gap") else "+"
+    return number_forms(full, value, sign)
 
 
 def format_duration(seconds: float) -> str:
@@ -56,6 +85,9 @@ def format_rate(rate: float) -> str:
     if rate >= 100:
         return f"{rate:,.0f}"
     return f"{rate:.1f}"
+
+
+NO_DATA = "–"
 
 
 class StatsPanel(StripWidget):
@@ -84,8 +116,9 @@ class StatsPanel(StripWidget):
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
         super().__init__(id=id, classes=classes)
         self.border_title = "Training"
-        self._rows: list[tuple[str, str, str]] = []  # (name, value, style)
-        self._reference: list[tuple[str, str]] = []
+        self._rows: list[tuple[str, Forms, str]] = []  # (name, value's forms, style)
+        self._reference: list[tuple[str, Forms]] = []
+        self._scope_note = ""
         self._engine_reason = ""
         self._shape: tuple = ()
         self._reference_note = ""
@@ -108,19 +141,23 @@ class StatsPanel(StripWidget):
             self._changed()
 
     def show_snapshot(self, snapshot: TrainingSnapshot) -> None:
-        episodes = snapshot.episodes
-        seen = episodes > 0
-        rows = [
-            ("episodes", f"{episodes:,}", "bold"),
-            ("steps", f"{snapshot.steps:,}", ""),
-            ("eps/s", format_rate(snapshot.episodes_per_second) if seen else "–", ""),
-            ("time", format_duration(snapshot.seconds), ""),
-            ("epsilon", f"{snapshot.epsilon:.3f}", ""),
-            ("return", f"{snapshot.mean_return:+.4f}" if seen else "–", "bold"),
-            ("length", f"{snapshot.mean_length:.2f}" if seen else "–", ""),
-            ("|TD|", f"{snapshot.mean_abs_td:.4f}" if seen else "–", ""),
+        recorded = snapshot.recorded > 0  # episodes in the rolling statistics
+        rate = snapshot.episodes_per_second
+        none: Forms = (NO_DATA,)
+        rows: list[tuple[str, Forms, str]] = [
+            ("episodes", count_forms(snapshot.episodes), "bold"),
+            ("steps", count_forms(snapshot.steps), ""),
+            ("eps/s", (format_rate(rate), compact_count(rate)) if rate > 0 else none, ""),
+            ("time", (format_duration(snapshot.seconds),) if snapshot.seconds > 0 else none, ""),
+            ("epsilon", (f"{snapshot.epsilon:.3f}",), ""),
+            ("return", number_forms(f"{snapshot.mean_return:+.4f}", snapshot.mean_return, "+")
+             if recorded else none, "bold"),
+            ("length", number_forms(f"{snapshot.mean_length:.2f}", snapshot.mean_length)
+             if recorded else none, ""),
+            ("|TD|", number_forms(f"{snapshot.mean_abs_td:.4f}", snapshot.mean_abs_td)
+             if recorded else none, ""),
         ]
-        window = min(snapshot.window, episodes)
+        window = min(snapshot.window, snapshot.recorded)
         if rows != self._rows or snapshot.engine != self._engine or window != self._window:
             self._rows = rows
             self._engine = snapshot.engine
@@ -134,14 +171,17 @@ class StatsPanel(StripWidget):
             self._changed()
 
     def show_reference(self, reference: ReferenceMetrics | None, note: str = "") -> None:
-        """The exact comparison with the optimum, or a note on why there is none."""
+        """The exact comparison with the optimum (and a word on what it takes into
+        account), or a note on why there is none."""
         figures: Mapping[str, float] = reference.figures if reference else {}
-        items = [(figure_name(k), format_figure(k, v)) for k, v in figures.items()]
+        items = [(figure_name(k), figure_forms(k, v)) for k, v in figures.items()]
         if reference is not None and not items:
-            items = [("reference", reference.summary)]
-        if items != self._reference or note != self._reference_note:
+            items = [("reference", (reference.summary,))]
+        scope = reference.scope.note if reference is not None else ""
+        if items != self._reference or (note, scope) != (self._reference_note, self._scope_note):
             self._reference = items
             self._reference_note = note
+            self._scope_note = scope
             self._changed()
 
     # --- drawing -----------------------------------------------------------
@@ -158,15 +198,17 @@ class StatsPanel(StripWidget):
         self.border_subtitle = " · ".join(parts)
         # A layout pass only when the panel's height may change (new rows or notes).
         shape = (len(self._rows), len(self._reference), bool(self._reference_note),
-                 self._engine_reason, self._compact())
+                 self._scope_note, self._engine_reason, self._compact())
         self.redraw(layout=shape != self._shape)
         self._shape = shape
 
     def _plain(self) -> str:
         label, _ = STATE_STYLES.get(self._state, (self._state, ""))
         lines = [f"{label}  speed {self._speed}  engine {self._engine}"]
-        lines += [f"{name} {value}" for name, value, _ in self._rows]
-        lines += [f"{name} {value}" for name, value in self._reference]
+        lines += [f"{name} {forms[0]}" for name, forms, _ in self._rows]
+        lines += [f"{name} {forms[0]}" for name, forms in self._reference]
+        if self._scope_note:
+            lines.append(self._scope_note)
         if self._reference_note:
             lines.append(self._reference_note)
         if self._engine_reason:
@@ -181,28 +223,27 @@ class StatsPanel(StripWidget):
 
     def draw(self, width: int) -> list[Line]:
         label, style = STATE_STYLES.get(self._state, (self._state, "bold"))
-        rows: list[list[tuple[str, str]]] = []  # four (text, style) cells a row
+        lines: list[Line] = []
         if self._compact():  # no border to carry the state, speed and engine: rows of their own
-            rows.append([(label, style), (self._engine, "dim"),
-                         ("speed", "dim"), (self._speed or "–", "bold magenta")])
-        figures = self._rows
-        for i in range(0, len(figures), 2):
-            row = []
-            for name, value, value_style in figures[i : i + 2]:
-                row += [(name, "dim"), (value, value_style)]
-            rows.append(row)
-        lines = _grid(rows, width)
+            lines += _grid([[(label, style), ((self._engine,), "dim"),
+                             ("speed", "dim"), ((self._speed or NO_DATA,), "bold magenta")]],
+                           width)
+        lines += _grid([[(name, "dim"), (forms, value_style)]
+                        for name, forms, value_style in self._rows], width, per_row=2)
         if self._reference:
-            lines += _grid([[(name, "dim"), (value, "bold")] for name, value in self._reference],
+            lines += _grid([[(name, "dim"), (forms, "bold")] for name, forms in self._reference],
                            width)
         elif self._reference_note:
             lines += _note(self._reference_note, width)
+        if self._reference and self._scope_note:
+            lines += _note(self._scope_note, width)
         if self._engine_reason:
             lines += _note(self._engine_reason, width)
         return lines
 
 
 GAP = 2  # cells between columns
+Cell = tuple[str | Forms, str]  # a name (one text) or a value (its forms), and its style
 
 
 @lru_cache(maxsize=64)
@@ -210,27 +251,69 @@ def _style(name: str) -> Style:
     return Style.parse(name) if name else Style()
 
 
-def _grid(rows: list[list[tuple[str, str]]], width: int) -> list[Line]:
+def _grid(rows: list[list[Cell]], width: int, per_row: int = 0) -> list[Line]:
     """Rows of (name, value) pairs: names left-aligned, values right-aligned, the
-    value columns sharing the width left over."""
-    pairs = max((len(row) // 2 for row in rows), default=0)
+    value columns sharing the width left over.
+
+    `per_row` > 0 regroups the pairs that many to a row. Values never get cut:
+    when the fullest forms do not fit, the widest value column takes shorter
+    forms, step by step, then the pairs go fewer to a row."""
+    pairs = [cell for row in rows for cell in zip(row[::2], row[1::2], strict=True)]
     if not pairs:
         return []
-    names = [max((len(row[2 * p][0]) for row in rows if len(row) > 2 * p), default=0)
-             for p in range(pairs)]
-    room = max(0, width - sum(names) - GAP * (2 * pairs - 1))
-    values = [room // pairs + (1 if p < room % pairs else 0) for p in range(pairs)]
+    layouts = [per_row, 1] if per_row > 1 else [0]
+    for i, group in enumerate(layouts):
+        lines = _lay_out(_regroup(rows, pairs, group), width, fit_only=i < len(layouts) - 1)
+        if lines is not None:
+            return lines
+    return []
+
+
+def _as_forms(value: str | Forms) -> Forms:
+    return (value,) if isinstance(value, str) else value
+
+
+def _regroup(rows: list[list[Cell]], pairs: list, group: int) -> list[list]:
+    if group <= 0:
+        return [list(zip(row[::2], row[1::2], strict=True)) for row in rows]
+    return [pairs[i : i + group] for i in range(0, len(pairs), group)]
+
+
+def _lay_out(rows: list[list], width: int, fit_only: bool) -> list[Line] | None:
+    """The lines of rows of ((name, style), (value forms, style)) pairs, or None when
+    `fit_only` and they do not fit in `width`."""
+    columns = max(len(row) for row in rows)
+    names = [max((len(row[p][0][0]) for row in rows if len(row) > p), default=0)
+             for p in range(columns)]
+    forms = [[_as_forms(row[p][1][0]) for row in rows if len(row) > p] for p in range(columns)]
+    gap = GAP
+    room = width - sum(names) - columns - gap * (columns - 1)  # a space before each value
+    widths = [max(len(f[0]) for f in column) for column in forms]
+    while sum(widths) > room:  # the widest column takes the next shorter forms
+        p = max(range(columns), key=widths.__getitem__)
+        narrower = max(len(fit(f, widths[p] - 1)) for f in forms[p])
+        if narrower >= widths[p]:
+            break
+        widths[p] = narrower
+    if sum(widths) > room:
+        if fit_only:
+            return None
+        gap = 1  # the last resort: closer columns
+        room = width - sum(names) - columns - gap * (columns - 1)
+    spare = max(0, room - sum(widths))  # shared out, so the values end where the width does
+    values = [widths[p] + spare // columns + (1 if p < spare % columns else 0)
+              for p in range(columns)]
     lines = []
     for row in rows:
         line: Line = []
-        for p in range(len(row) // 2):
-            (name, name_style), (value, value_style) = row[2 * p], row[2 * p + 1]
+        for p, ((name, name_style), (value, value_style)) in enumerate(row):
+            text = fit(_as_forms(value), widths[p])
             if p:
-                line.append(Segment(" " * GAP))
+                line.append(Segment(" " * gap))
             line.append(Segment(name, _style(name_style)))
-            pad = names[p] + GAP + values[p] - len(name) - len(value)
+            pad = names[p] + 1 + values[p] - len(name) - len(text)
             line.append(Segment(" " * max(1, pad)))
-            line.append(Segment(value, _style(value_style)))
+            line.append(Segment(text, _style(value_style)))
         lines.append(line)
     return lines
 

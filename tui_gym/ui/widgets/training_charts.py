@@ -7,10 +7,17 @@ spans. The whole box is one widget drawn from cached lines: a snapshot that
 changes nothing costs nothing, and one that does costs a single drawing
 rather than a dozen widgets' (`update_from`).
 
-A sparkline divides its width into buckets of the series, averages each and
-draws bars of eighths of a cell, `height` cells tall, coloured from the
-curve's low colour to its high colour (each curve's two colours are CSS
-component classes, e.g. `charts--return-high`).
+What is drawn and what is written agree (`plotted`): the curve's columns are
+bucket means of the series with the current value as the last column, and
+"max" and "min" are the highest and lowest of those columns, so the value
+beside a curve always lies within its range. A curve whose range rounds to
+one number is drawn flat. Figures too long for their column are shortened,
+never cut; a mean with no episodes behind it (just after loading a saved
+agent) reads "–".
+
+A sparkline draws bars of eighths of a cell, `height` cells tall, coloured
+from the curve's low colour to its high colour (each curve's two colours are
+CSS component classes, e.g. `charts--return-high`).
 """
 
 from __future__ import annotations
@@ -24,6 +31,7 @@ from rich.segment import Segment
 from rich.style import Style
 
 from tui_gym.core.training import TrainingSnapshot
+from tui_gym.ui.widgets.numbers import Forms, fit, number_forms
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget
 
 BARS = "▁▂▃▄▅▆▇█"
@@ -39,13 +47,18 @@ class Curve:
     name: str
     current: Callable[[TrainingSnapshot], float]
     fmt: str
+    of_episodes: bool = True  # the current value is a mean over recorded episodes
+
+    def forms(self, value: float) -> Forms:
+        """The value as `fmt` writes it, then shorter forms of it."""
+        return number_forms(self.fmt.format(value), value, "+" if "+" in self.fmt else "")
 
 
 CURVES: tuple[Curve, ...] = (
     Curve("return", "mean return", lambda s: s.mean_return, "{:+.3f}"),
     Curve("length", "ep. length", lambda s: s.mean_length, "{:.2f}"),
     Curve("td_error", "mean |TD|", lambda s: s.mean_abs_td, "{:.4f}"),
-    Curve("epsilon", "epsilon", lambda s: s.epsilon, "{:.3f}"),
+    Curve("epsilon", "epsilon", lambda s: s.epsilon, "{:.3f}", of_episodes=False),
 )
 
 
@@ -66,16 +79,35 @@ def bucket_means(data: Sequence[float], width: int) -> list[float]:
     return out
 
 
+def plotted(data: Sequence[float], width: int, current: float | None = None) -> list[float]:
+    """The `width` values a sparkline of `data` draws: bucket means of the series,
+    the last column being `current` (the value shown beside the curve) when given."""
+    if not data or width <= 0:
+        return []
+    if current is None:
+        return bucket_means(data, width)
+    return [*bucket_means(data, width - 1), float(current)]
+
+
 def sparkline_rows(
-    data: Sequence[float], width: int, height: int, low: RichColor, high: RichColor
+    data: Sequence[float],
+    width: int,
+    height: int,
+    low: RichColor,
+    high: RichColor,
+    *,
+    flat: bool = False,
 ) -> list[Line]:
-    """A sparkline of `data`, `width` x `height` cells, as lines of segments (top first)."""
+    """A sparkline of `data`, `width` x `height` cells, as lines of segments (top first).
+
+    `data` is drawn as it is when it has `width` values (see `plotted`), else
+    bucketed first; `flat` draws it as a level line (a range too small to show)."""
     if not data:
         blank = [[Segment(" " * width)] for _ in range(height - 1)]
         return [*blank, [Segment("▁" * width, Style(color=low))]]
-    values = bucket_means(data, width)
+    values = list(data) if len(data) == width else bucket_means(data, width)
     lo, hi = min(values), max(values)
-    extent = hi - lo
+    extent = 0.0 if flat else hi - lo
     levels = len(BARS) * height - 1
     styles: dict[int, Style] = {}
     cells: list[tuple[int, Style]] = []  # (eighths filled, style) per column
@@ -150,6 +182,7 @@ class TrainingCharts(StripWidget):
         super().__init__(id=id, classes=classes)
         self._data: dict[str, tuple[float, ...]] = {}
         self._values: dict[str, str] = {}
+        self._current: dict[str, float | None] = {}
         self.border_title = "Learning curves"
 
     # --- data in -----------------------------------------------------------
@@ -158,33 +191,37 @@ class TrainingCharts(StripWidget):
         return self._data.get(key, ())
 
     def value_text(self, key: str) -> str:
-        """The current value shown beside a sparkline."""
+        """The current value shown beside a sparkline (in its fullest form)."""
         return self._values.get(key, "")
+
+    def plotted(self, key: str, width: int) -> list[float]:
+        """The columns one sparkline draws at a given width (see `plotted`)."""
+        return plotted(self._data.get(key, ()), width, self._current.get(key))
 
     def clear(self) -> None:
         """Forget every curve (after an agent reset)."""
         self._data.clear()
         self._values.clear()
+        self._current.clear()
         self.border_title = "Learning curves"
         self.redraw()
 
     def update_from(self, snapshot: TrainingSnapshot) -> None:
         """Show a snapshot's curves; nothing is drawn when nothing changed."""
-        window = min(snapshot.window, max(1, snapshot.episodes))
-        title = (
-            f"Learning curves · rolling mean of {window:,}"
-            if snapshot.episodes
-            else "Learning curves"
-        )
+        recorded = snapshot.recorded  # episodes in the statistics (none just after a load)
+        window = min(snapshot.window, max(1, recorded))
+        title = f"Learning curves · rolling mean of {window:,}" if recorded else "Learning curves"
         if title != self.border_title:
             self.border_title = title
         changed = False
         for curve in CURVES:
             key = curve.key
-            data = tuple(snapshot.series.get(key, ()))
-            text = curve.fmt.format(curve.current(snapshot)) if snapshot.episodes else "–"
+            data = tuple(snapshot.series.get(key, ())) if recorded else ()
+            current = curve.current(snapshot) if recorded or not curve.of_episodes else None
+            text = curve.fmt.format(current) if current is not None else "–"
             if self._data.get(key) != data or self._values.get(key) != text:
                 self._data[key], self._values[key] = data, text
+                self._current[key] = current
                 changed = True
         if changed:
             self.redraw()
@@ -206,15 +243,17 @@ class TrainingCharts(StripWidget):
         spark_width = max(1, width - NAME_WIDTH - VALUE_WIDTH - 2 - range_width)
         lines: list[Line] = []
         for curve in CURVES:
-            data = self._data.get(curve.key, ())
+            current = self._current.get(curve.key)
+            columns = plotted(self._data.get(curve.key, ()), spark_width, current)
             low = styles[f"charts--{curve.key}-low"].color or RichColor.default()
             high = styles[f"charts--{curve.key}-high"].color or RichColor.default()
-            spark = sparkline_rows(data, spark_width, height, low, high)
-            value = self._values.get(curve.key, "–") or "–"
-            ends = (
-                [f"max {curve.fmt.format(max(data))}", f"min {curve.fmt.format(min(data))}"]
-                if data else ["", ""]
-            )
+            value = "–" if current is None else fit(curve.forms(current), VALUE_WIDTH)
+            ends, flat = ["", ""], False
+            if columns:
+                top = fit(curve.forms(max(columns)), RANGE_WIDTH - 4)
+                bottom = fit(curve.forms(min(columns)), RANGE_WIDTH - 4)
+                ends, flat = [f"max {top}", f"min {bottom}"], top == bottom
+            spark = sparkline_rows(columns, spark_width, height, low, high, flat=flat)
             for row in range(height):
                 line: Line = [
                     *_cell(curve.name if row == 0 else "", NAME_WIDTH, name_style),
@@ -237,4 +276,4 @@ def _cell(text: str, width: int, style: Style, right: bool = False) -> Line:
     return [pad, body] if right else [body, pad]
 
 
-__all__ = ["CURVES", "Curve", "TrainingCharts", "bucket_means", "sparkline_rows"]
+__all__ = ["CURVES", "Curve", "TrainingCharts", "bucket_means", "plotted", "sparkline_rows"]

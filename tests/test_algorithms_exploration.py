@@ -1,0 +1,144 @@
+"""Shared exploration, hyperparameter schemas and the registry.
+
+Epsilon-greedy picks a random action with probability ε and otherwise the
+best one, ties broken uniformly: the frequencies from a fixed seed sit within
+a few standard errors of those probabilities, in both draw orders, and match
+`policy_probabilities`. The epsilon schedule is the old `Hyperparameters`
+one. Each algorithm's schema has valid defaults and refuses bad values with
+a message that names the field. The package stays free of the UI and of
+Gymnasium.
+"""
+
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pytest
+
+from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, QLearning, Settings, algorithm
+from tui_gym.algorithms.exploration import (
+    epsilon_greedy_batch,
+    epsilon_greedy_one,
+    greedy_batch,
+    linear_epsilon,
+    policy_probabilities,
+)
+from tui_gym.core.agent import HYPERPARAMETER_FIELDS, Hyperparameters
+
+VALUES = np.array([1.0, 3.0, 3.0, -2.0, 3.0])  # three actions tie for the best
+
+
+def _within(counts: np.ndarray, probs: np.ndarray, n: int) -> bool:
+    """Every frequency within 5 standard errors of its probability."""
+    spread = 5 * np.sqrt(probs * (1 - probs) / n) + 1e-12
+    return bool(np.all(np.abs(counts / n - probs) <= spread))
+
+
+@pytest.mark.parametrize("epsilon", [0.0, 0.3, 1.0])
+def test_epsilon_greedy_frequencies_in_both_draw_orders(epsilon: float) -> None:
+    probs = policy_probabilities(VALUES[None, :], epsilon)[0]
+    # ε/5 each, plus (1 - ε)/3 for each of the three tied best
+    assert probs == pytest.approx(epsilon / 5 + (1 - epsilon) / 3 * (VALUES == 3.0))
+    n = 60_000
+    batch = epsilon_greedy_batch(np.tile(VALUES, (n, 1)), epsilon, np.random.default_rng(0))
+    assert _within(np.bincount(batch, minlength=5), probs, n)
+    rng = np.random.default_rng(1)
+    one = [epsilon_greedy_one(VALUES, epsilon, rng) for _ in range(6_000)]
+    assert _within(np.bincount(one, minlength=5), probs, 6_000)
+    if epsilon == 0.0:
+        assert set(batch.tolist()) == {1, 2, 4}  # never an action outside the tie
+
+
+def test_ties_are_broken_uniformly_and_a_single_best_wins() -> None:
+    rng = np.random.default_rng(2)
+    values = np.array([[0.0, 0.0, 0.0, 0.0], [1.0, 5.0, 5.0, 0.0], [0.0, 0.0, 9.0, 0.0]])
+    picks = greedy_batch(np.repeat(values, 20_000, axis=0), rng).reshape(3, -1)
+    assert _within(np.bincount(picks[0], minlength=4), np.full(4, 0.25), 20_000)
+    assert _within(np.bincount(picks[1], minlength=4), np.array([0, 0.5, 0.5, 0]), 20_000)
+    assert set(picks[2].tolist()) == {2}
+
+
+def test_policy_probabilities_sum_to_one_per_row() -> None:
+    values = np.random.default_rng(3).integers(0, 3, (50, 4)).astype(float)  # many ties
+    probs = policy_probabilities(values, 0.17)
+    np.testing.assert_allclose(probs.sum(axis=1), 1.0)
+    assert (probs >= 0.17 / 4 - 1e-15).all()
+
+
+def test_the_epsilon_schedule_is_the_old_one() -> None:
+    for fraction in (0.0, 0.3, 0.5, 1.0):
+        hp = Hyperparameters(epsilon_start=0.9, epsilon_final=0.1, epsilon_decay_fraction=fraction,
+                             episodes=1000)
+        settings = QLearning.settings(hp.to_dict())
+        for episode in (0, 1, 150, 299, 300, 499, 500, 999, 5000):
+            assert settings.epsilon_at(episode) == hp.epsilon_at(episode)
+    assert linear_epsilon(50, 1.0, 0.0, 0.5, 200) == 0.5
+
+
+def test_the_learner_follows_its_schedule_and_live_changes() -> None:
+    learner = QLearning(2, {"episodes": 100, "epsilon_decay_fraction": 0.5}, n_states=2, seed=0)
+    assert learner.epsilon == 1.0
+    learner.end_episodes(25)
+    assert learner.epsilon == pytest.approx(1.0 - 0.5 * 0.95)
+    learner.set_hyperparameters({**learner.hp, "epsilon_final": 0.2, "learning_rate": 0.5})
+    assert learner.epsilon == pytest.approx(0.6) and learner.episode == 25  # takes effect at once
+    assert learner.hp.learning_rate == 0.5
+
+
+def test_common_params_are_the_old_hyperparameters() -> None:
+    old = {f.name: f for f in HYPERPARAMETER_FIELDS}
+    for field in COMMON_PARAMS:
+        if field.name in old:
+            assert field == old[field.name]
+    assert QLearning.settings().to_dict() == Hyperparameters().to_dict()
+
+
+def test_settings_parse_text_and_refuse_bad_values() -> None:
+    settings = algorithm("dyna-q").settings({"learning_rate": "0.25", "planning_steps": "5",
+                                             "learning_rate_schedule": " Constant "})
+    assert (settings.learning_rate, settings.planning_steps) == (0.25, 5)
+    assert settings["learning_rate_schedule"] == "constant"
+    assert settings.replace(discount=0.5).discount == 0.5 and settings.discount == 1.0
+    assert pickle.loads(pickle.dumps(settings)) == settings
+    with pytest.raises(ValueError, match=r"learning_rate is out of range: 0 is not in \(0, 1\]"):
+        settings.replace(learning_rate=0)
+    with pytest.raises(ValueError, match="learning_rate_schedule must be one of constant, visits"):
+        settings.replace(learning_rate_schedule="cosine")
+    with pytest.raises(ValueError, match="unknown hyperparameter"):
+        QLearning.settings({"planning_steps": 3})  # Dyna-Q's, not Q-learning's
+    with pytest.raises(ValueError, match="epsilon_final"):
+        QLearning.settings({"epsilon_start": 0.1, "epsilon_final": 0.2})
+    with pytest.raises(AttributeError):
+        settings.discount = 0.3  # type: ignore[misc]
+
+
+def test_the_registry() -> None:
+    names = [cls.name for cls in ALGORITHMS]
+    assert names == ["q-learning", "sarsa", "expected-sarsa", "double-q", "monte-carlo", "dyna-q"]
+    assert algorithm("Expected_SARSA").name == "expected-sarsa"
+    with pytest.raises(ValueError, match="unknown algorithm 'td-lambda'; choose one of q-learning"):
+        algorithm("td-lambda")
+    for cls in ALGORITHMS:
+        assert cls.title and cls.summary and cls.formula
+        fields = [f.name for f in cls.params]
+        assert len(fields) == len(set(fields)) and all(f.help for f in cls.params)
+        assert isinstance(cls.settings(), Settings)
+    assert [cls.name for cls in ALGORITHMS if cls.needs_next_action] == ["sarsa"]
+
+
+def test_the_package_imports_neither_textual_nor_gymnasium() -> None:
+    import ast
+    from pathlib import Path
+
+    import tui_gym.algorithms as package
+
+    for path in Path(package.__file__).parent.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module:
+                names = [node.module]
+            for name in names:
+                assert name.split(".")[0] not in {"textual", "gymnasium"}, (path.name, name)

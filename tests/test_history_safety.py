@@ -1,0 +1,193 @@
+"""Files that are not our run history are refused in one line and left as they were;
+the schema upgrades through its migrations and refuses a newer one."""
+
+from __future__ import annotations
+
+import sqlite3
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tui_gym.core.experiments import (
+    Curve,
+    NewerRunHistoryError,
+    NotARunHistoryError,
+    RunHistory,
+    RunHistoryError,
+    RunKind,
+    RunSpec,
+    list_runs,
+)
+from tui_gym.core.experiments.schema import APPLICATION_ID, MIGRATIONS, Migration
+
+
+def spec(seed: int = 0) -> RunSpec:
+    return RunSpec(kind=RunKind.TRAIN, game="blackjack", algorithm="q_learning", seeds=(seed,))
+
+
+def files_beside(path: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(path.parent.iterdir()) if p.is_file()}
+
+
+def refused(path: Path, error: type[RunHistoryError], *phrases: str) -> None:
+    """Opening `path` raises `error` in one line naming it and the phrases; nothing changes."""
+    before = path.read_bytes()
+    with pytest.raises(error) as caught:
+        RunHistory(path)
+    message = str(caught.value)
+    assert "\n" not in message
+    assert str(path) in message
+    for phrase in phrases:
+        assert phrase in message
+    assert path.read_bytes() == before
+    # The commands that only read say the same.
+    with pytest.raises(error):
+        list_runs(str(path))
+    assert path.read_bytes() == before
+
+
+def test_random_bytes(tmp_path: Path) -> None:
+    path = tmp_path / "runs.db"
+    path.write_bytes(np.random.default_rng(0).bytes(8192))
+    refused(path, NotARunHistoryError, "not a tui-gym run history", "left untouched")
+    assert [p.name for p in tmp_path.iterdir()] == ["runs.db"]
+
+
+def test_text_file_and_truncated_header(tmp_path: Path) -> None:
+    path = tmp_path / "runs.db"
+    path.write_text("episode,return\n1,0.5\n")
+    refused(path, NotARunHistoryError, "not an SQLite database")
+    path.write_bytes(b"SQLite for")
+    refused(path, NotARunHistoryError, "not an SQLite database")
+
+
+def test_sqlite_header_with_garbage_after_it(tmp_path: Path) -> None:
+    path = tmp_path / "runs.db"
+    path.write_bytes(b"SQLite format 3\x00" + np.random.default_rng(1).bytes(4000))
+    refused(path, NotARunHistoryError, "not a tui-gym run history")
+
+
+def test_another_programs_database(tmp_path: Path) -> None:
+    path = tmp_path / "runs.db"
+    conn = sqlite3.connect(path)
+    conn.execute("CREATE TABLE contacts (name TEXT, phone TEXT)")
+    conn.execute("INSERT INTO contacts VALUES ('Ada', '123')")
+    conn.commit()
+    conn.close()
+    before = files_beside(path)
+    refused(path, NotARunHistoryError, "another program", "contacts")
+    assert files_beside(path) == before
+
+
+def test_another_programs_empty_database_with_its_own_id(tmp_path: Path) -> None:
+    path = tmp_path / "runs.db"
+    conn = sqlite3.connect(path)
+    conn.execute("PRAGMA application_id = 1234")
+    conn.commit()
+    conn.close()
+    refused(path, NotARunHistoryError, "another program", "1234")
+
+
+def test_a_newer_schema_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "runs.db"
+    with RunHistory(path) as history:
+        history.start_run(spec())
+    conn = sqlite3.connect(path)
+    conn.execute(f"PRAGMA user_version = {len(MIGRATIONS) + 1}")
+    conn.commit()
+    conn.close()
+    refused(path, NewerRunHistoryError, "made by a newer tui-gym")
+
+
+def test_a_damaged_history_of_ours(tmp_path: Path) -> None:
+    path = tmp_path / "runs.db"
+    with RunHistory(path) as history:
+        for seed in range(60):
+            run_id = history.start_run(spec(seed))
+            history.put_curves(run_id, [Curve.per_episode("return", np.zeros(500))])
+    data = bytearray(path.read_bytes())
+    assert len(data) > 5 * 4096
+    data[2 * 4096 : 5 * 4096] = np.random.default_rng(2).bytes(3 * 4096)  # pages 3 to 5
+    path.write_bytes(bytes(data))
+    before = path.read_bytes()
+    with pytest.raises(RunHistoryError) as caught, RunHistory(path) as history:
+        for run in history.list_runs():
+            history.get_run(run.id)
+    message = str(caught.value)
+    assert "\n" not in message and str(path) in message and "damaged" in message
+    assert path.read_bytes() == before
+
+
+def test_a_folder_is_refused(tmp_path: Path) -> None:
+    with pytest.raises(NotARunHistoryError, match="is a folder"):
+        RunHistory(tmp_path)
+
+
+def test_an_empty_file_becomes_a_history(tmp_path: Path) -> None:
+    path = tmp_path / "runs.db"
+    path.touch()
+    with RunHistory(path) as history:
+        assert history.list_runs() == []
+    conn = sqlite3.connect(path)
+    assert conn.execute("PRAGMA application_id").fetchone()[0] == APPLICATION_ID
+    assert conn.execute("PRAGMA user_version").fetchone()[0] == len(MIGRATIONS)
+    assert conn.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+    conn.close()
+
+
+def _add_note(conn: sqlite3.Connection) -> None:
+    conn.execute("ALTER TABLE runs ADD COLUMN note TEXT NOT NULL DEFAULT ''")
+    conn.execute("UPDATE runs SET note = 'from version 1'")
+
+
+def test_migrations_upgrade_an_older_history_and_keep_its_runs(tmp_path: Path) -> None:
+    path = tmp_path / "runs.db"
+    with RunHistory(path) as history:
+        old_run = history.start_run(spec(7))
+    version_2 = (*MIGRATIONS, Migration(2, "runs get a note", _add_note))
+    with RunHistory(path, migrations=version_2) as history:
+        assert history.schema_version == 2
+        assert [r.seeds for r in history.list_runs()] == [(7,)]
+        assert history.start_run(spec(8)) > old_run  # the old code still writes what it knows
+        notes = history._conn.execute("SELECT note FROM runs ORDER BY id").fetchall()
+    assert notes == [("from version 1",), ("",)]
+    conn = sqlite3.connect(path)
+    assert conn.execute("PRAGMA user_version").fetchone()[0] == 2
+    conn.close()
+    # Opening it again at version 2 applies nothing twice; version-1 code now refuses it.
+    RunHistory(path, migrations=version_2).close()
+    refused(path, NewerRunHistoryError, "newer tui-gym", "version 2", "up to 1")
+
+
+def test_a_failing_migration_changes_nothing(tmp_path: Path) -> None:
+    path = tmp_path / "runs.db"
+    with RunHistory(path) as history:
+        history.start_run(spec())
+
+    def broken(conn: sqlite3.Connection) -> None:
+        conn.execute("ALTER TABLE runs ADD COLUMN half_done TEXT")
+        raise sqlite3.OperationalError("no such table: missing")
+
+    with pytest.raises(RunHistoryError, match="no such table"):
+        RunHistory(path, migrations=(*MIGRATIONS, Migration(2, "broken", broken)))
+    with RunHistory(path) as history:
+        assert history.schema_version == 1 and len(history.list_runs()) == 1
+        columns = [row[1] for row in history._conn.execute("PRAGMA table_info(runs)")]
+    assert "half_done" not in columns
+
+
+def test_migrations_must_be_numbered_in_order(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="out of order"):
+        RunHistory(tmp_path / "runs.db", migrations=(*MIGRATIONS, Migration(3, "gap", _add_note)))
+    assert not (tmp_path / "runs.db").exists()
+
+
+def test_a_folder_that_cannot_be_made_is_one_line(tmp_path: Path) -> None:
+    blocker = tmp_path / "data"
+    blocker.write_text("a file where the folder should be")
+    with pytest.raises(RunHistoryError) as caught:
+        RunHistory(blocker / "tui-gym" / "runs.db")
+    message = str(caught.value)
+    assert "\n" not in message and "cannot create its folder" in message
+    assert blocker.read_text() == "a file where the folder should be"

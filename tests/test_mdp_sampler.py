@@ -1,0 +1,168 @@
+"""BatchSampler: batched steps and resets that agree in distribution with the env."""
+
+from __future__ import annotations
+
+from collections import defaultdict
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from tests.mdp_support import sampled_returns, within_standard_errors
+from tui_gym.core.mdp import BatchSampler, FiniteMDP, evaluate, model_from_env, solve
+
+
+def frequencies_agree(counts: dict, expected: dict, n: int, sigmas: float = 5.0) -> bool:
+    """Every outcome's count within `sigmas` binomial standard deviations of n * p, none extra."""
+    if set(counts) - set(expected):
+        return False
+    for key, p in expected.items():
+        spread = sigmas * np.sqrt(n * p * (1 - p)) + 1.0
+        if abs(counts.get(key, 0) - n * p) > spread:
+            return False
+    return True
+
+
+def table_distribution(table, state, action) -> dict:
+    merged = defaultdict(float)
+    for p, nxt, reward, terminated in table[state][action]:
+        merged[int(nxt), float(reward), bool(terminated)] += p
+    return merged
+
+
+@pytest.mark.parametrize("map_name", ["4x4", "8x8"])
+def test_every_state_action_follows_the_table(map_name):
+    env = gym.make("FrozenLake-v1", map_name=map_name, is_slippery=True)
+    model = model_from_env(env)
+    sampler = BatchSampler(model)
+    n = 3000
+    pairs = np.array([(s, a) for s in range(model.n_states) for a in range(model.n_actions)])
+    states = np.repeat(pairs[:, 0], n)
+    actions = np.repeat(pairs[:, 1], n)
+    step = sampler.step(states, actions, np.random.default_rng(0))
+    for index, (state, action) in enumerate(pairs):
+        rows = slice(index * n, (index + 1) * n)
+        counts = defaultdict(int)
+        for key in zip(
+            step.next_state[rows].tolist(),
+            step.reward[rows].tolist(),
+            step.terminated[rows].tolist(),
+            strict=True,
+        ):
+            counts[key] += 1
+        expected = table_distribution(env.unwrapped.P, state, action)
+        assert frequencies_agree(counts, expected, n), (state, action, dict(counts))
+
+
+def test_the_real_env_follows_the_model():
+    """Step the real slippery lake from every state-action pair: its frequencies are the model's."""
+    env = gym.make("FrozenLake-v1", is_slippery=True).unwrapped
+    model = model_from_env(env)
+    env.reset(seed=5)
+    n = 300
+    for state in range(model.n_states):
+        for action in range(model.n_actions):
+            counts = defaultdict(int)
+            for _ in range(n):
+                env.s = state
+                nxt, reward, terminated, _, _ = env.step(action)
+                counts[int(nxt), float(reward), bool(terminated)] += 1
+            expected = {(s, r, t): p for p, s, r, t in model.outcomes(state, action)}
+            assert frequencies_agree(counts, expected, n), (state, action)
+
+
+def test_resets_follow_the_initial_distribution():
+    model = model_from_env(gym.make("Taxi-v4"))
+    sampler = BatchSampler(model)
+    n = 60_000
+    starts = sampler.reset(n, np.random.default_rng(1))
+    counts = np.bincount(starts, minlength=model.n_states)
+    assert (counts[model.initial == 0] == 0).all()
+    expected = n * model.initial
+    spread = 5 * np.sqrt(expected * (1 - model.initial)) + 1
+    assert (np.abs(counts - expected) <= spread).all()
+
+
+def test_an_impossible_outcome_is_never_drawn():
+    table = {
+        0: {0: [(0.5, 0, 1.0, False), (0.0, 1, 9.0, False), (0.5, 1, 2.0, True)]},
+        1: {0: [(1.0, 1, 0.0, True)]},
+    }
+    model = FiniteMDP.from_table(table, [1.0, 0.0])
+    # Keep the impossible outcome in the middle of the row, where round-off could reach it.
+    prob = np.array([[[0.5, 0.0, 0.5]], [[1.0, 0.0, 0.0]]])
+    padded = FiniteMDP(
+        next_state=np.array([[[0, 1, 1]], [[1, 1, 1]]]),
+        prob=prob,
+        reward=np.array([[[1.0, 9.0, 2.0]], [[0.0, 0.0, 0.0]]]),
+        terminal=np.array([[[False, False, True]], [[True, False, False]]]),
+        initial=[1.0, 0.0],
+    )
+    for m in (model, padded):
+        step = BatchSampler(m).step(
+            np.zeros(20_000, dtype=int), np.zeros(20_000, dtype=int), np.random.default_rng(2)
+        )
+        assert set(step.reward.tolist()) == {1.0, 2.0}
+        assert abs(step.terminated.mean() - 0.5) < 0.02
+
+
+def test_the_same_seed_gives_the_same_draws():
+    model = model_from_env(gym.make("FrozenLake-v1"))
+    sampler = BatchSampler(model)
+    states = np.arange(16).repeat(4)
+    actions = np.tile(np.arange(4), 16)
+    first = sampler.step(states, actions, np.random.default_rng(9))
+    second = sampler.step(states, actions, np.random.default_rng(9))
+    np.testing.assert_array_equal(first.next_state, second.next_state)
+    np.testing.assert_array_equal(
+        sampler.reset(10, np.random.default_rng(3)), sampler.reset(10, np.random.default_rng(3))
+    )
+
+
+@pytest.mark.parametrize(
+    ("states", "actions", "message"),
+    [
+        (np.array([0, 1]), np.array([0]), "one length"),
+        (np.array([[0]]), np.array([[0]]), "1-D"),
+        (np.array([0.0]), np.array([0]), "states must be integers"),
+        (np.array([16]), np.array([0]), "states must be in \\[0, 15\\]"),
+        (np.array([0]), np.array([-1]), "actions must be in \\[0, 3\\]"),
+    ],
+)
+def test_bad_input_is_refused(states, actions, message):
+    sampler = BatchSampler(model_from_env(gym.make("FrozenLake-v1")))
+    with pytest.raises(ValueError, match=message):
+        sampler.step(states, actions, np.random.default_rng(0))
+
+
+@pytest.mark.parametrize(
+    ("env_id", "kwargs"),
+    [
+        ("FrozenLake8x8-v1", {}),
+        ("CliffWalking-v1", {"is_slippery": True, "max_episode_steps": 100}),
+        ("Taxi-v4", {"is_rainy": True}),
+    ],
+)
+def test_sampled_returns_agree_with_the_exact_value(env_id, kwargs):
+    model = model_from_env(gym.make(env_id, **kwargs))
+    policy = solve(model).policy
+    exact = evaluate(model, policy).value
+    returns = sampled_returns(model, policy, 10_000, np.random.default_rng(6))
+    assert within_standard_errors(returns, exact)
+    # A stochastic policy too: half the time a uniformly random action.
+    mixed = np.full((model.n_states, model.n_actions), 0.5 / model.n_actions)
+    mixed[np.arange(model.n_states), policy] += 0.5
+    exact = evaluate(model, mixed).value
+    returns = sampled_returns(model, mixed, 10_000, np.random.default_rng(7))
+    assert within_standard_errors(returns, exact)
+
+
+def test_sampled_discounted_returns_with_no_limit():
+    model = model_from_env(gym.make("CliffWalking-v1", is_slippery=True))
+    policy = solve(model, gamma=0.9).policy
+    exact = evaluate(model, policy, gamma=0.9).value
+    # Cut at 400 steps: 0.9^400 of any return left over is far below the sampling error.
+    returns = sampled_returns(
+        model, policy, 20_000, np.random.default_rng(8), gamma=0.9, max_steps=400
+    )
+    assert within_standard_errors(returns, exact)

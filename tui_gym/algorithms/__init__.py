@@ -1,0 +1,77 @@
+"""Tabular learners, one file each, and the `ALGORITHMS` registry.
+
+Every learner is a `Learner` (see `base` for the protocol engines follow):
+its hyperparameters as `Param`s, its tables, its batched update rule, and a
+record of a single update for the step-by-step view. `algorithm(name)` finds
+one by its registry name (`q-learning`, `sarsa`, `expected-sarsa`,
+`double-q`, `monte-carlo`, `dyna-q`).
+"""
+
+from __future__ import annotations
+
+from tui_gym.algorithms.base import (
+    SCALAR_ENV,
+    CellUpdate,
+    Learner,
+    LearnerState,
+    TableSpec,
+    Transitions,
+    UpdateRecord,
+)
+from tui_gym.algorithms.double_q import DoubleQLearning
+from tui_gym.algorithms.dyna_q import DynaQ
+from tui_gym.algorithms.expected_sarsa import ExpectedSarsa
+from tui_gym.algorithms.monte_carlo import MonteCarlo
+from tui_gym.algorithms.qlearning import QLearning
+from tui_gym.algorithms.sarsa import Sarsa
+from tui_gym.algorithms.settings import COMMON_PARAMS, Choice, Field, Settings
+
+__all__ = [
+    "ALGORITHMS",
+    "COMMON_PARAMS",
+    "DEFAULT_ALGORITHM",
+    "SCALAR_ENV",
+    "CellUpdate",
+    "Choice",
+    "DoubleQLearning",
+    "DynaQ",
+    "ExpectedSarsa",
+    "Field",
+    "Learner",
+    "LearnerState",
+    "MonteCarlo",
+    "QLearning",
+    "Sarsa",
+    "Settings",
+    "TableSpec",
+    "Transitions",
+    "UpdateRecord",
+    "algorithm",
+]
+
+ALGORITHMS: tuple[type[Learner], ...] = (
+    QLearning,
+    Sarsa,
+    ExpectedSarsa,
+    DoubleQLearning,
+    MonteCarlo,
+    DynaQ,
+)
+
+DEFAULT_ALGORITHM = QLearning.name
+
+_BY_NAME = {cls.name: cls for cls in ALGORITHMS}
+
+
+def algorithm(name: str) -> type[Learner]:
+    """The learner class registered as `name` (case and `_`/`-` ignored).
+
+    Raises ValueError naming the registered ones.
+    """
+    wanted = str(name).strip().lower().replace("_", "-")
+    found = _BY_NAME.get(wanted)
+    if found is None:
+        raise ValueError(
+            f"unknown algorithm {name!r}; choose one of {', '.join(_BY_NAME)}"
+        )
+    return found

@@ -1,0 +1,77 @@
+"""Experiments: curves over seeds aggregated into a mean and a confidence band, and the run
+history (an SQLite file) that keeps every run with its settings, curves and figures."""
+
+from tui_gym.core.experiments.aggregate import (
+    AggregateCurve,
+    CurvePoint,
+    Estimate,
+    aggregate,
+    mean_return_last,
+    mean_with_ci,
+    rolling_mean,
+)
+from tui_gym.core.experiments.errors import (
+    NewerRunHistoryError,
+    NotARunHistoryError,
+    RunHistoryBusyError,
+    RunHistoryError,
+    UnknownRunError,
+)
+from tui_gym.core.experiments.figures import Figure
+from tui_gym.core.experiments.history import STORED_POINTS, RunHistory
+from tui_gym.core.experiments.paths import resolve_db_path
+from tui_gym.core.experiments.recorder import RunRecorder
+from tui_gym.core.experiments.records import (
+    Curve,
+    RunKind,
+    RunRecord,
+    RunSpec,
+    RunStatus,
+    RunSummary,
+    Versions,
+    WrapperSetting,
+)
+from tui_gym.core.experiments.runs import (
+    CsvExport,
+    RemovedRun,
+    RunListing,
+    export_run_csv,
+    list_runs,
+    remove_run,
+    show_run,
+)
+
+__all__ = [
+    "STORED_POINTS",
+    "AggregateCurve",
+    "CsvExport",
+    "Curve",
+    "CurvePoint",
+    "Estimate",
+    "Figure",
+    "NewerRunHistoryError",
+    "NotARunHistoryError",
+    "RemovedRun",
+    "RunHistory",
+    "RunHistoryBusyError",
+    "RunHistoryError",
+    "RunKind",
+    "RunListing",
+    "RunRecord",
+    "RunRecorder",
+    "RunSpec",
+    "RunStatus",
+    "RunSummary",
+    "UnknownRunError",
+    "Versions",
+    "WrapperSetting",
+    "aggregate",
+    "export_run_csv",
+    "list_runs",
+    "mean_return_last",
+    "mean_with_ci",
+    "remove_run",
+    "resolve_db_path",
+    "rolling_mean",
+    "show_run",
+]

@@ -1,0 +1,291 @@
+"""`FiniteMDP`: a game's exact model as dense transition arrays.
+
+Every state-action pair has up to K outcomes (K the most any pair has); pairs
+with fewer are padded with outcomes of probability 0 that go back to the same
+state, pay nothing and do not end the episode, so every array is `[S, A, K]`
+and every computation is one gather. `FiniteMDP.from_table` builds one from a
+Gymnasium-style table (`table[s][a] = [(prob, next_state, reward, terminated),
+...]`), merging outcomes that are the same and dropping impossible ones.
+
+A model is immutable: its arrays are read-only, so it can be shared between
+threads and kept in snapshots. `ModelError` (a `ValueError`) says in one line
+what is wrong with arrays or a table that do not make a model.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+__all__ = ["PROBABILITY_TOLERANCE", "FiniteMDP", "ModelError", "Outcome"]
+
+PROBABILITY_TOLERANCE = 1e-9
+"""How far a distribution's total may stray from 1 (round-off in tables like 0.8 + 0.1 + 0.1)."""
+
+Outcome = tuple[float, int, float, bool]
+"""One outcome of a state-action pair: (probability, next state, reward, terminated)."""
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+BoolArray = npt.NDArray[np.bool_]
+
+
+class ModelError(ValueError):
+    """Arrays or a table that do not make a finite MDP; the message says where and why."""
+
+
+def _frozen(array: np.ndarray) -> np.ndarray:
+    array.setflags(write=False)
+    return array
+
+
+@dataclass(frozen=True, eq=False)
+class FiniteMDP:
+    """A finite MDP with S states, A actions and at most K outcomes per state-action pair.
+
+    Attributes:
+        next_state: `[S, A, K]` int, the state each outcome leads to.
+        prob: `[S, A, K]` float, each outcome's probability; each `[s, a]` row sums to 1.
+        reward: `[S, A, K]` float, the reward paid on that outcome.
+        terminal: `[S, A, K]` bool, whether that outcome ends the episode (terminated).
+        initial: `[S]` float, the distribution of the state an episode starts in.
+        horizon: the episode limit H (an episode is cut off after H steps), or None.
+        action_names: a name per action, or None.
+
+    Arrays are copied, checked and made read-only; a bad one raises `ModelError`.
+    """
+
+    next_state: IntArray
+    prob: FloatArray
+    reward: FloatArray
+    terminal: BoolArray
+    initial: FloatArray
+    horizon: int | None = None
+    action_names: tuple[str, ...] | None = None
+
+    def __post_init__(self) -> None:
+        prob = np.array(self.prob, dtype=np.float64)
+        if prob.ndim != 3 or 0 in prob.shape:
+            raise ModelError(f"prob must be a non-empty [S, A, K] array, got shape {prob.shape}")
+        shape = prob.shape
+        n_states, n_actions, _ = shape
+        arrays: dict[str, np.ndarray] = {"prob": prob}
+        for name, dtype in (("next_state", None), ("reward", np.float64), ("terminal", None)):
+            array = np.array(getattr(self, name), dtype=dtype)
+            if array.shape != shape:
+                raise ModelError(f"{name} has shape {array.shape}, prob has {shape}")
+            arrays[name] = array
+        next_state = arrays["next_state"]
+        if not np.issubdtype(next_state.dtype, np.integer):
+            raise ModelError(f"next_state must hold integers, got dtype {next_state.dtype}")
+        if next_state.min() < 0 or next_state.max() >= n_states:
+            s, a, _ = np.argwhere((next_state < 0) | (next_state >= n_states))[0]
+            raise ModelError(f"state {s}, action {a} leads to a state outside [0, {n_states - 1}]")
+        if arrays["terminal"].dtype != np.bool_:
+            raise ModelError(f"terminal must hold booleans, got dtype {arrays['terminal'].dtype}")
+        if not np.isfinite(arrays["reward"]).all():
+            s, a, _ = np.argwhere(~np.isfinite(arrays["reward"]))[0]
+            raise ModelError(f"state {s}, action {a} has a reward that is not finite")
+        if not np.isfinite(prob).all() or (prob < 0).any():
+            s, a, _ = np.argwhere(~(prob >= 0) | ~np.isfinite(prob))[0]
+            raise ModelError(f"state {s}, action {a} has a probability that is not in [0, 1]")
+        totals = prob.sum(axis=2)
+        bad = np.abs(totals - 1.0) > PROBABILITY_TOLERANCE
+        if bad.any():
+            s, a = np.argwhere(bad)[0]
+            raise ModelError(
+                f"the probabilities of state {s}, action {a} sum to {totals[s, a]:.12g}, not 1"
+            )
+        initial = np.array(self.initial, dtype=np.float64)
+        if initial.shape != (n_states,):
+            raise ModelError(f"initial must have shape ({n_states},), got {initial.shape}")
+        if not np.isfinite(initial).all() or (initial < 0).any():
+            raise ModelError("initial must hold probabilities in [0, 1]")
+        if abs(initial.sum() - 1.0) > PROBABILITY_TOLERANCE:
+            raise ModelError(f"initial sums to {initial.sum():.12g}, not 1")
+        horizon = self.horizon
+        if horizon is not None:
+            if isinstance(horizon, bool) or not isinstance(horizon, int | np.integer):
+                raise ModelError(f"horizon must be an integer or None, got {horizon!r}")
+            if horizon < 1:
+                raise ModelError(f"horizon must be >= 1 step, got {horizon}")
+            horizon = int(horizon)
+        names = self.action_names
+        if names is not None:
+            names = tuple(str(name) for name in names)
+            if len(names) != n_actions:
+                raise ModelError(f"{len(names)} action names for {n_actions} actions")
+        object.__setattr__(self, "prob", _frozen(prob))
+        object.__setattr__(self, "next_state", _frozen(next_state.astype(np.int64)))
+        object.__setattr__(self, "reward", _frozen(arrays["reward"]))
+        object.__setattr__(self, "terminal", _frozen(arrays["terminal"]))
+        object.__setattr__(self, "initial", _frozen(initial))
+        object.__setattr__(self, "horizon", horizon)
+        object.__setattr__(self, "action_names", names)
+
+    # -- sizes ------------------------------------------------------------------
+
+    @property
+    def n_states(self) -> int:
+        return int(self.prob.shape[0])
+
+    @property
+    def n_actions(self) -> int:
+        return int(self.prob.shape[1])
+
+    @property
+    def max_outcomes(self) -> int:
+        """K: the most outcomes any state-action pair has."""
+        return int(self.prob.shape[2])
+
+    # -- derived arrays, computed once --------------------------------------------
+
+    @cached_property
+    def expected_reward(self) -> FloatArray:
+        """`[S, A]`: the expected reward of one step."""
+        return _frozen((self.prob * self.reward).sum(axis=2))
+
+    @cached_property
+    def continue_prob(self) -> FloatArray:
+        """`[S, A, K]`: each outcome's probability where it does not end the episode, else 0."""
+        return _frozen(np.where(self.terminal, 0.0, self.prob))
+
+    @cached_property
+    def cumulative(self) -> FloatArray:
+        """`[S, A, K]`: the running total of `prob`, exactly 1 from each row's last outcome on."""
+        cumulative = np.cumsum(self.prob, axis=2)
+        possible = self.prob > 0
+        # Index of each row's last possible outcome: from there on the total is 1 exactly,
+        # so a uniform draw in [0, 1) never falls past it because of round-off.
+        last = self.max_outcomes - 1 - np.argmax(possible[:, :, ::-1], axis=2)
+        after = np.arange(self.max_outcomes) >= last[:, :, None]
+        cumulative[after] = 1.0
+        return _frozen(cumulative)
+
+    # -- reading and rebuilding -----------------------------------------------------
+
+    def outcomes(self, state: int, action: int) -> list[Outcome]:
+        """The possible outcomes of one state-action pair, padding left out."""
+        row = self.prob[state, action] > 0
+        return [
+            (float(p), int(s), float(r), bool(t))
+            for p, s, r, t in zip(
+                self.prob[state, action][row],
+                self.next_state[state, action][row],
+                self.reward[state, action][row],
+                self.terminal[state, action][row],
+                strict=True,
+            )
+        ]
+
+    def replace(self, **changes: Any) -> FiniteMDP:
+        """A copy with some fields replaced (checked again)."""
+        fields: dict[str, Any] = {
+            "next_state": self.next_state,
+            "prob": self.prob,
+            "reward": self.reward,
+            "terminal": self.terminal,
+            "initial": self.initial,
+            "horizon": self.horizon,
+            "action_names": self.action_names,
+        }
+        unknown = set(changes) - set(fields)
+        if unknown:
+            raise TypeError(f"FiniteMDP has no field {', '.join(sorted(unknown))}")
+        fields.update(changes)
+        return FiniteMDP(**fields)
+
+    @classmethod
+    def from_table(
+        cls,
+        table: Mapping[int, Mapping[int, Iterable[Sequence[Any]]]]
+        | Sequence[Sequence[Iterable[Sequence[Any]]]],
+        initial: Sequence[float] | np.ndarray,
+        *,
+        n_states: int | None = None,
+        n_actions: int | None = None,
+        horizon: int | None = None,
+        action_names: Sequence[str] | None = None,
+    ) -> FiniteMDP:
+        """Build a model from `table[s][a] = [(prob, next_state, reward, terminated), ...]`.
+
+        Outcomes with the same next state, reward and terminated flag are merged
+        (their probabilities added); outcomes of probability 0 are dropped. The
+        numbers of states and actions default to the table's size. Raises
+        `ModelError` for a missing state or action, or an outcome that is not a
+        4-tuple of numbers.
+        """
+        n_states = len(table) if n_states is None else n_states
+        if n_states < 1:
+            raise ModelError("the table has no states")
+        rows: list[list[list[Outcome]]] = []
+        for s in range(n_states):
+            try:
+                actions = table[s]
+            except (KeyError, IndexError):
+                raise ModelError(f"the table has no entry for state {s}") from None
+            count = len(actions) if n_actions is None else n_actions
+            if n_actions is None:
+                n_actions = count
+            if count < 1:
+                raise ModelError(f"state {s} has no actions")
+            row: list[list[Outcome]] = []
+            for a in range(n_actions):
+                try:
+                    listed = actions[a]
+                except (KeyError, IndexError):
+                    raise ModelError(f"the table has no entry for state {s}, action {a}") from None
+                row.append(_merged(listed, s, a))
+            rows.append(row)
+        assert n_actions is not None
+        width = max(len(outcomes) for row in rows for outcomes in row)
+        shape = (n_states, n_actions, width)
+        next_state = np.broadcast_to(np.arange(n_states)[:, None, None], shape).copy()
+        prob = np.zeros(shape)
+        reward = np.zeros(shape)
+        terminal = np.zeros(shape, dtype=bool)
+        for s, row in enumerate(rows):
+            for a, outcomes in enumerate(row):
+                for k, (p, nxt, r, t) in enumerate(outcomes):
+                    prob[s, a, k], next_state[s, a, k], reward[s, a, k], terminal[s, a, k] = (
+                        p,
+                        nxt,
+                        r,
+                        t,
+                    )
+        return cls(
+            next_state=next_state,
+            prob=prob,
+            reward=reward,
+            terminal=terminal,
+            initial=np.asarray(initial, dtype=np.float64),
+            horizon=horizon,
+            action_names=None if action_names is None else tuple(action_names),
+        )
+
+
+def _merged(listed: Iterable[Sequence[Any]], state: int, action: int) -> list[Outcome]:
+    merged: dict[tuple[int, float, bool], float] = {}
+    try:
+        for outcome in listed:
+            if len(outcome) != 4:
+                raise ModelError(
+                    f"state {state}, action {action}: an outcome must be "
+                    f"(prob, next_state, reward, terminated), got {outcome!r}"
+                )
+            p, nxt, r, t = outcome
+            p, nxt, r, t = float(p), int(nxt), float(r), bool(t)
+            if p != 0.0:
+                merged[nxt, r, t] = merged.get((nxt, r, t), 0.0) + p
+    except (TypeError, ValueError) as error:
+        if isinstance(error, ModelError):
+            raise
+        raise ModelError(f"state {state}, action {action}: {error}") from None
+    if not merged:
+        raise ModelError(f"state {state}, action {action} has no possible outcome")
+    return [(p, nxt, r, t) for (nxt, r, t), p in merged.items()]

@@ -1,0 +1,177 @@
+"""The optimum: `solve(model)` and the `Solution` it returns, and `optimal_actions`.
+
+With an episode limit H the optimum is found by backward induction over the H
+steps (value iteration run exactly H times), so it is the best any policy can
+do, including one that acts differently as the limit nears. With no limit and
+gamma < 1 it is found by policy iteration; with gamma = 1 by policy iteration
+over the policies that end the episode surely, started from one that does.
+Each policy iteration step is an exact linear solve, so the optimum carries no
+stopping tolerance.
+
+`optimal_actions(q)` marks, per state, every action within a tolerance of the
+best: the actions a coach calls optimal and a heatmap does not mark.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from tui_gym.core.mdp.ending import policy_ends, surely_ending
+from tui_gym.core.mdp.evaluation import backup, check_gamma, expected_value, solve_linear
+from tui_gym.core.mdp.model import FiniteMDP
+
+__all__ = ["Solution", "optimal_actions", "solve"]
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+BoolArray = npt.NDArray[np.bool_]
+
+_MAX_ITERATIONS = 100_000
+
+
+@dataclass(frozen=True)
+class Solution:
+    """The optimum of a model.
+
+    `q[s, a]`: the best value of an episode that takes `a` in `s` and plays
+    optimally after, with `steps_left` steps to go (None: no limit). `v[s]`:
+    the best over actions; `value`: the initial distribution's average of `v`,
+    the optimum. `policy[s]`: an optimal action to take in `s`, chosen so
+    that, always taken, it makes a good fixed policy: with no limit it is an
+    optimal fixed policy (one that ends episodes surely, with gamma = 1); with
+    a limit, of the actions optimal with `steps_left` to go, one that stays
+    optimal for the most step counts below (the one needing the least time to
+    spare; no fixed policy need reach a limited game's optimum).
+
+    With no limit and gamma = 1, `v[s]` is minus infinity where no policy
+    surely ends the episode (and `q` where an action may lead there); plus
+    infinity everywhere when a cycle that gains reward can be repeated at will
+    before ending (the optimum is then unbounded).
+    """
+
+    q: FloatArray
+    v: FloatArray
+    value: float
+    gamma: float
+    steps_left: int | None
+    policy: IntArray
+
+    @property
+    def unbounded(self) -> bool:
+        return self.value == np.inf
+
+
+def optimal_actions(q: npt.ArrayLike, atol: float = 1e-9, rtol: float = 1e-9) -> BoolArray:
+    """`[S, A]`: the actions within `atol + rtol * |best|` of each row's best value.
+
+    Where the best is infinite only the actions equal to it count (a row all
+    minus infinity marks every action).
+    """
+    values = np.asarray(q, dtype=np.float64)
+    best = values.max(axis=1, keepdims=True)
+    if np.isfinite(best).all():
+        return values >= best - (atol + rtol * np.abs(best))
+    finite = np.isfinite(best)
+    slack = np.where(finite, atol + rtol * np.abs(np.where(finite, best, 0.0)), 0.0)
+    with np.errstate(invalid="ignore"):
+        close = values >= best - slack
+    return np.where(finite, close, values == best)
+
+
+def _one_hot(policy: IntArray, n_actions: int) -> FloatArray:
+    matrix = np.zeros((len(policy), n_actions))
+    matrix[np.arange(len(policy)), policy] = 1.0
+    return matrix
+
+
+def _solution(
+    model: FiniteMDP, q: FloatArray, gamma: float, steps_left: int | None, policy: IntArray
+) -> Solution:
+    v = q.max(axis=1)
+    for array in (q, v, policy):
+        array.setflags(write=False)
+    return Solution(q, v, expected_value(model, v), gamma, steps_left, policy)
+
+
+def _backward_induction(model: FiniteMDP, gamma: float, steps: int) -> tuple[FloatArray, IntArray]:
+    """Q with `steps` steps left, and the optimal action there that has been optimal longest.
+
+    Ties are common with gamma = 1 (a wasted step costs nothing while time
+    remains), so among the actions optimal with `steps` left the policy takes
+    one that stays optimal for the most step counts below: the one that needs
+    the least time to spare.
+    """
+    v = np.zeros(model.n_states)
+    # last_off[s, a]: the most steps left (so far) at which `a` was not optimal in `s`.
+    last_off = np.zeros((model.n_states, model.n_actions), dtype=np.int64)
+    for k in range(1, steps + 1):
+        q = backup(model, v, gamma)
+        last_off[~optimal_actions(q)] = k
+        v = q.max(axis=1)
+    policy = np.argmin(last_off, axis=1).astype(np.int64)
+    return q, policy
+
+
+def _policy_iteration(
+    model: FiniteMDP, gamma: float, rows: BoolArray, safe: BoolArray, policy: IntArray
+) -> tuple[FloatArray, IntArray, bool]:
+    """Q and a policy of the best over `rows` using `safe` actions; True when it is unbounded.
+
+    The start `policy` must be safe and, with gamma = 1, end surely from
+    `rows`. An action is changed only for a clear gain, so the iteration
+    cannot cycle; with gamma = 1, if a change makes the policy one that may
+    never end, the cycle it closes gains reward on average, and repeating it
+    makes the optimum unbounded.
+    """
+    n_actions = model.n_actions
+    states = np.arange(model.n_states)
+    for _ in range(_MAX_ITERATIONS):
+        v = np.full(model.n_states, -np.inf)
+        v[rows] = solve_linear(model, _one_hot(policy, n_actions), gamma, rows)
+        q = backup(model, v, gamma)
+        q[~safe] = -np.inf
+        best = np.argmax(q, axis=1)
+        tolerance = 1e-10 * max(1.0, float(np.abs(v[rows]).max(initial=0.0)))
+        improves = rows & (q[states, best] > q[states, policy] + tolerance)
+        if not improves.any():
+            return q, policy, False
+        policy = np.where(improves, best, policy)
+        if gamma == 1.0 and not policy_ends(model, _one_hot(policy, n_actions))[rows].all():
+            return q, policy, True
+    raise RuntimeError("policy iteration did not settle")  # finite MDPs always settle
+
+
+def solve(model: FiniteMDP, gamma: float = 1.0, *, steps_left: int | None = None) -> Solution:
+    """The optimal action values, values and optimum of `model` (see the package docstring).
+
+    With an episode limit H, `steps_left` (1 to H, default H: the start of an
+    episode) is how many steps remain, for a coach answering mid-episode.
+    With no limit it is ignored: there are always infinitely many left.
+    """
+    gamma = check_gamma(gamma)
+    horizon = model.horizon
+    if horizon is not None:
+        steps = horizon if steps_left is None else int(steps_left)
+        if not 1 <= steps <= horizon:
+            raise ValueError(f"steps_left must be in [1, {horizon}], got {steps_left!r}")
+        q, policy = _backward_induction(model, gamma, steps)
+        return _solution(model, q, gamma, steps, policy)
+    if gamma < 1.0:
+        every = np.ones(model.n_states, dtype=bool)
+        safe = np.ones((model.n_states, model.n_actions), dtype=bool)
+        start = np.argmax(model.expected_reward, axis=1).astype(np.int64)
+        q, policy, _ = _policy_iteration(model, gamma, every, safe, start)
+        return _solution(model, q, gamma, None, policy)
+    ending = surely_ending(model)
+    if not ending.states.any():
+        q = np.full((model.n_states, model.n_actions), -np.inf)
+        return _solution(model, q, gamma, None, ending.policy)
+    q, policy, unbounded = _policy_iteration(
+        model, gamma, ending.states, ending.safe, ending.policy
+    )
+    if unbounded:
+        q = np.where(ending.safe, np.inf, -np.inf)
+    return _solution(model, q, gamma, None, policy)

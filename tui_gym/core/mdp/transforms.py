@@ -1,0 +1,57 @@
+"""A model as a reward or time-limit wrapper changes it.
+
+Each function returns a new model whose exact values are those of the wrapped
+game: `scale_reward` (`ScaleReward`: every reward times `factor`),
+`step_penalty` (`StepPenalty`: `penalty` taken off every step's reward, the
+last one included), `clip_reward` (Gymnasium's `ClipReward`: each reward
+clipped to `[low, high]`, either bound optional), and `with_horizon`
+(`TimeLimit`: a different episode limit, or None for none). Rewards are
+transformed outcome by outcome, so clipping stays exact however an action's
+outcomes differ. The arguments are checked as the wrappers check theirs.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from tui_gym.core.mdp.model import FiniteMDP
+
+__all__ = ["clip_reward", "scale_reward", "step_penalty", "with_horizon"]
+
+
+def _finite(name: str, value: float, *, minimum: float | None = None) -> float:
+    number = float(value)
+    if not math.isfinite(number) or (minimum is not None and number < minimum):
+        bound = "" if minimum is None else f" >= {minimum:g}"
+        raise ValueError(f"{name} must be a finite number{bound}, got {value!r}")
+    return number
+
+
+def scale_reward(model: FiniteMDP, factor: float) -> FiniteMDP:
+    """The model with every reward multiplied by `factor`."""
+    factor = _finite("ScaleReward factor", factor)
+    return model.replace(reward=factor * model.reward)
+
+
+def step_penalty(model: FiniteMDP, penalty: float) -> FiniteMDP:
+    """The model with `penalty` (>= 0) subtracted from every step's reward."""
+    penalty = _finite("StepPenalty penalty", penalty, minimum=0.0)
+    return model.replace(reward=model.reward - penalty)
+
+
+def clip_reward(model: FiniteMDP, low: float | None = None, high: float | None = None) -> FiniteMDP:
+    """The model with every reward clipped to `[low, high]` (None: no bound on that side)."""
+    if low is None and high is None:
+        raise ValueError("ClipReward needs min_reward, max_reward or both")
+    low = None if low is None else _finite("ClipReward min_reward", low)
+    high = None if high is None else _finite("ClipReward max_reward", high)
+    if low is not None and high is not None and low > high:
+        raise ValueError(f"ClipReward min_reward ({low:g}) must be <= max_reward ({high:g})")
+    return model.replace(reward=np.clip(model.reward, low, high))
+
+
+def with_horizon(model: FiniteMDP, horizon: int | None) -> FiniteMDP:
+    """The model with the episode cut off after `horizon` steps (None: no limit)."""
+    return model.replace(horizon=horizon)

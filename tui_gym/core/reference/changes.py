@@ -1,0 +1,124 @@
+"""How the wrappers around a game change it, as far as its exact figures care.
+
+`GameChanges.of(env)` reads a built env's wrapper stack, innermost first:
+
+- reward wrappers (any `gymnasium.RewardWrapper`, e.g. `ScaleReward`,
+  `StepPenalty`, `ClipReward`, and our `DistanceShaping`) become one function
+  `reward(base, distance)`: the reward the wrapped env hands out for a step
+  whose bare reward is `base` and after which the agent is `distance` cells
+  from its target (GridWorld's `info["distance"]`; unused elsewhere). It calls
+  the wrappers' own `reward` code, so it is exactly what they do;
+- the tightest `TimeLimit` is `time_limit`;
+- wrappers that change only what the agent observes change nothing here;
+- anything else (`StickyAction`, an unknown wrapper) changes the game's
+  dynamics in a way no exact figure here models: it is named in `others`.
+
+A game's profile decides from this whether its exact figures (optimum,
+advice, the value of a policy) can be computed for the game as played, or
+must be given as figures of the unwrapped game.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import gymnasium as gym
+from gymnasium.wrappers import OrderEnforcing, PassiveEnvChecker, TimeLimit
+
+from tui_gym.core.wrappers.custom import DistanceShaping
+
+__all__ = ["NO_CHANGES", "GameChanges"]
+
+_TRANSPARENT = (OrderEnforcing, PassiveEnvChecker)
+
+RewardStep = Callable[[float, float], float]
+
+
+@dataclass(frozen=True)
+class GameChanges:
+    """What the wrappers change: rewards, a time limit, and dynamics nobody models."""
+
+    reward_wrappers: tuple[str, ...] = ()  # labels, innermost first, e.g. "ScaleReward(factor=-1)"
+    time_limit: int | None = None  # the tightest TimeLimit in force (a registered one included)
+    chosen_time_limit: bool = False  # whether a TimeLimit other than the registered one applies
+    others: tuple[str, ...] = ()  # wrappers that change the dynamics, e.g. "StickyAction"
+    _steps: tuple[RewardStep, ...] = field(default=(), repr=False, compare=False)
+
+    @classmethod
+    def of(cls, env: gym.Env) -> GameChanges:
+        """Read the wrappers of a built env (see the module docstring)."""
+        layers: list[gym.Env] = []
+        inner: gym.Env = env
+        while isinstance(inner, gym.Wrapper):
+            layers.append(inner)
+            inner = inner.env
+        layers.reverse()  # innermost first
+        registered = None
+        if inner.spec is not None and inner.spec.id in gym.registry:
+            registered = gym.registry[inner.spec.id].max_episode_steps
+        labels: list[str] = []
+        steps: list[RewardStep] = []
+        others: list[str] = []
+        limit: int | None = None
+        chosen = False
+        for position, layer in enumerate(layers):
+            if isinstance(layer, (*_TRANSPARENT, gym.ObservationWrapper)):
+                continue
+            if isinstance(layer, TimeLimit):
+                n = int(layer._max_episode_steps)
+                limit = n if limit is None else min(limit, n)
+                below = layers[position - 1] if position else None
+                if not (isinstance(below, _TRANSPARENT) and n == registered):
+                    chosen = True
+                continue
+            if isinstance(layer, gym.RewardWrapper):
+                steps.append(_reward_step(layer))
+            elif isinstance(layer, DistanceShaping):
+                steps.append(_shaping_step(float(layer.k)))
+            else:
+                others.append(type(layer).__name__)
+                continue
+            labels.append(_label(layer))
+        return cls(tuple(labels), limit, chosen, tuple(others), tuple(steps))
+
+    @property
+    def changes_rewards(self) -> bool:
+        return bool(self._steps)
+
+    def reward(self, base: float, distance: float = 0.0) -> float:
+        """The reward of a step whose bare reward is `base`, as the wrapped env gives it."""
+        value = float(base)
+        for step in self._steps:
+            value = step(value, float(distance))
+        return value
+
+    def reward_names(self) -> str:
+        """The reward wrappers for a sentence: 'ScaleReward(factor=-1), StepPenalty(...)'."""
+        return ", ".join(self.reward_wrappers)
+
+
+NO_CHANGES = GameChanges()
+
+
+def _reward_step(layer: gym.RewardWrapper) -> RewardStep:
+    def step(reward: float, distance: float) -> float:
+        return float(layer.reward(reward))
+
+    return step
+
+
+def _shaping_step(k: float) -> RewardStep:
+    def step(reward: float, distance: float) -> float:
+        return reward - k * distance
+
+    return step
+
+
+def _label(layer: gym.Env) -> str:
+    saved: dict[str, Any] = getattr(layer, "_saved_kwargs", {}) or {}
+    params = ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
+                       for k, v in saved.items() if k != "env")
+    name = type(layer).__name__
+    return f"{name}({params})" if params else name

@@ -1,0 +1,50 @@
+"""Numbers that fit: each figure in its full form and in shorter ones.
+
+A widget with a fixed width for a figure asks for its forms, longest first,
+and shows the first that fits (`fit`), so a large number is shortened
+("5,496,812" to "5.50M", "+1234567.000" to "+1.235e+06") and never cut.
+"""
+
+from __future__ import annotations
+
+Forms = tuple[str, ...]  # one figure's texts, fullest first
+
+
+def compact_count(n: float) -> str:
+    """A count in at most five characters: '9,999', '12.3k', '5.50M', '1.23B'."""
+    n = float(n)
+    if abs(n) < 10_000:
+        return f"{n:,.0f}"
+    units = (("k", 1e3), ("M", 1e6), ("B", 1e9))
+    for i, (unit, size) in enumerate(units):
+        scaled = n / size
+        if abs(scaled) < 999.5 or i == len(units) - 1:  # 999.7k would round to 1000k
+            digits = 2 if abs(scaled) < 9.995 else 1 if abs(scaled) < 99.95 else 0
+            return f"{scaled:.{digits}f}{unit}"
+    return f"{n:,.0f}"
+
+
+def count_forms(n: float) -> Forms:
+    """'5,496,812', then '5.50M'."""
+    full = f"{n:,.0f}"
+    short = compact_count(n)
+    return (full, short) if short != full else (full,)
+
+
+def number_forms(full: str, value: float, sign: str = "") -> Forms:
+    """`full` (the value as the widget formats it), then the same value with fewer
+    significant digits (4, 3, 2): only the forms that are shorter."""
+    forms = [full]
+    for digits in (4, 3, 2):
+        text = f"{value:{sign}.{digits}g}"
+        if len(text) < len(forms[-1]):
+            forms.append(text)
+    return tuple(forms)
+
+
+def fit(forms: Forms, width: int) -> str:
+    """The fullest form at most `width` characters long (the shortest when none is)."""
+    for text in forms:
+        if len(text) <= width:
+            return text
+    return forms[-1]
