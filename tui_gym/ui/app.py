@@ -16,6 +16,7 @@ below the minimum size `TooSmallScreen` covers it and takes every key; and
 
 from __future__ import annotations
 
+import contextlib
 import gc
 import time
 from collections.abc import Callable, Iterable, Sequence
@@ -299,7 +300,8 @@ class TuiGymApp(App[int]):
         runner = self.runner
         runner.session = session  # both runners read their session afresh at each start
         runner.finished = False
-        runner.last_event = runner.last_scene = None
+        with contextlib.suppress(AttributeError):  # read-only where tied to the agent
+            runner.last_event = runner.last_scene = None  # the other game's last move
         self.sub_title = session.profile.title
         self._last_version = -1
         self.play_view.reload()
