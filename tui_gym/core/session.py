@@ -233,11 +233,12 @@ class Session:
         """The env id, checked arguments, wrappers and profile a rebuild would use."""
         new_id = resolve_env_id(env_id) if env_id is not None else self.env_id
         profile = profile_for(new_id)
+        asked: Mapping[str, Any]
         if env_kwargs is None:
-            kwargs = self.env_kwargs if new_id == self.env_id else profile.default_kwargs()
+            asked = self.env_kwargs if new_id == self.env_id else profile.default_kwargs()
         else:
-            kwargs = env_kwargs
-        kwargs = profile.normalize_kwargs(kwargs)
+            asked = env_kwargs
+        kwargs = profile.normalize_kwargs(asked)
         return new_id, kwargs, tuple(self.choices if choices is None else choices), profile
 
     def _keeps(self, built: _Built) -> bool:

@@ -164,10 +164,16 @@ class FileScreen(ModalScreen[Path | None]):
                     f"{path} already exists. Saving replaces what it holds.",
                     "Replace",
                 ),
-                lambda yes: self._finish(path) if yes else self.query_one(Input).focus(),
+                lambda yes: self._replace(path, bool(yes)),
             )
             return
         self._finish(path)
+
+    def _replace(self, path: Path, yes: bool) -> None:
+        if yes:
+            self._finish(path)
+        else:
+            self.query_one(Input).focus()
 
     def _finish(self, path: Path) -> None:
         error = self.perform(path)
