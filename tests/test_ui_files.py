@@ -104,13 +104,6 @@ async def test_save_asks_for_a_name_and_before_replacing_and_the_palette_has_it(
         assert "Q-table" in svg and "Screenshot" not in svg  # the app, not the palette
         await wait_for(pilot, lambda: any("Screenshot saved to" in n.message
                                           for n in app._notifications), "the notice")
-        await pilot.press("ctrl+p", *"Save ag")
-        await wait_for(pilot, lambda: palette_first(app).startswith("Save agent"),
-                       "the palette to list Save agent")
-        await pilot.press("down", "enter")
-        await wait_for(pilot, lambda: isinstance(app.screen, FileScreen), "the save dialog")
-        await type_name(pilot, "p")
-        assert (in_tmp / "p.tgym").is_file()
 
 
 async def test_load_says_what_is_wrong_and_asks_before_replacing_a_trained_agent(in_tmp: Path):
