@@ -361,6 +361,40 @@ class Session:
         return None if q is None else self.profile.heatmaps(q, self.env_kwargs, focus,
                                                             self.changes)
 
+    def heatmap_cell(
+        self, observation: Any, focus: Any = None
+    ) -> tuple[Any, tuple[int, int, int]] | None:
+        """Where an observation's state is drawn on the heatmaps: the focus to show it
+        under (`focus` when it is there, else the first focus that has it, for games
+        whose heatmaps follow one) and its (panel, row, col); None when no heatmap
+        shows it (wrappers hide the base states, or it is not one of them)."""
+        keys = self.base_keys()
+        if keys is None:
+            return None
+        try:
+            key = self.keyer.key(observation)
+        except (IndexError, KeyError, TypeError, ValueError):
+            return None
+        rows = [i for i, k in enumerate(keys) if k == key]
+        if not rows:
+            return None
+        # An indicator table: the state's cell is the only one whose value is 1.
+        q = np.zeros((len(keys), self._built.n_actions))
+        q[rows] = 1.0
+        profile, kwargs = self.profile, self.env_kwargs
+        focuses = [focus]
+        if profile.heatmap_focus:
+            panels = profile.heatmaps(q, kwargs, focus, self.changes)
+            height, width = panels[0].shape if panels else (0, 0)
+            focuses += [profile.heatmap_focus_at(r, c, kwargs)
+                        for r in range(height) for c in range(width)]
+        for candidate in focuses:
+            for index, panel in enumerate(profile.heatmaps(q, kwargs, candidate, self.changes)):
+                found = np.argwhere(np.nan_to_num(panel.values) == 1.0)
+                if found.size:
+                    return candidate, (index, int(found[0][0]), int(found[0][1]))
+        return None
+
     def agent_figures(self, snapshot: TrainingSnapshot | None = None) -> dict[str, float]:
         """Exact scoreboard figures of the agent's greedy policy (the live agent's, or a
         snapshot's) and of the optimum (`profile.agent_figures`); only the optimum's

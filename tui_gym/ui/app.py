@@ -41,7 +41,7 @@ from textual.widget import Widget
 from textual.widgets import ContentSwitcher, Header
 
 from tui_gym.core.profiles import PROFILES, GameProfile, profile_for
-from tui_gym.core.runner import make_runner
+from tui_gym.core.runner import SPEEDS, make_runner
 from tui_gym.core.session import Session
 from tui_gym.core.storage import StorageError
 from tui_gym.core.training import continue_run
@@ -58,6 +58,8 @@ from tui_gym.ui.widgets.key_bar import KeyBar
 MIN_WIDTH, MIN_HEIGHT = 80, 24  # below this: a message instead of the layout
 COMPACT_WIDTH, COMPACT_HEIGHT = 120, 36  # below this: the compact layout
 REFRESH_HZ = 15
+# The speed a step key switches to: the first animated one that is not the slowest.
+ANIMATED_SPEED = next(i for i, speed in enumerate(SPEEDS) if speed.name == "animated")
 IDLE_POLL = 0.02  # seconds between looks for the agent handed back before a change
 IDLE_TIMEOUT = 10.0  # and how long to look before giving up
 
@@ -80,6 +82,7 @@ class TuiGymApp(App[int]):
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("space", "toggle_training", "Start/Pause", key_display="space"),
         Binding("full_stop", "one_episode", "1 episode", key_display="."),
+        Binding("n", "one_step", "1 step", tooltip="One transition, explained step by step"),
         Binding("x", "request_reset", "Reset agent"),
         Binding("plus,equals_sign", "faster", "Faster", key_display="+"),
         Binding("minus,underscore", "slower", "Slower", key_display="-"),
@@ -94,7 +97,8 @@ class TuiGymApp(App[int]):
         Binding("ctrl+o", "load_agent", "Load agent", show=False),
     ]
     TRAIN_ACTIONS = frozenset(
-        {"toggle_training", "one_episode", "reset_agent", "request_reset", "faster", "slower"}
+        {"toggle_training", "one_episode", "one_step", "reset_agent", "request_reset", "faster",
+         "slower"}
     )
 
     def __init__(
@@ -381,6 +385,22 @@ class TuiGymApp(App[int]):
         if self._apply_form():
             self.runner.run_one_episode()
 
+    def action_one_step(self) -> None:
+        """One transition on the scalar engine, explained in the Train view's step panel
+        (the speed goes to animated, where the panel and the board show)."""
+        runner = self.runner
+        if runner.running:
+            self.notify("Pause training first (space).", severity="warning", timeout=3)
+            return
+        if not self._apply_form():
+            return
+        if not runner.speed.animated:
+            speed = runner.set_speed(ANIMATED_SPEED)
+            self.train_view.show_speed(speed.name)
+            self.notify(f"Speed: {speed.name}, so each step shows on the board and in the "
+                        "step panel.", timeout=4)
+        runner.run_one_step()
+
     def _apply_form(self) -> bool:
         """Apply the form's hyperparameters (a raised budget continues the run); False when
         a field is wrong."""
@@ -556,6 +576,51 @@ class TuiGymApp(App[int]):
             self.runner.start()
         return True
 
+    def on_side_panel_algorithm_picked(self, message: SidePanel.AlgorithmPicked) -> None:
+        """Another algorithm needs a fresh learner: once it has trained, ask first."""
+        from tui_gym.algorithms import algorithm
+
+        cls = algorithm(message.name)
+        if cls.name == self.session.algorithm:
+            return
+        episodes = self._episodes_trained()
+
+        def switch() -> None:
+            self._when_idle(lambda: self._use_algorithm(cls.name), self.side_panel.reload)
+
+        if not episodes:
+            switch()
+            return
+
+        def answer(yes: bool | None) -> None:
+            if yes:
+                switch()
+            else:
+                self.side_panel.reload()
+                self.notify(f"Still {self.session.learner_class.title}: the agent is kept.",
+                            timeout=3)
+
+        self.push_screen(
+            ConfirmScreen(
+                f"Train with {cls.title} instead?",
+                f"Another algorithm needs a fresh learner: the agent, trained {episodes:,} "
+                f"episodes with {self.session.learner_class.title}, would start over with "
+                f"{cls.title}'s defaults for this game (ctrl+s saves it first). "
+                "ε, the learning rate and the other fields change without this.",
+                "Switch and reset",
+            ),
+            answer,
+        )
+
+    def _use_algorithm(self, name: str) -> None:
+        self.session.set_algorithm(name)
+        self._last_version = -1
+        self.train_view.reload()
+        self.side_panel.reload()
+        cls = self.session.learner_class
+        self.notify(f"{cls.title}: a fresh learner with its defaults for "
+                    f"{self.session.profile.title}. {cls.summary}.", timeout=5)
+
     def on_side_panel_changed(self, message: SidePanel.Changed) -> None:
         """A new game switches sessions; a change that would reset a trained agent asks."""
         profile = profile_for(message.env_id)
@@ -611,6 +676,7 @@ class TuiGymApp(App[int]):
             ("Train", [
                 ("space", "start / pause training"),
                 (".", "run one episode"),
+                ("n", "one step (one transition): the step panel explains the update"),
                 ("x", "reset the agent (asks first once it has trained)"),
                 ("+ / -", "faster / slower (animated ... max)"),
                 *self.train_view.key_help(),
