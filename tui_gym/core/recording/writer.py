@@ -1,0 +1,57 @@
+"""`LineWriter`: appends whole lines to a file, each one flushed to the OS as it is written.
+
+Each line goes to the file in a single `write` on a descriptor opened for
+appending, so a crash (or a kill) of the program leaves every line written
+before it whole and no part of the next one. A write the disk cuts short
+(full, quota) is taken back: the file is truncated to where the line began
+and the error raised, so the file never ends in half a line written here.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+
+class LineWriter:
+    """Appends lines (bytes ending in a newline) to `path`; `truncate` empties it first."""
+
+    def __init__(self, path: str | Path, *, truncate: bool = True) -> None:
+        self.path = Path(path)
+        flags = os.O_WRONLY | os.O_CREAT | os.O_APPEND | getattr(os, "O_CLOEXEC", 0)
+        if truncate:
+            flags |= os.O_TRUNC
+        self._fd: int | None = os.open(self.path, flags, 0o644)
+        self.lines = 0
+
+    @property
+    def closed(self) -> bool:
+        return self._fd is None
+
+    def write(self, line: bytes) -> None:
+        """Write one whole line; OSError (and nothing of the line in the file) when it fails."""
+        if self._fd is None:
+            raise ValueError("the recording is closed")
+        if not line.endswith(b"\n") or b"\n" in line[:-1]:
+            raise ValueError("a line must end in its only newline")
+        fd = self._fd
+        start = os.lseek(fd, 0, os.SEEK_END)
+        try:
+            written = os.write(fd, line)
+            while written < len(line):  # a short write: finish it or fail
+                more = os.write(fd, line[written:])
+                if more <= 0:
+                    raise OSError(f"{self.path}: the line could not be written whole")
+                written += more
+        except OSError:
+            try:
+                os.ftruncate(fd, start)
+            except OSError:
+                pass
+            raise
+        self.lines += 1
+
+    def close(self) -> None:
+        if self._fd is not None:
+            fd, self._fd = self._fd, None
+            os.close(fd)
