@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from tui_gym.core.recording import Recorder
+    from tui_gym.core.recording.recorder import GameRecorder
     from tui_gym.core.session import Session
 
 
@@ -149,7 +149,7 @@ class HumanGame:
         self.last: PlayStep | None = None
         self.first_info: dict[str, Any] = {}
         self._seeded = False
-        self.recorder: Recorder | None = None  # told of every reset and move when set
+        self.recorder: GameRecorder | None = None  # told of every reset and move when set
 
     def close(self) -> None:
         self.env.close()

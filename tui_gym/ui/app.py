@@ -25,12 +25,15 @@ from textual.widget import Widget
 from textual.widgets import ContentSwitcher, Header, Static
 
 from tui_gym.core.profiles import PROFILES
+from tui_gym.core.recording import Recording
+from tui_gym.core.recording.switch import RecordingSwitch
 from tui_gym.core.runner import make_runner
 from tui_gym.core.session import Session
 from tui_gym.core.storage import StorageError
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.play_view import PlayView
+from tui_gym.ui.replay_screen import ReplayScreen
 from tui_gym.ui.side_panel import SidePanel
 from tui_gym.ui.train_view import TrainView
 from tui_gym.ui.widgets.key_bar import KeyBar
@@ -68,6 +71,7 @@ class TuiGymApp(App[int]):
         Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
         Binding("b", "switch_game('blackjack')", "Blackjack"),
         Binding("g", "switch_game('gridworld')", "GridWorld"),
+        Binding("ctrl+r", "toggle_recording", "Record", show=False),
     ]
     TRAIN_ACTIONS = frozenset({"toggle_training", "one_episode", "reset_agent", "faster", "slower"})
 
@@ -78,10 +82,14 @@ class TuiGymApp(App[int]):
         play_seed: int | None = None,
         runner: str = "thread",
         tune_gc: bool = False,
+        record: str | Path | None = None,
+        replay: Recording | None = None,
     ) -> None:
         """`runner` is "thread" (train on a worker thread) or "process" (a child process;
         what `tui-gym` opens). `tune_gc` applies `tune_gc_for_ui` at mount (for a
-        process that runs this one app, as `tui-gym` does; not for test suites)."""
+        process that runs this one app, as `tui-gym` does; not for test suites).
+        `record` records the person's games to that file from the start (ctrl+r
+        turns recording on and off); `replay` opens on a recording's replay."""
         super().__init__()
         self.tune_gc = tune_gc
         self.session = session or Session()
@@ -90,6 +98,9 @@ class TuiGymApp(App[int]):
         self._last_version = -1
         self._was_running = False
         self._switcher: ContentSwitcher | None = None
+        self.recording = RecordingSwitch(record, on_failure=self._recording_failed)
+        self._record_at_start = record is not None
+        self._replay = replay
 
     # --- layout ------------------------------------------------------------
     def get_default_screen(self) -> Screen:
@@ -117,6 +128,10 @@ class TuiGymApp(App[int]):
         self.set_interval(1 / REFRESH_HZ, self._tick)
         self._apply_size(self.size.width, self.size.height)
         self.call_after_refresh(self.play_view.focus_board)
+        if self._record_at_start:
+            self.call_after_refresh(self.action_toggle_recording)
+        if self._replay is not None:
+            self.push_screen(ReplayScreen(self._replay))
 
     def on_resize(self, event: Resize) -> None:
         self._apply_size(event.size.width, event.size.height)
@@ -248,6 +263,34 @@ class TuiGymApp(App[int]):
             return
         self.notify(f"Agent saved to {path}")
 
+    # --- recording ---------------------------------------------------------------
+    def action_toggle_recording(self) -> None:
+        """Record the person's games to a file, or stop."""
+        game = self.play_view.game
+        if self.recording.on:
+            path = self.recording.turn_off()
+            self.play_view.show_recording("")
+            self.notify(f"Recording stopped: {path}", timeout=4)
+            return
+        if game is None:
+            return
+        try:
+            path = self.recording.turn_on(game)
+        except OSError as exc:
+            self.notify(f"Cannot record to {exc.filename or self.recording.path}: "
+                        f"{exc.strerror or exc}", severity="error", title="Not recording")
+            return
+        self.play_view.show_recording(path.name)
+        noun = game.profile.episode_noun
+        when = "" if self.recording.recorder and self.recording.recorder.episode_open else (
+            f" from the next {noun}"
+        )
+        self.notify(f"Recording your {noun}s to {path}{when} (ctrl+r stops).", timeout=5)
+
+    def _recording_failed(self, message: str) -> None:
+        self.play_view.show_recording("")
+        self.notify(message, severity="error", title="Not recording", timeout=10)
+
     # --- rebuilding --------------------------------------------------------
     def rebuild(
         self,
@@ -289,6 +332,7 @@ class TuiGymApp(App[int]):
                 ("b / g", "switch to Blackjack / GridWorld"),
                 ("w / W", "focus the wrapper panel (W while the GridWorld board has focus)"),
                 ("? / F1", "this help"),
+            ("ctrl+r", "record your games to a file / stop (tui-gym replay FILE plays it back)"),
                 ("ctrl+p", "command palette"),
                 ("q", "quit"),
             ]),
@@ -323,6 +367,8 @@ class TuiGymApp(App[int]):
             ("Save agent", "Save the agent to the current folder", self.action_save_agent),
             ("Wrappers", "Focus the wrapper panel", self.action_focus_wrappers),
             ("Keys", "Every key tui-gym answers to", self.action_help),
+            ("Record games", "Record your games to a file, or stop (ctrl+r)",
+             self.action_toggle_recording),
         ]
         for title, help_text, callback in commands:
             yield SystemCommand(title, help_text, callback)
@@ -333,10 +379,12 @@ class TuiGymApp(App[int]):
         self.action_toggle_training()
 
     async def action_quit(self) -> None:
+        self.recording.turn_off()
         self.runner.close()
         self.exit(0)
 
     def on_unmount(self) -> None:
+        self.recording.turn_off()
         self.runner.close()
         if self.tune_gc:
             gc.enable()  # the timers that collected are gone with the app
@@ -366,10 +414,14 @@ def tune_gc_for_ui(app: App[Any]) -> None:
 
 
 def run_app(
-    env_id: str = "Blackjack-v1", seed: int = 0, load: str | None = None, runner: str = "process"
+    env_id: str = "Blackjack-v1", seed: int = 0, load: str | None = None, runner: str = "process",
+    *, session: Session | None = None, record: str | None = None,
+    replay: Recording | None = None,
 ) -> int:
-    """Open the app (from a saved agent with `load`); returns the exit code."""
-    session = Session.load(load) if load else Session(env_id=env_id, seed=seed)
-    app = TuiGymApp(session, runner=runner, tune_gc=True)
+    """Open the app (from a saved agent with `load`, or on `session`); returns the exit code.
+    `record` records the person's games to that file; `replay` opens on a recording."""
+    if session is None:
+        session = Session.load(load) if load else Session(env_id=env_id, seed=seed)
+    app = TuiGymApp(session, runner=runner, tune_gc=True, record=record, replay=replay)
     result = app.run()
     return int(result or 0)

@@ -20,11 +20,12 @@ is told once.
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from tui_gym import __version__
 from tui_gym.core.recording.format import (
@@ -42,6 +43,14 @@ from tui_gym.core.recording.writer import LineWriter
 if TYPE_CHECKING:
     from tui_gym.core.play import HumanGame
     from tui_gym.core.session import Session
+
+
+class GameRecorder(Protocol):
+    """What a `HumanGame` tells of its play: a `Recorder` or a `RecordingSwitch`."""
+
+    def game_reset(self, game: HumanGame, seed: int | None = None) -> None: ...
+
+    def game_step(self, game: HumanGame) -> None: ...
 
 
 def header_record(session: Session, *, source: str, seed: int | None) -> dict[str, Any]:
@@ -107,6 +116,7 @@ class Recorder:
         self._profile: Any = None
         self._judge: MoveJudge | None = None
         self._episode: _Episode | None = None
+        self._game: HumanGame | None = None  # whose episode is open (`game_reset`)
         if session is not None:
             self.use_session(session)
 
@@ -206,6 +216,7 @@ class Recorder:
     def end_episode(self) -> None:
         """Write the open episode's end line (nothing when none is open)."""
         episode, self._episode = self._episode, None
+        self._game = None
         if episode is None:
             return
         self._write({
@@ -234,16 +245,17 @@ class Recorder:
     # --- what a HumanGame calls ------------------------------------------------
     def game_reset(self, game: HumanGame, seed: int | None = None) -> None:
         """`game` has just been reset (with `seed`, when one was given)."""
-        if game.last is None:
+        if game.last is None or not self.active:
             return
         self.use_session(game.session)
         self.start_episode(game.env, game.last.observation, seed=seed, info=game.last.info)
+        self._game = game
 
     def game_step(self, game: HumanGame) -> None:
         """`game` has just made a move."""
         last = game.last
-        if last is None or last.action is None or self._episode is None:
-            return
+        if last is None or last.action is None or self._episode is None or game is not self._game:
+            return  # an episode whose start this recording did not see
         self.step(game.env, last.action, last.observation, last.reward, last.terminated,
                   last.truncated, info=last.info)
         if last.done:
@@ -284,9 +296,7 @@ class Recorder:
             reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
             self.failure = f"recording to {self.path} stopped: {reason}"
             self._writer = None
-            try:
+            with contextlib.suppress(OSError):
                 writer.close()
-            except OSError:
-                pass
             if self.on_failure is not None:
                 self.on_failure(self.failure)

@@ -9,6 +9,7 @@ and the error raised, so the file never ends in half a line written here.
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
 
@@ -44,10 +45,8 @@ class LineWriter:
                     raise OSError(f"{self.path}: the line could not be written whole")
                 written += more
         except OSError:
-            try:
+            with contextlib.suppress(OSError):
                 os.ftruncate(fd, start)
-            except OSError:
-                pass
             raise
         self.lines += 1
 
