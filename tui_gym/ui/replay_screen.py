@@ -128,6 +128,7 @@ class ReplayScreen(ModalScreen[None]):
         self.episode_index = 0  # into recording.episodes
         self.position = 0  # into the episode's positions
         self.board: Board | None = None
+        self._words: Static | None = None  # the state in words, where there is no board
         self._board_kind: tuple[str, str] | None = None  # (kind, player) of the board shown
         self._listed: int | None = None  # the episode the move list shows
 
@@ -249,7 +250,7 @@ class ReplayScreen(ModalScreen[None]):
     @on(OptionList.OptionHighlighted, "#replay-moves")
     def _highlighted(self, event: OptionList.OptionHighlighted) -> None:
         event.stop()
-        if self._listed == self.episode_index and event.option_index != self.position:
+        if event.option_index != self.position:
             self.show(self.episode_index, event.option_index)
 
     # --- drawing ---------------------------------------------------------------------------
@@ -261,7 +262,9 @@ class ReplayScreen(ModalScreen[None]):
         box = self.query_one("#replay-board", Vertical)
         box.remove_children()
         self.board = replay_board(kind, player)
-        widget: Widget = self.board if self.board is not None else Static(id="replay-words")
+        self._words = None if self.board is not None else Static(id="replay-words")
+        widget: Widget | None = self.board or self._words
+        assert widget is not None
         box.mount(widget)
 
     def _draw_board(self) -> None:
@@ -269,9 +272,9 @@ class ReplayScreen(ModalScreen[None]):
         here = episode.positions[position]
         board = self.board
         if board is None:
-            words = here.frame.text or _observation_text(here.frame.observation)
-            if self.is_mounted and self.query("#replay-words"):
-                self.query_one("#replay-words", Static).update(Text(words))
+            if self._words is not None:
+                words = here.frame.text or _observation_text(here.frame.observation)
+                self._words.update(Text(words))
             return
         reveal = here.move is not None and here.move.done
         board.start_episode()
@@ -377,12 +380,14 @@ class ReplayScreen(ModalScreen[None]):
 
     def _show_moves(self) -> None:
         moves = self.query_one("#replay-moves", OptionList)
-        if self._listed != self.episode_index:
-            self._listed = None  # no jumps while the list is rebuilt
-            moves.set_options(_move_option(place) for place in self.episode.positions)
-            self._listed = self.episode_index
-        if moves.highlighted != self.position:
-            moves.highlighted = self.position
+        # Only a person moving along the list asks to stand elsewhere: what is set here
+        # posts nothing (a message from here would arrive after the next step, and undo it).
+        with moves.prevent(OptionList.OptionHighlighted):
+            if self._listed != self.episode_index:
+                moves.set_options(_move_option(place) for place in self.episode.positions)
+                self._listed = self.episode_index
+            if moves.highlighted != self.position:
+                moves.highlighted = self.position
 
 
 def _move_option(place: Position) -> Option:

@@ -4,7 +4,8 @@ Each line goes to the file in a single `write` on a descriptor opened for
 appending, so a crash (or a kill) of the program leaves every line written
 before it whole and no part of the next one. A write the disk cuts short
 (full, quota) is taken back: the file is truncated to where the line began
-and the error raised, so the file never ends in half a line written here.
+and the error raised, so the file never ends in half a line written here
+(a pipe cannot be taken back: its reader sees a broken last line).
 """
 
 from __future__ import annotations
@@ -36,19 +37,27 @@ class LineWriter:
         if not line.endswith(b"\n") or b"\n" in line[:-1]:
             raise ValueError("a line must end in its only newline")
         fd = self._fd
-        start = os.lseek(fd, 0, os.SEEK_END)
         try:
-            written = os.write(fd, line)
+            start: int | None = os.lseek(fd, 0, os.SEEK_END)
+        except OSError:  # a pipe: nothing to take back
+            start = None
+        try:
+            written = self._raw_write(fd, line)
             while written < len(line):  # a short write: finish it or fail
-                more = os.write(fd, line[written:])
+                more = self._raw_write(fd, line[written:])
                 if more <= 0:
                     raise OSError(f"{self.path}: the line could not be written whole")
                 written += more
         except OSError:
-            with contextlib.suppress(OSError):
-                os.ftruncate(fd, start)
+            if start is not None:
+                with contextlib.suppress(OSError):
+                    os.ftruncate(fd, start)
             raise
         self.lines += 1
+
+    @staticmethod
+    def _raw_write(fd: int, data: bytes) -> int:
+        return os.write(fd, data)
 
     def close(self) -> None:
         if self._fd is not None:
