@@ -214,9 +214,11 @@ def build_parser() -> argparse.ArgumentParser:
     play.add_argument("--natural", action="store_true", help="Blackjack: 1.5 for a natural")
     play.add_argument("--wrapper", action="append", default=[], metavar="SPEC")
     from tui_gym.replay_command import add_record_option, add_replay_parser
+    from tui_gym.web import add_serve_parser
 
     add_record_option(play)
     add_replay_parser(sub)
+    add_serve_parser(sub)
 
     screenshots = sub.add_parser("screenshots", help="write the app's SVG screenshots")
     screenshots.add_argument("directory", nargs="?", default="screenshots", metavar="DIR")
@@ -262,8 +264,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _run_app(args)
         from tui_gym.commands import COMMANDS
         from tui_gym.replay_command import REPLAY_COMMANDS
+        from tui_gym.web import SERVE_COMMANDS
 
-        code = {**COMMANDS, **REPLAY_COMMANDS}[args.command](args, out)
+        code = {**COMMANDS, **REPLAY_COMMANDS, **SERVE_COMMANDS}[args.command](args, out)
         sys.stdout.flush()  # a closed pipe shows here, not at exit
         return code
     except BrokenPipeError:
