@@ -290,11 +290,12 @@ class ReplayScreen(ModalScreen[None]):
         recording, episode = self.recording, self.episode
         game = episode.game
         noun = game.episode_noun
-        wrappers = " → ".join(game.wrappers) if game.wrappers else "no wrappers"
+        chain = " → ".join(game.wrappers)
+        wrappers = f" [$text-muted]({escape(chain)})[/]" if chain else ""
         moves = len(episode.moves)
         optimal, judged = episode.judged
         parts = [
-            f"[b]{escape(game.title)}[/] [$text-muted]({escape(wrappers)})[/]",
+            f"[b]{escape(game.title)}[/]{wrappers}",
             f"{escape(noun)} [b]{self.episode_index + 1}[/] of {len(recording.episodes):,}",
             f"{moves} move{'' if moves == 1 else 's'}",
             f"return {format_reward(episode.total_return)}"
