@@ -90,7 +90,7 @@ class TuiGymApp(App[int]):
         Binding("plus,equals_sign", "faster", "Faster", key_display="+"),
         Binding("minus,underscore", "slower", "Slower", key_display="-"),
         Binding("p", "show_view('play')", "Play", tooltip="Play the game yourself"),
-        Binding("t", "show_view('train')", "Train", tooltip="Watch Q-learning train"),
+        Binding("t", "show_view('train')", "Train", tooltip="Watch the agent learn"),
         Binding("question_mark,f1", "help", "Help", key_display="?"),
         Binding("q", "quit", "Quit"),
         Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
@@ -749,7 +749,7 @@ class TuiGymApp(App[int]):
                 yield command
         commands = [
             ("Play view", "Play the game yourself", lambda: self.action_show_view("play")),
-            ("Train view", "Watch Q-learning learn", lambda: self.action_show_view("train")),
+            ("Train view", "Watch the agent learn", lambda: self.action_show_view("train")),
             *(
                 (f"Game: {p.title}", p.description,
                  lambda name=p.name: self.action_switch_game(name))
