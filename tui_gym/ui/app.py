@@ -728,7 +728,9 @@ class TuiGymApp(App[int]):
             ]),
             ("Side panel", [
                 ("tab / shift+tab", "move between fields"),
-                ("space / enter", "tick a wrapper, press a button"),
+                ("space / enter", "tick a wrapper, press a button, pick a game or an "
+                                  "algorithm (another algorithm asks first once the agent "
+                                  "has trained)"),
                 ("enter", "apply a parameter"),
                 ("[ / ]", "move the focused wrapper in / out in the chain (first = innermost)"),
                 ("esc", "back to the view; an edit not applied with enter is dropped"),
