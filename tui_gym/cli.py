@@ -219,6 +219,10 @@ def build_parser() -> argparse.ArgumentParser:
     bench = sub.add_parser("bench", help="measure speed, live training, memory and start-up")
     bench.add_argument("--quick", action="store_true", help="a shorter run (under a minute)")
     bench.add_argument("--json", action="store_true", help="print one JSON object")
+
+    from tui_gym.mcp_server.command import add_parser as add_mcp_parser
+
+    add_mcp_parser(sub, _positive_int, _number)
     return parser
 
 

@@ -30,6 +30,7 @@ from tui_gym.core.evaluation import EvalReport
 from tui_gym.core.params import Param, ParamError
 from tui_gym.core.profiles import PROFILES, profile_for, resolve_env_id
 from tui_gym.core.session import Session
+from tui_gym.mcp_server.command import cmd_mcp
 
 WRAPPER_SYNTAX = "--wrapper NAME or --wrapper NAME:key=value,key=value, repeatable; " \
     "the first is innermost"
@@ -460,4 +461,5 @@ COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {
     "play": cmd_play,
     "screenshots": cmd_screenshots,
     "bench": cmd_bench,
+    "mcp": cmd_mcp,
 }

@@ -93,6 +93,16 @@ def _too_deep(value: Any, limit: int = MAX_DEPTH) -> bool:
     return False
 
 
+def _is_clean(value: Any) -> bool:
+    """Whether `value` is JSON-safe as it is: no NaN or infinity, no surrogate in any text
+    (one pass of the C encoder; most responses are, and skip the walk of `_clean`)."""
+    try:
+        text = json.dumps(value, allow_nan=False)
+    except (TypeError, ValueError):
+        return False
+    return "\\ud" not in text  # the encoder writes every surrogate as \udXXX
+
+
 def _clean(value: Any) -> Any:
     """JSON-safe data: NaN and infinities as null, lone surrogates as U+FFFD."""
     if isinstance(value, float) and not math.isfinite(value):
@@ -151,7 +161,7 @@ class JsonlPlayer:
                 response = {"error": str(exc)}
         if "id" in request:
             response = {"id": request["id"], **response}
-        return _clean(response)
+        return response if _is_clean(response) else _clean(response)
 
     def _transition(self) -> dict[str, Any]:
         step = self.game.last
