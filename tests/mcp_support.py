@@ -89,7 +89,8 @@ class McpProcess(_McpThread):
     """`python -m tui_gym mcp ARGS` over stdio; its stderr is kept in `stderr_text()`."""
 
     def __init__(self, *args: str) -> None:
-        self._errlog = tempfile.TemporaryFile("w+", encoding="utf-8")
+        # Kept open while the server runs; `close` closes it.
+        self._errlog = tempfile.TemporaryFile("w+", encoding="utf-8")  # noqa: SIM115
         self._stderr = ""
         params = StdioServerParameters(
             command=sys.executable, args=["-m", "tui_gym", "mcp", *args]

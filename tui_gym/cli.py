@@ -223,6 +223,9 @@ def build_parser() -> argparse.ArgumentParser:
     from tui_gym.mcp_server.command import add_parser as add_mcp_parser
 
     add_mcp_parser(sub, _positive_int, _number)
+    from tui_gym.benchmark.command import add_parser as add_benchmark_parser
+
+    add_benchmark_parser(sub, _positive_int, _seed, _number)
     return parser
 
 

@@ -23,6 +23,7 @@ from rich.progress import (
 )
 from rich.table import Table
 
+from tui_gym.benchmark.command import cmd_benchmark
 from tui_gym.cli import CliError, _env_kwargs, key_value_table, print_json
 from tui_gym.core import evaluation
 from tui_gym.core.agent import Hyperparameters
@@ -462,4 +463,5 @@ COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {
     "screenshots": cmd_screenshots,
     "bench": cmd_bench,
     "mcp": cmd_mcp,
+    "benchmark": cmd_benchmark,
 }

@@ -116,6 +116,23 @@ def _clean(value: Any) -> Any:
     return value
 
 
+def parse_request(line: str | bytes) -> dict[str, Any]:
+    """A request line as the JSON object it holds; ValueError saying why it is not one
+    (not UTF-8, not JSON, not an object, nested too deeply, a number too long)."""
+    if isinstance(line, bytes):
+        try:
+            line = line.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise ValueError(f"not UTF-8: byte 0x{line[exc.start]:02x} at column "
+                             f"{exc.start + 1} cannot be decoded") from None
+    request = _decode(line)
+    if not isinstance(request, dict):
+        raise ValueError('a request must be a JSON object like {"cmd": "reset"}')
+    if _too_deep(request):
+        raise ValueError(f"not a usable request: nested deeper than {MAX_DEPTH} levels")
+    return request
+
+
 class JsonlPlayer:
     """Answers protocol requests for one game (with the session's wrappers)."""
 
@@ -134,20 +151,10 @@ class JsonlPlayer:
 
     def handle(self, line: str | bytes) -> dict[str, Any]:
         """One request line in, one response object out (never raises for bad input)."""
-        if isinstance(line, bytes):
-            try:
-                line = line.decode("utf-8")
-            except UnicodeDecodeError as exc:
-                return {"error": f"not UTF-8: byte 0x{line[exc.start]:02x} at column "
-                                 f"{exc.start + 1} cannot be decoded"}
         try:
-            request = _decode(line)
+            request = parse_request(line)
         except ValueError as exc:
             return {"error": str(exc)}
-        if not isinstance(request, dict):
-            return {"error": 'a request must be a JSON object like {"cmd": "reset"}'}
-        if _too_deep(request):
-            return {"error": f"not a usable request: nested deeper than {MAX_DEPTH} levels"}
         cmd = request.get("cmd")
         handler = self._handlers.get(cmd) if isinstance(cmd, str) else None
         if handler is None:

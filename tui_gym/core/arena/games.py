@@ -98,3 +98,9 @@ def close_handler(handler: JsonlPlayer) -> None:
     """Close the envs a handler holds (its game's and its session's)."""
     handler.game.close()
     handler.session.env.close()
+
+
+def raw_observation(handler: JsonlPlayer) -> Any:
+    """The current observation as the env gave it (for an in-process agent's table)."""
+    last = handler.game.last
+    return None if last is None else last.observation

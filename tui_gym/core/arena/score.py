@@ -127,6 +127,7 @@ class ArenaScore:
     unscored: int = 0
     notes: set[str] = field(default_factory=set)
     recent: deque[EpisodeScore] = field(default_factory=lambda: deque(maxlen=RECENT_EPISODES))
+    history: list[EpisodeScore] | None = None  # every finished episode, when a list is given
 
     def start_episode(self, seed: int | None) -> None:
         """A new episode begins (one left unfinished is dropped from the totals)."""
@@ -166,6 +167,8 @@ class ArenaScore:
             self.regret_sum += episode.regret
             self.regret_sq += episode.regret**2
         self.recent.append(episode)
+        if self.history is not None:
+            self.history.append(episode)
 
     @property
     def mean_return(self) -> float | None:
