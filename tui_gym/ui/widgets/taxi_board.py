@@ -1,0 +1,555 @@
+"""`TaxiBoard`: Taxi's city: walls, four coloured stands, the passenger, the destination, the cab.
+
+The scene is plain data; cells are (row, col) with row 0 at the top:
+
+- "taxi": (row, col) of the cab.
+- "passenger": the stand the passenger waits at (an index into "stands"), or
+  `len(stands)` (4 on Taxi's map) while in the cab.
+- "destination": the index of the stand the passenger is going to.
+- "stands": [[row, col], ...], the pick-up and drop-off points, and
+  "stand_names": their letters (["R", "G", "Y", "B"] by default); stands are
+  coloured in that order: red, green, yellow, blue.
+- "walls": [[row, col], ...]: a wall on the east side of each of these cells.
+- "rows", "cols": the size of the city (5 x 5 unless given).
+- "last_action": the action just taken, one of "south", "north", "east",
+  "west", "pickup", "dropoff", or None.
+- "last_illegal": whether it was a pick-up or drop-off that could not be made.
+- "rainy": whether moves may veer sideways (rain streaks on the road).
+
+The cab is a yellow chip marked T (TAXI on wide tiles); with the passenger
+aboard it turns green and shows ☺ beside the T. A waiting passenger is ☺ on
+their stand, the destination's stand carries ◎, walls are heavy lines and the
+lanes between cells dotted ones. A line under the city says what the last
+action did (a drive, a wall in the way, the rain pushing the cab aside, a
+pick-up, a drop-off, an illegal one and why, a passenger changing their
+mind) or where the passenger is going; with room to spare a legend follows.
+Tiles are drawn as large as fit and keep their size while they fit.
+
+Keys: arrows or WASD drive (north is up), k picks up, l or o drops off
+(p is the app's Play key), n or r starts a new episode at any time, Enter
+once the episode is over. A click on a cell drives one cell towards it; a
+click on the cab picks up or drops off.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+from rich.style import Style
+from rich.text import Text
+from textual.binding import Binding, BindingType
+from textual.geometry import Offset
+
+from tui_gym.ui.widgets.board_drawing import (
+    Cell,
+    CharGrid,
+    KeptShape,
+    cell_of,
+    legend,
+    on_tile,
+    stack,
+    step_toward,
+)
+from tui_gym.ui.widgets.boards import Board
+
+MOVES: dict[str, Cell] = {"south": (1, 0), "north": (-1, 0), "east": (0, 1), "west": (0, -1)}
+MOVE_OF: dict[Cell, str] = {step: name for name, step in MOVES.items()}
+STAND_NAMES = ("R", "G", "Y", "B")
+STAND_COLOURS = 4  # component classes taxi--stand-0 .. -3, used in turn
+PASSENGER, DESTINATION = "☺", "◎"
+MOVE_GROUP = Binding.Group("Drive")
+CAPTION_LINES = 1  # the line under the city is always kept free: tiles keep their size
+
+# What an action did: its words (longest first), their style, and whether the line goes
+# on to say where the passenger is going.
+Event = tuple[tuple[str, ...], str, bool]
+
+
+@dataclass(frozen=True)
+class TaxiShape:
+    """How big the city is drawn: `cell_w` x `cell_h` characters a tile, one column
+    between tiles for walls and lanes, and, with `frame`, a wall all round."""
+
+    rows: int
+    cols: int
+    cell_w: int
+    cell_h: int
+    frame: bool
+
+    @property
+    def edge(self) -> int:
+        return 1 if self.frame else 0
+
+    @property
+    def width(self) -> int:
+        return self.cols * (self.cell_w + 1) - 1 + 2 * self.edge
+
+    @property
+    def height(self) -> int:
+        return self.rows * self.cell_h + 2 * self.edge
+
+    def x_of(self, col: int) -> int:
+        return self.edge + col * (self.cell_w + 1)
+
+    def y_of(self, row: int) -> int:
+        return self.edge + row * self.cell_h
+
+
+TAXI_SIZES = (
+    (11, 4),
+    (9, 4),
+    (11, 3),
+    (9, 3),
+    (7, 3),
+    (9, 2),
+    (7, 2),
+    (5, 2),
+    (9, 1),
+    (7, 1),
+    (5, 1),
+    (3, 1),
+)
+
+
+def shape_fits(shape: TaxiShape, width: int, height: int) -> bool:
+    return shape.width <= width and shape.height + CAPTION_LINES <= height
+
+
+def choose_shape(rows: int, cols: int, width: int, height: int) -> TaxiShape:
+    """The largest drawing of the city that fits (the smallest one if none does)."""
+    for cell_w, cell_h in TAXI_SIZES:
+        for frame in (True, False):
+            shape = TaxiShape(rows, cols, cell_w, cell_h, frame)
+            if shape_fits(shape, width, height):
+                return shape
+    return TaxiShape(rows, cols, 3, 1, False)
+
+
+@dataclass(frozen=True)
+class TaxiLayout:
+    """Where the drawn city sits in the canvas, to map clicks back to cells."""
+
+    shape: TaxiShape
+    left: int  # canvas column of the drawing's left edge
+    top: int  # canvas line of the drawing's top edge
+
+    def cell_center(self, cell: Cell) -> Offset:
+        shape = self.shape
+        row, col = cell
+        return Offset(
+            self.left + shape.x_of(col) + shape.cell_w // 2,
+            self.top + shape.y_of(row) + shape.cell_h // 2,
+        )
+
+    def cell_at(self, offset: Offset) -> Cell | None:
+        """The cell under a canvas offset (None on a wall, a lane or off the city)."""
+        shape = self.shape
+        x = offset.x - self.left - shape.edge
+        y = offset.y - self.top - shape.edge
+        if x < 0 or y < 0:
+            return None
+        col, within = divmod(x, shape.cell_w + 1)
+        row = y // shape.cell_h
+        if within == shape.cell_w or col >= shape.cols or row >= shape.rows:
+            return None
+        return row, col
+
+
+def _cells(value: Any) -> list[Cell]:
+    if not isinstance(value, list | tuple):
+        return []
+    return [cell for cell in (cell_of(item) for item in value) if cell is not None]
+
+
+def _index(value: Any) -> int | None:
+    try:
+        return int(value)
+    except (TypeError, ValueError):
+        return None
+
+
+class TaxiBoard(Board):
+    """Taxi: drive to the passenger ☺, pick them up, drop them off at ◎."""
+
+    SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
+    DEFAULT_CSS = """
+    TaxiBoard .taxi--road { background: #3a3d42; color: #8b9099; }
+    TaxiBoard .taxi--road-alt { background: #34373c; color: #8b9099; }
+    TaxiBoard .taxi--lane { background: #3a3d42; color: #6f747c; }
+    TaxiBoard .taxi--wall { background: #3a3d42; color: #f0f0f0; text-style: bold; }
+    TaxiBoard .taxi--rain { color: #56687c; }
+    TaxiBoard .taxi--stand-0 { background: #8f2f2f; color: #ffd6d6; text-style: bold; }
+    TaxiBoard .taxi--stand-1 { background: #2f7a3f; color: #d6ffdf; text-style: bold; }
+    TaxiBoard .taxi--stand-2 { background: #8a7520; color: #fff4c9; text-style: bold; }
+    TaxiBoard .taxi--stand-3 { background: #2f548f; color: #d6e6ff; text-style: bold; }
+    TaxiBoard .taxi--passenger { color: #ffffff; text-style: bold; }
+    TaxiBoard .taxi--destination { color: #ffffff; text-style: bold; }
+    TaxiBoard .taxi--cab { background: #f5c518; color: #1b1b1b; text-style: bold; }
+    TaxiBoard .taxi--cab-full { background: #37c46b; color: #0b2414; text-style: bold; }
+    TaxiBoard .taxi--caption { color: $text-muted; }
+    TaxiBoard .taxi--note { color: $text-warning; text-style: bold; }
+    TaxiBoard .taxi--good { color: $text-success; text-style: bold; }
+    TaxiBoard .taxi--bad { color: $text-error; text-style: bold; }
+    """
+
+    COMPONENT_CLASSES: ClassVar[set[str]] = {
+        "taxi--road",
+        "taxi--road-alt",
+        "taxi--lane",
+        "taxi--wall",
+        "taxi--rain",
+        "taxi--stand-0",
+        "taxi--stand-1",
+        "taxi--stand-2",
+        "taxi--stand-3",
+        "taxi--passenger",
+        "taxi--destination",
+        "taxi--cab",
+        "taxi--cab-full",
+        "taxi--caption",
+        "taxi--note",
+        "taxi--good",
+        "taxi--bad",
+    }
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("up,w", "act('north')", "north", key_display="↑/w", group=MOVE_GROUP),
+        Binding("down,s", "act('south')", "south", key_display="↓/s", group=MOVE_GROUP),
+        Binding("left,a", "act('west')", "west", key_display="←/a", group=MOVE_GROUP),
+        Binding("right,d", "act('east')", "east", key_display="→/d", group=MOVE_GROUP),
+        Binding("k", "act('pickup')", "Pick up", tooltip="Pick the passenger up"),
+        Binding("l,o", "act('dropoff')", "Drop off", key_display="l", tooltip="Drop them off"),
+        Binding("n,r", "new_episode", "New", key_display="n", tooltip="Start a new episode"),
+        Binding("enter", "next_episode", "Next", show=False),
+    ]
+
+    BUTTONS = (
+        ("Pick up [dim]k[/]", "act('pickup')"),
+        ("Drop off [dim]l[/]", "act('dropoff')"),
+        ("↺ New [dim]n[/]", "new_episode"),
+    )
+    RESTART_ANYTIME = True
+
+    def __init__(
+        self,
+        *,
+        interactive: bool = True,
+        name: str | None = None,
+        id: str | None = None,  # noqa: A002 - Textual's own name for it
+        classes: str | None = None,
+    ) -> None:
+        super().__init__(interactive=interactive, name=name, id=id, classes=classes)
+        self.rows = self.cols = 0
+        self.taxi: Cell | None = None
+        self.passenger: int | None = None
+        self.destination: int | None = None
+        self.stands: list[Cell] = []
+        self.stand_names: list[str] = []
+        self.walls: frozenset[Cell] = frozenset()
+        self.rainy = False
+        self._event: Event | None = None
+        self._fresh = True
+        self._kept: KeptShape[TaxiShape] = KeptShape()
+        self._layout: TaxiLayout | None = None
+
+    def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
+        self.border_title = "Taxi"
+
+    # --- what the board says ---------------------------------------------------
+    def key_help(self) -> list[tuple[str, str]]:
+        return [
+            ("↑ ↓ ← →  or  w a s d", "drive north, south, west, east"),
+            ("k", "pick the passenger up"),
+            ("l / o", "drop the passenger off"),
+            ("n / r", "start a new episode (at any time)"),
+            ("enter", "start a new episode once this one is over"),
+            ("click a cell", "drive one cell towards it; click the cab to pick up or drop off"),
+        ]
+
+    @property
+    def prompt(self) -> str:
+        return "Drive with the arrows or WASD; k picks up, l drops off."
+
+    @property
+    def over_hint(self) -> str:
+        return "This ride is over: press n, r or Enter (or click New) for another."
+
+    def button_enabled(self, action: str) -> bool:
+        return action == "new_episode" or not self.episode_over
+
+    def button_suggested(self, action: str) -> bool:
+        return self.episode_over and action == "new_episode"
+
+    @property
+    def layout_drawn(self) -> TaxiLayout | None:
+        """The geometry of the last drawing (None before the first)."""
+        return self._layout
+
+    @property
+    def aboard(self) -> bool:
+        """Whether the passenger is in the cab."""
+        return self.passenger is not None and self.passenger >= len(self.stands) > 0
+
+    @property
+    def event_text(self) -> str:
+        """What the last action did, in words ('' when there is nothing to say)."""
+        return self._event[0][0] if self._event else ""
+
+    # --- the scene -----------------------------------------------------------------
+    def start_episode(self) -> None:
+        """The next scene begins a new episode; tiles may take a new size."""
+        self._fresh = True
+        self._kept.release()
+
+    def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
+        previous_taxi = None if self._fresh else self.taxi
+        previous_destination = None if self._fresh else self.destination
+        self.rows = _index(scene.get("rows")) or 5
+        self.cols = _index(scene.get("cols")) or 5
+        self.taxi = cell_of(scene.get("taxi"))
+        self.stands = _cells(scene.get("stands"))
+        names = scene.get("stand_names") or STAND_NAMES
+        self.stand_names = [str(name) for name in names]
+        self.passenger = _index(scene.get("passenger"))
+        self.destination = _index(scene.get("destination"))
+        self.walls = frozenset(_cells(scene.get("walls")))
+        self.rainy = bool(scene.get("rainy"))
+        action = scene.get("last_action")
+        self._event = self._event_of(
+            previous_taxi,
+            previous_destination,
+            str(action) if action is not None else None,
+            bool(scene.get("last_illegal")),
+        )
+        self._fresh = False
+        if self.is_mounted:
+            self.border_title = "Taxi · rain" if self.rainy else "Taxi"
+        super().show_scene(scene, reveal)
+
+    def stand_name(self, index: int | None) -> str:
+        if index is None or not 0 <= index < len(self.stands):
+            return "?"
+        return self.stand_names[index] if index < len(self.stand_names) else str(index)
+
+    def blocked(self, cell: Cell, move: str) -> bool:
+        """Whether a wall or the city's edge stops a move from `cell`."""
+        d_row, d_col = MOVES[move]
+        row, col = cell[0] + d_row, cell[1] + d_col
+        if not (0 <= row < self.rows and 0 <= col < self.cols):
+            return True
+        if d_col == 1:
+            return cell in self.walls
+        if d_col == -1:
+            return (row, col) in self.walls
+        return False
+
+    def _event_of(
+        self,
+        previous: Cell | None,
+        previous_destination: int | None,
+        action: str | None,
+        illegal: bool,
+    ) -> Event | None:
+        """What the last action did, in words from longest to shortest, and their style."""
+        taxi, to = self.taxi, self.stand_name(self.destination)
+        if taxi is None or action is None or previous is None:
+            return None
+        if (
+            previous_destination is not None
+            and self.destination != previous_destination
+            and self.aboard
+        ):
+            return (f"The passenger changed their mind: now to {to}", f"Now to {to}"), "note", False
+        if action == "pickup":
+            if illegal:
+                why = "already aboard" if self.aboard else "the passenger is not here"
+                return (f"Illegal pickup (−10): {why}", "Illegal pickup (−10)"), "bad", True
+            return (f"Picked the passenger up: now to {to}", f"Picked up: to {to}"), "good", False
+        if action == "dropoff":
+            if illegal:
+                why = "drop off at a stand" if self.aboard else "no passenger aboard"
+                return (f"Illegal drop-off (−10): {why}", "Illegal drop-off (−10)"), "bad", True
+            if self.passenger == self.destination:
+                return (f"Passenger delivered to {to}!", f"Delivered to {to}!"), "good", False
+            at = self.stand_name(self.passenger)
+            return (f"Dropped the passenger at {at}, not {to}", f"Dropped at {at}"), "note", True
+        if action not in MOVES:
+            return None
+        went = MOVE_OF.get((taxi[0] - previous[0], taxi[1] - previous[1]))
+        if self.rainy and went != action and not (went is None and self.blocked(previous, action)):
+            outcome = f"went {went}" if went else "stayed put"
+            rain = (
+                f"The rain pushed the cab: asked {action}, {outcome}",
+                f"Rain: asked {action}, {outcome}",
+                f"Rain: {outcome}",
+            )
+            return rain, "note", True
+        if went is None:
+            blocker = "the edge of the city" if self._off_edge(previous, action) else "a wall"
+            return (f"{blocker.capitalize()} blocks the way {action}", "Blocked"), "caption", True
+        return (f"Drove {action}", f"Drove {action}"), "caption", True
+
+    def _off_edge(self, cell: Cell, move: str) -> bool:
+        d_row, d_col = MOVES[move]
+        return not (0 <= cell[0] + d_row < self.rows and 0 <= cell[1] + d_col < self.cols)
+
+    # --- drawing -----------------------------------------------------------------
+    def _style(self, name: str) -> Style:
+        return self.get_component_rich_style(f"taxi--{name}")
+
+    def _stand_style(self, index: int) -> Style:
+        return self._style(f"stand-{index % STAND_COLOURS}")
+
+    def _cab(self, width: int) -> tuple[str, Style]:
+        """The cab's text (at most `width` characters) and style: full or empty."""
+        if self.aboard:
+            text = "TAXI☺" if width >= 9 else "T☺"
+            return text, self._style("cab-full")
+        return ("TAXI" if width >= 9 else "T"), self._style("cab")
+
+    def _status(self) -> tuple[str, ...]:
+        """Where the passenger is and is going, longest words first."""
+        to = self.stand_name(self.destination)
+        if self.aboard:
+            return f"Passenger aboard, going to {to}", f"{PASSENGER} aboard → {to}"
+        if self.passenger is not None and self.passenger == self.destination:
+            return f"Passenger delivered at {to}", f"Delivered at {to}"
+        at = self.stand_name(self.passenger)
+        return f"Passenger waiting at {at}, going to {to}", f"{PASSENGER} at {at} → {to}"
+
+    def _paint_tile(self, grid: CharGrid, cell: Cell, shape: TaxiShape) -> None:
+        w, h = shape.cell_w, shape.cell_h
+        x0, y0 = shape.x_of(cell[1]), shape.y_of(cell[0])
+        mid = h // 2
+        stand = self.stands.index(cell) if cell in self.stands else None
+        if stand is None:
+            tile = self._style("road-alt" if (cell[0] + cell[1]) % 2 else "road")
+            grid.fill(x0, y0, w, h, " ", tile)
+            if self.rainy and h >= 2:
+                rain = on_tile(self._style("rain"), tile)
+                for line in range(h):
+                    for x in range(w):
+                        if (x + 3 * line + cell[0] + 3 * cell[1]) % 7 == 0:
+                            grid.put(x0 + x, y0 + line, "╱", rain)
+        else:
+            tile = self._stand_style(stand)
+            grid.fill(x0, y0, w, h, " ", tile)
+            grid.put(x0, y0, self.stand_name(stand)[: max(1, w // 3)], tile)
+            if stand == self.destination:
+                grid.put(x0 + w - 1, y0, DESTINATION, on_tile(self._style("destination"), tile))
+        cab_here = cell == self.taxi
+        cab_text, cab_style = self._cab(w)
+        chip_w = len(cab_text) + (2 if w >= len(cab_text) + 4 else 0)
+        chip_x = x0 + (w - chip_w) // 2
+        waiting = (
+            stand is not None and self.passenger == stand and not self.aboard
+        )  # includes a passenger just delivered
+        if waiting:
+            person = on_tile(self._style("passenger"), tile)
+            x = chip_x - 1 if cab_here else x0 + w // 2
+            grid.put(max(x0, x), y0 + mid, PASSENGER, person)
+        if cab_here:
+            if w >= 7 and h >= 3:
+                under = grid.style_at(chip_x, y0 + mid - 1)
+                grid.pill(chip_x, y0 + mid - 1, chip_w, 3, cab_style, under)
+            grid.put(chip_x, y0 + mid, cab_text.center(chip_w), cab_style)
+
+    def _draw_city(self, shape: TaxiShape) -> list[Text]:
+        grid = CharGrid(shape.width, shape.height, self._style("lane"))
+        lane, wall = self._style("lane"), self._style("wall")
+        for row in range(shape.rows):
+            for col in range(shape.cols):
+                self._paint_tile(grid, (row, col), shape)
+            for col in range(shape.cols - 1):
+                x = shape.x_of(col) + shape.cell_w
+                walled = (row, col) in self.walls
+                for line in range(shape.cell_h):
+                    grid.put(
+                        x, shape.y_of(row) + line, "┃" if walled else "┆", wall if walled else lane
+                    )
+        if shape.frame:
+            last = shape.height - 1
+            for y in range(1, last):
+                grid.put(0, y, "┃", wall)
+                grid.put(shape.width - 1, y, "┃", wall)
+            grid.put(0, 0, "┏" + "━" * (shape.width - 2) + "┓", wall)
+            grid.put(0, last, "┗" + "━" * (shape.width - 2) + "┛", wall)
+            for col in range(shape.cols - 1):
+                x = shape.x_of(col) + shape.cell_w
+                if (0, col) in self.walls:
+                    grid.put(x, 0, "┳", wall)
+                if (shape.rows - 1, col) in self.walls:
+                    grid.put(x, last, "┻", wall)
+        return grid.lines()
+
+    def _caption(self, width: int) -> Text:
+        """What the last action did and, when it fits, where the passenger is going."""
+        status = self._status()
+        label = self._style("caption")
+        if self._event is None:
+            fitting = [text for text in status if len(text) <= width] or list(status[-1:])
+            return Text(fitting[0], label)
+        texts, style, then_status = self._event
+        if then_status:  # the longest words that leave room for where the passenger goes
+            for text in texts:
+                where = [place for place in status if len(text) + 3 + len(place) <= width]
+                if where:
+                    return Text.assemble(
+                        (text, self._style(style)), (" · ", label), (where[0], label)
+                    )
+        fitting = [text for text in texts if len(text) <= width] or list(texts[-1:])
+        return Text(fitting[0], self._style(style))
+
+    def _legend(self, width: int) -> Text | None:
+        """'T taxi  ☺ passenger  ◎ destination  ┃ wall' (None if too wide)."""
+        cab_text, cab_style = self._cab(3)
+        road = self._style("road")  # the marks as on the map, so they show on any theme
+        items = [
+            (cab_text, cab_style, "taxi"),
+            (PASSENGER, on_tile(self._style("passenger"), road), "passenger"),
+            (DESTINATION, on_tile(self._style("destination"), road), "destination"),
+            ("┃", self._style("wall"), "wall"),
+        ]
+        return legend(items, self._style("caption"), width)
+
+    def picture(self, width: int, height: int) -> Text:
+        if self.taxi is None or self.rows <= 0 or self.cols <= 0:
+            self._layout = None
+            return stack([Text("No city yet.", self._style("caption"))], width, height)
+        rows, cols = self.rows, self.cols
+        shape = self._kept.get(
+            (rows, cols), width, height, lambda w, h: choose_shape(rows, cols, w, h), shape_fits
+        )
+        lines = self._draw_city(shape)
+        lines.append(self._caption(width))
+        if shape.height + CAPTION_LINES < height:
+            legend = self._legend(width)
+            if legend is not None:
+                lines.append(legend)
+        left = max(0, (width - shape.width) // 2)
+        top = max(0, (height - len(lines)) // 2)
+        self._layout = TaxiLayout(shape, left, top)
+        return stack(lines, width, height)
+
+    # --- keys and clicks -----------------------------------------------------------
+    def action_next_episode(self) -> None:
+        """Enter: a new episode, once this one is over (so a stray Enter loses nothing)."""
+        if self.episode_over or self.agent_playing:
+            self.action_new_episode()
+
+    def canvas_clicked(self, offset: Offset) -> None:
+        """Drive one cell towards the clicked cell; a click on the cab picks up or drops off."""
+        if self._layout is None or self.taxi is None:
+            return
+        cell = self._layout.cell_at(offset)
+        if cell is None:
+            return
+        if cell == self.taxi:
+            self.action_act("dropoff" if self.aboard else "pickup")
+        else:
+            self.action_act(MOVE_OF[step_toward(self.taxi, cell)])
+
+
+__all__ = ["MOVES", "TaxiBoard", "TaxiLayout", "TaxiShape", "choose_shape"]

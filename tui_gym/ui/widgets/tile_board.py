@@ -1,0 +1,670 @@
+"""`TileBoard`: a map of tiles: FrozenLake's ice, CliffWalking's cliff, edited grid maps.
+
+The scene is plain data. Cells are (row, col) with row 0 at the top, as in
+Gymnasium's maps; where a key names a cell it is a "r,c" string or a (row, col) pair.
+
+- "cells": the map, one string per row and one character per cell: S start,
+  F floor (ice on a lake), H hole, G goal, C cliff, W wall, R reward cell (its
+  value in "rewards"). Any other character is floor showing that character.
+  Without "cells", "rows" and "cols" give the size of an all-floor map.
+- "theme": "lake" (ice, holes in the ice), "cliff" (ground and a cliff) or
+  "plain" (floor and pits): the colours and the words.
+- "agent": (row, col), or None.
+- "last_action": the move just asked, "left" | "down" | "right" | "up", or None.
+- "slipped": whether that move went elsewhere than asked.
+- "rewards": {cell: value}, optional. A reward cell shows its value; any other
+  cell's value (a hole's, the cliff's) is written on tiles tall enough for it.
+- "slip": {cell: probability}, optional: a faint ≈ in the corner of tiles wide enough.
+- "marks": {cell: text}, optional: a short overlay on a tile (an arrow, a value).
+- "cursor": (row, col), or None, optional: an editing cursor, drawn as a frame.
+
+Every kind of tile has its colour and its glyph, so the map reads on a
+monochrome terminal too: ⌂ start, · floor, ○ hole, ★ goal, ▒ cliff, █ wall,
+a reward cell its value. The agent ● is drawn on top (in other colours on the
+goal and in a hole), and each cell the agent left this episode shows the arrow
+of the move that left it. Under the map a line says what the last move did
+(moved, bumped, slipped, fell, reached the goal) and, with room to spare, a
+legend names the tiles. Tiles are drawn as large as fit, with row and column
+numbers when there is room; the smallest drawing puts two map rows in one
+line, in colour only. The size chosen is kept while it fits (see `KeptShape`).
+
+Keys: arrows or WASD move (the moves are named, never numbered); n or r starts
+a new episode at any time, Enter once the episode is over. A click on a cell
+posts `TileBoard.CellClicked(row, col)` and calls `cell_clicked(row, col)`,
+which steps the agent one cell towards it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+from rich.color import Color
+from rich.style import Style
+from rich.text import Text
+from textual.binding import Binding, BindingType
+from textual.geometry import Offset
+from textual.message import Message
+
+from tui_gym.ui.widgets.board_drawing import (
+    Cell,
+    CharGrid,
+    KeptShape,
+    cell_of,
+    legend,
+    on_tile,
+    reward_text,
+    stack,
+    step_toward,
+)
+from tui_gym.ui.widgets.boards import Board
+
+START, FLOOR, HOLE, GOAL, CLIFF, WALL, REWARD = "S", "F", "H", "G", "C", "W", "R"
+KINDS = (START, FLOOR, HOLE, GOAL, CLIFF, WALL, REWARD)  # the legend's order
+FILLED = frozenset({CLIFF, WALL})  # drawn as a texture over the whole tile
+GLYPHS = {START: "⌂", FLOOR: "·", HOLE: "○", GOAL: "★", CLIFF: "▒", WALL: "█"}
+AGENT = "●"
+
+MOVES: dict[str, Cell] = {"left": (0, -1), "down": (1, 0), "right": (0, 1), "up": (-1, 0)}
+MOVE_OF: dict[Cell, str] = {step: name for name, step in MOVES.items()}
+ARROWS = {"left": "←", "down": "↓", "right": "→", "up": "↑"}
+
+
+@dataclass(frozen=True)
+class Theme:
+    """The words and floor colours of one kind of map."""
+
+    title: str
+    floor: str  # component class of the floor, and its name in the legend
+    hole: str  # what a hole is called
+    fell_in: str  # '{who} ...' on landing in a hole
+    slipped: str  # '{who} ...' on a slip
+
+
+THEMES = {
+    "lake": Theme("Frozen lake", "ice", "hole", "fell through the ice", "slipped on the ice"),
+    "cliff": Theme("Cliff", "ground", "pit", "fell into a pit", "slipped"),
+    "plain": Theme("Map", "floor", "pit", "fell into a pit", "slipped"),
+}
+
+Event = tuple[tuple[str, ...], str]  # what a move did: ('{who} ...' longest first), its style
+MOVE_GROUP = Binding.Group("Move")
+CAPTION_LINES = 1  # the line under the map is always kept free: tiles keep their size
+
+
+@dataclass(frozen=True)
+class TileShape:
+    """How big a map is drawn: `cell_w` x `cell_h` characters a tile; `half`: two map
+    rows share a line (colour only); `axes`: row numbers left, column numbers below."""
+
+    rows: int
+    cols: int
+    cell_w: int
+    cell_h: int
+    half: bool = False
+    axes: bool = False
+
+    @property
+    def label_w(self) -> int:
+        return len(str(self.rows - 1)) + 1 if self.axes else 0
+
+    @property
+    def map_h(self) -> int:
+        return (self.rows + 1) // 2 if self.half else self.rows * self.cell_h
+
+    @property
+    def width(self) -> int:
+        return self.label_w + self.cols * self.cell_w
+
+    @property
+    def height(self) -> int:
+        """Lines of the map and its column numbers (the caption comes on top)."""
+        return self.map_h + (1 if self.axes else 0)
+
+
+TILE_SIZES = ((11, 5), (9, 4), (7, 3), (5, 2), (3, 1), (2, 1), (1, 1))
+HALF_WIDTHS = (2, 1)
+
+
+def shape_fits(shape: TileShape, width: int, height: int) -> bool:
+    return shape.width <= width and shape.height + CAPTION_LINES <= height
+
+
+def choose_shape(rows: int, cols: int, width: int, height: int) -> TileShape:
+    """The largest drawing of a rows x cols map that fits (the smallest one if none does)."""
+    for cell_w, cell_h in TILE_SIZES:
+        for axes in (True, False):
+            if axes and cell_w < len(str(cols - 1)):
+                continue
+            shape = TileShape(rows, cols, cell_w, cell_h, axes=axes)
+            if shape_fits(shape, width, height):
+                return shape
+    for cell_w in HALF_WIDTHS:
+        shape = TileShape(rows, cols, cell_w, 1, half=True)
+        if shape_fits(shape, width, height):
+            return shape
+    return TileShape(rows, cols, 1, 1, half=True)
+
+
+@dataclass(frozen=True)
+class TileLayout:
+    """Where the drawn map sits in the canvas, to map clicks back to cells."""
+
+    shape: TileShape
+    left: int  # canvas column of the first tile (after the row numbers)
+    top: int  # canvas line of the first tile
+
+    def cell_center(self, cell: Cell) -> Offset:
+        """The canvas offset of the middle of a cell (in the half drawing: its line)."""
+        shape = self.shape
+        row, col = cell
+        y = row // 2 if shape.half else row * shape.cell_h + shape.cell_h // 2
+        return Offset(self.left + col * shape.cell_w + shape.cell_w // 2, self.top + y)
+
+    def col_at(self, offset: Offset) -> int | None:
+        col = (offset.x - self.left) // self.shape.cell_w
+        return col if offset.x >= self.left and col < self.shape.cols else None
+
+    def rows_at(self, offset: Offset) -> tuple[int, ...]:
+        """The map rows under a canvas line: one, or two in the half drawing."""
+        shape = self.shape
+        line = offset.y - self.top
+        if line < 0 or line >= shape.map_h:
+            return ()
+        if shape.half:
+            return tuple(row for row in (2 * line, 2 * line + 1) if row < shape.rows)
+        return (line // shape.cell_h,)
+
+
+def cell_table(value: Any) -> dict[Cell, Any]:
+    """A scene's {cell: value} table with its keys read as cells (bad keys dropped)."""
+    if not isinstance(value, Mapping):
+        return {}
+    table = {}
+    for key, item in value.items():
+        cell = cell_of(key)
+        if cell is not None:
+            table[cell] = item
+    return table
+
+
+def map_rows(scene: Mapping[str, Any]) -> list[str]:
+    """The scene's map as equal-length strings (rows of characters, or of bytes, read alike)."""
+    cells = scene.get("cells")
+    if cells is None:
+        rows, cols = int(scene.get("rows", 0)), int(scene.get("cols", 0))
+        return [FLOOR * cols for _ in range(rows)] if rows > 0 and cols > 0 else []
+    rows_text = []
+    for row in cells:
+        if isinstance(row, bytes):
+            row = row.decode()
+        elif not isinstance(row, str):
+            row = "".join(c.decode() if isinstance(c, bytes) else str(c) for c in row)
+        rows_text.append(row)
+    cols = max((len(row) for row in rows_text), default=0)
+    return [row.ljust(cols, FLOOR) for row in rows_text] if cols else []
+
+
+def _number(value: Any) -> float | None:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return None
+
+
+class TileBoard(Board):
+    """A map of tiles (lake, cliff, plain): walk the agent ● to the goal ★."""
+
+    SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
+    DEFAULT_CSS = """
+    TileBoard .tile--ice { background: #d3e9f5; color: #8fb3cc; }
+    TileBoard .tile--ice-alt { background: #c2dfef; color: #8fb3cc; }
+    TileBoard .tile--ground { background: #c3d69c; color: #8a9e66; }
+    TileBoard .tile--ground-alt { background: #b8cd8f; color: #8a9e66; }
+    TileBoard .tile--floor { background: #d9d9d4; color: #a3a39c; }
+    TileBoard .tile--floor-alt { background: #cfcfc9; color: #a3a39c; }
+    TileBoard .tile--start { color: #3b4b5c; text-style: bold; }
+    TileBoard .tile--hole { background: #173a5c; color: #8cc3ea; text-style: bold; }
+    TileBoard .tile--goal { background: #e0ac2b; color: #3a2a00; text-style: bold; }
+    TileBoard .tile--cliff { background: #6e3b26; color: #9c5f43; }
+    TileBoard .tile--wall { background: #3e4047; color: #5d6069; }
+    TileBoard .tile--reward { background: #3f9b5a; color: #ffffff; text-style: bold; }
+    TileBoard .tile--penalty { background: #b8473c; color: #ffffff; text-style: bold; }
+    TileBoard .tile--agent { background: #1f7ae0; color: #ffffff; text-style: bold; }
+    TileBoard .tile--agent-home { background: $success; color: #ffffff; text-style: bold; }
+    TileBoard .tile--agent-lost { background: $error; color: #ffffff; text-style: bold; }
+    TileBoard .tile--trail { color: #1d5e9e; text-style: bold; }
+    TileBoard .tile--mark { color: #1b1b1b; text-style: bold; }
+    TileBoard .tile--value { color: #ffffff; text-style: bold; }
+    TileBoard .tile--slip { color: #4d87b3; }
+    TileBoard .tile--cursor { background: $accent; color: $text; text-style: bold; }
+    TileBoard .tile--axis { color: $text-muted; }
+    TileBoard .tile--caption { color: $text-muted; }
+    TileBoard .tile--slipped { color: $text-warning; text-style: bold; }
+    TileBoard .tile--good { color: $text-success; text-style: bold; }
+    TileBoard .tile--bad { color: $text-error; text-style: bold; }
+    """
+
+    COMPONENT_CLASSES: ClassVar[set[str]] = {
+        "tile--ice",
+        "tile--ice-alt",
+        "tile--ground",
+        "tile--ground-alt",
+        "tile--floor",
+        "tile--floor-alt",
+        "tile--start",
+        "tile--hole",
+        "tile--goal",
+        "tile--cliff",
+        "tile--wall",
+        "tile--reward",
+        "tile--penalty",
+        "tile--agent",
+        "tile--agent-home",
+        "tile--agent-lost",
+        "tile--trail",
+        "tile--mark",
+        "tile--value",
+        "tile--slip",
+        "tile--cursor",
+        "tile--axis",
+        "tile--caption",
+        "tile--slipped",
+        "tile--good",
+        "tile--bad",
+    }
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("up,w", "act('up')", "up", key_display="↑/w", group=MOVE_GROUP),
+        Binding("down,s", "act('down')", "down", key_display="↓/s", group=MOVE_GROUP),
+        Binding("left,a", "act('left')", "left", key_display="←/a", group=MOVE_GROUP),
+        Binding("right,d", "act('right')", "right", key_display="→/d", group=MOVE_GROUP),
+        Binding("n,r", "new_episode", "New", key_display="n", tooltip="Start a new episode"),
+        Binding("enter", "next_episode", "Next", show=False),
+    ]
+
+    BUTTONS = (("↺ Reset [dim]r[/]", "new_episode"),)
+    RESTART_ANYTIME = True
+
+    class CellClicked(Message):
+        """A person clicked map cell (row, col) (an editor paints it; play steps towards it)."""
+
+        def __init__(self, row: int, col: int) -> None:
+            super().__init__()
+            self.row = row
+            self.col = col
+
+    def __init__(
+        self,
+        *,
+        interactive: bool = True,
+        name: str | None = None,
+        id: str | None = None,  # noqa: A002 - Textual's own name for it
+        classes: str | None = None,
+    ) -> None:
+        super().__init__(interactive=interactive, name=name, id=id, classes=classes)
+        self.cells: list[str] = []
+        self.trail: dict[Cell, str] = {}  # cell the agent left -> arrow of that move
+        self.agent: Cell | None = None
+        self.theme = THEMES["lake"]
+        self.rewards: dict[Cell, Any] = {}
+        self.slip: dict[Cell, Any] = {}
+        self.marks: dict[Cell, str] = {}
+        self.cursor: Cell | None = None
+        self._event: Event | None = None
+        self._fresh = True
+        self._kept: KeptShape[TileShape] = KeptShape()
+        self._layout: TileLayout | None = None
+
+    def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
+        self.border_title = self.theme.title
+
+    # --- what the board says ---------------------------------------------------
+    def key_help(self) -> list[tuple[str, str]]:
+        return [
+            ("↑ ↓ ← →  or  w a s d", "move up, down, left, right"),
+            ("n / r", "start a new episode (at any time)"),
+            ("enter", "start a new episode once this one is over"),
+            ("click a cell", "step one cell towards it"),
+        ]
+
+    @property
+    def prompt(self) -> str:
+        return "Move with the arrows or WASD, or click a cell; r starts over."
+
+    @property
+    def over_hint(self) -> str:
+        return "This episode is over: press n, r or Enter (or click Reset) for a new one."
+
+    def button_suggested(self, action: str) -> bool:
+        return self.episode_over
+
+    @property
+    def layout_drawn(self) -> TileLayout | None:
+        """The geometry of the last drawing (None before the first)."""
+        return self._layout
+
+    @property
+    def event_text(self) -> str:
+        """What the last move did, in words ('' when there is nothing to say)."""
+        return self._event[0][0].format(who=self.player_name) if self._event else ""
+
+    # --- the scene ---------------------------------------------------------------
+    def start_episode(self) -> None:
+        """The next scene begins a new episode: forget the trail; tiles may take a new size."""
+        self._fresh = True
+        self._kept.release()
+
+    def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
+        cells = map_rows(scene)
+        agent = cell_of(scene.get("agent"))
+        theme = THEMES.get(str(scene.get("theme", "lake")), THEMES["plain"])
+        if cells != self.cells or theme is not self.theme:
+            self._fresh = True
+        previous = None if self._fresh else self.agent
+        self.cells, self.theme = cells, theme
+        self.rewards = cell_table(scene.get("rewards"))
+        self.slip = cell_table(scene.get("slip"))
+        self.marks = {cell: str(text) for cell, text in cell_table(scene.get("marks")).items()}
+        self.cursor = cell_of(scene.get("cursor"))
+        action = scene.get("last_action")
+        action = action if action in MOVES else None
+        self._event = self._event_of(previous, agent, action, bool(scene.get("slipped")))
+        if self._fresh or previous is None or agent is None:
+            self.trail = {}
+        elif agent != previous:
+            step = (agent[0] - previous[0], agent[1] - previous[1])
+            if step in MOVE_OF:
+                self.trail[previous] = ARROWS[MOVE_OF[step]]
+            else:  # a jump (back to the start after a fall): the walk starts over
+                self.trail = {}
+        self.agent = agent
+        self._fresh = False
+        if self.is_mounted:
+            self.border_title = theme.title
+        super().show_scene(scene, reveal)
+
+    def kind(self, cell: Cell) -> str:
+        """The map character at a cell ('' off the map)."""
+        row, col = cell
+        if 0 <= row < len(self.cells) and 0 <= col < len(self.cells[row]):
+            return self.cells[row][col]
+        return ""
+
+    def _event_of(
+        self, previous: Cell | None, agent: Cell | None, action: str | None, slipped: bool
+    ) -> Event | None:
+        """What the last move did, in words from longest to shortest, and their style."""
+        if agent is None:
+            return None
+        kind, theme = self.kind(agent), self.theme
+        if kind == HOLE:
+            if slipped:
+                return (
+                    f"{{who}} {theme.slipped} into a {theme.hole}",
+                    f"Slipped into a {theme.hole}",
+                ), "bad"
+            return (f"{{who}} {theme.fell_in}", theme.fell_in.capitalize()), "bad"
+        if kind == GOAL:
+            if slipped:
+                return (f"{{who}} {theme.slipped} onto the goal", "Slipped onto the goal"), "good"
+            return ("{who} reached the goal", "Reached the goal"), "good"
+        if previous is None or action is None:
+            return None
+        step = MOVES[action]
+        intended = (previous[0] + step[0], previous[1] + step[1])
+        if not self.kind(intended):
+            intended = previous  # the edge of the map
+        if self._fell(previous, agent, intended, slipped):
+            return ("{who} fell off the cliff: back to the start", "Fell off the cliff"), "bad"
+        if slipped:
+            went = MOVE_OF.get((agent[0] - previous[0], agent[1] - previous[1]))
+            outcome = f"went {went}" if went else "stayed put" if agent == previous else "moved"
+            short = f"{action} → {went or ('stayed' if agent == previous else '?')}"
+            texts: tuple[str, ...] = (
+                f"{{who}} {theme.slipped}: asked {action}, {outcome}",
+                f"Slipped: asked {action}, {outcome}",
+                f"Slipped: {short}",
+            )
+            return texts, "slipped"
+        if agent == previous:
+            blocker = "a wall" if self.kind(intended) == WALL else "the edge"
+            return (
+                f"{{who}} bumped into {blocker} (asked {action})",
+                f"Bumped into {blocker}",
+            ), "caption"
+        return (f"{{who}} moved {action}", f"Moved {action}"), "caption"
+
+    def _fell(self, previous: Cell, agent: Cell, intended: Cell, slipped: bool) -> bool:
+        """Whether the agent fell off a cliff and was sent back to the start."""
+        if self.kind(agent) != START or agent == intended:
+            return False
+        if self.kind(intended) == CLIFF:
+            return True
+        far = abs(agent[0] - previous[0]) + abs(agent[1] - previous[1]) > 1
+        beside = (
+            self.kind((previous[0] + dr, previous[1] + dc)) == CLIFF for dr, dc in MOVES.values()
+        )
+        return far and slipped and any(beside)
+
+    # --- drawing -----------------------------------------------------------------
+    def _style(self, name: str) -> Style:
+        return self.get_component_rich_style(f"tile--{name}")
+
+    def _reward(self, cell: Cell) -> float | None:
+        return _number(self.rewards.get(cell))
+
+    def _ground(self, cell: Cell, kind: str) -> Style:
+        """The style of a tile's background (and of its glyph, unless it has its own)."""
+        if kind == HOLE:
+            return self._style("hole")
+        if kind == GOAL:
+            return self._style("goal")
+        if kind == CLIFF:
+            return self._style("cliff")
+        if kind == WALL:
+            return self._style("wall")
+        if kind == REWARD:
+            value = self._reward(cell)
+            return self._style("penalty" if value is not None and value < 0 else "reward")
+        floor = self.theme.floor
+        return self._style(f"{floor}-alt" if (cell[0] + cell[1]) % 2 else floor)
+
+    def _glyph(self, cell: Cell, kind: str, width: int) -> str:
+        """A tile's glyph, at most `width` characters."""
+        if kind == REWARD:
+            value = self._reward(cell)
+            text = reward_text(value) if value is not None else "◆"
+            if len(text) > width:
+                text = "−" if value is not None and value < 0 else "+"
+            return text
+        return GLYPHS.get(kind, kind)[:width]
+
+    def _agent_style(self, kind: str) -> Style:
+        if kind == GOAL:
+            return self._style("agent-home")
+        if kind in (HOLE, CLIFF):
+            return self._style("agent-lost")
+        return self._style("agent")
+
+    def _paint_tile(self, grid: CharGrid, cell: Cell, x0: int, y0: int, shape: TileShape) -> None:
+        w, h = shape.cell_w, shape.cell_h
+        kind = self.kind(cell)
+        tile = self._ground(cell, kind)
+        mid = h // 2
+        big = w >= 7 and h >= 3  # room for a rounded agent
+        pool = w >= 7 and h >= 4  # room for a rounded hole in the floor, and its value
+        if kind in FILLED:
+            grid.fill(x0, y0, w, h, GLYPHS[kind], tile)
+        elif kind == HOLE and pool:
+            floor = self._ground(cell, FLOOR)
+            grid.fill(x0, y0, w, h, " ", floor)
+            grid.pill(x0 + 1, y0, w - 2, h, tile, floor)
+        else:
+            grid.fill(x0, y0, w, h, " ", tile)
+        glyph = self._glyph(cell, kind, w)
+        ink = on_tile(self._style("start"), tile) if kind == START else tile
+        if cell in self.marks:
+            glyph, ink = self.marks[cell][:w], on_tile(self._style("mark"), tile)
+        if cell in self.trail:
+            glyph, ink = self.trail[cell], on_tile(self._style("trail"), tile)
+        if kind not in FILLED or glyph != GLYPHS[kind]:
+            grid.put(x0 + (w - len(glyph)) // 2, y0 + mid, glyph, ink)
+        value = self._reward(cell)
+        if h >= 2 and value is not None and kind != REWARD:
+            text = reward_text(value)
+            if len(text) <= w:
+                below = mid + 1 < (h - 1 if kind == HOLE and pool else h)
+                line = mid + 1 if below else mid - 1
+                value_ink = on_tile(self._style("value"), tile)
+                grid.put(x0 + (w - len(text)) // 2, y0 + line, text, value_ink)
+        slip = _number(self.slip.get(cell))
+        if slip and w >= 5 and kind not in FILLED:
+            grid.put(x0 + w - 1, y0, "≈", on_tile(self._style("slip"), tile))
+        if cell == self.agent:
+            agent = self._agent_style(kind)
+            if big:
+                under = grid.style_at(x0, y0 + mid)
+                grid.pill(x0 + (w - 5) // 2, y0 + mid - 1, 5, 3, agent, under)
+                grid.put(x0 + w // 2, y0 + mid, AGENT, agent)
+            else:
+                chip = min(w, 3)
+                grid.put(x0 + (w - chip) // 2, y0 + mid, AGENT.center(chip), agent)
+        if cell == self.cursor:
+            self._paint_cursor(grid, x0, y0, w, h)
+
+    def _paint_cursor(self, grid: CharGrid, x0: int, y0: int, w: int, h: int) -> None:
+        """The editing cursor: corners around the tile, or the whole tile when narrow."""
+        cursor = self._style("cursor")
+        if w < 3:
+            for line in range(y0, y0 + h):
+                grid.put(x0, line, "".join(grid.chars[line][x0 : x0 + w]), cursor)
+        elif h == 1:
+            grid.put(x0, y0, "[", cursor)
+            grid.put(x0 + w - 1, y0, "]", cursor)
+        else:
+            grid.put(x0, y0, "┌", cursor)
+            grid.put(x0 + w - 1, y0, "┐", cursor)
+            grid.put(x0, y0 + h - 1, "└", cursor)
+            grid.put(x0 + w - 1, y0 + h - 1, "┘", cursor)
+
+    def _swatch(self, cell: Cell) -> Color | None:
+        """A cell's colour in the half drawing."""
+        kind = self.kind(cell)
+        if cell == self.agent:
+            return self._agent_style(kind).bgcolor
+        if cell == self.cursor:
+            return self._style("cursor").bgcolor
+        if kind == START:
+            return self._style("start").color
+        return self._ground(cell, kind).bgcolor
+
+    def _draw_map(self, shape: TileShape) -> list[Text]:
+        w, h = shape.cell_w, shape.cell_h
+        grid = CharGrid(shape.width, shape.height, Style())
+        x_map = shape.label_w
+        if shape.half:
+            for line in range(shape.map_h):
+                for col in range(shape.cols):
+                    top = self._swatch((2 * line, col))
+                    below = self._swatch((2 * line + 1, col)) if 2 * line + 1 < shape.rows else None
+                    grid.put(x_map + col * w, line, "▀" * w, Style(color=top, bgcolor=below))
+            return grid.lines()
+        for row in range(shape.rows):
+            for col in range(shape.cols):
+                self._paint_tile(grid, (row, col), x_map + col * w, row * h, shape)
+        if shape.axes:
+            axis = self._style("axis")
+            for row in range(shape.rows):
+                grid.put(0, row * h + h // 2, f"{row:>{shape.label_w - 1}}", axis)
+            for col in range(shape.cols):
+                grid.put(x_map + col * w, shape.map_h, str(col).center(w), axis)
+        return grid.lines()
+
+    def _caption(self, width: int) -> Text:
+        """What the last move did, or where the cursor or the agent is, in words that fit."""
+        spot = self.cursor or self.agent
+        if self._event is not None:
+            texts, style = self._event
+        elif spot is not None:
+            who, (row, col) = ("Cursor" if self.cursor else "{who}"), spot
+            texts = (f"{who} at row {row}, column {col}", f"{who} at ({row}, {col})")
+            style = "caption"
+        else:
+            return Text("")
+        said = [text.format(who=self.player_name) for text in texts]
+        fitting = [text for text in said if len(text) <= width] or said[-1:]
+        return Text(fitting[0], self._style(style))
+
+    def _legend(self, width: int) -> Text | None:
+        """'⌂ start  · ice  ○ hole  ★ goal  ● you': the tiles this map has (None if too wide)."""
+        present = {kind for row in self.cells for kind in row}
+        words = {
+            START: "start",
+            FLOOR: self.theme.floor,
+            HOLE: self.theme.hole,
+            GOAL: "goal",
+            CLIFF: "cliff",
+            WALL: "wall",
+            REWARD: "reward",
+        }
+        items = []
+        for kind in KINDS:
+            if kind in present:
+                tile = self._ground((0, 0), kind)
+                ink = on_tile(self._style("start"), tile) if kind == START else tile
+                items.append(("◆" if kind == REWARD else GLYPHS[kind], ink, words[kind]))
+        if self.agent is not None:
+            items.append((AGENT, self._style("agent"), self.player_name.lower()))
+        return legend(items, self._style("caption"), width)
+
+    def picture(self, width: int, height: int) -> Text:
+        if not self.cells:
+            self._layout = None
+            return stack([Text("No map yet.", self._style("caption"))], width, height)
+        rows, cols = len(self.cells), len(self.cells[0])
+        shape = self._kept.get(
+            (rows, cols), width, height, lambda w, h: choose_shape(rows, cols, w, h), shape_fits
+        )
+        lines = self._draw_map(shape)
+        caption = self._caption(width)
+        caption.truncate(width, overflow="ellipsis")
+        lines.append(caption)
+        if shape.height + CAPTION_LINES < height:
+            names = self._legend(width)
+            if names is not None:
+                lines.append(names)
+        left = max(0, (width - shape.width) // 2)
+        top = max(0, (height - len(lines)) // 2)
+        self._layout = TileLayout(shape, left + shape.label_w, top)
+        return stack(lines, width, height)
+
+    # --- keys and clicks -----------------------------------------------------------
+    def action_next_episode(self) -> None:
+        """Enter: a new episode, once this one is over (so a stray Enter loses nothing)."""
+        if self.episode_over or self.agent_playing:
+            self.action_new_episode()
+
+    def canvas_clicked(self, offset: Offset) -> None:
+        layout = self._layout
+        if layout is None:
+            return
+        rows, col = layout.rows_at(offset), layout.col_at(offset)
+        if not rows or col is None:
+            return
+        row = rows[0]
+        if len(rows) == 2 and self.agent is not None and self.agent[0] >= rows[1]:
+            row = rows[1]  # the half drawing: of the two rows, the one nearer the agent
+        self.post_message(self.CellClicked(row, col))
+        self.cell_clicked(row, col)
+
+    def cell_clicked(self, row: int, col: int) -> None:
+        """A click on cell (row, col): the agent steps one cell towards it."""
+        agent = self.agent
+        if agent is None or (row, col) == agent:
+            return
+        self.action_act(MOVE_OF[step_toward(agent, (row, col))])
+
+
+__all__ = ["MOVES", "THEMES", "TileBoard", "TileLayout", "TileShape", "choose_shape", "map_rows"]
