@@ -1,7 +1,8 @@
 """One bench run: every stage in turn, with the sizes of the quick or the full plan.
 
 `run_bench(quick, progress)` measures throughput, time to the target gap,
-live training (both runners), memory and start-up, and returns
+live training (both runners), memory, start-up, and programs as players
+(exact-regret scoring against returns, protocol and MCP speeds), and returns
 `BenchResults`. A stage that fails is recorded in `errors` and the others
 still run. `progress` (if given) hears the name of each stage as it starts.
 """
@@ -14,7 +15,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from tui_gym.bench import gap, live, memory, startup, throughput
+from tui_gym.bench import gap, live, memory, programs, startup, throughput
 from tui_gym.bench.figures import load_average
 from tui_gym.bench.results import BenchResults, MachineInfo
 
@@ -34,6 +35,9 @@ class Plan:
     memory_episodes: int
     memory_warmup: int
     startup_repeats: int
+    separation_episodes: int = 5_000  # each of the two Blackjack players
+    pipe_seconds: float = 1.0  # window per repeat, protocol and MCP
+    pipe_repeats: int = 3
 
 
 # About 50 s on an idle 2-CPU machine; the tutorial gets one capped run.
@@ -51,6 +55,7 @@ FULL = Plan(
     live_seconds=3.0, live_repeats=3, key_presses=30,
     memory_episodes=2_000_000, memory_warmup=100_000,
     startup_repeats=5,
+    separation_episodes=20_000, pipe_seconds=2.0,
 )
 
 
@@ -82,6 +87,10 @@ def run_bench(quick: bool = False, progress: Callable[[str], None] | None = None
           lambda: memory.measure(plan.memory_episodes, plan.memory_warmup))
     stage("startup", "start-up to the first frame",
           lambda: startup.measure(plan.startup_repeats))
+    stage("programs", "programs as players: episodes to separate two players, protocol "
+          "and MCP steps/s",
+          lambda: programs.measure(plan.separation_episodes, plan.pipe_seconds,
+                                   plan.pipe_repeats))
     return BenchResults(
         quick=quick,
         seconds=time.perf_counter() - started,
@@ -91,5 +100,6 @@ def run_bench(quick: bool = False, progress: Callable[[str], None] | None = None
         live=found.get("live", {}),
         memory=found.get("memory"),
         startup=found.get("startup"),
+        programs=found.get("programs"),
         errors=errors,
     )
