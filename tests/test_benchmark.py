@@ -63,7 +63,7 @@ def test_the_example_player_through_the_cli_and_the_leaderboard(
     db = str(tmp_path / "runs.db")
     code, out, err = _cli(capsys, "benchmark", "blackjack", "--agent-cmd",
                           f"{sys.executable} {EXAMPLE}", "--episodes", "300", "--seed", "3",
-                          "--json", "--db", db)
+                          "--json", "--db", db, "--name", "stick on 17")
     assert code == 0, err
     result = json.loads(out)
     assert result["episodes"] == 300 and result["seeds"] == [3, 302]
@@ -71,12 +71,13 @@ def test_the_example_player_through_the_cli_and_the_leaderboard(
     assert 0 < result["mean_regret"] < 0.1 and 0.7 < result["agreement"] < 1.0
     assert result["player_status"] == "played every episode; exited with code 0"
     assert result["decision_ms_median"] > 0 and result["run_id"] == 1
+    assert result["player"] == "stick on 17"
     code, out, _ = _cli(capsys, "benchmark", "blackjack", "--agent", "optimal", "--episodes",
                         "100", "--db", db)
     assert code == 0 and "recorded as run 2" in out
     code, out, _ = _cli(capsys, "benchmark", "--leaderboard", "blackjack", "--json", "--db", db)
     runs = json.loads(out)["runs"]
-    assert [r["algorithm"] for r in runs] == ["optimal", f"{sys.executable} {EXAMPLE}"]
+    assert [r["algorithm"] for r in runs] == ["optimal", "stick on 17"]
     assert [r["rank"] for r in runs] == [1, 2]
     code, out, _ = _cli(capsys, "benchmark", "--leaderboard", "blackjack", "--db", db)
     assert "best first" in out and "optimal" in out
@@ -87,6 +88,7 @@ def test_a_game_without_exact_values_says_regret_is_unavailable() -> None:
                            episodes=2, seed=0, params={"size": 3})
     assert result.regrets is None and result.mean_regret is None
     assert "no exact action values" in result.regret_note
+    assert result.player == f"{Path(sys.executable).name} heuristic_player.py"
     assert result.decisions > 0 and result.to_json()["mean_regret"] is None
 
 

@@ -31,6 +31,9 @@ def add_parser(sub: Any, int_type: Any, seed_type: Any, float_type: Any) -> None
                      help="a program that plays through the JSON-lines protocol")
     who.add_argument("--agent", metavar="NAME",
                      help="a built-in player (random, optimal) or a saved agent file (.tgym)")
+    bench.add_argument("--name", metavar="NAME",
+                       help="the player's name in the results and the leaderboard (default: "
+                       "the command, or the built-in's or agent file's name)")
     bench.add_argument("--episodes", type=int_type, default=1000, metavar="N",
                        help="episodes to play (default 1,000)")
     bench.add_argument("--seed", type=seed_type, default=0, dest="bench_seed", metavar="S",
@@ -102,6 +105,10 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.benchmark.run import run_benchmark
 
     player, params, wrappers = _player(args, args.game)
+    if args.name is not None:
+        if not args.name.strip():
+            raise ValueError("--name cannot be empty")
+        player.label = args.name.strip()
     result = run_benchmark(
         args.game, player, episodes=args.episodes, seed=args.bench_seed, params=params,
         wrappers=wrappers, decision_timeout=args.decision_timeout,
@@ -142,18 +149,18 @@ def _show_leaderboard(args: argparse.Namespace, out: Console) -> int:
                   box=box.SIMPLE_HEAD, show_edge=False, pad_edge=False,
                   padding=(0, 1, 0, 0))
     table.add_column("#", justify="right", no_wrap=True)
-    table.add_column("player", overflow="fold", min_width=10)
+    table.add_column("player", overflow="fold", min_width=12)
     for name in ("episodes", "mean return", "regret/ep.", "optimal", "bad/late", "ms/move"):
         table.add_column(name, justify="right", no_wrap=True)
     for standing in standings:
         run = standing.run
         agreement = run.figure("agreement")
         table.add_row(
-            str(standing.rank), escape(run.algorithm), _figure(run, "episodes", 0, False),
+            str(standing.rank), escape(run.algorithm), _count(run, "episodes"),
             _figure(run, "mean_return", 3, True), _figure(run, "regret_per_episode", 3, False),
             "–" if agreement is None else f"{agreement.value:.1%}",
-            f"{_figure(run, 'invalid_actions', 0, False)}/{_figure(run, 'timeouts', 0, False)}",
-            _figure(run, "decision_ms_median", 3, False),
+            f"{_count(run, 'invalid_actions')}/{_count(run, 'timeouts')}",
+            _figure(run, "decision_ms_median", 2, False),
         )
     out.print(table)
     out.print(escape(f"from {path}; bad/late: invalid actions and time-outs"))
@@ -167,3 +174,8 @@ def _figure(run: Any, name: str, places: int, signed: bool) -> str:
         return "–"
     text = f"{figure.value:+.{places}f}" if signed else f"{figure.value:.{places}f}"
     return text + (f"±{figure.ci95:.{places}f}" if figure.ci95 is not None else "")
+
+
+def _count(run: Any, name: str) -> str:
+    figure = run.figure(name)
+    return "–" if figure is None else f"{figure.value:,.0f}"

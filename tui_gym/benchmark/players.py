@@ -237,7 +237,8 @@ class ProcessPlayer(Player):
             raise PlayerError(f"cannot read the command {command!r}: {exc}") from None
         if not self.argv:
             raise PlayerError("the player's command is empty")
-        self.label = command
+        # Named by its words without their folders: "python heuristic_player.py".
+        self.label = " ".join(Path(word).name if "/" in word else word for word in self.argv)
 
     def play(self, referee: Referee, decision_timeout: float) -> PlayOutcome:
         program = _Program(self.argv)
