@@ -161,7 +161,7 @@ class _Program:
         except OSError as exc:
             raise PlayerError(f"cannot start {argv[0]!r}: {exc.strerror or exc}") from None
         assert self.process.stdin and self.process.stdout and self.process.stderr
-        self.lines: queue.Queue[Any] = queue.Queue()
+        self.lines: queue.Queue[tuple[float, Any]] = queue.Queue()  # (when read, line)
         self.stderr: deque[str] = deque(maxlen=STDERR_LINES)
         self._in = self.process.stdin.fileno()
         os.set_blocking(self._in, False)
@@ -174,8 +174,9 @@ class _Program:
     def _read(self, stream: IO[bytes]) -> None:
         with contextlib.suppress(OSError, ValueError):
             for line in read_lines(stream):
-                self.lines.put(_TOO_LONG if line is None else line)
-        self.lines.put(_EOF)
+                # Stamped here, as read: the main thread may be slow to take it.
+                self.lines.put((time.monotonic(), _TOO_LONG if line is None else line))
+        self.lines.put((time.monotonic(), _EOF))
 
     def _drain(self, stream: IO[bytes]) -> None:
         with contextlib.suppress(OSError, ValueError):
@@ -183,13 +184,13 @@ class _Program:
                 if line is not None and line.strip():
                     self.stderr.append(line.decode("utf-8", "replace").rstrip()[:200])
 
-    def next_line(self, timeout: float) -> Any:
-        """The next line it wrote, `_EOF`, `_TOO_LONG`, or `_TIMEOUT` after `timeout` s."""
+    def next_line(self, timeout: float) -> tuple[float, Any]:
+        """When it was read, and the next line it wrote (or `_EOF`, `_TOO_LONG`);
+        `_TIMEOUT` after `timeout` s without one."""
         try:
-            return self.lines.get(timeout=max(0.0, timeout)) if timeout > 0 else \
-                self.lines.get_nowait()
+            return self.lines.get(timeout=timeout) if timeout > 0 else self.lines.get_nowait()
         except queue.Empty:
-            return _TIMEOUT
+            return time.monotonic(), _TIMEOUT
 
     def send(self, data: bytes, timeout: float) -> bool:
         """Write `data` to its input; False if it stops reading (for `timeout` s) or is gone."""
@@ -275,7 +276,7 @@ class ProcessPlayer(Player):
         pending = time.monotonic()
         allowance = max(limit, STARTUP_S)
         while not referee.finished:
-            item = program.next_line(pending + allowance - time.monotonic())
+            received, item = program.next_line(pending + allowance - time.monotonic())
             if item is _TIMEOUT:
                 referee.timeout(limit)
                 owed += 1
@@ -290,7 +291,6 @@ class ProcessPlayer(Player):
                 except subprocess.TimeoutExpired:
                     return "it closed its output"
                 return f"it exited with code {code}"
-            received = time.monotonic()
             if item is _TOO_LONG:
                 referee.fouls.bad_requests += 1
                 answer, moved, cmd = {"error": "line too long: not read"}, False, None
@@ -309,10 +309,11 @@ class ProcessPlayer(Player):
                     late = False
             if moved and cmd == "step" and not late:
                 outcome.decision_times.append(received - pending)
+            sending = time.monotonic()
             if not program.send(_encode(answer), limit):
                 return "it stopped reading its input"
-            if moved:  # a new decision is due: its clock starts now
-                pending, allowance, strikes = time.monotonic(), limit, 0
+            if moved:  # a new decision is due: its clock started as the answer went out
+                pending, allowance, strikes = sending, limit, 0
         return ""
 
 
