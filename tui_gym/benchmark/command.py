@@ -150,7 +150,7 @@ def _show_leaderboard(args: argparse.Namespace, out: Console) -> int:
                   padding=(0, 1, 0, 0))
     table.add_column("#", justify="right", no_wrap=True)
     table.add_column("player", overflow="fold", min_width=12)
-    for name in ("episodes", "mean return", "regret/ep.", "optimal", "bad/late", "ms/move"):
+    for name in ("episodes", "mean return", "regret/ep.", "optimal", "bad/late", "ms"):
         table.add_column(name, justify="right", no_wrap=True)
     for standing in standings:
         run = standing.run
@@ -163,7 +163,8 @@ def _show_leaderboard(args: argparse.Namespace, out: Console) -> int:
             _figure(run, "decision_ms_median", 2, False),
         )
     out.print(table)
-    out.print(escape(f"from {path}; bad/late: invalid actions and time-outs"))
+    out.print(escape(f"from {path}; bad/late: invalid actions and time-outs; "
+                     "ms: median time per decision"))
     return 0
 
 
