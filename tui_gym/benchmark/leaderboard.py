@@ -33,8 +33,8 @@ def record(result: BenchmarkResult, db: str | None = None) -> int:
     from tui_gym.core.wrappers import parse_wrapper_spec
 
     wrappers = []
-    for spec in result.wrappers:
-        choice = parse_wrapper_spec(spec)
+    for text in result.wrappers:
+        choice = parse_wrapper_spec(text)
         wrappers.append(WrapperSetting(choice.name, choice.values()))
     spec = RunSpec(
         kind=RunKind.BENCHMARK,
