@@ -40,7 +40,7 @@ class Plan:
     pipe_repeats: int = 3
 
 
-# About 50 s on an idle 2-CPU machine; the tutorial gets one capped run.
+# About a minute on an idle 2-CPU machine; the tutorial gets one capped run.
 QUICK = Plan(
     throughput_seconds=0.5, throughput_repeats=3,
     gap_seeds=(0, 1, 2), tutorial_cap_s=15.0, tutorial_stage_s=0.0,
@@ -48,7 +48,7 @@ QUICK = Plan(
     memory_episodes=2_000_000, memory_warmup=100_000,
     startup_repeats=3,
 )
-# About 2.5 minutes on an idle 2-CPU machine.
+# About 3 minutes on an idle 2-CPU machine.
 FULL = Plan(
     throughput_seconds=2.0, throughput_repeats=3,
     gap_seeds=(0, 1, 2), tutorial_cap_s=90.0, tutorial_stage_s=60.0,
