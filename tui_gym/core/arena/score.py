@@ -44,7 +44,7 @@ class Verdict:
         values = hint.get("action_values")
         if not optimal:
             if hint.get("unwrapped_optimal_actions"):  # the wrappers change the game
-                return cls(False, note=str(hint.get("note", "")) or NOT_EXACT)
+                return cls(False, note=NOT_EXACT)
             return cls(False)
         if not isinstance(values, dict) or action not in values:
             return cls(True, action in optimal, None, optimal, None, NO_VALUES)
@@ -77,13 +77,14 @@ class EpisodeScore:
     agreed: int = 0
     regret: float = 0.0
     unscored: int = 0  # decisions with no exact action values (the regret then is unknown)
+    unjudged: int = 0  # moves the optimum could not judge (the wrappers change the game)
     done: bool = False
     terminated: bool = False
 
     @property
     def exact_regret(self) -> float | None:
-        """The episode's summed regret; None if a decision had no exact values."""
-        return None if self.unscored else self.regret
+        """The episode's summed regret; None if a move could not be scored exactly."""
+        return None if self.unscored or self.unjudged else self.regret
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -125,6 +126,7 @@ class ArenaScore:
     decisions: int = 0
     agreed: int = 0
     unscored: int = 0
+    unjudged: int = 0
     notes: set[str] = field(default_factory=set)
     recent: deque[EpisodeScore] = field(default_factory=lambda: deque(maxlen=RECENT_EPISODES))
     history: list[EpisodeScore] | None = None  # every finished episode, when a list is given
@@ -148,6 +150,8 @@ class ArenaScore:
                 episode.unscored += 1
             else:
                 episode.regret += verdict.regret
+        elif verdict.note:  # not a decision because the optimum is not known here
+            episode.unjudged += 1
         if verdict.note and len(self.notes) < 8:
             self.notes.add(verdict.note)
         if done:
@@ -162,6 +166,7 @@ class ArenaScore:
         self.decisions += episode.decisions
         self.agreed += episode.agreed
         self.unscored += episode.unscored
+        self.unjudged += episode.unjudged
         if episode.exact_regret is not None:
             self.regret_episodes += 1
             self.regret_sum += episode.regret
@@ -190,8 +195,10 @@ class ArenaScore:
         if self.unscored:
             regret_note = f"regret unavailable for {self.unscored} of {self.decisions} decisions"
             regret_note += f": {why}" if why else ""
-        elif self.finished and not self.decisions and why:
-            regret_note = f"no decision was judged: {why}"
+        elif self.unjudged:
+            moves = "1 move" if self.unjudged == 1 else f"{self.unjudged} moves"
+            regret_note = f"regret unavailable: {moves} could not be judged"
+            regret_note += f": {why}" if why else ""
         data: dict[str, Any] = {
             "episodes": self.finished,
             "mean_return": self.mean_return,
