@@ -21,7 +21,6 @@ from tui_gym.bench.programs import (
 )
 from tui_gym.bench.report import MISS, PASS, table, to_json, verdicts
 from tui_gym.bench.results import BenchResults
-from tui_gym.cli import _clean
 
 
 def test_episodes_needed_is_the_two_sample_formula() -> None:
@@ -55,7 +54,7 @@ def test_the_report_shows_the_rows_and_judges_them() -> None:
     assert verdict["regret_separation_ratio"] == PASS
     assert verdict["protocol_steps_per_second"] == PASS
     assert verdict["mcp_steps_per_second"] == PASS
-    data = json.loads(json.dumps(_clean(to_json(results))))["programs"]
+    data = json.loads(json.dumps(to_json(results)))["programs"]
     assert data["separation"]["episodes_needed_by_regret"] == pytest.approx(SEPARATION.by_regret)
     assert data["protocol_steps_per_second"] == 21_000.0
     assert data["mcp_steps_per_second_one_call_at_a_time"] == 900.0

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import json
+import math
+import sys
 from typing import Any
 
 from rich import box
@@ -94,9 +97,31 @@ def _player(args: argparse.Namespace, game: str) -> tuple[Any, dict[str, Any], t
     return agent, dict(session.env_kwargs), tuple(str(c) for c in session.applied)
 
 
-def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.cli import key_value_table, print_json
+def _print_json(data: dict[str, Any]) -> None:
+    """One JSON object on stdout (a number that is not finite as null)."""
+    def clean(value: Any) -> Any:
+        if isinstance(value, float) and not math.isfinite(value):
+            return None
+        if isinstance(value, dict):
+            return {k: clean(v) for k, v in value.items()}
+        if isinstance(value, list | tuple):
+            return [clean(v) for v in value]
+        return value
 
+    sys.stdout.write(json.dumps(clean(data)) + "\n")
+    sys.stdout.flush()
+
+
+def _summary(title: str, rows: list[tuple[str, str]]) -> Table:
+    table = Table(title=title, show_header=False, title_justify="left")
+    table.add_column(style="bold")
+    table.add_column(justify="right")
+    for label, value in rows:
+        table.add_row(label, escape(value))
+    return table
+
+
+def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
     if args.leaderboard:
         return _show_leaderboard(args, out)
     if not args.decision_timeout > 0:
@@ -122,11 +147,9 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
         object.__setattr__(result, "run_id", run_id)
         recorded = f"recorded as run {run_id} in {resolve_db_path(args.db)}"
     if args.json:
-        print_json(result.to_json())
+        _print_json(result.to_json())
         return 0
-    out.print(key_value_table(f"Benchmark: {result.game}", [
-        (label, escape(value)) for label, value in result.rows()
-    ]))
+    out.print(_summary(f"Benchmark: {result.game}", result.rows()))
     if recorded:
         out.print(escape(recorded))
     return 0
@@ -134,13 +157,12 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
 
 def _show_leaderboard(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.benchmark.leaderboard import leaderboard
-    from tui_gym.cli import print_json
     from tui_gym.core.arena import find_game
 
     game = find_game(args.game).name
     path, standings = leaderboard(game, args.db)
     if args.json:
-        print_json({"game": game, "db": path, "runs": [s.to_json() for s in standings]})
+        _print_json({"game": game, "db": path, "runs": [s.to_json() for s in standings]})
         return 0
     if not standings:
         out.print(escape(f"no benchmark of {game} is recorded in {path} yet"))

@@ -33,7 +33,7 @@ from typing import IO, Any
 import numpy as np
 
 from tui_gym.benchmark.referee import Referee
-from tui_gym.core.arena.games import raw_observation
+from tui_gym.core.arena.games import raw_observation, session_entry
 from tui_gym.core.protocol import parse_request, read_lines
 
 MAX_STRIKES = 3  # decisions in a row not made in time before a player counts as gone
@@ -132,10 +132,8 @@ class AgentPlayer(InProcessPlayer):
     def check_game(self, env_id: str) -> None:
         """PlayerError unless the agent plays `env_id`."""
         if self.session.env_id != env_id:
-            raise PlayerError(
-                f"the agent plays {self.session.profile.title} ({self.session.env_id}), "
-                f"not {env_id}"
-            )
+            title = session_entry(self.session).title
+            raise PlayerError(f"the agent plays {title} ({self.session.env_id}), not {env_id}")
 
     def choose(self, referee: Referee) -> str:
         names = referee.entry.actions

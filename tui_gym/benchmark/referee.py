@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from tui_gym.core.arena import Seat, SeatError, find_game, open_handler
+from tui_gym.core.arena.games import handler_params
 from tui_gym.core.protocol import parse_request
 
 
@@ -62,7 +63,7 @@ class Referee:
             raise ValueError(f"a benchmark needs at least one episode, got {self.episodes}")
         self.entry = find_game(self.game)
         handler = open_handler(self.entry.env_id, self.params, self.seed, self.wrappers)
-        self.params = dict(handler.session.env_kwargs)
+        self.params = handler_params(handler)
         self.seat = Seat(handler, self.entry, self.seed)
         self.fouls = Fouls()
         self.started = 0  # episodes started so far

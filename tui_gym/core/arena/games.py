@@ -100,6 +100,16 @@ def close_handler(handler: JsonlPlayer) -> None:
     handler.session.env.close()
 
 
+def handler_params(handler: JsonlPlayer) -> dict[str, Any]:
+    """The game's parameters a handler plays with, defaults filled in."""
+    return dict(handler.session.env_kwargs)
+
+
+def session_entry(session: Any) -> GameEntry:
+    """The game a session (say, a saved agent's) plays."""
+    return _entry(session.profile)
+
+
 def raw_observation(handler: JsonlPlayer) -> Any:
     """The current observation as the env gave it (for an in-process agent's table)."""
     last = handler.game.last
