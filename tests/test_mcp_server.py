@@ -95,7 +95,8 @@ def test_a_costly_move_is_scored_by_its_exact_regret(server: McpProcess) -> None
 
 
 def test_bad_calls_get_clear_errors_and_the_server_goes_on(server: McpProcess) -> None:
-    assert "unknown env 'chess'" in server.error("start_game", game="chess")
+    unknown = server.error("start_game", game="chess")
+    assert "'chess'" in unknown and "blackjack" in unknown  # the games it knows
     assert "out of range" in server.error("start_game", game="gridworld", parameters={"size": 99})
     assert "not 'colour'" in server.error(
         "start_game", game="gridworld", parameters={"colour": 1}
