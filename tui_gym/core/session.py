@@ -180,19 +180,12 @@ class Session:
 
         Raises ValueError (and changes nothing) for an unknown env or bad arguments.
         """
-        new_id = resolve_env_id(env_id) if env_id is not None else self.env_id
-        profile = profile_for(new_id)
-        if env_kwargs is None:
-            kwargs = self.env_kwargs if new_id == self.env_id else profile.default_kwargs()
-        else:
-            kwargs = env_kwargs
-        kwargs = profile.normalize_kwargs(kwargs)
-        new_choices = tuple(self.choices if choices is None else choices)
+        new_id, kwargs, new_choices, profile = self._rebuild_args(env_id, env_kwargs, choices)
         built = _build(new_id, kwargs, new_choices)
         if profile is not self.profile:
             # Each game learns with its own defaults (GridWorld needs discounting).
             self.hp = profile.default_hyperparameters()
-        keep = built.meaning == self._built.meaning and built.n_actions == self._built.n_actions
+        keep = self._keeps(built)
         old_trainer = self.trainer
         self.env.close()
         self.env_id, self.env_kwargs, self.choices, self.profile = (
@@ -213,6 +206,44 @@ class Session:
         if built.skipped:
             notice += " Not applied: " + "; ".join(reason for _, reason in built.skipped)
         return RebuildReport(keep, notice, built.skipped)
+
+    def rebuild_keeps_agent(
+        self,
+        env_id: str | None = None,
+        env_kwargs: Mapping[str, Any] | None = None,
+        choices: Sequence[WrapperChoice] | None = None,
+    ) -> bool:
+        """Whether `rebuild` with the same arguments would keep the agent (e.g. to ask
+        before a change that resets it). Builds the env to see; changes nothing.
+
+        Raises ValueError for an unknown env or bad arguments, as `rebuild` does.
+        """
+        built = _build(*self._rebuild_args(env_id, env_kwargs, choices)[:3])
+        try:
+            return self._keeps(built)
+        finally:
+            built.env.close()
+
+    def _rebuild_args(
+        self,
+        env_id: str | None,
+        env_kwargs: Mapping[str, Any] | None,
+        choices: Sequence[WrapperChoice] | None,
+    ) -> tuple[str, dict[str, Any], tuple[WrapperChoice, ...], GameProfile]:
+        """The env id, checked arguments, wrappers and profile a rebuild would use."""
+        new_id = resolve_env_id(env_id) if env_id is not None else self.env_id
+        profile = profile_for(new_id)
+        asked: Mapping[str, Any]
+        if env_kwargs is None:
+            asked = self.env_kwargs if new_id == self.env_id else profile.default_kwargs()
+        else:
+            asked = env_kwargs
+        kwargs = profile.normalize_kwargs(asked)
+        return new_id, kwargs, tuple(self.choices if choices is None else choices), profile
+
+    def _keeps(self, built: _Built) -> bool:
+        """Whether the agent can learn on `built`: its keys mean what they meant."""
+        return built.meaning == self._built.meaning and built.n_actions == self._built.n_actions
 
     def reset_agent(self) -> None:
         """A fresh agent (same seed) and fresh statistics."""

@@ -64,6 +64,15 @@ class Advice:
     unwrapped_optimal: tuple[int, ...] = ()  # the unwrapped game's optimum, when not exact
 
 
+class TallyWord(NamedTuple):
+    """One count of the Play view's running tally: its label, the tone of a count
+    above zero ("good", "even", "bad" or "" for none), and whether it shows at zero."""
+
+    label: str
+    tone: str = ""
+    always: bool = True
+
+
 class ScoreRow(NamedTuple):
     """One line of a scoreboard: who ("You", "Agent", "Optimum", "Watched") and how,
     in full and in a few words (`short`, for narrow screens; the full text if empty)."""
@@ -209,6 +218,22 @@ class GameProfile(ABC):
         if last.terminated:
             return f"Episode over after {steps}, return {total}"
         return f"Truncated by the time limit after {steps}, return {total}"
+
+    # The words a running tally counts finished episodes under, in order.
+    tally_words: tuple[TallyWord, ...] = (
+        TallyWord("wins", "good"),
+        TallyWord("draws", "even"),
+        TallyWord("losses", "bad"),
+        TallyWord("truncated", always=False),
+    )
+
+    def tally_word(self, last: PlayStep) -> str:
+        """The `tally_words` label a finished episode counts under."""
+        if last.truncated and not last.terminated:
+            return "truncated"
+        if last.episode_return > 0:
+            return "wins"
+        return "losses" if last.episode_return < 0 else "draws"
 
     def progress_text(self, last: PlayStep, first_info: Mapping[str, Any]) -> str:
         """How far the running episode has got, for people ('' when nothing to say)."""

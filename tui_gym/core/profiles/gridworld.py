@@ -33,6 +33,7 @@ from tui_gym.core.profiles.base import (
     ReferenceMetrics,
     Scope,
     ScoreRow,
+    TallyWord,
     agreement_summary,
     format_reward,
     greedy_policy,
@@ -243,6 +244,11 @@ class GridWorldProfile(GameProfile):
             return Advice((), None, f"shortest path: {names}  ({steps} steps to go; "
                           f"{scope.note.split(': ', 1)[-1]})", unwrapped_optimal=optimal)
         return Advice(optimal, None, f"optimal: {names}  ({steps} steps to go)")
+
+    tally_words = (TallyWord("reached", "good"), TallyWord("timed out", "bad"))
+
+    def tally_word(self, last: PlayStep) -> str:
+        return "reached" if last.terminated else "timed out"
 
     def outcome_text(
         self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]
