@@ -22,7 +22,7 @@ def add_parser(sub: Any, int_type: Any, seed_type: Any, float_type: Any) -> None
         "benchmark",
         help="score a player (a program, random, optimal, a saved agent) on fixed seeds",
         description="Play N episodes of GAME (episode i on seed S+i) with a player and score "
-        "it against the exact optimum: mean return and exact regret per episode with 95%% "
+        "it against the exact optimum: mean return and exact regret per episode with 95% "
         "intervals, agreement with the optimal action, invalid actions, time-outs and time "
         "per decision. A program player speaks the JSON-lines protocol of `tui-gym play GAME "
         "--jsonl`, writing requests on its stdout and reading answers on its stdin; an "
