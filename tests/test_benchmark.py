@@ -147,6 +147,30 @@ def test_a_player_that_hangs_times_out_and_is_ended(tmp_path: Path) -> None:
     assert result.status.endswith("the program was ended") and result.seconds < 30
 
 
+def test_a_player_that_floods_requests_that_are_not_moves_times_out(tmp_path: Path) -> None:
+    cmd = _script(tmp_path, "flood.py", PLAYS_STICK + """
+    ask({"cmd": "reset"})
+    while True:
+        ask({"cmd": "render"})
+    """)
+    result = run_benchmark("blackjack", ProcessPlayer(cmd), episodes=2, seed=0,
+                           decision_timeout=0.2)
+    assert result.fouls.timeouts == 3 and result.episodes == 2
+    assert result.status.endswith("the program was ended")
+
+
+def test_a_player_that_stops_reading_is_done_for(tmp_path: Path) -> None:
+    cmd = _script(tmp_path, "deaf.py", PLAYS_STICK + """
+    ask({"cmd": "reset"})
+    while True:  # requests without ever reading an answer: the pipe back fills up
+        print('{"cmd": "render"}', flush=True)
+    """)
+    result = run_benchmark("blackjack", ProcessPlayer(cmd), episodes=2, seed=0,
+                           decision_timeout=0.2)
+    assert "it stopped reading its input in episode 1 of 2" in result.status
+    assert result.episodes == 2 and result.fouls.defaulted == 3
+
+
 def test_players_that_cannot_start_say_why(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

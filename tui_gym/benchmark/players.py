@@ -274,7 +274,10 @@ class ProcessPlayer(Player):
         pending = time.monotonic()
         allowance = max(limit, STARTUP_S)
         while not referee.finished:
-            received, item = program.next_line(pending + allowance - time.monotonic())
+            left = pending + allowance - time.monotonic()
+            # Past the deadline it is a time-out, however many lines wait (a flood of
+            # requests that are not moves must not hold the clock).
+            received, item = program.next_line(left) if left > 0 else (0.0, _TIMEOUT)
             if item is _TIMEOUT:
                 referee.timeout(limit)
                 owed += 1
