@@ -169,6 +169,7 @@ def test_a_player_that_stops_reading_is_done_for(tmp_path: Path) -> None:
                            decision_timeout=0.2)
     assert "it stopped reading its input in episode 1 of 2" in result.status
     assert result.episodes == 2 and result.fouls.defaulted == 3
+    assert result.status.endswith("the program was ended")
 
 
 def test_players_that_cannot_start_say_why(

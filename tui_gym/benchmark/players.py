@@ -40,7 +40,6 @@ MAX_STRIKES = 3  # decisions in a row not made in time before a player counts as
 STARTUP_S = 10.0  # a program's first request may take this long (its start-up)
 EXIT_GRACE_S = 2.0  # after the last episode, time for a program to exit on end of input
 STDERR_LINES = 5  # lines of a program's stderr kept for the summary
-HUNG = "it made no decision"
 
 
 class PlayerError(ValueError):
@@ -252,8 +251,10 @@ class ProcessPlayer(Player):
                 while not referee.finished:
                     referee.play_default(gone)
         finally:
-            # A program that stopped answering is ended at once; others may exit on their own.
-            code = program.stop(0.0 if gone.startswith(HUNG) else EXIT_GRACE_S)
+            # A program done for but still running is ended at once; others may exit on
+            # their own once their input ends.
+            running = program.process.poll() is None
+            code = program.stop(0.0 if gone and running else EXIT_GRACE_S)
         outcome.exit_code = code
         outcome.stderr_tail = "\n".join(program.stderr)
         if gone and code is None:
@@ -284,7 +285,7 @@ class ProcessPlayer(Player):
                 strikes += 1
                 pending, allowance = time.monotonic(), limit
                 if strikes >= MAX_STRIKES:
-                    return f"{HUNG} within {limit:g} s {strikes} times in a row"
+                    return f"it made no decision within {limit:g} s {strikes} times in a row"
                 continue
             if item is _EOF:  # it exited, or closed its output: which, it says by exiting
                 try:
