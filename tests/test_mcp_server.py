@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 
 import pytest
@@ -145,6 +146,23 @@ def test_the_number_of_games_is_bounded(no_hints: McpProcess) -> None:
     assert third > second
     for game_id in (second, third):
         no_hints.data("end_game", game_id=game_id)
+
+
+def test_an_idle_game_expires_over_stdio() -> None:
+    server = McpProcess("--max-games", "1", "--idle-timeout", "0.3")
+    try:
+        idle = server.data("start_game", game="blackjack", seed=1)["game_id"]
+        deadline = time.monotonic() + 30
+        while True:  # the one place frees once the idle game expires
+            result = server.call("start_game", game="gridworld", seed=1)
+            if not result.is_error:
+                break
+            assert "the most this server plays at once" in result.content[0].text
+            assert time.monotonic() < deadline, "the idle game never expired"
+        assert "expired after 0.3 s without a call" in server.error("observe", game_id=idle)
+    finally:
+        server.close()
+    assert "Traceback" not in server.stderr_text()
 
 
 def test_idle_games_expire_on_the_tables_clock() -> None:
