@@ -83,6 +83,23 @@ def test_the_example_player_through_the_cli_and_the_leaderboard(
     assert "best first" in out and "optimal" in out
 
 
+def test_record_writes_every_episode_of_a_benchmark(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from tui_gym.core.recording import read_recording
+
+    path = tmp_path / "bench.jsonl"
+    code, _, err = _cli(capsys, "benchmark", "blackjack", "--agent", "random", "--episodes",
+                        "5", "--seed", "10", "--no-record", "--record", str(path))
+    assert code == 0, err
+    recording = read_recording(path)
+    assert recording.message is None and len(recording.episodes) == 5
+    assert [e.seed for e in recording.episodes] == [10, 11, 12, 13, 14]
+    code, _, err = _cli(capsys, "benchmark", "blackjack", "--agent", "random", "--no-record",
+                        "--record", str(tmp_path / "no" / "such.jsonl"))
+    assert code == 2 and "there is no folder" in err
+
+
 def test_a_game_without_exact_values_says_regret_is_unavailable() -> None:
     result = run_benchmark("gridworld", ProcessPlayer(f"{sys.executable} {EXAMPLE}"),
                            episodes=2, seed=0, params={"size": 3})

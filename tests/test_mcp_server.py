@@ -13,6 +13,8 @@ from collections.abc import Iterator
 import pytest
 
 pytest.importorskip("mcp")
+# One worker runs this module, so each server process below starts once.
+pytestmark = pytest.mark.xdist_group("mcp_server")
 
 from tests.mcp_support import McpInProcess, McpProcess  # noqa: E402
 from tui_gym.core.arena import GameTable, catalog  # noqa: E402

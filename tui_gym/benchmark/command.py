@@ -56,6 +56,9 @@ def add_parser(sub: Any, int_type: Any, seed_type: Any, float_type: Any) -> None
     bench.add_argument("--no-record", action="store_true",
                        help="do not record the result in the run history")
     bench.add_argument("--json", action="store_true", help="print one JSON object")
+    from tui_gym.replay_command import add_record_option
+
+    add_record_option(bench)
 
 
 def _params(pairs: list[str]) -> dict[str, str]:
@@ -129,6 +132,16 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.benchmark.leaderboard import record
     from tui_gym.benchmark.run import run_benchmark
 
+    recorder = None
+    if args.record is not None:
+        from tui_gym.replay_command import check_record_path, open_recorder
+
+        check_record_path(args.record)
+        path, seed = args.record, args.bench_seed
+
+        def recorder(session: Any) -> Any:
+            return open_recorder(path, session, source="benchmark", seed=seed)
+
     player, params, wrappers = _player(args, args.game)
     if args.name is not None:
         if not args.name.strip():
@@ -137,7 +150,7 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
     result = run_benchmark(
         args.game, player, episodes=args.episodes, seed=args.bench_seed, params=params,
         wrappers=wrappers, decision_timeout=args.decision_timeout,
-        allow_hints=args.allow_hints,
+        allow_hints=args.allow_hints, recorder=recorder,
     )
     recorded = ""
     if not args.no_record:

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from contextlib import AbstractContextManager, ExitStack
 from typing import Any
 
 import numpy as np
@@ -12,6 +13,7 @@ from tui_gym.benchmark.players import Player
 from tui_gym.benchmark.referee import Referee
 from tui_gym.benchmark.results import BenchmarkResult
 from tui_gym.core.arena import EpisodeScore
+from tui_gym.core.arena.games import attach_recorder
 
 
 def run_benchmark(
@@ -24,8 +26,10 @@ def run_benchmark(
     wrappers: Sequence[str] = (),
     decision_timeout: float = 5.0,
     allow_hints: bool = False,
+    recorder: Callable[[Any], AbstractContextManager[Any]] | None = None,
 ) -> BenchmarkResult:
-    """Play `episodes` episodes of `game` (episode i on seed `seed + i`) with `player`."""
+    """Play `episodes` episodes of `game` (episode i on seed `seed + i`) with `player`;
+    `recorder`, given the game's session, opens a recorder that writes every episode."""
     if not decision_timeout > 0:
         raise ValueError(f"the decision time limit must be positive, got {decision_timeout}")
     referee = Referee(game, episodes, seed, dict(params or {}), tuple(wrappers), allow_hints)
@@ -33,7 +37,11 @@ def run_benchmark(
     referee.seat.score.history = played
     started = time.perf_counter()
     try:
-        outcome = player.play(referee, decision_timeout)
+        with ExitStack() as stack:
+            if recorder is not None:
+                handler = referee.seat.handler
+                attach_recorder(handler, stack.enter_context(recorder(handler.session)))
+            outcome = player.play(referee, decision_timeout)
     finally:
         referee.close()
     seconds = time.perf_counter() - started

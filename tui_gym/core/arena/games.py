@@ -114,3 +114,8 @@ def raw_observation(handler: JsonlPlayer) -> Any:
     """The current observation as the env gave it (for an in-process agent's table)."""
     last = handler.game.last
     return None if last is None else last.observation
+
+
+def attach_recorder(handler: JsonlPlayer, recorder: Any) -> None:
+    """Have a recorder (`tui_gym.core.recording`) write every episode the handler plays."""
+    handler.game.recorder = recorder
