@@ -51,7 +51,11 @@ def run_benchmark(
     note = ""
     if not exact:
         why = "; ".join(sorted(score.notes)) or "the game gives no exact action values"
-        note = f"{why} ({score.unscored:,} of {score.decisions:,} decisions)"
+        counted = [f"{score.unscored:,} of {score.decisions:,} decisions"] if score.unscored \
+            else []
+        if score.unjudged:
+            counted.append(f"{score.unjudged:,} moves not judged")
+        note = f"{why} ({'; '.join(counted)})"
     return BenchmarkResult(
         game=referee.entry.name,
         env_id=referee.entry.env_id,
