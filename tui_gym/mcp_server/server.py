@@ -13,12 +13,14 @@ finished episodes only), so a player cannot read the optimum off its answers.
 
 from __future__ import annotations
 
+import json
 from typing import Annotated, Any
 
 import anyio
 from mcp.server.mcpserver import MCPServer
 from mcp.server.mcpserver.exceptions import ToolError
 from mcp.server.stdio import stdio_server
+from mcp.types import CallToolResult, TextContent
 from pydantic import Field
 
 from tui_gym import __version__
@@ -33,6 +35,14 @@ new episode; score gives the returns per episode and the exact decision regret (
 return each move gave up against the optimal move). Idle games expire."""
 
 GameId = Annotated[int, Field(description="the id start_game returned")]
+
+
+def _result(data: dict[str, Any]) -> CallToolResult:
+    """A tool's answer: the data as structured content, and as compact JSON text for
+    clients that read text (no output schema, so neither side re-validates it)."""
+    return CallToolResult(
+        content=[TextContent(type="text", text=json.dumps(data))], structured_content=data
+    )
 
 
 def _refused(exc: Exception) -> ToolError:
@@ -60,14 +70,14 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
         return data
 
     @server.tool()
-    async def list_games() -> dict[str, Any]:
+    async def list_games() -> CallToolResult:
         """The games: name, parameters (type, default, range) and action names."""
-        return {
+        return _result({
             "games": [entry.to_json() for entry in catalog()],
             "hints": hints,
             "max_games": table.max_games,
             "idle_timeout_seconds": table.idle_timeout,
-        }
+        })
 
     @server.tool()
     async def start_game(
@@ -84,25 +94,25 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
             list[str] | None,
             Field(description="Gymnasium wrappers as 'Name' or 'Name:key=value', innermost first"),
         ] = None,
-    ) -> dict[str, Any]:
+    ) -> CallToolResult:
         """Start a game and deal its first episode; its game id and first observation."""
         try:
             game_id, seat = table.start(game, parameters, seed, wrappers or ())
         except (TableError, SeatError, ValueError) as exc:
             raise _refused(exc) from None
-        return state(game_id, seat)
+        return _result(state(game_id, seat))
 
     @server.tool()
-    async def observe(game_id: GameId) -> dict[str, Any]:
+    async def observe(game_id: GameId) -> CallToolResult:
         """The state: as data and as text, the legal actions, and whether the episode is done."""
         seat = seat_of(game_id)
-        return state(game_id, seat)
+        return _result(state(game_id, seat))
 
     @server.tool()
     async def step(
         game_id: GameId,
         action: Annotated[int | str, Field(description="an action's name or number")],
-    ) -> dict[str, Any]:
+    ) -> CallToolResult:
         """Play one action; returns the new state, the reward and whether the episode is done."""
         seat = seat_of(game_id)
         try:
@@ -113,7 +123,7 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
         data["reward"] = answer["reward"]
         if hints:
             data["verdict"] = verdict.to_json()
-        return data
+        return _result(data)
 
     @server.tool()
     async def reset(
@@ -121,42 +131,42 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
         seed: Annotated[
             int | None, Field(description="seed of the new episode (continues if omitted)", ge=0)
         ] = None,
-    ) -> dict[str, Any]:
+    ) -> CallToolResult:
         """Deal a new episode of the game (an unfinished one is left out of the score)."""
         seat = seat_of(game_id)
         try:
             seat.reset(seed)
         except SeatError as exc:
             raise _refused(exc) from None
-        return state(game_id, seat)
+        return _result(state(game_id, seat))
 
     @server.tool()
-    async def hint(game_id: GameId) -> dict[str, Any]:
+    async def hint(game_id: GameId) -> CallToolResult:
         """The exact optimum here: the optimal actions and each action's exact expected return."""
         if not hints:
             raise ToolError("hints are off on this server (it was started with --no-hints)")
         seat = seat_of(game_id)
         try:
-            return {"game_id": game_id, **seat.hint()}
+            return _result({"game_id": game_id, **seat.hint()})
         except SeatError as exc:
             raise _refused(exc) from None
 
     @server.tool()
-    async def score(game_id: GameId) -> dict[str, Any]:
+    async def score(game_id: GameId) -> CallToolResult:
         """Returns per episode, exact decision regret so far, decisions and agreement."""
         seat = seat_of(game_id)
-        return {"game_id": game_id, "game": seat.entry.name,
-                **seat.score.to_json(running=hints)}
+        return _result({"game_id": game_id, "game": seat.entry.name,
+                        **seat.score.to_json(running=hints)})
 
     @server.tool()
-    async def end_game(game_id: GameId) -> dict[str, Any]:
+    async def end_game(game_id: GameId) -> CallToolResult:
         """End a game and free its place; returns its final score."""
         try:
             seat = table.end(game_id)
         except TableError as exc:
             raise _refused(exc) from None
-        return {"game_id": game_id, "game": seat.entry.name,
-                **seat.score.to_json(running=hints)}
+        return _result({"game_id": game_id, "game": seat.entry.name,
+                        **seat.score.to_json(running=hints)})
 
     return server
 
