@@ -1,4 +1,4 @@
-"""The Textual app: a Play view, a Train view and a wrapper side panel over one Session.
+"""The Textual app: Play, Train and Compare views and a wrapper side panel over one Session.
 
 `TuiGymApp` owns the `Session` (env, wrappers, agent, trainer) and the runner
 that trains it (in a child process, as `tui-gym` opens it, or on a worker
@@ -48,6 +48,7 @@ from tui_gym.core.session import Session
 from tui_gym.core.storage import StorageError
 from tui_gym.core.training import continue_run
 from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.ui.compare_view import CompareView
 from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.file_screen import FileScreen
 from tui_gym.ui.help_screen import HelpScreen
@@ -91,6 +92,8 @@ class TuiGymApp(App[int]):
         Binding("minus,underscore", "slower", "Slower", key_display="-"),
         Binding("p", "show_view('play')", "Play", tooltip="Play the game yourself"),
         Binding("t", "show_view('train')", "Train", tooltip="Watch the agent learn"),
+        Binding("v", "show_view('compare')", "Compare",
+                tooltip="Compare learners across seeds; the runs recorded for this game"),
         Binding("question_mark,f1", "help", "Help", key_display="?"),
         Binding("q", "quit", "Quit"),
         Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
@@ -116,6 +119,7 @@ class TuiGymApp(App[int]):
         standalone: bool = False,
         record: str | Path | None = None,
         replay: Recording | None = None,
+        db: str | Path | None = None,
     ) -> None:
         """`runner` is "thread" (train on a worker thread) or "process" (a child process;
         what `tui-gym` opens). `tune_gc` applies `tune_gc_for_ui` at mount (for a
@@ -125,7 +129,9 @@ class TuiGymApp(App[int]):
         terminal (`run_app`): termination signals end it cleanly, and a crash's
         traceback is left to `run_app` to log instead of being printed.
         `record` records the person's games to that file from the start (ctrl+r
-        turns recording on and off); `replay` opens on a recording's replay."""
+        turns recording on and off); `replay` opens on a recording's replay. `db` is the
+        run history the Compare view reads and records into (None: `TUI_GYM_DB`, else the
+        user's data folder)."""
         super().__init__()
         self.tune_gc = tune_gc
         self.gc_seconds = gc_seconds or (YOUNG_GC_SECONDS, FULL_GC_SECONDS)
@@ -147,6 +153,7 @@ class TuiGymApp(App[int]):
         self.recording = RecordingSwitch(record, on_failure=self._recording_failed)
         self._record_at_start = record is not None
         self._replay = replay
+        self.db = db
 
     # --- layout ------------------------------------------------------------
     def get_default_screen(self) -> Screen:
@@ -159,6 +166,7 @@ class TuiGymApp(App[int]):
             with ContentSwitcher(initial="play", id="views"):
                 yield PlayView(id="play")
                 yield TrainView(id="train")
+                yield CompareView(id="compare", db=self.db)
             yield SidePanel(id="side")
         yield KeyBar()
 
@@ -202,12 +210,16 @@ class TuiGymApp(App[int]):
         return self.query_one(TrainView)
 
     @property
+    def compare_view(self) -> CompareView:
+        return self.query_one(CompareView)
+
+    @property
     def side_panel(self) -> SidePanel:
         return self.query_one(SidePanel)
 
     @property
     def current_view(self) -> str:
-        """"play" or "train" (asked often: by every binding check and every tick)."""
+        """"play", "train" or "compare" (asked often: by every binding check and every tick)."""
         switcher = self._switcher
         if switcher is None or not switcher.is_attached:  # not yet, or being taken apart
             return "play"
@@ -245,9 +257,15 @@ class TuiGymApp(App[int]):
     def action_show_view(self, view: str) -> None:
         if self._switcher is None:
             return
+        if view != "compare" and self.compare_view.stop_comparison():
+            self.notify("Comparison stopped: what finished is recorded.", timeout=4)
         self._switcher.current = view
+        self._main_screen.set_class(view == "compare", "-view-compare")
         if view == "play":
             self.play_view.focus_board()
+        elif view == "compare":
+            self.compare_view.reload(fresh=True)
+            self.compare_view.focus_default()
         else:
             self._last_version = -1
             self.train_view.focus_default()
@@ -262,12 +280,15 @@ class TuiGymApp(App[int]):
         self.switch_game(profile)
 
     def action_focus_wrappers(self) -> None:
+        self._main_screen.remove_class("-view-compare")  # the compact Compare view hides it
         self.side_panel.focus_wrappers()
 
     def action_focus_view(self) -> None:
         """Give the keyboard back to the view shown (its board, or the heatmap)."""
         if self.current_view == "play":
             self.play_view.focus_board()
+        elif self.current_view == "compare":
+            self.compare_view.focus_default()
         else:
             self.train_view.focus_default()
 
@@ -277,6 +298,7 @@ class TuiGymApp(App[int]):
             self.action_focus_view()
 
     def on_side_panel_left(self, message: SidePanel.Left) -> None:
+        self._main_screen.set_class(self.current_view == "compare", "-view-compare")
         self.action_focus_view()
 
     # --- one session per game -------------------------------------------------
@@ -351,6 +373,7 @@ class TuiGymApp(App[int]):
         self._last_version = -1
         self.play_view.reload()
         self.train_view.reload()
+        self.compare_view.reload()
         self.side_panel.reload()
 
     def _episodes_trained(self) -> int:
@@ -704,7 +727,7 @@ class TuiGymApp(App[int]):
         """Every key, grouped by where it works: (section, [(key, what it does)])."""
         sections = [
             ("Everywhere", [
-                ("p / t", "Play view / Train view"),
+                ("p / t / v", "Play view / Train view / Compare view"),
                 ("b / g", "switch to Blackjack / GridWorld (each keeps its agent, "
                           "settings and curves)"),
                 ("w / W", "focus the wrapper panel (W while the GridWorld board has focus)"),
@@ -726,6 +749,7 @@ class TuiGymApp(App[int]):
                 ("+ / -", "faster / slower (animated ... max)"),
                 *self.train_view.key_help(),
             ]),
+            ("Compare", self.compare_view.key_help()),
             ("Side panel", [
                 ("tab / shift+tab", "move between fields"),
                 ("space / enter", "tick a wrapper, press a button, pick a game or an "
@@ -752,6 +776,8 @@ class TuiGymApp(App[int]):
         commands = [
             ("Play view", "Play the game yourself", lambda: self.action_show_view("play")),
             ("Train view", "Watch the agent learn", lambda: self.action_show_view("train")),
+            ("Compare view", "Compare learners across seeds; this game's recorded runs",
+             lambda: self.action_show_view("compare")),
             *(
                 (f"Game: {p.title}", p.description,
                  lambda name=p.name: self.action_switch_game(name))
@@ -780,6 +806,7 @@ class TuiGymApp(App[int]):
 
     async def action_quit(self) -> None:
         self.recording.turn_off()
+        self.compare_view.stop_comparison()  # it records what finished while the app ends
         self.exit(0)  # the runner closes at unmount, without holding the screen up
 
     def on_unmount(self) -> None:
