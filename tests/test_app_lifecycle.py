@@ -41,7 +41,7 @@ LEAVE_ALT_SCREEN = b"\x1b[?1049l"
 MOUSE_OFF = b"\x1b[?1000l"
 ANSI = re.compile(r"\x1b(\[[0-9;?<>=]*[ -/]*[@-~]|[@-_])")
 FRAME_SECONDS = 0.25  # the most the app may spend in a runner call: a frame (1/15 s) and slack
-KEY_SECONDS = 2.5  # a whole key press, redrawing included, on a loaded machine: the freezes
+KEY_SECONDS = 4.0  # a whole key press, redrawing included, on a loaded machine: the freezes
 # were 5 s (thread runner) and 10 s (process runner)
 
 

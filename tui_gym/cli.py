@@ -146,6 +146,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--env", default="blackjack", help="game to open (default: blackjack)")
     parser.add_argument("--seed", type=_seed, default=0, help="seed for every random thing")
     parser.add_argument("--load", metavar="PATH", help="open a saved agent")
+    parser.add_argument("--record", type=_path, metavar="PATH",
+                        help="record your games in the app to this file (ctrl+r: on/off)")
     parser.add_argument(
         "--runner", choices=("process", "thread"), default="process",
         help="train in a child process (default) or on a thread of the app's process",
@@ -223,6 +225,12 @@ def build_parser() -> argparse.ArgumentParser:
     play.add_argument("--sab", action="store_true", help="Blackjack: Sutton & Barto rules")
     play.add_argument("--natural", action="store_true", help="Blackjack: 1.5 for a natural")
     play.add_argument("--wrapper", action="append", default=[], metavar="SPEC")
+    from tui_gym.replay_command import add_record_option, add_replay_parser
+    from tui_gym.web import add_serve_parser
+
+    add_record_option(play)
+    add_replay_parser(sub)
+    add_serve_parser(sub)
 
     screenshots = sub.add_parser("screenshots", help="write the app's SVG screenshots")
     screenshots.add_argument("directory", nargs="?", default="screenshots", metavar="DIR")
@@ -271,8 +279,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command is None:
             return _run_app(args)
         from tui_gym.commands import COMMANDS
+        from tui_gym.replay_command import REPLAY_COMMANDS
+        from tui_gym.web import SERVE_COMMANDS
 
-        code = COMMANDS[args.command](args, out)
+        code = {**COMMANDS, **REPLAY_COMMANDS, **SERVE_COMMANDS}[args.command](args, out)
         sys.stdout.flush()  # a closed pipe shows here, not at exit
         return code
     except BrokenPipeError:
@@ -311,7 +321,12 @@ def _run_app(args: argparse.Namespace) -> int:
         from tui_gym.ui.app import run_app
     except ImportError as exc:  # pragma: no cover - only without the UI installed
         raise CliError(f"the app is not available ({exc}); try `tui-gym --help`") from None
-    return run_app(env_id=env_id, seed=args.seed, load=args.load, runner=args.runner)
+    if args.record is not None:
+        from tui_gym.replay_command import check_record_path
+
+        check_record_path(args.record)
+    return run_app(env_id=env_id, seed=args.seed, load=args.load, runner=args.runner,
+                   record=args.record)
 
 
 def print_json(data: dict[str, Any]) -> None:

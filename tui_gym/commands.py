@@ -471,7 +471,14 @@ def cmd_play(args: argparse.Namespace, out: Console) -> int:
     if session.skipped:
         reasons = "; ".join(reason for _, reason in session.skipped)
         raise CliError(f"wrapper does not fit {env_id}: {reasons}")
-    return serve(JsonlPlayer(session, seed=args.play_seed), sys.stdin.buffer, sys.stdout)
+    player = JsonlPlayer(session, seed=args.play_seed)
+    if args.record is None:
+        return serve(player, sys.stdin.buffer, sys.stdout)
+    from tui_gym.replay_command import open_recorder
+
+    with open_recorder(args.record, session, source="play", seed=args.play_seed) as recorder:
+        player.game.recorder = recorder
+        return serve(player, sys.stdin.buffer, sys.stdout)
 
 
 def cmd_screenshots(args: argparse.Namespace, out: Console) -> int:

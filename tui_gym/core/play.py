@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from tui_gym.core.recording.recorder import GameRecorder
     from tui_gym.core.session import Session
 
 
@@ -148,6 +149,7 @@ class HumanGame:
         self.last: PlayStep | None = None
         self.first_info: dict[str, Any] = {}
         self._seeded = False
+        self.recorder: GameRecorder | None = None  # told of every reset and move when set
 
     def close(self) -> None:
         self.env.close()
@@ -164,6 +166,8 @@ class HumanGame:
         obs, info = self.env.reset(seed=seed, options=options)
         self.first_info = dict(info)
         self.last = PlayStep(obs, 0.0, False, False, dict(info), 0.0, 0)
+        if self.recorder is not None:
+            self.recorder.game_reset(self, seed)
         return self.last
 
     def step(self, action: int | str) -> PlayStep:
@@ -184,6 +188,8 @@ class HumanGame:
         )
         if self.last.done:
             self.tally.add(total)
+        if self.recorder is not None:
+            self.recorder.game_step(self)
         return self.last
 
     def scene(self) -> dict[str, Any]:

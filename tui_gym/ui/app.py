@@ -41,6 +41,8 @@ from textual.widget import Widget
 from textual.widgets import ContentSwitcher, Header
 
 from tui_gym.core.profiles import PROFILES, GameProfile, profile_for
+from tui_gym.core.recording import Recording
+from tui_gym.core.recording.switch import RecordingSwitch
 from tui_gym.core.runner import SPEEDS, make_runner
 from tui_gym.core.session import Session
 from tui_gym.core.storage import StorageError
@@ -50,6 +52,7 @@ from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.file_screen import FileScreen
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.play_view import PlayView
+from tui_gym.ui.replay_screen import ReplayScreen
 from tui_gym.ui.side_panel import SidePanel
 from tui_gym.ui.too_small_screen import TooSmallScreen
 from tui_gym.ui.train_view import TrainView
@@ -95,6 +98,7 @@ class TuiGymApp(App[int]):
         Binding("g", "switch_game('gridworld')", "GridWorld"),
         Binding("ctrl+s", "save_agent", "Save agent", show=False),
         Binding("ctrl+o", "load_agent", "Load agent", show=False),
+        Binding("ctrl+r", "toggle_recording", "Record", show=False),
     ]
     TRAIN_ACTIONS = frozenset(
         {"toggle_training", "one_episode", "one_step", "reset_agent", "request_reset", "faster",
@@ -110,6 +114,8 @@ class TuiGymApp(App[int]):
         tune_gc: bool = False,
         gc_seconds: tuple[float, float] | None = None,
         standalone: bool = False,
+        record: str | Path | None = None,
+        replay: Recording | None = None,
     ) -> None:
         """`runner` is "thread" (train on a worker thread) or "process" (a child process;
         what `tui-gym` opens). `tune_gc` applies `tune_gc_for_ui` at mount (for a
@@ -117,7 +123,9 @@ class TuiGymApp(App[int]):
         collecting every `gc_seconds` (young, full; default `YOUNG_GC_SECONDS`,
         `FULL_GC_SECONDS`). `standalone` is for an app that owns its process and
         terminal (`run_app`): termination signals end it cleanly, and a crash's
-        traceback is left to `run_app` to log instead of being printed."""
+        traceback is left to `run_app` to log instead of being printed.
+        `record` records the person's games to that file from the start (ctrl+r
+        turns recording on and off); `replay` opens on a recording's replay."""
         super().__init__()
         self.tune_gc = tune_gc
         self.gc_seconds = gc_seconds or (YOUNG_GC_SECONDS, FULL_GC_SECONDS)
@@ -136,6 +144,9 @@ class TuiGymApp(App[int]):
         self._last_version = -1
         self._was_running = False
         self._switcher: ContentSwitcher | None = None
+        self.recording = RecordingSwitch(record, on_failure=self._recording_failed)
+        self._record_at_start = record is not None
+        self._replay = replay
 
     # --- layout ------------------------------------------------------------
     def get_default_screen(self) -> Screen:
@@ -161,6 +172,10 @@ class TuiGymApp(App[int]):
         self.set_interval(1 / REFRESH_HZ, self._tick)
         self._apply_size(self.size.width, self.size.height)
         self.call_after_refresh(self._focus_at_start)
+        if self._record_at_start:
+            self.call_after_refresh(self.action_toggle_recording)
+        if self._replay is not None:
+            self.push_screen(ReplayScreen(self._replay))
 
     def on_resize(self, event: Resize) -> None:
         self._apply_size(event.size.width, event.size.height)
@@ -545,6 +560,34 @@ class TuiGymApp(App[int]):
             return
         self.notify(f"Screenshot saved to {path}", title="Screenshot")
 
+    # --- recording ---------------------------------------------------------------
+    def action_toggle_recording(self) -> None:
+        """Record the person's games to a file, or stop."""
+        game = self.play_view.game
+        if self.recording.on:
+            path = self.recording.turn_off()
+            self.play_view.show_recording("")
+            self.notify(f"Recording stopped: {path}", timeout=4)
+            return
+        if game is None:
+            return
+        try:
+            path = self.recording.turn_on(game)
+        except OSError as exc:
+            self.notify(f"Cannot record to {exc.filename or self.recording.path}: "
+                        f"{exc.strerror or exc}", severity="error", title="Not recording")
+            return
+        self.play_view.show_recording(path.name)
+        noun = game.profile.episode_noun
+        when = "" if self.recording.recorder and self.recording.recorder.episode_open else (
+            f" from the next {noun}"
+        )
+        self.notify(f"Recording your {noun}s to {path}{when} (ctrl+r stops).", timeout=5)
+
+    def _recording_failed(self, message: str) -> None:
+        self.play_view.show_recording("")
+        self.notify(message, severity="error", title="Not recording", timeout=10)
+
     # --- rebuilding --------------------------------------------------------
     def rebuild(
         self,
@@ -669,6 +712,8 @@ class TuiGymApp(App[int]):
                 ("ctrl+s", "save the agent to a file you name (asks before replacing one)"),
                 ("ctrl+o", "load an agent from a file you name"),
                 ("? / F1", "this help"),
+                ("ctrl+r", "record your games to a file / stop "
+                           "(tui-gym replay FILE plays it back)"),
                 ("ctrl+p", "command palette (also: screenshot, theme)"),
                 ("q", "quit"),
             ]),
@@ -720,6 +765,8 @@ class TuiGymApp(App[int]):
             ("Keys", "Every key tui-gym answers to (? or F1)", self.action_help),
             ("Screenshot", "Save an SVG picture of the screen in the current folder",
              self.action_save_screenshot),
+            ("Record games", "Record your games to a file, or stop (ctrl+r)",
+             self.action_toggle_recording),
         ]
         for title, help_text, callback in commands:
             yield SystemCommand(title, help_text, callback)
@@ -730,9 +777,11 @@ class TuiGymApp(App[int]):
         self.action_toggle_training()
 
     async def action_quit(self) -> None:
+        self.recording.turn_off()
         self.exit(0)  # the runner closes at unmount, without holding the screen up
 
     def on_unmount(self) -> None:
+        self.recording.turn_off()
         self.runner.close(wait=False)  # `run_app` waits for it once the terminal is back
         loop = asyncio.get_running_loop()
         for signum in self._signals:
@@ -835,13 +884,18 @@ EXIT_CRASH = 1
 
 
 def run_app(
-    env_id: str = "Blackjack-v1", seed: int = 0, load: str | None = None, runner: str = "process"
+    env_id: str = "Blackjack-v1", seed: int = 0, load: str | None = None, runner: str = "process",
+    *, session: Session | None = None, record: str | None = None,
+    replay: Recording | None = None,
 ) -> int:
-    """Open the app (from a saved agent with `load`); returns the exit code."""
+    """Open the app (from a saved agent with `load`, or on `session`); returns the exit code.
+    `record` records the person's games to that file; `replay` opens on a recording."""
     gc_seconds = gc_seconds_from_env()
-    session = Session.load(load) if load else Session(env_id=env_id, seed=seed)
+    if session is None:
+        session = Session.load(load) if load else Session(env_id=env_id, seed=seed)
     return run_standalone(
-        TuiGymApp(session, runner=runner, tune_gc=True, gc_seconds=gc_seconds, standalone=True)
+        TuiGymApp(session, runner=runner, tune_gc=True, gc_seconds=gc_seconds, standalone=True,
+                  record=record, replay=replay)
     )
 
 
