@@ -270,8 +270,6 @@ class Learner(ABC):
         """Validated hyperparameters for this algorithm (defaults for what is missing)."""
         if isinstance(values, Settings) and values.schema == cls.params:
             return values
-        if values is not None and not isinstance(values, Mapping):
-            values = values.to_dict()  # e.g. the older `Hyperparameters` dataclass
         return Settings(cls.params, values)
 
     @classmethod

@@ -90,7 +90,7 @@ class TuiGymApp(App[int]):
         Binding("plus,equals_sign", "faster", "Faster", key_display="+"),
         Binding("minus,underscore", "slower", "Slower", key_display="-"),
         Binding("p", "show_view('play')", "Play", tooltip="Play the game yourself"),
-        Binding("t", "show_view('train')", "Train", tooltip="Watch Q-learning train"),
+        Binding("t", "show_view('train')", "Train", tooltip="Watch the agent learn"),
         Binding("question_mark,f1", "help", "Help", key_display="?"),
         Binding("q", "quit", "Quit"),
         Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
@@ -728,7 +728,9 @@ class TuiGymApp(App[int]):
             ]),
             ("Side panel", [
                 ("tab / shift+tab", "move between fields"),
-                ("space / enter", "tick a wrapper, press a button"),
+                ("space / enter", "tick a wrapper, press a button, pick a game or an "
+                                  "algorithm (another algorithm asks first once the agent "
+                                  "has trained)"),
                 ("enter", "apply a parameter"),
                 ("[ / ]", "move the focused wrapper in / out in the chain (first = innermost)"),
                 ("esc", "back to the view; an edit not applied with enter is dropped"),
@@ -749,7 +751,7 @@ class TuiGymApp(App[int]):
                 yield command
         commands = [
             ("Play view", "Play the game yourself", lambda: self.action_show_view("play")),
-            ("Train view", "Watch Q-learning learn", lambda: self.action_show_view("train")),
+            ("Train view", "Watch the agent learn", lambda: self.action_show_view("train")),
             *(
                 (f"Game: {p.title}", p.description,
                  lambda name=p.name: self.action_switch_game(name))

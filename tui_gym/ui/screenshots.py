@@ -69,6 +69,19 @@ async def _gridworld_train(app, pilot) -> None:
     await _train_view(app, pilot, 2_000)
 
 
+async def _step_by_step(app, pilot) -> None:
+    await _train_view(app, pilot, 300)
+    for _ in range(2):  # a step into the episode, so the board and the panel have history
+        await pilot.press("n")
+        await pilot.pause()
+        app.runner.wait_idle(10.0)
+    await pilot.pause()
+    app.train_view.show_snapshot(app.runner.latest, app.runner)
+    await pilot.pause()
+    app.train_view.step_panel.scroll_visible(animate=False)
+    await pilot.pause()
+
+
 async def _wrappers(app, pilot) -> None:
     await pilot.press("w")
     await pilot.pause()
@@ -90,6 +103,8 @@ SCENARIOS: tuple[Scenario, ...] = (
              lambda: Session("gridworld", hp=QLearning.hyperparameters(
                  discount=0.95, learning_rate=0.1, episodes=20_000), seed=0),
              _gridworld_train),
+    Scenario("step-by-step.svg", "GridWorld: one SARSA update, step by step",
+             lambda: Session("gridworld", seed=3, algorithm="sarsa"), _step_by_step),
     Scenario("wrappers.svg", "The wrapper panel in use",
              lambda: Session("gridworld", choices=(
                  WrapperChoice.make("TimeLimit", max_episode_steps=50),

@@ -1,4 +1,4 @@
-"""The Train view: watch tabular Q-learning learn the current game, live.
+"""The Train view: watch a tabular learner learn the current game, live, or step by step.
 
 `TrainView` lays out the controls (start/pause, one episode, reset, slower,
 faster: buttons for the mouse, the same keys live on the app), a progress
@@ -6,9 +6,11 @@ bar toward the episode budget and one line saying which engine trains and
 why (cut to fit; the whole of it in its tooltip and the help), all three
 always in sight; below them, scrolling when the window is short, the run's
 numbers (`StatsPanel`) beside the hyperparameter fields
-(`HyperparameterForm`), the learning curves (`TrainingCharts`) with, at
-animated speeds, the game's board replaying the agent's moves, and the
-Q-table heatmaps (`HeatmapView`).
+(`HyperparameterForm`, the algorithm's own fields), the learning curves
+(`TrainingCharts`) with, at animated speeds, the game's board replaying the
+agent's moves and the step panel (`StepPanel`) explaining each update, and
+the Q-table heatmaps (`HeatmapView`), where the explained step's state is
+marked.
 
 It never trains anything: the app's timer hands it the runner's latest
 snapshot through `show_snapshot()`, which redraws only what changed and
