@@ -243,6 +243,13 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"measure the per-algorithm figures for this learner only ({names}; default all)",
     )
     bench.add_argument("--json", action="store_true", help="print one JSON object")
+
+    from tui_gym.mcp_server.command import add_parser as add_mcp_parser
+
+    add_mcp_parser(sub, _positive_int, _number)
+    from tui_gym.benchmark.command import add_parser as add_benchmark_parser
+
+    add_benchmark_parser(sub, _positive_int, _seed, _number)
     return parser
 
 

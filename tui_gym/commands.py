@@ -24,12 +24,14 @@ from rich.progress import (
 from rich.table import Table
 
 from tui_gym.algorithms import ALGORITHMS, ALL_PARAMS, COMMON_PARAMS, Field, Learner, algorithm
+from tui_gym.benchmark.command import cmd_benchmark
 from tui_gym.cli import CliError, _env_kwargs, key_value_table, print_json
 from tui_gym.core import evaluation
 from tui_gym.core.evaluation import EvalReport
 from tui_gym.core.params import Param, ParamError
 from tui_gym.core.profiles import PROFILES, profile_for, resolve_env_id
 from tui_gym.core.session import Session
+from tui_gym.mcp_server.command import cmd_mcp
 
 WRAPPER_SYNTAX = "--wrapper NAME or --wrapper NAME:key=value,key=value, repeatable; " \
     "the first is innermost"
@@ -531,4 +533,6 @@ COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {
     "play": cmd_play,
     "screenshots": cmd_screenshots,
     "bench": cmd_bench,
+    "mcp": cmd_mcp,
+    "benchmark": cmd_benchmark,
 }

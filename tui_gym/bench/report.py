@@ -11,6 +11,10 @@ Targets (issue #4):
   loop of the same algorithm on the same env (Blackjack and a grid game);
 - Dyna-Q (planning_steps = 10) reaches the bound on a grid game in fewer
   real episodes than Q-learning.
+- exact-regret scoring separates `optimal` from a player deviating on 5% of
+  Blackjack decisions with >= 10x fewer episodes than mean returns do;
+- the JSON-lines protocol steps >= 20,000 times a second over a pipe, MCP >= 1,000
+  (with several games at once).
 
 A verdict is PASS or MISS; "?" when a lower bound cannot decide it, "n/a"
 when the figure is missing (its stage failed: see `errors`).
@@ -23,6 +27,7 @@ from typing import Any
 
 from rich.table import Table
 
+from tui_gym.bench import programs
 from tui_gym.bench.live import RUNNERS
 from tui_gym.bench.results import BenchResults
 
@@ -34,6 +39,9 @@ RSS_GROWTH_MB_TARGET = 20.0
 RSS_EPISODES_TARGET = 2_000_000
 STARTUP_S_TARGET = 1.0
 ALGORITHM_SPEEDUP_TARGET = 50.0
+SEPARATION_RATIO_TARGET = 10.0
+PROTOCOL_STEPS_TARGET = 20_000.0
+MCP_STEPS_TARGET = 1_000.0
 
 PASS, MISS, UNDECIDED, MISSING = "PASS", "MISS", "?", "n/a"
 
@@ -88,7 +96,43 @@ def verdicts(results: BenchResults) -> dict[str, str]:
     else:
         fewer = planning.dyna_q_episodes < planning.q_learning_episodes
         out["planning"] = PASS if fewer and all(r.reached for r in planning.dyna_q) else MISS
+    found = results.programs
+    ratio = found.separation.ratio if found else None
+    out["regret_separation_ratio"] = _ok(ratio, ratio is not None and
+                                         ratio >= SEPARATION_RATIO_TARGET)
+    rate = found.protocol.steps_per_second if found else None
+    out["protocol_steps_per_second"] = _ok(rate, rate is not None and
+                                           rate >= PROTOCOL_STEPS_TARGET)
+    rate = found.mcp_together.steps_per_second if found else None
+    out["mcp_steps_per_second"] = _ok(rate, rate is not None and rate >= MCP_STEPS_TARGET)
     return out
+
+
+def _programs_dict(results: BenchResults) -> dict[str, Any] | None:
+    found = results.programs
+    if found is None:
+        return None
+    sep = found.separation
+    return {
+        "separation": {
+            "episodes_each": sep.episodes,
+            "deviation": programs.DEVIATION,
+            "delta": sep.delta,
+            "return_gap_measured": sep.return_gap,
+            "return_sd": list(sep.return_sd),
+            "regret_sd": list(sep.regret_sd),
+            "episodes_needed_by_return": sep.by_return,
+            "episodes_needed_by_regret": sep.by_regret,
+            "ratio": sep.ratio,
+            "formula": "n = 1.96^2 (sd_a^2 + sd_b^2) / delta^2",
+        },
+        "protocol_steps_per_second": found.protocol.steps_per_second,
+        "protocol_samples": list(found.protocol.samples),
+        "mcp_steps_per_second_one_call_at_a_time": found.mcp_one.steps_per_second,
+        "mcp_steps_per_second": found.mcp_together.steps_per_second,
+        "mcp_games_at_once": programs.MCP_GAMES,
+        "mcp_note": found.mcp_together.reason,
+    }
 
 
 # --- JSON --------------------------------------------------------------------
@@ -189,6 +233,7 @@ def to_json(results: BenchResults) -> dict[str, Any]:
             for a in results.algorithms or ()
         ],
         "planning": _planning_dict(results),
+        "programs": _programs_dict(results),
         "verdicts": verdicts(results),
         "errors": dict(results.errors),
     }
@@ -289,6 +334,24 @@ def table(results: BenchResults) -> Table:
         row(f"real episodes to ≤ {planning.bound:g} on {planning.game}: Q-learning / Dyna-Q",
             f"{runs(planning.q_learning)} / {runs(planning.dyna_q)}",
             "Dyna-Q fewer", "planning")
+    found = results.programs
+    if found is not None:
+        sep = found.separation
+        row("episodes to separate optimal from 5% deviations, by return",
+            f"{_num(sep.by_return, ',.0f')}")
+        row("  by exact regret", f"{_num(sep.by_regret, ',.0f')}")
+        row("  ratio", _num(sep.ratio, ".0f", "×"), f"≥ {SEPARATION_RATIO_TARGET:g}×",
+            "regret_separation_ratio")
+        row("protocol over a pipe, steps/s", _num(found.protocol.steps_per_second, ",.0f"),
+            f"≥ {PROTOCOL_STEPS_TARGET:,.0f}", "protocol_steps_per_second")
+        if found.mcp_together.reason:
+            out.add_row("MCP, steps/s", f"[dim]{found.mcp_together.reason}[/]", "",
+                        _STYLE[MISSING])
+        else:
+            row(f"MCP, steps/s, {programs.MCP_GAMES} games at once",
+                _num(found.mcp_together.steps_per_second, ",.0f"),
+                f"≥ {MCP_STEPS_TARGET:,.0f}", "mcp_steps_per_second")
+            row("  one call at a time", _num(found.mcp_one.steps_per_second, ",.0f"))
     for stage, error in results.errors.items():
         out.add_row(f"{stage} failed", f"[red]{error}[/]", "", _STYLE[MISSING])
     return out
@@ -327,6 +390,16 @@ def notes(results: BenchResults) -> list[str]:
         lines.append(
             "The tutorial loop was stopped by its time cap before reaching the gap: its time "
             "and the speed-up are lower bounds (run without --quick for the full figure)."
+        )
+    found = results.programs
+    if found is not None:
+        sep = found.separation
+        lines.append(
+            f"Episodes to separate: each player played {sep.episodes:,} Blackjack episodes on "
+            "the same seeds; n = 1.96² (sd_a² + sd_b²) / Δ² episodes each, Δ the deviating "
+            f"player's mean exact regret ({sep.delta:.4f}), sd the measured per-episode "
+            f"standard deviations (return {sep.return_sd[1]:.3f}, regret "
+            f"{sep.regret_sd[1]:.3f})."
         )
     load = results.machine.load_before
     cpus = results.machine.cpus or 1

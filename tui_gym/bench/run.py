@@ -3,7 +3,8 @@
 `run_bench(quick, progress, algorithms)` measures throughput, time to the
 target gap, every algorithm's vector-engine speed against its tutorial loop
 (or the named ones'), Dyna-Q's planning against Q-learning, live training
-(both runners), memory and start-up, and returns
+(both runners), memory, start-up, and programs as players (exact-regret
+scoring against returns, protocol and MCP speeds), and returns
 `BenchResults`. A stage that fails is recorded in `errors` and the others
 still run. `progress` (if given) hears the name of each stage as it starts.
 """
@@ -17,7 +18,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from tui_gym.algorithms import ALGORITHMS
-from tui_gym.bench import gap, learners, live, memory, startup, throughput
+from tui_gym.bench import gap, learners, live, memory, programs, startup, throughput
 from tui_gym.bench.figures import load_average
 from tui_gym.bench.results import BenchResults, MachineInfo
 
@@ -40,9 +41,12 @@ class Plan:
     algorithm_seconds: float  # window per side per repeat, each (game, algorithm)
     algorithm_repeats: int
     planning_seeds: tuple[int, ...]
+    separation_episodes: int = 5_000  # each of the two Blackjack players
+    pipe_seconds: float = 1.0  # window per repeat, protocol and MCP
+    pipe_repeats: int = 3
 
 
-# About 50 s on an idle 2-CPU machine; the tutorial gets one capped run.
+# About a minute on an idle 2-CPU machine; the tutorial gets one capped run.
 QUICK = Plan(
     throughput_seconds=0.5, throughput_repeats=3,
     gap_seeds=(0, 1, 2), tutorial_cap_s=15.0, tutorial_stage_s=0.0,
@@ -51,7 +55,7 @@ QUICK = Plan(
     startup_repeats=3,
     algorithm_seconds=0.3, algorithm_repeats=3, planning_seeds=(0,),
 )
-# About 2.5 minutes on an idle 2-CPU machine.
+# About 3 minutes on an idle 2-CPU machine.
 FULL = Plan(
     throughput_seconds=2.0, throughput_repeats=3,
     gap_seeds=(0, 1, 2), tutorial_cap_s=90.0, tutorial_stage_s=60.0,
@@ -59,6 +63,7 @@ FULL = Plan(
     memory_episodes=2_000_000, memory_warmup=100_000,
     startup_repeats=5,
     algorithm_seconds=1.0, algorithm_repeats=3, planning_seeds=(0, 1, 2),
+    separation_episodes=20_000, pipe_seconds=2.0,
 )
 
 
@@ -102,6 +107,10 @@ def run_bench(
           lambda: memory.measure(plan.memory_episodes, plan.memory_warmup))
     stage("startup", "start-up to the first frame",
           lambda: startup.measure(plan.startup_repeats))
+    stage("programs", "programs as players: episodes to separate two players, protocol "
+          "and MCP steps/s",
+          lambda: programs.measure(plan.separation_episodes, plan.pipe_seconds,
+                                   plan.pipe_repeats))
     return BenchResults(
         quick=quick,
         seconds=time.perf_counter() - started,
@@ -113,5 +122,6 @@ def run_bench(
         startup=found.get("startup"),
         algorithms=found.get("algorithms"),
         planning=found.get("planning"),
+        programs=found.get("programs"),
         errors=errors,
     )
