@@ -4,19 +4,26 @@
 band's edges when the run has one) and `FigureRow` one row of the figures
 table; both come from a recorded run (`series_of_record`, `row_of_record`)
 or from a comparison still running (`series_of_outcome`, `row_of_outcome`).
-A single run has no band; its curve is noisy, so it is smoothed with a
-trailing mean over a tenth of its points, and the legend says so.
+Curves are noisy (a single run's per-episode return; on a game like
+Blackjack even a mean over seeds), so by default each is smoothed with a
+trailing mean over a tenth of its points, and the legend says so. A band is
+smoothed the same way, edge by edge: the mean of the points' half-widths is
+never narrower than the half-width of the smoothed mean, so the band stays a
+95% band, if a wide one. `smooth=False` draws the curves as recorded.
 """
 
 from __future__ import annotations
 
 from collections.abc import Hashable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from tui_gym.core.experiments import Figure, RunRecord, RunSummary, rolling_mean
+
+if TYPE_CHECKING:
+    from tui_gym.core.experiments.compare import AlgorithmOutcome
 
 CURVE = "return"
 SMOOTH_FRACTION = 0.1  # a single run's curve: a trailing mean over this share of its points
@@ -52,17 +59,29 @@ class Series:
         return self.lo is not None and self.hi is not None
 
     def legend(self) -> str:
-        """The legend's words: label, seeds, and what the band or the smoothing is."""
-        seeds = f"{self.seeds} seed{'s' if self.seeds != 1 else ''}"
+        """The legend's words: label, seeds, and what the band and the smoothing are."""
+        words = [self.label, f"{self.seeds} seed{'s' if self.seeds != 1 else ''}"]
         if self.has_band:
-            return f"{self.label} · {seeds} · mean, 95% band"
+            words.append("mean, 95% band")
         if self.smoothing > 1:
-            return f"{self.label} · {seeds} · smoothed over {self.smoothing} points"
-        return f"{self.label} · {seeds}"
+            words.append(f"smoothed over {self.smoothing} points")
+        return " · ".join(words)
 
 
-def smoothing_window(points: int) -> int:
-    return max(1, round(points * SMOOTH_FRACTION))
+def smoothing_window(points: int, smooth: bool = True) -> int:
+    """The trailing mean's window for a curve of `points` points (1: none)."""
+    return max(1, round(points * SMOOTH_FRACTION)) if smooth else 1
+
+
+def _smoothed(
+    key: Hashable, label: str, episodes: np.ndarray, mean: np.ndarray,
+    lo: np.ndarray | None, hi: np.ndarray | None, seeds: int, smooth: bool,
+) -> Series:
+    window = smoothing_window(len(mean), smooth)
+    if lo is not None and hi is not None:
+        lo, hi = rolling_mean(lo, window), rolling_mean(hi, window)
+    return Series(key, label, episodes, rolling_mean(mean, window), lo, hi, seeds=seeds,
+                  smoothing=window)
 
 
 def _finite(episodes: np.ndarray, *columns: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -72,7 +91,7 @@ def _finite(episodes: np.ndarray, *columns: np.ndarray) -> tuple[np.ndarray, ...
     return (episodes[keep], *(c[keep] for c in columns))
 
 
-def series_of_record(record: RunRecord) -> Series | None:
+def series_of_record(record: RunRecord, smooth: bool = True) -> Series | None:
     """The run's `return` curve (with `return.lo`/`return.hi` as its band), None without one."""
     curve = record.curve(CURVE)
     if curve is None or not len(curve):
@@ -84,31 +103,34 @@ def series_of_record(record: RunRecord) -> Series | None:
             and np.array_equal(hi.episodes, curve.episodes)):
         episodes, mean, low, high = _finite(curve.episodes, curve.values, lo.values, hi.values)
         if len(episodes):
-            return Series(record.id, label, episodes, mean, low, high, seeds=seeds)
+            return _smoothed(record.id, label, episodes, mean, low, high, seeds, smooth)
     episodes, values = _finite(curve.episodes, curve.values)
     if not len(episodes):
         return None
-    window = smoothing_window(len(values))
-    return Series(record.id, label, episodes, rolling_mean(values, window), seeds=seeds,
-                  smoothing=window)
+    return _smoothed(record.id, label, episodes, values, None, None, seeds, smooth)
 
 
-def series_of_outcome(outcome: Any, label: str) -> Series | None:
+def series_of_outcome(
+    outcome: AlgorithmOutcome, label: str, smooth: bool = True
+) -> Series | None:
     """A running comparison's aggregate curve for one algorithm, None before any point."""
     curve = outcome.curve
-    if curve is None or not len(curve):
+    if not len(curve):
         return None
     episodes = np.asarray(curve.episodes)
     mean = np.asarray(curve.mean, dtype=np.float64)
     lo, hi = curve.lo, curve.hi
     seeds = max(1, int(curve.seeds))
+    key = ("live", outcome.algorithm)
     if lo is not None and hi is not None:
         episodes, mean, lo, hi = _finite(episodes, mean, np.asarray(lo), np.asarray(hi))
-        return Series(("live", outcome.algorithm), label, episodes, mean, lo, hi, seeds=seeds)
+        if not len(episodes):
+            return None
+        return _smoothed(key, label, episodes, mean, lo, hi, seeds, smooth)
     episodes, mean = _finite(episodes, mean)
-    window = smoothing_window(len(mean)) if seeds == 1 else 1
-    return Series(("live", outcome.algorithm), label, episodes, rolling_mean(mean, window),
-                  seeds=seeds, smoothing=window)
+    if not len(episodes):
+        return None
+    return _smoothed(key, label, episodes, mean, None, None, seeds, smooth)
 
 
 @dataclass(frozen=True)
@@ -142,23 +164,20 @@ def row_of_record(record: RunRecord) -> FigureRow:
     )
 
 
-def _figure(name: str, value: Any, ci95: float | None = None) -> Figure | None:
-    if value is None:
-        return None
-    return Figure(name, float(value), ci95=ci95)
+def _figure(name: str, value: float | None, ci95: float | None = None) -> Figure | None:
+    return None if value is None else Figure(name, value, ci95=ci95)
 
 
-def row_of_outcome(outcome: Any, label: str, note: str = "running") -> FigureRow:
-    curve = outcome.curve
+def row_of_outcome(outcome: AlgorithmOutcome, label: str, note: str = "running") -> FigureRow:
+    """The figures so far: over the episodes every seed has finished."""
     estimate = outcome.mean_return_last
     return FigureRow(
         key=("live", outcome.algorithm),
         label=label,
-        seeds=int(outcome.seeds_done),
-        episodes=int(curve.episodes[-1]) if curve is not None and len(curve) else None,
-        mean_return_last=None if estimate is None else Figure(
-            "mean_return_last", estimate.mean, ci95=estimate.ci95),
-        exact_value=_figure("exact_value", outcome.exact_value),
+        seeds=int(outcome.curve.seeds),
+        episodes=outcome.episodes or None,
+        mean_return_last=Figure("mean_return_last", estimate.mean, ci95=estimate.ci95),
+        exact_value=_figure("exact_value", outcome.exact_value, outcome.exact_ci95),
         exact_gap=_figure("exact_gap", outcome.exact_gap),
         note=note,
     )

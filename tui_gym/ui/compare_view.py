@@ -65,6 +65,7 @@ from tui_gym.ui.widgets.stats_panel import format_duration
 from tui_gym.ui.widgets.tick_box import TickBox
 
 if TYPE_CHECKING:
+    from tui_gym.core.experiments.compare import AlgorithmOutcome, CompareProgress, CompareSpec
     from tui_gym.core.session import Session
 
 POLL_SECONDS = 0.25  # how often the view looks at a running comparison
@@ -114,18 +115,21 @@ def read_launch(algorithms: Sequence[str], seeds: str, episodes: str) -> Launch:
     return Launch(tuple(algorithms), counts[0], counts[1])
 
 
-def edited_settings(session: Session) -> dict[str, Any]:
+def edited_settings(session: Session, algorithms: Sequence[str]) -> dict[str, Any]:
     """The hyperparameters set in the Train view that differ from the algorithm's defaults
-    for the game (the episode budget aside: the form sets it)."""
+    for the game, those of them at least one of `algorithms` has (the episode budget
+    aside: the launch form sets it)."""
+    from tui_gym.algorithms import algorithm
     from tui_gym.core.session import default_settings
 
     hp = session.hp
     if hp is None:
         return {}
     defaults = default_settings(session.profile, session.algorithm)
+    owned = {f.name for name in algorithms for f in algorithm(name).params}
     return {
         name: value for name, value in hp.items()
-        if name != "episodes" and defaults.get(name) != value
+        if name != "episodes" and name in owned and defaults.get(name) != value
     }
 
 
@@ -193,6 +197,7 @@ class CompareView(Vertical):
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("l", "launch", "Launch", tooltip="Run a comparison with the chosen algorithms"),
         Binding("s", "stop", "Stop", tooltip="Stop the comparison; what finished is kept"),
+        Binding("m", "toggle_smoothing", "Smooth", tooltip="Smoothed curves, or as recorded"),
         Binding("r", "reload", "Reload", tooltip="Read the run history again"),
     ]
 
@@ -200,12 +205,15 @@ class CompareView(Vertical):
         self,
         *,
         db: str | Path | None = None,
+        processes: int | None = None,
         id: str | None = None,
         classes: str | None = None,
     ) -> None:
-        """`db` is the run history's file (None: `TUI_GYM_DB`, else the data folder's)."""
+        """`db` is the run history's file (None: `TUI_GYM_DB`, else the data folder's);
+        `processes` is `run_compare`'s (None: a child process per core)."""
         super().__init__(id=id, classes=classes)
         self._db = db
+        self.processes = processes
         self._runs: tuple[RunSummary, ...] = ()
         self._records: dict[int, RunRecord] = {}
         self._colours: dict[Hashable, int] = {}
@@ -215,6 +223,8 @@ class CompareView(Vertical):
         self._job_game: frozenset[str] = frozenset()
         self._seen_progress = -1
         self._live: tuple[tuple[Series, FigureRow], ...] = ()
+        self._live_outcomes: tuple[AlgorithmOutcome, ...] = ()
+        self.smooth = True  # curves drawn through a trailing mean (m toggles)
         self._message = ""
         self._stale = True  # the list has not been read for the current game
 
@@ -343,6 +353,7 @@ class CompareView(Vertical):
             ("tab / shift+tab", "the algorithms, Seeds, Episodes and the buttons"),
             ("l / enter", "run the comparison (enter in Seeds or Episodes)"),
             ("s", "stop the comparison; what finished is recorded"),
+            ("m", "smoothed curves (a trailing mean over a tenth of each) / as recorded"),
             ("r", "read the run history again (runs recorded elsewhere)"),
         ]
 
@@ -449,7 +460,8 @@ class CompareView(Vertical):
         for run_id in self.run_list.selected:
             record = self._record(run_id)
             if record is not None:
-                entries.append((series_of_record(record), row_of_record(record), run_id))
+                entries.append((series_of_record(record, self.smooth), row_of_record(record),
+                                run_id))
         for series, row in self._live:
             entries.append((series, row, series.key))
         shown = {key for _, _, key in entries}
@@ -497,18 +509,18 @@ class CompareView(Vertical):
         except ValueError as exc:
             self._say(f"Not started: {exc}", error=True)
             return
-        self.start_job(CompareJob(spec, self.db_path))
+        self.start_job(CompareJob(spec, self.db_path, processes=self.processes))
 
-    def _spec(self, launch: Launch) -> Any:
+    def _spec(self, launch: Launch) -> CompareSpec:
         from tui_gym.core.experiments.compare import CompareSpec
 
         session = self.session
         return CompareSpec(
-            game=session.profile.name,
+            game=session.env_id,
             algorithms=launch.algorithms,
             seeds=launch.seeds,
             episodes=launch.episodes,
-            settings=edited_settings(session),
+            settings=edited_settings(session, launch.algorithms),
             game_params=dict(session.env_kwargs),
             wrappers=tuple(session.choices),
             first_seed=session.seed,
@@ -519,15 +531,17 @@ class CompareView(Vertical):
         self._job = job
         self._job_game = self._game_key
         self._seen_progress = -1
-        self._live = ()
+        self._live, self._live_outcomes = (), ()
         job.start()
         self.add_class("-running")
         self.query_one("#btn-stop", Button).disabled = False
         self.query_one("#btn-compare", Button).disabled = True
         spec = job.spec
-        names = ", ".join(algorithm_title(a) for a in getattr(spec, "algorithms", ()))
-        self._say(f"Comparing {names}: {getattr(spec, 'seeds', '?')} seeds × "
-                  f"{compact_count(getattr(spec, 'episodes', 0))} episodes…")
+        names = ", ".join(algorithm_title(a) for a in spec.algorithms)
+        settings = ", ".join(f"{k}={v}" for k, v in spec.settings.items())
+        self._say(f"Comparing {names}: {spec.seeds:,} seeds × {compact_count(spec.episodes)} "
+                  f"episodes" + (f", with {settings} from the Train view" if settings else "")
+                  + "…")
         self.query_one("#compare-progress", ProgressLine).show(0, 1)
         self.refresh_bindings()
 
@@ -537,6 +551,11 @@ class CompareView(Vertical):
 
     def action_reload(self) -> None:
         self._load_runs()
+
+    def action_toggle_smoothing(self) -> None:
+        self.smooth = not self.smooth
+        self._live = self._live_entries()
+        self._redraw()
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         if action == "stop":
@@ -550,30 +569,29 @@ class CompareView(Vertical):
         job = self._job
         if job is None:
             return
-        if job.progress_count != self._seen_progress and job.progress is not None:
+        progress = job.progress
+        if job.progress_count != self._seen_progress and progress is not None:
             self._seen_progress = job.progress_count
-            self._show_progress(job)
+            self._show_progress(job, progress)
         if job.done:
             self._finished(job)
 
-    def _show_progress(self, job: CompareJob) -> None:
-        progress = job.progress
+    def _show_progress(self, job: CompareJob, progress: CompareProgress) -> None:
         done, total = int(progress.done), max(1, int(progress.total))
         elapsed = max(1e-9, time.monotonic() - job.started_at)
         eta = format_duration(elapsed / done * (total - done)) if 0 < done < total else ""
         self.query_one("#compare-progress", ProgressLine).show(done, total, eta)
-        self._live = self._live_entries(progress.outcomes, "running")
+        self._live_outcomes = progress.outcomes
+        self._live = self._live_entries()
         self._redraw()
 
-    def _live_entries(
-        self, outcomes: Sequence[Any], note: str
-    ) -> tuple[tuple[Series, FigureRow], ...]:
+    def _live_entries(self) -> tuple[tuple[Series, FigureRow], ...]:
         entries = []
-        for outcome in outcomes:
+        for outcome in self._live_outcomes:
             label = f"{algorithm_title(outcome.algorithm)} (live)"
-            series = series_of_outcome(outcome, label)
+            series = series_of_outcome(outcome, label, self.smooth)
             if series is not None:
-                entries.append((series, row_of_outcome(outcome, label, note)))
+                entries.append((series, row_of_outcome(outcome, label)))
         return tuple(entries)
 
     def _finished(self, job: CompareJob) -> None:
@@ -583,7 +601,7 @@ class CompareView(Vertical):
         self.query_one("#btn-compare", Button).disabled = False
         self.refresh_bindings()
         result = job.result
-        self._live = ()
+        self._live, self._live_outcomes = (), ()
         if job.error is not None or result is None:
             self._say(job.error or "The comparison ended without a result.", error=True)
             self._redraw()
