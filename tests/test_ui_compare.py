@@ -198,7 +198,9 @@ def test_plot_draws_the_band_under_the_line(tmp_path: Path) -> None:
     assert all(band[row][col] == 0 for row in range(8) for col in range(40) if ink[row][col] == 0)
 
 
-async def test_the_app_key_v_opens_it_and_follows_the_game(tmp_path: Path) -> None:
+async def test_the_app_key_v_opens_it_and_another_view_stops_it(
+    tmp_path: Path,
+) -> None:
     from tui_gym.ui.app import TuiGymApp
     from tui_gym.ui.help_screen import HelpScreen
 
@@ -210,9 +212,21 @@ async def test_the_app_key_v_opens_it_and_follows_the_game(tmp_path: Path) -> No
         await pilot.press("v")
         await wait_for(pilot, lambda: app.current_view == "compare", "the Compare view")
         view = app.compare_view
+        view.processes = 0
         assert len(view.runs) == 3 and app.focused is view.run_list
-        text = screen_text(app)
-        assert " l Launch " in text and " s Stop " not in text
+        assert " l Launch " in screen_text(app)
+        # Another view stops the comparison; what finished is recorded.
+        await launch(pilot, view, {"sarsa"}, seeds=2, episodes=200_000)
+        await wait_for(pilot, lambda: view.chart.series, "a live curve")
+        await pilot.press("t")
+        await wait_for(pilot, lambda: view.job is None, "the comparison to stop")
+        assert app.current_view == "train"
+        with RunHistory(db) as history:
+            newest = history.list_runs(limit=1)[0]
+        assert (newest.algorithm, str(newest.status)) == ("sarsa", "interrupted")
+        await pilot.press("v")
+        await wait_for(pilot, lambda: newest.id in {r.id for r in view.runs}, "the new run")
+        # Another game: its runs.
         await pilot.press("g")
         await wait_for(pilot, lambda: app.session.profile.name == "gridworld", "GridWorld")
         await wait_for(pilot, lambda: [r.id for r in view.runs] == [ids["gridworld"]],
@@ -220,3 +234,81 @@ async def test_the_app_key_v_opens_it_and_follows_the_game(tmp_path: Path) -> No
         await pilot.press("question_mark")
         await wait_for(pilot, lambda: isinstance(app.screen, HelpScreen), "the help")
         assert "Compare view" in screen_text(app)
+
+
+
+async def launch(pilot, view: CompareView, algorithms: set[str], seeds: int, episodes: int):
+    from tui_gym.ui.widgets.tick_box import TickBox
+
+    for box in view.query(TickBox):
+        box.value = box.id.removeprefix("algo-") in algorithms
+    view.query_one("#compare-seeds").value = str(seeds)
+    view.query_one("#compare-episodes").value = str(episodes)
+    view.focus_default()
+    await pilot.press("l")
+    await wait_for(pilot, lambda: view.job is not None, "the comparison to start")
+
+
+async def test_launch_runs_records_and_ticks_the_runs(tmp_path: Path) -> None:
+    db = tmp_path / "runs.db"
+    app = ViewApp(Session("blackjack", seed=0), db)
+    async with app.run_test(size=SIZE) as pilot:
+        view = app.query_one(CompareView)
+        view.processes = 0  # the batches on the job's thread: no child processes to start
+        await pilot.pause()
+        await launch(pilot, view, {"q-learning", "sarsa"}, seeds=3, episodes=40)
+        assert view.has_class("-running")
+        await wait_for(pilot, lambda: view.job is None, "the comparison to end")
+        assert "Comparison finished" in view.message
+        runs = view.runs
+        assert [(r.algorithm, str(r.kind), r.seeds) for r in runs] == [
+            ("sarsa", "compare", (0, 1, 2)), ("q-learning", "compare", (0, 1, 2))]
+        assert sorted(view.run_list.selected) == sorted(r.id for r in runs)
+        assert [s.key for s in view.chart.series] == [r.id for r in runs] or [
+            s.key for s in view.chart.series] == [r.id for r in reversed(runs)]
+        assert all(s.has_band and s.seeds == 3 for s in view.chart.series)
+        for row in view.table.rows:
+            assert row.note == "" and row.episodes == 40 and row.seeds == 3
+            assert row.mean_return_last.ci95 is not None
+        with RunHistory(db) as history:
+            recorded = history.list_runs()
+        assert {str(r.status) for r in recorded} == {"finished"}
+        by_id = {r.id: r for r in recorded}
+        for row in view.table.rows:  # the table reads what was recorded
+            assert row.mean_return_last == by_id[row.key].figure("mean_return_last")
+            assert row.exact_value == by_id[row.key].figure("exact_value")
+
+
+async def test_progress_draws_live_curves_and_stopping_keeps_what_finished(tmp_path: Path) -> None:
+    db = tmp_path / "runs.db"
+    app = ViewApp(Session("blackjack", seed=0), db)
+    async with app.run_test(size=SIZE) as pilot:
+        view = app.query_one(CompareView)
+        view.processes = 0
+        await pilot.pause()
+        await launch(pilot, view, {"q-learning"}, seeds=2, episodes=200_000)
+        await wait_for(pilot, lambda: [s.key for s in view.chart.series]
+                       == [("live", "q-learning")], "a live curve")
+        live = view.table.rows[0]
+        assert live.note == "running" and live.seeds == 2 and live.episodes >= 1
+        await wait_for(pilot, lambda: "Q-learning (live)" in screen_text(app), "the legend")
+        await pilot.press("s")
+        await wait_for(pilot, lambda: view.job is None, "the comparison to stop")
+        assert "Comparison stopped" in view.message
+        (run,) = view.runs
+        assert str(run.status) == "interrupted" and view.run_list.selected == [run.id]
+        (row,) = view.table.rows
+        assert row.note == "interrupted" and 1 <= row.episodes < 200_000
+        # Closing the app stops a comparison and records what finished.
+        await launch(pilot, view, {"sarsa"}, seeds=2, episodes=200_000)
+        job = view.job
+        await wait_for(pilot, lambda: job.progress_count > 0, "progress")
+    assert job.done and job.error is None and job.result.interrupted
+    with RunHistory(db) as history:
+        assert [(r.algorithm, str(r.status)) for r in history.list_runs()] == [
+            ("sarsa", "interrupted"), ("q-learning", "interrupted")]
+
+
+def test_seeds_times_episodes_is_bounded() -> None:
+    with pytest.raises(ValueError, match=r"at most 20,000,000 .*got 30,000,000"):
+        read_launch(("sarsa",), "3", "10000000")

@@ -58,7 +58,8 @@ class CompareJob:
 
     def start(self) -> None:
         """Start the thread; call it from the app's thread (see `_start_resource_tracker`)."""
-        _start_resource_tracker()
+        if self.processes != 0:
+            _start_resource_tracker()
         self.started_at = time.monotonic()
         self._thread.start()
 

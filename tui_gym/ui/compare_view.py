@@ -73,6 +73,8 @@ LISTED_RUNS = 200  # the newest runs of the game that the list offers
 OPEN_TIMEOUT = 2.0  # seconds the view waits on a history another process is writing
 MAX_SEEDS = 1_000
 MAX_EPISODES = 10_000_000
+# A comparison keeps every seed's per-episode returns in memory until it ends.
+MAX_SEED_EPISODES = 20_000_000
 DEFAULT_SEEDS = 10
 DEFAULT_ALGORITHMS = ("q-learning", "sarsa")
 
@@ -110,6 +112,11 @@ def read_launch(algorithms: Sequence[str], seeds: str, episodes: str) -> Launch:
             counts.append(parse_count(text, what, high))
         except ValueError as exc:
             problems.append(str(exc))
+    if not problems and counts[0] * counts[1] > MAX_SEED_EPISODES:
+        problems.append(
+            f"seeds × episodes is at most {MAX_SEED_EPISODES:,} (every seed's returns are "
+            f"kept until the end; got {counts[0] * counts[1]:,})"
+        )
     if problems:
         raise ValueError("; ".join(problems))
     return Launch(tuple(algorithms), counts[0], counts[1])
@@ -241,30 +248,42 @@ class CompareView(Vertical):
     def compose(self) -> ComposeResult:
         from tui_gym.algorithms import ALGORITHMS
 
+        # The parts the view updates, kept at hand: a timer tick never searches the DOM.
+        self._boxes = {
+            cls.name: TickBox(cls.title, value=cls.name in DEFAULT_ALGORITHMS, compact=True,
+                              id=f"algo-{cls.name}", tooltip=cls.summary)
+            for cls in ALGORITHMS
+        }
+        self._seeds = Input(str(DEFAULT_SEEDS), id="compare-seeds", compact=True,
+                            tooltip=f"independent learners per algorithm, 1 to {MAX_SEEDS:,}")
+        self._episodes = Input("", id="compare-episodes", compact=True,
+                               tooltip=f"episodes each learner trains, 1 to {MAX_EPISODES:,}")
+        self._launch = Button("▶ Compare", id="btn-compare", variant="success", compact=True,
+                              tooltip="Run the comparison for this game and its settings (l)")
+        self._stop = Button("■ Stop", id="btn-stop", variant="error", compact=True,
+                            disabled=True, tooltip="Stop it; what finished is recorded (s)")
+        self._progress = ProgressLine(id="compare-progress")
+        self._message_label = Label("", id="compare-message", markup=False)
+        self._run_list = RunList(id="compare-runs")
+        self._chart = CompareChart(id="compare-chart")
+        self._table = FiguresTable(id="compare-table")
+
         with Horizontal(id="compare-algorithms"):
-            for cls in ALGORITHMS:
-                box = TickBox(cls.title, value=cls.name in DEFAULT_ALGORITHMS, compact=True,
-                              id=f"algo-{cls.name}")
-                box.tooltip = cls.summary
-                yield box
+            yield from self._boxes.values()
         with Horizontal(id="compare-fields"):
             yield Label("Seeds")
-            yield Input(str(DEFAULT_SEEDS), id="compare-seeds", compact=True,
-                        tooltip=f"independent learners per algorithm, 1 to {MAX_SEEDS:,}")
+            yield self._seeds
             yield Label("Episodes")
-            yield Input("", id="compare-episodes", compact=True,
-                        tooltip=f"episodes each learner trains, 1 to {MAX_EPISODES:,}")
-            yield Button("▶ Compare", id="btn-compare", variant="success", compact=True,
-                         tooltip="Run the comparison for this game and its settings (l)")
-            yield Button("■ Stop", id="btn-stop", variant="error", compact=True, disabled=True,
-                         tooltip="Stop it; what finished is recorded (s)")
-        yield ProgressLine(id="compare-progress")
-        yield Label("", id="compare-message", markup=False)
+            yield self._episodes
+            yield self._launch
+            yield self._stop
+        yield self._progress
+        yield self._message_label
         with VerticalScroll(id="compare-body"):
             yield Label("Runs of this game (space ticks a run)", id="compare-runs-title")
-            yield RunList(id="compare-runs")
-            yield CompareChart(id="compare-chart")
-            yield FiguresTable(id="compare-table")
+            yield self._run_list
+            yield self._chart
+            yield self._table
 
     def on_mount(self) -> None:
         self.set_interval(POLL_SECONDS, self._poll)
@@ -273,15 +292,15 @@ class CompareView(Vertical):
     # --- parts -------------------------------------------------------------------
     @property
     def run_list(self) -> RunList:
-        return self.query_one(RunList)
+        return self._run_list
 
     @property
     def chart(self) -> CompareChart:
-        return self.query_one(CompareChart)
+        return self._chart
 
     @property
     def table(self) -> FiguresTable:
-        return self.query_one(FiguresTable)
+        return self._table
 
     @property
     def message(self) -> str:
@@ -307,7 +326,7 @@ class CompareView(Vertical):
 
     def _say(self, text: str, error: bool = False) -> None:
         self._message = text
-        label = self.query_one("#compare-message", Label)
+        label = self._message_label
         label.update(text)
         label.set_class(error, "-error")
 
@@ -325,7 +344,7 @@ class CompareView(Vertical):
             self._colours.clear()
             hp = self.session.hp
             budget = hp.get("episodes") if hp is not None else None
-            self.query_one("#compare-episodes", Input).value = str(budget or "")
+            self._episodes.value = str(budget or "")
             self._stale = True
         if self._stale and self.display:  # the history is read when the view is shown
             self._load_runs()
@@ -476,18 +495,15 @@ class CompareView(Vertical):
     def chosen_algorithms(self) -> tuple[str, ...]:
         from tui_gym.algorithms import ALGORITHMS
 
-        return tuple(
-            cls.name for cls in ALGORITHMS
-            if self.query_one(f"#algo-{cls.name}", TickBox).value
-        )
+        return tuple(cls.name for cls in ALGORITHMS if self._boxes[cls.name].value)
 
     def read_launch(self) -> Launch | None:
         """The form's values, or None (and the message saying what is wrong)."""
         try:
             return read_launch(
                 self.chosen_algorithms(),
-                self.query_one("#compare-seeds", Input).value,
-                self.query_one("#compare-episodes", Input).value,
+                self._seeds.value,
+                self._episodes.value,
             )
         except ValueError as exc:
             self._say(f"Not started: {exc}.", error=True)
@@ -534,15 +550,15 @@ class CompareView(Vertical):
         self._live, self._live_outcomes = (), ()
         job.start()
         self.add_class("-running")
-        self.query_one("#btn-stop", Button).disabled = False
-        self.query_one("#btn-compare", Button).disabled = True
+        self._stop.disabled = False
+        self._launch.disabled = True
         spec = job.spec
         names = ", ".join(algorithm_title(a) for a in spec.algorithms)
         settings = ", ".join(f"{k}={v}" for k, v in spec.settings.items())
         self._say(f"Comparing {names}: {spec.seeds:,} seeds × {compact_count(spec.episodes)} "
                   f"episodes" + (f", with {settings} from the Train view" if settings else "")
                   + "…")
-        self.query_one("#compare-progress", ProgressLine).show(0, 1)
+        self._progress.show(0, 1)
         self.refresh_bindings()
 
     def action_stop(self) -> None:
@@ -580,7 +596,7 @@ class CompareView(Vertical):
         done, total = int(progress.done), max(1, int(progress.total))
         elapsed = max(1e-9, time.monotonic() - job.started_at)
         eta = format_duration(elapsed / done * (total - done)) if 0 < done < total else ""
-        self.query_one("#compare-progress", ProgressLine).show(done, total, eta)
+        self._progress.show(done, total, eta)
         self._live_outcomes = progress.outcomes
         self._live = self._live_entries()
         self._redraw()
@@ -597,8 +613,8 @@ class CompareView(Vertical):
     def _finished(self, job: CompareJob) -> None:
         self._job = None
         self.remove_class("-running")
-        self.query_one("#btn-stop", Button).disabled = True
-        self.query_one("#btn-compare", Button).disabled = False
+        self._stop.disabled = True
+        self._launch.disabled = False
         self.refresh_bindings()
         result = job.result
         self._live, self._live_outcomes = (), ()
