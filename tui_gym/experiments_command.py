@@ -20,6 +20,7 @@ import sys
 import threading
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
@@ -324,7 +325,7 @@ def _write_csv(path: str, outcomes: Sequence[AlgorithmOutcome]) -> None:
         cells = [str(episode)] + ["" if np.isnan(c[i]) else repr(float(c[i])) for c in columns]
         lines.append(",".join(cells))
     try:
-        write_text_atomic(path, "\n".join(lines) + "\n")
+        write_text_atomic(Path(path).expanduser(), "\n".join(lines) + "\n")
     except OSError as exc:
         raise CliError(f"--csv {path}: cannot write ({exc.strerror or exc})") from None
 

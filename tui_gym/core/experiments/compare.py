@@ -430,8 +430,8 @@ def _run_scalar(
     exact = None if model is None else np.full((n, len(checkpoints)), np.nan)
 
     def state() -> SeedBatchState:
-        return SeedBatchState(done.copy(), returns.copy(), checkpoints.copy(),
-                              None if exact is None else exact.copy())
+        return SeedBatchState(done.copy(), returns[:, : int(done.max())].copy(),
+                              checkpoints.copy(), None if exact is None else exact.copy())
 
     last = time.monotonic()
     for i, seed in enumerate(job.seeds):
@@ -520,7 +520,7 @@ class _Tally:
                 continue
             rows = list(job.rows)
             done[rows] = state.done
-            returns[rows] = state.returns
+            returns[rows, : state.returns.shape[1]] = state.returns
             if exact is not None and state.exact is not None:
                 exact[rows] = state.exact
         return done, returns, checkpoints, exact

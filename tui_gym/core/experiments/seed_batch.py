@@ -177,7 +177,8 @@ def greedy_values(model: FiniteMDP, q: np.ndarray) -> np.ndarray:
 class SeedBatchState:
     """Where a batch stands: per seed, its episodes done, returns and exact values so far.
 
-    `returns[i, e]` is seed i's online return of episode e + 1 (NaN until played);
+    `returns[i, e]` is seed i's online return of episode e + 1 (NaN until played; the
+    columns stop at the furthest episode any seed has played);
     `exact[i, j]` its greedy policy's exact value at `checkpoints[j]` (NaN until
     reached; None without a model).
     """
@@ -210,9 +211,13 @@ class SeedBatch:
         n_states = steps.n_states
         self.learner = learner_class(steps.n_actions, hp, n_states=seeds * n_states, seed=seed)
         self.offset = np.arange(seeds, dtype=np.int64) * n_states
-        self.epsilons = np.array([hp.epsilon_at(e) for e in range(episodes)])
-        first = float(self.epsilons[0])
-        self._constant_epsilon = first if (self.epsilons == first).all() else None
+        self.hp = hp
+        # Each episode number's epsilon, worked out as the furthest seed gets there.
+        self.epsilons = np.zeros(episodes)
+        self._epsilons_known = 0
+        first, last = hp.epsilon_at(0), hp.epsilon_at(episodes - 1)
+        # The schedule is monotone: equal ends mean the same epsilon throughout.
+        self._constant_epsilon = float(first) if first == last else None
         self.model = model if model is not None and model.n_states == n_states else None
         self.checkpoints = checkpoint_episodes(episodes)
         self.done = np.zeros(seeds, dtype=np.int64)
@@ -224,11 +229,11 @@ class SeedBatch:
         self._to_value: list[tuple[int, int, np.ndarray]] = []  # (seed, checkpoint, its table)
 
     def state(self) -> SeedBatchState:
-        """Copies of what the batch has so far."""
+        """Copies of what the batch has so far (returns up to the furthest seed's episode)."""
         self._value_pending()
         return SeedBatchState(
             done=self.done.copy(),
-            returns=self.returns.copy(),
+            returns=self.returns[:, : int(self.done.max())].copy(),
             checkpoints=self.checkpoints.copy(),
             exact=None if self.exact is None else self.exact.copy(),
         )
@@ -269,14 +274,21 @@ class SeedBatch:
             learner.update(_subset(batch, np.flatnonzero(groups == g)))
 
     def _act(self, rows: np.ndarray, eps: np.ndarray | float) -> np.ndarray:
-        self.learner.epsilon = eps  # epsilon-greedy reads an array of them per row
+        self.learner.epsilon = eps  # type: ignore[assignment]  # read per row by epsilon-greedy
         return self.learner.act_batch(rows)
 
     def _epsilons(self, active: np.ndarray) -> np.ndarray | float:
         """Each active seed's epsilon (that of its episode number), one float if all agree."""
         if self._constant_epsilon is not None:
             return self._constant_epsilon
-        eps = self.epsilons[self.done[active]]
+        numbers = self.done[active]
+        furthest = int(numbers.max())
+        if furthest >= self._epsilons_known:
+            stop = min(self.episodes, furthest + 256)
+            for e in range(self._epsilons_known, stop):
+                self.epsilons[e] = self.hp.epsilon_at(e)
+            self._epsilons_known = stop
+        eps = self.epsilons[numbers]
         first = float(eps[0])
         return first if (eps == first).all() else eps
 
