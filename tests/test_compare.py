@@ -36,7 +36,13 @@ def _batch(name: str, model: FiniteMDP, seeds: int, episodes: int, **hp: object)
                      seed=2, model=model)
 
 
-def test_greedy_values_agree_with_policy_evaluation(cliff: FiniteMDP) -> None:
+@pytest.mark.parametrize("dense_states", [0, 256])
+def test_greedy_values_agree_with_policy_evaluation(
+    cliff: FiniteMDP, dense_states: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from tui_gym.core.experiments import seed_batch
+
+    monkeypatch.setattr(seed_batch, "_DENSE_STATES", dense_states)
     rng = np.random.default_rng(0)
     q = rng.integers(-3, 1, size=(4, cliff.n_states, cliff.n_actions)).astype(float)
     values = greedy_values(cliff, q)

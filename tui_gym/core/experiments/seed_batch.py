@@ -59,9 +59,9 @@ class BatchedSteps(Protocol):
         """Start an episode in each of `envs`; their first keys."""
 
     def step(
-        self, envs: np.ndarray, actions: np.ndarray
+        self, envs: np.ndarray | None, actions: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """One move in each of `envs`: rewards, next keys, terminated, truncated."""
+        """One move in each of `envs` (None: all): rewards, next keys, terminated, truncated."""
 
 
 class ModelSteps:
@@ -94,9 +94,10 @@ class ModelSteps:
         return states
 
     def step(
-        self, envs: np.ndarray, actions: np.ndarray
+        self, envs: np.ndarray | None, actions: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        pair = self.state[envs] * self.n_actions + actions
+        sel: Any = slice(None) if envs is None else envs
+        pair = self.state[sel] * self.n_actions + actions
         if self._deterministic:
             nxt = self._next[pair, 0]
             reward = self._reward[pair, 0]
@@ -108,9 +109,9 @@ class ModelSteps:
             nxt = self._next[pair, outcome]
             reward = self._reward[pair, outcome]
             terminated = self._terminal[pair, outcome]
-        self.state[envs] = nxt
-        elapsed = self.elapsed[envs] + 1
-        self.elapsed[envs] = elapsed
+        self.state[sel] = nxt
+        elapsed = self.elapsed[sel] + 1
+        self.elapsed[sel] = elapsed
         if self.horizon is None:
             truncated = np.zeros(len(pair), dtype=bool)
         else:
@@ -132,7 +133,7 @@ class PlanSteps:
         return np.asarray(self.keyer.keys(self.venv.reset(envs)), dtype=np.int64)
 
     def step(
-        self, envs: np.ndarray, actions: np.ndarray
+        self, envs: np.ndarray | None, actions: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         result = self.venv.step(actions, envs, autoreset=False)
         rewards = self.plan.transform_rewards(result.reward, result.distance)
@@ -149,14 +150,19 @@ def checkpoint_episodes(episodes: int, most: int = MAX_CHECKPOINTS) -> np.ndarra
 def greedy_values(model: FiniteMDP, q: np.ndarray) -> np.ndarray:
     """The exact value (gamma 1) of the greedy policy of each table `q[m, S, A]`, ties split evenly.
 
-    With an episode limit all tables are valued at once by backward steps; with
-    none, one at a time (minus infinity for a policy that may never end).
+    With an episode limit H all tables are valued at once: for a small model
+    by powers of each policy's transition matrix (the sum of the first H steps'
+    expected rewards in about log2(H) matrix products), else by H backward
+    steps. With no limit, one at a time (minus infinity for a policy that may
+    never end).
     """
     q = np.asarray(q, dtype=np.float64)
     tied = q == q.max(axis=2, keepdims=True)
     policy = tied / tied.sum(axis=2, keepdims=True)
     if model.horizon is None:
         return np.array([evaluate(model, p).value for p in policy])
+    if model.n_states <= _DENSE_STATES:
+        return _horizon_values_dense(model, policy, model.horizon)
     v = np.zeros((len(q), model.n_states))
     reward, cont, nxt = model.expected_reward, model.continue_prob, model.next_state
     moving = np.arange(len(q))  # tables whose values still change
@@ -171,6 +177,35 @@ def greedy_values(model: FiniteMDP, q: np.ndarray) -> np.ndarray:
         if not moving.size:
             break
     return v @ model.initial
+
+
+_DENSE_STATES = 256  # up to this many states, policies are valued by matrix powers
+
+
+def _horizon_values_dense(model: FiniteMDP, policy: np.ndarray, horizon: int) -> np.ndarray:
+    """Σ_{t<H} P^t r per policy, P its transition matrix over continuing outcomes."""
+    n = model.n_states
+    onto = np.zeros(model.next_state.shape + (n,))
+    np.put_along_axis(onto, model.next_state[..., np.newaxis], 1.0, axis=3)
+    step = np.einsum("sak,sakt->sat", model.continue_prob, onto)  # [S, A, S]
+    matrix = np.einsum("msa,sat->mst", policy, step)  # [m, S, S]
+    reward = (policy * model.expected_reward).sum(axis=2)  # [m, S]
+    # Binary powers: `power` is P^n and `total` the sum of the first n steps for the bits
+    # of H read so far, lowest first; n steps then m more: S_n + P^n S_m.
+    total = np.zeros_like(reward)
+    power_total = reward  # the sum of the first 2^k steps
+    power = matrix  # P^(2^k)
+    done_power = np.broadcast_to(np.eye(n), matrix.shape)  # P^(steps counted in total)
+    remaining = horizon
+    while remaining:
+        if remaining & 1:
+            total = total + np.einsum("mst,mt->ms", done_power, power_total)
+            done_power = done_power @ power
+        remaining >>= 1
+        if remaining:
+            power_total = power_total + np.einsum("mst,mt->ms", power, power_total)
+            power = power @ power
+    return total @ model.initial
 
 
 @dataclass(frozen=True)
@@ -326,18 +361,23 @@ class SeedBatch:
                     report(self)
                     last_report = now
             eps = self._epsilons(active)
-            rows = offset + keys if active.size == n else offset[active] + keys[active]
+            full = active.size == n
+            sel: Any = slice(None) if full else active
+            rows = offset[sel] + keys[sel]
             if sarsa_like:
-                actions = pending[active]
+                actions = pending[sel]
                 fresh = np.flatnonzero(actions < 0)
                 if fresh.size:
+                    if full:
+                        actions = actions.copy()  # a view of `pending` otherwise
                     actions[fresh] = self._act(
                         rows[fresh], eps if isinstance(eps, float) else eps[fresh]
                     )
             else:
                 actions = self._act(rows, eps)
-            rewards, next_keys, terminated, truncated = steps.step(active, actions)
-            next_rows = (offset if active.size == n else offset[active]) + next_keys
+            rewards, next_keys, terminated, truncated = steps.step(None if full else active,
+                                                                   actions)
+            next_rows = offset[sel] + next_keys
             next_actions = self._act(next_rows, eps) if sarsa_like else None
             self._update(
                 Transitions(rows, actions, rewards, next_rows, terminated, truncated,
@@ -345,9 +385,9 @@ class SeedBatch:
                 eps,
             )
             if next_actions is not None:
-                pending[active] = next_actions
-            keys[active] = next_keys
-            episode_return[active] += rewards
+                pending[sel] = next_actions
+            keys[sel] = next_keys
+            episode_return[sel] += rewards
             finished = terminated | truncated
             if finished.any():
                 ended = active[finished]
