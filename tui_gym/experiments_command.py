@@ -249,8 +249,10 @@ def cmd_compare(args: argparse.Namespace, out: Console) -> int:
         out.print(f"[yellow]interrupted:[/] kept the first "
                   f"{min(o.episodes for o in result.outcomes):,} episodes of every seed")
     if result.group is not None:
-        ids = ", ".join(str(o.run_id) for o in result.outcomes)
-        out.print(f"recorded as runs {ids} (tui-gym runs show ID)", style="dim")
+        ids = [str(o.run_id) for o in result.outcomes]
+        noun = "run" if len(ids) == 1 else "runs"
+        out.print(f"recorded in the run history as {noun} {', '.join(ids)} "
+                  "(tui-gym runs show ID)", style="dim")
     if args.csv:
         out.print(f"curves written to {args.csv}", style="dim")
     return 130 if result.interrupted else 0
@@ -272,7 +274,7 @@ def _compare_table(result: Any) -> Table:
     from tui_gym.terminal_chart import PALETTE
 
     for k, o in enumerate(result.outcomes):
-        row = [
+        row: list[Text | str] = [
             Text(o.algorithm, style=PALETTE[k % len(PALETTE)]),
             _settings_text(dict(o.hyperparameters)),
             _number_text(o.mean_return_last.mean, o.mean_return_last.ci95),

@@ -77,8 +77,7 @@ def measure(seeds: int, episodes: int, tutorial_share: float = 1.0) -> SeedsSpee
     for name in ALGORITHMS:
         session = Session(env_id=game, engine="scalar", algorithm=name,
                           hp={**SETTINGS, "episodes": episodes})
-        hp = session.hp
-        assert hp is not None  # a built session has its hyperparameters
+        hp = session.learner_class.settings(session.hp)
         for seed in range(per_algorithm):
             env = session.make_env()
             env.reset(seed=seed)
