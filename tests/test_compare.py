@@ -199,3 +199,12 @@ def test_stop_reaches_batches_in_child_processes(tmp_path) -> None:
     assert result.interrupted and len(result.outcomes) == 2
     assert all(1 <= o.episodes < 100_000 for o in result.outcomes)
     assert statuses == {RunStatus.INTERRUPTED}
+
+
+def test_wrappers_without_a_batched_form_play_seed_by_seed() -> None:
+    from tui_gym.core.wrappers import parse_wrapper_spec
+
+    spec = CompareSpec("blackjack", ["sarsa"], 2, 6,
+                       wrappers=(parse_wrapper_spec("DelayObservation"),))
+    (outcome,) = run_compare(spec, processes=0).outcomes
+    assert outcome.seeds_done == 2 and len(outcome.curve) == 6

@@ -388,7 +388,7 @@ def _run_job(
         if model is not None:
             steps = ModelSteps(model, len(job.seeds), env_seed)
         else:
-            steps = _plan_steps(session, len(job.seeds), env_seed)
+            steps = _plan_steps(job, session.keyer, len(job.seeds), env_seed)
         if steps is None:
             return _run_scalar(job, model, stop, report)
         batch = SeedBatch(
@@ -401,17 +401,25 @@ def _run_job(
         session.env.close()
 
 
-def _plan_steps(session: Any, n: int, seed: Any) -> PlanSteps | None:
-    """The vector engine's batched form of the session's game and wrappers, if it has one."""
-    from tui_gym.core.vector import NoBatchedForm, plan_for_env
+def _plan_steps(job: _Job, keyer: Any, n: int, seed: Any) -> PlanSteps | None:
+    """The vector engine's batched form of the job's game and wrappers, if it has one
+    (read from a session on the vector engine, as `train` would build it)."""
+    from tui_gym.core.session import Session
+    from tui_gym.core.vector import VectorTrainer
 
-    if not session.keyer.dense:
+    if not keyer.dense:
         return None
     try:
-        plan = plan_for_env(session.env)
-    except NoBatchedForm:
+        session = Session(env_id=job.env_id, env_kwargs=dict(job.env_kwargs),
+                          choices=tuple(job.wrappers), hp=dict(job.hp), seed=job.seeds[0],
+                          engine="vector", algorithm=job.algorithm)
+    except ValueError:  # no batched form for this game or these wrappers
         return None
-    return PlanSteps(plan, session.keyer, n, seed)
+    trainer = session.trainer
+    session.env.close()
+    if not isinstance(trainer, VectorTrainer):
+        return None
+    return PlanSteps(trainer.plan, keyer, n, seed)
 
 
 def _run_scalar(
