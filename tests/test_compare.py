@@ -36,7 +36,13 @@ def _batch(name: str, model: FiniteMDP, seeds: int, episodes: int, **hp: object)
                      seed=2, model=model)
 
 
-def test_greedy_values_agree_with_policy_evaluation(cliff: FiniteMDP) -> None:
+@pytest.mark.parametrize("dense_states", [0, 256])
+def test_greedy_values_agree_with_policy_evaluation(
+    cliff: FiniteMDP, dense_states: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from tui_gym.core.experiments import seed_batch
+
+    monkeypatch.setattr(seed_batch, "_DENSE_STATES", dense_states)
     rng = np.random.default_rng(0)
     q = rng.integers(-3, 1, size=(4, cliff.n_states, cliff.n_actions)).astype(float)
     values = greedy_values(cliff, q)
@@ -54,11 +60,11 @@ def test_sarsa_walks_safer_than_q_learning_on_the_cliff(cliff: FiniteMDP) -> Non
     # Q-learning's, while Q-learning's greedy policy is the optimal one along the edge.
     hp = {"epsilon_start": 0.1, "epsilon_final": 0.1, "learning_rate": 0.5,
           "learning_rate_schedule": "constant"}
-    q = _batch("q-learning", cliff, 6, 120, **hp)
-    sarsa = _batch("sarsa", cliff, 6, 120, **hp)
+    q = _batch("q-learning", cliff, 4, 80, **hp)
+    sarsa = _batch("sarsa", cliff, 4, 80, **hp)
     assert q.run() and sarsa.run()
-    assert (q.done == 120).all() and not np.isnan(q.returns).any()
-    last_q, last_sarsa = q.returns[:, -40:].mean(), sarsa.returns[:, -40:].mean()
+    assert (q.done == 80).all() and not np.isnan(q.returns).any()
+    last_q, last_sarsa = q.returns[:, -30:].mean(), sarsa.returns[:, -30:].mean()
     assert last_sarsa > last_q + 10
     assert q.exact is not None
     assert q.exact[:, -1].mean() == pytest.approx(solve(cliff).value)
@@ -143,8 +149,16 @@ def test_compare_output_shape_and_records(tmp_path) -> None:
     assert fig is not None and fig.value == pytest.approx(outcome.mean_return_last.mean)
 
 
+@pytest.fixture
+def quick_progress(monkeypatch: pytest.MonkeyPatch) -> None:
+    from tui_gym.core.experiments import compare
+
+    monkeypatch.setattr(compare, "PROGRESS_INTERVAL", 0.02)
+
+
+@pytest.mark.usefixtures("quick_progress")
 def test_stop_keeps_and_records_what_finished(tmp_path) -> None:
-    spec = CompareSpec("gridworld", ["q-learning"], 2, 100_000)
+    spec = CompareSpec("blackjack", ["q-learning"], 2, 100_000)
     stop = threading.Event()
 
     def progress(update: CompareProgress) -> None:
@@ -168,3 +182,29 @@ def test_batches_in_child_processes_match_the_calling_thread() -> None:
     there = run_compare(spec, processes=2)
     for a, b in zip(here.outcomes, there.outcomes, strict=True):
         np.testing.assert_array_equal(a.curve.mean, b.curve.mean)
+
+
+@pytest.mark.usefixtures("quick_progress")
+def test_stop_reaches_batches_in_child_processes(tmp_path) -> None:
+    spec = CompareSpec("blackjack", ["q-learning", "sarsa"], 2, 100_000)
+    stop = threading.Event()
+
+    def progress(update: CompareProgress) -> None:
+        if len(update.outcomes) == 2:
+            stop.set()
+
+    with RunHistory(tmp_path / "runs.db") as history:
+        result = run_compare(spec, progress=progress, stop=stop, history=history, processes=2)
+        statuses = {r.status for r in history.list_runs()}
+    assert result.interrupted and len(result.outcomes) == 2
+    assert all(1 <= o.episodes < 100_000 for o in result.outcomes)
+    assert statuses == {RunStatus.INTERRUPTED}
+
+
+def test_wrappers_without_a_batched_form_play_seed_by_seed() -> None:
+    from tui_gym.core.wrappers import parse_wrapper_spec
+
+    spec = CompareSpec("blackjack", ["sarsa"], 2, 6,
+                       wrappers=(parse_wrapper_spec("DelayObservation"),))
+    (outcome,) = run_compare(spec, processes=0).outcomes
+    assert outcome.seeds_done == 2 and len(outcome.curve) == 6

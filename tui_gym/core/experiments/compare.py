@@ -31,6 +31,7 @@ import multiprocessing
 import os
 import queue
 import signal
+import sys
 import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -72,6 +73,7 @@ __all__ = [
 PROGRESS_INTERVAL = 0.4  # seconds between progress calls
 JSON_CURVE_POINTS = 500  # curve points in `to_json`
 MIN_SEEDS_PER_BATCH = 8  # an algorithm's seeds are split over cores only down to this
+SMOOTHING_SHARE = 50  # charts smooth each seed's returns over 1/50 of the episodes
 
 
 @dataclass(frozen=True)
@@ -152,6 +154,8 @@ class AlgorithmOutcome:
     exact_curve: AggregateCurve | None = None
     exact_ci95: float | None = None
     seeds: int = 0
+    smoothed: AggregateCurve | None = None  # each seed's trailing mean over `smoothing` episodes
+    smoothing: int = 1
 
     @property
     def episodes(self) -> int:
@@ -223,10 +227,36 @@ class CompareResult:
 
 
 @dataclass(frozen=True)
+class Arm:
+    """One learner of an experiment: an algorithm with the settings given for it."""
+
+    algorithm: str
+    settings: Mapping[str, Any]
+    label: str = ""
+
+
+@dataclass(frozen=True)
+class Setup:
+    """What every arm of an experiment shares: the game, its seeds and episodes."""
+
+    game: str
+    seeds: int
+    episodes: int
+    game_params: Mapping[str, Any]
+    wrappers: tuple[WrapperChoice, ...]
+    first_seed: int
+
+    @property
+    def seed_list(self) -> tuple[int, ...]:
+        return tuple(range(self.first_seed, self.first_seed + self.seeds))
+
+
+@dataclass(frozen=True)
 class _Job:
-    """One batch: an algorithm's seeds `seeds` (indices `rows` of its seed list)."""
+    """One batch: an arm's seeds `seeds` (indices `rows` of its seed list)."""
 
     index: int
+    arm: int
     algorithm: str
     env_id: str
     env_kwargs: Mapping[str, Any]
@@ -238,30 +268,28 @@ class _Job:
 
 
 @dataclass
-class _Prepared:
+class Prepared:
+    """The game as built once: its name, id and arguments, each arm's hyperparameters,
+    and its exact model and optimum when it has one."""
+
     game: str
     env_id: str
     env_kwargs: dict[str, Any]
     wrappers: tuple[WrapperSetting, ...]
-    hyperparameters: dict[str, dict[str, Any]]
+    hyperparameters: list[dict[str, Any]]
     model: FiniteMDP | None
     optimum: float | None
 
 
-def _session(spec_or_job: Any, name: str, hp: Mapping[str, Any], seed: int) -> Any:
+def _session(
+    env_id: str, env_kwargs: Mapping[str, Any], wrappers: Sequence[WrapperChoice], name: str,
+    hp: Mapping[str, Any], seed: int,
+) -> Any:
     from tui_gym.core.session import Session
 
     return Session(
-        env_id=spec_or_job.game if isinstance(spec_or_job, CompareSpec) else spec_or_job.env_id,
-        env_kwargs=dict(
-            spec_or_job.game_params if isinstance(spec_or_job, CompareSpec)
-            else spec_or_job.env_kwargs
-        ),
-        choices=tuple(spec_or_job.wrappers),
-        hp=dict(hp),
-        seed=seed,
-        engine="scalar",
-        algorithm=name,
+        env_id=env_id, env_kwargs=dict(env_kwargs), choices=tuple(wrappers), hp=dict(hp),
+        seed=seed, engine="scalar", algorithm=name,
     )
 
 
@@ -279,16 +307,17 @@ def _exact_model(session: Any) -> FiniteMDP | None:
     return model
 
 
-def _prepare(spec: CompareSpec) -> _Prepared:
-    """Build the game once per algorithm: checks every setting, and gives the hyperparameters."""
-    hyperparameters: dict[str, dict[str, Any]] = {}
+def prepare(setup: Setup, arms: Sequence[Arm]) -> Prepared:
+    """Build the game once per arm: checks every setting, and gives the hyperparameters
+    (the budget `episodes` defaults to the experiment's). ValueError for a bad one."""
+    hyperparameters: list[dict[str, Any]] = []
     first: Any = None
-    for name in spec.algorithms:
-        fields = {f.name for f in algorithm(name).params}
-        values = {k: v for k, v in spec.settings.items() if k in fields}
-        values.setdefault("episodes", spec.episodes)
-        session = _session(spec, name, values, spec.first_seed)
-        hyperparameters[name] = dict(session.hp)
+    for arm in arms:
+        values = dict(arm.settings)
+        values.setdefault("episodes", setup.episodes)
+        session = _session(setup.game, setup.game_params, setup.wrappers, arm.algorithm,
+                           values, setup.first_seed)
+        hyperparameters.append(dict(session.hp))
         if first is None:
             first = session
         else:
@@ -303,7 +332,7 @@ def _prepare(spec: CompareSpec) -> _Prepared:
     if model is not None:
         value = solve(model).value
         optimum = value if math.isfinite(value) else None
-    prepared = _Prepared(
+    prepared = Prepared(
         game=_game_name(first),
         env_id=first.env_id,
         env_kwargs=dict(first.env_kwargs),
@@ -323,19 +352,19 @@ def _cores() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _jobs(spec: CompareSpec, prepared: _Prepared, cores: int) -> list[_Job]:
-    per_algorithm = max(1, math.ceil(cores / len(spec.algorithms)))
-    chunks = max(1, min(per_algorithm, spec.seeds // MIN_SEEDS_PER_BATCH))
-    bounds = np.linspace(0, spec.seeds, chunks + 1).round().astype(int)
-    seeds = spec.seed_list
+def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared, cores: int) -> list[_Job]:
+    per_arm = max(1, math.ceil(cores / len(arms)))
+    chunks = max(1, min(per_arm, setup.seeds // MIN_SEEDS_PER_BATCH))
+    bounds = np.linspace(0, setup.seeds, chunks + 1).round().astype(int)
+    seeds = setup.seed_list
     jobs: list[_Job] = []
-    for name in spec.algorithms:
+    for a, arm in enumerate(arms):
         for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
             jobs.append(_Job(
-                index=len(jobs), algorithm=name, env_id=prepared.env_id,
-                env_kwargs=prepared.env_kwargs, wrappers=tuple(spec.wrappers),
-                hp=prepared.hyperparameters[name], seeds=seeds[lo:hi],
-                rows=tuple(range(lo, hi)), episodes=spec.episodes,
+                index=len(jobs), arm=a, algorithm=arm.algorithm, env_id=prepared.env_id,
+                env_kwargs=prepared.env_kwargs, wrappers=tuple(setup.wrappers),
+                hp=prepared.hyperparameters[a], seeds=seeds[lo:hi],
+                rows=tuple(range(lo, hi)), episodes=setup.episodes,
             ))
     return jobs
 
@@ -349,7 +378,8 @@ def _run_job(
     report: Callable[[SeedBatchState], None],
 ) -> SeedBatchState:
     """Train a job's seeds; its state at the end (complete or stopped)."""
-    session = _session(job, job.algorithm, job.hp, job.seeds[0])
+    session = _session(job.env_id, job.env_kwargs, job.wrappers, job.algorithm, job.hp,
+                       job.seeds[0])
     try:
         model = _exact_model(session)
         entropy = [job.seeds[0], len(job.seeds), job.episodes]
@@ -358,7 +388,7 @@ def _run_job(
         if model is not None:
             steps = ModelSteps(model, len(job.seeds), env_seed)
         else:
-            steps = _plan_steps(session, len(job.seeds), env_seed)
+            steps = _plan_steps(job, session.keyer, len(job.seeds), env_seed)
         if steps is None:
             return _run_scalar(job, model, stop, report)
         batch = SeedBatch(
@@ -371,17 +401,25 @@ def _run_job(
         session.env.close()
 
 
-def _plan_steps(session: Any, n: int, seed: Any) -> PlanSteps | None:
-    """The vector engine's batched form of the session's game and wrappers, if it has one."""
-    from tui_gym.core.vector import NoBatchedForm, plan_for_env
+def _plan_steps(job: _Job, keyer: Any, n: int, seed: Any) -> PlanSteps | None:
+    """The vector engine's batched form of the job's game and wrappers, if it has one
+    (read from a session on the vector engine, as `train` would build it)."""
+    from tui_gym.core.session import Session
+    from tui_gym.core.vector import VectorTrainer
 
-    if not session.keyer.dense:
+    if not keyer.dense:
         return None
     try:
-        plan = plan_for_env(session.env)
-    except NoBatchedForm:
+        session = Session(env_id=job.env_id, env_kwargs=dict(job.env_kwargs),
+                          choices=tuple(job.wrappers), hp=dict(job.hp), seed=job.seeds[0],
+                          engine="vector", algorithm=job.algorithm)
+    except ValueError:  # no batched form for this game or these wrappers
         return None
-    return PlanSteps(plan, session.keyer, n, seed)
+    trainer = session.trainer
+    session.env.close()
+    if not isinstance(trainer, VectorTrainer):
+        return None
+    return PlanSteps(trainer.plan, keyer, n, seed)
 
 
 def _run_scalar(
@@ -401,12 +439,13 @@ def _run_scalar(
     exact = None if model is None else np.full((n, len(checkpoints)), np.nan)
 
     def state() -> SeedBatchState:
-        return SeedBatchState(done.copy(), returns.copy(), checkpoints.copy(),
-                              None if exact is None else exact.copy())
+        return SeedBatchState(done.copy(), returns[:, : int(done.max())].copy(),
+                              checkpoints.copy(), None if exact is None else exact.copy())
 
     last = time.monotonic()
     for i, seed in enumerate(job.seeds):
-        session = _session(job, job.algorithm, job.hp, seed)
+        session = _session(job.env_id, job.env_kwargs, job.wrappers, job.algorithm, job.hp,
+                           seed)
         try:
             for e in range(episodes):
                 if stop():
@@ -439,14 +478,11 @@ def _child(job: _Job, messages: Any, stop_flag: Any) -> None:
 
 
 def _context() -> Any:
-    methods = multiprocessing.get_all_start_methods()
-    # Forking is the quickest start, but only safe from a process with one thread.
-    if "fork" in methods and threading.active_count() == 1:
+    """Fork on Linux: the quickest start, and it runs no part of the caller's main module
+    again. The children only run batches (no terminal, no locks of the caller's threads),
+    so forking from a program with threads (the app) is safe here. Elsewhere, spawn."""
+    if sys.platform.startswith("linux") and "fork" in multiprocessing.get_all_start_methods():
         return multiprocessing.get_context("fork")
-    if "forkserver" in methods:
-        ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload([__name__])
-        return ctx
     return multiprocessing.get_context("spawn")
 
 
@@ -454,46 +490,49 @@ def _context() -> Any:
 
 
 class _Tally:
-    """The jobs' latest states, merged per algorithm."""
+    """The jobs' latest states, merged per arm."""
 
-    def __init__(self, spec: CompareSpec, prepared: _Prepared, jobs: list[_Job]) -> None:
-        self.spec = spec
+    def __init__(
+        self, setup: Setup, arms: Sequence[Arm], prepared: Prepared, jobs: list[_Job]
+    ) -> None:
+        self.setup = setup
+        self.arms = arms
         self.prepared = prepared
         self.jobs = jobs
         self.states: dict[int, SeedBatchState] = {}
-        self.run_ids: dict[str, int | None] = dict.fromkeys(spec.algorithms)
+        self.run_ids: list[int | None] = [None] * len(arms)
 
     def done(self) -> int:
         return int(sum(int(s.done.sum()) for s in self.states.values()))
 
     def total(self) -> int:
-        return len(self.spec.algorithms) * self.spec.seeds * self.spec.episodes
+        return len(self.arms) * self.setup.seeds * self.setup.episodes
 
-    def outcomes(self) -> tuple[AlgorithmOutcome, ...]:
-        found = (self._outcome(name) for name in self.spec.algorithms)
-        return tuple(o for o in found if o is not None)
+    def outcomes(self) -> list[AlgorithmOutcome | None]:
+        """Each arm's outcome so far (None for one with no episode finished by every seed)."""
+        return [self._outcome(a) for a in range(len(self.arms))]
 
-    def _merged(self, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
-        spec = self.spec
-        checkpoints = checkpoint_episodes(spec.episodes)
-        done = np.zeros(spec.seeds, dtype=np.int64)
-        returns = np.full((spec.seeds, spec.episodes), np.nan)
+    def _merged(self, arm: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+        setup = self.setup
+        checkpoints = checkpoint_episodes(setup.episodes)
+        done = np.zeros(setup.seeds, dtype=np.int64)
+        returns = np.full((setup.seeds, setup.episodes), np.nan)
         exact = None if self.prepared.model is None else np.full(
-            (spec.seeds, len(checkpoints)), np.nan
+            (setup.seeds, len(checkpoints)), np.nan
         )
         for job in self.jobs:
             state = self.states.get(job.index)
-            if job.algorithm != name or state is None:
+            if job.arm != arm or state is None:
                 continue
             rows = list(job.rows)
             done[rows] = state.done
-            returns[rows] = state.returns
+            returns[rows, : state.returns.shape[1]] = state.returns
             if exact is not None and state.exact is not None:
                 exact[rows] = state.exact
         return done, returns, checkpoints, exact
 
-    def _outcome(self, name: str) -> AlgorithmOutcome | None:
-        done, returns, checkpoints, exact = self._merged(name)
+    def _outcome(self, arm: int) -> AlgorithmOutcome | None:
+        done, returns, checkpoints, exact = self._merged(arm)
         common = int(done.min())
         if common < 1:
             return None
@@ -511,50 +550,54 @@ class _Tally:
                 exact_value, exact_ci = estimate.mean, estimate.ci95
                 if self.prepared.optimum is not None:
                     exact_gap = self.prepared.optimum - exact_value
+        window = max(1, common // SMOOTHING_SHARE)
         return AlgorithmOutcome(
-            algorithm=name,
-            hyperparameters=self.prepared.hyperparameters[name],
-            seeds_done=int((done >= self.spec.episodes).sum()),
+            algorithm=self.arms[arm].algorithm,
+            hyperparameters=self.prepared.hyperparameters[arm],
+            seeds_done=int((done >= self.setup.episodes).sum()),
             curve=aggregate(seen),
             mean_return_last=mean_return_last(seen),
             exact_value=exact_value,
             exact_gap=exact_gap,
-            run_id=self.run_ids[name],
+            run_id=self.run_ids[arm],
             exact_curve=exact_curve,
             exact_ci95=exact_ci,
-            seeds=self.spec.seeds,
+            seeds=self.setup.seeds,
+            smoothed=aggregate(seen, window=window) if window > 1 else None,
+            smoothing=window,
         )
 
 
-def _start_runs(history: RunHistory, spec: CompareSpec, prepared: _Prepared) -> dict[str, int]:
-    ids: dict[str, int] = {}
+def _start_runs(
+    history: RunHistory, kind: RunKind, setup: Setup, arms: Sequence[Arm], prepared: Prepared
+) -> list[int | None]:
+    ids: list[int | None] = []
     group: int | None = None
-    for name in spec.algorithms:
+    for a, arm in enumerate(arms):
         run_id = history.start_run(RunSpec(
-            kind=RunKind.COMPARE,
+            kind=kind,
             game=prepared.game,
-            algorithm=name,
+            algorithm=arm.algorithm,
             game_params=prepared.env_kwargs,
             wrappers=prepared.wrappers,
-            hyperparameters=prepared.hyperparameters[name],
-            seeds=spec.seed_list,
+            hyperparameters=prepared.hyperparameters[a],
+            seeds=setup.seed_list,
             group=group,
         ))
-        ids[name] = run_id
+        ids.append(run_id)
         if group is None:
             group = run_id
     return ids
 
 
 def _record(
-    history: RunHistory, tally: _Tally, outcomes: tuple[AlgorithmOutcome, ...], interrupted: bool
+    history: RunHistory, tally: _Tally, outcomes: Sequence[AlgorithmOutcome | None],
+    interrupted: bool,
 ) -> None:
-    by_name = {o.algorithm: o for o in outcomes}
     status = RunStatus.INTERRUPTED if interrupted else RunStatus.FINISHED
-    for name, run_id in tally.run_ids.items():
+    for run_id, outcome in zip(tally.run_ids, outcomes, strict=True):
         if run_id is None:
             continue
-        outcome = by_name.get(name)
         if outcome is None:
             history.update(run_id, status=status)
             continue
@@ -562,6 +605,72 @@ def _record(
         if outcome.exact_curve is not None:
             curves.extend(outcome.exact_curve.as_curves("exact_value"))
         history.update(run_id, curves=curves, figures=outcome.figures(), status=status)
+
+
+@dataclass(frozen=True)
+class Executed:
+    """What `execute` gives back: each arm's outcome (None if it finished no episode)."""
+
+    outcomes: tuple[AlgorithmOutcome | None, ...]
+    interrupted: bool
+    group: int | None
+    prepared: Prepared
+
+
+def execute(
+    setup: Setup,
+    arms: Sequence[Arm],
+    kind: RunKind,
+    *,
+    progress: Callable[[CompareProgress], None] | None = None,
+    stop: threading.Event | None = None,
+    history: RunHistory | None = None,
+    processes: int | None = None,
+) -> Executed:
+    """Train every arm over the setup's seeds (what `run_compare` and `run_sweep` share)."""
+    prepared = prepare(setup, arms)
+    cores = _cores() if processes is None else max(1, processes)
+    jobs = _jobs(setup, arms, prepared, cores)
+    tally = _Tally(setup, arms, prepared, jobs)
+    if history is not None:
+        tally.run_ids = _start_runs(history, kind, setup, arms, prepared)
+    last = [time.monotonic()]
+
+    def tell(force: bool = False) -> None:
+        if progress is None:
+            return
+        now = time.monotonic()
+        if force or now - last[0] >= PROGRESS_INTERVAL:
+            last[0] = now
+            found = tuple(o for o in tally.outcomes() if o is not None)
+            progress(CompareProgress(tally.done(), tally.total(), found))
+
+    stopped = stop.is_set if stop is not None else (lambda: False)
+    complete = False
+    failure: BaseException | None = None
+    try:
+        if processes == 0:
+            complete = _run_here(jobs, tally, stopped, tell)
+        else:
+            complete = _run_children(jobs, tally, stopped, tell, cores)
+    except BaseException as exc:
+        failure = exc
+    outcomes = tally.outcomes()
+    interrupted = not complete
+    if history is not None:
+        if failure is not None and not isinstance(failure, KeyboardInterrupt):
+            for run_id in tally.run_ids:
+                if run_id is not None:
+                    history.update(run_id, status=RunStatus.FAILED)
+        else:
+            _record(history, tally, outcomes, interrupted)
+    if failure is not None:
+        raise failure
+    tell(force=True)
+    return Executed(
+        outcomes=tuple(outcomes), interrupted=interrupted,
+        group=tally.run_ids[0] if tally.run_ids else None, prepared=prepared,
+    )
 
 
 def run_compare(
@@ -578,48 +687,18 @@ def run_compare(
     0 runs them one after another on the calling thread. ValueError, before
     anything runs, for an unknown game, algorithm or setting, or a bad value.
     """
-    prepared = _prepare(spec)
-    cores = _cores() if processes is None else max(1, processes)
-    jobs = _jobs(spec, prepared, cores)
-    tally = _Tally(spec, prepared, jobs)
-    if history is not None:
-        tally.run_ids.update(_start_runs(history, spec, prepared))
-    last = [time.monotonic()]
-
-    def tell(force: bool = False) -> None:
-        if progress is None:
-            return
-        now = time.monotonic()
-        if force or now - last[0] >= PROGRESS_INTERVAL:
-            last[0] = now
-            progress(CompareProgress(tally.done(), tally.total(), tally.outcomes()))
-
-    stopped = stop.is_set if stop is not None else (lambda: False)
-    complete = False
-    failure: BaseException | None = None
-    try:
-        if processes == 0:
-            complete = _run_here(jobs, tally, stopped, tell)
-        else:
-            complete = _run_children(jobs, tally, stopped, tell, cores)
-    except BaseException as exc:
-        failure = exc
-    outcomes = tally.outcomes()
-    interrupted = not complete
-    if history is not None:
-        if failure is not None and not isinstance(failure, KeyboardInterrupt):
-            for run_id in tally.run_ids.values():
-                if run_id is not None:
-                    history.update(run_id, status=RunStatus.FAILED)
-        else:
-            _record(history, tally, outcomes, interrupted)
-    if failure is not None:
-        raise failure
-    tell(force=True)
-    group = next(iter(tally.run_ids.values()), None)
+    setup = Setup(spec.game, spec.seeds, spec.episodes, spec.game_params,
+                  tuple(spec.wrappers), spec.first_seed)
+    arms = [
+        Arm(name, {k: v for k, v in spec.settings.items() if _owners(k, [name])}, name)
+        for name in spec.algorithms
+    ]
+    done = execute(setup, arms, RunKind.COMPARE, progress=progress, stop=stop,
+                   history=history, processes=processes)
     return CompareResult(
-        outcomes=outcomes, interrupted=interrupted, group=group, spec=spec,
-        game=prepared.game, optimum=prepared.optimum,
+        outcomes=tuple(o for o in done.outcomes if o is not None),
+        interrupted=done.interrupted, group=done.group, spec=spec,
+        game=done.prepared.game, optimum=done.prepared.optimum,
     )
 
 

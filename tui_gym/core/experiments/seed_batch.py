@@ -59,9 +59,9 @@ class BatchedSteps(Protocol):
         """Start an episode in each of `envs`; their first keys."""
 
     def step(
-        self, envs: np.ndarray, actions: np.ndarray
+        self, envs: np.ndarray | None, actions: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """One move in each of `envs`: rewards, next keys, terminated, truncated."""
+        """One move in each of `envs` (None: all): rewards, next keys, terminated, truncated."""
 
 
 class ModelSteps:
@@ -94,9 +94,10 @@ class ModelSteps:
         return states
 
     def step(
-        self, envs: np.ndarray, actions: np.ndarray
+        self, envs: np.ndarray | None, actions: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        pair = self.state[envs] * self.n_actions + actions
+        sel: Any = slice(None) if envs is None else envs
+        pair = self.state[sel] * self.n_actions + actions
         if self._deterministic:
             nxt = self._next[pair, 0]
             reward = self._reward[pair, 0]
@@ -108,9 +109,9 @@ class ModelSteps:
             nxt = self._next[pair, outcome]
             reward = self._reward[pair, outcome]
             terminated = self._terminal[pair, outcome]
-        self.state[envs] = nxt
-        elapsed = self.elapsed[envs] + 1
-        self.elapsed[envs] = elapsed
+        self.state[sel] = nxt
+        elapsed = self.elapsed[sel] + 1
+        self.elapsed[sel] = elapsed
         if self.horizon is None:
             truncated = np.zeros(len(pair), dtype=bool)
         else:
@@ -132,7 +133,7 @@ class PlanSteps:
         return np.asarray(self.keyer.keys(self.venv.reset(envs)), dtype=np.int64)
 
     def step(
-        self, envs: np.ndarray, actions: np.ndarray
+        self, envs: np.ndarray | None, actions: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         result = self.venv.step(actions, envs, autoreset=False)
         rewards = self.plan.transform_rewards(result.reward, result.distance)
@@ -149,14 +150,19 @@ def checkpoint_episodes(episodes: int, most: int = MAX_CHECKPOINTS) -> np.ndarra
 def greedy_values(model: FiniteMDP, q: np.ndarray) -> np.ndarray:
     """The exact value (gamma 1) of the greedy policy of each table `q[m, S, A]`, ties split evenly.
 
-    With an episode limit all tables are valued at once by backward steps; with
-    none, one at a time (minus infinity for a policy that may never end).
+    With an episode limit H all tables are valued at once: for a small model
+    by powers of each policy's transition matrix (the sum of the first H steps'
+    expected rewards in about log2(H) matrix products), else by H backward
+    steps. With no limit, one at a time (minus infinity for a policy that may
+    never end).
     """
     q = np.asarray(q, dtype=np.float64)
     tied = q == q.max(axis=2, keepdims=True)
     policy = tied / tied.sum(axis=2, keepdims=True)
     if model.horizon is None:
         return np.array([evaluate(model, p).value for p in policy])
+    if model.n_states <= _DENSE_STATES:
+        return _horizon_values_dense(model, policy, model.horizon)
     v = np.zeros((len(q), model.n_states))
     reward, cont, nxt = model.expected_reward, model.continue_prob, model.next_state
     moving = np.arange(len(q))  # tables whose values still change
@@ -173,11 +179,41 @@ def greedy_values(model: FiniteMDP, q: np.ndarray) -> np.ndarray:
     return v @ model.initial
 
 
+_DENSE_STATES = 256  # up to this many states, policies are valued by matrix powers
+
+
+def _horizon_values_dense(model: FiniteMDP, policy: np.ndarray, horizon: int) -> np.ndarray:
+    """Σ_{t<H} P^t r per policy, P its transition matrix over continuing outcomes."""
+    n = model.n_states
+    onto = np.zeros(model.next_state.shape + (n,))
+    np.put_along_axis(onto, model.next_state[..., np.newaxis], 1.0, axis=3)
+    step = np.einsum("sak,sakt->sat", model.continue_prob, onto)  # [S, A, S]
+    matrix = np.einsum("msa,sat->mst", policy, step)  # [m, S, S]
+    reward = (policy * model.expected_reward).sum(axis=2)  # [m, S]
+    # Binary powers: `power` is P^n and `total` the sum of the first n steps for the bits
+    # of H read so far, lowest first; n steps then m more: S_n + P^n S_m.
+    total = np.zeros_like(reward)
+    power_total = reward  # the sum of the first 2^k steps
+    power = matrix  # P^(2^k)
+    done_power = np.broadcast_to(np.eye(n), matrix.shape)  # P^(steps counted in total)
+    remaining = horizon
+    while remaining:
+        if remaining & 1:
+            total = total + np.einsum("mst,mt->ms", done_power, power_total)
+            done_power = done_power @ power
+        remaining >>= 1
+        if remaining:
+            power_total = power_total + np.einsum("mst,mt->ms", power, power_total)
+            power = power @ power
+    return total @ model.initial
+
+
 @dataclass(frozen=True)
 class SeedBatchState:
     """Where a batch stands: per seed, its episodes done, returns and exact values so far.
 
-    `returns[i, e]` is seed i's online return of episode e + 1 (NaN until played);
+    `returns[i, e]` is seed i's online return of episode e + 1 (NaN until played; the
+    columns stop at the furthest episode any seed has played);
     `exact[i, j]` its greedy policy's exact value at `checkpoints[j]` (NaN until
     reached; None without a model).
     """
@@ -210,9 +246,13 @@ class SeedBatch:
         n_states = steps.n_states
         self.learner = learner_class(steps.n_actions, hp, n_states=seeds * n_states, seed=seed)
         self.offset = np.arange(seeds, dtype=np.int64) * n_states
-        self.epsilons = np.array([hp.epsilon_at(e) for e in range(episodes)])
-        first = float(self.epsilons[0])
-        self._constant_epsilon = first if (self.epsilons == first).all() else None
+        self.hp = hp
+        # Each episode number's epsilon, worked out as the furthest seed gets there.
+        self.epsilons = np.zeros(episodes)
+        self._epsilons_known = 0
+        first, last = hp.epsilon_at(0), hp.epsilon_at(episodes - 1)
+        # The schedule is monotone: equal ends mean the same epsilon throughout.
+        self._constant_epsilon = float(first) if first == last else None
         self.model = model if model is not None and model.n_states == n_states else None
         self.checkpoints = checkpoint_episodes(episodes)
         self.done = np.zeros(seeds, dtype=np.int64)
@@ -224,11 +264,11 @@ class SeedBatch:
         self._to_value: list[tuple[int, int, np.ndarray]] = []  # (seed, checkpoint, its table)
 
     def state(self) -> SeedBatchState:
-        """Copies of what the batch has so far."""
+        """Copies of what the batch has so far (returns up to the furthest seed's episode)."""
         self._value_pending()
         return SeedBatchState(
             done=self.done.copy(),
-            returns=self.returns.copy(),
+            returns=self.returns[:, : int(self.done.max())].copy(),
             checkpoints=self.checkpoints.copy(),
             exact=None if self.exact is None else self.exact.copy(),
         )
@@ -269,14 +309,21 @@ class SeedBatch:
             learner.update(_subset(batch, np.flatnonzero(groups == g)))
 
     def _act(self, rows: np.ndarray, eps: np.ndarray | float) -> np.ndarray:
-        self.learner.epsilon = eps  # epsilon-greedy reads an array of them per row
+        self.learner.epsilon = eps  # type: ignore[assignment]  # read per row by epsilon-greedy
         return self.learner.act_batch(rows)
 
     def _epsilons(self, active: np.ndarray) -> np.ndarray | float:
         """Each active seed's epsilon (that of its episode number), one float if all agree."""
         if self._constant_epsilon is not None:
             return self._constant_epsilon
-        eps = self.epsilons[self.done[active]]
+        numbers = self.done[active]
+        furthest = int(numbers.max())
+        if furthest >= self._epsilons_known:
+            stop = min(self.episodes, furthest + 256)
+            for e in range(self._epsilons_known, stop):
+                self.epsilons[e] = self.hp.epsilon_at(e)
+            self._epsilons_known = stop
+        eps = self.epsilons[numbers]
         first = float(eps[0])
         return first if (eps == first).all() else eps
 
@@ -314,18 +361,23 @@ class SeedBatch:
                     report(self)
                     last_report = now
             eps = self._epsilons(active)
-            rows = offset + keys if active.size == n else offset[active] + keys[active]
+            full = active.size == n
+            sel: Any = slice(None) if full else active
+            rows = offset[sel] + keys[sel]
             if sarsa_like:
-                actions = pending[active]
+                actions = pending[sel]
                 fresh = np.flatnonzero(actions < 0)
                 if fresh.size:
+                    if full:
+                        actions = actions.copy()  # a view of `pending` otherwise
                     actions[fresh] = self._act(
                         rows[fresh], eps if isinstance(eps, float) else eps[fresh]
                     )
             else:
                 actions = self._act(rows, eps)
-            rewards, next_keys, terminated, truncated = steps.step(active, actions)
-            next_rows = (offset if active.size == n else offset[active]) + next_keys
+            rewards, next_keys, terminated, truncated = steps.step(None if full else active,
+                                                                   actions)
+            next_rows = offset[sel] + next_keys
             next_actions = self._act(next_rows, eps) if sarsa_like else None
             self._update(
                 Transitions(rows, actions, rewards, next_rows, terminated, truncated,
@@ -333,9 +385,9 @@ class SeedBatch:
                 eps,
             )
             if next_actions is not None:
-                pending[active] = next_actions
-            keys[active] = next_keys
-            episode_return[active] += rewards
+                pending[sel] = next_actions
+            keys[sel] = next_keys
+            episode_return[sel] += rewards
             finished = terminated | truncated
             if finished.any():
                 ended = active[finished]
