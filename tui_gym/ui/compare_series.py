@@ -53,6 +53,7 @@ class Series:
     hi: np.ndarray | None = None
     seeds: int = 1
     smoothing: int = 1  # the trailing mean's window over points (1: as recorded)
+    smoothing_episodes: int = 1  # about how many episodes that window spans
 
     @property
     def has_band(self) -> bool:
@@ -64,7 +65,7 @@ class Series:
         if self.has_band:
             words.append("mean, 95% band")
         if self.smoothing > 1:
-            words.append(f"smoothed over {self.smoothing} points")
+            words.append(f"smoothed over {self.smoothing_episodes:,} episodes")
         return " · ".join(words)
 
 
@@ -80,8 +81,9 @@ def _smoothed(
     window = smoothing_window(len(mean), smooth)
     if lo is not None and hi is not None:
         lo, hi = rolling_mean(lo, window), rolling_mean(hi, window)
+    spacing = (episodes[-1] - episodes[0]) / (len(episodes) - 1) if len(episodes) > 1 else 1
     return Series(key, label, episodes, rolling_mean(mean, window), lo, hi, seeds=seeds,
-                  smoothing=window)
+                  smoothing=window, smoothing_episodes=max(1, round(window * spacing)))
 
 
 def _finite(episodes: np.ndarray, *columns: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -113,8 +115,18 @@ def series_of_record(record: RunRecord, smooth: bool = True) -> Series | None:
 def series_of_outcome(
     outcome: AlgorithmOutcome, label: str, smooth: bool = True
 ) -> Series | None:
-    """A running comparison's aggregate curve for one algorithm, None before any point."""
+    """A running comparison's aggregate curve for one algorithm, None before any point.
+    Smoothed, it is the comparison's own smoothed curve where it has one (each seed's
+    returns smoothed before the band is formed)."""
     curve = outcome.curve
+    if smooth and outcome.smoothed is not None and len(outcome.smoothed):
+        own = outcome.smoothed
+        if own.lo is not None and own.hi is not None:
+            episodes, mean, lo, hi = _finite(np.asarray(own.episodes), own.mean, own.lo, own.hi)
+            if len(episodes):
+                return Series(("live", outcome.algorithm), label, episodes, mean, lo, hi,
+                              seeds=max(1, own.seeds), smoothing=outcome.smoothing,
+                              smoothing_episodes=outcome.smoothing)
     if not len(curve):
         return None
     episodes = np.asarray(curve.episodes)
