@@ -122,9 +122,9 @@ def series_of_outcome(
     if smooth and outcome.smoothed is not None and len(outcome.smoothed):
         own = outcome.smoothed
         if own.lo is not None and own.hi is not None:
-            episodes, mean, lo, hi = _finite(np.asarray(own.episodes), own.mean, own.lo, own.hi)
-            if len(episodes):
-                return Series(("live", outcome.algorithm), label, episodes, mean, lo, hi,
+            xs, ys, low, high = _finite(np.asarray(own.episodes), own.mean, own.lo, own.hi)
+            if len(xs):
+                return Series(("live", outcome.algorithm), label, xs, ys, low, high,
                               seeds=max(1, own.seeds), smoothing=outcome.smoothing,
                               smoothing_episodes=outcome.smoothing)
     if not len(curve):
