@@ -604,10 +604,10 @@ class CompareView(Vertical):
     def _live_entries(self) -> tuple[tuple[Series, FigureRow], ...]:
         entries = []
         for outcome in self._live_outcomes:
-            label = f"{algorithm_title(outcome.algorithm)} (live)"
-            series = series_of_outcome(outcome, label, self.smooth)
+            title = algorithm_title(outcome.algorithm)
+            series = series_of_outcome(outcome, f"{title} (live)", self.smooth)
             if series is not None:
-                entries.append((series, row_of_outcome(outcome, label)))
+                entries.append((series, row_of_outcome(outcome, title)))
         return tuple(entries)
 
     def _finished(self, job: CompareJob) -> None:

@@ -4,8 +4,10 @@ One row per run shown in the chart, marked in the curve's colour: its seeds,
 episodes, the mean online return over the last 10% of episodes (± the
 half-width of its 95% interval when there are several seeds), and, for
 games with an exact model, the greedy policy's exact value and its gap to
-the optimum. A figure a run does not have reads "–". Columns that do not fit
-the width are left out, the episodes first; the run's name is shortened last.
+the optimum; a status column when a run is not finished (running,
+interrupted). A figure a run does not have reads "–". Columns that do not fit
+the width are left out: one no run has a figure in first, then the episodes;
+the run's name is shortened last.
 """
 
 from __future__ import annotations
@@ -48,6 +50,7 @@ COLUMNS: tuple[tuple[str, str, int], ...] = (
     ("Return, last 10%", "return", 9),
     ("Exact value", "exact", 2),
     ("Gap", "gap", 4),
+    ("Status", "note", 5),  # only when a row has one (running, interrupted, failed)
 )
 MIN_LABEL = 10
 
@@ -60,6 +63,7 @@ def cells(row: FigureRow) -> dict[str, str]:
         "return": with_interval(row.mean_return_last),
         "exact": plain(row.exact_value),
         "gap": plain(row.exact_gap, sign=False),
+        "note": row.note,
     }
 
 
@@ -69,8 +73,16 @@ def layout(rows: Sequence[FigureRow], width: int) -> list[tuple[str, str, int]]:
     columns = [
         (header, key, max(len(header), *(len(t[key]) for t in texts)), rank)
         for header, key, rank in COLUMNS
+        if key != "note" or any(t["note"] for t in texts)
     ]
-    while columns and MIN_LABEL + 2 + sum(w + 2 for _, _, w, _ in columns) > width:
+    def too_wide() -> bool:
+        return MIN_LABEL + 2 + sum(w + 2 for _, _, w, _ in columns) > width
+
+    # Short of room, a column no run has a figure in goes first (a game without a model).
+    for column in [c for c in columns if all(t[c[1]] == MISSING for t in texts)]:
+        if too_wide():
+            columns.remove(column)
+    while columns and too_wide():
         columns.remove(min(columns, key=lambda c: c[3]))
     return [(header, key, w) for header, key, w, _ in columns]
 
@@ -118,20 +130,24 @@ class FiguresTable(StripWidget):
         columns = layout(self._rows, width)
         label_width = max(MIN_LABEL, width - 2 - sum(w + 2 for _, _, w in columns))
         head: Line = [Segment("  " + "Run".ljust(label_width), header_style)]
-        for header, _key, w in columns:
-            head.append(Segment("  " + header.rjust(w), header_style))
+        for header, key, w in columns:
+            text = header.ljust(w) if key == "note" else header.rjust(w)
+            head.append(Segment("  " + text, header_style))
         lines = [head]
         for row, place in zip(self._rows, self._colours, strict=True):
             texts = cells(row)
-            label = row.label + (f" ({row.note})" if row.note else "")
+            label = row.label
             if len(label) > label_width:
                 label = label[: label_width - 1] + "…"
             line: Line = [
                 Segment("▍ ", Style(color=colour(place))),
-                Segment(label.ljust(label_width), note_style if row.note else None),
+                Segment(label.ljust(label_width)),
             ]
             for _header, key, w in columns:
-                line.append(Segment("  " + texts[key].rjust(w)))
+                if key == "note":
+                    line.append(Segment("  " + texts[key].ljust(w), note_style))
+                else:
+                    line.append(Segment("  " + texts[key].rjust(w)))
             lines.append(line)
         return lines
 
