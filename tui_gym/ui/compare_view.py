@@ -219,7 +219,7 @@ class CompareView(Vertical):
         """`db` is the run history's file (None: `TUI_GYM_DB`, else the data folder's);
         `processes` is `run_compare`'s (None: a child process per core)."""
         super().__init__(id=id, classes=classes)
-        self._db = db
+        self.db = db  # read at each look, so the app can point the view elsewhere
         self.processes = processes
         self._runs: tuple[RunSummary, ...] = ()
         self._records: dict[int, RunRecord] = {}
@@ -242,7 +242,7 @@ class CompareView(Vertical):
 
     @property
     def db_path(self) -> Path:
-        return resolve_db_path(None if self._db is None else str(self._db))
+        return resolve_db_path(None if self.db is None else str(self.db))
 
     # --- layout ------------------------------------------------------------------
     def compose(self) -> ComposeResult:
