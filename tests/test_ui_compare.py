@@ -106,7 +106,7 @@ async def test_ticked_runs_draw_their_curves_and_figures(tmp_path: Path) -> None
         assert rows[1].seeds == 5 and rows[1].mean_return_last.ci95 is not None
         assert rows[0].episodes == 1000
         text = screen_text(app)
-        assert f"#{ids['sarsa']} SARSA · 5 seeds · mean, 95% band" in text
+        assert f"#{ids['sarsa']} SARSA · 5 seeds · 95% band" in text
         assert with_interval(rows[1].mean_return_last) in text
         assert chr(BRAILLE_BASE) not in text and any("⠁" <= ch <= "⣿" for ch in text)
         # Unticking takes the curve and the row away; the other keeps its colour.

@@ -63,7 +63,7 @@ class Series:
         """The legend's words: label, seeds, and what the band and the smoothing are."""
         words = [self.label, f"{self.seeds} seed{'s' if self.seeds != 1 else ''}"]
         if self.has_band:
-            words.append("mean, 95% band")
+            words.append("95% band")
         if self.smoothing > 1:
             words.append(f"smoothed over {self.smoothing_episodes:,} episodes")
         return " · ".join(words)

@@ -419,7 +419,8 @@ class CompareView(Vertical):
                           "choose algorithms, seeds and episodes, then Compare.")
             else:
                 self._say(f"{len(runs):,} run{'s' if len(runs) != 1 else ''} of {title} "
-                          f"in {self.db_path}.")
+                          "recorded.")
+        self._message_label.tooltip = str(self.db_path)
         self._show_selected()
 
     def _fill_list(self, ticked: Sequence[int]) -> None:

@@ -10,9 +10,15 @@ values in these pictures only, so the files change only when the app does.
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Awaitable, Callable
+import os
+import sqlite3
+import tempfile
+import time
+from collections.abc import Awaitable, Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from tui_gym.algorithms import QLearning
 from tui_gym.core.session import Session
@@ -20,6 +26,7 @@ from tui_gym.core.wrappers import WrapperChoice
 
 SIZE = (120, 40)
 NOMINAL_EPISODES_PER_SECOND = 50_000.0
+NOMINAL_START = 1_790_000_000.0  # when the pictured runs started (2026-09-21, UTC)
 
 
 @dataclass(frozen=True)
@@ -82,6 +89,58 @@ async def _step_by_step(app, pilot) -> None:
     await pilot.pause()
 
 
+def _record_comparison(db: Path, spec: Any) -> None:
+    """Record a comparison into `db`, its runs' times pinned to nominal ones."""
+    from tui_gym.core.experiments import RunHistory
+    from tui_gym.core.experiments.compare import run_compare
+
+    with RunHistory(db) as history:
+        # One batch per algorithm on this thread: the same curves on any number of cores.
+        run_compare(spec, history=history, processes=0)
+    conn = sqlite3.connect(db)
+    with conn:
+        conn.execute(
+            "UPDATE runs SET started_at = ? + 60 * id, ended_at = ? + 60 * id + 30",
+            (NOMINAL_START, NOMINAL_START),
+        )
+    conn.close()
+
+
+@contextmanager
+def _utc() -> Iterator[None]:
+    """Times shown in UTC, whatever the machine's zone."""
+    saved = os.environ.get("TZ")
+    os.environ["TZ"] = "UTC"
+    time.tzset()
+    try:
+        yield
+    finally:
+        if saved is None:
+            os.environ.pop("TZ", None)
+        else:
+            os.environ["TZ"] = saved
+        time.tzset()
+
+
+async def _compare(app, pilot) -> None:
+    from tui_gym.core.experiments.compare import CompareSpec
+
+    session = app.session
+    spec = CompareSpec(game=session.env_id, algorithms=("q-learning", "sarsa"), seeds=10,
+                       episodes=5_000, first_seed=session.seed)
+    with tempfile.TemporaryDirectory() as folder, _utc():
+        db = Path(folder) / "runs.db"
+        _record_comparison(db, spec)
+        view = app.compare_view
+        view.db = db
+        await pilot.press("v")
+        await pilot.pause()
+        await pilot.press("space", "down", "space")  # tick both runs
+        await pilot.pause()
+        view.run_list.highlighted = None
+        await pilot.pause()
+
+
 async def _wrappers(app, pilot) -> None:
     await pilot.press("w")
     await pilot.pause()
@@ -111,6 +170,8 @@ SCENARIOS: tuple[Scenario, ...] = (
                  WrapperChoice.make("StepPenalty", penalty=0.01),
                  WrapperChoice.make("DistanceShaping"),
              ), seed=1), _wrappers),
+    Scenario("compare.svg", "Q-learning against SARSA over 10 seeds",
+             lambda: Session("blackjack", seed=0), _compare),
     Scenario("help.svg", "Every key", lambda: Session("blackjack", seed=0), _help),
     Scenario("compact-80x24.svg", "The compact layout at 80x24",
              lambda: Session("blackjack", seed=4), _blackjack_play, size=(80, 24)),
