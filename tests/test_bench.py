@@ -23,7 +23,7 @@ from tui_gym.bench.throughput import ThroughputResult
 from tui_gym.cli import _clean, build_parser
 from tui_gym.commands import COMMANDS
 from tui_gym.core.agent import Hyperparameters
-from tui_gym.core.reference.blackjack import DECISION_MASK, optimal_policy
+from tui_gym.games.blackjack.solver import DECISION_MASK, optimal_policy
 
 REQUIRED_KEYS = (
     "tutorial_episodes_per_second",

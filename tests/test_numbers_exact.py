@@ -20,14 +20,14 @@ from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.play import HumanGame, Tally
 from tui_gym.core.profiles.base import MIN_CI_EPISODES, return_summary
 from tui_gym.core.protocol import JsonlPlayer
-from tui_gym.core.reference.blackjack import (
+from tui_gym.games.blackjack.solver import (
     POLICY_SHAPE,
     mixed_policy_value,
     optimal_policy,
     optimal_value,
     policy_value,
 )
-from tui_gym.core.reference.gridworld import (
+from tui_gym.games.gridworld.paths import (
     mixed_pair_fraction,
     mixed_steps_over_optimal,
     optimal_pair_fraction,

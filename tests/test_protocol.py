@@ -10,7 +10,7 @@ import sys
 import pytest
 
 from tui_gym.core.protocol import JsonlPlayer
-from tui_gym.core.reference.blackjack import BlackjackRules, optimal_policy
+from tui_gym.games.blackjack.solver import BlackjackRules, optimal_policy
 from tui_gym.core.session import Session
 
 

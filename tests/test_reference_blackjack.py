@@ -1,4 +1,4 @@
-"""Tests for `tui_gym.core.reference.blackjack`: the exact Blackjack DP.
+"""Tests for `tui_gym.games.blackjack.solver`: the exact Blackjack DP.
 
 Three independent yardsticks: Sutton & Barto's published optimal strategy; an
 exact evaluator written here on Gymnasium's own hand functions and its own

@@ -1,4 +1,4 @@
-"""Tests for `tui_gym.core.reference.gridworld`: shortest paths and policy checks."""
+"""Tests for `tui_gym.games.gridworld.paths`: shortest paths and policy checks."""
 
 from __future__ import annotations
 

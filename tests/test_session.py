@@ -287,14 +287,14 @@ def test_set_hyperparameters_keeps_the_table() -> None:
 
 
 def test_blackjack_heatmap_cells_read_the_q_table() -> None:
-    from tui_gym.core.profiles.blackjack import (
+    from tui_gym.games.blackjack.game import (
         ACTION_LETTERS,
         CHART_SUMS,
         DEALER_CARDS,
         BlackjackProfile,
         _row_of,
     )
-    from tui_gym.core.reference.blackjack import BlackjackRules, optimal_policy
+    from tui_gym.games.blackjack.solver import BlackjackRules, optimal_policy
 
     rows = len(_row_of())
     q = np.random.default_rng(3).normal(size=(rows, 2))

@@ -19,7 +19,7 @@ import pytest
 from tests.screen import screen_text
 from tui_gym.core.play import HumanGame
 from tui_gym.core.profiles.base import plural, signed
-from tui_gym.core.reference.gridworld import (
+from tui_gym.games.gridworld.paths import (
     mixed_steps_over_optimal,
     policy_steps_over_optimal,
     shortest_path_policy,

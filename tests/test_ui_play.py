@@ -13,7 +13,7 @@ from collections.abc import Sequence
 from textual.app import App, ComposeResult
 from textual.widgets import Static
 
-from tui_gym.core.profiles.blackjack import card_label
+from tui_gym.games.blackjack.game import card_label
 from tui_gym.core.session import Session
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.ui.app import TuiGymApp

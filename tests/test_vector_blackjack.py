@@ -1,4 +1,4 @@
-"""Tests for `tui_gym.core.vector.blackjack`: batched Blackjack plays Gymnasium's rules.
+"""Tests for `tui_gym.games.blackjack.batched`: batched Blackjack plays Gymnasium's rules.
 
 Three yardsticks: Gymnasium's own env fed the same cards (every observation
 and reward equal, step for step); the exact values of `policy_value` for
@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from gymnasium.envs.toy_text import blackjack as gym_bj
 
-from tui_gym.core.reference.blackjack import (
+from tui_gym.games.blackjack.solver import (
     DECISION_MASK,
     HIT,
     STICK,

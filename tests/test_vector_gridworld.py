@@ -1,4 +1,4 @@
-"""Tests for `tui_gym.core.vector.gridworld`: batched GridWorld moves like the env.
+"""Tests for `tui_gym.games.gridworld.batched`: batched GridWorld moves like the env.
 
 Every (agent, target, action) on sizes 2..6 is stepped in both engines and
 compared; the time limit, the starting distribution (a chi-square bound from
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from tui_gym.core.obskey import ObservationKeyer
-from tui_gym.core.reference.gridworld import all_pairs
+from tui_gym.games.gridworld.paths import all_pairs
 from tui_gym.core.vector import BatchedGridWorld, NoBatchedForm, plan_for_env, vector_support
 from tui_gym.core.wrappers import WrapperChoice, build_env
 from tui_gym.envs.gridworld import GridWorldEnv

@@ -339,8 +339,8 @@ def cmd_optimal(args: argparse.Namespace, out: Console) -> int:
 
 
 def _optimal_blackjack(kwargs: dict[str, Any], as_json: bool, out: Console) -> int:
-    from tui_gym.core.profiles.blackjack import CHART_SUMS, DEALER_CARDS, DEALER_LABELS
-    from tui_gym.core.reference.blackjack import BlackjackRules, optimal_policy, optimal_value
+    from tui_gym.games.blackjack.game import CHART_SUMS, DEALER_CARDS, DEALER_LABELS
+    from tui_gym.games.blackjack.solver import BlackjackRules, optimal_policy, optimal_value
 
     rules = BlackjackRules.from_env_kwargs(kwargs)
     policy = optimal_policy(rules)

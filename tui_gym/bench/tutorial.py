@@ -30,7 +30,7 @@ import gymnasium as gym
 import numpy as np
 
 from tui_gym.core.agent import Hyperparameters
-from tui_gym.core.reference.blackjack import (
+from tui_gym.games.blackjack.solver import (
     POLICY_SHAPE,
     BlackjackRules,
     optimal_value,

@@ -23,7 +23,7 @@ from tui_gym.core.evaluation import EvalReport, evaluate
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.profiles import GameProfile, ReferenceMetrics, profile_for, resolve_env_id
-from tui_gym.core.reference.changes import GameChanges
+from tui_gym.core.wrappers.changes import GameChanges
 from tui_gym.core.training import Trainer, TrainingSnapshot
 from tui_gym.core.vector import NoBatchedForm, VectorTrainer
 from tui_gym.core.wrappers import (

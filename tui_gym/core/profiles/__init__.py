@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from tui_gym.core.profiles.base import EvalOutcome, GameProfile, ReferenceMetrics
-from tui_gym.core.profiles.blackjack import BlackjackProfile
-from tui_gym.core.profiles.gridworld import GridWorldProfile
+from tui_gym.games.blackjack.game import BlackjackProfile
+from tui_gym.games.gridworld.game import GridWorldProfile
 
 PROFILES: tuple[GameProfile, ...] = (BlackjackProfile(), GridWorldProfile())
 ALIASES: dict[str, str] = {p.name: p.env_id for p in PROFILES}

@@ -18,7 +18,7 @@ import numpy as np
 from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.params import Param
-from tui_gym.core.reference.changes import NO_CHANGES, GameChanges
+from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 
 if TYPE_CHECKING:
     from tui_gym.core.play import PlayStep, Scorecard, Tally

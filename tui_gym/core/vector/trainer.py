@@ -2,16 +2,16 @@
 
 `VectorTrainer` trains the same `QAgent` the scalar `Trainer` does (its
 table, update counts, episode count and epsilon schedule) but plays
-`num_envs` games side by side on a batched env (`BatchedBlackjack`,
-`BatchedGridWorld`), so every numpy call serves hundreds of steps. Build it
-like a `Trainer`, from an env built by the wrapper catalog:
+`num_envs` games side by side on the batched env the game's `BatchedForm`
+makes, so every numpy call serves hundreds of steps. Build it like a
+`Trainer`, from an env built by the wrapper catalog and the game's form:
 
-    trainer = VectorTrainer(env, agent, keyer, seed=0)
+    trainer = VectorTrainer(env, agent, keyer, form=game.batched_form(kwargs), seed=0)
     trainer.run(episodes=200_000)
 
-or with `make_vector_trainer(env_id, env_kwargs, choices, agent, keyer)`.
+or with `make_vector_trainer(env_id, env_kwargs, choices, agent, keyer, form=...)`.
 `plan_for_env` reads the env's wrappers; an env with no batched form raises
-`NoBatchedForm` (ask `vector_support` first).
+`NoBatchedForm`.
 
 One batch step, top to bottom:
 
@@ -55,14 +55,16 @@ from tui_gym.core.agent import QAgent
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.stats import EpisodeStats
 from tui_gym.core.training import SERIES_NAMES, StepEvent, Trainer
+from tui_gym.core.mdp import NotAvailable
+from tui_gym.core.vector.base import BatchedForm
 from tui_gym.core.vector.plan import VectorPlan, plan_for_env
 from tui_gym.core.wrappers import WrapperChoice, build_env_lenient
 
 __all__ = ["DEFAULT_NUM_ENVS", "VectorTrainer", "batched_q_update", "make_vector_trainer"]
 
-# Blackjack episodes/s by num_envs on one core (2-CPU box): 256: 0.42M, 512: 0.66M,
-# 1024: 0.97M, 2048: 1.27M, 4096: 1.55M, 8192: 1.62M; learning per episode is the same
-# for all of them. 2048 is most of the speed with batch steps of about a millisecond.
+# Episodes/s grow with num_envs and level off by a few thousand, while learning per
+# episode is the same for all of them: 2048 is most of the speed with batch steps of
+# about a millisecond.
 DEFAULT_NUM_ENVS = 2048
 
 # 1 - lr is floored here before taking logs: a step size of 1 wipes out what came before.
@@ -141,11 +143,13 @@ class VectorTrainer(Trainer):
     """Runs Q-learning on `num_envs` copies of an env at once; the `Trainer` API.
 
     Args:
-        env: an env built by the wrapper catalog (`build_env`); its game and
-            wrappers are read with `plan_for_env` and played in batches (the
-            env itself is never stepped).
+        env: an env built by the wrapper catalog (`build_env`); its wrappers
+            are read with `plan_for_env` and played in batches (the env itself
+            is never stepped).
         agent: the dense-table `QAgent` to train (shared, as with `Trainer`).
         keyer: the keyer of `env`'s observation space.
+        form: the game's batched form (None or `NotAvailable`: there is none,
+            and `NoBatchedForm` says so).
         seed: seeds the batched env; the agent's own seed drives exploration.
         num_envs: games played side by side.
         window, series_capacity, publish_interval: as for `Trainer`.
@@ -159,13 +163,14 @@ class VectorTrainer(Trainer):
         agent: QAgent,
         keyer: ObservationKeyer,
         *,
+        form: BatchedForm | NotAvailable | None,
         seed: int | None = None,
         num_envs: int = DEFAULT_NUM_ENVS,
         window: int = 1000,
         series_capacity: int = 256,
         publish_interval: float = 0.1,
     ) -> None:
-        self.plan: VectorPlan = plan_for_env(env)
+        self.plan: VectorPlan = plan_for_env(env, form)
         if not (keyer.dense and agent.dense):
             raise ValueError("the vector engine needs a dense observation keyer and Q-table")
         if keyer.n_states != agent.n_states or agent.n_actions != env.action_space.n:
@@ -284,7 +289,7 @@ class VectorTrainer(Trainer):
         actions = self._choose(keys)
         epsilon = self.agent.epsilon
         result = self.venv.step(actions, index, autoreset=False)
-        rewards = self.plan.transform_rewards(result.reward, result.distance)
+        rewards = self.plan.transform_rewards(result.reward, result.info)
         next_keys = self.keyer.keys(result.next_obs)
         td = batched_q_update(self.agent, keys, actions, rewards, result.terminated, next_keys)
         self.steps += len(keys)
@@ -364,6 +369,7 @@ def make_vector_trainer(
     agent: QAgent,
     keyer: ObservationKeyer | None = None,
     *,
+    form: BatchedForm | NotAvailable | None,
     seed: int | None = None,
     num_envs: int = DEFAULT_NUM_ENVS,
     **options: Any,
@@ -371,11 +377,12 @@ def make_vector_trainer(
     """A `VectorTrainer` for a game and wrapper choice, built as a `Session` builds its env.
 
     Choices that do not fit are skipped, as `build_env_lenient` skips them.
-    `keyer` defaults to one for the built env. `options` go to `VectorTrainer`
-    (`window`, `series_capacity`, `publish_interval`). Raises `NoBatchedForm`
-    when the game or a wrapper has no batched form.
+    `keyer` defaults to one for the built env; `form` is the game's batched
+    form. `options` go to `VectorTrainer` (`window`, `series_capacity`,
+    `publish_interval`). Raises `NoBatchedForm` when the game or a wrapper has
+    no batched form.
     """
     env, _ = build_env_lenient(env_id, env_kwargs, choices)
     if keyer is None:
         keyer = ObservationKeyer(env.observation_space)
-    return VectorTrainer(env, agent, keyer, seed=seed, num_envs=num_envs, **options)
+    return VectorTrainer(env, agent, keyer, form=form, seed=seed, num_envs=num_envs, **options)

@@ -19,7 +19,7 @@ from rich.style import Style
 from rich.text import Text
 from textual.binding import Binding, BindingType
 
-from tui_gym.core.profiles.blackjack import card_label, hand_value
+from tui_gym.games.blackjack.game import card_label, hand_value
 from tui_gym.ui.widgets.boards import Board
 
 SUITS = ("♠", "♥", "♦", "♣")

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tui_gym.core.reference.blackjack import DEFAULT_RULES, BlackjackRules
+from tui_gym.games.blackjack.solver import DEFAULT_RULES, BlackjackRules
 from tui_gym.core.vector.base import (
     BatchStep,
     Selection,
