@@ -63,7 +63,8 @@ def test_one_episode_runs_exactly_one(runner):
 
 
 def test_animated_speed_records_each_step():
-    session = Session("gridworld", seed=0)
+    short = (WrapperChoice.make("TimeLimit", max_episode_steps=12),)
+    session = Session("gridworld", choices=short, seed=0)
     r = TrainingRunner(session, speed=len(SPEEDS) - 2)
     try:
         assert r.speed.animated
@@ -163,3 +164,53 @@ def test_tally_interval_shrinks_with_more_hands():
     lo, hi = tally.confidence_interval()
     assert hi - lo < wide / 5
     assert tally.wins == tally.losses == 1010
+
+
+def slow_gridworld_runner() -> TrainingRunner:
+    # The scalar engine throughout: max speed then goes on with the same episode.
+    return TrainingRunner(Session("gridworld", seed=0, engine="scalar"), speed=0)
+
+
+def test_a_pause_stops_an_animated_episode_mid_way_at_once():
+    r = slow_gridworld_runner()
+    try:
+        r.run_one_episode()
+        assert wait_for(lambda: r.last_event is not None)
+        began = time.perf_counter()
+        assert r.pause()  # returns once the worker has stopped
+        assert time.perf_counter() - began < 0.1, "a pause must not wait for the episode"
+        trainer = r.session.trainer
+        assert trainer.episode_in_progress() and trainer.episodes == 0
+        steps = trainer.steps
+        assert r.wait_idle() and not r.busy
+        assert trainer.steps == steps
+        r.set_speed(len(SPEEDS) - 1)
+        r.run_one_episode()  # `.` again finishes the episode under way
+        assert wait_for(lambda: trainer.episodes == 1 and not r.busy)
+        assert trainer.last.length > r.last_event.step, "the same episode went on"
+    finally:
+        began = time.perf_counter()
+        r.close()
+        assert time.perf_counter() - began < 0.5, "closing must not wait for the episode"
+
+
+def test_start_during_one_episode_then_pause_stops_everything():
+    r = slow_gridworld_runner()
+    try:
+        r.run_one_episode()
+        assert wait_for(lambda: r.last_event is not None)
+        assert r.start() and r.running
+        assert r.pause() and not r.busy
+    finally:
+        r.close()
+
+
+def test_a_faster_speed_applies_without_waiting_out_the_slow_step():
+    r = slow_gridworld_runner()
+    try:
+        r.start()
+        assert wait_for(lambda: r.last_event is not None)
+        r.set_speed(len(SPEEDS) - 1)  # max: the 0.35 s pause is cut short
+        assert wait_for(lambda: r.latest.episodes > 50, timeout=5)
+    finally:
+        r.close()

@@ -1,22 +1,35 @@
 """Training in a child process: the UI's Python never shares a core with the trainer.
 
 `ProcessRunner` has the same surface as `TrainingRunner` (start, pause,
-toggle, run_one_episode, speeds, latest, last_scene, error, finished), but
-the training runs in a separate process, so the trainer and the event loop
-never compete for one interpreter lock.
+toggle, run_one_episode, speeds, latest, last_scene, last_event, error,
+finished, update, close), but the training runs in a separate process, so the
+trainer and the event loop never compete for one interpreter lock.
 
-Ownership is simple: while paused, the parent's `Session` is the truth; on
-`start()` the parent sends the session's spec (game, wrappers, seed,
-hyperparameters), its agent and its trainer's progress to the child; while
-running, the child streams snapshots back (about 20 a second); on `pause()`
-the child sends the agent and progress back and the parent's session takes
-them over, so saving, evaluating or watching the agent see every episode.
+Ownership: while paused, the parent's `Session` is the truth. A start (or
+one episode) hands the child the session's spec (game, wrappers, seed,
+hyperparameters), its agent and its trainer's progress; while the child
+trains it streams snapshots back; a pause asks for the agent back. Every
+request has a number, and what comes back lands in the agent object the
+request was made from: after a reset (a new agent) or a game switch, a late
+handover changes nothing the session shows, and a rebuild that kept the agent
+gets every episode trained.
+
+Nothing here ever waits on the child in the caller's thread: requests are
+queued to a sender thread, and what the child says is queued by a receiver
+thread and taken in by `update()`, which the owner calls (every property and
+control does). A child that dies is reaped and replaced; one that stops
+answering for `HANG_SECONDS` while it holds the agent is killed and replaced;
+either way the agent is kept as it was last handed over, and `error` says so.
 """
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import multiprocessing as mp
+import pickle
+import queue
+import signal
 import threading
 import time
 import traceback
@@ -32,7 +45,12 @@ if TYPE_CHECKING:
     from tui_gym.core.session import Session
 
 SNAPSHOT_INTERVAL = 0.05  # seconds between snapshots sent by the child
-REPLY_TIMEOUT = 10.0  # seconds to wait for the child to hand the agent back
+ANIMATED_POLL = 0.01  # the child's look-out at animated speeds: every step is sent
+REPLY_TIMEOUT = 10.0  # seconds `wait_idle()` waits by default for the agent to come back
+HANG_SECONDS = 10.0  # silence while holding the agent after which the child is replaced
+RESPAWN_LIMIT = 3  # deaths within RESPAWN_WINDOW after which no new child is started
+RESPAWN_WINDOW = 60.0
+EXIT_SECONDS = 1.0  # how long `close()` lets the child end by itself before killing it
 
 
 @dataclass(frozen=True)
@@ -64,17 +82,125 @@ class Handover:
     hp: Any  # Hyperparameters
     agent: Any  # QAgent
     progress: TrainerProgress
+    engine: str = ""  # the engine that trained last ("scalar" while animating)
 
 
 def _handover(session: Session) -> Handover:
     return Handover(SessionSpec.of(session), session.hp, session.agent,
-                    session.trainer.progress())
+                    session.trainer.progress(), session.trainer.engine)
 
 
-def _take_over(session: Session, handover: Handover) -> None:
-    """Adopt the child's agent and progress, keeping the parent's objects."""
-    session.agent.assign_from(handover.agent)
-    session.trainer.restore(handover.progress)
+@dataclass
+class _Request:
+    """A start or one-episode request whose agent the child holds."""
+
+    number: int
+    kind: str  # "start" or "one"
+    agent: Any  # the agent object the handover came from, and goes back to
+    trainer: Any  # its trainer at the time
+    latest: TrainingSnapshot | None = None
+    pause_sent: bool = False
+
+
+class _Child:
+    """One training process, with a thread that sends to it and one that listens."""
+
+    def __init__(self, inbox: collections.deque[tuple[_Child, tuple]],
+                 wake: threading.Event) -> None:
+        ctx = mp.get_context("spawn")
+        self.conn, child_conn = ctx.Pipe()
+        self.process = ctx.Process(
+            target=child_main, args=(child_conn,), name="tui-gym-trainer", daemon=True
+        )
+        self.process.start()
+        child_conn.close()
+        self._inbox, self._wake = inbox, wake
+        self._outbox: queue.SimpleQueue[bytes | None] = queue.SimpleQueue()
+        self._lock = threading.Lock()
+        self.ready = False  # the child has said its first word
+        self.awaited = 0  # requests sent and not yet answered
+        self.last_heard = time.monotonic()
+        self.hung = False
+        self.gone = False
+        self.ending = False
+        threading.Thread(target=self._send_loop, name="tui-gym-sender", daemon=True).start()
+        threading.Thread(target=self._receive_loop, name="tui-gym-receiver", daemon=True).start()
+
+    def send(self, message: tuple, request: bool = False) -> None:
+        """Queue a message (pickled now, in the caller's thread: it may change later)."""
+        data = pickle.dumps(message, protocol=pickle.HIGHEST_PROTOCOL)
+        with self._lock:
+            if request:
+                self.awaited += 1
+                self.last_heard = time.monotonic()
+        self._outbox.put(data)
+
+    def stop_sending(self) -> None:
+        self._outbox.put(None)
+
+    def _send_loop(self) -> None:
+        while True:
+            data = self._outbox.get()
+            if data is None:
+                return
+            try:
+                self.conn.send_bytes(data)
+            except (OSError, ValueError):  # the child is gone: the receiver tells
+                return
+
+    def _receive_loop(self) -> None:
+        conn = self.conn
+        while True:
+            try:
+                if not conn.poll(0.25):
+                    if self._silent_too_long():
+                        self.hung = True
+                        with contextlib.suppress(OSError):
+                            self.process.kill()
+                    continue
+                message = conn.recv()
+            except (EOFError, OSError, ValueError, pickle.UnpicklingError):
+                break
+            with self._lock:
+                self.ready = True
+                self.last_heard = time.monotonic()
+                if message[0] == "returned":
+                    self.awaited = max(0, self.awaited - 1)
+            self._inbox.append((self, message))
+            self._wake.set()
+        self.process.join(timeout=5.0)  # reap it: no zombie left behind
+        self.gone = True
+        self._outbox.put(None)
+        self._inbox.append((self, ("gone", self.process.exitcode)))
+        self._wake.set()
+
+    def _silent_too_long(self) -> bool:
+        with self._lock:
+            waiting = self.ready and self.awaited > 0
+            return waiting and time.monotonic() - self.last_heard > HANG_SECONDS
+
+    def end(self, wait: bool) -> None:
+        """Ask the child to quit; with `wait`, make sure it has (killing it if need be)."""
+        if not self.ending:
+            self.ending = True
+            with contextlib.suppress(Exception):
+                self.send(("quit",))
+            self.stop_sending()
+        if wait:
+            self.reap()
+        else:
+            threading.Thread(target=self.reap, name="tui-gym-reaper", daemon=True).start()
+
+    def reap(self) -> None:
+        """Wait for the child to end, killing it when it does not by itself."""
+        process = self.process
+        process.join(timeout=EXIT_SECONDS)
+        if process.is_alive():
+            with contextlib.suppress(OSError):
+                process.kill()
+            process.join(timeout=EXIT_SECONDS)
+        with contextlib.suppress(OSError):
+            self.conn.close()
 
 
 class ProcessRunner:
@@ -83,84 +209,145 @@ class ProcessRunner:
     def __init__(self, session: Session, speed: int = DEFAULT_SPEED) -> None:
         self.session = session
         self.speed_index = speed
-        self.last_event: StepEvent | None = None
-        self.last_scene: dict | None = None
-        self.error: BaseException | None = None
-        self.finished = False
-        self._latest: TrainingSnapshot | None = None
-        self._running = False
-        self._busy = threading.Event()  # set while the child holds the agent
-        self._returned = threading.Event()
-        self._returned.set()
-        self._send_lock = threading.Lock()
-        ctx = mp.get_context("spawn")
-        self._conn, child_conn = ctx.Pipe()
-        self._process = ctx.Process(
-            target=child_main, args=(child_conn,), name="tui-gym-trainer", daemon=True
-        )
-        self._process.start()
-        child_conn.close()
+        self._error: BaseException | None = None
+        self._finished = False
+        self._want_run = False
+        self._want_one = False
+        self._pending: _Request | None = None
+        self._numbers = 0
+        self._last_sent_agent: Any = None  # to tell the child when the agent is a new one
+        self._shown: tuple[Any, dict | None, StepEvent | None] = (None, None, None)
+        self._inbox: collections.deque[tuple[_Child, tuple]] = collections.deque()
+        self._heard = threading.Event()
+        self._deaths: collections.deque[float] = collections.deque()
+        self._broken = ""  # why no new child is started (it kept dying), or empty
         self._closed = False
-        self._receiver = threading.Thread(target=self._receive, name="tui-gym-receiver",
-                                          daemon=True)
-        self._receiver.start()
+        self._ended: _Child | None = None  # the child `close()` ended
+        self._child: _Child | None = _Child(self._inbox, self._heard)
 
-    # --- controls ------------------------------------------------------------
+    # --- what the owner reads ---------------------------------------------------
     @property
     def speed(self) -> Speed:
         return SPEEDS[self.speed_index]
 
     @property
+    def error(self) -> BaseException | None:
+        """Why training stopped, or what happened to the child (the owner clears it)."""
+        self.update()
+        return self._error
+
+    @error.setter
+    def error(self, value: BaseException | None) -> None:
+        self._error = value
+
+    @property
+    def finished(self) -> bool:
+        """The episode budget was reached."""
+        self.update()
+        return self._finished
+
+    @finished.setter
+    def finished(self, value: bool) -> None:
+        self._finished = value
+
+    @property
     def running(self) -> bool:
-        return self._running
+        """True while training is switched on (the child may still be getting the agent)."""
+        self.update()
+        return self._want_run
+
+    @property
+    def busy(self) -> bool:
+        """True while training is on, an episode is asked for, or the child holds the agent."""
+        self.update()
+        return self._want_run or self._want_one or self._pending is not None
 
     @property
     def latest(self) -> TrainingSnapshot:
-        if self._running and self._latest is not None:
-            return self._latest
+        """The child's latest snapshot while it trains the session's agent, else the session's."""
+        self.update()
+        request = self._pending
+        if request is not None and request.latest is not None and self._current(request):
+            return request.latest
         return self.session.trainer.latest
 
-    def _send(self, message: tuple) -> None:
-        with self._send_lock:
-            self._conn.send(message)
+    @property
+    def last_scene(self) -> dict | None:
+        self.update()
+        agent, scene, _ = self._shown
+        return scene if agent is self.session.agent else None
 
+    @property
+    def last_event(self) -> StepEvent | None:
+        self.update()
+        agent, _, event = self._shown
+        return event if agent is self.session.agent else None
+
+    @property
+    def child_pid(self) -> int | None:
+        """The training process's id (None when there is none)."""
+        child = self._child
+        return None if child is None else child.process.pid
+
+    def _current(self, request: _Request) -> bool:
+        return request.agent is self.session.agent
+
+    # --- controls ---------------------------------------------------------------
     def start(self) -> bool:
-        if self.session.trainer.remaining == 0:
-            self.finished = True
+        """Train until paused or the budget is reached; False when the budget is used up
+        (or no training process can run: `error` says why)."""
+        self.update()
+        if self._broken:
+            self._error = RuntimeError(self._broken)
             return False
-        if self._running:
-            return True
-        self.wait_idle()
-        self.finished = False
-        self.error = None
-        self._latest = None
-        self._returned.clear()
-        self._running = True
-        self._send(("start", _handover(self.session), self.speed_index))
+        if self.session.trainer.remaining == 0 and self._pending is None:
+            self._finished = True
+            return False
+        self._finished = False
+        self._error = None
+        self._want_run = True
+        self._want_one = False
+        request = self._pending
+        if request is not None and request.kind == "one":
+            self._ask_back(request)  # then start from where the episode got to
+        self._sync()
         return True
 
-    def pause(self, wait: bool = True, timeout: float = REPLY_TIMEOUT) -> None:
-        if self._running:
-            self._send(("pause",))
-        if wait:
-            self.wait_idle(timeout)
+    def pause(self, wait: bool = True, timeout: float = REPLY_TIMEOUT) -> bool:
+        """Stop training now; the child hands the agent back in a moment.
+
+        With `wait`, wait (at most `timeout`) until it has, so the session holds
+        every episode; False on a timeout. A UI passes `wait=False` and lets
+        `update()` take the agent in when it comes.
+        """
+        self.update()
+        self._want_run = self._want_one = False
+        if self._pending is not None:
+            self._ask_back(self._pending)
+        return self.wait_idle(timeout) if wait else True
 
     def toggle(self) -> bool:
-        if self._running:
+        if self.running:
             self.pause(wait=False)
             return False
         return self.start()
 
     def run_one_episode(self) -> None:
-        if self._running or not self._returned.is_set():
+        """Play one training episode in the child (ignored while running or busy)."""
+        self.update()
+        if self._broken:
+            self._error = RuntimeError(self._broken)
             return
-        self.error = None
-        self._returned.clear()
-        self._send(("one", _handover(self.session), self.speed_index))
+        if self._want_run or self._pending is not None:
+            return
+        self._error = None
+        self._want_one = True
+        self._sync()
 
     def set_speed(self, index: int) -> Speed:
         self.speed_index = max(0, min(len(SPEEDS) - 1, index))
-        self._send(("speed", self.speed_index))
+        if self._child is not None:
+            self._child.send(("speed", self.speed_index))
         return self.speed
 
     def faster(self) -> Speed:
@@ -170,123 +357,246 @@ class ProcessRunner:
         return self.set_speed(self.speed_index - 1)
 
     def wait_idle(self, timeout: float = REPLY_TIMEOUT) -> bool:
-        """Wait until the child has handed the agent back (if it has it)."""
-        return self._returned.wait(timeout)
-
-    def close(self) -> None:
-        if self._closed:
-            return
-        self._closed = True
-        with contextlib.suppress(OSError, ValueError):
-            self._send(("quit",))
-        self._process.join(timeout=3.0)
-        if self._process.is_alive():
-            self._process.terminate()
-            self._process.join(timeout=2.0)
-        self._conn.close()
-
-    # --- what the child says -------------------------------------------------
-    def _receive(self) -> None:
+        """Wait until the child holds no agent (nothing running, nothing asked for)."""
+        deadline = time.monotonic() + timeout
         while True:
-            try:
-                message = self._conn.recv()
-            except (EOFError, OSError):
-                if not self._closed:
-                    self.error = RuntimeError("the training process ended unexpectedly")
-                self._running = False
-                self._returned.set()
-                return
+            self._heard.clear()
+            self.update()
+            if not (self._want_run or self._want_one or self._pending is not None):
+                return True
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return False
+            self._heard.wait(min(left, 0.25))
+
+    def close(self, wait: bool = True) -> None:
+        """End the child (with `wait`, return once it has ended; it is killed if it must be)."""
+        self._closed = True
+        self._want_run = self._want_one = False
+        child, self._child = self._child, None
+        self._ended = child or self._ended
+        if self._ended is not None:
+            self._ended.end(wait)
+
+    # --- taking in what the child says ------------------------------------------
+    def update(self) -> None:
+        """Take in what the child has said: snapshots, handed-back agents, its death."""
+        inbox = self._inbox
+        while inbox:
+            child, message = inbox.popleft()
+            if child is not self._child:
+                continue  # a replaced child's last words
             kind = message[0]
             if kind == "snapshot":
-                _, snapshot, scene, event = message
-                self._latest = snapshot
-                self.last_scene = scene
-                self.last_event = event
+                self._take_snapshot(*message[1:])
             elif kind == "returned":
-                _, handover, finished, error = message
-                _take_over(self.session, handover)
-                self.finished = finished
-                if error:
-                    self.error = RuntimeError(error)
-                self._running = False
-                self._latest = None
-                self._returned.set()
+                self._take_back(*message[1:])
+            elif kind == "gone":
+                self._replace_child(child, message[1])
+        self._sync()
+
+    def _take_snapshot(self, number: int, snapshot: TrainingSnapshot, scene: Any,
+                       event: Any) -> None:
+        request = self._pending
+        if request is None or request.number != number:
+            return
+        request.latest = snapshot
+        if scene is not None:
+            self._shown = (request.agent, scene, event)
+
+    def _take_back(self, number: int, handover: Handover, reason: str,
+                   error: str | None) -> None:
+        request = self._pending
+        if request is None or request.number != number:
+            return
+        self._pending = None
+        current = self._current(request)
+        try:
+            request.agent.assign_from(handover.agent)
+            trainer = request.trainer
+            if current:
+                # The session may have been rebuilt around the same agent meanwhile.
+                trainer = self.session.trainer_for(handover.engine == "scalar")
+                request.agent.set_hyperparameters(self.session.hp)
+            trainer.restore(handover.progress)
+        except Exception as exc:  # a handover that does not fit: keep what we have
+            self._error = RuntimeError(f"the trained agent could not be taken back: {exc}")
+            self._want_run = False
+            return
+        if not current:
+            return  # a reset or a switch came first: it wins
+        if reason == "finished":
+            self._finished = True
+            self._want_run = False
+        elif reason == "error":
+            self._error = RuntimeError(error or "training failed")
+            self._want_run = False
+
+    def _replace_child(self, child: _Child, exitcode: int | None) -> None:
+        request, self._pending = self._pending, None
+        was_training = self._want_run or self._want_one or request is not None
+        self._want_run = self._want_one = False
+        self._last_sent_agent = None
+        self._child = None
+        if self._closed:
+            return
+        now = time.monotonic()
+        self._deaths.append(now)
+        while self._deaths and now - self._deaths[0] > RESPAWN_WINDOW:
+            self._deaths.popleft()
+        if child.hung:
+            how = f"stopped answering for {HANG_SECONDS:g} s and was ended"
+        elif exitcode is not None and exitcode < 0:
+            how = f"was killed (signal {-exitcode})"
+        else:
+            how = f"ended unexpectedly (exit code {exitcode})"
+        episodes = self.session.trainer.episodes
+        kept = (f"the agent is kept as last handed back ({episodes:,} episodes)"
+                if was_training else "the agent is kept")
+        if request is not None and request.latest is not None and self._current(request):
+            lost = request.latest.episodes - episodes
+            if lost > 0:
+                kept += f"; the {lost:,} trained since are lost"
+        if len(self._deaths) >= RESPAWN_LIMIT:
+            self._broken = (
+                f"the training process {how}, {len(self._deaths)} times within "
+                f"{RESPAWN_WINDOW:g} s; {kept}, but training is off for this session "
+                "(save the agent, or restart tui-gym with --runner thread)"
+            )
+            self._error = RuntimeError(self._broken)
+            return
+        try:
+            self._child = _Child(self._inbox, self._heard)
+        except OSError as exc:
+            self._broken = (f"the training process {how}, and a new one could not start "
+                            f"({exc}); {kept}, but training is off for this session")
+            self._error = RuntimeError(self._broken)
+            return
+        self._error = RuntimeError(
+            f"the training process {how}; a new one is ready and {kept}"
+        )
+
+    # --- sending ----------------------------------------------------------------
+    def _ask_back(self, request: _Request) -> None:
+        if not request.pause_sent and self._child is not None:
+            request.pause_sent = True
+            self._child.send(("pause", request.number))
+
+    def _sync(self) -> None:
+        """Send the request the owner wants, once the child holds no agent."""
+        child = self._child
+        if self._pending is not None or child is None or self._closed:
+            return
+        if self._want_run:
+            kind = "start"
+            if self.session.trainer.remaining == 0:
+                self._finished = True
+                self._want_run = False
+                return
+        elif self._want_one:
+            kind = "one"
+            self._want_one = False
+        else:
+            return
+        session = self.session
+        self._numbers += 1
+        request = _Request(self._numbers, kind, session.agent, session.trainer)
+        fresh = session.agent is not self._last_sent_agent
+        self._last_sent_agent = session.agent
+        self._pending = request
+        child.send((kind, request.number, _handover(session), self.speed_index, fresh),
+                   request=True)
 
 
 def child_main(conn: Connection) -> None:
     """The child process: a TrainingRunner on its own Session, driven through the pipe."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # ctrl+c is the app's to handle
     from tui_gym.core.session import Session
 
+    conn.send(("ready",))
     session: Session | None = None
     spec: SessionSpec | None = None
     runner: TrainingRunner | None = None
-    holding = False  # the child has the agent (between start/one and its return)
-    one_episode_target: int | None = None
+    holding: int | None = None  # the number of the request whose agent the child holds
+    holding_kind = ""
     last_sent = -1
 
-    def hand_back(error: str | None = None) -> None:
-        nonlocal holding, one_episode_target
+    def hand_back(reason: str, error: str | None = None) -> None:
+        nonlocal holding
         assert session is not None and runner is not None
         runner.pause()
-        conn.send(("returned", _handover(session), runner.finished, error))
-        holding = False
-        one_episode_target = None
+        number, holding = holding, None
+        conn.send(("returned", number, _handover(session), reason, error))
+
+    def take(message: tuple) -> None:
+        nonlocal holding, holding_kind, last_sent
+        kind, number, handover, speed, fresh = message
+        try:
+            adopt(handover, fresh)
+        except Exception:  # nothing trained: the same agent goes back, with the reason
+            conn.send(("returned", number, handover, "error", traceback.format_exc(limit=3)))
+            return
+        assert session is not None and runner is not None
+        runner.set_speed(speed)
+        holding, holding_kind, last_sent = number, kind, -1
+        if kind == "one":
+            runner.run_one_episode()
+        elif not runner.start():
+            hand_back("finished")
+
+    def adopt(handover: Handover, fresh: bool) -> None:
+        nonlocal session, spec, runner
+        if session is None or runner is None or fresh or handover.spec != spec:
+            # A new game, new wrappers or a new agent: a fresh session, so that no
+            # episode of the old one carries over.
+            if runner is not None:
+                runner.close()
+            s = handover.spec
+            session = Session(env_id=s.env_id, env_kwargs=s.env_kwargs, choices=s.choices,
+                              hp=handover.hp, seed=s.seed, engine=s.engine)
+            spec = handover.spec
+            runner = TrainingRunner(session)
+        session.hp = handover.hp
+        session.agent.assign_from(handover.agent)
+        session.agent.set_hyperparameters(handover.hp)
+        session.trainer_for(handover.engine == "scalar").restore(handover.progress)
 
     while True:
         try:
-            ready = conn.poll(SNAPSHOT_INTERVAL)
-            if ready:
+            animated = runner is not None and runner.speed.animated
+            if conn.poll(ANIMATED_POLL if animated else SNAPSHOT_INTERVAL):
                 message = conn.recv()
                 kind = message[0]
                 if kind == "quit":
                     break
                 if kind in ("start", "one"):
-                    _, handover, speed = message
-                    if spec != handover.spec or session is None:
-                        if runner is not None:
-                            runner.close()
-                        s = handover.spec
-                        session = Session(env_id=s.env_id, env_kwargs=s.env_kwargs,
-                                          choices=s.choices, hp=handover.hp, seed=s.seed,
-                                          engine=s.engine)
-                        spec = handover.spec
-                        runner = TrainingRunner(session)
-                    session.set_hyperparameters(handover.hp)
-                    session.agent.assign_from(handover.agent)
-                    session.agent.set_hyperparameters(handover.hp)
-                    session.trainer.restore(handover.progress)
-                    runner.set_speed(speed)
-                    holding = True
-                    if kind == "start":
-                        runner.start()
-                    else:
-                        one_episode_target = session.trainer.episodes + 1
-                        runner.run_one_episode()
-                elif kind == "pause" and holding:
-                    hand_back()
+                    take(message)
+                elif kind == "pause" and holding is not None and message[1] == holding:
+                    hand_back("paused")
                 elif kind == "speed" and runner is not None:
                     runner.set_speed(message[1])
-            if runner is None or session is None:
+            if holding is None or runner is None or session is None:
                 continue
+            idle = not runner.busy  # read first: the snapshot below is then the last one
             snapshot = runner.latest
-            if holding and snapshot.version != last_sent:
+            if snapshot.version != last_sent:
                 last_sent = snapshot.version
-                conn.send(("snapshot", snapshot, runner.last_scene, runner.last_event))
-            if holding and one_episode_target is not None:
-                if session.trainer.episodes >= one_episode_target and runner.wait_idle(0.0):
-                    hand_back()
-            elif holding and not runner.running:
-                error = runner.error
-                hand_back(None if error is None else f"{error}")
-        except (EOFError, OSError, BrokenPipeError):
+                conn.send(("snapshot", holding, snapshot, runner.last_scene, runner.last_event))
+            if idle:
+                if runner.error is not None:
+                    hand_back("error", f"{runner.error}")
+                elif holding_kind == "one":
+                    hand_back("episode")
+                else:
+                    hand_back("finished" if runner.finished else "paused")
+        except (EOFError, OSError):
             break
         except Exception:  # report, hand back what we have, and carry on
             detail = traceback.format_exc(limit=3)
             try:
-                if holding and session is not None and runner is not None:
-                    hand_back(detail)
+                if holding is not None and session is not None and runner is not None:
+                    hand_back("error", detail)
             except Exception:
                 break
     if runner is not None:
         runner.close()
-    time.sleep(0)

@@ -1,10 +1,15 @@
 """Background training: runs a session's trainer on a worker thread.
 
 `TrainingRunner` owns one daemon thread. Front ends call `start()`,
-`pause()`, `run_one_episode()` and `set_speed()`; the thread trains in short
-chunks and publishes snapshots (the trainer's `latest`), which a UI pulls on a
-timer. Nothing here calls back into a front end, so a slow viewer can never
-slow training down, and a fast trainer never blocks the viewer.
+`pause()`, `run_one_episode()` and `set_speed()`; the thread trains in small
+pieces of work and publishes snapshots (the trainer's `latest`), which a UI
+pulls on a timer. Nothing here calls back into a front end, so a slow viewer
+can never slow training down, and a fast trainer never blocks the viewer.
+
+Every control takes effect after the piece of work under way: a few
+milliseconds of episodes at max speed, one agent step at animated speeds (the
+pause between animated steps is cut short). `pause()` returns once the worker
+has stopped, so the session can be changed right after it.
 
 Speeds run from *animated* (one agent step at a time, slow enough to follow,
 with the last move kept in `last_event` for a board to draw) to *max* (whole
@@ -16,9 +21,9 @@ from __future__ import annotations
 import threading
 import time
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
-from tui_gym.core.training import StepEvent, TrainingSnapshot
+from tui_gym.core.training import StepEvent, Trainer, TrainingSnapshot
 
 if TYPE_CHECKING:
     from tui_gym.core.session import Session
@@ -43,7 +48,8 @@ SPEEDS: tuple[Speed, ...] = (
     Speed("max", None),
 )
 DEFAULT_SPEED = len(SPEEDS) - 1
-CHUNK_SECONDS = 0.05  # how long one max-speed chunk trains before checking for a pause
+CHUNK_SECONDS = 0.05  # how long one max-speed chunk trains before publishing
+STOP_TIMEOUT = 5.0  # seconds `pause()` and `close()` wait at most for the worker
 
 
 class TrainingRunner:
@@ -52,29 +58,57 @@ class TrainingRunner:
     def __init__(self, session: Session, speed: int = DEFAULT_SPEED) -> None:
         self.session = session
         self.speed_index = speed
-        self.last_event: StepEvent | None = None
-        self.last_scene: dict | None = None  # the board after the last animated step
         self.error: BaseException | None = None
         self.finished = False  # the episode budget was reached
+        self._shown: tuple[Any, dict | None, StepEvent | None] = (None, None, None)
         self._anim_mark = 0.0  # when the last animated step was taken
-        self._want_run = threading.Event()
-        self._idle = threading.Event()
-        self._idle.set()
-        self._one_episode = threading.Event()
-        self._quit = threading.Event()
-        self._lock = threading.Lock()
+        # Every flag below changes under `_cond`, and every change notifies it:
+        # the worker sleeps on it, between animated steps too.
+        self._cond = threading.Condition()
+        self._want_run = False
+        self._want_one = False
+        self._quit = False
+        self._working = False  # the worker is inside a piece of work
+        self._controls = 0  # counts control changes, to cut an animated pause short
         self._thread = threading.Thread(target=self._loop, name="tui-gym-trainer", daemon=True)
         self._thread.start()
 
-    # --- controls (any thread) ---------------------------------------------
+    # --- controls (the thread that owns the session) ------------------------
     @property
     def speed(self) -> Speed:
         return SPEEDS[self.speed_index]
 
     @property
     def running(self) -> bool:
-        """True while training is switched on (it may be between chunks)."""
-        return self._want_run.is_set()
+        """True while training is switched on (it may be between pieces of work)."""
+        return self._want_run
+
+    @property
+    def busy(self) -> bool:
+        """True while training is on, an episode is asked for, or work is under way."""
+        return self._want_run or self._want_one or self._working
+
+    @property
+    def last_scene(self) -> dict | None:
+        """The board after the last animated step of the session's agent."""
+        agent, scene, _ = self._shown
+        return scene if agent is self.session.agent else None
+
+    @property
+    def last_event(self) -> StepEvent | None:
+        """The last animated step of the session's agent."""
+        agent, _, event = self._shown
+        return event if agent is self.session.agent else None
+
+    def _control(self, **flags: bool) -> None:
+        with self._cond:
+            for name, value in flags.items():
+                setattr(self, f"_{name}", value)
+            self._controls += 1
+            self._cond.notify_all()
+
+    def update(self) -> None:
+        """Nothing to collect: the worker trains the session's own objects."""
 
     def start(self) -> bool:
         """Train until paused or the budget is reached; False when the budget is used up."""
@@ -83,15 +117,21 @@ class TrainingRunner:
             return False
         self.finished = False
         self.error = None
-        self._want_run.set()
+        self._control(want_run=True, want_one=False)
         return True
 
-    def pause(self, wait: bool = True, timeout: float = 5.0) -> None:
-        """Stop training after the current chunk; with `wait`, return once it has stopped."""
-        self._want_run.clear()
-        self._one_episode.clear()
-        if wait:
-            self._idle.wait(timeout)
+    def pause(self, wait: bool = True, timeout: float = STOP_TIMEOUT) -> bool:
+        """Stop training, mid-episode included, and return once the worker has stopped.
+
+        The worker finishes the piece of work under way (milliseconds), so this
+        returns at once in practice; `wait` is there for the process runner,
+        whose child may take longer to hand the agent back. False on a timeout.
+        """
+        with self._cond:
+            self._want_run = self._want_one = False
+            self._controls += 1
+            self._cond.notify_all()
+            return self._cond.wait_for(lambda: not self._working, timeout)
 
     def toggle(self) -> bool:
         """Start when paused, pause when running; returns whether it now runs."""
@@ -102,12 +142,13 @@ class TrainingRunner:
 
     def run_one_episode(self) -> None:
         """Play one training episode on the worker (ignored while running)."""
-        if not self.running:
+        if not self._want_run:
             self.error = None
-            self._one_episode.set()
+            self._control(want_one=True)
 
     def set_speed(self, index: int) -> Speed:
         self.speed_index = max(0, min(len(SPEEDS) - 1, index))
+        self._control()  # an animated pause in progress ends: the new pace applies now
         return self.speed
 
     def faster(self) -> Speed:
@@ -120,53 +161,77 @@ class TrainingRunner:
     def latest(self) -> TrainingSnapshot:
         return self.session.trainer.latest
 
-    def wait_idle(self, timeout: float = 5.0) -> bool:
-        """Wait until the worker is not inside a chunk."""
-        return self._idle.wait(timeout)
+    def wait_idle(self, timeout: float = STOP_TIMEOUT) -> bool:
+        """Wait until the worker has nothing to do (the run or the episode is over)."""
+        with self._cond:
+            return self._cond.wait_for(lambda: not self.busy or self._quit, timeout)
 
-    def close(self) -> None:
-        """Stop the worker thread for good."""
-        self._quit.set()
-        self._want_run.clear()
-        self._one_episode.set()  # wake it
-        self._thread.join(timeout=5.0)
+    def close(self, wait: bool = True) -> None:
+        """Stop the worker thread for good (with `wait`, return once it has ended)."""
+        self._control(quit=True, want_run=False, want_one=False)
+        if wait and self._thread is not threading.current_thread():
+            self._thread.join(timeout=STOP_TIMEOUT)
 
     # --- the worker --------------------------------------------------------
     def _loop(self) -> None:
-        while not self._quit.is_set():
-            if not (self._want_run.is_set() or self._one_episode.is_set()):
-                self._idle.set()
-                # Sleep until asked to work (short waits keep quit responsive).
-                self._want_run.wait(0.05) or self._one_episode.wait(0.05)
-                continue
-            self._idle.clear()
-            if self._quit.is_set():
-                break
+        while True:
+            with self._cond:
+                self._cond.wait_for(lambda: self._quit or self._want_run or self._want_one)
+                if self._quit:
+                    return
+                self._working = True
+                controls = self._controls
+            delay = None
             try:
-                if self._one_episode.is_set() and not self._want_run.is_set():
-                    self._episode_once()
-                    self._one_episode.clear()
-                else:
-                    self._chunk()
+                delay = self._piece()
             except Exception as exc:  # shown to the user by the front end
                 self.error = exc
-                self._want_run.clear()
-                self._one_episode.clear()
-        self._idle.set()
+                with self._cond:
+                    self._want_run = self._want_one = False
+            finally:
+                with self._cond:
+                    self._working = False
+                    self._cond.notify_all()
+            if delay:
+                self._pause_between_steps(controls, delay)
 
-    def _episode_once(self) -> None:
+    def _pause_between_steps(self, controls: int, delay: float) -> None:
+        """The pause that makes animated steps readable; any control ends it."""
+        with self._cond:
+            self._cond.wait_for(lambda: self._controls != controls, delay)
+
+    def _piece(self) -> float | None:
+        """One piece of work; returns how long to pause before the next one."""
         speed = self.speed
         trainer = self.session.trainer_for(speed.animated)
-        if speed.animated:
-            while not self._quit.is_set():
+        if self._want_run:
+            if trainer.remaining == 0:
+                self.finished = True
+                with self._cond:
+                    self._want_run = False
+                trainer.publish()
+                return None
+            if speed.animated:
                 self._animated_step(trainer)
-                if self.last_event.episode_done is not None:
-                    return
-                time.sleep(speed.step_delay or 0.0)
+                return speed.step_delay
+            trainer.run(
+                episodes=trainer.remaining, seconds=CHUNK_SECONDS, stop=_Stopped(self)
+            )
+            return None
+        if not self._want_one:
+            return None
+        if speed.animated:
+            event = self._animated_step(trainer)
+            if event.episode_done is None:
+                return speed.step_delay
         else:
-            trainer.run(episodes=1)
+            trainer.run(episodes=1, stop=_Stopped(self, one=True))
+        with self._cond:
+            self._want_one = False
+            self._cond.notify_all()
+        return None
 
-    def _animated_step(self, trainer) -> None:
+    def _animated_step(self, trainer: Trainer) -> StepEvent:
         """One agent step, remembered (with the board's scene) for viewers.
 
         The time between animated steps (the pause that makes them readable)
@@ -177,35 +242,21 @@ class TrainingRunner:
             trainer.seconds += now - self._anim_mark
         self._anim_mark = now
         event = trainer.step()
-        self.last_event = event
-        self.last_scene = self.session.profile.scene(trainer.env)
+        self._shown = (trainer.agent, self.session.profile.scene(trainer.env), event)
         trainer.publish()
-
-    def _chunk(self) -> None:
-        speed = self.speed
-        trainer = self.session.trainer_for(speed.animated)
-        if trainer.remaining == 0:
-            self.finished = True
-            self._want_run.clear()
-            trainer.publish()
-            return
-        if speed.animated:
-            self._animated_step(trainer)
-            time.sleep(speed.step_delay or 0.0)
-            return
-        trainer.run(
-            episodes=trainer.remaining, seconds=CHUNK_SECONDS, stop=_Inverted(self._want_run)
-        )
+        return event
 
 
-class _Inverted:
-    """A stop flag that is set when the wrapped 'keep running' event is cleared."""
+class _Stopped:
+    """The trainer's stop flag: set once the runner is no longer asked to do this work."""
 
-    def __init__(self, event: threading.Event) -> None:
-        self._event = event
+    def __init__(self, runner: TrainingRunner, one: bool = False) -> None:
+        self._runner = runner
+        self._one = one
 
     def is_set(self) -> bool:
-        return not self._event.is_set()
+        runner = self._runner
+        return runner._quit or not (runner._want_one if self._one else runner._want_run)
 
 
 RUNNERS = ("thread", "process")

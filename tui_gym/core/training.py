@@ -7,24 +7,32 @@ return, length, mean |TD error| and epsilon go into `RollingWindow`s and
 whole-run `Series`, so memory is fixed however long it runs. `snapshot()`
 returns an immutable `TrainingSnapshot` (numpy copies) for viewers on other
 threads; `latest` holds the most recent one, refreshed while `run` works.
+`continue_run` decides how new hyperparameters apply to a run under way.
 """
 
 from __future__ import annotations
 
-import threading
+import math
 import time
 from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import gymnasium as gym
 import numpy as np
 
-from tui_gym.core.agent import QAgent
+from tui_gym.core.agent import Hyperparameters, QAgent
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.stats import EpisodeStats, RollingWindow, Series
 
 SERIES_NAMES = ("return", "length", "td_error", "epsilon")
+ADVANCE_STEPS = 256  # steps after which `Trainer.run` checks the clock and its stop flag
+
+
+class StopFlag(Protocol):
+    """What `Trainer.run` checks between pieces of work (a `threading.Event` will do)."""
+
+    def is_set(self) -> bool: ...
 
 
 @dataclass(frozen=True)
@@ -98,6 +106,8 @@ class StepEvent:
     terminated: bool
     truncated: bool
     episode_done: EpisodeStats | None
+    episode: int = 0  # the 1-based number of the episode this step belongs to
+    step: int = 0  # the 1-based number of this step within its episode
 
 
 class Trainer:
@@ -163,13 +173,14 @@ class Trainer:
         self._ep_return += float(reward)
         self._ep_len += 1
         self._ep_td += abs(td)
+        episode, step = self.episodes + 1, self._ep_len
         done_stats = None
         if terminated or truncated:
             done_stats = self._finish_episode()
         else:
             self._obs, self._key = next_obs, next_key
         return StepEvent(obs, action, float(reward), next_obs, bool(terminated),
-                         bool(truncated), done_stats)
+                         bool(truncated), done_stats, episode, step)
 
     def _finish_episode(self) -> EpisodeStats:
         stats = EpisodeStats(
@@ -205,7 +216,7 @@ class Trainer:
         self,
         episodes: int | None = None,
         seconds: float | None = None,
-        stop: threading.Event | None = None,
+        stop: StopFlag | None = None,
         on_publish: Callable[[TrainingSnapshot], None] | None = None,
     ) -> int:
         """Run until `episodes` more episodes, `seconds` elapse, or `stop` is set.
@@ -238,10 +249,15 @@ class Trainer:
         return done
 
     def _advance(self, limit: int | None) -> int:
-        """A small piece of work between clock checks: a few episodes (at most `limit`)."""
+        """A small piece of work between clock checks: a few episodes (at most `limit`),
+        fewer once they add up to `ADVANCE_STEPS` steps, so a stop is seen within
+        milliseconds however long the episodes are."""
         count = 16 if limit is None else min(16, limit)
-        for _ in range(count):
+        first_step = self.steps
+        for done in range(1, count + 1):
             self.run_episode()
+            if self.steps - first_step >= ADVANCE_STEPS:
+                return done
         return count
 
     def publish(self, callback: Callable[[TrainingSnapshot], None] | None = None) -> None:
@@ -315,3 +331,38 @@ class Trainer:
     @property
     def remaining(self) -> int:
         return max(0, self.agent.hp.episodes - self.episodes)
+
+
+def continue_run(
+    current: Hyperparameters | None, wanted: Hyperparameters, episodes_done: int
+) -> tuple[Hyperparameters, str | None]:
+    """The hyperparameters to train on with, and what to tell the person, if anything.
+
+    Raising the episode budget of an agent that has trained continues its run:
+    the epsilon decay keeps its length in episodes (the decay fraction is scaled
+    down to match), so epsilon carries on from where it is instead of jumping
+    back up. When the decay fraction or the epsilons are changed too, they are
+    taken as asked; if that sends epsilon back up, the note says so plainly.
+    """
+    if current is None or episodes_done <= 0:
+        return wanted, None
+    hp, note = wanted, None
+    same_fraction = math.isclose(
+        wanted.epsilon_decay_fraction, current.epsilon_decay_fraction, rel_tol=1e-5, abs_tol=1e-9
+    )
+    if wanted.episodes > current.episodes and same_fraction:
+        decay_episodes = current.epsilon_decay_fraction * current.episodes
+        hp = wanted.replace(epsilon_decay_fraction=min(1.0, decay_episodes / wanted.episodes))
+        note = (
+            f"Budget raised to {wanted.episodes:,} episodes: the run goes on from episode "
+            f"{episodes_done:,} with epsilon on its schedule (decay fraction "
+            f"{hp.epsilon_decay_fraction:.4g}: the decay still ends at episode "
+            f"{decay_episodes:,.0f})."
+        )
+    before, after = current.epsilon_at(episodes_done), hp.epsilon_at(episodes_done)
+    if after > before + 1e-6:
+        note = (
+            f"Exploration restarts: with these settings epsilon goes back up from "
+            f"{before:.3g} to {after:.3g} at episode {episodes_done:,}."
+        )
+    return hp, note

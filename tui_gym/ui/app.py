@@ -6,11 +6,19 @@ thread). A timer pulls the runner's latest snapshot and hands it to the Train
 view; the side panel asks for rebuilds through a message; nothing in the
 trainer calls into widgets. `MainScreen` is the app's screen, and
 `tune_gc_for_ui` paces the garbage collector for an app that owns its process.
+`run_app` runs the app as `tui-gym` does: SIGTERM, SIGHUP and SIGINT end it
+cleanly, and an unexpected error ends it with one line and a crash log
+(`tui_gym.crash_log`) instead of a traceback on the screen.
 """
 
 from __future__ import annotations
 
+import asyncio
 import gc
+import os
+import signal
+import sys
+import threading
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any, ClassVar
@@ -28,6 +36,7 @@ from tui_gym.core.profiles import PROFILES
 from tui_gym.core.runner import make_runner
 from tui_gym.core.session import Session
 from tui_gym.core.storage import StorageError
+from tui_gym.core.training import continue_run
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.play_view import PlayView
@@ -78,12 +87,24 @@ class TuiGymApp(App[int]):
         play_seed: int | None = None,
         runner: str = "thread",
         tune_gc: bool = False,
+        gc_seconds: tuple[float, float] | None = None,
+        standalone: bool = False,
     ) -> None:
         """`runner` is "thread" (train on a worker thread) or "process" (a child process;
         what `tui-gym` opens). `tune_gc` applies `tune_gc_for_ui` at mount (for a
-        process that runs this one app, as `tui-gym` does; not for test suites)."""
+        process that runs this one app, as `tui-gym` does; not for test suites),
+        collecting every `gc_seconds` (young, full; default `YOUNG_GC_SECONDS`,
+        `FULL_GC_SECONDS`). `standalone` is for an app that owns its process and
+        terminal (`run_app`): termination signals end it cleanly, and a crash's
+        traceback is left to `run_app` to log instead of being printed."""
         super().__init__()
         self.tune_gc = tune_gc
+        self.gc_seconds = gc_seconds or (YOUNG_GC_SECONDS, FULL_GC_SECONDS)
+        self.gc_pacer: GcPacer | None = None
+        self.standalone = standalone
+        self.crash: BaseException | None = None  # the first unexpected error, if any
+        self.thread_crash: BaseException | None = None  # one from a background thread
+        self._signals: list[int] = []
         self.session = session or Session()
         self.runner = make_runner(self.session, runner)
         self.play_seed = self.session.seed if play_seed is None else play_seed
@@ -111,7 +132,9 @@ class TuiGymApp(App[int]):
 
     def on_mount(self) -> None:
         if self.tune_gc:
-            tune_gc_for_ui(self)
+            self.gc_pacer = tune_gc_for_ui(self, *self.gc_seconds)
+        if self.standalone:
+            self._catch_signals()
         self._switcher = self.query_one("#views", ContentSwitcher)
         self.sub_title = self.session.profile.title
         self.set_interval(1 / REFRESH_HZ, self._tick)
@@ -148,7 +171,10 @@ class TuiGymApp(App[int]):
 
     # --- the timer: pull the latest snapshot --------------------------------
     def _tick(self) -> None:
+        if self.thread_crash is not None:
+            raise RuntimeError("a background thread failed") from self.thread_crash
         runner = self.runner
+        runner.update()  # take in what the training process handed back
         if runner.error is not None:
             error, runner.error = runner.error, None
             self.notify(f"Training stopped: {error}", severity="error", timeout=8)
@@ -193,34 +219,51 @@ class TuiGymApp(App[int]):
         self.side_panel.focus_wrappers()
 
     def action_toggle_training(self) -> None:
-        if self.runner.running:
-            self.runner.pause(wait=False)
+        runner = self.runner
+        if runner.running:
+            runner.pause(wait=False)
             self.notify("Training paused.", timeout=2)
             return
-        hp = self.train_view.read_hyperparameters()
-        if hp is None:
-            self.notify("Fix the highlighted fields first.", severity="error")
+        if not self._apply_form():
             return
-        self.session.set_hyperparameters(hp)
-        if not self.runner.start():
+        if runner.start():
+            return
+        if runner.finished:
             self.notify(
                 "The episode budget is used up: raise Episodes or reset the agent (x).",
                 severity="warning",
             )
+        else:  # no training process can run
+            error, runner.error = runner.error, None
+            self.notify(f"Cannot train: {error}", severity="error", timeout=10)
 
     def action_one_episode(self) -> None:
         if self.runner.running:
             self.notify("Pause training first (space).", severity="warning", timeout=3)
             return
+        if self._apply_form():
+            self.runner.run_one_episode()
+
+    def _apply_form(self) -> bool:
+        """Apply the form's hyperparameters (a raised budget continues the run); False when
+        a field is wrong."""
         hp = self.train_view.read_hyperparameters()
         if hp is None:
             self.notify("Fix the highlighted fields first.", severity="error")
-            return
-        self.session.set_hyperparameters(hp)
-        self.runner.run_one_episode()
+            return False
+        session = self.session
+        if hp != session.hp:
+            hp, note = continue_run(session.hp, hp, session.trainer.episodes)
+            if note:
+                self.notify(note, timeout=8)
+            session.set_hyperparameters(hp)
+            self.train_view.form.load(hp)
+        return True
 
     def action_reset_agent(self) -> None:
-        self.runner.pause()
+        # The thread runner stops within a piece of work; the process runner's child
+        # may hand its agent back later, into the old agent: the reset wins.
+        self.runner.pause(wait=False)
         self.session.reset_agent()
         self._last_version = -1
         self.train_view.reload()
@@ -257,7 +300,9 @@ class TuiGymApp(App[int]):
     ) -> bool:
         """Rebuild the session's env; False (and a message) when it cannot be built."""
         was_running = self.runner.running
-        self.runner.pause()
+        # Never waits on a training process: what it hands back later lands in the
+        # agent it was given (kept by a rebuild that keeps it, else dropped).
+        self.runner.pause(wait=False)
         try:
             report = self.session.rebuild(env_id=env_id, env_kwargs=env_kwargs, choices=choices)
         except ValueError as exc:
@@ -333,20 +378,67 @@ class TuiGymApp(App[int]):
         self.action_toggle_training()
 
     async def action_quit(self) -> None:
-        self.runner.close()
-        self.exit(0)
+        self.exit(0)  # the runner closes at unmount, without holding the screen up
 
     def on_unmount(self) -> None:
-        self.runner.close()
+        self.runner.close(wait=False)  # `run_app` waits for it once the terminal is back
+        loop = asyncio.get_running_loop()
+        for signum in self._signals:
+            loop.remove_signal_handler(signum)
+        self._signals.clear()
         if self.tune_gc:
             gc.enable()  # the timers that collected are gone with the app
+
+    # --- ending well ----------------------------------------------------------
+    def _catch_signals(self) -> None:
+        """End cleanly (terminal restored, training process closed) on these signals."""
+        loop = asyncio.get_running_loop()
+        for signum in (signal.SIGTERM, signal.SIGHUP, signal.SIGINT):
+            try:
+                loop.add_signal_handler(signum, self._end_on_signal, signum)
+            except (RuntimeError, ValueError, NotImplementedError):  # not the main thread
+                continue
+            self._signals.append(signum)
+
+    def _end_on_signal(self, signum: int) -> None:
+        self.exit(return_code=128 + signum)
+
+    def _handle_exception(self, error: Exception) -> None:
+        # Textual's one path for an unhandled error: it ends the app with code 1 and
+        # keeps a traceback to print on the terminal. A standalone app logs it
+        # instead (`run_app`), so the person sees one line.
+        if self.crash is None:
+            self.crash = error
+        super()._handle_exception(error)
+        if self.standalone:
+            self._exit_renderables.clear()
 
 
 YOUNG_GC_SECONDS = 0.5  # collect the young generations this often
 FULL_GC_SECONDS = 20.0  # and everything this often
+GC_SECONDS_ENV = "TUI_GYM_GC_SECONDS"  # "YOUNG,FULL" seconds, to override both
 
 
-def tune_gc_for_ui(app: App[Any]) -> None:
+class GcPacer:
+    """The collections `tune_gc_for_ui` runs on the app's timers, counted."""
+
+    def __init__(self) -> None:
+        self.young_collections = 0
+        self.full_collections = 0
+
+    # Methods, not `gc.collect` itself: Textual's timers take Python callables only.
+    def collect_young(self) -> None:
+        gc.collect(1)
+        self.young_collections += 1
+
+    def collect_all(self) -> None:
+        gc.collect()
+        self.full_collections += 1
+
+
+def tune_gc_for_ui(
+    app: App[Any], young_seconds: float = YOUNG_GC_SECONDS, full_seconds: float = FULL_GC_SECONDS
+) -> GcPacer:
     """Collect garbage between frames, on the app's own timers.
 
     Python's collector runs whenever enough objects have been allocated, so
@@ -354,22 +446,80 @@ def tune_gc_for_ui(app: App[Any]) -> None:
     objects made the collection take up to 25 ms. Here what is alive once the
     app is up moves to the permanent generation (`gc.freeze`: never collected
     again, hence one app a process), automatic collection is off, and timers
-    collect the young generations every `YOUNG_GC_SECONDS` (about a
-    millisecond) and everything every `FULL_GC_SECONDS`; a timer callback
+    collect the young generations every `young_seconds` (about a
+    millisecond) and everything every `full_seconds`; a timer callback
     never runs in the middle of a frame.
     """
+    pacer = GcPacer()
     gc.collect()
     gc.freeze()
     gc.disable()
-    app.set_interval(YOUNG_GC_SECONDS, lambda: gc.collect(1), name="young-gc")
-    app.set_interval(FULL_GC_SECONDS, gc.collect, name="full-gc")
+    app.set_interval(young_seconds, pacer.collect_young, name="young-gc")
+    app.set_interval(full_seconds, pacer.collect_all, name="full-gc")
+    return pacer
+
+
+def gc_seconds_from_env() -> tuple[float, float] | None:
+    """The collection periods set in `TUI_GYM_GC_SECONDS` ("YOUNG,FULL"), or None.
+
+    Raises ValueError with one clear line when the value is not two positive numbers.
+    """
+    text = os.environ.get(GC_SECONDS_ENV, "").strip()
+    if not text:
+        return None
+    try:
+        young, full = (float(part) for part in text.split(","))
+    except ValueError:
+        young = full = -1.0
+    if not (0 < young < 1e6 and 0 < full < 1e6):
+        raise ValueError(
+            f"{GC_SECONDS_ENV} must be two positive numbers of seconds, "
+            f"e.g. 0.5,20; got {text!r}"
+        )
+    return young, full
+
+
+EXIT_CRASH = 1
 
 
 def run_app(
     env_id: str = "Blackjack-v1", seed: int = 0, load: str | None = None, runner: str = "process"
 ) -> int:
     """Open the app (from a saved agent with `load`); returns the exit code."""
+    gc_seconds = gc_seconds_from_env()
     session = Session.load(load) if load else Session(env_id=env_id, seed=seed)
-    app = TuiGymApp(session, runner=runner, tune_gc=True)
-    result = app.run()
-    return int(result or 0)
+    return run_standalone(
+        TuiGymApp(session, runner=runner, tune_gc=True, gc_seconds=gc_seconds, standalone=True)
+    )
+
+
+def run_standalone(app: TuiGymApp) -> int:
+    """Run `app` in this terminal until it ends; returns the exit code.
+
+    An unexpected error, in the app or a background thread, ends it with
+    `EXIT_CRASH` and one line on stderr naming the crash log that holds the
+    traceback; a signal ends it with 128 + the signal's number.
+    """
+    from tui_gym.crash_log import report_crash
+
+    app.standalone = True
+    previous_hook = threading.excepthook
+
+    def thread_failed(args: threading.ExceptHookArgs) -> None:
+        if args.exc_value is not None and app.thread_crash is None:
+            app.thread_crash = args.exc_value  # raised on the app's next tick
+
+    threading.excepthook = thread_failed
+    try:
+        app.run()
+        error = app.crash or app.thread_crash
+        code = app.return_code or 0
+    except Exception as exc:  # outside the app's own handling: the same treatment
+        error, code = exc, EXIT_CRASH
+    finally:
+        threading.excepthook = previous_hook
+        app.runner.close()
+    if error is not None:
+        sys.stderr.write(report_crash(error) + "\n")
+        return EXIT_CRASH
+    return code

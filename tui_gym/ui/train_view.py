@@ -26,7 +26,7 @@ from textual.widget import Widget
 from textual.widgets import Button, Label
 
 from tui_gym.core.agent import Hyperparameters
-from tui_gym.core.training import TrainingSnapshot
+from tui_gym.core.training import TrainingSnapshot, continue_run
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
 from tui_gym.ui.widgets.progress_line import ProgressLine
@@ -421,10 +421,12 @@ class TrainView(VerticalScroll):
             state = profile.describe(event.observation)
         except Exception:  # wrappers may change what an observation looks like
             state = ""
+        count = f"episode {event.episode:,} · step {event.step:,}" if event.step else ""
         step = f"→ {action}, reward {event.reward:+g}"
         if event.episode_done is not None:
             step += f" · return {event.episode_done.episode_return:+g}"
-        return f"{state}\n{step}" if state else step
+        # The state comes last: when it wraps, the board above shows it anyway.
+        return "\n".join(line for line in (count, step, state) if line)
 
     # --- events ------------------------------------------------------------
     @on(Button.Pressed)
@@ -457,9 +459,12 @@ class TrainView(VerticalScroll):
             self.app.notify("Fix the highlighted fields first.", severity="error", timeout=3)
             return
         if not self.runner.running:
-            self.session.set_hyperparameters(hp)
+            session = self.session
+            hp, note = continue_run(session.hp, hp, session.trainer.episodes)
+            session.set_hyperparameters(hp)
+            self.form.load(hp)
             self.progress.show(self.progress.done, hp.episodes)
-            self.app.notify("Hyperparameters set.", timeout=2)
+            self.app.notify(note or "Hyperparameters set.", timeout=8 if note else 2)
         else:
             self.app.notify("They apply when training starts again.", timeout=3)
         self._leave_form()

@@ -1,0 +1,402 @@
+"""The app stays up, answers at once and ends well: as a person runs it, for real.
+
+Pilot tests run the real app with its real timers (the garbage collector's
+periods shortened so every periodic job fires within a second or two); the
+pseudo-terminal tests launch the installed `tui-gym` console script (or the
+same `run_standalone` path) as a person would, and read what reaches the
+terminal. Every wait polls a condition with a deadline.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import os
+import re
+import select
+import shutil
+import signal
+import struct
+import subprocess
+import sys
+import termios
+import textwrap
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+from textual._callback import count_parameters
+from textual.timer import Timer
+
+from tui_gym.core.agent import Hyperparameters
+from tui_gym.core.profiles import profile_for
+from tui_gym.core.session import Session
+from tui_gym.ui.app import TuiGymApp
+from tui_gym.ui.train_view import TrainView
+
+DEADLINE = 20.0  # seconds; generous for a loaded machine, never reached when things work
+LEAVE_ALT_SCREEN = b"\x1b[?1049l"
+MOUSE_OFF = b"\x1b[?1000l"
+ANSI = re.compile(r"\x1b(\[[0-9;?<>=]*[ -/]*[@-~]|[@-_])")
+FRAME_SECONDS = 0.25  # the most the app may spend in a runner call: a frame (1/15 s) and slack
+KEY_SECONDS = 2.5  # a whole key press, redrawing included, on a loaded machine: the freezes
+# were 5 s (thread runner) and 10 s (process runner)
+
+
+async def wait_for(pilot, predicate: Callable[[], bool], what: str, timeout: float = DEADLINE):
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out waiting for {what}")
+        await pilot.pause()
+
+
+def all_timers(app: TuiGymApp) -> list[Timer]:
+    nodes = [app, *app.screen_stack, *app.screen.walk_children()]
+    return [timer for node in nodes for timer in list(node._timers)]
+
+
+# --- the real timers -----------------------------------------------------------
+async def test_the_real_app_outlives_the_first_firing_of_every_periodic_job() -> None:
+    import gc
+
+    hp = Hyperparameters(episodes=10_000_000)
+    # As `tui-gym` runs: training in a child process, so the event loop has its core.
+    app = TuiGymApp(Session("blackjack", seed=0, hp=hp), runner="process", tune_gc=True,
+                    gc_seconds=(0.05, 0.3))
+    try:
+        async with app.run_test(size=(120, 40)) as pilot:
+            began = time.monotonic()
+            await pilot.press("t", "space")
+            timers = all_timers(app)
+            assert {"young-gc", "full-gc"} <= {t.name for t in timers}
+            for timer in timers:  # a built-in here is what crashed the app at 20 s
+                if timer._callback is not None:
+                    count_parameters(timer._callback)
+            for command in app.get_system_commands(app.screen):  # the palette's, likewise
+                count_parameters(command.callback)
+            longest = max(t._interval for t in timers)
+            assert longest <= 1.0, "every periodic job must fire within the test"
+            pacer = app.gc_pacer
+            assert pacer is not None
+            await wait_for(
+                pilot,
+                lambda: pacer.full_collections >= 2 and time.monotonic() - began > longest * 1.5,
+                "every periodic job to have fired",
+            )
+            assert pacer.young_collections > pacer.full_collections
+            assert app.is_running and app.return_code is None
+            assert app.runner.running and app.runner.latest.episodes > 0
+            await pilot.press("q")
+        assert app.return_code == 0
+    finally:
+        gc.enable()
+        gc.unfreeze()
+
+
+# --- one frame, whatever the speed -------------------------------------------------
+def animated_gridworld(runner: str) -> TuiGymApp:
+    hp = profile_for("gridworld").default_hyperparameters().replace(episodes=100_000)
+    return TuiGymApp(Session("gridworld", seed=0, hp=hp), runner=runner)
+
+
+def time_runner_calls(app: TuiGymApp) -> list[float]:
+    """Record how long every control call on the app's runner takes (the app's side)."""
+    spent: list[float] = []
+    runner = app.runner
+    for name in ("start", "pause", "run_one_episode", "set_speed", "close", "update"):
+        method = getattr(runner, name)
+
+        def timed(*args, _method=method, **kwargs):
+            began = time.perf_counter()
+            try:
+                return _method(*args, **kwargs)
+            finally:
+                spent.append(time.perf_counter() - began)
+
+        setattr(runner, name, timed)
+    return spent
+
+
+async def timed_press(pilot, key: str) -> float:
+    began = time.perf_counter()
+    await pilot.press(key)
+    return time.perf_counter() - began
+
+
+@pytest.mark.parametrize("runner", ["thread", "process"])
+async def test_pause_reset_switch_and_quit_take_effect_at_once_mid_episode(runner: str) -> None:
+    app = animated_gridworld(runner)
+    async with app.run_test(size=(120, 40)) as pilot:
+        spent = time_runner_calls(app)
+        await pilot.press("t", "minus", "minus", "minus")  # animated (slow)
+        assert app.runner.speed.name == "animated (slow)"
+        view = app.query_one(TrainView)
+        # `.` animates one episode on the board, with a step count.
+        await pilot.press("full_stop")
+        await wait_for(pilot, lambda: app.runner.last_event is not None
+                       and app.runner.last_event.step >= 2, "two animated steps")
+        await wait_for(pilot, lambda: "step 2" in str(view._caption.content), "the step count")
+        assert view._board_box.has_class("-shown")
+        # The switch lands at once though the episode has many slow steps to go.
+        assert await timed_press(pilot, "b") < KEY_SECONDS
+        assert app.session.profile.name == "blackjack"
+        # space then runs at once: no "running" at 0 episodes for seconds.
+        await pilot.press("plus", "plus", "space")  # animated (fast)
+        await wait_for(pilot, lambda: app.runner.latest.episodes >= 1, "the first hand", 5.0)
+        assert await timed_press(pilot, "space") < KEY_SECONDS
+        assert not app.runner.running
+        await pilot.press("g", "space")
+        await wait_for(pilot, lambda: app.runner.last_event is not None, "an animated step")
+        assert await timed_press(pilot, "x") < KEY_SECONDS
+        assert not app.runner.running and app.runner.latest.episodes == 0
+        await wait_for(pilot, lambda: not app.runner.busy, "the old agent to come back")
+        assert app.session.trainer.episodes == 0, "the reset lost to the old agent"
+        await pilot.press("space")
+        assert await timed_press(pilot, "q") < KEY_SECONDS
+    assert app.return_code == 0
+    assert max(spent) < FRAME_SECONDS, "the app waited on the runner"
+
+
+# --- the training process ----------------------------------------------------------
+async def test_a_stopped_or_killed_training_process_never_stops_the_app() -> None:
+    hp = Hyperparameters(episodes=10_000_000)
+    app = TuiGymApp(Session("blackjack", seed=0, hp=hp), runner="process")
+    notices: list[str] = []
+    app.notify = lambda message, **kw: notices.append(message)  # type: ignore[method-assign]
+    async with app.run_test(size=(120, 40)) as pilot:
+        runner = app.runner
+        await pilot.press("t", "space")
+        await wait_for(pilot, lambda: runner.latest.episodes > 1000, "some training")
+        # A stopped child: the reset lands at once, and wins over the agent it hands back.
+        stopped = runner.child_pid
+        os.kill(stopped, signal.SIGSTOP)
+        try:
+            spent = time_runner_calls(app)
+            assert await timed_press(pilot, "x") < KEY_SECONDS
+            assert runner.latest.episodes == 0
+            assert max(spent) < FRAME_SECONDS
+        finally:
+            os.kill(stopped, signal.SIGCONT)
+        await wait_for(pilot, lambda: not runner.busy, "the old agent to come back")
+        assert app.session.trainer.episodes == 0 and app.session.agent.episode == 0
+        assert not app.session.agent.q.any(), "the old table must not come back"
+        # A killed child: reaped, replaced, and the agent handed back last is kept.
+        await pilot.press("space")
+        await wait_for(pilot, lambda: runner.latest.episodes > 1000, "some training")
+        await pilot.press("space")
+        await wait_for(pilot, lambda: not runner.busy, "the agent to come back")
+        kept = app.session.trainer.episodes
+        await pilot.press("space")
+        await wait_for(pilot, lambda: runner.latest.episodes > kept, "training again")
+        dead = runner.child_pid
+        os.kill(dead, signal.SIGKILL)
+        await wait_for(pilot, lambda: any("killed" in n for n in notices), "the notice")
+        assert not runner.running
+        assert not Path(f"/proc/{dead}").exists(), "the dead child must be reaped, not a zombie"
+        assert app.session.trainer.episodes == kept, "the last handed-over agent is kept"
+        for key in ("minus", "plus", "full_stop", "space"):  # these raised BrokenPipeError
+            await pilot.press(key)
+        await wait_for(pilot, lambda: runner.latest.episodes > kept + 1000, "training again")
+        assert runner.child_pid != dead
+        await pilot.press("q")
+    assert app.return_code == 0
+
+
+# --- the console script in a pseudo-terminal -----------------------------------------
+class Terminal:
+    """A program in a pseudo-terminal of 120×40, with everything it writes kept."""
+
+    def __init__(self, argv: list[str], env: dict[str, str]) -> None:
+        master, slave = os.openpty()
+        fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 40, 120, 0, 0))
+        # The terminal's size is the pseudo-terminal's, not one left in the environment.
+        inherited = {k: v for k, v in os.environ.items() if k not in ("COLUMNS", "LINES")}
+        self.process = subprocess.Popen(
+            argv, stdin=slave, stdout=slave, stderr=slave, start_new_session=True,
+            env={**inherited, "TERM": "xterm-256color", **env},
+        )
+        os.close(slave)
+        self.master = master
+        self.output = bytearray()
+        self._lock = threading.Lock()
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        while True:
+            ready, _, _ = select.select([self.master], [], [], 0.05)
+            if not ready:
+                if self.process.poll() is not None:
+                    return
+                continue
+            try:
+                data = os.read(self.master, 65536)
+            except OSError:
+                return
+            if not data:
+                return
+            with self._lock:
+                self.output.extend(data)
+
+    @property
+    def text(self) -> str:
+        with self._lock:
+            return self.output.decode("utf-8", "replace")
+
+    def wait_for(self, predicate: Callable[[], bool], what: str) -> None:
+        deadline = time.monotonic() + DEADLINE
+        while not predicate():
+            if time.monotonic() > deadline:
+                self.kill()
+                raise AssertionError(f"timed out waiting for {what}; the screen ended:\n"
+                                     f"{self.text[-2000:]}")
+            time.sleep(0.02)  # polling a condition: the program runs on its own
+
+    def wait_for_text(self, words: str) -> None:
+        self.wait_for(lambda: words in self.text, repr(words))
+
+    def type(self, keys: str) -> None:
+        os.write(self.master, keys.encode())
+
+    def after(self, seconds: float) -> None:
+        """Let the program run this long (it trains meanwhile)."""
+        until = time.monotonic() + seconds
+        self.wait_for(lambda: time.monotonic() >= until or self.process.poll() is not None,
+                      f"{seconds} s to pass")
+
+    def exit_code(self) -> int:
+        try:
+            code = self.process.wait(timeout=DEADLINE)
+        except subprocess.TimeoutExpired:
+            self.kill()
+            raise AssertionError(f"did not end; the screen ended:\n{self.text[-2000:]}") from None
+        self._reader.join(timeout=5)
+        return code
+
+    def kill(self) -> None:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(self.process.pid, signal.SIGKILL)
+
+    def close(self) -> None:
+        if self.process.poll() is None:
+            self.kill()
+            self.process.wait()
+        with contextlib.suppress(OSError):
+            os.close(self.master)
+
+
+def console_script() -> str:
+    found = shutil.which("tui-gym", path=str(Path(sys.executable).parent))
+    if found is None:
+        pytest.skip("the tui-gym console script is not installed beside this Python")
+    return found
+
+
+@pytest.fixture
+def log_dir(tmp_path: Path) -> Path:
+    return tmp_path / "logs"
+
+
+def test_the_console_script_trains_at_max_past_every_periodic_job_and_quits(
+    log_dir, tmp_path
+) -> None:
+    agent = tmp_path / "long.tgym"  # a budget that lasts: training stays at max throughout
+    Session("blackjack", seed=1, hp=Hyperparameters(episodes=100_000_000)).save(agent)
+    term = Terminal([console_script(), "--load", str(agent)],
+                    {"TUI_GYM_GC_SECONDS": "0.1,0.4", "TUI_GYM_LOG_DIR": str(log_dir)})
+    try:
+        term.wait_for_text("tui-gym")  # the header: the app is up
+        term.type("t")
+        term.wait_for_text("Hyperparameters")
+        term.type(" ")
+        term.wait_for_text("running")
+        term.after(1.0)  # two full collections and more, at max speed
+        for key in "-+.":
+            term.type(key)
+        term.type(" ")
+        term.wait_for_text("paused")
+        term.type("q")
+        code = term.exit_code()
+    finally:
+        term.close()
+    text = term.text
+    assert code == 0, text[-2000:]
+    assert "Traceback" not in text
+    assert LEAVE_ALT_SCREEN in term.output
+    assert not log_dir.exists(), "no crash log for a run that went well"
+
+
+def test_an_unexpected_error_ends_the_app_with_one_line_and_a_crash_log(log_dir, tmp_path) -> None:
+    script = tmp_path / "broken_app.py"  # a file: Textual looks for the app class's source
+    script.write_text(textwrap.dedent("""
+        from pathlib import Path
+
+        import tui_gym.ui.app
+        from tui_gym.core.session import Session
+        from tui_gym.ui.app import TuiGymApp, run_standalone
+
+        class Broken(TuiGymApp):
+            CSS_PATH = Path(tui_gym.ui.app.__file__).with_name("app.tcss")
+
+            def _tick(self):
+                raise RuntimeError("the tick went wrong")
+
+        raise SystemExit(run_standalone(Broken(Session(), runner="thread", tune_gc=True)))
+    """))
+    term = Terminal([sys.executable, str(script)], {"TUI_GYM_LOG_DIR": str(log_dir)})
+    try:
+        code = term.exit_code()
+    finally:
+        term.close()
+    assert code == 1
+    output = bytes(term.output)
+    assert LEAVE_ALT_SCREEN in output
+    after = ANSI.sub("", output.rsplit(LEAVE_ALT_SCREEN, 1)[1].decode("utf-8", "replace"))
+    lines = [line for line in after.replace("\r", "").split("\n") if line.strip()]
+    assert len(lines) == 1, after
+    assert "Traceback" not in term.text
+    logs = list(log_dir.glob("crash-*.log"))
+    assert len(logs) == 1 and str(logs[0]) in lines[0]
+    assert "RuntimeError: the tick went wrong" in lines[0]
+    logged = logs[0].read_text()
+    assert "Traceback" in logged and "the tick went wrong" in logged and "_tick" in logged
+
+
+def child_pids(pid: int) -> list[int]:
+    path = Path(f"/proc/{pid}/task/{pid}/children")
+    return [int(p) for p in path.read_text().split()] if path.exists() else []
+
+
+def ended(pid: int) -> bool:
+    """Whether a process has ended (gone, or a zombie waiting for whoever adopted it)."""
+    try:
+        return "zombie" in Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return True
+
+
+def test_sigterm_restores_the_terminal_and_ends_the_training_process(log_dir) -> None:
+    term = Terminal([console_script(), "--env", "gridworld"], {"TUI_GYM_LOG_DIR": str(log_dir)})
+    try:
+        term.wait_for_text("tui-gym")  # the header: the app is up
+        term.type("t")
+        term.wait_for_text("Hyperparameters")
+        term.type(" ")
+        term.wait_for_text("running")
+        children = child_pids(term.process.pid)
+        term.process.send_signal(signal.SIGTERM)
+        code = term.exit_code()
+    finally:
+        term.close()
+    assert code == 128 + signal.SIGTERM
+    tail = bytes(term.output[-400:])
+    assert LEAVE_ALT_SCREEN in tail and MOUSE_OFF in tail, tail
+    assert "Traceback" not in term.text
+    # The training process (and multiprocessing's resource tracker) end with the app.
+    deadline = time.monotonic() + DEADLINE
+    while not all(ended(pid) for pid in children):
+        assert time.monotonic() < deadline, "a child process outlived the app"
+        time.sleep(0.02)  # polling a condition with a deadline

@@ -1,0 +1,117 @@
+"""The process runner: a child process that trains, hands the agent back, and can fail.
+
+Each test drives a real child process. Every wait polls a condition with a
+deadline (the runner takes in what the child says whenever it is asked).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import time
+from pathlib import Path
+
+import pytest
+
+from tui_gym.core import process_runner
+from tui_gym.core.agent import Hyperparameters
+from tui_gym.core.process_runner import ProcessRunner
+from tui_gym.core.profiles import profile_for
+from tui_gym.core.runner import SPEEDS
+from tui_gym.core.session import Session
+from tui_gym.core.wrappers import WrapperChoice
+
+from .test_runner_and_play import wait_for
+
+DEADLINE = 20.0
+
+
+@pytest.fixture
+def blackjack_runner():
+    runner = ProcessRunner(Session("blackjack", hp=Hyperparameters(episodes=10_000_000), seed=0))
+    yield runner
+    runner.close()
+
+
+def reaped(pid: int) -> bool:
+    return not Path(f"/proc/{pid}").exists()
+
+
+def test_a_stopped_child_is_replaced_and_the_agent_kept(blackjack_runner, monkeypatch) -> None:
+    monkeypatch.setattr(process_runner, "HANG_SECONDS", 0.5)
+    runner = blackjack_runner
+    runner.start()
+    assert wait_for(lambda: runner.latest.episodes > 1000, DEADLINE)
+    runner.pause(wait=True)
+    kept = runner.session.trainer.episodes
+    runner.start()
+    stopped = runner.child_pid
+    os.kill(stopped, signal.SIGSTOP)
+    assert wait_for(lambda: runner.error is not None, DEADLINE)
+    assert "stopped answering" in str(runner.error)
+    assert not runner.running
+    assert reaped(stopped)
+    assert runner.session.trainer.episodes == kept
+    assert runner.start()
+    assert wait_for(lambda: runner.latest.episodes > kept + 1000, DEADLINE)
+
+
+def test_a_child_that_keeps_dying_turns_training_off(blackjack_runner, monkeypatch) -> None:
+    monkeypatch.setattr(process_runner, "RESPAWN_LIMIT", 1)
+    runner = blackjack_runner
+    dead = runner.child_pid
+    os.kill(dead, signal.SIGKILL)
+    assert wait_for(lambda: runner.error is not None, DEADLINE)
+    assert "training is off" in str(runner.error) and "--runner thread" in str(runner.error)
+    assert reaped(dead)
+    assert not runner.start()
+    assert runner.child_pid is None
+
+
+def test_a_rebuild_that_keeps_the_agent_loses_no_episode() -> None:
+    hp = profile_for("gridworld").default_hyperparameters().replace(episodes=10_000_000)
+    session = Session("gridworld", hp=hp, seed=0)
+    runner = ProcessRunner(session)
+    try:
+        runner.start()
+        assert wait_for(lambda: runner.latest.episodes > 2000, DEADLINE)
+        seen = runner.latest.episodes
+        runner.pause(wait=False)  # as the app does: no waiting on the child
+        report = session.rebuild(choices=(WrapperChoice.make("TimeLimit", max_episode_steps=50),))
+        assert report.kept_agent
+        runner.start()
+        assert wait_for(lambda: runner.latest.episodes > seen + 2000, DEADLINE)
+        runner.pause(wait=True)
+        assert session.trainer.episodes > seen + 2000
+        assert session.agent.episode == session.trainer.episodes
+    finally:
+        runner.close()
+
+
+def test_one_animated_episode_streams_every_step_from_the_child() -> None:
+    short = (WrapperChoice.make("TimeLimit", max_episode_steps=12),)
+    session = Session("gridworld", choices=short, seed=0)
+    runner = ProcessRunner(session, speed=len(SPEEDS) - 2)  # animated (fast)
+    try:
+        runner.run_one_episode()
+        steps: list[int] = []
+
+        def episode_over() -> bool:
+            event = runner.last_event
+            if event is not None and (not steps or steps[-1] != event.step):
+                steps.append(event.step)
+            return not runner.busy
+
+        assert wait_for(episode_over, 60)
+        assert session.trainer.episodes == 1
+        assert session.trainer.engine == "scalar", "the session carries on as the child left it"
+        assert steps == sorted(steps) and len(steps) >= 2
+        last = runner.last_event
+        assert last is not None and last.episode_done is not None
+        assert last.episode == 1 and last.step == last.episode_done.length
+        assert runner.last_scene is not None and runner.last_scene["size"] == 5
+    finally:
+        runner.close()
+    began = time.monotonic()
+    runner.close(wait=True)
+    assert time.monotonic() - began < 1.0
