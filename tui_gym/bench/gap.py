@@ -25,10 +25,9 @@ from dataclasses import dataclass
 
 from tui_gym.bench import tutorial
 from tui_gym.bench.figures import median
-from tui_gym.commands import TARGET_GAP_BUDGET
 from tui_gym.core.agent import Hyperparameters
-from tui_gym.core.profiles import profile_for
-from tui_gym.core.session import Session
+from tui_gym.core.session import TARGET_GAP_BUDGET, Session
+from tui_gym.games import game_for
 
 TARGET_GAP = 0.002
 ENV_ID = "Blackjack-v1"
@@ -80,7 +79,7 @@ class GapResult:
 
 def default_hyperparameters() -> Hyperparameters:
     """The hyperparameters `tui-gym train blackjack --target-gap G` uses."""
-    return profile_for(ENV_ID).default_hyperparameters().replace(episodes=TARGET_GAP_BUDGET)
+    return game_for(ENV_ID).default_hyperparameters().replace(episodes=TARGET_GAP_BUDGET)
 
 
 def ours_once(seed: int, target: float = TARGET_GAP) -> GapRun:

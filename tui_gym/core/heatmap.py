@@ -1,6 +1,6 @@
 """Heatmap data: a Q-table projected onto a grid a person can read.
 
-A profile turns Q-values into `Heatmap`s (one per panel: Blackjack has two,
+A game's layout turns Q-values into `Heatmap`s (one per panel: a card chart has two,
 with and without a usable ace; GridWorld one per target). They are plain
 data; the UI only colours cells by `values` and prints `labels`.
 """

@@ -241,8 +241,11 @@ class TrainingRunner:
         if now - self._anim_mark < 2.0:
             trainer.seconds += now - self._anim_mark
         self._anim_mark = now
+        _, previous, last = self._shown
+        # The scene before this move, while one episode goes on: the board tells a slip.
+        before = previous if last is not None and last.episode_done is None else None
         event = trainer.step()
-        self._shown = (trainer.agent, self.session.profile.scene(trainer.env), event)
+        self._shown = (trainer.agent, self.session.game.states.scene(trainer.env, before), event)
         trainer.publish()
         return event
 

@@ -1,11 +1,14 @@
 """The session: one env, a choice of wrappers, one agent and its trainer.
 
 `Session` is the object every front end drives (the Textual app, the CLI,
-tests, the JSON-lines protocol). It builds the env through the wrapper
-catalog, keeps the agent when a rebuild leaves the observation keys meaning
-the same thing (and says so when it cannot), projects the Q-table onto the
-game's base states for heatmaps and the exact reference, evaluates, saves and
-loads.
+tests, the JSON-lines protocol). It is where game, wrappers, agent and engine
+meet: it finds the game (`tui_gym.games.game_for`), builds the env through
+the wrapper catalog with the game's arguments, hands the vector engine the
+game's batched form, keeps the agent when a rebuild leaves the observation
+keys meaning the same thing (and says so when it cannot), projects the
+Q-table onto the game's base states for heatmaps and the exact reference,
+evaluates, saves and loads. `vector_support` says whether the vector engine
+can run a game with some wrappers.
 """
 
 from __future__ import annotations
@@ -21,19 +24,22 @@ import numpy as np
 from tui_gym.core.agent import Hyperparameters, QAgent
 from tui_gym.core.evaluation import EvalReport, evaluate
 from tui_gym.core.heatmap import Heatmap
+from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.obskey import ObservationKeyer
-from tui_gym.core.profiles import GameProfile, ReferenceMetrics, profile_for, resolve_env_id
-from tui_gym.core.wrappers.changes import GameChanges
 from tui_gym.core.training import Trainer, TrainingSnapshot
-from tui_gym.core.vector import NoBatchedForm, VectorTrainer
+from tui_gym.core.vector import NoBatchedForm, VectorTrainer, plan_for_env
 from tui_gym.core.wrappers import (
     CATALOG,
     WrapperChoice,
     build_env,
     build_env_lenient,
 )
+from tui_gym.core.wrappers.changes import GameChanges
+from tui_gym.games import Game, game_for, resolve_env_id
+from tui_gym.games.base import FixedBound, ReferenceMetrics
 
 ENGINES = ("auto", "scalar", "vector")
+TARGET_GAP_BUDGET = 1_000_000  # episodes, when a target gap is given without a budget
 
 # Observation wrappers whose `observation()` is a pure function of the bare
 # observation: the heatmaps and the exact reference can see through them.
@@ -67,8 +73,10 @@ class _Built:
     meaning: tuple[str, ...]  # what keys mean: the space and the observation-changing wrappers
 
 
-def _build(env_id: str, env_kwargs: Mapping[str, Any], choices: Sequence[WrapperChoice]) -> _Built:
-    env, skipped = build_env_lenient(env_id, env_kwargs, choices)
+def _build(
+    game: Game, env_id: str, env_kwargs: Mapping[str, Any], choices: Sequence[WrapperChoice]
+) -> _Built:
+    env, skipped = build_env_lenient(env_id, game.make_kwargs(env_kwargs), choices)
     skipped_set = {id(c) for c, _ in skipped}
     applied = tuple(c for c in choices if id(c) not in skipped_set)
     if not isinstance(env.action_space, gym.spaces.Discrete):
@@ -95,14 +103,14 @@ class Session:
 
     def __post_init__(self) -> None:
         self.env_id = resolve_env_id(self.env_id)
-        self.profile: GameProfile = profile_for(self.env_id)
-        self.env_kwargs = self.profile.normalize_kwargs(self.env_kwargs)
+        self.game: Game = game_for(self.env_id)
+        self.env_kwargs = self.game.normalize_kwargs(self.env_kwargs)
         if self.hp is None:
-            self.hp = self.profile.default_hyperparameters()
+            self.hp = self.game.default_hyperparameters()
         self.choices = tuple(self.choices)
         if self.engine not in ENGINES:
             raise ValueError(f"engine must be one of {', '.join(ENGINES)}, got {self.engine!r}")
-        self._install(_build(self.env_id, self.env_kwargs, self.choices))
+        self._install(_build(self.game, self.env_id, self.env_kwargs, self.choices))
         self.agent = self._new_agent()
         self.trainer = self._new_trainer()
 
@@ -111,7 +119,8 @@ class Session:
         self._built = built
         self.env = built.env
         self.keyer = built.keyer
-        self.changes = GameChanges.of(built.env)  # what the exact figures must take into account
+        # What the exact figures must take into account.
+        self.changes = GameChanges.of(built.env, self.game.episode_limit(self.env_kwargs))
         self._base_keys: list[Hashable] | None | bool = False  # False: not computed yet
 
     def _new_agent(self) -> QAgent:
@@ -123,7 +132,10 @@ class Session:
         self._vector: Trainer | None = None
         if self.engine != "scalar":
             try:
-                self._vector = VectorTrainer(self.env, self.agent, self.keyer, seed=self.seed)
+                form = self.game.batched_form(self.env_kwargs)
+                limit = self.game.episode_limit(self.env_kwargs)
+                self._vector = VectorTrainer(self.env, self.agent, self.keyer, form=form,
+                                             made_limit=limit, seed=self.seed)
             except (NoBatchedForm, ValueError) as exc:
                 reason = str(exc).removeprefix("scalar engine: ")
                 if self.engine == "vector":
@@ -168,7 +180,8 @@ class Session:
 
     def make_env(self, render_mode: str | None = None) -> gym.Env:
         """A new env like the training one (same game, same wrappers), e.g. to play on."""
-        return build_env(self.env_id, self.env_kwargs, self.applied, render_mode=render_mode)
+        return build_env(self.env_id, self.game.make_kwargs(self.env_kwargs), self.applied,
+                         render_mode=render_mode)
 
     def rebuild(
         self,
@@ -180,26 +193,19 @@ class Session:
 
         Raises ValueError (and changes nothing) for an unknown env or bad arguments.
         """
-        new_id = resolve_env_id(env_id) if env_id is not None else self.env_id
-        profile = profile_for(new_id)
-        if env_kwargs is None:
-            kwargs = self.env_kwargs if new_id == self.env_id else profile.default_kwargs()
-        else:
-            kwargs = env_kwargs
-        kwargs = profile.normalize_kwargs(kwargs)
-        new_choices = tuple(self.choices if choices is None else choices)
-        built = _build(new_id, kwargs, new_choices)
-        if profile is not self.profile:
-            # Each game learns with its own defaults (GridWorld needs discounting).
-            self.hp = profile.default_hyperparameters()
-        keep = built.meaning == self._built.meaning and built.n_actions == self._built.n_actions
+        new_id, kwargs, new_choices, game = self._rebuild_args(env_id, env_kwargs, choices)
+        built = _build(game, new_id, kwargs, new_choices)
+        if game is not self.game:
+            # Each game learns with its own defaults (some need discounting).
+            self.hp = game.default_hyperparameters()
+        keep = self._keeps(built)
         old_trainer = self.trainer
         self.env.close()
-        self.env_id, self.env_kwargs, self.choices, self.profile = (
+        self.env_id, self.env_kwargs, self.choices, self.game = (
             new_id,
             kwargs,
             new_choices,
-            profile,
+            game,
         )
         self._install(built)
         if keep:
@@ -214,10 +220,48 @@ class Session:
             notice += " Not applied: " + "; ".join(reason for _, reason in built.skipped)
         return RebuildReport(keep, notice, built.skipped)
 
+    def rebuild_keeps_agent(
+        self,
+        env_id: str | None = None,
+        env_kwargs: Mapping[str, Any] | None = None,
+        choices: Sequence[WrapperChoice] | None = None,
+    ) -> bool:
+        """Whether `rebuild` with the same arguments would keep the agent (e.g. to ask
+        before a change that resets it). Builds the env to see; changes nothing.
+
+        Raises ValueError for an unknown env or bad arguments, as `rebuild` does.
+        """
+        new_id, kwargs, new_choices, game = self._rebuild_args(env_id, env_kwargs, choices)
+        built = _build(game, new_id, kwargs, new_choices)
+        try:
+            return self._keeps(built)
+        finally:
+            built.env.close()
+
+    def _rebuild_args(
+        self,
+        env_id: str | None,
+        env_kwargs: Mapping[str, Any] | None,
+        choices: Sequence[WrapperChoice] | None,
+    ) -> tuple[str, dict[str, Any], tuple[WrapperChoice, ...], Game]:
+        """The env id, checked arguments, wrappers and game a rebuild would use."""
+        new_id = resolve_env_id(env_id) if env_id is not None else self.env_id
+        game = game_for(new_id)
+        if env_kwargs is None:
+            kwargs = self.env_kwargs if new_id == self.env_id else game.default_kwargs()
+        else:
+            kwargs = env_kwargs
+        kwargs = game.normalize_kwargs(kwargs)
+        return new_id, kwargs, tuple(self.choices if choices is None else choices), game
+
+    def _keeps(self, built: _Built) -> bool:
+        """Whether the agent can learn on `built`: its keys mean what they meant."""
+        return built.meaning == self._built.meaning and built.n_actions == self._built.n_actions
+
     def reset_agent(self) -> None:
         """A fresh agent (same seed) and fresh statistics."""
         self.env.close()
-        self._install(_build(self.env_id, self.env_kwargs, self.choices))
+        self._install(_build(self.game, self.env_id, self.env_kwargs, self.choices))
         self.agent = self._new_agent()
         self.trainer = self._new_trainer()
 
@@ -228,7 +272,8 @@ class Session:
 
     # --- seeing the table -------------------------------------------------
     def base_keys(self) -> list[Hashable] | None:
-        """Table keys of the profile's base states, or None when wrappers hide them."""
+        """Table keys of the game's base states, or None when wrappers hide them (or
+        the game lists none)."""
         if self._base_keys is False:
             self._base_keys = self._compute_base_keys()
         return self._base_keys  # type: ignore[return-value]
@@ -245,8 +290,11 @@ class Session:
                 layers.append(env)
             env = env.env
         layers.reverse()  # innermost first
+        observations = self.game.states.base_observations(self.env_kwargs)
+        if isinstance(observations, NotAvailable):
+            return None
         keys = []
-        for obs in self.profile.base_observations(self.env_kwargs):
+        for obs in observations:
             for layer in layers:
                 obs = layer.observation(obs)
             keys.append(self.keyer.key(obs))
@@ -256,6 +304,9 @@ class Session:
         """Why heatmaps and the exact reference are unavailable (empty when they are)."""
         if self.base_keys() is not None:
             return ""
+        observations = self.game.states.base_observations(self.env_kwargs)
+        if isinstance(observations, NotAvailable):
+            return observations.reason
         names = [
             c.name
             for c in self.applied
@@ -273,22 +324,46 @@ class Session:
         return self.agent.values(keys)
 
     def reference(self, snapshot: TrainingSnapshot | None = None) -> ReferenceMetrics | None:
-        """The exact comparison of the greedy policy with the optimum."""
+        """The exact comparison of the greedy policy with the optimum (None when there
+        is none: `exact_reason` says why)."""
         q = self.base_q(snapshot)
-        return None if q is None else self.profile.reference(q, self.env_kwargs, self.changes)
+        if q is None:
+            return None
+        reference = self.game.oracle.reference(q, self.env_kwargs, self.changes)
+        return None if isinstance(reference, NotAvailable) else reference
+
+    def exact_reason(self) -> str:
+        """Why there are no exact figures of the agent here ('' when there are)."""
+        hidden = self.hidden_reason()
+        if hidden:
+            return hidden
+        q = self.base_q()
+        if q is None:
+            return "no per-state view of this table"
+        reference = self.game.oracle.reference(q, self.env_kwargs, self.changes)
+        return reference.reason if isinstance(reference, NotAvailable) else ""
 
     def heatmaps(
         self, snapshot: TrainingSnapshot | None = None, focus: Any = None
     ) -> list[Heatmap] | None:
+        """The game's heatmap panels of the table (None when wrappers hide the states)."""
         q = self.base_q(snapshot)
-        return None if q is None else self.profile.heatmaps(q, self.env_kwargs, focus,
-                                                            self.changes)
+        if q is None:
+            return None
+        marks = self.game.oracle.optimal_marks(self.env_kwargs, self.changes)
+        return self.game.layout.heatmaps(q, self.env_kwargs, focus, marks)
 
     def agent_figures(self, snapshot: TrainingSnapshot | None = None) -> dict[str, float]:
         """Exact scoreboard figures of the agent's greedy policy (the live agent's, or a
-        snapshot's) and of the optimum (`profile.agent_figures`); only the optimum's
+        snapshot's) and of the optimum (`Oracle.agent_figures`); only the optimum's
         when wrappers hide the base states."""
-        return self.profile.agent_figures(self.base_q(snapshot), self.env_kwargs, self.changes)
+        return self.game.oracle.agent_figures(self.base_q(snapshot), self.env_kwargs,
+                                              self.changes)
+
+    def fixed_policy_bound(self) -> FixedBound | None:
+        """How close a fixed (greedy) policy gets to the optimum here, when known."""
+        bound = self.game.oracle.fixed_policy_bound(self.env_kwargs, self.changes)
+        return None if isinstance(bound, NotAvailable) else bound
 
     def greedy_actions_for(
         self, observation: Any, snapshot: TrainingSnapshot | None = None
@@ -333,10 +408,7 @@ class Session:
         chunk of about `chunk_seconds`, e.g. to draw a progress bar.
         """
         if target_gap is not None:
-            ref = self.reference()
-            if ref is None or "gap" not in ref.figures:
-                raise ValueError(f"--target-gap needs a game with an exact optimum; "
-                                 f"{self.profile.title} has none here")
+            self.check_target_gap(target_gap)
         trainer = self.trainer
         next_check = trainer.episodes + check_every
         gap = None
@@ -357,6 +429,23 @@ class Session:
             return TrainOutcome(gap <= target_gap, gap)
         return TrainOutcome(None, None)
 
+    def check_target_gap(self, target_gap: float) -> None:
+        """`ValueError` when no greedy policy can meet `target_gap` here: the game has
+        no exact gap, or no fixed policy comes that close to the optimum (with an
+        episode limit the optimum may change course as time runs out)."""
+        ref = self.reference()
+        if ref is None or "gap" not in ref.figures:
+            why = self.exact_reason() or f"{self.game.title} has no exact gap"
+            raise ValueError(f"--target-gap needs an exact optimum: {why}")
+        bound = self.fixed_policy_bound()
+        if bound is not None and target_gap < bound.shortfall:
+            raise ValueError(
+                f"no fixed policy found comes within {target_gap:g} of the optimum here: the "
+                f"best one a search finds stays {bound.shortfall:.4f} below it (the optimum "
+                "plays differently as the episode limit nears); choose --target-gap "
+                f">= {_round_up(bound.shortfall)}"
+            )
+
     # --- evaluating, saving -----------------------------------------------
     def evaluate(
         self, episodes: int = 10_000, seed: int | None = None, progress=None
@@ -366,20 +455,125 @@ class Session:
         try:
             eval_seed = self.seed + 1_000_003 if seed is None else seed
             return evaluate(
-                env, self.agent, self.keyer, self.profile, episodes, eval_seed, progress
+                env, self.agent, self.keyer, self.game.narrator, episodes, eval_seed, progress
             )
         finally:
             env.close()
 
+    def meta(self) -> dict[str, Any]:
+        """Everything a save file keeps besides the table, as JSON data."""
+        from tui_gym.core.wrappers import format_wrapper_spec
+
+        assert self.hp is not None  # set when the session is built
+        return {
+            "env_id": self.env_id,
+            "env_kwargs": self.env_kwargs,
+            "wrappers": [format_wrapper_spec(c) for c in self.choices],
+            "hyperparameters": self.hp.to_dict(),
+            "seed": self.seed,
+            "episodes_trained": self.trainer.episodes,
+            "steps_trained": self.trainer.steps,
+            "agent_episode": self.agent.episode,
+            "n_actions": self.agent.n_actions,
+            "observation_space": self.keyer.signature,
+        }
+
     def save(self, path: str | Path) -> Path:
         """Write the agent and everything needed to rebuild this session (atomically)."""
-        from tui_gym.core.storage import save_session
+        from tui_gym.core.storage import save_agent
 
-        return save_session(self, path)
+        q, keys = self.agent.table()
+        return save_agent(path, self.meta(), q, keys, self.agent.update_counts())
 
     @classmethod
     def load(cls, path: str | Path) -> Session:
-        """A session rebuilt from a saved file; StorageError names the file when it cannot."""
-        from tui_gym.core.storage import load_session
+        """A session rebuilt from a saved file; StorageError names the file (and the
+        field at fault) when it cannot."""
+        from tui_gym.core.storage import read_agent, short_reason
 
-        return load_session(path)
+        saved = read_agent(path)
+        game = saved.checked("env_id", lambda: game_for(saved.env_id))
+        env_kwargs = saved.checked("env_kwargs", lambda: game.normalize_kwargs(saved.env_kwargs))
+        try:
+            session = cls(env_id=saved.env_id, env_kwargs=env_kwargs, choices=saved.choices,
+                          hp=saved.hp, seed=saved.seed)
+        except (ValueError, TypeError, KeyError) as exc:
+            raise saved.error(f"cannot rebuild the saved game ({short_reason(exc)})") from None
+        session._restore(saved)
+        return session
+
+    def _restore(self, saved: Any) -> None:
+        """Put a saved table and its counts into this session's agent and trainer."""
+        from tui_gym.core.storage import short_reason
+
+        agent = self.agent
+        if self.skipped:
+            choice, reason = self.skipped[0]
+            index = list(saved.choices).index(choice)
+            raise saved.field_error(f"wrappers[{index}]", f"does not fit {self.env_id}: {reason}")
+        if saved.n_actions is not None and saved.n_actions != agent.n_actions:
+            raise saved.field_error(
+                "n_actions", f"is {saved.n_actions}; {self.env_id} with these wrappers has "
+                f"{agent.n_actions}"
+            )
+        q, keys = saved.q, saved.keys
+        if q.shape[1] != agent.n_actions:
+            raise saved.field_error(
+                "q.npy", f"has {q.shape[1]} columns; {self.env_id} has {agent.n_actions} actions"
+            )
+        rows = agent.n_states
+        if rows is not None and keys is not None:
+            raise saved.field_error("keys.json", f"is for a sparse table; {self.env_id}'s is dense")
+        if rows is not None and len(q) != rows:
+            raise saved.field_error("q.npy", f"has {len(q):,} rows; {self.env_id} has {rows:,}")
+        if rows is None and keys is None:
+            raise saved.field_error("keys.json",
+                                    "is missing (the states of the sparse table's rows)")
+        try:
+            agent.load_table(q, keys, saved.counts)
+        except (KeyError, TypeError, ValueError) as exc:
+            raise saved.error(f"cannot restore the saved agent ({short_reason(exc)})") from None
+        agent.episode = saved.agent_episode
+        assert self.hp is not None
+        agent.set_hyperparameters(saved.hp)
+        self.trainer.episodes = saved.episodes
+        self.trainer.steps = saved.steps
+        self.trainer.publish()
+
+def _round_up(value: float) -> str:
+    """A value rounded up to 2 significant digits, as text: 0.0274 -> '0.028'."""
+    import math
+
+    if value <= 0:
+        return "0"
+    digits = 1 - int(math.floor(math.log10(value)))
+    scale = 10.0**digits
+    return f"{math.ceil(value * scale - 1e-9) / scale:.{max(digits, 0)}f}"
+
+
+def vector_support(
+    env_id: str,
+    env_kwargs: Mapping[str, Any] | None = None,
+    choices: Sequence[WrapperChoice] = (),
+) -> tuple[bool, str]:
+    """Whether the vector engine can train on this game and wrapper choice, and why.
+
+    The env is built as a `Session` builds it (choices that do not fit are
+    left out, as there), read with `plan_for_env`, and closed. Returns e.g.
+    `(True, "vector engine: Blackjack with StepPenalty")` or
+    `(False, "scalar engine: DelayObservation has no batched form (...)")`.
+    """
+    try:
+        env_id = resolve_env_id(env_id)
+        game = game_for(env_id)
+        kwargs = game.normalize_kwargs(env_kwargs or {})
+        env, _ = build_env_lenient(env_id, game.make_kwargs(kwargs), choices)
+    except (ValueError, TypeError, gym.error.Error) as error:
+        return False, f"scalar engine: {error}"
+    try:
+        form, limit = game.batched_form(kwargs), game.episode_limit(kwargs)
+        return True, plan_for_env(env, form, limit).describe()
+    except NoBatchedForm as error:
+        return False, error.reason
+    finally:
+        env.close()

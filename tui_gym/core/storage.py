@@ -5,7 +5,12 @@ and version, env id and arguments, wrapper choices, hyperparameters, seed,
 training counts), `q.npy` (the Q-table) and `counts.npy` (updates per state
 and action); sparse tables add `keys.json`.
 
-Writing (`save_session`, `atomic_write_bytes`) goes through a temporary file
+Storage takes and returns plain data and knows no game: `save_agent` writes
+a meta dict and the tables, `read_agent` returns them as a checked
+`SavedAgent` (the session rebuilds itself from it, and reports what does not
+fit the game through `SavedAgent.field_error`).
+
+Writing (`save_agent`, `atomic_write_bytes`) goes through a temporary file
 in the target's folder (`.NAME.PID.RANDOM.tmp`), flushed to disk and renamed
 into place, so a crash never leaves half a file. A path that is a symbolic
 link writes the file it points to; a new file gets the permissions the umask
@@ -14,7 +19,7 @@ the write wait until it is done, and temporary files that a killed writer
 left behind are removed by the next save to the same name. `check_save_path`
 says before a long run whether a path can be written at all.
 
-Reading (`read_file`, `load_session`) trusts nothing in the file: only a
+Reading (`read_file`, `read_agent`) trusts nothing in the file: only a
 regular file of bounded size is read, every archive member's unpacked size is
 capped before and while it is unpacked, numpy headers are checked against the
 bytes that follow before any array is built, JSON nesting is bounded, and
@@ -43,15 +48,13 @@ from collections.abc import Callable, Hashable, Iterator
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.params import shown_value
-
-if TYPE_CHECKING:
-    from tui_gym.core.session import Session
+from tui_gym.core.wrappers.catalog import WrapperChoice
 
 FORMAT_NAME = "tui-gym-agent"
 FORMAT_VERSION = 1
@@ -259,41 +262,27 @@ def _fsync_folder(folder: Path) -> None:
         os.close(fd)
 
 
-def session_meta(session: Session) -> dict[str, Any]:
-    """Everything but the table, as JSON data."""
-    from tui_gym.core.wrappers import format_wrapper_spec
-
-    assert session.hp is not None  # set when the session is built
-    return {
-        "format": FORMAT_NAME,
-        "version": FORMAT_VERSION,
-        "env_id": session.env_id,
-        "env_kwargs": session.env_kwargs,
-        "wrappers": [format_wrapper_spec(c) for c in session.choices],
-        "hyperparameters": session.hp.to_dict(),
-        "seed": session.seed,
-        "episodes_trained": session.trainer.episodes,
-        "steps_trained": session.trainer.steps,
-        "agent_episode": session.agent.episode,
-        "n_actions": session.agent.n_actions,
-        "observation_space": session.keyer.signature,
-    }
-
-
 def _npy_bytes(array: np.ndarray) -> bytes:
     buf = io.BytesIO()
     np.save(buf, array, allow_pickle=False)
     return buf.getvalue()
 
 
-def save_session(session: Session, path: str | Path) -> Path:
-    """Save a session's agent and settings to `path` (atomically); returns `path`."""
+def save_agent(
+    path: str | Path,
+    meta: dict[str, Any],
+    q: np.ndarray,
+    keys: list[Hashable] | None,
+    counts: np.ndarray,
+) -> Path:
+    """Save an agent's table and its settings (`meta`, JSON data: env id and arguments,
+    wrapper specs, hyperparameters, seed, counts) to `path` atomically; returns `path`."""
     path = check_save_path(path)
-    q, keys = session.agent.table()
+    meta = {"format": FORMAT_NAME, "version": FORMAT_VERSION, **meta}
     members = {
-        "meta.json": json.dumps(session_meta(session), indent=2).encode(),
+        "meta.json": json.dumps(meta, indent=2).encode(),
         "q.npy": _npy_bytes(q),
-        "counts.npy": _npy_bytes(session.agent.update_counts()),
+        "counts.npy": _npy_bytes(counts),
     }
     if keys is not None:
         members["keys.json"] = json.dumps([_key_to_json(k) for k in keys]).encode()
@@ -475,8 +464,7 @@ def read_file(
     """Meta, Q-table, sparse keys and update counts of a save file; StorageError if not one.
 
     The meta's format and version are checked here, the table's values and shape
-    and the keys' form too; `load_session` checks the rest of the meta against the
-    game it names.
+    and the keys' form too; `read_agent` checks the rest of the meta.
     """
     reader = _Reader(Path(path))
     raw = _read_regular_file(reader)
@@ -517,13 +505,13 @@ def read_file(
         raise reader.error("not a tui-gym save file (corrupt or truncated)") from None
     except (NotImplementedError, RuntimeError, zipfile.LargeZipFile, OSError) as exc:
         # Unsupported compression, encryption, ZIP64 oddities: not a file we wrote.
-        raise reader.error(f"not a tui-gym save file ({_short_reason(exc)})") from None
+        raise reader.error(f"not a tui-gym save file ({short_reason(exc)})") from None
     except MemoryError:
         raise reader.error("not a tui-gym save file (too large to read)") from None
     return meta, q, keys, counts
 
 
-def _short_reason(exc: BaseException) -> str:
+def short_reason(exc: BaseException) -> str:
     text = " ".join(str(exc).split()) or type(exc).__name__
     return text if len(text) <= 80 else text[:77] + "..."
 
@@ -569,13 +557,42 @@ def _checked(reader: _Reader, name: str, build: Callable[[], Any]) -> Any:
     except StorageError:
         raise
     except (ValueError, TypeError, KeyError) as exc:
-        raise reader.field(name, f"is not valid: {_short_reason(exc)}") from None
+        raise reader.field(name, f"is not valid: {short_reason(exc)}") from None
 
 
-def load_session(path: str | Path) -> Session:
-    """Rebuild a session (env, wrappers, hyperparameters, agent) from a save file."""
-    from tui_gym.core.profiles import profile_for
-    from tui_gym.core.session import Session
+@dataclass(frozen=True)
+class SavedAgent:
+    """What a save file holds, checked as far as it can be without the game it names."""
+
+    path: Path
+    env_id: str
+    env_kwargs: dict[str, Any]
+    choices: tuple[WrapperChoice, ...]
+    hp: Hyperparameters
+    seed: int
+    episodes: int
+    steps: int
+    agent_episode: int
+    n_actions: int | None  # None: the file does not say
+    q: np.ndarray
+    keys: list[Hashable] | None
+    counts: np.ndarray | None
+
+    def error(self, text: str) -> StorageError:
+        """A `StorageError` naming the file."""
+        return _Reader(self.path).error(text)
+
+    def field_error(self, name: str, problem: str) -> StorageError:
+        """A `StorageError` naming the file and the field at fault."""
+        return _Reader(self.path).field(name, problem)
+
+    def checked(self, name: str, build: Callable[[], Any]) -> Any:
+        """`build()`, with a ValueError or TypeError it raises refused under the field's name."""
+        return _checked(_Reader(self.path), name, build)
+
+
+def read_agent(path: str | Path) -> SavedAgent:
+    """A save file's contents as plain data; `StorageError` when it is not a valid one."""
     from tui_gym.core.wrappers import parse_wrapper_spec
 
     reader = _Reader(Path(path))
@@ -584,11 +601,9 @@ def load_session(path: str | Path) -> Session:
     env_id = meta.get("env_id")
     if not isinstance(env_id, str):
         raise reader.field("env_id", f"must be a game id, got {shown_value(env_id)}")
-    profile = _checked(reader, "env_id", lambda: profile_for(env_id))
     env_kwargs = meta.get("env_kwargs", {})
     if not isinstance(env_kwargs, dict):
         raise reader.field("env_kwargs", f"must be an object, got {shown_value(env_kwargs)}")
-    env_kwargs = _checked(reader, "env_kwargs", lambda: profile.normalize_kwargs(env_kwargs))
     wrappers = meta.get("wrappers", [])
     if not isinstance(wrappers, list):
         raise reader.field("wrappers", f"must be a list of specs, got {shown_value(wrappers)}")
@@ -608,45 +623,14 @@ def load_session(path: str | Path) -> Session:
     episodes = _int_field(reader, meta, "episodes_trained", 0, 0, MAX_COUNT)
     steps = _int_field(reader, meta, "steps_trained", 0, 0, MAX_COUNT)
     agent_episode = _int_field(reader, meta, "agent_episode", episodes, 0, MAX_COUNT)
+    n_actions = None
+    if "n_actions" in meta:
+        n_actions = _int_field(reader, meta, "n_actions", 1, 1, 1 << 20)
     for name in ("observation_space",):
         if name in meta and not isinstance(meta[name], str):
             raise reader.field(name, f"must be text, got {shown_value(meta[name])}")
-
-    try:
-        session = Session(
-            env_id=env_id, env_kwargs=env_kwargs, choices=tuple(choices), hp=hp, seed=seed
-        )
-    except (ValueError, TypeError, KeyError) as exc:
-        raise reader.error(f"cannot rebuild the saved game ({_short_reason(exc)})") from None
-    if session.skipped:
-        choice, reason = session.skipped[0]
-        index = list(choices).index(choice)
-        raise reader.field(f"wrappers[{index}]", f"does not fit {session.env_id}: {reason}")
-    n_actions = _int_field(reader, meta, "n_actions", session.agent.n_actions, 1, 1 << 20)
-    if n_actions != session.agent.n_actions:
-        raise reader.field(
-            "n_actions", f"is {n_actions}; {session.env_id} with these wrappers has "
-            f"{session.agent.n_actions}"
-        )
-    if q.shape[1] != session.agent.n_actions:
-        raise reader.field(
-            "q.npy", f"has {q.shape[1]} columns; {session.env_id} has "
-            f"{session.agent.n_actions} actions"
-        )
-    dense_rows = session.agent.n_states
-    if dense_rows is not None and keys is not None:
-        raise reader.field("keys.json", f"is for a sparse table; {session.env_id}'s is dense")
-    if dense_rows is not None and len(q) != dense_rows:
-        raise reader.field("q.npy", f"has {len(q):,} rows; {session.env_id} has {dense_rows:,}")
-    if dense_rows is None and keys is None:
-        raise reader.field("keys.json", "is missing (the states of the sparse table's rows)")
-    try:
-        session.agent.load_table(q, keys, counts)
-    except (KeyError, TypeError, ValueError) as exc:
-        raise reader.error(f"cannot restore the saved agent ({_short_reason(exc)})") from None
-    session.agent.episode = agent_episode
-    session.agent.set_hyperparameters(hp)
-    session.trainer.episodes = episodes
-    session.trainer.steps = steps
-    session.trainer.publish()
-    return session
+    return SavedAgent(
+        path=Path(path), env_id=env_id, env_kwargs=dict(env_kwargs), choices=tuple(choices),
+        hp=hp, seed=seed, episodes=episodes, steps=steps, agent_episode=agent_episode,
+        n_actions=n_actions, q=q, keys=keys, counts=counts,
+    )

@@ -492,6 +492,16 @@ class Game:
         """Hyperparameters that learn this game well (see the README)."""
         return Hyperparameters()
 
+    def episode_limit(self, kwargs: Mapping[str, Any]) -> int | None:
+        """The limit `gym.make` puts on the game with these arguments (None: none)."""
+        make = self.make_kwargs(kwargs)
+        if "max_episode_steps" in make:
+            return int(make["max_episode_steps"])
+        import gymnasium as gym
+
+        spec = gym.registry.get(self.env_id.rpartition(":")[2])
+        return None if spec is None else spec.max_episode_steps
+
     def action_index(self, action: int | str) -> int:
         """An action given as its number or its name (case-insensitive)."""
         names = self.action_names

@@ -303,7 +303,7 @@ class ModelOracle(Oracle):
 
     # --- what to do here ----------------------------------------------------------
     def advice(self, env: Any, kwargs: Mapping[str, Any]) -> Advice:
-        changes = GameChanges.of(env)
+        changes = GameChanges.of(env, self.model_game.episode_limit(kwargs))
         exact = self.exact(kwargs, changes)
         if isinstance(exact, NotAvailable):
             return Advice((), None, exact.reason)
@@ -462,16 +462,6 @@ class ModelGame(Game):
         """The game's model with no wrappers and no episode limit (kept per arguments)."""
         make = self.make_kwargs(kwargs)
         return _table_model(self.env_id, freeze(make), tuple(self.action_names))
-
-    def episode_limit(self, kwargs: Mapping[str, Any]) -> int | None:
-        """The limit `gym.make` puts on the game with these arguments (None: none)."""
-        make = self.make_kwargs(kwargs)
-        if "max_episode_steps" in make:
-            return make["max_episode_steps"]
-        import gymnasium as gym
-
-        spec = gym.registry.get(self.env_id)
-        return None if spec is None else spec.max_episode_steps
 
     def own_changes(self, kwargs: Mapping[str, Any]) -> GameChanges:
         """The game as `gym.make` builds it with no wrappers chosen: its own limit only."""

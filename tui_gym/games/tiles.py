@@ -30,7 +30,9 @@ if TYPE_CHECKING:
 
 __all__ = ["MOVES", "TileGame", "TileLayout", "TileNarrator", "TileStates"]
 
-MOVES: dict[str, tuple[int, int]] = {"left": (0, -1), "down": (1, 0), "right": (0, 1), "up": (-1, 0)}
+MOVES: dict[str, tuple[int, int]] = {
+    "left": (0, -1), "down": (1, 0), "right": (0, 1), "up": (-1, 0)
+}
 ARROWS = {"left": "←", "down": "↓", "right": "→", "up": "↑"}
 TILE_WORDS = {"S": "start", "F": "floor", "H": "hole", "G": "goal", "C": "cliff"}
 NO_DECISION = {"H": "○", "G": "★", "C": "▒"}  # tiles the agent never acts on

@@ -34,6 +34,7 @@ from gymnasium.wrappers import (
 
 from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.vector.base import BatchedEnv, BatchedForm
+from tui_gym.core.wrappers.changes import registry_limit
 from tui_gym.core.wrappers.custom import DistanceShaping, ScaleReward, StepPenalty
 
 __all__ = [
@@ -140,9 +141,13 @@ class VectorPlan:
         return reward
 
 
-def plan_for_env(env: gym.Env, form: BatchedForm | NotAvailable | None) -> VectorPlan:
+def plan_for_env(
+    env: gym.Env, form: BatchedForm | NotAvailable | None, made_limit: int | None | str = "registry"
+) -> VectorPlan:
     """The batched recipe of a built env whose game has batched form `form` (None or
-    `NotAvailable` when it has none); raises `NoBatchedForm` when there is none."""
+    `NotAvailable` when it has none); raises `NoBatchedForm` when there is none.
+    `made_limit`: the limit `gym.make` put on the game (by default the registry's),
+    which goes without saying in `describe`."""
     if not isinstance(form, BatchedForm):
         reason = form.reason if isinstance(form, NotAvailable) else "the game has no batched form"
         raise NoBatchedForm(f"scalar engine: {reason}")
@@ -152,8 +157,7 @@ def plan_for_env(env: gym.Env, form: BatchedForm | NotAvailable | None) -> Vecto
         layers.append(inner)
         inner = inner.env
     layers.reverse()  # innermost first
-    # The limit gym.make put on the env goes without saying.
-    registered = inner.spec.max_episode_steps if inner.spec is not None else None
+    registered = made_limit if not isinstance(made_limit, str) else registry_limit(inner)
 
     limit: int | None = None
     rewards: list[RewardTransform] = []

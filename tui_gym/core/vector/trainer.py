@@ -52,10 +52,10 @@ import gymnasium as gym
 import numpy as np
 
 from tui_gym.core.agent import QAgent
+from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.stats import EpisodeStats
 from tui_gym.core.training import SERIES_NAMES, StepEvent, Trainer
-from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.vector.base import BatchedForm
 from tui_gym.core.vector.plan import VectorPlan, plan_for_env
 from tui_gym.core.wrappers import WrapperChoice, build_env_lenient
@@ -150,6 +150,8 @@ class VectorTrainer(Trainer):
         keyer: the keyer of `env`'s observation space.
         form: the game's batched form (None or `NotAvailable`: there is none,
             and `NoBatchedForm` says so).
+        made_limit: the limit `gym.make` put on the game (by default the
+            registry's), for `plan.describe`.
         seed: seeds the batched env; the agent's own seed drives exploration.
         num_envs: games played side by side.
         window, series_capacity, publish_interval: as for `Trainer`.
@@ -164,13 +166,14 @@ class VectorTrainer(Trainer):
         keyer: ObservationKeyer,
         *,
         form: BatchedForm | NotAvailable | None,
+        made_limit: int | None | str = "registry",
         seed: int | None = None,
         num_envs: int = DEFAULT_NUM_ENVS,
         window: int = 1000,
         series_capacity: int = 256,
         publish_interval: float = 0.1,
     ) -> None:
-        self.plan: VectorPlan = plan_for_env(env, form)
+        self.plan: VectorPlan = plan_for_env(env, form, made_limit)
         if not (keyer.dense and agent.dense):
             raise ValueError("the vector engine needs a dense observation keyer and Q-table")
         if keyer.n_states != agent.n_states or agent.n_actions != env.action_space.n:

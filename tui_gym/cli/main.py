@@ -1,20 +1,20 @@
-"""The `tui-gym` command: the app with no sub-command, and headless sub-commands.
+"""The `tui-gym` command's entry point and parser: the app with no sub-command.
 
-Every sub-command is a thin call into `tui_gym.core`: `envs`, `wrappers`,
+Every sub-command (`commands`) is a thin call into `tui_gym.core`: `envs`, `wrappers`,
 `train`, `eval`, `optimal`, `screenshots` and `bench` print rich tables or
 lines (or one JSON object with `--json`); `play --jsonl` speaks JSON lines.
 Bad arguments, an unknown env or wrapper, or an unreadable file exit with
 code 2 and one clear line on stderr, never a traceback. Numbers are read as
 `Param`s read them (ASCII digits only; a value out of range says so), and a
 negative value may follow its flag (`--learning-rate -inf` is a value, not a
-flag). A reader that closes the pipe early (`| head -1`) ends the command
+flag). Each game's arguments are flags generated from its `Param`s (`flags`).
+A reader that closes the pipe early (`| head -1`) ends the command
 quietly with status 141, as it would end `cat`.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import re
@@ -23,27 +23,16 @@ from collections.abc import Callable, Sequence
 from typing import Any, NoReturn
 
 from rich.console import Console
-from rich.table import Table
 
 from tui_gym import __version__
-from tui_gym.core.agent import HYPERPARAMETER_FIELDS
+from tui_gym.cli.flags import add_game_flags, add_hyperparameter_flags
+from tui_gym.cli.output import CliError, OutConsole
 from tui_gym.core.params import read_number, shown_value
 
+ENV_HELP = "a game (`tui-gym envs` lists them), a Gymnasium id, or MODULE:ID"
 EXIT_USAGE = 2
 EXIT_BROKEN_PIPE = 128 + 13  # what a shell reports for a command ended by SIGPIPE
 MAX_SEED = 2**63 - 2**32  # room for the seeds derived from it (evaluation adds to it)
-
-
-class CliError(Exception):
-    """A user-facing error: printed as one line, exit code 2."""
-
-
-class _Console(Console):
-    """rich's Console, but a closed pipe ends the command the way every other write does."""
-
-    def on_broken_pipe(self) -> None:
-        self.quiet = True
-        raise BrokenPipeError
 
 
 class _Parser(argparse.ArgumentParser):
@@ -99,10 +88,6 @@ def _path(text: str) -> str:
     return text
 
 
-def _flag(name: str) -> str:
-    return "--" + name.replace("_", "-")
-
-
 # A negative number, `-inf` or `-nan` after a long option is that option's value; argparse
 # would take `-inf` (or `-1e5`) for an option of its own and say "expected one argument".
 _NEGATIVE_VALUE = re.compile(r"-(?:inf(?:inity)?|nan|[0-9.].*)", re.IGNORECASE)
@@ -133,11 +118,11 @@ def build_parser() -> argparse.ArgumentParser:
         description="A terminal playground for reinforcement learning. "
         "With no command, opens the app.",
         epilog="examples:\n"
-        "  tui-gym --env gridworld          open the app on GridWorld (? lists every key)\n"
-        "  tui-gym train blackjack --save bj.tgym\n"
-        "  tui-gym eval bj.tgym --json\n"
-        "  tui-gym optimal blackjack --sab\n"
-        "  tui-gym play gridworld --jsonl   a program plays through JSON lines\n"
+        "  tui-gym --env taxi               open the app on Taxi (? lists every key)\n"
+        "  tui-gym train frozenlake --map 8x8 --slippery false --save lake.tgym\n"
+        "  tui-gym eval lake.tgym --json\n"
+        "  tui-gym optimal cliffwalking\n"
+        "  tui-gym play taxi --jsonl        a program plays through JSON lines\n"
         "  tui-gym COMMAND --help           the options of one command",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -157,17 +142,11 @@ def build_parser() -> argparse.ArgumentParser:
     wrappers.add_argument("--json", action="store_true", help="print one JSON object")
 
     train = sub.add_parser("train", help="train a Q-learning agent headless")
-    train.add_argument("env", metavar="ENV", help="blackjack, gridworld or a Gymnasium id")
-    for field in HYPERPARAMETER_FIELDS:
-        # Read as text here and parsed by the field itself, so errors say "out of range".
-        train.add_argument(
-            _flag(field.name), metavar="N" if field.kind is int else "X",
-            help=f"{field.help} ({field.describe_range()})",
-        )
+    train.add_argument("env", metavar="ENV", help=ENV_HELP)
+    # Read as text here and parsed by the fields themselves, so errors say "out of range".
+    add_hyperparameter_flags(train)
     train.add_argument("--seed", type=_seed, default=0, dest="train_seed")
-    train.add_argument("--size", metavar="N", help="GridWorld size (default 5)")
-    train.add_argument("--sab", action="store_true", help="Blackjack: Sutton & Barto rules")
-    train.add_argument("--natural", action="store_true", help="Blackjack: 1.5 for a natural")
+    add_game_flags(train)
     train.add_argument(
         "--wrapper", action="append", default=[], metavar="SPEC",
         help="add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable, in order)",
@@ -178,7 +157,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     train.add_argument(
         "--target-gap", type=_number, metavar="G",
-        help="Blackjack: stop once the greedy policy's exact gap to the optimum is <= G "
+        help="stop once the greedy policy's exact gap to the optimum is <= G "
         "(budget defaults to 1,000,000 episodes then)",
     )
     train.add_argument(
@@ -197,19 +176,15 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--json", action="store_true")
 
     opt = sub.add_parser("optimal", help="the exact optimal strategy and its value")
-    opt.add_argument("env", metavar="ENV")
-    opt.add_argument("--sab", action="store_true", help="Sutton & Barto rules")
-    opt.add_argument("--natural", action="store_true", help="1.5 for a natural blackjack")
-    opt.add_argument("--size", metavar="N", help="GridWorld size (default 5)")
+    opt.add_argument("env", metavar="ENV", help=ENV_HELP)
+    add_game_flags(opt)
     opt.add_argument("--json", action="store_true")
     play = sub.add_parser("play", help="play a game from a program (JSON lines on stdin/stdout)")
-    play.add_argument("env", metavar="ENV")
+    play.add_argument("env", metavar="ENV", help=ENV_HELP)
     play.add_argument("--jsonl", action="store_true", required=True,
                       help="read one JSON request a line, write one JSON response a line")
     play.add_argument("--seed", type=_seed, default=None, dest="play_seed")
-    play.add_argument("--size", metavar="N", help="GridWorld size (default 5)")
-    play.add_argument("--sab", action="store_true", help="Blackjack: Sutton & Barto rules")
-    play.add_argument("--natural", action="store_true", help="Blackjack: 1.5 for a natural")
+    add_game_flags(play)
     play.add_argument("--wrapper", action="append", default=[], metavar="SPEC")
 
     screenshots = sub.add_parser("screenshots", help="write the app's SVG screenshots")
@@ -222,39 +197,16 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _env_kwargs(args: argparse.Namespace, env_id: str) -> dict[str, Any]:
-    kwargs: dict[str, Any] = {}
-    if env_id == "Blackjack-v1":
-        if getattr(args, "sab", False):
-            kwargs["sab"] = True
-        if getattr(args, "natural", False):
-            kwargs["natural"] = True
-    elif getattr(args, "sab", False) or getattr(args, "natural", False):
-        raise CliError("--sab and --natural apply to Blackjack only")
-    if getattr(args, "size", None) is not None:
-        if env_id == "Blackjack-v1":
-            raise CliError("--size applies to GridWorld only")
-        from tui_gym.core.params import ParamError
-        from tui_gym.core.profiles import profile_for
-
-        size = next(p for p in profile_for(env_id).env_params if p.name == "size")
-        try:
-            kwargs["size"] = size.parse(args.size)
-        except ParamError as exc:
-            raise CliError(f"--size {exc.reason}") from None
-    return kwargs
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the `tui-gym` command; returns the exit code."""
     argv = attach_negative_values(sys.argv[1:] if argv is None else argv)
     err = Console(stderr=True)
     try:
         args = build_parser().parse_args(argv)
-        out = _Console()
+        out = OutConsole()
         if args.command is None:
             return _run_app(args)
-        from tui_gym.commands import COMMANDS
+        from tui_gym.cli.commands import COMMANDS
 
         code = COMMANDS[args.command](args, out)
         sys.stdout.flush()  # a closed pipe shows here, not at exit
@@ -288,7 +240,7 @@ def _one_line(exc: BaseException) -> str:
 
 
 def _run_app(args: argparse.Namespace) -> int:
-    from tui_gym.core.profiles import resolve_env_id
+    from tui_gym.games import resolve_env_id
 
     env_id = resolve_env_id(args.env)
     try:
@@ -296,29 +248,3 @@ def _run_app(args: argparse.Namespace) -> int:
     except ImportError as exc:  # pragma: no cover - only without the UI installed
         raise CliError(f"the app is not available ({exc}); try `tui-gym --help`") from None
     return run_app(env_id=env_id, seed=args.seed, load=args.load, runner=args.runner)
-
-
-def print_json(data: dict[str, Any]) -> None:
-    """One JSON object on stdout (NaN written as null)."""
-    sys.stdout.write(json.dumps(_clean(data)) + "\n")
-    sys.stdout.flush()
-
-
-def _clean(value: Any) -> Any:
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _clean(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_clean(v) for v in value]
-    return value
-
-
-def key_value_table(title: str, rows: Sequence[tuple[str, str]]) -> Table:
-    """A two-column table for summaries."""
-    table = Table(title=title, show_header=False, title_justify="left")
-    table.add_column(style="bold")
-    table.add_column(justify="right")
-    for key, value in rows:
-        table.add_row(key, value)
-    return table

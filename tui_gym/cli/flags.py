@@ -1,0 +1,109 @@
+"""Flags generated from `Param` schemas: every game's arguments and the hyperparameters.
+
+`add_game_flags(parser)` adds one flag per game argument name across `GAMES`
+(`--map 8x8`, `--slippery false`, `--sab`; a flag several games share says
+whose it is), read as text. `game_kwargs(args, game)` reads the flags given
+for one game with that game's own `Param`s, so an error names the flag and
+what it takes, and a flag of another game says which games take it.
+`add_hyperparameter_flags` and `hyperparameters` do the same for the
+hyperparameters.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+from typing import Any
+
+from tui_gym.cli.output import CliError
+from tui_gym.core.agent import HYPERPARAMETER_FIELDS, Hyperparameters
+from tui_gym.core.params import Param, ParamError
+from tui_gym.games import GAMES, Game
+
+__all__ = [
+    "HP_FLAGS",
+    "add_game_flags",
+    "add_hyperparameter_flags",
+    "flag",
+    "game_kwargs",
+    "hyperparameters",
+]
+
+HP_FLAGS = tuple(field.name for field in HYPERPARAMETER_FIELDS)
+_PREFIX = "game_"
+
+
+def flag(name: str) -> str:
+    """`--learning-rate` for `learning_rate`."""
+    return "--" + name.replace("_", "-")
+
+
+def _owners() -> dict[str, list[tuple[Game, Param]]]:
+    owners: dict[str, list[tuple[Game, Param]]] = {}
+    for game in GAMES:
+        for param in game.params:
+            owners.setdefault(param.name, []).append((game, param))
+    return owners
+
+
+def add_game_flags(parser: argparse.ArgumentParser) -> None:
+    """One flag per game argument name; a true-or-false one may stand alone (`--sab`)."""
+    group = parser.add_argument_group("game arguments (each game takes its own; see `envs`)")
+    for name, owned in _owners().items():
+        param = owned[0][1]
+        games = ", ".join(game.title for game, _ in owned)
+        if param.kind is bool:
+            group.add_argument(flag(name), dest=_PREFIX + name, nargs="?", const="true",
+                               metavar="BOOL", help=f"{games}: {param.help} (true or false)")
+        else:
+            metavar = {int: "N", float: "X", str: "NAME"}[param.kind]
+            group.add_argument(flag(name), dest=_PREFIX + name, metavar=metavar,
+                               help=f"{games}: {param.help} ({param.describe_range()})")
+
+
+def game_kwargs(args: argparse.Namespace, game: Game) -> dict[str, Any]:
+    """The arguments given for `game`, each read by the game's own `Param`."""
+    own = {param.name: param for param in game.params}
+    kwargs: dict[str, Any] = {}
+    for name, owned in _owners().items():
+        text = getattr(args, _PREFIX + name, None)
+        if text is None:
+            continue
+        if name not in own:
+            games = " and ".join(g.title for g, _ in owned)
+            raise CliError(f"{flag(name)} applies to {games}, not {game.title}")
+        try:
+            kwargs[name] = own[name].parse(text)
+        except ParamError as exc:
+            raise CliError(f"{flag(name)} {exc.reason}") from None
+    return kwargs
+
+
+def add_hyperparameter_flags(parser: argparse.ArgumentParser) -> None:
+    """One flag per hyperparameter, read as text and parsed by the field itself."""
+    for field in HYPERPARAMETER_FIELDS:
+        parser.add_argument(
+            flag(field.name), metavar="N" if field.kind is int else "X",
+            help=f"{field.help} ({field.describe_range()})",
+        )
+
+
+def hyperparameters(
+    args: argparse.Namespace, base: Hyperparameters, names: Sequence[str] = HP_FLAGS
+) -> Hyperparameters:
+    """`base` with the hyperparameter flags given; errors name the flag."""
+    changes: dict[str, Any] = {}
+    for name in names:
+        value = getattr(args, name, None)
+        if value is not None:
+            changes[name] = value
+    try:
+        return base.replace(**changes)
+    except ParamError as exc:
+        # Name the flag, not the field, so the user knows what to fix.
+        raise CliError(f"{flag(exc.param.name)} {exc.reason}") from None
+    except ValueError as exc:
+        text = str(exc)
+        for name in names:
+            text = text.replace(name, flag(name))
+        raise CliError(text) from None
