@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import tui_gym.core.vector.trainer as vector_trainer
+from tests.game_support import form_of
 from tui_gym.algorithms import QLearning, Transitions
 from tui_gym.core.agent import Hyperparameters, QAgent
 from tui_gym.core.obskey import ObservationKeyer
@@ -149,7 +150,7 @@ def test_vector_trainer_runs_the_same_with_the_learner(
     env = build_env(env_id, {})
     keyer = ObservationKeyer(env.observation_space)
     agent = QAgent(int(env.action_space.n), hp, n_states=keyer.n_states, seed=3)
-    trainer = VectorTrainer(env, agent, keyer, seed=5, num_envs=num_envs)
+    trainer = VectorTrainer(env, agent, keyer, form=form_of(env), seed=5, num_envs=num_envs)
     trainer.run(episodes=episodes)
     trainer.run(episodes=3)  # quota tails step a handful of envs, down to one
 
@@ -159,7 +160,7 @@ def test_vector_trainer_runs_the_same_with_the_learner(
 
     monkeypatch.setattr(vector_trainer, "batched_q_update", learner_update)
     learner = QLearning(int(env.action_space.n), hp, n_states=keyer.n_states, seed=3)
-    other = _LearnerVectorTrainer(env, learner, keyer, seed=5, num_envs=num_envs)
+    other = _LearnerVectorTrainer(env, learner, keyer, form=form_of(env), seed=5, num_envs=num_envs)
     other.run(episodes=episodes)
     other.run(episodes=3)
     assert other.steps == trainer.steps and learner.epsilon == agent.epsilon

@@ -20,8 +20,9 @@ from tui_gym.bench.report import MISS, PASS, UNDECIDED, notes, table, to_json, v
 from tui_gym.bench.results import BenchResults, MachineInfo
 from tui_gym.bench.startup import StartupResult
 from tui_gym.bench.throughput import ThroughputResult
-from tui_gym.cli import _clean, build_parser
-from tui_gym.commands import COMMANDS
+from tui_gym.cli import build_parser
+from tui_gym.cli.commands import COMMANDS
+from tui_gym.cli.output import _clean
 from tui_gym.core.agent import Hyperparameters
 from tui_gym.games.blackjack.solver import DECISION_MASK, optimal_policy
 

@@ -14,8 +14,8 @@ import pytest
 
 from tui_gym.cli import main
 from tui_gym.core.agent import Hyperparameters
-from tui_gym.core.profiles import profile_for
 from tui_gym.core.session import Session
+from tui_gym.games import game_for
 
 TOLERANCE = 0.005
 
@@ -61,7 +61,7 @@ def test_blackjack_defaults_are_undiscounted_with_visit_count_step_sizes() -> No
       `learning_rate` then keeps tracking the improving values of later states.
     """
     for hp in (
-        profile_for("blackjack").default_hyperparameters(),
+        game_for("blackjack").default_hyperparameters(),
         Session("blackjack").hp,
         Hyperparameters(),
     ):

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from gymnasium.envs.toy_text import blackjack as gym_bj
 
-from tui_gym.core.reference import (
+from tui_gym.games.blackjack.solver import (
     DECISION_MASK,
     HIT,
     POLICY_SHAPE,

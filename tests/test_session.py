@@ -8,9 +8,10 @@ import pytest
 
 import tui_gym  # noqa: F401  (registers GridWorld)
 from tui_gym.core.agent import Hyperparameters
-from tui_gym.core.profiles import BlackjackProfile, GridWorldProfile
 from tui_gym.core.session import Session
 from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.games.blackjack import BlackjackGame as BlackjackProfile
+from tui_gym.games.gridworld import GridWorldGame as GridWorldProfile
 
 W = WrapperChoice.make
 GRID = "tui_gym/GridWorld-v0"
@@ -35,10 +36,10 @@ def test_session_for_each_game_and_alias(
 ) -> None:
     session = Session(name)
     assert session.env_id == env_id
-    assert isinstance(session.profile, profile)
+    assert isinstance(session.game, profile)
     assert session.agent.n_actions == n_actions
     assert session.keyer.dense
-    assert session.hp == session.profile.default_hyperparameters()
+    assert session.hp == session.game.default_hyperparameters()
     assert session.trainer.run(episodes=20) == 20
 
 
@@ -53,8 +54,10 @@ def test_env_kwargs_are_completed_and_checked() -> None:
 
 def test_unknown_env_is_a_value_error_naming_the_choices() -> None:
     with pytest.raises(ValueError) as caught:
-        Session("CartPole-v1")
+        Session("NoSuchGame-v0")
     assert "blackjack" in str(caught.value) and "gridworld" in str(caught.value)
+    with pytest.raises(ValueError, match="does not fit: its observation space is Box"):
+        Session("CartPole-v1")
 
 
 # -- rebuilding -----------------------------------------------------------------
@@ -291,14 +294,15 @@ def test_blackjack_heatmap_cells_read_the_q_table() -> None:
         ACTION_LETTERS,
         CHART_SUMS,
         DEALER_CARDS,
-        BlackjackProfile,
+        BlackjackGame,
         _row_of,
     )
     from tui_gym.games.blackjack.solver import BlackjackRules, optimal_policy
 
     rows = len(_row_of())
     q = np.random.default_rng(3).normal(size=(rows, 2))
-    panels = BlackjackProfile().heatmaps(q, {})
+    game = BlackjackGame()
+    panels = game.layout.heatmaps(q, {}, None, game.oracle.optimal_marks({}))
     best = optimal_policy(BlackjackRules())
     for panel, usable in zip(panels, (1, 0), strict=True):
         for r, player in enumerate(CHART_SUMS):

@@ -35,11 +35,11 @@ async def test_views_and_games_switch_by_key():
         assert switcher.current == "play"
         await pilot.press("g")
         await pilot.pause()
-        assert app.session.profile.name == "gridworld"
+        assert app.session.game.name == "gridworld"
         assert app.sub_title == "GridWorld"
         await pilot.press("b")
         await pilot.pause()
-        assert app.session.profile.name == "blackjack"
+        assert app.session.game.name == "blackjack"
 
 
 async def test_help_lists_every_app_key_and_closes():
@@ -145,7 +145,7 @@ async def test_game_picker_switches_game():
     async with app.run_test(size=(120, 40)) as pilot:
         await pilot.click("#game-gridworld")
         await pilot.pause()
-        assert app.session.profile.name == "gridworld"
+        assert app.session.game.name == "gridworld"
         assert app.query_one("#game-gridworld", RadioButton).value
 
 

@@ -13,9 +13,9 @@ from collections.abc import Sequence
 from textual.app import App, ComposeResult
 from textual.widgets import Static
 
-from tui_gym.games.blackjack.game import card_label
 from tui_gym.core.session import Session
 from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.games.blackjack.game import card_label
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.play_view import PlayView
 from tui_gym.ui.widgets.boards import BOARDS, BoardButton
@@ -332,7 +332,7 @@ async def test_switching_games_swaps_the_board_and_keeps_focus() -> None:
         view = app.play_view
         assert isinstance(view.board, GridBoard) and len(view.query(GridBoard)) == 1
         assert not view.query(CardsBoard)
-        assert view.game.profile.board == "grid"
+        assert view.game.game.board == "grid"
         assert app.focused is view.board
         assert "GridWorld" in shown(view, "#play-title")
         keys = [key for key, _ in view.key_help()]

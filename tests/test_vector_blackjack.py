@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from gymnasium.envs.toy_text import blackjack as gym_bj
 
+from tui_gym.games.blackjack.batched import BatchedBlackjack
 from tui_gym.games.blackjack.solver import (
     DECISION_MASK,
     HIT,
@@ -26,7 +27,6 @@ from tui_gym.games.blackjack.solver import (
     policy_from_function,
     policy_value,
 )
-from tui_gym.core.vector import BatchedBlackjack
 
 PLAIN = BlackjackRules()
 NATURAL = BlackjackRules(natural=True)

@@ -52,6 +52,13 @@ def _param_dict(param: Param) -> dict[str, Any]:
     return data
 
 
+def _shown(value: Any) -> str:
+    """A default as a person types it: `true`, `0.333333`, `4x4`."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
 def cmd_envs(args: argparse.Namespace, out: Console) -> int:
     if args.json:
         print_json({"envs": [
@@ -68,20 +75,22 @@ def cmd_envs(args: argparse.Namespace, out: Console) -> int:
             for g in GAMES
         ]})
         return 0
-    table = Table(title="Games", title_justify="left")
-    table.add_column("alias", style="bold cyan")
-    table.add_column("Gymnasium id", no_wrap=True)
-    table.add_column("actions")
-    table.add_column("flags", no_wrap=True)
-    table.add_column("about")
+    # One block a game, so nothing is cut on a narrow terminal.
+    out.print("[bold]Games[/]")
     for g in GAMES:
-        ids = "\n".join((g.env_id, *g.other_ids))
-        flags = "\n".join("--" + p.name.replace("_", "-") for p in g.params) or "-"
-        about = g.description + (f"\n[dim]teaches: {escape(g.teaches)}[/]" if g.teaches else "")
-        table.add_row(g.name, ids, ", ".join(g.action_names), flags, about)
-    out.print(table)
-    out.print("Any other Gymnasium id with Discrete spaces and a transition table P works too "
-              "(MODULE:ID imports the module that registers it).")
+        ids = ", ".join((g.env_id, *g.other_ids))
+        key = f"  (key {g.key} in the app)" if g.key else ""
+        out.print(f"\n[bold cyan]{g.name}[/]  {escape(ids)}{escape(key)}", overflow="fold")
+        out.print(f"  {escape(g.description)}", overflow="fold")
+        if g.teaches:
+            out.print(f"  [dim]teaches:[/] {escape(g.teaches)}", overflow="fold")
+        out.print(f"  [dim]actions:[/] {', '.join(g.action_names)}", overflow="fold")
+        for p in g.params:
+            flag = "--" + p.name.replace("_", "-")
+            out.print(f"  {flag} {escape(p.describe_range())}, default {_shown(p.default)}: "
+                      f"{escape(p.help)}", overflow="fold")
+    out.print("\nAny other Gymnasium id with Discrete spaces and a transition table P works "
+              "too (MODULE:ID imports the module that registers it).", overflow="fold")
     return 0
 
 

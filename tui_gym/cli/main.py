@@ -127,7 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"tui-gym {__version__}")
-    parser.add_argument("--env", default="blackjack", help="game to open (default: blackjack)")
+    parser.add_argument("--env", default="", help="game to open (default: the first of `envs`)")
     parser.add_argument("--seed", type=_seed, default=0, help="seed for every random thing")
     parser.add_argument("--load", metavar="PATH", help="open a saved agent")
     parser.add_argument(
@@ -242,7 +242,7 @@ def _one_line(exc: BaseException) -> str:
 def _run_app(args: argparse.Namespace) -> int:
     from tui_gym.games import resolve_env_id
 
-    env_id = resolve_env_id(args.env)
+    env_id = resolve_env_id(args.env) if args.env else None
     try:
         from tui_gym.ui.app import run_app
     except ImportError as exc:  # pragma: no cover - only without the UI installed

@@ -35,7 +35,7 @@ from tui_gym.core.wrappers import (
     build_env_lenient,
 )
 from tui_gym.core.wrappers.changes import GameChanges
-from tui_gym.games import Game, game_for, resolve_env_id
+from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 from tui_gym.games.base import FixedBound, ReferenceMetrics
 
 ENGINES = ("auto", "scalar", "vector")
@@ -94,7 +94,7 @@ def _build(
 class Session:
     """One game with its wrappers, agent and trainer; what every front end drives."""
 
-    env_id: str = "Blackjack-v1"
+    env_id: str = ""  # "": the first game of the registry
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     choices: tuple[WrapperChoice, ...] = ()
     hp: Hyperparameters | None = None  # None: the game's own defaults
@@ -102,7 +102,7 @@ class Session:
     engine: str = "auto"  # "auto" (vector when the wrappers allow), "scalar" or "vector"
 
     def __post_init__(self) -> None:
-        self.env_id = resolve_env_id(self.env_id)
+        self.env_id = resolve_env_id(self.env_id or GAMES[0].env_id)
         self.game: Game = game_for(self.env_id)
         self.env_kwargs = self.game.normalize_kwargs(self.env_kwargs)
         if self.hp is None:

@@ -32,12 +32,12 @@ from textual.screen import Screen
 from textual.widget import Widget
 from textual.widgets import ContentSwitcher, Header, Static
 
-from tui_gym.core.profiles import PROFILES
-from tui_gym.core.runner import make_runner
+from tui_gym.core.runners import make_runner
 from tui_gym.core.session import Session
 from tui_gym.core.storage import StorageError
 from tui_gym.core.training import continue_run
 from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.games import GAMES, game_named
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.play_view import PlayView
 from tui_gym.ui.side_panel import SidePanel
@@ -75,8 +75,9 @@ class TuiGymApp(App[int]):
         Binding("question_mark,f1", "help", "Help", key_display="?"),
         Binding("q", "quit", "Quit"),
         Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
-        Binding("b", "switch_game('blackjack')", "Blackjack"),
-        Binding("g", "switch_game('gridworld')", "GridWorld"),
+        # A key for each game in the registry (the help and the side panel's picker list them).
+        *(Binding(game.key, f"switch_game('{game.name}')", game.title, show=False)
+          for game in GAMES if game.key),
     ]
     TRAIN_ACTIONS = frozenset({"toggle_training", "one_episode", "reset_agent", "faster", "slower"})
 
@@ -136,7 +137,7 @@ class TuiGymApp(App[int]):
         if self.standalone:
             self._catch_signals()
         self._switcher = self.query_one("#views", ContentSwitcher)
-        self.sub_title = self.session.profile.title
+        self.sub_title = self.session.game.title
         self.set_interval(1 / REFRESH_HZ, self._tick)
         self._apply_size(self.size.width, self.size.height)
         self.call_after_refresh(self.play_view.focus_board)
@@ -209,11 +210,11 @@ class TuiGymApp(App[int]):
         self.refresh_bindings()  # the view's keys, even when the focus stays put
 
     def action_switch_game(self, name: str) -> None:
-        profile = next(p for p in PROFILES if p.name == name)
-        if profile.env_id == self.session.env_id:
-            self.notify(f"Already playing {profile.title}.")
+        game = game_named(name)
+        if game.matches(self.session.env_id):
+            self.notify(f"Already playing {game.title}.")
             return
-        self.rebuild(env_id=profile.env_id)
+        self.rebuild(env_id=game.env_id)
 
     def action_focus_wrappers(self) -> None:
         self.side_panel.focus_wrappers()
@@ -282,7 +283,7 @@ class TuiGymApp(App[int]):
             self.push_screen(HelpScreen(self.key_help()))
 
     def action_save_agent(self) -> None:
-        path = Path.cwd() / f"{self.session.profile.name}-agent.tgym"
+        path = Path.cwd() / f"{self.session.game.name.replace('/', '-')}-agent.tgym"
         self.runner.pause()
         try:
             self.session.save(path)
@@ -311,7 +312,7 @@ class TuiGymApp(App[int]):
             if was_running:
                 self.runner.start()
             return False
-        self.sub_title = self.session.profile.title
+        self.sub_title = self.session.game.title
         self._last_version = -1
         self.play_view.reload()
         self.train_view.reload()
@@ -331,8 +332,9 @@ class TuiGymApp(App[int]):
         sections = [
             ("Everywhere", [
                 ("p / t", "Play view / Train view"),
-                ("b / g", "switch to Blackjack / GridWorld"),
-                ("w / W", "focus the wrapper panel (W while the GridWorld board has focus)"),
+                *((game.key, f"switch to {game.title}") for game in GAMES if game.key),
+                ("w / W", "focus the wrapper panel (W while a board that moves with WASD "
+                          "has focus)"),
                 ("? / F1", "this help"),
                 ("ctrl+p", "command palette"),
                 ("q", "quit"),
@@ -359,9 +361,9 @@ class TuiGymApp(App[int]):
             ("Play view", "Play the game yourself", lambda: self.action_show_view("play")),
             ("Train view", "Watch Q-learning learn", lambda: self.action_show_view("train")),
             *(
-                (f"Game: {p.title}", p.description,
-                 lambda name=p.name: self.action_switch_game(name))
-                for p in PROFILES
+                (f"Game: {g.title}", g.description,
+                 lambda name=g.name: self.action_switch_game(name))
+                for g in GAMES
             ),
             ("Start / pause training", "Toggle training", self._palette_toggle),
             ("Reset agent", "Empty Q-table, fresh statistics", self.action_reset_agent),
@@ -483,11 +485,11 @@ EXIT_CRASH = 1
 
 
 def run_app(
-    env_id: str = "Blackjack-v1", seed: int = 0, load: str | None = None, runner: str = "process"
+    env_id: str | None = None, seed: int = 0, load: str | None = None, runner: str = "process"
 ) -> int:
     """Open the app (from a saved agent with `load`); returns the exit code."""
     gc_seconds = gc_seconds_from_env()
-    session = Session.load(load) if load else Session(env_id=env_id, seed=seed)
+    session = Session.load(load) if load else Session(env_id=env_id or "", seed=seed)
     return run_standalone(
         TuiGymApp(session, runner=runner, tune_gc=True, gc_seconds=gc_seconds, standalone=True)
     )

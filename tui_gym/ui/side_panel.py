@@ -20,8 +20,8 @@ from textual.message import Message
 from textual.validation import ValidationResult, Validator
 from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet, Static
 
-from tui_gym.core.profiles import PROFILES
 from tui_gym.core.wrappers import CATALOG, Param, WrapperChoice
+from tui_gym.games import GAMES
 from tui_gym.ui.widgets.tick_box import TickBox
 
 
@@ -218,8 +218,8 @@ class SidePanel(VerticalScroll):
     def compose(self) -> ComposeResult:
         yield Static("Game", classes="section")
         with RadioSet(id="game-picker"):
-            for profile in PROFILES:
-                yield RadioButton(profile.title, id=f"game-{profile.name}")
+            for index, (title, _) in enumerate(self._picker_games()):
+                yield RadioButton(title, id=f"game-{index}")
         yield Vertical(*self._env_fields(), id="env-params")
         yield Static("", id="env-error", classes="field-error")
         yield Static("Wrapper chain", classes="section")
@@ -237,8 +237,17 @@ class SidePanel(VerticalScroll):
         session = self.session
         return [
             ParamField(p, session.env_kwargs.get(p.name, p.default), "env")
-            for p in session.profile.env_params
+            for p in session.game.params
         ]
+
+    def _picker_games(self) -> list[tuple[str, str]]:
+        """(label, env id) of every game the picker lists: the registered ones, each with
+        its hotkey, and the session's own when it is another env."""
+        games = [(f"{g.title} ({g.key})" if g.key else g.title, g.env_id) for g in GAMES]
+        game = self.session.game
+        if not any(g is game for g in GAMES):
+            games.append((game.title, self.session.env_id))
+        return games
 
     def _wrapper_states(self) -> tuple[dict[str, WrapperChoice], dict[str, str | None]]:
         """Each chosen wrapper by name, and for every wrapper why it does not fit (if so)."""
@@ -252,9 +261,16 @@ class SidePanel(VerticalScroll):
 
     def _check_game(self) -> None:
         picker = self.query_one("#game-picker", RadioSet)
+        game = self.session.game
+        listed = self._picker_games()
+        if len(listed) != len(picker.query(RadioButton)):  # another env joined or left the list
+            picker.remove_children()
+            picker.mount_all(RadioButton(title, id=f"game-{index}")
+                             for index, (title, _) in enumerate(listed))
+        mine = next((i for i, (_, env_id) in enumerate(listed) if game.matches(env_id)), -1)
         with picker.prevent(RadioSet.Changed, RadioButton.Changed):
             for button in picker.query(RadioButton):
-                button.value = button.id == f"game-{self.session.profile.name}"
+                button.value = button.id == f"game-{mine}"
 
     @property
     def session(self):  # the app's Session
@@ -265,7 +281,7 @@ class SidePanel(VerticalScroll):
         self._check_game()
         env_box = self.query_one("#env-params", Vertical)
         fields = list(env_box.query(ParamField))
-        wanted = self.session.profile.env_params
+        wanted = self.session.game.params
         if [f.param for f in fields] == list(wanted):
             for field in fields:
                 field.set_value(self.session.env_kwargs.get(field.param.name))
@@ -304,8 +320,9 @@ class SidePanel(VerticalScroll):
         pressed = picker.pressed_button
         if pressed is None or pressed.id is None:
             return self.session.env_id
-        name = pressed.id.removeprefix("game-")
-        return next(p.env_id for p in PROFILES if p.name == name)
+        listed = self._picker_games()
+        index = int(pressed.id.removeprefix("game-"))
+        return listed[index][1] if 0 <= index < len(listed) else self.session.env_id
 
     def _mark(self, field: ParamField, error: str | None) -> None:
         if field.param.kind is not bool:

@@ -125,10 +125,17 @@ class BlackjackStates(StateSpace):
         return f"sum {player} vs dealer {card}, {ace}"
 
     def read_scene(self, game_env: Any, before: Mapping[str, Any]) -> dict[str, Any]:
-        """The hands: `player` and `dealer` card lists (1 = ace, 10 = ten or face)."""
+        """The hands: `player` and `dealer` card lists (1 = ace, 10 = ten or face), and
+        their totals (`player_usable`: the player's ace counts 11)."""
+        player = [int(c) for c in getattr(game_env, "player", [])]
+        dealer = [int(c) for c in getattr(game_env, "dealer", [])]
+        player_total, usable = hand_value(player)
         return {
-            "player": [int(c) for c in getattr(game_env, "player", [])],
-            "dealer": [int(c) for c in getattr(game_env, "dealer", [])],
+            "player": player,
+            "dealer": dealer,
+            "player_total": player_total,
+            "player_usable": usable,
+            "dealer_total": hand_value(dealer)[0],
         }
 
     def text(self, env: Any, reveal: bool = True) -> str:
