@@ -192,6 +192,9 @@ class VectorTrainer(Trainer):
         # Episode results held until every earlier-started episode has finished: a ring
         # indexed by start number, `_released` the first start number not yet recorded.
         self._start_seq = np.zeros(n, dtype=np.int64)  # start number of each env's episode
+        # The exploration rate each env's episode started with: what its curve point shows,
+        # so that points in start order follow the schedule.
+        self._start_epsilon = np.zeros(n, dtype=np.float64)
         self._next_seq = 0
         self._released = 0
         self._held = np.zeros((_ring_size(2 * n), len(SERIES_NAMES)), dtype=np.float64)
@@ -290,7 +293,6 @@ class VectorTrainer(Trainer):
 
         keys = self._keys[sel]
         actions = self._choose(keys)
-        epsilon = self.agent.epsilon
         result = self.venv.step(actions, index, autoreset=False)
         rewards = self.plan.transform_rewards(result.reward, result.info)
         next_keys = self.keyer.keys(result.next_obs)
@@ -307,7 +309,7 @@ class VectorTrainer(Trainer):
         envs = finished if index is None else index[finished]
         self._live[envs] = False
         self._n_live -= len(envs)
-        self._record(envs, epsilon)
+        self._record(envs)
         return len(envs)
 
     def _number(self, envs: np.ndarray) -> None:
@@ -317,6 +319,7 @@ class VectorTrainer(Trainer):
         while self._next_seq - self._released > len(self._held):
             self._grow()
         self._start_seq[envs] = np.arange(first, self._next_seq)
+        self._start_epsilon[envs] = self.agent.epsilon
 
     def _grow(self) -> None:
         """Double the ring of held results, keeping each at its start number's place."""
@@ -325,7 +328,7 @@ class VectorTrainer(Trainer):
         self._held = np.zeros((2 * len(old), old.shape[1]), dtype=np.float64)
         self._held[seqs % len(self._held)] = old[seqs % len(old)]
 
-    def _record(self, envs: np.ndarray, epsilon: float) -> None:
+    def _record(self, envs: np.ndarray) -> None:
         """Hold finished episodes' statistics, release those whose turn has come, and
         move the agent's schedule on."""
         lengths = self._lengths[envs].astype(np.float64)
@@ -333,7 +336,7 @@ class VectorTrainer(Trainer):
             self._returns[envs],
             lengths,
             self._abs_td[envs] / np.maximum(lengths, 1.0),
-            np.full(len(envs), epsilon),
+            self._start_epsilon[envs],
         ])
         self._held[self._start_seq[envs] % len(self._held)] = columns
         ret, length, td, eps = columns[-1].tolist()
