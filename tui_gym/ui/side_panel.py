@@ -218,8 +218,8 @@ class SidePanel(VerticalScroll):
     def compose(self) -> ComposeResult:
         yield Static("Game", classes="section")
         with RadioSet(id="game-picker"):
-            for index, (title, _) in enumerate(self._picker_games()):
-                yield RadioButton(title, id=f"game-{index}")
+            for button_id, title, _ in self._picker_games():
+                yield RadioButton(title, id=button_id)
         yield Vertical(*self._env_fields(), id="env-params")
         yield Static("", id="env-error", classes="field-error")
         yield Static("Wrapper chain", classes="section")
@@ -240,13 +240,14 @@ class SidePanel(VerticalScroll):
             for p in session.game.params
         ]
 
-    def _picker_games(self) -> list[tuple[str, str]]:
-        """(label, env id) of every game the picker lists: the registered ones, each with
-        its hotkey, and the session's own when it is another env."""
-        games = [(f"{g.title} ({g.key})" if g.key else g.title, g.env_id) for g in GAMES]
+    def _picker_games(self) -> list[tuple[str, str, str]]:
+        """(button id, label, env id) of every game the picker lists: the registered ones,
+        each with its hotkey, and the session's own when it is another env."""
+        games = [(f"game-{g.name}", f"{g.title} ({g.key})" if g.key else g.title, g.env_id)
+                 for g in GAMES]
         game = self.session.game
         if not any(g is game for g in GAMES):
-            games.append((game.title, self.session.env_id))
+            games.append(("game-other", game.title, self.session.env_id))
         return games
 
     def _wrapper_states(self) -> tuple[dict[str, WrapperChoice], dict[str, str | None]]:
@@ -263,14 +264,13 @@ class SidePanel(VerticalScroll):
         picker = self.query_one("#game-picker", RadioSet)
         game = self.session.game
         listed = self._picker_games()
-        if len(listed) != len(picker.query(RadioButton)):  # another env joined or left the list
-            picker.remove_children()
-            picker.mount_all(RadioButton(title, id=f"game-{index}")
-                             for index, (title, _) in enumerate(listed))
-        mine = next((i for i, (_, env_id) in enumerate(listed) if game.matches(env_id)), -1)
+        if [b.id for b in picker.query(RadioButton)] != [i for i, _, _ in listed]:
+            picker.remove_children()  # another env joined or left the list
+            picker.mount_all(RadioButton(title, id=button_id) for button_id, title, _ in listed)
+        mine = next((i for i, _, env_id in listed if game.matches(env_id)), "")
         with picker.prevent(RadioSet.Changed, RadioButton.Changed):
             for button in picker.query(RadioButton):
-                button.value = button.id == f"game-{mine}"
+                button.value = button.id == mine
 
     @property
     def session(self):  # the app's Session
@@ -320,9 +320,8 @@ class SidePanel(VerticalScroll):
         pressed = picker.pressed_button
         if pressed is None or pressed.id is None:
             return self.session.env_id
-        listed = self._picker_games()
-        index = int(pressed.id.removeprefix("game-"))
-        return listed[index][1] if 0 <= index < len(listed) else self.session.env_id
+        return next((env_id for i, _, env_id in self._picker_games() if i == pressed.id),
+                    self.session.env_id)
 
     def _mark(self, field: ParamField, error: str | None) -> None:
         if field.param.kind is not bool:
