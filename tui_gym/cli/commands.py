@@ -144,8 +144,10 @@ def _wrapper_table(catalog: dict[str, Any]) -> Table:
     return table
 
 
-def _base_hyperparameters(args: argparse.Namespace, game: Game) -> Hyperparameters:
-    hp = game.default_hyperparameters()
+def _base_hyperparameters(
+    args: argparse.Namespace, game: Game, kwargs: dict[str, Any]
+) -> Hyperparameters:
+    hp = game.default_hyperparameters(game.normalize_kwargs(kwargs))
     if getattr(args, "target_gap", None) is not None and args.episodes is None:
         # A longer budget decays epsilon more slowly; the run stops at the target anyway.
         hp = hp.replace(episodes=TARGET_GAP_BUDGET)
@@ -158,11 +160,12 @@ def _session_from_args(args: argparse.Namespace) -> Session:
     env_id = resolve_env_id(args.env)
     game = game_for(env_id)
     choices = tuple(parse_wrapper_spec(text) for text in args.wrapper)
+    kwargs = game_kwargs(args, game)
     session = Session(
         env_id=env_id,
-        env_kwargs=game_kwargs(args, game),
+        env_kwargs=kwargs,
         choices=choices,
-        hp=hyperparameters(args, _base_hyperparameters(args, game)),
+        hp=hyperparameters(args, _base_hyperparameters(args, game, kwargs)),
         seed=args.train_seed,
         engine=args.engine,
     )

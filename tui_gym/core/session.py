@@ -106,7 +106,7 @@ class Session:
         self.game: Game = game_for(self.env_id)
         self.env_kwargs = self.game.normalize_kwargs(self.env_kwargs)
         if self.hp is None:
-            self.hp = self.game.default_hyperparameters()
+            self.hp = self.game.default_hyperparameters(self.env_kwargs)
         self.choices = tuple(self.choices)
         if self.engine not in ENGINES:
             raise ValueError(f"engine must be one of {', '.join(ENGINES)}, got {self.engine!r}")
@@ -195,10 +195,12 @@ class Session:
         """
         new_id, kwargs, new_choices, game = self._rebuild_args(env_id, env_kwargs, choices)
         built = _build(game, new_id, kwargs, new_choices)
-        if game is not self.game:
-            # Each game learns with its own defaults (some need discounting).
-            self.hp = game.default_hyperparameters()
         keep = self._keeps(built)
+        defaults = self.game.default_hyperparameters(self.env_kwargs)
+        if game is not self.game or (not keep and self.hp == defaults):
+            # Each game (and a larger map) learns with its own defaults; a fresh agent on
+            # the same game keeps hyperparameters a person chose.
+            self.hp = game.default_hyperparameters(kwargs)
         old_trainer = self.trainer
         self.env.close()
         self.env_id, self.env_kwargs, self.choices, self.game = (

@@ -488,8 +488,8 @@ class Game:
         """What `gym.make` takes for these (normalized) arguments."""
         return dict(kwargs)
 
-    def default_hyperparameters(self) -> Hyperparameters:
-        """Hyperparameters that learn this game well (see the README)."""
+    def default_hyperparameters(self, kwargs: Mapping[str, Any] | None = None) -> Hyperparameters:
+        """Hyperparameters that learn this game well with these arguments (see the README)."""
         return Hyperparameters()
 
     def episode_limit(self, kwargs: Mapping[str, Any]) -> int | None:

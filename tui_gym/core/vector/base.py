@@ -82,13 +82,15 @@ class BatchedForm:
     `make(num_envs, seed, max_episode_steps)` builds the batched env (the
     episode limit is read from the env's wrappers); `info` names the per-step
     entries its `BatchStep.info` carries; `key` tells two forms of one game
-    apart (for equality).
+    apart (for equality); `num_envs` is how many episodes it plays best at
+    once (None: the engine's default).
     """
 
     title: str
     make: MakeBatched = field(compare=False)
     info: tuple[str, ...] = ()
     key: Hashable = ()
+    num_envs: int | None = None
 
 
 def check_num_envs(num_envs: int) -> int:

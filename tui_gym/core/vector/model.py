@@ -1,8 +1,10 @@
 """Any finite game on numpy arrays: `BatchedModel`, a `FiniteMDP` stepped in batches.
 
 `BatchedModel` keeps the state of `num_envs` episodes of one model and steps
-any subset of them with `tui_gym.core.mdp.BatchSampler` (one uniform draw per
-row, no loop over rows). Observations are the model's state numbers, one
+any subset of them as `tui_gym.core.mdp.BatchSampler` does (one uniform draw
+per row against the row's cumulative probabilities, no loop over rows; none
+at all for a model whose every move has one outcome), reading the model's
+arrays flat so that one index serves every array. Observations are the model's state numbers, one
 column wide, as a `Discrete` observation space reads them. Episodes follow
 the model's own distributions, so they agree in distribution with the env the
 model was read from, not draw for draw. `model_form(title, model)` is the
@@ -24,7 +26,9 @@ from tui_gym.core.vector.base import (
     selection_size,
 )
 
-__all__ = ["BatchedModel", "model_form"]
+__all__ = ["MODEL_NUM_ENVS", "BatchedModel", "model_form"]
+
+MODEL_NUM_ENVS = 8192  # episodes a model game plays at once
 
 
 class BatchedModel:
@@ -54,6 +58,13 @@ class BatchedModel:
         self.n_actions = model.n_actions
         self.max_episode_steps = max_episode_steps
         self.sampler = BatchSampler(model)
+        n_actions, outcomes = model.n_actions, model.max_outcomes
+        self._outcomes = outcomes
+        self._cumulative = model.cumulative.reshape(-1, outcomes)
+        self._next = model.next_state.reshape(-1)
+        self._reward = model.reward.reshape(-1)
+        self._terminal = model.terminal.reshape(-1)
+        self._rows = n_actions
         self.rng = np.random.default_rng(seed)
         self.state = np.zeros(self.num_envs, dtype=np.int64)
         self.elapsed = np.zeros(self.num_envs, dtype=np.int64)
@@ -83,19 +94,26 @@ class BatchedModel:
         k = selection_size(index, self.num_envs)
         acts = check_actions(actions, k, self.n_actions)
         states = self.state if index is None else self.state[index]
-        sampled = self.sampler.step(states, acts, self.rng)
+        pair = states * self._rows + acts  # the row of (state, action) in the flat arrays
+        flat = pair * self._outcomes
+        if self._outcomes > 1:
+            # Outcome k is drawn when cumulative[k - 1] <= u < cumulative[k].
+            draws = self.rng.random(len(pair))
+            flat += (draws[:, None] >= self._cumulative[pair]).sum(axis=1)
+        next_state = self._next[flat]
+        terminated = self._terminal[flat]
         if index is None:
-            self.state[:] = sampled.next_state
+            self.state[:] = next_state
             self.elapsed += 1
             elapsed = self.elapsed
         else:
-            self.state[index] = sampled.next_state
+            self.state[index] = next_state
             elapsed = self.elapsed[index] + 1
             self.elapsed[index] = elapsed
-        next_obs = sampled.next_state[:, None]
-        truncated, obs = after_step(next_obs, sampled.terminated, elapsed,
+        next_obs = next_state[:, None]
+        truncated, obs = after_step(next_obs, terminated, elapsed,
                                     self.max_episode_steps, index, self.reset, autoreset)
-        return BatchStep(next_obs, sampled.reward, sampled.terminated, truncated, obs)
+        return BatchStep(next_obs, self._reward[flat], terminated, truncated, obs)
 
 
 def model_form(title: str, model: FiniteMDP) -> BatchedForm:
@@ -106,4 +124,5 @@ def model_form(title: str, model: FiniteMDP) -> BatchedForm:
     ) -> BatchedModel:
         return BatchedModel(model, num_envs, seed=seed, max_episode_steps=max_episode_steps)
 
-    return BatchedForm(title, make, key=("model", id(model)))
+    # Model steps are cheap: larger batches spread the per-batch work further.
+    return BatchedForm(title, make, key=("model", id(model)), num_envs=MODEL_NUM_ENVS)

@@ -153,7 +153,8 @@ class VectorTrainer(Trainer):
         made_limit: the limit `gym.make` put on the game (by default the
             registry's), for `plan.describe`.
         seed: seeds the batched env; the agent's own seed drives exploration.
-        num_envs: games played side by side.
+        num_envs: games played side by side (None: the form's choice, else
+            `DEFAULT_NUM_ENVS`).
         window, series_capacity, publish_interval: as for `Trainer`.
     """
 
@@ -168,7 +169,7 @@ class VectorTrainer(Trainer):
         form: BatchedForm | NotAvailable | None,
         made_limit: int | None | str = "registry",
         seed: int | None = None,
-        num_envs: int = DEFAULT_NUM_ENVS,
+        num_envs: int | None = None,
         window: int = 1000,
         series_capacity: int = 256,
         publish_interval: float = 0.1,
@@ -180,6 +181,8 @@ class VectorTrainer(Trainer):
             raise ValueError("the agent's table does not match the env's states and actions")
         if keyer.signature != repr(env.observation_space):
             raise ValueError("the keyer was not built from this env's observation space")
+        if num_envs is None:
+            num_envs = self.plan.form.num_envs or DEFAULT_NUM_ENVS
         self.venv = self.plan.make_env(num_envs, seed)
         self.num_envs = self.venv.num_envs
         n = self.num_envs
@@ -377,7 +380,7 @@ def make_vector_trainer(
     *,
     form: BatchedForm | NotAvailable | None,
     seed: int | None = None,
-    num_envs: int = DEFAULT_NUM_ENVS,
+    num_envs: int | None = None,
     **options: Any,
 ) -> VectorTrainer:
     """A `VectorTrainer` for a game and wrapper choice, built as a `Session` builds its env.

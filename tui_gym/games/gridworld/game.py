@@ -448,7 +448,7 @@ class GridWorldGame(Game):
         self.narrator = GridWorldNarrator(self)
         self.layout = GridWorldLayout(self)
 
-    def default_hyperparameters(self) -> Hyperparameters:
+    def default_hyperparameters(self, kwargs: Mapping[str, Any] | None = None) -> Hyperparameters:
         # Reward only at the target: without discounting every path is worth 1
         # and the greedy policy would have no reason to take the shortest one.
         return Hyperparameters(

@@ -261,7 +261,7 @@ class TaxiGame(ModelGame):
             return NotAvailable(FICKLE)
         return super().base_model(kwargs)
 
-    def default_hyperparameters(self) -> Hyperparameters:
-        return Hyperparameters(
-            learning_rate=0.1, discount=1.0, episodes=20_000, epsilon_decay_fraction=0.5
-        )
+    def default_hyperparameters(self, kwargs: Mapping[str, Any] | None = None) -> Hyperparameters:
+        if (kwargs or {}).get("rainy"):
+            return Hyperparameters(learning_rate=0.05, episodes=50_000)
+        return Hyperparameters(learning_rate=0.1, episodes=5_000)
