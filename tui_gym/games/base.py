@@ -51,6 +51,7 @@ if TYPE_CHECKING:
 __all__ = [
     "EXACT",
     "Advice",
+    "Bound",
     "EvalOutcome",
     "Game",
     "HeatmapLayout",
@@ -247,6 +248,13 @@ class Oracle(Role):
         reach it (an episode limit rewards playing differently as time runs out)."""
         return NotAvailable(f"{self.game.title} has no exact optimum")
 
+    def bound(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> Bound | NotAvailable:
+        """What training with the game's default hyperparameters reaches, as a figure
+        of `reference` and its limit (the bound the README and the tests state)."""
+        return NotAvailable(f"{self.game.title} states no bound")
+
 
 @dataclass(frozen=True)
 class Optimum:
@@ -258,6 +266,23 @@ class Optimum:
     q: np.ndarray | None = None  # [base states, actions] optimal action values, when listed
     marks: np.ndarray | None = None  # [base states, actions]: the optimal actions
     figures: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Bound:
+    """A figure of `Oracle.reference` and the limit a trained agent's reaches:
+    `figure <= limit` for a gap, `figure >= limit` for a share (`at_least`)."""
+
+    figure: str
+    limit: float
+    text: str  # for people: 'gap <= 0.0074 (1% of the optimum)'
+    at_least: bool = False
+
+    def met(self, figures: Mapping[str, float]) -> bool:
+        value = figures.get(self.figure)
+        if value is None:
+            return False
+        return value >= self.limit if self.at_least else value <= self.limit + 1e-12
 
 
 @dataclass(frozen=True)

@@ -51,6 +51,7 @@ from tui_gym.games.base import (
     EXACT,
     UNREADABLE,
     Advice,
+    Bound,
     FixedBound,
     Game,
     Optimum,
@@ -356,6 +357,23 @@ class ModelOracle(Oracle):
             marks=ladder.choices()[1],
         )
 
+    def bound(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> Bound | NotAvailable:
+        """The gap within `gap_tolerance` of the optimum's magnitude, beyond what no
+        fixed policy found reaches."""
+        fixed = self.fixed_policy_bound(kwargs, changes)
+        if isinstance(fixed, NotAvailable):
+            return fixed
+        share = self.model_game.gap_tolerance(kwargs)
+        limit = fixed.shortfall + share * abs(fixed.optimal_value)
+        text = f"gap <= {limit:.4g}"
+        if share:
+            text += f" ({share:.0%} of the optimum"
+            text += f", beyond the best fixed policy's {fixed.shortfall:.4g})" if (
+                fixed.shortfall) else ")"
+        return Bound("gap", limit, text)
+
     def fixed_policy_bound(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> FixedBound | NotAvailable:
@@ -462,6 +480,10 @@ class ModelGame(Game):
         """The game's model with no wrappers and no episode limit (kept per arguments)."""
         make = self.make_kwargs(kwargs)
         return _table_model(self.env_id, freeze(make), tuple(self.action_names))
+
+    def gap_tolerance(self, kwargs: Mapping[str, Any]) -> float:
+        """The share of the optimum's magnitude a trained greedy policy's gap stays within."""
+        return 0.01
 
     def own_changes(self, kwargs: Mapping[str, Any]) -> GameChanges:
         """The game as `gym.make` builds it with no wrappers chosen: its own limit only."""

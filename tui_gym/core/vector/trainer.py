@@ -66,6 +66,7 @@ __all__ = ["DEFAULT_NUM_ENVS", "VectorTrainer", "batched_q_update", "make_vector
 # episode is the same for all of them: 2048 is most of the speed with batch steps of
 # about a millisecond.
 DEFAULT_NUM_ENVS = 2048
+MIN_NUM_ENVS = 256  # fewer games at once than this leave numpy too little to do a step
 
 # 1 - lr is floored here before taking logs: a step size of 1 wipes out what came before.
 _TINY = 1e-300
@@ -154,7 +155,8 @@ class VectorTrainer(Trainer):
             registry's), for `plan.describe`.
         seed: seeds the batched env; the agent's own seed drives exploration.
         num_envs: games played side by side (None: the form's choice, else
-            `DEFAULT_NUM_ENVS`).
+            `DEFAULT_NUM_ENVS`, and at most a tenth of the episode budget, so
+            that a short run still plays each game through many episodes).
         window, series_capacity, publish_interval: as for `Trainer`.
     """
 
@@ -182,7 +184,8 @@ class VectorTrainer(Trainer):
         if keyer.signature != repr(env.observation_space):
             raise ValueError("the keyer was not built from this env's observation space")
         if num_envs is None:
-            num_envs = self.plan.form.num_envs or DEFAULT_NUM_ENVS
+            widest = self.plan.form.num_envs or DEFAULT_NUM_ENVS
+            num_envs = min(widest, max(MIN_NUM_ENVS, agent.hp.episodes // 10))
         self.venv = self.plan.make_env(num_envs, seed)
         self.num_envs = self.venv.num_envs
         n = self.num_envs

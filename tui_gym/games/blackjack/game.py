@@ -27,6 +27,7 @@ from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.games.base import (
     EXACT,
     Advice,
+    Bound,
     EvalOutcome,
     FixedBound,
     Game,
@@ -63,6 +64,7 @@ DEALER_LABELS = ("A", "2", "3", "4", "5", "6", "7", "8", "9", "10")
 ACTION_LETTERS = ("S", "H")
 LONGEST_HAND = 20  # steps: 19 hits from two aces to 21 aces-as-one, then a stick or a bust
 TIED = "·"  # a heatmap cell whose actions tie
+TRAINED_GAP = 0.005  # what the default training reaches (see the README)
 
 
 @lru_cache(maxsize=1)
@@ -249,6 +251,11 @@ class BlackjackOracle(Oracle):
             q=q,
             marks=self.optimal_marks(kwargs),
         )
+
+    def bound(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> Bound:
+        return Bound("gap", TRAINED_GAP, f"gap <= {TRAINED_GAP}")
 
     def fixed_policy_bound(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES

@@ -31,6 +31,7 @@ from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.games.base import (
     EXACT,
     Advice,
+    Bound,
     EvalOutcome,
     Game,
     HeatmapLayout,
@@ -70,6 +71,7 @@ ARROWS = ("→", "↑", "←", "↓")
 MIN_SIZE, MAX_SIZE = 2, 12
 AGREEMENT = "moves on a shortest path"  # how a scoreboard words moves that match the optimum
 TIED = "·"  # a heatmap cell whose actions tie
+TRAINED_SHARE = 0.95  # what the default training reaches (see the README)
 
 
 @lru_cache(maxsize=16)
@@ -214,6 +216,13 @@ class GridWorldOracle(Oracle):
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> np.ndarray:
         return _optimal_marks(_size(kwargs))
+
+    def bound(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> Bound:
+        return Bound("optimal_pair_fraction", TRAINED_SHARE,
+                     f"{TRAINED_SHARE:.0%} of placements solved in the fewest steps",
+                     at_least=True)
 
     def optimum(self, kwargs: Mapping[str, Any]) -> Optimum:
         size = _size(kwargs)
