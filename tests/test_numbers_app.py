@@ -54,7 +54,7 @@ async def test_the_badge_follows_the_run() -> None:
         await settled(pilot, app, "✓ finished")
         assert app.runner.latest.episodes == 40
 
-        await pilot.press("x")  # a fresh agent: nothing is finished
+        await pilot.press("x", "y")  # a fresh agent (yes: it has trained): nothing is finished
         await settled(pilot, app, "○ ready")
         assert app.runner.latest.episodes == 0
 
@@ -62,7 +62,7 @@ async def test_the_badge_follows_the_run() -> None:
         await wait_for(pilot, lambda: app.runner.latest.episodes == 1, "one episode")
         await settled(pilot, app, "‖ paused")
 
-        await pilot.press("x")
+        await pilot.press("x", "y")
         await settled(pilot, app, "○ ready")
         await pilot.press("minus")  # animated: single steps (this first episode takes 155)
         await pilot.press("space")

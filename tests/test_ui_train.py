@@ -144,6 +144,7 @@ async def test_one_episode_and_reset() -> None:
         await pilot.press("space")
         await wait_for(pilot, lambda: app.runner.latest.episodes > 200, "some training")
         await pilot.press("x")  # while it may still run: the reset pauses first
+        await pilot.press("y")  # yes: it has trained, so it asks first
         await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
         assert not app.runner.running
         await wait_for(pilot, lambda: "episodes 0\n" in view.stats.plain, "fresh stats")
@@ -334,6 +335,7 @@ async def test_buttons_do_what_the_keys_do() -> None:
         await paused(pilot)
         assert "finished" in view.stats.plain
         assert await pilot.click("#btn-reset")
+        await pilot.press("y")  # yes: it has trained, so it asks first
         await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
 
 

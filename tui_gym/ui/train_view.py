@@ -2,10 +2,13 @@
 
 `TrainView` lays out the controls (start/pause, one episode, reset, slower,
 faster: buttons for the mouse, the same keys live on the app), a progress
-bar toward the episode budget, the run's numbers (`StatsPanel`) beside the
-hyperparameter fields (`HyperparameterForm`), the learning curves
-(`TrainingCharts`) with, at animated speeds, the game's board replaying the
-agent's moves, and the Q-table heatmaps (`HeatmapView`).
+bar toward the episode budget and one line saying which engine trains and
+why (cut to fit; the whole of it in its tooltip and the help), all three
+always in sight; below them, scrolling when the window is short, the run's
+numbers (`StatsPanel`) beside the hyperparameter fields
+(`HyperparameterForm`), the learning curves (`TrainingCharts`) with, at
+animated speeds, the game's board replaying the agent's moves, and the
+Q-table heatmaps (`HeatmapView`).
 
 It never trains anything: the app's timer hands it the runner's latest
 snapshot through `show_snapshot()`, which redraws only what changed and
@@ -40,7 +43,7 @@ if TYPE_CHECKING:
 STATE_POLL_SECONDS = 0.25  # how often the view checks for a pause with no new snapshot
 
 
-class TrainView(VerticalScroll):
+class TrainView(Vertical):
     """Controls, live statistics, learning curves and Q-table heatmaps."""
 
     # Not scoped: the `Screen.compact ...` rules must match from the screen down.
@@ -49,11 +52,22 @@ class TrainView(VerticalScroll):
     TrainView {
         height: 1fr;
         padding: 0 0 0 1;
+    }
+    TrainView #train-body {
+        height: 1fr;
         scrollbar-size-vertical: 1;
     }
     TrainView #train-controls {
         height: 1;
         margin-bottom: 0;
+    }
+    TrainView #train-engine {
+        width: 1fr;
+        height: 1;
+        color: $text-muted;
+        text-style: italic;
+        text-wrap: nowrap;
+        text-overflow: ellipsis;
     }
     TrainView #train-controls Button {
         min-width: 0;
@@ -118,7 +132,7 @@ class TrainView(VerticalScroll):
     Screen.compact TrainView #train-top > * {
         min-height: 0;
     }
-    Screen.compact TrainView #train-speed {
+    Screen.compact TrainView #train-speed, Screen.compact TrainView #train-engine {
         display: none;
     }
     Screen.compact TrainView #train-controls Button {
@@ -178,6 +192,7 @@ class TrainView(VerticalScroll):
                                tooltip="Train for exactly one episode (.)")
         self._speed = Label("", id="train-speed")
         self._progress = ProgressLine(id="train-progress")
+        self._engine = Label("", id="train-engine", markup=False)
         self._stats = StatsPanel(id="train-stats")
         self._form = HyperparameterForm(session.hp, id="train-form")
         self._charts = TrainingCharts(id="train-charts")
@@ -195,15 +210,17 @@ class TrainView(VerticalScroll):
             yield self._speed
             yield Button("+", id="btn-faster", compact=True, tooltip="Faster (+)")
         yield self._progress
-        with Horizontal(id="train-top"):
-            yield self._stats
-            yield self._form
-        with Horizontal(id="train-middle"):
-            yield self._charts
-            with self._board_box:
-                yield self._caption
-        with self._heatmap_box:
-            yield self._heatmap
+        yield self._engine
+        with VerticalScroll(id="train-body"):
+            with Horizontal(id="train-top"):
+                yield self._stats
+                yield self._form
+            with Horizontal(id="train-middle"):
+                yield self._charts
+                with self._board_box:
+                    yield self._caption
+            with self._heatmap_box:
+                yield self._heatmap
 
     def on_mount(self) -> None:
         self._heatmap_box.border_title = "Q-table"
@@ -299,6 +316,8 @@ class TrainView(VerticalScroll):
         layout = self.session.game.layout
         if layout.has_focus:
             keys.append(("←↑↓→ / hjkl / click", layout.focus_help))
+        if self.engine_note:
+            keys.append(("engine", self.engine_note))
         return keys
 
     # --- drawing pieces ----------------------------------------------------
@@ -334,7 +353,19 @@ class TrainView(VerticalScroll):
         reason = session.engine_reason
         if snapshot.engine == "scalar" and reason.startswith("vector"):
             reason = "scalar engine while animating (the vector engine runs at max speed)"
-        self.stats.show_engine_reason(reason)
+        self.show_engine(reason)
+
+    @property
+    def engine_note(self) -> str:
+        """Which engine trains and why, in full (the line shows what fits)."""
+        return str(self._engine.content)
+
+    def show_engine(self, reason: str) -> None:
+        """Say which engine trains and why, on one line (the whole in its tooltip)."""
+        if reason != self.engine_note:
+            self._engine.update(reason)
+            self._engine.tooltip = reason
+            self._stats.tooltip = reason  # the compact layout hides the line
 
     def _show_state(self, runner: TrainingRunner) -> None:
         """The badge, from what is shown: running (a run, or one episode, under way),
@@ -428,7 +459,7 @@ class TrainView(VerticalScroll):
         actions = {
             "btn-toggle": "toggle_training",
             "btn-episode": "one_episode",
-            "btn-reset": "reset_agent",
+            "btn-reset": "request_reset",
             "btn-slower": "slower",
             "btn-faster": "faster",
         }
