@@ -30,7 +30,7 @@ from tui_gym.core import evaluation
 from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.evaluation import EvalReport
 from tui_gym.core.params import Param
-from tui_gym.core.session import TARGET_GAP_BUDGET, Session
+from tui_gym.core.session import TARGET_GAP_BUDGET_FACTOR, Session
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 
 WRAPPER_SYNTAX = "--wrapper NAME or --wrapper NAME:key=value,key=value, repeatable; " \
@@ -38,7 +38,7 @@ WRAPPER_SYNTAX = "--wrapper NAME or --wrapper NAME:key=value,key=value, repeatab
 
 
 def _param_dict(param: Param) -> dict[str, Any]:
-    data = {
+    data: dict[str, Any] = {
         "name": param.name,
         "type": param.kind.__name__,
         "default": param.default,
@@ -123,7 +123,7 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
     out.print(
         "Use with [bold]--wrapper NAME[/] or [bold]--wrapper NAME:key=value,key=value[/], "
         "repeatable; the first is innermost.\n"
-        "Example: tui-gym train gridworld --wrapper TimeLimit:max_episode_steps=50 "
+        "Example: tui-gym train GAME --wrapper TimeLimit:max_episode_steps=50 "
         "--wrapper StepPenalty:penalty=0.01"
     )
     return 0
@@ -150,7 +150,7 @@ def _base_hyperparameters(
     hp = game.default_hyperparameters(game.normalize_kwargs(kwargs))
     if getattr(args, "target_gap", None) is not None and args.episodes is None:
         # A longer budget decays epsilon more slowly; the run stops at the target anyway.
-        hp = hp.replace(episodes=TARGET_GAP_BUDGET)
+        hp = hp.replace(episodes=TARGET_GAP_BUDGET_FACTOR * hp.episodes)
     return hp
 
 

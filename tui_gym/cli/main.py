@@ -118,11 +118,12 @@ def build_parser() -> argparse.ArgumentParser:
         description="A terminal playground for reinforcement learning. "
         "With no command, opens the app.",
         epilog="examples:\n"
-        "  tui-gym --env taxi               open the app on Taxi (? lists every key)\n"
-        "  tui-gym train frozenlake --map 8x8 --slippery false --save lake.tgym\n"
-        "  tui-gym eval lake.tgym --json\n"
-        "  tui-gym optimal cliffwalking\n"
-        "  tui-gym play taxi --jsonl        a program plays through JSON lines\n"
+        "  tui-gym envs                     the games, their flags and what they teach\n"
+        "  tui-gym --env GAME               open the app on a game (? lists every key)\n"
+        "  tui-gym train GAME --save agent.tgym\n"
+        "  tui-gym eval agent.tgym --json\n"
+        "  tui-gym optimal GAME\n"
+        "  tui-gym play GAME --jsonl        a program plays through JSON lines\n"
         "  tui-gym COMMAND --help           the options of one command",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -158,7 +159,7 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument(
         "--target-gap", type=_number, metavar="G",
         help="stop once the greedy policy's exact gap to the optimum is <= G "
-        "(budget defaults to 1,000,000 episodes then)",
+        "(the budget defaults to five times the game's then)",
     )
     train.add_argument(
         "--eval-episodes", type=_positive_int, default=10_000, metavar="N",

@@ -26,10 +26,11 @@ from tui_gym.core.params import Param
 class Hyperparameters:
     """Everything that shapes a Q-learning run.
 
-    The defaults learn Blackjack to within 0.005 of the exact optimum (see the
-    README): an undiscounted return (the game's value is undiscounted, and a
-    hand lasts a few steps), and a step size that starts as a plain average of
-    what each (state, action) has seen (1/n) and settles at `learning_rate`, so
+    The defaults suit a game of short episodes with noisy +-1 outcomes (each
+    game states its own: see the README): an undiscounted return (the game's
+    value is undiscounted, and an episode lasts a few steps), and a step size
+    that starts as a plain average of what each (state, action) has seen (1/n)
+    and settles at `learning_rate`, so
     the noisy +-1 outcomes average out quickly and then keep tracking the
     improving estimates of the next state.
     """
@@ -82,7 +83,7 @@ class Hyperparameters:
 
 LEARNING_RATE_SCHEDULES = ("constant", "visits")
 
-_DEFAULTS = {f.name: f.default for f in fields(Hyperparameters)}
+_DEFAULTS: dict[str, Any] = {f.name: f.default for f in fields(Hyperparameters)}
 HYPERPARAMETER_FIELDS: tuple[Param, ...] = tuple(
     Param(name, kind, _DEFAULTS[name], low, high, help_text, title=title, min_inclusive=closed)
     for name, title, kind, low, high, closed, help_text in (
@@ -185,7 +186,7 @@ class QAgent:
         """A copy of the used part of the table and, for sparse tables, the key of each row."""
         if self._index is None:
             return self.q.copy(), None
-        keys = [None] * self._rows_used
+        keys: list[Hashable] = [None] * self._rows_used
         for key, row in self._index.items():
             keys[row] = key
         return self.q[: self._rows_used].copy(), keys

@@ -39,7 +39,9 @@ from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 from tui_gym.games.base import FixedBound, ReferenceMetrics
 
 ENGINES = ("auto", "scalar", "vector")
-TARGET_GAP_BUDGET = 1_000_000  # episodes, when a target gap is given without a budget
+# With a target gap and no budget given, the budget is the game's default times this,
+# so epsilon decays more slowly (the run stops at the target anyway).
+TARGET_GAP_BUDGET_FACTOR = 5
 
 # Observation wrappers whose `observation()` is a pure function of the bare
 # observation: the heatmaps and the exact reference can see through them.
@@ -249,11 +251,12 @@ class Session:
         """The env id, checked arguments, wrappers and game a rebuild would use."""
         new_id = resolve_env_id(env_id) if env_id is not None else self.env_id
         game = game_for(new_id)
+        asked: Mapping[str, Any]
         if env_kwargs is None:
-            kwargs = self.env_kwargs if new_id == self.env_id else game.default_kwargs()
+            asked = self.env_kwargs if new_id == self.env_id else game.default_kwargs()
         else:
-            kwargs = env_kwargs
-        kwargs = game.normalize_kwargs(kwargs)
+            asked = env_kwargs
+        kwargs = game.normalize_kwargs(asked)
         return new_id, kwargs, tuple(self.choices if choices is None else choices), game
 
     def _keeps(self, built: _Built) -> bool:
@@ -399,19 +402,22 @@ class Session:
     def train(
         self,
         target_gap: float | None = None,
-        check_every: int = 10_000,
+        check_every: int | None = None,
         chunk_seconds: float = 0.2,
         on_chunk: Callable[[TrainingSnapshot], None] | None = None,
     ) -> TrainOutcome:
         """Train to the end of the budget, or until the exact gap is at most `target_gap`.
 
         The gap is checked every `check_every` episodes (exactly, from the
-        reference: no sampling noise). `on_chunk` sees a snapshot after each
+        reference: no sampling noise; by default a twentieth of the budget,
+        between 1,000 and 10,000). `on_chunk` sees a snapshot after each
         chunk of about `chunk_seconds`, e.g. to draw a progress bar.
         """
         if target_gap is not None:
             self.check_target_gap(target_gap)
         trainer = self.trainer
+        if check_every is None:
+            check_every = check_every_for(trainer.remaining)
         next_check = trainer.episodes + check_every
         gap = None
         while trainer.remaining > 0:
@@ -542,6 +548,11 @@ class Session:
         self.trainer.steps = saved.steps
         self.trainer.publish()
 
+def check_every_for(budget: int) -> int:
+    """Episodes between exact gap checks on a run of `budget` episodes."""
+    return max(1_000, min(10_000, budget // 20))
+
+
 def _round_up(value: float) -> str:
     """A value rounded up to 2 significant digits, as text: 0.0274 -> '0.028'."""
     import math
@@ -562,7 +573,7 @@ def vector_support(
 
     The env is built as a `Session` builds it (choices that do not fit are
     left out, as there), read with `plan_for_env`, and closed. Returns e.g.
-    `(True, "vector engine: Blackjack with StepPenalty")` or
+    `(True, "vector engine: <the game's title> with StepPenalty")` or
     `(False, "scalar engine: DelayObservation has no batched form (...)")`.
     """
     try:

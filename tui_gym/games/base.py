@@ -472,6 +472,11 @@ class Game:
     board: str = "text"  # which kind of board draws `states.scene`
     render_mode: str | None = None  # the env's text render mode, if it has one
     episode_noun: str = "episode"  # what people call one episode, e.g. "hand"
+    # `tui-gym bench` measures the game with these arguments (None: it does not), to a
+    # target gap of `bench_gap` (None: the bound its oracle states).
+    bench_kwargs: dict[str, Any] | None = None
+    bench_gap: float | None = None
+    demo_wrappers: tuple[str, ...] = ()  # wrapper specs a screenshot of the panel ticks
 
     def __init__(self) -> None:
         self.states: StateSpace = StateSpace(self)

@@ -195,7 +195,7 @@ class TileLayout(HeatmapLayout):
 class TileNarrator(Narrator):
     """Reached the goal, fell, or ran out of time."""
 
-    tally_words = (
+    tally_words: tuple[TallyWord, ...] = (
         TallyWord("reached", "good"),
         TallyWord("fell in", "bad", always=False),
         TallyWord("timed out", "even"),

@@ -328,7 +328,8 @@ class TuiGymApp(App[int]):
         runner.session = session  # both runners read their session afresh at each start
         runner.finished = False
         with contextlib.suppress(AttributeError):  # read-only where tied to the agent
-            runner.last_event = runner.last_scene = None  # the other game's last move
+            # The other game's last move.
+            runner.last_event = runner.last_scene = None  # type: ignore[misc]
         self.sub_title = session.game.title
         self._last_version = -1
         self.play_view.reload()
@@ -551,8 +552,8 @@ class TuiGymApp(App[int]):
         self.play_view.reload()
         self.train_view.reload()
         self.side_panel.reload()
-        severity = "information" if report.kept_agent else "warning"
-        self.notify(report.notice, severity=severity, timeout=6)
+        self.notify(report.notice, severity="information" if report.kept_agent else "warning",
+                    timeout=6)
         if was_running and report.kept_agent:
             self.runner.start()
         return True

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import random
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, cast
 
 from textual import events
 from textual.app import ComposeResult
@@ -56,6 +56,9 @@ from tui_gym.games.words import (
 from tui_gym.ui.widgets.board_kinds import board_class
 from tui_gym.ui.widgets.boards import Board
 from tui_gym.ui.widgets.scoreboard import Scoreboard
+
+if TYPE_CHECKING:
+    from tui_gym.ui.app import TuiGymApp
 
 OBSERVATION_CHARS = 64  # a raw observation longer than this is cut short
 WATCH_INTERVAL = 0.4  # seconds between the watched agent's moves: slow enough to follow
@@ -179,7 +182,7 @@ class PlayView(Vertical):
     # --- layout ------------------------------------------------------------
     def compose(self) -> ComposeResult:
         yield Static(id="play-title")
-        self.board = board_class(self.app.session.game.board)()
+        self.board = board_class(self.tui.session.game.board)()
         yield self.board
         with Vertical(id="play-status"):
             yield Static(id="play-headline")
@@ -202,11 +205,16 @@ class PlayView(Vertical):
     def on_hide(self) -> None:
         self.stop_watching(restore=True)
 
+    @property
+    def tui(self) -> TuiGymApp:
+        """The app, with its session and seeds."""
+        return cast("TuiGymApp", self.app)
+
     # --- what the app calls --------------------------------------------------
     def reload(self) -> None:
         """Show the session's game: the person's play put away on it (`put_away`) when
         the game and its wrappers are still the same, else a new game, tally and board."""
-        session = self.app.session
+        session = self.tui.session
         self.stop_watching(restore=False)
         kept = self._kept.pop(session.game.name, None)
         if kept is not None and (kept.game.session is not session or kept.chain != _chain(session)):
@@ -217,11 +225,11 @@ class PlayView(Vertical):
         if self.agent_game is not None:
             self.agent_game.close()
         if kept is None:
-            self.game = HumanGame(session, seed=self.app.play_seed)
+            self.game = HumanGame(session, seed=self.tui.play_seed)
             self.scorecard = Scorecard(tally=self.game.tally)
             self.agent_game = None
             self.agent_card = Scorecard()
-            self._watch_rng = random.Random(self.app.play_seed)
+            self._watch_rng = random.Random(self.tui.play_seed)
             self.outcomes = {}
         else:
             self._restore(kept)
@@ -393,7 +401,7 @@ class PlayView(Vertical):
         board.set_episode_over(game.done)
 
     def _show_title(self) -> None:
-        session = self.app.session
+        session = self.tui.session
         chain = " → ".join(_short(choice.name, choice.params) for choice in session.applied)
         title = f"[b]{escape(session.game.title)}[/]  [$text-muted]wrappers:[/] " + (
             f"[i $text-accent]{escape(chain)}[/]" if chain else "[$text-muted]none[/]"
@@ -450,12 +458,12 @@ class PlayView(Vertical):
         """What the exact optimum would do now in `game` (None when the game cannot say)."""
         if game.done:
             return None
-        return game.game.oracle.advice(game.env, self.app.session.env_kwargs)
+        return game.game.oracle.advice(game.env, self.tui.session.env_kwargs)
 
     def agent_note(self, observation: Any) -> str:
         """'agent: hit (Q stick −0.310, hit −0.402)': the greedy agent's choice here."""
-        names = self.app.session.game.action_names
-        choice = self.app.session.greedy_actions_for(observation, self._training_snapshot())
+        names = self.tui.session.game.action_names
+        choice = self.tui.session.greedy_actions_for(observation, self._training_snapshot())
         if choice is None:
             return "agent: has never seen this state (it would pick at random)"
         ties, q = choice
@@ -497,7 +505,7 @@ class PlayView(Vertical):
     # --- the scoreboard --------------------------------------------------------
     def refresh_agent_figures(self) -> None:
         """Recompute the agent's exact figures (a few ms) and redraw the scoreboard."""
-        self.agent_figures = self.app.session.agent_figures(self._training_snapshot())
+        self.agent_figures = self.tui.session.agent_figures(self._training_snapshot())
         self._show_scoreboard()
 
     def _training_snapshot(self) -> TrainingSnapshot | None:
@@ -508,7 +516,7 @@ class PlayView(Vertical):
 
     def score_rows(self) -> list[ScoreRow]:
         """The scoreboard's rows as the game's narrator words them."""
-        session = self.app.session
+        session = self.tui.session
         watched = self.agent_card if self.agent_card.tally.episodes else None
         scope = session.game.oracle.scope(session.env_kwargs, session.changes)
         return session.game.narrator.scoreboard(
@@ -529,10 +537,10 @@ class PlayView(Vertical):
         board = self.board
         if board is None or self.watching:
             return
-        session = self.app.session
+        session = self.tui.session
         if self.agent_game is None:
             try:
-                self.agent_game = HumanGame(session, seed=self.app.play_seed + WATCH_SEED_OFFSET)
+                self.agent_game = HumanGame(session, seed=self.tui.play_seed + WATCH_SEED_OFFSET)
             except Exception as exc:
                 self._say_hint(f"The agent cannot play here: {exc}")
                 return
@@ -605,7 +613,7 @@ class PlayView(Vertical):
             else:
                 self._agent_new_episode()
             return
-        session = self.app.session
+        session = self.tui.session
         before = self._advice(game)
         assert game.last is not None
         choice = session.greedy_actions_for(game.last.observation, self._training_snapshot())
@@ -645,7 +653,7 @@ class PlayView(Vertical):
     def _observation_text(self, last: PlayStep) -> str:
         """The observation in the game's words, or raw (cut short) when wrappers reshaped it."""
         assert self.game is not None
-        text = self.game.game.states.describe(last.observation, self.app.session.env_kwargs)
+        text = self.game.game.states.describe(last.observation, self.tui.session.env_kwargs)
         return text if len(text) <= OBSERVATION_CHARS else text[: OBSERVATION_CHARS - 1] + "…"
 
     def _show_tally(self) -> None:

@@ -179,7 +179,8 @@ class VectorTrainer(Trainer):
         self.plan: VectorPlan = plan_for_env(env, form, made_limit)
         if not (keyer.dense and agent.dense):
             raise ValueError("the vector engine needs a dense observation keyer and Q-table")
-        if keyer.n_states != agent.n_states or agent.n_actions != env.action_space.n:
+        n_actions = getattr(env.action_space, "n", None)
+        if keyer.n_states != agent.n_states or agent.n_actions != n_actions:
             raise ValueError("the agent's table does not match the env's states and actions")
         if keyer.signature != repr(env.observation_space):
             raise ValueError("the keyer was not built from this env's observation space")

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -219,7 +219,9 @@ class BlackjackOracle(Oracle):
             return Advice((), None, "bust: no decision left")
         changes = GameChanges.of(env)
         scope = self.scope(kwargs, changes)
-        soft_21 = "natural" if len(player) == 2 and total == 21 else "drawn"
+        soft_21: Literal["natural", "drawn"] = (
+            "natural" if len(player) == 2 and total == 21 else "drawn"
+        )
         q = optimal_action_values(self.rules(kwargs, changes), soft_21=soft_21)[
             total, dealer[0], int(usable)
         ]
@@ -367,6 +369,8 @@ class BlackjackGame(Game):
     )
     board = "cards"
     episode_noun = "hand"
+    bench_kwargs: dict[str, Any] | None = {}
+    bench_gap = 0.002
 
     def __init__(self) -> None:
         super().__init__()

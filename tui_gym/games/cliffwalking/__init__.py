@@ -89,6 +89,7 @@ class CliffWalkingGame(TileGame):
     )
     theme = "cliff"
     floor_word = "ground"
+    bench_kwargs: dict[str, Any] | None = {}
 
     def __init__(self) -> None:
         super().__init__()

@@ -78,6 +78,7 @@ class FrozenLakeGame(TileGame):
     )
     theme = "lake"
     floor_word = "ice"
+    bench_kwargs: dict[str, Any] | None = {"map": "8x8"}
 
     def __init__(self) -> None:
         super().__init__()

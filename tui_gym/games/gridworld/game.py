@@ -335,8 +335,8 @@ class GridWorldNarrator(Narrator):
             rows.append(ScoreRow("Optimum", f"a shortest path from every placement ({scope.note})",
                                  "shortest path (unwrapped)"))
         if watched is not None and watched.tally.episodes:
-            extra = watched.figure_mean("steps_over_optimal")
-            more = "" if extra is None else f"{extra:.2f} extra steps"
+            watched_extra = watched.figure_mean("steps_over_optimal")
+            more = "" if watched_extra is None else f"{watched_extra:.2f} extra steps"
             rows.append(watched_row(watched, self.game.episode_noun, AGREEMENT, more))
         return rows
 
@@ -449,6 +449,8 @@ class GridWorldGame(Game):
     )
     board = "grid"
     render_mode = "ansi"
+    demo_wrappers = ("TimeLimit:max_episode_steps=50", "StepPenalty:penalty=0.01",
+                     "DistanceShaping")
 
     def __init__(self) -> None:
         super().__init__()

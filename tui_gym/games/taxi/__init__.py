@@ -182,7 +182,7 @@ class TaxiLayout(HeatmapLayout):
             for p, row in enumerate(done)
         )
         picker = Heatmap(
-            title="slices: passenger × destination",
+            title="slice: passenger × dest.",
             row_labels=WHERE,
             col_labels=STAND_NAMES,
             values=picker_values,
@@ -240,6 +240,7 @@ class TaxiGame(ModelGame):
         Param("fickle", bool, False, help="the passenger may change destination", owner="Taxi"),
     )
     board = "taxi"
+    bench_kwargs: dict[str, Any] | None = {}
 
     def __init__(self) -> None:
         super().__init__()

@@ -37,7 +37,7 @@ def format_value(field: Param, value: float) -> str:
 
 def range_hint(field: Param) -> str:
     """The accepted range, short: '(0, 1]', or '≥ 1' when the top is out of sight."""
-    if field.maximum >= 1e6:
+    if field.maximum is not None and field.minimum is not None and field.maximum >= 1e6:
         low = f"{int(field.minimum)}" if field.kind is int else f"{field.minimum:g}"
         return f"≥ {low}" if field.min_inclusive else f"> {low}"
     return field.expected().split(" in ", 1)[-1]
@@ -230,7 +230,7 @@ class HyperparameterForm(Vertical):
         Settings the form has no field for (the learning-rate schedule) come
         from the hyperparameters last loaded.
         """
-        values: dict[str, int | float] = {}
+        values: dict[str, int | float | str] = {}
         ok = True
         for field in HYPERPARAMETER_FIELDS:
             text = self.input(field.name).value
