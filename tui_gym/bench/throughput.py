@@ -7,7 +7,16 @@ the first game, our scalar engine (`Trainer` on one Gymnasium env), all with
 the game's default hyperparameters and a budget far beyond the window (so
 epsilon stays near its start and every engine plays the same kind of
 episodes). The engines are timed inside `trainer.run(seconds=...)`, after a
-short warm-up; the tutorial after `gym.make`. Interleaving them within each
+warm-up that finishes every game in progress at least once; the tutorial
+after `gym.make`.
+
+The vector engine starts thousands of episodes together, and where nearly
+every episode runs to the time limit (a random walk on Taxi or CliffWalking)
+they end together too: counting the episodes that happen to end inside a
+short window would measure that window's luck. So an engine's episodes per
+second are its steps per second over the window divided by the mean length
+of its episodes (the tutorial loop's, played one after the other, are
+counted as they end). Interleaving them within each
 repeat spreads the machine's background load over all of them; each figure is
 the median over the repeats, and the speed-ups are ratios of those medians.
 """
@@ -37,6 +46,7 @@ class ThroughputResult:
     repeats: int
     seconds: float  # the window of each measurement
     title: str = ""
+    vector_steps: float = float("nan")  # steps per second of the vector engine
 
     @property
     def vector_speedup(self) -> float | None:
@@ -47,30 +57,41 @@ class ThroughputResult:
         return ratio(self.scalar, self.tutorial)
 
 
-def engine_rate(game: Game, engine: str, seconds: float, seed: int = 0) -> float:
-    """Episodes per second of a fresh session of `game` on `engine` ("scalar" or "vector")."""
+def engine_rate(
+    game: Game, engine: str, seconds: float, seed: int = 0
+) -> tuple[float, float]:
+    """Episodes and steps per second of a fresh session of `game` on `engine` ("scalar" or
+    "vector"): steps over the window, and steps / the mean episode length."""
     kwargs = bench_kwargs(game)
     hp = game.default_hyperparameters(kwargs).replace(episodes=WINDOW_BUDGET)
     session = Session(game.env_id, kwargs, hp=hp, seed=seed, engine=engine)
     trainer = session.trainer
-    trainer.run(seconds=WARMUP_SECONDS)
+    games_at_once = getattr(trainer, "num_envs", 1)
+    warm = time.perf_counter()
+    while trainer.episodes < games_at_once or time.perf_counter() - warm < WARMUP_SECONDS:
+        trainer.run(seconds=WARMUP_SECONDS)
+    steps = trainer.steps
     start = time.perf_counter()
-    done = trainer.run(seconds=seconds)
+    trainer.run(seconds=seconds)
     elapsed = time.perf_counter() - start
+    steps_per_second = (trainer.steps - steps) / elapsed
+    length = trainer.windows["length"].mean
     session.env.close()
-    return done / elapsed
+    return steps_per_second / max(length, 1.0), steps_per_second
 
 
 def measure_game(game: Game, seconds: float, repeats: int, scalar: bool) -> ThroughputResult:
     """Interleaved repeats of the tutorial loop and our engines on one game; medians."""
     kwargs = bench_kwargs(game)
     hp = game.default_hyperparameters(kwargs).replace(episodes=WINDOW_BUDGET)
-    rates: dict[str, list[float]] = {"tutorial": [], "scalar": [], "vector": []}
+    rates: dict[str, list[float]] = {"tutorial": [], "scalar": [], "vector": [], "steps": []}
     for seed in range(repeats):
         rates["tutorial"].append(tutorial.episodes_per_second(seconds, game, kwargs, hp, seed))
         if scalar:
-            rates["scalar"].append(engine_rate(game, "scalar", seconds, seed))
-        rates["vector"].append(engine_rate(game, "vector", seconds, seed))
+            rates["scalar"].append(engine_rate(game, "scalar", seconds, seed)[0])
+        episodes, steps = engine_rate(game, "vector", seconds, seed)
+        rates["vector"].append(episodes)
+        rates["steps"].append(steps)
     return ThroughputResult(
         tutorial=median(rates["tutorial"]),
         scalar=median(rates["scalar"]) if scalar else None,
@@ -78,6 +99,7 @@ def measure_game(game: Game, seconds: float, repeats: int, scalar: bool) -> Thro
         repeats=repeats,
         seconds=seconds,
         title=title_of(game),
+        vector_steps=median(rates["steps"]),
     )
 
 

@@ -196,7 +196,7 @@ class HumanGame:
 
     def text(self) -> str:
         """A text picture of the state (hidden cards stay hidden until the end)."""
-        return self.game.states.text(self.env, reveal=self.done)
+        return self.game.states.text(self.env, reveal=self.done, before=self._before)
 
     def observation_json(self) -> Any:
         if self.last is None:

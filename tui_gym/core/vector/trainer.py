@@ -267,17 +267,24 @@ class VectorTrainer(Trainer):
         self._abs_td[idle] = 0.0
 
     def _choose(self, keys: np.ndarray) -> np.ndarray:
-        """Epsilon-greedy actions, ties among the best broken uniformly at random."""
+        """Epsilon-greedy actions, ties among the best broken uniformly at random.
+
+        Which envs explore is drawn first, and the greedy choice is made only for
+        the others (early in a run nearly every env explores).
+        """
         agent = self.agent
         rng = agent.rng
         k, n_actions = len(keys), agent.n_actions
-        values = agent.q[keys]
-        tied = values == values.max(axis=1, keepdims=True)
-        draws = rng.random((k, n_actions))
-        actions = np.argmax(np.where(tied, draws, -1.0), axis=1)
-        explore = np.flatnonzero(rng.random(k) < agent.epsilon)
-        if explore.size:
-            actions[explore] = rng.integers(n_actions, size=explore.size)
+        explore = rng.random(k) < agent.epsilon
+        actions = np.empty(k, dtype=np.int64)
+        count = int(np.count_nonzero(explore))
+        if count:
+            actions[explore] = rng.integers(n_actions, size=count)
+        if count < k:
+            values = agent.q[keys[~explore]]
+            tied = values == values.max(axis=1, keepdims=True)
+            draws = rng.random(values.shape)
+            actions[~explore] = np.argmax(np.where(tied, draws, -1.0), axis=1)
         return actions
 
     def _advance(self, limit: int | None) -> int:

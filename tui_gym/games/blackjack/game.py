@@ -140,7 +140,9 @@ class BlackjackStates(StateSpace):
             "dealer_total": hand_value(dealer)[0],
         }
 
-    def text(self, env: Any, reveal: bool = True) -> str:
+    def text(
+        self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None
+    ) -> str:
         """Both hands as text; the dealer's hole card shows only with `reveal`."""
         hands = self.scene(env)
         dealer = hands.get("dealer", [])

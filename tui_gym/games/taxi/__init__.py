@@ -86,7 +86,29 @@ def _walls(game_env: Any) -> list[list[int]]:
 
 
 class TaxiStates(DiscreteStates):
-    """The 500 states; the taxi board's scene."""
+    """The 500 states; the taxi board's scene; the city as text."""
+
+    def text(
+        self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None
+    ) -> str:
+        """Gymnasium's map with the taxi as `T` (`@` with the passenger aboard) and the
+        waiting passenger's stand in lower case, and a line saying where they go."""
+        try:
+            game_env = env.unwrapped
+            row, col, passenger, destination = decode(int(game_env.s))
+            lines = [line.decode() if isinstance(line, bytes) else str(line)
+                     for line in ("".join(c.decode() for c in r) for r in game_env.desc)]
+        except (AttributeError, TypeError, ValueError):
+            return ""
+        grid = [list(line) for line in lines]
+        if passenger < IN_TAXI:
+            r, c = STANDS[passenger]
+            grid[1 + r][2 * c + 1] = grid[1 + r][2 * c + 1].lower()
+        grid[1 + row][2 * col + 1] = "@" if passenger == IN_TAXI else "T"
+        where = "in the taxi (@)" if passenger == IN_TAXI else \
+            f"at {STAND_NAMES[passenger]} (lower case)"
+        return "\n".join(["".join(line) for line in grid]
+                         + [f"T taxi; passenger {where}, going to {STAND_NAMES[destination]}"])
 
     def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
         row, col, passenger, destination = decode(int(observation))
