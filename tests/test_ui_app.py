@@ -6,7 +6,7 @@ import random
 
 from textual.widgets import Checkbox, ContentSwitcher, Input, RadioButton, Static
 
-from tui_gym.core.agent import Hyperparameters
+from tui_gym.algorithms import QLearning
 from tui_gym.core.session import Session
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.ui.app import TuiGymApp
@@ -102,7 +102,7 @@ async def test_a_misfit_wrapper_shows_its_reason_and_is_not_applied():
         await pilot.pause()
         shaping = row(app, "DistanceShaping")
         assert shaping.has_class("-misfit")
-        assert "GridWorld" in str(shaping.query_one(".reason", Static).render())
+        assert "info['distance']" in str(shaping.query_one(".reason", Static).render())
         assert "DistanceShaping" not in app.session.chain_repr()
         assert "not applied" in chain_text(app)
 
@@ -151,7 +151,7 @@ async def test_game_picker_switches_game():
 
 
 async def test_too_small_terminal_shows_a_message_and_ignores_keys():
-    app = TuiGymApp(Session("blackjack", hp=Hyperparameters(episodes=500), seed=0))
+    app = TuiGymApp(Session("blackjack", hp=QLearning.hyperparameters(episodes=500), seed=0))
     async with app.run_test(size=(60, 20)) as pilot:
         await pilot.pause()
         assert isinstance(app.screen, TooSmallScreen)
@@ -227,7 +227,7 @@ async def test_random_keys_in_every_view_never_break_the_app():
     rng = random.Random(1234)
     for name in ("blackjack", "gridworld"):
         # A small budget: space may start training, which should end soon.
-        app = TuiGymApp(Session(name, hp=Hyperparameters(episodes=2_000), seed=0))
+        app = TuiGymApp(Session(name, hp=QLearning.hyperparameters(episodes=2_000), seed=0))
         async with app.run_test(size=(100, 30)) as pilot:
             for view in ("p", "t"):
                 await pilot.press("escape", view)

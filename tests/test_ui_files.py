@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 from textual.widgets import Input
 
-from tui_gym.core.agent import Hyperparameters
+from tui_gym.algorithms import QLearning
 from tui_gym.core.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.confirm_screen import ConfirmScreen
@@ -31,7 +31,7 @@ def in_tmp(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
 
 
 def blackjack(episodes: int = 300) -> TuiGymApp:
-    return TuiGymApp(Session("blackjack", hp=Hyperparameters(episodes=episodes), seed=0))
+    return TuiGymApp(Session("blackjack", hp=QLearning.hyperparameters(episodes=episodes), seed=0))
 
 
 async def type_name(pilot, name: str) -> FileScreen:
@@ -107,7 +107,7 @@ async def test_save_asks_for_a_name_and_before_replacing_and_the_palette_has_it(
 
 
 async def test_load_says_what_is_wrong_and_asks_before_replacing_a_trained_agent(in_tmp: Path):
-    grid = Session("gridworld", hp=Hyperparameters(episodes=50, discount=0.95), seed=3)
+    grid = Session("gridworld", hp=QLearning.hyperparameters(episodes=50, discount=0.95), seed=3)
     grid.train()
     grid.save(in_tmp / "g.tgym")
     (in_tmp / "j.tgym").write_bytes(b"not a save file")

@@ -13,7 +13,7 @@ from __future__ import annotations
 import pytest
 from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet
 
-from tui_gym.core.agent import Hyperparameters
+from tui_gym.algorithms import QLearning
 from tui_gym.core.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.help_screen import HelpScreen
@@ -27,7 +27,7 @@ SIZES = [(120, 40), (80, 24)]
 
 
 def app_for(game: str, episodes: int | None = None) -> TuiGymApp:
-    hp = None if episodes is None else Hyperparameters(episodes=episodes)
+    hp = None if episodes is None else QLearning.hyperparameters(episodes=episodes)
     return TuiGymApp(Session(game, hp=hp, seed=0))
 
 

@@ -13,8 +13,8 @@ from __future__ import annotations
 from textual.command import CommandList
 from textual.widgets import Checkbox, Input
 
-from tui_gym.core.agent import Hyperparameters
-from tui_gym.core.session import Session
+from tui_gym.algorithms import QLearning
+from tui_gym.core.session import Session, default_settings
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.confirm_screen import ConfirmScreen
 
@@ -22,7 +22,7 @@ from .test_ui_train import DEADLINE, wait_for
 
 
 def blackjack(episodes: int = 300, runner: str = "thread") -> TuiGymApp:
-    return TuiGymApp(Session("blackjack", hp=Hyperparameters(episodes=episodes), seed=0),
+    return TuiGymApp(Session("blackjack", hp=QLearning.hyperparameters(episodes=episodes), seed=0),
                      runner=runner)
 
 
@@ -76,7 +76,8 @@ async def test_each_game_keeps_its_agent_settings_wrappers_curves_and_play():
         await pilot.pause()
         assert app.session.game.name == "gridworld"
         assert app.session.trainer.episodes == 0 and not app.session.choices
-        assert app.session.hp == app.session.game.default_hyperparameters(app.session.env_kwargs)
+        assert app.session.hp == default_settings(app.session.game, "q-learning",
+                                                  app.session.env_kwargs)
         assert not app.train_view.charts.data("return")
         assert any("a new agent" in n.message for n in app._notifications)
         await pilot.press("full_stop")
@@ -116,7 +117,7 @@ async def test_each_game_keeps_its_agent_settings_wrappers_curves_and_play():
 
 
 async def test_the_child_process_trains_the_restored_agent():
-    session = Session("blackjack", hp=Hyperparameters(episodes=1_000_000), seed=0,
+    session = Session("blackjack", hp=QLearning.hyperparameters(episodes=1_000_000), seed=0,
                       engine="scalar")  # slow enough to be mid-run at the switch
     app = TuiGymApp(session, runner="process")
     async with app.run_test(size=(120, 40)) as pilot:

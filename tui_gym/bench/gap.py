@@ -27,11 +27,16 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from tui_gym.algorithms import Settings
 from tui_gym.bench import tutorial
 from tui_gym.bench.figures import median
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.mdp import NotAvailable
-from tui_gym.core.session import TARGET_GAP_BUDGET_FACTOR, Session, check_every_for
+from tui_gym.core.session import (
+    TARGET_GAP_BUDGET_FACTOR,
+    Session,
+    check_every_for,
+    default_settings,
+)
 from tui_gym.games import GAMES, Game
 
 
@@ -100,9 +105,9 @@ def target_for(game: Game) -> float:
     return bound.limit
 
 
-def default_hyperparameters(game: Game) -> Hyperparameters:
-    """The hyperparameters `tui-gym train GAME --target-gap G` uses."""
-    hp = game.default_hyperparameters(bench_kwargs(game))
+def default_hyperparameters(game: Game) -> Settings:
+    """The hyperparameters `tui-gym train GAME --target-gap G` uses (Q-learning's)."""
+    hp = default_settings(game, "q-learning", bench_kwargs(game))
     return hp.replace(episodes=TARGET_GAP_BUDGET_FACTOR * hp.episodes)
 
 

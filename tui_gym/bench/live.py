@@ -53,8 +53,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from tui_gym.algorithms import QLearning, Settings
 from tui_gym.bench.figures import median, percentile
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.session import Session
 
 RUNNERS = ("thread", "process")
@@ -151,8 +151,8 @@ class LiveResult:
         return out
 
 
-def _hyperparameters() -> Hyperparameters:
-    return Hyperparameters(episodes=LIVE_BUDGET)
+def _hyperparameters() -> Settings:
+    return QLearning.hyperparameters(episodes=LIVE_BUDGET)
 
 
 def headless_rate(seconds: float, seed: int = 0) -> float:

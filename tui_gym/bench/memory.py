@@ -59,10 +59,10 @@ def train_and_watch(
     """The measurement itself (run in the child process); figures as a dict."""
     import time
 
-    from tui_gym.core.agent import Hyperparameters
+    from tui_gym.algorithms import QLearning
     from tui_gym.core.session import Session
 
-    hp = Hyperparameters(episodes=warmup + episodes)
+    hp = QLearning.hyperparameters(episodes=warmup + episodes)
     session = Session(hp=hp, seed=0, engine=engine)
     trainer = session.trainer
     trainer.run(episodes=warmup)

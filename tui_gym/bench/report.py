@@ -8,7 +8,15 @@ Targets:
 - the UI draws snapshots at >= 10 Hz;
 - key press to screen update p95 <= 50 ms while training at max speed;
 - RSS growth < 20 MB over 2,000,000 training episodes;
-- app start to first frame <= 1.0 s.
+- app start to first frame <= 1.0 s;
+- every algorithm on the vector engine >= 50x the episodes/s of a tutorial
+  loop of the same algorithm on the same env (Blackjack and a grid game);
+- Dyna-Q (planning_steps = 10) reaches the bound on a grid game in fewer
+  real episodes than Q-learning.
+- exact-regret scoring separates `optimal` from a player deviating on 5% of
+  Blackjack decisions with >= 10x fewer episodes than mean returns do;
+- the JSON-lines protocol steps >= 20,000 times a second over a pipe, MCP >= 1,000
+  (with several games at once).
 
 A verdict is PASS or MISS; "?" when a lower bound cannot decide it, "n/a"
 when the figure is missing (its stage failed: see `errors`).
@@ -21,6 +29,7 @@ from typing import Any
 
 from rich.table import Table
 
+from tui_gym.bench import programs
 from tui_gym.bench.live import RUNNERS
 from tui_gym.bench.results import BenchResults
 
@@ -32,6 +41,10 @@ KEY_P95_MS_TARGET = 50.0
 RSS_GROWTH_MB_TARGET = 20.0
 RSS_EPISODES_TARGET = 2_000_000
 STARTUP_S_TARGET = 1.0
+ALGORITHM_SPEEDUP_TARGET = 50.0
+SEPARATION_RATIO_TARGET = 10.0
+PROTOCOL_STEPS_TARGET = 20_000.0
+MCP_STEPS_TARGET = 1_000.0
 
 PASS, MISS, UNDECIDED, MISSING = "PASS", "MISS", "?", "n/a"
 
@@ -77,7 +90,56 @@ def verdicts(results: BenchResults) -> dict[str, str]:
     startup = results.startup
     seconds = startup.seconds if startup is not None else None
     out["startup_s"] = _ok(seconds, seconds is not None and seconds <= STARTUP_S_TARGET)
+    for speed in results.algorithms or ():
+        up = speed.speedup
+        out[f"algorithm_speedup[{speed.game}/{speed.algorithm}]"] = _ok(
+            up, up is not None and up >= ALGORITHM_SPEEDUP_TARGET
+        )
+    if "algorithms" in results.errors:
+        out["algorithm_speedup"] = MISSING
+    planning = results.planning
+    if planning is None:
+        out["planning"] = MISSING
+    else:
+        fewer = planning.dyna_q_episodes < planning.q_learning_episodes
+        out["planning"] = PASS if fewer and all(r.reached for r in planning.dyna_q) else MISS
+    found = results.programs
+    ratio = found.separation.ratio if found else None
+    out["regret_separation_ratio"] = _ok(ratio, ratio is not None and
+                                         ratio >= SEPARATION_RATIO_TARGET)
+    rate = found.protocol.steps_per_second if found else None
+    out["protocol_steps_per_second"] = _ok(rate, rate is not None and
+                                           rate >= PROTOCOL_STEPS_TARGET)
+    rate = found.mcp_together.steps_per_second if found else None
+    out["mcp_steps_per_second"] = _ok(rate, rate is not None and rate >= MCP_STEPS_TARGET)
     return out
+
+
+def _programs_dict(results: BenchResults) -> dict[str, Any] | None:
+    found = results.programs
+    if found is None:
+        return None
+    sep = found.separation
+    return {
+        "separation": {
+            "episodes_each": sep.episodes,
+            "deviation": programs.DEVIATION,
+            "delta": sep.delta,
+            "return_gap_measured": sep.return_gap,
+            "return_sd": list(sep.return_sd),
+            "regret_sd": list(sep.regret_sd),
+            "episodes_needed_by_return": sep.by_return,
+            "episodes_needed_by_regret": sep.by_regret,
+            "ratio": sep.ratio,
+            "formula": "n = 1.96^2 (sd_a^2 + sd_b^2) / delta^2",
+        },
+        "protocol_steps_per_second": found.protocol.steps_per_second,
+        "protocol_samples": list(found.protocol.samples),
+        "mcp_steps_per_second_one_call_at_a_time": found.mcp_one.steps_per_second,
+        "mcp_steps_per_second": found.mcp_together.steps_per_second,
+        "mcp_games_at_once": programs.MCP_GAMES,
+        "mcp_note": found.mcp_together.reason,
+    }
 
 
 # --- JSON --------------------------------------------------------------------
@@ -120,6 +182,23 @@ def _game_dict(results: BenchResults, name: str) -> dict[str, Any]:
         "tutorial_time_to_gap_episodes": [r.episodes for r in gap.tutorial] if gap else None,
         "time_to_gap_speedup": gap.speedup if gap else None,
         "time_to_gap_speedup_is_lower_bound": (not gap.tutorial_reached) if gap else None,
+    }
+
+
+def _planning_dict(results: BenchResults) -> dict[str, Any] | None:
+    planning = results.planning
+    if planning is None:
+        return None
+    return {
+        "game": planning.game,
+        "measure": planning.measure,
+        "bound": planning.bound,
+        "q_learning_episodes": planning.q_learning_episodes,
+        "dyna_q_episodes": planning.dyna_q_episodes,
+        "q_learning_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
+                            for r in planning.q_learning],
+        "dyna_q_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
+                        for r in planning.dyna_q],
     }
 
 
@@ -181,6 +260,15 @@ def to_json(results: BenchResults) -> dict[str, Any]:
         ),
         "startup_s": startup.seconds if startup else None,
         "startup_samples_s": list(startup.samples) if startup else None,
+        "algorithms": [
+            {"game": a.game, "algorithm": a.algorithm,
+             "vector_episodes_per_second": a.vector,
+             "tutorial_episodes_per_second": a.tutorial, "speedup": a.speedup,
+             "repeats": a.repeats}
+            for a in results.algorithms or ()
+        ],
+        "planning": _planning_dict(results),
+        "programs": _programs_dict(results),
         "verdicts": verdicts(results),
         "errors": dict(results.errors),
     }
@@ -267,9 +355,48 @@ def table(results: BenchResults) -> Table:
         samples = ", ".join(f"{s:.2f}" for s in results.startup.samples)
         row("start to first frame", f"{results.startup.seconds:.2f} s ({samples})",
             f"≤ {STARTUP_S_TARGET:g} s", "startup_s")
+    for speed in results.algorithms or ():
+        key = f"algorithm_speedup[{speed.game}/{speed.algorithm}]"
+        row(f"{speed.algorithm} on {speed.game}: vector ÷ tutorial loop",
+            f"{_num(speed.speedup, '.0f', '×')} ({_num(speed.vector, ',.0f')} / "
+            f"{_num(speed.tutorial, ',.0f')} ep/s)",
+            f"≥ {ALGORITHM_SPEEDUP_TARGET:g}×", key)
+    planning = results.planning
+    if planning is not None:
+        def runs(items: tuple) -> str:
+            return _num(median_of(items), ",.0f") + ("" if all(r.reached for r in items)
+                                                       else " (not all reached)")
+        row(f"real episodes to ≤ {planning.bound:g} on {planning.game}: Q-learning / Dyna-Q",
+            f"{runs(planning.q_learning)} / {runs(planning.dyna_q)}",
+            "Dyna-Q fewer", "planning")
+    found = results.programs
+    if found is not None:
+        sep = found.separation
+        row("episodes to separate optimal from 5% deviations, by return",
+            f"{_num(sep.by_return, ',.0f')}")
+        row("  by exact regret", f"{_num(sep.by_regret, ',.0f')}")
+        row("  ratio", _num(sep.ratio, ".0f", "×"), f"≥ {SEPARATION_RATIO_TARGET:g}×",
+            "regret_separation_ratio")
+        row("protocol over a pipe, steps/s", _num(found.protocol.steps_per_second, ",.0f"),
+            f"≥ {PROTOCOL_STEPS_TARGET:,.0f}", "protocol_steps_per_second")
+        if found.mcp_together.reason:
+            out.add_row("MCP, steps/s", f"[dim]{found.mcp_together.reason}[/]", "",
+                        _STYLE[MISSING])
+        else:
+            row(f"MCP, steps/s, {programs.MCP_GAMES} games at once",
+                _num(found.mcp_together.steps_per_second, ",.0f"),
+                f"≥ {MCP_STEPS_TARGET:,.0f}", "mcp_steps_per_second")
+            row("  one call at a time", _num(found.mcp_one.steps_per_second, ",.0f"))
     for stage, error in results.errors.items():
         out.add_row(f"{stage} failed", f"[red]{error}[/]", "", _STYLE[MISSING])
     return out
+
+
+def median_of(runs: tuple) -> float:
+    """The median episode count of planning runs."""
+    from tui_gym.bench.figures import median
+
+    return median([r.episodes for r in runs])
 
 
 def notes(results: BenchResults) -> list[str]:
@@ -288,12 +415,27 @@ def notes(results: BenchResults) -> list[str]:
             "for comparison (a thread runner shares one interpreter lock with the UI, so the UI's "
             "drawing comes out of training time)."
         )
+    if results.planning is not None:
+        lines.append(
+            f"Planning: the bound is on the {results.planning.measure}; episodes are real "
+            "ones (Dyna-Q's simulated updates are not counted), medians over seeds."
+        )
     capped = [gap.title for gap in results.gap.values() if not gap.tutorial_reached]
     if capped:
         lines.append(
             f"The tutorial loop was stopped by its time cap before reaching the gap on "
             f"{', '.join(capped)}: its time and the speed-up are lower bounds (run without "
             "--quick for longer caps)."
+        )
+    found = results.programs
+    if found is not None:
+        sep = found.separation
+        lines.append(
+            f"Episodes to separate: each player played {sep.episodes:,} Blackjack episodes on "
+            "the same seeds; n = 1.96² (sd_a² + sd_b²) / Δ² episodes each, Δ the deviating "
+            f"player's mean exact regret ({sep.delta:.4f}), sd the measured per-episode "
+            f"standard deviations (return {sep.return_sd[1]:.3f}, regret "
+            f"{sep.regret_sd[1]:.3f})."
         )
     load = results.machine.load_before
     cpus = results.machine.cpus or 1

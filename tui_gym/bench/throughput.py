@@ -25,11 +25,13 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import Any
 
+from tui_gym.algorithms import Settings
 from tui_gym.bench import tutorial
 from tui_gym.bench.figures import median, ratio
 from tui_gym.bench.gap import bench_kwargs, benched, title_of
-from tui_gym.core.session import Session
+from tui_gym.core.session import Session, default_settings
 from tui_gym.games import Game
 
 WINDOW_BUDGET = 1_000_000_000  # episodes: never reached in a window, so epsilon barely moves
@@ -57,13 +59,18 @@ class ThroughputResult:
         return ratio(self.scalar, self.tutorial)
 
 
+def window_settings(game: Game, kwargs: dict[str, Any]) -> Settings:
+    """Q-learning's settings for the game, with a budget far beyond the window."""
+    return default_settings(game, "q-learning", kwargs).replace(episodes=WINDOW_BUDGET)
+
+
 def engine_rate(
     game: Game, engine: str, seconds: float, seed: int = 0
 ) -> tuple[float, float]:
     """Episodes and steps per second of a fresh session of `game` on `engine` ("scalar" or
     "vector"): steps over the window, and steps / the mean episode length."""
     kwargs = bench_kwargs(game)
-    hp = game.default_hyperparameters(kwargs).replace(episodes=WINDOW_BUDGET)
+    hp = window_settings(game, kwargs)
     session = Session(game.env_id, kwargs, hp=hp, seed=seed, engine=engine)
     trainer = session.trainer
     games_at_once = getattr(trainer, "num_envs", 1)
@@ -83,7 +90,7 @@ def engine_rate(
 def measure_game(game: Game, seconds: float, repeats: int, scalar: bool) -> ThroughputResult:
     """Interleaved repeats of the tutorial loop and our engines on one game; medians."""
     kwargs = bench_kwargs(game)
-    hp = game.default_hyperparameters(kwargs).replace(episodes=WINDOW_BUDGET)
+    hp = window_settings(game, kwargs)
     rates: dict[str, list[float]] = {"tutorial": [], "scalar": [], "vector": [], "steps": []}
     for seed in range(repeats):
         rates["tutorial"].append(tutorial.episodes_per_second(seconds, game, kwargs, hp, seed))

@@ -31,7 +31,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from tui_gym.core.agent import Hyperparameters
+from tui_gym.algorithms import Settings
 from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.wrappers.changes import GameChanges
 from tui_gym.games import Game
@@ -52,7 +52,7 @@ class TutorialAgent:
     """The tutorial's agent, with the game's default schedules (see the module docstring)."""
 
     def __init__(
-        self, env: gym.Env, hp: Hyperparameters, game: Game, kwargs: Mapping[str, Any],
+        self, env: gym.Env, hp: Settings, game: Game, kwargs: Mapping[str, Any],
         seed: int = 0,
     ) -> None:
         self.env = env
@@ -128,20 +128,22 @@ def train_episodes(agent: TutorialAgent, episodes: int) -> None:
 
 
 def make_agent(
-    game: Game, kwargs: Mapping[str, Any], hp: Hyperparameters | None = None, seed: int = 0
+    game: Game, kwargs: Mapping[str, Any], hp: Settings | None = None, seed: int = 0
 ) -> TutorialAgent:
     """A fresh tutorial agent on a fresh `gym.make` of the game, seeded."""
     import tui_gym.envs
+    from tui_gym.core.session import default_settings
 
     tui_gym.envs.register_envs()
     normal = game.normalize_kwargs(kwargs)
     env = gym.make(game.env_id, **game.make_kwargs(normal))
     env.reset(seed=seed)
-    return TutorialAgent(env, hp or game.default_hyperparameters(normal), game, normal, seed=seed)
+    hp = hp or default_settings(game, "q-learning", normal)
+    return TutorialAgent(env, hp, game, normal, seed=seed)
 
 
 def episodes_per_second(
-    seconds: float, game: Game, kwargs: Mapping[str, Any], hp: Hyperparameters, seed: int = 0
+    seconds: float, game: Game, kwargs: Mapping[str, Any], hp: Settings, seed: int = 0
 ) -> float:
     """Train a fresh agent for about `seconds`; its episodes per second."""
     agent = make_agent(game, kwargs, hp, seed)
@@ -171,7 +173,7 @@ def time_to_gap(
     target: float,
     game: Game,
     kwargs: Mapping[str, Any],
-    hp: Hyperparameters,
+    hp: Settings,
     seed: int = 0,
     cap_seconds: float | None = None,
     check_every: int = GAP_CHECK_EVERY,

@@ -40,8 +40,11 @@ from textual.screen import Screen
 from textual.widget import Widget
 from textual.widgets import ContentSwitcher, Header
 
+from tui_gym.core.recording import Recording
+from tui_gym.core.recording.switch import RecordingSwitch
 from tui_gym.core.runners import make_runner
 from tui_gym.core.session import Session
+from tui_gym.core.speeds import SPEEDS
 from tui_gym.core.storage import StorageError
 from tui_gym.core.training import continue_run
 from tui_gym.core.wrappers import WrapperChoice
@@ -50,6 +53,7 @@ from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.file_screen import FileScreen
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.play_view import PlayView
+from tui_gym.ui.replay_screen import ReplayScreen
 from tui_gym.ui.side_panel import SidePanel
 from tui_gym.ui.too_small_screen import TooSmallScreen
 from tui_gym.ui.train_view import TrainView
@@ -58,6 +62,8 @@ from tui_gym.ui.widgets.key_bar import KeyBar
 MIN_WIDTH, MIN_HEIGHT = 80, 24  # below this: a message instead of the layout
 COMPACT_WIDTH, COMPACT_HEIGHT = 120, 36  # below this: the compact layout
 REFRESH_HZ = 15
+# The speed a step key switches to: the first animated one that is not the slowest.
+ANIMATED_SPEED = next(i for i, speed in enumerate(SPEEDS) if speed.name == "animated")
 IDLE_POLL = 0.02  # seconds between looks for the agent handed back before a change
 IDLE_TIMEOUT = 10.0  # and how long to look before giving up
 
@@ -80,11 +86,12 @@ class TuiGymApp(App[int]):
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("space", "toggle_training", "Start/Pause", key_display="space"),
         Binding("full_stop", "one_episode", "1 episode", key_display="."),
+        Binding("n", "one_step", "1 step", tooltip="One transition, explained step by step"),
         Binding("x", "request_reset", "Reset agent"),
         Binding("plus,equals_sign", "faster", "Faster", key_display="+"),
         Binding("minus,underscore", "slower", "Slower", key_display="-"),
         Binding("p", "show_view('play')", "Play", tooltip="Play the game yourself"),
-        Binding("t", "show_view('train')", "Train", tooltip="Watch Q-learning train"),
+        Binding("t", "show_view('train')", "Train", tooltip="Watch the agent learn"),
         Binding("question_mark,f1", "help", "Help", key_display="?"),
         Binding("q", "quit", "Quit"),
         Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
@@ -93,9 +100,11 @@ class TuiGymApp(App[int]):
           for game in GAMES if game.key),
         Binding("ctrl+s", "save_agent", "Save agent", show=False),
         Binding("ctrl+o", "load_agent", "Load agent", show=False),
+        Binding("ctrl+r", "toggle_recording", "Record", show=False),
     ]
     TRAIN_ACTIONS = frozenset(
-        {"toggle_training", "one_episode", "reset_agent", "request_reset", "faster", "slower"}
+        {"toggle_training", "one_episode", "one_step", "reset_agent", "request_reset", "faster",
+         "slower"}
     )
 
     def __init__(
@@ -107,6 +116,8 @@ class TuiGymApp(App[int]):
         tune_gc: bool = False,
         gc_seconds: tuple[float, float] | None = None,
         standalone: bool = False,
+        record: str | Path | None = None,
+        replay: Recording | None = None,
     ) -> None:
         """`runner` is "thread" (train on a worker thread) or "process" (a child process;
         what `tui-gym` opens). `tune_gc` applies `tune_gc_for_ui` at mount (for a
@@ -114,7 +125,9 @@ class TuiGymApp(App[int]):
         collecting every `gc_seconds` (young, full; default `YOUNG_GC_SECONDS`,
         `FULL_GC_SECONDS`). `standalone` is for an app that owns its process and
         terminal (`run_app`): termination signals end it cleanly, and a crash's
-        traceback is left to `run_app` to log instead of being printed."""
+        traceback is left to `run_app` to log instead of being printed.
+        `record` records the person's games to that file from the start (ctrl+r
+        turns recording on and off); `replay` opens on a recording's replay."""
         super().__init__()
         self.tune_gc = tune_gc
         self.gc_seconds = gc_seconds or (YOUNG_GC_SECONDS, FULL_GC_SECONDS)
@@ -133,6 +146,9 @@ class TuiGymApp(App[int]):
         self._last_version = -1
         self._was_running = False
         self._switcher: ContentSwitcher | None = None
+        self.recording = RecordingSwitch(record, on_failure=self._recording_failed)
+        self._record_at_start = record is not None
+        self._replay = replay
 
     # --- layout ------------------------------------------------------------
     def get_default_screen(self) -> Screen:
@@ -158,6 +174,10 @@ class TuiGymApp(App[int]):
         self.set_interval(1 / REFRESH_HZ, self._tick)
         self._apply_size(self.size.width, self.size.height)
         self.call_after_refresh(self._focus_at_start)
+        if self._record_at_start:
+            self.call_after_refresh(self.action_toggle_recording)
+        if self._replay is not None:
+            self.push_screen(ReplayScreen(self._replay))
 
     def on_resize(self, event: Resize) -> None:
         self._apply_size(event.size.width, event.size.height)
@@ -383,6 +403,22 @@ class TuiGymApp(App[int]):
         if self._apply_form():
             self.runner.run_one_episode()
 
+    def action_one_step(self) -> None:
+        """One transition on the scalar engine, explained in the Train view's step panel
+        (the speed goes to animated, where the panel and the board show)."""
+        runner = self.runner
+        if runner.running:
+            self.notify("Pause training first (space).", severity="warning", timeout=3)
+            return
+        if not self._apply_form():
+            return
+        if not runner.speed.animated:
+            speed = runner.set_speed(ANIMATED_SPEED)
+            self.train_view.show_speed(speed.name)
+            self.notify(f"Speed: {speed.name}, so each step shows on the board and in the "
+                        "step panel.", timeout=4)
+        runner.run_one_step()
+
     def _apply_form(self) -> bool:
         """Apply the form's hyperparameters (a raised budget continues the run); False when
         a field is wrong."""
@@ -527,6 +563,34 @@ class TuiGymApp(App[int]):
             return
         self.notify(f"Screenshot saved to {path}", title="Screenshot")
 
+    # --- recording ---------------------------------------------------------------
+    def action_toggle_recording(self) -> None:
+        """Record the person's games to a file, or stop."""
+        game = self.play_view.game
+        if self.recording.on:
+            path = self.recording.turn_off()
+            self.play_view.show_recording("")
+            self.notify(f"Recording stopped: {path}", timeout=4)
+            return
+        if game is None:
+            return
+        try:
+            path = self.recording.turn_on(game)
+        except OSError as exc:
+            self.notify(f"Cannot record to {exc.filename or self.recording.path}: "
+                        f"{exc.strerror or exc}", severity="error", title="Not recording")
+            return
+        self.play_view.show_recording(path.name)
+        noun = game.game.episode_noun
+        when = "" if self.recording.recorder and self.recording.recorder.episode_open else (
+            f" from the next {noun}"
+        )
+        self.notify(f"Recording your {noun}s to {path}{when} (ctrl+r stops).", timeout=5)
+
+    def _recording_failed(self, message: str) -> None:
+        self.play_view.show_recording("")
+        self.notify(message, severity="error", title="Not recording", timeout=10)
+
     # --- rebuilding --------------------------------------------------------
     def rebuild(
         self,
@@ -557,6 +621,51 @@ class TuiGymApp(App[int]):
         if was_running and report.kept_agent:
             self.runner.start()
         return True
+
+    def on_side_panel_algorithm_picked(self, message: SidePanel.AlgorithmPicked) -> None:
+        """Another algorithm needs a fresh learner: once it has trained, ask first."""
+        from tui_gym.algorithms import algorithm
+
+        cls = algorithm(message.name)
+        if cls.name == self.session.algorithm:
+            return
+        episodes = self._episodes_trained()
+
+        def switch() -> None:
+            self._when_idle(lambda: self._use_algorithm(cls.name), self.side_panel.reload)
+
+        if not episodes:
+            switch()
+            return
+
+        def answer(yes: bool | None) -> None:
+            if yes:
+                switch()
+            else:
+                self.side_panel.reload()
+                self.notify(f"Still {self.session.learner_class.title}: the agent is kept.",
+                            timeout=3)
+
+        self.push_screen(
+            ConfirmScreen(
+                f"Train with {cls.title} instead?",
+                f"Another algorithm needs a fresh learner: the agent, trained {episodes:,} "
+                f"episodes with {self.session.learner_class.title}, would start over with "
+                f"{cls.title}'s defaults for this game (ctrl+s saves it first). "
+                "ε, the learning rate and the other fields change without this.",
+                "Switch and reset",
+            ),
+            answer,
+        )
+
+    def _use_algorithm(self, name: str) -> None:
+        self.session.set_algorithm(name)
+        self._last_version = -1
+        self.train_view.reload()
+        self.side_panel.reload()
+        cls = self.session.learner_class
+        self.notify(f"{cls.title}: a fresh learner with its defaults for "
+                    f"{self.session.game.title}. {cls.summary}.", timeout=5)
 
     def on_side_panel_changed(self, message: SidePanel.Changed) -> None:
         """A new game switches sessions; a change that would reset a trained agent asks."""
@@ -608,6 +717,8 @@ class TuiGymApp(App[int]):
                 ("ctrl+s", "save the agent to a file you name (asks before replacing one)"),
                 ("ctrl+o", "load an agent from a file you name"),
                 ("? / F1", "this help"),
+                ("ctrl+r", "record your games to a file / stop "
+                           "(tui-gym replay FILE plays it back)"),
                 ("ctrl+p", "command palette (also: screenshot, theme)"),
                 ("q", "quit"),
             ]),
@@ -615,13 +726,16 @@ class TuiGymApp(App[int]):
             ("Train", [
                 ("space", "start / pause training"),
                 (".", "run one episode"),
+                ("n", "one step (one transition): the step panel explains the update"),
                 ("x", "reset the agent (asks first once it has trained)"),
                 ("+ / -", "faster / slower (animated ... max)"),
                 *self.train_view.key_help(),
             ]),
             ("Side panel", [
                 ("tab / shift+tab", "move between fields"),
-                ("space / enter", "tick a wrapper, press a button"),
+                ("space / enter", "tick a wrapper, press a button, pick a game or an "
+                                  "algorithm (another algorithm asks first once the agent "
+                                  "has trained)"),
                 ("enter", "apply a parameter"),
                 ("[ / ]", "move the focused wrapper in / out in the chain (first = innermost)"),
                 ("esc", "back to the view; an edit not applied with enter is dropped"),
@@ -642,7 +756,7 @@ class TuiGymApp(App[int]):
                 yield command
         commands = [
             ("Play view", "Play the game yourself", lambda: self.action_show_view("play")),
-            ("Train view", "Watch Q-learning learn", lambda: self.action_show_view("train")),
+            ("Train view", "Watch the agent learn", lambda: self.action_show_view("train")),
             *(
                 (f"Game: {g.title}", g.description,
                  lambda name=g.name: self.action_switch_game(name))
@@ -658,6 +772,8 @@ class TuiGymApp(App[int]):
             ("Keys", "Every key tui-gym answers to (? or F1)", self.action_help),
             ("Screenshot", "Save an SVG picture of the screen in the current folder",
              self.action_save_screenshot),
+            ("Record games", "Record your games to a file, or stop (ctrl+r)",
+             self.action_toggle_recording),
         ]
         for title, help_text, callback in commands:
             yield SystemCommand(title, help_text, callback)
@@ -668,9 +784,11 @@ class TuiGymApp(App[int]):
         self.action_toggle_training()
 
     async def action_quit(self) -> None:
+        self.recording.turn_off()
         self.exit(0)  # the runner closes at unmount, without holding the screen up
 
     def on_unmount(self) -> None:
+        self.recording.turn_off()
         self.runner.close(wait=False)  # `run_app` waits for it once the terminal is back
         loop = asyncio.get_running_loop()
         for signum in self._signals:
@@ -773,13 +891,18 @@ EXIT_CRASH = 1
 
 
 def run_app(
-    env_id: str | None = None, seed: int = 0, load: str | None = None, runner: str = "process"
+    env_id: str | None = None, seed: int = 0, load: str | None = None, runner: str = "process",
+    *, session: Session | None = None, record: str | None = None,
+    replay: Recording | None = None,
 ) -> int:
-    """Open the app (from a saved agent with `load`); returns the exit code."""
+    """Open the app (from a saved agent with `load`, or on `session`); returns the exit code.
+    `record` records the person's games to that file; `replay` opens on a recording."""
     gc_seconds = gc_seconds_from_env()
-    session = Session.load(load) if load else Session(env_id=env_id or "", seed=seed)
+    if session is None:
+        session = Session.load(load) if load else Session(env_id=env_id or "", seed=seed)
     return run_standalone(
-        TuiGymApp(session, runner=runner, tune_gc=True, gc_seconds=gc_seconds, standalone=True)
+        TuiGymApp(session, runner=runner, tune_gc=True, gc_seconds=gc_seconds, standalone=True,
+                  record=record, replay=replay)
     )
 
 

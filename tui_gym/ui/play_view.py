@@ -178,6 +178,7 @@ class PlayView(Vertical):
         self._watch_timer: Timer | None = None
         self._watch_rng = random.Random(0)
         self._watch_wait = 0  # ticks left to show a finished episode
+        self.recording_label = ""  # e.g. "games.jsonl" while the person's games are recorded
 
     # --- layout ------------------------------------------------------------
     def compose(self) -> ComposeResult:
@@ -226,6 +227,7 @@ class PlayView(Vertical):
             self.agent_game.close()
         if kept is None:
             self.game = HumanGame(session, seed=self.tui.play_seed)
+            self.game.recorder = getattr(self.tui, "recording", None)  # records while switched on
             self.scorecard = Scorecard(tally=self.game.tally)
             self.agent_game = None
             self.agent_card = Scorecard()
@@ -411,10 +413,17 @@ class PlayView(Vertical):
         ]
         if modes:
             title += "  [$text-success]" + escape(" · ".join(f"{m} on" for m in modes)) + "[/]"
+        if self.recording_label:
+            title += f"  [b $text-error]● REC[/] [$text-muted]{escape(self.recording_label)}[/]"
         content = Content.from_markup(title)
         widget = self.query_one("#play-title", Static)
         widget.update(content)
         widget.tooltip = content.plain  # the line is cut short on a narrow screen
+
+    def show_recording(self, label: str) -> None:
+        """Say in the title that the person's games are being recorded ('' when not)."""
+        self.recording_label = label
+        self._show_title()
 
     def _say_hint(self, hint: str) -> None:
         self._hint = hint

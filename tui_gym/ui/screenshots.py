@@ -85,6 +85,19 @@ async def _train(app, pilot) -> None:
     await _train_view(app, pilot, max(1, app.session.hp.episodes // 4))
 
 
+async def _step_by_step(app, pilot) -> None:
+    await _train_view(app, pilot, 300)
+    for _ in range(2):  # a step into the episode, so the board and the panel have history
+        await pilot.press("n")
+        await pilot.pause()
+        app.runner.wait_idle(10.0)
+    await pilot.pause()
+    app.train_view.show_snapshot(app.runner.latest, app.runner)
+    await pilot.pause()
+    app.train_view.step_panel.scroll_visible(animate=False)
+    await pilot.pause()
+
+
 async def _wrappers(app, pilot) -> None:
     await pilot.press("w")
     await pilot.pause()
@@ -96,7 +109,8 @@ async def _help(app, pilot) -> None:
 
 
 def _scenarios() -> tuple[Scenario, ...]:
-    """Each game played and training, then the wrapper panel, the keys and 80x24."""
+    """Each game played and training, one update step by step, then the wrapper panel,
+    the keys and 80x24."""
     shots: list[Scenario] = []
     for game in GAMES:
         shots.append(Scenario(f"{game.name}-play.svg", f"{game.title}: play",
@@ -104,9 +118,12 @@ def _scenarios() -> tuple[Scenario, ...]:
         shots.append(Scenario(f"{game.name}-train.svg", f"{game.title}: Q-learning mid-run",
                               partial(Session, game.env_id, seed=0), _train))
     first = GAMES[0]
+    focused = next((g for g in GAMES if g.layout.has_focus), first)
     shown = next((g for g in GAMES if g.demo_wrappers), first)
     choices = tuple(parse_wrapper_spec(text) for text in shown.demo_wrappers)
     shots += [
+        Scenario("step-by-step.svg", f"{focused.title}: one SARSA update, step by step",
+                 partial(Session, focused.env_id, seed=3, algorithm="sarsa"), _step_by_step),
         Scenario("wrappers.svg", "The wrapper panel in use",
                  partial(Session, shown.env_id, choices=choices, seed=1), _wrappers),
         Scenario("help.svg", "Every key", partial(Session, first.env_id, seed=0), _help),

@@ -1,6 +1,8 @@
-"""The side panel: pick the game, tick wrappers, edit their parameters, see the chain.
+"""The side panel: pick the game and the algorithm, tick wrappers, edit them, see the chain.
 
-`SidePanel` shows the game picker with the game's own arguments, the whole
+`SidePanel` shows the game picker with the game's own arguments, the
+algorithm picker (the `ALGORITHMS` registry, with what the chosen one
+teaches; picking another posts `SidePanel.AlgorithmPicked`), the whole
 wrapper catalog as checkboxes (each with its one-line lesson, its parameter
 fields and, when it does not fit the game, the reason), and the resulting
 wrapper chain: each wrapper in order, innermost first, with its parameters,
@@ -24,6 +26,7 @@ from textual.message import Message
 from textual.validation import ValidationResult, Validator
 from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet, Static
 
+from tui_gym.algorithms import ALGORITHMS
 from tui_gym.core.wrappers import CATALOG, Param, WrapperChoice, format_wrapper_spec
 from tui_gym.games import GAMES
 from tui_gym.ui.widgets.tick_box import TickBox
@@ -232,6 +235,9 @@ class SidePanel(VerticalScroll):
     SidePanel #chain { padding: 0 0 1 0; }
     SidePanel #game-picker { width: 100%; height: auto; }
     SidePanel #game-picker > RadioButton.-on { text-style: bold; color: $text-accent; }
+    SidePanel #algorithm-picker { width: 100%; height: auto; }
+    SidePanel #algorithm-picker > RadioButton.-on { text-style: bold; color: $text-accent; }
+    SidePanel #algorithm-summary { color: $text-muted; }
     SidePanel #env-params, SidePanel #wrapper-list { height: auto; }
     SidePanel .field-error { color: $error; display: none; }
     SidePanel .field-error.-shown { display: block; }
@@ -248,6 +254,13 @@ class SidePanel(VerticalScroll):
 
     class Left(Message):
         """The person left the panel (escape): the view should take the keyboard."""
+
+    class AlgorithmPicked(Message):
+        """The person picked another algorithm (by registry name)."""
+
+        def __init__(self, name: str) -> None:
+            super().__init__()
+            self.name = name
 
     class Changed(Message):
         """The person asked for a different game, env arguments or wrappers."""
@@ -268,6 +281,11 @@ class SidePanel(VerticalScroll):
                 yield RadioButton(title, id=button_id)
         yield Vertical(*self._env_fields(), id="env-params")
         yield Static("", id="env-error", classes="field-error")
+        yield Static("Algorithm", classes="section")
+        with RadioSet(id="algorithm-picker"):
+            for cls in ALGORITHMS:
+                yield RadioButton(cls.title, id=f"algorithm-{cls.name}")
+        yield Static(self._algorithm_summary(), id="algorithm-summary")
         yield Static("Wrapper chain  (innermost first)", classes="section")
         yield Static(self._chain_text(), id="chain")
         yield Static("Wrappers  ([ ] move the focused one)", classes="section")
@@ -278,6 +296,19 @@ class SidePanel(VerticalScroll):
 
     def on_mount(self) -> None:
         self._check_game()
+        self._check_algorithm()
+
+    def _algorithm_summary(self) -> str:
+        cls = self.session.learner_class
+        return f"{cls.summary}; target {cls.formula}"
+
+    def _check_algorithm(self) -> None:
+        """Press the session's algorithm in its picker (the change asks for nothing)."""
+        picker = self.query_one("#algorithm-picker", RadioSet)
+        button = picker.query_one(f"#algorithm-{self.session.algorithm}", RadioButton)
+        if picker.pressed_button is not button:
+            button.value = True
+        self.query_one("#algorithm-summary", Static).update(self._algorithm_summary())
 
     def _place(self, name: str) -> int:
         return self._order.index(name) + 1 if name in self._order else 0
@@ -337,6 +368,7 @@ class SidePanel(VerticalScroll):
         """Show the session as it is now (after a rebuild, or to undo an invalid edit)."""
         self._order = [c.name for c in self.session.choices]
         self._check_game()
+        self._check_algorithm()
         env_box = self.query_one("#env-params", Vertical)
         fields = list(env_box.query(ParamField))
         wanted = self.session.game.params
@@ -441,6 +473,14 @@ class SidePanel(VerticalScroll):
         env_id = self._selected_env_id()
         if env_id != self.session.env_id:
             self.post_message(self.Changed(env_id, {}, self.session.choices))
+
+    @on(RadioSet.Changed, "#algorithm-picker")
+    def _algorithm_picked(self, event: RadioSet.Changed) -> None:
+        event.stop()
+        pressed = event.radio_set.pressed_button
+        name = (pressed.id or "").removeprefix("algorithm-") if pressed is not None else ""
+        if name and name != self.session.algorithm:
+            self.post_message(self.AlgorithmPicked(name))
 
     @on(Checkbox.Changed)
     def _wrapper_ticked(self, event: Checkbox.Changed) -> None:

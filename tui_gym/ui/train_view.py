@@ -1,4 +1,4 @@
-"""The Train view: watch tabular Q-learning learn the current game, live.
+"""The Train view: watch a tabular learner learn the current game, live, or step by step.
 
 `TrainView` lays out the controls (start/pause, one episode, reset, slower,
 faster: buttons for the mouse, the same keys live on the app), a progress
@@ -6,9 +6,11 @@ bar toward the episode budget and one line saying which engine trains and
 why (cut to fit; the whole of it in its tooltip and the help), all three
 always in sight; below them, scrolling when the window is short, the run's
 numbers (`StatsPanel`) beside the hyperparameter fields
-(`HyperparameterForm`), the learning curves (`TrainingCharts`) with, at
-animated speeds, the game's board replaying the agent's moves, and the
-Q-table heatmaps (`HeatmapView`).
+(`HyperparameterForm`, the algorithm's own fields), the learning curves
+(`TrainingCharts`) with, at animated speeds, the game's board replaying the
+agent's moves and the step panel (`StepPanel`) explaining each update, and
+the Q-table heatmaps (`HeatmapView`), where the explained step's state is
+marked.
 
 It never trains anything: the app's timer hands it the runner's latest
 snapshot through `show_snapshot()`, which redraws only what changed and
@@ -28,12 +30,13 @@ from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widget import Widget
 from textual.widgets import Button, Label
 
-from tui_gym.core.agent import Hyperparameters
+from tui_gym.algorithms import Settings
 from tui_gym.core.training import TrainingSnapshot, continue_run
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
 from tui_gym.ui.widgets.progress_line import ProgressLine
 from tui_gym.ui.widgets.stats_panel import StatsPanel, format_duration, run_state
+from tui_gym.ui.widgets.step_panel import StepPanel, explain
 from tui_gym.ui.widgets.training_charts import TrainingCharts
 
 if TYPE_CHECKING:
@@ -115,6 +118,15 @@ class TrainView(Vertical):
         width: 100%;
         height: 3;
         padding: 0 1;
+    }
+    TrainView #train-step {
+        display: none;
+    }
+    TrainView.-animated #train-step {
+        display: block;
+    }
+    TrainView.-stepping #train-board-box {
+        border-left: thick $accent;
     }
     TrainView #train-heatmap-box {
         height: auto;
@@ -200,6 +212,7 @@ class TrainView(Vertical):
         self._caption = Label("", id="train-board-caption")
         self._heatmap_box = Vertical(id="train-heatmap-box")
         self._heatmap = HeatmapView(id="train-heatmaps")
+        self._step = StepPanel(id="train-step")
 
         with Horizontal(id="train-controls"):
             yield self._toggle
@@ -219,6 +232,7 @@ class TrainView(Vertical):
                 yield self._charts
                 with self._board_box:
                     yield self._caption
+            yield self._step
             with self._heatmap_box:
                 yield self._heatmap
 
@@ -295,7 +309,7 @@ class TrainView(Vertical):
         self.stats.show_speed(name)
         self._show_board(self.runner)
 
-    def read_hyperparameters(self) -> Hyperparameters | None:
+    def read_hyperparameters(self) -> Settings | None:
         """The hyperparameters in the form, or None (with the bad fields marked and shown)."""
         hp = self.form.read()
         if hp is None:
@@ -307,10 +321,15 @@ class TrainView(Vertical):
         """Give the keyboard to the heatmap (its keys move the focus where there is one)."""
         self.heatmap.focus()
 
+    @property
+    def step_panel(self) -> StepPanel:
+        return self._step
+
     def key_help(self) -> list[tuple[str, str]]:
         """The keys this view adds to the app's own training keys."""
         keys = [
-            ("e", "edit the hyperparameters (enter or esc: back)"),
+            ("e", "edit the hyperparameters (enter applies, also while training runs; "
+                  "esc: back)"),
             ("tab / shift+tab", "move between fields and buttons"),
         ]
         layout = self.session.game.layout
@@ -424,8 +443,9 @@ class TrainView(Vertical):
         animated = runner.speed.animated and getattr(self._snapshot, "engine", "") == "scalar"
         shown = animated and scene is not None
         box.set_class(shown, "-shown")
-        self.set_class(shown, "-animated")
+        self.set_class(runner.speed.animated, "-animated")
         if not shown:
+            self._show_step(None)
             return
         board = self._ensure_board()
         event = runner.last_event
@@ -438,6 +458,31 @@ class TrainView(Vertical):
         if event is not self._scene_event:
             self._scene_event = event
             self._caption.update(self._describe(event))
+            self._show_step(event)
+
+    def _show_step(self, event: Any) -> None:
+        """Explain a step's update in the step panel, and mark its state on the heatmap."""
+        record = getattr(event, "last_update", None)
+        self.set_class(record is not None, "-stepping")
+        if record is None:
+            if self._step.lines or not self._step.content:
+                self._step.show([])
+            if self.heatmap.step_cell is not None:
+                self.heatmap.step_cell = None
+            return
+        session = self.session
+        game = session.game
+        self._step.show(explain(event, record, game.action_names, game.states.describe,
+                                session.learner_class.title))
+        found = session.heatmap_cell(event.observation, self.focus_target)
+        if found is None:
+            self.heatmap.step_cell = None
+            return
+        focus, cell = found
+        if focus != self.focus_target:  # show the state under its own target (GridWorld)
+            self.focus_target = focus
+            self._show_heatmaps()
+        self.heatmap.step_cell = cell
 
     def _describe(self, event: Any) -> str:
         if event is None:
@@ -483,15 +528,20 @@ class TrainView(Vertical):
         if hp is None:
             self.app.notify("Fix the highlighted fields first.", severity="error", timeout=3)
             return
-        if not self.runner.running:
-            session = self.session
-            hp, note = continue_run(session.hp, hp, session.trainer.episodes)
-            session.set_hyperparameters(hp)
-            self.form.load(hp)
-            self.progress.show(self.progress.done, hp.episodes)
-            self.app.notify(note or "Hyperparameters set.", timeout=8 if note else 2)
-        else:
-            self.app.notify("They apply when training starts again.", timeout=3)
+        session, runner = self.session, self.runner
+        running = runner.running
+        done = runner.latest.episodes if running else session.trainer.episodes
+        hp, note = continue_run(session.hp, hp, done)
+        try:
+            runner.set_hyperparameters(hp)  # in force at once, while training runs too
+        except ValueError as exc:
+            self.app.notify(str(exc), severity="error", timeout=5)
+            return
+        self.form.load(hp)
+        self.progress.show(self.progress.done, hp.episodes)
+        applied = "Applied at once: training goes on with them." if running else (
+            "Hyperparameters set.")
+        self.app.notify(note or applied, timeout=8 if note else 3)
         self._leave_form()
 
     @on(HyperparameterForm.Left)

@@ -29,7 +29,6 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.params import Param
 from tui_gym.games.tiles import TileGame, TileLayout, TileNarrator, TileStates
 
@@ -107,8 +106,10 @@ class CliffWalkingGame(TileGame):
     def episode_limit(self, kwargs: Mapping[str, Any]) -> int:
         return EPISODE_LIMIT
 
-    def default_hyperparameters(self, kwargs: Mapping[str, Any] | None = None) -> Hyperparameters:
+    def hyperparameter_table(
+        self, kwargs: Mapping[str, Any] | None = None
+    ) -> Mapping[str, Mapping[str, Any]]:
         if (kwargs or {}).get("slippery"):
             # A fall costs 100 at random: averaging it out needs small steps and many episodes.
-            return Hyperparameters(learning_rate=0.01, episodes=50_000)
-        return Hyperparameters(learning_rate=0.1, episodes=2_000)
+            return {"*": {"learning_rate": 0.01, "episodes": 50_000}}
+        return {"*": {"learning_rate": 0.1, "episodes": 2_000}}

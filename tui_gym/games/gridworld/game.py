@@ -23,7 +23,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.params import Param
@@ -452,19 +451,19 @@ class GridWorldGame(Game):
     demo_wrappers = ("TimeLimit:max_episode_steps=50", "StepPenalty:penalty=0.01",
                      "DistanceShaping")
 
+    # Reward only at the target: without discounting every path is worth 1
+    # and the greedy policy would have no reason to take the shortest one.
+    hyperparameters = {
+        "*": {"discount": 0.95, "learning_rate": 0.1, "episodes": 20_000,
+              "epsilon_decay_fraction": 0.5},
+    }
+
     def __init__(self) -> None:
         super().__init__()
         self.states = GridWorldStates(self)
         self.oracle = GridWorldOracle(self)
         self.narrator = GridWorldNarrator(self)
         self.layout = GridWorldLayout(self)
-
-    def default_hyperparameters(self, kwargs: Mapping[str, Any] | None = None) -> Hyperparameters:
-        # Reward only at the target: without discounting every path is worth 1
-        # and the greedy policy would have no reason to take the shortest one.
-        return Hyperparameters(
-            discount=0.95, learning_rate=0.1, episodes=20_000, epsilon_decay_fraction=0.5
-        )
 
     def batched_form(self, kwargs: Mapping[str, Any]) -> BatchedForm:
         from tui_gym.core.vector.base import BatchedForm

@@ -36,7 +36,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP, NotAvailable
 from tui_gym.core.params import Param
@@ -288,7 +287,9 @@ class TaxiGame(ModelGame):
         # Every move is certain without rain: a trained greedy policy is the optimum.
         return 0.01 if kwargs.get("rainy") else 0.0
 
-    def default_hyperparameters(self, kwargs: Mapping[str, Any] | None = None) -> Hyperparameters:
+    def hyperparameter_table(
+        self, kwargs: Mapping[str, Any] | None = None
+    ) -> Mapping[str, Mapping[str, Any]]:
         if (kwargs or {}).get("rainy"):
-            return Hyperparameters(learning_rate=0.05, episodes=50_000)
-        return Hyperparameters(learning_rate=0.1, episodes=5_000)
+            return {"*": {"learning_rate": 0.05, "episodes": 50_000}}
+        return {"*": {"learning_rate": 0.1, "episodes": 5_000}}
