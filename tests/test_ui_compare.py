@@ -228,7 +228,7 @@ async def test_the_app_key_v_opens_it_and_another_view_stops_it(
         await wait_for(pilot, lambda: newest.id in {r.id for r in view.runs}, "the new run")
         # Another game: its runs.
         await pilot.press("g")
-        await wait_for(pilot, lambda: app.session.profile.name == "gridworld", "GridWorld")
+        await wait_for(pilot, lambda: app.session.game.name == "gridworld", "GridWorld")
         await wait_for(pilot, lambda: [r.id for r in view.runs] == [ids["gridworld"]],
                        "GridWorld's runs")
         await pilot.press("question_mark")

@@ -28,7 +28,10 @@ from rich.table import Table
 from rich.text import Text
 
 from tui_gym.algorithms import ALGORITHMS
-from tui_gym.cli import CliError, _int_in, _path, _seed, print_json
+from tui_gym.cli.output import CliError, print_json
+from tui_gym.cli.types import file_name as _path
+from tui_gym.cli.types import int_in as _int_in
+from tui_gym.cli.types import seed_number as _seed
 
 if TYPE_CHECKING:
     from tui_gym.core.experiments import RunHistory

@@ -132,7 +132,7 @@ def edited_settings(session: Session, algorithms: Sequence[str]) -> dict[str, An
     hp = session.hp
     if hp is None:
         return {}
-    defaults = default_settings(session.profile, session.algorithm)
+    defaults = default_settings(session.game, session.algorithm, session.env_kwargs)
     owned = {f.name for name in algorithms for f in algorithm(name).params}
     return {
         name: value for name, value in hp.items()
@@ -142,8 +142,8 @@ def edited_settings(session: Session, algorithms: Sequence[str]) -> dict[str, An
 
 def game_names(session: Session) -> set[str]:
     """The names a run of the session's game may be recorded under (case folded)."""
-    profile = session.profile
-    names = {profile.name, profile.env_id, *getattr(profile, "other_ids", ())}
+    game = session.game
+    names = {game.name, game.env_id, *game.other_ids}
     return {n.casefold() for n in names if n}
 
 
@@ -413,7 +413,7 @@ class CompareView(Vertical):
             del self._records[run_id]  # gone, or rewritten since it was read
         self._fill_list(ticked)
         if not self.running:
-            title = self.session.profile.title
+            title = self.session.game.title
             if not runs:
                 self._say(f"No runs of {title} recorded yet in {self.db_path}: "
                           "choose algorithms, seeds and episodes, then Compare.")

@@ -136,7 +136,7 @@ class PlanSteps:
         self, envs: np.ndarray | None, actions: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         result = self.venv.step(actions, envs, autoreset=False)
-        rewards = self.plan.transform_rewards(result.reward, result.distance)
+        rewards = self.plan.transform_rewards(result.reward, result.info)
         keys = np.asarray(self.keyer.keys(result.next_obs), dtype=np.int64)
         return rewards, keys, result.terminated, result.truncated
 
