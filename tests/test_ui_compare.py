@@ -210,10 +210,11 @@ async def test_the_app_key_v_opens_it_and_another_view_stops_it(
     async with app.run_test(size=(120, 40)) as pilot:
         await pilot.pause()
         await pilot.press("v")
-        await wait_for(pilot, lambda: app.current_view == "compare", "the Compare view")
+        await wait_for(pilot, lambda: app.compare_view is not None
+                       and len(app.compare_view.runs) == 3, "the Compare view and its runs")
         view = app.compare_view
         view.processes = 0
-        assert len(view.runs) == 3 and app.focused is view.run_list
+        await wait_for(pilot, lambda: app.focused is view.run_list, "the list's focus")
         assert " l Launch " in screen_text(app)
         # Another view stops the comparison; what finished is recorded.
         await launch(pilot, view, {"sarsa"}, seeds=2, episodes=200_000)

@@ -156,6 +156,7 @@ class TuiGymApp(App[int]):
         self._record_at_start = record is not None
         self._replay = replay
         self.db = db
+        self._compare: CompareView | None = None
 
     # --- layout ------------------------------------------------------------
     def get_default_screen(self) -> Screen:
@@ -168,7 +169,6 @@ class TuiGymApp(App[int]):
             with ContentSwitcher(initial="play", id="views"):
                 yield PlayView(id="play")
                 yield TrainView(id="train")
-                yield CompareView(id="compare", db=self.db)
             yield SidePanel(id="side")
         yield KeyBar()
 
@@ -212,8 +212,9 @@ class TuiGymApp(App[int]):
         return self.query_one(TrainView)
 
     @property
-    def compare_view(self) -> CompareView:
-        return self.query_one(CompareView)
+    def compare_view(self) -> CompareView | None:
+        """The Compare view, once it has been shown (it is built the first time)."""
+        return self._compare
 
     @property
     def side_panel(self) -> SidePanel:
@@ -259,15 +260,22 @@ class TuiGymApp(App[int]):
     def action_show_view(self, view: str) -> None:
         if self._switcher is None:
             return
-        if view != "compare" and self.compare_view.stop_comparison():
+        compare = self._compare
+        if view != "compare" and compare is not None and compare.stop_comparison():
             self.notify("Comparison stopped: what finished is recorded.", timeout=4)
+        if view == "compare" and compare is None:
+            # Built the first time it shows: most runs of the app never open it.
+            compare = self._compare = CompareView(id="compare", db=self.db)
+            self._switcher.mount(compare)  # it reads the history and takes the focus at mount
         self._switcher.current = view
         self._main_screen.set_class(view == "compare", "-view-compare")
         if view == "play":
             self.play_view.focus_board()
         elif view == "compare":
-            self.compare_view.reload(fresh=True)
-            self.compare_view.focus_default()
+            assert compare is not None
+            if compare.is_mounted:
+                compare.reload(fresh=True)
+                compare.focus_default()
         else:
             self._last_version = -1
             self.train_view.focus_default()
@@ -289,8 +297,8 @@ class TuiGymApp(App[int]):
         """Give the keyboard back to the view shown (its board, or the heatmap)."""
         if self.current_view == "play":
             self.play_view.focus_board()
-        elif self.current_view == "compare":
-            self.compare_view.focus_default()
+        elif self.current_view == "compare" and self._compare is not None:
+            self._compare.focus_default()
         else:
             self.train_view.focus_default()
 
@@ -376,7 +384,8 @@ class TuiGymApp(App[int]):
         self._last_version = -1
         self.play_view.reload()
         self.train_view.reload()
-        self.compare_view.reload()
+        if self._compare is not None:
+            self._compare.reload()
         self.side_panel.reload()
 
     def _episodes_trained(self) -> int:
@@ -754,7 +763,7 @@ class TuiGymApp(App[int]):
                 ("+ / -", "faster / slower (animated ... max)"),
                 *self.train_view.key_help(),
             ]),
-            ("Compare", self.compare_view.key_help()),
+            ("Compare", CompareView.key_help()),
             ("Side panel", [
                 ("tab / shift+tab", "move between fields"),
                 ("space / enter", "tick a wrapper, press a button, pick a game or an "
@@ -811,7 +820,8 @@ class TuiGymApp(App[int]):
 
     async def action_quit(self) -> None:
         self.recording.turn_off()
-        self.compare_view.stop_comparison()  # it records what finished while the app ends
+        if self._compare is not None:
+            self._compare.stop_comparison()  # it records what finished while the app ends
         self.exit(0)  # the runner closes at unmount, without holding the screen up
 
     def on_unmount(self) -> None:

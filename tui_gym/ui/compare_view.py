@@ -288,6 +288,8 @@ class CompareView(Vertical):
     def on_mount(self) -> None:
         self.set_interval(POLL_SECONDS, self._poll)
         self.reload()
+        if self.display:
+            self.focus_default()
 
     # --- parts -------------------------------------------------------------------
     @property
@@ -366,7 +368,9 @@ class CompareView(Vertical):
         if self._job is not None:
             self._job.close()
 
-    def key_help(self) -> list[tuple[str, str]]:
+    @staticmethod
+    def key_help() -> list[tuple[str, str]]:
+        """(key, what it does) in this view."""
         return [
             ("↑ ↓ / space", "move in the list of runs / tick a run to draw it"),
             ("tab / shift+tab", "the algorithms, Seeds, Episodes and the buttons"),

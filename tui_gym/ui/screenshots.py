@@ -147,10 +147,13 @@ async def _compare(app, pilot) -> None:
     with tempfile.TemporaryDirectory() as folder, _utc():
         db = Path(folder) / "runs.db"
         _record_comparison(db, spec)
-        view = app.compare_view
-        view.db = db
+        app.db = db  # the view reads it when it is first shown
         await pilot.press("v")
         await pilot.pause()
+        view = app.compare_view
+        while view is None or len(view.runs) < 2 or app.focused is not view.run_list:
+            await pilot.pause()
+            view = app.compare_view
         await pilot.press("space", "down", "space")  # tick both runs
         await pilot.pause()
         view.run_list.highlighted = None
