@@ -192,10 +192,10 @@ def test_plot_draws_the_band_under_the_line(tmp_path: Path) -> None:
         series = series_of_record(history.get_run(ids["sarsa"]))
     assert series is not None
     bits, ink, band = plot_cells([series], 40, 8)
-    assert all(any(band[row][col] == 0 for row in range(8)) for col in range(40))
+    assert all(any(band[row][col] == 1 for row in range(8)) for col in range(40))
     assert all(any(bits[row][col] for row in range(8)) for col in range(40))
     # Every dot of the mean lies in a cell its band shades.
-    assert all(band[row][col] == 0 for row in range(8) for col in range(40) if ink[row][col] == 0)
+    assert all(band[row][col] == 1 for row in range(8) for col in range(40) if ink[row][col] == 0)
 
 
 async def test_the_app_key_v_opens_it_and_another_view_stops_it(

@@ -142,8 +142,9 @@ async def _compare(app, pilot) -> None:
     from tui_gym.core.experiments.compare import CompareSpec
 
     session = app.session
+    settings, episodes = session.game.demo_compare or ({}, 5_000)
     spec = CompareSpec(game=session.env_id, algorithms=("q-learning", "sarsa"), seeds=10,
-                       episodes=5_000, first_seed=session.seed)
+                       episodes=episodes, settings=settings, first_seed=session.seed)
     with tempfile.TemporaryDirectory() as folder, _utc():
         db = Path(folder) / "runs.db"
         _record_comparison(db, spec)
@@ -182,14 +183,15 @@ def _scenarios() -> tuple[Scenario, ...]:
     first = GAMES[0]
     focused = next((g for g in GAMES if g.layout.has_focus), first)
     shown = next((g for g in GAMES if g.demo_wrappers), first)
+    compared = next((g for g in GAMES if g.demo_compare), first)
     choices = tuple(parse_wrapper_spec(text) for text in shown.demo_wrappers)
     shots += [
         Scenario("step-by-step.svg", f"{focused.title}: one SARSA update, step by step",
                  partial(Session, focused.env_id, seed=3, algorithm="sarsa"), _step_by_step),
         Scenario("wrappers.svg", "The wrapper panel in use",
                  partial(Session, shown.env_id, choices=choices, seed=1), _wrappers),
-        Scenario("compare.svg", f"{first.title}: Q-learning against SARSA over 10 seeds",
-                 partial(Session, first.env_id, seed=0), _compare),
+        Scenario("compare.svg", f"{compared.title}: Q-learning against SARSA over 10 seeds",
+                 partial(Session, compared.env_id, seed=0), _compare),
         Scenario("help.svg", "Every key", partial(Session, first.env_id, seed=0), _help),
         Scenario("compact-80x24.svg", "The compact layout at 80x24",
                  partial(Session, first.env_id, seed=4), _play, size=(80, 24)),

@@ -2,8 +2,10 @@
 
 Each curve is a line of braille dots (two columns and four rows of dots a
 cell) in its own colour; its band, where it has one, shades the cells
-between its edges with a dim tint of that colour (where bands overlap, the
-later curve's tint shows). The left margin gives the y range, the line below
+between its edges with a dim tint of that colour (where bands overlap, a tint
+of their colours' mean). The left margin gives the y range (fitted to all but
+the first tenth of the episodes, where a learner's first random walks would
+flatten the rest: what lies beyond is drawn along the edge), the line below
 the plot the episodes, and one legend line per curve says whose it is, how
 many seeds, and whether its band is a confidence band or its line smoothed.
 A curve shorter than the others stops where its episodes stop.
@@ -27,6 +29,10 @@ from tui_gym.ui.widgets.strip_widget import Line, StripWidget
 PALETTE: tuple[str, ...] = (
     "#3d9df3", "#f5a030", "#3cc46a", "#e5484d", "#a77bf0", "#e0c43a", "#2fc5c0", "#f06bab",
 )
+# The y axis leaves out the first tenth of the episodes: a learner's first episodes (a
+# random walk that takes 1,000 steps) would squeeze the rest into a line, as Sutton &
+# Barto's figures clip them.
+EARLY_SHARE = 0.1
 BAND_TINT = 0.28  # how much of a curve's colour its band mixes into the background
 LABEL_WIDTH = 8  # the y labels' column, with a space after it
 MIN_PLOT_HEIGHT = 3
@@ -47,11 +53,17 @@ def _mix(a: RichColor, b: RichColor, t: float) -> RichColor:
 
 
 def value_range(series: Sequence[Series]) -> tuple[float, float]:
-    """The y range every curve and band fits in (widened when it is a single value)."""
+    """The y range the curves and bands fit in past the first `EARLY_SHARE` of the
+    episodes (widened when it is a single value); what lies outside is drawn at the edge."""
+    first, last = episode_range(series)
+    start = first + EARLY_SHARE * (last - first)
     lows, highs = [], []
     for s in series:
-        lows.append(float(np.min(s.lo if s.lo is not None else s.mean)))
-        highs.append(float(np.max(s.hi if s.hi is not None else s.mean)))
+        keep = s.episodes >= start
+        if not keep.any():
+            keep = np.ones(len(s.episodes), dtype=bool)
+        lows.append(float(np.min((s.lo if s.lo is not None else s.mean)[keep])))
+        highs.append(float(np.max((s.hi if s.hi is not None else s.mean)[keep])))
     low, high = min(lows), max(highs)
     if high - low < 1e-12:
         pad = max(0.5, abs(low) * 0.1)
@@ -73,10 +85,11 @@ def plot_cells(
     series: Sequence[Series], width: int, height: int
 ) -> tuple[list[list[int]], list[list[int]], list[list[int]]]:
     """The plot as three grids of `height` x `width` cells: braille bits, the index of the
-    curve whose dot was drawn last (-1: none) and of the band that shades it (-1: none)."""
+    curve whose dot was drawn last (-1: none) and the bands that shade it (a bit per curve,
+    1 << index; 0: none)."""
     bits = [[0] * width for _ in range(height)]
     ink = [[-1] * width for _ in range(height)]
-    band = [[-1] * width for _ in range(height)]
+    band = [[0] * width for _ in range(height)]
     if not series or width < 1 or height < 1:
         return bits, ink, band
     low, high = value_range(series)
@@ -95,7 +108,7 @@ def plot_cells(
         his = np.interp(centres, s.episodes, s.hi)
         for col in np.flatnonzero(inside):
             for row in range(cell_row(his[col]), cell_row(los[col]) + 1):
-                band[row][col] = index
+                band[row][col] |= 1 << index
     dots_x, dots_y = 2 * width, 4 * height
     xs = first + np.arange(dots_x) / max(1, dots_x - 1) * (last - first)
     for index, s in enumerate(series):
@@ -191,7 +204,20 @@ class CompareChart(StripWidget):
         low, high = value_range(self._series)
         background = self.rich_style.bgcolor or RichColor.parse("#000000")
         line_styles = [Style(color=colour(c)) for c in self._colours]
-        band_colours = [_mix(background, colour(c), BAND_TINT) for c in self._colours]
+        colours = [colour(c) for c in self._colours]
+        tints: dict[int, RichColor] = {}
+
+        def tint(mask: int) -> RichColor:
+            # Where bands overlap, the tint of their colours' mean: each band stays visible.
+            found = tints.get(mask)
+            if found is None:
+                members = [c for i, c in enumerate(colours) if mask >> i & 1]
+                mean = members[0]
+                for n, other in enumerate(members[1:], start=2):
+                    mean = _mix(mean, other, 1 / n)
+                found = tints[mask] = _mix(background, mean, BAND_TINT)
+            return found
+
         labels = {0: _label(high, LABEL_WIDTH - 1), height - 1: _label(low, LABEL_WIDTH - 1)}
         if height >= 5:
             labels[height // 2] = _label((high + low) / 2, LABEL_WIDTH - 1)
@@ -205,7 +231,7 @@ class CompareChart(StripWidget):
                 style = cache.get(key)
                 if style is None:
                     fg = line_styles[key[0]].color if key[0] >= 0 else None
-                    bg = band_colours[key[1]] if key[1] >= 0 else None
+                    bg = tint(key[1]) if key[1] else None
                     style = cache[key] = Style(color=fg, bgcolor=bg)
                 glyph = chr(BRAILLE_BASE + bits[row][col]) if bits[row][col] else " "
                 if line and line[-1].style is style:
