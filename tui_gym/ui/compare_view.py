@@ -7,8 +7,8 @@ each) above a table of their final figures with intervals (`FiguresTable`).
 Above the list, the launch form: the algorithms to compare, the number of
 seeds and of episodes (checked, each wrong field named in one message),
 and a button that runs the comparison for the current game, its parameters,
-its wrappers and the hyperparameters edited in the Train view (those every
-chosen algorithm has), through `run_compare` on a worker thread
+its wrappers and the hyperparameters edited in the Train view (each given
+to the chosen algorithms that have it), through `run_compare` on a worker thread
 (`CompareJob`). The view's timer draws its progress as it comes: the curves
 so far, a progress line, and the figures; `s` (or the Stop button) stops
 it, keeping what finished. Once it ends, the runs it recorded appear in the
@@ -360,7 +360,7 @@ class CompareView(Vertical):
         if job is None or not job.running or job.stopping:
             return False
         job.stop()
-        self._say("Stopping: the seeds under way finish, then what is done is recorded.")
+        self._say("Stopping: the episodes every seed has finished are kept and recorded.")
         return True
 
     def close(self) -> None:
@@ -425,7 +425,7 @@ class CompareView(Vertical):
                 self._say(f"{len(runs):,} run{'s' if len(runs) != 1 else ''} of {title} "
                           "recorded.")
         self._message_label.tooltip = str(self.db_path)
-        self._show_selected()
+        self._redraw()
 
     def _fill_list(self, ticked: Sequence[int]) -> None:
         run_list = self.run_list
@@ -475,9 +475,6 @@ class CompareView(Vertical):
         place = next((i for i in range(len(PALETTE)) if i not in used), len(self._colours))
         self._colours[key] = place
         return place
-
-    def _show_selected(self) -> None:
-        self._redraw()
 
     def _redraw(self) -> None:
         entries: list[tuple[Series | None, FigureRow, Hashable]] = []
@@ -649,7 +646,7 @@ class CompareView(Vertical):
     @on(SelectionList.SelectedChanged)
     def _ticked(self, event: SelectionList.SelectedChanged) -> None:
         event.stop()
-        self._show_selected()
+        self._redraw()
 
     @on(Button.Pressed)
     def _button(self, event: Button.Pressed) -> None:
