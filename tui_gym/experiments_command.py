@@ -403,13 +403,13 @@ def _sweep_table(result: Any) -> Table:
     table = Table(title=title, title_justify="left")
     for key in spec.grid:
         table.add_column(key, justify="right", style="bold")
-    table.add_column("online return, last 10% (95% CI)", justify="right")
+    table.add_column("return, last 10%", justify="right")
     has_exact = any(p.outcome is not None and p.outcome.exact_value is not None
                     for p in result.points)
     if has_exact:
         table.add_column("greedy exact value", justify="right")
-        table.add_column("exact gap", justify="right")
-    table.add_column("seeds done", justify="right")
+        table.add_column("gap", justify="right")
+    table.add_column("seeds", justify="right")
     best = max((v for p in result.points if (v := _figure_of(p.outcome)) is not None),
                default=None)
     for point in result.points:
