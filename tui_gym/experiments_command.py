@@ -71,7 +71,7 @@ def add_experiment_parsers(sub: Any) -> None:
     """The `compare` and `sweep` sub-commands."""
     names = ", ".join(cls.name for cls in ALGORITHMS)
     compare = sub.add_parser(
-        "compare", help="compare learners over many seeds: mean return with a 95% band",
+        "compare", help="compare learners over many seeds: mean return with a 95%% band",
         description="Every (algorithm, seed) learns from scratch; the per-episode online "
         "return is averaged over seeds with a 95% confidence band, and for games with an "
         "exact model the greedy policy's exact value is followed at checkpoints.",
