@@ -1,0 +1,172 @@
+"""`tui-gym runs` and the recording of `tui-gym train`, through the command line."""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tui_gym.cli import main
+from tui_gym.core.experiments import RunHistory
+from tui_gym.core.experiments.schema import APPLICATION_ID
+
+SHORT = ["--episodes", "3000", "--eval-episodes", "200"]
+
+
+def run_cli(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def runs_json(capsys: pytest.CaptureFixture[str], db: Path, *extra: str) -> list[dict]:
+    code, out, err = run_cli(capsys, "runs", "--json", "--db", str(db), *extra)
+    assert code == 0, err
+    return json.loads(out)["runs"]
+
+
+def test_train_is_recorded_with_settings_curves_and_figures(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = tmp_path / "runs.db"
+    agent = tmp_path / "bj.tgym"
+    code, out, err = run_cli(capsys, "train", "blackjack", *SHORT, "--seed", "3",
+                             "--learning-rate", "0.05", "--save", str(agent), "--json",
+                             "--db", str(db))
+    assert code == 0, err
+    trained = json.loads(out)
+    [run] = runs_json(capsys, db)
+    assert run["id"] == trained["run"]
+    assert (run["kind"], run["game"], run["algorithm"], run["seeds"], run["status"]) == (
+        "train", "blackjack", "q-learning", [3], "finished")
+    figures = {f["name"]: f for f in run["figures"]}
+    assert {"mean_return_last", "exact_value", "exact_gap", "eval_mean_return"} <= set(figures)
+    assert figures["exact_gap"]["value"] == pytest.approx(trained["eval"]["gap"])
+
+    code, out, err = run_cli(capsys, "runs", "show", str(run["id"]), "--json", "--db", str(db))
+    assert code == 0, err
+    record = json.loads(out)
+    assert record["hyperparameters"]["learning_rate"] == 0.05
+    assert record["hyperparameters"]["episodes"] == 3000
+    assert record["game_params"] == trained["env_kwargs"]
+    assert record["agent_path"] == str(agent.resolve())
+    assert record["versions"]["gymnasium"]
+    curves = {c["name"]: c for c in record["curves"]}
+    assert set(curves) == {"return", "exact_value"}
+    returns = curves["return"]
+    assert 2 <= len(returns["episodes"]) <= 100 and returns["episodes"][-1] <= 3000
+    assert all(-1.5 <= v <= 1.5 for v in returns["values"])
+    assert curves["exact_value"]["episodes"][0] == 0  # the untrained policy's value first
+    # Curves are stored to about three significant digits; figures in full.
+    final = figures["exact_value"]["value"]
+    assert curves["exact_value"]["values"][-1] == pytest.approx(final, abs=1e-3)
+
+    code, out, _ = run_cli(capsys, "runs", "show", str(run["id"]), "--db", str(db))
+    assert code == 0 and "exact gap" in out and "q-learning" in out
+
+
+def test_list_filter_export_and_remove(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("COLUMNS", "160")
+    db = tmp_path / "runs.db"
+    for game in ("blackjack", "gridworld"):
+        assert run_cli(capsys, "train", game, *SHORT, "--db", str(db))[0] == 0
+    assert run_cli(capsys, "train", "blackjack", *SHORT, "--db", str(db), "--no-record")[0] == 0
+    runs = runs_json(capsys, db)
+    assert [r["game"] for r in runs] == ["gridworld", "blackjack"]  # newest first
+    assert [r["game"] for r in runs_json(capsys, db, "--game", "GridWorld")] == ["gridworld"]
+    code, out, _ = run_cli(capsys, "runs", "--db", str(db))
+    assert code == 0 and "gridworld" in out and "blackjack" in out
+
+    blackjack = runs[1]["id"]
+    csv_path = tmp_path / "curves.csv"
+    code, out, err = run_cli(capsys, "runs", "export", str(blackjack), "--csv", str(csv_path),
+                             "--db", str(db))
+    assert code == 0, err
+    lines = csv_path.read_text().splitlines()
+    assert lines[0] == "episode,exact_value,return" and len(lines) > 3
+
+    code, out, err = run_cli(capsys, "runs", "rm", str(blackjack), "--db", str(db))
+    assert code == 0 and f"removed run {blackjack}" in out
+    assert [r["game"] for r in runs_json(capsys, db)] == ["gridworld"]
+    code, out, err = run_cli(capsys, "runs", "show", str(blackjack), "--db", str(db))
+    assert code == 2 and out == ""
+    assert err == f"tui-gym: error: no run {blackjack} in {db}\n"
+    with pytest.raises(SystemExit) as exit_:
+        main(["runs", "rm", "0", "--db", str(db)])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and "a run id" in err and err.count("\n") == 1
+
+
+def test_the_env_variable_chooses_the_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    db = tmp_path / "from-env.db"
+    monkeypatch.setenv("TUI_GYM_DB", str(db))
+    assert run_cli(capsys, "train", "blackjack", *SHORT)[0] == 0
+    code, out, _ = run_cli(capsys, "runs", "--json")
+    assert code == 0 and json.loads(out)["db"] == str(db)
+    assert len(json.loads(out)["runs"]) == 1
+
+
+def test_a_file_that_is_not_a_history_is_never_touched(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = tmp_path / "notes.db"
+    db.write_bytes(b"my notes, not a database\n" * 50)
+    before = db.read_bytes()
+    code, out, err = run_cli(capsys, "runs", "--db", str(db))
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and "is not a tui-gym run history" in err
+    # Training still trains; the run is not recorded, and the file stays as it was.
+    code, out, err = run_cli(capsys, "train", "blackjack", *SHORT, "--json", "--db", str(db))
+    assert code == 0 and json.loads(out)["run"] is None
+    assert err.count("\n") == 1 and "not recorded" in err and "left untouched" in err
+    assert db.read_bytes() == before
+
+
+def test_a_history_from_a_newer_tui_gym_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = tmp_path / "runs.db"
+    RunHistory(db).close()
+    with sqlite3.connect(db) as conn:
+        conn.execute(f"PRAGMA application_id = {APPLICATION_ID}")
+        conn.execute("PRAGMA user_version = 99")
+    for argv in (("runs",), ("runs", "show", "1"), ("train", "blackjack", *SHORT)):
+        code, _, err = run_cli(capsys, *argv, "--db", str(db))
+        assert err.count("\n") == 1 and "newer tui-gym" in err, argv
+        assert code == (0 if argv[0] == "train" else 2)
+
+
+def test_two_processes_recording_at_once_lose_nothing(tmp_path: Path) -> None:
+    db = tmp_path / "runs.db"
+    script = (
+        "import sys\nfrom tui_gym.cli import main\n"
+        "for seed in range(3):\n"
+        "    code = main(['train', 'gridworld', '--episodes', '300', '--eval-episodes', '5',"
+        " '--engine', 'scalar', '--seed', str(seed + int(sys.argv[1])), '--json',"
+        f" '--db', {str(db)!r}])\n"
+        "    assert code == 0\n"
+    )
+    procs = [
+        subprocess.Popen([sys.executable, "-c", script, str(first)], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
+        for first in (0, 100)
+    ]
+    results = [proc.communicate(timeout=120) for proc in procs]
+    for proc, (_, err) in zip(procs, results, strict=True):
+        assert proc.returncode == 0, err
+        assert "not recorded" not in err
+    ids = sorted(json.loads(line)["run"] for out, _ in results for line in out.splitlines())
+    with RunHistory(db) as history:
+        runs = history.list_runs()
+        assert sorted(r.id for r in runs) == ids and len(ids) == 6
+        assert sorted(r.seeds[0] for r in runs) == [0, 1, 2, 100, 101, 102]
+        assert all(r.status == "finished" for r in runs)
+        assert all(history.get_run(i).curve("return") is not None for i in ids)
