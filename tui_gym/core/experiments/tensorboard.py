@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import math
 import re
+import secrets
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -104,7 +105,9 @@ def export_run_tensorboard(
     scalars = 0
     last_episode = 0
     try:
-        writer = SummaryWriter(logdir=str(folder), flush_secs=3600)
+        # A suffix of its own: an export within the same second gets a new file name too.
+        suffix = f".{secrets.token_hex(4)}"
+        writer = SummaryWriter(logdir=str(folder), flush_secs=3600, filename_suffix=suffix)
         try:
             for curve in record.curves:
                 tag = scalar_tag(curve.name)

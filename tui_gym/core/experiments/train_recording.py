@@ -1,7 +1,8 @@
 """`TrainRecording`: one headless training run (`tui-gym train`) kept in the run history.
 
 Used as a context manager around the run: `begin(session)` writes the run
-(status running) once the session is built, `on_chunk` (Session.train's
+(status running) once the session is built, on a thread of its own so the
+training does not wait for the disk, `on_chunk` (Session.train's
 callback) takes exact-value checkpoints, and `finish` writes the curves, the
 final figures and the saved agent's path. Leaving the block by an exception
 marks the run interrupted (Ctrl+C) or failed, with what it had. A history
@@ -11,6 +12,7 @@ line and the run goes on unrecorded.
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 from pathlib import Path
 from types import TracebackType
@@ -26,7 +28,7 @@ from tui_gym.core.experiments.live import (
     run_spec,
 )
 from tui_gym.core.experiments.paths import resolve_db_path
-from tui_gym.core.experiments.records import RunKind, RunStatus
+from tui_gym.core.experiments.records import RunKind, RunSpec, RunStatus
 from tui_gym.core.training import TrainingSnapshot
 
 if TYPE_CHECKING:
@@ -53,21 +55,42 @@ class TrainRecording:
         self._session: Session | None = None
         self._checkpoints: ExactCheckpoints | None = None
         self._after = 0
+        self._opening: threading.Thread | None = None
+        self._problem: Exception | None = None  # why the file could not be opened
 
     def begin(self, session: Session) -> None:
-        """Write the run (status running) with the session's settings."""
+        """Start recording: the file is opened and the run written (status running) on a
+        thread of its own while the training goes on."""
         if not self.enabled or self.path is None:
             return
         try:
-            self._history = RunHistory(self.path)
-            self.run_id = self._history.start_run(run_spec(session, RunKind.TRAIN))
-        except (RunHistoryError, ValueError) as exc:
+            spec = run_spec(session, RunKind.TRAIN)
+        except ValueError as exc:
             self._give_up(exc)
             return
         self._session = session
         self._after = session.trainer.episodes
         self._checkpoints = ExactCheckpoints(session)
+        self._opening = threading.Thread(target=self._open, args=(spec,), name="run-history",
+                                         daemon=True)
+        self._opening.start()
         self._checkpoints.take()
+
+    def _open(self, spec: RunSpec) -> None:
+        try:
+            self._history = RunHistory(self.path)  # type: ignore[arg-type]
+            self.run_id = self._history.start_run(spec)
+        except (RunHistoryError, ValueError) as exc:
+            self._problem = exc
+
+    def _opened(self) -> bool:
+        """Wait for the file to be open and the run written; False (and one warning) if not."""
+        if self._opening is not None:
+            self._opening.join()
+            self._opening = None
+            if self._problem is not None:
+                self._give_up(self._problem)
+        return self._history is not None and self.run_id is not None
 
     def on_chunk(self, snapshot: TrainingSnapshot) -> None:
         """`Session.train`'s callback: an exact-value checkpoint when they are cheap."""
@@ -93,6 +116,8 @@ class TrainRecording:
     ) -> int | None:
         """Write the curves, figures and saved agent's path with the final status; the
         run's id (None when it was not recorded)."""
+        if not self._opened():
+            return None
         history, session, checkpoints = self._history, self._session, self._checkpoints
         if history is None or session is None or checkpoints is None or self.run_id is None:
             return None
@@ -125,6 +150,9 @@ class TrainRecording:
             self._history = None
 
     def close(self) -> None:
+        if self._opening is not None:
+            self._opening.join()
+            self._opening = None
         if self._history is not None:
             self._history.close()
             self._history = None
