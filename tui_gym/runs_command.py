@@ -125,10 +125,10 @@ def _history_call(action: Callable[[], Any]) -> Any:
         raise CliError(str(exc)) from None
 
 
-def _when(seconds: float | None) -> str:
+def _when(seconds: float | None, full: bool = False) -> str:
     if seconds is None:
         return ""
-    return datetime.fromtimestamp(seconds).strftime("%m-%d %H:%M")
+    return datetime.fromtimestamp(seconds).strftime("%Y-%m-%d %H:%M:%S" if full else "%m-%d %H:%M")
 
 
 def _duration(seconds: float | None) -> str:
@@ -216,8 +216,8 @@ def _cmd_show(args: argparse.Namespace, out: Console) -> int:
         ("hyperparameters", settings),
         ("seeds", ", ".join(str(s) for s in run.seeds) or "none"),
         ("status", str(run.status)),
-        ("started", _when(run.started_at)),
-        ("ended", _when(run.ended_at)),
+        ("started", _when(run.started_at, full=True)),
+        ("ended", _when(run.ended_at, full=True)),
         ("took", _duration(run.seconds)),
     ]
     if run.group is not None:

@@ -107,6 +107,7 @@ class SessionRunLog:
         self._run = run
         self._next_flush = self.clock() + self.flush_seconds
         self._send("start", run, run_spec(session, RunKind.APP))
+        run.checkpoints.take(snapshot)  # the exact value near the run's start
         return run
 
     def _results(
