@@ -102,6 +102,17 @@ def test_list_filter_export_and_remove(
     assert exit_.value.code == 2 and "a run id" in err and err.count("\n") == 1
 
 
+def test_db_may_come_before_the_command(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = tmp_path / "runs.db"
+    assert run_cli(capsys, "--db", str(db), "train", "blackjack", *SHORT)[0] == 0
+    code, out, _ = run_cli(capsys, "--db", str(db), "runs", "--json")
+    assert code == 0 and len(json.loads(out)["runs"]) == 1
+    code, out, _ = run_cli(capsys, "runs", "--db", str(db), "show", "1", "--json")
+    assert code == 0 and json.loads(out)["id"] == 1
+
+
 def test_the_env_variable_chooses_the_file(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -32,7 +32,8 @@ KINDS = ("train", "compare", "sweep", "app", "benchmark")
 
 
 def _db_option(parser: argparse.ArgumentParser, *, inherit: bool = False) -> None:
-    # On a sub-command, SUPPRESS keeps a `--db` given before the sub-command's name.
+    # On a sub-command, SUPPRESS keeps a `--db` given before the sub-command's name
+    # (`tui-gym --db PATH train ...` and `tui-gym runs --db PATH show 3` both work).
     default = argparse.SUPPRESS if inherit else None
     parser.add_argument("--db", type=_path, metavar="PATH", default=default, help=DB_HELP)
 
@@ -51,7 +52,7 @@ def add_runs_parser(sub: Any) -> None:
         "trained in the app, with its settings, curves and final figures.",
     )
     _json_option(runs)
-    _db_option(runs)
+    _db_option(runs, inherit=True)
     runs.add_argument("--game", metavar="G", help="only this game's runs (e.g. blackjack)")
     runs.add_argument("--kind", choices=KINDS, help="only runs of this kind")
     verbs = runs.add_subparsers(dest="runs_command", metavar="VERB")
@@ -80,7 +81,7 @@ def add_runs_parser(sub: Any) -> None:
 
 def add_train_options(train: argparse.ArgumentParser) -> None:
     """`--db PATH` and `--no-record` on `train`."""
-    _db_option(train)
+    _db_option(train, inherit=True)
     train.add_argument("--no-record", action="store_true",
                        help="do not keep this run in the run history")
 
@@ -104,7 +105,7 @@ def recorded(command: Command) -> Command:
     def run(args: argparse.Namespace, out: Console) -> int:
         from tui_gym.core.experiments.train_recording import TrainRecording
 
-        enabled = not getattr(args, "no_record", False)
+        enabled = not (getattr(args, "no_record", False) or getattr(args, "no_history", False))
         with TrainRecording(getattr(args, "db", None), enabled=enabled, warn=_warn) as recording:
             args.recording = recording
             return command(args, out)
