@@ -178,7 +178,7 @@ def rows(result: HistoryResult | None) -> list[tuple[str, str, str, str | None]]
         (f"run history: recording's share of a train {result.game} run",
          f"{result.overhead:.2%} (median of {len(result.shares)})",
          f"≤ {OVERHEAD_TARGET:.0%}", "history_overhead"),
-        ("  fastest run, recorded ÷ --no-record",
+        ("  whole run, fastest recorded ÷ fastest --no-record (noisy)",
          f"{result.ab_ratio:.3f} ({min(result.recorded_s):.2f} s / "
          f"{min(result.unrecorded_s):.2f} s)", "", None),
         (f"run history: file size per 1,000 default runs ({result.runs:,} written)",
