@@ -29,7 +29,7 @@ import threading
 import time
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding, BindingType
@@ -40,8 +40,6 @@ from textual.screen import Screen
 from textual.widget import Widget
 from textual.widgets import ContentSwitcher, Header
 
-from tui_gym.core.experiments.app_recording import SessionRunLog
-from tui_gym.core.experiments.paths import resolve_db_path
 from tui_gym.core.profiles import PROFILES, GameProfile, profile_for
 from tui_gym.core.recording import Recording
 from tui_gym.core.recording.switch import RecordingSwitch
@@ -59,6 +57,9 @@ from tui_gym.ui.side_panel import SidePanel
 from tui_gym.ui.too_small_screen import TooSmallScreen
 from tui_gym.ui.train_view import TrainView
 from tui_gym.ui.widgets.key_bar import KeyBar
+
+if TYPE_CHECKING:
+    from tui_gym.core.experiments.app_recording import SessionRunLog
 
 MIN_WIDTH, MIN_HEIGHT = 80, 24  # below this: a message instead of the layout
 COMPACT_WIDTH, COMPACT_HEIGHT = 120, 36  # below this: the compact layout
@@ -908,7 +909,12 @@ def run_app(
     gc_seconds = gc_seconds_from_env()
     if session is None:
         session = Session.load(load) if load else Session(env_id=env_id, seed=seed)
-    run_log = SessionRunLog(resolve_db_path(db)) if keep_history else None
+    run_log = None
+    if keep_history:
+        from tui_gym.core.experiments.app_recording import SessionRunLog
+        from tui_gym.core.experiments.paths import resolve_db_path
+
+        run_log = SessionRunLog(resolve_db_path(db))
     return run_standalone(
         TuiGymApp(session, runner=runner, tune_gc=True, gc_seconds=gc_seconds, standalone=True,
                   record=record, replay=replay, run_log=run_log)
