@@ -14,6 +14,7 @@ import hashlib
 import numpy as np
 import pytest
 
+from tests.game_support import form_of
 from tui_gym.algorithms import Learner, QLearning
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.training import Trainer
@@ -69,7 +70,7 @@ def test_the_vector_engine_gives_the_recorded_run(env_id, hp, num_envs, expected
     env = build_env(env_id, {})
     keyer = ObservationKeyer(env.observation_space)
     learner = QLearning(int(env.action_space.n), hp, n_states=keyer.n_states, seed=3)
-    trainer = VectorTrainer(env, learner, keyer, seed=5, num_envs=num_envs)
+    trainer = VectorTrainer(env, learner, keyer, form=form_of(env), seed=5, num_envs=num_envs)
     trainer.run(episodes=hp["episodes"])
     trainer.run(episodes=3)  # quota tails step a handful of envs, down to one
     assert (fingerprint(learner), trainer.steps) == expected

@@ -31,8 +31,8 @@ from textual._callback import count_parameters
 from textual.timer import Timer
 
 from tui_gym.algorithms import QLearning
-from tui_gym.core.profiles import profile_for
 from tui_gym.core.session import Session, default_settings
+from tui_gym.games import game_for
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.train_view import TrainView
 
@@ -98,7 +98,7 @@ async def test_the_real_app_outlives_the_first_firing_of_every_periodic_job() ->
 
 # --- one frame, whatever the speed -------------------------------------------------
 def animated_gridworld(runner: str) -> TuiGymApp:
-    hp = default_settings(profile_for("gridworld"), "q-learning").replace(episodes=100_000)
+    hp = default_settings(game_for("gridworld"), "q-learning").replace(episodes=100_000)
     return TuiGymApp(Session("gridworld", seed=0, hp=hp), runner=runner)
 
 
@@ -142,7 +142,7 @@ async def test_pause_reset_switch_and_quit_take_effect_at_once_mid_episode(runne
         assert view._board_box.has_class("-shown")
         # The switch lands at once though the episode has many slow steps to go.
         assert await timed_press(pilot, "b") < KEY_SECONDS
-        assert app.session.profile.name == "blackjack"
+        assert app.session.game.name == "blackjack"
         # space then runs at once: no "running" at 0 episodes for seconds.
         await pilot.press("plus", "plus", "space")  # animated (fast)
         await wait_for(pilot, lambda: app.runner.latest.episodes >= 1, "the first hand", 5.0)

@@ -15,7 +15,7 @@ import pytest
 
 from tui_gym import __version__
 from tui_gym.cli import attach_negative_values, build_parser, main
-from tui_gym.commands import _eval_rows
+from tui_gym.cli.commands import _eval_rows
 from tui_gym.core.wrappers import CATALOG
 
 REPO = Path(__file__).resolve().parents[1]
@@ -109,7 +109,7 @@ def test_wrappers_lists_the_catalog_and_the_syntax(
 def test_envs_json(capsys: pytest.CaptureFixture[str]) -> None:
     data = run_json(capsys, "envs", "--json")
     games = {game["name"]: game for game in data["envs"]}
-    assert set(games) == {"blackjack", "gridworld"}
+    assert set(games) == {"blackjack", "gridworld", "frozenlake", "cliffwalking", "taxi"}
     assert games["blackjack"]["env_id"] == "Blackjack-v1"
     assert games["blackjack"]["actions"] == ["stick", "hit"]
     assert "gymnasium_env/GridWorld-v0" in games["gridworld"]["other_ids"]
@@ -272,24 +272,24 @@ def test_optimal_blackjack_json(capsys: pytest.CaptureFixture[str]) -> None:
     data = run_json(capsys, "optimal", "blackjack", "--json")
     assert data["optimal_value"] == pytest.approx(-0.0466, abs=5e-5)
     policy = data["policy"]
-    assert len(policy) == 200
-    assert all(set(e) == {"player_sum", "dealer_card", "usable_ace", "action"} for e in policy)
-    assert {e["action"] for e in policy} == {"stick", "hit"}
-    cells = {(e["player_sum"], e["dealer_card"], e["usable_ace"]) for e in policy}
-    assert cells == {(s, d, u) for s in range(12, 22) for d in range(1, 11) for u in (False, True)}
-    chart = {(e["player_sum"], e["dealer_card"], e["usable_ace"]): e["action"] for e in policy}
+    assert len(policy) == 280  # every decision state: hard 4-21, soft 12-21, dealer A-10
+    assert all(set(e) == {"state", "actions", "value"} for e in policy)
+    assert {a for e in policy for a in e["actions"]} == {"stick", "hit"}
+    cells = {tuple(e["state"]) for e in policy}
+    assert cells >= {(s, d, u) for s in range(12, 22) for d in range(1, 11) for u in (0, 1)}
+    chart = {tuple(e["state"]): e["actions"] for e in policy}
     # Basic strategy landmarks: stand on hard 17+, hit hard 12 against a 2, stand on 13 v 6.
-    assert all(chart[(s, d, False)] == "stick" for s in range(17, 22) for d in range(1, 11))
-    assert chart[(12, 2, False)] == "hit" and chart[(13, 6, False)] == "stick"
+    assert all(chart[(s, d, 0)] == ["stick"] for s in range(17, 22) for d in range(1, 11))
+    assert chart[(12, 2, 0)] == ["hit"] and chart[(13, 6, 0)] == ["stick"]
 
     sab = run_json(capsys, "optimal", "blackjack", "--sab", "--json")
     assert sab["optimal_value"] != pytest.approx(data["optimal_value"], abs=1e-4)
-    assert sab["rules"]["sab"] is True and data["rules"]["sab"] is False
+    assert sab["env_kwargs"]["sab"] is True and data["env_kwargs"]["sab"] is False
 
 
 def test_optimal_tables_and_gridworld(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = run(capsys, "optimal", "blackjack")
-    assert code == 0 and "-0.04656" in out and "Usable ace" in out
+    assert code == 0 and "\u22120.04656" in out and "usable ace" in out
     data = run_json(capsys, "optimal", "gridworld", "--size", "2", "--json")
     # 2x2: of the 12 ordered pairs of distinct cells, 8 are 1 step apart and 4 are 2.
     assert data["optimal_mean_steps"] == pytest.approx(16 / 12)
@@ -539,7 +539,7 @@ def test_python_m_tui_gym_prints_json() -> None:
     assert result.returncode == 0, result.stderr
     data = json.loads(result.stdout)
     assert data["optimal_value"] == pytest.approx(-0.0466, abs=5e-5)
-    assert len(data["policy"]) == 200
+    assert len(data["policy"]) == 280
 
 
 def test_python_m_tui_gym_errors_without_a_traceback(tmp_path: Path) -> None:

@@ -29,7 +29,6 @@ import pytest
 
 from tui_gym.algorithms import ALGORITHMS
 from tui_gym.core.session import Session
-from tui_gym.core.vector import VectorTrainer
 from tui_gym.core.wrappers import WrapperChoice
 
 NAMES = [cls.name for cls in ALGORITHMS]
@@ -66,8 +65,8 @@ def test_the_scalar_and_vector_engines_agree_in_distribution(name: str) -> None:
         for seed in range(3):
             session = Session("blackjack", seed=seed, algorithm=name, engine="scalar",
                               hp={"episodes": 800})
-            trainer = session.trainer if engine == "scalar" else VectorTrainer(
-                session.env, session.agent, session.keyer, seed=seed, num_envs=8)
+            trainer = session.trainer if engine == "scalar" else session.vector_trainer(
+                seed=seed, num_envs=8)
             trainer.run(episodes=800)
             values[engine].append(session.reference().figures["exact_value"])
     scalar, vector = np.mean(values["scalar"]), np.mean(values["vector"])

@@ -14,8 +14,8 @@ import pytest
 
 from tui_gym.algorithms import QLearning
 from tui_gym.cli import main
-from tui_gym.core.profiles import profile_for
 from tui_gym.core.session import Session, default_settings
+from tui_gym.games import game_for
 
 TOLERANCE = 0.005
 
@@ -61,7 +61,7 @@ def test_blackjack_defaults_are_undiscounted_with_visit_count_step_sizes() -> No
       `learning_rate` then keeps tracking the improving values of later states.
     """
     for hp in (
-        default_settings(profile_for("blackjack"), "q-learning"),
+        default_settings(game_for("blackjack"), "q-learning"),
         Session("blackjack").hp,
         QLearning.hyperparameters(),
     ):

@@ -18,11 +18,13 @@ import numpy as np
 import pytest
 
 from tui_gym.algorithms import ALGORITHMS, ALL_PARAMS, QLearning
-from tui_gym.cli import CliError, _env_kwargs, build_parser
-from tui_gym.commands import HP_FLAGS, _hyperparameters
+from tui_gym.cli import build_parser
+from tui_gym.cli.flags import HP_FLAGS, game_kwargs
+from tui_gym.cli.flags import hyperparameters as _hyperparameters
+from tui_gym.cli.output import CliError
 from tui_gym.core.params import Param, ParamError
-from tui_gym.core.profiles import PROFILES
 from tui_gym.core.wrappers import CATALOG, parse_wrapper_spec
+from tui_gym.games import GAMES, game_for
 
 SEED = 9
 CASES = 400
@@ -107,7 +109,7 @@ def nasty_value(rng: random.Random, depth: int = 0) -> Any:
 def all_params() -> list[Param]:
     """Every numeric or yes/no field a person or a file fills in, each once."""
     params = [p for spec in CATALOG.values() for p in spec.params]
-    params += [p for profile in PROFILES for p in profile.env_params]
+    params += [p for game in GAMES for p in game.params]
     params += [p for learner in ALGORITHMS for p in learner.params if isinstance(p, Param)]
     unique: dict[tuple[str, str], Param] = {}
     for param in params:
@@ -232,7 +234,7 @@ def test_the_command_line_answers_every_value(capsys: pytest.CaptureFixture[str]
         try:
             _hyperparameters(args, base)
             if flag == "--size":
-                _env_kwargs(args, "tui_gym/GridWorld-v0")
+                game_kwargs(args, game_for("gridworld"))
         except CliError as exc:
             check_one_line(str(exc), flag)
     assert set(HP_FLAGS) == {f.name for f in ALL_PARAMS}

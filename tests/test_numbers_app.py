@@ -13,9 +13,9 @@ import time
 from collections.abc import Callable
 
 from tui_gym.algorithms import QLearning
-from tui_gym.core.profiles import profile_for
-from tui_gym.core.profiles.base import signed
 from tui_gym.core.session import Session, default_settings
+from tui_gym.games import game_for
+from tui_gym.games.words import signed
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.widgets.scoreboard import Scoreboard
 
@@ -44,7 +44,7 @@ async def settled(pilot, app: TuiGymApp, shown: str) -> None:
 
 
 async def test_the_badge_follows_the_run() -> None:
-    hp = default_settings(profile_for("gridworld"), "q-learning").replace(episodes=40)
+    hp = default_settings(game_for("gridworld"), "q-learning").replace(episodes=40)
     app = TuiGymApp(Session("gridworld", seed=0, hp=hp))
     async with app.run_test(size=(120, 40)) as pilot:
         await pilot.press("t")
@@ -93,7 +93,7 @@ async def test_advice_and_scoreboard_read_the_trained_agent() -> None:
         observation = view.game.last.observation
         key = session.keyer.key(observation)
         q = session.agent.values([key])[0]
-        names = session.profile.action_names
+        names = session.game.action_names
         values = ", ".join(f"{names[a]} {signed(float(v), 3)}" for a, v in enumerate(q))
         detail = str(view.query_one("#play-detail").render())
         assert f"(Q {values})" in detail  # the advice reads the trained table

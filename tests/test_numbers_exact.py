@@ -18,25 +18,25 @@ import pytest
 
 from tui_gym.algorithms import QLearning
 from tui_gym.core.play import HumanGame, Tally
-from tui_gym.core.profiles.base import MIN_CI_EPISODES, return_summary
 from tui_gym.core.protocol import JsonlPlayer
-from tui_gym.core.reference.blackjack import (
+from tui_gym.core.session import Session
+from tui_gym.core.wrappers import parse_wrapper_spec
+from tui_gym.games.blackjack.batched import BatchedBlackjack
+from tui_gym.games.blackjack.solver import (
     POLICY_SHAPE,
     mixed_policy_value,
     optimal_policy,
     optimal_value,
     policy_value,
 )
-from tui_gym.core.reference.gridworld import (
+from tui_gym.games.gridworld.paths import (
     mixed_pair_fraction,
     mixed_steps_over_optimal,
     optimal_pair_fraction,
     policy_steps_over_optimal,
     shortest_path_policy,
 )
-from tui_gym.core.session import Session
-from tui_gym.core.vector import BatchedBlackjack
-from tui_gym.core.wrappers import parse_wrapper_spec
+from tui_gym.games.words import MIN_CI_EPISODES, return_summary
 
 Z = 4.0  # standard errors a sampled mean may stray from the exact value
 
@@ -49,7 +49,7 @@ def session(env: str, *wrappers: str, **env_kwargs) -> Session:
 def play_blackjack(session: Session, hit: np.ndarray, n: int, seed: int) -> np.ndarray:
     """Returns of `n` hands of the bare game's cards, hitting with probability `hit`,
     each step's reward passed through the session's wrappers' own code."""
-    rules = session.profile.rules(session.env_kwargs)
+    rules = session.game.oracle.rules(session.env_kwargs)
     env = BatchedBlackjack(n, rules, seed=seed)
     rng = np.random.default_rng(seed + 1)
 
@@ -88,7 +88,7 @@ def assert_close(returns: np.ndarray, exact: float) -> None:
 )
 def test_wrapped_blackjack_figures_match_play(wrappers, env_kwargs) -> None:
     game = session("blackjack", *wrappers, **env_kwargs)
-    profile = game.profile
+    profile = game.game.oracle
     scope = profile.scope(game.env_kwargs, game.changes)
     assert scope.exact and "exact with" in scope.note
     rules = profile.rules(game.env_kwargs, game.changes)
@@ -133,7 +133,7 @@ def test_a_negative_scale_flips_the_advice_and_the_hint() -> None:
 )
 def test_changes_beyond_the_exact_figures_claim_no_optimum(env: str, wrapper: str) -> None:
     game = session(env, wrapper)
-    scope = game.profile.scope(game.env_kwargs, game.changes)
+    scope = game.game.oracle.scope(game.env_kwargs, game.changes)
     assert not scope.exact
     assert game.reference().scope == scope
     player = JsonlPlayer(game, seed=3)
@@ -148,7 +148,7 @@ def test_changes_beyond_the_exact_figures_claim_no_optimum(env: str, wrapper: st
 
 def test_a_time_limit_no_hand_reaches_changes_nothing() -> None:
     game = session("blackjack", "TimeLimit:max_episode_steps=20")
-    assert game.profile.scope(game.env_kwargs, game.changes).exact
+    assert game.game.oracle.scope(game.env_kwargs, game.changes).exact
     assert game.reference().figures["optimal_value"] == pytest.approx(
         session("blackjack").reference().figures["optimal_value"])
 
@@ -169,11 +169,11 @@ def test_gridworld_claims_shortest_paths_optimal_only_when_they_are(
     wrappers, env_kwargs, exact, note
 ) -> None:
     game = session("gridworld", *wrappers, **env_kwargs)
-    scope = game.profile.scope(game.env_kwargs, game.changes)
+    scope = game.game.oracle.scope(game.env_kwargs, game.changes)
     assert scope.exact == exact and scope.note.startswith(note)
     play = HumanGame(game, seed=0)
     play.reset()
-    advice = game.profile.advice(play.env, game.env_kwargs)
+    advice = game.game.oracle.advice(play.env, game.env_kwargs)
     assert bool(advice.optimal) == exact and bool(advice.unwrapped_optimal) != exact
 
 
@@ -204,7 +204,7 @@ def test_a_half_trained_table_counts_its_ties_as_coin_tosses() -> None:
     q = game.base_q()
     tied = q[:, 0] == q[:, 1]
     assert tied.any() and not tied.all()
-    hit = game.profile.hit_probability(q)
+    hit = game.game.oracle.hit_probability(q)
     assert set(np.unique(hit[hit > 0])) <= {0.5, 1.0}
     exact = game.reference().figures["exact_value"]
     assert exact == pytest.approx(mixed_policy_value(hit))

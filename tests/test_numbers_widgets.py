@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from textual.app import App, ComposeResult
 
-from tui_gym.core.profiles.base import ReferenceMetrics, Scope
 from tui_gym.core.training import SERIES_NAMES, TrainingSnapshot
+from tui_gym.games.base import ReferenceMetrics, Scope
 from tui_gym.ui.widgets.numbers import compact_count, fit, number_forms
 from tui_gym.ui.widgets.progress_line import ProgressLine
 from tui_gym.ui.widgets.stats_panel import StatsPanel, run_state

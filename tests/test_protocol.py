@@ -10,8 +10,8 @@ import sys
 import pytest
 
 from tui_gym.core.protocol import JsonlPlayer
-from tui_gym.core.reference.blackjack import BlackjackRules, optimal_policy
 from tui_gym.core.session import Session
+from tui_gym.games.blackjack.solver import BlackjackRules, optimal_policy
 
 
 def run_protocol(env: str, lines: list[str], *extra: str) -> tuple[list[dict], str, int]:

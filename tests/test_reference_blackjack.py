@@ -1,4 +1,4 @@
-"""Tests for `tui_gym.core.reference.blackjack`: the exact Blackjack DP.
+"""Tests for `tui_gym.games.blackjack.solver`: the exact Blackjack DP.
 
 Three independent yardsticks: Sutton & Barto's published optimal strategy; an
 exact evaluator written here on Gymnasium's own hand functions and its own
@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from gymnasium.envs.toy_text import blackjack as gym_bj
 
-from tui_gym.core.reference import (
+from tui_gym.games.blackjack.solver import (
     DECISION_MASK,
     HIT,
     POLICY_SHAPE,

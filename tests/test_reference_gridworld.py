@@ -1,4 +1,4 @@
-"""Tests for `tui_gym.core.reference.gridworld`: shortest paths and policy checks."""
+"""Tests for `tui_gym.games.gridworld.paths`: shortest paths and policy checks."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import tui_gym  # noqa: F401  (registers the GridWorld ids)
-from tui_gym.core.reference import (
+from tui_gym.games.gridworld.paths import (
     all_pairs,
     optimal_actions,
     optimal_pair_fraction,

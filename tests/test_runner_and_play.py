@@ -8,8 +8,9 @@ import pytest
 
 from tui_gym.algorithms import QLearning
 from tui_gym.core.play import HumanGame, PlayError, Tally
-from tui_gym.core.runner import SPEEDS, TrainingRunner
+from tui_gym.core.runner import TrainingRunner
 from tui_gym.core.session import Session
+from tui_gym.core.speeds import SPEEDS
 from tui_gym.core.wrappers import WrapperChoice
 
 

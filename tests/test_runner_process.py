@@ -16,10 +16,10 @@ import pytest
 from tui_gym.algorithms import QLearning
 from tui_gym.core import process_runner
 from tui_gym.core.process_runner import ProcessRunner
-from tui_gym.core.profiles import profile_for
 from tui_gym.core.runner import SPEEDS
 from tui_gym.core.session import Session, default_settings
 from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.games import game_for
 
 from .test_runner_and_play import wait_for
 
@@ -70,7 +70,7 @@ def test_a_child_that_keeps_dying_turns_training_off(blackjack_runner, monkeypat
 
 
 def test_a_rebuild_that_keeps_the_agent_loses_no_episode() -> None:
-    hp = default_settings(profile_for("gridworld"), "q-learning").replace(episodes=10_000_000)
+    hp = default_settings(game_for("gridworld"), "q-learning").replace(episodes=10_000_000)
     session = Session("gridworld", hp=hp, seed=0)
     runner = ProcessRunner(session)
     try:

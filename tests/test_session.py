@@ -8,9 +8,10 @@ import pytest
 
 import tui_gym  # noqa: F401  (registers GridWorld)
 from tui_gym.algorithms import QLearning
-from tui_gym.core.profiles import BlackjackProfile, GridWorldProfile
 from tui_gym.core.session import Session, default_settings
 from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.games.blackjack import BlackjackGame as BlackjackProfile
+from tui_gym.games.gridworld import GridWorldGame as GridWorldProfile
 
 W = WrapperChoice.make
 GRID = "tui_gym/GridWorld-v0"
@@ -35,10 +36,10 @@ def test_session_for_each_game_and_alias(
 ) -> None:
     session = Session(name)
     assert session.env_id == env_id
-    assert isinstance(session.profile, profile)
+    assert isinstance(session.game, profile)
     assert session.agent.n_actions == n_actions
     assert session.keyer.dense
-    assert session.hp == default_settings(session.profile, "q-learning")
+    assert session.hp == default_settings(session.game, "q-learning", session.env_kwargs)
     assert session.trainer.run(episodes=20) == 20
 
 
@@ -53,8 +54,10 @@ def test_env_kwargs_are_completed_and_checked() -> None:
 
 def test_unknown_env_is_a_value_error_naming_the_choices() -> None:
     with pytest.raises(ValueError) as caught:
-        Session("CartPole-v1")
+        Session("NoSuchGame-v0")
     assert "blackjack" in str(caught.value) and "gridworld" in str(caught.value)
+    with pytest.raises(ValueError, match="does not fit: its observation space is Box"):
+        Session("CartPole-v1")
 
 
 # -- rebuilding -----------------------------------------------------------------
@@ -135,7 +138,7 @@ def test_a_misfit_wrapper_is_skipped_and_the_reason_given() -> None:
     assert report.kept_agent and session.agent is agent
     assert [c.name for c, _ in report.skipped] == ["DistanceShaping"]
     reason = report.skipped[0][1]
-    assert "GridWorld" in reason and reason in report.notice
+    assert "info['distance']" in reason and reason in report.notice
     assert "Not applied" in report.notice
     assert session.skipped == report.skipped
     assert [c.name for c in session.applied] == ["StepPenalty"]
@@ -287,18 +290,19 @@ def test_set_hyperparameters_keeps_the_table() -> None:
 
 
 def test_blackjack_heatmap_cells_read_the_q_table() -> None:
-    from tui_gym.core.profiles.blackjack import (
+    from tui_gym.games.blackjack.game import (
         ACTION_LETTERS,
         CHART_SUMS,
         DEALER_CARDS,
-        BlackjackProfile,
+        BlackjackGame,
         _row_of,
     )
-    from tui_gym.core.reference.blackjack import BlackjackRules, optimal_policy
+    from tui_gym.games.blackjack.solver import BlackjackRules, optimal_policy
 
     rows = len(_row_of())
     q = np.random.default_rng(3).normal(size=(rows, 2))
-    panels = BlackjackProfile().heatmaps(q, {})
+    game = BlackjackGame()
+    panels = game.layout.heatmaps(q, {}, None, game.oracle.optimal_marks({}))
     best = optimal_policy(BlackjackRules())
     for panel, usable in zip(panels, (1, 0), strict=True):
         for r, player in enumerate(CHART_SUMS):

@@ -24,7 +24,7 @@ import tui_gym  # noqa: F401  (registers GridWorld)
 from tui_gym.algorithms import QLearning
 from tui_gym.core import storage
 from tui_gym.core.session import Session
-from tui_gym.core.storage import FORMAT_NAME, FORMAT_VERSION, StorageError, load_session
+from tui_gym.core.storage import FORMAT_NAME, FORMAT_VERSION, StorageError, read_agent
 from tui_gym.core.wrappers import WrapperChoice
 
 W = WrapperChoice.make
@@ -513,7 +513,7 @@ CRAFTED: dict[str, tuple[str, object, str]] = {
         "env_kwargs is not valid: GridWorld takes size",
     ),
     "unknown game": ("dense", lambda good: _with_meta(good, env_id="Pong-v9"),
-                     "env_id is not valid: unknown env 'Pong-v9'"),
+                     "env_id is not valid: unknown environment 'Pong-v9'"),
     "game id a number": ("dense", lambda good: _with_meta(good, env_id=5),
                          "env_id must be a game id"),
 }
@@ -630,7 +630,7 @@ def test_newer_version_says_to_upgrade(tmp_path: Path, saves: dict[str, bytes]) 
     path = tmp_path / "future.tgym"
     path.write_bytes(_with_meta(saves["dense"], version=FORMAT_VERSION + 1))
     with pytest.raises(StorageError, match="upgrade tui-gym"):
-        load_session(path)
+        read_agent(path)
 
 
 def test_missing_file_and_folder(tmp_path: Path) -> None:

@@ -36,11 +36,11 @@ async def test_views_and_games_switch_by_key():
         assert switcher.current == "play"
         await pilot.press("g")
         await pilot.pause()
-        assert app.session.profile.name == "gridworld"
+        assert app.session.game.name == "gridworld"
         assert app.sub_title == "GridWorld"
         await pilot.press("b")
         await pilot.pause()
-        assert app.session.profile.name == "blackjack"
+        assert app.session.game.name == "blackjack"
 
 
 async def test_help_lists_every_app_key_and_closes():
@@ -102,7 +102,7 @@ async def test_a_misfit_wrapper_shows_its_reason_and_is_not_applied():
         await pilot.pause()
         shaping = row(app, "DistanceShaping")
         assert shaping.has_class("-misfit")
-        assert "GridWorld" in str(shaping.query_one(".reason", Static).render())
+        assert "info['distance']" in str(shaping.query_one(".reason", Static).render())
         assert "DistanceShaping" not in app.session.chain_repr()
         assert "not applied" in chain_text(app)
 
@@ -146,7 +146,7 @@ async def test_game_picker_switches_game():
     async with app.run_test(size=(120, 40)) as pilot:
         await pilot.click("#game-gridworld")
         await pilot.pause()
-        assert app.session.profile.name == "gridworld"
+        assert app.session.game.name == "gridworld"
         assert app.query_one("#game-gridworld", RadioButton).value
 
 
@@ -165,7 +165,7 @@ async def test_too_small_terminal_shows_a_message_and_ignores_keys():
             await pilot.press(key)
         await pilot.pause()
         assert isinstance(app.screen, TooSmallScreen)
-        assert app.session.profile.name == "blackjack"
+        assert app.session.game.name == "blackjack"
         assert app.current_view == "play"
         assert game.scene()["player"] == player and not game.done
         assert not app.runner.running and app.runner.latest.episodes == 0
@@ -176,7 +176,7 @@ async def test_too_small_terminal_shows_a_message_and_ignores_keys():
         assert app.focused is app.play_view.board  # back where it was
         await pilot.press("g")  # and keys act again
         await pilot.pause()
-        assert app.session.profile.name == "gridworld"
+        assert app.session.game.name == "gridworld"
         await pilot.resize_terminal(70, 30)
         await pilot.pause()
         assert isinstance(app.screen, TooSmallScreen)

@@ -18,13 +18,13 @@ import pytest
 
 from tests.screen import screen_text
 from tui_gym.core.play import HumanGame
-from tui_gym.core.profiles.base import plural, signed
-from tui_gym.core.reference.gridworld import (
+from tui_gym.core.session import Session
+from tui_gym.games.gridworld.paths import (
     mixed_steps_over_optimal,
     policy_steps_over_optimal,
     shortest_path_policy,
 )
-from tui_gym.core.session import Session
+from tui_gym.games.words import plural, signed
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.play_view import WATCHING, PlayView
 from tui_gym.ui.widgets.scoreboard import Scoreboard
@@ -73,7 +73,7 @@ async def wait_for(pilot, condition: Callable[[], bool], what: str) -> None:
 
 def key_of(view: PlayView, action: int) -> str:
     """The key that makes `action` on the current board (Blackjack h/s, grid arrows)."""
-    name = view.game.profile.action_names[action]
+    name = view.game.game.action_names[action]
     return {"hit": "h", "stick": "s"}.get(name, ARROW.get(name, name))
 
 
@@ -92,7 +92,7 @@ async def test_coach_prices_a_blunder_and_approves_the_optimum() -> None:
         await pilot.pause()
         assert view.coach_on and "coach on" in shown(view, "#play-title")
 
-        advice = game.profile.advice(game.env, app.session.env_kwargs)
+        advice = game.game.oracle.advice(game.env, app.session.env_kwargs)
         assert advice.optimal == (0,), "on a hard 20, stick is the optimum"
         cost = advice.values[0] - advice.values[1]
         assert cost > 0
@@ -113,11 +113,11 @@ async def test_coach_prices_a_blunder_and_approves_the_optimum() -> None:
         await pilot.press("n")
         await pilot.pause()
         assert shown(view, "#play-coach") == "", "a new hand starts without a verdict"
-        advice = game.profile.advice(game.env, app.session.env_kwargs)
+        advice = game.game.oracle.advice(game.env, app.session.env_kwargs)
         best = advice.optimal[0]
         await pilot.press(key_of(view, best))
         await pilot.pause()
-        name = game.profile.action_names[best]
+        name = game.game.action_names[best]
         assert shown(view, "#play-coach") == f"✓ {name} was optimal"
         assert f"✓ {name} was optimal" in screen_text(app)
         assert view.scorecard.decisions == decisions + 1
@@ -139,7 +139,7 @@ async def test_coach_flags_moves_off_every_shortest_path() -> None:
         game = view.game
         await pilot.press("c")
         await pilot.pause()
-        names = game.profile.action_names
+        names = game.game.action_names
 
         def distance() -> int:
             scene = game.scene()
@@ -149,7 +149,7 @@ async def test_coach_flags_moves_off_every_shortest_path() -> None:
         def off_path_move() -> str:
             """A move off every shortest path that does not bump into a wall."""
             scene, size = game.scene(), game.scene()["size"]
-            optimal = game.profile.advice(game.env, app.session.env_kwargs).optimal
+            optimal = game.game.oracle.advice(game.env, app.session.env_kwargs).optimal
             for action, name in enumerate(names):
                 dx, dy = MOVES[name]
                 x, y = scene["agent"][0] + dx, scene["agent"][1] + dy
@@ -167,7 +167,7 @@ async def test_coach_flags_moves_off_every_shortest_path() -> None:
         assert view.scorecard.decisions == 1 and view.scorecard.agreed == 0
 
         while not game.done:  # walk home along a shortest path: every move approved
-            optimal = game.profile.advice(game.env, app.session.env_kwargs).optimal
+            optimal = game.game.oracle.advice(game.env, app.session.env_kwargs).optimal
             before = distance()
             await pilot.press(ARROW[names[optimal[0]]])
             await pilot.pause()
@@ -212,13 +212,13 @@ async def test_advice_shows_the_optimum_and_the_agent() -> None:
         await pilot.press("i")
         await pilot.pause()
         detail = shown(view, "#play-detail")
-        advice = game.profile.advice(game.env, session.env_kwargs)
+        advice = game.game.oracle.advice(game.env, session.env_kwargs)
         assert advice.note in detail
         choice = session.greedy_actions_for(game.last.observation)
         assert choice is not None, "3000 hands visit every opening state"
         ties, q = choice
         assert tuple(np.flatnonzero(q == q.max())) == ties
-        picks = " or ".join(game.profile.action_names[a] for a in ties)
+        picks = " or ".join(game.game.action_names[a] for a in ties)
         assert f"agent: {picks} (Q stick {signed(q[0], 3)}, hit {signed(q[1], 3)})" in detail
         assert "agent: " in screen_text(app) and "optimal: " in screen_text(app)
 
@@ -245,7 +245,7 @@ async def test_scoreboard_matches_the_tally_and_the_exact_reference() -> None:
         optimal_moves = 0
         for hand in range(4):  # stick on the first two hands, follow the advice after
             while not game.done:
-                advice = game.profile.advice(game.env, session.env_kwargs)
+                advice = game.game.oracle.advice(game.env, session.env_kwargs)
                 action = 0 if hand < 2 else advice.optimal[0]
                 optimal_moves += action in advice.optimal
                 await pilot.press(key_of(view, action))

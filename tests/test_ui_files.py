@@ -124,7 +124,7 @@ async def test_load_says_what_is_wrong_and_asks_before_replacing_a_trained_agent
         await pilot.press("escape")
         await pilot.pause()
         assert not isinstance(app.screen, FileScreen)
-        assert app.session.profile.name == "blackjack"
+        assert app.session.game.name == "blackjack"
 
         # A GridWorld agent while Blackjack shows: the app switches to it (nothing to
         # replace there yet), and Blackjack keeps its own agent.
@@ -132,7 +132,7 @@ async def test_load_says_what_is_wrong_and_asks_before_replacing_a_trained_agent
         await pilot.press("ctrl+o")
         await pilot.pause()
         await type_name(pilot, "g")  # .tgym found
-        assert app.session.profile.name == "gridworld"
+        assert app.session.game.name == "gridworld"
         assert app.session.trainer.episodes == 50 and app.session.seed == 3
         assert any("Loaded" in n.message for n in app._notifications)
         await pilot.press("b")

@@ -13,12 +13,13 @@ from collections.abc import Sequence
 from textual.app import App, ComposeResult
 from textual.widgets import Static
 
-from tui_gym.core.profiles.blackjack import card_label
 from tui_gym.core.session import Session
 from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.games.blackjack.game import card_label
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.play_view import PlayView
-from tui_gym.ui.widgets.boards import BOARDS, BoardButton
+from tui_gym.ui.widgets.board_kinds import BOARDS
+from tui_gym.ui.widgets.boards import BoardButton
 from tui_gym.ui.widgets.cards_board import CardsBoard
 from tui_gym.ui.widgets.grid_board import GridBoard
 
@@ -334,7 +335,7 @@ async def test_switching_games_swaps_the_board_and_keeps_focus() -> None:
         view = app.play_view
         assert isinstance(view.board, GridBoard) and len(view.query(GridBoard)) == 1
         assert not view.query(CardsBoard)
-        assert view.game.profile.board == "grid"
+        assert view.game.game.board == "grid"
         assert app.focused is view.board
         assert "GridWorld" in shown(view, "#play-title")
         keys = [key for key, _ in view.key_help()]
@@ -389,7 +390,8 @@ async def test_passive_boards_draw_but_never_take_keys() -> None:
     app = PassiveBoards()
     async with app.run_test(size=(60, 30)) as pilot:
         cards, grid = app.query_one(CardsBoard), app.query_one(GridBoard)
-        cards.show_scene({"player": [1, 6], "dealer": [10, 7]}, reveal=True)
+        cards.show_scene({"player": [1, 6], "dealer": [10, 7], "player_total": 17,
+                          "player_usable": True, "dealer_total": 17}, reveal=True)
         grid.show_scene({"size": 4, "agent": (0, 0), "target": (3, 3)}, reveal=True)
         await pilot.pause()
         assert not cards.focusable and not grid.focusable

@@ -13,9 +13,9 @@ from textual.app import App
 from textual.widgets import OptionList, Static
 
 from tui_gym.core.play import HumanGame
-from tui_gym.core.profiles import PROFILES
 from tui_gym.core.recording import Recorder, Recording, read_recording
 from tui_gym.core.session import Session
+from tui_gym.games import GAMES
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.jump_screen import JumpScreen
 from tui_gym.ui.play_view import PlayView
@@ -41,7 +41,7 @@ def record(path: Path, env: str, episodes: int, seed: int = 0, moves: int = 40) 
     session = Session(env, seed=seed)
     game = HumanGame(session, seed=seed)
     rng = random.Random(seed)
-    names = list(session.profile.action_names)
+    names = list(session.game.action_names)
     with Recorder(path, session, source="app", seed=seed) as recorder:
         game.recorder = recorder
         for _ in range(episodes):
@@ -145,7 +145,7 @@ async def test_a_broken_file_replays_its_good_lines_with_one_message(tmp_path: P
         assert screen.episode_index == 2
 
 
-@pytest.mark.parametrize("profile", PROFILES, ids=lambda p: p.name)
+@pytest.mark.parametrize("profile", GAMES, ids=lambda p: p.name)
 async def test_every_board_kind_replays_forward_and_back_alike(
     tmp_path: Path, profile: Any
 ) -> None:

@@ -74,9 +74,10 @@ async def test_each_game_keeps_its_agent_settings_wrappers_curves_and_play():
 
         await pilot.press("g")
         await pilot.pause()
-        assert app.session.profile.name == "gridworld"
+        assert app.session.game.name == "gridworld"
         assert app.session.trainer.episodes == 0 and not app.session.choices
-        assert app.session.hp == default_settings(app.session.profile, "q-learning")
+        assert app.session.hp == default_settings(app.session.game, "q-learning",
+                                                  app.session.env_kwargs)
         assert not app.train_view.charts.data("return")
         assert any("a new agent" in n.message for n in app._notifications)
         await pilot.press("full_stop")
@@ -99,7 +100,7 @@ async def test_each_game_keeps_its_agent_settings_wrappers_curves_and_play():
         # The picker switches the same way, and GridWorld kept its one episode.
         await pilot.click("#game-gridworld")
         await pilot.pause()
-        assert app.session.profile.name == "gridworld" and app.session.trainer.episodes == 1
+        assert app.session.game.name == "gridworld" and app.session.trainer.episodes == 1
         # So does the command palette.
         await pilot.press("ctrl+p")
         await pilot.pause()
@@ -124,7 +125,7 @@ async def test_the_child_process_trains_the_restored_agent():
         await wait_for(pilot, lambda: app.runner.latest.episodes > 500, "some training")
         agent = session.agent
         await pilot.press("g")  # while the child trains: it pauses and hands back
-        await wait_for(pilot, lambda: app.session.profile.name == "gridworld", "the switch")
+        await wait_for(pilot, lambda: app.session.game.name == "gridworld", "the switch")
         assert not app.runner.running
         trained = session.trainer.episodes
         assert trained > 500 and agent.episode == trained  # every episode came back

@@ -13,9 +13,9 @@ from collections.abc import Callable
 import pytest
 
 from tui_gym.algorithms import QLearning
-from tui_gym.core.profiles import profile_for
 from tui_gym.core.session import Session, default_settings
 from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.games import game_for
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.train_view import TrainView
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
@@ -65,7 +65,7 @@ def blackjack_app(episodes: int = 1_000_000, engine: str = "scalar") -> TuiGymAp
 
 
 def gridworld_app(episodes: int = 1_000_000, engine: str = "scalar", **kwargs) -> TuiGymApp:
-    hp = default_settings(profile_for("gridworld"), "q-learning").replace(episodes=episodes)
+    hp = default_settings(game_for("gridworld"), "q-learning").replace(episodes=episodes)
     return TuiGymApp(Session("gridworld", seed=0, hp=hp, engine=engine, **kwargs))
 
 
@@ -345,7 +345,7 @@ async def test_switching_game_reloads_the_view() -> None:
         view = await open_train(pilot)
         assert view.heatmap.focus_cell is None
         await pilot.press("g")
-        await wait_for(pilot, lambda: app.session.profile.name == "gridworld", "GridWorld")
+        await wait_for(pilot, lambda: app.session.game.name == "gridworld", "GridWorld")
         await pilot.pause()
         assert "target at (4, 4)" in view.heatmap.plain
         assert view.heatmap.focus_cell == (0, 4)

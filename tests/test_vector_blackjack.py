@@ -1,4 +1,4 @@
-"""Tests for `tui_gym.core.vector.blackjack`: batched Blackjack plays Gymnasium's rules.
+"""Tests for `tui_gym.games.blackjack.batched`: batched Blackjack plays Gymnasium's rules.
 
 Three yardsticks: Gymnasium's own env fed the same cards (every observation
 and reward equal, step for step); the exact values of `policy_value` for
@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 from gymnasium.envs.toy_text import blackjack as gym_bj
 
-from tui_gym.core.reference.blackjack import (
+from tui_gym.games.blackjack.batched import BatchedBlackjack
+from tui_gym.games.blackjack.solver import (
     DECISION_MASK,
     HIT,
     STICK,
@@ -26,7 +27,6 @@ from tui_gym.core.reference.blackjack import (
     policy_from_function,
     policy_value,
 )
-from tui_gym.core.vector import BatchedBlackjack
 
 PLAIN = BlackjackRules()
 NATURAL = BlackjackRules(natural=True)

@@ -1,4 +1,4 @@
-"""Tests for `tui_gym.core.vector.gridworld`: batched GridWorld moves like the env.
+"""Tests for `tui_gym.games.gridworld.batched`: batched GridWorld moves like the env.
 
 Every (agent, target, action) on sizes 2..6 is stepped in both engines and
 compared; the time limit, the starting distribution (a chi-square bound from
@@ -14,11 +14,14 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
+from tests.game_support import form_of
 from tui_gym.core.obskey import ObservationKeyer
-from tui_gym.core.reference.gridworld import all_pairs
-from tui_gym.core.vector import BatchedGridWorld, NoBatchedForm, plan_for_env, vector_support
+from tui_gym.core.session import vector_support
+from tui_gym.core.vector import NoBatchedForm, plan_for_env
 from tui_gym.core.wrappers import WrapperChoice, build_env
 from tui_gym.envs.gridworld import GridWorldEnv
+from tui_gym.games.gridworld.batched import BatchedGridWorld
+from tui_gym.games.gridworld.paths import all_pairs
 
 
 def chi2_bound(df: int, z: float = 4.5) -> float:
@@ -53,7 +56,7 @@ def test_every_transition_matches_the_env(size: int, rewards: tuple[float, float
         assert result.reward[i] == reward
         assert bool(result.terminated[i]) == terminated
         assert not result.truncated[i] and not truncated
-        assert result.distance[i] == info["distance"]
+        assert result.info["distance"][i] == info["distance"]
     assert result.terminated.any()
 
 
@@ -135,7 +138,7 @@ WRAPPED = [
 def test_reward_wrappers_and_time_limit_match_the_built_env() -> None:
     """Random walks in lockstep through the catalog's stack and the batched plan."""
     env = build_env("tui_gym/GridWorld-v0", {"size": 4, "reward_scale": 2.0}, WRAPPED)
-    plan = plan_for_env(env)
+    plan = plan_for_env(env, form_of(env))
     assert plan.max_episode_steps == 12
     assert [t.name for t in plan.rewards] == [
         "StepPenalty",
@@ -155,7 +158,7 @@ def test_reward_wrappers_and_time_limit_match_the_built_env() -> None:
             action = int(rng.integers(4))
             obs, reward, terminated, truncated, _ = env.step(action)
             result = batched.step(np.array([action]), autoreset=False)
-            shaped = plan.transform_rewards(result.reward, result.distance)
+            shaped = plan.transform_rewards(result.reward, result.info)
             assert tuple(result.next_obs[0]) == _flat(obs)
             assert shaped[0] == pytest.approx(reward, abs=1e-12)
             assert (bool(result.terminated[0]), bool(result.truncated[0])) == (
@@ -168,7 +171,8 @@ def test_reward_wrappers_and_time_limit_match_the_built_env() -> None:
 
 
 def test_the_registered_time_limit_is_300() -> None:
-    plan = plan_for_env(build_env("tui_gym/GridWorld-v0", {"size": 5}))
+    grid = build_env("tui_gym/GridWorld-v0", {"size": 5})
+    plan = plan_for_env(grid, form_of(grid))
     assert plan.max_episode_steps == 300
     assert plan.describe() == "vector engine: GridWorld 5x5"
     longer = build_env(
@@ -176,7 +180,7 @@ def test_the_registered_time_limit_is_300() -> None:
         {"size": 5},
         [WrapperChoice.make("TimeLimit", max_episode_steps=500)],
     )
-    assert plan_for_env(longer).max_episode_steps == 500
+    assert plan_for_env(longer, form_of(longer)).max_episode_steps == 500
 
 
 @pytest.mark.parametrize(
@@ -196,7 +200,7 @@ def test_the_registered_time_limit_is_300() -> None:
             False,
             "TimeAwareObservation",
         ),
-        ("CartPole-v1", [], False, "CartPoleEnv has no batched form"),
+        ("CartPole-v1", [], False, "CartPole-v1 does not fit"),
     ],
 )
 def test_vector_support_says_what_and_why(
@@ -211,7 +215,7 @@ def test_vector_support_says_what_and_why(
 def test_an_unbatchable_env_raises_with_the_reason() -> None:
     env = build_env("Blackjack-v1", {}, [WrapperChoice.make("StickyAction")])
     with pytest.raises(NoBatchedForm, match="StickyAction has no batched form"):
-        plan_for_env(env)
+        plan_for_env(env, form_of(env))
 
 
 def test_bad_arguments_are_rejected() -> None:

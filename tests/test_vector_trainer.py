@@ -15,9 +15,9 @@ import tracemalloc
 import numpy as np
 import pytest
 
+from tests.game_support import form_of
 from tui_gym.algorithms import Learner, QLearning, Settings
 from tui_gym.core.obskey import ObservationKeyer
-from tui_gym.core.profiles import profile_for
 from tui_gym.core.session import default_settings
 from tui_gym.core.stats import RollingWindow, Series
 from tui_gym.core.training import Engine, Trainer
@@ -27,9 +27,13 @@ from tui_gym.core.vector import (
     make_vector_trainer,
 )
 from tui_gym.core.wrappers import WrapperChoice, build_env
+from tui_gym.games import game_for
 
 BLACKJACK = "Blackjack-v1"
 GRID = "tui_gym/GridWorld-v0"
+
+
+FORM = game_for("Blackjack-v1").batched_form({"natural": False, "sab": False})
 
 
 def _agent(env_id: str, hp: Settings | None = None, seed: int = 0, **kwargs):
@@ -77,14 +81,14 @@ def test_series_many_equals_pushing_one_by_one() -> None:
 
 
 def _blackjack_gap(agent: Learner, keyer: ObservationKeyer) -> float:
-    profile = profile_for(BLACKJACK)
-    keys = [keyer.key(obs) for obs in profile.base_observations({})]
-    return profile.reference(agent.values(keys), {}).figures["gap"]
+    game = game_for(BLACKJACK)
+    keys = [keyer.key(obs) for obs in game.states.base_observations({})]
+    return game.oracle.reference(agent.values(keys), {}).figures["gap"]
 
 
 def test_learns_blackjack_to_within_0_005_of_the_optimum() -> None:
     env, agent, keyer = _agent(BLACKJACK, QLearning.hyperparameters(episodes=500_000), seed=3)
-    trainer = VectorTrainer(env, agent, keyer, seed=3)
+    trainer = VectorTrainer(env, agent, keyer, form=form_of(env), seed=3)
     assert trainer.run(episodes=500_000) == 500_000
     assert agent.episode == 500_000 and trainer.episodes == 500_000
     assert agent.epsilon == agent.hp.epsilon_at(500_000)
@@ -94,13 +98,14 @@ def test_learns_blackjack_to_within_0_005_of_the_optimum() -> None:
 
 
 def test_learns_gridworld_shortest_paths() -> None:
-    profile = profile_for(GRID)
+    profile = game_for(GRID)
     hp = default_settings(profile, "q-learning")
     env, agent, keyer = _agent(GRID, hp, seed=1, size=5)
-    trainer = VectorTrainer(env, agent, keyer, seed=1)
+    trainer = VectorTrainer(env, agent, keyer, form=form_of(env), seed=1)
     trainer.run(episodes=hp.episodes)
-    keys = [keyer.key(obs) for obs in profile.base_observations({"size": 5})]
-    fraction = profile.reference(agent.values(keys), {"size": 5}).figures["optimal_pair_fraction"]
+    keys = [keyer.key(obs) for obs in profile.states.base_observations({"size": 5})]
+    reference = profile.oracle.reference(agent.values(keys), {"size": 5})
+    fraction = reference.figures["optimal_pair_fraction"]
     assert fraction > 0.95
     assert trainer.windows["length"].mean < 8  # shortest paths on 5x5 average 3.3 steps
 
@@ -108,7 +113,7 @@ def test_learns_gridworld_shortest_paths() -> None:
 def test_same_seeds_give_the_same_table_however_the_run_is_sliced() -> None:
     def train(seconds: float | None) -> VectorTrainer:
         env, agent, keyer = _agent(BLACKJACK, QLearning.hyperparameters(episodes=30_000), seed=5)
-        trainer = VectorTrainer(env, agent, keyer, seed=5, num_envs=256)
+        trainer = VectorTrainer(env, agent, keyer, form=form_of(env), seed=5, num_envs=256)
         while trainer.remaining:  # as the runner does: time slices of what remains
             trainer.run(episodes=trainer.remaining, seconds=seconds)
         return trainer
@@ -119,13 +124,13 @@ def test_same_seeds_give_the_same_table_however_the_run_is_sliced() -> None:
     assert (whole.agent.counts == sliced.agent.counts).all()
     assert whole.windows["return"].mean == sliced.windows["return"].mean
     env, agent, keyer = _agent(BLACKJACK, QLearning.hyperparameters(episodes=30_000), seed=6)
-    VectorTrainer(env, agent, keyer, seed=6, num_envs=256).run(episodes=30_000)
+    VectorTrainer(env, agent, keyer, form=form_of(env), seed=6, num_envs=256).run(episodes=30_000)
     assert not (agent.q == whole.agent.q).all()
 
 
 def test_runs_finish_exactly_the_episodes_asked_for() -> None:
     env, agent, keyer = _agent(GRID, size=4)
-    trainer = VectorTrainer(env, agent, keyer, seed=0, num_envs=64)
+    trainer = VectorTrainer(env, agent, keyer, form=form_of(env), seed=0, num_envs=64)
     assert trainer.run(episodes=1) == 1
     assert trainer.run(episodes=10) == 10
     assert trainer.episode_in_progress()  # envs keep playing: games carry over to the next run
@@ -146,7 +151,8 @@ def test_runs_finish_exactly_the_episodes_asked_for() -> None:
 
 def test_memory_stays_bounded() -> None:
     env, agent, keyer = _agent(BLACKJACK, seed=2)
-    trainer = VectorTrainer(env, agent, keyer, seed=2, num_envs=1024, series_capacity=64)
+    trainer = VectorTrainer(env, agent, keyer, form=form_of(env), seed=2, num_envs=1024,
+                            series_capacity=64)
     trainer.run(episodes=50_000)
     tracemalloc.start()
     before, _ = tracemalloc.get_traced_memory()
@@ -162,7 +168,7 @@ def test_an_engine_beside_the_scalar_trainer() -> None:
     env, agent, keyer = _agent(BLACKJACK, seed=4)
     scalar = Trainer(env, agent, keyer, seed=4)
     scalar.run(episodes=200)
-    vector = VectorTrainer(env, agent, keyer, seed=4, num_envs=128)
+    vector = VectorTrainer(env, agent, keyer, form=form_of(env), seed=4, num_envs=128)
     vector.adopt_progress(scalar)
     assert vector.episodes == 200 and vector.latest.episodes == 200
     published = []
@@ -185,24 +191,26 @@ def test_an_engine_beside_the_scalar_trainer() -> None:
 def test_wrappers_shape_the_rewards_and_unbatchable_ones_refuse() -> None:
     env, agent, keyer = _agent(BLACKJACK, seed=0)
     choices = [WrapperChoice.make("StepPenalty", penalty=1.0)]
-    trainer = make_vector_trainer(BLACKJACK, {}, choices, agent, keyer, seed=0, num_envs=256)
+    trainer = make_vector_trainer(BLACKJACK, {}, choices, agent, keyer, form=FORM, seed=0,
+                                  num_envs=256)
     trainer.run(episodes=20_000)
     # Every step costs 1, on top of a Blackjack return in [-1, 1].
     returns = trainer.windows["return"].values()
     lengths = trainer.windows["length"].values()
     assert (returns <= 1.0 - lengths + 1e-9).all() and (returns >= -1.0 - lengths - 1e-9).all()
     with pytest.raises(NoBatchedForm, match="StickyAction"):
-        make_vector_trainer(BLACKJACK, {}, [WrapperChoice.make("StickyAction")], agent, keyer)
+        make_vector_trainer(BLACKJACK, {}, [WrapperChoice.make("StickyAction")], agent, keyer,
+                            form=FORM)
     sparse = QLearning(2, seed=0)
     with pytest.raises(ValueError, match="dense"):
-        VectorTrainer(env, sparse, keyer)
+        VectorTrainer(env, sparse, keyer, form=form_of(env))
 
 
 def test_the_last_window_is_not_skewed_towards_long_episodes() -> None:
     # A run must not end by waiting for its longest games: the rolling window
     # of the last 1,000 episodes should look like the run as a whole.
     env, agent, keyer = _agent(BLACKJACK, QLearning.hyperparameters(episodes=60_000), seed=0)
-    trainer = VectorTrainer(env, agent, keyer, seed=0)
+    trainer = VectorTrainer(env, agent, keyer, form=form_of(env), seed=0)
     trainer.run(episodes=60_000)
     lengths = trainer.windows["length"].values()
     overall = trainer.steps / trainer.episodes
@@ -222,7 +230,7 @@ def test_curves_begin_with_an_unbiased_sample(env_id: str, kwargs: dict) -> None
     the rest."""
     hp = QLearning.hyperparameters(episodes=100_000, epsilon_start=1.0, epsilon_final=1.0)
     env, agent, keyer = _agent(env_id, hp, **kwargs)
-    trainer = VectorTrainer(env, agent, keyer, seed=0, num_envs=2048, window=1,
+    trainer = VectorTrainer(env, agent, keyer, form=form_of(env), seed=0, num_envs=2048, window=1,
                             series_capacity=1 << 16)  # one point per episode, in order
     trainer.run(episodes=30_000)
     lengths = np.array(trainer.series["length"].points())
@@ -236,7 +244,7 @@ def test_curves_begin_with_an_unbiased_sample(env_id: str, kwargs: dict) -> None
 
 def test_results_wait_for_earlier_episodes_and_one_episode_is_the_oldest() -> None:
     env, agent, keyer = _agent(GRID, size=5)
-    trainer = VectorTrainer(env, agent, keyer, seed=1, num_envs=64)
+    trainer = VectorTrainer(env, agent, keyer, form=form_of(env), seed=1, num_envs=64)
     stop = threading.Event()
     stop.set()
     finished = 0

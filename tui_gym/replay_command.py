@@ -13,7 +13,8 @@ from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
 
-from tui_gym.cli import CliError, _path
+from tui_gym.cli.output import CliError
+from tui_gym.cli.types import file_name as _path
 
 if TYPE_CHECKING:
     from tui_gym.core.recording import Recorder, Recording

@@ -22,11 +22,13 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from tui_gym.cli import CliError, _int_in, _path, key_value_table, print_json
+from tui_gym.cli.output import CliError, key_value_table, print_json
+from tui_gym.cli.types import file_name as _path
+from tui_gym.cli.types import int_in
 
 Command = Callable[[argparse.Namespace, Console], int]
 
-_run_id = _int_in(1, 2**63 - 1, "a run id (a positive integer, see `tui-gym runs`)")
+_run_id = int_in(1, 2**63 - 1, "a run id (a positive integer, see `tui-gym runs`)")
 DB_HELP = "the run history file (default: $TUI_GYM_DB, else the data folder's runs.db)"
 KINDS = ("train", "compare", "sweep", "app", "benchmark")
 

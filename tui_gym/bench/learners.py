@@ -24,7 +24,6 @@ from dataclasses import dataclass
 from tui_gym.bench import tutorial_learners
 from tui_gym.bench.figures import median, ratio
 from tui_gym.core.session import Session
-from tui_gym.core.vector import VectorTrainer
 
 SPEED_BUDGET = 1_000_000_000  # episodes: never reached in a window, so epsilon stays put
 SPEED_WARMUP_S = 0.1
@@ -140,8 +139,7 @@ def episodes_to_bound(
     """Real episodes until the bound is met (checked every `PLANNING_CHECK`)."""
     hp = {"episodes": PLANNING_BUDGET, **(overrides or {})}
     session = Session(game, seed=seed, algorithm=algorithm, engine="vector", hp=hp)
-    trainer = VectorTrainer(session.env, session.agent, session.keyer, seed=seed,
-                            num_envs=PLANNING_ENVS)
+    trainer = session.vector_trainer(seed=seed, num_envs=PLANNING_ENVS)
     try:
         while trainer.remaining:
             trainer.run(episodes=min(PLANNING_CHECK, trainer.remaining))

@@ -30,8 +30,8 @@ class BenchResults:
     quick: bool
     seconds: float  # the whole run
     machine: MachineInfo
-    throughput: ThroughputResult | None = None
-    gap: GapResult | None = None
+    throughput: dict[str, ThroughputResult] = field(default_factory=dict)  # by game name
+    gap: dict[str, GapResult] = field(default_factory=dict)  # by game name
     live: dict[str, LiveResult] = field(default_factory=dict)  # by runner
     memory: MemoryResult | None = None
     startup: StartupResult | None = None

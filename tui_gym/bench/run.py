@@ -1,13 +1,14 @@
 """One bench run: every stage in turn, with the sizes of the quick or the full plan.
 
-`run_bench(quick, progress, algorithms)` measures throughput, time to the
-target gap, every algorithm's vector-engine speed against its tutorial loop
-(or the named ones'), Dyna-Q's planning against Q-learning, live training
-(both runners), memory, start-up, and programs as players (exact-regret
-scoring against returns, protocol and MCP speeds), the run history's cost
-(recording's share of a train run, the file's size per 1,000 runs), and returns
-`BenchResults`. A stage that fails is recorded in `errors` and the others
-still run. `progress` (if given) hears the name of each stage as it starts.
+`run_bench(quick, progress, algorithms)` measures throughput and time to
+the target gap (on every game the bench measures), every algorithm's
+vector-engine speed against its tutorial loop (or the named ones'), Dyna-Q's
+planning against Q-learning, live training (both runners), memory, start-up,
+programs as players (exact-regret scoring against returns, protocol and MCP
+speeds), and the run history's cost (recording's share of a train run, the
+file's size per 1,000 runs), and returns `BenchResults`. A stage that fails is
+recorded in `errors` and the others still run. `progress` (if given) hears the
+name of each stage as it starts.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 from tui_gym.algorithms import ALGORITHMS
@@ -47,19 +49,19 @@ class Plan:
     pipe_repeats: int = 3
 
 
-# About a minute on an idle 2-CPU machine; the tutorial gets one capped run.
+# About 2 minutes on an idle 2-CPU machine; the tutorial gets one capped run a game.
 QUICK = Plan(
     throughput_seconds=0.5, throughput_repeats=3,
-    gap_seeds=(0, 1, 2), tutorial_cap_s=15.0, tutorial_stage_s=0.0,
+    gap_seeds=(0, 1, 2), tutorial_cap_s=10.0, tutorial_stage_s=0.0,
     live_seconds=1.0, live_repeats=1, key_presses=30,
     memory_episodes=2_000_000, memory_warmup=100_000,
     startup_repeats=3,
     algorithm_seconds=0.3, algorithm_repeats=3, planning_seeds=(0,),
 )
-# About 3 minutes on an idle 2-CPU machine.
+# About 12 minutes on an idle 2-CPU machine.
 FULL = Plan(
     throughput_seconds=2.0, throughput_repeats=3,
-    gap_seeds=(0, 1, 2), tutorial_cap_s=90.0, tutorial_stage_s=60.0,
+    gap_seeds=(0, 1, 2), tutorial_cap_s=60.0, tutorial_stage_s=60.0,
     live_seconds=3.0, live_repeats=3, key_presses=30,
     memory_episodes=2_000_000, memory_warmup=100_000,
     startup_repeats=5,
@@ -89,11 +91,25 @@ def run_bench(
 
     started = time.perf_counter()
     load_before = load_average()
-    stage("throughput", "throughput: the tutorial loop, the scalar and the vector engine",
-          lambda: throughput.measure(plan.throughput_seconds, plan.throughput_repeats))
+    rates: dict[str, throughput.ThroughputResult] = {}
+    gaps: dict[str, gap.GapResult] = {}
+    for index, game in enumerate(gap.benched()):
+        name = game.name
+        stage(f"throughput[{name}]", f"throughput on {gap.title_of(game)}: the tutorial loop "
+              "and our engines",
+              partial(throughput.measure_game, game, plan.throughput_seconds,
+                      plan.throughput_repeats, scalar=index == 0))
+        if f"throughput[{name}]" in found:
+            rates[name] = found.pop(f"throughput[{name}]")
     cap = f"capped at {plan.tutorial_cap_s:.0f} s"
-    stage("gap", f"time to gap ≤ {gap.TARGET_GAP}: ours, then the tutorial loop ({cap})",
-          lambda: gap.measure(plan.gap_seeds, plan.tutorial_cap_s, plan.tutorial_stage_s))
+    for game in gap.benched():
+        name = game.name
+        stage(f"gap[{name}]", f"time to the target gap on {gap.title_of(game)}: ours, then the "
+              f"tutorial loop ({cap})",
+              partial(gap.measure_game, game, plan.gap_seeds, plan.tutorial_cap_s,
+                      plan.tutorial_stage_s))
+        if f"gap[{name}]" in found:
+            gaps[name] = found.pop(f"gap[{name}]")
     names = algorithms or tuple(cls.name for cls in ALGORITHMS)
     stage("algorithms", f"each algorithm's vector engine against its tutorial loop "
           f"({', '.join(names)})",
@@ -118,8 +134,8 @@ def run_bench(
         quick=quick,
         seconds=time.perf_counter() - started,
         machine=MachineInfo(os.cpu_count(), load_before, load_average()),
-        throughput=found.get("throughput"),
-        gap=found.get("gap"),
+        throughput=rates,
+        gap=gaps,
         live=found.get("live", {}),
         memory=found.get("memory"),
         startup=found.get("startup"),

@@ -3,8 +3,8 @@
 `evaluate` plays N episodes with exploration off (ties between equally valued
 actions broken by its own seeded generator, so the agent's generator is left
 alone) and reports mean and standard deviation of the return plus the game's
-own figures (Blackjack win/draw/loss rates, GridWorld success rate and steps
-over the optimum).
+own figures (its narrator's: win rates, success rates, steps over the
+optimum).
 
 The cost of an evaluation follows the game, not only N: it also stops once a
 step budget is spent (at the end of the episode that spends it), so a policy
@@ -17,17 +17,19 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 import numpy as np
 
 from tui_gym.algorithms import Learner
 from tui_gym.core.obskey import ObservationKeyer
-from tui_gym.core.profiles.base import GameProfile
 
-# Steps one evaluation may spend: 10,000 Blackjack hands take about 15,000 and a
-# good GridWorld policy about 80,000, while one that loops until a 300-step time
+if TYPE_CHECKING:
+    from tui_gym.games.base import Narrator
+
+# Steps one evaluation may spend: 10,000 short card hands take about 15,000 and a
+# good walk to a target about 80,000, while a policy that loops until a 300-step time
 # limit would take 3,000,000 for the same 10,000 episodes.
 EVAL_STEP_BUDGET = 200_000
 
@@ -60,7 +62,7 @@ def evaluate(
     env: gym.Env,
     agent: Learner,
     keyer: ObservationKeyer,
-    profile: GameProfile,
+    narrator: Narrator,
     episodes: int,
     seed: int | None = 0,
     progress: Callable[[int], None] | None = None,
@@ -92,12 +94,12 @@ def evaluate(
                 break
         steps += length
         returns.append(total)
-        details.append(profile.episode_detail(first_info, length, total, bool(terminated)))
+        details.append(narrator.episode_detail(first_info, length, total, bool(terminated)))
         if progress is not None:
             progress(i + 1)
     r = np.asarray(returns)
     played = len(returns)
-    outcome = profile.eval_outcome(returns, details)
+    outcome = narrator.eval_outcome(returns, details)
     return EvalReport(
         episodes=played,
         mean_return=float(r.mean()),

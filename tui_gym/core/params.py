@@ -24,7 +24,7 @@ import numpy as np
 
 __all__ = ["Param", "ParamError", "ParamValue", "read_number", "shown_value"]
 
-ParamValue = int | float | bool
+ParamValue = int | float | bool | str
 
 _TRUE_WORDS = frozenset({"true", "t", "yes", "y", "on", "1"})
 _FALSE_WORDS = frozenset({"false", "f", "no", "n", "off", "0"})
@@ -114,11 +114,12 @@ class Param:
     `owner` is e.g. the wrapper's name, filled in by `WrapperSpec`, so that
     error messages say `TimeLimit.max_episode_steps` rather than a bare field
     name. `title` is how a form labels it; `min_inclusive=False` makes the
-    lower bound exclusive (a learning rate must be above 0).
+    lower bound exclusive (a learning rate must be above 0). A `str` param is a
+    choice among `choices` (a map's name), read case-insensitively.
     """
 
     name: str
-    kind: type  # int, float or bool
+    kind: type  # int, float, bool or str
     default: ParamValue
     minimum: float | None = None
     maximum: float | None = None
@@ -126,10 +127,15 @@ class Param:
     owner: str = ""
     title: str = ""
     min_inclusive: bool = True
+    choices: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
-        if self.kind not in (int, float, bool):
-            raise TypeError(f"Param {self.name}: kind must be int, float or bool, not {self.kind}")
+        if self.kind not in (int, float, bool, str):
+            raise TypeError(
+                f"Param {self.name}: kind must be int, float, bool or str, not {self.kind}"
+            )
+        if (self.kind is str) != bool(self.choices):
+            raise TypeError(f"Param {self.name}: a str param, and only one, has choices")
         # A catalog entry whose default is out of its own range is a bug: fail at import.
         if self.parse(self.default) != self.default:
             raise ValueError(f"Param {self.name}: default {self.default!r} is not canonical")
@@ -143,6 +149,8 @@ class Param:
         """The valid values, as shown in help and errors: `[1, 100000]`, `true or false`."""
         if self.kind is bool:
             return "true or false"
+        if self.kind is str:
+            return "one of " + ", ".join(self.choices)
         bracket = "[" if self.min_inclusive else "("
         low = "(-inf" if self.minimum is None else f"{bracket}{_number_text(self.minimum)}"
         high = "inf)" if self.maximum is None else f"{_number_text(self.maximum)}]"
@@ -152,6 +160,8 @@ class Param:
         """What a valid value is, in words: `an integer in [1, 100000]`."""
         if self.kind is bool:
             return "true or false"
+        if self.kind is str:
+            return self.describe_range()
         noun = "an integer" if self.kind is int else "a number"
         return f"{noun} in {self.describe_range()}"
 
@@ -165,6 +175,8 @@ class Param:
         value = self._convert(raw)
         if value is None:
             raise ParamError(self, raw, out_of_range=False)
+        if isinstance(value, str):
+            return value
         if self.kind is not bool and not self._in_range(value):
             raise ParamError(self, raw, out_of_range=True)
         if self.kind is float:
@@ -185,6 +197,9 @@ class Param:
     def _convert(self, raw: object) -> ParamValue | None:
         """`raw` as `kind` (±inf for numbers too large to hold), or None when it does not
         read as one."""
+        if self.kind is str:
+            word = raw.strip().lower() if isinstance(raw, str) else None
+            return next((c for c in self.choices if c.lower() == word), None)
         if self.kind is bool:
             if isinstance(raw, bool | np.bool_):
                 return bool(raw)

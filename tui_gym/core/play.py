@@ -78,7 +78,7 @@ class Scorecard:
     `tally` counts finished episodes (usually the game's own `Tally`);
     `decisions` counts moves made where the optimum had a say and `agreed`
     those among them that the optimum would also make; `figures` holds running
-    sums of per-episode figures (`profile.episode_figures`), e.g. steps over
+    sums of per-episode figures (`Narrator.episode_figures`), e.g. steps over
     optimal, each with the number of episodes it was measured on.
     """
 
@@ -144,11 +144,12 @@ class HumanGame:
     tally: Tally = field(default_factory=Tally)
 
     def __post_init__(self) -> None:
-        self.profile = self.session.profile
-        self.env = self.session.make_env(render_mode=self.profile.render_mode)
+        self.game = self.session.game
+        self.env = self.session.make_env(render_mode=self.game.render_mode)
         self.last: PlayStep | None = None
         self.first_info: dict[str, Any] = {}
         self._seeded = False
+        self._before: dict[str, Any] | None = None  # the scene before the last move
         self.recorder: GameRecorder | None = None  # told of every reset and move when set
 
     def close(self) -> None:
@@ -164,6 +165,7 @@ class HumanGame:
             seed = self.seed
         self._seeded = True
         obs, info = self.env.reset(seed=seed, options=options)
+        self._before = None
         self.first_info = dict(info)
         self.last = PlayStep(obs, 0.0, False, False, dict(info), 0.0, 0)
         if self.recorder is not None:
@@ -177,10 +179,12 @@ class HumanGame:
         if self.last.done:
             raise PlayError("the episode is over: reset to play again")
         try:
-            index = self.profile.action_index(action)
+            index = self.game.action_index(action)
         except ValueError as exc:
             raise PlayError(str(exc)) from None
+        before = self.game.states.scene(self.env)
         obs, reward, terminated, truncated, info = self.env.step(index)
+        self._before = before
         total = self.last.episode_return + float(reward)
         self.last = PlayStep(
             obs, float(reward), bool(terminated), bool(truncated), dict(info), total,
@@ -193,12 +197,14 @@ class HumanGame:
         return self.last
 
     def scene(self) -> dict[str, Any]:
-        """What the board draws (see the profile's `scene`)."""
-        return self.profile.scene(self.env)
+        """What the board draws (see `StateSpace.scene`), the last move included."""
+        return self.game.states.scene(self.env, self._before)
 
     def text(self) -> str:
         """A text picture of the state (hidden cards stay hidden until the end)."""
-        return self.profile.text(self.env, reveal=self.done)
+        return self.game.states.text(self.env, reveal=self.done, before=self._before)
 
     def observation_json(self) -> Any:
-        return None if self.last is None else self.profile.json_observation(self.last.observation)
+        if self.last is None:
+            return None
+        return self.game.states.json_observation(self.last.observation)

@@ -38,7 +38,8 @@ import traceback
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from tui_gym.core.runner import DEFAULT_SPEED, SPEEDS, Speed, TrainingRunner
+from tui_gym.core.runner import TrainingRunner
+from tui_gym.core.speeds import DEFAULT_SPEED, SPEEDS, Speed
 from tui_gym.core.training import StepEvent, TrainerProgress, TrainingSnapshot
 
 if TYPE_CHECKING:

@@ -32,8 +32,8 @@ from typing import IO, Any
 
 from tui_gym.core.params import shown_value
 from tui_gym.core.play import HumanGame, PlayError
-from tui_gym.core.profiles.base import to_jsonable
 from tui_gym.core.session import Session
+from tui_gym.games.words import to_jsonable
 
 COMMANDS = ("spaces", "reset", "step", "render", "hint", "help")
 
@@ -144,7 +144,7 @@ class JsonlPlayer:
 
     def __init__(self, session: Session, seed: int | None = None) -> None:
         self.session = session
-        self.profile = session.profile
+        self.rules = session.game  # the game's names and roles
         self.game = HumanGame(session, seed=seed)
         self._handlers: dict[str, Callable[[dict[str, Any]], dict[str, Any]]] = {
             "spaces": self._spaces,
@@ -190,7 +190,7 @@ class JsonlPlayer:
         step = self.game.last
         assert step is not None
         return {
-            "observation": self.profile.json_observation(step.observation),
+            "observation": self.rules.states.json_observation(step.observation),
             "reward": step.reward,
             "terminated": step.terminated,
             "truncated": step.truncated,
@@ -205,7 +205,7 @@ class JsonlPlayer:
             "wrappers": [str(c) for c in self.session.applied],
             "observation_space": str(env.observation_space),
             "action_space": str(env.action_space),
-            "actions": list(self.profile.action_names),
+            "actions": list(self.rules.action_names),
         }
 
     def _reset(self, request: dict[str, Any]) -> dict[str, Any]:
@@ -218,12 +218,12 @@ class JsonlPlayer:
         return self._transition()
 
     def _step(self, request: dict[str, Any]) -> dict[str, Any]:
-        names = ", ".join(self.profile.action_names)
+        names = ", ".join(self.rules.action_names)
         if "action" not in request:
             raise ValueError(f'step needs an "action": an integer or one of {names}')
         action = request["action"]
         if not isinstance(action, int | str) or len(str(action)) > 32:
-            valid = ", ".join(f"{i}={n}" for i, n in enumerate(self.profile.action_names))
+            valid = ", ".join(f"{i}={n}" for i, n in enumerate(self.rules.action_names))
             raise ValueError(f"invalid action {shown_value(action)}; valid actions: {valid}")
         self.game.step(action)
         return self._transition()
@@ -238,8 +238,8 @@ class JsonlPlayer:
             raise PlayError("no episode running: reset first")
         if self.game.done:
             raise PlayError("the episode is over: reset to play again")
-        advice = self.profile.advice(self.game.env, self.session.env_kwargs)
-        names = self.profile.action_names
+        advice = self.rules.oracle.advice(self.game.env, self.session.env_kwargs)
+        names = self.rules.action_names
         response: dict[str, Any] = {
             "optimal_actions": [names[a] for a in advice.optimal],
             "note": advice.note,
@@ -251,7 +251,7 @@ class JsonlPlayer:
         return response
 
     def _help(self, request: dict[str, Any]) -> dict[str, Any]:
-        return {"commands": list(COMMANDS), "actions": list(self.profile.action_names)}
+        return {"commands": list(COMMANDS), "actions": list(self.rules.action_names)}
 
 
 def read_lines(stdin: IO[bytes], limit: int = MAX_LINE_BYTES) -> Iterator[bytes | None]:

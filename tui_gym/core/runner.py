@@ -13,43 +13,24 @@ milliseconds of episodes at max speed, one agent step at animated speeds (the
 pause between animated steps is cut short). `pause()` returns once the worker
 has stopped, so the session can be changed right after it.
 
-Speeds run from *animated* (one agent step at a time, slow enough to follow,
-with the last move kept in `last_event` for a board to draw) to *max* (whole
-chunks of episodes, no pauses).
+Speeds (`tui_gym.core.speeds`) run from *animated* (one agent step at a time,
+slow enough to follow, with the last move kept in `last_event` for a board to
+draw) to *max* (whole chunks of episodes, no pauses).
 """
 
 from __future__ import annotations
 
 import threading
 import time
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from tui_gym.core.speeds import DEFAULT_SPEED, SPEEDS, Speed
 from tui_gym.core.training import StepEvent, Trainer, TrainingSnapshot
 
 if TYPE_CHECKING:
     from tui_gym.core.session import Session
 
 
-@dataclass(frozen=True)
-class Speed:
-    """One training speed: a step delay for animated speeds, or whole chunks."""
-
-    name: str
-    step_delay: float | None  # seconds between agent steps; None = chunks of episodes
-
-    @property
-    def animated(self) -> bool:
-        return self.step_delay is not None
-
-
-SPEEDS: tuple[Speed, ...] = (
-    Speed("animated (slow)", 0.35),
-    Speed("animated", 0.12),
-    Speed("animated (fast)", 0.03),
-    Speed("max", None),
-)
-DEFAULT_SPEED = len(SPEEDS) - 1
 CHUNK_SECONDS = 0.05  # how long one max-speed chunk trains before publishing
 STOP_TIMEOUT = 5.0  # seconds `pause()` and `close()` wait at most for the worker
 
@@ -264,8 +245,11 @@ class TrainingRunner:
         if now - self._anim_mark < 2.0:
             trainer.seconds += now - self._anim_mark
         self._anim_mark = now
+        _, previous, last = self._shown
+        # The scene before this move, while one episode goes on: the board tells a slip.
+        before = previous if last is not None and last.episode_done is None else None
         event = trainer.step(explain=True)
-        self._shown = (trainer.agent, self.session.profile.scene(trainer.env), event)
+        self._shown = (trainer.agent, self.session.game.states.scene(trainer.env, before), event)
         trainer.publish()
         return event
 
@@ -282,15 +266,4 @@ class _Stopped:
         return runner._quit or not (runner._want_one if self._one else runner._want_run)
 
 
-RUNNERS = ("thread", "process")
-
-
-def make_runner(session: Session, kind: str = "thread", speed: int = DEFAULT_SPEED):
-    """A runner of the given kind: "thread" (this process) or "process" (a child process)."""
-    if kind == "thread":
-        return TrainingRunner(session, speed)
-    if kind == "process":
-        from tui_gym.core.process_runner import ProcessRunner
-
-        return ProcessRunner(session, speed)
-    raise ValueError(f"runner must be one of {', '.join(RUNNERS)}, got {kind!r}")
+__all__ = ["DEFAULT_SPEED", "SPEEDS", "Speed", "TrainingRunner"]

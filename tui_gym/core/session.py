@@ -1,13 +1,17 @@
 """The session: one env, a choice of wrappers, one learner (the agent) and its trainer.
 
 `Session` is the object every front end drives (the Textual app, the CLI,
-tests, the JSON-lines protocol). It builds the env through the wrapper
-catalog and the learner from the `ALGORITHMS` registry, with the game's
-defaults for that algorithm; it keeps the agent when a rebuild leaves the
-observation keys meaning the same thing (and says so when it cannot),
+tests, the JSON-lines protocol). It is where game, wrappers, learner and engine
+meet: it finds the game (`tui_gym.games.game_for`), builds the env through
+the wrapper catalog with the game's arguments and the learner from the
+`ALGORITHMS` registry with the game's defaults for that algorithm, hands the
+vector engine the game's batched form, keeps the agent when a rebuild leaves
+the observation keys meaning the same thing (and says so when it cannot),
 changes hyperparameters live (only a change of algorithm needs a fresh
 learner), projects the learner's values onto the game's base states for
 heatmaps and the exact reference, evaluates, saves and loads.
+`vector_support` says whether the vector engine can run a game with some
+wrappers.
 """
 
 from __future__ import annotations
@@ -23,19 +27,24 @@ import numpy as np
 from tui_gym.algorithms import DEFAULT_ALGORITHM, Learner, Settings, algorithm
 from tui_gym.core.evaluation import EvalReport, evaluate
 from tui_gym.core.heatmap import Heatmap
+from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.obskey import ObservationKeyer
-from tui_gym.core.profiles import GameProfile, ReferenceMetrics, profile_for, resolve_env_id
-from tui_gym.core.reference.changes import GameChanges
 from tui_gym.core.training import Trainer, TrainingSnapshot
-from tui_gym.core.vector import NoBatchedForm, VectorTrainer
+from tui_gym.core.vector import NoBatchedForm, VectorTrainer, plan_for_env
 from tui_gym.core.wrappers import (
     CATALOG,
     WrapperChoice,
     build_env,
     build_env_lenient,
 )
+from tui_gym.core.wrappers.changes import GameChanges
+from tui_gym.games import GAMES, Game, game_for, resolve_env_id
+from tui_gym.games.base import FixedBound, ReferenceMetrics
 
 ENGINES = ("auto", "scalar", "vector")
+# With a target gap and no budget given, the budget is the game's default times this,
+# so epsilon decays more slowly (the run stops at the target anyway).
+TARGET_GAP_BUDGET_FACTOR = 5
 
 # Observation wrappers whose `observation()` is a pure function of the bare
 # observation: the heatmaps and the exact reference can see through them.
@@ -69,8 +78,10 @@ class _Built:
     meaning: tuple[str, ...]  # what keys mean: the space and the observation-changing wrappers
 
 
-def _build(env_id: str, env_kwargs: Mapping[str, Any], choices: Sequence[WrapperChoice]) -> _Built:
-    env, skipped = build_env_lenient(env_id, env_kwargs, choices)
+def _build(
+    game: Game, env_id: str, env_kwargs: Mapping[str, Any], choices: Sequence[WrapperChoice]
+) -> _Built:
+    env, skipped = build_env_lenient(env_id, game.make_kwargs(env_kwargs), choices)
     skipped_set = {id(c) for c, _ in skipped}
     applied = tuple(c for c in choices if id(c) not in skipped_set)
     if not isinstance(env.action_space, gym.spaces.Discrete):
@@ -84,12 +95,15 @@ def _build(env_id: str, env_kwargs: Mapping[str, Any], choices: Sequence[Wrapper
     return _Built(env, applied, tuple(skipped), keyer, int(env.action_space.n), meaning)
 
 
-def default_settings(profile: GameProfile, name: str) -> Settings:
-    """The hyperparameters algorithm `name` starts with on a game: its own defaults with
-    the game's overrides for it (those of its parameters the game sets)."""
+def default_settings(
+    game: Game, name: str, kwargs: Mapping[str, Any] | None = None
+) -> Settings:
+    """The hyperparameters algorithm `name` starts with on a game with arguments `kwargs`:
+    its own defaults with the game's overrides for it (those of its parameters the game
+    sets)."""
     cls = algorithm(name)
     fields = {f.name for f in cls.params}
-    overrides = profile.default_hyperparameters(cls.name)
+    overrides = game.default_hyperparameters(cls.name, kwargs)
     return cls.settings({k: v for k, v in overrides.items() if k in fields})
 
 
@@ -102,7 +116,7 @@ class Session:
     schema give the values the two schemas share.
     """
 
-    env_id: str = "Blackjack-v1"
+    env_id: str = ""  # "": the first game of the registry
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     choices: tuple[WrapperChoice, ...] = ()
     hp: Settings | Mapping[str, Any] | None = None  # None: the game's own defaults
@@ -111,16 +125,16 @@ class Session:
     algorithm: str = DEFAULT_ALGORITHM  # a name in the ALGORITHMS registry
 
     def __post_init__(self) -> None:
-        self.env_id = resolve_env_id(self.env_id)
-        self.profile: GameProfile = profile_for(self.env_id)
-        self.env_kwargs = self.profile.normalize_kwargs(self.env_kwargs)
+        self.env_id = resolve_env_id(self.env_id or GAMES[0].env_id)
+        self.game: Game = game_for(self.env_id)
+        self.env_kwargs = self.game.normalize_kwargs(self.env_kwargs)
         self.learner_class: type[Learner] = algorithm(self.algorithm)
         self.algorithm = self.learner_class.name
         self.hp = self._settings(self.hp)
         self.choices = tuple(self.choices)
         if self.engine not in ENGINES:
             raise ValueError(f"engine must be one of {', '.join(ENGINES)}, got {self.engine!r}")
-        self._install(_build(self.env_id, self.env_kwargs, self.choices))
+        self._install(_build(self.game, self.env_id, self.env_kwargs, self.choices))
         self.agent = self._new_agent()
         self.trainer = self._new_trainer()
 
@@ -129,12 +143,13 @@ class Session:
         self._built = built
         self.env = built.env
         self.keyer = built.keyer
-        self.changes = GameChanges.of(built.env)  # what the exact figures must take into account
+        # What the exact figures must take into account.
+        self.changes = GameChanges.of(built.env, self.game.episode_limit(self.env_kwargs))
         self._base_keys: list[Hashable] | None | bool = False  # False: not computed yet
 
     def _settings(self, hp: Settings | Mapping[str, Any] | None) -> Settings:
         """`hp` as this algorithm's settings over the game's defaults (see the class)."""
-        base = default_settings(self.profile, self.algorithm)
+        base = default_settings(self.game, self.algorithm, self.env_kwargs)
         if hp is None:
             return base
         values = dict(hp)
@@ -150,22 +165,32 @@ class Session:
     def _new_trainer(self) -> Trainer:
         """The trainer for the chosen engine; `engine_reason` says which and why."""
         self._scalar: Trainer | None = None
-        self._vector: Trainer | None = None
+        self._vector: VectorTrainer | None = None
         if self.engine != "scalar":
             try:
-                self._vector = VectorTrainer(self.env, self.agent, self.keyer, seed=self.seed)
+                vector = self.vector_trainer(seed=self.seed)
             except (NoBatchedForm, ValueError) as exc:
                 reason = str(exc).removeprefix("scalar engine: ")
                 if self.engine == "vector":
                     raise ValueError(f"the vector engine cannot run this: {reason}") from None
                 self.engine_reason = f"scalar engine: {reason}"
             else:
-                self.engine_reason = self._vector.plan.describe()
-                return self._vector
+                self._vector = vector
+                self.engine_reason = vector.plan.describe()
+                return vector
         else:
             self.engine_reason = "scalar engine: chosen"
         self._scalar = Trainer(self.env, self.agent, self.keyer, seed=self.seed)
         return self._scalar
+
+    def vector_trainer(self, **options: Any) -> VectorTrainer:
+        """A vector engine on this session's env and learner, with the game's batched form
+        (`NoBatchedForm` when there is none); `options` go to `VectorTrainer` (`seed`,
+        `num_envs`, ...). The session's own trainer is left as it is."""
+        form = self.game.batched_form(self.env_kwargs)
+        limit = self.game.episode_limit(self.env_kwargs)
+        return VectorTrainer(self.env, self.agent, self.keyer, form=form, made_limit=limit,
+                             **options)
 
     def trainer_for(self, animated: bool) -> Trainer:
         """The trainer to use now: animation needs single steps, so the scalar engine.
@@ -198,7 +223,8 @@ class Session:
 
     def make_env(self, render_mode: str | None = None) -> gym.Env:
         """A new env like the training one (same game, same wrappers), e.g. to play on."""
-        return build_env(self.env_id, self.env_kwargs, self.applied, render_mode=render_mode)
+        return build_env(self.env_id, self.game.make_kwargs(self.env_kwargs), self.applied,
+                         render_mode=render_mode)
 
     def rebuild(
         self,
@@ -210,19 +236,21 @@ class Session:
 
         Raises ValueError (and changes nothing) for an unknown env or bad arguments.
         """
-        new_id, kwargs, new_choices, profile = self._rebuild_args(env_id, env_kwargs, choices)
-        built = _build(new_id, kwargs, new_choices)
-        if profile is not self.profile:
-            # Each game learns with its own defaults (GridWorld needs discounting).
-            self.hp = default_settings(profile, self.algorithm)
+        new_id, kwargs, new_choices, game = self._rebuild_args(env_id, env_kwargs, choices)
+        built = _build(game, new_id, kwargs, new_choices)
         keep = self._keeps(built)
+        defaults = default_settings(self.game, self.algorithm, self.env_kwargs)
+        if game is not self.game or (not keep and self.hp == defaults):
+            # Each game (and a larger map) learns with its own defaults; a fresh agent on
+            # the same game keeps hyperparameters a person chose.
+            self.hp = default_settings(game, self.algorithm, kwargs)
         old_trainer = self.trainer
         self.env.close()
-        self.env_id, self.env_kwargs, self.choices, self.profile = (
+        self.env_id, self.env_kwargs, self.choices, self.game = (
             new_id,
             kwargs,
             new_choices,
-            profile,
+            game,
         )
         self._install(built)
         if keep:
@@ -248,7 +276,8 @@ class Session:
 
         Raises ValueError for an unknown env or bad arguments, as `rebuild` does.
         """
-        built = _build(*self._rebuild_args(env_id, env_kwargs, choices)[:3])
+        new_id, kwargs, new_choices, game = self._rebuild_args(env_id, env_kwargs, choices)
+        built = _build(game, new_id, kwargs, new_choices)
         try:
             return self._keeps(built)
         finally:
@@ -259,17 +288,17 @@ class Session:
         env_id: str | None,
         env_kwargs: Mapping[str, Any] | None,
         choices: Sequence[WrapperChoice] | None,
-    ) -> tuple[str, dict[str, Any], tuple[WrapperChoice, ...], GameProfile]:
-        """The env id, checked arguments, wrappers and profile a rebuild would use."""
+    ) -> tuple[str, dict[str, Any], tuple[WrapperChoice, ...], Game]:
+        """The env id, checked arguments, wrappers and game a rebuild would use."""
         new_id = resolve_env_id(env_id) if env_id is not None else self.env_id
-        profile = profile_for(new_id)
+        game = game_for(new_id)
         asked: Mapping[str, Any]
         if env_kwargs is None:
-            asked = self.env_kwargs if new_id == self.env_id else profile.default_kwargs()
+            asked = self.env_kwargs if new_id == self.env_id else game.default_kwargs()
         else:
             asked = env_kwargs
-        kwargs = profile.normalize_kwargs(asked)
-        return new_id, kwargs, tuple(self.choices if choices is None else choices), profile
+        kwargs = game.normalize_kwargs(asked)
+        return new_id, kwargs, tuple(self.choices if choices is None else choices), game
 
     def _keeps(self, built: _Built) -> bool:
         """Whether the agent can learn on `built`: its keys mean what they meant."""
@@ -278,7 +307,7 @@ class Session:
     def reset_agent(self) -> None:
         """A fresh agent (same seed) and fresh statistics."""
         self.env.close()
-        self._install(_build(self.env_id, self.env_kwargs, self.choices))
+        self._install(_build(self.game, self.env_id, self.env_kwargs, self.choices))
         self.agent = self._new_agent()
         self.trainer = self._new_trainer()
 
@@ -300,12 +329,13 @@ class Session:
         an unknown name, changing nothing."""
         cls = algorithm(name)
         self.learner_class, self.algorithm = cls, cls.name
-        self.hp = default_settings(self.profile, cls.name)
+        self.hp = default_settings(self.game, cls.name, self.env_kwargs)
         self.reset_agent()
 
     # --- seeing the table -------------------------------------------------
     def base_keys(self) -> list[Hashable] | None:
-        """Table keys of the profile's base states, or None when wrappers hide them."""
+        """Table keys of the game's base states, or None when wrappers hide them (or
+        the game lists none)."""
         if self._base_keys is False:
             self._base_keys = self._compute_base_keys()
         return self._base_keys  # type: ignore[return-value]
@@ -322,8 +352,11 @@ class Session:
                 layers.append(env)
             env = env.env
         layers.reverse()  # innermost first
+        observations = self.game.states.base_observations(self.env_kwargs)
+        if isinstance(observations, NotAvailable):
+            return None
         keys = []
-        for obs in self.profile.base_observations(self.env_kwargs):
+        for obs in observations:
             for layer in layers:
                 obs = layer.observation(obs)
             keys.append(self.keyer.key(obs))
@@ -333,6 +366,9 @@ class Session:
         """Why heatmaps and the exact reference are unavailable (empty when they are)."""
         if self.base_keys() is not None:
             return ""
+        observations = self.game.states.base_observations(self.env_kwargs)
+        if isinstance(observations, NotAvailable):
+            return observations.reason
         names = [
             c.name
             for c in self.applied
@@ -350,16 +386,34 @@ class Session:
         return self.agent.values(keys)
 
     def reference(self, snapshot: TrainingSnapshot | None = None) -> ReferenceMetrics | None:
-        """The exact comparison of the greedy policy with the optimum."""
+        """The exact comparison of the greedy policy with the optimum (None when there
+        is none: `exact_reason` says why)."""
         q = self.base_q(snapshot)
-        return None if q is None else self.profile.reference(q, self.env_kwargs, self.changes)
+        if q is None:
+            return None
+        reference = self.game.oracle.reference(q, self.env_kwargs, self.changes)
+        return None if isinstance(reference, NotAvailable) else reference
+
+    def exact_reason(self) -> str:
+        """Why there are no exact figures of the agent here ('' when there are)."""
+        hidden = self.hidden_reason()
+        if hidden:
+            return hidden
+        q = self.base_q()
+        if q is None:
+            return "no per-state view of this table"
+        reference = self.game.oracle.reference(q, self.env_kwargs, self.changes)
+        return reference.reason if isinstance(reference, NotAvailable) else ""
 
     def heatmaps(
         self, snapshot: TrainingSnapshot | None = None, focus: Any = None
     ) -> list[Heatmap] | None:
+        """The game's heatmap panels of the table (None when wrappers hide the states)."""
         q = self.base_q(snapshot)
-        return None if q is None else self.profile.heatmaps(q, self.env_kwargs, focus,
-                                                            self.changes)
+        if q is None:
+            return None
+        marks = self.game.oracle.optimal_marks(self.env_kwargs, self.changes)
+        return self.game.layout.heatmaps(q, self.env_kwargs, focus, marks)
 
     def heatmap_cell(
         self, observation: Any, focus: Any = None
@@ -381,15 +435,15 @@ class Session:
         # An indicator table: the state's cell is the only one whose value is 1.
         q = np.zeros((len(keys), self._built.n_actions))
         q[rows] = 1.0
-        profile, kwargs = self.profile, self.env_kwargs
+        layout, kwargs = self.game.layout, self.env_kwargs
         focuses = [focus]
-        if profile.heatmap_focus:
-            panels = profile.heatmaps(q, kwargs, focus, self.changes)
+        if layout.has_focus:
+            panels = layout.heatmaps(q, kwargs, focus)
             height, width = panels[0].shape if panels else (0, 0)
-            focuses += [profile.heatmap_focus_at(r, c, kwargs)
+            focuses += [layout.focus_at(r, c, kwargs)
                         for r in range(height) for c in range(width)]
         for candidate in focuses:
-            for index, panel in enumerate(profile.heatmaps(q, kwargs, candidate, self.changes)):
+            for index, panel in enumerate(layout.heatmaps(q, kwargs, candidate)):
                 found = np.argwhere(np.nan_to_num(panel.values) == 1.0)
                 if found.size:
                     return candidate, (index, int(found[0][0]), int(found[0][1]))
@@ -397,9 +451,15 @@ class Session:
 
     def agent_figures(self, snapshot: TrainingSnapshot | None = None) -> dict[str, float]:
         """Exact scoreboard figures of the agent's greedy policy (the live agent's, or a
-        snapshot's) and of the optimum (`profile.agent_figures`); only the optimum's
+        snapshot's) and of the optimum (`Oracle.agent_figures`); only the optimum's
         when wrappers hide the base states."""
-        return self.profile.agent_figures(self.base_q(snapshot), self.env_kwargs, self.changes)
+        return self.game.oracle.agent_figures(self.base_q(snapshot), self.env_kwargs,
+                                              self.changes)
+
+    def fixed_policy_bound(self) -> FixedBound | None:
+        """How close a fixed (greedy) policy gets to the optimum here, when known."""
+        bound = self.game.oracle.fixed_policy_bound(self.env_kwargs, self.changes)
+        return None if isinstance(bound, NotAvailable) else bound
 
     def greedy_actions_for(
         self, observation: Any, snapshot: TrainingSnapshot | None = None
@@ -433,22 +493,22 @@ class Session:
     def train(
         self,
         target_gap: float | None = None,
-        check_every: int = 10_000,
+        check_every: int | None = None,
         chunk_seconds: float = 0.2,
         on_chunk: Callable[[TrainingSnapshot], None] | None = None,
     ) -> TrainOutcome:
         """Train to the end of the budget, or until the exact gap is at most `target_gap`.
 
         The gap is checked every `check_every` episodes (exactly, from the
-        reference: no sampling noise). `on_chunk` sees a snapshot after each
+        reference: no sampling noise; by default a twentieth of the budget,
+        between 1,000 and 10,000). `on_chunk` sees a snapshot after each
         chunk of about `chunk_seconds`, e.g. to draw a progress bar.
         """
         if target_gap is not None:
-            ref = self.reference()
-            if ref is None or "gap" not in ref.figures:
-                raise ValueError(f"--target-gap needs a game with an exact optimum; "
-                                 f"{self.profile.title} has none here")
+            self.check_target_gap(target_gap)
         trainer = self.trainer
+        if check_every is None:
+            check_every = check_every_for(trainer.remaining)
         next_check = trainer.episodes + check_every
         gap = None
         while trainer.remaining > 0:
@@ -468,6 +528,23 @@ class Session:
             return TrainOutcome(gap <= target_gap, gap)
         return TrainOutcome(None, None)
 
+    def check_target_gap(self, target_gap: float) -> None:
+        """`ValueError` when no greedy policy can meet `target_gap` here: the game has
+        no exact gap, or no fixed policy comes that close to the optimum (with an
+        episode limit the optimum may change course as time runs out)."""
+        ref = self.reference()
+        if ref is None or "gap" not in ref.figures:
+            why = self.exact_reason() or f"{self.game.title} has no exact gap"
+            raise ValueError(f"--target-gap needs an exact optimum: {why}")
+        bound = self.fixed_policy_bound()
+        if bound is not None and target_gap < bound.shortfall:
+            raise ValueError(
+                f"no fixed policy found comes within {target_gap:g} of the optimum here: the "
+                f"best one a search finds stays {bound.shortfall:.4f} below it (the optimum "
+                "plays differently as the episode limit nears); choose --target-gap "
+                f">= {_round_up(bound.shortfall)}"
+            )
+
     # --- evaluating, saving -----------------------------------------------
     def evaluate(
         self, episodes: int = 10_000, seed: int | None = None, progress=None
@@ -477,20 +554,133 @@ class Session:
         try:
             eval_seed = self.seed + 1_000_003 if seed is None else seed
             return evaluate(
-                env, self.agent, self.keyer, self.profile, episodes, eval_seed, progress
+                env, self.agent, self.keyer, self.game.narrator, episodes, eval_seed, progress
             )
         finally:
             env.close()
 
+    def meta(self) -> dict[str, Any]:
+        """Everything a save file keeps besides the table, as JSON data."""
+        from tui_gym.core.wrappers import format_wrapper_spec
+
+        assert self.hp is not None  # set when the session is built
+        return {
+            "env_id": self.env_id,
+            "env_kwargs": self.env_kwargs,
+            "wrappers": [format_wrapper_spec(c) for c in self.choices],
+            "algorithm": self.algorithm,
+            "hyperparameters": self.hp.to_dict(),
+            "seed": self.seed,
+            "episodes_trained": self.trainer.episodes,
+            "steps_trained": self.trainer.steps,
+            "agent_episode": self.agent.episode,
+            "n_actions": self.agent.n_actions,
+            "observation_space": self.keyer.signature,
+        }
+
     def save(self, path: str | Path) -> Path:
         """Write the agent and everything needed to rebuild this session (atomically)."""
-        from tui_gym.core.storage import save_session
+        from tui_gym.core.storage import save_agent
 
-        return save_session(self, path)
+        return save_agent(path, self.meta(), self.agent.state())
 
     @classmethod
     def load(cls, path: str | Path) -> Session:
-        """A session rebuilt from a saved file; StorageError names the file when it cannot."""
-        from tui_gym.core.storage import load_session
+        """A session rebuilt from a saved file; StorageError names the file (and the
+        field at fault) when it cannot."""
+        from tui_gym.core.storage import read_agent, short_reason
 
-        return load_session(path)
+        saved = read_agent(path)
+        game = saved.checked("env_id", lambda: game_for(saved.env_id))
+        env_kwargs = saved.checked("env_kwargs", lambda: game.normalize_kwargs(saved.env_kwargs))
+        try:
+            session = cls(env_id=saved.env_id, env_kwargs=env_kwargs, choices=saved.choices,
+                          hp=saved.hp, seed=saved.seed, algorithm=saved.algorithm.name)
+        except (ValueError, TypeError, KeyError) as exc:
+            raise saved.error(f"cannot rebuild the saved game ({short_reason(exc)})") from None
+        session._restore(saved)
+        return session
+
+    def _restore(self, saved: Any) -> None:
+        """Put a saved learner state into this session's agent and its counts into the
+        trainer; `saved.field_error` names what does not fit the game."""
+        from tui_gym.core.storage import short_reason
+
+        agent = self.agent
+        if self.skipped:
+            choice, reason = self.skipped[0]
+            index = list(saved.choices).index(choice)
+            raise saved.field_error(f"wrappers[{index}]", f"does not fit {self.env_id}: {reason}")
+        n_actions = agent.n_actions if saved.n_actions is None else saved.n_actions
+        if n_actions != agent.n_actions:
+            raise saved.field_error(
+                "n_actions", f"is {n_actions}; {self.env_id} with these wrappers has "
+                f"{agent.n_actions}"
+            )
+        member = f"{saved.table_name}.npy"
+        first = saved.arrays[saved.table_name]
+        if first.shape[1] != agent.n_actions:
+            raise saved.field_error(
+                member, f"has {first.shape[1]} columns; {self.env_id} has "
+                f"{agent.n_actions} actions"
+            )
+        rows, keys = agent.n_states, saved.keys
+        if rows is not None and keys is not None:
+            raise saved.field_error("keys.json", f"is for a sparse table; {self.env_id}'s is dense")
+        if rows is not None and len(first) != rows:
+            raise saved.field_error(member, f"has {len(first):,} rows; {self.env_id} has {rows:,}")
+        if rows is None and keys is None:
+            raise saved.field_error("keys.json",
+                                    "is missing (the states of the sparse table's rows)")
+        saved.check_learner_meta()
+        try:
+            agent.load_state(saved.state(n_actions, rows))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise saved.error(f"cannot restore the saved agent ({short_reason(exc)})") from None
+        self.trainer.episodes = saved.episodes
+        self.trainer.steps = saved.steps
+        self.trainer.publish()
+
+
+def check_every_for(budget: int) -> int:
+    """Episodes between exact gap checks on a run of `budget` episodes."""
+    return max(1_000, min(10_000, budget // 20))
+
+
+def _round_up(value: float) -> str:
+    """A value rounded up to 2 significant digits, as text: 0.0274 -> '0.028'."""
+    import math
+
+    if value <= 0:
+        return "0"
+    digits = 1 - int(math.floor(math.log10(value)))
+    scale = 10.0**digits
+    return f"{math.ceil(value * scale - 1e-9) / scale:.{max(digits, 0)}f}"
+
+
+def vector_support(
+    env_id: str,
+    env_kwargs: Mapping[str, Any] | None = None,
+    choices: Sequence[WrapperChoice] = (),
+) -> tuple[bool, str]:
+    """Whether the vector engine can train on this game and wrapper choice, and why.
+
+    The env is built as a `Session` builds it (choices that do not fit are
+    left out, as there), read with `plan_for_env`, and closed. Returns e.g.
+    `(True, "vector engine: <the game's title> with StepPenalty")` or
+    `(False, "scalar engine: DelayObservation has no batched form (...)")`.
+    """
+    try:
+        env_id = resolve_env_id(env_id)
+        game = game_for(env_id)
+        kwargs = game.normalize_kwargs(env_kwargs or {})
+        env, _ = build_env_lenient(env_id, game.make_kwargs(kwargs), choices)
+    except (ValueError, TypeError, gym.error.Error) as error:
+        return False, f"scalar engine: {error}"
+    try:
+        form, limit = game.batched_form(kwargs), game.episode_limit(kwargs)
+        return True, plan_for_env(env, form, limit).describe()
+    except NoBatchedForm as error:
+        return False, error.reason
+    finally:
+        env.close()

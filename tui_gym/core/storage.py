@@ -5,7 +5,12 @@ and version, env id and arguments, wrapper choices, hyperparameters, seed,
 training counts), `q.npy` (the Q-table) and `counts.npy` (updates per state
 and action); sparse tables add `keys.json`.
 
-Writing (`save_session`, `atomic_write_bytes`) goes through a temporary file
+Storage takes and returns plain data and knows no game: `save_agent` writes
+a meta dict and a learner's state, `read_agent` returns them as a checked
+`SavedAgent` (the session rebuilds itself from it, and reports what does not
+fit the game through `SavedAgent.field_error`).
+
+Writing (`save_agent`, `atomic_write_bytes`) goes through a temporary file
 in the target's folder (`.NAME.PID.RANDOM.tmp`), flushed to disk and renamed
 into place, so a crash never leaves half a file. A path that is a symbolic
 link writes the file it points to; a new file gets the permissions the umask
@@ -14,7 +19,7 @@ the write wait until it is done, and temporary files that a killed writer
 left behind are removed by the next save to the same name. `check_save_path`
 says before a long run whether a path can be written at all.
 
-Reading (`read_file`, `load_session`) trusts nothing in the file: only a
+Reading (`read_file`, `read_agent`) trusts nothing in the file: only a
 regular file of bounded size is read, every archive member's unpacked size is
 capped before and while it is unpacked, numpy headers are checked against the
 bytes that follow before any array is built, JSON nesting is bounded, and
@@ -43,15 +48,13 @@ from collections.abc import Callable, Hashable, Iterator
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from tui_gym.algorithms import Learner, LearnerState, QLearning, algorithm
+from tui_gym.algorithms import Learner, LearnerState, QLearning, Settings, algorithm
 from tui_gym.core.params import shown_value
-
-if TYPE_CHECKING:
-    from tui_gym.core.session import Session
+from tui_gym.core.wrappers.catalog import WrapperChoice
 
 FORMAT_NAME = "tui-gym-agent"
 FORMAT_VERSION = 2
@@ -259,40 +262,18 @@ def _fsync_folder(folder: Path) -> None:
         os.close(fd)
 
 
-def session_meta(session: Session) -> dict[str, Any]:
-    """Everything but the table, as JSON data."""
-    from tui_gym.core.wrappers import format_wrapper_spec
-
-    assert session.hp is not None  # set when the session is built
-    return {
-        "format": FORMAT_NAME,
-        "version": FORMAT_VERSION,
-        "env_id": session.env_id,
-        "env_kwargs": session.env_kwargs,
-        "wrappers": [format_wrapper_spec(c) for c in session.choices],
-        "algorithm": session.algorithm,
-        "hyperparameters": session.hp.to_dict(),
-        "seed": session.seed,
-        "episodes_trained": session.trainer.episodes,
-        "steps_trained": session.trainer.steps,
-        "agent_episode": session.agent.episode,
-        "n_actions": session.agent.n_actions,
-        "observation_space": session.keyer.signature,
-    }
-
-
 def _npy_bytes(array: np.ndarray) -> bytes:
     buf = io.BytesIO()
     np.save(buf, array, allow_pickle=False)
     return buf.getvalue()
 
 
-def save_session(session: Session, path: str | Path) -> Path:
-    """Save a session's agent and settings to `path` (atomically); returns `path`."""
+def save_agent(path: str | Path, meta: dict[str, Any], state: LearnerState) -> Path:
+    """Save a learner's state and its settings (`meta`, JSON data: env id and arguments,
+    wrapper specs, algorithm, hyperparameters, seed, counts) to `path` atomically;
+    returns `path`."""
     path = check_save_path(path)
-    state = session.agent.state()
-    meta = session_meta(session)
-    meta["learner"] = state.meta
+    meta = {"format": FORMAT_NAME, "version": FORMAT_VERSION, **meta, "learner": state.meta}
     members = {"meta.json": json.dumps(meta, indent=2).encode()}
     for name, array in state.arrays.items():
         members[f"{name}.npy"] = _npy_bytes(array)
@@ -488,8 +469,8 @@ def read_file(path: str | Path) -> SaveContents:
 
     The meta's format, version and algorithm are checked here, every array's
     kind of number and dimensions, the keys' form, and values no learner makes
-    (NaN or infinite values, negative counts); `load_session` checks the rest
-    against the game the meta names and the learner's own rules.
+    (NaN or infinite values, negative counts); `read_agent` checks the rest of
+    the meta, and the session the game and the learner's own rules.
     """
     reader = _Reader(Path(path))
     raw = _read_regular_file(reader)
@@ -516,7 +497,7 @@ def read_file(path: str | Path) -> SaveContents:
         raise reader.error("not a tui-gym save file (corrupt or truncated)") from None
     except (NotImplementedError, RuntimeError, zipfile.LargeZipFile, OSError) as exc:
         # Unsupported compression, encryption, ZIP64 oddities: not a file we wrote.
-        raise reader.error(f"not a tui-gym save file ({_short_reason(exc)})") from None
+        raise reader.error(f"not a tui-gym save file ({short_reason(exc)})") from None
     except MemoryError:
         raise reader.error("not a tui-gym save file (too large to read)") from None
     return SaveContents(meta, cls, arrays, keys)
@@ -595,7 +576,7 @@ def _check_numbers(reader: _Reader, member: str, array: np.ndarray, lowest: int 
         raise reader.field(member, "holds negative or impossible counts")
 
 
-def _short_reason(exc: BaseException) -> str:
+def short_reason(exc: BaseException) -> str:
     text = " ".join(str(exc).split()) or type(exc).__name__
     return text if len(text) <= 80 else text[:77] + "..."
 
@@ -642,7 +623,7 @@ def _checked(reader: _Reader, name: str, build: Callable[[], Any]) -> Any:
     except StorageError:
         raise
     except (ValueError, TypeError, KeyError) as exc:
-        raise reader.field(name, f"is not valid: {_short_reason(exc)}") from None
+        raise reader.field(name, f"is not valid: {short_reason(exc)}") from None
 
 
 def _check_learner_meta(
@@ -664,27 +645,74 @@ def _check_learner_meta(
         )
 
 
-def load_session(path: str | Path) -> Session:
-    """Rebuild a session (env, wrappers, hyperparameters, agent) from a save file."""
-    from tui_gym.core.profiles import profile_for
-    from tui_gym.core.session import Session
+@dataclass(frozen=True)
+class SavedAgent:
+    """What a save file holds, checked as far as it can be without the game it names."""
+
+    path: Path
+    env_id: str
+    env_kwargs: dict[str, Any]
+    choices: tuple[WrapperChoice, ...]
+    algorithm: type[Learner]
+    hp: Settings
+    seed: int
+    episodes: int
+    steps: int
+    agent_episode: int
+    n_actions: int | None  # None: the file does not say
+    arrays: dict[str, np.ndarray]  # the learner's, by name; the first table's gives the shape
+    keys: list[Hashable] | None
+    meta: dict[str, Any]  # meta.json as read
+
+    def check_learner_meta(self) -> None:
+        """The learner's own metadata (format 2), which must agree with the tables;
+        checked once the tables are known to fit the game (their fault is named first)."""
+        rows = len(self.arrays[self.table_name])
+        _check_learner_meta(_Reader(self.path), self.meta, self.algorithm, rows)
+
+    @property
+    def table_name(self) -> str:
+        return self.algorithm.tables[0].name
+
+    def state(self, n_actions: int, n_states: int | None) -> LearnerState:
+        """The learner state to load into a learner of `n_actions` and `n_states`."""
+        return LearnerState(
+            self.algorithm.name,
+            self.arrays,
+            {"n_actions": n_actions, "n_states": n_states,
+             "rows": len(self.arrays[self.table_name]),
+             "episode": self.agent_episode, "hyperparameters": self.hp.to_dict()},
+            self.keys,
+        )
+
+    def error(self, text: str) -> StorageError:
+        """A `StorageError` naming the file."""
+        return _Reader(self.path).error(text)
+
+    def field_error(self, name: str, problem: str) -> StorageError:
+        """A `StorageError` naming the file and the field at fault."""
+        return _Reader(self.path).field(name, problem)
+
+    def checked(self, name: str, build: Callable[[], Any]) -> Any:
+        """`build()`, with a ValueError or TypeError it raises refused under the field's name."""
+        return _checked(_Reader(self.path), name, build)
+
+
+def read_agent(path: str | Path) -> SavedAgent:
+    """A save file's contents as plain data; `StorageError` when it is not a valid one."""
     from tui_gym.core.wrappers import parse_wrapper_spec
 
     reader = _Reader(Path(path))
     contents = read_file(path)
     meta, keys, arrays, cls = contents.meta, contents.keys, contents.arrays, contents.algorithm
-    table = cls.tables[0].name
-    first = arrays[table]  # every table has its rows and columns
-    table_member = f"{table}.npy"
+    first = arrays[cls.tables[0].name]
 
     env_id = meta.get("env_id")
     if not isinstance(env_id, str):
         raise reader.field("env_id", f"must be a game id, got {shown_value(env_id)}")
-    profile = _checked(reader, "env_id", lambda: profile_for(env_id))
     env_kwargs = meta.get("env_kwargs", {})
     if not isinstance(env_kwargs, dict):
         raise reader.field("env_kwargs", f"must be an object, got {shown_value(env_kwargs)}")
-    env_kwargs = _checked(reader, "env_kwargs", lambda: profile.normalize_kwargs(env_kwargs))
     wrappers = meta.get("wrappers", [])
     if not isinstance(wrappers, list):
         raise reader.field("wrappers", f"must be a list of specs, got {shown_value(wrappers)}")
@@ -704,58 +732,18 @@ def load_session(path: str | Path) -> Session:
     episodes = _int_field(reader, meta, "episodes_trained", 0, 0, MAX_COUNT)
     steps = _int_field(reader, meta, "steps_trained", 0, 0, MAX_COUNT)
     agent_episode = _int_field(reader, meta, "agent_episode", episodes, 0, MAX_COUNT)
+    n_actions = None
+    if "n_actions" in meta:
+        n_actions = _int_field(reader, meta, "n_actions", 1, 1, 1 << 20)
     for name in ("observation_space",):
         if name in meta and not isinstance(meta[name], str):
             raise reader.field(name, f"must be text, got {shown_value(meta[name])}")
-
-    try:
-        session = Session(
-            env_id=env_id, env_kwargs=env_kwargs, choices=tuple(choices), hp=hp, seed=seed,
-            algorithm=cls.name,
-        )
-    except (ValueError, TypeError, KeyError) as exc:
-        raise reader.error(f"cannot rebuild the saved game ({_short_reason(exc)})") from None
-    if session.skipped:
-        choice, reason = session.skipped[0]
-        index = list(choices).index(choice)
-        raise reader.field(f"wrappers[{index}]", f"does not fit {session.env_id}: {reason}")
-    n_actions = _int_field(reader, meta, "n_actions", session.agent.n_actions, 1, 1 << 20)
-    if n_actions != session.agent.n_actions:
-        raise reader.field(
-            "n_actions", f"is {n_actions}; {session.env_id} with these wrappers has "
-            f"{session.agent.n_actions}"
-        )
-    if first.shape[1] != session.agent.n_actions:
-        raise reader.field(
-            table_member, f"has {first.shape[1]} columns; {session.env_id} has "
-            f"{session.agent.n_actions} actions"
-        )
-    dense_rows = session.agent.n_states
-    if dense_rows is not None and keys is not None:
-        raise reader.field("keys.json", f"is for a sparse table; {session.env_id}'s is dense")
-    if dense_rows is not None and len(first) != dense_rows:
-        raise reader.field(
-            table_member, f"has {len(first):,} rows; {session.env_id} has {dense_rows:,}"
-        )
-    if dense_rows is None and keys is None:
-        raise reader.field("keys.json", "is missing (the states of the sparse table's rows)")
     if len(arrays["visits"]) != len(first):
         raise reader.field(
             "visits.npy", f"has {len(arrays['visits']):,} entries for {len(first):,} table rows"
         )
-    _check_learner_meta(reader, meta, cls, len(first))
-    state = LearnerState(
-        cls.name,
-        arrays,
-        {"n_actions": n_actions, "n_states": dense_rows, "rows": len(first),
-         "episode": agent_episode, "hyperparameters": hp.to_dict()},
-        keys,
+    return SavedAgent(
+        path=Path(path), env_id=env_id, env_kwargs=dict(env_kwargs), choices=tuple(choices),
+        algorithm=cls, hp=hp, seed=seed, episodes=episodes, steps=steps,
+        agent_episode=agent_episode, n_actions=n_actions, arrays=arrays, keys=keys, meta=meta,
     )
-    try:
-        session.agent.load_state(state)
-    except (KeyError, TypeError, ValueError) as exc:
-        raise reader.error(f"cannot restore the saved agent ({_short_reason(exc)})") from None
-    session.trainer.episodes = episodes
-    session.trainer.steps = steps
-    session.trainer.publish()
-    return session

@@ -40,14 +40,15 @@ from textual.screen import Screen
 from textual.widget import Widget
 from textual.widgets import ContentSwitcher, Header
 
-from tui_gym.core.profiles import PROFILES, GameProfile, profile_for
 from tui_gym.core.recording import Recording
 from tui_gym.core.recording.switch import RecordingSwitch
-from tui_gym.core.runner import SPEEDS, make_runner
+from tui_gym.core.runners import make_runner
 from tui_gym.core.session import Session
+from tui_gym.core.speeds import SPEEDS
 from tui_gym.core.storage import StorageError
 from tui_gym.core.training import continue_run
 from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.games import GAMES, Game, game_for, game_named
 from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.file_screen import FileScreen
 from tui_gym.ui.help_screen import HelpScreen
@@ -97,8 +98,9 @@ class TuiGymApp(App[int]):
         Binding("question_mark,f1", "help", "Help", key_display="?"),
         Binding("q", "quit", "Quit"),
         Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
-        Binding("b", "switch_game('blackjack')", "Blackjack"),
-        Binding("g", "switch_game('gridworld')", "GridWorld"),
+        # A key for each game in the registry (the help and the side panel's picker list them).
+        *(Binding(game.key, f"switch_game('{game.name}')", game.title, show=False)
+          for game in GAMES if game.key),
         Binding("ctrl+s", "save_agent", "Save agent", show=False),
         Binding("ctrl+o", "load_agent", "Load agent", show=False),
         Binding("ctrl+r", "toggle_recording", "Record", show=False),
@@ -142,7 +144,7 @@ class TuiGymApp(App[int]):
         self.session = session or Session()
         self.runner = make_runner(self.session, runner)
         self.play_seed = self.session.seed if play_seed is None else play_seed
-        self._sessions: dict[str, Session] = {self.session.profile.name: self.session}
+        self._sessions: dict[str, Session] = {self.session.game.name: self.session}
         self._files: dict[str, Path] = {}  # the last file each game was saved to or loaded from
         self._loaded: tuple[Session, Path] | None = None  # read, waiting to be put in place
         self._too_small: TooSmallScreen | None = None
@@ -174,7 +176,7 @@ class TuiGymApp(App[int]):
         if self.standalone:
             self._catch_signals()
         self._switcher = self.query_one("#views", ContentSwitcher)
-        self.sub_title = self.session.profile.title
+        self.sub_title = self.session.game.title
         self.set_interval(1 / REFRESH_HZ, self._tick)
         self._apply_size(self.size.width, self.size.height)
         self.call_after_refresh(self._focus_at_start)
@@ -265,11 +267,11 @@ class TuiGymApp(App[int]):
         self.refresh_bindings()  # the view's keys, even when the focus stays put
 
     def action_switch_game(self, name: str) -> None:
-        profile = next(p for p in PROFILES if p.name == name)
-        if profile is self.session.profile:
-            self.notify(f"Already playing {profile.title}.")
+        game = game_named(name)
+        if game is self.session.game:
+            self.notify(f"Already playing {game.title}.")
             return
-        self.switch_game(profile)
+        self.switch_game(game)
 
     def action_focus_wrappers(self) -> None:
         self.side_panel.focus_wrappers()
@@ -291,30 +293,30 @@ class TuiGymApp(App[int]):
 
     # --- one session per game -------------------------------------------------
     def switch_game(
-        self, profile: GameProfile, otherwise: Callable[[], None] | None = None
+        self, game: Game, otherwise: Callable[[], None] | None = None
     ) -> None:
-        """Play `profile`'s game: its session from earlier in this run (agent, settings,
+        """Play `game`: its session from earlier in this run (agent, settings,
         wrappers, curves) or a new one. Training pauses first; `otherwise` runs if the
         runner never hands the agent back."""
         was_running = self.runner.running
-        self._when_idle(lambda: self._switch_now(profile, was_running), otherwise)
+        self._when_idle(lambda: self._switch_now(game, was_running), otherwise)
 
-    def _switch_now(self, profile: GameProfile, was_running: bool) -> None:
-        if profile is self.session.profile:  # two switches asked for in a row
+    def _switch_now(self, game: Game, was_running: bool) -> None:
+        if game is self.session.game:  # two switches asked for in a row
             return
-        session = self._sessions.get(profile.name)
+        session = self._sessions.get(game.name)
         fresh = session is None
         if session is None:
             current = self.session
-            session = Session(profile.env_id, seed=current.seed, engine=current.engine)
-            self._sessions[profile.name] = session
+            session = Session(game.env_id, seed=current.seed, engine=current.engine)
+            self._sessions[game.name] = session
         self.play_view.put_away()
         self._use_session(session)
         if fresh:
-            notice = f"{profile.title}: a new agent with the game's own settings."
+            notice = f"{game.title}: a new agent with the game's own settings."
         else:
             episodes = session.trainer.episodes
-            notice = (f"{profile.title}: your agent ({episodes:,} episodes), settings "
+            notice = (f"{game.title}: your agent ({episodes:,} episodes), settings "
                       "and wrappers as you left them.")
         if was_running:
             notice = "Training paused. " + notice
@@ -356,8 +358,9 @@ class TuiGymApp(App[int]):
         runner.session = session  # both runners read their session afresh at each start
         runner.finished = False
         with contextlib.suppress(AttributeError):  # read-only where tied to the agent
-            runner.last_event = runner.last_scene = None  # the other game's last move
-        self.sub_title = session.profile.title
+            # The other game's last move.
+            runner.last_event = runner.last_scene = None  # type: ignore[misc]
+        self.sub_title = session.game.title
         self._last_version = -1
         self.play_view.reload()
         self.train_view.reload()
@@ -466,7 +469,7 @@ class TuiGymApp(App[int]):
     # --- files -----------------------------------------------------------------
     def action_save_agent(self) -> None:
         """Ask for a file name and save the agent (and its settings) there."""
-        title = self.session.profile.title
+        title = self.session.game.title
         self.push_screen(
             FileScreen(f"Save the {title} agent", self._suggested_file(), self._save_to,
                        saving=True)
@@ -483,7 +486,7 @@ class TuiGymApp(App[int]):
     def _suggested_file(self, loading: bool = False) -> str:
         """The name last used for this game, else `<game>-agent.tgym` (when loading,
         only if that file is there)."""
-        name = self.session.profile.name
+        name = self.session.game.name.replace("/", "-").replace(":", "-")
         path = self._files.get(name, Path.cwd() / f"{name}-agent.tgym")
         if loading and not path.is_file():
             return ""
@@ -506,7 +509,7 @@ class TuiGymApp(App[int]):
         finally:
             if was_running:
                 self.runner.start()
-        self._files[self.session.profile.name] = path
+        self._files[self.session.game.name] = path
         episodes = self.session.trainer.episodes
         self.notify(f"Agent saved to {path} ({episodes:,} episodes).", title="Saved")
         return None
@@ -526,8 +529,8 @@ class TuiGymApp(App[int]):
         if path is None or loaded is None:
             return
         session, path = loaded
-        profile = session.profile
-        current = self._sessions.get(profile.name)
+        game = session.game
+        current = self._sessions.get(game.name)
         if current is self.session:
             episodes = self._episodes_trained()
         else:
@@ -537,8 +540,8 @@ class TuiGymApp(App[int]):
             return
         self.push_screen(
             ConfirmScreen(
-                f"Replace the {profile.title} agent?",
-                f"The {profile.title} agent here has trained {episodes:,} episodes; "
+                f"Replace the {game.title} agent?",
+                f"The {game.title} agent here has trained {episodes:,} episodes; "
                 f"{path.name} replaces it, its settings and its wrappers.",
                 "Load",
             ),
@@ -549,12 +552,12 @@ class TuiGymApp(App[int]):
         self._when_idle(lambda: self._install_now(session, path))
 
     def _install_now(self, session: Session, path: Path) -> None:
-        if session.profile is not self.session.profile:
+        if session.game is not self.session.game:
             self.play_view.put_away()
-        self._sessions[session.profile.name] = session
-        self._files[session.profile.name] = path
+        self._sessions[session.game.name] = session
+        self._files[session.game.name] = path
         self._use_session(session)
-        self.notify(f"Loaded {path}: {session.profile.title}, "
+        self.notify(f"Loaded {path}: {session.game.title}, "
                     f"{session.trainer.episodes:,} episodes trained.", title="Loaded")
 
     def action_save_screenshot(self) -> None:
@@ -588,7 +591,7 @@ class TuiGymApp(App[int]):
                         f"{exc.strerror or exc}", severity="error", title="Not recording")
             return
         self.play_view.show_recording(path.name)
-        noun = game.profile.episode_noun
+        noun = game.game.episode_noun
         when = "" if self.recording.recorder and self.recording.recorder.episode_open else (
             f" from the next {noun}"
         )
@@ -618,13 +621,13 @@ class TuiGymApp(App[int]):
             if was_running:
                 self.runner.start()
             return False
-        self.sub_title = self.session.profile.title
+        self.sub_title = self.session.game.title
         self._last_version = -1
         self.play_view.reload()
         self.train_view.reload()
         self.side_panel.reload()
-        severity = "information" if report.kept_agent else "warning"
-        self.notify(report.notice, severity=severity, timeout=6)
+        self.notify(report.notice, severity="information" if report.kept_agent else "warning",
+                    timeout=6)
         if was_running and report.kept_agent:
             self.runner.start()
         return True
@@ -672,13 +675,13 @@ class TuiGymApp(App[int]):
         self.side_panel.reload()
         cls = self.session.learner_class
         self.notify(f"{cls.title}: a fresh learner with its defaults for "
-                    f"{self.session.profile.title}. {cls.summary}.", timeout=5)
+                    f"{self.session.game.title}. {cls.summary}.", timeout=5)
 
     def on_side_panel_changed(self, message: SidePanel.Changed) -> None:
         """A new game switches sessions; a change that would reset a trained agent asks."""
-        profile = profile_for(message.env_id)
-        if profile is not self.session.profile:
-            self.switch_game(profile, otherwise=self.side_panel.reload)
+        game = game_for(message.env_id)
+        if game is not self.session.game:
+            self.switch_game(game, otherwise=self.side_panel.reload)
             return
         change: dict[str, Any] = {
             "env_id": message.env_id, "env_kwargs": message.env_kwargs, "choices": message.choices,
@@ -715,9 +718,11 @@ class TuiGymApp(App[int]):
         sections = [
             ("Everywhere", [
                 ("p / t", "Play view / Train view"),
-                ("b / g", "switch to Blackjack / GridWorld (each keeps its agent, "
-                          "settings and curves)"),
-                ("w / W", "focus the wrapper panel (W while the GridWorld board has focus)"),
+                (" / ".join(g.key for g in GAMES if g.key),
+                 "switch game: " + ", ".join(g.title for g in GAMES if g.key)
+                 + " (each keeps its agent, settings and curves)"),
+                ("w / W", "focus the wrapper panel (W while a board that moves with WASD "
+                          "has focus)"),
                 ("esc", "leave a text field or the side panel: back to the view"),
                 ("ctrl+s", "save the agent to a file you name (asks before replacing one)"),
                 ("ctrl+o", "load an agent from a file you name"),
@@ -763,9 +768,9 @@ class TuiGymApp(App[int]):
             ("Play view", "Play the game yourself", lambda: self.action_show_view("play")),
             ("Train view", "Watch the agent learn", lambda: self.action_show_view("train")),
             *(
-                (f"Game: {p.title}", p.description,
-                 lambda name=p.name: self.action_switch_game(name))
-                for p in PROFILES
+                (f"Game: {g.title}", g.description,
+                 lambda name=g.name: self.action_switch_game(name))
+                for g in GAMES
             ),
             ("Start / pause training", "Toggle training", self._palette_toggle),
             ("Reset agent", "Empty Q-table, fresh statistics (asks first once trained)",
@@ -898,7 +903,7 @@ EXIT_CRASH = 1
 
 
 def run_app(
-    env_id: str = "Blackjack-v1", seed: int = 0, load: str | None = None, runner: str = "process",
+    env_id: str | None = None, seed: int = 0, load: str | None = None, runner: str = "process",
     *, session: Session | None = None, record: str | None = None,
     replay: Recording | None = None, db: str | None = None, keep_history: bool = True,
 ) -> int:
@@ -908,7 +913,7 @@ def run_app(
     `keep_history`."""
     gc_seconds = gc_seconds_from_env()
     if session is None:
-        session = Session.load(load) if load else Session(env_id=env_id, seed=seed)
+        session = Session.load(load) if load else Session(env_id=env_id or "", seed=seed)
     run_log = None
     if keep_history:
         from tui_gym.core.experiments.app_recording import SessionRunLog

@@ -2,20 +2,20 @@
 
 `PlayView` owns a `HumanGame` (its own env, built like the session's, so the
 wrappers chosen in the side panel apply to human play too) and the board the
-game's profile asks for (`BOARDS[profile.board]`). The board turns keys and
+game asks for (`board_class(game.board)`). The board turns keys and
 clicks into `Board.Act` / `Board.NewEpisode` messages; this view answers them,
-states what happened in plain words (the profile words outcomes, so nothing
-here knows which game it is) and keeps a running tally of finished episodes,
-counted under the profile's `tally_words`. A game switch puts the person's
+states what happened in plain words (the game's narrator words outcomes, so
+nothing here knows which game it is) and keeps a running tally of finished
+episodes, counted under the narrator's `tally_words`. A game switch puts the person's
 game and record away (`put_away`) and switching back brings them back.
 
 Beside the game:
 
-- the coach (`c`): after each move, one line from the profile on whether it
+- the coach (`c`): after each move, one line from the narrator on whether it
   was optimal and what it cost (judged on the advice taken *before* the move);
 - advice (`i`): what the exact optimum and the agent's greedy policy would do
   in the current state (and, with the coach off, a ✓/✗ after each move);
-- the `Scoreboard`: the person, the agent and the optimum as the profile words
+- the `Scoreboard`: the person, the agent and the optimum as the narrator words
   them; the person's agreement with the optimum is counted whether or not the
   coach is on; the agent's exact figures are recomputed when the view is shown
   and after each episode, never per frame;
@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import random
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, cast
 
 from textual import events
 from textual.app import ComposeResult
@@ -44,18 +44,21 @@ from textual.timer import Timer
 from textual.widgets import Static
 
 from tui_gym.core.play import HumanGame, PlayError, PlayStep, Scorecard
-from tui_gym.core.profiles.base import (
-    Advice,
+from tui_gym.core.training import TrainingSnapshot
+from tui_gym.games.base import Advice
+from tui_gym.games.words import (
     ScoreRow,
     format_reward,
     interval_text,
     plural,
     signed,
-    to_jsonable,
 )
-from tui_gym.core.training import TrainingSnapshot
-from tui_gym.ui.widgets.boards import BOARDS, Board
+from tui_gym.ui.widgets.board_kinds import board_class
+from tui_gym.ui.widgets.boards import Board
 from tui_gym.ui.widgets.scoreboard import Scoreboard
+
+if TYPE_CHECKING:
+    from tui_gym.ui.app import TuiGymApp
 
 OBSERVATION_CHARS = 64  # a raw observation longer than this is cut short
 WATCH_INTERVAL = 0.4  # seconds between the watched agent's moves: slow enough to follow
@@ -153,7 +156,7 @@ class PlayView(Vertical):
         super().__init__(name=name, id=id, classes=classes)
         self.game: HumanGame | None = None
         self.board: Board | None = None
-        self.outcomes: dict[str, int] = {}  # finished episodes by the profile's tally word
+        self.outcomes: dict[str, int] = {}  # finished episodes by the narrator's tally word
         self._kept: dict[str, _KeptPlay] = {}  # each game's play put away by a game switch
         self._headline = Content()
         self._tone = ""
@@ -180,7 +183,7 @@ class PlayView(Vertical):
     # --- layout ------------------------------------------------------------
     def compose(self) -> ComposeResult:
         yield Static(id="play-title")
-        self.board = BOARDS[self.app.session.profile.board]()
+        self.board = board_class(self.tui.session.game.board)()
         yield self.board
         with Vertical(id="play-status"):
             yield Static(id="play-headline")
@@ -203,13 +206,18 @@ class PlayView(Vertical):
     def on_hide(self) -> None:
         self.stop_watching(restore=True)
 
+    @property
+    def tui(self) -> TuiGymApp:
+        """The app, with its session and seeds."""
+        return cast("TuiGymApp", self.app)
+
     # --- what the app calls --------------------------------------------------
     def reload(self) -> None:
         """Show the session's game: the person's play put away on it (`put_away`) when
         the game and its wrappers are still the same, else a new game, tally and board."""
-        session = self.app.session
+        session = self.tui.session
         self.stop_watching(restore=False)
-        kept = self._kept.pop(session.profile.name, None)
+        kept = self._kept.pop(session.game.name, None)
         if kept is not None and (kept.game.session is not session or kept.chain != _chain(session)):
             kept.close()
             kept = None
@@ -218,16 +226,16 @@ class PlayView(Vertical):
         if self.agent_game is not None:
             self.agent_game.close()
         if kept is None:
-            self.game = HumanGame(session, seed=self.app.play_seed)
-            self.game.recorder = getattr(self.app, "recording", None)  # records while switched on
+            self.game = HumanGame(session, seed=self.tui.play_seed)
+            self.game.recorder = getattr(self.tui, "recording", None)  # records while switched on
             self.scorecard = Scorecard(tally=self.game.tally)
             self.agent_game = None
             self.agent_card = Scorecard()
-            self._watch_rng = random.Random(self.app.play_seed)
+            self._watch_rng = random.Random(self.tui.play_seed)
             self.outcomes = {}
         else:
             self._restore(kept)
-        kind = BOARDS[session.profile.board]
+        kind = board_class(session.game.board)
         if type(self.board) is not kind:
             old = self.board
             had_focus = old is not None and old.has_focus
@@ -254,7 +262,7 @@ class PlayView(Vertical):
         game = self.game
         if game is None:
             return
-        self._kept[game.profile.name] = _KeptPlay(
+        self._kept[game.game.name] = _KeptPlay(
             game, _chain(game.session), self.scorecard, dict(self.outcomes), self.agent_game,
             self.agent_card, self._watch_rng, self._headline, self._tone, self._hint,
             self._verdict, self._coach, self._coach_tone,
@@ -322,25 +330,25 @@ class PlayView(Vertical):
             self._say_hint(f"The env refused the move: {exc}")
             return
         self._hint = ""
-        profile = game.profile
+        rules = game.game
         agreed = self.scorecard.judge_move(before.optimal if before else (), step.action)
         self._verdict = ""
         if self.show_advice and not self.coach_on:
-            self._verdict = _verdict(before, step, profile.action_names)
+            self._verdict = _verdict(before, step, rules.action_names)
         self._coach, self._coach_tone = "", ""
         if before is not None and step.action is not None and agreed is not None:
-            try:
-                self._coach = profile.coach_text(before, step.action, scene_before, game.scene())
-            except Exception:  # coaching is a help, never a reason to fail
-                self._coach = ""
+            self._coach = rules.narrator.coach_text(before, step.action, scene_before,
+                                                    game.scene())
             self._coach_tone = "-good" if agreed else "-bad"
         elif before is not None and before.unwrapped_optimal:  # no optimum to judge against
             self._coach = "no verdict: " + before.note
         if step.done:
-            word = profile.tally_word(step)
+            word = rules.narrator.tally_word(step)
             self.outcomes[word] = self.outcomes.get(word, 0) + 1
-            self.scorecard.add_figures(profile.episode_figures(step, game.first_info))
-            self._headline = Content(profile.outcome_text(step, game.first_info, game.scene()))
+            self.scorecard.add_figures(rules.narrator.episode_figures(step, game.first_info))
+            self._headline = Content(
+                rules.narrator.outcome_text(step, game.first_info, game.scene())
+            )
             self._tone = "-even" if not step.terminated else _tone(step.reward)
         else:
             self._headline = Content(f"{action.capitalize()}: reward {format_reward(step.reward)}")
@@ -374,7 +382,7 @@ class PlayView(Vertical):
             self._headline = Content(f"The env could not start an episode: {exc}")
             self._tone = "-bad"
         else:
-            noun = game.profile.episode_noun
+            noun = game.game.episode_noun
             self._headline = Content.from_markup(
                 f"New {escape(noun)}.  [not bold $text-muted]{escape(board.prompt)}[/]"
             )
@@ -395,9 +403,9 @@ class PlayView(Vertical):
         board.set_episode_over(game.done)
 
     def _show_title(self) -> None:
-        session = self.app.session
+        session = self.tui.session
         chain = " → ".join(_short(choice.name, choice.params) for choice in session.applied)
-        title = f"[b]{escape(session.profile.title)}[/]  [$text-muted]wrappers:[/] " + (
+        title = f"[b]{escape(session.game.title)}[/]  [$text-muted]wrappers:[/] " + (
             f"[i $text-accent]{escape(chain)}[/]" if chain else "[$text-muted]none[/]"
         )
         modes = [
@@ -428,7 +436,7 @@ class PlayView(Vertical):
         if game is not None and last is not None:
             parts = [self._verdict] if self._verdict else []
             parts.append(f"observation: {self._observation_text(last)}")
-            progress = game.profile.progress_text(last, game.first_info)
+            progress = game.game.narrator.progress_text(last, game.first_info)
             if progress:
                 parts.append(progress)
             if last.steps:
@@ -459,15 +467,12 @@ class PlayView(Vertical):
         """What the exact optimum would do now in `game` (None when the game cannot say)."""
         if game.done:
             return None
-        try:
-            return game.profile.advice(game.env, self.app.session.env_kwargs)
-        except Exception:  # advice is a help, never a reason to fail
-            return None
+        return game.game.oracle.advice(game.env, self.tui.session.env_kwargs)
 
     def agent_note(self, observation: Any) -> str:
         """'agent: hit (Q stick −0.310, hit −0.402)': the greedy agent's choice here."""
-        names = self.app.session.profile.action_names
-        choice = self.app.session.greedy_actions_for(observation, self._training_snapshot())
+        names = self.tui.session.game.action_names
+        choice = self.tui.session.greedy_actions_for(observation, self._training_snapshot())
         if choice is None:
             return "agent: has never seen this state (it would pick at random)"
         ties, q = choice
@@ -509,10 +514,7 @@ class PlayView(Vertical):
     # --- the scoreboard --------------------------------------------------------
     def refresh_agent_figures(self) -> None:
         """Recompute the agent's exact figures (a few ms) and redraw the scoreboard."""
-        try:
-            self.agent_figures = self.app.session.agent_figures(self._training_snapshot())
-        except Exception:  # a table that does not fit the reference: no figures
-            self.agent_figures = None
+        self.agent_figures = self.tui.session.agent_figures(self._training_snapshot())
         self._show_scoreboard()
 
     def _training_snapshot(self) -> TrainingSnapshot | None:
@@ -522,12 +524,12 @@ class PlayView(Vertical):
         return runner.latest if runner is not None and runner.running else None
 
     def score_rows(self) -> list[ScoreRow]:
-        """The scoreboard's rows as the profile words them."""
-        session = self.app.session
+        """The scoreboard's rows as the game's narrator words them."""
+        session = self.tui.session
         watched = self.agent_card if self.agent_card.tally.episodes else None
-        scope = session.profile.scope(session.env_kwargs, session.changes)
-        return session.profile.scoreboard(
-            self.scorecard, self.agent_figures, watched, session.hidden_reason(), scope
+        scope = session.game.oracle.scope(session.env_kwargs, session.changes)
+        return session.game.narrator.scoreboard(
+            self.scorecard, self.agent_figures, watched, session.exact_reason(), scope
         )
 
     def _show_scoreboard(self) -> None:
@@ -544,10 +546,10 @@ class PlayView(Vertical):
         board = self.board
         if board is None or self.watching:
             return
-        session = self.app.session
+        session = self.tui.session
         if self.agent_game is None:
             try:
-                self.agent_game = HumanGame(session, seed=self.app.play_seed + WATCH_SEED_OFFSET)
+                self.agent_game = HumanGame(session, seed=self.tui.play_seed + WATCH_SEED_OFFSET)
             except Exception as exc:
                 self._say_hint(f"The agent cannot play here: {exc}")
                 return
@@ -575,7 +577,7 @@ class PlayView(Vertical):
         board.start_episode()
         if not restore or game is None:
             return
-        noun = escape(game.profile.episode_noun)
+        noun = escape(game.game.episode_noun)
         hint = board.over_hint if game.done else board.prompt
         self._headline = Content.from_markup(
             f"Back to your {noun}.  [not bold $text-muted]{escape(hint)}[/]"
@@ -606,7 +608,7 @@ class PlayView(Vertical):
             self._say_hint(f"The agent's episode could not start: {exc}")
             return False
         board.start_episode()
-        self._show_agent(f"New {game.profile.episode_noun} for the agent.")
+        self._show_agent(f"New {game.game.episode_noun} for the agent.")
         return True
 
     def _watch_tick(self) -> None:
@@ -620,7 +622,7 @@ class PlayView(Vertical):
             else:
                 self._agent_new_episode()
             return
-        session = self.app.session
+        session = self.tui.session
         before = self._advice(game)
         assert game.last is not None
         choice = session.greedy_actions_for(game.last.observation, self._training_snapshot())
@@ -634,13 +636,13 @@ class PlayView(Vertical):
             self._say_hint(f"The env refused the agent's move: {exc}")
             return
         self.agent_card.judge_move(before.optimal if before else (), step.action)
-        name = game.profile.action_names[action]
+        name = game.game.action_names[action]
         if step.done:
-            self.agent_card.add_figures(game.profile.episode_figures(step, game.first_info))
+            self.agent_card.add_figures(game.game.narrator.episode_figures(step, game.first_info))
             self._watch_wait = self.watch_pause_ticks
             moves = plural(step.steps, "move")
             self._show_agent(
-                f"The agent's {game.profile.episode_noun} is over: "
+                f"The agent's {game.game.episode_noun} is over: "
                 f"return {format_reward(step.episode_return)} after {moves}.",
                 tone=_tone(step.episode_return) if step.terminated else "-even",
             )
@@ -658,13 +660,10 @@ class PlayView(Vertical):
         self._update_status(Content(WATCHING), detail, "", "", tone)
 
     def _observation_text(self, last: PlayStep) -> str:
-        """The observation in the profile's words, or raw when wrappers reshaped it."""
+        """The observation in the game's words, or raw (cut short) when wrappers reshaped it."""
         assert self.game is not None
-        try:
-            return self.game.profile.describe(last.observation)
-        except Exception:  # a wrapper changed its shape: show it as it is
-            raw = str(to_jsonable(last.observation))
-            return raw if len(raw) <= OBSERVATION_CHARS else raw[: OBSERVATION_CHARS - 1] + "…"
+        text = self.game.game.states.describe(last.observation, self.tui.session.env_kwargs)
+        return text if len(text) <= OBSERVATION_CHARS else text[: OBSERVATION_CHARS - 1] + "…"
 
     def _show_tally(self) -> None:
         game = self.game
@@ -672,10 +671,10 @@ class PlayView(Vertical):
             return
         tally = game.tally
         parts = [
-            f"[$text-muted]{escape(game.profile.episode_noun.capitalize())}s[/] "
+            f"[$text-muted]{escape(game.game.episode_noun.capitalize())}s[/] "
             f"[b]{tally.episodes}[/]"
         ]
-        for word in game.profile.tally_words:
+        for word in game.game.narrator.tally_words:
             count = self.outcomes.get(word.label, 0)
             if not (count or word.always):
                 continue

@@ -33,12 +33,13 @@ from textual.widgets import Button, Header, OptionList, Static
 from textual.widgets.option_list import Option
 
 from tui_gym.core.play import PlayStep
-from tui_gym.core.profiles.base import format_reward
-from tui_gym.core.recording.games import profile_named
+from tui_gym.core.recording.games import game_named
 from tui_gym.core.recording.reader import Episode, Move, Position, Recording
+from tui_gym.games.words import format_reward
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.jump_screen import JumpScreen
-from tui_gym.ui.widgets.boards import BOARDS, Board
+from tui_gym.ui.widgets.board_kinds import BOARDS
+from tui_gym.ui.widgets.boards import Board
 from tui_gym.ui.widgets.key_bar import KeyBar
 
 TRAIL_POSITIONS = 200  # scenes handed to a board before the one shown (its trail)
@@ -66,7 +67,7 @@ def replay_board(kind: str, player: str) -> Board | None:
         replay_class = type(
             f"Replay{board_class.__name__}",
             (board_class,),
-            {"player_name": property(lambda self: self.replay_player)},
+            {"player_name": property(lambda self: self.replay_player), "KEEP_SHAPE": False},
         )
         _REPLAY_BOARDS[board_class] = replay_class
     board = replay_class(interactive=False)
@@ -367,13 +368,13 @@ class ReplayScreen(ModalScreen[None]):
         move = here.move
         assert move is not None
         total = episode.running_return(position)
-        profile = profile_named(episode.game.env_id)
-        if profile is not None:
+        game = game_named(episode.game.env_id)
+        if game is not None:
             last = PlayStep(here.frame.observation, move.reward, move.terminated, move.truncated,
                             dict(here.frame.info), total, move.step, move.action)
             first_info = dict(episode.positions[0].frame.info) if episode.started else {}
             try:
-                return str(profile.outcome_text(last, first_info, here.frame.scene or {}))
+                return str(game.narrator.outcome_text(last, first_info, here.frame.scene or {}))
             except Exception:  # a recording this version's words cannot read
                 pass
         how = "Episode over" if move.terminated else "Truncated by the time limit"

@@ -27,9 +27,11 @@ from textual.validation import ValidationResult, Validator
 from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet, Static
 
 from tui_gym.algorithms import ALGORITHMS
-from tui_gym.core.profiles import PROFILES
 from tui_gym.core.wrappers import CATALOG, Param, WrapperChoice, format_wrapper_spec
+from tui_gym.games import GAMES
 from tui_gym.ui.widgets.tick_box import TickBox
+
+OTHER = "game-other"  # the picker's button for an env the registry does not list
 
 
 def _value_text(value: Any) -> str:
@@ -275,8 +277,8 @@ class SidePanel(VerticalScroll):
         self._order = [c.name for c in self.session.choices]  # the chain, innermost first
         yield Static("Game", classes="section")
         with RadioSet(id="game-picker"):
-            for profile in PROFILES:
-                yield RadioButton(profile.title, id=f"game-{profile.name}")
+            for button_id, title, _ in self._picker_games():
+                yield RadioButton(title, id=button_id)
         yield Vertical(*self._env_fields(), id="env-params")
         yield Static("", id="env-error", classes="field-error")
         yield Static("Algorithm", classes="section")
@@ -315,8 +317,18 @@ class SidePanel(VerticalScroll):
         session = self.session
         return [
             ParamField(p, session.env_kwargs.get(p.name, p.default), "env")
-            for p in session.profile.env_params
+            for p in session.game.params
         ]
+
+    def _picker_games(self) -> list[tuple[str, str, str]]:
+        """(button id, label, env id) of every game the picker lists: the registered ones,
+        each with its hotkey, and the session's own when it is another env."""
+        games = [(f"game-{g.name}", f"{g.title} ({g.key})" if g.key else g.title, g.env_id)
+                 for g in GAMES]
+        game = self.session.game
+        if not any(g is game for g in GAMES):
+            games.append((OTHER, game.title, self.session.env_id))
+        return games
 
     def _wrapper_states(self) -> tuple[dict[str, WrapperChoice], dict[str, str | None]]:
         """Each chosen wrapper by name, and for every wrapper why it does not fit (if so)."""
@@ -332,7 +344,19 @@ class SidePanel(VerticalScroll):
         """Press the session's game in the picker, so the picker's own highlight moves
         to it too (the change it reports matches the session and asks for nothing)."""
         picker = self.query_one("#game-picker", RadioSet)
-        button = picker.query_one(f"#game-{self.session.profile.name}", RadioButton)
+        game = self.session.game
+        listed = self._picker_games()
+        # Another env than the registry's has one button of its own, while it is played.
+        other = next((title for button_id, title, _ in listed if button_id == OTHER), None)
+        buttons = picker.query(f"#{OTHER}")
+        if other is None:
+            buttons.remove()
+        elif buttons:
+            buttons.first(RadioButton).label = other
+        else:
+            picker.mount(RadioButton(other, id=OTHER))
+        mine = next(i for i, _, env_id in listed if game.matches(env_id))
+        button = picker.query_one(f"#{mine}", RadioButton)
         if picker.pressed_button is not button:
             button.value = True
 
@@ -347,7 +371,7 @@ class SidePanel(VerticalScroll):
         self._check_algorithm()
         env_box = self.query_one("#env-params", Vertical)
         fields = list(env_box.query(ParamField))
-        wanted = self.session.profile.env_params
+        wanted = self.session.game.params
         if [f.param for f in fields] == list(wanted):
             for field in fields:
                 field.set_value(self.session.env_kwargs.get(field.param.name))
@@ -403,8 +427,8 @@ class SidePanel(VerticalScroll):
         pressed = picker.pressed_button
         if pressed is None or pressed.id is None:
             return self.session.env_id
-        name = pressed.id.removeprefix("game-")
-        return next(p.env_id for p in PROFILES if p.name == name)
+        return next((env_id for i, _, env_id in self._picker_games() if i == pressed.id),
+                    self.session.env_id)
 
     def _mark(self, field: ParamField, error: str | None) -> None:
         if field.param.kind is not bool:

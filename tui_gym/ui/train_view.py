@@ -15,8 +15,8 @@ marked.
 It never trains anything: the app's timer hands it the runner's latest
 snapshot through `show_snapshot()`, which redraws only what changed and
 recomputes heatmaps and the exact reference only for a new snapshot. It asks
-the session's profile whether the heatmaps follow a focus (GridWorld's
-target) and what a heatmap cell means; it never branches on a game's name.
+the game's heatmap layout whether the heatmaps follow a focus (a target, a
+slice) and what a heatmap cell means; it never branches on a game's name.
 """
 
 from __future__ import annotations
@@ -40,8 +40,8 @@ from tui_gym.ui.widgets.step_panel import StepPanel, explain
 from tui_gym.ui.widgets.training_charts import TrainingCharts
 
 if TYPE_CHECKING:
-    from tui_gym.core.runner import TrainingRunner
     from tui_gym.core.session import Session
+    from tui_gym.core.speeds import Runner as TrainingRunner
 
 STATE_POLL_SECONDS = 0.25  # how often the view checks for a pause with no new snapshot
 
@@ -174,7 +174,7 @@ class TrainView(Vertical):
 
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
         super().__init__(id=id, classes=classes)
-        self.focus_target: Any = None  # what the heatmaps follow (GridWorld: the target)
+        self.focus_target: Any = None  # what the heatmaps follow (a target, a slice)
         self._snapshot: TrainingSnapshot | None = None
         self._version = -1
         self._state = ""
@@ -182,7 +182,7 @@ class TrainView(Vertical):
         self._board_kind = ""
         self._scene: Any = None
         self._scene_event: Any = None
-        self._layout_key: Any = None  # (profile, env kwargs) the focus belongs to
+        self._layout_key: Any = None  # (game, env kwargs) the focus belongs to
 
     # --- the app and its session ---------------------------------------------
     @property
@@ -270,19 +270,19 @@ class TrainView(Vertical):
     def reload(self) -> None:
         """Start over from the session (after a rebuild or an agent reset)."""
         session, runner = self.session, self.runner
-        profile = session.profile
-        layout_key = (profile.name, tuple(sorted(session.env_kwargs.items())))
+        game = session.game
+        layout_key = (game.name, tuple(sorted(session.env_kwargs.items())))
         if layout_key != self._layout_key:
             self._layout_key = layout_key
-            self.focus_target = profile.default_heatmap_focus(session.env_kwargs)
-        if profile.board != self._board_kind:
+            self.focus_target = game.layout.default_focus(session.env_kwargs)
+        if game.board != self._board_kind:
             self._drop_board()
         self._scene = self._scene_event = None
         if session.hp is not None:
             self.form.load(session.hp)
         self.charts.clear()
         self._heatmap_box.border_subtitle = (
-            "←↑↓→ / hjkl / click: move the target" if profile.heatmap_focus else ""
+            f"←↑↓→ / hjkl / click: {game.layout.focus_help}" if game.layout.has_focus else ""
         )
         self._version = -1
         self._state = ""
@@ -318,7 +318,7 @@ class TrainView(Vertical):
         return hp
 
     def focus_default(self) -> None:
-        """Give the keyboard to the heatmap (its keys move GridWorld's target)."""
+        """Give the keyboard to the heatmap (its keys move the focus where there is one)."""
         self.heatmap.focus()
 
     @property
@@ -332,8 +332,9 @@ class TrainView(Vertical):
                   "esc: back)"),
             ("tab / shift+tab", "move between fields and buttons"),
         ]
-        if self.session.profile.heatmap_focus:
-            keys.append(("←↑↓→ / hjkl / click", "move the heatmap's target"))
+        layout = self.session.game.layout
+        if layout.has_focus:
+            keys.append(("←↑↓→ / hjkl / click", layout.focus_help))
         if self.engine_note:
             keys.append(("engine", self.engine_note))
         return keys
@@ -349,7 +350,7 @@ class TrainView(Vertical):
         session, snapshot = self.session, self._snapshot
         if snapshot is None:
             return
-        profile = session.profile
+        layout = session.game.layout
         panels = session.heatmaps(snapshot, focus=self.focus_target)
         view = self.heatmap
         if panels is None:
@@ -357,9 +358,7 @@ class TrainView(Vertical):
             view.show_message(session.hidden_reason() or "No per-state view of this table.")
             return
         view.focus_cell = (
-            profile.heatmap_focus_cell(self.focus_target, session.env_kwargs)
-            if profile.heatmap_focus
-            else None
+            layout.focus_cell(self.focus_target, session.env_kwargs) if layout.has_focus else None
         )
         view.show(panels)
 
@@ -368,7 +367,7 @@ class TrainView(Vertical):
         if snapshot is None:
             return
         reference = session.reference(snapshot)
-        note = "" if reference is not None else session.hidden_reason()
+        note = "" if reference is not None else session.exact_reason()
         self.stats.show_reference(reference, note)
         reason = session.engine_reason
         if snapshot.engine == "scalar" and reason.startswith("vector"):
@@ -412,11 +411,9 @@ class TrainView(Vertical):
 
     # --- the board at animated speeds --------------------------------------
     def _board_class(self) -> type[Widget] | None:
-        try:
-            from tui_gym.ui.widgets.boards import BOARDS  # written beside this view
-        except ImportError:
-            return None
-        return BOARDS.get(self.session.profile.board)
+        from tui_gym.ui.widgets.board_kinds import board_class
+
+        return board_class(self.session.game.board)
 
     def _drop_board(self) -> None:
         if self._board is not None:
@@ -436,7 +433,7 @@ class TrainView(Vertical):
             board = cls()
         board.can_focus = False
         self._board = board
-        self._board_kind = self.session.profile.board
+        self._board_kind = self.session.game.board
         self._board_box.mount(board, before=0)
         return board
 
@@ -474,8 +471,8 @@ class TrainView(Vertical):
                 self.heatmap.step_cell = None
             return
         session = self.session
-        profile = session.profile
-        self._step.show(explain(event, record, profile.action_names, profile.describe,
+        game = session.game
+        self._step.show(explain(event, record, game.action_names, game.states.describe,
                                 session.learner_class.title))
         found = session.heatmap_cell(event.observation, self.focus_target)
         if found is None:
@@ -490,13 +487,10 @@ class TrainView(Vertical):
     def _describe(self, event: Any) -> str:
         if event is None:
             return ""
-        profile = self.session.profile
-        names = profile.action_names
+        session = self.session
+        names = session.game.action_names
         action = names[event.action] if 0 <= event.action < len(names) else str(event.action)
-        try:
-            state = profile.describe(event.observation)
-        except Exception:  # wrappers may change what an observation looks like
-            state = ""
+        state = session.game.states.describe(event.observation, session.env_kwargs)
         count = f"episode {event.episode:,} · step {event.step:,}" if event.step else ""
         step = f"→ {action}, reward {event.reward:+g}"
         if event.episode_done is not None:
@@ -524,7 +518,7 @@ class TrainView(Vertical):
         event.stop()
         session = self.session
         row, col = event.cell
-        self.focus_target = session.profile.heatmap_focus_at(row, col, session.env_kwargs)
+        self.focus_target = session.game.layout.focus_at(row, col, session.env_kwargs)
         self._show_heatmaps()
 
     @on(HyperparameterForm.Submitted)

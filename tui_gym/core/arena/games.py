@@ -12,8 +12,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from tui_gym.core.params import Param
-from tui_gym.core.profiles import PROFILES, profile_for, resolve_env_id
 from tui_gym.core.protocol import JsonlPlayer
+from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 
 
 @dataclass(frozen=True)
@@ -47,27 +47,27 @@ class GameEntry:
         }
 
 
-def _entry(profile: Any) -> GameEntry:
+def _entry(game: Game) -> GameEntry:
     return GameEntry(
-        name=profile.name,
-        title=profile.title,
-        env_id=profile.env_id,
-        actions=tuple(profile.action_names),
-        params=tuple(profile.env_params),
-        description=profile.description,
+        name=game.name,
+        title=game.title,
+        env_id=game.env_id,
+        actions=tuple(game.action_names),
+        params=tuple(game.params),
+        description=game.description,
     )
 
 
 def catalog() -> list[GameEntry]:
     """Every registered game, in the registry's order."""
-    return [_entry(profile) for profile in PROFILES]
+    return [_entry(game) for game in GAMES]
 
 
 def find_game(name: str) -> GameEntry:
     """The game a short alias or Gymnasium id names; ValueError listing the games if none."""
     if not isinstance(name, str) or not name.strip():
         raise ValueError(f"name a game: one of {', '.join(e.name for e in catalog())}")
-    return _entry(profile_for(resolve_env_id(name)))
+    return _entry(game_for(resolve_env_id(name)))
 
 
 def open_handler(
@@ -107,7 +107,7 @@ def handler_params(handler: JsonlPlayer) -> dict[str, Any]:
 
 def session_entry(session: Any) -> GameEntry:
     """The game a session (say, a saved agent's) plays."""
-    return _entry(session.profile)
+    return _entry(session.game)
 
 
 def raw_observation(handler: JsonlPlayer) -> Any:

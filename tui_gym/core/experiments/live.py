@@ -34,8 +34,7 @@ MAX_CHECKPOINTS = 1000  # beyond this, every other checkpoint is dropped
 
 def game_name(session: Session) -> str:
     """The short name of the session's game (e.g. "blackjack")."""
-    game = getattr(session, "game", None) or session.profile
-    return str(game.name)
+    return session.game.name
 
 
 def run_spec(session: Session, kind: RunKind) -> RunSpec:

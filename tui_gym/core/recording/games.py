@@ -5,13 +5,13 @@ from __future__ import annotations
 from typing import Any
 
 
-def profile_named(env_id: str) -> Any | None:
-    """The profile that plays `env_id`, or None for a game this tui-gym does not know."""
+def game_named(env_id: str) -> Any | None:
+    """The game that plays `env_id`, or None for a game this tui-gym does not know."""
     if not env_id:
         return None
-    from tui_gym.core.profiles import profile_for
+    from tui_gym.games import game_for
 
     try:
-        return profile_for(env_id)
+        return game_for(env_id)
     except ValueError:
         return None

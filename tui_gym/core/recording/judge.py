@@ -76,10 +76,10 @@ class _ModelValues:
 
 
 class MoveJudge:
-    """Judges moves in one game (a profile and its env arguments), on any env of it."""
+    """Judges moves in one game (a game and its arguments), on any env of it."""
 
-    def __init__(self, profile: Any, env_kwargs: Mapping[str, Any]) -> None:
-        self.profile = profile
+    def __init__(self, game: Any, env_kwargs: Mapping[str, Any]) -> None:
+        self.game = game
         self.env_kwargs = dict(env_kwargs)
         self._env_ref: weakref.ref[Any] | None = None
         self._model: Any = None  # the env's FiniteMDP, False when it has none
@@ -88,7 +88,7 @@ class MoveJudge:
     def assess(self, env: Any, steps_taken: int = 0) -> Assessment:
         """The optimum's view of `env`'s current state (never raises: a help, not a rule)."""
         try:
-            advice = self.profile.advice(env, self.env_kwargs)
+            advice = self.game.oracle.advice(env, self.env_kwargs)
         except Exception:
             advice = None
         if advice is not None and not advice.optimal:

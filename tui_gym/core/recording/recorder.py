@@ -57,22 +57,22 @@ def header_record(session: Session, *, source: str, seed: int | None) -> dict[st
     """The header line for a session's game, parameters and wrappers."""
     from tui_gym.core.wrappers import format_wrapper_spec
 
-    profile = session.profile
+    game = session.game
     return {
         "type": HEADER,
         "format": FORMAT_NAME,
         "version": FORMAT_VERSION,
         "tui_gym": __version__,
         "source": source,
-        "game": profile.name,
-        "title": profile.title,
+        "game": game.name,
+        "title": game.title,
         "env_id": session.env_id,
         "env_kwargs": dict(session.env_kwargs),
         "wrappers": [format_wrapper_spec(choice) for choice in session.applied],
         "seed": seed,
-        "board": profile.board,
-        "actions": list(profile.action_names),
-        "episode_noun": profile.episode_noun,
+        "board": game.board,
+        "actions": list(game.action_names),
+        "episode_noun": game.episode_noun,
         "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
     }
 
@@ -113,7 +113,7 @@ class Recorder:
         self.episodes = 0  # episodes started in this file by this recorder
         self._writer: LineWriter | None = LineWriter(self.path, truncate=not append)
         self._header_key: tuple[Any, ...] | None = None
-        self._profile: Any = None
+        self._played: Any = None
         self._judge: MoveJudge | None = None
         self._episode: _Episode | None = None
         self._game: HumanGame | None = None  # whose episode is open (`game_reset`)
@@ -140,12 +140,12 @@ class Recorder:
             tuple(sorted((k, repr(v)) for k, v in session.env_kwargs.items())),
             tuple(session.applied),
         )
-        self._profile = session.profile
+        self._played = session.game
         if key == self._header_key:
             return
         self.end_episode()
         self._header_key = key
-        self._judge = MoveJudge(session.profile, session.env_kwargs)
+        self._judge = MoveJudge(session.game, session.env_kwargs)
         self._write(header_record(session, source=self.source, seed=self.seed))
 
     def start_episode(
@@ -191,7 +191,7 @@ class Recorder:
         if episode.regret is not None:
             episode.regret = None if judgement.regret is None else episode.regret + judgement.regret
         episode.terminated, episode.truncated = bool(terminated), bool(truncated)
-        names = self._profile.action_names
+        names = self._played.action_names
         record: dict[str, Any] = {
             "type": STEP,
             "episode": episode.number,
@@ -263,7 +263,7 @@ class Recorder:
 
     # --- helpers ---------------------------------------------------------------
     def _need_session(self) -> None:
-        if self._profile is None:
+        if self._played is None:
             raise ValueError("no game to record: pass a session or call use_session first")
 
     def _assess(self, env: Any, steps_taken: int) -> Assessment:
@@ -271,17 +271,17 @@ class Recorder:
 
     def _state(self, env: Any, observation: Any, info: Mapping[str, Any] | None) -> dict[str, Any]:
         """The observation, the board's scene and the state in words."""
-        profile = self._profile
+        game = self._played
         try:
-            data = profile.json_observation(observation)
+            data = game.states.json_observation(observation)
         except Exception:
             data = None
         try:
-            scene: Any = profile.scene(env)
+            scene: Any = game.states.scene(env)
         except Exception:  # a recording keeps going without a picture
             scene = None
         try:
-            text: str | None = profile.describe(observation)
+            text: str | None = game.states.describe(observation)
         except Exception:  # a wrapper reshaped the observation
             text = None
         return {"observation": data, "scene": scene, "text": text, "info": dict(info or {})}

@@ -53,7 +53,7 @@ class RecordingSwitch:
         if self.on:
             assert self.path is not None
             return self.path
-        path = self.path or default_path(game.profile.name)
+        path = self.path or default_path(game.game.name)
         self.recorder = Recorder(
             path, game.session, source=self.source, seed=game.seed, append=self._used,
             on_failure=self._failed,

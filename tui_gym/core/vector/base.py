@@ -1,20 +1,25 @@
-"""What every batched environment shares: the result of one batched step.
+"""What every batched environment shares: the result of one batched step, and its recipe.
 
 A batched env holds the state of `num_envs` copies of one game in numpy
-arrays and steps any subset of them at once. `BatchStep` is what a step
-returns, one row per stepped env; `Selection` is how callers name the subset
-(None for all of them, else an int array of env indices).
+arrays and steps any subset of them at once (`BatchedEnv`). `BatchStep` is
+what a step returns, one row per stepped env; `Selection` is how callers name
+the subset (None for all of them, else an int array of env indices). A game
+hands the vector engine a `BatchedForm`: its title, how to make its batched
+env, and the per-step `info` entries it reports (e.g. "distance").
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Hashable, Mapping
+from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 
 __all__ = [
     "BatchStep",
+    "BatchedEnv",
+    "BatchedForm",
     "Selection",
     "after_step",
     "check_actions",
@@ -34,8 +39,8 @@ class BatchStep:
     just ended it is the final observation (the one to bootstrap from after a
     truncation). `obs` is what each env will act on next: `next_obs`, except
     that envs reset automatically show their new starting observation.
-    `distance` is GridWorld's `info["distance"]` after the move (None for
-    games without one).
+    `info` holds the per-step entries the game reports, one value per row
+    (e.g. "distance", the scalar env's `info["distance"]` after the move).
     """
 
     next_obs: np.ndarray  # int64 (k, obs_width)
@@ -43,12 +48,49 @@ class BatchStep:
     terminated: np.ndarray  # bool (k,)
     truncated: np.ndarray  # bool (k,)
     obs: np.ndarray  # int64 (k, obs_width)
-    distance: np.ndarray | None = None  # int64 (k,)
+    info: Mapping[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def done(self) -> np.ndarray:
         """Episodes that ended on this step (terminated or truncated)."""
         return self.terminated | self.truncated
+
+
+class BatchedEnv(Protocol):
+    """`num_envs` copies of one game in arrays; any subset stepped in one call."""
+
+    num_envs: int
+    n_actions: int
+    obs_width: int
+
+    def observations(self, index: Selection = None) -> np.ndarray: ...
+
+    def reset(self, index: Selection = None) -> np.ndarray: ...
+
+    def step(
+        self, actions: np.ndarray, index: Selection = None, *, autoreset: bool = True
+    ) -> BatchStep: ...
+
+
+MakeBatched = Callable[[int, "int | np.random.SeedSequence | None", "int | None"], BatchedEnv]
+
+
+@dataclass(frozen=True)
+class BatchedForm:
+    """A game's recipe for the vector engine.
+
+    `make(num_envs, seed, max_episode_steps)` builds the batched env (the
+    episode limit is read from the env's wrappers); `info` names the per-step
+    entries its `BatchStep.info` carries; `key` tells two forms of one game
+    apart (for equality); `num_envs` is how many episodes it plays best at
+    once (None: the engine's default).
+    """
+
+    title: str
+    make: MakeBatched = field(compare=False)
+    info: tuple[str, ...] = ()
+    key: Hashable = ()
+    num_envs: int | None = None
 
 
 def check_num_envs(num_envs: int) -> int:

@@ -1,26 +1,26 @@
 """Reading a built env's wrapper stack as a recipe for the batched engine.
 
-`plan_for_env(env)` walks the wrappers of an env built by the catalog
+`plan_for_env(env, form)` walks the wrappers of an env built by the catalog
 (`tui_gym.core.wrappers.build_env`) from the inside out and returns a
-`VectorPlan`: which game and arguments, the time limit in force, and the
-reward transforms in the order they apply. It raises `NoBatchedForm`, with a
-sentence a person can read, for anything it cannot reproduce exactly.
+`VectorPlan`: the game's `BatchedForm` (which the game supplies: the engine
+knows no game by name), the time limit in force, and the reward transforms in
+the order they apply. It raises `NoBatchedForm`, with a sentence a person can
+read, for anything it cannot reproduce exactly.
 
 Reading the built stack, rather than the list of choices, means the batched
 engine sees exactly what the scalar one does: the same choices skipped as
-misfits, a first `TimeLimit` replacing the registered one, later ones only
-able to shorten it.
+misfits, a first `TimeLimit` replacing the one `gym.make` put on, later ones
+only able to shorten it.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from gymnasium.envs.toy_text.blackjack import BlackjackEnv
 from gymnasium.wrappers import (
     ClipReward,
     DelayObservation,
@@ -32,15 +32,21 @@ from gymnasium.wrappers import (
     TimeLimit,
 )
 
-from tui_gym.core.reference.blackjack import BlackjackRules
-from tui_gym.core.vector.blackjack import BatchedBlackjack
-from tui_gym.core.vector.gridworld import BatchedGridWorld
+from tui_gym.core.mdp import NotAvailable
+from tui_gym.core.vector.base import BatchedEnv, BatchedForm
+from tui_gym.core.wrappers.changes import registry_limit
 from tui_gym.core.wrappers.custom import DistanceShaping, ScaleReward, StepPenalty
-from tui_gym.envs.gridworld import GridWorldEnv
 
-__all__ = ["BatchedEnv", "NoBatchedForm", "RewardTransform", "VectorPlan", "plan_for_env"]
+__all__ = [
+    "BatchedEnv",
+    "BatchedForm",
+    "NoBatchedForm",
+    "RewardTransform",
+    "VectorPlan",
+    "plan_for_env",
+]
 
-BatchedEnv = BatchedBlackjack | BatchedGridWorld
+Info = Mapping[str, np.ndarray]
 
 # Wrappers gym.make adds that change nothing about the dynamics.
 _TRANSPARENT = (OrderEnforcing, PassiveEnvChecker)
@@ -64,10 +70,10 @@ class NoBatchedForm(ValueError):
 
 @dataclass(frozen=True)
 class RewardTransform:
-    """One reward wrapper as a function of batched rewards (and distances)."""
+    """One reward wrapper as a function of batched rewards (and the step's info)."""
 
     name: str
-    apply: Callable[[np.ndarray, np.ndarray | None], np.ndarray] = field(compare=False)
+    apply: Callable[[np.ndarray, Info], np.ndarray] = field(compare=False)
     params: tuple[tuple[str, Any], ...] = ()
 
 
@@ -88,10 +94,10 @@ def _clip(low: float | None, high: float | None) -> RewardTransform:
 
 
 def _shaping(k: float) -> RewardTransform:
-    def shaped(reward: np.ndarray, distance: np.ndarray | None) -> np.ndarray:
-        if distance is None:
+    def shaped(reward: np.ndarray, info: Info) -> np.ndarray:
+        if "distance" not in info:
             raise ValueError("DistanceShaping needs the distance to the target of every step")
-        return reward - k * distance
+        return reward - k * info["distance"]
 
     return RewardTransform("DistanceShaping", shaped, (("k", k),))
 
@@ -100,28 +106,23 @@ def _shaping(k: float) -> RewardTransform:
 class VectorPlan:
     """What the batched engine needs to reproduce one built env.
 
-    `game` is "blackjack" or "gridworld"; `game_kwargs` the env's own
-    arguments; `max_episode_steps` the tightest `TimeLimit` in the stack
-    (None without one); `rewards` the reward wrappers, innermost first;
-    `wrappers` the names of the wrappers that matter, innermost first, for
-    messages.
+    `form` is the game's batched form; `max_episode_steps` the tightest
+    `TimeLimit` in the stack (None without one); `rewards` the reward
+    wrappers, innermost first; `wrappers` the names of the wrappers that
+    matter, innermost first, for messages.
     """
 
-    game: str
-    game_kwargs: tuple[tuple[str, Any], ...]
+    form: BatchedForm
     max_episode_steps: int | None
     rewards: tuple[RewardTransform, ...]
     wrappers: tuple[str, ...]
 
     @property
     def title(self) -> str:
-        kwargs = dict(self.game_kwargs)
-        if self.game == "gridworld":
-            return f"GridWorld {kwargs['size']}x{kwargs['size']}"
-        return "Blackjack"
+        return self.form.title
 
     def describe(self) -> str:
-        """E.g. "vector engine: Blackjack with StepPenalty"."""
+        """E.g. "vector engine: <the game's title> with StepPenalty"."""
         text = f"vector engine: {self.title}"
         if self.wrappers:
             text += " with " + ", ".join(self.wrappers)
@@ -131,66 +132,43 @@ class VectorPlan:
         self, num_envs: int, seed: int | np.random.SeedSequence | None = None
     ) -> BatchedEnv:
         """The batched env this plan describes (reward wrappers are applied separately)."""
-        kwargs = dict(self.game_kwargs)
-        if self.game == "blackjack":
-            return BatchedBlackjack(
-                num_envs,
-                BlackjackRules(natural=kwargs["natural"], sab=kwargs["sab"]),
-                seed=seed,
-                max_episode_steps=self.max_episode_steps,
-            )
-        return BatchedGridWorld(
-            num_envs,
-            size=kwargs["size"],
-            reward_scale=kwargs["reward_scale"],
-            step_penalty=kwargs["step_penalty"],
-            max_episode_steps=self.max_episode_steps,
-            seed=seed,
-        )
+        return self.form.make(num_envs, seed, self.max_episode_steps)
 
-    def transform_rewards(
-        self, reward: np.ndarray, distance: np.ndarray | None = None
-    ) -> np.ndarray:
+    def transform_rewards(self, reward: np.ndarray, info: Info | None = None) -> np.ndarray:
         """The rewards the wrapped env would return, from the bare env's."""
         for transform in self.rewards:
-            reward = transform.apply(reward, distance)
+            reward = transform.apply(reward, info or {})
         return reward
 
 
-def _base_game(env: gym.Env) -> tuple[str, tuple[tuple[str, Any], ...]]:
-    if type(env) is BlackjackEnv:
-        return "blackjack", (("natural", bool(env.natural)), ("sab", bool(env.sab)))
-    if type(env) is GridWorldEnv:
-        return "gridworld", (
-            ("reward_scale", env.reward_scale),
-            ("size", env.size),
-            ("step_penalty", env.step_penalty),
-        )
-    raise NoBatchedForm(f"scalar engine: {type(env).__name__} has no batched form")
-
-
-def plan_for_env(env: gym.Env) -> VectorPlan:
-    """The batched recipe of a built env; raises `NoBatchedForm` when there is none."""
+def plan_for_env(
+    env: gym.Env, form: BatchedForm | NotAvailable | None, made_limit: int | None | str = "registry"
+) -> VectorPlan:
+    """The batched recipe of a built env whose game has batched form `form` (None or
+    `NotAvailable` when it has none); raises `NoBatchedForm` when there is none.
+    `made_limit`: the limit `gym.make` put on the game (by default the registry's),
+    which goes without saying in `describe`."""
+    if not isinstance(form, BatchedForm):
+        reason = form.reason if isinstance(form, NotAvailable) else "the game has no batched form"
+        raise NoBatchedForm(f"scalar engine: {reason}")
     layers: list[gym.Wrapper] = []
     inner: gym.Env = env
     while isinstance(inner, gym.Wrapper):
         layers.append(inner)
         inner = inner.env
     layers.reverse()  # innermost first
-    game, game_kwargs = _base_game(inner)
-    registered = None  # the limit gym.make puts on the id, which goes without saying
-    if inner.spec is not None and inner.spec.id in gym.registry:
-        registered = gym.registry[inner.spec.id].max_episode_steps
+    registered = made_limit if not isinstance(made_limit, str) else registry_limit(inner)
 
     limit: int | None = None
     rewards: list[RewardTransform] = []
     names: list[str] = []
     for position, layer in enumerate(layers):
         kind = type(layer)
+        wrapper: Any = layer  # its own attributes are read by its exact type below
         if kind in _TRANSPARENT:
             continue
         if kind is TimeLimit:
-            steps = int(layer._max_episode_steps)
+            steps = int(wrapper._max_episode_steps)
             limit = steps if limit is None else min(limit, steps)
             below = layers[position - 1] if position else None
             from_make = isinstance(below, _TRANSPARENT) and steps == registered
@@ -198,17 +176,17 @@ def plan_for_env(env: gym.Env) -> VectorPlan:
                 names.append("TimeLimit")
             continue
         if kind is ScaleReward:
-            rewards.append(_scale(layer.factor))
+            rewards.append(_scale(wrapper.factor))
         elif kind is StepPenalty:
-            rewards.append(_penalty(layer.penalty))
+            rewards.append(_penalty(wrapper.penalty))
         elif kind is ClipReward:
             saved = getattr(layer, "_saved_kwargs", {})
             rewards.append(_clip(saved.get("min_reward"), saved.get("max_reward")))
-        elif kind is DistanceShaping and game == "gridworld":
-            rewards.append(_shaping(layer.k))
+        elif kind is DistanceShaping and "distance" in form.info:
+            rewards.append(_shaping(wrapper.k))
         else:
             why = _UNBATCHABLE.get(kind)
             reason = f"scalar engine: {kind.__name__} has no batched form"
             raise NoBatchedForm(f"{reason} ({why})" if why else reason)
         names.append(kind.__name__)
-    return VectorPlan(game, game_kwargs, limit, tuple(rewards), tuple(names))
+    return VectorPlan(form, limit, tuple(rewards), tuple(names))

@@ -3,16 +3,16 @@
 `VectorTrainer` is an `Engine`, as the scalar `Trainer` is: it trains the
 same learner (any `tui_gym.algorithms.Learner` with a dense table: its
 tables, episode count and epsilon schedule) but plays `num_envs` games side
-by side on a batched env (`BatchedBlackjack`, `BatchedGridWorld`), so every
-numpy call serves hundreds of steps. Build it from an env built by the
-wrapper catalog:
+by side on the batched env the game's `BatchedForm` makes, so every numpy
+call serves hundreds of steps. Build it from an env built by the wrapper
+catalog and the game's form:
 
-    trainer = VectorTrainer(env, learner, keyer, seed=0)
+    trainer = VectorTrainer(env, learner, keyer, form=game.batched_form(kwargs), seed=0)
     trainer.run(episodes=200_000)
 
-or with `make_vector_trainer(env_id, env_kwargs, choices, learner, keyer)`.
+or with `make_vector_trainer(env_id, env_kwargs, choices, learner, keyer, form=...)`.
 `plan_for_env` reads the env's wrappers; an env with no batched form raises
-`NoBatchedForm` (ask `vector_support` first).
+`NoBatchedForm`.
 
 One batch step, top to bottom, following the learner protocol
 (`tui_gym.algorithms.base`); the env with index i is the learner's env
@@ -55,31 +55,40 @@ import gymnasium as gym
 import numpy as np
 
 from tui_gym.algorithms import Learner, Transitions
+from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.stats import EpisodeStats
 from tui_gym.core.training import EPISODE_RETURNS, SERIES_NAMES, Engine
+from tui_gym.core.vector.base import BatchedForm
 from tui_gym.core.vector.plan import VectorPlan, plan_for_env
 from tui_gym.core.wrappers import WrapperChoice, build_env_lenient
 
 __all__ = ["DEFAULT_NUM_ENVS", "VectorTrainer", "make_vector_trainer"]
 
-# Blackjack episodes/s by num_envs on one core (2-CPU box): 256: 0.42M, 512: 0.66M,
-# 1024: 0.97M, 2048: 1.27M, 4096: 1.55M, 8192: 1.62M; learning per episode is the same
-# for all of them. 2048 is most of the speed with batch steps of about a millisecond.
+# Episodes/s grow with num_envs and level off by a few thousand, while learning per
+# episode is the same for all of them: 2048 is most of the speed with batch steps of
+# about a millisecond.
 DEFAULT_NUM_ENVS = 2048
+MIN_NUM_ENVS = 256  # fewer games at once than this leave numpy too little to do a step
 
 
 class VectorTrainer(Engine):
     """Trains a learner on `num_envs` copies of an env at once (see the module docstring).
 
     Args:
-        env: an env built by the wrapper catalog (`build_env`); its game and
-            wrappers are read with `plan_for_env` and played in batches (the
-            env itself is never stepped).
+        env: an env built by the wrapper catalog (`build_env`); its wrappers
+            are read with `plan_for_env` and played in batches (the env itself
+            is never stepped).
         agent: the dense-table learner to train (shared, as with `Trainer`).
         keyer: the keyer of `env`'s observation space.
+        form: the game's batched form (None or `NotAvailable`: there is none,
+            and `NoBatchedForm` says so).
+        made_limit: the limit `gym.make` put on the game (by default the
+            registry's), for `plan.describe`.
         seed: seeds the batched env; the learner's own seed drives exploration.
-        num_envs: games played side by side.
+        num_envs: games played side by side (None: the form's choice, else
+            `DEFAULT_NUM_ENVS`, and at most a tenth of the episode budget, so
+            that a short run still plays each game through many episodes).
         window, series_capacity, publish_interval: as for `Trainer`.
     """
 
@@ -91,19 +100,25 @@ class VectorTrainer(Engine):
         agent: Learner,
         keyer: ObservationKeyer,
         *,
+        form: BatchedForm | NotAvailable | None,
+        made_limit: int | None | str = "registry",
         seed: int | None = None,
-        num_envs: int = DEFAULT_NUM_ENVS,
+        num_envs: int | None = None,
         window: int = 1000,
         series_capacity: int = 256,
         publish_interval: float = 0.1,
     ) -> None:
-        self.plan: VectorPlan = plan_for_env(env)
+        self.plan: VectorPlan = plan_for_env(env, form, made_limit)
         if not (keyer.dense and agent.dense):
             raise ValueError("the vector engine needs a dense observation keyer and Q-table")
-        if keyer.n_states != agent.n_states or agent.n_actions != env.action_space.n:
+        n_actions = getattr(env.action_space, "n", None)
+        if keyer.n_states != agent.n_states or agent.n_actions != n_actions:
             raise ValueError("the agent's table does not match the env's states and actions")
         if keyer.signature != repr(env.observation_space):
             raise ValueError("the keyer was not built from this env's observation space")
+        if num_envs is None:
+            widest = self.plan.form.num_envs or DEFAULT_NUM_ENVS
+            num_envs = min(widest, max(MIN_NUM_ENVS, agent.hp.episodes // 10))
         self.venv = self.plan.make_env(num_envs, seed)
         self.num_envs = self.venv.num_envs
         n = self.num_envs
@@ -213,7 +228,7 @@ class VectorTrainer(Engine):
         keys = self._keys[sel]
         actions = self._choose(keys, sel)
         result = self.venv.step(actions, index, autoreset=False)
-        rewards = self.plan.transform_rewards(result.reward, result.distance)
+        rewards = self.plan.transform_rewards(result.reward, result.info)
         next_keys = self.keyer.keys(result.next_obs)
         next_actions = agent.act_batch(next_keys) if agent.needs_next_action else None
         td = agent.update(Transitions(
@@ -299,18 +314,20 @@ def make_vector_trainer(
     agent: Learner,
     keyer: ObservationKeyer | None = None,
     *,
+    form: BatchedForm | NotAvailable | None,
     seed: int | None = None,
-    num_envs: int = DEFAULT_NUM_ENVS,
+    num_envs: int | None = None,
     **options: Any,
 ) -> VectorTrainer:
     """A `VectorTrainer` for a game and wrapper choice, built as a `Session` builds its env.
 
     Choices that do not fit are skipped, as `build_env_lenient` skips them.
-    `keyer` defaults to one for the built env. `options` go to `VectorTrainer`
-    (`window`, `series_capacity`, `publish_interval`). Raises `NoBatchedForm`
-    when the game or a wrapper has no batched form.
+    `keyer` defaults to one for the built env; `form` is the game's batched
+    form. `options` go to `VectorTrainer` (`window`, `series_capacity`,
+    `publish_interval`). Raises `NoBatchedForm` when the game or a wrapper has
+    no batched form.
     """
     env, _ = build_env_lenient(env_id, env_kwargs, choices)
     if keyer is None:
         keyer = ObservationKeyer(env.observation_space)
-    return VectorTrainer(env, agent, keyer, seed=seed, num_envs=num_envs, **options)
+    return VectorTrainer(env, agent, keyer, form=form, seed=seed, num_envs=num_envs, **options)

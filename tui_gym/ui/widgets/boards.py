@@ -1,6 +1,6 @@
-"""The board every game is drawn on: the `Board` base, its messages, and `BOARDS`.
+"""The board every game is drawn on: the `Board` base and its messages.
 
-A board draws a game's *scene* (plain data from `profile.scene(env)`) and,
+A board draws a game's *scene* (plain data from `game.states.scene(env)`) and,
 when `interactive`, turns keys and clicks into messages that bubble up:
 `Board.Act(action_name)` for a move and `Board.NewEpisode()` for a new
 episode. It never touches an env or a game itself: the Play view owns the
@@ -8,8 +8,8 @@ game and answers the messages; the Train view shows the agent's moves on a
 non-interactive board. While the Play view lets the agent play on an
 interactive board, `set_agent_playing(True)` says so on the board (the
 player's hand is the agent's, the border changes colour) and a person's
-click or move posts `Board.TakeOver()` instead. `BOARDS` maps a profile's
-`board` kind to its class.
+click or move posts `Board.TakeOver()` instead. `board_kinds.BOARDS` maps a
+game's `board` kind to its class.
 
 A board is a small vertical stack: a `BoardCanvas` that renders the board's
 `picture()` at whatever size it is given (a board picks the largest drawing
@@ -114,8 +114,13 @@ class Board(Widget):
     RESTART_ANYTIME: ClassVar[bool] = True
     """May a new episode start before the current one ends?"""
 
+    KEEP_SHAPE: ClassVar[bool] = True
+    """Does a drawing keep the cell shape of the last while it fits (no jumps as the
+    space around changes)? A replay draws each position afresh instead, so that it
+    looks the same however it is reached."""
+
     class Act(Message):
-        """A person asked for a move, by the profile's action name."""
+        """A person asked for a move, by the game's action name."""
 
         def __init__(self, action: str) -> None:
             super().__init__()
@@ -279,12 +284,4 @@ class Board(Widget):
         await self.run_action(self.BUTTONS[int(event.button.name or 0)][1])
 
 
-# The registry comes last: the board modules import `Board` from here. The
-# package's __init__ imports this module first, so the import order is safe.
-from tui_gym.ui.widgets.cards_board import CardsBoard  # noqa: E402
-from tui_gym.ui.widgets.grid_board import GridBoard  # noqa: E402
-
-BOARDS: dict[str, type[Board]] = {"cards": CardsBoard, "grid": GridBoard}
-"""Board class for each `profile.board` kind."""
-
-__all__ = ["BOARDS", "Board", "BoardButton", "BoardCanvas", "CardsBoard", "GridBoard"]
+__all__ = ["Board", "BoardButton", "BoardCanvas"]

@@ -1,7 +1,9 @@
 """`CardsBoard`: a card table that draws the dealer's and the player's hands.
 
 The scene is `{"player": [cards], "dealer": [cards]}` with 1 for an ace and 10
-for a ten or a face card. The dealer's second card lies face down until the
+for a ten or a face card, and each hand's total as the game counts it
+(`player_total`, `player_usable`: an ace counted 11; `dealer_total`, shown
+once the dealer's hand is). The dealer's second card lies face down until the
 scene is shown with `reveal=True`. Cards are drawn as little boxes in one of
 three sizes, the largest that fits; suits are decorative (the game has none)
 and follow the card's place in the hand, so a redraw never reshuffles them.
@@ -19,12 +21,16 @@ from rich.style import Style
 from rich.text import Text
 from textual.binding import Binding, BindingType
 
-from tui_gym.core.profiles.blackjack import card_label, hand_value
 from tui_gym.ui.widgets.boards import Board
 
 SUITS = ("♠", "♥", "♦", "♣")
 RED_SUITS = frozenset({"♥", "♦"})
 ON_FELT = frozenset({"label", "muted", "total", "bust", "best"})
+
+
+def card_label(card: int) -> str:
+    """'A' for an ace, else the card's value."""
+    return "A" if card == 1 else str(card)
 
 
 def suit_for(hand: int, position: int, card: int) -> str:
@@ -182,6 +188,13 @@ class CardsBoard(Board):
             rows.append(row)
         return rows
 
+    def _total(self, who: str, cards: Sequence[int]) -> tuple[int, bool]:
+        """A hand's total and usable ace, as the scene gives them (sums of the cards else)."""
+        total = self.scene.get(f"{who}_total")
+        if isinstance(total, int):
+            return total, bool(self.scene.get(f"{who}_usable", False))
+        return sum(cards), False
+
     def _dealer_label(self, dealer: Sequence[int], hidden: bool) -> Text:
         label = Text("Dealer", self._style("label"))
         if not dealer:
@@ -191,7 +204,7 @@ class CardsBoard(Board):
             label.append("showing ", self._style("muted"))
             label.append(card_label(dealer[0]), self._style("total"))
             return label
-        total, _ = hand_value(list(dealer))
+        total, _ = self._total("dealer", dealer)
         if total > 21:
             label.append(f"{total} bust", self._style("bust"))
         else:
@@ -202,7 +215,7 @@ class CardsBoard(Board):
         label = Text(self.player_name, self._style("label"))
         if not player:
             return label
-        total, usable = hand_value(list(player))
+        total, usable = self._total("player", player)
         label.append("  ")
         if total > 21:
             label.append(f"{total} bust", self._style("bust"))

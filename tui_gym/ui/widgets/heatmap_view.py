@@ -7,10 +7,10 @@ values have both signs, sequential otherwise; NaN cells stay blank), the
 cell's label is centred in it and marked cells carry a `*`. A legend line
 shows the scale with its range.
 
-When the view has a *focus cell* (e.g. GridWorld's target), the arrow keys
+When the view has a *focus cell* (e.g. a target, a slice), the arrow keys
 or hjkl move it and a click on a cell sets it; either way the view posts
 `HeatmapView.FocusChanged` with the (row, col) of the new cell and leaves
-it to the owner to say what that cell means (it asks the game's profile).
+it to the owner to say what that cell means (it asks the game's layout).
 """
 
 from __future__ import annotations

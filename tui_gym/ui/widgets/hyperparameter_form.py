@@ -57,7 +57,7 @@ def format_value(field: Param, value: float) -> str:
 
 def range_hint(field: Param) -> str:
     """The accepted range, short: '(0, 1]', or '≥ 1' when the top is out of sight."""
-    if field.maximum >= 1e6:
+    if field.maximum is not None and field.minimum is not None and field.maximum >= 1e6:
         low = f"{int(field.minimum)}" if field.kind is int else f"{field.minimum:g}"
         return f"≥ {low}" if field.min_inclusive else f"> {low}"
     return field.expected().split(" in ", 1)[-1]

@@ -1,6 +1,6 @@
 """`Scoreboard`: the person, the agent and the exact optimum, one row each.
 
-The rows come from the game's profile (`profile.scoreboard(...)`, a list of
+The rows come from the game's narrator (`Narrator.scoreboard(...)`, a list of
 `ScoreRow(who, text, short)`), so nothing here knows which game it is: the
 widget lays them out as two columns, the name on the left and the words
 wrapping beside it. On a compact screen it shows each row's `short` words
@@ -17,11 +17,11 @@ from rich.table import Table
 from rich.text import Text
 from textual.widget import Widget
 
-from tui_gym.core.profiles.base import ScoreRow
+from tui_gym.games.words import ScoreRow
 
 
 class Scoreboard(Widget):
-    """You, the agent and the optimum side by side, as the profile words them."""
+    """You, the agent and the optimum side by side, as the game words them."""
 
     SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
     DEFAULT_CSS = """

@@ -3,9 +3,9 @@
 `StatsPanel` shows the state of the run (`run_state`: running, paused,
 finished or ready), the speed and the engine, then episodes, steps, episodes
 per second, time, epsilon and the rolling means of return, length and |TD
-error|, then the reference figures the game's profile computes for the
-current greedy policy (Blackjack: its exact value beside the optimum and the
-gap; GridWorld: the share of (agent, target) pairs solved in the fewest
+error|, then the reference figures the game's oracle computes for the
+current greedy policy (its exact value beside the optimum and the gap, or a
+game's own figures such as the share of placements solved in the fewest
 steps) with a word on what they take into account. The figures are shown
 generically, by name, so a new game needs no change here.
 
@@ -26,8 +26,8 @@ from rich.segment import Segment
 from rich.style import Style
 from rich.text import Text
 
-from tui_gym.core.profiles import ReferenceMetrics
 from tui_gym.core.training import TrainingSnapshot
+from tui_gym.games.base import ReferenceMetrics
 from tui_gym.ui.widgets.numbers import Forms, compact_count, count_forms, fit, number_forms
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget
 

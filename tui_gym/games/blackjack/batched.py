@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from tui_gym.core.reference.blackjack import DEFAULT_RULES, BlackjackRules
 from tui_gym.core.vector.base import (
     BatchStep,
     Selection,
@@ -35,6 +34,7 @@ from tui_gym.core.vector.base import (
     check_num_envs,
     selection_size,
 )
+from tui_gym.games.blackjack.solver import DEFAULT_RULES, BlackjackRules
 
 __all__ = ["BatchedBlackjack"]
 

@@ -1,49 +1,37 @@
-"""The `tui-gym` command: the app with no sub-command, and headless sub-commands.
+"""The `tui-gym` command's entry point and parser: the app with no sub-command.
 
-Every sub-command is a thin call into `tui_gym.core`: `envs`, `wrappers`,
+Every sub-command (`commands`) is a thin call into `tui_gym.core`: `envs`, `wrappers`,
 `algorithms`, `train`, `eval`, `optimal`, `screenshots` and `bench` print rich tables or
 lines (or one JSON object with `--json`); `play --jsonl` speaks JSON lines.
 Bad arguments, an unknown env or wrapper, or an unreadable file exit with
 code 2 and one clear line on stderr, never a traceback. Numbers are read as
 `Param`s read them (ASCII digits only; a value out of range says so), and a
 negative value may follow its flag (`--learning-rate -inf` is a value, not a
-flag). A reader that closes the pipe early (`| head -1`) ends the command
+flag). Each game's arguments are flags generated from its `Param`s (`flags`).
+A reader that closes the pipe early (`| head -1`) ends the command
 quietly with status 141, as it would end `cat`.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
-import math
 import os
 import re
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any, NoReturn
 
 from rich.console import Console
-from rich.table import Table
 
 from tui_gym import __version__
-from tui_gym.algorithms import ALGORITHMS, ALL_PARAMS, DEFAULT_ALGORITHM
-from tui_gym.core.params import read_number, shown_value
+from tui_gym.algorithms import ALGORITHMS, DEFAULT_ALGORITHM
+from tui_gym.cli.flags import add_game_flags, add_hyperparameter_flags
+from tui_gym.cli.output import CliError, OutConsole
+from tui_gym.cli.types import file_name, finite_number, positive_int, seed_number
 
+ENV_HELP = "a game (`tui-gym envs` lists them), a Gymnasium id, or MODULE:ID"
 EXIT_USAGE = 2
 EXIT_BROKEN_PIPE = 128 + 13  # what a shell reports for a command ended by SIGPIPE
-MAX_SEED = 2**63 - 2**32  # room for the seeds derived from it (evaluation adds to it)
-
-
-class CliError(Exception):
-    """A user-facing error: printed as one line, exit code 2."""
-
-
-class _Console(Console):
-    """rich's Console, but a closed pipe ends the command the way every other write does."""
-
-    def on_broken_pipe(self) -> None:
-        self.quiet = True
-        raise BrokenPipeError
 
 
 class _Parser(argparse.ArgumentParser):
@@ -58,49 +46,6 @@ class _Parser(argparse.ArgumentParser):
         # command; let a closed pipe reach `main`.
         if message:
             (file or sys.stderr).write(message)
-
-
-def _int_in(minimum: int, maximum: int, noun: str) -> Callable[[str], int]:
-    """An argparse type: an integer (ASCII digits, `_` allowed) in [minimum, maximum]."""
-
-    def parse(text: str) -> int:
-        value = read_number(text)
-        if value is None or math.isnan(value) or (math.isfinite(value) and value % 1):
-            raise argparse.ArgumentTypeError(f"expected {noun}, got {shown_value(text)}")
-        if not minimum <= value <= maximum:
-            raise argparse.ArgumentTypeError(
-                f"{shown_value(text)} is out of range: expected {noun}"
-            )
-        return int(value)
-
-    return parse
-
-
-_positive_int = _int_in(1, 10**9, "a positive integer up to 1,000,000,000")
-_seed = _int_in(0, MAX_SEED, f"an integer in [0, {MAX_SEED}]")
-
-
-def _number(text: str) -> float:
-    """An argparse type: a finite number (ASCII digits)."""
-    value = read_number(text)
-    if value is None or math.isnan(value):
-        raise argparse.ArgumentTypeError(f"expected a number, got {shown_value(text)}")
-    if math.isinf(value):
-        raise argparse.ArgumentTypeError(
-            f"{shown_value(text)} is out of range: expected a finite number"
-        )
-    return float(value)
-
-
-def _path(text: str) -> str:
-    """An argparse type: a file name, which cannot be empty."""
-    if not text.strip():
-        raise argparse.ArgumentTypeError("expected a file name, got an empty one")
-    return text
-
-
-def _flag(name: str) -> str:
-    return "--" + name.replace("_", "-")
 
 
 # A negative number, `-inf` or `-nan` after a long option is that option's value; argparse
@@ -133,20 +78,21 @@ def build_parser() -> argparse.ArgumentParser:
         description="A terminal playground for reinforcement learning. "
         "With no command, opens the app.",
         epilog="examples:\n"
-        "  tui-gym --env gridworld          open the app on GridWorld (? lists every key)\n"
-        "  tui-gym train blackjack --save bj.tgym\n"
-        "  tui-gym train gridworld --algorithm sarsa\n"
-        "  tui-gym eval bj.tgym --json\n"
-        "  tui-gym optimal blackjack --sab\n"
-        "  tui-gym play gridworld --jsonl   a program plays through JSON lines\n"
+        "  tui-gym envs                     the games, their flags and what they teach\n"
+        "  tui-gym --env GAME               open the app on a game (? lists every key)\n"
+        "  tui-gym train GAME --save agent.tgym\n"
+        "  tui-gym train GAME --algorithm sarsa\n"
+        "  tui-gym eval agent.tgym --json\n"
+        "  tui-gym optimal GAME\n"
+        "  tui-gym play GAME --jsonl        a program plays through JSON lines\n"
         "  tui-gym COMMAND --help           the options of one command",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"tui-gym {__version__}")
-    parser.add_argument("--env", default="blackjack", help="game to open (default: blackjack)")
-    parser.add_argument("--seed", type=_seed, default=0, help="seed for every random thing")
+    parser.add_argument("--env", default="", help="game to open (default: the first of `envs`)")
+    parser.add_argument("--seed", type=seed_number, default=0, help="seed for every random thing")
     parser.add_argument("--load", metavar="PATH", help="open a saved agent")
-    parser.add_argument("--record", type=_path, metavar="PATH",
+    parser.add_argument("--record", type=file_name, metavar="PATH",
                         help="record your games in the app to this file (ctrl+r: on/off)")
     parser.add_argument(
         "--runner", choices=("process", "thread"), default="process",
@@ -166,25 +112,15 @@ def build_parser() -> argparse.ArgumentParser:
     names = ", ".join(cls.name for cls in ALGORITHMS)
 
     train = sub.add_parser("train", help="train an agent headless")
-    train.add_argument("env", metavar="ENV", help="blackjack, gridworld or a Gymnasium id")
+    train.add_argument("env", metavar="ENV", help=ENV_HELP)
     train.add_argument(
         "--algorithm", default=DEFAULT_ALGORITHM, metavar="NAME",
         help=f"the learner: {names} (default {DEFAULT_ALGORITHM}; `tui-gym algorithms`)",
     )
-    for field in ALL_PARAMS:
-        # Read as text here and parsed by the field itself, so errors say "out of range".
-        kind = getattr(field, "kind", str)
-        metavar = {int: "N", float: "X", bool: "BOOL"}.get(kind, "WORD")
-        owners = [cls.name for cls in ALGORITHMS if field in cls.params]
-        only = "" if len(owners) == len(ALGORITHMS) else f"; {', '.join(owners)}"
-        train.add_argument(
-            _flag(field.name), metavar=metavar,
-            help=f"{field.help} ({field.describe_range()}{only})",
-        )
-    train.add_argument("--seed", type=_seed, default=0, dest="train_seed")
-    train.add_argument("--size", metavar="N", help="GridWorld size (default 5)")
-    train.add_argument("--sab", action="store_true", help="Blackjack: Sutton & Barto rules")
-    train.add_argument("--natural", action="store_true", help="Blackjack: 1.5 for a natural")
+    # Read as text here and parsed by the fields themselves, so errors say "out of range".
+    add_hyperparameter_flags(train)
+    train.add_argument("--seed", type=seed_number, default=0, dest="train_seed")
+    add_game_flags(train)
     train.add_argument(
         "--wrapper", action="append", default=[], metavar="SPEC",
         help="add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable, in order)",
@@ -194,40 +130,36 @@ def build_parser() -> argparse.ArgumentParser:
         help="auto: the vector engine when the wrappers have a batched form (default)",
     )
     train.add_argument(
-        "--target-gap", type=_number, metavar="G",
-        help="Blackjack: stop once the greedy policy's exact gap to the optimum is <= G "
-        "(budget defaults to 1,000,000 episodes then)",
+        "--target-gap", type=finite_number, metavar="G",
+        help="stop once the greedy policy's exact gap to the optimum is <= G "
+        "(the budget defaults to five times the game's then)",
     )
     train.add_argument(
-        "--eval-episodes", type=_positive_int, default=10_000, metavar="N",
+        "--eval-episodes", type=positive_int, default=10_000, metavar="N",
         help="greedy episodes to evaluate with (default 10,000; a long-looping policy "
         "stops at the evaluation's step budget)",
     )
-    train.add_argument("--save", type=_path, metavar="PATH",
+    train.add_argument("--save", type=file_name, metavar="PATH",
                        help="save the trained agent here (the folder is checked first)")
     train.add_argument("--json", action="store_true", help="print one JSON object, no bar")
     add_train_options(train)
 
     ev = sub.add_parser("eval", help="evaluate a saved agent (greedy play + exact reference)")
     ev.add_argument("path", metavar="PATH")
-    ev.add_argument("--episodes", type=_positive_int, default=10_000, metavar="N")
-    ev.add_argument("--seed", type=_seed, default=None, dest="eval_seed")
+    ev.add_argument("--episodes", type=positive_int, default=10_000, metavar="N")
+    ev.add_argument("--seed", type=seed_number, default=None, dest="eval_seed")
     ev.add_argument("--json", action="store_true")
 
     opt = sub.add_parser("optimal", help="the exact optimal strategy and its value")
-    opt.add_argument("env", metavar="ENV")
-    opt.add_argument("--sab", action="store_true", help="Sutton & Barto rules")
-    opt.add_argument("--natural", action="store_true", help="1.5 for a natural blackjack")
-    opt.add_argument("--size", metavar="N", help="GridWorld size (default 5)")
+    opt.add_argument("env", metavar="ENV", help=ENV_HELP)
+    add_game_flags(opt)
     opt.add_argument("--json", action="store_true")
     play = sub.add_parser("play", help="play a game from a program (JSON lines on stdin/stdout)")
-    play.add_argument("env", metavar="ENV")
+    play.add_argument("env", metavar="ENV", help=ENV_HELP)
     play.add_argument("--jsonl", action="store_true", required=True,
                       help="read one JSON request a line, write one JSON response a line")
-    play.add_argument("--seed", type=_seed, default=None, dest="play_seed")
-    play.add_argument("--size", metavar="N", help="GridWorld size (default 5)")
-    play.add_argument("--sab", action="store_true", help="Blackjack: Sutton & Barto rules")
-    play.add_argument("--natural", action="store_true", help="Blackjack: 1.5 for a natural")
+    play.add_argument("--seed", type=seed_number, default=None, dest="play_seed")
+    add_game_flags(play)
     play.add_argument("--wrapper", action="append", default=[], metavar="SPEC")
     from tui_gym.replay_command import add_record_option, add_replay_parser
     from tui_gym.web import add_serve_parser
@@ -251,34 +183,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     from tui_gym.mcp_server.command import add_parser as add_mcp_parser
 
-    add_mcp_parser(sub, _positive_int, _number)
+    add_mcp_parser(sub, positive_int, finite_number)
     from tui_gym.benchmark.command import add_parser as add_benchmark_parser
 
-    add_benchmark_parser(sub, _positive_int, _seed, _number)
+    add_benchmark_parser(sub, positive_int, seed_number, finite_number)
     return parser
-
-
-def _env_kwargs(args: argparse.Namespace, env_id: str) -> dict[str, Any]:
-    kwargs: dict[str, Any] = {}
-    if env_id == "Blackjack-v1":
-        if getattr(args, "sab", False):
-            kwargs["sab"] = True
-        if getattr(args, "natural", False):
-            kwargs["natural"] = True
-    elif getattr(args, "sab", False) or getattr(args, "natural", False):
-        raise CliError("--sab and --natural apply to Blackjack only")
-    if getattr(args, "size", None) is not None:
-        if env_id == "Blackjack-v1":
-            raise CliError("--size applies to GridWorld only")
-        from tui_gym.core.params import ParamError
-        from tui_gym.core.profiles import profile_for
-
-        size = next(p for p in profile_for(env_id).env_params if p.name == "size")
-        try:
-            kwargs["size"] = size.parse(args.size)
-        except ParamError as exc:
-            raise CliError(f"--size {exc.reason}") from None
-    return kwargs
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -287,10 +196,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     err = Console(stderr=True)
     try:
         args = build_parser().parse_args(argv)
-        out = _Console()
+        out = OutConsole()
         if args.command is None:
             return _run_app(args)
-        from tui_gym.commands import COMMANDS
+        from tui_gym.cli.commands import COMMANDS
         from tui_gym.replay_command import REPLAY_COMMANDS
         from tui_gym.runs_command import RUNS_COMMANDS
         from tui_gym.web import SERVE_COMMANDS
@@ -328,9 +237,9 @@ def _one_line(exc: BaseException) -> str:
 
 
 def _run_app(args: argparse.Namespace) -> int:
-    from tui_gym.core.profiles import resolve_env_id
+    from tui_gym.games import resolve_env_id
 
-    env_id = resolve_env_id(args.env)
+    env_id = resolve_env_id(args.env) if args.env else None
     try:
         from tui_gym.ui.app import run_app
     except ImportError as exc:  # pragma: no cover - only without the UI installed
@@ -341,29 +250,3 @@ def _run_app(args: argparse.Namespace) -> int:
         check_record_path(args.record)
     return run_app(env_id=env_id, seed=args.seed, load=args.load, runner=args.runner,
                    record=args.record, db=args.db, keep_history=not args.no_history)
-
-
-def print_json(data: dict[str, Any]) -> None:
-    """One JSON object on stdout (NaN written as null)."""
-    sys.stdout.write(json.dumps(_clean(data)) + "\n")
-    sys.stdout.flush()
-
-
-def _clean(value: Any) -> Any:
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _clean(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_clean(v) for v in value]
-    return value
-
-
-def key_value_table(title: str, rows: Sequence[tuple[str, str]]) -> Table:
-    """A two-column table for summaries."""
-    table = Table(title=title, show_header=False, title_justify="left")
-    table.add_column(style="bold")
-    table.add_column(justify="right")
-    for key, value in rows:
-        table.add_row(key, value)
-    return table

@@ -6,14 +6,14 @@
   `StepPenalty`, `ClipReward`, and our `DistanceShaping`) become one function
   `reward(base, distance)`: the reward the wrapped env hands out for a step
   whose bare reward is `base` and after which the agent is `distance` cells
-  from its target (GridWorld's `info["distance"]`; unused elsewhere). It calls
+  from its target (the env's `info["distance"]`; unused elsewhere). It calls
   the wrappers' own `reward` code, so it is exactly what they do;
 - the tightest `TimeLimit` is `time_limit`;
 - wrappers that change only what the agent observes change nothing here;
 - anything else (`StickyAction`, an unknown wrapper) changes the game's
   dynamics in a way no exact figure here models: it is named in `others`.
 
-A game's profile decides from this whether its exact figures (optimum,
+A game's oracle decides from this whether its exact figures (optimum,
 advice, the value of a policy) can be computed for the game as played, or
 must be given as figures of the unwrapped game.
 """
@@ -29,7 +29,7 @@ from gymnasium.wrappers import OrderEnforcing, PassiveEnvChecker, TimeLimit
 
 from tui_gym.core.wrappers.custom import DistanceShaping
 
-__all__ = ["NO_CHANGES", "GameChanges"]
+__all__ = ["NO_CHANGES", "GameChanges", "registry_limit"]
 
 _TRANSPARENT = (OrderEnforcing, PassiveEnvChecker)
 
@@ -47,17 +47,20 @@ class GameChanges:
     _steps: tuple[RewardStep, ...] = field(default=(), repr=False, compare=False)
 
     @classmethod
-    def of(cls, env: gym.Env) -> GameChanges:
-        """Read the wrappers of a built env (see the module docstring)."""
+    def of(cls, env: gym.Env, made_limit: int | None | str = "registry") -> GameChanges:
+        """Read the wrappers of a built env (see the module docstring).
+
+        `made_limit` is the limit `gym.make` put on the game (a game that passes its
+        own `max_episode_steps` says which); by default the registry's. A `TimeLimit`
+        other than that one is a chosen one.
+        """
         layers: list[gym.Env] = []
         inner: gym.Env = env
         while isinstance(inner, gym.Wrapper):
             layers.append(inner)
             inner = inner.env
         layers.reverse()  # innermost first
-        registered = None
-        if inner.spec is not None and inner.spec.id in gym.registry:
-            registered = gym.registry[inner.spec.id].max_episode_steps
+        registered = made_limit if not isinstance(made_limit, str) else registry_limit(inner)
         labels: list[str] = []
         steps: list[RewardStep] = []
         others: list[str] = []
@@ -100,6 +103,14 @@ class GameChanges:
 
 
 NO_CHANGES = GameChanges()
+
+
+def registry_limit(env: gym.Env) -> int | None:
+    """The `max_episode_steps` Gymnasium's registry gives the env's id (None: none)."""
+    spec = env.unwrapped.spec
+    if spec is not None and spec.id in gym.registry:
+        return gym.registry[spec.id].max_episode_steps
+    return None
 
 
 def _reward_step(layer: gym.RewardWrapper) -> RewardStep:

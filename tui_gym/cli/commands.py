@@ -10,6 +10,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
 from rich.console import Console
 from rich.markup import escape
 from rich.progress import (
@@ -23,21 +24,21 @@ from rich.progress import (
 )
 from rich.table import Table
 
-from tui_gym.algorithms import ALGORITHMS, ALL_PARAMS, COMMON_PARAMS, Field, Learner, algorithm
+from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, Field, Learner, algorithm
 from tui_gym.benchmark.command import cmd_benchmark
-from tui_gym.cli import CliError, _env_kwargs, key_value_table, print_json
+from tui_gym.cli.flags import flag, game_kwargs, hyperparameters
+from tui_gym.cli.output import CliError, key_value_table, print_json
 from tui_gym.core import evaluation
 from tui_gym.core.evaluation import EvalReport
-from tui_gym.core.params import Param, ParamError
-from tui_gym.core.profiles import PROFILES, profile_for, resolve_env_id
-from tui_gym.core.session import Session
+from tui_gym.core.params import Param
+from tui_gym.core.session import TARGET_GAP_BUDGET_FACTOR, Session, default_settings
+from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 from tui_gym.mcp_server.command import cmd_mcp
 from tui_gym.runs_command import recorded
 
 WRAPPER_SYNTAX = "--wrapper NAME or --wrapper NAME:key=value,key=value, repeatable; " \
     "the first is innermost"
 
-HP_FLAGS = tuple(field.name for field in ALL_PARAMS)  # `train --learning-rate X`, ...
 
 
 def _param_dict(param: Field) -> dict[str, Any]:
@@ -50,7 +51,7 @@ def _param_dict(param: Field) -> dict[str, Any]:
             "range": param.describe_range(),
             "help": param.help,
         }
-    return {
+    data: dict[str, Any] = {
         "name": param.name,
         "type": param.kind.__name__,
         "default": param.default,
@@ -59,31 +60,50 @@ def _param_dict(param: Field) -> dict[str, Any]:
         "range": param.describe_range(),
         "help": param.help,
     }
+    if param.choices:
+        data["choices"] = list(param.choices)
+    return data
+
+
+def _shown(value: Any) -> str:
+    """A default as a person types it: `true`, `0.333333`, `4x4`."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 def cmd_envs(args: argparse.Namespace, out: Console) -> int:
     if args.json:
         print_json({"envs": [
             {
-                "name": p.name,
-                "env_id": p.env_id,
-                "other_ids": list(p.other_ids),
-                "actions": list(p.action_names),
-                "description": p.description,
-                "params": [_param_dict(param) for param in p.env_params],
+                "name": g.name,
+                "env_id": g.env_id,
+                "other_ids": list(g.other_ids),
+                "key": g.key,
+                "actions": list(g.action_names),
+                "description": g.description,
+                "teaches": g.teaches,
+                "params": [_param_dict(param) for param in g.params],
             }
-            for p in PROFILES
+            for g in GAMES
         ]})
         return 0
-    table = Table(title="Games", title_justify="left")
-    table.add_column("alias", style="bold cyan")
-    table.add_column("Gymnasium id", no_wrap=True)
-    table.add_column("actions")
-    table.add_column("about")
-    for p in PROFILES:
-        ids = "\n".join((p.env_id, *p.other_ids))
-        table.add_row(p.name, ids, ", ".join(p.action_names), p.description)
-    out.print(table)
+    # One block a game, so nothing is cut on a narrow terminal.
+    out.print("[bold]Games[/]")
+    for g in GAMES:
+        ids = ", ".join((g.env_id, *g.other_ids))
+        key = f"  (key {g.key} in the app)" if g.key else ""
+        out.print(f"\n[bold cyan]{g.name}[/]  {escape(ids)}{escape(key)}", overflow="fold")
+        out.print(f"  {escape(g.description)}", overflow="fold")
+        if g.teaches:
+            out.print(f"  [dim]teaches:[/] {escape(g.teaches)}", overflow="fold")
+        out.print(f"  [dim]actions:[/] {', '.join(g.action_names)}", overflow="fold")
+        for p in g.params:
+            flag = "--" + p.name.replace("_", "-")
+            out.print(f"  {flag} {escape(p.describe_range())}, default {_shown(p.default)}: "
+                      f"{escape(p.help)}", overflow="fold")
+    out.print("\nAny other Gymnasium id with Discrete spaces and a transition table P works "
+              "too (MODULE:ID imports the module that registers it).", overflow="fold")
     return 0
 
 
@@ -116,7 +136,7 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
     out.print(
         "Use with [bold]--wrapper NAME[/] or [bold]--wrapper NAME:key=value,key=value[/], "
         "repeatable; the first is innermost.\n"
-        "Example: tui-gym train gridworld --wrapper TimeLimit:max_episode_steps=50 "
+        "Example: tui-gym train GAME --wrapper TimeLimit:max_episode_steps=50 "
         "--wrapper StepPenalty:penalty=0.01"
     )
     return 0
@@ -171,52 +191,35 @@ def cmd_algorithms(args: argparse.Namespace, out: Console) -> int:
     return 0
 
 
-def _flag_name(name: str) -> str:
-    return "--" + name.replace("_", "-")
-
-
-def _hyperparameters(args: argparse.Namespace, cls: type[Learner]) -> dict[str, Any]:
-    """The hyperparameter flags given, checked against the algorithm's schema."""
-    changes: dict[str, Any] = {}
-    own = {field.name: field for field in cls.params}
-    for name in HP_FLAGS:
-        value = getattr(args, name, None)
-        if value is None:
-            continue
-        field = own.get(name)
-        if field is None:
-            takers = ", ".join(c.name for c in ALGORITHMS if any(f.name == name for f in c.params))
-            raise CliError(f"{_flag_name(name)} applies to {takers}, not {cls.name}")
-        try:
-            changes[name] = field.parse(value)
-        except ParamError as exc:
-            # Name the flag, not the field, so the user knows what to fix.
-            raise CliError(f"{_flag_name(name)} {exc.reason}") from None
-        except ValueError as exc:
-            raise CliError(str(exc).replace(name, _flag_name(name), 1)) from None
-    return changes
-
-
-TARGET_GAP_BUDGET = 1_000_000  # episodes, when --target-gap is given without --episodes
+def _base_hyperparameters(
+    args: argparse.Namespace, game: Game, kwargs: dict[str, Any], cls: type[Learner]
+) -> dict[str, Any]:
+    """The hyperparameter flags given; with a target gap and no budget, five times the
+    game's budget (a longer budget decays epsilon more slowly; the run stops at the
+    target anyway)."""
+    hp = hyperparameters(args, cls)
+    if getattr(args, "target_gap", None) is not None and "episodes" not in hp:
+        defaults = default_settings(game, cls.name, game.normalize_kwargs(kwargs))
+        hp["episodes"] = TARGET_GAP_BUDGET_FACTOR * int(defaults.episodes)
+    return hp
 
 
 def _session_from_args(args: argparse.Namespace) -> Session:
     from tui_gym.core.wrappers import parse_wrapper_spec
 
     env_id = resolve_env_id(args.env)
+    game = game_for(env_id)
     choices = tuple(parse_wrapper_spec(text) for text in args.wrapper)
     try:
         cls = algorithm(args.algorithm)
     except ValueError as exc:
         raise CliError(f"--algorithm: {exc}") from None
-    hp = _hyperparameters(args, cls)
-    if getattr(args, "target_gap", None) is not None and "episodes" not in hp:
-        # A longer budget decays epsilon more slowly; the run stops at the target anyway.
-        hp["episodes"] = TARGET_GAP_BUDGET
+    kwargs = game_kwargs(args, game)
+    hp = _base_hyperparameters(args, game, kwargs, cls)
     try:
         session = Session(
             env_id=env_id,
-            env_kwargs=_env_kwargs(args, env_id),
+            env_kwargs=kwargs,
             choices=choices,
             hp=hp,
             seed=args.train_seed,
@@ -226,7 +229,7 @@ def _session_from_args(args: argparse.Namespace) -> Session:
     except ValueError as exc:
         text = str(exc)
         for name in hp:  # e.g. epsilon_final above epsilon_start: say it with the flags
-            text = text.replace(name, _flag_name(name))
+            text = text.replace(name, flag(name))
         raise CliError(text) from None
     if session.skipped:
         reasons = "; ".join(reason for _, reason in session.skipped)
@@ -257,7 +260,8 @@ def _eval_rows(data: dict[str, Any]) -> list[tuple[str, str]]:
         ("mean return", f"{data['mean_return']:+.4f}"),
         ("std of return", f"{data['std_return']:.4f}"),
     ]
-    percent = ("win_rate", "draw_rate", "loss_rate", "success_rate", "optimal_pair_fraction")
+    percent = ("win_rate", "draw_rate", "loss_rate", "success_rate", "optimal_pair_fraction",
+               "timeout_rate", "delivered_rate", "terminated_rate")
     for key, value in data.items():
         if key in ("env_id", "episodes", "episodes_requested", "mean_return", "std_return"):
             continue
@@ -396,72 +400,55 @@ def cmd_eval(args: argparse.Namespace, out: Console) -> int:
 
 
 def cmd_optimal(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.core.mdp import NotAvailable
+    from tui_gym.games.words import signed
+
     env_id = resolve_env_id(args.env)
-    kwargs = profile_for(env_id).normalize_kwargs(_env_kwargs(args, env_id))
-    if env_id == "Blackjack-v1":
-        return _optimal_blackjack(kwargs, args.json, out)
-    return _optimal_gridworld(env_id, kwargs, args.json, out)
-
-
-def _optimal_blackjack(kwargs: dict[str, Any], as_json: bool, out: Console) -> int:
-    from tui_gym.core.profiles.blackjack import CHART_SUMS, DEALER_CARDS, DEALER_LABELS
-    from tui_gym.core.reference.blackjack import BlackjackRules, optimal_policy, optimal_value
-
-    rules = BlackjackRules.from_env_kwargs(kwargs)
-    policy = optimal_policy(rules)
-    value = optimal_value(rules)
-    if as_json:
-        entries = [
-            {
-                "player_sum": s,
-                "dealer_card": d,
-                "usable_ace": bool(u),
-                "action": "hit" if policy[s, d, u] else "stick",
-            }
-            for u in (0, 1)
-            for s in range(12, 22)
-            for d in DEALER_CARDS
-        ]
-        print_json({"env_id": "Blackjack-v1", "rules": kwargs, "optimal_value": value,
-                    "policy": entries})
-        return 0
-    for usable, title in ((0, "No usable ace (hard hands)"), (1, "Usable ace (soft hands)")):
-        table = Table(title=title, title_justify="left")
-        table.add_column("sum", justify="right", style="bold")
-        for label in DEALER_LABELS:
-            table.add_column(label, justify="center")
-        for s in CHART_SUMS:
-            cells = [
-                "[black on green] H [/]" if policy[s, d, usable] else "[black on red] S [/]"
-                for d in DEALER_CARDS
+    game = game_for(env_id)
+    kwargs = game.normalize_kwargs(game_kwargs(args, game))
+    optimum = game.oracle.optimum(kwargs)
+    if isinstance(optimum, NotAvailable):
+        raise CliError(optimum.reason)
+    names = game.action_names
+    states = game.states.base_observations(kwargs)
+    listed = optimum.q is not None and optimum.marks is not None
+    if args.json:
+        data: dict[str, Any] = {"env_id": env_id, "env_kwargs": kwargs,
+                                "optimal_value": optimum.value, "meaning": optimum.summary,
+                                **optimum.figures}
+        if listed and not isinstance(states, NotAvailable):
+            assert optimum.q is not None and optimum.marks is not None
+            data["policy"] = [
+                {"state": game.states.json_observation(obs),
+                 "actions": [names[a] for a in np.flatnonzero(marks)],
+                 "value": float(np.max(q))}
+                for obs, q, marks in zip(states, optimum.q, optimum.marks, strict=True)
             ]
-            table.add_row(str(s), *cells)
-        out.print(table)
-    out.print("H hit, S stick; columns are the dealer's up card. Hit on every sum below 12.")
-    rules_text = ", ".join(f"{k}={v}" for k, v in kwargs.items())
-    out.print(f"Exact value of this strategy ({rules_text}): [bold]{value:+.5f}[/] per hand")
-    return 0
-
-
-def _optimal_gridworld(env_id: str, kwargs: dict[str, Any], as_json: bool, out: Console) -> int:
-    import numpy as np
-
-    size = kwargs["size"]
-    coords = np.arange(size)
-    diffs = np.abs(coords[:, None] - coords[None, :])
-    # Mean Manhattan distance over ordered pairs of distinct cells.
-    total = 2 * diffs.sum() * size * size
-    mean_steps = float(total) / (size * size * (size * size - 1))
-    if as_json:
-        print_json({"env_id": env_id, "size": size, "optimal_mean_steps": mean_steps,
-                    "rule": "move along any shortest (Manhattan) path"})
+        print_json(data)
         return 0
-    out.print(
-        f"GridWorld {size}x{size}: the optimal policy walks any shortest path, so an "
-        f"episode takes the Manhattan distance from agent to target.\n"
-        f"Mean optimal episode length over random starts: [bold]{mean_steps:.4f}[/] steps"
-    )
+    if listed:
+        assert optimum.q is not None
+        layout = game.layout
+        focus = layout.default_focus(kwargs)
+        for panel in layout.heatmaps(np.asarray(optimum.q), kwargs, focus, optimum.marks):
+            out.print(_panel_table(panel))
+    rules = ", ".join(f"{k}={v}" for k, v in kwargs.items())
+    out.print(f"{game.title}{f' ({rules})' if rules else ''}: {optimum.summary}.")
+    out.print(f"Exact value of the optimum: [bold]{signed(optimum.value, 5)}[/]")
     return 0
+
+
+def _panel_table(panel: Any) -> Table:
+    """A heatmap panel of the optimum as a table of its cells' labels."""
+    table = Table(title=panel.title, title_justify="left")
+    table.add_column("", justify="right", style="bold")
+    for label in panel.col_labels:
+        table.add_column(label, justify="center")
+    for row_label, labels in zip(panel.row_labels, panel.labels, strict=True):
+        table.add_row(row_label, *(escape(text) for text in labels))
+    if panel.legend:
+        table.caption = panel.legend.replace("* not", "not").split("  * ")[0]
+    return table
 
 
 def cmd_play(args: argparse.Namespace, out: Console) -> int:
@@ -473,7 +460,7 @@ def cmd_play(args: argparse.Namespace, out: Console) -> int:
     env_id = resolve_env_id(args.env)
     session = Session(
         env_id=env_id,
-        env_kwargs=_env_kwargs(args, env_id),
+        env_kwargs=game_kwargs(args, game_for(env_id)),
         choices=tuple(parse_wrapper_spec(text) for text in args.wrapper),
         seed=args.play_seed or 0,
     )

@@ -144,4 +144,4 @@ class BatchedGridWorld:
         distance = np.abs(rows[:, :2] - rows[:, 2:]).sum(axis=1)
         truncated, obs = after_step(rows, terminated, elapsed, self.max_episode_steps,
                                     index, self.reset, autoreset)
-        return BatchStep(rows, reward, terminated, truncated, obs, distance)
+        return BatchStep(rows, reward, terminated, truncated, obs, {"distance": distance})

@@ -1,0 +1,299 @@
+"""The contract every game in `GAMES` keeps, checked over the registry.
+
+Every game builds, keys its base states, round-trips through a save file,
+plays one episode through the CLI, the JSON-lines protocol and the app, and
+with its default hyperparameters trains to the bound its oracle states.
+Where a game has an exact value, the sampled returns of a fixed policy on the
+real env and on the batched form agree with it within a bound computed from
+the sample (four standard errors); a model read from a transition table
+agrees with the env's every move. Sample sizes are small: a bound from the
+sample size is as strict as the sample allows, and the suite stays fast.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+import sys
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from textual.binding import Binding
+
+from tui_gym.cli import main
+from tui_gym.core.mdp import NotAvailable
+from tui_gym.core.protocol import JsonlPlayer
+from tui_gym.core.session import Session
+from tui_gym.core.vector import BatchedForm
+from tui_gym.core.wrappers import parse_wrapper_spec
+from tui_gym.games import GAMES, Game, game_for
+from tui_gym.games.model import ModelGame
+from tui_gym.ui.app import TuiGymApp
+
+Z = 4.0  # standard errors a sampled mean may stray from the exact value
+IDS = [game.name for game in GAMES]
+# Model games in the arguments worth checking apart (slippery, larger, random maps).
+VARIANTS = [
+    ("frozenlake", {}),
+    ("frozenlake", {"map": "8x8"}),
+    ("frozenlake", {"slippery": False}),
+    ("frozenlake", {"map": "random", "size": 5, "map_seed": 3, "success_rate": 0.6}),
+    ("cliffwalking", {}),
+    ("cliffwalking", {"slippery": True}),
+    ("taxi", {}),
+    ("taxi", {"rainy": True}),
+]
+VARIANT_IDS = [f"{name}-{'-'.join(f'{k}={v}' for k, v in kw.items()) or 'default'}"
+               for name, kw in VARIANTS]
+
+
+def _session(name: str, kwargs: dict[str, Any] | None = None, **extra: Any) -> Session:
+    return Session(name, env_kwargs=kwargs or {}, seed=0, **extra)
+
+
+def _optimal_q(session: Session) -> np.ndarray:
+    optimum = session.game.oracle.optimum(session.env_kwargs)
+    assert not isinstance(optimum, NotAvailable) and optimum.q is not None
+    q = np.asarray(optimum.q, dtype=float)
+    return np.where(np.isfinite(q), q, -1e9)
+
+
+def _policy_rows(session: Session) -> dict[Any, int]:
+    keys = session.base_keys()
+    assert keys is not None
+    return {key: row for row, key in enumerate(keys)}
+
+
+def _within(samples: np.ndarray, exact: float) -> None:
+    error = Z * samples.std(ddof=1) / math.sqrt(len(samples)) + 1e-9
+    assert abs(samples.mean() - exact) <= error, (samples.mean(), exact, error)
+
+
+# --- every game ----------------------------------------------------------------
+
+
+@pytest.mark.parametrize("game", GAMES, ids=IDS)
+def test_builds_with_its_arguments_and_reads_its_states(game: Game) -> None:
+    session = _session(game.name)
+    assert game.matches(session.env_id) and session.game is game
+    assert set(session.env_kwargs) == {p.name for p in game.params}
+    assert session.agent.n_actions == len(game.action_names)
+    assert game.key and game.description and game.teaches
+    env = session.make_env(render_mode=game.render_mode)
+    obs, _ = env.reset(seed=0)
+    assert game.states.scene(env) and game.states.describe(obs, session.env_kwargs)
+    assert game.oracle.advice(env, session.env_kwargs).note
+    env.close()
+    # A state of another shape reads as text, never as an exception.
+    assert game.states.describe(object(), session.env_kwargs)
+
+
+@pytest.mark.parametrize("game", GAMES, ids=IDS)
+def test_base_states_have_keys_and_heatmaps(game: Game) -> None:
+    session = _session(game.name)
+    keys = session.base_keys()
+    assert keys is not None and len(set(keys)) == len(keys)
+    assert all(0 <= key < session.keyer.n_states for key in keys)
+    panels = session.heatmaps()
+    assert panels and all(p.values.shape == p.marked.shape for p in panels)
+    assert session.reference() is not None
+
+
+@pytest.mark.parametrize("game", GAMES, ids=IDS)
+def test_save_and_load_round_trip(game: Game, tmp_path) -> None:
+    session = _session(game.name, engine="scalar")
+    session.trainer.run(episodes=15)
+    loaded = Session.load(session.save(tmp_path / "agent.tgym"))
+    assert (loaded.env_id, loaded.env_kwargs) == (session.env_id, session.env_kwargs)
+    assert np.array_equal(loaded.agent.table()[0], session.agent.table()[0])
+    assert loaded.trainer.episodes == 15
+
+
+@pytest.mark.parametrize("game", GAMES, ids=IDS)
+def test_default_training_reaches_the_stated_bound(game: Game) -> None:
+    session = _session(game.name)
+    bound = game.oracle.bound(session.env_kwargs, session.changes)
+    assert not isinstance(bound, NotAvailable)
+    session.train()
+    reference = session.reference()
+    assert reference is not None and bound.met(reference.figures), (bound, reference.figures)
+
+
+@pytest.mark.parametrize("game", GAMES, ids=IDS)
+def test_the_cli_trains_and_plays(game: Game, capsys, monkeypatch) -> None:
+    code = main(["train", game.name, "--episodes", "3", "--engine", "scalar",
+                 "--eval-episodes", "2", "--json"])
+    data = json.loads(capsys.readouterr().out)
+    assert code == 0 and data["episodes"] == 3
+    lines = ['{"cmd": "reset", "seed": 1}', '{"cmd": "hint"}', '{"cmd": "render"}',
+             json.dumps({"cmd": "step", "action": game.action_names[0]})]
+    stdin = io.TextIOWrapper(io.BytesIO("".join(f"{line}\n" for line in lines).encode()))
+    monkeypatch.setattr(sys, "stdin", stdin)
+    assert main(["play", game.name, "--jsonl"]) == 0
+    answers = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert len(answers) == 4 and not any("error" in a for a in answers), answers
+    assert answers[3]["info"] is not None
+
+
+@pytest.mark.parametrize("game", GAMES, ids=IDS)
+def test_a_program_plays_one_episode_by_the_hints(game: Game) -> None:
+    player = JsonlPlayer(_session(game.name), seed=3)
+    answer = player.handle('{"cmd": "reset"}')
+    for _ in range(400):
+        hint = player.handle('{"cmd": "hint"}')
+        action = (hint.get("optimal_actions") or [game.action_names[0]])[0]
+        answer = player.handle(json.dumps({"cmd": "step", "action": action}))
+        assert "error" not in answer, answer
+        if answer["terminated"] or answer["truncated"]:
+            break
+    assert answer["terminated"] or answer["truncated"]
+
+
+def _key_for(board: Any, action: str) -> str:
+    for binding in Binding.make_bindings(board.BINDINGS):
+        if binding.action == f"act('{action}')":
+            return binding.key
+    raise AssertionError(f"no key for {action}")
+
+
+@pytest.mark.parametrize("game", GAMES, ids=IDS)
+async def test_a_person_plays_one_episode_in_the_app(game: Game) -> None:
+    # A time limit keeps the episode short where the optimum takes its time.
+    limit = parse_wrapper_spec("TimeLimit:max_episode_steps=25")
+    app = TuiGymApp(_session(game.name, choices=(limit,)))
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.pause()
+        view = app.play_view
+        for _ in range(200):
+            human = view.game
+            assert human is not None and view.board is not None
+            if human.done:
+                break
+            advice = game.oracle.advice(human.env, app.session.env_kwargs)
+            action = game.action_names[advice.optimal[0] if advice.optimal else 0]
+            steps = human.last.steps if human.last else 0
+            await pilot.press(_key_for(view.board, action))
+            await pilot.pause()
+            assert human.last is not None and (human.last.steps == steps + 1 or human.done)
+        assert view.game is not None and view.game.done
+        assert str(view.query_one("#play-headline").render())
+
+
+# --- exact values against play ---------------------------------------------------
+
+
+def _play_scalar(session: Session, q: np.ndarray, episodes: int) -> np.ndarray:
+    """Returns of `episodes` episodes of the real env, greedy on `q` (rows: base states)."""
+    rows = _policy_rows(session)
+    env = session.make_env()
+    returns = np.zeros(episodes)
+    obs, _ = env.reset(seed=11)
+    for i in range(episodes):
+        if i:
+            obs, _ = env.reset()
+        done = False
+        while not done:
+            row = rows.get(session.keyer.key(obs))
+            action = int(np.argmax(q[row])) if row is not None else 0
+            obs, reward, terminated, truncated, _ = env.step(action)
+            returns[i] += float(reward)
+            done = terminated or truncated
+    env.close()
+    return returns
+
+
+def _play_batched(session: Session, q: np.ndarray, episodes: int) -> np.ndarray:
+    """The same policy played on the game's batched form, `episodes` at once."""
+    form = session.game.batched_form(session.env_kwargs)
+    assert isinstance(form, BatchedForm)
+    venv = form.make(episodes, 5, session.changes.time_limit)
+    keys = session.base_keys()
+    assert keys is not None
+    row_of = np.full(session.keyer.n_states, -1)
+    row_of[np.asarray(keys)] = np.arange(len(keys))
+    obs = venv.reset()
+    live = np.arange(episodes)
+    returns = np.zeros(episodes)
+    while live.size:
+        rows = row_of[session.keyer.keys(obs)]
+        actions = np.where(rows >= 0, np.argmax(q[np.maximum(rows, 0)], axis=1), 0)
+        step = venv.step(actions.astype(np.int64), live, autoreset=False)
+        returns[live] += step.reward  # no wrappers here: the bare rewards
+        going = ~(step.terminated | step.truncated)
+        live, obs = live[going], step.next_obs[going]
+    return returns
+
+
+def _exact_value(session: Session, q: np.ndarray) -> float | None:
+    one_hot = np.zeros_like(q)
+    one_hot[np.arange(len(q)), np.argmax(q, axis=1)] = 1.0
+    reference = session.game.oracle.reference(one_hot, session.env_kwargs, session.changes)
+    assert not isinstance(reference, NotAvailable)
+    return reference.figures.get("exact_value")
+
+
+@pytest.mark.parametrize(("name", "kwargs"), [("blackjack", {}), *VARIANTS],
+                         ids=["blackjack", *VARIANT_IDS])
+def test_sampled_returns_of_a_fixed_policy_agree_with_its_exact_value(
+    name: str, kwargs: dict
+) -> None:
+    session = _session(name, kwargs)
+    q = _optimal_q(session)
+    exact = _exact_value(session, q)
+    assert exact is not None
+    _within(_play_scalar(session, q, 300), exact)
+    _within(_play_batched(session, q, 4000), exact)
+
+
+def test_grid_batched_form_agrees_with_the_scalar_env() -> None:
+    session = _session("gridworld")
+    q = _optimal_q_grid(session)
+    scalar, batched = _play_scalar(session, q, 200), _play_batched(session, q, 4000)
+    # The shortest-path policy reaches the target from every placement: both pay 1.
+    assert scalar.min() == scalar.max() == batched.min() == batched.max() == 1.0
+
+
+def _optimal_q_grid(session: Session) -> np.ndarray:
+    marks = session.game.oracle.optimal_marks(session.env_kwargs)
+    assert not isinstance(marks, NotAvailable)
+    return np.asarray(marks, dtype=float)
+
+
+@pytest.mark.parametrize(("name", "kwargs"), VARIANTS, ids=VARIANT_IDS)
+def test_the_model_agrees_with_every_move_of_the_env(name: str, kwargs: dict) -> None:
+    game = game_for(name)
+    assert isinstance(game, ModelGame)
+    normal = game.normalize_kwargs(kwargs)
+    model = game.base_model(normal)
+    assert not isinstance(model, NotAvailable)
+    env = gym.make(game.env_id, **game.make_kwargs(normal)).unwrapped
+    env.reset(seed=0)
+    for s in range(model.n_states):
+        for a in range(model.n_actions):
+            outcomes = {(n, r, t): p for p, n, r, t in model.outcomes(s, a)}
+            # A certain move is checked once, a random one by a few draws of the env.
+            for _ in range(1 if len(outcomes) == 1 else 6):
+                env.s = s
+                nxt, reward, terminated, _, _ = env.step(a)
+                assert (int(nxt), float(reward), bool(terminated)) in outcomes, (s, a)
+    env.close()
+    assert abs(model.initial.sum() - 1) < 1e-9
+    assert np.allclose(model.initial, np.asarray(env.initial_state_distrib))
+
+
+def test_exact_values_of_the_games_are_the_known_ones() -> None:
+    known = {
+        ("frozenlake", ()): 0.744190,
+        ("frozenlake", (("slippery", False),)): 1.0,
+        ("frozenlake", (("map", "8x8"),)): 0.913220,
+        ("cliffwalking", ()): -13.0,
+        ("taxi", ()): 7.93,
+    }
+    for (name, kwargs), value in known.items():
+        game = game_for(name)
+        optimum = game.oracle.optimum(game.normalize_kwargs(dict(kwargs)))
+        assert not isinstance(optimum, NotAvailable)
+        assert optimum.value == pytest.approx(value, abs=5e-7)

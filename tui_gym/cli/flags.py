@@ -1,0 +1,116 @@
+"""Flags generated from `Param` schemas: every game's arguments and the hyperparameters.
+
+`add_game_flags(parser)` adds one flag per game argument name across `GAMES`
+(`--map 8x8`, `--slippery false`, `--sab`; a flag several games share says
+whose it is), read as text. `game_kwargs(args, game)` reads the flags given
+for one game with that game's own `Param`s, so an error names the flag and
+what it takes, and a flag of another game says which games take it.
+`add_hyperparameter_flags` adds one flag per hyperparameter of any
+algorithm, and `hyperparameters(args, cls)` reads those given with the
+algorithm's own fields (a flag of another algorithm says which take it).
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from tui_gym.algorithms import ALGORITHMS, ALL_PARAMS, Learner
+from tui_gym.cli.output import CliError
+from tui_gym.core.params import Param, ParamError
+from tui_gym.games import GAMES, Game
+
+__all__ = [
+    "HP_FLAGS",
+    "add_game_flags",
+    "add_hyperparameter_flags",
+    "flag",
+    "game_kwargs",
+    "hyperparameters",
+]
+
+HP_FLAGS = tuple(field.name for field in ALL_PARAMS)  # `train --learning-rate X`, ...
+_PREFIX = "game_"
+
+
+def flag(name: str) -> str:
+    """`--learning-rate` for `learning_rate`."""
+    return "--" + name.replace("_", "-")
+
+
+def _owners() -> dict[str, list[tuple[Game, Param]]]:
+    owners: dict[str, list[tuple[Game, Param]]] = {}
+    for game in GAMES:
+        for param in game.params:
+            owners.setdefault(param.name, []).append((game, param))
+    return owners
+
+
+def add_game_flags(parser: argparse.ArgumentParser) -> None:
+    """One flag per game argument name; a true-or-false one may stand alone (`--sab`)."""
+    group = parser.add_argument_group("game arguments (each game takes its own; see `envs`)")
+    for name, owned in _owners().items():
+        param = owned[0][1]
+        games = ", ".join(game.title for game, _ in owned)
+        if param.kind is bool:
+            group.add_argument(flag(name), dest=_PREFIX + name, nargs="?", const="true",
+                               metavar="BOOL", help=f"{games}: {param.help} (true or false)")
+        else:
+            metavar = {int: "N", float: "X", str: "NAME"}[param.kind]
+            group.add_argument(flag(name), dest=_PREFIX + name, metavar=metavar,
+                               help=f"{games}: {param.help} ({param.describe_range()})")
+
+
+def game_kwargs(args: argparse.Namespace, game: Game) -> dict[str, Any]:
+    """The arguments given for `game`, each read by the game's own `Param`."""
+    own = {param.name: param for param in game.params}
+    kwargs: dict[str, Any] = {}
+    for name, owned in _owners().items():
+        text = getattr(args, _PREFIX + name, None)
+        if text is None:
+            continue
+        if name not in own:
+            games = " and ".join(g.title for g, _ in owned)
+            raise CliError(f"{flag(name)} applies to {games}, not {game.title}")
+        try:
+            kwargs[name] = own[name].parse(text)
+        except ParamError as exc:
+            raise CliError(f"{flag(name)} {exc.reason}") from None
+    return kwargs
+
+
+def add_hyperparameter_flags(parser: argparse.ArgumentParser) -> None:
+    """One flag per hyperparameter of any algorithm, read as text and parsed by the
+    field itself; a field some algorithms lack says which have it."""
+    for field in ALL_PARAMS:
+        kind = getattr(field, "kind", str)
+        metavar = {int: "N", float: "X", bool: "BOOL"}.get(kind, "WORD")
+        owners = [cls.name for cls in ALGORITHMS if field in cls.params]
+        only = "" if len(owners) == len(ALGORITHMS) else f"; {', '.join(owners)}"
+        parser.add_argument(
+            flag(field.name), metavar=metavar,
+            help=f"{field.help} ({field.describe_range()}{only})",
+        )
+
+
+def hyperparameters(args: argparse.Namespace, cls: type[Learner]) -> dict[str, Any]:
+    """The hyperparameter flags given, checked against the algorithm's schema; errors
+    name the flag."""
+    changes: dict[str, Any] = {}
+    own = {field.name: field for field in cls.params}
+    for name in HP_FLAGS:
+        value = getattr(args, name, None)
+        if value is None:
+            continue
+        field = own.get(name)
+        if field is None:
+            takers = ", ".join(c.name for c in ALGORITHMS if any(f.name == name for f in c.params))
+            raise CliError(f"{flag(name)} applies to {takers}, not {cls.name}")
+        try:
+            changes[name] = field.parse(value)
+        except ParamError as exc:
+            # Name the flag, not the field, so the user knows what to fix.
+            raise CliError(f"{flag(name)} {exc.reason}") from None
+        except ValueError as exc:
+            raise CliError(str(exc).replace(name, flag(name), 1)) from None
+    return changes

@@ -1,0 +1,109 @@
+"""The games, one folder each, and the `GAMES` registry.
+
+`GAMES` lists the games the app offers (each with its hotkey, parameters and
+roles; see `base`). `resolve_env_id(name)` turns an alias (`frozenlake`) or a
+Gymnasium id into the id a session builds; `game_for(env_id)` finds the game
+that plays it. An id no registered game plays is played by a `GenericGame`
+when its env fits (Discrete spaces and a transition table), including
+Gymnasium's `module:EnvId` form, which imports the module that registers it;
+one that does not fit raises `UnknownGameError` saying what it lacks.
+
+Modules:
+
+- `base`: `Game` and its roles (`StateSpace`, `Oracle`, `Narrator`,
+  `HeatmapLayout`), and the data they hand out;
+- `model`: `ModelGame`, the exact figures of any game with a transition table;
+- `tiles`: what grid-map games share (FrozenLake, CliffWalking);
+- `generic`: `GenericGame`, any env with a transition table;
+- `words`: numbers and words for people;
+- one package per game: `blackjack`, `gridworld`, `frozenlake`,
+  `cliffwalking`, `taxi`.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+from tui_gym.games.base import Game
+from tui_gym.games.blackjack import BlackjackGame
+from tui_gym.games.cliffwalking import CliffWalkingGame
+from tui_gym.games.frozenlake import FrozenLakeGame
+from tui_gym.games.gridworld import GridWorldGame
+from tui_gym.games.taxi import TaxiGame
+
+__all__ = ["GAMES", "Game", "UnknownGameError", "game_for", "game_named", "resolve_env_id"]
+
+GAMES: tuple[Game, ...] = (
+    BlackjackGame(),
+    GridWorldGame(),
+    FrozenLakeGame(),
+    CliffWalkingGame(),
+    TaxiGame(),
+)
+
+_generic: dict[str, Game] = {}
+
+
+class UnknownGameError(ValueError):
+    """An env id or alias that no game plays; the message says why in one line."""
+
+
+def game_named(name: str) -> Game:
+    """A registered game by its alias (`UnknownGameError` for another)."""
+    for game in GAMES:
+        if game.name == name:
+            return game
+    raise UnknownGameError(f"no game named {name!r}")
+
+
+def resolve_env_id(name: str) -> str:
+    """An alias (`blackjack`, `taxi`, ...) or a Gymnasium id, as the id a session builds.
+
+    An id no registered game plays must be one Gymnasium knows (with `module:`
+    in front, after importing that module) whose env fits a generic game.
+    """
+    text = name.strip()
+    for game in GAMES:
+        if game.name == text.lower() or game.matches(text):
+            return game.env_id if game.name == text.lower() else text
+    if text in _generic:
+        return text
+    _check_generic(text)
+    return text
+
+
+def game_for(env_id: str) -> Game:
+    """The game that plays an env id (aliases accepted)."""
+    env_id = resolve_env_id(env_id)
+    for game in GAMES:
+        if game.matches(env_id):
+            return game
+    if env_id not in _generic:
+        from tui_gym.games.generic import GenericGame
+
+        _generic[env_id] = GenericGame(env_id)
+    return _generic[env_id]
+
+
+def _check_generic(env_id: str) -> None:
+    import gymnasium as gym
+
+    import tui_gym.envs
+
+    tui_gym.envs.register_envs()
+    module, _, bare = env_id.rpartition(":")
+    if module:
+        try:
+            importlib.import_module(module)
+        except ImportError as error:
+            raise UnknownGameError(f"cannot import {module!r} for {env_id!r}: {error}") from None
+    if bare not in gym.registry:
+        aliases = ", ".join(g.name for g in GAMES)
+        from tui_gym.core.wrappers import UnknownEnvError
+
+        raise UnknownGameError(f"{UnknownEnvError(bare)}; the games: {aliases}") from None
+    from tui_gym.games.generic import check_fit
+
+    misfit = check_fit(env_id)
+    if misfit is not None:
+        raise UnknownGameError(misfit.reason)

@@ -1,0 +1,579 @@
+"""What a game is: its identity and parameters, and four small roles.
+
+A `Game` names itself (alias, title, Gymnasium ids, app hotkey), lists its
+typed `Param`s (they become CLI flags and side-panel fields), its actions,
+its board kind and its words for an episode, and hands out four roles:
+
+- `StateSpace` (`game.states`): the base states heatmaps and exact figures
+  look at, a state in words, the board's scene and a text picture;
+- `Oracle` (`game.oracle`): the exact figures: how far a greedy policy is
+  from the optimum, the optimal actions in a state, the optimum itself;
+- `Narrator` (`game.narrator`): outcomes, coach lines, the tally's words,
+  the scoreboard, evaluation figures;
+- `HeatmapLayout` (`game.layout`): the Q-table as heatmap panels, and the
+  focus cell some games let a person move (GridWorld's target, Taxi's slice).
+
+Every role method is total: where a game has nothing to say it returns
+`NotAvailable` (with the reason), an empty answer or a plain fallback, and
+never raises for a state it cannot read. Optionally a game supplies a
+batched form for the vector engine (`batched_form`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
+
+import numpy as np
+import numpy.typing as npt
+
+from tui_gym.core.heatmap import Heatmap
+from tui_gym.core.mdp import NotAvailable
+from tui_gym.core.params import Param
+from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
+from tui_gym.games.words import (
+    ScoreRow,
+    agreement_summary,
+    format_reward,
+    join_parts,
+    return_summary,
+    signed,
+    to_jsonable,
+    watched_row,
+)
+
+if TYPE_CHECKING:
+    from tui_gym.core.play import PlayStep, Scorecard
+    from tui_gym.core.vector.plan import BatchedForm
+
+__all__ = [
+    "EXACT",
+    "Advice",
+    "Bound",
+    "EvalOutcome",
+    "Game",
+    "HeatmapLayout",
+    "Narrator",
+    "NotAvailable",
+    "Oracle",
+    "ReferenceMetrics",
+    "Scope",
+    "StateSpace",
+    "TallyWord",
+    "all_tied",
+    "greedy_probabilities",
+]
+
+BoolArray = npt.NDArray[np.bool_]
+
+# What a state that cannot be read counts as: the reasons a role may meet, never a bug's.
+UNREADABLE = (TypeError, ValueError, KeyError, IndexError, AttributeError)
+
+
+# --- the data roles hand out ------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Scope:
+    """Whether a game's exact figures describe the game as it is played (with its
+    wrappers), and a note for people when there is something to say: which
+    wrappers they take into account, or that they are figures of the unwrapped
+    game because a wrapper changes it in a way they cannot follow."""
+
+    exact: bool = True
+    note: str = ""
+
+
+EXACT = Scope()
+
+
+@dataclass(frozen=True)
+class ReferenceMetrics:
+    """How the agent's greedy policy compares with the exact optimum."""
+
+    figures: dict[str, float]  # e.g. exact_value / optimal_value / gap
+    summary: str  # one line for people
+    scope: Scope = EXACT  # whether the figures are of the game as played
+
+
+@dataclass(frozen=True)
+class Advice:
+    """What the exact optimum would do in the env's current state.
+
+    `optimal` and `values` are for the game as played, wrappers included;
+    when the wrappers change it in a way the exact figures cannot follow,
+    both are empty and `unwrapped_optimal` holds the unwrapped game's optimum
+    (the note says so), so nothing claims an optimum that may not be one.
+    `equal` lists actions worth as much as the optimal ones that the coach
+    does not call optimal (they waste a step while time remains).
+    """
+
+    optimal: tuple[int, ...]  # every optimal action (empty when there is no decision)
+    values: dict[int, float] | None = None  # exact expected return per action, when known
+    note: str = ""  # one line for people
+    unwrapped_optimal: tuple[int, ...] = ()  # the unwrapped game's optimum, when not exact
+    equal: tuple[int, ...] = ()
+
+
+class TallyWord(NamedTuple):
+    """One count of the Play view's running tally: its label, the tone of a count
+    above zero ("good", "even", "bad" or "" for none), and whether it shows at zero."""
+
+    label: str
+    tone: str = ""
+    always: bool = True
+
+
+@dataclass(frozen=True)
+class EvalOutcome:
+    """Per-game extras of a greedy evaluation, beside mean and std of return."""
+
+    figures: dict[str, float] = field(default_factory=dict)
+
+
+def greedy_probabilities(q: npt.ArrayLike) -> npt.NDArray[np.float64]:
+    """Each action's chance per row under the greedy policy as the agent plays it:
+    ties (e.g. an unvisited state's zeros) broken uniformly at random."""
+    values = np.asarray(q, dtype=np.float64)
+    tied = values == values.max(axis=1, keepdims=True)
+    return tied / tied.sum(axis=1, keepdims=True)
+
+
+def all_tied(q: npt.ArrayLike) -> BoolArray:
+    """Per row: whether every action ties (the agent has no preference there)."""
+    values = np.asarray(q)
+    return np.asarray((values == values[:, :1]).all(axis=1))
+
+
+# --- the roles ---------------------------------------------------------------------
+
+
+class Role:
+    """A part of a game; `game` gives it the game's names and parameters."""
+
+    def __init__(self, game: Game) -> None:
+        self.game = game
+
+
+class StateSpace(Role):
+    """The game's states: which ones the heatmaps and exact figures look at, and how
+    one reads in words, on a board (`scene`) and as text."""
+
+    def base_observations(self, kwargs: Mapping[str, Any]) -> list[Any] | NotAvailable:
+        """Every state of the bare env the heatmaps and the exact figures look at."""
+        return NotAvailable(f"{self.game.title} lists no states")
+
+    def describe(self, observation: Any, kwargs: Mapping[str, Any] | None = None) -> str:
+        """The state in words ('row 2, col 3'); the raw observation when it cannot say.
+        `kwargs`, the game's arguments, when the words depend on them (a map's size)."""
+        try:
+            return self.describe_state(observation, kwargs or self.game.default_kwargs())
+        except UNREADABLE:
+            return str(to_jsonable(observation))
+
+    def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
+        """`describe`'s words; may raise for an observation of another shape."""
+        return str(to_jsonable(observation))
+
+    def scene(self, env: Any, before: Mapping[str, Any] | None = None) -> dict[str, Any]:
+        """What the game's board draws of the env's current state (plain data, a copy);
+        empty before the first reset. `before` is the scene before the last move, when
+        known: a board says from it what the move did (a slip, an illegal pick-up)."""
+        try:
+            return self.read_scene(env.unwrapped, before or {})
+        except UNREADABLE:
+            return {}
+
+    def read_scene(self, game_env: Any, before: Mapping[str, Any]) -> dict[str, Any]:
+        """`scene` of the unwrapped env; may raise before the first reset."""
+        return {}
+
+    def text(
+        self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None
+    ) -> str:
+        """A plain-text picture of the env's state ('' when it has none); `reveal` shows
+        what is hidden during an episode, `before` is as for `scene`."""
+        if self.game.render_mode != "ansi":
+            return ""
+        try:
+            picture = env.render()
+        except UNREADABLE:
+            return ""
+        return strip_ansi(picture) if isinstance(picture, str) else ""
+
+    def json_observation(self, observation: Any) -> Any:
+        """The observation as JSON-friendly data."""
+        return to_jsonable(observation)
+
+
+class Oracle(Role):
+    """The exact figures: the optimum, a policy's distance from it, the optimal actions."""
+
+    def scope(self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> Scope:
+        """Whether the exact figures follow what the wrappers change (see `Scope`)."""
+        return Scope(False, "no exact figures for this game")
+
+    def reference(
+        self, q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> ReferenceMetrics | NotAvailable:
+        """The greedy policy of `q` (rows: base states; ties broken at random, as the
+        agent breaks them) beside the optimum, in the game as the wrappers make it
+        where `scope` says it can be."""
+        return NotAvailable(f"{self.game.title} has no exact optimum")
+
+    def advice(self, env: Any, kwargs: Mapping[str, Any]) -> Advice:
+        """The optimal action(s) in the env's current state, wrappers read from `env`."""
+        return Advice((), None, "no exact optimum for this game")
+
+    def agent_figures(
+        self, q: np.ndarray | None, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> dict[str, float]:
+        """Exact figures for the scoreboard: of the greedy policy of `q` (None when
+        wrappers hide the base states) and of the optimum; none when there are none."""
+        return {}
+
+    def optimal_marks(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> BoolArray | NotAvailable:
+        """`[base states, actions]`: the actions a heatmap does not mark with `*`."""
+        return NotAvailable(f"{self.game.title} has no exact optimum")
+
+    def optimum(self, kwargs: Mapping[str, Any]) -> Optimum | NotAvailable:
+        """The optimum of the unwrapped game, for `tui-gym optimal`."""
+        return NotAvailable(f"{self.game.title} has no exact optimum")
+
+    def fixed_policy_bound(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> FixedBound | NotAvailable:
+        """How close any fixed (greedy) policy gets to the optimum, when it may not
+        reach it (an episode limit rewards playing differently as time runs out)."""
+        return NotAvailable(f"{self.game.title} has no exact optimum")
+
+    def bound(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> Bound | NotAvailable:
+        """What training with the game's default hyperparameters reaches, as a figure
+        of `reference` and its limit (the bound the README and the tests state)."""
+        return NotAvailable(f"{self.game.title} states no bound")
+
+
+@dataclass(frozen=True)
+class Optimum:
+    """The optimum of a game for people: its value, what it means, and per base state
+    the optimal actions and the value of playing optimally from there."""
+
+    value: float
+    summary: str  # one line: what the value is
+    q: np.ndarray | None = None  # [base states, actions] optimal action values, when listed
+    marks: np.ndarray | None = None  # [base states, actions]: the optimal actions
+    figures: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Bound:
+    """A figure of `Oracle.reference` and the limit a trained agent's reaches:
+    `figure <= limit` for a gap, `figure >= limit` for a share (`at_least`)."""
+
+    figure: str
+    limit: float
+    text: str  # for people: 'gap <= 0.0074 (1% of the optimum)'
+    at_least: bool = False
+
+    def met(self, figures: Mapping[str, float]) -> bool:
+        value = figures.get(self.figure)
+        if value is None:
+            return False
+        return value >= self.limit if self.at_least else value <= self.limit + 1e-12
+
+
+@dataclass(frozen=True)
+class FixedBound:
+    """The best value a fixed policy was found to reach, beside the optimum."""
+
+    optimal_value: float
+    fixed_value: float  # the best fixed policy found (a local search: a lower bound)
+
+    @property
+    def shortfall(self) -> float:
+        """How far below the optimum the best fixed policy found stays (0 when it reaches it)."""
+        return max(0.0, self.optimal_value - self.fixed_value)
+
+
+class Narrator(Role):
+    """The game's words: outcomes, the coach, the tally, the scoreboard, evaluation."""
+
+    agreement_words = "moves as the optimum"
+
+    tally_words: tuple[TallyWord, ...] = (
+        TallyWord("wins", "good"),
+        TallyWord("draws", "even"),
+        TallyWord("losses", "bad"),
+        TallyWord("truncated", always=False),
+    )
+
+    def tally_word(self, last: PlayStep) -> str:
+        """The `tally_words` label a finished episode counts under."""
+        if last.truncated and not last.terminated:
+            return "truncated"
+        if last.episode_return > 0:
+            return "wins"
+        return "losses" if last.episode_return < 0 else "draws"
+
+    def outcome_text(
+        self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]
+    ) -> str:
+        """How a finished episode ended, in plain words (truncation told apart)."""
+        steps = f"{last.steps} step{'' if last.steps == 1 else 's'}"
+        total = format_reward(last.episode_return)
+        if last.terminated:
+            return f"Episode over after {steps}, return {total}"
+        return f"Truncated by the time limit after {steps}, return {total}"
+
+    def progress_text(self, last: PlayStep, first_info: Mapping[str, Any]) -> str:
+        """How far the running episode has got ('' when nothing to say)."""
+        return ""
+
+    def coach_text(
+        self,
+        before: Advice,
+        action: int,
+        scene_before: Mapping[str, Any],
+        scene_after: Mapping[str, Any],
+    ) -> str:
+        """One line judging `action`, taken where `before` was the advice ('' without a
+        decision), worded by the exact values when the advice has them."""
+        if not before.optimal:
+            return ""
+        names = self.game.action_names
+        name = names[action] if 0 <= action < len(names) else str(action)
+        if action in before.optimal:
+            return f"✓ {name} was optimal"
+        best = " or ".join(names[a] for a in before.optimal)
+        if action in before.equal:
+            return f"✗ {name} keeps the exact value but wastes a step (quicker: {best})"
+        if before.values and action in before.values:
+            cost = max(before.values.values()) - before.values[action]
+            values = ", ".join(
+                f"{names[a]}: {signed(v, 3)}" for a, v in sorted(before.values.items())
+            )
+            return f"✗ {name} cost {cost:.3f} in expected return ({values})"
+        return f"✗ {name} was not optimal (the optimum: {best})"
+
+    def episode_figures(self, last: PlayStep, first_info: Mapping[str, Any]) -> dict[str, float]:
+        """Figures of one finished episode that a scoreboard averages (none by default)."""
+        return {}
+
+    def scoreboard(
+        self,
+        you: Scorecard,
+        figures: Mapping[str, float] | None,
+        watched: Scorecard | None = None,
+        agent_note: str = "",
+        scope: Scope = EXACT,
+    ) -> list[ScoreRow]:
+        """The rows: the person's mean return and agreement, the agent's and the
+        optimum's exact values (`figures` from `Oracle.agent_figures`), the episodes
+        watched; `scope` says whether the exact figures are of the game as played."""
+        figures = figures or {}
+        noun = self.game.episode_noun
+        words = self.agreement_words
+        rows = [
+            ScoreRow(
+                "You",
+                join_parts(return_summary(you.tally, noun), agreement_summary(you, words)),
+                join_parts(
+                    return_summary(you.tally, noun, short=True),
+                    agreement_summary(you, short=True),
+                ),
+            )
+        ]
+        places = self.value_places
+        if "exact_value" in figures:
+            value = signed(figures["exact_value"], places)
+            text = f"exact value {value} with its greedy policy"
+            if "gap" in figures:
+                text += f" ({figures['gap']:.{places}f} below the optimum)"
+            rows.append(ScoreRow("Agent", text, f"{value} exact"))
+        else:
+            rows.append(ScoreRow("Agent", agent_note or "no exact figures for this game", "–"))
+        if "optimal_value" in figures:
+            value = signed(figures["optimal_value"], places)
+            text, short = f"exact value {value}", f"{value} exact"
+            if scope.note:
+                text += f" ({scope.note})"
+            if not scope.exact:
+                short = f"{value} unwrapped"
+            rows.append(ScoreRow("Optimum", text, short))
+        if watched is not None and watched.tally.episodes:
+            rows.append(watched_row(watched, noun, words))
+        return rows
+
+    value_places = 3  # decimals of the values the scoreboard shows
+
+    def episode_detail(
+        self, first_info: Mapping[str, Any], length: int, total: float, terminated: bool
+    ) -> dict[str, Any]:
+        """What `eval_outcome` needs to remember of one episode."""
+        return {"length": length, "return": total, "terminated": terminated}
+
+    def eval_outcome(
+        self, returns: Sequence[float], details: Sequence[dict[str, Any]]
+    ) -> EvalOutcome:
+        """Per-game figures from a greedy evaluation's episodes (the share that ended)."""
+        n = max(1, len(details))
+        ended = sum(1 for d in details if d.get("terminated"))
+        return EvalOutcome(figures={"terminated_rate": ended / n})
+
+
+class HeatmapLayout(Role):
+    """The Q-table as heatmap panels, and the focus cell a person may move."""
+
+    has_focus = False  # the panels follow a focus (GridWorld's target, Taxi's slice)
+    focus_help = ""  # what moving the focus does, for the key help
+
+    def heatmaps(
+        self,
+        q: np.ndarray,
+        kwargs: Mapping[str, Any],
+        focus: Any = None,
+        marks: BoolArray | NotAvailable | None = None,
+    ) -> list[Heatmap]:
+        """Panels for `q` (rows: base states); `marks` ([states, actions], from
+        `Oracle.optimal_marks`) leaves unmarked the cells whose greedy action is optimal."""
+        return []
+
+    def default_focus(self, kwargs: Mapping[str, Any]) -> Any:
+        """The focus the heatmaps start with (None when the game has none)."""
+        return None
+
+    def focus_at(self, row: int, col: int, kwargs: Mapping[str, Any]) -> Any:
+        """The focus that cell (row, col) of the first panel stands for."""
+        return None
+
+    def focus_cell(self, focus: Any, kwargs: Mapping[str, Any]) -> tuple[int, int] | None:
+        """The first panel's cell of a focus; the inverse of `focus_at`."""
+        return None
+
+
+# --- the game ----------------------------------------------------------------------
+
+
+class Game:
+    """One game: identity and parameters, and its roles (see the module docstring)."""
+
+    name: str = ""  # short alias, e.g. "frozenlake"
+    title: str = ""  # for people, e.g. "FrozenLake"
+    env_id: str = ""  # the Gymnasium id it plays
+    other_ids: tuple[str, ...] = ()  # further ids of the same game
+    key: str = ""  # the app's hotkey for it ("" for none)
+    description: str = ""  # one line: what the game is
+    teaches: str = ""  # one line: what it teaches
+    params: tuple[Param, ...] = ()  # the arguments a person may change
+    action_names: tuple[str, ...] = ()
+    board: str = "text"  # which kind of board draws `states.scene`
+    render_mode: str | None = None  # the env's text render mode, if it has one
+    episode_noun: str = "episode"  # what people call one episode, e.g. "hand"
+    # `tui-gym bench` measures the game with these arguments (None: it does not), to a
+    # target gap of `bench_gap` (None: the bound its oracle states).
+    bench_kwargs: dict[str, Any] | None = None
+    bench_gap: float | None = None
+    demo_wrappers: tuple[str, ...] = ()  # wrapper specs a screenshot of the panel ticks
+    # Hyperparameters that learn this game well, over each algorithm's own defaults:
+    # "*" for every algorithm, then an algorithm's registry name for its own (see the README).
+    hyperparameters: ClassVar[Mapping[str, Mapping[str, Any]]] = {}
+
+    def __init__(self) -> None:
+        self.states: StateSpace = StateSpace(self)
+        self.oracle: Oracle = Oracle(self)
+        self.narrator: Narrator = Narrator(self)
+        self.layout: HeatmapLayout = HeatmapLayout(self)
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.env_id}>"
+
+    # --- ids and arguments ---------------------------------------------------
+    @property
+    def ids(self) -> tuple[str, ...]:
+        return (self.env_id, *self.other_ids)
+
+    def matches(self, env_id: str) -> bool:
+        return env_id in self.ids
+
+    def default_kwargs(self) -> dict[str, Any]:
+        """The arguments the game starts with."""
+        return {p.name: p.default for p in self.params}
+
+    def normalize_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+        """Check and complete arguments; `ValueError` with a clear message when wrong."""
+        params = {p.name: p for p in self.params}
+        out = self.default_kwargs()
+        for key, value in kwargs.items():
+            if key not in params:
+                known = ", ".join(params) or "no arguments"
+                raise ValueError(f"{self.title} takes {known}, not {key!r}")
+            out[key] = params[key].parse(value)
+        self.check_kwargs(out)
+        return out
+
+    def check_kwargs(self, kwargs: Mapping[str, Any]) -> None:
+        """Check arguments that only make sense together; `ValueError` when they don't."""
+
+    def make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+        """What `gym.make` takes for these (normalized) arguments."""
+        return dict(kwargs)
+
+    def hyperparameter_table(
+        self, kwargs: Mapping[str, Any] | None = None
+    ) -> Mapping[str, Mapping[str, Any]]:
+        """The game's `hyperparameters` for these arguments (a larger map may need others)."""
+        return self.hyperparameters
+
+    def default_hyperparameters(
+        self, algorithm: str, kwargs: Mapping[str, Any] | None = None
+    ) -> dict[str, Any]:
+        """The values this game sets for an algorithm (by registry name) with these
+        arguments, over the algorithm's own defaults; parameters the algorithm lacks
+        are left to the caller (see the README)."""
+        table = self.hyperparameter_table(kwargs)
+        return {**table.get("*", {}), **table.get(algorithm, {})}
+
+    def episode_limit(self, kwargs: Mapping[str, Any]) -> int | None:
+        """The limit `gym.make` puts on the game with these arguments (None: none)."""
+        make = self.make_kwargs(kwargs)
+        if "max_episode_steps" in make:
+            return int(make["max_episode_steps"])
+        import gymnasium as gym
+
+        spec = gym.registry.get(self.env_id.rpartition(":")[2])
+        return None if spec is None else spec.max_episode_steps
+
+    def action_index(self, action: int | str) -> int:
+        """An action given as its number or its name (case-insensitive)."""
+        names = self.action_names
+        if isinstance(action, bool):
+            raise ValueError(f"invalid action {action!r}")
+        if isinstance(action, int | np.integer):
+            if 0 <= int(action) < len(names):
+                return int(action)
+        elif isinstance(action, str):
+            text = action.strip().lower()
+            if text in names:
+                return names.index(text)
+            # ASCII digits only ('١' and '²' are digits to Python, not to the protocol).
+            if text.isascii() and text.isdigit() and int(text) < len(names):
+                return int(text)
+        listed = ", ".join(f"{i}={n}" for i, n in enumerate(names))
+        raise ValueError(f"invalid action {action!r}; valid actions: {listed}")
+
+    # --- the vector engine --------------------------------------------------
+    def batched_form(self, kwargs: Mapping[str, Any]) -> BatchedForm | NotAvailable:
+        """The game on numpy arrays for the vector engine, or why there is none."""
+        return NotAvailable(f"{self.title} has no batched form")
+
+
+def strip_ansi(text: str) -> str:
+    """`text` without terminal colour codes (Gymnasium's text renders use them)."""
+    import re
+
+    return re.sub(r"\x1b\[[0-9;]*m", "", text)

@@ -1,0 +1,409 @@
+"""Blackjack: Gymnasium's `Blackjack-v1` as the app sees it.
+
+Actions are stick (0) and hit (1). Base states are every decision state
+(player sum 4-21, dealer card A-10, usable ace); the exact figures come from
+the game's own dynamic programme (`solver`, an infinite deck, exact), and the
+heatmaps are the two halves of a basic-strategy chart.
+
+Reward wrappers (`ScaleReward`, `StepPenalty`, `ClipReward`, any function of
+a step's reward) and a `TimeLimit` too long to cut a hand short are taken into
+account exactly: the dynamic programme runs on the rewards the wrapped env
+hands out. Anything else that changes the game (`StickyAction`, a shorter
+`TimeLimit`) leaves the figures those of the unwrapped game, and they say so.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from functools import lru_cache
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from tui_gym.core.heatmap import Heatmap
+from tui_gym.core.mdp import NotAvailable
+from tui_gym.core.params import Param
+from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
+from tui_gym.games.base import (
+    EXACT,
+    Advice,
+    Bound,
+    EvalOutcome,
+    FixedBound,
+    Game,
+    HeatmapLayout,
+    Narrator,
+    Optimum,
+    Oracle,
+    ReferenceMetrics,
+    Scope,
+    StateSpace,
+    greedy_probabilities,
+)
+from tui_gym.games.blackjack.solver import (
+    POLICY_SHAPE,
+    BlackjackRules,
+    mixed_policy_value,
+    optimal_action_values,
+    optimal_policy,
+    optimal_value,
+    policy_value,
+)
+from tui_gym.games.words import format_reward, unwrapped_note
+
+if TYPE_CHECKING:
+    from tui_gym.core.play import PlayStep
+    from tui_gym.core.vector.base import BatchedForm
+
+__all__ = ["CHART_SUMS", "DEALER_CARDS", "DEALER_LABELS", "BlackjackGame", "card_label",
+           "hand_value"]
+
+CHART_SUMS = tuple(range(21, 11, -1))  # rows of the chart, top to bottom
+DEALER_CARDS = tuple(range(1, 11))  # columns: A, 2 .. 10
+DEALER_LABELS = ("A", "2", "3", "4", "5", "6", "7", "8", "9", "10")
+ACTION_LETTERS = ("S", "H")
+LONGEST_HAND = 20  # steps: 19 hits from two aces to 21 aces-as-one, then a stick or a bust
+TIED = "·"  # a heatmap cell whose actions tie
+TRAINED_GAP = 0.005  # what the default training reaches (see the README)
+
+
+@lru_cache(maxsize=1)
+def _base_states() -> tuple[tuple[int, int, int], ...]:
+    states = []
+    for usable in (0, 1):
+        low = 12 if usable else 4
+        for player in range(low, 22):
+            for dealer in DEALER_CARDS:
+                states.append((player, dealer, usable))
+    return tuple(states)
+
+
+@lru_cache(maxsize=1)
+def _row_of() -> dict[tuple[int, int, int], int]:
+    return {s: i for i, s in enumerate(_base_states())}
+
+
+@lru_cache(maxsize=2)
+def _chart_rows(usable: int) -> np.ndarray:
+    """The Q-table row of each chart cell (player sum x dealer card), for one ace state."""
+    row_of = _row_of()
+    return np.array([[row_of[(player, dealer, usable)] for dealer in DEALER_CARDS]
+                     for player in CHART_SUMS])
+
+
+@lru_cache(maxsize=1)
+def _base_index() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where each base state sits in a (32, 11, 2) policy table."""
+    states = np.array(_base_states())
+    return states[:, 0], states[:, 1], states[:, 2]
+
+
+def hand_value(cards: list[int]) -> tuple[int, bool]:
+    """The hand's total and whether it holds a usable ace (an ace counted as 11)."""
+    total = sum(cards)
+    usable = 1 in cards and total + 10 <= 21
+    return (total + 10 if usable else total), usable
+
+
+def card_label(card: int) -> str:
+    """'A' for an ace, else the card's value."""
+    return "A" if card == 1 else str(card)
+
+
+def rules_of(kwargs: Mapping[str, Any]) -> BlackjackRules:
+    return BlackjackRules.from_env_kwargs(kwargs)
+
+
+class BlackjackStates(StateSpace):
+    """Decision states `(player sum, dealer card, usable ace)`; the hands as the scene."""
+
+    def base_observations(self, kwargs: Mapping[str, Any]) -> list[Any]:
+        return list(_base_states())
+
+    def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
+        player, dealer, usable = (int(v) for v in observation)
+        card = "A" if dealer == 1 else str(dealer)
+        ace = "usable ace" if usable else "no usable ace"
+        return f"sum {player} vs dealer {card}, {ace}"
+
+    def read_scene(self, game_env: Any, before: Mapping[str, Any]) -> dict[str, Any]:
+        """The hands: `player` and `dealer` card lists (1 = ace, 10 = ten or face), and
+        their totals (`player_usable`: the player's ace counts 11)."""
+        player = [int(c) for c in getattr(game_env, "player", [])]
+        dealer = [int(c) for c in getattr(game_env, "dealer", [])]
+        player_total, usable = hand_value(player)
+        return {
+            "player": player,
+            "dealer": dealer,
+            "player_total": player_total,
+            "player_usable": usable,
+            "dealer_total": hand_value(dealer)[0],
+        }
+
+    def text(
+        self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None
+    ) -> str:
+        """Both hands as text; the dealer's hole card shows only with `reveal`."""
+        hands = self.scene(env)
+        dealer = hands.get("dealer", [])
+        shown = [card_label(c) for c in (dealer if reveal else dealer[:1])]
+        if not reveal and len(dealer) > 1:
+            shown.append("??")
+        player = " ".join(card_label(c) for c in hands.get("player", []))
+        return f"dealer: {' '.join(shown)}\nplayer: {player}"
+
+
+class BlackjackOracle(Oracle):
+    """The exact figures of the infinite-deck dynamic programme."""
+
+    def rules(self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> BlackjackRules:
+        """The rules the exact figures use: the wrapped game's where `scope` is exact."""
+        rules = rules_of(kwargs)
+        if changes.changes_rewards and self.scope(kwargs, changes).exact:
+            rules = rules.with_rewards(changes.reward)
+        return rules
+
+    def scope(self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> Scope:
+        """Exact for reward wrappers and a TimeLimit that never cuts a hand short."""
+        others = list(changes.others)
+        if changes.time_limit is not None and changes.time_limit < LONGEST_HAND:
+            others.append(f"TimeLimit(max_episode_steps={changes.time_limit})")
+        if others:
+            return Scope(False, unwrapped_note(others))
+        if changes.changes_rewards:
+            return Scope(True, f"exact with {changes.reward_names()}")
+        return EXACT
+
+    def hit_probability(self, q: np.ndarray) -> np.ndarray:
+        """The greedy policy of `q` (rows = base states) as a (32, 11, 2) table of the
+        chance to hit: 0 or 1, or 0.5 where the two actions tie (the agent picks at random)."""
+        table = np.zeros(POLICY_SHAPE, dtype=np.float64)
+        table[_base_index()] = greedy_probabilities(q)[:, 1]
+        return table
+
+    def policy_value(self, q: np.ndarray, rules: BlackjackRules) -> float:
+        """The exact value of the greedy policy of `q` as the agent plays it."""
+        hit = self.hit_probability(q)
+        if ((hit == 0.0) | (hit == 1.0)).all():
+            return policy_value(hit.astype(np.int8), rules)
+        return mixed_policy_value(hit, rules)
+
+    def reference(
+        self, q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> ReferenceMetrics | NotAvailable:
+        if np.shape(q) != (len(_base_states()), 2):
+            return NotAvailable(f"a table of shape {np.shape(q)} does not fit Blackjack")
+        rules = self.rules(kwargs, changes)
+        exact = self.policy_value(q, rules)
+        best = optimal_value(rules)
+        return ReferenceMetrics(
+            figures={"exact_value": exact, "optimal_value": best, "gap": best - exact},
+            summary=f"exact value {exact:+.4f}  optimum {best:+.4f}  gap {best - exact:.4f}",
+            scope=self.scope(kwargs, changes),
+        )
+
+    def agent_figures(
+        self, q: np.ndarray | None, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> dict[str, float]:
+        """`exact_value` of the greedy policy (as `reference` has it) and `optimal_value`."""
+        if q is None:
+            return {"optimal_value": optimal_value(self.rules(kwargs, changes))}
+        reference = self.reference(q, kwargs, changes)
+        return {} if isinstance(reference, NotAvailable) else dict(reference.figures)
+
+    def advice(self, env: Any, kwargs: Mapping[str, Any]) -> Advice:
+        hands = self.game.states.scene(env)
+        player, dealer = hands.get("player", []), hands.get("dealer", [])
+        if not player or not dealer:
+            return Advice((), None, "no hand dealt")
+        total, usable = hand_value(player)
+        if total > 21:
+            return Advice((), None, "bust: no decision left")
+        changes = GameChanges.of(env)
+        scope = self.scope(kwargs, changes)
+        soft_21: Literal["natural", "drawn"] = (
+            "natural" if len(player) == 2 and total == 21 else "drawn"
+        )
+        q = optimal_action_values(self.rules(kwargs, changes), soft_21=soft_21)[
+            total, dealer[0], int(usable)
+        ]
+        values = {a: float(q[a]) for a in range(2)}
+        best = max(values.values())
+        optimal = tuple(a for a, v in values.items() if v >= best - 1e-12)
+        names = " or ".join(self.game.action_names[a] for a in optimal)
+        expected = f"stick {values[0]:+.3f}, hit {values[1]:+.3f} expected"
+        if not scope.exact:
+            return Advice((), None, f"the unwrapped game's optimum: {names}  ({expected} "
+                          f"there; {scope.note.removeprefix('figures of the unwrapped game: ')})",
+                          unwrapped_optimal=optimal)
+        return Advice(optimal, values, f"optimal: {names}  ({expected})")
+
+    def optimal_marks(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> np.ndarray:
+        best = optimal_policy(self.rules(kwargs, changes))[_base_index()]
+        marks = np.zeros((len(best), 2), dtype=bool)
+        marks[np.arange(len(best)), best] = True
+        return marks
+
+    def optimum(self, kwargs: Mapping[str, Any]) -> Optimum:
+        rules = rules_of(kwargs)
+        q = optimal_action_values(rules, soft_21="drawn")[_base_index()]
+        return Optimum(
+            value=optimal_value(rules),
+            summary="the exact expected return per hand of the optimal strategy",
+            q=q,
+            marks=self.optimal_marks(kwargs),
+        )
+
+    def bound(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> Bound:
+        return Bound("gap", TRAINED_GAP, f"gap <= {TRAINED_GAP}")
+
+    def fixed_policy_bound(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> FixedBound:
+        value = optimal_value(self.rules(kwargs, changes))
+        return FixedBound(value, value)  # no episode limit: a fixed policy is optimal
+
+
+class BlackjackNarrator(Narrator):
+    """Hands won, pushed and lost, in the words of a card table."""
+
+    agreement_words = "optimal decisions"
+    value_places = 4
+
+    def outcome_text(
+        self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]
+    ) -> str:
+        """'You win +1', 'Dealer wins −1 (you bust)', 'Push 0' from the final reward."""
+        if not last.terminated:
+            steps = f"{last.steps} move{'' if last.steps == 1 else 's'}"
+            total = format_reward(last.episode_return)
+            return f"Hand cut short by the time limit after {steps}, return {total}"
+        player, _ = hand_value(list(scene.get("player", [])))
+        dealer, _ = hand_value(list(scene.get("dealer", [])))
+        reward = format_reward(last.reward)
+        if last.reward > 0:
+            if len(scene.get("player", [])) == 2 and player == 21:
+                return f"You win {reward} (blackjack!)"
+            if dealer > 21:
+                return f"You win {reward} (the dealer busts with {dealer})"
+            return f"You win {reward} (your {player} beats the dealer's {dealer})"
+        if last.reward < 0:
+            if player > 21:
+                return f"Dealer wins {reward} (you bust with {player})"
+            return f"Dealer wins {reward} (the dealer's {dealer} beats your {player})"
+        return f"Push {reward} (both have {player})"
+
+    def eval_outcome(
+        self, returns: Sequence[float], details: Sequence[dict[str, Any]]
+    ) -> EvalOutcome:
+        n = max(1, len(returns))
+        r = np.asarray(returns, dtype=np.float64)
+        return EvalOutcome(
+            figures={
+                "win_rate": float(np.count_nonzero(r > 0)) / n,
+                "draw_rate": float(np.count_nonzero(r == 0)) / n,
+                "loss_rate": float(np.count_nonzero(r < 0)) / n,
+            }
+        )
+
+
+class BlackjackLayout(HeatmapLayout):
+    """The two halves of a basic-strategy chart: with and without a usable ace."""
+
+    def heatmaps(
+        self,
+        q: np.ndarray,
+        kwargs: Mapping[str, Any],
+        focus: Any = None,
+        marks: Any = None,
+    ) -> list[Heatmap]:
+        if np.shape(q) != (len(_base_states()), 2):
+            return []
+        has_marks = isinstance(marks, np.ndarray)
+        panels = []
+        for usable, title in ((1, "usable ace"), (0, "no usable ace")):
+            rows = _chart_rows(usable)
+            qs = q[rows]  # (sums, cards, actions)
+            actions = qs.argmax(axis=-1)
+            values = qs.max(axis=-1).astype(float)
+            tied = qs[..., 0] == qs[..., 1]  # no preference: the agent picks at random
+            if has_marks:
+                optimal = np.take_along_axis(marks[rows], actions[..., None], axis=-1)[..., 0]
+                marked = ~optimal & ~tied
+            else:
+                marked = np.zeros(actions.shape, dtype=bool)
+            labels = tuple(
+                tuple(TIED if t else ACTION_LETTERS[a] for a, t in zip(row, ties, strict=True))
+                for row, ties in zip(actions.tolist(), tied.tolist(), strict=True)
+            )
+            panels.append(
+                Heatmap(
+                    title=f"Q-values, {title}",
+                    row_labels=tuple(str(s) for s in CHART_SUMS),
+                    col_labels=DEALER_LABELS,
+                    values=values,
+                    labels=labels,
+                    marked=marked,
+                    legend="rows: player sum  cols: dealer card  H hit  S stick  "
+                    f"{TIED} tie  * not optimal",
+                )
+            )
+        return panels
+
+
+class BlackjackGame(Game):
+    """Hit or stick against a dealer who stands on 17."""
+
+    name = "blackjack"
+    title = "Blackjack"
+    env_id = "Blackjack-v1"
+    key = "b"
+    description = "Hit or stick; beat the dealer without going over 21 (infinite deck)."
+    teaches = "acting on probabilities: the same hand calls for a hit or a stick by the dealer"
+    action_names = ("stick", "hit")
+    params = (
+        Param("natural", bool, False, help="a natural blackjack pays 1.5", owner="Blackjack"),
+        Param("sab", bool, False, help="Sutton & Barto's rules", owner="Blackjack"),
+    )
+    board = "cards"
+    episode_noun = "hand"
+    bench_kwargs: dict[str, Any] | None = {}
+    bench_gap = 0.002
+    # The common defaults (discount 1, the visits step size from 1/n down to 0.001, epsilon
+    # 1 -> 0.05 over half of 200,000 episodes) suit the off-policy learners. The on-policy
+    # ones learn the values of the exploring policy: exploration falls to 0 (so what they
+    # learn becomes the greedy policy's values) and a larger step size forgets the early,
+    # exploratory returns. Dyna-Q's model keeps one outcome per pair, which misleads in a
+    # card game; one planning step with a small step size keeps that noise down.
+    hyperparameters = {
+        "sarsa": {"learning_rate": 0.01, "epsilon_final": 0.0, "epsilon_decay_fraction": 0.3,
+                  "episodes": 500_000},
+        "expected-sarsa": {"learning_rate": 0.01, "epsilon_final": 0.0,
+                           "epsilon_decay_fraction": 0.3, "episodes": 500_000},
+        "monte-carlo": {"learning_rate": 0.005, "epsilon_final": 0.0,
+                        "epsilon_decay_fraction": 0.5, "episodes": 1_000_000},
+        "dyna-q": {"planning_steps": 1, "learning_rate": 0.0003, "episodes": 500_000},
+    }
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.states = BlackjackStates(self)
+        self.oracle = BlackjackOracle(self)
+        self.narrator = BlackjackNarrator(self)
+        self.layout = BlackjackLayout(self)
+
+    def batched_form(self, kwargs: Mapping[str, Any]) -> BatchedForm:
+        from tui_gym.core.vector.base import BatchedForm
+        from tui_gym.games.blackjack.batched import BatchedBlackjack
+
+        rules = rules_of(kwargs)
+
+        def make(num_envs: int, seed: Any, max_episode_steps: int | None) -> BatchedBlackjack:
+            return BatchedBlackjack(num_envs, rules, seed=seed,
+                                    max_episode_steps=max_episode_steps)
+
+        return BatchedForm("Blackjack", make, key=("blackjack", rules))

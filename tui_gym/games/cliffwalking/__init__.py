@@ -1,0 +1,115 @@
+"""CliffWalking: Gymnasium's `CliffWalking-v1`, Sutton & Barto's Example 6.6.
+
+## Action Space
+up (0), right (1), down (2), left (3).
+
+## Observation Space
+The cell the agent stands on, `row * 12 + col`, on a 4 x 12 map.
+
+## Rewards
+-1 a step; -100 for stepping onto the cliff, which sends the agent back to
+the start (the episode goes on).
+
+## Starting State
+Bottom left; the goal is bottom right, the cliff between them.
+
+## Episode End
+Terminated on the goal. Gymnasium sets no limit; tui-gym plays it with one
+of `EPISODE_LIMIT` steps, so that every way of playing, a policy that walks
+into a wall for ever included, has a finite exact value and every episode of
+an untrained agent ends.
+
+## Arguments
+`slippery`: a move goes where asked with chance 1/3 and to either side
+otherwise (Gymnasium's `is_slippery`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from tui_gym.core.params import Param
+from tui_gym.games.tiles import TileGame, TileLayout, TileNarrator, TileStates
+
+__all__ = ["EPISODE_LIMIT", "CliffWalkingGame"]
+
+EPISODE_LIMIT = 200  # steps
+CLIFF_MAP = (
+    "FFFFFFFFFFFF",
+    "FFFFFFFFFFFF",
+    "FFFFFFFFFFFF",
+    "SCCCCCCCCCCG",
+)
+FALL = -100.0  # the reward for stepping onto the cliff
+
+
+class CliffNarrator(TileNarrator):
+    """Reached the goal or ran out of time, with the falls an episode took."""
+
+    holes = False
+    tally_words = TileNarrator.tally_words[:1] + TileNarrator.tally_words[2:]
+
+    def progress_text(self, last: Any, first_info: Mapping[str, Any]) -> str:
+        if not last.steps:
+            return ""
+        falls = _falls(last.episode_return, last.steps)
+        fell = f", fell {falls} time{'' if falls == 1 else 's'}" if falls else ""
+        return f"{last.steps} step{'' if last.steps == 1 else 's'} taken{fell}"
+
+    def outcome_text(self, last: Any, first_info: Mapping[str, Any],
+                     scene: Mapping[str, Any]) -> str:
+        text = super().outcome_text(last, first_info, scene)
+        falls = _falls(last.episode_return, last.steps)
+        if falls:
+            text += f" ({falls} fall{'' if falls == 1 else 's'} off the cliff)"
+        return text
+
+
+def _falls(episode_return: float, steps: int) -> int:
+    """Falls off the cliff in an episode of the bare game: each costs 99 more than a step."""
+    extra = -float(episode_return) - steps
+    falls = round(extra / (-FALL - 1))
+    return falls if falls > 0 and abs(extra - falls * (-FALL - 1)) < 1e-6 else 0
+
+
+class CliffWalkingGame(TileGame):
+    """Walk from start to goal along a cliff's edge."""
+
+    name = "cliffwalking"
+    title = "CliffWalking"
+    env_id = "CliffWalking-v1"
+    key = "C"
+    description = "Walk to the goal along the edge of a cliff; every step costs, a fall costs 100."
+    teaches = "on-policy against off-policy: SARSA walks the safe path, Q-learning the edge"
+    action_names = ("up", "right", "down", "left")
+    params = (
+        Param("slippery", bool, False, help="moves may slide sideways", owner="CliffWalking"),
+    )
+    theme = "cliff"
+    floor_word = "ground"
+    bench_kwargs: dict[str, Any] | None = {}
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.states = TileStates(self)
+        self.narrator = CliffNarrator(self)
+        self.layout = TileLayout(self)
+
+    def cells(self, kwargs: Mapping[str, Any]) -> list[str]:
+        return list(CLIFF_MAP)
+
+    def make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+        return {"is_slippery": bool(kwargs.get("slippery", False)),
+                "max_episode_steps": EPISODE_LIMIT}
+
+    def episode_limit(self, kwargs: Mapping[str, Any]) -> int:
+        return EPISODE_LIMIT
+
+    def hyperparameter_table(
+        self, kwargs: Mapping[str, Any] | None = None
+    ) -> Mapping[str, Mapping[str, Any]]:
+        if (kwargs or {}).get("slippery"):
+            # A fall costs 100 at random: averaging it out needs small steps and many episodes.
+            return {"*": {"learning_rate": 0.01, "episodes": 50_000}}
+        return {"*": {"learning_rate": 0.1, "episodes": 2_000}}

@@ -1,0 +1,115 @@
+"""FrozenLake: Gymnasium's `FrozenLake-v1`, solved exactly from its own table.
+
+## Action Space
+left (0), down (1), right (2), up (3).
+
+## Observation Space
+The cell the agent stands on, `row * size + col`.
+
+## Rewards
++1 on reaching the goal, 0 otherwise (Gymnasium's default schedule).
+
+## Starting State
+The start cell, top left.
+
+## Episode End
+Terminated in a hole or on the goal; truncated after 100 steps on maps up to
+4x4 (Gymnasium's `FrozenLake-v1`) and 200 on larger ones (as Gymnasium's
+`FrozenLake8x8-v1`).
+
+## Arguments
+`map`: "4x4" or "8x8" (Gymnasium's maps) or "random" (a map of `size` cells a
+side drawn with seed `map_seed` by Gymnasium's `generate_random_map`, which
+only returns maps with a path from start to goal); `slippery`: whether a move
+may go sideways; `success_rate`: the chance a slippery move goes where asked
+(each sideways move takes half of the rest).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from functools import lru_cache
+from typing import Any
+
+from tui_gym.core.params import Param
+from tui_gym.games.tiles import TileGame, TileLayout, TileNarrator, TileStates
+
+__all__ = ["FrozenLakeGame", "lake_map"]
+
+MAPS = ("4x4", "8x8", "random")
+SMALL_LIMIT, LARGE_LIMIT = 100, 200  # steps: Gymnasium's FrozenLake-v1 and FrozenLake8x8-v1
+
+
+@lru_cache(maxsize=32)
+def _random_map(size: int, seed: int) -> tuple[str, ...]:
+    from gymnasium.envs.toy_text.frozen_lake import generate_random_map
+
+    return tuple(generate_random_map(size=size, p=0.8, seed=seed))
+
+
+def lake_map(kwargs: Mapping[str, Any]) -> list[str]:
+    """The map the arguments choose, one string a row."""
+    choice = kwargs.get("map", "4x4")
+    if choice == "random":
+        return list(_random_map(int(kwargs.get("size", 8)), int(kwargs.get("map_seed", 0))))
+    from gymnasium.envs.toy_text.frozen_lake import MAPS as GYM_MAPS
+
+    return list(GYM_MAPS[choice])
+
+
+class FrozenLakeGame(TileGame):
+    """Cross the ice from start to goal without falling through a hole."""
+
+    name = "frozenlake"
+    title = "FrozenLake"
+    env_id = "FrozenLake-v1"
+    key = "F"
+    description = "Cross a frozen lake to the goal without falling into a hole; it may be slippery."
+    teaches = "acting under uncertain moves: on slippery ice the safest path is not the shortest"
+    params = (
+        Param("map", str, "4x4", help="4x4, 8x8 or a random map", owner="FrozenLake",
+              choices=MAPS),
+        Param("size", int, 8, 3, 12, help="cells a side of a random map", owner="FrozenLake"),
+        Param("map_seed", int, 0, 0, 1_000_000, help="seed of a random map", owner="FrozenLake"),
+        Param("slippery", bool, True, help="moves may slide sideways", owner="FrozenLake"),
+        Param("success_rate", float, 1 / 3, 0.0, 1.0, help="chance a slippery move goes as asked",
+              owner="FrozenLake", min_inclusive=False),
+    )
+    theme = "lake"
+    floor_word = "ice"
+    bench_kwargs: dict[str, Any] | None = {"map": "8x8"}
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.states = TileStates(self)
+        self.narrator = TileNarrator(self)
+        self.layout = TileLayout(self)
+
+    def cells(self, kwargs: Mapping[str, Any]) -> list[str]:
+        return lake_map(kwargs)
+
+    def make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+        cells = lake_map(kwargs)
+        out: dict[str, Any] = {
+            "is_slippery": bool(kwargs.get("slippery", True)),
+            "success_rate": float(kwargs.get("success_rate", 1 / 3)),
+        }
+        if kwargs.get("map", "4x4") == "random":
+            out["desc"] = cells
+        else:
+            out["map_name"] = kwargs.get("map", "4x4")
+        if len(cells) > 4:
+            out["max_episode_steps"] = LARGE_LIMIT
+        return out
+
+    def episode_limit(self, kwargs: Mapping[str, Any]) -> int:
+        return LARGE_LIMIT if len(lake_map(kwargs)) > 4 else SMALL_LIMIT
+
+    def hyperparameter_table(
+        self, kwargs: Mapping[str, Any] | None = None
+    ) -> Mapping[str, Mapping[str, Any]]:
+        # A discount just below 1: with 1 the values of a cautious move that stays put
+        # and of one that heads for the goal tie, and the greedy policy may never arrive.
+        if len(lake_map(kwargs or {})) <= 4:
+            return {"*": {"learning_rate": 0.05, "discount": 0.999, "episodes": 20_000}}
+        return {"*": {"learning_rate": 0.02, "discount": 0.999, "episodes": 100_000}}

@@ -1,0 +1,171 @@
+"""Bring your own env: any registered Gymnasium env with a transition table.
+
+`GenericGame(env_id)` plays an env whose unwrapped form has `Discrete`
+observation and action spaces and a table `P` (as Gymnasium's toy-text envs
+do), with no code written for it: its exact model, optimum and batched form
+come from the table (`ModelGame`); its board is its own text render (kind
+"text"); its actions are named by their numbers; its heatmap is a state x
+action table, in pages of `PAGE` states picked on a small panel when there
+are more.
+
+`check_fit(env_id)` says in one sentence what an env that does not fit lacks.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from tui_gym.core.heatmap import Heatmap
+from tui_gym.core.mdp import NotAvailable
+from tui_gym.games.base import UNREADABLE, HeatmapLayout, strip_ansi
+from tui_gym.games.model import DiscreteStates, ModelGame
+
+__all__ = ["PAGE", "GenericGame", "check_fit"]
+
+PAGE = 25  # states a heatmap page shows
+TIED = "·"
+
+
+def _make(env_id: str, render_mode: str | None = None) -> Any:
+    import gymnasium as gym
+
+    import tui_gym.envs
+
+    tui_gym.envs.register_envs()
+    return gym.make(env_id, render_mode=render_mode)
+
+
+def check_fit(env_id: str) -> NotAvailable | None:
+    """None when `env_id` can be played as a generic game, else what it lacks."""
+    import gymnasium as gym
+
+    from tui_gym.core.mdp import model_from_env
+
+    try:
+        env = _make(env_id)
+    except (gym.error.Error, ImportError, TypeError, ValueError, AttributeError) as error:
+        return NotAvailable(f"{env_id} could not be built: {' '.join(str(error).split())}")
+    try:
+        model = model_from_env(env.unwrapped, horizon=None)
+    finally:
+        env.close()
+    if isinstance(model, NotAvailable):
+        reason = model.reason.split(": ", 1)[-1]
+        return NotAvailable(
+            f"{env_id} does not fit: {reason} (tui-gym plays envs with Discrete observations "
+            "and actions and a transition table P)"
+        )
+    return None
+
+
+class GenericStates(DiscreteStates):
+    """The env's `Discrete` states; its text render as the board."""
+
+    def read_scene(self, game_env: Any, before: Mapping[str, Any]) -> dict[str, Any]:
+        text = ""
+        if getattr(game_env, "render_mode", None) == "ansi":
+            try:
+                picture = game_env.render()
+            except UNREADABLE:
+                picture = None
+            text = strip_ansi(picture) if isinstance(picture, str) else ""
+        state = getattr(game_env, "s", None)
+        return {"text": text, "state": None if state is None else int(state),
+                "actions": list(self.game.action_names)}
+
+
+class TableLayout(HeatmapLayout):
+    """A state x action table; past `PAGE` states, pages picked on a first panel."""
+
+    focus_help = "choose a page of states"
+
+    def heatmaps(
+        self,
+        q: np.ndarray,
+        kwargs: Mapping[str, Any],
+        focus: Any = None,
+        marks: Any = None,
+    ) -> list[Heatmap]:
+        values = np.asarray(q, dtype=float)
+        if values.ndim != 2 or 0 in values.shape:
+            return []
+        n_states, n_actions = values.shape
+        greedy = values.argmax(axis=1)
+        tied = (values == values[:, :1]).all(axis=1)
+        has_marks = isinstance(marks, np.ndarray) and marks.shape == values.shape
+        wrong = np.zeros(n_states, dtype=bool)
+        if has_marks:
+            wrong = ~marks[np.arange(n_states), greedy] & ~tied
+        pages = -(-n_states // PAGE)
+        page = 0 if focus is None else min(max(0, int(focus)), pages - 1)
+        rows = range(page * PAGE, min(n_states, (page + 1) * PAGE))
+        labels = tuple(
+            tuple(("●" if a == greedy[s] and not tied[s] else TIED if tied[s] else "")
+                  for a in range(n_actions))
+            for s in rows
+        )
+        marked = np.zeros((len(rows), n_actions), dtype=bool)
+        for i, s in enumerate(rows):
+            marked[i, greedy[s]] = wrong[s]
+        table = Heatmap(
+            title=f"Q, states {rows.start}-{rows.stop - 1}",
+            row_labels=tuple(str(s) for s in rows),
+            col_labels=tuple(self.game.action_names),
+            values=values[rows.start:rows.stop].copy(),
+            labels=labels,
+            marked=marked,
+            legend=f"rows: states  cols: actions  ● greedy  {TIED} tie  * not optimal",
+        )
+        if pages == 1:
+            return [table]
+        starts = np.arange(pages) * PAGE
+        picker = Heatmap(
+            title="pages",
+            row_labels=("from",),
+            col_labels=tuple(str(s) for s in starts),
+            values=np.array([[values[s:s + PAGE].max(axis=1).mean() for s in starts]]),
+            labels=(tuple(f"{int(wrong[s:s + PAGE].sum())}*" if wrong[s:s + PAGE].any() else ""
+                          for s in starts),),
+            marked=np.zeros((1, pages), dtype=bool),
+            legend="pages: mean max Q, n* states not optimal",
+        )
+        return [picker, table]
+
+    def default_focus(self, kwargs: Mapping[str, Any]) -> Any:
+        return 0
+
+    def focus_at(self, row: int, col: int, kwargs: Mapping[str, Any]) -> Any:
+        return max(0, col)
+
+    def focus_cell(self, focus: Any, kwargs: Mapping[str, Any]) -> tuple[int, int] | None:
+        return (0, int(focus or 0))
+
+
+class GenericGame(ModelGame):
+    """An env of the caller's choosing, played from its transition table."""
+
+    board = "text"
+
+    def __init__(self, env_id: str) -> None:
+        super().__init__()
+        self.env_id = env_id
+        self.name = env_id.lower()
+        self.title = env_id.split(":")[-1]
+        self.description = f"{self.title}: played from its own transition table"
+        env = _make(env_id)
+        try:
+            self.action_names = tuple(str(a) for a in range(int(env.action_space.n)))
+            modes = env.metadata.get("render_modes", []) or []
+            self.render_mode = "ansi" if "ansi" in modes else None
+        finally:
+            env.close()
+        self.states = GenericStates(self)
+        self.layout = TableLayout(self)
+        self.layout.has_focus = self._states() > PAGE
+
+    def _states(self) -> int:
+        model = self.base_model({})
+        return 0 if isinstance(model, NotAvailable) else model.n_states

@@ -1,0 +1,6 @@
+"""GridWorld: the game (`game`), its shortest-path figures (`paths`) and its batched
+form for the vector engine (`batched`); the env itself is `tui_gym.envs.gridworld`."""
+
+from tui_gym.games.gridworld.game import GridWorldGame
+
+__all__ = ["GridWorldGame"]

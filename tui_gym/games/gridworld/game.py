@@ -1,0 +1,482 @@
+"""GridWorld: our `tui_gym/GridWorld-v0` as the app sees it.
+
+Actions are right, up, left, down (the tutorial's mapping). Base states are
+every (agent, target) pair; the exact figures are shortest-path ones (`paths`):
+the share of pairs the greedy policy solves in the Manhattan number of steps
+and its steps over the fewest (ties broken at random, as the agent breaks
+them), and the heatmap shows max Q over the grid for one target (the focus a
+person moves) with the greedy move in each cell.
+
+The optimum is a shortest path. That holds whenever reaching the target pays
+(its reward is positive) and no other step does (rewards of at most zero, no
+better farther away): then every step a route wastes costs, and the target
+comes later. The wrappers' rewards are checked against that (`scope`); when
+they break it, the figures are shortest-path figures and say so, and the
+advice claims no optimum.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from functools import lru_cache
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from tui_gym.core.heatmap import Heatmap
+from tui_gym.core.mdp import NotAvailable
+from tui_gym.core.params import Param
+from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
+from tui_gym.games.base import (
+    EXACT,
+    Advice,
+    Bound,
+    EvalOutcome,
+    Game,
+    HeatmapLayout,
+    Narrator,
+    Optimum,
+    Oracle,
+    ReferenceMetrics,
+    Scope,
+    StateSpace,
+    TallyWord,
+    greedy_probabilities,
+)
+from tui_gym.games.gridworld.paths import (
+    mixed_pair_fraction,
+    mixed_steps_over_optimal,
+    optimal_actions,
+    optimal_pair_fraction,
+    policy_steps_over_optimal,
+)
+from tui_gym.games.words import (
+    ScoreRow,
+    agreement_summary,
+    format_reward,
+    join_parts,
+    plural,
+    unwrapped_note,
+    watched_row,
+)
+
+if TYPE_CHECKING:
+    from tui_gym.core.play import PlayStep, Scorecard
+    from tui_gym.core.vector.base import BatchedForm
+
+__all__ = ["GridWorldGame"]
+
+ARROWS = ("→", "↑", "←", "↓")
+MIN_SIZE, MAX_SIZE = 2, 12
+AGREEMENT = "moves on a shortest path"  # how a scoreboard words moves that match the optimum
+TIED = "·"  # a heatmap cell whose actions tie
+TRAINED_SHARE = 0.95  # what the default training reaches (see the README)
+
+
+@lru_cache(maxsize=16)
+def _pairs(size: int) -> np.ndarray:
+    """All (ax, ay, tx, ty) in row-major order: shape (size**4, 4)."""
+    grid = np.indices((size,) * 4).reshape(4, -1).T
+    return grid.astype(np.int64)
+
+
+@lru_cache(maxsize=4)
+def _optimal_marks(size: int) -> np.ndarray:
+    """`[pairs, 4]`: the actions that start a shortest path from each placement."""
+    pairs = _pairs(size)
+    dx = pairs[:, 2] - pairs[:, 0]
+    dy = pairs[:, 3] - pairs[:, 1]
+    marks = np.column_stack([dx > 0, dy > 0, dx < 0, dy < 0])
+    marks.setflags(write=False)
+    return marks
+
+
+def _size(kwargs: Mapping[str, Any]) -> int:
+    return int(kwargs.get("size", 5))
+
+
+def _policy(q: np.ndarray, size: int) -> tuple[np.ndarray, bool]:
+    """The greedy policy of `q` as the agent plays it: an action array when no state
+    ties (True), else action probabilities (ties broken at random; False)."""
+    probs = greedy_probabilities(q)
+    if (probs.max(axis=1) == 1.0).all():
+        return np.argmax(q, axis=1).astype(np.int64).reshape((size,) * 4), True
+    return probs.reshape((size,) * 4 + (q.shape[1],)), False
+
+
+def _shortest_pays(kwargs: Mapping[str, Any], changes: GameChanges) -> bool:
+    """Whether a shortest path is optimal with these rewards: reaching the target
+    pays, and no other step does, nor pays more farther from the target."""
+    size = _size(kwargs)
+    goal = changes.reward(float(kwargs.get("reward_scale", 1.0)), 0.0)
+    miss = -float(kwargs.get("step_penalty", 0.0))
+    others = [changes.reward(miss, d) for d in range(1, 2 * size - 1)]
+    never_pays = all(r <= 0.0 for r in others)
+    farther_no_better = all(b <= a for a, b in zip(others, others[1:], strict=False))
+    return goal > 0.0 and never_pays and farther_no_better
+
+
+def _distance(scene: Mapping[str, Any]) -> int:
+    """Steps from the scene's agent to its target (0 when either is missing)."""
+    agent, target = scene.get("agent"), scene.get("target")
+    if agent is None or target is None:
+        return 0
+    return abs(int(agent[0]) - int(target[0])) + abs(int(agent[1]) - int(target[1]))
+
+
+class GridWorldStates(StateSpace):
+    """Every (agent, target) placement; the grid as the scene."""
+
+    def base_observations(self, kwargs: Mapping[str, Any]) -> list[Any]:
+        return [{"agent": row[:2].copy(), "target": row[2:].copy()}
+                for row in _pairs(_size(kwargs))]
+
+    def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
+        ax, ay = (int(v) for v in observation["agent"])
+        tx, ty = (int(v) for v in observation["target"])
+        dist = abs(ax - tx) + abs(ay - ty)
+        return f"agent ({ax}, {ay})  target ({tx}, {ty})  distance {dist}"
+
+    def read_scene(self, game_env: Any, before: Mapping[str, Any]) -> dict[str, Any]:
+        """The grid: `size`, `agent` and `target` positions as (x, y)."""
+        try:
+            agent, target = game_env.agent_position, game_env.target_position
+        except AttributeError:  # before the first reset
+            agent = target = None
+        return {"size": int(game_env.size), "agent": agent, "target": target}
+
+
+class GridWorldOracle(Oracle):
+    """Shortest paths: exact while the rewards keep one optimal."""
+
+    def scope(self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> Scope:
+        """Exact while the rewards keep a shortest path optimal (the module docstring)."""
+        if changes.others:
+            return Scope(False, unwrapped_note(changes.others))
+        if _shortest_pays(kwargs, changes):
+            return EXACT
+        if changes.changes_rewards and _shortest_pays(kwargs, NO_CHANGES):
+            return Scope(False, f"figures of the unwrapped game: with {changes.reward_names()} "
+                         "a shortest path need not pay best")
+        return Scope(False, "shortest-path figures: with these rewards a shortest path "
+                     "need not pay best")
+
+    def reference(
+        self, q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> ReferenceMetrics | NotAvailable:
+        size = _size(kwargs)
+        if np.shape(q) != (size**4, 4):
+            return NotAvailable(f"a table of shape {np.shape(q)} does not fit a {size}x{size} grid")
+        policy, deterministic = _policy(q, size)
+        if deterministic:
+            frac = optimal_pair_fraction(size, policy)
+        else:
+            frac = mixed_pair_fraction(size, policy)
+        return ReferenceMetrics(
+            figures={"optimal_pair_fraction": frac},
+            summary=f"{frac:.1%} of (agent, target) pairs solved in the fewest steps",
+            scope=self.scope(kwargs, changes),
+        )
+
+    def agent_figures(
+        self, q: np.ndarray | None, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> dict[str, float]:
+        """Exact, over every placement: the greedy policy's mean `steps_over_optimal`
+        where it reaches the target, and the `solved_fraction` of placements it reaches
+        (within the time limit in force; with ties broken at random, a chance)."""
+        size = _size(kwargs)
+        if q is None or np.shape(q) != (size**4, 4):
+            return {}
+        policy, deterministic = _policy(q, size)
+        limit = changes.time_limit
+        if deterministic:
+            extra, solved = policy_steps_over_optimal(size, policy, limit)
+        else:
+            extra, solved = mixed_steps_over_optimal(size, policy, limit)
+        return {"steps_over_optimal": extra, "solved_fraction": solved}
+
+    def advice(self, env: Any, kwargs: Mapping[str, Any]) -> Advice:
+        scene = self.game.states.scene(env)
+        agent, target = scene.get("agent"), scene.get("target")
+        if agent is None or target is None:
+            return Advice((), None, "no episode running")
+        optimal = optimal_actions(agent, target)
+        if not optimal:
+            return Advice((), None, "at the target")
+        names = " or ".join(self.game.action_names[a] for a in optimal)
+        steps = abs(agent[0] - target[0]) + abs(agent[1] - target[1])
+        scope = self.scope(kwargs, GameChanges.of(env))
+        if not scope.exact:
+            return Advice((), None, f"shortest path: {names}  ({steps} steps to go; "
+                          f"{scope.note.split(': ', 1)[-1]})", unwrapped_optimal=optimal)
+        return Advice(optimal, None, f"optimal: {names}  ({steps} steps to go)")
+
+    def optimal_marks(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> np.ndarray:
+        return _optimal_marks(_size(kwargs))
+
+    def bound(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> Bound:
+        return Bound("optimal_pair_fraction", TRAINED_SHARE,
+                     f"{TRAINED_SHARE:.0%} of placements solved in the fewest steps",
+                     at_least=True)
+
+    def optimum(self, kwargs: Mapping[str, Any]) -> Optimum:
+        size = _size(kwargs)
+        coords = np.arange(size)
+        diffs = np.abs(coords[:, None] - coords[None, :])
+        # Mean Manhattan distance over ordered pairs of distinct cells.
+        total = 2 * diffs.sum() * size * size
+        mean_steps = float(total) / (size * size * (size * size - 1))
+        return Optimum(
+            value=mean_steps,
+            summary=f"{size}x{size}: the optimal policy walks any shortest path, so an episode "
+            "takes the Manhattan distance from agent to target; the value is the mean number "
+            "of steps over random starts",
+            figures={"optimal_mean_steps": mean_steps},
+        )
+
+
+class GridWorldNarrator(Narrator):
+    """Steps taken against the fewest; reached or timed out."""
+
+    agreement_words = AGREEMENT
+    tally_words = (TallyWord("reached", "good"), TallyWord("timed out", "bad"))
+
+    def tally_word(self, last: PlayStep) -> str:
+        return "reached" if last.terminated else "timed out"
+
+    def outcome_text(
+        self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]
+    ) -> str:
+        """'Reached the target in 7 steps (optimal 7)' or 'Truncated by the time limit ...'."""
+        steps = f"{last.steps} step{'' if last.steps == 1 else 's'}"
+        total = format_reward(last.episode_return)
+        if last.terminated:
+            optimal = int(first_info.get("distance", 0))
+            extra = last.steps - optimal
+            verdict = "a shortest path" if extra <= 0 else f"{extra} more than needed"
+            return f"Reached the target in {steps} (optimal {optimal}), {verdict}; return {total}"
+        return f"Truncated by the time limit after {steps}, target not reached, return {total}"
+
+    def progress_text(self, last: PlayStep, first_info: Mapping[str, Any]) -> str:
+        optimal = int(first_info.get("distance", 0))
+        return f"{last.steps} step{'' if last.steps == 1 else 's'} taken, optimal {optimal}"
+
+    def coach_text(
+        self,
+        before: Advice,
+        action: int,
+        scene_before: Mapping[str, Any],
+        scene_after: Mapping[str, Any],
+    ) -> str:
+        """'✓ right is on a shortest path (3 steps to go)' or
+        '✗ left is off every shortest path (now 5 steps away, was 4)'."""
+        if not before.optimal:
+            return ""
+        names = self.game.action_names
+        name = names[action] if 0 <= action < len(names) else str(action)
+        was, now = _distance(scene_before), _distance(scene_after)
+        if action in before.optimal:
+            to_go = f"{plural(now, 'step')} to go" if now else "target reached"
+            return f"✓ {name} is on a shortest path ({to_go})"
+        return f"✗ {name} is off every shortest path (now {plural(now, 'step')} away, was {was})"
+
+    def episode_figures(self, last: PlayStep, first_info: Mapping[str, Any]) -> dict[str, float]:
+        """`steps_over_optimal` of an episode that reached the target."""
+        if not last.terminated or "distance" not in first_info:
+            return {}
+        return {"steps_over_optimal": float(last.steps - int(first_info["distance"]))}
+
+    def scoreboard(
+        self,
+        you: Scorecard,
+        figures: Mapping[str, float] | None,
+        watched: Scorecard | None = None,
+        agent_note: str = "",
+        scope: Scope = EXACT,
+    ) -> list[ScoreRow]:
+        """Steps over optimal: yours over the episodes you finished, the agent's exactly."""
+        figures = figures or {}
+        reached = you.figure_count("steps_over_optimal")
+        mean = you.figure_mean("steps_over_optimal")
+        if mean is None:
+            mine, mine_short = "no episode reached the target yet", "no target reached yet"
+        else:
+            mine = f"{mean:.2f} steps over optimal (mean of {plural(reached, 'episode')} reached)"
+            mine_short = f"{mean:.2f} extra steps ({reached} reached)"
+        rows = [
+            ScoreRow(
+                "You",
+                join_parts(mine, agreement_summary(you, AGREEMENT)),
+                join_parts(mine_short, agreement_summary(you, short=True)),
+            )
+        ]
+        solved = figures.get("solved_fraction")
+        if solved is None:
+            rows.append(ScoreRow("Agent", agent_note or "no exact figures", "–"))
+        elif solved == 0:
+            text = "its greedy policy reaches the target from no placement yet (exact)"
+            rows.append(ScoreRow("Agent", text, "reaches no target yet"))
+        else:
+            extra = figures["steps_over_optimal"]
+            text = (
+                f"{extra:.2f} steps over optimal, exact mean over the episodes "
+                f"its greedy policy brings to the target ({solved:.1%} of them)"
+            )
+            rows.append(ScoreRow("Agent", text, f"{extra:.2f} extra steps, reaches {solved:.0%}"))
+        if scope.exact:
+            rows.append(ScoreRow("Optimum", "0 steps over optimal from every placement",
+                                 "0 extra"))
+        else:
+            rows.append(ScoreRow("Optimum", f"a shortest path from every placement ({scope.note})",
+                                 "shortest path (unwrapped)"))
+        if watched is not None and watched.tally.episodes:
+            watched_extra = watched.figure_mean("steps_over_optimal")
+            more = "" if watched_extra is None else f"{watched_extra:.2f} extra steps"
+            rows.append(watched_row(watched, self.game.episode_noun, AGREEMENT, more))
+        return rows
+
+    def episode_detail(
+        self, first_info: Mapping[str, Any], length: int, total: float, terminated: bool
+    ) -> dict[str, Any]:
+        return {
+            "length": length,
+            "return": total,
+            "terminated": terminated,
+            "optimal": int(first_info.get("distance", 0)),
+        }
+
+    def eval_outcome(
+        self, returns: Sequence[float], details: Sequence[dict[str, Any]]
+    ) -> EvalOutcome:
+        n = max(1, len(details))
+        solved = [d for d in details if d["terminated"]]
+        extra = [d["length"] - d["optimal"] for d in solved]
+        return EvalOutcome(
+            figures={
+                "success_rate": len(solved) / n,
+                "mean_steps_over_optimal": float(np.mean(extra)) if extra else float("nan"),
+            }
+        )
+
+
+class GridWorldLayout(HeatmapLayout):
+    """Max Q over the grid for one target, which a person moves."""
+
+    has_focus = True
+    focus_help = "move the heatmap's target"
+
+    def heatmaps(
+        self,
+        q: np.ndarray,
+        kwargs: Mapping[str, Any],
+        focus: Any = None,
+        marks: Any = None,
+    ) -> list[Heatmap]:
+        size = _size(kwargs)
+        if np.shape(q) != (size**4, 4):
+            return []
+        tx, ty = focus if focus is not None else (size - 1, size - 1)
+        q4 = q.reshape(size, size, size, size, q.shape[1])
+        values = np.full((size, size), np.nan)
+        marked = np.zeros((size, size), dtype=bool)
+        labels = []
+        for r in range(size):
+            y = size - 1 - r  # +y is up: the top row is y = size-1
+            row = []
+            for x in range(size):
+                if (x, y) == (tx, ty):
+                    row.append("T")
+                    continue
+                qs = q4[x, y, tx, ty]
+                action = int(np.argmax(qs))
+                values[r, x] = float(qs.max())
+                if (qs == qs[0]).all():  # no preference: the agent picks at random
+                    row.append(TIED)
+                    continue
+                row.append(ARROWS[action])
+                marked[r, x] = action not in optimal_actions((x, y), (tx, ty))
+            labels.append(tuple(row))
+        return [
+            Heatmap(
+                title=f"max Q with the target at ({tx}, {ty})",
+                row_labels=tuple(str(size - 1 - r) for r in range(size)),
+                col_labels=tuple(str(x) for x in range(size)),
+                values=values,
+                labels=tuple(labels),
+                marked=marked,
+                legend=f"arrow: greedy move  {TIED} tie  T target  * off every shortest path",
+            )
+        ]
+
+    def default_focus(self, kwargs: Mapping[str, Any]) -> Any:
+        size = _size(kwargs)
+        return (size - 1, size - 1)
+
+    def focus_at(self, row: int, col: int, kwargs: Mapping[str, Any]) -> Any:
+        """The target (x, y) of a heatmap cell: the top row is y = size - 1."""
+        size = _size(kwargs)
+        row, col = min(size - 1, max(0, row)), min(size - 1, max(0, col))
+        return (col, size - 1 - row)
+
+    def focus_cell(self, focus: Any, kwargs: Mapping[str, Any]) -> tuple[int, int] | None:
+        size = _size(kwargs)
+        x, y = focus if focus is not None else self.default_focus(kwargs)
+        return (size - 1 - int(y), int(x))
+
+
+class GridWorldGame(Game):
+    """Walk the agent to the target on a square grid."""
+
+    name = "gridworld"
+    title = "GridWorld"
+    env_id = "tui_gym/GridWorld-v0"
+    other_ids = ("gymnasium_env/GridWorld-v0",)
+    key = "g"
+    description = "Reach the target on a square grid; the tutorial's custom environment."
+    teaches = "goal-conditioned states and discounting: why a shorter path is worth more"
+    action_names = ("right", "up", "left", "down")
+    params = (
+        Param("size", int, 5, MIN_SIZE, MAX_SIZE, help="cells a side", owner="GridWorld"),
+        Param("reward_scale", float, 1.0, -100.0, 100.0, help="reward for reaching the target",
+              owner="GridWorld"),
+        Param("step_penalty", float, 0.0, 0.0, 10.0, help="subtracted every other step",
+              owner="GridWorld"),
+    )
+    board = "grid"
+    render_mode = "ansi"
+    demo_wrappers = ("TimeLimit:max_episode_steps=50", "StepPenalty:penalty=0.01",
+                     "DistanceShaping")
+
+    # Reward only at the target: without discounting every path is worth 1
+    # and the greedy policy would have no reason to take the shortest one.
+    hyperparameters = {
+        "*": {"discount": 0.95, "learning_rate": 0.1, "episodes": 20_000,
+              "epsilon_decay_fraction": 0.5},
+    }
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.states = GridWorldStates(self)
+        self.oracle = GridWorldOracle(self)
+        self.narrator = GridWorldNarrator(self)
+        self.layout = GridWorldLayout(self)
+
+    def batched_form(self, kwargs: Mapping[str, Any]) -> BatchedForm:
+        from tui_gym.core.vector.base import BatchedForm
+        from tui_gym.games.gridworld.batched import BatchedGridWorld
+
+        size = _size(kwargs)
+        reward_scale = float(kwargs.get("reward_scale", 1.0))
+        step_penalty = float(kwargs.get("step_penalty", 0.0))
+
+        def make(num_envs: int, seed: Any, max_episode_steps: int | None) -> BatchedGridWorld:
+            return BatchedGridWorld(num_envs, size=size, reward_scale=reward_scale,
+                                    step_penalty=step_penalty,
+                                    max_episode_steps=max_episode_steps, seed=seed)
+
+        return BatchedForm(f"GridWorld {size}x{size}", make, info=("distance",),
+                           key=("gridworld", size, reward_scale, step_penalty))

@@ -1,0 +1,506 @@
+"""Games with an exact model: the oracle every finite game shares.
+
+`ModelGame` is a game whose exact model comes from its env's transition table
+(`env.unwrapped.P`, as Gymnasium's toy-text envs carry it; `base_model`),
+read once per set of arguments and kept. Its states are the model's states
+(the env's `Discrete` observations), and from the model come, with no game
+code at all:
+
+- the optimum and the exact value of the agent's greedy policy, in the
+  definition of `tui_gym.core.mdp` (over the episode limit in force, gamma 1),
+  with the wrappers' reward changes and time limits taken into account;
+- the coach's action values in the current state, for the steps left;
+- the heatmap's marks, and the batched form the vector engine runs.
+
+**Ties.** With gamma 1 a wasted step costs nothing while time remains, so in
+a deterministic game many moves keep the optimum's value. The coach and the
+heatmaps call optimal only the quickest of them: among the actions of
+optimal value, those that are also best with rewards discounted by
+`TIE_GAMMA` per step. The others are listed in `Advice.equal`.
+
+**Fixed policies.** With an episode limit the optimum may play differently
+as the limit nears, which no fixed (greedy) policy does.
+`ModelOracle.fixed_policy_bound` says how close a fixed policy gets: the best
+one a local search finds (a lower bound on the best there is), for
+`--target-gap` and the bench to set targets a greedy policy can reach.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from tui_gym.core.mdp import (
+    FiniteMDP,
+    NotAvailable,
+    evaluate,
+    model_from_env,
+    optimal_actions,
+    solve,
+    with_horizon,
+)
+from tui_gym.core.mdp.evaluation import backup
+from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
+from tui_gym.games.base import (
+    EXACT,
+    UNREADABLE,
+    Advice,
+    Bound,
+    FixedBound,
+    Game,
+    Optimum,
+    Oracle,
+    ReferenceMetrics,
+    Scope,
+    StateSpace,
+    greedy_probabilities,
+)
+from tui_gym.games.words import signed, unwrapped_note
+
+__all__ = [
+    "TIE_GAMMA",
+    "DiscreteStates",
+    "ModelGame",
+    "ModelOracle",
+    "Ladder",
+    "elapsed_steps",
+    "freeze",
+    "model_under",
+]
+
+TIE_GAMMA = 0.99  # the discount that breaks ties between moves of equal exact value
+LADDER_LIMIT = 4_000_000  # Q-values kept per ladder (steps x states x actions) at most
+SEARCH_LIMIT = 4096  # state-action pairs a fixed-policy search looks at, at most
+
+BoolArray = npt.NDArray[np.bool_]
+FloatArray = npt.NDArray[np.float64]
+
+
+def freeze(value: Any) -> Any:
+    """Arguments as a hashable key: dicts and lists become sorted tuples."""
+    if isinstance(value, Mapping):
+        return tuple(sorted((str(k), freeze(v)) for k, v in value.items()))
+    if isinstance(value, list | tuple):
+        return tuple(freeze(v) for v in value)
+    if isinstance(value, np.ndarray):
+        return freeze(value.tolist())
+    return value
+
+
+@lru_cache(maxsize=32)
+def _table_model(env_id: str, frozen: Any, names: tuple[str, ...]) -> FiniteMDP | NotAvailable:
+    import gymnasium as gym
+
+    import tui_gym.envs
+
+    tui_gym.envs.register_envs()
+    kwargs = {k: _thaw(v) for k, v in frozen}
+    kwargs.pop("max_episode_steps", None)
+    try:
+        env = gym.make(env_id, **kwargs)
+    except (gym.error.Error, TypeError, ValueError, ImportError) as error:
+        return NotAvailable(f"{env_id} could not be built: {error}")
+    try:
+        n = getattr(env.action_space, "n", None)
+        action_names = names if n is not None and len(names) == int(n) else None
+        return model_from_env(env.unwrapped, horizon=None, action_names=action_names)
+    finally:
+        env.close()
+
+
+def _thaw(value: Any) -> Any:
+    if isinstance(value, tuple):
+        return [_thaw(v) for v in value]
+    return value
+
+
+def model_under(model: FiniteMDP, changes: GameChanges) -> FiniteMDP:
+    """`model` as the wrappers read into `changes` make it: their rewards (each distinct
+    reward passed once through the wrappers' own code) and the tightest time limit."""
+    if changes.changes_rewards:
+        unique, inverse = np.unique(model.reward, return_inverse=True)
+        mapped = np.array([changes.reward(float(r)) for r in unique])
+        model = model.replace(reward=mapped[inverse].reshape(model.reward.shape))
+    return with_horizon(model, changes.time_limit)
+
+
+def elapsed_steps(env: Any) -> int | None:
+    """Steps taken this episode as the env's tightest `TimeLimit` counts them, or None."""
+    from gymnasium.wrappers import TimeLimit
+
+    best: tuple[int, int] | None = None  # (steps left, elapsed)
+    layer = env
+    while hasattr(layer, "env"):
+        if isinstance(layer, TimeLimit):
+            limit = int(layer._max_episode_steps)
+            elapsed = int(getattr(layer, "_elapsed_steps", 0) or 0)
+            if best is None or limit - elapsed < best[0]:
+                best = (limit - elapsed, elapsed)
+        layer = layer.env
+    return None if best is None else best[1]
+
+
+class Ladder:
+    """Optimal action values of a model for every number of steps left, kept.
+
+    `q(k)` is Q* with `k` steps left (k from 1 to the horizon); with no horizon
+    every `k` gives the stationary optimum. Computed once, by backward
+    induction, for gamma 1 and for `TIE_GAMMA`; past `LADDER_LIMIT` values the
+    rungs are solved when asked for instead.
+    """
+
+    def __init__(self, model: FiniteMDP) -> None:
+        self.model = model
+        self._rungs: dict[float, FloatArray] = {}
+        self._stationary: dict[float, FloatArray] = {}
+
+    def q(self, steps_left: int | None = None, gamma: float = 1.0) -> FloatArray:
+        model = self.model
+        horizon = model.horizon
+        if horizon is None:
+            if gamma not in self._stationary:
+                self._stationary[gamma] = solve(model, gamma).q
+            return self._stationary[gamma]
+        k = horizon if steps_left is None else min(max(1, int(steps_left)), horizon)
+        if horizon * model.n_states * model.n_actions > LADDER_LIMIT:
+            return solve(model, gamma, steps_left=k).q
+        if gamma not in self._rungs:
+            rungs = np.empty((horizon, model.n_states, model.n_actions))
+            v = np.zeros(model.n_states)
+            for i in range(horizon):
+                rungs[i] = backup(model, v, gamma)
+                v = rungs[i].max(axis=1)
+            rungs.setflags(write=False)
+            self._rungs[gamma] = rungs
+        return self._rungs[gamma][k - 1]
+
+    def choices(self, steps_left: int | None = None) -> tuple[BoolArray, BoolArray]:
+        """`[S, A]` twice: the actions of optimal value, and the quickest of them."""
+        best = optimal_actions(self.q(steps_left))
+        tie = np.where(best, self.q(steps_left, TIE_GAMMA), -np.inf)
+        with np.errstate(invalid="ignore"):
+            quickest = best & optimal_actions(tie)
+        # A row where the discounted values say nothing (all -inf) keeps every optimal action.
+        quickest[~quickest.any(axis=1)] = best[~quickest.any(axis=1)]
+        return best, quickest
+
+
+@dataclass(frozen=True)
+class _Exact:
+    """A model with its optimum, kept per (arguments, wrappers)."""
+
+    model: FiniteMDP
+    ladder: Ladder
+    scope: Scope
+
+
+class DiscreteStates(StateSpace):
+    """States that are the env's `Discrete` observations, one per model state."""
+
+    def base_observations(self, kwargs: Mapping[str, Any]) -> list[Any] | NotAvailable:
+        game = self.game
+        assert isinstance(game, ModelGame)
+        model = game.base_model(kwargs)
+        if isinstance(model, NotAvailable):
+            return model
+        return list(range(model.n_states))
+
+    def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
+        return f"state {int(observation)}"
+
+
+class ModelOracle(Oracle):
+    """Exact figures from the game's model (see the module docstring)."""
+
+    def __init__(self, game: ModelGame) -> None:
+        super().__init__(game)
+        self._kept: dict[Any, _Exact | NotAvailable] = {}
+        self._bounds: dict[Any, FixedBound | NotAvailable] = {}
+
+    @property
+    def model_game(self) -> ModelGame:
+        assert isinstance(self.game, ModelGame)
+        return self.game
+
+    # --- the model as played ---------------------------------------------------
+    def exact(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> _Exact | NotAvailable:
+        """The model as the wrappers make it (or the unwrapped game's, when they change it
+        beyond what a model follows: `scope` says so), with its optimum."""
+        key = (freeze(kwargs), changes)
+        if key not in self._kept:
+            if len(self._kept) >= 16:
+                self._kept.pop(next(iter(self._kept)))
+            self._kept[key] = self._build(kwargs, changes)
+        return self._kept[key]
+
+    def _build(self, kwargs: Mapping[str, Any], changes: GameChanges) -> _Exact | NotAvailable:
+        game = self.model_game
+        base = game.base_model(kwargs)
+        if isinstance(base, NotAvailable):
+            return base
+        if changes.others:
+            model = with_horizon(base, game.episode_limit(kwargs))
+            return _Exact(model, Ladder(model), Scope(False, unwrapped_note(changes.others)))
+        model = model_under(base, changes)
+        notes = []
+        if changes.changes_rewards:
+            notes.append(changes.reward_names())
+        if changes.chosen_time_limit and changes.time_limit is not None:
+            notes.append(f"TimeLimit(max_episode_steps={changes.time_limit})")
+        scope = Scope(True, f"exact with {', '.join(notes)}") if notes else EXACT
+        return _Exact(model, Ladder(model), scope)
+
+    def scope(self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> Scope:
+        exact = self.exact(kwargs, changes)
+        if isinstance(exact, NotAvailable):
+            return Scope(False, exact.reason)
+        return exact.scope
+
+    # --- the greedy policy beside the optimum ------------------------------------
+    def reference(
+        self, q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> ReferenceMetrics | NotAvailable:
+        exact = self.exact(kwargs, changes)
+        if isinstance(exact, NotAvailable):
+            return exact
+        model = exact.model
+        values = np.asarray(q, dtype=np.float64)
+        if values.shape != (model.n_states, model.n_actions) or np.isnan(values).any():
+            return NotAvailable(
+                f"a table of shape {values.shape} does not fit {model.n_states} states "
+                f"and {model.n_actions} actions"
+            )
+        optimum = exact.ladder.q()
+        policy = greedy_probabilities(values)
+        value = evaluate(model, policy).value
+        best = _initial_value(model, optimum.max(axis=1))
+        gap = exact_gap_of(best, value)
+        places = self.model_game.narrator.value_places
+        return ReferenceMetrics(
+            figures={"exact_value": value, "optimal_value": best, "gap": gap},
+            summary=f"exact value {signed(value, places)}  optimum {signed(best, places)}  "
+            f"gap {gap:.{places}f}",
+            scope=exact.scope,
+        )
+
+    def agent_figures(
+        self, q: np.ndarray | None, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> dict[str, float]:
+        exact = self.exact(kwargs, changes)
+        if isinstance(exact, NotAvailable):
+            return {}
+        if q is None:
+            return {"optimal_value": _initial_value(exact.model, exact.ladder.q().max(axis=1))}
+        reference = self.reference(q, kwargs, changes)
+        return {} if isinstance(reference, NotAvailable) else dict(reference.figures)
+
+    # --- what to do here ----------------------------------------------------------
+    def advice(self, env: Any, kwargs: Mapping[str, Any]) -> Advice:
+        changes = GameChanges.of(env, self.model_game.episode_limit(kwargs))
+        exact = self.exact(kwargs, changes)
+        if isinstance(exact, NotAvailable):
+            return Advice((), None, exact.reason)
+        state = self.model_game.state_of(env)
+        model = exact.model
+        if state is None or not 0 <= state < model.n_states:
+            return Advice((), None, "no episode running")
+        steps_left = None
+        if model.horizon is not None:
+            elapsed = elapsed_steps(env) or 0
+            steps_left = model.horizon - elapsed
+            if steps_left < 1:
+                return Advice((), None, "no steps left")
+        q = exact.ladder.q(steps_left)[state]
+        best, quickest = (rows[state] for rows in exact.ladder.choices(steps_left))
+        names = self.game.action_names
+        values = {a: float(v) for a, v in enumerate(q)}
+        optimal = tuple(int(a) for a in np.flatnonzero(quickest))
+        equal = tuple(int(a) for a in np.flatnonzero(best & ~quickest))
+        places = self.model_game.narrator.value_places
+        listed = ", ".join(f"{names[a]} {signed(v, places)}" for a, v in values.items())
+        chosen = " or ".join(names[a] for a in optimal)
+        if not exact.scope.exact:
+            why = exact.scope.note.removeprefix("figures of the unwrapped game: ")
+            return Advice((), None, f"the unwrapped game's optimum: {chosen}  ({listed}; {why})",
+                          unwrapped_optimal=optimal)
+        return Advice(optimal, values, f"optimal: {chosen}  ({listed} expected)", equal=equal)
+
+    def optimal_marks(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> BoolArray | NotAvailable:
+        exact = self.exact(kwargs, changes)
+        if isinstance(exact, NotAvailable):
+            return exact
+        return exact.ladder.choices()[1]
+
+    def optimum(self, kwargs: Mapping[str, Any]) -> Optimum | NotAvailable:
+        game = self.model_game
+        exact = self.exact(kwargs, game.own_changes(kwargs))
+        if isinstance(exact, NotAvailable):
+            return exact
+        model, ladder = exact.model, exact.ladder
+        q = ladder.q()
+        value = _initial_value(model, q.max(axis=1))
+        limit = "no episode limit" if model.horizon is None else f"{model.horizon}-step episodes"
+        return Optimum(
+            value=value,
+            summary=f"the best expected return of an episode ({limit}, undiscounted)",
+            q=q,
+            marks=ladder.choices()[1],
+        )
+
+    def bound(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> Bound | NotAvailable:
+        """The gap within `gap_tolerance` of the optimum's magnitude, beyond what no
+        fixed policy found reaches."""
+        fixed = self.fixed_policy_bound(kwargs, changes)
+        if isinstance(fixed, NotAvailable):
+            return fixed
+        share = self.model_game.gap_tolerance(kwargs)
+        limit = fixed.shortfall + share * abs(fixed.optimal_value)
+        text = f"gap <= {limit:.4g}"
+        if share:
+            text += f" ({share:.0%} of the optimum"
+            text += f", beyond the best fixed policy's {fixed.shortfall:.4g})" if (
+                fixed.shortfall) else ")"
+        return Bound("gap", limit, text)
+
+    def fixed_policy_bound(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> FixedBound | NotAvailable:
+        exact = self.exact(kwargs, changes)
+        if isinstance(exact, NotAvailable):
+            return exact
+        key = (freeze(kwargs), changes)
+        if key not in self._bounds:
+            self._bounds[key] = best_fixed_policy(exact.model, exact.ladder)
+        return self._bounds[key]
+
+
+def exact_gap_of(optimal: float, value: float) -> float:
+    """The optimum minus a policy's value, never negative (round-off counts as 0)."""
+    if optimal == value:
+        return 0.0
+    difference = optimal - value
+    if math.isfinite(difference) and difference <= 1e-9 * max(1.0, abs(optimal)):
+        return 0.0
+    return difference
+
+
+def _initial_value(model: FiniteMDP, v: FloatArray) -> float:
+    weight = model.initial > 0
+    if np.isneginf(v[weight]).any():
+        return float("-inf")
+    return float(model.initial[weight] @ v[weight])
+
+
+def best_fixed_policy(model: FiniteMDP, ladder: Ladder) -> FixedBound:
+    """The best fixed policy a local search finds, beside the optimum.
+
+    Candidates: the optimum's own fixed policy and the optima with no episode
+    limit (discounted by 1, 0.999 and 0.99); from the best of them, single-state
+    changes that raise the exact value are taken, the best first, until none
+    does (skipped for models past `SEARCH_LIMIT` state-action pairs).
+    """
+    optimal = _initial_value(model, ladder.q().max(axis=1))
+    candidates = [solve(model).policy]
+    if model.horizon is not None:
+        free = with_horizon(model, None)
+        for gamma in (1.0, 0.999, 0.99):
+            try:
+                candidates.append(solve(free, gamma).policy)
+            except (RuntimeError, ValueError):  # no policy ends episodes surely
+                continue
+    values = [evaluate(model, np.asarray(p, dtype=np.int64)).value for p in candidates]
+    policy = np.asarray(candidates[int(np.argmax(values))], dtype=np.int64).copy()
+    value = max(values)
+    if exact_gap_of(optimal, value) == 0.0 or model.horizon is None:
+        return FixedBound(optimal, value)
+    if model.n_states * model.n_actions <= SEARCH_LIMIT:
+        policy, value = _climb(model, policy, value)
+    return FixedBound(optimal, value)
+
+
+def _climb(model: FiniteMDP, policy: np.ndarray, value: float) -> tuple[np.ndarray, float]:
+    """Hill-climb on single-state changes of a fixed policy, evaluated all at once."""
+    n_states, n_actions = model.n_states, model.n_actions
+    states = np.repeat(np.arange(n_states), n_actions)
+    actions = np.tile(np.arange(n_actions), n_states)
+    for _ in range(10 * n_states):
+        neighbours = np.broadcast_to(policy, (len(states), n_states)).copy()
+        neighbours[np.arange(len(states)), states] = actions
+        scores = _values_of(model, neighbours)
+        best = int(np.argmax(scores))
+        if not scores[best] > value + 1e-12:
+            break
+        policy, value = neighbours[best], float(scores[best])
+    return policy, value
+
+
+def _values_of(model: FiniteMDP, policies: np.ndarray) -> FloatArray:
+    """The exact values (over the model's limit) of many fixed policies `[C, S]` at once."""
+    horizon = model.horizon or 0
+    count, n_states = policies.shape
+    rows = np.arange(n_states)[None, :]
+    reward = model.expected_reward[rows, policies]  # [C, S]
+    prob = model.continue_prob[rows, policies]  # [C, S, K]
+    nxt = model.next_state[rows, policies]  # [C, S, K]
+    v = np.zeros((count, n_states))
+    which = np.arange(count)[:, None, None]
+    for _ in range(horizon):
+        v = reward + (prob * v[which, nxt]).sum(axis=2)
+    weight = model.initial
+    return v @ weight
+
+
+class ModelGame(Game):
+    """A game whose exact model is its env's transition table (see the module docstring).
+
+    Subclasses name the game and may override `base_model` (a model of their
+    own), `state_of` (the current state of a built env) and `episode_limit`.
+    """
+
+    render_mode: str | None = "ansi"
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.states = DiscreteStates(self)
+        self.oracle = ModelOracle(self)
+
+    def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP | NotAvailable:
+        """The game's model with no wrappers and no episode limit (kept per arguments)."""
+        make = self.make_kwargs(kwargs)
+        return _table_model(self.env_id, freeze(make), tuple(self.action_names))
+
+    def gap_tolerance(self, kwargs: Mapping[str, Any]) -> float:
+        """The share of the optimum's magnitude a trained greedy policy's gap stays within."""
+        return 0.01
+
+    def own_changes(self, kwargs: Mapping[str, Any]) -> GameChanges:
+        """The game as `gym.make` builds it with no wrappers chosen: its own limit only."""
+        return GameChanges(time_limit=self.episode_limit(kwargs))
+
+    def state_of(self, env: Any) -> int | None:
+        """The current state of a built env (None before the first reset)."""
+        try:
+            state = env.unwrapped.s
+        except UNREADABLE:
+            return None
+        return None if state is None else int(state)
+
+    def batched_form(self, kwargs: Mapping[str, Any]) -> Any:
+        model = self.base_model(kwargs)
+        if isinstance(model, NotAvailable):
+            return model
+        from tui_gym.core.vector.model import model_form
+
+        return model_form(self.title, model)

@@ -1,0 +1,69 @@
+"""`TextBoard`: a game drawn as its own text picture, for envs with no board of their own.
+
+The scene is `{"text": picture, "state": n, "actions": [names]}`: the env's
+text render (colour codes removed), its state number, and the names of its
+actions. The picture is drawn as it is, centred, with the actions and the
+keys that take them under it. Keys: a digit takes the action of that number,
+n or r starts a new episode at any time, Enter once the episode is over.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+from rich.text import Text
+from textual.binding import Binding, BindingType
+
+from tui_gym.ui.widgets.boards import Board
+
+ACTION_GROUP = Binding.Group("Act")
+
+
+class TextBoard(Board):
+    """Any game's text picture; digits take actions."""
+
+    DEFAULT_CSS = """
+    TextBoard > BoardCanvas { content-align: center middle; }
+    """
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        *(Binding(str(d), f"act('{d}')", f"action {d}", show=False, group=ACTION_GROUP)
+          for d in range(10)),
+        Binding("n,r", "new_episode", "New", key_display="n", tooltip="Start a new episode"),
+        Binding("enter", "next_episode", "Next", show=False),
+    ]
+
+    def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
+        self.border_title = "Game"
+
+    def key_help(self) -> list[tuple[str, str]]:
+        return [
+            ("0-9", "take the action of that number"),
+            ("n / r", "start a new episode (at any time)"),
+            ("enter", "start a new episode once this one is over"),
+        ]
+
+    @property
+    def prompt(self) -> str:
+        return "Press an action's number; r starts over."
+
+    @property
+    def over_hint(self) -> str:
+        return "This episode is over: press n, r or Enter for a new one."
+
+    def action_next_episode(self) -> None:
+        if self.episode_over:
+            self.action_new_episode()
+
+    def picture(self, width: int, height: int) -> Text:
+        scene = self.scene
+        text = str(scene.get("text") or "").rstrip("\n")
+        if not text and scene.get("state") is not None:
+            text = f"state {scene['state']}"
+        lines = text.split("\n") if text else []
+        actions = [str(a) for a in scene.get("actions", [])]
+        if actions:
+            lines += ["", "actions: " + "  ".join(actions[:10]) + "  (press the number)"]
+        picture = Text("\n".join(line[:width] for line in lines[: max(1, height)]))
+        picture.no_wrap = True
+        return picture
