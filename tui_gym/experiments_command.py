@@ -71,7 +71,7 @@ def add_experiment_parsers(sub: Any) -> None:
     """The `compare` and `sweep` sub-commands."""
     names = ", ".join(cls.name for cls in ALGORITHMS)
     compare = sub.add_parser(
-        "compare", help="compare learners over many seeds: mean return with a 95% band",
+        "compare", help="compare learners over many seeds: mean return with a 95%% band",
         description="Every (algorithm, seed) learns from scratch; the per-episode online "
         "return is averaged over seeds with a 95% confidence band, and for games with an "
         "exact model the greedy policy's exact value is followed at checkpoints.",
@@ -196,17 +196,25 @@ def _run_with_progress(
             return run(update, stop)
 
 
-def _number_text(value: float | None, ci: float | None = None, digits: int = 3) -> str:
+def _number_text(value: float | None, ci: float | None = None) -> str:
+    """A figure with 3 significant digits or so, and its 95% interval."""
     if value is None:
         return "—"
+    digits = 3 if abs(value) < 1 else 2 if abs(value) < 10 else 1
     text = f"{value:+.{digits}f}"
     return f"{text} ± {ci:.{digits}f}" if ci is not None else text
 
 
 def _settings_text(hp: dict[str, Any]) -> str:
-    keys = ("learning_rate", "epsilon_start", "epsilon_final", "discount")
-    short = {"learning_rate": "α", "epsilon_start": "ε₀", "epsilon_final": "ε₁", "discount": "γ"}
-    return " ".join(f"{short[k]}={hp[k]:g}" for k in keys if k in hp)
+    parts = []
+    if "learning_rate" in hp:
+        parts.append(f"α={hp['learning_rate']:g}")
+    if "epsilon_start" in hp and "epsilon_final" in hp:
+        start, final = hp["epsilon_start"], hp["epsilon_final"]
+        parts.append(f"ε={start:g}" if start == final else f"ε={start:g}→{final:g}")
+    if "discount" in hp:
+        parts.append(f"γ={hp['discount']:g}")
+    return " ".join(parts)
 
 
 # --- compare -------------------------------------------------------------------------------
@@ -268,12 +276,12 @@ def _compare_table(result: Any) -> Table:
     table = Table(title=title, title_justify="left")
     table.add_column("algorithm", style="bold")
     table.add_column("settings")
-    table.add_column("online return, last 10% (95% CI)", justify="right")
+    table.add_column("return, last 10%", justify="right")
     has_exact = any(o.exact_value is not None for o in result.outcomes)
     if has_exact:
         table.add_column("greedy exact value", justify="right")
-        table.add_column("exact gap", justify="right")
-    table.add_column("seeds done", justify="right")
+        table.add_column("gap", justify="right")
+    table.add_column("seeds", justify="right")
     from tui_gym.terminal_chart import PALETTE
 
     for k, o in enumerate(result.outcomes):
@@ -299,7 +307,7 @@ def _compare_chart(result: Any, width: int) -> Text:
     window = max(o.smoothing for o in result.outcomes)
     smoothed = f", each seed's averaged over its last {window} episodes" if window > 1 else ""
     chart = band_chart(series, width, 14, y_label=f"online return per episode, mean of "
-                       f"{result.spec.seeds} seeds{smoothed}")
+                       f"{result.spec.seeds} seeds{smoothed}", skip_start=True)
     exact = [o for o in result.outcomes if o.exact_curve is not None]
     if exact:
         chart.append("\n\n")
@@ -395,13 +403,13 @@ def _sweep_table(result: Any) -> Table:
     table = Table(title=title, title_justify="left")
     for key in spec.grid:
         table.add_column(key, justify="right", style="bold")
-    table.add_column("online return, last 10% (95% CI)", justify="right")
+    table.add_column("return, last 10%", justify="right")
     has_exact = any(p.outcome is not None and p.outcome.exact_value is not None
                     for p in result.points)
     if has_exact:
         table.add_column("greedy exact value", justify="right")
-        table.add_column("exact gap", justify="right")
-    table.add_column("seeds done", justify="right")
+        table.add_column("gap", justify="right")
+    table.add_column("seeds", justify="right")
     best = max((v for p in result.points if (v := _figure_of(p.outcome)) is not None),
                default=None)
     for point in result.points:

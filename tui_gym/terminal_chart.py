@@ -76,8 +76,13 @@ def band_chart(
     *,
     x_label: str = "episode",
     y_label: str = "",
+    skip_start: bool = False,
 ) -> Text:
-    """The chart of `series` in `width` x `height` character cells of plot, plus axes and legend."""
+    """The chart of `series` in `width` x `height` character cells of plot, plus axes and legend.
+
+    With `skip_start` the y range fits the curves after their first 5%, and points
+    beyond it are drawn on its edge (the legend says so).
+    """
     shown = [s for s in series if len(s.x)]
     if not shown:
         return Text("(nothing to plot yet)")
@@ -98,9 +103,15 @@ def band_chart(
             lo = _fill_gaps(_binned(x, np.asarray(s.lo, dtype=np.float64), edges))
             hi = _fill_gaps(_binned(x, np.asarray(s.hi, dtype=np.float64), edges))
         binned.append((mean, lo, hi))
-    everything = np.concatenate([a for b in binned for a in b if a is not None])
+    # The y range leaves out the first columns when they alone would stretch it (early
+    # learning curves start far below where they end): those points sit on the edge.
+    skip = columns // 20 if skip_start else 0
+    everything = np.concatenate([a[skip:] for b in binned for a in b if a is not None])
     everything = everything[np.isfinite(everything)]
     y_min, y_max = (float(everything.min()), float(everything.max())) if everything.size else (0, 1)
+    whole = np.concatenate([a for b in binned for a in b if a is not None])
+    whole = whole[np.isfinite(whole)]
+    clipped = bool(whole.size) and (whole.min() < y_min or whole.max() > y_max)
     if y_max == y_min:
         y_min, y_max = y_min - 1, y_max + 1
 
@@ -169,6 +180,9 @@ def band_chart(
         text.append("   ")
     if any(lo is not None for _, lo, _ in binned):
         text.append(f"{BAND * 2} 95% band", style="dim")
+    if clipped:
+        note = "(the first episodes go off the scale: drawn on its edge)"
+        text.append("\n" + " " * (pad + 2) + note, style="dim")
     return text
 
 

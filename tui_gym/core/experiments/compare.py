@@ -64,6 +64,7 @@ from tui_gym.core.wrappers import WrapperChoice
 __all__ = [
     "JSON_CURVE_POINTS",
     "AlgorithmOutcome",
+    "CompareError",
     "CompareProgress",
     "CompareResult",
     "CompareSpec",
