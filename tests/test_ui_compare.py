@@ -166,13 +166,17 @@ async def test_launch_fields_are_checked(tmp_path: Path) -> None:
         await pilot.pause()
         view.query_one("#compare-seeds").value = "ten"
         view.query_one("#compare-episodes").value = "0"
-        await pilot.press("l")
+        view.query_one("#compare-episodes").focus()
+        await pilot.press("enter")  # in a field, enter launches
         await pilot.pause()
         assert view.job is None
         assert view.message == (
             "Not started: Seeds: a whole number from 1 to 1,000 (got 'ten'); "
             "Episodes: a whole number from 1 to 10,000,000 (got '0')."
         )
+        await pilot.press("escape")  # back to the list, where l launches
+        await pilot.pause()
+        assert app.focused is view.run_list
 
 
 def test_launch_values() -> None:

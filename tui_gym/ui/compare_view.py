@@ -206,6 +206,7 @@ class CompareView(Vertical):
         Binding("s", "stop", "Stop", tooltip="Stop the comparison; what finished is kept"),
         Binding("m", "toggle_smoothing", "Smooth", tooltip="Smoothed curves, or as recorded"),
         Binding("r", "reload", "Reload", tooltip="Read the run history again"),
+        Binding("escape", "focus_list", "Back to the runs", show=False),
     ]
 
     def __init__(
@@ -378,6 +379,7 @@ class CompareView(Vertical):
             ("s", "stop the comparison; what finished is recorded"),
             ("m", "smoothed curves (a trailing mean over a tenth of each) / as recorded"),
             ("r", "read the run history again (runs recorded elsewhere)"),
+            ("esc", "leave a field or a button: back to the list of runs"),
         ]
 
     # --- the history ---------------------------------------------------------------
@@ -566,6 +568,10 @@ class CompareView(Vertical):
     def action_stop(self) -> None:
         if not self.stop_comparison():
             self._say("No comparison is running.")
+
+    def action_focus_list(self) -> None:
+        """Leave a field or a button: the keys go to the list of runs again."""
+        self.focus_default()
 
     def action_reload(self) -> None:
         self._load_runs()
