@@ -391,8 +391,8 @@ def table(results: BenchResults) -> Table:
                 _num(found.mcp_together.steps_per_second, ",.0f"),
                 f"≥ {MCP_STEPS_TARGET:,.0f}", "mcp_steps_per_second")
             row("  one call at a time", _num(found.mcp_one.steps_per_second, ",.0f"))
-    for label, value, target, key in history.rows(results.history):
-        row(label, value, target, key)
+    for label, value, target, verdict_key in history.rows(results.history):
+        row(label, value, target, verdict_key)
     for stage, error in results.errors.items():
         out.add_row(f"{stage} failed", f"[red]{error}[/]", "", _STYLE[MISSING])
     return out
