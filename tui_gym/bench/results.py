@@ -10,6 +10,7 @@ from tui_gym.bench.learners import AlgorithmSpeed, PlanningResult
 from tui_gym.bench.live import DEFAULT_RUNNER, LiveResult
 from tui_gym.bench.memory import MemoryResult
 from tui_gym.bench.programs import ProgramsResult
+from tui_gym.bench.seeds import SeedsSpeed
 from tui_gym.bench.startup import StartupResult
 from tui_gym.bench.throughput import ThroughputResult
 
@@ -39,6 +40,7 @@ class BenchResults:
     planning: PlanningResult | None = None  # Dyna-Q against Q-learning, real episodes
     programs: ProgramsResult | None = None
     history: HistoryResult | None = None  # the run history's overhead and size
+    seeds: SeedsSpeed | None = None  # `compare` against the same learners in a loop
     errors: dict[str, str] = field(default_factory=dict)  # stage -> what went wrong
     default_runner: str = DEFAULT_RUNNER
 

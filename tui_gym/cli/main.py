@@ -168,6 +168,9 @@ def build_parser() -> argparse.ArgumentParser:
     add_replay_parser(sub)
     add_serve_parser(sub)
     add_runs_parser(sub)
+    from tui_gym.experiments_command import add_experiment_parsers
+
+    add_experiment_parsers(sub)
 
     screenshots = sub.add_parser("screenshots", help="write the app's SVG screenshots")
     screenshots.add_argument("directory", nargs="?", default="screenshots", metavar="DIR")
@@ -200,11 +203,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command is None:
             return _run_app(args)
         from tui_gym.cli.commands import COMMANDS
+        from tui_gym.experiments_command import EXPERIMENT_COMMANDS
         from tui_gym.replay_command import REPLAY_COMMANDS
         from tui_gym.runs_command import RUNS_COMMANDS
         from tui_gym.web import SERVE_COMMANDS
 
-        commands = {**COMMANDS, **REPLAY_COMMANDS, **SERVE_COMMANDS, **RUNS_COMMANDS}
+        commands = {**COMMANDS, **REPLAY_COMMANDS, **SERVE_COMMANDS, **RUNS_COMMANDS,
+                    **EXPERIMENT_COMMANDS}
         code = commands[args.command](args, out)
         sys.stdout.flush()  # a closed pipe shows here, not at exit
         return code
