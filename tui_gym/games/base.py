@@ -479,6 +479,9 @@ class Game:
     bench_kwargs: dict[str, Any] | None = None
     bench_gap: float | None = None
     demo_wrappers: tuple[str, ...] = ()  # wrapper specs a screenshot of the panel ticks
+    # Settings and episodes of the comparison of Q-learning and SARSA a screenshot of the
+    # Compare view records (None: the screenshot compares on another game).
+    demo_compare: tuple[Mapping[str, Any], int] | None = None
     # Hyperparameters that learn this game well, over each algorithm's own defaults:
     # "*" for every algorithm, then an algorithm's registry name for its own (see the README).
     hyperparameters: ClassVar[Mapping[str, Mapping[str, Any]]] = {}

@@ -1,4 +1,4 @@
-"""The Textual app: a Play view, a Train view and a wrapper side panel over one Session.
+"""The Textual app: Play, Train and Compare views and a wrapper side panel over one Session.
 
 `TuiGymApp` owns the `Session` (env, wrappers, agent, trainer) and the runner
 that trains it (in a child process, as `tui-gym` opens it, or on a worker
@@ -49,6 +49,7 @@ from tui_gym.core.storage import StorageError
 from tui_gym.core.training import continue_run
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games import GAMES, Game, game_for, game_named
+from tui_gym.ui.compare_view import CompareView
 from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.file_screen import FileScreen
 from tui_gym.ui.help_screen import HelpScreen
@@ -95,6 +96,8 @@ class TuiGymApp(App[int]):
         Binding("minus,underscore", "slower", "Slower", key_display="-"),
         Binding("p", "show_view('play')", "Play", tooltip="Play the game yourself"),
         Binding("t", "show_view('train')", "Train", tooltip="Watch the agent learn"),
+        Binding("v", "show_view('compare')", "Compare",
+                tooltip="Compare learners across seeds; the runs recorded for this game"),
         Binding("question_mark,f1", "help", "Help", key_display="?"),
         Binding("q", "quit", "Quit"),
         Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
@@ -122,6 +125,7 @@ class TuiGymApp(App[int]):
         record: str | Path | None = None,
         replay: Recording | None = None,
         run_log: SessionRunLog | None = None,
+        db: str | Path | None = None,
     ) -> None:
         """`runner` is "thread" (train on a worker thread) or "process" (a child process;
         what `tui-gym` opens). `tune_gc` applies `tune_gc_for_ui` at mount (for a
@@ -132,7 +136,9 @@ class TuiGymApp(App[int]):
         traceback is left to `run_app` to log instead of being printed.
         `record` records the person's games to that file from the start (ctrl+r
         turns recording on and off); `replay` opens on a recording's replay; `run_log`
-        keeps every run trained here in the run history."""
+        keeps every run trained here in the run history. `db` is the run history the
+        Compare view reads and records into (None: `TUI_GYM_DB`, else the user's data
+        folder)."""
         super().__init__()
         self.tune_gc = tune_gc
         self.gc_seconds = gc_seconds or (YOUNG_GC_SECONDS, FULL_GC_SECONDS)
@@ -155,6 +161,8 @@ class TuiGymApp(App[int]):
         self._record_at_start = record is not None
         self._replay = replay
         self.run_log = run_log
+        self.db = db
+        self._compare: CompareView | None = None
 
     # --- layout ------------------------------------------------------------
     def get_default_screen(self) -> Screen:
@@ -210,12 +218,17 @@ class TuiGymApp(App[int]):
         return self.query_one(TrainView)
 
     @property
+    def compare_view(self) -> CompareView | None:
+        """The Compare view, once it has been shown (it is built the first time)."""
+        return self._compare
+
+    @property
     def side_panel(self) -> SidePanel:
         return self.query_one(SidePanel)
 
     @property
     def current_view(self) -> str:
-        """"play" or "train" (asked often: by every binding check and every tick)."""
+        """"play", "train" or "compare" (asked often: by every binding check and every tick)."""
         switcher = self._switcher
         if switcher is None or not switcher.is_attached:  # not yet, or being taken apart
             return "play"
@@ -257,9 +270,22 @@ class TuiGymApp(App[int]):
     def action_show_view(self, view: str) -> None:
         if self._switcher is None:
             return
+        compare = self._compare
+        if view != "compare" and compare is not None and compare.stop_comparison():
+            self.notify("Comparison stopped: what finished is recorded.", timeout=4)
+        if view == "compare" and compare is None:
+            # Built the first time it shows: most runs of the app never open it.
+            compare = self._compare = CompareView(id="compare", db=self.db)
+            self._switcher.mount(compare)  # it reads the history and takes the focus at mount
         self._switcher.current = view
+        self._main_screen.set_class(view == "compare", "-view-compare")
         if view == "play":
             self.play_view.focus_board()
+        elif view == "compare":
+            assert compare is not None
+            if compare.is_mounted:
+                compare.reload(fresh=True)
+                compare.focus_default()
         else:
             self._last_version = -1
             self.train_view.focus_default()
@@ -274,12 +300,15 @@ class TuiGymApp(App[int]):
         self.switch_game(game)
 
     def action_focus_wrappers(self) -> None:
+        self._main_screen.remove_class("-view-compare")  # the compact Compare view hides it
         self.side_panel.focus_wrappers()
 
     def action_focus_view(self) -> None:
         """Give the keyboard back to the view shown (its board, or the heatmap)."""
         if self.current_view == "play":
             self.play_view.focus_board()
+        elif self.current_view == "compare" and self._compare is not None:
+            self._compare.focus_default()
         else:
             self.train_view.focus_default()
 
@@ -289,6 +318,7 @@ class TuiGymApp(App[int]):
             self.action_focus_view()
 
     def on_side_panel_left(self, message: SidePanel.Left) -> None:
+        self._main_screen.set_class(self.current_view == "compare", "-view-compare")
         self.action_focus_view()
 
     # --- one session per game -------------------------------------------------
@@ -364,6 +394,8 @@ class TuiGymApp(App[int]):
         self._last_version = -1
         self.play_view.reload()
         self.train_view.reload()
+        if self._compare is not None:
+            self._compare.reload()
         self.side_panel.reload()
 
     def _episodes_trained(self) -> int:
@@ -717,7 +749,7 @@ class TuiGymApp(App[int]):
         """Every key, grouped by where it works: (section, [(key, what it does)])."""
         sections = [
             ("Everywhere", [
-                ("p / t", "Play view / Train view"),
+                ("p / t / v", "Play view / Train view / Compare view"),
                 (" / ".join(g.key for g in GAMES if g.key),
                  "switch game: " + ", ".join(g.title for g in GAMES if g.key)
                  + " (each keeps its agent, settings and curves)"),
@@ -741,6 +773,7 @@ class TuiGymApp(App[int]):
                 ("+ / -", "faster / slower (animated ... max)"),
                 *self.train_view.key_help(),
             ]),
+            ("Compare", CompareView.key_help()),
             ("Side panel", [
                 ("tab / shift+tab", "move between fields"),
                 ("space / enter", "tick a wrapper, press a button, pick a game or an "
@@ -767,6 +800,8 @@ class TuiGymApp(App[int]):
         commands = [
             ("Play view", "Play the game yourself", lambda: self.action_show_view("play")),
             ("Train view", "Watch the agent learn", lambda: self.action_show_view("train")),
+            ("Compare view", "Compare learners across seeds; this game's recorded runs",
+             lambda: self.action_show_view("compare")),
             *(
                 (f"Game: {g.title}", g.description,
                  lambda name=g.name: self.action_switch_game(name))
@@ -795,6 +830,8 @@ class TuiGymApp(App[int]):
 
     async def action_quit(self) -> None:
         self.recording.turn_off()
+        if self._compare is not None:
+            self._compare.stop_comparison()  # it records what finished while the app ends
         self.exit(0)  # the runner closes at unmount, without holding the screen up
 
     def on_unmount(self) -> None:
@@ -922,7 +959,7 @@ def run_app(
         run_log = SessionRunLog(resolve_db_path(db))
     return run_standalone(
         TuiGymApp(session, runner=runner, tune_gc=True, gc_seconds=gc_seconds, standalone=True,
-                  record=record, replay=replay, run_log=run_log)
+                  record=record, replay=replay, run_log=run_log, db=db)
     )
 
 

@@ -89,6 +89,9 @@ class CliffWalkingGame(TileGame):
     theme = "cliff"
     floor_word = "ground"
     bench_kwargs: dict[str, Any] | None = {}
+    # Sutton & Barto's Example 6.6: SARSA's online return above Q-learning's at ε = 0.1.
+    demo_compare = ({"epsilon_start": 0.1, "epsilon_final": 0.1, "learning_rate": 0.5,
+                     "learning_rate_schedule": "constant"}, 500)
 
     def __init__(self) -> None:
         super().__init__()
