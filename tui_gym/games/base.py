@@ -472,6 +472,7 @@ class Game:
     board: str = "text"  # which kind of board draws `states.scene`
     render_mode: str | None = None  # the env's text render mode, if it has one
     episode_noun: str = "episode"  # what people call one episode, e.g. "hand"
+    editable: bool = False  # whether the app's map editor edits its maps
 
     def __init__(self) -> None:
         self.states: StateSpace = StateSpace(self)
@@ -512,6 +513,11 @@ class Game:
     def make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         """What `gym.make` takes for these (normalized) arguments."""
         return dict(kwargs)
+
+    def make_id(self, env_id: str, kwargs: Mapping[str, Any]) -> str:
+        """The id `gym.make` builds for these arguments: `env_id` (the one asked for),
+        unless they need another env (an edited map)."""
+        return env_id
 
     def default_hyperparameters(self, kwargs: Mapping[str, Any] | None = None) -> Hyperparameters:
         """Hyperparameters that learn this game well with these arguments (see the README)."""
