@@ -514,6 +514,16 @@ class Game:
         """What `gym.make` takes for these (normalized) arguments."""
         return dict(kwargs)
 
+    def with_map(self, kwargs: Mapping[str, Any], grid_map: Any) -> dict[str, Any]:
+        """The arguments that play `grid_map` (a `games.maps.GridMap`), the others kept;
+        `ValueError` when this game plays no such map."""
+        raise ValueError(f"{self.title} plays on no map; maps are for the grid games")
+
+    def grid_map(self, kwargs: Mapping[str, Any]) -> Any:
+        """The map these arguments play (a `games.maps.GridMap`), None for a game
+        without maps."""
+        return None
+
     def make_id(self, env_id: str, kwargs: Mapping[str, Any]) -> str:
         """The id `gym.make` builds for these arguments: `env_id` (the one asked for),
         unless they need another env (an edited map)."""

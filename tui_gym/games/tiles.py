@@ -34,7 +34,7 @@ from tui_gym.core.mdp import FiniteMDP, NotAvailable
 from tui_gym.envs import TILE_MAP_ID
 from tui_gym.envs.tile_map import STANDING, TileMapEnv, TileRules, cell_key, tile_arrays
 from tui_gym.games.base import UNREADABLE, EvalOutcome, HeatmapLayout, Narrator, TallyWord
-from tui_gym.games.maps import GridMap, MapError, format_map, parse_map
+from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
 from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.words import format_reward, plural
 
@@ -54,12 +54,6 @@ TILE_WORDS = {"S": "start", "F": "floor", "H": "hole", "G": "goal", "C": "cliff"
               "R": "reward cell"}
 NO_DECISION = {"H": "○", "G": "★", "C": "▒", "W": "█"}  # tiles the agent never acts on
 TIED = "·"
-
-
-@lru_cache(maxsize=64)
-def read_layout(text: str) -> GridMap:
-    """An edited map's text as a map (kept: the same text is read once)."""
-    return parse_map(text)
 
 
 @lru_cache(maxsize=32)
@@ -103,7 +97,9 @@ class TileGame(ModelGame):
         return list(self.grid_map(kwargs).cells)
 
     def with_map(self, kwargs: Mapping[str, Any], grid_map: GridMap) -> dict[str, Any]:
-        """The arguments that play `grid_map` (the others kept)."""
+        """The arguments that play `grid_map` (the others kept); `ValueError` when this
+        game cannot play it."""
+        self.check_map(grid_map)
         return {**kwargs, "map": CUSTOM, LAYOUT: format_map(grid_map)}
 
     def check_map(self, grid_map: GridMap) -> None:

@@ -10,6 +10,7 @@
 """
 
 from tui_gym.games.maps.grid_map import MAX_SIDE, TOOLS, GridMap, Tool
-from tui_gym.games.maps.text import MapError, format_map, parse_map
+from tui_gym.games.maps.text import MapError, format_map, parse_map, read_layout
 
-__all__ = ["MAX_SIDE", "TOOLS", "GridMap", "MapError", "Tool", "format_map", "parse_map"]
+__all__ = ["MAX_SIDE", "TOOLS", "GridMap", "MapError", "Tool", "format_map", "parse_map",
+           "read_layout"]

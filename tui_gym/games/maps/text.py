@@ -23,12 +23,13 @@ from __future__ import annotations
 
 import math
 import re
+from functools import lru_cache
 
 from tui_gym.core.params import read_number
 from tui_gym.envs.tile_map import STANDING, TILE_NAMES, TILES, VALUED
 from tui_gym.games.maps.grid_map import MAX_SIDE, Cell, GridMap
 
-__all__ = ["MAX_TEXT", "MapError", "format_map", "parse_map"]
+__all__ = ["MAX_TEXT", "MapError", "format_map", "parse_map", "read_layout"]
 
 MAX_TEXT = 64 << 10  # characters of a map's text, at most
 _HEADER = re.compile(r"(reward|slip)\s+([0-9]+)\s*,\s*([0-9]+)\s*[:=]?\s*(\S+)",
@@ -83,6 +84,12 @@ def parse_map(text: str) -> GridMap:
                           {c: v for c, (v, _) in header["slip"].items()})
     except ValueError as error:  # everything is checked above; kept as one clear line anyway
         raise MapError(str(error)) from None
+
+
+@lru_cache(maxsize=64)
+def read_layout(text: str) -> GridMap:
+    """`parse_map`, kept: the same text (a game's `layout` argument) is read once."""
+    return parse_map(text)
 
 
 def _header_line(line: str, number: int, header: dict[str, dict[Cell, tuple[float, int]]]) -> None:
