@@ -26,6 +26,7 @@ from rich.console import Console
 
 from tui_gym import __version__
 from tui_gym.cli.flags import add_game_flags, add_hyperparameter_flags
+from tui_gym.cli.maps_command import add_maps_parser
 from tui_gym.cli.output import CliError, OutConsole
 from tui_gym.core.params import read_number, shown_value
 
@@ -140,6 +141,7 @@ def build_parser() -> argparse.ArgumentParser:
     envs.add_argument("--json", action="store_true", help="print one JSON object")
     wrappers = sub.add_parser("wrappers", help="list the wrapper catalog and the --wrapper syntax")
     wrappers.add_argument("--json", action="store_true", help="print one JSON object")
+    add_maps_parser(sub)
 
     train = sub.add_parser("train", help="train a Q-learning agent headless")
     train.add_argument("env", metavar="ENV", help=ENV_HELP)
