@@ -473,6 +473,7 @@ class Game:
     render_mode: str | None = None  # the env's text render mode, if it has one
     episode_noun: str = "episode"  # what people call one episode, e.g. "hand"
     editable: bool = False  # whether the app's map editor edits its maps
+    map_tools: tuple[str, ...] = ()  # what the editor paints with (`games.maps.TOOLS` names)
 
     def __init__(self) -> None:
         self.states: StateSpace = StateSpace(self)
@@ -523,6 +524,11 @@ class Game:
         """The map these arguments play (a `games.maps.GridMap`), None for a game
         without maps."""
         return None
+
+    def solution(self, kwargs: Mapping[str, Any]) -> Optimum | NotAvailable:
+        """The optimum with action values per base state where there are any (what the
+        map editor colours and points arrows with): `oracle.optimum` by default."""
+        return self.oracle.optimum(kwargs)
 
     def make_id(self, env_id: str, kwargs: Mapping[str, Any]) -> str:
         """The id `gym.make` builds for these arguments: `env_id` (the one asked for),

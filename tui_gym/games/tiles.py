@@ -75,6 +75,7 @@ class TileGame(ModelGame):
     theme = "plain"  # the tile board's theme: "lake", "cliff" or "plain"
     floor_word = "floor"  # what a floor tile is called
     editable = True  # the app's map editor edits its maps
+    map_tools = ("floor", "wall", "hole", "goal", "start", "reward", "ice", "cliff")
 
     def builtin_cells(self, kwargs: Mapping[str, Any]) -> list[str]:
         """The map the parameters choose, one string a row (S F H G C tiles)."""

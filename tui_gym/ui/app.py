@@ -75,6 +75,7 @@ class TuiGymApp(App[int]):
         Binding("question_mark,f1", "help", "Help", key_display="?"),
         Binding("q", "quit", "Quit"),
         Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
+        Binding("m", "edit_map", "Map", tooltip="Edit a grid game's map while it trains"),
         # A key for each game in the registry (the help and the side panel's picker list them).
         *(Binding(game.key, f"switch_game('{game.name}')", game.title, show=False)
           for game in GAMES if game.key),
@@ -216,6 +217,15 @@ class TuiGymApp(App[int]):
             return
         self.rebuild(env_id=game.env_id)
 
+    def action_edit_map(self) -> None:
+        self.action_show_view("train")
+        self.train_view.open_editor()
+
+    def rebuild_map(self, env_kwargs: dict[str, Any], resized: bool) -> bool:
+        """Play an edited map: the agent and training go on where the states keep their
+        meaning; a new size resets the agent (with a notice) and training goes on."""
+        return self.rebuild(env_kwargs=env_kwargs, quiet=True, keep_running=True)
+
     def action_focus_wrappers(self) -> None:
         self.side_panel.focus_wrappers()
 
@@ -298,8 +308,13 @@ class TuiGymApp(App[int]):
         env_id: str | None = None,
         env_kwargs: dict[str, Any] | None = None,
         choices: Sequence[WrapperChoice] | None = None,
+        *,
+        quiet: bool = False,
+        keep_running: bool = False,
     ) -> bool:
-        """Rebuild the session's env; False (and a message) when it cannot be built."""
+        """Rebuild the session's env; False (and a message) when it cannot be built.
+        `quiet`: no notice when the agent is kept; `keep_running`: training goes on
+        even with a fresh agent."""
         was_running = self.runner.running
         # Never waits on a training process: what it hands back later lands in the
         # agent it was given (kept by a rebuild that keeps it, else dropped).
@@ -318,8 +333,9 @@ class TuiGymApp(App[int]):
         self.train_view.reload()
         self.side_panel.reload()
         severity = "information" if report.kept_agent else "warning"
-        self.notify(report.notice, severity=severity, timeout=6)
-        if was_running and report.kept_agent:
+        if not (quiet and report.kept_agent):
+            self.notify(report.notice, severity=severity, timeout=6)
+        if was_running and (report.kept_agent or keep_running):
             self.runner.start()
         return True
 
@@ -335,6 +351,7 @@ class TuiGymApp(App[int]):
                 *((game.key, f"switch to {game.title}") for game in GAMES if game.key),
                 ("w / W", "focus the wrapper panel (W while a board that moves with WASD "
                           "has focus)"),
+                ("m", "edit the map of a grid game (in the Train view, while it trains)"),
                 ("? / F1", "this help"),
                 ("ctrl+p", "command palette"),
                 ("q", "quit"),

@@ -34,7 +34,7 @@ from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
-from tui_gym.envs.walls import Walls, cell_distances, check_walls
+from tui_gym.envs.walls import Walls, cell_distances, cell_moves, check_walls
 from tui_gym.games.base import (
     EXACT,
     Advice,
@@ -531,6 +531,7 @@ class GridWorldGame(Game):
     board = "grid"
     render_mode = "ansi"
     editable = True
+    map_tools = ("floor", "wall")
 
     def __init__(self) -> None:
         super().__init__()
@@ -546,6 +547,20 @@ class GridWorldGame(Game):
             discount=0.95, learning_rate=0.1, episodes=20_000, epsilon_decay_fraction=0.5
         )
 
+    def solution(self, kwargs: Mapping[str, Any]) -> Optimum:
+        """The optimum with action values: minus the steps to the target after each move
+        (around the walls; a walled-off target counts as `size**2` steps away)."""
+        size, walls = _size(kwargs), _walls(kwargs)
+        optimum = self.oracle.optimum(kwargs)
+        cells = size * size
+        distance = cell_distances(size, walls).astype(np.float64)
+        distance[distance < 0] = cells
+        moves = cell_moves(size, walls)
+        q = np.stack([-1.0 - distance[moves[a]] for a in range(4)], axis=-1).reshape(-1, 4)
+        q[np.eye(cells, dtype=bool).reshape(-1)] = 0.0
+        return Optimum(optimum.value, optimum.summary, q=q,
+                       marks=self.oracle.optimal_marks(kwargs), figures=optimum.figures)
+
     def normalize_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         """As `Game.normalize_kwargs`, with the walls: `layout` (a square map of F and W,
         whose side is the size) or `walls` (a list of (x, y) cells)."""
@@ -557,6 +572,8 @@ class GridWorldGame(Game):
                 grid_map = read_layout(str(layout))
             except MapError as error:
                 raise ValueError(f"GridWorld map: {error}") from None
+            if "size" in rest and _size(out) != grid_map.rows:  # a new size crops or extends
+                grid_map = grid_map.resized(_size(out), _size(out))
             return self.with_map(out, grid_map)
         if walls:
             size = _size(out)
