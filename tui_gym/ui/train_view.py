@@ -328,9 +328,11 @@ class TrainView(VerticalScroll):
         if solution.q is not None:
             panels = game.layout.heatmaps(solution.q, kwargs, self.focus_target, solution.marks)
         took = (time.perf_counter() - started) * 1000
-        what = "mean steps" if "optimal_mean_steps" in solution.figures else "return"
-        self._editor.show(grid_map, panels,
-                          f"exact optimum {solution.value:+.4f} ({what}), solved in {took:.0f} ms")
+        if "optimal_mean_steps" in solution.figures:
+            figure = f"{solution.value:.3f} steps on average"
+        else:
+            figure = f"{solution.value:+.4f} return"
+        self._editor.show(grid_map, panels, f"exact optimum {figure}, solved in {took:.0f} ms")
 
     @on(MapEditor.Changed)
     def _map_changed(self, event: MapEditor.Changed) -> None:

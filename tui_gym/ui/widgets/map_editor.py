@@ -36,6 +36,7 @@ __all__ = ["MapCanvas", "MapEditor"]
 
 TILE_MARKS = {"S": "S", "R": "$"}  # tiles drawn with a letter beside the arrow
 ICE = "~"
+WIDE_MAP = 8  # columns, beyond which a cell shows its mark alone
 HISTORY = 200  # edits undo remembers
 VALUE_STEP = {"reward": 1.0, "slip": 0.1}
 
@@ -169,17 +170,28 @@ class MapEditor(Vertical):
         if panel.shape != (grid_map.rows, grid_map.cols):
             return panel
         slip = grid_map.slip_table()
+        # A wide map keeps one character a cell (the mark instead of the arrow), so that
+        # twelve columns fit beside the side panel at 80 columns.
+        wide = grid_map.cols > WIDE_MAP
         labels = []
         for r, line in enumerate(panel.labels):
             row = []
             for c, label in enumerate(line):
                 tile = grid_map.tile((r, c))
-                text = TILE_MARKS.get(tile, "") + label
-                if slip.get((r, c), 0.0) > 0:
-                    text += ICE
+                mark = TILE_MARKS.get(tile, "")
+                iced = slip.get((r, c), 0.0) > 0
+                if wide:
+                    text = mark or (ICE if iced else label)
+                else:
+                    text = mark + label + (ICE if iced else "")
                 row.append(text)
             labels.append(tuple(row))
-        legend = "S start  $ reward cell  ~ ice  " + panel.legend.replace(
+        present = [word for mark, word, here in (
+            ("S", "start", grid_map.start is not None),
+            ("$", "reward cell", "R" in grid_map.tiles()),
+            (ICE, "ice", bool(slip)),
+        ) if here for word in [f"{mark} {word}"]]
+        legend = "  ".join(present) + "  " + panel.legend.replace(
             "* not an optimal move", "").replace("  * off every shortest path", "")
         return replace(panel, title="the exact optimum: value and optimal move",
                        labels=tuple(labels), legend=legend.strip())
