@@ -147,3 +147,14 @@ def test_cli_sees_the_same_maps(tmp_path: Path, capsys: pytest.CaptureFixture[st
     assert code == 0 and json.loads(out)["goal_reachable"]
     code, out, err = run(capsys, "optimal", "blackjack", "--map-file", str(path))
     assert code == 2 and "--map-file applies to" in err
+
+
+def test_the_edit_to_optimum_figure_exists() -> None:
+    from tui_gym.bench.map_edit import BUDGET_MS, measure
+
+    results = measure(edits=4)
+    assert {r.game for r in results} == {"FrozenLake", "CliffWalking"}
+    for result in results:
+        assert result.size == "12x12" and result.edits == 4 and result.kept_agent
+        assert 0 < result.median_ms <= result.worst_ms
+        assert BUDGET_MS == 50.0
