@@ -131,6 +131,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--env", default="", help="game to open (default: the first of `envs`)")
     parser.add_argument("--seed", type=_seed, default=0, help="seed for every random thing")
     parser.add_argument("--load", metavar="PATH", help="open a saved agent")
+    parser.add_argument("--map-file", metavar="PATH", dest="app_map_file",
+                        help="open a grid game (--env) on the map in this file")
     parser.add_argument(
         "--runner", choices=("process", "thread"), default="process",
         help="train in a child process (default) or on a thread of the app's process",
@@ -245,8 +247,17 @@ def _run_app(args: argparse.Namespace) -> int:
     from tui_gym.games import resolve_env_id
 
     env_id = resolve_env_id(args.env) if args.env else None
+    env_kwargs = None
+    if args.app_map_file:
+        from tui_gym.cli.flags import map_kwargs
+        from tui_gym.games import GAMES, game_for
+
+        game = game_for(env_id) if env_id else GAMES[0]
+        env_kwargs = map_kwargs(args.app_map_file, game, {})
+        env_id = env_id or game.env_id
     try:
         from tui_gym.ui.app import run_app
     except ImportError as exc:  # pragma: no cover - only without the UI installed
         raise CliError(f"the app is not available ({exc}); try `tui-gym --help`") from None
-    return run_app(env_id=env_id, seed=args.seed, load=args.load, runner=args.runner)
+    return run_app(env_id=env_id, seed=args.seed, load=args.load, runner=args.runner,
+                   env_kwargs=env_kwargs)

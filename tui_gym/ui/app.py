@@ -502,11 +502,13 @@ EXIT_CRASH = 1
 
 
 def run_app(
-    env_id: str | None = None, seed: int = 0, load: str | None = None, runner: str = "process"
+    env_id: str | None = None, seed: int = 0, load: str | None = None, runner: str = "process",
+    env_kwargs: dict[str, Any] | None = None,
 ) -> int:
     """Open the app (from a saved agent with `load`); returns the exit code."""
     gc_seconds = gc_seconds_from_env()
-    session = Session.load(load) if load else Session(env_id=env_id or "", seed=seed)
+    session = Session.load(load) if load else Session(env_id=env_id or "", seed=seed,
+                                                      env_kwargs=env_kwargs or {})
     return run_standalone(
         TuiGymApp(session, runner=runner, tune_gc=True, gc_seconds=gc_seconds, standalone=True)
     )

@@ -21,6 +21,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any, ClassVar
 
+import numpy as np
 from textual import events
 from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
@@ -193,8 +194,10 @@ class MapEditor(Vertical):
         ) if here for word in [f"{mark} {word}"]]
         legend = "  ".join(present) + "  " + panel.legend.replace(
             "* not an optimal move", "").replace("  * off every shortest path", "")
+        # Every arrow here is an optimal move: nothing to mark.
         return replace(panel, title="the exact optimum: value and optimal move",
-                       labels=tuple(labels), legend=legend.strip())
+                       labels=tuple(labels), legend=legend.strip(),
+                       marked=np.zeros(panel.shape, dtype=bool))
 
     def _show_tools(self) -> None:
         parts = []
