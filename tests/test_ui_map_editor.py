@@ -40,8 +40,10 @@ async def test_paint_undo_and_the_optimum_on_a_small_cliff() -> None:
         await pilot.pause()
         await pilot.press("m")
         view = app.query_one(TrainView)
+        await wait_for(pilot, lambda: view.editor is not None and view.editor.canvas.has_focus,
+                       "the editor")
         editor = view.editor
-        await wait_for(pilot, lambda: editor.display and editor.canvas.has_focus, "the editor")
+        assert editor is not None
         assert "exact optimum -3.0000 return" in status(editor)
 
         await pilot.press("down", "right", "2")  # a wall at row 1, col 1: the top way is left

@@ -217,9 +217,9 @@ class TuiGymApp(App[int]):
             return
         self.rebuild(env_id=game.env_id)
 
-    def action_edit_map(self) -> None:
+    async def action_edit_map(self) -> None:
         self.action_show_view("train")
-        self.train_view.open_editor()
+        await self.train_view.open_editor()
 
     def rebuild_map(self, env_kwargs: dict[str, Any], resized: bool) -> bool:
         """Play an edited map: the agent and training go on where the states keep their

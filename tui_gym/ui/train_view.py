@@ -203,7 +203,7 @@ class TrainView(VerticalScroll):
         self._caption = Label("", id="train-board-caption")
         self._heatmap_box = Vertical(id="train-heatmap-box")
         self._heatmap = HeatmapView(id="train-heatmaps")
-        self._editor = MapEditor(id="train-editor")
+        self._editor: MapEditor | None = None  # mounted when first opened
 
         with Horizontal(id="train-controls"):
             yield self._toggle
@@ -221,7 +221,6 @@ class TrainView(VerticalScroll):
             yield self._charts
             with self._board_box:
                 yield self._caption
-        yield self._editor
         with self._heatmap_box:
             yield self._heatmap
 
@@ -244,7 +243,7 @@ class TrainView(VerticalScroll):
         return self._heatmap
 
     @property
-    def editor(self) -> MapEditor:
+    def editor(self) -> MapEditor | None:
         return self._editor
 
     @property
@@ -285,7 +284,7 @@ class TrainView(VerticalScroll):
         self._state = ""
         self.show_speed(runner.speed.name)
         self.show_snapshot(runner.latest, runner)
-        if self.editing_map:
+        if self.editing_map and self._editor is not None:
             if not game.editable:
                 self.close_editor()
             else:
@@ -295,13 +294,16 @@ class TrainView(VerticalScroll):
                 self._show_editor()
 
     # --- the map editor ----------------------------------------------------
-    def open_editor(self) -> bool:
+    async def open_editor(self) -> bool:
         """Show the map editor with the keyboard on it; False when the game has no map."""
         game = self.session.game
         if not game.editable:
             self.app.notify(f"{game.title} has no map to edit; the grid games do.",
                             severity="warning", timeout=4)
             return False
+        if self._editor is None:
+            self._editor = MapEditor(id="train-editor")
+            await self.mount(self._editor, before=self._heatmap_box)
         self._editor.start(game.grid_map(self.session.env_kwargs), game.map_tools)
         self._editor_game = game.name
         self.add_class("-mapping")
@@ -316,6 +318,8 @@ class TrainView(VerticalScroll):
     def _show_editor(self) -> None:
         from tui_gym.core.mdp import NotAvailable
 
+        if self._editor is None:
+            return
         session = self.session
         game, kwargs = session.game, session.env_kwargs
         grid_map = game.grid_map(kwargs)
@@ -342,11 +346,11 @@ class TrainView(VerticalScroll):
             kwargs = session.game.with_map(session.env_kwargs, event.grid_map)
         except ValueError as error:
             self.app.notify(str(error), severity="warning", timeout=4)
-            self._editor.drop_last()
+            event.editor.drop_last()
             return
         rebuild = getattr(self.app, "rebuild_map", None)
         if rebuild is None or not rebuild(kwargs, event.resized):
-            self._editor.drop_last()
+            event.editor.drop_last()
             self._show_editor()
 
     @on(MapEditor.SaveAsked)

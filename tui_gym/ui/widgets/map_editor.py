@@ -97,8 +97,10 @@ class MapEditor(Vertical):
     class Changed(Message):
         """A new map: painted, resized, undone or redone."""
 
-        def __init__(self, grid_map: GridMap, resized: bool, what: str) -> None:
+        def __init__(self, editor: MapEditor, grid_map: GridMap, resized: bool,
+                     what: str) -> None:
             super().__init__()
+            self.editor = editor
             self.grid_map = grid_map
             self.resized = resized
             self.what = what  # the edit in words, e.g. "wall at row 1, col 2"
@@ -240,7 +242,7 @@ class MapEditor(Vertical):
     def _post(self, new: GridMap, old: GridMap, what: str) -> None:
         self.last_edit = what
         resized = (new.rows, new.cols) != (old.rows, old.cols)
-        self.post_message(self.Changed(new, resized, what))
+        self.post_message(self.Changed(self, new, resized, what))
 
     def paint(self, cell: tuple[int, int]) -> None:
         """Paint `cell` with the current tool (a message says why when it cannot)."""
