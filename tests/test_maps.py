@@ -158,3 +158,25 @@ def test_the_edit_to_optimum_figure_exists() -> None:
         assert result.size == "12x12" and result.edits == 4 and result.kept_agent
         assert 0 < result.median_ms <= result.worst_ms
         assert BUDGET_MS == 50.0
+
+
+def test_batched_gridworld_steps_round_walls_as_the_env_does() -> None:
+    from tui_gym.envs.gridworld import GridWorldEnv
+    from tui_gym.games.gridworld.batched import BatchedGridWorld
+
+    walls = ((2, 1), (2, 2), (1, 3))
+    batch = BatchedGridWorld(200, size=5, walls=walls, seed=1)
+    start = batch.reset()
+    assert not any(tuple(r[:2]) in walls or tuple(r[2:]) in walls for r in start.tolist())
+    env = GridWorldEnv(size=5, walls=walls)
+    rng = np.random.default_rng(0)
+    for _ in range(10):
+        actions = rng.integers(0, 4, size=200)
+        before = batch.state.copy()
+        step = batch.step(actions)
+        for i in range(0, 200, 7):
+            env.reset(options={"agent": tuple(before[i, :2]), "target": tuple(before[i, 2:])})
+            obs, reward, terminated, _, info = env.step(int(actions[i]))
+            assert tuple(obs["agent"]) == tuple(step.next_obs[i, :2])
+            assert (reward, terminated) == (step.reward[i], step.terminated[i])
+            assert info["distance"] == step.info["distance"][i]

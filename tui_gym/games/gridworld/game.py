@@ -617,18 +617,17 @@ class GridWorldGame(Game):
         from tui_gym.core.vector.base import BatchedForm
         from tui_gym.games.gridworld.batched import BatchedGridWorld
 
-        if _walls(kwargs):
-            return NotAvailable("GridWorld with walls has no batched form: the scalar engine "
-                                "plays it")
 
         size = _size(kwargs)
         reward_scale = float(kwargs.get("reward_scale", 1.0))
         step_penalty = float(kwargs.get("step_penalty", 0.0))
 
+        walls = _walls(kwargs)
+
         def make(num_envs: int, seed: Any, max_episode_steps: int | None) -> BatchedGridWorld:
             return BatchedGridWorld(num_envs, size=size, reward_scale=reward_scale,
                                     step_penalty=step_penalty,
-                                    max_episode_steps=max_episode_steps, seed=seed)
+                                    max_episode_steps=max_episode_steps, seed=seed, walls=walls)
 
         return BatchedForm(f"GridWorld {size}x{size}", make, info=("distance",),
-                           key=("gridworld", size, reward_scale, step_penalty))
+                           key=("gridworld", size, reward_scale, step_penalty, walls))
