@@ -341,16 +341,17 @@ class TrainView(VerticalScroll):
     @on(MapEditor.Changed)
     def _map_changed(self, event: MapEditor.Changed) -> None:
         event.stop()
+        event.editor.pending = max(0, event.editor.pending - 1)
         session = self.session
         try:
             kwargs = session.game.with_map(session.env_kwargs, event.grid_map)
         except ValueError as error:
             self.app.notify(str(error), severity="warning", timeout=4)
-            event.editor.drop_last()
+            event.editor.drop_last(session.game.grid_map(session.env_kwargs))
             return
         rebuild = getattr(self.app, "rebuild_map", None)
         if rebuild is None or not rebuild(kwargs, event.resized):
-            event.editor.drop_last()
+            event.editor.drop_last(session.game.grid_map(session.env_kwargs))
             self._show_editor()
 
     @on(MapEditor.SaveAsked)

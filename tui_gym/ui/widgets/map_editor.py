@@ -124,6 +124,7 @@ class MapEditor(Vertical):
         self.redo_stack: list[GridMap] = []
         self.last_edit = ""
         self._optimum_text = ""
+        self.pending = 0  # edits posted that the owner has not taken yet
 
     def compose(self) -> ComposeResult:
         yield Label("", id="editor-tools")
@@ -148,6 +149,7 @@ class MapEditor(Vertical):
         """Edit `grid_map` afresh (forgetting undo) with these tools."""
         self.undo_stack.clear()
         self.redo_stack.clear()
+        self.pending = 0
         self.tools = tuple(t for t in TOOLS if t.name in tool_names)
         if self.tool not in self.tools:
             self.tool = next((t for t in self.tools if t.name == "wall"), self.tools[0])
@@ -155,8 +157,10 @@ class MapEditor(Vertical):
         self.last_edit = ""
 
     def show(self, grid_map: GridMap, panels: list[Heatmap], optimum: str) -> None:
-        """Draw the map and its solved optimum (`panels` from the game's layout)."""
-        self.grid_map = grid_map
+        """Draw the map and its solved optimum (`panels` from the game's layout); while
+        edits are on their way the editor keeps its own, newer map."""
+        if not self.pending:
+            self.grid_map = grid_map
         canvas = self.canvas
         if panels:
             canvas.show([self._dress(panels[0], grid_map)])
@@ -240,6 +244,10 @@ class MapEditor(Vertical):
         self._post(new, old, what)
 
     def _post(self, new: GridMap, old: GridMap, what: str) -> None:
+        # The map is the new one at once: keys that come before the owner has rebuilt
+        # the game edit this map, not the one before.
+        self.grid_map = new
+        self.pending += 1
         self.last_edit = what
         resized = (new.rows, new.cols) != (old.rows, old.cols)
         self.post_message(self.Changed(self, new, resized, what))
@@ -257,12 +265,11 @@ class MapEditor(Vertical):
             return
         self._apply(new, f"{tool.name} at row {cell[0]}, col {cell[1]}")
 
-    def drop_last(self) -> None:
-        """Forget the last edit posted: the owner could not apply it."""
-        if self.last_edit in ("undone", "redone"):
-            return
-        if self.undo_stack:
+    def drop_last(self, shown: GridMap) -> None:
+        """Forget the last edit posted: the owner could not apply it and plays `shown`."""
+        if self.last_edit not in ("undone", "redone") and self.undo_stack:
             self.undo_stack.pop()
+        self.grid_map = shown
         self.last_edit = ""
 
     def action_tool(self, index: int) -> None:
