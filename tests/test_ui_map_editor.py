@@ -69,13 +69,11 @@ async def test_paint_undo_and_the_optimum_on_a_small_cliff() -> None:
         await pilot.press("space")  # training goes on while editing
         await wait_for(pilot, lambda: app.session.trainer.episodes > 0, "some training")
         agent = app.session.agent
-        # A pit of +5 beside the start: falling in pays best (one step, +5).
+        # A pit of +1 beside the start: falling in (one step, +1) beats walking (-3).
         await pilot.press("left", "down", "3")  # a hole at row 1, col 0, at the game's own cost
-        for _ in range(5):
-            await pilot.press("right_square_bracket")  # its reward up to +5
-        await pilot.press("enter")
-        assert editor.grid_map.reward_table() == {(1, 0): 5.0}
-        assert "exact optimum +5.0000 return" in status(editor)
+        await pilot.press("right_square_bracket", "enter")  # its reward up to +1
+        assert editor.grid_map.reward_table() == {(1, 0): 1.0}
+        assert "exact optimum +1.0000 return" in status(editor)
         assert app.session.agent is agent, "a reward edit keeps the agent"
         assert app.runner.running, "training goes on"
 
@@ -85,10 +83,10 @@ async def test_paint_undo_and_the_optimum_on_a_small_cliff() -> None:
         assert any("reset" in n.message for n in app._notifications)
         assert app.runner.running, "training goes on with the fresh agent"
 
-        await pilot.press("escape")
-        assert not view.editing_map
         await pilot.press("space")
         await wait_for(pilot, lambda: not app.runner.running, "training to pause")
+        await pilot.press("escape")
+        assert not view.editing_map
 
 
 async def test_a_game_without_a_map_says_so() -> None:
