@@ -240,7 +240,7 @@ def _perpendicular(a: str, b: str) -> bool:
     return ar * br + ac * bc == 0
 
 
-class TileMapEnv(gym.Env[int, int]):
+class TileMapEnv(gym.Env[Any, Any]):
     """
     Walk a map of tiles from the start to a goal: FrozenLake and CliffWalking on any map.
 

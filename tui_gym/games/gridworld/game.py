@@ -547,19 +547,22 @@ class GridWorldGame(Game):
             discount=0.95, learning_rate=0.1, episodes=20_000, epsilon_decay_fraction=0.5
         )
 
-    def solution(self, kwargs: Mapping[str, Any]) -> Optimum:
+    def solution(self, kwargs: Mapping[str, Any]) -> Optimum | NotAvailable:
         """The optimum with action values: minus the steps to the target after each move
         (around the walls; a walled-off target counts as `size**2` steps away)."""
         size, walls = _size(kwargs), _walls(kwargs)
         optimum = self.oracle.optimum(kwargs)
+        marks = self.oracle.optimal_marks(kwargs)
+        if isinstance(optimum, NotAvailable) or isinstance(marks, NotAvailable):
+            return optimum if isinstance(optimum, NotAvailable) else NotAvailable("no marks")
         cells = size * size
         distance = cell_distances(size, walls).astype(np.float64)
         distance[distance < 0] = cells
         moves = cell_moves(size, walls)
         q = np.stack([-1.0 - distance[moves[a]] for a in range(4)], axis=-1).reshape(-1, 4)
         q[np.eye(cells, dtype=bool).reshape(-1)] = 0.0
-        return Optimum(optimum.value, optimum.summary, q=q,
-                       marks=self.oracle.optimal_marks(kwargs), figures=optimum.figures)
+        return Optimum(optimum.value, optimum.summary, q=q, marks=marks,
+                       figures=optimum.figures)
 
     def normalize_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         """As `Game.normalize_kwargs`, with the walls: `layout` (a square map of F and W,

@@ -195,7 +195,7 @@ class GridMap:
             if tile not in STANDING:
                 cells[cell[0]][cell[1]] = "F"
                 rewards.pop(cell, None)
-            slip[cell] = tool.default if value is None else value
+            slip[cell] = value if value is not None else (tool.default or 0.0)
         else:
             old = self.start
             if tool.tile == "S" and old is not None:
