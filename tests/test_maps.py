@@ -180,3 +180,23 @@ def test_batched_gridworld_steps_round_walls_as_the_env_does() -> None:
             assert tuple(obs["agent"]) == tuple(step.next_obs[i, :2])
             assert (reward, terminated) == (step.reward[i], step.terminated[i])
             assert info["distance"] == step.info["distance"][i]
+
+
+def test_train_and_play_on_a_map_file(tmp_path: Path, capsys, monkeypatch) -> None:
+    import io
+    import sys
+
+    path = tmp_path / "corridor.txt"
+    path.write_text("reward 0,2: 2\nSFRFG\n")
+    code, out, err = run(capsys, "train", "cliffwalking", "--map-file", str(path),
+                         "--episodes", "50", "--eval-episodes", "10", "--json")
+    assert code == 0, err
+    assert json.loads(out)["env_kwargs"]["layout"] == "reward 0,2: 2\nSFRFG\n"
+    lines = ['{"cmd": "reset", "seed": 1}', json.dumps({"cmd": "step", "action": "right"}),
+             json.dumps({"cmd": "step", "action": "right"})]
+    stdin = io.TextIOWrapper(io.BytesIO("".join(f"{line}\n" for line in lines).encode()))
+    monkeypatch.setattr(sys, "stdin", stdin)
+    assert main(["play", "cliffwalking", "--map-file", str(path), "--jsonl"]) == 0
+    answers = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert [a.get("observation") for a in answers] == [0, 1, 2]
+    assert answers[2]["reward"] == 2.0
