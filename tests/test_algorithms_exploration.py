@@ -3,9 +3,9 @@
 Epsilon-greedy picks a random action with probability ε and otherwise the
 best one, ties broken uniformly: the frequencies from a fixed seed sit within
 a few standard errors of those probabilities, in both draw orders, and match
-`policy_probabilities`. The epsilon schedule is the old `Hyperparameters`
-one. Each algorithm's schema has valid defaults and refuses bad values with
-a message that names the field. The package stays free of the UI and of
+`policy_probabilities`. The epsilon schedule is linear, then flat. Each
+algorithm's schema has valid defaults and refuses bad values with a message
+that names the field. The package stays free of the UI and of
 Gymnasium.
 """
 
@@ -24,7 +24,6 @@ from tui_gym.algorithms.exploration import (
     linear_epsilon,
     policy_probabilities,
 )
-from tui_gym.core.agent import HYPERPARAMETER_FIELDS, Hyperparameters
 
 VALUES = np.array([1.0, 3.0, 3.0, -2.0, 3.0])  # three actions tie for the best
 
@@ -66,13 +65,14 @@ def test_policy_probabilities_sum_to_one_per_row() -> None:
     assert (probs >= 0.17 / 4 - 1e-15).all()
 
 
-def test_the_epsilon_schedule_is_the_old_one() -> None:
+def test_the_epsilon_schedule_is_linear_then_flat() -> None:
     for fraction in (0.0, 0.3, 0.5, 1.0):
-        hp = Hyperparameters(epsilon_start=0.9, epsilon_final=0.1, epsilon_decay_fraction=fraction,
-                             episodes=1000)
-        settings = QLearning.settings(hp.to_dict())
+        settings = QLearning.hyperparameters(epsilon_start=0.9, epsilon_final=0.1,
+                                             epsilon_decay_fraction=fraction, episodes=1000)
+        decay = fraction * 1000
         for episode in (0, 1, 150, 299, 300, 499, 500, 999, 5000):
-            assert settings.epsilon_at(episode) == hp.epsilon_at(episode)
+            expected = 0.1 if episode >= decay else 0.9 + episode / decay * (0.1 - 0.9)
+            assert settings.epsilon_at(episode) == expected
     assert linear_epsilon(50, 1.0, 0.0, 0.5, 200) == 0.5
 
 
@@ -86,12 +86,12 @@ def test_the_learner_follows_its_schedule_and_live_changes() -> None:
     assert learner.hp.learning_rate == 0.5
 
 
-def test_common_params_are_the_old_hyperparameters() -> None:
-    old = {f.name: f for f in HYPERPARAMETER_FIELDS}
-    for field in COMMON_PARAMS:
-        if field.name in old:
-            assert field == old[field.name]
-    assert QLearning.settings().to_dict() == Hyperparameters().to_dict()
+def test_common_params_keep_the_defaults_blackjack_learns_with() -> None:
+    assert QLearning.settings().to_dict() == {
+        "learning_rate": 0.001, "discount": 1.0, "epsilon_start": 1.0, "epsilon_final": 0.05,
+        "epsilon_decay_fraction": 0.5, "episodes": 200_000, "learning_rate_schedule": "visits",
+    }
+    assert [f.name for f in COMMON_PARAMS] == list(QLearning.settings())
 
 
 def test_settings_parse_text_and_refuse_bad_values() -> None:

@@ -12,9 +12,9 @@ import json
 
 import pytest
 
+from tui_gym.algorithms import QLearning
 from tui_gym.cli import main
-from tui_gym.core.agent import Hyperparameters
-from tui_gym.core.session import Session
+from tui_gym.core.session import Session, default_settings
 from tui_gym.games import game_for
 
 TOLERANCE = 0.005
@@ -39,7 +39,7 @@ def test_default_blackjack_training_is_within_tolerance_of_the_optimum(
     assert code == 0, err
     data = json.loads(out)
     assert data["engine"] == ("vector" if engine == "auto" else engine)
-    assert data["episodes"] == Hyperparameters().episodes  # the default budget, all of it
+    assert data["episodes"] == QLearning.hyperparameters().episodes  # the default budget, all of it
     evaluation = data["eval"]
     assert evaluation["optimal_value"] == pytest.approx(-0.0466, abs=5e-5)
     assert evaluation["gap"] == pytest.approx(
@@ -61,9 +61,9 @@ def test_blackjack_defaults_are_undiscounted_with_visit_count_step_sizes() -> No
       `learning_rate` then keeps tracking the improving values of later states.
     """
     for hp in (
-        game_for("blackjack").default_hyperparameters(),
+        default_settings(game_for("blackjack"), "q-learning"),
         Session("blackjack").hp,
-        Hyperparameters(),
+        QLearning.hyperparameters(),
     ):
         assert hp.discount == 1.0
         assert hp.learning_rate_schedule == "visits"

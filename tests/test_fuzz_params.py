@@ -17,12 +17,11 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tui_gym.algorithms import ALGORITHMS
+from tui_gym.algorithms import ALGORITHMS, ALL_PARAMS, QLearning
 from tui_gym.cli import build_parser
 from tui_gym.cli.flags import HP_FLAGS, game_kwargs
 from tui_gym.cli.flags import hyperparameters as _hyperparameters
 from tui_gym.cli.output import CliError
-from tui_gym.core.agent import HYPERPARAMETER_FIELDS, Hyperparameters
 from tui_gym.core.params import Param, ParamError
 from tui_gym.core.wrappers import CATALOG, parse_wrapper_spec
 from tui_gym.games import GAMES, game_for
@@ -111,7 +110,6 @@ def all_params() -> list[Param]:
     """Every numeric or yes/no field a person or a file fills in, each once."""
     params = [p for spec in CATALOG.values() for p in spec.params]
     params += [p for game in GAMES for p in game.params]
-    params += list(HYPERPARAMETER_FIELDS)
     params += [p for learner in ALGORITHMS for p in learner.params if isinstance(p, Param)]
     unique: dict[tuple[str, str], Param] = {}
     for param in params:
@@ -182,7 +180,7 @@ def test_the_app_fields_answer_every_value() -> None:
     from tui_gym.ui.widgets.hyperparameter_form import field_error
 
     texts = [t for t in inputs(SEED + 1, CASES) if isinstance(t, str)]
-    for field in HYPERPARAMETER_FIELDS:
+    for field in (p for p in ALL_PARAMS if isinstance(p, Param) and p.kind is not bool):
         for text in texts:
             problem = field_error(field, text)
             if problem is not None:
@@ -220,7 +218,7 @@ def test_wrapper_specs_answer_every_value() -> None:
 def test_the_command_line_answers_every_value(capsys: pytest.CaptureFixture[str]) -> None:
     rng = random.Random(SEED + 3)
     parser = build_parser()
-    base = Hyperparameters()
+    base = QLearning
     for _ in range(CASES // 2):
         text = nasty_text(rng).replace("\0", "")
         flag = rng.choice(["--episodes", "--learning-rate", "--discount", "--epsilon-start",
@@ -239,5 +237,5 @@ def test_the_command_line_answers_every_value(capsys: pytest.CaptureFixture[str]
                 game_kwargs(args, game_for("gridworld"))
         except CliError as exc:
             check_one_line(str(exc), flag)
-    assert set(HP_FLAGS) == {f.name for f in HYPERPARAMETER_FIELDS}
+    assert set(HP_FLAGS) == {f.name for f in ALL_PARAMS}
     assert isinstance(parser, argparse.ArgumentParser)

@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tui_gym.algorithms import QLearning
 from tui_gym.cli import main
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.session import Session
 from tui_gym.core.storage import StorageError
 from tui_gym.core.wrappers import WrapperChoice
@@ -32,7 +32,7 @@ META_FIELDS = ["format", "version", "env_id", "env_kwargs", "wrappers", "hyperpa
 @pytest.fixture(scope="module")
 def saves(tmp_path_factory: pytest.TempPathFactory) -> list[bytes]:
     folder = tmp_path_factory.mktemp("fuzz-saves")
-    hp = Hyperparameters(learning_rate=0.05, episodes=1_000)
+    hp = QLearning.hyperparameters(learning_rate=0.05, episodes=1_000)
     made = [
         Session("blackjack", hp=hp, seed=1),
         Session("blackjack", choices=(WrapperChoice.make("FlattenObservation"),), hp=hp, seed=2),

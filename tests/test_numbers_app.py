@@ -12,8 +12,8 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
-from tui_gym.core.agent import Hyperparameters
-from tui_gym.core.session import Session
+from tui_gym.algorithms import QLearning
+from tui_gym.core.session import Session, default_settings
 from tui_gym.games import game_for
 from tui_gym.games.words import signed
 from tui_gym.ui.app import TuiGymApp
@@ -44,7 +44,7 @@ async def settled(pilot, app: TuiGymApp, shown: str) -> None:
 
 
 async def test_the_badge_follows_the_run() -> None:
-    hp = game_for("gridworld").default_hyperparameters().replace(episodes=40)
+    hp = default_settings(game_for("gridworld"), "q-learning").replace(episodes=40)
     app = TuiGymApp(Session("gridworld", seed=0, hp=hp))
     async with app.run_test(size=(120, 40)) as pilot:
         await pilot.press("t")
@@ -54,7 +54,7 @@ async def test_the_badge_follows_the_run() -> None:
         await settled(pilot, app, "✓ finished")
         assert app.runner.latest.episodes == 40
 
-        await pilot.press("x")  # a fresh agent: nothing is finished
+        await pilot.press("x", "y")  # a fresh agent (yes: it has trained): nothing is finished
         await settled(pilot, app, "○ ready")
         assert app.runner.latest.episodes == 0
 
@@ -62,7 +62,7 @@ async def test_the_badge_follows_the_run() -> None:
         await wait_for(pilot, lambda: app.runner.latest.episodes == 1, "one episode")
         await settled(pilot, app, "‖ paused")
 
-        await pilot.press("x")
+        await pilot.press("x", "y")
         await settled(pilot, app, "○ ready")
         await pilot.press("minus")  # animated: single steps (this first episode takes 155)
         await pilot.press("space")
@@ -104,7 +104,7 @@ async def test_advice_and_scoreboard_read_the_trained_agent() -> None:
 
 
 async def test_a_loaded_agent_shows_dashes_where_there_is_no_data(tmp_path) -> None:
-    trained = Session("blackjack", seed=0, hp=Hyperparameters(episodes=50_000))
+    trained = Session("blackjack", seed=0, hp=QLearning.hyperparameters(episodes=50_000))
     trained.trainer.run(episodes=5000)
     path = trained.save(tmp_path / "bj.tgym")
     app = TuiGymApp(Session.load(path))

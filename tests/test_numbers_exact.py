@@ -16,7 +16,7 @@ import math
 import numpy as np
 import pytest
 
-from tui_gym.core.agent import Hyperparameters
+from tui_gym.algorithms import QLearning
 from tui_gym.core.play import HumanGame, Tally
 from tui_gym.core.protocol import JsonlPlayer
 from tui_gym.core.session import Session
@@ -199,7 +199,7 @@ def test_an_untrained_gridworld_agent_is_valued_as_it_plays() -> None:
 
 
 def test_a_half_trained_table_counts_its_ties_as_coin_tosses() -> None:
-    game = Session(env_id="blackjack", seed=0, hp=Hyperparameters(episodes=2000))
+    game = Session(env_id="blackjack", seed=0, hp=QLearning.hyperparameters(episodes=2000))
     game.trainer.run(episodes=300)
     q = game.base_q()
     tied = q[:, 0] == q[:, 1]

@@ -6,7 +6,7 @@ import time
 
 import pytest
 
-from tui_gym.core.agent import Hyperparameters
+from tui_gym.algorithms import QLearning
 from tui_gym.core.play import HumanGame, PlayError, Tally
 from tui_gym.core.runner import TrainingRunner
 from tui_gym.core.session import Session
@@ -26,7 +26,7 @@ def wait_for(predicate, timeout: float = 10.0) -> bool:
 
 @pytest.fixture
 def runner():
-    session = Session("blackjack", hp=Hyperparameters(episodes=50_000), seed=0)
+    session = Session("blackjack", hp=QLearning.hyperparameters(episodes=50_000), seed=0)
     r = TrainingRunner(session)
     yield r
     r.close()
@@ -44,7 +44,7 @@ def test_runner_trains_in_background_and_pauses(runner):
 
 
 def test_runner_stops_at_the_budget():
-    session = Session("blackjack", hp=Hyperparameters(episodes=300), seed=0)
+    session = Session("blackjack", hp=QLearning.hyperparameters(episodes=300), seed=0)
     r = TrainingRunner(session)
     try:
         r.start()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
-from tui_gym.core.agent import Hyperparameters
+from tui_gym.algorithms import QLearning
 from tui_gym.core.session import Session
 from tui_gym.core.training import continue_run
 from tui_gym.ui.app import TuiGymApp
@@ -15,7 +15,7 @@ DEADLINE = 20.0
 
 
 def test_a_raised_budget_keeps_the_decay_where_it_was() -> None:
-    done = Hyperparameters(episodes=1000, epsilon_decay_fraction=0.5)  # decays over 500
+    done = QLearning.hyperparameters(episodes=1000, epsilon_decay_fraction=0.5)  # decays over 500
     hp, note = continue_run(done, done.replace(episodes=4000), 1000)
     assert hp.episodes == 4000 and hp.epsilon_decay_fraction == 0.125
     assert hp.epsilon_at(1000) == done.epsilon_at(1000) == done.epsilon_final
@@ -23,14 +23,14 @@ def test_a_raised_budget_keeps_the_decay_where_it_was() -> None:
 
 
 def test_a_raised_budget_mid_decay_carries_epsilon_on_smoothly() -> None:
-    hp0 = Hyperparameters(episodes=1000, epsilon_decay_fraction=0.5)
+    hp0 = QLearning.hyperparameters(episodes=1000, epsilon_decay_fraction=0.5)
     hp, _ = continue_run(hp0, hp0.replace(episodes=2000), 200)
     for episode in (200, 300, 499, 500, 1500):
         assert abs(hp.epsilon_at(episode) - hp0.epsilon_at(episode)) < 1e-12
 
 
 def test_settings_that_send_epsilon_back_up_say_so() -> None:
-    hp0 = Hyperparameters(episodes=1000, epsilon_decay_fraction=0.5)
+    hp0 = QLearning.hyperparameters(episodes=1000, epsilon_decay_fraction=0.5)
     wanted = hp0.replace(episodes=4000, epsilon_decay_fraction=0.9)  # asked for: kept
     hp, note = continue_run(hp0, wanted, 1000)
     assert hp == wanted
@@ -39,7 +39,7 @@ def test_settings_that_send_epsilon_back_up_say_so() -> None:
 
 
 def test_nothing_to_continue_before_the_first_episode_or_when_nothing_changes() -> None:
-    hp0 = Hyperparameters(episodes=1000)
+    hp0 = QLearning.hyperparameters(episodes=1000)
     assert continue_run(hp0, hp0.replace(episodes=5000), 0) == (hp0.replace(episodes=5000), None)
     assert continue_run(hp0, hp0, 700) == (hp0, None)
     assert continue_run(hp0, hp0.replace(episodes=800), 700) == (hp0.replace(episodes=800), None)
@@ -54,7 +54,7 @@ async def wait_for(pilot, predicate: Callable[[], bool], what: str) -> None:
 
 
 async def test_raising_the_budget_after_a_finished_run_continues_it_in_the_app() -> None:
-    hp = Hyperparameters(episodes=400, epsilon_decay_fraction=0.5)
+    hp = QLearning.hyperparameters(episodes=400, epsilon_decay_fraction=0.5)
     app = TuiGymApp(Session("blackjack", seed=0, hp=hp))
     notes: list[str] = []
     app.notify = lambda message, **kw: notes.append(message)  # type: ignore[method-assign]

@@ -13,11 +13,11 @@ from pathlib import Path
 
 import pytest
 
+from tui_gym.algorithms import QLearning
 from tui_gym.core import process_runner
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.process_runner import ProcessRunner
 from tui_gym.core.runner import SPEEDS
-from tui_gym.core.session import Session
+from tui_gym.core.session import Session, default_settings
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games import game_for
 
@@ -28,7 +28,8 @@ DEADLINE = 20.0
 
 @pytest.fixture
 def blackjack_runner():
-    runner = ProcessRunner(Session("blackjack", hp=Hyperparameters(episodes=10_000_000), seed=0))
+    hp = QLearning.hyperparameters(episodes=10_000_000)
+    runner = ProcessRunner(Session("blackjack", hp=hp, seed=0))
     yield runner
     runner.close()
 
@@ -69,7 +70,7 @@ def test_a_child_that_keeps_dying_turns_training_off(blackjack_runner, monkeypat
 
 
 def test_a_rebuild_that_keeps_the_agent_loses_no_episode() -> None:
-    hp = game_for("gridworld").default_hyperparameters().replace(episodes=10_000_000)
+    hp = default_settings(game_for("gridworld"), "q-learning").replace(episodes=10_000_000)
     session = Session("gridworld", hp=hp, seed=0)
     runner = ProcessRunner(session)
     try:

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 import tui_gym  # noqa: F401  (registers GridWorld)
-from tui_gym.core.agent import Hyperparameters
-from tui_gym.core.session import Session
+from tui_gym.algorithms import QLearning
+from tui_gym.core.session import Session, default_settings
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games.blackjack import BlackjackGame as BlackjackProfile
 from tui_gym.games.gridworld import GridWorldGame as GridWorldProfile
@@ -39,7 +39,7 @@ def test_session_for_each_game_and_alias(
     assert isinstance(session.game, profile)
     assert session.agent.n_actions == n_actions
     assert session.keyer.dense
-    assert session.hp == session.game.default_hyperparameters()
+    assert session.hp == default_settings(session.game, "q-learning", session.env_kwargs)
     assert session.trainer.run(episodes=20) == 20
 
 
@@ -138,7 +138,7 @@ def test_a_misfit_wrapper_is_skipped_and_the_reason_given() -> None:
     assert report.kept_agent and session.agent is agent
     assert [c.name for c, _ in report.skipped] == ["DistanceShaping"]
     reason = report.skipped[0][1]
-    assert "GridWorld" in reason and reason in report.notice
+    assert "info['distance']" in reason and reason in report.notice
     assert "Not applied" in report.notice
     assert session.skipped == report.skipped
     assert [c.name for c in session.applied] == ["StepPenalty"]
@@ -282,7 +282,7 @@ def test_short_gridworld_training_solves_the_grid() -> None:
 def test_set_hyperparameters_keeps_the_table() -> None:
     session = _trained(episodes=100)
     q = session.agent.q.copy()
-    session.set_hyperparameters(Hyperparameters(learning_rate=0.5, episodes=1000))
+    session.set_hyperparameters(QLearning.hyperparameters(learning_rate=0.5, episodes=1000))
     assert session.agent.hp.learning_rate == 0.5 and np.array_equal(session.agent.q, q)
     session.reset_agent()
     assert session.agent.states_seen == 0 and session.trainer.episodes == 0

@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 
 import tui_gym  # noqa: F401  (registers GridWorld)
+from tui_gym.algorithms import QLearning
 from tui_gym.core import storage
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.session import Session
 from tui_gym.core.storage import FORMAT_NAME, FORMAT_VERSION, StorageError, read_agent
 from tui_gym.core.wrappers import WrapperChoice
@@ -31,7 +31,7 @@ W = WrapperChoice.make
 
 
 def _trained(choices: tuple[WrapperChoice, ...] = (), episodes: int = 400) -> Session:
-    hp = Hyperparameters(learning_rate=0.01, episodes=5_000, epsilon_final=0.1)
+    hp = QLearning.hyperparameters(learning_rate=0.01, episodes=5_000, epsilon_final=0.1)
     session = Session("blackjack", {"sab": True}, choices=choices, hp=hp, seed=9)
     session.trainer.run(episodes=episodes)
     return session
@@ -424,7 +424,8 @@ CRAFTED: dict[str, tuple[str, object, str]] = {
     "a row short": (
         "dense",
         lambda good: _with_entries(_with_table(good, lambda q: q[:-1]),
-                                   counts_npy=_npy(np.zeros((703, 2), np.int64))),
+                                   counts_npy=_npy(np.zeros((703, 2), np.int64)),
+                                   visits_npy=_npy(np.zeros(703, np.int64))),
         "q.npy has 703 rows; Blackjack-v1 has 704",
     ),
     "sparse table without keys": (
@@ -595,7 +596,9 @@ def test_a_member_whose_size_lies_is_never_unpacked_past_it(tmp_path: Path) -> N
 
 
 def _bare_meta() -> bytes:
-    return json.dumps({"format": FORMAT_NAME, "version": FORMAT_VERSION}).encode()
+    return json.dumps(
+        {"format": FORMAT_NAME, "version": FORMAT_VERSION, "algorithm": "q-learning"}
+    ).encode()
 
 
 def test_a_file_too_large_to_be_a_save_is_not_read(
@@ -640,12 +643,15 @@ def test_missing_file_and_folder(tmp_path: Path) -> None:
 
 
 def test_a_save_without_counts_still_loads(tmp_path: Path) -> None:
-    # Files written before update counts were saved have no counts.npy.
+    # Version 1 files written before update counts were saved have no counts.npy.
     original = _trained(episodes=50)
     raw = original.save(tmp_path / "a.tgym").read_bytes()
-    with zipfile.ZipFile(io.BytesIO(raw)) as zf:
-        entries = {n: zf.read(n) for n in zf.namelist() if n != "counts.npy"}
+    entries = _entries(raw)
+    meta = json.loads(entries["meta.json"])
+    meta["version"] = 1
+    del meta["algorithm"], meta["learner"]
     old = tmp_path / "old.tgym"
-    old.write_bytes(_zip(entries))
+    old.write_bytes(_zip({"meta.json": json.dumps(meta).encode(), "q.npy": entries["q.npy"]}))
     loaded = Session.load(old)
+    assert loaded.algorithm == "q-learning"
     assert np.array_equal(loaded.agent.table()[0], original.agent.table()[0])

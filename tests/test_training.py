@@ -12,7 +12,7 @@ import pytest
 from gymnasium.wrappers import RecordEpisodeStatistics
 
 import tui_gym  # noqa: F401  (registers GridWorld)
-from tui_gym.core.agent import Hyperparameters, QAgent
+from tui_gym.algorithms import QLearning, Settings
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.stats import EpisodeStats, RollingWindow, Series
 from tui_gym.core.training import SERIES_NAMES, StepEvent, Trainer, TrainingSnapshot
@@ -116,12 +116,12 @@ class EpisodeRecorder(gym.Wrapper):
 
 def _trainer(
     env: gym.Env,
-    hp: Hyperparameters | None = None,
+    hp: Settings | None = None,
     seed: int = 0,
     **kwargs: Any,
 ) -> Trainer:
     keyer = ObservationKeyer(env.observation_space)
-    agent = QAgent(int(env.action_space.n), hp, n_states=keyer.n_states, seed=seed)
+    agent = QLearning(int(env.action_space.n), hp, n_states=keyer.n_states, seed=seed)
     return Trainer(env, agent, keyer, seed=seed, **kwargs)
 
 
@@ -294,7 +294,7 @@ def test_step_gives_events_and_finishes_episodes() -> None:
 
 
 def test_epsilon_follows_the_budget_during_training() -> None:
-    hp = Hyperparameters(episodes=100, epsilon_decay_fraction=0.5, epsilon_final=0.1)
+    hp = QLearning.hyperparameters(episodes=100, epsilon_decay_fraction=0.5, epsilon_final=0.1)
     trainer = _trainer(gym.make("Blackjack-v1"), hp)
     stats = [trainer.run_episode() for _ in range(60)]
     assert stats[0].epsilon == 1.0

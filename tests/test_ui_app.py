@@ -6,12 +6,13 @@ import random
 
 from textual.widgets import Checkbox, ContentSwitcher, Input, RadioButton, Static
 
-from tui_gym.core.agent import Hyperparameters
+from tui_gym.algorithms import QLearning
 from tui_gym.core.session import Session
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.side_panel import ParamField, SidePanel, WrapperRow
+from tui_gym.ui.too_small_screen import TooSmallScreen
 
 from .screen import screen_text
 
@@ -101,7 +102,7 @@ async def test_a_misfit_wrapper_shows_its_reason_and_is_not_applied():
         await pilot.pause()
         shaping = row(app, "DistanceShaping")
         assert shaping.has_class("-misfit")
-        assert "GridWorld" in str(shaping.query_one(".reason", Static).render())
+        assert "info['distance']" in str(shaping.query_one(".reason", Static).render())
         assert "DistanceShaping" not in app.session.chain_repr()
         assert "not applied" in chain_text(app)
 
@@ -149,16 +150,39 @@ async def test_game_picker_switches_game():
         assert app.query_one("#game-gridworld", RadioButton).value
 
 
-async def test_too_small_terminal_shows_a_message():
-    app = TuiGymApp(Session("blackjack", seed=0))
+async def test_too_small_terminal_shows_a_message_and_ignores_keys():
+    app = TuiGymApp(Session("blackjack", hp=QLearning.hyperparameters(episodes=500), seed=0))
     async with app.run_test(size=(60, 20)) as pilot:
         await pilot.pause()
-        assert app.screen.has_class("too-small")
-        message = app.query_one("#too-small", Static)
-        assert message.display and "80×24" in str(message.render())
+        assert isinstance(app.screen, TooSmallScreen)
+        message = app.screen.query_one("#too-small", Static)
+        assert "80×24" in str(message.render()) and "q quits" in str(message.render())
+        # Keys a person cannot see the effect of do nothing: no game switch, no view
+        # switch, no move on the board, no training, no palette.
+        game = app.play_view.game
+        player = list(game.scene()["player"])
+        for key in ("g", "t", "space", "h", "s", "w", "question_mark", "ctrl+p", "ctrl+s"):
+            await pilot.press(key)
+        await pilot.pause()
+        assert isinstance(app.screen, TooSmallScreen)
+        assert app.session.game.name == "blackjack"
+        assert app.current_view == "play"
+        assert game.scene()["player"] == player and not game.done
+        assert not app.runner.running and app.runner.latest.episodes == 0
         await pilot.resize_terminal(120, 40)
         await pilot.pause()
+        assert not isinstance(app.screen, TooSmallScreen)
         assert not app.screen.has_class("too-small")
+        assert app.focused is app.play_view.board  # back where it was
+        await pilot.press("g")  # and keys act again
+        await pilot.pause()
+        assert app.session.game.name == "gridworld"
+        await pilot.resize_terminal(70, 30)
+        await pilot.pause()
+        assert isinstance(app.screen, TooSmallScreen)
+        await pilot.press("q")  # quitting still works
+        await pilot.pause()
+    assert app.return_code == 0
 
 
 async def test_compact_layout_at_80_by_24():
@@ -203,7 +227,7 @@ async def test_random_keys_in_every_view_never_break_the_app():
     rng = random.Random(1234)
     for name in ("blackjack", "gridworld"):
         # A small budget: space may start training, which should end soon.
-        app = TuiGymApp(Session(name, hp=Hyperparameters(episodes=2_000), seed=0))
+        app = TuiGymApp(Session(name, hp=QLearning.hyperparameters(episodes=2_000), seed=0))
         async with app.run_test(size=(100, 30)) as pilot:
             for view in ("p", "t"):
                 await pilot.press("escape", view)

@@ -9,7 +9,6 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.train_view import TrainView
@@ -34,7 +33,7 @@ async def test_paint_undo_and_the_optimum_on_a_small_cliff() -> None:
     """CliffWalking's rules on SFF/FFG: every step costs 1, so the optimum is minus the
     fewest steps (3), and with the goal walled off the whole 200-step limit."""
     session = Session("cliffwalking", env_kwargs={"layout": "SFF\nFFG\n"}, seed=0,
-                      hp=Hyperparameters(episodes=1_000_000_000))
+                      hp={"episodes": 1_000_000_000})
     app = TuiGymApp(session)
     async with app.run_test(size=(120, 40)) as pilot:
         await pilot.pause()

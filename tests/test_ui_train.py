@@ -12,8 +12,8 @@ from collections.abc import Callable
 
 import pytest
 
-from tui_gym.core.agent import Hyperparameters
-from tui_gym.core.session import Session
+from tui_gym.algorithms import QLearning
+from tui_gym.core.session import Session, default_settings
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games import game_for
 from tui_gym.ui.app import TuiGymApp
@@ -60,12 +60,12 @@ async def paused(pilot) -> None:
 
 def blackjack_app(episodes: int = 1_000_000, engine: str = "scalar") -> TuiGymApp:
     # The scalar engine by default: slow enough to watch a run between two checks.
-    hp = Hyperparameters(episodes=episodes)
+    hp = QLearning.hyperparameters(episodes=episodes)
     return TuiGymApp(Session("blackjack", seed=0, hp=hp, engine=engine))
 
 
 def gridworld_app(episodes: int = 1_000_000, engine: str = "scalar", **kwargs) -> TuiGymApp:
-    hp = game_for("gridworld").default_hyperparameters().replace(episodes=episodes)
+    hp = default_settings(game_for("gridworld"), "q-learning").replace(episodes=episodes)
     return TuiGymApp(Session("gridworld", seed=0, hp=hp, engine=engine, **kwargs))
 
 
@@ -144,6 +144,7 @@ async def test_one_episode_and_reset() -> None:
         await pilot.press("space")
         await wait_for(pilot, lambda: app.runner.latest.episodes > 200, "some training")
         await pilot.press("x")  # while it may still run: the reset pauses first
+        await pilot.press("y")  # yes: it has trained, so it asks first
         await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
         assert not app.runner.running
         await wait_for(pilot, lambda: "episodes 0\n" in view.stats.plain, "fresh stats")
@@ -231,7 +232,7 @@ async def test_fields_are_checked_together_and_loaded() -> None:
         await wait_for(pilot, lambda: form.valid, "the fields to settle")
         hp = view.read_hyperparameters()
         assert hp is not None and hp.epsilon_start == 0.1 and hp.episodes == 1234
-        form.load(Hyperparameters(episodes=77))
+        form.load(QLearning.hyperparameters(episodes=77))
         assert form.input("episodes").value == "77"
 
 
@@ -334,6 +335,7 @@ async def test_buttons_do_what_the_keys_do() -> None:
         await paused(pilot)
         assert "finished" in view.stats.plain
         assert await pilot.click("#btn-reset")
+        await pilot.press("y")  # yes: it has trained, so it asks first
         await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
 
 

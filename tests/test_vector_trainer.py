@@ -1,8 +1,7 @@
-"""Tests for `tui_gym.core.vector.trainer`: batched Q-learning on the shared agent.
+"""Tests for `tui_gym.core.vector.trainer`: the vector engine driving a learner.
 
-The batched update is checked against `QAgent.update` applied one transition
-at a time; the batched statistics against one-by-one pushes; then the
-trainer itself: it learns Blackjack to within 0.005 of the exact optimum and
+The batched statistics are checked against one-by-one pushes; then the
+trainer itself, with Q-learning: it learns Blackjack to within 0.005 of the exact optimum and
 GridWorld to shortest paths, finishes exactly the episodes asked for, gives
 the same table for the same seeds however a run is sliced, and keeps its
 memory fixed.
@@ -17,14 +16,14 @@ import numpy as np
 import pytest
 
 from tests.game_support import form_of
-from tui_gym.core.agent import Hyperparameters, QAgent
+from tui_gym.algorithms import Learner, QLearning, Settings
 from tui_gym.core.obskey import ObservationKeyer
+from tui_gym.core.session import default_settings
 from tui_gym.core.stats import RollingWindow, Series
-from tui_gym.core.training import Trainer
+from tui_gym.core.training import Engine, Trainer
 from tui_gym.core.vector import (
     NoBatchedForm,
     VectorTrainer,
-    batched_q_update,
     make_vector_trainer,
 )
 from tui_gym.core.wrappers import WrapperChoice, build_env
@@ -37,56 +36,11 @@ GRID = "tui_gym/GridWorld-v0"
 FORM = game_for("Blackjack-v1").batched_form({"natural": False, "sab": False})
 
 
-def _agent(env_id: str, hp: Hyperparameters | None = None, seed: int = 0, **kwargs):
+def _agent(env_id: str, hp: Settings | None = None, seed: int = 0, **kwargs):
     env = build_env(env_id, kwargs)
     keyer = ObservationKeyer(env.observation_space)
-    agent = QAgent(int(env.action_space.n), hp, n_states=keyer.n_states, seed=seed)
+    agent = QLearning(int(env.action_space.n), hp, n_states=keyer.n_states, seed=seed)
     return env, agent, keyer
-
-
-# --- the batched update ---------------------------------------------------------
-
-
-@pytest.mark.parametrize("schedule", ["visits", "constant"])
-@pytest.mark.parametrize("learning_rate", [0.001, 0.3, 1.0])
-def test_batched_update_equals_sequential_updates(schedule: str, learning_rate: float) -> None:
-    """With fixed targets (terminal steps) a batch is QAgent.update in batch order."""
-    hp = Hyperparameters(learning_rate=learning_rate, learning_rate_schedule=schedule)
-    rng = np.random.default_rng(1)
-    batched = QAgent(3, hp, n_states=6, seed=0)
-    sequential = QAgent(3, hp, n_states=6, seed=0)
-    for _ in range(20):  # many duplicates: 40 transitions over 18 (state, action) cells
-        keys = rng.integers(0, 6, size=40)
-        actions = rng.integers(0, 3, size=40)
-        rewards = rng.normal(size=40)
-        done = np.ones(40, dtype=bool)
-        expected_td = [
-            sequential.q[k, a] for k, a in zip(keys, actions, strict=True)
-        ]  # TD errors are against the table before the batch
-        expected_td = rewards - np.array(expected_td)
-        for k, a, r in zip(keys, actions, rewards, strict=True):
-            sequential.update(int(k), int(a), float(r), True, 0)
-        td = batched_q_update(batched, keys, actions, rewards, done, keys)
-        np.testing.assert_allclose(batched.q, sequential.q, rtol=1e-9, atol=1e-12)
-        np.testing.assert_allclose(td, expected_td, rtol=1e-12, atol=1e-12)
-    assert (batched.counts == sequential.counts).all()
-    assert (batched.visits == sequential.visits).all()
-
-
-def test_batched_update_bootstraps_from_the_table_before_the_batch() -> None:
-    hp = Hyperparameters(learning_rate=0.5, discount=0.9, learning_rate_schedule="constant")
-    agent = QAgent(2, hp, n_states=4, seed=0)
-    agent.q[:] = [[0.0, 0.0], [1.0, 3.0], [2.0, -1.0], [0.0, 0.0]]
-    keys, actions = np.array([0, 0, 3]), np.array([1, 1, 0])
-    rewards, terminated = np.array([1.0, 0.0, 5.0]), np.array([False, False, True])
-    next_keys = np.array([1, 2, 1])
-    td = batched_q_update(agent, keys, actions, rewards, terminated, next_keys)
-    targets = np.array([1.0 + 0.9 * 3.0, 0.9 * 2.0, 5.0])
-    np.testing.assert_allclose(td, targets - [0.0, 0.0, 0.0])
-    q01 = 0.5 * (0.5 * targets[0]) + 0.5 * targets[1]  # two updates of (0, 1) in order
-    assert agent.q[0, 1] == pytest.approx(q01)
-    assert agent.q[3, 0] == pytest.approx(2.5)
-    assert agent.counts[0, 1] == 2 and agent.visits[0] == 2 and agent.visits[3] == 1
 
 
 # --- batched statistics ----------------------------------------------------------
@@ -126,14 +80,14 @@ def test_series_many_equals_pushing_one_by_one() -> None:
 # --- training -------------------------------------------------------------------
 
 
-def _blackjack_gap(agent: QAgent, keyer: ObservationKeyer) -> float:
-    profile = game_for(BLACKJACK)
-    keys = [keyer.key(obs) for obs in profile.states.base_observations({})]
-    return profile.oracle.reference(agent.values(keys), {}).figures["gap"]
+def _blackjack_gap(agent: Learner, keyer: ObservationKeyer) -> float:
+    game = game_for(BLACKJACK)
+    keys = [keyer.key(obs) for obs in game.states.base_observations({})]
+    return game.oracle.reference(agent.values(keys), {}).figures["gap"]
 
 
 def test_learns_blackjack_to_within_0_005_of_the_optimum() -> None:
-    env, agent, keyer = _agent(BLACKJACK, Hyperparameters(episodes=500_000), seed=3)
+    env, agent, keyer = _agent(BLACKJACK, QLearning.hyperparameters(episodes=500_000), seed=3)
     trainer = VectorTrainer(env, agent, keyer, form=form_of(env), seed=3)
     assert trainer.run(episodes=500_000) == 500_000
     assert agent.episode == 500_000 and trainer.episodes == 500_000
@@ -145,7 +99,7 @@ def test_learns_blackjack_to_within_0_005_of_the_optimum() -> None:
 
 def test_learns_gridworld_shortest_paths() -> None:
     profile = game_for(GRID)
-    hp = profile.default_hyperparameters()
+    hp = default_settings(profile, "q-learning")
     env, agent, keyer = _agent(GRID, hp, seed=1, size=5)
     trainer = VectorTrainer(env, agent, keyer, form=form_of(env), seed=1)
     trainer.run(episodes=hp.episodes)
@@ -158,7 +112,7 @@ def test_learns_gridworld_shortest_paths() -> None:
 
 def test_same_seeds_give_the_same_table_however_the_run_is_sliced() -> None:
     def train(seconds: float | None) -> VectorTrainer:
-        env, agent, keyer = _agent(BLACKJACK, Hyperparameters(episodes=30_000), seed=5)
+        env, agent, keyer = _agent(BLACKJACK, QLearning.hyperparameters(episodes=30_000), seed=5)
         trainer = VectorTrainer(env, agent, keyer, form=form_of(env), seed=5, num_envs=256)
         while trainer.remaining:  # as the runner does: time slices of what remains
             trainer.run(episodes=trainer.remaining, seconds=seconds)
@@ -169,7 +123,7 @@ def test_same_seeds_give_the_same_table_however_the_run_is_sliced() -> None:
     assert (whole.agent.q == sliced.agent.q).all()
     assert (whole.agent.counts == sliced.agent.counts).all()
     assert whole.windows["return"].mean == sliced.windows["return"].mean
-    env, agent, keyer = _agent(BLACKJACK, Hyperparameters(episodes=30_000), seed=6)
+    env, agent, keyer = _agent(BLACKJACK, QLearning.hyperparameters(episodes=30_000), seed=6)
     VectorTrainer(env, agent, keyer, form=form_of(env), seed=6, num_envs=256).run(episodes=30_000)
     assert not (agent.q == whole.agent.q).all()
 
@@ -210,7 +164,7 @@ def test_memory_stays_bounded() -> None:
     assert all(w.filled == 1000 for w in trainer.windows.values())
 
 
-def test_a_drop_in_for_the_scalar_trainer() -> None:
+def test_an_engine_beside_the_scalar_trainer() -> None:
     env, agent, keyer = _agent(BLACKJACK, seed=4)
     scalar = Trainer(env, agent, keyer, seed=4)
     scalar.run(episodes=200)
@@ -225,8 +179,9 @@ def test_a_drop_in_for_the_scalar_trainer() -> None:
     assert [s.version for s in published] == sorted(s.version for s in published)
     assert vector.remaining == agent.hp.episodes - 5_200
     assert vector.current_observation() is None
-    with pytest.raises(NotImplementedError):
-        vector.step()
+    # Engines compose with the learner: neither stands in for the other.
+    assert isinstance(vector, Engine) and not isinstance(vector, Trainer)
+    assert not hasattr(vector, "step")
     back = Trainer(env, agent, keyer, seed=4)
     back.adopt_progress(vector)
     back.run(episodes=10)
@@ -246,7 +201,7 @@ def test_wrappers_shape_the_rewards_and_unbatchable_ones_refuse() -> None:
     with pytest.raises(NoBatchedForm, match="StickyAction"):
         make_vector_trainer(BLACKJACK, {}, [WrapperChoice.make("StickyAction")], agent, keyer,
                             form=FORM)
-    sparse = QAgent(2, seed=0)
+    sparse = QLearning(2, seed=0)
     with pytest.raises(ValueError, match="dense"):
         VectorTrainer(env, sparse, keyer, form=form_of(env))
 
@@ -254,7 +209,7 @@ def test_wrappers_shape_the_rewards_and_unbatchable_ones_refuse() -> None:
 def test_the_last_window_is_not_skewed_towards_long_episodes() -> None:
     # A run must not end by waiting for its longest games: the rolling window
     # of the last 1,000 episodes should look like the run as a whole.
-    env, agent, keyer = _agent(BLACKJACK, Hyperparameters(episodes=60_000), seed=0)
+    env, agent, keyer = _agent(BLACKJACK, QLearning.hyperparameters(episodes=60_000), seed=0)
     trainer = VectorTrainer(env, agent, keyer, form=form_of(env), seed=0)
     trainer.run(episodes=60_000)
     lengths = trainer.windows["length"].values()
@@ -273,7 +228,7 @@ def test_curves_begin_with_an_unbiased_sample(env_id: str, kwargs: dict) -> None
     took them in that order would begin on the shortest episodes. Under a random
     policy every episode is alike, so the first thousand recorded must look like
     the rest."""
-    hp = Hyperparameters(episodes=100_000, epsilon_start=1.0, epsilon_final=1.0)
+    hp = QLearning.hyperparameters(episodes=100_000, epsilon_start=1.0, epsilon_final=1.0)
     env, agent, keyer = _agent(env_id, hp, **kwargs)
     trainer = VectorTrainer(env, agent, keyer, form=form_of(env), seed=0, num_envs=2048, window=1,
                             series_capacity=1 << 16)  # one point per episode, in order

@@ -1,7 +1,7 @@
 """tui-gym: a terminal playground for reinforcement learning.
 
-Importing the package registers its Gymnasium environments
-(`tui_gym/GridWorld-v0` and the tutorial's id `gymnasium_env/GridWorld-v0`).
+Importing the package registers its own Gymnasium environments (see
+`tui_gym.envs`).
 """
 
 from tui_gym.envs import register_envs

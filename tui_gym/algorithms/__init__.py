@@ -28,6 +28,7 @@ from tui_gym.algorithms.settings import COMMON_PARAMS, Choice, Field, Settings
 
 __all__ = [
     "ALGORITHMS",
+    "ALL_PARAMS",
     "COMMON_PARAMS",
     "DEFAULT_ALGORITHM",
     "SCALAR_ENV",
@@ -47,6 +48,7 @@ __all__ = [
     "Transitions",
     "UpdateRecord",
     "algorithm",
+    "owners",
 ]
 
 ALGORITHMS: tuple[type[Learner], ...] = (
@@ -61,6 +63,23 @@ ALGORITHMS: tuple[type[Learner], ...] = (
 DEFAULT_ALGORITHM = QLearning.name
 
 _BY_NAME = {cls.name: cls for cls in ALGORITHMS}
+
+
+def _union() -> tuple[Field, ...]:
+    seen: dict[str, Field] = {}
+    for cls in ALGORITHMS:
+        for field in cls.params:
+            seen.setdefault(field.name, field)
+    return tuple(seen.values())
+
+
+ALL_PARAMS: tuple[Field, ...] = _union()
+"""Every hyperparameter of any algorithm, once each (the common ones first)."""
+
+
+def owners(name: str) -> tuple[str, ...]:
+    """The registry names of the algorithms that have the hyperparameter `name`."""
+    return tuple(cls.name for cls in ALGORITHMS if any(f.name == name for f in cls.params))
 
 
 def algorithm(name: str) -> type[Learner]:

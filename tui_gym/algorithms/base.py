@@ -73,6 +73,8 @@ SCALAR_ENV = 0
 
 # Rows a growing (sparse) table starts with; it doubles when full.
 _INITIAL_ROWS = 256
+# The largest count a saved table may hold (far beyond any run; keeps sums in int64).
+MAX_SAVED_COUNT = 2**62
 
 
 @dataclass(frozen=True)
@@ -268,9 +270,12 @@ class Learner(ABC):
         """Validated hyperparameters for this algorithm (defaults for what is missing)."""
         if isinstance(values, Settings) and values.schema == cls.params:
             return values
-        if values is not None and not isinstance(values, Mapping):
-            values = values.to_dict()  # e.g. the older `Hyperparameters` dataclass
         return Settings(cls.params, values)
+
+    @classmethod
+    def hyperparameters(cls, **values: Any) -> Settings:
+        """Settings for this algorithm from keyword values (defaults for the rest)."""
+        return cls.settings(values)
 
     # --- the rule: what a subclass writes --------------------------------------
     @abstractmethod
@@ -295,6 +300,29 @@ class Learner(ABC):
     def _load_extra_arrays(self, arrays: Mapping[str, np.ndarray], rows: int) -> None:
         """Take back what `_extra_arrays` saved; raise ValueError before changing anything."""
         return None
+
+    def _check_arrays(self, arrays: Mapping[str, np.ndarray], rows: int) -> None:
+        """Raise ValueError, naming the array, for saved values this learner could not
+        have made: another kind of number, NaN or infinite values, counts below the
+        table's fill or beyond `MAX_SAVED_COUNT`. Shapes are checked before."""
+        specs = (TableSpec("visits", np.int64), *self.tables)
+        for spec in specs:
+            array = np.asarray(arrays[spec.name])
+            kind = array.dtype.kind
+            if spec.dtype is bool:
+                if kind != "b":
+                    raise ValueError(f"saved {spec.name!r} holds {array.dtype} values, not bool")
+            elif np.issubdtype(spec.dtype, np.floating):
+                if kind not in "fiu":
+                    raise ValueError(f"saved {spec.name!r} holds {array.dtype} values")
+                if not np.isfinite(array).all():
+                    raise ValueError(f"saved {spec.name!r} holds NaN or infinite values")
+            else:
+                if kind not in "iu":
+                    raise ValueError(f"saved {spec.name!r} holds {array.dtype} values")
+                low = min(0, int(spec.fill))
+                if array.size and (array.min() < low or array.max() > MAX_SAVED_COUNT):
+                    raise ValueError(f"saved {spec.name!r} holds negative or impossible counts")
 
     def _move(
         self,
@@ -569,6 +597,7 @@ class Learner(ABC):
                 raise ValueError(
                     f"saved {name!r} has shape {np.shape(arrays[name])}, expected {shape}"
                 )
+        self._check_arrays(arrays, rows)
         capacity = rows if dense else max(_INITIAL_ROWS, rows)
         loaded: dict[str, np.ndarray] = {}
         for spec in self.tables:

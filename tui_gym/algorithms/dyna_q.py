@@ -118,6 +118,12 @@ class DynaQ(QLearning):
     def _extra_arrays(self) -> dict[str, np.ndarray]:
         return {"model_tried": self._tried[: self._n_tried].copy()}
 
+    def _check_arrays(self, arrays: Any, rows: int) -> None:
+        super()._check_arrays(arrays, rows)
+        model_next = np.asarray(arrays["model_next"])
+        if model_next.size and model_next.max() >= rows:
+            raise ValueError("saved 'model_next' names a state past the table")
+
     def _load_extra_arrays(self, arrays: Any, rows: int) -> None:
         if "model_tried" not in arrays:
             raise ValueError("the saved state has no 'model_tried' array")
@@ -125,5 +131,7 @@ class DynaQ(QLearning):
         cells = rows * self.n_actions
         if tried.ndim != 1 or (tried.size and (tried.min() < 0 or tried.max() >= cells)):
             raise ValueError("saved 'model_tried' does not fit the table")
+        if (np.asarray(arrays["model_next"]).reshape(-1)[tried] < 0).any():
+            raise ValueError("saved 'model_tried' names a pair the model has never seen")
         self._tried = np.concatenate([tried, np.zeros(max(64, tried.size), dtype=np.int64)])
         self._n_tried = int(tried.size)

@@ -20,6 +20,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
+    "row_max",
+    "row_sum",
     "epsilon_greedy_batch",
     "epsilon_greedy_one",
     "expected_values",
@@ -41,9 +43,36 @@ def linear_epsilon(
     return start + frac * (final - start)
 
 
+# Below this many actions a loop over columns beats numpy's reduction along a short axis
+# (several times over): every batch of a vector engine takes a few such row maxima.
+_COLUMN_LOOP = 16
+
+
+def row_max(values: np.ndarray) -> np.ndarray:
+    """The maximum of each row of `values` (k, n), as `values.max(axis=1)`, only faster."""
+    n = values.shape[1]
+    if n > _COLUMN_LOOP or n == 0:
+        return values.max(axis=1)
+    out = values[:, 0].copy()
+    for j in range(1, n):
+        np.maximum(out, values[:, j], out=out)
+    return out
+
+
+def row_sum(values: np.ndarray) -> np.ndarray:
+    """The sum of each row of `values` (k, n), adding the columns in order."""
+    n = values.shape[1]
+    if n > _COLUMN_LOOP or n == 0:
+        return values.sum(axis=1)
+    out = values[:, 0].astype(np.float64)
+    for j in range(1, n):
+        out += values[:, j]
+    return out
+
+
 def greedy_batch(values: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """The best action of each row of `values` (k, n_actions), ties broken uniformly."""
-    tied = values == values.max(axis=1, keepdims=True)
+    tied = values == row_max(values)[:, None]
     draws = rng.random(values.shape)
     return np.argmax(np.where(tied, draws, -1.0), axis=1)
 
@@ -83,11 +112,11 @@ def policy_probabilities(values: np.ndarray, epsilon: float) -> np.ndarray:
     evenly among the actions tied for the best value.
     """
     n_actions = values.shape[1]
-    tied = values == values.max(axis=1, keepdims=True)
-    share = (1.0 - epsilon) / tied.sum(axis=1, keepdims=True)
+    tied = values == row_max(values)[:, None]
+    share = (1.0 - epsilon) / row_sum(tied)[:, None]
     return epsilon / n_actions + tied * share
 
 
 def expected_values(values: np.ndarray, epsilon: float) -> np.ndarray:
     """Σ_a π(a|s) Q(s, a) per row of `values` under epsilon-greedy with uniform tie-breaking."""
-    return (policy_probabilities(values, epsilon) * values).sum(axis=1)
+    return row_sum(policy_probabilities(values, epsilon) * values)

@@ -36,6 +36,35 @@ from tui_gym.core.params import Param
 __all__ = ["MonteCarlo"]
 
 
+def discounted_returns(
+    rewards: np.ndarray, lengths: np.ndarray, tails: np.ndarray, discount: float
+) -> np.ndarray:
+    """G_t = r_t + γ G_{t+1} for each row of `rewards` (k, T), row i of length
+    `lengths[i]` ending on the value `tails[i]`; entries past a row's end are 0.
+
+    Computed without a loop over t: within blocks short enough that γ^t stays
+    far from underflow, G_t = (Σ_{j>=t} γ^j r_j + γ^e G_e) / γ^t.
+    """
+    k, steps = rewards.shape
+    r = np.where(np.arange(steps) < lengths[:, None], rewards, 0.0)
+    last = np.flatnonzero(lengths > 0)
+    r[last, lengths[last] - 1] += discount * tails[last]
+    if discount == 0.0:
+        return r
+    if discount == 1.0:
+        return np.cumsum(r[:, ::-1], axis=1)[:, ::-1]
+    block = max(1, int(200 / -np.log10(discount)))  # γ^block >= 1e-200
+    out = np.empty((k, steps))
+    carry = np.zeros(k)
+    for start in range((steps - 1) // block * block, -1, -block):
+        end = min(start + block, steps)
+        weights = discount ** np.arange(end - start + 1, dtype=np.float64)
+        partial = np.cumsum((r[:, start:end] * weights[:-1])[:, ::-1], axis=1)[:, ::-1]
+        out[:, start:end] = (partial + weights[-1] * carry[:, None]) / weights[:-1]
+        carry = out[:, start]
+    return out
+
+
 class MonteCarlo(Learner):
     """On-policy Monte Carlo control; learns from whole episodes."""
 
@@ -134,11 +163,7 @@ class MonteCarlo(Learner):
         actions = self._actions[envs, :steps]
         rewards = self._rewards[envs, :steps]
         valid = np.arange(steps) < lengths[:, None]
-        returns = np.empty((k, steps))
-        g = tails.astype(np.float64)
-        for t in range(steps - 1, -1, -1):
-            g = np.where(valid[:, t], rewards[:, t] + hp.discount * g, g)
-            returns[:, t] = g
+        returns = discounted_returns(rewards, lengths, tails, hp.discount)
         cells = states * self.n_actions + actions
         chosen = valid
         if hp.first_visit:

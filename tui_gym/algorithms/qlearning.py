@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from tui_gym.algorithms.base import Learner, Transitions, UpdateRecord
+from tui_gym.algorithms.exploration import row_max
 
 __all__ = ["QLearning", "q_learning_targets"]
 
@@ -22,7 +23,7 @@ def q_learning_targets(
     discount: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """`r + γ max Q(s', ·)` per row (r alone after termination), and the max used."""
-    future = q[next_state].max(axis=1)
+    future = row_max(q[next_state])
     future[terminated] = 0.0
     return reward + discount * future, future
 

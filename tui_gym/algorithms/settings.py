@@ -4,9 +4,9 @@ Every learner declares its hyperparameters as a tuple of `Param`s (numbers
 and switches) and `Choice`s (one word out of a few, e.g. the step-size
 schedule). `COMMON_PARAMS` are the ones every learner shares: step size,
 discount, the linear epsilon decay and the episode budget. `Settings` holds
-one validated value per field of a schema; it reads like the old
-`Hyperparameters` (`hp.learning_rate`, `hp.epsilon_at(episode)`,
-`hp.replace(...)`, `hp.to_dict()`) and pickles, so it crosses processes.
+one validated value per field of a schema, read as attributes or items
+(`hp.learning_rate`, `hp.epsilon_at(episode)`, `hp.replace(...)`,
+`hp.to_dict()`), and pickles, so it crosses processes.
 """
 
 from __future__ import annotations

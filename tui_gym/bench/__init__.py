@@ -3,11 +3,12 @@
 Speeds are quoted as ratios against a baseline measured in the same run (the
 machine is small and shared), each figure a median over repeats.
 
-- `tutorial`: the baseline, a tutorial-style Q-learning loop on Gymnasium's
-  `Blackjack-v1` with our default hyperparameters, and its exact gap.
-- `throughput`: episodes/s of the tutorial loop, the scalar and the vector engine.
-- `gap`: time to a greedy policy within 0.002 of the optimum, ours (as
-  `tui-gym train blackjack --target-gap 0.002`) against the tutorial loop.
+- `tutorial`: the baseline, a tutorial-style Q-learning loop on a game's own
+  Gymnasium env with the game's default hyperparameters, and its exact gap.
+- `throughput`: episodes/s of the tutorial loop and our engines, on every game
+  with `bench_kwargs` (the scalar engine on the first).
+- `gap`: time to a greedy policy within the game's target gap of the optimum,
+  ours (as `tui-gym train GAME --target-gap G`) against the tutorial loop.
 - `live`: episodes/s while the real app shows training at max speed, against
   headless; how often the Train view draws; key press to screen latency;
   for the thread and the process runner.

@@ -1,20 +1,23 @@
-"""Time to a target gap: how long until the greedy policy is within 0.002 of the optimum.
+"""Time to a target gap: how long until the greedy policy is within the target of the optimum.
 
-Ours: exactly what `tui-gym train blackjack --target-gap 0.002` runs, a
-`Session` on the default engine ("auto": the vector engine for Blackjack)
-with the default hyperparameters and the CLI's budget for a target gap
-(`TARGET_GAP_BUDGET`, 1,000,000 episodes), `session.train(target_gap=...)`
-checking the exact gap every 10,000 episodes.
+For every game of the registry with `bench_kwargs`, to its `bench_gap` (else
+the bound its oracle states: for a model game, 1% of the optimum's magnitude,
+beyond what no fixed policy found reaches).
+
+Ours: exactly what `tui-gym train GAME --target-gap G` runs, a `Session` on
+the default engine ("auto": the vector engine) with the game's default
+hyperparameters and the CLI's budget for a target gap (five times the
+default), `session.train(target_gap=...)` checking the exact gap as it does.
 
 The tutorial: the tutorial-style loop (`tutorial.py`) with the same
-hyperparameters and budget, checking its exact gap every 10,000 episodes too.
+hyperparameters and budget, checking its exact gap as often.
 
 Both clocks start before the env is built and stop when the check that met
-the target returns, so both include their gap checks. Each side runs once per
-seed, and the figures are medians over seeds. The tutorial can take long, so
-each of its runs has a time cap and the stage stops adding seeds past a time
-budget; a run stopped by the cap or the budget only gives a lower bound on its
-time, and then the figure says so (`tutorial_reached` false, speed-up ">= x").
+the target returns, so both include their gap checks. Ours runs once per
+seed and the tutorial on seeds in turn while the stage has time; the figures
+are medians over seeds. A tutorial run stopped by its time cap or the stage's
+budget only gives a lower bound on its time, and the figure says so
+(`tutorial_reached` false, speed-up ">= x").
 """
 
 from __future__ import annotations
@@ -22,15 +25,19 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
+from tui_gym.algorithms import Settings
 from tui_gym.bench import tutorial
 from tui_gym.bench.figures import median
-from tui_gym.core.agent import Hyperparameters
-from tui_gym.core.session import TARGET_GAP_BUDGET, Session
-from tui_gym.games import game_for
-
-TARGET_GAP = 0.002
-ENV_ID = "Blackjack-v1"
+from tui_gym.core.mdp import NotAvailable
+from tui_gym.core.session import (
+    TARGET_GAP_BUDGET_FACTOR,
+    Session,
+    check_every_for,
+    default_settings,
+)
+from tui_gym.games import GAMES, Game
 
 
 @dataclass(frozen=True)
@@ -46,11 +53,12 @@ class GapRun:
 
 @dataclass(frozen=True)
 class GapResult:
-    """Time to the target gap, ours and the tutorial's (medians over seeds)."""
+    """Time to the target gap on one game, ours and the tutorial's (medians over seeds)."""
 
     target: float
     ours: tuple[GapRun, ...]
     tutorial: tuple[GapRun, ...]
+    title: str = ""
 
     @property
     def time_to_gap_s(self) -> float:
@@ -77,15 +85,37 @@ class GapResult:
         return self.tutorial_time_to_gap_s / ours
 
 
-def default_hyperparameters() -> Hyperparameters:
-    """The hyperparameters `tui-gym train blackjack --target-gap G` uses."""
-    return game_for(ENV_ID).default_hyperparameters().replace(episodes=TARGET_GAP_BUDGET)
+def benched() -> list[Game]:
+    """The games the bench measures, in the registry's order."""
+    return [game for game in GAMES if game.bench_kwargs is not None]
 
 
-def ours_once(seed: int, target: float = TARGET_GAP) -> GapRun:
+def bench_kwargs(game: Game) -> dict[str, Any]:
+    return game.normalize_kwargs(game.bench_kwargs or {})
+
+
+def target_for(game: Game) -> float:
+    """The gap the bench trains `game` to."""
+    if game.bench_gap is not None:
+        return game.bench_gap
+    bound = game.oracle.bound(bench_kwargs(game), Session(game.env_id,
+                                                          bench_kwargs(game)).changes)
+    if isinstance(bound, NotAvailable) or bound.figure != "gap":
+        raise ValueError(f"{game.title} states no gap to train to")
+    return bound.limit
+
+
+def default_hyperparameters(game: Game) -> Settings:
+    """The hyperparameters `tui-gym train GAME --target-gap G` uses (Q-learning's)."""
+    hp = default_settings(game, "q-learning", bench_kwargs(game))
+    return hp.replace(episodes=TARGET_GAP_BUDGET_FACTOR * hp.episodes)
+
+
+def ours_once(game: Game, seed: int, target: float) -> GapRun:
     """Our default engine, as the CLI runs it for `--target-gap`."""
     start = time.perf_counter()
-    session = Session(ENV_ID, hp=default_hyperparameters(), seed=seed)
+    session = Session(game.env_id, bench_kwargs(game), hp=default_hyperparameters(game),
+                      seed=seed)
     outcome = session.train(target_gap=target)
     seconds = time.perf_counter() - start
     episodes = session.trainer.episodes
@@ -94,15 +124,16 @@ def ours_once(seed: int, target: float = TARGET_GAP) -> GapRun:
     return GapRun(seed, seconds, episodes, gap, bool(outcome.reached_target))
 
 
-def tutorial_once(seed: int, cap_seconds: float | None, target: float = TARGET_GAP) -> GapRun:
+def tutorial_once(game: Game, seed: int, cap_seconds: float | None, target: float) -> GapRun:
     """The tutorial loop with the same hyperparameters and budget, capped in time."""
-    run = tutorial.time_to_gap(target, default_hyperparameters(), seed, cap_seconds)
+    hp = default_hyperparameters(game)
+    run = tutorial.time_to_gap(target, game, bench_kwargs(game), hp, seed, cap_seconds,
+                               check_every=check_every_for(hp.episodes))
     return GapRun(seed, run.seconds, run.episodes, run.gap, run.reached)
 
 
-def measure(
-    seeds: Sequence[int], tutorial_cap_s: float, tutorial_stage_s: float,
-    target: float = TARGET_GAP,
+def measure_game(
+    game: Game, seeds: Sequence[int], tutorial_cap_s: float, tutorial_stage_s: float
 ) -> GapResult:
     """Ours on every seed; the tutorial on seeds in turn while the stage has time left.
 
@@ -111,14 +142,29 @@ def measure(
     tutorial has used `tutorial_stage_s` in all (so the stage takes at most
     about `tutorial_stage_s + tutorial_cap_s`).
     """
+    target = target_for(game)
     ours: list[GapRun] = []
     theirs: list[GapRun] = []
     used = 0.0
     for seed in seeds:
-        ours.append(ours_once(seed, target))
+        ours.append(ours_once(game, seed, target))
         if theirs and used >= tutorial_stage_s:
             continue
-        run = tutorial_once(seed, tutorial_cap_s, target)
+        run = tutorial_once(game, seed, tutorial_cap_s, target)
         theirs.append(run)
         used += run.seconds
-    return GapResult(target, tuple(ours), tuple(theirs))
+    return GapResult(target, tuple(ours), tuple(theirs), title_of(game))
+
+
+def title_of(game: Game) -> str:
+    kwargs = game.bench_kwargs or {}
+    extra = " ".join(f"{v}" if k == "map" else f"{k}={v}" for k, v in kwargs.items())
+    return f"{game.title} {extra}".strip()
+
+
+def measure(
+    seeds: Sequence[int], tutorial_cap_s: float, tutorial_stage_s: float
+) -> dict[str, GapResult]:
+    """`measure_game` for every game the bench measures, by game name."""
+    return {game.name: measure_game(game, seeds, tutorial_cap_s, tutorial_stage_s)
+            for game in benched()}

@@ -3,7 +3,7 @@
 For each runner ("thread": training on a worker thread of the app's process;
 "process": training in a child process, the app's default), one repeat is:
 
-1. Headless: a Blackjack `Session` (engine "auto", i.e. the vector engine)
+1. Headless: a `Session` of the first game (engine "auto", i.e. the vector engine)
    trains in this process with `trainer.run(seconds=W)`, after a warm-up:
    headless episodes per second.
 2. Live: the real `TuiGymApp(session, runner=...)` on a session like it runs
@@ -53,8 +53,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from tui_gym.algorithms import QLearning, Settings
 from tui_gym.bench.figures import median, percentile
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.session import Session
 
 RUNNERS = ("thread", "process")
@@ -151,13 +151,13 @@ class LiveResult:
         return out
 
 
-def _hyperparameters() -> Hyperparameters:
-    return Hyperparameters(episodes=LIVE_BUDGET)
+def _hyperparameters() -> Settings:
+    return QLearning.hyperparameters(episodes=LIVE_BUDGET)
 
 
 def headless_rate(seconds: float, seed: int = 0) -> float:
     """Episodes per second of the default engine ("auto") trained headless in this process."""
-    session = Session("Blackjack-v1", hp=_hyperparameters(), seed=seed)
+    session = Session(hp=_hyperparameters(), seed=seed)
     trainer = session.trainer
     trainer.run(seconds=0.2)
     start = time.perf_counter()
@@ -286,7 +286,7 @@ async def _live_once(
 ) -> tuple[float, float, float, str, list[KeySample]]:
     from tui_gym.ui.app import TuiGymApp
 
-    session = Session("Blackjack-v1", hp=_hyperparameters(), seed=seed)
+    session = Session(hp=_hyperparameters(), seed=seed)
     app = TuiGymApp(session, runner=runner_kind, tune_gc=True)  # as `tui-gym` runs it
     tools = _Instruments(app)
     async with app.run_test(size=SIZE) as pilot:

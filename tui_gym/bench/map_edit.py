@@ -16,7 +16,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.session import Session
 from tui_gym.games import GAMES
@@ -52,7 +51,7 @@ def _one_game(name: str, edits: int, seed: int) -> MapEditResult:
     rng = np.random.default_rng(seed)
     grid_map = random_map(MAP_SIDE, MAP_SIDE, 0.15, seed)
     session = Session(game.env_id, env_kwargs=game.with_map({}, grid_map), seed=seed,
-                      hp=Hyperparameters(episodes=1_000))
+                      hp={"episodes": 1_000})
     agent, kept, times = session.agent, True, []
     for i in range(edits):
         tool, value = TOOLS[i % len(TOOLS)]

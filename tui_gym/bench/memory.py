@@ -1,7 +1,7 @@
 """Memory: how much the resident set grows over a long training run.
 
 A fresh Python process (so nothing else measured in this run shares its heap)
-builds a Blackjack `Session` on the vector engine, trains a warm-up (the
+builds a `Session` of the first game on the vector engine, trains a warm-up (the
 table, numpy's buffers and the rolling statistics reach their working size),
 reads its resident set size (RSS, from /proc/self/statm; the peak from
 `resource` where /proc is missing), then trains `episodes` more the way the
@@ -53,15 +53,17 @@ def rss_bytes() -> int:
         return peak if sys.platform == "darwin" else peak * 1024
 
 
-def train_and_watch(episodes: int, warmup: int, engine: str = "vector") -> dict[str, float]:
+def train_and_watch(
+    episodes: int, warmup: int, engine: str = "vector"
+) -> dict[str, float | str]:
     """The measurement itself (run in the child process); figures as a dict."""
     import time
 
-    from tui_gym.core.agent import Hyperparameters
+    from tui_gym.algorithms import QLearning
     from tui_gym.core.session import Session
 
-    hp = Hyperparameters(episodes=warmup + episodes)
-    session = Session("Blackjack-v1", hp=hp, seed=0, engine=engine)
+    hp = QLearning.hyperparameters(episodes=warmup + episodes)
+    session = Session(hp=hp, seed=0, engine=engine)
     trainer = session.trainer
     trainer.run(episodes=warmup)
     gc.collect()

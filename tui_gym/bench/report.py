@@ -1,12 +1,22 @@
 """The bench's output: one table (each figure, its target, PASS or MISS) or one JSON object.
 
-Targets (issue #4):
-- time to gap <= 0.002 at most 1/8 of the tutorial loop's (a speed-up >= 8);
+Targets:
+- the vector engine >= 50x the tutorial loop's episodes/s, on every game measured;
+- time to the target gap at most 1/20 of the tutorial loop's (a speed-up >= 20),
+  on every game measured;
 - live episodes/s >= 80% of headless with the same engine, per runner;
 - the UI draws snapshots at >= 10 Hz;
 - key press to screen update p95 <= 50 ms while training at max speed;
 - RSS growth < 20 MB over 2,000,000 training episodes;
-- app start to first frame <= 1.0 s.
+- app start to first frame <= 1.0 s;
+- every algorithm on the vector engine >= 50x the episodes/s of a tutorial
+  loop of the same algorithm on the same env (Blackjack and a grid game);
+- Dyna-Q (planning_steps = 10) reaches the bound on a grid game in fewer
+  real episodes than Q-learning.
+- exact-regret scoring separates `optimal` from a player deviating on 5% of
+  Blackjack decisions with >= 10x fewer episodes than mean returns do;
+- the JSON-lines protocol steps >= 20,000 times a second over a pipe, MCP >= 1,000
+  (with several games at once).
 
 A verdict is PASS or MISS; "?" when a lower bound cannot decide it, "n/a"
 when the figure is missing (its stage failed: see `errors`).
@@ -19,16 +29,22 @@ from typing import Any
 
 from rich.table import Table
 
+from tui_gym.bench import programs
 from tui_gym.bench.live import RUNNERS
 from tui_gym.bench.results import BenchResults
 
-GAP_SPEEDUP_TARGET = 8.0
+VECTOR_SPEEDUP_TARGET = 50.0
+GAP_SPEEDUP_TARGET = 20.0
 LIVE_RATIO_TARGET = 0.8
 REFRESH_HZ_TARGET = 10.0
 KEY_P95_MS_TARGET = 50.0
 RSS_GROWTH_MB_TARGET = 20.0
 RSS_EPISODES_TARGET = 2_000_000
 STARTUP_S_TARGET = 1.0
+ALGORITHM_SPEEDUP_TARGET = 50.0
+SEPARATION_RATIO_TARGET = 10.0
+PROTOCOL_STEPS_TARGET = 20_000.0
+MCP_STEPS_TARGET = 1_000.0
 
 PASS, MISS, UNDECIDED, MISSING = "PASS", "MISS", "?", "n/a"
 
@@ -42,15 +58,19 @@ def _ok(value: float | None, good: bool) -> str:
 def verdicts(results: BenchResults) -> dict[str, str]:
     """Each target's verdict, keyed like the JSON's figures."""
     out: dict[str, str] = {}
-    gap = results.gap
-    if gap is None or gap.speedup is None:
-        out["time_to_gap"] = MISSING
-    elif not gap.reached:
-        out["time_to_gap"] = MISS
-    elif gap.speedup >= GAP_SPEEDUP_TARGET:
-        out["time_to_gap"] = PASS  # a lower bound above the target decides it too
-    else:
-        out["time_to_gap"] = MISS if gap.tutorial_reached else UNDECIDED
+    for name, tp in results.throughput.items():
+        speedup = tp.vector_speedup
+        out[f"vector_speedup[{name}]"] = _ok(speedup, (speedup or 0) >= VECTOR_SPEEDUP_TARGET)
+    for name, gap in results.gap.items():
+        key = f"time_to_gap[{name}]"
+        if gap.speedup is None:
+            out[key] = MISSING
+        elif not gap.reached:
+            out[key] = MISS
+        elif gap.speedup >= GAP_SPEEDUP_TARGET:
+            out[key] = PASS  # a lower bound above the target decides it too
+        else:
+            out[key] = MISS if gap.tutorial_reached else UNDECIDED
     for runner in RUNNERS:
         live = results.live_for(runner)
         if live is None:
@@ -70,7 +90,56 @@ def verdicts(results: BenchResults) -> dict[str, str]:
     startup = results.startup
     seconds = startup.seconds if startup is not None else None
     out["startup_s"] = _ok(seconds, seconds is not None and seconds <= STARTUP_S_TARGET)
+    for speed in results.algorithms or ():
+        up = speed.speedup
+        out[f"algorithm_speedup[{speed.game}/{speed.algorithm}]"] = _ok(
+            up, up is not None and up >= ALGORITHM_SPEEDUP_TARGET
+        )
+    if "algorithms" in results.errors:
+        out["algorithm_speedup"] = MISSING
+    planning = results.planning
+    if planning is None:
+        out["planning"] = MISSING
+    else:
+        fewer = planning.dyna_q_episodes < planning.q_learning_episodes
+        out["planning"] = PASS if fewer and all(r.reached for r in planning.dyna_q) else MISS
+    found = results.programs
+    ratio = found.separation.ratio if found else None
+    out["regret_separation_ratio"] = _ok(ratio, ratio is not None and
+                                         ratio >= SEPARATION_RATIO_TARGET)
+    rate = found.protocol.steps_per_second if found else None
+    out["protocol_steps_per_second"] = _ok(rate, rate is not None and
+                                           rate >= PROTOCOL_STEPS_TARGET)
+    rate = found.mcp_together.steps_per_second if found else None
+    out["mcp_steps_per_second"] = _ok(rate, rate is not None and rate >= MCP_STEPS_TARGET)
     return out
+
+
+def _programs_dict(results: BenchResults) -> dict[str, Any] | None:
+    found = results.programs
+    if found is None:
+        return None
+    sep = found.separation
+    return {
+        "separation": {
+            "episodes_each": sep.episodes,
+            "deviation": programs.DEVIATION,
+            "delta": sep.delta,
+            "return_gap_measured": sep.return_gap,
+            "return_sd": list(sep.return_sd),
+            "regret_sd": list(sep.regret_sd),
+            "episodes_needed_by_return": sep.by_return,
+            "episodes_needed_by_regret": sep.by_regret,
+            "ratio": sep.ratio,
+            "formula": "n = 1.96^2 (sd_a^2 + sd_b^2) / delta^2",
+        },
+        "protocol_steps_per_second": found.protocol.steps_per_second,
+        "protocol_samples": list(found.protocol.samples),
+        "mcp_steps_per_second_one_call_at_a_time": found.mcp_one.steps_per_second,
+        "mcp_steps_per_second": found.mcp_together.steps_per_second,
+        "mcp_games_at_once": programs.MCP_GAMES,
+        "mcp_note": found.mcp_together.reason,
+    }
 
 
 # --- JSON --------------------------------------------------------------------
@@ -95,9 +164,53 @@ def _runner_dict(results: BenchResults, runner: str) -> dict[str, Any]:
     }
 
 
+def _game_dict(results: BenchResults, name: str) -> dict[str, Any]:
+    tp, gap = results.throughput.get(name), results.gap.get(name)
+    title = tp.title if tp is not None else gap.title if gap is not None else name
+    return {
+        "title": title,
+        "tutorial_episodes_per_second": tp.tutorial if tp else None,
+        "vector_episodes_per_second": tp.vector if tp else None,
+        "scalar_episodes_per_second": tp.scalar if tp else None,
+        "vector_speedup_vs_tutorial": tp.vector_speedup if tp else None,
+        "target_gap": gap.target if gap else None,
+        "time_to_gap_s": gap.time_to_gap_s if gap else None,
+        "time_to_gap_reached": gap.reached if gap else None,
+        "time_to_gap_episodes": [r.episodes for r in gap.ours] if gap else None,
+        "tutorial_time_to_gap_s": gap.tutorial_time_to_gap_s if gap else None,
+        "tutorial_reached": gap.tutorial_reached if gap else None,
+        "tutorial_time_to_gap_episodes": [r.episodes for r in gap.tutorial] if gap else None,
+        "time_to_gap_speedup": gap.speedup if gap else None,
+        "time_to_gap_speedup_is_lower_bound": (not gap.tutorial_reached) if gap else None,
+    }
+
+
+def _planning_dict(results: BenchResults) -> dict[str, Any] | None:
+    planning = results.planning
+    if planning is None:
+        return None
+    return {
+        "game": planning.game,
+        "measure": planning.measure,
+        "bound": planning.bound,
+        "q_learning_episodes": planning.q_learning_episodes,
+        "dyna_q_episodes": planning.dyna_q_episodes,
+        "q_learning_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
+                            for r in planning.q_learning],
+        "dyna_q_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
+                        for r in planning.dyna_q],
+    }
+
+
 def to_json(results: BenchResults) -> dict[str, Any]:
-    """The JSON object `tui-gym bench --json` prints (NaN and missing figures are null)."""
-    tp, gap, memory, startup = results.throughput, results.gap, results.memory, results.startup
+    """The JSON object `tui-gym bench --json` prints (NaN and missing figures are null).
+
+    `games` holds every game's figures; the top-level throughput and gap figures are
+    those of the first game measured."""
+    names = list(dict.fromkeys([*results.throughput, *results.gap]))
+    first = names[0] if names else ""
+    tp, gap = results.throughput.get(first), results.gap.get(first)
+    memory, startup = results.memory, results.startup
     default = results.live_for(results.default_runner)
     machine = results.machine
     data: dict[str, Any] = {
@@ -125,6 +238,7 @@ def to_json(results: BenchResults) -> dict[str, Any]:
         "tutorial_time_to_gap_episodes": [r.episodes for r in gap.tutorial] if gap else None,
         "time_to_gap_speedup": gap.speedup if gap else None,
         "time_to_gap_speedup_is_lower_bound": (not gap.tutorial_reached) if gap else None,
+        "games": {name: _game_dict(results, name) for name in names},
         "default_runner": results.default_runner,
         "live_ratio": default.live_ratio if default else None,
         "ui_refresh_hz": default.refresh_hz if default else None,
@@ -146,6 +260,15 @@ def to_json(results: BenchResults) -> dict[str, Any]:
         ),
         "startup_s": startup.seconds if startup else None,
         "startup_samples_s": list(startup.samples) if startup else None,
+        "algorithms": [
+            {"game": a.game, "algorithm": a.algorithm,
+             "vector_episodes_per_second": a.vector,
+             "tutorial_episodes_per_second": a.tutorial, "speedup": a.speedup,
+             "repeats": a.repeats}
+            for a in results.algorithms or ()
+        ],
+        "planning": _planning_dict(results),
+        "programs": _programs_dict(results),
         "verdicts": verdicts(results),
         "errors": dict(results.errors),
     }
@@ -185,34 +308,34 @@ def table(results: BenchResults) -> Table:
     def row(label: str, value: str, target: str = "", key: str | None = None) -> None:
         out.add_row(label, value, target, _STYLE[verdict[key]] if key else "")
 
-    tp = results.throughput
-    if tp is not None:
-        row("tutorial loop on gym Blackjack-v1, ep/s", _num(tp.tutorial, ",.0f"), "baseline")
-        row("scalar engine, ep/s",
-            f"{_num(tp.scalar, ',.0f')} ({_num(tp.scalar_speedup, '.2f', '×')})")
-        row("vector engine, ep/s",
-            f"{_num(tp.vector, ',.0f')} ({_num(tp.vector_speedup, '.0f', '×')})")
-    gap = results.gap
-    if gap is not None:
+    for name, tp in results.throughput.items():
+        row(f"{tp.title}: tutorial loop, ep/s", _num(tp.tutorial, ",.0f"), "baseline")
+        if tp.scalar is not None:
+            row("  scalar engine, ep/s",
+                f"{_num(tp.scalar, ',.0f')} ({_num(tp.scalar_speedup, '.2f', '×')})")
+        row("  vector engine, ep/s",
+            f"{_num(tp.vector, ',.0f')} ({_num(tp.vector_speedup, '.0f', '×')})",
+            f"≥ {VECTOR_SPEEDUP_TARGET:g}×", f"vector_speedup[{name}]")
+    for name, gap in results.gap.items():
         ours_eps = sorted(r.episodes for r in gap.ours)
         mark = "" if gap.reached else " (not reached)"
-        row(f"time to gap ≤ {gap.target:g}, ours",
+        row(f"{gap.title}: time to gap ≤ {gap.target:.4g}, ours",
             f"{_num(gap.time_to_gap_s, '.2f', ' s')}{mark}, "
             f"{ours_eps[len(ours_eps) // 2]:,} ep")
         theirs_eps = sorted(r.episodes for r in gap.tutorial)
         prefix = "" if gap.tutorial_reached else "≥ "
         mark = "" if gap.tutorial_reached else " (capped)"
-        row(f"time to gap ≤ {gap.target:g}, tutorial loop",
+        row("  tutorial loop",
             f"{prefix}{_num(gap.tutorial_time_to_gap_s, '.1f', ' s')}{mark}, "
             f"{theirs_eps[len(theirs_eps) // 2]:,} ep" if theirs_eps else "n/a")
         row("  tutorial time / ours", prefix + _num(gap.speedup, ".0f", "×"),
-            f"≥ {GAP_SPEEDUP_TARGET:g}×", "time_to_gap")
+            f"≥ {GAP_SPEEDUP_TARGET:g}×", f"time_to_gap[{name}]")
     for runner in RUNNERS:
         name = f"{runner} runner" + (" (default)" if runner == results.default_runner else "")
         live = results.live_for(runner)
         if live is None:
-            error = results.live.get(runner)
-            text = "; ".join(error.errors) if error is not None else "not measured"
+            failed = results.live.get(runner)
+            text = "; ".join(failed.errors) if failed is not None else "not measured"
             out.add_row(f"live, {name}", f"[red]{text}[/]", "", _STYLE[MISSING])
             continue
         row(f"live ep/s ÷ headless, {name}",
@@ -232,9 +355,48 @@ def table(results: BenchResults) -> Table:
         samples = ", ".join(f"{s:.2f}" for s in results.startup.samples)
         row("start to first frame", f"{results.startup.seconds:.2f} s ({samples})",
             f"≤ {STARTUP_S_TARGET:g} s", "startup_s")
+    for speed in results.algorithms or ():
+        key = f"algorithm_speedup[{speed.game}/{speed.algorithm}]"
+        row(f"{speed.algorithm} on {speed.game}: vector ÷ tutorial loop",
+            f"{_num(speed.speedup, '.0f', '×')} ({_num(speed.vector, ',.0f')} / "
+            f"{_num(speed.tutorial, ',.0f')} ep/s)",
+            f"≥ {ALGORITHM_SPEEDUP_TARGET:g}×", key)
+    planning = results.planning
+    if planning is not None:
+        def runs(items: tuple) -> str:
+            return _num(median_of(items), ",.0f") + ("" if all(r.reached for r in items)
+                                                       else " (not all reached)")
+        row(f"real episodes to ≤ {planning.bound:g} on {planning.game}: Q-learning / Dyna-Q",
+            f"{runs(planning.q_learning)} / {runs(planning.dyna_q)}",
+            "Dyna-Q fewer", "planning")
+    found = results.programs
+    if found is not None:
+        sep = found.separation
+        row("episodes to separate optimal from 5% deviations, by return",
+            f"{_num(sep.by_return, ',.0f')}")
+        row("  by exact regret", f"{_num(sep.by_regret, ',.0f')}")
+        row("  ratio", _num(sep.ratio, ".0f", "×"), f"≥ {SEPARATION_RATIO_TARGET:g}×",
+            "regret_separation_ratio")
+        row("protocol over a pipe, steps/s", _num(found.protocol.steps_per_second, ",.0f"),
+            f"≥ {PROTOCOL_STEPS_TARGET:,.0f}", "protocol_steps_per_second")
+        if found.mcp_together.reason:
+            out.add_row("MCP, steps/s", f"[dim]{found.mcp_together.reason}[/]", "",
+                        _STYLE[MISSING])
+        else:
+            row(f"MCP, steps/s, {programs.MCP_GAMES} games at once",
+                _num(found.mcp_together.steps_per_second, ",.0f"),
+                f"≥ {MCP_STEPS_TARGET:,.0f}", "mcp_steps_per_second")
+            row("  one call at a time", _num(found.mcp_one.steps_per_second, ",.0f"))
     for stage, error in results.errors.items():
         out.add_row(f"{stage} failed", f"[red]{error}[/]", "", _STYLE[MISSING])
     return out
+
+
+def median_of(runs: tuple) -> float:
+    """The median episode count of planning runs."""
+    from tui_gym.bench.figures import median
+
+    return median([r.episodes for r in runs])
 
 
 def notes(results: BenchResults) -> list[str]:
@@ -253,11 +415,27 @@ def notes(results: BenchResults) -> list[str]:
             "for comparison (a thread runner shares one interpreter lock with the UI, so the UI's "
             "drawing comes out of training time)."
         )
-    gap = results.gap
-    if gap is not None and not gap.tutorial_reached:
+    if results.planning is not None:
         lines.append(
-            "The tutorial loop was stopped by its time cap before reaching the gap: its time "
-            "and the speed-up are lower bounds (run without --quick for the full figure)."
+            f"Planning: the bound is on the {results.planning.measure}; episodes are real "
+            "ones (Dyna-Q's simulated updates are not counted), medians over seeds."
+        )
+    capped = [gap.title for gap in results.gap.values() if not gap.tutorial_reached]
+    if capped:
+        lines.append(
+            f"The tutorial loop was stopped by its time cap before reaching the gap on "
+            f"{', '.join(capped)}: its time and the speed-up are lower bounds (run without "
+            "--quick for longer caps)."
+        )
+    found = results.programs
+    if found is not None:
+        sep = found.separation
+        lines.append(
+            f"Episodes to separate: each player played {sep.episodes:,} Blackjack episodes on "
+            "the same seeds; n = 1.96² (sd_a² + sd_b²) / Δ² episodes each, Δ the deviating "
+            f"player's mean exact regret ({sep.delta:.4f}), sd the measured per-episode "
+            f"standard deviations (return {sep.return_sd[1]:.3f}, regret "
+            f"{sep.regret_sd[1]:.3f})."
         )
     load = results.machine.load_before
     cpus = results.machine.cpus or 1

@@ -5,8 +5,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from tui_gym.bench.gap import GapResult
+from tui_gym.bench.learners import AlgorithmSpeed, PlanningResult
 from tui_gym.bench.live import DEFAULT_RUNNER, LiveResult
 from tui_gym.bench.memory import MemoryResult
+from tui_gym.bench.programs import ProgramsResult
 from tui_gym.bench.startup import StartupResult
 from tui_gym.bench.throughput import ThroughputResult
 
@@ -27,11 +29,14 @@ class BenchResults:
     quick: bool
     seconds: float  # the whole run
     machine: MachineInfo
-    throughput: ThroughputResult | None = None
-    gap: GapResult | None = None
+    throughput: dict[str, ThroughputResult] = field(default_factory=dict)  # by game name
+    gap: dict[str, GapResult] = field(default_factory=dict)  # by game name
     live: dict[str, LiveResult] = field(default_factory=dict)  # by runner
     memory: MemoryResult | None = None
     startup: StartupResult | None = None
+    algorithms: tuple[AlgorithmSpeed, ...] | None = None  # vector engine vs tutorial, each
+    planning: PlanningResult | None = None  # Dyna-Q against Q-learning, real episodes
+    programs: ProgramsResult | None = None
     errors: dict[str, str] = field(default_factory=dict)  # stage -> what went wrong
     default_runner: str = DEFAULT_RUNNER
 

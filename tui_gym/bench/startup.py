@@ -1,6 +1,6 @@
 """Start-up: from launching the app to its first frame on a terminal.
 
-`python -m tui_gym` (what `tui-gym` runs: the CLI, the default Blackjack
+`python -m tui_gym` (what `tui-gym` runs: the CLI, the default game's
 session and the default process runner) is started on a fresh pseudo-terminal
 of 120x40. The clock starts just before the process is launched and stops
 when the first frame arrives on the terminal: the first full-screen paint

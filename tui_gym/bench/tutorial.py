@@ -1,70 +1,84 @@
-"""The baseline: a tutorial-style Q-learning loop on Gymnasium's `Blackjack-v1`.
+"""The baseline: a tutorial-style Q-learning loop on the game's own Gymnasium env.
 
-This is how Gymnasium's "Solving Blackjack with Q-Learning" tutorial trains,
-written the tutorial's way: one `gym.make("Blackjack-v1")`, a
-`defaultdict(lambda: np.zeros(n_actions))` Q-table keyed by the observation
-tuple, epsilon-greedy with `env.action_space.sample()` and `np.argmax`, one
+This is how Gymnasium's Q-learning tutorial trains (its card-game agent),
+written the tutorial's way and run on any game of the registry: one
+`gym.make(...)` of the game's id and arguments, a
+`defaultdict(lambda: np.zeros(n_actions))` Q-table keyed by the observation,
+epsilon-greedy with `env.action_space.sample()` and `np.argmax`, one
 Python-level update per step. Only the hyperparameters are ours, so that the
-comparison is about speed, not about settings: the same ones as the default
-Blackjack agent (`Hyperparameters()`: discount 1, the "visits" step size
-`max(lr, 1/n(s, a))`, epsilon from 1.0 to 0.05 linearly over the first half of
-the budget).
+comparison is about speed, not about settings: the game's default ones (the
+discount, the "visits" step size `max(lr, 1/n(s, a))`, epsilon from 1.0 to
+0.05 linearly over the first half of the budget).
 
 To keep the baseline honest rather than a strawman, the loop leaves out what
 only slows the tutorial down: no `RecordEpisodeStatistics` wrapper, no
 `training_error` list, no progress bar. What remains is what any tutorial-style
 loop must do per step: step the env, pick an action, update one Q-value.
 
-`TutorialAgent.gap()` scores the agent's greedy policy exactly (the
-`policy_value` dynamic programme; no sampling), as `Session.reference()` does
-for our agent: unseen states get the tutorial's `np.argmax` of zeros (stick).
+`TutorialAgent.gap()` scores the agent's greedy policy exactly, with the
+game's own oracle (no sampling), as `Session.reference()` does for our agent:
+unseen states get the tutorial's `np.argmax` of zeros (the first action).
 """
 
 from __future__ import annotations
 
 import time
 from collections import defaultdict
+from collections.abc import Hashable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
-from tui_gym.core.agent import Hyperparameters
-from tui_gym.games.blackjack.solver import (
-    POLICY_SHAPE,
-    BlackjackRules,
-    optimal_value,
-    policy_value,
-)
+from tui_gym.algorithms import Settings
+from tui_gym.core.mdp import NotAvailable
+from tui_gym.core.wrappers.changes import GameChanges
+from tui_gym.games import Game
 
 GAP_CHECK_EVERY = 10_000  # episodes between exact gap checks (as `Session.train`)
 
 
-class TutorialAgent:
-    """The tutorial's `BlackjackAgent`, with our default schedules (see the module docstring)."""
+def _key(obs: Any) -> Hashable:
+    """An observation as the tutorial keys its table: as it comes (tuples, ints)."""
+    if isinstance(obs, np.ndarray):
+        return tuple(obs.tolist())
+    if isinstance(obs, np.integer):
+        return int(obs)
+    return obs
 
-    def __init__(self, env: gym.Env, hp: Hyperparameters, seed: int = 0) -> None:
+
+class TutorialAgent:
+    """The tutorial's agent, with the game's default schedules (see the module docstring)."""
+
+    def __init__(
+        self, env: gym.Env, hp: Settings, game: Game, kwargs: Mapping[str, Any],
+        seed: int = 0,
+    ) -> None:
         self.env = env
         self.hp = hp
-        self.n_actions = int(env.action_space.n)
-        self.q_values: defaultdict[tuple, np.ndarray] = defaultdict(
+        self.game = game
+        self.kwargs = dict(kwargs)
+        self.n_actions = len(game.action_names)
+        self.q_values: defaultdict[Hashable, np.ndarray] = defaultdict(
             lambda: np.zeros(self.n_actions)
         )
-        self.counts: defaultdict[tuple, np.ndarray] = defaultdict(
+        self.counts: defaultdict[Hashable, np.ndarray] = defaultdict(
             lambda: np.zeros(self.n_actions, dtype=np.int64)
         )
         self.rng = np.random.default_rng(seed)
         env.action_space.seed(seed)
         self.episode = 0
         self.epsilon = hp.epsilon_at(0)
+        self._changes = GameChanges.of(env, game.episode_limit(self.kwargs))
 
-    def get_action(self, obs: tuple) -> int:
+    def get_action(self, obs: Hashable) -> int:
         if self.rng.random() < self.epsilon:
             return int(self.env.action_space.sample())
         return int(np.argmax(self.q_values[obs]))
 
     def update(
-        self, obs: tuple, action: int, reward: float, terminated: bool, next_obs: tuple
+        self, obs: Hashable, action: int, reward: float, terminated: bool, next_obs: Hashable
     ) -> None:
         future_q_value = (not terminated) * np.max(self.q_values[next_obs])
         temporal_difference = (
@@ -80,17 +94,20 @@ class TutorialAgent:
         self.epsilon = self.hp.epsilon_at(self.episode)
 
     def policy(self) -> np.ndarray:
-        """The greedy policy as a `POLICY_SHAPE` array (0 stick, 1 hit) for `policy_value`."""
-        policy = np.zeros(POLICY_SHAPE, dtype=np.int8)
-        for obs, values in self.q_values.items():
-            player, dealer, usable = (int(x) for x in obs)
-            policy[player, dealer, usable] = int(np.argmax(values))
-        return policy
+        """The greedy policy on the game's base states, one-hot rows: `np.argmax`'s choice."""
+        states = self.game.states.base_observations(self.kwargs)
+        assert not isinstance(states, NotAvailable), states
+        one_hot = np.zeros((len(states), self.n_actions))
+        for row, obs in enumerate(states):
+            values = self.q_values.get(_key(obs))
+            one_hot[row, int(np.argmax(values)) if values is not None else 0] = 1.0
+        return one_hot
 
-    def gap(self, rules: BlackjackRules | None = None) -> float:
+    def gap(self) -> float:
         """The exact distance of the greedy policy's value from the optimum's."""
-        rules = rules or BlackjackRules()
-        return optimal_value(rules) - policy_value(self.policy(), rules)
+        reference = self.game.oracle.reference(self.policy(), self.kwargs, self._changes)
+        assert not isinstance(reference, NotAvailable), reference
+        return float(reference.figures["gap"])
 
 
 def train_episodes(agent: TutorialAgent, episodes: int) -> None:
@@ -98,28 +115,40 @@ def train_episodes(agent: TutorialAgent, episodes: int) -> None:
     env = agent.env
     for _ in range(episodes):
         obs, _info = env.reset()
+        obs = _key(obs)
         done = False
         while not done:
             action = agent.get_action(obs)
             next_obs, reward, terminated, truncated, _info = env.step(action)
+            next_obs = _key(next_obs)
             agent.update(obs, action, float(reward), terminated, next_obs)
             done = terminated or truncated
             obs = next_obs
         agent.decay_epsilon()
 
 
-def make_agent(hp: Hyperparameters | None = None, seed: int = 0) -> TutorialAgent:
-    """A fresh tutorial agent on a fresh `gym.make("Blackjack-v1")`, seeded."""
-    env = gym.make("Blackjack-v1")
+def make_agent(
+    game: Game, kwargs: Mapping[str, Any], hp: Settings | None = None, seed: int = 0
+) -> TutorialAgent:
+    """A fresh tutorial agent on a fresh `gym.make` of the game, seeded."""
+    import tui_gym.envs
+    from tui_gym.core.session import default_settings
+
+    tui_gym.envs.register_envs()
+    normal = game.normalize_kwargs(kwargs)
+    env = gym.make(game.env_id, **game.make_kwargs(normal))
     env.reset(seed=seed)
-    return TutorialAgent(env, hp or Hyperparameters(), seed=seed)
+    hp = hp or default_settings(game, "q-learning", normal)
+    return TutorialAgent(env, hp, game, normal, seed=seed)
 
 
-def episodes_per_second(seconds: float, hp: Hyperparameters | None = None, seed: int = 0) -> float:
+def episodes_per_second(
+    seconds: float, game: Game, kwargs: Mapping[str, Any], hp: Settings, seed: int = 0
+) -> float:
     """Train a fresh agent for about `seconds`; its episodes per second."""
-    agent = make_agent(hp, seed)
+    agent = make_agent(game, kwargs, hp, seed)
     done = 0
-    batch = 500
+    batch = 50
     start = time.perf_counter()
     while True:
         train_episodes(agent, batch)
@@ -142,7 +171,9 @@ class GapRun:
 
 def time_to_gap(
     target: float,
-    hp: Hyperparameters,
+    game: Game,
+    kwargs: Mapping[str, Any],
+    hp: Settings,
     seed: int = 0,
     cap_seconds: float | None = None,
     check_every: int = GAP_CHECK_EVERY,
@@ -150,7 +181,7 @@ def time_to_gap(
     """Train until the exact gap is at most `target` (checked every `check_every` episodes),
     the budget `hp.episodes` runs out, or `cap_seconds` pass."""
     start = time.perf_counter()
-    agent = make_agent(hp, seed)
+    agent = make_agent(game, kwargs, hp, seed)
     done = 0
     gap = float("inf")
     while done < hp.episodes:

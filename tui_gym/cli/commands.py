@@ -24,22 +24,34 @@ from rich.progress import (
 )
 from rich.table import Table
 
-from tui_gym.cli.flags import game_kwargs, hyperparameters
+from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, Field, Learner, algorithm
+from tui_gym.benchmark.command import cmd_benchmark
+from tui_gym.cli.flags import flag, game_kwargs, hyperparameters
 from tui_gym.cli.maps_command import cmd_maps
 from tui_gym.cli.output import CliError, key_value_table, print_json
 from tui_gym.core import evaluation
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.evaluation import EvalReport
 from tui_gym.core.params import Param
-from tui_gym.core.session import TARGET_GAP_BUDGET, Session
+from tui_gym.core.session import TARGET_GAP_BUDGET_FACTOR, Session, default_settings
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
+from tui_gym.mcp_server.command import cmd_mcp
 
 WRAPPER_SYNTAX = "--wrapper NAME or --wrapper NAME:key=value,key=value, repeatable; " \
     "the first is innermost"
 
 
-def _param_dict(param: Param) -> dict[str, Any]:
-    data = {
+
+def _param_dict(param: Field) -> dict[str, Any]:
+    if not isinstance(param, Param):  # a Choice: one word out of a few
+        return {
+            "name": param.name,
+            "type": "choice",
+            "default": param.default,
+            "choices": list(param.choices),
+            "range": param.describe_range(),
+            "help": param.help,
+        }
+    data: dict[str, Any] = {
         "name": param.name,
         "type": param.kind.__name__,
         "default": param.default,
@@ -124,7 +136,7 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
     out.print(
         "Use with [bold]--wrapper NAME[/] or [bold]--wrapper NAME:key=value,key=value[/], "
         "repeatable; the first is innermost.\n"
-        "Example: tui-gym train gridworld --wrapper TimeLimit:max_episode_steps=50 "
+        "Example: tui-gym train GAME --wrapper TimeLimit:max_episode_steps=50 "
         "--wrapper StepPenalty:penalty=0.01"
     )
     return 0
@@ -145,13 +157,50 @@ def _wrapper_table(catalog: dict[str, Any]) -> Table:
     return table
 
 
+def cmd_algorithms(args: argparse.Namespace, out: Console) -> int:
+    if args.json:
+        print_json({"algorithms": [
+            {
+                "name": cls.name,
+                "title": cls.title,
+                "summary": cls.summary,
+                "target": cls.formula,
+                "params": [_param_dict(field) for field in cls.params],
+            }
+            for cls in ALGORITHMS
+        ]})
+        return 0
+    table = Table(title="Algorithms", title_justify="left", show_lines=True)
+    table.add_column("name", style="bold cyan", no_wrap=True)
+    table.add_column("what it teaches", ratio=1, overflow="fold")
+    table.add_column("target", overflow="fold")
+    table.add_column("its own parameters (default, range)", overflow="fold")
+    common = {field.name for field in COMMON_PARAMS}
+    for cls in ALGORITHMS:
+        own = "\n".join(
+            f"{f.name}\n  ={f.default} {f.describe_range()}" for f in cls.params
+            if f.name not in common
+        ) or "-"
+        table.add_row(cls.name, escape(f"{cls.title}: {cls.summary}"), escape(cls.formula),
+                      escape(own))
+    out.print(table)
+    shared = ", ".join(field.name for field in COMMON_PARAMS)
+    out.print(f"Every algorithm also takes {shared}.", overflow="fold")
+    out.print("Use with [bold]tui-gym train ENV --algorithm NAME[/]; each game has its own "
+              "defaults per algorithm (see the README).")
+    return 0
+
+
 def _base_hyperparameters(
-    args: argparse.Namespace, game: Game, kwargs: dict[str, Any]
-) -> Hyperparameters:
-    hp = game.default_hyperparameters(game.normalize_kwargs(kwargs))
-    if getattr(args, "target_gap", None) is not None and args.episodes is None:
-        # A longer budget decays epsilon more slowly; the run stops at the target anyway.
-        hp = hp.replace(episodes=TARGET_GAP_BUDGET)
+    args: argparse.Namespace, game: Game, kwargs: dict[str, Any], cls: type[Learner]
+) -> dict[str, Any]:
+    """The hyperparameter flags given; with a target gap and no budget, five times the
+    game's budget (a longer budget decays epsilon more slowly; the run stops at the
+    target anyway)."""
+    hp = hyperparameters(args, cls)
+    if getattr(args, "target_gap", None) is not None and "episodes" not in hp:
+        defaults = default_settings(game, cls.name, game.normalize_kwargs(kwargs))
+        hp["episodes"] = TARGET_GAP_BUDGET_FACTOR * int(defaults.episodes)
     return hp
 
 
@@ -161,15 +210,27 @@ def _session_from_args(args: argparse.Namespace) -> Session:
     env_id = resolve_env_id(args.env)
     game = game_for(env_id)
     choices = tuple(parse_wrapper_spec(text) for text in args.wrapper)
+    try:
+        cls = algorithm(args.algorithm)
+    except ValueError as exc:
+        raise CliError(f"--algorithm: {exc}") from None
     kwargs = game_kwargs(args, game)
-    session = Session(
-        env_id=env_id,
-        env_kwargs=kwargs,
-        choices=choices,
-        hp=hyperparameters(args, _base_hyperparameters(args, game, kwargs)),
-        seed=args.train_seed,
-        engine=args.engine,
-    )
+    hp = _base_hyperparameters(args, game, kwargs, cls)
+    try:
+        session = Session(
+            env_id=env_id,
+            env_kwargs=kwargs,
+            choices=choices,
+            hp=hp,
+            seed=args.train_seed,
+            engine=args.engine,
+            algorithm=cls.name,
+        )
+    except ValueError as exc:
+        text = str(exc)
+        for name in hp:  # e.g. epsilon_final above epsilon_start: say it with the flags
+            text = text.replace(name, flag(name))
+        raise CliError(text) from None
     if session.skipped:
         reasons = "; ".join(reason for _, reason in session.skipped)
         raise CliError(f"wrapper does not fit {env_id}: {reasons}")
@@ -178,7 +239,9 @@ def _session_from_args(args: argparse.Namespace) -> Session:
 
 def eval_dict(session: Session, report: EvalReport) -> dict[str, Any]:
     """The JSON object `eval --json` prints (and `train --json` nests)."""
-    data: dict[str, Any] = {"env_id": session.env_id, **report.to_dict()}
+    data: dict[str, Any] = {
+        "env_id": session.env_id, "algorithm": session.algorithm, **report.to_dict()
+    }
     ref = session.reference()
     if ref is not None:
         data.update(ref.figures)
@@ -275,6 +338,7 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
     data = {
         "env_id": session.env_id,
         "env_kwargs": session.env_kwargs,
+        "algorithm": session.algorithm,
         "wrappers": _wrapper_dicts(session),
         "engine": trainer.engine,
         "engine_reason": session.engine_reason,
@@ -295,6 +359,7 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
         return 0
     rows = [
         ("env", f"{session.env_id} {session.env_kwargs or ''}".strip()),
+        ("algorithm", session.learner_class.title),
         ("wrappers", session.chain_repr()),
         ("engine", session.engine_reason),
         ("episodes", f"{trainer.episodes:,}"),
@@ -321,7 +386,8 @@ def cmd_eval(args: argparse.Namespace, out: Console) -> int:
     if args.json:
         print_json(data)
         return 0
-    rows = [("file", args.path), ("env", session.env_id), ("wrappers", session.chain_repr())]
+    rows = [("file", args.path), ("env", session.env_id),
+            ("algorithm", session.learner_class.title), ("wrappers", session.chain_repr())]
     rows += _eval_rows(data)
     out.print(key_value_table("Evaluation", rows))
     return 0
@@ -397,7 +463,14 @@ def cmd_play(args: argparse.Namespace, out: Console) -> int:
     if session.skipped:
         reasons = "; ".join(reason for _, reason in session.skipped)
         raise CliError(f"wrapper does not fit {env_id}: {reasons}")
-    return serve(JsonlPlayer(session, seed=args.play_seed), sys.stdin.buffer, sys.stdout)
+    player = JsonlPlayer(session, seed=args.play_seed)
+    if args.record is None:
+        return serve(player, sys.stdin.buffer, sys.stdout)
+    from tui_gym.replay_command import open_recorder
+
+    with open_recorder(args.record, session, source="play", seed=args.play_seed) as recorder:
+        player.game.recorder = recorder
+        return serve(player, sys.stdin.buffer, sys.stdout)
 
 
 def cmd_screenshots(args: argparse.Namespace, out: Console) -> int:
@@ -416,8 +489,14 @@ def cmd_bench(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.bench.report import notes, table, to_json
     from tui_gym.bench.run import run_bench
 
+    names = None
+    if args.algorithm is not None:
+        try:
+            names = (algorithm(args.algorithm).name,)
+        except ValueError as exc:
+            raise CliError(f"--algorithm: {exc}") from None
     if args.json:
-        print_json(to_json(run_bench(quick=args.quick)))
+        print_json(to_json(run_bench(quick=args.quick, algorithms=names)))
         return 0
     # Plain lines, not a spinner: a spinner's refresh thread would share the GIL
     # with the thread runner being measured.
@@ -426,6 +505,7 @@ def cmd_bench(args: argparse.Namespace, out: Console) -> int:
     results = run_bench(
         quick=args.quick,
         progress=lambda text: err.print(f"[dim]{time.perf_counter() - started:5.1f} s[/] {text}"),
+        algorithms=names,
     )
     out.print(table(results))
     for line in notes(results):
@@ -436,6 +516,7 @@ def cmd_bench(args: argparse.Namespace, out: Console) -> int:
 COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {
     "envs": cmd_envs,
     "wrappers": cmd_wrappers,
+    "algorithms": cmd_algorithms,
     "train": cmd_train,
     "eval": cmd_eval,
     "optimal": cmd_optimal,
@@ -443,4 +524,6 @@ COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {
     "screenshots": cmd_screenshots,
     "bench": cmd_bench,
     "maps": cmd_maps,
+    "mcp": cmd_mcp,
+    "benchmark": cmd_benchmark,
 }

@@ -7,18 +7,18 @@ for one game with that game's own `Param`s, so an error names the flag and
 what it takes, and a flag of another game says which games take it.
 `--map-file PATH` gives a grid game a map (`tui_gym.games.maps`); a bad file
 is one line naming the row and column at fault.
-`add_hyperparameter_flags` and `hyperparameters` do the same for the
-hyperparameters.
+`add_hyperparameter_flags` adds one flag per hyperparameter of any
+algorithm, and `hyperparameters(args, cls)` reads those given with the
+algorithm's own fields (a flag of another algorithm says which take it).
 """
 
 from __future__ import annotations
 
 import argparse
-from collections.abc import Sequence
 from typing import Any
 
+from tui_gym.algorithms import ALGORITHMS, ALL_PARAMS, Learner
 from tui_gym.cli.output import CliError
-from tui_gym.core.agent import HYPERPARAMETER_FIELDS, Hyperparameters
 from tui_gym.core.params import Param, ParamError
 from tui_gym.games import GAMES, Game
 
@@ -31,7 +31,7 @@ __all__ = [
     "hyperparameters",
 ]
 
-HP_FLAGS = tuple(field.name for field in HYPERPARAMETER_FIELDS)
+HP_FLAGS = tuple(field.name for field in ALL_PARAMS)  # `train --learning-rate X`, ...
 _PREFIX = "game_"
 
 
@@ -105,30 +105,37 @@ def map_kwargs(path: str, game: Game, kwargs: dict[str, Any]) -> dict[str, Any]:
 
 
 def add_hyperparameter_flags(parser: argparse.ArgumentParser) -> None:
-    """One flag per hyperparameter, read as text and parsed by the field itself."""
-    for field in HYPERPARAMETER_FIELDS:
+    """One flag per hyperparameter of any algorithm, read as text and parsed by the
+    field itself; a field some algorithms lack says which have it."""
+    for field in ALL_PARAMS:
+        kind = getattr(field, "kind", str)
+        metavar = {int: "N", float: "X", bool: "BOOL"}.get(kind, "WORD")
+        owners = [cls.name for cls in ALGORITHMS if field in cls.params]
+        only = "" if len(owners) == len(ALGORITHMS) else f"; {', '.join(owners)}"
         parser.add_argument(
-            flag(field.name), metavar="N" if field.kind is int else "X",
-            help=f"{field.help} ({field.describe_range()})",
+            flag(field.name), metavar=metavar,
+            help=f"{field.help} ({field.describe_range()}{only})",
         )
 
 
-def hyperparameters(
-    args: argparse.Namespace, base: Hyperparameters, names: Sequence[str] = HP_FLAGS
-) -> Hyperparameters:
-    """`base` with the hyperparameter flags given; errors name the flag."""
+def hyperparameters(args: argparse.Namespace, cls: type[Learner]) -> dict[str, Any]:
+    """The hyperparameter flags given, checked against the algorithm's schema; errors
+    name the flag."""
     changes: dict[str, Any] = {}
-    for name in names:
+    own = {field.name: field for field in cls.params}
+    for name in HP_FLAGS:
         value = getattr(args, name, None)
-        if value is not None:
-            changes[name] = value
-    try:
-        return base.replace(**changes)
-    except ParamError as exc:
-        # Name the flag, not the field, so the user knows what to fix.
-        raise CliError(f"{flag(exc.param.name)} {exc.reason}") from None
-    except ValueError as exc:
-        text = str(exc)
-        for name in names:
-            text = text.replace(name, flag(name))
-        raise CliError(text) from None
+        if value is None:
+            continue
+        field = own.get(name)
+        if field is None:
+            takers = ", ".join(c.name for c in ALGORITHMS if any(f.name == name for f in c.params))
+            raise CliError(f"{flag(name)} applies to {takers}, not {cls.name}")
+        try:
+            changes[name] = field.parse(value)
+        except ParamError as exc:
+            # Name the flag, not the field, so the user knows what to fix.
+            raise CliError(f"{flag(name)} {exc.reason}") from None
+        except ValueError as exc:
+            raise CliError(str(exc).replace(name, flag(name), 1)) from None
+    return changes

@@ -1,7 +1,7 @@
 """The `tui-gym` command's entry point and parser: the app with no sub-command.
 
 Every sub-command (`commands`) is a thin call into `tui_gym.core`: `envs`, `wrappers`,
-`train`, `eval`, `optimal`, `screenshots` and `bench` print rich tables or
+`algorithms`, `train`, `eval`, `optimal`, `screenshots` and `bench` print rich tables or
 lines (or one JSON object with `--json`); `play --jsonl` speaks JSON lines.
 Bad arguments, an unknown env or wrapper, or an unreadable file exit with
 code 2 and one clear line on stderr, never a traceback. Numbers are read as
@@ -15,25 +15,24 @@ quietly with status 141, as it would end `cat`.
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import re
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any, NoReturn
 
 from rich.console import Console
 
 from tui_gym import __version__
+from tui_gym.algorithms import ALGORITHMS, DEFAULT_ALGORITHM
 from tui_gym.cli.flags import add_game_flags, add_hyperparameter_flags
 from tui_gym.cli.maps_command import add_maps_parser
 from tui_gym.cli.output import CliError, OutConsole
-from tui_gym.core.params import read_number, shown_value
+from tui_gym.cli.types import file_name, finite_number, positive_int, seed_number
 
 ENV_HELP = "a game (`tui-gym envs` lists them), a Gymnasium id, or MODULE:ID"
 EXIT_USAGE = 2
 EXIT_BROKEN_PIPE = 128 + 13  # what a shell reports for a command ended by SIGPIPE
-MAX_SEED = 2**63 - 2**32  # room for the seeds derived from it (evaluation adds to it)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -48,45 +47,6 @@ class _Parser(argparse.ArgumentParser):
         # command; let a closed pipe reach `main`.
         if message:
             (file or sys.stderr).write(message)
-
-
-def _int_in(minimum: int, maximum: int, noun: str) -> Callable[[str], int]:
-    """An argparse type: an integer (ASCII digits, `_` allowed) in [minimum, maximum]."""
-
-    def parse(text: str) -> int:
-        value = read_number(text)
-        if value is None or math.isnan(value) or (math.isfinite(value) and value % 1):
-            raise argparse.ArgumentTypeError(f"expected {noun}, got {shown_value(text)}")
-        if not minimum <= value <= maximum:
-            raise argparse.ArgumentTypeError(
-                f"{shown_value(text)} is out of range: expected {noun}"
-            )
-        return int(value)
-
-    return parse
-
-
-_positive_int = _int_in(1, 10**9, "a positive integer up to 1,000,000,000")
-_seed = _int_in(0, MAX_SEED, f"an integer in [0, {MAX_SEED}]")
-
-
-def _number(text: str) -> float:
-    """An argparse type: a finite number (ASCII digits)."""
-    value = read_number(text)
-    if value is None or math.isnan(value):
-        raise argparse.ArgumentTypeError(f"expected a number, got {shown_value(text)}")
-    if math.isinf(value):
-        raise argparse.ArgumentTypeError(
-            f"{shown_value(text)} is out of range: expected a finite number"
-        )
-    return float(value)
-
-
-def _path(text: str) -> str:
-    """An argparse type: a file name, which cannot be empty."""
-    if not text.strip():
-        raise argparse.ArgumentTypeError("expected a file name, got an empty one")
-    return text
 
 
 # A negative number, `-inf` or `-nan` after a long option is that option's value; argparse
@@ -119,20 +79,24 @@ def build_parser() -> argparse.ArgumentParser:
         description="A terminal playground for reinforcement learning. "
         "With no command, opens the app.",
         epilog="examples:\n"
-        "  tui-gym --env taxi               open the app on Taxi (? lists every key)\n"
-        "  tui-gym train frozenlake --map 8x8 --slippery false --save lake.tgym\n"
-        "  tui-gym eval lake.tgym --json\n"
-        "  tui-gym optimal cliffwalking\n"
-        "  tui-gym play taxi --jsonl        a program plays through JSON lines\n"
+        "  tui-gym envs                     the games, their flags and what they teach\n"
+        "  tui-gym --env GAME               open the app on a game (? lists every key)\n"
+        "  tui-gym train GAME --save agent.tgym\n"
+        "  tui-gym train GAME --algorithm sarsa\n"
+        "  tui-gym eval agent.tgym --json\n"
+        "  tui-gym optimal GAME\n"
+        "  tui-gym play GAME --jsonl        a program plays through JSON lines\n"
         "  tui-gym COMMAND --help           the options of one command",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"tui-gym {__version__}")
     parser.add_argument("--env", default="", help="game to open (default: the first of `envs`)")
-    parser.add_argument("--seed", type=_seed, default=0, help="seed for every random thing")
+    parser.add_argument("--seed", type=seed_number, default=0, help="seed for every random thing")
     parser.add_argument("--load", metavar="PATH", help="open a saved agent")
     parser.add_argument("--map-file", metavar="PATH", dest="app_map_file",
                         help="open a grid game (--env) on the map in this file")
+    parser.add_argument("--record", type=file_name, metavar="PATH",
+                        help="record your games in the app to this file (ctrl+r: on/off)")
     parser.add_argument(
         "--runner", choices=("process", "thread"), default="process",
         help="train in a child process (default) or on a thread of the app's process",
@@ -144,12 +108,19 @@ def build_parser() -> argparse.ArgumentParser:
     wrappers = sub.add_parser("wrappers", help="list the wrapper catalog and the --wrapper syntax")
     wrappers.add_argument("--json", action="store_true", help="print one JSON object")
     add_maps_parser(sub)
+    algorithms = sub.add_parser("algorithms", help="list the learners and their parameters")
+    algorithms.add_argument("--json", action="store_true", help="print one JSON object")
+    names = ", ".join(cls.name for cls in ALGORITHMS)
 
-    train = sub.add_parser("train", help="train a Q-learning agent headless")
+    train = sub.add_parser("train", help="train an agent headless")
     train.add_argument("env", metavar="ENV", help=ENV_HELP)
+    train.add_argument(
+        "--algorithm", default=DEFAULT_ALGORITHM, metavar="NAME",
+        help=f"the learner: {names} (default {DEFAULT_ALGORITHM}; `tui-gym algorithms`)",
+    )
     # Read as text here and parsed by the fields themselves, so errors say "out of range".
     add_hyperparameter_flags(train)
-    train.add_argument("--seed", type=_seed, default=0, dest="train_seed")
+    train.add_argument("--seed", type=seed_number, default=0, dest="train_seed")
     add_game_flags(train)
     train.add_argument(
         "--wrapper", action="append", default=[], metavar="SPEC",
@@ -160,23 +131,23 @@ def build_parser() -> argparse.ArgumentParser:
         help="auto: the vector engine when the wrappers have a batched form (default)",
     )
     train.add_argument(
-        "--target-gap", type=_number, metavar="G",
+        "--target-gap", type=finite_number, metavar="G",
         help="stop once the greedy policy's exact gap to the optimum is <= G "
-        "(budget defaults to 1,000,000 episodes then)",
+        "(the budget defaults to five times the game's then)",
     )
     train.add_argument(
-        "--eval-episodes", type=_positive_int, default=10_000, metavar="N",
+        "--eval-episodes", type=positive_int, default=10_000, metavar="N",
         help="greedy episodes to evaluate with (default 10,000; a long-looping policy "
         "stops at the evaluation's step budget)",
     )
-    train.add_argument("--save", type=_path, metavar="PATH",
+    train.add_argument("--save", type=file_name, metavar="PATH",
                        help="save the trained agent here (the folder is checked first)")
     train.add_argument("--json", action="store_true", help="print one JSON object, no bar")
 
     ev = sub.add_parser("eval", help="evaluate a saved agent (greedy play + exact reference)")
     ev.add_argument("path", metavar="PATH")
-    ev.add_argument("--episodes", type=_positive_int, default=10_000, metavar="N")
-    ev.add_argument("--seed", type=_seed, default=None, dest="eval_seed")
+    ev.add_argument("--episodes", type=positive_int, default=10_000, metavar="N")
+    ev.add_argument("--seed", type=seed_number, default=None, dest="eval_seed")
     ev.add_argument("--json", action="store_true")
 
     opt = sub.add_parser("optimal", help="the exact optimal strategy and its value")
@@ -187,9 +158,15 @@ def build_parser() -> argparse.ArgumentParser:
     play.add_argument("env", metavar="ENV", help=ENV_HELP)
     play.add_argument("--jsonl", action="store_true", required=True,
                       help="read one JSON request a line, write one JSON response a line")
-    play.add_argument("--seed", type=_seed, default=None, dest="play_seed")
+    play.add_argument("--seed", type=seed_number, default=None, dest="play_seed")
     add_game_flags(play)
     play.add_argument("--wrapper", action="append", default=[], metavar="SPEC")
+    from tui_gym.replay_command import add_record_option, add_replay_parser
+    from tui_gym.web import add_serve_parser
+
+    add_record_option(play)
+    add_replay_parser(sub)
+    add_serve_parser(sub)
 
     screenshots = sub.add_parser("screenshots", help="write the app's SVG screenshots")
     screenshots.add_argument("directory", nargs="?", default="screenshots", metavar="DIR")
@@ -197,7 +174,18 @@ def build_parser() -> argparse.ArgumentParser:
 
     bench = sub.add_parser("bench", help="measure speed, live training, memory and start-up")
     bench.add_argument("--quick", action="store_true", help="a shorter run (under a minute)")
+    bench.add_argument(
+        "--algorithm", metavar="NAME", default=None,
+        help=f"measure the per-algorithm figures for this learner only ({names}; default all)",
+    )
     bench.add_argument("--json", action="store_true", help="print one JSON object")
+
+    from tui_gym.mcp_server.command import add_parser as add_mcp_parser
+
+    add_mcp_parser(sub, positive_int, finite_number)
+    from tui_gym.benchmark.command import add_parser as add_benchmark_parser
+
+    add_benchmark_parser(sub, positive_int, seed_number, finite_number)
     return parser
 
 
@@ -211,8 +199,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command is None:
             return _run_app(args)
         from tui_gym.cli.commands import COMMANDS
+        from tui_gym.replay_command import REPLAY_COMMANDS
+        from tui_gym.web import SERVE_COMMANDS
 
-        code = COMMANDS[args.command](args, out)
+        code = {**COMMANDS, **REPLAY_COMMANDS, **SERVE_COMMANDS}[args.command](args, out)
         sys.stdout.flush()  # a closed pipe shows here, not at exit
         return code
     except BrokenPipeError:
@@ -259,5 +249,9 @@ def _run_app(args: argparse.Namespace) -> int:
         from tui_gym.ui.app import run_app
     except ImportError as exc:  # pragma: no cover - only without the UI installed
         raise CliError(f"the app is not available ({exc}); try `tui-gym --help`") from None
+    if args.record is not None:
+        from tui_gym.replay_command import check_record_path
+
+        check_record_path(args.record)
     return run_app(env_id=env_id, seed=args.seed, load=args.load, runner=args.runner,
-                   env_kwargs=env_kwargs)
+                   record=args.record, env_kwargs=env_kwargs)

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 import gymnasium as gym
 import numpy as np
 
-from tui_gym.core.agent import QAgent
+from tui_gym.algorithms import Learner
 from tui_gym.core.obskey import ObservationKeyer
 
 if TYPE_CHECKING:
@@ -60,7 +60,7 @@ class EvalReport:
 
 def evaluate(
     env: gym.Env,
-    agent: QAgent,
+    agent: Learner,
     keyer: ObservationKeyer,
     narrator: Narrator,
     episodes: int,

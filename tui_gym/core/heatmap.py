@@ -1,8 +1,8 @@
 """Heatmap data: a Q-table projected onto a grid a person can read.
 
-A game's layout turns Q-values into `Heatmap`s (one per panel: a card chart has two,
-with and without a usable ace; GridWorld one per target). They are plain
-data; the UI only colours cells by `values` and prints `labels`.
+A game's layout turns Q-values into `Heatmap`s (one per panel: a card chart
+has two, a grid one per target). They are plain data; the UI only colours
+cells by `values` and prints `labels`.
 """
 
 from __future__ import annotations

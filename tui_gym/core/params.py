@@ -175,7 +175,7 @@ class Param:
         value = self._convert(raw)
         if value is None:
             raise ParamError(self, raw, out_of_range=False)
-        if self.kind is str:
+        if isinstance(value, str):
             return value
         if self.kind is not bool and not self._in_range(value):
             raise ParamError(self, raw, out_of_range=True)

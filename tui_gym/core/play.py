@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from tui_gym.core.recording.recorder import GameRecorder
     from tui_gym.core.session import Session
 
 
@@ -149,6 +150,7 @@ class HumanGame:
         self.first_info: dict[str, Any] = {}
         self._seeded = False
         self._before: dict[str, Any] | None = None  # the scene before the last move
+        self.recorder: GameRecorder | None = None  # told of every reset and move when set
 
     def close(self) -> None:
         self.env.close()
@@ -166,6 +168,8 @@ class HumanGame:
         self._before = None
         self.first_info = dict(info)
         self.last = PlayStep(obs, 0.0, False, False, dict(info), 0.0, 0)
+        if self.recorder is not None:
+            self.recorder.game_reset(self, seed)
         return self.last
 
     def step(self, action: int | str) -> PlayStep:
@@ -188,6 +192,8 @@ class HumanGame:
         )
         if self.last.done:
             self.tally.add(total)
+        if self.recorder is not None:
+            self.recorder.game_step(self)
         return self.last
 
     def scene(self) -> dict[str, Any]:
@@ -196,7 +202,7 @@ class HumanGame:
 
     def text(self) -> str:
         """A text picture of the state (hidden cards stay hidden until the end)."""
-        return self.game.states.text(self.env, reveal=self.done)
+        return self.game.states.text(self.env, reveal=self.done, before=self._before)
 
     def observation_json(self) -> Any:
         if self.last is None:

@@ -1,14 +1,16 @@
 """Training in a child process: the UI's Python never shares a core with the trainer.
 
 `ProcessRunner` has the same surface as `TrainingRunner` (start, pause,
-toggle, run_one_episode, speeds, latest, last_scene, last_event, error,
-finished, update, close), but the training runs in a separate process, so the
-trainer and the event loop never compete for one interpreter lock.
+toggle, run_one_episode, run_one_step, speeds, set_hyperparameters, latest,
+last_scene, last_event, error, finished, update, close), but the training
+runs in a separate process, so the trainer and the event loop never compete
+for one interpreter lock.
 
 Ownership: while paused, the parent's `Session` is the truth. A start (or
-one episode) hands the child the session's spec (game, wrappers, seed,
-hyperparameters), its agent and its trainer's progress; while the child
-trains it streams snapshots back; a pause asks for the agent back. Every
+one episode) hands the child the session's spec (game, wrappers, seed, engine, algorithm),
+its hyperparameters, its agent (the learner, pickled) and its trainer's progress; while the child
+trains it streams snapshots back; new hyperparameters follow it there at once;
+a pause asks for the agent back. Every
 request has a number, and what comes back lands in the agent object the
 request was made from: after a reset (a new agent) or a game switch, a late
 handover changes nothing the session shows, and a rebuild that kept the agent
@@ -63,6 +65,7 @@ class SessionSpec:
     choices: tuple[Any, ...]
     seed: int
     engine: str
+    algorithm: str
 
     @classmethod
     def of(cls, session: Session) -> SessionSpec:
@@ -72,6 +75,7 @@ class SessionSpec:
             tuple(session.choices),
             session.seed,
             getattr(session, "engine", "auto"),
+            session.algorithm,
         )
 
 
@@ -80,8 +84,8 @@ class Handover:
     """Everything that moves between the processes at a start or a pause."""
 
     spec: SessionSpec
-    hp: Any  # Hyperparameters
-    agent: Any  # QAgent
+    hp: Any  # the algorithm's Settings
+    agent: Any  # the learner (any tui_gym.algorithms.Learner)
     progress: TrainerProgress
     engine: str = ""  # the engine that trained last ("scalar" while animating)
 
@@ -96,7 +100,7 @@ class _Request:
     """A start or one-episode request whose agent the child holds."""
 
     number: int
-    kind: str  # "start" or "one"
+    kind: str  # "start", "one" (an episode) or "step" (a transition)
     agent: Any  # the agent object the handover came from, and goes back to
     trainer: Any  # its trainer at the time
     latest: TrainingSnapshot | None = None
@@ -214,6 +218,7 @@ class ProcessRunner:
         self._finished = False
         self._want_run = False
         self._want_one = False
+        self._want_step = False
         self._pending: _Request | None = None
         self._numbers = 0
         self._last_sent_agent: Any = None  # to tell the child when the agent is a new one
@@ -259,9 +264,13 @@ class ProcessRunner:
 
     @property
     def busy(self) -> bool:
-        """True while training is on, an episode is asked for, or the child holds the agent."""
+        """True while training is on, an episode or step is asked for, or the child holds
+        the agent."""
         self.update()
-        return self._want_run or self._want_one or self._pending is not None
+        return self._wanted() or self._pending is not None
+
+    def _wanted(self) -> bool:
+        return self._want_run or self._want_one or self._want_step
 
     @property
     def latest(self) -> TrainingSnapshot:
@@ -307,9 +316,9 @@ class ProcessRunner:
         self._finished = False
         self._error = None
         self._want_run = True
-        self._want_one = False
+        self._want_one = self._want_step = False
         request = self._pending
-        if request is not None and request.kind == "one":
+        if request is not None and request.kind in ("one", "step"):
             self._ask_back(request)  # then start from where the episode got to
         self._sync()
         return True
@@ -322,7 +331,7 @@ class ProcessRunner:
         `update()` take the agent in when it comes.
         """
         self.update()
-        self._want_run = self._want_one = False
+        self._want_run = self._want_one = self._want_step = False
         if self._pending is not None:
             self._ask_back(self._pending)
         return self.wait_idle(timeout) if wait else True
@@ -345,6 +354,27 @@ class ProcessRunner:
         self._want_one = True
         self._sync()
 
+    def run_one_step(self) -> None:
+        """Take one training step (one transition) in the child, explained in
+        `last_event.last_update` (ignored while running or busy)."""
+        self.update()
+        if self._broken:
+            self._error = RuntimeError(self._broken)
+            return
+        if self._wanted() or self._pending is not None:
+            return
+        self._error = None
+        self._want_step = True
+        self._sync()
+
+    def set_hyperparameters(self, hp: Any) -> None:
+        """New hyperparameters for the session, taking effect at once: the child training
+        its agent gets them too (ValueError, changing nothing, for bad ones)."""
+        self.update()
+        self.session.set_hyperparameters(hp)
+        request = self._pending
+        if request is not None and self._current(request) and self._child is not None:
+            self._child.send(("hyperparameters", request.number, self.session.hp))
     def set_speed(self, index: int) -> Speed:
         self.speed_index = max(0, min(len(SPEEDS) - 1, index))
         if self._child is not None:
@@ -363,7 +393,7 @@ class ProcessRunner:
         while True:
             self._heard.clear()
             self.update()
-            if not (self._want_run or self._want_one or self._pending is not None):
+            if not (self._wanted() or self._pending is not None):
                 return True
             left = deadline - time.monotonic()
             if left <= 0:
@@ -373,7 +403,7 @@ class ProcessRunner:
     def close(self, wait: bool = True) -> None:
         """End the child (with `wait`, return once it has ended; it is killed if it must be)."""
         self._closed = True
-        self._want_run = self._want_one = False
+        self._want_run = self._want_one = self._want_step = False
         child, self._child = self._child, None
         self._ended = child or self._ended
         if self._ended is not None:
@@ -435,8 +465,8 @@ class ProcessRunner:
 
     def _replace_child(self, child: _Child, exitcode: int | None) -> None:
         request, self._pending = self._pending, None
-        was_training = self._want_run or self._want_one or request is not None
-        self._want_run = self._want_one = False
+        was_training = self._wanted() or request is not None
+        self._want_run = self._want_one = self._want_step = False
         self._last_sent_agent = None
         self._child = None
         if self._closed:
@@ -497,6 +527,9 @@ class ProcessRunner:
         elif self._want_one:
             kind = "one"
             self._want_one = False
+        elif self._want_step:
+            kind = "step"
+            self._want_step = False
         else:
             return
         session = self.session
@@ -542,6 +575,8 @@ def child_main(conn: Connection) -> None:
         holding, holding_kind, last_sent = number, kind, -1
         if kind == "one":
             runner.run_one_episode()
+        elif kind == "step":
+            runner.run_one_step()
         elif not runner.start():
             hand_back("finished")
 
@@ -554,7 +589,8 @@ def child_main(conn: Connection) -> None:
                 runner.close()
             s = handover.spec
             session = Session(env_id=s.env_id, env_kwargs=s.env_kwargs, choices=s.choices,
-                              hp=handover.hp, seed=s.seed, engine=s.engine)
+                              hp=handover.hp, seed=s.seed, engine=s.engine,
+                              algorithm=s.algorithm)
             spec = handover.spec
             runner = TrainingRunner(session)
         session.hp = handover.hp
@@ -570,12 +606,15 @@ def child_main(conn: Connection) -> None:
                 kind = message[0]
                 if kind == "quit":
                     break
-                if kind in ("start", "one"):
+                if kind in ("start", "one", "step"):
                     take(message)
                 elif kind == "pause" and holding is not None and message[1] == holding:
                     hand_back("paused")
                 elif kind == "speed" and runner is not None:
                     runner.set_speed(message[1])
+                elif kind == "hyperparameters" and holding is not None and message[1] == holding:
+                    assert runner is not None
+                    runner.set_hyperparameters(message[2])
             if holding is None or runner is None or session is None:
                 continue
             idle = not runner.busy  # read first: the snapshot below is then the last one
@@ -588,6 +627,8 @@ def child_main(conn: Connection) -> None:
                     hand_back("error", f"{runner.error}")
                 elif holding_kind == "one":
                     hand_back("episode")
+                elif holding_kind == "step":
+                    hand_back("step")
                 else:
                     hand_back("finished" if runner.finished else "paused")
         except (EOFError, OSError):

@@ -66,12 +66,17 @@ def _parse_constant(name: str) -> float:
     raise _BadNumber(f"{name} is not a JSON number")
 
 
+_DECODER = json.JSONDecoder(
+    parse_int=_parse_int, parse_float=_parse_float, parse_constant=_parse_constant
+)
+
+
 def _decode(line: str) -> Any:
     """`line` as JSON; ValueError (no internals in its message) when it is not a request's."""
     try:
-        return json.loads(
-            line, parse_int=_parse_int, parse_float=_parse_float, parse_constant=_parse_constant
-        )
+        if line.startswith("\ufeff"):  # json.loads names the byte-order mark
+            return json.loads(line, cls=json.JSONDecoder)
+        return _DECODER.decode(line)
     except json.JSONDecodeError as exc:
         raise ValueError(f"not JSON: {exc.msg} at column {exc.colno}") from None
     except _BadNumber as exc:
@@ -93,6 +98,16 @@ def _too_deep(value: Any, limit: int = MAX_DEPTH) -> bool:
     return False
 
 
+def _clean_text(value: Any) -> str | None:
+    """`value` as JSON text when it is JSON-safe as it is (no NaN or infinity, no surrogate
+    in any text), else None: one pass of the C encoder, which most responses need alone."""
+    try:
+        text = json.dumps(value, allow_nan=False)
+    except (TypeError, ValueError):
+        return None
+    return None if "\\ud" in text else text  # the encoder writes every surrogate as \udXXX
+
+
 def _clean(value: Any) -> Any:
     """JSON-safe data: NaN and infinities as null, lone surrogates as U+FFFD."""
     if isinstance(value, float) and not math.isfinite(value):
@@ -104,6 +119,24 @@ def _clean(value: Any) -> Any:
     if isinstance(value, list | tuple):
         return [_clean(v) for v in value]
     return value
+
+
+def parse_request(line: str | bytes) -> dict[str, Any]:
+    """A request line as the JSON object it holds; ValueError saying why it is not one
+    (not UTF-8, not JSON, not an object, nested too deeply, a number too long)."""
+    if isinstance(line, bytes):
+        try:
+            line = line.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise ValueError(f"not UTF-8: byte 0x{line[exc.start]:02x} at column "
+                             f"{exc.start + 1} cannot be decoded") from None
+    request = _decode(line)
+    if not isinstance(request, dict):
+        raise ValueError('a request must be a JSON object like {"cmd": "reset"}')
+    # Fewer brackets than levels cannot nest too deep: most requests skip the walk.
+    if line.count("[") + line.count("{") > MAX_DEPTH and _too_deep(request):
+        raise ValueError(f"not a usable request: nested deeper than {MAX_DEPTH} levels")
+    return request
 
 
 class JsonlPlayer:
@@ -124,20 +157,20 @@ class JsonlPlayer:
 
     def handle(self, line: str | bytes) -> dict[str, Any]:
         """One request line in, one response object out (never raises for bad input)."""
-        if isinstance(line, bytes):
-            try:
-                line = line.decode("utf-8")
-            except UnicodeDecodeError as exc:
-                return {"error": f"not UTF-8: byte 0x{line[exc.start]:02x} at column "
-                                 f"{exc.start + 1} cannot be decoded"}
+        response = self._respond(line)
+        return response if _clean_text(response) is not None else _clean(response)
+
+    def handle_text(self, line: str | bytes) -> str:
+        """`handle`, answered as the JSON text of the response (no newline)."""
+        response = self._respond(line)
+        text = _clean_text(response)
+        return text if text is not None else json.dumps(_clean(response))
+
+    def _respond(self, line: str | bytes) -> dict[str, Any]:
         try:
-            request = _decode(line)
+            request = parse_request(line)
         except ValueError as exc:
             return {"error": str(exc)}
-        if not isinstance(request, dict):
-            return {"error": 'a request must be a JSON object like {"cmd": "reset"}'}
-        if _too_deep(request):
-            return {"error": f"not a usable request: nested deeper than {MAX_DEPTH} levels"}
         cmd = request.get("cmd")
         handler = self._handlers.get(cmd) if isinstance(cmd, str) else None
         if handler is None:
@@ -151,7 +184,7 @@ class JsonlPlayer:
                 response = {"error": str(exc)}
         if "id" in request:
             response = {"id": request["id"], **response}
-        return _clean(response)
+        return response
 
     def _transition(self) -> dict[str, Any]:
         step = self.game.last
@@ -243,13 +276,11 @@ def serve(player: JsonlPlayer, stdin: IO[bytes], stdout: IO[str]) -> int:
     """
     for line in read_lines(stdin):
         if line is None:
-            response: dict[str, Any] = {
-                "error": f"line longer than {MAX_LINE_BYTES:,} bytes: not read"
-            }
+            text = json.dumps({"error": f"line longer than {MAX_LINE_BYTES:,} bytes: not read"})
         elif not line.strip():
             continue
         else:
-            response = player.handle(line)
-        stdout.write(json.dumps(response) + "\n")
+            text = player.handle_text(line)
+        stdout.write(text + "\n")
         stdout.flush()
     return 0

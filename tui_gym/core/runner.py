@@ -1,7 +1,9 @@
 """Background training: runs a session's trainer on a worker thread.
 
 `TrainingRunner` owns one daemon thread. Front ends call `start()`,
-`pause()`, `run_one_episode()` and `set_speed()`; the thread trains in small
+`pause()`, `run_one_episode()`, `run_one_step()` (one transition, explained
+in `last_event.last_update`), `set_speed()` and `set_hyperparameters()`
+(live: the next step uses them); the thread trains in small
 pieces of work and publishes snapshots (the trainer's `latest`), which a UI
 pulls on a timer. Nothing here calls back into a front end, so a slow viewer
 can never slow training down, and a fast trainer never blocks the viewer.
@@ -48,6 +50,7 @@ class TrainingRunner:
         self._cond = threading.Condition()
         self._want_run = False
         self._want_one = False
+        self._want_step = False
         self._quit = False
         self._working = False  # the worker is inside a piece of work
         self._controls = 0  # counts control changes, to cut an animated pause short
@@ -66,8 +69,8 @@ class TrainingRunner:
 
     @property
     def busy(self) -> bool:
-        """True while training is on, an episode is asked for, or work is under way."""
-        return self._want_run or self._want_one or self._working
+        """True while training is on, an episode or step is asked for, or work is under way."""
+        return self._want_run or self._want_one or self._want_step or self._working
 
     @property
     def last_scene(self) -> dict | None:
@@ -109,7 +112,7 @@ class TrainingRunner:
         whose child may take longer to hand the agent back. False on a timeout.
         """
         with self._cond:
-            self._want_run = self._want_one = False
+            self._want_run = self._want_one = self._want_step = False
             self._controls += 1
             self._cond.notify_all()
             return self._cond.wait_for(lambda: not self._working, timeout)
@@ -126,6 +129,18 @@ class TrainingRunner:
         if not self._want_run:
             self.error = None
             self._control(want_one=True)
+
+    def run_one_step(self) -> None:
+        """Take one training step (one transition) on the scalar engine, explained in
+        `last_event.last_update` (ignored while running or busy with an episode)."""
+        if not (self._want_run or self._want_one or self._want_step):
+            self.error = None
+            self._control(want_step=True)
+
+    def set_hyperparameters(self, hp: Any) -> None:
+        """New hyperparameters for the session, taking effect at once, mid-run too
+        (ValueError, changing nothing, for bad ones)."""
+        self.session.set_hyperparameters(hp)
 
     def set_speed(self, index: int) -> Speed:
         self.speed_index = max(0, min(len(SPEEDS) - 1, index))
@@ -149,7 +164,7 @@ class TrainingRunner:
 
     def close(self, wait: bool = True) -> None:
         """Stop the worker thread for good (with `wait`, return once it has ended)."""
-        self._control(quit=True, want_run=False, want_one=False)
+        self._control(quit=True, want_run=False, want_one=False, want_step=False)
         if wait and self._thread is not threading.current_thread():
             self._thread.join(timeout=STOP_TIMEOUT)
 
@@ -157,7 +172,9 @@ class TrainingRunner:
     def _loop(self) -> None:
         while True:
             with self._cond:
-                self._cond.wait_for(lambda: self._quit or self._want_run or self._want_one)
+                self._cond.wait_for(
+                    lambda: self._quit or self._want_run or self._want_one or self._want_step
+                )
                 if self._quit:
                     return
                 self._working = True
@@ -168,7 +185,7 @@ class TrainingRunner:
             except Exception as exc:  # shown to the user by the front end
                 self.error = exc
                 with self._cond:
-                    self._want_run = self._want_one = False
+                    self._want_run = self._want_one = self._want_step = False
             finally:
                 with self._cond:
                     self._working = False
@@ -184,6 +201,12 @@ class TrainingRunner:
     def _piece(self) -> float | None:
         """One piece of work; returns how long to pause before the next one."""
         speed = self.speed
+        if self._want_step and not self._want_run:
+            self._animated_step(self.session.trainer_for(True))
+            with self._cond:
+                self._want_step = False
+                self._cond.notify_all()
+            return None
         trainer = self.session.trainer_for(speed.animated)
         if self._want_run:
             if trainer.remaining == 0:
@@ -213,7 +236,7 @@ class TrainingRunner:
         return None
 
     def _animated_step(self, trainer: Trainer) -> StepEvent:
-        """One agent step, remembered (with the board's scene) for viewers.
+        """One agent step, explained and remembered (with the board's scene) for viewers.
 
         The time between animated steps (the pause that makes them readable)
         counts as training time, so episodes/s tells the pace being shown.
@@ -225,7 +248,7 @@ class TrainingRunner:
         _, previous, last = self._shown
         # The scene before this move, while one episode goes on: the board tells a slip.
         before = previous if last is not None and last.episode_done is None else None
-        event = trainer.step()
+        event = trainer.step(explain=True)
         self._shown = (trainer.agent, self.session.game.states.scene(trainer.env, before), event)
         trainer.publish()
         return event

@@ -1,14 +1,17 @@
-"""The session: one env, a choice of wrappers, one agent and its trainer.
+"""The session: one env, a choice of wrappers, one learner (the agent) and its trainer.
 
 `Session` is the object every front end drives (the Textual app, the CLI,
-tests, the JSON-lines protocol). It is where game, wrappers, agent and engine
+tests, the JSON-lines protocol). It is where game, wrappers, learner and engine
 meet: it finds the game (`tui_gym.games.game_for`), builds the env through
-the wrapper catalog with the game's arguments, hands the vector engine the
-game's batched form, keeps the agent when a rebuild leaves the observation
-keys meaning the same thing (and says so when it cannot), projects the
-Q-table onto the game's base states for heatmaps and the exact reference,
-evaluates, saves and loads. `vector_support` says whether the vector engine
-can run a game with some wrappers.
+the wrapper catalog with the game's arguments and the learner from the
+`ALGORITHMS` registry with the game's defaults for that algorithm, hands the
+vector engine the game's batched form, keeps the agent when a rebuild leaves
+the observation keys meaning the same thing (and says so when it cannot),
+changes hyperparameters live (only a change of algorithm needs a fresh
+learner), projects the learner's values onto the game's base states for
+heatmaps and the exact reference, evaluates, saves and loads.
+`vector_support` says whether the vector engine can run a game with some
+wrappers.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from tui_gym.core.agent import Hyperparameters, QAgent
+from tui_gym.algorithms import DEFAULT_ALGORITHM, Learner, Settings, algorithm
 from tui_gym.core.evaluation import EvalReport, evaluate
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import NotAvailable
@@ -39,7 +42,9 @@ from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 from tui_gym.games.base import FixedBound, ReferenceMetrics
 
 ENGINES = ("auto", "scalar", "vector")
-TARGET_GAP_BUDGET = 1_000_000  # episodes, when a target gap is given without a budget
+# With a target gap and no budget given, the budget is the game's default times this,
+# so epsilon decays more slowly (the run stops at the target anyway).
+TARGET_GAP_BUDGET_FACTOR = 5
 
 # Observation wrappers whose `observation()` is a pure function of the bare
 # observation: the heatmaps and the exact reference can see through them.
@@ -91,23 +96,42 @@ def _build(
     return _Built(env, applied, tuple(skipped), keyer, int(env.action_space.n), meaning)
 
 
+def default_settings(
+    game: Game, name: str, kwargs: Mapping[str, Any] | None = None
+) -> Settings:
+    """The hyperparameters algorithm `name` starts with on a game with arguments `kwargs`:
+    its own defaults with the game's overrides for it (those of its parameters the game
+    sets)."""
+    cls = algorithm(name)
+    fields = {f.name for f in cls.params}
+    overrides = game.default_hyperparameters(cls.name, kwargs)
+    return cls.settings({k: v for k, v in overrides.items() if k in fields})
+
+
 @dataclass
 class Session:
-    """One game with its wrappers, agent and trainer; what every front end drives."""
+    """One game with its wrappers, learner and trainer; what every front end drives.
+
+    `hp` is a mapping of hyperparameters over the game's defaults for the
+    algorithm (None: those defaults); `Settings` of another algorithm's
+    schema give the values the two schemas share.
+    """
 
     env_id: str = ""  # "": the first game of the registry
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     choices: tuple[WrapperChoice, ...] = ()
-    hp: Hyperparameters | None = None  # None: the game's own defaults
+    hp: Settings | Mapping[str, Any] | None = None  # None: the game's own defaults
     seed: int = 0
     engine: str = "auto"  # "auto" (vector when the wrappers allow), "scalar" or "vector"
+    algorithm: str = DEFAULT_ALGORITHM  # a name in the ALGORITHMS registry
 
     def __post_init__(self) -> None:
         self.env_id = resolve_env_id(self.env_id or GAMES[0].env_id)
         self.game: Game = game_for(self.env_id)
         self.env_kwargs = self.game.normalize_kwargs(self.env_kwargs)
-        if self.hp is None:
-            self.hp = self.game.default_hyperparameters(self.env_kwargs)
+        self.learner_class: type[Learner] = algorithm(self.algorithm)
+        self.algorithm = self.learner_class.name
+        self.hp = self._settings(self.hp)
         self.choices = tuple(self.choices)
         if self.engine not in ENGINES:
             raise ValueError(f"engine must be one of {', '.join(ENGINES)}, got {self.engine!r}")
@@ -124,31 +148,50 @@ class Session:
         self.changes = GameChanges.of(built.env, self.game.episode_limit(self.env_kwargs))
         self._base_keys: list[Hashable] | None | bool = False  # False: not computed yet
 
-    def _new_agent(self) -> QAgent:
-        return QAgent(self._built.n_actions, self.hp, n_states=self.keyer.n_states, seed=self.seed)
+    def _settings(self, hp: Settings | Mapping[str, Any] | None) -> Settings:
+        """`hp` as this algorithm's settings over the game's defaults (see the class)."""
+        base = default_settings(self.game, self.algorithm, self.env_kwargs)
+        if hp is None:
+            return base
+        values = dict(hp)
+        if isinstance(hp, Settings) and hp.schema != self.learner_class.params:
+            values = {k: v for k, v in values.items() if k in base}
+        return base.replace(**values)
+
+    def _new_agent(self) -> Learner:
+        return self.learner_class(
+            self._built.n_actions, self.hp, n_states=self.keyer.n_states, seed=self.seed
+        )
 
     def _new_trainer(self) -> Trainer:
         """The trainer for the chosen engine; `engine_reason` says which and why."""
         self._scalar: Trainer | None = None
-        self._vector: Trainer | None = None
+        self._vector: VectorTrainer | None = None
         if self.engine != "scalar":
             try:
-                form = self.game.batched_form(self.env_kwargs)
-                limit = self.game.episode_limit(self.env_kwargs)
-                self._vector = VectorTrainer(self.env, self.agent, self.keyer, form=form,
-                                             made_limit=limit, seed=self.seed)
+                vector = self.vector_trainer(seed=self.seed)
             except (NoBatchedForm, ValueError) as exc:
                 reason = str(exc).removeprefix("scalar engine: ")
                 if self.engine == "vector":
                     raise ValueError(f"the vector engine cannot run this: {reason}") from None
                 self.engine_reason = f"scalar engine: {reason}"
             else:
-                self.engine_reason = self._vector.plan.describe()
-                return self._vector
+                self._vector = vector
+                self.engine_reason = vector.plan.describe()
+                return vector
         else:
             self.engine_reason = "scalar engine: chosen"
         self._scalar = Trainer(self.env, self.agent, self.keyer, seed=self.seed)
         return self._scalar
+
+    def vector_trainer(self, **options: Any) -> VectorTrainer:
+        """A vector engine on this session's env and learner, with the game's batched form
+        (`NoBatchedForm` when there is none); `options` go to `VectorTrainer` (`seed`,
+        `num_envs`, ...). The session's own trainer is left as it is."""
+        form = self.game.batched_form(self.env_kwargs)
+        limit = self.game.episode_limit(self.env_kwargs)
+        return VectorTrainer(self.env, self.agent, self.keyer, form=form, made_limit=limit,
+                             **options)
 
     def trainer_for(self, animated: bool) -> Trainer:
         """The trainer to use now: animation needs single steps, so the scalar engine.
@@ -198,11 +241,11 @@ class Session:
         new_id, kwargs, new_choices, game = self._rebuild_args(env_id, env_kwargs, choices)
         built = _build(game, new_id, kwargs, new_choices)
         keep = self._keeps(built)
-        defaults = self.game.default_hyperparameters(self.env_kwargs)
+        defaults = default_settings(self.game, self.algorithm, self.env_kwargs)
         if game is not self.game or (not keep and self.hp == defaults):
             # Each game (and a larger map) learns with its own defaults; a fresh agent on
             # the same game keeps hyperparameters a person chose.
-            self.hp = game.default_hyperparameters(kwargs)
+            self.hp = default_settings(game, self.algorithm, kwargs)
         old_trainer = self.trainer
         self.env.close()
         self.env_id, self.env_kwargs, self.choices, self.game = (
@@ -251,11 +294,12 @@ class Session:
         """The env id, checked arguments, wrappers and game a rebuild would use."""
         new_id = resolve_env_id(env_id) if env_id is not None else self.env_id
         game = game_for(new_id)
+        asked: Mapping[str, Any]
         if env_kwargs is None:
-            kwargs = self.env_kwargs if new_id == self.env_id else game.default_kwargs()
+            asked = self.env_kwargs if new_id == self.env_id else game.default_kwargs()
         else:
-            kwargs = env_kwargs
-        kwargs = game.normalize_kwargs(kwargs)
+            asked = env_kwargs
+        kwargs = game.normalize_kwargs(asked)
         return new_id, kwargs, tuple(self.choices if choices is None else choices), game
 
     def _keeps(self, built: _Built) -> bool:
@@ -269,10 +313,26 @@ class Session:
         self.agent = self._new_agent()
         self.trainer = self._new_trainer()
 
-    def set_hyperparameters(self, hp: Hyperparameters) -> None:
-        """New hyperparameters for the rest of the run (the table is kept)."""
-        self.hp = hp
-        self.agent.set_hyperparameters(hp)
+    def set_hyperparameters(self, hp: Settings | Mapping[str, Any]) -> None:
+        """New hyperparameters for the rest of the run, taking effect at once (the
+        learner and its tables are kept). A mapping may name some values only: the
+        others stay as they are. ValueError, changing nothing, for a bad value."""
+        current = self.hp
+        assert current is not None  # set when the session is built
+        settings = hp if isinstance(hp, Settings) and hp.schema == current.schema else (
+            current.replace(**dict(hp))
+        )
+        self.agent.set_hyperparameters(settings)
+        self.hp = settings
+
+    def set_algorithm(self, name: str) -> None:
+        """Train with another algorithm: a fresh learner with the game's defaults for it,
+        and fresh statistics (nothing of the old learner carries over). ValueError for
+        an unknown name, changing nothing."""
+        cls = algorithm(name)
+        self.learner_class, self.algorithm = cls, cls.name
+        self.hp = default_settings(self.game, cls.name, self.env_kwargs)
+        self.reset_agent()
 
     # --- seeing the table -------------------------------------------------
     def base_keys(self) -> list[Hashable] | None:
@@ -357,6 +417,40 @@ class Session:
         marks = self.game.oracle.optimal_marks(self.env_kwargs, self.changes)
         return self.game.layout.heatmaps(q, self.env_kwargs, focus, marks)
 
+    def heatmap_cell(
+        self, observation: Any, focus: Any = None
+    ) -> tuple[Any, tuple[int, int, int]] | None:
+        """Where an observation's state is drawn on the heatmaps: the focus to show it
+        under (`focus` when it is there, else the first focus that has it, for games
+        whose heatmaps follow one) and its (panel, row, col); None when no heatmap
+        shows it (wrappers hide the base states, or it is not one of them)."""
+        keys = self.base_keys()
+        if keys is None:
+            return None
+        try:
+            key = self.keyer.key(observation)
+        except (IndexError, KeyError, TypeError, ValueError):
+            return None
+        rows = [i for i, k in enumerate(keys) if k == key]
+        if not rows:
+            return None
+        # An indicator table: the state's cell is the only one whose value is 1.
+        q = np.zeros((len(keys), self._built.n_actions))
+        q[rows] = 1.0
+        layout, kwargs = self.game.layout, self.env_kwargs
+        focuses = [focus]
+        if layout.has_focus:
+            panels = layout.heatmaps(q, kwargs, focus)
+            height, width = panels[0].shape if panels else (0, 0)
+            focuses += [layout.focus_at(r, c, kwargs)
+                        for r in range(height) for c in range(width)]
+        for candidate in focuses:
+            for index, panel in enumerate(layout.heatmaps(q, kwargs, candidate)):
+                found = np.argwhere(np.nan_to_num(panel.values) == 1.0)
+                if found.size:
+                    return candidate, (index, int(found[0][0]), int(found[0][1]))
+        return None
+
     def agent_figures(self, snapshot: TrainingSnapshot | None = None) -> dict[str, float]:
         """Exact scoreboard figures of the agent's greedy policy (the live agent's, or a
         snapshot's) and of the optimum (`Oracle.agent_figures`); only the optimum's
@@ -401,19 +495,22 @@ class Session:
     def train(
         self,
         target_gap: float | None = None,
-        check_every: int = 10_000,
+        check_every: int | None = None,
         chunk_seconds: float = 0.2,
         on_chunk: Callable[[TrainingSnapshot], None] | None = None,
     ) -> TrainOutcome:
         """Train to the end of the budget, or until the exact gap is at most `target_gap`.
 
         The gap is checked every `check_every` episodes (exactly, from the
-        reference: no sampling noise). `on_chunk` sees a snapshot after each
+        reference: no sampling noise; by default a twentieth of the budget,
+        between 1,000 and 10,000). `on_chunk` sees a snapshot after each
         chunk of about `chunk_seconds`, e.g. to draw a progress bar.
         """
         if target_gap is not None:
             self.check_target_gap(target_gap)
         trainer = self.trainer
+        if check_every is None:
+            check_every = check_every_for(trainer.remaining)
         next_check = trainer.episodes + check_every
         gap = None
         while trainer.remaining > 0:
@@ -473,6 +570,7 @@ class Session:
             "env_id": self.env_id,
             "env_kwargs": self.env_kwargs,
             "wrappers": [format_wrapper_spec(c) for c in self.choices],
+            "algorithm": self.algorithm,
             "hyperparameters": self.hp.to_dict(),
             "seed": self.seed,
             "episodes_trained": self.trainer.episodes,
@@ -486,8 +584,7 @@ class Session:
         """Write the agent and everything needed to rebuild this session (atomically)."""
         from tui_gym.core.storage import save_agent
 
-        q, keys = self.agent.table()
-        return save_agent(path, self.meta(), q, keys, self.agent.update_counts())
+        return save_agent(path, self.meta(), self.agent.state())
 
     @classmethod
     def load(cls, path: str | Path) -> Session:
@@ -500,14 +597,15 @@ class Session:
         env_kwargs = saved.checked("env_kwargs", lambda: game.normalize_kwargs(saved.env_kwargs))
         try:
             session = cls(env_id=saved.env_id, env_kwargs=env_kwargs, choices=saved.choices,
-                          hp=saved.hp, seed=saved.seed)
+                          hp=saved.hp, seed=saved.seed, algorithm=saved.algorithm.name)
         except (ValueError, TypeError, KeyError) as exc:
             raise saved.error(f"cannot rebuild the saved game ({short_reason(exc)})") from None
         session._restore(saved)
         return session
 
     def _restore(self, saved: Any) -> None:
-        """Put a saved table and its counts into this session's agent and trainer."""
+        """Put a saved learner state into this session's agent and its counts into the
+        trainer; `saved.field_error` names what does not fit the game."""
         from tui_gym.core.storage import short_reason
 
         agent = self.agent
@@ -515,34 +613,41 @@ class Session:
             choice, reason = self.skipped[0]
             index = list(saved.choices).index(choice)
             raise saved.field_error(f"wrappers[{index}]", f"does not fit {self.env_id}: {reason}")
-        if saved.n_actions is not None and saved.n_actions != agent.n_actions:
+        n_actions = agent.n_actions if saved.n_actions is None else saved.n_actions
+        if n_actions != agent.n_actions:
             raise saved.field_error(
-                "n_actions", f"is {saved.n_actions}; {self.env_id} with these wrappers has "
+                "n_actions", f"is {n_actions}; {self.env_id} with these wrappers has "
                 f"{agent.n_actions}"
             )
-        q, keys = saved.q, saved.keys
-        if q.shape[1] != agent.n_actions:
+        member = f"{saved.table_name}.npy"
+        first = saved.arrays[saved.table_name]
+        if first.shape[1] != agent.n_actions:
             raise saved.field_error(
-                "q.npy", f"has {q.shape[1]} columns; {self.env_id} has {agent.n_actions} actions"
+                member, f"has {first.shape[1]} columns; {self.env_id} has "
+                f"{agent.n_actions} actions"
             )
-        rows = agent.n_states
+        rows, keys = agent.n_states, saved.keys
         if rows is not None and keys is not None:
             raise saved.field_error("keys.json", f"is for a sparse table; {self.env_id}'s is dense")
-        if rows is not None and len(q) != rows:
-            raise saved.field_error("q.npy", f"has {len(q):,} rows; {self.env_id} has {rows:,}")
+        if rows is not None and len(first) != rows:
+            raise saved.field_error(member, f"has {len(first):,} rows; {self.env_id} has {rows:,}")
         if rows is None and keys is None:
             raise saved.field_error("keys.json",
                                     "is missing (the states of the sparse table's rows)")
+        saved.check_learner_meta()
         try:
-            agent.load_table(q, keys, saved.counts)
+            agent.load_state(saved.state(n_actions, rows))
         except (KeyError, TypeError, ValueError) as exc:
             raise saved.error(f"cannot restore the saved agent ({short_reason(exc)})") from None
-        agent.episode = saved.agent_episode
-        assert self.hp is not None
-        agent.set_hyperparameters(saved.hp)
         self.trainer.episodes = saved.episodes
         self.trainer.steps = saved.steps
         self.trainer.publish()
+
+
+def check_every_for(budget: int) -> int:
+    """Episodes between exact gap checks on a run of `budget` episodes."""
+    return max(1_000, min(10_000, budget // 20))
+
 
 def _round_up(value: float) -> str:
     """A value rounded up to 2 significant digits, as text: 0.0274 -> '0.028'."""
@@ -564,7 +669,7 @@ def vector_support(
 
     The env is built as a `Session` builds it (choices that do not fit are
     left out, as there), read with `plan_for_env`, and closed. Returns e.g.
-    `(True, "vector engine: Blackjack with StepPenalty")` or
+    `(True, "vector engine: <the game's title> with StepPenalty")` or
     `(False, "scalar engine: DelayObservation has no batched form (...)")`.
     """
     try:

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
 if TYPE_CHECKING:
+    from tui_gym.core.session import Session
     from tui_gym.core.training import StepEvent, TrainingSnapshot
 
 __all__ = ["DEFAULT_SPEED", "SPEEDS", "Runner", "Speed"]
@@ -41,6 +42,7 @@ DEFAULT_SPEED = len(SPEEDS) - 1
 class Runner(Protocol):
     """What a front end asks of a runner: controls, the latest snapshot, the last move."""
 
+    session: Session
     error: BaseException | None
     finished: bool
 
@@ -71,6 +73,10 @@ class Runner(Protocol):
     def toggle(self) -> bool: ...
 
     def run_one_episode(self) -> None: ...
+
+    def run_one_step(self) -> None: ...
+
+    def set_hyperparameters(self, hp: Any) -> None: ...
 
     def set_speed(self, index: int) -> Speed: ...
 

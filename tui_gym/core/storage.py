@@ -6,7 +6,7 @@ training counts), `q.npy` (the Q-table) and `counts.npy` (updates per state
 and action); sparse tables add `keys.json`.
 
 Storage takes and returns plain data and knows no game: `save_agent` writes
-a meta dict and the tables, `read_agent` returns them as a checked
+a meta dict and a learner's state, `read_agent` returns them as a checked
 `SavedAgent` (the session rebuilds itself from it, and reports what does not
 fit the game through `SavedAgent.field_error`).
 
@@ -52,16 +52,16 @@ from typing import Any
 
 import numpy as np
 
-from tui_gym.core.agent import Hyperparameters
+from tui_gym.algorithms import Learner, LearnerState, QLearning, Settings, algorithm
 from tui_gym.core.params import shown_value
 from tui_gym.core.wrappers.catalog import WrapperChoice
 
 FORMAT_NAME = "tui-gym-agent"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 
 MAX_FILE_BYTES = 256 << 20  # the archive on disk
 MAX_META_BYTES = 1 << 20  # meta.json unpacked
-MAX_TABLE_BYTES = 128 << 20  # q.npy, counts.npy and keys.json, each unpacked
+MAX_TABLE_BYTES = 128 << 20  # each array's .npy and keys.json, unpacked
 MAX_ROWS = 4_000_000  # table rows (the largest dense table has 2,000,000)
 MAX_JSON_DEPTH = 8
 MAX_COUNT = 2**62  # episodes, steps and update counts
@@ -268,29 +268,23 @@ def _npy_bytes(array: np.ndarray) -> bytes:
     return buf.getvalue()
 
 
-def save_agent(
-    path: str | Path,
-    meta: dict[str, Any],
-    q: np.ndarray,
-    keys: list[Hashable] | None,
-    counts: np.ndarray,
-) -> Path:
-    """Save an agent's table and its settings (`meta`, JSON data: env id and arguments,
-    wrapper specs, hyperparameters, seed, counts) to `path` atomically; returns `path`."""
+def save_agent(path: str | Path, meta: dict[str, Any], state: LearnerState) -> Path:
+    """Save a learner's state and its settings (`meta`, JSON data: env id and arguments,
+    wrapper specs, algorithm, hyperparameters, seed, counts) to `path` atomically;
+    returns `path`."""
     path = check_save_path(path)
-    meta = {"format": FORMAT_NAME, "version": FORMAT_VERSION, **meta}
-    members = {
-        "meta.json": json.dumps(meta, indent=2).encode(),
-        "q.npy": _npy_bytes(q),
-        "counts.npy": _npy_bytes(counts),
-    }
-    if keys is not None:
-        members["keys.json"] = json.dumps([_key_to_json(k) for k in keys]).encode()
+    meta = {"format": FORMAT_NAME, "version": FORMAT_VERSION, **meta, "learner": state.meta}
+    members = {"meta.json": json.dumps(meta, indent=2).encode()}
+    for name, array in state.arrays.items():
+        members[f"{name}.npy"] = _npy_bytes(array)
+    if state.keys is not None:
+        members["keys.json"] = json.dumps([_key_to_json(k) for k in state.keys]).encode()
+    rows = int(state.meta["rows"])
     for name, data in members.items():
         cap = MAX_META_BYTES if name == "meta.json" else MAX_TABLE_BYTES
-        if len(data) > cap or len(q) > MAX_ROWS:
+        if len(data) > cap or rows > MAX_ROWS:
             # Never write a file this version would refuse to read.
-            raise StorageError(f"{path}: cannot save: the table is too large ({len(q):,} rows)")
+            raise StorageError(f"{path}: cannot save: the table is too large ({rows:,} rows)")
     buf = io.BytesIO()
     with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as zf:
         for name, data in members.items():
@@ -412,8 +406,9 @@ def _depth_over(value: Any, limit: int) -> bool:
     return False
 
 
-def _array(reader: _Reader, name: str, data: bytes, kinds: str) -> np.ndarray:
-    """A 2-D `.npy` array whose header agrees with its bytes, of a dtype kind in `kinds`."""
+def _array(reader: _Reader, name: str, data: bytes, kinds: str, ndim: int = 2) -> np.ndarray:
+    """A `.npy` array of `ndim` dimensions (1 or 2) whose header agrees with its bytes,
+    of a dtype kind in `kinds`."""
     buf = io.BytesIO(data)
     try:
         major, _minor = np.lib.format.read_magic(buf)
@@ -427,9 +422,10 @@ def _array(reader: _Reader, name: str, data: bytes, kinds: str) -> np.ndarray:
         raise reader.field(name, "is not a numpy array file") from None
     if dtype.hasobject or dtype.kind not in kinds or dtype.itemsize == 0:
         raise reader.field(name, f"holds {dtype} values")
-    if len(shape) != 2:
-        raise reader.field(name, f"must be a 2-D table, has shape {shape}")
-    rows, columns = shape
+    if len(shape) != ndim:
+        what = "a 2-D table" if ndim == 2 else "a 1-D array"
+        raise reader.field(name, f"must be {what}, has shape {shape}")
+    rows, columns = shape if ndim == 2 else (*shape, 1)
     if rows > MAX_ROWS or columns > 1024:
         raise reader.field(name, f"declares {rows:,} x {columns:,} entries (too large)")
     needed = rows * columns * dtype.itemsize
@@ -440,6 +436,16 @@ def _array(reader: _Reader, name: str, data: bytes, kinds: str) -> np.ndarray:
         )
     array = np.frombuffer(data, dtype=dtype, count=rows * columns, offset=buf.tell())
     return array.reshape(shape, order="F" if fortran else "C")
+
+
+@dataclass(frozen=True)
+class SaveContents:
+    """What a save file holds: its meta, the learner's arrays by name, and sparse keys."""
+
+    meta: dict[str, Any]
+    algorithm: type[Learner]
+    arrays: dict[str, np.ndarray]
+    keys: list[Hashable] | None
 
 
 def _key_from_json(reader: _Reader, index: int, value: Any) -> Hashable:
@@ -458,13 +464,13 @@ def _plain_number(value: Any) -> bool:
     )
 
 
-def read_file(
-    path: str | Path,
-) -> tuple[dict[str, Any], np.ndarray, list[Any] | None, np.ndarray | None]:
-    """Meta, Q-table, sparse keys and update counts of a save file; StorageError if not one.
+def read_file(path: str | Path) -> SaveContents:
+    """Meta, learner arrays and sparse keys of a save file; StorageError if not one.
 
-    The meta's format and version are checked here, the table's values and shape
-    and the keys' form too; `read_agent` checks the rest of the meta.
+    The meta's format, version and algorithm are checked here, every array's
+    kind of number and dimensions, the keys' form, and values no learner makes
+    (NaN or infinite values, negative counts); `read_agent` checks the rest of
+    the meta, and the session the game and the learner's own rules.
     """
     reader = _Reader(Path(path))
     raw = _read_regular_file(reader)
@@ -476,28 +482,14 @@ def read_file(
             meta = _json(reader, "meta.json", meta_bytes)
             if not isinstance(meta, dict) or meta.get("format") != FORMAT_NAME:
                 raise reader.error(f"not a tui-gym save file (format is not {FORMAT_NAME})")
-            _check_version(reader, meta.get("version"))
-            q_bytes = _member(reader, zf, "q.npy", MAX_TABLE_BYTES)
-            if q_bytes is None:
-                raise reader.field("q.npy", "is missing (the Q-table)")
-            q = _array(reader, "q.npy", q_bytes, "f").astype(np.float64)
-            if not np.isfinite(q).all():
-                raise reader.field("q.npy", "holds NaN or infinite Q-values")
-            counts = None
-            counts_bytes = _member(reader, zf, "counts.npy", MAX_TABLE_BYTES)
-            if counts_bytes is not None:
-                counts = _array(reader, "counts.npy", counts_bytes, "iu")
-                if counts.shape != q.shape:
-                    raise reader.field(
-                        "counts.npy", f"has shape {counts.shape}, the Q-table {q.shape}"
-                    )
-                if counts.size and (counts.min() < 0 or counts.max() > MAX_COUNT):
-                    raise reader.field("counts.npy", "holds negative or impossible counts")
-                counts = counts.astype(np.int64)
+            version = _check_version(reader, meta.get("version"))
+            cls = _algorithm_of(reader, meta, version)
+            arrays = _learner_arrays(reader, zf, cls, version)
+            rows = len(arrays[cls.tables[0].name])
             keys = None
             keys_bytes = _member(reader, zf, "keys.json", MAX_TABLE_BYTES)
             if keys_bytes is not None:
-                keys = _keys(reader, _json(reader, "keys.json", keys_bytes), len(q))
+                keys = _keys(reader, _json(reader, "keys.json", keys_bytes), rows)
     except StorageError:
         raise
     except (zipfile.BadZipFile, zlib.error, EOFError, ValueError, struct.error):
@@ -508,7 +500,80 @@ def read_file(
         raise reader.error(f"not a tui-gym save file ({short_reason(exc)})") from None
     except MemoryError:
         raise reader.error("not a tui-gym save file (too large to read)") from None
-    return meta, q, keys, counts
+    return SaveContents(meta, cls, arrays, keys)
+
+
+def _algorithm_of(reader: _Reader, meta: dict[str, Any], version: int) -> type[Learner]:
+    """The learner class a save names (version 1 files are Q-learning's)."""
+    if version < 2:
+        return QLearning
+    name = meta.get("algorithm")
+    if not isinstance(name, str):
+        raise reader.field("algorithm", f"must be an algorithm's name, got {shown_value(name)}")
+    return _checked(reader, "algorithm", lambda: algorithm(name))
+
+
+# The dtype kinds each kind of learner array may be saved as.
+_KINDS = {"f": "f", "i": "iu", "u": "iu", "b": "b"}
+
+
+def _learner_arrays(
+    reader: _Reader, zf: zipfile.ZipFile, cls: type[Learner], version: int
+) -> dict[str, np.ndarray]:
+    """Every array `cls` saves, read from its `NAME.npy` (version 1: `q.npy` and the
+    optional `counts.npy`), all with one row count."""
+    if version < 2:
+        return _version_1_arrays(reader, zf)
+    blank = cls(1, n_states=1).state().arrays  # the names, kinds and dimensions it saves
+    tables = [spec.name for spec in cls.tables]
+    names = tables + [name for name in blank if name not in tables]
+    lowest = {spec.name: min(0, int(spec.fill)) for spec in cls.tables if spec.dtype is not bool}
+    arrays: dict[str, np.ndarray] = {}
+    for name in names:
+        like, member = blank[name], f"{name}.npy"
+        data = _member(reader, zf, member, MAX_TABLE_BYTES)
+        if data is None:
+            raise reader.field(member, f"is missing (the {cls.title} learner saves it)")
+        array = _array(reader, member, data, _KINDS[like.dtype.kind], like.ndim)
+        _check_numbers(reader, member, array, lowest.get(name, 0))
+        first = arrays.get(tables[0])
+        if name in tables and first is not None and array.shape != first.shape:
+            raise reader.field(member, f"has shape {array.shape}, {tables[0]}.npy {first.shape}")
+        arrays[name] = array
+    return arrays
+
+
+def _version_1_arrays(reader: _Reader, zf: zipfile.ZipFile) -> dict[str, np.ndarray]:
+    """Q-learning's arrays from a version 1 save: q.npy, and counts.npy when present."""
+    q_bytes = _member(reader, zf, "q.npy", MAX_TABLE_BYTES)
+    if q_bytes is None:
+        raise reader.field("q.npy", "is missing (the Q-table)")
+    q = _array(reader, "q.npy", q_bytes, "f").astype(np.float64)
+    _check_numbers(reader, "q.npy", q)
+    counts_bytes = _member(reader, zf, "counts.npy", MAX_TABLE_BYTES)
+    if counts_bytes is None:
+        # Unknown history: every learned value is taken as well established.
+        counts = np.where(q != 0, 1_000_000, 0).astype(np.int64)
+    else:
+        counts = _array(reader, "counts.npy", counts_bytes, "iu")
+        if counts.shape != q.shape:
+            raise reader.field("counts.npy", f"has shape {counts.shape}, q.npy {q.shape}")
+        _check_numbers(reader, "counts.npy", counts)
+        counts = counts.astype(np.int64)
+    return {"q": q, "counts": counts, "visits": counts.sum(axis=1)}
+
+
+def _check_numbers(reader: _Reader, member: str, array: np.ndarray, lowest: int = 0) -> None:
+    """Values no learner saves: NaN or infinite numbers, counts below `lowest` (-1 marks
+    "never" in some tables, e.g. Dyna-Q's model) or impossibly large."""
+    if array.dtype.kind == "f":
+        if not np.isfinite(array).all():
+            what = "Q-values" if member == "q.npy" else "values"
+            raise reader.field(member, f"holds NaN or infinite {what}")
+    elif array.dtype.kind in "iu" and array.size and (
+        array.min() < lowest or array.max() > MAX_COUNT
+    ):
+        raise reader.field(member, "holds negative or impossible counts")
 
 
 def short_reason(exc: BaseException) -> str:
@@ -516,7 +581,7 @@ def short_reason(exc: BaseException) -> str:
     return text if len(text) <= 80 else text[:77] + "..."
 
 
-def _check_version(reader: _Reader, version: Any) -> None:
+def _check_version(reader: _Reader, version: Any) -> int:
     if version is None or isinstance(version, bool) or not isinstance(version, int):
         raise reader.error(
             f"save file has no valid format version (got {shown_value(version)})"
@@ -528,6 +593,7 @@ def _check_version(reader: _Reader, version: Any) -> None:
             f"saved by a newer tui-gym (format {shown_value(version)}; "
             f"this one reads up to {FORMAT_VERSION}); upgrade tui-gym to open it"
         )
+    return version
 
 
 def _keys(reader: _Reader, value: Any, rows: int) -> list[Hashable]:
@@ -560,6 +626,25 @@ def _checked(reader: _Reader, name: str, build: Callable[[], Any]) -> Any:
         raise reader.field(name, f"is not valid: {short_reason(exc)}") from None
 
 
+def _check_learner_meta(
+    reader: _Reader, meta: dict[str, Any], cls: type[Learner], rows: int
+) -> None:
+    """The learner's own metadata (format 2), which must agree with the rest."""
+    if "learner" not in meta and meta.get("version", 1) < 2:
+        return
+    learner = meta.get("learner")
+    if not isinstance(learner, dict):
+        raise reader.field("learner", f"must be an object, got {shown_value(learner)}")
+    if learner.get("algorithm") != cls.name:
+        raise reader.field(
+            "learner.algorithm", f"is {shown_value(learner.get('algorithm'))}, not {cls.name}"
+        )
+    if learner.get("rows") != rows or isinstance(learner.get("rows"), bool):
+        raise reader.field(
+            "learner.rows", f"is {shown_value(learner.get('rows'))}; the tables have {rows:,}"
+        )
+
+
 @dataclass(frozen=True)
 class SavedAgent:
     """What a save file holds, checked as far as it can be without the game it names."""
@@ -568,15 +653,37 @@ class SavedAgent:
     env_id: str
     env_kwargs: dict[str, Any]
     choices: tuple[WrapperChoice, ...]
-    hp: Hyperparameters
+    algorithm: type[Learner]
+    hp: Settings
     seed: int
     episodes: int
     steps: int
     agent_episode: int
     n_actions: int | None  # None: the file does not say
-    q: np.ndarray
+    arrays: dict[str, np.ndarray]  # the learner's, by name; the first table's gives the shape
     keys: list[Hashable] | None
-    counts: np.ndarray | None
+    meta: dict[str, Any]  # meta.json as read
+
+    def check_learner_meta(self) -> None:
+        """The learner's own metadata (format 2), which must agree with the tables;
+        checked once the tables are known to fit the game (their fault is named first)."""
+        rows = len(self.arrays[self.table_name])
+        _check_learner_meta(_Reader(self.path), self.meta, self.algorithm, rows)
+
+    @property
+    def table_name(self) -> str:
+        return self.algorithm.tables[0].name
+
+    def state(self, n_actions: int, n_states: int | None) -> LearnerState:
+        """The learner state to load into a learner of `n_actions` and `n_states`."""
+        return LearnerState(
+            self.algorithm.name,
+            self.arrays,
+            {"n_actions": n_actions, "n_states": n_states,
+             "rows": len(self.arrays[self.table_name]),
+             "episode": self.agent_episode, "hyperparameters": self.hp.to_dict()},
+            self.keys,
+        )
 
     def error(self, text: str) -> StorageError:
         """A `StorageError` naming the file."""
@@ -596,7 +703,9 @@ def read_agent(path: str | Path) -> SavedAgent:
     from tui_gym.core.wrappers import parse_wrapper_spec
 
     reader = _Reader(Path(path))
-    meta, q, keys, counts = read_file(path)
+    contents = read_file(path)
+    meta, keys, arrays, cls = contents.meta, contents.keys, contents.arrays, contents.algorithm
+    first = arrays[cls.tables[0].name]
 
     env_id = meta.get("env_id")
     if not isinstance(env_id, str):
@@ -618,7 +727,7 @@ def read_agent(path: str | Path) -> SavedAgent:
     hp_data = meta.get("hyperparameters")
     if not isinstance(hp_data, dict):
         raise reader.field("hyperparameters", f"must be an object, got {shown_value(hp_data)}")
-    hp = _checked(reader, "hyperparameters", lambda: Hyperparameters.from_dict(hp_data))
+    hp = _checked(reader, "hyperparameters", lambda: cls.settings(hp_data))
     seed = _int_field(reader, meta, "seed", 0, 0, MAX_SEED)
     episodes = _int_field(reader, meta, "episodes_trained", 0, 0, MAX_COUNT)
     steps = _int_field(reader, meta, "steps_trained", 0, 0, MAX_COUNT)
@@ -629,8 +738,12 @@ def read_agent(path: str | Path) -> SavedAgent:
     for name in ("observation_space",):
         if name in meta and not isinstance(meta[name], str):
             raise reader.field(name, f"must be text, got {shown_value(meta[name])}")
+    if len(arrays["visits"]) != len(first):
+        raise reader.field(
+            "visits.npy", f"has {len(arrays['visits']):,} entries for {len(first):,} table rows"
+        )
     return SavedAgent(
         path=Path(path), env_id=env_id, env_kwargs=dict(env_kwargs), choices=tuple(choices),
-        hp=hp, seed=seed, episodes=episodes, steps=steps, agent_episode=agent_episode,
-        n_actions=n_actions, q=q, keys=keys, counts=counts,
+        algorithm=cls, hp=hp, seed=seed, episodes=episodes, steps=steps,
+        agent_episode=agent_episode, n_actions=n_actions, arrays=arrays, keys=keys, meta=meta,
     )

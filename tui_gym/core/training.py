@@ -1,12 +1,18 @@
-"""The trainer: episodes of Q-learning in chunks, with bounded live statistics.
+"""The engines' shared loop, and the scalar engine: episodes in chunks, with bounded statistics.
 
-`Trainer` drives one env and one `QAgent`. A front end calls `run(episodes=…)`
-or `run(seconds=…)` in chunks (or `step()` one move at a time to animate),
-so it can interleave drawing, pausing and changing settings. Per-episode
-return, length, mean |TD error| and epsilon go into `RollingWindow`s and
-whole-run `Series`, so memory is fixed however long it runs. `snapshot()`
-returns an immutable `TrainingSnapshot` (numpy copies) for viewers on other
-threads; `latest` holds the most recent one, refreshed while `run` works.
+`Engine` is what every engine shares: the learner it trains (any
+`tui_gym.algorithms.Learner`), `run(episodes=…)` / `run(seconds=…)` in
+chunks so a front end can interleave drawing, pausing and changing
+settings, per-episode return, length, mean |TD error| and epsilon in
+`RollingWindow`s and whole-run `Series` (memory is fixed however long it
+runs), and `snapshot()`, an immutable `TrainingSnapshot` (numpy copies) for
+viewers on other threads; `latest` holds the most recent one. Each engine
+writes `_advance`, its small piece of work.
+
+`Trainer` is the scalar engine: one Gymnasium env, any wrapper, one move at
+a time (`step()` animates, and can explain the update it made). It drives
+the learner through the protocol of `tui_gym.algorithms.base`. The vector
+engine (`tui_gym.core.vector.VectorTrainer`) is another `Engine`.
 `continue_run` decides how new hyperparameters apply to a run under way.
 """
 
@@ -14,6 +20,7 @@ from __future__ import annotations
 
 import math
 import time
+from abc import ABC, abstractmethod
 from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
@@ -21,7 +28,7 @@ from typing import Any, Protocol
 import gymnasium as gym
 import numpy as np
 
-from tui_gym.core.agent import Hyperparameters, QAgent
+from tui_gym.algorithms import SCALAR_ENV, Learner, Settings, UpdateRecord
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.stats import EpisodeStats, RollingWindow, Series
 
@@ -50,7 +57,7 @@ class TrainingSnapshot:
     mean_abs_td: float
     window: int
     series: dict[str, tuple[float, ...]]  # whole-run history per quantity
-    q: np.ndarray  # copy of the Q-table (rows used)
+    q: np.ndarray  # copy of the learner's action values (rows used)
     keys: list[Hashable] | None  # the key of each row for sparse tables, None when dense
     budget: int  # the episode budget from the hyperparameters
     last: EpisodeStats | None = None
@@ -59,7 +66,7 @@ class TrainingSnapshot:
     _lookup: dict[Hashable, int] | None = field(default=None, repr=False, compare=False)
 
     def values(self, keys: list[Hashable]) -> np.ndarray:
-        """Q-values for the given keys (zeros for unseen states), like `QAgent.values`."""
+        """Action values for the given keys (zeros for unseen states), like `Learner.values`."""
         out = np.zeros((len(keys), self.q.shape[1]))
         if self.keys is None:
             if keys:
@@ -108,17 +115,23 @@ class StepEvent:
     episode_done: EpisodeStats | None
     episode: int = 0  # the 1-based number of the episode this step belongs to
     step: int = 0  # the 1-based number of this step within its episode
+    last_update: UpdateRecord | None = None  # how the learner used it, when asked to explain
 
 
-class Trainer:
-    """Runs Q-learning on one env, a step, an episode or a chunk at a time."""
+class Engine(ABC):
+    """What every engine shares: a learner, chunked runs, statistics and snapshots.
 
-    engine = "scalar"
+    `agent` is the learner being trained (shared with the session and any
+    other engine of it). A subclass writes `_advance`, one small piece of
+    work, and may finish `episodes` in any order it likes.
+    """
+
+    engine = ""
 
     def __init__(
         self,
         env: gym.Env,
-        agent: QAgent,
+        agent: Learner,
         keyer: ObservationKeyer,
         *,
         seed: int | None = None,
@@ -137,60 +150,30 @@ class Trainer:
         self.windows = {name: RollingWindow(window) for name in SERIES_NAMES}
         self.series = {name: Series(series_capacity) for name in SERIES_NAMES}
         self.last: EpisodeStats | None = None
-        self._obs: Any = None
-        self._key: Hashable | None = None
-        self._ep_return = 0.0
-        self._ep_len = 0
-        self._ep_td = 0.0
         self._rate_mark = (0.0, 0)  # (seconds, episodes) at the last rate sample
         self._rate = 0.0
         self._version = 0
         self.latest: TrainingSnapshot = self.snapshot()
 
-    # --- one move --------------------------------------------------------
-    def _begin_episode(self) -> None:
-        if self.episodes == 0 and self._obs is None and self.seed is not None:
-            obs, _ = self.env.reset(seed=self.seed)
-        else:
-            obs, _ = self.env.reset()
-        self._obs = obs
-        self._key = self.keyer.key(obs)
-        self._ep_return = 0.0
-        self._ep_len = 0
-        self._ep_td = 0.0
+    @abstractmethod
+    def _advance(self, limit: int | None) -> int:
+        """A small piece of work (milliseconds) finishing at most `limit` episodes;
+        returns how many it finished."""
 
-    def step(self) -> StepEvent:
-        """Take one environment step (starting an episode if none is running)."""
-        if self._obs is None:
-            self._begin_episode()
-        obs, key = self._obs, self._key
-        agent = self.agent
-        action = agent.act(key)
-        next_obs, reward, terminated, truncated, _ = self.env.step(action)
-        next_key = self.keyer.key(next_obs)
-        td = agent.update(key, action, float(reward), bool(terminated), next_key)
-        self.steps += 1
-        self._ep_return += float(reward)
-        self._ep_len += 1
-        self._ep_td += abs(td)
-        episode, step = self.episodes + 1, self._ep_len
-        done_stats = None
-        if terminated or truncated:
-            done_stats = self._finish_episode()
-        else:
-            self._obs, self._key = next_obs, next_key
-        return StepEvent(obs, action, float(reward), next_obs, bool(terminated),
-                         bool(truncated), done_stats, episode, step)
+    @abstractmethod
+    def run_episode(self) -> EpisodeStats:
+        """Finish one more episode and return its statistics."""
 
-    def _finish_episode(self) -> EpisodeStats:
-        stats = EpisodeStats(
-            episode_return=self._ep_return,
-            length=self._ep_len,
-            mean_abs_td=self._ep_td / max(1, self._ep_len),
-            epsilon=self.agent.epsilon,
-        )
-        self.agent.end_episode()
-        self.episodes += 1
+    @abstractmethod
+    def episode_in_progress(self) -> bool:
+        """Whether an episode has started and not ended."""
+
+    def current_observation(self) -> Any:
+        """The observation the agent is about to act on (None when there is no one)."""
+        return None
+
+    def _record_episode(self, stats: EpisodeStats) -> None:
+        """Count one finished episode into the windows and curves."""
         self.last = stats
         windows, series = self.windows, self.series
         for name, value in zip(
@@ -201,15 +184,6 @@ class Trainer:
             window = windows[name]
             window.push(value)
             series[name].push(window.mean)
-        self._obs = None
-        return stats
-
-    def run_episode(self) -> EpisodeStats:
-        """Play one whole episode (finishing the one in progress, if any)."""
-        while True:
-            event = self.step()
-            if event.episode_done is not None:
-                return event.episode_done
 
     # --- chunks ----------------------------------------------------------
     def run(
@@ -248,18 +222,6 @@ class Trainer:
         self.publish(on_publish)
         return done
 
-    def _advance(self, limit: int | None) -> int:
-        """A small piece of work between clock checks: a few episodes (at most `limit`),
-        fewer once they add up to `ADVANCE_STEPS` steps, so a stop is seen within
-        milliseconds however long the episodes are."""
-        count = 16 if limit is None else min(16, limit)
-        first_step = self.steps
-        for done in range(1, count + 1):
-            self.run_episode()
-            if self.steps - first_step >= ADVANCE_STEPS:
-                return done
-        return count
-
     def publish(self, callback: Callable[[TrainingSnapshot], None] | None = None) -> None:
         snap = self.snapshot()
         self.latest = snap
@@ -277,7 +239,7 @@ class Trainer:
         return self._rate
 
     def snapshot(self) -> TrainingSnapshot:
-        """An immutable copy of the current statistics and Q-table."""
+        """An immutable copy of the current statistics and the learner's action values."""
         q, keys = self.agent.table()
         self._version += 1
         w = self.windows
@@ -317,9 +279,113 @@ class Trainer:
         self._version = progress.version
         self.publish()
 
-    def adopt_progress(self, other: Trainer) -> None:
-        """Carry on another trainer's counts and statistics (the agent is shared)."""
+    def adopt_progress(self, other: Engine) -> None:
+        """Carry on another engine's counts and statistics (the agent is shared)."""
         self.restore(other.progress())
+
+    @property
+    def remaining(self) -> int:
+        return max(0, self.agent.hp.episodes - self.episodes)
+
+
+class Trainer(Engine):
+    """The scalar engine: one env, a step, an episode or a chunk at a time.
+
+    Each step follows the learner protocol with a batch of one: the action
+    (`act`, or for SARSA the next action chosen at the previous step), the
+    env step, the next action first when the learner needs it, then
+    `update_one`, and `end_episodes(1)` when the episode ends.
+    """
+
+    engine = "scalar"
+
+    def __init__(self, env: gym.Env, agent: Learner, keyer: ObservationKeyer, **options: Any):
+        self._obs: Any = None
+        self._key: Hashable | None = None
+        self._next_action: int | None = None  # chosen in advance (SARSA), taken next step
+        self._ep_return = 0.0
+        self._ep_len = 0
+        self._ep_td = 0.0
+        super().__init__(env, agent, keyer, **options)
+
+    # --- one move --------------------------------------------------------
+    def _begin_episode(self) -> None:
+        if self.episodes == 0 and self._obs is None and self.seed is not None:
+            obs, _ = self.env.reset(seed=self.seed)
+        else:
+            obs, _ = self.env.reset()
+        # Whatever the learner kept of an episode this engine no longer plays goes.
+        self.agent.forget_episodes((SCALAR_ENV,))
+        self._obs = obs
+        self._key = self.keyer.key(obs)
+        self._next_action = None
+        self._ep_return = 0.0
+        self._ep_len = 0
+        self._ep_td = 0.0
+
+    def step(self, explain: bool = False) -> StepEvent:
+        """Take one environment step (starting an episode if none is running).
+
+        With `explain` the event carries the learner's record of the update.
+        """
+        if self._obs is None:
+            self._begin_episode()
+        obs, key = self._obs, self._key
+        agent = self.agent
+        action = self._next_action
+        if action is None:
+            action = agent.act(key)
+        next_obs, reward, terminated, truncated, _ = self.env.step(action)
+        next_key = self.keyer.key(next_obs)
+        next_action = agent.act(next_key) if agent.needs_next_action else None
+        td = agent.update_one(key, action, float(reward), next_key, bool(terminated),
+                              bool(truncated), next_action)
+        record = agent.last_update if explain else None
+        self.steps += 1
+        self._ep_return += float(reward)
+        self._ep_len += 1
+        self._ep_td += abs(td)
+        episode, step = self.episodes + 1, self._ep_len
+        done_stats = None
+        if terminated or truncated:
+            done_stats = self._finish_episode()
+        else:
+            self._obs, self._key, self._next_action = next_obs, next_key, next_action
+        return StepEvent(obs, action, float(reward), next_obs, bool(terminated),
+                         bool(truncated), done_stats, episode, step, record)
+
+    def _finish_episode(self) -> EpisodeStats:
+        stats = EpisodeStats(
+            episode_return=self._ep_return,
+            length=self._ep_len,
+            mean_abs_td=self._ep_td / max(1, self._ep_len),
+            epsilon=self.agent.epsilon,
+        )
+        self.agent.end_episodes(1)
+        self.episodes += 1
+        self._record_episode(stats)
+        self._obs = None
+        self._next_action = None
+        return stats
+
+    def run_episode(self) -> EpisodeStats:
+        """Play one whole episode (finishing the one in progress, if any)."""
+        while True:
+            event = self.step()
+            if event.episode_done is not None:
+                return event.episode_done
+
+    def _advance(self, limit: int | None) -> int:
+        """A small piece of work between clock checks: a few episodes (at most `limit`),
+        fewer once they add up to `ADVANCE_STEPS` steps, so a stop is seen within
+        milliseconds however long the episodes are."""
+        count = 16 if limit is None else min(16, limit)
+        first_step = self.steps
+        for done in range(1, count + 1):
+            self.run_episode()
+            if self.steps - first_step >= ADVANCE_STEPS:
+                return done
+        return count
 
     def episode_in_progress(self) -> bool:
         return self._obs is not None
@@ -328,14 +394,10 @@ class Trainer:
         """The observation the agent is about to act on (None between episodes)."""
         return self._obs
 
-    @property
-    def remaining(self) -> int:
-        return max(0, self.agent.hp.episodes - self.episodes)
-
 
 def continue_run(
-    current: Hyperparameters | None, wanted: Hyperparameters, episodes_done: int
-) -> tuple[Hyperparameters, str | None]:
+    current: Settings | None, wanted: Settings, episodes_done: int
+) -> tuple[Settings, str | None]:
     """The hyperparameters to train on with, and what to tell the person, if anything.
 
     Raising the episode budget of an agent that has trained continues its run:

@@ -164,6 +164,7 @@ class GridWorldEnv(gym.Env[ObsType, int]):
     """
 
     metadata: dict[str, Any] = {"render_modes": ["ansi", "human", "rgb_array"], "render_fps": 4}
+    reports_distance = True  # every step's info holds "distance" (DistanceShaping reads it)
 
     def __init__(
         self,
@@ -194,13 +195,13 @@ class GridWorldEnv(gym.Env[ObsType, int]):
         self.step_penalty = float(step_penalty)
         self.render_mode = render_mode
 
-        self.observation_space = spaces.Dict(
+        self.observation_space = spaces.Dict(  # type: ignore[assignment]
             {
                 "agent": spaces.Box(0, self.size - 1, shape=(2,), dtype=np.int64),
                 "target": spaces.Box(0, self.size - 1, shape=(2,), dtype=np.int64),
             }
         )
-        self.action_space = spaces.Discrete(len(ACTION_NAMES))
+        self.action_space = spaces.Discrete(len(ACTION_NAMES))  # type: ignore[assignment]
 
         # Positions are kept as tuples of Python ints, so nothing returned to a
         # caller can alias the environment's state.

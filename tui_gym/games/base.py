@@ -23,12 +23,11 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
 
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.params import Param
@@ -190,8 +189,11 @@ class StateSpace(Role):
         """`scene` of the unwrapped env; may raise before the first reset."""
         return {}
 
-    def text(self, env: Any, reveal: bool = True) -> str:
-        """A plain-text picture of the env's state ('' when it has none)."""
+    def text(
+        self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None
+    ) -> str:
+        """A plain-text picture of the env's state ('' when it has none); `reveal` shows
+        what is hidden during an episode, `before` is as for `scene`."""
         if self.game.render_mode != "ansi":
             return ""
         try:
@@ -474,6 +476,14 @@ class Game:
     episode_noun: str = "episode"  # what people call one episode, e.g. "hand"
     editable: bool = False  # whether the app's map editor edits its maps
     map_tools: tuple[str, ...] = ()  # what the editor paints with (`games.maps.TOOLS` names)
+    # `tui-gym bench` measures the game with these arguments (None: it does not), to a
+    # target gap of `bench_gap` (None: the bound its oracle states).
+    bench_kwargs: dict[str, Any] | None = None
+    bench_gap: float | None = None
+    demo_wrappers: tuple[str, ...] = ()  # wrapper specs a screenshot of the panel ticks
+    # Hyperparameters that learn this game well, over each algorithm's own defaults:
+    # "*" for every algorithm, then an algorithm's registry name for its own (see the README).
+    hyperparameters: ClassVar[Mapping[str, Mapping[str, Any]]] = {}
 
     def __init__(self) -> None:
         self.states: StateSpace = StateSpace(self)
@@ -535,9 +545,20 @@ class Game:
         unless they need another env (an edited map)."""
         return env_id
 
-    def default_hyperparameters(self, kwargs: Mapping[str, Any] | None = None) -> Hyperparameters:
-        """Hyperparameters that learn this game well with these arguments (see the README)."""
-        return Hyperparameters()
+    def hyperparameter_table(
+        self, kwargs: Mapping[str, Any] | None = None
+    ) -> Mapping[str, Mapping[str, Any]]:
+        """The game's `hyperparameters` for these arguments (a larger map may need others)."""
+        return self.hyperparameters
+
+    def default_hyperparameters(
+        self, algorithm: str, kwargs: Mapping[str, Any] | None = None
+    ) -> dict[str, Any]:
+        """The values this game sets for an algorithm (by registry name) with these
+        arguments, over the algorithm's own defaults; parameters the algorithm lacks
+        are left to the caller (see the README)."""
+        table = self.hyperparameter_table(kwargs)
+        return {**table.get("*", {}), **table.get(algorithm, {})}
 
     def episode_limit(self, kwargs: Mapping[str, Any]) -> int | None:
         """The limit `gym.make` puts on the game with these arguments (None: none)."""

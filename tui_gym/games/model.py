@@ -487,7 +487,7 @@ class ModelGame(Game):
     own), `state_of` (the current state of a built env) and `episode_limit`.
     """
 
-    render_mode = "ansi"
+    render_mode: str | None = "ansi"
 
     def __init__(self) -> None:
         super().__init__()

@@ -183,7 +183,13 @@ def _game(role: Any) -> TileGame:
 
 
 class TileStates(DiscreteStates):
-    """Cells of the map; the tile board's scene."""
+    """Cells of the map; the tile board's scene; the map as text."""
+
+    def text(
+        self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None
+    ) -> str:
+        scene = self.scene(env, before)
+        return tile_text(scene, _game(self)) if scene else ""
 
     def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
         cells = _game(self).cells(kwargs)
@@ -221,6 +227,26 @@ class TileStates(DiscreteStates):
             scene["slip"] = {f"{r},{c}": slip_chance for r, line in enumerate(cells)
                              for c, tile in enumerate(line) if tile in "SF"}
         return scene
+
+
+AGENT_TEXT = "@"  # the agent's cell in the text picture
+
+
+def tile_text(scene: Mapping[str, Any], game: TileGame) -> str:
+    """The map as text, the agent's cell shown as `@`, and what the last move did."""
+    cells = [list(line) for line in scene.get("cells", [])]
+    agent = scene.get("agent")
+    if agent is not None and cells:
+        cells[int(agent[0])][int(agent[1])] = AGENT_TEXT
+    lines = ["".join(line) for line in cells]
+    action = scene.get("last_action")
+    if action:
+        lines.append(f"({action}{', slipped' if scene.get('slipped') else ''})")
+    kinds = {tile for line in scene.get("cells", []) for tile in line}
+    words = [f"{tile} {TILE_WORDS[tile] if tile != 'F' else game.floor_word}"
+             for tile in "SFHGC" if tile in kinds]
+    legend = ", ".join([f"{AGENT_TEXT} you", *words])
+    return "\n".join([*lines, legend])
 
 
 def _env_cells(game_env: Any) -> list[str]:
@@ -322,7 +348,7 @@ class TileLayout(HeatmapLayout):
 class TileNarrator(Narrator):
     """Reached the goal, fell, or ran out of time."""
 
-    tally_words = (
+    tally_words: tuple[TallyWord, ...] = (
         TallyWord("reached", "good"),
         TallyWord("fell in", "bad", always=False),
         TallyWord("timed out", "even"),

@@ -2,9 +2,15 @@
 
 `TuiGymApp` owns the `Session` (env, wrappers, agent, trainer) and the runner
 that trains it (in a child process, as `tui-gym` opens it, or on a worker
-thread). A timer pulls the runner's latest snapshot and hands it to the Train
-view; the side panel asks for rebuilds through a message; nothing in the
-trainer calls into widgets. `MainScreen` is the app's screen, and
+thread). It keeps one `Session` per game for the whole run: switching game
+hands the runner the other game's session, and switching back finds its agent,
+settings, wrappers and curves as they were. A timer pulls the runner's latest
+snapshot and hands it to the Train view; the side panel asks for rebuilds
+through a message; nothing in the trainer calls into widgets. Whatever would
+lose a trained agent (a reset, a change that resets it, loading over it,
+saving over a file) asks first (`ConfirmScreen`); saving and loading take a
+file name the person types (`FileScreen`). `MainScreen` is the app's screen;
+below the minimum size `TooSmallScreen` covers it and takes every key; and
 `tune_gc_for_ui` paces the garbage collector for an app that owns its process.
 `run_app` runs the app as `tui-gym` does: SIGTERM, SIGHUP and SIGINT end it
 cleanly, and an unexpected error ends it with one line and a crash log
@@ -14,12 +20,14 @@ cleanly, and an unexpected error ends it with one line and a crash log
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import gc
 import os
 import signal
 import sys
 import threading
-from collections.abc import Iterable, Sequence
+import time
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -30,23 +38,34 @@ from textual.events import Resize
 from textual.reactive import Reactive
 from textual.screen import Screen
 from textual.widget import Widget
-from textual.widgets import ContentSwitcher, Header, Static
+from textual.widgets import ContentSwitcher, Header
 
+from tui_gym.core.recording import Recording
+from tui_gym.core.recording.switch import RecordingSwitch
 from tui_gym.core.runners import make_runner
 from tui_gym.core.session import Session
+from tui_gym.core.speeds import SPEEDS
 from tui_gym.core.storage import StorageError
 from tui_gym.core.training import continue_run
 from tui_gym.core.wrappers import WrapperChoice
-from tui_gym.games import GAMES, game_named
+from tui_gym.games import GAMES, Game, game_for, game_named
+from tui_gym.ui.confirm_screen import ConfirmScreen
+from tui_gym.ui.file_screen import FileScreen
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.play_view import PlayView
+from tui_gym.ui.replay_screen import ReplayScreen
 from tui_gym.ui.side_panel import SidePanel
+from tui_gym.ui.too_small_screen import TooSmallScreen
 from tui_gym.ui.train_view import TrainView
 from tui_gym.ui.widgets.key_bar import KeyBar
 
 MIN_WIDTH, MIN_HEIGHT = 80, 24  # below this: a message instead of the layout
 COMPACT_WIDTH, COMPACT_HEIGHT = 120, 36  # below this: the compact layout
 REFRESH_HZ = 15
+# The speed a step key switches to: the first animated one that is not the slowest.
+ANIMATED_SPEED = next(i for i, speed in enumerate(SPEEDS) if speed.name == "animated")
+IDLE_POLL = 0.02  # seconds between looks for the agent handed back before a change
+IDLE_TIMEOUT = 10.0  # and how long to look before giving up
 
 
 class MainScreen(Screen):
@@ -67,11 +86,12 @@ class TuiGymApp(App[int]):
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("space", "toggle_training", "Start/Pause", key_display="space"),
         Binding("full_stop", "one_episode", "1 episode", key_display="."),
-        Binding("x", "reset_agent", "Reset agent"),
+        Binding("n", "one_step", "1 step", tooltip="One transition, explained step by step"),
+        Binding("x", "request_reset", "Reset agent"),
         Binding("plus,equals_sign", "faster", "Faster", key_display="+"),
         Binding("minus,underscore", "slower", "Slower", key_display="-"),
         Binding("p", "show_view('play')", "Play", tooltip="Play the game yourself"),
-        Binding("t", "show_view('train')", "Train", tooltip="Watch Q-learning train"),
+        Binding("t", "show_view('train')", "Train", tooltip="Watch the agent learn"),
         Binding("question_mark,f1", "help", "Help", key_display="?"),
         Binding("q", "quit", "Quit"),
         Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
@@ -79,8 +99,14 @@ class TuiGymApp(App[int]):
         # A key for each game in the registry (the help and the side panel's picker list them).
         *(Binding(game.key, f"switch_game('{game.name}')", game.title, show=False)
           for game in GAMES if game.key),
+        Binding("ctrl+s", "save_agent", "Save agent", show=False),
+        Binding("ctrl+o", "load_agent", "Load agent", show=False),
+        Binding("ctrl+r", "toggle_recording", "Record", show=False),
     ]
-    TRAIN_ACTIONS = frozenset({"toggle_training", "one_episode", "reset_agent", "faster", "slower"})
+    TRAIN_ACTIONS = frozenset(
+        {"toggle_training", "one_episode", "one_step", "reset_agent", "request_reset", "faster",
+         "slower"}
+    )
 
     def __init__(
         self,
@@ -91,6 +117,8 @@ class TuiGymApp(App[int]):
         tune_gc: bool = False,
         gc_seconds: tuple[float, float] | None = None,
         standalone: bool = False,
+        record: str | Path | None = None,
+        replay: Recording | None = None,
     ) -> None:
         """`runner` is "thread" (train on a worker thread) or "process" (a child process;
         what `tui-gym` opens). `tune_gc` applies `tune_gc_for_ui` at mount (for a
@@ -98,7 +126,9 @@ class TuiGymApp(App[int]):
         collecting every `gc_seconds` (young, full; default `YOUNG_GC_SECONDS`,
         `FULL_GC_SECONDS`). `standalone` is for an app that owns its process and
         terminal (`run_app`): termination signals end it cleanly, and a crash's
-        traceback is left to `run_app` to log instead of being printed."""
+        traceback is left to `run_app` to log instead of being printed.
+        `record` records the person's games to that file from the start (ctrl+r
+        turns recording on and off); `replay` opens on a recording's replay."""
         super().__init__()
         self.tune_gc = tune_gc
         self.gc_seconds = gc_seconds or (YOUNG_GC_SECONDS, FULL_GC_SECONDS)
@@ -110,13 +140,21 @@ class TuiGymApp(App[int]):
         self.session = session or Session()
         self.runner = make_runner(self.session, runner)
         self.play_seed = self.session.seed if play_seed is None else play_seed
+        self._sessions: dict[str, Session] = {self.session.game.name: self.session}
+        self._files: dict[str, Path] = {}  # the last file each game was saved to or loaded from
+        self._loaded: tuple[Session, Path] | None = None  # read, waiting to be put in place
+        self._too_small: TooSmallScreen | None = None
         self._last_version = -1
         self._was_running = False
         self._switcher: ContentSwitcher | None = None
+        self.recording = RecordingSwitch(record, on_failure=self._recording_failed)
+        self._record_at_start = record is not None
+        self._replay = replay
 
     # --- layout ------------------------------------------------------------
     def get_default_screen(self) -> Screen:
-        return MainScreen(id="_default")
+        self._main_screen = MainScreen(id="_default")
+        return self._main_screen
 
     def compose(self) -> ComposeResult:
         yield Header()
@@ -125,11 +163,6 @@ class TuiGymApp(App[int]):
                 yield PlayView(id="play")
                 yield TrainView(id="train")
             yield SidePanel(id="side")
-        yield Static(
-            f"The terminal is too small for tui-gym.\n"
-            f"It needs at least {MIN_WIDTH}×{MIN_HEIGHT}; make the window larger.",
-            id="too-small",
-        )
         yield KeyBar()
 
     def on_mount(self) -> None:
@@ -141,15 +174,27 @@ class TuiGymApp(App[int]):
         self.sub_title = self.session.game.title
         self.set_interval(1 / REFRESH_HZ, self._tick)
         self._apply_size(self.size.width, self.size.height)
-        self.call_after_refresh(self.play_view.focus_board)
+        self.call_after_refresh(self._focus_at_start)
+        if self._record_at_start:
+            self.call_after_refresh(self.action_toggle_recording)
+        if self._replay is not None:
+            self.push_screen(ReplayScreen(self._replay))
 
     def on_resize(self, event: Resize) -> None:
         self._apply_size(event.size.width, event.size.height)
 
     def _apply_size(self, width: int, height: int) -> None:
-        screen = self.screen
-        screen.set_class(width < MIN_WIDTH or height < MIN_HEIGHT, "too-small")
+        screen = self._main_screen  # the layout's classes, whatever screen is on top
+        small = width < MIN_WIDTH or height < MIN_HEIGHT
+        screen.set_class(small, "too-small")
         screen.set_class(width < COMPACT_WIDTH or height < COMPACT_HEIGHT, "compact")
+        if small and self._too_small is None:
+            self._too_small = TooSmallScreen(MIN_WIDTH, MIN_HEIGHT)
+            self.push_screen(self._too_small)
+        elif not small and self._too_small is not None:
+            if self.screen is self._too_small:
+                self.pop_screen()
+            self._too_small = None
 
     @property
     def play_view(self) -> PlayView:
@@ -194,6 +239,8 @@ class TuiGymApp(App[int]):
 
     # --- actions -----------------------------------------------------------
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if self._too_small is not None:
+            return action == "quit"  # nothing else behind a screen that hides the app
         if action in self.TRAIN_ACTIONS:
             return self.current_view == "train"
         return True
@@ -212,10 +259,10 @@ class TuiGymApp(App[int]):
 
     def action_switch_game(self, name: str) -> None:
         game = game_named(name)
-        if game.matches(self.session.env_id):
+        if game is self.session.game:
             self.notify(f"Already playing {game.title}.")
             return
-        self.rebuild(env_id=game.env_id)
+        self.switch_game(game)
 
     async def action_edit_map(self) -> None:
         self.action_show_view("train")
@@ -228,6 +275,117 @@ class TuiGymApp(App[int]):
 
     def action_focus_wrappers(self) -> None:
         self.side_panel.focus_wrappers()
+
+    def action_focus_view(self) -> None:
+        """Give the keyboard back to the view shown (its board, or the heatmap)."""
+        if self.current_view == "play":
+            self.play_view.focus_board()
+        else:
+            self.train_view.focus_default()
+
+    def _focus_at_start(self) -> None:
+        """The view's keys from the first frame, unless a key already moved the focus."""
+        if self.focused is None:
+            self.action_focus_view()
+
+    def on_side_panel_left(self, message: SidePanel.Left) -> None:
+        self.action_focus_view()
+
+    # --- one session per game -------------------------------------------------
+    def switch_game(
+        self, game: Game, otherwise: Callable[[], None] | None = None
+    ) -> None:
+        """Play `game`: its session from earlier in this run (agent, settings,
+        wrappers, curves) or a new one. Training pauses first; `otherwise` runs if the
+        runner never hands the agent back."""
+        was_running = self.runner.running
+        self._when_idle(lambda: self._switch_now(game, was_running), otherwise)
+
+    def _switch_now(self, game: Game, was_running: bool) -> None:
+        if game is self.session.game:  # two switches asked for in a row
+            return
+        session = self._sessions.get(game.name)
+        fresh = session is None
+        if session is None:
+            current = self.session
+            session = Session(game.env_id, seed=current.seed, engine=current.engine)
+            self._sessions[game.name] = session
+        self.play_view.put_away()
+        self._use_session(session)
+        if fresh:
+            notice = f"{game.title}: a new agent with the game's own settings."
+        else:
+            episodes = session.trainer.episodes
+            notice = (f"{game.title}: your agent ({episodes:,} episodes), settings "
+                      "and wrappers as you left them.")
+        if was_running:
+            notice = "Training paused. " + notice
+        self.notify(notice, timeout=5)
+
+    def _when_idle(
+        self,
+        then: Callable[[], None],
+        otherwise: Callable[[], None] | None = None,
+        deadline: float | None = None,
+    ) -> None:
+        """Pause training and run `then` once the runner has the agent back: at once
+        when it is idle, else as soon as it hands the agent back, never blocking the
+        UI meanwhile. After `IDLE_TIMEOUT` it gives up, says so and runs `otherwise`."""
+        runner = self.runner
+        if deadline is None:
+            runner.pause(wait=False)
+            deadline = time.monotonic() + IDLE_TIMEOUT
+        if runner.wait_idle(0):
+            then()
+        elif time.monotonic() > deadline:
+            self.notify("Training did not hand the agent back; nothing was changed.",
+                        severity="error")
+            if otherwise is not None:
+                otherwise()
+        else:
+            self.set_timer(IDLE_POLL, lambda: self._when_idle(then, otherwise, deadline))
+
+    def _pause_now(self) -> bool:
+        """Pause training and wait for the agent (to save it); False when the runner
+        has not handed it back."""
+        self.runner.pause()
+        return self.runner.wait_idle(0)
+
+    def _use_session(self, session: Session) -> None:
+        """Make `session` the one shown and trained (the runner is paused)."""
+        self.session = session
+        runner = self.runner
+        runner.session = session  # both runners read their session afresh at each start
+        runner.finished = False
+        with contextlib.suppress(AttributeError):  # read-only where tied to the agent
+            # The other game's last move.
+            runner.last_event = runner.last_scene = None  # type: ignore[misc]
+        self.sub_title = session.game.title
+        self._last_version = -1
+        self.play_view.reload()
+        self.train_view.reload()
+        self.side_panel.reload()
+
+    def _episodes_trained(self) -> int:
+        """Episodes the current agent has trained (the runner's count while it trains)."""
+        return max(self.runner.latest.episodes, self.session.trainer.episodes)
+
+    # --- what would lose a trained agent asks first -----------------------------
+    def action_request_reset(self) -> None:
+        """Reset the agent; when it has trained, only once the person confirms."""
+        episodes = self._episodes_trained()
+        if not episodes:
+            self.action_reset_agent()
+            return
+        self.push_screen(
+            ConfirmScreen(
+                "Reset the agent?",
+                f"It has trained {episodes:,} episodes. An empty Q-table and fresh "
+                "statistics replace them (ctrl+s saves it first).",
+                "Reset",
+            ),
+            lambda yes: self.action_reset_agent() if yes else None,
+        )
 
     def action_toggle_training(self) -> None:
         runner = self.runner
@@ -254,6 +412,22 @@ class TuiGymApp(App[int]):
             return
         if self._apply_form():
             self.runner.run_one_episode()
+
+    def action_one_step(self) -> None:
+        """One transition on the scalar engine, explained in the Train view's step panel
+        (the speed goes to animated, where the panel and the board show)."""
+        runner = self.runner
+        if runner.running:
+            self.notify("Pause training first (space).", severity="warning", timeout=3)
+            return
+        if not self._apply_form():
+            return
+        if not runner.speed.animated:
+            speed = runner.set_speed(ANIMATED_SPEED)
+            self.train_view.show_speed(speed.name)
+            self.notify(f"Speed: {speed.name}, so each step shows on the board and in the "
+                        "step panel.", timeout=4)
+        runner.run_one_step()
 
     def _apply_form(self) -> bool:
         """Apply the form's hyperparameters (a raised budget continues the run); False when
@@ -292,15 +466,140 @@ class TuiGymApp(App[int]):
         if not isinstance(self.screen, HelpScreen):
             self.push_screen(HelpScreen(self.key_help()))
 
+    # --- files -----------------------------------------------------------------
     def action_save_agent(self) -> None:
-        path = Path.cwd() / f"{self.session.game.name.replace('/', '-')}-agent.tgym"
-        self.runner.pause()
+        """Ask for a file name and save the agent (and its settings) there."""
+        title = self.session.game.title
+        self.push_screen(
+            FileScreen(f"Save the {title} agent", self._suggested_file(), self._save_to,
+                       saving=True)
+        )
+
+    def action_load_agent(self) -> None:
+        """Ask for a file name and load the agent (and its game and settings) from it."""
+        self.push_screen(
+            FileScreen("Load an agent", self._suggested_file(loading=True), self._read_file,
+                       saving=False),
+            self._loaded_file,
+        )
+
+    def _suggested_file(self, loading: bool = False) -> str:
+        """The name last used for this game, else `<game>-agent.tgym` (when loading,
+        only if that file is there)."""
+        name = self.session.game.name.replace("/", "-").replace(":", "-")
+        path = self._files.get(name, Path.cwd() / f"{name}-agent.tgym")
+        if loading and not path.is_file():
+            return ""
+        try:
+            return str(path.relative_to(Path.cwd()))
+        except ValueError:
+            return str(path)
+
+    def _save_to(self, path: Path) -> str | None:
+        """Save to `path` (the dialog asked before replacing a file); an error or None."""
+        was_running = self.runner.running
+        if not self._pause_now():
+            return "Training has not handed the agent back yet; try again in a moment."
         try:
             self.session.save(path)
         except StorageError as exc:
-            self.notify(str(exc), severity="error")
+            return str(exc)
+        except (OSError, ValueError) as exc:
+            return f"{path}: cannot write ({exc})"
+        finally:
+            if was_running:
+                self.runner.start()
+        self._files[self.session.game.name] = path
+        episodes = self.session.trainer.episodes
+        self.notify(f"Agent saved to {path} ({episodes:,} episodes).", title="Saved")
+        return None
+
+    def _read_file(self, path: Path) -> str | None:
+        """Read a save file for `_loaded_file`; an error or None."""
+        try:
+            self._loaded = (Session.load(path), path)
+        except (StorageError, OSError, ValueError) as exc:
+            return str(exc)
+        return None
+
+    def _loaded_file(self, path: Path | None) -> None:
+        """Put a file read by the load dialog in place, asking first when that would
+        replace an agent that has trained."""
+        loaded, self._loaded = self._loaded, None
+        if path is None or loaded is None:
             return
-        self.notify(f"Agent saved to {path}")
+        session, path = loaded
+        game = session.game
+        current = self._sessions.get(game.name)
+        if current is self.session:
+            episodes = self._episodes_trained()
+        else:
+            episodes = current.trainer.episodes if current is not None else 0
+        if not episodes:
+            self._install_loaded(session, path)
+            return
+        self.push_screen(
+            ConfirmScreen(
+                f"Replace the {game.title} agent?",
+                f"The {game.title} agent here has trained {episodes:,} episodes; "
+                f"{path.name} replaces it, its settings and its wrappers.",
+                "Load",
+            ),
+            lambda yes: self._install_loaded(session, path) if yes else None,
+        )
+
+    def _install_loaded(self, session: Session, path: Path) -> None:
+        self._when_idle(lambda: self._install_now(session, path))
+
+    def _install_now(self, session: Session, path: Path) -> None:
+        if session.game is not self.session.game:
+            self.play_view.put_away()
+        self._sessions[session.game.name] = session
+        self._files[session.game.name] = path
+        self._use_session(session)
+        self.notify(f"Loaded {path}: {session.game.title}, "
+                    f"{session.trainer.episodes:,} episodes trained.", title="Loaded")
+
+    def action_save_screenshot(self) -> None:
+        """Save an SVG picture of the screen in the current folder, and say where."""
+        self.call_after_refresh(self._save_screenshot)  # once the palette is gone
+
+    def _save_screenshot(self) -> None:
+        try:
+            path = self.save_screenshot(path=str(Path.cwd()))
+        except OSError as exc:
+            self.notify(f"Screenshot not saved: {exc.strerror or exc}", title="Screenshot",
+                        severity="error")
+            return
+        self.notify(f"Screenshot saved to {path}", title="Screenshot")
+
+    # --- recording ---------------------------------------------------------------
+    def action_toggle_recording(self) -> None:
+        """Record the person's games to a file, or stop."""
+        game = self.play_view.game
+        if self.recording.on:
+            path = self.recording.turn_off()
+            self.play_view.show_recording("")
+            self.notify(f"Recording stopped: {path}", timeout=4)
+            return
+        if game is None:
+            return
+        try:
+            path = self.recording.turn_on(game)
+        except OSError as exc:
+            self.notify(f"Cannot record to {exc.filename or self.recording.path}: "
+                        f"{exc.strerror or exc}", severity="error", title="Not recording")
+            return
+        self.play_view.show_recording(path.name)
+        noun = game.game.episode_noun
+        when = "" if self.recording.recorder and self.recording.recorder.episode_open else (
+            f" from the next {noun}"
+        )
+        self.notify(f"Recording your {noun}s to {path}{when} (ctrl+r stops).", timeout=5)
+
+    def _recording_failed(self, message: str) -> None:
+        self.play_view.show_recording("")
+        self.notify(message, severity="error", title="Not recording", timeout=10)
 
     # --- rebuilding --------------------------------------------------------
     def rebuild(
@@ -339,8 +638,85 @@ class TuiGymApp(App[int]):
             self.runner.start()
         return True
 
+    def on_side_panel_algorithm_picked(self, message: SidePanel.AlgorithmPicked) -> None:
+        """Another algorithm needs a fresh learner: once it has trained, ask first."""
+        from tui_gym.algorithms import algorithm
+
+        cls = algorithm(message.name)
+        if cls.name == self.session.algorithm:
+            return
+        episodes = self._episodes_trained()
+
+        def switch() -> None:
+            self._when_idle(lambda: self._use_algorithm(cls.name), self.side_panel.reload)
+
+        if not episodes:
+            switch()
+            return
+
+        def answer(yes: bool | None) -> None:
+            if yes:
+                switch()
+            else:
+                self.side_panel.reload()
+                self.notify(f"Still {self.session.learner_class.title}: the agent is kept.",
+                            timeout=3)
+
+        self.push_screen(
+            ConfirmScreen(
+                f"Train with {cls.title} instead?",
+                f"Another algorithm needs a fresh learner: the agent, trained {episodes:,} "
+                f"episodes with {self.session.learner_class.title}, would start over with "
+                f"{cls.title}'s defaults for this game (ctrl+s saves it first). "
+                "ε, the learning rate and the other fields change without this.",
+                "Switch and reset",
+            ),
+            answer,
+        )
+
+    def _use_algorithm(self, name: str) -> None:
+        self.session.set_algorithm(name)
+        self._last_version = -1
+        self.train_view.reload()
+        self.side_panel.reload()
+        cls = self.session.learner_class
+        self.notify(f"{cls.title}: a fresh learner with its defaults for "
+                    f"{self.session.game.title}. {cls.summary}.", timeout=5)
+
     def on_side_panel_changed(self, message: SidePanel.Changed) -> None:
-        self.rebuild(env_id=message.env_id, env_kwargs=message.env_kwargs, choices=message.choices)
+        """A new game switches sessions; a change that would reset a trained agent asks."""
+        game = game_for(message.env_id)
+        if game is not self.session.game:
+            self.switch_game(game, otherwise=self.side_panel.reload)
+            return
+        change: dict[str, Any] = {
+            "env_id": message.env_id, "env_kwargs": message.env_kwargs, "choices": message.choices,
+        }
+        episodes = self._episodes_trained()
+        try:
+            keeps = not episodes or self.session.rebuild_keeps_agent(**change)
+        except ValueError:
+            keeps = True  # it cannot be built: `rebuild` says why and changes nothing
+        if keeps:
+            self.rebuild(**change)
+            return
+
+        def answer(yes: bool | None) -> None:
+            if yes:
+                self.rebuild(**change)
+            else:
+                self.side_panel.reload()
+                self.notify("Not applied: the agent is kept.", timeout=3)
+
+        self.push_screen(
+            ConfirmScreen(
+                "Reset the agent for this change?",
+                f"It changes what observations mean, so the agent, trained {episodes:,} "
+                "episodes, would start over (ctrl+s saves it first).",
+                "Apply and reset",
+            ),
+            answer,
+        )
 
     # --- help and the command palette ---------------------------------------
     def key_help(self) -> list[tuple[str, list[tuple[str, str]]]]:
@@ -348,45 +724,73 @@ class TuiGymApp(App[int]):
         sections = [
             ("Everywhere", [
                 ("p / t", "Play view / Train view"),
-                *((game.key, f"switch to {game.title}") for game in GAMES if game.key),
+                (" / ".join(g.key for g in GAMES if g.key),
+                 "switch game: " + ", ".join(g.title for g in GAMES if g.key)
+                 + " (each keeps its agent, settings and curves)"),
                 ("w / W", "focus the wrapper panel (W while a board that moves with WASD "
                           "has focus)"),
-                ("m", "edit the map of a grid game (in the Train view, while it trains)"),
+                ("m", "edit a grid game's map, while it trains"),
+                ("esc", "leave a text field or the side panel: back to the view"),
+                ("ctrl+s", "save the agent to a file you name (asks before replacing one)"),
+                ("ctrl+o", "load an agent from a file you name"),
                 ("? / F1", "this help"),
-                ("ctrl+p", "command palette"),
+                ("ctrl+r", "record your games to a file / stop "
+                           "(tui-gym replay FILE plays it back)"),
+                ("ctrl+p", "command palette (also: screenshot, theme)"),
                 ("q", "quit"),
             ]),
             ("Play", self.play_view.key_help()),
             ("Train", [
                 ("space", "start / pause training"),
                 (".", "run one episode"),
-                ("x", "reset the agent"),
+                ("n", "one step (one transition): the step panel explains the update"),
+                ("x", "reset the agent (asks first once it has trained)"),
                 ("+ / -", "faster / slower (animated ... max)"),
                 *self.train_view.key_help(),
             ]),
             ("Side panel", [
                 ("tab / shift+tab", "move between fields"),
-                ("space / enter", "tick a wrapper, press a button"),
+                ("space / enter", "tick a wrapper, press a button, pick a game or an "
+                                  "algorithm (another algorithm asks first once the agent "
+                                  "has trained)"),
                 ("enter", "apply a parameter"),
+                ("[ / ]", "move the focused wrapper in / out in the chain (first = innermost)"),
+                ("esc", "back to the view; an edit not applied with enter is dropped"),
+            ]),
+            ("Dialogs", [
+                ("y / enter", "confirm (enter presses the focused button)"),
+                ("n / esc", "cancel"),
             ]),
         ]
         return sections
 
     def get_system_commands(self, screen: Screen) -> Iterable[SystemCommand]:
-        yield from super().get_system_commands(screen)
+        # Textual's own "Keys" (a second, different key list) and "Screenshot" (saved to
+        # a Downloads folder that may not exist, failing without saying why) make way
+        # for ours below.
+        for command in super().get_system_commands(screen):
+            if command.title not in ("Keys", "Screenshot"):
+                yield command
         commands = [
             ("Play view", "Play the game yourself", lambda: self.action_show_view("play")),
-            ("Train view", "Watch Q-learning learn", lambda: self.action_show_view("train")),
+            ("Train view", "Watch the agent learn", lambda: self.action_show_view("train")),
             *(
                 (f"Game: {g.title}", g.description,
                  lambda name=g.name: self.action_switch_game(name))
                 for g in GAMES
             ),
             ("Start / pause training", "Toggle training", self._palette_toggle),
-            ("Reset agent", "Empty Q-table, fresh statistics", self.action_reset_agent),
-            ("Save agent", "Save the agent to the current folder", self.action_save_agent),
+            ("Reset agent", "Empty Q-table, fresh statistics (asks first once trained)",
+             self.action_request_reset),
+            ("Save agent…", "Save the agent to a file you name (ctrl+s)", self.action_save_agent),
+            ("Load agent…", "Load an agent from a file you name (ctrl+o)",
+             self.action_load_agent),
             ("Wrappers", "Focus the wrapper panel", self.action_focus_wrappers),
-            ("Keys", "Every key tui-gym answers to", self.action_help),
+            ("Keys", "Every key tui-gym answers to (? or F1)", self.action_help),
+            ("Screenshot", "Save an SVG picture of the screen in the current folder",
+             self.action_save_screenshot),
+            ("Record games", "Record your games to a file, or stop (ctrl+r)",
+             self.action_toggle_recording),
         ]
         for title, help_text, callback in commands:
             yield SystemCommand(title, help_text, callback)
@@ -397,9 +801,11 @@ class TuiGymApp(App[int]):
         self.action_toggle_training()
 
     async def action_quit(self) -> None:
+        self.recording.turn_off()
         self.exit(0)  # the runner closes at unmount, without holding the screen up
 
     def on_unmount(self) -> None:
+        self.recording.turn_off()
         self.runner.close(wait=False)  # `run_app` waits for it once the terminal is back
         loop = asyncio.get_running_loop()
         for signum in self._signals:
@@ -504,13 +910,18 @@ EXIT_CRASH = 1
 def run_app(
     env_id: str | None = None, seed: int = 0, load: str | None = None, runner: str = "process",
     env_kwargs: dict[str, Any] | None = None,
+    *, session: Session | None = None, record: str | None = None,
+    replay: Recording | None = None,
 ) -> int:
-    """Open the app (from a saved agent with `load`); returns the exit code."""
+    """Open the app (from a saved agent with `load`, or on `session`); returns the exit code.
+    `record` records the person's games to that file; `replay` opens on a recording."""
     gc_seconds = gc_seconds_from_env()
-    session = Session.load(load) if load else Session(env_id=env_id or "", seed=seed,
-                                                      env_kwargs=env_kwargs or {})
+    if session is None:
+        session = Session.load(load) if load else Session(env_id=env_id or "", seed=seed,
+                                                          env_kwargs=env_kwargs or {})
     return run_standalone(
-        TuiGymApp(session, runner=runner, tune_gc=True, gc_seconds=gc_seconds, standalone=True)
+        TuiGymApp(session, runner=runner, tune_gc=True, gc_seconds=gc_seconds, standalone=True,
+                  record=record, replay=replay)
     )
 
 

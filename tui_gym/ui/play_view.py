@@ -4,8 +4,10 @@
 wrappers chosen in the side panel apply to human play too) and the board the
 game asks for (`board_class(game.board)`). The board turns keys and
 clicks into `Board.Act` / `Board.NewEpisode` messages; this view answers them,
-states what happened in plain words (the game's narrator words outcomes, so nothing
-here knows which game it is) and keeps a running tally of finished episodes.
+states what happened in plain words (the game's narrator words outcomes, so
+nothing here knows which game it is) and keeps a running tally of finished
+episodes, counted under the narrator's `tally_words`. A game switch puts the person's
+game and record away (`put_away`) and switching back brings them back.
 
 Beside the game:
 
@@ -29,7 +31,8 @@ The app calls `reload()` after a rebuild, `focus_board()` and `key_help()`.
 from __future__ import annotations
 
 import random
-from typing import Any, ClassVar
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar, cast
 
 from textual import events
 from textual.app import ComposeResult
@@ -54,11 +57,44 @@ from tui_gym.ui.widgets.board_kinds import board_class
 from tui_gym.ui.widgets.boards import Board
 from tui_gym.ui.widgets.scoreboard import Scoreboard
 
+if TYPE_CHECKING:
+    from tui_gym.ui.app import TuiGymApp
+
 OBSERVATION_CHARS = 64  # a raw observation longer than this is cut short
 WATCH_INTERVAL = 0.4  # seconds between the watched agent's moves: slow enough to follow
 WATCH_PAUSE_TICKS = 3  # moves' worth of time a finished episode stays on the board
 WATCH_SEED_OFFSET = 1  # the watched agent's game: seeded apart from the person's deals
 WATCHING = "Agent playing — press any key to take over"
+TONE_COLOURS = {"good": "$text-success", "even": "$text-warning", "bad": "$text-error"}
+
+
+@dataclass
+class _KeptPlay:
+    """A game's play put away by a game switch (see `PlayView.put_away`)."""
+
+    game: HumanGame
+    chain: tuple[Any, ...]  # the game and wrappers it was played with
+    scorecard: Scorecard
+    outcomes: dict[str, int]
+    agent_game: HumanGame | None
+    agent_card: Scorecard
+    watch_rng: random.Random
+    headline: Content
+    tone: str
+    hint: str
+    verdict: str
+    coach: str
+    coach_tone: str
+
+    def close(self) -> None:
+        self.game.close()
+        if self.agent_game is not None:
+            self.agent_game.close()
+
+
+def _chain(session: Any) -> tuple[Any, ...]:
+    """What a human game was built from: the game, its arguments and its wrappers."""
+    return (session.env_id, tuple(sorted(session.env_kwargs.items())), session.applied)
 
 
 class PlayView(Vertical):
@@ -67,10 +103,14 @@ class PlayView(Vertical):
     SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
     DEFAULT_CSS = """
     PlayView { width: 1fr; height: 1fr; padding: 0 1; }
-    PlayView #play-title { height: auto; max-height: 3; width: 1fr; padding: 0 1; }
+    PlayView #play-title {
+        height: 1; width: 1fr; padding: 0 1; text-wrap: nowrap; text-overflow: ellipsis;
+    }
     PlayView > Board { height: 1fr; min-height: 7; }
+    /* Room kept for the status lines, so the board keeps its size as they come and go. */
     PlayView #play-status {
         height: auto;
+        min-height: 6;
         width: 1fr;
         padding: 0 1;
         border-left: outer $foreground 30%;
@@ -93,6 +133,7 @@ class PlayView(Vertical):
     PlayView #play-status.-agent #play-headline { color: $text-warning; }
     PlayView #play-tally { height: auto; width: 1fr; padding: 0 1; margin-top: 1; }
     Screen.compact PlayView { padding: 0; }
+    Screen.compact PlayView #play-status { min-height: 0; max-height: 7; overflow: hidden; }
     Screen.compact PlayView #play-tally { margin-top: 0; }
     """
 
@@ -115,7 +156,8 @@ class PlayView(Vertical):
         super().__init__(name=name, id=id, classes=classes)
         self.game: HumanGame | None = None
         self.board: Board | None = None
-        self.truncated = 0  # finished episodes cut short by a time limit
+        self.outcomes: dict[str, int] = {}  # finished episodes by the narrator's tally word
+        self._kept: dict[str, _KeptPlay] = {}  # each game's play put away by a game switch
         self._headline = Content()
         self._tone = ""
         self._hint = ""
@@ -136,11 +178,12 @@ class PlayView(Vertical):
         self._watch_timer: Timer | None = None
         self._watch_rng = random.Random(0)
         self._watch_wait = 0  # ticks left to show a finished episode
+        self.recording_label = ""  # e.g. "games.jsonl" while the person's games are recorded
 
     # --- layout ------------------------------------------------------------
     def compose(self) -> ComposeResult:
         yield Static(id="play-title")
-        self.board = board_class(self.app.session.game.board)()
+        self.board = board_class(self.tui.session.game.board)()
         yield self.board
         with Vertical(id="play-status"):
             yield Static(id="play-headline")
@@ -163,21 +206,35 @@ class PlayView(Vertical):
     def on_hide(self) -> None:
         self.stop_watching(restore=True)
 
+    @property
+    def tui(self) -> TuiGymApp:
+        """The app, with its session and seeds."""
+        return cast("TuiGymApp", self.app)
+
     # --- what the app calls --------------------------------------------------
     def reload(self) -> None:
-        """Start afresh on the session's current game and wrappers: new game, tally, board."""
-        session = self.app.session
+        """Show the session's game: the person's play put away on it (`put_away`) when
+        the game and its wrappers are still the same, else a new game, tally and board."""
+        session = self.tui.session
         self.stop_watching(restore=False)
+        kept = self._kept.pop(session.game.name, None)
+        if kept is not None and (kept.game.session is not session or kept.chain != _chain(session)):
+            kept.close()
+            kept = None
         if self.game is not None:
             self.game.close()
         if self.agent_game is not None:
             self.agent_game.close()
-        self.game = HumanGame(session, seed=self.app.play_seed)
-        self.scorecard = Scorecard(tally=self.game.tally)
-        self.agent_game = None
-        self.agent_card = Scorecard()
-        self._watch_rng = random.Random(self.app.play_seed)
-        self.truncated = 0
+        if kept is None:
+            self.game = HumanGame(session, seed=self.tui.play_seed)
+            self.game.recorder = getattr(self.tui, "recording", None)  # records while switched on
+            self.scorecard = Scorecard(tally=self.game.tally)
+            self.agent_game = None
+            self.agent_card = Scorecard()
+            self._watch_rng = random.Random(self.tui.play_seed)
+            self.outcomes = {}
+        else:
+            self._restore(kept)
         kind = board_class(session.game.board)
         if type(self.board) is not kind:
             old = self.board
@@ -189,8 +246,36 @@ class PlayView(Vertical):
             if had_focus:
                 self.call_after_refresh(self.focus_board)
         self._show_title()
-        self._start_episode()
+        if kept is None:
+            self._start_episode()
+        else:
+            self.board.start_episode()
+            self._show_board()
+            self._show_status()
+            self._show_tally()
         self.refresh_agent_figures()
+
+    def put_away(self) -> None:
+        """Keep the person's game and record on this game (before a switch to another
+        game): `reload` on this game again brings them back as they were."""
+        self.stop_watching(restore=False)
+        game = self.game
+        if game is None:
+            return
+        self._kept[game.game.name] = _KeptPlay(
+            game, _chain(game.session), self.scorecard, dict(self.outcomes), self.agent_game,
+            self.agent_card, self._watch_rng, self._headline, self._tone, self._hint,
+            self._verdict, self._coach, self._coach_tone,
+        )
+        self.game = self.agent_game = None
+
+    def _restore(self, kept: _KeptPlay) -> None:
+        self.game, self.scorecard, self.outcomes = kept.game, kept.scorecard, kept.outcomes
+        self.agent_game, self.agent_card, self._watch_rng = (
+            kept.agent_game, kept.agent_card, kept.watch_rng,
+        )
+        self._headline, self._tone, self._hint = kept.headline, kept.tone, kept.hint
+        self._verdict, self._coach, self._coach_tone = kept.verdict, kept.coach, kept.coach_tone
 
     def focus_board(self) -> None:
         if self.board is not None and self.board.is_mounted:
@@ -258,8 +343,8 @@ class PlayView(Vertical):
         elif before is not None and before.unwrapped_optimal:  # no optimum to judge against
             self._coach = "no verdict: " + before.note
         if step.done:
-            if step.truncated and not step.terminated:
-                self.truncated += 1
+            word = rules.narrator.tally_word(step)
+            self.outcomes[word] = self.outcomes.get(word, 0) + 1
             self.scorecard.add_figures(rules.narrator.episode_figures(step, game.first_info))
             self._headline = Content(
                 rules.narrator.outcome_text(step, game.first_info, game.scene())
@@ -318,7 +403,7 @@ class PlayView(Vertical):
         board.set_episode_over(game.done)
 
     def _show_title(self) -> None:
-        session = self.app.session
+        session = self.tui.session
         chain = " → ".join(_short(choice.name, choice.params) for choice in session.applied)
         title = f"[b]{escape(session.game.title)}[/]  [$text-muted]wrappers:[/] " + (
             f"[i $text-accent]{escape(chain)}[/]" if chain else "[$text-muted]none[/]"
@@ -328,7 +413,17 @@ class PlayView(Vertical):
         ]
         if modes:
             title += "  [$text-success]" + escape(" · ".join(f"{m} on" for m in modes)) + "[/]"
-        self.query_one("#play-title", Static).update(Content.from_markup(title))
+        if self.recording_label:
+            title += f"  [b $text-error]● REC[/] [$text-muted]{escape(self.recording_label)}[/]"
+        content = Content.from_markup(title)
+        widget = self.query_one("#play-title", Static)
+        widget.update(content)
+        widget.tooltip = content.plain  # the line is cut short on a narrow screen
+
+    def show_recording(self, label: str) -> None:
+        """Say in the title that the person's games are being recorded ('' when not)."""
+        self.recording_label = label
+        self._show_title()
 
     def _say_hint(self, hint: str) -> None:
         self._hint = hint
@@ -372,12 +467,12 @@ class PlayView(Vertical):
         """What the exact optimum would do now in `game` (None when the game cannot say)."""
         if game.done:
             return None
-        return game.game.oracle.advice(game.env, self.app.session.env_kwargs)
+        return game.game.oracle.advice(game.env, self.tui.session.env_kwargs)
 
     def agent_note(self, observation: Any) -> str:
         """'agent: hit (Q stick −0.310, hit −0.402)': the greedy agent's choice here."""
-        names = self.app.session.game.action_names
-        choice = self.app.session.greedy_actions_for(observation, self._training_snapshot())
+        names = self.tui.session.game.action_names
+        choice = self.tui.session.greedy_actions_for(observation, self._training_snapshot())
         if choice is None:
             return "agent: has never seen this state (it would pick at random)"
         ties, q = choice
@@ -419,7 +514,7 @@ class PlayView(Vertical):
     # --- the scoreboard --------------------------------------------------------
     def refresh_agent_figures(self) -> None:
         """Recompute the agent's exact figures (a few ms) and redraw the scoreboard."""
-        self.agent_figures = self.app.session.agent_figures(self._training_snapshot())
+        self.agent_figures = self.tui.session.agent_figures(self._training_snapshot())
         self._show_scoreboard()
 
     def _training_snapshot(self) -> TrainingSnapshot | None:
@@ -430,7 +525,7 @@ class PlayView(Vertical):
 
     def score_rows(self) -> list[ScoreRow]:
         """The scoreboard's rows as the game's narrator words them."""
-        session = self.app.session
+        session = self.tui.session
         watched = self.agent_card if self.agent_card.tally.episodes else None
         scope = session.game.oracle.scope(session.env_kwargs, session.changes)
         return session.game.narrator.scoreboard(
@@ -451,10 +546,10 @@ class PlayView(Vertical):
         board = self.board
         if board is None or self.watching:
             return
-        session = self.app.session
+        session = self.tui.session
         if self.agent_game is None:
             try:
-                self.agent_game = HumanGame(session, seed=self.app.play_seed + WATCH_SEED_OFFSET)
+                self.agent_game = HumanGame(session, seed=self.tui.play_seed + WATCH_SEED_OFFSET)
             except Exception as exc:
                 self._say_hint(f"The agent cannot play here: {exc}")
                 return
@@ -527,7 +622,7 @@ class PlayView(Vertical):
             else:
                 self._agent_new_episode()
             return
-        session = self.app.session
+        session = self.tui.session
         before = self._advice(game)
         assert game.last is not None
         choice = session.greedy_actions_for(game.last.observation, self._training_snapshot())
@@ -567,7 +662,7 @@ class PlayView(Vertical):
     def _observation_text(self, last: PlayStep) -> str:
         """The observation in the game's words, or raw (cut short) when wrappers reshaped it."""
         assert self.game is not None
-        text = self.game.game.states.describe(last.observation, self.app.session.env_kwargs)
+        text = self.game.game.states.describe(last.observation, self.tui.session.env_kwargs)
         return text if len(text) <= OBSERVATION_CHARS else text[: OBSERVATION_CHARS - 1] + "…"
 
     def _show_tally(self) -> None:
@@ -579,15 +674,13 @@ class PlayView(Vertical):
             f"[$text-muted]{escape(game.game.episode_noun.capitalize())}s[/] "
             f"[b]{tally.episodes}[/]"
         ]
-        for label, count, colour in (
-            ("wins", tally.wins, "$text-success"),
-            ("draws", tally.draws, "$text-warning"),
-            ("losses", tally.losses, "$text-error"),
-        ):
-            style = f"b {colour}" if count else "b"
-            parts.append(f"[$text-muted]{label}[/] [{style}]{count}[/]")
-        if self.truncated:
-            parts.append(f"[$text-muted]truncated[/] [b]{self.truncated}[/]")
+        for word in game.game.narrator.tally_words:
+            count = self.outcomes.get(word.label, 0)
+            if not (count or word.always):
+                continue
+            colour = TONE_COLOURS.get(word.tone, "")
+            style = f"b {colour}" if count and colour else "b"
+            parts.append(f"[$text-muted]{escape(word.label)}[/] [{style}]{count}[/]")
         mean = "[$text-muted]–[/]"
         if tally.episodes:
             mean = f"[b]{format_reward(round(tally.mean, 3))}[/]"

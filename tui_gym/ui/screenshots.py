@@ -1,7 +1,9 @@
 """`tui-gym screenshots`: deterministic SVG screenshots of the app.
 
-Each scenario builds a seeded Session, drives the real app headless with
-Textual's pilot (keys a person would press), trains synchronously where a
+Each game of the registry gets two pictures (played a few moves, and training
+mid-run), then the wrapper panel, the keys and the compact layout. Each
+scenario builds a seeded Session, drives the real app headless with Textual's
+pilot (keys a person would press), trains synchronously where a
 training picture is wanted (so the picture does not depend on thread timing),
 and saves an SVG. Timing figures (episodes/s, seconds) are pinned to nominal
 values in these pictures only, so the files change only when the app does.
@@ -12,11 +14,15 @@ from __future__ import annotations
 import asyncio
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
-from tui_gym.core.agent import Hyperparameters
+from textual.binding import Binding
+
 from tui_gym.core.session import Session
-from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.core.wrappers import parse_wrapper_spec
+from tui_gym.games import GAMES
+from tui_gym.ui.widgets.boards import Board
 
 SIZE = (120, 40)
 NOMINAL_EPISODES_PER_SECOND = 50_000.0
@@ -50,23 +56,46 @@ async def _train_view(app, pilot, episodes: int) -> None:
     await pilot.pause()
 
 
-async def _blackjack_play(app, pilot) -> None:
-    await pilot.press("h")
-    await pilot.pause()
+def _key_for(board: Board, action: str) -> str | None:
+    """The key of the board that takes `action` (None when none does)."""
+    for binding in Binding.make_bindings(board.BINDINGS):
+        if binding.action == f"act('{action}')":
+            return binding.key
+    return None
 
 
-async def _gridworld_play(app, pilot) -> None:
-    for key in ("right", "up"):
+async def _play(app, pilot, moves: int = 2) -> None:
+    """A few moves as the optimum would make them, by the board's own keys."""
+    view = app.play_view
+    for _ in range(moves):
+        human, board = view.game, view.board
+        if human is None or board is None or human.done:
+            break
+        advice = human.game.oracle.advice(human.env, app.session.env_kwargs)
+        action = human.game.action_names[advice.optimal[0] if advice.optimal else 0]
+        key = _key_for(board, action)
+        if key is None:
+            break
         await pilot.press(key)
+        await pilot.pause()
+
+
+async def _train(app, pilot) -> None:
+    """A quarter of the default budget: mid-run, with curves and a heatmap to show."""
+    await _train_view(app, pilot, max(1, app.session.hp.episodes // 4))
+
+
+async def _step_by_step(app, pilot) -> None:
+    await _train_view(app, pilot, 300)
+    for _ in range(2):  # a step into the episode, so the board and the panel have history
+        await pilot.press("n")
+        await pilot.pause()
+        app.runner.wait_idle(10.0)
     await pilot.pause()
-
-
-async def _blackjack_train(app, pilot) -> None:
-    await _train_view(app, pilot, 60_000)
-
-
-async def _gridworld_train(app, pilot) -> None:
-    await _train_view(app, pilot, 2_000)
+    app.train_view.show_snapshot(app.runner.latest, app.runner)
+    await pilot.pause()
+    app.train_view.step_panel.scroll_visible(animate=False)
+    await pilot.pause()
 
 
 async def _wrappers(app, pilot) -> None:
@@ -79,27 +108,32 @@ async def _help(app, pilot) -> None:
     await pilot.pause()
 
 
-SCENARIOS: tuple[Scenario, ...] = (
-    Scenario("blackjack-play.svg", "Blackjack: play a hand",
-             lambda: Session("blackjack", seed=4), _blackjack_play),
-    Scenario("gridworld-play.svg", "GridWorld: walk to the target",
-             lambda: Session("gridworld", seed=2), _gridworld_play),
-    Scenario("blackjack-train.svg", "Blackjack: Q-learning mid-run",
-             lambda: Session("blackjack", seed=0), _blackjack_train),
-    Scenario("gridworld-train.svg", "GridWorld: Q-learning mid-run",
-             lambda: Session("gridworld", hp=Hyperparameters(
-                 discount=0.95, learning_rate=0.1, episodes=20_000), seed=0),
-             _gridworld_train),
-    Scenario("wrappers.svg", "The wrapper panel in use",
-             lambda: Session("gridworld", choices=(
-                 WrapperChoice.make("TimeLimit", max_episode_steps=50),
-                 WrapperChoice.make("StepPenalty", penalty=0.01),
-                 WrapperChoice.make("DistanceShaping"),
-             ), seed=1), _wrappers),
-    Scenario("help.svg", "Every key", lambda: Session("blackjack", seed=0), _help),
-    Scenario("compact-80x24.svg", "The compact layout at 80x24",
-             lambda: Session("blackjack", seed=4), _blackjack_play, size=(80, 24)),
-)
+def _scenarios() -> tuple[Scenario, ...]:
+    """Each game played and training, one update step by step, then the wrapper panel,
+    the keys and 80x24."""
+    shots: list[Scenario] = []
+    for game in GAMES:
+        shots.append(Scenario(f"{game.name}-play.svg", f"{game.title}: play",
+                              partial(Session, game.env_id, seed=4), _play))
+        shots.append(Scenario(f"{game.name}-train.svg", f"{game.title}: Q-learning mid-run",
+                              partial(Session, game.env_id, seed=0), _train))
+    first = GAMES[0]
+    focused = next((g for g in GAMES if g.layout.has_focus), first)
+    shown = next((g for g in GAMES if g.demo_wrappers), first)
+    choices = tuple(parse_wrapper_spec(text) for text in shown.demo_wrappers)
+    shots += [
+        Scenario("step-by-step.svg", f"{focused.title}: one SARSA update, step by step",
+                 partial(Session, focused.env_id, seed=3, algorithm="sarsa"), _step_by_step),
+        Scenario("wrappers.svg", "The wrapper panel in use",
+                 partial(Session, shown.env_id, choices=choices, seed=1), _wrappers),
+        Scenario("help.svg", "Every key", partial(Session, first.env_id, seed=0), _help),
+        Scenario("compact-80x24.svg", "The compact layout at 80x24",
+                 partial(Session, first.env_id, seed=4), _play, size=(80, 24)),
+    ]
+    return tuple(shots)
+
+
+SCENARIOS = _scenarios()
 
 
 async def _shoot(scenario: Scenario, directory: Path) -> Path:

@@ -1,28 +1,37 @@
-"""The side panel: pick the game, tick wrappers, edit their parameters, see the chain.
+"""The side panel: pick the game and the algorithm, tick wrappers, edit them, see the chain.
 
-`SidePanel` shows the game picker with the game's own arguments, the whole
+`SidePanel` shows the game picker with the game's own arguments, the
+algorithm picker (the `ALGORITHMS` registry, with what the chosen one
+teaches; picking another posts `SidePanel.AlgorithmPicked`), the whole
 wrapper catalog as checkboxes (each with its one-line lesson, its parameter
 fields and, when it does not fit the game, the reason), and the resulting
-wrapper chain in Gymnasium's repr form. It never rebuilds anything itself: it
+wrapper chain: each wrapper in order, innermost first, with its parameters,
+then Gymnasium's repr of the env. A newly ticked wrapper goes outermost; `[`
+and `]` move the focused one in or out. It never rebuilds anything itself: it
 posts `SidePanel.Changed` and the app asks the Session, then calls `reload()`.
-Invalid parameter text marks its field, says why, and is not applied.
+Invalid parameter text marks its field, says why, and is not applied; escape
+drops an edit not yet applied and posts `SidePanel.Left`.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 from rich.text import Text
-from textual import on
+from textual import events, on
 from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.message import Message
 from textual.validation import ValidationResult, Validator
 from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet, Static
 
-from tui_gym.core.wrappers import CATALOG, Param, WrapperChoice
+from tui_gym.algorithms import ALGORITHMS
+from tui_gym.core.wrappers import CATALOG, Param, WrapperChoice, format_wrapper_spec
 from tui_gym.games import GAMES
 from tui_gym.ui.widgets.tick_box import TickBox
+
+OTHER = "game-other"  # the picker's button for an env the registry does not list
 
 
 def _value_text(value: Any) -> str:
@@ -46,16 +55,25 @@ class ParamValidator(Validator):
         return self.success()
 
 
-class ParamField(Horizontal):
-    """One labelled parameter input with its own error line."""
+FIELD_WIDTH, COMPACT_FIELD_WIDTH = 12, 7  # the input beside a parameter's name
 
-    DEFAULT_CSS = """
-    ParamField { height: 1; padding-left: 4; }
-    ParamField Label { width: 1fr; color: $text-muted; }
-    ParamField Input { width: 12; }
-    ParamField Checkbox { width: 12; }
-    Screen.compact ParamField { padding-left: 2; }
-    Screen.compact ParamField Input, Screen.compact ParamField Checkbox { width: 7; }
+
+class ParamField(Horizontal):
+    """One labelled parameter input. A name too long to sit beside its input goes on
+    a line of its own above it (`-stacked`): the name is what a person types
+    after `--wrapper`, so it is never cut."""
+
+    DEFAULT_CSS = f"""
+    ParamField {{ height: 1; padding-left: 4; }}
+    ParamField Label {{ width: 1fr; color: $text-muted; }}
+    ParamField Input {{ width: {FIELD_WIDTH}; }}
+    ParamField Checkbox {{ width: {FIELD_WIDTH}; }}
+    ParamField.-stacked {{ layout: vertical; height: 2; }}
+    ParamField.-stacked Input, ParamField.-stacked Checkbox {{ margin-left: 2; }}
+    Screen.compact ParamField {{ padding-left: 2; }}
+    Screen.compact ParamField Input, Screen.compact ParamField Checkbox {{
+        width: {COMPACT_FIELD_WIDTH};
+    }}
     """
     SCOPED_CSS = False  # the compact rules start at Screen
 
@@ -85,6 +103,12 @@ class ParamField(Horizontal):
     @property
     def input(self) -> Input:
         return self.query_one(Input)
+
+    def on_resize(self, event: events.Resize) -> None:
+        compact = self.screen.has_class("compact")
+        field = COMPACT_FIELD_WIDTH if compact else FIELD_WIDTH
+        room = self.size.width - field - 1
+        self.set_class(len(self.param.name) > room, "-stacked")
 
     def set_value(self, value: Any) -> None:
         """Show a value (without counting as an edit)."""
@@ -121,15 +145,27 @@ class WrapperRow(Vertical):
     Screen.compact WrapperRow .summary { display: none; }
     """
 
-    def __init__(self, name: str, choice: WrapperChoice | None, reason: str | None) -> None:
+    def __init__(
+        self, name: str, choice: WrapperChoice | None, reason: str | None, place: int = 0
+    ) -> None:
         super().__init__(id=f"wrapper-{name}")
         self.spec = CATALOG[name]
         self.choice = choice
         self.reason = reason
+        self.place = place  # 1 for the innermost wrapper of the chain; 0 when not in it
+
+    def _label(self) -> str:
+        return f"{self.spec.name}  #{self.place}" if self.place else self.spec.name
+
+    def show_place(self, place: int) -> None:
+        """Say where in the chain this wrapper sits (0: not in it)."""
+        if place != self.place:
+            self.place = place
+            self.query_one(Checkbox).label = self._label()
 
     def compose(self) -> ComposeResult:
         spec = self.spec
-        box = TickBox(spec.name, value=self.choice is not None, compact=True)
+        box = TickBox(self._label(), value=self.choice is not None, compact=True)
         box.tooltip = spec.summary
         yield box
         yield Static(spec.summary, classes="summary", markup=False)
@@ -196,13 +232,35 @@ class SidePanel(VerticalScroll):
     SidePanel { width: 44; border-left: tall $primary-background; padding: 0 1; }
     Screen.compact SidePanel { width: 34; }
     SidePanel .section { text-style: bold; color: $accent; margin-top: 1; }
-    SidePanel #chain { color: $success; padding: 0 0 1 0; }
+    SidePanel #chain { padding: 0 0 1 0; }
     SidePanel #game-picker { width: 100%; height: auto; }
+    SidePanel #game-picker > RadioButton.-on { text-style: bold; color: $text-accent; }
+    SidePanel #algorithm-picker { width: 100%; height: auto; }
+    SidePanel #algorithm-picker > RadioButton.-on { text-style: bold; color: $text-accent; }
+    SidePanel #algorithm-summary { color: $text-muted; }
     SidePanel #env-params, SidePanel #wrapper-list { height: auto; }
     SidePanel .field-error { color: $error; display: none; }
     SidePanel .field-error.-shown { display: block; }
     SidePanel Input.-invalid { border: tall $error; }
     """
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("left_square_bracket", "move_wrapper(-1)", "Move in", key_display="[",
+                tooltip="Move the focused wrapper one place in (earlier) in the chain"),
+        Binding("right_square_bracket", "move_wrapper(1)", "Move out", key_display="]",
+                tooltip="Move the focused wrapper one place out (later) in the chain"),
+        Binding("escape", "leave", "Back", tooltip="Back to the view (drops an edit not applied)"),
+    ]
+
+    class Left(Message):
+        """The person left the panel (escape): the view should take the keyboard."""
+
+    class AlgorithmPicked(Message):
+        """The person picked another algorithm (by registry name)."""
+
+        def __init__(self, name: str) -> None:
+            super().__init__()
+            self.name = name
 
     class Changed(Message):
         """The person asked for a different game, env arguments or wrappers."""
@@ -216,22 +274,44 @@ class SidePanel(VerticalScroll):
             self.choices = choices
 
     def compose(self) -> ComposeResult:
+        self._order = [c.name for c in self.session.choices]  # the chain, innermost first
         yield Static("Game", classes="section")
         with RadioSet(id="game-picker"):
             for button_id, title, _ in self._picker_games():
                 yield RadioButton(title, id=button_id)
         yield Vertical(*self._env_fields(), id="env-params")
         yield Static("", id="env-error", classes="field-error")
-        yield Static("Wrapper chain", classes="section")
-        yield Static(Text(self._chain_text()), id="chain")
-        yield Static("Wrappers  (first ticked = innermost)", classes="section")
+        yield Static("Algorithm", classes="section")
+        with RadioSet(id="algorithm-picker"):
+            for cls in ALGORITHMS:
+                yield RadioButton(cls.title, id=f"algorithm-{cls.name}")
+        yield Static(self._algorithm_summary(), id="algorithm-summary")
+        yield Static("Wrapper chain  (innermost first)", classes="section")
+        yield Static(self._chain_text(), id="chain")
+        yield Static("Wrappers  ([ ] move the focused one)", classes="section")
         chosen, reasons = self._wrapper_states()
         with Vertical(id="wrapper-list"):
             for name in CATALOG:
-                yield WrapperRow(name, chosen.get(name), reasons.get(name))
+                yield WrapperRow(name, chosen.get(name), reasons.get(name), self._place(name))
 
     def on_mount(self) -> None:
         self._check_game()
+        self._check_algorithm()
+
+    def _algorithm_summary(self) -> str:
+        cls = self.session.learner_class
+        return f"{cls.summary}; target {cls.formula}"
+
+    def _check_algorithm(self) -> None:
+        """Press the session's algorithm in its picker (the change asks for nothing)."""
+        picker = self.query_one("#algorithm-picker", RadioSet)
+        button = picker.query_one(f"#algorithm-{self.session.algorithm}", RadioButton)
+        if picker.pressed_button is not button:
+            button.value = True
+        self.query_one("#algorithm-summary", Static).update(self._algorithm_summary())
+
+    def _place(self, name: str) -> int:
+        return self._order.index(name) + 1 if name in self._order else 0
 
     def _env_fields(self) -> list[ParamField]:
         session = self.session
@@ -247,7 +327,7 @@ class SidePanel(VerticalScroll):
                  for g in GAMES]
         game = self.session.game
         if not any(g is game for g in GAMES):
-            games.append(("game-other", game.title, self.session.env_id))
+            games.append((OTHER, game.title, self.session.env_id))
         return games
 
     def _wrapper_states(self) -> tuple[dict[str, WrapperChoice], dict[str, str | None]]:
@@ -261,16 +341,24 @@ class SidePanel(VerticalScroll):
         return chosen, reasons
 
     def _check_game(self) -> None:
+        """Press the session's game in the picker, so the picker's own highlight moves
+        to it too (the change it reports matches the session and asks for nothing)."""
         picker = self.query_one("#game-picker", RadioSet)
         game = self.session.game
         listed = self._picker_games()
-        if [b.id for b in picker.query(RadioButton)] != [i for i, _, _ in listed]:
-            picker.remove_children()  # another env joined or left the list
-            picker.mount_all(RadioButton(title, id=button_id) for button_id, title, _ in listed)
-        mine = next((i for i, _, env_id in listed if game.matches(env_id)), "")
-        with picker.prevent(RadioSet.Changed, RadioButton.Changed):
-            for button in picker.query(RadioButton):
-                button.value = button.id == mine
+        # Another env than the registry's has one button of its own, while it is played.
+        other = next((title for button_id, title, _ in listed if button_id == OTHER), None)
+        buttons = picker.query(f"#{OTHER}")
+        if other is None:
+            buttons.remove()
+        elif buttons:
+            buttons.first(RadioButton).label = other
+        else:
+            picker.mount(RadioButton(other, id=OTHER))
+        mine = next(i for i, _, env_id in listed if game.matches(env_id))
+        button = picker.query_one(f"#{mine}", RadioButton)
+        if picker.pressed_button is not button:
+            button.value = True
 
     @property
     def session(self):  # the app's Session
@@ -278,7 +366,9 @@ class SidePanel(VerticalScroll):
 
     def reload(self) -> None:
         """Show the session as it is now (after a rebuild, or to undo an invalid edit)."""
+        self._order = [c.name for c in self.session.choices]
         self._check_game()
+        self._check_algorithm()
         env_box = self.query_one("#env-params", Vertical)
         fields = list(env_box.query(ParamField))
         wanted = self.session.game.params
@@ -291,20 +381,37 @@ class SidePanel(VerticalScroll):
         chosen, reasons = self._wrapper_states()
         for row in self.query(WrapperRow):
             row.set_state(chosen.get(row.spec.name), reasons.get(row.spec.name))
+            row.show_place(self._place(row.spec.name))
         self._show_error("#env-error", None)
-        self.query_one("#chain", Static).update(Text(self._chain_text()))
+        self.query_one("#chain", Static).update(self._chain_text())
 
-    def _chain_text(self) -> str:
+    def _chain_text(self) -> Text:
+        """The game, then each chosen wrapper in order with its parameters (`key=value`,
+        as `--wrapper` takes them), then Gymnasium's repr of the env."""
         session = self.session
-        text = session.chain_repr()
+        skipped = {id(choice) for choice, _ in session.skipped}
+        text = Text(session.env_id, style="bold")
+        if not session.choices:
+            text.append("  (no wrappers)", style="dim")
+        for place, choice in enumerate(session.choices, 1):
+            applied = id(choice) not in skipped
+            text.append(f"\n{place} ", style="dim")
+            text.append(choice.name, style="bold green" if applied else "")
+            if not applied:
+                text.append("  ✗ not applied", style="red")
+            # One line a parameter, as `--wrapper` writes it: names are never cut.
+            for pair in format_wrapper_spec(choice).partition(":")[2].split(","):
+                if pair:
+                    text.append(f"\n    {pair}", style="green" if applied else "")
+        text.append("\n" + session.chain_repr(), style="dim")
         if session.skipped:
             names = ", ".join(c.name for c, _ in session.skipped)
-            text += f"\n(not applied: {names})"
+            text.append(f"\n(not applied: {names})", style="red")
         return text
 
     def focus_wrappers(self) -> None:
         """Move the keyboard focus to the first wrapper checkbox."""
-        boxes = self.query(Checkbox)
+        boxes = self.query_one("#wrapper-list").query(Checkbox)  # not the game's own
         if boxes:
             boxes.first().focus()
             self.scroll_to_widget(boxes.first())
@@ -344,7 +451,9 @@ class SidePanel(VerticalScroll):
         return None if first_error else {**kept, **values}
 
     def _read_choices(self) -> tuple[WrapperChoice, ...] | None:
-        choices = []
+        """The ticked wrappers in chain order: the order kept so far, then any newly
+        ticked one outermost."""
+        chosen: dict[str, WrapperChoice] = {}
         first_error = None
         for row in self.query(WrapperRow):
             for field in row.query(ParamField):
@@ -354,8 +463,12 @@ class SidePanel(VerticalScroll):
             if error:
                 first_error = first_error or error
             elif choice is not None:
-                choices.append(choice)
-        return None if first_error else tuple(choices)
+                chosen[choice.name] = choice
+        if first_error:
+            return None
+        names = [n for n in self._order if n in chosen]
+        names += [n for n in chosen if n not in names]
+        return tuple(chosen[n] for n in names)
 
     # --- events ----------------------------------------------------------------
     @on(RadioSet.Changed, "#game-picker")
@@ -363,6 +476,14 @@ class SidePanel(VerticalScroll):
         env_id = self._selected_env_id()
         if env_id != self.session.env_id:
             self.post_message(self.Changed(env_id, {}, self.session.choices))
+
+    @on(RadioSet.Changed, "#algorithm-picker")
+    def _algorithm_picked(self, event: RadioSet.Changed) -> None:
+        event.stop()
+        pressed = event.radio_set.pressed_button
+        name = (pressed.id or "").removeprefix("algorithm-") if pressed is not None else ""
+        if name and name != self.session.algorithm:
+            self.post_message(self.AlgorithmPicked(name))
 
     @on(Checkbox.Changed)
     def _wrapper_ticked(self, event: Checkbox.Changed) -> None:
@@ -386,6 +507,35 @@ class SidePanel(VerticalScroll):
                 self._show_error("#env-error", error)
             else:
                 row.show_error(error)
+
+    def action_move_wrapper(self, step: int) -> None:
+        """Move the wrapper whose row has the focus one place in (-1) or out (+1)."""
+        focused = self.app.focused
+        nodes = focused.ancestors_with_self if focused is not None else []
+        row = next((node for node in nodes if isinstance(node, WrapperRow)), None)
+        if row is None:
+            self.app.notify("Focus a ticked wrapper first (w, then tab).", timeout=3)
+            return
+        name = row.spec.name
+        if name not in self._order:
+            self.app.notify(f"Tick {name} first: only wrappers in the chain have a place.",
+                            timeout=3)
+            return
+        index = self._order.index(name)
+        target = index + step
+        if not 0 <= target < len(self._order):
+            where = "innermost" if step < 0 else "outermost"
+            self.app.notify(f"{name} is already {where}.", timeout=2)
+            return
+        order = list(self._order)
+        order[index], order[target] = order[target], order[index]
+        self._order = order
+        self._request()
+
+    def action_leave(self) -> None:
+        """Back to the view; an edit not applied (with enter) is dropped."""
+        self.reload()
+        self.post_message(self.Left())
 
     def _request(self) -> None:
         kwargs = self._read_env_kwargs()

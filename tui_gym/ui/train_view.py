@@ -1,14 +1,19 @@
-"""The Train view: watch tabular Q-learning learn the current game, live.
+"""The Train view: watch a tabular learner learn the current game, live, or step by step.
 
 `TrainView` lays out the controls (start/pause, one episode, reset, slower,
 faster: buttons for the mouse, the same keys live on the app), a progress
-bar toward the episode budget, the run's numbers (`StatsPanel`) beside the
-hyperparameter fields (`HyperparameterForm`), the learning curves
+bar toward the episode budget and one line saying which engine trains and
+why (cut to fit; the whole of it in its tooltip and the help), all three
+always in sight; below them, scrolling when the window is short, the run's
+numbers (`StatsPanel`) beside the hyperparameter fields
+(`HyperparameterForm`, the algorithm's own fields), the learning curves
 (`TrainingCharts`) with, at animated speeds, the game's board replaying the
-agent's moves, and the Q-table heatmaps (`HeatmapView`). On a grid game
-`m` opens the map editor (`MapEditor`) above the heatmaps: each edit rebuilds
-the game through the app (the agent kept while its states keep their meaning,
-training going on) and the editor shows the new map solved exactly.
+agent's moves and the step panel (`StepPanel`) explaining each update, and
+the Q-table heatmaps (`HeatmapView`), where the explained step's state is
+marked. On a grid game `m` opens the map editor (`MapEditor`) above the
+heatmaps: each edit rebuilds the game through the app (the agent kept while
+its states keep their meaning, training going on) and the editor shows the new
+map solved exactly.
 
 It never trains anything: the app's timer hands it the runner's latest
 snapshot through `show_snapshot()`, which redraws only what changed and
@@ -30,13 +35,14 @@ from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widget import Widget
 from textual.widgets import Button, Label
 
-from tui_gym.core.agent import Hyperparameters
+from tui_gym.algorithms import Settings
 from tui_gym.core.training import TrainingSnapshot, continue_run
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
 from tui_gym.ui.widgets.map_editor import MapEditor
 from tui_gym.ui.widgets.progress_line import ProgressLine
 from tui_gym.ui.widgets.stats_panel import StatsPanel, format_duration, run_state
+from tui_gym.ui.widgets.step_panel import StepPanel, explain
 from tui_gym.ui.widgets.training_charts import TrainingCharts
 
 if TYPE_CHECKING:
@@ -46,7 +52,7 @@ if TYPE_CHECKING:
 STATE_POLL_SECONDS = 0.25  # how often the view checks for a pause with no new snapshot
 
 
-class TrainView(VerticalScroll):
+class TrainView(Vertical):
     """Controls, live statistics, learning curves and Q-table heatmaps."""
 
     # Not scoped: the `Screen.compact ...` rules must match from the screen down.
@@ -55,11 +61,22 @@ class TrainView(VerticalScroll):
     TrainView {
         height: 1fr;
         padding: 0 0 0 1;
+    }
+    TrainView #train-body {
+        height: 1fr;
         scrollbar-size-vertical: 1;
     }
     TrainView #train-controls {
         height: 1;
         margin-bottom: 0;
+    }
+    TrainView #train-engine {
+        width: 1fr;
+        height: 1;
+        color: $text-muted;
+        text-style: italic;
+        text-wrap: nowrap;
+        text-overflow: ellipsis;
     }
     TrainView #train-controls Button {
         min-width: 0;
@@ -108,6 +125,15 @@ class TrainView(VerticalScroll):
         height: 3;
         padding: 0 1;
     }
+    TrainView #train-step {
+        display: none;
+    }
+    TrainView.-animated #train-step {
+        display: block;
+    }
+    TrainView.-stepping #train-board-box {
+        border-left: thick $accent;
+    }
     TrainView #train-heatmap-box {
         height: auto;
         border: round $primary-background-lighten-2;
@@ -135,7 +161,7 @@ class TrainView(VerticalScroll):
     Screen.compact TrainView #train-top > * {
         min-height: 0;
     }
-    Screen.compact TrainView #train-speed {
+    Screen.compact TrainView #train-speed, Screen.compact TrainView #train-engine {
         display: none;
     }
     Screen.compact TrainView #train-controls Button {
@@ -196,6 +222,7 @@ class TrainView(VerticalScroll):
                                tooltip="Train for exactly one episode (.)")
         self._speed = Label("", id="train-speed")
         self._progress = ProgressLine(id="train-progress")
+        self._engine = Label("", id="train-engine", markup=False)
         self._stats = StatsPanel(id="train-stats")
         self._form = HyperparameterForm(session.hp, id="train-form")
         self._charts = TrainingCharts(id="train-charts")
@@ -204,6 +231,7 @@ class TrainView(VerticalScroll):
         self._heatmap_box = Vertical(id="train-heatmap-box")
         self._heatmap = HeatmapView(id="train-heatmaps")
         self._editor: MapEditor | None = None  # mounted when first opened
+        self._step = StepPanel(id="train-step")
 
         with Horizontal(id="train-controls"):
             yield self._toggle
@@ -214,15 +242,18 @@ class TrainView(VerticalScroll):
             yield self._speed
             yield Button("+", id="btn-faster", compact=True, tooltip="Faster (+)")
         yield self._progress
-        with Horizontal(id="train-top"):
-            yield self._stats
-            yield self._form
-        with Horizontal(id="train-middle"):
-            yield self._charts
-            with self._board_box:
-                yield self._caption
-        with self._heatmap_box:
-            yield self._heatmap
+        yield self._engine
+        with VerticalScroll(id="train-body"):
+            with Horizontal(id="train-top"):
+                yield self._stats
+                yield self._form
+            with Horizontal(id="train-middle"):
+                yield self._charts
+                with self._board_box:
+                    yield self._caption
+            yield self._step
+            with self._heatmap_box:
+                yield self._heatmap
 
     def on_mount(self) -> None:
         self._heatmap_box.border_title = "Q-table"
@@ -394,7 +425,7 @@ class TrainView(VerticalScroll):
         self.stats.show_speed(name)
         self._show_board(self.runner)
 
-    def read_hyperparameters(self) -> Hyperparameters | None:
+    def read_hyperparameters(self) -> Settings | None:
         """The hyperparameters in the form, or None (with the bad fields marked and shown)."""
         hp = self.form.read()
         if hp is None:
@@ -406,18 +437,22 @@ class TrainView(VerticalScroll):
         """Give the keyboard to the heatmap (its keys move the focus where there is one)."""
         self.heatmap.focus()
 
+    @property
+    def step_panel(self) -> StepPanel:
+        return self._step
+
     def key_help(self) -> list[tuple[str, str]]:
         """The keys this view adds to the app's own training keys."""
         keys = [
-            ("e", "edit the hyperparameters (enter or esc: back)"),
-            ("m", "edit the map (grid games): arrows or click move, 1-8 paint "
-                  "(floor wall hole goal start reward ice cliff), enter paints, [ ] value, "
-                  "shift+arrows resize, u undo, y redo, ctrl+s save, esc close"),
+            ("e", "edit the hyperparameters (enter applies, also while training runs; "
+                  "esc: back)"),
             ("tab / shift+tab", "move between fields and buttons"),
         ]
         layout = self.session.game.layout
         if layout.has_focus:
             keys.append(("←↑↓→ / hjkl / click", layout.focus_help))
+        if self.engine_note:
+            keys.append(("engine", self.engine_note))
         return keys
 
     # --- drawing pieces ----------------------------------------------------
@@ -453,7 +488,19 @@ class TrainView(VerticalScroll):
         reason = session.engine_reason
         if snapshot.engine == "scalar" and reason.startswith("vector"):
             reason = "scalar engine while animating (the vector engine runs at max speed)"
-        self.stats.show_engine_reason(reason)
+        self.show_engine(reason)
+
+    @property
+    def engine_note(self) -> str:
+        """Which engine trains and why, in full (the line shows what fits)."""
+        return str(self._engine.content)
+
+    def show_engine(self, reason: str) -> None:
+        """Say which engine trains and why, on one line (the whole in its tooltip)."""
+        if reason != self.engine_note:
+            self._engine.update(reason)
+            self._engine.tooltip = reason
+            self._stats.tooltip = reason  # the compact layout hides the line
 
     def _show_state(self, runner: TrainingRunner) -> None:
         """The badge, from what is shown: running (a run, or one episode, under way),
@@ -512,8 +559,9 @@ class TrainView(VerticalScroll):
         animated = runner.speed.animated and getattr(self._snapshot, "engine", "") == "scalar"
         shown = animated and scene is not None
         box.set_class(shown, "-shown")
-        self.set_class(shown, "-animated")
+        self.set_class(runner.speed.animated, "-animated")
         if not shown:
+            self._show_step(None)
             return
         board = self._ensure_board()
         event = runner.last_event
@@ -526,6 +574,31 @@ class TrainView(VerticalScroll):
         if event is not self._scene_event:
             self._scene_event = event
             self._caption.update(self._describe(event))
+            self._show_step(event)
+
+    def _show_step(self, event: Any) -> None:
+        """Explain a step's update in the step panel, and mark its state on the heatmap."""
+        record = getattr(event, "last_update", None)
+        self.set_class(record is not None, "-stepping")
+        if record is None:
+            if self._step.lines or not self._step.content:
+                self._step.show([])
+            if self.heatmap.step_cell is not None:
+                self.heatmap.step_cell = None
+            return
+        session = self.session
+        game = session.game
+        self._step.show(explain(event, record, game.action_names, game.states.describe,
+                                session.learner_class.title))
+        found = session.heatmap_cell(event.observation, self.focus_target)
+        if found is None:
+            self.heatmap.step_cell = None
+            return
+        focus, cell = found
+        if focus != self.focus_target:  # show the state under its own target (GridWorld)
+            self.focus_target = focus
+            self._show_heatmaps()
+        self.heatmap.step_cell = cell
 
     def _describe(self, event: Any) -> str:
         if event is None:
@@ -547,7 +620,7 @@ class TrainView(VerticalScroll):
         actions = {
             "btn-toggle": "toggle_training",
             "btn-episode": "one_episode",
-            "btn-reset": "reset_agent",
+            "btn-reset": "request_reset",
             "btn-slower": "slower",
             "btn-faster": "faster",
         }
@@ -571,15 +644,20 @@ class TrainView(VerticalScroll):
         if hp is None:
             self.app.notify("Fix the highlighted fields first.", severity="error", timeout=3)
             return
-        if not self.runner.running:
-            session = self.session
-            hp, note = continue_run(session.hp, hp, session.trainer.episodes)
-            session.set_hyperparameters(hp)
-            self.form.load(hp)
-            self.progress.show(self.progress.done, hp.episodes)
-            self.app.notify(note or "Hyperparameters set.", timeout=8 if note else 2)
-        else:
-            self.app.notify("They apply when training starts again.", timeout=3)
+        session, runner = self.session, self.runner
+        running = runner.running
+        done = runner.latest.episodes if running else session.trainer.episodes
+        hp, note = continue_run(session.hp, hp, done)
+        try:
+            runner.set_hyperparameters(hp)  # in force at once, while training runs too
+        except ValueError as exc:
+            self.app.notify(str(exc), severity="error", timeout=5)
+            return
+        self.form.load(hp)
+        self.progress.show(self.progress.done, hp.episodes)
+        applied = "Applied at once: training goes on with them." if running else (
+            "Hyperparameters set.")
+        self.app.notify(note or applied, timeout=8 if note else 3)
         self._leave_form()
 
     @on(HyperparameterForm.Left)

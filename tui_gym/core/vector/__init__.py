@@ -1,4 +1,4 @@
-"""The vector engine: many episodes stepped at once with numpy, Q-learning in batches.
+"""The vector engine: many episodes stepped at once with numpy, any learner in batches.
 
 - `base`: `BatchStep`, the `BatchedEnv` protocol and `BatchedForm`, the
   recipe a game hands the engine (the engine knows no game by name);
@@ -7,9 +7,9 @@
 - `plan.plan_for_env`: reads a built env's wrappers as a `VectorPlan`
   (the game's form, time limit, reward transforms) or says why it has no
   batched form;
-- `trainer.VectorTrainer`: a drop-in for `Trainer` (engine "vector") that
-  trains the same `QAgent`; `make_vector_trainer` builds one from a game id
-  and wrapper choices.
+- `trainer.VectorTrainer`: an engine beside the scalar `Trainer` (engine
+  "vector") that trains the same learner; `make_vector_trainer` builds one
+  from a game id and wrapper choices.
 
 Batched forms take `TimeLimit`, `ScaleReward`, `StepPenalty`, `ClipReward`
 and, for games that report a distance, `DistanceShaping`.
@@ -26,7 +26,6 @@ from tui_gym.core.vector.plan import NoBatchedForm, VectorPlan, plan_for_env
 from tui_gym.core.vector.trainer import (
     DEFAULT_NUM_ENVS,
     VectorTrainer,
-    batched_q_update,
     make_vector_trainer,
 )
 
@@ -39,7 +38,6 @@ __all__ = [
     "NoBatchedForm",
     "VectorPlan",
     "VectorTrainer",
-    "batched_q_update",
     "make_vector_trainer",
     "model_form",
     "plan_for_env",

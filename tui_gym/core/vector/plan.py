@@ -122,7 +122,7 @@ class VectorPlan:
         return self.form.title
 
     def describe(self) -> str:
-        """E.g. "vector engine: Blackjack with StepPenalty"."""
+        """E.g. "vector engine: <the game's title> with StepPenalty"."""
         text = f"vector engine: {self.title}"
         if self.wrappers:
             text += " with " + ", ".join(self.wrappers)
@@ -164,10 +164,11 @@ def plan_for_env(
     names: list[str] = []
     for position, layer in enumerate(layers):
         kind = type(layer)
+        wrapper: Any = layer  # its own attributes are read by its exact type below
         if kind in _TRANSPARENT:
             continue
         if kind is TimeLimit:
-            steps = int(layer._max_episode_steps)
+            steps = int(wrapper._max_episode_steps)
             limit = steps if limit is None else min(limit, steps)
             below = layers[position - 1] if position else None
             from_make = isinstance(below, _TRANSPARENT) and steps == registered
@@ -175,14 +176,14 @@ def plan_for_env(
                 names.append("TimeLimit")
             continue
         if kind is ScaleReward:
-            rewards.append(_scale(layer.factor))
+            rewards.append(_scale(wrapper.factor))
         elif kind is StepPenalty:
-            rewards.append(_penalty(layer.penalty))
+            rewards.append(_penalty(wrapper.penalty))
         elif kind is ClipReward:
             saved = getattr(layer, "_saved_kwargs", {})
             rewards.append(_clip(saved.get("min_reward"), saved.get("max_reward")))
         elif kind is DistanceShaping and "distance" in form.info:
-            rewards.append(_shaping(layer.k))
+            rewards.append(_shaping(wrapper.k))
         else:
             why = _UNBATCHABLE.get(kind)
             reason = f"scalar engine: {kind.__name__} has no batched form"

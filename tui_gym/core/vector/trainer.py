@@ -1,46 +1,49 @@
-"""The vector engine: Q-learning on many envs at once, a drop-in for `Trainer`.
+"""The vector engine: any learner on many envs at once, beside the scalar `Trainer`.
 
-`VectorTrainer` trains the same `QAgent` the scalar `Trainer` does (its
-table, update counts, episode count and epsilon schedule) but plays
-`num_envs` games side by side on the batched env the game's `BatchedForm`
-makes, so every numpy call serves hundreds of steps. Build it like a
-`Trainer`, from an env built by the wrapper catalog and the game's form:
+`VectorTrainer` is an `Engine`, as the scalar `Trainer` is: it trains the
+same learner (any `tui_gym.algorithms.Learner` with a dense table: its
+tables, episode count and epsilon schedule) but plays `num_envs` games side
+by side on the batched env the game's `BatchedForm` makes, so every numpy
+call serves hundreds of steps. Build it from an env built by the wrapper
+catalog and the game's form:
 
-    trainer = VectorTrainer(env, agent, keyer, form=game.batched_form(kwargs), seed=0)
+    trainer = VectorTrainer(env, learner, keyer, form=game.batched_form(kwargs), seed=0)
     trainer.run(episodes=200_000)
 
-or with `make_vector_trainer(env_id, env_kwargs, choices, agent, keyer, form=...)`.
+or with `make_vector_trainer(env_id, env_kwargs, choices, learner, keyer, form=...)`.
 `plan_for_env` reads the env's wrappers; an env with no batched form raises
 `NoBatchedForm`.
 
-One batch step, top to bottom:
+One batch step, top to bottom, following the learner protocol
+(`tui_gym.algorithms.base`); the env with index i is the learner's env
+`1 + i`:
 
 1. Envs without an episode start one, each numbered in the order episodes
-   start. When the episode quota of `run(episodes=...)` is smaller than the
-   number of games in progress, only the oldest episodes step (so a run
-   finishes exactly that many).
-2. Epsilon-greedy actions for every stepping env: a random action with
-   probability `agent.epsilon`, else the best-valued one, ties broken
-   uniformly at random (the highest of independent uniform draws among the
-   tied actions wins).
+   start; the learner forgets anything it kept of an earlier episode there.
+   When the episode quota of `run(episodes=...)` is smaller than the number
+   of games in progress, only the oldest episodes step (so a run finishes
+   exactly that many).
+2. Actions for every stepping env: `act_batch`, or for a learner that picks
+   its next action before its update (SARSA) the action picked at the
+   previous step (`act_batch` only where an episode just started).
 3. One batched env step; the wrappers' reward transforms; keys of the next
-   observations.
-4. The batched Q-learning update (`batched_q_update`).
-5. The agent's episode count and epsilon move on for the finished episodes
-   (epsilon is thus updated once per batch). Their statistics go into the
-   rolling windows and curves in the order the episodes *started*: a result
-   waits until every episode that started before it has finished. Many games
-   started at once finish shortest first, so recording them as they finish
-   would begin every curve on the shortest episodes (a biased sample); in
-   start order every stretch of a curve is an unbiased sample of the episodes
-   of its time. What waits is bounded by the games in progress times the
-   longest episode.
+   observations; for SARSA, the next actions.
+4. The learner's batched `update`.
+5. `end_episodes` for the finished episodes (epsilon is thus updated once
+   per batch). Their statistics go into the rolling windows and curves in
+   the order the episodes *started*: a result waits until every episode
+   that started before it has finished. Many games started at once finish
+   shortest first, so recording them as they finish would begin every
+   curve on the shortest episodes (a biased sample); in start order every
+   stretch of a curve is an unbiased sample of the episodes of its time.
+   What waits is bounded by the games in progress times the longest
+   episode.
 
 Episodes in progress survive between `run` calls, and `seconds` and `stop`
 end a call only between batch steps, so cutting a run into time slices does
-not change it: with the same seeds (the trainer's for the envs, the agent's
-for exploration), one `run(episodes=n)` and any number of
-`run(episodes=n - done, seconds=...)` calls give the same Q-table.
+not change it: with the same seeds (the trainer's for the envs, the
+learner's for exploration), one `run(episodes=n)` and any number of
+`run(episodes=n - done, seconds=...)` calls give the same table.
 """
 
 from __future__ import annotations
@@ -51,16 +54,16 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from tui_gym.core.agent import QAgent
+from tui_gym.algorithms import Learner, Transitions
 from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.stats import EpisodeStats
-from tui_gym.core.training import SERIES_NAMES, StepEvent, Trainer
+from tui_gym.core.training import SERIES_NAMES, Engine
 from tui_gym.core.vector.base import BatchedForm
 from tui_gym.core.vector.plan import VectorPlan, plan_for_env
 from tui_gym.core.wrappers import WrapperChoice, build_env_lenient
 
-__all__ = ["DEFAULT_NUM_ENVS", "VectorTrainer", "batched_q_update", "make_vector_trainer"]
+__all__ = ["DEFAULT_NUM_ENVS", "VectorTrainer", "make_vector_trainer"]
 
 # Episodes/s grow with num_envs and level off by a few thousand, while learning per
 # episode is the same for all of them: 2048 is most of the speed with batch steps of
@@ -68,92 +71,21 @@ __all__ = ["DEFAULT_NUM_ENVS", "VectorTrainer", "batched_q_update", "make_vector
 DEFAULT_NUM_ENVS = 2048
 MIN_NUM_ENVS = 256  # fewer games at once than this leave numpy too little to do a step
 
-# 1 - lr is floored here before taking logs: a step size of 1 wipes out what came before.
-_TINY = 1e-300
 
-
-def batched_q_update(
-    agent: QAgent,
-    keys: np.ndarray,
-    actions: np.ndarray,
-    rewards: np.ndarray,
-    terminated: np.ndarray,
-    next_keys: np.ndarray,
-) -> np.ndarray:
-    """Q-learning updates for a batch of transitions; returns each TD error.
-
-    Targets `r + discount * max_a' Q(s', a')` (0 after termination) are all
-    read from the table as it is before the batch. Transitions that share a
-    (state, action) are then applied one after the other, in batch order,
-    each with its own step size (`max(lr, 1/n)` for the "visits" schedule,
-    n counting this update), exactly as `QAgent.update` would apply them if
-    the targets stayed fixed. This is done in closed form: after updates
-    1..m with step sizes a_i, Q = prod(1 - a_i) Q_0 + sum_i a_i prod_{j>i}(1 - a_j) t_i,
-    the products taken as sums of logs within each group of a sorted batch.
-    So a batch is sequential Q-learning whose bootstrap values lag by at
-    most one batch. The TD errors returned (for the |TD| statistic) are
-    measured against the table before the batch.
-
-    `keys` and `next_keys` are dense row numbers of `agent.q`; the agent's
-    `counts` and `visits` grow by one per transition.
-    """
-    hp = agent.hp
-    n_actions = agent.n_actions
-    if not (agent.q.flags.c_contiguous and agent.counts.flags.c_contiguous):
-        agent.q = np.ascontiguousarray(agent.q)  # so the flat views below write through
-        agent.counts = np.ascontiguousarray(agent.counts)
-    q_flat = agent.q.reshape(-1)
-    counts_flat = agent.counts.reshape(-1)
-    future = agent.q[next_keys].max(axis=1)
-    future[terminated] = 0.0
-    targets = rewards + hp.discount * future
-    flat = keys * n_actions + actions
-    td = targets - q_flat[flat]
-    if len(flat) == 0:
-        return td
-
-    # A stable sort of small integers is a radix sort in numpy: several times faster.
-    sortable = flat.astype(np.uint16) if q_flat.size <= 1 << 16 else flat
-    order = np.argsort(sortable, kind="stable")
-    cells = flat[order]
-    goals = targets[order]
-    m = len(cells)
-    first = np.ones(m, dtype=bool)
-    first[1:] = cells[1:] != cells[:-1]
-    starts = np.flatnonzero(first)
-    group = np.cumsum(first) - 1
-    sizes = np.diff(np.append(starts, m))
-    if hp.learning_rate_schedule == "visits":
-        rank = np.arange(1, m + 1) - starts[group]
-        alpha = np.maximum(hp.learning_rate, 1.0 / (counts_flat[cells] + rank))
-    else:
-        alpha = np.full(m, hp.learning_rate)
-    log_keep = np.log(np.maximum(1.0 - alpha, _TINY))
-    running = np.cumsum(log_keep)
-    ends = starts + sizes - 1
-    weights = alpha * np.exp(running[ends][group] - running)
-    keep_all = np.exp(running[ends] - running[starts] + log_keep[starts])
-    unique = cells[starts]
-    q_flat[unique] = keep_all * q_flat[unique] + np.add.reduceat(weights * goals, starts)
-    counts_flat[unique] += sizes
-    np.add.at(agent.visits, unique // n_actions, sizes)
-    return td
-
-
-class VectorTrainer(Trainer):
-    """Runs Q-learning on `num_envs` copies of an env at once; the `Trainer` API.
+class VectorTrainer(Engine):
+    """Trains a learner on `num_envs` copies of an env at once (see the module docstring).
 
     Args:
         env: an env built by the wrapper catalog (`build_env`); its wrappers
             are read with `plan_for_env` and played in batches (the env itself
             is never stepped).
-        agent: the dense-table `QAgent` to train (shared, as with `Trainer`).
+        agent: the dense-table learner to train (shared, as with `Trainer`).
         keyer: the keyer of `env`'s observation space.
         form: the game's batched form (None or `NotAvailable`: there is none,
             and `NoBatchedForm` says so).
         made_limit: the limit `gym.make` put on the game (by default the
             registry's), for `plan.describe`.
-        seed: seeds the batched env; the agent's own seed drives exploration.
+        seed: seeds the batched env; the learner's own seed drives exploration.
         num_envs: games played side by side (None: the form's choice, else
             `DEFAULT_NUM_ENVS`, and at most a tenth of the episode budget, so
             that a short run still plays each game through many episodes).
@@ -165,7 +97,7 @@ class VectorTrainer(Trainer):
     def __init__(
         self,
         env: gym.Env,
-        agent: QAgent,
+        agent: Learner,
         keyer: ObservationKeyer,
         *,
         form: BatchedForm | NotAvailable | None,
@@ -179,7 +111,8 @@ class VectorTrainer(Trainer):
         self.plan: VectorPlan = plan_for_env(env, form, made_limit)
         if not (keyer.dense and agent.dense):
             raise ValueError("the vector engine needs a dense observation keyer and Q-table")
-        if keyer.n_states != agent.n_states or agent.n_actions != env.action_space.n:
+        n_actions = getattr(env.action_space, "n", None)
+        if keyer.n_states != agent.n_states or agent.n_actions != n_actions:
             raise ValueError("the agent's table does not match the env's states and actions")
         if keyer.signature != repr(env.observation_space):
             raise ValueError("the keyer was not built from this env's observation space")
@@ -195,6 +128,8 @@ class VectorTrainer(Trainer):
         self._returns = np.zeros(n, dtype=np.float64)
         self._lengths = np.zeros(n, dtype=np.int64)
         self._abs_td = np.zeros(n, dtype=np.float64)
+        self._env_ids = np.arange(1, n + 1, dtype=np.int64)  # the learner's env ids
+        self._pending = np.full(n, -1, dtype=np.int64)  # SARSA's next actions; -1: none yet
         # Episode results held until every earlier-started episode has finished: a ring
         # indexed by start number, `_released` the first start number not yet recorded.
         self._start_seq = np.zeros(n, dtype=np.int64)  # start number of each env's episode
@@ -215,13 +150,7 @@ class VectorTrainer(Trainer):
             publish_interval=publish_interval,
         )
 
-    # --- the Trainer surface ---------------------------------------------
-    def step(self) -> StepEvent:
-        """Not available: the vector engine moves many envs at once (animate with `Trainer`)."""
-        raise NotImplementedError(
-            "the vector engine steps many envs at once; use the scalar Trainer to animate moves"
-        )
-
+    # --- the Engine surface ----------------------------------------------
     def run_episode(self) -> EpisodeStats:
         """Finish one more episode (the oldest in progress; the others wait) and
         return its statistics."""
@@ -241,9 +170,6 @@ class VectorTrainer(Trainer):
     def episode_in_progress(self) -> bool:
         return self._n_live > 0
 
-    def current_observation(self) -> Any:
-        return None  # many games are in progress, none of them "the" current one
-
     # --- one batch step --------------------------------------------------
     def _start_episodes(self) -> None:
         """Start an episode in every idle env.
@@ -260,23 +186,24 @@ class VectorTrainer(Trainer):
         self._keys[idle] = self.keyer.keys(self.venv.reset(idle))
         self._number(idle)
         self._live[idle] = True
+        self._pending[idle] = -1
+        self.agent.forget_episodes(self._env_ids[idle])
         self._n_live += len(idle)
         self._returns[idle] = 0.0
         self._lengths[idle] = 0
         self._abs_td[idle] = 0.0
 
-    def _choose(self, keys: np.ndarray) -> np.ndarray:
-        """Epsilon-greedy actions, ties among the best broken uniformly at random."""
+    def _choose(self, keys: np.ndarray, sel: Any) -> np.ndarray:
+        """The actions of the stepping envs (see the module docstring, step 2)."""
         agent = self.agent
-        rng = agent.rng
-        k, n_actions = len(keys), agent.n_actions
-        values = agent.q[keys]
-        tied = values == values.max(axis=1, keepdims=True)
-        draws = rng.random((k, n_actions))
-        actions = np.argmax(np.where(tied, draws, -1.0), axis=1)
-        explore = np.flatnonzero(rng.random(k) < agent.epsilon)
-        if explore.size:
-            actions[explore] = rng.integers(n_actions, size=explore.size)
+        if not agent.needs_next_action:
+            return agent.act_batch(keys)
+        actions = self._pending[sel]
+        if isinstance(sel, slice):  # a view of the whole array, not a copy
+            actions = actions.copy()
+        fresh = np.flatnonzero(actions < 0)
+        if fresh.size:
+            actions[fresh] = agent.act_batch(keys[fresh])
         return actions
 
     def _advance(self, limit: int | None) -> int:
@@ -297,12 +224,19 @@ class VectorTrainer(Trainer):
                 index = np.sort(index[oldest])
         sel: Any = slice(None) if index is None else index
 
+        agent = self.agent
         keys = self._keys[sel]
-        actions = self._choose(keys)
+        actions = self._choose(keys, sel)
         result = self.venv.step(actions, index, autoreset=False)
         rewards = self.plan.transform_rewards(result.reward, result.info)
         next_keys = self.keyer.keys(result.next_obs)
-        td = batched_q_update(self.agent, keys, actions, rewards, result.terminated, next_keys)
+        next_actions = agent.act_batch(next_keys) if agent.needs_next_action else None
+        td = agent.update(Transitions(
+            keys, actions, rewards, next_keys, result.terminated, result.truncated,
+            next_actions, self._env_ids[sel],
+        ))
+        if next_actions is not None:
+            self._pending[sel] = next_actions
         self.steps += len(keys)
         self._keys[sel] = next_keys
         self._returns[sel] += rewards
@@ -336,7 +270,7 @@ class VectorTrainer(Trainer):
 
     def _record(self, envs: np.ndarray) -> None:
         """Hold finished episodes' statistics, release those whose turn has come, and
-        move the agent's schedule on."""
+        move the learner's schedule on."""
         lengths = self._lengths[envs].astype(np.float64)
         columns = np.column_stack([
             self._returns[envs],
@@ -349,9 +283,7 @@ class VectorTrainer(Trainer):
         self._last_finished = EpisodeStats(ret, int(length), td, eps)
         count = len(envs)
         self.episodes += count
-        agent = self.agent
-        agent.episode += count
-        agent.epsilon = agent.hp.epsilon_at(agent.episode)
+        self.agent.end_episodes(count)
         self._release()
 
     def _release(self) -> None:
@@ -378,7 +310,7 @@ def make_vector_trainer(
     env_id: str,
     env_kwargs: Mapping[str, Any] | None,
     choices: Sequence[WrapperChoice],
-    agent: QAgent,
+    agent: Learner,
     keyer: ObservationKeyer | None = None,
     *,
     form: BatchedForm | NotAvailable | None,

@@ -8,9 +8,9 @@
 - `build`: `build_env`, `build_env_lenient`, `check_choices`.
 
     >>> from tui_gym.core.wrappers import build_env, parse_wrapper_spec
-    >>> env = build_env("Blackjack-v1", choices=[parse_wrapper_spec("StepPenalty:penalty=0.1")])
+    >>> env = build_env("CartPole-v1", choices=[parse_wrapper_spec("StepPenalty:penalty=0.1")])
     >>> env
-    <StepPenalty<OrderEnforcing<PassiveEnvChecker<BlackjackEnv<Blackjack-v1>>>>>
+    <StepPenalty<TimeLimit<OrderEnforcing<PassiveEnvChecker<CartPoleEnv<CartPole-v1>>>>>>
 """
 
 from tui_gym.core.params import Param

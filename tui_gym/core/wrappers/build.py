@@ -7,7 +7,8 @@ and `UnknownEnvError`.
 
 Choices apply in order, the first innermost. A `TimeLimit` put directly on
 top of another replaces it (see `catalog.replace_time_limit`), so choosing
-`TimeLimit:max_episode_steps=500` first on GridWorld gives 500-step episodes,
+`TimeLimit:max_episode_steps=500` first on an env registered with 300 steps
+gives 500-step episodes,
 just as `gym.make(..., max_episode_steps=500)` would, not a second limit that
 could only shorten the registered 300.
 """

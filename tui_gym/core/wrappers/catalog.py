@@ -68,7 +68,7 @@ def replace_time_limit(env: gym.Env, max_episode_steps: int) -> TimeLimit:
     """`TimeLimit(env, n)`, except that a `TimeLimit` right below is replaced, not stacked on.
 
     Stacked limits can only shorten each other, so without this the limit
-    `gym.make` puts on a registered env (GridWorld's 300) could never be raised.
+    `gym.make` puts on a registered env (say 300) could never be raised.
     """
     if isinstance(env, TimeLimit):
         env = env.env

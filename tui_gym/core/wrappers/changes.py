@@ -6,7 +6,7 @@
   `StepPenalty`, `ClipReward`, and our `DistanceShaping`) become one function
   `reward(base, distance)`: the reward the wrapped env hands out for a step
   whose bare reward is `base` and after which the agent is `distance` cells
-  from its target (GridWorld's `info["distance"]`; unused elsewhere). It calls
+  from its target (the env's `info["distance"]`; unused elsewhere). It calls
   the wrappers' own `reward` code, so it is exactly what they do;
 - the tightest `TimeLimit` is `time_limit`;
 - wrappers that change only what the agent observes change nothing here;

@@ -82,7 +82,7 @@ class DistanceShaping(
     thinks is best (it learns to stay near, not to arrive).
 
     The wrapped env must put the distance in `info["distance"]` on every step,
-    as GridWorld does.
+    as envs with `reports_distance` do.
 
     Args:
         env: the environment to wrap.

@@ -102,19 +102,16 @@ def fits_delay(env: gym.Env, values: Mapping[str, Any] | None) -> str | None:
 
 
 def _reports_distance(env: gym.Env) -> bool:
-    try:
-        from tui_gym.envs.gridworld import GridWorldEnv
-    except ImportError:  # GridWorld missing: fall back to the class name
-        return type(env.unwrapped).__name__ == "GridWorldEnv"
-    return isinstance(env.unwrapped, GridWorldEnv)
+    """Whether the env says it puts `info["distance"]` in every step (`reports_distance`)."""
+    return bool(getattr(env.unwrapped, "reports_distance", False))
 
 
 def fits_distance(env: gym.Env, values: Mapping[str, Any] | None) -> str | None:
     if _reports_distance(env):
         return None
     return (
-        "DistanceShaping needs GridWorld (an info['distance'] each step); "
-        f"{env_label(env)} has none"
+        "DistanceShaping needs an env that reports info['distance'] each step; "
+        f"{env_label(env)} does not"
     )
 
 

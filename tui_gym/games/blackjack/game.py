@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -140,7 +140,9 @@ class BlackjackStates(StateSpace):
             "dealer_total": hand_value(dealer)[0],
         }
 
-    def text(self, env: Any, reveal: bool = True) -> str:
+    def text(
+        self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None
+    ) -> str:
         """Both hands as text; the dealer's hole card shows only with `reveal`."""
         hands = self.scene(env)
         dealer = hands.get("dealer", [])
@@ -219,7 +221,9 @@ class BlackjackOracle(Oracle):
             return Advice((), None, "bust: no decision left")
         changes = GameChanges.of(env)
         scope = self.scope(kwargs, changes)
-        soft_21 = "natural" if len(player) == 2 and total == 21 else "drawn"
+        soft_21: Literal["natural", "drawn"] = (
+            "natural" if len(player) == 2 and total == 21 else "drawn"
+        )
         q = optimal_action_values(self.rules(kwargs, changes), soft_21=soft_21)[
             total, dealer[0], int(usable)
         ]
@@ -367,6 +371,23 @@ class BlackjackGame(Game):
     )
     board = "cards"
     episode_noun = "hand"
+    bench_kwargs: dict[str, Any] | None = {}
+    bench_gap = 0.002
+    # The common defaults (discount 1, the visits step size from 1/n down to 0.001, epsilon
+    # 1 -> 0.05 over half of 200,000 episodes) suit the off-policy learners. The on-policy
+    # ones learn the values of the exploring policy: exploration falls to 0 (so what they
+    # learn becomes the greedy policy's values) and a larger step size forgets the early,
+    # exploratory returns. Dyna-Q's model keeps one outcome per pair, which misleads in a
+    # card game; one planning step with a small step size keeps that noise down.
+    hyperparameters = {
+        "sarsa": {"learning_rate": 0.01, "epsilon_final": 0.0, "epsilon_decay_fraction": 0.3,
+                  "episodes": 500_000},
+        "expected-sarsa": {"learning_rate": 0.01, "epsilon_final": 0.0,
+                           "epsilon_decay_fraction": 0.3, "episodes": 500_000},
+        "monte-carlo": {"learning_rate": 0.005, "epsilon_final": 0.0,
+                        "epsilon_decay_fraction": 0.5, "episodes": 1_000_000},
+        "dyna-q": {"planning_steps": 1, "learning_rate": 0.0003, "episodes": 500_000},
+    }
 
     def __init__(self) -> None:
         super().__init__()

@@ -34,7 +34,6 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.params import Param
 from tui_gym.envs.tile_map import TileRules
 from tui_gym.games.maps import GridMap
@@ -99,6 +98,7 @@ class CliffWalkingGame(TileGame):
     )
     theme = "cliff"
     floor_word = "ground"
+    bench_kwargs: dict[str, Any] | None = {}
 
     def __init__(self) -> None:
         super().__init__()
@@ -123,8 +123,10 @@ class CliffWalkingGame(TileGame):
     def map_limit(self, grid_map: GridMap) -> int:
         return max(EPISODE_LIMIT, 2 * grid_map.rows * grid_map.cols)
 
-    def default_hyperparameters(self, kwargs: Mapping[str, Any] | None = None) -> Hyperparameters:
+    def hyperparameter_table(
+        self, kwargs: Mapping[str, Any] | None = None
+    ) -> Mapping[str, Mapping[str, Any]]:
         if (kwargs or {}).get("slippery"):
             # A fall costs 100 at random: averaging it out needs small steps and many episodes.
-            return Hyperparameters(learning_rate=0.01, episodes=50_000)
-        return Hyperparameters(learning_rate=0.1, episodes=2_000)
+            return {"*": {"learning_rate": 0.01, "episodes": 50_000}}
+        return {"*": {"learning_rate": 0.1, "episodes": 2_000}}

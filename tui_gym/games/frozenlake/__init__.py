@@ -34,7 +34,6 @@ from collections.abc import Mapping
 from functools import lru_cache
 from typing import Any
 
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.params import Param
 from tui_gym.envs.tile_map import TileRules
 from tui_gym.games.tiles import CUSTOM, TileGame, TileLayout, TileNarrator, TileStates
@@ -84,6 +83,7 @@ class FrozenLakeGame(TileGame):
     )
     theme = "lake"
     floor_word = "ice"
+    bench_kwargs: dict[str, Any] | None = {"map": "8x8"}
 
     def __init__(self) -> None:
         super().__init__()
@@ -115,9 +115,11 @@ class FrozenLakeGame(TileGame):
     def builtin_limit(self, kwargs: Mapping[str, Any]) -> int:
         return LARGE_LIMIT if len(lake_map(kwargs)) > 4 else SMALL_LIMIT
 
-    def default_hyperparameters(self, kwargs: Mapping[str, Any] | None = None) -> Hyperparameters:
+    def hyperparameter_table(
+        self, kwargs: Mapping[str, Any] | None = None
+    ) -> Mapping[str, Mapping[str, Any]]:
         # A discount just below 1: with 1 the values of a cautious move that stays put
         # and of one that heads for the goal tie, and the greedy policy may never arrive.
         if len(self.cells(kwargs or {})) <= 4:
-            return Hyperparameters(learning_rate=0.05, discount=0.999, episodes=20_000)
-        return Hyperparameters(learning_rate=0.02, discount=0.999, episodes=100_000)
+            return {"*": {"learning_rate": 0.05, "discount": 0.999, "episodes": 20_000}}
+        return {"*": {"learning_rate": 0.02, "discount": 0.999, "episodes": 100_000}}

@@ -29,7 +29,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.params import Param
@@ -410,8 +409,8 @@ class GridWorldNarrator(Narrator):
             rows.append(ScoreRow("Optimum", f"a shortest path from every placement ({scope.note})",
                                  "shortest path (unwrapped)"))
         if watched is not None and watched.tally.episodes:
-            extra = watched.figure_mean("steps_over_optimal")
-            more = "" if extra is None else f"{extra:.2f} extra steps"
+            watched_extra = watched.figure_mean("steps_over_optimal")
+            more = "" if watched_extra is None else f"{watched_extra:.2f} extra steps"
             rows.append(watched_row(watched, self.game.episode_noun, AGREEMENT, more))
         return rows
 
@@ -532,6 +531,15 @@ class GridWorldGame(Game):
     render_mode = "ansi"
     editable = True
     map_tools = ("floor", "wall")
+    demo_wrappers = ("TimeLimit:max_episode_steps=50", "StepPenalty:penalty=0.01",
+                     "DistanceShaping")
+
+    # Reward only at the target: without discounting every path is worth 1
+    # and the greedy policy would have no reason to take the shortest one.
+    hyperparameters = {
+        "*": {"discount": 0.95, "learning_rate": 0.1, "episodes": 20_000,
+              "epsilon_decay_fraction": 0.5},
+    }
 
     def __init__(self) -> None:
         super().__init__()
@@ -539,13 +547,6 @@ class GridWorldGame(Game):
         self.oracle = GridWorldOracle(self)
         self.narrator = GridWorldNarrator(self)
         self.layout = GridWorldLayout(self)
-
-    def default_hyperparameters(self, kwargs: Mapping[str, Any] | None = None) -> Hyperparameters:
-        # Reward only at the target: without discounting every path is worth 1
-        # and the greedy policy would have no reason to take the shortest one.
-        return Hyperparameters(
-            discount=0.95, learning_rate=0.1, episodes=20_000, epsilon_decay_fraction=0.5
-        )
 
     def solution(self, kwargs: Mapping[str, Any]) -> Optimum | NotAvailable:
         """The optimum with action values: minus the steps to the target after each move
@@ -616,7 +617,7 @@ class GridWorldGame(Game):
             out["walls"] = [list(w) for w in walls]
         return out
 
-    def batched_form(self, kwargs: Mapping[str, Any]) -> BatchedForm | NotAvailable:
+    def batched_form(self, kwargs: Mapping[str, Any]) -> BatchedForm:
         from tui_gym.core.vector.base import BatchedForm
         from tui_gym.games.gridworld.batched import BatchedGridWorld
 

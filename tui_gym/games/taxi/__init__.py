@@ -36,7 +36,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tui_gym.core.agent import Hyperparameters
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP, NotAvailable
 from tui_gym.core.params import Param
@@ -86,7 +85,29 @@ def _walls(game_env: Any) -> list[list[int]]:
 
 
 class TaxiStates(DiscreteStates):
-    """The 500 states; the taxi board's scene."""
+    """The 500 states; the taxi board's scene; the city as text."""
+
+    def text(
+        self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None
+    ) -> str:
+        """Gymnasium's map with the taxi as `T` (`@` with the passenger aboard) and the
+        waiting passenger's stand in lower case, and a line saying where they go."""
+        try:
+            game_env = env.unwrapped
+            row, col, passenger, destination = decode(int(game_env.s))
+            lines = [line.decode() if isinstance(line, bytes) else str(line)
+                     for line in ("".join(c.decode() for c in r) for r in game_env.desc)]
+        except (AttributeError, TypeError, ValueError):
+            return ""
+        grid = [list(line) for line in lines]
+        if passenger < IN_TAXI:
+            r, c = STANDS[passenger]
+            grid[1 + r][2 * c + 1] = grid[1 + r][2 * c + 1].lower()
+        grid[1 + row][2 * col + 1] = "@" if passenger == IN_TAXI else "T"
+        where = "in the taxi (@)" if passenger == IN_TAXI else \
+            f"at {STAND_NAMES[passenger]} (lower case)"
+        return "\n".join(["".join(line) for line in grid]
+                         + [f"T taxi; passenger {where}, going to {STAND_NAMES[destination]}"])
 
     def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
         row, col, passenger, destination = decode(int(observation))
@@ -182,7 +203,7 @@ class TaxiLayout(HeatmapLayout):
             for p, row in enumerate(done)
         )
         picker = Heatmap(
-            title="slices: passenger × destination",
+            title="slice: passenger × dest.",
             row_labels=WHERE,
             col_labels=STAND_NAMES,
             values=picker_values,
@@ -240,6 +261,7 @@ class TaxiGame(ModelGame):
         Param("fickle", bool, False, help="the passenger may change destination", owner="Taxi"),
     )
     board = "taxi"
+    bench_kwargs: dict[str, Any] | None = {}
 
     def __init__(self) -> None:
         super().__init__()
@@ -265,7 +287,9 @@ class TaxiGame(ModelGame):
         # Every move is certain without rain: a trained greedy policy is the optimum.
         return 0.01 if kwargs.get("rainy") else 0.0
 
-    def default_hyperparameters(self, kwargs: Mapping[str, Any] | None = None) -> Hyperparameters:
+    def hyperparameter_table(
+        self, kwargs: Mapping[str, Any] | None = None
+    ) -> Mapping[str, Mapping[str, Any]]:
         if (kwargs or {}).get("rainy"):
-            return Hyperparameters(learning_rate=0.05, episodes=50_000)
-        return Hyperparameters(learning_rate=0.1, episodes=5_000)
+            return {"*": {"learning_rate": 0.05, "episodes": 50_000}}
+        return {"*": {"learning_rate": 0.1, "episodes": 5_000}}

@@ -114,6 +114,11 @@ class Board(Widget):
     RESTART_ANYTIME: ClassVar[bool] = True
     """May a new episode start before the current one ends?"""
 
+    KEEP_SHAPE: ClassVar[bool] = True
+    """Does a drawing keep the cell shape of the last while it fits (no jumps as the
+    space around changes)? A replay draws each position afresh instead, so that it
+    looks the same however it is reached."""
+
     class Act(Message):
         """A person asked for a move, by the game's action name."""
 

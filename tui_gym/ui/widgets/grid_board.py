@@ -4,19 +4,23 @@ The scene is `{"size": n, "agent": (x, y), "target": (x, y), "walls": [(x, y)]}`
 tutorial's coordinates: x grows to the right and y grows *upwards*, so y = 0
 is the bottom row on screen. The board remembers the cells the agent left
 this episode and draws each with the arrow of the move that left it, a trail
-that shows the path taken. Cells are drawn as large as the space allows.
+that shows the path taken. Cells are drawn as large as the space allows, and
+keep their size while the space around the board changes (until the terminal
+is resized or the grid changes size, or they no longer fit).
 Keys: arrows or WASD move, r resets; a click on a cell steps the agent one
 cell towards it.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from rich.style import Style
 from rich.text import Text
+from textual import events
 from textual.binding import Binding, BindingType
 from textual.geometry import Offset
 
@@ -113,9 +117,19 @@ def choose_layout(n: int, width: int, height: int) -> GridLayout:
         else:
             continue
         break
+    return place_layout(layout, width, height)
+
+
+def fits(layout: GridLayout, width: int, height: int) -> bool:
+    """Whether the drawing fits in `width` x `height` cells."""
+    return layout.width <= width and layout.height <= height
+
+
+def place_layout(layout: GridLayout, width: int, height: int) -> GridLayout:
+    """The same drawing centred in `width` x `height`."""
     left = max(0, (width - layout.width) // 2) + layout.label_w
     top = max(0, (height - layout.height) // 2)
-    return GridLayout(n, layout.cell_w, layout.cell_h, layout.lines, layout.axes, left, top)
+    return dataclasses.replace(layout, left=left, top=top)
 
 
 def _cell(value: Any) -> Cell | None:
@@ -178,9 +192,21 @@ class GridBoard(Board):
         self._grid_walls: frozenset[Cell] = frozenset()
         self._grid_fresh = True
         self._grid_layout: GridLayout | None = None
+        self._layout_n = 0  # the grid size the kept cell shape is for (0: choose afresh)
+        self._laid_out: tuple[Any, int] | None = None  # (terminal size, board width) last seen
 
     def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
         self.border_title = "Grid"
+
+    def on_resize(self, event: events.Resize) -> None:
+        # A new terminal size, or a new width (the layout around the board changed, or
+        # is settling after a resize): the cell shape is chosen afresh. Lines of text
+        # coming and going above or below change only the board's height.
+        laid_out = (self.app.size, event.size.width)
+        if laid_out != self._laid_out:
+            self._laid_out = laid_out
+            self._layout_n = 0
+            self.redraw()
 
     # --- what the board says ---------------------------------------------------
     def key_help(self) -> list[tuple[str, str]]:
@@ -255,7 +281,7 @@ class GridBoard(Board):
             self._grid_layout = None
             out.append("No grid yet.", self._style("axis"))
             return out
-        layout = choose_layout(n, width, height)
+        layout = self._steady_layout(n, width, height)
         self._grid_layout = layout
         line, axis = self._style("line"), self._style("axis")
         cw, ch = layout.cell_w, layout.cell_h
@@ -301,6 +327,16 @@ class GridBoard(Board):
             out.append(margin)
             out.append_text(row)
         return out
+
+    def _steady_layout(self, n: int, width: int, height: int) -> GridLayout:
+        """The cell shape stays while the space around the board changes (status lines
+        wrapping, a scoreboard row coming): it is chosen afresh for a new grid size or
+        terminal size, and otherwise only gives way when it no longer fits."""
+        kept = self._grid_layout
+        if kept is not None and self._layout_n == n and fits(kept, width, height):
+            return place_layout(kept, width, height)
+        self._layout_n = n
+        return choose_layout(n, width, height)
 
     def canvas_clicked(self, offset: Offset) -> None:
         """Step one cell towards the clicked cell (the longer way first)."""

@@ -183,6 +183,8 @@ class HeatmapView(StripWidget, can_focus=True):
 
     focus_cell: reactive[tuple[int, int] | None] = reactive(None, init=False)
     """(row, col) of the focus cell, or None when the game has no focus concept."""
+    step_cell: reactive[tuple[int, int, int] | None] = reactive(None, init=False)
+    """(panel, row, col) of the state the step-by-step panel explains, or None."""
 
     def __init__(
         self,
@@ -222,6 +224,9 @@ class HeatmapView(StripWidget, can_focus=True):
         self._message = text
         self.add_class("-empty")
         self.redraw(layout=True)
+
+    def watch_step_cell(self, old: object, new: object) -> None:
+        self.refresh()
 
     def watch_focus_cell(self, old: object, new: object) -> None:
         self.refresh()
@@ -321,7 +326,8 @@ class HeatmapView(StripWidget, can_focus=True):
     # --- drawing -----------------------------------------------------------
     def picture_key(self) -> Hashable:
         height = 0 if self._panels else self.content_size.height  # a message is centred
-        return (self._version, self.focus_cell, self.has_focus, self._compact(), height)
+        return (self._version, self.focus_cell, self.step_cell, self.has_focus, self._compact(),
+                height)
 
     def draw(self, width: int) -> list[Line]:
         if not self._panels:
@@ -389,6 +395,7 @@ class HeatmapView(StripWidget, can_focus=True):
             header.add(label.center(cw), DIM)
         lines.append(header)
         focus = self.focus_cell if index == 0 else None
+        step = self.step_cell[1:] if self.step_cell and self.step_cell[0] == index else None
         has_focus = self.has_focus
         steps = scale.steps(np.asarray(panel.values, dtype=float)).tolist()
         marked_cells = panel.marked.tolist()
@@ -401,7 +408,10 @@ class HeatmapView(StripWidget, can_focus=True):
                     marked = bool(marked_cells[r][c]) and sub == 0
                     pad = (cw - len(label)) // 2
                     body = (" " * pad + label + ("*" if marked else "")).ljust(cw)[:cw]
-                    if focus == (r, c):  # bright while the keys move it, quiet otherwise
+                    if step == (r, c):  # the state of the step being explained
+                        style = STEP_CELL
+                        body = ("[" + body[1:-1] + "]") if cw >= 3 else body
+                    elif focus == (r, c):  # bright while the keys move it, quiet otherwise
                         style = FOCUS_ACTIVE if has_focus else FOCUS_QUIET
                     else:
                         style = _cell_style(scale.diverging, steps[r][c], marked)
@@ -426,6 +436,7 @@ DIM = Style(dim=True)
 BOLD = Style(bold=True)
 FOCUS_ACTIVE = Style(bold=True, color="#000000", bgcolor="#f5f5f5")
 FOCUS_QUIET = Style(bold=True, color="#f5f5f5", bgcolor="#5a5a5a")
+STEP_CELL = Style(bold=True, color="#000000", bgcolor="#ffd75f")
 BLANK_CELL = Style(color="#808080")
 
 

@@ -1,15 +1,16 @@
-"""The hyperparameter form: one checked field per Q-learning knob.
+"""The hyperparameter form: one checked field per knob of the algorithm in use.
 
-`HyperparameterForm` has an `Input` for every entry of
-`tui_gym.core.agent.HYPERPARAMETER_FIELDS` (learning rate, discount,
-epsilon start / final / decay fraction, episodes), each with its label and
-the range it accepts. Every keystroke is checked with the field's own
-`Param.parse`: a bad value turns the field red and says why under it.
-`read()` returns the `Hyperparameters` the fields describe, or None (with
-every problem marked, including ones between fields such as epsilon final
-above epsilon start); `load(hp)` fills the fields. Enter posts `Submitted`
-so the owner can hand the keyboard back to the view; Escape does the same
-without checking.
+`HyperparameterForm` is generated from the schema of the `Settings` it
+shows (the algorithm's `params`): an `Input` for every number, with its
+label and the range it accepts, and a `Select` for every `Choice` (the
+step-size schedule) and switch (Monte Carlo's first visit). Every keystroke
+is checked with the field's own `Param.parse`: a bad value turns the field
+red and says why under it. `read()` returns the `Settings` the fields
+describe, or None (with every problem marked, including ones between fields
+such as epsilon final above epsilon start); `load(settings)` fills the
+fields, and rebuilds them when the schema is another algorithm's. Enter
+posts `Submitted` so the owner can hand the keyboard back to the view;
+Escape does the same without checking.
 """
 
 from __future__ import annotations
@@ -22,10 +23,29 @@ from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.message import Message
 from textual.validation import ValidationResult, Validator
-from textual.widgets import Input, Label, Static
+from textual.widget import Widget
+from textual.widgets import Input, Label, Select, Static
 
-from tui_gym.core.agent import HYPERPARAMETER_FIELDS, Hyperparameters, Param
-from tui_gym.core.params import ParamError
+from tui_gym.algorithms import Field, QLearning, Settings
+from tui_gym.core.params import Param, ParamError
+
+
+def _typed(field: Field) -> bool:
+    """Whether the field is typed in (a number), not picked from a few words."""
+    return isinstance(field, Param) and field.kind is not bool
+
+
+def _words(field: Field) -> tuple[str, ...]:
+    """The words a picked field offers."""
+    return ("true", "false") if isinstance(field, Param) else field.choices
+
+
+def _text(field: Field, value: object) -> str:
+    if isinstance(field, Param) and field.kind is bool:
+        return "true" if value else "false"
+    if _typed(field):
+        return format_value(field, value)  # type: ignore[arg-type]
+    return str(value)
 
 
 def format_value(field: Param, value: float) -> str:
@@ -37,7 +57,7 @@ def format_value(field: Param, value: float) -> str:
 
 def range_hint(field: Param) -> str:
     """The accepted range, short: '(0, 1]', or '≥ 1' when the top is out of sight."""
-    if field.maximum >= 1e6:
+    if field.maximum is not None and field.minimum is not None and field.maximum >= 1e6:
         low = f"{int(field.minimum)}" if field.kind is int else f"{field.minimum:g}"
         return f"≥ {low}" if field.min_inclusive else f"> {low}"
     return field.expected().split(" in ", 1)[-1]
@@ -136,7 +156,7 @@ class HyperparameterForm(Vertical):
     class Submitted(Message):
         """Enter in a field: `hyperparameters` is None when some field is wrong."""
 
-        def __init__(self, form: HyperparameterForm, hyperparameters: Hyperparameters | None):
+        def __init__(self, form: HyperparameterForm, hyperparameters: Settings | None):
             super().__init__()
             self.form = form
             self.hyperparameters = hyperparameters
@@ -150,38 +170,63 @@ class HyperparameterForm(Vertical):
 
     def __init__(
         self,
-        hyperparameters: Hyperparameters | None = None,
+        hyperparameters: Settings | None = None,
         *,
         id: str | None = None,
         classes: str | None = None,
     ) -> None:
         super().__init__(id=id, classes=classes)
-        self._initial = hyperparameters or Hyperparameters()
+        self._initial = hyperparameters or QLearning.settings()
         self._base = self._initial
         self._between: set[str] = set()  # fields marked by a rule between fields
         self.border_title = "Hyperparameters"
         self.border_subtitle = "↵ set · esc back"
 
+    @property
+    def fields(self) -> tuple[Field, ...]:
+        """The fields shown: the schema of the settings last loaded."""
+        return self._base.schema
+
     def compose(self) -> ComposeResult:
-        for field in HYPERPARAMETER_FIELDS:
-            with Horizontal(classes="hp-row", id=f"hp-row-{field.name}"):
-                yield Label(field.title, classes="hp-label")
-                box = Input(
-                    format_value(field, getattr(self._initial, field.name)),
-                    id=f"hp-{field.name}",
-                    compact=True,
-                    validators=[FieldValidator(field)],
-                    select_on_focus=True,
-                )
-                box.tooltip = f"{field.help}: {field.expected()}"
-                yield box
-                yield Label(range_hint(field), classes="hp-hint")
-            yield Static("", id=f"hp-error-{field.name}", classes="hp-error", markup=False)
+        for field in self.fields:
+            yield from self._field_widgets(field, getattr(self._base, field.name))
+
+    def _field_widgets(self, field: Field, value: object) -> list[Widget]:
+        label = Label(field.title or field.name, classes="hp-label")
+        box: Widget
+        if _typed(field):
+            assert isinstance(field, Param)
+            box = Input(
+                _text(field, value),
+                id=f"hp-{field.name}",
+                compact=True,
+                validators=[FieldValidator(field)],
+                select_on_focus=True,
+            )
+            hint = Label(range_hint(field), classes="hp-hint")
+        else:
+            box = Select(
+                [(word, word) for word in _words(field)], value=_text(field, value),
+                allow_blank=False, compact=True, id=f"hp-{field.name}",
+            )
+            hint = Label("", classes="hp-hint")
+        box.tooltip = f"{field.help}: {field.expected()}"
+        row = Horizontal(label, box, hint, classes="hp-row", id=f"hp-row-{field.name}")
+        error = Static("", id=f"hp-error-{field.name}", classes="hp-error", markup=False)
+        return [row, error]
 
     # --- the fields --------------------------------------------------------
     def input(self, name: str) -> Input:
-        """The Input of one hyperparameter, e.g. `input("learning_rate")`."""
+        """The Input of one typed hyperparameter, e.g. `input("learning_rate")`."""
         return self.query_one(f"#hp-{name}", Input)
+
+    def select(self, name: str) -> Select:
+        """The Select of one picked hyperparameter, e.g. `select("learning_rate_schedule")`."""
+        return self.query_one(f"#hp-{name}", Select)
+
+    def control(self, name: str) -> Widget:
+        """The widget that edits one hyperparameter (an Input or a Select)."""
+        return self.query_one(f"#hp-{name}")
 
     def error(self, name: str) -> str:
         """The problem shown under a field ('' when none)."""
@@ -189,11 +234,11 @@ class HyperparameterForm(Vertical):
         return str(widget.content) if widget.has_class("-shown") else ""
 
     def is_invalid(self, name: str) -> bool:
-        return self.input(name).has_class("-invalid")
+        return self.control(name).has_class("-invalid")
 
     def _mark(self, name: str, problem: str | None) -> None:
-        self.input(name).set_class(problem is not None, "-invalid")
-        self.input(name).set_class(problem is None, "-valid")
+        self.control(name).set_class(problem is not None, "-invalid")
+        self.control(name).set_class(problem is None, "-valid")
         self.query_one(f"#hp-row-{name}").set_class(problem is not None, "-invalid")
         note = self.query_one(f"#hp-error-{name}", Static)
         note.update(problem or "")
@@ -223,18 +268,26 @@ class HyperparameterForm(Vertical):
     def action_leave(self) -> None:
         self.post_message(self.Left())
 
-    # --- reading and loading -----------------------------------------------
-    def read(self) -> Hyperparameters | None:
-        """The hyperparameters in the fields, or None with every problem marked.
+    @on(Select.Changed)
+    def _picked(self, event: Select.Changed) -> None:
+        event.stop()
+        self._mark((event.select.id or "").removeprefix("hp-"), None)
 
-        Settings the form has no field for (the learning-rate schedule) come
-        from the hyperparameters last loaded.
-        """
-        values: dict[str, int | float] = {}
+    # --- reading and loading -----------------------------------------------
+    def _raw(self, field: Field) -> str:
+        if _typed(field):
+            return self.input(field.name).value
+        value = self.select(field.name).value
+        return value if isinstance(value, str) else ""
+
+    def read(self) -> Settings | None:
+        """The hyperparameters in the fields, or None with every problem marked."""
+        values: dict[str, object] = {}
         ok = True
-        for field in HYPERPARAMETER_FIELDS:
-            text = self.input(field.name).value
-            problem = field_error(field, text)
+        fields = self.fields
+        for field in fields:
+            text = self._raw(field)
+            problem = field_error(field, text) if isinstance(field, Param) else None
             self._mark(field.name, problem)
             if problem is None:
                 values[field.name] = field.parse(text)
@@ -248,27 +301,41 @@ class HyperparameterForm(Vertical):
             # A rule between fields (epsilon final above epsilon start): mark the
             # fields the message names, with the message in people's words.
             reason = str(exc)
-            named = [f for f in HYPERPARAMETER_FIELDS if f.name in reason]
-            for field in HYPERPARAMETER_FIELDS:
-                reason = reason.replace(field.name, field.title.lower())
+            named = [f for f in fields if f.name in reason]
+            for field in fields:
+                reason = reason.replace(field.name, (field.title or field.name).lower())
             reason = reason[:1].upper() + reason[1:]
-            marked = named or list(HYPERPARAMETER_FIELDS[:1])
+            marked = named or list(fields[:1])
             for field in marked:  # the reason once, under the last field it names
                 self._mark(field.name, reason if field is marked[-1] else "")
                 self._between.add(field.name)
             return None
 
-    def load(self, hyperparameters: Hyperparameters) -> None:
-        """Fill every field from `hyperparameters` and clear the marks."""
+    def load(self, hyperparameters: Settings) -> None:
+        """Fill every field from `hyperparameters` and clear the marks; another
+        algorithm's schema rebuilds the fields."""
+        rebuild = hyperparameters.schema != self._base.schema
         self._base = hyperparameters
-        for field in HYPERPARAMETER_FIELDS:
-            box = self.input(field.name)
-            text = format_value(field, getattr(hyperparameters, field.name))
-            if box.value != text:
-                box.value = text
+        self._between.clear()
+        if rebuild:
+            # New fields (the schema is another algorithm's), built once the old ones
+            # are gone: ids repeat between schemas.
+            if self.is_mounted:
+                self.call_later(self.recompose)
+            return
+        for field in self.fields:
+            text = _text(field, getattr(hyperparameters, field.name))
+            if _typed(field):
+                box = self.input(field.name)
+                if box.value != text:
+                    box.value = text
+            else:
+                select = self.select(field.name)
+                if select.value != text:
+                    select.value = text
             self._mark(field.name, None)
 
     @property
     def valid(self) -> bool:
         """True when no field is marked."""
-        return not any(self.is_invalid(f.name) for f in HYPERPARAMETER_FIELDS)
+        return not any(self.is_invalid(f.name) for f in self.fields)

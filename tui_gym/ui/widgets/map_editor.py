@@ -7,8 +7,8 @@ cursor and a click picks a cell and paints it; a number key picks a tool and
 paints the cursor's cell with it (1 floor, 2 wall, 3 hole, 4 goal, 5 start,
 6 reward, 7 ice, 8 cliff: the ones the game takes), enter paints again, and
 [ ] change the tool's number (a reward, or ice's slip). Shift with an arrow
-adds or takes away a row or a column. u undoes, y redoes, ctrl+s saves the
-map to a file, esc closes the editor.
+adds or takes away a row or a column. u undoes, y redoes, s saves the map
+to a file, esc closes the editor.
 
 It edits nothing itself: every change is posted as `MapEditor.Changed` with
 the new map, and the owner rebuilds the game and hands the editor the new map
@@ -90,7 +90,7 @@ class MapEditor(Vertical):
         Binding("shift+up", "resize(-1, 0)", "Shorter", show=False),
         Binding("u,ctrl+z", "undo", "Undo", key_display="u"),
         Binding("y,ctrl+y", "redo", "Redo", key_display="y"),
-        Binding("ctrl+s", "save", "Save map", key_display="^s"),
+        Binding("s", "save", "Save map"),
         Binding("escape", "close", "Close editor", key_display="esc"),
     ]
 
@@ -216,7 +216,7 @@ class MapEditor(Vertical):
                 name += f" {value:+g}" if tool.value == "reward" else f" {value:g}"
             text = f"{i + 1} {name}"
             parts.append(f"[reverse]{text}[/]" if tool is self.tool else text)
-        keys = "enter paint  [ ] value  shift+←→↑↓ size  u undo  y redo  ^s save"
+        keys = "enter paint  [ ] value  shift+←→↑↓ size  u undo  y redo  s save"
         self.query_one("#editor-tools", Label).update("  ".join(parts) + "\n" + keys)
 
     def _show_status(self) -> None:

@@ -103,7 +103,7 @@ class StripWidget(Widget):
         """The current picture as Rich text (Textual draws through `render_line`)."""
         lines = self.picture(self.content_size.width)
         return Text("\n").join(
-            Text.assemble(*((s.text, s.style) for s in line)) for line in lines
+            Text.assemble(*((s.text, s.style or "") for s in line)) for line in lines
         )
 
     def component_styles(self) -> dict[str, Style]:

@@ -519,6 +519,8 @@ class TaxiBoard(Board):
             self._layout = None
             return stack([Text("No city yet.", self._style("caption"))], width, height)
         rows, cols = self.rows, self.cols
+        if not self.KEEP_SHAPE:
+            self._kept.release()
         shape = self._kept.get(
             (rows, cols), width, height, lambda w, h: choose_shape(rows, cols, w, h), shape_fits
         )

@@ -624,6 +624,8 @@ class TileBoard(Board):
             self._layout = None
             return stack([Text("No map yet.", self._style("caption"))], width, height)
         rows, cols = len(self.cells), len(self.cells[0])
+        if not self.KEEP_SHAPE:
+            self._kept.release()
         shape = self._kept.get(
             (rows, cols), width, height, lambda w, h: choose_shape(rows, cols, w, h), shape_fits
         )

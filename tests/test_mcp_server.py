@@ -1,0 +1,207 @@
+"""`tui-gym mcp` through the MCP SDK's own client over stdio: every game played to the
+end, bad calls refused with a clear message, `--no-hints`, the bound on games, and idle
+games expiring (on an injected clock, through the SDK's in-process client)."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+
+import pytest
+
+pytest.importorskip("mcp")
+# One worker runs this module, so each server process below starts once.
+pytestmark = pytest.mark.xdist_group("mcp_server")
+
+from tests.mcp_support import McpInProcess, McpProcess  # noqa: E402
+from tui_gym.core.arena import GameTable, catalog  # noqa: E402
+from tui_gym.mcp_server.server import build_server  # noqa: E402
+
+GAMES = [entry.name for entry in catalog()]
+
+
+@pytest.fixture(scope="module")
+def server() -> Iterator[McpProcess]:
+    process = McpProcess("--max-games", "3")
+    yield process
+    process.close()
+    assert "Traceback" not in process.stderr_text()
+
+
+@pytest.fixture(scope="module")
+def no_hints() -> Iterator[McpProcess]:
+    process = McpProcess("--no-hints", "--max-games", "2")
+    yield process
+    process.close()
+    assert "Traceback" not in process.stderr_text()
+
+
+def test_the_tools_and_the_games_they_list(server: McpProcess) -> None:
+    assert set(server.tools()) >= {
+        "list_games", "start_game", "observe", "step", "hint", "score", "reset", "end_game"
+    }
+    listed = server.data("list_games")
+    assert [g["name"] for g in listed["games"]] == GAMES
+    for game, entry in zip(listed["games"], catalog(), strict=True):
+        assert game["actions"] == list(entry.actions)
+        assert [p["name"] for p in game["parameters"]] == [p.name for p in entry.params]
+    assert listed["max_games"] == 3 and listed["hints"] is True
+
+
+@pytest.mark.parametrize("game", GAMES)
+def test_a_whole_episode_of_every_game_played_optimally(server: McpProcess, game: str) -> None:
+    start = server.data("start_game", game=game, seed=5)
+    game_id = start["game_id"]
+    assert start["game"] == game and start["done"] is False and start["text"]
+    assert start["legal_actions"]
+    try:
+        for _ in range(1000):
+            hint = server.data("hint", game_id=game_id)
+            move = server.data("step", game_id=game_id, action=hint["optimal_actions"][0])
+            assert move["verdict"]["decision"] is True and move["verdict"]["optimal"] is True
+            if move["done"]:
+                break
+        observed = server.data("observe", game_id=game_id)
+        assert observed["done"] is True and observed["legal_actions"] == []
+        score = server.data("score", game_id=game_id)
+        assert score["episodes"] == 1 and score["decisions"] >= 1 and score["agreement"] == 1.0
+        assert score["recent_episodes"][0]["return"] == pytest.approx(observed["episode_return"])
+        assert score["recent_episodes"][0]["seed"] == 5
+        if "action_values" in hint:  # exact values: an optimal episode loses nothing
+            assert score["regret"]["mean_per_episode"] == pytest.approx(0.0, abs=1e-12)
+        else:
+            assert score["regret"]["mean_per_episode"] is None
+            assert "no exact action values" in score["regret"]["note"]
+    finally:
+        server.data("end_game", game_id=game_id)
+
+
+def test_a_costly_move_is_scored_by_its_exact_regret(server: McpProcess) -> None:
+    game_id = server.data("start_game", game="blackjack", seed=7)["game_id"]
+    try:
+        values = server.data("hint", game_id=game_id)["action_values"]
+        move = server.data("step", game_id=game_id, action=1)  # hit on 19 against a 10
+        regret = values["stick"] - values["hit"]
+        assert regret > 0.5
+        assert move["verdict"] == {"decision": True, "optimal": False,
+                                   "optimal_actions": ["stick"], "regret": regret}
+        score = server.data("score", game_id=game_id)
+        assert score["regret"]["mean_per_episode"] == pytest.approx(regret)
+        assert score["agreement"] == 0.0 and score["mean_return"] == -1.0
+        again = server.data("reset", game_id=game_id, seed=7)
+        assert again["observation"] == [19, 10, 0] and again["episode"] == 2
+    finally:
+        server.data("end_game", game_id=game_id)
+
+
+def test_bad_calls_get_clear_errors_and_the_server_goes_on(server: McpProcess) -> None:
+    unknown = server.error("start_game", game="chess")
+    assert "'chess'" in unknown and "blackjack" in unknown  # the games it knows
+    assert "out of range" in server.error("start_game", game="gridworld", parameters={"size": 99})
+    assert "not 'colour'" in server.error(
+        "start_game", game="gridworld", parameters={"colour": 1}
+    )
+    assert "unknown wrapper" in server.error(
+        "start_game", game="blackjack", wrappers=["NoSuchWrapper"]
+    ).lower()
+    assert "no game 999" in server.error("observe", game_id=999)
+    assert "game_id" in server.error("step", game_id="seven", action=0)
+    assert "Unknown tool" in server.error("fly", game_id=1)
+    game_id = server.data("start_game", game="blackjack", seed=7)["game_id"]
+    try:
+        assert "valid actions: 0=stick, 1=hit" in server.error("step", game_id=game_id, action=7)
+        assert "valid actions" in server.error("step", game_id=game_id, action="double")
+        server.data("step", game_id=game_id, action="stick")
+        assert "the episode is over" in server.error("step", game_id=game_id, action="stick")
+        assert "the episode is over" in server.error("hint", game_id=game_id)
+        assert server.data("observe", game_id=game_id)["done"] is True
+    finally:
+        server.data("end_game", game_id=game_id)
+    assert "was ended" in server.error("score", game_id=game_id)
+
+
+def test_no_hints_refuses_the_hint_and_hides_verdicts(no_hints: McpProcess) -> None:
+    assert no_hints.data("list_games")["hints"] is False
+    game_id = no_hints.data("start_game", game="blackjack", seed=7)["game_id"]
+    try:
+        assert "hints are off" in no_hints.error("hint", game_id=game_id)
+        move = no_hints.data("step", game_id=game_id, action="hit")
+        assert "verdict" not in move and move["done"] is True
+        score = no_hints.data("score", game_id=game_id)
+        assert score["regret"]["mean_per_episode"] > 0.5  # still scored, after the episode
+        no_hints.data("reset", game_id=game_id)
+        assert "current_episode" not in no_hints.data("score", game_id=game_id)
+    finally:
+        no_hints.data("end_game", game_id=game_id)
+
+
+def test_the_number_of_games_is_bounded(no_hints: McpProcess) -> None:
+    first = no_hints.data("start_game", game="blackjack")["game_id"]
+    second = no_hints.data("start_game", game="gridworld")["game_id"]
+    refused = no_hints.error("start_game", game="blackjack")
+    assert "2 games are running, the most this server plays at once" in refused
+    no_hints.data("end_game", game_id=first)
+    third = no_hints.data("start_game", game="blackjack")["game_id"]
+    assert third > second
+    for game_id in (second, third):
+        no_hints.data("end_game", game_id=game_id)
+
+
+def test_an_idle_game_expires_over_stdio() -> None:
+    server = McpProcess("--max-games", "1", "--idle-timeout", "0.3")
+    try:
+        idle = server.data("start_game", game="blackjack", seed=1)["game_id"]
+        deadline = time.monotonic() + 30
+        while True:  # the one place frees once the idle game expires
+            result = server.call("start_game", game="gridworld", seed=1)
+            if not result.is_error:
+                break
+            assert "the most this server plays at once" in result.content[0].text
+            assert time.monotonic() < deadline, "the idle game never expired"
+        assert "expired after 0.3 s without a call" in server.error("observe", game_id=idle)
+    finally:
+        server.close()
+    assert "Traceback" not in server.stderr_text()
+
+
+def test_idle_games_expire_on_the_tables_clock() -> None:
+    now = [0.0]
+    table = GameTable(max_games=1, idle_timeout=60, clock=lambda: now[0])
+    client = McpInProcess(build_server(table))
+    try:
+        game_id = client.data("start_game", game="blackjack", seed=1)["game_id"]
+        now[0] = 59.0
+        client.data("observe", game_id=game_id)  # a call keeps it alive
+        assert "the most this server plays" in client.error("start_game", game="gridworld")
+        now[0] = 59.0 + 60.5
+        other = client.data("start_game", game="gridworld")["game_id"]
+        assert f"game {game_id} expired after 60 s without a call" in client.error(
+            "step", game_id=game_id, action=0
+        )
+        assert len(table) == 1 and table.ids() == [other]
+    finally:
+        client.close()
+        table.close()
+
+
+def test_without_the_sdk_the_command_says_how_to_install_it() -> None:
+    code = "import sys; sys.modules['mcp'] = None; from tui_gym.cli import main; " \
+           "sys.exit(main(['mcp']))"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=60)
+    assert done.returncode == 2
+    assert done.stderr == "tui-gym mcp needs the MCP SDK: pip install 'tui-gym[mcp]'\n"
+    assert done.stdout == ""
+
+
+def test_scores_stay_finite_json(server: McpProcess) -> None:
+    game_id = server.data("start_game", game="gridworld", seed=1)["game_id"]
+    try:
+        score = server.data("score", game_id=game_id)
+        assert score["episodes"] == 0 and score["mean_return"] is None
+        assert not any(isinstance(v, float) and not math.isfinite(v) for v in score.values())
+    finally:
+        server.data("end_game", game_id=game_id)

@@ -1,0 +1,170 @@
+"""The layout holds while people use it, at 120×40 and at 80×24.
+
+The Train view's controls stay in sight whatever the engine note says; the
+GridWorld board keeps its cell size while a person plays; the game picker
+highlights the game shown; parameter names are never cut in the side panel,
+where a person types them (the `wrappers` command's table is tested with the
+CLI); escape leaves a text field; the wrapper chain shows its order and
+parameters and can be reordered from the keyboard.
+"""
+
+from __future__ import annotations
+
+import pytest
+from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet
+
+from tui_gym.algorithms import QLearning
+from tui_gym.core.session import Session
+from tui_gym.ui.app import TuiGymApp
+from tui_gym.ui.help_screen import HelpScreen
+from tui_gym.ui.side_panel import ParamField
+from tui_gym.ui.widgets.grid_board import choose_layout
+
+from .screen import screen_text
+from .test_ui_train import DEADLINE, wait_for
+
+SIZES = [(120, 40), (80, 24)]
+
+
+def app_for(game: str, episodes: int | None = None) -> TuiGymApp:
+    hp = None if episodes is None else QLearning.hyperparameters(episodes=episodes)
+    return TuiGymApp(Session(game, hp=hp, seed=0))
+
+
+def inside(app: TuiGymApp, selector: str) -> bool:
+    """Whether the widget is wholly on screen."""
+    region = app.query_one(selector).region
+    return bool(region.height) and app.screen.region.contains_region(region)
+
+
+@pytest.mark.parametrize("size", SIZES)
+async def test_train_controls_stay_in_sight_whatever_the_engine_says(size):
+    app = app_for("blackjack", episodes=300)
+    async with app.run_test(size=size) as pilot:
+        await pilot.press("t")
+        app.query_one("#wrapper-FlattenObservation").query_one(Checkbox).value = True
+        await pilot.press("escape", "space")  # back to the view, and train (scalar engine)
+        await wait_for(pilot, lambda: app.runner.finished and not app.runner.running,
+                       "the budget to finish")
+        assert app.runner.wait_idle(DEADLINE)
+        view = app.train_view
+        note = view.engine_note
+        assert "FlattenObservation has no batched form" in note
+        assert "batched form" not in view.stats.plain  # no longer wrapped over five lines
+        assert view.stats.tooltip == note
+        if size == (120, 40):
+            assert inside(app, "#train-engine")
+            assert app.query_one("#train-engine").region.height == 1
+            assert app.query_one("#train-engine").tooltip == note
+        view.heatmap.focus()  # the body scrolls to the heatmap; the controls stay
+        await pilot.pause()
+        for selector in ("#train-controls", "#btn-toggle", "#btn-reset", "#train-progress"):
+            assert inside(app, selector), selector
+        assert "Start" in screen_text(app)
+        await pilot.press("f1")  # the whole note is in the help too
+        assert isinstance(app.screen, HelpScreen)
+        assert any(note == text for _, rows in app.screen.sections for _, text in rows)
+
+
+def names_whole(app: TuiGymApp) -> None:
+    """Every parameter field shows its whole name beside (or above) a usable input."""
+    fields = list(app.query(ParamField))
+    assert {"repeat_action_probability", "step_penalty"} <= {f.param.name for f in fields}
+    for field in fields:
+        label = field.query_one(Label)
+        assert str(label.render()) == field.param.name
+        assert label.region.width >= len(field.param.name), field.param.name
+        box = field.query_one(Checkbox if field.param.kind is bool else Input)
+        assert box.region.width >= 7
+
+
+@pytest.mark.parametrize("size", SIZES)
+async def test_gridworld_board_keeps_its_cells_and_names_stay_whole(size):
+    app = app_for("gridworld")
+    async with app.run_test(size=size) as pilot:
+        await pilot.pause()
+        names_whole(app)
+        board = app.play_view.board
+
+        def shape() -> tuple:
+            layout = board.layout_drawn
+            return (layout.cell_w, layout.cell_h, layout.lines, layout.axes)
+
+        shapes = {shape()}
+        # Advice, the coach, moves, a reset and the watched agent change the lines
+        # around the board; the cells stay as they are.
+        for key in ("i", "c", "right", "down", "r", "A", "x"):
+            await pilot.press(key)
+            shapes.add(shape())
+        assert len(shapes) == 1, shapes
+        # A new terminal size picks the largest shape that fits, whichever way it went.
+        for width, height in (*[s for s in SIZES if s != size], size):
+            await pilot.resize_terminal(width, height)
+            await pilot.pause()
+            canvas = board.canvas.content_size
+            best = choose_layout(5, canvas.width, canvas.height)
+            assert shape() == (best.cell_w, best.cell_h, best.lines, best.axes)
+            names_whole(app)
+        assert shape() in shapes
+
+
+async def test_the_side_panel_by_keyboard():
+    """The picker highlights the game shown; the chain lists order and parameters and
+    `[` / `]` reorder it; escape leaves a field (dropping an edit) for the view."""
+    app = app_for("gridworld")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.pause()
+        picker = app.query_one("#game-picker", RadioSet)
+
+        def highlighted() -> list[str]:
+            return [b.id for b in picker.query(RadioButton) if b.has_class("-selected")]
+
+        assert picker.pressed_button.id == "game-gridworld"
+        assert highlighted() == ["game-gridworld"]
+        assert not app.query_one("#game-blackjack", RadioButton).value
+
+        # Escape leaves a text field: the edit not applied is dropped.
+        size = app.query_one("#env-params").query_one(Input)
+        await pilot.click(size)
+        assert app.focused is size
+        await pilot.press("end", "backspace", "9", "escape")
+        assert app.focused is app.play_view.board
+        assert size.value == "5" and app.session.env_kwargs["size"] == 5
+
+        # The chain, in order, with parameters; [ and ] move the focused wrapper.
+        await pilot.press("W", "space")  # the wrapper panel (w walks up here): TimeLimit
+        app.query_one("#wrapper-StepPenalty").query_one(Checkbox).value = True
+        await pilot.pause()
+        assert [c.name for c in app.session.choices] == ["TimeLimit", "StepPenalty"]
+        chain = str(app.query_one("#chain").render())
+        assert "1 TimeLimit\n    max_episode_steps=100\n2 StepPenalty\n    penalty=0.01" in chain
+        assert "StepPenalty  #2" in str(
+            app.query_one("#wrapper-StepPenalty").query_one(Checkbox).label)
+        app.query_one("#wrapper-StepPenalty").query_one(Checkbox).focus()
+        await pilot.press("left_square_bracket")
+        assert [c.name for c in app.session.choices] == ["StepPenalty", "TimeLimit"]
+        assert app.session.chain_repr().startswith("<TimeLimit<StepPenalty<")
+        chain = str(app.query_one("#chain").render())
+        assert chain.index("1 StepPenalty") < chain.index("2 TimeLimit")
+        await pilot.press("left_square_bracket")  # already innermost: said, nothing changes
+        assert any("already innermost" in n.message for n in app._notifications)
+        await pilot.press("right_square_bracket")
+        assert [c.name for c in app.session.choices] == ["TimeLimit", "StepPenalty"]
+        app.query_one("#wrapper-ClipReward").query_one(Checkbox).focus()
+        await pilot.press("right_square_bracket")  # not in the chain: said, nothing changes
+        assert any("Tick ClipReward first" in n.message for n in app._notifications)
+        assert [c.name for c in app.session.choices] == ["TimeLimit", "StepPenalty"]
+
+        # Escape from the panel in the Train view gives the keyboard to the heatmap.
+        await pilot.press("t", "W", "escape")
+        assert app.focused is app.train_view.heatmap
+        await pilot.press("b")
+        assert picker.pressed_button.id == "game-blackjack"
+        assert highlighted() == ["game-blackjack"]
+        assert not app.query_one("#game-gridworld", RadioButton).value
+        await pilot.press("w")  # the wrappers, not Blackjack's own check boxes above them
+        assert app.focused is app.query_one("#wrapper-TimeLimit").query_one(Checkbox)
+        await pilot.press("f1")
+        rows = [row for _, rows in app.screen.sections for row in rows]
+        assert any(key == "esc" and "text field" in text for key, text in rows)
+        assert any(key == "[ / ]" for key, _ in rows)

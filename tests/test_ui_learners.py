@@ -1,0 +1,143 @@
+"""The app and the learners: the algorithm picker, the generated form, live knobs, and
+the step-by-step panel, checked against updates computed here by hand.
+
+Each hand-computed example fills the learner's tables with known values,
+takes one step with `n`, and works out the target from the book's formula
+and the transition the panel reports; the panel must print those numbers.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from textual.widgets import Input, RadioButton, Select
+
+from tui_gym.algorithms import ALGORITHMS
+from tui_gym.core.session import Session
+from tui_gym.ui.app import TuiGymApp
+from tui_gym.ui.confirm_screen import ConfirmScreen
+from tui_gym.ui.widgets.step_panel import _num
+
+from .test_ui_train import open_train, wait_for
+
+KNOWN = {"learning_rate": 0.5, "learning_rate_schedule": "constant", "discount": 0.9,
+         "epsilon_start": 0.3, "epsilon_final": 0.3}
+
+
+def _known_tables(agent) -> None:
+    """Distinct, easy values: Q(s, a) = 0.01 s + 0.1 a (Double Q: B is A minus 0.05)."""
+    for spec in agent.tables:
+        table = getattr(agent, spec.name)
+        if table.dtype.kind != "f" or spec.name.startswith("model"):
+            continue
+        rows, cols = table.shape
+        values = 0.01 * np.arange(rows)[:, None] + 0.1 * np.arange(cols)[None, :]
+        table[:] = values - (0.05 if spec.name == "q_b" else 0.0)
+
+
+def _hand_target(name: str, agent, record) -> float:
+    """The target by the book, from the tables before the step (`_known_tables`)."""
+    s2, r, gamma = record.next_state, record.reward, 0.9
+    q = 0.01 * s2 + 0.1 * np.arange(agent.n_actions)
+    if record.terminated:
+        return r
+    if name in ("q-learning", "dyna-q"):
+        return r + gamma * q.max()
+    if name == "sarsa":
+        return r + gamma * q[record.target_action]
+    if name == "expected-sarsa":
+        eps = 0.3
+        probs = np.full(len(q), eps / len(q))
+        probs[q == q.max()] += (1 - eps) / (q == q.max()).sum()
+        return r + gamma * float(probs @ q)
+    if name == "double-q":  # the other table judges the updated table's best action
+        other = q - 0.05 if record.table == "A" else q
+        return r + gamma * other[int(np.argmax(q if record.table == "A" else q - 0.05))]
+    raise AssertionError(name)
+
+
+async def test_each_algorithm_explains_a_hand_computed_step() -> None:
+    app = TuiGymApp(Session("gridworld", {"size": 3}, seed=0, hp=KNOWN))
+    async with app.run_test(size=(120, 40)) as pilot:
+        view = await open_train(pilot)
+        for cls in ALGORITHMS:
+            if cls.name != app.session.algorithm:
+                await pilot.click(f"#algorithm-{cls.name}")
+                await wait_for(pilot, lambda c=cls: app.session.algorithm == c.name,
+                               f"the switch to {cls.name}")
+                app.session.set_hyperparameters(KNOWN)
+                view.form.load(app.session.hp)
+            agent = app.session.agent
+            _known_tables(agent)
+            before = app.session.trainer.steps
+            await pilot.press("n")
+            await wait_for(pilot, lambda b=before: app.session.trainer.steps == b + 1,
+                           f"one {cls.name} step")
+            await wait_for(pilot, lambda c=cls: view.step_panel.lines
+                           and view.step_panel.lines[0][1].startswith(c.title),
+                           f"the {cls.name} step panel")
+            record = app.runner.last_event.last_update
+            text = "\n".join(body for _, body in view.step_panel.lines)
+            assert app.runner.speed.animated
+            if cls.name == "monte-carlo" and record.target is None:
+                assert "nothing is updated before then" in text
+                continue
+            target = record.reward if cls.name == "monte-carlo" else _hand_target(
+                cls.name, agent, record)
+            assert abs(record.target - target) < 1e-12, cls.name
+            before_q = 0.01 * record.state + 0.1 * record.action
+            before_q -= 0.05 if record.table == "B" else 0.0
+            after = before_q + 0.5 * (target - before_q)
+            assert f"= {_num(target)}" in text, (cls.name, text)
+            assert f"{_num(before_q)} → {_num(after)}" in text, (cls.name, text)
+            assert f"= {_num(target - before_q)}" in text  # the TD error
+            if cls.name == "dyna-q":
+                assert f"then {app.session.hp.planning_steps} simulated updates" in text
+            assert view.heatmap.step_cell is not None  # the state's cell is marked
+
+
+async def test_the_form_follows_the_algorithm_and_a_trained_agent_asks() -> None:
+    app = TuiGymApp(Session("blackjack", seed=0, hp={"episodes": 2_000}))
+    async with app.run_test(size=(120, 40)) as pilot:
+        view = await open_train(pilot)
+        assert isinstance(view.form.control("learning_rate_schedule"), Select)
+        await pilot.click("#algorithm-dyna-q")  # untrained: no question
+        await wait_for(pilot, lambda: app.session.algorithm == "dyna-q", "Dyna-Q")
+        await wait_for(pilot, lambda: bool(view.form.query("#hp-planning_steps")),
+                       "the planning field")
+        assert isinstance(view.form.control("planning_steps"), Input)
+        assert view.form.input("episodes").value == "500000"  # Dyna-Q's default here
+        view.form.input("episodes").value = "2000"
+        await pilot.press("escape", "space")  # back to the view; applies the form and trains
+        await wait_for(pilot, lambda: app.runner.finished and not app.runner.running, "a run")
+        await pilot.click("#algorithm-monte-carlo")
+        await wait_for(pilot, lambda: isinstance(app.screen, ConfirmScreen), "the question")
+        await pilot.press("escape")  # no: the trained agent stays
+        await wait_for(pilot, lambda: not isinstance(app.screen, ConfirmScreen), "no")
+        assert app.session.algorithm == "dyna-q" and app.session.trainer.episodes == 2_000
+        assert app.query_one("#algorithm-dyna-q", RadioButton).value
+        await pilot.click("#algorithm-monte-carlo")
+        await wait_for(pilot, lambda: isinstance(app.screen, ConfirmScreen), "the question")
+        await pilot.click("#confirm-yes")
+        await wait_for(pilot, lambda: app.session.algorithm == "monte-carlo", "the switch")
+        assert app.session.trainer.episodes == 0
+        await wait_for(pilot, lambda: bool(view.form.query("#hp-first_visit")), "first visit")
+        assert isinstance(view.form.control("first_visit"), Select)
+
+
+async def test_epsilon_and_learning_rate_change_while_training_runs() -> None:
+    app = TuiGymApp(Session("blackjack", seed=0, hp={"episodes": 100_000_000}), runner="process")
+    async with app.run_test(size=(120, 40)) as pilot:
+        view = await open_train(pilot)
+        await pilot.press("space")
+        await wait_for(pilot, lambda: app.runner.latest.episodes > 200, "training")
+        await pilot.press("e")
+        for name, value in (("epsilon_start", "0.2"), ("epsilon_final", "0.2"),
+                            ("learning_rate", "0.05")):
+            view.form.input(name).value = value
+        view.form.input("learning_rate").focus()
+        await pilot.press("enter")
+        await wait_for(pilot, lambda: app.session.agent.epsilon == 0.2, "epsilon in force")
+        assert app.runner.running and app.session.agent.hp.learning_rate == 0.05
+        seen = app.runner.latest.episodes
+        await wait_for(pilot, lambda: app.runner.latest.episodes > seen + 5_000, "more episodes")
+        assert app.runner.latest.series["epsilon"][-1] < 0.25  # the curve shows it

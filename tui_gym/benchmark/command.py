@@ -1,0 +1,217 @@
+"""The `tui-gym benchmark` sub-command: its flags, running a benchmark, the leaderboard."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from typing import Any
+
+from rich import box
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
+BUILT_IN = ("random", "optimal")
+
+
+def add_parser(sub: Any, int_type: Any, seed_type: Any, float_type: Any) -> None:
+    """Add `benchmark` to the sub-command parsers `sub`."""
+    bench = sub.add_parser(
+        "benchmark",
+        help="score a player (a program, random, optimal, a saved agent) on fixed seeds",
+        description="Play N episodes of GAME (episode i on seed S+i) with a player and score "
+        "it against the exact optimum: mean return and exact regret per episode with 95% "
+        "intervals, agreement with the optimal action, invalid actions, time-outs and time "
+        "per decision. A program player speaks the JSON-lines protocol of `tui-gym play GAME "
+        "--jsonl`, writing requests on its stdout and reading answers on its stdin; an "
+        "invalid or late action is replaced by the game's first legal action.",
+    )
+    bench.add_argument("game", metavar="GAME", help="a game from `tui-gym envs`")
+    who = bench.add_mutually_exclusive_group()
+    who.add_argument("--agent-cmd", metavar="CMD",
+                     help="a program that plays through the JSON-lines protocol")
+    who.add_argument("--agent", metavar="NAME",
+                     help="a built-in player (random, optimal) or a saved agent file (.tgym)")
+    bench.add_argument("--name", metavar="NAME",
+                       help="the player's name in the results and the leaderboard (default: "
+                       "the command, or the built-in's or agent file's name)")
+    bench.add_argument("--episodes", type=int_type, default=1000, metavar="N",
+                       help="episodes to play (default 1,000)")
+    bench.add_argument("--seed", type=seed_type, default=0, dest="bench_seed", metavar="S",
+                       help="seed of the first episode (default 0)")
+    bench.add_argument("--decision-timeout", type=float_type, default=5.0, metavar="SEC",
+                       help="seconds a program has for each decision (default 5)")
+    bench.add_argument("--allow-hints", action="store_true",
+                       help="answer the player's hint requests (refused by default)")
+    bench.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                       help="a game parameter, e.g. --param size=6 (repeatable)")
+    bench.add_argument("--wrapper", action="append", default=[], metavar="SPEC",
+                       help="add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable)")
+    bench.add_argument("--leaderboard", action="store_true",
+                       help="list GAME's recorded benchmarks, best first, instead of running one")
+    bench.add_argument("--db", metavar="PATH", help="the run history file (default: "
+                       "$TUI_GYM_DB, else the user's data folder)")
+    bench.add_argument("--no-record", action="store_true",
+                       help="do not record the result in the run history")
+    bench.add_argument("--json", action="store_true", help="print one JSON object")
+    from tui_gym.replay_command import add_record_option
+
+    add_record_option(bench)
+
+
+def _params(pairs: list[str]) -> dict[str, str]:
+    params: dict[str, str] = {}
+    for pair in pairs:
+        name, sep, value = pair.partition("=")
+        if not sep or not name.strip():
+            raise ValueError(f"--param takes NAME=VALUE, got {pair!r}")
+        params[name.strip()] = value.strip()
+    return params
+
+
+def _player(args: argparse.Namespace, game: str) -> tuple[Any, dict[str, Any], tuple[str, ...]]:
+    """The player, and the game's parameters and wrappers it plays with."""
+    from tui_gym.benchmark.players import (
+        AgentPlayer,
+        OptimalPlayer,
+        ProcessPlayer,
+        RandomPlayer,
+    )
+    from tui_gym.core.arena import find_game
+
+    params: dict[str, Any] = _params(args.param)
+    wrappers = tuple(args.wrapper)
+    if args.agent_cmd is not None:
+        return ProcessPlayer(args.agent_cmd), params, wrappers
+    if args.agent is None:
+        raise ValueError("name a player: --agent-cmd CMD, or --agent random, optimal or a "
+                         "saved agent file")
+    if args.agent in BUILT_IN:
+        player = RandomPlayer(args.bench_seed) if args.agent == "random" else OptimalPlayer()
+        return player, params, wrappers
+    agent = AgentPlayer(args.agent, args.bench_seed)
+    agent.check_game(find_game(game).env_id)
+    if params or wrappers:
+        raise ValueError("a saved agent plays the game as it was saved: drop --param and "
+                         "--wrapper")
+    session = agent.session
+    return agent, dict(session.env_kwargs), tuple(str(c) for c in session.applied)
+
+
+def _print_json(data: dict[str, Any]) -> None:
+    """One JSON object on stdout (a number that is not finite as null)."""
+    def clean(value: Any) -> Any:
+        if isinstance(value, float) and not math.isfinite(value):
+            return None
+        if isinstance(value, dict):
+            return {k: clean(v) for k, v in value.items()}
+        if isinstance(value, list | tuple):
+            return [clean(v) for v in value]
+        return value
+
+    sys.stdout.write(json.dumps(clean(data)) + "\n")
+    sys.stdout.flush()
+
+
+def _summary(title: str, rows: list[tuple[str, str]]) -> Table:
+    table = Table(title=title, show_header=False, title_justify="left")
+    table.add_column(style="bold")
+    table.add_column(justify="right")
+    for label, value in rows:
+        table.add_row(label, escape(value))
+    return table
+
+
+def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
+    if args.leaderboard:
+        return _show_leaderboard(args, out)
+    if not args.decision_timeout > 0:
+        raise ValueError("--decision-timeout must be a positive number of seconds")
+    from tui_gym.benchmark.leaderboard import record
+    from tui_gym.benchmark.run import run_benchmark
+
+    recorder = None
+    if args.record is not None:
+        from tui_gym.replay_command import check_record_path, open_recorder
+
+        check_record_path(args.record)
+        path, seed = args.record, args.bench_seed
+
+        def recorder(session: Any) -> Any:
+            return open_recorder(path, session, source="benchmark", seed=seed)
+
+    player, params, wrappers = _player(args, args.game)
+    if args.name is not None:
+        if not args.name.strip():
+            raise ValueError("--name cannot be empty")
+        player.label = args.name.strip()
+    result = run_benchmark(
+        args.game, player, episodes=args.episodes, seed=args.bench_seed, params=params,
+        wrappers=wrappers, decision_timeout=args.decision_timeout,
+        allow_hints=args.allow_hints, recorder=recorder,
+    )
+    recorded = ""
+    if not args.no_record:
+        from tui_gym.core.experiments import resolve_db_path
+
+        run_id = record(result, args.db)
+        object.__setattr__(result, "run_id", run_id)
+        recorded = f"recorded as run {run_id} in {resolve_db_path(args.db)}"
+    if args.json:
+        _print_json(result.to_json())
+        return 0
+    out.print(_summary(f"Benchmark: {result.game}", result.rows()))
+    if recorded:
+        out.print(escape(recorded))
+    return 0
+
+
+def _show_leaderboard(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.benchmark.leaderboard import leaderboard
+    from tui_gym.core.arena import find_game
+
+    game = find_game(args.game).name
+    path, standings = leaderboard(game, args.db)
+    if args.json:
+        _print_json({"game": game, "db": path, "runs": [s.to_json() for s in standings]})
+        return 0
+    if not standings:
+        out.print(escape(f"no benchmark of {game} is recorded in {path} yet"))
+        return 0
+    table = Table(title=f"Leaderboard: {game}, best first", title_justify="left",
+                  box=box.SIMPLE_HEAD, show_edge=False, pad_edge=False,
+                  padding=(0, 1, 0, 0))
+    table.add_column("#", justify="right", no_wrap=True)
+    table.add_column("player", overflow="fold", min_width=12)
+    for name in ("episodes", "mean return", "regret/ep.", "optimal", "bad/late", "ms"):
+        table.add_column(name, justify="right", no_wrap=True)
+    for standing in standings:
+        run = standing.run
+        agreement = run.figure("agreement")
+        table.add_row(
+            str(standing.rank), escape(run.algorithm), _count(run, "episodes"),
+            _figure(run, "mean_return", 3, True), _figure(run, "regret_per_episode", 3, False),
+            "–" if agreement is None else f"{agreement.value:.1%}",
+            f"{_count(run, 'invalid_actions')}/{_count(run, 'timeouts')}",
+            _figure(run, "decision_ms_median", 2, False),
+        )
+    out.print(table)
+    out.print(escape(f"from {path}; bad/late: invalid actions and time-outs; "
+                     "ms: median time per decision"))
+    return 0
+
+
+def _figure(run: Any, name: str, places: int, signed: bool) -> str:
+    """A recorded figure as '-0.036±0.042' ('–' when the run has none)."""
+    figure = run.figure(name)
+    if figure is None:
+        return "–"
+    text = f"{figure.value:+.{places}f}" if signed else f"{figure.value:.{places}f}"
+    return text + (f"±{figure.ci95:.{places}f}" if figure.ci95 is not None else "")
+
+
+def _count(run: Any, name: str) -> str:
+    figure = run.figure(name)
+    return "–" if figure is None else f"{figure.value:,.0f}"

@@ -1,0 +1,333 @@
+"""The players a benchmark runs: built-in ones in this process, or a program.
+
+Every player plays through a `Referee`. The built-ins: `random` (a uniform
+legal action, seeded), `optimal` (an optimal action from the game's exact
+hint, the lowest-numbered where several are), and a saved agent (its greedy
+action, ties broken at random, a random action in a state it never learned).
+
+`ProcessPlayer` runs a program that speaks the JSON-lines protocol: it writes
+requests on its stdout and reads the answers on its stdin. Each decision has a
+time limit; a decision not made in time is made with the default action, and
+the late request is answered with the state the game is in by then. A player
+that misses `MAX_STRIKES` decisions in a row, exits, closes its output, or
+stops reading is done for: the rest of the benchmark is played with the
+default action, and the program is ended at the end.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import queue
+import select
+import shlex
+import subprocess
+import threading
+import time
+from abc import ABC, abstractmethod
+from collections import deque
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+
+from tui_gym.benchmark.referee import Referee
+from tui_gym.core.arena.games import raw_observation, session_entry
+from tui_gym.core.protocol import parse_request, read_lines
+
+MAX_STRIKES = 3  # decisions in a row not made in time before a player counts as gone
+STARTUP_S = 10.0  # a program's first request may take this long (its start-up)
+EXIT_GRACE_S = 2.0  # after the last episode, time for a program to exit on end of input
+STDERR_LINES = 5  # lines of a program's stderr kept for the summary
+
+
+class PlayerError(ValueError):
+    """A player that cannot be set up (no such program, an unreadable agent file)."""
+
+
+@dataclass
+class PlayOutcome:
+    """How a player played: each decision's time, and how it ended, in words."""
+
+    decision_times: list[float] = field(default_factory=list)
+    status: str = "played every episode"
+    exit_code: int | None = None
+    stderr_tail: str = ""
+
+
+class Player(ABC):
+    """One player of a benchmark; `label` names it in results and the leaderboard."""
+
+    label: str
+
+    @abstractmethod
+    def play(self, referee: Referee, decision_timeout: float) -> PlayOutcome:
+        """Play every episode of `referee`'s benchmark."""
+
+
+class InProcessPlayer(Player):
+    """A player in this process: `choose` picks an action name in the current state."""
+
+    @abstractmethod
+    def choose(self, referee: Referee) -> str: ...
+
+    def play(self, referee: Referee, decision_timeout: float) -> PlayOutcome:
+        outcome = PlayOutcome()
+        while not referee.finished:
+            if referee.awaiting_reset:
+                referee.handle({"cmd": "reset"})
+                continue
+            started = time.perf_counter()
+            action = self.choose(referee)
+            spent = time.perf_counter() - started
+            outcome.decision_times.append(spent)
+            if spent > decision_timeout:
+                referee.timeout(decision_timeout)
+            else:
+                referee.handle({"cmd": "step", "action": action})
+        return outcome
+
+
+class RandomPlayer(InProcessPlayer):
+    """A uniformly random legal action (seeded)."""
+
+    label = "random"
+
+    def __init__(self, seed: int) -> None:
+        self.rng = np.random.default_rng(seed)
+
+    def choose(self, referee: Referee) -> str:
+        legal = referee.seat.legal_actions()
+        return legal[int(self.rng.integers(len(legal)))]
+
+
+class OptimalPlayer(InProcessPlayer):
+    """An optimal action from the exact hint (the unwrapped game's where the wrappers
+    change it beyond the exact figures; the default where the hint names none)."""
+
+    label = "optimal"
+
+    def choose(self, referee: Referee) -> str:
+        hint = referee.seat.hint()
+        best = hint.get("optimal_actions") or hint.get("unwrapped_optimal_actions")
+        return str(best[0]) if best else referee.default_action()
+
+
+class AgentPlayer(InProcessPlayer):
+    """A saved agent's greedy action (ties and unlearned states at random, seeded)."""
+
+    def __init__(self, path: str, seed: int) -> None:
+        from tui_gym.core.session import Session
+        from tui_gym.core.storage import StorageError
+
+        try:
+            self.session = Session.load(path)
+        except (StorageError, OSError, ValueError) as exc:
+            raise PlayerError(str(exc)) from None
+        self.label = f"agent {Path(path).name}"
+        self.rng = np.random.default_rng(seed)
+
+    def check_game(self, env_id: str) -> None:
+        """PlayerError unless the agent plays `env_id`."""
+        if self.session.env_id != env_id:
+            title = session_entry(self.session).title
+            raise PlayerError(f"the agent plays {title} ({self.session.env_id}), not {env_id}")
+
+    def choose(self, referee: Referee) -> str:
+        names = referee.entry.actions
+        greedy = self.session.greedy_actions_for(raw_observation(referee.seat.handler))
+        options = greedy[0] if greedy else tuple(range(len(names)))
+        return names[options[int(self.rng.integers(len(options)))]]
+
+
+_EOF = object()
+_TOO_LONG = object()
+_TIMEOUT = object()
+
+
+class _Program:
+    """A running program's pipes: its output read on a thread, a bounded tail of its
+    stderr, and writes to its input that give up when it stops reading."""
+
+    def __init__(self, argv: list[str]) -> None:
+        try:
+            self.process = subprocess.Popen(
+                argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE
+            )
+        except OSError as exc:
+            raise PlayerError(f"cannot start {argv[0]!r}: {exc.strerror or exc}") from None
+        assert self.process.stdin and self.process.stdout and self.process.stderr
+        self.lines: queue.Queue[tuple[float, Any]] = queue.Queue()  # (when read, line)
+        self.stderr: deque[str] = deque(maxlen=STDERR_LINES)
+        self._in = self.process.stdin.fileno()
+        os.set_blocking(self._in, False)
+        threading.Thread(target=self._read, args=(self.process.stdout,), daemon=True).start()
+        self._stderr_done = threading.Thread(
+            target=self._drain, args=(self.process.stderr,), daemon=True
+        )
+        self._stderr_done.start()
+
+    def _read(self, stream: IO[bytes]) -> None:
+        with contextlib.suppress(OSError, ValueError):
+            for line in read_lines(stream):
+                # Stamped here, as read: the main thread may be slow to take it.
+                self.lines.put((time.monotonic(), _TOO_LONG if line is None else line))
+        self.lines.put((time.monotonic(), _EOF))
+
+    def _drain(self, stream: IO[bytes]) -> None:
+        with contextlib.suppress(OSError, ValueError):
+            for line in read_lines(stream, limit=4096):
+                if line is not None and line.strip():
+                    self.stderr.append(line.decode("utf-8", "replace").rstrip()[:200])
+
+    def next_line(self, timeout: float) -> tuple[float, Any]:
+        """When it was read, and the next line it wrote (or `_EOF`, `_TOO_LONG`);
+        `_TIMEOUT` after `timeout` s without one."""
+        try:
+            return self.lines.get(timeout=timeout) if timeout > 0 else self.lines.get_nowait()
+        except queue.Empty:
+            return time.monotonic(), _TIMEOUT
+
+    def send(self, data: bytes, timeout: float) -> bool:
+        """Write `data` to its input; False if it stops reading (for `timeout` s) or is gone."""
+        deadline = time.monotonic() + timeout
+        view = memoryview(data)
+        while view:
+            try:
+                written = os.write(self._in, view)
+            except BlockingIOError:
+                written = 0
+            except OSError:  # a broken pipe: it closed its input or exited
+                return False
+            view = view[written:]
+            if view:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return False
+                select.select([], [self._in], [], left)
+        return True
+
+    def stop(self, grace: float) -> int | None:
+        """Close its input, give it `grace` s to exit, then end it; its exit code (None
+        when it had to be ended)."""
+        with contextlib.suppress(OSError):
+            self.process.stdin.close()  # type: ignore[union-attr]
+        try:
+            if grace <= 0:
+                raise subprocess.TimeoutExpired(self.process.args, grace)
+            code = self.process.wait(timeout=grace)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            self.process.wait()
+            code = None
+        self._stderr_done.join(timeout=1.0)
+        return code
+
+
+class ProcessPlayer(Player):
+    """A program speaking the JSON-lines protocol on its stdout (requests) and stdin."""
+
+    def __init__(self, command: str) -> None:
+        try:
+            self.argv = shlex.split(command)
+        except ValueError as exc:
+            raise PlayerError(f"cannot read the command {command!r}: {exc}") from None
+        if not self.argv:
+            raise PlayerError("the player's command is empty")
+        # Named by its words without their folders: "python heuristic_player.py".
+        self.label = " ".join(Path(word).name if "/" in word else word for word in self.argv)
+
+    def play(self, referee: Referee, decision_timeout: float) -> PlayOutcome:
+        program = _Program(self.argv)
+        outcome = PlayOutcome()
+        gone = ""
+        try:
+            gone = self._serve(program, referee, decision_timeout, outcome)
+            if gone:
+                episode = referee.started
+                outcome.status = f"{gone} in episode {episode} of {referee.episodes}; " \
+                                 "the rest was played with the default action"
+                while not referee.finished:
+                    referee.play_default(gone)
+        finally:
+            # A program done for but still running is ended at once; others may exit on
+            # their own once their input ends.
+            running = program.process.poll() is None
+            code = program.stop(0.0 if gone and running else EXIT_GRACE_S)
+        outcome.exit_code = code
+        outcome.stderr_tail = "\n".join(program.stderr)
+        if gone and code is None:
+            outcome.status += "; the program was ended"
+        if not gone:
+            outcome.status = "played every episode" + (
+                "; it did not exit at the end of its input and was ended" if code is None
+                else f"; exited with code {code}"
+            )
+        return outcome
+
+    def _serve(
+        self, program: _Program, referee: Referee, limit: float, outcome: PlayOutcome
+    ) -> str:
+        """Answer the program until the benchmark is over (""), or why it is gone."""
+        owed = 0  # requests of its still to come for decisions made for it
+        strikes = 0
+        pending = time.monotonic()
+        allowance = max(limit, STARTUP_S)
+        while not referee.finished:
+            left = pending + allowance - time.monotonic()
+            # Past the deadline it is a time-out, however many lines wait (a flood of
+            # requests that are not moves must not hold the clock).
+            received, item = program.next_line(left) if left > 0 else (0.0, _TIMEOUT)
+            if item is _TIMEOUT:
+                referee.timeout(limit)
+                owed += 1
+                strikes += 1
+                pending, allowance = time.monotonic(), limit
+                if strikes >= MAX_STRIKES:
+                    return f"it made no decision within {limit:g} s {strikes} times in a row"
+                continue
+            if item is _EOF:  # it exited, or closed its output: which, it says by exiting
+                try:
+                    code = program.process.wait(timeout=EXIT_GRACE_S)
+                except subprocess.TimeoutExpired:
+                    return "it closed its output"
+                return f"it exited with code {code}"
+            if item is _TOO_LONG:
+                referee.fouls.bad_requests += 1
+                answer, moved, cmd = {"error": "line too long: not read"}, False, None
+                late = False
+            else:
+                cmd = _command_of(item)
+                if owed and cmd in ("step", "reset"):
+                    owed -= 1
+                    answer = referee.current(
+                        "this request came after its decision time; the default was played "
+                        "for it, and this is the state now"
+                    )
+                    moved = late = True
+                else:
+                    answer, moved = referee.handle_line(item)
+                    late = False
+            if moved and cmd == "step" and not late:
+                outcome.decision_times.append(received - pending)
+            sending = time.monotonic()
+            if not program.send(_encode(answer), limit):
+                return "it stopped reading its input"
+            if moved:  # a new decision is due: its clock started as the answer went out
+                pending, allowance, strikes = sending, limit, 0
+        return ""
+
+
+def _command_of(line: bytes) -> str | None:
+    try:
+        cmd = parse_request(line).get("cmd")
+    except ValueError:
+        return None
+    return cmd if isinstance(cmd, str) else None
+
+
+def _encode(answer: dict[str, Any]) -> bytes:
+    import json
+
+    return (json.dumps(answer) + "\n").encode("ascii")

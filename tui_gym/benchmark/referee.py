@@ -1,0 +1,178 @@
+"""`Referee`: one game served to a player under benchmark rules.
+
+The player sends protocol requests (`tui-gym play GAME --jsonl`); the referee
+answers them as the game would, except that:
+
+- episode i (from 0) always starts on seed S+i: a `reset` takes no seed of
+  the player's, may only come once the episode is over, and after the last
+  episode is refused with "the benchmark is over" (a program's input simply
+  ends then);
+- `hint` is refused unless hints are allowed;
+- a step with an invalid action plays the default action (the first legal
+  one) and says so in the answer (`"invalid"`), so the episode goes on;
+- `timeout()` plays the default for a player that did not decide in time.
+
+Every move is judged against the exact optimum (the arena's `Seat`), and the
+referee counts what went wrong.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import Any
+
+from tui_gym.core.arena import Seat, SeatError, find_game, open_handler
+from tui_gym.core.arena.games import handler_params
+from tui_gym.core.protocol import parse_request
+
+
+@dataclass
+class Fouls:
+    """What a player got wrong, counted."""
+
+    invalid_actions: int = 0  # steps whose action was not valid (the default was played)
+    timeouts: int = 0  # decisions not made in time (the default was played)
+    defaulted: int = 0  # decisions made for a player that had exited or stopped answering
+    bad_requests: int = 0  # lines that were not a usable request, or a request out of turn
+    hints_refused: int = 0
+
+    def to_json(self) -> dict[str, int]:
+        return {
+            "invalid_actions": self.invalid_actions,
+            "timeouts": self.timeouts,
+            "defaulted": self.defaulted,
+            "bad_requests": self.bad_requests,
+            "hints_refused": self.hints_refused,
+        }
+
+
+@dataclass
+class Referee:
+    """Serves `episodes` episodes of a game, from seed `seed`, to one player."""
+
+    game: str
+    episodes: int
+    seed: int
+    params: dict[str, Any] = field(default_factory=dict)
+    wrappers: tuple[str, ...] = ()
+    allow_hints: bool = False
+
+    def __post_init__(self) -> None:
+        if self.episodes < 1:
+            raise ValueError(f"a benchmark needs at least one episode, got {self.episodes}")
+        self.entry = find_game(self.game)
+        handler = open_handler(self.entry.env_id, self.params, self.seed, self.wrappers)
+        self.params = handler_params(handler)
+        self.seat = Seat(handler, self.entry, self.seed)
+        self.fouls = Fouls()
+        self.started = 0  # episodes started so far
+
+    # -- the state of play ------------------------------------------------
+    @property
+    def finished(self) -> bool:
+        """Whether every episode has been played to its end."""
+        return self.started >= self.episodes and self.seat.done
+
+    @property
+    def awaiting_reset(self) -> bool:
+        return self.seat.done and not self.finished
+
+    def default_action(self) -> str:
+        return self.seat.legal_actions()[0]
+
+    def _transition(self) -> dict[str, Any]:
+        last = self.seat.last
+        assert last is not None
+        return dict(last)
+
+    def _start_episode(self) -> dict[str, Any]:
+        seed = self.seed + self.started
+        self.seat.reset(seed)
+        self.started += 1
+        return {**self._transition(), "episode": self.started, "seed": seed}
+
+    # -- requests -----------------------------------------------------------
+    def handle_line(self, line: bytes | str) -> tuple[dict[str, Any], bool]:
+        """Answer one request line; the answer, and whether it moved the game on (a step
+        or the next episode's deal)."""
+        try:
+            request = parse_request(line)
+        except ValueError as exc:
+            self.fouls.bad_requests += 1
+            return {"error": str(exc)}, False
+        return self.handle(request)
+
+    def handle(self, request: dict[str, Any]) -> tuple[dict[str, Any], bool]:
+        """Answer one request object; the answer, and whether it moved the game on."""
+        cmd = request.get("cmd")
+        moved = False
+        if cmd == "reset":
+            answer, moved = self._reset()
+        elif cmd == "step":
+            answer, moved = self._step(request)
+        elif cmd == "hint" and not self.allow_hints:
+            self.fouls.hints_refused += 1
+            answer = {"error": "hints are off during a benchmark (--allow-hints turns them on)"}
+        else:
+            answer = self.seat.handler.handle(json.dumps(request))
+            if "error" in answer:
+                self.fouls.bad_requests += 1
+        if "id" in request and "id" not in answer:
+            answer = {"id": request["id"], **answer}
+        return answer, moved
+
+    def _reset(self) -> tuple[dict[str, Any], bool]:
+        if self.finished:
+            self.fouls.bad_requests += 1
+            return {"error": f"the benchmark is over: {self.episodes} episodes played"}, False
+        if not self.seat.done:
+            self.fouls.bad_requests += 1
+            return {"error": "the episode is not over: a benchmark plays every episode to "
+                             "its end"}, False
+        return self._start_episode(), True
+
+    def _step(self, request: dict[str, Any]) -> tuple[dict[str, Any], bool]:
+        if self.seat.last is None or self.seat.done:
+            self.fouls.bad_requests += 1
+            word = "the benchmark is over" if self.finished else "the episode is over"
+            return {"error": f"{word}: no move to make (reset starts the next episode)"}, False
+        action = request.get("action")
+        try:
+            name = self.seat.action_name(action)  # type: ignore[arg-type]
+        except SeatError as exc:
+            self.fouls.invalid_actions += 1
+            default = self.default_action()
+            self.seat.step(default)
+            return {**self._transition(), "invalid": f"{exc}; played {default}"}, True
+        self.seat.step(name)
+        return self._transition(), True
+
+    def timeout(self, limit: float) -> dict[str, Any]:
+        """Play for a player that did not decide within `limit` seconds: the default
+        move, or the next episode's deal; the state it leads to."""
+        self.fouls.timeouts += 1
+        return self._play_default(f"no decision within {limit:g} s")
+
+    def play_default(self, why: str) -> dict[str, Any]:
+        """Play for a player that is gone (exited, or stopped answering)."""
+        self.fouls.defaulted += 1
+        return self._play_default(why)
+
+    def _play_default(self, why: str) -> dict[str, Any]:
+        if self.finished:
+            raise SeatError("the benchmark is over")
+        if self.seat.done:
+            return {**self._start_episode(), "late": f"{why}: the next episode was dealt"}
+        default = self.default_action()
+        self.seat.step(default)
+        return {**self._transition(), "late": f"{why}: played {default}"}
+
+    def current(self, note: str) -> dict[str, Any]:
+        """The state now, with a note (for a request the referee answered for the player)."""
+        if self.seat.last is None:
+            return {"error": note}
+        return {**self._transition(), "late": note}
+
+    def close(self) -> None:
+        self.seat.close()

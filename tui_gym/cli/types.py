@@ -1,0 +1,53 @@
+"""argparse types: numbers read as `Param`s read them (ASCII digits only; a value out of
+range says so) and file names, each failing with one clear line."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Callable
+
+from tui_gym.core.params import read_number, shown_value
+
+__all__ = ["MAX_SEED", "file_name", "finite_number", "int_in", "positive_int", "seed_number"]
+
+MAX_SEED = 2**63 - 2**32  # room for the seeds derived from it (evaluation adds to it)
+
+
+def int_in(minimum: int, maximum: int, noun: str) -> Callable[[str], int]:
+    """An argparse type: an integer (ASCII digits, `_` allowed) in [minimum, maximum]."""
+
+    def parse(text: str) -> int:
+        value = read_number(text)
+        if value is None or math.isnan(value) or (math.isfinite(value) and value % 1):
+            raise argparse.ArgumentTypeError(f"expected {noun}, got {shown_value(text)}")
+        if not minimum <= value <= maximum:
+            raise argparse.ArgumentTypeError(
+                f"{shown_value(text)} is out of range: expected {noun}"
+            )
+        return int(value)
+
+    return parse
+
+
+positive_int = int_in(1, 10**9, "a positive integer up to 1,000,000,000")
+seed_number = int_in(0, MAX_SEED, f"an integer in [0, {MAX_SEED}]")
+
+
+def finite_number(text: str) -> float:
+    """An argparse type: a finite number (ASCII digits)."""
+    value = read_number(text)
+    if value is None or math.isnan(value):
+        raise argparse.ArgumentTypeError(f"expected a number, got {shown_value(text)}")
+    if math.isinf(value):
+        raise argparse.ArgumentTypeError(
+            f"{shown_value(text)} is out of range: expected a finite number"
+        )
+    return float(value)
+
+
+def file_name(text: str) -> str:
+    """An argparse type: a file name, which cannot be empty."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a file name, got an empty one")
+    return text

@@ -1,0 +1,121 @@
+"""The arena's one seam to the games: the catalog, and a game's protocol handler.
+
+Everything else in the arena talks to a game only through the `JsonlPlayer`
+that `open_handler` returns (reset, step, render, hint, spaces), so a change
+in where games live changes this module alone.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from tui_gym.core.params import Param
+from tui_gym.core.protocol import JsonlPlayer
+from tui_gym.games import GAMES, Game, game_for, resolve_env_id
+
+
+@dataclass(frozen=True)
+class GameEntry:
+    """One registered game as a program sees it: names, actions and parameters."""
+
+    name: str  # the short alias, e.g. "blackjack"
+    title: str
+    env_id: str
+    actions: tuple[str, ...]
+    params: tuple[Param, ...]
+    description: str
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "title": self.title,
+            "env_id": self.env_id,
+            "actions": list(self.actions),
+            "parameters": [
+                {
+                    "name": p.name,
+                    "type": p.kind.__name__,
+                    "default": p.default,
+                    "range": p.describe_range(),
+                    "help": p.help,
+                }
+                for p in self.params
+            ],
+            "description": self.description,
+        }
+
+
+def _entry(game: Game) -> GameEntry:
+    return GameEntry(
+        name=game.name,
+        title=game.title,
+        env_id=game.env_id,
+        actions=tuple(game.action_names),
+        params=tuple(game.params),
+        description=game.description,
+    )
+
+
+def catalog() -> list[GameEntry]:
+    """Every registered game, in the registry's order."""
+    return [_entry(game) for game in GAMES]
+
+
+def find_game(name: str) -> GameEntry:
+    """The game a short alias or Gymnasium id names; ValueError listing the games if none."""
+    if not isinstance(name, str) or not name.strip():
+        raise ValueError(f"name a game: one of {', '.join(e.name for e in catalog())}")
+    return _entry(game_for(resolve_env_id(name)))
+
+
+def open_handler(
+    name: str,
+    params: Mapping[str, Any] | None = None,
+    seed: int | None = None,
+    wrappers: Sequence[str] = (),
+) -> JsonlPlayer:
+    """A protocol handler playing game `name` with `params` and `wrappers` (specs as
+    `--wrapper` takes them); ValueError with one clear line for a bad game, parameter
+    or wrapper."""
+    from tui_gym.core.session import Session
+    from tui_gym.core.wrappers import parse_wrapper_spec
+
+    entry = find_game(name)
+    choices = tuple(parse_wrapper_spec(spec) for spec in wrappers)
+    session = Session(
+        env_id=entry.env_id, env_kwargs=dict(params or {}), choices=choices, seed=seed or 0
+    )
+    if session.skipped:
+        session.env.close()
+        reasons = "; ".join(reason for _, reason in session.skipped)
+        raise ValueError(f"wrapper does not fit {entry.title}: {reasons}")
+    return JsonlPlayer(session, seed=seed)
+
+
+def close_handler(handler: JsonlPlayer) -> None:
+    """Close the envs a handler holds (its game's and its session's)."""
+    handler.game.close()
+    handler.session.env.close()
+
+
+def handler_params(handler: JsonlPlayer) -> dict[str, Any]:
+    """The game's parameters a handler plays with, defaults filled in."""
+    return dict(handler.session.env_kwargs)
+
+
+def session_entry(session: Any) -> GameEntry:
+    """The game a session (say, a saved agent's) plays."""
+    return _entry(session.game)
+
+
+def raw_observation(handler: JsonlPlayer) -> Any:
+    """The current observation as the env gave it (for an in-process agent's table)."""
+    last = handler.game.last
+    return None if last is None else last.observation
+
+
+def attach_recorder(handler: JsonlPlayer, recorder: Any) -> None:
+    """Have a recorder (`tui_gym.core.recording`) write every episode the handler plays."""
+    handler.game.recorder = recorder

@@ -1,0 +1,435 @@
+"""`read_recording`: a recording file read back, tolerantly, for replay.
+
+Every line is read on its own: a line that is not JSON, not a known record or
+missing a field it needs is skipped and its number kept; a file from another
+format version is read as far as its lines fit this one. Whatever went wrong
+comes back as one message (`Recording.message`), and everything that could
+be read replays. Episodes are numbered in the order they appear in the file,
+from 1.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO, Any
+
+from tui_gym.core.recording.format import (
+    END,
+    FORMAT_NAME,
+    FORMAT_VERSION,
+    HEADER,
+    START,
+    STEP,
+    VERDICTS,
+)
+
+MAX_LINE_BYTES = 1 << 20  # longer lines are skipped unread
+LINES_NAMED = 10  # bad lines named in the message; the rest are counted
+
+
+class RecordingError(ValueError):
+    """A file that cannot be replayed at all (not there, or no episode in it)."""
+
+
+@dataclass(frozen=True)
+class RecordedGame:
+    """A header: which game the episodes after it were played in."""
+
+    line: int
+    version: int | None
+    tui_gym: str
+    source: str
+    game: str
+    title: str
+    env_id: str
+    env_kwargs: Mapping[str, Any]
+    wrappers: tuple[str, ...]
+    seed: int | None
+    board: str
+    actions: tuple[str, ...]
+    episode_noun: str
+
+    def action_name(self, action: int) -> str:
+        return self.actions[action] if 0 <= action < len(self.actions) else str(action)
+
+
+UNKNOWN_GAME = RecordedGame(
+    0, None, "", "", "", "unknown game", "", {}, (), None, "", (), "episode"
+)
+
+
+@dataclass(frozen=True)
+class Frame:
+    """A state as recorded: the observation, the board's scene, the state in words."""
+
+    observation: Any
+    scene: Mapping[str, Any] | None
+    text: str | None
+    info: Mapping[str, Any]
+
+
+@dataclass(frozen=True)
+class Move:
+    """One recorded move and the coach's judgement of it."""
+
+    step: int
+    action: int
+    action_name: str
+    reward: float
+    terminated: bool
+    truncated: bool
+    verdict: str | None
+    regret: float | None
+    optimal: tuple[str, ...]
+    note: str = ""
+
+    @property
+    def done(self) -> bool:
+        return self.terminated or self.truncated
+
+
+@dataclass(frozen=True)
+class Position:
+    """One place to stand in an episode: a state, and the move that led to it (None first)."""
+
+    frame: Frame
+    move: Move | None
+
+
+@dataclass(frozen=True)
+class EpisodeEnd:
+    """An episode's end line."""
+
+    steps: int
+    episode_return: float
+    terminated: bool
+    truncated: bool
+    regret: float | None
+
+
+@dataclass
+class Episode:
+    """One recorded episode: its positions in order, from the reset (when recorded) on."""
+
+    index: int  # 1, 2, ... in the order of the file
+    game: RecordedGame
+    seed: int | None = None
+    started: bool = True  # False when its start line was lost (it begins at its first move)
+    positions: list[Position] = field(default_factory=list)
+    end: EpisodeEnd | None = None
+    recorded_number: int = 0  # the number the file gave it
+
+    @property
+    def moves(self) -> list[Move]:
+        return [p.move for p in self.positions if p.move is not None]
+
+    @property
+    def total_return(self) -> float:
+        if self.end is not None:
+            return self.end.episode_return
+        return sum(move.reward for move in self.moves)
+
+    @property
+    def finished(self) -> bool:
+        """Whether it ended by terminating or being truncated (not abandoned or cut off)."""
+        if self.end is not None:
+            return self.end.terminated or self.end.truncated
+        moves = self.moves
+        return bool(moves) and moves[-1].done
+
+    def running_regret(self, position: int) -> float | None:
+        """The sum of the regrets of the moves up to `position` (None when one is unknown)."""
+        total = 0.0
+        for place in self.positions[: position + 1]:
+            move = place.move
+            if move is None or move.verdict is None:
+                continue  # no decision to judge: costs nothing
+            if move.regret is None:
+                return None
+            total += move.regret
+        return total
+
+    def running_return(self, position: int) -> float:
+        return sum(p.move.reward for p in self.positions[: position + 1] if p.move is not None)
+
+    @property
+    def judged(self) -> tuple[int, int]:
+        """(moves judged optimal, moves judged) over the episode."""
+        verdicts = [m.verdict for m in self.moves if m.verdict is not None]
+        return sum(v == "optimal" for v in verdicts), len(verdicts)
+
+
+@dataclass
+class Recording:
+    """A recording file as read: its games and episodes, and what could not be read."""
+
+    path: Path
+    games: list[RecordedGame] = field(default_factory=list)
+    episodes: list[Episode] = field(default_factory=list)
+    skipped: list[int] = field(default_factory=list)  # numbers of the lines not read
+    versions: set[int | None] = field(default_factory=set)  # versions of headers not ours
+    missing_header: bool = False
+    lines: int = 0
+
+    @property
+    def message(self) -> str | None:
+        """One sentence on whatever was wrong with the file (None when nothing was)."""
+        parts = []
+        foreign = sorted(v for v in self.versions if v is not None)
+        if foreign:
+            shown = ", ".join(str(v) for v in foreign)
+            parts.append(
+                f"it was written in recording format version {shown} and this tui-gym reads "
+                f"version {FORMAT_VERSION}"
+            )
+        elif None in self.versions:
+            parts.append(f"its header names no format version this tui-gym reads "
+                         f"(version {FORMAT_VERSION})")
+        if self.missing_header:
+            parts.append("it does not start with a recording header")
+        if self.skipped:
+            count = len(self.skipped)
+            named = ", ".join(str(n) for n in self.skipped[:LINES_NAMED])
+            more = f" and {count - LINES_NAMED} more" if count > LINES_NAMED else ""
+            noun = "line" if count == 1 else "lines"
+            parts.append(f"{count} {noun} could not be read and {'was' if count == 1 else 'were'}"
+                         f" skipped ({noun} {named}{more})")
+        if not parts:
+            return None
+        return f"{self.path.name}: " + "; ".join(parts) + "; the rest replays."
+
+
+def read_recording(path: str | Path) -> Recording:
+    """Read a recording; RecordingError when it cannot be opened or holds no episode."""
+    path = Path(path)
+    if path.is_dir():
+        raise RecordingError(f"{path} is a folder, not a recording")
+    try:
+        handle = path.open("rb")
+    except OSError as exc:
+        raise RecordingError(f"{path}: {exc.strerror or exc}") from None
+    with handle:
+        recording = read_lines_of(handle, path)
+    if not recording.episodes:
+        if not recording.games and recording.skipped:
+            raise RecordingError(f"{path} is not a tui-gym recording (no line of it could be read)")
+        raise RecordingError(f"{path} holds no episode to replay")
+    return recording
+
+
+def read_lines_of(handle: IO[bytes], path: Path) -> Recording:
+    """Read a recording from an open binary file (see `read_recording`)."""
+    recording = Recording(path)
+    reader = _Reader(recording)
+    for number, line in _lines(handle):
+        recording.lines = number
+        if line is None:
+            recording.skipped.append(number)
+            continue
+        if not line.strip():
+            continue
+        try:
+            reader.take(number, line)
+        except _Bad:
+            recording.skipped.append(number)
+    reader.finish()
+    return recording
+
+
+class _Bad(Exception):
+    """A line that does not hold a usable record."""
+
+
+def _lines(handle: IO[bytes]) -> Iterator[tuple[int, bytes | None]]:
+    number = 0
+    while True:
+        line = handle.readline(MAX_LINE_BYTES + 1)
+        if not line:
+            return
+        number += 1
+        if len(line) > MAX_LINE_BYTES:
+            while line and not line.endswith(b"\n"):
+                line = handle.readline(MAX_LINE_BYTES)
+            yield number, None
+            continue
+        yield number, line
+
+
+def _constant(name: str) -> float:
+    raise _Bad(f"{name} is not a JSON number")
+
+
+class _Reader:
+    """Turns lines into games and episodes."""
+
+    def __init__(self, recording: Recording) -> None:
+        self.recording = recording
+        self.game: RecordedGame | None = None
+        self.episode: Episode | None = None
+
+    def take(self, number: int, line: bytes) -> None:
+        try:
+            record = json.loads(line.decode("utf-8"), parse_constant=_constant)
+        except (UnicodeDecodeError, ValueError, RecursionError):
+            raise _Bad from None
+        if not isinstance(record, dict):
+            raise _Bad
+        kind = record.get("type")
+        if kind == HEADER:
+            self._header(number, record)
+        elif kind == START:
+            self._start(record)
+        elif kind == STEP:
+            self._step(record)
+        elif kind == END:
+            self._end(record)
+        else:
+            raise _Bad
+
+    def finish(self) -> None:
+        self.episode = None
+
+    # --- records ---------------------------------------------------------------
+    def _header(self, number: int, record: dict[str, Any]) -> None:
+        version = record.get("version")
+        if record.get("format") != FORMAT_NAME:
+            version = None
+        if version != FORMAT_VERSION:
+            self.recording.versions.add(version if isinstance(version, int) else None)
+        game = RecordedGame(
+            line=number,
+            version=version if isinstance(version, int) else None,
+            tui_gym=_text(record.get("tui_gym")),
+            source=_text(record.get("source")),
+            game=_text(record.get("game")),
+            title=_text(record.get("title")) or _text(record.get("game")) or "unknown game",
+            env_id=_text(record.get("env_id")),
+            env_kwargs=record["env_kwargs"] if isinstance(record.get("env_kwargs"), dict) else {},
+            wrappers=tuple(str(w) for w in _list(record.get("wrappers"))),
+            seed=_int_or_none(record.get("seed")),
+            board=_text(record.get("board")),
+            actions=tuple(str(a) for a in _list(record.get("actions"))),
+            episode_noun=_text(record.get("episode_noun")) or "episode",
+        )
+        self.recording.games.append(game)
+        self.game = game
+        self.episode = None
+
+    def _current_game(self) -> RecordedGame:
+        if self.game is None:
+            self.recording.missing_header = True
+            self.game = UNKNOWN_GAME
+        return self.game
+
+    def _start(self, record: dict[str, Any]) -> None:
+        number = _int(record.get("episode"))
+        frame = _frame(record)
+        episode = Episode(
+            index=len(self.recording.episodes) + 1,
+            game=self._current_game(),
+            seed=_int_or_none(record.get("seed")),
+            positions=[Position(frame, None)],
+            recorded_number=number,
+        )
+        self.recording.episodes.append(episode)
+        self.episode = episode
+
+    def _step(self, record: dict[str, Any]) -> None:
+        number = _int(record.get("episode"))
+        game = self._current_game()
+        action = _int(record.get("action"))
+        verdict = record.get("verdict")
+        if verdict is not None and verdict not in VERDICTS:
+            raise _Bad
+        name = record.get("action_name")
+        move = Move(
+            step=_int(record.get("step")),
+            action=action,
+            action_name=name if isinstance(name, str) and name else game.action_name(action),
+            reward=_number(record.get("reward")),
+            terminated=_bool(record.get("terminated")),
+            truncated=_bool(record.get("truncated")),
+            verdict=verdict,
+            regret=_number_or_none(record.get("regret")),
+            optimal=tuple(str(a) for a in _list(record.get("optimal"))),
+            note=_text(record.get("note")),
+        )
+        frame = _frame(record)
+        episode = self.episode
+        if episode is None or episode.recorded_number != number or episode.end is not None:
+            # Its start line was lost: the episode begins at this move.
+            episode = Episode(
+                index=len(self.recording.episodes) + 1,
+                game=game,
+                started=False,
+                recorded_number=number,
+            )
+            self.recording.episodes.append(episode)
+            self.episode = episode
+        episode.positions.append(Position(frame, move))
+
+    def _end(self, record: dict[str, Any]) -> None:
+        number = _int(record.get("episode"))
+        end = EpisodeEnd(
+            steps=_int(record.get("steps")),
+            episode_return=_number(record.get("return")),
+            terminated=_bool(record.get("terminated")),
+            truncated=_bool(record.get("truncated")),
+            regret=_number_or_none(record.get("regret")),
+        )
+        episode = self.episode
+        if episode is not None and episode.recorded_number == number and episode.end is None:
+            episode.end = end
+        # An end whose episode was lost altogether has nothing to replay: it is let go.
+
+
+def _frame(record: dict[str, Any]) -> Frame:
+    scene = record.get("scene")
+    if scene is not None and not isinstance(scene, dict):
+        raise _Bad
+    info = record.get("info")
+    text = record.get("text")
+    return Frame(
+        observation=record.get("observation"),
+        scene=scene,
+        text=text if isinstance(text, str) else None,
+        info=info if isinstance(info, dict) else {},
+    )
+
+
+def _int(value: Any) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise _Bad
+    return value
+
+
+def _int_or_none(value: Any) -> int | None:
+    return None if value is None else _int(value)
+
+
+def _number(value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise _Bad
+    return float(value)
+
+
+def _number_or_none(value: Any) -> float | None:
+    return None if value is None else _number(value)
+
+
+def _bool(value: Any) -> bool:
+    if not isinstance(value, bool):
+        raise _Bad
+    return value
+
+
+def _text(value: Any) -> str:
+    return value if isinstance(value, str) else ""
+
+
+def _list(value: Any) -> Sequence[Any]:
+    return value if isinstance(value, list) else ()

@@ -1,0 +1,302 @@
+"""`Recorder`: writes the episodes a player plays to a recording file (see `format`).
+
+Front ends drive it with four calls, each one line in the file, written whole
+and flushed as it happens:
+
+    recorder = Recorder("games.jsonl", session, source="benchmark", seed=7)
+    recorder.start_episode(env, observation, seed=episode_seed)   # after env.reset
+    recorder.step(env, action, observation, reward, terminated, truncated)  # after env.step
+    recorder.end_episode()
+    recorder.close()
+
+`step` judges the move against the state the env was in before it (the
+recorder looks at each state as it is reached) and returns the `Judgement`.
+A `HumanGame` with a recorder attached calls `game_reset` and `game_step`
+itself; `use_session` starts a new header when the game, its parameters or
+its wrappers change. A write that fails (a full disk, a vanished folder)
+stops the recording, never the game: `failure` says why, and `on_failure`
+is told once.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol
+
+from tui_gym import __version__
+from tui_gym.core.recording.format import (
+    END,
+    FORMAT_NAME,
+    FORMAT_VERSION,
+    HEADER,
+    START,
+    STEP,
+    encode_line,
+)
+from tui_gym.core.recording.judge import NOTHING_KNOWN, Assessment, Judgement, MoveJudge
+from tui_gym.core.recording.writer import LineWriter
+
+if TYPE_CHECKING:
+    from tui_gym.core.play import HumanGame
+    from tui_gym.core.session import Session
+
+
+class GameRecorder(Protocol):
+    """What a `HumanGame` tells of its play: a `Recorder` or a `RecordingSwitch`."""
+
+    def game_reset(self, game: HumanGame, seed: int | None = None) -> None: ...
+
+    def game_step(self, game: HumanGame) -> None: ...
+
+
+def header_record(session: Session, *, source: str, seed: int | None) -> dict[str, Any]:
+    """The header line for a session's game, parameters and wrappers."""
+    from tui_gym.core.wrappers import format_wrapper_spec
+
+    game = session.game
+    return {
+        "type": HEADER,
+        "format": FORMAT_NAME,
+        "version": FORMAT_VERSION,
+        "tui_gym": __version__,
+        "source": source,
+        "game": game.name,
+        "title": game.title,
+        "env_id": session.env_id,
+        "env_kwargs": dict(session.env_kwargs),
+        "wrappers": [format_wrapper_spec(choice) for choice in session.applied],
+        "seed": seed,
+        "board": game.board,
+        "actions": list(game.action_names),
+        "episode_noun": game.episode_noun,
+        "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+    }
+
+
+@dataclass
+class _Episode:
+    """The episode being written."""
+
+    number: int
+    steps: int = 0
+    total: float = 0.0
+    regret: float | None = 0.0  # None once a move's regret was unknown
+    terminated: bool = False
+    truncated: bool = False
+    pending: Assessment = NOTHING_KNOWN  # the optimum's view of the state reached
+
+
+class Recorder:
+    """Records episodes of one session's game (or several, in turn) as JSON lines."""
+
+    def __init__(
+        self,
+        path: str | Path,
+        session: Session | None = None,
+        *,
+        source: str = "play",
+        seed: int | None = None,
+        append: bool = False,
+        on_failure: Callable[[str], None] | None = None,
+    ) -> None:
+        """Open `path` (emptied unless `append`; OSError when it cannot be opened) and,
+        given a session, write its header."""
+        self.path = Path(path)
+        self.source = source
+        self.seed = seed
+        self.on_failure = on_failure
+        self.failure: str | None = None
+        self.episodes = 0  # episodes started in this file by this recorder
+        self._writer: LineWriter | None = LineWriter(self.path, truncate=not append)
+        self._header_key: tuple[Any, ...] | None = None
+        self._played: Any = None
+        self._judge: MoveJudge | None = None
+        self._episode: _Episode | None = None
+        self._game: HumanGame | None = None  # whose episode is open (`game_reset`)
+        if session is not None:
+            self.use_session(session)
+
+    # --- state ---------------------------------------------------------------
+    @property
+    def active(self) -> bool:
+        """Still writing: neither closed nor stopped by a failed write."""
+        return self._writer is not None
+
+    @property
+    def episode_open(self) -> bool:
+        return self._episode is not None
+
+    # --- the calls -------------------------------------------------------------
+    def use_session(self, session: Session, seed: int | None = None) -> None:
+        """Record the session's game from here on: a new header when it differs from the last."""
+        if seed is not None:
+            self.seed = seed
+        key = (
+            session.env_id,
+            tuple(sorted((k, repr(v)) for k, v in session.env_kwargs.items())),
+            tuple(session.applied),
+        )
+        self._played = session.game
+        if key == self._header_key:
+            return
+        self.end_episode()
+        self._header_key = key
+        self._judge = MoveJudge(session.game, session.env_kwargs)
+        self._write(header_record(session, source=self.source, seed=self.seed))
+
+    def start_episode(
+        self,
+        env: Any,
+        observation: Any,
+        *,
+        seed: int | None = None,
+        info: Mapping[str, Any] | None = None,
+    ) -> None:
+        """A new episode has been reset to `observation` (an open one ends, abandoned)."""
+        self._need_session()
+        self.end_episode()
+        self.episodes += 1
+        episode = self._episode = _Episode(self.episodes)
+        record: dict[str, Any] = {"type": START, "episode": episode.number}
+        if seed is not None:
+            record["seed"] = seed
+        record.update(self._state(env, observation, info))
+        self._write(record)
+        episode.pending = self._assess(env, 0)
+
+    def step(
+        self,
+        env: Any,
+        action: int,
+        observation: Any,
+        reward: float,
+        terminated: bool,
+        truncated: bool,
+        *,
+        info: Mapping[str, Any] | None = None,
+        note: str | None = None,
+    ) -> Judgement:
+        """Record one move (made on `env`, now in its resulting state); its judgement."""
+        episode = self._episode
+        if episode is None:
+            raise ValueError("no episode is being recorded: call start_episode first")
+        action = int(action)
+        judgement = episode.pending.judge(action)
+        episode.steps += 1
+        episode.total += float(reward)
+        if episode.regret is not None:
+            episode.regret = None if judgement.regret is None else episode.regret + judgement.regret
+        episode.terminated, episode.truncated = bool(terminated), bool(truncated)
+        names = self._played.action_names
+        record: dict[str, Any] = {
+            "type": STEP,
+            "episode": episode.number,
+            "step": episode.steps,
+            "action": action,
+            "action_name": names[action] if 0 <= action < len(names) else str(action),
+            "reward": float(reward),
+            "terminated": episode.terminated,
+            "truncated": episode.truncated,
+            **self._state(env, observation, info),
+            "verdict": judgement.verdict,
+            "regret": judgement.regret,
+            "optimal": [names[a] for a in judgement.optimal if 0 <= a < len(names)],
+        }
+        if note:
+            record["note"] = note
+        self._write(record)
+        done = episode.terminated or episode.truncated
+        episode.pending = NOTHING_KNOWN if done else self._assess(env, episode.steps)
+        return judgement
+
+    def end_episode(self) -> None:
+        """Write the open episode's end line (nothing when none is open)."""
+        episode, self._episode = self._episode, None
+        self._game = None
+        if episode is None:
+            return
+        self._write({
+            "type": END,
+            "episode": episode.number,
+            "steps": episode.steps,
+            "return": episode.total,
+            "terminated": episode.terminated,
+            "truncated": episode.truncated,
+            "regret": episode.regret,
+        })
+
+    def close(self) -> None:
+        """End the open episode (abandoned when unfinished) and close the file."""
+        self.end_episode()
+        if self._writer is not None:
+            writer, self._writer = self._writer, None
+            writer.close()
+
+    def __enter__(self) -> Recorder:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # --- what a HumanGame calls ------------------------------------------------
+    def game_reset(self, game: HumanGame, seed: int | None = None) -> None:
+        """`game` has just been reset (with `seed`, when one was given)."""
+        if game.last is None or not self.active:
+            return
+        self.use_session(game.session)
+        self.start_episode(game.env, game.last.observation, seed=seed, info=game.last.info)
+        self._game = game
+
+    def game_step(self, game: HumanGame) -> None:
+        """`game` has just made a move."""
+        last = game.last
+        if last is None or last.action is None or self._episode is None or game is not self._game:
+            return  # an episode whose start this recording did not see
+        self.step(game.env, last.action, last.observation, last.reward, last.terminated,
+                  last.truncated, info=last.info)
+        if last.done:
+            self.end_episode()
+
+    # --- helpers ---------------------------------------------------------------
+    def _need_session(self) -> None:
+        if self._played is None:
+            raise ValueError("no game to record: pass a session or call use_session first")
+
+    def _assess(self, env: Any, steps_taken: int) -> Assessment:
+        return self._judge.assess(env, steps_taken) if self._judge is not None else NOTHING_KNOWN
+
+    def _state(self, env: Any, observation: Any, info: Mapping[str, Any] | None) -> dict[str, Any]:
+        """The observation, the board's scene and the state in words."""
+        game = self._played
+        try:
+            data = game.states.json_observation(observation)
+        except Exception:
+            data = None
+        try:
+            scene: Any = game.states.scene(env)
+        except Exception:  # a recording keeps going without a picture
+            scene = None
+        try:
+            text: str | None = game.states.describe(observation)
+        except Exception:  # a wrapper reshaped the observation
+            text = None
+        return {"observation": data, "scene": scene, "text": text, "info": dict(info or {})}
+
+    def _write(self, record: dict[str, Any]) -> None:
+        writer = self._writer
+        if writer is None:
+            return
+        try:
+            writer.write(encode_line(record))
+        except (OSError, ValueError) as exc:
+            reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+            self.failure = f"recording to {self.path} stopped: {reason}"
+            self._writer = None
+            with contextlib.suppress(OSError):
+                writer.close()
+            if self.on_failure is not None:
+                self.on_failure(self.failure)

@@ -1,0 +1,87 @@
+"""`RecordingSwitch`: recording that a person turns on and off while playing.
+
+The switch stands where a `HumanGame` expects its recorder, on and off alike:
+while on, each reset and move goes to a `Recorder`; while off, nothing is
+written. Turned on, it records to the file it was given (`tui-gym --record
+PATH`) or else to a new `tui-gym-GAME-TIME.jsonl` in the current folder, and
+every later turn on adds to that same file. An episode under way when it is
+turned on is recorded from its next reset, unless no move has been made yet.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from tui_gym.core.recording.format import SUFFIX
+from tui_gym.core.recording.recorder import Recorder
+
+if TYPE_CHECKING:
+    from tui_gym.core.play import HumanGame
+
+
+def default_path(game: str, folder: Path | None = None) -> Path:
+    """`tui-gym-blackjack-20250101-120000.jsonl` in `folder` (the current one by default)."""
+    stamp = time.strftime("%Y%m%d-%H%M%S")
+    return (folder or Path.cwd()) / f"tui-gym-{game}-{stamp}{SUFFIX}"
+
+
+class RecordingSwitch:
+    """Records a person's games while on; `path` is the file it writes (or will)."""
+
+    def __init__(
+        self,
+        path: str | Path | None = None,
+        *,
+        source: str = "app",
+        on_failure: Callable[[str], None] | None = None,
+    ) -> None:
+        self.path = Path(path) if path is not None else None
+        self.source = source
+        self.on_failure = on_failure
+        self.recorder: Recorder | None = None
+        self._used = False  # the file has been written once: later turns add to it
+
+    @property
+    def on(self) -> bool:
+        return self.recorder is not None and self.recorder.active
+
+    def turn_on(self, game: HumanGame) -> Path:
+        """Start recording `game` (OSError when the file cannot be opened); the file's path."""
+        if self.on:
+            assert self.path is not None
+            return self.path
+        path = self.path or default_path(game.game.name)
+        self.recorder = Recorder(
+            path, game.session, source=self.source, seed=game.seed, append=self._used,
+            on_failure=self._failed,
+        )
+        self.path, self._used = path, True
+        last = game.last
+        if last is not None and last.steps == 0 and not last.done:
+            self.recorder.game_reset(game)  # no move made yet: this episode is recorded whole
+        return path
+
+    def turn_off(self) -> Path | None:
+        """Stop recording (an unfinished episode ends as abandoned); the file, if one was on."""
+        recorder, self.recorder = self.recorder, None
+        if recorder is None:
+            return None
+        recorder.close()
+        return recorder.path
+
+    def _failed(self, message: str) -> None:
+        self.recorder = None
+        if self.on_failure is not None:
+            self.on_failure(message)
+
+    # --- what a HumanGame calls ------------------------------------------------
+    def game_reset(self, game: HumanGame, seed: int | None = None) -> None:
+        if self.recorder is not None:
+            self.recorder.game_reset(game, seed)
+
+    def game_step(self, game: HumanGame) -> None:
+        if self.recorder is not None:
+            self.recorder.game_step(game)

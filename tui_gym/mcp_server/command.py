@@ -1,0 +1,42 @@
+"""The `tui-gym mcp` sub-command: its flags, and starting the server (or saying how to
+install the SDK when it is missing)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from tui_gym.mcp_server import INSTALL_HINT
+
+EXIT_USAGE = 2
+
+
+def add_parser(sub: Any, int_type: Any, float_type: Any) -> None:
+    """Add `mcp` to the sub-command parsers `sub`."""
+    mcp = sub.add_parser(
+        "mcp", help="serve the games to language models (MCP over stdio)",
+        description="A Model Context Protocol server over stdin/stdout: tools to list the "
+        "games, start one, observe, step, hint, and score against the exact optimum.",
+    )
+    mcp.add_argument("--no-hints", action="store_true",
+                     help="refuse the hint tool and hide verdicts (for fair benchmarks)")
+    mcp.add_argument("--max-games", type=int_type, default=8, metavar="N",
+                     help="games running at once (default 8)")
+    mcp.add_argument("--idle-timeout", type=float_type, default=600.0, metavar="S",
+                     help="seconds after which an idle game is closed (default 600)")
+
+
+def cmd_mcp(args: argparse.Namespace, out: Any) -> int:
+    if not args.idle_timeout > 0:
+        sys.stderr.write("tui-gym: error: --idle-timeout must be a positive number of seconds\n")
+        return EXIT_USAGE
+    try:
+        from tui_gym.mcp_server.server import run
+    except ImportError as exc:
+        if (exc.name or "").partition(".")[0] != "mcp":
+            raise
+        sys.stderr.write(INSTALL_HINT + "\n")
+        return EXIT_USAGE
+    run(args.max_games, args.idle_timeout, hints=not args.no_hints)
+    return 0

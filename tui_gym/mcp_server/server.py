@@ -1,0 +1,193 @@
+"""The MCP server: each tool is a thin call into a `GameTable` of the arena.
+
+Tools: `list_games`, `start_game`, `observe`, `step`, `reset`, `hint`,
+`score` and `end_game`. A refused call raises the SDK's `ToolError`, which the
+client gets as an error result with the message; the server goes on. Tools are
+coroutines that never wait, so calls run one at a time on the event loop and
+the table needs no lock.
+
+With `hints` off the `hint` tool refuses, and a move's verdict and the running
+episode's figures stay hidden until the episode ends (`score` then counts
+finished episodes only), so a player cannot read the optimum off its answers.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Annotated, Any
+
+import anyio
+from mcp.server.mcpserver import MCPServer
+from mcp.server.mcpserver.exceptions import ToolError
+from mcp.server.stdio import stdio_server
+from mcp.types import CallToolResult, TextContent
+from pydantic import Field
+
+from tui_gym import __version__
+from tui_gym.core.arena import GameTable, Seat, SeatError, TableError, catalog
+from tui_gym.mcp_server.pipes import open_pipes
+
+INSTRUCTIONS = """\
+Games of tui-gym (Blackjack, GridWorld, ...) to play move by move, scored against the exact
+optimum. Call list_games for the games, their parameters and action names; start_game returns
+a game id and the first observation; step plays an action (by name or number); reset deals a
+new episode; score gives the returns per episode and the exact decision regret (the expected
+return each move gave up against the optimal move). Idle games expire."""
+
+GameId = Annotated[int, Field(description="the id start_game returned")]
+
+
+def _result(data: dict[str, Any]) -> CallToolResult:
+    """A tool's answer: the data as structured content, and as compact JSON text for
+    clients that read text (no output schema, so neither side re-validates it)."""
+    return CallToolResult(
+        content=[TextContent(type="text", text=json.dumps(data))], structured_content=data
+    )
+
+
+def _refused(exc: Exception) -> ToolError:
+    return ToolError(str(exc))
+
+
+def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
+    """An `MCPServer` whose tools play the games of `table`."""
+    server: MCPServer = MCPServer(
+        name="tui-gym",
+        instructions=INSTRUCTIONS,
+        version=__version__,
+        log_level="WARNING",
+    )
+
+    def seat_of(game_id: int) -> Seat:
+        try:
+            return table.get(game_id)
+        except TableError as exc:
+            raise _refused(exc) from None
+
+    def state(game_id: int, seat: Seat) -> dict[str, Any]:
+        data: dict[str, Any] = {"game_id": game_id, "game": seat.entry.name}
+        data.update(seat.observe())
+        return data
+
+    @server.tool()
+    async def list_games() -> CallToolResult:
+        """The games: name, parameters (type, default, range) and action names."""
+        return _result({
+            "games": [entry.to_json() for entry in catalog()],
+            "hints": hints,
+            "max_games": table.max_games,
+            "idle_timeout_seconds": table.idle_timeout,
+        })
+
+    @server.tool()
+    async def start_game(
+        game: Annotated[str, Field(description="a game name from list_games, e.g. 'blackjack'")],
+        parameters: Annotated[
+            dict[str, Any] | None,
+            Field(description="the game's parameters by name, e.g. {'size': 6}; defaults if "
+                  "omitted"),
+        ] = None,
+        seed: Annotated[
+            int | None, Field(description="seed of the first episode (random if omitted)", ge=0)
+        ] = None,
+        wrappers: Annotated[
+            list[str] | None,
+            Field(description="Gymnasium wrappers as 'Name' or 'Name:key=value', innermost first"),
+        ] = None,
+    ) -> CallToolResult:
+        """Start a game and deal its first episode; its game id and first observation."""
+        try:
+            game_id, seat = table.start(game, parameters, seed, wrappers or ())
+        except (TableError, SeatError, ValueError) as exc:
+            raise _refused(exc) from None
+        return _result(state(game_id, seat))
+
+    @server.tool()
+    async def observe(game_id: GameId) -> CallToolResult:
+        """The state: as data and as text, the legal actions, and whether the episode is done."""
+        seat = seat_of(game_id)
+        return _result(state(game_id, seat))
+
+    @server.tool()
+    async def step(
+        game_id: GameId,
+        action: Annotated[int | str, Field(description="an action's name or number")],
+    ) -> CallToolResult:
+        """Play one action; returns the new state, the reward and whether the episode is done."""
+        seat = seat_of(game_id)
+        try:
+            answer, verdict = seat.step(action)
+        except SeatError as exc:
+            raise _refused(exc) from None
+        data = state(game_id, seat)
+        data["reward"] = answer["reward"]
+        if hints:
+            data["verdict"] = verdict.to_json()
+        return _result(data)
+
+    @server.tool()
+    async def reset(
+        game_id: GameId,
+        seed: Annotated[
+            int | None, Field(description="seed of the new episode (continues if omitted)", ge=0)
+        ] = None,
+    ) -> CallToolResult:
+        """Deal a new episode of the game (an unfinished one is left out of the score)."""
+        seat = seat_of(game_id)
+        try:
+            seat.reset(seed)
+        except SeatError as exc:
+            raise _refused(exc) from None
+        return _result(state(game_id, seat))
+
+    @server.tool()
+    async def hint(game_id: GameId) -> CallToolResult:
+        """The exact optimum here: the optimal actions and each action's exact expected return."""
+        if not hints:
+            raise ToolError("hints are off on this server (it was started with --no-hints)")
+        seat = seat_of(game_id)
+        try:
+            return _result({"game_id": game_id, **seat.hint()})
+        except SeatError as exc:
+            raise _refused(exc) from None
+
+    @server.tool()
+    async def score(game_id: GameId) -> CallToolResult:
+        """Returns per episode, exact decision regret so far, decisions and agreement."""
+        seat = seat_of(game_id)
+        return _result({"game_id": game_id, "game": seat.entry.name,
+                        **seat.score.to_json(running=hints)})
+
+    @server.tool()
+    async def end_game(game_id: GameId) -> CallToolResult:
+        """End a game and free its place; returns its final score."""
+        try:
+            seat = table.end(game_id)
+        except TableError as exc:
+            raise _refused(exc) from None
+        return _result({"game_id": game_id, "game": seat.entry.name,
+                        **seat.score.to_json(running=hints)})
+
+    return server
+
+
+async def serve_stdio(server: MCPServer) -> None:
+    """Serve on stdin/stdout until the client closes them: on the event loop where they
+    are pipes (`pipes`), else through the SDK's own stdio transport."""
+    lowlevel = getattr(server, "_lowlevel_server", None)
+    async with open_pipes() as pipes:
+        if pipes is None or lowlevel is None:
+            await server.run_stdio_async()
+            return
+        lines, writer = pipes
+        async with stdio_server(stdin=lines, stdout=writer) as (read_stream, write_stream):  # type: ignore[arg-type]
+            await lowlevel.run(read_stream, write_stream, lowlevel.create_initialization_options())
+
+
+def run(max_games: int, idle_timeout: float, hints: bool) -> None:
+    """Serve on stdin/stdout until the client closes them."""
+    table = GameTable(max_games=max_games, idle_timeout=idle_timeout)
+    try:
+        anyio.run(serve_stdio, build_server(table, hints=hints))
+    finally:
+        table.close()

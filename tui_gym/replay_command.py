@@ -1,0 +1,106 @@
+"""`--record PATH` for the commands that play, and the `replay` command.
+
+`add_record_option` puts `--record PATH` on a parser; `open_recorder` opens
+the file for a session (one clear line when it cannot be written). `replay
+PATH` reads a recording (bad lines skipped, see `tui_gym.core.recording`) and
+opens the app on it, on the game of its first episode.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import TYPE_CHECKING, Any
+
+from rich.console import Console
+
+from tui_gym.cli.output import CliError
+from tui_gym.cli.types import file_name as _path
+
+if TYPE_CHECKING:
+    from tui_gym.core.recording import Recorder, Recording
+    from tui_gym.core.session import Session
+
+RECORD_HELP = "record every episode to this file, as JSON lines (tui-gym replay PATH plays it back)"
+
+
+def add_record_option(parser: argparse.ArgumentParser, dest: str = "record") -> None:
+    """`--record PATH` on `parser`."""
+    parser.add_argument("--record", type=_path, metavar="PATH", dest=dest, help=RECORD_HELP)
+
+
+def open_recorder(
+    path: str, session: Session, *, source: str, seed: int | None = None
+) -> Recorder:
+    """A `Recorder` writing `session`'s episodes to `path`; CliError when it cannot be opened.
+
+    A write that fails later stops the recording with one line on stderr; the
+    command goes on.
+    """
+    import sys
+
+    from tui_gym.core.recording import Recorder
+
+    def failed(message: str) -> None:
+        sys.stderr.write(f"tui-gym: {message}\n")
+        sys.stderr.flush()
+
+    try:
+        return Recorder(path, session, source=source, seed=seed, on_failure=failed)
+    except IsADirectoryError:
+        raise CliError(f"--record {path}: is a folder; name a file") from None
+    except OSError as exc:
+        raise CliError(f"--record {path}: cannot write ({exc.strerror or exc})") from None
+
+
+def check_record_path(path: str) -> None:
+    """CliError unless `path` names a file that can be made in a folder that is there."""
+    from pathlib import Path
+
+    target = Path(path)
+    if target.is_dir():
+        raise CliError(f"--record {path}: is a folder; name a file")
+    if not target.parent.is_dir():
+        raise CliError(f"--record {path}: there is no folder {target.parent}")
+
+
+def add_replay_parser(sub: Any) -> None:
+    """The `replay` sub-command."""
+    replay = sub.add_parser(
+        "replay", help="step through a recording in the app (tui-gym --record / play --record)"
+    )
+    replay.add_argument("path", metavar="PATH", help="a recording (JSON lines)")
+
+
+def cmd_replay(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.core.recording import RecordingError, read_recording
+
+    try:
+        recording = read_recording(args.path)
+    except RecordingError as exc:
+        raise CliError(str(exc)) from None
+    try:
+        from tui_gym.ui.app import run_app
+    except ImportError as exc:  # pragma: no cover - only without the UI installed
+        raise CliError(f"the app is not available ({exc})") from None
+    return run_app(session=session_for(recording), replay=recording, runner=args.runner)
+
+
+def session_for(recording: Recording) -> Session | None:
+    """A session on the game of the recording's first episode (None when it cannot be built:
+    the app then opens on its default game, and the replay shows what was recorded)."""
+    from tui_gym.core.session import Session
+    from tui_gym.core.wrappers import parse_wrapper_spec
+
+    game = recording.episodes[0].game
+    try:
+        return Session(
+            env_id=game.env_id,
+            env_kwargs=dict(game.env_kwargs),
+            choices=tuple(parse_wrapper_spec(spec) for spec in game.wrappers),
+            seed=game.seed or 0,
+        )
+    except Exception:  # another version's game or wrapper: replay needs none of it
+        return None
+
+
+REPLAY_COMMANDS = {"replay": cmd_replay}

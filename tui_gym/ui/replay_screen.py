@@ -1,0 +1,416 @@
+"""`ReplayScreen`: step through a recording, move by move, with the coach's word on each move.
+
+The screen shows one position of one recorded episode at a time: the game's
+board drawing the recorded scene (the board kind the recording names, not
+interactive; where this tui-gym has no such board, the state in words), the
+move that led there with its reward, the coach's verdict and regret, the
+episode's running regret and return, and on the right the episode's moves,
+each marked ✓ or ✗ (click one, or move along the list, to stand there).
+
+Keys: → / ← (or l / h) one move forward / back, home / end the episode's
+first / last position, n / N (or ] / [) the next / previous episode, j asks
+for an episode's number, escape goes back to the app. The buttons under the
+board do the same with the mouse. Boards that draw a trail (the cells the
+agent left) get the episode's scenes from its start, so a step back draws
+what a step forward would.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+from rich.text import Text
+from textual import on
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Horizontal, Vertical
+from textual.content import Content
+from textual.events import Resize
+from textual.markup import escape
+from textual.screen import ModalScreen
+from textual.widget import Widget
+from textual.widgets import Button, Header, OptionList, Static
+from textual.widgets.option_list import Option
+
+from tui_gym.core.play import PlayStep
+from tui_gym.core.recording.games import game_named
+from tui_gym.core.recording.reader import Episode, Move, Position, Recording
+from tui_gym.games.words import format_reward
+from tui_gym.ui.help_screen import HelpScreen
+from tui_gym.ui.jump_screen import JumpScreen
+from tui_gym.ui.widgets.board_kinds import BOARDS
+from tui_gym.ui.widgets.boards import Board
+from tui_gym.ui.widgets.key_bar import KeyBar
+
+TRAIL_POSITIONS = 200  # scenes handed to a board before the one shown (its trail)
+NARROW_WIDTH = 100  # below this the list of moves gives its room to the board
+OBSERVATION_CHARS = 64
+SOURCES = {  # who played, by the recording's `source`
+    "app": "played in the app",
+    "play": "played by a program",
+    "benchmark": "a benchmark run",
+}
+
+
+_REPLAY_BOARDS: dict[type[Board], type[Board]] = {}
+
+
+def replay_board(kind: str, player: str) -> Board | None:
+    """A passive board of `kind` whose player is called `player` (None: no such board here).
+
+    A passive board calls its player "Agent"; in a replay it is whoever played."""
+    board_class = BOARDS.get(kind)
+    if board_class is None:
+        return None
+    replay_class = _REPLAY_BOARDS.get(board_class)
+    if replay_class is None:
+        replay_class = type(
+            f"Replay{board_class.__name__}",
+            (board_class,),
+            {"player_name": property(lambda self: self.replay_player), "KEEP_SHAPE": False},
+        )
+        _REPLAY_BOARDS[board_class] = replay_class
+    board = replay_class(interactive=False)
+    board.replay_player = player  # type: ignore[attr-defined]
+    return board
+
+
+def player_of(source: str) -> str:
+    """Who played, as a board names them: "You" in the app, else "Player"."""
+    return "You" if source == "app" else "Player"
+
+
+class ReplayButton(Button, can_focus=False):
+    """A compact button under the board; the keyboard stays where it was."""
+
+
+class ReplayScreen(ModalScreen[None]):
+    """A recording, one position at a time."""
+
+    DEFAULT_CSS = """
+    ReplayScreen { background: $background; layout: vertical; }
+    ReplayScreen #replay-title { height: auto; max-height: 2; padding: 0 1; }
+    ReplayScreen #replay-body { height: 1fr; }
+    ReplayScreen #replay-main { width: 1fr; height: 1fr; padding: 0 1; }
+    ReplayScreen #replay-board { height: 1fr; min-height: 7; }
+    ReplayScreen #replay-board > Board { height: 1fr; }
+    ReplayScreen #replay-words { height: 1fr; padding: 1 2; color: $text-muted; }
+    ReplayScreen #replay-status {
+        height: auto; padding: 0 1; border-left: outer $foreground 30%;
+    }
+    ReplayScreen #replay-status.-good { border-left: outer $success; }
+    ReplayScreen #replay-status.-bad { border-left: outer $error; }
+    ReplayScreen #replay-headline { text-style: bold; }
+    ReplayScreen #replay-coach.-good { color: $text-success; }
+    ReplayScreen #replay-coach.-bad { color: $text-error; }
+    ReplayScreen #replay-detail { color: $text-muted; }
+    ReplayScreen #replay-buttons { height: 1; align-horizontal: center; }
+    ReplayScreen ReplayButton { margin: 0 1; min-width: 8; }
+    ReplayScreen #replay-moves { width: 36; height: 1fr; }
+    ReplayScreen.-narrow #replay-moves { display: none; }
+    """
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("right,l", "step(1)", "Forward", key_display="→"),
+        Binding("left,h", "step(-1)", "Back", key_display="←"),
+        Binding("home", "edge(0)", "First", show=False),
+        Binding("end", "edge(1)", "Last", show=False),
+        Binding("n,right_square_bracket", "episode(1)", "Next episode", key_display="n"),
+        Binding("N,left_square_bracket", "episode(-1)", "Previous", key_display="N"),
+        Binding("j", "ask_episode", "Jump to…"),
+        Binding("question_mark,f1", "help", "Help", key_display="?"),
+        Binding("escape", "close", "Close replay", key_display="esc"),
+        Binding("q", "app.quit", "Quit"),
+    ]
+
+    def __init__(self, recording: Recording) -> None:
+        super().__init__()
+        self.recording = recording
+        self.episode_index = 0  # into recording.episodes
+        self.position = 0  # into the episode's positions
+        self.board: Board | None = None
+        self._words: Static | None = None  # the state in words, where there is no board
+        self._board_kind: tuple[str, str] | None = None  # (kind, player) of the board shown
+        self._listed: int | None = None  # the episode the move list shows
+
+    # --- layout ------------------------------------------------------------------
+    def compose(self) -> ComposeResult:
+        yield Header()
+        yield Static(id="replay-title")
+        with Horizontal(id="replay-body"):
+            with Vertical(id="replay-main"):
+                yield Vertical(id="replay-board")
+                with Vertical(id="replay-status"):
+                    yield Static(id="replay-headline")
+                    yield Static(id="replay-coach")
+                    yield Static(id="replay-detail")
+                with Horizontal(id="replay-buttons"):
+                    yield ReplayButton("⏮ episode", id="replay-previous-episode", compact=True)
+                    yield ReplayButton("◀ back", id="replay-back", compact=True)
+                    yield ReplayButton("forward ▶", id="replay-forward", compact=True)
+                    yield ReplayButton("episode ⏭", id="replay-next-episode", compact=True)
+            yield OptionList(id="replay-moves")
+        yield KeyBar()
+
+    def on_mount(self) -> None:
+        self.title = "tui-gym"
+        self.sub_title = f"Replay: {self.recording.path.name}"
+        self.set_class(self.app.size.width < NARROW_WIDTH, "-narrow")
+        self.show(0, 0)
+        self.query_one("#replay-moves", OptionList).focus()
+        message = self.recording.message
+        if message:
+            self.notify(message, title="Replay", severity="warning", timeout=12)
+
+    def on_resize(self, event: Resize) -> None:
+        self.set_class(event.size.width < NARROW_WIDTH, "-narrow")
+
+    # --- where we stand --------------------------------------------------------------
+    @property
+    def episode(self) -> Episode:
+        return self.recording.episodes[self.episode_index]
+
+    @property
+    def current(self) -> Position:
+        return self.episode.positions[self.position]
+
+    def show(self, episode_index: int, position: int) -> None:
+        """Stand at `position` of episode `episode_index` (both clamped) and draw it all."""
+        episodes = self.recording.episodes
+        episode_index = max(0, min(episode_index, len(episodes) - 1))
+        episode = episodes[episode_index]
+        position = max(0, min(position, len(episode.positions) - 1))
+        self.episode_index, self.position = episode_index, position
+        self._use_board(episode.game.board, player_of(episode.game.source))
+        self._draw_board()
+        self._show_title()
+        self._show_status()
+        self._show_moves()
+
+    # --- actions -------------------------------------------------------------------------
+    def action_step(self, delta: int) -> None:
+        last = len(self.episode.positions) - 1
+        target = self.position + delta
+        if 0 <= target <= last:
+            self.show(self.episode_index, target)
+        elif target > last and self.episode_index + 1 < len(self.recording.episodes):
+            self.show(self.episode_index + 1, 0)  # on into the next episode
+        elif target < 0 and self.episode_index > 0:
+            previous = self.recording.episodes[self.episode_index - 1]
+            self.show(self.episode_index - 1, len(previous.positions) - 1)
+
+    def action_edge(self, end: int) -> None:
+        self.show(self.episode_index, len(self.episode.positions) - 1 if end else 0)
+
+    def action_episode(self, delta: int) -> None:
+        self.show(self.episode_index + delta, 0)
+
+    def action_ask_episode(self) -> None:
+        noun = self.episode.game.episode_noun
+
+        def jump(number: int | None) -> None:
+            if number is not None:
+                self.show(number - 1, 0)
+
+        self.app.push_screen(
+            JumpScreen(len(self.recording.episodes), self.episode_index + 1, noun), jump
+        )
+
+    def action_help(self) -> None:
+        self.app.push_screen(HelpScreen([("Replay", self.key_help())]))
+
+    def action_close(self) -> None:
+        self.dismiss(None)
+
+    def key_help(self) -> list[tuple[str, str]]:
+        return [
+            ("→ / l", "one move forward (on into the next episode at the end)"),
+            ("← / h", "one move back"),
+            ("↑ / ↓", "along the list of moves (click one to stand there)"),
+            ("home / end", "the episode's start / its last move"),
+            ("n / ]", "the next episode"),
+            ("N / [", "the previous episode"),
+            ("j", "jump to an episode by its number"),
+            ("esc", "close the replay, back to the app"),
+            ("q", "quit"),
+        ]
+
+    @on(ReplayButton.Pressed)
+    def _pressed(self, event: Button.Pressed) -> None:
+        event.stop()
+        actions = {
+            "replay-previous-episode": lambda: self.action_episode(-1),
+            "replay-back": lambda: self.action_step(-1),
+            "replay-forward": lambda: self.action_step(1),
+            "replay-next-episode": lambda: self.action_episode(1),
+        }
+        action = actions.get(event.button.id or "")
+        if action is not None:
+            action()
+
+    @on(OptionList.OptionHighlighted, "#replay-moves")
+    def _highlighted(self, event: OptionList.OptionHighlighted) -> None:
+        event.stop()
+        if event.option_index != self.position:
+            self.show(self.episode_index, event.option_index)
+
+    # --- drawing ---------------------------------------------------------------------------
+    def _use_board(self, kind: str, player: str) -> None:
+        """The episode's kind of board (the state in words where there is none)."""
+        if (kind, player) == self._board_kind:
+            return
+        self._board_kind = (kind, player)
+        box = self.query_one("#replay-board", Vertical)
+        box.remove_children()
+        self.board = replay_board(kind, player)
+        self._words = None if self.board is not None else Static(id="replay-words")
+        widget: Widget | None = self.board or self._words
+        assert widget is not None
+        box.mount(widget)
+
+    def _draw_board(self) -> None:
+        episode, position = self.episode, self.position
+        here = episode.positions[position]
+        board = self.board
+        if board is None:
+            if self._words is not None:
+                words = here.frame.text or _observation_text(here.frame.observation)
+                self._words.update(Text(words))
+            return
+        reveal = here.move is not None and here.move.done
+        board.start_episode()
+        for place in episode.positions[max(0, position - TRAIL_POSITIONS) : position + 1]:
+            if place.frame.scene is not None:
+                try:
+                    board.show_scene(place.frame.scene, reveal=reveal if place is here else False)
+                except Exception:  # a scene this board cannot read: it keeps the last one
+                    continue
+        board.set_episode_over(reveal)
+
+    def _show_title(self) -> None:
+        recording, episode = self.recording, self.episode
+        game = episode.game
+        noun = game.episode_noun
+        chain = " → ".join(game.wrappers)
+        wrappers = f" [$text-muted]({escape(chain)})[/]" if chain else ""
+        moves = len(episode.moves)
+        optimal, judged = episode.judged
+        parts = [
+            f"[b]{escape(game.title)}[/]{wrappers}",
+            f"{escape(noun)} [b]{self.episode_index + 1}[/] of {len(recording.episodes):,}",
+            f"{moves} move{'' if moves == 1 else 's'}",
+            f"return {format_reward(episode.total_return)}"
+            + ("" if episode.finished else " [$text-warning](unfinished)[/]"),
+        ]
+        if judged:
+            parts.append(f"{optimal}/{judged} optimal")
+        total = episode.running_regret(len(episode.positions) - 1)
+        parts.append("regret " + ("–" if total is None else f"{total:.3f}"))
+        if game.source:
+            said = SOURCES.get(game.source, f"recorded by {game.source}")
+            parts.append(f"[$text-muted]{escape(said)}[/]")
+        self.query_one("#replay-title", Static).update(Content.from_markup("  ·  ".join(parts)))
+
+    def _show_status(self) -> None:
+        episode, here = self.episode, self.current
+        noun = episode.game.episode_noun
+        move = here.move
+        coach, tone = "", ""
+        if move is None:
+            seed = f" (seed {episode.seed})" if episode.seed is not None else ""
+            headline = f"Start of {noun} {self.episode_index + 1}{seed}"
+        else:
+            count = episode.end.steps if episode.end is not None else len(episode.moves)
+            headline = (
+                f"Move {move.step} of {count}: {move.action_name} → "
+                f"reward {format_reward(move.reward)}"
+            )
+            if move.done:
+                headline += f".  {self._outcome(episode, self.position)}"
+            coach, tone = self._coach_line(episode, move)
+        detail = [f"state: {here.frame.text or _observation_text(here.frame.observation)}"]
+        if move is not None:
+            detail.append(f"return so far {format_reward(episode.running_return(self.position))}")
+            if move.note:
+                detail.append(move.note)
+        if here.frame.scene is None and self.board is not None:
+            detail.append("no picture recorded here")
+        self.query_one("#replay-headline", Static).update(Text(headline))
+        coach_line = self.query_one("#replay-coach", Static)
+        coach_line.update(Text(coach))
+        coach_line.set_classes(tone)
+        self.query_one("#replay-detail", Static).update(Text("  ·  ".join(detail)))
+        self.query_one("#replay-status").set_classes(tone)
+
+    def _coach_line(self, episode: Episode, move: Move) -> tuple[str, str]:
+        """The coach's verdict, the move's regret and the episode's so far, and a tone."""
+        running = episode.running_regret(self.position)
+        so_far = "–" if running is None else f"{running:.3f}"
+        if move.verdict is None:
+            return f"no verdict: no optimum to judge this move by · regret so far {so_far}", ""
+        regret = (
+            "regret – (no exact values for this game)"
+            if move.regret is None
+            else f"regret {move.regret:.3f}"
+        )
+        if move.verdict == "optimal":
+            return f"✓ {move.action_name} was optimal · {regret} · regret so far {so_far}", "-good"
+        best = " or ".join(move.optimal) or "another move"
+        return (
+            f"✗ {move.action_name} was not optimal (the optimum: {best}) · {regret}"
+            f" · regret so far {so_far}",
+            "-bad",
+        )
+
+    def _outcome(self, episode: Episode, position: int) -> str:
+        """How the episode ended, in the game's words where this tui-gym knows the game."""
+        here = episode.positions[position]
+        move = here.move
+        assert move is not None
+        total = episode.running_return(position)
+        game = game_named(episode.game.env_id)
+        if game is not None:
+            last = PlayStep(here.frame.observation, move.reward, move.terminated, move.truncated,
+                            dict(here.frame.info), total, move.step, move.action)
+            first_info = dict(episode.positions[0].frame.info) if episode.started else {}
+            try:
+                return str(game.narrator.outcome_text(last, first_info, here.frame.scene or {}))
+            except Exception:  # a recording this version's words cannot read
+                pass
+        how = "Episode over" if move.terminated else "Truncated by the time limit"
+        return f"{how} after {move.step} moves, return {format_reward(total)}"
+
+    def _show_moves(self) -> None:
+        moves = self.query_one("#replay-moves", OptionList)
+        # Only a person moving along the list asks to stand elsewhere: what is set here
+        # posts nothing (a message from here would arrive after the next step, and undo it).
+        with moves.prevent(OptionList.OptionHighlighted):
+            if self._listed != self.episode_index:
+                moves.set_options(_move_option(place) for place in self.episode.positions)
+                self._listed = self.episode_index
+            if moves.highlighted != self.position:
+                moves.highlighted = self.position
+
+
+def _move_option(place: Position) -> Option:
+    move = place.move
+    if move is None:
+        return Option(Text.assemble(("start", "bold"), "  ", _cut(place.frame.text or "", 22)))
+    mark, style = "·", "dim"
+    if move.verdict == "optimal":
+        mark, style = "✓", "green"
+    elif move.verdict is not None:
+        mark, style = "✗", "red"
+    regret = "" if move.regret is None or move.verdict == "optimal" else f" {move.regret:.3f}"
+    return Option(
+        Text.assemble(f"{move.step:>3} ", (move.action_name, "bold"), " ", (mark, style),
+                      (regret, style), f"  {format_reward(move.reward)}" if move.reward else "")
+    )
+
+
+def _observation_text(observation: object) -> str:
+    return _cut(str(observation), OBSERVATION_CHARS)
+
+
+def _cut(text: str, width: int) -> str:
+    return text if len(text) <= width else text[: width - 1] + "…"

@@ -1,0 +1,126 @@
+"""The step-by-step panel: how the learner used the transition just taken.
+
+`StepPanel` shows one `StepEvent` and its `UpdateRecord`: the state, the
+action, the reward and the next state; the target as the algorithm forms it
+(Q-learning's max, SARSA's Q(s',a') with the a' it picked, Expected SARSA's
+expectation, Double Q's table, Monte Carlo's return at the episode's end,
+Dyna-Q's planning updates counted), each symbol with its value, the TD error
+and Q(s, a) before → after. `explain` writes those lines as plain text, so
+what the panel says can be read and tested without a screen.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from rich.text import Text
+from textual.widgets import Static
+
+from tui_gym.algorithms import UpdateRecord
+
+__all__ = ["StepPanel", "explain"]
+
+EPISODE_UPDATES_SHOWN = 4  # Monte Carlo: the first few of an episode's updates
+
+
+def _num(value: float) -> str:
+    return f"{value:+.4g}" if value else "0"
+
+
+def explain(
+    event: Any,
+    record: UpdateRecord,
+    action_names: Sequence[str],
+    describe: Callable[[Any], str],
+    title: str = "",
+) -> list[tuple[str, str]]:
+    """The panel's lines as (label, text) pairs for one step and its update record."""
+
+    def name(action: int | None) -> str:
+        if action is None:
+            return "-"
+        return action_names[action] if 0 <= action < len(action_names) else str(action)
+
+    def state(observation: Any, row: int) -> str:
+        try:
+            return describe(observation)
+        except Exception:  # wrappers may change what an observation looks like
+            return f"state {row}"
+
+    lines: list[tuple[str, str]] = []
+    where = f"episode {event.episode:,} · step {event.step:,}" if event.step else ""
+    lines.append(("", " · ".join(part for part in (title, where) if part)))
+    lines.append(("s", state(event.observation, record.state)))
+    lines.append(("a", f"{name(record.action)}    r = {_num(record.reward)}"))
+    ending = " (terminal)" if record.terminated else " (time limit)" if record.truncated else ""
+    lines.append(("s'", state(event.next_observation, record.next_state) + ending))
+    if record.table:
+        lines.append(("table", f"a coin picked Q_{record.table} to update"))
+    if record.target_action is not None:
+        what = "a' it will take" if record.next_action is not None and not record.table else (
+            "a* = argmax of the updated table"
+        )
+        lines.append(("a'", f"{name(record.target_action)}  ({what})"))
+    terms = "   ".join(f"{symbol} = {_num(value)}" for symbol, value in record.terms)
+    if record.target is None:
+        lines.append(("target", f"{record.formula}: nothing is updated before then"))
+        lines.append(("", terms))
+        lines.append(("Q(s,a)", f"{_num(record.before)} (unchanged)"))
+        return lines
+    lines.append(("target", f"{record.formula} = {_num(record.target)}"))
+    lines.append(("", terms))
+    if record.episode_return is not None:
+        count = len(record.episode_updates)
+        lines.append(("return", f"G = {_num(record.episode_return)} from the episode's start; "
+                                f"{count} update{'s' if count != 1 else ''} at its end"))
+        for update in record.episode_updates[:EPISODE_UPDATES_SHOWN]:
+            lines.append(("", f"s{update.state} {name(update.action)}: G = {_num(update.target)}"
+                              f"  Q {_num(update.before)} → {_num(update.after)}"))
+        if count > EPISODE_UPDATES_SHOWN:
+            lines.append(("", f"... {count - EPISODE_UPDATES_SHOWN} more"))
+    assert record.td_error is not None and record.step_size is not None
+    lines.append(("TD error", f"target − Q(s,a) = {_num(record.target)} − {_num(record.before)}"
+                              f" = {_num(record.td_error)}"))
+    lines.append(("Q(s,a)", f"{_num(record.before)} → {_num(record.after)}   "
+                            f"(step α = {record.step_size:.4g})"))
+    if record.planning_updates:
+        lines.append(("planning", f"then {record.planning_updates} simulated updates from the "
+                                  "model"))
+    return lines
+
+
+class StepPanel(Static):
+    """The explanation of the last step (see the module docstring)."""
+
+    DEFAULT_CSS = """
+    StepPanel {
+        height: auto;
+        border: round $primary-background-lighten-2;
+        border-title-color: $text-muted;
+        padding: 0 1;
+    }
+    """
+
+    def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
+        super().__init__("", id=id, classes=classes)
+        self.border_title = "The update, step by step"
+        self.lines: list[tuple[str, str]] = []
+
+    def show(self, lines: list[tuple[str, str]]) -> None:
+        """Show lines from `explain` (none: a hint how to get some)."""
+        self.lines = lines
+        if not lines:
+            self.update(Text("n: take one step and see how the learner uses it", style="dim"))
+            return
+        width = max(len(label) for label, _ in lines)
+        text = Text()
+        for i, (label, body) in enumerate(lines):
+            if i:
+                text.append("\n")
+            if i == 0:
+                text.append(body, style="bold")
+                continue
+            text.append(label.ljust(width) + "  ", style="bold" if label else "")
+            text.append(body)
+        self.update(text)

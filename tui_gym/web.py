@@ -1,0 +1,149 @@
+"""`tui-gym serve`: the app in a browser tab, through textual-serve (the `web` extra).
+
+Each browser tab that opens the page runs its own `tui-gym` app (with the
+options given before `serve`: `tui-gym --env gridworld serve`) in a process of
+its own, its screen drawn in the page by textual-serve's terminal. The server
+listens on 127.0.0.1 unless told otherwise, so only this machine reaches it;
+a host that is not a loopback address is refused unless `--public` says that
+everyone who can reach it may use the app (which can read and write files
+here, as the person who started it). The page's links follow the address the
+browser used, so it works under any name the server is reached by.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ipaddress
+import shlex
+import sys
+from typing import TYPE_CHECKING, Any
+
+from rich.console import Console
+
+from tui_gym.cli.output import CliError
+from tui_gym.cli.types import int_in as _int_in
+
+if TYPE_CHECKING:
+    from aiohttp import web
+
+DEFAULT_HOST = "127.0.0.1"
+DEFAULT_PORT = 8000
+INSTALL_HINT = "pip install 'tui-gym[web]'"
+
+
+def is_local(host: str) -> bool:
+    """Whether `host` is this machine only: `localhost` or a loopback address."""
+    name = host.strip().strip("[]").lower()
+    if name == "localhost" or name.endswith(".localhost"):
+        return True
+    try:
+        return ipaddress.ip_address(name).is_loopback
+    except ValueError:
+        return False
+
+
+def add_serve_parser(sub: Any) -> None:
+    """The `serve` sub-command."""
+    serve = sub.add_parser(
+        "serve", help="serve the app in a browser (needs the web extra)",
+        description="Serve the app in a browser tab, one app per tab, through textual-serve. "
+        "Options before `serve` (--env, --seed, --load, --runner) open each tab's app.",
+    )
+    serve.add_argument("--host", default=DEFAULT_HOST,
+                       help=f"address to listen on (default {DEFAULT_HOST}: this machine only)")
+    serve.add_argument("--port", type=_int_in(1, 65535, "a port number from 1 to 65535"),
+                       default=DEFAULT_PORT, help=f"port to listen on (default {DEFAULT_PORT})")
+    serve.add_argument("--public", action="store_true",
+                       help="allow a --host that other machines can reach")
+
+
+def check_host(host: str, public: bool) -> None:
+    """CliError for a host other machines may reach, unless `public`."""
+    if not host.strip():
+        raise CliError("--host is empty: give an address such as 127.0.0.1")
+    if not public and not is_local(host):
+        raise CliError(
+            f"--host {host} is not a local address: anyone who can reach it could use the "
+            "app, which reads and writes files here; add --public to serve it there anyway"
+        )
+
+
+def app_command(args: argparse.Namespace) -> str:
+    """The shell command that runs one app for one browser tab."""
+    command = [sys.executable, "-m", "tui_gym", "--env", args.env, "--seed", str(args.seed),
+               "--runner", args.runner]
+    if args.load:
+        command += ["--load", args.load]
+    return shlex.join(command)
+
+
+def cmd_serve(args: argparse.Namespace, out: Console) -> int:
+    if args.record is not None:
+        raise CliError("--record records the app in this terminal; it does not go with serve")
+    check_host(args.host, args.public)
+    try:
+        from textual_serve.server import Server
+    except ImportError:
+        raise CliError(f"tui-gym serve needs textual-serve: {INSTALL_HINT}") from None
+    if args.load:
+        from tui_gym.core.session import Session
+
+        Session.load(args.load)  # a file that cannot be opened is said now, not in each tab
+
+    class AppServer(Server):
+        """textual-serve's server, saying what it serves and to whom in its own words."""
+
+        def initialize_logging(self) -> None:
+            import logging
+
+            logging.basicConfig(level=logging.WARNING, format="%(message)s")
+
+        async def on_startup(self, app: web.Application) -> None:
+            """Nothing: what is served is said once the port listens (`serve`)."""
+
+        def serve(self, debug: bool = False) -> None:
+            import asyncio
+            import signal
+
+            from aiohttp import web
+
+            self.debug = debug
+            self.initialize_logging()
+            loop = asyncio.new_event_loop()
+            for signal_number in (signal.SIGINT, signal.SIGTERM):
+                loop.add_signal_handler(signal_number, self.request_exit)
+            web.run_app(
+                self._make_app(), host=self.host, port=self.port, handle_signals=False,
+                loop=loop, print=lambda *_: say_serving(args.host, args.port),
+            )
+
+        async def handle_index(self, request: web.Request) -> Any:
+            # The page's links (its websocket above all) go where the browser went; the
+            # page is drawn with no await in between, so no other request sees this one's.
+            self.public_url = f"{request.scheme}://{request.host}"
+            return await super().handle_index(request)
+
+    server = AppServer(app_command(args), host=args.host, port=args.port, title="tui-gym")
+    server.serve()
+    return 0
+
+
+def say_serving(host: str, port: int) -> None:
+    """The line that says the server listens: where, and to whom."""
+    url = f"http://{_url_host(host)}:{port}"
+    who = "on this machine only" if is_local(host) else (
+        "to anyone who can reach this machine (--public)"
+    )
+    sys.stdout.write(f"Serving tui-gym at {url} {who}. Open it in a browser; "
+                     "each tab runs its own app. Ctrl+C stops.\n")
+    sys.stdout.flush()
+
+
+def _url_host(host: str) -> str:
+    try:
+        return f"[{host}]" if ipaddress.ip_address(host.strip("[]")).version == 6 else host
+    except ValueError:
+        return host
+
+
+SERVE_COMMANDS = {"serve": cmd_serve}
