@@ -20,7 +20,7 @@ from functools import partial
 from typing import Any
 
 from tui_gym.algorithms import ALGORITHMS
-from tui_gym.bench import gap, learners, live, memory, programs, startup, throughput
+from tui_gym.bench import gap, learners, live, map_edit, memory, programs, startup, throughput
 from tui_gym.bench.figures import load_average
 from tui_gym.bench.results import BenchResults, MachineInfo
 
@@ -127,6 +127,8 @@ def run_bench(
           "and MCP steps/s",
           lambda: programs.measure(plan.separation_episodes, plan.pipe_seconds,
                                    plan.pipe_repeats))
+    stage("map_edit", f"map editor: an edit to the new optimum on {map_edit.MAP_SIDE}x"
+          f"{map_edit.MAP_SIDE} maps", lambda: tuple(map_edit.measure()))
     return BenchResults(
         quick=quick,
         seconds=time.perf_counter() - started,
@@ -139,5 +141,6 @@ def run_bench(
         algorithms=found.get("algorithms"),
         planning=found.get("planning"),
         programs=found.get("programs"),
+        map_edit=found.get("map_edit"),
         errors=errors,
     )

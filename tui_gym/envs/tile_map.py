@@ -317,7 +317,7 @@ class TileMapEnv(gym.Env[Any, Any]):
         self.desc = np.asarray([list(row) for row in rows], dtype="c")
         arrays = tile_arrays(rows, reward_of, slip_of, self.action_order, self.rules)
         self.arrays = arrays
-        self.P = _table(arrays)
+        self._table: dict[int, dict[int, list[tuple[float, int, float, bool]]]] | None = None
         self.initial_state_distrib = arrays.initial.copy()
         self.observation_space = spaces.Discrete(self.nrow * self.ncol)
         self.action_space = spaces.Discrete(4)
@@ -338,13 +338,24 @@ class TileMapEnv(gym.Env[Any, Any]):
             raise gym.error.ResetNeeded("TileMap: call reset() before step()")
         if not self.action_space.contains(action):
             raise ValueError(f"TileMap action must be an integer in [0, 3], got {action!r}")
-        outcomes = self.P[self.s][int(action)]
-        weights = np.array([o[0] for o in outcomes])
+        arrays, s, a = self.arrays, self.s, int(action)
+        weights = arrays.prob[s, a]
+        # Outcomes that cannot happen weigh 0, so they are never drawn: the draw is the
+        # one over the toy-text table `P`, which leaves them out.
         index = int(np.searchsorted(np.cumsum(weights), self.np_random.random(), side="right"))
-        p, state, reward, terminated = outcomes[min(index, len(outcomes) - 1)]
-        self.s = int(state)
-        self.lastaction = int(action)
-        return self.s, float(reward), bool(terminated), False, {"prob": float(p)}
+        index = min(index, int(np.flatnonzero(weights)[-1]))
+        self.s = int(arrays.next_state[s, a, index])
+        self.lastaction = a
+        return (self.s, float(arrays.reward[s, a, index]), bool(arrays.terminal[s, a, index]),
+                False, {"prob": float(weights[index])})
+
+    @property
+    def P(self) -> dict[int, dict[int, list[tuple[float, int, float, bool]]]]:  # noqa: N802
+        """The toy-text table `P[s][a] = [(prob, next_state, reward, terminated), ...]`
+        (Gymnasium's name), made when first asked for."""
+        if self._table is None:
+            self._table = _table(self.arrays)
+        return self._table
 
     def render(self) -> str | None:
         if self.render_mode is None:
