@@ -631,9 +631,9 @@ class TuiGymApp(App[int]):
         self.play_view.reload()
         self.train_view.reload()
         self.side_panel.reload()
-        severity = "information" if report.kept_agent else "warning"
         if not (quiet and report.kept_agent):
-            self.notify(report.notice, severity=severity, timeout=6)
+            self.notify(report.notice, severity="information" if report.kept_agent else "warning",
+                        timeout=6)
         if was_running and (report.kept_agent or keep_running):
             self.runner.start()
         return True
