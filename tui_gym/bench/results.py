@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from tui_gym.bench.gap import GapResult
+from tui_gym.bench.history import HistoryResult
 from tui_gym.bench.learners import AlgorithmSpeed, PlanningResult
 from tui_gym.bench.live import DEFAULT_RUNNER, LiveResult
 from tui_gym.bench.map_edit import MapEditResult
@@ -39,6 +40,7 @@ class BenchResults:
     planning: PlanningResult | None = None  # Dyna-Q against Q-learning, real episodes
     programs: ProgramsResult | None = None
     map_edit: tuple[MapEditResult, ...] | None = None  # edit to new optimum, per grid game
+    history: HistoryResult | None = None  # the run history's overhead and size
     errors: dict[str, str] = field(default_factory=dict)  # stage -> what went wrong
     default_runner: str = DEFAULT_RUNNER
 
