@@ -27,6 +27,7 @@ from rich.table import Table
 from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, Field, Learner, algorithm
 from tui_gym.benchmark.command import cmd_benchmark
 from tui_gym.cli.flags import flag, game_kwargs, hyperparameters
+from tui_gym.cli.maps_command import cmd_maps
 from tui_gym.cli.output import CliError, key_value_table, print_json
 from tui_gym.core import evaluation
 from tui_gym.core.evaluation import EvalReport
@@ -432,7 +433,9 @@ def cmd_optimal(args: argparse.Namespace, out: Console) -> int:
         focus = layout.default_focus(kwargs)
         for panel in layout.heatmaps(np.asarray(optimum.q), kwargs, focus, optimum.marks):
             out.print(_panel_table(panel))
-    rules = ", ".join(f"{k}={v}" for k, v in kwargs.items())
+    # An edited map's text is shown as its size; its rows are in the table above.
+    rules = ", ".join(f"{k}={v}" if k != "layout" else f"a {game.grid_map(kwargs).size_text} map"
+                      for k, v in kwargs.items())
     out.print(f"{game.title}{f' ({rules})' if rules else ''}: {optimum.summary}.")
     out.print(f"Exact value of the optimum: [bold]{signed(optimum.value, 5)}[/]")
     return 0
@@ -527,6 +530,7 @@ COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {
     "play": cmd_play,
     "screenshots": cmd_screenshots,
     "bench": cmd_bench,
+    "maps": cmd_maps,
     "mcp": cmd_mcp,
     "benchmark": cmd_benchmark,
 }
