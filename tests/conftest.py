@@ -23,3 +23,9 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     for item in items:
         if "slow" in item.keywords:
             item.add_marker(skip)
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _run_history_in_tmp(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """Every run the tests record goes to a file of their own, never the user's history."""
+    os.environ["TUI_GYM_DB"] = str(tmp_path_factory.mktemp("history") / "runs.db")

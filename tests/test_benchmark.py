@@ -20,6 +20,7 @@ from tui_gym.benchmark.players import (
 )
 from tui_gym.benchmark.run import run_benchmark
 from tui_gym.cli import main
+from tui_gym.games import GAMES
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLE = ROOT / "examples" / "heuristic_player.py"
@@ -55,6 +56,14 @@ def test_optimal_play_has_no_regret_and_random_play_some() -> None:
     again = run_benchmark("blackjack", RandomPlayer(1), episodes=300, seed=1)
     assert np.array_equal(again.returns, rand.returns)  # fixed seeds: the same episodes
     assert np.array_equal(again.regrets, rand.regrets)
+
+
+@pytest.mark.parametrize("game", [g.name for g in GAMES])
+def test_the_optimal_player_plays_a_whole_episode_of_every_game(game: str) -> None:
+    result = run_benchmark(game, OptimalPlayer(), episodes=1, seed=0)
+    assert result.episodes == 1 and result.decisions > 0
+    if result.regrets is not None:  # games whose exact model gives action values
+        assert np.all(result.regrets == 0.0) and result.agreement == 1.0
 
 
 def test_the_example_player_through_the_cli_and_the_leaderboard(

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from tui_gym.bench.gap import GapResult
+from tui_gym.bench.history import HistoryResult
 from tui_gym.bench.learners import AlgorithmSpeed, PlanningResult
 from tui_gym.bench.live import DEFAULT_RUNNER, LiveResult
 from tui_gym.bench.memory import MemoryResult
@@ -37,6 +38,7 @@ class BenchResults:
     algorithms: tuple[AlgorithmSpeed, ...] | None = None  # vector engine vs tutorial, each
     planning: PlanningResult | None = None  # Dyna-Q against Q-learning, real episodes
     programs: ProgramsResult | None = None
+    history: HistoryResult | None = None  # the run history's overhead and size
     errors: dict[str, str] = field(default_factory=dict)  # stage -> what went wrong
     default_runner: str = DEFAULT_RUNNER
 

@@ -4,10 +4,11 @@
 the target gap (on every game the bench measures), every algorithm's
 vector-engine speed against its tutorial loop (or the named ones'), Dyna-Q's
 planning against Q-learning, live training (both runners), memory, start-up,
-and programs as players (exact-regret scoring against returns, protocol and
-MCP speeds), and returns `BenchResults`. A stage that fails is recorded in
-`errors` and the others still run. `progress` (if given) hears the name of
-each stage as it starts.
+programs as players (exact-regret scoring against returns, protocol and MCP
+speeds), and the run history's cost (recording's share of a train run, the
+file's size per 1,000 runs), and returns `BenchResults`. A stage that fails is
+recorded in `errors` and the others still run. `progress` (if given) hears the
+name of each stage as it starts.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from functools import partial
 from typing import Any
 
 from tui_gym.algorithms import ALGORITHMS
-from tui_gym.bench import gap, learners, live, memory, programs, startup, throughput
+from tui_gym.bench import gap, history, learners, live, memory, programs, startup, throughput
 from tui_gym.bench.figures import load_average
 from tui_gym.bench.results import BenchResults, MachineInfo
 
@@ -127,6 +128,8 @@ def run_bench(
           "and MCP steps/s",
           lambda: programs.measure(plan.separation_episodes, plan.pipe_seconds,
                                    plan.pipe_repeats))
+    stage("history", "the run history: recording's share of a train run, the file's size",
+          lambda: history.measure(3 if quick else 5))
     return BenchResults(
         quick=quick,
         seconds=time.perf_counter() - started,
@@ -139,5 +142,6 @@ def run_bench(
         algorithms=found.get("algorithms"),
         planning=found.get("planning"),
         programs=found.get("programs"),
+        history=found.get("history"),
         errors=errors,
     )

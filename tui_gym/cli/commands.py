@@ -34,6 +34,7 @@ from tui_gym.core.params import Param
 from tui_gym.core.session import TARGET_GAP_BUDGET_FACTOR, Session, default_settings
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 from tui_gym.mcp_server.command import cmd_mcp
+from tui_gym.runs_command import recorded
 
 WRAPPER_SYNTAX = "--wrapper NAME or --wrapper NAME:key=value,key=value, repeatable; " \
     "the first is innermost"
@@ -343,21 +344,24 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
     # Before training: a run is not lost to a save path that cannot be written.
     save_path = check_save_path(args.save) if args.save is not None else None
     session = _session_from_args(args)
+    recording = args.recording  # the run history's record of this run (see `recorded`)
+    recording.begin(session)
     hp = session.hp
     assert hp is not None  # a built session has its hyperparameters
     trainer = session.trainer
     started = time.perf_counter()
     if args.json or not out.is_terminal:
-        outcome = session.train(target_gap=args.target_gap)
+        outcome = session.train(target_gap=args.target_gap, on_chunk=recording.on_chunk)
     else:
         progress, update = _progress_bar(out, hp.episodes)
         with progress:
-            outcome = session.train(target_gap=args.target_gap, on_chunk=update)
+            outcome = session.train(target_gap=args.target_gap, on_chunk=recording.chain(update))
     seconds = time.perf_counter() - started
     trainer = session.trainer
     report = session.evaluate(args.eval_episodes, seed=args.train_seed + 1)
     evaluation = eval_dict(session, report)
     saved = str(session.save(save_path)) if save_path is not None else None
+    run_id = recording.finish(report, saved)
     data = {
         "env_id": session.env_id,
         "env_kwargs": session.env_kwargs,
@@ -373,6 +377,7 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
         "rolling_mean_return": trainer.latest.mean_return,
         "eval": evaluation,
         "saved": saved,
+        "run": run_id,
     }
     if args.target_gap is not None:
         data.update(target_gap=args.target_gap, reached_target=outcome.reached_target,
@@ -397,6 +402,8 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
     rows += _eval_rows(evaluation)
     if saved:
         rows.append(("saved to", saved))
+    if run_id is not None:
+        rows.append(("run history", f"run {run_id} in {recording.path}"))
     out.print(key_value_table("Training summary", rows))
     return 0
 
@@ -538,7 +545,7 @@ COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {
     "envs": cmd_envs,
     "wrappers": cmd_wrappers,
     "algorithms": cmd_algorithms,
-    "train": cmd_train,
+    "train": recorded(cmd_train),
     "eval": cmd_eval,
     "optimal": cmd_optimal,
     "play": cmd_play,

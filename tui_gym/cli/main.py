@@ -98,6 +98,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--runner", choices=("process", "thread"), default="process",
         help="train in a child process (default) or on a thread of the app's process",
     )
+    from tui_gym.runs_command import add_app_options, add_runs_parser, add_train_options
+
+    add_app_options(parser)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
     envs = sub.add_parser("envs", help="list the games")
@@ -139,6 +142,7 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--save", type=file_name, metavar="PATH",
                        help="save the trained agent here (the folder is checked first)")
     train.add_argument("--json", action="store_true", help="print one JSON object, no bar")
+    add_train_options(train)
 
     ev = sub.add_parser("eval", help="evaluate a saved agent (greedy play + exact reference)")
     ev.add_argument("path", metavar="PATH")
@@ -163,6 +167,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_record_option(play)
     add_replay_parser(sub)
     add_serve_parser(sub)
+    add_runs_parser(sub)
 
     screenshots = sub.add_parser("screenshots", help="write the app's SVG screenshots")
     screenshots.add_argument("directory", nargs="?", default="screenshots", metavar="DIR")
@@ -196,9 +201,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _run_app(args)
         from tui_gym.cli.commands import COMMANDS
         from tui_gym.replay_command import REPLAY_COMMANDS
+        from tui_gym.runs_command import RUNS_COMMANDS
         from tui_gym.web import SERVE_COMMANDS
 
-        code = {**COMMANDS, **REPLAY_COMMANDS, **SERVE_COMMANDS}[args.command](args, out)
+        commands = {**COMMANDS, **REPLAY_COMMANDS, **SERVE_COMMANDS, **RUNS_COMMANDS}
+        code = commands[args.command](args, out)
         sys.stdout.flush()  # a closed pipe shows here, not at exit
         return code
     except BrokenPipeError:
@@ -242,4 +249,4 @@ def _run_app(args: argparse.Namespace) -> int:
 
         check_record_path(args.record)
     return run_app(env_id=env_id, seed=args.seed, load=args.load, runner=args.runner,
-                   record=args.record)
+                   record=args.record, db=args.db, keep_history=not args.no_history)

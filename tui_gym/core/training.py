@@ -33,6 +33,9 @@ from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.stats import EpisodeStats, RollingWindow, Series
 
 SERIES_NAMES = ("return", "length", "td_error", "epsilon")
+# The series of each episode's own return (bucket means, not rolling means): what the run
+# history records as a run's `return` curve.
+EPISODE_RETURNS = "episode_return"
 ADVANCE_STEPS = 256  # steps after which `Trainer.run` checks the clock and its stop flag
 
 
@@ -148,7 +151,7 @@ class Engine(ABC):
         self.steps = 0
         self.seconds = 0.0
         self.windows = {name: RollingWindow(window) for name in SERIES_NAMES}
-        self.series = {name: Series(series_capacity) for name in SERIES_NAMES}
+        self.series = {name: Series(series_capacity) for name in (*SERIES_NAMES, EPISODE_RETURNS)}
         self.last: EpisodeStats | None = None
         self._rate_mark = (0.0, 0)  # (seconds, episodes) at the last rate sample
         self._rate = 0.0
@@ -184,6 +187,7 @@ class Engine(ABC):
             window = windows[name]
             window.push(value)
             series[name].push(window.mean)
+        series[EPISODE_RETURNS].push(stats.episode_return)
 
     # --- chunks ----------------------------------------------------------
     def run(

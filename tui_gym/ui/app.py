@@ -29,7 +29,7 @@ import threading
 import time
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding, BindingType
@@ -58,6 +58,9 @@ from tui_gym.ui.side_panel import SidePanel
 from tui_gym.ui.too_small_screen import TooSmallScreen
 from tui_gym.ui.train_view import TrainView
 from tui_gym.ui.widgets.key_bar import KeyBar
+
+if TYPE_CHECKING:
+    from tui_gym.core.experiments.app_recording import SessionRunLog
 
 MIN_WIDTH, MIN_HEIGHT = 80, 24  # below this: a message instead of the layout
 COMPACT_WIDTH, COMPACT_HEIGHT = 120, 36  # below this: the compact layout
@@ -118,6 +121,7 @@ class TuiGymApp(App[int]):
         standalone: bool = False,
         record: str | Path | None = None,
         replay: Recording | None = None,
+        run_log: SessionRunLog | None = None,
     ) -> None:
         """`runner` is "thread" (train on a worker thread) or "process" (a child process;
         what `tui-gym` opens). `tune_gc` applies `tune_gc_for_ui` at mount (for a
@@ -127,7 +131,8 @@ class TuiGymApp(App[int]):
         terminal (`run_app`): termination signals end it cleanly, and a crash's
         traceback is left to `run_app` to log instead of being printed.
         `record` records the person's games to that file from the start (ctrl+r
-        turns recording on and off); `replay` opens on a recording's replay."""
+        turns recording on and off); `replay` opens on a recording's replay; `run_log`
+        keeps every run trained here in the run history."""
         super().__init__()
         self.tune_gc = tune_gc
         self.gc_seconds = gc_seconds or (YOUNG_GC_SECONDS, FULL_GC_SECONDS)
@@ -149,6 +154,7 @@ class TuiGymApp(App[int]):
         self.recording = RecordingSwitch(record, on_failure=self._recording_failed)
         self._record_at_start = record is not None
         self._replay = replay
+        self.run_log = run_log
 
     # --- layout ------------------------------------------------------------
     def get_default_screen(self) -> Screen:
@@ -224,6 +230,10 @@ class TuiGymApp(App[int]):
         if runner.error is not None:
             error, runner.error = runner.error, None
             self.notify(f"Training stopped: {error}", severity="error", timeout=8)
+        if self.run_log is not None:
+            notice = self.run_log.observe(self.session, runner.latest)
+            if notice:
+                self.notify(notice, severity="warning", title="Run history", timeout=8)
         running = runner.running
         if running != self._was_running:
             self._was_running = running
@@ -790,6 +800,8 @@ class TuiGymApp(App[int]):
     def on_unmount(self) -> None:
         self.recording.turn_off()
         self.runner.close(wait=False)  # `run_app` waits for it once the terminal is back
+        if self.run_log is not None:
+            self.run_log.close()
         loop = asyncio.get_running_loop()
         for signum in self._signals:
             loop.remove_signal_handler(signum)
@@ -893,16 +905,24 @@ EXIT_CRASH = 1
 def run_app(
     env_id: str | None = None, seed: int = 0, load: str | None = None, runner: str = "process",
     *, session: Session | None = None, record: str | None = None,
-    replay: Recording | None = None,
+    replay: Recording | None = None, db: str | None = None, keep_history: bool = True,
 ) -> int:
     """Open the app (from a saved agent with `load`, or on `session`); returns the exit code.
-    `record` records the person's games to that file; `replay` opens on a recording."""
+    `record` records the person's games to that file; `replay` opens on a recording; the
+    runs trained are kept in the run history (`db`, else the default file) unless not
+    `keep_history`."""
     gc_seconds = gc_seconds_from_env()
     if session is None:
         session = Session.load(load) if load else Session(env_id=env_id or "", seed=seed)
+    run_log = None
+    if keep_history:
+        from tui_gym.core.experiments.app_recording import SessionRunLog
+        from tui_gym.core.experiments.paths import resolve_db_path
+
+        run_log = SessionRunLog(resolve_db_path(db))
     return run_standalone(
         TuiGymApp(session, runner=runner, tune_gc=True, gc_seconds=gc_seconds, standalone=True,
-                  record=record, replay=replay)
+                  record=record, replay=replay, run_log=run_log)
     )
 
 

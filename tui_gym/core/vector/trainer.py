@@ -58,7 +58,7 @@ from tui_gym.algorithms import Learner, Transitions
 from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.stats import EpisodeStats
-from tui_gym.core.training import SERIES_NAMES, Engine
+from tui_gym.core.training import EPISODE_RETURNS, SERIES_NAMES, Engine
 from tui_gym.core.vector.base import BatchedForm
 from tui_gym.core.vector.plan import VectorPlan, plan_for_env
 from tui_gym.core.wrappers import WrapperChoice, build_env_lenient
@@ -297,6 +297,7 @@ class VectorTrainer(Engine):
         for name, values in zip(SERIES_NAMES, rows.T, strict=True):
             means = self.windows[name].push_many(values)
             self.series[name].push_many(means)
+        self.series[EPISODE_RETURNS].push_many(rows[:, 0])
         ret, length, td, eps = rows[-1].tolist()
         self.last = EpisodeStats(ret, int(length), td, eps)
 

@@ -292,4 +292,14 @@ class TaxiGame(ModelGame):
     ) -> Mapping[str, Mapping[str, Any]]:
         if (kwargs or {}).get("rainy"):
             return {"*": {"learning_rate": 0.05, "episodes": 50_000}}
-        return {"*": {"learning_rate": 0.1, "episodes": 5_000}}
+        # The on-policy learners learn the values of the exploring policy: exploration
+        # falls to 0 so that those become the greedy policy's; Double Q splits its
+        # experience over two tables. Each takes a longer budget (see the README).
+        on_policy = {"epsilon_final": 0.0, "episodes": 10_000}
+        return {
+            "*": {"learning_rate": 0.1, "episodes": 5_000},
+            "sarsa": on_policy,
+            "expected-sarsa": on_policy,
+            "double-q": {"episodes": 10_000},
+            "monte-carlo": {"epsilon_final": 0.0, "episodes": 20_000},
+        }

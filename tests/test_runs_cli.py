@@ -1,0 +1,183 @@
+"""`tui-gym runs` and the recording of `tui-gym train`, through the command line."""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import sqlite3
+from pathlib import Path
+
+import pytest
+
+from tui_gym.cli import main
+from tui_gym.core.experiments import RunHistory
+from tui_gym.core.experiments.schema import APPLICATION_ID
+
+SHORT = ["--episodes", "3000", "--eval-episodes", "200"]
+
+
+def run_cli(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def runs_json(capsys: pytest.CaptureFixture[str], db: Path, *extra: str) -> list[dict]:
+    code, out, err = run_cli(capsys, "runs", "--json", "--db", str(db), *extra)
+    assert code == 0, err
+    return json.loads(out)["runs"]
+
+
+def test_train_is_recorded_with_settings_curves_and_figures(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = tmp_path / "runs.db"
+    agent = tmp_path / "bj.tgym"
+    code, out, err = run_cli(capsys, "train", "blackjack", *SHORT, "--seed", "3",
+                             "--learning-rate", "0.05", "--save", str(agent), "--json",
+                             "--db", str(db))
+    assert code == 0, err
+    trained = json.loads(out)
+    [run] = runs_json(capsys, db)
+    assert run["id"] == trained["run"]
+    assert (run["kind"], run["game"], run["algorithm"], run["seeds"], run["status"]) == (
+        "train", "blackjack", "q-learning", [3], "finished")
+    figures = {f["name"]: f for f in run["figures"]}
+    assert {"mean_return_last", "exact_value", "exact_gap", "eval_mean_return"} <= set(figures)
+    assert figures["exact_gap"]["value"] == pytest.approx(trained["eval"]["gap"])
+
+    code, out, err = run_cli(capsys, "runs", "show", str(run["id"]), "--json", "--db", str(db))
+    assert code == 0, err
+    record = json.loads(out)
+    assert record["hyperparameters"]["learning_rate"] == 0.05
+    assert record["hyperparameters"]["episodes"] == 3000
+    assert record["game_params"] == trained["env_kwargs"]
+    assert record["agent_path"] == str(agent.resolve())
+    assert record["versions"]["gymnasium"]
+    curves = {c["name"]: c for c in record["curves"]}
+    assert set(curves) == {"return", "exact_value"}
+    returns = curves["return"]
+    assert 2 <= len(returns["episodes"]) <= 100 and returns["episodes"][-1] <= 3000
+    assert all(-1.5 <= v <= 1.5 for v in returns["values"])
+    assert curves["exact_value"]["episodes"][0] == 0  # the untrained policy's value first
+    # Curves are stored to about three significant digits; figures in full.
+    final = figures["exact_value"]["value"]
+    assert curves["exact_value"]["values"][-1] == pytest.approx(final, abs=1e-3)
+
+    code, out, _ = run_cli(capsys, "runs", "show", str(run["id"]), "--db", str(db))
+    assert code == 0 and "exact gap" in out and "q-learning" in out
+
+
+def test_list_filter_export_and_remove(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("COLUMNS", "160")
+    db = tmp_path / "runs.db"
+    for game in ("blackjack", "gridworld"):
+        assert run_cli(capsys, "train", game, *SHORT, "--db", str(db))[0] == 0
+    assert run_cli(capsys, "train", "blackjack", *SHORT, "--db", str(db), "--no-record")[0] == 0
+    runs = runs_json(capsys, db)
+    assert [r["game"] for r in runs] == ["gridworld", "blackjack"]  # newest first
+    assert [r["game"] for r in runs_json(capsys, db, "--game", "GridWorld")] == ["gridworld"]
+    code, out, _ = run_cli(capsys, "runs", "--db", str(db))
+    assert code == 0 and "gridworld" in out and "blackjack" in out
+
+    blackjack = runs[1]["id"]
+    csv_path = tmp_path / "curves.csv"
+    code, out, err = run_cli(capsys, "runs", "export", str(blackjack), "--csv", str(csv_path),
+                             "--db", str(db))
+    assert code == 0, err
+    lines = csv_path.read_text().splitlines()
+    assert lines[0] == "episode,exact_value,return" and len(lines) > 3
+
+    code, out, err = run_cli(capsys, "runs", "rm", str(blackjack), "--db", str(db))
+    assert code == 0 and f"removed run {blackjack}" in out
+    assert [r["game"] for r in runs_json(capsys, db)] == ["gridworld"]
+    code, out, err = run_cli(capsys, "runs", "show", str(blackjack), "--db", str(db))
+    assert code == 2 and out == ""
+    assert err == f"tui-gym: error: no run {blackjack} in {db}\n"
+    with pytest.raises(SystemExit) as exit_:
+        main(["runs", "rm", "0", "--db", str(db)])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and "a run id" in err and err.count("\n") == 1
+
+
+def test_db_may_come_before_the_command(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = tmp_path / "runs.db"
+    assert run_cli(capsys, "--db", str(db), "train", "blackjack", *SHORT)[0] == 0
+    code, out, _ = run_cli(capsys, "--db", str(db), "runs", "--json")
+    assert code == 0 and len(json.loads(out)["runs"]) == 1
+    code, out, _ = run_cli(capsys, "runs", "--db", str(db), "show", "1", "--json")
+    assert code == 0 and json.loads(out)["id"] == 1
+
+
+def test_the_env_variable_chooses_the_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    db = tmp_path / "from-env.db"
+    monkeypatch.setenv("TUI_GYM_DB", str(db))
+    assert run_cli(capsys, "train", "blackjack", *SHORT)[0] == 0
+    code, out, _ = run_cli(capsys, "runs", "--json")
+    assert code == 0 and json.loads(out)["db"] == str(db)
+    assert len(json.loads(out)["runs"]) == 1
+
+
+def test_a_file_that_is_not_a_history_is_never_touched(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = tmp_path / "notes.db"
+    db.write_bytes(b"my notes, not a database\n" * 50)
+    before = db.read_bytes()
+    code, out, err = run_cli(capsys, "runs", "--db", str(db))
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and "is not a tui-gym run history" in err
+    # Training still trains; the run is not recorded, and the file stays as it was.
+    code, out, err = run_cli(capsys, "train", "blackjack", *SHORT, "--json", "--db", str(db))
+    assert code == 0 and json.loads(out)["run"] is None
+    assert err.count("\n") == 1 and "not recorded" in err and "left untouched" in err
+    assert db.read_bytes() == before
+
+
+def test_a_history_from_a_newer_tui_gym_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = tmp_path / "runs.db"
+    RunHistory(db).close()
+    with sqlite3.connect(db) as conn:
+        conn.execute(f"PRAGMA application_id = {APPLICATION_ID}")
+        conn.execute("PRAGMA user_version = 99")
+    for argv in (("runs",), ("runs", "show", "1"), ("train", "blackjack", *SHORT)):
+        code, _, err = run_cli(capsys, *argv, "--db", str(db))
+        assert err.count("\n") == 1 and "newer tui-gym" in err, argv
+        assert code == (0 if argv[0] == "train" else 2)
+
+
+def _train_three(db: str, first_seed: int) -> None:
+    import contextlib
+    import io
+
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        for seed in range(first_seed, first_seed + 3):
+            code = main(["train", "blackjack", "--episodes", "300", "--eval-episodes", "5",
+                         "--engine", "scalar", "--seed", str(seed), "--db", db])
+            if code != 0:
+                raise SystemExit(code)
+
+
+def test_two_processes_recording_at_once_lose_nothing(tmp_path: Path) -> None:
+    db = tmp_path / "runs.db"
+    # Forked, so each process starts with tui-gym already imported and both write at once.
+    context = multiprocessing.get_context("fork")
+    procs = [context.Process(target=_train_three, args=(str(db), first)) for first in (0, 100)]
+    for proc in procs:
+        proc.start()
+    for proc in procs:
+        proc.join(120)
+        assert proc.exitcode == 0
+    with RunHistory(db) as history:
+        runs = history.list_runs()
+        assert sorted(r.seeds[0] for r in runs) == [0, 1, 2, 100, 101, 102]
+        assert all(r.status == "finished" for r in runs)
+        assert all(history.get_run(r.id).curve("return") is not None for r in runs)

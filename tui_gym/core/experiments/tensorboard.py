@@ -1,0 +1,144 @@
+"""A recorded run as TensorBoard event files (`tui-gym runs export ID --tensorboard DIR`).
+
+Each run goes to a folder of its own under DIR, `run-<id>-<game>-<algorithm>`,
+so `tensorboard --logdir DIR` shows every exported run side by side. Curves
+become scalars over the episode number with CleanRL's tags: `return` is
+`charts/episodic_return`, `exact_value` is `charts/exact_value`, a band's
+edges `..._lo` / `..._hi`; the final figures are scalars `figures/<name>` at
+the last episode, and the settings a text summary. Exporting a run again
+replaces its earlier event file. The writer is tensorboardX, from the
+optional extra `tui-gym[tensorboard]`; without it the error says how to
+install it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import secrets
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from tui_gym.core.experiments.errors import RunHistoryError
+from tui_gym.core.experiments.records import Curve, RunRecord
+from tui_gym.core.experiments.runs import show_run
+
+INSTALL_HINT = "pip install 'tui-gym[tensorboard]'"
+EVENT_PREFIX = "events.out.tfevents."
+_TAGS = {"return": "charts/episodic_return", "exact_value": "charts/exact_value"}
+
+
+class TensorBoardUnavailable(RunHistoryError):
+    """The optional TensorBoard writer (tensorboardX) is not installed."""
+
+
+@dataclass(frozen=True)
+class TensorBoardExport:
+    """A run written as TensorBoard events: the file, its folder's parent, tags and values."""
+
+    run_id: int
+    path: Path
+    directory: Path
+    tags: tuple[str, ...]
+    scalars: int
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "run": self.run_id,
+            "path": str(self.path),
+            "logdir": str(self.directory),
+            "tags": list(self.tags),
+            "scalars": self.scalars,
+        }
+
+
+def scalar_tag(curve_name: str) -> str:
+    """The TensorBoard tag of a curve: `return` -> `charts/episodic_return`, `x.lo` -> `..._lo`."""
+    base, dot, edge = curve_name.partition(".")
+    tag = _TAGS.get(base, "charts/" + re.sub(r"[^A-Za-z0-9_\-]", "_", base))
+    return f"{tag}_{edge}" if dot else tag
+
+
+def _run_folder(record: RunRecord) -> str:
+    summary = record.summary
+    words = re.sub(r"[^A-Za-z0-9_\-]+", "_", f"{summary.game}-{summary.algorithm}")
+    return f"run-{summary.id}-{words}"
+
+
+def _settings_text(record: RunRecord) -> str:
+    data = record.to_json(curves=False)
+    data.pop("figures", None)
+    return "```\n" + json.dumps(data, indent=2, default=str) + "\n```"
+
+
+def _walltimes(curve: Curve, started: float, ended: float | None) -> list[float]:
+    """When each point was reached, spread evenly by episode over the run's time."""
+    episodes = curve.episodes.tolist()
+    if ended is None or len(episodes) < 2 or episodes[-1] == episodes[0]:
+        return [started] * len(episodes)
+    first, last = episodes[0], episodes[-1]
+    return [started + (ended - started) * (e - first) / (last - first) for e in episodes]
+
+
+def export_run_tensorboard(
+    run_id: int, directory: str | Path, db: str | None = None
+) -> TensorBoardExport:
+    """Write run `run_id`'s curves and figures as TensorBoard events under `directory`."""
+    try:
+        from tensorboardX import SummaryWriter
+    except ImportError:
+        raise TensorBoardUnavailable(
+            f"TensorBoard export needs the tensorboard extra: {INSTALL_HINT}"
+        ) from None
+    record = show_run(run_id, db)
+    summary = record.summary
+    root = Path(directory).expanduser()
+    folder = root / _run_folder(record)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        earlier = set(folder.glob(EVENT_PREFIX + "*"))
+    except OSError as exc:
+        raise RunHistoryError(f"cannot write {folder}: {exc.strerror or exc}") from None
+    tags: list[str] = []
+    scalars = 0
+    last_episode = 0
+    try:
+        # A suffix of its own: an export within the same second gets a new file name too.
+        suffix = f".{secrets.token_hex(4)}"
+        writer = SummaryWriter(logdir=str(folder), flush_secs=3600, filename_suffix=suffix)
+        try:
+            for curve in record.curves:
+                tag = scalar_tag(curve.name)
+                tags.append(tag)
+                times = _walltimes(curve, summary.started_at, summary.ended_at)
+                for episode, value, when in zip(
+                    curve.episodes.tolist(), curve.values.tolist(), times, strict=True
+                ):
+                    if math.isfinite(value):
+                        writer.add_scalar(tag, value, global_step=episode, walltime=when)
+                        scalars += 1
+                if len(curve):
+                    last_episode = max(last_episode, int(curve.episodes[-1]))
+            end = summary.ended_at or summary.started_at
+            for figure in summary.figures:
+                if math.isfinite(figure.value):
+                    tag = f"figures/{figure.name}"
+                    tags.append(tag)
+                    writer.add_scalar(tag, figure.value, global_step=last_episode, walltime=end)
+                    scalars += 1
+            writer.add_text("run/settings", _settings_text(record), global_step=0,
+                            walltime=summary.started_at)
+        finally:
+            writer.close()
+        written = sorted(set(folder.glob(EVENT_PREFIX + "*")) - earlier)
+        for old in earlier:
+            old.unlink(missing_ok=True)
+    except OSError as exc:
+        raise RunHistoryError(f"cannot write {folder}: {exc.strerror or exc}") from None
+    if not written:
+        raise RunHistoryError(f"cannot write {folder}: no event file was written")
+    return TensorBoardExport(
+        run_id=summary.id, path=written[-1], directory=root, tags=tuple(tags), scalars=scalars
+    )

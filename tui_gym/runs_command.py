@@ -1,0 +1,274 @@
+"""The run history on the command line: `runs`, and recording `train` runs into it.
+
+`tui-gym runs [--json] [--game G] [--kind K]` lists the recorded runs, newest
+first; `runs show ID`, `runs export ID --csv PATH | --tensorboard DIR` and
+`runs rm ID` work on one. Every one takes `--db PATH` (else `TUI_GYM_DB`,
+else the data folder's `runs.db`). `add_train_options` puts `--db` and
+`--no-record` on `train`, and `recorded` wraps the `train` command so that
+its run is recorded (see `TrainRecording`). A history that cannot be read, an
+unknown id or a file that cannot be written is one line and exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Callable
+from datetime import datetime
+from typing import Any
+
+from rich import box
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
+from tui_gym.cli.output import CliError, key_value_table, print_json
+from tui_gym.cli.types import file_name as _path
+from tui_gym.cli.types import int_in
+
+Command = Callable[[argparse.Namespace, Console], int]
+
+_run_id = int_in(1, 2**63 - 1, "a run id (a positive integer, see `tui-gym runs`)")
+DB_HELP = "the run history file (default: $TUI_GYM_DB, else the data folder's runs.db)"
+KINDS = ("train", "compare", "sweep", "app", "benchmark")
+
+
+def _db_option(parser: argparse.ArgumentParser, *, inherit: bool = False) -> None:
+    # On a sub-command, SUPPRESS keeps a `--db` given before the sub-command's name
+    # (`tui-gym --db PATH train ...` and `tui-gym runs --db PATH show 3` both work).
+    default = argparse.SUPPRESS if inherit else None
+    parser.add_argument("--db", type=_path, metavar="PATH", default=default, help=DB_HELP)
+
+
+def _json_option(parser: argparse.ArgumentParser, *, inherit: bool = False) -> None:
+    default = argparse.SUPPRESS if inherit else False
+    parser.add_argument("--json", action="store_true", default=default,
+                        help="print one JSON object")
+
+
+def add_runs_parser(sub: Any) -> None:
+    """The `runs` sub-command and its own sub-commands."""
+    runs = sub.add_parser(
+        "runs", help="list the run history (every train run and every run in the app)",
+        description="The run history: every `train` run, every comparison and every run "
+        "trained in the app, with its settings, curves and final figures.",
+    )
+    _json_option(runs)
+    _db_option(runs, inherit=True)
+    runs.add_argument("--game", metavar="G", help="only this game's runs (e.g. blackjack)")
+    runs.add_argument("--kind", choices=KINDS, help="only runs of this kind")
+    verbs = runs.add_subparsers(dest="runs_command", metavar="VERB")
+
+    show = verbs.add_parser("show", help="everything about one run")
+    show.add_argument("run_id", type=_run_id, metavar="ID")
+    _json_option(show, inherit=True)
+    _db_option(show, inherit=True)
+
+    export = verbs.add_parser("export", help="write a run's curves to a CSV file or for "
+                              "TensorBoard")
+    export.add_argument("run_id", type=_run_id, metavar="ID")
+    where = export.add_mutually_exclusive_group(required=True)
+    where.add_argument("--csv", type=_path, metavar="PATH",
+                       help="one row per episode, one column per curve")
+    where.add_argument("--tensorboard", type=_path, metavar="DIR",
+                       help="TensorBoard event files under DIR (needs tui-gym[tensorboard])")
+    _json_option(export, inherit=True)
+    _db_option(export, inherit=True)
+
+    rm = verbs.add_parser("rm", help="remove one run (its curves and figures with it)")
+    rm.add_argument("run_id", type=_run_id, metavar="ID")
+    _json_option(rm, inherit=True)
+    _db_option(rm, inherit=True)
+
+
+def add_train_options(train: argparse.ArgumentParser) -> None:
+    """`--db PATH` and `--no-record` on `train`."""
+    _db_option(train, inherit=True)
+    train.add_argument("--no-record", action="store_true",
+                       help="do not keep this run in the run history")
+
+
+def add_app_options(parser: argparse.ArgumentParser) -> None:
+    """`--db PATH` and `--no-history` for the app (`--record` is for games, not runs)."""
+    _db_option(parser)
+    parser.add_argument("--no-history", action="store_true",
+                        help="do not keep the app's training runs in the run history")
+
+
+def _warn(line: str) -> None:
+    sys.stderr.write(f"tui-gym: {line}\n")
+    sys.stderr.flush()
+
+
+def recorded(command: Command) -> Command:
+    """`command` (train) with its run recorded in the history; `args.recording` is the
+    `TrainRecording` it reports to."""
+
+    def run(args: argparse.Namespace, out: Console) -> int:
+        from tui_gym.core.experiments.train_recording import TrainRecording
+
+        enabled = not (getattr(args, "no_record", False) or getattr(args, "no_history", False))
+        with TrainRecording(getattr(args, "db", None), enabled=enabled, warn=_warn) as recording:
+            args.recording = recording
+            return command(args, out)
+
+    run.__doc__ = command.__doc__
+    return run
+
+
+# --- the commands ------------------------------------------------------------------
+
+
+def _history_call(action: Callable[[], Any]) -> Any:
+    from tui_gym.core.experiments import RunHistoryError
+
+    try:
+        return action()
+    except RunHistoryError as exc:
+        raise CliError(str(exc)) from None
+
+
+def _when(seconds: float | None, full: bool = False) -> str:
+    if seconds is None:
+        return ""
+    return datetime.fromtimestamp(seconds).strftime("%Y-%m-%d %H:%M:%S" if full else "%m-%d %H:%M")
+
+
+def _duration(seconds: float | None) -> str:
+    if seconds is None:
+        return ""
+    if seconds < 120:
+        return f"{seconds:.1f} s"
+    return f"{seconds / 60:.1f} min"
+
+
+def _figure_text(figure: Any, interval: bool = True) -> str:
+    if figure is None or figure.value != figure.value:
+        return ""
+    text = f"{figure.value:+.4f}"
+    if interval and figure.ci95 is not None:
+        text += f" ± {figure.ci95:.4f}"
+    return text
+
+
+def _seeds_text(seeds: tuple[int, ...]) -> str:
+    if len(seeds) <= 3:
+        return ", ".join(str(s) for s in seeds)
+    return f"{len(seeds)} seeds"
+
+
+def cmd_runs(args: argparse.Namespace, out: Console) -> int:
+    verb = getattr(args, "runs_command", None)
+    if verb is not None:
+        return {"show": _cmd_show, "export": _cmd_export, "rm": _cmd_rm}[verb](args, out)
+    from tui_gym.core.experiments import list_runs
+
+    game = args.game.strip().lower() if args.game else None
+    listing = _history_call(lambda: list_runs(args.db, game=game, kind=args.kind))
+    if args.json:
+        print_json(listing.to_json())
+        return 0
+    if not listing.runs:
+        which = f" of {args.game}" if args.game else ""
+        out.print(f"No runs{which} in {escape(str(listing.db))} yet: `tui-gym train GAME` "
+                  "and the app record theirs.")
+        return 0
+    table = Table(title=f"Runs in {escape(str(listing.db))}", title_justify="left",
+                  box=box.SIMPLE_HEAD, pad_edge=False, collapse_padding=True,
+                  caption="return: the mean online return over the last 10% of episodes; "
+                  "gap: the greedy policy's exact gap to the optimum", caption_justify="left")
+    for name, justify in (("id", "right"), ("kind", "left"), ("game", "left"),
+                          ("algorithm", "left"), ("seeds", "left"), ("started", "left"),
+                          ("took", "right"), ("return", "right"), ("gap", "right")):
+        wraps = name in ("game", "algorithm", "started")
+        table.add_column(name, justify=justify, no_wrap=not wraps)  # type: ignore[arg-type]
+    for run in listing.runs:
+        kind = str(run.kind)
+        if run.status != "finished":
+            kind += f" ({run.status})"
+        table.add_row(
+            str(run.id), kind, run.game, run.algorithm, _seeds_text(run.seeds),
+            _when(run.started_at), _duration(run.seconds),
+            _figure_text(run.figure("mean_return_last"), interval=False),
+            _figure_text(run.figure("exact_gap"), interval=False),
+        )
+    out.print(table)
+    return 0
+
+
+def _cmd_show(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.core.experiments import show_run
+
+    record = _history_call(lambda: show_run(args.run_id, args.db))
+    if args.json:
+        print_json(record.to_json())
+        return 0
+    run = record.summary
+    settings = ", ".join(f"{k}={v}" for k, v in record.hyperparameters.items())
+    wrappers = ", ".join(
+        w.name + (f"({', '.join(f'{k}={v}' for k, v in w.params.items())})" if w.params else "")
+        for w in record.wrappers
+    )
+    params = ", ".join(f"{k}={v}" for k, v in record.game_params.items())
+    versions = record.versions
+    rows = [
+        ("kind", str(run.kind)),
+        ("game", run.game + (f" ({params})" if params else "")),
+        ("wrappers", wrappers or "none"),
+        ("algorithm", run.algorithm),
+        ("hyperparameters", settings),
+        ("seeds", ", ".join(str(s) for s in run.seeds) or "none"),
+        ("status", str(run.status)),
+        ("started", _when(run.started_at, full=True)),
+        ("ended", _when(run.ended_at, full=True)),
+        ("took", _duration(run.seconds)),
+    ]
+    if run.group is not None:
+        rows.append(("launched with run", str(run.group)))
+    for figure in run.figures:
+        rows.append((figure.name.replace("_", " "), _figure_text(figure)))
+    for curve in record.curves:
+        if len(curve):
+            span = f"episodes {int(curve.episodes[0]):,}..{int(curve.episodes[-1]):,}"
+            rows.append((f"curve {curve.name}", f"{len(curve)} points, {span}"))
+    rows.append(("saved agent", record.agent_path or "none"))
+    rows.append(("versions", f"tui-gym {versions.tui_gym}, gymnasium {versions.gymnasium}, "
+                 f"numpy {versions.numpy}, Python {versions.python}"))
+    out.print(key_value_table(f"Run {run.id}", [(k, escape(v)) for k, v in rows]))
+    return 0
+
+
+def _cmd_export(args: argparse.Namespace, out: Console) -> int:
+    if args.csv is not None:
+        from tui_gym.core.experiments import export_run_csv
+
+        done = _history_call(lambda: export_run_csv(args.run_id, args.csv, args.db))
+        line = f"wrote {done.rows} rows of {', '.join(done.columns[1:])} to {done.path}"
+    else:
+        from tui_gym.core.experiments.tensorboard import export_run_tensorboard
+
+        done = _history_call(lambda: export_run_tensorboard(args.run_id, args.tensorboard,
+                                                            args.db))
+        line = (f"wrote {done.scalars} values of {', '.join(done.tags)} to {done.path} "
+                f"(tensorboard --logdir {done.directory})")
+    if args.json:
+        print_json(done.to_json())
+    else:
+        out.print(escape(line))
+    return 0
+
+
+def _cmd_rm(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.core.experiments import remove_run
+
+    removed = _history_call(lambda: remove_run(args.run_id, args.db))
+    if args.json:
+        print_json(removed.to_json())
+    else:
+        run = removed.run
+        out.print(escape(f"removed run {run.id} ({run.kind} {run.game} {run.algorithm}) "
+                         f"from {removed.db}"))
+    return 0
+
+
+RUNS_COMMANDS: dict[str, Command] = {"runs": cmd_runs}
