@@ -42,7 +42,7 @@ def test_exact_value_of_always_right_on_a_2x2_grid(
 ) -> None:
     session = Session(env_id="tui_gym/GridWorld-v0", env_kwargs={"size": 2, **params},
                       choices=tuple(parse_wrapper_spec(w) for w in wrappers), seed=0)
-    reference = session.game.oracle.reference(
+    reference = session.game.oracle.evaluation_reference(
         _always_right(), session.env_kwargs, session.changes
     )
     figures = reference.figures  # type: ignore[union-attr]

@@ -246,7 +246,7 @@ def eval_dict(session: Session, report: EvalReport) -> dict[str, Any]:
     }
     if report.requested is not None:
         data["step_budget"] = evaluation.EVAL_STEP_BUDGET
-    ref = session.reference()
+    ref = session.evaluation_reference()
     if ref is not None:
         data.update(ref.figures)
         if ref.scope.note:  # what the exact figures take into account, or that they cannot

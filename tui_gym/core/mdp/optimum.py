@@ -107,13 +107,12 @@ def _backward_induction(model: FiniteMDP, gamma: float, steps: int) -> tuple[Flo
     v = np.zeros(model.n_states)
     # last_off[s, a]: the most steps left (so far) at which `a` was not optimal in `s`.
     last_off = np.zeros((model.n_states, model.n_actions), dtype=np.int64)
-    q = backup(model, v, gamma)
     for k in range(1, steps + 1):
-        q = backup(model, v, gamma) if k > 1 else q
+        q = backup(model, v, gamma)
         off = ~optimal_actions(q)
         last_off[off] = k
         settled = q.max(axis=1)
-        if k > 1 and np.array_equal(settled, v):
+        if np.array_equal(settled, v):
             # The same backup of the same values from here on: every later step
             # left gives this q again, and the actions not optimal now stay so.
             last_off[off] = steps
