@@ -140,8 +140,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     train.add_argument(
         "--eval-episodes", type=positive_int, default=10_000, metavar="N",
-        help="greedy episodes to evaluate with (default 10,000; a long-looping policy "
-        "stops at the evaluation's step budget)",
+        help="greedy episodes to sample after the exact evaluation (default 10,000; "
+        "a long-looping policy stops at the evaluation's step budget)",
     )
     train.add_argument("--save", type=file_name, metavar="PATH",
                        help="save the trained agent here (the folder is checked first)")

@@ -416,6 +416,14 @@ class Session:
         reference = self.game.oracle.reference(q, self.env_kwargs, self.changes)
         return None if isinstance(reference, NotAvailable) else reference
 
+    def evaluation_reference(self) -> ReferenceMetrics | None:
+        """`reference()` with what only an evaluation asks for (see the game's oracle)."""
+        q = self.base_q()
+        if q is None:
+            return None
+        reference = self.game.oracle.evaluation_reference(q, self.env_kwargs, self.changes)
+        return None if isinstance(reference, NotAvailable) else reference
+
     def exact_reason(self) -> str:
         """Why there are no exact figures of the agent here ('' when there are)."""
         hidden = self.hidden_reason()

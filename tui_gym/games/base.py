@@ -222,6 +222,13 @@ class Oracle(Role):
         where `scope` says it can be."""
         return NotAvailable(f"{self.game.title} has no exact optimum")
 
+    def evaluation_reference(
+        self, q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> ReferenceMetrics | NotAvailable:
+        """What an evaluation reports: `reference`, plus exact figures too costly for
+        every redraw of a running view (none beyond it by default)."""
+        return self.reference(q, kwargs, changes)
+
     def advice(self, env: Any, kwargs: Mapping[str, Any]) -> Advice:
         """The optimal action(s) in the env's current state, wrappers read from `env`."""
         return Advice((), None, "no exact optimum for this game")

@@ -4,8 +4,10 @@ Actions are right, up, left, down (the tutorial's mapping). Base states are
 every (agent, target) pair; the exact figures are shortest-path ones (`paths`):
 the share of pairs the greedy policy solves in the Manhattan number of steps
 and its steps over the fewest (ties broken at random, as the agent breaks
-them), and the heatmap shows max Q over the grid for one target (the focus a
-person moves) with the greedy move in each cell.
+them), for evaluations also the greedy policy's exact expected return beside
+the optimum's on the game's model (`model`, rewards and time limit as the
+wrappers make them), and the heatmap shows max Q over the grid for one target (the focus a person
+moves) with the greedy move in each cell.
 
 The optimum is a shortest path. That holds whenever reaching the target pays
 (its reward is positive) and no other step does (rewards of at most zero, no
@@ -30,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
-from tui_gym.core.mdp import NotAvailable
+from tui_gym.core.mdp import NotAvailable, evaluate
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.envs.walls import Walls, cell_distances, cell_moves, check_walls
@@ -50,6 +52,7 @@ from tui_gym.games.base import (
     TallyWord,
     greedy_probabilities,
 )
+from tui_gym.games.gridworld.model import gridworld_model, gridworld_optimum
 from tui_gym.games.gridworld.paths import (
     mixed_pair_fraction,
     mixed_steps_over_optimal,
@@ -63,6 +66,7 @@ from tui_gym.games.gridworld.walled import (
     walled_mean_steps,
 )
 from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
+from tui_gym.games.model import exact_gap_of
 from tui_gym.games.words import (
     ScoreRow,
     agreement_summary,
@@ -165,6 +169,21 @@ def _shortest_pays(kwargs: Mapping[str, Any], changes: GameChanges) -> bool:
     return goal > 0.0 and never_pays and farther_no_better
 
 
+def _exact_return(
+    q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges
+) -> dict[str, float]:
+    """The greedy policy's exact expected return, the optimum's and the gap, over the
+    model as the wrappers make it (the unwrapped game's when they change its dynamics)."""
+    if changes.others:
+        changes = GameChanges(time_limit=changes.time_limit)
+    args = (_size(kwargs), float(kwargs.get("reward_scale", 1.0)),
+            float(kwargs.get("step_penalty", 0.0)), changes, _walls(kwargs))
+    model = gridworld_model(*args)
+    value = evaluate(model, greedy_probabilities(q)).value
+    best = gridworld_optimum(*args).value
+    return {"exact_value": value, "optimal_value": best, "gap": exact_gap_of(best, value)}
+
+
 def _distance(scene: Mapping[str, Any]) -> int:
     """Steps from the scene's agent to its target (0 when either is missing)."""
     agent, target = scene.get("agent"), scene.get("target")
@@ -232,6 +251,21 @@ class GridWorldOracle(Oracle):
             summary=f"{frac:.1%} of (agent, target) pairs solved in the fewest steps",
             scope=self.scope(kwargs, changes),
         )
+
+    def evaluation_reference(
+        self, q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> ReferenceMetrics | NotAvailable:
+        """The shortest-path figures and the greedy policy's exact expected return on the
+        model (a running view asks only for the first: the model has size**4 states)."""
+        reference = self.reference(q, kwargs, changes)
+        if isinstance(reference, NotAvailable):
+            return reference
+        scope = reference.scope
+        if changes.changes_rewards and not changes.others and not scope.exact:
+            scope = Scope(False, f"{scope.note}; the exact value and gap are with "
+                          f"{changes.reward_names()}")
+        figures = {**reference.figures, **_exact_return(q, kwargs, changes)}
+        return ReferenceMetrics(figures, reference.summary, scope)
 
     def agent_figures(
         self, q: np.ndarray | None, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
