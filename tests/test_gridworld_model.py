@@ -51,3 +51,20 @@ def test_exact_value_of_always_right_on_a_2x2_grid(
     assert figures["gap"] == pytest.approx(optimum - value, abs=1e-12)
     assert reference.scope.exact == (not note)  # type: ignore[union-attr]
     assert reference.scope.note.endswith(note)  # type: ignore[union-attr]
+
+
+def test_walls_block_moves_and_part_placements_in_the_exact_value() -> None:
+    # A wall down the middle column of a 3x3 grid leaves two columns of three free
+    # cells: 30 placements on different free cells, 12 of them in one column, where
+    # the optimum reaches the target (+1); across the wall nothing ever does. Always
+    # moving up reaches it only from below: 3 placements a column, 6 of 30.
+    session = Session(env_id="tui_gym/GridWorld-v0",
+                      env_kwargs={"size": 3, "walls": [[1, 0], [1, 1], [1, 2]]}, seed=0)
+    always_up = np.zeros((81, 4))
+    always_up[:, 1] = 1.0
+    reference = session.game.oracle.evaluation_reference(
+        always_up, session.env_kwargs, session.changes
+    )
+    figures = reference.figures  # type: ignore[union-attr]
+    assert figures["optimal_value"] == pytest.approx(12 / 30, abs=1e-12)
+    assert figures["exact_value"] == pytest.approx(6 / 30, abs=1e-12)
