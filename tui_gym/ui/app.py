@@ -101,6 +101,7 @@ class TuiGymApp(App[int]):
         Binding("question_mark,f1", "help", "Help", key_display="?"),
         Binding("q", "quit", "Quit"),
         Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
+        Binding("m", "edit_map", "Map", tooltip="Edit a grid game's map while it trains"),
         # A key for each game in the registry (the help and the side panel's picker list them).
         *(Binding(game.key, f"switch_game('{game.name}')", game.title, show=False)
           for game in GAMES if game.key),
@@ -298,6 +299,15 @@ class TuiGymApp(App[int]):
             self.notify(f"Already playing {game.title}.")
             return
         self.switch_game(game)
+
+    async def action_edit_map(self) -> None:
+        self.action_show_view("train")
+        await self.train_view.open_editor()
+
+    def rebuild_map(self, env_kwargs: dict[str, Any], resized: bool) -> bool:
+        """Play an edited map: the agent and training go on where the states keep their
+        meaning; a new size resets the agent (with a notice) and training goes on."""
+        return self.rebuild(env_kwargs=env_kwargs, quiet=True, keep_running=True)
 
     def action_focus_wrappers(self) -> None:
         self._main_screen.remove_class("-view-compare")  # the compact Compare view hides it
@@ -639,8 +649,13 @@ class TuiGymApp(App[int]):
         env_id: str | None = None,
         env_kwargs: dict[str, Any] | None = None,
         choices: Sequence[WrapperChoice] | None = None,
+        *,
+        quiet: bool = False,
+        keep_running: bool = False,
     ) -> bool:
-        """Rebuild the session's env; False (and a message) when it cannot be built."""
+        """Rebuild the session's env; False (and a message) when it cannot be built.
+        `quiet`: no notice when the agent is kept; `keep_running`: training goes on
+        even with a fresh agent."""
         was_running = self.runner.running
         # Never waits on a training process: what it hands back later lands in the
         # agent it was given (kept by a rebuild that keeps it, else dropped).
@@ -658,9 +673,10 @@ class TuiGymApp(App[int]):
         self.play_view.reload()
         self.train_view.reload()
         self.side_panel.reload()
-        self.notify(report.notice, severity="information" if report.kept_agent else "warning",
-                    timeout=6)
-        if was_running and report.kept_agent:
+        if not (quiet and report.kept_agent):
+            self.notify(report.notice, severity="information" if report.kept_agent else "warning",
+                        timeout=6)
+        if was_running and (report.kept_agent or keep_running):
             self.runner.start()
         return True
 
@@ -755,6 +771,7 @@ class TuiGymApp(App[int]):
                  + " (each keeps its agent, settings and curves)"),
                 ("w / W", "focus the wrapper panel (W while a board that moves with WASD "
                           "has focus)"),
+                ("m", "edit a grid game's map, while it trains"),
                 ("esc", "leave a text field or the side panel: back to the view"),
                 ("ctrl+s", "save the agent to a file you name (asks before replacing one)"),
                 ("ctrl+o", "load an agent from a file you name"),
@@ -941,6 +958,7 @@ EXIT_CRASH = 1
 
 def run_app(
     env_id: str | None = None, seed: int = 0, load: str | None = None, runner: str = "process",
+    env_kwargs: dict[str, Any] | None = None,
     *, session: Session | None = None, record: str | None = None,
     replay: Recording | None = None, db: str | None = None, keep_history: bool = True,
 ) -> int:
@@ -950,7 +968,8 @@ def run_app(
     `keep_history`."""
     gc_seconds = gc_seconds_from_env()
     if session is None:
-        session = Session.load(load) if load else Session(env_id=env_id or "", seed=seed)
+        session = Session.load(load) if load else Session(env_id=env_id or "", seed=seed,
+                                                          env_kwargs=env_kwargs or {})
     run_log = None
     if keep_history:
         from tui_gym.core.experiments.app_recording import SessionRunLog

@@ -28,6 +28,7 @@ from textual.binding import Binding
 from tui_gym.core.session import Session
 from tui_gym.core.wrappers import parse_wrapper_spec
 from tui_gym.games import GAMES
+from tui_gym.games.maps.builtin import builtin_map
 from tui_gym.ui.widgets.boards import Board
 
 SIZE = (120, 40)
@@ -161,6 +162,24 @@ async def _compare(app, pilot) -> None:
         await pilot.pause()
 
 
+async def _map_editor(app, pilot) -> None:
+    """Trained a while, then a wall painted on the safe way round, and training on."""
+    await _train_view(app, pilot, 4_000)
+    await pilot.press("m")
+    await pilot.pause()
+    for key in ("right", "right", "right", "2"):  # a wall at row 0, col 3
+        await pilot.press(key)
+    await pilot.pause()
+    app.session.trainer.run(episodes=1_000)  # the agent keeps learning on the new map
+    _pin_timing(app.session)
+    app.train_view.show_snapshot(app.runner.latest, app.runner)
+    await pilot.pause()
+    editor = app.train_view.editor
+    if editor is not None:
+        app.train_view.scroll_to_widget(editor, top=True, animate=False)
+    await pilot.pause()
+
+
 async def _wrappers(app, pilot) -> None:
     await pilot.press("w")
     await pilot.pause()
@@ -185,6 +204,12 @@ def _scenarios() -> tuple[Scenario, ...]:
     shown = next((g for g in GAMES if g.demo_wrappers), first)
     compared = next((g for g in GAMES if g.demo_compare), first)
     choices = tuple(parse_wrapper_spec(text) for text in shown.demo_wrappers)
+    mapped = next((g for g in GAMES if "start" in g.map_tools), None)
+    if mapped is not None:
+        bridge = mapped.with_map({}, builtin_map("bridge").grid_map)
+        shots.append(Scenario("map-editor.svg", f"{mapped.title}: a map edited mid-training",
+                              partial(Session, mapped.env_id, env_kwargs=bridge, seed=0),
+                              _map_editor))
     shots += [
         Scenario("step-by-step.svg", f"{focused.title}: one SARSA update, step by step",
                  partial(Session, focused.env_id, seed=3, algorithm="sarsa"), _step_by_step),
