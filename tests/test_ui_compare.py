@@ -317,3 +317,13 @@ async def test_progress_draws_live_curves_and_stopping_keeps_what_finished(tmp_p
 def test_seeds_times_episodes_is_bounded() -> None:
     with pytest.raises(ValueError, match=r"at most 20,000,000 .*got 30,000,000"):
         read_launch(("sarsa",), "3", "10000000")
+
+
+def test_the_views_keys_leave_the_apps_keys_alone() -> None:
+    from tui_gym.ui.app import TuiGymApp
+
+    def keys(bindings) -> set[str]:
+        return {k for b in bindings for k in b.key.split(",")}
+
+    assert not keys(CompareView.BINDINGS) & keys(TuiGymApp.BINDINGS)
+    assert "v" in keys(TuiGymApp.BINDINGS)
