@@ -21,6 +21,7 @@ import contextlib
 import io
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -83,21 +84,19 @@ def _timed_recording(db: Path, spent: list[float]) -> Any:
     return recording
 
 
-def _train_once(db: Path, record: bool) -> tuple[float, float]:
-    """One default `train` run as the CLI runs it: (whole seconds, recording seconds)."""
-    from rich.console import Console
+TrainCommand = Callable[[list[str], Any], None]
+"""Runs `tui-gym ARGV` (a `train` command) as the CLI runs it, with a recording."""
 
-    from tui_gym.cli import build_parser
-    from tui_gym.commands import cmd_train
+
+def _train_once(db: Path, record: bool, train: TrainCommand) -> tuple[float, float]:
+    """One default `train` run as the CLI runs it: (whole seconds, recording seconds)."""
     from tui_gym.core.experiments.train_recording import TrainRecording
 
-    args = build_parser().parse_args(["train", GAME, "--json", "--db", str(db)])
     spent = [0.0]
     started = time.perf_counter()
     recording = _timed_recording(db, spent) if record else TrainRecording(enabled=False)
     with recording, contextlib.redirect_stdout(io.StringIO()):
-        args.recording = recording
-        cmd_train(args, Console(file=io.StringIO()))
+        train(["train", GAME, "--json", "--db", str(db)], recording)
     return time.perf_counter() - started, spent[0]
 
 
@@ -125,18 +124,21 @@ def _size(db: Path, template: Path, runs: int) -> int:
     return db.stat().st_size
 
 
-def measure(repeats: int, runs: int = 1000) -> HistoryResult:
-    """Recording's share of `repeats` default train runs, and the size of `runs` runs."""
+def measure(repeats: int, train: TrainCommand | None, runs: int = 1000) -> HistoryResult:
+    """Recording's share of `repeats` default train runs (`train` runs the CLI's train
+    command), and the size of `runs` runs."""
+    if train is None:
+        raise RuntimeError("the history stage needs the CLI's train command")
     with tempfile.TemporaryDirectory(prefix="tui-gym-bench-") as tmp:
         folder = Path(tmp)
         db = folder / "runs.db"
-        _train_once(db, record=True)  # warm-up: imports, the file's creation
+        _train_once(db, True, train)  # warm-up: imports, the file's creation
         shares, recorded, unrecorded = [], [], []
         for _ in range(repeats):
-            seconds, spent = _train_once(db, record=True)
+            seconds, spent = _train_once(db, True, train)
             shares.append(spent / seconds)
             recorded.append(seconds)
-            unrecorded.append(_train_once(db, record=False)[0])
+            unrecorded.append(_train_once(db, False, train)[0])
         size = _size(folder / "size.db", db, runs)
     return HistoryResult(GAME, tuple(shares), tuple(recorded), tuple(unrecorded), runs, size)
 

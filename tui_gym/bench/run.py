@@ -74,9 +74,11 @@ def run_bench(
     quick: bool = False,
     progress: Callable[[str], None] | None = None,
     algorithms: tuple[str, ...] | None = None,
+    train: history.TrainCommand | None = None,
 ) -> BenchResults:
     """Measure everything (see the module docstring); `algorithms` (registry names)
-    limits the per-algorithm speeds to those (default: every one)."""
+    limits the per-algorithm speeds to those (default: every one); `train` runs the
+    CLI's train command, for the run history's stage."""
     plan = QUICK if quick else FULL
     say = progress or (lambda _text: None)
     errors: dict[str, str] = {}
@@ -129,7 +131,7 @@ def run_bench(
           lambda: programs.measure(plan.separation_episodes, plan.pipe_seconds,
                                    plan.pipe_repeats))
     stage("history", "the run history: recording's share of a train run, the file's size",
-          lambda: history.measure(3 if quick else 5))
+          lambda: history.measure(3 if quick else 5, train))
     return BenchResults(
         quick=quick,
         seconds=time.perf_counter() - started,

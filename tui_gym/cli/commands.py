@@ -500,7 +500,8 @@ def cmd_bench(args: argparse.Namespace, out: Console) -> int:
         except ValueError as exc:
             raise CliError(f"--algorithm: {exc}") from None
     if args.json:
-        print_json(to_json(run_bench(quick=args.quick, algorithms=names)))
+        print_json(to_json(run_bench(quick=args.quick, algorithms=names,
+                                     train=getattr(args, "train_command", None))))
         return 0
     # Plain lines, not a spinner: a spinner's refresh thread would share the GIL
     # with the thread runner being measured.
@@ -510,6 +511,7 @@ def cmd_bench(args: argparse.Namespace, out: Console) -> int:
         quick=args.quick,
         progress=lambda text: err.print(f"[dim]{time.perf_counter() - started:5.1f} s[/] {text}"),
         algorithms=names,
+        train=getattr(args, "train_command", None),
     )
     out.print(table(results))
     for line in notes(results):

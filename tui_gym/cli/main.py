@@ -205,6 +205,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         from tui_gym.web import SERVE_COMMANDS
 
         commands = {**COMMANDS, **REPLAY_COMMANDS, **SERVE_COMMANDS, **RUNS_COMMANDS}
+        if args.command == "bench":  # the bench times a train command as the CLI runs it
+            args.train_command = _train_for_bench
         code = commands[args.command](args, out)
         sys.stdout.flush()  # a closed pipe shows here, not at exit
         return code
@@ -217,6 +219,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (CliError, ValueError, OSError) as exc:
         sys.stderr.write(f"tui-gym: error: {_one_line(exc)}\n")
         return EXIT_USAGE
+
+
+def _train_for_bench(argv: list[str], recording: Any) -> None:
+    """`tui-gym ARGV` (a train command) with the bench's recording, its output dropped."""
+    import io
+
+    from tui_gym.cli.commands import cmd_train
+
+    args = build_parser().parse_args(argv)
+    args.recording = recording
+    cmd_train(args, Console(file=io.StringIO()))
 
 
 def _quiet_stdout() -> None:
