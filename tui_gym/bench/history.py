@@ -1,8 +1,9 @@
 """The run history's cost: recording's share of a `train` run, and the file's size.
 
-Overhead: `tui-gym train blackjack` with its default settings (the budget,
-the 10,000-episode greedy evaluation, the JSON output) runs `repeats` times
-in this process into a fresh history file, and every call that records
+Overhead: a train run as `tui-gym train blackjack` makes it with its default
+settings (the session with the game's defaults, the training, the
+10,000-episode greedy evaluation) runs `repeats` times in this process into a
+fresh history file, and every call that records
 (opening the file, writing the run, the exact-value checkpoints, the curves
 and figures at the end, closing it) is timed. The figure is that time's share
 of the whole run, the median over repeats. Beside it, the same run with
@@ -17,11 +18,8 @@ seeds give) into a fresh file through `RunHistory`, which is then closed
 
 from __future__ import annotations
 
-import contextlib
-import io
 import tempfile
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -33,6 +31,7 @@ from tui_gym.bench.figures import median
 OVERHEAD_TARGET = 0.02  # recording's share of a train run
 SIZE_TARGET_BYTES = 1_000_000  # per 1,000 runs
 GAME = "blackjack"
+EVAL_EPISODES = 10_000  # as `train`'s --eval-episodes by default
 
 
 @dataclass(frozen=True)
@@ -84,19 +83,21 @@ def _timed_recording(db: Path, spent: list[float]) -> Any:
     return recording
 
 
-TrainCommand = Callable[[list[str], Any], None]
-"""Runs `tui-gym ARGV` (a `train` command) as the CLI runs it, with a recording."""
-
-
-def _train_once(db: Path, record: bool, train: TrainCommand) -> tuple[float, float]:
-    """One default `train` run as the CLI runs it: (whole seconds, recording seconds)."""
+def _train_once(db: Path, record: bool) -> tuple[float, float]:
+    """One default train run as `tui-gym train blackjack` runs it (the game's defaults,
+    seed 0, then the greedy evaluation): (whole seconds, recording seconds)."""
     from tui_gym.core.experiments.train_recording import TrainRecording
+    from tui_gym.core.session import Session
 
     spent = [0.0]
     started = time.perf_counter()
     recording = _timed_recording(db, spent) if record else TrainRecording(enabled=False)
-    with recording, contextlib.redirect_stdout(io.StringIO()):
-        train(["train", GAME, "--json", "--db", str(db)], recording)
+    with recording:
+        session = Session(GAME, seed=0)
+        recording.begin(session)
+        session.train(on_chunk=recording.on_chunk)
+        report = session.evaluate(EVAL_EPISODES, seed=1)
+        recording.finish(report)
     return time.perf_counter() - started, spent[0]
 
 
@@ -124,21 +125,18 @@ def _size(db: Path, template: Path, runs: int) -> int:
     return db.stat().st_size
 
 
-def measure(repeats: int, train: TrainCommand | None, runs: int = 1000) -> HistoryResult:
-    """Recording's share of `repeats` default train runs (`train` runs the CLI's train
-    command), and the size of `runs` runs."""
-    if train is None:
-        raise RuntimeError("the history stage needs the CLI's train command")
+def measure(repeats: int, runs: int = 1000) -> HistoryResult:
+    """Recording's share of `repeats` default train runs, and the size of `runs` runs."""
     with tempfile.TemporaryDirectory(prefix="tui-gym-bench-") as tmp:
         folder = Path(tmp)
         db = folder / "runs.db"
-        _train_once(db, True, train)  # warm-up: imports, the file's creation
+        _train_once(db, record=True)  # warm-up: imports, the file's creation
         shares, recorded, unrecorded = [], [], []
         for _ in range(repeats):
-            seconds, spent = _train_once(db, True, train)
+            seconds, spent = _train_once(db, record=True)
             shares.append(spent / seconds)
             recorded.append(seconds)
-            unrecorded.append(_train_once(db, False, train)[0])
+            unrecorded.append(_train_once(db, record=False)[0])
         size = _size(folder / "size.db", db, runs)
     return HistoryResult(GAME, tuple(shares), tuple(recorded), tuple(unrecorded), runs, size)
 

@@ -16,9 +16,11 @@ Targets:
 - exact-regret scoring separates `optimal` from a player deviating on 5% of
   Blackjack decisions with >= 10x fewer episodes than mean returns do;
 - the JSON-lines protocol steps >= 20,000 times a second over a pipe, MCP >= 1,000
-  (with several games at once).
+  (with several games at once);
 - recording a run in the run history takes <= 2% of a `train` run's time, and the
-  history stays under 1 MB per 1,000 runs of default settings.
+  history stays under 1 MB per 1,000 runs of default settings;
+- `compare` of Q-learning and SARSA, 50 seeds x 500 episodes, >= 20x faster than the
+  same 100 learners one after another in a tutorial-style loop.
 
 A verdict is PASS or MISS; "?" when a lower bound cannot decide it, "n/a"
 when the figure is missing (its stage failed: see `errors`).
@@ -47,6 +49,8 @@ ALGORITHM_SPEEDUP_TARGET = 50.0
 SEPARATION_RATIO_TARGET = 10.0
 PROTOCOL_STEPS_TARGET = 20_000.0
 MCP_STEPS_TARGET = 1_000.0
+COMPARE_SPEEDUP_TARGET = 20.0
+MAP_EDIT_MS_TARGET = 50.0
 
 PASS, MISS, UNDECIDED, MISSING = "PASS", "MISS", "?", "n/a"
 
@@ -99,6 +103,11 @@ def verdicts(results: BenchResults) -> dict[str, str]:
         )
     if "algorithms" in results.errors:
         out["algorithm_speedup"] = MISSING
+    for edit in results.map_edit or ():
+        out[f"map_edit_ms[{edit.game}]"] = _ok(edit.median_ms,
+                                                edit.median_ms <= MAP_EDIT_MS_TARGET)
+    if "map_edit" in results.errors:
+        out["map_edit_ms"] = MISSING
     planning = results.planning
     if planning is None:
         out["planning"] = MISSING
@@ -114,8 +123,27 @@ def verdicts(results: BenchResults) -> dict[str, str]:
                                            rate >= PROTOCOL_STEPS_TARGET)
     rate = found.mcp_together.steps_per_second if found else None
     out["mcp_steps_per_second"] = _ok(rate, rate is not None and rate >= MCP_STEPS_TARGET)
+    up = results.seeds.speedup if results.seeds else None
+    out["compare_speedup"] = _ok(up, up is not None and up >= COMPARE_SPEEDUP_TARGET)
     out.update(history.verdicts(results.history, MISSING, _ok))
     return out
+
+
+def _seeds_dict(results: BenchResults) -> dict[str, Any] | None:
+    found = results.seeds
+    if found is None:
+        return None
+    return {
+        "game": found.game,
+        "algorithms": list(found.algorithms),
+        "seeds": found.seeds,
+        "episodes": found.episodes,
+        "compare_s": found.compare_s,
+        "tutorial_s": found.tutorial_s,
+        "tutorial_learners_run": found.tutorial_learners,
+        "processes": found.processes,
+        "speedup": found.speedup,
+    }
 
 
 def _programs_dict(results: BenchResults) -> dict[str, Any] | None:
@@ -272,7 +300,13 @@ def to_json(results: BenchResults) -> dict[str, Any]:
         ],
         "planning": _planning_dict(results),
         "programs": _programs_dict(results),
+        "map_edit": [
+            {"game": e.game, "size": e.size, "edits": e.edits, "median_ms": e.median_ms,
+             "worst_ms": e.worst_ms, "kept_agent": e.kept_agent}
+            for e in results.map_edit or ()
+        ],
         "history": history.to_json(results.history),
+        "compare": _seeds_dict(results),
         "verdicts": verdicts(results),
         "errors": dict(results.errors),
     }
@@ -365,6 +399,10 @@ def table(results: BenchResults) -> Table:
             f"{_num(speed.speedup, '.0f', '×')} ({_num(speed.vector, ',.0f')} / "
             f"{_num(speed.tutorial, ',.0f')} ep/s)",
             f"≥ {ALGORITHM_SPEEDUP_TARGET:g}×", key)
+    for edit in results.map_edit or ():
+        row(f"{edit.game}: map edit → new optimum, {edit.size} (median, worst of {edit.edits})",
+            f"{edit.median_ms:.0f} ms (worst {edit.worst_ms:.0f})",
+            f"≤ {MAP_EDIT_MS_TARGET:g} ms", f"map_edit_ms[{edit.game}]")
     planning = results.planning
     if planning is not None:
         def runs(items: tuple) -> str:
@@ -391,6 +429,15 @@ def table(results: BenchResults) -> Table:
                 _num(found.mcp_together.steps_per_second, ",.0f"),
                 f"≥ {MCP_STEPS_TARGET:,.0f}", "mcp_steps_per_second")
             row("  one call at a time", _num(found.mcp_one.steps_per_second, ",.0f"))
+    found_seeds = results.seeds
+    if found_seeds is not None:
+        scaled = ("" if found_seeds.tutorial_learners == found_seeds.learners else
+                  f", {found_seeds.tutorial_learners} of {found_seeds.learners} run, scaled")
+        row(f"compare on {found_seeds.game}, {found_seeds.seeds} seeds × "
+            f"{found_seeds.episodes} ep: tutorial loop ÷ compare",
+            f"{_num(found_seeds.speedup, '.1f', '×')} ({found_seeds.tutorial_s:.1f} s{scaled} / "
+            f"{found_seeds.compare_s:.2f} s)",
+            f"≥ {COMPARE_SPEEDUP_TARGET:g}×", "compare_speedup")
     for label, value, target, verdict_key in history.rows(results.history):
         row(label, value, target, verdict_key)
     for stage, error in results.errors.items():

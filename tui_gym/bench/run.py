@@ -3,12 +3,13 @@
 `run_bench(quick, progress, algorithms)` measures throughput and time to
 the target gap (on every game the bench measures), every algorithm's
 vector-engine speed against its tutorial loop (or the named ones'), Dyna-Q's
-planning against Q-learning, live training (both runners), memory, start-up,
-programs as players (exact-regret scoring against returns, protocol and MCP
-speeds), and the run history's cost (recording's share of a train run, the
-file's size per 1,000 runs), and returns `BenchResults`. A stage that fails is
-recorded in `errors` and the others still run. `progress` (if given) hears the
-name of each stage as it starts.
+planning against Q-learning, `compare` against the same learners one after
+another, live training (both runners), memory, start-up, programs as players
+(exact-regret scoring against returns, protocol and MCP speeds), and the run
+history's cost (recording's share of a train run, the file's size per 1,000
+runs), and returns `BenchResults`. A stage that fails is recorded in `errors`
+and the others still run. `progress` (if given) hears the name of each stage
+as it starts.
 """
 
 from __future__ import annotations
@@ -21,7 +22,18 @@ from functools import partial
 from typing import Any
 
 from tui_gym.algorithms import ALGORITHMS
-from tui_gym.bench import gap, history, learners, live, memory, programs, startup, throughput
+from tui_gym.bench import (
+    gap,
+    history,
+    learners,
+    live,
+    map_edit,
+    memory,
+    programs,
+    seeds,
+    startup,
+    throughput,
+)
 from tui_gym.bench.figures import load_average
 from tui_gym.bench.results import BenchResults, MachineInfo
 
@@ -47,6 +59,9 @@ class Plan:
     separation_episodes: int = 5_000  # each of the two Blackjack players
     pipe_seconds: float = 1.0  # window per repeat, protocol and MCP
     pipe_repeats: int = 3
+    compare_seeds: int = 50  # `compare`: seeds per algorithm, episodes per seed
+    compare_episodes: int = 500
+    compare_tutorial_share: float = 1.0  # of the learners the tutorial loop runs
 
 
 # About 2 minutes on an idle 2-CPU machine; the tutorial gets one capped run a game.
@@ -57,6 +72,7 @@ QUICK = Plan(
     memory_episodes=2_000_000, memory_warmup=100_000,
     startup_repeats=3,
     algorithm_seconds=0.3, algorithm_repeats=3, planning_seeds=(0,),
+    compare_tutorial_share=0.1,
 )
 # About 12 minutes on an idle 2-CPU machine.
 FULL = Plan(
@@ -74,11 +90,9 @@ def run_bench(
     quick: bool = False,
     progress: Callable[[str], None] | None = None,
     algorithms: tuple[str, ...] | None = None,
-    train: history.TrainCommand | None = None,
 ) -> BenchResults:
     """Measure everything (see the module docstring); `algorithms` (registry names)
-    limits the per-algorithm speeds to those (default: every one); `train` runs the
-    CLI's train command, for the run history's stage."""
+    limits the per-algorithm speeds to those (default: every one)."""
     plan = QUICK if quick else FULL
     say = progress or (lambda _text: None)
     errors: dict[str, str] = {}
@@ -119,6 +133,10 @@ def run_bench(
     stage("planning", f"real episodes to the bound: Q-learning, then Dyna-Q "
           f"(planning_steps = {learners.PLANNING_STEPS}) on {learners.PLANNING_GAME}",
           lambda: learners.measure_planning(plan.planning_seeds, learners.PLANNING_BOUND))
+    stage("seeds", f"compare, {plan.compare_seeds} seeds × {plan.compare_episodes} episodes of "
+          "Q-learning and SARSA, against the same learners in a tutorial loop",
+          lambda: seeds.measure(plan.compare_seeds, plan.compare_episodes,
+                                plan.compare_tutorial_share))
     stage("live", "live training in the app",
           lambda: live.measure(plan.live_seconds, plan.key_presses, plan.live_repeats,
                                progress=say))
@@ -130,8 +148,10 @@ def run_bench(
           "and MCP steps/s",
           lambda: programs.measure(plan.separation_episodes, plan.pipe_seconds,
                                    plan.pipe_repeats))
+    stage("map_edit", f"map editor: an edit to the new optimum on {map_edit.MAP_SIDE}x"
+          f"{map_edit.MAP_SIDE} maps", lambda: tuple(map_edit.measure()))
     stage("history", "the run history: recording's share of a train run, the file's size",
-          lambda: history.measure(3 if quick else 5, train))
+          lambda: history.measure(3 if quick else 5))
     return BenchResults(
         quick=quick,
         seconds=time.perf_counter() - started,
@@ -144,6 +164,8 @@ def run_bench(
         algorithms=found.get("algorithms"),
         planning=found.get("planning"),
         programs=found.get("programs"),
+        map_edit=found.get("map_edit"),
         history=found.get("history"),
+        seeds=found.get("seeds"),
         errors=errors,
     )

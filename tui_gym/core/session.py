@@ -82,7 +82,8 @@ class _Built:
 def _build(
     game: Game, env_id: str, env_kwargs: Mapping[str, Any], choices: Sequence[WrapperChoice]
 ) -> _Built:
-    env, skipped = build_env_lenient(env_id, game.make_kwargs(env_kwargs), choices)
+    env, skipped = build_env_lenient(game.make_id(env_id, env_kwargs),
+                                     game.make_kwargs(env_kwargs), choices)
     skipped_set = {id(c) for c, _ in skipped}
     applied = tuple(c for c in choices if id(c) not in skipped_set)
     if not isinstance(env.action_space, gym.spaces.Discrete):
@@ -243,7 +244,8 @@ class Session:
 
     def make_env(self, render_mode: str | None = None) -> gym.Env:
         """A new env like the training one (same game, same wrappers), e.g. to play on."""
-        return build_env(self.env_id, self.game.make_kwargs(self.env_kwargs), self.applied,
+        return build_env(self.game.make_id(self.env_id, self.env_kwargs),
+                         self.game.make_kwargs(self.env_kwargs), self.applied,
                          render_mode=render_mode)
 
     def rebuild(
@@ -412,6 +414,14 @@ class Session:
         if q is None:
             return None
         reference = self.game.oracle.reference(q, self.env_kwargs, self.changes)
+        return None if isinstance(reference, NotAvailable) else reference
+
+    def evaluation_reference(self) -> ReferenceMetrics | None:
+        """`reference()` with what only an evaluation asks for (see the game's oracle)."""
+        q = self.base_q()
+        if q is None:
+            return None
+        reference = self.game.oracle.evaluation_reference(q, self.env_kwargs, self.changes)
         return None if isinstance(reference, NotAvailable) else reference
 
     def exact_reason(self) -> str:
@@ -694,7 +704,8 @@ def vector_support(
         env_id = resolve_env_id(env_id)
         game = game_for(env_id)
         kwargs = game.normalize_kwargs(env_kwargs or {})
-        env, _ = build_env_lenient(env_id, game.make_kwargs(kwargs), choices)
+        env, _ = build_env_lenient(game.make_id(env_id, kwargs), game.make_kwargs(kwargs),
+                                   choices)
     except (ValueError, TypeError, gym.error.Error) as error:
         return False, f"scalar engine: {error}"
     try:

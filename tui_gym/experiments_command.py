@@ -1,0 +1,459 @@
+"""The `compare` and `sweep` commands: learners across seeds, and settings across a grid.
+
+`compare GAME --algorithms A,B --seeds N --episodes E [--set KEY=VALUE ...]`
+prints a table of final figures and a line chart of the mean online return
+with its 95% band; `sweep GAME --algorithm A --grid KEY=V1,V2 [--grid ...]`
+prints a table of every grid point and, for two keys, a coloured grid of the
+final figure. Both take `--json` (one object), show a progress bar with an
+ETA on a terminal, stop cleanly on the first Ctrl+C (what finished is kept,
+printed and recorded; a second Ctrl+C ends at once), and record their runs in
+the run history (`--db PATH`, else `TUI_GYM_DB`, else the data folder's file;
+`--no-record` opts out). `compare --csv PATH` writes every episode's mean and
+band per algorithm.
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import threading
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rich.console import Console
+from rich.table import Table
+from rich.text import Text
+
+from tui_gym.algorithms import ALGORITHMS
+from tui_gym.cli.output import CliError, print_json
+from tui_gym.cli.types import file_name as _path
+from tui_gym.cli.types import int_in as _int_in
+from tui_gym.cli.types import seed_number as _seed
+
+if TYPE_CHECKING:
+    from tui_gym.core.experiments import RunHistory
+    from tui_gym.core.experiments.compare import AlgorithmOutcome, CompareProgress
+
+DB_HELP = "the run history file (default: $TUI_GYM_DB, else the data folder's runs.db)"
+# Every seed's return of every episode is kept while a run lasts: these bound that memory.
+_seeds = _int_in(1, 1000, "a number of seeds from 1 to 1,000")
+_episodes = _int_in(1, 200_000, "a number of episodes from 1 to 200,000")
+
+
+def _common_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--seeds", type=_seeds, default=10, metavar="N",
+                        help="independent learners per algorithm (default 10)")
+    parser.add_argument("--episodes", type=_episodes, default=500, metavar="E",
+                        help="episodes each learner trains for (default 500)")
+    parser.add_argument("--first-seed", type=_seed, default=0, metavar="S",
+                        help="seeds are S, S+1, ... (default 0)")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        dest="settings", help="a hyperparameter for every algorithm that has it "
+                        "(repeatable), e.g. --set epsilon_start=0.1")
+    parser.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
+                        dest="params", help="a game parameter (repeatable), e.g. --param size=6")
+    parser.add_argument("--wrapper", action="append", default=[], metavar="SPEC",
+                        help="add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable)")
+    parser.add_argument("--processes", type=_int_in(0, 1024, "a number of processes"),
+                        default=None, metavar="P",
+                        help="batches at once in child processes (default: one per core; "
+                        "0: in this process)")
+    parser.add_argument("--db", type=_path, metavar="PATH", help=DB_HELP)
+    parser.add_argument("--no-record", action="store_true",
+                        help="do not keep these runs in the run history")
+    parser.add_argument("--json", action="store_true", help="print one JSON object, no bar")
+
+
+def add_experiment_parsers(sub: Any) -> None:
+    """The `compare` and `sweep` sub-commands."""
+    names = ", ".join(cls.name for cls in ALGORITHMS)
+    compare = sub.add_parser(
+        "compare", help="compare learners over many seeds: mean return with a 95%% band",
+        description="Every (algorithm, seed) learns from scratch; the per-episode online "
+        "return is averaged over seeds with a 95% confidence band, and for games with an "
+        "exact model the greedy policy's exact value is followed at checkpoints.",
+    )
+    compare.add_argument("game", metavar="GAME", help="a game name or Gymnasium id")
+    compare.add_argument("--algorithms", required=True, metavar="A,B",
+                         help=f"comma-separated learners: {names}")
+    _common_options(compare)
+    compare.add_argument("--csv", type=_path, metavar="PATH",
+                         help="write each episode's mean and band per algorithm to a CSV file")
+    compare.add_argument("--width", type=_int_in(20, 400, "a width from 20 to 400"),
+                         default=None, metavar="W", help="chart width in characters")
+
+    sweep = sub.add_parser(
+        "sweep", help="one learner over a grid of hyperparameter values, many seeds each",
+        description="Every grid point trains the algorithm over the seeds, as `compare` does; "
+        "the table lists each point's figures, and two keys also show as a coloured grid.",
+    )
+    sweep.add_argument("game", metavar="GAME", help="a game name or Gymnasium id")
+    sweep.add_argument("--algorithm", required=True, metavar="NAME", help=f"the learner: {names}")
+    sweep.add_argument("--grid", action="append", required=True, metavar="KEY=V1,V2",
+                       help="a hyperparameter and its values (repeatable)")
+    _common_options(sweep)
+
+
+# --- reading the arguments ---------------------------------------------------------------
+
+
+def _pairs(items: Sequence[str], flag: str) -> dict[str, str]:
+    out: dict[str, str] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        key = key.strip().replace("-", "_")
+        if not sep or not key or not value.strip():
+            raise CliError(f"{flag} {item!r}: expected KEY=VALUE")
+        if key in out:
+            raise CliError(f"{flag} {key} is given twice")
+        out[key] = value.strip()
+    return out
+
+
+def _wrappers(specs: Sequence[str]) -> tuple[Any, ...]:
+    from tui_gym.core.wrappers import parse_wrapper_spec
+
+    return tuple(parse_wrapper_spec(spec) for spec in specs)
+
+
+@contextmanager
+def _history(args: argparse.Namespace) -> Iterator[RunHistory | None]:
+    """The run history to record in (None with --no-record, or when it cannot be opened)."""
+    if args.no_record:
+        yield None
+        return
+    from tui_gym.core.experiments import RunHistory, RunHistoryError, resolve_db_path
+
+    path = resolve_db_path(args.db)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        history = RunHistory(path)
+    except (RunHistoryError, OSError) as exc:
+        text = str(exc) if isinstance(exc, RunHistoryError) else f"{path}: {exc}"
+        sys.stderr.write(f"tui-gym: not recording these runs: {text}\n")
+        yield None
+        return
+    with history:
+        yield history
+
+
+@contextmanager
+def _ctrl_c_stops(stop: threading.Event, err: Console) -> Iterator[None]:
+    """The first Ctrl+C sets `stop` (the run ends cleanly); a second one interrupts at once."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum: int, frame: Any) -> None:
+        if stop.is_set():
+            raise KeyboardInterrupt
+        stop.set()
+        err.print("stopping: keeping what finished (Ctrl+C again to quit at once)",
+                  style="yellow")
+
+    previous = signal.signal(signal.SIGINT, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _run_with_progress(
+    out: Console,
+    as_json: bool,
+    label: str,
+    run: Callable[[Callable[[CompareProgress], None] | None, threading.Event], Any],
+) -> Any:
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TaskProgressColumn,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
+    stop = threading.Event()
+    err = Console(stderr=True)
+    with _ctrl_c_stops(stop, err):
+        if as_json or not out.is_terminal:
+            return run(None, stop)
+        progress = Progress(
+            TextColumn(f"[bold]{label}[/]"), BarColumn(), MofNCompleteColumn(),
+            TextColumn("episodes"), TaskProgressColumn(), TimeElapsedColumn(),
+            TextColumn("ETA"), TimeRemainingColumn(), console=out, transient=True,
+        )
+        task = progress.add_task(label, total=None)
+
+        def update(p: CompareProgress) -> None:
+            progress.update(task, completed=p.done, total=p.total)
+
+        with progress:
+            return run(update, stop)
+
+
+def _number_text(value: float | None, ci: float | None = None) -> str:
+    """A figure with 3 significant digits or so, and its 95% interval."""
+    if value is None:
+        return "—"
+    digits = 3 if abs(value) < 1 else 2 if abs(value) < 10 else 1
+    text = f"{value:+.{digits}f}"
+    return f"{text} ± {ci:.{digits}f}" if ci is not None else text
+
+
+def _settings_text(hp: dict[str, Any]) -> str:
+    parts = []
+    if "learning_rate" in hp:
+        parts.append(f"α={hp['learning_rate']:g}")
+    if "epsilon_start" in hp and "epsilon_final" in hp:
+        start, final = hp["epsilon_start"], hp["epsilon_final"]
+        parts.append(f"ε={start:g}" if start == final else f"ε={start:g}→{final:g}")
+    if "discount" in hp:
+        parts.append(f"γ={hp['discount']:g}")
+    return " ".join(parts)
+
+
+# --- compare -------------------------------------------------------------------------------
+
+
+def _algorithm_names(text: str) -> list[str]:
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    if not names:
+        raise CliError("--algorithms: name at least one, e.g. --algorithms q-learning,sarsa")
+    return names
+
+
+def cmd_compare(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.core.experiments.compare import CompareError, CompareSpec, run_compare
+
+    spec = CompareSpec(
+        game=args.game, algorithms=_algorithm_names(args.algorithms), seeds=args.seeds,
+        episodes=args.episodes, settings=_pairs(args.settings, "--set"),
+        game_params=_pairs(args.params, "--param"), wrappers=_wrappers(args.wrapper),
+        first_seed=args.first_seed,
+    )
+    with _history(args) as history:
+        try:
+            result = _run_with_progress(
+                out, args.json, "comparing",
+                lambda progress, stop: run_compare(spec, progress=progress, stop=stop,
+                                                   history=history, processes=args.processes),
+            )
+        except CompareError as exc:
+            raise CliError(str(exc)) from None
+    if args.csv:
+        _write_csv(args.csv, result.outcomes)
+    if args.json:
+        print_json(result.to_json())
+        return 130 if result.interrupted else 0
+    if not result.outcomes:
+        out.print("stopped before any episode finished; nothing to show")
+        return 130
+    out.print(_compare_table(result))
+    width = args.width or max(20, min(100, out.width - 12))
+    out.print(_compare_chart(result, width))
+    if result.interrupted:
+        out.print(f"[yellow]interrupted:[/] kept the first "
+                  f"{min(o.episodes for o in result.outcomes):,} episodes of every seed")
+    if result.group is not None:
+        ids = [str(o.run_id) for o in result.outcomes]
+        noun = "run" if len(ids) == 1 else "runs"
+        out.print(f"recorded in the run history as {noun} {', '.join(ids)} "
+                  "(tui-gym runs show ID)", style="dim")
+    if args.csv:
+        out.print(f"curves written to {args.csv}", style="dim")
+    return 130 if result.interrupted else 0
+
+
+def _compare_table(result: Any) -> Table:
+    spec = result.spec
+    title = (f"{result.game}: {spec.seeds} seeds × {spec.episodes:,} episodes"
+             + (f", optimum {result.optimum:+.3f}" if result.optimum is not None else ""))
+    table = Table(title=title, title_justify="left")
+    table.add_column("algorithm", style="bold")
+    table.add_column("settings")
+    table.add_column("return, last 10%", justify="right")
+    has_exact = any(o.exact_value is not None for o in result.outcomes)
+    if has_exact:
+        table.add_column("greedy exact value", justify="right")
+        table.add_column("gap", justify="right")
+    table.add_column("seeds", justify="right")
+    from tui_gym.terminal_chart import PALETTE
+
+    for k, o in enumerate(result.outcomes):
+        row: list[Text | str] = [
+            Text(o.algorithm, style=PALETTE[k % len(PALETTE)]),
+            _settings_text(dict(o.hyperparameters)),
+            _number_text(o.mean_return_last.mean, o.mean_return_last.ci95),
+        ]
+        if has_exact:
+            row += [_number_text(o.exact_value, o.exact_ci95), _number_text(o.exact_gap)]
+        row.append(f"{o.seeds_done}/{o.seeds}")
+        table.add_row(*row)
+    return table
+
+
+def _compare_chart(result: Any, width: int) -> Text:
+    from tui_gym.terminal_chart import ChartSeries, band_chart
+
+    series = []
+    for o in result.outcomes:
+        curve = o.smoothed or o.curve
+        series.append(ChartSeries(o.algorithm, curve.episodes, curve.mean, curve.lo, curve.hi))
+    window = max(o.smoothing for o in result.outcomes)
+    smoothed = f", each seed's averaged over its last {window} episodes" if window > 1 else ""
+    chart = band_chart(series, width, 14, y_label=f"online return per episode, mean of "
+                       f"{result.spec.seeds} seeds{smoothed}", skip_start=True)
+    exact = [o for o in result.outcomes if o.exact_curve is not None]
+    if exact:
+        chart.append("\n\n")
+        curves = [ChartSeries(o.algorithm, o.exact_curve.episodes, o.exact_curve.mean,
+                              o.exact_curve.lo, o.exact_curve.hi) for o in exact]
+        chart.append_text(band_chart(curves, width, 8, y_label="greedy policy's exact value"))
+    return chart
+
+
+def _write_csv(path: str, outcomes: Sequence[AlgorithmOutcome]) -> None:
+    import numpy as np
+
+    from tui_gym.core.experiments.csv_export import write_text_atomic
+
+    if not outcomes:
+        return
+    episodes = max((o.curve.episodes for o in outcomes), key=len)
+    header = ["episode"]
+    columns = []
+    for o in outcomes:
+        pad = np.full(len(episodes) - len(o.curve), np.nan)
+        header += [f"{o.algorithm}.mean", f"{o.algorithm}.lo", f"{o.algorithm}.hi"]
+        for values in (o.curve.mean, o.curve.lo, o.curve.hi):
+            columns.append(np.concatenate([values, pad]) if values is not None
+                           else np.full(len(episodes), np.nan))
+    lines = [",".join(header)]
+    for i, episode in enumerate(episodes.tolist()):
+        cells = [str(episode)] + ["" if np.isnan(c[i]) else repr(float(c[i])) for c in columns]
+        lines.append(",".join(cells))
+    try:
+        write_text_atomic(Path(path).expanduser(), "\n".join(lines) + "\n")
+    except OSError as exc:
+        raise CliError(f"--csv {path}: cannot write ({exc.strerror or exc})") from None
+
+
+# --- sweep ---------------------------------------------------------------------------------
+
+
+def _grid(items: Sequence[str]) -> dict[str, list[str]]:
+    grid: dict[str, list[str]] = {}
+    for item in items:
+        key, sep, values = item.partition("=")
+        key = key.strip().replace("-", "_")
+        parts = [v.strip() for v in values.split(",") if v.strip()]
+        if not sep or not key or not parts:
+            raise CliError(f"--grid {item!r}: expected KEY=V1,V2,...")
+        if key in grid:
+            raise CliError(f"--grid {key} is given twice")
+        grid[key] = parts
+    return grid
+
+
+def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.core.experiments.compare import CompareError
+    from tui_gym.core.experiments.sweep import SweepSpec, run_sweep
+
+    spec = SweepSpec(
+        game=args.game, algorithm=args.algorithm, grid=_grid(args.grid), seeds=args.seeds,
+        episodes=args.episodes, settings=_pairs(args.settings, "--set"),
+        game_params=_pairs(args.params, "--param"), wrappers=_wrappers(args.wrapper),
+        first_seed=args.first_seed,
+    )
+    with _history(args) as history:
+        try:
+            result = _run_with_progress(
+                out, args.json, "sweeping",
+                lambda progress, stop: run_sweep(spec, progress=progress, stop=stop,
+                                                 history=history, processes=args.processes),
+            )
+        except CompareError as exc:
+            raise CliError(str(exc)) from None
+    if args.json:
+        print_json(result.to_json())
+        return 130 if result.interrupted else 0
+    out.print(_sweep_table(result))
+    if len(spec.grid) == 2:
+        out.print(_sweep_grid(result))
+    if result.interrupted:
+        out.print("[yellow]interrupted:[/] points show the episodes every seed finished")
+    return 130 if result.interrupted else 0
+
+
+def _figure_of(o: AlgorithmOutcome | None) -> float | None:
+    """The figure a sweep ranks by: the exact value where there is one, else the online return."""
+    if o is None:
+        return None
+    return o.exact_value if o.exact_value is not None else o.mean_return_last.mean
+
+
+def _sweep_table(result: Any) -> Table:
+    spec = result.spec
+    title = f"{result.game}, {spec.algorithm}: {spec.seeds} seeds × {spec.episodes:,} episodes"
+    table = Table(title=title, title_justify="left")
+    for key in spec.grid:
+        table.add_column(key, justify="right", style="bold")
+    table.add_column("return, last 10%", justify="right")
+    has_exact = any(p.outcome is not None and p.outcome.exact_value is not None
+                    for p in result.points)
+    if has_exact:
+        table.add_column("greedy exact value", justify="right")
+        table.add_column("gap", justify="right")
+    table.add_column("seeds", justify="right")
+    best = max((v for p in result.points if (v := _figure_of(p.outcome)) is not None),
+               default=None)
+    for point in result.points:
+        o = point.outcome
+        row = [f"{point.values[k]:g}" if isinstance(point.values[k], float)
+               else str(point.values[k]) for k in spec.grid]
+        if o is None:
+            row += ["—"] * (4 if has_exact else 2)
+        else:
+            row.append(_number_text(o.mean_return_last.mean, o.mean_return_last.ci95))
+            if has_exact:
+                row += [_number_text(o.exact_value, o.exact_ci95), _number_text(o.exact_gap)]
+            row.append(f"{o.seeds_done}/{o.seeds}")
+        top = best is not None and _figure_of(o) == best
+        table.add_row(*row, style="green" if top else None)
+    return table
+
+
+def _sweep_grid(result: Any) -> Table:
+    """Two keys as rows and columns, each cell the final figure on a red-to-green scale."""
+    (row_key, rows), (col_key, cols) = list(result.grid.items())
+    figure = {(p.values[row_key], p.values[col_key]): _figure_of(p.outcome)
+              for p in result.points}
+    values = [v for v in figure.values() if v is not None]
+    low, high = (min(values), max(values)) if values else (0.0, 1.0)
+    exact = any(p.outcome is not None and p.outcome.exact_value is not None
+                for p in result.points)
+    what = "greedy exact value" if exact else "online return, last 10%"
+    table = Table(title=f"{what}: {row_key} (rows) × {col_key} (columns)", title_justify="left")
+    table.add_column(f"{row_key} \\ {col_key}", style="bold", justify="right")
+    for c in cols:
+        table.add_column(f"{c:g}" if isinstance(c, float) else str(c), justify="right")
+    for r in rows:
+        cells: list[Text | str] = [f"{r:g}" if isinstance(r, float) else str(r)]
+        for c in cols:
+            v = figure.get((r, c))
+            if v is None:
+                cells.append("—")
+                continue
+            share = 0.5 if high == low else (v - low) / (high - low)
+            red, green = int(200 * (1 - share)) + 30, int(200 * share) + 30
+            cells.append(Text(f" {v:+.3f} ", style=f"bold black on rgb({red},{green},60)"))
+        table.add_row(*cells)
+    return table
+
+
+EXPERIMENT_COMMANDS = {"compare": cmd_compare, "sweep": cmd_sweep}

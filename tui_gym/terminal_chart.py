@@ -1,0 +1,190 @@
+"""Line charts with confidence bands in the terminal, for `compare` and `sweep`.
+
+`band_chart(series, width, height)` draws each `ChartSeries` (x, mean and
+optionally lo/hi) as a braille line (2 x 4 dots a character) in its colour,
+over its band drawn as shaded blocks in the same colour, with the y range on
+the left, the x range below and a legend. Points that share a dot column are
+averaged, so a long noisy curve reads as its trend. The result is a rich
+`Text`: coloured on a terminal, plain characters (lines and shaded bands)
+everywhere else.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from rich.text import Text
+
+__all__ = ["PALETTE", "ChartSeries", "band_chart", "format_number"]
+
+PALETTE = ("cyan", "magenta", "yellow", "green", "red", "blue", "bright_white", "bright_cyan")
+BAND = "░"
+_BRAILLE = 0x2800
+# The braille dot bit at (column 0..1, row 0..3 from the top) of a character cell.
+_DOTS = ((0x01, 0x08), (0x02, 0x10), (0x04, 0x20), (0x40, 0x80))
+
+
+@dataclass(frozen=True, eq=False)
+class ChartSeries:
+    """One curve: its name, x values, means and band edges (None for no band)."""
+
+    name: str
+    x: np.ndarray
+    mean: np.ndarray
+    lo: np.ndarray | None = None
+    hi: np.ndarray | None = None
+
+
+def format_number(value: float) -> str:
+    """A short form of an axis value."""
+    if not math.isfinite(value):
+        return str(value)
+    if value != 0 and (abs(value) >= 1e5 or abs(value) < 1e-3):
+        return f"{value:.2g}"
+    if abs(value) >= 100:
+        return f"{value:.0f}"
+    return f"{value:.3g}"
+
+
+def _binned(x: np.ndarray, values: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """The mean of `values` in each x bin (NaN for an empty one)."""
+    index = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, len(edges) - 2)
+    sums = np.bincount(index, weights=values, minlength=len(edges) - 1)
+    counts = np.bincount(index, minlength=len(edges) - 1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(counts > 0, sums / counts, np.nan)
+
+
+def _fill_gaps(values: np.ndarray) -> np.ndarray:
+    """Empty bins take the value of the bin before them (or after, at the start)."""
+    out = values.copy()
+    present = np.flatnonzero(~np.isnan(out))
+    if not present.size:
+        return out
+    index = np.maximum.accumulate(np.where(~np.isnan(out), np.arange(len(out)), -1))
+    index[index < 0] = present[0]
+    return out[index]
+
+
+def band_chart(
+    series: Sequence[ChartSeries],
+    width: int = 72,
+    height: int = 16,
+    *,
+    x_label: str = "episode",
+    y_label: str = "",
+    skip_start: bool = False,
+) -> Text:
+    """The chart of `series` in `width` x `height` character cells of plot, plus axes and legend.
+
+    With `skip_start` the y range fits the curves after their first 5%, and points
+    beyond it are drawn on its edge (the legend says so).
+    """
+    shown = [s for s in series if len(s.x)]
+    if not shown:
+        return Text("(nothing to plot yet)")
+    width, height = max(8, width), max(3, height)
+    x_min = float(min(s.x.min() for s in shown))
+    x_max = float(max(s.x.max() for s in shown))
+    if x_max == x_min:
+        x_max = x_min + 1
+    columns, rows = 2 * width, 4 * height
+    edges = np.linspace(x_min, x_max, columns + 1)
+    edges[-1] = np.nextafter(edges[-1], np.inf)
+    binned = []
+    for s in shown:
+        x = np.asarray(s.x, dtype=np.float64)
+        mean = _fill_gaps(_binned(x, np.asarray(s.mean, dtype=np.float64), edges))
+        lo = hi = None
+        if s.lo is not None and s.hi is not None:
+            lo = _fill_gaps(_binned(x, np.asarray(s.lo, dtype=np.float64), edges))
+            hi = _fill_gaps(_binned(x, np.asarray(s.hi, dtype=np.float64), edges))
+        binned.append((mean, lo, hi))
+    # The y range leaves out the first columns when they alone would stretch it (early
+    # learning curves start far below where they end): those points sit on the edge.
+    skip = columns // 20 if skip_start else 0
+    everything = np.concatenate([a[skip:] for b in binned for a in b if a is not None])
+    everything = everything[np.isfinite(everything)]
+    y_min, y_max = (float(everything.min()), float(everything.max())) if everything.size else (0, 1)
+    whole = np.concatenate([a for b in binned for a in b if a is not None])
+    whole = whole[np.isfinite(whole)]
+    clipped = bool(whole.size) and (whole.min() < y_min or whole.max() > y_max)
+    if y_max == y_min:
+        y_min, y_max = y_min - 1, y_max + 1
+
+    def dot_row(y: np.ndarray) -> np.ndarray:
+        scaled = (y_max - y) / (y_max - y_min) * (rows - 1)
+        return np.clip(np.rint(np.nan_to_num(scaled, nan=rows - 1)), 0, rows - 1).astype(int)
+
+    dots = np.zeros((height, width), dtype=np.int64)
+    dot_owner = np.full((height, width), -1, dtype=np.int64)
+    band_owner = np.full((height, width), -1, dtype=np.int64)
+    for k, (mean, lo, hi) in enumerate(binned):
+        if lo is not None and hi is not None:
+            top, bottom = dot_row(hi), dot_row(lo)
+            for c in range(width):
+                first = int(min(top[2 * c], top[2 * c + 1])) // 4
+                last = int(max(bottom[2 * c], bottom[2 * c + 1])) // 4
+                band_owner[first : last + 1, c] = k
+        ys = dot_row(mean)
+        for col in range(columns):
+            # Join each dot to the one before it, so that steep stretches stay one line.
+            prev = ys[col - 1] if col else ys[col]
+            lo_row, hi_row = sorted((int(prev), int(ys[col])))
+            if lo_row < hi_row:
+                mid = (lo_row + hi_row) // 2
+                span = range(mid + 1, hi_row + 1) if ys[col] > prev else range(lo_row, mid + 1)
+            else:
+                span = range(lo_row, hi_row + 1)
+            for r in span:
+                cell_r, cell_c = r // 4, col // 2
+                dots[cell_r, cell_c] |= _DOTS[r % 4][col % 2]
+                dot_owner[cell_r, cell_c] = k
+    labels = [format_number(y_max), format_number((y_max + y_min) / 2), format_number(y_min)]
+    pad = max(len(label) for label in labels)
+    text = Text()
+    if y_label:
+        text.append(f"{y_label}\n", style="bold")
+    for r in range(height):
+        label = ""
+        if r == 0:
+            label = labels[0]
+        elif r == height // 2:
+            label = labels[1]
+        elif r == height - 1:
+            label = labels[2]
+        text.append(f"{label:>{pad}} ┤" if label else f"{'':>{pad}} │", style="dim")
+        for c in range(width):
+            owner = int(dot_owner[r, c])
+            if owner >= 0:
+                text.append(chr(_BRAILLE + int(dots[r, c])), style=f"bold {_colour(owner)}")
+            elif band_owner[r, c] >= 0:
+                text.append(BAND, style=_colour(int(band_owner[r, c])))
+            else:
+                text.append(" ")
+        text.append("\n")
+    axis = f"{'':>{pad}} └" + "─" * width
+    text.append(axis + "\n", style="dim")
+    left, right = format_number(x_min), format_number(x_max)
+    gap = max(1, width - len(left) - len(right))
+    text.append(f"{'':>{pad}}  {left}{' ' * gap}{right}\n", style="dim")
+    if x_label:
+        text.append(f"{'':>{pad}}  {x_label:^{width}}\n", style="dim")
+    text.append(f"{'':>{pad}}  ")
+    for k, s in enumerate(shown):
+        text.append("━━ ", style=f"bold {_colour(k)}")
+        text.append(s.name)
+        text.append("   ")
+    if any(lo is not None for _, lo, _ in binned):
+        text.append(f"{BAND * 2} 95% band", style="dim")
+    if clipped:
+        note = "(the first episodes go off the scale: drawn on its edge)"
+        text.append("\n" + " " * (pad + 2) + note, style="dim")
+    return text
+
+
+def _colour(k: int) -> str:
+    return PALETTE[k % len(PALETTE)]
