@@ -28,7 +28,9 @@ BLACKJACK_EVAL_KEYS = EVAL_KEYS | {
     "optimal_value",
     "gap",
 }
-GRIDWORLD_EVAL_KEYS = EVAL_KEYS | {"success_rate", "optimal_pair_fraction"}
+GRIDWORLD_EVAL_KEYS = EVAL_KEYS | {
+    "success_rate", "optimal_pair_fraction", "exact_value", "optimal_value", "gap"
+}
 
 
 def run(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
@@ -442,24 +444,39 @@ def test_save_through_a_symlink_writes_its_target(
     assert run_json(capsys, "eval", str(link), "--episodes", "10", "--json")["episodes"] == 10
 
 
-def test_the_evaluation_stops_at_its_step_budget(
-    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+def test_the_evaluation_is_exact_and_its_sample_stops_at_the_step_budget(
+    capsys: pytest.CaptureFixture[str],
 ) -> None:
-    from tui_gym.core import evaluation
+    from tui_gym.core.evaluation import EVAL_STEP_BUDGET
 
-    # An agent trained for 50 episodes on a 12x12 grid loops until the 300-step time limit.
-    monkeypatch.setattr(evaluation, "EVAL_STEP_BUDGET", 3_000)
+    # An agent trained for 50 episodes on a 12x12 grid often loops until the 300-step limit.
     data = run_json(capsys, "train", "gridworld", "--size", "12", "--episodes", "50", "--json")
     report = data["eval"]
+    assert 0.0 <= report["exact_value"] < report["optimal_value"] == pytest.approx(1.0)
+    assert report["gap"] == pytest.approx(report["optimal_value"] - report["exact_value"])
+    assert "exact_reason" not in report and "reference_note" not in report
     assert report["episodes_requested"] == 10_000
-    assert 3_000 / 300 <= report["episodes"] < 3_000 / 12
+    assert report["step_budget"] == EVAL_STEP_BUDGET
+    assert EVAL_STEP_BUDGET / 300 <= report["episodes"] < 10_000
     rows = dict(_eval_rows(report))  # what the summary table shows without --json
-    assert rows["greedy episodes"] == (
-        f"{report['episodes']} of 10,000 (stopped at the 3,000-step budget)"
+    assert rows["exact value (greedy policy)"] == f"{report['exact_value']:+.4f}"
+    assert rows["gap to the optimum"] == f"{report['gap']:.4f}"
+    assert rows["sampled episodes"] == (
+        f"{report['episodes']} of 10,000 (stopped at the {EVAL_STEP_BUDGET:,}-step budget)"
     )
+    assert rows["sampled mean return"] == f"{report['mean_return']:+.4f}"
     small = run_json(capsys, "train", "gridworld", "--size", "2", "--episodes", "500",
                      "--eval-episodes", "300", "--json")
     assert small["eval"]["episodes"] == small["eval"]["episodes_requested"] == 300
+    assert "step_budget" not in small["eval"]
+    assert small["eval"]["gap"] == 0.0  # a 2x2 grid is learnt in 500 episodes
+
+
+def test_eval_rows_say_why_there_is_no_exact_value() -> None:
+    rows = dict(_eval_rows({"env_id": "x", "episodes": 5, "mean_return": 1.0,
+                            "std_return": 0.0, "exact_reason": "StickyAction changes it"}))
+    assert rows["exact value"] == "n/a (StickyAction changes it)"
+    assert rows["sampled episodes"] == "5"
 
 
 def test_bad_save_files_are_one_line_and_exit_2(

@@ -1,8 +1,9 @@
 """The run history's cost: recording's share of a `train` run, and the file's size.
 
-Overhead: `tui-gym train blackjack` with its default settings (the budget,
-the 10,000-episode greedy evaluation, the JSON output) runs `repeats` times
-in this process into a fresh history file, and every call that records
+Overhead: a train run as `tui-gym train blackjack` makes it with its default
+settings (the session with the game's defaults, the training, the
+10,000-episode greedy evaluation) runs `repeats` times in this process into a
+fresh history file, and every call that records
 (opening the file, writing the run, the exact-value checkpoints, the curves
 and figures at the end, closing it) is timed. The figure is that time's share
 of the whole run, the median over repeats. Beside it, the same run with
@@ -17,8 +18,6 @@ seeds give) into a fresh file through `RunHistory`, which is then closed
 
 from __future__ import annotations
 
-import contextlib
-import io
 import tempfile
 import time
 from dataclasses import dataclass, replace
@@ -32,6 +31,7 @@ from tui_gym.bench.figures import median
 OVERHEAD_TARGET = 0.02  # recording's share of a train run
 SIZE_TARGET_BYTES = 1_000_000  # per 1,000 runs
 GAME = "blackjack"
+EVAL_EPISODES = 10_000  # as `train`'s --eval-episodes by default
 
 
 @dataclass(frozen=True)
@@ -84,20 +84,20 @@ def _timed_recording(db: Path, spent: list[float]) -> Any:
 
 
 def _train_once(db: Path, record: bool) -> tuple[float, float]:
-    """One default `train` run as the CLI runs it: (whole seconds, recording seconds)."""
-    from rich.console import Console
-
-    from tui_gym.cli import build_parser
-    from tui_gym.commands import cmd_train
+    """One default train run as `tui-gym train blackjack` runs it (the game's defaults,
+    seed 0, then the greedy evaluation): (whole seconds, recording seconds)."""
     from tui_gym.core.experiments.train_recording import TrainRecording
+    from tui_gym.core.session import Session
 
-    args = build_parser().parse_args(["train", GAME, "--json", "--db", str(db)])
     spent = [0.0]
     started = time.perf_counter()
     recording = _timed_recording(db, spent) if record else TrainRecording(enabled=False)
-    with recording, contextlib.redirect_stdout(io.StringIO()):
-        args.recording = recording
-        cmd_train(args, Console(file=io.StringIO()))
+    with recording:
+        session = Session(GAME, seed=0)
+        recording.begin(session)
+        session.train(on_chunk=recording.on_chunk)
+        report = session.evaluate(EVAL_EPISODES, seed=1)
+        recording.finish(report)
     return time.perf_counter() - started, spent[0]
 
 

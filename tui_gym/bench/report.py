@@ -50,6 +50,7 @@ SEPARATION_RATIO_TARGET = 10.0
 PROTOCOL_STEPS_TARGET = 20_000.0
 MCP_STEPS_TARGET = 1_000.0
 COMPARE_SPEEDUP_TARGET = 20.0
+MAP_EDIT_MS_TARGET = 50.0
 
 PASS, MISS, UNDECIDED, MISSING = "PASS", "MISS", "?", "n/a"
 
@@ -102,6 +103,11 @@ def verdicts(results: BenchResults) -> dict[str, str]:
         )
     if "algorithms" in results.errors:
         out["algorithm_speedup"] = MISSING
+    for edit in results.map_edit or ():
+        out[f"map_edit_ms[{edit.game}]"] = _ok(edit.median_ms,
+                                                edit.median_ms <= MAP_EDIT_MS_TARGET)
+    if "map_edit" in results.errors:
+        out["map_edit_ms"] = MISSING
     planning = results.planning
     if planning is None:
         out["planning"] = MISSING
@@ -294,6 +300,11 @@ def to_json(results: BenchResults) -> dict[str, Any]:
         ],
         "planning": _planning_dict(results),
         "programs": _programs_dict(results),
+        "map_edit": [
+            {"game": e.game, "size": e.size, "edits": e.edits, "median_ms": e.median_ms,
+             "worst_ms": e.worst_ms, "kept_agent": e.kept_agent}
+            for e in results.map_edit or ()
+        ],
         "history": history.to_json(results.history),
         "compare": _seeds_dict(results),
         "verdicts": verdicts(results),
@@ -388,6 +399,10 @@ def table(results: BenchResults) -> Table:
             f"{_num(speed.speedup, '.0f', '×')} ({_num(speed.vector, ',.0f')} / "
             f"{_num(speed.tutorial, ',.0f')} ep/s)",
             f"≥ {ALGORITHM_SPEEDUP_TARGET:g}×", key)
+    for edit in results.map_edit or ():
+        row(f"{edit.game}: map edit → new optimum, {edit.size} (median, worst of {edit.edits})",
+            f"{edit.median_ms:.0f} ms (worst {edit.worst_ms:.0f})",
+            f"≤ {MAP_EDIT_MS_TARGET:g} ms", f"map_edit_ms[{edit.game}]")
     planning = results.planning
     if planning is not None:
         def runs(items: tuple) -> str:
@@ -423,8 +438,8 @@ def table(results: BenchResults) -> Table:
             f"{_num(found_seeds.speedup, '.1f', '×')} ({found_seeds.tutorial_s:.1f} s{scaled} / "
             f"{found_seeds.compare_s:.2f} s)",
             f"≥ {COMPARE_SPEEDUP_TARGET:g}×", "compare_speedup")
-    for label, value, target, key in history.rows(results.history):
-        row(label, value, target, key)
+    for label, value, target, verdict_key in history.rows(results.history):
+        row(label, value, target, verdict_key)
     for stage, error in results.errors.items():
         out.add_row(f"{stage} failed", f"[red]{error}[/]", "", _STYLE[MISSING])
     return out

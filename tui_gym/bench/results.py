@@ -8,6 +8,7 @@ from tui_gym.bench.gap import GapResult
 from tui_gym.bench.history import HistoryResult
 from tui_gym.bench.learners import AlgorithmSpeed, PlanningResult
 from tui_gym.bench.live import DEFAULT_RUNNER, LiveResult
+from tui_gym.bench.map_edit import MapEditResult
 from tui_gym.bench.memory import MemoryResult
 from tui_gym.bench.programs import ProgramsResult
 from tui_gym.bench.seeds import SeedsSpeed
@@ -39,6 +40,7 @@ class BenchResults:
     algorithms: tuple[AlgorithmSpeed, ...] | None = None  # vector engine vs tutorial, each
     planning: PlanningResult | None = None  # Dyna-Q against Q-learning, real episodes
     programs: ProgramsResult | None = None
+    map_edit: tuple[MapEditResult, ...] | None = None  # edit to new optimum, per grid game
     history: HistoryResult | None = None  # the run history's overhead and size
     seeds: SeedsSpeed | None = None  # `compare` against the same learners in a loop
     errors: dict[str, str] = field(default_factory=dict)  # stage -> what went wrong

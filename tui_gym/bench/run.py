@@ -27,6 +27,7 @@ from tui_gym.bench import (
     history,
     learners,
     live,
+    map_edit,
     memory,
     programs,
     seeds,
@@ -147,6 +148,8 @@ def run_bench(
           "and MCP steps/s",
           lambda: programs.measure(plan.separation_episodes, plan.pipe_seconds,
                                    plan.pipe_repeats))
+    stage("map_edit", f"map editor: an edit to the new optimum on {map_edit.MAP_SIDE}x"
+          f"{map_edit.MAP_SIDE} maps", lambda: tuple(map_edit.measure()))
     stage("history", "the run history: recording's share of a train run, the file's size",
           lambda: history.measure(3 if quick else 5))
     return BenchResults(
@@ -161,6 +164,7 @@ def run_bench(
         algorithms=found.get("algorithms"),
         planning=found.get("planning"),
         programs=found.get("programs"),
+        map_edit=found.get("map_edit"),
         history=found.get("history"),
         seeds=found.get("seeds"),
         errors=errors,

@@ -42,7 +42,9 @@ class TutorialLearner:
         self.env = env
         self.algorithm = algorithm
         self.hp = hp
-        self.n_actions = int(env.action_space.n)
+        space = env.action_space
+        assert isinstance(space, gym.spaces.Discrete), space  # a tabular agent's actions
+        self.n_actions = int(space.n)
         zeros = lambda: np.zeros(self.n_actions)  # noqa: E731 - the tutorial's idiom
         self.q: defaultdict[Hashable, np.ndarray] = defaultdict(zeros)
         self.q_b: defaultdict[Hashable, np.ndarray] = defaultdict(zeros)  # Double Q's second
@@ -112,7 +114,7 @@ class TutorialLearner:
 
     def mc_update(self, steps: list[tuple[Hashable, int, float]]) -> None:
         g = 0.0
-        first = {}
+        first: dict[tuple[Hashable, int], int] = {}
         if self.hp.first_visit:
             for t, (obs, action, _) in enumerate(steps):
                 first.setdefault((obs, action), t)

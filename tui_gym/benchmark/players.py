@@ -278,7 +278,8 @@ class ProcessPlayer(Player):
             left = pending + allowance - time.monotonic()
             # Past the deadline it is a time-out, however many lines wait (a flood of
             # requests that are not moves must not hold the clock).
-            received, item = program.next_line(left) if left > 0 else (0.0, _TIMEOUT)
+            got: tuple[float, Any] = program.next_line(left) if left > 0 else (0.0, _TIMEOUT)
+            received, item = got
             if item is _TIMEOUT:
                 referee.timeout(limit)
                 owed += 1

@@ -27,6 +27,7 @@ from rich.table import Table
 from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, Field, Learner, algorithm
 from tui_gym.benchmark.command import cmd_benchmark
 from tui_gym.cli.flags import flag, game_kwargs, hyperparameters
+from tui_gym.cli.maps_command import cmd_maps
 from tui_gym.cli.output import CliError, key_value_table, print_json
 from tui_gym.core import evaluation
 from tui_gym.core.evaluation import EvalReport
@@ -238,40 +239,64 @@ def _session_from_args(args: argparse.Namespace) -> Session:
 
 
 def eval_dict(session: Session, report: EvalReport) -> dict[str, Any]:
-    """The JSON object `eval --json` prints (and `train --json` nests)."""
+    """The JSON object `eval --json` prints (and `train --json` nests): the sampled
+    figures of greedy play and, where the game has an exact model, the greedy policy's
+    `exact_value` beside the `optimal_value` and their `gap` (else `exact_reason`)."""
     data: dict[str, Any] = {
         "env_id": session.env_id, "algorithm": session.algorithm, **report.to_dict()
     }
-    ref = session.reference()
+    if report.requested is not None:
+        data["step_budget"] = evaluation.EVAL_STEP_BUDGET
+    ref = session.evaluation_reference()
     if ref is not None:
         data.update(ref.figures)
         if ref.scope.note:  # what the exact figures take into account, or that they cannot
             data["reference_note"] = ref.scope.note
+    else:
+        data["exact_reason"] = session.exact_reason() or "no exact model of this game"
     return data
 
 
+# Rows of the exact figures, first, with their labels.
+_EXACT_ROWS = (("exact_value", "exact value (greedy policy)"), ("optimal_value", "optimal value"),
+               ("gap", "gap to the optimum"))
+_PERCENT = ("win_rate", "draw_rate", "loss_rate", "success_rate", "optimal_pair_fraction",
+            "timeout_rate", "delivered_rate", "terminated_rate")
+_NOT_ROWS = ("env_id", "episodes", "episodes_requested", "mean_return", "std_return",
+             "step_budget", "exact_reason", "reference_note", "algorithm")
+
+
 def _eval_rows(data: dict[str, Any]) -> list[tuple[str, str]]:
+    rows: list[tuple[str, str]] = []
+    for key, label in _EXACT_ROWS:
+        value = data.get(key)
+        if isinstance(value, float):
+            rows.append((label, f"{value:.4f}" if key == "gap" else f"{value:+.4f}"))
+    if "exact_reason" in data:
+        rows.append(("exact value", f"n/a ({data['exact_reason']})"))
+    if data.get("reference_note"):
+        rows.append(("exact figures", str(data["reference_note"])))
     played = f"{data['episodes']:,}"
     requested = data.get("episodes_requested", data["episodes"])
     if requested != data["episodes"]:
-        played += f" of {requested:,} (stopped at the {evaluation.EVAL_STEP_BUDGET:,}-step budget)"
-    rows = [
-        ("greedy episodes", played),
-        ("mean return", f"{data['mean_return']:+.4f}"),
-        ("std of return", f"{data['std_return']:.4f}"),
+        budget = data.get("step_budget", evaluation.EVAL_STEP_BUDGET)
+        played += f" of {requested:,} (stopped at the {budget:,}-step budget)"
+    rows += [
+        ("sampled episodes", played),
+        ("sampled mean return", f"{data['mean_return']:+.4f}"),
+        ("sampled std of return", f"{data['std_return']:.4f}"),
     ]
-    percent = ("win_rate", "draw_rate", "loss_rate", "success_rate", "optimal_pair_fraction",
-               "timeout_rate", "delivered_rate", "terminated_rate")
+    exact_keys = {key for key, _ in _EXACT_ROWS}
     for key, value in data.items():
-        if key in ("env_id", "episodes", "episodes_requested", "mean_return", "std_return"):
+        if key in _NOT_ROWS or key in exact_keys:
             continue
         label = key.replace("_", " ")
         if value is None:
             rows.append((label, "n/a"))
-        elif key in percent:
+        elif key in _PERCENT:
             rows.append((label, f"{value:.2%}"))
         elif isinstance(value, float):
-            rows.append((label, f"{value:+.4f}" if key != "gap" else f"{value:.4f}"))
+            rows.append((label, f"{value:+.4f}"))
         else:
             rows.append((label, str(value)))
     return rows
@@ -432,7 +457,9 @@ def cmd_optimal(args: argparse.Namespace, out: Console) -> int:
         focus = layout.default_focus(kwargs)
         for panel in layout.heatmaps(np.asarray(optimum.q), kwargs, focus, optimum.marks):
             out.print(_panel_table(panel))
-    rules = ", ".join(f"{k}={v}" for k, v in kwargs.items())
+    # An edited map's text is shown as its size; its rows are in the table above.
+    rules = ", ".join(f"{k}={v}" if k != "layout" else f"a {game.grid_map(kwargs).size_text} map"
+                      for k, v in kwargs.items())
     out.print(f"{game.title}{f' ({rules})' if rules else ''}: {optimum.summary}.")
     out.print(f"Exact value of the optimum: [bold]{signed(optimum.value, 5)}[/]")
     return 0
@@ -527,6 +554,7 @@ COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {
     "play": cmd_play,
     "screenshots": cmd_screenshots,
     "bench": cmd_bench,
+    "maps": cmd_maps,
     "mcp": cmd_mcp,
     "benchmark": cmd_benchmark,
 }

@@ -5,6 +5,8 @@
 whose it is), read as text. `game_kwargs(args, game)` reads the flags given
 for one game with that game's own `Param`s, so an error names the flag and
 what it takes, and a flag of another game says which games take it.
+`--map-file PATH` gives a grid game a map (`tui_gym.games.maps`); a bad file
+is one line naming the row and column at fault.
 `add_hyperparameter_flags` adds one flag per hyperparameter of any
 algorithm, and `hyperparameters(args, cls)` reads those given with the
 algorithm's own fields (a flag of another algorithm says which take it).
@@ -59,6 +61,9 @@ def add_game_flags(parser: argparse.ArgumentParser) -> None:
             metavar = {int: "N", float: "X", str: "NAME"}[param.kind]
             group.add_argument(flag(name), dest=_PREFIX + name, metavar=metavar,
                                help=f"{games}: {param.help} ({param.describe_range()})")
+    mapped = ", ".join(game.title for game in GAMES if game.editable)
+    group.add_argument("--map-file", dest=_PREFIX + "map_file", metavar="PATH",
+                       help=f"{mapped}: play a map from a file (see `tui-gym maps`)")
 
 
 def game_kwargs(args: argparse.Namespace, game: Game) -> dict[str, Any]:
@@ -76,7 +81,27 @@ def game_kwargs(args: argparse.Namespace, game: Game) -> dict[str, Any]:
             kwargs[name] = own[name].parse(text)
         except ParamError as exc:
             raise CliError(f"{flag(name)} {exc.reason}") from None
+    path = getattr(args, _PREFIX + "map_file", None)
+    if path is not None:
+        kwargs = map_kwargs(path, game, kwargs)
     return kwargs
+
+
+def map_kwargs(path: str, game: Game, kwargs: dict[str, Any]) -> dict[str, Any]:
+    """`kwargs` playing the map in the file at `path`; `CliError` of one line otherwise."""
+    from tui_gym.games.maps.files import read_map_file
+
+    if not game.editable:
+        mapped = ", ".join(g.title for g in GAMES if g.editable)
+        raise CliError(f"--map-file applies to {mapped}, not {game.title}")
+    try:
+        grid_map = read_map_file(path)
+    except ValueError as exc:  # a MapError names the file, line, row and column
+        raise CliError(f"--map-file {exc}") from None
+    try:
+        return game.with_map(kwargs, grid_map)
+    except ValueError as exc:
+        raise CliError(f"--map-file {path}: {exc}") from None
 
 
 def add_hyperparameter_flags(parser: argparse.ArgumentParser) -> None:

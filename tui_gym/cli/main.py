@@ -26,6 +26,7 @@ from rich.console import Console
 from tui_gym import __version__
 from tui_gym.algorithms import ALGORITHMS, DEFAULT_ALGORITHM
 from tui_gym.cli.flags import add_game_flags, add_hyperparameter_flags
+from tui_gym.cli.maps_command import add_maps_parser
 from tui_gym.cli.output import CliError, OutConsole
 from tui_gym.cli.types import file_name, finite_number, positive_int, seed_number
 
@@ -92,6 +93,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--env", default="", help="game to open (default: the first of `envs`)")
     parser.add_argument("--seed", type=seed_number, default=0, help="seed for every random thing")
     parser.add_argument("--load", metavar="PATH", help="open a saved agent")
+    parser.add_argument("--map-file", metavar="PATH", dest="app_map_file",
+                        help="open a grid game (--env) on the map in this file")
     parser.add_argument("--record", type=file_name, metavar="PATH",
                         help="record your games in the app to this file (ctrl+r: on/off)")
     parser.add_argument(
@@ -107,6 +110,7 @@ def build_parser() -> argparse.ArgumentParser:
     envs.add_argument("--json", action="store_true", help="print one JSON object")
     wrappers = sub.add_parser("wrappers", help="list the wrapper catalog and the --wrapper syntax")
     wrappers.add_argument("--json", action="store_true", help="print one JSON object")
+    add_maps_parser(sub)
     algorithms = sub.add_parser("algorithms", help="list the learners and their parameters")
     algorithms.add_argument("--json", action="store_true", help="print one JSON object")
     names = ", ".join(cls.name for cls in ALGORITHMS)
@@ -136,8 +140,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     train.add_argument(
         "--eval-episodes", type=positive_int, default=10_000, metavar="N",
-        help="greedy episodes to evaluate with (default 10,000; a long-looping policy "
-        "stops at the evaluation's step budget)",
+        help="greedy episodes to sample after the exact evaluation (default 10,000; "
+        "a long-looping policy stops at the evaluation's step budget)",
     )
     train.add_argument("--save", type=file_name, metavar="PATH",
                        help="save the trained agent here (the folder is checked first)")
@@ -245,6 +249,14 @@ def _run_app(args: argparse.Namespace) -> int:
     from tui_gym.games import resolve_env_id
 
     env_id = resolve_env_id(args.env) if args.env else None
+    env_kwargs = None
+    if args.app_map_file:
+        from tui_gym.cli.flags import map_kwargs
+        from tui_gym.games import GAMES, game_for
+
+        game = game_for(env_id) if env_id else GAMES[0]
+        env_kwargs = map_kwargs(args.app_map_file, game, {})
+        env_id = env_id or game.env_id
     try:
         from tui_gym.ui.app import run_app
     except ImportError as exc:  # pragma: no cover - only without the UI installed
@@ -254,4 +266,5 @@ def _run_app(args: argparse.Namespace) -> int:
 
         check_record_path(args.record)
     return run_app(env_id=env_id, seed=args.seed, load=args.load, runner=args.runner,
-                   record=args.record, db=args.db, keep_history=not args.no_history)
+                   record=args.record, db=args.db, keep_history=not args.no_history,
+                   env_kwargs=env_kwargs)

@@ -202,7 +202,7 @@ class TrainingRunner:
         """One piece of work; returns how long to pause before the next one."""
         speed = self.speed
         if self._want_step and not self._want_run:
-            self._animated_step(self.session.trainer_for(True))
+            self._animated_step(self.session.scalar_trainer())
             with self._cond:
                 self._want_step = False
                 self._cond.notify_all()
@@ -216,7 +216,7 @@ class TrainingRunner:
                 trainer.publish()
                 return None
             if speed.animated:
-                self._animated_step(trainer)
+                self._animated_step(self.session.scalar_trainer())
                 return speed.step_delay
             trainer.run(
                 episodes=trainer.remaining, seconds=CHUNK_SECONDS, stop=_Stopped(self)
@@ -225,7 +225,7 @@ class TrainingRunner:
         if not self._want_one:
             return None
         if speed.animated:
-            event = self._animated_step(trainer)
+            event = self._animated_step(self.session.scalar_trainer())
             if event.episode_done is None:
                 return speed.step_delay
         else:

@@ -17,19 +17,20 @@ wrappers.
 from __future__ import annotations
 
 from collections.abc import Callable, Hashable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
-from tui_gym.algorithms import DEFAULT_ALGORITHM, Learner, Settings, algorithm
+from tui_gym.algorithms import DEFAULT_ALGORITHM, Learner, Settings
+from tui_gym.algorithms import algorithm as learner_class_named
 from tui_gym.core.evaluation import EvalReport, evaluate
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.obskey import ObservationKeyer
-from tui_gym.core.training import Trainer, TrainingSnapshot
+from tui_gym.core.training import Engine, Trainer, TrainingSnapshot
 from tui_gym.core.vector import NoBatchedForm, VectorTrainer, plan_for_env
 from tui_gym.core.wrappers import (
     CATALOG,
@@ -81,7 +82,8 @@ class _Built:
 def _build(
     game: Game, env_id: str, env_kwargs: Mapping[str, Any], choices: Sequence[WrapperChoice]
 ) -> _Built:
-    env, skipped = build_env_lenient(env_id, game.make_kwargs(env_kwargs), choices)
+    env, skipped = build_env_lenient(game.make_id(env_id, env_kwargs),
+                                     game.make_kwargs(env_kwargs), choices)
     skipped_set = {id(c) for c, _ in skipped}
     applied = tuple(c for c in choices if id(c) not in skipped_set)
     if not isinstance(env.action_space, gym.spaces.Discrete):
@@ -101,39 +103,51 @@ def default_settings(
     """The hyperparameters algorithm `name` starts with on a game with arguments `kwargs`:
     its own defaults with the game's overrides for it (those of its parameters the game
     sets)."""
-    cls = algorithm(name)
+    cls = learner_class_named(name)
     fields = {f.name for f in cls.params}
     overrides = game.default_hyperparameters(cls.name, kwargs)
     return cls.settings({k: v for k, v in overrides.items() if k in fields})
 
 
-@dataclass
+@dataclass(init=False)
 class Session:
     """One game with its wrappers, learner and trainer; what every front end drives.
 
-    `hp` is a mapping of hyperparameters over the game's defaults for the
-    algorithm (None: those defaults); `Settings` of another algorithm's
-    schema give the values the two schemas share.
+    `hp` is given as a mapping of hyperparameters over the game's defaults for
+    the algorithm (None: those defaults); `Settings` of another algorithm's
+    schema give the values the two schemas share. Once built, `hp` holds the
+    algorithm's `Settings`.
     """
 
-    env_id: str = ""  # "": the first game of the registry
-    env_kwargs: dict[str, Any] = field(default_factory=dict)
-    choices: tuple[WrapperChoice, ...] = ()
-    hp: Settings | Mapping[str, Any] | None = None  # None: the game's own defaults
-    seed: int = 0
-    engine: str = "auto"  # "auto" (vector when the wrappers allow), "scalar" or "vector"
-    algorithm: str = DEFAULT_ALGORITHM  # a name in the ALGORITHMS registry
+    env_id: str  # "": the first game of the registry
+    env_kwargs: dict[str, Any]
+    choices: tuple[WrapperChoice, ...]
+    hp: Settings
+    seed: int
+    engine: str  # "auto" (vector when the wrappers allow), "scalar" or "vector"
+    algorithm: str  # a name in the ALGORITHMS registry
 
-    def __post_init__(self) -> None:
-        self.env_id = resolve_env_id(self.env_id or GAMES[0].env_id)
+    def __init__(
+        self,
+        env_id: str = "",
+        env_kwargs: Mapping[str, Any] | None = None,
+        choices: Sequence[WrapperChoice] = (),
+        hp: Settings | Mapping[str, Any] | None = None,
+        seed: int = 0,
+        engine: str = "auto",
+        algorithm: str = DEFAULT_ALGORITHM,
+    ) -> None:
+        self.env_id = resolve_env_id(env_id or GAMES[0].env_id)
         self.game: Game = game_for(self.env_id)
-        self.env_kwargs = self.game.normalize_kwargs(self.env_kwargs)
-        self.learner_class: type[Learner] = algorithm(self.algorithm)
+        self.env_kwargs = self.game.normalize_kwargs(env_kwargs or {})
+        self.learner_class: type[Learner] = learner_class_named(algorithm)
         self.algorithm = self.learner_class.name
-        self.hp = self._settings(self.hp)
-        self.choices = tuple(self.choices)
-        if self.engine not in ENGINES:
-            raise ValueError(f"engine must be one of {', '.join(ENGINES)}, got {self.engine!r}")
+        self.hp = self._settings(hp)
+        self.seed = seed
+        self.choices = tuple(choices)
+        if engine not in ENGINES:
+            raise ValueError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
+        self.engine = engine
         self._install(_build(self.game, self.env_id, self.env_kwargs, self.choices))
         self.agent = self._new_agent()
         self.trainer = self._new_trainer()
@@ -162,7 +176,7 @@ class Session:
             self._built.n_actions, self.hp, n_states=self.keyer.n_states, seed=self.seed
         )
 
-    def _new_trainer(self) -> Trainer:
+    def _new_trainer(self) -> Engine:
         """The trainer for the chosen engine; `engine_reason` says which and why."""
         self._scalar: Trainer | None = None
         self._vector: VectorTrainer | None = None
@@ -192,17 +206,24 @@ class Session:
         return VectorTrainer(self.env, self.agent, self.keyer, form=form, made_limit=limit,
                              **options)
 
-    def trainer_for(self, animated: bool) -> Trainer:
-        """The trainer to use now: animation needs single steps, so the scalar engine.
-
-        Switching hands the counts and statistics over, so the run reads as one.
-        """
-        if animated and self.trainer.engine != "scalar":
+    def scalar_trainer(self) -> Trainer:
+        """The scalar engine, made the session's trainer (animation needs single steps);
+        switching hands the counts and statistics over, so the run reads as one."""
+        if self._scalar is None or self.trainer is not self._scalar:
             if self._scalar is None:
                 self._scalar = Trainer(self.env, self.agent, self.keyer, seed=self.seed + 1)
             self._scalar.adopt_progress(self.trainer)
             self.trainer = self._scalar
-        elif not animated and self._vector is not None and self.trainer is not self._vector:
+        return self._scalar
+
+    def trainer_for(self, animated: bool) -> Engine:
+        """The trainer to use now: animation needs single steps, so the scalar engine.
+
+        Switching hands the counts and statistics over, so the run reads as one.
+        """
+        if animated:
+            return self.scalar_trainer()
+        if self._vector is not None and self.trainer is not self._vector:
             self._vector.adopt_progress(self.trainer)
             self.trainer = self._vector
         return self.trainer
@@ -223,7 +244,8 @@ class Session:
 
     def make_env(self, render_mode: str | None = None) -> gym.Env:
         """A new env like the training one (same game, same wrappers), e.g. to play on."""
-        return build_env(self.env_id, self.game.make_kwargs(self.env_kwargs), self.applied,
+        return build_env(self.game.make_id(self.env_id, self.env_kwargs),
+                         self.game.make_kwargs(self.env_kwargs), self.applied,
                          render_mode=render_mode)
 
     def rebuild(
@@ -327,7 +349,7 @@ class Session:
         """Train with another algorithm: a fresh learner with the game's defaults for it,
         and fresh statistics (nothing of the old learner carries over). ValueError for
         an unknown name, changing nothing."""
-        cls = algorithm(name)
+        cls = learner_class_named(name)
         self.learner_class, self.algorithm = cls, cls.name
         self.hp = default_settings(self.game, cls.name, self.env_kwargs)
         self.reset_agent()
@@ -392,6 +414,14 @@ class Session:
         if q is None:
             return None
         reference = self.game.oracle.reference(q, self.env_kwargs, self.changes)
+        return None if isinstance(reference, NotAvailable) else reference
+
+    def evaluation_reference(self) -> ReferenceMetrics | None:
+        """`reference()` with what only an evaluation asks for (see the game's oracle)."""
+        q = self.base_q()
+        if q is None:
+            return None
+        reference = self.game.oracle.evaluation_reference(q, self.env_kwargs, self.changes)
         return None if isinstance(reference, NotAvailable) else reference
 
     def exact_reason(self) -> str:
@@ -674,7 +704,8 @@ def vector_support(
         env_id = resolve_env_id(env_id)
         game = game_for(env_id)
         kwargs = game.normalize_kwargs(env_kwargs or {})
-        env, _ = build_env_lenient(env_id, game.make_kwargs(kwargs), choices)
+        env, _ = build_env_lenient(game.make_id(env_id, kwargs), game.make_kwargs(kwargs),
+                                   choices)
     except (ValueError, TypeError, gym.error.Error) as error:
         return False, f"scalar engine: {error}"
     try:

@@ -1,8 +1,10 @@
 """Gymnasium environments of our own, and their registration.
 
 `register_envs()` registers GridWorld as `tui_gym/GridWorld-v0` and under the
-tutorial's id `gymnasium_env/GridWorld-v0` (both with `max_episode_steps=300`).
-It is idempotent and runs on `import tui_gym`.
+tutorial's id `gymnasium_env/GridWorld-v0` (both with `max_episode_steps=300`),
+and the tile map FrozenLake and CliffWalking play edited maps on as
+`tui_gym/TileMap-v0` (no limit of its own). It is idempotent and runs on
+`import tui_gym`.
 """
 
 from __future__ import annotations
@@ -12,6 +14,8 @@ import gymnasium as gym
 GRIDWORLD_IDS = ("tui_gym/GridWorld-v0", "gymnasium_env/GridWorld-v0")
 GRIDWORLD_ENTRY_POINT = "tui_gym.envs.gridworld:GridWorldEnv"
 GRIDWORLD_MAX_STEPS = 300
+TILE_MAP_ID = "tui_gym/TileMap-v0"
+TILE_MAP_ENTRY_POINT = "tui_gym.envs.tile_map:TileMapEnv"
 
 
 def register_envs() -> None:
@@ -23,3 +27,5 @@ def register_envs() -> None:
                 entry_point=GRIDWORLD_ENTRY_POINT,
                 max_episode_steps=GRIDWORLD_MAX_STEPS,
             )
+    if TILE_MAP_ID not in gym.registry:
+        gym.register(id=TILE_MAP_ID, entry_point=TILE_MAP_ENTRY_POINT)

@@ -9,7 +9,8 @@ the `rgb_array` renderer draws with. Rendering needs no pygame: text for
 Differences from the tutorial's version: every observation is a new array (the
 tutorial hands back the same objects each step, which Gymnasium's checker
 flags), arguments are validated, reset can place the agent and target
-explicitly, and the reward can be scaled or given a per-step penalty.
+explicitly, the reward can be scaled or given a per-step penalty, and cells
+can be walls (`tui_gym.envs.walls` finds the moves and distances around them).
 """
 
 from __future__ import annotations
@@ -25,6 +26,8 @@ from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 from numpy.typing import NDArray
 
+from tui_gym.envs.walls import Walls, cell_distances, check_walls
+
 __all__ = [
     "ACTION_DELTAS",
     "ACTION_NAMES",
@@ -33,6 +36,7 @@ __all__ = [
     "CELL_PIXELS",
     "GRID_LINE_COLOR",
     "TARGET_COLOR",
+    "WALL_COLOR",
     "GridWorldEnv",
     "manhattan",
 ]
@@ -51,6 +55,7 @@ BACKGROUND_COLOR: tuple[int, int, int] = (255, 255, 255)
 GRID_LINE_COLOR: tuple[int, int, int] = (190, 190, 190)
 AGENT_COLOR: tuple[int, int, int] = (40, 90, 220)
 TARGET_COLOR: tuple[int, int, int] = (220, 40, 40)
+WALL_COLOR: tuple[int, int, int] = (70, 72, 80)
 
 _RENDER_MODES: tuple[str | None, ...] = (None, "ansi", "human", "rgb_array")
 _DELTAS = np.array(ACTION_DELTAS, dtype=np.int64)
@@ -77,8 +82,10 @@ class GridWorldEnv(gym.Env[ObsType, int]):
     ## Description
     The grid is `size` x `size` cells. An agent and a target are placed on two
     different cells at random; the agent moves one cell at a time until it stands
-    on the target. Moves into a wall leave the agent where it was (`np.clip`).
-    The shortest episode takes exactly the Manhattan distance between the two.
+    on the target. Moves off the grid leave the agent where it was (`np.clip`),
+    and so do moves into a wall cell (`walls`, none by default). Without walls
+    the shortest episode takes exactly the Manhattan distance between the two;
+    with walls, the fewest moves around them.
 
     This is the environment of Gymnasium's "Create a custom environment"
     tutorial, with the same spaces and action mapping, but every observation is
@@ -100,8 +107,9 @@ class GridWorldEnv(gym.Env[ObsType, int]):
     - `"agent"`: where the agent stands.
     - `"target"`: where the target is.
 
-    `reset()` and `step()` also return `info = {"distance": d}`, the Manhattan
-    distance (a Python `int`) from the agent to the target.
+    `reset()` and `step()` also return `info = {"distance": d}`, the fewest
+    moves (a Python `int`) from the agent to the target: the Manhattan distance
+    when there are no walls, and -1 when walls leave no way to it.
 
     ## Rewards
     - Reaching the target: `+reward_scale` (default `+1`).
@@ -109,9 +117,12 @@ class GridWorldEnv(gym.Env[ObsType, int]):
 
     ## Starting State
     The agent is placed uniformly at random; the target uniformly at random on a
-    different cell (resampled until it differs from the agent). Either or both
-    can be placed explicitly with
-    `reset(options={"agent": (x, y), "target": (x, y)})`; they must differ.
+    different cell (resampled until it differs from the agent). With walls, both
+    are drawn among the free cells (a draw on a wall is drawn again); the target
+    may be walled off from the agent, and then the episode can only time out.
+    Either or both can be placed explicitly with
+    `reset(options={"agent": (x, y), "target": (x, y)})`; they must differ, on
+    free cells.
 
     ## Episode End
     The episode ends if the following happens:
@@ -134,6 +145,7 @@ class GridWorldEnv(gym.Env[ObsType, int]):
         size=5,
         reward_scale=1.0,
         step_penalty=0.0,
+        walls=(),
     )
     ```
 
@@ -141,11 +153,14 @@ class GridWorldEnv(gym.Env[ObsType, int]):
       text), `"human"` (the text is printed on every reset and step) or
       `"rgb_array"` (`render()` returns a `uint8` image of shape `(H, W, 3)`).
       In the text, `y = size - 1` is the top row, so "up" moves up on screen;
-      `A` is the agent, `T` the target, `*` the agent on the target, `.` empty.
+      `A` is the agent, `T` the target, `*` the agent on the target, `#` a wall,
+      `.` empty.
     * `size=5`: cells per side, an integer `>= 2`.
     * `reward_scale=1.0`: reward for reaching the target; any finite number.
     * `step_penalty=0.0`: cost of every step that does not reach the target;
       finite and `>= 0`.
+    * `walls=()`: cells `(x, y)` that cannot be entered; at least two cells
+      must stay free.
     """
 
     metadata: dict[str, Any] = {"render_modes": ["ansi", "human", "rgb_array"], "render_fps": 4}
@@ -157,6 +172,7 @@ class GridWorldEnv(gym.Env[ObsType, int]):
         size: int = 5,
         reward_scale: float = 1.0,
         step_penalty: float = 0.0,
+        walls: Sequence[Sequence[int]] = (),
     ) -> None:
         if not _is_int(size) or size < 2:
             raise ValueError(f"GridWorld size must be an integer >= 2, got {size!r}")
@@ -173,6 +189,8 @@ class GridWorldEnv(gym.Env[ObsType, int]):
             raise ValueError(f"GridWorld render_mode must be one of {valid}, got {render_mode!r}")
 
         self.size = int(size)
+        self.walls: Walls = check_walls(self.size, walls)
+        self._wall_set = frozenset(self.walls)
         self.reward_scale = float(reward_scale)
         self.step_penalty = float(step_penalty)
         self.render_mode = render_mode
@@ -217,11 +235,22 @@ class GridWorldEnv(gym.Env[ObsType, int]):
 
     def _get_info(self) -> dict[str, Any]:
         agent, target = self._require_state()
-        return {"distance": manhattan(agent, target)}
+        return {"distance": self.distance(agent, target)}
+
+    def distance(self, a: Sequence[int], b: Sequence[int]) -> int:
+        """The fewest moves from cell `a` to cell `b` (-1 when walls leave no way)."""
+        if not self.walls:
+            return manhattan(a, b)
+        table = cell_distances(self.size, self.walls)
+        return int(table[int(a[0]) * self.size + int(a[1]), int(b[0]) * self.size + int(b[1])])
 
     def _random_position(self) -> Position:
-        x, y = self.np_random.integers(0, self.size, size=2, dtype=np.int64)
-        return int(x), int(y)
+        # The tutorial's draw, repeated while it lands on a wall (none without walls, so
+        # a grid without walls draws exactly as the tutorial's does).
+        while True:
+            x, y = self.np_random.integers(0, self.size, size=2, dtype=np.int64)
+            if (int(x), int(y)) not in self._wall_set:
+                return int(x), int(y)
 
     def _option_position(self, options: dict[str, Any], key: str) -> Position | None:
         if key not in options or options[key] is None:
@@ -238,7 +267,10 @@ class GridWorldEnv(gym.Env[ObsType, int]):
                 f"GridWorld reset option {key!r} must be two integers (x, y) in "
                 f"[0, {self.size - 1}], got {value!r}"
             )
-        return int(array[0]), int(array[1])
+        position = int(array[0]), int(array[1])
+        if position in self._wall_set:
+            raise ValueError(f"GridWorld reset option {key!r} puts it on the wall {position}")
+        return position
 
     # -- gymnasium API -----------------------------------------------------
 
@@ -282,7 +314,9 @@ class GridWorldEnv(gym.Env[ObsType, int]):
                 f"{ACTION_NAMES}, got {action!r}"
             )
         moved = np.clip(np.add(agent, _DELTAS[int(action)]), 0, self.size - 1)
-        self._agent = (int(moved[0]), int(moved[1]))
+        position = (int(moved[0]), int(moved[1]))
+        if position not in self._wall_set:
+            self._agent = position
 
         terminated = self._agent == target
         # `0.0 - penalty` rather than `-penalty`, so no penalty gives 0.0 and not -0.0.
@@ -323,6 +357,8 @@ class GridWorldEnv(gym.Env[ObsType, int]):
                     cells.append("*" if agent == target else "A")
                 elif (x, y) == target:
                     cells.append("T")
+                elif (x, y) in self._wall_set:
+                    cells.append("#")
                 else:
                     cells.append(".")
             lines.append("| " + " ".join(cells) + " |")
@@ -341,6 +377,9 @@ class GridWorldEnv(gym.Env[ObsType, int]):
             image[:] = BACKGROUND_COLOR
             image[::CELL_PIXELS, :] = GRID_LINE_COLOR
             image[:, ::CELL_PIXELS] = GRID_LINE_COLOR
+            for wall in self.walls:
+                row, col = self._cell_origin(wall)
+                image[row : row + CELL_PIXELS - 1, col : col + CELL_PIXELS - 1] = WALL_COLOR
             self._background = image
         return self._background.copy()
 

@@ -222,6 +222,13 @@ class Oracle(Role):
         where `scope` says it can be."""
         return NotAvailable(f"{self.game.title} has no exact optimum")
 
+    def evaluation_reference(
+        self, q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> ReferenceMetrics | NotAvailable:
+        """What an evaluation reports: `reference`, plus exact figures too costly for
+        every redraw of a running view (none beyond it by default)."""
+        return self.reference(q, kwargs, changes)
+
     def advice(self, env: Any, kwargs: Mapping[str, Any]) -> Advice:
         """The optimal action(s) in the env's current state, wrappers read from `env`."""
         return Advice((), None, "no exact optimum for this game")
@@ -474,11 +481,16 @@ class Game:
     board: str = "text"  # which kind of board draws `states.scene`
     render_mode: str | None = None  # the env's text render mode, if it has one
     episode_noun: str = "episode"  # what people call one episode, e.g. "hand"
+    editable: bool = False  # whether the app's map editor edits its maps
+    map_tools: tuple[str, ...] = ()  # what the editor paints with (`games.maps.TOOLS` names)
     # `tui-gym bench` measures the game with these arguments (None: it does not), to a
     # target gap of `bench_gap` (None: the bound its oracle states).
     bench_kwargs: dict[str, Any] | None = None
     bench_gap: float | None = None
     demo_wrappers: tuple[str, ...] = ()  # wrapper specs a screenshot of the panel ticks
+    # Settings and episodes of the comparison of Q-learning and SARSA a screenshot of the
+    # Compare view records (None: the screenshot compares on another game).
+    demo_compare: tuple[Mapping[str, Any], int] | None = None
     # Hyperparameters that learn this game well, over each algorithm's own defaults:
     # "*" for every algorithm, then an algorithm's registry name for its own (see the README).
     hyperparameters: ClassVar[Mapping[str, Mapping[str, Any]]] = {}
@@ -522,6 +534,26 @@ class Game:
     def make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         """What `gym.make` takes for these (normalized) arguments."""
         return dict(kwargs)
+
+    def with_map(self, kwargs: Mapping[str, Any], grid_map: Any) -> dict[str, Any]:
+        """The arguments that play `grid_map` (a `games.maps.GridMap`), the others kept;
+        `ValueError` when this game plays no such map."""
+        raise ValueError(f"{self.title} plays on no map; maps are for the grid games")
+
+    def grid_map(self, kwargs: Mapping[str, Any]) -> Any:
+        """The map these arguments play (a `games.maps.GridMap`), None for a game
+        without maps."""
+        return None
+
+    def solution(self, kwargs: Mapping[str, Any]) -> Optimum | NotAvailable:
+        """The optimum with action values per base state where there are any (what the
+        map editor colours and points arrows with): `oracle.optimum` by default."""
+        return self.oracle.optimum(kwargs)
+
+    def make_id(self, env_id: str, kwargs: Mapping[str, Any]) -> str:
+        """The id `gym.make` builds for these arguments: `env_id` (the one asked for),
+        unless they need another env (an edited map)."""
+        return env_id
 
     def hyperparameter_table(
         self, kwargs: Mapping[str, Any] | None = None

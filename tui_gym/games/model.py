@@ -45,7 +45,6 @@ from tui_gym.core.mdp import (
     solve,
     with_horizon,
 )
-from tui_gym.core.mdp.evaluation import backup
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.games.base import (
     EXACT,
@@ -171,13 +170,7 @@ class Ladder:
         if horizon * model.n_states * model.n_actions > LADDER_LIMIT:
             return solve(model, gamma, steps_left=k).q
         if gamma not in self._rungs:
-            rungs = np.empty((horizon, model.n_states, model.n_actions))
-            v = np.zeros(model.n_states)
-            for i in range(horizon):
-                rungs[i] = backup(model, v, gamma)
-                v = rungs[i].max(axis=1)
-            rungs.setflags(write=False)
-            self._rungs[gamma] = rungs
+            self._rungs[gamma] = _induction(model, gamma, horizon)
         return self._rungs[gamma][k - 1]
 
     def choices(self, steps_left: int | None = None) -> tuple[BoolArray, BoolArray]:
@@ -189,6 +182,31 @@ class Ladder:
         # A row where the discounted values say nothing (all -inf) keeps every optimal action.
         quickest[~quickest.any(axis=1)] = best[~quickest.any(axis=1)]
         return best, quickest
+
+
+def _induction(model: FiniteMDP, gamma: float, horizon: int) -> FloatArray:
+    """`[H, S, A]`: Q* for 1 to H steps left, each rung the numbers `backup` gives.
+
+    The outcomes are added one by one, in the order `sum` adds them, rather than
+    reduced over their short axis, which numpy does slowly; values stay finite (a
+    limit, finite rewards), so `backup`'s care for infinities is not needed.
+    """
+    reward = model.expected_reward
+    going = [np.ascontiguousarray(model.continue_prob[..., k]) for k in range(model.max_outcomes)]
+    following = [np.ascontiguousarray(model.next_state[..., k])
+                 for k in range(model.max_outcomes)]
+    rungs = np.empty((horizon, model.n_states, model.n_actions))
+    v = np.zeros(model.n_states)
+    for i in range(horizon):
+        ahead = going[0] * v[following[0]]
+        for k in range(1, len(going)):
+            ahead += going[k] * v[following[k]]
+        q = rungs[i]
+        np.multiply(ahead, gamma, out=q)
+        q += reward
+        v = q.max(axis=1)
+    rungs.setflags(write=False)
+    return rungs
 
 
 @dataclass(frozen=True)

@@ -5,38 +5,65 @@ row (state = row * cols + col), with four moves named left, down, right, up
 in the env's own action order. This module gives such a game:
 
 - `TileStates`: a cell in words, and the tile board's scene (the map as rows
-  of S F H G C letters, the agent, the last move and whether it slipped);
+  of S F H G C W R letters, its rewards and slip, the agent, the last move and
+  whether it slipped);
 - `TileLayout`: one heatmap panel shaped like the map, the greedy move's
   arrow in each cell, the tiles with no decision drawn as themselves;
 - `TileNarrator`: words for reaching the goal, falling and running out of time.
 
-A game says how its map reads (`cells(kwargs)`), its board theme and words.
+A game says which map its parameters choose (`builtin_cells(kwargs)`), what
+its tiles pay and how they slip (`rules(kwargs)`), its board theme and words.
+
+**Edited maps.** The argument `layout` holds a map as text (`games.maps`);
+with it the parameter `map` reads "custom" and the game is played on
+`tui_gym/TileMap-v0` (`envs.tile_map`) with the game's rules and action
+numbers, and its exact model is built from the map directly. Gymnasium's own
+maps are played on Gymnasium's own envs.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
+from tui_gym.core.mdp import FiniteMDP, NotAvailable
+from tui_gym.envs import TILE_MAP_ID
+from tui_gym.envs.tile_map import STANDING, TileMapEnv, TileRules, cell_key, tile_arrays
 from tui_gym.games.base import UNREADABLE, EvalOutcome, HeatmapLayout, Narrator, TallyWord
+from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
 from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.words import format_reward, plural
 
 if TYPE_CHECKING:
     from tui_gym.core.play import PlayStep
 
-__all__ = ["MOVES", "TileGame", "TileLayout", "TileNarrator", "TileStates"]
+__all__ = ["CUSTOM", "LAYOUT", "MOVES", "TileGame", "TileLayout", "TileNarrator", "TileStates"]
+
+LAYOUT = "layout"  # the argument that holds an edited map, as text
+CUSTOM = "custom"  # the `map` choice of an edited map
 
 MOVES: dict[str, tuple[int, int]] = {
     "left": (0, -1), "down": (1, 0), "right": (0, 1), "up": (-1, 0)
 }
 ARROWS = {"left": "←", "down": "↓", "right": "→", "up": "↑"}
-TILE_WORDS = {"S": "start", "F": "floor", "H": "hole", "G": "goal", "C": "cliff"}
-NO_DECISION = {"H": "○", "G": "★", "C": "▒"}  # tiles the agent never acts on
+TILE_WORDS = {"S": "start", "F": "floor", "H": "hole", "G": "goal", "C": "cliff", "W": "wall",
+              "R": "reward cell"}
+NO_DECISION = {"H": "○", "G": "★", "C": "▒", "W": "█"}  # tiles the agent never acts on
 TIED = "·"
+
+
+@lru_cache(maxsize=32)
+def _layout_model(
+    grid_map: GridMap, actions: tuple[str, ...], rules: TileRules
+) -> FiniteMDP:
+    arrays = tile_arrays(grid_map.cells, grid_map.reward_table(), grid_map.slip_table(),
+                         actions, rules)
+    return FiniteMDP(arrays.next_state, arrays.prob, arrays.reward, arrays.terminal,
+                     arrays.initial, action_names=actions)
 
 
 class TileGame(ModelGame):
@@ -44,16 +71,109 @@ class TileGame(ModelGame):
 
     board = "tile"
     action_names = ("left", "down", "right", "up")
+    action_order = "lake"  # `TileMapEnv`'s numbering of the moves: "lake" or "cliff"
     theme = "plain"  # the tile board's theme: "lake", "cliff" or "plain"
     floor_word = "floor"  # what a floor tile is called
+    editable = True  # the app's map editor edits its maps
+    map_tools = ("floor", "wall", "hole", "goal", "start", "reward", "ice", "cliff")
 
-    def cells(self, kwargs: Mapping[str, Any]) -> list[str]:
-        """The map, one string a row: S start, F floor, H hole, G goal, C cliff."""
+    def builtin_cells(self, kwargs: Mapping[str, Any]) -> list[str]:
+        """The map the parameters choose, one string a row (S F H G C tiles)."""
         raise NotImplementedError
 
-    def slip_probability(self, kwargs: Mapping[str, Any]) -> float:
-        """The chance a move goes elsewhere than asked (0 when it never does)."""
-        return 0.0
+    def rules(self, kwargs: Mapping[str, Any]) -> TileRules:
+        """What tiles pay and how they slip where a map does not say."""
+        return TileRules()
+
+    def grid_map(self, kwargs: Mapping[str, Any]) -> GridMap:
+        """The map played: the edited one (`layout`), else the one the parameters choose."""
+        layout = kwargs.get(LAYOUT)
+        if layout:
+            return read_layout(str(layout))
+        return GridMap.of(self.builtin_cells(kwargs))
+
+    def cells(self, kwargs: Mapping[str, Any]) -> list[str]:
+        """The map played, one string a row: S start, F floor, H hole, G goal, C cliff,
+        W wall, R reward cell."""
+        return list(self.grid_map(kwargs).cells)
+
+    def with_map(self, kwargs: Mapping[str, Any], grid_map: GridMap) -> dict[str, Any]:
+        """The arguments that play `grid_map` (the others kept); `ValueError` when this
+        game cannot play it."""
+        self.check_map(grid_map)
+        return {**kwargs, "map": CUSTOM, LAYOUT: format_map(grid_map)}
+
+    def check_map(self, grid_map: GridMap) -> None:
+        """`ValueError` for a map this game cannot play."""
+        if grid_map.start is None:
+            raise ValueError(f"{self.title} needs a start (S) on the map")
+
+    def normalize_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+        """As `Game.normalize_kwargs`, with `layout`: an edited map, kept (as its text) when
+        `map` is "custom" or not given; another map choice drops it."""
+        rest = dict(kwargs)
+        layout = rest.pop(LAYOUT, None)
+        out = super().normalize_kwargs(rest)
+        if layout is not None and rest.get("map", CUSTOM) == CUSTOM:
+            try:
+                grid_map = read_layout(str(layout))
+            except MapError as error:
+                raise ValueError(f"{self.title} map: {error}") from None
+            self.check_map(grid_map)
+            return self.with_map(out, grid_map)
+        if out.get("map") == CUSTOM:
+            raise ValueError("map 'custom' is an edited map: give one with --map-file PATH, "
+                             "or edit one in the app (m)")
+        return out
+
+    def make_id(self, env_id: str, kwargs: Mapping[str, Any]) -> str:
+        return TILE_MAP_ID if kwargs.get(LAYOUT) else env_id
+
+    def make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+        if kwargs.get(LAYOUT):
+            return self.map_make_kwargs(kwargs)
+        return self.builtin_make_kwargs(kwargs)
+
+    def builtin_make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+        """What `gym.make` takes for the map the parameters choose."""
+        return {}
+
+    def episode_limit(self, kwargs: Mapping[str, Any]) -> int | None:
+        if kwargs.get(LAYOUT):
+            return self.map_limit(self.grid_map(kwargs))
+        return self.builtin_limit(kwargs)
+
+    def builtin_limit(self, kwargs: Mapping[str, Any]) -> int | None:
+        """The episode limit on the map the parameters choose."""
+        return super().episode_limit(kwargs)
+
+    def map_make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+        """What `gym.make` takes to play an edited map on `tui_gym/TileMap-v0`."""
+        rules = self.rules(kwargs)
+        return {
+            **self.grid_map(kwargs).env_kwargs(),
+            "slip_default": rules.slip,
+            "actions": self.action_order,
+            "step_reward": rules.step,
+            "goal_reward": rules.goal,
+            "hole_reward": rules.hole,
+            "cliff_reward": rules.cliff,
+            "max_episode_steps": self.episode_limit(kwargs),
+        }
+
+    def map_limit(self, grid_map: GridMap) -> int:
+        """The episode limit of an edited map: FrozenLake's (100 steps up to four rows, else
+        200), more on a map so large that a walk across may need it."""
+        return 100 if grid_map.rows <= 4 else max(200, 2 * grid_map.rows * grid_map.cols)
+
+    def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP | NotAvailable:
+        if not kwargs.get(LAYOUT):
+            return super().base_model(kwargs)
+        try:
+            grid_map = self.grid_map(kwargs)
+        except MapError as error:
+            return NotAvailable(f"the map cannot be read: {error}")
+        return _layout_model(grid_map, tuple(self.action_names), self.rules(kwargs))
 
 
 def _game(role: Any) -> TileGame:
@@ -95,9 +215,16 @@ class TileStates(DiscreteStates):
             "last_action": action,
             "slipped": _slipped(cells, before.get("agent"), agent, action),
         }
-        slip = _slip_chance(game_env, cells)
-        if slip > 0:
-            scene["slip"] = {f"{r},{c}": slip for r, line in enumerate(cells)
+        if isinstance(game_env, TileMapEnv):
+            scene["rewards"] = {cell_key(c): v for c, v in game_env.rewards.items()}
+            slip = {cell_key((r, c)): game_env.slip.get((r, c), game_env.rules.slip)
+                    for r, line in enumerate(cells) for c, tile in enumerate(line)
+                    if tile in STANDING}
+            scene["slip"] = {key: p for key, p in slip.items() if p > 0}
+            return scene
+        slip_chance = _slip_chance(game_env, cells)
+        if slip_chance > 0:
+            scene["slip"] = {f"{r},{c}": slip_chance for r, line in enumerate(cells)
                              for c, tile in enumerate(line) if tile in "SF"}
         return scene
 
@@ -204,7 +331,7 @@ class TileLayout(HeatmapLayout):
                 marked[r, c] = has_marks and not marks[r * cols + c, action]
             labels.append(tuple(line))
         shown = "".join(sorted({t for line in cells for t in line if t in NO_DECISION}))
-        tiles = "  ".join(f"{NO_DECISION[t]} {TILE_WORDS[t]}" for t in "HGC" if t in shown)
+        tiles = "  ".join(f"{NO_DECISION[t]} {TILE_WORDS[t]}" for t in "HGCW" if t in shown)
         return [
             Heatmap(
                 title="max Q and the greedy move",

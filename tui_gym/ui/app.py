@@ -1,4 +1,4 @@
-"""The Textual app: a Play view, a Train view and a wrapper side panel over one Session.
+"""The Textual app: Play, Train and Compare views and a wrapper side panel over one Session.
 
 `TuiGymApp` owns the `Session` (env, wrappers, agent, trainer) and the runner
 that trains it (in a child process, as `tui-gym` opens it, or on a worker
@@ -49,6 +49,7 @@ from tui_gym.core.storage import StorageError
 from tui_gym.core.training import continue_run
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games import GAMES, Game, game_for, game_named
+from tui_gym.ui.compare_view import CompareView
 from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.file_screen import FileScreen
 from tui_gym.ui.help_screen import HelpScreen
@@ -95,9 +96,12 @@ class TuiGymApp(App[int]):
         Binding("minus,underscore", "slower", "Slower", key_display="-"),
         Binding("p", "show_view('play')", "Play", tooltip="Play the game yourself"),
         Binding("t", "show_view('train')", "Train", tooltip="Watch the agent learn"),
+        Binding("v", "show_view('compare')", "Compare",
+                tooltip="Compare learners across seeds; the runs recorded for this game"),
         Binding("question_mark,f1", "help", "Help", key_display="?"),
         Binding("q", "quit", "Quit"),
         Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
+        Binding("m", "edit_map", "Map", tooltip="Edit a grid game's map while it trains"),
         # A key for each game in the registry (the help and the side panel's picker list them).
         *(Binding(game.key, f"switch_game('{game.name}')", game.title, show=False)
           for game in GAMES if game.key),
@@ -122,6 +126,7 @@ class TuiGymApp(App[int]):
         record: str | Path | None = None,
         replay: Recording | None = None,
         run_log: SessionRunLog | None = None,
+        db: str | Path | None = None,
     ) -> None:
         """`runner` is "thread" (train on a worker thread) or "process" (a child process;
         what `tui-gym` opens). `tune_gc` applies `tune_gc_for_ui` at mount (for a
@@ -132,7 +137,9 @@ class TuiGymApp(App[int]):
         traceback is left to `run_app` to log instead of being printed.
         `record` records the person's games to that file from the start (ctrl+r
         turns recording on and off); `replay` opens on a recording's replay; `run_log`
-        keeps every run trained here in the run history."""
+        keeps every run trained here in the run history. `db` is the run history the
+        Compare view reads and records into (None: `TUI_GYM_DB`, else the user's data
+        folder)."""
         super().__init__()
         self.tune_gc = tune_gc
         self.gc_seconds = gc_seconds or (YOUNG_GC_SECONDS, FULL_GC_SECONDS)
@@ -155,6 +162,8 @@ class TuiGymApp(App[int]):
         self._record_at_start = record is not None
         self._replay = replay
         self.run_log = run_log
+        self.db = db
+        self._compare: CompareView | None = None
 
     # --- layout ------------------------------------------------------------
     def get_default_screen(self) -> Screen:
@@ -210,12 +219,17 @@ class TuiGymApp(App[int]):
         return self.query_one(TrainView)
 
     @property
+    def compare_view(self) -> CompareView | None:
+        """The Compare view, once it has been shown (it is built the first time)."""
+        return self._compare
+
+    @property
     def side_panel(self) -> SidePanel:
         return self.query_one(SidePanel)
 
     @property
     def current_view(self) -> str:
-        """"play" or "train" (asked often: by every binding check and every tick)."""
+        """"play", "train" or "compare" (asked often: by every binding check and every tick)."""
         switcher = self._switcher
         if switcher is None or not switcher.is_attached:  # not yet, or being taken apart
             return "play"
@@ -257,9 +271,22 @@ class TuiGymApp(App[int]):
     def action_show_view(self, view: str) -> None:
         if self._switcher is None:
             return
+        compare = self._compare
+        if view != "compare" and compare is not None and compare.stop_comparison():
+            self.notify("Comparison stopped: what finished is recorded.", timeout=4)
+        if view == "compare" and compare is None:
+            # Built the first time it shows: most runs of the app never open it.
+            compare = self._compare = CompareView(id="compare", db=self.db)
+            self._switcher.mount(compare)  # it reads the history and takes the focus at mount
         self._switcher.current = view
+        self._main_screen.set_class(view == "compare", "-view-compare")
         if view == "play":
             self.play_view.focus_board()
+        elif view == "compare":
+            assert compare is not None
+            if compare.is_mounted:
+                compare.reload(fresh=True)
+                compare.focus_default()
         else:
             self._last_version = -1
             self.train_view.focus_default()
@@ -273,13 +300,25 @@ class TuiGymApp(App[int]):
             return
         self.switch_game(game)
 
+    async def action_edit_map(self) -> None:
+        self.action_show_view("train")
+        await self.train_view.open_editor()
+
+    def rebuild_map(self, env_kwargs: dict[str, Any], resized: bool) -> bool:
+        """Play an edited map: the agent and training go on where the states keep their
+        meaning; a new size resets the agent (with a notice) and training goes on."""
+        return self.rebuild(env_kwargs=env_kwargs, quiet=True, keep_running=True)
+
     def action_focus_wrappers(self) -> None:
+        self._main_screen.remove_class("-view-compare")  # the compact Compare view hides it
         self.side_panel.focus_wrappers()
 
     def action_focus_view(self) -> None:
         """Give the keyboard back to the view shown (its board, or the heatmap)."""
         if self.current_view == "play":
             self.play_view.focus_board()
+        elif self.current_view == "compare" and self._compare is not None:
+            self._compare.focus_default()
         else:
             self.train_view.focus_default()
 
@@ -289,6 +328,7 @@ class TuiGymApp(App[int]):
             self.action_focus_view()
 
     def on_side_panel_left(self, message: SidePanel.Left) -> None:
+        self._main_screen.set_class(self.current_view == "compare", "-view-compare")
         self.action_focus_view()
 
     # --- one session per game -------------------------------------------------
@@ -364,6 +404,8 @@ class TuiGymApp(App[int]):
         self._last_version = -1
         self.play_view.reload()
         self.train_view.reload()
+        if self._compare is not None:
+            self._compare.reload()
         self.side_panel.reload()
 
     def _episodes_trained(self) -> int:
@@ -607,8 +649,13 @@ class TuiGymApp(App[int]):
         env_id: str | None = None,
         env_kwargs: dict[str, Any] | None = None,
         choices: Sequence[WrapperChoice] | None = None,
+        *,
+        quiet: bool = False,
+        keep_running: bool = False,
     ) -> bool:
-        """Rebuild the session's env; False (and a message) when it cannot be built."""
+        """Rebuild the session's env; False (and a message) when it cannot be built.
+        `quiet`: no notice when the agent is kept; `keep_running`: training goes on
+        even with a fresh agent."""
         was_running = self.runner.running
         # Never waits on a training process: what it hands back later lands in the
         # agent it was given (kept by a rebuild that keeps it, else dropped).
@@ -626,9 +673,10 @@ class TuiGymApp(App[int]):
         self.play_view.reload()
         self.train_view.reload()
         self.side_panel.reload()
-        self.notify(report.notice, severity="information" if report.kept_agent else "warning",
-                    timeout=6)
-        if was_running and report.kept_agent:
+        if not (quiet and report.kept_agent):
+            self.notify(report.notice, severity="information" if report.kept_agent else "warning",
+                        timeout=6)
+        if was_running and (report.kept_agent or keep_running):
             self.runner.start()
         return True
 
@@ -717,12 +765,13 @@ class TuiGymApp(App[int]):
         """Every key, grouped by where it works: (section, [(key, what it does)])."""
         sections = [
             ("Everywhere", [
-                ("p / t", "Play view / Train view"),
+                ("p / t / v", "Play view / Train view / Compare view"),
                 (" / ".join(g.key for g in GAMES if g.key),
                  "switch game: " + ", ".join(g.title for g in GAMES if g.key)
                  + " (each keeps its agent, settings and curves)"),
                 ("w / W", "focus the wrapper panel (W while a board that moves with WASD "
                           "has focus)"),
+                ("m", "edit a grid game's map, while it trains"),
                 ("esc", "leave a text field or the side panel: back to the view"),
                 ("ctrl+s", "save the agent to a file you name (asks before replacing one)"),
                 ("ctrl+o", "load an agent from a file you name"),
@@ -741,6 +790,7 @@ class TuiGymApp(App[int]):
                 ("+ / -", "faster / slower (animated ... max)"),
                 *self.train_view.key_help(),
             ]),
+            ("Compare", CompareView.key_help()),
             ("Side panel", [
                 ("tab / shift+tab", "move between fields"),
                 ("space / enter", "tick a wrapper, press a button, pick a game or an "
@@ -767,6 +817,8 @@ class TuiGymApp(App[int]):
         commands = [
             ("Play view", "Play the game yourself", lambda: self.action_show_view("play")),
             ("Train view", "Watch the agent learn", lambda: self.action_show_view("train")),
+            ("Compare view", "Compare learners across seeds; this game's recorded runs",
+             lambda: self.action_show_view("compare")),
             *(
                 (f"Game: {g.title}", g.description,
                  lambda name=g.name: self.action_switch_game(name))
@@ -795,6 +847,8 @@ class TuiGymApp(App[int]):
 
     async def action_quit(self) -> None:
         self.recording.turn_off()
+        if self._compare is not None:
+            self._compare.stop_comparison()  # it records what finished while the app ends
         self.exit(0)  # the runner closes at unmount, without holding the screen up
 
     def on_unmount(self) -> None:
@@ -904,6 +958,7 @@ EXIT_CRASH = 1
 
 def run_app(
     env_id: str | None = None, seed: int = 0, load: str | None = None, runner: str = "process",
+    env_kwargs: dict[str, Any] | None = None,
     *, session: Session | None = None, record: str | None = None,
     replay: Recording | None = None, db: str | None = None, keep_history: bool = True,
 ) -> int:
@@ -913,7 +968,8 @@ def run_app(
     `keep_history`."""
     gc_seconds = gc_seconds_from_env()
     if session is None:
-        session = Session.load(load) if load else Session(env_id=env_id or "", seed=seed)
+        session = Session.load(load) if load else Session(env_id=env_id or "", seed=seed,
+                                                          env_kwargs=env_kwargs or {})
     run_log = None
     if keep_history:
         from tui_gym.core.experiments.app_recording import SessionRunLog
@@ -922,7 +978,7 @@ def run_app(
         run_log = SessionRunLog(resolve_db_path(db))
     return run_standalone(
         TuiGymApp(session, runner=runner, tune_gc=True, gc_seconds=gc_seconds, standalone=True,
-                  record=record, replay=replay, run_log=run_log)
+                  record=record, replay=replay, run_log=run_log, db=db)
     )
 
 

@@ -12,20 +12,28 @@ values in these pictures only, so the files change only when the app does.
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Awaitable, Callable
+import os
+import sqlite3
+import tempfile
+import time
+from collections.abc import Awaitable, Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
+from typing import Any
 
 from textual.binding import Binding
 
 from tui_gym.core.session import Session
 from tui_gym.core.wrappers import parse_wrapper_spec
 from tui_gym.games import GAMES
+from tui_gym.games.maps.builtin import builtin_map
 from tui_gym.ui.widgets.boards import Board
 
 SIZE = (120, 40)
 NOMINAL_EPISODES_PER_SECOND = 50_000.0
+NOMINAL_START = 1_790_000_000.0  # when the pictured runs started (2026-09-21, UTC)
 
 
 @dataclass(frozen=True)
@@ -98,6 +106,80 @@ async def _step_by_step(app, pilot) -> None:
     await pilot.pause()
 
 
+def _record_comparison(db: Path, spec: Any) -> None:
+    """Record a comparison into `db`, its runs' times pinned to nominal ones."""
+    from tui_gym.core.experiments import RunHistory
+    from tui_gym.core.experiments.compare import run_compare
+
+    with RunHistory(db) as history:
+        # One batch per algorithm on this thread: the same curves on any number of cores.
+        run_compare(spec, history=history, processes=0)
+    conn = sqlite3.connect(db)
+    with conn:
+        conn.execute(
+            "UPDATE runs SET started_at = ? + 60 * id, ended_at = ? + 60 * id + 30",
+            (NOMINAL_START, NOMINAL_START),
+        )
+    conn.close()
+
+
+@contextmanager
+def _utc() -> Iterator[None]:
+    """Times shown in UTC, whatever the machine's zone."""
+    saved = os.environ.get("TZ")
+    os.environ["TZ"] = "UTC"
+    time.tzset()
+    try:
+        yield
+    finally:
+        if saved is None:
+            os.environ.pop("TZ", None)
+        else:
+            os.environ["TZ"] = saved
+        time.tzset()
+
+
+async def _compare(app, pilot) -> None:
+    from tui_gym.core.experiments.compare import CompareSpec
+
+    session = app.session
+    settings, episodes = session.game.demo_compare or ({}, 5_000)
+    spec = CompareSpec(game=session.env_id, algorithms=("q-learning", "sarsa"), seeds=10,
+                       episodes=episodes, settings=settings, first_seed=session.seed)
+    with tempfile.TemporaryDirectory() as folder, _utc():
+        db = Path(folder) / "runs.db"
+        _record_comparison(db, spec)
+        app.db = db  # the view reads it when it is first shown
+        await pilot.press("v")
+        await pilot.pause()
+        view = app.compare_view
+        while view is None or len(view.runs) < 2 or app.focused is not view.run_list:
+            await pilot.pause()
+            view = app.compare_view
+        await pilot.press("space", "down", "space")  # tick both runs
+        await pilot.pause()
+        view.run_list.highlighted = None
+        await pilot.pause()
+
+
+async def _map_editor(app, pilot) -> None:
+    """Trained a while, then a wall painted on the safe way round, and training on."""
+    await _train_view(app, pilot, 4_000)
+    await pilot.press("m")
+    await pilot.pause()
+    for key in ("right", "right", "right", "2"):  # a wall at row 0, col 3
+        await pilot.press(key)
+    await pilot.pause()
+    app.session.trainer.run(episodes=1_000)  # the agent keeps learning on the new map
+    _pin_timing(app.session)
+    app.train_view.show_snapshot(app.runner.latest, app.runner)
+    await pilot.pause()
+    editor = app.train_view.editor
+    if editor is not None:
+        app.train_view.scroll_to_widget(editor, top=True, animate=False)
+    await pilot.pause()
+
+
 async def _wrappers(app, pilot) -> None:
     await pilot.press("w")
     await pilot.pause()
@@ -110,7 +192,7 @@ async def _help(app, pilot) -> None:
 
 def _scenarios() -> tuple[Scenario, ...]:
     """Each game played and training, one update step by step, then the wrapper panel,
-    the keys and 80x24."""
+    a comparison, the keys and 80x24."""
     shots: list[Scenario] = []
     for game in GAMES:
         shots.append(Scenario(f"{game.name}-play.svg", f"{game.title}: play",
@@ -120,12 +202,21 @@ def _scenarios() -> tuple[Scenario, ...]:
     first = GAMES[0]
     focused = next((g for g in GAMES if g.layout.has_focus), first)
     shown = next((g for g in GAMES if g.demo_wrappers), first)
+    compared = next((g for g in GAMES if g.demo_compare), first)
     choices = tuple(parse_wrapper_spec(text) for text in shown.demo_wrappers)
+    mapped = next((g for g in GAMES if "start" in g.map_tools), None)
+    if mapped is not None:
+        bridge = mapped.with_map({}, builtin_map("bridge").grid_map)
+        shots.append(Scenario("map-editor.svg", f"{mapped.title}: a map edited mid-training",
+                              partial(Session, mapped.env_id, env_kwargs=bridge, seed=0),
+                              _map_editor))
     shots += [
         Scenario("step-by-step.svg", f"{focused.title}: one SARSA update, step by step",
                  partial(Session, focused.env_id, seed=3, algorithm="sarsa"), _step_by_step),
         Scenario("wrappers.svg", "The wrapper panel in use",
                  partial(Session, shown.env_id, choices=choices, seed=1), _wrappers),
+        Scenario("compare.svg", f"{compared.title}: Q-learning against SARSA over 10 seeds",
+                 partial(Session, compared.env_id, seed=0), _compare),
         Scenario("help.svg", "Every key", partial(Session, first.env_id, seed=0), _help),
         Scenario("compact-80x24.svg", "The compact layout at 80x24",
                  partial(Session, first.env_id, seed=4), _play, size=(80, 24)),

@@ -445,7 +445,10 @@ class SidePanel(VerticalScroll):
             else:
                 values[field.param.name] = value
         self._show_error("#env-error", first_error)
-        return None if first_error else values
+        # Arguments without a field (an edited map) stay as they are.
+        kept = {k: v for k, v in self.session.env_kwargs.items()
+                if k not in {p.name for p in self.session.game.params}}
+        return None if first_error else {**kept, **values}
 
     def _read_choices(self) -> tuple[WrapperChoice, ...] | None:
         """The ticked wrappers in chain order: the order kept so far, then any newly

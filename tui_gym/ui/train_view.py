@@ -10,7 +10,10 @@ numbers (`StatsPanel`) beside the hyperparameter fields
 (`TrainingCharts`) with, at animated speeds, the game's board replaying the
 agent's moves and the step panel (`StepPanel`) explaining each update, and
 the Q-table heatmaps (`HeatmapView`), where the explained step's state is
-marked.
+marked. On a grid game `m` opens the map editor (`MapEditor`) above the
+heatmaps: each edit rebuilds the game through the app (the agent kept while
+its states keep their meaning, training going on) and the editor shows the new
+map solved exactly.
 
 It never trains anything: the app's timer hands it the runner's latest
 snapshot through `show_snapshot()`, which redraws only what changed and
@@ -21,6 +24,8 @@ slice) and what a heatmap cell means; it never branches on a game's name.
 
 from __future__ import annotations
 
+import time
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from textual import on
@@ -34,6 +39,7 @@ from tui_gym.algorithms import Settings
 from tui_gym.core.training import TrainingSnapshot, continue_run
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
+from tui_gym.ui.widgets.map_editor import MapEditor
 from tui_gym.ui.widgets.progress_line import ProgressLine
 from tui_gym.ui.widgets.stats_panel import StatsPanel, format_duration, run_state
 from tui_gym.ui.widgets.step_panel import StepPanel, explain
@@ -137,6 +143,17 @@ class TrainView(Vertical):
     TrainView #train-heatmap-box:focus-within {
         border: round $primary;
     }
+    TrainView #train-editor {
+        display: none;
+    }
+    TrainView.-mapping #train-editor {
+        display: block;
+    }
+    /* At 80x24 the editor takes the place of the numbers and the charts. */
+    Screen.compact TrainView.-mapping #train-top,
+    Screen.compact TrainView.-mapping #train-middle {
+        display: none;
+    }
 
     Screen.compact TrainView #train-top {
         layout: vertical;
@@ -183,6 +200,7 @@ class TrainView(Vertical):
         self._scene: Any = None
         self._scene_event: Any = None
         self._layout_key: Any = None  # (game, env kwargs) the focus belongs to
+        self._editor_game = ""  # the game the editor's undo history belongs to
 
     # --- the app and its session ---------------------------------------------
     @property
@@ -212,6 +230,7 @@ class TrainView(Vertical):
         self._caption = Label("", id="train-board-caption")
         self._heatmap_box = Vertical(id="train-heatmap-box")
         self._heatmap = HeatmapView(id="train-heatmaps")
+        self._editor: MapEditor | None = None  # mounted when first opened
         self._step = StepPanel(id="train-step")
 
         with Horizontal(id="train-controls"):
@@ -255,6 +274,14 @@ class TrainView(Vertical):
         return self._heatmap
 
     @property
+    def editor(self) -> MapEditor | None:
+        return self._editor
+
+    @property
+    def editing_map(self) -> bool:
+        return self.has_class("-mapping")
+
+    @property
     def form(self) -> HyperparameterForm:
         return self._form
 
@@ -288,6 +315,95 @@ class TrainView(Vertical):
         self._state = ""
         self.show_speed(runner.speed.name)
         self.show_snapshot(runner.latest, runner)
+        if self.editing_map and self._editor is not None:
+            if not game.editable:
+                self.close_editor()
+            else:
+                if self._editor.grid_map is None or self._editor_game != game.name:
+                    self._editor.start(game.grid_map(session.env_kwargs), game.map_tools)
+                    self._editor_game = game.name
+                self._show_editor()
+
+    # --- the map editor ----------------------------------------------------
+    async def open_editor(self) -> bool:
+        """Show the map editor with the keyboard on it; False when the game has no map."""
+        game = self.session.game
+        if not game.editable:
+            self.app.notify(f"{game.title} has no map to edit; the grid games do.",
+                            severity="warning", timeout=4)
+            return False
+        if self._editor is None:
+            self._editor = MapEditor(id="train-editor")
+            await self.mount(self._editor, before=self._heatmap_box)
+        self._editor.start(game.grid_map(self.session.env_kwargs), game.map_tools)
+        self._editor_game = game.name
+        self.add_class("-mapping")
+        self._show_editor()
+        self.call_after_refresh(self._editor.focus_canvas)
+        return True
+
+    def close_editor(self) -> None:
+        self.remove_class("-mapping")
+        self.focus_default()
+
+    def _show_editor(self) -> None:
+        from tui_gym.core.mdp import NotAvailable
+
+        if self._editor is None:
+            return
+        session = self.session
+        game, kwargs = session.game, session.env_kwargs
+        grid_map = game.grid_map(kwargs)
+        started = time.perf_counter()
+        solution = game.solution(kwargs)
+        if isinstance(solution, NotAvailable):
+            self._editor.show(grid_map, [], f"no exact optimum: {solution.reason}")
+            return
+        panels: list[Any] = []
+        if solution.q is not None:
+            panels = game.layout.heatmaps(solution.q, kwargs, self.focus_target, solution.marks)
+        took = (time.perf_counter() - started) * 1000
+        if "optimal_mean_steps" in solution.figures:
+            figure = f"{solution.value:.3f} steps on average"
+        else:
+            figure = f"{solution.value:+.4f} return"
+        self._editor.show(grid_map, panels, f"exact optimum {figure}, solved in {took:.0f} ms")
+
+    @on(MapEditor.Changed)
+    def _map_changed(self, event: MapEditor.Changed) -> None:
+        event.stop()
+        event.editor.pending = max(0, event.editor.pending - 1)
+        session = self.session
+        try:
+            kwargs = session.game.with_map(session.env_kwargs, event.grid_map)
+        except ValueError as error:
+            self.app.notify(str(error), severity="warning", timeout=4)
+            event.editor.drop_last(session.game.grid_map(session.env_kwargs))
+            return
+        rebuild = getattr(self.app, "rebuild_map", None)
+        if rebuild is None or not rebuild(kwargs, event.resized):
+            event.editor.drop_last(session.game.grid_map(session.env_kwargs))
+            self._show_editor()
+
+    @on(MapEditor.SaveAsked)
+    def _map_save(self, event: MapEditor.SaveAsked) -> None:
+        from tui_gym.games.maps import MapError
+        from tui_gym.games.maps.files import write_map_file
+
+        event.stop()
+        game = self.session.game
+        path = Path.cwd() / f"{game.name}-map.txt"
+        try:
+            write_map_file(path, event.grid_map, f"{game.title} map, saved by tui-gym")
+        except MapError as error:
+            self.app.notify(str(error), severity="error")
+            return
+        self.app.notify(f"Map saved to {path} (play it with --map-file)", timeout=6)
+
+    @on(MapEditor.Closed)
+    def _map_closed(self, event: MapEditor.Closed) -> None:
+        event.stop()
+        self.close_editor()
 
     def show_snapshot(self, snapshot: TrainingSnapshot, runner: TrainingRunner) -> None:
         """Draw a snapshot; cheap when it is the one already shown."""

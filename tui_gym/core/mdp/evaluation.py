@@ -9,6 +9,7 @@ for a policy that may not end them.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -92,6 +93,29 @@ def backup(model: FiniteMDP, v: FloatArray, gamma: float) -> FloatArray:
     return q
 
 
+def _policy_sweep(
+    model: FiniteMDP, matrix: FloatArray, gamma: float
+) -> Callable[[FloatArray], FloatArray]:
+    """One step of the Bellman expectation under a policy, for finite values.
+
+    Only the outcomes the policy can reach are gathered (one per state for a
+    deterministic policy on a deterministic game), not every action's.
+    """
+    n_states = model.n_states
+    reward = (matrix * model.expected_reward).sum(axis=1)
+    weight = (matrix[:, :, None] * model.continue_prob).reshape(n_states, -1)
+    target = model.next_state.reshape(n_states, -1)
+    width = max(1, int((weight > 0).sum(axis=1).max()))
+    keep = np.argsort(weight <= 0, axis=1, kind="stable")[:, :width]
+    weight = np.take_along_axis(weight, keep, axis=1)
+    target = np.take_along_axis(target, keep, axis=1)
+
+    def sweep(v: FloatArray) -> FloatArray:
+        return reward + gamma * (weight * v[target]).sum(axis=1)
+
+    return sweep
+
+
 def _transition_matrix(
     model: FiniteMDP, matrix: FloatArray, rows: npt.NDArray[np.bool_]
 ) -> FloatArray:
@@ -141,9 +165,13 @@ def evaluate(model: FiniteMDP, policy: npt.ArrayLike, gamma: float = 1.0) -> Pol
     matrix = policy_matrix(model, policy)
     horizon = model.horizon
     if horizon is not None:
+        sweep = _policy_sweep(model, matrix, gamma)
         v = np.zeros(model.n_states)
         for _ in range(horizon):
-            v = (matrix * backup(model, v, gamma)).sum(axis=1)
+            step = sweep(v)
+            if np.array_equal(step, v):  # the same sweep from the same values: settled
+                break
+            v = step
         return PolicyValue(v, expected_value(model, v), gamma, horizon)
     if gamma < 1.0:
         every = np.ones(model.n_states, dtype=bool)

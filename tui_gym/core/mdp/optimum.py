@@ -109,8 +109,15 @@ def _backward_induction(model: FiniteMDP, gamma: float, steps: int) -> tuple[Flo
     last_off = np.zeros((model.n_states, model.n_actions), dtype=np.int64)
     for k in range(1, steps + 1):
         q = backup(model, v, gamma)
-        last_off[~optimal_actions(q)] = k
-        v = q.max(axis=1)
+        off = ~optimal_actions(q)
+        last_off[off] = k
+        settled = q.max(axis=1)
+        if np.array_equal(settled, v):
+            # The same backup of the same values from here on: every later step
+            # left gives this q again, and the actions not optimal now stay so.
+            last_off[off] = steps
+            break
+        v = settled
     policy = np.argmin(last_off, axis=1).astype(np.int64)
     return q, policy
 

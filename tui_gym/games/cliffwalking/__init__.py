@@ -21,7 +21,12 @@ an untrained agent ends.
 
 ## Arguments
 `slippery`: a move goes where asked with chance 1/3 and to either side
-otherwise (Gymnasium's `is_slippery`).
+otherwise (Gymnasium's `is_slippery`), on every cell an edited map gives no
+slip of its own; `map`: "4x12" (Gymnasium's) or "custom", an edited map given
+as `layout` (see `tui_gym.games.tiles`): a step costs 1, the goal ends the
+episode, a hole (a pit) ends it at a cost of 100, the cliff costs 100 and
+sends the agent back; 200 steps, or more on a map so large that a walk
+across may need them.
 """
 
 from __future__ import annotations
@@ -30,7 +35,9 @@ from collections.abc import Mapping
 from typing import Any
 
 from tui_gym.core.params import Param
-from tui_gym.games.tiles import TileGame, TileLayout, TileNarrator, TileStates
+from tui_gym.envs.tile_map import TileRules
+from tui_gym.games.maps import GridMap
+from tui_gym.games.tiles import CUSTOM, TileGame, TileLayout, TileNarrator, TileStates
 
 __all__ = ["EPISODE_LIMIT", "CliffWalkingGame"]
 
@@ -83,12 +90,18 @@ class CliffWalkingGame(TileGame):
     description = "Walk to the goal along the edge of a cliff; every step costs, a fall costs 100."
     teaches = "on-policy against off-policy: SARSA walks the safe path, Q-learning the edge"
     action_names = ("up", "right", "down", "left")
+    action_order = "cliff"
     params = (
         Param("slippery", bool, False, help="moves may slide sideways", owner="CliffWalking"),
+        Param("map", str, "4x12", help="the 4x12 cliff or an edited map (custom)",
+              owner="CliffWalking", choices=("4x12", CUSTOM)),
     )
     theme = "cliff"
     floor_word = "ground"
     bench_kwargs: dict[str, Any] | None = {}
+    # Sutton & Barto's Example 6.6: SARSA's online return above Q-learning's at ε = 0.1.
+    demo_compare = ({"epsilon_start": 0.1, "epsilon_final": 0.1, "learning_rate": 0.5,
+                     "learning_rate_schedule": "constant"}, 500)
 
     def __init__(self) -> None:
         super().__init__()
@@ -96,15 +109,22 @@ class CliffWalkingGame(TileGame):
         self.narrator = CliffNarrator(self)
         self.layout = TileLayout(self)
 
-    def cells(self, kwargs: Mapping[str, Any]) -> list[str]:
+    def builtin_cells(self, kwargs: Mapping[str, Any]) -> list[str]:
         return list(CLIFF_MAP)
 
-    def make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+    def rules(self, kwargs: Mapping[str, Any]) -> TileRules:
+        slip = 2 / 3 if kwargs.get("slippery", False) else 0.0
+        return TileRules(step=-1.0, goal=-1.0, hole=FALL, cliff=FALL, slip=slip)
+
+    def builtin_make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         return {"is_slippery": bool(kwargs.get("slippery", False)),
                 "max_episode_steps": EPISODE_LIMIT}
 
-    def episode_limit(self, kwargs: Mapping[str, Any]) -> int:
+    def builtin_limit(self, kwargs: Mapping[str, Any]) -> int:
         return EPISODE_LIMIT
+
+    def map_limit(self, grid_map: GridMap) -> int:
+        return max(EPISODE_LIMIT, 2 * grid_map.rows * grid_map.cols)
 
     def hyperparameter_table(
         self, kwargs: Mapping[str, Any] | None = None

@@ -18,11 +18,14 @@ Terminated in a hole or on the goal; truncated after 100 steps on maps up to
 `FrozenLake8x8-v1`).
 
 ## Arguments
-`map`: "4x4" or "8x8" (Gymnasium's maps) or "random" (a map of `size` cells a
+`map`: "4x4" or "8x8" (Gymnasium's maps), "random" (a map of `size` cells a
 side drawn with seed `map_seed` by Gymnasium's `generate_random_map`, which
-only returns maps with a path from start to goal); `slippery`: whether a move
-may go sideways; `success_rate`: the chance a slippery move goes where asked
-(each sideways move takes half of the rest).
+only returns maps with a path from start to goal) or "custom" (an edited map,
+given as `layout`: see `tui_gym.games.tiles`; its reward cells, rewards and
+slip as it says, 100 steps on maps of up to four rows, else 200 or more);
+`slippery`: whether a move may go sideways; `success_rate`: the chance a
+slippery move goes where asked (each sideways move takes half of the rest),
+on every cell an edited map gives no slip of its own.
 """
 
 from __future__ import annotations
@@ -32,11 +35,12 @@ from functools import lru_cache
 from typing import Any
 
 from tui_gym.core.params import Param
-from tui_gym.games.tiles import TileGame, TileLayout, TileNarrator, TileStates
+from tui_gym.envs.tile_map import TileRules
+from tui_gym.games.tiles import CUSTOM, TileGame, TileLayout, TileNarrator, TileStates
 
 __all__ = ["FrozenLakeGame", "lake_map"]
 
-MAPS = ("4x4", "8x8", "random")
+MAPS = ("4x4", "8x8", "random", CUSTOM)
 SMALL_LIMIT, LARGE_LIMIT = 100, 200  # steps: Gymnasium's FrozenLake-v1 and FrozenLake8x8-v1
 
 
@@ -50,6 +54,8 @@ def _random_map(size: int, seed: int) -> tuple[str, ...]:
 def lake_map(kwargs: Mapping[str, Any]) -> list[str]:
     """The map the arguments choose, one string a row."""
     choice = kwargs.get("map", "4x4")
+    if choice == CUSTOM:
+        choice = "4x4"  # an edited map's own rows are the game's (`cells`), not these
     if choice == "random":
         return list(_random_map(int(kwargs.get("size", 8)), int(kwargs.get("map_seed", 0))))
     from gymnasium.envs.toy_text.frozen_lake import MAPS as GYM_MAPS
@@ -67,8 +73,8 @@ class FrozenLakeGame(TileGame):
     description = "Cross a frozen lake to the goal without falling into a hole; it may be slippery."
     teaches = "acting under uncertain moves: on slippery ice the safest path is not the shortest"
     params = (
-        Param("map", str, "4x4", help="4x4, 8x8 or a random map", owner="FrozenLake",
-              choices=MAPS),
+        Param("map", str, "4x4", help="4x4, 8x8, a random map or an edited one (custom)",
+              owner="FrozenLake", choices=MAPS),
         Param("size", int, 8, 3, 12, help="cells a side of a random map", owner="FrozenLake"),
         Param("map_seed", int, 0, 0, 1_000_000, help="seed of a random map", owner="FrozenLake"),
         Param("slippery", bool, True, help="moves may slide sideways", owner="FrozenLake"),
@@ -85,10 +91,14 @@ class FrozenLakeGame(TileGame):
         self.narrator = TileNarrator(self)
         self.layout = TileLayout(self)
 
-    def cells(self, kwargs: Mapping[str, Any]) -> list[str]:
+    def builtin_cells(self, kwargs: Mapping[str, Any]) -> list[str]:
         return lake_map(kwargs)
 
-    def make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+    def rules(self, kwargs: Mapping[str, Any]) -> TileRules:
+        slip = 1.0 - float(kwargs.get("success_rate", 1 / 3)) if kwargs.get("slippery", True) else 0
+        return TileRules(step=0.0, goal=1.0, hole=0.0, cliff=-100.0, slip=slip)
+
+    def builtin_make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         cells = lake_map(kwargs)
         out: dict[str, Any] = {
             "is_slippery": bool(kwargs.get("slippery", True)),
@@ -102,7 +112,7 @@ class FrozenLakeGame(TileGame):
             out["max_episode_steps"] = LARGE_LIMIT
         return out
 
-    def episode_limit(self, kwargs: Mapping[str, Any]) -> int:
+    def builtin_limit(self, kwargs: Mapping[str, Any]) -> int:
         return LARGE_LIMIT if len(lake_map(kwargs)) > 4 else SMALL_LIMIT
 
     def hyperparameter_table(
@@ -114,7 +124,7 @@ class FrozenLakeGame(TileGame):
         # planning step with a small step size keeps that noise down. Monte Carlo
         # learns only at episodes' ends, from returns of a slowly improving policy: a
         # small step size and a longer budget (see the README).
-        small = len(lake_map(kwargs or {})) <= 4
+        small = len(self.cells(kwargs or {})) <= 4
         common = {"learning_rate": 0.05 if small else 0.02, "discount": 0.999,
                   "episodes": 20_000 if small else 100_000}
         return {

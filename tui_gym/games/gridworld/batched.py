@@ -12,7 +12,8 @@ into truncation.
 Observations are rows `(agent_x, agent_y, target_x, target_y)`, the flat form
 of the env's `Dict(agent=Box(2), target=Box(2))` in space order. The random
 stream is not the scalar env's, so starts match it in distribution, not draw
-for draw; given the same placement, every step is identical.
+for draw; given the same placement, every step is identical. With `walls`,
+a move into a wall stays put and placements are drawn among the free cells.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from tui_gym.core.vector.base import (
     selection_size,
 )
 from tui_gym.envs.gridworld import ACTION_DELTAS
+from tui_gym.envs.walls import cell_distances, check_walls, free_cells
 
 __all__ = ["BatchedGridWorld"]
 
@@ -51,6 +53,7 @@ class BatchedGridWorld:
         max_episode_steps: truncate after this many steps; None for never
             (the registered ids use 300).
         seed: seeds placements; the same seed gives the same starts.
+        walls: cells (x, y) that cannot be entered.
     """
 
     n_actions = 4
@@ -64,6 +67,7 @@ class BatchedGridWorld:
         step_penalty: float = 0.0,
         max_episode_steps: int | None = 300,
         seed: int | np.random.SeedSequence | None = None,
+        walls: tuple[tuple[int, int], ...] = (),
     ) -> None:
         self.num_envs = check_num_envs(num_envs)
         if isinstance(size, bool) or not isinstance(size, int | np.integer) or size < 2:
@@ -83,6 +87,9 @@ class BatchedGridWorld:
         self.step_penalty = float(step_penalty)
         self.max_episode_steps = max_episode_steps
         self.rng = np.random.default_rng(seed)
+        self.walls = check_walls(self.size, walls)
+        self._free = np.flatnonzero(free_cells(self.size, self.walls))  # free cell numbers
+        self._distance = cell_distances(self.size, self.walls) if self.walls else None
         self.state = np.zeros((self.num_envs, 4), dtype=np.int64)
         self.state[:, 2] = 1  # a valid placement (agent != target) before the first reset
         self.elapsed = np.zeros(self.num_envs, dtype=np.int64)
@@ -94,7 +101,13 @@ class BatchedGridWorld:
     def distances(self, index: Selection = None) -> np.ndarray:
         """Manhattan distance from agent to target, the env's `info["distance"]`."""
         rows = self.state if index is None else self.state[index]
-        return np.abs(rows[:, :2] - rows[:, 2:]).sum(axis=1)
+        return self._distances(rows)
+
+    def _distances(self, rows: np.ndarray) -> np.ndarray:
+        if self._distance is None:
+            return np.abs(rows[:, :2] - rows[:, 2:]).sum(axis=1)
+        size = self.size
+        return self._distance[rows[:, 0] * size + rows[:, 1], rows[:, 2] * size + rows[:, 3]]
 
     def reset(self, index: Selection = None) -> np.ndarray:
         """New placements for the selected envs (all by default); returns their observations.
@@ -103,10 +116,11 @@ class BatchedGridWorld:
         the other cells: the distribution of the env's draw-until-different.
         """
         k = selection_size(index, self.num_envs)
-        cells = self.size * self.size
+        cells = len(self._free)
         agent = self.rng.integers(0, cells, size=k)
         target = self.rng.integers(0, cells - 1, size=k)
         target += target >= agent  # skip the agent's cell
+        agent, target = self._free[agent], self._free[target]
         rows = np.empty((k, 4), dtype=np.int64)
         rows[:, 0], rows[:, 1] = np.divmod(agent, self.size)
         rows[:, 2], rows[:, 3] = np.divmod(target, self.size)
@@ -130,7 +144,11 @@ class BatchedGridWorld:
         k = selection_size(index, self.num_envs)
         acts = check_actions(actions, k, self.n_actions)
         rows = np.array(self.state if index is None else self.state[index])
+        before = rows[:, :2].copy() if self.walls else None
         np.clip(rows[:, :2] + _DELTAS[acts], 0, self.size - 1, out=rows[:, :2])
+        if before is not None:  # a move into a wall stays put
+            blocked = ~free_cells(self.size, self.walls)[rows[:, 0] * self.size + rows[:, 1]]
+            rows[blocked, :2] = before[blocked]
         terminated = (rows[:, 0] == rows[:, 2]) & (rows[:, 1] == rows[:, 3])
         reward = np.where(terminated, self.reward_scale, self._miss_reward)
         if index is None:
@@ -141,7 +159,7 @@ class BatchedGridWorld:
             self.state[index] = rows
             elapsed = self.elapsed[index] + 1
             self.elapsed[index] = elapsed
-        distance = np.abs(rows[:, :2] - rows[:, 2:]).sum(axis=1)
+        distance = self._distances(rows)
         truncated, obs = after_step(rows, terminated, elapsed, self.max_episode_steps,
                                     index, self.reset, autoreset)
         return BatchStep(rows, reward, terminated, truncated, obs, {"distance": distance})

@@ -4,8 +4,10 @@ Actions are right, up, left, down (the tutorial's mapping). Base states are
 every (agent, target) pair; the exact figures are shortest-path ones (`paths`):
 the share of pairs the greedy policy solves in the Manhattan number of steps
 and its steps over the fewest (ties broken at random, as the agent breaks
-them), and the heatmap shows max Q over the grid for one target (the focus a
-person moves) with the greedy move in each cell.
+them), for evaluations also the greedy policy's exact expected return beside
+the optimum's on the game's model (`model`, rewards and time limit as the
+wrappers make them), and the heatmap shows max Q over the grid for one target (the focus a person
+moves) with the greedy move in each cell.
 
 The optimum is a shortest path. That holds whenever reaching the target pays
 (its reward is positive) and no other step does (rewards of at most zero, no
@@ -13,6 +15,12 @@ better farther away): then every step a route wastes costs, and the target
 comes later. The wrappers' rewards are checked against that (`scope`); when
 they break it, the figures are shortest-path figures and say so, and the
 advice claims no optimum.
+
+**Walls.** The argument `layout` holds a square map of floor (F) and walls (W)
+as text (`games.maps`; `walls`, a list of (x, y) cells, is read into one): the
+env's `walls`, and the shortest paths and figures go around them (`walled`).
+The state space stays every (agent, target) pair, so painting walls keeps an
+agent's table meaningful.
 """
 
 from __future__ import annotations
@@ -24,9 +32,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
-from tui_gym.core.mdp import NotAvailable
+from tui_gym.core.mdp import NotAvailable, evaluate
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
+from tui_gym.envs.walls import Walls, cell_distances, cell_moves, check_walls
 from tui_gym.games.base import (
     EXACT,
     Advice,
@@ -43,6 +52,7 @@ from tui_gym.games.base import (
     TallyWord,
     greedy_probabilities,
 )
+from tui_gym.games.gridworld.model import gridworld_model, gridworld_optimum
 from tui_gym.games.gridworld.paths import (
     mixed_pair_fraction,
     mixed_steps_over_optimal,
@@ -50,6 +60,13 @@ from tui_gym.games.gridworld.paths import (
     optimal_pair_fraction,
     policy_steps_over_optimal,
 )
+from tui_gym.games.gridworld.walled import (
+    walled_figures,
+    walled_marks,
+    walled_mean_steps,
+)
+from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
+from tui_gym.games.model import exact_gap_of
 from tui_gym.games.words import (
     ScoreRow,
     agreement_summary,
@@ -70,6 +87,7 @@ ARROWS = ("→", "↑", "←", "↓")
 MIN_SIZE, MAX_SIZE = 2, 12
 AGREEMENT = "moves on a shortest path"  # how a scoreboard words moves that match the optimum
 TIED = "·"  # a heatmap cell whose actions tie
+WALL = "█"  # a heatmap cell that is a wall
 TRAINED_SHARE = 0.95  # what the default training reaches (see the README)
 
 
@@ -91,8 +109,42 @@ def _optimal_marks(size: int) -> np.ndarray:
     return marks
 
 
+LAYOUT = "layout"  # the argument that holds the grid's walls, as a map's text
+
+
 def _size(kwargs: Mapping[str, Any]) -> int:
     return int(kwargs.get("size", 5))
+
+
+def _walls(kwargs: Mapping[str, Any]) -> Walls:
+    """The walls as (x, y) cells (none without a layout)."""
+    layout = kwargs.get(LAYOUT)
+    if not layout:
+        return ()
+    return read_layout(str(layout)).walls_xy()
+
+
+def _scene_walls(scene: Mapping[str, Any]) -> Walls:
+    return tuple(tuple(int(v) for v in w) for w in scene.get("walls", ()))  # type: ignore[misc]
+
+
+def _steps_between(size: int, walls: Walls, a: Any, b: Any) -> int:
+    """The fewest moves from cell a to cell b, (x, y) each (-1 when walled off)."""
+    (ax, ay), (bx, by) = (int(v) for v in a), (int(v) for v in b)
+    if not walls:
+        return abs(ax - bx) + abs(ay - by)
+    return int(cell_distances(size, walls)[ax * size + ay, bx * size + by])
+
+
+def _optimal_from(size: int, walls: Walls, agent: Any, target: Any) -> tuple[int, ...]:
+    """The actions that start a shortest path from agent to target."""
+    if not walls:
+        return optimal_actions(agent, target)
+    ax, ay = (int(v) for v in agent)
+    tx, ty = (int(v) for v in target)
+    cells = size * size
+    row = walled_marks(size, walls)[(ax * size + ay) * cells + tx * size + ty]
+    return tuple(int(a) for a in np.flatnonzero(row))
 
 
 def _policy(q: np.ndarray, size: int) -> tuple[np.ndarray, bool]:
@@ -110,10 +162,26 @@ def _shortest_pays(kwargs: Mapping[str, Any], changes: GameChanges) -> bool:
     size = _size(kwargs)
     goal = changes.reward(float(kwargs.get("reward_scale", 1.0)), 0.0)
     miss = -float(kwargs.get("step_penalty", 0.0))
-    others = [changes.reward(miss, d) for d in range(1, 2 * size - 1)]
+    farthest = max(2 * size - 2, int(cell_distances(size, _walls(kwargs)).max()))
+    others = [changes.reward(miss, d) for d in range(1, farthest + 1)]
     never_pays = all(r <= 0.0 for r in others)
     farther_no_better = all(b <= a for a, b in zip(others, others[1:], strict=False))
     return goal > 0.0 and never_pays and farther_no_better
+
+
+def _exact_return(
+    q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges
+) -> dict[str, float]:
+    """The greedy policy's exact expected return, the optimum's and the gap, over the
+    model as the wrappers make it (the unwrapped game's when they change its dynamics)."""
+    if changes.others:
+        changes = GameChanges(time_limit=changes.time_limit)
+    args = (_size(kwargs), float(kwargs.get("reward_scale", 1.0)),
+            float(kwargs.get("step_penalty", 0.0)), changes, _walls(kwargs))
+    model = gridworld_model(*args)
+    value = evaluate(model, greedy_probabilities(q)).value
+    best = gridworld_optimum(*args).value
+    return {"exact_value": value, "optimal_value": best, "gap": exact_gap_of(best, value)}
 
 
 def _distance(scene: Mapping[str, Any]) -> int:
@@ -121,7 +189,7 @@ def _distance(scene: Mapping[str, Any]) -> int:
     agent, target = scene.get("agent"), scene.get("target")
     if agent is None or target is None:
         return 0
-    return abs(int(agent[0]) - int(target[0])) + abs(int(agent[1]) - int(target[1]))
+    return _steps_between(int(scene.get("size", 0)), _scene_walls(scene), agent, target)
 
 
 class GridWorldStates(StateSpace):
@@ -134,16 +202,18 @@ class GridWorldStates(StateSpace):
     def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
         ax, ay = (int(v) for v in observation["agent"])
         tx, ty = (int(v) for v in observation["target"])
-        dist = abs(ax - tx) + abs(ay - ty)
-        return f"agent ({ax}, {ay})  target ({tx}, {ty})  distance {dist}"
+        dist = _steps_between(_size(kwargs), _walls(kwargs), (ax, ay), (tx, ty))
+        text = "walled off" if dist < 0 else str(dist)
+        return f"agent ({ax}, {ay})  target ({tx}, {ty})  distance {text}"
 
     def read_scene(self, game_env: Any, before: Mapping[str, Any]) -> dict[str, Any]:
-        """The grid: `size`, `agent` and `target` positions as (x, y)."""
+        """The grid: `size`, `agent` and `target` positions as (x, y), and its `walls`."""
         try:
             agent, target = game_env.agent_position, game_env.target_position
         except AttributeError:  # before the first reset
             agent = target = None
-        return {"size": int(game_env.size), "agent": agent, "target": target}
+        walls = [list(w) for w in getattr(game_env, "walls", ())]
+        return {"size": int(game_env.size), "agent": agent, "target": target, "walls": walls}
 
 
 class GridWorldOracle(Oracle):
@@ -167,16 +237,35 @@ class GridWorldOracle(Oracle):
         size = _size(kwargs)
         if np.shape(q) != (size**4, 4):
             return NotAvailable(f"a table of shape {np.shape(q)} does not fit a {size}x{size} grid")
-        policy, deterministic = _policy(q, size)
-        if deterministic:
-            frac = optimal_pair_fraction(size, policy)
+        walls = _walls(kwargs)
+        if walls:
+            frac = walled_figures(size, walls, greedy_probabilities(q))[0]
         else:
-            frac = mixed_pair_fraction(size, policy)
+            policy, deterministic = _policy(q, size)
+            if deterministic:
+                frac = optimal_pair_fraction(size, policy)
+            else:
+                frac = mixed_pair_fraction(size, policy)
         return ReferenceMetrics(
             figures={"optimal_pair_fraction": frac},
             summary=f"{frac:.1%} of (agent, target) pairs solved in the fewest steps",
             scope=self.scope(kwargs, changes),
         )
+
+    def evaluation_reference(
+        self, q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> ReferenceMetrics | NotAvailable:
+        """The shortest-path figures and the greedy policy's exact expected return on the
+        model (a running view asks only for the first: the model has size**4 states)."""
+        reference = self.reference(q, kwargs, changes)
+        if isinstance(reference, NotAvailable):
+            return reference
+        scope = reference.scope
+        if changes.changes_rewards and not changes.others and not scope.exact:
+            scope = Scope(False, f"{scope.note}; the exact value and gap are with "
+                          f"{changes.reward_names()}")
+        figures = {**reference.figures, **_exact_return(q, kwargs, changes)}
+        return ReferenceMetrics(figures, reference.summary, scope)
 
     def agent_figures(
         self, q: np.ndarray | None, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
@@ -187,8 +276,12 @@ class GridWorldOracle(Oracle):
         size = _size(kwargs)
         if q is None or np.shape(q) != (size**4, 4):
             return {}
-        policy, deterministic = _policy(q, size)
         limit = changes.time_limit
+        walls = _walls(kwargs)
+        if walls:
+            _, extra, solved = walled_figures(size, walls, greedy_probabilities(q), limit)
+            return {"steps_over_optimal": extra, "solved_fraction": solved}
+        policy, deterministic = _policy(q, size)
         if deterministic:
             extra, solved = policy_steps_over_optimal(size, policy, limit)
         else:
@@ -200,11 +293,14 @@ class GridWorldOracle(Oracle):
         agent, target = scene.get("agent"), scene.get("target")
         if agent is None or target is None:
             return Advice((), None, "no episode running")
-        optimal = optimal_actions(agent, target)
+        size, walls = _size(kwargs), _walls(kwargs)
+        steps = _steps_between(size, walls, agent, target)
+        if steps < 0:
+            return Advice((), None, "the walls leave no way to the target")
+        optimal = _optimal_from(size, walls, agent, target)
         if not optimal:
             return Advice((), None, "at the target")
         names = " or ".join(self.game.action_names[a] for a in optimal)
-        steps = abs(agent[0] - target[0]) + abs(agent[1] - target[1])
         scope = self.scope(kwargs, GameChanges.of(env))
         if not scope.exact:
             return Advice((), None, f"shortest path: {names}  ({steps} steps to go; "
@@ -214,6 +310,9 @@ class GridWorldOracle(Oracle):
     def optimal_marks(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> np.ndarray:
+        walls = _walls(kwargs)
+        if walls:
+            return walled_marks(_size(kwargs), walls)
         return _optimal_marks(_size(kwargs))
 
     def bound(
@@ -225,6 +324,16 @@ class GridWorldOracle(Oracle):
 
     def optimum(self, kwargs: Mapping[str, Any]) -> Optimum:
         size = _size(kwargs)
+        walls = _walls(kwargs)
+        if walls:
+            mean_steps = walled_mean_steps(size, walls)
+            return Optimum(
+                value=mean_steps,
+                summary=f"{size}x{size} with {len(walls)} wall cells: the optimal policy walks "
+                "a shortest way round the walls; the value is the mean number of steps over "
+                "the random starts that have a way to the target",
+                figures={"optimal_mean_steps": mean_steps},
+            )
         coords = np.arange(size)
         diffs = np.abs(coords[:, None] - coords[None, :])
         # Mean Manhattan distance over ordered pairs of distinct cells.
@@ -380,6 +489,8 @@ class GridWorldLayout(HeatmapLayout):
         if np.shape(q) != (size**4, 4):
             return []
         tx, ty = focus if focus is not None else (size - 1, size - 1)
+        walls = _walls(kwargs)
+        wall_set = set(walls)
         q4 = q.reshape(size, size, size, size, q.shape[1])
         values = np.full((size, size), np.nan)
         marked = np.zeros((size, size), dtype=bool)
@@ -391,6 +502,9 @@ class GridWorldLayout(HeatmapLayout):
                 if (x, y) == (tx, ty):
                     row.append("T")
                     continue
+                if (x, y) in wall_set:
+                    row.append(WALL)
+                    continue
                 qs = q4[x, y, tx, ty]
                 action = int(np.argmax(qs))
                 values[r, x] = float(qs.max())
@@ -398,7 +512,7 @@ class GridWorldLayout(HeatmapLayout):
                     row.append(TIED)
                     continue
                 row.append(ARROWS[action])
-                marked[r, x] = action not in optimal_actions((x, y), (tx, ty))
+                marked[r, x] = action not in _optimal_from(size, walls, (x, y), (tx, ty))
             labels.append(tuple(row))
         return [
             Heatmap(
@@ -408,7 +522,8 @@ class GridWorldLayout(HeatmapLayout):
                 values=values,
                 labels=tuple(labels),
                 marked=marked,
-                legend=f"arrow: greedy move  {TIED} tie  T target  * off every shortest path",
+                legend=f"arrow: greedy move  {TIED} tie  T target  * off every shortest path"
+                + (f"  {WALL} wall" if walls else ""),
             )
         ]
 
@@ -448,6 +563,8 @@ class GridWorldGame(Game):
     )
     board = "grid"
     render_mode = "ansi"
+    editable = True
+    map_tools = ("floor", "wall")
     demo_wrappers = ("TimeLimit:max_episode_steps=50", "StepPenalty:penalty=0.01",
                      "DistanceShaping")
 
@@ -465,18 +582,90 @@ class GridWorldGame(Game):
         self.narrator = GridWorldNarrator(self)
         self.layout = GridWorldLayout(self)
 
+    def solution(self, kwargs: Mapping[str, Any]) -> Optimum | NotAvailable:
+        """The optimum with action values: minus the steps to the target after each move
+        (around the walls; a walled-off target counts as `size**2` steps away)."""
+        size, walls = _size(kwargs), _walls(kwargs)
+        optimum = self.oracle.optimum(kwargs)
+        marks = self.oracle.optimal_marks(kwargs)
+        if isinstance(optimum, NotAvailable) or isinstance(marks, NotAvailable):
+            return optimum if isinstance(optimum, NotAvailable) else NotAvailable("no marks")
+        cells = size * size
+        distance = cell_distances(size, walls).astype(np.float64)
+        distance[distance < 0] = cells
+        moves = cell_moves(size, walls)
+        q = np.stack([-1.0 - distance[moves[a]] for a in range(4)], axis=-1).reshape(-1, 4)
+        q[np.eye(cells, dtype=bool).reshape(-1)] = 0.0
+        return Optimum(optimum.value, optimum.summary, q=q, marks=marks,
+                       figures=optimum.figures)
+
+    def normalize_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+        """As `Game.normalize_kwargs`, with the walls: `layout` (a square map of F and W,
+        whose side is the size) or `walls` (a list of (x, y) cells)."""
+        rest = dict(kwargs)
+        layout, walls = rest.pop(LAYOUT, None), rest.pop("walls", None)
+        out = super().normalize_kwargs(rest)
+        if layout:
+            try:
+                grid_map = read_layout(str(layout))
+            except MapError as error:
+                raise ValueError(f"GridWorld map: {error}") from None
+            if "size" in rest and _size(out) != grid_map.rows:  # a new size crops or extends
+                grid_map = grid_map.resized(_size(out), _size(out))
+            return self.with_map(out, grid_map)
+        if walls:
+            size = _size(out)
+            cells = [["F"] * size for _ in range(size)]
+            for x, y in check_walls(size, walls):
+                cells[size - 1 - y][x] = "W"
+            return self.with_map(out, GridMap.of("".join(row) for row in cells))
+        return out
+
+    def with_map(self, kwargs: Mapping[str, Any], grid_map: Any) -> dict[str, Any]:
+        """The arguments that play a square map of floor and walls (its side the size)."""
+        if grid_map.rows != grid_map.cols or not MIN_SIZE <= grid_map.rows <= MAX_SIZE:
+            raise ValueError(f"GridWorld plays a square map of {MIN_SIZE} to {MAX_SIZE} cells a "
+                             f"side, not {grid_map.size_text}")
+        others = sorted(grid_map.tiles() - {"F", "W"})
+        if others:
+            raise ValueError(f"GridWorld's map is floor (F) and walls (W) only, not "
+                             f"{', '.join(others)}: agent and target are placed at random")
+        check_walls(grid_map.rows, grid_map.walls_xy())
+        out = {**kwargs, "size": grid_map.rows}
+        out.pop(LAYOUT, None)
+        if grid_map.walls_xy():
+            out[LAYOUT] = format_map(grid_map)
+        return out
+
+    def grid_map(self, kwargs: Mapping[str, Any]) -> GridMap:
+        layout = kwargs.get(LAYOUT)
+        if layout:
+            return read_layout(str(layout))
+        size = _size(kwargs)
+        return GridMap.of(["F" * size] * size)
+
+    def make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+        out = {k: v for k, v in kwargs.items() if k != LAYOUT}
+        walls = _walls(kwargs)
+        if walls:
+            out["walls"] = [list(w) for w in walls]
+        return out
+
     def batched_form(self, kwargs: Mapping[str, Any]) -> BatchedForm:
         from tui_gym.core.vector.base import BatchedForm
         from tui_gym.games.gridworld.batched import BatchedGridWorld
+
 
         size = _size(kwargs)
         reward_scale = float(kwargs.get("reward_scale", 1.0))
         step_penalty = float(kwargs.get("step_penalty", 0.0))
 
+        walls = _walls(kwargs)
+
         def make(num_envs: int, seed: Any, max_episode_steps: int | None) -> BatchedGridWorld:
             return BatchedGridWorld(num_envs, size=size, reward_scale=reward_scale,
                                     step_penalty=step_penalty,
-                                    max_episode_steps=max_episode_steps, seed=seed)
+                                    max_episode_steps=max_episode_steps, seed=seed, walls=walls)
 
         return BatchedForm(f"GridWorld {size}x{size}", make, info=("distance",),
-                           key=("gridworld", size, reward_scale, step_penalty))
+                           key=("gridworld", size, reward_scale, step_penalty, walls))

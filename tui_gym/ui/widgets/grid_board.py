@@ -1,6 +1,6 @@
 """`GridBoard`: a square grid with the agent, the target and the agent's trail.
 
-The scene is `{"size": n, "agent": (x, y), "target": (x, y)}` in the
+The scene is `{"size": n, "agent": (x, y), "target": (x, y), "walls": [(x, y)]}` in the
 tutorial's coordinates: x grows to the right and y grows *upwards*, so y = 0
 is the bottom row on screen. The board remembers the cells the agent left
 this episode and draws each with the arrow of the move that left it, a trail
@@ -35,6 +35,7 @@ MOVES: dict[Cell, tuple[str, str]] = {  # (dx, dy) -> (action name, trail arrow)
     (0, -1): ("down", "↓"),
 }
 AGENT, TARGET, HOME = "●", "◎", "◉"  # HOME: the agent stands on the target
+WALL = "█"
 
 MOVE_GROUP = Binding.Group("Move")
 
@@ -150,6 +151,7 @@ class GridBoard(Board):
     GridBoard .grid--target { background: $error 75%; color: #ffffff; text-style: bold; }
     GridBoard .grid--home { background: $success; color: #ffffff; text-style: bold; }
     GridBoard .grid--axis { color: $text-muted; }
+    GridBoard .grid--wall { color: $foreground 55%; }
     """
 
     COMPONENT_CLASSES: ClassVar[set[str]] = {
@@ -160,6 +162,7 @@ class GridBoard(Board):
         "grid--target",
         "grid--home",
         "grid--axis",
+        "grid--wall",
     }
 
     BINDINGS: ClassVar[list[BindingType]] = [
@@ -186,6 +189,7 @@ class GridBoard(Board):
         self._grid_agent: Cell | None = None
         self._grid_target: Cell | None = None
         self._grid_size = 0
+        self._grid_walls: frozenset[Cell] = frozenset()
         self._grid_fresh = True
         self._grid_layout: GridLayout | None = None
         self._layout_n = 0  # the grid size the kept cell shape is for (0: choose afresh)
@@ -249,6 +253,7 @@ class GridBoard(Board):
             self.trail[previous] = MOVES[move][1]
         self._grid_fresh = False
         self._grid_agent, self._grid_target, self._grid_size = agent, target, size
+        self._grid_walls = frozenset(c for c in map(_cell, scene.get("walls", ())) if c)
         super().show_scene(scene, reveal)
 
     # --- drawing ---------------------------------------------------------------
@@ -263,6 +268,8 @@ class GridBoard(Board):
             return AGENT, self._style("agent")
         if cell == self._grid_target:
             return TARGET, self._style("target")
+        if cell in self._grid_walls:
+            return WALL, self._style("wall")
         if cell in self.trail:
             return self.trail[cell], self._style("trail")
         return (" " if lines else "·"), self._style("empty")
@@ -299,7 +306,10 @@ class GridBoard(Board):
                     row.append("│", line)
                 for x in range(n):
                     glyph, style = self._cell_look((x, y), layout.lines)
-                    row.append((glyph if k == ch // 2 else " ").center(cw), style)
+                    if glyph == WALL:  # a wall fills its cell
+                        row.append(WALL * cw, style)
+                    else:
+                        row.append((glyph if k == ch // 2 else " ").center(cw), style)
                     if layout.lines:
                         row.append("│", line)
                 rows.append(row)

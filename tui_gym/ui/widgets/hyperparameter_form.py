@@ -179,6 +179,7 @@ class HyperparameterForm(Vertical):
         self._initial = hyperparameters or QLearning.settings()
         self._base = self._initial
         self._between: set[str] = set()  # fields marked by a rule between fields
+        self._rebuilding = False  # new fields are being built (see `load`)
         self.border_title = "Hyperparameters"
         self.border_subtitle = "↵ set · esc back"
 
@@ -186,6 +187,12 @@ class HyperparameterForm(Vertical):
     def fields(self) -> tuple[Field, ...]:
         """The fields shown: the schema of the settings last loaded."""
         return self._base.schema
+
+    async def _rebuild(self) -> None:
+        try:
+            await self.recompose()
+        finally:
+            self._rebuilding = False
 
     def compose(self) -> ComposeResult:
         for field in self.fields:
@@ -317,11 +324,13 @@ class HyperparameterForm(Vertical):
         rebuild = hyperparameters.schema != self._base.schema
         self._base = hyperparameters
         self._between.clear()
-        if rebuild:
+        if rebuild or self._rebuilding:
             # New fields (the schema is another algorithm's), built once the old ones
-            # are gone: ids repeat between schemas.
-            if self.is_mounted:
-                self.call_later(self.recompose)
+            # are gone: ids repeat between schemas. Values loaded before then are
+            # the ones the new fields start with.
+            if self.is_mounted and not self._rebuilding:
+                self._rebuilding = True
+                self.call_later(self._rebuild)
             return
         for field in self.fields:
             text = _text(field, getattr(hyperparameters, field.name))

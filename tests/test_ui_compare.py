@@ -1,0 +1,315 @@
+"""The Compare view, driven like a person would: tick runs, read the curves and the figures,
+launch a comparison and stop it; a history that cannot be read is one message.
+
+The view is mounted alone on a small app that holds a session, over a run
+history in a temporary folder; waits poll a condition with a deadline.
+"""
+
+from __future__ import annotations
+
+import sqlite3
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+from textual.app import App, ComposeResult
+
+from tui_gym.core.experiments import (
+    Figure,
+    RunHistory,
+    RunRecorder,
+    RunSpec,
+    aggregate,
+    mean_return_last,
+)
+from tui_gym.core.experiments.schema import MIGRATIONS
+from tui_gym.core.session import Session
+from tui_gym.ui.compare_series import series_of_record
+from tui_gym.ui.compare_view import CompareView, parse_count, read_launch
+from tui_gym.ui.widgets.compare_chart import BRAILLE_BASE, plot_cells
+from tui_gym.ui.widgets.figures_table import with_interval
+
+from .screen import screen_text
+
+DEADLINE = 20.0
+SIZE = (100, 40)
+
+
+class ViewApp(App[None]):
+    """The Compare view alone, over one session."""
+
+    def __init__(self, session: Session, db: Path) -> None:
+        super().__init__()
+        self.session = session
+        self.db = db
+
+    def compose(self) -> ComposeResult:
+        yield CompareView(db=self.db)
+
+
+async def wait_for(pilot, predicate: Callable[[], bool], what: str, timeout: float = DEADLINE):
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out waiting for {what}")
+        await pilot.pause(0.02)
+
+
+def record_runs(db: Path) -> dict[str, int]:
+    """A compare run per algorithm (5 seeds, with a band), a single train run, and a
+    GridWorld run the Blackjack view must not list."""
+    rng = np.random.default_rng(0)
+    ids = {}
+    with RunHistory(db) as history:
+        for algorithm, base in (("q-learning", -0.3), ("sarsa", -0.1)):
+            data = base + rng.normal(0, 0.05, (5, 200))
+            with RunRecorder(history, RunSpec("compare", "blackjack", algorithm,
+                                              seeds=range(5))) as run:
+                for curve in aggregate(data).as_curves("return"):
+                    run.put_curve(curve)
+                run.add_figures(mean_return_last(data).figure("mean_return_last"))
+            ids[algorithm] = run.run_id
+        with RunRecorder(history, RunSpec("train", "blackjack", "q-learning", seeds=[7])) as run:
+            run.extend("return", rng.normal(-0.2, 1.0, 1000))
+            run.add_figures(Figure("mean_return_last", -0.21))
+        ids["train"] = run.run_id
+        with RunRecorder(history, RunSpec("train", "gridworld", "sarsa", seeds=[1])) as run:
+            run.extend("return", rng.normal(0.5, 0.1, 50))
+        ids["gridworld"] = run.run_id
+    return ids
+
+
+async def test_ticked_runs_draw_their_curves_and_figures(tmp_path: Path) -> None:
+    db = tmp_path / "runs.db"
+    ids = record_runs(db)
+    app = ViewApp(Session("blackjack", seed=0), db)
+    async with app.run_test(size=SIZE) as pilot:
+        view = app.query_one(CompareView)
+        await pilot.pause()
+        # Newest first, Blackjack's only.
+        assert [r.id for r in view.runs] == [ids["train"], ids["sarsa"], ids["q-learning"]]
+        assert view.chart.series == ()
+        assert "Tick runs" in screen_text(app)
+        view.focus_default()
+        await pilot.press("space", "down", "space")  # the train run, then SARSA
+        await pilot.pause()
+        series = view.chart.series
+        assert [s.key for s in series] == [ids["train"], ids["sarsa"]]
+        single, band = series
+        assert not single.has_band and single.smoothing == 10  # a tenth of its 100 stored points
+        assert band.has_band and np.all(band.lo <= band.mean) and np.all(band.mean <= band.hi)
+        assert len(set(view.chart.colours)) == 2
+        rows = view.table.rows
+        assert [r.key for r in rows] == [ids["train"], ids["sarsa"]]
+        assert rows[1].seeds == 5 and rows[1].mean_return_last.ci95 is not None
+        assert rows[0].episodes == 1000
+        text = screen_text(app)
+        assert f"#{ids['sarsa']} SARSA · 5 seeds · 95% band" in text
+        assert with_interval(rows[1].mean_return_last) in text
+        assert chr(BRAILLE_BASE) not in text and any("⠁" <= ch <= "⣿" for ch in text)
+        # Unticking takes the curve and the row away; the other keeps its colour.
+        colour = view.chart.colours[1]
+        await pilot.press("up", "space")
+        await pilot.pause()
+        assert [s.key for s in view.chart.series] == [ids["sarsa"]]
+        assert view.chart.colours == (colour,)
+        assert [r.key for r in view.table.rows] == [ids["sarsa"]]
+
+
+@pytest.mark.parametrize("damage", ["corrupt", "newer"])
+async def test_a_history_that_cannot_be_read_is_one_message(tmp_path: Path, damage: str) -> None:
+    db = tmp_path / "runs.db"
+    if damage == "corrupt":
+        db.write_bytes(b"SQLite format 3\x00" + bytes(range(256)) * 16)
+        phrase = "damaged"
+    else:
+        record_runs(db)
+        conn = sqlite3.connect(db)
+        conn.execute(f"PRAGMA user_version = {len(MIGRATIONS) + 1}")
+        conn.close()
+        phrase = "newer tui-gym"
+    before = db.read_bytes()
+    app = ViewApp(Session("blackjack", seed=0), db)
+    async with app.run_test(size=SIZE) as pilot:
+        view = app.query_one(CompareView)
+        await pilot.pause()
+        assert view.history_error is not None
+        assert view.message.startswith("The run history cannot be read:")
+        assert str(db) in view.message and "\n" not in view.message
+        if damage == "newer":
+            assert phrase in view.message
+        assert view.runs == ()
+        await pilot.press("l")  # nothing is launched into a history that cannot be read
+        await pilot.pause()
+        assert view.job is None and "Not started" in view.message
+        assert "Traceback" not in screen_text(app)
+    assert db.read_bytes() == before
+
+
+async def test_no_history_yet_says_so_and_creates_nothing(tmp_path: Path) -> None:
+    db = tmp_path / "data" / "runs.db"
+    app = ViewApp(Session("blackjack", seed=0), db)
+    async with app.run_test(size=SIZE) as pilot:
+        view = app.query_one(CompareView)
+        await pilot.pause()
+        assert view.runs == () and view.history_error is None
+        assert "No runs of Blackjack recorded yet" in view.message
+    assert not db.parent.exists()
+
+
+async def test_launch_fields_are_checked(tmp_path: Path) -> None:
+    app = ViewApp(Session("blackjack", seed=0), tmp_path / "runs.db")
+    async with app.run_test(size=SIZE) as pilot:
+        view = app.query_one(CompareView)
+        await pilot.pause()
+        view.query_one("#compare-seeds").value = "ten"
+        view.query_one("#compare-episodes").value = "0"
+        await pilot.press("l")
+        await pilot.pause()
+        assert view.job is None
+        assert view.message == (
+            "Not started: Seeds: a whole number from 1 to 1,000 (got 'ten'); "
+            "Episodes: a whole number from 1 to 10,000,000 (got '0')."
+        )
+
+
+def test_launch_values() -> None:
+    assert parse_count(" 1,000 ", "Seeds", 1000) == 1000
+    with pytest.raises(ValueError, match=r"^Seeds: a whole number from 1 to 5 \(got nothing\)$"):
+        parse_count("", "Seeds", 5)
+    with pytest.raises(ValueError, match="tick at least one algorithm"):
+        read_launch((), "3", "10")
+    launch = read_launch(("sarsa",), "3", "10_000")
+    assert (launch.algorithms, launch.seeds, launch.episodes) == (("sarsa",), 3, 10_000)
+
+
+def test_plot_draws_the_band_under_the_line(tmp_path: Path) -> None:
+    db = tmp_path / "runs.db"
+    ids = record_runs(db)
+    with RunHistory(db) as history:
+        series = series_of_record(history.get_run(ids["sarsa"]))
+    assert series is not None
+    bits, ink, band = plot_cells([series], 40, 8)
+    assert all(any(band[row][col] == 1 for row in range(8)) for col in range(40))
+    assert all(any(bits[row][col] for row in range(8)) for col in range(40))
+    # Every dot of the mean lies in a cell its band shades.
+    assert all(band[row][col] == 1 for row in range(8) for col in range(40) if ink[row][col] == 0)
+
+
+async def test_the_app_key_v_opens_it_and_another_view_stops_it(
+    tmp_path: Path,
+) -> None:
+    from tui_gym.ui.app import TuiGymApp
+    from tui_gym.ui.help_screen import HelpScreen
+
+    db = tmp_path / "runs.db"
+    ids = record_runs(db)
+    app = TuiGymApp(Session("blackjack", seed=0), db=db)
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.pause()
+        await pilot.press("v")
+        await wait_for(pilot, lambda: app.compare_view is not None
+                       and len(app.compare_view.runs) == 3, "the Compare view and its runs")
+        view = app.compare_view
+        view.processes = 0
+        await wait_for(pilot, lambda: app.focused is view.run_list, "the list's focus")
+        assert " l Launch " in screen_text(app)
+        # Another view stops the comparison; what finished is recorded.
+        await launch(pilot, view, {"sarsa"}, seeds=2, episodes=200_000)
+        await wait_for(pilot, lambda: view.chart.series, "a live curve")
+        await pilot.press("t")
+        await wait_for(pilot, lambda: view.job is None, "the comparison to stop")
+        assert app.current_view == "train"
+        with RunHistory(db) as history:
+            newest = history.list_runs(limit=1)[0]
+        assert (newest.algorithm, str(newest.status)) == ("sarsa", "interrupted")
+        await pilot.press("v")
+        await wait_for(pilot, lambda: newest.id in {r.id for r in view.runs}, "the new run")
+        # Another game: its runs.
+        await pilot.press("g")
+        await wait_for(pilot, lambda: app.session.game.name == "gridworld", "GridWorld")
+        await wait_for(pilot, lambda: [r.id for r in view.runs] == [ids["gridworld"]],
+                       "GridWorld's runs")
+        await pilot.press("question_mark")
+        await wait_for(pilot, lambda: isinstance(app.screen, HelpScreen), "the help")
+        assert "Compare view" in screen_text(app)
+
+
+
+async def launch(pilot, view: CompareView, algorithms: set[str], seeds: int, episodes: int):
+    from tui_gym.ui.widgets.tick_box import TickBox
+
+    for box in view.query(TickBox):
+        box.value = box.id.removeprefix("algo-") in algorithms
+    view.query_one("#compare-seeds").value = str(seeds)
+    view.query_one("#compare-episodes").value = str(episodes)
+    view.focus_default()
+    await pilot.press("l")
+    await wait_for(pilot, lambda: view.job is not None, "the comparison to start")
+
+
+async def test_launch_runs_records_and_ticks_the_runs(tmp_path: Path) -> None:
+    db = tmp_path / "runs.db"
+    app = ViewApp(Session("blackjack", seed=0), db)
+    async with app.run_test(size=SIZE) as pilot:
+        view = app.query_one(CompareView)
+        view.processes = 0  # the batches on the job's thread: no child processes to start
+        await pilot.pause()
+        await launch(pilot, view, {"q-learning", "sarsa"}, seeds=3, episodes=40)
+        assert view.has_class("-running")
+        await wait_for(pilot, lambda: view.job is None, "the comparison to end")
+        assert "Comparison finished" in view.message
+        runs = view.runs
+        assert [(r.algorithm, str(r.kind), r.seeds) for r in runs] == [
+            ("sarsa", "compare", (0, 1, 2)), ("q-learning", "compare", (0, 1, 2))]
+        assert sorted(view.run_list.selected) == sorted(r.id for r in runs)
+        assert [s.key for s in view.chart.series] == [r.id for r in runs] or [
+            s.key for s in view.chart.series] == [r.id for r in reversed(runs)]
+        assert all(s.has_band and s.seeds == 3 for s in view.chart.series)
+        for row in view.table.rows:
+            assert row.note == "" and row.episodes == 40 and row.seeds == 3
+            assert row.mean_return_last.ci95 is not None
+        with RunHistory(db) as history:
+            recorded = history.list_runs()
+        assert {str(r.status) for r in recorded} == {"finished"}
+        by_id = {r.id: r for r in recorded}
+        for row in view.table.rows:  # the table reads what was recorded
+            assert row.mean_return_last == by_id[row.key].figure("mean_return_last")
+            assert row.exact_value == by_id[row.key].figure("exact_value")
+
+
+async def test_progress_draws_live_curves_and_stopping_keeps_what_finished(tmp_path: Path) -> None:
+    db = tmp_path / "runs.db"
+    app = ViewApp(Session("blackjack", seed=0), db)
+    async with app.run_test(size=SIZE) as pilot:
+        view = app.query_one(CompareView)
+        view.processes = 0
+        await pilot.pause()
+        await launch(pilot, view, {"q-learning"}, seeds=2, episodes=200_000)
+        await wait_for(pilot, lambda: [s.key for s in view.chart.series]
+                       == [("live", "q-learning")], "a live curve")
+        live = view.table.rows[0]
+        assert live.note == "running" and live.seeds == 2 and live.episodes >= 1
+        await wait_for(pilot, lambda: "Q-learning (live)" in screen_text(app), "the legend")
+        await pilot.press("s")
+        await wait_for(pilot, lambda: view.job is None, "the comparison to stop")
+        assert "Comparison stopped" in view.message
+        (run,) = view.runs
+        assert str(run.status) == "interrupted" and view.run_list.selected == [run.id]
+        (row,) = view.table.rows
+        assert row.note == "interrupted" and 1 <= row.episodes < 200_000
+        # Closing the app stops a comparison and records what finished.
+        await launch(pilot, view, {"sarsa"}, seeds=2, episodes=200_000)
+        job = view.job
+        await wait_for(pilot, lambda: job.progress_count > 0, "progress")
+    assert job.done and job.error is None and job.result.interrupted
+    with RunHistory(db) as history:
+        assert [(r.algorithm, str(r.status)) for r in history.list_runs()] == [
+            ("sarsa", "interrupted"), ("q-learning", "interrupted")]
+
+
+def test_seeds_times_episodes_is_bounded() -> None:
+    with pytest.raises(ValueError, match=r"at most 20,000,000 .*got 30,000,000"):
+        read_launch(("sarsa",), "3", "10000000")

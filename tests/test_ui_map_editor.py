@@ -1,0 +1,98 @@
+"""The map editor, driven like a person would: paint, undo and redo, the optimum following
+each edit, the agent kept through edits that keep its states and reset on a resize.
+
+Waits poll a condition with a deadline; nothing sleeps.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+from tui_gym.core.session import Session
+from tui_gym.ui.app import TuiGymApp
+from tui_gym.ui.train_view import TrainView
+from tui_gym.ui.widgets.map_editor import MapCanvas, MapEditor
+
+DEADLINE = 20.0
+
+
+async def wait_for(pilot, predicate: Callable[[], bool], what: str) -> None:
+    deadline = time.monotonic() + DEADLINE
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out waiting for {what}")
+        await pilot.pause()
+
+
+def status(editor: MapEditor) -> str:
+    return str(editor.query_one("#editor-status").content)
+
+
+async def test_paint_undo_and_the_optimum_on_a_small_cliff() -> None:
+    """CliffWalking's rules on SFF/FFG: every step costs 1, so the optimum is minus the
+    fewest steps (3), and with the goal walled off the whole 200-step limit."""
+    session = Session("cliffwalking", env_kwargs={"layout": "SFF\nFFG\n"}, seed=0,
+                      hp={"episodes": 1_000_000_000})
+    app = TuiGymApp(session)
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.pause()
+        await pilot.press("m")
+        view = app.query_one(TrainView)
+        await wait_for(pilot, lambda: view.editor is not None and view.editor.canvas.has_focus,
+                       "the editor")
+        editor = view.editor
+        assert editor is not None
+        assert "exact optimum -3.0000 return" in status(editor)
+
+        await pilot.press("down", "right", "2")  # a wall at row 1, col 1: the top way is left
+        assert app.session.game.cells(app.session.env_kwargs) == ["SFF", "FWG"]
+        assert "exact optimum -3.0000 return" in status(editor)
+        canvas = editor.query_one(MapCanvas)
+        hit = next((x, y) for y in range(canvas.size.height) for x in range(canvas.size.width)
+                   if (cell := canvas.cell_at(x, y)) is not None and cell[1:] == (0, 1))
+        pad = canvas.content_region.offset - canvas.region.offset  # cell_at counts in content
+        await pilot.click(MapCanvas, offset=(hit[0] + pad.x, hit[1] + pad.y))
+        # The top way walled too: no way to the goal, so the whole 200-step limit.
+        assert app.session.game.cells(app.session.env_kwargs) == ["SWF", "FWG"]
+        assert "exact optimum -200.0000 return" in status(editor)
+        assert "no goal can be reached" in status(editor)
+
+        await pilot.press("u")
+        assert editor.grid_map.cells == ("SFF", "FWG")
+        assert "exact optimum -3.0000" in status(editor)
+        await pilot.press("y", "u")
+        assert editor.grid_map.cells == ("SFF", "FWG")
+
+        await pilot.press("minus")  # animated: light on the machine, and a person can follow
+        await pilot.press("space")  # training goes on while editing
+        await wait_for(pilot, lambda: app.session.trainer.episodes > 0, "some training")
+        agent = app.session.agent
+        # A pit of +1 beside the start: falling in (one step, +1) beats walking (-3).
+        await pilot.press("left", "down", "3")  # a hole at row 1, col 0, at the game's own cost
+        await pilot.press("right_square_bracket", "enter")  # its reward up to +1
+        assert editor.grid_map.reward_table() == {(1, 0): 1.0}
+        assert "exact optimum +1.0000 return" in status(editor)
+        assert app.session.agent is agent, "a reward edit keeps the agent"
+        assert app.runner.running, "training goes on"
+
+        await pilot.press("shift+right")  # a new size: the states mean other cells
+        await wait_for(pilot, lambda: app.session.agent is not agent, "a fresh agent")
+        assert editor.grid_map.size_text == "2x4"
+        assert any("reset" in n.message for n in app._notifications)
+        assert app.runner.running, "training goes on with the fresh agent"
+
+        await pilot.press("space")
+        await wait_for(pilot, lambda: not app.runner.running, "training to pause")
+        await pilot.press("escape")
+        assert not view.editing_map
+
+
+async def test_a_game_without_a_map_says_so() -> None:
+    app = TuiGymApp(Session("blackjack", seed=0))
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.pause()
+        await pilot.press("m")
+        await pilot.pause()
+        assert not app.query_one(TrainView).editing_map
+        assert any("no map to edit" in n.message for n in app._notifications)

@@ -1,0 +1,386 @@
+"""TileMap: FrozenLake and CliffWalking played on any map of tiles.
+
+Provides `TileMapEnv` (registered as `tui_gym/TileMap-v0`), `TileRules` (the
+rewards and slip a game gives tiles by default) and `tile_arrays`, the
+transition arrays the env's table is read from (one source for the env and
+for the exact model built from a map without making an env).
+
+A map is rows of tiles: S start (exactly one), F floor, H hole (ends the
+episode), G goal (ends the episode), C cliff (sends the agent back to the
+start, the episode goes on), W wall (cannot be entered), R reward cell (pays
+its reward on every entry). Gymnasium's FrozenLake and CliffWalking are this
+env on their own maps with their own rules, move for move.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import numpy.typing as npt
+from gymnasium import spaces
+
+__all__ = [
+    "ACTION_ORDERS",
+    "TILES",
+    "TileArrays",
+    "TileMapEnv",
+    "TileRules",
+    "cell_key",
+    "read_cell",
+    "tile_arrays",
+]
+
+TILES = "SFHGCWR"
+TILE_NAMES = {"S": "start", "F": "floor", "H": "hole", "G": "goal", "C": "cliff", "W": "wall",
+              "R": "reward cell"}
+VALUED = "RHGC"  # tiles whose reward a map may set
+STANDING = "SFR"  # tiles an agent stands on, so the only ones whose slip matters
+ENDING = "HG"
+STEPS = {"left": (0, -1), "down": (1, 0), "right": (0, 1), "up": (-1, 0)}
+# The action numbers of Gymnasium's two games: FrozenLake's and CliffWalking's.
+ACTION_ORDERS: dict[str, tuple[str, ...]] = {
+    "lake": ("left", "down", "right", "up"),
+    "cliff": ("up", "right", "down", "left"),
+}
+
+Cell = tuple[int, int]
+FloatArray = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class TileRules:
+    """What tiles pay and how slippery they are where a map does not say.
+
+    `step`: entering floor or the start, and bumping into a wall or the edge;
+    `goal`, `hole`, `cliff`: entering one (a cliff then sends the agent back to
+    the start); `slip`: the chance that a move goes to one side or the other
+    instead of where asked (half each).
+    """
+
+    step: float = 0.0
+    goal: float = 1.0
+    hole: float = 0.0
+    cliff: float = -100.0
+    slip: float = 0.0
+
+
+def cell_key(cell: Cell) -> str:
+    """A cell as the "r,c" text maps and scenes key it by."""
+    return f"{cell[0]},{cell[1]}"
+
+
+def read_cell(key: Any) -> Cell:
+    """A cell from "r,c" text or a (row, col) pair; `ValueError` otherwise."""
+    if isinstance(key, str):
+        parts = key.split(",")
+        if len(parts) == 2 and all(p.strip().isdigit() and p.strip().isascii() for p in parts):
+            return int(parts[0]), int(parts[1])
+        raise ValueError(f"a cell is 'row,col', got {key!r}")
+    if isinstance(key, Sequence) and len(key) == 2 and all(
+        isinstance(v, int | np.integer) and not isinstance(v, bool) for v in key
+    ):
+        return int(key[0]), int(key[1])
+    raise ValueError(f"a cell is (row, col), got {key!r}")
+
+
+def _where(cell: Cell) -> str:
+    return f"row {cell[0]}, col {cell[1]}"
+
+
+def check_map(
+    cells: Sequence[str],
+    rewards: Mapping[Any, Any] | None,
+    slip: Mapping[Any, Any] | None,
+    need_start: bool = True,
+) -> tuple[tuple[str, ...], dict[Cell, float], dict[Cell, float]]:
+    """The map checked: rows, rewards and slip by cell. `ValueError` names the cell at fault.
+    With `need_start`, exactly one start; without, at most one."""
+    rows = tuple(str(row) for row in cells)
+    if not rows or not rows[0]:
+        raise ValueError("a tile map needs at least one row of tiles")
+    width = len(rows[0])
+    for r, row in enumerate(rows):
+        if len(row) != width:
+            raise ValueError(f"row {r} has {len(row)} tiles, row 0 has {width}: rows must be "
+                             "equally long")
+        for c, tile in enumerate(row):
+            if tile not in TILES:
+                raise ValueError(f"{_where((r, c))}: {tile!r} is not a tile "
+                                 f"({', '.join(f'{t} {n}' for t, n in TILE_NAMES.items())})")
+    starts = [(r, c) for r, row in enumerate(rows) for c, t in enumerate(row) if t == "S"]
+    if len(starts) > 1 or (need_start and not starts):
+        found = "none" if not starts else ", ".join(_where(s) for s in starts)
+        raise ValueError(f"a tile map needs exactly one start S (found {found})")
+    reward_of: dict[Cell, float] = {}
+    for key, value in (rewards or {}).items():
+        cell = _on_map(read_cell(key), rows)
+        tile = rows[cell[0]][cell[1]]
+        if tile not in VALUED:
+            raise ValueError(f"{_where(cell)} is {TILE_NAMES[tile]}: only reward (R), hole (H), "
+                             "goal (G) and cliff (C) cells take a reward")
+        reward_of[cell] = _finite(value, f"the reward at {_where(cell)}")
+    for r, row in enumerate(rows):
+        for c, tile in enumerate(row):
+            if tile == "R" and (r, c) not in reward_of:
+                raise ValueError(f"{_where((r, c))}: a reward cell needs its reward")
+    slip_of: dict[Cell, float] = {}
+    for key, value in (slip or {}).items():
+        cell = _on_map(read_cell(key), rows)
+        tile = rows[cell[0]][cell[1]]
+        if tile not in STANDING:
+            raise ValueError(f"{_where(cell)} is {TILE_NAMES[tile]}: only cells the agent "
+                             "stands on (S, F, R) slip")
+        slip_of[cell] = _probability(value, f"the slip at {_where(cell)}")
+    return rows, reward_of, slip_of
+
+
+def _on_map(cell: Cell, rows: Sequence[str]) -> Cell:
+    if not (0 <= cell[0] < len(rows) and 0 <= cell[1] < len(rows[0])):
+        raise ValueError(f"{_where(cell)} is off the {len(rows)}x{len(rows[0])} map")
+    return cell
+
+
+def _finite(value: Any, what: str) -> float:
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} must be a number, got {value!r}") from None
+    if isinstance(value, bool) or not math.isfinite(number):
+        raise ValueError(f"{what} must be a finite number, got {value!r}")
+    return number
+
+
+def _probability(value: Any, what: str) -> float:
+    number = _finite(value, what)
+    if not 0.0 <= number <= 1.0:
+        raise ValueError(f"{what} must be in [0, 1], got {value!r}")
+    return number
+
+
+@dataclass(frozen=True)
+class TileArrays:
+    """A map's transitions as `[S, A, K]` arrays (see `tui_gym.core.mdp.FiniteMDP`):
+    K is 3 (as asked, then the two sides) where anything slips, else 1; outcomes that
+    cannot happen stay in place, pay 0 and do not end."""
+
+    next_state: npt.NDArray[np.int64]
+    prob: FloatArray
+    reward: FloatArray
+    terminal: npt.NDArray[np.bool_]
+    initial: FloatArray
+
+
+def tile_arrays(
+    cells: Sequence[str],
+    rewards: Mapping[Cell, float],
+    slip: Mapping[Cell, float],
+    actions: Sequence[str],
+    rules: TileRules,
+) -> TileArrays:
+    """The transitions of a checked map (`check_map`), vectorized over cells."""
+    n_rows, n_cols = len(cells), len(cells[0])
+    n = n_rows * n_cols
+    tiles = np.array([list(row) for row in cells]).reshape(-1)
+    states = np.arange(n)
+    rr, cc = np.divmod(states, n_cols)
+    start = int(np.flatnonzero(tiles == "S")[0])
+    # What entering each cell pays, and where the agent then is.
+    pays = np.full(n, rules.step)
+    pays[tiles == "G"], pays[tiles == "H"], pays[tiles == "C"] = rules.goal, rules.hole, rules.cliff
+    for (r, c), value in rewards.items():
+        pays[r * n_cols + c] = value
+    lands = np.where(tiles == "C", start, states)
+    ends = np.isin(tiles, list(ENDING))
+    # A move in each direction from each cell: the cell it reaches (itself when blocked).
+    step_to = {}
+    for name, (dr, dc) in STEPS.items():
+        r2, c2 = rr + dr, cc + dc
+        inside = (r2 >= 0) & (r2 < n_rows) & (c2 >= 0) & (c2 < n_cols)
+        to = np.where(inside, np.clip(r2, 0, n_rows - 1) * n_cols + np.clip(c2, 0, n_cols - 1),
+                      states)
+        step_to[name] = np.where(tiles[to] == "W", states, to)
+    slip_at = np.full(n, rules.slip)
+    slip_at[~np.isin(tiles, list(STANDING))] = 0.0
+    for (r, c), value in slip.items():
+        slip_at[r * n_cols + c] = value
+    k = 3 if slip_at.any() else 1
+    shape = (n, len(actions), k)
+    next_state = np.broadcast_to(states[:, None, None], shape).copy()
+    prob = np.zeros(shape)
+    reward = np.zeros(shape)
+    terminal = np.zeros(shape, dtype=bool)
+    acting = ~np.isin(tiles, list(ENDING + "WC"))  # cells an agent acts from
+    for a, name in enumerate(actions):
+        sides = [d for d in STEPS if d != name and _perpendicular(d, name)]
+        chances = [1.0 - slip_at, slip_at / 2, slip_at / 2][:k]
+        for j, (direction, chance) in enumerate(zip([name, *sides], chances, strict=False)):
+            to = step_to[direction]
+            bumped = to == states
+            possible = acting & (chance > 0)
+            next_state[possible, a, j] = lands[to][possible]
+            prob[possible, a, j] = chance[possible]
+            reward[possible, a, j] = np.where(bumped, rules.step, pays[to])[possible]
+            terminal[possible, a, j] = ends[to][possible]
+    # Where the agent never acts (a hole, the goal, a wall, the cliff) the episode is over.
+    idle = ~acting
+    prob[idle, :, 0] = 1.0
+    terminal[idle, :, 0] = np.isin(tiles[idle], list(ENDING))[:, None]
+    initial = np.zeros(n)
+    initial[start] = 1.0
+    return TileArrays(next_state, prob, reward, terminal, initial)
+
+
+def _perpendicular(a: str, b: str) -> bool:
+    (ar, ac), (br, bc) = STEPS[a], STEPS[b]
+    return ar * br + ac * bc == 0
+
+
+class TileMapEnv(gym.Env[Any, Any]):
+    """
+    Walk a map of tiles from the start to a goal: FrozenLake and CliffWalking on any map.
+
+    ## Description
+    The map is rows of tiles: S start, F floor, H hole, G goal, C cliff, W wall,
+    R reward cell. Moves go one cell up, down, left or right; a move into a
+    wall or off the map leaves the agent where it is. From a cell that slips
+    (probability `p`), a move goes where asked with chance `1 - p` and to
+    either side with `p / 2` each, as on FrozenLake's ice.
+
+    ## Action Space
+    `Discrete(4)`, numbered as Gymnasium's game of the `actions` order:
+    "lake" (FrozenLake): 0 left, 1 down, 2 right, 3 up; "cliff"
+    (CliffWalking): 0 up, 1 right, 2 down, 3 left.
+
+    ## Observation Space
+    `Discrete(rows * cols)`: the agent's cell, `row * cols + col`.
+
+    ## Rewards
+    Entering a cell pays its tile's reward: a reward cell its own value, a
+    hole, the goal or the cliff the value the map gives it or the rules'
+    (`goal_reward`, `hole_reward`, `cliff_reward`), floor and the start
+    `step_reward`. A move that bumps into a wall or the edge pays `step_reward`.
+
+    ## Starting State
+    The start cell S.
+
+    ## Episode End
+    Terminated on entering a hole or a goal. Stepping onto the cliff sends the
+    agent back to the start and the episode goes on. No limit of its own: the
+    games pass `max_episode_steps` to `gym.make`.
+
+    ## Arguments
+    `cells` (rows of tiles, exactly one S), `rewards` ({"r,c": value} for R, H,
+    G and C cells; every R needs one), `slip` ({"r,c": probability} for S, F
+    and R cells), `slip_default` (every other standing cell), `actions`
+    ("lake" or "cliff"), `step_reward`, `goal_reward`, `hole_reward`,
+    `cliff_reward`; `render_mode` "ansi" draws the map as text with the agent
+    highlighted.
+    """
+
+    metadata: dict[str, Any] = {"render_modes": ["ansi"], "render_fps": 4}
+
+    def __init__(
+        self,
+        cells: Sequence[str] = ("SFFF", "FHFH", "FFFH", "HFFG"),
+        rewards: Mapping[Any, float] | None = None,
+        slip: Mapping[Any, float] | None = None,
+        slip_default: float = 0.0,
+        actions: str = "lake",
+        step_reward: float = 0.0,
+        goal_reward: float = 1.0,
+        hole_reward: float = 0.0,
+        cliff_reward: float = -100.0,
+        render_mode: str | None = None,
+    ) -> None:
+        if actions not in ACTION_ORDERS:
+            raise ValueError(f"actions must be one of {', '.join(ACTION_ORDERS)}, got {actions!r}")
+        if render_mode not in (None, "ansi"):
+            raise ValueError(f"TileMap renders 'ansi' only, got {render_mode!r}")
+        rows, reward_of, slip_of = check_map(cells, rewards, slip)
+        self.rules = TileRules(
+            step=_finite(step_reward, "step_reward"),
+            goal=_finite(goal_reward, "goal_reward"),
+            hole=_finite(hole_reward, "hole_reward"),
+            cliff=_finite(cliff_reward, "cliff_reward"),
+            slip=_probability(slip_default, "slip_default"),
+        )
+        self.cells = rows
+        self.rewards = reward_of
+        self.slip = slip_of
+        self.action_order = ACTION_ORDERS[actions]
+        self.nrow, self.ncol = len(rows), len(rows[0])
+        self.desc = np.asarray([list(row) for row in rows], dtype="c")
+        arrays = tile_arrays(rows, reward_of, slip_of, self.action_order, self.rules)
+        self.arrays = arrays
+        self._table: dict[int, dict[int, list[tuple[float, int, float, bool]]]] | None = None
+        self.initial_state_distrib = arrays.initial.copy()
+        self.observation_space = spaces.Discrete(self.nrow * self.ncol)
+        self.action_space = spaces.Discrete(4)
+        self.render_mode = render_mode
+        self.s: int | None = None
+        self.lastaction: int | None = None
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[int, dict[str, Any]]:
+        super().reset(seed=seed)
+        self.s = int(np.flatnonzero(self.initial_state_distrib)[0])
+        self.lastaction = None
+        return self.s, {"prob": 1.0}
+
+    def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
+        if self.s is None:
+            raise gym.error.ResetNeeded("TileMap: call reset() before step()")
+        if not self.action_space.contains(action):
+            raise ValueError(f"TileMap action must be an integer in [0, 3], got {action!r}")
+        arrays, s, a = self.arrays, self.s, int(action)
+        weights = arrays.prob[s, a]
+        # Outcomes that cannot happen weigh 0, so they are never drawn: the draw is the
+        # one over the toy-text table `P`, which leaves them out.
+        index = int(np.searchsorted(np.cumsum(weights), self.np_random.random(), side="right"))
+        index = min(index, int(np.flatnonzero(weights)[-1]))
+        self.s = int(arrays.next_state[s, a, index])
+        self.lastaction = a
+        return (self.s, float(arrays.reward[s, a, index]), bool(arrays.terminal[s, a, index]),
+                False, {"prob": float(weights[index])})
+
+    @property
+    def P(self) -> dict[int, dict[int, list[tuple[float, int, float, bool]]]]:  # noqa: N802
+        """The toy-text table `P[s][a] = [(prob, next_state, reward, terminated), ...]`
+        (Gymnasium's name), made when first asked for."""
+        if self._table is None:
+            self._table = _table(self.arrays)
+        return self._table
+
+    def render(self) -> str | None:
+        if self.render_mode is None:
+            gym.logger.warn("TileMap: no render_mode given; pass render_mode='ansi'")
+            return None
+        lines = [list(row) for row in self.cells]
+        if self.s is not None:
+            r, c = divmod(self.s, self.ncol)
+            lines[r][c] = f"\x1b[41m{lines[r][c]}\x1b[0m"
+        text = ""
+        if self.lastaction is not None:
+            text = f"  ({self.action_order[self.lastaction].capitalize()})\n"
+        return text + "\n".join("".join(line) for line in lines) + "\n"
+
+
+def _table(arrays: TileArrays) -> dict[int, dict[int, list[tuple[float, int, float, bool]]]]:
+    """The toy-text table `P[s][a] = [(prob, next_state, reward, terminated), ...]`."""
+    table: dict[int, dict[int, list[tuple[float, int, float, bool]]]] = {}
+    n_states, n_actions, _ = arrays.prob.shape
+    probs, nexts = arrays.prob.tolist(), arrays.next_state.tolist()
+    rewards, terminals = arrays.reward.tolist(), arrays.terminal.tolist()
+    for s in range(n_states):
+        table[s] = {
+            a: [(p, n, r, t) for p, n, r, t in zip(probs[s][a], nexts[s][a], rewards[s][a],
+                                                   terminals[s][a], strict=True) if p > 0]
+            for a in range(n_actions)
+        }
+    return table

@@ -1,0 +1,66 @@
+"""GridWorld's exact model, so a greedy policy gets an exact expected return.
+
+States are the (agent, target) placements in the row-major order of the
+game's table (`ax, ay, tx, ty`), actions right, up, left, down; a move is
+clipped at the grid's edges, stays put against a wall cell (`walls`), and ends
+the episode on the target. Every move has one outcome, so the model is
+`[S, 4, 1]`. Episodes start uniformly over the placements of agent and target
+on different free cells (the env's draws). Rewards are the env's
+(`+reward_scale` on the target, `-step_penalty` otherwise) passed through the
+wrappers' reward code with the distance after the move (the fewest moves
+around the walls, -1 where they part the two, as the env reports it), so
+`StepPenalty`, `ScaleReward` and `DistanceShaping` are followed exactly; the
+episode limit is the tightest `TimeLimit`.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from tui_gym.core.mdp import FiniteMDP, Solution, solve
+from tui_gym.core.wrappers.changes import GameChanges
+from tui_gym.envs.walls import Walls, cell_distances, cell_moves, free_cells
+
+__all__ = ["gridworld_model", "gridworld_optimum"]
+
+
+@lru_cache(maxsize=8)
+def gridworld_model(
+    size: int, reward_scale: float, step_penalty: float, changes: GameChanges,
+    walls: Walls = (),
+) -> FiniteMDP:
+    """The model of a `size` x `size` GridWorld with `walls` as the wrappers in `changes`
+    make it."""
+    cells = size * size
+    agent, target = np.divmod(np.arange(cells * cells), cells)  # [S]: cell numbers x*size+y
+    moved = cell_moves(size, walls)[:, agent].T  # [S, A]: the agent's cell after each move
+    next_state = moved * cells + target[:, None]
+    distance = cell_distances(size, walls)[moved, target[:, None]]
+    terminal = moved == target[:, None]
+    # Each distinct (bare reward, distance) passes once through the wrappers' own code.
+    miss = 0.0 - float(step_penalty)
+    reward = np.empty(distance.shape)
+    for d in np.unique(distance):
+        base = float(reward_scale) if d == 0 else miss
+        reward[distance == d] = changes.reward(base, float(d))
+    free = free_cells(size, walls)
+    start = free[agent] & free[target] & (agent != target)
+    return FiniteMDP(
+        next_state=next_state[..., None],
+        prob=np.ones(next_state.shape + (1,)),
+        reward=reward[..., None],
+        terminal=terminal[..., None],
+        initial=start / start.sum(),
+        horizon=changes.time_limit,
+    )
+
+
+@lru_cache(maxsize=8)
+def gridworld_optimum(
+    size: int, reward_scale: float, step_penalty: float, changes: GameChanges,
+    walls: Walls = (),
+) -> Solution:
+    """The optimum of `gridworld_model` with the same arguments (kept)."""
+    return solve(gridworld_model(size, reward_scale, step_penalty, changes, walls))

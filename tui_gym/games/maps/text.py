@@ -1,0 +1,154 @@
+"""Maps as text: FrozenLake's rows of tiles, with a small header for rewards and slip.
+
+    # a comment: lines starting with '#' and blank lines are skipped
+    reward 1,1: -5
+    slip 0,1: 0.25
+    SFFF
+    FHFH
+    FFFH
+    HFFG
+
+A file of just the rows (`SFFF`, `FHFH`, `FFFH`, `HFFG` on four lines) is
+FrozenLake's 4x4 map. Tiles: S start, F floor, H hole, G goal, C cliff, W
+wall, R reward cell. Header lines name a cell as `row,col`, row 0 being the
+first line of tiles: `reward ROW,COL: VALUE` for an R, H, G or C cell (every
+R needs one), `slip ROW,COL: P` for an S, F or R cell.
+
+`parse_map(text)` reads a map; the first thing wrong raises `MapError` with
+one line naming the file line and, for a tile, the map row and column.
+`format_map(grid_map)` writes one that reads back the same.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from functools import lru_cache
+
+from tui_gym.core.params import read_number
+from tui_gym.envs.tile_map import STANDING, TILE_NAMES, TILES, VALUED
+from tui_gym.games.maps.grid_map import MAX_SIDE, Cell, GridMap
+
+__all__ = ["MAX_TEXT", "MapError", "format_map", "parse_map", "read_layout"]
+
+MAX_TEXT = 64 << 10  # characters of a map's text, at most
+_HEADER = re.compile(r"(reward|slip)\s+([0-9]+)\s*,\s*([0-9]+)\s*[:=]?\s*(\S+)",
+                     re.ASCII | re.IGNORECASE)
+_KEYWORD = re.compile(r"(reward|slip)\b", re.IGNORECASE)
+TILE_LIST = ", ".join(f"{t} {n}" for t, n in TILE_NAMES.items())
+
+
+class MapError(ValueError):
+    """A map that cannot be read; the message is one line naming where (line, row, column)."""
+
+
+def _number(text: str, line: int, what: str) -> float:
+    value = read_number(text)
+    if value is None or not math.isfinite(value):
+        raise MapError(f"line {line}: {what} must be a finite number, got {text!r}")
+    return float(value)
+
+
+def parse_map(text: str) -> GridMap:
+    """The map `text` holds (see the module docstring); `MapError` when it holds none."""
+    if len(text) > MAX_TEXT:
+        raise MapError(f"{len(text):,} characters: a map's text is at most {MAX_TEXT:,}")
+    rows: list[str] = []
+    row_lines: list[int] = []
+    header: dict[str, dict[Cell, tuple[float, int]]] = {"reward": {}, "slip": {}}
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip()
+        if not line or line.startswith("#"):
+            continue
+        if _KEYWORD.match(line):
+            _header_line(line, number, header)
+            continue
+        where = f"line {number} (map row {len(rows)})"
+        for col, tile in enumerate(line):
+            if tile not in TILES:
+                raise MapError(f"{where}, column {col}: {tile!r} is not a tile ({TILE_LIST})")
+        if len(rows) >= MAX_SIDE:
+            raise MapError(f"line {number}: a map has at most {MAX_SIDE} rows")
+        if len(line) > MAX_SIDE:
+            raise MapError(f"{where} has {len(line)} tiles: at most {MAX_SIDE}")
+        if rows and len(line) != len(rows[0]):
+            raise MapError(f"{where} has {len(line)} tiles, row 0 has {len(rows[0])}: rows "
+                           "must be equally long")
+        rows.append(line)
+        row_lines.append(number)
+    if not rows:
+        raise MapError(f"no rows of tiles: a map is rows of tiles ({TILE_LIST})")
+    _check_tiles(rows, row_lines, header)
+    try:
+        return GridMap.of(rows, {c: v for c, (v, _) in header["reward"].items()},
+                          {c: v for c, (v, _) in header["slip"].items()})
+    except ValueError as error:  # everything is checked above; kept as one clear line anyway
+        raise MapError(str(error)) from None
+
+
+@lru_cache(maxsize=64)
+def read_layout(text: str) -> GridMap:
+    """`parse_map`, kept: the same text (a game's `layout` argument) is read once."""
+    return parse_map(text)
+
+
+def _header_line(line: str, number: int, header: dict[str, dict[Cell, tuple[float, int]]]) -> None:
+    match = _HEADER.fullmatch(line)
+    if match is None:
+        raise MapError(f"line {number}: a header line reads 'reward ROW,COL: VALUE' or "
+                       f"'slip ROW,COL: P', got {line[:40]!r}")
+    key, row, col, value = match.groups()
+    key = key.lower()
+    cell = (int(row), int(col))
+    amount = _number(value, number, f"the {key} at row {cell[0]}, col {cell[1]}")
+    if key == "slip" and not 0.0 <= amount <= 1.0:
+        raise MapError(f"line {number}: the slip at row {cell[0]}, col {cell[1]} must be in "
+                       f"[0, 1], got {value}")
+    earlier = header[key].get(cell)
+    if earlier is not None:
+        raise MapError(f"line {number}: {key} {row},{col} is given twice (first on line "
+                       f"{earlier[1]})")
+    header[key][cell] = (amount, number)
+
+
+def _check_tiles(
+    rows: list[str], row_lines: list[int], header: dict[str, dict[Cell, tuple[float, int]]]
+) -> None:
+    start: Cell | None = None
+    for r, row in enumerate(rows):
+        for c, tile in enumerate(row):
+            where = f"line {row_lines[r]} (map row {r}), column {c}"
+            if tile == "S":
+                if start is not None:
+                    raise MapError(f"{where}: a second start (the first is at row {start[0]}, "
+                                   f"col {start[1]}); a map has one")
+                start = (r, c)
+            if tile == "R" and (r, c) not in header["reward"]:
+                raise MapError(f"{where}: a reward cell needs its value: add "
+                               f"'reward {r},{c}: VALUE' above the rows")
+    size = f"{len(rows)}x{len(rows[0])}"
+    for key, allowed, words in (
+        ("reward", VALUED, "only reward (R), hole (H), goal (G) and cliff (C) cells take a "
+                           "reward"),
+        ("slip", STANDING, "only cells the agent stands on (S, F, R) slip"),
+    ):
+        for (r, c), (_, number) in header[key].items():
+            if not (r < len(rows) and c < len(rows[0])):
+                raise MapError(f"line {number}: {key} {r},{c} is off the {size} map")
+            tile = rows[r][c]
+            if tile not in allowed:
+                raise MapError(f"line {number}: row {r}, col {c} is {TILE_NAMES[tile]}: {words}")
+
+
+def _number_text(value: float) -> str:
+    short = f"{value:g}"
+    return short if float(short) == value else repr(value)
+
+
+def format_map(grid_map: GridMap, comment: str = "") -> str:
+    """The map as text that `parse_map` reads back the same (a `# comment` line first)."""
+    lines = [f"# {line}" for line in comment.splitlines()]
+    lines += [f"reward {r},{c}: {_number_text(v)}" for (r, c), v in grid_map.rewards]
+    lines += [f"slip {r},{c}: {_number_text(v)}" for (r, c), v in grid_map.slip]
+    lines += list(grid_map.cells)
+    return "\n".join(lines) + "\n"

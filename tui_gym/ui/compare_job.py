@@ -1,0 +1,156 @@
+"""`CompareJob`: one comparison running on a worker thread, watched by the Compare view.
+
+The view never waits on it: `run_compare` runs on the job's own thread,
+its progress callbacks only keep the latest `CompareProgress`, and the
+view's timer reads `progress`, `result` and `error` when it draws. `stop()`
+sets the event `run_compare` watches, so what finished is still recorded;
+`close()` stops and waits a bounded time for the thread (the app's exit
+and a switch of game or view use it). A failure becomes one line in
+`error`, never a traceback.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from tui_gym.core.experiments import RunHistory, RunHistoryError
+
+if TYPE_CHECKING:
+    from tui_gym.core.experiments.compare import CompareProgress, CompareResult, CompareSpec
+
+CLOSE_SECONDS = 5.0  # how long `close()` waits for the thread to end
+
+
+class CompareJob:
+    """A comparison on a thread: `start()`, then read `progress`, `result`, `error`."""
+
+    def __init__(
+        self,
+        spec: CompareSpec,
+        db: Path,
+        run: Callable[..., Any] | None = None,
+        processes: int | None = None,
+    ) -> None:
+        """`run` is `run_compare` (or a function with its signature); `processes` is its
+        own (None: one child process per core, 0: all on the job's thread)."""
+        if run is None:
+            from tui_gym.core.experiments.compare import run_compare
+
+            run = run_compare
+        self.spec = spec
+        self.db = db
+        self._run = run
+        self.processes = processes
+        self.stop_event = threading.Event()
+        self.progress: CompareProgress | None = None  # the latest report
+        self.progress_count = 0  # how many reports came
+        self.result: CompareResult | None = None  # once it ends
+        self.error: str | None = None
+        self.started_at = 0.0
+        self._thread = threading.Thread(target=self._work, name="compare", daemon=True)
+
+    def start(self) -> None:
+        """Start the thread; call it from the app's thread (see `_start_resource_tracker`)."""
+        if self.processes != 0:
+            _start_resource_tracker()
+        self.started_at = time.monotonic()
+        self._thread.start()
+
+    @property
+    def running(self) -> bool:
+        return self._thread.is_alive()
+
+    @property
+    def done(self) -> bool:
+        """Started and ended (with a result or an error)."""
+        return self._thread.ident is not None and not self._thread.is_alive()
+
+    @property
+    def stopping(self) -> bool:
+        return self.stop_event.is_set()
+
+    def stop(self) -> None:
+        """Ask the comparison to end; what finished is kept and recorded."""
+        self.stop_event.set()
+
+    def close(self, timeout: float = CLOSE_SECONDS) -> bool:
+        """Stop and wait up to `timeout` seconds for the thread; whether it ended."""
+        self.stop()
+        if self._thread.ident is None:
+            return True
+        self._thread.join(timeout)
+        return not self._thread.is_alive()
+
+    def _report(self, progress: CompareProgress) -> None:
+        self.progress = progress  # one assignment: the view reads whichever is latest
+        self.progress_count += 1
+
+    def _work(self) -> None:
+        _lower_priority()
+        try:
+            with RunHistory(self.db) as history:
+                self.result = self._run(
+                    self.spec, progress=self._report, stop=self.stop_event, history=history,
+                    processes=self.processes,
+                )
+        except RunHistoryError as exc:
+            self.error = f"Not recorded: {_one_line(exc)}"
+        except ValueError as exc:  # settings a learner or the game refuses
+            self.error = f"The comparison could not run: {_one_line(exc)}"
+        except Exception as exc:  # shown as one line in the view, not raised into the app
+            self.error = f"The comparison failed: {type(exc).__name__}: {_one_line(exc)}"
+
+
+def _one_line(exc: BaseException, limit: int = 300) -> str:
+    text = " ".join(str(exc).split())
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+NICENESS = 10  # the comparison's thread and processes yield the cores to the app's
+
+
+def _lower_priority() -> None:
+    """Lower this thread's scheduling priority, and so that of the processes it starts.
+
+    On Linux a thread has a priority of its own and the processes it starts
+    inherit it, so the comparison's batches give way to the app's event loop on
+    a busy machine while they still use every idle core. Elsewhere `os.nice`
+    would lower the whole app, so it is left alone.
+    """
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError):
+            os.nice(NICENESS)
+
+
+def _start_resource_tracker() -> None:
+    """Start multiprocessing's resource tracker now, with the real stderr in place.
+
+    `run_compare` starts child processes, and the first one starts the tracker,
+    handing it `sys.stderr.fileno()`. Inside a Textual app `sys.stderr` is the
+    app's capture, whose file number is -1, and starting a process fails
+    ("bad value(s) in fds_to_keep"). Started here, on the app's thread, with
+    the process's own stderr put back for the moment, the tracker is running
+    when the comparison's thread needs it.
+    """
+    from multiprocessing import resource_tracker
+
+    captured = sys.stderr
+    if sys.__stderr__ is None:
+        return
+    sys.stderr = sys.__stderr__
+    try:
+        resource_tracker.ensure_running()
+    except OSError:
+        pass  # then the comparison says why it cannot start its processes
+    finally:
+        sys.stderr = captured
+
+
+__all__ = ["CompareJob"]

@@ -1,0 +1,668 @@
+"""The Compare view: the current game's recorded runs side by side, and comparisons launched here.
+
+`CompareView` lists the current game's runs from the run history, newest
+first, each with a tick box (`RunList`); the runs ticked are drawn together
+(`CompareChart`: their return curves with 95% bands, a legend, a colour
+each) above a table of their final figures with intervals (`FiguresTable`).
+Above the list, the launch form: the algorithms to compare, the number of
+seeds and of episodes (checked, each wrong field named in one message),
+and a button that runs the comparison for the current game, its parameters,
+its wrappers and the hyperparameters edited in the Train view (each given
+to the chosen algorithms that have it), through `run_compare` on a worker thread
+(`CompareJob`). The view's timer draws its progress as it comes: the curves
+so far, a progress line, and the figures; `s` (or the Stop button) stops
+it, keeping what finished. Once it ends, the runs it recorded appear in the
+list, ticked. A history that cannot be opened (damaged, another program's,
+from a newer tui-gym) is one message in the view; nothing else changes.
+
+The view reads the session and the history; it sends nothing up but
+notifications. The app stops a comparison when the person leaves the view,
+switches game or quits (`stop_comparison`, `close`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Hashable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, ClassVar
+
+from rich.segment import Segment
+from rich.text import Text
+from textual import on
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Horizontal, Vertical, VerticalScroll
+from textual.strip import Strip
+from textual.widgets import Button, Input, Label, SelectionList
+from textual.widgets._toggle_button import ToggleButton
+from textual.widgets.selection_list import Selection
+
+from tui_gym.core.experiments import (
+    RunHistory,
+    RunHistoryError,
+    RunRecord,
+    RunSummary,
+    resolve_db_path,
+)
+from tui_gym.ui.compare_job import CompareJob
+from tui_gym.ui.compare_series import (
+    FigureRow,
+    Series,
+    algorithm_title,
+    row_of_outcome,
+    row_of_record,
+    run_label,
+    series_of_outcome,
+    series_of_record,
+)
+from tui_gym.ui.widgets.compare_chart import PALETTE, CompareChart
+from tui_gym.ui.widgets.figures_table import FiguresTable, with_interval
+from tui_gym.ui.widgets.numbers import compact_count
+from tui_gym.ui.widgets.progress_line import ProgressLine
+from tui_gym.ui.widgets.stats_panel import format_duration
+from tui_gym.ui.widgets.tick_box import TickBox
+
+if TYPE_CHECKING:
+    from tui_gym.core.experiments.compare import AlgorithmOutcome, CompareProgress, CompareSpec
+    from tui_gym.core.session import Session
+
+POLL_SECONDS = 0.25  # how often the view looks at a running comparison
+LISTED_RUNS = 200  # the newest runs of the game that the list offers
+OPEN_TIMEOUT = 2.0  # seconds the view waits on a history another process is writing
+MAX_SEEDS = 1_000
+MAX_EPISODES = 10_000_000
+# A comparison keeps every seed's per-episode returns in memory until it ends.
+MAX_SEED_EPISODES = 20_000_000
+DEFAULT_SEEDS = 10
+DEFAULT_ALGORITHMS = ("q-learning", "sarsa")
+
+
+def parse_count(text: str, what: str, high: int) -> int:
+    """A whole number from 1 to `high` typed in a field; ValueError saying what is wanted."""
+    cleaned = text.strip().replace(",", "").replace("_", "")
+    try:
+        value = int(cleaned)
+    except ValueError:
+        value = 0
+    if not 1 <= value <= high:
+        shown = repr(text.strip()) if text.strip() else "nothing"
+        raise ValueError(f"{what}: a whole number from 1 to {high:,} (got {shown})")
+    return value
+
+
+@dataclass(frozen=True)
+class Launch:
+    """What the launch form asks for: algorithms (registry names), seeds, episodes."""
+
+    algorithms: tuple[str, ...]
+    seeds: int
+    episodes: int
+
+
+def read_launch(algorithms: Sequence[str], seeds: str, episodes: str) -> Launch:
+    """The form's values checked; ValueError naming every wrong field, one line."""
+    problems = []
+    if not algorithms:
+        problems.append("tick at least one algorithm")
+    counts = []
+    for text, what, high in ((seeds, "Seeds", MAX_SEEDS), (episodes, "Episodes", MAX_EPISODES)):
+        try:
+            counts.append(parse_count(text, what, high))
+        except ValueError as exc:
+            problems.append(str(exc))
+    if not problems and counts[0] * counts[1] > MAX_SEED_EPISODES:
+        problems.append(
+            f"seeds × episodes is at most {MAX_SEED_EPISODES:,} (every seed's returns are "
+            f"kept until the end; got {counts[0] * counts[1]:,})"
+        )
+    if problems:
+        raise ValueError("; ".join(problems))
+    return Launch(tuple(algorithms), counts[0], counts[1])
+
+
+def edited_settings(session: Session, algorithms: Sequence[str]) -> dict[str, Any]:
+    """The hyperparameters set in the Train view that differ from the algorithm's defaults
+    for the game, those of them at least one of `algorithms` has (the episode budget
+    aside: the launch form sets it)."""
+    from tui_gym.algorithms import algorithm
+    from tui_gym.core.session import default_settings
+
+    hp = session.hp
+    if hp is None:
+        return {}
+    defaults = default_settings(session.game, session.algorithm, session.env_kwargs)
+    owned = {f.name for name in algorithms for f in algorithm(name).params}
+    return {
+        name: value for name, value in hp.items()
+        if name != "episodes" and name in owned and defaults.get(name) != value
+    }
+
+
+def game_names(session: Session) -> set[str]:
+    """The names a run of the session's game may be recorded under (case folded)."""
+    game = session.game
+    names = {game.name, game.env_id, *game.other_ids}
+    return {n.casefold() for n in names if n}
+
+
+class RunList(SelectionList[int]):
+    """The runs, one a line, each with a tick box that reads ✓ when ticked."""
+
+    DEFAULT_CSS = """
+    RunList { height: auto; max-height: 10; border: none; padding: 0; }
+    RunList:focus { border: none; }
+    """
+
+    def render_line(self, y: int) -> Strip:
+        strip = super().render_line(y)
+        segments = list(strip)
+        # Textual's box draws the same X on and off; say the state with the mark itself.
+        if len(segments) > 2 and segments[1].text == ToggleButton.BUTTON_INNER:
+            try:
+                value = self.get_option_at_index(self.scroll_offset.y + y).value
+            except Exception:
+                return strip
+            mark = "✓" if value in self.selected else " "
+            segments[1] = Segment(mark, segments[1].style)
+            return Strip(segments, strip.cell_length)
+        return strip
+
+
+class CompareView(Vertical):
+    """Runs of the current game, their curves and figures, and comparisons to launch."""
+
+    SCOPED_CSS = False  # the compact rules start at Screen
+    DEFAULT_CSS = """
+    CompareView { height: 1fr; padding: 0 0 0 1; }
+    CompareView #compare-algorithms {
+        layout: grid; grid-size: 3; grid-gutter: 0 1; height: auto;
+    }
+    CompareView #compare-algorithms TickBox { width: 1fr; }
+    CompareView #compare-fields { height: 1; }
+    CompareView #compare-fields Label { padding: 0 1 0 0; color: $text-muted; }
+    CompareView #compare-fields Input { width: 10; margin-right: 2; }
+    CompareView #compare-fields Input.-invalid { border: none; color: $text-error; }
+    CompareView #compare-fields Button { min-width: 0; margin-right: 1; }
+    CompareView #compare-progress { display: none; }
+    CompareView.-running #compare-progress { display: block; }
+    CompareView #compare-message {
+        width: 1fr; color: $text-muted; text-wrap: wrap; height: auto;
+    }
+    CompareView #compare-message.-error { color: $text-error; }
+    CompareView #compare-body { height: 1fr; scrollbar-size-vertical: 1; }
+    CompareView #compare-runs-title { color: $text-muted; text-style: bold; margin-top: 1; }
+    CompareView #compare-chart { margin-top: 1; }
+
+    Screen.compact CompareView { padding: 0; }
+    Screen.compact CompareView #compare-runs-title { margin-top: 0; }
+    Screen.compact CompareView #compare-chart { margin-top: 0; }
+    Screen.compact CompareView RunList { max-height: 5; }
+    """
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("l", "launch", "Launch", tooltip="Run a comparison with the chosen algorithms"),
+        Binding("s", "stop", "Stop", tooltip="Stop the comparison; what finished is kept"),
+        Binding("m", "toggle_smoothing", "Smooth", tooltip="Smoothed curves, or as recorded"),
+        Binding("r", "reload", "Reload", tooltip="Read the run history again"),
+    ]
+
+    def __init__(
+        self,
+        *,
+        db: str | Path | None = None,
+        processes: int | None = None,
+        id: str | None = None,
+        classes: str | None = None,
+    ) -> None:
+        """`db` is the run history's file (None: `TUI_GYM_DB`, else the data folder's);
+        `processes` is `run_compare`'s (None: a child process per core)."""
+        super().__init__(id=id, classes=classes)
+        self.db = db  # read at each look, so the app can point the view elsewhere
+        self.processes = processes
+        self._runs: tuple[RunSummary, ...] = ()
+        self._records: dict[int, RunRecord] = {}
+        self._colours: dict[Hashable, int] = {}
+        self._history_error: str | None = None
+        self._game_key: frozenset[str] = frozenset()
+        self._job: CompareJob | None = None
+        self._job_game: frozenset[str] = frozenset()
+        self._seen_progress = -1
+        self._live: tuple[tuple[Series, FigureRow], ...] = ()
+        self._live_outcomes: tuple[AlgorithmOutcome, ...] = ()
+        self.smooth = True  # curves drawn through a trailing mean (m toggles)
+        self._message = ""
+        self._stale = True  # the list has not been read for the current game
+
+    # --- the app and its session ---------------------------------------------
+    @property
+    def session(self) -> Session:
+        return self.app.session  # type: ignore[attr-defined, no-any-return]
+
+    @property
+    def db_path(self) -> Path:
+        return resolve_db_path(None if self.db is None else str(self.db))
+
+    # --- layout ------------------------------------------------------------------
+    def compose(self) -> ComposeResult:
+        from tui_gym.algorithms import ALGORITHMS
+
+        # The parts the view updates, kept at hand: a timer tick never searches the DOM.
+        self._boxes = {
+            cls.name: TickBox(cls.title, value=cls.name in DEFAULT_ALGORITHMS, compact=True,
+                              id=f"algo-{cls.name}", tooltip=cls.summary)
+            for cls in ALGORITHMS
+        }
+        self._seeds = Input(str(DEFAULT_SEEDS), id="compare-seeds", compact=True,
+                            tooltip=f"independent learners per algorithm, 1 to {MAX_SEEDS:,}")
+        self._episodes = Input("", id="compare-episodes", compact=True,
+                               tooltip=f"episodes each learner trains, 1 to {MAX_EPISODES:,}")
+        self._launch = Button("▶ Compare", id="btn-compare", variant="success", compact=True,
+                              tooltip="Run the comparison for this game and its settings (l)")
+        self._stop = Button("■ Stop", id="btn-stop", variant="error", compact=True,
+                            disabled=True, tooltip="Stop it; what finished is recorded (s)")
+        self._progress = ProgressLine(id="compare-progress")
+        self._message_label = Label("", id="compare-message", markup=False)
+        self._run_list = RunList(id="compare-runs")
+        self._chart = CompareChart(id="compare-chart")
+        self._table = FiguresTable(id="compare-table")
+
+        with Horizontal(id="compare-algorithms"):
+            yield from self._boxes.values()
+        with Horizontal(id="compare-fields"):
+            yield Label("Seeds")
+            yield self._seeds
+            yield Label("Episodes")
+            yield self._episodes
+            yield self._launch
+            yield self._stop
+        yield self._progress
+        yield self._message_label
+        with VerticalScroll(id="compare-body"):
+            yield Label("Runs of this game (space ticks a run)", id="compare-runs-title")
+            yield self._run_list
+            yield self._chart
+            yield self._table
+
+    def on_mount(self) -> None:
+        self.set_interval(POLL_SECONDS, self._poll)
+        self.reload()
+        if self.display:
+            self.focus_default()
+
+    # --- parts -------------------------------------------------------------------
+    @property
+    def run_list(self) -> RunList:
+        return self._run_list
+
+    @property
+    def chart(self) -> CompareChart:
+        return self._chart
+
+    @property
+    def table(self) -> FiguresTable:
+        return self._table
+
+    @property
+    def message(self) -> str:
+        """The line under the form: what the view has to say (an error, the job's state)."""
+        return self._message
+
+    @property
+    def history_error(self) -> str | None:
+        return self._history_error
+
+    @property
+    def runs(self) -> tuple[RunSummary, ...]:
+        """The current game's runs the list offers, newest first."""
+        return self._runs
+
+    @property
+    def job(self) -> CompareJob | None:
+        return self._job
+
+    @property
+    def running(self) -> bool:
+        return self._job is not None and self._job.running
+
+    def _say(self, text: str, error: bool = False) -> None:
+        self._message = text
+        label = self._message_label
+        label.update(text)
+        label.set_class(error, "-error")
+
+    # --- what the app calls ------------------------------------------------------
+    def reload(self, fresh: bool = False) -> None:
+        """Follow the session's game (after a switch, a load); `fresh` reads the history
+        again (when the view is shown). The history is only read while the view shows."""
+        if fresh:
+            self._stale = True
+        key = frozenset(game_names(self.session))
+        if key != self._game_key:
+            self._game_key = key
+            self.stop_comparison()  # a comparison belongs to the game it was launched for
+            self._records.clear()
+            self._colours.clear()
+            hp = self.session.hp
+            budget = hp.get("episodes") if hp is not None else None
+            self._episodes.value = str(budget or "")
+            self._stale = True
+        if self._stale and self.display:  # the history is read when the view is shown
+            self._load_runs()
+
+    def focus_default(self) -> None:
+        self.run_list.focus()
+
+    def stop_comparison(self) -> bool:
+        """Ask a running comparison to stop (it records what finished); whether one ran."""
+        job = self._job
+        if job is None or not job.running or job.stopping:
+            return False
+        job.stop()
+        self._say("Stopping: the episodes every seed has finished are kept and recorded.")
+        return True
+
+    def close(self) -> None:
+        """Stop a running comparison and wait (bounded) for it to record what finished."""
+        if self._job is not None:
+            self._job.close()
+
+    @staticmethod
+    def key_help() -> list[tuple[str, str]]:
+        """(key, what it does) in this view."""
+        return [
+            ("↑ ↓ / space", "move in the list of runs / tick a run to draw it"),
+            ("tab / shift+tab", "the algorithms, Seeds, Episodes and the buttons"),
+            ("l / enter", "run the comparison (enter in Seeds or Episodes)"),
+            ("s", "stop the comparison; what finished is recorded"),
+            ("m", "smoothed curves (a trailing mean over a tenth of each) / as recorded"),
+            ("r", "read the run history again (runs recorded elsewhere)"),
+        ]
+
+    # --- the history ---------------------------------------------------------------
+    def _open(self) -> RunHistory | None:
+        """The history, or None when there is none yet; RunHistoryError when it cannot open."""
+        path = self.db_path
+        if not path.exists() or path.stat().st_size == 0:
+            return None  # reading never creates the file
+        return RunHistory(path, timeout=OPEN_TIMEOUT)
+
+    def _load_runs(self, select: Sequence[int] = ()) -> None:
+        self._stale = False
+        names = self._game_key
+        try:
+            history = self._open()
+            if history is None:
+                runs: list[RunSummary] = []
+            else:
+                with history:
+                    found = {r.id: r for name in sorted(names)
+                             for r in history.list_runs(game=name, limit=LISTED_RUNS)}
+                runs = sorted(found.values(), key=lambda r: (-r.started_at, -r.id))[:LISTED_RUNS]
+        except (RunHistoryError, OSError) as exc:
+            self._history_error = str(exc)
+            self._runs = ()
+            self._records.clear()
+            self._fill_list(())
+            self._say(f"The run history cannot be read: {exc}", error=True)
+            self._redraw()
+            return
+        self._history_error = None
+        self._runs = tuple(runs)
+        known = {r.id for r in runs}
+        ticked = [i for i in self.run_list.selected if i in known]
+        ticked += [i for i in select if i in known and i not in ticked]
+        for run_id in [i for i in self._records if i not in known or i in select]:
+            del self._records[run_id]  # gone, or rewritten since it was read
+        self._fill_list(ticked)
+        if not self.running:
+            title = self.session.game.title
+            if not runs:
+                self._say(f"No runs of {title} recorded yet in {self.db_path}: "
+                          "choose algorithms, seeds and episodes, then Compare.")
+            else:
+                self._say(f"{len(runs):,} run{'s' if len(runs) != 1 else ''} of {title} "
+                          "recorded.")
+        self._message_label.tooltip = str(self.db_path)
+        self._redraw()
+
+    def _fill_list(self, ticked: Sequence[int]) -> None:
+        run_list = self.run_list
+        highlighted = run_list.highlighted
+        run_list.clear_options()
+        run_list.add_options(
+            Selection(self._describe(run), run.id, run.id in ticked) for run in self._runs
+        )
+        if self._runs:
+            run_list.highlighted = min(highlighted or 0, len(self._runs) - 1)
+
+    def _describe(self, run: RunSummary) -> Text:
+        from datetime import datetime
+
+        when = datetime.fromtimestamp(run.started_at).strftime("%m-%d %H:%M")
+        seeds = len(run.seeds)
+        parts = [run_label(run), str(run.kind), f"{seeds} seed{'s' if seeds != 1 else ''}"]
+        figure = run.figure("mean_return_last")
+        if figure is not None:
+            parts.append(f"return {with_interval(figure)}")
+        if str(run.status) != "finished":
+            parts.append(str(run.status))
+        parts.append(when)
+        return Text(" · ".join(parts), no_wrap=True, overflow="ellipsis")
+
+    def _record(self, run_id: int) -> RunRecord | None:
+        record = self._records.get(run_id)
+        if record is not None:
+            return record
+        try:
+            history = self._open()
+            if history is None:
+                return None
+            with history:
+                record = history.get_run(run_id)
+        except RunHistoryError as exc:
+            self._say(f"Run {run_id} cannot be read: {exc}", error=True)
+            return None
+        self._records[run_id] = record
+        return record
+
+    # --- drawing -------------------------------------------------------------------
+    def _colour_for(self, key: Hashable, shown: set[Hashable]) -> int:
+        if key in self._colours:
+            return self._colours[key]
+        used = {self._colours[k] for k in shown if k in self._colours}
+        place = next((i for i in range(len(PALETTE)) if i not in used), len(self._colours))
+        self._colours[key] = place
+        return place
+
+    def _redraw(self) -> None:
+        entries: list[tuple[Series | None, FigureRow, Hashable]] = []
+        for run_id in self.run_list.selected:
+            record = self._record(run_id)
+            if record is not None:
+                entries.append((series_of_record(record, self.smooth), row_of_record(record),
+                                run_id))
+        for series, row in self._live:
+            entries.append((series, row, series.key))
+        shown = {key for _, _, key in entries}
+        for key in [k for k in self._colours if k not in shown]:
+            del self._colours[key]
+        colours = [self._colour_for(key, shown) for _, _, key in entries]
+        curves = [(s, c) for (s, _, _), c in zip(entries, colours, strict=True) if s is not None]
+        self.chart.show([s for s, _ in curves], [c for _, c in curves])
+        self.table.show([row for _, row, _ in entries], colours)
+
+    # --- launching -----------------------------------------------------------------
+    def chosen_algorithms(self) -> tuple[str, ...]:
+        from tui_gym.algorithms import ALGORITHMS
+
+        return tuple(cls.name for cls in ALGORITHMS if self._boxes[cls.name].value)
+
+    def read_launch(self) -> Launch | None:
+        """The form's values, or None (and the message saying what is wrong)."""
+        try:
+            return read_launch(
+                self.chosen_algorithms(),
+                self._seeds.value,
+                self._episodes.value,
+            )
+        except ValueError as exc:
+            self._say(f"Not started: {exc}.", error=True)
+            return None
+
+    def action_launch(self) -> None:
+        if self.running:
+            self._say("A comparison is running: stop it first (s).", error=True)
+            return
+        if self._history_error is not None:
+            self._say(f"Not started: the run history cannot be read ({self._history_error}).",
+                      error=True)
+            return
+        launch = self.read_launch()
+        if launch is None:
+            return
+        try:
+            spec = self._spec(launch)
+        except ValueError as exc:
+            self._say(f"Not started: {exc}", error=True)
+            return
+        self.start_job(CompareJob(spec, self.db_path, processes=self.processes))
+
+    def _spec(self, launch: Launch) -> CompareSpec:
+        from tui_gym.core.experiments.compare import CompareSpec
+
+        session = self.session
+        return CompareSpec(
+            game=session.env_id,
+            algorithms=launch.algorithms,
+            seeds=launch.seeds,
+            episodes=launch.episodes,
+            settings=edited_settings(session, launch.algorithms),
+            game_params=dict(session.env_kwargs),
+            wrappers=tuple(session.choices),
+            first_seed=session.seed,
+        )
+
+    def start_job(self, job: CompareJob) -> None:
+        """Run `job` and follow it (the launch button's end; tests hand in their own)."""
+        self._job = job
+        self._job_game = self._game_key
+        self._seen_progress = -1
+        self._live, self._live_outcomes = (), ()
+        job.start()
+        self.add_class("-running")
+        self._stop.disabled = False
+        self._launch.disabled = True
+        spec = job.spec
+        names = ", ".join(algorithm_title(a) for a in spec.algorithms)
+        settings = ", ".join(f"{k}={v}" for k, v in spec.settings.items())
+        self._say(f"Comparing {names}: {spec.seeds:,} seeds × {compact_count(spec.episodes)} "
+                  f"episodes" + (f", with {settings} from the Train view" if settings else "")
+                  + "…")
+        self._progress.show(0, 1)
+        self.refresh_bindings()
+
+    def action_stop(self) -> None:
+        if not self.stop_comparison():
+            self._say("No comparison is running.")
+
+    def action_reload(self) -> None:
+        self._load_runs()
+
+    def action_toggle_smoothing(self) -> None:
+        self.smooth = not self.smooth
+        self._live = self._live_entries()
+        self._redraw()
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action == "stop":
+            return self.running
+        if action == "launch":
+            return not self.running
+        return True
+
+    # --- following a comparison ------------------------------------------------------
+    def _poll(self) -> None:
+        job = self._job
+        if job is None:
+            return
+        progress = job.progress
+        if job.progress_count != self._seen_progress and progress is not None:
+            self._seen_progress = job.progress_count
+            self._show_progress(job, progress)
+        if job.done:
+            self._finished(job)
+
+    def _show_progress(self, job: CompareJob, progress: CompareProgress) -> None:
+        done, total = int(progress.done), max(1, int(progress.total))
+        elapsed = max(1e-9, time.monotonic() - job.started_at)
+        eta = format_duration(elapsed / done * (total - done)) if 0 < done < total else ""
+        self._progress.show(done, total, eta)
+        self._live_outcomes = progress.outcomes
+        self._live = self._live_entries()
+        self._redraw()
+
+    def _live_entries(self) -> tuple[tuple[Series, FigureRow], ...]:
+        entries = []
+        for outcome in self._live_outcomes:
+            title = algorithm_title(outcome.algorithm)
+            series = series_of_outcome(outcome, f"{title} (live)", self.smooth)
+            if series is not None:
+                entries.append((series, row_of_outcome(outcome, title)))
+        return tuple(entries)
+
+    def _finished(self, job: CompareJob) -> None:
+        self._job = None
+        self.remove_class("-running")
+        self._stop.disabled = True
+        self._launch.disabled = False
+        self.refresh_bindings()
+        result = job.result
+        self._live, self._live_outcomes = (), ()
+        if job.error is not None or result is None:
+            self._say(job.error or "The comparison ended without a result.", error=True)
+            self._redraw()
+            return
+        run_ids = [o.run_id for o in result.outcomes if o.run_id is not None]
+        # The recorded runs take over the live curves' colours.
+        for outcome in result.outcomes:
+            live_colour = self._colours.pop(("live", outcome.algorithm), None)
+            if live_colour is not None and outcome.run_id is not None:
+                self._colours[outcome.run_id] = live_colour
+        if self._job_game == self._game_key:
+            self._load_runs(select=run_ids)
+        seconds = format_duration(time.monotonic() - job.started_at)
+        how = "stopped" if result.interrupted else "finished"
+        if run_ids:
+            plural = "s" if len(run_ids) != 1 else ""
+            recorded = f"recorded as run{plural} " + ", ".join(f"#{i}" for i in run_ids)
+        else:
+            recorded = "nothing was recorded"
+        self._say(f"Comparison {how} in {seconds}: {recorded}.")
+        self.app.notify(f"Comparison {how}: {recorded}.", title="Compare", timeout=5)
+
+    # --- events ------------------------------------------------------------------
+    @on(SelectionList.SelectedChanged)
+    def _ticked(self, event: SelectionList.SelectedChanged) -> None:
+        event.stop()
+        self._redraw()
+
+    @on(Button.Pressed)
+    def _button(self, event: Button.Pressed) -> None:
+        event.stop()
+        if event.button.id == "btn-compare":
+            self.action_launch()
+        elif event.button.id == "btn-stop":
+            self.action_stop()
+
+    @on(Input.Submitted)
+    def _submitted(self, event: Input.Submitted) -> None:
+        event.stop()
+        self.action_launch()
+
+    def on_unmount(self) -> None:
+        self.close()
+
+
+__all__ = ["CompareView", "Launch", "RunList", "parse_count", "read_launch"]

@@ -1,0 +1,254 @@
+"""`CompareChart`: several return curves overlaid, each with its 95% band, a legend and colours.
+
+Each curve is a line of braille dots (two columns and four rows of dots a
+cell) in its own colour; its band, where it has one, shades the cells
+between its edges with a dim tint of that colour (where bands overlap, a tint
+of their colours' mean). The left margin gives the y range (fitted to all but
+the first tenth of the episodes, where a learner's first random walks would
+flatten the rest: what lies beyond is drawn along the edge), the line below
+the plot the episodes, and one legend line per curve says whose it is, how
+many seeds, and whether its band is a confidence band or its line smoothed.
+A curve shorter than the others stops where its episodes stop.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Hashable, Sequence
+from typing import ClassVar
+
+import numpy as np
+from rich.color import Color as RichColor
+from rich.segment import Segment
+from rich.style import Style
+
+from tui_gym.ui.compare_series import Series
+from tui_gym.ui.widgets.numbers import fit, number_forms
+from tui_gym.ui.widgets.strip_widget import Line, StripWidget
+
+# Distinct on dark and light themes alike; a curve keeps its colour while it is shown.
+PALETTE: tuple[str, ...] = (
+    "#3d9df3", "#f5a030", "#3cc46a", "#e5484d", "#a77bf0", "#e0c43a", "#2fc5c0", "#f06bab",
+)
+# The y axis leaves out the first tenth of the episodes: a learner's first episodes (a
+# random walk that takes 1,000 steps) would squeeze the rest into a line, as Sutton &
+# Barto's figures clip them.
+EARLY_SHARE = 0.1
+BAND_TINT = 0.28  # how much of a curve's colour its band mixes into the background
+LABEL_WIDTH = 8  # the y labels' column, with a space after it
+MIN_PLOT_HEIGHT = 3
+BRAILLE_BASE = 0x2800
+# The bit of each dot of a braille cell, by (column, row) within the cell.
+DOT_BITS = ((0x01, 0x02, 0x04, 0x40), (0x08, 0x10, 0x20, 0x80))
+
+
+def colour(index: int) -> RichColor:
+    """The palette's colour for a curve's place (it wraps round after eight)."""
+    return RichColor.parse(PALETTE[index % len(PALETTE)])
+
+
+def _mix(a: RichColor, b: RichColor, t: float) -> RichColor:
+    ra, ga, ba = a.get_truecolor()
+    rb, gb, bb = b.get_truecolor()
+    return RichColor.from_rgb(ra + (rb - ra) * t, ga + (gb - ga) * t, ba + (bb - ba) * t)
+
+
+def value_range(series: Sequence[Series]) -> tuple[float, float]:
+    """The y range the curves and bands fit in past the first `EARLY_SHARE` of the
+    episodes (widened when it is a single value); what lies outside is drawn at the edge."""
+    first, last = episode_range(series)
+    start = first + EARLY_SHARE * (last - first)
+    lows, highs = [], []
+    for s in series:
+        keep = s.episodes >= start
+        if not keep.any():
+            keep = np.ones(len(s.episodes), dtype=bool)
+        lows.append(float(np.min((s.lo if s.lo is not None else s.mean)[keep])))
+        highs.append(float(np.max((s.hi if s.hi is not None else s.mean)[keep])))
+    low, high = min(lows), max(highs)
+    if high - low < 1e-12:
+        pad = max(0.5, abs(low) * 0.1)
+        low, high = low - pad, high + pad
+    return low, high
+
+
+def episode_range(series: Sequence[Series]) -> tuple[int, int]:
+    first = min(int(s.episodes[0]) for s in series)
+    last = max(int(s.episodes[-1]) for s in series)
+    return first, max(last, first + 1)
+
+
+def _label(value: float, width: int) -> str:
+    return fit(number_forms(f"{value:+.3f}", value, "+"), width)
+
+
+def plot_cells(
+    series: Sequence[Series], width: int, height: int
+) -> tuple[list[list[int]], list[list[int]], list[list[int]]]:
+    """The plot as three grids of `height` x `width` cells: braille bits, the index of the
+    curve whose dot was drawn last (-1: none) and the bands that shade it (a bit per curve,
+    1 << index; 0: none)."""
+    bits = [[0] * width for _ in range(height)]
+    ink = [[-1] * width for _ in range(height)]
+    band = [[0] * width for _ in range(height)]
+    if not series or width < 1 or height < 1:
+        return bits, ink, band
+    low, high = value_range(series)
+    first, last = episode_range(series)
+    span = high - low
+
+    def cell_row(value: float) -> int:
+        return min(height - 1, max(0, int((high - value) / span * height)))
+
+    centres = first + (np.arange(width) + 0.5) / width * (last - first)
+    for index, s in enumerate(series):
+        if s.lo is None or s.hi is None:
+            continue
+        inside = (centres >= s.episodes[0]) & (centres <= s.episodes[-1])
+        los = np.interp(centres, s.episodes, s.lo)
+        his = np.interp(centres, s.episodes, s.hi)
+        for col in np.flatnonzero(inside):
+            for row in range(cell_row(his[col]), cell_row(los[col]) + 1):
+                band[row][col] |= 1 << index
+    dots_x, dots_y = 2 * width, 4 * height
+    xs = first + np.arange(dots_x) / max(1, dots_x - 1) * (last - first)
+    for index, s in enumerate(series):
+        inside = (xs >= s.episodes[0] - 1e-9) & (xs <= s.episodes[-1] + 1e-9)
+        if len(s.episodes) == 1:  # one point: a dot at its episode
+            inside = np.zeros(dots_x, dtype=bool)
+            inside[int(round((s.episodes[0] - first) / (last - first) * (dots_x - 1)))] = True
+        values = np.interp(xs, s.episodes, s.mean)
+        rows = np.clip(np.rint((high - values) / span * (dots_y - 1)), 0, dots_y - 1).astype(int)
+        previous: int | None = None
+        for x in np.flatnonzero(inside):
+            row = int(rows[x])
+            # Join the dots: fill the column from just past the previous dot to this one.
+            if previous is None or previous == row:
+                top = bottom = row
+            elif row > previous:
+                top, bottom = previous + 1, row
+            else:
+                top, bottom = row, previous - 1
+            for y in range(top, bottom + 1):
+                cell_y, cell_x = y // 4, x // 2
+                bits[cell_y][cell_x] |= DOT_BITS[x % 2][y % 4]
+                ink[cell_y][cell_x] = index
+            previous = row
+    return bits, ink, band
+
+
+class CompareChart(StripWidget):
+    """Curves with bands, y and episode labels, and a legend (`show(series)`)."""
+
+    SCOPED_CSS = False  # the compact rule starts at Screen
+    COMPONENT_CLASSES: ClassVar[set[str]] = {"chart--axis", "chart--empty"}
+    DEFAULT_CSS = """
+    CompareChart {
+        height: auto;
+        border: round $primary-background-lighten-2;
+        border-title-color: $text-muted;
+        padding: 0 1;
+    }
+    CompareChart > .chart--axis { color: $text-muted; }
+    CompareChart > .chart--empty { color: $text-muted; text-style: italic; }
+    Screen.compact CompareChart { border: none; padding: 0; }
+    """
+
+    PLOT_HEIGHT = 12
+    COMPACT_PLOT_HEIGHT = 7
+
+    def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
+        super().__init__(id=id, classes=classes)
+        self._series: tuple[Series, ...] = ()
+        self._colours: tuple[int, ...] = ()
+        self.empty_text = "Tick runs in the list to draw their return curves here."
+        self.border_title = "Return per episode"
+
+    @property
+    def series(self) -> tuple[Series, ...]:
+        return self._series
+
+    @property
+    def colours(self) -> tuple[int, ...]:
+        """Each shown curve's place in the palette."""
+        return self._colours
+
+    def show(self, series: Sequence[Series], colours: Sequence[int] | None = None) -> None:
+        """Draw these curves, each in its palette colour (by default, in order)."""
+        series = tuple(series)
+        colours = tuple(colours) if colours is not None else tuple(range(len(series)))
+        if len(colours) != len(series):
+            raise ValueError("one colour per curve")
+        if series != self._series or colours != self._colours:
+            self._series, self._colours = series, colours
+            self.redraw(layout=True)
+
+    def picture_key(self) -> Hashable:
+        return (self._version, self._compact(), self.rich_style)
+
+    def plot_height(self) -> int:
+        return self.COMPACT_PLOT_HEIGHT if self._compact() else self.PLOT_HEIGHT
+
+    def get_content_height(self, container: object, viewport: object, width: int) -> int:
+        if not self._series:
+            return 1
+        return self.plot_height() + 1 + len(self._series)
+
+    def draw(self, width: int) -> list[Line]:
+        styles = self.component_styles()
+        axis = styles["chart--axis"]
+        if not self._series:
+            return [[Segment(self.empty_text[:width], styles["chart--empty"])]]
+        height = max(MIN_PLOT_HEIGHT, self.plot_height())
+        plot_width = max(1, width - LABEL_WIDTH)
+        bits, ink, band = plot_cells(self._series, plot_width, height)
+        low, high = value_range(self._series)
+        background = self.rich_style.bgcolor or RichColor.parse("#000000")
+        line_styles = [Style(color=colour(c)) for c in self._colours]
+        colours = [colour(c) for c in self._colours]
+        tints: dict[int, RichColor] = {}
+
+        def tint(mask: int) -> RichColor:
+            # Where bands overlap, the tint of their colours' mean: each band stays visible.
+            found = tints.get(mask)
+            if found is None:
+                members = [c for i, c in enumerate(colours) if mask >> i & 1]
+                mean = members[0]
+                for n, other in enumerate(members[1:], start=2):
+                    mean = _mix(mean, other, 1 / n)
+                found = tints[mask] = _mix(background, mean, BAND_TINT)
+            return found
+
+        labels = {0: _label(high, LABEL_WIDTH - 1), height - 1: _label(low, LABEL_WIDTH - 1)}
+        if height >= 5:
+            labels[height // 2] = _label((high + low) / 2, LABEL_WIDTH - 1)
+        cache: dict[tuple[int, int], Style] = {}
+        lines: list[Line] = []
+        for row in range(height):
+            line: Line = [Segment(labels.get(row, "").rjust(LABEL_WIDTH - 1) + "┤"
+                                  if row in labels else " " * (LABEL_WIDTH - 1) + "│", axis)]
+            for col in range(plot_width):
+                key = (ink[row][col], band[row][col])
+                style = cache.get(key)
+                if style is None:
+                    fg = line_styles[key[0]].color if key[0] >= 0 else None
+                    bg = tint(key[1]) if key[1] else None
+                    style = cache[key] = Style(color=fg, bgcolor=bg)
+                glyph = chr(BRAILLE_BASE + bits[row][col]) if bits[row][col] else " "
+                if line and line[-1].style is style:
+                    line[-1] = Segment(line[-1].text + glyph, style)
+                else:
+                    line.append(Segment(glyph, style))
+            lines.append(line)
+        first, last = episode_range(self._series)
+        left, right = f"{first:,}", f"{last:,} episodes"
+        gap = plot_width - len(left) - len(right)
+        if gap < 1:
+            right = f"{last:,}"
+            gap = max(1, plot_width - len(left) - len(right))
+        lines.append([Segment(" " * LABEL_WIDTH + left + " " * gap + right, axis)])
+        for s, style in zip(self._series, line_styles, strict=True):
+            lines.append([Segment("━━ ", style), Segment(s.legend()[: max(0, width - 3)])])
+        return lines
+
+
+__all__ = ["PALETTE", "CompareChart", "colour", "plot_cells", "value_range"]
