@@ -333,11 +333,21 @@ class SeedBatch:
         stop: Callable[[], bool] | None = None,
         report: Callable[[SeedBatch], None] | None = None,
         interval: float = 0.25,
+        general: bool = False,
     ) -> bool:
         """Play until every seed has its episodes, or `stop()` says so; True when complete.
 
         `report(self)` is called about every `interval` seconds while it runs.
+        Q-learning and SARSA on a deterministic model take `fast_batch.run_fast`,
+        which gives the same numbers as the general loop below (`general` forces it).
         """
+        if not general:
+            from tui_gym.core.experiments.fast_batch import fast_rule, run_fast
+
+            tables = fast_rule(self)
+            if tables is not None:
+                return run_fast(self, tables, stop=stop, report=report, interval=interval,
+                                check_every=_CHECK_EVERY)
         steps, learner, offset = self.steps, self.learner, self.offset
         sarsa_like = learner.needs_next_action
         n = self.seeds
