@@ -166,13 +166,17 @@ async def test_launch_fields_are_checked(tmp_path: Path) -> None:
         await pilot.pause()
         view.query_one("#compare-seeds").value = "ten"
         view.query_one("#compare-episodes").value = "0"
-        await pilot.press("l")
+        view.query_one("#compare-episodes").focus()
+        await pilot.press("enter")  # in a field, enter launches
         await pilot.pause()
         assert view.job is None
         assert view.message == (
             "Not started: Seeds: a whole number from 1 to 1,000 (got 'ten'); "
             "Episodes: a whole number from 1 to 10,000,000 (got '0')."
         )
+        await pilot.press("escape")  # back to the list, where l launches
+        await pilot.pause()
+        assert app.focused is view.run_list
 
 
 def test_launch_values() -> None:
@@ -313,3 +317,13 @@ async def test_progress_draws_live_curves_and_stopping_keeps_what_finished(tmp_p
 def test_seeds_times_episodes_is_bounded() -> None:
     with pytest.raises(ValueError, match=r"at most 20,000,000 .*got 30,000,000"):
         read_launch(("sarsa",), "3", "10000000")
+
+
+def test_the_views_keys_leave_the_apps_keys_alone() -> None:
+    from tui_gym.ui.app import TuiGymApp
+
+    def keys(bindings) -> set[str]:
+        return {k for b in bindings for k in b.key.split(",")}
+
+    assert not keys(CompareView.BINDINGS) & keys(TuiGymApp.BINDINGS)
+    assert "v" in keys(TuiGymApp.BINDINGS)

@@ -204,8 +204,9 @@ class CompareView(Vertical):
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("l", "launch", "Launch", tooltip="Run a comparison with the chosen algorithms"),
         Binding("s", "stop", "Stop", tooltip="Stop the comparison; what finished is kept"),
-        Binding("m", "toggle_smoothing", "Smooth", tooltip="Smoothed curves, or as recorded"),
+        Binding("o", "toggle_smoothing", "Smooth", tooltip="Smoothed curves, or as recorded"),
         Binding("r", "reload", "Reload", tooltip="Read the run history again"),
+        Binding("escape", "focus_list", "Back to the runs", show=False),
     ]
 
     def __init__(
@@ -231,7 +232,7 @@ class CompareView(Vertical):
         self._seen_progress = -1
         self._live: tuple[tuple[Series, FigureRow], ...] = ()
         self._live_outcomes: tuple[AlgorithmOutcome, ...] = ()
-        self.smooth = True  # curves drawn through a trailing mean (m toggles)
+        self.smooth = True  # curves drawn through a trailing mean (o toggles)
         self._message = ""
         self._stale = True  # the list has not been read for the current game
 
@@ -376,8 +377,9 @@ class CompareView(Vertical):
             ("tab / shift+tab", "the algorithms, Seeds, Episodes and the buttons"),
             ("l / enter", "run the comparison (enter in Seeds or Episodes)"),
             ("s", "stop the comparison; what finished is recorded"),
-            ("m", "smoothed curves (a trailing mean over a tenth of each) / as recorded"),
+            ("o", "smoothed curves (a trailing mean over a tenth of each) / as recorded"),
             ("r", "read the run history again (runs recorded elsewhere)"),
+            ("esc", "leave a field or a button: back to the list of runs"),
         ]
 
     # --- the history ---------------------------------------------------------------
@@ -566,6 +568,10 @@ class CompareView(Vertical):
     def action_stop(self) -> None:
         if not self.stop_comparison():
             self._say("No comparison is running.")
+
+    def action_focus_list(self) -> None:
+        """Leave a field or a button: the keys go to the list of runs again."""
+        self.focus_default()
 
     def action_reload(self) -> None:
         self._load_runs()
