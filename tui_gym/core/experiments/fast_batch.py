@@ -4,8 +4,9 @@
 `QLearning` or `Sarsa` and its game a `ModelSteps` whose every move has one
 outcome. `run_fast(batch, ...)` then plays it as `SeedBatch.run` does, with
 the same draws from the same generators in the same order, so the tables,
-returns and exact values come out bit for bit the same; it only does less
-work per step:
+returns and exact values come out bit for bit the same (a model with one
+start state draws nothing for a start, which no number depends on); it only
+does less work per step:
 
 - the model's moves are read through tables over the batch's own cells (the
   next row, reward and termination of each seed's (state, action)), so one
@@ -14,6 +15,9 @@ work per step:
   one cell per row and every cell different (each seed owns its rows): each
   cell moves once, `Q <- keep * Q + α t`, with `α` and `keep` looked up by
   visit count from tables worked out by the same expressions as the closed form;
+- each row's maximum is kept as rows change, the episode limit is looked at
+  only when an episode may have reached it, and visit counts are added once
+  at the end (a row's visits are its cells' counts);
 - seeds that have played all their episodes leave the working arrays, so
   the seeds still playing are contiguous and never indexed through a mask.
 """
@@ -27,7 +31,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tui_gym.algorithms import QLearning, Sarsa
-from tui_gym.algorithms.exploration import row_max
 from tui_gym.algorithms.steps import _TINY
 
 if TYPE_CHECKING:
@@ -128,9 +131,11 @@ def run_fast(
     next_row_of = np.tile(steps._next[:, 0], seeds) + shift
     reward_of = np.tile(steps._reward[:, 0], seeds)
     terminal_of = np.tile(steps._terminal[:, 0], seeds)
+    # The reductions are called directly: the array methods add a Python layer per call.
+    maximum, any_of = np.maximum.reduce, np.logical_or.reduce
     # Each row's maximum, kept up to date as rows change (the greedy choice and
     # Q-learning's target read it).
-    best = row_max(q)
+    best = maximum(q, axis=1)
     # A model with one start state: every episode starts there, whatever is drawn.
     starts = np.flatnonzero(steps.model.initial)
     only_start = int(starts[0]) if starts.size == 1 else None
@@ -138,10 +143,12 @@ def run_fast(
     checkpoint = np.zeros(episodes + 1, dtype=bool)
     checkpoint[batch.checkpoints] = batch.exact is not None
 
+    start_rows = None if only_start is None else batch.offset + only_start
+
     def restart(envs: np.ndarray) -> np.ndarray:
-        if only_start is None:
+        if start_rows is None:
             return batch.offset.take(envs) + steps.reset(envs)
-        return batch.offset.take(envs) + only_start
+        return start_rows.take(envs)
 
     # The seeds still playing, in seed order, and their per-seed working arrays.
     ids = np.flatnonzero(done < episodes)
@@ -151,7 +158,12 @@ def run_fast(
             report(batch)
         return True
     rows = restart(ids)
-    elapsed = np.zeros(ids.size, dtype=np.int64)
+    # Episode limits: the batch step each episode began, and a bound below all of
+    # them (it only grows), so the limit is looked at only when one may be reached.
+    began = np.zeros(ids.size, dtype=np.int64)
+    earliest = 0
+    # Visits are counts summed over a row's actions: added once at the end.
+    counts_before = counts.sum(axis=1)
     episode_return = np.zeros(ids.size)
     pending = np.full(ids.size, -1, dtype=np.int64)
     learner.forget_episodes(ids)
@@ -162,6 +174,7 @@ def run_fast(
         count += 1
         if count % check_every == 0:
             if stop is not None and stop():
+                visits += counts.sum(axis=1) - counts_before
                 batch._value_pending()
                 return False
             now = time.monotonic()
@@ -193,39 +206,44 @@ def run_fast(
         step: Any = np.minimum(before, last_count) if last_count else 0
         q_flat[cells] = keep_of.take(step) * q_flat.take(cells) + alpha_of.take(step) * targets
         counts_flat[cells] = before + 1
-        visits[rows] += 1
-        best[rows] = row_max(q.take(rows, axis=0))
+        best[rows] = maximum(q.take(rows, axis=0), axis=1)
         rows = next_rows
         episode_return += rewards
-        elapsed += 1
-        finished = terminated if horizon is None else terminated | (elapsed >= horizon)
-        if not finished.any():
+        finished = terminated
+        if horizon is not None and count - earliest >= horizon:
+            earliest = int(began.min())
+            if count - earliest >= horizon:
+                finished = terminated | (count - began >= horizon)
+        if not any_of(finished):
             continue
         local = finished.nonzero()[0]
         ended = ids.take(local)
-        returns[ended, done[ended]] = episode_return.take(local)
-        done[ended] += 1
+        number = done.take(ended)
+        returns[ended, number] = episode_return.take(local)
+        number += 1
+        done[ended] = number
         episode_return[local] = 0.0
-        if checkpoint.take(done.take(ended)).any():
+        if any_of(checkpoint.take(number)):
             batch._value_checkpoints(ended)
-        more = done.take(ended) < episodes
-        if more.all():
+        if maximum(number) < episodes:
             rows[local] = restart(ended)
-            elapsed[local] = 0
+            began[local] = count
             pending[local] = -1
             learner.forget_episodes(ended)
             continue
+        more = number < episodes
         again = ended[more]
         if again.size:
             begin = local[more]
             rows[begin] = restart(again)
-            elapsed[begin] = 0
+            began[begin] = count
             pending[begin] = -1
             learner.forget_episodes(again)
         playing = done.take(ids) < episodes
-        ids, rows, elapsed = ids[playing], rows[playing], elapsed[playing]
+        ids, rows, began = ids[playing], rows[playing], began[playing]
         episode_return, pending = episode_return[playing], pending[playing]
     learner.epsilon = eps  # type: ignore[assignment]  # as the general loop leaves it
+    visits += counts.sum(axis=1) - counts_before
     batch._value_pending()
     if report is not None:
         report(batch)
