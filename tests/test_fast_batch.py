@@ -8,7 +8,7 @@ import pytest
 
 from tui_gym.algorithms import algorithm
 from tui_gym.algorithms.steps import move_toward
-from tui_gym.core.experiments.fast_batch import fast_rule, step_size_tables
+from tui_gym.core.experiments.fast_batch import step_size_tables
 from tui_gym.core.experiments.seed_batch import ModelSteps, SeedBatch
 from tui_gym.core.mdp import FiniteMDP, model_from_env
 
@@ -43,7 +43,8 @@ def _same(fast: SeedBatch, general: SeedBatch) -> None:
         assert mine.dtype == theirs.dtype
         # Bit for bit: the same bytes, NaN where the other has NaN.
         assert mine.tobytes() == theirs.tobytes()
-    # The learner's generator is left where the general loop leaves it.
+    # The learner's generator and epsilon are left where the general loop leaves them.
+    assert fast.learner.epsilon == general.learner.epsilon
     assert fast.learner.rng.random() == general.learner.rng.random()
 
 
@@ -60,7 +61,7 @@ def test_fast_path_matches_the_general_loop(
     cliff: FiniteMDP, name: str, hp: dict[str, object]
 ) -> None:
     fast, general = _batch(name, cliff, 4, 12, **hp), _batch(name, cliff, 4, 12, **hp)
-    assert fast_rule(fast) is not None
+    assert fast._fast_tables() is not None
     assert fast.run() and general.run(general=True)
     assert (fast.done == 12).all()
     _same(fast, general)
@@ -77,12 +78,12 @@ def test_fast_path_stops_where_the_general_loop_stops(cliff: FiniteMDP, name: st
 
 
 def test_other_learners_and_random_moves_take_the_general_loop(cliff: FiniteMDP) -> None:
-    assert fast_rule(_batch("expected-sarsa", cliff, 2, 5)) is None
+    assert _batch("expected-sarsa", cliff, 2, 5)._fast_tables() is None
     slippery = gym.make("FrozenLake-v1", is_slippery=True)
     model = model_from_env(slippery)
     slippery.close()
     assert isinstance(model, FiniteMDP) and model.max_outcomes > 1
-    assert fast_rule(_batch("q-learning", model, 2, 5)) is None
+    assert _batch("q-learning", model, 2, 5)._fast_tables() is None
 
 
 @pytest.mark.parametrize("schedule", ["visits", "constant"])

@@ -1,8 +1,8 @@
 """A `SeedBatch` of Q-learning or SARSA on a deterministic model, in few numpy calls per step.
 
-`fast_rule(batch)` says whether a batch qualifies: its learner is exactly
-`QLearning` or `Sarsa` and its game a `ModelSteps` whose every move has one
-outcome. `run_fast(batch, ...)` then plays it as `SeedBatch.run` does, with
+A batch qualifies when its learner is exactly `QLearning` or `Sarsa`
+(`fast_rule`) and its game a `ModelSteps` whose every move has one outcome.
+`run_fast(batch, ...)` then plays it as `SeedBatch.run` does, with
 the same draws from the same generators in the same order, so the tables,
 returns and exact values come out bit for bit the same (a model with one
 start state draws nothing for a start, which no number depends on); it only
@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tui_gym.algorithms import QLearning, Sarsa
+from tui_gym.algorithms import Learner, QLearning, Sarsa
 from tui_gym.algorithms.steps import _TINY
 
 if TYPE_CHECKING:
@@ -68,15 +68,13 @@ def step_size_tables(learning_rate: float, schedule: str) -> tuple[np.ndarray, n
     return alpha, keep
 
 
-def fast_rule(batch: SeedBatch) -> tuple[np.ndarray, np.ndarray] | None:
-    """The step-size tables when `batch` can run on the fast path, else None."""
-    from tui_gym.core.experiments.seed_batch import ModelSteps
+def fast_rule(learner: Learner) -> tuple[np.ndarray, np.ndarray] | None:
+    """The step-size tables when `learner` can learn on the fast path, else None.
 
-    steps, learner = batch.steps, batch.learner
+    The batch's game must also be a `ModelSteps` whose every move has one
+    outcome (`SeedBatch` checks that).
+    """
     if type(learner) not in (QLearning, Sarsa):
-        return None
-    # A ModelSteps whose moves were replaced on the instance is played as it says.
-    if type(steps) is not ModelSteps or "step" in vars(steps) or not steps._deterministic:
         return None
     hp = learner.hp
     return step_size_tables(float(hp.learning_rate), str(hp.learning_rate_schedule))
@@ -109,7 +107,7 @@ def run_fast(
     interval: float,
     check_every: int,
 ) -> bool:
-    """`SeedBatch.run` for a batch `fast_rule` accepts (same arguments and result)."""
+    """`SeedBatch.run` for a batch that qualifies (same arguments and result)."""
     steps: Any = batch.steps
     learner = batch.learner
     sarsa = learner.needs_next_action
@@ -174,6 +172,7 @@ def run_fast(
         count += 1
         if count % check_every == 0:
             if stop is not None and stop():
+                _leave_epsilon(learner, eps)
                 visits += counts.sum(axis=1) - counts_before
                 batch._value_pending()
                 return False
@@ -242,9 +241,14 @@ def run_fast(
         playing = done.take(ids) < episodes
         ids, rows, began = ids[playing], rows[playing], began[playing]
         episode_return, pending = episode_return[playing], pending[playing]
-    learner.epsilon = eps  # type: ignore[assignment]  # as the general loop leaves it
+    _leave_epsilon(learner, eps)
     visits += counts.sum(axis=1) - counts_before
     batch._value_pending()
     if report is not None:
         report(batch)
     return True
+
+
+def _leave_epsilon(learner: Learner, eps: np.ndarray | float) -> None:
+    """Set epsilon as the general loop leaves it: its last update's (the largest of a step's)."""
+    learner.epsilon = eps if isinstance(eps, float) else float(eps.max())

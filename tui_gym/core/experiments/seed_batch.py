@@ -33,6 +33,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from tui_gym.algorithms import Learner, Settings, Transitions
+from tui_gym.core.experiments.fast_batch import fast_rule, run_fast
 from tui_gym.core.mdp import BatchSampler, FiniteMDP, evaluate
 
 __all__ = [
@@ -327,6 +328,14 @@ class SeedBatch:
         first = float(eps[0])
         return first if (eps == first).all() else eps
 
+    def _fast_tables(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """`fast_batch.fast_rule` for a game that is a deterministic `ModelSteps`."""
+        steps = self.steps
+        # A ModelSteps whose moves were replaced on the instance is played as it says.
+        if type(steps) is not ModelSteps or "step" in vars(steps) or not steps._deterministic:
+            return None
+        return fast_rule(self.learner)
+
     def run(
         self,
         *,
@@ -342,9 +351,7 @@ class SeedBatch:
         which gives the same numbers as the general loop below (`general` forces it).
         """
         if not general:
-            from tui_gym.core.experiments.fast_batch import fast_rule, run_fast
-
-            tables = fast_rule(self)
+            tables = self._fast_tables()
             if tables is not None:
                 return run_fast(self, tables, stop=stop, report=report, interval=interval,
                                 check_every=_CHECK_EVERY)
