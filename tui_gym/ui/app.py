@@ -49,7 +49,6 @@ from tui_gym.core.storage import StorageError
 from tui_gym.core.training import continue_run
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games import GAMES, Game, game_for, game_named
-from tui_gym.ui.compare_view import CompareView
 from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.file_screen import FileScreen
 from tui_gym.ui.help_screen import HelpScreen
@@ -62,6 +61,7 @@ from tui_gym.ui.widgets.key_bar import KeyBar
 
 if TYPE_CHECKING:
     from tui_gym.core.experiments.app_recording import SessionRunLog
+    from tui_gym.ui.compare_view import CompareView
 
 MIN_WIDTH, MIN_HEIGHT = 80, 24  # below this: a message instead of the layout
 COMPACT_WIDTH, COMPACT_HEIGHT = 120, 36  # below this: the compact layout
@@ -275,7 +275,9 @@ class TuiGymApp(App[int]):
         if view != "compare" and compare is not None and compare.stop_comparison():
             self.notify("Comparison stopped: what finished is recorded.", timeout=4)
         if view == "compare" and compare is None:
-            # Built the first time it shows: most runs of the app never open it.
+            # Built (and imported) the first time it shows: most runs of the app never open it.
+            from tui_gym.ui.compare_view import CompareView
+
             compare = self._compare = CompareView(id="compare", db=self.db)
             self._switcher.mount(compare)  # it reads the history and takes the focus at mount
         self._switcher.current = view
@@ -763,6 +765,8 @@ class TuiGymApp(App[int]):
     # --- help and the command palette ---------------------------------------
     def key_help(self) -> list[tuple[str, list[tuple[str, str]]]]:
         """Every key, grouped by where it works: (section, [(key, what it does)])."""
+        from tui_gym.ui.compare_view import CompareView
+
         sections = [
             ("Everywhere", [
                 ("p / t / v", "Play view / Train view / Compare view"),
