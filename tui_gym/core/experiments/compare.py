@@ -9,8 +9,8 @@ model, the greedy policy's exact value at checkpoints and its gap to the
 optimum at the end.
 
 Seeds run as batches (`seed_batch.SeedBatch`: one table per seed, all stepped
-together); the batches (an algorithm's seeds, split when there are more cores
-than algorithms) run in child processes, as many at once as there are cores.
+together); the batches (an algorithm's seeds, `MAX_SEEDS_PER_BATCH` at most in
+each) run in child processes, as many at once as there are cores.
 A game with neither an exact model nor a batched form, or a wrapper without
 one, is played seed after seed by the session's scalar engine.
 
@@ -73,7 +73,9 @@ __all__ = [
 
 PROGRESS_INTERVAL = 0.4  # seconds between progress calls
 JSON_CURVE_POINTS = 500  # curve points in `to_json`
-MIN_SEEDS_PER_BATCH = 8  # an algorithm's seeds are split over cores only down to this
+# Seeds per batch at most. The split depends on the seed count only, never on the cores,
+# so a comparison gives the same figures on any machine (a seed's draws depend on its batch).
+MAX_SEEDS_PER_BATCH = 64
 SMOOTHING_SHARE = 50  # charts smooth each seed's returns over 1/50 of the episodes
 
 
@@ -353,9 +355,8 @@ def _cores() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared, cores: int) -> list[_Job]:
-    per_arm = max(1, math.ceil(cores / len(arms)))
-    chunks = max(1, min(per_arm, setup.seeds // MIN_SEEDS_PER_BATCH))
+def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared) -> list[_Job]:
+    chunks = math.ceil(setup.seeds / MAX_SEEDS_PER_BATCH)
     bounds = np.linspace(0, setup.seeds, chunks + 1).round().astype(int)
     seeds = setup.seed_list
     jobs: list[_Job] = []
@@ -631,7 +632,7 @@ def execute(
     """Train every arm over the setup's seeds (what `run_compare` and `run_sweep` share)."""
     prepared = prepare(setup, arms)
     cores = _cores() if processes is None else max(1, processes)
-    jobs = _jobs(setup, arms, prepared, cores)
+    jobs = _jobs(setup, arms, prepared)
     tally = _Tally(setup, arms, prepared, jobs)
     if history is not None:
         tally.run_ids = _start_runs(history, kind, setup, arms, prepared)

@@ -33,6 +33,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from tui_gym.algorithms import Learner, Settings, Transitions
+from tui_gym.core.experiments.fast_batch import fast_rule, run_fast
 from tui_gym.core.mdp import BatchSampler, FiniteMDP, evaluate
 
 __all__ = [
@@ -327,17 +328,33 @@ class SeedBatch:
         first = float(eps[0])
         return first if (eps == first).all() else eps
 
+    def _fast_tables(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """`fast_batch.fast_rule` for a game that is a deterministic `ModelSteps`."""
+        steps = self.steps
+        # A ModelSteps whose moves were replaced on the instance is played as it says.
+        if type(steps) is not ModelSteps or "step" in vars(steps) or not steps._deterministic:
+            return None
+        return fast_rule(self.learner)
+
     def run(
         self,
         *,
         stop: Callable[[], bool] | None = None,
         report: Callable[[SeedBatch], None] | None = None,
         interval: float = 0.25,
+        general: bool = False,
     ) -> bool:
         """Play until every seed has its episodes, or `stop()` says so; True when complete.
 
         `report(self)` is called about every `interval` seconds while it runs.
+        Q-learning and SARSA on a deterministic model take `fast_batch.run_fast`,
+        which gives the same numbers as the general loop below (`general` forces it).
         """
+        if not general:
+            tables = self._fast_tables()
+            if tables is not None:
+                return run_fast(self, tables, stop=stop, report=report, interval=interval,
+                                check_every=_CHECK_EVERY)
         steps, learner, offset = self.steps, self.learner, self.offset
         sarsa_like = learner.needs_next_action
         n = self.seeds

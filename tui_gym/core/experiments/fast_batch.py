@@ -1,0 +1,254 @@
+"""A `SeedBatch` of Q-learning or SARSA on a deterministic model, in few numpy calls per step.
+
+A batch qualifies when its learner is exactly `QLearning` or `Sarsa`
+(`fast_rule`) and its game a `ModelSteps` whose every move has one outcome.
+`run_fast(batch, ...)` then plays it as `SeedBatch.run` does, with
+the same draws from the same generators in the same order, so the tables,
+returns and exact values come out bit for bit the same (a model with one
+start state draws nothing for a start, which no number depends on); it only
+does less work per step:
+
+- the model's moves are read through tables over the batch's own cells (the
+  next row, reward and termination of each seed's (state, action)), so one
+  gather per quantity replaces the per-step state bookkeeping;
+- the update is `move_toward` specialised to what a seed batch always has,
+  one cell per row and every cell different (each seed owns its rows): each
+  cell moves once, `Q <- keep * Q + α t`, with `α` and `keep` looked up by
+  visit count from tables worked out by the same expressions as the closed form;
+- each row's maximum is kept as rows change, the episode limit is looked at
+  only when an episode may have reached it, and visit counts are added once
+  at the end (a row's visits are its cells' counts);
+- seeds that have played all their episodes leave the working arrays, so
+  the seeds still playing are contiguous and never indexed through a mask.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from tui_gym.algorithms import Learner, QLearning, Sarsa
+from tui_gym.algorithms.steps import _TINY
+
+if TYPE_CHECKING:
+    from tui_gym.core.experiments.seed_batch import SeedBatch
+
+__all__ = ["fast_rule", "run_fast", "step_size_tables"]
+
+# Visit counts beyond this many distinct step sizes are left to the general update.
+_MAX_STEP_SIZES = 1 << 16
+
+
+def step_size_tables(learning_rate: float, schedule: str) -> tuple[np.ndarray, np.ndarray] | None:
+    """`α` and `keep` by a cell's count before its update, the last entry for every larger count.
+
+    The closed form of `move_toward` gives a cell updated once in a batch
+    `keep * Q + α t`, with `keep = exp(log(max(1 - α, tiny)))`; these are the
+    same expressions, elementwise, so the numbers are the same. None when the
+    schedule would need more entries than `_MAX_STEP_SIZES`.
+    """
+    if schedule == "visits":
+        if learning_rate <= 0.0:
+            return None
+        last = int(np.ceil(1.0 / learning_rate))
+        while last > 0 and 1.0 / last <= learning_rate:  # the first count from which α is flat
+            last -= 1
+        while 1.0 / (last + 1) > learning_rate:
+            last += 1
+        if last >= _MAX_STEP_SIZES:
+            return None
+        counts = np.arange(last + 1, dtype=np.int64)
+        alpha = np.maximum(learning_rate, 1.0 / (counts + np.ones(last + 1, dtype=np.int64)))
+    else:
+        alpha = np.full(1, learning_rate)
+    keep = np.exp(np.log(np.maximum(1.0 - alpha, _TINY)))
+    return alpha, keep
+
+
+def fast_rule(learner: Learner) -> tuple[np.ndarray, np.ndarray] | None:
+    """The step-size tables when `learner` can learn on the fast path, else None.
+
+    The batch's game must also be a `ModelSteps` whose every move has one
+    outcome (`SeedBatch` checks that).
+    """
+    if type(learner) not in (QLearning, Sarsa):
+        return None
+    hp = learner.hp
+    return step_size_tables(float(hp.learning_rate), str(hp.learning_rate_schedule))
+
+
+def _act(
+    q: np.ndarray,
+    best: np.ndarray,
+    rows: np.ndarray,
+    eps: np.ndarray | float,
+    rng: np.random.Generator,
+) -> np.ndarray:
+    """`epsilon_greedy_batch(q[rows], eps, rng)`, the same draws in the same order;
+    `best` holds each row's maximum."""
+    values = q.take(rows, axis=0)
+    tied = values == best.take(rows)[:, None]
+    actions = np.where(tied, rng.random(values.shape), -1.0).argmax(axis=1)
+    explore = (rng.random(len(rows)) < eps).nonzero()[0]
+    if explore.size:
+        actions[explore] = rng.integers(q.shape[1], size=explore.size)
+    return actions
+
+
+def run_fast(
+    batch: SeedBatch,
+    tables: tuple[np.ndarray, np.ndarray],
+    *,
+    stop: Callable[[], bool] | None,
+    report: Callable[[SeedBatch], None] | None,
+    interval: float,
+    check_every: int,
+) -> bool:
+    """`SeedBatch.run` for a batch that qualifies (same arguments and result)."""
+    steps: Any = batch.steps
+    learner = batch.learner
+    sarsa = learner.needs_next_action
+    rng = learner.rng
+    n_actions = steps.n_actions
+    n_states = steps.n_states
+    discount = float(learner.hp.discount)
+    alpha_of, keep_of = tables
+    last_count = len(alpha_of) - 1
+    q, counts, visits = learner.q, learner.counts, learner.visits
+    q_flat, counts_flat = q.reshape(-1), counts.reshape(-1)
+    episodes, returns, done = batch.episodes, batch.returns, batch.done
+    horizon = steps.horizon
+
+    # The model's move from every cell of the batch's table: seed i's cell
+    # (i * S + s) * A + a leads to row i * S + s'.
+    seeds = batch.seeds
+    shift = np.repeat(batch.offset, n_states * n_actions)
+    next_row_of = np.tile(steps._next[:, 0], seeds) + shift
+    reward_of = np.tile(steps._reward[:, 0], seeds)
+    terminal_of = np.tile(steps._terminal[:, 0], seeds)
+    # The reductions are called directly: the array methods add a Python layer per call.
+    maximum, any_of = np.maximum.reduce, np.logical_or.reduce
+    # Each row's maximum, kept up to date as rows change (the greedy choice and
+    # Q-learning's target read it).
+    best = maximum(q, axis=1)
+    # A model with one start state: every episode starts there, whatever is drawn.
+    starts = np.flatnonzero(steps.model.initial)
+    only_start = int(starts[0]) if starts.size == 1 else None
+    # Which episode counts are checkpoints (their tables are kept for exact valuing).
+    checkpoint = np.zeros(episodes + 1, dtype=bool)
+    checkpoint[batch.checkpoints] = batch.exact is not None
+
+    start_rows = None if only_start is None else batch.offset + only_start
+
+    def restart(envs: np.ndarray) -> np.ndarray:
+        if start_rows is None:
+            return batch.offset.take(envs) + steps.reset(envs)
+        return start_rows.take(envs)
+
+    # The seeds still playing, in seed order, and their per-seed working arrays.
+    ids = np.flatnonzero(done < episodes)
+    if not ids.size:
+        batch._value_pending()
+        if report is not None:
+            report(batch)
+        return True
+    rows = restart(ids)
+    # Episode limits: the batch step each episode began, and a bound below all of
+    # them (it only grows), so the limit is looked at only when one may be reached.
+    began = np.zeros(ids.size, dtype=np.int64)
+    earliest = 0
+    # Visits are counts summed over a row's actions: added once at the end.
+    counts_before = counts.sum(axis=1)
+    episode_return = np.zeros(ids.size)
+    pending = np.full(ids.size, -1, dtype=np.int64)
+    learner.forget_episodes(ids)
+    last_report = time.monotonic()
+    count = 0
+    eps: np.ndarray | float = learner.epsilon
+    while ids.size:
+        count += 1
+        if count % check_every == 0:
+            if stop is not None and stop():
+                _leave_epsilon(learner, eps)
+                visits += counts.sum(axis=1) - counts_before
+                batch._value_pending()
+                return False
+            now = time.monotonic()
+            if report is not None and now - last_report >= interval:
+                report(batch)
+                last_report = now
+        eps = batch._epsilons(ids)
+        if sarsa:
+            actions = pending
+            fresh = (actions < 0).nonzero()[0]
+            if fresh.size:
+                actions[fresh] = _act(
+                    q, best, rows.take(fresh), eps if isinstance(eps, float) else eps[fresh], rng
+                )
+        else:
+            actions = _act(q, best, rows, eps, rng)
+        cells = rows * n_actions + actions
+        next_rows = next_row_of.take(cells)
+        rewards = reward_of.take(cells)
+        terminated = terminal_of.take(cells)
+        if sarsa:
+            pending = _act(q, best, next_rows, eps, rng)
+            future = q_flat.take(next_rows * n_actions + pending)
+        else:
+            future = best.take(next_rows)
+        future[terminated] = 0.0
+        targets = rewards + discount * future
+        before = counts_flat.take(cells)
+        step: Any = np.minimum(before, last_count) if last_count else 0
+        q_flat[cells] = keep_of.take(step) * q_flat.take(cells) + alpha_of.take(step) * targets
+        counts_flat[cells] = before + 1
+        best[rows] = maximum(q.take(rows, axis=0), axis=1)
+        rows = next_rows
+        episode_return += rewards
+        finished = terminated
+        if horizon is not None and count - earliest >= horizon:
+            earliest = int(began.min())
+            if count - earliest >= horizon:
+                finished = terminated | (count - began >= horizon)
+        if not any_of(finished):
+            continue
+        local = finished.nonzero()[0]
+        ended = ids.take(local)
+        number = done.take(ended)
+        returns[ended, number] = episode_return.take(local)
+        number += 1
+        done[ended] = number
+        episode_return[local] = 0.0
+        if any_of(checkpoint.take(number)):
+            batch._value_checkpoints(ended)
+        if maximum(number) < episodes:
+            rows[local] = restart(ended)
+            began[local] = count
+            pending[local] = -1
+            learner.forget_episodes(ended)
+            continue
+        more = number < episodes
+        again = ended[more]
+        if again.size:
+            begin = local[more]
+            rows[begin] = restart(again)
+            began[begin] = count
+            pending[begin] = -1
+            learner.forget_episodes(again)
+        playing = done.take(ids) < episodes
+        ids, rows, began = ids[playing], rows[playing], began[playing]
+        episode_return, pending = episode_return[playing], pending[playing]
+    _leave_epsilon(learner, eps)
+    visits += counts.sum(axis=1) - counts_before
+    batch._value_pending()
+    if report is not None:
+        report(batch)
+    return True
+
+
+def _leave_epsilon(learner: Learner, eps: np.ndarray | float) -> None:
+    """Set epsilon as the general loop leaves it: its last update's (the largest of a step's)."""
+    learner.epsilon = eps if isinstance(eps, float) else float(eps.max())
