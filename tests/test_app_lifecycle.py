@@ -385,6 +385,9 @@ def test_sigterm_restores_the_terminal_and_ends_the_training_process(log_dir) ->
         term.wait_for_text("tui-gym")  # the header: the app is up
         term.type("t")
         term.wait_for_text("Hyperparameters")
+        # Animated, so training still runs when the signal comes (at max the default
+        # budget is done within a frame on an idle machine).
+        term.type("-")
         term.type(" ")
         term.wait_for_text("running")
         children = child_pids(term.process.pid)
