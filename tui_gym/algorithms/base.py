@@ -341,6 +341,23 @@ class Learner(ABC):
             hp.learning_rate_schedule, count=count, sequential=sequential,
         )
 
+    def _move_q(
+        self, batch: Transitions, targets: np.ndarray, future: np.ndarray, *extra: Any
+    ) -> np.ndarray:
+        """Move `q` at the batch's (state, action) cells toward `targets`; the TD errors.
+        A batch of one keeps its figures for `_describe`: target, future, Q before and
+        after, the cell's count, then `extra`."""
+        cells = batch.state * self.n_actions + batch.action
+        q_flat = self.q.reshape(-1)
+        before = q_flat[cells[0]] if len(cells) == 1 else None
+        td = self._move(self.q, self.counts, cells, targets, batch.sequential)
+        if before is None:
+            self._last = None
+        else:
+            self._keep(batch, targets[0], future[0], before, q_flat[cells[0]],
+                       self.counts.reshape(-1)[cells[0]], *extra)
+        return td
+
     # --- rows ----------------------------------------------------------------------
     @property
     def dense(self) -> bool:

@@ -33,16 +33,7 @@ class ExpectedSarsa(Learner):
         future = expected_values(self.q[batch.next_state], self.epsilon)
         future[batch.terminated] = 0.0
         targets = batch.reward + hp.discount * future
-        cells = batch.state * self.n_actions + batch.action
-        q_flat = self.q.reshape(-1)
-        before = q_flat[cells[0]] if len(cells) == 1 else None
-        td = self._move(self.q, self.counts, cells, targets, batch.sequential)
-        if before is None:
-            self._last = None
-        else:
-            self._keep(batch, targets[0], future[0], before, q_flat[cells[0]],
-                       self.counts.reshape(-1)[cells[0]], self.epsilon)
-        return td
+        return self._move_q(batch, targets, future, self.epsilon)
 
     def _describe(self, batch: Transitions, *numbers: float) -> UpdateRecord:
         target, future, before, after, n, epsilon = numbers
