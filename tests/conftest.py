@@ -1,12 +1,36 @@
-"""Shared pytest setup: the `slow` marker, run only when TUI_GYM_SLOW=1."""
+"""Shared pytest setup: the `slow` marker, run only when TUI_GYM_SLOW=1; bytecode kept
+for the processes the tests start; every run's history in a file of its own."""
 
 from __future__ import annotations
 
 import os
+import sys
+from pathlib import Path
 
 import pytest
 
 SLOW_ENV = "TUI_GYM_SLOW"
+PYCACHE = Path(__file__).resolve().parent.parent / ".pytest_cache" / "pycache"
+
+
+def _keep_bytecode() -> None:
+    """Where writing bytecode is switched off, keep it under pytest's cache folder instead.
+
+    The xdist workers, the `python -m tui_gym` subprocesses and the training processes
+    all start from this environment: without bytecode each compiles the package and
+    rewrites the test modules afresh. A prefix keeps the bytecode out of the source
+    tree, as the switch meant. This runs when pytest loads this file, before the
+    workers start.
+    """
+    if not os.environ.get("PYTHONDONTWRITEBYTECODE") or os.environ.get("PYTHONPYCACHEPREFIX"):
+        return
+    del os.environ["PYTHONDONTWRITEBYTECODE"]
+    os.environ["PYTHONPYCACHEPREFIX"] = str(PYCACHE)
+    sys.pycache_prefix = str(PYCACHE)
+    sys.dont_write_bytecode = False
+
+
+_keep_bytecode()
 
 
 def pytest_configure(config: pytest.Config) -> None:

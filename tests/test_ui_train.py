@@ -151,7 +151,7 @@ async def test_one_episode_and_reset() -> None:
         assert not view.charts.data("return")
 
 
-async def test_speed_keys_change_the_speed() -> None:
+async def test_speed_keys_animated_training_and_switching_game() -> None:
     app = blackjack_app()
     async with app.run_test(size=(120, 40)) as pilot:
         view = await open_train(pilot)
@@ -168,11 +168,7 @@ async def test_speed_keys_change_the_speed() -> None:
         await pilot.press("plus", "plus")
         assert view.speed_name == "max"
 
-
-async def test_animated_training_shows_the_agent_on_a_board() -> None:
-    app = blackjack_app()
-    async with app.run_test(size=(120, 40)) as pilot:
-        view = await open_train(pilot)
+        # Animated training shows the agent on a board; max hides it.
         await pilot.press("minus")  # animated (fast)
         await pilot.press("space")
         await wait_for(pilot, lambda: app.runner.last_scene is not None, "an animated step")
@@ -182,45 +178,55 @@ async def test_animated_training_shows_the_agent_on_a_board() -> None:
         await pilot.press("plus")  # max: no board
         assert not box.has_class("-shown")
 
+        # Switching game reloads the view.
+        assert view.heatmap.focus_cell is None
+        await pilot.press("g")
+        await wait_for(pilot, lambda: app.session.game.name == "gridworld", "GridWorld")
+        await pilot.pause()
+        assert "target at (4, 4)" in view.heatmap.plain
+        assert view.heatmap.focus_cell == (0, 4)
+        assert any("target" in text for _, text in view.key_help())
+        hp = app.session.hp
+        assert view.form.input("episodes").value == str(hp.episodes)
 
-@pytest.mark.parametrize("bad", ["abc", "5", ""])
-async def test_invalid_learning_rate_is_marked_and_blocks_training(bad: str) -> None:
+
+async def test_invalid_fields_are_marked_block_training_and_are_checked_together() -> None:
     app = blackjack_app(episodes=300)
     async with app.run_test(size=(120, 40)) as pilot:
         view = await open_train(pilot)
         form = view.query_one(HyperparameterForm)
-        await pilot.press("e")  # edit the hyperparameters
-        await wait_for(pilot, lambda: app.focused is form.input("learning_rate"), "the field")
-        await pilot.press("backspace", *bad)  # the text is selected on focus: replace it
-        await wait_for(pilot, lambda: form.is_invalid("learning_rate"), "the mark")
-        assert "(0, 1]" in form.error("learning_rate")  # '5' is out of range, 'abc' not a number
-        assert form.error("learning_rate") in screen_text(app)  # said under the field
+        # One app for every bad value: each is marked and blocks training, and the fix
+        # clears the mark before the next one is typed.
+        for bad in ("abc", "5", ""):
+            await pilot.press("e")  # edit the hyperparameters
+            await wait_for(pilot, lambda: app.focused is form.input("learning_rate"),
+                           "the field")
+            await pilot.press("backspace", *bad)  # the text is selected on focus: replace it
+            await wait_for(pilot, lambda: form.is_invalid("learning_rate"), f"the mark ({bad!r})")
+            assert "(0, 1]" in form.error("learning_rate")  # '5' out of range, 'abc' no number
+            assert form.error("learning_rate") in screen_text(app)  # said under the field
 
-        await pilot.press("escape")  # the keyboard goes back to the view
-        assert app.focused is view.heatmap
-        await pilot.press("space")
-        await pilot.pause()
-        assert not app.runner.running
-        assert app.runner.latest.episodes == 0
-        assert form.is_invalid("learning_rate")
+            await pilot.press("escape")  # the keyboard goes back to the view
+            assert app.focused is view.heatmap
+            await pilot.press("space")
+            await pilot.pause()
+            assert not app.runner.running
+            assert app.runner.latest.episodes == 0
+            assert form.is_invalid("learning_rate")
 
-        await pilot.press("e")
-        await wait_for(pilot, lambda: app.focused is form.input("learning_rate"), "the field")
-        await pilot.press("backspace", *"0.01", "enter")
-        await wait_for(pilot, lambda: not form.is_invalid("learning_rate"), "the fix")
-        assert form.error("learning_rate") == ""
-        assert app.focused is view.heatmap
+            await pilot.press("e")
+            await wait_for(pilot, lambda: app.focused is form.input("learning_rate"),
+                           "the field")
+            await pilot.press("backspace", *"0.01", "enter")
+            await wait_for(pilot, lambda: not form.is_invalid("learning_rate"), "the fix")
+            assert form.error("learning_rate") == ""
+            assert app.focused is view.heatmap
         await pilot.press("space")
         await wait_for(pilot, lambda: app.runner.latest.episodes == 300, "the whole budget")
         assert app.session.hp.learning_rate == pytest.approx(0.01)
 
-
-async def test_fields_are_checked_together_and_loaded() -> None:
-    app = blackjack_app(episodes=1234)
-    async with app.run_test(size=(120, 40)) as pilot:
-        view = await open_train(pilot)
-        form = view.form
-        assert form.input("episodes").value == "1234"
+        # Fields are checked together, and the form loads a whole set.
+        assert form.input("episodes").value == "300"
         form.input("epsilon_start").value = "0.1"
         form.input("epsilon_final").value = "0.5"
         await pilot.pause()
@@ -231,13 +237,13 @@ async def test_fields_are_checked_together_and_loaded() -> None:
         form.input("epsilon_final").value = "0.05"
         await wait_for(pilot, lambda: form.valid, "the fields to settle")
         hp = view.read_hyperparameters()
-        assert hp is not None and hp.epsilon_start == 0.1 and hp.episodes == 1234
+        assert hp is not None and hp.epsilon_start == 0.1 and hp.episodes == 300
         form.load(QLearning.hyperparameters(episodes=77))
         assert form.input("episodes").value == "77"
 
 
-async def test_gridworld_target_moves_with_keys_and_clicks() -> None:
-    app = gridworld_app()
+async def test_gridworld_target_moves_and_training_fills_the_heatmap() -> None:
+    app = gridworld_app(episodes=300)
     async with app.run_test(size=(120, 40)) as pilot:
         view = await open_train(pilot)
         heatmap = view.query_one(HeatmapView)
@@ -267,11 +273,7 @@ async def test_gridworld_target_moves_with_keys_and_clicks() -> None:
         assert "target at (0, 0)" in heatmap.plain
         assert "optimal pair fraction" in view.stats.plain
 
-
-async def test_gridworld_training_fills_the_heatmap() -> None:
-    app = gridworld_app(episodes=300)
-    async with app.run_test(size=(120, 40)) as pilot:
-        view = await open_train(pilot)
+        # Training fills the heatmap, and the view says when the budget is done.
         before = view.heatmap.plain
         await pilot.press("space")
         await wait_for(pilot, lambda: app.runner.latest.episodes == 300, "the whole budget")
@@ -337,18 +339,3 @@ async def test_buttons_do_what_the_keys_do() -> None:
         assert await pilot.click("#btn-reset")
         await pilot.press("y")  # yes: it has trained, so it asks first
         await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
-
-
-async def test_switching_game_reloads_the_view() -> None:
-    app = blackjack_app()
-    async with app.run_test(size=(120, 40)) as pilot:
-        view = await open_train(pilot)
-        assert view.heatmap.focus_cell is None
-        await pilot.press("g")
-        await wait_for(pilot, lambda: app.session.game.name == "gridworld", "GridWorld")
-        await pilot.pause()
-        assert "target at (4, 4)" in view.heatmap.plain
-        assert view.heatmap.focus_cell == (0, 4)
-        assert any("target" in text for _, text in view.key_help())
-        hp = app.session.hp
-        assert view.form.input("episodes").value == str(hp.episodes)
