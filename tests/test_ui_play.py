@@ -60,7 +60,7 @@ WASD = {"right": "d", "left": "a", "up": "w", "down": "s"}
 # --- Blackjack ------------------------------------------------------------------
 
 
-async def test_blackjack_hand_played_to_the_end() -> None:
+async def test_blackjack_hand_played_to_the_end_by_keys_buttons_and_clicks() -> None:
     app = make_app("blackjack")
     async with app.run_test(size=BIG) as pilot:
         await pilot.pause()
@@ -111,6 +111,38 @@ async def test_blackjack_hand_played_to_the_end() -> None:
         assert "New hand" in shown(view, "#play-headline")
         assert "Hands 1" in shown(view, "#play-tally")
 
+        # The buttons work with the mouse (the same app: a fresh hand is dealt).
+        hit, stick, deal = view.board.query(BoardButton)
+        assert deal.disabled and not hit.disabled
+
+        cards = len(game.scene()["player"])
+        await pilot.click(hit)
+        await pilot.pause()
+        assert game.last.steps == 1
+        assert game.done or len(game.scene()["player"]) == cards + 1
+        if not game.done:
+            await pilot.click(stick)
+            await pilot.pause()
+        assert game.done
+        assert hit.disabled and stick.disabled and not deal.disabled
+        assert app.focused is view.board, "clicking a button leaves the keyboard on the board"
+
+        await pilot.click(deal)
+        await pilot.pause()
+        assert not game.done and game.tally.episodes == 2
+
+        # Clicking the table gives the board the keyboard back.
+        app.set_focus(None)
+        await pilot.pause()
+        assert view.board.border_subtitle == "click here to play"
+        await pilot.click(view.board.canvas)
+        await pilot.pause()
+        assert app.focused is view.board
+        assert not view.board.border_subtitle
+        await pilot.press("s")
+        await pilot.pause()
+        assert view.game.done
+
 
 async def test_blackjack_stick_enter_and_running_tally() -> None:
     app = make_app("blackjack", seed=3)
@@ -144,54 +176,10 @@ async def test_blackjack_stick_enter_and_running_tally() -> None:
         assert f"losses {tally.losses}" in text and "95% CI" in text
 
 
-async def test_blackjack_buttons_work_with_the_mouse() -> None:
-    app = make_app("blackjack")
-    async with app.run_test(size=BIG) as pilot:
-        await pilot.pause()
-        view = app.play_view
-        game = view.game
-        assert game is not None and view.board is not None
-        hit, stick, deal = view.board.query(BoardButton)
-        assert deal.disabled and not hit.disabled
-
-        cards = len(game.scene()["player"])
-        await pilot.click(hit)
-        await pilot.pause()
-        assert game.last.steps == 1
-        assert game.done or len(game.scene()["player"]) == cards + 1
-        if not game.done:
-            await pilot.click(stick)
-            await pilot.pause()
-        assert game.done
-        assert hit.disabled and stick.disabled and not deal.disabled
-        assert app.focused is view.board, "clicking a button leaves the keyboard on the board"
-
-        await pilot.click(deal)
-        await pilot.pause()
-        assert not game.done and game.tally.episodes == 1
-
-
-async def test_clicking_the_table_focuses_the_board() -> None:
-    app = make_app("blackjack")
-    async with app.run_test(size=BIG) as pilot:
-        await pilot.pause()
-        view = app.play_view
-        app.set_focus(None)
-        await pilot.pause()
-        assert view.board.border_subtitle == "click here to play"
-        await pilot.click(view.board.canvas)
-        await pilot.pause()
-        assert app.focused is view.board
-        assert not view.board.border_subtitle
-        await pilot.press("s")
-        await pilot.pause()
-        assert view.game.done
-
-
 # --- GridWorld ------------------------------------------------------------------
 
 
-async def test_gridworld_walk_to_the_target_with_arrows_then_wasd() -> None:
+async def test_gridworld_walk_by_arrows_wasd_and_clicks_and_reset() -> None:
     app = make_app("gridworld")
     async with app.run_test(size=BIG) as pilot:
         await pilot.pause()
@@ -220,13 +208,7 @@ async def test_gridworld_walk_to_the_target_with_arrows_then_wasd() -> None:
         assert game.tally.episodes == 2 and game.tally.wins == 2
         assert "Episodes 2" in shown(view, "#play-tally")
 
-
-async def test_gridworld_up_is_up_on_screen_and_the_trail_shows() -> None:
-    app = make_app("gridworld")
-    async with app.run_test(size=BIG) as pilot:
-        await pilot.pause()
-        view = app.play_view
-        game = view.game
+        # Up is up on screen, and the trail shows (the same app, a fresh episode).
         start = game.scene()["agent"]
         key = "up" if start[1] < game.scene()["size"] - 1 else "down"
         row_before = _agent_row(drawing(view))
@@ -237,25 +219,35 @@ async def test_gridworld_up_is_up_on_screen_and_the_trail_shows() -> None:
         assert (row_after < row_before) == (key == "up"), "+y is drawn upwards"
         assert ("↑" if key == "up" else "↓") in drawing(view), "the cell left shows the move"
 
-
-def _agent_row(picture: str) -> int:
-    return next(i for i, line in enumerate(picture.splitlines()) if "●" in line)
-
-
-async def test_gridworld_r_resets_mid_episode() -> None:
-    app = make_app("gridworld")
-    async with app.run_test(size=BIG) as pilot:
+        # r resets mid-episode.
+        await pilot.press("r")
         await pilot.pause()
-        view = app.play_view
-        game = view.game
         await pilot.press(path_keys(view, ARROWS)[0])
         await pilot.pause()
         assert game.last.steps == 1
         await pilot.press("r")
         await pilot.pause()
         assert game.last.steps == 0 and not game.done
-        assert game.tally.episodes == 0, "an unfinished episode is not counted"
+        assert game.tally.episodes == 2, "an unfinished episode is not counted"
         assert "New episode" in shown(view, "#play-headline")
+
+        # A click on a cell steps towards it.
+        board = view.board
+        optimal = game.first_info["distance"]
+        for _ in range(optimal):
+            layout = board.layout_drawn
+            assert layout is not None
+            await pilot.click(board.canvas, offset=layout.cell_center(game.scene()["target"]))
+            await pilot.pause()
+        assert game.done and game.last.terminated and game.last.steps == optimal
+
+        await pilot.click(board.query_one(BoardButton))  # ↺ Reset
+        await pilot.pause()
+        assert not game.done and game.last.steps == 0
+
+
+def _agent_row(picture: str) -> int:
+    return next(i for i, line in enumerate(picture.splitlines()) if "●" in line)
 
 
 async def test_gridworld_time_limit_truncates() -> None:
@@ -282,27 +274,6 @@ async def test_gridworld_time_limit_truncates() -> None:
         await pilot.press(away)  # a move after the end is refused gently
         await pilot.pause()
         assert "This episode is over" in shown(view, "#play-hint")
-
-
-async def test_gridworld_click_a_cell_steps_towards_it() -> None:
-    app = make_app("gridworld")
-    async with app.run_test(size=BIG) as pilot:
-        await pilot.pause()
-        view = app.play_view
-        game = view.game
-        board = view.board
-        assert isinstance(board, GridBoard)
-        optimal = game.first_info["distance"]
-        for _ in range(optimal):
-            layout = board.layout_drawn
-            assert layout is not None
-            await pilot.click(board.canvas, offset=layout.cell_center(game.scene()["target"]))
-            await pilot.pause()
-        assert game.done and game.last.terminated and game.last.steps == optimal
-
-        await pilot.click(board.query_one(BoardButton))  # ↺ Reset
-        await pilot.pause()
-        assert not game.done and game.last.steps == 0
 
 
 async def test_advice_shows_the_optimum_and_judges_moves() -> None:
