@@ -25,9 +25,13 @@ def row(app: TuiGymApp, name: str) -> WrapperRow:
     return app.query_one(f"#wrapper-{name}", WrapperRow)
 
 
-async def test_views_and_games_switch_by_key():
+async def test_blackjack_keys_help_wrappers_and_the_game_picker():
+    """One app for facts about one state: views and games switch by key, help lists every
+    app key, a misfit wrapper is refused with its reason, a wrapper that changes the
+    observations resets the agent with a notice, and the picker switches game."""
     app = TuiGymApp(Session("blackjack", seed=0))
     async with app.run_test(size=(120, 40)) as pilot:
+        # Views and games switch by key.
         switcher = app.query_one("#views", ContentSwitcher)
         assert switcher.current == "play"
         await pilot.press("t")
@@ -42,10 +46,7 @@ async def test_views_and_games_switch_by_key():
         await pilot.pause()
         assert app.session.game.name == "blackjack"
 
-
-async def test_help_lists_every_app_key_and_closes():
-    app = TuiGymApp(Session("blackjack", seed=0))
-    async with app.run_test(size=(120, 40)) as pilot:
+        # Help lists every app key and closes.
         await pilot.press("f1")
         assert isinstance(app.screen, HelpScreen)
         text = screen_text(app)
@@ -66,8 +67,36 @@ async def test_help_lists_every_app_key_and_closes():
         await pilot.press("question_mark")
         assert not isinstance(app.screen, HelpScreen)
 
+        # A misfit wrapper shows its reason and is not applied.
+        shaping = row(app, "DistanceShaping")
+        assert shaping.has_class("-misfit")  # the reason shows before it is ticked
+        shaping.query_one(Checkbox).value = True
+        await pilot.pause()
+        shaping = row(app, "DistanceShaping")
+        assert shaping.has_class("-misfit")
+        assert "info['distance']" in str(shaping.query_one(".reason", Static).render())
+        assert "DistanceShaping" not in app.session.chain_repr()
+        assert "not applied" in chain_text(app)
 
-async def test_ticking_a_wrapper_rebuilds_and_keeps_the_agent():
+        # A wrapper that changes observations resets the agent, with a notice.
+        agent = app.session.agent
+        earlier = {n.identity for n in app._notifications}  # the game switches' notices
+        row(app, "FlattenObservation").query_one(Checkbox).value = True
+        await pilot.pause()
+        assert app.session.agent is not agent
+        assert any("reset" in n.message for n in app._notifications
+                   if n.identity not in earlier)
+
+        # The game picker switches game.
+        await pilot.click("#game-gridworld")
+        await pilot.pause()
+        assert app.session.game.name == "gridworld"
+        assert app.query_one("#game-gridworld", RadioButton).value
+
+
+async def test_gridworld_wrapper_size_and_typing_in_the_panel():
+    """One app: ticking a wrapper rebuilds and keeps the agent, the size changes from the
+    panel, and inputs capture typing instead of app keys."""
     app = TuiGymApp(Session("gridworld", seed=0))
     async with app.run_test(size=(120, 40)) as pilot:
         agent = app.session.agent
@@ -82,29 +111,24 @@ async def test_ticking_a_wrapper_rebuilds_and_keeps_the_agent():
         # Human play uses the wrapped env too.
         assert "StepPenalty" in str(app.play_view.game.env)
 
-
-async def test_a_wrapper_that_changes_observations_resets_the_agent_with_a_notice():
-    app = TuiGymApp(Session("blackjack", seed=0))
-    async with app.run_test(size=(120, 40)) as pilot:
-        agent = app.session.agent
-        row(app, "FlattenObservation").query_one(Checkbox).value = True
+        # The size changes from the panel (the wrapper stays on).
         await pilot.pause()
-        assert app.session.agent is not agent
-        assert any("reset" in n.message for n in app._notifications)
-
-
-async def test_a_misfit_wrapper_shows_its_reason_and_is_not_applied():
-    app = TuiGymApp(Session("blackjack", seed=0))
-    async with app.run_test(size=(120, 40)) as pilot:
-        shaping = row(app, "DistanceShaping")
-        assert shaping.has_class("-misfit")  # the reason shows before it is ticked
-        shaping.query_one(Checkbox).value = True
+        size_field = app.query_one("#env-params").query_one(ParamField)
+        size_field.input.value = "7"
+        size_field.input.focus()
+        await pilot.press("enter")
         await pilot.pause()
-        shaping = row(app, "DistanceShaping")
-        assert shaping.has_class("-misfit")
-        assert "info['distance']" in str(shaping.query_one(".reason", Static).render())
-        assert "DistanceShaping" not in app.session.chain_repr()
-        assert "not applied" in chain_text(app)
+        assert app.session.env_kwargs["size"] == 7
+        assert app.play_view.game.scene()["size"] == 7
+
+        # Inputs capture typing instead of app keys.
+        await pilot.pause()
+        field = row(app, "StepPenalty").query_one(Input)
+        field.focus()
+        field.value = ""
+        await pilot.press("q", "t", "p")  # would quit / switch views if not typed
+        assert field.value == "qtp"
+        assert app.query_one("#views", ContentSwitcher).current == "play"
 
 
 async def test_an_invalid_parameter_is_marked_and_not_applied():
@@ -126,28 +150,6 @@ async def test_an_invalid_parameter_is_marked_and_not_applied():
         await pilot.press("enter")
         await pilot.pause()
         assert app.session.applied[0].values()["max_episode_steps"] == 20
-
-
-async def test_gridworld_size_changes_from_the_panel():
-    app = TuiGymApp(Session("gridworld", seed=0))
-    async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.pause()
-        size_field = app.query_one("#env-params").query_one(ParamField)
-        size_field.input.value = "7"
-        size_field.input.focus()
-        await pilot.press("enter")
-        await pilot.pause()
-        assert app.session.env_kwargs["size"] == 7
-        assert app.play_view.game.scene()["size"] == 7
-
-
-async def test_game_picker_switches_game():
-    app = TuiGymApp(Session("blackjack", seed=0))
-    async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.click("#game-gridworld")
-        await pilot.pause()
-        assert app.session.game.name == "gridworld"
-        assert app.query_one("#game-gridworld", RadioButton).value
 
 
 async def test_too_small_terminal_shows_a_message_and_ignores_keys():
@@ -243,15 +245,3 @@ async def test_random_keys_in_every_view_never_break_the_app():
             await pilot.pause()
             assert app.query_one("#views", ContentSwitcher).current == "play"
             app.runner.pause()
-
-
-async def test_inputs_capture_typing_instead_of_app_keys():
-    app = TuiGymApp(Session("gridworld", seed=0))
-    async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.pause()
-        field = row(app, "StepPenalty").query_one(Input)
-        field.focus()
-        field.value = ""
-        await pilot.press("q", "t", "p")  # would quit / switch views if not typed
-        assert field.value == "qtp"
-        assert app.query_one("#views", ContentSwitcher).current == "play"
