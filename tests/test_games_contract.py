@@ -175,8 +175,7 @@ async def test_a_person_plays_one_episode_in_the_app(game: Game) -> None:
             advice = game.oracle.advice(human.env, app.session.env_kwargs)
             action = game.action_names[advice.optimal[0] if advice.optimal else 0]
             steps = human.last.steps if human.last else 0
-            await pilot.press(_key_for(view.board, action))
-            await pilot.pause()
+            await pilot.press(_key_for(view.board, action))  # waits for the screen
             assert human.last is not None and (human.last.steps == steps + 1 or human.done)
         assert view.game is not None and view.game.done
         assert str(view.query_one("#play-headline").render())
