@@ -36,6 +36,8 @@ from tui_gym.games import game_for
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.train_view import TrainView
 
+from .waiting import wait_for
+
 DEADLINE = 20.0  # seconds; generous for a loaded machine, never reached when things work
 LEAVE_ALT_SCREEN = b"\x1b[?1049l"
 MOUSE_OFF = b"\x1b[?1000l"
@@ -43,14 +45,6 @@ ANSI = re.compile(r"\x1b(\[[0-9;?<>=]*[ -/]*[@-~]|[@-_])")
 FRAME_SECONDS = 0.25  # the most the app may spend in a runner call: a frame (1/15 s) and slack
 KEY_SECONDS = 4.0  # a whole key press, redrawing included, on a loaded machine: the freezes
 # were 5 s (thread runner) and 10 s (process runner)
-
-
-async def wait_for(pilot, predicate: Callable[[], bool], what: str, timeout: float = DEADLINE):
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        await pilot.pause()
 
 
 def all_timers(app: TuiGymApp) -> list[Timer]:

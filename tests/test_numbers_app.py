@@ -9,9 +9,6 @@ headless on the session; every wait polls a condition.
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
-
 from tui_gym.algorithms import QLearning
 from tui_gym.core.session import Session, default_settings
 from tui_gym.games import game_for
@@ -19,14 +16,9 @@ from tui_gym.games.words import signed
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.widgets.scoreboard import Scoreboard
 
+from .waiting import wait_for
+
 DEADLINE = 20.0
-
-
-async def wait_for(pilot, condition: Callable[[], bool], what: str) -> None:
-    deadline = time.monotonic() + DEADLINE
-    while not condition():
-        assert time.monotonic() < deadline, f"timed out waiting for {what}"
-        await pilot.pause()
 
 
 def badge(app: TuiGymApp) -> str:

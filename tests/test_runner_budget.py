@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
-
 from tui_gym.algorithms import QLearning
 from tui_gym.core.session import Session
 from tui_gym.core.training import continue_run
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.train_view import TrainView
+
+from .waiting import wait_for
 
 DEADLINE = 20.0
 
@@ -43,14 +42,6 @@ def test_nothing_to_continue_before_the_first_episode_or_when_nothing_changes() 
     assert continue_run(hp0, hp0.replace(episodes=5000), 0) == (hp0.replace(episodes=5000), None)
     assert continue_run(hp0, hp0, 700) == (hp0, None)
     assert continue_run(hp0, hp0.replace(episodes=800), 700) == (hp0.replace(episodes=800), None)
-
-
-async def wait_for(pilot, predicate: Callable[[], bool], what: str) -> None:
-    deadline = time.monotonic() + DEADLINE
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        await pilot.pause()
 
 
 async def test_raising_the_budget_after_a_finished_run_continues_it_in_the_app() -> None:

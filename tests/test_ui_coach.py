@@ -10,9 +10,6 @@ tests check `policy_steps_over_optimal` against a brute-force walk.
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
-
 import numpy as np
 import pytest
 
@@ -28,6 +25,8 @@ from tui_gym.games.words import plural, signed
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.play_view import WATCHING, PlayView
 from tui_gym.ui.widgets.scoreboard import Scoreboard
+
+from .waiting import wait_for
 
 BIG = (120, 40)
 FAST = 0.05  # seconds between the watched agent's moves in tests (faster starves the pilot)
@@ -61,14 +60,6 @@ def shown(view: PlayView, selector: str) -> str:
 
 def scoreboard_text(view: PlayView) -> str:
     return view.query_one(Scoreboard).text(compact=False)
-
-
-async def wait_for(pilot, condition: Callable[[], bool], what: str) -> None:
-    """Let the app run until `condition` holds (fail after DEADLINE seconds)."""
-    deadline = time.monotonic() + DEADLINE
-    while not condition():
-        assert time.monotonic() < deadline, f"timed out waiting for {what}"
-        await pilot.pause()
 
 
 def key_of(view: PlayView, action: int) -> str:

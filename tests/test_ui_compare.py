@@ -8,8 +8,6 @@ history in a temporary folder; waits poll a condition with a deadline.
 from __future__ import annotations
 
 import sqlite3
-import time
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +30,7 @@ from tui_gym.ui.widgets.compare_chart import BRAILLE_BASE, plot_cells
 from tui_gym.ui.widgets.figures_table import with_interval
 
 from .screen import screen_text
+from .waiting import wait_for
 
 DEADLINE = 20.0
 SIZE = (100, 40)
@@ -47,14 +46,6 @@ class ViewApp(App[None]):
 
     def compose(self) -> ComposeResult:
         yield CompareView(db=self.db)
-
-
-async def wait_for(pilot, predicate: Callable[[], bool], what: str, timeout: float = DEADLINE):
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        await pilot.pause(0.02)
 
 
 def record_runs(db: Path) -> dict[str, int]:
@@ -239,7 +230,6 @@ async def test_the_app_key_v_opens_it_and_another_view_stops_it(
         await pilot.press("question_mark")
         await wait_for(pilot, lambda: isinstance(app.screen, HelpScreen), "the help")
         assert "Compare view" in screen_text(app)
-
 
 
 async def launch(pilot, view: CompareView, algorithms: set[str], seeds: int, episodes: int):

@@ -15,7 +15,7 @@ from tui_gym.ui.help_screen import HelpScreen
 
 from .screen import screen_lines
 from .test_ui_session_keeping import palette_first
-from .test_ui_train import wait_for
+from .waiting import wait_for
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -21,7 +21,7 @@ from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.file_screen import FileScreen
 
 from .test_ui_session_keeping import palette_first, train_to_the_end
-from .test_ui_train import wait_for
+from .waiting import wait_for
 
 
 @pytest.fixture(autouse=True)

@@ -21,7 +21,7 @@ from tui_gym.ui.side_panel import ParamField
 from tui_gym.ui.widgets.grid_board import choose_layout
 
 from .screen import screen_text
-from .test_ui_train import DEADLINE, wait_for
+from .waiting import DEADLINE, wait_for
 
 SIZES = [(120, 40), (80, 24)]
 

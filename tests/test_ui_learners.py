@@ -17,7 +17,8 @@ from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.widgets.step_panel import _num
 
-from .test_ui_train import open_train, wait_for
+from .test_ui_train import open_train
+from .waiting import wait_for
 
 KNOWN = {"learning_rate": 0.5, "learning_rate_schedule": "constant", "discount": 0.9,
          "epsilon_start": 0.3, "epsilon_final": 0.3}

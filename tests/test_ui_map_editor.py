@@ -6,23 +6,14 @@ Waits poll a condition with a deadline; nothing sleeps.
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
-
 from tui_gym.core.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.train_view import TrainView
 from tui_gym.ui.widgets.map_editor import MapCanvas, MapEditor
 
+from .waiting import wait_for
+
 DEADLINE = 20.0
-
-
-async def wait_for(pilot, predicate: Callable[[], bool], what: str) -> None:
-    deadline = time.monotonic() + DEADLINE
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        await pilot.pause()
 
 
 def status(editor: MapEditor) -> str:

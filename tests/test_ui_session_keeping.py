@@ -18,7 +18,7 @@ from tui_gym.core.session import Session, default_settings
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.confirm_screen import ConfirmScreen
 
-from .test_ui_train import DEADLINE, wait_for
+from .waiting import DEADLINE, wait_for
 
 
 def blackjack(episodes: int = 300, runner: str = "thread") -> TuiGymApp:

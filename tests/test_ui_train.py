@@ -7,9 +7,6 @@ the view follows it without ever training on the event loop.
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
-
 import pytest
 
 from tui_gym.algorithms import QLearning
@@ -22,17 +19,7 @@ from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
 
 from .screen import screen_text
-
-DEADLINE = 20.0  # seconds; generous for slow CI machines, never reached when things work
-
-
-async def wait_for(pilot, predicate: Callable[[], bool], what: str, timeout: float = DEADLINE):
-    """Let the app run until `predicate()` holds; fail with `what` after `timeout`."""
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        await pilot.pause()
+from .waiting import DEADLINE, wait_for
 
 
 async def open_train(pilot) -> TrainView:
