@@ -3,6 +3,7 @@ for the processes the tests start; every run's history in a file of its own."""
 
 from __future__ import annotations
 
+import inspect
 import os
 import sys
 from pathlib import Path
@@ -40,7 +41,30 @@ def pytest_configure(config: pytest.Config) -> None:
     )
 
 
+def _module_rank(items: list[pytest.Item]) -> int:
+    """0 for a module whose tests share one worker (an xdist group), 1 for one with app
+    tests (coroutines under the pilot), 2 for the rest."""
+    if any(item.get_closest_marker("xdist_group") for item in items):
+        return 0
+    if any(inspect.iscoroutinefunction(getattr(item, "obj", None)) for item in items):
+        return 1
+    return 2
+
+
+def _long_modules_first(items: list[pytest.Item]) -> None:
+    """Order whole modules so the long units start first and the many short tests fill
+    the tail: a group, or a pilot test of several seconds, dispatched last keeps one
+    worker busy while the other has nothing left to do. Each module's tests stay
+    together and in their order, so module fixtures are set up once."""
+    modules: dict[str, list[pytest.Item]] = {}
+    for item in items:
+        modules.setdefault(item.nodeid.split("::", 1)[0], []).append(item)
+    ordered = sorted(modules.values(), key=_module_rank)  # stable: file order within a rank
+    items[:] = [item for module in ordered for item in module]
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    _long_modules_first(items)
     if os.environ.get(SLOW_ENV) == "1":
         return
     skip = pytest.mark.skip(reason=f"slow; set {SLOW_ENV}=1 to run")
