@@ -314,7 +314,7 @@ def read_batches(stdin: IO[bytes], limit: int = MAX_LINE_BYTES,
     while True:
         data = read(chunk)
         if not data:
-            if dropping or len(pending) > limit:
+            if dropping:
                 yield [None]
             elif pending:
                 yield [pending]
