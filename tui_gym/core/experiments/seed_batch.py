@@ -151,22 +151,68 @@ def checkpoint_episodes(episodes: int, most: int = MAX_CHECKPOINTS) -> np.ndarra
 def greedy_values(model: FiniteMDP, q: np.ndarray) -> np.ndarray:
     """The exact value (gamma 1) of the greedy policy of each table `q[m, S, A]`, ties split evenly.
 
-    With an episode limit H all tables are valued at once: for a small model
-    by powers of each policy's transition matrix (the sum of the first H steps'
-    expected rewards in about log2(H) matrix products), else by H backward
-    steps. With no limit, one at a time (minus infinity for a policy that may
-    never end).
+    On a model whose every move has one outcome and with one start state, a
+    policy that meets no tie on its way is valued by walking its path (all
+    tables at once, at most H steps). The others, with an episode limit H,
+    are valued at once: for a small model by powers of each policy's
+    transition matrix (the sum of the first H steps' expected rewards in about
+    log2(H) matrix products), else by H backward steps. With no limit, one
+    at a time (minus infinity for a policy that may never end).
     """
     q = np.asarray(q, dtype=np.float64)
     tied = q == q.max(axis=2, keepdims=True)
-    policy = tied / tied.sum(axis=2, keepdims=True)
+    ties = tied.sum(axis=2)
+    if model.horizon is not None and model.max_outcomes == 1 and len(q):
+        starts = np.flatnonzero(model.initial)
+        if starts.size == 1:
+            values, walked = _path_values(model, tied, ties, int(starts[0]), model.horizon)
+            rest = np.flatnonzero(~walked)
+            if rest.size:
+                values[rest] = _valued(model, tied[rest], ties[rest])
+            return values
+    return _valued(model, tied, ties)
+
+
+def _path_values(
+    model: FiniteMDP, tied: np.ndarray, ties: np.ndarray, start: int, horizon: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The rewards along each greedy policy's path from `start` over at most `horizon`
+    moves, and which policies met no tie on the way (only their values are set)."""
+    m = len(tied)
+    nxt, reward, terminal = (a[:, :, 0] for a in (model.next_state, model.reward, model.terminal))
+    greedy = tied.argmax(axis=2)
+    values = np.zeros(m)
+    walked = np.ones(m, dtype=bool)
+    live = np.arange(m)  # the policies still on their way
+    state = np.full(m, start, dtype=np.int64)
+    for _ in range(horizon):
+        split = ties[live, state] > 1
+        if split.any():
+            walked[live[split]] = False
+            live, state = live[~split], state[~split]
+            if not live.size:
+                break
+        action = greedy[live, state]
+        values[live] += reward[state, action]
+        ended = terminal[state, action]
+        state = nxt[state, action]
+        if ended.any():
+            live, state = live[~ended], state[~ended]
+            if not live.size:
+                break
+    return values, walked
+
+
+def _valued(model: FiniteMDP, tied: np.ndarray, ties: np.ndarray) -> np.ndarray:
+    """`greedy_values` by the policies' matrices (see there), from their ties."""
+    policy = tied / ties[..., np.newaxis]
     if model.horizon is None:
         return np.array([evaluate(model, p).value for p in policy])
     if model.n_states <= _DENSE_STATES:
         return _horizon_values_dense(model, policy, model.horizon)
-    v = np.zeros((len(q), model.n_states))
+    v = np.zeros((len(policy), model.n_states))
     reward, cont, nxt = model.expected_reward, model.continue_prob, model.next_state
-    moving = np.arange(len(q))  # tables whose values still change
+    moving = np.arange(len(policy))  # tables whose values still change
     for _ in range(model.horizon):
         now = v[moving]
         after = (policy[moving] * (reward + (cont * now[:, nxt]).sum(axis=3))).sum(axis=2)
