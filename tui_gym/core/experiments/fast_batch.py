@@ -31,7 +31,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tui_gym.algorithms import Learner, QLearning, Sarsa
+from tui_gym.algorithms.exploration import _COLUMN_LOOP
 from tui_gym.algorithms.steps import _TINY
+from tui_gym.core.experiments.block_draws import Draws, block_draws
 
 if TYPE_CHECKING:
     from tui_gym.core.experiments.seed_batch import SeedBatch
@@ -85,17 +87,44 @@ def _act(
     best: np.ndarray,
     rows: np.ndarray,
     eps: np.ndarray | float,
-    rng: np.random.Generator,
+    draws: Draws,
 ) -> np.ndarray:
     """`epsilon_greedy_batch(q[rows], eps, rng)`, the same draws in the same order;
     `best` holds each row's maximum."""
+    k, n_actions = len(rows), q.shape[1]
     values = q.take(rows, axis=0)
     tied = values == best.take(rows)[:, None]
-    actions = np.where(tied, rng.random(values.shape), -1.0).argmax(axis=1)
-    explore = (rng.random(len(rows)) < eps).nonzero()[0]
+    ties = k * n_actions
+    p = draws.p
+    if p + ties + k > draws.size:
+        draws.reserve(ties + k)
+        p = draws.p
+    dbl = draws.dbl
+    draws.p = p + ties + k
+    actions = np.where(tied, dbl[p:p + ties].reshape(k, n_actions), -1.0).argmax(axis=1)
+    explore = (dbl[p + ties:p + ties + k] < eps).nonzero()[0]
     if explore.size:
-        actions[explore] = rng.integers(q.shape[1], size=explore.size)
+        actions[explore] = draws.integers(explore.size)
     return actions
+
+
+def _row_max(values: np.ndarray) -> np.ndarray:
+    """`exploration.row_max`, the same maximum calls in the same order, with fewer copies."""
+    if values.shape[1] > _COLUMN_LOOP:
+        return values.max(axis=1)
+    columns = values.T
+    out = columns[0]
+    for j in range(1, len(columns)):
+        out = _maximum(out, columns[j])
+    return out
+
+
+_maximum = np.maximum
+
+
+def _grown(table: np.ndarray, length: int) -> np.ndarray:
+    """`table` with its last entry repeated up to `length` entries."""
+    return np.concatenate((table, np.full(length - len(table), table[-1])))
 
 
 def run_fast(
@@ -108,32 +137,65 @@ def run_fast(
     check_every: int,
 ) -> bool:
     """`SeedBatch.run` for a batch that qualifies (same arguments and result)."""
+    draws = block_draws(batch.learner.rng, batch.steps.n_actions)
+    try:
+        return _run(batch, tables, draws, stop, report, interval, check_every)
+    finally:
+        draws.close()
+
+
+def _run(
+    batch: SeedBatch,
+    tables: tuple[np.ndarray, np.ndarray],
+    draws: Draws,
+    stop: Callable[[], bool] | None,
+    report: Callable[[SeedBatch], None] | None,
+    interval: float,
+    check_every: int,
+) -> bool:
     steps: Any = batch.steps
     learner = batch.learner
     sarsa = learner.needs_next_action
-    rng = learner.rng
     n_actions = steps.n_actions
     n_states = steps.n_states
     discount = float(learner.hp.discount)
     alpha_of, keep_of = tables
-    last_count = len(alpha_of) - 1
+    constant_step = len(alpha_of) == 1
+    alpha_0, keep_0 = float(alpha_of[0]), float(keep_of[0])
     q, counts, visits = learner.q, learner.counts, learner.visits
     q_flat, counts_flat = q.reshape(-1), counts.reshape(-1)
     episodes, returns, done = batch.episodes, batch.returns, batch.done
     horizon = steps.horizon
+    constant_eps = batch._constant_epsilon
+    forget = type(learner).forget_episodes is not Learner.forget_episodes
+    # A count indexes the step-size tables directly: they are made longer than any count
+    # can get before the next look (counts grow by at most one per batch step).
+    highest_count = int(counts.max()) if counts.size else 0
+
+    def cover(upto: int) -> None:
+        nonlocal alpha_of, keep_of
+        if not constant_step and len(alpha_of) <= upto:
+            length = max(2 * len(alpha_of), upto + 1)
+            alpha_of, keep_of = _grown(alpha_of, length), _grown(keep_of, length)
+
+    cover(highest_count + check_every + 1)
 
     # The model's move from every cell of the batch's table: seed i's cell
     # (i * S + s) * A + a leads to row i * S + s'.
     seeds = batch.seeds
-    shift = np.repeat(batch.offset, n_states * n_actions)
+    cells_per_seed = n_states * n_actions
+    shift = np.repeat(batch.offset, cells_per_seed)
     next_row_of = np.tile(steps._next[:, 0], seeds) + shift
     reward_of = np.tile(steps._reward[:, 0], seeds)
     terminal_of = np.tile(steps._terminal[:, 0], seeds)
-    # The reductions are called directly: the array methods add a Python layer per call.
-    maximum, any_of = np.maximum.reduce, np.logical_or.reduce
+    any_of = np.logical_or.reduce
     # Each row's maximum, kept up to date as rows change (the greedy choice and
-    # Q-learning's target read it).
-    best = maximum(q, axis=1)
+    # Q-learning's target read it). Q-learning's moves that end an episode lead to an
+    # extra row whose maximum stays 0, the target's future after termination.
+    best = _row_max(q)
+    if not sarsa:
+        best = np.append(best, 0.0)
+        next_row_of[terminal_of] = len(q)
     # A model with one start state: every episode starts there, whatever is drawn.
     starts = np.flatnonzero(steps.model.initial)
     only_start = int(starts[0]) if starts.size == 1 else None
@@ -164,10 +226,11 @@ def run_fast(
     counts_before = counts.sum(axis=1)
     episode_return = np.zeros(ids.size)
     pending = np.full(ids.size, -1, dtype=np.int64)
-    learner.forget_episodes(ids)
+    if forget:
+        learner.forget_episodes(ids)
     last_report = time.monotonic()
     count = 0
-    eps: np.ndarray | float = learner.epsilon
+    eps: np.ndarray | float = learner.epsilon if constant_eps is None else constant_eps
     while ids.size:
         count += 1
         if count % check_every == 0:
@@ -180,32 +243,38 @@ def run_fast(
             if report is not None and now - last_report >= interval:
                 report(batch)
                 last_report = now
-        eps = batch._epsilons(ids)
+            cover(highest_count + count + check_every + 1)
+        if constant_eps is None:
+            eps = batch._epsilons(ids)
         if sarsa:
             actions = pending
             fresh = (actions < 0).nonzero()[0]
             if fresh.size:
                 actions[fresh] = _act(
-                    q, best, rows.take(fresh), eps if isinstance(eps, float) else eps[fresh], rng
+                    q, best, rows.take(fresh), eps if isinstance(eps, float) else eps[fresh],
+                    draws,
                 )
         else:
-            actions = _act(q, best, rows, eps, rng)
+            actions = _act(q, best, rows, eps, draws)
         cells = rows * n_actions + actions
         next_rows = next_row_of.take(cells)
         rewards = reward_of.take(cells)
         terminated = terminal_of.take(cells)
         if sarsa:
-            pending = _act(q, best, next_rows, eps, rng)
+            pending = _act(q, best, next_rows, eps, draws)
             future = q_flat.take(next_rows * n_actions + pending)
+            future[terminated] = 0.0
         else:
             future = best.take(next_rows)
-        future[terminated] = 0.0
-        targets = rewards + discount * future
+        targets = rewards + future if discount == 1.0 else rewards + discount * future
         before = counts_flat.take(cells)
-        step: Any = np.minimum(before, last_count) if last_count else 0
-        q_flat[cells] = keep_of.take(step) * q_flat.take(cells) + alpha_of.take(step) * targets
+        if constant_step:
+            q_flat[cells] = keep_0 * q_flat.take(cells) + alpha_0 * targets
+        else:
+            q_flat[cells] = keep_of.take(before) * q_flat.take(cells) + alpha_of.take(
+                before) * targets
         counts_flat[cells] = before + 1
-        best[rows] = maximum(q.take(rows, axis=0), axis=1)
+        best[rows] = _row_max(q.take(rows, axis=0))
         rows = next_rows
         episode_return += rewards
         finished = terminated
@@ -224,11 +293,12 @@ def run_fast(
         episode_return[local] = 0.0
         if any_of(checkpoint.take(number)):
             batch._value_checkpoints(ended)
-        if maximum(number) < episodes:
+        if number.max() < episodes:
             rows[local] = restart(ended)
             began[local] = count
             pending[local] = -1
-            learner.forget_episodes(ended)
+            if forget:
+                learner.forget_episodes(ended)
             continue
         more = number < episodes
         again = ended[more]
@@ -237,7 +307,8 @@ def run_fast(
             rows[begin] = restart(again)
             began[begin] = count
             pending[begin] = -1
-            learner.forget_episodes(again)
+            if forget:
+                learner.forget_episodes(again)
         playing = done.take(ids) < episodes
         ids, rows, began = ids[playing], rows[playing], began[playing]
         episode_return, pending = episode_return[playing], pending[playing]

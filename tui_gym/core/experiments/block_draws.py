@@ -1,0 +1,186 @@
+"""A generator's `random` and `integers` draws, read from blocks of its raw output.
+
+`block_draws(rng, high)` gives an object whose `doubles(k)` gives what
+`rng.random(k)` gives and `integers(k)` what `rng.integers(high, size=k)`
+gives, in any order; `close()` leaves `rng` exactly where those calls would
+have left it. For the hottest loops, `reserve(k)` makes `k` doubles ready at
+`dbl[p:p + k]` (the caller moves `p` on past those it takes).
+
+For numpy's default generator (PCG64) on a little-endian machine the draws
+come from blocks of `random_raw`, worked out as numpy works them out: a double
+is the top 53 bits of one 64-bit output; an integer below 2**32 takes one
+32-bit half (the low half of an output first, the high half kept for the next
+integer) by Lemire's method, drawing again when it rejects. That saves the
+call overhead of many small draws. Any other generator is called directly.
+"""
+
+from __future__ import annotations
+
+import sys
+from typing import Any, Protocol
+
+import numpy as np
+
+__all__ = ["Draws", "block_draws"]
+
+_DOUBLE = 1.0 / 9007199254740992.0  # 2**-53
+_HALF_MASK = np.uint64(0xFFFFFFFF)
+
+
+class Draws(Protocol):
+    dbl: np.ndarray
+    p: int
+    size: int
+
+    def reserve(self, k: int) -> None:
+        """Make `dbl[p:p + k]` the next `k` doubles."""
+
+    def doubles(self, k: int) -> np.ndarray:
+        """`rng.random(k)`."""
+
+    def integers(self, k: int) -> np.ndarray:
+        """`rng.integers(high, size=k)`."""
+
+    def close(self) -> None:
+        """Leave the generator where the draws so far would have left it."""
+
+
+class _Direct:
+    """Draws straight from the generator, exactly as many as are asked for."""
+
+    def __init__(self, rng: np.random.Generator, high: int) -> None:
+        self.rng = rng
+        self.high = high
+        self.dbl = np.zeros(0)
+        self.p = self.size = 0
+
+    def reserve(self, k: int) -> None:
+        self.dbl = np.concatenate((self.dbl[self.p:], self.rng.random(k - (self.size - self.p))))
+        self.p, self.size = 0, len(self.dbl)
+
+    def doubles(self, k: int) -> np.ndarray:
+        if self.p + k > self.size:
+            self.reserve(k)
+        p = self.p
+        self.p = p + k
+        return self.dbl[p:p + k]
+
+    def integers(self, k: int) -> np.ndarray:
+        return self.rng.integers(self.high, size=k)
+
+    def close(self) -> None:
+        return None
+
+
+class _Blocks:
+    """A PCG64 generator's draws from blocks of its raw output (see the module docstring)."""
+
+    def __init__(self, rng: np.random.Generator, high: int, block: int) -> None:
+        self.bits = rng.bit_generator
+        self.start: dict[str, Any] = dict(self.bits.state)
+        self.high = high
+        self.threshold = (1 << 32) % high  # Lemire's method rejects products below it
+        self.block = block
+        # numpy keeps one 32-bit half between integer draws: here it is the high half
+        # of a leading output that is not the generator's (hence `used` -1).
+        kept = np.uint64(int(self.start["uinteger"]) << 32)
+        self.raw = np.array([kept], dtype=np.uint64)
+        self.p = 1  # outputs of the block taken
+        self.used = -1  # outputs before the block
+        self.register = 1  # index in `halves` of the kept half
+        self.held = 1 if self.start["has_uint32"] else -1  # the same, while it is unused
+        self._refill(block)
+
+    def _refill(self, need: int) -> None:
+        first = min(self.p, self.register // 2)  # keep the output of the kept half
+        raw = np.concatenate((self.raw[first:], self.bits.random_raw(max(self.block, need))))
+        self.used += first
+        self.p -= first
+        self.register -= 2 * first
+        if self.held >= 0:
+            self.held -= 2 * first
+        self.raw = raw
+        self.size = len(raw)
+        self.dbl = (raw >> 11) * _DOUBLE
+        self.halves = raw.view(np.uint32)  # low half first on a little-endian machine
+        products = self.halves.astype(np.uint64) * np.uint64(self.high)
+        self.ints = (products >> 32).astype(np.int64)
+        self.rejected = np.zeros(0, dtype=np.int64)
+        if self.threshold:
+            self.rejected = np.flatnonzero((products & _HALF_MASK) < self.threshold)
+
+    def reserve(self, k: int) -> None:
+        if self.p + k > self.size:
+            self._refill(k)
+
+    def doubles(self, k: int) -> np.ndarray:
+        if self.p + k > self.size:
+            self._refill(k)
+        p = self.p
+        self.p = p + k
+        return self.dbl[p:p + k]
+
+    def integers(self, k: int) -> np.ndarray:
+        if k < 1 or self.high == 1:  # nothing to draw
+            return np.zeros(max(k, 0), dtype=np.int64)
+        held = self.held
+        m = k if held < 0 else k - 1  # halves to take from the outputs not yet taken
+        outputs = (m + 1) // 2
+        if self.p + outputs > self.size:
+            self._refill(outputs)
+            held = self.held
+        start = 2 * self.p
+        rejected = self.rejected
+        if rejected.size and (
+            held in rejected or ((rejected >= start) & (rejected < start + m)).any()
+        ):
+            return self._integers_one_by_one(k)
+        out = self.ints[start:start + m]
+        if held >= 0:
+            out = np.concatenate((self.ints[held:held + 1], out))
+        self.p += outputs
+        self.held = -1
+        if m % 2:  # the last output's high half is kept for the next integer
+            self.held = self.register = start + m
+        elif m:  # it was kept and used
+            self.register = start + m - 1
+        return out
+
+    def _half(self) -> int:
+        if self.held >= 0:
+            half, self.held = self.held, -1
+            return int(self.halves[half])
+        if self.p + 1 > self.size:
+            self._refill(1)
+        low = 2 * self.p
+        self.p += 1
+        self.held = self.register = low + 1
+        return int(self.halves[low])
+
+    def _integers_one_by_one(self, k: int) -> np.ndarray:
+        out = np.empty(k, dtype=np.int64)
+        for i in range(k):
+            product = self._half() * self.high
+            while product & 0xFFFFFFFF < self.threshold:  # rejected: draw again
+                product = self._half() * self.high
+            out[i] = product >> 32
+        return out
+
+    def close(self) -> None:
+        bits: Any = self.bits  # a PCG64, as `block_draws` checked
+        bits.state = self.start
+        bits.advance(self.used + self.p)
+        state = dict(bits.state)
+        state["has_uint32"] = int(self.held >= 0)
+        state["uinteger"] = int(self.halves[self.register])
+        bits.state = state
+
+
+def block_draws(rng: np.random.Generator, high: int, block: int = 1 << 14) -> Draws:
+    """Draws of `rng`, integers below `high` (1 to 2**32; see the module docstring);
+    `block` outputs are read at a time."""
+    if not 1 <= high <= 1 << 32:
+        raise ValueError(f"integers below {high} are not drawn from 32-bit halves")
+    if type(rng.bit_generator) is np.random.PCG64 and sys.byteorder == "little":
+        return _Blocks(rng, high, block)
+    return _Direct(rng, high)
