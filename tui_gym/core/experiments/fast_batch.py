@@ -188,7 +188,6 @@ def _run(
     next_row_of = np.tile(steps._next[:, 0], seeds) + shift
     reward_of = np.tile(steps._reward[:, 0], seeds)
     terminal_of = np.tile(steps._terminal[:, 0], seeds)
-    any_of = np.logical_or.reduce
     # Each row's maximum, kept up to date as rows change (the greedy choice and
     # Q-learning's target read it). Q-learning's moves that end an episode lead to an
     # extra row whose maximum stays 0, the target's future after termination.
@@ -202,6 +201,11 @@ def _run(
     # Which episode counts are checkpoints (their tables are kept for exact valuing).
     checkpoint = np.zeros(episodes + 1, dtype=bool)
     checkpoint[batch.checkpoints] = batch.exact is not None
+
+    # Episode counts after which something happens: a checkpoint, or the seed's last.
+    event_of = checkpoint.copy()
+    event_of[episodes] = True
+    count_nonzero = np.count_nonzero
 
     start_rows = None if only_start is None else batch.offset + only_start
 
@@ -231,6 +235,11 @@ def _run(
     last_report = time.monotonic()
     count = 0
     eps: np.ndarray | float = learner.epsilon if constant_eps is None else constant_eps
+    # SARSA picks a new episode's first action as the episode starts (the same draws and
+    # table as at the next step's start), except before a step that looks at the stop
+    # flag: a run stopped there must not have drawn them. `fresh_due`: some are missing.
+    early_first = sarsa and constant_eps is not None
+    fresh_due = sarsa
     while ids.size:
         count += 1
         if count % check_every == 0:
@@ -248,12 +257,14 @@ def _run(
             eps = batch._epsilons(ids)
         if sarsa:
             actions = pending
-            fresh = (actions < 0).nonzero()[0]
-            if fresh.size:
-                actions[fresh] = _act(
-                    q, best, rows.take(fresh), eps if isinstance(eps, float) else eps[fresh],
-                    draws,
-                )
+            if fresh_due:
+                fresh_due = not early_first
+                fresh = (actions < 0).nonzero()[0]
+                if fresh.size:
+                    actions[fresh] = _act(
+                        q, best, rows.take(fresh), eps if isinstance(eps, float) else eps[fresh],
+                        draws,
+                    )
         else:
             actions = _act(q, best, rows, eps, draws)
         cells = rows * n_actions + actions
@@ -282,36 +293,43 @@ def _run(
             earliest = int(began.min())
             if count - earliest >= horizon:
                 finished = terminated | (count - began >= horizon)
-        if not any_of(finished):
-            continue
         local = finished.nonzero()[0]
+        if not local.size:
+            continue
         ended = ids.take(local)
         number = done.take(ended)
         returns[ended, number] = episode_return.take(local)
         number += 1
         done[ended] = number
         episode_return[local] = 0.0
-        if any_of(checkpoint.take(number)):
-            batch._value_checkpoints(ended)
-        if number.max() < episodes:
-            rows[local] = restart(ended)
+        if count_nonzero(event_of.take(number)):
+            if count_nonzero(checkpoint.take(number)):
+                batch._value_checkpoints(ended)
+            if number.max() >= episodes:  # some seeds have played all their episodes
+                more = number < episodes
+                local, ended = local[more], ended[more]
+                playing = done.take(ids) < episodes
+                if local.size:
+                    rows[local] = restart(ended)
+                    began[local] = count
+                    pending[local] = -1
+                    fresh_due = sarsa
+                    if forget:
+                        learner.forget_episodes(ended)
+                ids, rows, began = ids[playing], rows[playing], began[playing]
+                episode_return, pending = episode_return[playing], pending[playing]
+                continue
+        rows[local] = restart(ended) if start_rows is None else start_rows.take(ended)
+        if horizon is not None:
             began[local] = count
-            pending[local] = -1
-            if forget:
-                learner.forget_episodes(ended)
-            continue
-        more = number < episodes
-        again = ended[more]
-        if again.size:
-            begin = local[more]
-            rows[begin] = restart(again)
-            began[begin] = count
-            pending[begin] = -1
-            if forget:
-                learner.forget_episodes(again)
-        playing = done.take(ids) < episodes
-        ids, rows, began = ids[playing], rows[playing], began[playing]
-        episode_return, pending = episode_return[playing], pending[playing]
+        if forget:
+            learner.forget_episodes(ended)
+        if sarsa:
+            if early_first and (count + 1) % check_every:
+                pending[local] = _act(q, best, rows.take(local), eps, draws)
+            else:
+                pending[local] = -1
+                fresh_due = True
     _leave_epsilon(learner, eps)
     visits += counts.sum(axis=1) - counts_before
     batch._value_pending()
