@@ -41,6 +41,9 @@ class Draws(Protocol):
     def integers(self, k: int) -> np.ndarray:
         """`rng.integers(high, size=k)`."""
 
+    def integers_into(self, target: np.ndarray, at: np.ndarray) -> None:
+        """`target[at] = rng.integers(high, size=len(at))`."""
+
     def close(self) -> None:
         """Leave the generator where the draws so far would have left it."""
 
@@ -67,6 +70,9 @@ class _Direct:
 
     def integers(self, k: int) -> np.ndarray:
         return self.rng.integers(self.high, size=k)
+
+    def integers_into(self, target: np.ndarray, at: np.ndarray) -> None:
+        target[at] = self.rng.integers(self.high, size=len(at))
 
     def close(self) -> None:
         return None
@@ -103,11 +109,6 @@ class _Blocks:
         self.size = len(raw)
         self.dbl = (raw >> 11) * _DOUBLE
         self.halves = raw.view(np.uint32)  # low half first on a little-endian machine
-        products = self.halves.astype(np.uint64) * np.uint64(self.high)
-        self.ints = (products >> 32).astype(np.int64)
-        self.rejected = np.zeros(0, dtype=np.int64)
-        if self.threshold:
-            self.rejected = np.flatnonzero((products & _HALF_MASK) < self.threshold)
 
     def reserve(self, k: int) -> None:
         if self.p + k > self.size:
@@ -121,8 +122,17 @@ class _Blocks:
         return self.dbl[p:p + k]
 
     def integers(self, k: int) -> np.ndarray:
-        if k < 1 or self.high == 1:  # nothing to draw
-            return np.zeros(max(k, 0), dtype=np.int64)
+        out = np.zeros(max(k, 0), dtype=np.int64)
+        self.integers_into(out, np.arange(len(out)))
+        return out
+
+    def integers_into(self, target: np.ndarray, at: np.ndarray) -> None:
+        """`target[at] = rng.integers(high, size=len(at))`."""
+        k = len(at)
+        high = self.high
+        if k < 1 or high == 1:  # nothing to draw
+            target[at] = 0
+            return
         held = self.held
         m = k if held < 0 else k - 1  # halves to take from the outputs not yet taken
         outputs = (m + 1) // 2
@@ -130,21 +140,25 @@ class _Blocks:
             self._refill(outputs)
             held = self.held
         start = 2 * self.p
-        rejected = self.rejected
-        if rejected.size and (
-            held in rejected or ((rejected >= start) & (rejected < start + m)).any()
+        halves = self.halves[start:start + m]
+        products = halves.astype(np.uint64) * np.uint64(high)
+        threshold = self.threshold
+        if threshold and (
+            ((products & _HALF_MASK) < threshold).any()
+            or (held >= 0 and int(self.halves[held]) * high & 0xFFFFFFFF < threshold)
         ):
-            return self._integers_one_by_one(k)
-        out = self.ints[start:start + m]
+            target[at] = self._integers_one_by_one(k)
+            return
         if held >= 0:
-            out = np.concatenate((self.ints[held:held + 1], out))
+            target[at[0]] = int(self.halves[held]) * high >> 32
+            at = at[1:]
+        target[at] = products >> 32
         self.p += outputs
         self.held = -1
         if m % 2:  # the last output's high half is kept for the next integer
             self.held = self.register = start + m
         elif m:  # it was kept and used
             self.register = start + m - 1
-        return out
 
     def _half(self) -> int:
         if self.held >= 0:

@@ -104,7 +104,7 @@ def _act(
     actions = np.where(tied, dbl[p:p + ties].reshape(k, n_actions), -1.0).argmax(axis=1)
     explore = (dbl[p + ties:p + ties + k] < eps).nonzero()[0]
     if explore.size:
-        actions[explore] = draws.integers(explore.size)
+        draws.integers_into(actions, explore)
     return actions
 
 

@@ -152,8 +152,8 @@ def greedy_values(model: FiniteMDP, q: np.ndarray) -> np.ndarray:
     """The exact value (gamma 1) of the greedy policy of each table `q[m, S, A]`, ties split evenly.
 
     On a model whose every move has one outcome and with one start state, a
-    policy that meets no tie on its way is valued by walking its path (all
-    tables at once, at most H steps). The others, with an episode limit H,
+    policy that meets no tie on its way is valued along its path (all tables
+    at once, in about log2(H) steps). The others, with an episode limit H,
     are valued at once: for a small model by powers of each policy's
     transition matrix (the sum of the first H steps' expected rewards in about
     log2(H) matrix products), else by H backward steps. With no limit, one
@@ -177,30 +177,42 @@ def _path_values(
     model: FiniteMDP, tied: np.ndarray, ties: np.ndarray, start: int, horizon: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """The rewards along each greedy policy's path from `start` over at most `horizon`
-    moves, and which policies met no tie on the way (only their values are set)."""
-    m = len(tied)
-    nxt, reward, terminal = (a[:, :, 0] for a in (model.next_state, model.reward, model.terminal))
+    moves, and which policies met no tie on the way (only their values are right).
+
+    All paths at once by doubling: from every state, where 2**k moves lead, what
+    they earn and whether they meet a tie, for k up to log2(horizon); a move that
+    ends the episode leads to a sink that stays put and earns nothing.
+    """
+    m, n = ties.shape
+    size = n + 1  # the states and the sink, per policy
     greedy = tied.argmax(axis=2)
+    states = np.arange(n)
+    lead = np.full((m, size), n, dtype=np.int64)
+    earn = np.zeros((m, size))
+    split = np.zeros((m, size), dtype=bool)
+    ends = model.terminal[states, greedy, 0]
+    lead[:, :n] = np.where(ends, n, model.next_state[states, greedy, 0])
+    earn[:, :n] = model.reward[states, greedy, 0]
+    split[:, :n] = ties > 1
+    # Flat indices: policy i's states are i * size to (i + 1) * size - 1.
+    first = np.arange(m, dtype=np.int64) * size
+    lead = (lead + first[:, np.newaxis]).ravel()
+    earn, split = earn.ravel(), split.ravel()
+    at = first + start
     values = np.zeros(m)
-    walked = np.ones(m, dtype=bool)
-    live = np.arange(m)  # the policies still on their way
-    state = np.full(m, start, dtype=np.int64)
-    for _ in range(horizon):
-        split = ties[live, state] > 1
-        if split.any():
-            walked[live[split]] = False
-            live, state = live[~split], state[~split]
-            if not live.size:
-                break
-        action = greedy[live, state]
-        values[live] += reward[state, action]
-        ended = terminal[state, action]
-        state = nxt[state, action]
-        if ended.any():
-            live, state = live[~ended], state[~ended]
-            if not live.size:
-                break
-    return values, walked
+    met = np.zeros(m, dtype=bool)
+    remaining = horizon
+    while remaining:
+        if remaining & 1:
+            values += earn[at]
+            met |= split[at]
+            at = lead[at]
+        remaining >>= 1
+        if remaining:
+            earn = earn + earn[lead]
+            split = split | split[lead]
+            lead = lead[lead]
+    return values, ~met
 
 
 def _valued(model: FiniteMDP, tied: np.ndarray, ties: np.ndarray) -> np.ndarray:
