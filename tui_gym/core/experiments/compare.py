@@ -268,6 +268,7 @@ class _Job:
     seeds: tuple[int, ...]
     rows: tuple[int, ...]
     episodes: int
+    model: FiniteMDP | None = None  # the game's exact model, when it has one
 
 
 @dataclass
@@ -366,7 +367,7 @@ def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared) -> list[_Job]:
                 index=len(jobs), arm=a, algorithm=arm.algorithm, env_id=prepared.env_id,
                 env_kwargs=prepared.env_kwargs, wrappers=tuple(setup.wrappers),
                 hp=prepared.hyperparameters[a], seeds=seeds[lo:hi],
-                rows=tuple(range(lo, hi)), episodes=setup.episodes,
+                rows=tuple(range(lo, hi)), episodes=setup.episodes, model=prepared.model,
             ))
     return jobs
 
@@ -380,12 +381,21 @@ def _run_job(
     report: Callable[[SeedBatchState], None],
 ) -> SeedBatchState:
     """Train a job's seeds; its state at the end (complete or stopped)."""
+    if job.model is not None:  # the game as its model: no env to build
+        learner_class = algorithm(job.algorithm)
+        env_seed, learner_seed = _seeds(job)
+        batch = SeedBatch(
+            learner_class, learner_class.settings(job.hp),
+            ModelSteps(job.model, len(job.seeds), env_seed), len(job.seeds), job.episodes,
+            seed=learner_seed, model=job.model,
+        )
+        batch.run(stop=stop, report=lambda b: report(b.state()), interval=PROGRESS_INTERVAL / 2)
+        return batch.state()
     session = _session(job.env_id, job.env_kwargs, job.wrappers, job.algorithm, job.hp,
                        job.seeds[0])
     try:
         model = _exact_model(session)
-        entropy = [job.seeds[0], len(job.seeds), job.episodes]
-        env_seed, learner_seed = np.random.SeedSequence(entropy).spawn(2)
+        env_seed, learner_seed = _seeds(job)
         steps: Any = None
         if model is not None:
             steps = ModelSteps(model, len(job.seeds), env_seed)
@@ -401,6 +411,11 @@ def _run_job(
         return batch.state()
     finally:
         session.env.close()
+
+
+def _seeds(job: _Job) -> list[np.random.SeedSequence]:
+    """The seeds of a job's envs and of its learner."""
+    return np.random.SeedSequence([job.seeds[0], len(job.seeds), job.episodes]).spawn(2)
 
 
 def _plan_steps(job: _Job, keyer: Any, n: int, seed: Any) -> PlanSteps | None:
