@@ -86,6 +86,7 @@ class _Blocks:
         self.start: dict[str, Any] = dict(self.bits.state)
         self.high = high
         self.threshold = (1 << 32) % high  # Lemire's method rejects products below it
+        self.shift = 33 - high.bit_length()  # for a power of two: 32 - log2(high)
         self.block = block
         # numpy keeps one 32-bit half between integer draws: here it is the high half
         # of a leading output that is not the generator's (hence `used` -1).
@@ -141,18 +142,21 @@ class _Blocks:
             held = self.held
         start = 2 * self.p
         halves = self.halves[start:start + m]
-        products = halves.astype(np.uint64) * np.uint64(high)
         threshold = self.threshold
-        if threshold and (
-            ((products & _HALF_MASK) < threshold).any()
-            or (held >= 0 and int(self.halves[held]) * high & 0xFFFFFFFF < threshold)
-        ):
-            target[at] = self._integers_one_by_one(k)
-            return
+        if threshold:
+            products = halves.astype(np.uint64) * np.uint64(high)
+            if ((products & _HALF_MASK) < threshold).any() or (
+                held >= 0 and int(self.halves[held]) * high & 0xFFFFFFFF < threshold
+            ):
+                target[at] = self._integers_one_by_one(k)
+                return
+            drawn = products >> 32
+        else:  # a power of two: the top bits of each half
+            drawn = halves >> self.shift
         if held >= 0:
             target[at[0]] = int(self.halves[held]) * high >> 32
             at = at[1:]
-        target[at] = products >> 32
+        target[at] = drawn
         self.p += outputs
         self.held = -1
         if m % 2:  # the last output's high half is kept for the next integer

@@ -101,7 +101,10 @@ def _act(
         p = draws.p
     dbl = draws.dbl
     draws.p = p + ties + k
-    actions = np.where(tied, dbl[p:p + ties].reshape(k, n_actions), -1.0).argmax(axis=1)
+    if _count_nonzero(tied) == k:  # one best action per row: the draws cannot change it
+        actions = tied.argmax(axis=1)
+    else:
+        actions = np.where(tied, dbl[p:p + ties].reshape(k, n_actions), -1.0).argmax(axis=1)
     explore = (dbl[p + ties:p + ties + k] < eps).nonzero()[0]
     if explore.size:
         draws.integers_into(actions, explore)
@@ -120,6 +123,7 @@ def _row_max(values: np.ndarray) -> np.ndarray:
 
 
 _maximum = np.maximum
+_count_nonzero = np.count_nonzero
 
 
 def _grown(table: np.ndarray, length: int) -> np.ndarray:
