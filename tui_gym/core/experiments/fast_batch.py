@@ -14,10 +14,18 @@ does less work per step:
 - the update is `move_toward` specialised to what a seed batch always has,
   one cell per row and every cell different (each seed owns its rows): each
   cell moves once, `Q <- keep * Q + α t`, with `α` and `keep` looked up by
-  visit count from tables worked out by the same expressions as the closed form;
+  visit count from tables worked out by the same expressions as the closed form
+  (made longer as counts grow, so a count indexes them as it is);
 - each row's maximum is kept as rows change, the episode limit is looked at
   only when an episode may have reached it, and visit counts are added once
   at the end (a row's visits are its cells' counts);
+- epsilon-greedy reads its numbers from blocks of the generator's raw output
+  (`block_draws`), and skips the tie-break when no row has a tie (the numbers
+  it would have used are passed over all the same);
+- with epsilon constant, SARSA picks a new episode's first action as the
+  episode starts rather than at the next step (nothing changes in between),
+  except before a step that looks at the stop flag, so a stopped run has
+  drawn exactly what the general loop drew;
 - seeds that have played all their episodes leave the working arrays, so
   the seeds still playing are contiguous and never indexed through a mask.
 """
