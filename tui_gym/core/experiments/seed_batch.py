@@ -145,7 +145,9 @@ class PlanSteps:
 def checkpoint_episodes(episodes: int, most: int = MAX_CHECKPOINTS) -> np.ndarray:
     """The episode counts (1-based, the last one `episodes`) at which greedy policies are valued."""
     count = max(1, min(episodes, most))
-    return np.unique(np.rint(np.linspace(episodes / count, episodes, count)).astype(np.int64))
+    points = np.rint(np.linspace(episodes / count, episodes, count)).astype(np.int64)
+    # Rising already: drop repeats (np.unique would load numpy.ma on first use).
+    return points[np.concatenate(([True], points[1:] != points[:-1]))]
 
 
 def greedy_values(model: FiniteMDP, q: np.ndarray) -> np.ndarray:
