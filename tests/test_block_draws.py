@@ -26,3 +26,11 @@ def test_the_same_numbers_in_any_order_and_the_generator_left_where_they_leave_i
     draws.close()
     assert expected.random(3).tobytes() == mine.random(3).tobytes()
     assert expected.integers(high, size=3).tobytes() == mine.integers(high, size=3).tobytes()
+
+
+def test_a_block_holds_no_more_than_it_needs_when_no_integer_is_drawn() -> None:
+    draws = block_draws(np.random.default_rng(0), 4, block=64)
+    draws.integers(1)  # a kept half from the first output
+    for _ in range(100):
+        draws.doubles(40)
+    assert draws.size <= 64 + 40

@@ -88,24 +88,19 @@ class _Blocks:
         self.threshold = (1 << 32) % high  # Lemire's method rejects products below it
         self.shift = 33 - high.bit_length()  # for a power of two: 32 - log2(high)
         self.block = block
-        # numpy keeps one 32-bit half between integer draws: here it is the high half
-        # of a leading output that is not the generator's (hence `used` -1).
-        kept = np.uint64(int(self.start["uinteger"]) << 32)
-        self.raw = np.array([kept], dtype=np.uint64)
-        self.p = 1  # outputs of the block taken
-        self.used = -1  # outputs before the block
-        self.register = 1  # index in `halves` of the kept half
-        self.held = 1 if self.start["has_uint32"] else -1  # the same, while it is unused
+        # numpy keeps one 32-bit half between integer draws: the last high half kept, and
+        # whether it is still unused (-1 when not).
+        self.register = int(self.start["uinteger"])
+        self.held = self.register if self.start["has_uint32"] else -1
+        self.used = 0  # outputs before the block
+        self.p = 0  # outputs of the block taken
+        self.raw = np.zeros(0, dtype=np.uint64)
         self._refill(block)
 
     def _refill(self, need: int) -> None:
-        first = min(self.p, self.register // 2)  # keep the output of the kept half
-        raw = np.concatenate((self.raw[first:], self.bits.random_raw(max(self.block, need))))
-        self.used += first
-        self.p -= first
-        self.register -= 2 * first
-        if self.held >= 0:
-            self.held -= 2 * first
+        raw = np.concatenate((self.raw[self.p:], self.bits.random_raw(max(self.block, need))))
+        self.used += self.p
+        self.p = 0
         self.raw = raw
         self.size = len(raw)
         self.dbl = (raw >> 11) * _DOUBLE
@@ -139,14 +134,13 @@ class _Blocks:
         outputs = (m + 1) // 2
         if self.p + outputs > self.size:
             self._refill(outputs)
-            held = self.held
         start = 2 * self.p
         halves = self.halves[start:start + m]
         threshold = self.threshold
         if threshold:
             products = halves.astype(np.uint64) * np.uint64(high)
             if ((products & _HALF_MASK) < threshold).any() or (
-                held >= 0 and int(self.halves[held]) * high & 0xFFFFFFFF < threshold
+                held >= 0 and held * high & 0xFFFFFFFF < threshold
             ):
                 target[at] = self._integers_one_by_one(k)
                 return
@@ -154,25 +148,25 @@ class _Blocks:
         else:  # a power of two: the top bits of each half
             drawn = halves >> self.shift
         if held >= 0:
-            target[at[0]] = int(self.halves[held]) * high >> 32
+            target[at[0]] = held * high >> 32
             at = at[1:]
         target[at] = drawn
         self.p += outputs
         self.held = -1
         if m % 2:  # the last output's high half is kept for the next integer
-            self.held = self.register = start + m
+            self.held = self.register = int(self.halves[start + m])
         elif m:  # it was kept and used
-            self.register = start + m - 1
+            self.register = int(self.halves[start + m - 1])
 
     def _half(self) -> int:
         if self.held >= 0:
             half, self.held = self.held, -1
-            return int(self.halves[half])
+            return half
         if self.p + 1 > self.size:
             self._refill(1)
         low = 2 * self.p
         self.p += 1
-        self.held = self.register = low + 1
+        self.held = self.register = int(self.halves[low + 1])
         return int(self.halves[low])
 
     def _integers_one_by_one(self, k: int) -> np.ndarray:
@@ -190,7 +184,7 @@ class _Blocks:
         bits.advance(self.used + self.p)
         state = dict(bits.state)
         state["has_uint32"] = int(self.held >= 0)
-        state["uinteger"] = int(self.halves[self.register])
+        state["uinteger"] = self.register
         bits.state = state
 
 
