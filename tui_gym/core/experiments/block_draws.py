@@ -96,6 +96,8 @@ class _Blocks:
         self.p = 0  # outputs of the block taken
         self.raw = np.zeros(0, dtype=np.uint64)
         self._refill(block)
+        if high > 1 and not self.threshold:  # a power of two: no rejections, no products
+            self.integers_into = self._into_power_of_two  # type: ignore[method-assign]
 
     def _refill(self, need: int) -> None:
         raw = np.concatenate((self.raw[self.p:], self.bits.random_raw(max(self.block, need))))
@@ -157,6 +159,28 @@ class _Blocks:
             self.held = self.register = int(self.halves[start + m])
         elif m:  # it was kept and used
             self.register = int(self.halves[start + m - 1])
+
+    def _into_power_of_two(self, target: np.ndarray, at: np.ndarray) -> None:
+        """`integers_into` for `high` a power of two: each integer is a half's top bits."""
+        held, shift = self.held, self.shift
+        if held >= 0 and len(at):
+            target[at[0]] = held >> shift
+            at = at[1:]
+            self.held = -1
+        m = len(at)
+        if not m:
+            return
+        outputs = (m + 1) // 2
+        if self.p + outputs > self.size:
+            self._refill(outputs)
+        start = 2 * self.p
+        halves = self.halves
+        target[at] = halves[start:start + m] >> shift
+        self.p += outputs
+        if m % 2:  # the last output's high half is kept for the next integer
+            self.held = self.register = int(halves[start + m])
+        else:  # it was kept and used
+            self.register = int(halves[start + m - 1])
 
     def _half(self) -> int:
         if self.held >= 0:

@@ -101,7 +101,7 @@ def _act(
     `best` holds each row's maximum."""
     k, n_actions = len(rows), q.shape[1]
     values = q.take(rows, axis=0)
-    tied = values == best.take(rows)[:, None]
+    tied = values == best.take(rows).reshape(k, 1)
     ties = k * n_actions
     p = draws.p
     if p + ties + k > draws.size:
