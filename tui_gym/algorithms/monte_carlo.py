@@ -36,33 +36,34 @@ from tui_gym.core.params import Param
 __all__ = ["MonteCarlo"]
 
 
-def discounted_returns(
-    rewards: np.ndarray, lengths: np.ndarray, tails: np.ndarray, discount: float
-) -> np.ndarray:
-    """G_t = r_t + γ G_{t+1} for each row of `rewards` (k, T), row i of length
-    `lengths[i]` ending on the value `tails[i]`; entries past a row's end are 0.
+def _backward_sums(x: np.ndarray, discount: float) -> tuple[np.ndarray, np.ndarray | None]:
+    """The returns G_t = x_t + γ G_{t+1} along each row of `x` (k, T), G_T = 0, in
+    two parts: `sums` (k, T), reversed in time (column u is t = T-1-u), and
+    `weights` (T,) or None, such that G_t = sums[:, T-1-t] / weights[t] (or
+    sums[:, T-1-t] itself). `x` may be overwritten.
 
     Computed without a loop over t: within blocks short enough that γ^t stays
-    far from underflow, G_t = (Σ_{j>=t} γ^j r_j + γ^e G_e) / γ^t.
+    far from underflow, G_t = (Σ_{j>=t} γ^j x_j + γ^e G_e) / γ^t.
     """
-    k, steps = rewards.shape
-    r = np.where(np.arange(steps) < lengths[:, None], rewards, 0.0)
-    last = np.flatnonzero(lengths > 0)
-    r[last, lengths[last] - 1] += discount * tails[last]
     if discount == 0.0:
-        return r
+        return x[:, ::-1], None
     if discount == 1.0:
-        return np.cumsum(r[:, ::-1], axis=1)[:, ::-1]
+        return np.cumsum(x[:, ::-1], axis=1), None
+    k, steps = x.shape
     block = max(1, int(200 / -np.log10(discount)))  # γ^block >= 1e-200
+    if steps <= block:  # the usual case: one block, nothing carried in
+        weights = discount ** np.arange(steps, dtype=np.float64)
+        x *= weights
+        return np.cumsum(x[:, ::-1], axis=1), weights
     out = np.empty((k, steps))
     carry = np.zeros(k)
     for start in range((steps - 1) // block * block, -1, -block):
         end = min(start + block, steps)
         weights = discount ** np.arange(end - start + 1, dtype=np.float64)
-        partial = np.cumsum((r[:, start:end] * weights[:-1])[:, ::-1], axis=1)[:, ::-1]
+        partial = np.cumsum((x[:, start:end] * weights[:-1])[:, ::-1], axis=1)[:, ::-1]
         out[:, start:end] = (partial + weights[-1] * carry[:, None]) / weights[:-1]
         carry = out[:, start]
-    return out
+    return out[:, ::-1], None
 
 
 class MonteCarlo(Learner):
@@ -80,37 +81,53 @@ class MonteCarlo(Learner):
     )
 
     # --- episodes in progress -------------------------------------------------------
+    # Env e's episode so far is row e of `_cells` (flat (state, action) cells) and of
+    # `_rewards`; `_next[e]` is the flat place of its next step in them, so its
+    # length is `_next[e] - e * width`. `_longest` is at least the longest length.
+    # Rows and columns grow by doubling.
     def forget_episodes(self, envs: Sequence[int] | np.ndarray | None = None) -> None:
         if envs is None:
-            self._states = np.zeros((0, 16), dtype=np.int64)
-            self._actions = np.zeros((0, 16), dtype=np.int64)
+            self._cells = np.zeros((0, 16), dtype=np.int64)
             self._rewards = np.zeros((0, 16), dtype=np.float64)
-            self._length = np.zeros(0, dtype=np.int64)
+            self._next = np.zeros(0, dtype=np.int64)
+            self._longest = 0
             return
         envs = np.asarray(envs, dtype=np.int64)
-        self._length[envs[envs < len(self._length)]] = 0
+        envs = envs[envs < len(self._next)]
+        self._next[envs] = envs * self._cells.shape[1]
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self.forget_episodes()
 
-    def _make_room(self, envs: np.ndarray) -> None:
-        """Room for one more step of each env's episode."""
-        width = int(envs.max()) + 1
-        if width > len(self._length):
-            grow = max(width, 2 * len(self._length)) - len(self._length)
-            self._length = np.concatenate([self._length, np.zeros(grow, dtype=np.int64)])
-            for name in ("_states", "_actions", "_rewards"):
-                old = getattr(self, name)
-                pad = np.zeros((grow, old.shape[1]), dtype=old.dtype)
-                setattr(self, name, np.concatenate([old, pad]))
-        longest = int(self._length[envs].max()) + 1
-        if longest > self._states.shape[1]:
-            extra = max(longest, 2 * self._states.shape[1]) - self._states.shape[1]
-            for name in ("_states", "_actions", "_rewards"):
-                old = getattr(self, name)
-                pad = np.zeros((old.shape[0], extra), dtype=old.dtype)
-                setattr(self, name, np.concatenate([old, pad], axis=1))
+    def _resize(self, rows: int, width: int) -> None:
+        """Room for `rows` envs' episodes of up to `width` steps, keeping what is kept."""
+        old_rows, old_width = self._cells.shape
+        lengths = self._next - np.arange(old_rows) * old_width
+        for name in ("_cells", "_rewards"):
+            old = getattr(self, name)
+            grown = np.zeros((rows, width), dtype=old.dtype)
+            grown[:old_rows, :old_width] = old
+            setattr(self, name, grown)
+        self._next = np.arange(rows) * width
+        self._next[:old_rows] += lengths
+
+    def _record_steps(self, envs: np.ndarray, cells: np.ndarray, rewards: np.ndarray) -> None:
+        """Append one step to each env's episode, making room first."""
+        rows, width = self._cells.shape
+        if self._longest >= width:  # perhaps no room for one more step: look closer
+            self._longest = int((self._next - np.arange(rows) * width).max(initial=0))
+            if self._longest >= width:
+                self._resize(rows, max(2 * width, self._longest + 1))
+        try:
+            at = self._next[envs]
+        except IndexError:  # a new env id
+            self._resize(max(2 * rows, int(envs.max()) + 1), self._cells.shape[1])
+            at = self._next[envs]
+        self._cells.reshape(-1)[at] = cells
+        self._rewards.reshape(-1)[at] = rewards
+        self._next[envs] = at + 1
+        self._longest += 1
 
     # --- the rule ---------------------------------------------------------------------
     def update(self, batch: Transitions) -> np.ndarray:
@@ -124,21 +141,18 @@ class MonteCarlo(Learner):
             self._last = None
             return np.zeros(0)
         envs = batch.envs()
-        self._make_room(envs)
-        t = self._length[envs]
-        self._states[envs, t] = batch.state
-        self._actions[envs, t] = batch.action
-        self._rewards[envs, t] = batch.reward
-        self._length[envs] = t + 1
+        self._record_steps(envs, batch.state * self.n_actions + batch.action, batch.reward)
         errors = np.zeros(len(batch))
-        ended = np.flatnonzero(batch.terminated | batch.truncated)
+        ended = (batch.terminated | batch.truncated).nonzero()[0]
         single = len(batch) == 1
         if ended.size:
-            cut = ended[~batch.terminated[ended]]
-            tails = np.zeros(len(ended))
-            if cut.size:
-                values = self.action_values(batch.next_state[cut])
-                tails[~batch.terminated[ended]] = expected_values(values, self.epsilon)
+            tails = None
+            if batch.truncated.any():
+                cut = np.flatnonzero(~batch.terminated[ended])
+                if cut.size:
+                    tails = np.zeros(len(ended))
+                    values = self.action_values(batch.next_state[ended[cut]])
+                    tails[cut] = expected_values(values, self.epsilon)
             errors[ended], applied = self._learn(envs[ended], tails, single, batch.sequential)
         if single:
             cell = int(batch.state[0]) * self.n_actions + int(batch.action[0])
@@ -152,42 +166,62 @@ class MonteCarlo(Learner):
         return errors
 
     def _learn(
-        self, envs: np.ndarray, tails: np.ndarray, keep: bool, sequential: bool
+        self, envs: np.ndarray, tails: np.ndarray | None, keep: bool, sequential: bool
     ) -> tuple[np.ndarray, tuple[Any, ...]]:
-        """Move Q toward the returns of the episodes of `envs`, which just ended."""
-        hp = self.hp
+        """Move Q toward the returns of the episodes of `envs`, which just ended
+        (`tails`: the value each ends on, None for all 0).
+
+        The book's order is episode after episode, each from its last step back
+        to its first; only the order among the updates of one cell changes the
+        result, so first visits (one per episode and cell) go sorted by cell.
+        """
         k = len(envs)
-        lengths = self._length[envs]
+        width = self._cells.shape[1]
+        starts = envs * width
+        lengths = self._next[envs] - starts
+        self._next[envs] = starts
         steps = int(lengths.max())
-        states = self._states[envs, :steps]
-        actions = self._actions[envs, :steps]
-        rewards = self._rewards[envs, :steps]
         valid = np.arange(steps) < lengths[:, None]
-        returns = discounted_returns(rewards, lengths, tails, hp.discount)
-        cells = states * self.n_actions + actions
-        chosen = valid
-        if hp.first_visit:
-            n_cells = len(self.visits) * self.n_actions
-            flat = (np.arange(k)[:, None] * n_cells + cells)[valid]  # by env, then time
-            _, first = np.unique(flat, return_index=True)
-            is_first = np.zeros(len(flat), dtype=bool)
-            is_first[first] = True
-            chosen = np.zeros_like(valid)
-            chosen[valid] = is_first
-        # The book's order: each episode from its last step back to its first.
-        backwards = chosen[:, ::-1]
-        order_cells = cells[:, ::-1][backwards]
-        order_returns = returns[:, ::-1][backwards]
-        owner = np.broadcast_to(np.arange(k)[:, None], (k, steps))[:, ::-1][backwards]
-        before = self.q.reshape(-1)[order_cells] if keep else None
-        td = self._move(self.q, self.counts, order_cells, order_returns, sequential)
-        self._length[envs] = 0
+        x = np.where(valid, self._rewards[envs, :steps], 0.0)
+        if tails is not None:
+            x[np.arange(k), lengths - 1] += self.hp.discount * tails
+        sums, weights = _backward_sums(x, self.hp.discount)
+        cells = self._cells[envs, :steps]
+        if self.hp.first_visit:
+            # The entries, episode after episode and forward in time: their places in
+            # `cells`, episodes and times (a 2-d nonzero is several times slower).
+            places = valid.reshape(-1).nonzero()[0]
+            owner = np.repeat(np.arange(k), lengths)
+            times = places - owner * steps
+            forward = cells.reshape(-1)[places]
+            sortable = forward.astype(np.uint16) if self.q.size <= 1 << 16 else forward
+            order = np.argsort(sortable, kind="stable")
+            moved, owner = forward[order], owner[order]
+            first = np.empty(len(order), dtype=bool)
+            first[0] = True
+            np.not_equal(moved[1:], moved[:-1], out=first[1:])
+            first[1:] |= owner[1:] != owner[:-1]
+            picked = first.nonzero()[0]
+            moved, owner, times = moved[picked], owner[picked], times[order[picked]]
+            if keep:  # the book's order, as the step-by-step view lists the updates
+                book = np.lexsort((-times, owner))
+                moved, owner, times = moved[book], owner[book], times[book]
+            targets = sums[owner, steps - 1 - times]
+            if weights is not None:
+                targets /= weights[times]
+        else:
+            backward = valid[:, ::-1]
+            moved = cells[:, ::-1][backward]
+            targets = (sums if weights is None else sums / weights[::-1])[backward]
+            owner = np.repeat(np.arange(k), lengths)
+        before = self.q.reshape(-1)[moved] if keep else None
+        td = self._move(self.q, self.counts, moved, targets, sequential)
         errors = np.bincount(owner, weights=np.abs(td), minlength=k)
         applied: tuple[Any, ...] = ()
         if keep:
-            counts_after = self.counts.reshape(-1)[order_cells]
-            applied = (order_cells, order_returns, before, counts_after, float(returns[0, 0]),
-                       float(tails[0]))
+            counts_after = self.counts.reshape(-1)[moved]
+            applied = (moved, targets, before, counts_after, float(sums[0, steps - 1]),
+                       0.0 if tails is None else float(tails[0]))
         return errors, applied
 
     # --- the record ----------------------------------------------------------------------

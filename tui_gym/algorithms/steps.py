@@ -78,11 +78,15 @@ def move_toward(
     order = np.argsort(sortable, kind="stable")
     sorted_cells = cells[order]
     goals = targets[order]
-    first = np.ones(m, dtype=bool)
-    first[1:] = sorted_cells[1:] != sorted_cells[:-1]
-    starts = np.flatnonzero(first)
-    group = np.cumsum(first) - 1
-    sizes = np.diff(np.append(starts, m))
+    first = np.empty(m, dtype=bool)
+    first[0] = True
+    np.not_equal(sorted_cells[1:], sorted_cells[:-1], out=first[1:])
+    starts = first.nonzero()[0]
+    ends = np.empty_like(starts)
+    ends[:-1] = starts[1:] - 1
+    ends[-1] = m - 1
+    sizes = ends - starts + 1
+    group = np.repeat(np.arange(len(starts)), sizes)
     if schedule == "visits":
         if count:
             rank = np.arange(1, m + 1) - starts[group]
@@ -93,7 +97,6 @@ def move_toward(
         alpha = np.full(m, learning_rate)
     log_keep = np.log(np.maximum(1.0 - alpha, _TINY))
     running = np.cumsum(log_keep)
-    ends = starts + sizes - 1
     weights = alpha * np.exp(running[ends][group] - running)
     keep_all = np.exp(running[ends] - running[starts] + log_keep[starts])
     unique = sorted_cells[starts]

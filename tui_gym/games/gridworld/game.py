@@ -653,6 +653,7 @@ class GridWorldGame(Game):
 
     def batched_form(self, kwargs: Mapping[str, Any]) -> BatchedForm:
         from tui_gym.core.vector.base import BatchedForm
+        from tui_gym.core.vector.model import MODEL_NUM_ENVS
         from tui_gym.games.gridworld.batched import BatchedGridWorld
 
 
@@ -667,5 +668,7 @@ class GridWorldGame(Game):
                                     step_penalty=step_penalty,
                                     max_episode_steps=max_episode_steps, seed=seed, walls=walls)
 
+        # As wide as the model games: numpy's per-call cost is spread over more rows.
         return BatchedForm(f"GridWorld {size}x{size}", make, info=("distance",),
-                           key=("gridworld", size, reward_scale, step_penalty, walls))
+                           key=("gridworld", size, reward_scale, step_penalty, walls),
+                           num_envs=MODEL_NUM_ENVS)
