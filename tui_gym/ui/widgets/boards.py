@@ -252,6 +252,12 @@ class Board(Widget):
         self._update_buttons()
         self._update_subtitle(focused=self.has_focus)
 
+    def watch_has_focus(self, has_focus: bool) -> None:
+        # Only the board's own look follows its focus (the border): restyle the board
+        # alone, not the canvas and buttons below it as Textual would, which cost
+        # most of a view switch's style work.
+        self.app.stylesheet.update_nodes([self], animate=True)
+
     def on_focus(self) -> None:
         self._update_subtitle(focused=True)
 
