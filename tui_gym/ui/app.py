@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal
-from textual.events import Resize
+from textual.events import Resize, ScreenResume
 from textual.reactive import Reactive
 from textual.screen import Screen
 from textual.widget import AwaitMount, Widget
@@ -80,9 +80,21 @@ IDLE_TIMEOUT = 10.0  # and how long to look before giving up
 class MainScreen(Screen):
     """The app's screen. A focus change repaints the widgets whose look it changes
     (their `:focus` styles), not the whole screen as Textual's `Screen` does: a
-    view switch moves the focus, and a whole-screen repaint doubled its cost."""
+    view switch moves the focus, and a whole-screen repaint doubled its cost. When
+    it first shows, its widgets keep the styles they were given as they were
+    mounted instead of being styled all over again."""
 
     focused: Reactive[Widget | None] = Reactive(None, repaint=False)
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._shown = False
+
+    def _on_screen_resume(self, event: ScreenResume) -> None:
+        # Runs before `Screen`'s own handler, which restyles every node when asked to.
+        if not self._shown:
+            self._shown = True
+            event.refresh_styles = False
 
 
 class TuiGymApp(App[int]):
