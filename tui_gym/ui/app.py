@@ -4,8 +4,11 @@
 that trains it (in a child process, as `tui-gym` opens it, or on a worker
 thread). It keeps one `Session` per game for the whole run: switching game
 hands the runner the other game's session, and switching back finds its agent,
-settings, wrappers and curves as they were. A timer pulls the runner's latest
-snapshot and hands it to the Train view; the side panel asks for rebuilds
+settings, wrappers and curves as they were. The first frame shows the Play
+view and the side panel; the Train view is built right after it (or at once
+when asked for first), the Compare view the first time it shows, and dialogs
+are imported when first used. A timer pulls the runner's latest snapshot and
+hands it to the Train view; the side panel asks for rebuilds
 through a message; nothing in the trainer calls into widgets. Whatever would
 lose a trained agent (a reset, a change that resets it, loading over it,
 saving over a file) asks first (`ConfirmScreen`); saving and loading take a
@@ -31,10 +34,12 @@ from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
+from textual._compositor import Compositor, ReflowResult
 from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal
 from textual.events import Resize, ScreenResume
+from textual.geometry import Size
 from textual.reactive import Reactive
 from textual.screen import Screen
 from textual.widget import AwaitMount, Widget
@@ -77,17 +82,33 @@ IDLE_POLL = 0.02  # seconds between looks for the agent handed back before a cha
 IDLE_TIMEOUT = 10.0  # and how long to look before giving up
 
 
+class _Compositor(Compositor):
+    """Textual's compositor, keeping the full map a layout pass has just made.
+
+    Textual marks the map stale before a layout pass and leaves it so after the
+    pass, so the first widget that asks for its region while the frame is drawn
+    (a strip widget does) had the whole screen laid out a second time, for each
+    view switch."""
+
+    def reflow(self, parent: Widget, size: Size) -> ReflowResult:
+        result = super().reflow(parent, size)
+        self._full_map_invalidated = False  # the map just made is the full one
+        return result
+
+
 class MainScreen(Screen):
     """The app's screen. A focus change repaints the widgets whose look it changes
     (their `:focus` styles), not the whole screen as Textual's `Screen` does: a
-    view switch moves the focus, and a whole-screen repaint doubled its cost. When
-    it first shows, its widgets keep the styles they were given as they were
-    mounted instead of being styled all over again."""
+    view switch moves the focus, and a whole-screen repaint doubled its cost. Its
+    compositor keeps the layout it has just made (`_Compositor`). When it first
+    shows, its widgets keep the styles they were given as they were mounted instead
+    of being styled all over again."""
 
     focused: Reactive[Widget | None] = Reactive(None, repaint=False)
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
+        self._compositor = _Compositor()
         self._shown = False
 
     def _on_screen_resume(self, event: ScreenResume) -> None:
