@@ -16,9 +16,14 @@ expected return's gap to the optimum's), so the two counts differ by their
 variances alone; both use the measured regret gap, the better-measured of the two.
 
 **Protocol speed over a pipe.** `tui-gym play gridworld --jsonl` runs as a
-child process; this process sends one step at a time and waits for each
-answer before the next (as a player must), resetting when an episode ends.
-Steps per second over a window, median over repeats.
+child process. Throughput: this process keeps `WINDOW` step requests in flight
+(it writes a new one for each answer it reads, as a program evaluating a policy
+or collecting transitions would), every step with `"auto_reset": true` so that
+steps sent ahead never land on a finished episode; steps answered per second
+over a window, median over repeats. Round trip: one step at a time, each
+written only once the previous answer is read (as a player thinking between
+moves must), its time from writing the request to reading the answer; the
+median over all round trips, and steps per second over each window.
 
 **MCP speed.** `tui-gym mcp` runs as a child process and the MCP SDK's own
 client calls `step` on GridWorld games: one call at a time on one game, and
@@ -30,6 +35,7 @@ extra is installed.
 from __future__ import annotations
 
 import math
+import os
 import subprocess
 import sys
 import time
@@ -38,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from tui_gym.bench.figures import median
+from tui_gym.bench.figures import median, percentile
 from tui_gym.benchmark.players import InProcessPlayer, OptimalPlayer
 from tui_gym.benchmark.referee import Referee
 from tui_gym.benchmark.run import run_benchmark
@@ -46,7 +52,9 @@ from tui_gym.benchmark.run import run_benchmark
 Z95 = 1.96
 DEVIATION = 0.05
 MCP_GAMES = 4  # games one client plays at once for the MCP throughput
-STEP_LINES = (b'{"cmd":"step","action":"up"}\n', b'{"cmd":"step","action":"down"}\n')
+WINDOW = 64  # step requests the pipelined client keeps in flight
+STEP_LINES = (b'{"cmd":"step","action":"up","auto_reset":true}\n',
+              b'{"cmd":"step","action":"down","auto_reset":true}\n')
 
 
 class DeviatingPlayer(InProcessPlayer):
@@ -123,37 +131,119 @@ class RateResult:
         return median(self.samples) if self.samples else None
 
 
+@dataclass(frozen=True)
+class RoundTripResult:
+    """One request at a time: the round trip of a step (microseconds), and steps per second."""
+
+    p50_us: float | None = None
+    p95_us: float | None = None
+    round_trips: int = 0
+    rate: RateResult = RateResult()
+
+
+class _ProtocolChild:
+    """`tui-gym play gridworld --jsonl` as a child process, driven through its raw pipes."""
+
+    def __init__(self) -> None:
+        self.child = subprocess.Popen(
+            [sys.executable, "-m", "tui_gym", "play", "gridworld", "--jsonl", "--size", "12"],
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, bufsize=0,
+        )
+        assert self.child.stdin is not None and self.child.stdout is not None
+        self.requests = self.child.stdin.fileno()
+        self.answers = self.child.stdout.fileno()
+        self.sent = 0  # step requests written (their parity picks the action)
+        self.tail = b""  # the start of an answer whose newline has not come yet
+
+    def write(self, data: bytes) -> None:
+        view = memoryview(data)
+        while view:
+            view = view[os.write(self.requests, view):]
+
+    def send_steps(self, count: int) -> None:
+        first = self.sent
+        self.sent += count
+        self.write(b"".join(STEP_LINES[k & 1] for k in range(first, first + count)))
+
+    def read_answers(self) -> int:
+        """Wait for answers; how many whole ones came. RuntimeError on an error answer."""
+        data = os.read(self.answers, 1 << 16)
+        if not data:
+            raise RuntimeError("the protocol process exited")
+        data = self.tail + data
+        end = data.rfind(b"\n") + 1
+        whole, self.tail = data[:end], data[end:]
+        if b'"error"' in whole:
+            bad = next(line for line in whole.splitlines() if b'"error"' in line)
+            raise RuntimeError(f"the protocol answered {bad.decode(errors='replace')}")
+        return whole.count(b"\n")
+
+    def reset(self) -> None:
+        self.write(b'{"cmd":"reset","seed":1}\n')
+        while not self.read_answers():
+            pass
+
+    def close(self) -> None:
+        assert self.child.stdin is not None and self.child.stdout is not None
+        self.child.stdin.close()  # end of input: the child answers what is left and exits
+        self.child.stdout.read()
+        self.child.wait(timeout=30)
+
+
 def measure_protocol(seconds: float, repeats: int) -> RateResult:
-    """Protocol steps per second over a pipe: `repeats` windows on one child process."""
-    child = subprocess.Popen(
-        [sys.executable, "-m", "tui_gym", "play", "gridworld", "--jsonl", "--size", "12"],
-        stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-    )
-    assert child.stdin is not None and child.stdout is not None
-    send, answer = child.stdin, child.stdout
+    """Protocol steps per second over a pipe with `WINDOW` requests in flight: `repeats`
+    windows on one child process."""
+    pipe = _ProtocolChild()
     samples = []
     try:
-        send.write(b'{"cmd":"reset","seed":1}\n')
-        send.flush()
-        answer.readline()
+        pipe.reset()
+        pipe.send_steps(WINDOW)
         for _ in range(repeats):
-            steps = 0
+            answered = 0
             started = time.perf_counter()
             deadline = started + seconds
-            while steps % 256 or time.perf_counter() < deadline:
-                send.write(STEP_LINES[steps & 1])
-                send.flush()
-                line = answer.readline()
-                steps += 1
-                if b'"terminated": true' in line or b'"truncated": true' in line:
-                    send.write(b'{"cmd":"reset"}\n')
-                    send.flush()
-                    answer.readline()
-            samples.append(steps / (time.perf_counter() - started))
+            while True:
+                got = pipe.read_answers()
+                answered += got
+                pipe.send_steps(got)  # one new request per answer: the window stays full
+                now = time.perf_counter()
+                if now >= deadline:
+                    break
+            samples.append(answered / (now - started))
     finally:
-        send.close()
-        child.wait(timeout=30)
+        pipe.close()
     return RateResult(tuple(samples))
+
+
+def measure_round_trip(seconds: float, repeats: int) -> RoundTripResult:
+    """Protocol steps one at a time over a pipe: each step's round trip, `repeats` windows
+    on one child process."""
+    pipe = _ProtocolChild()
+    trips: list[float] = []
+    rates = []
+    clock = time.perf_counter
+    try:
+        pipe.reset()
+        for _ in range(repeats):
+            started = clock()
+            deadline = started + seconds
+            steps = 0
+            now = started
+            while now < deadline:
+                sent = now
+                pipe.send_steps(1)
+                while not pipe.read_answers():
+                    pass
+                now = clock()
+                trips.append(now - sent)
+                steps += 1
+            rates.append(steps / (now - started))
+    finally:
+        pipe.close()
+    return RoundTripResult(
+        p50_us=percentile(trips, 50) * 1e6, p95_us=percentile(trips, 95) * 1e6,
+        round_trips=len(trips), rate=RateResult(tuple(rates)),
+    )
 
 
 async def _mcp_steps(client: Any, game_id: int, until: float) -> int:
@@ -217,9 +307,10 @@ class ProgramsResult:
     """The figures of this module."""
 
     separation: SeparationResult
-    protocol: RateResult
+    protocol: RateResult  # `WINDOW` requests in flight
     mcp_one: RateResult  # one call at a time
     mcp_together: RateResult  # `MCP_GAMES` games at once
+    protocol_round_trip: RoundTripResult = RoundTripResult()  # one request at a time
 
 
 def measure(separation_episodes: int, seconds: float, repeats: int) -> ProgramsResult:
@@ -230,4 +321,5 @@ def measure(separation_episodes: int, seconds: float, repeats: int) -> ProgramsR
         protocol=measure_protocol(seconds, repeats),
         mcp_one=one,
         mcp_together=together,
+        protocol_round_trip=measure_round_trip(seconds, repeats),
     )

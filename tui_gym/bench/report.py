@@ -15,7 +15,8 @@ Targets:
   real episodes than Q-learning.
 - exact-regret scoring separates `optimal` from a player deviating on 5% of
   Blackjack decisions with >= 10x fewer episodes than mean returns do;
-- the JSON-lines protocol steps >= 20,000 times a second over a pipe, MCP >= 1,000
+- the JSON-lines protocol steps >= 20,000 times a second over a pipe (with requests
+  in flight; the round trip of one request at a time is shown beside it), MCP >= 1,000
   (with several games at once);
 - recording a run in the run history takes <= 2% of a `train` run's time, and the
   history stays under 1 MB per 1,000 runs of default settings;
@@ -151,6 +152,7 @@ def _programs_dict(results: BenchResults) -> dict[str, Any] | None:
     if found is None:
         return None
     sep = found.separation
+    trip = found.protocol_round_trip
     return {
         "separation": {
             "episodes_each": sep.episodes,
@@ -166,6 +168,11 @@ def _programs_dict(results: BenchResults) -> dict[str, Any] | None:
         },
         "protocol_steps_per_second": found.protocol.steps_per_second,
         "protocol_samples": list(found.protocol.samples),
+        "protocol_requests_in_flight": programs.WINDOW,
+        "protocol_steps_per_second_one_request_at_a_time": trip.rate.steps_per_second,
+        "protocol_round_trip_p50_us": trip.p50_us,
+        "protocol_round_trip_p95_us": trip.p95_us,
+        "protocol_round_trips": trip.round_trips,
         "mcp_steps_per_second_one_call_at_a_time": found.mcp_one.steps_per_second,
         "mcp_steps_per_second": found.mcp_together.steps_per_second,
         "mcp_games_at_once": programs.MCP_GAMES,
@@ -419,8 +426,14 @@ def table(results: BenchResults) -> Table:
         row("  by exact regret", f"{_num(sep.by_regret, ',.0f')}")
         row("  ratio", _num(sep.ratio, ".0f", "×"), f"≥ {SEPARATION_RATIO_TARGET:g}×",
             "regret_separation_ratio")
-        row("protocol over a pipe, steps/s", _num(found.protocol.steps_per_second, ",.0f"),
+        row(f"protocol over a pipe, steps/s, {programs.WINDOW} requests in flight",
+            _num(found.protocol.steps_per_second, ",.0f"),
             f"≥ {PROTOCOL_STEPS_TARGET:,.0f}", "protocol_steps_per_second")
+        trip = found.protocol_round_trip
+        if trip.round_trips:
+            row("  one request at a time, round trip p50",
+                f"{_num(trip.p50_us, '.0f', ' µs')} (p95 {_num(trip.p95_us, '.0f')}; "
+                f"{_num(trip.rate.steps_per_second, ',.0f')} steps/s)")
         if found.mcp_together.reason:
             out.add_row("MCP, steps/s", f"[dim]{found.mcp_together.reason}[/]", "",
                         _STYLE[MISSING])

@@ -2,13 +2,19 @@
 
 `JsonlPlayer.handle(line)` takes one request line and returns one response
 object; `serve(stdin, stdout)` runs the loop behind `tui-gym play ENV --jsonl`
-(one JSON object a line in, one a line out, flushed; end of input ends it).
+(one JSON object a line in, one a line out, in order; end of input ends it).
+A program may send requests without waiting for their answers: the loop reads
+whatever has arrived, answers every complete line, and flushes the answers
+before it waits for more input.
 
 Requests (an optional `"id"` is echoed back in the response):
 
 - `{"cmd": "spaces"}`: observation and action spaces, action names, wrappers;
 - `{"cmd": "reset"}` (optional `"seed"`): a new episode;
 - `{"cmd": "step", "action": A}`: A as the integer or the action's name;
+  with `"auto_reset": true`, a step that ends the episode also starts the
+  next one and answers it under `"reset"` (so steps sent ahead of their
+  answers never land on a finished episode);
 - `{"cmd": "render"}`: the text picture (hidden cards stay hidden);
 - `{"cmd": "hint"}`: the exact optimal action(s) in the current state, in the
   game as its wrappers make it;
@@ -42,6 +48,11 @@ MAX_DEPTH = 32  # nesting of arrays and objects in a request
 MAX_INT_DIGITS = 64  # integer literals in a request (ids, seeds, actions)
 MAX_SEED = 2**64 - 1
 _SURROGATE = re.compile("[\ud800-\udfff]")
+_ENCODER = json.JSONEncoder(allow_nan=False)  # once: `json.dumps` with options builds one a call
+_PLAIN = (str, int, float, bool, type(None))
+_CACHED_LINE_BYTES = 256  # a program repeats a handful of short requests: each is parsed once
+_CACHED_LINES = 1024
+_parsed: dict[str | bytes, dict[str, Any]] = {}
 
 
 class _BadNumber(ValueError):
@@ -102,7 +113,7 @@ def _clean_text(value: Any) -> str | None:
     """`value` as JSON text when it is JSON-safe as it is (no NaN or infinity, no surrogate
     in any text), else None: one pass of the C encoder, which most responses need alone."""
     try:
-        text = json.dumps(value, allow_nan=False)
+        text = _ENCODER.encode(value)
     except (TypeError, ValueError):
         return None
     return None if "\\ud" in text else text  # the encoder writes every surrogate as \udXXX
@@ -124,6 +135,18 @@ def _clean(value: Any) -> Any:
 def parse_request(line: str | bytes) -> dict[str, Any]:
     """A request line as the JSON object it holds; ValueError saying why it is not one
     (not UTF-8, not JSON, not an object, nested too deeply, a number too long)."""
+    cached = _parsed.get(line)
+    if cached is not None:
+        return dict(cached)  # a copy: the caller may change its request
+    request = _parse(line)
+    if len(line) <= _CACHED_LINE_BYTES:
+        if len(_parsed) >= _CACHED_LINES:
+            _parsed.clear()
+        _parsed[line] = dict(request)
+    return request
+
+
+def _parse(line: str | bytes) -> dict[str, Any]:
     if isinstance(line, bytes):
         try:
             line = line.decode("utf-8")
@@ -189,12 +212,15 @@ class JsonlPlayer:
     def _transition(self) -> dict[str, Any]:
         step = self.game.last
         assert step is not None
+        info = step.info
+        if not all(type(k) is str and type(v) in _PLAIN for k, v in info.items()):
+            info = to_jsonable(info)
         return {
             "observation": self.rules.states.json_observation(step.observation),
             "reward": step.reward,
             "terminated": step.terminated,
             "truncated": step.truncated,
-            "info": to_jsonable(step.info),
+            "info": info,
         }
 
     def _spaces(self, request: dict[str, Any]) -> dict[str, Any]:
@@ -225,8 +251,15 @@ class JsonlPlayer:
         if not isinstance(action, int | str) or len(str(action)) > 32:
             valid = ", ".join(f"{i}={n}" for i, n in enumerate(self.rules.action_names))
             raise ValueError(f"invalid action {shown_value(action)}; valid actions: {valid}")
+        auto_reset = request.get("auto_reset", False)
+        if not isinstance(auto_reset, bool):
+            raise ValueError(f"auto_reset must be true or false, got {shown_value(auto_reset)}")
         self.game.step(action)
-        return self._transition()
+        response = self._transition()
+        if auto_reset and self.game.done:
+            self.game.reset()
+            response["reset"] = self._transition()
+        return response
 
     def _render(self, request: dict[str, Any]) -> dict[str, Any]:
         if self.game.last is None:
@@ -269,18 +302,54 @@ def read_lines(stdin: IO[bytes], limit: int = MAX_LINE_BYTES) -> Iterator[bytes 
         yield line
 
 
+def read_batches(stdin: IO[bytes], limit: int = MAX_LINE_BYTES,
+                 chunk: int = 1 << 16) -> Iterator[list[bytes | None]]:
+    """The lines of `stdin` (without their newlines) in batches: each batch holds every
+    line completed by what had arrived when it was read, so a reader waits for input
+    only when no whole line is left. A line longer than `limit` comes back as None
+    (its bytes are dropped as they come, not held); a last line needs no newline."""
+    read = getattr(stdin, "read1", stdin.read)  # read1: what has arrived, without waiting for more
+    pending = b""  # the start of a line whose newline has not come yet
+    dropping = False  # inside a line that is too long, until its newline
+    while True:
+        data = read(chunk)
+        if not data:
+            if dropping:
+                yield [None]
+            elif pending:
+                yield [pending]
+            return
+        batch: list[bytes | None] = []
+        if dropping:
+            end = data.find(b"\n")
+            if end < 0:
+                continue
+            batch.append(None)
+            data, dropping = data[end + 1:], False
+        lines = (pending + data).split(b"\n") if pending else data.split(b"\n")
+        pending = lines.pop()
+        batch.extend(line if len(line) < limit else None for line in lines)
+        if len(pending) >= limit:
+            pending, dropping = b"", True
+        if batch:
+            yield batch
+
+
 def serve(player: JsonlPlayer, stdin: IO[bytes], stdout: IO[str]) -> int:
-    """Answer every line of `stdin` (bytes) on `stdout`; blank lines are skipped. Returns 0.
+    """Answer every line of `stdin` (bytes) on `stdout`, in order; blank lines are
+    skipped. Returns 0.
 
     Lines are read as bytes and decoded one by one, so a bad byte is one bad line.
+    The answers to the lines that arrived together are written and flushed together:
+    a program that waits for each answer gets it at once, and one that sends requests
+    ahead is not slowed by a write per answer.
     """
-    for line in read_lines(stdin):
-        if line is None:
-            text = json.dumps({"error": f"line longer than {MAX_LINE_BYTES:,} bytes: not read"})
-        elif not line.strip():
-            continue
-        else:
-            text = player.handle_text(line)
-        stdout.write(text + "\n")
-        stdout.flush()
+    too_long = json.dumps({"error": f"line longer than {MAX_LINE_BYTES:,} bytes: not read"})
+    for batch in read_batches(stdin):
+        answers = [too_long if line is None else player.handle_text(line)
+                   for line in batch if line is None or line.strip()]
+        if answers:
+            answers.append("")
+            stdout.write("\n".join(answers))
+            stdout.flush()
     return 0

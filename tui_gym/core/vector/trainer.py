@@ -220,8 +220,10 @@ class VectorTrainer(Engine):
             if quota is not None and quota < len(index):
                 # The oldest episodes step and the others wait, so no more than the quota
                 # finish, and what finishes is what the statistics wait for.
-                oldest = np.argsort(self._start_seq[index], kind="stable")[:quota]
-                index = np.sort(index[oldest])
+                # Start numbers are distinct: the quota-th smallest one splits them in O(n),
+                # and `index` stays in env order.
+                seqs = self._start_seq[index]
+                index = index[seqs <= np.partition(seqs, quota - 1)[quota - 1]]
         sel: Any = slice(None) if index is None else index
 
         agent = self.agent
