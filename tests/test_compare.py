@@ -45,6 +45,8 @@ def test_greedy_values_agree_with_policy_evaluation(
     monkeypatch.setattr(seed_batch, "_DENSE_STATES", dense_states)
     rng = np.random.default_rng(0)
     q = rng.integers(-3, 1, size=(4, cliff.n_states, cliff.n_actions)).astype(float)
+    # Tables with no ties: their paths are walked (one that loops runs into the limit).
+    q = np.concatenate([q, rng.normal(size=(4, cliff.n_states, cliff.n_actions))])
     values = greedy_values(cliff, q)
     for table, value in zip(q, values, strict=True):
         assert value == pytest.approx(evaluate(cliff, greedy_policy(table)).value)

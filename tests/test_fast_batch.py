@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -74,6 +76,33 @@ def test_fast_path_stops_where_the_general_loop_stops(cliff: FiniteMDP, name: st
     assert not fast.run(stop=lambda: next(fast_calls) >= 15)
     assert not general.run(stop=lambda: next(general_calls) >= 15, general=True)
     assert (fast.done < 1000).all()
+    _same(fast, general)
+
+
+@pytest.mark.parametrize("changes", range(1, 7))
+def test_sarsa_stopped_just_after_episodes_end_has_drawn_what_the_general_loop_drew(
+    cliff: FiniteMDP, changes: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # With epsilon constant, SARSA draws a new episode's first action as the episode starts
+    # (the general loop: at the next step). Stopping looks every second step here; it stops
+    # at the `changes`-th look that sees episodes ended since the last one.
+    from tui_gym.core.experiments import seed_batch
+
+    monkeypatch.setattr(seed_batch, "_CHECK_EVERY", 2)
+
+    def stop_after(batch: SeedBatch) -> Callable[[], bool]:
+        seen = [0, 0]  # episodes done at the last look, looks that saw more
+
+        def stop() -> bool:
+            done = int(batch.done.sum())
+            seen[1] += done > seen[0]
+            seen[0] = done
+            return seen[1] >= changes
+        return stop
+
+    fast, general = (_batch("sarsa", cliff, 8, 1000, **SETTINGS[2]) for _ in range(2))
+    assert not fast.run(stop=stop_after(fast))
+    assert not general.run(stop=stop_after(general), general=True)
     _same(fast, general)
 
 

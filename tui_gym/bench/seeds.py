@@ -3,9 +3,10 @@
 `measure(seeds, episodes, tutorial_share)` times `run_compare` on
 `GAME` (Q-learning and SARSA, `seeds` seeds each, `episodes` episodes each,
 Sutton & Barto's Example 6.6 settings: epsilon 0.1 throughout, step size
-0.5), seeds batched and batches on every core, child processes' start
-included; then the same learners, algorithm by algorithm and seed by seed,
-in a tutorial-style loop (`tutorial_learners`) on the Gymnasium env the game
+0.5), seeds batched and the batches spread over every core (the calling
+thread plays one, child processes the others, their start included); then
+the same learners, algorithm by algorithm and seed by seed, in a
+tutorial-style loop (`tutorial_learners`) on the Gymnasium env the game
 is played on, with the same settings. With `tutorial_share` below 1 only
 that share of each algorithm's seeds run the loop, and its time is scaled
 up to all of them (the learners are alike, so each takes about as long).

@@ -4,8 +4,11 @@
 that trains it (in a child process, as `tui-gym` opens it, or on a worker
 thread). It keeps one `Session` per game for the whole run: switching game
 hands the runner the other game's session, and switching back finds its agent,
-settings, wrappers and curves as they were. A timer pulls the runner's latest
-snapshot and hands it to the Train view; the side panel asks for rebuilds
+settings, wrappers and curves as they were. The first frame shows the Play
+view and the side panel; the Train view is built right after it (or at once
+when asked for first), the Compare view the first time it shows, and dialogs
+are imported when first used. A timer pulls the runner's latest snapshot and
+hands it to the Train view; the side panel asks for rebuilds
 through a message; nothing in the trainer calls into widgets. Whatever would
 lose a trained agent (a reset, a change that resets it, loading over it,
 saving over a file) asks first (`ConfirmScreen`); saving and loading take a
@@ -31,16 +34,17 @@ from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
+from textual._compositor import Compositor, ReflowResult
 from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal
-from textual.events import Resize
+from textual.events import Resize, ScreenResume
+from textual.geometry import Size
 from textual.reactive import Reactive
 from textual.screen import Screen
-from textual.widget import Widget
+from textual.widget import AwaitMount, Widget
 from textual.widgets import ContentSwitcher, Header
 
-from tui_gym.core.recording import Recording
 from tui_gym.core.recording.switch import RecordingSwitch
 from tui_gym.core.runners import make_runner
 from tui_gym.core.session import Session
@@ -49,19 +53,25 @@ from tui_gym.core.storage import StorageError
 from tui_gym.core.training import continue_run
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games import GAMES, Game, game_for, game_named
-from tui_gym.ui.confirm_screen import ConfirmScreen
-from tui_gym.ui.file_screen import FileScreen
-from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.play_view import PlayView
-from tui_gym.ui.replay_screen import ReplayScreen
 from tui_gym.ui.side_panel import SidePanel
 from tui_gym.ui.too_small_screen import TooSmallScreen
-from tui_gym.ui.train_view import TrainView
 from tui_gym.ui.widgets.key_bar import KeyBar
 
 if TYPE_CHECKING:
     from tui_gym.core.experiments.app_recording import SessionRunLog
+    from tui_gym.core.recording import Recording
     from tui_gym.ui.compare_view import CompareView
+    from tui_gym.ui.confirm_screen import ConfirmScreen
+    from tui_gym.ui.train_view import TrainView
+
+
+def _confirm_screen(title: str, text: str, yes: str) -> ConfirmScreen:
+    """A yes/no question (the dialog's module is imported when first asked)."""
+    from tui_gym.ui.confirm_screen import ConfirmScreen
+
+    return ConfirmScreen(title, text, yes)
+
 
 MIN_WIDTH, MIN_HEIGHT = 80, 24  # below this: a message instead of the layout
 COMPACT_WIDTH, COMPACT_HEIGHT = 120, 36  # below this: the compact layout
@@ -72,12 +82,40 @@ IDLE_POLL = 0.02  # seconds between looks for the agent handed back before a cha
 IDLE_TIMEOUT = 10.0  # and how long to look before giving up
 
 
+class _Compositor(Compositor):
+    """Textual's compositor, keeping the full map a layout pass has just made.
+
+    Textual marks the map stale before a layout pass and leaves it so after the
+    pass, so the first widget that asks for its region while the frame is drawn
+    (a strip widget does) had the whole screen laid out a second time, for each
+    view switch."""
+
+    def reflow(self, parent: Widget, size: Size) -> ReflowResult:
+        result = super().reflow(parent, size)
+        self._full_map_invalidated = False  # the map just made is the full one
+        return result
+
+
 class MainScreen(Screen):
     """The app's screen. A focus change repaints the widgets whose look it changes
     (their `:focus` styles), not the whole screen as Textual's `Screen` does: a
-    view switch moves the focus, and a whole-screen repaint doubled its cost."""
+    view switch moves the focus, and a whole-screen repaint doubled its cost. Its
+    compositor keeps the layout it has just made (`_Compositor`). When it first
+    shows, its widgets keep the styles they were given as they were mounted instead
+    of being styled all over again."""
 
     focused: Reactive[Widget | None] = Reactive(None, repaint=False)
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._compositor = _Compositor()
+        self._shown = False
+
+    def _on_screen_resume(self, event: ScreenResume) -> None:
+        # Runs before `Screen`'s own handler, which restyles every node when asked to.
+        if not self._shown:
+            self._shown = True
+            event.refresh_styles = False
 
 
 class TuiGymApp(App[int]):
@@ -125,7 +163,7 @@ class TuiGymApp(App[int]):
         standalone: bool = False,
         record: str | Path | None = None,
         replay: Recording | None = None,
-        run_log: SessionRunLog | None = None,
+        run_log: SessionRunLog | Callable[[], SessionRunLog] | None = None,
         db: str | Path | None = None,
     ) -> None:
         """`runner` is "thread" (train on a worker thread) or "process" (a child process;
@@ -137,7 +175,8 @@ class TuiGymApp(App[int]):
         traceback is left to `run_app` to log instead of being printed.
         `record` records the person's games to that file from the start (ctrl+r
         turns recording on and off); `replay` opens on a recording's replay; `run_log`
-        keeps every run trained here in the run history. `db` is the run history the
+        keeps every run trained here in the run history (given as a function, it is
+        made once the first frame is out). `db` is the run history the
         Compare view reads and records into (None: `TUI_GYM_DB`, else the user's data
         folder)."""
         super().__init__()
@@ -161,9 +200,12 @@ class TuiGymApp(App[int]):
         self.recording = RecordingSwitch(record, on_failure=self._recording_failed)
         self._record_at_start = record is not None
         self._replay = replay
-        self.run_log = run_log
+        self.run_log = run_log if not callable(run_log) else None
+        self._make_run_log = run_log if callable(run_log) else None
         self.db = db
         self._compare: CompareView | None = None
+        self._train: TrainView | None = None
+        self._train_mounted: AwaitMount | None = None
 
     # --- layout ------------------------------------------------------------
     def get_default_screen(self) -> Screen:
@@ -175,13 +217,10 @@ class TuiGymApp(App[int]):
         with Horizontal(id="body"):
             with ContentSwitcher(initial="play", id="views"):
                 yield PlayView(id="play")
-                yield TrainView(id="train")
             yield SidePanel(id="side")
         yield KeyBar()
 
     def on_mount(self) -> None:
-        if self.tune_gc:
-            self.gc_pacer = tune_gc_for_ui(self, *self.gc_seconds)
         if self.standalone:
             self._catch_signals()
         self._switcher = self.query_one("#views", ContentSwitcher)
@@ -189,10 +228,27 @@ class TuiGymApp(App[int]):
         self.set_interval(1 / REFRESH_HZ, self._tick)
         self._apply_size(self.size.width, self.size.height)
         self.call_after_refresh(self._focus_at_start)
+        self.call_after_refresh(self._after_first_frame)
         if self._record_at_start:
             self.call_after_refresh(self.action_toggle_recording)
         if self._replay is not None:
+            from tui_gym.ui.replay_screen import ReplayScreen
+
             self.push_screen(ReplayScreen(self._replay))
+
+    def _after_first_frame(self) -> None:
+        """What the first frame need not wait for: the Train view is built (unless a
+        key asked for it already), then the collector is tuned, once what the app
+        keeps alive is there. The run history opens then too."""
+        self._ensure_train()
+        if self._make_run_log is not None:
+            self.run_log, self._make_run_log = self._make_run_log(), None
+        if self.tune_gc:
+            self.call_after_refresh(self._tune_gc)
+
+    def _tune_gc(self) -> None:
+        if self.gc_pacer is None and self.is_running:
+            self.gc_pacer = tune_gc_for_ui(self, *self.gc_seconds)
 
     def on_resize(self, event: Resize) -> None:
         self._apply_size(event.size.width, event.size.height)
@@ -216,7 +272,32 @@ class TuiGymApp(App[int]):
 
     @property
     def train_view(self) -> TrainView:
-        return self.query_one(TrainView)
+        """The Train view (built, and mounted, the first time it is asked for)."""
+        return self._ensure_train()
+
+    def _ensure_train(self) -> TrainView:
+        view = self._train
+        if view is None:
+            from tui_gym.ui.train_view import TrainView
+
+            view = self._train = TrainView(id="train")
+            view.display = self.current_view == "train"
+            assert self._switcher is not None
+            self._train_mounted = self._switcher.mount(view)  # it reads the session then
+        return view
+
+    async def _mounted_train(self) -> TrainView:
+        """The Train view, once it is mounted."""
+        view = self._ensure_train()
+        if self._train_mounted is not None:
+            await self._train_mounted
+        return view
+
+    def _train_ready(self) -> TrainView | None:
+        """The Train view once it is mounted, else None (it shows the session as it is
+        when it mounts, so there is nothing to tell it before)."""
+        view = self._train
+        return view if view is not None and view.is_mounted else None
 
     @property
     def compare_view(self) -> CompareView | None:
@@ -253,12 +334,13 @@ class TuiGymApp(App[int]):
             self._was_running = running
             if not running and runner.finished:
                 self.notify("Training reached its episode budget.", title="Done")
-        if self.current_view != "train":
+        view = self._train_ready()
+        if view is None or self.current_view != "train":
             return
         snapshot = runner.latest
         if snapshot.version != self._last_version or running:
             self._last_version = snapshot.version
-            self.train_view.show_snapshot(snapshot, runner)
+            view.show_snapshot(snapshot, runner)
 
     # --- actions -----------------------------------------------------------
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
@@ -274,6 +356,8 @@ class TuiGymApp(App[int]):
         compare = self._compare
         if view != "compare" and compare is not None and compare.stop_comparison():
             self.notify("Comparison stopped: what finished is recorded.", timeout=4)
+        if view == "train":
+            self._ensure_train()
         if view == "compare" and compare is None:
             # Built (and imported) the first time it shows: most runs of the app never open it.
             from tui_gym.ui.compare_view import CompareView
@@ -290,10 +374,22 @@ class TuiGymApp(App[int]):
                 compare.reload(fresh=True)
                 compare.focus_default()
         else:
-            self._last_version = -1
-            self.train_view.focus_default()
-            self._tick()
+            self._train_shown()
         self.refresh_bindings()  # the view's keys, even when the focus stays put
+
+    def _train_shown(self) -> None:
+        """The Train view takes the keyboard and draws the latest snapshot (once it is
+        mounted, when it is shown before)."""
+        if self.current_view != "train":
+            return
+        view = self._train_ready()
+        if view is None:
+            self.call_after_refresh(self._train_shown)
+            return
+        self._last_version = -1
+        view.focus_default()
+        self._tick()
+        self.refresh_bindings()
 
     def action_switch_game(self, name: str) -> None:
         game = game_named(name)
@@ -304,7 +400,8 @@ class TuiGymApp(App[int]):
 
     async def action_edit_map(self) -> None:
         self.action_show_view("train")
-        await self.train_view.open_editor()
+        view = await self._mounted_train()
+        await view.open_editor()
 
     def rebuild_map(self, env_kwargs: dict[str, Any], resized: bool) -> bool:
         """Play an edited map: the agent and training go on where the states keep their
@@ -321,8 +418,8 @@ class TuiGymApp(App[int]):
             self.play_view.focus_board()
         elif self.current_view == "compare" and self._compare is not None:
             self._compare.focus_default()
-        else:
-            self.train_view.focus_default()
+        elif (view := self._train_ready()) is not None:
+            view.focus_default()  # else it takes the keyboard when it mounts
 
     def _focus_at_start(self) -> None:
         """The view's keys from the first frame, unless a key already moved the focus."""
@@ -405,7 +502,7 @@ class TuiGymApp(App[int]):
         self.sub_title = session.game.title
         self._last_version = -1
         self.play_view.reload()
-        self.train_view.reload()
+        self._reload_train()
         if self._compare is not None:
             self._compare.reload()
         self.side_panel.reload()
@@ -422,7 +519,7 @@ class TuiGymApp(App[int]):
             self.action_reset_agent()
             return
         self.push_screen(
-            ConfirmScreen(
+            _confirm_screen(
                 "Reset the agent?",
                 f"It has trained {episodes:,} episodes. An empty Q-table and fresh "
                 "statistics replace them (ctrl+s saves it first).",
@@ -468,7 +565,7 @@ class TuiGymApp(App[int]):
             return
         if not runner.speed.animated:
             speed = runner.set_speed(ANIMATED_SPEED)
-            self.train_view.show_speed(speed.name)
+            self._show_speed(speed.name)
             self.notify(f"Speed: {speed.name}, so each step shows on the board and in the "
                         "step panel.", timeout=4)
         runner.run_one_step()
@@ -476,7 +573,10 @@ class TuiGymApp(App[int]):
     def _apply_form(self) -> bool:
         """Apply the form's hyperparameters (a raised budget continues the run); False when
         a field is wrong."""
-        hp = self.train_view.read_hyperparameters()
+        view = self._train_ready()
+        if view is None:
+            return True  # no form yet: nothing typed to apply
+        hp = view.read_hyperparameters()
         if hp is None:
             self.notify("Fix the highlighted fields first.", severity="error")
             return False
@@ -486,7 +586,7 @@ class TuiGymApp(App[int]):
             if note:
                 self.notify(note, timeout=8)
             session.set_hyperparameters(hp)
-            self.train_view.form.load(hp)
+            view.form.load(hp)
         return True
 
     def action_reset_agent(self) -> None:
@@ -495,24 +595,37 @@ class TuiGymApp(App[int]):
         self.runner.pause(wait=False)
         self.session.reset_agent()
         self._last_version = -1
-        self.train_view.reload()
+        self._reload_train()
         self.notify("Agent reset: empty Q-table, fresh statistics.")
 
     def action_faster(self) -> None:
-        speed = self.runner.faster()
-        self.train_view.show_speed(speed.name)
+        self._show_speed(self.runner.faster().name)
 
     def action_slower(self) -> None:
-        speed = self.runner.slower()
-        self.train_view.show_speed(speed.name)
+        self._show_speed(self.runner.slower().name)
 
-    def action_help(self) -> None:
+    def _show_speed(self, name: str) -> None:
+        if (view := self._train_ready()) is not None:
+            view.show_speed(name)  # else it reads the runner's speed when it mounts
+
+    def _reload_train(self) -> None:
+        """Show the session afresh in the Train view (if it is not mounted yet, it will
+        read the session when it is)."""
+        if (view := self._train_ready()) is not None:
+            view.reload()
+
+    async def action_help(self) -> None:
+        await self._mounted_train()  # the help lists the Train view's keys too
+        from tui_gym.ui.help_screen import HelpScreen
+
         if not isinstance(self.screen, HelpScreen):
             self.push_screen(HelpScreen(self.key_help()))
 
     # --- files -----------------------------------------------------------------
     def action_save_agent(self) -> None:
         """Ask for a file name and save the agent (and its settings) there."""
+        from tui_gym.ui.file_screen import FileScreen
+
         title = self.session.game.title
         self.push_screen(
             FileScreen(f"Save the {title} agent", self._suggested_file(), self._save_to,
@@ -521,6 +634,8 @@ class TuiGymApp(App[int]):
 
     def action_load_agent(self) -> None:
         """Ask for a file name and load the agent (and its game and settings) from it."""
+        from tui_gym.ui.file_screen import FileScreen
+
         self.push_screen(
             FileScreen("Load an agent", self._suggested_file(loading=True), self._read_file,
                        saving=False),
@@ -583,7 +698,7 @@ class TuiGymApp(App[int]):
             self._install_loaded(session, path)
             return
         self.push_screen(
-            ConfirmScreen(
+            _confirm_screen(
                 f"Replace the {game.title} agent?",
                 f"The {game.title} agent here has trained {episodes:,} episodes; "
                 f"{path.name} replaces it, its settings and its wrappers.",
@@ -673,7 +788,7 @@ class TuiGymApp(App[int]):
         self.sub_title = self.session.game.title
         self._last_version = -1
         self.play_view.reload()
-        self.train_view.reload()
+        self._reload_train()
         self.side_panel.reload()
         if not (quiet and report.kept_agent):
             self.notify(report.notice, severity="information" if report.kept_agent else "warning",
@@ -707,7 +822,7 @@ class TuiGymApp(App[int]):
                             timeout=3)
 
         self.push_screen(
-            ConfirmScreen(
+            _confirm_screen(
                 f"Train with {cls.title} instead?",
                 f"Another algorithm needs a fresh learner: the agent, trained {episodes:,} "
                 f"episodes with {self.session.learner_class.title}, would start over with "
@@ -721,7 +836,7 @@ class TuiGymApp(App[int]):
     def _use_algorithm(self, name: str) -> None:
         self.session.set_algorithm(name)
         self._last_version = -1
-        self.train_view.reload()
+        self._reload_train()
         self.side_panel.reload()
         cls = self.session.learner_class
         self.notify(f"{cls.title}: a fresh learner with its defaults for "
@@ -753,7 +868,7 @@ class TuiGymApp(App[int]):
                 self.notify("Not applied: the agent is kept.", timeout=3)
 
         self.push_screen(
-            ConfirmScreen(
+            _confirm_screen(
                 "Reset the agent for this change?",
                 f"It changes what observations mean, so the agent, trained {episodes:,} "
                 "episodes, would start over (ctrl+s saves it first).",
@@ -976,10 +1091,13 @@ def run_app(
                                                           env_kwargs=env_kwargs or {})
     run_log = None
     if keep_history:
-        from tui_gym.core.experiments.app_recording import SessionRunLog
-        from tui_gym.core.experiments.paths import resolve_db_path
 
-        run_log = SessionRunLog(resolve_db_path(db))
+        def run_log() -> SessionRunLog:  # imported and made after the first frame
+            from tui_gym.core.experiments.app_recording import SessionRunLog
+            from tui_gym.core.experiments.paths import resolve_db_path
+
+            return SessionRunLog(resolve_db_path(db))
+
     return run_standalone(
         TuiGymApp(session, runner=runner, tune_gc=True, gc_seconds=gc_seconds, standalone=True,
                   record=record, replay=replay, run_log=run_log, db=db)

@@ -131,7 +131,9 @@ class ParamField(Horizontal):
 
 
 class WrapperRow(Vertical):
-    """A catalog entry: a checkbox, its lesson, its parameters, and why it may not fit."""
+    """A catalog entry: a checkbox, its lesson, its parameters, and why it may not fit.
+    The lines for a parameter's error and the reason are made when there is one to
+    show (most rows never have either, and every widget costs the panel at start)."""
 
     SCOPED_CSS = False  # the compact rule below starts at Screen
     DEFAULT_CSS = """
@@ -172,8 +174,8 @@ class WrapperRow(Vertical):
         values = self.choice.values() if self.choice else spec.defaults()
         for param in spec.params:
             yield ParamField(param, values.get(param.name, param.default), spec.name)
-        yield Static("", classes="param-error")
-        yield Static(self._reason_text(), classes="reason")
+        if self.reason:
+            yield Static(self._reason_text(), classes="reason")
 
     def on_mount(self) -> None:
         self.set_class(bool(self.reason), "-misfit")
@@ -199,14 +201,31 @@ class WrapperRow(Vertical):
 
     def show_error(self, error: str | None) -> None:
         """Say why a parameter's text is not valid (or clear the message)."""
-        widget = self.query_one(".param-error", Static)
+        widget = self._line("param-error")
+        if widget is None:
+            if not error:
+                return
+            widget = Static("", classes="param-error")
+            self.mount(widget, before=self._line("reason"))  # above the reason
         widget.update(Text(error or ""))
         widget.set_class(bool(error), "-shown")
 
     def show_reason(self, reason: str | None) -> None:
         self.reason = reason
         self.set_class(bool(reason), "-misfit")
-        self.query_one(".reason", Static).update(self._reason_text())
+        widget = self._line("reason")
+        if widget is None:
+            if reason:
+                self.mount(Static(self._reason_text(), classes="reason"))
+        else:
+            widget.update(self._reason_text())
+
+    def _line(self, kind: str) -> Static | None:
+        """The row's error or reason line, if it has been made."""
+        for child in self.children:
+            if child.has_class(kind) and isinstance(child, Static):
+                return child
+        return None
 
     def read(self) -> tuple[WrapperChoice | None, str | None]:
         """The choice this row stands for (None when unticked), or the reason it is invalid."""

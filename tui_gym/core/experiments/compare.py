@@ -10,7 +10,9 @@ optimum at the end.
 
 Seeds run as batches (`seed_batch.SeedBatch`: one table per seed, all stepped
 together); the batches (an algorithm's seeds, `MAX_SEEDS_PER_BATCH` at most in
-each) run in child processes, as many at once as there are cores.
+each) run in child processes, as many at once as there are cores. Called on
+the main thread with no more batches than cores, the calling thread plays the
+last batch itself while the children play the others.
 A game with neither an exact model nor a batched form, or a wrapper without
 one, is played seed after seed by the session's scalar engine.
 
@@ -268,6 +270,7 @@ class _Job:
     seeds: tuple[int, ...]
     rows: tuple[int, ...]
     episodes: int
+    model: FiniteMDP | None = None  # the game's exact model, when it has one
 
 
 @dataclass
@@ -366,7 +369,7 @@ def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared) -> list[_Job]:
                 index=len(jobs), arm=a, algorithm=arm.algorithm, env_id=prepared.env_id,
                 env_kwargs=prepared.env_kwargs, wrappers=tuple(setup.wrappers),
                 hp=prepared.hyperparameters[a], seeds=seeds[lo:hi],
-                rows=tuple(range(lo, hi)), episodes=setup.episodes,
+                rows=tuple(range(lo, hi)), episodes=setup.episodes, model=prepared.model,
             ))
     return jobs
 
@@ -380,12 +383,21 @@ def _run_job(
     report: Callable[[SeedBatchState], None],
 ) -> SeedBatchState:
     """Train a job's seeds; its state at the end (complete or stopped)."""
+    if job.model is not None:  # the game as its model: no env to build
+        learner_class = algorithm(job.algorithm)
+        env_seed, learner_seed = _seeds(job)
+        batch = SeedBatch(
+            learner_class, learner_class.settings(job.hp),
+            ModelSteps(job.model, len(job.seeds), env_seed), len(job.seeds), job.episodes,
+            seed=learner_seed, model=job.model,
+        )
+        batch.run(stop=stop, report=lambda b: report(b.state()), interval=PROGRESS_INTERVAL / 2)
+        return batch.state()
     session = _session(job.env_id, job.env_kwargs, job.wrappers, job.algorithm, job.hp,
                        job.seeds[0])
     try:
         model = _exact_model(session)
-        entropy = [job.seeds[0], len(job.seeds), job.episodes]
-        env_seed, learner_seed = np.random.SeedSequence(entropy).spawn(2)
+        env_seed, learner_seed = _seeds(job)
         steps: Any = None
         if model is not None:
             steps = ModelSteps(model, len(job.seeds), env_seed)
@@ -401,6 +413,11 @@ def _run_job(
         return batch.state()
     finally:
         session.env.close()
+
+
+def _seeds(job: _Job) -> list[np.random.SeedSequence]:
+    """The seeds of a job's envs and of its learner."""
+    return np.random.SeedSequence([job.seeds[0], len(job.seeds), job.episodes]).spawn(2)
 
 
 def _plan_steps(job: _Job, keyer: Any, n: int, seed: Any) -> PlanSteps | None:
@@ -734,53 +751,86 @@ def _run_children(
     tell: Callable[..., None],
     cores: int,
 ) -> bool:
+    # When every batch runs at once and this is the main thread (a command, not the app's
+    # worker thread), the calling thread plays the last batch itself instead of waiting:
+    # one process fewer to start, and its results need no passing over.
+    own = None
+    if 1 < len(jobs) <= cores and threading.current_thread() is threading.main_thread():
+        own = jobs[-1]
     ctx = _context()
     messages = ctx.Queue()
     stop_flag = ctx.Event()
-    waiting = list(jobs)
+    waiting = [job for job in jobs if job is not own]
     running: dict[int, Any] = {}
+    gone: list[Any] = []  # processes that sent their last word, joined at the end
     ended: set[int] = set()
-    error: str | None = None
+    errors: list[str] = []
     dead_since: dict[int, float] = {}
+
+    def start() -> None:
+        if stopped() and not stop_flag.is_set():
+            stop_flag.set()
+        while waiting and len(running) < cores and not stop_flag.is_set():
+            job = waiting.pop(0)
+            process = ctx.Process(target=_child, args=(job, messages, stop_flag), daemon=True)
+            process.start()
+            running[job.index] = process
+        if stop_flag.is_set():
+            waiting.clear()
+
+    def take(timeout: float) -> bool:
+        """Take one message (waiting up to `timeout`); False when there was none."""
+        try:
+            kind, index, payload = messages.get(timeout=timeout) if timeout else (
+                messages.get_nowait()
+            )
+        except queue.Empty:
+            now = time.monotonic()
+            for index, process in list(running.items()):
+                if process.is_alive():
+                    continue
+                # Gone without its last word: allow a moment for it to arrive.
+                if now - dead_since.setdefault(index, now) > 2.0:
+                    running.pop(index)
+                    errors.append(f"a batch process ended with code {process.exitcode}")
+                    stop_flag.set()
+            return False
+        message = _take(kind, index, payload, tally, ended, running, gone)
+        if message:
+            errors.append(message)
+            stop_flag.set()
+        return True
+
     try:
-        while waiting or running:
-            if stopped() and not stop_flag.is_set():
-                stop_flag.set()
-            while waiting and len(running) < cores and not stop_flag.is_set():
-                job = waiting.pop(0)
-                process = ctx.Process(target=_child, args=(job, messages, stop_flag), daemon=True)
-                process.start()
-                running[job.index] = process
-            if stop_flag.is_set():
-                waiting.clear()
-            try:
-                kind, index, payload = messages.get(timeout=0.05)
-            except queue.Empty:
-                now = time.monotonic()
-                for index, process in list(running.items()):
-                    if process.is_alive():
-                        continue
-                    # Gone without its last word: allow a moment for it to arrive.
-                    if now - dead_since.setdefault(index, now) > 2.0:
-                        running.pop(index)
-                        error = error or f"a batch process ended with code {process.exitcode}"
-                        stop_flag.set()
+        start()
+        if own is not None:
+
+            def own_stop() -> bool:
+                if stopped():
+                    stop_flag.set()
+                return bool(stop_flag.is_set())
+
+            def report(state: SeedBatchState) -> None:
+                tally.states[own.index] = state
+                while take(0):
+                    pass
                 tell()
-                continue
-            message = _take(kind, index, payload, tally, ended, running)
-            if message:
-                error = error or message
-                stop_flag.set()
+
+            tally.states[own.index] = _run_job(own, own_stop, report)
+            ended.add(own.index)
+        while waiting or running:
+            start()
+            take(0.05)
             tell()
     finally:
         stop_flag.set()
-        for process in running.values():
+        for process in [*running.values(), *gone]:
             process.join(timeout=5)
             if process.is_alive():
                 process.terminate()
         messages.close()
-    if error:
-        raise CompareError(error)
+    if errors:
+        raise CompareError(errors[0])
     return all(
         index in ended and (tally.states[index].done >= job.episodes).all()
         for index, job in enumerate(jobs)
@@ -788,18 +838,19 @@ def _run_children(
 
 
 def _take(
-    kind: str, index: int, payload: Any, tally: _Tally, ended: set[int], running: dict[int, Any]
+    kind: str, index: int, payload: Any, tally: _Tally, ended: set[int],
+    running: dict[int, Any], gone: list[Any],
 ) -> str | None:
     """Take one message from a child; an error's text, if it is one."""
     if kind == "error":
         process = running.pop(index, None)
         if process is not None:
-            process.join(timeout=5)
+            gone.append(process)
         return str(payload)
     tally.states[index] = payload
     if kind == "end":
         ended.add(index)
         process = running.pop(index, None)
         if process is not None:
-            process.join(timeout=5)
+            gone.append(process)
     return None

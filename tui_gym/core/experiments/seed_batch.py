@@ -145,28 +145,88 @@ class PlanSteps:
 def checkpoint_episodes(episodes: int, most: int = MAX_CHECKPOINTS) -> np.ndarray:
     """The episode counts (1-based, the last one `episodes`) at which greedy policies are valued."""
     count = max(1, min(episodes, most))
-    return np.unique(np.rint(np.linspace(episodes / count, episodes, count)).astype(np.int64))
+    points = np.rint(np.linspace(episodes / count, episodes, count)).astype(np.int64)
+    # Rising already: drop repeats (np.unique would load numpy.ma on first use).
+    return points[np.concatenate(([True], points[1:] != points[:-1]))]
 
 
 def greedy_values(model: FiniteMDP, q: np.ndarray) -> np.ndarray:
     """The exact value (gamma 1) of the greedy policy of each table `q[m, S, A]`, ties split evenly.
 
-    With an episode limit H all tables are valued at once: for a small model
-    by powers of each policy's transition matrix (the sum of the first H steps'
-    expected rewards in about log2(H) matrix products), else by H backward
-    steps. With no limit, one at a time (minus infinity for a policy that may
-    never end).
+    On a model whose every move has one outcome and with one start state, a
+    policy that meets no tie on its way is valued along its path (all tables
+    at once, in about log2(H) steps). The others, with an episode limit H,
+    are valued at once: for a small model by powers of each policy's
+    transition matrix (the sum of the first H steps' expected rewards in about
+    log2(H) matrix products), else by H backward steps. With no limit, one
+    at a time (minus infinity for a policy that may never end).
     """
     q = np.asarray(q, dtype=np.float64)
     tied = q == q.max(axis=2, keepdims=True)
-    policy = tied / tied.sum(axis=2, keepdims=True)
+    ties = tied.sum(axis=2)
+    if model.horizon is not None and model.max_outcomes == 1 and len(q):
+        starts = np.flatnonzero(model.initial)
+        if starts.size == 1:
+            values, walked = _path_values(model, tied, ties, int(starts[0]), model.horizon)
+            rest = np.flatnonzero(~walked)
+            if rest.size:
+                values[rest] = _valued(model, tied[rest], ties[rest])
+            return values
+    return _valued(model, tied, ties)
+
+
+def _path_values(
+    model: FiniteMDP, tied: np.ndarray, ties: np.ndarray, start: int, horizon: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The rewards along each greedy policy's path from `start` over at most `horizon`
+    moves, and which policies met no tie on the way (only their values are right).
+
+    All paths at once by doubling: from every state, where 2**k moves lead, what
+    they earn and whether they meet a tie, for k up to log2(horizon); a move that
+    ends the episode leads to a sink that stays put and earns nothing.
+    """
+    m, n = ties.shape
+    size = n + 1  # the states and the sink, per policy
+    greedy = tied.argmax(axis=2)
+    states = np.arange(n)
+    lead = np.full((m, size), n, dtype=np.int64)
+    earn = np.zeros((m, size))
+    split = np.zeros((m, size), dtype=bool)
+    ends = model.terminal[states, greedy, 0]
+    lead[:, :n] = np.where(ends, n, model.next_state[states, greedy, 0])
+    earn[:, :n] = model.reward[states, greedy, 0]
+    split[:, :n] = ties > 1
+    # Flat indices: policy i's states are i * size to (i + 1) * size - 1.
+    first = np.arange(m, dtype=np.int64) * size
+    lead = (lead + first[:, np.newaxis]).ravel()
+    earn, split = earn.ravel(), split.ravel()
+    at = first + start
+    values = np.zeros(m)
+    met = np.zeros(m, dtype=bool)
+    remaining = horizon
+    while remaining:
+        if remaining & 1:
+            values += earn[at]
+            met |= split[at]
+            at = lead[at]
+        remaining >>= 1
+        if remaining:
+            earn = earn + earn[lead]
+            split = split | split[lead]
+            lead = lead[lead]
+    return values, ~met
+
+
+def _valued(model: FiniteMDP, tied: np.ndarray, ties: np.ndarray) -> np.ndarray:
+    """`greedy_values` by the policies' matrices (see there), from their ties."""
+    policy = tied / ties[..., np.newaxis]
     if model.horizon is None:
         return np.array([evaluate(model, p).value for p in policy])
     if model.n_states <= _DENSE_STATES:
         return _horizon_values_dense(model, policy, model.horizon)
-    v = np.zeros((len(q), model.n_states))
+    v = np.zeros((len(policy), model.n_states))
     reward, cont, nxt = model.expected_reward, model.continue_prob, model.next_state
-    moving = np.arange(len(q))  # tables whose values still change
+    moving = np.arange(len(policy))  # tables whose values still change
     for _ in range(model.horizon):
         now = v[moving]
         after = (policy[moving] * (reward + (cont * now[:, nxt]).sum(axis=3))).sum(axis=2)

@@ -10,6 +10,7 @@ freedom have closed forms and use them.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from statistics import NormalDist
 
 _MAX_ITERATIONS = 500
@@ -92,6 +93,7 @@ def _cornish_fisher(z: float, df: float) -> float:
     return z + g1 / df + g2 / df**2 + g3 / df**3 + g4 / df**4
 
 
+@lru_cache(maxsize=256)  # the same few (p, df) come back for every curve point
 def t_quantile(p: float, df: float) -> float:
     """The t with P(T <= t) = p, for Student's t with `df` degrees of freedom (0 < p < 1)."""
     _check_df(df)

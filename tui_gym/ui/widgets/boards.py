@@ -31,6 +31,7 @@ from textual.message import Message
 from textual.widget import Widget
 from textual.widgets import Button
 
+from tui_gym.ui.widgets.focus_style import restyle_on_focus
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget, segments_of
 
 
@@ -251,6 +252,11 @@ class Board(Widget):
     def on_mount(self) -> None:
         self._update_buttons()
         self._update_subtitle(focused=self.has_focus)
+
+    def watch_has_focus(self, has_focus: bool) -> None:
+        # Only the board's own border follows its focus, not the canvas and buttons
+        # below it nor the colours it draws with.
+        restyle_on_focus(self)
 
     def on_focus(self) -> None:
         self._update_subtitle(focused=True)
