@@ -1,5 +1,6 @@
 """Shared pytest setup: the `slow` marker, run only when TUI_GYM_SLOW=1; bytecode kept
-for the processes the tests start; every run's history in a file of its own."""
+for the processes the tests start; one xdist worker more than CPUs; long modules first;
+every run's history in a file of its own."""
 
 from __future__ import annotations
 
@@ -39,6 +40,15 @@ def pytest_configure(config: pytest.Config) -> None:
         "markers",
         f"slow: takes tens of seconds; skipped unless the environment variable {SLOW_ENV}=1",
     )
+
+
+def pytest_xdist_auto_num_workers(config: pytest.Config) -> int | None:
+    """`-n auto` starts one worker more than there are CPUs: the app's tests spend part
+    of their time waiting (on Textual's timers, on a training process), and the extra
+    worker runs while another waits. PYTEST_XDIST_AUTO_NUM_WORKERS still decides first."""
+    if os.environ.get("PYTEST_XDIST_AUTO_NUM_WORKERS"):
+        return None
+    return len(os.sched_getaffinity(0)) + 1
 
 
 def _module_rank(items: list[pytest.Item]) -> int:
