@@ -1,15 +1,16 @@
 """The comparison figure: `compare` against the same learners one after another.
 
-`measure(seeds, episodes, tutorial_share)` times `run_compare` on
-`GAME` (Q-learning and SARSA, `seeds` seeds each, `episodes` episodes each,
-Sutton & Barto's Example 6.6 settings: epsilon 0.1 throughout, step size
-0.5), seeds batched and the batches spread over every core (the calling
-thread plays one, child processes the others, their start included); then
-the same learners, algorithm by algorithm and seed by seed, in a
-tutorial-style loop (`tutorial_learners`) on the Gymnasium env the game
-is played on, with the same settings. With `tutorial_share` below 1 only
-that share of each algorithm's seeds run the loop, and its time is scaled
-up to all of them (the learners are alike, so each takes about as long).
+`measure(seeds, episodes, tutorial_share)` times `run_compare` (the median
+of `COMPARE_REPEATS` runs) on the first game of `GAMES` the registry has:
+Q-learning and SARSA, `seeds` seeds each, `episodes` episodes each, Sutton &
+Barto's Example 6.6 settings (epsilon 0.1 throughout, step size 0.5), seeds
+batched and the batches spread over every core (the calling thread plays
+one, child processes the others, their start included). Then it times the
+same learners, algorithm by algorithm and seed by seed, in a tutorial-style
+loop (`tutorial_learners`) on the Gymnasium env the game is played on, with
+the same settings. With `tutorial_share` below 1 only that share of each
+algorithm's seeds run the loop, and its time is scaled up to all of them
+(the learners are alike, so each takes about as long).
 The speed-up is the ratio of the two times.
 """
 
@@ -19,12 +20,13 @@ import math
 import time
 from dataclasses import dataclass
 
-from tui_gym.bench.figures import ratio
+from tui_gym.bench.figures import median, ratio
 from tui_gym.bench.tutorial_learners import TutorialLearner
 
 GAMES = ("cliffwalking", "gridworld")  # the first the registry has is measured
 ALGORITHMS = ("q-learning", "sarsa")
 SETTINGS = {"epsilon_start": 0.1, "epsilon_final": 0.1, "learning_rate": 0.5}
+COMPARE_REPEATS = 3  # the comparison is short, so its time is the median of a few runs
 
 
 @dataclass(frozen=True)
@@ -69,9 +71,12 @@ def measure(seeds: int, episodes: int, tutorial_share: float = 1.0) -> SeedsSpee
 
     game = pick_game()
     spec = CompareSpec(game, ALGORITHMS, seeds, episodes, settings=SETTINGS)
-    started = time.perf_counter()
-    run_compare(spec)
-    compare_s = time.perf_counter() - started
+    compare_times = []
+    for _ in range(COMPARE_REPEATS):
+        started = time.perf_counter()
+        run_compare(spec)
+        compare_times.append(time.perf_counter() - started)
+    compare_s = median(compare_times)
 
     per_algorithm = max(1, min(seeds, math.ceil(seeds * tutorial_share)))
     tutorial_s = 0.0
