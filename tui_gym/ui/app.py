@@ -34,14 +34,15 @@ from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
-from textual._compositor import Compositor, ReflowResult
+from textual._compositor import ChopsUpdate, Compositor, ReflowResult
 from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal
 from textual.events import Resize, ScreenResume
-from textual.geometry import Size
+from textual.geometry import Region, Size
 from textual.reactive import Reactive
 from textual.screen import Screen
+from textual.strip import Strip
 from textual.widget import AwaitMount, Widget
 from textual.widgets import ContentSwitcher, Header
 
@@ -83,7 +84,8 @@ IDLE_TIMEOUT = 10.0  # and how long to look before giving up
 
 
 class _Compositor(Compositor):
-    """Textual's compositor, keeping the full map a layout pass has just made.
+    """Textual's compositor, keeping the full map a layout pass has just made, and
+    drawing in a partial update only the widgets it repaints.
 
     Textual marks the map stale before a layout pass and leaves it so after the
     pass, so the first widget that asks for its region while the frame is drawn
@@ -94,6 +96,34 @@ class _Compositor(Compositor):
         result = super().reflow(parent, size)
         self._full_map_invalidated = False  # the map just made is the full one
         return result
+
+    _updating: tuple[Region, ...] = ()  # the regions a partial update repaints
+
+    def render_partial_update(self) -> ChopsUpdate | None:
+        self._updating = tuple(self._dirty_regions)
+        try:
+            return super().render_partial_update()
+        finally:
+            self._updating = ()
+
+    def _get_renders(
+        self, crop: Region | None = None
+    ) -> Iterable[tuple[Region, Region, list[Strip]]]:
+        """Textual's renders, leaving out in a partial update the widgets whose visible
+        part misses every region it repaints. Textual tests each widget's container's
+        clip against the box around them all, so a snapshot that changed the Train
+        view's curves, stats and heatmap drew every widget on the screen."""
+        if crop is None:
+            yield from super()._get_renders(crop)
+            return
+        updating = self._updating or (crop,)
+        for widget, (region, clip) in self.visible_widgets.items():
+            visible = region.intersection(clip)
+            if not (visible.width and visible.height):
+                continue
+            if not any(visible.overlaps(part) for part in updating):
+                continue
+            yield region, clip, widget.render_lines(visible.translate(-region.offset))
 
 
 class MainScreen(Screen):
