@@ -35,6 +35,21 @@ def _keep_bytecode() -> None:
 _keep_bytecode()
 
 
+def _warm_bytecode() -> None:
+    """On a first run (an empty bytecode folder), compile what every test process loads
+    once, here in the controller, before the workers start: otherwise the workers and
+    the first processes they start all compile the same modules at the same time."""
+    if os.environ.get("PYTEST_XDIST_WORKER") or sys.pycache_prefix != str(PYCACHE):
+        return
+    if PYCACHE.is_dir() and any(PYCACHE.iterdir()):
+        return
+    import tui_gym.cli.main  # noqa: F401  (the CLI, the games, the engines)
+    import tui_gym.ui.app  # noqa: F401  (the app and Textual)
+
+
+_warm_bytecode()
+
+
 def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line(
         "markers",
