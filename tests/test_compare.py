@@ -4,36 +4,21 @@ from __future__ import annotations
 
 import threading
 
-import gymnasium as gym
 import numpy as np
 import pytest
 
-from tui_gym.algorithms import algorithm
 from tui_gym.core.experiments import RunHistory, RunKind, RunStatus
 from tui_gym.core.experiments.compare import CompareProgress, CompareSpec, run_compare
-from tui_gym.core.experiments.seed_batch import (
-    ModelSteps,
-    SeedBatch,
-    checkpoint_episodes,
-    greedy_values,
-)
-from tui_gym.core.mdp import FiniteMDP, evaluate, greedy_policy, model_from_env, solve
+from tui_gym.core.experiments.seed_batch import checkpoint_episodes, greedy_values
+from tui_gym.core.mdp import FiniteMDP, evaluate, greedy_policy, solve
+
+from .seed_batches import cliff_model
+from .seed_batches import seed_batch as _batch
 
 
 @pytest.fixture(scope="module")
 def cliff() -> FiniteMDP:
-    env = gym.make("CliffWalking-v1", max_episode_steps=200)
-    model = model_from_env(env)
-    env.close()
-    assert isinstance(model, FiniteMDP)
-    return model
-
-
-def _batch(name: str, model: FiniteMDP, seeds: int, episodes: int, **hp: object) -> SeedBatch:
-    cls = algorithm(name)
-    settings = cls.settings({"episodes": episodes, **hp})
-    return SeedBatch(cls, settings, ModelSteps(model, seeds, 1), seeds, episodes,
-                     seed=2, model=model)
+    return cliff_model()
 
 
 @pytest.mark.parametrize("dense_states", [0, 256])

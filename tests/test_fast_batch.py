@@ -8,27 +8,18 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from tui_gym.algorithms import algorithm
 from tui_gym.algorithms.steps import move_toward
 from tui_gym.core.experiments.fast_batch import step_size_tables
-from tui_gym.core.experiments.seed_batch import ModelSteps, SeedBatch
+from tui_gym.core.experiments.seed_batch import SeedBatch
 from tui_gym.core.mdp import FiniteMDP, model_from_env
+
+from .seed_batches import cliff_model
+from .seed_batches import seed_batch as _batch
 
 
 @pytest.fixture(scope="module")
 def cliff() -> FiniteMDP:
-    env = gym.make("CliffWalking-v1", max_episode_steps=200)
-    model = model_from_env(env)
-    env.close()
-    assert isinstance(model, FiniteMDP)
-    return model
-
-
-def _batch(name: str, model: FiniteMDP, seeds: int, episodes: int, **hp: object) -> SeedBatch:
-    cls = algorithm(name)
-    settings = cls.settings({"episodes": episodes, **hp})
-    return SeedBatch(cls, settings, ModelSteps(model, seeds, 1), seeds, episodes,
-                     seed=2, model=model)
+    return cliff_model()
 
 
 def _same(fast: SeedBatch, general: SeedBatch) -> None:
