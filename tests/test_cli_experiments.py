@@ -10,18 +10,9 @@ import numpy as np
 import pytest
 from rich.console import Console
 
-from tui_gym.cli import main
+from tests.test_cli import run
 from tui_gym.core.experiments import RunHistory, RunKind
 from tui_gym.terminal_chart import BAND, ChartSeries, band_chart
-
-
-def run(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
-    try:
-        code = main(list(args))
-    except SystemExit as exit_:
-        code = exit_.code if isinstance(exit_.code, int) else 1
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def run_json(capsys: pytest.CaptureFixture[str], *args: str) -> dict[str, Any]:

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.test_cli import run
 from tui_gym.cli import main
 from tui_gym.games import game_for
 from tui_gym.games.maps import GridMap, MapError, format_map, parse_map
@@ -17,15 +18,6 @@ from tui_gym.games.maps.files import read_map_file, write_map_file
 from tui_gym.games.maps.random_map import random_map
 
 DETOUR = "# a comment\nreward 1,2: -1.5\nslip 0,1: 0.25\nSFFG\nFHRF\n"
-
-
-def run(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
-    try:
-        code = main(list(args))
-    except SystemExit as exit_:
-        code = exit_.code if isinstance(exit_.code, int) else 1
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def optimum(game: str, grid_map: GridMap, **kwargs: object) -> float:
