@@ -4,6 +4,7 @@ every run's history in a file of its own."""
 
 from __future__ import annotations
 
+import gc
 import inspect
 import os
 import sys
@@ -12,6 +13,7 @@ from pathlib import Path
 import pytest
 
 SLOW_ENV = "TUI_GYM_SLOW"
+GC_THRESHOLDS = (20_000, 20, 100)  # young, middle and full generations
 PYCACHE = Path(__file__).resolve().parent.parent / ".pytest_cache" / "pycache"
 
 
@@ -96,6 +98,25 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     for item in items:
         if "slow" in item.keywords:
             item.add_marker(skip)
+
+
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """What the imports and the collected tests made lives until the run ends: frozen,
+    the collector's passes no longer walk it. The collector also runs less often: a
+    test process allocates in bursts (an app's frames) and frees nearly all of it."""
+    gc.collect()
+    gc.freeze()
+    gc.set_threshold(*GC_THRESHOLDS)
+
+
+def pytest_runtest_teardown(item: pytest.Item) -> None:
+    """Let an app's drawing go with the app. Textual keeps the last 1,024 widgets'
+    style caches (each with its lines) in an `lru_cache` keyed by the cache itself,
+    so every app a test ran stayed alive for several tests after, and the collector
+    walked all of it again and again."""
+    styles_cache = sys.modules.get("textual._styles_cache")
+    if styles_cache is not None:
+        styles_cache.StylesCache.get_inner_outer.cache_clear()
 
 
 @pytest.fixture(autouse=True, scope="session")
