@@ -6,7 +6,7 @@ teaches; picking another posts `SidePanel.AlgorithmPicked`), the whole
 wrapper catalog as checkboxes (each with its one-line lesson, its parameter
 fields and, when it does not fit the game, the reason), and the resulting
 wrapper chain: each wrapper in order, innermost first, with its parameters,
-then Gymnasium's repr of the env. A newly ticked wrapper goes outermost; `[`
+then Gymnasium's repr of the env (`chain_text`). A newly ticked wrapper goes outermost; `[`
 and `]` move the focused one in or out. It never rebuilds anything itself: it
 posts `SidePanel.Changed` and the app asks the Session, then calls `reload()`.
 Invalid parameter text marks its field, says why, and is not applied; escape
@@ -15,7 +15,7 @@ drops an edit not yet applied and posts `SidePanel.Left`.
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from rich.text import Text
 from textual import events, on
@@ -30,6 +30,9 @@ from tui_gym.algorithms import ALGORITHMS
 from tui_gym.core.wrappers import CATALOG, Param, WrapperChoice, format_wrapper_spec
 from tui_gym.games import GAMES
 from tui_gym.ui.widgets.tick_box import TickBox
+
+if TYPE_CHECKING:
+    from tui_gym.core.session import Session
 
 OTHER = "game-other"  # the picker's button for an env the registry does not list
 
@@ -243,6 +246,34 @@ class WrapperRow(Vertical):
             return None, str(exc)
 
 
+def chain_text(session: Session) -> Text:
+    """The env built (the game's, or the one an edited map plays on), then each
+    chosen wrapper in order with its parameters (`key=value`, as `--wrapper` takes
+    them), then Gymnasium's repr of the env."""
+    skipped = {id(choice) for choice, _ in session.skipped}
+    built = session.game.make_id(session.env_id, session.env_kwargs)
+    text = Text(built, style="bold")
+    if built != session.env_id:  # an edited map plays on another env
+        text.append(f"  ({session.env_id}'s rules on the edited map)", style="dim")
+    if not session.choices:
+        text.append("  (no wrappers)", style="dim")
+    for place, choice in enumerate(session.choices, 1):
+        applied = id(choice) not in skipped
+        text.append(f"\n{place} ", style="dim")
+        text.append(choice.name, style="bold green" if applied else "")
+        if not applied:
+            text.append("  ✗ not applied", style="red")
+        # One line a parameter, as `--wrapper` writes it: names are never cut.
+        for pair in format_wrapper_spec(choice).partition(":")[2].split(","):
+            if pair:
+                text.append(f"\n    {pair}", style="green" if applied else "")
+    text.append("\n" + session.chain_repr(), style="dim")
+    if session.skipped:
+        names = ", ".join(c.name for c, _ in session.skipped)
+        text.append(f"\n(not applied: {names})", style="red")
+    return text
+
+
 class SidePanel(VerticalScroll):
     """Game, wrappers and the resulting chain; posts `Changed` when a person edits them."""
 
@@ -405,28 +436,7 @@ class SidePanel(VerticalScroll):
         self.query_one("#chain", Static).update(self._chain_text())
 
     def _chain_text(self) -> Text:
-        """The game, then each chosen wrapper in order with its parameters (`key=value`,
-        as `--wrapper` takes them), then Gymnasium's repr of the env."""
-        session = self.session
-        skipped = {id(choice) for choice, _ in session.skipped}
-        text = Text(session.env_id, style="bold")
-        if not session.choices:
-            text.append("  (no wrappers)", style="dim")
-        for place, choice in enumerate(session.choices, 1):
-            applied = id(choice) not in skipped
-            text.append(f"\n{place} ", style="dim")
-            text.append(choice.name, style="bold green" if applied else "")
-            if not applied:
-                text.append("  ✗ not applied", style="red")
-            # One line a parameter, as `--wrapper` writes it: names are never cut.
-            for pair in format_wrapper_spec(choice).partition(":")[2].split(","):
-                if pair:
-                    text.append(f"\n    {pair}", style="green" if applied else "")
-        text.append("\n" + session.chain_repr(), style="dim")
-        if session.skipped:
-            names = ", ".join(c.name for c, _ in session.skipped)
-            text.append(f"\n(not applied: {names})", style="red")
-        return text
+        return chain_text(self.session)
 
     def focus_wrappers(self) -> None:
         """Move the keyboard focus to the first wrapper checkbox."""
