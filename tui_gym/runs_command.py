@@ -92,7 +92,8 @@ def add_app_options(parser: argparse.ArgumentParser) -> None:
     """`--db PATH` and `--no-history` for the app (`--record` is for games, not runs)."""
     _db_option(parser)
     parser.add_argument("--no-history", action="store_true",
-                        help="do not keep the app's training runs in the run history")
+                        help="keep nothing in the run history: the app's training runs are not "
+                             "recorded, and its comparisons go when it ends")
 
 
 def _warn(line: str) -> None:

@@ -28,9 +28,10 @@ import gc
 import os
 import signal
 import sys
+import tempfile
 import threading
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -195,6 +196,7 @@ class TuiGymApp(App[int]):
         replay: Recording | None = None,
         run_log: SessionRunLog | Callable[[], SessionRunLog] | None = None,
         db: str | Path | None = None,
+        history_kept: bool = True,
     ) -> None:
         """`runner` is "thread" (train on a worker thread) or "process" (a child process;
         what `tui-gym` opens). `tune_gc` applies `tune_gc_for_ui` at mount (for a
@@ -208,7 +210,7 @@ class TuiGymApp(App[int]):
         keeps every run trained here in the run history (given as a function, it is
         made once the first frame is out). `db` is the run history the
         Compare view reads and records into (None: `TUI_GYM_DB`, else the user's data
-        folder)."""
+        folder); `history_kept` False says `db` is a scratch file gone at the end."""
         super().__init__()
         self.tune_gc = tune_gc
         self.gc_seconds = gc_seconds or (YOUNG_GC_SECONDS, FULL_GC_SECONDS)
@@ -233,6 +235,7 @@ class TuiGymApp(App[int]):
         self.run_log = run_log if not callable(run_log) else None
         self._make_run_log = run_log if callable(run_log) else None
         self.db = db
+        self.history_kept = history_kept
         self._compare: CompareView | None = None
         self._train: TrainView | None = None
         self._train_mounted: AwaitMount | None = None
@@ -392,7 +395,8 @@ class TuiGymApp(App[int]):
             # Built (and imported) the first time it shows: most runs of the app never open it.
             from tui_gym.ui.compare_view import CompareView
 
-            compare = self._compare = CompareView(id="compare", db=self.db)
+            compare = self._compare = CompareView(id="compare", db=self.db,
+                                                        kept=self.history_kept)
             self._switcher.mount(compare)  # it reads the history and takes the focus at mount
         self._switcher.current = view
         self._main_screen.set_class(view == "compare", "-view-compare")
@@ -1128,10 +1132,24 @@ def run_app(
 
             return SessionRunLog(resolve_db_path(db))
 
-    return run_standalone(
-        TuiGymApp(session, runner=runner, tune_gc=True, gc_seconds=gc_seconds, standalone=True,
-                  record=record, replay=replay, run_log=run_log, db=db)
-    )
+    with history_for_app(db, keep_history) as compare_db:
+        return run_standalone(
+            TuiGymApp(session, runner=runner, tune_gc=True, gc_seconds=gc_seconds,
+                      standalone=True, record=record, replay=replay, run_log=run_log,
+                      db=compare_db, history_kept=keep_history)
+        )
+
+
+@contextlib.contextmanager
+def history_for_app(db: str | None, keep_history: bool) -> Iterator[str | None]:
+    """The run history the app's Compare view reads and records into: `db` (None: the
+    default file) when runs are kept, else a scratch file removed with its folder when
+    the app ends (`tui-gym --no-history` keeps nothing)."""
+    if keep_history:
+        yield db
+        return
+    with tempfile.TemporaryDirectory(prefix="tui-gym-") as scratch:
+        yield str(Path(scratch) / "runs.db")
 
 
 def run_standalone(app: TuiGymApp) -> int:

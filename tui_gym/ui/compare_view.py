@@ -213,14 +213,18 @@ class CompareView(Vertical):
         self,
         *,
         db: str | Path | None = None,
+        kept: bool = True,
         processes: int | None = None,
         id: str | None = None,
         classes: str | None = None,
     ) -> None:
         """`db` is the run history's file (None: `TUI_GYM_DB`, else the data folder's);
-        `processes` is `run_compare`'s (None: a child process per core)."""
+        `kept` False says it is a scratch file that goes when the app ends
+        (`tui-gym --no-history`); `processes` is `run_compare`'s (None: a child
+        process per core)."""
         super().__init__(id=id, classes=classes)
         self.db = db  # read at each look, so the app can point the view elsewhere
+        self.kept = kept
         self.processes = processes
         self._runs: tuple[RunSummary, ...] = ()
         self._records: dict[int, RunRecord] = {}
@@ -420,13 +424,18 @@ class CompareView(Vertical):
         self._fill_list(ticked)
         if not self.running:
             title = self.session.game.title
-            if not runs:
+            if not runs and not self.kept:
+                self._say(f"No comparisons of {title} yet (--no-history: they are shown "
+                          "until the app ends, and not kept): choose algorithms, seeds and "
+                          "episodes, then Compare.")
+            elif not runs:
                 self._say(f"No runs of {title} recorded yet in {self.db_path}: "
                           "choose algorithms, seeds and episodes, then Compare.")
             else:
                 self._say(f"{len(runs):,} run{'s' if len(runs) != 1 else ''} of {title} "
                           "recorded.")
-        self._message_label.tooltip = str(self.db_path)
+        self._message_label.tooltip = (
+            str(self.db_path) if self.kept else "not kept: the app runs with --no-history")
         self._redraw()
 
     def _fill_list(self, ticked: Sequence[int]) -> None:
