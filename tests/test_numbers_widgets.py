@@ -21,6 +21,7 @@ from tui_gym.ui.widgets.numbers import compact_count, fit, number_forms
 from tui_gym.ui.widgets.progress_line import ProgressLine
 from tui_gym.ui.widgets.stats_panel import StatsPanel, run_state
 from tui_gym.ui.widgets.training_charts import (
+    MIN_SPARK,
     NAME_WIDTH,
     RANGE_WIDTH,
     VALUE_WIDTH,
@@ -147,6 +148,24 @@ async def test_sparkline_ranges_are_those_of_what_is_drawn() -> None:
         assert chart_ends(charts, "mean |TD|")[2] == "0.5893"
         value, top, bottom = chart_ends(charts, "epsilon")
         assert float(bottom) < float(value) < float(top)  # 0.679, within the run's range
+
+
+async def test_a_narrow_box_keeps_its_curves_and_drops_the_ranges() -> None:
+    charts = TrainingCharts()
+    app = Alone(charts)
+    async with app.run_test(size=(40, 12)) as pilot:  # the Train view's, the board beside
+        charts.update_from(snapshot(
+            episodes=300, recorded=300, mean_return=0.5, mean_length=9.0, mean_abs_td=0.1,
+            epsilon=0.9, series={"return": tuple(np.linspace(-1, 0.5, 50)),
+                                 "length": tuple(np.linspace(30, 9, 50)),
+                                 "td_error": (0.1,) * 50, "epsilon": (0.9,) * 50},
+        ))
+        await pilot.pause()
+        lines = drawn(charts)
+        assert not any("max" in line or "min" in line for line in lines), lines
+        row = next(i for i, line in enumerate(lines) if "mean return" in line)
+        bars = re.sub(r"[^▁▂▃▄▅▆▇█]", "", lines[row + 1])  # the lower row: every column
+        assert len(bars) >= MIN_SPARK and len(set(bars)) > 2, lines  # a rising curve
 
 
 async def test_a_flat_series_is_drawn_flat() -> None:

@@ -113,9 +113,6 @@ class TrainView(Vertical):
         width: 100%;
         height: 7;
     }
-    TrainView.-animated TrainingCharts .chart-range {
-        display: none;
-    }
     TrainView #train-board-box.-shown {
         display: block;
     }

@@ -11,8 +11,9 @@ What is drawn and what is written agree (`plotted`): the curve's columns are
 bucket means of the series with the current value as the last column, and
 "max" and "min" are the highest and lowest of those columns, so the value
 beside a curve always lies within its range. A curve whose range rounds to
-one number is drawn flat. Figures too long for their column are shortened,
-never cut; a mean with no episodes behind it (just after loading a saved
+one number is drawn flat. In a narrow box (the animated board beside it) the
+ranges make way so the curves keep `MIN_SPARK` columns. Figures too long for
+their column are shortened, never cut; a mean with no episodes behind it (just after loading a saved
 agent) reads "–".
 
 A sparkline draws bars of eighths of a cell, `height` cells tall, coloured
@@ -36,6 +37,7 @@ from tui_gym.ui.widgets.strip_widget import Line, StripWidget
 
 BARS = "▁▂▃▄▅▆▇█"
 NAME_WIDTH, VALUE_WIDTH, RANGE_WIDTH = 12, 9, 13
+MIN_SPARK = 10  # narrower than this, the ranges make way for the curves
 COLOUR_STEPS = 32  # bar colours are blended in this many steps
 
 
@@ -240,6 +242,8 @@ class TrainingCharts(StripWidget):
         name_style, value_style = styles["charts--name"], styles["charts--value"]
         range_style = styles["charts--range"]
         range_width = 0 if compact else RANGE_WIDTH + 1
+        if width - NAME_WIDTH - VALUE_WIDTH - 2 - range_width < MIN_SPARK:
+            range_width = 0  # a narrow box (the board beside it): the curves, not their ranges
         spark_width = max(1, width - NAME_WIDTH - VALUE_WIDTH - 2 - range_width)
         lines: list[Line] = []
         for curve in CURVES:
