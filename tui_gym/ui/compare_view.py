@@ -170,6 +170,26 @@ class RunList(SelectionList[int]):
         return strip
 
 
+def describe_run(run: RunSummary) -> Text:
+    """A run's line in the list: label, kind, seeds, final return, status unless
+    finished ("open in the app" for an app's run whose agent is still there, trained
+    or not), and when it started."""
+    from datetime import datetime
+
+    when = datetime.fromtimestamp(run.started_at).strftime("%m-%d %H:%M")
+    seeds = len(run.seeds)
+    parts = [run_label(run), str(run.kind), f"{seeds} seed{'s' if seeds != 1 else ''}"]
+    figure = run.figure("mean_return_last")
+    if figure is not None:
+        parts.append(f"return {with_interval(figure)}")
+    if str(run.status) == "running" and str(run.kind) == "app":
+        parts.append("open in the app")  # it ends when the app lets the agent go
+    elif str(run.status) != "finished":
+        parts.append(str(run.status))
+    parts.append(when)
+    return Text(" · ".join(parts), no_wrap=True, overflow="ellipsis")
+
+
 class CompareView(Vertical):
     """Runs of the current game, their curves and figures, and comparisons to launch."""
 
@@ -449,18 +469,7 @@ class CompareView(Vertical):
             run_list.highlighted = min(highlighted or 0, len(self._runs) - 1)
 
     def _describe(self, run: RunSummary) -> Text:
-        from datetime import datetime
-
-        when = datetime.fromtimestamp(run.started_at).strftime("%m-%d %H:%M")
-        seeds = len(run.seeds)
-        parts = [run_label(run), str(run.kind), f"{seeds} seed{'s' if seeds != 1 else ''}"]
-        figure = run.figure("mean_return_last")
-        if figure is not None:
-            parts.append(f"return {with_interval(figure)}")
-        if str(run.status) != "finished":
-            parts.append(str(run.status))
-        parts.append(when)
-        return Text(" · ".join(parts), no_wrap=True, overflow="ellipsis")
+        return describe_run(run)
 
     def _record(self, run_id: int) -> RunRecord | None:
         record = self._records.get(run_id)
