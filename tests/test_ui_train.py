@@ -2,7 +2,9 @@
 
 Every wait polls a condition with a deadline (`wait_for`); nothing sleeps.
 Training runs on the runner's worker thread, so these tests also check that
-the view follows it without ever training on the event loop.
+the view follows it without ever training on the event loop. Checks of one
+setup share one app, run in sequence; the view's own drawing of a session is
+checked on the view mounted alone.
 """
 
 from __future__ import annotations
@@ -18,14 +20,13 @@ from tui_gym.ui.train_view import TrainView
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
 
+from .host_app_suite_train import TrainHost
 from .screen import screen_text
 from .waiting import DEADLINE, wait_for
 
 
 async def open_train(pilot) -> TrainView:
-    await pilot.pause()
     await pilot.press("t")
-    await pilot.pause()
     view = pilot.app.query_one(TrainView)
     assert view.display
     return view
@@ -70,7 +71,9 @@ async def test_the_vector_engine_reaches_near_optimal_play_live() -> None:
         assert "gap" in screen_text(app)
 
 
-async def test_training_runs_live_and_pauses() -> None:
+async def test_one_episode_reset_live_training_pause_and_speed_keys() -> None:
+    """One app, in turn: one episode at a time and the reset; training live and the
+    pause; the speed keys, animated training and switching game."""
     app = blackjack_app()
     async with app.run_test(size=(120, 40)) as pilot:
         view = await open_train(pilot)
@@ -79,6 +82,29 @@ async def test_training_runs_live_and_pauses() -> None:
         assert "episodes 0" in view.stats.plain
         assert app.runner.speed.name == "max"
 
+        # One episode, and the reset.
+        await pilot.press("full_stop")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 1, "one episode")
+        assert app.runner.wait_idle(DEADLINE)
+        for _ in range(5):
+            await pilot.pause()
+        assert app.runner.latest.episodes == 1
+        assert not app.runner.running
+        await wait_for(pilot, lambda: "episodes 1\n" in view.stats.plain, "the stats to say 1")
+
+        await pilot.press("full_stop")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 2, "a second episode")
+
+        await pilot.press("space")
+        await wait_for(pilot, lambda: app.runner.latest.episodes > 200, "some training")
+        await pilot.press("x")  # while it may still run: the reset pauses first
+        await pilot.press("y")  # yes: it has trained, so it asks first
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
+        assert not app.runner.running
+        await wait_for(pilot, lambda: "episodes 0\n" in view.stats.plain, "fresh stats")
+        assert not view.charts.data("return")
+
+        # Training runs live, and pauses.
         await pilot.press("space")
         await wait_for(pilot, lambda: app.runner.latest.episodes > 500, "500 episodes")
         await wait_for(pilot, lambda: len(view.charts.data("return")) > 1,
@@ -105,43 +131,12 @@ async def test_training_runs_live_and_pauses() -> None:
             assert app.runner.latest.episodes == stopped
         assert "paused" in view.stats.plain
         assert view._snapshot.episodes == stopped
-        await pilot.pause()
         on_screen = screen_text(app)
         assert f"{stopped:,} / 1,000,000 episodes" in on_screen
         assert "paused" in on_screen and "mean return" in on_screen
         assert "Q-values, usable ace" in on_screen and "exact value" in on_screen
 
-
-async def test_one_episode_and_reset() -> None:
-    app = blackjack_app(episodes=1000)
-    async with app.run_test(size=(120, 40)) as pilot:
-        view = await open_train(pilot)
-        await pilot.press("full_stop")
-        await wait_for(pilot, lambda: app.runner.latest.episodes == 1, "one episode")
-        assert app.runner.wait_idle(DEADLINE)
-        for _ in range(5):
-            await pilot.pause()
-        assert app.runner.latest.episodes == 1
-        assert not app.runner.running
-        await wait_for(pilot, lambda: "episodes 1\n" in view.stats.plain, "the stats to say 1")
-
-        await pilot.press("full_stop")
-        await wait_for(pilot, lambda: app.runner.latest.episodes == 2, "a second episode")
-
-        await pilot.press("space")
-        await wait_for(pilot, lambda: app.runner.latest.episodes > 200, "some training")
-        await pilot.press("x")  # while it may still run: the reset pauses first
-        await pilot.press("y")  # yes: it has trained, so it asks first
-        await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
-        assert not app.runner.running
-        await wait_for(pilot, lambda: "episodes 0\n" in view.stats.plain, "fresh stats")
-        assert not view.charts.data("return")
-
-
-async def test_speed_keys_animated_training_and_switching_game() -> None:
-    app = blackjack_app()
-    async with app.run_test(size=(120, 40)) as pilot:
-        view = await open_train(pilot)
+        # The speed keys.
         assert view.speed_name == "max"
         await pilot.press("minus")
         assert app.runner.speed.name == view.speed_name == "animated (fast)"
@@ -177,12 +172,14 @@ async def test_speed_keys_animated_training_and_switching_game() -> None:
         assert view.form.input("episodes").value == str(hp.episodes)
 
 
-async def test_invalid_fields_are_marked_block_training_and_are_checked_together() -> None:
+async def test_invalid_fields_buttons_and_the_compact_layout() -> None:
+    """One app, in turn: bad fields are marked, block training and are checked together;
+    the buttons do what the keys do; the compact layout at 80x24."""
     app = blackjack_app(episodes=300)
     async with app.run_test(size=(120, 40)) as pilot:
         view = await open_train(pilot)
         form = view.query_one(HyperparameterForm)
-        # One app for every bad value: each is marked and blocks training, and the fix
+        # Every bad value in turn: each is marked and blocks training, and the fix
         # clears the mark before the next one is typed.
         for bad in ("abc", "5", ""):
             await pilot.press("e")  # edit the hyperparameters
@@ -211,6 +208,40 @@ async def test_invalid_fields_are_marked_block_training_and_are_checked_together
         await pilot.press("space")
         await wait_for(pilot, lambda: app.runner.latest.episodes == 300, "the whole budget")
         assert app.session.hp.learning_rate == pytest.approx(0.01)
+        await paused(pilot)
+        assert "finished" in view.stats.plain
+
+        # The buttons do what the keys do.
+        assert await pilot.click("#btn-reset")
+        await pilot.press("y")  # yes: it has trained, so it asks first
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
+        assert await pilot.click("#btn-slower")
+        assert view.speed_name == "animated (fast)"
+        assert await pilot.click("#btn-faster")
+        assert view.speed_name == "max"
+        assert await pilot.click("#btn-episode")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 1, "one episode")
+        assert await pilot.click("#btn-toggle")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 300, "the whole budget")
+        await paused(pilot)
+        assert "finished" in view.stats.plain
+
+        # At 80x24 the compact layout hides the form until `e`.
+        await pilot.press("x", "y")  # a fresh agent, to train at this size
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
+        await pilot.resize_terminal(80, 24)
+        assert app.screen.has_class("compact")
+        assert not view.form.region.height  # hidden until `e`
+        await pilot.press("space")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 300, "the whole budget")
+        await paused(pilot)
+        assert "episodes" in view.stats.plain
+        assert "A  2  3" in view.heatmap.plain
+        await pilot.press("e")
+        await wait_for(pilot, lambda: app.focused is view.form.input("learning_rate"),
+                       "the form")
+        await pilot.press("escape")
+        assert app.focused is view.heatmap
 
         # Fields are checked together, and the form loads a whole set.
         assert form.input("episodes").value == "300"
@@ -229,7 +260,7 @@ async def test_invalid_fields_are_marked_block_training_and_are_checked_together
         assert form.input("episodes").value == "77"
 
 
-async def test_gridworld_target_moves_and_training_fills_the_heatmap() -> None:
+async def test_gridworld_target_moves_training_fills_the_heatmap_also_compact() -> None:
     app = gridworld_app(episodes=300)
     async with app.run_test(size=(120, 40)) as pilot:
         view = await open_train(pilot)
@@ -268,61 +299,23 @@ async def test_gridworld_target_moves_and_training_fills_the_heatmap() -> None:
         assert view.heatmap.plain != before
         assert "finished" in view.stats.plain
 
-
-async def test_hidden_heatmaps_say_why() -> None:
-    app = TuiGymApp(
-        Session("blackjack", seed=0, choices=(WrapperChoice("DelayObservation"),))
-    )
-    async with app.run_test(size=(120, 40)) as pilot:
-        view = await open_train(pilot)
-        reason = app.session.hidden_reason()
-        assert reason
-        assert view.heatmap.plain == reason
-        assert reason in view.stats.plain
-
-
-async def test_compact_layout_at_80x24() -> None:
-    app = blackjack_app(episodes=500)
-    async with app.run_test(size=(80, 24)) as pilot:
-        view = await open_train(pilot)
+        # The same at 80x24, from a fresh agent.
+        await pilot.press("x", "y")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
+        await pilot.resize_terminal(80, 24)
         assert app.screen.has_class("compact")
-        assert not view.form.region.height  # hidden until `e`
         await pilot.press("space")
-        await wait_for(pilot, lambda: app.runner.latest.episodes == 500, "the whole budget")
-        await paused(pilot)
-        assert "episodes" in view.stats.plain
-        assert "A  2  3" in view.heatmap.plain
-        await pilot.press("e")
-        await wait_for(pilot, lambda: app.focused is view.form.input("learning_rate"),
-                       "the form")
-        await pilot.press("escape")
-        assert app.focused is view.heatmap
-
-
-async def test_gridworld_compact() -> None:
-    app = gridworld_app(episodes=100)
-    async with app.run_test(size=(80, 24)) as pilot:
-        view = await open_train(pilot)
-        await pilot.press("space")
-        await wait_for(pilot, lambda: app.runner.latest.episodes == 100, "the whole budget")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 300, "the whole budget")
         await paused(pilot)
         assert "target at" in view.heatmap.plain
 
 
-async def test_buttons_do_what_the_keys_do() -> None:
-    app = blackjack_app(episodes=400)
+async def test_hidden_heatmaps_say_why() -> None:
+    app = TrainHost(Session("blackjack", seed=0, choices=(WrapperChoice("DelayObservation"),)))
     async with app.run_test(size=(120, 40)) as pilot:
-        view = await open_train(pilot)
-        assert await pilot.click("#btn-slower")
-        assert view.speed_name == "animated (fast)"
-        assert await pilot.click("#btn-faster")
-        assert view.speed_name == "max"
-        assert await pilot.click("#btn-episode")
-        await wait_for(pilot, lambda: app.runner.latest.episodes == 1, "one episode")
-        assert await pilot.click("#btn-toggle")
-        await wait_for(pilot, lambda: app.runner.latest.episodes == 400, "the whole budget")
-        await paused(pilot)
-        assert "finished" in view.stats.plain
-        assert await pilot.click("#btn-reset")
-        await pilot.press("y")  # yes: it has trained, so it asks first
-        await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
+        await pilot.pause()
+        view = app.query_one(TrainView)
+        reason = app.session.hidden_reason()
+        assert reason
+        assert view.heatmap.plain == reason
+        assert reason in view.stats.plain
