@@ -58,13 +58,13 @@ def gridworld_app(episodes: int = 1_000_000, engine: str = "scalar", **kwargs) -
 
 
 async def test_the_vector_engine_reaches_near_optimal_play_live() -> None:
-    app = blackjack_app(episodes=1_000_000, engine="auto")
+    app = blackjack_app(episodes=500_000, engine="auto")
     async with app.run_test(size=(120, 40)) as pilot:
         view = await open_train(pilot)
         await pilot.press("space")
         await wait_for(pilot, lambda: not app.runner.running and app.runner.finished,
                        "the budget to finish", timeout=60)
-        await wait_for(pilot, lambda: view._snapshot.episodes == 1_000_000, "the last frame")
+        await wait_for(pilot, lambda: view._snapshot.episodes == 500_000, "the last frame")
         assert "vector" in view.stats.plain
         gap = app.session.reference().figures["gap"]
         assert gap < 0.002
@@ -114,7 +114,7 @@ async def test_one_episode_reset_live_training_pause_and_speed_keys() -> None:
         assert all(first.values()), first
         seen = app.runner.latest.episodes
 
-        await wait_for(pilot, lambda: view._snapshot.episodes > seen + 2000, "more episodes")
+        await wait_for(pilot, lambda: view._snapshot.episodes > seen + 500, "more episodes")
         later = view.charts.data("epsilon")
         assert later != first["epsilon"]  # the curves follow the run
         shown = view._snapshot.episodes
