@@ -16,11 +16,12 @@ from tui_gym.core.session import Session, default_settings
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games import game_for
 from tui_gym.ui.app import TuiGymApp
+from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.train_view import TrainView
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
 
-from .host_app_suite_train import TrainHost
+from .host_app_suite_train import TrainHost, send_key, wait_until
 from .screen import screen_text
 from .waiting import DEADLINE, wait_for
 
@@ -61,7 +62,7 @@ async def test_the_vector_engine_reaches_near_optimal_play_live() -> None:
     app = blackjack_app(episodes=500_000, engine="auto")
     async with app.run_test(size=(120, 40)) as pilot:
         view = await open_train(pilot)
-        await pilot.press("space")
+        send_key(pilot, "space")
         await wait_for(pilot, lambda: not app.runner.running and app.runner.finished,
                        "the budget to finish", timeout=60)
         await wait_for(pilot, lambda: view._snapshot.episodes == 500_000, "the last frame")
@@ -95,9 +96,10 @@ async def test_one_episode_reset_live_training_pause_and_speed_keys() -> None:
         await pilot.press("full_stop")
         await wait_for(pilot, lambda: app.runner.latest.episodes == 2, "a second episode")
 
-        await pilot.press("space")
-        await wait_for(pilot, lambda: app.runner.latest.episodes > 200, "some training")
-        await pilot.press("x")  # while it may still run: the reset pauses first
+        send_key(pilot, "space")
+        await wait_until(pilot, lambda: app.runner.latest.episodes > 200, "some training")
+        send_key(pilot, "x")  # while it may still run: the reset pauses first
+        await wait_until(pilot, lambda: isinstance(app.screen, ConfirmScreen), "the question")
         await pilot.press("y")  # yes: it has trained, so it asks first
         await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
         assert not app.runner.running
@@ -105,16 +107,16 @@ async def test_one_episode_reset_live_training_pause_and_speed_keys() -> None:
         assert not view.charts.data("return")
 
         # Training runs live, and pauses.
-        await pilot.press("space")
-        await wait_for(pilot, lambda: app.runner.latest.episodes > 500, "500 episodes")
-        await wait_for(pilot, lambda: len(view.charts.data("return")) > 1,
-                       "the return sparkline")
+        send_key(pilot, "space")
+        await wait_until(pilot, lambda: app.runner.latest.episodes > 500, "500 episodes")
+        await wait_until(pilot, lambda: len(view.charts.data("return")) > 1,
+                         "the return sparkline")
         first = {k: view.charts.data(k)
                  for k in ("return", "length", "td_error", "epsilon")}
         assert all(first.values()), first
         seen = app.runner.latest.episodes
 
-        await wait_for(pilot, lambda: view._snapshot.episodes > seen + 500, "more episodes")
+        await wait_until(pilot, lambda: view._snapshot.episodes > seen + 500, "more episodes")
         later = view.charts.data("epsilon")
         assert later != first["epsilon"]  # the curves follow the run
         shown = view._snapshot.episodes
