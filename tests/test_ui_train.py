@@ -223,20 +223,15 @@ async def test_invalid_fields_buttons_and_the_compact_layout() -> None:
         assert view.speed_name == "max"
         assert await pilot.click("#btn-episode")
         await wait_for(pilot, lambda: app.runner.latest.episodes == 1, "one episode")
+
+        # At 80x24 the compact layout hides the form until `e`; the run goes on there.
+        await pilot.resize_terminal(80, 24)
+        assert app.screen.has_class("compact")
+        assert not view.form.region.height  # hidden until `e`
         assert await pilot.click("#btn-toggle")
         await wait_for(pilot, lambda: app.runner.latest.episodes == 300, "the whole budget")
         await paused(pilot)
         assert "finished" in view.stats.plain
-
-        # At 80x24 the compact layout hides the form until `e`.
-        await pilot.press("x", "y")  # a fresh agent, to train at this size
-        await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
-        await pilot.resize_terminal(80, 24)
-        assert app.screen.has_class("compact")
-        assert not view.form.region.height  # hidden until `e`
-        await pilot.press("space")
-        await wait_for(pilot, lambda: app.runner.latest.episodes == 300, "the whole budget")
-        await paused(pilot)
         assert "episodes" in view.stats.plain
         assert "A  2  3" in view.heatmap.plain
         await pilot.press("e")
@@ -262,7 +257,7 @@ async def test_invalid_fields_buttons_and_the_compact_layout() -> None:
         assert form.input("episodes").value == "77"
 
 
-async def test_gridworld_target_moves_training_fills_the_heatmap_also_compact() -> None:
+async def test_gridworld_target_moves_and_training_fills_the_heatmap_also_compact() -> None:
     app = gridworld_app(episodes=300)
     async with app.run_test(size=(120, 40)) as pilot:
         view = await open_train(pilot)
@@ -301,14 +296,9 @@ async def test_gridworld_target_moves_training_fills_the_heatmap_also_compact() 
         assert view.heatmap.plain != before
         assert "finished" in view.stats.plain
 
-        # The same at 80x24, from a fresh agent.
-        await pilot.press("x", "y")
-        await wait_for(pilot, lambda: app.runner.latest.episodes == 0, "the reset")
+        # The trained heatmap at 80x24.
         await pilot.resize_terminal(80, 24)
         assert app.screen.has_class("compact")
-        await pilot.press("space")
-        await wait_for(pilot, lambda: app.runner.latest.episodes == 300, "the whole budget")
-        await paused(pilot)
         assert "target at" in view.heatmap.plain
 
 
