@@ -45,22 +45,22 @@ def test_nothing_to_continue_before_the_first_episode_or_when_nothing_changes() 
 
 
 async def test_raising_the_budget_after_a_finished_run_continues_it_in_the_app() -> None:
-    hp = QLearning.hyperparameters(episodes=400, epsilon_decay_fraction=0.5)
+    hp = QLearning.hyperparameters(episodes=100, epsilon_decay_fraction=0.5)
     app = TuiGymApp(Session("blackjack", seed=0, hp=hp))
     notes: list[str] = []
     app.notify = lambda message, **kw: notes.append(message)  # type: ignore[method-assign]
     async with app.run_test(size=(120, 40)) as pilot:
         await pilot.press("t", "space")
-        await wait_for(pilot, lambda: app.runner.finished and not app.runner.running, "400")
+        await wait_for(pilot, lambda: app.runner.finished and not app.runner.running, "100")
         final = app.session.agent.epsilon
         assert final == hp.epsilon_final
         form = app.query_one(TrainView).form
-        form.input("episodes").value = "1600"
+        form.input("episodes").value = "400"
         await pilot.press("space")
-        assert any("goes on from episode 400" in note for note in notes), notes
+        assert any("goes on from episode 100" in note for note in notes), notes
         assert form.input("epsilon_decay_fraction").value == "0.125"
-        await wait_for(pilot, lambda: app.runner.finished and not app.runner.running, "1600")
-        assert app.session.trainer.episodes == 1600
+        await wait_for(pilot, lambda: app.runner.finished and not app.runner.running, "400")
+        assert app.session.trainer.episodes == 400
         assert app.session.agent.epsilon == final
         # The curve (rolling means of epsilon) never rises: exploration did not restart.
         epsilons = app.runner.latest.series["epsilon"]
