@@ -98,10 +98,33 @@ async def test_each_algorithm_explains_a_hand_computed_step() -> None:
             assert view.heatmap.step_cell is not None  # the state's cell is marked
 
 
-async def test_the_form_follows_the_algorithm_and_a_trained_agent_asks() -> None:
-    app = TuiGymApp(Session("blackjack", seed=0, hp={"episodes": 2_000}))
+async def test_epsilon_and_learning_rate_change_live_and_the_form_follows_the_algorithm(
+) -> None:
+    """One app training in a child process, in turn: epsilon and the learning rate
+    change while it trains; the form follows the algorithm, and a trained agent asks
+    before another algorithm replaces it."""
+    app = TuiGymApp(Session("blackjack", seed=0, hp={"episodes": 100_000_000}), runner="process")
     async with app.run_test(size=(120, 40)) as pilot:
         view = await open_train(pilot)
+        await pilot.press("space")
+        await wait_for(pilot, lambda: app.runner.latest.episodes > 200, "training")
+        await pilot.press("e")
+        for name, value in (("epsilon_start", "0.2"), ("epsilon_final", "0.2"),
+                            ("learning_rate", "0.05")):
+            view.form.input(name).value = value
+        view.form.input("learning_rate").focus()
+        await pilot.press("enter")
+        await wait_for(pilot, lambda: app.session.agent.epsilon == 0.2, "epsilon in force")
+        assert app.runner.running and app.session.agent.hp.learning_rate == 0.05
+        seen = app.runner.latest.episodes
+        await wait_for(pilot, lambda: app.runner.latest.episodes > seen + 5_000, "more episodes")
+        assert app.runner.latest.series["epsilon"][-1] < 0.25  # the curve shows it
+
+        # The form follows the algorithm, and a trained agent asks before a switch.
+        await pilot.press("space")  # pause
+        await wait_for(pilot, lambda: app.runner.wait_idle(0), "the agent handed back")
+        await pilot.press("x", "y")  # a fresh agent: it has trained, so it asks first
+        await wait_for(pilot, lambda: app.session.trainer.episodes == 0, "the reset")
         assert isinstance(view.form.control("learning_rate_schedule"), Select)
         await pilot.click("#algorithm-dyna-q")  # untrained: no question
         await wait_for(pilot, lambda: app.session.algorithm == "dyna-q", "Dyna-Q")
@@ -127,20 +150,3 @@ async def test_the_form_follows_the_algorithm_and_a_trained_agent_asks() -> None
         assert isinstance(view.form.control("first_visit"), Select)
 
 
-async def test_epsilon_and_learning_rate_change_while_training_runs() -> None:
-    app = TuiGymApp(Session("blackjack", seed=0, hp={"episodes": 100_000_000}), runner="process")
-    async with app.run_test(size=(120, 40)) as pilot:
-        view = await open_train(pilot)
-        await pilot.press("space")
-        await wait_for(pilot, lambda: app.runner.latest.episodes > 200, "training")
-        await pilot.press("e")
-        for name, value in (("epsilon_start", "0.2"), ("epsilon_final", "0.2"),
-                            ("learning_rate", "0.05")):
-            view.form.input(name).value = value
-        view.form.input("learning_rate").focus()
-        await pilot.press("enter")
-        await wait_for(pilot, lambda: app.session.agent.epsilon == 0.2, "epsilon in force")
-        assert app.runner.running and app.session.agent.hp.learning_rate == 0.05
-        seen = app.runner.latest.episodes
-        await wait_for(pilot, lambda: app.runner.latest.episodes > seen + 5_000, "more episodes")
-        assert app.runner.latest.series["epsilon"][-1] < 0.25  # the curve shows it
