@@ -53,11 +53,6 @@ def blackjack_app(episodes: int = 1_000_000, engine: str = "scalar") -> TuiGymAp
     return TuiGymApp(Session("blackjack", seed=0, hp=hp, engine=engine))
 
 
-def gridworld_app(episodes: int = 1_000_000, engine: str = "scalar", **kwargs) -> TuiGymApp:
-    hp = default_settings(game_for("gridworld"), "q-learning").replace(episodes=episodes)
-    return TuiGymApp(Session("gridworld", seed=0, hp=hp, engine=engine, **kwargs))
-
-
 async def test_the_vector_engine_reaches_near_optimal_play_live() -> None:
     app = blackjack_app(episodes=500_000, engine="auto")
     async with app.run_test(size=(120, 40)) as pilot:
@@ -72,9 +67,11 @@ async def test_the_vector_engine_reaches_near_optimal_play_live() -> None:
         assert "gap" in screen_text(app)
 
 
-async def test_one_episode_reset_live_training_pause_and_speed_keys() -> None:
+async def test_one_episode_reset_live_training_speed_keys_then_gridworld_targets() -> None:
     """One app, in turn: one episode at a time and the reset; training live and the
-    pause; the speed keys, animated training and switching game."""
+    pause; the speed keys, animated training and switching game; on GridWorld then,
+    the target moved by keys and clicks, training filling the heatmap, and the compact
+    layout."""
     app = blackjack_app()
     async with app.run_test(size=(120, 40)) as pilot:
         view = await open_train(pilot)
@@ -172,6 +169,49 @@ async def test_one_episode_reset_live_training_pause_and_speed_keys() -> None:
         assert any("target" in text for _, text in view.key_help())
         hp = app.session.hp
         assert view.form.input("episodes").value == str(hp.episodes)
+        assert hp == default_settings(game_for("gridworld"), "q-learning")
+
+        # GridWorld's heatmaps follow a target moved by keys and clicks; its own budget.
+        view.form.input("episodes").value = "300"  # applied when training starts
+        heatmap = view.query_one(HeatmapView)
+        assert app.focused is heatmap
+        assert view.focus_target == (4, 4)
+        assert heatmap.focus_cell == (0, 4)
+        assert "target at (4, 4)" in heatmap.plain
+
+        await pilot.press("left")
+        assert view.focus_target == (3, 4)
+        await pilot.press("j")  # down
+        assert view.focus_target == (3, 3)
+        await pilot.press("up", "up", "up")  # clipped at the top edge
+        assert view.focus_target == (3, 4)
+        await pilot.pause()
+        assert "target at (3, 4)" in heatmap.plain
+        assert heatmap.focus_cell == (0, 3)
+
+        # a click on the bottom-left cell puts the target at (0, 0)
+        place = heatmap._placements[0]
+        cell_w, cell_h = heatmap._cell_geometry
+        x = heatmap.styles.padding.left + place.x + cell_w // 2
+        y = place.y + 4 * cell_h
+        assert await pilot.click(HeatmapView, offset=(x, y))
+        assert view.focus_target == (0, 0)
+        await pilot.pause()
+        assert "target at (0, 0)" in heatmap.plain
+        assert "optimal pair fraction" in view.stats.plain
+
+        # Training fills the heatmap, and the view says when the budget is done.
+        before = view.heatmap.plain
+        await pilot.press("space")
+        await wait_for(pilot, lambda: app.runner.latest.episodes == 300, "the whole budget")
+        await paused(pilot)
+        assert view.heatmap.plain != before
+        assert "finished" in view.stats.plain
+
+        # The trained heatmap at 80x24.
+        await pilot.resize_terminal(80, 24)
+        assert app.screen.has_class("compact")
+        assert "target at" in view.heatmap.plain
 
 
 async def test_invalid_fields_buttons_and_the_compact_layout() -> None:
@@ -259,51 +299,6 @@ async def test_invalid_fields_buttons_and_the_compact_layout() -> None:
         assert hp is not None and hp.epsilon_start == 0.1 and hp.episodes == 300
         form.load(QLearning.hyperparameters(episodes=77))
         assert form.input("episodes").value == "77"
-
-
-async def test_gridworld_target_moves_and_training_fills_the_heatmap_also_compact() -> None:
-    app = gridworld_app(episodes=300)
-    async with app.run_test(size=(120, 40)) as pilot:
-        view = await open_train(pilot)
-        heatmap = view.query_one(HeatmapView)
-        assert app.focused is heatmap
-        assert view.focus_target == (4, 4)
-        assert heatmap.focus_cell == (0, 4)
-        assert "target at (4, 4)" in heatmap.plain
-
-        await pilot.press("left")
-        assert view.focus_target == (3, 4)
-        await pilot.press("j")  # down
-        assert view.focus_target == (3, 3)
-        await pilot.press("up", "up", "up")  # clipped at the top edge
-        assert view.focus_target == (3, 4)
-        await pilot.pause()
-        assert "target at (3, 4)" in heatmap.plain
-        assert heatmap.focus_cell == (0, 3)
-
-        # a click on the bottom-left cell puts the target at (0, 0)
-        place = heatmap._placements[0]
-        cell_w, cell_h = heatmap._cell_geometry
-        x = heatmap.styles.padding.left + place.x + cell_w // 2
-        y = place.y + 4 * cell_h
-        assert await pilot.click(HeatmapView, offset=(x, y))
-        assert view.focus_target == (0, 0)
-        await pilot.pause()
-        assert "target at (0, 0)" in heatmap.plain
-        assert "optimal pair fraction" in view.stats.plain
-
-        # Training fills the heatmap, and the view says when the budget is done.
-        before = view.heatmap.plain
-        await pilot.press("space")
-        await wait_for(pilot, lambda: app.runner.latest.episodes == 300, "the whole budget")
-        await paused(pilot)
-        assert view.heatmap.plain != before
-        assert "finished" in view.stats.plain
-
-        # The trained heatmap at 80x24.
-        await pilot.resize_terminal(80, 24)
-        assert app.screen.has_class("compact")
-        assert "target at" in view.heatmap.plain
 
 
 async def test_hidden_heatmaps_say_why() -> None:
