@@ -58,7 +58,9 @@ def _hand_target(name: str, agent, record) -> float:
 
 async def test_each_algorithm_explains_a_hand_computed_step() -> None:
     app = TuiGymApp(Session("gridworld", {"size": 3}, seed=0, hp=KNOWN))
-    async with app.run_test(size=(120, 40)) as pilot:
+    # The smallest window: the panel's numbers do not depend on its size, and there is
+    # less to lay out each time the form rebuilds for another algorithm.
+    async with app.run_test(size=(80, 24)) as pilot:
         view = await open_train(pilot)
         for cls in ALGORITHMS:
             if cls.name != app.session.algorithm:
