@@ -100,8 +100,7 @@ async def test_each_algorithm_explains_a_hand_computed_step() -> None:
             assert view.heatmap.step_cell is not None  # the state's cell is marked
 
 
-async def test_epsilon_and_learning_rate_change_live_and_the_form_follows_the_algorithm(
-) -> None:
+async def test_epsilon_changes_live_then_the_form_follows_the_algorithm() -> None:
     """One app training in a child process, in turn: epsilon and the learning rate
     change while it trains; the form follows the algorithm, and a trained agent asks
     before another algorithm replaces it."""
