@@ -50,7 +50,7 @@ async def tick(pilot, wrapper: str) -> None:
 
 async def test_each_game_keeps_its_agent_settings_wrappers_curves_and_play():
     app = blackjack()
-    async with app.run_test(size=(120, 40)) as pilot:
+    async with app.run_test(size=(80, 24)) as pilot:
         await pilot.press("t")
         await train_to_the_end(pilot)
         blackjack_session = app.session
@@ -120,7 +120,7 @@ async def test_the_child_process_trains_the_restored_agent():
     session = Session("blackjack", hp=QLearning.hyperparameters(episodes=1_000_000), seed=0,
                       engine="scalar")  # slow enough to be mid-run at the switch
     app = TuiGymApp(session, runner="process")
-    async with app.run_test(size=(120, 40)) as pilot:
+    async with app.run_test(size=(80, 24)) as pilot:
         await pilot.press("t", "space")
         await wait_for(pilot, lambda: app.runner.latest.episodes > 500, "some training")
         agent = session.agent
