@@ -1,13 +1,11 @@
-"""Driving an app while it keeps the process busy (a comparison computing on the job's
-thread, training animated on the board): keys sent and a condition waited for without
-Textual's wait for an idle process.
+"""Driving an app while a comparison computes on a thread of the test's process: keys
+sent and conditions waited for without Textual's wait for an idle process.
 
 The pilot's `press()` and `pause()` wait until the process stops using the CPU, for up
-to a second each time; while a comparison computes on a thread of the test's process,
-or the app redraws each animated step, that second runs out, spent computing and
-redrawing. Here a key goes the way a pressed key goes (a `Key` event to the app, through
-its bindings) and the app is settled by letting it handle what it has queued until
-nothing is left, so each step lasts only as long as the app needs.
+to a second each time; while a comparison computes, that second always runs out, and
+the comparison spends it. Here a key goes the way a pressed key goes (a `Key` event to
+the app, through its bindings) and the app is settled by letting it handle what it has
+queued until nothing is left, so each step lasts only as long as the app needs.
 """
 
 from __future__ import annotations
