@@ -11,6 +11,8 @@ from tui_gym.core.experiments.app_recording import SessionRunLog
 from tui_gym.core.session import Session
 from tui_gym.ui.app import TuiGymApp
 
+from .waiting import wait_for
+
 DEADLINE = 20.0
 
 
@@ -110,13 +112,11 @@ async def test_the_app_records_the_run_it_trains(tmp_path: Path) -> None:
     db = tmp_path / "runs.db"
     app = TuiGymApp(blackjack(episodes=2000), runner="thread",
                     run_log=SessionRunLog(db, clock=Clock()))
-    async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.press("t")
-        await pilot.press("space")
-        deadline = time.monotonic() + DEADLINE
-        while not (app.runner.finished and app._last_version == app.runner.latest.version):
-            assert time.monotonic() < deadline, "training did not finish"
-            await pilot.pause()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.press("t", "space")
+        await wait_for(pilot, lambda: app.runner.finished
+                       and app._last_version == app.runner.latest.version,
+                       "training to finish", DEADLINE)
         await pilot.press("q")
     with RunHistory(db) as history:
         [run] = history.list_runs()

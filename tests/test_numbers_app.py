@@ -2,9 +2,10 @@
 
 The Train view's badge follows what happened (finished only when a budget was
 used up; paused, not ready, once training has begun); the advice (`i`) and the
-scoreboard read the same agent after it trained; a loaded agent's figures
-with nothing behind them read "–". Training runs on the runner's thread or
-headless on the session; every wait polls a condition.
+scoreboard read the same agent after it trained (one app drives both in
+turn); a loaded agent's figures with nothing behind them read "–" (the Train
+view mounted alone). Training runs on the runner's thread or headless on the
+session; every wait polls a condition.
 """
 
 from __future__ import annotations
@@ -16,12 +17,13 @@ from tui_gym.games.words import signed
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.widgets.scoreboard import Scoreboard
 
+from .host_app_suite_session import TrainViewAlone
 from .waiting import wait_for
 
 DEADLINE = 20.0
 
 
-def badge(app: TuiGymApp) -> str:
+def badge(app: TuiGymApp | TrainViewAlone) -> str:
     return app.train_view.stats.plain.split("  ")[0]
 
 
@@ -35,10 +37,11 @@ async def settled(pilot, app: TuiGymApp, shown: str) -> None:
     await wait_for(pilot, lambda: badge(app) == shown, f"the badge to say {shown!r}")
 
 
-async def test_the_badge_follows_the_run() -> None:
+async def test_the_badge_follows_the_run_then_advice_and_scoreboard_read_the_trained_agent(
+) -> None:
     hp = default_settings(game_for("gridworld"), "q-learning").replace(episodes=40)
     app = TuiGymApp(Session("gridworld", seed=0, hp=hp))
-    async with app.run_test(size=(120, 40)) as pilot:
+    async with app.run_test(size=(80, 24)) as pilot:
         await pilot.press("t")
         await pilot.pause()
         assert badge(app) == "○ ready"
@@ -63,19 +66,15 @@ async def test_the_badge_follows_the_run() -> None:
         await settled(pilot, app, "‖ paused")  # paused before the first episode ended
         assert app.runner.latest.episodes == 0
 
-
-async def test_advice_and_scoreboard_read_the_trained_agent() -> None:
-    app = TuiGymApp(Session("gridworld", seed=0))
-    async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.pause()
+        # The advice and the scoreboard, on a fresh agent (no episode yet: no question).
+        await pilot.press("x")
+        assert app.session.trainer.episodes == 0 and app.runner.latest.steps == 0
+        await pilot.press("p", "i")
         view = app.play_view
-        await pilot.press("i")
-        await pilot.pause()
         detail = str(view.query_one("#play-detail").render())
         assert "agent: has never seen this state" in detail
 
         await pilot.press("t")
-        await pilot.pause()
         session = app.session
         session.trainer.run(episodes=4000)  # headless, as the runner would
         await pilot.press("p")
@@ -99,9 +98,8 @@ async def test_a_loaded_agent_shows_dashes_where_there_is_no_data(tmp_path) -> N
     trained = Session("blackjack", seed=0, hp=QLearning.hyperparameters(episodes=50_000))
     trained.trainer.run(episodes=5000)
     path = trained.save(tmp_path / "bj.tgym")
-    app = TuiGymApp(Session.load(path))
+    app = TrainViewAlone(Session.load(path))  # what the Train view shows of it
     async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.press("t")
         await pilot.pause()
         stats = app.train_view.stats.plain.splitlines()
         assert "episodes 5,000" in stats and "steps " + f"{trained.trainer.steps:,}" in stats

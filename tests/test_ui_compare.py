@@ -29,6 +29,7 @@ from tui_gym.ui.compare_view import CompareView, parse_count, read_launch
 from tui_gym.ui.widgets.compare_chart import BRAILLE_BASE, plot_cells
 from tui_gym.ui.widgets.figures_table import with_interval
 
+from .busy_waiting_suite_session import press_busy, wait_busy
 from .screen import screen_text
 from .waiting import wait_for
 
@@ -202,8 +203,7 @@ async def test_the_app_key_v_opens_it_and_another_view_stops_it(
     db = tmp_path / "runs.db"
     ids = record_runs(db)
     app = TuiGymApp(Session("blackjack", seed=0), db=db)
-    async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.pause()
+    async with app.run_test(size=(80, 24)) as pilot:
         await pilot.press("v")
         await wait_for(pilot, lambda: app.compare_view is not None
                        and len(app.compare_view.runs) == 3, "the Compare view and its runs")
@@ -213,7 +213,7 @@ async def test_the_app_key_v_opens_it_and_another_view_stops_it(
         assert " l Launch " in screen_text(app)
         # Another view stops the comparison; what finished is recorded.
         await launch(pilot, view, {"sarsa"}, seeds=2, episodes=200_000)
-        await wait_for(pilot, lambda: view.chart.series, "a live curve")
+        await wait_busy(pilot, lambda: view.chart.series, "a live curve")
         await pilot.press("t")
         await wait_for(pilot, lambda: view.job is None, "the comparison to stop")
         assert app.current_view == "train"
@@ -240,10 +240,11 @@ async def launch(pilot, view: CompareView, algorithms: set[str], seeds: int, epi
     view.query_one("#compare-seeds").value = str(seeds)
     view.query_one("#compare-episodes").value = str(episodes)
     view.focus_default()
-    await pilot.press("l")
+    # The comparison keeps the process busy from here on: no waiting for an idle one.
+    await press_busy(pilot, "l")
     # A short comparison may be over before the first look: started, or already done.
-    await wait_for(pilot, lambda: view.job is not None or view.message.startswith("Comparison"),
-                   "the comparison to start")
+    await wait_busy(pilot, lambda: view.job is not None or view.message.startswith("Comparison"),
+                    "the comparison to start")
 
 
 async def test_launch_runs_records_and_ticks_the_runs(tmp_path: Path) -> None:
@@ -283,11 +284,11 @@ async def test_progress_draws_live_curves_and_stopping_keeps_what_finished(tmp_p
         view.processes = 0
         await pilot.pause()
         await launch(pilot, view, {"q-learning"}, seeds=2, episodes=200_000)
-        await wait_for(pilot, lambda: [s.key for s in view.chart.series]
-                       == [("live", "q-learning")], "a live curve")
+        await wait_busy(pilot, lambda: [s.key for s in view.chart.series]
+                        == [("live", "q-learning")], "a live curve")
         live = view.table.rows[0]
         assert live.note == "running" and live.seeds == 2 and live.episodes >= 1
-        await wait_for(pilot, lambda: "Q-learning (live)" in screen_text(app), "the legend")
+        await wait_busy(pilot, lambda: "Q-learning (live)" in screen_text(app), "the legend")
         await pilot.press("s")
         await wait_for(pilot, lambda: view.job is None, "the comparison to stop")
         assert "Comparison stopped" in view.message
@@ -298,7 +299,7 @@ async def test_progress_draws_live_curves_and_stopping_keeps_what_finished(tmp_p
         # Closing the app stops a comparison and records what finished.
         await launch(pilot, view, {"sarsa"}, seeds=2, episodes=200_000)
         job = view.job
-        await wait_for(pilot, lambda: job.progress_count > 0, "progress")
+        await wait_busy(pilot, lambda: job.progress_count > 0, "progress")
     assert job.done and job.error is None and job.result.interrupted
     with RunHistory(db) as history:
         assert [(r.algorithm, str(r.status)) for r in history.list_runs()] == [

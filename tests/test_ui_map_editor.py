@@ -1,5 +1,6 @@
 """The map editor, driven like a person would: paint, undo and redo, the optimum following
-each edit, the agent kept through edits that keep its states and reset on a resize.
+each edit, the agent kept through edits that keep its states and reset on a resize; a
+game without a map says so. One app drives it all in turn.
 
 Waits poll a condition with a deadline; nothing sleeps.
 """
@@ -14,20 +15,22 @@ from tui_gym.ui.widgets.map_editor import MapCanvas, MapEditor
 from .waiting import wait_for
 
 DEADLINE = 20.0
+SIZE = (80, 24)
 
 
 def status(editor: MapEditor) -> str:
     return str(editor.query_one("#editor-status").content)
 
 
-async def test_paint_undo_and_the_optimum_on_a_small_cliff() -> None:
+async def test_paint_undo_and_the_optimum_on_a_small_cliff_and_a_game_without_a_map(
+) -> None:
     """CliffWalking's rules on SFF/FFG: every step costs 1, so the optimum is minus the
-    fewest steps (3), and with the goal walled off the whole 200-step limit."""
+    fewest steps (3), and with the goal walled off the whole 200-step limit. Then
+    Blackjack, a game without a map, says so."""
     session = Session("cliffwalking", env_kwargs={"layout": "SFF\nFFG\n"}, seed=0,
                       hp={"episodes": 1_000_000_000})
     app = TuiGymApp(session)
-    async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.pause()
+    async with app.run_test(size=SIZE) as pilot:
         await pilot.press("m")
         view = app.query_one(TrainView)
         await wait_for(pilot, lambda: view.editor is not None and view.editor.canvas.has_focus,
@@ -55,8 +58,9 @@ async def test_paint_undo_and_the_optimum_on_a_small_cliff() -> None:
         await pilot.press("y", "u")
         assert editor.grid_map.cells == ("SFF", "FWG")
 
-        await pilot.press("minus")  # animated: light on the machine, and a person can follow
-        await pilot.press("space")  # training goes on while editing
+        # Animated (light on the machine, and a person can follow); training goes on while
+        # editing.
+        await pilot.press("minus", "minus", "space")
         await wait_for(pilot, lambda: app.session.trainer.episodes > 0, "some training")
         agent = app.session.agent
         # A pit of +1 beside the start: falling in (one step, +1) beats walking (-3).
@@ -78,12 +82,10 @@ async def test_paint_undo_and_the_optimum_on_a_small_cliff() -> None:
         await pilot.press("escape")
         assert not view.editing_map
 
-
-async def test_a_game_without_a_map_says_so() -> None:
-    app = TuiGymApp(Session("blackjack", seed=0))
-    async with app.run_test(size=(80, 24)) as pilot:
-        await pilot.pause()
+        # A game without a map says so.
+        await pilot.press("b")
+        await wait_for(pilot, lambda: app.session.game.name == "blackjack", "Blackjack")
         await pilot.press("m")
         await pilot.pause()
-        assert not app.query_one(TrainView).editing_map
+        assert not view.editing_map
         assert any("no map to edit" in n.message for n in app._notifications)

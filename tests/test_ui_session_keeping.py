@@ -40,7 +40,6 @@ async def train_to_the_end(pilot) -> None:
     await wait_for(pilot, lambda: app.runner.finished and not app.runner.running,
                    "the budget to finish")
     assert app.runner.wait_idle(DEADLINE)
-    await pilot.pause()
 
 
 async def tick(pilot, wrapper: str) -> None:
@@ -50,7 +49,7 @@ async def tick(pilot, wrapper: str) -> None:
 
 async def test_each_game_keeps_its_agent_settings_wrappers_curves_and_play():
     app = blackjack()
-    async with app.run_test(size=(120, 40)) as pilot:
+    async with app.run_test(size=(80, 24)) as pilot:
         await pilot.press("t")
         await train_to_the_end(pilot)
         blackjack_session = app.session
@@ -60,7 +59,6 @@ async def test_each_game_keeps_its_agent_settings_wrappers_curves_and_play():
         rate = app.train_view.form.input("learning_rate")
         await wait_for(pilot, lambda: app.focused is rate, "the form")
         await pilot.press(*"0.05", "enter")
-        await pilot.pause()
         assert app.session.hp.learning_rate == 0.05
         await tick(pilot, "ScaleReward")
         assert [c.name for c in app.session.choices] == ["ScaleReward"]
@@ -68,12 +66,10 @@ async def test_each_game_keeps_its_agent_settings_wrappers_curves_and_play():
         curve = app.train_view.charts.data("return")
         assert curve
         await pilot.press("p", "s")  # a hand of the person's own (with the wrapper)
-        await pilot.pause()
         assert app.play_view.game.tally.episodes == 1
         await pilot.press("t")
 
         await pilot.press("g")
-        await pilot.pause()
         assert app.session.game.name == "gridworld"
         assert app.session.trainer.episodes == 0 and not app.session.choices
         assert app.session.hp == default_settings(app.session.game, "q-learning",
@@ -85,7 +81,6 @@ async def test_each_game_keeps_its_agent_settings_wrappers_curves_and_play():
         assert app.runner.wait_idle(DEADLINE)
 
         await pilot.press("b")
-        await pilot.pause()
         assert app.session is blackjack_session and app.session.agent is agent
         assert (app.session.agent.table()[0] == table).all()
         assert app.session.trainer.episodes == 300 and app.runner.latest.episodes == 300
@@ -99,7 +94,6 @@ async def test_each_game_keeps_its_agent_settings_wrappers_curves_and_play():
 
         # The picker switches the same way, and GridWorld kept its one episode.
         await pilot.click("#game-gridworld")
-        await pilot.pause()
         assert app.session.game.name == "gridworld" and app.session.trainer.episodes == 1
         # So does the command palette.
         await pilot.press("ctrl+p")
@@ -111,7 +105,6 @@ async def test_each_game_keeps_its_agent_settings_wrappers_curves_and_play():
         await wait_for(pilot, lambda: app.session is blackjack_session, "the palette's switch")
         # The person's own play came back too.
         await pilot.press("p")
-        await pilot.pause()
         assert app.play_view.game.tally.episodes == 1
         assert "Hands 1" in str(app.play_view.query_one("#play-tally").render())
 
@@ -120,7 +113,7 @@ async def test_the_child_process_trains_the_restored_agent():
     session = Session("blackjack", hp=QLearning.hyperparameters(episodes=1_000_000), seed=0,
                       engine="scalar")  # slow enough to be mid-run at the switch
     app = TuiGymApp(session, runner="process")
-    async with app.run_test(size=(120, 40)) as pilot:
+    async with app.run_test(size=(80, 24)) as pilot:
         await pilot.press("t", "space")
         await wait_for(pilot, lambda: app.runner.latest.episodes > 500, "some training")
         agent = session.agent
