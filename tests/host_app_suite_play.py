@@ -9,6 +9,10 @@ from textual.app import App, ComposeResult
 from tui_gym.core.session import Session
 from tui_gym.ui.play_view import PlayView
 
+# The Play view's size in the app at 120x40 (beside the side panel, under the header,
+# over the key bar): mounted alone at this size, it lays out and wraps as there.
+VIEW_SIZE = (76, 38)
+
 
 class PlayHost(App[None]):
     """A `PlayView` filling the screen, playing `session`'s game."""

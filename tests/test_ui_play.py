@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from textual.app import App, ComposeResult
 from textual.widgets import Static
 
-from tests.host_app_suite_play import PlayHost
+from tests.host_app_suite_play import VIEW_SIZE, PlayHost
 from tui_gym.core.session import Session
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games.blackjack.game import card_label
@@ -70,7 +70,7 @@ WASD = {"right": "d", "left": "a", "up": "w", "down": "s"}
 
 async def test_blackjack_hand_played_to_the_end_by_keys_buttons_and_clicks() -> None:
     app = make_host("blackjack")
-    async with app.run_test(size=BIG) as pilot:
+    async with app.run_test(size=VIEW_SIZE) as pilot:
         await pilot.pause()
         view = app.play_view
         game = view.game
@@ -146,7 +146,7 @@ async def test_blackjack_hand_played_to_the_end_by_keys_buttons_and_clicks() -> 
 
 async def test_blackjack_stick_enter_and_running_tally() -> None:
     app = make_host("blackjack", seed=3)
-    async with app.run_test(size=BIG) as pilot:
+    async with app.run_test(size=VIEW_SIZE) as pilot:
         await pilot.pause()
         view = app.play_view
         game = view.game
@@ -178,7 +178,7 @@ async def test_blackjack_stick_enter_and_running_tally() -> None:
 
 async def test_gridworld_walk_by_arrows_wasd_and_clicks_and_reset() -> None:
     app = make_host("gridworld")
-    async with app.run_test(size=BIG) as pilot:
+    async with app.run_test(size=VIEW_SIZE) as pilot:
         await pilot.pause()
         view = app.play_view
         game = view.game
@@ -240,7 +240,7 @@ def _agent_row(picture: str) -> int:
 
 async def test_gridworld_time_limit_truncates() -> None:
     app = make_host("gridworld", choices=(WrapperChoice.make("TimeLimit", max_episode_steps=3),))
-    async with app.run_test(size=BIG) as pilot:
+    async with app.run_test(size=VIEW_SIZE) as pilot:
         await pilot.pause()
         view = app.play_view
         game = view.game
@@ -264,7 +264,7 @@ async def test_gridworld_time_limit_truncates() -> None:
 async def test_advice_shows_the_optimum_and_judges_moves() -> None:
     for env, keys in (("blackjack", ("s",)), ("gridworld", None)):
         app = make_host(env)
-        async with app.run_test(size=BIG) as pilot:
+        async with app.run_test(size=VIEW_SIZE) as pilot:
             await pilot.pause()
             view = app.play_view
             assert "optimal:" not in shown(view, "#play-detail")
@@ -321,7 +321,7 @@ async def test_switching_games_swaps_the_board_and_keeps_focus() -> None:
 
 async def test_observation_wrappers_show_the_raw_observation() -> None:
     app = make_host("blackjack", choices=(WrapperChoice.make("FlattenObservation"),))
-    async with app.run_test(size=BIG) as pilot:
+    async with app.run_test(size=VIEW_SIZE) as pilot:
         await pilot.pause()
         view = app.play_view
         assert "observation: [" in shown(view, "#play-detail")
