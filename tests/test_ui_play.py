@@ -280,45 +280,6 @@ async def test_advice_shows_the_optimum_and_judges_moves() -> None:
 # --- what the app adds: its keys, game switches, sizes --------------------------
 
 
-async def test_switching_games_swaps_the_board_and_keeps_focus() -> None:
-    app = make_app("blackjack")
-    async with app.run_test(size=BIG) as pilot:
-        await pilot.pause()
-        view = app.play_view
-        assert app.focused is view.board, "the board has the keyboard from the start"
-        await pilot.press("g")
-        await pilot.pause()
-        assert isinstance(view.board, GridBoard) and len(view.query(GridBoard)) == 1
-        assert not view.query(CardsBoard)
-        assert view.game.game.board == "grid"
-        assert app.focused is view.board
-        assert "GridWorld" in shown(view, "#play-title")
-        keys = [key for key, _ in view.key_help()]
-        assert "r" in keys
-
-        # w (the app's key for the wrappers) and r walk and reset on the grid.
-        start, size = view.game.scene()["agent"], view.game.scene()["size"]
-        await pilot.press("w")
-        assert view.game.last.steps == 1
-        agent = view.game.scene()["agent"]
-        assert (agent[0], agent[1]) == (start[0], min(start[1] + 1, size - 1)), "w is up"
-        assert app.focused is view.board, "w moved the agent; it did not leave the board"
-        await pilot.press("r")
-        assert view.game.last.steps == 0
-
-        await pilot.press("b")
-        await pilot.pause()
-        assert isinstance(view.board, CardsBoard) and app.focused is view.board
-        assert view.game.tally.episodes == 0
-
-        # n (the app's key for one training step) deals the next hand here.
-        await pilot.press("s")
-        assert view.game.done
-        await pilot.press("n")
-        assert not view.game.done and view.game.tally.episodes == 1
-        assert app.focused is view.board
-
-
 async def test_observation_wrappers_show_the_raw_observation() -> None:
     app = make_host("blackjack", choices=(WrapperChoice.make("FlattenObservation"),))
     async with app.run_test(size=VIEW_SIZE) as pilot:
@@ -329,16 +290,26 @@ async def test_observation_wrappers_show_the_raw_observation() -> None:
         assert view.game.done
 
 
-async def test_compact_layout_at_80x24() -> None:
-    # One app: Blackjack first, then GridWorld switched to at the same size.
+async def test_compact_layout_at_80x24_and_switching_games_swaps_the_board_keeps_focus() -> None:
+    # One app at 80x24: Blackjack first, then GridWorld by its key, then back.
     app = make_app("blackjack")
     async with app.run_test(size=SMALL) as pilot:
+        await pilot.pause()
+        view = app.play_view
+        assert app.focused is view.board, "the board has the keyboard from the start"
+        mine = view.game
         for env, key in (("blackjack", "h"), ("gridworld", "up")):
             if env == "gridworld":
                 await pilot.press("g")
-            await pilot.pause()
+                await pilot.pause()
+                assert isinstance(view.board, GridBoard) and len(view.query(GridBoard)) == 1
+                assert not view.query(CardsBoard)
+                assert view.game.game.board == "grid"
+                assert app.focused is view.board
+                assert "GridWorld" in shown(view, "#play-title")
+                keys = [key for key, _ in view.key_help()]
+                assert "r" in keys
             assert app.screen.has_class("compact")
-            view = app.play_view
             board = view.board
             assert board is not None and board.region.height >= 7
             canvas = board.canvas.region
@@ -348,6 +319,28 @@ async def test_compact_layout_at_80x24() -> None:
             assert ("░" in picture) if env == "blackjack" else ("●" in picture)
             await pilot.press(key)
             assert view.game.last.steps == 1 or view.game.done
+
+        # w (the app's key for the wrappers) and r walk and reset on the grid.
+        start, size = view.game.scene()["agent"], view.game.scene()["size"]
+        await pilot.press("w")
+        assert view.game.last.steps == 2
+        agent = view.game.scene()["agent"]
+        assert (agent[0], agent[1]) == (start[0], min(start[1] + 1, size - 1)), "w is up"
+        assert app.focused is view.board, "w moved the agent; it did not leave the board"
+        await pilot.press("r")
+        assert view.game.last.steps == 0
+
+        await pilot.press("b")
+        await pilot.pause()
+        assert isinstance(view.board, CardsBoard) and app.focused is view.board
+        assert view.game is mine and view.game.tally.episodes == 0, "the hand is kept"
+
+        # n (the app's key for one training step) deals the next hand here.
+        await pilot.press("s")
+        assert view.game.done
+        await pilot.press("n")
+        assert not view.game.done and view.game.tally.episodes == 1
+        assert app.focused is view.board
 
 
 # --- the boards on their own (as the Train view uses them) ---------------------
