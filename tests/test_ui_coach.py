@@ -207,7 +207,8 @@ async def test_advice_shows_the_optimum_and_the_agent() -> None:
         assert tuple(np.flatnonzero(q == q.max())) == ties
         picks = " or ".join(game.game.action_names[a] for a in ties)
         assert f"agent: {picks} (Q stick {signed(q[0], 3)}, hit {signed(q[1], 3)})" in detail
-        assert "agent: " in screen_text(app) and "optimal: " in screen_text(app)
+        screen = screen_text(app)
+        assert "agent: " in screen and "optimal: " in screen
 
 
 # --- the scoreboard --------------------------------------------------------------
@@ -343,7 +344,8 @@ async def test_watching_the_agent_walk_the_grid_with_shift_a() -> None:
             "the agent to walk across the board",
         )
         assert view.agent_card.decisions >= 2, "the agent made the moves"
-        assert "Grid" in screen_text(app) and WATCHING in screen_text(app)
+        screen = screen_text(app)
+        assert "Grid" in screen and WATCHING in screen
 
         await pilot.press("left")
         assert not view.watching and game.last.steps == 1 and game.scene() == mine
