@@ -162,7 +162,7 @@ def _key_for(board: Any, action: str) -> str:
 async def test_a_person_plays_one_episode_of_every_game_in_the_app() -> None:
     # One app plays each game in turn, switched to by the game's own key, as a person
     # would. A time limit keeps the episode short where the optimum takes its time.
-    limit = parse_wrapper_spec("TimeLimit:max_episode_steps=25")
+    limit = parse_wrapper_spec("TimeLimit:max_episode_steps=15")
     app = TuiGymApp(_session(GAMES[0].name, choices=(limit,)))
     async with app.run_test(size=(120, 40)) as pilot:
         await pilot.pause()
