@@ -159,26 +159,40 @@ def _key_for(board: Any, action: str) -> str:
     raise AssertionError(f"no key for {action}")
 
 
-@pytest.mark.parametrize("game", GAMES, ids=IDS)
-async def test_a_person_plays_one_episode_in_the_app(game: Game) -> None:
-    # A time limit keeps the episode short where the optimum takes its time.
-    limit = parse_wrapper_spec("TimeLimit:max_episode_steps=25")
-    app = TuiGymApp(_session(game.name, choices=(limit,)))
+async def test_a_person_plays_one_episode_of_every_game_in_the_app() -> None:
+    # One app plays each game in turn, switched to by the game's own key, as a person
+    # would. A time limit keeps the episode short where the optimum takes its time.
+    limit = parse_wrapper_spec("TimeLimit:max_episode_steps=15")
+    app = TuiGymApp(_session(GAMES[0].name, choices=(limit,)))
     async with app.run_test(size=(120, 40)) as pilot:
         await pilot.pause()
         view = app.play_view
-        for _ in range(200):
-            human = view.game
-            assert human is not None and view.board is not None
-            if human.done:
-                break
-            advice = game.oracle.advice(human.env, app.session.env_kwargs)
-            action = game.action_names[advice.optimal[0] if advice.optimal else 0]
-            steps = human.last.steps if human.last else 0
-            await pilot.press(_key_for(view.board, action))  # waits for the screen
-            assert human.last is not None and (human.last.steps == steps + 1 or human.done)
-        assert view.game is not None and view.game.done
-        assert str(view.query_one("#play-headline").render())
+        for game in GAMES:
+            if app.session.game is not game:
+                await pilot.press(game.key)
+                assert app.session.game is game, game.name
+                assert app.rebuild(choices=(limit,)), game.name
+                await pilot.pause()
+            assert app.focused is view.board, f"{game.name}: the board has the keyboard"
+            # Each key is handled in full before the next; the frames in between, which
+            # nothing here reads, are drawn once at the end of the episode.
+            with app.batch_update():
+                for _ in range(200):
+                    human = view.game
+                    assert human is not None and view.board is not None
+                    if human.done:
+                        break
+                    advice = game.oracle.advice(human.env, app.session.env_kwargs)
+                    action = game.action_names[advice.optimal[0] if advice.optimal else 0]
+                    steps = human.last.steps if human.last else 0
+                    await pilot.press(_key_for(view.board, action))  # waits for the screen
+                    assert human.last is not None and (
+                        human.last.steps == steps + 1 or human.done
+                    ), game.name
+            await pilot.pause()
+            assert view.game is not None and view.game.done, game.name
+            assert view.game.game is game
+            assert str(view.query_one("#play-headline").render()), game.name
 
 
 # --- exact values against play ---------------------------------------------------

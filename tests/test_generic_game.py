@@ -78,7 +78,6 @@ async def test_the_app_draws_its_text_and_plays_by_digits() -> None:
             if app.play_view.game.done:
                 break
             await pilot.press("1")
-            await pilot.pause()
         assert app.play_view.game.done
         await pilot.press("t")
         await pilot.pause()

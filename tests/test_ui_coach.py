@@ -1,11 +1,12 @@
-"""The coach, the advice, the scoreboard and watching the agent, through the real app.
+"""The coach, the advice, the scoreboard and watching the agent.
 
-Each UI test drives `TuiGymApp` with Textual's pilot as a person would and
+Each UI test drives the Play view with Textual's pilot as a person would and
 checks the words on screen against exact figures computed independently
 (the profile's advice values, the session's exact reference, the Tally's
-interval). Sessions and deals are seeded; nothing sleeps: the watched agent
-plays on a fast interval and the tests poll for what they wait on. The last
-tests check `policy_steps_over_optimal` against a brute-force walk.
+interval). The view is mounted alone (`PlayHost`), except where the app's view
+switch is the point. Sessions and deals are seeded; nothing sleeps: the watched
+agent plays on a fast interval and the tests poll for what they wait on. The
+last tests check `policy_steps_over_optimal` against a brute-force walk.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from tests.host_app_suite_play import VIEW_SIZE, PlayHost
 from tests.screen import screen_text
 from tui_gym.core.play import HumanGame
 from tui_gym.core.session import Session
@@ -73,14 +75,13 @@ def key_of(view: PlayView, action: int) -> str:
 
 async def test_coach_prices_a_blunder_and_approves_the_optimum() -> None:
     seed = seed_for_first_hand(20, usable=0)
-    app = TuiGymApp(Session(env_id="blackjack", seed=seed))
-    async with app.run_test(size=BIG) as pilot:
+    app = PlayHost(Session(env_id="blackjack", seed=seed))
+    async with app.run_test(size=VIEW_SIZE) as pilot:
         await pilot.pause()
         view = app.play_view
         game = view.game
         assert not view.coach_on
         await pilot.press("c")
-        await pilot.pause()
         assert view.coach_on and "coach on" in shown(view, "#play-title")
 
         advice = game.game.oracle.advice(game.env, app.session.env_kwargs)
@@ -98,11 +99,9 @@ async def test_coach_prices_a_blunder_and_approves_the_optimum() -> None:
 
         if not game.done:  # drew an ace to 21: stick and finish
             await pilot.press("s")
-            await pilot.pause()
         decisions = view.scorecard.decisions
         agreed = view.scorecard.agreed
         await pilot.press("n")
-        await pilot.pause()
         assert shown(view, "#play-coach") == "", "a new hand starts without a verdict"
         advice = game.game.oracle.advice(game.env, app.session.env_kwargs)
         best = advice.optimal[0]
@@ -115,7 +114,7 @@ async def test_coach_prices_a_blunder_and_approves_the_optimum() -> None:
         assert view.scorecard.agreed == agreed + 1
 
         await pilot.press("c")  # off: the line goes, the counting goes on
-        await pilot.pause()
+        await pilot.pause()  # the screen read below drops the line
         assert not view.coach_on and "coach on" not in shown(view, "#play-title")
         assert shown(view, "#play-coach") == ""
         assert "was optimal" not in screen_text(app)
@@ -123,13 +122,12 @@ async def test_coach_prices_a_blunder_and_approves_the_optimum() -> None:
 
 
 async def test_coach_flags_moves_off_every_shortest_path() -> None:
-    app = TuiGymApp(Session(env_id="gridworld", seed=1))
-    async with app.run_test(size=BIG) as pilot:
+    app = PlayHost(Session(env_id="gridworld", seed=1))
+    async with app.run_test(size=VIEW_SIZE) as pilot:
         await pilot.pause()
         view = app.play_view
         game = view.game
         await pilot.press("c")
-        await pilot.pause()
         names = game.game.action_names
 
         def distance() -> int:
@@ -161,7 +159,6 @@ async def test_coach_flags_moves_off_every_shortest_path() -> None:
             optimal = game.game.oracle.advice(game.env, app.session.env_kwargs).optimal
             before = distance()
             await pilot.press(ARROW[names[optimal[0]]])
-            await pilot.pause()
             coach = shown(view, "#play-coach")
             assert coach.startswith(f"✓ {names[optimal[0]]} is on a shortest path")
             to_go = f"{plural(before - 1, 'step')} to go" if before > 1 else "target reached"
@@ -176,7 +173,6 @@ async def test_coach_flags_moves_off_every_shortest_path() -> None:
         # The agent has learned nothing: advice says so, and its exact score is that of
         # what it does, a random walk (every action ties), cut off by the time limit.
         await pilot.press("r", "i")
-        await pilot.pause()
         detail = shown(view, "#play-detail")
         assert "optimal: " in detail and "agent: has never seen this state" in detail
         size = game.scene()["size"]
@@ -195,13 +191,13 @@ async def test_coach_flags_moves_off_every_shortest_path() -> None:
 
 async def test_advice_shows_the_optimum_and_the_agent() -> None:
     session = trained("blackjack", 3000)
-    app = TuiGymApp(session)
-    async with app.run_test(size=BIG) as pilot:
+    app = PlayHost(session)
+    async with app.run_test(size=VIEW_SIZE) as pilot:
         await pilot.pause()
         view = app.play_view
         game = view.game
         await pilot.press("i")
-        await pilot.pause()
+        await pilot.pause()  # the screen read below shows the advice
         detail = shown(view, "#play-detail")
         advice = game.game.oracle.advice(game.env, session.env_kwargs)
         assert advice.note in detail
@@ -211,7 +207,8 @@ async def test_advice_shows_the_optimum_and_the_agent() -> None:
         assert tuple(np.flatnonzero(q == q.max())) == ties
         picks = " or ".join(game.game.action_names[a] for a in ties)
         assert f"agent: {picks} (Q stick {signed(q[0], 3)}, hit {signed(q[1], 3)})" in detail
-        assert "agent: " in screen_text(app) and "optimal: " in screen_text(app)
+        screen = screen_text(app)
+        assert "agent: " in screen and "optimal: " in screen
 
 
 # --- the scoreboard --------------------------------------------------------------
@@ -240,10 +237,8 @@ async def test_scoreboard_matches_the_tally_and_the_exact_reference() -> None:
                 action = 0 if hand < 2 else advice.optimal[0]
                 optimal_moves += action in advice.optimal
                 await pilot.press(key_of(view, action))
-                await pilot.pause()
             if hand < 3:
                 await pilot.press("n")
-                await pilot.pause()
         tally = game.tally
         assert tally.episodes == 4
         # Four hands say little about the interval's width: it shows as "–" (from 30 on).
@@ -253,6 +248,7 @@ async def test_scoreboard_matches_the_tally_and_the_exact_reference() -> None:
         share = f"{card.agreed}/{card.decisions} optimal decisions ({card.agreement:.0%})"
         text = scoreboard_text(view)
         assert f"You      {mean} · {share}" in text
+        await pilot.pause()  # the screen read below shows the last hand's figures
         assert "± – (95% CI)" in screen_text(app)
 
         # The agent learns on: the figures follow when the Play view is shown again.
@@ -260,7 +256,7 @@ async def test_scoreboard_matches_the_tally_and_the_exact_reference() -> None:
         exact = session.reference().figures["exact_value"]
         assert view.agent_figures["exact_value"] != exact, "500 more hands moved the value"
         await pilot.press("t")
-        await pilot.pause()
+        await pilot.pause()  # the Play view is hidden
         await pilot.press("p")
         await wait_for(
             pilot, lambda: view.agent_figures["exact_value"] == exact, "fresh agent figures"
@@ -272,8 +268,8 @@ async def test_scoreboard_matches_the_tally_and_the_exact_reference() -> None:
 
 
 async def test_watching_the_agent_play_blackjack_and_taking_over() -> None:
-    app = TuiGymApp(trained("blackjack", 2000))
-    async with app.run_test(size=BIG) as pilot:
+    app = PlayHost(trained("blackjack", 2000))
+    async with app.run_test(size=VIEW_SIZE) as pilot:
         await pilot.pause()
         view = app.play_view
         view.watch_interval, view.watch_pause_ticks = FAST, 1
@@ -308,7 +304,6 @@ async def test_watching_the_agent_play_blackjack_and_taking_over() -> None:
         assert (view.agent_game.last.steps, watched.episodes) == moves, "the agent has stopped"
 
         await pilot.press("h")  # now keys play again
-        await pilot.pause()
         assert game.last.steps == 1 or game.done
 
         # A click on the board takes over too, and moves nothing.
@@ -323,14 +318,13 @@ async def test_watching_the_agent_play_blackjack_and_taking_over() -> None:
             else:  # Hit, Stick or Deal, whichever the agent's hand allows
                 buttons = view.board.query("BoardButton")
                 await pilot.click(next(b for b in buttons if not b.disabled))
-            await pilot.pause()
             assert not view.watching, f"a click on the {target} takes over"
             assert game.last is last and game.tally.episodes == int(game.done)
 
 
 async def test_watching_the_agent_walk_the_grid_with_shift_a() -> None:
-    app = TuiGymApp(Session(env_id="gridworld", seed=1, env_kwargs={"size": 4}))
-    async with app.run_test(size=BIG) as pilot:
+    app = PlayHost(Session(env_id="gridworld", seed=1, env_kwargs={"size": 4}))
+    async with app.run_test(size=VIEW_SIZE) as pilot:
         await pilot.pause()
         view = app.play_view
         view.watch_interval = FAST
@@ -338,12 +332,10 @@ async def test_watching_the_agent_walk_the_grid_with_shift_a() -> None:
         assert dict(view.key_help())["A"].startswith("watch the agent play")
 
         await pilot.press("a")  # on the grid, a is a move (left), not watching
-        await pilot.pause()
         assert not view.watching and game.last.steps == 1
         mine = game.scene()
 
         await pilot.press("A")
-        await pilot.pause()
         assert view.watching
         seen = {tuple(view.board.scene["agent"])}
         await wait_for(
@@ -352,10 +344,10 @@ async def test_watching_the_agent_walk_the_grid_with_shift_a() -> None:
             "the agent to walk across the board",
         )
         assert view.agent_card.decisions >= 2, "the agent made the moves"
-        assert "Grid" in screen_text(app) and WATCHING in screen_text(app)
+        screen = screen_text(app)
+        assert "Grid" in screen and WATCHING in screen
 
         await pilot.press("left")
-        await pilot.pause()
         assert not view.watching and game.last.steps == 1 and game.scene() == mine
         assert view.board.scene["agent"] == mine["agent"]
         assert game.tally.episodes == 0 and view.scorecard.decisions == 1

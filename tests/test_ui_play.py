@@ -1,9 +1,11 @@
-"""The Play view through the real app: play Blackjack hands and walk GridWorld.
+"""The Play view: play Blackjack hands and walk GridWorld.
 
-Every test drives `TuiGymApp` with Textual's pilot the way a person would
-(keys, clicks) and checks both the game's state and the words on screen.
-Sessions are seeded, so the hands dealt and the grids drawn are the same on
-every run; no test sleeps.
+Every test drives the view with Textual's pilot the way a person would (keys,
+clicks) and checks both the game's state and the words on screen. Most mount the
+view alone (`PlayHost`); what the app adds, the keyboard on the board from the
+start, the keys it shares with the boards, game switches and the compact layout,
+is checked through the real `TuiGymApp`. Sessions are seeded, so the hands dealt
+and the grids drawn are the same on every run; no test sleeps.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from collections.abc import Sequence
 from textual.app import App, ComposeResult
 from textual.widgets import Static
 
+from tests.host_app_suite_play import VIEW_SIZE, PlayHost
 from tui_gym.core.session import Session
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games.blackjack.game import card_label
@@ -29,6 +32,11 @@ SMALL = (80, 24)
 
 def make_app(env: str = "blackjack", choices: Sequence[WrapperChoice] = (), seed: int = 0):
     return TuiGymApp(Session(env_id=env, seed=seed, choices=tuple(choices)))
+
+
+def make_host(env: str = "blackjack", choices: Sequence[WrapperChoice] = (), seed: int = 0):
+    """The Play view alone, on the session `make_app` would make."""
+    return PlayHost(Session(env_id=env, seed=seed, choices=tuple(choices)))
 
 
 def shown(view: PlayView, selector: str) -> str:
@@ -61,13 +69,13 @@ WASD = {"right": "d", "left": "a", "up": "w", "down": "s"}
 
 
 async def test_blackjack_hand_played_to_the_end_by_keys_buttons_and_clicks() -> None:
-    app = make_app("blackjack")
-    async with app.run_test(size=BIG) as pilot:
+    app = make_host("blackjack")
+    async with app.run_test(size=VIEW_SIZE) as pilot:
         await pilot.pause()
         view = app.play_view
         game = view.game
         assert game is not None and isinstance(view.board, CardsBoard)
-        assert app.focused is view.board, "the board has the keyboard from the start"
+        assert app.focused is view.board
         assert not game.done
         picture = drawing(view)
         assert "░" in picture and "showing" in picture, "the hole card lies face down"
@@ -78,7 +86,6 @@ async def test_blackjack_hand_played_to_the_end_by_keys_buttons_and_clicks() -> 
                 break
             total = game.last.observation[0]
             await pilot.press("h" if total < 17 else "s")
-            await pilot.pause()
         assert game.done and game.last is not None
 
         headline = shown(view, "#play-headline")
@@ -99,36 +106,31 @@ async def test_blackjack_hand_played_to_the_end_by_keys_buttons_and_clicks() -> 
 
         # A move after the end only says what to do.
         await pilot.press("h")
-        await pilot.pause()
         assert "This hand is over" in shown(view, "#play-hint")
         assert game.tally.episodes == 1
 
         # n deals the next hand; the tally keeps the first.
         await pilot.press("n")
-        await pilot.pause()
         assert not game.done and game.last.steps == 0
         assert "░" in drawing(view)
         assert "New hand" in shown(view, "#play-headline")
         assert "Hands 1" in shown(view, "#play-tally")
 
-        # The buttons work with the mouse (the same app: a fresh hand is dealt).
+        # The buttons work with the mouse (the same view: a fresh hand is dealt).
         hit, stick, deal = view.board.query(BoardButton)
         assert deal.disabled and not hit.disabled
 
         cards = len(game.scene()["player"])
         await pilot.click(hit)
-        await pilot.pause()
         assert game.last.steps == 1
         assert game.done or len(game.scene()["player"]) == cards + 1
         if not game.done:
             await pilot.click(stick)
-            await pilot.pause()
         assert game.done
         assert hit.disabled and stick.disabled and not deal.disabled
         assert app.focused is view.board, "clicking a button leaves the keyboard on the board"
 
         await pilot.click(deal)
-        await pilot.pause()
         assert not game.done and game.tally.episodes == 2
 
         # Clicking the table gives the board the keyboard back.
@@ -136,17 +138,15 @@ async def test_blackjack_hand_played_to_the_end_by_keys_buttons_and_clicks() -> 
         await pilot.pause()
         assert view.board.border_subtitle == "click here to play"
         await pilot.click(view.board.canvas)
-        await pilot.pause()
         assert app.focused is view.board
         assert not view.board.border_subtitle
         await pilot.press("s")
-        await pilot.pause()
         assert view.game.done
 
 
 async def test_blackjack_stick_enter_and_running_tally() -> None:
-    app = make_app("blackjack", seed=3)
-    async with app.run_test(size=BIG) as pilot:
+    app = make_host("blackjack", seed=3)
+    async with app.run_test(size=VIEW_SIZE) as pilot:
         await pilot.pause()
         view = app.play_view
         game = view.game
@@ -154,18 +154,15 @@ async def test_blackjack_stick_enter_and_running_tally() -> None:
 
         player = list(game.scene()["player"])
         await pilot.press("enter")  # dealing in the middle of a hand is refused gently
-        await pilot.pause()
         assert "Finish this hand first" in shown(view, "#play-hint")
         assert game.scene()["player"] == player and not game.done
 
         returns = []
         for _ in range(5):
             await pilot.press("s")
-            await pilot.pause()
             assert game.done
             returns.append(game.last.reward)
             await pilot.press("enter")
-            await pilot.pause()
         tally = game.tally
         assert tally.episodes == 5
         assert tally.wins == sum(r > 0 for r in returns)
@@ -180,8 +177,8 @@ async def test_blackjack_stick_enter_and_running_tally() -> None:
 
 
 async def test_gridworld_walk_by_arrows_wasd_and_clicks_and_reset() -> None:
-    app = make_app("gridworld")
-    async with app.run_test(size=BIG) as pilot:
+    app = make_host("gridworld")
+    async with app.run_test(size=VIEW_SIZE) as pilot:
         await pilot.pause()
         view = app.play_view
         game = view.game
@@ -193,27 +190,23 @@ async def test_gridworld_walk_by_arrows_wasd_and_clicks_and_reset() -> None:
             assert "optimal" in shown(view, "#play-detail")
             path = path_keys(view, keys)
             assert len(path) == optimal
-            for key in path:
-                await pilot.press(key)
-            await pilot.pause()
+            await pilot.press(*path)
             assert game.done and game.last.terminated and not game.last.truncated
             steps = f"{optimal} step{'' if optimal == 1 else 's'}"
             assert shown(view, "#play-headline").startswith(
                 f"Reached the target in {steps} (optimal {optimal})"
             )
-            assert app.focused is view.board, "w moved the agent; it did not leave the board"
+            assert app.focused is view.board, "the moves kept the keyboard on the board"
             await pilot.press("r")
-            await pilot.pause()
             assert not game.done and game.last.steps == 0
         assert game.tally.episodes == 2 and game.tally.wins == 2
         assert "Episodes 2" in shown(view, "#play-tally")
 
-        # Up is up on screen, and the trail shows (the same app, a fresh episode).
+        # Up is up on screen, and the trail shows (the same view, a fresh episode).
         start = game.scene()["agent"]
         key = "up" if start[1] < game.scene()["size"] - 1 else "down"
         row_before = _agent_row(drawing(view))
         await pilot.press(key)
-        await pilot.pause()
         assert game.scene()["agent"][1] == start[1] + (1 if key == "up" else -1)
         row_after = _agent_row(drawing(view))
         assert (row_after < row_before) == (key == "up"), "+y is drawn upwards"
@@ -221,12 +214,9 @@ async def test_gridworld_walk_by_arrows_wasd_and_clicks_and_reset() -> None:
 
         # r resets mid-episode.
         await pilot.press("r")
-        await pilot.pause()
         await pilot.press(path_keys(view, ARROWS)[0])
-        await pilot.pause()
         assert game.last.steps == 1
         await pilot.press("r")
-        await pilot.pause()
         assert game.last.steps == 0 and not game.done
         assert game.tally.episodes == 2, "an unfinished episode is not counted"
         assert "New episode" in shown(view, "#play-headline")
@@ -238,11 +228,9 @@ async def test_gridworld_walk_by_arrows_wasd_and_clicks_and_reset() -> None:
             layout = board.layout_drawn
             assert layout is not None
             await pilot.click(board.canvas, offset=layout.cell_center(game.scene()["target"]))
-            await pilot.pause()
         assert game.done and game.last.terminated and game.last.steps == optimal
 
         await pilot.click(board.query_one(BoardButton))  # ↺ Reset
-        await pilot.pause()
         assert not game.done and game.last.steps == 0
 
 
@@ -251,17 +239,15 @@ def _agent_row(picture: str) -> int:
 
 
 async def test_gridworld_time_limit_truncates() -> None:
-    app = make_app("gridworld", choices=(WrapperChoice.make("TimeLimit", max_episode_steps=3),))
-    async with app.run_test(size=BIG) as pilot:
+    app = make_host("gridworld", choices=(WrapperChoice.make("TimeLimit", max_episode_steps=3),))
+    async with app.run_test(size=VIEW_SIZE) as pilot:
         await pilot.pause()
         view = app.play_view
         game = view.game
         assert "TimeLimit(3)" in shown(view, "#play-title")
         (ax, _), (tx, _) = game.scene()["agent"], game.scene()["target"]
         away = "left" if tx >= ax else "right"  # away from the target, into the wall
-        for _ in range(3):
-            await pilot.press(away)
-        await pilot.pause()
+        await pilot.press(away, away, away)
         assert game.done and game.last.truncated and not game.last.terminated
         headline = shown(view, "#play-headline")
         assert headline.startswith("Truncated by the time limit after 3 steps")
@@ -272,70 +258,58 @@ async def test_gridworld_time_limit_truncates() -> None:
         assert "wins" not in tally and "draws" not in tally and "losses" not in tally
 
         await pilot.press(away)  # a move after the end is refused gently
-        await pilot.pause()
         assert "This episode is over" in shown(view, "#play-hint")
 
 
 async def test_advice_shows_the_optimum_and_judges_moves() -> None:
     for env, keys in (("blackjack", ("s",)), ("gridworld", None)):
-        app = make_app(env)
-        async with app.run_test(size=BIG) as pilot:
+        app = make_host(env)
+        async with app.run_test(size=VIEW_SIZE) as pilot:
             await pilot.pause()
             view = app.play_view
             assert "optimal:" not in shown(view, "#play-detail")
             await pilot.press("i")
-            await pilot.pause()
             assert view.show_advice and "optimal:" in shown(view, "#play-detail")
             await pilot.press(*(keys or path_keys(view, ARROWS)[:1]))
-            await pilot.pause()
             detail = shown(view, "#play-detail")
             assert "✓ optimal move" in detail or "✗ the optimum:" in detail
             if env == "gridworld":
                 assert "✓ optimal move" in detail, "a step along a shortest path is optimal"
 
 
-# --- switching, wrappers, sizes ------------------------------------------------
-
-
-async def test_switching_games_swaps_the_board_and_keeps_focus() -> None:
-    app = make_app("blackjack")
-    async with app.run_test(size=BIG) as pilot:
-        await pilot.pause()
-        await pilot.press("g")
-        await pilot.pause()
-        view = app.play_view
-        assert isinstance(view.board, GridBoard) and len(view.query(GridBoard)) == 1
-        assert not view.query(CardsBoard)
-        assert view.game.game.board == "grid"
-        assert app.focused is view.board
-        assert "GridWorld" in shown(view, "#play-title")
-        keys = [key for key, _ in view.key_help()]
-        assert "r" in keys
-
-        await pilot.press("b")
-        await pilot.pause()
-        assert isinstance(view.board, CardsBoard) and app.focused is view.board
-        assert view.game.tally.episodes == 0
+# --- what the app adds: its keys, game switches, sizes --------------------------
 
 
 async def test_observation_wrappers_show_the_raw_observation() -> None:
-    app = make_app("blackjack", choices=(WrapperChoice.make("FlattenObservation"),))
-    async with app.run_test(size=BIG) as pilot:
+    app = make_host("blackjack", choices=(WrapperChoice.make("FlattenObservation"),))
+    async with app.run_test(size=VIEW_SIZE) as pilot:
         await pilot.pause()
         view = app.play_view
         assert "observation: [" in shown(view, "#play-detail")
         await pilot.press("s")
-        await pilot.pause()
         assert view.game.done
 
 
-async def test_compact_layout_at_80x24() -> None:
-    for env, key in (("blackjack", "h"), ("gridworld", "up")):
-        app = make_app(env)
-        async with app.run_test(size=SMALL) as pilot:
-            await pilot.pause()
+async def test_compact_layout_at_80x24_and_switching_games_swaps_the_board_keeps_focus() -> None:
+    # One app at 80x24: Blackjack first, then GridWorld by its key, then back.
+    app = make_app("blackjack")
+    async with app.run_test(size=SMALL) as pilot:
+        await pilot.pause()
+        view = app.play_view
+        assert app.focused is view.board, "the board has the keyboard from the start"
+        mine = view.game
+        for env, key in (("blackjack", "h"), ("gridworld", "up")):
+            if env == "gridworld":
+                await pilot.press("g")
+                await pilot.pause()
+                assert isinstance(view.board, GridBoard) and len(view.query(GridBoard)) == 1
+                assert not view.query(CardsBoard)
+                assert view.game.game.board == "grid"
+                assert app.focused is view.board
+                assert "GridWorld" in shown(view, "#play-title")
+                keys = [key for key, _ in view.key_help()]
+                assert "r" in keys
             assert app.screen.has_class("compact")
-            view = app.play_view
             board = view.board
             assert board is not None and board.region.height >= 7
             canvas = board.canvas.region
@@ -344,8 +318,29 @@ async def test_compact_layout_at_80x24() -> None:
             picture = drawing(view)
             assert ("░" in picture) if env == "blackjack" else ("●" in picture)
             await pilot.press(key)
-            await pilot.pause()
             assert view.game.last.steps == 1 or view.game.done
+
+        # w (the app's key for the wrappers) and r walk and reset on the grid.
+        start, size = view.game.scene()["agent"], view.game.scene()["size"]
+        await pilot.press("w")
+        assert view.game.last.steps == 2
+        agent = view.game.scene()["agent"]
+        assert (agent[0], agent[1]) == (start[0], min(start[1] + 1, size - 1)), "w is up"
+        assert app.focused is view.board, "w moved the agent; it did not leave the board"
+        await pilot.press("r")
+        assert view.game.last.steps == 0
+
+        await pilot.press("b")
+        await pilot.pause()
+        assert isinstance(view.board, CardsBoard) and app.focused is view.board
+        assert view.game is mine and view.game.tally.episodes == 0, "the hand is kept"
+
+        # n (the app's key for one training step) deals the next hand here.
+        await pilot.press("s")
+        assert view.game.done
+        await pilot.press("n")
+        assert not view.game.done and view.game.tally.episodes == 1
+        assert app.focused is view.board
 
 
 # --- the boards on their own (as the Train view uses them) ---------------------
