@@ -15,6 +15,7 @@ from tui_gym.ui.side_panel import ParamField, SidePanel, WrapperRow
 from tui_gym.ui.too_small_screen import TooSmallScreen
 
 from .screen import screen_text
+from .waiting import wait_for
 
 
 def chain_text(app: TuiGymApp) -> str:
@@ -227,14 +228,19 @@ async def test_random_keys_in_every_view_never_break_the_app():
         "backspace",
     ]
     rng = random.Random(1234)
-    for name in ("blackjack", "gridworld"):
-        # A small budget: space may start training, which should end soon.
-        app = TuiGymApp(Session(name, hp=QLearning.hyperparameters(episodes=2_000), seed=0))
-        async with app.run_test(size=(100, 30)) as pilot:
+    # One app for both games (g switches), at the smallest size it lays out. A small
+    # budget for each game: space may start training, which should end soon.
+    app = TuiGymApp(Session("blackjack", hp=QLearning.hyperparameters(episodes=2_000), seed=0))
+    async with app.run_test(size=(80, 24)) as pilot:
+        for name in ("blackjack", "gridworld"):
+            if name != app.session.game.name:
+                app.runner.pause()
+                await pilot.press("g")
+                await wait_for(pilot, lambda n=name: app.session.game.name == n, "the game switch")
+                app.train_view.form.input("episodes").value = "2000"  # applied at a start
             for view in ("p", "t"):
-                await pilot.press("escape", view)
-                for _ in range(20):
-                    await pilot.press(rng.choice(keys))
+                # Twenty keys in one go: the app handles each before the next arrives.
+                await pilot.press("escape", view, *(rng.choice(keys) for _ in range(20)))
                 await pilot.pause()
             # Still answering: the views switch on request.
             await pilot.press("escape", "escape", "t")
@@ -243,5 +249,5 @@ async def test_random_keys_in_every_view_never_break_the_app():
                 await pilot.press("escape")
             await pilot.press("p")
             await pilot.pause()
-            assert app.query_one("#views", ContentSwitcher).current == "play"
-            app.runner.pause()
+            assert app.query_one("#views", ContentSwitcher).current == "play", name
+        app.runner.pause()
