@@ -10,7 +10,6 @@ parameters and can be reordered from the keyboard.
 
 from __future__ import annotations
 
-import pytest
 from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet
 
 from tui_gym.algorithms import QLearning
@@ -37,10 +36,10 @@ def inside(app: TuiGymApp, selector: str) -> bool:
     return bool(region.height) and app.screen.region.contains_region(region)
 
 
-@pytest.mark.parametrize("size", SIZES)
-async def test_train_controls_stay_in_sight_whatever_the_engine_says(size):
+async def test_train_controls_stay_in_sight_whatever_the_engine_says():
+    """One app at 80×24, then resized to 120×40: the controls stay in sight at both."""
     app = app_for("blackjack", episodes=300)
-    async with app.run_test(size=size) as pilot:
+    async with app.run_test(size=(80, 24)) as pilot:
         await pilot.press("t")
         app.query_one("#wrapper-FlattenObservation").query_one(Checkbox).value = True
         await pilot.press("escape", "space")  # back to the view, and train (scalar engine)
@@ -52,15 +51,18 @@ async def test_train_controls_stay_in_sight_whatever_the_engine_says(size):
         assert "FlattenObservation has no batched form" in note
         assert "batched form" not in view.stats.plain  # no longer wrapped over five lines
         assert view.stats.tooltip == note
-        if size == (120, 40):
-            assert inside(app, "#train-engine")
-            assert app.query_one("#train-engine").region.height == 1
-            assert app.query_one("#train-engine").tooltip == note
-        view.heatmap.focus()  # the body scrolls to the heatmap; the controls stay
-        await pilot.pause()
-        for selector in ("#train-controls", "#btn-toggle", "#btn-reset", "#train-progress"):
-            assert inside(app, selector), selector
-        assert "Start" in screen_text(app)
+        for size in ((80, 24), (120, 40)):
+            if size != (80, 24):
+                await pilot.resize_terminal(*size)
+            view.heatmap.focus()  # the body scrolls to the heatmap; the controls stay
+            await pilot.pause()
+            if size == (120, 40):
+                assert inside(app, "#train-engine")
+                assert app.query_one("#train-engine").region.height == 1
+                assert app.query_one("#train-engine").tooltip == note
+            for selector in ("#train-controls", "#btn-toggle", "#btn-reset", "#train-progress"):
+                assert inside(app, selector), (size, selector)
+            assert "Start" in screen_text(app), size
         await pilot.press("f1")  # the whole note is in the help too
         assert isinstance(app.screen, HelpScreen)
         assert any(note == text for _, rows in app.screen.sections for _, text in rows)
@@ -78,34 +80,42 @@ def names_whole(app: TuiGymApp) -> None:
         assert box.region.width >= 7
 
 
-@pytest.mark.parametrize("size", SIZES)
-async def test_gridworld_board_keeps_its_cells_and_names_stay_whole(size):
+async def test_gridworld_board_keeps_its_cells_and_names_stay_whole():
+    """One app at 120×40, resized to 80×24 and back: at each size keys leave the cells
+    as they are, and each resize picks the largest shape that fits."""
     app = app_for("gridworld")
-    async with app.run_test(size=size) as pilot:
+    async with app.run_test(size=SIZES[0]) as pilot:
         await pilot.pause()
-        names_whole(app)
         board = app.play_view.board
 
         def shape() -> tuple:
             layout = board.layout_drawn
             return (layout.cell_w, layout.cell_h, layout.lines, layout.axes)
 
-        shapes = {shape()}
-        # Advice, the coach, moves, a reset and the watched agent change the lines
-        # around the board; the cells stay as they are.
-        for key in ("i", "c", "right", "down", "r", "A", "x"):
-            await pilot.press(key)
-            shapes.add(shape())
-        assert len(shapes) == 1, shapes
-        # A new terminal size picks the largest shape that fits, whichever way it went.
-        for width, height in (*[s for s in SIZES if s != size], size):
+        async def resize(width: int, height: int) -> None:
             await pilot.resize_terminal(width, height)
-            await pilot.pause()
+            await pilot.pause()  # the app takes a new size on a timer
             canvas = board.canvas.content_size
             best = choose_layout(5, canvas.width, canvas.height)
-            assert shape() == (best.cell_w, best.cell_h, best.lines, best.axes)
+            assert shape() == (best.cell_w, best.cell_h, best.lines, best.axes), (width, height)
+
+        kept = {}  # the shape each size drew
+        for size in SIZES:
+            if size != SIZES[0]:
+                await resize(*size)  # a new terminal size: the largest shape that fits
             names_whole(app)
-        assert shape() in shapes
+            shapes = {shape()}
+            # Advice, the coach, moves, a reset and the watched agent change the lines
+            # around the board; the cells stay as they are.
+            for key in ("i", "c", "right", "down", "r", "A", "x"):
+                await pilot.press(key)
+                shapes.add(shape())
+            assert len(shapes) == 1, (size, shapes)
+            kept[size] = shape()
+        # And back, the other way: the largest that fits, the shape drawn there before.
+        await resize(*SIZES[0])
+        names_whole(app)
+        assert shape() == kept[SIZES[0]]
 
 
 async def test_the_side_panel_by_keyboard():
