@@ -16,7 +16,12 @@ from tui_gym.core.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.widgets.stats_panel import _grid
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget, line_text
-from tui_gym.ui.widgets.training_charts import BARS, bucket_means, sparkline_rows
+from tui_gym.ui.widgets.training_charts import (
+    BARS,
+    TrainingCharts,
+    bucket_means,
+    sparkline_rows,
+)
 
 from .screen import screen_lines
 
@@ -176,12 +181,16 @@ def test_heatmap_cells_take_their_colour_from_their_place_on_the_scale() -> None
     assert _cell_style(False, -1, False).bgcolor is None  # no value: no colour
 
 
+class OneChart(App[None]):
+    def compose(self) -> ComposeResult:
+        yield TrainingCharts()
+
+
 async def test_kept_component_styles_follow_a_theme_change() -> None:
-    app = TuiGymApp(Session("blackjack", seed=0))
-    async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.press("t")
+    app = OneChart()
+    async with app.run_test(size=(80, 12)) as pilot:
         await pilot.pause()
-        charts = app.train_view.charts
+        charts = app.query_one(TrainingCharts)
         name = "charts--return-high"
         before = charts.component_styles()[name]
         assert before == charts.get_component_rich_style(name)
