@@ -95,14 +95,35 @@ async def test_blackjack_keys_help_wrappers_and_the_game_picker():
         assert app.query_one("#game-gridworld", RadioButton).value
 
 
-async def test_gridworld_wrapper_size_and_typing_in_the_panel():
-    """One app: ticking a wrapper rebuilds and keeps the agent, the size changes from the
-    panel, and inputs capture typing instead of app keys."""
-    app = TuiGymApp(Session("gridworld", seed=0))
+async def test_gridworld_invalid_parameter_wrapper_size_and_typing_in_the_panel():
+    """One app: an invalid parameter is marked and not applied, ticking a wrapper rebuilds
+    and keeps the agent, the size changes from the panel, and inputs capture typing
+    instead of app keys."""
+    session = Session("gridworld", choices=(WrapperChoice.make("TimeLimit", max_episode_steps=50),),
+                      seed=0)
+    app = TuiGymApp(session)
     async with app.run_test(size=(120, 40)) as pilot:
+        # An invalid parameter is marked and not applied.
+        await pilot.pause()  # let the app settle its initial focus
+        before = app.session.chain_repr()
+        field = row(app, "TimeLimit").query_one(ParamField)
+        field.input.focus()
+        field.input.value = "lots"
+        await pilot.press("enter")
+        await pilot.pause()
+        assert field.input.has_class("-invalid")
+        error = str(row(app, "TimeLimit").query_one(".param-error", Static).render())
+        assert "max_episode_steps" in error and "integer" in error
+        assert app.session.chain_repr() == before
+        field.input.value = "20"
+        await pilot.press("enter")
+        await pilot.pause()
+        assert app.session.applied[0].values()["max_episode_steps"] == 20
+
+        # Ticking a wrapper rebuilds and keeps the agent.
         agent = app.session.agent
         assert "StepPenalty" not in chain_text(app)
-        await pilot.press("w")
+        await pilot.press("escape", "w")  # out of the field, to the wrappers
         box = row(app, "StepPenalty").query_one(Checkbox)
         box.value = True
         await pilot.pause()
@@ -130,27 +151,6 @@ async def test_gridworld_wrapper_size_and_typing_in_the_panel():
         await pilot.press("q", "t", "p")  # would quit / switch views if not typed
         assert field.value == "qtp"
         assert app.query_one("#views", ContentSwitcher).current == "play"
-
-
-async def test_an_invalid_parameter_is_marked_and_not_applied():
-    session = Session("gridworld", choices=(WrapperChoice.make("TimeLimit", max_episode_steps=50),))
-    app = TuiGymApp(session)
-    async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.pause()  # let the app settle its initial focus
-        before = app.session.chain_repr()
-        field = row(app, "TimeLimit").query_one(ParamField)
-        field.input.focus()
-        field.input.value = "lots"
-        await pilot.press("enter")
-        await pilot.pause()
-        assert field.input.has_class("-invalid")
-        error = str(row(app, "TimeLimit").query_one(".param-error", Static).render())
-        assert "max_episode_steps" in error and "integer" in error
-        assert app.session.chain_repr() == before
-        field.input.value = "20"
-        await pilot.press("enter")
-        await pilot.pause()
-        assert app.session.applied[0].values()["max_episode_steps"] == 20
 
 
 async def test_too_small_terminal_shows_a_message_and_ignores_keys():
@@ -188,17 +188,9 @@ async def test_too_small_terminal_shows_a_message_and_ignores_keys():
     assert app.return_code == 0
 
 
-async def test_compact_layout_at_80_by_24():
-    app = TuiGymApp(Session("blackjack", seed=0))
-    async with app.run_test(size=(80, 24)) as pilot:
-        await pilot.pause()
-        assert app.screen.has_class("compact") and not app.screen.has_class("too-small")
-        assert app.query_one(SidePanel).region.width > 0
-        await pilot.press("t")
-        await pilot.pause()
-
-
-async def test_random_keys_in_every_view_never_break_the_app():
+async def test_compact_layout_at_80_by_24_and_random_keys_in_every_view_never_break_the_app():
+    """At 80×24, the smallest size the app lays out: the compact layout with the side
+    panel; then random keys (seeded) in each view of two games."""
     keys = [
         "h",
         "s",
@@ -232,6 +224,9 @@ async def test_random_keys_in_every_view_never_break_the_app():
     # budget for each game: space may start training, which should end soon.
     app = TuiGymApp(Session("blackjack", hp=QLearning.hyperparameters(episodes=2_000), seed=0))
     async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.pause()
+        assert app.screen.has_class("compact") and not app.screen.has_class("too-small")
+        assert app.query_one(SidePanel).region.width > 0
         for name in ("blackjack", "gridworld"):
             if name != app.session.game.name:
                 app.runner.pause()
