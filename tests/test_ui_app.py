@@ -14,7 +14,7 @@ from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.side_panel import ParamField, SidePanel, WrapperRow
 from tui_gym.ui.too_small_screen import TooSmallScreen
 
-from .screen import screen_text
+from .screen import screen_lines, screen_text
 from .waiting import wait_for
 
 
@@ -26,19 +26,31 @@ def row(app: TuiGymApp, name: str) -> WrapperRow:
     return app.query_one(f"#wrapper-{name}", WrapperRow)
 
 
-async def test_blackjack_keys_help_wrappers_and_the_game_picker():
-    """One app for facts about one state: views and games switch by key, help lists every
-    app key, a misfit wrapper is refused with its reason, a wrapper that changes the
-    observations resets the agent with a notice, and the picker switches game."""
+async def test_blackjack_keys_key_bar_help_wrappers_and_the_game_picker():
+    """One app for facts about one state: views and games switch by key, the key bar
+    follows the view, help lists every app key, a misfit wrapper is refused with its
+    reason, a wrapper that changes the observations resets the agent with a notice, and
+    the picker switches game."""
     app = TuiGymApp(Session("blackjack", seed=0))
     async with app.run_test(size=(120, 40)) as pilot:
-        # Views and games switch by key.
+        # Views and games switch by key; the key bar (a kept picture) and the keyboard
+        # follow the view.
         switcher = app.query_one("#views", ContentSwitcher)
         assert switcher.current == "play"
+        await pilot.pause()
+        play_keys = screen_lines(app)[-1]
+        assert "Deal" in play_keys and "Start/Pause" not in play_keys
         await pilot.press("t")
         assert switcher.current == "train"
+        await pilot.pause()
+        train_keys = screen_lines(app)[-1]
+        assert "Start/Pause" in train_keys and "Deal" not in train_keys
+        assert app.focused is app.train_view.heatmap
         await pilot.press("p")
         assert switcher.current == "play"
+        await pilot.pause()
+        assert screen_lines(app)[-1] == play_keys  # the kept picture, and the right one
+        assert app.focused is app.play_view.board
         await pilot.press("g")
         await pilot.pause()
         assert app.session.game.name == "gridworld"
