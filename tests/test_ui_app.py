@@ -165,44 +165,10 @@ async def test_gridworld_invalid_parameter_wrapper_size_and_typing_in_the_panel(
         assert app.query_one("#views", ContentSwitcher).current == "play"
 
 
-async def test_too_small_terminal_shows_a_message_and_ignores_keys():
-    app = TuiGymApp(Session("blackjack", hp=QLearning.hyperparameters(episodes=500), seed=0))
-    async with app.run_test(size=(60, 20)) as pilot:
-        await pilot.pause()
-        assert isinstance(app.screen, TooSmallScreen)
-        message = app.screen.query_one("#too-small", Static)
-        assert "80×24" in str(message.render()) and "q quits" in str(message.render())
-        # Keys a person cannot see the effect of do nothing: no game switch, no view
-        # switch, no move on the board, no training, no palette.
-        game = app.play_view.game
-        player = list(game.scene()["player"])
-        for key in ("g", "t", "space", "h", "s", "w", "question_mark", "ctrl+p", "ctrl+s"):
-            await pilot.press(key)
-        await pilot.pause()
-        assert isinstance(app.screen, TooSmallScreen)
-        assert app.session.game.name == "blackjack"
-        assert app.current_view == "play"
-        assert game.scene()["player"] == player and not game.done
-        assert not app.runner.running and app.runner.latest.episodes == 0
-        await pilot.resize_terminal(120, 40)
-        await pilot.pause()
-        assert not isinstance(app.screen, TooSmallScreen)
-        assert not app.screen.has_class("too-small")
-        assert app.focused is app.play_view.board  # back where it was
-        await pilot.press("g")  # and keys act again
-        await pilot.pause()
-        assert app.session.game.name == "gridworld"
-        await pilot.resize_terminal(70, 30)
-        await pilot.pause()
-        assert isinstance(app.screen, TooSmallScreen)
-        await pilot.press("q")  # quitting still works
-        await pilot.pause()
-    assert app.return_code == 0
-
-
-async def test_compact_layout_at_80_by_24_and_random_keys_in_every_view_never_break_the_app():
-    """At 80×24, the smallest size the app lays out: the compact layout with the side
-    panel; then random keys (seeded) in each view of two games."""
+async def test_sizes_too_small_and_compact_and_random_keys_never_break_the_app():
+    """One app through the sizes: below 80×24 a message covers it and takes every key but
+    q; at 80×24, the smallest size it lays out, the compact layout with the side panel,
+    where random keys (seeded) in each view of two games never break it."""
     keys = [
         "h",
         "s",
@@ -232,19 +198,45 @@ async def test_compact_layout_at_80_by_24_and_random_keys_in_every_view_never_br
         "backspace",
     ]
     rng = random.Random(1234)
-    # One app for both games (g switches), at the smallest size it lays out. A small
-    # budget for each game: space may start training, which should end soon.
+    # A small budget: space may start training, which should end soon.
     app = TuiGymApp(Session("blackjack", hp=QLearning.hyperparameters(episodes=2_000), seed=0))
-    async with app.run_test(size=(80, 24)) as pilot:
+    async with app.run_test(size=(60, 20)) as pilot:
         await pilot.pause()
-        assert app.screen.has_class("compact") and not app.screen.has_class("too-small")
+        assert isinstance(app.screen, TooSmallScreen)
+        message = app.screen.query_one("#too-small", Static)
+        assert "80×24" in str(message.render()) and "q quits" in str(message.render())
+        # Keys a person cannot see the effect of do nothing: no game switch, no view
+        # switch, no move on the board, no training, no palette.
+        game = app.play_view.game
+        player = list(game.scene()["player"])
+        for key in ("g", "t", "space", "h", "s", "w", "question_mark", "ctrl+p", "ctrl+s"):
+            await pilot.press(key)
+        await pilot.pause()
+        assert isinstance(app.screen, TooSmallScreen)
+        assert app.session.game.name == "blackjack"
+        assert app.current_view == "play"
+        assert game.scene()["player"] == player and not game.done
+        assert not app.runner.running and app.runner.latest.episodes == 0
+
+        # At 80×24 the app is back, in its compact layout with the side panel.
+        await pilot.resize_terminal(80, 24)
+        await pilot.pause()
+        assert not isinstance(app.screen, TooSmallScreen)
+        assert not app.screen.has_class("too-small")
+        assert app.screen.has_class("compact")
         assert app.query_one(SidePanel).region.width > 0
-        for name in ("blackjack", "gridworld"):
+        assert app.focused is app.play_view.board  # back where it was
+        await pilot.press("g")  # and keys act again
+        await pilot.pause()
+        assert app.session.game.name == "gridworld"
+        app.train_view.form.input("episodes").value = "2000"  # applied at a start
+
+        # Random keys in each view of both games (b switches back).
+        for name in ("gridworld", "blackjack"):
             if name != app.session.game.name:
                 app.runner.pause()
-                await pilot.press("g")
+                await pilot.press("b")
                 await wait_for(pilot, lambda n=name: app.session.game.name == n, "the game switch")
-                app.train_view.form.input("episodes").value = "2000"  # applied at a start
             for view in ("p", "t"):
                 # Twenty keys in one go: the app handles each before the next arrives.
                 await pilot.press("escape", view, *(rng.choice(keys) for _ in range(20)))
@@ -258,3 +250,11 @@ async def test_compact_layout_at_80_by_24_and_random_keys_in_every_view_never_br
             await pilot.pause()
             assert app.query_one("#views", ContentSwitcher).current == "play", name
         app.runner.pause()
+
+        # Too small again (narrow only): the message, and quitting still works.
+        await pilot.resize_terminal(70, 30)
+        await pilot.pause()
+        assert isinstance(app.screen, TooSmallScreen)
+        await pilot.press("q")
+        await pilot.pause()
+    assert app.return_code == 0
