@@ -36,38 +36,6 @@ def inside(app: TuiGymApp, selector: str) -> bool:
     return bool(region.height) and app.screen.region.contains_region(region)
 
 
-async def test_train_controls_stay_in_sight_whatever_the_engine_says():
-    """One app at 80×24, then resized to 120×40: the controls stay in sight at both."""
-    app = app_for("blackjack", episodes=300)
-    async with app.run_test(size=(80, 24)) as pilot:
-        await pilot.press("t")
-        app.query_one("#wrapper-FlattenObservation").query_one(Checkbox).value = True
-        await pilot.press("escape", "space")  # back to the view, and train (scalar engine)
-        await wait_for(pilot, lambda: app.runner.finished and not app.runner.running,
-                       "the budget to finish")
-        assert app.runner.wait_idle(DEADLINE)
-        view = app.train_view
-        note = view.engine_note
-        assert "FlattenObservation has no batched form" in note
-        assert "batched form" not in view.stats.plain  # no longer wrapped over five lines
-        assert view.stats.tooltip == note
-        for size in ((80, 24), (120, 40)):
-            if size != (80, 24):
-                await pilot.resize_terminal(*size)
-            view.heatmap.focus()  # the body scrolls to the heatmap; the controls stay
-            await pilot.pause()
-            if size == (120, 40):
-                assert inside(app, "#train-engine")
-                assert app.query_one("#train-engine").region.height == 1
-                assert app.query_one("#train-engine").tooltip == note
-            for selector in ("#train-controls", "#btn-toggle", "#btn-reset", "#train-progress"):
-                assert inside(app, selector), (size, selector)
-            assert "Start" in screen_text(app), size
-        await pilot.press("f1")  # the whole note is in the help too
-        assert isinstance(app.screen, HelpScreen)
-        assert any(note == text for _, rows in app.screen.sections for _, text in rows)
-
-
 def names_whole(app: TuiGymApp) -> None:
     """Every parameter field shows its whole name beside (or above) a usable input."""
     fields = list(app.query(ParamField))
@@ -80,13 +48,15 @@ def names_whole(app: TuiGymApp) -> None:
         assert box.region.width >= 7
 
 
-async def test_gridworld_board_keeps_its_cells_names_stay_whole_and_the_side_panel():
-    """One GridWorld app for both: the board and the names through the sizes, then the
-    side panel by keyboard."""
+async def test_board_names_side_panel_and_train_controls_hold_while_people_use_it():
+    """One app for the three: GridWorld's board and the names through the sizes, the
+    side panel by keyboard (which ends on Blackjack), then Blackjack's Train view
+    controls whatever the engine says, at both sizes."""
     app = app_for("gridworld")
     async with app.run_test(size=SIZES[0]) as pilot:
         await board_keeps_its_cells_and_names_stay_whole(pilot)
         await the_side_panel_by_keyboard(pilot)
+        await train_controls_stay_in_sight_whatever_the_engine_says(pilot)
 
 
 async def board_keeps_its_cells_and_names_stay_whole(pilot) -> None:
@@ -187,3 +157,39 @@ async def the_side_panel_by_keyboard(pilot) -> None:
     rows = [row for _, rows in app.screen.sections for row in rows]
     assert any(key == "esc" and "text field" in text for key, text in rows)
     assert any(key == "[ / ]" for key, _ in rows)
+
+
+async def train_controls_stay_in_sight_whatever_the_engine_says(pilot) -> None:
+    """Blackjack at 120×40, then resized to 80×24: the controls stay in sight at both."""
+    app = pilot.app
+    assert app.session.game.name == "blackjack" and app.size == (120, 40)
+    await pilot.press("escape", "t")  # out of the help, to the Train view
+    app.query_one("#wrapper-FlattenObservation").query_one(Checkbox).value = True
+    await pilot.pause()
+    # A small budget (the note does not depend on it), applied when training starts.
+    app.train_view.form.input("episodes").value = "300"
+    await pilot.press("escape", "space")  # back to the view, and train (scalar engine)
+    await wait_for(pilot, lambda: app.runner.finished and not app.runner.running,
+                   "the budget to finish")
+    assert app.runner.wait_idle(DEADLINE)
+    assert app.session.trainer.episodes == 300
+    view = app.train_view
+    note = view.engine_note
+    assert "FlattenObservation has no batched form" in note
+    assert "batched form" not in view.stats.plain  # no longer wrapped over five lines
+    assert view.stats.tooltip == note
+    for size in SIZES:
+        if size != SIZES[0]:
+            await pilot.resize_terminal(*size)
+        view.heatmap.focus()  # the body scrolls to the heatmap; the controls stay
+        await pilot.pause()
+        if size == (120, 40):
+            assert inside(app, "#train-engine")
+            assert app.query_one("#train-engine").region.height == 1
+            assert app.query_one("#train-engine").tooltip == note
+        for selector in ("#train-controls", "#btn-toggle", "#btn-reset", "#train-progress"):
+            assert inside(app, selector), (size, selector)
+        assert "Start" in screen_text(app), size
+    await pilot.press("f1")  # the whole note is in the help too
+    assert isinstance(app.screen, HelpScreen)
+    assert any(note == text for _, rows in app.screen.sections for _, text in rows)
