@@ -8,7 +8,6 @@ from textual.widgets import Checkbox, ContentSwitcher, Input, RadioButton, Stati
 
 from tui_gym.algorithms import QLearning
 from tui_gym.core.session import Session
-from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.side_panel import ParamField, SidePanel, WrapperRow
@@ -26,11 +25,13 @@ def row(app: TuiGymApp, name: str) -> WrapperRow:
     return app.query_one(f"#wrapper-{name}", WrapperRow)
 
 
-async def test_blackjack_keys_key_bar_help_wrappers_and_the_game_picker():
+async def test_keys_key_bar_help_wrappers_the_game_picker_and_the_gridworld_panel():
     """One app for facts about one state: views and games switch by key, the key bar
     follows the view, help lists every app key, a misfit wrapper is refused with its
     reason, a wrapper that changes the observations resets the agent with a notice, and
-    the picker switches game."""
+    the picker switches game. Then, on the GridWorld the picker switched to: an invalid
+    parameter is marked and not applied, ticking a wrapper rebuilds and keeps the agent,
+    the size changes from the panel, and inputs capture typing instead of app keys."""
     app = TuiGymApp(Session("blackjack", seed=0))
     async with app.run_test(size=(120, 40)) as pilot:
         # Views and games switch by key; the key bar (a kept picture) and the keyboard
@@ -106,17 +107,10 @@ async def test_blackjack_keys_key_bar_help_wrappers_and_the_game_picker():
         assert app.session.game.name == "gridworld"
         assert app.query_one("#game-gridworld", RadioButton).value
 
-
-async def test_gridworld_invalid_parameter_wrapper_size_and_typing_in_the_panel():
-    """One app: an invalid parameter is marked and not applied, ticking a wrapper rebuilds
-    and keeps the agent, the size changes from the panel, and inputs capture typing
-    instead of app keys."""
-    session = Session("gridworld", choices=(WrapperChoice.make("TimeLimit", max_episode_steps=50),),
-                      seed=0)
-    app = TuiGymApp(session)
-    async with app.run_test(size=(120, 40)) as pilot:
-        # An invalid parameter is marked and not applied.
-        await pilot.pause()  # let the app settle its initial focus
+        # GridWorld's panel: an invalid parameter is marked and not applied.
+        row(app, "TimeLimit").query_one(Checkbox).value = True
+        await pilot.pause()
+        assert [c.name for c in app.session.choices] == ["TimeLimit"]
         before = app.session.chain_repr()
         field = row(app, "TimeLimit").query_one(ParamField)
         field.input.focus()
