@@ -8,13 +8,13 @@ from textual.widgets import Checkbox, ContentSwitcher, Input, RadioButton, Stati
 
 from tui_gym.algorithms import QLearning
 from tui_gym.core.session import Session
-from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.side_panel import ParamField, SidePanel, WrapperRow
 from tui_gym.ui.too_small_screen import TooSmallScreen
 
-from .screen import screen_text
+from .screen import screen_lines, screen_text
+from .waiting import wait_for
 
 
 def chain_text(app: TuiGymApp) -> str:
@@ -25,19 +25,33 @@ def row(app: TuiGymApp, name: str) -> WrapperRow:
     return app.query_one(f"#wrapper-{name}", WrapperRow)
 
 
-async def test_blackjack_keys_help_wrappers_and_the_game_picker():
-    """One app for facts about one state: views and games switch by key, help lists every
-    app key, a misfit wrapper is refused with its reason, a wrapper that changes the
-    observations resets the agent with a notice, and the picker switches game."""
+async def test_keys_key_bar_help_wrappers_the_game_picker_and_the_gridworld_panel():
+    """One app for facts about one state: views and games switch by key, the key bar
+    follows the view, help lists every app key, a misfit wrapper is refused with its
+    reason, a wrapper that changes the observations resets the agent with a notice, and
+    the picker switches game. Then, on the GridWorld the picker switched to: an invalid
+    parameter is marked and not applied, ticking a wrapper rebuilds and keeps the agent,
+    the size changes from the panel, and inputs capture typing instead of app keys."""
     app = TuiGymApp(Session("blackjack", seed=0))
     async with app.run_test(size=(120, 40)) as pilot:
-        # Views and games switch by key.
+        # Views and games switch by key; the key bar (a kept picture) and the keyboard
+        # follow the view.
         switcher = app.query_one("#views", ContentSwitcher)
         assert switcher.current == "play"
+        await pilot.pause()
+        play_keys = screen_lines(app)[-1]
+        assert "Deal" in play_keys and "Start/Pause" not in play_keys
         await pilot.press("t")
         assert switcher.current == "train"
+        await pilot.pause()
+        train_keys = screen_lines(app)[-1]
+        assert "Start/Pause" in train_keys and "Deal" not in train_keys
+        assert app.focused is app.train_view.heatmap
         await pilot.press("p")
         assert switcher.current == "play"
+        await pilot.pause()
+        assert screen_lines(app)[-1] == play_keys  # the kept picture, and the right one
+        assert app.focused is app.play_view.board
         await pilot.press("g")
         await pilot.pause()
         assert app.session.game.name == "gridworld"
@@ -93,15 +107,29 @@ async def test_blackjack_keys_help_wrappers_and_the_game_picker():
         assert app.session.game.name == "gridworld"
         assert app.query_one("#game-gridworld", RadioButton).value
 
+        # GridWorld's panel: an invalid parameter is marked and not applied.
+        row(app, "TimeLimit").query_one(Checkbox).value = True
+        await pilot.pause()
+        assert [c.name for c in app.session.choices] == ["TimeLimit"]
+        before = app.session.chain_repr()
+        field = row(app, "TimeLimit").query_one(ParamField)
+        field.input.focus()
+        field.input.value = "lots"
+        await pilot.press("enter")
+        await pilot.pause()
+        assert field.input.has_class("-invalid")
+        error = str(row(app, "TimeLimit").query_one(".param-error", Static).render())
+        assert "max_episode_steps" in error and "integer" in error
+        assert app.session.chain_repr() == before
+        field.input.value = "20"
+        await pilot.press("enter")
+        await pilot.pause()
+        assert app.session.applied[0].values()["max_episode_steps"] == 20
 
-async def test_gridworld_wrapper_size_and_typing_in_the_panel():
-    """One app: ticking a wrapper rebuilds and keeps the agent, the size changes from the
-    panel, and inputs capture typing instead of app keys."""
-    app = TuiGymApp(Session("gridworld", seed=0))
-    async with app.run_test(size=(120, 40)) as pilot:
+        # Ticking a wrapper rebuilds and keeps the agent.
         agent = app.session.agent
         assert "StepPenalty" not in chain_text(app)
-        await pilot.press("w")
+        await pilot.press("escape", "w")  # out of the field, to the wrappers
         box = row(app, "StepPenalty").query_one(Checkbox)
         box.value = True
         await pilot.pause()
@@ -131,73 +159,10 @@ async def test_gridworld_wrapper_size_and_typing_in_the_panel():
         assert app.query_one("#views", ContentSwitcher).current == "play"
 
 
-async def test_an_invalid_parameter_is_marked_and_not_applied():
-    session = Session("gridworld", choices=(WrapperChoice.make("TimeLimit", max_episode_steps=50),))
-    app = TuiGymApp(session)
-    async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.pause()  # let the app settle its initial focus
-        before = app.session.chain_repr()
-        field = row(app, "TimeLimit").query_one(ParamField)
-        field.input.focus()
-        field.input.value = "lots"
-        await pilot.press("enter")
-        await pilot.pause()
-        assert field.input.has_class("-invalid")
-        error = str(row(app, "TimeLimit").query_one(".param-error", Static).render())
-        assert "max_episode_steps" in error and "integer" in error
-        assert app.session.chain_repr() == before
-        field.input.value = "20"
-        await pilot.press("enter")
-        await pilot.pause()
-        assert app.session.applied[0].values()["max_episode_steps"] == 20
-
-
-async def test_too_small_terminal_shows_a_message_and_ignores_keys():
-    app = TuiGymApp(Session("blackjack", hp=QLearning.hyperparameters(episodes=500), seed=0))
-    async with app.run_test(size=(60, 20)) as pilot:
-        await pilot.pause()
-        assert isinstance(app.screen, TooSmallScreen)
-        message = app.screen.query_one("#too-small", Static)
-        assert "80×24" in str(message.render()) and "q quits" in str(message.render())
-        # Keys a person cannot see the effect of do nothing: no game switch, no view
-        # switch, no move on the board, no training, no palette.
-        game = app.play_view.game
-        player = list(game.scene()["player"])
-        for key in ("g", "t", "space", "h", "s", "w", "question_mark", "ctrl+p", "ctrl+s"):
-            await pilot.press(key)
-        await pilot.pause()
-        assert isinstance(app.screen, TooSmallScreen)
-        assert app.session.game.name == "blackjack"
-        assert app.current_view == "play"
-        assert game.scene()["player"] == player and not game.done
-        assert not app.runner.running and app.runner.latest.episodes == 0
-        await pilot.resize_terminal(120, 40)
-        await pilot.pause()
-        assert not isinstance(app.screen, TooSmallScreen)
-        assert not app.screen.has_class("too-small")
-        assert app.focused is app.play_view.board  # back where it was
-        await pilot.press("g")  # and keys act again
-        await pilot.pause()
-        assert app.session.game.name == "gridworld"
-        await pilot.resize_terminal(70, 30)
-        await pilot.pause()
-        assert isinstance(app.screen, TooSmallScreen)
-        await pilot.press("q")  # quitting still works
-        await pilot.pause()
-    assert app.return_code == 0
-
-
-async def test_compact_layout_at_80_by_24():
-    app = TuiGymApp(Session("blackjack", seed=0))
-    async with app.run_test(size=(80, 24)) as pilot:
-        await pilot.pause()
-        assert app.screen.has_class("compact") and not app.screen.has_class("too-small")
-        assert app.query_one(SidePanel).region.width > 0
-        await pilot.press("t")
-        await pilot.pause()
-
-
-async def test_random_keys_in_every_view_never_break_the_app():
+async def test_sizes_too_small_and_compact_and_random_keys_never_break_the_app():
+    """One app through the sizes: below 80×24 a message covers it and takes every key but
+    q; at 80×24, the smallest size it lays out, the compact layout with the side panel,
+    where random keys (seeded) in each view of two games never break it."""
     keys = [
         "h",
         "s",
@@ -227,14 +192,48 @@ async def test_random_keys_in_every_view_never_break_the_app():
         "backspace",
     ]
     rng = random.Random(1234)
-    for name in ("blackjack", "gridworld"):
-        # A small budget: space may start training, which should end soon.
-        app = TuiGymApp(Session(name, hp=QLearning.hyperparameters(episodes=2_000), seed=0))
-        async with app.run_test(size=(100, 30)) as pilot:
+    # A small budget: space may start training, which should end soon.
+    app = TuiGymApp(Session("blackjack", hp=QLearning.hyperparameters(episodes=2_000), seed=0))
+    async with app.run_test(size=(60, 20)) as pilot:
+        await pilot.pause()
+        assert isinstance(app.screen, TooSmallScreen)
+        message = app.screen.query_one("#too-small", Static)
+        assert "80×24" in str(message.render()) and "q quits" in str(message.render())
+        # Keys a person cannot see the effect of do nothing: no game switch, no view
+        # switch, no move on the board, no training, no palette.
+        game = app.play_view.game
+        player = list(game.scene()["player"])
+        for key in ("g", "t", "space", "h", "s", "w", "question_mark", "ctrl+p", "ctrl+s"):
+            await pilot.press(key)
+        await pilot.pause()
+        assert isinstance(app.screen, TooSmallScreen)
+        assert app.session.game.name == "blackjack"
+        assert app.current_view == "play"
+        assert game.scene()["player"] == player and not game.done
+        assert not app.runner.running and app.runner.latest.episodes == 0
+
+        # At 80×24 the app is back, in its compact layout with the side panel.
+        await pilot.resize_terminal(80, 24)
+        await pilot.pause()
+        assert not isinstance(app.screen, TooSmallScreen)
+        assert not app.screen.has_class("too-small")
+        assert app.screen.has_class("compact")
+        assert app.query_one(SidePanel).region.width > 0
+        assert app.focused is app.play_view.board  # back where it was
+        await pilot.press("g")  # and keys act again
+        await pilot.pause()
+        assert app.session.game.name == "gridworld"
+        app.train_view.form.input("episodes").value = "2000"  # applied at a start
+
+        # Random keys in each view of both games (b switches back).
+        for name in ("gridworld", "blackjack"):
+            if name != app.session.game.name:
+                app.runner.pause()
+                await pilot.press("b")
+                await wait_for(pilot, lambda n=name: app.session.game.name == n, "the game switch")
             for view in ("p", "t"):
-                await pilot.press("escape", view)
-                for _ in range(20):
-                    await pilot.press(rng.choice(keys))
+                # Twenty keys in one go: the app handles each before the next arrives.
+                await pilot.press("escape", view, *(rng.choice(keys) for _ in range(20)))
                 await pilot.pause()
             # Still answering: the views switch on request.
             await pilot.press("escape", "escape", "t")
@@ -243,5 +242,13 @@ async def test_random_keys_in_every_view_never_break_the_app():
                 await pilot.press("escape")
             await pilot.press("p")
             await pilot.pause()
-            assert app.query_one("#views", ContentSwitcher).current == "play"
-            app.runner.pause()
+            assert app.query_one("#views", ContentSwitcher).current == "play", name
+        app.runner.pause()
+
+        # Too small again (narrow only): the message, and quitting still works.
+        await pilot.resize_terminal(70, 30)
+        await pilot.pause()
+        assert isinstance(app.screen, TooSmallScreen)
+        await pilot.press("q")
+        await pilot.pause()
+    assert app.return_code == 0

@@ -2,9 +2,10 @@
 
 ctrl+s and ctrl+o open a dialog with a file name field; what goes wrong is said
 inside it; an existing file is replaced only after a yes; loading over an agent
-that has trained asks too. The command palette lists the same, one "Keys"
-entry, and a Screenshot that lands in the current folder. Every test works in
-its own temporary folder.
+that has trained asks too. The help names both keys; the command palette lists
+the same ("Save agent…" and "Load agent…" open the dialog), one "Keys" entry,
+and a Screenshot that lands in the current folder. Every test works in its own
+temporary folder.
 """
 
 from __future__ import annotations
@@ -19,7 +20,9 @@ from tui_gym.core.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.file_screen import FileScreen
+from tui_gym.ui.help_screen import HelpScreen
 
+from .screen import screen_lines
 from .test_ui_session_keeping import palette_first, train_to_the_end
 from .waiting import wait_for
 
@@ -46,7 +49,9 @@ async def type_name(pilot, name: str) -> FileScreen:
     return screen
 
 
-async def test_save_asks_for_a_name_and_before_replacing_and_the_palette_has_it(in_tmp: Path):
+async def test_save_asks_for_a_name_and_before_replacing_and_help_and_palette_have_it(
+    in_tmp: Path,
+):
     app = blackjack()
     async with app.run_test(size=(120, 40)) as pilot:
         await pilot.press("t")
@@ -91,11 +96,39 @@ async def test_save_asks_for_a_name_and_before_replacing_and_the_palette_has_it(
         assert not isinstance(app.screen, FileScreen | ConfirmScreen)
         assert Session.load(saved).trainer.episodes == 0
 
+        # The help names ctrl+s and ctrl+o.
+        await pilot.press("question_mark")
+        await wait_for(pilot, lambda: isinstance(app.screen, HelpScreen), "the help screen")
+        lines = screen_lines(app)
+        assert any("ctrl+s" in line and "save the agent to a file you name" in line
+                   for line in lines)
+        assert any("ctrl+o" in line and "load an agent from a file you name" in line
+                   for line in lines)
+        await pilot.press("escape")
+        await wait_for(pilot, lambda: not isinstance(app.screen, HelpScreen), "help to close")
+
+        # The palette's Save agent… and Load agent… open the dialog; nothing is saved or
+        # loaded without a name confirmed.
+        files = sorted(in_tmp.iterdir())
+        session = app.session
+        for entry, saving in (("Save agent", True), ("Load agent", False)):
+            await pilot.press("ctrl+p", *entry.split()[0])  # its first word finds it
+            await wait_for(pilot, lambda e=entry: palette_first(app).startswith(e),
+                           f"the palette to list {entry}")
+            await pilot.press("down", "enter")
+            await wait_for(pilot, lambda: isinstance(app.screen, FileScreen), "the file dialog")
+            screen = app.screen
+            assert isinstance(screen, FileScreen) and screen.saving is saving
+            await pilot.press("escape")
+            await wait_for(pilot, lambda: not isinstance(app.screen, FileScreen),
+                           "the dialog to close")
+        assert sorted(in_tmp.iterdir()) == files and app.session is session
+
         # The command palette: one Keys entry, files, and a Screenshot that works.
         titles = [c.title for c in app.get_system_commands(app.screen)]
         assert titles.count("Keys") == 1 and titles.count("Screenshot") == 1
         assert "Save agent…" in titles and "Load agent…" in titles
-        await pilot.press("ctrl+p", *"Screens")
+        await pilot.press("ctrl+p", *"Screen")
         await wait_for(pilot, lambda: palette_first(app).startswith("Screenshot"),
                        "the palette to list Screenshot")
         await pilot.press("down", "enter")

@@ -10,7 +10,6 @@ parameters and can be reordered from the keyboard.
 
 from __future__ import annotations
 
-import pytest
 from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet
 
 from tui_gym.algorithms import QLearning
@@ -37,35 +36,6 @@ def inside(app: TuiGymApp, selector: str) -> bool:
     return bool(region.height) and app.screen.region.contains_region(region)
 
 
-@pytest.mark.parametrize("size", SIZES)
-async def test_train_controls_stay_in_sight_whatever_the_engine_says(size):
-    app = app_for("blackjack", episodes=300)
-    async with app.run_test(size=size) as pilot:
-        await pilot.press("t")
-        app.query_one("#wrapper-FlattenObservation").query_one(Checkbox).value = True
-        await pilot.press("escape", "space")  # back to the view, and train (scalar engine)
-        await wait_for(pilot, lambda: app.runner.finished and not app.runner.running,
-                       "the budget to finish")
-        assert app.runner.wait_idle(DEADLINE)
-        view = app.train_view
-        note = view.engine_note
-        assert "FlattenObservation has no batched form" in note
-        assert "batched form" not in view.stats.plain  # no longer wrapped over five lines
-        assert view.stats.tooltip == note
-        if size == (120, 40):
-            assert inside(app, "#train-engine")
-            assert app.query_one("#train-engine").region.height == 1
-            assert app.query_one("#train-engine").tooltip == note
-        view.heatmap.focus()  # the body scrolls to the heatmap; the controls stay
-        await pilot.pause()
-        for selector in ("#train-controls", "#btn-toggle", "#btn-reset", "#train-progress"):
-            assert inside(app, selector), selector
-        assert "Start" in screen_text(app)
-        await pilot.press("f1")  # the whole note is in the help too
-        assert isinstance(app.screen, HelpScreen)
-        assert any(note == text for _, rows in app.screen.sections for _, text in rows)
-
-
 def names_whole(app: TuiGymApp) -> None:
     """Every parameter field shows its whole name beside (or above) a usable input."""
     fields = list(app.query(ParamField))
@@ -78,93 +48,148 @@ def names_whole(app: TuiGymApp) -> None:
         assert box.region.width >= 7
 
 
-@pytest.mark.parametrize("size", SIZES)
-async def test_gridworld_board_keeps_its_cells_and_names_stay_whole(size):
+async def test_board_names_side_panel_and_train_controls_hold_while_people_use_it():
+    """One app for the three: GridWorld's board and the names through the sizes, the
+    side panel by keyboard (which ends on Blackjack), then Blackjack's Train view
+    controls whatever the engine says, at both sizes."""
     app = app_for("gridworld")
-    async with app.run_test(size=size) as pilot:
-        await pilot.pause()
+    async with app.run_test(size=SIZES[0]) as pilot:
+        await board_keeps_its_cells_and_names_stay_whole(pilot)
+        await the_side_panel_by_keyboard(pilot)
+        await train_controls_stay_in_sight_whatever_the_engine_says(pilot)
+
+
+async def board_keeps_its_cells_and_names_stay_whole(pilot) -> None:
+    """At 120×40, resized to 80×24 and back: at each size keys leave the cells as they
+    are, and each resize picks the largest shape that fits."""
+    app = pilot.app
+    await pilot.pause()
+    board = app.play_view.board
+
+    def shape() -> tuple:
+        layout = board.layout_drawn
+        return (layout.cell_w, layout.cell_h, layout.lines, layout.axes)
+
+    async def resize(width: int, height: int) -> None:
+        await pilot.resize_terminal(width, height)
+        await pilot.pause()  # the app takes a new size on a timer
+        canvas = board.canvas.content_size
+        best = choose_layout(5, canvas.width, canvas.height)
+        assert shape() == (best.cell_w, best.cell_h, best.lines, best.axes), (width, height)
+
+    kept = {}  # the shape each size drew
+    for size in SIZES:
+        if size != SIZES[0]:
+            await resize(*size)  # a new terminal size: the largest shape that fits
         names_whole(app)
-        board = app.play_view.board
-
-        def shape() -> tuple:
-            layout = board.layout_drawn
-            return (layout.cell_w, layout.cell_h, layout.lines, layout.axes)
-
         shapes = {shape()}
         # Advice, the coach, moves, a reset and the watched agent change the lines
         # around the board; the cells stay as they are.
         for key in ("i", "c", "right", "down", "r", "A", "x"):
             await pilot.press(key)
             shapes.add(shape())
-        assert len(shapes) == 1, shapes
-        # A new terminal size picks the largest shape that fits, whichever way it went.
-        for width, height in (*[s for s in SIZES if s != size], size):
-            await pilot.resize_terminal(width, height)
-            await pilot.pause()
-            canvas = board.canvas.content_size
-            best = choose_layout(5, canvas.width, canvas.height)
-            assert shape() == (best.cell_w, best.cell_h, best.lines, best.axes)
-            names_whole(app)
-        assert shape() in shapes
+        assert len(shapes) == 1, (size, shapes)
+        kept[size] = shape()
+    # And back, the other way: the largest that fits, the shape drawn there before.
+    await resize(*SIZES[0])
+    names_whole(app)
+    assert shape() == kept[SIZES[0]]
 
 
-async def test_the_side_panel_by_keyboard():
-    """The picker highlights the game shown; the chain lists order and parameters and
-    `[` / `]` reorder it; escape leaves a field (dropping an edit) for the view."""
-    app = app_for("gridworld")
-    async with app.run_test(size=(120, 40)) as pilot:
+async def the_side_panel_by_keyboard(pilot) -> None:
+    """At 120×40: the picker highlights the game shown; the chain lists order and
+    parameters and `[` / `]` reorder it; escape leaves a field (dropping an edit) for
+    the view."""
+    app = pilot.app
+    assert app.size == (120, 40)
+    await pilot.pause()
+    picker = app.query_one("#game-picker", RadioSet)
+
+    def highlighted() -> list[str]:
+        return [b.id for b in picker.query(RadioButton) if b.has_class("-selected")]
+
+    assert picker.pressed_button.id == "game-gridworld"
+    assert highlighted() == ["game-gridworld"]
+    assert not app.query_one("#game-blackjack", RadioButton).value
+
+    # Escape leaves a text field: the edit not applied is dropped.
+    size = app.query_one("#env-params").query_one(Input)
+    await pilot.click(size)
+    assert app.focused is size
+    await pilot.press("end", "backspace", "9", "escape")
+    assert app.focused is app.play_view.board
+    assert size.value == "5" and app.session.env_kwargs["size"] == 5
+
+    # The chain, in order, with parameters; [ and ] move the focused wrapper.
+    await pilot.press("W", "space")  # the wrapper panel (w walks up here): TimeLimit
+    app.query_one("#wrapper-StepPenalty").query_one(Checkbox).value = True
+    await pilot.pause()
+    assert [c.name for c in app.session.choices] == ["TimeLimit", "StepPenalty"]
+    chain = str(app.query_one("#chain").render())
+    assert "1 TimeLimit\n    max_episode_steps=100\n2 StepPenalty\n    penalty=0.01" in chain
+    assert "StepPenalty  #2" in str(
+        app.query_one("#wrapper-StepPenalty").query_one(Checkbox).label)
+    app.query_one("#wrapper-StepPenalty").query_one(Checkbox).focus()
+    await pilot.press("left_square_bracket")
+    assert [c.name for c in app.session.choices] == ["StepPenalty", "TimeLimit"]
+    assert app.session.chain_repr().startswith("<TimeLimit<StepPenalty<")
+    chain = str(app.query_one("#chain").render())
+    assert chain.index("1 StepPenalty") < chain.index("2 TimeLimit")
+    await pilot.press("left_square_bracket")  # already innermost: said, nothing changes
+    assert any("already innermost" in n.message for n in app._notifications)
+    await pilot.press("right_square_bracket")
+    assert [c.name for c in app.session.choices] == ["TimeLimit", "StepPenalty"]
+    app.query_one("#wrapper-ClipReward").query_one(Checkbox).focus()
+    await pilot.press("right_square_bracket")  # not in the chain: said, nothing changes
+    assert any("Tick ClipReward first" in n.message for n in app._notifications)
+    assert [c.name for c in app.session.choices] == ["TimeLimit", "StepPenalty"]
+
+    # Escape from the panel in the Train view gives the keyboard to the heatmap.
+    await pilot.press("t", "W", "escape")
+    assert app.focused is app.train_view.heatmap
+    await pilot.press("b")
+    assert picker.pressed_button.id == "game-blackjack"
+    assert highlighted() == ["game-blackjack"]
+    assert not app.query_one("#game-gridworld", RadioButton).value
+    await pilot.press("w")  # the wrappers, not Blackjack's own check boxes above them
+    assert app.focused is app.query_one("#wrapper-TimeLimit").query_one(Checkbox)
+    await pilot.press("f1")
+    rows = [row for _, rows in app.screen.sections for row in rows]
+    assert any(key == "esc" and "text field" in text for key, text in rows)
+    assert any(key == "[ / ]" for key, _ in rows)
+
+
+async def train_controls_stay_in_sight_whatever_the_engine_says(pilot) -> None:
+    """Blackjack at 120×40, then resized to 80×24: the controls stay in sight at both."""
+    app = pilot.app
+    assert app.session.game.name == "blackjack" and app.size == (120, 40)
+    await pilot.press("escape", "t")  # out of the help, to the Train view
+    app.query_one("#wrapper-FlattenObservation").query_one(Checkbox).value = True
+    await pilot.pause()
+    # A small budget (the note does not depend on it), applied when training starts.
+    app.train_view.form.input("episodes").value = "300"
+    await pilot.press("escape", "space")  # back to the view, and train (scalar engine)
+    await wait_for(pilot, lambda: app.runner.finished and not app.runner.running,
+                   "the budget to finish")
+    assert app.runner.wait_idle(DEADLINE)
+    assert app.session.trainer.episodes == 300
+    view = app.train_view
+    note = view.engine_note
+    assert "FlattenObservation has no batched form" in note
+    assert "batched form" not in view.stats.plain  # no longer wrapped over five lines
+    assert view.stats.tooltip == note
+    for size in SIZES:
+        if size != SIZES[0]:
+            await pilot.resize_terminal(*size)
+        view.heatmap.focus()  # the body scrolls to the heatmap; the controls stay
         await pilot.pause()
-        picker = app.query_one("#game-picker", RadioSet)
-
-        def highlighted() -> list[str]:
-            return [b.id for b in picker.query(RadioButton) if b.has_class("-selected")]
-
-        assert picker.pressed_button.id == "game-gridworld"
-        assert highlighted() == ["game-gridworld"]
-        assert not app.query_one("#game-blackjack", RadioButton).value
-
-        # Escape leaves a text field: the edit not applied is dropped.
-        size = app.query_one("#env-params").query_one(Input)
-        await pilot.click(size)
-        assert app.focused is size
-        await pilot.press("end", "backspace", "9", "escape")
-        assert app.focused is app.play_view.board
-        assert size.value == "5" and app.session.env_kwargs["size"] == 5
-
-        # The chain, in order, with parameters; [ and ] move the focused wrapper.
-        await pilot.press("W", "space")  # the wrapper panel (w walks up here): TimeLimit
-        app.query_one("#wrapper-StepPenalty").query_one(Checkbox).value = True
-        await pilot.pause()
-        assert [c.name for c in app.session.choices] == ["TimeLimit", "StepPenalty"]
-        chain = str(app.query_one("#chain").render())
-        assert "1 TimeLimit\n    max_episode_steps=100\n2 StepPenalty\n    penalty=0.01" in chain
-        assert "StepPenalty  #2" in str(
-            app.query_one("#wrapper-StepPenalty").query_one(Checkbox).label)
-        app.query_one("#wrapper-StepPenalty").query_one(Checkbox).focus()
-        await pilot.press("left_square_bracket")
-        assert [c.name for c in app.session.choices] == ["StepPenalty", "TimeLimit"]
-        assert app.session.chain_repr().startswith("<TimeLimit<StepPenalty<")
-        chain = str(app.query_one("#chain").render())
-        assert chain.index("1 StepPenalty") < chain.index("2 TimeLimit")
-        await pilot.press("left_square_bracket")  # already innermost: said, nothing changes
-        assert any("already innermost" in n.message for n in app._notifications)
-        await pilot.press("right_square_bracket")
-        assert [c.name for c in app.session.choices] == ["TimeLimit", "StepPenalty"]
-        app.query_one("#wrapper-ClipReward").query_one(Checkbox).focus()
-        await pilot.press("right_square_bracket")  # not in the chain: said, nothing changes
-        assert any("Tick ClipReward first" in n.message for n in app._notifications)
-        assert [c.name for c in app.session.choices] == ["TimeLimit", "StepPenalty"]
-
-        # Escape from the panel in the Train view gives the keyboard to the heatmap.
-        await pilot.press("t", "W", "escape")
-        assert app.focused is app.train_view.heatmap
-        await pilot.press("b")
-        assert picker.pressed_button.id == "game-blackjack"
-        assert highlighted() == ["game-blackjack"]
-        assert not app.query_one("#game-gridworld", RadioButton).value
-        await pilot.press("w")  # the wrappers, not Blackjack's own check boxes above them
-        assert app.focused is app.query_one("#wrapper-TimeLimit").query_one(Checkbox)
-        await pilot.press("f1")
-        rows = [row for _, rows in app.screen.sections for row in rows]
-        assert any(key == "esc" and "text field" in text for key, text in rows)
-        assert any(key == "[ / ]" for key, _ in rows)
+        if size == (120, 40):
+            assert inside(app, "#train-engine")
+            assert app.query_one("#train-engine").region.height == 1
+            assert app.query_one("#train-engine").tooltip == note
+        for selector in ("#train-controls", "#btn-toggle", "#btn-reset", "#train-progress"):
+            assert inside(app, selector), (size, selector)
+        assert "Start" in screen_text(app), size
+    await pilot.press("f1")  # the whole note is in the help too
+    assert isinstance(app.screen, HelpScreen)
+    assert any(note == text for _, rows in app.screen.sections for _, text in rows)

@@ -3,8 +3,9 @@
 `StripWidget` keeps its picture between frames; these tests pin down that a
 refresh that changes nothing draws nothing, that `redraw()` and a new width
 do draw again, and that what reaches the screen is the picture. Then the
-widgets built on it: the key bar follows the view, the sparklines summarise
-their series, and the stats table lines its numbers up.
+widgets built on it: the sparklines summarise their series, the stats table
+lines its numbers up, and kept styles follow a theme change. (The key bar, a
+strip widget too, follows the view in the app's own tests, test_ui_app.py.)
 """
 
 from __future__ import annotations
@@ -12,11 +13,14 @@ from __future__ import annotations
 from rich.segment import Segment
 from textual.app import App, ComposeResult
 
-from tui_gym.core.session import Session
-from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.widgets.stats_panel import _grid
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget, line_text
-from tui_gym.ui.widgets.training_charts import BARS, bucket_means, sparkline_rows
+from tui_gym.ui.widgets.training_charts import (
+    BARS,
+    TrainingCharts,
+    bucket_means,
+    sparkline_rows,
+)
 
 from .screen import screen_lines
 
@@ -75,23 +79,6 @@ async def test_a_strip_widget_pads_and_crops_to_its_width() -> None:
     async with app.run_test(size=(6, 5)) as pilot:
         await pilot.pause()
         assert drawn_lines(app, "alpha") == ["alpha"] * 3  # "alpha 6" cropped to 6 cells
-
-
-async def test_the_key_bar_follows_the_view() -> None:
-    app = TuiGymApp(Session("blackjack", seed=0))
-    async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.pause()
-        play_keys = screen_lines(app)[-1]
-        assert "Deal" in play_keys and "Start/Pause" not in play_keys
-        await pilot.press("t")
-        await pilot.pause()
-        train_keys = screen_lines(app)[-1]
-        assert "Start/Pause" in train_keys and "Deal" not in train_keys
-        assert app.focused is app.train_view.heatmap
-        await pilot.press("p")
-        await pilot.pause()
-        assert screen_lines(app)[-1] == play_keys  # the kept picture, and the right one
-        assert app.focused is app.play_view.board
 
 
 def test_bucket_means_average_each_bucket_and_sample_short_series() -> None:
@@ -176,12 +163,16 @@ def test_heatmap_cells_take_their_colour_from_their_place_on_the_scale() -> None
     assert _cell_style(False, -1, False).bgcolor is None  # no value: no colour
 
 
+class OneChart(App[None]):
+    def compose(self) -> ComposeResult:
+        yield TrainingCharts()
+
+
 async def test_kept_component_styles_follow_a_theme_change() -> None:
-    app = TuiGymApp(Session("blackjack", seed=0))
-    async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.press("t")
+    app = OneChart()
+    async with app.run_test(size=(80, 12)) as pilot:
         await pilot.pause()
-        charts = app.train_view.charts
+        charts = app.query_one(TrainingCharts)
         name = "charts--return-high"
         before = charts.component_styles()[name]
         assert before == charts.get_component_rich_style(name)
