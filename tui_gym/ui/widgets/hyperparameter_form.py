@@ -289,6 +289,10 @@ class HyperparameterForm(Vertical):
 
     def read(self) -> Settings | None:
         """The hyperparameters in the fields, or None with every problem marked."""
+        if self._rebuilding:
+            # Another algorithm's fields are on their way, holding what was loaded; the
+            # old ones on screen meanwhile are not the settings' fields.
+            return self._base
         values: dict[str, object] = {}
         ok = True
         fields = self.fields
