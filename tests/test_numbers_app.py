@@ -17,13 +17,13 @@ from tui_gym.games.words import signed
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.widgets.scoreboard import Scoreboard
 
-from .host_app_suite_session import TrainViewAlone
+from .hosts import TrainHost
 from .waiting import wait_for
 
 DEADLINE = 20.0
 
 
-def badge(app: TuiGymApp | TrainViewAlone) -> str:
+def badge(app: TuiGymApp | TrainHost) -> str:
     return app.train_view.stats.plain.split("  ")[0]
 
 
@@ -98,7 +98,7 @@ async def test_a_loaded_agent_shows_dashes_where_there_is_no_data(tmp_path) -> N
     trained = Session("blackjack", seed=0, hp=QLearning.hyperparameters(episodes=50_000))
     trained.trainer.run(episodes=5000)
     path = trained.save(tmp_path / "bj.tgym")
-    app = TrainViewAlone(Session.load(path))  # what the Train view shows of it
+    app = TrainHost(Session.load(path))  # what the Train view shows of it
     async with app.run_test(size=(120, 40)) as pilot:
         await pilot.pause()
         stats = app.train_view.stats.plain.splitlines()

@@ -14,7 +14,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.host_app_suite_play import VIEW_SIZE, PlayHost
 from tests.screen import screen_text
 from tui_gym.core.play import HumanGame
 from tui_gym.core.session import Session
@@ -28,6 +27,7 @@ from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.play_view import WATCHING, PlayView
 from tui_gym.ui.widgets.scoreboard import Scoreboard
 
+from .hosts import VIEW_SIZE, PlayHost
 from .waiting import wait_for
 
 BIG = (120, 40)

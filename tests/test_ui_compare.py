@@ -29,9 +29,8 @@ from tui_gym.ui.compare_view import CompareView, parse_count, read_launch
 from tui_gym.ui.widgets.compare_chart import BRAILLE_BASE, plot_cells
 from tui_gym.ui.widgets.figures_table import with_interval
 
-from .busy_waiting_suite_session import press_busy, wait_busy
 from .screen import screen_text
-from .waiting import wait_for
+from .waiting import press_busy, wait_busy, wait_for
 
 DEADLINE = 20.0
 SIZE = (100, 40)

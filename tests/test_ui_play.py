@@ -15,7 +15,6 @@ from collections.abc import Sequence
 from textual.app import App, ComposeResult
 from textual.widgets import Static
 
-from tests.host_app_suite_play import VIEW_SIZE, PlayHost
 from tui_gym.core.session import Session
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games.blackjack.game import card_label
@@ -25,6 +24,8 @@ from tui_gym.ui.widgets.board_kinds import BOARDS
 from tui_gym.ui.widgets.boards import BoardButton
 from tui_gym.ui.widgets.cards_board import CardsBoard
 from tui_gym.ui.widgets.grid_board import GridBoard
+
+from .hosts import VIEW_SIZE, PlayHost
 
 BIG = (120, 40)
 SMALL = (80, 24)

@@ -21,9 +21,9 @@ from tui_gym.ui.train_view import TrainView
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
 
-from .host_app_suite_train import TrainHost, send_key, wait_until
+from .hosts import TrainHost
 from .screen import screen_text
-from .waiting import DEADLINE, wait_for
+from .waiting import DEADLINE, send_key, wait_for, wait_until
 
 
 async def open_train(pilot) -> TrainView:

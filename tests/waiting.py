@@ -1,5 +1,12 @@
 """Waiting on a running app under the pilot: poll a condition with a deadline, never sleep
-a fixed time."""
+a fixed time; and driving an app while training or a comparison computes on a thread of
+the test's process.
+
+The pilot's `press()` and `pause()` wait until the process stops using the CPU, for up
+to a second each time; while training or a comparison computes, that second always
+runs out, and the work spends it. `send_key`, `wait_until`, `press_busy` and
+`wait_busy` do without that wait.
+"""
 
 from __future__ import annotations
 
@@ -7,25 +14,73 @@ import asyncio
 import time
 from collections.abc import Callable
 
+from textual import events
+
 DEADLINE = 20.0  # seconds; generous for a loaded machine, never reached when things work
 POLL = 0.02  # seconds the app runs on its own between two looks at the condition
+SETTLE_ROUNDS = 50  # rounds of handling what is queued; a few suffice for one key
 
 
-async def wait_for(pilot, predicate: Callable[[], bool], what: str,
-                   timeout: float = DEADLINE) -> None:
-    """Let the app run until `predicate()` holds; fail with `what` after `timeout` seconds.
-
-    Between two looks the app runs on its own timers (an asyncio sleep) rather than
-    under a pilot pause: a pause also redraws the whole screen, so polling with pauses
-    spends most of a core redrawing while the condition is still far off. Once the
-    condition holds, one pause lets the app handle what it has queued by then, so the
-    test reads a settled screen.
-    """
-    if predicate():
-        return
+async def wait_until(pilot, predicate: Callable[[], bool], what: str,
+                     timeout: float = DEADLINE) -> None:
+    """Let the app run on its own timers until `predicate()` holds; fail with `what`
+    after `timeout` seconds. Nothing more: the app's own timers have drawn what the
+    checks read by then."""
     deadline = time.monotonic() + timeout
     while not predicate():
         if time.monotonic() > deadline:
             raise AssertionError(f"timed out waiting for {what}")
         await asyncio.sleep(POLL)
+
+
+async def wait_for(pilot, predicate: Callable[[], bool], what: str,
+                   timeout: float = DEADLINE) -> None:
+    """`wait_until`, then one pause so the test reads a settled screen.
+
+    Between two looks the app runs on its own timers (an asyncio sleep) rather than
+    under a pilot pause: a pause also redraws the whole screen, so polling with pauses
+    spends most of a core redrawing while the condition is still far off.
+    """
+    if predicate():
+        return
+    await wait_until(pilot, predicate, what, timeout)
     await pilot.pause()
+
+
+_CHARS = {"space": " ", "full_stop": ".", "minus": "-", "plus": "+"}
+
+
+def send_key(pilot, key: str) -> None:
+    """Hand the app one key press, as the terminal driver does, and return at once.
+    Follow it with `wait_until` on what the key does."""
+    app = pilot.app
+    event = events.Key(key, _CHARS.get(key, key if len(key) == 1 else None))
+    event.set_sender(app)
+    app.post_message(event)
+
+
+async def settle(pilot) -> None:
+    """Let the app handle every message queued, and those its handlers queue in turn,
+    until no queue of the app or its screen holds one."""
+    app = pilot.app
+    for _ in range(SETTLE_ROUNDS):
+        await pilot.pause(0)  # handles what is queued now; no wait for an idle process
+        pumps = (app, *app.screen.walk_children(with_self=True))
+        if not any(pump.message_queue_size for pump in pumps):
+            return
+    raise AssertionError(f"the app still had messages queued after {SETTLE_ROUNDS} rounds")
+
+
+async def press_busy(pilot, *keys: str) -> None:
+    """Press `keys` one after the other (through the app's bindings, as a pressed key
+    goes), the app settled after each."""
+    for key in keys:
+        pilot.app.simulate_key(key)
+        await settle(pilot)
+
+
+async def wait_busy(pilot, predicate: Callable[[], bool], what: str,
+                    timeout: float = DEADLINE) -> None:
+    """`wait_until`, then `settle`."""
+    await wait_until(pilot, predicate, what, timeout)
+    await settle(pilot)

@@ -1,13 +1,14 @@
-"""The Play view mounted alone: a tiny host app that gives the view what it reads from
-`TuiGymApp` (the session, the play seed, no recording, no runner) and puts the keyboard
-on the board once it is drawn, as the app does at start."""
+"""Small host apps for a view mounted alone: each gives the view what it reads from
+`TuiGymApp` (the session, and the runner or play seed), without the whole app around it."""
 
 from __future__ import annotations
 
 from textual.app import App, ComposeResult
 
+from tui_gym.core.runners import make_runner
 from tui_gym.core.session import Session
 from tui_gym.ui.play_view import PlayView
+from tui_gym.ui.train_view import TrainView
 
 # The Play view's size in the app at 120x40 (beside the side panel, under the header,
 # over the key bar): mounted alone at this size, it lays out and wraps as there.
@@ -33,3 +34,22 @@ class PlayHost(App[None]):
 
     def on_mount(self) -> None:
         self.call_after_refresh(self.play_view.focus_board)
+
+
+class TrainHost(App[None]):
+    """Only a `TrainView` over `session`, trained (when asked) on a worker thread."""
+
+    def __init__(self, session: Session) -> None:
+        super().__init__()
+        self.session = session
+        self.runner = make_runner(session, "thread")
+
+    @property
+    def train_view(self) -> TrainView:
+        return self.query_one(TrainView)
+
+    def compose(self) -> ComposeResult:
+        yield TrainView(id="train")
+
+    def on_unmount(self) -> None:
+        self.runner.close(wait=False)
