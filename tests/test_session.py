@@ -312,3 +312,17 @@ def test_blackjack_heatmap_cells_read_the_q_table() -> None:
                 assert panel.labels[r][c] == ACTION_LETTERS[action]
                 assert panel.values[r, c] == qs.max()
                 assert panel.marked[r, c] == (action != best[player, dealer, usable])
+
+
+def test_an_animated_step_after_vector_training_is_seeded() -> None:
+    """The scalar engine takes over a run the vector engine began: its first episode's
+    placement comes from the session's seed, the same on every run, not from the OS."""
+    firsts = []
+    for _ in range(3):
+        session = Session("gridworld", seed=3)
+        session.trainer.run(episodes=300)
+        assert session.trainer.engine == "vector"
+        scalar = session.scalar_trainer()
+        scalar.step()
+        firsts.append(repr(scalar.current_observation()))
+    assert len(set(firsts)) == 1, firsts

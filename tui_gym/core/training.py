@@ -310,12 +310,17 @@ class Trainer(Engine):
         self._ep_return = 0.0
         self._ep_len = 0
         self._ep_td = 0.0
+        self._env_seeded = False  # the env's first reset here takes the seed
         super().__init__(env, agent, keyer, **options)
 
     # --- one move --------------------------------------------------------
     def _begin_episode(self) -> None:
-        if self.episodes == 0 and self._obs is None and self.seed is not None:
+        if not self._env_seeded and self.seed is not None:
+            # Also when this engine takes over a run another began (the vector engine
+            # before an animated step): its episodes are not 0 then, and an env never
+            # seeded would draw its first placement from the operating system.
             obs, _ = self.env.reset(seed=self.seed)
+            self._env_seeded = True
         else:
             obs, _ = self.env.reset()
         # Whatever the learner kept of an episode this engine no longer plays goes.
