@@ -463,13 +463,10 @@ class CompareView(Vertical):
         highlighted = run_list.highlighted
         run_list.clear_options()
         run_list.add_options(
-            Selection(self._describe(run), run.id, run.id in ticked) for run in self._runs
+            Selection(describe_run(run), run.id, run.id in ticked) for run in self._runs
         )
         if self._runs:
             run_list.highlighted = min(highlighted or 0, len(self._runs) - 1)
-
-    def _describe(self, run: RunSummary) -> Text:
-        return describe_run(run)
 
     def _record(self, run_id: int) -> RunRecord | None:
         record = self._records.get(run_id)

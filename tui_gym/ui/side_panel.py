@@ -337,7 +337,7 @@ class SidePanel(VerticalScroll):
                 yield RadioButton(cls.title, id=f"algorithm-{cls.name}")
         yield Static(self._algorithm_summary(), id="algorithm-summary")
         yield Static("Wrapper chain  (innermost first)", classes="section")
-        yield Static(self._chain_text(), id="chain")
+        yield Static(chain_text(self.session), id="chain")
         yield Static("Wrappers  ([ ] move the focused one)", classes="section")
         chosen, reasons = self._wrapper_states()
         with Vertical(id="wrapper-list"):
@@ -433,10 +433,7 @@ class SidePanel(VerticalScroll):
             row.set_state(chosen.get(row.spec.name), reasons.get(row.spec.name))
             row.show_place(self._place(row.spec.name))
         self._show_error("#env-error", None)
-        self.query_one("#chain", Static).update(self._chain_text())
-
-    def _chain_text(self) -> Text:
-        return chain_text(self.session)
+        self.query_one("#chain", Static).update(chain_text(self.session))
 
     def focus_wrappers(self) -> None:
         """Move the keyboard focus to the first wrapper checkbox."""
