@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from textual.app import App, ComposeResult
 
-from tui_gym.core.runners import make_runner
-from tui_gym.core.session import Session
+from tui_gym.session.runners import make_runner
+from tui_gym.session.session import Session
 from tui_gym.ui.play_view import PlayView
 from tui_gym.ui.train_view import TrainView
 

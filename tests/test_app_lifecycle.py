@@ -31,8 +31,8 @@ from textual._callback import count_parameters
 from textual.timer import Timer
 
 from tui_gym.algorithms import QLearning
-from tui_gym.core.session import Session, default_settings
 from tui_gym.games import game_for
+from tui_gym.session.session import Session, default_settings
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.train_view import TrainView
 
@@ -330,7 +330,7 @@ def test_an_unexpected_error_ends_the_app_with_one_line_and_a_crash_log(log_dir,
         from pathlib import Path
 
         import tui_gym.ui.app
-        from tui_gym.core.session import Session
+        from tui_gym.session.session import Session
         from tui_gym.ui.app import TuiGymApp, run_standalone
 
         class Broken(TuiGymApp):

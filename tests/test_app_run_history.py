@@ -7,8 +7,8 @@ from pathlib import Path
 
 from tui_gym.algorithms import QLearning
 from tui_gym.core.experiments import RunHistory, RunKind, RunStatus
-from tui_gym.core.experiments.app_recording import SessionRunLog
-from tui_gym.core.session import Session
+from tui_gym.session.experiments.app_recording import SessionRunLog
+from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 
 from .waiting import wait_for

@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from tui_gym.core.arena import (
+from tui_gym.session.arena import (
     ArenaScore,
     GameTable,
     Seat,

@@ -219,7 +219,7 @@ def test_players_that_cannot_start_say_why(
 
 
 def test_a_saved_agent_plays_its_own_game(tmp_path: Path) -> None:
-    from tui_gym.core.session import Session
+    from tui_gym.session.session import Session
 
     session = Session(env_id="blackjack", seed=0)
     session.hp = session.hp.replace(episodes=20_000)

@@ -447,7 +447,7 @@ def test_save_through_a_symlink_writes_its_target(
 def test_the_evaluation_is_exact_and_its_sample_stops_at_the_step_budget(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    from tui_gym.core.evaluation import EVAL_STEP_BUDGET
+    from tui_gym.session.evaluation import EVAL_STEP_BUDGET
 
     # An agent trained for 50 episodes on a 12x12 grid often loops until the 300-step limit.
     data = run_json(capsys, "train", "gridworld", "--size", "12", "--episodes", "50", "--json")

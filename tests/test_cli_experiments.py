@@ -127,7 +127,7 @@ def test_first_ctrl_c_asks_to_stop_and_a_second_one_interrupts() -> None:
     import signal
     import threading
 
-    from tui_gym.experiments_command import _ctrl_c_stops
+    from tui_gym.cli.experiments_command import _ctrl_c_stops
 
     stop = threading.Event()
     with _ctrl_c_stops(stop, Console(stderr=True, quiet=True)):

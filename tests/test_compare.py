@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from tui_gym.core.experiments import RunHistory, RunKind, RunStatus
-from tui_gym.core.experiments.compare import CompareProgress, CompareSpec, run_compare
 from tui_gym.core.experiments.seed_batch import checkpoint_episodes, greedy_values
 from tui_gym.core.mdp import FiniteMDP, evaluate, greedy_policy, solve
+from tui_gym.session.experiments.compare import CompareProgress, CompareSpec, run_compare
 
 from .seed_batches import cliff_model
 from .seed_batches import seed_batch as _batch
@@ -138,7 +138,7 @@ def test_compare_output_shape_and_records(tmp_path) -> None:
 
 @pytest.fixture
 def quick_progress(monkeypatch: pytest.MonkeyPatch) -> None:
-    from tui_gym.core.experiments import compare
+    from tui_gym.session.experiments import compare
 
     monkeypatch.setattr(compare, "PROGRESS_INTERVAL", 0.02)
 

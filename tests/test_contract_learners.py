@@ -29,8 +29,8 @@ import numpy as np
 import pytest
 
 from tui_gym.algorithms import ALGORITHMS
-from tui_gym.core.session import Session
 from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.session.session import Session
 
 NAMES = [cls.name for cls in ALGORITHMS]
 

@@ -14,8 +14,8 @@ import pytest
 
 from tui_gym.algorithms import QLearning
 from tui_gym.cli import main
-from tui_gym.core.session import Session, default_settings
 from tui_gym.games import game_for
+from tui_gym.session.session import Session, default_settings
 
 TOLERANCE = 0.005
 

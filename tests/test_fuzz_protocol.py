@@ -11,8 +11,8 @@ import sys
 
 import pytest
 
-from tui_gym.core.protocol import MAX_LINE_BYTES, JsonlPlayer
-from tui_gym.core.session import Session
+from tui_gym.session.protocol import MAX_LINE_BYTES, JsonlPlayer
+from tui_gym.session.session import Session
 
 from .test_fuzz_params import nasty_text, nasty_value
 

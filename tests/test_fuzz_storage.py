@@ -16,9 +16,9 @@ import pytest
 
 from tui_gym.algorithms import QLearning
 from tui_gym.cli import main
-from tui_gym.core.session import Session
-from tui_gym.core.storage import StorageError
 from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.session.session import Session
+from tui_gym.session.storage import StorageError
 
 from .test_fuzz_params import nasty_text, nasty_value
 

@@ -25,12 +25,12 @@ from textual.binding import Binding
 
 from tui_gym.cli import main
 from tui_gym.core.mdp import NotAvailable
-from tui_gym.core.protocol import JsonlPlayer
-from tui_gym.core.session import Session
 from tui_gym.core.vector import BatchedForm
 from tui_gym.core.wrappers import parse_wrapper_spec
 from tui_gym.games import GAMES, Game, game_for
 from tui_gym.games.model import ModelGame
+from tui_gym.session.protocol import JsonlPlayer
+from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 
 Z = 4.0  # standard errors a sampled mean may stray from the exact value

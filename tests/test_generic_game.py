@@ -16,10 +16,10 @@ import pytest
 
 from tui_gym.cli import main
 from tui_gym.core.mdp import NotAvailable
-from tui_gym.core.protocol import JsonlPlayer
-from tui_gym.core.session import Session
 from tui_gym.games import UnknownGameError, game_for, resolve_env_id
 from tui_gym.games.generic import GenericGame
+from tui_gym.session.protocol import JsonlPlayer
+from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.widgets.text_board import TextBoard
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tui_gym.core.session import Session
 from tui_gym.core.wrappers import parse_wrapper_spec
+from tui_gym.session.session import Session
 
 RIGHT = 0
 

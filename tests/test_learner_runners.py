@@ -13,9 +13,9 @@ import pickle
 import pytest
 
 from tui_gym.algorithms import ALGORITHMS, DoubleQLearning, QLearning, Sarsa
-from tui_gym.core.process_runner import ProcessRunner, SessionSpec
-from tui_gym.core.runner import TrainingRunner
-from tui_gym.core.session import Session
+from tui_gym.session.process_runner import ProcessRunner, SessionSpec
+from tui_gym.session.runner import TrainingRunner
+from tui_gym.session.session import Session
 
 from .test_runner_and_play import wait_for
 

@@ -17,8 +17,8 @@ pytest.importorskip("mcp")
 pytestmark = pytest.mark.xdist_group("mcp_server")
 
 from tests.mcp_support import McpInProcess, McpProcess  # noqa: E402
-from tui_gym.core.arena import GameTable, catalog  # noqa: E402
 from tui_gym.mcp_server.server import build_server  # noqa: E402
+from tui_gym.session.arena import GameTable, catalog  # noqa: E402
 
 GAMES = [entry.name for entry in catalog()]
 

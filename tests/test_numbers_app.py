@@ -11,9 +11,9 @@ session; every wait polls a condition.
 from __future__ import annotations
 
 from tui_gym.algorithms import QLearning
-from tui_gym.core.session import Session, default_settings
 from tui_gym.games import game_for
 from tui_gym.games.words import signed
+from tui_gym.session.session import Session, default_settings
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.widgets.scoreboard import Scoreboard
 

@@ -17,9 +17,6 @@ import numpy as np
 import pytest
 
 from tui_gym.algorithms import QLearning
-from tui_gym.core.play import HumanGame, Tally
-from tui_gym.core.protocol import JsonlPlayer
-from tui_gym.core.session import Session
 from tui_gym.core.wrappers import parse_wrapper_spec
 from tui_gym.games.blackjack.batched import BatchedBlackjack
 from tui_gym.games.blackjack.solver import (
@@ -37,6 +34,9 @@ from tui_gym.games.gridworld.paths import (
     shortest_path_policy,
 )
 from tui_gym.games.words import MIN_CI_EPISODES, return_summary
+from tui_gym.session.play import HumanGame, Tally
+from tui_gym.session.protocol import JsonlPlayer
+from tui_gym.session.session import Session
 
 Z = 4.0  # standard errors a sampled mean may stray from the exact value
 

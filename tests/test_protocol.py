@@ -9,9 +9,9 @@ import sys
 
 import pytest
 
-from tui_gym.core.protocol import JsonlPlayer
-from tui_gym.core.session import Session
 from tui_gym.games.blackjack.solver import BlackjackRules, optimal_policy
+from tui_gym.session.protocol import JsonlPlayer
+from tui_gym.session.session import Session
 
 
 def run_protocol(env: str, lines: list[str], *extra: str) -> tuple[list[dict], str, int]:

@@ -14,8 +14,8 @@ from tests.test_bench import fake_results
 from tui_gym.bench import programs
 from tui_gym.bench.programs import ProgramsResult, RateResult, RoundTripResult, SeparationResult
 from tui_gym.bench.report import table, to_json
-from tui_gym.core.protocol import JsonlPlayer, read_batches, serve
-from tui_gym.core.session import Session
+from tui_gym.session.protocol import JsonlPlayer, read_batches, serve
+from tui_gym.session.session import Session
 
 
 class Chunks(io.RawIOBase):

@@ -15,19 +15,19 @@ import pytest
 
 from tui_gym.cli import main
 from tui_gym.core.mdp import model_from_env, solve
-from tui_gym.core.play import HumanGame
 from tui_gym.core.recording import (
     FORMAT_VERSION,
     MoveJudge,
-    Recorder,
     RecordingError,
     read_recording,
 )
-from tui_gym.core.recording.switch import RecordingSwitch
-from tui_gym.core.session import Session
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games import GAMES
 from tui_gym.games.base import Advice
+from tui_gym.session.play import HumanGame
+from tui_gym.session.recording import Recorder
+from tui_gym.session.recording.switch import RecordingSwitch
+from tui_gym.session.session import Session
 
 
 def lines_of(path: Path) -> list[dict[str, Any]]:

@@ -7,11 +7,11 @@ import time
 import pytest
 
 from tui_gym.algorithms import QLearning
-from tui_gym.core.play import HumanGame, PlayError, Tally
-from tui_gym.core.runner import TrainingRunner
-from tui_gym.core.session import Session
-from tui_gym.core.speeds import SPEEDS
 from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.session.play import HumanGame, PlayError, Tally
+from tui_gym.session.runner import TrainingRunner
+from tui_gym.session.session import Session
+from tui_gym.session.speeds import SPEEDS
 
 
 def wait_for(predicate, timeout: float = 10.0) -> bool:

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from tui_gym.algorithms import QLearning
-from tui_gym.core.session import Session
 from tui_gym.core.training import continue_run
+from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.train_view import TrainView
 

@@ -14,12 +14,12 @@ from pathlib import Path
 import pytest
 
 from tui_gym.algorithms import QLearning
-from tui_gym.core import process_runner
-from tui_gym.core.process_runner import ProcessRunner
-from tui_gym.core.runner import SPEEDS
-from tui_gym.core.session import Session, default_settings
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games import game_for
+from tui_gym.session import process_runner
+from tui_gym.session.process_runner import ProcessRunner
+from tui_gym.session.runner import SPEEDS
+from tui_gym.session.session import Session, default_settings
 
 from .test_runner_and_play import wait_for
 

@@ -8,10 +8,10 @@ import pytest
 
 import tui_gym  # noqa: F401  (registers GridWorld)
 from tui_gym.algorithms import QLearning
-from tui_gym.core.session import Session, default_settings
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games.blackjack import BlackjackGame as BlackjackProfile
 from tui_gym.games.gridworld import GridWorldGame as GridWorldProfile
+from tui_gym.session.session import Session, default_settings
 
 W = WrapperChoice.make
 GRID = "tui_gym/GridWorld-v0"

@@ -22,10 +22,10 @@ import pytest
 
 import tui_gym  # noqa: F401  (registers GridWorld)
 from tui_gym.algorithms import QLearning
-from tui_gym.core import storage
-from tui_gym.core.session import Session
-from tui_gym.core.storage import FORMAT_NAME, FORMAT_VERSION, StorageError, read_agent
 from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.session import storage
+from tui_gym.session.session import Session
+from tui_gym.session.storage import FORMAT_NAME, FORMAT_VERSION, StorageError, read_agent
 
 W = WrapperChoice.make
 
@@ -202,7 +202,7 @@ def test_a_kill_during_a_write_leaves_a_temp_file_the_next_save_removes(tmp_path
     # writing its temporary file and renaming it into place.
     script = (
         "import os, signal, sys\n"
-        "from tui_gym.core.session import Session\n"
+        "from tui_gym.session.session import Session\n"
         "os.replace = lambda *a: os.kill(os.getpid(), signal.SIGKILL)\n"
         "Session('blackjack').save(sys.argv[1])\n"
     )

@@ -7,7 +7,7 @@ import random
 from textual.widgets import Checkbox, ContentSwitcher, Input, RadioButton, Static
 
 from tui_gym.algorithms import QLearning
-from tui_gym.core.session import Session
+from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.side_panel import ParamField, SidePanel, WrapperRow

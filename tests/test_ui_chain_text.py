@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from tui_gym.core.session import Session
 from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.session.session import Session
 from tui_gym.ui.side_panel import chain_text
 
 

@@ -15,14 +15,14 @@ import numpy as np
 import pytest
 
 from tests.screen import screen_text
-from tui_gym.core.play import HumanGame
-from tui_gym.core.session import Session
 from tui_gym.games.gridworld.paths import (
     mixed_steps_over_optimal,
     policy_steps_over_optimal,
     shortest_path_policy,
 )
 from tui_gym.games.words import plural, signed
+from tui_gym.session.play import HumanGame
+from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.play_view import WATCHING, PlayView
 from tui_gym.ui.widgets.scoreboard import Scoreboard

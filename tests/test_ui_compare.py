@@ -23,7 +23,7 @@ from tui_gym.core.experiments import (
     mean_return_last,
 )
 from tui_gym.core.experiments.schema import MIGRATIONS
-from tui_gym.core.session import Session
+from tui_gym.session.session import Session
 from tui_gym.ui.compare_series import series_of_record
 from tui_gym.ui.compare_view import CompareView, parse_count, read_launch
 from tui_gym.ui.widgets.compare_chart import BRAILLE_BASE, plot_cells

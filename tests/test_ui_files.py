@@ -16,7 +16,7 @@ import pytest
 from textual.widgets import Input
 
 from tui_gym.algorithms import QLearning
-from tui_gym.core.session import Session
+from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.file_screen import FileScreen

@@ -13,7 +13,7 @@ from __future__ import annotations
 from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet
 
 from tui_gym.algorithms import QLearning
-from tui_gym.core.session import Session
+from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.side_panel import ParamField

@@ -12,7 +12,7 @@ import numpy as np
 from textual.widgets import Input, RadioButton, Select
 
 from tui_gym.algorithms import ALGORITHMS
-from tui_gym.core.session import Session
+from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.widgets.step_panel import _num

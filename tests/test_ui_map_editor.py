@@ -7,7 +7,7 @@ Waits poll a condition with a deadline; nothing sleeps.
 
 from __future__ import annotations
 
-from tui_gym.core.session import Session
+from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.train_view import TrainView
 from tui_gym.ui.widgets.map_editor import MapCanvas, MapEditor

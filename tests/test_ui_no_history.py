@@ -8,7 +8,7 @@ from pathlib import Path
 from textual.app import App, ComposeResult
 
 from tui_gym.core.experiments import RunHistory, RunRecorder, RunSpec
-from tui_gym.core.session import Session
+from tui_gym.session.session import Session
 from tui_gym.ui.app import history_for_app
 from tui_gym.ui.compare_view import CompareView
 

@@ -15,9 +15,9 @@ from collections.abc import Sequence
 from textual.app import App, ComposeResult
 from textual.widgets import Static
 
-from tui_gym.core.session import Session
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games.blackjack.game import card_label
+from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.play_view import PlayView
 from tui_gym.ui.widgets.board_kinds import BOARDS

@@ -12,10 +12,11 @@ import pytest
 from textual.app import App
 from textual.widgets import OptionList, Static
 
-from tui_gym.core.play import HumanGame
-from tui_gym.core.recording import Recorder, Recording, read_recording
-from tui_gym.core.session import Session
+from tui_gym.core.recording import Recording, read_recording
 from tui_gym.games import GAMES
+from tui_gym.session.play import HumanGame
+from tui_gym.session.recording import Recorder
+from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.jump_screen import JumpScreen
 from tui_gym.ui.play_view import PlayView

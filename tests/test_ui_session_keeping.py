@@ -14,7 +14,7 @@ from textual.command import CommandList
 from textual.widgets import Checkbox, Input
 
 from tui_gym.algorithms import QLearning
-from tui_gym.core.session import Session, default_settings
+from tui_gym.session.session import Session, default_settings
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.confirm_screen import ConfirmScreen
 

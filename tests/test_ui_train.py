@@ -12,9 +12,9 @@ from __future__ import annotations
 import pytest
 
 from tui_gym.algorithms import QLearning
-from tui_gym.core.session import Session, default_settings
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games import game_for
+from tui_gym.session.session import Session, default_settings
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.train_view import TrainView

@@ -16,12 +16,12 @@ import pytest
 
 from tests.game_support import form_of
 from tui_gym.core.obskey import ObservationKeyer
-from tui_gym.core.session import vector_support
 from tui_gym.core.vector import NoBatchedForm, plan_for_env
 from tui_gym.core.wrappers import WrapperChoice, build_env
 from tui_gym.envs.gridworld import GridWorldEnv
 from tui_gym.games.gridworld.batched import BatchedGridWorld
 from tui_gym.games.gridworld.paths import all_pairs
+from tui_gym.session.session import vector_support
 
 
 def chi2_bound(df: int, z: float = 4.5) -> float:

@@ -18,7 +18,6 @@ import pytest
 from tests.game_support import form_of
 from tui_gym.algorithms import Learner, QLearning, Settings
 from tui_gym.core.obskey import ObservationKeyer
-from tui_gym.core.session import default_settings
 from tui_gym.core.stats import RollingWindow, Series
 from tui_gym.core.training import Engine, Trainer
 from tui_gym.core.vector import (
@@ -28,6 +27,7 @@ from tui_gym.core.vector import (
 )
 from tui_gym.core.wrappers import WrapperChoice, build_env
 from tui_gym.games import game_for
+from tui_gym.session.session import default_settings
 
 BLACKJACK = "Blackjack-v1"
 GRID = "tui_gym/GridWorld-v0"

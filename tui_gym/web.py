@@ -86,7 +86,7 @@ def cmd_serve(args: argparse.Namespace, out: Console) -> int:
     except ImportError:
         raise CliError(f"tui-gym serve needs textual-serve: {INSTALL_HINT}") from None
     if args.load:
-        from tui_gym.core.session import Session
+        from tui_gym.session.session import Session
 
         Session.load(args.load)  # a file that cannot be opened is said now, not in each tab
 

@@ -31,13 +31,13 @@ from tui_gym.algorithms import Settings
 from tui_gym.bench import tutorial
 from tui_gym.bench.figures import median
 from tui_gym.core.mdp import NotAvailable
-from tui_gym.core.session import (
+from tui_gym.games import GAMES, Game
+from tui_gym.session.session import (
     TARGET_GAP_BUDGET_FACTOR,
     Session,
     check_every_for,
     default_settings,
 )
-from tui_gym.games import GAMES, Game
 
 
 @dataclass(frozen=True)

@@ -61,7 +61,7 @@ class HistoryResult:
 
 def _timed_recording(db: Path, spent: list[float]) -> Any:
     """A `TrainRecording` that adds the time of each of its calls to `spent[0]`."""
-    from tui_gym.core.experiments.train_recording import TrainRecording
+    from tui_gym.session.experiments.train_recording import TrainRecording
 
     class Timed(TrainRecording):
         pass
@@ -86,8 +86,8 @@ def _timed_recording(db: Path, spent: list[float]) -> Any:
 def _train_once(db: Path, record: bool) -> tuple[float, float]:
     """One default train run as `tui-gym train blackjack` runs it (the game's defaults,
     seed 0, then the greedy evaluation): (whole seconds, recording seconds)."""
-    from tui_gym.core.experiments.train_recording import TrainRecording
-    from tui_gym.core.session import Session
+    from tui_gym.session.experiments.train_recording import TrainRecording
+    from tui_gym.session.session import Session
 
     spent = [0.0]
     started = time.perf_counter()

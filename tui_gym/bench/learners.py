@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 from tui_gym.bench import tutorial_learners
 from tui_gym.bench.figures import median, ratio
-from tui_gym.core.session import Session
+from tui_gym.session.session import Session
 
 SPEED_BUDGET = 1_000_000_000  # episodes: never reached in a window, so epsilon stays put
 SPEED_WARMUP_S = 0.1

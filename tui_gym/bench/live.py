@@ -55,7 +55,7 @@ from typing import Any
 
 from tui_gym.algorithms import QLearning, Settings
 from tui_gym.bench.figures import median, percentile
-from tui_gym.core.session import Session
+from tui_gym.session.session import Session
 
 RUNNERS = ("thread", "process")
 DEFAULT_RUNNER = "process"  # what `tui-gym` (run_app) opens the app with

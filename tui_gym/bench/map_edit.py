@@ -17,9 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from tui_gym.core.mdp import NotAvailable
-from tui_gym.core.session import Session
 from tui_gym.games import GAMES
 from tui_gym.games.maps.random_map import random_map
+from tui_gym.session.session import Session
 
 __all__ = ["MAP_SIDE", "MapEditResult", "measure"]
 

@@ -60,7 +60,7 @@ def train_and_watch(
     import time
 
     from tui_gym.algorithms import QLearning
-    from tui_gym.core.session import Session
+    from tui_gym.session.session import Session
 
     hp = QLearning.hyperparameters(episodes=warmup + episodes)
     session = Session(hp=hp, seed=0, engine=engine)

@@ -53,7 +53,7 @@ class SeedsSpeed:
 
 def pick_game() -> str:
     """The first of `GAMES` the registry plays."""
-    from tui_gym.core.session import Session
+    from tui_gym.session.session import Session
 
     for name in GAMES:
         try:
@@ -66,8 +66,8 @@ def pick_game() -> str:
 
 def measure(seeds: int, episodes: int, tutorial_share: float = 1.0) -> SeedsSpeed:
     """Time the comparison, then the tutorial loop (see the module docstring)."""
-    from tui_gym.core.experiments.compare import CompareSpec, _cores, run_compare
-    from tui_gym.core.session import Session
+    from tui_gym.session.experiments.compare import CompareSpec, _cores, run_compare
+    from tui_gym.session.session import Session
 
     game = pick_game()
     spec = CompareSpec(game, ALGORITHMS, seeds, episodes, settings=SETTINGS)

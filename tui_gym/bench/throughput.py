@@ -31,8 +31,8 @@ from tui_gym.algorithms import Settings
 from tui_gym.bench import tutorial
 from tui_gym.bench.figures import median, ratio
 from tui_gym.bench.gap import bench_kwargs, benched, title_of
-from tui_gym.core.session import Session, default_settings
 from tui_gym.games import Game
+from tui_gym.session.session import Session, default_settings
 
 WINDOW_BUDGET = 1_000_000_000  # episodes: never reached in a window, so epsilon barely moves
 WARMUP_SECONDS = 0.1

@@ -132,7 +132,7 @@ def make_agent(
 ) -> TutorialAgent:
     """A fresh tutorial agent on a fresh `gym.make` of the game, seeded."""
     import tui_gym.envs
-    from tui_gym.core.session import default_settings
+    from tui_gym.session.session import default_settings
 
     tui_gym.envs.register_envs()
     normal = game.normalize_kwargs(kwargs)

@@ -56,7 +56,7 @@ def add_parser(sub: Any, int_type: Any, seed_type: Any, float_type: Any) -> None
     bench.add_argument("--no-record", action="store_true",
                        help="do not record the result in the run history")
     bench.add_argument("--json", action="store_true", help="print one JSON object")
-    from tui_gym.replay_command import add_record_option
+    from tui_gym.cli.replay_command import add_record_option
 
     add_record_option(bench)
 
@@ -79,7 +79,7 @@ def _player(args: argparse.Namespace, game: str) -> tuple[Any, dict[str, Any], t
         ProcessPlayer,
         RandomPlayer,
     )
-    from tui_gym.core.arena import find_game
+    from tui_gym.session.arena import find_game
 
     params: dict[str, Any] = _params(args.param)
     wrappers = tuple(args.wrapper)
@@ -134,7 +134,7 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
 
     recorder = None
     if args.record is not None:
-        from tui_gym.replay_command import check_record_path, open_recorder
+        from tui_gym.cli.replay_command import check_record_path, open_recorder
 
         check_record_path(args.record)
         path, seed = args.record, args.bench_seed
@@ -170,7 +170,7 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
 
 def _show_leaderboard(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.benchmark.leaderboard import leaderboard
-    from tui_gym.core.arena import find_game
+    from tui_gym.session.arena import find_game
 
     game = find_game(args.game).name
     path, standings = leaderboard(game, args.db)

@@ -33,8 +33,8 @@ from typing import IO, Any
 import numpy as np
 
 from tui_gym.benchmark.referee import Referee
-from tui_gym.core.arena.games import raw_observation, session_entry
-from tui_gym.core.protocol import parse_request, read_lines
+from tui_gym.session.arena.games import raw_observation, session_entry
+from tui_gym.session.protocol import parse_request, read_lines
 
 MAX_STRIKES = 3  # decisions in a row not made in time before a player counts as gone
 STARTUP_S = 10.0  # a program's first request may take this long (its start-up)
@@ -118,8 +118,8 @@ class AgentPlayer(InProcessPlayer):
     """A saved agent's greedy action (ties and unlearned states at random, seeded)."""
 
     def __init__(self, path: str, seed: int) -> None:
-        from tui_gym.core.session import Session
-        from tui_gym.core.storage import StorageError
+        from tui_gym.session.session import Session
+        from tui_gym.session.storage import StorageError
 
         try:
             self.session = Session.load(path)

@@ -22,9 +22,9 @@ import json
 from dataclasses import dataclass, field
 from typing import Any
 
-from tui_gym.core.arena import Seat, SeatError, find_game, open_handler
-from tui_gym.core.arena.games import handler_params
-from tui_gym.core.protocol import parse_request
+from tui_gym.session.arena import Seat, SeatError, find_game, open_handler
+from tui_gym.session.arena.games import handler_params
+from tui_gym.session.protocol import parse_request
 
 
 @dataclass

@@ -12,8 +12,8 @@ import numpy as np
 from tui_gym.benchmark.players import Player
 from tui_gym.benchmark.referee import Referee
 from tui_gym.benchmark.results import BenchmarkResult
-from tui_gym.core.arena import EpisodeScore
-from tui_gym.core.arena.games import attach_recorder
+from tui_gym.session.arena import EpisodeScore
+from tui_gym.session.arena.games import attach_recorder
 
 
 def run_benchmark(

@@ -29,13 +29,13 @@ from tui_gym.benchmark.command import cmd_benchmark
 from tui_gym.cli.flags import flag, game_kwargs, hyperparameters
 from tui_gym.cli.maps_command import cmd_maps
 from tui_gym.cli.output import CliError, key_value_table, print_json
-from tui_gym.core import evaluation
-from tui_gym.core.evaluation import EvalReport
+from tui_gym.cli.runs_command import recorded
 from tui_gym.core.params import Param
-from tui_gym.core.session import TARGET_GAP_BUDGET_FACTOR, Session, default_settings
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 from tui_gym.mcp_server.command import cmd_mcp
-from tui_gym.runs_command import recorded
+from tui_gym.session import evaluation
+from tui_gym.session.evaluation import EvalReport
+from tui_gym.session.session import TARGET_GAP_BUDGET_FACTOR, Session, default_settings
 
 WRAPPER_SYNTAX = "--wrapper NAME or --wrapper NAME:key=value,key=value, repeatable; " \
     "the first is innermost"
@@ -338,7 +338,7 @@ def _wrapper_dicts(session: Session) -> list[dict[str, Any]]:
 
 
 def cmd_train(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.core.storage import check_save_path
+    from tui_gym.session.storage import check_save_path
 
     if args.target_gap is not None and args.target_gap <= 0:
         raise CliError(f"--target-gap must be a positive number, got {args.target_gap:g}")
@@ -481,8 +481,8 @@ def _panel_table(panel: Any) -> Table:
 def cmd_play(args: argparse.Namespace, out: Console) -> int:
     import sys
 
-    from tui_gym.core.protocol import JsonlPlayer, serve
     from tui_gym.core.wrappers import parse_wrapper_spec
+    from tui_gym.session.protocol import JsonlPlayer, serve
 
     env_id = resolve_env_id(args.env)
     session = Session(
@@ -497,7 +497,7 @@ def cmd_play(args: argparse.Namespace, out: Console) -> int:
     player = JsonlPlayer(session, seed=args.play_seed)
     if args.record is None:
         return serve(player, sys.stdin.buffer, sys.stdout)
-    from tui_gym.replay_command import open_recorder
+    from tui_gym.cli.replay_command import open_recorder
 
     with open_recorder(args.record, session, source="play", seed=args.play_seed) as recorder:
         player.game.recorder = recorder

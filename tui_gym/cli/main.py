@@ -101,7 +101,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--runner", choices=("process", "thread"), default="process",
         help="train in a child process (default) or on a thread of the app's process",
     )
-    from tui_gym.runs_command import add_app_options, add_runs_parser, add_train_options
+    from tui_gym.cli.runs_command import add_app_options, add_runs_parser, add_train_options
 
     add_app_options(parser)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
@@ -165,14 +165,14 @@ def build_parser() -> argparse.ArgumentParser:
     play.add_argument("--seed", type=seed_number, default=None, dest="play_seed")
     add_game_flags(play)
     play.add_argument("--wrapper", action="append", default=[], metavar="SPEC")
-    from tui_gym.replay_command import add_record_option, add_replay_parser
+    from tui_gym.cli.replay_command import add_record_option, add_replay_parser
     from tui_gym.web import add_serve_parser
 
     add_record_option(play)
     add_replay_parser(sub)
     add_serve_parser(sub)
     add_runs_parser(sub)
-    from tui_gym.experiments_command import add_experiment_parsers
+    from tui_gym.cli.experiments_command import add_experiment_parsers
 
     add_experiment_parsers(sub)
 
@@ -207,9 +207,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command is None:
             return _run_app(args)
         from tui_gym.cli.commands import COMMANDS
-        from tui_gym.experiments_command import EXPERIMENT_COMMANDS
-        from tui_gym.replay_command import REPLAY_COMMANDS
-        from tui_gym.runs_command import RUNS_COMMANDS
+        from tui_gym.cli.experiments_command import EXPERIMENT_COMMANDS
+        from tui_gym.cli.replay_command import REPLAY_COMMANDS
+        from tui_gym.cli.runs_command import RUNS_COMMANDS
         from tui_gym.web import SERVE_COMMANDS
 
         commands = {**COMMANDS, **REPLAY_COMMANDS, **SERVE_COMMANDS, **RUNS_COMMANDS,
@@ -262,7 +262,7 @@ def _run_app(args: argparse.Namespace) -> int:
     except ImportError as exc:  # pragma: no cover - only without the UI installed
         raise CliError(f"the app is not available ({exc}); try `tui-gym --help`") from None
     if args.record is not None:
-        from tui_gym.replay_command import check_record_path
+        from tui_gym.cli.replay_command import check_record_path
 
         check_record_path(args.record)
     return run_app(env_id=env_id, seed=args.seed, load=args.load, runner=args.runner,

@@ -44,8 +44,8 @@ from tui_gym.games.words import (
 )
 
 if TYPE_CHECKING:
-    from tui_gym.core.play import PlayStep, Scorecard
     from tui_gym.core.vector.plan import BatchedForm
+    from tui_gym.session.play import PlayStep, Scorecard
 
 __all__ = [
     "EXACT",

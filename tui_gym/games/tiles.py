@@ -39,7 +39,7 @@ from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.words import format_reward, plural
 
 if TYPE_CHECKING:
-    from tui_gym.core.play import PlayStep
+    from tui_gym.session.play import PlayStep
 
 __all__ = ["CUSTOM", "LAYOUT", "MOVES", "TileGame", "TileLayout", "TileNarrator", "TileStates"]
 

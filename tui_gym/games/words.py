@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 
 if TYPE_CHECKING:
-    from tui_gym.core.play import Scorecard, Tally
+    from tui_gym.session.play import Scorecard, Tally
 
 __all__ = [
     "MIN_CI_EPISODES",

@@ -24,8 +24,8 @@ from mcp.types import CallToolResult, TextContent
 from pydantic import Field
 
 from tui_gym import __version__
-from tui_gym.core.arena import GameTable, Seat, SeatError, TableError, catalog
 from tui_gym.mcp_server.pipes import open_pipes
+from tui_gym.session.arena import GameTable, Seat, SeatError, TableError, catalog
 
 INSTRUCTIONS = """\
 Games of tui-gym (Blackjack, GridWorld, ...) to play move by move, scored against the exact

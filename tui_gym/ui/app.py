@@ -47,22 +47,22 @@ from textual.strip import Strip
 from textual.widget import AwaitMount, Widget
 from textual.widgets import ContentSwitcher, Header
 
-from tui_gym.core.recording.switch import RecordingSwitch
-from tui_gym.core.runners import make_runner
-from tui_gym.core.session import Session
-from tui_gym.core.speeds import SPEEDS
-from tui_gym.core.storage import StorageError
 from tui_gym.core.training import continue_run
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games import GAMES, Game, game_for, game_named
+from tui_gym.session.recording.switch import RecordingSwitch
+from tui_gym.session.runners import make_runner
+from tui_gym.session.session import Session
+from tui_gym.session.speeds import SPEEDS
+from tui_gym.session.storage import StorageError
 from tui_gym.ui.play_view import PlayView
 from tui_gym.ui.side_panel import SidePanel
 from tui_gym.ui.too_small_screen import TooSmallScreen
 from tui_gym.ui.widgets.key_bar import KeyBar
 
 if TYPE_CHECKING:
-    from tui_gym.core.experiments.app_recording import SessionRunLog
     from tui_gym.core.recording import Recording
+    from tui_gym.session.experiments.app_recording import SessionRunLog
     from tui_gym.ui.compare_view import CompareView
     from tui_gym.ui.confirm_screen import ConfirmScreen
     from tui_gym.ui.train_view import TrainView
@@ -1127,8 +1127,8 @@ def run_app(
     if keep_history:
 
         def run_log() -> SessionRunLog:  # imported and made after the first frame
-            from tui_gym.core.experiments.app_recording import SessionRunLog
             from tui_gym.core.experiments.paths import resolve_db_path
+            from tui_gym.session.experiments.app_recording import SessionRunLog
 
             return SessionRunLog(resolve_db_path(db))
 

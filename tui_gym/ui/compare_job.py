@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 from tui_gym.core.experiments import RunHistory, RunHistoryError
 
 if TYPE_CHECKING:
-    from tui_gym.core.experiments.compare import CompareProgress, CompareResult, CompareSpec
+    from tui_gym.session.experiments.compare import CompareProgress, CompareResult, CompareSpec
 
 CLOSE_SECONDS = 5.0  # how long `close()` waits for the thread to end
 
@@ -41,7 +41,7 @@ class CompareJob:
         """`run` is `run_compare` (or a function with its signature); `processes` is its
         own (None: one child process per core, 0: all on the job's thread)."""
         if run is None:
-            from tui_gym.core.experiments.compare import run_compare
+            from tui_gym.session.experiments.compare import run_compare
 
             run = run_compare
         self.spec = spec

@@ -23,7 +23,7 @@ import numpy as np
 from tui_gym.core.experiments import Figure, RunRecord, RunSummary, rolling_mean
 
 if TYPE_CHECKING:
-    from tui_gym.core.experiments.compare import AlgorithmOutcome
+    from tui_gym.session.experiments.compare import AlgorithmOutcome
 
 CURVE = "return"
 SMOOTH_FRACTION = 0.1  # a single run's curve: a trailing mean over this share of its points

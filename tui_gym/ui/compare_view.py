@@ -65,8 +65,8 @@ from tui_gym.ui.widgets.stats_panel import format_duration
 from tui_gym.ui.widgets.tick_box import TickBox
 
 if TYPE_CHECKING:
-    from tui_gym.core.experiments.compare import AlgorithmOutcome, CompareProgress, CompareSpec
-    from tui_gym.core.session import Session
+    from tui_gym.session.experiments.compare import AlgorithmOutcome, CompareProgress, CompareSpec
+    from tui_gym.session.session import Session
 
 POLL_SECONDS = 0.25  # how often the view looks at a running comparison
 LISTED_RUNS = 200  # the newest runs of the game that the list offers
@@ -127,7 +127,7 @@ def edited_settings(session: Session, algorithms: Sequence[str]) -> dict[str, An
     for the game, those of them at least one of `algorithms` has (the episode budget
     aside: the launch form sets it)."""
     from tui_gym.algorithms import algorithm
-    from tui_gym.core.session import default_settings
+    from tui_gym.session.session import default_settings
 
     hp = session.hp
     if hp is None:
@@ -547,7 +547,7 @@ class CompareView(Vertical):
         self.start_job(CompareJob(spec, self.db_path, processes=self.processes))
 
     def _spec(self, launch: Launch) -> CompareSpec:
-        from tui_gym.core.experiments.compare import CompareSpec
+        from tui_gym.session.experiments.compare import CompareSpec
 
         session = self.session
         return CompareSpec(

@@ -43,7 +43,6 @@ from textual.markup import escape
 from textual.timer import Timer
 from textual.widgets import Static
 
-from tui_gym.core.play import HumanGame, PlayError, PlayStep, Scorecard
 from tui_gym.core.training import TrainingSnapshot
 from tui_gym.games.base import Advice
 from tui_gym.games.words import (
@@ -53,6 +52,7 @@ from tui_gym.games.words import (
     plural,
     signed,
 )
+from tui_gym.session.play import HumanGame, PlayError, PlayStep, Scorecard
 from tui_gym.ui.widgets.board_kinds import board_class
 from tui_gym.ui.widgets.boards import Board
 from tui_gym.ui.widgets.scoreboard import Scoreboard

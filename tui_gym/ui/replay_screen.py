@@ -32,10 +32,10 @@ from textual.widget import Widget
 from textual.widgets import Button, Header, OptionList, Static
 from textual.widgets.option_list import Option
 
-from tui_gym.core.play import PlayStep
-from tui_gym.core.recording.games import game_named
 from tui_gym.core.recording.reader import Episode, Move, Position, Recording
 from tui_gym.games.words import format_reward
+from tui_gym.session.play import PlayStep
+from tui_gym.session.recording.games import game_named
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.jump_screen import JumpScreen
 from tui_gym.ui.widgets.board_kinds import BOARDS

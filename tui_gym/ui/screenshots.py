@@ -25,10 +25,10 @@ from typing import Any
 
 from textual.binding import Binding
 
-from tui_gym.core.session import Session
 from tui_gym.core.wrappers import parse_wrapper_spec
 from tui_gym.games import GAMES
 from tui_gym.games.maps.builtin import builtin_map
+from tui_gym.session.session import Session
 from tui_gym.ui.widgets.boards import Board
 
 SIZE = (120, 40)
@@ -109,7 +109,7 @@ async def _step_by_step(app, pilot) -> None:
 def _record_comparison(db: Path, spec: Any) -> None:
     """Record a comparison into `db`, its runs' times pinned to nominal ones."""
     from tui_gym.core.experiments import RunHistory
-    from tui_gym.core.experiments.compare import run_compare
+    from tui_gym.session.experiments.compare import run_compare
 
     with RunHistory(db) as history:
         # One batch per algorithm on this thread: the same curves on any number of cores.
@@ -140,7 +140,7 @@ def _utc() -> Iterator[None]:
 
 
 async def _compare(app, pilot) -> None:
-    from tui_gym.core.experiments.compare import CompareSpec
+    from tui_gym.session.experiments.compare import CompareSpec
 
     session = app.session
     settings, episodes = session.game.demo_compare or ({}, 5_000)

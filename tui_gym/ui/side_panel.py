@@ -32,7 +32,7 @@ from tui_gym.games import GAMES
 from tui_gym.ui.widgets.tick_box import TickBox
 
 if TYPE_CHECKING:
-    from tui_gym.core.session import Session
+    from tui_gym.session.session import Session
 
 OTHER = "game-other"  # the picker's button for an env the registry does not list
 

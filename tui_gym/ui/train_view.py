@@ -46,8 +46,8 @@ from tui_gym.ui.widgets.step_panel import StepPanel, explain
 from tui_gym.ui.widgets.training_charts import TrainingCharts
 
 if TYPE_CHECKING:
-    from tui_gym.core.session import Session
-    from tui_gym.core.speeds import Runner as TrainingRunner
+    from tui_gym.session.session import Session
+    from tui_gym.session.speeds import Runner as TrainingRunner
 
 STATE_POLL_SECONDS = 0.25  # how often the view checks for a pause with no new snapshot
 

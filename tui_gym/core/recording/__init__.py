@@ -1,10 +1,9 @@
 """Recorded episodes: a JSON-lines format, its writer and a tolerant reader, and the coach's
-judgement of each move.
+judgement of each move. What records (`Recorder`) is in `tui_gym.session.recording`.
 
 - `format`: the record types and their fields, `FORMAT_VERSION`;
 - `writer`: `LineWriter`, whole lines only, each flushed as it is written;
 - `judge`: `MoveJudge`, the verdict and exact regret of a move;
-- `recorder`: `Recorder`, what `play`, `benchmark` and the app record with;
 - `reader`: `read_recording`, episodes back for replay, bad lines skipped and counted.
 """
 
@@ -20,7 +19,6 @@ from tui_gym.core.recording.reader import (
     RecordingError,
     read_recording,
 )
-from tui_gym.core.recording.recorder import Recorder
 
 __all__ = [
     "FORMAT_NAME",
@@ -33,7 +31,6 @@ __all__ = [
     "MoveJudge",
     "Position",
     "RecordedGame",
-    "Recorder",
     "Recording",
     "RecordingError",
     "read_recording",

@@ -52,8 +52,8 @@ from tui_gym.games.blackjack.solver import (
 from tui_gym.games.words import format_reward, unwrapped_note
 
 if TYPE_CHECKING:
-    from tui_gym.core.play import PlayStep
     from tui_gym.core.vector.base import BatchedForm
+    from tui_gym.session.play import PlayStep
 
 __all__ = ["CHART_SUMS", "DEALER_CARDS", "DEALER_LABELS", "BlackjackGame", "card_label",
            "hand_value"]

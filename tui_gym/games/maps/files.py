@@ -80,7 +80,7 @@ def read_map_file(path: str | Path) -> GridMap:
 
 def write_map_file(path: str | Path, grid_map: GridMap, comment: str = "") -> Path:
     """Write the map atomically; `MapError` when the path cannot take it."""
-    from tui_gym.core.storage import StorageError, atomic_write_bytes, check_save_path
+    from tui_gym.session.storage import StorageError, atomic_write_bytes, check_save_path
 
     try:
         target = check_save_path(path)

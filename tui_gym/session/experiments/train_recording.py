@@ -20,20 +20,20 @@ from typing import TYPE_CHECKING
 
 from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.history import RunHistory
-from tui_gym.core.experiments.live import (
+from tui_gym.core.experiments.paths import resolve_db_path
+from tui_gym.core.experiments.records import RunKind, RunSpec, RunStatus
+from tui_gym.core.training import TrainingSnapshot
+from tui_gym.session.experiments.live import (
     ExactCheckpoints,
     eval_figures,
     return_curve,
     run_figures,
     run_spec,
 )
-from tui_gym.core.experiments.paths import resolve_db_path
-from tui_gym.core.experiments.records import RunKind, RunSpec, RunStatus
-from tui_gym.core.training import TrainingSnapshot
 
 if TYPE_CHECKING:
-    from tui_gym.core.evaluation import EvalReport
-    from tui_gym.core.session import Session
+    from tui_gym.session.evaluation import EvalReport
+    from tui_gym.session.session import Session
 
 
 class TrainRecording:

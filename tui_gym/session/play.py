@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from tui_gym.core.recording.recorder import GameRecorder
-    from tui_gym.core.session import Session
+    from tui_gym.session.recording.recorder import GameRecorder
+    from tui_gym.session.session import Session
 
 
 class PlayError(ValueError):

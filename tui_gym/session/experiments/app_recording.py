@@ -25,13 +25,13 @@ from typing import TYPE_CHECKING, Any
 
 from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.history import RunHistory
-from tui_gym.core.experiments.live import ExactCheckpoints, return_curve, run_figures, run_spec
 from tui_gym.core.experiments.records import Curve, RunKind, RunSpec, RunStatus
 from tui_gym.core.training import TrainingSnapshot
+from tui_gym.session.experiments.live import ExactCheckpoints, return_curve, run_figures, run_spec
 
 if TYPE_CHECKING:
     from tui_gym.core.experiments.figures import Figure
-    from tui_gym.core.session import Session
+    from tui_gym.session.session import Session
 
 FLUSH_SECONDS = 2.0  # how often an open run's curves are written
 CLOSE_WAIT_SECONDS = 3.0  # how long `close()` waits for the last writes

@@ -291,7 +291,7 @@ def _session(
     env_id: str, env_kwargs: Mapping[str, Any], wrappers: Sequence[WrapperChoice], name: str,
     hp: Mapping[str, Any], seed: int,
 ) -> Any:
-    from tui_gym.core.session import Session
+    from tui_gym.session.session import Session
 
     return Session(
         env_id=env_id, env_kwargs=dict(env_kwargs), choices=tuple(wrappers), hp=dict(hp),
@@ -423,8 +423,8 @@ def _seeds(job: _Job) -> list[np.random.SeedSequence]:
 def _plan_steps(job: _Job, keyer: Any, n: int, seed: Any) -> PlanSteps | None:
     """The vector engine's batched form of the job's game and wrappers, if it has one
     (read from a session on the vector engine, as `train` would build it)."""
-    from tui_gym.core.session import Session
     from tui_gym.core.vector import VectorTrainer
+    from tui_gym.session.session import Session
 
     if not keyer.dense:
         return None

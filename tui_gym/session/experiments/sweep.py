@@ -17,7 +17,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from tui_gym.algorithms import algorithm
-from tui_gym.core.experiments.compare import (
+from tui_gym.core.experiments.history import RunHistory
+from tui_gym.core.experiments.records import RunKind
+from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.session.experiments.compare import (
     AlgorithmOutcome,
     Arm,
     CompareProgress,
@@ -25,9 +28,6 @@ from tui_gym.core.experiments.compare import (
     _finite,
     execute,
 )
-from tui_gym.core.experiments.history import RunHistory
-from tui_gym.core.experiments.records import RunKind
-from tui_gym.core.wrappers import WrapperChoice
 
 __all__ = ["SWEEP_CURVE_POINTS", "SweepPoint", "SweepResult", "SweepSpec", "run_sweep"]
 

@@ -17,10 +17,10 @@ Where a game gives no exact action values (or its wrappers change it beyond
 them) the regret is unavailable and the score says so, rather than guess.
 """
 
-from tui_gym.core.arena.games import GameEntry, catalog, find_game, open_handler
-from tui_gym.core.arena.score import ArenaScore, EpisodeScore, Verdict
-from tui_gym.core.arena.seat import Seat, SeatError
-from tui_gym.core.arena.table import GameTable, TableError
+from tui_gym.session.arena.games import GameEntry, catalog, find_game, open_handler
+from tui_gym.session.arena.score import ArenaScore, EpisodeScore, Verdict
+from tui_gym.session.arena.seat import Seat, SeatError
+from tui_gym.session.arena.table import GameTable, TableError
 
 __all__ = [
     "ArenaScore",

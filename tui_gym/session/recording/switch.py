@@ -16,10 +16,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from tui_gym.core.recording.format import SUFFIX
-from tui_gym.core.recording.recorder import Recorder
+from tui_gym.session.recording.recorder import Recorder
 
 if TYPE_CHECKING:
-    from tui_gym.core.play import HumanGame
+    from tui_gym.session.play import HumanGame
 
 
 def default_path(game: str, folder: Path | None = None) -> Path:

@@ -13,7 +13,7 @@ milliseconds of episodes at max speed, one agent step at animated speeds (the
 pause between animated steps is cut short). `pause()` returns once the worker
 has stopped, so the session can be changed right after it.
 
-Speeds (`tui_gym.core.speeds`) run from *animated* (one agent step at a time,
+Speeds (`tui_gym.session.speeds`) run from *animated* (one agent step at a time,
 slow enough to follow, with the last move kept in `last_event` for a board to
 draw) to *max* (whole chunks of episodes, no pauses).
 """
@@ -24,11 +24,11 @@ import threading
 import time
 from typing import TYPE_CHECKING, Any
 
-from tui_gym.core.speeds import DEFAULT_SPEED, SPEEDS, Speed
 from tui_gym.core.training import StepEvent, Trainer, TrainingSnapshot
+from tui_gym.session.speeds import DEFAULT_SPEED, SPEEDS, Speed
 
 if TYPE_CHECKING:
-    from tui_gym.core.session import Session
+    from tui_gym.session.session import Session
 
 
 CHUNK_SECONDS = 0.05  # how long one max-speed chunk trains before publishing

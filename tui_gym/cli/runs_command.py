@@ -106,7 +106,7 @@ def recorded(command: Command) -> Command:
     `TrainRecording` it reports to."""
 
     def run(args: argparse.Namespace, out: Console) -> int:
-        from tui_gym.core.experiments.train_recording import TrainRecording
+        from tui_gym.session.experiments.train_recording import TrainRecording
 
         enabled = not (getattr(args, "no_record", False) or getattr(args, "no_history", False))
         with TrainRecording(getattr(args, "db", None), enabled=enabled, warn=_warn) as recording:

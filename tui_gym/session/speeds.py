@@ -3,7 +3,7 @@
 Speeds run from *animated* (one agent step at a time, slow enough to follow,
 with the last move kept for a board to draw) to *max* (whole chunks of
 episodes, no pauses). A front end drives any runner through `Runner`; which
-one it gets is `tui_gym.core.runners.make_runner`'s business.
+one it gets is `tui_gym.session.runners.make_runner`'s business.
 """
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
 if TYPE_CHECKING:
-    from tui_gym.core.session import Session
     from tui_gym.core.training import StepEvent, TrainingSnapshot
+    from tui_gym.session.session import Session
 
 __all__ = ["DEFAULT_SPEED", "SPEEDS", "Runner", "Speed"]
 

@@ -38,14 +38,14 @@ import traceback
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from tui_gym.core.runner import TrainingRunner
-from tui_gym.core.speeds import DEFAULT_SPEED, SPEEDS, Speed
 from tui_gym.core.training import StepEvent, TrainerProgress, TrainingSnapshot
+from tui_gym.session.runner import TrainingRunner
+from tui_gym.session.speeds import DEFAULT_SPEED, SPEEDS, Speed
 
 if TYPE_CHECKING:
     from multiprocessing.connection import Connection
 
-    from tui_gym.core.session import Session
+    from tui_gym.session.session import Session
 
 SNAPSHOT_INTERVAL = 0.05  # seconds between snapshots sent by the child
 ANIMATED_POLL = 0.01  # the child's look-out at animated speeds: every step is sent
@@ -545,7 +545,7 @@ class ProcessRunner:
 def child_main(conn: Connection) -> None:
     """The child process: a TrainingRunner on its own Session, driven through the pipe."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # ctrl+c is the app's to handle
-    from tui_gym.core.session import Session
+    from tui_gym.session.session import Session
 
     conn.send(("ready",))
     session: Session | None = None

@@ -13,8 +13,8 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from tui_gym.core.arena.games import find_game, open_handler
-from tui_gym.core.arena.seat import Seat
+from tui_gym.session.arena.games import find_game, open_handler
+from tui_gym.session.arena.seat import Seat
 
 REMEMBERED_ENDS = 1024  # ids of ended games remembered for a clear message
 

@@ -41,8 +41,8 @@ from tui_gym.core.recording.judge import NOTHING_KNOWN, Assessment, Judgement, M
 from tui_gym.core.recording.writer import LineWriter
 
 if TYPE_CHECKING:
-    from tui_gym.core.play import HumanGame
-    from tui_gym.core.session import Session
+    from tui_gym.session.play import HumanGame
+    from tui_gym.session.session import Session
 
 
 class GameRecorder(Protocol):

@@ -17,8 +17,9 @@ from tui_gym.cli.output import CliError
 from tui_gym.cli.types import file_name as _path
 
 if TYPE_CHECKING:
-    from tui_gym.core.recording import Recorder, Recording
-    from tui_gym.core.session import Session
+    from tui_gym.core.recording import Recording
+    from tui_gym.session.recording import Recorder
+    from tui_gym.session.session import Session
 
 RECORD_HELP = "record every episode to this file, as JSON lines (tui-gym replay PATH plays it back)"
 
@@ -38,7 +39,7 @@ def open_recorder(
     """
     import sys
 
-    from tui_gym.core.recording import Recorder
+    from tui_gym.session.recording import Recorder
 
     def failed(message: str) -> None:
         sys.stderr.write(f"tui-gym: {message}\n")
@@ -88,8 +89,8 @@ def cmd_replay(args: argparse.Namespace, out: Console) -> int:
 def session_for(recording: Recording) -> Session | None:
     """A session on the game of the recording's first episode (None when it cannot be built:
     the app then opens on its default game, and the replay shows what was recorded)."""
-    from tui_gym.core.session import Session
     from tui_gym.core.wrappers import parse_wrapper_spec
+    from tui_gym.session.session import Session
 
     game = recording.episodes[0].game
     try:

@@ -37,9 +37,9 @@ from collections.abc import Callable, Iterator
 from typing import IO, Any
 
 from tui_gym.core.params import shown_value
-from tui_gym.core.play import HumanGame, PlayError
-from tui_gym.core.session import Session
 from tui_gym.games.words import to_jsonable
+from tui_gym.session.play import HumanGame, PlayError
+from tui_gym.session.session import Session
 
 COMMANDS = ("spaces", "reset", "step", "render", "hint", "help")
 

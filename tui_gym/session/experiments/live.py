@@ -23,8 +23,8 @@ from tui_gym.core.experiments.records import Curve, RunKind, RunSpec, WrapperSet
 from tui_gym.core.training import EPISODE_RETURNS, TrainingSnapshot
 
 if TYPE_CHECKING:
-    from tui_gym.core.evaluation import EvalReport
-    from tui_gym.core.session import Session
+    from tui_gym.session.evaluation import EvalReport
+    from tui_gym.session.session import Session
 
 # Checkpoints may take this share of the run's time; past it they wait (the first and the
 # final one are always taken).

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from tui_gym.core.params import Param
-from tui_gym.core.protocol import JsonlPlayer
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
+from tui_gym.session.protocol import JsonlPlayer
 
 
 @dataclass(frozen=True)
@@ -79,8 +79,8 @@ def open_handler(
     """A protocol handler playing game `name` with `params` and `wrappers` (specs as
     `--wrapper` takes them); ValueError with one clear line for a bad game, parameter
     or wrapper."""
-    from tui_gym.core.session import Session
     from tui_gym.core.wrappers import parse_wrapper_spec
+    from tui_gym.session.session import Session
 
     entry = find_game(name)
     choices = tuple(parse_wrapper_spec(spec) for spec in wrappers)

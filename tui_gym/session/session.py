@@ -26,7 +26,6 @@ import numpy as np
 
 from tui_gym.algorithms import DEFAULT_ALGORITHM, Learner, Settings
 from tui_gym.algorithms import algorithm as learner_class_named
-from tui_gym.core.evaluation import EvalReport, evaluate
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.obskey import ObservationKeyer
@@ -41,6 +40,7 @@ from tui_gym.core.wrappers import (
 from tui_gym.core.wrappers.changes import GameChanges
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 from tui_gym.games.base import FixedBound, ReferenceMetrics
+from tui_gym.session.evaluation import EvalReport, evaluate
 
 ENGINES = ("auto", "scalar", "vector")
 # With a target gap and no budget given, the budget is the game's default times this,
@@ -610,7 +610,7 @@ class Session:
 
     def save(self, path: str | Path) -> Path:
         """Write the agent and everything needed to rebuild this session (atomically)."""
-        from tui_gym.core.storage import save_agent
+        from tui_gym.session.storage import save_agent
 
         return save_agent(path, self.meta(), self.agent.state())
 
@@ -618,7 +618,7 @@ class Session:
     def load(cls, path: str | Path) -> Session:
         """A session rebuilt from a saved file; StorageError names the file (and the
         field at fault) when it cannot."""
-        from tui_gym.core.storage import read_agent, short_reason
+        from tui_gym.session.storage import read_agent, short_reason
 
         saved = read_agent(path)
         game = saved.checked("env_id", lambda: game_for(saved.env_id))
@@ -634,7 +634,7 @@ class Session:
     def _restore(self, saved: Any) -> None:
         """Put a saved learner state into this session's agent and its counts into the
         trainer; `saved.field_error` names what does not fit the game."""
-        from tui_gym.core.storage import short_reason
+        from tui_gym.session.storage import short_reason
 
         agent = self.agent
         if self.skipped:

@@ -10,9 +10,9 @@ from __future__ import annotations
 import json
 from typing import Any
 
-from tui_gym.core.arena.games import GameEntry, close_handler
-from tui_gym.core.arena.score import ArenaScore, Verdict
-from tui_gym.core.protocol import JsonlPlayer
+from tui_gym.session.arena.games import GameEntry, close_handler
+from tui_gym.session.arena.score import ArenaScore, Verdict
+from tui_gym.session.protocol import JsonlPlayer
 
 
 class SeatError(ValueError):

@@ -35,7 +35,7 @@ from tui_gym.cli.types import seed_number as _seed
 
 if TYPE_CHECKING:
     from tui_gym.core.experiments import RunHistory
-    from tui_gym.core.experiments.compare import AlgorithmOutcome, CompareProgress
+    from tui_gym.session.experiments.compare import AlgorithmOutcome, CompareProgress
 
 DB_HELP = "the run history file (default: $TUI_GYM_DB, else the data folder's runs.db)"
 # Every seed's return of every episode is kept while a run lasts: these bound that memory.
@@ -228,7 +228,7 @@ def _algorithm_names(text: str) -> list[str]:
 
 
 def cmd_compare(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.core.experiments.compare import CompareError, CompareSpec, run_compare
+    from tui_gym.session.experiments.compare import CompareError, CompareSpec, run_compare
 
     spec = CompareSpec(
         game=args.game, algorithms=_algorithm_names(args.algorithms), seeds=args.seeds,
@@ -361,8 +361,8 @@ def _grid(items: Sequence[str]) -> dict[str, list[str]]:
 
 
 def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.core.experiments.compare import CompareError
-    from tui_gym.core.experiments.sweep import SweepSpec, run_sweep
+    from tui_gym.session.experiments.compare import CompareError
+    from tui_gym.session.experiments.sweep import SweepSpec, run_sweep
 
     spec = SweepSpec(
         game=args.game, algorithm=args.algorithm, grid=_grid(args.grid), seeds=args.seeds,
