@@ -1,0 +1,45 @@
+"""Text that came from a file or another program, made safe to show: `visible`.
+
+A string read from a run history, a recording, a save file or a tool call is data. Shown
+as it is, its control characters would drive the terminal (an escape sequence can set the
+window title, clear the screen or write the clipboard), so everything that is not plain
+printable text is written as an escape (`\\x1b`, `\\u202e`), and a long string is cut to a
+readable length with an ellipsis and its full length.
+"""
+
+from __future__ import annotations
+
+import unicodedata
+
+__all__ = ["visible"]
+
+# Control (Cc), format (Cf: bidirectional overrides, zero-width marks), line and paragraph
+# separators, surrogates and unassigned code points.
+_HIDDEN = frozenset({"Cc", "Cf", "Zl", "Zp", "Cs", "Co", "Cn"})
+
+
+def _escaped(char: str) -> str:
+    code = ord(char)
+    if code < 0x100:
+        return f"\\x{code:02x}"
+    if code < 0x10000:
+        return f"\\u{code:04x}"
+    return f"\\U{code:08x}"
+
+
+def visible(text: object, limit: int | None = 80) -> str:
+    """`text` with every control or invisible character written as an escape, cut to
+    `limit` characters (None: never cut); a cut string says how long it was."""
+    raw = text if isinstance(text, str) else str(text)
+    if limit is not None and len(raw) > 4 * limit:
+        raw_cut: str | None = raw[: 4 * limit]  # enough to fill `limit` after escaping
+    else:
+        raw_cut = None
+    source = raw if raw_cut is None else raw_cut
+    shown = "".join(
+        _escaped(c) if unicodedata.category(c) in _HIDDEN else c for c in source
+    )
+    if limit is None or (raw_cut is None and len(shown) <= limit):
+        return shown
+    keep = max(1, limit - 1)
+    return f"{shown[:keep]}… ({len(raw):,} characters)"
