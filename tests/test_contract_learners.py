@@ -1,14 +1,14 @@
-"""The learner contract, over ALGORITHMS x games: each learns each game, both engines agree,
+"""The learner contract, over ALGORITHMS x games: each learns each game, both loops agree,
 and every algorithm's state survives a save and a load.
 
-- Learning: the game's defaults for the algorithm, on the vector engine, seed 0,
+- Learning: the game's defaults for the algorithm, on the game's model, seed 0,
   end within a bound of the optimum (the exact gap for games with an exact
   value, the share of (agent, target) pairs off a shortest path for
   GridWorld). The bounds come from measurements over several seeds (the
   README's algorithms table), with room for the seed-to-seed spread; each
-  game's defaults per algorithm keep the budgets small on the vector engine.
-- Engines: the scalar engine and the vector engine (a few envs side by side)
-  differ in their random draws, so they are compared in distribution: the
+  game's defaults per algorithm keep the budgets small.
+- Loops: the compiled loop on the model and the Python loop on the env differ
+  in their random draws, so they are compared in distribution: the
   exact value the greedy policy reaches after the same number of episodes,
   averaged over seeds, agrees within a few standard errors, far from where an
   untrained (random) policy stands.
@@ -61,8 +61,8 @@ def _distance(session: Session) -> float:
 @pytest.mark.parametrize("game", list(BOUNDS))
 @pytest.mark.parametrize("name", NAMES)
 def test_each_algorithm_learns_each_game_within_its_default_budget(name: str, game: str):
-    session = Session(game, seed=0, algorithm=name, engine="vector")
-    assert session.trainer.engine == "vector"
+    session = Session(game, seed=0, algorithm=name, engine="model")
+    assert session.trainer.engine == "model"
     session.train()
     assert session.trainer.episodes == session.hp.episodes
     _, bounds = BOUNDS[game]
@@ -70,19 +70,17 @@ def test_each_algorithm_learns_each_game_within_its_default_budget(name: str, ga
 
 
 @pytest.mark.parametrize("name", NAMES)
-def test_the_scalar_and_vector_engines_agree_in_distribution(name: str) -> None:
-    values: dict[str, list[float]] = {"scalar": [], "vector": []}
+def test_the_model_and_env_loops_agree_in_distribution(name: str) -> None:
+    values: dict[str, list[float]] = {"env": [], "model": []}
     for engine in values:
         for seed in range(3):
-            session = Session("blackjack", seed=seed, algorithm=name, engine="scalar",
+            session = Session("blackjack", seed=seed, algorithm=name, engine=engine,
                               hp={"episodes": 800})
-            trainer = session.trainer if engine == "scalar" else session.vector_trainer(
-                seed=seed, num_envs=8)
-            trainer.run(episodes=800)
+            session.trainer.run(episodes=800)
             values[engine].append(session.reference().figures["exact_value"])
-    scalar, vector = np.mean(values["scalar"]), np.mean(values["vector"])
-    assert abs(scalar - vector) < 0.05, values
-    assert min(scalar, vector) > -0.25  # both learned: random play is worth about -0.4
+    env, model = np.mean(values["env"]), np.mean(values["model"])
+    assert abs(env - model) < 0.05, values
+    assert min(env, model) > -0.25  # both learned: random play is worth about -0.4
 
 
 def _arrays(session: Session) -> tuple[dict[str, np.ndarray], list | None, dict]:
@@ -92,9 +90,9 @@ def _arrays(session: Session) -> tuple[dict[str, np.ndarray], list | None, dict]
 
 @pytest.mark.parametrize(
     ("game", "choices", "engine"),
-    [("blackjack", (), "vector"),
+    [("blackjack", (), "model"),
      ("gridworld", (WrapperChoice("TimeAwareObservation", {"normalize_time": True}),),
-      "scalar")],
+      "env")],
     ids=["dense", "sparse"],
 )
 @pytest.mark.parametrize("name", NAMES)

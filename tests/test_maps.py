@@ -157,8 +157,9 @@ def test_the_edit_to_optimum_figure_exists() -> None:
 
 
 def test_batched_gridworld_steps_round_walls_as_the_env_does() -> None:
-    from tui_gym.envs.gridworld import GridWorldEnv
     from tui_gym.games.gridworld.batched import BatchedGridWorld
+
+    from tui_gym.envs.gridworld import GridWorldEnv
 
     walls = ((2, 1), (2, 2), (1, 3))
     batch = BatchedGridWorld(200, size=5, walls=walls, seed=1)

@@ -28,7 +28,7 @@ from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, Field, Learner, algori
 from tui_gym.benchmark.command import cmd_benchmark
 from tui_gym.cli.flags import flag, game_kwargs, hyperparameters
 from tui_gym.cli.maps_command import cmd_maps
-from tui_gym.cli.output import CliError, key_value_table, print_json
+from tui_gym.cli.output import CliError, key_value_table, print_json, say_status
 from tui_gym.cli.runs_command import recorded
 from tui_gym.core.params import Param
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
@@ -235,6 +235,7 @@ def _session_from_args(args: argparse.Namespace) -> Session:
     if session.skipped:
         reasons = "; ".join(reason for _, reason in session.skipped)
         raise CliError(f"wrapper does not fit {env_id}: {reasons}")
+    session.trainer.on_status = say_status
     return session
 
 

@@ -130,8 +130,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable, in order)",
     )
     train.add_argument(
-        "--engine", choices=("auto", "scalar", "vector"), default="auto",
-        help="auto: the vector engine when the wrappers have a batched form (default)",
+        "--engine", choices=("auto", "model", "env"), default="auto",
+        help="auto: the compiled loop on the game's model when the wrappers let it follow "
+        "(default); env: one transition at a time on the Gymnasium env",
     )
     train.add_argument(
         "--target-gap", type=finite_number, metavar="G",

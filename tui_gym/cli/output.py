@@ -9,9 +9,10 @@ from collections.abc import Sequence
 from typing import Any
 
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
-__all__ = ["CliError", "OutConsole", "key_value_table", "print_json"]
+__all__ = ["CliError", "OutConsole", "key_value_table", "print_json", "say_status"]
 
 
 class CliError(Exception):
@@ -50,3 +51,9 @@ def key_value_table(title: str, rows: Sequence[tuple[str, str]]) -> Table:
     for key, value in rows:
         table.add_row(key, value)
     return table
+
+
+def say_status(text: str) -> None:
+    """A line of the engine's ("compiling the learners, once"), on standard error."""
+    if text:
+        Console(stderr=True).print(escape(text), style="dim")

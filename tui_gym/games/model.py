@@ -10,7 +10,7 @@ code at all:
   definition of `tui_gym.core.mdp` (over the episode limit in force, gamma 1),
   with the wrappers' reward changes and time limits taken into account;
 - the coach's action values in the current state, for the steps left;
-- the heatmap's marks, and the batched form the vector engine runs.
+- the heatmap's marks, and the model the engine trains on.
 
 **Ties.** With gamma 1 a wasted step costs nothing while time remains, so in
 a deterministic game many moves keep the optimum's value. The coach and the
@@ -58,6 +58,7 @@ from tui_gym.games.base import (
     ReferenceMetrics,
     Scope,
     StateSpace,
+    TrainingModel,
     greedy_probabilities,
 )
 from tui_gym.games.words import signed, unwrapped_note
@@ -515,10 +516,14 @@ class ModelGame(Game):
             return None
         return None if state is None else int(state)
 
-    def batched_form(self, kwargs: Mapping[str, Any]) -> Any:
-        model = self.base_model(kwargs)
-        if isinstance(model, NotAvailable):
-            return model
-        from tui_gym.core.vector.model import model_form
-
-        return model_form(self.title, model)
+    def training_model(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> TrainingModel | NotAvailable:
+        oracle = self.oracle
+        assert isinstance(oracle, ModelOracle)
+        exact = oracle.exact(kwargs, changes)
+        if isinstance(exact, NotAvailable):
+            return exact
+        if not exact.scope.exact:
+            return NotAvailable(exact.scope.note)
+        return TrainingModel(exact.model)

@@ -36,7 +36,8 @@ from textual.widget import Widget
 from textual.widgets import Button, Label
 
 from tui_gym.algorithms import Settings
-from tui_gym.core.training import TrainingSnapshot, continue_run
+from tui_gym.core.engine.stats import TrainingSnapshot
+from tui_gym.core.engine.trainer import continue_run
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
 from tui_gym.ui.widgets.map_editor import MapEditor
@@ -483,8 +484,10 @@ class TrainView(Vertical):
         note = "" if reference is not None else session.exact_reason()
         self.stats.show_reference(reference, note)
         reason = session.engine_reason
-        if snapshot.engine == "scalar" and reason.startswith("vector"):
-            reason = "scalar engine while animating (the vector engine runs at max speed)"
+        if snapshot.status:
+            reason = snapshot.status  # "compiling the learners, once"
+        elif snapshot.engine == "env" and reason.startswith("model"):
+            reason = "env: one step at a time while animating (the model at max speed)"
         self.show_engine(reason)
 
     @property

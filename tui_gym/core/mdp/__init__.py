@@ -35,8 +35,7 @@ Modules, one job each:
 - `evaluation`: `evaluate`, a policy's exact value (`PolicyValue`);
 - `optimum`: `solve`, the optimum (`Solution`, with `Q*` and `V*`); `optimal_actions`;
 - `gap`: `exact_gap`, a policy's value beside the optimum (`Gap`);
-- `ending`: which states a policy (or any policy) ends episodes from;
-- `sampler`: `BatchSampler`, batched steps and resets for the vector engine.
+- `ending`: which states a policy (or any policy) ends episodes from.
 """
 
 from tui_gym.core.mdp.evaluation import PolicyValue, evaluate
@@ -45,18 +44,15 @@ from tui_gym.core.mdp.gap import Gap, exact_gap
 from tui_gym.core.mdp.model import FiniteMDP, ModelError
 from tui_gym.core.mdp.optimum import Solution, optimal_actions, solve
 from tui_gym.core.mdp.policy import PolicyError, greedy_policy, policy_matrix
-from tui_gym.core.mdp.sampler import BatchSampler, SampledStep
 from tui_gym.core.mdp.transforms import clip_reward, scale_reward, step_penalty, with_horizon
 
 __all__ = [
-    "BatchSampler",
     "FiniteMDP",
     "Gap",
     "ModelError",
     "NotAvailable",
     "PolicyError",
     "PolicyValue",
-    "SampledStep",
     "Solution",
     "clip_reward",
     "evaluate",

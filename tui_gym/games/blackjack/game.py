@@ -38,8 +38,10 @@ from tui_gym.games.base import (
     ReferenceMetrics,
     Scope,
     StateSpace,
+    TrainingModel,
     greedy_probabilities,
 )
+from tui_gym.games.blackjack.model import blackjack_model
 from tui_gym.games.blackjack.solver import (
     POLICY_SHAPE,
     BlackjackRules,
@@ -52,7 +54,6 @@ from tui_gym.games.blackjack.solver import (
 from tui_gym.games.words import format_reward, unwrapped_note
 
 if TYPE_CHECKING:
-    from tui_gym.core.vector.base import BatchedForm
     from tui_gym.session.play import PlayStep
 
 __all__ = ["CHART_SUMS", "DEALER_CARDS", "DEALER_LABELS", "BlackjackGame", "card_label",
@@ -396,14 +397,13 @@ class BlackjackGame(Game):
         self.narrator = BlackjackNarrator(self)
         self.layout = BlackjackLayout(self)
 
-    def batched_form(self, kwargs: Mapping[str, Any]) -> BatchedForm:
-        from tui_gym.core.vector.base import BatchedForm
-        from tui_gym.games.blackjack.batched import BatchedBlackjack
-
+    def training_model(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> TrainingModel | NotAvailable:
+        if changes.others:
+            return NotAvailable(unwrapped_note(changes.others))
         rules = rules_of(kwargs)
-
-        def make(num_envs: int, seed: Any, max_episode_steps: int | None) -> BatchedBlackjack:
-            return BatchedBlackjack(num_envs, rules, seed=seed,
-                                    max_episode_steps=max_episode_steps)
-
-        return BatchedForm("Blackjack", make, key=("blackjack", rules))
+        if changes.changes_rewards:
+            rules = rules.with_rewards(changes.reward)
+        model, rows = blackjack_model(rules, changes.time_limit)
+        return TrainingModel(model, rows)

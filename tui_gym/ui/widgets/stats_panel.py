@@ -26,7 +26,7 @@ from rich.segment import Segment
 from rich.style import Style
 from rich.text import Text
 
-from tui_gym.core.training import TrainingSnapshot
+from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.games.base import ReferenceMetrics
 from tui_gym.ui.widgets.numbers import Forms, compact_count, count_forms, fit, number_forms
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget
