@@ -22,6 +22,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Hashable, Iterable, Mapping
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any, ClassVar, get_type_hints
 
 import numpy as np
@@ -37,6 +38,11 @@ __all__ = [
     "Transition",
     "UpdateRecord",
 ]
+
+@lru_cache(maxsize=None)
+def _field_types(params: type) -> dict[str, Any]:
+    return get_type_hints(params)
+
 
 # Rows a growing (sparse) table starts with; it doubles when full.
 _INITIAL_ROWS = 256
@@ -242,20 +248,21 @@ class Learner(ABC):
     def compiled_params(self) -> Any:
         """The compiled hyperparameters (`Params`) of the current settings."""
         if self._params is None:
-            hp, kinds = self.hp, get_type_hints(self.Params)
+            hp, kinds = self.hp, _field_types(self.Params)
             values = {
                 name: (hp.learning_rate_schedule == "visits") if name == "by_visits"
                 else kinds[name](hp[name])
                 for name in self.Params._fields
             }
             self._params = self.Params(**values)
+            self._exploration = np.array([hp.epsilon_start, hp.epsilon_final,
+                                          hp.epsilon_decay_fraction * hp.episodes])
         return self._params
 
     def exploration(self) -> np.ndarray:
         """(epsilon start, final, episodes of the decay) for the compiled schedule."""
-        hp = self.hp
-        return np.array([hp.epsilon_start, hp.epsilon_final,
-                         hp.epsilon_decay_fraction * hp.episodes], dtype=np.float64)
+        self.compiled_params()
+        return self._exploration
 
     @property
     def next_first(self) -> bool:

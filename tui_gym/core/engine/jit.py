@@ -14,6 +14,11 @@ nothing and it runs as Python until `start()` is called, which
   replaces every kernel, in every `tui_gym` module that holds it, by its
   compiled form (`njit(cache=True)`), so kernels call kernels compiled.
 
+Kernels allocate nothing, so they run without Numba's reference counting
+(`_nrt=False`: an array passed between compiled functions costs nothing
+then), at optimisation level 1 (`NUMBA_OPT`, unless set: the loops run as
+fast as at level 3 and compile in two thirds of the time).
+
 Python calls a kernel that takes an algorithm's `Params` through `entry`.
 
 `NUMBA_DISABLE_JIT=1` leaves every kernel plain Python.
@@ -100,6 +105,7 @@ def start() -> None:
         chosen = cache_folder()
         chosen.mkdir(parents=True, exist_ok=True)
         os.environ["NUMBA_CACHE_DIR"] = str(chosen)
+        os.environ.setdefault("NUMBA_OPT", "1")
         _folder = chosen
         import numba  # after the cache folder is set
 
@@ -121,9 +127,9 @@ def _compile(fn: Callable[..., Any]) -> Any:
     compiled = _COMPILED.get(fn)
     if compiled is None:
         if fn in kernel.INLINE:
-            compiled = _COMPILED[fn] = njit(cache=True, inline="always")(fn)
+            compiled = _COMPILED[fn] = njit(cache=True, inline="always", _nrt=False)(fn)
         else:
-            compiled = _COMPILED[fn] = njit(cache=True)(fn)
+            compiled = _COMPILED[fn] = njit(cache=True, _nrt=False)(fn)
         for name, module in list(sys.modules.items()):
             if module is None or not (name == "tui_gym" or name.startswith("tui_gym.")):
                 continue
@@ -133,12 +139,34 @@ def _compile(fn: Callable[..., Any]) -> Any:
     return compiled
 
 
+class _Entry:
+    """A kernel compiled for one algorithm's calls from Python (see `entry`)."""
+
+    def __init__(self, dispatcher: Any) -> None:
+        self.dispatcher = dispatcher
+        self._direct: Any = None
+
+    def __call__(self, *args: Any) -> Any:
+        direct = self._direct
+        if direct is not None:
+            try:
+                return direct(*args)
+            except TypeError:  # other argument types: the dispatcher sorts them out
+                pass
+        found = self.dispatcher(*args)
+        signatures = getattr(self.dispatcher, "signatures", ())
+        if len(signatures) == 1 and hasattr(self.dispatcher, "get_overload"):
+            self._direct = self.dispatcher.get_overload(signatures[0])
+        return found
+
+
 def entry(fn: Callable[..., Any], kind: type) -> Any:
-    """Kernel `fn` as called from Python with one algorithm's `Params` (`kind`), compiled
-    apart: called from Python, a compiled function would run the code it has for
-    another algorithm's `Params` of the same field types (Numba converts one such
-    NamedTuple into another), while compiled callers tell them apart. It lets go of
-    the interpreter lock while it runs, so a trainer's thread never holds up the UI."""
+    """Kernel `fn` as called from Python with one algorithm's `Params` (`kind`),
+    compiled apart: Numba types a NamedTuple from Python by its fields alone, so one
+    dispatcher would run the code it has for another algorithm's `Params` of the same
+    field types (or take its slow path on every call), while compiled callers tell
+    them apart. Once compiled, it is called directly (no dispatch). It lets go of the
+    interpreter lock while it runs, so a trainer's thread never holds up the UI."""
     start()
     key = (fn, kind)
     found = _ENTRIES.get(key)
@@ -146,7 +174,7 @@ def entry(fn: Callable[..., Any], kind: type) -> Any:
         from numba import njit
 
         plain = getattr(fn, "py_func", fn)
-        found = _ENTRIES[key] = njit(cache=True, nogil=True)(plain)
+        found = _ENTRIES[key] = _Entry(njit(cache=True, nogil=True, _nrt=False)(plain))
     return found
 
 

@@ -82,15 +82,16 @@ class ModelArrays:
         table_rows = np.arange(model.n_states) if rows is None else np.asarray(rows)
         if table_rows.shape != (model.n_states,):
             raise ValueError(f"rows must have one entry per model state ({model.n_states})")
+        # Writable copies: Numba types a read-only array on its slow path, every call.
         return cls(
-            next_state=np.ascontiguousarray(model.next_state.reshape(-1), dtype=np.int64),
-            cumulative=np.ascontiguousarray(model.cumulative.reshape(-1), dtype=np.float64),
-            reward=np.ascontiguousarray(model.reward.reshape(-1), dtype=np.float64),
-            terminal=np.ascontiguousarray(model.terminal.reshape(-1), dtype=np.bool_),
+            next_state=np.array(model.next_state.reshape(-1), dtype=np.int64),
+            cumulative=np.array(model.cumulative.reshape(-1), dtype=np.float64),
+            reward=np.array(model.reward.reshape(-1), dtype=np.float64),
+            terminal=np.array(model.terminal.reshape(-1), dtype=np.bool_),
             outcomes=model.max_outcomes,
             starts=starts,
             start_cumulative=np.ascontiguousarray(start_cumulative, dtype=np.float64),
-            rows=np.ascontiguousarray(table_rows, dtype=np.int64),
+            rows=np.array(table_rows, dtype=np.int64),
             horizon=int(model.horizon or 0),
             n_actions=model.n_actions,
         )
