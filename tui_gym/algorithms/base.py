@@ -22,7 +22,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Hashable, Iterable, Mapping
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 from typing import Any, ClassVar, get_type_hints
 
 import numpy as np
@@ -39,7 +39,7 @@ __all__ = [
     "UpdateRecord",
 ]
 
-@lru_cache(maxsize=None)
+@cache
 def _field_types(params: type) -> dict[str, Any]:
     return get_type_hints(params)
 
