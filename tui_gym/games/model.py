@@ -132,17 +132,15 @@ def model_under(model: FiniteMDP, changes: GameChanges) -> FiniteMDP:
 
 def elapsed_steps(env: Any) -> int | None:
     """Steps taken this episode as the env's tightest `TimeLimit` counts them, or None."""
-    from gymnasium.wrappers import TimeLimit
+    from tui_gym.core.wrappers import chain
 
     best: tuple[int, int] | None = None  # (steps left, elapsed)
-    layer = env
-    while hasattr(layer, "env"):
-        if isinstance(layer, TimeLimit):
-            limit = int(layer._max_episode_steps)
-            elapsed = int(getattr(layer, "_elapsed_steps", 0) or 0)
-            if best is None or limit - elapsed < best[0]:
-                best = (limit - elapsed, elapsed)
-        layer = layer.env
+    for layer in chain.layers(env):
+        limit = chain.time_limit(layer)
+        if limit is not None:
+            done = chain.elapsed(layer)
+            if best is None or limit - done < best[0]:
+                best = (limit - done, done)
     return None if best is None else best[1]
 
 

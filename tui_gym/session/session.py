@@ -36,6 +36,7 @@ from tui_gym.core.wrappers import (
     WrapperChoice,
     build_env,
     build_env_lenient,
+    chain,
 )
 from tui_gym.core.wrappers.changes import GameChanges
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
@@ -358,13 +359,8 @@ class Session:
             spec = CATALOG[choice.name]
             if spec.changes_observation and choice.name not in STATELESS_OBSERVATION_WRAPPERS:
                 return None
-        layers = []
-        env: Any = self.env
-        while isinstance(env, gym.Wrapper):
-            if isinstance(env, gym.ObservationWrapper):
-                layers.append(env)
-            env = env.env
-        layers.reverse()  # innermost first
+        layers = [layer for layer in chain.layers(self.env)
+                  if isinstance(layer, gym.ObservationWrapper)]
         observations = self.game.states.base_observations(self.env_kwargs)
         if isinstance(observations, NotAvailable):
             return None

@@ -386,7 +386,7 @@ class TrainView(Vertical):
     @on(MapEditor.SaveAsked)
     def _map_save(self, event: MapEditor.SaveAsked) -> None:
         from tui_gym.games.maps import MapError
-        from tui_gym.games.maps.files import write_map_file
+        from tui_gym.session.map_files import write_map_file
 
         event.stop()
         game = self.session.game

@@ -41,6 +41,7 @@ COMPILING = "compiling the learners, once"
 
 _PACKAGE = Path(__file__).resolve().parents[2]  # tui_gym/
 _SOURCES = ("core/engine", "algorithms")  # what compiled code is made of
+_OPTIONS: Any = {"cache": True, "_nrt": False}  # see the module docstring
 _COMPILED: dict[Callable[..., Any], Any] = {}
 _ENTRIES: dict[tuple[Callable[..., Any], type], Any] = {}
 _started = False
@@ -126,10 +127,8 @@ def _compile(fn: Callable[..., Any]) -> Any:
 
     compiled = _COMPILED.get(fn)
     if compiled is None:
-        if fn in kernel.INLINE:
-            compiled = _COMPILED[fn] = njit(cache=True, inline="always", _nrt=False)(fn)
-        else:
-            compiled = _COMPILED[fn] = njit(cache=True, _nrt=False)(fn)
+        inline: Any = "always" if fn in kernel.INLINE else "never"
+        compiled = _COMPILED[fn] = njit(**_OPTIONS, inline=inline)(fn)
         for name, module in list(sys.modules.items()):
             if module is None or not (name == "tui_gym" or name.startswith("tui_gym.")):
                 continue
@@ -154,7 +153,7 @@ class _Entry:
             except TypeError:  # other argument types: the dispatcher sorts them out
                 pass
         found = self.dispatcher(*args)
-        signatures = getattr(self.dispatcher, "signatures", ())
+        signatures: Any = getattr(self.dispatcher, "signatures", ())
         if len(signatures) == 1 and hasattr(self.dispatcher, "get_overload"):
             self._direct = self.dispatcher.get_overload(signatures[0])
         return found
@@ -174,7 +173,7 @@ def entry(fn: Callable[..., Any], kind: type) -> Any:
         from numba import njit
 
         plain = getattr(fn, "py_func", fn)
-        found = _ENTRIES[key] = _Entry(njit(cache=True, nogil=True, _nrt=False)(plain))
+        found = _ENTRIES[key] = _Entry(njit(**_OPTIONS, nogil=True)(plain))
     return found
 
 
