@@ -56,6 +56,7 @@ HANG_SECONDS = 10.0  # silence while holding the agent after which the child is 
 RESPAWN_LIMIT = 3  # deaths within RESPAWN_WINDOW after which no new child is started
 RESPAWN_WINDOW = 60.0
 EXIT_SECONDS = 1.0  # how long `close()` lets the child end by itself before killing it
+SPAWN_DELAY = 1.0  # the first child waits this long (or for a request): the app draws first
 
 
 @dataclass(frozen=True)
@@ -230,7 +231,9 @@ class ProcessRunner:
         self._broken = ""  # why no new child is started (it kept dying), or empty
         self._closed = False
         self._ended: _Child | None = None  # the child `close()` ended
-        self._child: _Child | None = _Child(self._inbox, self._heard)
+        # The first child starts once the app has drawn (or at the first request).
+        self._child: _Child | None = None
+        self._spawn_at = time.monotonic() + SPAWN_DELAY
 
     # --- what the owner reads ---------------------------------------------------
     @property
@@ -297,6 +300,7 @@ class ProcessRunner:
     @property
     def child_pid(self) -> int | None:
         """The training process's id (None when there is none)."""
+        self._spawn()
         child = self._child
         return None if child is None else child.process.pid
 
@@ -518,8 +522,15 @@ class ProcessRunner:
             request.pause_sent = True
             self._child.send(("pause", request.number))
 
+    def _spawn(self) -> None:
+        """The first child, once it is due (see `SPAWN_DELAY`) or asked for."""
+        if self._child is None and self._ended is None and not (self._closed or self._broken):
+            self._child = _Child(self._inbox, self._heard)
+
     def _sync(self) -> None:
         """Send the request the owner wants, once the child holds no agent."""
+        if self._wanted() or time.monotonic() >= self._spawn_at:
+            self._spawn()
         child = self._child
         if self._pending is not None or child is None or self._closed:
             return
