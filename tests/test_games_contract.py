@@ -198,7 +198,7 @@ async def test_a_person_plays_one_episode_of_every_game_in_the_app() -> None:
 # --- exact values against play ---------------------------------------------------
 
 
-def _play_scalar(session: Session, q: np.ndarray, episodes: int) -> np.ndarray:
+def _play_env(session: Session, q: np.ndarray, episodes: int) -> np.ndarray:
     """Returns of `episodes` episodes of the real env, greedy on `q` (rows: base states)."""
     rows = _policy_rows(session)
     env = session.make_env()
@@ -250,16 +250,16 @@ def test_sampled_returns_of_a_fixed_policy_agree_with_its_exact_value(
     q = _optimal_q(session)
     exact = _exact_value(session, q)
     assert exact is not None
-    _within(_play_scalar(session, q, 300), exact)
+    _within(_play_env(session, q, 300), exact)
     _within(_play_model(session, q, 4000), exact)
 
 
-def test_the_grid_model_agrees_with_the_scalar_env() -> None:
+def test_the_grid_model_agrees_with_the_env() -> None:
     session = _session("gridworld")
     q = _optimal_q_grid(session)
-    scalar, model = _play_scalar(session, q, 200), _play_model(session, q, 4000)
+    played, model = _play_env(session, q, 200), _play_model(session, q, 4000)
     # The shortest-path policy reaches the target from every placement: both pay 1.
-    assert scalar.min() == scalar.max() == model.min() == model.max() == 1.0
+    assert played.min() == played.max() == model.min() == model.max() == 1.0
 
 
 def _optimal_q_grid(session: Session) -> np.ndarray:

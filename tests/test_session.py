@@ -279,6 +279,22 @@ def test_short_gridworld_training_solves_the_grid() -> None:
     assert session.reference().figures["optimal_pair_fraction"] > 0.9
 
 
+def test_a_run_short_of_the_bound_says_why_in_a_sentence() -> None:
+    solved = Session("gridworld", seed=0)
+    solved.train()
+    assert solved.shortfall(solved.reference()) == ""
+    # Too few episodes: the settings are why.
+    early = Session("frozenlake", seed=0, hp=QLearning.hyperparameters(episodes=20))
+    early.train()
+    sentence = early.shortfall(early.reference())
+    assert sentence.startswith("It ends short of the bound (gap <= ")
+    assert "more episodes" in sentence
+    # SARSA's safe path on CliffWalking: the game's lesson is why.
+    safe = Session("cliffwalking", algorithm="sarsa", seed=0)
+    safe.train()
+    assert safe.game.lessons["sarsa"] in safe.shortfall(safe.reference())
+
+
 def test_set_hyperparameters_keeps_the_table() -> None:
     session = _trained(episodes=100)
     q = session.agent.q.copy()

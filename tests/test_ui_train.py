@@ -310,3 +310,13 @@ async def test_hidden_heatmaps_say_why() -> None:
         assert reason
         assert view.heatmap.plain == reason
         assert reason in view.stats.plain
+
+
+async def test_a_run_that_ends_short_of_the_bound_says_why() -> None:
+    session = Session("frozenlake", seed=0, hp=QLearning.hyperparameters(episodes=20))
+    session.train()  # to the budget's end
+    app = TrainHost(session)
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.pause()
+        assert "It ends short of the bound" in app.query_one(TrainView).stats.plain
+        assert "more episodes" in screen_text(app)

@@ -2,8 +2,9 @@
 
 Every game the bench measures, every algorithm, with the game's defaults for
 it and seeds 0 to n - 1: `train` as the command runs it (`Session.train()`),
-then the bound the game's oracle states, checked exactly. Seeds run in child
-processes, one per core.
+then the bound the game's oracle states, checked exactly. A pair the game
+names a lesson for ends short by the learner's nature (the lesson says why).
+Seeds run in child processes, one per core.
 """
 
 from __future__ import annotations
@@ -30,15 +31,16 @@ class DefaultsResult:
     met: int
     seeds: int
     worst: float
+    lesson: str = ""  # why the defaults end short by the learner's nature, if they do
 
     @property
     def share(self) -> float:
         return self.met / self.seeds if self.seeds else math.nan
 
 
-def one_run(game: str, algorithm: str, seed: int) -> tuple[bool, float, str, bool]:
-    """Whether a default run meets the game's bound, its figure, the bound in words and
-    whether it is a least value (else a most)."""
+def one_run(game: str, algorithm: str, seed: int) -> tuple[bool, float, str, bool, str]:
+    """Whether a default run meets the game's bound, its figure, the bound in words,
+    whether it is a least value (else a most) and the game's lesson for the algorithm."""
     from tui_gym.session.session import Session
 
     session = Session(game, algorithm=algorithm, seed=seed)
@@ -49,7 +51,8 @@ def one_run(game: str, algorithm: str, seed: int) -> tuple[bool, float, str, boo
     assert reference is not None
     value = float(reference.figures[bound.figure])
     session.env.close()
-    return bound.met(reference.figures), value, bound.text, bound.at_least
+    lesson = session.game.lessons.get(session.algorithm, "")
+    return bound.met(reference.figures), value, bound.text, bound.at_least, lesson
 
 
 def measure(games: Sequence[str], algorithms: Sequence[str], seeds: int = SEEDS,
@@ -62,8 +65,8 @@ def measure(games: Sequence[str], algorithms: Sequence[str], seeds: int = SEEDS,
         out = []
         for (game, algorithm), runs in futures.items():
             found = [run.result() for run in runs]
-            values = [value for _, value, _, _ in found]
-            _, _, text, at_least = found[0]
+            values = [f[1] for f in found]
+            _, _, text, at_least, lesson = found[0]
             out.append(DefaultsResult(game, algorithm, text, sum(f[0] for f in found), seeds,
-                                      min(values) if at_least else max(values)))
+                                      min(values) if at_least else max(values), lesson))
     return tuple(out)

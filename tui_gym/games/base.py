@@ -504,6 +504,9 @@ class Game:
     # Hyperparameters that learn this game well, over each algorithm's own defaults:
     # "*" for every algorithm, then an algorithm's registry name for its own (see the README).
     hyperparameters: ClassVar[Mapping[str, Mapping[str, Any]]] = {}
+    # Algorithms (by registry name) whose defaults end short of the game's bound by their
+    # nature, not by chance, and why, in a sentence: what the run teaches (see the README).
+    lessons: ClassVar[Mapping[str, str]] = {}
 
     def __init__(self) -> None:
         self.states: StateSpace = StateSpace(self)

@@ -473,6 +473,19 @@ class Session:
         return self.game.oracle.agent_figures(self.base_q(snapshot), self.env_kwargs,
                                               self.changes)
 
+    def shortfall(self, reference: ReferenceMetrics) -> str:
+        """When the greedy policy `reference` measured ends short of the game's stated
+        bound, a sentence saying so and why ('' when it meets it, or there is none)."""
+        bound = self.game.oracle.bound(self.env_kwargs, self.changes)
+        if isinstance(bound, NotAvailable) or bound.met(reference.figures):
+            return ""
+        value = reference.figures.get(bound.figure, float("nan"))
+        why = self.game.lessons.get(self.algorithm) or (
+            "the greedy policy has not got there yet with these settings; more episodes "
+            "or a smaller learning rate would close the rest")
+        figure = bound.figure.replace("_", " ")
+        return f"It ends short of the bound ({bound.text}; {figure} {value:.4g}): {why}."
+
     def fixed_policy_bound(self) -> FixedBound | None:
         """How close a fixed (greedy) policy gets to the optimum here, when known."""
         bound = self.game.oracle.fixed_policy_bound(self.env_kwargs, self.changes)

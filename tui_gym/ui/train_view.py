@@ -481,7 +481,10 @@ class TrainView(Vertical):
         if snapshot is None:
             return
         reference = session.reference(snapshot)
-        note = "" if reference is not None else session.exact_reason()
+        if reference is None:
+            note = session.exact_reason()
+        else:  # at the budget's end: why it ends short of the bound, if it does
+            note = session.shortfall(reference) if snapshot.episodes >= snapshot.budget else ""
         self.stats.show_reference(reference, note)
         reason = session.engine_reason
         if snapshot.status:
@@ -556,7 +559,7 @@ class TrainView(Vertical):
     def _show_board(self, runner: TrainingRunner) -> None:
         box = self._board_box
         scene = runner.last_scene
-        animated = runner.speed.animated and getattr(self._snapshot, "engine", "") == "scalar"
+        animated = runner.speed.animated and getattr(self._snapshot, "engine", "") == "env"
         shown = animated and scene is not None
         box.set_class(shown, "-shown")
         self.set_class(runner.speed.animated, "-animated")

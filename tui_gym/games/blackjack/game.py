@@ -385,9 +385,9 @@ class BlackjackGame(Game):
                   "episodes": 500_000},
         "expected-sarsa": {"learning_rate": 0.01, "epsilon_final": 0.0,
                            "epsilon_decay_fraction": 0.3, "episodes": 500_000},
-        "monte-carlo": {"learning_rate": 0.005, "epsilon_final": 0.0,
-                        "epsilon_decay_fraction": 0.5, "episodes": 1_000_000},
-        "dyna-q": {"planning_steps": 1, "learning_rate": 0.0003, "episodes": 500_000},
+        "monte-carlo": {"learning_rate": 0.003, "epsilon_final": 0.0,
+                        "epsilon_decay_fraction": 0.5, "episodes": 1_500_000},
+        "dyna-q": {"planning_steps": 1, "learning_rate": 0.0003, "episodes": 700_000},
     }
 
     def __init__(self) -> None:

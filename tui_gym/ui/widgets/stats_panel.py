@@ -233,10 +233,10 @@ class StatsPanel(StripWidget):
         if self._reference:
             lines += _grid([[(name, "dim"), (forms, "bold")] for name, forms in self._reference],
                            width)
-        elif self._reference_note:
-            lines += _note(self._reference_note, width)
         if self._reference and self._scope_note:
             lines += _note(self._scope_note, width)
+        if self._reference_note:
+            lines += _note(self._reference_note, width)
         if self._engine_reason:
             lines += _note(self._engine_reason, width)
         return lines
