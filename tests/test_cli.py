@@ -14,7 +14,7 @@ from typing import Any
 import pytest
 
 from tui_gym import __version__
-from tui_gym.cli import attach_negative_values, build_parser, main
+from tui_gym.cli import attach_negative_values, main
 from tui_gym.cli.commands import _eval_rows
 from tui_gym.core.wrappers import CATALOG
 

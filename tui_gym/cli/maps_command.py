@@ -34,8 +34,8 @@ def add_maps_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[ty
     maps = sub.add_parser("maps", help="list the built-in maps, print one, or draw a random one")
     maps.add_argument("name", nargs="?", metavar="NAME", help="print this built-in map's text")
     maps.add_argument("--random", metavar="ROWSxCOLS", help="print a random solvable map")
-    maps.add_argument("--density", type=number_in(0.0, MAX_DENSITY, f"a number in [0, {MAX_DENSITY}]"),
-                      default=0.2, metavar="X",
+    density = number_in(0.0, MAX_DENSITY, f"a number in [0, {MAX_DENSITY}]")
+    maps.add_argument("--density", type=density, default=0.2, metavar="X",
                       help=f"share of obstacle cells in a random map (0 to {MAX_DENSITY})")
     maps.add_argument("--map-seed", type=seed_number, default=0, metavar="N", dest="maps_seed",
                       help="seed of a random map (default 0)")

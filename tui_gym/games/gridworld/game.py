@@ -610,7 +610,8 @@ class GridWorldGame(Game):
         moves = cell_moves(size, walls)
         q = np.stack([-1.0 - distance[moves[a]] for a in range(4)], axis=-1).reshape(-1, 4)
         q[np.eye(cells, dtype=bool).reshape(-1)] = 0.0
-        return replace(self.oracle.optimum(kwargs), q=q)
+        optimum = self.oracle.optimum(kwargs)
+        return optimum if isinstance(optimum, NotAvailable) else replace(optimum, q=q)
 
     def normalize_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         """As `Game.normalize_kwargs`, with the walls: `layout` (a square map of F and W,
