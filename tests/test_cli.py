@@ -175,7 +175,7 @@ def test_train_gridworld_json_then_eval(capsys: pytest.CaptureFixture[str], tmp_
     assert data["eval"]["episodes"] == 1000
 
     evaluated = run_json(capsys, "eval", str(path), "--episodes", "500", "--json")
-    assert set(evaluated) == set(data["eval"])
+    assert set(evaluated) == {"schema", *data["eval"]}
     assert set(evaluated) >= GRIDWORLD_EVAL_KEYS
     assert 0.0 <= evaluated["success_rate"] <= 1.0
     # The exact figure depends only on the table, which the file kept.
@@ -194,7 +194,7 @@ def test_train_blackjack_save_then_eval(capsys: pytest.CaptureFixture[str], tmp_
 
     evaluated = run_json(capsys, "eval", str(path), "--json")
     assert set(evaluated) >= BLACKJACK_EVAL_KEYS
-    assert set(evaluated) == set(data["eval"])
+    assert set(evaluated) == {"schema", *data["eval"]}
     assert evaluated["env_id"] == "Blackjack-v1"
     assert evaluated["episodes"] == 10_000  # the default
     rates = evaluated["win_rate"] + evaluated["draw_rate"] + evaluated["loss_rate"]

@@ -1,5 +1,6 @@
-"""The command line's contracts: every flag says what it does, and every `--json` object
-carries its `schema` version and exactly the keys the README lists for its command."""
+"""The command line's contracts: every flag says what it does and reads numbers as `Param`s
+do, and every `--json` object carries its `schema` version and exactly the keys the README
+lists for its command."""
 
 from __future__ import annotations
 
@@ -39,6 +40,14 @@ def test_every_flag_and_sub_command_says_what_it_does() -> None:
             elif not action.help or action.help == argparse.SUPPRESS:
                 missing.append(f"{path} {'/'.join(action.option_strings) or action.dest}")
     assert missing == []
+
+
+def test_every_number_flag_reads_ascii_digits_only() -> None:
+    # Python's int() and float() read any script's digits: '\u0661\u0662' is 12 to them.
+    loose = [f"{path} {'/'.join(action.option_strings) or action.dest}"
+             for path, parser in _parsers(build_parser()) for action in parser._actions
+             if action.type in (int, float)]
+    assert loose == []
 
 
 def test_every_json_command_has_a_schema_and_its_help_says_so(
