@@ -113,7 +113,7 @@ def test_gridworld_walls_lengthen_shortest_paths() -> None:
     assert game.make_kwargs(kwargs)["walls"] == [[1, 1]]
     assert game.normalize_kwargs({"size": 3, "walls": [[1, 1]]}) == kwargs
     # 8 free cells on a ring: from each, the others are 1, 1, 2, 2, 3, 3, 4 steps away.
-    assert game.oracle.optimum(kwargs).value == pytest.approx(16 / 7)
+    assert game.oracle.optimum(kwargs).figures["optimal_mean_steps"] == pytest.approx(16 / 7)
     marks = game.oracle.optimal_marks(kwargs)
     perfect = game.oracle.reference(marks.astype(float), kwargs)
     assert perfect.figures["optimal_pair_fraction"] == pytest.approx(1.0)

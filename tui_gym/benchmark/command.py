@@ -3,15 +3,14 @@
 from __future__ import annotations
 
 import argparse
-import json
-import math
-import sys
 from typing import Any
 
 from rich import box
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
+
+from tui_gym.cli.output import print_json
 
 BUILT_IN = ("random", "optimal")
 
@@ -100,21 +99,6 @@ def _player(args: argparse.Namespace, game: str) -> tuple[Any, dict[str, Any], t
     return agent, dict(session.env_kwargs), tuple(str(c) for c in session.applied)
 
 
-def _print_json(data: dict[str, Any]) -> None:
-    """One JSON object on stdout (a number that is not finite as null)."""
-    def clean(value: Any) -> Any:
-        if isinstance(value, float) and not math.isfinite(value):
-            return None
-        if isinstance(value, dict):
-            return {k: clean(v) for k, v in value.items()}
-        if isinstance(value, list | tuple):
-            return [clean(v) for v in value]
-        return value
-
-    sys.stdout.write(json.dumps(clean(data)) + "\n")
-    sys.stdout.flush()
-
-
 def _summary(title: str, rows: list[tuple[str, str]]) -> Table:
     table = Table(title=title, show_header=False, title_justify="left")
     table.add_column(style="bold")
@@ -160,7 +144,7 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
         object.__setattr__(result, "run_id", run_id)
         recorded = f"recorded as run {run_id} in {resolve_db_path(args.db)}"
     if args.json:
-        _print_json(result.to_json())
+        print_json("benchmark", result.to_json())
         return 0
     out.print(_summary(f"Benchmark: {result.game}", result.rows()))
     if recorded:
@@ -175,7 +159,8 @@ def _show_leaderboard(args: argparse.Namespace, out: Console) -> int:
     game = find_game(args.game).name
     path, standings = leaderboard(game, args.db)
     if args.json:
-        _print_json({"game": game, "db": path, "runs": [s.to_json() for s in standings]})
+        print_json("benchmark", {"game": game, "db": path,
+                                 "runs": [s.to_json() for s in standings]})
         return 0
     if not standings:
         out.print(escape(f"no benchmark of {game} is recorded in {path} yet"))

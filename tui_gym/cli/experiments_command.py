@@ -248,7 +248,7 @@ def cmd_compare(args: argparse.Namespace, out: Console) -> int:
     if args.csv:
         _write_csv(args.csv, result.outcomes)
     if args.json:
-        print_json(result.to_json())
+        print_json("compare", result.to_json())
         return 130 if result.interrupted else 0
     if not result.outcomes:
         out.print("stopped before any episode finished; nothing to show")
@@ -380,7 +380,7 @@ def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
         except CompareError as exc:
             raise CliError(str(exc)) from None
     if args.json:
-        print_json(result.to_json())
+        print_json("sweep", result.to_json())
         return 130 if result.interrupted else 0
     out.print(_sweep_table(result))
     if len(spec.grid) == 2:

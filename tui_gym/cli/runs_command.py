@@ -30,6 +30,7 @@ Command = Callable[[argparse.Namespace, Console], int]
 
 _run_id = int_in(1, 2**63 - 1, "a run id (a positive integer, see `tui-gym runs`)")
 DB_HELP = "the run history file (default: $TUI_GYM_DB, else the data folder's runs.db)"
+RUN_ID_HELP = "a run's id (`tui-gym runs` lists them)"
 KINDS = ("train", "compare", "sweep", "app", "benchmark")
 
 
@@ -60,13 +61,13 @@ def add_runs_parser(sub: Any) -> None:
     verbs = runs.add_subparsers(dest="runs_command", metavar="VERB")
 
     show = verbs.add_parser("show", help="everything about one run")
-    show.add_argument("run_id", type=_run_id, metavar="ID")
+    show.add_argument("run_id", type=_run_id, metavar="ID", help=RUN_ID_HELP)
     _json_option(show, inherit=True)
     _db_option(show, inherit=True)
 
     export = verbs.add_parser("export", help="write a run's curves to a CSV file or for "
                               "TensorBoard")
-    export.add_argument("run_id", type=_run_id, metavar="ID")
+    export.add_argument("run_id", type=_run_id, metavar="ID", help=RUN_ID_HELP)
     where = export.add_mutually_exclusive_group(required=True)
     where.add_argument("--csv", type=_path, metavar="PATH",
                        help="one row per episode, one column per curve")
@@ -76,7 +77,7 @@ def add_runs_parser(sub: Any) -> None:
     _db_option(export, inherit=True)
 
     rm = verbs.add_parser("rm", help="remove one run (its curves and figures with it)")
-    rm.add_argument("run_id", type=_run_id, metavar="ID")
+    rm.add_argument("run_id", type=_run_id, metavar="ID", help=RUN_ID_HELP)
     _json_option(rm, inherit=True)
     _db_option(rm, inherit=True)
 
@@ -167,7 +168,7 @@ def cmd_runs(args: argparse.Namespace, out: Console) -> int:
     game = args.game.strip().lower() if args.game else None
     listing = _history_call(lambda: list_runs(args.db, game=game, kind=args.kind))
     if args.json:
-        print_json(listing.to_json())
+        print_json("runs", listing.to_json())
         return 0
     if not listing.runs:
         which = f" of {args.game}" if args.game else ""
@@ -202,7 +203,7 @@ def _cmd_show(args: argparse.Namespace, out: Console) -> int:
 
     record = _history_call(lambda: show_run(args.run_id, args.db))
     if args.json:
-        print_json(record.to_json())
+        print_json("runs show", record.to_json())
         return 0
     run = record.summary
     settings = ", ".join(f"{k}={v}" for k, v in record.hyperparameters.items())
@@ -253,7 +254,7 @@ def _cmd_export(args: argparse.Namespace, out: Console) -> int:
         line = (f"wrote {done.scalars} values of {', '.join(done.tags)} to {done.path} "
                 f"(tensorboard --logdir {done.directory})")
     if args.json:
-        print_json(done.to_json())
+        print_json("runs export", done.to_json())
     else:
         out.print(escape(line))
     return 0
@@ -264,7 +265,7 @@ def _cmd_rm(args: argparse.Namespace, out: Console) -> int:
 
     removed = _history_call(lambda: remove_run(args.run_id, args.db))
     if args.json:
-        print_json(removed.to_json())
+        print_json("runs rm", removed.to_json())
     else:
         run = removed.run
         out.print(escape(f"removed run {run.id} ({run.kind} {run.game} {run.algorithm}) "

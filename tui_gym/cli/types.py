@@ -9,7 +9,9 @@ from collections.abc import Callable
 
 from tui_gym.core.params import read_number, shown_value
 
-__all__ = ["MAX_SEED", "file_name", "finite_number", "int_in", "positive_int", "seed_number"]
+__all__ = [
+    "MAX_SEED", "file_name", "finite_number", "int_in", "number_in", "positive_int", "seed_number",
+]
 
 MAX_SEED = 2**63 - 2**32  # room for the seeds derived from it (evaluation adds to it)
 
@@ -44,6 +46,22 @@ def finite_number(text: str) -> float:
             f"{shown_value(text)} is out of range: expected a finite number"
         )
     return float(value)
+
+
+def number_in(minimum: float, maximum: float, noun: str) -> Callable[[str], float]:
+    """An argparse type: a number (ASCII digits) in [minimum, maximum]."""
+
+    def parse(text: str) -> float:
+        value = read_number(text)
+        if value is None or math.isnan(value):
+            raise argparse.ArgumentTypeError(f"expected {noun}, got {shown_value(text)}")
+        if not minimum <= value <= maximum:
+            raise argparse.ArgumentTypeError(
+                f"{shown_value(text)} is out of range: expected {noun}"
+            )
+        return float(value)
+
+    return parse
 
 
 def file_name(text: str) -> str:

@@ -361,7 +361,7 @@ class TrainView(Vertical):
             panels = game.layout.heatmaps(solution.q, kwargs, self.focus_target, solution.marks)
         took = (time.perf_counter() - started) * 1000
         if "optimal_mean_steps" in solution.figures:
-            figure = f"{solution.value:.3f} steps on average"
+            figure = f"{solution.figures['optimal_mean_steps']:.3f} steps on average"
         else:
             figure = f"{solution.value:+.4f} return"
         self._editor.show(grid_map, panels, f"exact optimum {figure}, solved in {took:.0f} ms")
