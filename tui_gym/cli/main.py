@@ -206,6 +206,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         out = OutConsole()
         if args.command is None:
             return _run_app(args)
+        if ":" in args.env:
+            from tui_gym.games import resolve_env_id
+
+            # The user's own `--env module:Id` imports its module on purpose, so a file that
+            # names the same env (which alone never imports code) opens with it.
+            resolve_env_id(args.env)
         from tui_gym.cli.commands import COMMANDS
         from tui_gym.cli.experiments_command import EXPERIMENT_COMMANDS
         from tui_gym.cli.replay_command import REPLAY_COMMANDS

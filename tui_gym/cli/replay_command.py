@@ -88,14 +88,22 @@ def cmd_replay(args: argparse.Namespace, out: Console) -> int:
 
 def session_for(recording: Recording) -> Session | None:
     """A session on the game of the recording's first episode (None when it cannot be built:
-    the app then opens on its default game, and the replay shows what was recorded)."""
+    the app then opens on its default game, and the replay shows what was recorded);
+    CliError when its id would import a module."""
     from tui_gym.core.wrappers import parse_wrapper_spec
+    from tui_gym.games import ImportRefusedError, resolve_env_id
     from tui_gym.session.session import Session
 
     game = recording.episodes[0].game
     try:
+        env_id = resolve_env_id(game.env_id, from_data=True)
+    except ImportRefusedError as error:
+        raise CliError(f"{recording.path}: {error}") from None
+    except ValueError:
+        return None
+    try:
         return Session(
-            env_id=game.env_id,
+            env_id=env_id,
             env_kwargs=dict(game.env_kwargs),
             choices=tuple(parse_wrapper_spec(spec) for spec in game.wrappers),
             seed=game.seed or 0,

@@ -8,7 +8,9 @@ and action); sparse tables add `keys.json`.
 Storage takes and returns plain data and knows no game: `save_agent` writes
 a meta dict and a learner's state, `read_agent` returns them as a checked
 `SavedAgent` (the session rebuilds itself from it, and reports what does not
-fit the game through `SavedAgent.field_error`).
+fit the game through `SavedAgent.field_error`). The env id a file names is
+resolved as data (`tui_gym.games.resolve_env_id(from_data=True)`): a file
+never makes tui-gym import a module.
 
 Writing (`save_agent`, `atomic_write_bytes`) goes through a temporary file
 in the target's folder (`.NAME.PID.RANDOM.tmp`), flushed to disk and renamed
@@ -698,6 +700,16 @@ class SavedAgent:
         return _checked(_Reader(self.path), name, build)
 
 
+def _data_env_id(reader: _Reader, env_id: str) -> str:
+    """The game id a file names, resolved as data: never by importing a module."""
+    from tui_gym.games import UnknownGameError, resolve_env_id
+
+    try:
+        return resolve_env_id(env_id, from_data=True)
+    except UnknownGameError as error:
+        raise reader.field("env_id", f"is not valid: {error}") from None
+
+
 def read_agent(path: str | Path) -> SavedAgent:
     """A save file's contents as plain data; `StorageError` when it is not a valid one."""
     from tui_gym.core.wrappers import parse_wrapper_spec
@@ -710,6 +722,7 @@ def read_agent(path: str | Path) -> SavedAgent:
     env_id = meta.get("env_id")
     if not isinstance(env_id, str):
         raise reader.field("env_id", f"must be a game id, got {shown_value(env_id)}")
+    env_id = _data_env_id(reader, env_id)
     env_kwargs = meta.get("env_kwargs", {})
     if not isinstance(env_kwargs, dict):
         raise reader.field("env_kwargs", f"must be an object, got {shown_value(env_kwargs)}")
