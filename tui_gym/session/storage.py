@@ -712,7 +712,7 @@ def _data_env_id(reader: _Reader, env_id: str) -> str:
 
 def read_agent(path: str | Path) -> SavedAgent:
     """A save file's contents as plain data; `StorageError` when it is not a valid one."""
-    from tui_gym.core.wrappers import parse_wrapper_spec
+    from tui_gym.core.wrappers import check_chain_length, parse_wrapper_spec
 
     reader = _Reader(Path(path))
     contents = read_file(path)
@@ -729,6 +729,7 @@ def read_agent(path: str | Path) -> SavedAgent:
     wrappers = meta.get("wrappers", [])
     if not isinstance(wrappers, list):
         raise reader.field("wrappers", f"must be a list of specs, got {shown_value(wrappers)}")
+    _checked(reader, "wrappers", partial(check_chain_length, len(wrappers)))
     choices = []
     for i, spec in enumerate(wrappers):
         if not isinstance(spec, str):

@@ -80,10 +80,11 @@ def open_handler(
     """A protocol handler playing game `name` with `params` and `wrappers` (specs as
     `--wrapper` takes them); ValueError with one clear line for a bad game, parameter
     or wrapper."""
-    from tui_gym.core.wrappers import parse_wrapper_spec
+    from tui_gym.core.wrappers import check_chain_length, parse_wrapper_spec
     from tui_gym.session.session import Session
 
     entry = find_game(name)
+    check_chain_length(len(wrappers))
     choices = tuple(parse_wrapper_spec(spec) for spec in wrappers)
     session = Session(
         env_id=entry.env_id, env_kwargs=dict(params or {}), choices=choices, seed=seed or 0
