@@ -134,9 +134,8 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
 
     recorder = None
     if args.record is not None:
-        from tui_gym.cli.replay_command import check_record_path, open_recorder
+        from tui_gym.cli.replay_command import open_recorder
 
-        check_record_path(args.record)
         path, seed = args.record, args.bench_seed
 
         def recorder(session: Any) -> Any:

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 from rich.console import Console
 
 from tui_gym.cli.output import CliError
-from tui_gym.cli.types import file_name as _path
+from tui_gym.cli.types import output_file
 
 if TYPE_CHECKING:
     from tui_gym.core.recording import Recording
@@ -26,7 +26,8 @@ RECORD_HELP = "record every episode to this file, as JSON lines (tui-gym replay 
 
 def add_record_option(parser: argparse.ArgumentParser, dest: str = "record") -> None:
     """`--record PATH` on `parser`."""
-    parser.add_argument("--record", type=_path, metavar="PATH", dest=dest, help=RECORD_HELP)
+    parser.add_argument("--record", type=output_file, metavar="PATH", dest=dest,
+                        help=RECORD_HELP)
 
 
 def open_recorder(
@@ -51,17 +52,6 @@ def open_recorder(
         raise CliError(f"--record {path}: is a folder; name a file") from None
     except OSError as exc:
         raise CliError(f"--record {path}: cannot write ({exc.strerror or exc})") from None
-
-
-def check_record_path(path: str) -> None:
-    """CliError unless `path` names a file that can be made in a folder that is there."""
-    from pathlib import Path
-
-    target = Path(path)
-    if target.is_dir():
-        raise CliError(f"--record {path}: is a folder; name a file")
-    if not target.parent.is_dir():
-        raise CliError(f"--record {path}: there is no folder {target.parent}")
 
 
 def add_replay_parser(sub: Any) -> None:
