@@ -2,8 +2,9 @@
 
 `add_record_option` puts `--record PATH` on a parser; `open_recorder` opens
 the file for a session (one clear line when it cannot be written). `replay
-PATH` reads a recording (bad lines skipped, see `tui_gym.core.recording`) and
-opens the app on it, on the game of its first episode.
+PATH` reads a recording (bad lines skipped, scenes checked against their game's
+board, see `tui_gym.core.recording`) and opens the app on it, on the game of
+its first episode (refused when that game's id would import a module).
 """
 
 from __future__ import annotations
@@ -64,9 +65,10 @@ def add_replay_parser(sub: Any) -> None:
 
 def cmd_replay(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.core.recording import RecordingError, read_recording
+    from tui_gym.session.recording.scenes import scene_fits
 
     try:
-        recording = read_recording(args.path)
+        recording = read_recording(args.path, scene_fits)
     except RecordingError as exc:
         raise CliError(str(exc)) from None
     try:
