@@ -129,6 +129,7 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
         return _show_leaderboard(args, out)
     if not args.decision_timeout > 0:
         raise ValueError("--decision-timeout must be a positive number of seconds")
+    from tui_gym.benchmark.group import ending_on_signals
     from tui_gym.benchmark.leaderboard import record
     from tui_gym.benchmark.run import run_benchmark
 
@@ -146,11 +147,12 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
         if not args.name.strip():
             raise ValueError("--name cannot be empty")
         player.label = args.name.strip()
-    result = run_benchmark(
-        args.game, player, episodes=args.episodes, seed=args.bench_seed, params=params,
-        wrappers=wrappers, decision_timeout=args.decision_timeout,
-        allow_hints=args.allow_hints, recorder=recorder,
-    )
+    with ending_on_signals():  # SIGTERM and SIGHUP end the player's program as ctrl+c does
+        result = run_benchmark(
+            args.game, player, episodes=args.episodes, seed=args.bench_seed, params=params,
+            wrappers=wrappers, decision_timeout=args.decision_timeout,
+            allow_hints=args.allow_hints, recorder=recorder,
+        )
     recorded = ""
     if not args.no_record:
         from tui_gym.core.experiments import resolve_db_path
