@@ -13,6 +13,7 @@ import pytest
 from aiohttp import web
 from aiohttp.test_utils import TestServer
 
+from tui_gym.web import is_local
 from tui_gym.web_guard import COOKIE, ServeGuard
 
 pytestmark = pytest.mark.xdist_group("serve")
@@ -65,7 +66,7 @@ async def _status(client: aiohttp.ClientSession, url: str, **kwargs: object) -> 
 
 
 async def test_a_foreign_or_missing_origin_is_refused(serve: Callable[..., object]) -> None:
-    server = await serve(max_apps=4, token=None, local_only=True)  # type: ignore[misc]
+    server = await serve(max_apps=4, token=None, host_allowed=is_local)  # type: ignore[misc]
     url = str(server.make_url("/ws"))
     async with aiohttp.ClientSession() as client:
         assert await _status(client, url, origin="http://evil.example") == 403
@@ -77,7 +78,7 @@ async def test_a_foreign_or_missing_origin_is_refused(serve: Callable[..., objec
 async def test_a_name_that_is_not_local_is_refused_when_serving_this_machine(
     serve: Callable[..., object],
 ) -> None:
-    server = await serve(max_apps=4, token=None, local_only=True)  # type: ignore[misc]
+    server = await serve(max_apps=4, token=None, host_allowed=is_local)  # type: ignore[misc]
     rebound = f"evil.example:{server.port}"  # a site's name made to resolve to 127.0.0.1
     async with aiohttp.ClientSession() as client:
         async with client.get(server.make_url("/"), headers={"Host": rebound}) as response:
@@ -87,7 +88,7 @@ async def test_a_name_that_is_not_local_is_refused_when_serving_this_machine(
 
 
 async def test_the_cap_on_live_apps_holds(serve: Callable[..., object]) -> None:
-    server = await serve(max_apps=2, token=None, local_only=True)  # type: ignore[misc]
+    server = await serve(max_apps=2, token=None, host_allowed=is_local)  # type: ignore[misc]
     url = str(server.make_url("/ws"))
     async with aiohttp.ClientSession() as client:
         first = await client.ws_connect(url, origin=_origin(server))
@@ -109,7 +110,7 @@ async def test_the_cap_on_live_apps_holds(serve: Callable[..., object]) -> None:
 async def test_the_token_holds_on_the_page_and_the_socket(
     serve: Callable[..., object],
 ) -> None:
-    server = await serve(max_apps=4, token=TOKEN, local_only=False)  # type: ignore[misc]
+    server = await serve(max_apps=4, token=TOKEN, host_allowed=None)  # type: ignore[misc]
     url = str(server.make_url("/ws"))
     origin = _origin(server)
     async with aiohttp.ClientSession(cookie_jar=aiohttp.CookieJar(unsafe=True)) as client:
@@ -136,7 +137,7 @@ async def test_textual_serves_routes_are_the_same_through_the_fallback() -> None
     class WithoutPrivateNames(Server):
         _make_app = None  # as if a textual-serve without it
 
-    guard = ServeGuard(max_apps=1, token=None, local_only=True)
+    guard = ServeGuard(max_apps=1, token=None, host_allowed=is_local)
     stock = await guarded_app(Server("true"), guard)
     fallback = await guarded_app(WithoutPrivateNames("true"), guard)
 

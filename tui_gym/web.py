@@ -111,7 +111,8 @@ def cmd_serve(args: argparse.Namespace, out: Console) -> int:
         raise CliError(f"tui-gym serve needs textual-serve: {INSTALL_HINT}") from None
     from tui_gym.web_guard import ServeGuard
 
-    guard = ServeGuard(max_apps=args.max_apps, token=token, local_only=not args.public)
+    guard = ServeGuard(max_apps=args.max_apps, token=token,
+                       host_allowed=None if args.public else is_local)
     if args.load:
         from tui_gym.session.session import Session
 

@@ -6,8 +6,9 @@ started the server, so the guard lets one through only when:
 - its `Origin` is the served page's own (the host and port the request came to): a page
   of another site open in the same browser cannot open one, and neither can a request
   with no `Origin` at all;
-- served on this machine only, the address the request came to is a local one, so a
-  site whose name is made to resolve to 127.0.0.1 (DNS rebinding) is refused too;
+- served on this machine only (`host_allowed` given), the address the request came to
+  is a local one, so a site whose name is made to resolve to 127.0.0.1 (DNS rebinding)
+  is refused too;
 - fewer than `max_apps` apps are live: beyond that the page and the socket are answered
   with a page that says so;
 - with a token (`--public` always has one), the page was opened with `?token=...` (the
@@ -55,12 +56,15 @@ def _host_name(host: str) -> str:
 class ServeGuard:
     """The middleware: `app.middlewares.append(ServeGuard(...).middleware)`."""
 
-    def __init__(self, *, max_apps: int, token: str | None, local_only: bool) -> None:
+    def __init__(
+        self, *, max_apps: int, token: str | None,
+        host_allowed: Callable[[str], bool] | None = None,
+    ) -> None:
         if max_apps < 1:
             raise ValueError(f"max_apps must be at least 1, got {max_apps}")
         self.max_apps = max_apps
         self.token = token
-        self.local_only = local_only
+        self.host_allowed = host_allowed
         self.live = 0  # apps running now (open sockets)
 
     @web.middleware
@@ -94,11 +98,7 @@ class ServeGuard:
             self.live -= 1
 
     def _host_refusal(self, request: web.Request) -> web.Response | None:
-        if not self.local_only:
-            return None
-        from tui_gym.web import is_local
-
-        if is_local(_host_name(request.host)):
+        if self.host_allowed is None or self.host_allowed(_host_name(request.host)):
             return None
         return _page(403, f"tui-gym serves this machine only; open it at a local address "
                           f"such as 127.0.0.1, not {visible(request.host, 60)}")

@@ -2,8 +2,9 @@
 
 A scene from a file is data: a hand of a hundred thousand cards or a grid a hundred
 thousand cells a side would have the board build a picture that size. Each kind of
-board takes the scenes its games make, within the games' own bounds (GridWorld's
-sides, the largest map, a Blackjack hand); a scene that does not fit is not drawn.
+board takes the scenes its games make, within the games' own bounds (no grid is
+larger than the largest map, no Blackjack hand holds more than 21 cards); a scene
+that does not fit is not drawn.
 """
 
 from __future__ import annotations
@@ -11,8 +12,6 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from tui_gym.games.gridworld.game import MAX_SIZE as GRID_MAX
-from tui_gym.games.gridworld.game import MIN_SIZE as GRID_MIN
 from tui_gym.games.maps import MAX_SIDE
 
 __all__ = ["scene_fits"]
@@ -65,7 +64,7 @@ def _cards(scene: Mapping[str, Any]) -> bool:
 
 
 def _grid(scene: Mapping[str, Any]) -> bool:
-    if not _int(scene.get("size"), GRID_MIN, GRID_MAX):
+    if not _int(scene.get("size"), 1, MAX_SIDE):
         return False
     size = int(scene["size"])
     return all(scene.get(key) is None or _cell(scene.get(key), size, size)
