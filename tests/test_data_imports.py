@@ -4,15 +4,14 @@ module, which would leave a marker file, never runs."""
 
 from __future__ import annotations
 
-import io
 import json
 import sys
-import zipfile
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
+from tests.test_storage import _with_meta
 from tui_gym.cli import main
 from tui_gym.games import UnknownGameError, resolve_env_id
 from tui_gym.session.recording.games import game_named
@@ -43,16 +42,7 @@ def marker(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
 def _save_naming(tmp_path: Path, env_id: str) -> Path:
     path = tmp_path / "agent.tgym"
     Session("FrozenLake-v1", seed=0).save(path)
-    with zipfile.ZipFile(path) as zf:
-        entries = {name: zf.read(name) for name in zf.namelist()}
-    meta = json.loads(entries["meta.json"])
-    meta["env_id"], meta["env_kwargs"] = env_id, {}
-    entries["meta.json"] = json.dumps(meta).encode()
-    buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w") as zf:
-        for name, data in entries.items():
-            zf.writestr(name, data)
-    path.write_bytes(buf.getvalue())
+    path.write_bytes(_with_meta(path.read_bytes(), env_id=env_id, env_kwargs={}))
     return path
 
 

@@ -48,6 +48,16 @@ def read_line(stream: Any, deadline: float) -> str:
     return stream.readline().decode("utf-8", "replace")
 
 
+def stop(process: subprocess.Popen[bytes]) -> None:
+    """End a server as ctrl+c does (killed if it does not end in time)."""
+    process.send_signal(signal.SIGINT)
+    try:
+        process.wait(timeout=15)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
+
+
 @pytest.fixture(scope="module")
 def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     """`tui-gym serve` on a free port; its URL."""
@@ -69,12 +79,7 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
         assert f"Serving tui-gym at http://127.0.0.1:{port} on this machine only." in said, said
         yield f"http://127.0.0.1:{port}"
     finally:
-        process.send_signal(signal.SIGINT)
-        try:
-            process.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
+        stop(process)
 
 
 async def read_until(ws: Any, wanted: bytes, seen: bytearray) -> None:
@@ -230,12 +235,7 @@ def test_public_serves_with_a_token_it_makes_up_and_prints(tmp_path: Path) -> No
 
         assert asyncio.run(pages()) == (401, 200)
     finally:
-        process.send_signal(signal.SIGINT)
-        try:
-            process.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
+        stop(process)
 
 
 @pytest.mark.parametrize(

@@ -561,10 +561,7 @@ def test_distance_shaping_refuses_envs_without_distance() -> None:
 def test_a_chain_longer_than_the_cap_is_refused_wherever_it_comes_from(
     tmp_path: Any, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    import io
-    import json
-    import zipfile
-
+    from tests.test_storage import _with_meta
     from tui_gym.cli import main
     from tui_gym.core.wrappers import MAX_CHAIN
     from tui_gym.session.session import Session
@@ -582,15 +579,6 @@ def test_a_chain_longer_than_the_cap_is_refused_wherever_it_comes_from(
     # A save file that names 2,000 of them.
     path = tmp_path / "agent.tgym"
     Session("blackjack").save(path)
-    with zipfile.ZipFile(path) as zf:
-        entries = {name: zf.read(name) for name in zf.namelist()}
-    meta = json.loads(entries["meta.json"])
-    meta["wrappers"] = ["DelayObservation"] * 2_000
-    entries["meta.json"] = json.dumps(meta).encode()
-    buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w") as zf:
-        for name, data in entries.items():
-            zf.writestr(name, data)
-    path.write_bytes(buf.getvalue())
+    path.write_bytes(_with_meta(path.read_bytes(), wrappers=["DelayObservation"] * 2_000))
     with pytest.raises(StorageError, match="wrappers is not valid: a chain of 2,000 wrappers"):
         Session.load(path)
