@@ -378,7 +378,7 @@ ERRORS = {
     ),
     "target gap -inf": (["train", "blackjack", "--target-gap", "-inf"], "out of range"),
     "seed too large": (["train", "blackjack", "--seed", "9" * 40], "out of range"),
-    "empty save path": (["train", "blackjack", "--save", ""], "--save: expected a file name"),
+    "empty save path": (["train", "blackjack", "--save", ""], "--save: the path is empty"),
     "learning rate not a number": (["train", "blackjack", "--learning-rate", "fast"], "'fast'"),
     "epsilon final above start": (
         ["train", "blackjack", "--epsilon-start", "0.1", "--epsilon-final", "0.5"],
@@ -477,7 +477,8 @@ def test_the_save_folder_is_checked_before_training(
     code, out, err = run(capsys, "train", "blackjack", "--episodes", "1000000000",
                          "--save", str(path))
     assert (code, out) == (2, "")
-    assert err == f"tui-gym: error: {path}: the folder {path.parent} does not exist\n"
+    assert err == (f"tui-gym train: error: argument --save: {path}: the folder {path.parent} "
+                   "does not exist\n")
 
 
 def test_save_through_a_symlink_writes_its_target(

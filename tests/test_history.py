@@ -308,7 +308,7 @@ def test_csv_export_round_trip(db: Path, tmp_path: Path) -> None:
     umask = os.umask(0)
     os.umask(umask)
     assert stat.S_IMODE(target.stat().st_mode) == 0o666 & ~umask
-    with pytest.raises(RunHistoryError, match="cannot write"):
+    with pytest.raises(RunHistoryError, match="missing does not exist"):
         export_run_csv(run_id, tmp_path / "missing" / "x.csv", str(db))
 
 

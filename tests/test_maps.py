@@ -58,6 +58,18 @@ def test_bad_maps_say_where(text: str, expected: str) -> None:
     assert "\n" not in str(error.value)
 
 
+@pytest.mark.parametrize(("text", "expected"), [
+    (f"reward 0,2: {'9' * 400}\nSFRG\n", "must be a finite number, got '999999999999…999999' "
+     "(400 characters)"),
+    (f"slip 0,0: 0.{'5' * 400}9x\nSFFG\n", "(404 characters)"),
+    (f"reward {'1' * 5000},0: 1\nSFRG\n", "a header line reads"),
+])
+def test_long_values_in_a_map_are_quoted_short(text: str, expected: str) -> None:
+    with pytest.raises(MapError) as error:
+        parse_map(text)
+    assert expected in str(error.value) and len(str(error.value)) < 160, str(error.value)
+
+
 def test_bad_files_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     bad = tmp_path / "bad.txt"
     bad.write_text("SFFF\nFHFH\nFF?H\nHFFG\n")

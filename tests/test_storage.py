@@ -262,8 +262,8 @@ def test_a_signal_during_a_write_waits_for_the_write(
 @pytest.mark.parametrize(
     ("name", "fragment"),
     [
-        ("", "the save path is empty"),
-        ("  ", "the save path is empty"),
+        ("", "the path is empty"),
+        ("  ", "the path is empty"),
         ("no/such/agent.tgym", "the folder"),
         (".", "is a folder"),
         ("sub/", "a file name is needed"),

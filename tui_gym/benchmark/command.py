@@ -113,14 +113,14 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
         return _show_leaderboard(args, out)
     if not args.decision_timeout > 0:
         raise ValueError("--decision-timeout must be a positive number of seconds")
+    from tui_gym.benchmark.group import ending_on_signals
     from tui_gym.benchmark.leaderboard import record
     from tui_gym.benchmark.run import run_benchmark
 
     recorder = None
     if args.record is not None:
-        from tui_gym.cli.replay_command import check_record_path, open_recorder
+        from tui_gym.cli.replay_command import open_recorder
 
-        check_record_path(args.record)
         path, seed = args.record, args.bench_seed
 
         def recorder(session: Any) -> Any:
@@ -131,11 +131,12 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
         if not args.name.strip():
             raise ValueError("--name cannot be empty")
         player.label = args.name.strip()
-    result = run_benchmark(
-        args.game, player, episodes=args.episodes, seed=args.bench_seed, params=params,
-        wrappers=wrappers, decision_timeout=args.decision_timeout,
-        allow_hints=args.allow_hints, recorder=recorder,
-    )
+    with ending_on_signals():  # SIGTERM and SIGHUP end the player's program as ctrl+c does
+        result = run_benchmark(
+            args.game, player, episodes=args.episodes, seed=args.bench_seed, params=params,
+            wrappers=wrappers, decision_timeout=args.decision_timeout,
+            allow_hints=args.allow_hints, recorder=recorder,
+        )
     recorded = ""
     if not args.no_record:
         from tui_gym.core.experiments import resolve_db_path

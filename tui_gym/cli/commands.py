@@ -345,12 +345,9 @@ def _wrapper_dicts(session: Session) -> list[dict[str, Any]]:
 
 
 def cmd_train(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.session.storage import check_save_path
-
     if args.target_gap is not None and args.target_gap <= 0:
         raise CliError(f"--target-gap must be a positive number, got {args.target_gap:g}")
-    # Before training: a run is not lost to a save path that cannot be written.
-    save_path = check_save_path(args.save) if args.save is not None else None
+    save_path = args.save  # checked as the arguments were read (`output_file`)
     session = _session_from_args(args)
     recording = args.recording  # the run history's record of this run (see `recorded`)
     recording.begin(session)

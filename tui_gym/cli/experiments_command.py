@@ -20,7 +20,6 @@ import sys
 import threading
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
@@ -31,6 +30,7 @@ from tui_gym.algorithms import ALGORITHMS
 from tui_gym.cli.output import CliError, print_json
 from tui_gym.cli.types import file_name as _path
 from tui_gym.cli.types import int_in as _int_in
+from tui_gym.cli.types import output_file
 from tui_gym.cli.types import seed_number as _seed
 
 if TYPE_CHECKING:
@@ -80,7 +80,7 @@ def add_experiment_parsers(sub: Any) -> None:
     compare.add_argument("--algorithms", required=True, metavar="A,B",
                          help=f"comma-separated learners: {names}")
     _common_options(compare)
-    compare.add_argument("--csv", type=_path, metavar="PATH",
+    compare.add_argument("--csv", type=output_file, metavar="PATH",
                          help="write each episode's mean and band per algorithm to a CSV file")
     compare.add_argument("--width", type=_int_in(20, 400, "a width from 20 to 400"),
                          default=None, metavar="W", help="chart width in characters")
@@ -320,7 +320,7 @@ def _compare_chart(result: Any, width: int) -> Text:
 def _write_csv(path: str, outcomes: Sequence[AlgorithmOutcome]) -> None:
     import numpy as np
 
-    from tui_gym.core.experiments.csv_export import write_text_atomic
+    from tui_gym.core.files import write_atomically
 
     if not outcomes:
         return
@@ -338,7 +338,7 @@ def _write_csv(path: str, outcomes: Sequence[AlgorithmOutcome]) -> None:
         cells = [str(episode)] + ["" if np.isnan(c[i]) else repr(float(c[i])) for c in columns]
         lines.append(",".join(cells))
     try:
-        write_text_atomic(Path(path).expanduser(), "\n".join(lines) + "\n")
+        write_atomically(path, "\n".join(lines) + "\n")
     except OSError as exc:
         raise CliError(f"--csv {path}: cannot write ({exc.strerror or exc})") from None
 

@@ -29,7 +29,7 @@ from tui_gym.algorithms import ALGORITHMS, DEFAULT_ALGORITHM
 from tui_gym.cli.flags import add_game_flags, add_hyperparameter_flags
 from tui_gym.cli.maps_command import add_maps_parser
 from tui_gym.cli.output import JSON_SCHEMAS, CliError, OutConsole, readable
-from tui_gym.cli.types import file_name, finite_number, positive_int, seed_number
+from tui_gym.cli.types import finite_number, output_file, positive_int, seed_number
 
 ENV_HELP = "a game (`tui-gym envs` lists them), a Gymnasium id, or MODULE:ID"
 WRAPPER_HELP = "add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable, in order)"
@@ -98,7 +98,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--load", metavar="PATH", help="open a saved agent")
     parser.add_argument("--map-file", metavar="PATH", dest="app_map_file",
                         help="open a grid game (--env) on the map in this file")
-    parser.add_argument("--record", type=file_name, metavar="PATH",
+    parser.add_argument("--record", type=output_file, metavar="PATH",
                         help="record your games in the app to this file (ctrl+r: on/off)")
     parser.add_argument(
         "--runner", choices=("process", "thread"), default="process",
@@ -146,7 +146,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="greedy episodes to sample after the exact evaluation (default 10,000; "
         "a long-looping policy stops at the evaluation's step budget)",
     )
-    train.add_argument("--save", type=file_name, metavar="PATH",
+    train.add_argument("--save", type=output_file, metavar="PATH",
                        help="save the trained agent here (the folder is checked first)")
     train.add_argument("--json", action="store_true", help="print one JSON object, no bar")
     add_train_options(train)
@@ -246,6 +246,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         out = OutConsole()
         if args.command is None:
             return _run_app(args)
+        if ":" in args.env:
+            from tui_gym.games import resolve_env_id
+
+            # The user's own `--env module:Id` imports its module on purpose, so a file that
+            # names the same env (which alone never imports code) opens with it.
+            resolve_env_id(args.env)
         from tui_gym.cli.commands import COMMANDS
         from tui_gym.cli.experiments_command import EXPERIMENT_COMMANDS
         from tui_gym.cli.replay_command import REPLAY_COMMANDS
@@ -301,10 +307,6 @@ def _run_app(args: argparse.Namespace) -> int:
         from tui_gym.ui.app import run_app
     except ImportError as exc:  # pragma: no cover - only without the UI installed
         raise CliError(f"the app is not available ({exc}); try `tui-gym --help`") from None
-    if args.record is not None:
-        from tui_gym.cli.replay_command import check_record_path
-
-        check_record_path(args.record)
     return run_app(env_id=env_id, seed=args.seed, load=args.load, runner=args.runner,
                    record=args.record, db=args.db, keep_history=not args.no_history,
                    env_kwargs=env_kwargs)

@@ -24,7 +24,7 @@ from rich.table import Table
 
 from tui_gym.cli.output import CliError, key_value_table, print_json
 from tui_gym.cli.types import file_name as _path
-from tui_gym.cli.types import int_in
+from tui_gym.cli.types import int_in, output_file
 
 Command = Callable[[argparse.Namespace, Console], int]
 
@@ -69,7 +69,7 @@ def add_runs_parser(sub: Any) -> None:
                               "TensorBoard")
     export.add_argument("run_id", type=_run_id, metavar="ID", help=RUN_ID_HELP)
     where = export.add_mutually_exclusive_group(required=True)
-    where.add_argument("--csv", type=_path, metavar="PATH",
+    where.add_argument("--csv", type=output_file, metavar="PATH",
                        help="one row per episode, one column per curve")
     where.add_argument("--tensorboard", type=_path, metavar="DIR",
                        help="TensorBoard event files under DIR (needs tui-gym[tensorboard])")

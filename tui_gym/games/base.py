@@ -30,7 +30,7 @@ import numpy.typing as npt
 
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import NotAvailable
-from tui_gym.core.params import Param
+from tui_gym.core.params import Param, shown_value
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.games.words import (
     ScoreRow,
@@ -523,7 +523,7 @@ class Game:
         for key, value in kwargs.items():
             if key not in params:
                 known = ", ".join(params) or "no arguments"
-                raise ValueError(f"{self.title} takes {known}, not {key!r}")
+                raise ValueError(f"{self.title} takes {known}, not {shown_value(key)}")
             out[key] = params[key].parse(value)
         self.check_kwargs(out)
         return out

@@ -758,8 +758,14 @@ class TuiGymApp(App[int]):
         self.call_after_refresh(self._save_screenshot)  # once the palette is gone
 
     def _save_screenshot(self) -> None:
+        from tui_gym.core.files import OutputPathError, write_atomically
+
+        stamp = time.strftime("%Y-%m-%dT%H_%M_%S")
         try:
-            path = self.save_screenshot(path=str(Path.cwd()))
+            path = write_atomically(Path.cwd() / f"tui-gym {stamp}.svg", self.export_screenshot())
+        except OutputPathError as error:
+            self.notify(f"Screenshot not saved: {error}", title="Screenshot", severity="error")
+            return
         except OSError as exc:
             self.notify(f"Screenshot not saved: {exc.strerror or exc}", title="Screenshot",
                         severity="error")

@@ -25,6 +25,7 @@ from typing import Any
 
 from textual.binding import Binding
 
+from tui_gym.core.files import check_output_path, write_atomically
 from tui_gym.core.wrappers import parse_wrapper_spec
 from tui_gym.games import GAMES
 from tui_gym.games.maps.builtin import builtin_map
@@ -237,18 +238,17 @@ async def _shoot(scenario: Scenario, directory: Path) -> Path:
         await pilot.pause()
         app.title = f"tui-gym — {scenario.title}"
         await pilot.pause()
-        path = directory / scenario.filename
         svg = app.export_screenshot(title=scenario.title)
-    tmp = path.with_suffix(".svg.tmp")
-    tmp.write_text(svg, encoding="utf-8")
-    tmp.replace(path)
-    return path
+    return write_atomically(directory / scenario.filename, svg)
 
 
 def write_screenshots(directory: str | Path = "screenshots") -> list[Path]:
-    """Write every scenario's SVG into `directory` (created if needed)."""
+    """Write every scenario's SVG into `directory` (created if needed); every file's
+    path is checked before the first is drawn (`OutputPathError` saying why)."""
     folder = Path(directory)
     folder.mkdir(parents=True, exist_ok=True)
+    for scenario in SCENARIOS:
+        check_output_path(folder / scenario.filename)
 
     async def shoot_all() -> list[Path]:
         return [await _shoot(s, folder) for s in SCENARIOS]

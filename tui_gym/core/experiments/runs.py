@@ -13,11 +13,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tui_gym.core.experiments.csv_export import curves_csv, write_text_atomic
+from tui_gym.core.experiments.csv_export import curves_csv
 from tui_gym.core.experiments.errors import RunHistoryError, UnknownRunError
 from tui_gym.core.experiments.history import RunHistory
 from tui_gym.core.experiments.paths import resolve_db_path
 from tui_gym.core.experiments.records import RunKind, RunRecord, RunSummary
+from tui_gym.core.files import OutputPathError, check_output_path, write_atomically
 
 
 @dataclass(frozen=True)
@@ -91,11 +92,16 @@ def show_run(run_id: int, db: str | None = None) -> RunRecord:
 
 def export_run_csv(run_id: int, csv_path: str | Path, db: str | None = None) -> CsvExport:
     """Write a run's curves to `csv_path` (atomically), one row per episode."""
+    try:
+        target = check_output_path(csv_path)
+    except OutputPathError as error:
+        raise RunHistoryError(str(error)) from None
     record = show_run(run_id, db)
     text, rows = curves_csv(record.curves)
-    target = Path(csv_path).expanduser()
     try:
-        write_text_atomic(target, text)
+        write_atomically(target, text)
+    except OutputPathError as error:
+        raise RunHistoryError(str(error)) from None
     except OSError as exc:
         raise RunHistoryError(f"cannot write {target}: {exc.strerror or exc}") from None
     columns = ("episode", *(c.name for c in record.curves))

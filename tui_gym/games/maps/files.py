@@ -4,8 +4,8 @@
 pipe, a device or a folder is refused without reading it), decodes it as
 UTF-8 and parses it; every refusal is a `MapError` of one line that names the
 file (and the line, row and column at fault). `write_map_file(path, map)`
-writes through a temporary file and a rename, so an old file stays whole
-until the new one is.
+writes through `tui_gym.core.files.write_atomically`: a temporary file and a
+rename, so an old file stays whole until the new one is.
 """
 
 from __future__ import annotations
@@ -80,12 +80,11 @@ def read_map_file(path: str | Path) -> GridMap:
 
 def write_map_file(path: str | Path, grid_map: GridMap, comment: str = "") -> Path:
     """Write the map atomically; `MapError` when the path cannot take it."""
-    from tui_gym.session.storage import StorageError, atomic_write_bytes, check_save_path
+    from tui_gym.core.files import OutputPathError, write_atomically
 
     try:
-        target = check_save_path(path)
-        atomic_write_bytes(target, format_map(grid_map, comment).encode())
-    except StorageError as error:
+        target = write_atomically(path, format_map(grid_map, comment))
+    except OutputPathError as error:
         raise MapError(str(error)) from None
     except OSError as exc:
         raise MapError(f"{path}: cannot write ({exc.strerror or exc})") from None
