@@ -145,19 +145,36 @@ def test_migrations_upgrade_an_older_history_and_keep_its_runs(tmp_path: Path) -
     path = tmp_path / "runs.db"
     with RunHistory(path) as history:
         old_run = history.start_run(spec(7))
-    version_2 = (*MIGRATIONS, Migration(2, "runs get a note", _add_note))
-    with RunHistory(path, migrations=version_2) as history:
-        assert history.schema_version == 2
+    now = len(MIGRATIONS)
+    newer = (*MIGRATIONS, Migration(now + 1, "runs get a note", _add_note))
+    with RunHistory(path, migrations=newer) as history:
+        assert history.schema_version == now + 1
         assert [r.seeds for r in history.list_runs()] == [(7,)]
         assert history.start_run(spec(8)) > old_run  # the old code still writes what it knows
         notes = history._conn.execute("SELECT note FROM runs ORDER BY id").fetchall()
     assert notes == [("from version 1",), ("",)]
     conn = sqlite3.connect(path)
-    assert conn.execute("PRAGMA user_version").fetchone()[0] == 2
+    assert conn.execute("PRAGMA user_version").fetchone()[0] == now + 1
     conn.close()
-    # Opening it again at version 2 applies nothing twice; version-1 code now refuses it.
-    RunHistory(path, migrations=version_2).close()
-    refused(path, NewerRunHistoryError, "newer tui-gym", "version 2", "up to 1")
+    # Opening it again applies nothing twice; the code of the version before now refuses it.
+    RunHistory(path, migrations=newer).close()
+    refused(path, NewerRunHistoryError, "newer tui-gym", f"version {now + 1}", f"up to {now}")
+
+
+def test_a_version_1_history_is_brought_up_to_date_with_its_runs(tmp_path: Path) -> None:
+    path = tmp_path / "runs.db"
+    RunHistory(path, migrations=MIGRATIONS[:1]).close()
+    with sqlite3.connect(path) as conn:  # a run as version 1 wrote it
+        conn.execute("INSERT INTO platforms VALUES (1, '0.1.0', '1.0.0', '2.0.0', '3.11.0')")
+        conn.execute("INSERT INTO settings VALUES (1, 'blackjack', '{}', '[]', 'q', '{}')")
+        conn.execute("INSERT INTO runs (kind, settings_id, platform_id, seeds, status, started_at)"
+                     " VALUES ('train', 1, 1, '[3]', 'running', 1.0)")
+    conn.close()
+    with RunHistory(path) as history:
+        assert history.schema_version == len(MIGRATIONS)
+        [run] = history.list_runs()
+    # A run from before writers were marked cannot be told dead: it is taken at its word.
+    assert run.seeds == (3,) and run.status == "running"
 
 
 def test_a_failing_migration_changes_nothing(tmp_path: Path) -> None:
@@ -170,16 +187,17 @@ def test_a_failing_migration_changes_nothing(tmp_path: Path) -> None:
         raise sqlite3.OperationalError("no such table: missing")
 
     with pytest.raises(RunHistoryError, match="no such table"):
-        RunHistory(path, migrations=(*MIGRATIONS, Migration(2, "broken", broken)))
+        RunHistory(path, migrations=(*MIGRATIONS, Migration(len(MIGRATIONS) + 1, "broken", broken)))
     with RunHistory(path) as history:
-        assert history.schema_version == 1 and len(history.list_runs()) == 1
+        assert history.schema_version == len(MIGRATIONS) and len(history.list_runs()) == 1
         columns = [row[1] for row in history._conn.execute("PRAGMA table_info(runs)")]
     assert "half_done" not in columns
 
 
 def test_migrations_must_be_numbered_in_order(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="out of order"):
-        RunHistory(tmp_path / "runs.db", migrations=(*MIGRATIONS, Migration(3, "gap", _add_note)))
+        RunHistory(tmp_path / "runs.db",
+                   migrations=(*MIGRATIONS, Migration(len(MIGRATIONS) + 2, "gap", _add_note)))
     assert not (tmp_path / "runs.db").exists()
 
 
