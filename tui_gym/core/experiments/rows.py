@@ -134,7 +134,8 @@ def _json(text: object, what: str) -> Any:
         raise BadRow(f"its {what} are nested too deeply") from None
     except ValueError as exc:  # JSONDecodeError, a number too long for Python
         raise BadRow(f"its {what} are not JSON ({visible(exc, 60)})") from None
-    if _depth(value) > MAX_DEPTH:
+    # More brackets than the bound is the only way to nest past it: count them first.
+    if text.count("[") + text.count("{") > MAX_DEPTH and _depth(value) > MAX_DEPTH:
         raise BadRow(f"its {what} are nested too deeply")
     return value
 
