@@ -12,15 +12,20 @@ import subprocess
 import sys
 from pathlib import Path
 
+from tui_gym.algorithms import QLearning
+from tui_gym.session.session import Session
+
 from .test_app_lifecycle import Terminal, console_script
 
-COMMANDS = (
-    ["train", "blackjack", "--episodes", "3000", "--eval-episodes", "100", "--seed", "11"],
-    ["compare", "blackjack", "--algorithms", "q-learning,sarsa", "--seeds", "2",
-     "--episodes", "400", "--processes", "0"],
-    ["train", "gridworld", "--episodes", "300", "--eval-episodes", "50", "--seed", "12"],
-    ["sweep", "blackjack", "--algorithm", "q-learning", "--grid", "learning_rate=0.05,0.1",
-     "--seeds", "2", "--episodes", "400", "--processes", "0"],
+# Two waves, one after the other: between them no command has the file open, so a
+# process that had lost its locks on the file would see its write-ahead log go.
+WAVES = (
+    (["train", "blackjack", "--episodes", "3000", "--eval-episodes", "100", "--seed", "11"],
+     ["compare", "blackjack", "--algorithms", "q-learning,sarsa", "--seeds", "2",
+      "--episodes", "400", "--processes", "0"]),
+    (["train", "gridworld", "--episodes", "300", "--eval-episodes", "50", "--seed", "12"],
+     ["sweep", "blackjack", "--algorithm", "q-learning", "--grid", "learning_rate=0.05,0.1",
+      "--seeds", "2", "--episodes", "400", "--processes", "0"]),
 )
 EXPECTED = {"train": 2, "compare": 2, "sweep": 2}  # runs each kind of command records
 
@@ -31,7 +36,9 @@ def record_beside_the_app(scratch: Path) -> None:
     env = {"TUI_GYM_DB": str(db), "XDG_DATA_HOME": str(scratch / "data"),
            "XDG_STATE_HOME": str(scratch / "state"), "TUI_GYM_LOG_DIR": str(scratch / "logs")}
     script = console_script()
-    term = Terminal([script, "--seed", "1"], env)
+    agent = scratch / "long.tgym"  # a budget that lasts: the app records as long as it runs
+    Session("blackjack", seed=1, hp=QLearning.hyperparameters(episodes=100_000_000)).save(agent)
+    term = Terminal([script, "--load", str(agent)], env)
     commands: list[subprocess.Popen[str]] = []
     try:
         term.wait_for_text("tui-gym")
@@ -41,21 +48,22 @@ def record_beside_the_app(scratch: Path) -> None:
         term.wait_for_text("running")
         term.type("v")
         term.wait_for_text("Runs of this game")
-        commands = [
-            subprocess.Popen([script, *argv, "--json"], stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, text=True, env={**os.environ, **env})
-            for argv in COMMANDS
-        ]
-        # The view reads the history again and again while the commands write to it.
-        while any(c.poll() is None for c in commands):
-            seen = len(term.output)
-            term.type("r")
-            term.wait_for(lambda seen=seen: len(term.output) > seen
-                          or all(c.poll() is not None for c in commands), "a redraw")
-        for argv, command in zip(COMMANDS, commands, strict=True):
-            out, err = command.communicate()
-            assert command.returncode == 0, (argv, err)
-            assert "not recorded" not in err and "Traceback" not in err, (argv, err)
+        for wave in WAVES:
+            commands = [
+                subprocess.Popen([script, *argv, "--json"], stdout=subprocess.PIPE,
+                                 stderr=subprocess.PIPE, text=True, env={**os.environ, **env})
+                for argv in wave
+            ]
+            # The view reads the history again and again while the commands write to it.
+            while any(c.poll() is None for c in commands):
+                seen = len(term.output)
+                term.type("r")
+                term.wait_for(lambda seen=seen: len(term.output) > seen
+                              or all(c.poll() is not None for c in commands), "a redraw")
+            for argv, command in zip(wave, commands, strict=True):
+                out, err = command.communicate()
+                assert command.returncode == 0, (argv, err)
+                assert "not recorded" not in err and "Traceback" not in err, (argv, err)
         term.type("q")
         assert term.exit_code() == 0, term.text[-2000:]
     finally:
