@@ -272,8 +272,8 @@ def _cmd_recover(args: argparse.Namespace, out: Console) -> int:
         _warn(f"no run could be read from {source} ({done.check}); it was left as it was")
         return 2
     verdict = "SQLite finds it sound" if done.check == "ok" else f"SQLite finds: {done.check}"
-    lost = f", {done.unreadable:,} could not be read" if done.unreadable else ""
-    dropped = (f", {done.curves_dropped:,} copied without their curves"
+    lost = f" ({done.unreadable:,} could not be read)" if done.unreadable else ""
+    dropped = (f"; {done.curves_dropped:,} of them without their curves, which could not be read"
                if done.curves_dropped else "")
     target = visible(done.target, 160)
     out.print(Text(f"copied {done.copied:,} runs from {source} into {target}{lost}{dropped}.\n"

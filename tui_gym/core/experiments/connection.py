@@ -41,7 +41,6 @@ from tui_gym.core.text import visible
 
 T = TypeVar("T")
 
-RECOVER_HINT = "`tui-gym runs --recover` copies what can still be read into a new file beside it"
 SIDE_FILES = ("-wal", "-shm", "-journal")
 _READ_ONLY = frozenset({"SQLITE_READONLY", "SQLITE_CANTOPEN", "SQLITE_PERM", "SQLITE_AUTH"})
 
@@ -66,8 +65,10 @@ def is_damage(exc: sqlite3.Error) -> bool:
 
 
 def damaged(path: Path, what: object) -> DamagedRunHistoryError:
+    """The error for a damaged file: what SQLite says, and how to save what it still holds."""
     return DamagedRunHistoryError(
-        f"{shown(path)} is damaged ({visible(what, 120)}): {RECOVER_HINT}"
+        f"{shown(path)} is damaged ({visible(what, 120)}): `tui-gym runs --recover --db "
+        f"{shown(path)}` copies what can still be read into a new file beside it"
     )
 
 

@@ -68,19 +68,20 @@ def _fresh_path(source: Path) -> Path:
 
 
 def _reader(source: Path) -> sqlite3.Connection:
-    """A connection that only reads `source` (as a file nothing changes, where SQLite
-    cannot read it otherwise: a read-only folder)."""
-    uri = source.resolve().as_uri()
-    problem: sqlite3.Error | None = None
-    for mode in ("ro", "ro&immutable=1"):
-        conn = sqlite3.connect(f"{uri}?mode={mode}", uri=True, isolation_level=None)
-        try:
-            conn.execute("SELECT COUNT(*) FROM sqlite_master").fetchone()
-            return conn
-        except sqlite3.Error as exc:
-            problem = exc
-            conn.close()
-    raise RunHistoryError(f"nothing can be read from {shown(source)} ({visible(problem, 80)})")
+    """A connection that only reads `source` and makes no file beside it (as a file that
+    does not change, unless a write-ahead log beside it holds its latest state), told to
+    read past a page count the file no longer has (a truncated file)."""
+    wal = os.path.lexists(f"{source}-wal")
+    uri = f"{source.resolve().as_uri()}?mode=ro{'' if wal else '&immutable=1'}"
+    conn = sqlite3.connect(uri, uri=True, isolation_level=None)
+    try:
+        conn.execute("PRAGMA writable_schema = 1")  # changes nothing: the file is read only
+        conn.execute("SELECT COUNT(*) FROM sqlite_master").fetchone()
+    except sqlite3.Error as exc:
+        conn.close()
+        raise RunHistoryError(f"nothing can be read from {shown(source)} ({visible(exc, 80)})"
+                              ) from None
+    return conn
 
 
 def _check(conn: sqlite3.Connection) -> str:
@@ -88,7 +89,8 @@ def _check(conn: sqlite3.Connection) -> str:
         found = [row[0] for row in conn.execute("PRAGMA quick_check(3)")]
     except sqlite3.Error as exc:
         return visible(exc, 120)
-    return "; ".join(visible(line, 80) for line in found)
+    lines = [part.strip() for text in found for part in str(text).splitlines() if part.strip()]
+    return visible("; ".join(lines), 200)
 
 
 def _scan(conn: sqlite3.Connection, order: str) -> tuple[list[int], bool]:
@@ -117,19 +119,66 @@ def _run_ids(conn: sqlite3.Connection) -> Iterator[int]:
     yield from sorted(found | set(range(1, last + 1)))
 
 
-def _one(conn: sqlite3.Connection, run_id: int) -> tuple[Any, Any] | None:
+def _run_columns(conn: sqlite3.Connection) -> str:
+    """The runs table's fields as `_one` reads them; null for those an older schema lacks."""
     try:
-        row = conn.execute(
-            f"SELECT {rows.RECORD_COLUMNS} {rows.RECORD_FROM} WHERE r.id = ?", (run_id,)
-        ).fetchone()
+        have = {row[1] for row in conn.execute("PRAGMA table_info(runs)")}
     except sqlite3.Error:
+        have = set()
+
+    def field(name: str, read: str) -> str:
+        return read if name in have else "NULL"
+
+    return ", ".join((
+        "id", field("kind", rows.text_column("kind", rows.MAX_NAME)),
+        field("settings_id", "settings_id"), field("platform_id", "platform_id"),
+        field("seeds", rows.text_column("seeds", rows.MAX_JSON)),
+        field("status", rows.text_column("status", rows.MAX_NAME)),
+        field("started_at", rows.number_column("started_at")),
+        field("ended_at", rows.number_column("ended_at")),
+        field("group_id", rows.number_column("group_id")),
+        field("figures", rows.text_column("figures", rows.MAX_JSON)),
+        field("writer", rows.text_column("writer", rows.MAX_NAME)),
+        field("agent_path", rows.text_column("agent_path", rows.MAX_PATH)),
+    ))
+
+
+_SETTINGS = ", ".join(rows.text_column(c, rows.MAX_NAME if c in ("game", "algorithm")
+                                       else rows.MAX_JSON)
+                      for c in ("game", "algorithm", "game_params", "wrappers", "hyperparameters"))
+_PLATFORM = ", ".join(rows.text_column(c, rows.MAX_NAME)
+                      for c in ("tui_gym", "gymnasium", "numpy", "python"))
+
+
+def _fetch(conn: sqlite3.Connection, sql: str, key: object) -> tuple[Any, ...] | None:
+    """One row, None when there is none; sqlite3.Error where the file is damaged."""
+    row = conn.execute(sql, (key,)).fetchone()
+    return None if row is None else tuple(row)
+
+
+def _one(conn: sqlite3.Connection, columns: str, run_id: int
+         ) -> tuple[tuple[Any, ...], Any] | None:
+    """A run's row, as `rows.record` reads it, and its curves; each table read on its own
+    so that a damaged one loses only what it holds (a platform: the versions)."""
+    run = _fetch(conn, f"SELECT {columns} FROM runs WHERE id = ?", run_id)
+    if run is None:
         return None
+    (run_id, kind, settings_id, platform_id, seeds, status, started, ended, group, figures,
+     writer, agent_path) = run
+    settings = _fetch(conn, f"SELECT {_SETTINGS} FROM settings WHERE id = ?", settings_id)
+    if settings is None:
+        raise rows.BadRow("its settings are gone")
+    game, algorithm, game_params, wrappers, hyperparameters = settings
     try:
-        blob = conn.execute(
-            f"SELECT {rows.CURVES_COLUMNS} FROM curves WHERE run_id = ?", (run_id,)
-        ).fetchone()
+        versions = _fetch(conn, f"SELECT {_PLATFORM} FROM platforms WHERE id = ?", platform_id)
+    except sqlite3.Error:
+        versions = None
+    try:
+        blob = _fetch(conn, f"SELECT {rows.CURVES_COLUMNS} FROM curves WHERE run_id = ?", run_id)
     except sqlite3.Error:
         blob = ("damaged", 0, None)
+    row = (run_id, kind, game, algorithm, seeds, status, started, ended, group, figures, writer,
+           game_params, wrappers, hyperparameters, *(versions or ("",) * 4), agent_path)
     return row, blob
 
 
@@ -146,21 +195,19 @@ def recover(source: str | Path) -> Recovery:
         try:
             with RunHistory(target) as history:
                 writers = WriterCheck()
+                columns = _run_columns(conn)
                 for run_id in _run_ids(conn):
-                    found = _one(conn, run_id)
-                    if found is None:
-                        unreadable += 1
-                        continue
-                    row, blob = found
-                    if row is None:
-                        continue  # no run with that id
                     try:
-                        curves = () if blob is None else rows.curves(*blob)
-                    except rows.BadRow:
-                        curves, dropped = (), dropped + 1
-                    try:
+                        found = _one(conn, columns, run_id)
+                        if found is None:
+                            continue  # no run with that id
+                        row, blob = found
+                        try:
+                            curves = () if blob is None else rows.curves(*blob)
+                        except rows.BadRow:
+                            curves, dropped = (), dropped + 1
                         record = rows.record(row, curves, writers)
-                    except rows.BadRow:
+                    except (sqlite3.Error, rows.BadRow):
                         unreadable += 1
                         continue
                     alive = record.summary.status is RunStatus.RUNNING

@@ -44,14 +44,18 @@ class BadRow(ValueError):
     """A field of a row that does not read as what tui-gym writes there."""
 
 
-def _text(expr: str, cap: int) -> str:
-    # Cut inside SQLite, one character past the bound so that an oversized text is seen.
+def text_column(expr: str, cap: int) -> str:
+    """`expr` cut inside SQLite, one character past `cap` so that an oversized text shows."""
     return f"substr({expr}, 1, {cap + 1})"
 
 
-def _number(expr: str) -> str:
+def number_column(expr: str) -> str:
+    """`expr` as it is when a number (or null), else cut as a short text."""
     return f"CASE WHEN typeof({expr}) IN ('integer', 'real', 'null') THEN {expr} " \
            f"ELSE substr({expr}, 1, 41) END"
+
+
+_text, _number = text_column, number_column
 
 
 SUMMARY_COLUMNS = ", ".join((
