@@ -3,7 +3,10 @@ the schema upgrades through its migrations and refuses a newer one."""
 
 from __future__ import annotations
 
+import os
 import sqlite3
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +14,7 @@ import pytest
 
 from tui_gym.core.experiments import (
     Curve,
+    DamagedRunHistoryError,
     NewerRunHistoryError,
     NotARunHistoryError,
     RunHistory,
@@ -18,6 +22,7 @@ from tui_gym.core.experiments import (
     RunKind,
     RunSpec,
     list_runs,
+    show_run,
 )
 from tui_gym.core.experiments.schema import APPLICATION_ID, MIGRATIONS, Migration
 
@@ -209,3 +214,103 @@ def test_a_folder_that_cannot_be_made_is_one_line(tmp_path: Path) -> None:
     message = str(caught.value)
     assert "\n" not in message and "cannot create its folder" in message
     assert blocker.read_text() == "a file where the folder should be"
+
+
+RECORD_ONE = (
+    "import sys\n"
+    "from tui_gym.core.experiments import RunHistory, RunSpec\n"
+    "with RunHistory(sys.argv[1]) as history:\n"
+    "    history.start_run(RunSpec('train', 'blackjack', 'q_learning', seeds=(int(sys.argv[2]),)))\n"
+)
+
+
+def test_looking_at_the_file_again_keeps_what_this_process_writes(tmp_path: Path) -> None:
+    """Another look at the file from this process (the Compare view reading while the app
+    records) must not cost the process its locks: else the next process to close the file
+    takes itself for the last and removes the write-ahead log this process writes to, and
+    what later processes record is lost when this one folds its log in."""
+    path = tmp_path / "runs.db"
+    with RunHistory(path) as history:
+        history.start_run(spec(0))  # closed: the runs are in the file itself now
+    with RunHistory(path) as history:
+        history.start_run(spec(1))
+        RunHistory(path).close()
+        for seeds in ((100, 2), (200, 3)):  # another process records and closes, then this one
+            subprocess.run([sys.executable, "-c", RECORD_ONE, str(path), str(seeds[0])],
+                           check=True, timeout=60)
+            history.start_run(spec(seeds[1]))
+    read = ("import sys, sqlite3; conn = sqlite3.connect(sys.argv[1]); "
+            "print(*sorted(r[0] for r in conn.execute('SELECT seeds FROM runs')), "
+            "conn.execute('PRAGMA integrity_check').fetchone()[0])")
+    found = subprocess.run([sys.executable, "-c", read, str(path)], capture_output=True,
+                           text=True, check=True, timeout=60).stdout.split()
+    assert found == ["[0]", "[100]", "[1]", "[200]", "[2]", "[3]", "ok"]
+
+
+def test_a_device_is_refused_and_nothing_is_made_beside_it(tmp_path: Path) -> None:
+    before = set(Path("/dev").iterdir())
+    for make in (RunHistory, lambda p: list_runs(str(p))):
+        with pytest.raises(NotARunHistoryError) as caught:
+            make(Path("/dev/null"))
+        message = str(caught.value)
+        assert "\n" not in message and "/dev/null is not a regular file" in message
+    assert set(Path("/dev").iterdir()) == before  # no /dev/null-journal, -wal or -shm
+
+
+def test_a_path_that_cannot_be_examined_is_one_line(tmp_path: Path) -> None:
+    long_name = tmp_path / ("x" * 300) / "runs.db"
+    for make in (RunHistory, lambda p: list_runs(str(p))):
+        with pytest.raises(RunHistoryError) as caught:
+            make(long_name)
+        message = str(caught.value)
+        assert "\n" not in message and "cannot be examined (File name too long)" in message
+        assert len(message) < 300  # the name is cut to a readable length
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="permissions do not stop root")
+def test_a_folder_without_permissions_is_one_line(tmp_path: Path) -> None:
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0)
+    try:
+        with pytest.raises(RunHistoryError, match="cannot be examined .Permission denied"):
+            RunHistory(locked / "runs.db")
+    finally:
+        locked.chmod(0o700)
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="permissions do not stop root")
+def test_a_history_in_a_read_only_folder_can_be_listed_and_shown(tmp_path: Path) -> None:
+    folder = tmp_path / "shared"
+    path = folder / "runs.db"
+    with RunHistory(path) as history:
+        run_id = history.start_run(spec(4))
+        history.put_curves(run_id, [Curve.per_episode("return", np.zeros(10))])
+    folder.chmod(0o555)
+    try:
+        assert [r.id for r in list_runs(str(path)).runs] == [run_id]
+        assert show_run(run_id, str(path)).curve("return") is not None
+        assert sorted(p.name for p in folder.iterdir()) == ["runs.db"]
+        with pytest.raises(RunHistoryError, match="cannot be written"):
+            RunHistory(path)
+    finally:
+        folder.chmod(0o755)
+
+
+def test_refusing_a_truncated_history_leaves_nothing_beside_it(tmp_path: Path) -> None:
+    path = tmp_path / "runs.db"
+    with RunHistory(path) as history:
+        for seed in range(60):
+            run_id = history.start_run(spec(seed))
+            history.put_curves(run_id, [Curve.per_episode("return", np.zeros(300))])
+    data = path.read_bytes()
+    for cut in (4096, 3 * 4096, len(data) // 2):
+        path.write_bytes(data[:cut])
+        for make in (RunHistory, lambda p: list_runs(str(p))):
+            with pytest.raises(DamagedRunHistoryError) as caught:
+                make(path)
+            message = str(caught.value)
+            assert "\n" not in message and "is damaged" in message
+            assert f"tui-gym runs --recover --db {path}" in message
+            assert [p.name for p in tmp_path.iterdir()] == ["runs.db"], cut
+            assert path.read_bytes() == data[:cut]
