@@ -55,11 +55,13 @@ def record_beside_the_app(scratch: Path) -> None:
                 for argv in wave
             ]
             # The view reads the history again and again while the commands write to it.
-            while any(c.poll() is None for c in commands):
+            def all_done(commands: list[subprocess.Popen[str]] = commands) -> bool:
+                return all(c.poll() is not None for c in commands)
+
+            while not all_done():
                 seen = len(term.output)
                 term.type("r")
-                term.wait_for(lambda seen=seen: len(term.output) > seen
-                              or all(c.poll() is not None for c in commands), "a redraw")
+                term.wait_for(lambda seen=seen: len(term.output) > seen or all_done(), "a redraw")
             for argv, command in zip(wave, commands, strict=True):
                 out, err = command.communicate()
                 assert command.returncode == 0, (argv, err)

@@ -220,7 +220,8 @@ RECORD_ONE = (
     "import sys\n"
     "from tui_gym.core.experiments import RunHistory, RunSpec\n"
     "with RunHistory(sys.argv[1]) as history:\n"
-    "    history.start_run(RunSpec('train', 'blackjack', 'q_learning', seeds=(int(sys.argv[2]),)))\n"
+    "    seeds = (int(sys.argv[2]),)\n"
+    "    history.start_run(RunSpec('train', 'blackjack', 'q_learning', seeds=seeds))\n"
 )
 
 
