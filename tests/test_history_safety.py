@@ -3,6 +3,7 @@ the schema upgrades through its migrations and refuses a newer one."""
 
 from __future__ import annotations
 
+import json
 import os
 import sqlite3
 import subprocess
@@ -22,7 +23,6 @@ from tui_gym.core.experiments import (
     RunKind,
     RunSpec,
     list_runs,
-    show_run,
 )
 from tui_gym.core.experiments.schema import APPLICATION_ID, MIGRATIONS, Migration
 
@@ -280,22 +280,50 @@ def test_a_folder_without_permissions_is_one_line(tmp_path: Path) -> None:
         locked.chmod(0o700)
 
 
-@pytest.mark.skipif(os.geteuid() == 0, reason="permissions do not stop root")
+READ_ONLY_CHECK = """
+import json, sys
+from tui_gym.core.experiments import RunHistory, RunHistoryError, list_runs, show_run
+path = sys.argv[1]
+try:
+    RunHistory(path)
+    written = "opened for writing"
+except RunHistoryError as exc:
+    written = str(exc)
+print(json.dumps({"runs": [r.id for r in list_runs(path).runs],
+                  "curve": show_run(1, path).curve("return") is not None, "write": written}))
+"""
+
+
+def in_read_only_folder(folder: Path, code: str, *args: str) -> str:
+    """What Python `code` prints with `folder` read-only: by its mode, or for root (whom
+    modes do not stop) in a read-only bind mount of its own."""
+    if os.geteuid() != 0:
+        folder.chmod(0o555)
+        try:
+            return subprocess.run([sys.executable, "-c", code, *args], capture_output=True,
+                                  text=True, check=True, timeout=60).stdout
+        finally:
+            folder.chmod(0o755)
+    mount = (f"mount --bind '{folder}' '{folder}' && mount -o remount,bind,ro '{folder}' && "
+             f"exec '{sys.executable}' -c \"$0\" \"$@\"")
+    done = subprocess.run(["unshare", "-m", "sh", "-c", mount, code, *args],
+                          capture_output=True, text=True, timeout=60)
+    if done.returncode != 0 and ("mount" in done.stderr or "unshare" in done.stderr):
+        pytest.skip(f"root, and no read-only mount here: {done.stderr.strip()}")
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
 def test_a_history_in_a_read_only_folder_can_be_listed_and_shown(tmp_path: Path) -> None:
     folder = tmp_path / "shared"
     path = folder / "runs.db"
     with RunHistory(path) as history:
         run_id = history.start_run(spec(4))
         history.put_curves(run_id, [Curve.per_episode("return", np.zeros(10))])
-    folder.chmod(0o555)
-    try:
-        assert [r.id for r in list_runs(str(path)).runs] == [run_id]
-        assert show_run(run_id, str(path)).curve("return") is not None
-        assert sorted(p.name for p in folder.iterdir()) == ["runs.db"]
-        with pytest.raises(RunHistoryError, match="cannot be written"):
-            RunHistory(path)
-    finally:
-        folder.chmod(0o755)
+    found = json.loads(in_read_only_folder(folder, READ_ONLY_CHECK, str(path)))
+    assert found["runs"] == [run_id] and found["curve"]
+    assert "cannot be written" in found["write"] and "\n" not in found["write"]
+    assert sorted(p.name for p in folder.iterdir()) == ["runs.db"]
 
 
 def test_refusing_a_truncated_history_leaves_nothing_beside_it(tmp_path: Path) -> None:
