@@ -158,6 +158,8 @@ def _duration(seconds: float | None) -> str:
 def _figure_text(figure: Any, interval: bool = True) -> str:
     if figure is None or figure.value != figure.value:
         return ""
+    if figure.unit == "episodes" and figure.value.is_integer():
+        return f"{int(figure.value):,}"  # a count
     text = f"{figure.value:+.4f}"
     if interval and figure.ci95 is not None:
         text += f" ± {figure.ci95:.4f}"
@@ -171,8 +173,9 @@ def _seeds_text(seeds: tuple[int, ...]) -> str:
 
 
 def _screenful(out: Console) -> int:
-    # The title, the header and its rule, the caption and a line under it take the rest.
-    return max(5, out.size.height - 8)
+    # The title and a blank line, the header and its rule, the line saying there are more,
+    # a blank line and the caption's two, and the shell's prompt after it.
+    return max(5, out.size.height - 9)
 
 
 # The columns, and those that go first to last when the terminal is narrow.
