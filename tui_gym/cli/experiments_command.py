@@ -132,8 +132,7 @@ def _history(args: argparse.Namespace) -> Iterator[BestEffortHistory | None]:
 
     path = resolve_db_path(args.db)
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        history = BestEffortHistory(path)
+        history = BestEffortHistory(path)  # makes the folder, or says why it cannot
     except (RunHistoryError, OSError) as exc:
         text = str(exc) if isinstance(exc, RunHistoryError) else f"{path}: {exc}"
         sys.stderr.write(f"tui-gym: not recording these runs: {text}\n")
