@@ -84,24 +84,28 @@ def test_training_again_after_a_switch_back_is_a_new_run_of_the_new_episodes(
         assert episodes[0] > 4096 and episodes[-1] == 8192
 
 
+def first_notice(log: SessionRunLog, session: Session) -> str:
+    """Train a little and follow it until the log has a line to show."""
+    log.observe(session, session.trainer.latest)
+    session.trainer.run(episodes=500)
+    deadline = time.monotonic() + DEADLINE
+    while time.monotonic() < deadline:
+        notice = log.observe(session, session.trainer.latest)
+        if notice:
+            return notice
+        assert log._writer is not None
+        log._writer.join(0.05)  # the writer thread opens the file
+    raise AssertionError("no notice")
+
+
 def test_a_history_that_cannot_be_opened_is_one_notice(tmp_path: Path) -> None:
     db = tmp_path / "runs.db"
     db.write_text("not a database\n" * 100)
     before = db.read_bytes()
     log = SessionRunLog(db, clock=Clock())
     session = blackjack()
-    log.observe(session, session.trainer.latest)
-    session.trainer.run(episodes=500)
-    notices = []
-    deadline = time.monotonic() + DEADLINE
-    while not notices and time.monotonic() < deadline:
-        notice = log.observe(session, session.trainer.latest)
-        if notice:
-            notices.append(notice)
-        else:
-            assert log._writer is not None
-            log._writer.join(0.05)  # the writer thread opens the file
-    assert notices and "not a tui-gym run history" in notices[0]
+    notice = first_notice(log, session)
+    assert "not a tui-gym run history" in notice
     session.trainer.run(episodes=500)
     assert log.observe(session, session.trainer.latest) is None  # said once
     log.close()
@@ -162,18 +166,9 @@ def test_a_run_records_the_settings_it_trained_with_its_episodes_and_its_save(
 def test_a_history_path_that_cannot_be_examined_is_one_notice(tmp_path: Path) -> None:
     log = SessionRunLog(tmp_path / ("x" * 300) / "runs.db", clock=Clock())
     session = blackjack()
-    log.observe(session, session.trainer.latest)
-    session.trainer.run(episodes=500)
-    notices = []
-    deadline = time.monotonic() + DEADLINE
-    while not notices and time.monotonic() < deadline:
-        notice = log.observe(session, session.trainer.latest)
-        if notice:
-            notices.append(notice)
-        elif log._writer is not None:
-            log._writer.join(0.05)
-    assert notices and "cannot be examined (File name too long)" in notices[0]
-    assert "\n" not in notices[0] and len(notices[0]) < 300
+    notice = first_notice(log, session)
+    assert "cannot be examined (File name too long)" in notice
+    assert "\n" not in notice and len(notice) < 300
     assert log._writer is not None and log._writer.is_alive()  # it waits for work: no crash
     session.trainer.run(episodes=500)
     assert log.observe(session, session.trainer.latest) is None
