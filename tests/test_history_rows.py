@@ -201,3 +201,14 @@ def test_text_from_the_history_reaches_the_terminal_as_data(
         assert "\x1b" not in out + err and "\u202e" not in out + err and "\x07" not in out
         if name == "rich markup":
             assert "[/bold]" in out  # shown as it is, not read as markup
+
+
+def test_adding_curves_to_a_run_whose_curves_do_not_read_names_it(tmp_path: Path) -> None:
+    db = tmp_path / "runs.db"
+    record_three(db)
+    edit(db, *IN_THE_RECORD["a curve blob as text"])
+    with RunHistory(db) as history:
+        with pytest.raises(DamagedRunError, match="^run 2 in .*its curves do not decode"):
+            history.put_curves(2, [Curve("more", [1], [0.5])])
+        history.put_curves(3, [Curve("more", [1], [0.5])])  # the others take theirs
+        assert history.get_run(3).curve("more") is not None

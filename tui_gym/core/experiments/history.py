@@ -158,6 +158,15 @@ class RunHistory:
         if conn.execute("SELECT 1 FROM runs WHERE id = ?", (run_id,)).fetchone() is None:
             raise UnknownRunError(f"no run {run_id} in {shown(self.path)}")
 
+    def _stored_curves(self, run_id: int, blob: object) -> dict[str, bytes]:
+        """A run's stored curves by name, to add to; DamagedRunError if they do not read."""
+        try:
+            if not isinstance(blob, bytes):
+                raise CurveFormatError("not a blob")
+            return unpack_curves(blob)
+        except CurveFormatError as exc:
+            raise self._damaged_run(run_id, f"its curves do not decode ({exc})") from None
+
     def _damaged_run(self, run_id: int, reason: str) -> DamagedRunError:
         return DamagedRunError(
             run_id,
@@ -219,7 +228,7 @@ class RunHistory:
             self._require_run(conn, run_id)
             if blobs:
                 row = conn.execute("SELECT data FROM curves WHERE run_id = ?", (run_id,)).fetchone()
-                stored = {} if row is None else unpack_curves(row[0])
+                stored = {} if row is None else self._stored_curves(run_id, row[0])
                 stored.update(blobs)
                 conn.execute(
                     "INSERT OR REPLACE INTO curves (run_id, data) VALUES (?, ?)",
