@@ -194,6 +194,8 @@ def open_shared(path: Path, migrations: Sequence[Migration], timeout: float, *,
     with _shared_lock:
         shared = _shared.get(key)
         if shared is not None and (shared.writable or read_only):
+            if shared.version > len(migrations):  # opened by code that knows more versions
+                check_identity(path, len(migrations), APPLICATION_ID, shared.version, [])
             if shared.version < len(migrations) and shared.writable:
                 _upgrade(path, shared, migrations, timeout)
         else:
