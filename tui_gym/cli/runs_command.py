@@ -22,6 +22,7 @@ from collections.abc import Callable
 from datetime import datetime
 from typing import Any
 
+from rich.cells import cell_len
 from rich.console import Console
 from rich.markup import escape
 from rich.text import Text
@@ -192,7 +193,8 @@ def _runs_table(title: str, rows: list[dict[str, str]], width: int) -> tuple[Tex
     """The runs in aligned columns, those that fit `width` (the least needed go first),
     as the heading and the lines of the runs; a cell is never cut. The lines are plain
     text, so that thousands of runs print at once."""
-    widths = {name: max([len(name), *(len(row[name]) for row in rows)]) for name, _ in _COLUMNS}
+    widths = {name: max([len(name), *(cell_len(row[name]) for row in rows)])
+              for name, _ in _COLUMNS}
     shown = [name for name, _ in _COLUMNS]
     for name in _DROPPED_FIRST:
         if sum(widths[n] for n in shown) + _GAP * (len(shown) - 1) <= width:
@@ -201,7 +203,8 @@ def _runs_table(title: str, rows: list[dict[str, str]], width: int) -> tuple[Tex
     justify = dict(_COLUMNS)
 
     def line(cells: dict[str, str]) -> str:
-        parts = [cells[n].rjust(widths[n]) if justify[n] == "right" else cells[n].ljust(widths[n])
+        pads = {n: " " * (widths[n] - cell_len(cells[n])) for n in shown}  # wide characters
+        parts = [pads[n] + cells[n] if justify[n] == "right" else cells[n] + pads[n]
                  for n in shown]
         return (" " * _GAP).join(parts).rstrip()
 
