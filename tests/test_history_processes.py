@@ -9,7 +9,6 @@ import json
 import os
 import sqlite3
 import subprocess
-import sys
 from pathlib import Path
 
 from tui_gym.algorithms import QLearning
@@ -98,7 +97,3 @@ def record_beside_the_app(scratch: Path) -> None:
 
 def test_the_app_and_three_kinds_of_command_record_into_one_history(tmp_path: Path) -> None:
     record_beside_the_app(tmp_path)
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit("run with pytest")
