@@ -33,7 +33,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
 
-from tui_gym.core.experiments import rows
+import tui_gym.core.experiments.rows as rows
 from tui_gym.core.experiments.connection import (
     busy_error,
     damaged,

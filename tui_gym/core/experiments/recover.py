@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tui_gym.core.experiments import rows
+import tui_gym.core.experiments.rows as rows
 from tui_gym.core.experiments.connection import examine, shown
 from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.history import RunHistory
