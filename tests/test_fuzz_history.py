@@ -36,8 +36,8 @@ from .test_fuzz_params import nasty_text, nasty_value
 from .test_history_rows import uvarint, zlib_bomb
 
 SEED = 21
-CASES = 150
-CLI_CASES = 30
+CASES = 120
+CLI_CASES = 20
 FIELDS = {
     "runs": ("kind", "settings_id", "platform_id", "seeds", "status", "started_at", "ended_at",
              "agent_path", "group_id", "figures", "writer"),
