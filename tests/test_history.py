@@ -249,7 +249,7 @@ def test_runs_commands_without_a_history_create_nothing(tmp_path: Path) -> None:
     db = tmp_path / "none" / "runs.db"
     listing = list_runs(str(db))
     assert listing.runs == () and listing.db == db
-    assert listing.to_json() == {"db": str(db), "runs": []}
+    assert listing.to_json() == {"db": str(db), "runs": [], "damaged": [], "total": 0}
     with pytest.raises(UnknownRunError, match="no run 3"):
         show_run(3, str(db))
     with pytest.raises(UnknownRunError):

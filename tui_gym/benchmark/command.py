@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import Any
 
 from rich import box
@@ -137,19 +138,24 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
             wrappers=wrappers, decision_timeout=args.decision_timeout,
             allow_hints=args.allow_hints, recorder=recorder,
         )
-    recorded = ""
+    recorded = unrecorded = ""
     if not args.no_record:
-        from tui_gym.core.experiments import resolve_db_path
+        from tui_gym.core.experiments import RunHistoryError, resolve_db_path
 
-        run_id = record(result, args.db)
-        object.__setattr__(result, "run_id", run_id)
-        recorded = f"recorded as run {run_id} in {resolve_db_path(args.db)}"
+        try:  # a history that fails (a full disk) must not lose the result: said after it
+            run_id = record(result, args.db)
+        except RunHistoryError as exc:
+            unrecorded = f"tui-gym: this result was not recorded in the run history: {exc}\n"
+        else:
+            object.__setattr__(result, "run_id", run_id)
+            recorded = f"recorded as run {run_id} in {resolve_db_path(args.db)}"
     if args.json:
         print_json("benchmark", result.to_json())
-        return 0
-    out.print(_summary(f"Benchmark: {result.game}", result.rows()))
-    if recorded:
-        out.print(escape(recorded))
+    else:
+        out.print(_summary(f"Benchmark: {result.game}", result.rows()))
+        if recorded:
+            out.print(escape(recorded))
+    sys.stderr.write(unrecorded)
     return 0
 
 

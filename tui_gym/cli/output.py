@@ -36,6 +36,7 @@ JSON_SCHEMAS: dict[str, int] = {
     "runs show": 1,
     "runs export": 1,
     "runs rm": 1,
+    "runs recover": 1,
     "compare": 1,
     "sweep": 1,
     "screenshots": 1,

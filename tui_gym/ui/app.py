@@ -703,6 +703,8 @@ class TuiGymApp(App[int]):
             if was_running:
                 self.runner.start()
         self._files[self.session.game.name] = path
+        if self.run_log is not None:
+            self.run_log.saved(self.session, path)  # the run in the history says where
         episodes = self.session.trainer.episodes
         self.notify(f"Agent saved to {path} ({episodes:,} episodes).", title="Saved")
         return None
