@@ -82,11 +82,11 @@ def car_rental_arrays(exercise: bool = False) -> TileArrays:
     cost = np.zeros((n, len(MOVES)))
     for s in range(n):
         for a, move in enumerate(MOVES):
-            _, m1, m2, cost[s, a] = night(divmod(s, SIDE), move, exercise)
-            mornings[s, a] = m1, m2
-    m1, m2 = mornings[..., 0], mornings[..., 1]
-    prob = first_site[0][m1][..., :, None] * second_site[0][m2][..., None, :]
-    rented = first_site[1][m1][..., :, None] + second_site[1][m2][..., None, :]
+            _, first, second, cost[s, a] = night(divmod(s, SIDE), move, exercise)
+            mornings[s, a] = first, second
+    at_first, at_second = mornings[..., 0], mornings[..., 1]
+    prob = first_site[0][at_first][..., :, None] * second_site[0][at_second][..., None, :]
+    rented = first_site[1][at_first][..., :, None] + second_site[1][at_second][..., None, :]
     reward = RENT * rented - cost[..., None, None]
     shape = (n, len(MOVES), n)
     next_state = np.broadcast_to(np.arange(n), shape).copy()
@@ -94,7 +94,7 @@ def car_rental_arrays(exercise: bool = False) -> TileArrays:
                       np.zeros(shape, dtype=bool), np.full(n, 1.0 / n))
 
 
-class CarRentalEnv(gym.Env[int, int]):
+class CarRentalEnv(gym.Env[Any, Any]):
     """Sutton & Barto's Example 4.2: Jack moves cars between his two sites overnight.
 
     ## Action Space

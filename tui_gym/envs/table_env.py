@@ -21,7 +21,7 @@ from tui_gym.envs.tile_map import TileArrays, _table
 __all__ = ["TableEnv"]
 
 
-class TableEnv(gym.Env[int, int]):
+class TableEnv(gym.Env[Any, Any]):
     """An env stepped by drawing from transition arrays (see the module docstring)."""
 
     metadata: dict[str, Any] = {"render_modes": ["ansi"], "render_fps": 4}
@@ -54,7 +54,7 @@ class TableEnv(gym.Env[int, int]):
             raise gym.error.ResetNeeded(f"{type(self).__name__}: call reset() before step()")
         if not self.action_space.contains(action):
             raise ValueError(f"{type(self).__name__}: action must be an integer in "
-                             f"[0, {int(self.action_space.n) - 1}], got {action!r}")
+                             f"[0, {self.arrays.prob.shape[1] - 1}], got {action!r}")
         arrays, s, a = self.arrays, self.s, int(action)
         weights = arrays.prob[s, a]
         index = int(np.searchsorted(np.cumsum(weights), self.np_random.random(), side="right"))

@@ -149,7 +149,7 @@ def improve(
     by an evaluation stopped at theta cannot flip a policy back and forth."""
     old = policy_matrix(model, policy)
     best = greedy(model, v, gamma, tolerance)
-    kept = ((old > 0) <= best).all(axis=1)
+    kept = np.asarray(((old > 0) <= best).all(axis=1), dtype=bool)
     shared = best / best.sum(axis=1, keepdims=True)
     new = np.where(kept[:, None], old, shared)
     return Improvement(new, ~kept)

@@ -55,11 +55,11 @@ class PolicyArrays:
             keep = np.argsort(weight <= 0, axis=1, kind="stable")[:, :width]
             weight = np.take_along_axis(weight, keep, axis=1)
             target = np.take_along_axis(target, keep, axis=1)
-        dense = None
+        dense: FloatArray | None = None
         if n_states <= DENSE_STATES:
             flat = (np.arange(n_states)[:, None] * n_states + target).reshape(-1)
-            dense = np.bincount(flat, weights=weight.reshape(-1), minlength=n_states**2)
-            dense = dense.reshape(n_states, n_states)
+            counts = np.bincount(flat, weights=weight.reshape(-1), minlength=n_states**2)
+            dense = np.asarray(counts, dtype=np.float64).reshape(n_states, n_states)
         return cls(reward, np.ascontiguousarray(weight), np.ascontiguousarray(target), dense)
 
     def sweep(self, v: FloatArray, gamma: float) -> FloatArray:

@@ -83,6 +83,7 @@ class GamblerStates(DiscreteStates):
             "bars": [["capital", capital, goal]],
             "lines": lines,
             "actions": list(self.game.action_names),
+            "labels": [f"${k}" for k in range(1, MAX_STAKE + 1)],
             "allowed": max(1, min(capital, goal - capital)),
             "unit": "$",
             "prompt": f"Stake on heads (chance {game_env.p_heads:g}); reach ${goal} to win.",
@@ -116,7 +117,7 @@ class GamblerLayout(HeatmapLayout):
                 continue
             legal = values[capital, : min(capital, goal - capital)]
             grid[r, c] = float(legal.max())
-            if (legal == legal[0]).all():
+            if len(legal) > 1 and (legal == legal[0]).all():
                 labels[r][c] = TIED
                 continue
             action = int(np.argmax(legal))
