@@ -21,10 +21,11 @@ from tui_gym.core.heatmap import Heatmap
 from tui_gym.games import Game
 from tui_gym.games.planning import PlanModel
 
-__all__ = ["plan_panels", "plan_table"]
+__all__ = ["number_text", "numbered", "plan_panels", "plan_table"]
 
 _NOT_OPTIMAL = re.compile(r"not (?:an )?optimal(?: move| stake)?")
 _TITLE = re.compile(r"max Q|Q-value")
+_ABOUT_ACTIONS = re.compile(r"arrow|number|greedy|tie|\*|jumps")
 _GREEDY = re.compile(r"\bthe greedy\b|\bgreedy\b")
 
 
@@ -36,19 +37,26 @@ def plan_table(plan: PlanModel, v: npt.ArrayLike, policy: npt.ArrayLike) -> np.n
         return np.where(taken, values, values - np.maximum(1.0, np.abs(values)))
 
 
-def number_text(value: float) -> str:
-    """A value in a cell: one decimal, two significant digits below one."""
-    return f"{value:.1f}" if abs(value) >= 0.95 else f"{value:.2g}"
+def number_text(value: float, largest: float) -> str:
+    """A value in a cell of a panel whose largest magnitude is `largest`: as the book
+    prints them, one decimal (none from 100; two while every value is below one)."""
+    if largest >= 99.95:
+        return f"{value:.0f}"
+    return f"{value:.1f}" if largest >= 0.995 else f"{value:.2f}"
 
 
-def _numbered(panel: Heatmap) -> Heatmap:
+def numbered(panel: Heatmap) -> Heatmap:
+    """The panel with each cell that has a value showing it (`number_text`)."""
+    finite = np.abs(panel.values[np.isfinite(panel.values)])
+    largest = float(finite.max()) if finite.size else 0.0
     labels = tuple(
-        tuple(number_text(float(value)) if np.isfinite(value) else label
+        tuple(number_text(float(value), largest) if np.isfinite(value) else label
               for value, label in zip(row, line, strict=True))
         for row, line in zip(panel.values, panel.labels, strict=True)
     )
+    kept = [part for part in panel.legend.split("  ") if not _ABOUT_ACTIONS.search(part)]
     return replace(panel, labels=labels, title="values",
-                   legend="number: the value  " + panel.legend.split("  ", 1)[-1])
+                   legend="  ".join(["number: the value", *kept]))
 
 
 def plan_panels(
@@ -67,7 +75,7 @@ def plan_panels(
     marks = np.broadcast_to(~moved[:, None], q.shape)
     panels = game.layout.heatmaps(q, kwargs, focus, marks)
     if numbers:
-        panels = [_numbered(panel) for panel in panels]
+        panels = [numbered(panel) for panel in panels]
     return [replace(panel, title=_GREEDY.sub("the policy's", _TITLE.sub("value", panel.title)),
                     legend=_GREEDY.sub("the policy's", _NOT_OPTIMAL.sub(
                         "changed by the last step", panel.legend)))
