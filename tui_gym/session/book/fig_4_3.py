@@ -31,6 +31,7 @@ def run(options: FigureOptions, progress: Progress) -> FigureResult:
             series.append(Series(f"sweep {planner.sweeps}", capital,
                                  planner.v[line.states].copy()))
         progress(min(planner.sweeps, 32), 32, f"sweep {planner.sweeps}")
+    progress(planner.sweeps, planner.sweeps, f"converged in {planner.sweeps} sweeps")
     v = planner.v
     series.append(Series(f"sweep {planner.sweeps} (final)", capital, v[line.states].copy()))
     best = greedy(plan.model, v, 1.0, TIES)
