@@ -40,6 +40,7 @@ from tui_gym.session.plan.start import START_POLICIES, start_policy
 from tui_gym.ui.map_editing import apply_edit, save_map, show_optimum
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.map_editor import MapEditor
+from tui_gym.ui.widgets.plan_status import PlanStatus
 from tui_gym.ui.widgets.value_lines import ValueLines
 
 if TYPE_CHECKING:
@@ -68,11 +69,6 @@ class PlanView(Vertical):
     PlanView #plan-knobs Label { padding: 0 1; color: $text-muted; }
     PlanView #plan-knobs Input { width: 12; height: 1; border: none; padding: 0 1; }
     PlanView #plan-knobs Input.-invalid { color: $text-error; }
-    PlanView #plan-settings { width: 1fr; text-wrap: nowrap; text-overflow: ellipsis; }
-    PlanView .plan-line { width: 1fr; padding: 0 1 0 0; }
-    PlanView #plan-status { text-style: bold; }
-    PlanView #plan-meaning { color: $text-muted; }
-    PlanView #plan-note { color: $text-warning; }
     PlanView #plan-body { height: 1fr; scrollbar-size-vertical: 1; }
     PlanView #plan-heatmap-box { height: auto; border: round $primary-background-lighten-2;
                                  border-title-color: $text-muted;
@@ -82,7 +78,6 @@ class PlanView(Vertical):
     PlanView #plan-values.-shown, PlanView #plan-lines.-shown { display: block; }
     PlanView #plan-editor { display: none; }
     PlanView.-mapping #plan-editor { display: block; }
-    Screen.compact PlanView #plan-meaning { display: none; }
     """
 
     BINDINGS: ClassVar[list[BindingType]] = [
@@ -127,6 +122,7 @@ class PlanView(Vertical):
         self._heatmap = HeatmapView(id="plan-heatmap")
         self._values = HeatmapView(id="plan-values")
         self._lines = ValueLines(id="plan-lines")
+        self._status = PlanStatus(id="plan-status")
         with Horizontal(id="plan-controls"):
             yield self._run
             yield Button("1 step", id="plan-step", compact=True, tooltip="One sweep (n)")
@@ -145,10 +141,7 @@ class PlanView(Vertical):
             yield Label("θ")
             yield Input("", id="plan-theta", compact=True,
                         tooltip="Stop when the largest change is below θ; ties within θ")
-            yield Label("", id="plan-settings")
-        yield Label("", id="plan-status", classes="plan-line")
-        yield Label("", id="plan-meaning", classes="plan-line")
-        yield Label("", id="plan-note", classes="plan-line")
+        yield self._status
         with VerticalScroll(id="plan-body"):
             yield MapEditor(id="plan-editor")
             with Vertical(id="plan-heatmap-box"):
@@ -254,20 +247,24 @@ class PlanView(Vertical):
         self._heatmap.show(plan_panels(session.game, session.env_kwargs, plan, snapshot.v,
                                        snapshot.policy, snapshot.changed, self.focus_target,
                                        self.numbers))
-        self._run.label = "⏸ Pause" if snapshot.running else "▶ Run"
-        self._speed.update(SPEEDS[snapshot.speed][0])
+        run = "⏸ Pause" if snapshot.running else "▶ Run"
+        if str(self._run.label) != run:
+            self._run.label = run
+        speed = SPEEDS[snapshot.speed][0]
+        if str(self._speed.content) != speed:
+            self._speed.update(speed)
         sweep = "in place" if snapshot.in_place else "synchronous"
-        self.query_one("#plan-settings", Label).update(
-            f"{METHOD_WORDS[snapshot.method]} (1 2 3) · start: {self.start} (o) · {sweep} (s)")
         state = "running" if snapshot.running else "done" if snapshot.done else "paused"
         delta = "–" if math.isinf(snapshot.delta) else f"{snapshot.delta:.3g}"
         improvements = (f" · {snapshot.iterations} improvement"
                         f"{'s' * (snapshot.iterations != 1)}" if snapshot.iterations else "")
         last = f" · {snapshot.step}" if snapshot.step else ""
-        self.query_one("#plan-status", Label).update(
-            f"{state} · sweep {snapshot.sweeps} · Δ {delta}{improvements}{last}")
-        self.query_one("#plan-meaning", Label).update(self._meaning(snapshot))
-        self.query_one("#plan-note", Label).update(snapshot.note or self._never_ends(snapshot))
+        self._status.show((
+            f"{METHOD_WORDS[snapshot.method]} (1 2 3) · start: {self.start} (o) · {sweep} (s)",
+            f"{state} · sweep {snapshot.sweeps} · Δ {delta}{improvements}{last}",
+            self._meaning(snapshot),
+            snapshot.note or self._never_ends(snapshot),
+        ))
         self._show_lines(snapshot)
 
     def _meaning(self, snapshot: PlanSnapshot) -> str:
@@ -296,11 +293,15 @@ class PlanView(Vertical):
     def _show_lines(self, snapshot: PlanSnapshot | None) -> None:
         plan = self.plan
         panel = plan.value_panel if plan is not None else None
-        self._values.set_class(snapshot is not None and panel is not None, "-shown")
+        shown = snapshot is not None and panel is not None
+        if self._values.has_class("-shown") != shown:
+            self._values.set_class(shown, "-shown")
         if snapshot is not None and panel is not None:
             self._values.show([panel(snapshot.v)])
         line = plan.line if plan is not None else None
-        self._lines.set_class(snapshot is not None and line is not None, "-shown")
+        shown = snapshot is not None and line is not None
+        if self._lines.has_class("-shown") != shown:
+            self._lines.set_class(shown, "-shown")
         if snapshot is not None and line is not None:
             curves = [(f"sweep {sweep}", values[line.states]) for sweep, values in snapshot.kept]
             if snapshot.sweeps not in {sweep for sweep, _ in snapshot.kept}:
@@ -313,7 +314,7 @@ class PlanView(Vertical):
         event.stop()
         session = self.session
         self.focus_target = session.game.layout.focus_at(*event.cell, session.env_kwargs)
-        self._shown_version = -1
+        self._redraw()
 
     # --- actions ---------------------------------------------------------------------
     def _command(self) -> PlanRunner | None:
@@ -381,7 +382,14 @@ class PlanView(Vertical):
 
     def action_toggle_numbers(self) -> None:
         self.numbers = not self.numbers
-        self._shown_version = -1
+        self._redraw()
+
+    def _redraw(self) -> None:
+        """Draw the latest snapshot now (a change of the view's own, not the planner's)."""
+        if self.runner is not None:
+            snapshot = self.runner.latest
+            self._shown_version = snapshot.version
+            self.show_snapshot(snapshot)
 
     def action_edit_knobs(self) -> None:
         self.query_one("#plan-gamma", Input).focus()

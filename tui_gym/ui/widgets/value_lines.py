@@ -41,9 +41,10 @@ class ValueLines(Widget):
 
     def show(self, x: np.ndarray, curves: Sequence[tuple[str, np.ndarray]],
              numbers: np.ndarray, x_label: str, number_label: str) -> None:
+        relaid = len(self._x) != len(x)  # the height changes only with the points
         self._x, self._curves, self._numbers = x, list(curves), numbers
         self._labels = (x_label, number_label)
-        self.refresh(layout=True)
+        self.refresh(layout=relaid)
 
     def get_content_height(self, container: object, viewport: object, width: int) -> int:
         return 2 * (CHART_ROWS + 4) + 2 if len(self._x) else 1
