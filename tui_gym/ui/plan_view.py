@@ -287,8 +287,8 @@ class PlanView(Vertical):
         stuck = snapshot.never_ending
         if not stuck:
             return ""
-        return (f"with γ = 1 the policy never ends an episode from {stuck} state"
-                f"{'s' * (stuck != 1)}: their values fall without bound")
+        return (f"with γ = 1 this policy can go round for ever from {stuck} state"
+                f"{'s' * (stuck != 1)}: no episode ends, so their values are no episode's")
 
     def _show_lines(self, snapshot: PlanSnapshot | None) -> None:
         plan = self.plan

@@ -54,7 +54,8 @@ def numbered(panel: Heatmap) -> Heatmap:
               for value, label in zip(row, line, strict=True))
         for row, line in zip(panel.values, panel.labels, strict=True)
     )
-    kept = [part for part in panel.legend.split("  ") if not _ABOUT_ACTIONS.search(part)]
+    kept = [part.strip() for part in panel.legend.split("  ")
+            if part.strip() and not _ABOUT_ACTIONS.search(part)]
     return replace(panel, labels=labels, title="values",
                    legend="  ".join(["number: the value", *kept]))
 
