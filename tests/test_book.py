@@ -8,8 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from tui_gym.cli import main
-from tui_gym.cli import book_command
+from tui_gym.cli import book_command, main
 from tui_gym.session.book import figure_named, figures
 from tui_gym.session.book.figure import (
     BookFigure,

@@ -15,7 +15,7 @@ from tui_gym.core.mdp import NotAvailable, solve
 from tui_gym.games import GAMES, game_named
 from tui_gym.games.blackjack.solver import BlackjackRules, optimal_value
 from tui_gym.games.planning import PlanModel
-from tui_gym.session.plan import plan, plan_json
+from tui_gym.session.plan import plan
 from tui_gym.session.plan.runner import PlanRunner
 from tui_gym.session.session import Session
 

@@ -948,13 +948,13 @@ class TuiGymApp(App[int]):
 
         sections = [
             ("Everywhere", [
-                ("p / t / v / P", "Play view / Train view / Compare view / Plan view"),
-                (" / ".join(g.key for g in GAMES if g.key),
-                 "switch game: " + ", ".join(g.title for g in GAMES if g.key)
-                 + " (each keeps its agent, settings and curves)"),
+                ("p / t / v / P", "Play view / Train / Compare / Plan view"),
+                (" ".join(g.key for g in GAMES if g.key),
+                 "switch game, as the picker names them; each keeps its agent, "
+                 "settings and curves"),
                 ("w / W", "focus the wrapper panel (W while a board that moves with WASD "
                           "has focus)"),
-                ("m", "edit a grid game's map, while it trains (or plans, in the Plan view)"),
+                ("m", "edit a grid game's map (training or planning)"),
                 ("esc", "leave a text field or the side panel: back to the view"),
                 ("ctrl+s", "save the agent to a file you name (asks before replacing one)"),
                 ("ctrl+o", "load an agent from a file you name"),
