@@ -106,7 +106,8 @@ class DPGridStates(DiscreteStates):
             "last_action": None if last is None else game.action_names[int(last)],
             "slipped": False,
             "rewards": {f"{r},{c}": pay for (r, c), (_, pay) in game.jumps.items()},
-            "marks": {f"{r},{c}": text for (r, c), text in game.primes.items()},
+            "marks": {f"{r},{c}": text
+                      for (r, c), text in {**game.letters, **game.primes}.items()},
         }
         was = before.get("agent")
         if was is not None and agent is not None and last is not None:
@@ -152,8 +153,9 @@ class DPGridLayout(HeatmapLayout):
                 line.append(ARROWS[game.action_names[action]])
                 marked[r, c] = has_marks and not marks[r * cols + c, action]
             labels.append(tuple(line))
-        special = "  ".join(f"{letter} jumps" for letter in game.letters.values())
-        ends = f"  {END} terminal" if game.terminals else ""
+        parts = ["arrow: greedy move", f"{TIED} tie",
+                 *(f"{letter} jumps" for letter in game.letters.values()),
+                 *([f"{END} terminal"] if game.terminals else []), "* not an optimal move"]
         return [
             Heatmap(
                 title="max Q and the greedy move",
@@ -162,6 +164,6 @@ class DPGridLayout(HeatmapLayout):
                 values=grid,
                 labels=tuple(labels),
                 marked=marked,
-                legend=f"arrow: greedy move  {TIED} tie  {special}{ends}  * not an optimal move",
+                legend="  ".join(parts),
             )
         ]
