@@ -29,6 +29,7 @@ from textual import on, work
 from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical, VerticalScroll
+from textual.message import Message
 from textual.widgets import Button, Input, Label
 
 from tui_gym.core.mdp import NotAvailable
@@ -56,6 +57,9 @@ METHOD_WORDS = {"evaluate": "policy evaluation", "policy-iteration": "policy ite
 
 class PlanView(Vertical):
     """Policy evaluation, improvement, policy iteration and value iteration, watched."""
+
+    class Published(Message):
+        """The planner carried out a command (posted from its thread)."""
 
     SCOPED_CSS = False
     DEFAULT_CSS = """
@@ -218,7 +222,8 @@ class PlanView(Vertical):
         else:
             self._close_runner()
             self.runner = PlanRunner(model.model, method=self.method, gamma=model.gamma,
-                                     theta=1e-4, limited=model.limited_value)
+                                     theta=1e-4, limited=model.limited_value,
+                                     on_command=self._published)
             self.query_one("#plan-gamma", Input).value = f"{model.gamma:g}"
             self.query_one("#plan-theta", Input).value = "1e-04"
         self._shown_version = -1
@@ -229,6 +234,15 @@ class PlanView(Vertical):
             self.runner = None
 
     # --- drawing -------------------------------------------------------------------
+    def _published(self) -> None:
+        """Called on the planner's thread after a command: ask for a drawing (posting a
+        message is safe from any thread)."""
+        self.post_message(self.Published())
+
+    def on_plan_view_published(self, message: Published) -> None:
+        """A command's effect: drawn now, not at the next look."""
+        self._poll()
+
     def _poll(self) -> None:
         runner = self.runner
         if runner is None or not self.display:

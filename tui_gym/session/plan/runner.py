@@ -10,7 +10,9 @@ until the method is done or is paused. A run the person did not pause starts
 again when the world changes, from the values it had (as the book's demos
 re-plan after an edit). With `limited`, a snapshot taken while no run is on
 also carries the policy's value by that function (the tool's own exact value,
-over the episode limit), computed again only when the policy has changed.
+over the episode limit), computed again only when the policy has changed. With `on_command`, the
+thread calls it (from its own thread) after publishing what a command did, so
+a view can draw a setting's effect without waiting for its next look.
 """
 
 from __future__ import annotations
@@ -80,8 +82,10 @@ class PlanRunner:
         in_place: bool = False,
         speed: int = DEFAULT_SPEED,
         limited: Callable[[FloatArray], float] | None = None,
+        on_command: Callable[[], None] | None = None,
     ) -> None:
         self._limited = limited
+        self._on_command = on_command
         self._figures_of: tuple[Any, dict[str, Any]] | None = None
         self._planner = Planner(model, gamma=gamma, theta=theta, policy=policy, in_place=in_place)
         self._method = check_method(method)
@@ -245,6 +249,8 @@ class PlanRunner:
                 stepped = True
             if commands or not stepped or self._publish_due():
                 self._publish()
+            if commands and self._on_command is not None:
+                self._on_command()
 
     def _run_step(self) -> None:
         planner = self._planner
