@@ -21,7 +21,8 @@ from gymnasium import spaces
 
 from tui_gym.envs.tile_map import TileArrays
 
-__all__ = ["MAX_CARS", "MAX_MOVE", "MOVES", "CarRentalEnv", "car_rental_arrays", "night"]
+__all__ = ["MAX_CARS", "MAX_MOVE", "MOVES", "CarRentalEnv", "car_rental_arrays", "night",
+           "nights"]
 
 MAX_CARS = 20  # at each site; more are sent back to the company
 MAX_MOVE = 5  # cars moved overnight, either way
@@ -39,14 +40,22 @@ def night(cars: tuple[int, int], move: int, exercise: bool) -> tuple[int, int, i
     """The cars moved (at most those there), each site's cars in the morning, and the
     night's cost (moves, and with `exercise` one free move to the second site and
     parking over 10 cars)."""
-    first, second = cars
-    moved = min(move, first) if move >= 0 else -min(-move, second)
-    morning = (min(MAX_CARS, first - moved), min(MAX_CARS, second + moved))
-    paid = abs(moved) - (1 if exercise and moved > 0 else 0)
+    moved, first, second, cost = nights(np.asarray(cars[0]), np.asarray(cars[1]),
+                                        np.asarray(move), exercise)
+    return int(moved), int(first), int(second), float(cost)
+
+
+def nights(first: np.ndarray, second: np.ndarray, move: np.ndarray,
+           exercise: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, FloatArray]:
+    """`night` over arrays of cars and moves, broadcast."""
+    moved = np.where(move >= 0, np.minimum(move, first), -np.minimum(-move, second))
+    at_first = np.minimum(MAX_CARS, first - moved)
+    at_second = np.minimum(MAX_CARS, second + moved)
+    paid = np.abs(moved) - (exercise & (moved > 0))
     cost = MOVE_COST * paid
     if exercise:
-        cost += PARKING * sum(n > PARKED for n in morning)
-    return moved, morning[0], morning[1], cost
+        cost = cost + PARKING * ((at_first > PARKED).astype(int) + (at_second > PARKED))
+    return moved, at_first, at_second, cost.astype(np.float64)
 
 
 def _poisson(mean: float) -> FloatArray:
@@ -78,13 +87,9 @@ def car_rental_arrays(exercise: bool = False) -> TileArrays:
     Episodes start uniformly on every state."""
     n = SIDE * SIDE
     first_site, second_site = _site(REQUESTS[0], RETURNS[0]), _site(REQUESTS[1], RETURNS[1])
-    mornings = np.zeros((n, len(MOVES), 2), dtype=np.int64)
-    cost = np.zeros((n, len(MOVES)))
-    for s in range(n):
-        for a, move in enumerate(MOVES):
-            _, first, second, cost[s, a] = night(divmod(s, SIDE), move, exercise)
-            mornings[s, a] = first, second
-    at_first, at_second = mornings[..., 0], mornings[..., 1]
+    first, second = np.divmod(np.arange(n), SIDE)
+    _, at_first, at_second, cost = nights(first[:, None], second[:, None],
+                                          np.array(MOVES)[None, :], exercise)
     prob = first_site[0][at_first][..., :, None] * second_site[0][at_second][..., None, :]
     rented = first_site[1][at_first][..., :, None] + second_site[1][at_second][..., None, :]
     reward = RENT * rented - cost[..., None, None]
