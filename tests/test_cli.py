@@ -143,7 +143,8 @@ def test_every_sub_command_the_readme_names_takes_json() -> None:
     commands = _readme_json_commands()
     assert {"envs", "wrappers", "train", "eval", "optimal", "bench"} <= set(commands)
     parser = build_parser()
-    positional = {"train": ["blackjack"], "eval": ["x.tgym"], "optimal": ["blackjack"]}
+    positional = {"train": ["blackjack"], "eval": ["x.tgym"], "optimal": ["blackjack"],
+                  "plan": ["blackjack"]}
     for command in commands:
         args = parser.parse_args([command, *positional.get(command, []), "--json"])
         assert args.json is True, command

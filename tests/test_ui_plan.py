@@ -48,7 +48,7 @@ async def test_the_plan_view_by_its_keys_at_80x24() -> None:
         assert view.start == "optimal"
         sections = dict(app.key_help())
         assert [key for key, _ in sections["Plan"]][:2] == ["1 / 2 / 3", "space"]
-        assert any(key == "p / t / v / P" for key, _ in sections["Everywhere"])
+        assert any(key == "P" for key, _ in sections["Everywhere"])
         await press_busy(pilot, "p")
         assert app.current_view == "play"
 
@@ -60,16 +60,22 @@ async def test_an_edit_while_value_iteration_runs_plans_on_from_the_values() -> 
         view = app.plan_view
         await wait_busy(pilot, lambda: view.runner is not None, "the model")
         assert view.open_editor()
+        canvas = view.editor.canvas
+        await wait_busy(pilot, lambda: canvas.has_focus, "the editor's keyboard")
         await press_busy(pilot, "right")  # the editor's cursor onto row 0, col 1
         view.focus_default()
+        await wait_busy(pilot, lambda: view._heatmap.has_focus, "the values' keyboard")
         await press_busy(pilot, "3", "minus", "minus")  # value iteration at 2 sweeps a second
         await press_busy(pilot, "space")
         await wait_busy(pilot, lambda: latest(view).sweeps >= 2, "two sweeps")
         before = latest(view).sweeps
         view.editor.focus_canvas()
+        await wait_busy(pilot, lambda: canvas.has_focus, "the editor's keyboard again")
         await press_busy(pilot, "3")  # a hole at row 0, col 1, while the run goes on
         await wait_busy(pilot, lambda: session.game.grid_map(session.env_kwargs).cells[0][1]
                         == "H", "the edit played")
+        view.focus_default()
+        await wait_busy(pilot, lambda: view._heatmap.has_focus, "the values' keyboard again")
         await press_busy(pilot, "plus", "plus", "plus", "plus")
         await wait_busy(pilot, lambda: latest(view).done and not latest(view).running,
                         "value iteration on the edited lake")
@@ -88,6 +94,7 @@ async def test_the_gamblers_values_by_sweep_and_a_bad_gamma() -> None:
         view = app.plan_view
         await wait_busy(pilot, lambda: view.runner is not None, "the model")
         view.focus_default()
+        await wait_busy(pilot, lambda: view._heatmap.has_focus, "the values' keyboard")
         await press_busy(pilot, "c")
         await wait_busy(pilot, lambda: latest(view).done, "value iteration")
         await wait_busy(pilot, lambda: "sweep 3" in view._lines.plain, "the chart")

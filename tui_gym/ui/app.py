@@ -948,7 +948,8 @@ class TuiGymApp(App[int]):
 
         sections = [
             ("Everywhere", [
-                ("p / t / v / P", "Play view / Train / Compare / Plan view"),
+                ("p / t / v", "Play view / Train view / Compare view"),
+                ("P", "Plan view: planning, sweep by sweep"),
                 (" ".join(g.key for g in GAMES if g.key),
                  "switch game, as the picker names them; each keeps its agent, "
                  "settings and curves"),
