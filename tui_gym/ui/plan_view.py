@@ -286,8 +286,9 @@ class PlanView(Vertical):
         plan = self.plan
         assert plan is not None
         start = plan.start_value(snapshot.v)
-        book = (f"values: discounted by γ = {snapshot.gamma:g}, no episode limit (the book's);"
-                f" start average {start:+.4g}")
+        bare = " of the game without its wrappers" if self.session.applied else ""
+        book = (f"values{bare}: discounted by γ = {snapshot.gamma:g}, no episode limit (the "
+                f"book's); start average {start:+.4g}")
         limited = snapshot.limited_value
         if plan.horizon is None and snapshot.gamma == 1.0:
             return book + " (the tool's exact value too)"
