@@ -28,7 +28,7 @@ from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, Field, Learner, algori
 from tui_gym.benchmark.command import cmd_benchmark
 from tui_gym.cli.flags import flag, game_kwargs, hyperparameters
 from tui_gym.cli.maps_command import cmd_maps
-from tui_gym.cli.output import CliError, key_value_table, panel_table, print_json
+from tui_gym.cli.output import CliError, key_value_table, print_json
 from tui_gym.cli.runs_command import recorded
 from tui_gym.core.params import Param
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
@@ -456,13 +456,26 @@ def cmd_optimal(args: argparse.Namespace, out: Console) -> int:
         layout = game.layout
         focus = layout.default_focus(kwargs)
         for panel in layout.heatmaps(np.asarray(optimum.q), kwargs, focus, optimum.marks):
-            out.print(panel_table(panel))
+            out.print(_panel_table(panel))
     # An edited map's text is shown as its size; its rows are in the table above.
     rules = ", ".join(f"{k}={v}" if k != "layout" else f"a {game.grid_map(kwargs).size_text} map"
                       for k, v in kwargs.items())
     out.print(f"{game.title}{f' ({rules})' if rules else ''}: {optimum.summary}.")
     out.print(f"Exact value of the optimum: [bold]{signed(optimum.value, 5)}[/]")
     return 0
+
+
+def _panel_table(panel: Any) -> Table:
+    """A heatmap panel of the optimum as a table of its cells' labels."""
+    table = Table(title=panel.title, title_justify="left")
+    table.add_column("", justify="right", style="bold")
+    for label in panel.col_labels:
+        table.add_column(label, justify="center")
+    for row_label, labels in zip(panel.row_labels, panel.labels, strict=True):
+        table.add_row(row_label, *(escape(text) for text in labels))
+    if panel.legend:
+        table.caption = panel.legend.replace("* not", "not").split("  * ")[0]
+    return table
 
 
 def cmd_play(args: argparse.Namespace, out: Console) -> int:

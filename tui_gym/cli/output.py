@@ -9,12 +9,9 @@ from collections.abc import Sequence
 from typing import Any
 
 from rich.console import Console
-from rich.markup import escape
 from rich.table import Table
 
-from tui_gym.core.heatmap import Heatmap
-
-__all__ = ["CliError", "OutConsole", "key_value_table", "panel_table", "print_json"]
+__all__ = ["CliError", "OutConsole", "key_value_table", "print_json"]
 
 
 class CliError(Exception):
@@ -52,17 +49,4 @@ def key_value_table(title: str, rows: Sequence[tuple[str, str]]) -> Table:
     table.add_column(justify="right")
     for key, value in rows:
         table.add_row(key, value)
-    return table
-
-
-def panel_table(panel: Heatmap) -> Table:
-    """A heatmap panel of the optimum as a table of its cells' labels."""
-    table = Table(title=panel.title, title_justify="left")
-    table.add_column("", justify="right", style="bold")
-    for label in panel.col_labels:
-        table.add_column(label, justify="center")
-    for row_label, labels in zip(panel.row_labels, panel.labels, strict=True):
-        table.add_row(row_label, *(escape(text) for text in labels))
-    if panel.legend:
-        table.caption = panel.legend.replace("* not", "not").split("  * ")[0]
     return table
