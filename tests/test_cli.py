@@ -121,7 +121,8 @@ def test_algorithms_show_defaults_as_they_are_typed(
 def test_envs_json(capsys: pytest.CaptureFixture[str]) -> None:
     data = run_json(capsys, "envs", "--json")
     games = {game["name"]: game for game in data["envs"]}
-    assert set(games) == {"blackjack", "gridworld", "frozenlake", "cliffwalking", "taxi"}
+    assert set(games) == {"blackjack", "gridworld", "frozenlake", "cliffwalking", "taxi",
+                          "ab-grid", "corner-grid", "gambler", "car-rental"}
     assert games["blackjack"]["env_id"] == "Blackjack-v1"
     assert games["blackjack"]["actions"] == ["stick", "hit"]
     assert "gymnasium_env/GridWorld-v0" in games["gridworld"]["other_ids"]

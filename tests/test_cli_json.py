@@ -55,8 +55,8 @@ def test_every_json_command_has_a_schema_and_its_help_says_so(
 ) -> None:
     parser = build_parser()
     flags = json_flags(parser)
-    # `runs --recover --json` is the one flag that gives a command's JSON a shape of its own.
-    assert set(flags) == set(JSON_SCHEMAS) - {"runs recover"}
+    # `runs --recover --json` and `book --json` without a figure give a shape of their own.
+    assert set(flags) == set(JSON_SCHEMAS) - {"runs recover", "book list"}
     for command, flag in flags.items():
         assert f'"schema": {JSON_SCHEMAS[command]}' in (flag.help or ""), command
     listing = " ".join(parser.format_help().split())
@@ -255,3 +255,20 @@ def test_benchmark_keys(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> N
     board = run_json(capsys, "benchmark", "blackjack", "--leaderboard", "--db", db, "--json")
     pinned("benchmark", board, {"game", "db", "runs"})
     assert all(set(run) == {"rank"} | SUMMARY for run in board["runs"])
+
+
+def test_plan_and_book_keys(capsys: pytest.CaptureFixture[str]) -> None:
+    planned = run_json(capsys, "plan", "corner-grid", "--method", "value-iteration", "--json")
+    pinned("plan", planned, {"game", "env_kwargs", "method", "start", "gamma", "theta",
+                             "in_place", "converged", "sweeps", "iterations", "start_value",
+                             "limited_value", "episode_limit", "values", "policy"})
+    assert set(planned["values"][0]) == {"state", "value"}
+    assert set(planned["policy"][0]) == {"state", "actions"}
+    listed = run_json(capsys, "book", "--json")
+    pinned("book list", listed, {"figures"})
+    assert set(listed["figures"][0]) == {"figure", "title", "world", "about", "runs",
+                                         "episodes"}
+    figure = run_json(capsys, "book", "3.2", "--json")
+    pinned("book", figure, {"figure", "title", "runs", "series", "checks"})
+    assert all(set(s) == {"label", "x", "y", "lo", "hi"} for s in figure["series"])
+    assert all(set(c) == {"claim", "book", "measured", "ok"} for c in figure["checks"])

@@ -34,7 +34,7 @@ from typing import Any
 
 from rich.table import Table
 
-from tui_gym.bench import history, programs
+from tui_gym.bench import dp, history, programs
 from tui_gym.bench.live import RUNNERS
 from tui_gym.bench.results import BenchResults
 
@@ -127,6 +127,7 @@ def verdicts(results: BenchResults) -> dict[str, str]:
     up = results.seeds.speedup if results.seeds else None
     out["compare_speedup"] = _ok(up, up is not None and up >= COMPARE_SPEEDUP_TARGET)
     out.update(history.verdicts(results.history, MISSING, _ok))
+    out.update(dp.verdicts(results.dp, MISSING, _ok))
     return out
 
 
@@ -314,6 +315,7 @@ def to_json(results: BenchResults) -> dict[str, Any]:
         ],
         "history": history.to_json(results.history),
         "compare": _seeds_dict(results),
+        "planning_dp": dp.to_json(results.dp),
         "verdicts": verdicts(results),
         "errors": dict(results.errors),
     }
@@ -451,7 +453,8 @@ def table(results: BenchResults) -> Table:
             f"{_num(found_seeds.speedup, '.1f', '×')} ({found_seeds.tutorial_s:.1f} s{scaled} / "
             f"{found_seeds.compare_s:.2f} s)",
             f"≥ {COMPARE_SPEEDUP_TARGET:g}×", "compare_speedup")
-    for label, value, target, verdict_key in history.rows(results.history):
+    for label, value, target, verdict_key in (*history.rows(results.history),
+                                              *dp.rows(results.dp)):
         row(label, value, target, verdict_key)
     for stage, error in results.errors.items():
         out.add_row(f"{stage} failed", f"[red]{error}[/]", "", _STYLE[MISSING])

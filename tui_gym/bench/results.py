@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from tui_gym.bench.dp import DPResult
 from tui_gym.bench.gap import GapResult
 from tui_gym.bench.history import HistoryResult
 from tui_gym.bench.learners import AlgorithmSpeed, PlanningResult
@@ -43,6 +44,7 @@ class BenchResults:
     map_edit: tuple[MapEditResult, ...] | None = None  # edit to new optimum, per grid game
     history: HistoryResult | None = None  # the run history's overhead and size
     seeds: SeedsSpeed | None = None  # `compare` against the same learners in a loop
+    dp: DPResult | None = None  # planning: sweeps, Jack's car rental, the Plan view
     errors: dict[str, str] = field(default_factory=dict)  # stage -> what went wrong
     default_runner: str = DEFAULT_RUNNER
 

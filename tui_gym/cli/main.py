@@ -87,6 +87,8 @@ def build_parser() -> argparse.ArgumentParser:
         "  tui-gym train GAME --algorithm sarsa\n"
         "  tui-gym eval agent.tgym --json\n"
         "  tui-gym optimal GAME\n"
+        "  tui-gym plan GAME --method policy-iteration   dynamic programming, headless\n"
+        "  tui-gym book 4.3                 a figure of Sutton & Barto's, run and checked\n"
         "  tui-gym play GAME --jsonl        a program plays through JSON lines\n"
         "  tui-gym COMMAND --help           the options of one command",
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -185,6 +187,11 @@ def build_parser() -> argparse.ArgumentParser:
     from tui_gym.cli.experiments_command import add_experiment_parsers
 
     add_experiment_parsers(sub)
+    from tui_gym.cli.book_command import add_book_parser
+    from tui_gym.cli.plan_command import add_plan_parser
+
+    add_plan_parser(sub)
+    add_book_parser(sub)
 
     screenshots = sub.add_parser("screenshots", help="write the app's SVG screenshots")
     screenshots.add_argument("directory", nargs="?", default="screenshots", metavar="DIR",
@@ -252,14 +259,16 @@ def main(argv: Sequence[str] | None = None) -> int:
             # The user's own `--env module:Id` imports its module on purpose, so a file that
             # names the same env (which alone never imports code) opens with it.
             resolve_env_id(args.env)
+        from tui_gym.cli.book_command import BOOK_COMMANDS
         from tui_gym.cli.commands import COMMANDS
         from tui_gym.cli.experiments_command import EXPERIMENT_COMMANDS
+        from tui_gym.cli.plan_command import PLAN_COMMANDS
         from tui_gym.cli.replay_command import REPLAY_COMMANDS
         from tui_gym.cli.runs_command import RUNS_COMMANDS
         from tui_gym.web import SERVE_COMMANDS
 
         commands = {**COMMANDS, **REPLAY_COMMANDS, **SERVE_COMMANDS, **RUNS_COMMANDS,
-                    **EXPERIMENT_COMMANDS}
+                    **EXPERIMENT_COMMANDS, **PLAN_COMMANDS, **BOOK_COMMANDS}
         code = commands[args.command](args, out)
         sys.stdout.flush()  # a closed pipe shows here, not at exit
         return code

@@ -21,8 +21,11 @@ Modules:
 - `tiles`: what grid-map games share (FrozenLake, CliffWalking);
 - `generic`: `GenericGame`, any env with a transition table;
 - `words`: numbers and words for people;
+- `planning`: `PlanModel`, what a game hands the Plan view and `tui-gym plan`;
+- `dp_grid`: what the book's small grids share;
 - one package per game: `blackjack`, `gridworld`, `frozenlake`,
-  `cliffwalking`, `taxi`.
+  `cliffwalking`, `taxi`, and Sutton & Barto's worlds `ab_grid`, `corner_grid`,
+  `gambler`, `car_rental`.
 """
 
 from __future__ import annotations
@@ -31,10 +34,14 @@ import importlib
 import sys
 
 from tui_gym.core.text import visible
+from tui_gym.games.ab_grid import ABGridGame
 from tui_gym.games.base import Game
 from tui_gym.games.blackjack import BlackjackGame
+from tui_gym.games.car_rental import CarRentalGame
 from tui_gym.games.cliffwalking import CliffWalkingGame
+from tui_gym.games.corner_grid import CornerGridGame
 from tui_gym.games.frozenlake import FrozenLakeGame
+from tui_gym.games.gambler import GamblerGame
 from tui_gym.games.gridworld import GridWorldGame
 from tui_gym.games.taxi import TaxiGame
 
@@ -49,6 +56,10 @@ GAMES: tuple[Game, ...] = (
     FrozenLakeGame(),
     CliffWalkingGame(),
     TaxiGame(),
+    ABGridGame(),
+    CornerGridGame(),
+    GamblerGame(),
+    CarRentalGame(),
 )
 
 _generic: dict[str, Game] = {}

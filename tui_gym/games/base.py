@@ -45,6 +45,7 @@ from tui_gym.games.words import (
 
 if TYPE_CHECKING:
     from tui_gym.core.vector.plan import BatchedForm
+    from tui_gym.games.planning import PlanModel
     from tui_gym.session.play import PlayStep, Scorecard
 
 __all__ = [
@@ -549,6 +550,10 @@ class Game:
         """The optimum with action values per base state where there are any (what the
         map editor colours and points arrows with): `oracle.optimum` by default."""
         return self.oracle.optimum(kwargs)
+
+    def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel | NotAvailable:
+        """The exact model the Plan view and `tui-gym plan` sweep, or why there is none."""
+        return NotAvailable(f"{self.title} has no exact model to plan on")
 
     def make_id(self, env_id: str, kwargs: Mapping[str, Any]) -> str:
         """The id `gym.make` builds for these arguments: `env_id` (the one asked for),

@@ -36,7 +36,11 @@ Modules, one job each:
 - `optimum`: `solve`, the optimum (`Solution`, with `Q*` and `V*`); `optimal_actions`;
 - `gap`: `exact_gap`, a policy's value beside the optimum (`Gap`);
 - `ending`: which states a policy (or any policy) ends episodes from;
-- `sampler`: `BatchSampler`, batched steps and resets for the vector engine.
+- `sampler`: `BatchSampler`, batched steps and resets for the vector engine;
+- `policy_arrays`: `PolicyArrays`, a policy's Bellman expectation, swept synchronously
+  or in place;
+- `planning`: dynamic programming sweep by sweep (`Planner`: policy evaluation, policy
+  iteration, value iteration), with the book's discounted values and no episode limit.
 """
 
 from tui_gym.core.mdp.evaluation import PolicyValue, evaluate

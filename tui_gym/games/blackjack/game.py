@@ -53,6 +53,7 @@ from tui_gym.games.words import format_reward, unwrapped_note
 
 if TYPE_CHECKING:
     from tui_gym.core.vector.base import BatchedForm
+    from tui_gym.games.planning import PlanModel
     from tui_gym.session.play import PlayStep
 
 __all__ = ["CHART_SUMS", "DEALER_CARDS", "DEALER_LABELS", "BlackjackGame", "card_label",
@@ -395,6 +396,15 @@ class BlackjackGame(Game):
         self.oracle = BlackjackOracle(self)
         self.narrator = BlackjackNarrator(self)
         self.layout = BlackjackLayout(self)
+
+    def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel:
+        """The hands as a finite model (`finite_model`); a natural plays as a soft 21."""
+        from tui_gym.games.blackjack.finite_model import N_BASE, blackjack_model, natural_base_rows
+        from tui_gym.games.planning import PlanModel
+
+        base_of = np.concatenate([np.arange(N_BASE), natural_base_rows()])
+        return PlanModel(blackjack_model(rules_of(kwargs)), 1.0, None, base_of=base_of,
+                         shown=np.arange(N_BASE))
 
     def batched_form(self, kwargs: Mapping[str, Any]) -> BatchedForm:
         from tui_gym.core.vector.base import BatchedForm

@@ -73,6 +73,7 @@ from tui_gym.games.gridworld.walled import (
 )
 from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
 from tui_gym.games.model import exact_gap_of
+from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import (
     ScoreRow,
     agreement_summary,
@@ -612,6 +613,15 @@ class GridWorldGame(Game):
         q[np.eye(cells, dtype=bool).reshape(-1)] = 0.0
         optimum = self.oracle.optimum(kwargs)
         return optimum if isinstance(optimum, NotAvailable) else replace(optimum, q=q)
+
+    def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel:
+        """The model with no limit, discounted as the learners discount it by default: with
+        a reward only at the target, every path is worth as much undiscounted."""
+        model = gridworld_model(_size(kwargs), float(kwargs.get("reward_scale", 1.0)),
+                                float(kwargs.get("step_penalty", 0.0)), NO_CHANGES,
+                                _walls(kwargs))
+        gamma = self.hyperparameters["*"]["discount"]
+        return PlanModel(model, gamma, self.episode_limit(kwargs))
 
     def normalize_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         """As `Game.normalize_kwargs`, with the walls: `layout` (a square map of F and W,
