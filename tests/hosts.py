@@ -7,6 +7,7 @@ from textual.app import App, ComposeResult
 
 from tui_gym.session.runners import make_runner
 from tui_gym.session.session import Session
+from tui_gym.ui.plan_view import PlanView
 from tui_gym.ui.play_view import PlayView
 from tui_gym.ui.train_view import TrainView
 
@@ -53,3 +54,24 @@ class TrainHost(App[None]):
 
     def on_unmount(self) -> None:
         self.runner.close(wait=False)
+
+
+class PlanHost(App[None]):
+    """Only a `PlanView` over `session`; an edited map rebuilds the session, as the app does."""
+
+    def __init__(self, session: Session) -> None:
+        super().__init__()
+        self.session = session
+        self.runner = None  # no training here: the agent's table is the session's
+
+    @property
+    def plan_view(self) -> PlanView:
+        return self.query_one(PlanView)
+
+    def compose(self) -> ComposeResult:
+        yield PlanView(id="plan")
+
+    def rebuild_map(self, env_kwargs: dict, resized: bool) -> bool:
+        self.session.rebuild(env_kwargs=env_kwargs)
+        self.plan_view.reload()
+        return True

@@ -84,24 +84,28 @@ def test_training_again_after_a_switch_back_is_a_new_run_of_the_new_episodes(
         assert episodes[0] > 4096 and episodes[-1] == 8192
 
 
+def first_notice(log: SessionRunLog, session: Session) -> str:
+    """Train a little and follow it until the log has a line to show."""
+    log.observe(session, session.trainer.latest)
+    session.trainer.run(episodes=500)
+    deadline = time.monotonic() + DEADLINE
+    while time.monotonic() < deadline:
+        notice = log.observe(session, session.trainer.latest)
+        if notice:
+            return notice
+        assert log._writer is not None
+        log._writer.join(0.05)  # the writer thread opens the file
+    raise AssertionError("no notice")
+
+
 def test_a_history_that_cannot_be_opened_is_one_notice(tmp_path: Path) -> None:
     db = tmp_path / "runs.db"
     db.write_text("not a database\n" * 100)
     before = db.read_bytes()
     log = SessionRunLog(db, clock=Clock())
     session = blackjack()
-    log.observe(session, session.trainer.latest)
-    session.trainer.run(episodes=500)
-    notices = []
-    deadline = time.monotonic() + DEADLINE
-    while not notices and time.monotonic() < deadline:
-        notice = log.observe(session, session.trainer.latest)
-        if notice:
-            notices.append(notice)
-        else:
-            assert log._writer is not None
-            log._writer.join(0.05)  # the writer thread opens the file
-    assert notices and "not a tui-gym run history" in notices[0]
+    notice = first_notice(log, session)
+    assert "not a tui-gym run history" in notice
     session.trainer.run(episodes=500)
     assert log.observe(session, session.trainer.latest) is None  # said once
     log.close()
@@ -123,3 +127,65 @@ async def test_the_app_records_the_run_it_trains(tmp_path: Path) -> None:
         assert (run.kind, run.game, run.status) == (RunKind.APP, "blackjack", RunStatus.FINISHED)
         returns = history.get_run(run.id).curve("return")
         assert returns is not None and returns.episodes[-1] == 2000
+
+
+def test_a_run_records_the_settings_it_trained_with_its_episodes_and_its_save(
+    tmp_path: Path,
+) -> None:
+    from tui_gym.ui.compare_series import row_of_record
+
+    db = tmp_path / "runs.db"
+    clock = Clock()
+    log = SessionRunLog(db, clock=clock)
+    session = blackjack(episodes=200_000)
+    log.observe(session, session.trainer.latest)
+    session.trainer.run(episodes=3000)
+    log.observe(session, session.trainer.latest)  # the run starts with the settings of then
+    session.set_hyperparameters({"episodes": 400_000, "epsilon_decay_fraction": 0.25})
+    session.trainer.run(episodes=2000)
+    clock.now = 10.0
+    log.observe(session, session.trainer.latest)
+    saved = session.save(tmp_path / "bj.tgym")
+    log.saved(session, saved)
+    session.trainer.run(episodes=1001)
+    log.observe(session, session.trainer.latest)
+    log.close()
+    with RunHistory(db) as history:
+        [run] = history.list_runs()
+        record = history.get_run(run.id)
+    assert record.hyperparameters["episodes"] == 400_000
+    assert record.hyperparameters["epsilon_decay_fraction"] == 0.25
+    assert record.agent_path == str(saved.resolve())
+    episodes = run.figure("episodes")
+    assert episodes is not None and episodes.value == 6001
+    assert row_of_record(record).episodes == 6001  # the table says what ran, not a bucket's end
+    returns = record.curve("return")
+    assert returns is not None and returns.episodes[-1] < 6001
+
+
+def test_a_history_path_that_cannot_be_examined_is_one_notice(tmp_path: Path) -> None:
+    log = SessionRunLog(tmp_path / ("x" * 300) / "runs.db", clock=Clock())
+    session = blackjack()
+    notice = first_notice(log, session)
+    assert "cannot be examined (File name too long)" in notice
+    assert "\n" not in notice and len(notice) < 300
+    assert log._writer is not None and log._writer.is_alive()  # it waits for work: no crash
+    session.trainer.run(episodes=500)
+    assert log.observe(session, session.trainer.latest) is None
+    log.close()
+
+
+async def test_the_app_goes_on_without_a_history_it_cannot_examine(tmp_path: Path) -> None:
+    db = tmp_path / ("x" * 300) / "runs.db"
+    app = TuiGymApp(blackjack(episodes=2000), runner="thread", run_log=SessionRunLog(db),
+                    db=str(db))
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.press("t", "space")
+        await wait_for(pilot, lambda: app.runner.finished, "training to finish", DEADLINE)
+        await pilot.press("v")
+        view = app._compare
+        await wait_for(pilot, lambda: view is not None and view.history_error is not None,
+                       "the Compare view's message", DEADLINE)
+        assert "cannot be examined" in view.message
+        await pilot.press("q")
+    assert app.return_code == 0 and app.thread_crash is None

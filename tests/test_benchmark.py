@@ -104,9 +104,10 @@ def test_record_writes_every_episode_of_a_benchmark(
     recording = read_recording(path)
     assert recording.message is None and len(recording.episodes) == 5
     assert [e.seed for e in recording.episodes] == [10, 11, 12, 13, 14]
-    code, _, err = _cli(capsys, "benchmark", "blackjack", "--agent", "random", "--no-record",
-                        "--record", str(tmp_path / "no" / "such.jsonl"))
-    assert code == 2 and "there is no folder" in err
+    with pytest.raises(SystemExit) as exit_:
+        main(["benchmark", "blackjack", "--agent", "random", "--no-record", "--record",
+              str(tmp_path / "no" / "such.jsonl")])
+    assert exit_.value.code == 2 and "does not exist" in capsys.readouterr().err
 
 
 def test_a_game_without_exact_values_says_regret_is_unavailable() -> None:

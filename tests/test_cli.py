@@ -14,7 +14,7 @@ from typing import Any
 import pytest
 
 from tui_gym import __version__
-from tui_gym.cli import attach_negative_values, build_parser, main
+from tui_gym.cli import attach_negative_values, main
 from tui_gym.cli.commands import _eval_rows
 from tui_gym.core.wrappers import CATALOG
 
@@ -104,14 +104,25 @@ def test_wrappers_lists_the_catalog_and_the_syntax(
         assert name in words
         for param in spec.params:  # whole, as they must be typed
             assert param.name in words
-    assert "=100 [1, 100000]" in out  # parameters with their defaults and ranges
+    assert "=100 in [1, 100000]" in out  # parameters with their defaults and ranges
     assert "…" not in out
+
+
+def test_algorithms_show_defaults_as_they_are_typed(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("COLUMNS", "160")
+    code, out, err = run(capsys, "algorithms")
+    assert code == 0 and err == ""
+    assert "=true (true or false)" in out and "=10 in [0, 1000]" in out
+    assert "True" not in out
 
 
 def test_envs_json(capsys: pytest.CaptureFixture[str]) -> None:
     data = run_json(capsys, "envs", "--json")
     games = {game["name"]: game for game in data["envs"]}
-    assert set(games) == {"blackjack", "gridworld", "frozenlake", "cliffwalking", "taxi"}
+    assert set(games) == {"blackjack", "gridworld", "frozenlake", "cliffwalking", "taxi",
+                          "ab-grid", "corner-grid", "gambler", "car-rental"}
     assert games["blackjack"]["env_id"] == "Blackjack-v1"
     assert games["blackjack"]["actions"] == ["stick", "hit"]
     assert "gymnasium_env/GridWorld-v0" in games["gridworld"]["other_ids"]
@@ -131,23 +142,6 @@ def test_wrappers_json(capsys: pytest.CaptureFixture[str]) -> None:
     assert "--wrapper NAME:key=value" in data["syntax"]
 
 
-def _readme_json_commands() -> list[str]:
-    text = " ".join((REPO / "README.md").read_text().split())
-    match = re.search(r"((?:`\w+`,? (?:and )?)+)take `--json`", text)
-    assert match, "the README says which sub-commands take --json"
-    return re.findall(r"`(\w+)`", match.group(1))
-
-
-def test_every_sub_command_the_readme_names_takes_json() -> None:
-    commands = _readme_json_commands()
-    assert {"envs", "wrappers", "train", "eval", "optimal", "bench"} <= set(commands)
-    parser = build_parser()
-    positional = {"train": ["blackjack"], "eval": ["x.tgym"], "optimal": ["blackjack"]}
-    for command in commands:
-        args = parser.parse_args([command, *positional.get(command, []), "--json"])
-        assert args.json is True, command
-
-
 def test_screenshots_json(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch,
                           tmp_path: Path) -> None:
     import tui_gym.ui.screenshots as screenshots
@@ -155,7 +149,7 @@ def test_screenshots_json(capsys: pytest.CaptureFixture[str], monkeypatch: pytes
     written = [tmp_path / "a.svg", tmp_path / "b.svg"]
     monkeypatch.setattr(screenshots, "write_screenshots", lambda directory: written)
     assert run_json(capsys, "screenshots", str(tmp_path), "--json") == {
-        "written": [str(p) for p in written]
+        "schema": 1, "written": [str(p) for p in written]
     }
 
 
@@ -182,7 +176,7 @@ def test_train_gridworld_json_then_eval(capsys: pytest.CaptureFixture[str], tmp_
     assert data["eval"]["episodes"] == 1000
 
     evaluated = run_json(capsys, "eval", str(path), "--episodes", "500", "--json")
-    assert set(evaluated) == set(data["eval"])
+    assert set(evaluated) == {"schema", *data["eval"]}
     assert set(evaluated) >= GRIDWORLD_EVAL_KEYS
     assert 0.0 <= evaluated["success_rate"] <= 1.0
     # The exact figure depends only on the table, which the file kept.
@@ -201,7 +195,7 @@ def test_train_blackjack_save_then_eval(capsys: pytest.CaptureFixture[str], tmp_
 
     evaluated = run_json(capsys, "eval", str(path), "--json")
     assert set(evaluated) >= BLACKJACK_EVAL_KEYS
-    assert set(evaluated) == set(data["eval"])
+    assert set(evaluated) == {"schema", *data["eval"]}
     assert evaluated["env_id"] == "Blackjack-v1"
     assert evaluated["episodes"] == 10_000  # the default
     rates = evaluated["win_rate"] + evaluated["draw_rate"] + evaluated["loss_rate"]
@@ -289,12 +283,36 @@ def test_optimal_blackjack_json(capsys: pytest.CaptureFixture[str]) -> None:
     assert sab["env_kwargs"]["sab"] is True and data["env_kwargs"]["sab"] is False
 
 
-def test_optimal_tables_and_gridworld(capsys: pytest.CaptureFixture[str]) -> None:
+def test_optimal_tables_say_what_their_marks_mean(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = run(capsys, "optimal", "blackjack")
     assert code == 0 and "\u22120.04656" in out and "usable ace" in out
-    data = run_json(capsys, "optimal", "gridworld", "--size", "2", "--json")
+    legend = " ".join(out.split())
+    assert "· tie * not optimal" in legend  # the legend names the mark it explains
+    code, out, _ = run(capsys, "optimal", "gridworld", "--size", "3")
+    assert code == 0 and "* off every shortest path" in " ".join(out.split())
+    assert "→" in out  # the optimal moves, drawn
+
+
+def test_optimal_gridworld_lists_its_policy_with_returns_and_steps(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    data = run_json(capsys, "optimal", "gridworld", "--size", "2", "--step-penalty", "0.25",
+                    "--json")
     # 2x2: of the 12 ordered pairs of distinct cells, 8 are 1 step apart and 4 are 2.
     assert data["optimal_mean_steps"] == pytest.approx(16 / 12)
+    # optimal_value is a return, as in an evaluation: +1 on the target, -0.25 a step before.
+    assert data["optimal_value"] == pytest.approx(1 - 0.25 * 4 / 12)
+    rows = {(tuple(r["state"]["agent"]), tuple(r["state"]["target"])): r for r in data["policy"]}
+    assert len(rows) == 16 and all(set(r) == {"state", "actions", "value"} for r in rows.values())
+    assert rows[(0, 0), (1, 1)] == {"state": {"agent": [0, 0], "target": [1, 1]},
+                                    "actions": ["right", "up"], "value": 0.75}
+    assert rows[(0, 0), (0, 1)]["actions"] == ["up"] and rows[(0, 0), (0, 1)]["value"] == 1.0
+    trained = run_json(capsys, "train", "gridworld", "--size", "2", "--step-penalty", "0.25",
+                       "--episodes", "300", "--eval-episodes", "10", "--no-record", "--json")
+    assert trained["eval"]["optimal_value"] == pytest.approx(data["optimal_value"])
+    code, out, _ = run(capsys, "optimal", "gridworld", "--size", "2", "--step-penalty", "0.25")
+    assert code == 0
+    assert "Exact value of the optimum: +0.91667" in out and "Optimal mean steps: 1.3333" in out
 
 
 # -- errors ---------------------------------------------------------------------
@@ -361,7 +379,7 @@ ERRORS = {
     ),
     "target gap -inf": (["train", "blackjack", "--target-gap", "-inf"], "out of range"),
     "seed too large": (["train", "blackjack", "--seed", "9" * 40], "out of range"),
-    "empty save path": (["train", "blackjack", "--save", ""], "--save: expected a file name"),
+    "empty save path": (["train", "blackjack", "--save", ""], "--save: the path is empty"),
     "learning rate not a number": (["train", "blackjack", "--learning-rate", "fast"], "'fast'"),
     "epsilon final above start": (
         ["train", "blackjack", "--epsilon-start", "0.1", "--epsilon-final", "0.5"],
@@ -376,6 +394,30 @@ ERRORS = {
         ["train", "gridworld", "--size", "50"], "--size is out of range: '50' is not in [2, 12]"
     ),
     "unknown sub-command": (["frobnicate"], "'frobnicate'"),
+    "arabic-indic map seed": (["maps", "--random", "4x4", "--map-seed", "\u0661\u0662"],
+                              "--map-seed: expected an integer in [0,"),
+    "arabic-indic density": (["maps", "--random", "4x4", "--density", "\u0660.\u0663"],
+                             "--density: expected a number in [0, 0.8], got"),
+    "negative map seed": (["maps", "--random", "4x4", "--map-seed", "-5"],
+                          "--map-seed: '-5' is out of range"),
+    "density too high": (["maps", "--random", "4x4", "--density", "0.9"],
+                         "--density: '0.9' is out of range"),
+    "map seed of 5000 digits": (["maps", "--random", "4x4", "--map-seed", "9" * 5000],
+                                "(5,000 characters) is out of range"),
+}
+# Input of 5,000 characters, wherever a message echoes it: cut to its ends and its length.
+LONG = "x" * 4994 + "\x1b]2;t\x07"
+ECHOES = {
+    "sub-command": [LONG],
+    "extra argument": ["envs", LONG],
+    "env": ["train", LONG],
+    "choice": ["maps", "--random", "4x4", "--obstacle", LONG],
+    "map name": ["maps", LONG],
+    "random map size": ["maps", "--random", LONG],
+    "game flag": ["optimal", "gridworld", "--size", LONG],
+    "compare setting": ["compare", "blackjack", "--algorithms", "sarsa", "--no-record",
+                        "--set", LONG],
+    "benchmark parameter": ["benchmark", "blackjack", "--agent", "random", "--param", LONG],
 }
 
 
@@ -393,6 +435,16 @@ def test_errors_exit_2_with_one_line(case: str, capsys: pytest.CaptureFixture[st
     for internal in ("invalid literal", "could not convert", "Exceeds the limit", "Error:"):
         assert internal not in lines[0]
     assert len(lines[0]) < 300
+
+
+@pytest.mark.parametrize("case", list(ECHOES))
+def test_errors_cut_the_input_they_echo(case: str, capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, err = run(capsys, *ECHOES[case])
+    assert code == 2 and out == ""
+    lines = err.splitlines()
+    assert len(lines) == 1 and len(lines[0]) < 300, lines
+    # The length of the input as quoted (its escapes written out) or as given.
+    assert re.search(r"… ?\S* \(5,00[06] characters\)", lines[0]) and "\x1b" not in lines[0]
 
 
 @pytest.mark.parametrize("kind", ["missing", "corrupt", "folder", "json"])
@@ -426,7 +478,8 @@ def test_the_save_folder_is_checked_before_training(
     code, out, err = run(capsys, "train", "blackjack", "--episodes", "1000000000",
                          "--save", str(path))
     assert (code, out) == (2, "")
-    assert err == f"tui-gym: error: {path}: the folder {path.parent} does not exist\n"
+    assert err == (f"tui-gym train: error: argument --save: {path}: the folder {path.parent} "
+                   "does not exist\n")
 
 
 def test_save_through_a_symlink_writes_its_target(

@@ -32,7 +32,8 @@ from tui_gym.session.session import Session
 
 NAMES = [cls.name for cls in ALGORITHMS]
 
-GAMES = ("blackjack", "gridworld", "frozenlake", "cliffwalking", "taxi")
+GAMES = ("blackjack", "gridworld", "frozenlake", "cliffwalking", "taxi", "ab-grid",
+         "corner-grid", "gambler", "car-rental")
 
 # The pairs a game names a lesson for (its defaults end short of its bound by the
 # learner's nature) and how far short they end, over the seeds measured (the README's

@@ -20,7 +20,7 @@ from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.wrappers import WrapperChoice, build_env
 from tui_gym.core.wrappers.changes import NO_CHANGES
 from tui_gym.envs.gridworld import GridWorldEnv
-from tui_gym.games.blackjack.model import OBSERVATIONS, blackjack_model, observation_row
+from tui_gym.games.blackjack.finite_model import N_BASE, blackjack_model, observation_rows
 from tui_gym.games.blackjack.solver import BlackjackRules, optimal_value
 from tui_gym.games.gridworld.model import gridworld_model
 from tui_gym.games.gridworld.paths import all_pairs
@@ -30,6 +30,18 @@ RULES = (BlackjackRules(), BlackjackRules(natural=True), BlackjackRules(sab=True
 RULE_IDS = ("plain", "natural", "sab")
 CARD_PROBS = {card: (4 if card == 10 else 1) / 13 for card in range(1, 11)}
 STICK, HIT = 0, 1
+ROWS = observation_rows()  # the table row of each model state
+OBSERVATIONS = 32 * 11 * 2  # the observation keyer's rows
+
+
+def observation_row(total: int, dealer: int, usable: int) -> int:
+    return ObservationKeyer(gym.make("Blackjack-v1").observation_space).key(
+        (total, dealer, usable))
+
+
+def state_of(total: int, dealer: int, usable: int) -> int:
+    """The model state of a hand (not the opening natural)."""
+    return int(np.flatnonzero(ROWS[:N_BASE] == observation_row(total, dealer, usable))[0])
 
 
 def _outcomes(model, state: int, action: int) -> dict[tuple[int, float, bool], float]:
@@ -45,43 +57,43 @@ def _hand(total: int, usable: int) -> list[int]:
 
 @pytest.mark.parametrize("rules", RULES, ids=RULE_IDS)
 def test_blackjack_hits_follow_gymnasiums_hand_arithmetic(rules: BlackjackRules) -> None:
-    model, rows = blackjack_model(rules)
+    model = blackjack_model(rules)
     lose, push = rules.payoffs[0], rules.payoffs[1]
     for total in range(4, 22):
         for usable in (0, 1) if total >= 12 else (0,):
             for dealer in range(1, 11):
+                state = state_of(total, dealer, usable)
                 expected: dict[tuple[int, float, bool], float] = {}
                 for card, p in CARD_PROBS.items():
                     hand = [*_hand(total, usable), card]
                     after, soft = sum_hand(hand), int(usable_ace(hand))
-                    bust = after > 21
-                    key = (observation_row(after, dealer, 0 if bust else soft),
-                           lose if bust else push, bust)
+                    bust = after > 21  # the hand ends where it stood
+                    key = ((state, lose, True) if bust
+                           else (state_of(after, dealer, soft), push, False))
                     expected[key] = expected.get(key, 0.0) + p
-                found = _outcomes(model, observation_row(total, dealer, usable), HIT)
+                found = _outcomes(model, state, HIT)
                 assert found.keys() == expected.keys()
                 assert all(found[k] == pytest.approx(v) for k, v in expected.items())
-    assert rows[OBSERVATIONS + 6] == observation_row(21, 7, 1)  # the natural shows as soft 21
+    assert ROWS[N_BASE + 6] == observation_row(21, 7, 1)  # the natural shows as soft 21
 
 
-def test_a_bust_shows_the_raw_total_and_loses() -> None:
-    model, _ = blackjack_model(BlackjackRules())
-    found = _outcomes(model, observation_row(20, 5, 0), HIT)
-    busts = {k: p for k, p in found.items() if k[2]}
-    assert {divmod(divmod(s, 2)[0], 11)[0] for s, _, _ in busts} == set(range(22, 31))
-    assert {r for _, r, _ in busts} == {-1.0}
-    assert found[(observation_row(21, 5, 0), 0.0, False)] == pytest.approx(1 / 13)
+def test_a_bust_loses() -> None:
+    model = blackjack_model(BlackjackRules())
+    state = state_of(20, 5, 0)
+    found = _outcomes(model, state, HIT)
+    assert found[(state, -1.0, True)] == pytest.approx(12 / 13)
+    assert found[(state_of(21, 5, 0), 0.0, False)] == pytest.approx(1 / 13)
 
 
 def test_the_deal_follows_the_exact_two_card_distribution() -> None:
-    model, rows = blackjack_model(BlackjackRules())
+    model = blackjack_model(BlackjackRules())
     expected = np.zeros(OBSERVATIONS)
     for c1, p1 in CARD_PROBS.items():
         for c2, p2 in CARD_PROBS.items():
             usable = int(1 in (c1, c2))
             for up, p3 in CARD_PROBS.items():
                 expected[observation_row(c1 + c2 + 10 * usable, up, usable)] += p1 * p2 * p3
-    shown = np.bincount(rows, weights=model.initial, minlength=OBSERVATIONS)
+    shown = np.bincount(ROWS, weights=model.initial, minlength=OBSERVATIONS)
     np.testing.assert_allclose(shown, expected, atol=1e-15)
 
 
@@ -89,11 +101,11 @@ def test_the_deal_follows_the_exact_two_card_distribution() -> None:
 def test_sticking_on_21_pays_by_the_rules_as_the_env_does(rules: BlackjackRules) -> None:
     # The opening natural and a soft 21 drawn to look alike; under `natural` and `sab`
     # they pay apart. Hands played on the real env, stuck on 21, agree with the model.
-    model, _ = blackjack_model(rules)
+    model = blackjack_model(rules)
     env = gym.make("Blackjack-v1", natural=rules.natural, sab=rules.sab).unwrapped
     env.reset(seed=1)
     n = 1500
-    for natural, state in ((True, OBSERVATIONS + 9), (False, observation_row(21, 10, 1))):
+    for natural, state in ((True, N_BASE + 9), (False, state_of(21, 10, 1))):
         mean = sum(p * r for p, _, r, _ in model.outcomes(state, STICK))
         played = []
         for _ in range(n):
@@ -107,7 +119,7 @@ def test_sticking_on_21_pays_by_the_rules_as_the_env_does(rules: BlackjackRules)
 
 @pytest.mark.parametrize("rules", RULES, ids=RULE_IDS)
 def test_the_blackjack_model_has_the_exact_optimum(rules: BlackjackRules) -> None:
-    model, _ = blackjack_model(rules)
+    model = blackjack_model(rules)
     assert solve(model).value == pytest.approx(optimal_value(rules), abs=1e-12)
 
 

@@ -188,3 +188,41 @@ def test_eval_answers_damaged_saves_in_one_line(
         else:
             assert code == 2 and out == ""
             assert err.count("\n") == 1 and err.startswith(f"tui-gym: error: {path}: ")
+
+
+def hostile_env_id(rng: random.Random, module: str) -> str:
+    """An env id a damaged or crafted save could name: module forms (the marker module,
+    modules of the standard library), near misses, and nasty text."""
+    bare = rng.choice(["Blackjack-v1", "FrozenLake-v1", "CliffWalking-v1", "Nope-v0", ""])
+    return rng.choice([
+        f"{module}:{bare}", f"{module}.sub:{bare}", f"this:{bare}", f"antigravity:{bare}",
+        f"{nasty_text(rng)}:{bare}", f"::{bare}", f"{module}:", f" {module}:{bare} ",
+        f"{bare}:{module}", nasty_text(rng), "x" * rng.choice([201, 5_000]), bare,
+    ])
+
+
+def test_saves_naming_hostile_env_ids_never_import_a_module(
+    saves: list[bytes], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import sys
+
+    module = "tgym_fuzz_marker"
+    marker = tmp_path / "marker"
+    (tmp_path / f"{module}.py").write_text(f"open({str(marker)!r}, 'w').write('ran')\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    before = set(sys.modules)
+    rng = random.Random(SEED + 2)
+    for case in range(60):
+        entries = _entries(rng.choice(saves))
+        meta = json.loads(entries["meta.json"])
+        meta["env_id"] = hostile_env_id(rng, module)
+        entries["meta.json"] = _json_bytes(meta)
+        path = tmp_path / f"case-{case}.tgym"
+        path.write_bytes(_zip(entries))
+        try:
+            Session.load(path)
+        except StorageError as exc:
+            assert "\n" not in str(exc) and len(str(exc)) < 400 + len(str(path)), str(exc)
+    assert not marker.exists()
+    assert {name.split(".")[0] for name in set(sys.modules) - before}.isdisjoint(
+        {module, "this", "antigravity"})

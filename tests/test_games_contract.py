@@ -45,6 +45,10 @@ VARIANTS = [
     ("cliffwalking", {"slippery": True}),
     ("taxi", {}),
     ("taxi", {"rainy": True}),
+    ("ab-grid", {}),
+    ("corner-grid", {}),
+    ("gambler", {}),
+    ("gambler", {"p_heads": 0.55, "goal": 30}),
 ]
 VARIANT_IDS = [f"{name}-{'-'.join(f'{k}={v}' for k, v in kw.items()) or 'default'}"
                for name, kw in VARIANTS]
@@ -152,10 +156,13 @@ def test_a_program_plays_one_episode_by_the_hints(game: Game) -> None:
     assert answer["terminated"] or answer["truncated"]
 
 
-def _key_for(board: Any, action: str) -> str:
+def _keys_for(board: Any, action: str) -> list[str]:
+    """The keys that make a move: its own, or those a board says pick it (a dial's)."""
+    if hasattr(board, "keys_for"):
+        return list(board.keys_for(action))
     for binding in Binding.make_bindings(board.BINDINGS):
         if binding.action == f"act('{action}')":
-            return binding.key
+            return [binding.key]
     raise AssertionError(f"no key for {action}")
 
 
@@ -185,7 +192,7 @@ async def test_a_person_plays_one_episode_of_every_game_in_the_app() -> None:
                     advice = game.oracle.advice(human.env, app.session.env_kwargs)
                     action = game.action_names[advice.optimal[0] if advice.optimal else 0]
                     steps = human.last.steps if human.last else 0
-                    await pilot.press(_key_for(view.board, action))  # waits for the screen
+                    await pilot.press(*_keys_for(view.board, action))  # waits for the screen
                     assert human.last is not None and (
                         human.last.steps == steps + 1 or human.done
                     ), game.name
@@ -241,8 +248,8 @@ def _exact_value(session: Session, q: np.ndarray) -> float | None:
     return reference.figures.get("exact_value")
 
 
-@pytest.mark.parametrize(("name", "kwargs"), [("blackjack", {}), *VARIANTS],
-                         ids=["blackjack", *VARIANT_IDS])
+@pytest.mark.parametrize(("name", "kwargs"), [("blackjack", {}), ("car-rental", {}), *VARIANTS],
+                         ids=["blackjack", "car-rental", *VARIANT_IDS])
 def test_sampled_returns_of_a_fixed_policy_agree_with_its_exact_value(
     name: str, kwargs: dict
 ) -> None:

@@ -68,3 +68,46 @@ def test_walls_block_moves_and_part_placements_in_the_exact_value() -> None:
     figures = reference.figures  # type: ignore[union-attr]
     assert figures["optimal_value"] == pytest.approx(12 / 30, abs=1e-12)
     assert figures["exact_value"] == pytest.approx(6 / 30, abs=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("size", "reward_scale", "step_penalty", "walls"),
+    [
+        (2, 1.0, 0.0, ()),
+        (3, 2.5, 0.3, ()),
+        (4, 1.0, 0.1, ((1, 1), (1, 2), (2, 1))),
+        (4, 0.5, 0.2, ((0, 2), (1, 2), (2, 2), (3, 2))),  # a wall across: parted placements
+    ],
+)
+def test_the_shortest_path_optimum_is_the_model_solved(
+    size: int, reward_scale: float, step_penalty: float, walls: tuple
+) -> None:
+    from tui_gym.core.wrappers.changes import GameChanges
+    from tui_gym.envs.walls import free_cells
+    from tui_gym.games.gridworld.model import gridworld_optimum, shortest_path_optimum
+
+    found = shortest_path_optimum(size, reward_scale, step_penalty, 300, walls)
+    assert found is not None
+    q, value = found
+    solved = gridworld_optimum(size, reward_scale, step_penalty, GameChanges(time_limit=300),
+                               walls)
+    assert value == pytest.approx(solved.value)
+    free = free_cells(size, walls)
+    agent, target = np.divmod(np.arange(size**4), size * size)
+    played = free[agent] & free[target] & (agent != target)
+    np.testing.assert_allclose(q[played], solved.q[played])
+    # A target that costs to reach: no closed form, the model is solved instead.
+    assert shortest_path_optimum(size, -1.0, step_penalty, 300, walls) is None
+
+
+def test_the_optimum_of_gridworld_is_a_return_beside_its_mean_steps() -> None:
+    from tui_gym.games import game_for
+
+    game = game_for("gridworld")
+    kwargs = game.normalize_kwargs({"size": 3, "reward_scale": -1.0})
+    optimum = game.oracle.optimum(kwargs)  # the target costs: the optimum never goes there
+    assert optimum.value == pytest.approx(0.0) and optimum.figures["optimal_mean_steps"] == 2.0
+    session = Session("gridworld", env_kwargs=kwargs, seed=0)
+    reference = session.evaluation_reference()
+    assert reference is not None
+    assert reference.figures["optimal_value"] == pytest.approx(optimum.value)

@@ -249,7 +249,7 @@ def test_runs_commands_without_a_history_create_nothing(tmp_path: Path) -> None:
     db = tmp_path / "none" / "runs.db"
     listing = list_runs(str(db))
     assert listing.runs == () and listing.db == db
-    assert listing.to_json() == {"db": str(db), "runs": []}
+    assert listing.to_json() == {"db": str(db), "runs": [], "damaged": [], "total": 0}
     with pytest.raises(UnknownRunError, match="no run 3"):
         show_run(3, str(db))
     with pytest.raises(UnknownRunError):
@@ -308,7 +308,7 @@ def test_csv_export_round_trip(db: Path, tmp_path: Path) -> None:
     umask = os.umask(0)
     os.umask(umask)
     assert stat.S_IMODE(target.stat().st_mode) == 0o666 & ~umask
-    with pytest.raises(RunHistoryError, match="cannot write"):
+    with pytest.raises(RunHistoryError, match="missing does not exist"):
         export_run_csv(run_id, tmp_path / "missing" / "x.csv", str(db))
 
 

@@ -14,9 +14,8 @@ from tui_gym.cli import main
 from tui_gym.games import game_for
 from tui_gym.games.maps import GridMap, MapError, format_map, parse_map
 from tui_gym.games.maps.builtin import BUILTIN_MAPS
-from tui_gym.games.maps.files import read_map_file
+from tui_gym.games.maps.files import read_map_file, write_map_file
 from tui_gym.games.maps.random_map import random_map
-from tui_gym.session.map_files import write_map_file
 
 DETOUR = "# a comment\nreward 1,2: -1.5\nslip 0,1: 0.25\nSFFG\nFHRF\n"
 
@@ -57,6 +56,18 @@ def test_bad_maps_say_where(text: str, expected: str) -> None:
         parse_map(text)
     assert expected in str(error.value)
     assert "\n" not in str(error.value)
+
+
+@pytest.mark.parametrize(("text", "expected"), [
+    (f"reward 0,2: {'9' * 400}\nSFRG\n", "must be a finite number, got '999999999999…999999' "
+     "(400 characters)"),
+    (f"slip 0,0: 0.{'5' * 400}9x\nSFFG\n", "(404 characters)"),
+    (f"reward {'1' * 5000},0: 1\nSFRG\n", "a header line reads"),
+])
+def test_long_values_in_a_map_are_quoted_short(text: str, expected: str) -> None:
+    with pytest.raises(MapError) as error:
+        parse_map(text)
+    assert expected in str(error.value) and len(str(error.value)) < 160, str(error.value)
 
 
 def test_bad_files_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -114,7 +125,7 @@ def test_gridworld_walls_lengthen_shortest_paths() -> None:
     assert game.make_kwargs(kwargs)["walls"] == [[1, 1]]
     assert game.normalize_kwargs({"size": 3, "walls": [[1, 1]]}) == kwargs
     # 8 free cells on a ring: from each, the others are 1, 1, 2, 2, 3, 3, 4 steps away.
-    assert game.oracle.optimum(kwargs).value == pytest.approx(16 / 7)
+    assert game.oracle.optimum(kwargs).figures["optimal_mean_steps"] == pytest.approx(16 / 7)
     marks = game.oracle.optimal_marks(kwargs)
     perfect = game.oracle.reference(marks.astype(float), kwargs)
     assert perfect.figures["optimal_pair_fraction"] == pytest.approx(1.0)

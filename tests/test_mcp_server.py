@@ -205,3 +205,57 @@ def test_scores_stay_finite_json(server: McpProcess) -> None:
         assert not any(isinstance(v, float) and not math.isfinite(v) for v in score.values())
     finally:
         server.data("end_game", game_id=game_id)
+
+
+@pytest.fixture(scope="module")
+def in_process() -> Iterator[McpInProcess]:
+    table = GameTable(max_games=2)
+    client = McpInProcess(build_server(table))
+    yield client
+    client.close()
+    table.close()
+
+
+@pytest.mark.parametrize(("tool", "arguments", "argument", "takes"), [
+    ("step", {"action": True}, "action", "an action's name or number, not True"),
+    ("step", {"action": 1.5}, "action", "an action's name or number, not 1.5"),
+    ("step", {"game_id": "seven", "action": 0}, "game_id", "the id start_game returned"),
+    ("step", {"game_id": True, "action": 0}, "game_id", "the id start_game returned"),
+    ("step", {"action": 0, "game_id": None}, "game_id", "the id start_game returned"),
+    ("observe", {}, "game_id", "is missing (the id start_game returned)"),
+    ("start_game", {"game": "blackjack", "seed": -1}, "seed", "a whole number >= 0"),
+    ("start_game", {"game": 7}, "game", "a game name from list_games"),
+    ("start_game", {"game": "blackjack", "wrappers": "TimeLimit"}, "wrappers", "a list of"),
+])
+def test_an_argument_of_the_wrong_type_is_named_in_one_line(
+    in_process: McpInProcess, tool: str, arguments: dict[str, object], argument: str,
+    takes: str,
+) -> None:
+    game_id = in_process.data("start_game", game="blackjack", seed=1)["game_id"]
+    try:
+        message = in_process.error(tool, **{"game_id": game_id, **arguments}
+                                   if tool == "step" else arguments)
+    finally:
+        in_process.data("end_game", game_id=game_id)
+    assert message.startswith(f"Error executing tool {tool}: argument {argument} "), message
+    assert takes in message and "\n" not in message and "http" not in message, message
+
+
+def test_a_bool_is_not_an_action(in_process: McpInProcess) -> None:
+    game_id = in_process.data("start_game", game="blackjack", seed=3)["game_id"]
+    try:
+        in_process.error("step", game_id=game_id, action=True)
+        assert in_process.data("observe", game_id=game_id)["steps"] == 0  # nothing was played
+    finally:
+        in_process.data("end_game", game_id=game_id)
+
+
+def test_huge_or_deep_calls_are_answered_in_short(in_process: McpInProcess) -> None:
+    name = in_process.error("start_game", game="x" * 5_000_000)
+    assert "5,000,000 characters" in name and len(name) < 300
+    chain = in_process.error("start_game", game="blackjack",
+                             wrappers=["DelayObservation"] * 2_000)
+    assert "a chain of 2,000 wrappers: a chain holds at most 32" in chain
+    for call in ({"parameters": {"k" * 100_000: 1}}, {"wrappers": ["W" * 100_000]}):
+        message = in_process.error("start_game", game="blackjack", **call)
+        assert "100,000 characters" in message and len(message) < 400, message

@@ -321,14 +321,19 @@ def test_record_paths_that_cannot_be_written_are_refused(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(b"")))
-    assert main(["play", "blackjack", "--jsonl", "--record", str(tmp_path)]) == 2
-    assert capsys.readouterr().err == f"tui-gym: error: --record {tmp_path}: is a folder; " \
-        "name a file\n"
     missing = tmp_path / "no" / "such.jsonl"
-    assert main(["play", "blackjack", "--jsonl", "--record", str(missing)]) == 2
-    assert "cannot write (No such file or directory)" in capsys.readouterr().err
-    assert main(["--record", str(missing)]) == 2
-    assert capsys.readouterr().err == f"tui-gym: error: --record {missing}: there is no " \
-        f"folder {missing.parent}\n"
+    for argv, said in (
+        (["play", "blackjack", "--jsonl", "--record", str(tmp_path)],
+         f"tui-gym play: error: argument --record: {tmp_path}: is a folder; give a file name\n"),
+        (["play", "blackjack", "--jsonl", "--record", str(missing)],
+         f"tui-gym play: error: argument --record: {missing}: the folder {missing.parent} does "
+         "not exist\n"),
+        (["--record", str(missing)],
+         f"tui-gym: error: argument --record: {missing}: the folder {missing.parent} does not "
+         "exist\n"),
+    ):
+        with pytest.raises(SystemExit) as exit_:
+            main(argv)
+        assert exit_.value.code == 2 and capsys.readouterr().err == said
     assert main(["replay", str(tmp_path / "none.jsonl")]) == 2
     assert "none.jsonl: No such file or directory" in capsys.readouterr().err

@@ -177,11 +177,9 @@ def test_a_pause_stops_an_animated_episode_mid_way_at_once():
     try:
         r.run_one_episode()
         assert wait_for(lambda: r.last_event is not None)
-        began = time.perf_counter()
         assert r.pause()  # returns once the worker has stopped
-        assert time.perf_counter() - began < 0.1, "a pause must not wait for the episode"
         trainer = r.session.trainer
-        assert trainer.episode_in_progress() and trainer.episodes == 0
+        assert trainer.episode_in_progress() and trainer.episodes == 0, "it waited for the episode"
         steps = trainer.steps
         assert r.wait_idle() and not r.busy
         assert trainer.steps == steps
@@ -190,9 +188,17 @@ def test_a_pause_stops_an_animated_episode_mid_way_at_once():
         assert wait_for(lambda: trainer.episodes == 1 and not r.busy)
         assert trainer.last.length > r.last_event.step, "the same episode went on"
     finally:
-        began = time.perf_counter()
         r.close()
-        assert time.perf_counter() - began < 0.5, "closing must not wait for the episode"
+
+
+def test_closing_mid_way_through_an_animated_episode_ends_the_worker_at_once():
+    r = slow_gridworld_runner()
+    r.run_one_episode()
+    assert wait_for(lambda: r.last_event is not None)
+    r.close()  # returns once the worker has ended
+    assert not r.busy
+    trainer = r.session.trainer
+    assert trainer.episode_in_progress() and trainer.episodes == 0, "it waited for the episode"
 
 
 def test_start_during_one_episode_then_pause_stops_everything():

@@ -6,9 +6,9 @@ deadline (the runner takes in what the child says whenever it is asked).
 
 from __future__ import annotations
 
+import multiprocessing.process
 import os
 import signal
-import time
 from pathlib import Path
 
 import pytest
@@ -113,6 +113,25 @@ def test_one_animated_episode_streams_every_step_from_the_child() -> None:
         assert runner.last_scene is not None and runner.last_scene["size"] == 5
     finally:
         runner.close()
-    began = time.monotonic()
+
+
+def test_a_closed_child_ends_by_itself(monkeypatch) -> None:
+    killed: list[int | None] = []
+    real_kill = multiprocessing.process.BaseProcess.kill
+
+    def kill(process) -> None:
+        killed.append(process.pid)
+        real_kill(process)
+
+    monkeypatch.setattr(multiprocessing.process.BaseProcess, "kill", kill)
+    # Time enough for any machine: the child must quit when asked, not be killed.
+    monkeypatch.setattr(process_runner, "EXIT_SECONDS", DEADLINE)
+    runner = ProcessRunner(Session("blackjack", seed=0))
+    runner.start()
+    assert wait_for(lambda: runner.latest.episodes > 0, DEADLINE)
+    child = runner.child_pid
+    assert child is not None
     runner.close(wait=True)
-    assert time.monotonic() - began < 1.0
+    assert reaped(child) and killed == []
+    runner.close(wait=True)  # again: nothing left to end
+    assert killed == []

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from tui_gym.cli import main
-from tui_gym.core.experiments import RunHistory
+from tui_gym.core.experiments import RunHistory, RunSpec
 from tui_gym.core.experiments.schema import APPLICATION_ID
 
 SHORT = ["--episodes", "3000", "--eval-episodes", "200"]
@@ -181,3 +181,118 @@ def test_two_processes_recording_at_once_lose_nothing(tmp_path: Path) -> None:
         assert sorted(r.seeds[0] for r in runs) == [0, 1, 2, 100, 101, 102]
         assert all(r.status == "finished" for r in runs)
         assert all(history.get_run(r.id).curve("return") is not None for r in runs)
+
+
+def record(db: Path, *runs: tuple[str, str, str, str]) -> None:
+    """Runs (kind, game, algorithm, status) straight into the history."""
+    from tui_gym.core.experiments import Figure, RunSpec, RunStatus
+
+    with RunHistory(db) as history:
+        for seed, (kind, game, algorithm, status) in enumerate(runs):
+            run_id = history.start_run(RunSpec(kind, game, algorithm, seeds=(seed,)))
+            history.update(run_id, figures=[Figure("mean_return_last", 0.5)],
+                           status=None if status == "running" else RunStatus(status))
+
+
+def test_the_listing_fits_80_columns_without_cutting_a_name(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    db = tmp_path / "runs.db"
+    record(db, ("train", "frozenlake", "expected-sarsa", "finished"),
+           ("compare", "cliffwalking", "double-q", "interrupted"),
+           ("sweep", "blackjack", "monte-carlo", "failed"))
+    for width in (80, 50):
+        monkeypatch.setenv("COLUMNS", str(width))
+        code, out, err = run_cli(capsys, "runs", "--db", str(db))
+        assert code == 0, err
+        table = out.splitlines()[2:7]  # the header, its rule and the three runs
+        if width == 80:
+            assert all(len(line) <= width for line in table), table
+            assert "seeds" not in table[0] and "took" not in table[0]  # dropped to fit
+        # Narrower, the terminal wraps the lines: never is a name cut.
+        for name in ("frozenlake", "expected-sarsa", "cliffwalking", "double-q", "monte-carlo",
+                     "compare (interrupted)", "sweep (failed)", "return"):
+            assert name in out, (width, name)
+        assert "…" not in out
+    monkeypatch.setenv("COLUMNS", "160")
+    code, out, _ = run_cli(capsys, "runs", "--db", str(db))
+    assert all(column in out.splitlines()[2] for column in ("seeds", "started", "took"))
+
+
+def test_the_listing_is_a_screenful_unless_asked(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    db = tmp_path / "runs.db"
+    record(db, *[("train", "blackjack", "q-learning", "finished")] * 40)
+    monkeypatch.setenv("LINES", "24")
+    monkeypatch.setenv("COLUMNS", "100")
+    code, out, err = run_cli(capsys, "runs", "--db", str(db))
+    assert code == 0, err
+    assert len(out.splitlines()) <= 24 and "the newest 15 of 40 runs" in out
+    assert out.count(" blackjack ") == 15
+    code, out, _ = run_cli(capsys, "runs", "--db", str(db), "--limit", "0")
+    assert out.count(" blackjack ") == 40 and "newest" not in out
+    code, out, _ = run_cli(capsys, "runs", "--db", str(db), "--limit", "3")
+    assert out.count(" blackjack ") == 3 and "the newest 3 of 40 runs" in out
+    listing = json.loads(run_cli(capsys, "runs", "--db", str(db), "--json")[1])
+    assert len(listing["runs"]) == 40 and listing["total"] == 40
+    listing = json.loads(run_cli(capsys, "runs", "--db", str(db), "--json", "--limit", "5")[1])
+    assert [r["id"] for r in listing["runs"]] == [40, 39, 38, 37, 36] and listing["total"] == 40
+
+
+def test_a_damaged_history_says_how_to_recover_and_recover_copies_what_reads(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import numpy as np
+
+    monkeypatch.setenv("COLUMNS", "400")  # the paths on one line each
+    from tui_gym.core.experiments import Curve
+
+    db = tmp_path / "runs.db"
+    with RunHistory(db) as history:
+        for seed in range(60):
+            run_id = history.start_run(RunSpec("train", "blackjack", "q-learning", seeds=(seed,)))
+            history.put_curves(run_id, [Curve.per_episode("return", np.zeros(300))])
+    conn = sqlite3.connect(db)
+    root = conn.execute("SELECT rootpage FROM sqlite_master WHERE name = 'curves'").fetchone()[0]
+    page_size = conn.execute("PRAGMA page_size").fetchone()[0]
+    conn.close()
+    data = bytearray(db.read_bytes())
+    data[(root - 1) * page_size: root * page_size] = b"\xff" * page_size  # the curves' table
+    db.write_bytes(bytes(data))
+    damaged = db.read_bytes()
+    assert len(json.loads(run_cli(capsys, "runs", "--db", str(db), "--json")[1])["runs"]) == 60
+    code, out, err = run_cli(capsys, "runs", "show", "7", "--db", str(db))
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert "is damaged" in err and f"tui-gym runs --recover --db {db}" in err
+
+    code, out, err = run_cli(capsys, "runs", "--recover", "--db", str(db))
+    assert code == 0, err
+    copy = tmp_path / "runs.recovered.db"
+    said = " ".join(out.split())
+    assert f"copied 60 runs from {db} into {copy}; 60 of them without their curves" in said
+    assert f"tui-gym runs --db {copy}" in said and "SQLite finds:" in said
+    assert db.read_bytes() == damaged  # the original is never written
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["runs.db", "runs.recovered.db"]
+    listing = json.loads(run_cli(capsys, "runs", "--db", str(copy), "--json")[1])
+    assert sorted(r["seeds"][0] for r in listing["runs"]) == list(range(60))
+    conn = sqlite3.connect(copy)
+    assert conn.execute("PRAGMA integrity_check").fetchall() == [("ok",)]
+    conn.close()
+    # Again: a second copy beside the first, which stays as it was.
+    first = copy.read_bytes()
+    code, out, _ = run_cli(capsys, "runs", "--recover", "--db", str(db), "--json")
+    assert code == 0 and json.loads(out)["target"] == str(tmp_path / "runs.recovered-2.db")
+    assert copy.read_bytes() == first
+
+
+def test_recover_says_so_when_nothing_can_be_read(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = tmp_path / "runs.db"
+    db.write_bytes(b"not a database at all\n" * 100)
+    code, out, err = run_cli(capsys, "runs", "--recover", "--db", str(db))
+    assert code == 2 and out == "" and err.count("\n") == 1 and "nothing can be read" in err
+    assert [p.name for p in tmp_path.iterdir()] == ["runs.db"]
+    code, _, err = run_cli(capsys, "runs", "--recover", "show", "1", "--db", str(db))
+    assert code == 2 and "--recover" in err

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
 import math
@@ -15,6 +16,7 @@ import sys
 import time
 import tracemalloc
 import zipfile
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -215,6 +217,28 @@ def test_a_kill_during_a_write_leaves_a_temp_file_the_next_save_removes(tmp_path
     assert [p.name for p in tmp_path.iterdir()] == ["agent.tgym"]
 
 
+@pytest.fixture(params=["none", "SIG_IGN", "a function"])
+def sigint_left_behind(request: pytest.FixtureRequest) -> Iterator[None]:
+    """A SIGINT handler an earlier test in this process may leave (a child's SIG_IGN, an
+    app's own), put back as it was afterwards."""
+    found = signal.getsignal(signal.SIGINT)
+    left = {"none": found, "SIG_IGN": signal.SIG_IGN, "a function": lambda *args: None}
+    signal.signal(signal.SIGINT, left[request.param])
+    yield
+    signal.signal(signal.SIGINT, found)
+
+
+@contextlib.contextmanager
+def python_sigint() -> Iterator[None]:
+    """SIGINT as Python starts a program (KeyboardInterrupt), then the handler found."""
+    found = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, found)
+
+
+@pytest.mark.usefixtures("sigint_left_behind")
 def test_a_signal_during_a_write_waits_for_the_write(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -225,20 +249,21 @@ def test_a_signal_during_a_write_waits_for_the_write(
         real_fsync(fd)
         signal.raise_signal(signal.SIGINT)  # ctrl+c in the middle of the write
 
-    monkeypatch.setattr(os, "fsync", fsync_then_interrupt)
-    with pytest.raises(KeyboardInterrupt):
-        _trained(episodes=10).save(path)
-    monkeypatch.undo()
+    with python_sigint():
+        monkeypatch.setattr(os, "fsync", fsync_then_interrupt)
+        with pytest.raises(KeyboardInterrupt):
+            _trained(episodes=10).save(path)
+        monkeypatch.undo()
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
     assert [p.name for p in tmp_path.iterdir()] == ["agent.tgym"]
     assert Session.load(path).trainer.episodes == 10
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
 @pytest.mark.parametrize(
     ("name", "fragment"),
     [
-        ("", "the save path is empty"),
-        ("  ", "the save path is empty"),
+        ("", "the path is empty"),
+        ("  ", "the path is empty"),
         ("no/such/agent.tgym", "the folder"),
         (".", "is a folder"),
         ("sub/", "a file name is needed"),

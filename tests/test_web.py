@@ -48,6 +48,16 @@ def read_line(stream: Any, deadline: float) -> str:
     return stream.readline().decode("utf-8", "replace")
 
 
+def stop(process: subprocess.Popen[bytes]) -> None:
+    """End a server as ctrl+c does (killed if it does not end in time)."""
+    process.send_signal(signal.SIGINT)
+    try:
+        process.wait(timeout=15)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
+
+
 @pytest.fixture(scope="module")
 def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     """`tui-gym serve` on a free port; its URL."""
@@ -69,12 +79,7 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
         assert f"Serving tui-gym at http://127.0.0.1:{port} on this machine only." in said, said
         yield f"http://127.0.0.1:{port}"
     finally:
-        process.send_signal(signal.SIGINT)
-        try:
-            process.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
+        stop(process)
 
 
 async def read_until(ws: Any, wanted: bytes, seen: bytearray) -> None:
@@ -95,7 +100,11 @@ async def test_the_page_is_served_and_a_key_reaches_the_app(server: str) -> None
             page = await response.text()
         ws_url = server.replace("http://", "ws://") + "/ws"
         assert f'data-session-websocket-url="{ws_url}"' in page
-        async with client.ws_connect(ws_url + "?width=110&height=32") as ws:
+        for origin in ("http://evil.example", None):  # another site's page, or no page
+            with pytest.raises(aiohttp.WSServerHandshakeError) as refused:
+                await client.ws_connect(ws_url, origin=origin)
+            assert refused.value.status == 403
+        async with client.ws_connect(ws_url + "?width=110&height=32", origin=server) as ws:
             seen = bytearray()
             await read_until(ws, b"tui-gym", seen)  # the app's title in its header
             seen.clear()
@@ -199,6 +208,34 @@ def test_serve_refuses_a_public_host_and_says_how_to_install_the_extra(
     )
     assert main(["--record", "x.jsonl", "serve"]) == 2
     assert "does not go with serve" in capsys.readouterr().err
+    assert main(["serve", "--host", "0.0.0.0", "--public", "--token", "short"]) == 2
+    assert "--token must be at least 8 characters" in capsys.readouterr().err
+
+
+def test_public_serves_with_a_token_it_makes_up_and_prints(tmp_path: Path) -> None:
+    port = free_port()
+    process = subprocess.Popen(
+        [sys.executable, "-m", "tui_gym", "serve", "--host", "127.0.0.1", "--public",
+         "--port", str(port)],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, cwd=tmp_path,
+        env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])},
+    )
+    try:
+        said = read_line(process.stdout, time.monotonic() + START_SECONDS)
+        found = re.search(rf"at http://127\.0\.0\.1:{port}/\?token=([\w-]{{20,}}) on this "
+                          r"machine only, with its token\.", said)
+        assert found, said
+
+        async def pages() -> tuple[int, int]:
+            async with aiohttp.ClientSession() as client:
+                base = f"http://127.0.0.1:{port}/"
+                async with client.get(base) as without, \
+                        client.get(base, params={"token": found.group(1)}) as with_token:
+                    return without.status, with_token.status
+
+        assert asyncio.run(pages()) == (401, 200)
+    finally:
+        stop(process)
 
 
 @pytest.mark.parametrize(

@@ -553,3 +553,32 @@ def test_distance_shaping_refuses_envs_without_distance() -> None:
         "not"
     )
     assert spec.fits(gym.make("gymnasium_env/GridWorld-v0")) is None
+
+
+# -- the length of a chain ------------------------------------------------------
+
+
+def test_a_chain_longer_than_the_cap_is_refused_wherever_it_comes_from(
+    tmp_path: Any, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from tests.test_storage import _with_meta
+    from tui_gym.cli import main
+    from tui_gym.core.wrappers import MAX_CHAIN
+    from tui_gym.session.session import Session
+    from tui_gym.session.storage import StorageError
+
+    delay = W("DelayObservation")
+    build_env(GRID, choices=[delay] * MAX_CHAIN).close()
+    too_many = f"a chain of {MAX_CHAIN + 1} wrappers: a chain holds at most {MAX_CHAIN}"
+    for build in (build_env, build_env_lenient, check_choices):
+        with pytest.raises(ValueError, match=too_many):
+            build(GRID, None, [delay] * (MAX_CHAIN + 1))
+    assert main(["train", "blackjack", *["--wrapper=DelayObservation"] * 2_000]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "a chain of 2,000 wrappers" in err
+    # A save file that names 2,000 of them.
+    path = tmp_path / "agent.tgym"
+    Session("blackjack").save(path)
+    path.write_bytes(_with_meta(path.read_bytes(), wrappers=["DelayObservation"] * 2_000))
+    with pytest.raises(StorageError, match="wrappers is not valid: a chain of 2,000 wrappers"):
+        Session.load(path)

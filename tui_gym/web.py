@@ -5,9 +5,11 @@ options given before `serve`: `tui-gym --env gridworld serve`) in a process of
 its own, its screen drawn in the page by textual-serve's terminal. The server
 listens on 127.0.0.1 unless told otherwise, so only this machine reaches it;
 a host that is not a loopback address is refused unless `--public` says that
-everyone who can reach it may use the app (which can read and write files
-here, as the person who started it). The page's links follow the address the
-browser used, so it works under any name the server is reached by.
+everyone who can reach it and has its token may use the app (which can read and
+write files here, as the person who started it). The page's links follow the
+address the browser used. `web_guard.ServeGuard`, a middleware on textual-serve's
+aiohttp application, decides who may open an app: the served page only (its
+Origin), at most `--max-apps` at once, and with `--public` only with the token.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ if TYPE_CHECKING:
 
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 8000
+DEFAULT_MAX_APPS = 4
 INSTALL_HINT = "pip install 'tui-gym[web]'"
 
 
@@ -54,7 +57,14 @@ def add_serve_parser(sub: Any) -> None:
     serve.add_argument("--port", type=_int_in(1, 65535, "a port number from 1 to 65535"),
                        default=DEFAULT_PORT, help=f"port to listen on (default {DEFAULT_PORT})")
     serve.add_argument("--public", action="store_true",
-                       help="allow a --host that other machines can reach")
+                       help="allow a --host that other machines can reach (with a token)")
+    serve.add_argument("--token", metavar="TOKEN",
+                       help="the token the page needs (?token=TOKEN); --public makes one up "
+                       "and prints it when none is given")
+    serve.add_argument("--max-apps", type=_int_in(1, 64, "a number of apps from 1 to 64"),
+                       default=DEFAULT_MAX_APPS, metavar="N",
+                       help=f"apps (browser tabs) running at once, at most (default "
+                       f"{DEFAULT_MAX_APPS})")
 
 
 def check_host(host: str, public: bool) -> None:
@@ -66,6 +76,19 @@ def check_host(host: str, public: bool) -> None:
             f"--host {host} is not a local address: anyone who can reach it could use the "
             "app, which reads and writes files here; add --public to serve it there anyway"
         )
+
+
+def serve_token(token: str | None, public: bool) -> str | None:
+    """The token the page needs: the one given, or with `public` a new one; CliError for
+    a token too short to protect anything."""
+    if token is not None and len(token.strip()) < 8:
+        raise CliError("--token must be at least 8 characters: anyone could guess a shorter "
+                       "one (leave it out and --public makes one up)")
+    if token is None and public:
+        from tui_gym.web_guard import new_token
+
+        return new_token()
+    return token
 
 
 def app_command(args: argparse.Namespace) -> str:
@@ -81,10 +104,15 @@ def cmd_serve(args: argparse.Namespace, out: Console) -> int:
     if args.record is not None:
         raise CliError("--record records the app in this terminal; it does not go with serve")
     check_host(args.host, args.public)
+    token = serve_token(args.token, args.public)
     try:
         from textual_serve.server import Server
     except ImportError:
         raise CliError(f"tui-gym serve needs textual-serve: {INSTALL_HINT}") from None
+    from tui_gym.web_guard import ServeGuard
+
+    guard = ServeGuard(max_apps=args.max_apps, token=token,
+                       host_allowed=None if args.public else is_local)
     if args.load:
         from tui_gym.session.session import Session
 
@@ -113,8 +141,9 @@ def cmd_serve(args: argparse.Namespace, out: Console) -> int:
             for signal_number in (signal.SIGINT, signal.SIGTERM):
                 loop.add_signal_handler(signal_number, self.request_exit)
             web.run_app(
-                self._make_app(), host=self.host, port=self.port, handle_signals=False,
-                loop=loop, print=lambda *_: say_serving(args.host, args.port),
+                guarded_app(self, guard), host=self.host, port=self.port,
+                handle_signals=False, loop=loop,
+                print=lambda *_: say_serving(args.host, args.port, token),
             )
 
         async def handle_index(self, request: web.Request) -> Any:
@@ -128,12 +157,41 @@ def cmd_serve(args: argparse.Namespace, out: Console) -> int:
     return 0
 
 
-def say_serving(host: str, port: int) -> None:
+async def guarded_app(server: Any, guard: Any) -> web.Application:
+    """textual-serve's aiohttp application with `guard`'s middleware in front."""
+    # textual-serve's private `_make_app` builds its application (routes, templates); the
+    # one private name used here. Without it, the same routes on its public handlers.
+    make = getattr(server, "_make_app", None)
+    app = await make() if make is not None else _public_app(server)
+    app.middlewares.append(guard.middleware)
+    return app
+
+
+def _public_app(server: Any) -> web.Application:
+    """textual-serve's routes, built from its public handlers (see `guarded_app`)."""
+    import aiohttp_jinja2
+    import jinja2
+    from aiohttp import web
+
+    app = web.Application()
+    aiohttp_jinja2.setup(app, loader=jinja2.FileSystemLoader(server.templates_path))
+    app.add_routes([
+        web.get("/", server.handle_index, name="index"),
+        web.get("/ws", server.handle_websocket, name="websocket"),
+        web.get("/download/{key}", server.handle_download, name="download"),
+        web.static("/static", server.statics_path, name="static"),
+    ])
+    return app
+
+
+def say_serving(host: str, port: int, token: str | None = None) -> None:
     """The line that says the server listens: where, and to whom."""
-    url = f"http://{_url_host(host)}:{port}"
+    url = f"http://{_url_host(host)}:{port}" + (f"/?token={token}" if token else "")
     who = "on this machine only" if is_local(host) else (
         "to anyone who can reach this machine (--public)"
     )
+    if token:
+        who += ", with its token"
     sys.stdout.write(f"Serving tui-gym at {url} {who}. Open it in a browser; "
                      "each tab runs its own app. Ctrl+C stops.\n")
     sys.stdout.flush()

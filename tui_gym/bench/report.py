@@ -38,7 +38,7 @@ from typing import Any
 
 from rich.table import Table
 
-from tui_gym.bench import history, programs
+from tui_gym.bench import dp, history, programs
 from tui_gym.bench.live import RUNNERS
 from tui_gym.bench.results import BenchResults
 
@@ -143,6 +143,7 @@ def verdicts(results: BenchResults) -> dict[str, str]:
     out["example_6_6"] = _ok(online[1] if len(online) == 2 else None,
                              len(online) == 2 and online[1] > online[0])
     out.update(history.verdicts(results.history, MISSING, _ok))
+    out.update(dp.verdicts(results.dp, MISSING, _ok))
     return out
 
 
@@ -315,6 +316,7 @@ def to_json(results: BenchResults) -> dict[str, Any]:
         ],
         "history": history.to_json(results.history),
         "compare": _seeds_dict(results),
+        "planning_dp": dp.to_json(results.dp),
         "verdicts": verdicts(results),
         "errors": dict(results.errors),
     }
@@ -458,7 +460,8 @@ def table(results: BenchResults) -> Table:
             f"{found_defaults.met} of {found_defaults.seeds} (worst {found_defaults.worst:.4g};"
             f" {found_defaults.bound})", f"≥ {DEFAULTS_SHARE_TARGET:.0%}",
             f"defaults[{found_defaults.game}/{found_defaults.algorithm}]")
-    for label, value, target, verdict_key in history.rows(results.history):
+    for label, value, target, verdict_key in (*history.rows(results.history),
+                                              *dp.rows(results.dp)):
         row(label, value, target, verdict_key)
     for stage, error in results.errors.items():
         out.add_row(f"{stage} failed", f"[red]{error}[/]", "", _STYLE[MISSING])

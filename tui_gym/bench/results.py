@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 from tui_gym.bench.compiling import CompileResult
 from tui_gym.bench.defaults import DefaultsResult
+from tui_gym.bench.dp import DPResult
 from tui_gym.bench.gap import GapResult
 from tui_gym.bench.history import HistoryResult
 from tui_gym.bench.learners import PlanningResult
@@ -46,6 +47,7 @@ class BenchResults:
     history: HistoryResult | None = None  # the run history's overhead and size
     seeds: SeedsSpeed | None = None  # `compare` against the same learners in a loop
     defaults: tuple[DefaultsResult, ...] | None = None  # the share of seeds at the bound
+    dp: DPResult | None = None  # planning: sweeps, Jack's car rental, the Plan view
     errors: dict[str, str] = field(default_factory=dict)  # stage -> what went wrong
     default_runner: str = DEFAULT_RUNNER
 

@@ -24,6 +24,7 @@ from tui_gym.algorithms import ALGORITHMS
 from tui_gym.bench import (
     compiling,
     defaults,
+    dp,
     gap,
     history,
     learners,
@@ -141,6 +142,8 @@ def run_bench(
           f"{map_edit.MAP_SIDE} maps", lambda: tuple(map_edit.measure()))
     stage("history", "the run history: recording's share of a train run, the file's size",
           lambda: history.measure(3 if quick else 5))
+    stage("dp", "planning: sweeps, Jack's car rental, the Plan view",
+          lambda: dp.measure(plan.live_seconds, plan.key_presses, plan.live_repeats, say))
     return BenchResults(
         quick=quick,
         seconds=time.perf_counter() - started,
@@ -157,5 +160,6 @@ def run_bench(
         history=found.get("history"),
         seeds=found.get("seeds"),
         defaults=found.get("defaults"),
+        dp=found.get("dp"),
         errors=errors,
     )

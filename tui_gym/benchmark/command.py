@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
-import math
 import sys
 from typing import Any
 
@@ -12,6 +10,8 @@ from rich import box
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
+
+from tui_gym.cli.output import print_json
 
 BUILT_IN = ("random", "optimal")
 
@@ -100,21 +100,6 @@ def _player(args: argparse.Namespace, game: str) -> tuple[Any, dict[str, Any], t
     return agent, dict(session.env_kwargs), tuple(str(c) for c in session.applied)
 
 
-def _print_json(data: dict[str, Any]) -> None:
-    """One JSON object on stdout (a number that is not finite as null)."""
-    def clean(value: Any) -> Any:
-        if isinstance(value, float) and not math.isfinite(value):
-            return None
-        if isinstance(value, dict):
-            return {k: clean(v) for k, v in value.items()}
-        if isinstance(value, list | tuple):
-            return [clean(v) for v in value]
-        return value
-
-    sys.stdout.write(json.dumps(clean(data)) + "\n")
-    sys.stdout.flush()
-
-
 def _summary(title: str, rows: list[tuple[str, str]]) -> Table:
     table = Table(title=title, show_header=False, title_justify="left")
     table.add_column(style="bold")
@@ -129,14 +114,14 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
         return _show_leaderboard(args, out)
     if not args.decision_timeout > 0:
         raise ValueError("--decision-timeout must be a positive number of seconds")
+    from tui_gym.benchmark.group import ending_on_signals
     from tui_gym.benchmark.leaderboard import record
     from tui_gym.benchmark.run import run_benchmark
 
     recorder = None
     if args.record is not None:
-        from tui_gym.cli.replay_command import check_record_path, open_recorder
+        from tui_gym.cli.replay_command import open_recorder
 
-        check_record_path(args.record)
         path, seed = args.record, args.bench_seed
 
         def recorder(session: Any) -> Any:
@@ -147,24 +132,30 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
         if not args.name.strip():
             raise ValueError("--name cannot be empty")
         player.label = args.name.strip()
-    result = run_benchmark(
-        args.game, player, episodes=args.episodes, seed=args.bench_seed, params=params,
-        wrappers=wrappers, decision_timeout=args.decision_timeout,
-        allow_hints=args.allow_hints, recorder=recorder,
-    )
-    recorded = ""
+    with ending_on_signals():  # SIGTERM and SIGHUP end the player's program as ctrl+c does
+        result = run_benchmark(
+            args.game, player, episodes=args.episodes, seed=args.bench_seed, params=params,
+            wrappers=wrappers, decision_timeout=args.decision_timeout,
+            allow_hints=args.allow_hints, recorder=recorder,
+        )
+    recorded = unrecorded = ""
     if not args.no_record:
-        from tui_gym.core.experiments import resolve_db_path
+        from tui_gym.core.experiments import RunHistoryError, resolve_db_path
 
-        run_id = record(result, args.db)
-        object.__setattr__(result, "run_id", run_id)
-        recorded = f"recorded as run {run_id} in {resolve_db_path(args.db)}"
+        try:  # a history that fails (a full disk) must not lose the result: said after it
+            run_id = record(result, args.db)
+        except RunHistoryError as exc:
+            unrecorded = f"tui-gym: this result was not recorded in the run history: {exc}\n"
+        else:
+            object.__setattr__(result, "run_id", run_id)
+            recorded = f"recorded as run {run_id} in {resolve_db_path(args.db)}"
     if args.json:
-        _print_json(result.to_json())
-        return 0
-    out.print(_summary(f"Benchmark: {result.game}", result.rows()))
-    if recorded:
-        out.print(escape(recorded))
+        print_json("benchmark", result.to_json())
+    else:
+        out.print(_summary(f"Benchmark: {result.game}", result.rows()))
+        if recorded:
+            out.print(escape(recorded))
+    sys.stderr.write(unrecorded)
     return 0
 
 
@@ -175,7 +166,8 @@ def _show_leaderboard(args: argparse.Namespace, out: Console) -> int:
     game = find_game(args.game).name
     path, standings = leaderboard(game, args.db)
     if args.json:
-        _print_json({"game": game, "db": path, "runs": [s.to_json() for s in standings]})
+        print_json("benchmark", {"game": game, "db": path,
+                                 "runs": [s.to_json() for s in standings]})
         return 0
     if not standings:
         out.print(escape(f"no benchmark of {game} is recorded in {path} yet"))

@@ -11,7 +11,9 @@ time limit; a decision not made in time is made with the default action, and
 the late request is answered with the state the game is in by then. A player
 that misses `MAX_STRIKES` decisions in a row, exits, closes its output, or
 stops reading is done for: the rest of the benchmark is played with the
-default action, and the program is ended at the end.
+default action, and the program is ended at the end. The program runs in a process
+group of its own, ended whole (its children with it) however the benchmark ends,
+even when it is killed outright (see `group`).
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from typing import IO, Any
 
 import numpy as np
 
+from tui_gym.benchmark.group import start_group
 from tui_gym.benchmark.referee import Referee
 from tui_gym.session.arena.games import raw_observation, session_entry
 from tui_gym.session.protocol import parse_request, read_lines
@@ -152,11 +155,12 @@ class _Program:
 
     def __init__(self, argv: list[str]) -> None:
         try:
-            self.process = subprocess.Popen(
+            self.group = start_group(
                 argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE
             )
         except OSError as exc:
             raise PlayerError(f"cannot start {argv[0]!r}: {exc.strerror or exc}") from None
+        self.process = self.group.process
         assert self.process.stdin and self.process.stdout and self.process.stderr
         self.lines: queue.Queue[tuple[float, Any]] = queue.Queue()  # (when read, line)
         self.stderr: deque[str] = deque(maxlen=STDERR_LINES)
@@ -209,18 +213,9 @@ class _Program:
         return True
 
     def stop(self, grace: float) -> int | None:
-        """Close its input, give it `grace` s to exit, then end it; its exit code (None
-        when it had to be ended)."""
-        with contextlib.suppress(OSError):
-            self.process.stdin.close()  # type: ignore[union-attr]
-        try:
-            if grace <= 0:
-                raise subprocess.TimeoutExpired(self.process.args, grace)
-            code = self.process.wait(timeout=grace)
-        except subprocess.TimeoutExpired:
-            self.process.kill()
-            self.process.wait()
-            code = None
+        """Close its input, give it `grace` s to exit, then end its whole process group;
+        its exit code (None when it had to be ended)."""
+        code = self.group.end(grace)
         self._stderr_done.join(timeout=1.0)
         return code
 
@@ -242,6 +237,7 @@ class ProcessPlayer(Player):
         program = _Program(self.argv)
         outcome = PlayOutcome()
         gone = ""
+        played = False
         try:
             gone = self._serve(program, referee, decision_timeout, outcome)
             if gone:
@@ -250,11 +246,13 @@ class ProcessPlayer(Player):
                                  "the rest was played with the default action"
                 while not referee.finished:
                     referee.play_default(gone)
+            played = True
         finally:
-            # A program done for but still running is ended at once; others may exit on
-            # their own once their input ends.
+            # A program done for but still running, or a benchmark cut short (ctrl+c, a
+            # signal, an error), ends it at once; others may exit on their own once their
+            # input ends.
             running = program.process.poll() is None
-            code = program.stop(0.0 if gone and running else EXIT_GRACE_S)
+            code = program.stop(EXIT_GRACE_S if played and not (gone and running) else 0.0)
         outcome.exit_code = code
         outcome.stderr_tail = "\n".join(program.stderr)
         if gone and code is None:

@@ -73,9 +73,16 @@ def _shown(value: Any) -> str:
     return f"{value:g}" if isinstance(value, float) else str(value)
 
 
+def _default_text(field: Field) -> str:
+    """A parameter's default and what it takes: `=100 in [1, 100000]`, `=true (true or false)`."""
+    allowed = field.describe_range()
+    where = f"in {allowed}" if allowed[:1] in "[(" else f"({allowed})"
+    return f"={_shown(field.default)} {where}"
+
+
 def cmd_envs(args: argparse.Namespace, out: Console) -> int:
     if args.json:
-        print_json({"envs": [
+        print_json("envs", {"envs": [
             {
                 "name": g.name,
                 "env_id": g.env_id,
@@ -112,7 +119,7 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.core.wrappers import CATALOG
 
     if args.json:
-        print_json({
+        print_json("wrappers", {
             "wrappers": [
                 {
                     "name": spec.name,
@@ -131,7 +138,7 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
             out.print(f"\n[bold cyan]{spec.name}[/]")
             out.print(escape(spec.summary), overflow="fold")
             for p in spec.params:
-                out.print(f"  {p.name}={p.default} {escape(p.describe_range())}", overflow="fold")
+                out.print(f"  {p.name}{escape(_default_text(p))}", overflow="fold")
     else:
         out.print(_wrapper_table(CATALOG))
     out.print(
@@ -152,7 +159,7 @@ def _wrapper_table(catalog: dict[str, Any]) -> Table:
     table.add_column("parameters (default, range)", min_width=longest, overflow="fold")
     for spec in catalog.values():
         params = "\n".join(
-            f"{p.name}\n  ={p.default} {p.describe_range()}" for p in spec.params
+            f"{p.name}\n  {_default_text(p)}" for p in spec.params
         ) or "-"
         table.add_row(spec.name, escape(spec.summary), escape(params))
     return table
@@ -160,7 +167,7 @@ def _wrapper_table(catalog: dict[str, Any]) -> Table:
 
 def cmd_algorithms(args: argparse.Namespace, out: Console) -> int:
     if args.json:
-        print_json({"algorithms": [
+        print_json("algorithms", {"algorithms": [
             {
                 "name": cls.name,
                 "title": cls.title,
@@ -179,7 +186,7 @@ def cmd_algorithms(args: argparse.Namespace, out: Console) -> int:
     common = {field.name for field in COMMON_PARAMS}
     for cls in ALGORITHMS:
         own = "\n".join(
-            f"{f.name}\n  ={f.default} {f.describe_range()}" for f in cls.params
+            f"{f.name}\n  {_default_text(f)}" for f in cls.params
             if f.name not in common
         ) or "-"
         table.add_row(cls.name, escape(f"{cls.title}: {cls.summary}"), escape(cls.formula),
@@ -339,12 +346,9 @@ def _wrapper_dicts(session: Session) -> list[dict[str, Any]]:
 
 
 def cmd_train(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.session.storage import check_save_path
-
     if args.target_gap is not None and args.target_gap <= 0:
         raise CliError(f"--target-gap must be a positive number, got {args.target_gap:g}")
-    # Before training: a run is not lost to a save path that cannot be written.
-    save_path = check_save_path(args.save) if args.save is not None else None
+    save_path = args.save  # checked as the arguments were read (`output_file`)
     session = _session_from_args(args)
     recording = args.recording  # the run history's record of this run (see `recorded`)
     recording.begin(session)
@@ -385,7 +389,7 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
         data.update(target_gap=args.target_gap, reached_target=outcome.reached_target,
                     checked_gap=outcome.gap)
     if args.json:
-        print_json(data)
+        print_json("train", data)
         return 0
     rows = [
         ("env", f"{session.env_id} {session.env_kwargs or ''}".strip()),
@@ -416,7 +420,7 @@ def cmd_eval(args: argparse.Namespace, out: Console) -> int:
     report = session.evaluate(args.episodes, seed=seed)
     data = eval_dict(session, report)
     if args.json:
-        print_json(data)
+        print_json("eval", data)
         return 0
     rows = [("file", args.path), ("env", session.env_id),
             ("algorithm", session.learner_class.title), ("wrappers", session.chain_repr())]
@@ -450,19 +454,21 @@ def cmd_optimal(args: argparse.Namespace, out: Console) -> int:
                  "value": float(np.max(q))}
                 for obs, q, marks in zip(states, optimum.q, optimum.marks, strict=True)
             ]
-        print_json(data)
+        print_json("optimal", data)
         return 0
-    if listed:
-        assert optimum.q is not None
+    shown = game.solution(kwargs)  # action values that point the optimal moves
+    if not isinstance(shown, NotAvailable) and shown.q is not None:
         layout = game.layout
         focus = layout.default_focus(kwargs)
-        for panel in layout.heatmaps(np.asarray(optimum.q), kwargs, focus, optimum.marks):
+        for panel in layout.heatmaps(np.asarray(shown.q), kwargs, focus, shown.marks):
             out.print(_panel_table(panel))
     # An edited map's text is shown as its size; its rows are in the table above.
     rules = ", ".join(f"{k}={v}" if k != "layout" else f"a {game.grid_map(kwargs).size_text} map"
                       for k, v in kwargs.items())
     out.print(f"{game.title}{f' ({rules})' if rules else ''}: {optimum.summary}.")
     out.print(f"Exact value of the optimum: [bold]{signed(optimum.value, 5)}[/]")
+    for name, value in optimum.figures.items():
+        out.print(f"{name.replace('_', ' ').capitalize()}: {value:.5g}")
     return 0
 
 
@@ -472,10 +478,11 @@ def _panel_table(panel: Any) -> Table:
     table.add_column("", justify="right", style="bold")
     for label in panel.col_labels:
         table.add_column(label, justify="center")
-    for row_label, labels in zip(panel.row_labels, panel.labels, strict=True):
-        table.add_row(row_label, *(escape(text) for text in labels))
-    if panel.legend:
-        table.caption = panel.legend.replace("* not", "not").split("  * ")[0]
+    for row_label, labels, marked in zip(panel.row_labels, panel.labels, panel.marked.tolist(),
+                                         strict=True):
+        table.add_row(row_label, *(escape(text) + ("*" if mark else "")
+                                   for text, mark in zip(labels, marked, strict=True)))
+    table.caption = panel.legend or None
     return table
 
 
@@ -510,7 +517,7 @@ def cmd_screenshots(args: argparse.Namespace, out: Console) -> int:
 
     paths = [str(path) for path in write_screenshots(args.directory)]
     if args.json:
-        print_json({"written": paths})
+        print_json("screenshots", {"written": paths})
         return 0
     for path in paths:
         out.print(f"wrote {path}")
@@ -528,7 +535,7 @@ def cmd_bench(args: argparse.Namespace, out: Console) -> int:
         except ValueError as exc:
             raise CliError(f"--algorithm: {exc}") from None
     if args.json:
-        print_json(to_json(run_bench(quick=args.quick, algorithms=names)))
+        print_json("bench", to_json(run_bench(quick=args.quick, algorithms=names)))
         return 0
     # Plain lines, not a spinner: a spinner's refresh thread would share the GIL
     # with the thread runner being measured.

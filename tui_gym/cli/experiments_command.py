@@ -8,8 +8,10 @@ final figure. Both take `--json` (one object), show a progress bar with an
 ETA on a terminal, stop cleanly on the first Ctrl+C (what finished is kept,
 printed and recorded; a second Ctrl+C ends at once), and record their runs in
 the run history (`--db PATH`, else `TUI_GYM_DB`, else the data folder's file;
-`--no-record` opts out). `compare --csv PATH` writes every episode's mean and
-band per algorithm.
+`--no-record` opts out). A history that fails while they run (a full disk)
+loses nothing: the results are printed, then one line says they were not
+recorded. `compare --csv PATH` writes every episode's mean and band per
+algorithm.
 """
 
 from __future__ import annotations
@@ -20,7 +22,6 @@ import sys
 import threading
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
@@ -31,10 +32,11 @@ from tui_gym.algorithms import ALGORITHMS
 from tui_gym.cli.output import CliError, print_json, say_status
 from tui_gym.cli.types import file_name as _path
 from tui_gym.cli.types import int_in as _int_in
+from tui_gym.cli.types import output_file
 from tui_gym.cli.types import seed_number as _seed
 
 if TYPE_CHECKING:
-    from tui_gym.core.experiments import RunHistory
+    from tui_gym.core.experiments import BestEffortHistory
     from tui_gym.session.experiments.compare import AlgorithmOutcome, CompareProgress
 
 DB_HELP = "the run history file (default: $TUI_GYM_DB, else the data folder's runs.db)"
@@ -80,7 +82,7 @@ def add_experiment_parsers(sub: Any) -> None:
     compare.add_argument("--algorithms", required=True, metavar="A,B",
                          help=f"comma-separated learners: {names}")
     _common_options(compare)
-    compare.add_argument("--csv", type=_path, metavar="PATH",
+    compare.add_argument("--csv", type=output_file, metavar="PATH",
                          help="write each episode's mean and band per algorithm to a CSV file")
     compare.add_argument("--width", type=_int_in(20, 400, "a width from 20 to 400"),
                          default=None, metavar="W", help="chart width in characters")
@@ -120,17 +122,17 @@ def _wrappers(specs: Sequence[str]) -> tuple[Any, ...]:
 
 
 @contextmanager
-def _history(args: argparse.Namespace) -> Iterator[RunHistory | None]:
-    """The run history to record in (None with --no-record, or when it cannot be opened)."""
+def _history(args: argparse.Namespace) -> Iterator[BestEffortHistory | None]:
+    """The run history to record in (None with --no-record, or when it cannot be opened);
+    its writes never raise (see `_unrecorded`)."""
     if args.no_record:
         yield None
         return
-    from tui_gym.core.experiments import RunHistory, RunHistoryError, resolve_db_path
+    from tui_gym.core.experiments import BestEffortHistory, RunHistoryError, resolve_db_path
 
     path = resolve_db_path(args.db)
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        history = RunHistory(path)
+        history = BestEffortHistory(path)  # makes the folder, or says why it cannot
     except (RunHistoryError, OSError) as exc:
         text = str(exc) if isinstance(exc, RunHistoryError) else f"{path}: {exc}"
         sys.stderr.write(f"tui-gym: not recording these runs: {text}\n")
@@ -138,6 +140,15 @@ def _history(args: argparse.Namespace) -> Iterator[RunHistory | None]:
         return
     with history:
         yield history
+
+
+def _unrecorded(history: BestEffortHistory | None) -> bool:
+    """Say, after the results, that they were not recorded when a write failed; whether so."""
+    if history is None or history.failure is None:
+        return False
+    sys.stderr.write(f"tui-gym: these results were not recorded in the run history: "
+                     f"{history.failure}\n")
+    return True
 
 
 @contextmanager
@@ -249,10 +260,12 @@ def cmd_compare(args: argparse.Namespace, out: Console) -> int:
     if args.csv:
         _write_csv(args.csv, result.outcomes)
     if args.json:
-        print_json(result.to_json())
+        print_json("compare", result.to_json())
+        _unrecorded(history)
         return 130 if result.interrupted else 0
     if not result.outcomes:
         out.print("stopped before any episode finished; nothing to show")
+        _unrecorded(history)
         return 130
     out.print(_compare_table(result))
     width = args.width or max(20, min(100, out.width - 12))
@@ -260,13 +273,13 @@ def cmd_compare(args: argparse.Namespace, out: Console) -> int:
     if result.interrupted:
         out.print(f"[yellow]interrupted:[/] kept the first "
                   f"{min(o.episodes for o in result.outcomes):,} episodes of every seed")
-    if result.group is not None:
+    if args.csv:
+        out.print(f"curves written to {args.csv}", style="dim")
+    if not _unrecorded(history) and result.group is not None:
         ids = [str(o.run_id) for o in result.outcomes]
         noun = "run" if len(ids) == 1 else "runs"
         out.print(f"recorded in the run history as {noun} {', '.join(ids)} "
                   "(tui-gym runs show ID)", style="dim")
-    if args.csv:
-        out.print(f"curves written to {args.csv}", style="dim")
     return 130 if result.interrupted else 0
 
 
@@ -321,7 +334,7 @@ def _compare_chart(result: Any, width: int) -> Text:
 def _write_csv(path: str, outcomes: Sequence[AlgorithmOutcome]) -> None:
     import numpy as np
 
-    from tui_gym.core.experiments.csv_export import write_text_atomic
+    from tui_gym.core.files import write_atomically
 
     if not outcomes:
         return
@@ -339,7 +352,7 @@ def _write_csv(path: str, outcomes: Sequence[AlgorithmOutcome]) -> None:
         cells = [str(episode)] + ["" if np.isnan(c[i]) else repr(float(c[i])) for c in columns]
         lines.append(",".join(cells))
     try:
-        write_text_atomic(Path(path).expanduser(), "\n".join(lines) + "\n")
+        write_atomically(path, "\n".join(lines) + "\n")
     except OSError as exc:
         raise CliError(f"--csv {path}: cannot write ({exc.strerror or exc})") from None
 
@@ -382,13 +395,15 @@ def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
         except CompareError as exc:
             raise CliError(str(exc)) from None
     if args.json:
-        print_json(result.to_json())
+        print_json("sweep", result.to_json())
+        _unrecorded(history)
         return 130 if result.interrupted else 0
     out.print(_sweep_table(result))
     if len(spec.grid) == 2:
         out.print(_sweep_grid(result))
     if result.interrupted:
         out.print("[yellow]interrupted:[/] points show the episodes every seed finished")
+    _unrecorded(history)
     return 130 if result.interrupted else 0
 
 

@@ -18,6 +18,7 @@ import argparse
 import os
 import re
 import sys
+import textwrap
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
@@ -27,10 +28,11 @@ from tui_gym import __version__
 from tui_gym.algorithms import ALGORITHMS, DEFAULT_ALGORITHM
 from tui_gym.cli.flags import add_game_flags, add_hyperparameter_flags
 from tui_gym.cli.maps_command import add_maps_parser
-from tui_gym.cli.output import CliError, OutConsole
-from tui_gym.cli.types import file_name, finite_number, positive_int, seed_number
+from tui_gym.cli.output import JSON_SCHEMAS, CliError, OutConsole, readable
+from tui_gym.cli.types import finite_number, output_file, positive_int, seed_number
 
 ENV_HELP = "a game (`tui-gym envs` lists them), a Gymnasium id, or MODULE:ID"
+WRAPPER_HELP = "add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable, in order)"
 EXIT_USAGE = 2
 EXIT_BROKEN_PIPE = 128 + 13  # what a shell reports for a command ended by SIGPIPE
 
@@ -39,7 +41,7 @@ class _Parser(argparse.ArgumentParser):
     """argparse, but errors are one line on stderr and exit code 2."""
 
     def error(self, message: str) -> NoReturn:
-        sys.stderr.write(f"{self.prog}: error: {message}\n")
+        sys.stderr.write(f"{self.prog}: error: {readable(message)}\n")
         raise SystemExit(EXIT_USAGE)
 
     def _print_message(self, message: str, file: Any = None) -> None:
@@ -85,17 +87,20 @@ def build_parser() -> argparse.ArgumentParser:
         "  tui-gym train GAME --algorithm sarsa\n"
         "  tui-gym eval agent.tgym --json\n"
         "  tui-gym optimal GAME\n"
+        "  tui-gym plan GAME --method policy-iteration   dynamic programming, headless\n"
+        "  tui-gym book 4.3                 a figure of Sutton & Barto's, run and checked\n"
         "  tui-gym play GAME --jsonl        a program plays through JSON lines\n"
         "  tui-gym COMMAND --help           the options of one command",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"tui-gym {__version__}")
     parser.add_argument("--env", default="", help="game to open (default: the first of `envs`)")
-    parser.add_argument("--seed", type=seed_number, default=0, help="seed for every random thing")
+    parser.add_argument("--seed", type=seed_number, default=0, metavar="S",
+                        help="seed for every random thing (default 0)")
     parser.add_argument("--load", metavar="PATH", help="open a saved agent")
     parser.add_argument("--map-file", metavar="PATH", dest="app_map_file",
                         help="open a grid game (--env) on the map in this file")
-    parser.add_argument("--record", type=file_name, metavar="PATH",
+    parser.add_argument("--record", type=output_file, metavar="PATH",
                         help="record your games in the app to this file (ctrl+r: on/off)")
     parser.add_argument(
         "--runner", choices=("process", "thread"), default="process",
@@ -123,12 +128,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     # Read as text here and parsed by the fields themselves, so errors say "out of range".
     add_hyperparameter_flags(train)
-    train.add_argument("--seed", type=seed_number, default=0, dest="train_seed")
+    train.add_argument("--seed", type=seed_number, default=0, dest="train_seed", metavar="S",
+                       help="seed of the training run (default 0; the evaluation after it "
+                       "plays on S + 1)")
     add_game_flags(train)
-    train.add_argument(
-        "--wrapper", action="append", default=[], metavar="SPEC",
-        help="add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable, in order)",
-    )
+    train.add_argument("--wrapper", action="append", default=[], metavar="SPEC",
+                       help=WRAPPER_HELP)
     train.add_argument(
         "--engine", choices=("auto", "model", "env"), default="auto",
         help="auto: the compiled loop on the game's model when the wrappers let it follow "
@@ -144,15 +149,20 @@ def build_parser() -> argparse.ArgumentParser:
         help="greedy episodes to sample after the exact evaluation (default 10,000; "
         "a long-looping policy stops at the evaluation's step budget)",
     )
-    train.add_argument("--save", type=file_name, metavar="PATH",
+    train.add_argument("--save", type=output_file, metavar="PATH",
                        help="save the trained agent here (the folder is checked first)")
     train.add_argument("--json", action="store_true", help="print one JSON object, no bar")
     add_train_options(train)
 
     ev = sub.add_parser("eval", help="evaluate a saved agent (greedy play + exact reference)")
-    ev.add_argument("path", metavar="PATH")
-    ev.add_argument("--episodes", type=positive_int, default=10_000, metavar="N")
-    ev.add_argument("--seed", type=seed_number, default=None, dest="eval_seed")
+    ev.add_argument("path", metavar="PATH", help="a saved agent (train --save, or ctrl+s in "
+                    "the app)")
+    ev.add_argument("--episodes", type=positive_int, default=10_000, metavar="N",
+                    help="greedy episodes to sample (default 10,000; a long-looping policy "
+                    "stops at the evaluation's step budget)")
+    ev.add_argument("--seed", type=seed_number, default=None, dest="eval_seed", metavar="S",
+                    help="seed of the sampled episodes (default: one derived from the "
+                    "agent's training seed)")
     ev.add_argument("--json", action="store_true")
 
     opt = sub.add_parser("optimal", help="the exact optimal strategy and its value")
@@ -163,9 +173,11 @@ def build_parser() -> argparse.ArgumentParser:
     play.add_argument("env", metavar="ENV", help=ENV_HELP)
     play.add_argument("--jsonl", action="store_true", required=True,
                       help="read one JSON request a line, write one JSON response a line")
-    play.add_argument("--seed", type=seed_number, default=None, dest="play_seed")
+    play.add_argument("--seed", type=seed_number, default=None, dest="play_seed", metavar="S",
+                      help="seed of the first episode (a reset may give its own)")
     add_game_flags(play)
-    play.add_argument("--wrapper", action="append", default=[], metavar="SPEC")
+    play.add_argument("--wrapper", action="append", default=[], metavar="SPEC",
+                      help=WRAPPER_HELP)
     from tui_gym.cli.replay_command import add_record_option, add_replay_parser
     from tui_gym.web import add_serve_parser
 
@@ -176,9 +188,15 @@ def build_parser() -> argparse.ArgumentParser:
     from tui_gym.cli.experiments_command import add_experiment_parsers
 
     add_experiment_parsers(sub)
+    from tui_gym.cli.book_command import add_book_parser
+    from tui_gym.cli.plan_command import add_plan_parser
+
+    add_plan_parser(sub)
+    add_book_parser(sub)
 
     screenshots = sub.add_parser("screenshots", help="write the app's SVG screenshots")
-    screenshots.add_argument("directory", nargs="?", default="screenshots", metavar="DIR")
+    screenshots.add_argument("directory", nargs="?", default="screenshots", metavar="DIR",
+                             help="the folder to write them to (default screenshots)")
     screenshots.add_argument("--json", action="store_true", help="print one JSON object")
 
     bench = sub.add_parser("bench", help="measure speed, live training, memory and start-up")
@@ -195,7 +213,36 @@ def build_parser() -> argparse.ArgumentParser:
     from tui_gym.benchmark.command import add_parser as add_benchmark_parser
 
     add_benchmark_parser(sub, positive_int, seed_number, finite_number)
+    _document_json(parser)
     return parser
+
+
+def json_flags(parser: argparse.ArgumentParser, path: str = "") -> dict[str, argparse.Action]:
+    """Every sub-command that takes `--json` (`"runs show"`, ...) and its flag."""
+    found: dict[str, argparse.Action] = {}
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                command = f"{path} {name}".strip()
+                flag = sub._option_string_actions.get("--json")
+                if flag is not None:
+                    found[command] = flag
+                found.update(json_flags(sub, command))
+    return found
+
+
+def _document_json(parser: argparse.ArgumentParser) -> None:
+    """Each `--json` flag says its schema version; the main help lists the commands."""
+    flags = json_flags(parser)
+    for command, action in flags.items():
+        action.help = (f"print one JSON object instead (\"schema\": {JSON_SCHEMAS[command]}; "
+                       "the README lists its keys under JSON outputs)")
+    listed = textwrap.fill(
+        ", ".join(flags) + ' take --json: one JSON object, whose "schema" is its version '
+        "(the README lists each one's keys under JSON outputs)",
+        width=78, initial_indent="  ", subsequent_indent="  ",
+    )
+    parser.epilog = f"{parser.epilog}\n\nJSON:\n{listed}"
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -207,14 +254,22 @@ def main(argv: Sequence[str] | None = None) -> int:
         out = OutConsole()
         if args.command is None:
             return _run_app(args)
+        if ":" in args.env:
+            from tui_gym.games import resolve_env_id
+
+            # The user's own `--env module:Id` imports its module on purpose, so a file that
+            # names the same env (which alone never imports code) opens with it.
+            resolve_env_id(args.env)
+        from tui_gym.cli.book_command import BOOK_COMMANDS
         from tui_gym.cli.commands import COMMANDS
         from tui_gym.cli.experiments_command import EXPERIMENT_COMMANDS
+        from tui_gym.cli.plan_command import PLAN_COMMANDS
         from tui_gym.cli.replay_command import REPLAY_COMMANDS
         from tui_gym.cli.runs_command import RUNS_COMMANDS
         from tui_gym.web import SERVE_COMMANDS
 
         commands = {**COMMANDS, **REPLAY_COMMANDS, **SERVE_COMMANDS, **RUNS_COMMANDS,
-                    **EXPERIMENT_COMMANDS}
+                    **EXPERIMENT_COMMANDS, **PLAN_COMMANDS, **BOOK_COMMANDS}
         code = commands[args.command](args, out)
         sys.stdout.flush()  # a closed pipe shows here, not at exit
         return code
@@ -243,7 +298,7 @@ def _one_line(exc: BaseException) -> str:
     text = str(exc) or type(exc).__name__
     if isinstance(exc, OSError) and exc.filename:
         text = f"{exc.filename}: {exc.strerror or text}"
-    return " ".join(text.split())
+    return readable(text)
 
 
 def _run_app(args: argparse.Namespace) -> int:
@@ -262,10 +317,6 @@ def _run_app(args: argparse.Namespace) -> int:
         from tui_gym.ui.app import run_app
     except ImportError as exc:  # pragma: no cover - only without the UI installed
         raise CliError(f"the app is not available ({exc}); try `tui-gym --help`") from None
-    if args.record is not None:
-        from tui_gym.cli.replay_command import check_record_path
-
-        check_record_path(args.record)
     return run_app(env_id=env_id, seed=args.seed, load=args.load, runner=args.runner,
                    record=args.record, db=args.db, keep_history=not args.no_history,
                    env_kwargs=env_kwargs)

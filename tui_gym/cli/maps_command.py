@@ -19,6 +19,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from tui_gym.cli.output import CliError, print_json
+from tui_gym.cli.types import number_in, seed_number
 from tui_gym.games.maps import GridMap, format_map
 from tui_gym.games.maps.builtin import BUILTIN_MAPS, builtin_map, fits
 from tui_gym.games.maps.files import read_map_file
@@ -33,10 +34,11 @@ def add_maps_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[ty
     maps = sub.add_parser("maps", help="list the built-in maps, print one, or draw a random one")
     maps.add_argument("name", nargs="?", metavar="NAME", help="print this built-in map's text")
     maps.add_argument("--random", metavar="ROWSxCOLS", help="print a random solvable map")
-    maps.add_argument("--density", type=float, default=0.2, metavar="X",
+    density = number_in(0.0, MAX_DENSITY, f"a number in [0, {MAX_DENSITY}]")
+    maps.add_argument("--density", type=density, default=0.2, metavar="X",
                       help=f"share of obstacle cells in a random map (0 to {MAX_DENSITY})")
-    maps.add_argument("--map-seed", type=int, default=0, metavar="N", dest="maps_seed",
-                      help="seed of a random map")
+    maps.add_argument("--map-seed", type=seed_number, default=0, metavar="N", dest="maps_seed",
+                      help="seed of a random map (default 0)")
     maps.add_argument("--obstacle", default="H", choices=("H", "C", "W"),
                       help="what a random map's obstacles are: holes, cliff or walls")
     maps.add_argument("--walled", action="store_true",
@@ -56,7 +58,7 @@ def _summary(grid_map: GridMap) -> dict[str, object]:
 
 def _print_map(out: Console, grid_map: GridMap, args: argparse.Namespace, title: str) -> int:
     if args.json:
-        print_json({"name": title, **_summary(grid_map)})
+        print_json("maps", {"name": title, **_summary(grid_map)})
         return 0
     sys.stdout.write(format_map(grid_map))  # as a file holds it: no colours, no wrapping
     return 0
@@ -86,7 +88,7 @@ def cmd_maps(args: argparse.Namespace, out: Console) -> int:
     if args.check:
         grid_map = read_map_file(args.check)  # a MapError is one line naming where
         if args.json:
-            print_json({"path": args.check, **_summary(grid_map)})
+            print_json("maps", {"path": args.check, **_summary(grid_map)})
             return 0
         games = ", ".join(fits(grid_map)) or "none"
         reach = "a goal can be reached" if grid_map.goal_reachable() else "no goal can be reached"
@@ -94,7 +96,7 @@ def cmd_maps(args: argparse.Namespace, out: Console) -> int:
                   f"{games}", highlight=False, soft_wrap=True)
         return 0
     if args.json:
-        print_json({"maps": [{"name": m.name, "description": m.description,
+        print_json("maps", {"maps": [{"name": m.name, "description": m.description,
                                    **_summary(m.grid_map)} for m in BUILTIN_MAPS]})
         return 0
     table = Table(title="Built-in maps (tui-gym maps NAME prints one; --map-file PATH plays it)",

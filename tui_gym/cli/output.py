@@ -1,9 +1,17 @@
-"""What the `tui-gym` command prints: one-line errors, JSON objects and summary tables."""
+"""What the `tui-gym` command prints: one-line errors, JSON objects and summary tables.
+
+Every `--json` object starts with `"schema"`, its command's version in
+`JSON_SCHEMAS`. A version goes up by one when a key of its command's object is
+removed or renamed, or a value changes its type or meaning; a new key leaves
+it as it is (a reader ignores keys it does not know). The README lists every
+command's keys.
+"""
 
 from __future__ import annotations
 
 import json
 import math
+import re
 import sys
 from collections.abc import Sequence
 from typing import Any
@@ -12,7 +20,37 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-__all__ = ["CliError", "OutConsole", "key_value_table", "print_json", "say_status"]
+from tui_gym.core.text import visible
+
+__all__ = ["JSON_SCHEMAS", "CliError", "OutConsole", "key_value_table", "print_json", "readable",
+           "say_status"]
+
+# The version of each command's JSON object (see the module docstring).
+JSON_SCHEMAS: dict[str, int] = {
+    "envs": 1,
+    "wrappers": 1,
+    "maps": 1,
+    "algorithms": 1,
+    "train": 1,
+    "eval": 1,
+    "optimal": 1,
+    "runs": 1,
+    "runs show": 1,
+    "runs export": 1,
+    "runs rm": 1,
+    "runs recover": 1,
+    "plan": 1,
+    "book": 1,
+    "book list": 1,
+    "compare": 1,
+    "sweep": 1,
+    "screenshots": 1,
+    "bench": 2,
+    "benchmark": 1,
+}
+
+_QUOTED = re.compile(r"'[^']{81,}'|\"[^\"]{81,}\"")  # an echoed value, as repr quotes it
+_LONG_RUN = re.compile(r"\S{101,}")  # an echoed value with no quotes (argparse's lists)
 
 
 class CliError(Exception):
@@ -27,8 +65,20 @@ class OutConsole(Console):
         raise BrokenPipeError
 
 
-def print_json(data: dict[str, Any]) -> None:
-    """One JSON object on stdout (NaN written as null)."""
+def readable(message: str) -> str:
+    """An error message as one line a person reads: control characters written as
+    escapes, and input it echoes cut to its ends and its length."""
+    text = _QUOTED.sub(lambda m: _cut(m.group()[1:-1], m.group()[0]), " ".join(message.split()))
+    return visible(_LONG_RUN.sub(lambda m: _cut(m.group()), text), limit=None)
+
+
+def _cut(text: str, quote: str = "") -> str:
+    return f"{quote}{text[:20]}…{text[-8:]}{quote} ({len(text):,} characters)"
+
+
+def print_json(command: str, data: dict[str, Any]) -> None:
+    """`command`'s JSON object on stdout, its `schema` first (NaN written as null)."""
+    data = {"schema": JSON_SCHEMAS[command], **data}
     sys.stdout.write(json.dumps(_clean(data)) + "\n")
     sys.stdout.flush()
 

@@ -2,8 +2,9 @@
 
 `add_record_option` puts `--record PATH` on a parser; `open_recorder` opens
 the file for a session (one clear line when it cannot be written). `replay
-PATH` reads a recording (bad lines skipped, see `tui_gym.core.recording`) and
-opens the app on it, on the game of its first episode.
+PATH` reads a recording (bad lines skipped, scenes checked against their game's
+board, see `tui_gym.core.recording`) and opens the app on it, on the game of
+its first episode (refused when that game's id would import a module).
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 from rich.console import Console
 
 from tui_gym.cli.output import CliError
-from tui_gym.cli.types import file_name as _path
+from tui_gym.cli.types import output_file
 
 if TYPE_CHECKING:
     from tui_gym.core.recording import Recording
@@ -26,7 +27,8 @@ RECORD_HELP = "record every episode to this file, as JSON lines (tui-gym replay 
 
 def add_record_option(parser: argparse.ArgumentParser, dest: str = "record") -> None:
     """`--record PATH` on `parser`."""
-    parser.add_argument("--record", type=_path, metavar="PATH", dest=dest, help=RECORD_HELP)
+    parser.add_argument("--record", type=output_file, metavar="PATH", dest=dest,
+                        help=RECORD_HELP)
 
 
 def open_recorder(
@@ -53,17 +55,6 @@ def open_recorder(
         raise CliError(f"--record {path}: cannot write ({exc.strerror or exc})") from None
 
 
-def check_record_path(path: str) -> None:
-    """CliError unless `path` names a file that can be made in a folder that is there."""
-    from pathlib import Path
-
-    target = Path(path)
-    if target.is_dir():
-        raise CliError(f"--record {path}: is a folder; name a file")
-    if not target.parent.is_dir():
-        raise CliError(f"--record {path}: there is no folder {target.parent}")
-
-
 def add_replay_parser(sub: Any) -> None:
     """The `replay` sub-command."""
     replay = sub.add_parser(
@@ -74,9 +65,10 @@ def add_replay_parser(sub: Any) -> None:
 
 def cmd_replay(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.core.recording import RecordingError, read_recording
+    from tui_gym.session.recording.scenes import scene_fits
 
     try:
-        recording = read_recording(args.path)
+        recording = read_recording(args.path, scene_fits)
     except RecordingError as exc:
         raise CliError(str(exc)) from None
     try:
@@ -88,14 +80,22 @@ def cmd_replay(args: argparse.Namespace, out: Console) -> int:
 
 def session_for(recording: Recording) -> Session | None:
     """A session on the game of the recording's first episode (None when it cannot be built:
-    the app then opens on its default game, and the replay shows what was recorded)."""
+    the app then opens on its default game, and the replay shows what was recorded);
+    CliError when its id would import a module."""
     from tui_gym.core.wrappers import parse_wrapper_spec
+    from tui_gym.games import ImportRefusedError, resolve_env_id
     from tui_gym.session.session import Session
 
     game = recording.episodes[0].game
     try:
+        env_id = resolve_env_id(game.env_id, from_data=True)
+    except ImportRefusedError as error:
+        raise CliError(f"{recording.path}: {error}") from None
+    except ValueError:
+        return None
+    try:
         return Session(
-            env_id=game.env_id,
+            env_id=env_id,
             env_kwargs=dict(game.env_kwargs),
             choices=tuple(parse_wrapper_spec(spec) for spec in game.wrappers),
             seed=game.seed or 0,

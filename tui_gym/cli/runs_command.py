@@ -1,12 +1,17 @@
 """The run history on the command line: `runs`, and recording `train` runs into it.
 
-`tui-gym runs [--json] [--game G] [--kind K]` lists the recorded runs, newest
-first; `runs show ID`, `runs export ID --csv PATH | --tensorboard DIR` and
-`runs rm ID` work on one. Every one takes `--db PATH` (else `TUI_GYM_DB`,
-else the data folder's `runs.db`). `add_train_options` puts `--db` and
-`--no-record` on `train`, and `recorded` wraps the `train` command so that
-its run is recorded (see `TrainRecording`). A history that cannot be read, an
-unknown id or a file that cannot be written is one line and exit code 2.
+`tui-gym runs [--json] [--game G] [--kind K] [--limit N]` lists the recorded
+runs, newest first (a screenful by default; every run with `--json`), in the
+columns that fit the terminal (the least needed go first; names are never
+cut); `runs show ID`, `runs export ID --csv PATH | --tensorboard DIR` and
+`runs rm ID` work on one; `runs --recover` copies what can be read of a
+damaged history into a new file beside it. Every one takes `--db PATH` (else
+`TUI_GYM_DB`, else the data folder's `runs.db`). `add_train_options` puts
+`--db` and `--no-record` on `train`, and `recorded` wraps the `train` command
+so that its run is recorded (see `TrainRecording`). A history that cannot be
+read, an unknown id or a file that cannot be written is one line and exit
+code 2; a run that does not read is one line naming it, after the others.
+Text from the history reaches the terminal through `visible`, as data.
 """
 
 from __future__ import annotations
@@ -17,19 +22,22 @@ from collections.abc import Callable
 from datetime import datetime
 from typing import Any
 
-from rich import box
+from rich.cells import cell_len
 from rich.console import Console
 from rich.markup import escape
-from rich.table import Table
+from rich.text import Text
 
 from tui_gym.cli.output import CliError, key_value_table, print_json
 from tui_gym.cli.types import file_name as _path
-from tui_gym.cli.types import int_in
+from tui_gym.cli.types import int_in, output_file
+from tui_gym.core.text import visible
 
 Command = Callable[[argparse.Namespace, Console], int]
 
 _run_id = int_in(1, 2**63 - 1, "a run id (a positive integer, see `tui-gym runs`)")
+_limit = int_in(0, 2**31 - 1, "a number of runs (0 for all)")
 DB_HELP = "the run history file (default: $TUI_GYM_DB, else the data folder's runs.db)"
+RUN_ID_HELP = "a run's id (`tui-gym runs` lists them)"
 KINDS = ("train", "compare", "sweep", "app", "benchmark")
 
 
@@ -57,18 +65,24 @@ def add_runs_parser(sub: Any) -> None:
     _db_option(runs, inherit=True)
     runs.add_argument("--game", metavar="G", help="only this game's runs (e.g. blackjack)")
     runs.add_argument("--kind", choices=KINDS, help="only runs of this kind")
+    runs.add_argument("--limit", type=_limit, metavar="N",
+                      help="the newest N runs (default: a screenful; every run with --json; "
+                      "0: every run)")
+    runs.add_argument("--recover", action="store_true",
+                      help="copy what can be read of a damaged history into a new file beside "
+                      "it (the history itself is left as it is)")
     verbs = runs.add_subparsers(dest="runs_command", metavar="VERB")
 
     show = verbs.add_parser("show", help="everything about one run")
-    show.add_argument("run_id", type=_run_id, metavar="ID")
+    show.add_argument("run_id", type=_run_id, metavar="ID", help=RUN_ID_HELP)
     _json_option(show, inherit=True)
     _db_option(show, inherit=True)
 
     export = verbs.add_parser("export", help="write a run's curves to a CSV file or for "
                               "TensorBoard")
-    export.add_argument("run_id", type=_run_id, metavar="ID")
+    export.add_argument("run_id", type=_run_id, metavar="ID", help=RUN_ID_HELP)
     where = export.add_mutually_exclusive_group(required=True)
-    where.add_argument("--csv", type=_path, metavar="PATH",
+    where.add_argument("--csv", type=output_file, metavar="PATH",
                        help="one row per episode, one column per curve")
     where.add_argument("--tensorboard", type=_path, metavar="DIR",
                        help="TensorBoard event files under DIR (needs tui-gym[tensorboard])")
@@ -76,7 +90,7 @@ def add_runs_parser(sub: Any) -> None:
     _db_option(export, inherit=True)
 
     rm = verbs.add_parser("rm", help="remove one run (its curves and figures with it)")
-    rm.add_argument("run_id", type=_run_id, metavar="ID")
+    rm.add_argument("run_id", type=_run_id, metavar="ID", help=RUN_ID_HELP)
     _json_option(rm, inherit=True)
     _db_option(rm, inherit=True)
 
@@ -146,6 +160,8 @@ def _duration(seconds: float | None) -> str:
 def _figure_text(figure: Any, interval: bool = True) -> str:
     if figure is None or figure.value != figure.value:
         return ""
+    if figure.unit == "episodes" and figure.value.is_integer():
+        return f"{int(figure.value):,}"  # a count
     text = f"{figure.value:+.4f}"
     if interval and figure.ci95 is not None:
         text += f" ± {figure.ci95:.4f}"
@@ -158,42 +174,119 @@ def _seeds_text(seeds: tuple[int, ...]) -> str:
     return f"{len(seeds)} seeds"
 
 
+def _screenful(out: Console) -> int:
+    # The title and a blank line, the header and its rule, the line saying there are more,
+    # a blank line and the caption's two, and the shell's prompt after it.
+    return max(5, out.size.height - 9)
+
+
+# The columns, and those that go first to last when the terminal is narrow.
+_COLUMNS = (("id", "right"), ("kind", "left"), ("game", "left"), ("algorithm", "left"),
+            ("seeds", "left"), ("started", "left"), ("took", "right"), ("return", "right"),
+            ("gap", "right"))
+_DROPPED_FIRST = ("took", "seeds", "started")
+_GAP = 2  # spaces between columns
+CAPTION = ("return: the mean online return over the last 10% of episodes; "
+           "gap: the greedy policy's exact gap to the optimum")
+
+
+def _runs_table(title: str, rows: list[dict[str, str]], width: int) -> tuple[Text, str]:
+    """The runs in aligned columns, those that fit `width` (the least needed go first),
+    as the heading and the lines of the runs; a cell is never cut. The lines are plain
+    text, so that thousands of runs print at once."""
+    widths = {name: max([len(name), *(cell_len(row[name]) for row in rows)])
+              for name, _ in _COLUMNS}
+    shown = [name for name, _ in _COLUMNS]
+    for name in _DROPPED_FIRST:
+        if sum(widths[n] for n in shown) + _GAP * (len(shown) - 1) <= width:
+            break
+        shown.remove(name)
+    justify = dict(_COLUMNS)
+
+    def line(cells: dict[str, str]) -> str:
+        pads = {n: " " * (widths[n] - cell_len(cells[n])) for n in shown}  # wide characters
+        parts = [pads[n] + cells[n] if justify[n] == "right" else cells[n] + pads[n]
+                 for n in shown]
+        return (" " * _GAP).join(parts).rstrip()
+
+    total = sum(widths[n] for n in shown) + _GAP * (len(shown) - 1)
+    text = Text(title + "\n\n", style="italic")
+    text.append(line({n: n for n in shown}) + "\n", style="bold")
+    text.append("─" * total)
+    return text, "".join(line(row) + "\n" for row in rows)
+
+
 def cmd_runs(args: argparse.Namespace, out: Console) -> int:
     verb = getattr(args, "runs_command", None)
+    if args.recover:
+        if verb is not None:
+            raise CliError(f"--recover works on the whole history, not with `runs {verb}`")
+        return _cmd_recover(args, out)
     if verb is not None:
         return {"show": _cmd_show, "export": _cmd_export, "rm": _cmd_rm}[verb](args, out)
     from tui_gym.core.experiments import list_runs
 
     game = args.game.strip().lower() if args.game else None
-    listing = _history_call(lambda: list_runs(args.db, game=game, kind=args.kind))
+    limit = args.limit
+    if limit is None:
+        limit = 0 if args.json else _screenful(out)
+    listing = _history_call(lambda: list_runs(args.db, game=game, kind=args.kind,
+                                              limit=limit or None))
+    for bad in listing.damaged[:5]:
+        _warn(f"run {bad.id} cannot be read: {bad.reason} (`tui-gym runs rm {bad.id}` "
+              "removes it)")
+    if len(listing.damaged) > 5:
+        _warn(f"and {len(listing.damaged) - 5} more runs cannot be read")
     if args.json:
-        print_json(listing.to_json())
+        print_json("runs", listing.to_json())
         return 0
     if not listing.runs:
-        which = f" of {args.game}" if args.game else ""
-        out.print(f"No runs{which} in {escape(str(listing.db))} yet: `tui-gym train GAME` "
-                  "and the app record theirs.")
+        which = f" of {visible(args.game, 40)}" if args.game else ""
+        out.print(Text(f"No runs{which} in {visible(listing.db, 160)} yet: `tui-gym train "
+                       "GAME` and the app record theirs."))
         return 0
-    table = Table(title=f"Runs in {escape(str(listing.db))}", title_justify="left",
-                  box=box.SIMPLE_HEAD, pad_edge=False, collapse_padding=True,
-                  caption="return: the mean online return over the last 10% of episodes; "
-                  "gap: the greedy policy's exact gap to the optimum", caption_justify="left")
-    for name, justify in (("id", "right"), ("kind", "left"), ("game", "left"),
-                          ("algorithm", "left"), ("seeds", "left"), ("started", "left"),
-                          ("took", "right"), ("return", "right"), ("gap", "right")):
-        wraps = name in ("game", "algorithm", "started")
-        table.add_column(name, justify=justify, no_wrap=not wraps)  # type: ignore[arg-type]
+    rows = []
     for run in listing.runs:
-        kind = str(run.kind)
-        if run.status != "finished":
-            kind += f" ({run.status})"
-        table.add_row(
-            str(run.id), kind, run.game, run.algorithm, _seeds_text(run.seeds),
-            _when(run.started_at), _duration(run.seconds),
-            _figure_text(run.figure("mean_return_last"), interval=False),
-            _figure_text(run.figure("exact_gap"), interval=False),
-        )
-    out.print(table)
+        kind = str(run.kind) if run.status == "finished" else f"{run.kind} ({run.status})"
+        rows.append({
+            "id": str(run.id), "kind": kind, "game": visible(run.game, 40),
+            "algorithm": visible(run.algorithm, 40), "seeds": _seeds_text(run.seeds),
+            "started": _when(run.started_at), "took": _duration(run.seconds),
+            "return": _figure_text(run.figure("mean_return_last"), interval=False),
+            "gap": _figure_text(run.figure("exact_gap"), interval=False),
+        })
+    title = f"Runs in {visible(listing.db, 160)}"
+    heading, lines = _runs_table(title, rows, out.width)
+    out.print(heading, soft_wrap=True)
+    out.file.write(lines)  # plain text: rich would take seconds over thousands of lines
+    listed = len(listing.runs) + len(listing.damaged)
+    if listing.total > listed:
+        out.print(Text(f"(the newest {listed:,} of {listing.total:,} runs: --limit N lists "
+                       "more, --limit 0 every one)"))
+    out.print(Text("\n" + CAPTION, style="dim"))
+    return 0
+
+
+def _cmd_recover(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.core.experiments import recover_history
+
+    done = _history_call(lambda: recover_history(args.db))
+    if args.json:
+        print_json("runs recover", done.to_json())
+        return 0 if done.target is not None else 2
+    source = visible(done.source, 160)
+    if done.target is None:
+        _warn(f"no run could be read from {source} ({done.check}); it was left as it was")
+        return 2
+    verdict = "SQLite finds it sound" if done.check == "ok" else f"SQLite finds: {done.check}"
+    lost = f" ({done.unreadable:,} could not be read)" if done.unreadable else ""
+    dropped = (f"; {done.curves_dropped:,} of them without their curves, which could not be read"
+               if done.curves_dropped else "")
+    target = visible(done.target, 160)
+    out.print(Text(f"copied {done.copied:,} runs from {source} into {target}{lost}{dropped}.\n"
+                   f"{source} was left as it was ({verdict}). To use the copy: "
+                   f"`tui-gym runs --db {target}`, or move it in place of the original "
+                   "while no tui-gym runs."))
     return 0
 
 
@@ -202,7 +295,7 @@ def _cmd_show(args: argparse.Namespace, out: Console) -> int:
 
     record = _history_call(lambda: show_run(args.run_id, args.db))
     if args.json:
-        print_json(record.to_json())
+        print_json("runs show", record.to_json())
         return 0
     run = record.summary
     settings = ", ".join(f"{k}={v}" for k, v in record.hyperparameters.items())
@@ -235,7 +328,9 @@ def _cmd_show(args: argparse.Namespace, out: Console) -> int:
     rows.append(("saved agent", record.agent_path or "none"))
     rows.append(("versions", f"tui-gym {versions.tui_gym}, gymnasium {versions.gymnasium}, "
                  f"numpy {versions.numpy}, Python {versions.python}"))
-    out.print(key_value_table(f"Run {run.id}", [(k, escape(v)) for k, v in rows]))
+    # Rich reads markup in these cells: what came from the history is escaped for it.
+    out.print(key_value_table(f"Run {run.id}", [(escape(visible(k, 40)), escape(visible(v, 400)))
+                                                for k, v in rows]))
     return 0
 
 
@@ -253,22 +348,23 @@ def _cmd_export(args: argparse.Namespace, out: Console) -> int:
         line = (f"wrote {done.scalars} values of {', '.join(done.tags)} to {done.path} "
                 f"(tensorboard --logdir {done.directory})")
     if args.json:
-        print_json(done.to_json())
+        print_json("runs export", done.to_json())
     else:
-        out.print(escape(line))
+        out.print(Text(visible(line, None)))
     return 0
 
 
 def _cmd_rm(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.core.experiments import remove_run
+    from tui_gym.core.experiments import DamagedRun, remove_run
 
     removed = _history_call(lambda: remove_run(args.run_id, args.db))
     if args.json:
-        print_json(removed.to_json())
-    else:
-        run = removed.run
-        out.print(escape(f"removed run {run.id} ({run.kind} {run.game} {run.algorithm}) "
-                         f"from {removed.db}"))
+        print_json("runs rm", removed.to_json())
+        return 0
+    run = removed.run
+    what = (f"it could not be read: {run.reason}" if isinstance(run, DamagedRun)
+            else f"{run.kind} {run.game} {run.algorithm}")
+    out.print(Text(visible(f"removed run {run.id} ({what}) from {removed.db}", None)))
     return 0
 
 

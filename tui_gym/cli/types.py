@@ -1,5 +1,7 @@
 """argparse types: numbers read as `Param`s read them (ASCII digits only; a value out of
-range says so) and file names, each failing with one clear line."""
+range says so) and file names, each failing with one clear line. `output_file` checks a
+file to write (`--save`, `--csv`, `--record`) as the arguments are read, so a path that
+cannot be written is said before any work is done."""
 
 from __future__ import annotations
 
@@ -9,7 +11,10 @@ from collections.abc import Callable
 
 from tui_gym.core.params import read_number, shown_value
 
-__all__ = ["MAX_SEED", "file_name", "finite_number", "int_in", "positive_int", "seed_number"]
+__all__ = [
+    "MAX_SEED", "file_name", "finite_number", "int_in", "number_in", "output_file",
+    "positive_int", "seed_number",
+]
 
 MAX_SEED = 2**63 - 2**32  # room for the seeds derived from it (evaluation adds to it)
 
@@ -46,8 +51,35 @@ def finite_number(text: str) -> float:
     return float(value)
 
 
+def number_in(minimum: float, maximum: float, noun: str) -> Callable[[str], float]:
+    """An argparse type: a number (ASCII digits) in [minimum, maximum]."""
+
+    def parse(text: str) -> float:
+        value = read_number(text)
+        if value is None or math.isnan(value):
+            raise argparse.ArgumentTypeError(f"expected {noun}, got {shown_value(text)}")
+        if not minimum <= value <= maximum:
+            raise argparse.ArgumentTypeError(
+                f"{shown_value(text)} is out of range: expected {noun}"
+            )
+        return float(value)
+
+    return parse
+
+
 def file_name(text: str) -> str:
     """An argparse type: a file name, which cannot be empty."""
     if not text.strip():
         raise argparse.ArgumentTypeError("expected a file name, got an empty one")
+    return text
+
+
+def output_file(text: str) -> str:
+    """An argparse type: a file that can be written (see `tui_gym.core.files`)."""
+    from tui_gym.core.files import OutputPathError, check_output_path
+
+    try:
+        check_output_path(text)
+    except OutputPathError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
     return text

@@ -31,6 +31,8 @@ def visible(text: object, limit: int | None = 80) -> str:
     """`text` with every control or invisible character written as an escape, cut to
     `limit` characters (None: never cut); a cut string says how long it was."""
     raw = text if isinstance(text, str) else str(text)
+    if (limit is None or len(raw) <= limit) and raw.isprintable():
+        return raw  # the common case, checked at C speed: nothing to escape or cut
     if limit is not None and len(raw) > 4 * limit:
         raw_cut: str | None = raw[: 4 * limit]  # enough to fill `limit` after escaping
     else:

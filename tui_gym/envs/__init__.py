@@ -3,7 +3,8 @@
 `register_envs()` registers GridWorld as `tui_gym/GridWorld-v0` and under the
 tutorial's id `gymnasium_env/GridWorld-v0` (both with `max_episode_steps=300`),
 and the tile map FrozenLake and CliffWalking play edited maps on as
-`tui_gym/TileMap-v0` (no limit of its own). It is idempotent and runs on
+`tui_gym/TileMap-v0` (no limit of its own), and Sutton & Barto's worlds
+(`BOOK_WORLDS`, each with its episode limit). It is idempotent and runs on
 `import tui_gym`.
 """
 
@@ -16,6 +17,13 @@ GRIDWORLD_ENTRY_POINT = "tui_gym.envs.gridworld:GridWorldEnv"
 GRIDWORLD_MAX_STEPS = 300
 TILE_MAP_ID = "tui_gym/TileMap-v0"
 TILE_MAP_ENTRY_POINT = "tui_gym.envs.tile_map:TileMapEnv"
+# id -> (entry point, episode limit)
+BOOK_WORLDS: dict[str, tuple[str, int]] = {
+    "tui_gym/ABGrid-v0": ("tui_gym.envs.dp_grid:ABGridEnv", 50),
+    "tui_gym/CornerGrid-v0": ("tui_gym.envs.dp_grid:CornerGridEnv", 100),
+    "tui_gym/Gambler-v0": ("tui_gym.envs.gambler:GamblerEnv", 1000),
+    "tui_gym/CarRental-v0": ("tui_gym.envs.car_rental:CarRentalEnv", 20),
+}
 
 
 def register_envs() -> None:
@@ -29,3 +37,6 @@ def register_envs() -> None:
             )
     if TILE_MAP_ID not in gym.registry:
         gym.register(id=TILE_MAP_ID, entry_point=TILE_MAP_ENTRY_POINT)
+    for env_id, (entry_point, limit) in BOOK_WORLDS.items():
+        if env_id not in gym.registry:
+            gym.register(id=env_id, entry_point=entry_point, max_episode_steps=limit)

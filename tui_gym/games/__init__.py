@@ -8,6 +8,11 @@ when its env fits (Discrete spaces and a transition table), including
 Gymnasium's `module:EnvId` form, which imports the module that registers it;
 one that does not fit raises `UnknownGameError` saying what it lacks.
 
+Text that came from data (a save file, a recording, the run history, a tool
+call) is resolved with `from_data=True`: it names registered ids only, and a
+`module:` id is refused unless that module is imported already (the user named
+it with `--env`), so a file never makes tui-gym import code.
+
 Modules:
 
 - `base`: `Game` and its roles (`StateSpace`, `Oracle`, `Narrator`,
@@ -16,22 +21,34 @@ Modules:
 - `tiles`: what grid-map games share (FrozenLake, CliffWalking);
 - `generic`: `GenericGame`, any env with a transition table;
 - `words`: numbers and words for people;
+- `planning`: `PlanModel`, what a game hands the Plan view and `tui-gym plan`;
+- `dp_grid`: what the book's small grids share;
 - one package per game: `blackjack`, `gridworld`, `frozenlake`,
-  `cliffwalking`, `taxi`.
+  `cliffwalking`, `taxi`, and Sutton & Barto's worlds `ab_grid`, `corner_grid`,
+  `gambler`, `car_rental`.
 """
 
 from __future__ import annotations
 
 import importlib
+import sys
 
+from tui_gym.core.text import visible
+from tui_gym.games.ab_grid import ABGridGame
 from tui_gym.games.base import Game
 from tui_gym.games.blackjack import BlackjackGame
+from tui_gym.games.car_rental import CarRentalGame
 from tui_gym.games.cliffwalking import CliffWalkingGame
+from tui_gym.games.corner_grid import CornerGridGame
 from tui_gym.games.frozenlake import FrozenLakeGame
+from tui_gym.games.gambler import GamblerGame
 from tui_gym.games.gridworld import GridWorldGame
 from tui_gym.games.taxi import TaxiGame
 
-__all__ = ["GAMES", "Game", "UnknownGameError", "game_for", "game_named", "resolve_env_id"]
+__all__ = [
+    "GAMES", "Game", "ImportRefusedError", "UnknownGameError", "game_for", "game_named",
+    "resolve_env_id",
+]
 
 GAMES: tuple[Game, ...] = (
     BlackjackGame(),
@@ -39,6 +56,10 @@ GAMES: tuple[Game, ...] = (
     FrozenLakeGame(),
     CliffWalkingGame(),
     TaxiGame(),
+    ABGridGame(),
+    CornerGridGame(),
+    GamblerGame(),
+    CarRentalGame(),
 )
 
 _generic: dict[str, Game] = {}
@@ -46,6 +67,10 @@ _generic: dict[str, Game] = {}
 
 class UnknownGameError(ValueError):
     """An env id or alias that no game plays; the message says why in one line."""
+
+
+class ImportRefusedError(UnknownGameError):
+    """A `module:Id` from data whose module is not imported: data never imports code."""
 
 
 def game_named(name: str) -> Game:
@@ -56,25 +81,49 @@ def game_named(name: str) -> Game:
     raise UnknownGameError(f"no game named {name!r}")
 
 
-def resolve_env_id(name: str) -> str:
+MAX_ID_CHARS = 200  # no alias or Gymnasium id is longer
+
+
+def resolve_env_id(name: str, *, from_data: bool = False) -> str:
     """An alias (`blackjack`, `taxi`, ...) or a Gymnasium id, as the id a session builds.
 
     An id no registered game plays must be one Gymnasium knows (with `module:`
     in front, after importing that module) whose env fits a generic game.
+    `from_data`: the text came from a file or a program, so no module is
+    imported for it (`UnknownGameError` saying how to open it on purpose).
     """
+    if not isinstance(name, str):
+        raise UnknownGameError(f"a game id is text, not a {type(name).__name__}")
     text = name.strip()
+    if len(text) > MAX_ID_CHARS:
+        raise UnknownGameError(f"no game has an id of {len(text):,} characters "
+                               f"({visible(text, 40)})")
     for game in GAMES:
         if game.name == text.lower() or game.matches(text):
             return game.env_id if game.name == text.lower() else text
+    if from_data:
+        _check_no_import(text)
     if text in _generic:
         return text
     _check_generic(text)
     return text
 
 
-def game_for(env_id: str) -> Game:
-    """The game that plays an env id (aliases accepted)."""
-    env_id = resolve_env_id(env_id)
+def _check_no_import(env_id: str) -> None:
+    """`UnknownGameError` when building `env_id` would import a module not imported yet."""
+    module = env_id.rpartition(":")[0]
+    if module and module not in sys.modules:
+        raise ImportRefusedError(
+            f"{visible(env_id, 60)} would import the module {visible(module, 40)}, and ids from "
+            f"files and programs never import code; to play it on purpose, name it yourself: "
+            f"tui-gym --env {visible(env_id, 60)} ..."
+        )
+
+
+def game_for(env_id: str, *, from_data: bool = False) -> Game:
+    """The game that plays an env id (aliases accepted); `from_data` as for
+    `resolve_env_id`."""
+    env_id = resolve_env_id(env_id, from_data=from_data)
     for game in GAMES:
         if game.matches(env_id):
             return game

@@ -30,7 +30,7 @@ import numpy.typing as npt
 
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import NotAvailable
-from tui_gym.core.params import Param
+from tui_gym.core.params import Param, shown_value
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.games.words import (
     ScoreRow,
@@ -45,6 +45,7 @@ from tui_gym.games.words import (
 
 if TYPE_CHECKING:
     from tui_gym.core.mdp import FiniteMDP
+    from tui_gym.games.planning import PlanModel
     from tui_gym.session.play import PlayStep, Scorecard
 
 __all__ = [
@@ -536,7 +537,7 @@ class Game:
         for key, value in kwargs.items():
             if key not in params:
                 known = ", ".join(params) or "no arguments"
-                raise ValueError(f"{self.title} takes {known}, not {key!r}")
+                raise ValueError(f"{self.title} takes {known}, not {shown_value(key)}")
             out[key] = params[key].parse(value)
         self.check_kwargs(out)
         return out
@@ -562,6 +563,10 @@ class Game:
         """The optimum with action values per base state where there are any (what the
         map editor colours and points arrows with): `oracle.optimum` by default."""
         return self.oracle.optimum(kwargs)
+
+    def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel | NotAvailable:
+        """The exact model the Plan view and `tui-gym plan` sweep, or why there is none."""
+        return NotAvailable(f"{self.title} has no exact model to plan on")
 
     def make_id(self, env_id: str, kwargs: Mapping[str, Any]) -> str:
         """The id `gym.make` builds for these arguments: `env_id` (the one asked for),

@@ -61,6 +61,7 @@ from tui_gym.games.base import (
     TrainingModel,
     greedy_probabilities,
 )
+from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import signed, unwrapped_note
 
 __all__ = [
@@ -487,11 +488,18 @@ class ModelGame(Game):
     """
 
     render_mode: str | None = "ansi"
+    plan_gamma = 1.0  # the discount the Plan view starts with
 
     def __init__(self) -> None:
         super().__init__()
         self.states = DiscreteStates(self)
         self.oracle = ModelOracle(self)
+
+    def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel | NotAvailable:
+        model = self.base_model(kwargs)
+        if isinstance(model, NotAvailable):
+            return model
+        return PlanModel(model, self.plan_gamma, self.episode_limit(kwargs))
 
     def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP | NotAvailable:
         """The game's model with no wrappers and no episode limit (kept per arguments)."""

@@ -2,7 +2,10 @@
 
 Tools: `list_games`, `start_game`, `observe`, `step`, `reset`, `hint`,
 `score` and `end_game`. A refused call raises the SDK's `ToolError`, which the
-client gets as an error result with the message; the server goes on. Tools are
+client gets as an error result with the message; the server goes on. Arguments
+are taken as their types are, strictly (`true` is no action and no game id); an
+argument of the wrong type is answered in one line naming it and what it takes,
+and text from the call is echoed cut to a readable length. Tools are
 coroutines that never wait, so calls run one at a time on the event loop and
 the table needs no lock.
 
@@ -21,9 +24,11 @@ from mcp.server.mcpserver import MCPServer
 from mcp.server.mcpserver.exceptions import ToolError
 from mcp.server.stdio import stdio_server
 from mcp.types import CallToolResult, TextContent
-from pydantic import Field
+from pydantic import Field, StrictInt, StrictStr, ValidationError
 
 from tui_gym import __version__
+from tui_gym.core.params import shown_value
+from tui_gym.core.text import visible
 from tui_gym.mcp_server.pipes import open_pipes
 from tui_gym.session.arena import GameTable, Seat, SeatError, TableError, catalog
 
@@ -34,7 +39,9 @@ a game id and the first observation; step plays an action (by name or number); r
 new episode; score gives the returns per episode and the exact decision regret (the expected
 return each move gave up against the optimal move). Idle games expire."""
 
-GameId = Annotated[int, Field(description="the id start_game returned")]
+GameId = Annotated[StrictInt, Field(description="the id start_game returned")]
+Seed = StrictInt | None
+MESSAGE_CHARS = 300  # a refusal's length at most: it may quote what the call sent
 
 
 def _result(data: dict[str, Any]) -> CallToolResult:
@@ -46,12 +53,39 @@ def _result(data: dict[str, Any]) -> CallToolResult:
 
 
 def _refused(exc: Exception) -> ToolError:
-    return ToolError(str(exc))
+    return ToolError(visible(" ".join(str(exc).split()), MESSAGE_CHARS))
+
+
+class _Server(MCPServer):
+    """The SDK's server, answering arguments of the wrong type in one line."""
+
+    async def call_tool(self, name: str, arguments: dict[str, Any], context: Any = None) -> Any:
+        try:
+            return await super().call_tool(name, arguments, context)
+        except ToolError as exc:
+            if not isinstance(exc.__cause__, ValidationError):
+                raise
+            raise ToolError(await self._argument_error(name, exc.__cause__)) from None
+
+    async def _argument_error(self, tool: str, error: ValidationError) -> str:
+        """`step: argument action takes an action's name or number, not True`."""
+        first = error.errors()[0]
+        argument = str(first["loc"][0]) if first["loc"] else "?"
+        listed = [t.input_schema for t in await self.list_tools() if t.name == tool]
+        schema = listed[0] if listed else {}
+        described = schema.get("properties", {}).get(argument, {}).get("description")
+        if first["type"] == "missing":
+            what = f"is missing ({described})" if described else "is missing"
+        elif described is None:
+            what = f"is not one this tool takes ({', '.join(schema.get('properties', {}))})"
+        else:
+            what = f"takes {described}, not {shown_value(first.get('input'))}"
+        return f"Error executing tool {tool}: argument {visible(argument, 40)} {what}"
 
 
 def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
     """An `MCPServer` whose tools play the games of `table`."""
-    server: MCPServer = MCPServer(
+    server: MCPServer = _Server(
         name="tui-gym",
         instructions=INSTRUCTIONS,
         version=__version__,
@@ -81,18 +115,21 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
 
     @server.tool()
     async def start_game(
-        game: Annotated[str, Field(description="a game name from list_games, e.g. 'blackjack'")],
+        game: Annotated[
+            StrictStr, Field(description="a game name from list_games, e.g. 'blackjack'")
+        ],
         parameters: Annotated[
             dict[str, Any] | None,
             Field(description="the game's parameters by name, e.g. {'size': 6}; defaults if "
                   "omitted"),
         ] = None,
-        seed: Annotated[
-            int | None, Field(description="seed of the first episode (random if omitted)", ge=0)
-        ] = None,
+        seed: Annotated[Seed, Field(
+            description="a whole number >= 0, the first episode's seed (random if omitted)", ge=0,
+        )] = None,
         wrappers: Annotated[
-            list[str] | None,
-            Field(description="Gymnasium wrappers as 'Name' or 'Name:key=value', innermost first"),
+            list[StrictStr] | None,
+            Field(description="a list of Gymnasium wrappers as 'Name' or 'Name:key=value', "
+                  "innermost first"),
         ] = None,
     ) -> CallToolResult:
         """Start a game and deal its first episode; its game id and first observation."""
@@ -111,7 +148,7 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
     @server.tool()
     async def step(
         game_id: GameId,
-        action: Annotated[int | str, Field(description="an action's name or number")],
+        action: Annotated[StrictInt | StrictStr, Field(description="an action's name or number")],
     ) -> CallToolResult:
         """Play one action; returns the new state, the reward and whether the episode is done."""
         seat = seat_of(game_id)
@@ -129,7 +166,8 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
     async def reset(
         game_id: GameId,
         seed: Annotated[
-            int | None, Field(description="seed of the new episode (continues if omitted)", ge=0)
+            Seed, Field(description="a whole number >= 0, the new episode's seed (the game's own "
+                  "sequence goes on if omitted)", ge=0)
         ] = None,
     ) -> CallToolResult:
         """Deal a new episode of the game (an unfinished one is left out of the score)."""

@@ -35,6 +35,7 @@ import signal
 import threading
 import time
 import traceback
+from multiprocessing import resource_tracker
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -231,7 +232,10 @@ class ProcessRunner:
         self._broken = ""  # why no new child is started (it kept dying), or empty
         self._closed = False
         self._ended: _Child | None = None  # the child `close()` ended
-        # The first child starts once the app has drawn (or at the first request).
+        # The first child starts once the app has drawn (or at the first request). The
+        # resource tracker every child registers with starts now: under a running app the
+        # standard error it hands on is Textual's capture, which has no file descriptor.
+        resource_tracker.ensure_running()
         self._child: _Child | None = None
         self._spawn_at = time.monotonic() + SPAWN_DELAY
 

@@ -8,16 +8,14 @@ and action); sparse tables add `keys.json`.
 Storage takes and returns plain data and knows no game: `save_agent` writes
 a meta dict and a learner's state, `read_agent` returns them as a checked
 `SavedAgent` (the session rebuilds itself from it, and reports what does not
-fit the game through `SavedAgent.field_error`).
+fit the game through `SavedAgent.field_error`). The env id a file names is
+resolved as data (`tui_gym.games.resolve_env_id(from_data=True)`): a file
+never makes tui-gym import a module.
 
-Writing (`save_agent`, `atomic_write_bytes`) goes through a temporary file
-in the target's folder (`.NAME.PID.RANDOM.tmp`), flushed to disk and renamed
-into place, so a crash never leaves half a file. A path that is a symbolic
-link writes the file it points to; a new file gets the permissions the umask
-gives, a replaced one keeps its own. Termination signals that arrive during
-the write wait until it is done, and temporary files that a killed writer
-left behind are removed by the next save to the same name. `check_save_path`
-says before a long run whether a path can be written at all.
+Writing (`save_agent`) goes through `tui_gym.core.files.write_atomically`: a
+temporary file renamed into place, through symbolic links, never over what is
+not a regular file; `check_save_path` says before a long run whether a path
+can be written at all.
 
 Reading (`read_file`, `read_agent`) trusts nothing in the file: only a
 regular file of bounded size is read, every archive member's unpacked size is
@@ -30,21 +28,15 @@ the field.
 
 from __future__ import annotations
 
-import contextlib
 import io
 import json
 import math
 import os
-import re
-import secrets
-import signal
 import stat
 import struct
-import threading
-import time
 import zipfile
 import zlib
-from collections.abc import Callable, Hashable, Iterator
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -53,6 +45,7 @@ from typing import Any
 import numpy as np
 
 from tui_gym.algorithms import Learner, LearnerState, QLearning, Settings, algorithm
+from tui_gym.core.files import OutputPathError, check_output_path, write_atomically
 from tui_gym.core.params import shown_value
 from tui_gym.core.wrappers.catalog import WrapperChoice
 
@@ -67,7 +60,6 @@ MAX_JSON_DEPTH = 8
 MAX_COUNT = 2**62  # episodes, steps and update counts
 MAX_SEED = 2**63 - 1
 _COUNTERS = ("episodes_trained", "steps_trained", "agent_episode")
-_STALE_AFTER = 60.0  # seconds: a temporary file without a writer's pid this old is left over
 
 
 class StorageError(ValueError):
@@ -81,185 +73,13 @@ def _key_to_json(key: Any) -> Any:
     return list(key) if isinstance(key, tuple) else key
 
 
-def _real_target(path: Path) -> Path:
-    """Where writing `path` should land: through symbolic links to the file they name."""
-    return Path(os.path.realpath(path)) if path.is_symlink() else path
-
-
 def check_save_path(path: str | Path) -> Path:
-    """`path` as a `Path` when a save can be written there; else `StorageError` saying why.
-
-    Checks what can be known before any work is done: a file name is given, its
-    folder exists and is writable, and the name is not a folder or something
-    other than a file.
-    """
-    text = str(path)
-    if not text.strip():
-        raise StorageError("the save path is empty: give a file name")
-    given = Path(path)
-    if text.endswith(os.sep):
-        raise StorageError(f"{given}: a file name is needed, not a folder")
-    target = _real_target(given)
-    folder = target.parent
+    """`path` as a `Path` when a save can be written there; else `StorageError` saying why
+    (see `tui_gym.core.files.check_output_path`)."""
     try:
-        folder_stat = folder.stat()
-    except FileNotFoundError:
-        raise StorageError(f"{given}: the folder {folder} does not exist") from None
-    except OSError as exc:
-        raise StorageError(f"{given}: cannot use the folder {folder} ({exc.strerror})") from None
-    if not stat.S_ISDIR(folder_stat.st_mode):
-        raise StorageError(f"{given}: {folder} is not a folder")
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise StorageError(f"{given}: the folder {folder} is not writable")
-    try:
-        mode = target.stat().st_mode
-    except FileNotFoundError:
-        return given
-    except OSError as exc:
-        raise StorageError(f"{given}: cannot use this path ({exc.strerror})") from None
-    if stat.S_ISDIR(mode):
-        raise StorageError(f"{given}: is a folder; give a file name")
-    if not stat.S_ISREG(mode):
-        raise StorageError(f"{given}: is not a regular file; will not write over it")
-    return given
-
-
-def _temp_pattern(name: str) -> re.Pattern[str]:
-    # `.NAME.PID.HEX.tmp` (ours) and `.NAME.XXXXXXXX.tmp` (from tempfile, by earlier versions).
-    return re.compile(rf"\.{re.escape(name)}\.(?:(\d+)\.[0-9a-f]+|[a-z0-9_]{{8}})\.tmp")
-
-
-def _pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except (PermissionError, OverflowError, ValueError):
-        return True  # someone else's process, or not a pid at all: leave its file alone
-    return True
-
-
-def remove_stale_temp_files(path: Path) -> list[Path]:
-    """Remove temporary files a killed writer left beside `path`; returns what was removed.
-
-    Only names of our own pattern go: those whose writer's pid is gone, and
-    older unnamed ones.
-    """
-    pattern = _temp_pattern(path.name)
-    folder = path.parent if str(path.parent) else Path(".")
-    removed: list[Path] = []
-    try:
-        entries = list(os.scandir(folder))
-    except OSError:
-        return removed
-    now = time.time()
-    for entry in entries:
-        match = pattern.fullmatch(entry.name)
-        if match is None:
-            continue
-        try:
-            info = entry.stat(follow_symlinks=False)
-            if not stat.S_ISREG(info.st_mode):
-                continue
-            pid = match.group(1)
-            stale = (
-                not _pid_alive(int(pid)) if pid is not None
-                else now - info.st_mtime > _STALE_AFTER
-            )
-            if stale:
-                os.unlink(entry.path)
-                removed.append(Path(entry.path))
-        except OSError:
-            continue
-    return removed
-
-
-@contextlib.contextmanager
-def _signals_deferred() -> Iterator[None]:
-    """Hold SIGTERM, SIGHUP and SIGINT until the block is done, then deliver them.
-
-    A write takes milliseconds; finishing it (or removing its temporary file) first
-    means a signal never leaves one behind. Only signals that still have their
-    default action are held (a program's own handlers stay as they are), and only
-    the main thread can set handlers; elsewhere the block runs as is.
-    """
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    caught: list[int] = []
-    previous: dict[int, Any] = {}
-    for name in ("SIGTERM", "SIGHUP", "SIGINT"):
-        sig = getattr(signal, name, None)
-        if sig is None:
-            continue
-        try:
-            handler = signal.getsignal(sig)
-            if handler not in (signal.SIG_DFL, signal.default_int_handler):
-                continue
-            previous[sig] = handler
-            signal.signal(sig, lambda signum, frame: caught.append(signum))
-        except (ValueError, OSError):
-            continue
-    try:
-        yield
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
-        for sig in dict.fromkeys(caught):
-            signal.raise_signal(sig)
-
-
-def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write `data` to `path` through a temporary file, fsync and a rename.
-
-    Through a symbolic link the file it points to is written. A new file's mode
-    comes from the umask; a file that is replaced keeps its mode.
-    """
-    target = _real_target(Path(path))
-    folder = target.parent if str(target.parent) else Path(".")
-    remove_stale_temp_files(target)
-    try:
-        mode = stat.S_IMODE(target.stat().st_mode)
-    except FileNotFoundError:
-        mode = None
-    with _signals_deferred():
-        tmp, fd = _create_temp(folder, target.name)
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                fh.write(data)
-                fh.flush()
-                if mode is not None:
-                    os.fchmod(fh.fileno(), mode)
-                os.fsync(fh.fileno())
-            os.replace(tmp, target)
-        except BaseException:
-            tmp.unlink(missing_ok=True)
-            raise
-    _fsync_folder(folder)
-
-
-def _create_temp(folder: Path, name: str) -> tuple[Path, int]:
-    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0)
-    while True:
-        tmp = folder / f".{name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
-        try:
-            return tmp, os.open(tmp, flags, 0o666)  # the umask applies, as for any new file
-        except FileExistsError:
-            continue
-
-
-def _fsync_folder(folder: Path) -> None:
-    """Make the rename itself durable (where the platform allows it)."""
-    try:
-        fd = os.open(folder, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
+        return check_output_path(path)
+    except OutputPathError as error:
+        raise StorageError(str(error)) from None
 
 
 def _npy_bytes(array: np.ndarray) -> bytes:
@@ -290,7 +110,9 @@ def save_agent(path: str | Path, meta: dict[str, Any], state: LearnerState) -> P
         for name, data in members.items():
             zf.writestr(name, data)
     try:
-        atomic_write_bytes(path, buf.getvalue())
+        write_atomically(path, buf.getvalue())
+    except OutputPathError as error:
+        raise StorageError(str(error)) from None
     except OSError as exc:
         raise StorageError(f"{path}: cannot write ({exc.strerror or exc})") from None
     return path
@@ -698,9 +520,19 @@ class SavedAgent:
         return _checked(_Reader(self.path), name, build)
 
 
+def _data_env_id(reader: _Reader, env_id: str) -> str:
+    """The game id a file names, resolved as data: never by importing a module."""
+    from tui_gym.games import UnknownGameError, resolve_env_id
+
+    try:
+        return resolve_env_id(env_id, from_data=True)
+    except UnknownGameError as error:
+        raise reader.field("env_id", f"is not valid: {error}") from None
+
+
 def read_agent(path: str | Path) -> SavedAgent:
     """A save file's contents as plain data; `StorageError` when it is not a valid one."""
-    from tui_gym.core.wrappers import parse_wrapper_spec
+    from tui_gym.core.wrappers import check_chain_length, parse_wrapper_spec
 
     reader = _Reader(Path(path))
     contents = read_file(path)
@@ -710,12 +542,14 @@ def read_agent(path: str | Path) -> SavedAgent:
     env_id = meta.get("env_id")
     if not isinstance(env_id, str):
         raise reader.field("env_id", f"must be a game id, got {shown_value(env_id)}")
+    env_id = _data_env_id(reader, env_id)
     env_kwargs = meta.get("env_kwargs", {})
     if not isinstance(env_kwargs, dict):
         raise reader.field("env_kwargs", f"must be an object, got {shown_value(env_kwargs)}")
     wrappers = meta.get("wrappers", [])
     if not isinstance(wrappers, list):
         raise reader.field("wrappers", f"must be a list of specs, got {shown_value(wrappers)}")
+    _checked(reader, "wrappers", partial(check_chain_length, len(wrappers)))
     choices = []
     for i, spec in enumerate(wrappers):
         if not isinstance(spec, str):

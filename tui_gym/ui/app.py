@@ -1,4 +1,4 @@
-"""The Textual app: Play, Train and Compare views and a wrapper side panel over one Session.
+"""The Textual app: Play, Train, Compare and Plan views and a wrapper side panel over one Session.
 
 `TuiGymApp` owns the `Session` (env, wrappers, agent, trainer) and the runner
 that trains it (in a child process, as `tui-gym` opens it, or on a worker
@@ -6,7 +6,7 @@ thread). It keeps one `Session` per game for the whole run: switching game
 hands the runner the other game's session, and switching back finds its agent,
 settings, wrappers and curves as they were. The first frame shows the Play
 view and the side panel; the Train view is built right after it (or at once
-when asked for first), the Compare view the first time it shows, and dialogs
+when asked for first), the Compare and Plan views the first time they show, and dialogs
 are imported when first used. A timer pulls the runner's latest snapshot and
 hands it to the Train view; the side panel asks for rebuilds
 through a message; nothing in the trainer calls into widgets. Whatever would
@@ -65,6 +65,7 @@ if TYPE_CHECKING:
     from tui_gym.session.experiments.app_recording import SessionRunLog
     from tui_gym.ui.compare_view import CompareView
     from tui_gym.ui.confirm_screen import ConfirmScreen
+    from tui_gym.ui.plan_view import PlanView
     from tui_gym.ui.train_view import TrainView
 
 
@@ -167,6 +168,8 @@ class TuiGymApp(App[int]):
         Binding("t", "show_view('train')", "Train", tooltip="Watch the agent learn"),
         Binding("v", "show_view('compare')", "Compare",
                 tooltip="Compare learners across seeds; the runs recorded for this game"),
+        Binding("P", "show_view('plan')", "Plan",
+                tooltip="Plan: policy evaluation, policy and value iteration, sweep by sweep"),
         Binding("question_mark,f1", "help", "Help", key_display="?"),
         Binding("q", "quit", "Quit"),
         Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
@@ -237,6 +240,7 @@ class TuiGymApp(App[int]):
         self.db = db
         self.history_kept = history_kept
         self._compare: CompareView | None = None
+        self._plan: PlanView | None = None
         self._train: TrainView | None = None
         self._train_mounted: AwaitMount | None = None
 
@@ -338,12 +342,22 @@ class TuiGymApp(App[int]):
         return self._compare
 
     @property
+    def plan_view(self) -> PlanView | None:
+        """The Plan view, once it has been shown (it is built the first time)."""
+        return self._plan
+
+    def _reload_plan(self) -> None:
+        if self._plan is not None and self._plan.is_mounted:
+            self._plan.reload()
+
+    @property
     def side_panel(self) -> SidePanel:
         return self.query_one(SidePanel)
 
     @property
     def current_view(self) -> str:
-        """"play", "train" or "compare" (asked often: by every binding check and every tick)."""
+        """"play", "train", "compare" or "plan" (asked often: by every binding check and every
+        tick)."""
         switcher = self._switcher
         if switcher is None or not switcher.is_attached:  # not yet, or being taken apart
             return "play"
@@ -398,6 +412,11 @@ class TuiGymApp(App[int]):
             compare = self._compare = CompareView(id="compare", db=self.db,
                                                         kept=self.history_kept)
             self._switcher.mount(compare)  # it reads the history and takes the focus at mount
+        if view == "plan" and self._plan is None:
+            from tui_gym.ui.plan_view import PlanView
+
+            self._plan = PlanView(id="plan")
+            self._switcher.mount(self._plan)
         self._switcher.current = view
         self._main_screen.set_class(view == "compare", "-view-compare")
         if view == "play":
@@ -407,6 +426,9 @@ class TuiGymApp(App[int]):
             if compare.is_mounted:
                 compare.reload(fresh=True)
                 compare.focus_default()
+        elif view == "plan":
+            assert self._plan is not None
+            self.call_after_refresh(self._plan.focus_default)
         else:
             self._train_shown()
         self.refresh_bindings()  # the view's keys, even when the focus stays put
@@ -433,6 +455,9 @@ class TuiGymApp(App[int]):
         self.switch_game(game)
 
     async def action_edit_map(self) -> None:
+        if self.current_view == "plan" and self._plan is not None:
+            self._plan.open_editor()  # it plans on beside the editor
+            return
         self.action_show_view("train")
         view = await self._mounted_train()
         await view.open_editor()
@@ -452,6 +477,8 @@ class TuiGymApp(App[int]):
             self.play_view.focus_board()
         elif self.current_view == "compare" and self._compare is not None:
             self._compare.focus_default()
+        elif self.current_view == "plan" and self._plan is not None:
+            self._plan.focus_default()
         elif (view := self._train_ready()) is not None:
             view.focus_default()  # else it takes the keyboard when it mounts
 
@@ -539,6 +566,7 @@ class TuiGymApp(App[int]):
         self._reload_train()
         if self._compare is not None:
             self._compare.reload()
+        self._reload_plan()
         self.side_panel.reload()
 
     def _episodes_trained(self) -> int:
@@ -706,6 +734,8 @@ class TuiGymApp(App[int]):
             if was_running:
                 self.runner.start()
         self._files[self.session.game.name] = path
+        if self.run_log is not None:
+            self.run_log.saved(self.session, path)  # the run in the history says where
         episodes = self.session.trainer.episodes
         self.notify(f"Agent saved to {path} ({episodes:,} episodes).", title="Saved")
         return None
@@ -761,8 +791,14 @@ class TuiGymApp(App[int]):
         self.call_after_refresh(self._save_screenshot)  # once the palette is gone
 
     def _save_screenshot(self) -> None:
+        from tui_gym.core.files import OutputPathError, write_atomically
+
+        stamp = time.strftime("%Y-%m-%dT%H_%M_%S")
         try:
-            path = self.save_screenshot(path=str(Path.cwd()))
+            path = write_atomically(Path.cwd() / f"tui-gym {stamp}.svg", self.export_screenshot())
+        except OutputPathError as error:
+            self.notify(f"Screenshot not saved: {error}", title="Screenshot", severity="error")
+            return
         except OSError as exc:
             self.notify(f"Screenshot not saved: {exc.strerror or exc}", title="Screenshot",
                         severity="error")
@@ -826,6 +862,7 @@ class TuiGymApp(App[int]):
         self._last_version = -1
         self.play_view.reload()
         self._reload_train()
+        self._reload_plan()
         self.side_panel.reload()
         if not (quiet and report.kept_agent):
             self.notify(report.notice, severity="information" if report.kept_agent else "warning",
@@ -918,16 +955,18 @@ class TuiGymApp(App[int]):
     def key_help(self) -> list[tuple[str, list[tuple[str, str]]]]:
         """Every key, grouped by where it works: (section, [(key, what it does)])."""
         from tui_gym.ui.compare_view import CompareView
+        from tui_gym.ui.plan_view import PlanView
 
         sections = [
             ("Everywhere", [
                 ("p / t / v", "Play view / Train view / Compare view"),
-                (" / ".join(g.key for g in GAMES if g.key),
-                 "switch game: " + ", ".join(g.title for g in GAMES if g.key)
-                 + " (each keeps its agent, settings and curves)"),
+                ("P", "Plan view: planning, sweep by sweep"),
+                (" ".join(g.key for g in GAMES if g.key),
+                 "switch game, as the picker names them; each keeps its agent, "
+                 "settings and curves"),
                 ("w / W", "focus the wrapper panel (W while a board that moves with WASD "
                           "has focus)"),
-                ("m", "edit a grid game's map, while it trains"),
+                ("m", "edit a grid game's map (training or planning)"),
                 ("esc", "leave a text field or the side panel: back to the view"),
                 ("ctrl+s", "save the agent to a file you name (asks before replacing one)"),
                 ("ctrl+o", "load an agent from a file you name"),
@@ -947,6 +986,7 @@ class TuiGymApp(App[int]):
                 *self.train_view.key_help(),
             ]),
             ("Compare", CompareView.key_help()),
+            ("Plan", PlanView.key_help()),
             ("Side panel", [
                 ("tab / shift+tab", "move between fields"),
                 ("space / enter", "tick a wrapper, press a button, pick a game or an "
@@ -975,6 +1015,8 @@ class TuiGymApp(App[int]):
             ("Train view", "Watch the agent learn", lambda: self.action_show_view("train")),
             ("Compare view", "Compare learners across seeds; this game's recorded runs",
              lambda: self.action_show_view("compare")),
+            ("Plan view", "Policy evaluation, policy iteration and value iteration on the "
+             "game's exact model, sweep by sweep (P)", lambda: self.action_show_view("plan")),
             *(
                 (f"Game: {g.title}", g.description,
                  lambda name=g.name: self.action_switch_game(name))

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from tui_gym.core.experiments import Figure, RunRecord, RunSummary, rolling_mean
+from tui_gym.core.text import visible
 
 if TYPE_CHECKING:
     from tui_gym.session.experiments.compare import AlgorithmOutcome
@@ -37,8 +38,8 @@ def algorithm_title(name: str) -> str:
 
 
 def run_label(run: RunSummary) -> str:
-    """'#12 Q-learning': a run's id and its algorithm."""
-    return f"#{run.id} {algorithm_title(run.algorithm)}"
+    """'#12 Q-learning': a run's id and its algorithm (as data: control characters shown)."""
+    return f"#{run.id} {visible(algorithm_title(run.algorithm), 40)}"
 
 
 @dataclass(frozen=True, eq=False)
@@ -162,7 +163,11 @@ class FigureRow:
 def row_of_record(record: RunRecord) -> FigureRow:
     summary = record.summary
     curve = record.curve(CURVE)
-    episodes = int(curve.episodes[-1]) if curve is not None and len(curve) else None
+    trained = summary.figure("episodes")  # what the run trained; a curve ends at its last bucket
+    if trained is not None and trained.value == trained.value:
+        episodes: int | None = int(trained.value)
+    else:
+        episodes = int(curve.episodes[-1]) if curve is not None and len(curve) else None
     status = str(summary.status)
     return FigureRow(
         key=record.id,

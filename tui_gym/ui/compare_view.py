@@ -13,7 +13,10 @@ to the chosen algorithms that have it), through `run_compare` on a worker thread
 so far, a progress line, and the figures; `s` (or the Stop button) stops
 it, keeping what finished. Once it ends, the runs it recorded appear in the
 list, ticked. A history that cannot be opened (damaged, another program's,
-from a newer tui-gym) is one message in the view; nothing else changes.
+from a newer tui-gym, a path that cannot be examined) is one message in the
+view, and a run that does not read is named in the message while the others
+are listed; nothing else changes. Text from the history is shown as data
+(`visible`).
 
 The view reads the session and the history; it sends nothing up but
 notifications. The app stops a comparison when the person leaves the view,
@@ -40,12 +43,16 @@ from textual.widgets._toggle_button import ToggleButton
 from textual.widgets.selection_list import Selection
 
 from tui_gym.core.experiments import (
+    DamagedRun,
+    DamagedRunError,
     RunHistory,
     RunHistoryError,
     RunRecord,
     RunSummary,
     resolve_db_path,
 )
+from tui_gym.core.experiments.connection import examine
+from tui_gym.core.text import visible
 from tui_gym.ui.compare_job import CompareJob
 from tui_gym.ui.compare_series import (
     FigureRow,
@@ -188,6 +195,17 @@ def describe_run(run: RunSummary) -> Text:
         parts.append(str(run.status))
     parts.append(when)
     return Text(" · ".join(parts), no_wrap=True, overflow="ellipsis")
+
+
+def _unreadable(damaged: Sequence[DamagedRun]) -> str:
+    """One line naming the runs of the history that do not read."""
+    if len(damaged) == 1:
+        bad = damaged[0]
+        return (f"Run {bad.id} cannot be read: {visible(bad.reason, 120)} "
+                f"(`tui-gym runs rm {bad.id}` removes it); the other runs are listed.")
+    ids = ", ".join(str(d.id) for d in damaged[:10]) + (", ..." if len(damaged) > 10 else "")
+    return (f"{len(damaged):,} runs cannot be read ({ids}): `tui-gym runs show ID` says why, "
+            "`tui-gym runs rm ID` removes one; the other runs are listed.")
 
 
 class CompareView(Vertical):
@@ -410,21 +428,26 @@ class CompareView(Vertical):
     def _open(self) -> RunHistory | None:
         """The history, or None when there is none yet; RunHistoryError when it cannot open."""
         path = self.db_path
-        if not path.exists() or path.stat().st_size == 0:
+        status = examine(path)
+        if status is None or status.st_size == 0:
             return None  # reading never creates the file
-        return RunHistory(path, timeout=OPEN_TIMEOUT)
+        return RunHistory(path, timeout=OPEN_TIMEOUT, read_only=True)
 
     def _load_runs(self, select: Sequence[int] = ()) -> None:
         self._stale = False
         names = self._game_key
+        damaged: dict[int, DamagedRun] = {}
         try:
             history = self._open()
             if history is None:
                 runs: list[RunSummary] = []
             else:
+                found: dict[int, RunSummary] = {}
                 with history:
-                    found = {r.id: r for name in sorted(names)
-                             for r in history.list_runs(game=name, limit=LISTED_RUNS)}
+                    for name in sorted(names):
+                        read = history.read_runs(game=name, limit=LISTED_RUNS)
+                        found.update((r.id, r) for r in read.runs)
+                        damaged.update((d.id, d) for d in read.damaged)
                 runs = sorted(found.values(), key=lambda r: (-r.started_at, -r.id))[:LISTED_RUNS]
         except (RunHistoryError, OSError) as exc:
             self._history_error = str(exc)
@@ -454,6 +477,8 @@ class CompareView(Vertical):
             else:
                 self._say(f"{len(runs):,} run{'s' if len(runs) != 1 else ''} of {title} "
                           "recorded.")
+            if damaged:
+                self._say(_unreadable(list(damaged.values())), error=True)
         self._message_label.tooltip = (
             str(self.db_path) if self.kept else "not kept: the app runs with --no-history")
         self._redraw()
@@ -478,7 +503,10 @@ class CompareView(Vertical):
                 return None
             with history:
                 record = history.get_run(run_id)
-        except RunHistoryError as exc:
+        except DamagedRunError as exc:
+            self._say(f"{str(exc)[:1].upper()}{str(exc)[1:]}", error=True)
+            return None
+        except (RunHistoryError, OSError) as exc:
             self._say(f"Run {run_id} cannot be read: {exc}", error=True)
             return None
         self._records[run_id] = record

@@ -33,6 +33,7 @@ from textual.widgets import Button, Header, OptionList, Static
 from textual.widgets.option_list import Option
 
 from tui_gym.core.recording.reader import Episode, Move, Position, Recording
+from tui_gym.core.text import visible
 from tui_gym.games.words import format_reward
 from tui_gym.session.play import PlayStep
 from tui_gym.session.recording.games import game_named
@@ -374,7 +375,8 @@ class ReplayScreen(ModalScreen[None]):
                             dict(here.frame.info), total, move.step, move.action)
             first_info = dict(episode.positions[0].frame.info) if episode.started else {}
             try:
-                return str(game.narrator.outcome_text(last, first_info, here.frame.scene or {}))
+                said = game.narrator.outcome_text(last, first_info, here.frame.scene or {})
+                return visible(said, 200)  # the words may quote what the file holds
             except Exception:  # a recording this version's words cannot read
                 pass
         how = "Episode over" if move.terminated else "Truncated by the time limit"
@@ -409,7 +411,7 @@ def _move_option(place: Position) -> Option:
 
 
 def _observation_text(observation: object) -> str:
-    return _cut(str(observation), OBSERVATION_CHARS)
+    return visible(observation, OBSERVATION_CHARS)
 
 
 def _cut(text: str, width: int) -> str:

@@ -25,6 +25,7 @@ from typing import Any
 
 from textual.binding import Binding
 
+from tui_gym.core.files import check_output_path, write_atomically
 from tui_gym.core.wrappers import parse_wrapper_spec
 from tui_gym.games import GAMES
 from tui_gym.games.maps.builtin import builtin_map
@@ -64,12 +65,16 @@ async def _train_view(app, pilot, episodes: int) -> None:
     await pilot.pause()
 
 
-def _key_for(board: Board, action: str) -> str | None:
-    """The key of the board that takes `action` (None when none does)."""
+def _keys_for(board: Board, action: str) -> list[str]:
+    """The keys of the board that take `action`: its own key, or those a board says pick it
+    (a dial's); none when no key does."""
+    keys_for = getattr(board, "keys_for", None)
+    if keys_for is not None:
+        return list(keys_for(action))
     for binding in Binding.make_bindings(board.BINDINGS):
         if binding.action == f"act('{action}')":
-            return binding.key
-    return None
+            return [binding.key]
+    return []
 
 
 async def _play(app, pilot, moves: int = 2) -> None:
@@ -81,10 +86,10 @@ async def _play(app, pilot, moves: int = 2) -> None:
             break
         advice = human.game.oracle.advice(human.env, app.session.env_kwargs)
         action = human.game.action_names[advice.optimal[0] if advice.optimal else 0]
-        key = _key_for(board, action)
-        if key is None:
+        keys = _keys_for(board, action)
+        if not keys:
             break
-        await pilot.press(key)
+        await pilot.press(*keys)
         await pilot.pause()
 
 
@@ -180,6 +185,34 @@ async def _map_editor(app, pilot) -> None:
     await pilot.pause()
 
 
+async def _plan(app, pilot, keys: tuple[str, ...], edit: tuple[str, ...] = ()) -> None:
+    """The Plan view: `keys` pressed, each step run to its end, and with `edit` the map
+    editor open and those keys pressed in it (planning goes on from the values)."""
+    await pilot.press("P")
+    view = app.plan_view
+    while view is None or view.runner is None:
+        await pilot.pause()
+        view = app.plan_view
+
+    async def settled() -> None:
+        await pilot.pause()
+        while view.runner is None or view.runner.latest.running or view.runner._commands:
+            await pilot.pause(0.05)
+        view._poll()
+        await pilot.pause()
+
+    for key in keys:
+        await pilot.press(key)
+        await settled()
+    if edit:
+        await pilot.press("m")
+        await pilot.pause()
+        await pilot.press(*edit)
+        await settled()
+        view.focus_default()
+        await pilot.pause()
+
+
 async def _wrappers(app, pilot) -> None:
     await pilot.press("w")
     await pilot.pause()
@@ -217,6 +250,13 @@ def _scenarios() -> tuple[Scenario, ...]:
                  partial(Session, shown.env_id, choices=choices, seed=1), _wrappers),
         Scenario("compare.svg", f"{compared.title}: Q-learning against SARSA over 10 seeds",
                  partial(Session, compared.env_id, seed=0), _compare),
+        Scenario("plan.svg", "FrozenLake: value iteration, then a hole painted while it plans",
+                 partial(Session, "frozenlake", seed=0),
+                 partial(_plan, keys=("3", "c"), edit=("right", "right", "down", "3"))),
+        Scenario("plan-gambler.svg", "Gambler: value iteration, sweep by sweep (Figure 4.3)",
+                 partial(Session, "gambler", seed=0), partial(_plan, keys=("3", "c"))),
+        Scenario("plan-car-rental.svg", "Jack's car rental: policy iteration (Figure 4.2)",
+                 partial(Session, "car-rental", seed=0), partial(_plan, keys=("2", "c"))),
         Scenario("help.svg", "Every key", partial(Session, first.env_id, seed=0), _help),
         Scenario("compact-80x24.svg", "The compact layout at 80x24",
                  partial(Session, first.env_id, seed=4), _play, size=(80, 24)),
@@ -237,18 +277,17 @@ async def _shoot(scenario: Scenario, directory: Path) -> Path:
         await pilot.pause()
         app.title = f"tui-gym — {scenario.title}"
         await pilot.pause()
-        path = directory / scenario.filename
         svg = app.export_screenshot(title=scenario.title)
-    tmp = path.with_suffix(".svg.tmp")
-    tmp.write_text(svg, encoding="utf-8")
-    tmp.replace(path)
-    return path
+    return write_atomically(directory / scenario.filename, svg)
 
 
 def write_screenshots(directory: str | Path = "screenshots") -> list[Path]:
-    """Write every scenario's SVG into `directory` (created if needed)."""
+    """Write every scenario's SVG into `directory` (created if needed); every file's
+    path is checked before the first is drawn (`OutputPathError` saying why)."""
     folder = Path(directory)
     folder.mkdir(parents=True, exist_ok=True)
+    for scenario in SCENARIOS:
+        check_output_path(folder / scenario.filename)
 
     async def shoot_all() -> list[Path]:
         return [await _shoot(s, folder) for s in SCENARIOS]

@@ -24,8 +24,6 @@ slice) and what a heatmap cell means; it never branches on a game's name.
 
 from __future__ import annotations
 
-import time
-from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from textual import on
@@ -38,6 +36,7 @@ from textual.widgets import Button, Label
 from tui_gym.algorithms import Settings
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.engine.trainer import continue_run
+from tui_gym.ui.map_editing import apply_edit, save_map, show_optimum
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
 from tui_gym.ui.widgets.map_editor import MapEditor
@@ -345,58 +344,19 @@ class TrainView(Vertical):
         self.focus_default()
 
     def _show_editor(self) -> None:
-        from tui_gym.core.mdp import NotAvailable
-
-        if self._editor is None:
-            return
-        session = self.session
-        game, kwargs = session.game, session.env_kwargs
-        grid_map = game.grid_map(kwargs)
-        started = time.perf_counter()
-        solution = game.solution(kwargs)
-        if isinstance(solution, NotAvailable):
-            self._editor.show(grid_map, [], f"no exact optimum: {solution.reason}")
-            return
-        panels: list[Any] = []
-        if solution.q is not None:
-            panels = game.layout.heatmaps(solution.q, kwargs, self.focus_target, solution.marks)
-        took = (time.perf_counter() - started) * 1000
-        if "optimal_mean_steps" in solution.figures:
-            figure = f"{solution.value:.3f} steps on average"
-        else:
-            figure = f"{solution.value:+.4f} return"
-        self._editor.show(grid_map, panels, f"exact optimum {figure}, solved in {took:.0f} ms")
+        if self._editor is not None:
+            show_optimum(self._editor, self.session, self.focus_target)
 
     @on(MapEditor.Changed)
     def _map_changed(self, event: MapEditor.Changed) -> None:
         event.stop()
-        event.editor.pending = max(0, event.editor.pending - 1)
-        session = self.session
-        try:
-            kwargs = session.game.with_map(session.env_kwargs, event.grid_map)
-        except ValueError as error:
-            self.app.notify(str(error), severity="warning", timeout=4)
-            event.editor.drop_last(session.game.grid_map(session.env_kwargs))
-            return
-        rebuild = getattr(self.app, "rebuild_map", None)
-        if rebuild is None or not rebuild(kwargs, event.resized):
-            event.editor.drop_last(session.game.grid_map(session.env_kwargs))
+        if not apply_edit(self.app, self.session, event):
             self._show_editor()
 
     @on(MapEditor.SaveAsked)
     def _map_save(self, event: MapEditor.SaveAsked) -> None:
-        from tui_gym.games.maps import MapError
-        from tui_gym.session.map_files import write_map_file
-
         event.stop()
-        game = self.session.game
-        path = Path.cwd() / f"{game.name}-map.txt"
-        try:
-            write_map_file(path, event.grid_map, f"{game.title} map, saved by tui-gym")
-        except MapError as error:
-            self.app.notify(str(error), severity="error")
-            return
-        self.app.notify(f"Map saved to {path} (play it with --map-file)", timeout=6)
+        save_map(self.app, self.session, event.grid_map)
 
     @on(MapEditor.Closed)
     def _map_closed(self, event: MapEditor.Closed) -> None:

@@ -11,6 +11,8 @@ from tui_gym.core.experiments.aggregate import (
     rolling_mean,
 )
 from tui_gym.core.experiments.errors import (
+    DamagedRunError,
+    DamagedRunHistoryError,
     NewerRunHistoryError,
     NotARunHistoryError,
     RunHistoryBusyError,
@@ -18,7 +20,13 @@ from tui_gym.core.experiments.errors import (
     UnknownRunError,
 )
 from tui_gym.core.experiments.figures import Figure
-from tui_gym.core.experiments.history import STORED_POINTS, RunHistory
+from tui_gym.core.experiments.history import (
+    STORED_POINTS,
+    BestEffortHistory,
+    DamagedRun,
+    RunHistory,
+    RunRows,
+)
 from tui_gym.core.experiments.paths import resolve_db_path
 from tui_gym.core.experiments.recorder import RunRecorder
 from tui_gym.core.experiments.records import (
@@ -31,12 +39,14 @@ from tui_gym.core.experiments.records import (
     Versions,
     WrapperSetting,
 )
+from tui_gym.core.experiments.recover import Recovery
 from tui_gym.core.experiments.runs import (
     CsvExport,
     RemovedRun,
     RunListing,
     export_run_csv,
     list_runs,
+    recover_history,
     remove_run,
     show_run,
 )
@@ -44,13 +54,18 @@ from tui_gym.core.experiments.runs import (
 __all__ = [
     "STORED_POINTS",
     "AggregateCurve",
+    "BestEffortHistory",
     "CsvExport",
     "Curve",
     "CurvePoint",
+    "DamagedRun",
+    "DamagedRunError",
+    "DamagedRunHistoryError",
     "Estimate",
     "Figure",
     "NewerRunHistoryError",
     "NotARunHistoryError",
+    "Recovery",
     "RemovedRun",
     "RunHistory",
     "RunHistoryBusyError",
@@ -59,6 +74,7 @@ __all__ = [
     "RunListing",
     "RunRecord",
     "RunRecorder",
+    "RunRows",
     "RunSpec",
     "RunStatus",
     "RunSummary",
@@ -70,6 +86,7 @@ __all__ = [
     "list_runs",
     "mean_return_last",
     "mean_with_ci",
+    "recover_history",
     "remove_run",
     "resolve_db_path",
     "rolling_mean",

@@ -1,7 +1,6 @@
 """A run's curves as CSV: one row per episode that any curve has, one column per curve.
 
-The file is written to a temporary file beside it and renamed into place, so
-it is either the old file or the whole new one, never half of one. Floats are
+Floats are
 written in full (`repr`), so reading them back gives the same numbers; an
 episode a curve has no value at is an empty cell.
 """
@@ -10,10 +9,7 @@ from __future__ import annotations
 
 import csv
 import io
-import os
-import secrets
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 
@@ -42,18 +38,3 @@ def curves_csv(curves: Sequence[Curve]) -> tuple[str, int]:
     for row, episode in enumerate(episodes.tolist()):
         writer.writerow([episode, *(cells[row] for cells in columns)])
     return out.getvalue(), len(episodes)
-
-
-def write_text_atomic(path: Path, text: str) -> None:
-    """Write `text` to `path` through a temporary file in the same folder and a rename."""
-    # Opened with "x" rather than mkstemp, so the file gets the usual permissions.
-    tmp = path.with_name(f".{path.name}.{secrets.token_hex(6)}.tmp")
-    try:
-        with tmp.open("x", encoding="utf-8", newline="") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise

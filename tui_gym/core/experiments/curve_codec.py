@@ -23,6 +23,8 @@ import numpy as np
 FORMAT_FLOAT16 = 1
 _RAW, _ZLIB, _EVEN = 0, 1, 2
 _TOP_EXPONENT = 14  # the largest magnitude is scaled into [2**14, 2**15)
+_MAX_EXPONENT = 1100  # a float64 scaled from float16 needs no more
+_MAX_VARINT = 10  # bytes of a 64-bit varint
 
 
 class CurveFormatError(ValueError):
@@ -100,7 +102,11 @@ def encode_curve(episodes: np.ndarray, values: np.ndarray) -> bytes:
 
 
 def decode_curve(data: bytes) -> tuple[np.ndarray, np.ndarray]:
-    """(episodes, values) from the bytes `encode_curve` made; CurveFormatError otherwise."""
+    """(episodes, values) from the bytes `encode_curve` made; CurveFormatError otherwise.
+
+    The point count is checked against the bytes there are before anything is
+    allocated, and the episodes inflate to at most the bytes that count needs.
+    """
     if not data or data[0] != FORMAT_FLOAT16:
         raise CurveFormatError("unknown curve format")
     n, pos = _read_uvarint(data, 1)
@@ -110,28 +116,45 @@ def decode_curve(data: bytes) -> tuple[np.ndarray, np.ndarray]:
     if mode not in (_RAW, _ZLIB, _EVEN):
         raise CurveFormatError("unknown episode encoding")
     length, pos = _read_uvarint(data, pos + 1)
+    if len(data) != pos + length + 2 + 2 * n:
+        raise CurveFormatError(f"curve of the wrong length for {n:,} points")
     body = data[pos : pos + length]
     pos += length
-    try:
-        gaps = zlib.decompress(body) if mode == _ZLIB else bytes(body)
-    except zlib.error as exc:
-        raise CurveFormatError(f"damaged episodes ({exc})") from None
+    gaps = _inflate(body, n) if mode == _ZLIB else bytes(body)
     episodes = np.empty(n, dtype=np.int64)
-    if n:
-        first, at = _read_uvarint(gaps, 0)
-        episodes[0] = _unzigzag(first)
-        if mode == _EVEN and n > 1:
-            step, at = _read_uvarint(gaps, at)
-            episodes[1:] = episodes[0] + step * np.arange(1, n)
-        else:
-            for i in range(1, n):
-                gap, at = _read_uvarint(gaps, at)
-                episodes[i] = episodes[i - 1] + gap
-    if len(data) != pos + 2 + 2 * n:
-        raise CurveFormatError("curve of the wrong length")
+    try:
+        if n:
+            first, at = _read_uvarint(gaps, 0)
+            episodes[0] = _unzigzag(first)
+            if mode == _EVEN and n > 1:
+                step, at = _read_uvarint(gaps, at)
+                if step < 1 or int(episodes[0]) + step * (n - 1) >= 2**63:
+                    raise CurveFormatError("episodes out of range")
+                episodes[1:] = episodes[0] + step * np.arange(1, n)
+            else:
+                for i in range(1, n):
+                    gap, at = _read_uvarint(gaps, at)
+                    episodes[i] = episodes[i - 1] + gap
+    except OverflowError:
+        raise CurveFormatError("episodes out of range") from None
     (exponent,) = struct.unpack_from("<h", data, pos)
+    if abs(exponent) > _MAX_EXPONENT:
+        raise CurveFormatError("values out of range")
     scaled = np.frombuffer(data, dtype="<f2", count=n, offset=pos + 2)
     return episodes, np.ldexp(scaled.astype(np.float64), exponent)
+
+
+def _inflate(body: bytes, n: int) -> bytes:
+    """The episodes' gaps, inflated to at most the bytes n points can take."""
+    limit = _MAX_VARINT * max(n, 1)
+    inflater = zlib.decompressobj()
+    try:
+        gaps = inflater.decompress(body, limit)
+    except zlib.error as exc:
+        raise CurveFormatError(f"damaged episodes ({exc})") from None
+    if inflater.unconsumed_tail or not inflater.eof:
+        raise CurveFormatError(f"episodes that inflate past {limit:,} bytes or stop short")
+    return gaps
 
 
 def pack_curves(curves: Mapping[str, bytes]) -> bytes:

@@ -8,7 +8,11 @@ class RunHistoryError(Exception):
 
 
 class NotARunHistoryError(RunHistoryError):
-    """The file is not a tui-gym run history (corrupt, not SQLite, or another program's)."""
+    """The file is not a tui-gym run history (not SQLite, or another program's)."""
+
+
+class DamagedRunHistoryError(RunHistoryError):
+    """The file is a run history SQLite cannot read through; `runs --recover` may save runs."""
 
 
 class NewerRunHistoryError(RunHistoryError):
@@ -21,3 +25,11 @@ class RunHistoryBusyError(RunHistoryError):
 
 class UnknownRunError(RunHistoryError, LookupError):
     """No run has that id."""
+
+
+class DamagedRunError(RunHistoryError):
+    """One run's row does not read as a run (an edit, damage); the others are readable."""
+
+    def __init__(self, run_id: int, message: str) -> None:
+        super().__init__(message)
+        self.run_id = run_id

@@ -1,43 +1,56 @@
 """The run history: every run recorded in one SQLite file that any number of processes share.
 
 `RunHistory(path)` opens the file, creating it (and its folder) when missing,
-and brings an older schema up to date. Before writing anything it checks that
-the file is a tui-gym run history: a file that is not SQLite, a damaged one,
-another program's database, or one made by a newer tui-gym raises a
-`RunHistoryError` naming the file, and the file is left as it was.
+and brings an older schema up to date; every `RunHistory` on one file in a
+process shares the process's one connection to it (see `connection`). Before
+writing anything it checks that the file is a tui-gym run history: a file that
+is not SQLite, another program's database, a damaged history or one made by a
+newer tui-gym raises a `RunHistoryError` naming the file, and the file is left
+as it was; a damaged one's message says how to copy what is readable
+(`recover`). `read_only=True` is for callers that only read: a missing file is
+not created, and a history in a read-only place can still be listed.
 
 The file is in WAL mode, so readers never wait; writers take the write lock
-up front (`BEGIN IMMEDIATE`) and wait their turn, retrying past the busy
-timeout, so two processes recording at once both get every run in. A run is
-written when it starts (status running) and updated as it goes: curves (kept
-to at most `STORED_POINTS` bucket means each, see `curve_codec` for the bytes),
-figures, the saved agent's path, and finally its status and end time.
+up front and wait their turn, so two processes recording at once both get
+every run in. A run is written when it starts (status running, with its
+writer's mark, see `writers`) and updated as it goes: curves (kept to at most
+`STORED_POINTS` bucket means each, see `curve_codec` for the bytes), figures,
+its settings, the saved agent's path, and finally its status and end time.
+Every row is checked as it is read (`rows`): a run that does not read is one
+line naming it (`DamagedRunError`), and the others stay readable.
+`BestEffortHistory` never raises on a write: a command keeps its results when
+the disk is full and says afterwards that they were not recorded.
 """
 
 from __future__ import annotations
 
-import json
 import math
 import sqlite3
-import threading
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
 
+import tui_gym.core.experiments.rows as rows
+from tui_gym.core.experiments.connection import (
+    busy_error,
+    damaged,
+    is_damage,
+    open_shared,
+    release,
+    shown,
+)
 from tui_gym.core.experiments.curve_codec import (
     CurveFormatError,
-    decode_curve,
     encode_curve,
     pack_curves,
     unpack_curves,
 )
 from tui_gym.core.experiments.downsample import bucket_means
 from tui_gym.core.experiments.errors import (
-    NewerRunHistoryError,
-    NotARunHistoryError,
-    RunHistoryBusyError,
+    DamagedRunError,
     RunHistoryError,
     UnknownRunError,
 )
@@ -50,52 +63,37 @@ from tui_gym.core.experiments.records import (
     RunStatus,
     RunSummary,
     Versions,
-    WrapperSetting,
     to_json_text,
 )
-from tui_gym.core.experiments.schema import (
-    APPLICATION_ID,
-    MIGRATIONS,
-    Migration,
-    check_migrations,
-    migrate,
-)
+from tui_gym.core.experiments.schema import MIGRATIONS, Migration, check_migrations
+from tui_gym.core.experiments.writers import WriterCheck, current_writer
 
 # Points kept per stored curve: about a terminal chart's width, and few enough that a
 # thousand runs with a few curves each stay within the history's size budget.
 STORED_POINTS = 100
 MAX_STORED_POINTS = 500
-BUSY_TIMEOUT_S = 10.0  # how long one attempt waits for another writer
-WRITE_ATTEMPTS = 4
-SQLITE_MAGIC = b"SQLite format 3\x00"
+BUSY_TIMEOUT_S = 30.0  # how long a read or a write waits for other processes
 
 T = TypeVar("T")
 
 
-def _is_busy(exc: sqlite3.OperationalError) -> bool:
-    text = str(exc).lower()
-    return "locked" in text or "busy" in text
+@dataclass(frozen=True)
+class DamagedRun:
+    """A run whose row does not read: its id and why, in a few words."""
+
+    id: int
+    reason: str
+
+    def to_json(self) -> dict[str, Any]:
+        return {"id": self.id, "reason": self.reason}
 
 
-def _inspect(conn: sqlite3.Connection) -> tuple[int, int, list[str]]:
-    # One read transaction, so that the three answers describe the same state of the file:
-    # another process may be creating it (tables first, then the id) at this very moment.
-    own = not conn.in_transaction
-    if own:
-        conn.execute("BEGIN")
-    try:
-        app_id = conn.execute("PRAGMA application_id").fetchone()[0]
-        version = conn.execute("PRAGMA user_version").fetchone()[0]
-        tables = [
-            row[0]
-            for row in conn.execute(
-                "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%'"
-            )
-        ]
-    finally:
-        if own and conn.in_transaction:
-            conn.execute("COMMIT")
-    return app_id, version, tables
+@dataclass(frozen=True)
+class RunRows:
+    """The runs a query found that read, and those that do not."""
+
+    runs: tuple[RunSummary, ...]
+    damaged: tuple[DamagedRun, ...] = ()
 
 
 class RunHistory:
@@ -107,99 +105,19 @@ class RunHistory:
         *,
         timeout: float = BUSY_TIMEOUT_S,
         migrations: Sequence[Migration] = MIGRATIONS,
+        read_only: bool = False,
     ) -> None:
         self.path = Path(path)
         self.timeout = timeout
         self.schema_version = check_migrations(migrations)
-        self._lock = threading.Lock()
-        self._conn = self._open(migrations)
-
-    # -- opening -------------------------------------------------------------
-
-    def _untouched(self, what: str) -> NotARunHistoryError:
-        return NotARunHistoryError(
-            f"{self.path} is not a tui-gym run history ({what}); it was left untouched"
-        )
-
-    def _check_identity(self, app_id: int, version: int, tables: list[str]) -> int:
-        """The file's schema version, 0 for an empty file; raises for anything not ours."""
-        if app_id == APPLICATION_ID:
-            if version > self.schema_version:
-                raise NewerRunHistoryError(
-                    f"{self.path} was made by a newer tui-gym (run history version {version}; "
-                    f"this tui-gym reads up to {self.schema_version}): upgrade tui-gym, "
-                    "or record elsewhere with --db PATH"
-                )
-            return version
-        if app_id == 0 and version == 0 and not tables:
-            return 0
-        if tables:
-            shown = ", ".join(tables[:3]) + (", ..." if len(tables) > 3 else "")
-            raise self._untouched(f"an SQLite database of another program, with tables {shown}")
-        raise self._untouched(f"an SQLite database of another program (application id {app_id})")
-
-    def _check_existing(self) -> None:
-        """Checks a non-empty file without writing to it: the header, then a read-only look."""
-        try:
-            with self.path.open("rb") as fh:
-                header = fh.read(len(SQLITE_MAGIC))
-        except OSError as exc:
-            raise RunHistoryError(f"{self.path}: cannot read it ({exc.strerror})") from None
-        if header != SQLITE_MAGIC:
-            raise self._untouched("not an SQLite database")
-        uri = self.path.resolve().as_uri() + "?mode=ro"
-        try:
-            conn = sqlite3.connect(uri, uri=True, timeout=self.timeout)
-            try:
-                identity = _inspect(conn)
-            finally:
-                conn.close()
-        except sqlite3.OperationalError as exc:
-            if _is_busy(exc):
-                raise self._busy() from None
-            raise RunHistoryError(f"{self.path}: cannot read it ({exc})") from None
-        except sqlite3.DatabaseError as exc:  # "file is not a database" and the like
-            raise self._untouched(str(exc)) from None
-        self._check_identity(*identity)
-
-    def _open(self, migrations: Sequence[Migration]) -> sqlite3.Connection:
-        if self.path.is_dir():
-            raise NotARunHistoryError(f"{self.path} is a folder, not a run history file")
-        if self.path.exists() and self.path.stat().st_size > 0:
-            self._check_existing()
-        else:
-            try:
-                self.path.parent.mkdir(parents=True, exist_ok=True)
-            except OSError as exc:
-                raise RunHistoryError(
-                    f"{self.path}: cannot create its folder ({exc.strerror})"
-                ) from None
-        try:
-            conn = sqlite3.connect(
-                self.path, timeout=self.timeout, isolation_level=None, check_same_thread=False
-            )
-        except sqlite3.Error as exc:
-            raise RunHistoryError(f"{self.path}: cannot open it ({exc})") from None
-        try:
-            with self._errors():
-                self._retry(lambda: conn.execute("PRAGMA journal_mode = WAL").fetchone())
-                conn.execute("PRAGMA synchronous = NORMAL")  # WAL stays consistent on a crash
-                conn.execute("PRAGMA foreign_keys = ON")
-                if self._check_identity(*_inspect(conn)) < self.schema_version:
-
-                    def upgrade(c: sqlite3.Connection) -> None:
-                        # Another process may have got there first: look again under the lock.
-                        migrate(c, self._check_identity(*_inspect(c)), migrations)
-
-                    self._transaction(conn, upgrade)
-        except BaseException:
-            conn.close()
-            raise
-        return conn
+        self._shared = open_shared(self.path, migrations, timeout, read_only=read_only)
+        self._conn = self._shared.conn
+        self._closed = False
 
     def close(self) -> None:
-        with self._lock:
-            self._conn.close()
+        if not self._closed:
+            self._closed = True
+            release(self._shared)
 
     def __enter__(self) -> RunHistory:
         return self
@@ -209,109 +127,69 @@ class RunHistory:
 
     # -- plumbing ------------------------------------------------------------
 
-    def _busy(self) -> RunHistoryBusyError:
-        return RunHistoryBusyError(
-            f"{self.path} is busy: another process kept it locked for over "
-            f"{self.timeout * WRITE_ATTEMPTS:.0f} s"
-        )
-
     @contextmanager
     def _errors(self) -> Iterator[None]:
         """SQLite's errors as one line naming the file."""
         try:
             yield
-        except sqlite3.OperationalError as exc:
-            if _is_busy(exc):
-                raise self._busy() from None
-            raise RunHistoryError(f"{self.path}: {exc}") from None
         except sqlite3.DatabaseError as exc:
-            raise RunHistoryError(f"{self.path} is damaged ({exc})") from None
+            if is_damage(exc):
+                raise damaged(self.path, exc) from None
+            raise RunHistoryError(f"{shown(self.path)}: {exc}") from None
         except CurveFormatError as exc:
-            raise RunHistoryError(f"{self.path} is damaged (a stored curve: {exc})") from None
-
-    @contextmanager
-    def _damaged_rows(self) -> Iterator[None]:
-        """Rows that do not read as what this version wrote, as one line naming the file."""
-        try:
-            yield
-        except (ValueError, KeyError, TypeError) as exc:
-            raise RunHistoryError(f"{self.path} is damaged (a run reads as {exc!r})") from None
-
-    def _retry(self, action: Callable[[], T]) -> T:
-        for attempt in range(WRITE_ATTEMPTS):
-            try:
-                return action()
-            except sqlite3.OperationalError as exc:
-                if not _is_busy(exc) or attempt + 1 == WRITE_ATTEMPTS:
-                    raise
-                time.sleep(0.01 * 2**attempt)  # the busy timeout already waited; back off a little
-        raise AssertionError("unreachable")
-
-    def _transaction(self, conn: sqlite3.Connection, write: Callable[[sqlite3.Connection], T]) -> T:
-        """`write(conn)` inside one write transaction, taken as soon as no one else holds it."""
-        self._retry(lambda: conn.execute("BEGIN IMMEDIATE"))
-        try:
-            result = write(conn)
-            conn.execute("COMMIT")
-        except BaseException:
-            if conn.in_transaction:
-                conn.execute("ROLLBACK")
-            raise
-        return result
+            raise damaged(self.path, f"a stored curve: {exc}") from None
 
     def _write(self, write: Callable[[sqlite3.Connection], T]) -> T:
-        with self._lock, self._errors():
-            return self._transaction(self._conn, write)
+        """`write(conn)` in one write transaction, taken as soon as no one else holds it."""
+        if self._closed:
+            raise RunHistoryError(f"{shown(self.path)}: this history was closed")
+        with self._errors():
+            return self._shared.attempt(write, self.timeout, busy_error(self.path, self.timeout),
+                                        begin="BEGIN IMMEDIATE")
 
-    @contextmanager
-    def _read(self) -> Iterator[sqlite3.Connection]:
-        with self._lock, self._errors():
-            yield self._conn
+    def _read(self, read: Callable[[sqlite3.Connection], T]) -> T:
+        """`read(conn)` in one read transaction (one state of the file)."""
+        if self._closed:
+            raise RunHistoryError(f"{shown(self.path)}: this history was closed")
+        with self._errors():
+            return self._shared.attempt(read, self.timeout, busy_error(self.path, self.timeout))
 
     def _require_run(self, conn: sqlite3.Connection, run_id: int) -> None:
         if conn.execute("SELECT 1 FROM runs WHERE id = ?", (run_id,)).fetchone() is None:
-            raise UnknownRunError(f"no run {run_id} in {self.path}")
+            raise UnknownRunError(f"no run {run_id} in {shown(self.path)}")
+
+    def _stored_curves(self, run_id: int, blob: object) -> dict[str, bytes]:
+        """A run's stored curves by name, to add to; DamagedRunError if they do not read."""
+        try:
+            if not isinstance(blob, bytes):
+                raise CurveFormatError("not a blob")
+            return unpack_curves(blob)
+        except CurveFormatError as exc:
+            raise self._damaged_run(run_id, f"its curves do not decode ({exc})") from None
+
+    def _damaged_run(self, run_id: int, reason: str) -> DamagedRunError:
+        return DamagedRunError(
+            run_id,
+            f"run {run_id} in {shown(self.path)} cannot be read: {reason} "
+            f"(`tui-gym runs rm {run_id}` removes it)",
+        )
 
     # -- recording -----------------------------------------------------------
 
     def start_run(self, spec: RunSpec, started_at: float | None = None) -> int:
         """Record a new run (status running); its id."""
-        versions = spec.versions or Versions.current()
-        settings = (
-            spec.game,
-            to_json_text(dict(spec.game_params), "the game's parameters"),
-            to_json_text([w.to_json() for w in spec.wrappers], "the wrappers"),
-            spec.algorithm,
-            to_json_text(dict(spec.hyperparameters), "the hyperparameters"),
-        )
-        seeds = to_json_text(list(spec.seeds), "the seeds")
         started = time.time() if started_at is None else started_at
+        settings = _settings(spec)
+        platform = _platform(spec.versions or Versions.current())
+        seeds = to_json_text(list(spec.seeds), "the seeds")
+        writer = current_writer()
 
         def write(conn: sqlite3.Connection) -> int:
-            platform_id = _row_id(
-                conn,
-                "platforms",
-                ("tui_gym", "gymnasium", "numpy", "python"),
-                (versions.tui_gym, versions.gymnasium, versions.numpy, versions.python),
-            )
-            settings_id = _row_id(
-                conn,
-                "settings",
-                ("game", "game_params", "wrappers", "algorithm", "hyperparameters"),
-                settings,
-            )
             cursor = conn.execute(
                 "INSERT INTO runs (kind, settings_id, platform_id, seeds, status, started_at,"
-                " group_id) VALUES (?, ?, ?, ?, ?, ?, ?)",
-                (
-                    str(spec.kind),
-                    settings_id,
-                    platform_id,
-                    seeds,
-                    str(RunStatus.RUNNING),
-                    started,
-                    spec.group,
-                ),
+                " group_id, writer) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+                (str(spec.kind), _settings_id(conn, settings), _platform_id(conn, platform),
+                 seeds, str(RunStatus.RUNNING), started, spec.group, writer),
             )
             assert cursor.lastrowid is not None
             return cursor.lastrowid
@@ -328,15 +206,19 @@ class RunHistory:
         status: RunStatus | None = None,
         ended_at: float | None = None,
         max_points: int = STORED_POINTS,
+        spec: RunSpec | None = None,
     ) -> None:
         """Add or replace curves (each bounded to `max_points`) and figures (by name), set the
-        saved agent's path (None: leave it), and set a final status with the end time, at once."""
+        saved agent's path (None: leave it), the run's settings to `spec`'s (its game,
+        wrappers, algorithm and hyperparameters; None: leave them), and a final status
+        with the end time, at once."""
         if not 2 <= max_points <= MAX_STORED_POINTS:
             raise ValueError(f"max_points must be in 2..{MAX_STORED_POINTS}, got {max_points}")
         blobs = [
             (c.name, encode_curve(*bucket_means(c.episodes, c.values, max_points))) for c in curves
         ]
         figure_rows = list(figures)
+        settings = None if spec is None else _settings(spec)
         final = None if status is None else RunStatus(status)
         if final is RunStatus.RUNNING:
             raise ValueError("a run can only be set to a final status")
@@ -346,7 +228,7 @@ class RunHistory:
             self._require_run(conn, run_id)
             if blobs:
                 row = conn.execute("SELECT data FROM curves WHERE run_id = ?", (run_id,)).fetchone()
-                stored = {} if row is None else unpack_curves(row[0])
+                stored = {} if row is None else self._stored_curves(run_id, row[0])
                 stored.update(blobs)
                 conn.execute(
                     "INSERT OR REPLACE INTO curves (run_id, data) VALUES (?, ?)",
@@ -354,12 +236,21 @@ class RunHistory:
                 )
             if figure_rows:
                 row = conn.execute("SELECT figures FROM runs WHERE id = ?", (run_id,)).fetchone()
-                merged = {f.name: f for f in _figures_from_json(row[0])}
+                try:
+                    merged = {f.name: f for f in rows.figures(row[0])}
+                except rows.BadRow as exc:
+                    raise self._damaged_run(run_id, str(exc)) from None
                 merged.update((f.name, f) for f in figure_rows)  # a known name keeps its place
                 conn.execute(
                     "UPDATE runs SET figures = ? WHERE id = ?",
                     (_figures_to_json(merged.values()), run_id),
                 )
+            if settings is not None:
+                old = conn.execute("SELECT settings_id FROM runs WHERE id = ?", (run_id,))
+                old_id = old.fetchone()[0]
+                conn.execute("UPDATE runs SET settings_id = ? WHERE id = ?",
+                             (_settings_id(conn, settings), run_id))
+                _drop_unused(conn, "settings", "settings_id", old_id)
             if agent_path is not None:
                 conn.execute(
                     "UPDATE runs SET agent_path = ? WHERE id = ?", (str(agent_path), run_id)
@@ -398,7 +289,63 @@ class RunHistory:
         """Mark a run finished, interrupted or failed, now or at `ended_at`."""
         self.update(run_id, status=status, ended_at=ended_at)
 
+    def restore_run(self, record: RunRecord, writer: str | None = None) -> None:
+        """Write a run read elsewhere under its own id (`recover`): its settings, times,
+        status, figures, curves and saved agent's path, and the mark of its writer."""
+        run = record.summary
+        settings = _settings(RunSpec(
+            kind=run.kind, game=run.game, algorithm=run.algorithm,
+            game_params=record.game_params, wrappers=record.wrappers,
+            hyperparameters=record.hyperparameters,
+        ))
+        platform = _platform(record.versions)
+        blob = pack_curves({
+            c.name: encode_curve(*bucket_means(c.episodes, c.values, MAX_STORED_POINTS))
+            for c in record.curves
+        })
+
+        def write(conn: sqlite3.Connection) -> None:
+            conn.execute(
+                "INSERT INTO runs (id, kind, settings_id, platform_id, seeds, status, started_at,"
+                " ended_at, agent_path, group_id, figures, writer)"
+                " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                (run.id, str(run.kind), _settings_id(conn, settings),
+                 _platform_id(conn, platform), to_json_text(list(run.seeds), "the seeds"),
+                 str(run.status), run.started_at, run.ended_at, record.agent_path, run.group,
+                 _figures_to_json(run.figures), writer),
+            )
+            if record.curves:
+                conn.execute("INSERT INTO curves (run_id, data) VALUES (?, ?)", (run.id, blob))
+
+        self._write(write)
+
     # -- queries -------------------------------------------------------------
+
+    def read_runs(
+        self,
+        *,
+        game: str | None = None,
+        kind: RunKind | str | None = None,
+        limit: int | None = None,
+    ) -> RunRows:
+        """The runs, newest first (at most `limit`; only those of `game` and `kind` when
+        given), each checked as it is read: those that do not read come apart, by id."""
+        where, args = _where(game, kind)
+        sql = f"SELECT {rows.SUMMARY_COLUMNS} {rows.SUMMARY_FROM}{where}" \
+              " ORDER BY r.started_at DESC, r.id DESC"
+        if limit is not None:
+            sql += " LIMIT ?"
+            args.append(int(limit))
+        found = self._read(lambda conn: conn.execute(sql, args).fetchall())
+        writers = WriterCheck()
+        runs: list[RunSummary] = []
+        bad: list[DamagedRun] = []
+        for row in found:
+            try:
+                runs.append(rows.summary(row, writers))
+            except rows.BadRow as exc:
+                bad.append(DamagedRun(int(row[0]), str(exc)))
+        return RunRows(tuple(runs), tuple(bad))
 
     def list_runs(
         self,
@@ -407,86 +354,115 @@ class RunHistory:
         kind: RunKind | str | None = None,
         limit: int | None = None,
     ) -> list[RunSummary]:
-        """The runs, newest first; only those of `game` and `kind` when given."""
-        sql = _SUMMARY_SELECT + " WHERE 1 = 1"
-        args: list[Any] = []
-        if game is not None:
-            sql += " AND s.game = ? COLLATE NOCASE"
-            args.append(game)
-        if kind is not None:
-            sql += " AND r.kind = ?"
-            args.append(str(RunKind(kind)))
-        sql += " ORDER BY r.started_at DESC, r.id DESC"
-        if limit is not None:
-            sql += " LIMIT ?"
-            args.append(int(limit))
-        with self._read() as conn:
-            rows = conn.execute(sql, args).fetchall()
-        with self._damaged_rows():
-            return [_summary(row) for row in rows]
+        """The runs that read, newest first (see `read_runs`, which also names the others)."""
+        return list(self.read_runs(game=game, kind=kind, limit=limit).runs)
+
+    def count_runs(self, *, game: str | None = None, kind: RunKind | str | None = None) -> int:
+        """How many runs there are (of `game` and `kind` when given)."""
+        where, args = _where(game, kind)
+        sql = f"SELECT COUNT(*) {rows.SUMMARY_FROM}{where}"
+        return int(self._read(lambda conn: conn.execute(sql, args).fetchone()[0]))
 
     def get_run(self, run_id: int) -> RunRecord:
-        """Everything about one run; UnknownRunError if there is none with that id."""
-        with self._read() as conn:
-            row = conn.execute(_RECORD_SELECT, (run_id,)).fetchone()
-            if row is None:
-                raise UnknownRunError(f"no run {run_id} in {self.path}")
-            blob = conn.execute("SELECT data FROM curves WHERE run_id = ?", (run_id,)).fetchone()
-            stored = {} if blob is None else unpack_curves(blob[0])
-            curves = tuple(Curve(name, *decode_curve(data)) for name, data in stored.items())
-        with self._damaged_rows():
-            game_params, wrappers, hyperparameters = (json.loads(text) for text in row[10:13])
-            return RunRecord(
-                summary=_summary(row),
-                game_params=game_params,
-                wrappers=tuple(WrapperSetting(w["name"], w["params"]) for w in wrappers),
-                hyperparameters=hyperparameters,
-                versions=Versions(*row[13:17]),
-                curves=curves,
-                agent_path=row[17],
-            )
+        """Everything about one run; UnknownRunError if there is none with that id,
+        DamagedRunError (one line naming it) if its row does not read."""
 
-    def remove_run(self, run_id: int) -> RunSummary:
-        """Delete a run with its curves and figures; what it was."""
-
-        def write(conn: sqlite3.Connection) -> RunSummary:
-            row = conn.execute(_SUMMARY_SELECT + " WHERE r.id = ?", (run_id,)).fetchone()
-            if row is None:
-                raise UnknownRunError(f"no run {run_id} in {self.path}")
-            with self._damaged_rows():
-                summary = _summary(row)
-            ids = conn.execute(
-                "SELECT settings_id, platform_id FROM runs WHERE id = ?", (run_id,)
+        def read(conn: sqlite3.Connection) -> tuple[Any, Any]:
+            row = conn.execute(
+                f"SELECT {rows.RECORD_COLUMNS} {rows.RECORD_FROM} WHERE r.id = ?", (run_id,)
             ).fetchone()
+            blob = conn.execute(
+                f"SELECT {rows.CURVES_COLUMNS} FROM curves WHERE run_id = ?", (run_id,)
+            ).fetchone()
+            return row, blob
+
+        row, blob = self._read(read)
+        if row is None:
+            raise UnknownRunError(f"no run {run_id} in {shown(self.path)}")
+        try:
+            curves = () if blob is None else rows.curves(*blob)
+            return rows.record(row, curves, WriterCheck())
+        except rows.BadRow as exc:
+            raise self._damaged_run(run_id, str(exc)) from None
+
+    def remove_run(self, run_id: int) -> RunSummary | DamagedRun:
+        """Delete a run with its curves and figures; what it was (a `DamagedRun` for a run
+        whose row did not read: removing it is how it goes)."""
+
+        def write(conn: sqlite3.Connection) -> RunSummary | DamagedRun:
+            row = conn.execute(
+                f"SELECT {rows.SUMMARY_COLUMNS}, r.settings_id, r.platform_id "
+                f"{rows.SUMMARY_FROM} WHERE r.id = ?", (run_id,)
+            ).fetchone()
+            if row is None:
+                raise UnknownRunError(f"no run {run_id} in {shown(self.path)}")
+            was: RunSummary | DamagedRun
+            try:
+                was = rows.summary(row, WriterCheck())
+            except rows.BadRow as exc:
+                was = DamagedRun(run_id, str(exc))
+            settings_id, platform_id = row[-2:]
             conn.execute("DELETE FROM curves WHERE run_id = ?", (run_id,))
             conn.execute("DELETE FROM runs WHERE id = ?", (run_id,))
-            # Settings and platforms no other run uses go with it.
-            conn.execute(
-                "DELETE FROM settings WHERE id = ? AND NOT EXISTS"
-                " (SELECT 1 FROM runs WHERE settings_id = ?)",
-                (ids[0], ids[0]),
-            )
-            conn.execute(
-                "DELETE FROM platforms WHERE id = ? AND NOT EXISTS"
-                " (SELECT 1 FROM runs WHERE platform_id = ?)",
-                (ids[1], ids[1]),
-            )
-            return summary
+            _drop_unused(conn, "settings", "settings_id", settings_id)
+            _drop_unused(conn, "platforms", "platform_id", platform_id)
+            return was
 
         return self._write(write)
 
 
-_SUMMARY_COLUMNS = (
-    "r.id, r.kind, s.game, s.algorithm, r.seeds, r.status, r.started_at, r.ended_at,"
-    " r.group_id, r.figures"
-)
-_SUMMARY_SELECT = f"SELECT {_SUMMARY_COLUMNS} FROM runs r JOIN settings s ON s.id = r.settings_id"
-_RECORD_SELECT = (
-    f"SELECT {_SUMMARY_COLUMNS}, s.game_params, s.wrappers, s.hyperparameters,"
-    " p.tui_gym, p.gymnasium, p.numpy, p.python, r.agent_path"
-    " FROM runs r JOIN settings s ON s.id = r.settings_id"
-    " JOIN platforms p ON p.id = r.platform_id WHERE r.id = ?"
-)
+class BestEffortHistory(RunHistory):
+    """A run history whose writes never raise: once one fails (a full disk, a damaged
+    file), it and every later write are skipped, and `failure` says why. A run it could
+    not start has the id None. For commands that print their results whatever happens
+    to the history, and then say they were not recorded."""
+
+    failure: str | None = None
+
+    def _write(self, write: Callable[[sqlite3.Connection], T]) -> T:
+        if self.failure is None:
+            try:
+                return super()._write(write)
+            except RunHistoryError as exc:
+                self.failure = str(exc)
+        return None  # type: ignore[return-value]
+
+
+def _where(game: str | None, kind: RunKind | str | None) -> tuple[str, list[Any]]:
+    clauses, args = [], []
+    if game is not None:
+        clauses.append("s.game = ? COLLATE NOCASE")
+        args.append(game)
+    if kind is not None:
+        clauses.append("r.kind = ?")
+        args.append(str(RunKind(kind)))
+    return ("" if not clauses else " WHERE " + " AND ".join(clauses)), args
+
+
+_SETTINGS = ("game", "game_params", "wrappers", "algorithm", "hyperparameters")
+_PLATFORM = ("tui_gym", "gymnasium", "numpy", "python")
+
+
+def _settings(spec: RunSpec) -> tuple[str, ...]:
+    return (
+        spec.game,
+        to_json_text(dict(spec.game_params), "the game's parameters"),
+        to_json_text([w.to_json() for w in spec.wrappers], "the wrappers"),
+        spec.algorithm,
+        to_json_text(dict(spec.hyperparameters), "the hyperparameters"),
+    )
+
+
+def _platform(versions: Versions) -> tuple[str, ...]:
+    return (versions.tui_gym, versions.gymnasium, versions.numpy, versions.python)
+
+
+def _settings_id(conn: sqlite3.Connection, values: tuple[str, ...]) -> int:
+    return _row_id(conn, "settings", _SETTINGS, values)
+
+
+def _platform_id(conn: sqlite3.Connection, values: tuple[str, ...]) -> int:
+    return _row_id(conn, "platforms", _PLATFORM, values)
 
 
 def _row_id(
@@ -501,32 +477,17 @@ def _row_id(
     return int(row[0])
 
 
+def _drop_unused(conn: sqlite3.Connection, table: str, column: str, row_id: object) -> None:
+    """Settings and platforms no run uses any more go."""
+    conn.execute(
+        f"DELETE FROM {table} WHERE id = ? AND NOT EXISTS (SELECT 1 FROM runs WHERE {column} = ?)",
+        (row_id, row_id),
+    )
+
+
 def _figures_to_json(figures: Iterable[Figure]) -> str:
     # SQLite and JSON have no NaN: a figure without a value is stored as null.
     return to_json_text(
         [[f.name, f.value if math.isfinite(f.value) else None, f.unit, f.ci95] for f in figures],
         "the figures",
-    )
-
-
-def _figures_from_json(text: str) -> tuple[Figure, ...]:
-    return tuple(
-        Figure(name, float("nan") if value is None else value, unit, ci95)
-        for name, value, unit, ci95 in json.loads(text)
-    )
-
-
-def _summary(row: Sequence[Any]) -> RunSummary:
-    run_id, kind, game, algorithm, seeds, status, started, ended, group, figures = row[:10]
-    return RunSummary(
-        id=run_id,
-        kind=RunKind(kind),
-        game=game,
-        algorithm=algorithm,
-        seeds=tuple(json.loads(seeds)),
-        status=RunStatus(status),
-        started_at=started,
-        ended_at=ended,
-        figures=_figures_from_json(figures),
-        group=group,
     )

@@ -35,7 +35,8 @@ class RunKind(StrEnum):
 
 
 class RunStatus(StrEnum):
-    """Where a run stands: running until it finishes, is interrupted (Ctrl+C) or fails."""
+    """Where a run stands: running until it finishes, is interrupted (Ctrl+C, or its
+    process ended without saying how) or fails."""
 
     RUNNING = "running"
     FINISHED = "finished"

@@ -1,10 +1,13 @@
 """What `tui-gym runs` does, as plain functions returning typed results for the CLI to print.
 
-`list_runs` (`runs [--json] [--game G]`), `show_run` (`runs show ID`),
-`export_run_csv` (`runs export ID --csv PATH`) and `remove_run` (`runs rm ID`).
-Each takes `db`, the `--db` value (None for `TUI_GYM_DB` or the data folder's
-file). Reading never creates a file: with no history yet there are no runs.
-Every problem raises a `RunHistoryError` whose message is one line to show.
+`list_runs` (`runs [--json] [--game G] [--limit N]`), `show_run` (`runs show
+ID`), `export_run_csv` (`runs export ID --csv PATH`), `remove_run` (`runs rm
+ID`) and `recover_history` (`runs --recover`). Each takes `db`, the `--db`
+value (None for `TUI_GYM_DB` or the data folder's file). Reading never
+creates a file: with no history yet there are no runs; a history that can
+only be read (a read-only folder) can still be listed and shown. A listing
+names the runs that do not read beside those that do. Every problem raises a
+`RunHistoryError` whose message is one line to show.
 """
 
 from __future__ import annotations
@@ -13,22 +16,33 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tui_gym.core.experiments.csv_export import curves_csv, write_text_atomic
+from tui_gym.core.experiments.connection import examine, shown
+from tui_gym.core.experiments.csv_export import curves_csv
 from tui_gym.core.experiments.errors import RunHistoryError, UnknownRunError
-from tui_gym.core.experiments.history import RunHistory
+from tui_gym.core.experiments.history import DamagedRun, RunHistory
 from tui_gym.core.experiments.paths import resolve_db_path
 from tui_gym.core.experiments.records import RunKind, RunRecord, RunSummary
+from tui_gym.core.experiments.recover import Recovery, recover
+from tui_gym.core.files import OutputPathError, check_output_path, write_atomically
 
 
 @dataclass(frozen=True)
 class RunListing:
-    """The runs of one history file, newest first."""
+    """The runs of one history file, newest first: those that read, those that do not,
+    and how many there are in all (`total`; more than listed past a limit)."""
 
     db: Path
     runs: tuple[RunSummary, ...]
+    damaged: tuple[DamagedRun, ...] = ()
+    total: int = 0
 
     def to_json(self) -> dict[str, Any]:
-        return {"db": str(self.db), "runs": [run.to_json() for run in self.runs]}
+        return {
+            "db": str(self.db),
+            "runs": [run.to_json() for run in self.runs],
+            "damaged": [run.to_json() for run in self.damaged],
+            "total": self.total,
+        }
 
 
 @dataclass(frozen=True)
@@ -51,10 +65,10 @@ class CsvExport:
 
 @dataclass(frozen=True)
 class RemovedRun:
-    """A run that was removed from `db`."""
+    """A run that was removed from `db` (a `DamagedRun` when its row did not read)."""
 
     db: Path
-    run: RunSummary
+    run: RunSummary | DamagedRun
 
     def to_json(self) -> dict[str, Any]:
         return {"db": str(self.db), "removed": self.run.to_json()}
@@ -62,7 +76,12 @@ class RemovedRun:
 
 def _existing(db: str | None) -> tuple[Path, bool]:
     path = resolve_db_path(db)
-    return path, path.exists() and path.stat().st_size > 0
+    status = examine(path)
+    return path, status is not None and status.st_size > 0
+
+
+def _none_yet(run_id: int, path: Path) -> UnknownRunError:
+    return UnknownRunError(f"no run {run_id} in {shown(path)} (no runs are recorded there yet)")
 
 
 def list_runs(
@@ -72,40 +91,53 @@ def list_runs(
     kind: RunKind | str | None = None,
     limit: int | None = None,
 ) -> RunListing:
-    """The recorded runs, newest first (only `game`'s and `kind`'s when given)."""
+    """The recorded runs, newest first (the newest `limit`, only `game`'s and `kind`'s
+    when given)."""
     path, exists = _existing(db)
     if not exists:
         return RunListing(db=path, runs=())
-    with RunHistory(path) as history:
-        return RunListing(db=path, runs=tuple(history.list_runs(game=game, kind=kind, limit=limit)))
+    with RunHistory(path, read_only=True) as history:
+        found = history.read_runs(game=game, kind=kind, limit=limit)
+        total = history.count_runs(game=game, kind=kind)
+    return RunListing(db=path, runs=found.runs, damaged=found.damaged, total=total)
 
 
 def show_run(run_id: int, db: str | None = None) -> RunRecord:
     """Everything about one run."""
     path, exists = _existing(db)
     if not exists:
-        raise UnknownRunError(f"no run {run_id} in {path} (no runs are recorded there yet)")
-    with RunHistory(path) as history:
+        raise _none_yet(run_id, path)
+    with RunHistory(path, read_only=True) as history:
         return history.get_run(run_id)
 
 
 def export_run_csv(run_id: int, csv_path: str | Path, db: str | None = None) -> CsvExport:
     """Write a run's curves to `csv_path` (atomically), one row per episode."""
+    try:
+        target = check_output_path(csv_path)
+    except OutputPathError as error:
+        raise RunHistoryError(str(error)) from None
     record = show_run(run_id, db)
     text, rows = curves_csv(record.curves)
-    target = Path(csv_path).expanduser()
     try:
-        write_text_atomic(target, text)
+        write_atomically(target, text)
+    except OutputPathError as error:
+        raise RunHistoryError(str(error)) from None
     except OSError as exc:
-        raise RunHistoryError(f"cannot write {target}: {exc.strerror or exc}") from None
+        raise RunHistoryError(f"cannot write {shown(target)}: {exc.strerror or exc}") from None
     columns = ("episode", *(c.name for c in record.curves))
     return CsvExport(run_id=run_id, path=target, columns=columns, rows=rows)
 
 
 def remove_run(run_id: int, db: str | None = None) -> RemovedRun:
-    """Delete one run (its curves and figures with it)."""
+    """Delete one run (its curves and figures with it), whether or not it reads."""
     path, exists = _existing(db)
     if not exists:
-        raise UnknownRunError(f"no run {run_id} in {path} (no runs are recorded there yet)")
+        raise _none_yet(run_id, path)
     with RunHistory(path) as history:
         return RemovedRun(db=path, run=history.remove_run(run_id))
+
+
+def recover_history(db: str | None = None) -> Recovery:
+    """Copy what can be read of the history into a fresh file beside it (see `recover`)."""
+    return recover(resolve_db_path(db))

@@ -11,6 +11,10 @@ versions and of run settings once (a thousand runs of the same settings share
 one row); `runs` is one row per run, its final figures a JSON list of
 [name, value, unit, ci95] in the order given; `curves` holds each run's named
 curves in one blob (see `curve_codec`).
+
+Version 2: `runs.writer` marks the process that records a run (see
+`writers`), so that a run left running by a process that died reads as
+interrupted; an index on the start time keeps the newest runs quick to list.
 """
 
 from __future__ import annotations
@@ -77,7 +81,15 @@ _V1 = _statements(
     )""",
 )
 
-MIGRATIONS: tuple[Migration, ...] = (Migration(1, "runs, their settings and curves", _V1),)
+_V2 = _statements(
+    "ALTER TABLE runs ADD COLUMN writer TEXT",
+    "CREATE INDEX runs_by_start ON runs (started_at, id)",
+)
+
+MIGRATIONS: tuple[Migration, ...] = (
+    Migration(1, "runs, their settings and curves", _V1),
+    Migration(2, "the process writing each run; runs indexed by start", _V2),
+)
 
 
 def check_migrations(migrations: Sequence[Migration]) -> int:

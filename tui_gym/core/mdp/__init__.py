@@ -35,7 +35,11 @@ Modules, one job each:
 - `evaluation`: `evaluate`, a policy's exact value (`PolicyValue`);
 - `optimum`: `solve`, the optimum (`Solution`, with `Q*` and `V*`); `optimal_actions`;
 - `gap`: `exact_gap`, a policy's value beside the optimum (`Gap`);
-- `ending`: which states a policy (or any policy) ends episodes from.
+- `ending`: which states a policy (or any policy) ends episodes from;
+- `policy_arrays`: `PolicyArrays`, a policy's Bellman expectation, swept synchronously
+  or in place;
+- `planning`: dynamic programming sweep by sweep (`Planner`: policy evaluation, policy
+  iteration, value iteration), with the book's discounted values and no episode limit.
 """
 
 from tui_gym.core.mdp.evaluation import PolicyValue, evaluate

@@ -18,6 +18,7 @@ import numpy.typing as npt
 from tui_gym.core.mdp.ending import policy_ends
 from tui_gym.core.mdp.model import FiniteMDP
 from tui_gym.core.mdp.policy import policy_matrix
+from tui_gym.core.mdp.policy_arrays import PolicyArrays
 
 __all__ = [
     "DENSE_LIMIT",
@@ -96,24 +97,9 @@ def backup(model: FiniteMDP, v: FloatArray, gamma: float) -> FloatArray:
 def _policy_sweep(
     model: FiniteMDP, matrix: FloatArray, gamma: float
 ) -> Callable[[FloatArray], FloatArray]:
-    """One step of the Bellman expectation under a policy, for finite values.
-
-    Only the outcomes the policy can reach are gathered (one per state for a
-    deterministic policy on a deterministic game), not every action's.
-    """
-    n_states = model.n_states
-    reward = (matrix * model.expected_reward).sum(axis=1)
-    weight = (matrix[:, :, None] * model.continue_prob).reshape(n_states, -1)
-    target = model.next_state.reshape(n_states, -1)
-    width = max(1, int((weight > 0).sum(axis=1).max()))
-    keep = np.argsort(weight <= 0, axis=1, kind="stable")[:, :width]
-    weight = np.take_along_axis(weight, keep, axis=1)
-    target = np.take_along_axis(target, keep, axis=1)
-
-    def sweep(v: FloatArray) -> FloatArray:
-        return reward + gamma * (weight * v[target]).sum(axis=1)
-
-    return sweep
+    """One step of the Bellman expectation under a policy, for finite values."""
+    arrays = PolicyArrays.of(model, matrix)
+    return lambda v: arrays.sweep(v, gamma)
 
 
 def _transition_matrix(

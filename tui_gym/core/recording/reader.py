@@ -6,13 +6,20 @@ format version is read as far as its lines fit this one. Whatever went wrong
 comes back as one message (`Recording.message`), and everything that could
 be read replays. Episodes are numbered in the order they appear in the file,
 from 1.
+
+A recording is data from a file: only its first `MAX_READ_BYTES` are read (the
+message says so past them), text meant for people (names, notes, the state in
+words) comes back with its control characters made visible and cut to a
+readable length, and a scene that the caller's `scene_fits(board, scene)` says
+its board cannot draw is dropped (and counted in the message).
 """
 
 from __future__ import annotations
 
 import json
 import math
-from collections.abc import Iterator, Mapping, Sequence
+import os
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
@@ -26,9 +33,17 @@ from tui_gym.core.recording.format import (
     STEP,
     VERDICTS,
 )
+from tui_gym.core.text import visible
 
 MAX_LINE_BYTES = 1 << 20  # longer lines are skipped unread
+MAX_READ_BYTES = 32 << 20  # a file's first bytes that are read; the rest is left
+MAX_WRAPPERS = 32  # a header's wrappers, at most (a chain's length)
 LINES_NAMED = 10  # bad lines named in the message; the rest are counted
+NAME_CHARS = 80  # names, titles and labels from the file
+TEXT_CHARS = 200  # each line of a note or of the state in words
+TEXT_LINES = 40  # lines of the state in words
+
+SceneCheck = Callable[[str, Mapping[str, Any]], bool]
 
 
 class RecordingError(ValueError):
@@ -174,6 +189,9 @@ class Recording:
     versions: set[int | None] = field(default_factory=set)  # versions of headers not ours
     missing_header: bool = False
     lines: int = 0
+    unfit_scenes: int = 0  # scenes their board cannot draw, dropped
+    cut_at_line: int | None = None  # the first line not read, past MAX_READ_BYTES
+    size: int = 0  # the file's size in bytes
 
     @property
     def message(self) -> str | None:
@@ -191,6 +209,15 @@ class Recording:
                          f"(version {FORMAT_VERSION})")
         if self.missing_header:
             parts.append("it does not start with a recording header")
+        if self.cut_at_line is not None:
+            parts.append(f"it is {self.size / 2**20:,.0f} MB and only its first "
+                         f"{MAX_READ_BYTES >> 20} MB (up to line {self.cut_at_line - 1:,}) "
+                         "are read")
+        if self.unfit_scenes:
+            count = self.unfit_scenes
+            parts.append(f"{count:,} scene{'' if count == 1 else 's'} did not fit "
+                         f"{'its' if count == 1 else 'their'} game and "
+                         f"{'is' if count == 1 else 'are'} not drawn")
         if self.skipped:
             count = len(self.skipped)
             named = ", ".join(str(n) for n in self.skipped[:LINES_NAMED])
@@ -200,11 +227,13 @@ class Recording:
                          f" skipped ({noun} {named}{more})")
         if not parts:
             return None
-        return f"{self.path.name}: " + "; ".join(parts) + "; the rest replays."
+        rest = "what was read" if self.cut_at_line is not None else "the rest"
+        return f"{visible(self.path.name)}: " + "; ".join(parts) + f"; {rest} replays."
 
 
-def read_recording(path: str | Path) -> Recording:
-    """Read a recording; RecordingError when it cannot be opened or holds no episode."""
+def read_recording(path: str | Path, scene_fits: SceneCheck | None = None) -> Recording:
+    """Read a recording; RecordingError when it cannot be opened or holds no episode.
+    `scene_fits(board, scene)`, when given, says which scenes can be drawn."""
     path = Path(path)
     if path.is_dir():
         raise RecordingError(f"{path} is a folder, not a recording")
@@ -213,7 +242,7 @@ def read_recording(path: str | Path) -> Recording:
     except OSError as exc:
         raise RecordingError(f"{path}: {exc.strerror or exc}") from None
     with handle:
-        recording = read_lines_of(handle, path)
+        recording = read_lines_of(handle, path, scene_fits)
     if not recording.episodes:
         if not recording.games and recording.skipped:
             raise RecordingError(f"{path} is not a tui-gym recording (no line of it could be read)")
@@ -221,11 +250,19 @@ def read_recording(path: str | Path) -> Recording:
     return recording
 
 
-def read_lines_of(handle: IO[bytes], path: Path) -> Recording:
+def read_lines_of(
+    handle: IO[bytes], path: Path, scene_fits: SceneCheck | None = None
+) -> Recording:
     """Read a recording from an open binary file (see `read_recording`)."""
     recording = Recording(path)
-    reader = _Reader(recording)
+    reader = _Reader(recording, scene_fits)
+    read = 0
     for number, line in _lines(handle):
+        read += MAX_LINE_BYTES if line is None else len(line)
+        if read > MAX_READ_BYTES:
+            recording.cut_at_line = number
+            recording.size = _size_of(handle)
+            break
         recording.lines = number
         if line is None:
             recording.skipped.append(number)
@@ -238,6 +275,13 @@ def read_lines_of(handle: IO[bytes], path: Path) -> Recording:
             recording.skipped.append(number)
     reader.finish()
     return recording
+
+
+def _size_of(handle: IO[bytes]) -> int:
+    try:
+        return os.fstat(handle.fileno()).st_size
+    except (OSError, ValueError, AttributeError):
+        return 0
 
 
 class _Bad(Exception):
@@ -263,17 +307,22 @@ def _constant(name: str) -> float:
     raise _Bad(f"{name} is not a JSON number")
 
 
+_DECODER = json.JSONDecoder(parse_constant=_constant)  # one for every line
+
+
 class _Reader:
     """Turns lines into games and episodes."""
 
-    def __init__(self, recording: Recording) -> None:
+    def __init__(self, recording: Recording, scene_fits: SceneCheck | None = None) -> None:
         self.recording = recording
+        self.scene_fits = scene_fits
         self.game: RecordedGame | None = None
         self.episode: Episode | None = None
+        self.last_scene: Mapping[str, Any] = {}
 
     def take(self, number: int, line: bytes) -> None:
         try:
-            record = json.loads(line.decode("utf-8"), parse_constant=_constant)
+            record = _DECODER.decode(line.decode("utf-8"))
         except (UnicodeDecodeError, ValueError, RecursionError):
             raise _Bad from None
         if not isinstance(record, dict):
@@ -300,20 +349,23 @@ class _Reader:
             version = None
         if version != FORMAT_VERSION:
             self.recording.versions.add(version if isinstance(version, int) else None)
+        wrappers = _list(record.get("wrappers"))
+        if len(wrappers) > MAX_WRAPPERS:
+            raise _Bad
         game = RecordedGame(
             line=number,
             version=version if isinstance(version, int) else None,
-            tui_gym=_text(record.get("tui_gym")),
-            source=_text(record.get("source")),
-            game=_text(record.get("game")),
-            title=_text(record.get("title")) or _text(record.get("game")) or "unknown game",
+            tui_gym=_name(record.get("tui_gym")),
+            source=_name(record.get("source")),
+            game=_name(record.get("game")),
+            title=_name(record.get("title")) or _name(record.get("game")) or "unknown game",
             env_id=_text(record.get("env_id")),
             env_kwargs=record["env_kwargs"] if isinstance(record.get("env_kwargs"), dict) else {},
-            wrappers=tuple(str(w) for w in _list(record.get("wrappers"))),
+            wrappers=tuple(visible(w, NAME_CHARS) for w in wrappers),
             seed=_int_or_none(record.get("seed")),
             board=_text(record.get("board")),
-            actions=tuple(str(a) for a in _list(record.get("actions"))),
-            episode_noun=_text(record.get("episode_noun")) or "episode",
+            actions=tuple(visible(a, NAME_CHARS) for a in _list(record.get("actions"))[:1024]),
+            episode_noun=_name(record.get("episode_noun")) or "episode",
         )
         self.recording.games.append(game)
         self.game = game
@@ -327,7 +379,7 @@ class _Reader:
 
     def _start(self, record: dict[str, Any]) -> None:
         number = _int(record.get("episode"))
-        frame = _frame(record)
+        frame = self._frame(record)
         episode = Episode(
             index=len(self.recording.episodes) + 1,
             game=self._current_game(),
@@ -345,20 +397,20 @@ class _Reader:
         verdict = record.get("verdict")
         if verdict is not None and verdict not in VERDICTS:
             raise _Bad
-        name = record.get("action_name")
+        name = _name(record.get("action_name"))
         move = Move(
             step=_int(record.get("step")),
             action=action,
-            action_name=name if isinstance(name, str) and name else game.action_name(action),
+            action_name=name or game.action_name(action),
             reward=_number(record.get("reward")),
             terminated=_bool(record.get("terminated")),
             truncated=_bool(record.get("truncated")),
             verdict=verdict,
             regret=_number_or_none(record.get("regret")),
-            optimal=tuple(str(a) for a in _list(record.get("optimal"))),
-            note=_text(record.get("note")),
+            optimal=tuple(visible(a, NAME_CHARS) for a in _list(record.get("optimal"))[:64]),
+            note=_words(record.get("note")),
         )
-        frame = _frame(record)
+        frame = self._frame(record)
         episode = self.episode
         if episode is None or episode.recorded_number != number or episode.end is not None:
             # Its start line was lost: the episode begins at this move.
@@ -387,18 +439,37 @@ class _Reader:
         # An end whose episode was lost altogether has nothing to replay: it is let go.
 
 
-def _frame(record: dict[str, Any]) -> Frame:
-    scene = record.get("scene")
-    if scene is not None and not isinstance(scene, dict):
-        raise _Bad
-    info = record.get("info")
-    text = record.get("text")
-    return Frame(
-        observation=record.get("observation"),
-        scene=scene,
-        text=text if isinstance(text, str) else None,
-        info=info if isinstance(info, dict) else {},
-    )
+    def _frame(self, record: dict[str, Any]) -> Frame:
+        scene = record.get("scene")
+        if scene is not None and not isinstance(scene, dict):
+            raise _Bad
+        if scene is not None:
+            board = self._current_game().board
+            if self.scene_fits is not None and not self.scene_fits(board, scene):
+                self.recording.unfit_scenes += 1
+                scene = None
+            else:
+                scene = self._shared(scene)
+        info = record.get("info")
+        text = record.get("text")
+        return Frame(
+            observation=record.get("observation"),
+            scene=scene,
+            text=_words(text) if isinstance(text, str) else None,
+            info=info if isinstance(info, dict) else {},
+        )
+
+    def _shared(self, scene: dict[str, Any]) -> dict[str, Any]:
+        """`scene`, its values equal to the last scene's being the last scene's own (a
+        map's cells and slips repeat on every move: kept once, not once a move)."""
+        last = self.last_scene
+        for key, value in scene.items():
+            before = last.get(key)
+            if before is not None and before is not value and type(before) is type(value) \
+                    and before == value:
+                scene[key] = before
+        self.last_scene = scene
+        return scene
 
 
 def _int(value: Any) -> int:
@@ -429,6 +500,22 @@ def _bool(value: Any) -> bool:
 
 def _text(value: Any) -> str:
     return value if isinstance(value, str) else ""
+
+
+def _name(value: Any) -> str:
+    """A name from the file as it may be shown: control characters visible, cut short."""
+    return visible(value, NAME_CHARS) if isinstance(value, str) else ""
+
+
+def _words(value: Any) -> str:
+    """Text from the file as it may be shown, line by line (see `_name`)."""
+    if not isinstance(value, str):
+        return ""
+    lines = value.split("\n")
+    shown = [visible(line, TEXT_CHARS) for line in lines[:TEXT_LINES]]
+    if len(lines) > TEXT_LINES:
+        shown.append(f"… ({len(lines):,} lines)")
+    return "\n".join(shown)
 
 
 def _list(value: Any) -> Sequence[Any]:

@@ -4,14 +4,17 @@ Each line goes to the file in a single `write` on a descriptor opened for
 appending, so a crash (or a kill) of the program leaves every line written
 before it whole and no part of the next one. A write the disk cuts short
 (full, quota) is taken back: the file is truncated to where the line began
-and the error raised, so the file never ends in half a line written here
-(a pipe cannot be taken back: its reader sees a broken last line).
+and the error raised, so the file never ends in half a line written here.
+Only a regular file is written (through a symbolic link, the file it points to); a
+device, a pipe or a socket is refused before anything is written.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
+import stat
 from pathlib import Path
 
 
@@ -20,10 +23,27 @@ class LineWriter:
 
     def __init__(self, path: str | Path, *, truncate: bool = True) -> None:
         self.path = Path(path)
-        flags = os.O_WRONLY | os.O_CREAT | os.O_APPEND | getattr(os, "O_CLOEXEC", 0)
-        if truncate:
-            flags |= os.O_TRUNC
-        self._fd: int | None = os.open(self.path, flags, 0o644)
+        # Opened without blocking (a pipe with no reader must not hang) and emptied only
+        # once it is known to be a regular file: a device or a pipe is never written.
+        flags = (os.O_WRONLY | os.O_CREAT | os.O_APPEND | os.O_NONBLOCK
+                 | getattr(os, "O_CLOEXEC", 0))
+        refused = OSError(errno.EINVAL, "is not a regular file; will not write over it")
+        try:
+            fd = os.open(self.path, flags, 0o644)
+        except OSError as error:
+            if error.errno == errno.ENXIO:  # a pipe no one reads
+                raise refused from None
+            raise
+        try:
+            if not stat.S_ISREG(os.fstat(fd).st_mode):
+                raise refused
+            os.set_blocking(fd, True)
+            if truncate:
+                os.ftruncate(fd, 0)
+        except BaseException:
+            os.close(fd)
+            raise
+        self._fd: int | None = fd
         self.lines = 0
 
     @property
@@ -37,10 +57,7 @@ class LineWriter:
         if not line.endswith(b"\n") or b"\n" in line[:-1]:
             raise ValueError("a line must end in its only newline")
         fd = self._fd
-        try:
-            start: int | None = os.lseek(fd, 0, os.SEEK_END)
-        except OSError:  # a pipe: nothing to take back
-            start = None
+        start = os.lseek(fd, 0, os.SEEK_END)
         try:
             written = self._raw_write(fd, line)
             while written < len(line):  # a short write: finish it or fail
@@ -49,9 +66,8 @@ class LineWriter:
                     raise OSError(f"{self.path}: the line could not be written whole")
                 written += more
         except OSError:
-            if start is not None:
-                with contextlib.suppress(OSError):
-                    os.ftruncate(fd, start)
+            with contextlib.suppress(OSError):
+                os.ftruncate(fd, start)
             raise
         self.lines += 1
 

@@ -22,10 +22,12 @@ from tui_gym.core.wrappers.build import (
 )
 from tui_gym.core.wrappers.catalog import (
     CATALOG,
+    MAX_CHAIN,
     UnknownWrapperError,
     WrapperChoice,
     WrapperMismatchError,
     WrapperSpec,
+    check_chain_length,
     format_wrapper_spec,
     get_spec,
     parse_wrapper_spec,
@@ -34,6 +36,7 @@ from tui_gym.core.wrappers.custom import DistanceShaping, ScaleReward, StepPenal
 
 __all__ = [
     "CATALOG",
+    "MAX_CHAIN",
     "DistanceShaping",
     "Param",
     "ScaleReward",
@@ -45,6 +48,7 @@ __all__ = [
     "WrapperSpec",
     "build_env",
     "build_env_lenient",
+    "check_chain_length",
     "check_choices",
     "format_wrapper_spec",
     "get_spec",

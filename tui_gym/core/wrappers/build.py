@@ -5,7 +5,8 @@ Provides `build_env` (strict: a choice that does not fit raises
 skipped and why), `check_choices` (the same verdicts without keeping the env)
 and `UnknownEnvError`.
 
-Choices apply in order, the first innermost. A `TimeLimit` put directly on
+Choices apply in order, the first innermost; a chain of more than `MAX_CHAIN`
+is refused. A `TimeLimit` put directly on
 top of another replaces it (see `catalog.replace_time_limit`), so choosing
 `TimeLimit:max_episode_steps=500` first on an env registered with 300 steps
 gives 500-step episodes,
@@ -27,6 +28,7 @@ from tui_gym.core.wrappers.catalog import (
     WrapperChoice,
     WrapperMismatchError,
     WrapperSpec,
+    check_chain_length,
     get_spec,
 )
 from tui_gym.core.wrappers.fits import env_label
@@ -69,6 +71,7 @@ def _assemble(
     strict: bool,
 ) -> tuple[gym.Env, list[str | None]]:
     """The env, and per choice None (applied) or the reason it was skipped."""
+    check_chain_length(len(choices))
     reasons: list[str | None] = [None] * len(choices)
     planned: list[_Planned] = []
     for index, choice in enumerate(choices):

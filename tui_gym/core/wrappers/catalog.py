@@ -3,8 +3,9 @@
 Provides `WrapperSpec` (one catalog entry: a one-line summary, its `Param`s,
 whether it fits an env, how to build it), `CATALOG` in teaching order and
 `get_spec`, `WrapperChoice` (a hashable, validated pick of one wrapper and its
-values), and the CLI syntax `parse_wrapper_spec` / `format_wrapper_spec`
-(`Name` or `Name:key=value,key=value`).
+values), the CLI syntax `parse_wrapper_spec` / `format_wrapper_spec`
+(`Name` or `Name:key=value,key=value`), and `check_chain_length`: a chain holds
+at most `MAX_CHAIN` wrappers, wherever it comes from.
 
 Parameter names are the wrapped classes' own keyword arguments, so a choice's
 values go straight into the constructor.
@@ -28,7 +29,7 @@ from gymnasium.wrappers import (
     TimeLimit,
 )
 
-from tui_gym.core.params import Param, ParamValue
+from tui_gym.core.params import Param, ParamValue, shown_value
 from tui_gym.core.wrappers.custom import DistanceShaping, ScaleReward, StepPenalty
 from tui_gym.core.wrappers.fits import (
     fits_any,
@@ -41,14 +42,18 @@ from tui_gym.core.wrappers.fits import (
 
 __all__ = [
     "CATALOG",
+    "MAX_CHAIN",
     "UnknownWrapperError",
     "WrapperChoice",
     "WrapperMismatchError",
     "WrapperSpec",
+    "check_chain_length",
     "format_wrapper_spec",
     "get_spec",
     "parse_wrapper_spec",
 ]
+
+MAX_CHAIN = 32  # wrappers in one chain: far more than any lesson needs, far below a stack's depth
 
 
 class UnknownWrapperError(ValueError):
@@ -138,7 +143,8 @@ class WrapperSpec:
                 f"valid: {', '.join(self.param_names)}" if self.params else "it takes no parameters"
             )
             raise ValueError(
-                f"{self.name} has no parameter {', '.join(repr(n) for n in unknown)}; {valid}"
+                f"{self.name} has no parameter {', '.join(shown_value(n) for n in unknown[:3])}"
+                f"; {valid}"
             )
         parsed = {
             param.name: param.parse(values[param.name]) if param.name in values else param.default
@@ -349,7 +355,9 @@ def get_spec(name: str) -> WrapperSpec:
     """The catalog entry called `name` (case does not matter)."""
     spec = CATALOG.get(name) or _BY_FOLDED_NAME.get(name.strip().casefold())
     if spec is None:
-        raise UnknownWrapperError(f"unknown wrapper {name!r}; known wrappers: {', '.join(CATALOG)}")
+        raise UnknownWrapperError(
+            f"unknown wrapper {shown_value(name)}; known wrappers: {', '.join(CATALOG)}"
+        )
     return spec
 
 
@@ -419,10 +427,11 @@ def parse_wrapper_spec(text: str) -> WrapperChoice:
     Examples: `TimeLimit:max_episode_steps=50`, `ClipReward:min_reward=-1,max_reward=1`.
     """
     syntax = "expected Name or Name:key=value,key=value"
+    shown = shown_value(text)
     name, colon, rest = text.strip().partition(":")
     name = name.strip()
     if not name:
-        raise ValueError(f"wrapper spec {text!r} has no wrapper name; {syntax}")
+        raise ValueError(f"wrapper spec {shown} has no wrapper name; {syntax}")
     params: dict[str, str] = {}
     if colon and rest.strip():
         for item in rest.split(","):
@@ -430,9 +439,15 @@ def parse_wrapper_spec(text: str) -> WrapperChoice:
             key, value = key.strip(), value.strip()
             if not equals or not key or not value:
                 raise ValueError(
-                    f"wrapper spec {text!r}: {item.strip()!r} is not key=value; {syntax}"
+                    f"wrapper spec {shown}: {shown_value(item.strip())} is not key=value; {syntax}"
                 )
             if key in params:
-                raise ValueError(f"wrapper spec {text!r} sets {key!r} twice")
+                raise ValueError(f"wrapper spec {shown} sets {shown_value(key)} twice")
             params[key] = value
     return WrapperChoice.make(name, **params)
+
+
+def check_chain_length(count: int) -> None:
+    """`ValueError` for a chain of more than `MAX_CHAIN` wrappers."""
+    if count > MAX_CHAIN:
+        raise ValueError(f"a chain of {count:,} wrappers: a chain holds at most {MAX_CHAIN}")

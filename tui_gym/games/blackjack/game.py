@@ -41,7 +41,6 @@ from tui_gym.games.base import (
     TrainingModel,
     greedy_probabilities,
 )
-from tui_gym.games.blackjack.model import blackjack_model
 from tui_gym.games.blackjack.solver import (
     POLICY_SHAPE,
     BlackjackRules,
@@ -54,6 +53,7 @@ from tui_gym.games.blackjack.solver import (
 from tui_gym.games.words import format_reward, unwrapped_note
 
 if TYPE_CHECKING:
+    from tui_gym.games.planning import PlanModel
     from tui_gym.session.play import PlayStep
 
 __all__ = ["CHART_SUMS", "DEALER_CARDS", "DEALER_LABELS", "BlackjackGame", "card_label",
@@ -397,13 +397,26 @@ class BlackjackGame(Game):
         self.narrator = BlackjackNarrator(self)
         self.layout = BlackjackLayout(self)
 
+    def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel:
+        """The hands as a finite model (`finite_model`); a natural plays as a soft 21."""
+        from tui_gym.games.blackjack.finite_model import N_BASE, blackjack_model, natural_base_rows
+        from tui_gym.games.planning import PlanModel
+
+        base_of = np.concatenate([np.arange(N_BASE), natural_base_rows()])
+        return PlanModel(blackjack_model(rules_of(kwargs)), 1.0, None, base_of=base_of,
+                         shown=np.arange(N_BASE))
+
     def training_model(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> TrainingModel | NotAvailable:
+        from tui_gym.games.blackjack.finite_model import blackjack_model, observation_rows
+
         if changes.others:
             return NotAvailable(unwrapped_note(changes.others))
         rules = rules_of(kwargs)
         if changes.changes_rewards:
             rules = rules.with_rewards(changes.reward)
-        model, rows = blackjack_model(rules, changes.time_limit)
-        return TrainingModel(model, rows)
+        model = blackjack_model(rules)
+        if changes.time_limit is not None:
+            model = model.replace(horizon=changes.time_limit)
+        return TrainingModel(model, observation_rows())

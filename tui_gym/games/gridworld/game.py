@@ -26,6 +26,7 @@ agent's table meaningful.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
@@ -35,6 +36,7 @@ from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import NotAvailable, evaluate
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
+from tui_gym.envs import GRIDWORLD_MAX_STEPS
 from tui_gym.envs.walls import Walls, cell_distances, cell_moves, check_walls
 from tui_gym.games.base import (
     EXACT,
@@ -53,7 +55,11 @@ from tui_gym.games.base import (
     TrainingModel,
     greedy_probabilities,
 )
-from tui_gym.games.gridworld.model import gridworld_model, gridworld_optimum
+from tui_gym.games.gridworld.model import (
+    gridworld_model,
+    gridworld_optimum,
+    shortest_path_optimum,
+)
 from tui_gym.games.gridworld.paths import (
     mixed_pair_fraction,
     mixed_steps_over_optimal,
@@ -68,6 +74,7 @@ from tui_gym.games.gridworld.walled import (
 )
 from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
 from tui_gym.games.model import exact_gap_of
+from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import (
     ScoreRow,
     agreement_summary,
@@ -323,27 +330,38 @@ class GridWorldOracle(Oracle):
                      at_least=True)
 
     def optimum(self, kwargs: Mapping[str, Any]) -> Optimum:
-        size = _size(kwargs)
-        walls = _walls(kwargs)
+        """The optimum's exact expected return per episode (as `optimal_value` of an
+        evaluation), its values and shortest-path moves per placement, and its
+        `optimal_mean_steps`: the mean fewest steps over the random starts."""
+        size, walls = _size(kwargs), _walls(kwargs)
+        rewards = float(kwargs.get("reward_scale", 1.0)), float(kwargs.get("step_penalty", 0.0))
+        found = shortest_path_optimum(size, *rewards, GRIDWORLD_MAX_STEPS, walls)
+        if found is None:  # a shortest path need not pay: solve the model
+            solution = gridworld_optimum(
+                size, *rewards, GameChanges(time_limit=GRIDWORLD_MAX_STEPS), walls
+            )
+            found = solution.q, solution.value
+        optimal_q, value = found
         if walls:
             mean_steps = walled_mean_steps(size, walls)
-            return Optimum(
-                value=mean_steps,
-                summary=f"{size}x{size} with {len(walls)} wall cells: the optimal policy walks "
-                "a shortest way round the walls; the value is the mean number of steps over "
-                "the random starts that have a way to the target",
-                figures={"optimal_mean_steps": mean_steps},
-            )
-        coords = np.arange(size)
-        diffs = np.abs(coords[:, None] - coords[None, :])
-        # Mean Manhattan distance over ordered pairs of distinct cells.
-        total = 2 * diffs.sum() * size * size
-        mean_steps = float(total) / (size * size * (size * size - 1))
+            route = f"{size}x{size} with {len(walls)} wall cells: the optimal policy walks a " \
+                "shortest way round the walls"
+        else:
+            coords = np.arange(size)
+            diffs = np.abs(coords[:, None] - coords[None, :])
+            # Mean Manhattan distance over ordered pairs of distinct cells.
+            mean_steps = float(2 * diffs.sum() * size * size) / (size * size * (size * size - 1))
+            route = f"{size}x{size}: the optimal policy walks any shortest path"
+        # On the target the episode is over: every move is as good, and worth nothing more.
+        over = np.eye(size * size, dtype=bool).reshape(-1)
+        q, marks = optimal_q.copy(), self.optimal_marks(kwargs).copy()
+        q[over], marks[over] = 0.0, True
         return Optimum(
-            value=mean_steps,
-            summary=f"{size}x{size}: the optimal policy walks any shortest path, so an episode "
-            "takes the Manhattan distance from agent to target; the value is the mean number "
-            "of steps over random starts",
+            value=value,
+            summary=f"{route}, {mean_steps:.5g} steps on average over the random starts; "
+            "the value is its exact expected return per episode",
+            q=q,
+            marks=marks,
             figures={"optimal_mean_steps": mean_steps},
         )
 
@@ -583,21 +601,27 @@ class GridWorldGame(Game):
         self.layout = GridWorldLayout(self)
 
     def solution(self, kwargs: Mapping[str, Any]) -> Optimum | NotAvailable:
-        """The optimum with action values: minus the steps to the target after each move
-        (around the walls; a walled-off target counts as `size**2` steps away)."""
+        """The optimum with action values that point its moves: minus the steps to the
+        target after each move (around the walls; a walled-off target counts as
+        `size**2` steps away), where the returns of most moves tie."""
         size, walls = _size(kwargs), _walls(kwargs)
-        optimum = self.oracle.optimum(kwargs)
-        marks = self.oracle.optimal_marks(kwargs)
-        if isinstance(optimum, NotAvailable) or isinstance(marks, NotAvailable):
-            return optimum if isinstance(optimum, NotAvailable) else NotAvailable("no marks")
         cells = size * size
         distance = cell_distances(size, walls).astype(np.float64)
         distance[distance < 0] = cells
         moves = cell_moves(size, walls)
         q = np.stack([-1.0 - distance[moves[a]] for a in range(4)], axis=-1).reshape(-1, 4)
         q[np.eye(cells, dtype=bool).reshape(-1)] = 0.0
-        return Optimum(optimum.value, optimum.summary, q=q, marks=marks,
-                       figures=optimum.figures)
+        optimum = self.oracle.optimum(kwargs)
+        return optimum if isinstance(optimum, NotAvailable) else replace(optimum, q=q)
+
+    def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel:
+        """The model with no limit, discounted as the learners discount it by default: with
+        a reward only at the target, every path is worth as much undiscounted."""
+        model = gridworld_model(_size(kwargs), float(kwargs.get("reward_scale", 1.0)),
+                                float(kwargs.get("step_penalty", 0.0)), NO_CHANGES,
+                                _walls(kwargs))
+        gamma = self.hyperparameters["*"]["discount"]
+        return PlanModel(model, gamma, self.episode_limit(kwargs))
 
     def normalize_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         """As `Game.normalize_kwargs`, with the walls: `layout` (a square map of F and W,

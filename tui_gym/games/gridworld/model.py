@@ -23,7 +23,7 @@ from tui_gym.core.mdp import FiniteMDP, Solution, solve
 from tui_gym.core.wrappers.changes import GameChanges
 from tui_gym.envs.walls import Walls, cell_distances, cell_moves, free_cells
 
-__all__ = ["gridworld_model", "gridworld_optimum"]
+__all__ = ["gridworld_model", "gridworld_optimum", "shortest_path_optimum"]
 
 
 @lru_cache(maxsize=8)
@@ -64,3 +64,24 @@ def gridworld_optimum(
 ) -> Solution:
     """The optimum of `gridworld_model` with the same arguments (kept)."""
     return solve(gridworld_model(size, reward_scale, step_penalty, changes, walls))
+
+
+def shortest_path_optimum(
+    size: int, reward_scale: float, step_penalty: float, limit: int, walls: Walls = ()
+) -> tuple[np.ndarray, float] | None:
+    """`(q, value)` of `gridworld_optimum` with no wrappers but a time limit of `limit`
+    steps, where a shortest path pays (a positive `reward_scale`, no negative
+    penalty): an episode that walks the fewest steps d returns
+    `reward_scale - step_penalty * (d - 1)`, and one the walls part from its target
+    `-step_penalty * limit`. None where that does not hold."""
+    cells = size * size
+    distance = cell_distances(size, walls)
+    if reward_scale <= 0.0 or step_penalty < 0.0 or distance.max() >= limit:
+        return None
+    agent, target = np.divmod(np.arange(cells * cells), cells)
+    after = distance[cell_moves(size, walls)[:, agent].T, target[:, None]]  # [S, A]
+    parted = -float(step_penalty) * limit
+    q = np.where(after >= 0, float(reward_scale) - float(step_penalty) * after, parted)
+    free = free_cells(size, walls)
+    start = free[agent] & free[target] & (agent != target)
+    return q, float(q.max(axis=1)[start].mean())

@@ -1,9 +1,11 @@
-"""Map files, read as carefully as save files (`tui_gym.session.map_files` writes them).
+"""Map files: read as carefully as save files, written atomically.
 
 `read_map_file(path)` reads a regular file of at most `MAX_FILE_BYTES` (a
 pipe, a device or a folder is refused without reading it), decodes it as
 UTF-8 and parses it; every refusal is a `MapError` of one line that names the
-file (and the line, row and column at fault).
+file (and the line, row and column at fault). `write_map_file(path, map)`
+writes through `tui_gym.core.files.write_atomically`: a temporary file and a
+rename, so an old file stays whole until the new one is.
 """
 
 from __future__ import annotations
@@ -13,9 +15,9 @@ import stat
 from pathlib import Path
 
 from tui_gym.games.maps.grid_map import GridMap
-from tui_gym.games.maps.text import MAX_TEXT, MapError, parse_map
+from tui_gym.games.maps.text import MAX_TEXT, MapError, format_map, parse_map
 
-__all__ = ["MAX_FILE_BYTES", "read_map_file", "read_map_text"]
+__all__ = ["MAX_FILE_BYTES", "read_map_file", "read_map_text", "write_map_file"]
 
 MAX_FILE_BYTES = MAX_TEXT * 4  # UTF-8 takes at most four bytes a character
 
@@ -75,3 +77,15 @@ def read_map_file(path: str | Path) -> GridMap:
     except MapError as error:
         raise MapError(f"{path}: {error}") from None
 
+
+def write_map_file(path: str | Path, grid_map: GridMap, comment: str = "") -> Path:
+    """Write the map atomically; `MapError` when the path cannot take it."""
+    from tui_gym.core.files import OutputPathError, write_atomically
+
+    try:
+        target = write_atomically(path, format_map(grid_map, comment))
+    except OutputPathError as error:
+        raise MapError(str(error)) from None
+    except OSError as exc:
+        raise MapError(f"{path}: cannot write ({exc.strerror or exc})") from None
+    return target

@@ -25,14 +25,14 @@ import math
 import re
 from functools import lru_cache
 
-from tui_gym.core.params import read_number
+from tui_gym.core.params import read_number, shown_value
 from tui_gym.envs.tile_map import STANDING, TILE_NAMES, TILES, VALUED
 from tui_gym.games.maps.grid_map import MAX_SIDE, Cell, GridMap
 
 __all__ = ["MAX_TEXT", "MapError", "format_map", "parse_map", "read_layout"]
 
 MAX_TEXT = 64 << 10  # characters of a map's text, at most
-_HEADER = re.compile(r"(reward|slip)\s+([0-9]+)\s*,\s*([0-9]+)\s*[:=]?\s*(\S+)",
+_HEADER = re.compile(r"(reward|slip)\s+([0-9]{1,4})\s*,\s*([0-9]{1,4})\s*[:=]?\s*(\S+)",
                      re.ASCII | re.IGNORECASE)
 _KEYWORD = re.compile(r"(reward|slip)\b", re.IGNORECASE)
 TILE_LIST = ", ".join(f"{t} {n}" for t, n in TILE_NAMES.items())
@@ -45,7 +45,7 @@ class MapError(ValueError):
 def _number(text: str, line: int, what: str) -> float:
     value = read_number(text)
     if value is None or not math.isfinite(value):
-        raise MapError(f"line {line}: {what} must be a finite number, got {text!r}")
+        raise MapError(f"line {line}: {what} must be a finite number, got {shown_value(text)}")
     return float(value)
 
 
@@ -103,7 +103,7 @@ def _header_line(line: str, number: int, header: dict[str, dict[Cell, tuple[floa
     amount = _number(value, number, f"the {key} at row {cell[0]}, col {cell[1]}")
     if key == "slip" and not 0.0 <= amount <= 1.0:
         raise MapError(f"line {number}: the slip at row {cell[0]}, col {cell[1]} must be in "
-                       f"[0, 1], got {value}")
+                       f"[0, 1], got {shown_value(value)}")
     earlier = header[key].get(cell)
     if earlier is not None:
         raise MapError(f"line {number}: {key} {row},{col} is given twice (first on line "

@@ -63,11 +63,12 @@ def catalog() -> list[GameEntry]:
     return [_entry(game) for game in GAMES]
 
 
-def find_game(name: str) -> GameEntry:
-    """The game a short alias or Gymnasium id names; ValueError listing the games if none."""
+def find_game(name: str, *, from_data: bool = False) -> GameEntry:
+    """The game a short alias or Gymnasium id names; ValueError listing the games if none.
+    `from_data`: the name came from a program (a tool call), so it never imports a module."""
     if not isinstance(name, str) or not name.strip():
         raise ValueError(f"name a game: one of {', '.join(e.name for e in catalog())}")
-    return _entry(game_for(resolve_env_id(name)))
+    return _entry(game_for(resolve_env_id(name, from_data=from_data)))
 
 
 def open_handler(
@@ -79,10 +80,11 @@ def open_handler(
     """A protocol handler playing game `name` with `params` and `wrappers` (specs as
     `--wrapper` takes them); ValueError with one clear line for a bad game, parameter
     or wrapper."""
-    from tui_gym.core.wrappers import parse_wrapper_spec
+    from tui_gym.core.wrappers import check_chain_length, parse_wrapper_spec
     from tui_gym.session.session import Session
 
     entry = find_game(name)
+    check_chain_length(len(wrappers))
     choices = tuple(parse_wrapper_spec(spec) for spec in wrappers)
     session = Session(
         env_id=entry.env_id, env_kwargs=dict(params or {}), choices=choices, seed=seed or 0

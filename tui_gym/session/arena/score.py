@@ -51,6 +51,8 @@ class Verdict:
         finite = [float(v) for v in values.values() if math.isfinite(v)]
         mine = float(values[action])
         regret = max(0.0, max(finite) - mine) if finite and math.isfinite(mine) else None
+        if regret is not None and action in optimal:
+            regret = 0.0  # an optimal move gives nothing up (ties differ by round-off only)
         return cls(True, action in optimal, regret, optimal, dict(values),
                    "" if regret is not None else "the action values are not finite here")
 

@@ -85,7 +85,7 @@ class GameTable:
                 f"end one with end_game (running: {', '.join(map(str, self.ids()))}) or let "
                 f"one stay idle for {self.idle_timeout:g} s to expire"
             )
-        entry = find_game(game)
+        entry = find_game(game, from_data=True)  # a program's choice: never imports code
         seat = Seat(open_handler(entry.env_id, params, seed, wrappers), entry, seed)
         try:
             seat.reset()

@@ -6,16 +6,21 @@ switch to another game (training that agent again later is a new run, of
 the episodes after the switch back) or the app's end. The app calls
 `observe(session, snapshot)` on its timer: it only compares a few numbers,
 and every `flush_seconds` builds the run's curves and figures from the
-snapshot (a few hundred points). Opening the file and writing happen on a
-writer thread, so the event loop never waits on the disk or on another
-process holding the file. When the history cannot be opened or written, the
-next `observe` returns one line to show, once, and nothing more is recorded.
-`close()` ends the open run and waits briefly for the writes to land.
+snapshot (a few hundred points). A run records what ran: the settings it
+trains with last (the Episodes or the decay raised mid-run), the episodes it
+trained, and where its agent was saved (`saved`, after ctrl+s). Opening the
+file and writing happen on a writer thread, so the event loop never waits on
+the disk or on another process holding the file. When the history cannot be
+opened or written (a path that cannot be examined, a damaged file: the line
+says how to recover it), the next `observe` returns one line to show, once,
+and nothing more is recorded; the app goes on without the history. `close()`
+ends the open run and waits briefly for the writes to land.
 """
 
 from __future__ import annotations
 
 import queue
+import sqlite3
 import threading
 import time
 from collections.abc import Callable
@@ -27,7 +32,13 @@ from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.history import RunHistory
 from tui_gym.core.experiments.records import Curve, RunKind, RunSpec, RunStatus
-from tui_gym.session.experiments.live import ExactCheckpoints, return_curve, run_figures, run_spec
+from tui_gym.session.experiments.live import (
+    ExactCheckpoints,
+    episodes_figure,
+    return_curve,
+    run_figures,
+    run_spec,
+)
 
 if TYPE_CHECKING:
     from tui_gym.core.experiments.figures import Figure
@@ -42,9 +53,16 @@ class _OpenRun:
     agent: Any  # the learner this run trains
     after: int  # the agent's episodes before the run began
     checkpoints: ExactCheckpoints
+    spec: RunSpec  # the settings it trains with, as of the last look
+    settings: tuple[Any, ...]  # what `spec` was made from (see `_settings`)
     token: object = field(default_factory=object)  # names the run to the writer
     episodes: int = 0  # the latest snapshot's
     flushed: int = -1  # episodes at the last flush
+
+
+def _settings(session: Session) -> tuple[Any, ...]:
+    # The session replaces these objects when a setting changes: comparing them is cheap.
+    return (id(session.hp), id(session.env_kwargs), session.choices, session.algorithm)
 
 
 class SessionRunLog:
@@ -91,22 +109,33 @@ class SessionRunLog:
             if snapshot.episodes <= self._baseline:
                 return None
             run = self._begin(session, snapshot)
+        settings = _settings(session)
+        if settings != run.settings:  # edited mid-run: the run records what it trains with
+            run.spec, run.settings, run.flushed = run_spec(session, RunKind.APP), settings, -1
         run.episodes = snapshot.episodes
         now = self.clock()
         if now >= self._next_flush and run.episodes != run.flushed:
             self._next_flush = now + self.flush_seconds
             run.checkpoints.take(snapshot)
-            self._send("update", run, *self._results(run, snapshot))
+            self._send("update", run, *self._results(run, snapshot), run.spec)
             run.flushed = run.episodes
         self._last_snapshot = snapshot
         return None
 
+    def saved(self, session: Session, path: str | Path) -> None:
+        """The session's agent was saved to `path`: its run records where."""
+        run = self._run
+        if run is not None and run.agent is session.agent and self._problem is None:
+            self._send("agent", run, str(Path(path).resolve()))
+
     def _begin(self, session: Session, snapshot: TrainingSnapshot) -> _OpenRun:
+        spec = run_spec(session, RunKind.APP)
         run = _OpenRun(agent=session.agent, after=self._baseline,
-                       checkpoints=ExactCheckpoints(session))
+                       checkpoints=ExactCheckpoints(session), spec=spec,
+                       settings=_settings(session))
         self._run = run
         self._next_flush = self.clock() + self.flush_seconds
-        self._send("start", run, run_spec(session, RunKind.APP))
+        self._send("start", run, spec)
         run.checkpoints.take(snapshot)  # the exact value near the run's start
         return run
 
@@ -115,12 +144,13 @@ class SessionRunLog:
     ) -> tuple[list[Curve], list[Figure]]:
         curve = None if snapshot is None else return_curve(snapshot, run.after)
         curves = [c for c in (curve, run.checkpoints.curve()) if c is not None]
-        return curves, run_figures(curve, run.checkpoints.last, after=run.after)
+        episodes = () if snapshot is None else (episodes_figure(snapshot, run.after),)
+        return curves, run_figures(curve, run.checkpoints.last, episodes, after=run.after)
 
     def _end(self, run: _OpenRun) -> None:
         # No checkpoint here: the session may have been rebuilt around another table.
         curves, figures = self._results(run, self._last_snapshot)
-        self._send("finish", run, curves, figures)
+        self._send("finish", run, curves, figures, run.spec)
         self._run = None
         self._baseline = run.episodes
 
@@ -152,7 +182,7 @@ class SessionRunLog:
                     if history is None:
                         history = RunHistory(self.path)
                     self._write(history, job)
-                except (RunHistoryError, ValueError) as exc:
+                except (RunHistoryError, ValueError, OSError, sqlite3.Error) as exc:
                     self._problem = f"Runs are not recorded in the run history: {exc}"
         finally:
             if history is not None:
@@ -167,6 +197,9 @@ class SessionRunLog:
         run_id = self.run_ids.get(token)
         if run_id is None:
             return
-        curves, figures = payload
+        if kind == "agent":
+            history.update(run_id, agent_path=payload[0])
+            return
+        curves, figures, spec = payload
         status = RunStatus.FINISHED if kind == "finish" else None
-        history.update(run_id, curves=curves, figures=figures, status=status)
+        history.update(run_id, curves=curves, figures=figures, status=status, spec=spec)

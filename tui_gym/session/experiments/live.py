@@ -6,7 +6,8 @@ training snapshot's per-episode returns (the engine's bucket means) as the
 checkpoints for games with an exact model, and stops taking them when one is
 not cheap; `run_figures` gives the final figures: `mean_return_last` (the
 online return over the last 10% of the run's episodes), `exact_value` and
-`exact_gap`.
+`exact_gap`; `episodes_figure` how many episodes the run trained (a curve's
+last point is the end of its last full bucket, not the run's last episode).
 """
 
 from __future__ import annotations
@@ -148,6 +149,11 @@ def run_figures(
         figures.append(Figure("exact_gap", exact["gap"], "return"))
     figures.extend(extra)
     return figures
+
+
+def episodes_figure(snapshot: TrainingSnapshot, after: int = 0) -> Figure:
+    """The episodes the run trained: those of the snapshot after `after`."""
+    return Figure("episodes", max(0, snapshot.episodes - after), "episodes")
 
 
 def eval_figures(report: EvalReport) -> tuple[Figure, ...]:

@@ -25,6 +25,7 @@ from tui_gym.core.experiments.paths import resolve_db_path
 from tui_gym.core.experiments.records import RunKind, RunSpec, RunStatus
 from tui_gym.session.experiments.live import (
     ExactCheckpoints,
+    episodes_figure,
     eval_figures,
     return_curve,
     run_figures,
@@ -80,7 +81,7 @@ class TrainRecording:
         try:
             self._history = RunHistory(self.path)  # type: ignore[arg-type]
             self.run_id = self._history.start_run(spec)
-        except (RunHistoryError, ValueError) as exc:
+        except (RunHistoryError, ValueError, OSError) as exc:
             self._problem = exc
 
     def _opened(self) -> bool:
@@ -124,7 +125,8 @@ class TrainRecording:
         snapshot = session.trainer.latest
         checkpoints.take(snapshot, final=True)
         curve = return_curve(snapshot, self._after)
-        extra = eval_figures(report) if report is not None else ()
+        extra = (episodes_figure(snapshot, self._after),
+                 *(eval_figures(report) if report is not None else ()))
         curves = [c for c in (curve, checkpoints.curve()) if c is not None]
         try:
             history.update(

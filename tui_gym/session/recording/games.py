@@ -6,12 +6,13 @@ from typing import Any
 
 
 def game_named(env_id: str) -> Any | None:
-    """The game that plays `env_id`, or None for a game this tui-gym does not know."""
+    """The game that plays `env_id`, or None for a game this tui-gym does not know (an
+    id that would import a module is one: a recording never imports code)."""
     if not env_id:
         return None
     from tui_gym.games import game_for
 
     try:
-        return game_for(env_id)
+        return game_for(env_id, from_data=True)
     except ValueError:
         return None

@@ -17,6 +17,8 @@ Gymnasium's maps; where a key names a cell it is a "r,c" string or a (row, col) 
 - "slip": {cell: probability}, optional: a faint ≈ in the corner of tiles wide enough.
 - "marks": {cell: text}, optional: a short overlay on a tile (an arrow, a value).
 - "cursor": (row, col), or None, optional: an editing cursor, drawn as a frame.
+- "event": text, optional: what the last move did in the game's own words (a jump),
+  `{who}` standing for the player; it replaces the board's own words.
 
 Every kind of tile has its colour and its glyph, so the map reads on a
 monochrome terminal too: ⌂ start, · floor, ○ hole, ★ goal, ▒ cliff, █ wall,
@@ -371,6 +373,8 @@ class TileBoard(Board):
         action = scene.get("last_action")
         action = action if action in MOVES else None
         self._event = self._event_of(previous, agent, action, bool(scene.get("slipped")))
+        if scene.get("event"):
+            self._event = (str(scene["event"]),), "good"
         if self._fresh or previous is None or agent is None:
             self.trail = {}
         elif agent != previous:

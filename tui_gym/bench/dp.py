@@ -1,0 +1,233 @@
+"""Planning's figures: a value-iteration sweep on Taxi, Jack's car rental solved by policy
+iteration, and the Plan view animating sweeps while it answers keys.
+
+- `taxi_sweep_ms`: the median time of one synchronous value-iteration sweep on
+  Taxi's 500 states x 6 actions (the model built beforehand);
+- `jack_seconds`: Figure 4.2's policy iteration on Jack's car rental (441 states
+  x 11 actions, 441 outcomes each), from moving nothing to the optimal policy,
+  median of repeats (the model, built once beforehand, is not counted);
+- per grid game, the real app at 120x40 on the Plan view, policy evaluation
+  running at 50 sweeps a second (θ so small it never ends): the sweeps the view
+  drew per second of wall time over the window, and, at a person's pace, the
+  time from a key to the first screen update that shows its effect, for `d`
+  (values as numbers: the view's own) and `s` (in place: through the planner's
+  thread), as `live` times keys (the key handed to the driver, the frame handed
+  back, its terminal encoding included).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import random
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from tui_gym.bench.figures import median, percentile
+from tui_gym.bench.live import PAUSE_RANGE, SIZE, _send_key, _until
+
+__all__ = ["DPResult", "measure", "rows", "to_json", "verdicts"]
+
+TAXI_SWEEP_MS_TARGET = 5.0
+JACK_SECONDS_TARGET = 1.0
+SWEEPS_PER_SECOND_TARGET = 20.0
+KEY_P95_MS_TARGET = 50.0
+GRID_GAMES = ("gridworld", "frozenlake", "cliffwalking")
+SPEED = 5  # the Plan view's 50 sweeps a second
+
+
+@dataclass(frozen=True)
+class ViewFigures:
+    """One grid game's Plan view: sweeps drawn a second, and key latencies (ms)."""
+
+    game: str
+    sweeps_per_second: float
+    keys_ms: tuple[float, ...]
+
+    @property
+    def key_p95_ms(self) -> float:
+        return percentile(list(self.keys_ms), 95)
+
+
+@dataclass(frozen=True)
+class DPResult:
+    """Planning's figures (see the module docstring)."""
+
+    taxi_sweep_ms: float
+    jack_seconds: float
+    jack_model_seconds: float
+    views: tuple[ViewFigures, ...]
+
+
+def _taxi_sweep_ms(repeats: int) -> float:
+    from tui_gym.core.mdp.planning import value_sweep
+    from tui_gym.games import game_named
+
+    model = game_named("taxi").plan_model({})
+    assert not isinstance(model, type(None))
+    v = np.zeros(500)
+    times = []
+    for _ in range(repeats):
+        started = time.perf_counter()
+        v, _, _ = value_sweep(model.model, v, 1.0)  # type: ignore[union-attr]
+        times.append((time.perf_counter() - started) * 1000)
+    return median(times)
+
+
+def _jack_seconds(repeats: int) -> tuple[float, float]:
+    from tui_gym.games import game_named
+    from tui_gym.session.book import figure_named
+    from tui_gym.session.book.figure import FigureOptions
+
+    started = time.perf_counter()
+    game_named("car-rental").plan_model({})
+    built = time.perf_counter() - started
+    times = []
+    for _ in range(repeats):
+        started = time.perf_counter()
+        figure_named("4.2").run(FigureOptions(), lambda done, total, what: None)
+        times.append(time.perf_counter() - started)
+    return median(times), built
+
+
+async def _view_once(game: str, seconds: float, presses: int, seed: int) -> ViewFigures:
+    from tui_gym.session.session import Session
+    from tui_gym.ui.app import TuiGymApp
+
+    app = TuiGymApp(Session(game, seed=seed), tune_gc=True)
+    frames: list[float] = []
+    drawn: list[tuple[float, int, bool, bool]] = []  # (time, sweeps, in place, numbers)
+    display = app._display
+
+    def timed_display(screen: Any, renderable: Any) -> None:
+        display(screen, renderable)
+        if renderable is not None:
+            render = getattr(renderable, "render_segments", None)
+            if render is not None:
+                render(app.console)
+            frames.append(time.perf_counter())
+
+    app._display = timed_display  # type: ignore[method-assign]
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("P")
+        view = app.plan_view
+        assert view is not None
+        await _until(lambda: view.runner is not None, "the model")
+        show = view.show_snapshot
+
+        def counted(snapshot: Any) -> None:
+            show(snapshot)
+            drawn.append((time.perf_counter(), snapshot.sweeps, snapshot.in_place, view.numbers))
+
+        view.show_snapshot = counted  # type: ignore[method-assign]
+        runner = view.runner
+        assert runner is not None
+        runner.set_method("evaluate")
+        runner.set_theta(1e-300)
+        runner.set_speed(SPEED)
+        runner.run()
+        await _until(lambda: runner.latest.running, "the run")
+        await asyncio.sleep(0.3)
+        start, first = time.perf_counter(), len(drawn)
+        await asyncio.sleep(seconds)
+        shown = drawn[first:]
+        rate = (shown[-1][1] - shown[0][1]) / (time.perf_counter() - start) if shown else 0.0
+        keys = await _keys(app, view, frames, drawn, presses, random.Random(seed))
+        runner.pause()
+    return ViewFigures(game, rate, tuple(keys))
+
+
+async def _keys(app: Any, view: Any, frames: list[float],
+                drawn: list[tuple[float, int, bool, bool]], presses: int,
+                rng: random.Random) -> list[float]:
+    out = []
+    for i in range(presses):
+        await asyncio.sleep(rng.uniform(*PAUSE_RANGE))
+        key, column = ("d", 3) if i % 2 else ("s", 2)
+        target = not (view.numbers if key == "d" else view.runner.latest.in_place)
+        before = len(drawn)
+        sent = time.perf_counter()
+        _send_key(app, key)
+
+        def answered(before: int = before, column: int = column, target: bool = target
+                     ) -> float | None:
+            hit = next((d[0] for d in drawn[before:] if d[column] == target), None)
+            return None if hit is None else next((t for t in frames if t >= hit), None)
+
+        await _until(lambda: answered() is not None, f"the answer to {key}")
+        at = answered()
+        assert at is not None
+        out.append((at - sent) * 1000)
+    return out
+
+
+def measure(seconds: float, presses: int, repeats: int,
+            progress: Callable[[str], None] | None = None) -> DPResult:
+    """Every figure of the module docstring."""
+    say = progress or (lambda _text: None)
+    say("planning: a value-iteration sweep on Taxi")
+    taxi = _taxi_sweep_ms(50)
+    say("planning: Jack's car rental by policy iteration")
+    jack, built = _jack_seconds(repeats)
+    views = []
+    for game in GRID_GAMES:
+        say(f"planning: the Plan view on {game}")
+        views.append(asyncio.run(_view_once(game, seconds, presses, 0)))
+    return DPResult(taxi, jack, built, tuple(views))
+
+
+def verdicts(result: DPResult | None, missing: str,
+             ok: Callable[[float | None, bool], str]) -> dict[str, str]:
+    """The targets' verdicts, keyed as in the JSON."""
+    if result is None:
+        return {"taxi_sweep_ms": missing, "jack_policy_iteration_s": missing,
+                "plan_view": missing}
+    out = {
+        "taxi_sweep_ms": ok(result.taxi_sweep_ms, result.taxi_sweep_ms <= TAXI_SWEEP_MS_TARGET),
+        "jack_policy_iteration_s": ok(result.jack_seconds,
+                                      result.jack_seconds <= JACK_SECONDS_TARGET),
+    }
+    for view in result.views:
+        out[f"plan_sweeps_per_second[{view.game}]"] = ok(
+            view.sweeps_per_second, view.sweeps_per_second >= SWEEPS_PER_SECOND_TARGET)
+        out[f"plan_key_p95_ms[{view.game}]"] = ok(view.key_p95_ms,
+                                                  view.key_p95_ms <= KEY_P95_MS_TARGET)
+    return out
+
+
+def rows(result: DPResult | None) -> list[tuple[str, str, str, str | None]]:
+    """(figure, measured, target, verdict key) rows of the bench's table."""
+    if result is None:
+        return []
+    out: list[tuple[str, str, str, str | None]] = [
+        ("planning: a value-iteration sweep on Taxi (500 × 6), median",
+         f"{result.taxi_sweep_ms:.2f} ms", f"≤ {TAXI_SWEEP_MS_TARGET:g} ms", "taxi_sweep_ms"),
+        ("  Jack's car rental by policy iteration (Figure 4.2), median",
+         f"{result.jack_seconds:.2f} s (model built once: {result.jack_model_seconds:.2f} s)",
+         f"≤ {JACK_SECONDS_TARGET:g} s", "jack_policy_iteration_s"),
+    ]
+    for view in result.views:
+        out.append((f"  Plan view on {view.game}: sweeps drawn a second (50/s asked)",
+                    f"{view.sweeps_per_second:.1f}", f"≥ {SWEEPS_PER_SECOND_TARGET:g}",
+                    f"plan_sweeps_per_second[{view.game}]"))
+        out.append((f"  Plan view on {view.game}: key → screen p95 while it runs",
+                    f"{view.key_p95_ms:.0f} ms (p50 {median(list(view.keys_ms)):.0f}, "
+                    f"n={len(view.keys_ms)})", f"≤ {KEY_P95_MS_TARGET:g} ms",
+                    f"plan_key_p95_ms[{view.game}]"))
+    return out
+
+
+def to_json(result: DPResult | None) -> dict[str, Any] | None:
+    if result is None:
+        return None
+    return {
+        "taxi_value_sweep_ms": result.taxi_sweep_ms,
+        "jack_policy_iteration_s": result.jack_seconds,
+        "jack_model_build_s": result.jack_model_seconds,
+        "plan_view": [{"game": v.game, "sweeps_per_second": v.sweeps_per_second,
+                       "key_p50_ms": median(list(v.keys_ms)), "key_p95_ms": v.key_p95_ms,
+                       "key_presses": len(v.keys_ms)} for v in result.views],
+    }

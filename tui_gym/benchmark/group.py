@@ -1,0 +1,150 @@
+"""A program run in a process group of its own, ended whole on every way out: `start_group`.
+
+A player's program may be a shell script that starts others, or fork children of its
+own; ending only the process that was started would leave the rest running. So the
+program starts in a new session (its own process group, away from the terminal's
+signals), and `GroupProcess.end` ends the whole group: the leader is given `grace`
+seconds to exit on its own once its input is closed, then every process left in the
+group is killed. The benchmark ends it in a `finally`, and turns SIGTERM and SIGHUP
+into an exit that runs it (`ending_on_signals`).
+
+A parent killed outright (SIGKILL) runs no `finally`: for that a small watcher
+process, started first and in a session of its own, holds the read end of a pipe
+from the parent. When the pipe closes without the parent's word that the group is
+already ended, the parent is gone, and the watcher kills the group.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import subprocess
+import sys
+from collections.abc import Iterator
+from typing import Any
+
+__all__ = ["GroupProcess", "ending_on_signals", "start_group"]
+
+# The watcher: reads the group's id, then waits for its input to close. "done" first
+# means the parent ended the group itself; anything else, that the parent is gone.
+_WATCHER = """
+import os, signal, sys, time
+for s in (signal.SIGINT, signal.SIGHUP, signal.SIGTERM):
+    signal.signal(s, signal.SIG_IGN)
+said = b""
+while True:
+    try:
+        chunk = os.read(0, 64)
+    except InterruptedError:
+        continue
+    except OSError:
+        chunk = b""
+    if not chunk:
+        break
+    said += chunk
+words = said.split()
+if words and words[-1] != b"done":
+    pgid = int(words[0])
+    for sig, wait in ((signal.SIGTERM, 1.0), (signal.SIGKILL, 0.0)):
+        try:
+            os.killpg(pgid, sig)
+        except OSError:
+            break
+        end = time.monotonic() + wait
+        while time.monotonic() < end:
+            try:
+                os.killpg(pgid, 0)
+            except OSError:
+                break
+            time.sleep(0.02)
+"""
+
+
+class GroupProcess:
+    """A started program (`process`, a `subprocess.Popen`) and the group it leads."""
+
+    def __init__(self, process: subprocess.Popen[bytes], watcher: subprocess.Popen[bytes] | None):
+        self.process = process
+        self.pgid = process.pid  # a new session's leader leads its process group
+        self._watcher = watcher
+        if watcher is not None and watcher.stdin is not None:
+            with contextlib.suppress(OSError):
+                watcher.stdin.write(f"{self.pgid}\n".encode())
+                watcher.stdin.flush()
+
+    def end(self, grace: float) -> int | None:
+        """Close the program's input, give it `grace` s to exit, then kill what is left of
+        its group; its exit code (None when it had to be killed)."""
+        process = self.process
+        if process.stdin is not None:
+            with contextlib.suppress(OSError):
+                process.stdin.close()
+        code: int | None
+        try:
+            if grace <= 0:
+                raise subprocess.TimeoutExpired(process.args, grace)
+            code = process.wait(timeout=grace)
+        except subprocess.TimeoutExpired:
+            code = None
+        self._kill_group()
+        process.wait()
+        self._release_watcher()
+        return code
+
+    def _kill_group(self) -> None:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(self.pgid, signal.SIGKILL)
+
+    def _release_watcher(self) -> None:
+        watcher, self._watcher = self._watcher, None
+        if watcher is None:
+            return
+        with contextlib.suppress(OSError):
+            if watcher.stdin is not None:
+                watcher.stdin.write(b" done\n")
+                watcher.stdin.close()
+        try:
+            watcher.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            watcher.kill()
+            watcher.wait()
+
+
+def start_group(argv: list[str], **popen: Any) -> GroupProcess:
+    """Start `argv` as the leader of a new session (OSError when it cannot start), watched
+    so that its group ends even when this process is killed outright."""
+    watcher = subprocess.Popen(
+        [sys.executable, "-S", "-c", _WATCHER], stdin=subprocess.PIPE,
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
+    )
+    try:
+        process = subprocess.Popen(argv, start_new_session=True, **popen)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            if watcher.stdin is not None:
+                watcher.stdin.close()  # no group id said: it exits without killing
+        watcher.wait()
+        raise
+    return GroupProcess(process, watcher)
+
+
+@contextlib.contextmanager
+def ending_on_signals() -> Iterator[None]:
+    """SIGTERM and SIGHUP end the block as an exit (`SystemExit(128 + signal)`), so its
+    `finally` clauses run; outside the main thread the block runs as it is."""
+    previous: dict[int, Any] = {}
+
+    def leave(signum: int, frame: Any) -> None:
+        raise SystemExit(128 + signum)
+
+    for signum in (signal.SIGTERM, signal.SIGHUP):
+        try:
+            previous[signum] = signal.signal(signum, leave)
+        except ValueError:  # not the main thread
+            break
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)

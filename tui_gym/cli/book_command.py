@@ -1,0 +1,112 @@
+"""`tui-gym book`: Sutton & Barto's figures, listed, or run one at a time and checked.
+
+`tui-gym book` lists the figures it reproduces. `tui-gym book FIGURE [--runs N]
+[--episodes E] [--seed S] [--json]` runs one headless with a progress bar, draws
+it in the terminal (its curves as band charts, its grids as tables) and prints
+each of the book's claims beside the measured figure with a verdict; the exit
+status is 1 when a claim is not borne out. `--json` prints `{"schema": 1,
+"figure", "title", "runs", "series": [{"label", "x", "y", "lo", "hi"}],
+"checks": [{"claim", "book", "measured", "ok"}]}`.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+
+from rich.console import Console
+from rich.markup import escape
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from tui_gym.cli.grids import panel_text
+from tui_gym.cli.output import print_json
+from tui_gym.cli.types import positive_int, seed_number
+from tui_gym.session.book import figure_named, figures
+from tui_gym.session.book.figure import FigureOptions, FigureResult
+from tui_gym.terminal_chart import ChartSeries, band_chart
+
+__all__ = ["BOOK_COMMANDS", "add_book_parser"]
+
+CHART_HEIGHT = 10
+
+
+def add_book_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    book = sub.add_parser("book", help="Sutton & Barto's figures: list them, or run one and "
+                          "check the book's claims")
+    book.add_argument("figure", nargs="?", metavar="FIGURE",
+                      help="the figure to run, as the book numbers it (e.g. 4.3)")
+    book.add_argument("--runs", type=positive_int, metavar="N",
+                      help="independent runs (default: the figure's)")
+    book.add_argument("--episodes", type=positive_int, metavar="E",
+                      help="episodes a run (default: the figure's)")
+    book.add_argument("--seed", type=seed_number, default=0, dest="book_seed", metavar="S",
+                      help="the first run's seed (default 0)")
+    book.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def cmd_book(args: argparse.Namespace, out: Console) -> int:
+    if args.figure is None:
+        return _list(args, out)
+    figure = figure_named(args.figure)
+    options = FigureOptions(args.runs, args.episodes, args.book_seed)
+    if args.json:
+        result = figure.run(options, lambda done, total, what: None)
+        print_json("book", result.as_json())
+        return 0 if result.ok else 1
+    err = Console(stderr=True)
+    progress = Progress(TextColumn(f"[bold]Figure {figure.name}[/]"), BarColumn(),
+                        MofNCompleteColumn(), TextColumn("{task.description}"),
+                        TimeElapsedColumn(), console=err, transient=True)
+    task = progress.add_task("", total=None)
+
+    def update(done: int, total: int, what: str) -> None:
+        progress.update(task, completed=done, total=total, description=escape(what))
+
+    with progress:
+        result = figure.run(options, update)
+    _draw(out, result)
+    return 0 if result.ok else 1
+
+
+def _list(args: argparse.Namespace, out: Console) -> int:
+    listed = figures()
+    if args.json:
+        print_json("book list", {"figures": [
+            {"figure": f.name, "title": f.title, "world": f.world, "about": f.about,
+             "runs": f.runs, "episodes": f.episodes} for f in listed]})
+        return 0
+    table = Table(title="Sutton & Barto's figures (tui-gym book FIGURE runs one)",
+                  title_justify="left")
+    for column in ("figure", "world", "what it shows"):
+        table.add_column(column, style="bold" if column == "figure" else None)
+    for f in listed:
+        table.add_row(f.name, f.world, f"{escape(f.title)}\n[dim]{escape(f.about)}[/]")
+    out.print(table)
+    return 0
+
+
+def _draw(out: Console, result: FigureResult) -> None:
+    out.print(f"[bold]Figure {result.figure}[/]: {escape(result.title)}")
+    width = max(20, min(100, out.width) - 14)
+    for chart in result.charts:
+        series = [ChartSeries(s.label, s.x, s.y, s.lo, s.hi) for s in chart.series]
+        out.print(band_chart(series, width, CHART_HEIGHT, x_label=chart.x_label,
+                             y_label=chart.title))
+    for panel in result.panels:
+        out.print(panel_text(panel, out.width), soft_wrap=True)
+    checks = Table(title="The book's claims", title_justify="left")
+    checks.add_column("claim")
+    checks.add_column("book", justify="right")
+    checks.add_column("measured", justify="right")
+    checks.add_column("")
+    for check in result.checks:
+        verdict = "[green]✓ reproduced[/]" if check.ok else "[red]✗ differs[/]"
+        checks.add_row(escape(check.claim), escape(str(check.book)), escape(str(check.measured)),
+                       verdict)
+    out.print(checks)
+    for note in result.notes:
+        out.print(f"[dim]{escape(note)}[/]")
+
+
+BOOK_COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {"book": cmd_book}

@@ -1,0 +1,330 @@
+"""The one SQLite connection a process keeps to a run history file: `open_shared`, `Connection`.
+
+Every `RunHistory` on the same file in one process shares one connection (by
+the file's real path; a child process opens its own). SQLite's locks belong to
+the process, and closing any handle a process has on a file drops every lock
+it holds there, so nothing here opens the file but SQLite: the file is
+examined with `stat` only, and recognised (not SQLite, another program's
+database, a damaged or a newer history) by SQLite reading it, before anything
+is written. A refused file is left as it was, and the empty `-wal`/`-shm`
+files SQLite made beside it while reading are removed again.
+
+Writers take the write lock up front (`BEGIN IMMEDIATE`). The connection does
+not wait inside SQLite: a busy file is tried again from here, with the
+connection's lock free between tries, so a thread that only reads never waits
+behind another thread's wait for a different process. A history that can only
+be read (a read-only folder or file) is opened for reading when the caller
+only reads; with no write-ahead log beside it, as a file nothing changes.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sqlite3
+import stat
+import threading
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import TypeVar
+
+from tui_gym.core.experiments.errors import (
+    DamagedRunHistoryError,
+    NewerRunHistoryError,
+    NotARunHistoryError,
+    RunHistoryBusyError,
+    RunHistoryError,
+)
+from tui_gym.core.experiments.schema import APPLICATION_ID, Migration, migrate
+from tui_gym.core.text import visible
+
+T = TypeVar("T")
+
+SIDE_FILES = ("-wal", "-shm", "-journal")
+_READ_ONLY = frozenset({"SQLITE_READONLY", "SQLITE_CANTOPEN", "SQLITE_PERM", "SQLITE_AUTH"})
+
+
+def shown(path: str | Path) -> str:
+    """A file's name as messages show it (control characters escaped, a long one cut)."""
+    return visible(str(path), 160)
+
+
+def _code(exc: sqlite3.Error) -> str:
+    """SQLite's primary error name ("SQLITE_READONLY" for SQLITE_READONLY_DIRECTORY)."""
+    return "_".join((getattr(exc, "sqlite_errorname", "") or "").split("_")[:2])
+
+
+def is_busy(exc: sqlite3.Error) -> bool:
+    text = str(exc).lower()
+    return _code(exc) in ("SQLITE_BUSY", "SQLITE_LOCKED") or "locked" in text or "busy" in text
+
+
+def is_damage(exc: sqlite3.Error) -> bool:
+    return _code(exc) in ("SQLITE_CORRUPT", "SQLITE_NOTADB") or "malformed" in str(exc).lower()
+
+
+def damaged(path: Path, what: object) -> DamagedRunHistoryError:
+    """The error for a damaged file: what SQLite says, and how to save what it still holds."""
+    return DamagedRunHistoryError(
+        f"{shown(path)} is damaged ({visible(what, 120)}): `tui-gym runs --recover --db "
+        f"{shown(path)}` copies what can still be read into a new file beside it"
+    )
+
+
+def untouched(path: Path, what: str) -> NotARunHistoryError:
+    return NotARunHistoryError(
+        f"{shown(path)} is not a tui-gym run history ({what}); it was left untouched"
+    )
+
+
+def examine(path: Path) -> os.stat_result | None:
+    """The file's status (None when there is none yet); RunHistoryError for a folder,
+    a device or anything else that is not a regular file, or a path that cannot be
+    looked at (no permission, a name too long)."""
+    try:
+        status = os.stat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+    except (OSError, ValueError) as exc:
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise RunHistoryError(f"{shown(path)} cannot be examined ({why})") from None
+    if stat.S_ISDIR(status.st_mode):
+        raise NotARunHistoryError(f"{shown(path)} is a folder, not a run history file")
+    if not stat.S_ISREG(status.st_mode):
+        raise NotARunHistoryError(
+            f"{shown(path)} is not a regular file (a device, a pipe or a socket): "
+            "give a file's path with --db"
+        )
+    return status
+
+
+def inspect(conn: sqlite3.Connection) -> tuple[int, int, list[str]]:
+    """(application id, schema version, tables) of the file, inside the caller's transaction."""
+    app_id = conn.execute("PRAGMA application_id").fetchone()[0]
+    version = conn.execute("PRAGMA user_version").fetchone()[0]
+    tables = [
+        row[0]
+        for row in conn.execute(
+            "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%'"
+        )
+    ]
+    return app_id, version, tables
+
+
+def check_identity(path: Path, latest: int, app_id: int, version: int, tables: list[str]) -> int:
+    """The file's schema version, 0 for an empty database; raises for anything not ours."""
+    if app_id == APPLICATION_ID:
+        if version > latest:
+            raise NewerRunHistoryError(
+                f"{shown(path)} was made by a newer tui-gym (run history version {version}; "
+                f"this tui-gym reads up to {latest}): upgrade tui-gym, "
+                "or record elsewhere with --db PATH"
+            )
+        return int(version)
+    if app_id == 0 and version == 0 and not tables:
+        return 0
+    if tables:
+        names = ", ".join(visible(t, 40) for t in tables[:3]) + (", ..." if len(tables) > 3 else "")
+        raise untouched(path, f"an SQLite database of another program, with tables {names}")
+    raise untouched(path, f"an SQLite database of another program (application id {app_id})")
+
+
+class Connection:
+    """One SQLite connection of this process, and the lock each thread takes to use it."""
+
+    def __init__(self, key: tuple[int, str], conn: sqlite3.Connection, writable: bool) -> None:
+        self.key = key
+        self.conn = conn
+        self.writable = writable
+        self.version = 0  # the file's schema version
+        self.users = 0
+
+        self.lock = threading.Lock()
+
+    def attempt(self, action: Callable[[sqlite3.Connection], T], timeout: float,
+                busy: Callable[[], Exception], begin: str | None = "BEGIN") -> T:
+        """`action(conn)` inside `begin` ... COMMIT (no transaction when None), tried again
+        while another process holds the file, for up to `timeout` seconds; then `busy()`."""
+        deadline = time.monotonic() + timeout
+        pause = 0.001
+        while True:
+            with self.lock:
+                try:
+                    return self._once(action, begin)
+                except sqlite3.OperationalError as exc:
+                    if not is_busy(exc):
+                        raise
+            if time.monotonic() >= deadline:
+                raise busy()
+            # The lock is free meanwhile: this process's other threads go on reading.
+            time.sleep(pause)
+            pause = min(2 * pause, 0.05)
+
+    def _once(self, action: Callable[[sqlite3.Connection], T], begin: str | None) -> T:
+        conn = self.conn
+        if begin is None:
+            return action(conn)
+        conn.execute(begin)
+        try:
+            result = action(conn)
+            conn.execute("COMMIT")
+        except BaseException:
+            if conn.in_transaction:
+                conn.execute("ROLLBACK")
+            raise
+        return result
+
+
+_shared: dict[tuple[int, str], Connection] = {}
+_shared_lock = threading.Lock()
+
+
+def open_shared(path: Path, migrations: Sequence[Migration], timeout: float, *,
+                read_only: bool = False) -> Connection:
+    """This process's connection to `path`, opened if there is none yet: the file (and its
+    folder) created, made WAL and brought up to the schema of `migrations`.
+
+    `read_only`: the caller only reads; a missing file is not created, and one that
+    cannot be written is opened for reading. RunHistoryError, one line naming the
+    file, for anything that is not a run history of this version or an older one,
+    or that cannot be opened.
+    """
+    key = (os.getpid(), os.path.realpath(path))
+    with _shared_lock:
+        shared = _shared.get(key)
+        if shared is not None and (shared.writable or read_only):
+            if shared.version > len(migrations):  # opened by code that knows more versions
+                check_identity(path, len(migrations), APPLICATION_ID, shared.version, [])
+            if shared.version < len(migrations) and shared.writable:
+                _upgrade(path, shared, migrations, timeout)
+        else:
+            shared = _connect(path, key, migrations, timeout, read_only)
+            _shared[key] = shared
+        shared.users += 1
+        return shared
+
+
+def release(shared: Connection) -> None:
+    """One user fewer; the last one closes the connection."""
+    with _shared_lock:
+        shared.users -= 1
+        if shared.users > 0:
+            return
+        if _shared.get(shared.key) is shared:
+            del _shared[shared.key]
+    with shared.lock:
+        shared.conn.close()
+
+
+def busy_error(path: Path, timeout: float) -> Callable[[], RunHistoryBusyError]:
+    return lambda: RunHistoryBusyError(
+        f"{shown(path)} is busy: another process kept it locked for over {timeout:.0f} s"
+    )
+
+
+class _ReadOnly(Exception):
+    """The file can at most be read (a read-only file or folder)."""
+
+
+def _connect(path: Path, key: tuple[int, str], migrations: Sequence[Migration], timeout: float,
+             read_only: bool) -> Connection:
+    status = examine(path)
+    real = Path(key[1])
+    if status is None:
+        if read_only:
+            raise RunHistoryError(f"{shown(path)}: there is no run history there yet")
+        try:
+            real.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise RunHistoryError(
+                f"{shown(path)}: cannot create its folder ({exc.strerror or exc})"
+            ) from None
+    before = {suffix for suffix in SIDE_FILES if os.path.lexists(f"{real}{suffix}")}
+    try:
+        try:
+            return _open(path, real, key, "rw" if status else "rwc", migrations, timeout)
+        except _ReadOnly as exc:
+            if not read_only:
+                raise RunHistoryError(f"{shown(path)} cannot be written ({exc})") from None
+        # Only reading: open it for reading, or, with no write-ahead log to read, as a file
+        # that does not change (SQLite then needs no -shm file beside it).
+        mode = "ro" if os.path.lexists(f"{real}-wal") else "ro&immutable=1"
+        try:
+            return _open(path, real, key, mode, migrations, timeout)
+        except _ReadOnly as exc:
+            raise RunHistoryError(f"{shown(path)} cannot be read ({exc})") from None
+    except (NotARunHistoryError, DamagedRunHistoryError):
+        _tidy(real, before)
+        raise
+
+
+def _open(path: Path, real: Path, key: tuple[int, str], mode: str,
+          migrations: Sequence[Migration], timeout: float) -> Connection:
+    try:
+        conn = sqlite3.connect(f"{real.as_uri()}?mode={mode}", uri=True, timeout=0,
+                               isolation_level=None, check_same_thread=False)
+    except sqlite3.Error as exc:
+        if _code(exc) in _READ_ONLY:
+            raise _ReadOnly(str(exc)) from None
+        raise RunHistoryError(f"{shown(path)}: cannot open it ({exc})") from None
+    shared = Connection(key, conn, writable=not mode.startswith("ro"))
+    busy = busy_error(path, timeout)
+    try:
+        try:
+            identity = shared.attempt(inspect, timeout, busy)  # reading only, so far
+            shared.version = check_identity(path, len(migrations), *identity)
+            if shared.writable:
+                conn.execute("PRAGMA synchronous = NORMAL")  # WAL stays consistent on a crash
+                conn.execute("PRAGMA foreign_keys = ON")
+                shared.attempt(
+                    lambda c: c.execute("PRAGMA journal_mode = WAL").fetchone(), timeout, busy,
+                    begin=None,
+                )
+        except sqlite3.DatabaseError as exc:
+            if _code(exc) == "SQLITE_NOTADB":
+                raise untouched(path, "not an SQLite database") from None
+            if shared.writable and _code(exc) in _READ_ONLY:
+                raise _ReadOnly(str(exc)) from None
+            if is_damage(exc):
+                raise damaged(path, exc) from None
+            raise RunHistoryError(f"{shown(path)}: cannot open it ({exc})") from None
+        if shared.version < len(migrations):
+            if not shared.writable:
+                raise RunHistoryError(
+                    f"{shown(path)} was made by an older tui-gym and cannot be brought up to "
+                    "date where it is (it cannot be written there)"
+                )
+            _upgrade(path, shared, migrations, timeout)
+    except BaseException:
+        conn.close()
+        raise
+    return shared
+
+
+def _upgrade(path: Path, shared: Connection, migrations: Sequence[Migration],
+             timeout: float) -> None:
+    latest = len(migrations)
+
+    def upgrade(conn: sqlite3.Connection) -> int:
+        # Another process may have got there first: look again under the write lock.
+        return migrate(conn, check_identity(path, latest, *inspect(conn)), migrations)
+
+    try:
+        shared.version = shared.attempt(upgrade, timeout, busy_error(path, timeout),
+                                        begin="BEGIN IMMEDIATE")
+    except sqlite3.DatabaseError as exc:
+        if is_damage(exc):
+            raise damaged(path, exc) from None
+        raise RunHistoryError(f"{shown(path)}: cannot bring it up to date ({exc})") from None
+
+
+def _tidy(real: Path, before: set[str]) -> None:
+    """Remove the empty side files SQLite made beside a file that was refused."""
+    made = [s for s in SIDE_FILES if s not in before and os.path.lexists(f"{real}{s}")]
+    for suffix in made:
+        if suffix != "-shm" and os.path.getsize(f"{real}{suffix}") > 0:
+            return  # something was written there: not ours to remove
+    for suffix in made:
+        with contextlib.suppress(OSError):
+            os.unlink(f"{real}{suffix}")

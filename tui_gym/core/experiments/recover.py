@@ -1,0 +1,223 @@
+"""Saving what can be read of a damaged run history: `recover`.
+
+`recover(path)` reads the file through SQLite, for reading only, and copies
+every run that still reads (its settings, figures, status and times, and its
+curves when they decode) into a fresh history beside it,
+`NAME.recovered.EXT` (`NAME.recovered-2.EXT`, ... when that exists), keeping
+the run ids. The original is never written. Runs are found by a scan of the
+runs table and, where the scan stops at damage, by asking for each id in turn.
+"""
+
+from __future__ import annotations
+
+import os
+import sqlite3
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import tui_gym.core.experiments.rows as rows
+from tui_gym.core.experiments.connection import examine, shown
+from tui_gym.core.experiments.errors import RunHistoryError
+from tui_gym.core.experiments.history import RunHistory
+from tui_gym.core.experiments.records import RunStatus
+from tui_gym.core.experiments.writers import WriterCheck
+from tui_gym.core.text import visible
+
+PROBE_BEYOND = 100_000  # ids asked for one by one past the last one a damaged scan found
+
+
+@dataclass(frozen=True)
+class Recovery:
+    """What `recover` did: the runs it copied from `source` into `target`, the runs it
+    found but could not read, and SQLite's verdict on the source ("ok" when sound)."""
+
+    source: Path
+    target: Path | None  # None when nothing could be read
+    copied: int
+    unreadable: int
+    curves_dropped: int  # runs copied without curves that did not decode
+    check: str
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "source": str(self.source),
+            "target": None if self.target is None else str(self.target),
+            "copied": self.copied,
+            "unreadable": self.unreadable,
+            "curves_dropped": self.curves_dropped,
+            "check": self.check,
+        }
+
+
+def _fresh_path(source: Path) -> Path:
+    """A name beside `source` that nothing has, made (empty) so no one else takes it."""
+    for n in range(1, 1000):
+        mark = "recovered" if n == 1 else f"recovered-{n}"
+        target = source.with_name(f"{source.stem}.{mark}{source.suffix}")
+        try:
+            # A new, empty file: no connection has it open, so a plain handle is harmless.
+            os.close(os.open(target, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+        except FileExistsError:
+            continue
+        except OSError as exc:
+            raise RunHistoryError(f"cannot write beside {shown(source)} ({exc.strerror})") from None
+        return target
+    raise RunHistoryError(f"cannot find a free name beside {shown(source)}")
+
+
+def _reader(source: Path) -> sqlite3.Connection:
+    """A connection that only reads `source` and makes no file beside it (as a file that
+    does not change, unless a write-ahead log beside it holds its latest state), told to
+    read past a page count the file no longer has (a truncated file)."""
+    wal = os.path.lexists(f"{source}-wal")
+    uri = f"{source.resolve().as_uri()}?mode=ro{'' if wal else '&immutable=1'}"
+    conn = sqlite3.connect(uri, uri=True, isolation_level=None)
+    try:
+        conn.execute("PRAGMA writable_schema = 1")  # changes nothing: the file is read only
+        conn.execute("SELECT COUNT(*) FROM sqlite_master").fetchone()
+    except sqlite3.Error as exc:
+        conn.close()
+        raise RunHistoryError(f"nothing can be read from {shown(source)} ({visible(exc, 80)})"
+                              ) from None
+    return conn
+
+
+def _check(conn: sqlite3.Connection) -> str:
+    try:
+        found = [row[0] for row in conn.execute("PRAGMA quick_check(3)")]
+    except sqlite3.Error as exc:
+        return visible(exc, 120)
+    lines = [part.strip() for text in found for part in str(text).splitlines() if part.strip()]
+    return visible("; ".join(lines), 200)
+
+
+def _scan(conn: sqlite3.Connection, order: str) -> tuple[list[int], bool]:
+    """The run ids a scan reads before it stops; whether it read to the end."""
+    ids: list[int] = []
+    try:
+        for (run_id,) in conn.execute(f"SELECT id FROM runs ORDER BY id {order}"):
+            ids.append(int(run_id))
+    except sqlite3.Error:
+        return ids, False
+    return ids, True
+
+
+def _run_ids(conn: sqlite3.Connection) -> Iterator[int]:
+    ids, whole = _scan(conn, "ASC")
+    if whole:
+        yield from ids
+        return
+    found = set(ids) | set(_scan(conn, "DESC")[0])
+    try:
+        top = conn.execute("SELECT seq FROM sqlite_sequence WHERE name = 'runs'").fetchone()
+        last = int(top[0]) if top else 0
+    except (sqlite3.Error, TypeError, ValueError):
+        last = 0
+    last = min(max([last, *found, 0]), max(found, default=0) + PROBE_BEYOND)
+    yield from sorted(found | set(range(1, last + 1)))
+
+
+def _run_columns(conn: sqlite3.Connection) -> str:
+    """The runs table's fields as `_one` reads them; null for those an older schema lacks."""
+    try:
+        have = {row[1] for row in conn.execute("PRAGMA table_info(runs)")}
+    except sqlite3.Error:
+        have = set()
+
+    def field(name: str, read: str) -> str:
+        return read if name in have else "NULL"
+
+    return ", ".join((
+        "id", field("kind", rows.text_column("kind", rows.MAX_NAME)),
+        field("settings_id", "settings_id"), field("platform_id", "platform_id"),
+        field("seeds", rows.text_column("seeds", rows.MAX_JSON)),
+        field("status", rows.text_column("status", rows.MAX_NAME)),
+        field("started_at", rows.number_column("started_at")),
+        field("ended_at", rows.number_column("ended_at")),
+        field("group_id", rows.number_column("group_id")),
+        field("figures", rows.text_column("figures", rows.MAX_JSON)),
+        field("writer", rows.text_column("writer", rows.MAX_NAME)),
+        field("agent_path", rows.text_column("agent_path", rows.MAX_PATH)),
+    ))
+
+
+_SETTINGS = ", ".join(rows.text_column(c, rows.MAX_NAME if c in ("game", "algorithm")
+                                       else rows.MAX_JSON)
+                      for c in ("game", "algorithm", "game_params", "wrappers", "hyperparameters"))
+_PLATFORM = ", ".join(rows.text_column(c, rows.MAX_NAME)
+                      for c in ("tui_gym", "gymnasium", "numpy", "python"))
+
+
+def _fetch(conn: sqlite3.Connection, sql: str, key: object) -> tuple[Any, ...] | None:
+    """One row, None when there is none; sqlite3.Error where the file is damaged."""
+    row = conn.execute(sql, (key,)).fetchone()
+    return None if row is None else tuple(row)
+
+
+def _one(conn: sqlite3.Connection, columns: str, run_id: int
+         ) -> tuple[tuple[Any, ...], Any] | None:
+    """A run's row, as `rows.record` reads it, and its curves; each table read on its own
+    so that a damaged one loses only what it holds (a platform: the versions)."""
+    run = _fetch(conn, f"SELECT {columns} FROM runs WHERE id = ?", run_id)
+    if run is None:
+        return None
+    (run_id, kind, settings_id, platform_id, seeds, status, started, ended, group, figures,
+     writer, agent_path) = run
+    settings = _fetch(conn, f"SELECT {_SETTINGS} FROM settings WHERE id = ?", settings_id)
+    if settings is None:
+        raise rows.BadRow("its settings are gone")
+    game, algorithm, game_params, wrappers, hyperparameters = settings
+    try:
+        versions = _fetch(conn, f"SELECT {_PLATFORM} FROM platforms WHERE id = ?", platform_id)
+    except sqlite3.Error:
+        versions = None
+    try:
+        blob = _fetch(conn, f"SELECT {rows.CURVES_COLUMNS} FROM curves WHERE run_id = ?", run_id)
+    except sqlite3.Error:
+        blob = ("damaged", 0, None)
+    row = (run_id, kind, game, algorithm, seeds, status, started, ended, group, figures, writer,
+           game_params, wrappers, hyperparameters, *(versions or ("",) * 4), agent_path)
+    return row, blob
+
+
+def recover(source: str | Path) -> Recovery:
+    """Copy what can be read of the history at `source` into a fresh file beside it."""
+    source = Path(source).expanduser()
+    if examine(source) is None:
+        raise RunHistoryError(f"no run history at {shown(source)}")
+    conn = _reader(source)
+    try:
+        check = _check(conn)
+        target = _fresh_path(source)
+        copied = unreadable = dropped = 0
+        try:
+            with RunHistory(target) as history:
+                writers = WriterCheck()
+                columns = _run_columns(conn)
+                for run_id in _run_ids(conn):
+                    try:
+                        found = _one(conn, columns, run_id)
+                        if found is None:
+                            continue  # no run with that id
+                        row, blob = found
+                        try:
+                            curves = () if blob is None else rows.curves(*blob)
+                        except rows.BadRow:
+                            curves, dropped = (), dropped + 1
+                        record = rows.record(row, curves, writers)
+                    except (sqlite3.Error, rows.BadRow):
+                        unreadable += 1
+                        continue
+                    alive = record.summary.status is RunStatus.RUNNING
+                    history.restore_run(record, writer=row[10] if alive else None)
+                    copied += 1
+        except BaseException:
+            target.unlink(missing_ok=True)
+            raise
+        if not copied:
+            target.unlink(missing_ok=True)
+        return Recovery(source, target if copied else None, copied, unreadable, dropped, check)
+    finally:
+        conn.close()

@@ -1,0 +1,214 @@
+"""Writing the files a user names: checked before any work, written atomically.
+
+`check_output_path(path)` says before a long run whether a file can be written
+there at all: a file name is given, its folder exists and is writable, and the
+name is not a folder, a device, a pipe or anything else that is not a regular
+file (through a symbolic link, of the file it points to). `write_atomically(path,
+data)` checks again and writes through a temporary file in the target's folder
+(`.NAME.PID.RANDOM.tmp`), flushed to disk and renamed into place, so a crash
+never leaves half a file. A path that is a symbolic link writes the file it
+points to (the link stays); a new file gets the permissions the umask gives, a
+replaced one keeps its own. Termination signals that arrive during the write
+wait until it is done, and temporary files that a killed writer left behind
+are removed by the next write to the same name. Every refusal is an
+`OutputPathError` of one line that names the path.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import secrets
+import signal
+import stat
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+__all__ = ["OutputPathError", "check_output_path", "remove_stale_temp_files", "write_atomically"]
+
+_STALE_AFTER = 60.0  # seconds: a temporary file without a writer's pid this old is left over
+
+
+class OutputPathError(ValueError):
+    """A path a file cannot be written to; the message names it and says why."""
+
+
+def _real_target(path: Path) -> Path:
+    """Where writing `path` lands: through symbolic links to the file they name."""
+    return Path(os.path.realpath(path)) if path.is_symlink() else path
+
+
+def check_output_path(path: str | Path) -> Path:
+    """`path` as a `Path` when a file can be written there; else `OutputPathError`."""
+    text = str(path)
+    if not text.strip():
+        raise OutputPathError("the path is empty: give a file name")
+    given = Path(path).expanduser()
+    if text.endswith(os.sep):
+        raise OutputPathError(f"{given}: a file name is needed, not a folder")
+    target = _real_target(given)
+    folder = target.parent
+    try:
+        folder_stat = folder.stat()
+    except FileNotFoundError:
+        raise OutputPathError(f"{given}: the folder {folder} does not exist") from None
+    except OSError as exc:
+        raise OutputPathError(f"{given}: cannot use the folder {folder} ({exc.strerror})") from None
+    if not stat.S_ISDIR(folder_stat.st_mode):
+        raise OutputPathError(f"{given}: {folder} is not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise OutputPathError(f"{given}: the folder {folder} is not writable")
+    try:
+        mode = target.stat().st_mode
+    except FileNotFoundError:
+        return given
+    except OSError as exc:
+        raise OutputPathError(f"{given}: cannot use this path ({exc.strerror})") from None
+    if stat.S_ISDIR(mode):
+        raise OutputPathError(f"{given}: is a folder; give a file name")
+    if not stat.S_ISREG(mode):
+        raise OutputPathError(f"{given}: is not a regular file; will not write over it")
+    return given
+
+
+def write_atomically(path: str | Path, data: bytes | str) -> Path:
+    """Write `data` (text as UTF-8) to `path` through a temporary file, fsync and a
+    rename; returns `path` (`OutputPathError` when it cannot be written there, OSError
+    when the write itself fails)."""
+    given = check_output_path(path)
+    payload = data.encode("utf-8") if isinstance(data, str) else data
+    target = _real_target(given)
+    folder = target.parent if str(target.parent) else Path(".")
+    remove_stale_temp_files(target)
+    try:
+        mode = stat.S_IMODE(target.stat().st_mode)
+    except FileNotFoundError:
+        mode = None
+    with _signals_deferred():
+        tmp, fd = _create_temp(folder, target.name)
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(payload)
+                fh.flush()
+                if mode is not None:
+                    os.fchmod(fh.fileno(), mode)
+                os.fsync(fh.fileno())
+            os.replace(tmp, target)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
+    _fsync_folder(folder)
+    return given
+
+
+def _temp_pattern(name: str) -> re.Pattern[str]:
+    # `.NAME.PID.HEX.tmp` (ours) and `.NAME.XXXXXXXX.tmp` (from tempfile, by earlier versions).
+    return re.compile(rf"\.{re.escape(name)}\.(?:(\d+)\.[0-9a-f]+|[a-z0-9_]{{8}})\.tmp")
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError, ValueError):
+        return True  # someone else's process, or not a pid at all: leave its file alone
+    return True
+
+
+def remove_stale_temp_files(path: Path) -> list[Path]:
+    """Remove temporary files a killed writer left beside `path`; returns what was removed.
+
+    Only names of our own pattern go: those whose writer's pid is gone, and
+    older unnamed ones.
+    """
+    pattern = _temp_pattern(path.name)
+    folder = path.parent if str(path.parent) else Path(".")
+    removed: list[Path] = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    now = time.time()
+    for entry in entries:
+        match = pattern.fullmatch(entry.name)
+        if match is None:
+            continue
+        try:
+            info = entry.stat(follow_symlinks=False)
+            if not stat.S_ISREG(info.st_mode):
+                continue
+            pid = match.group(1)
+            stale = (
+                not _pid_alive(int(pid)) if pid is not None
+                else now - info.st_mtime > _STALE_AFTER
+            )
+            if stale:
+                os.unlink(entry.path)
+                removed.append(Path(entry.path))
+        except OSError:
+            continue
+    return removed
+
+
+@contextlib.contextmanager
+def _signals_deferred() -> Iterator[None]:
+    """Hold SIGTERM, SIGHUP and SIGINT until the block is done, then deliver them.
+
+    A write takes milliseconds; finishing it (or removing its temporary file) first
+    means a signal never leaves one behind. Only signals that still have their
+    default action are held (a program's own handlers stay as they are), and only
+    the main thread can set handlers; elsewhere the block runs as is.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[int] = []
+    previous: dict[int, Any] = {}
+    for name in ("SIGTERM", "SIGHUP", "SIGINT"):
+        sig = getattr(signal, name, None)
+        if sig is None:
+            continue
+        try:
+            handler = signal.getsignal(sig)
+            if handler not in (signal.SIG_DFL, signal.default_int_handler):
+                continue
+            previous[sig] = handler
+            signal.signal(sig, lambda signum, frame: caught.append(signum))
+        except (ValueError, OSError):
+            continue
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        for sig in dict.fromkeys(caught):
+            signal.raise_signal(sig)
+
+
+def _create_temp(folder: Path, name: str) -> tuple[Path, int]:
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0)
+    while True:
+        tmp = folder / f".{name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
+        try:
+            return tmp, os.open(tmp, flags, 0o666)  # the umask applies, as for any new file
+        except FileExistsError:
+            continue
+
+
+def _fsync_folder(folder: Path) -> None:
+    """Make the rename itself durable (where the platform allows it)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)

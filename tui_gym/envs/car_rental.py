@@ -1,0 +1,184 @@
+"""`CarRentalEnv`: Sutton & Barto's Example 4.2, Jack's car rental (and Exercise 4.7's variant).
+
+`car_rental_arrays(exercise)` gives the exact transitions the model is built
+from: the day's rentals and returns at each site are independent, so each
+site's chances of ending the day with each number of cars (and the rentals
+expected on the way there) are computed once and multiplied. An outcome is
+the next state; its reward is the night's costs and the rentals expected
+given that outcome, so every expected reward is exact while the arrays stay
+441 outcomes wide. The env itself draws the day's requests and returns.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import numpy.typing as npt
+from gymnasium import spaces
+
+from tui_gym.envs.tile_map import TileArrays
+
+__all__ = ["MAX_CARS", "MAX_MOVE", "MOVES", "CarRentalEnv", "car_rental_arrays", "night",
+           "nights"]
+
+MAX_CARS = 20  # at each site; more are sent back to the company
+MAX_MOVE = 5  # cars moved overnight, either way
+MOVES = tuple(range(-MAX_MOVE, MAX_MOVE + 1))  # action a moves MOVES[a] cars, first to second
+RENT = 10.0  # dollars a car rented
+MOVE_COST = 2.0  # dollars a car moved
+PARKING, PARKED = 4.0, 10  # Exercise 4.7: dollars for a site keeping more than 10 cars
+REQUESTS = (3.0, 4.0)  # Poisson means, first and second site
+RETURNS = (3.0, 2.0)
+SIDE = MAX_CARS + 1
+FloatArray = npt.NDArray[np.float64]
+
+
+def night(cars: tuple[int, int], move: int, exercise: bool) -> tuple[int, int, int, float]:
+    """The cars moved (at most those there), each site's cars in the morning, and the
+    night's cost (moves, and with `exercise` one free move to the second site and
+    parking over 10 cars)."""
+    moved, first, second, cost = nights(np.asarray(cars[0]), np.asarray(cars[1]),
+                                        np.asarray(move), exercise)
+    return int(moved), int(first), int(second), float(cost)
+
+
+def nights(first: np.ndarray, second: np.ndarray, move: np.ndarray,
+           exercise: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, FloatArray]:
+    """`night` over arrays of cars and moves, broadcast."""
+    moved = np.where(move >= 0, np.minimum(move, first), -np.minimum(-move, second))
+    at_first = np.minimum(MAX_CARS, first - moved)
+    at_second = np.minimum(MAX_CARS, second + moved)
+    paid = np.abs(moved) - (exercise & (moved > 0))
+    cost = MOVE_COST * paid
+    if exercise:
+        cost = cost + PARKING * ((at_first > PARKED).astype(int) + (at_second > PARKED))
+    return moved, at_first, at_second, cost.astype(np.float64)
+
+
+def _poisson(mean: float) -> FloatArray:
+    """P(k) for k = 0 .. SIDE - 1, and P(k >= SIDE) as the last entry."""
+    pmf = np.array([math.exp(-mean) * mean**k / math.factorial(k) for k in range(SIDE)])
+    return np.append(pmf, max(0.0, 1.0 - pmf.sum()))
+
+
+def _site(request: float, ret: float) -> tuple[FloatArray, FloatArray]:
+    """`[m, n]` twice: the chance that a site with `m` cars in the morning has `n` at night,
+    and the rentals expected given that it does."""
+    asked, back = _poisson(request), _poisson(ret)
+    chance = np.zeros((SIDE, SIDE))
+    rented = np.zeros((SIDE, SIDE))
+    for m in range(SIDE):
+        for k, p_ask in enumerate(asked):  # k = SIDE stands for "SIDE or more": all rented
+            rent = min(k, m)
+            for j, p_back in enumerate(back):
+                n = min(MAX_CARS, m - rent + j)
+                chance[m, n] += p_ask * p_back
+                rented[m, n] += p_ask * p_back * rent
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return chance, np.where(chance > 0, rented / chance, 0.0)
+
+
+def car_rental_arrays(exercise: bool = False) -> TileArrays:
+    """The exact transitions: states `first * 21 + second`, actions `MOVES`, every next
+    state an outcome (its reward: the rentals expected given it, less the night's costs).
+    Episodes start uniformly on every state."""
+    n = SIDE * SIDE
+    first_site, second_site = _site(REQUESTS[0], RETURNS[0]), _site(REQUESTS[1], RETURNS[1])
+    first, second = np.divmod(np.arange(n), SIDE)
+    _, at_first, at_second, cost = nights(first[:, None], second[:, None],
+                                          np.array(MOVES)[None, :], exercise)
+    prob = first_site[0][at_first][..., :, None] * second_site[0][at_second][..., None, :]
+    rented = first_site[1][at_first][..., :, None] + second_site[1][at_second][..., None, :]
+    reward = RENT * rented - cost[..., None, None]
+    shape = (n, len(MOVES), n)
+    next_state = np.broadcast_to(np.arange(n), shape).copy()
+    return TileArrays(next_state, prob.reshape(shape), reward.reshape(shape),
+                      np.zeros(shape, dtype=bool), np.full(n, 1.0 / n))
+
+
+class CarRentalEnv(gym.Env[Any, Any]):
+    """Sutton & Barto's Example 4.2: Jack moves cars between his two sites overnight.
+
+    ## Action Space
+    The cars moved from the first site to the second, -5 to +5 (action `a`
+    moves `a - 5`; negative numbers move cars the other way); at most the cars
+    the site has are moved.
+
+    ## Observation Space
+    The cars at each site at the end of the day, `first * 21 + second`.
+
+    ## Rewards
+    $10 for every car rented, less $2 for every car moved. Requests are
+    Poisson with means 3 and 4 at the first and second site, returns Poisson
+    with means 3 and 2, available the next day; a site holds at most 20 cars.
+    With `exercise` (Exercise 4.7) one car moved to the second site is free,
+    and a site keeping more than 10 cars overnight costs $4.
+
+    ## Starting State
+    Any number of cars at each site, uniformly.
+
+    ## Episode End
+    Never: the task is continuing. The game puts a limit on an episode.
+
+    ## Arguments
+    `exercise` (False), `render_mode` "ansi".
+    """
+
+    metadata: dict[str, Any] = {"render_modes": ["ansi"], "render_fps": 4}
+    action_names = tuple("0" if move == 0 else f"{move:+d}" for move in MOVES)
+
+    def __init__(self, exercise: bool = False, render_mode: str | None = None) -> None:
+        if render_mode not in (None, "ansi"):
+            raise ValueError(f"CarRental renders 'ansi' only, got {render_mode!r}")
+        self.exercise = bool(exercise)
+        self.observation_space = spaces.Discrete(SIDE * SIDE)
+        self.action_space = spaces.Discrete(len(MOVES))
+        self.initial_state_distrib = np.full(SIDE * SIDE, 1.0 / SIDE**2)
+        self.render_mode = render_mode
+        self.s: int | None = None
+        self.lastaction: int | None = None
+        self.last_day: dict[str, Any] = {}
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[int, dict[str, Any]]:
+        super().reset(seed=seed)
+        self.s = int(self.np_random.integers(SIDE * SIDE))
+        self.lastaction = None
+        self.last_day = {}
+        return self.s, {}
+
+    def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
+        if self.s is None:
+            raise gym.error.ResetNeeded("CarRental: call reset() before step()")
+        if not self.action_space.contains(action):
+            raise ValueError(f"CarRental: action must be an integer in [0, {len(MOVES) - 1}], "
+                             f"got {action!r}")
+        moved, *morning, cost = night(divmod(self.s, SIDE), MOVES[int(action)], self.exercise)
+        rng = self.np_random
+        asked = [int(rng.poisson(mean)) for mean in REQUESTS]
+        back = [int(rng.poisson(mean)) for mean in RETURNS]
+        rented = [min(k, m) for k, m in zip(asked, morning, strict=True)]
+        cars = [min(MAX_CARS, m - r + b) for m, r, b in zip(morning, rented, back, strict=True)]
+        self.s = cars[0] * SIDE + cars[1]
+        self.lastaction = int(action)
+        self.last_day = {"moved": moved, "cost": cost, "requested": asked, "rented": rented,
+                         "returned": back}
+        return self.s, RENT * sum(rented) - cost, False, False, dict(self.last_day)
+
+    def render(self) -> str | None:
+        if self.render_mode is None:
+            gym.logger.warn("CarRental: no render_mode given; pass render_mode='ansi'")
+            return None
+        if self.s is None:
+            return ""
+        first, second = divmod(self.s, SIDE)
+        text = f"first site {first} cars, second site {second} cars\n"
+        day = self.last_day
+        if day:
+            text = (f"  (moved {day['moved']:+d}, rented {day['rented'][0]}+{day['rented'][1]},"
+                    f" returned {day['returned'][0]}+{day['returned'][1]})\n") + text
+        return text

@@ -1,0 +1,83 @@
+"""`TableEnv`: a Gymnasium env that plays its own transition arrays, toy-text style.
+
+The arrays (`TileArrays`: next state, probability, reward and terminated per
+state, action and outcome, and the start distribution) are the one source for
+the env and for the exact model built from them without making an env. The
+env draws each step's outcome from them, keeps its state in `s` and its last
+action in `lastaction` as Gymnasium's toy-text envs do, and hands out the
+toy-text table `P` when asked. A subclass draws its text picture (`picture`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from tui_gym.envs.tile_map import TileArrays, _table
+
+__all__ = ["TableEnv"]
+
+
+class TableEnv(gym.Env[Any, Any]):
+    """An env stepped by drawing from transition arrays (see the module docstring)."""
+
+    metadata: dict[str, Any] = {"render_modes": ["ansi"], "render_fps": 4}
+    action_names: tuple[str, ...] = ()
+
+    def __init__(self, arrays: TileArrays, render_mode: str | None = None) -> None:
+        if render_mode not in (None, "ansi"):
+            raise ValueError(f"{type(self).__name__} renders 'ansi' only, got {render_mode!r}")
+        n_states, n_actions, _ = arrays.prob.shape
+        self.arrays = arrays
+        self.initial_state_distrib = arrays.initial.copy()
+        self.observation_space = spaces.Discrete(n_states)
+        self.action_space = spaces.Discrete(n_actions)
+        self.render_mode = render_mode
+        self.s: int | None = None
+        self.lastaction: int | None = None
+        self._P: dict[int, dict[int, list[tuple[float, int, float, bool]]]] | None = None
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[int, dict[str, Any]]:
+        super().reset(seed=seed)
+        weights = self.initial_state_distrib
+        self.s = int(self.np_random.choice(len(weights), p=weights))
+        self.lastaction = None
+        return self.s, {"prob": float(weights[self.s])}
+
+    def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
+        if self.s is None:
+            raise gym.error.ResetNeeded(f"{type(self).__name__}: call reset() before step()")
+        if not self.action_space.contains(action):
+            raise ValueError(f"{type(self).__name__}: action must be an integer in "
+                             f"[0, {self.arrays.prob.shape[1] - 1}], got {action!r}")
+        arrays, s, a = self.arrays, self.s, int(action)
+        weights = arrays.prob[s, a]
+        index = int(np.searchsorted(np.cumsum(weights), self.np_random.random(), side="right"))
+        index = min(index, int(np.flatnonzero(weights)[-1]))
+        self.s = int(arrays.next_state[s, a, index])
+        self.lastaction = a
+        return (self.s, float(arrays.reward[s, a, index]), bool(arrays.terminal[s, a, index]),
+                False, {"prob": float(weights[index])})
+
+    @property
+    def P(self) -> dict[int, dict[int, list[tuple[float, int, float, bool]]]]:  # noqa: N802
+        """The toy-text table `P[s][a] = [(prob, next_state, reward, terminated), ...]`."""
+        if self._P is None:
+            self._P = _table(self.arrays)
+        return self._P
+
+    def render(self) -> str | None:
+        if self.render_mode is None:
+            gym.logger.warn(f"{type(self).__name__}: no render_mode given; pass "
+                            "render_mode='ansi'")
+            return None
+        return self.picture()
+
+    def picture(self) -> str:
+        """The state as text."""
+        return f"state {self.s}\n"

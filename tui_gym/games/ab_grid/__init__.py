@@ -1,0 +1,83 @@
+"""ab-grid: Sutton & Barto's Example 3.5, the 5 x 5 grid with the special cells A and B.
+
+## Action Space
+up (0), down (1), left (2), right (3).
+
+## Observation Space
+The cell, `row * 5 + col`.
+
+## Rewards
+From A (row 0, col 1) any move pays +10 and lands on A′ (row 4, col 1); from
+B (row 0, col 3) +5 and lands on B′ (row 2, col 3); a move off the grid pays
+-1 and stays; every other move pays 0.
+
+## Starting State
+Any cell, uniformly.
+
+## Episode End
+The book's task never ends; tui-gym plays it in episodes of `EPISODE_LIMIT`
+steps (truncated), and its exact values count those steps undiscounted, as
+for every game. The book's values are discounted by 0.9 with no end: the
+Plan view and `tui-gym plan` show those (Figures 3.2 and 3.5).
+
+## Arguments
+None.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from tui_gym.envs.dp_grid import AB_JUMPS, grid_arrays
+from tui_gym.envs.tile_map import TileArrays
+from tui_gym.games.base import Narrator
+from tui_gym.games.dp_grid import DPGridGame
+from tui_gym.games.words import format_reward, plural
+
+__all__ = ["EPISODE_LIMIT", "ABGridGame"]
+
+EPISODE_LIMIT = 50  # steps (the env's registration)
+
+
+class ABGridNarrator(Narrator):
+    """Every episode runs to the limit: how much it collected on the way."""
+
+    tally_words = ()  # every episode runs to the limit: the count says it all
+
+    def tally_word(self, last: Any) -> str:
+        return "episodes"
+
+    def outcome_text(self, last: Any, first_info: Mapping[str, Any],
+                     scene: Mapping[str, Any]) -> str:
+        return (f"{plural(last.steps, 'step')} played, return "
+                f"{format_reward(last.episode_return)} (the task never ends: the limit did)")
+
+    def progress_text(self, last: Any, first_info: Mapping[str, Any]) -> str:
+        if not last.steps:
+            return ""
+        return f"{plural(last.steps, 'step')}, return so far {format_reward(last.episode_return)}"
+
+
+class ABGridGame(DPGridGame):
+    """Collect +10 at A and +5 at B on the book's 5 x 5 grid."""
+
+    name = "ab-grid"
+    title = "AB grid"
+    env_id = "tui_gym/ABGrid-v0"
+    key = "B"
+    description = "Example 3.5's 5x5 grid: any move from A pays +10 (to A′), from B +5 (to B′)."
+    teaches = "discounting in a task that never ends: why A beats B though A′ is farther"
+    rows = cols = 5
+    letters = {(0, 1): "A", (0, 3): "B"}
+    primes = {(4, 1): "A′", (2, 3): "B′"}
+    jumps = AB_JUMPS
+    plan_gamma = 0.9
+    hyperparameters = {"*": {"discount": 0.9, "learning_rate": 0.1, "episodes": 2_000}}
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.narrator = ABGridNarrator(self)
+
+    def arrays(self) -> TileArrays:
+        return grid_arrays(5, 5, step=0.0, edge=-1.0, jumps=AB_JUMPS)

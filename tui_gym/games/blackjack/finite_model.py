@@ -1,0 +1,131 @@
+"""Blackjack as a `FiniteMDP`, for planning sweep by sweep (the Plan view, `tui-gym plan`).
+
+The states are the game's base states, in their order (player sum 4-21
+without a usable ace, then 12-21 with one, each against dealer cards A-10),
+followed by the opening natural against each dealer card: the hidden state
+behind the soft-21 observation that pays differently under the `natural`
+and `sab` rules (see `solver`). Actions are stick (0) and hit (1). A hit
+that does not bust goes on, with the step's reward; a bust ends the hand;
+a stick ends it with a loss, a push or a win, with the chances of the
+dealer's final hand against the player's total (an infinite deck, exactly
+as `solver` computes them). Hands start as dealt: the player's two cards
+and the dealer's up card.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+
+import numpy as np
+
+from tui_gym.core.mdp import FiniteMDP
+from tui_gym.games.blackjack.solver import (
+    _BUST,
+    _CARD_PROBS,
+    _D17,
+    _D21,
+    _DBUST,
+    _DNAT,
+    _HIT_MATRIX,
+    _INITIAL,
+    _N_LIVE,
+    _NATURAL,
+    _STATE_OBS,
+    _STATE_TOTAL,
+    DEFAULT_RULES,
+    BlackjackRules,
+    _dealer_final,
+)
+
+__all__ = ["N_BASE", "blackjack_model", "natural_base_rows", "observation_rows"]
+
+DEALERS = 10
+N_BASE = (18 + 10) * DEALERS  # the game's base states: 4-21 hard and 12-21 soft, per dealer card
+
+
+def _base_index(total: int, usable: int, dealer: int) -> int:
+    """The base state (game order) of an observation; `dealer` 1-10."""
+    if usable:
+        return 180 + (total - 12) * DEALERS + dealer - 1
+    return (total - 4) * DEALERS + dealer - 1
+
+
+def natural_base_rows() -> np.ndarray:
+    """`[10]`: the base state (a soft 21 against each dealer card) each natural plays as."""
+    return np.array([_base_index(21, 1, d) for d in range(1, DEALERS + 1)], dtype=np.int64)
+
+
+def observation_rows() -> np.ndarray:
+    """The row of the learners' table (the observation keyer's: mixed radix 32 x 11 x 2
+    over (player_sum, dealer_card, usable_ace)) of each model state; a natural's is
+    the soft 21's, which it shows as."""
+    totals = np.r_[np.repeat(np.arange(4, 22), DEALERS), np.repeat(np.arange(12, 22), DEALERS),
+                   np.full(DEALERS, 21)]
+    dealers = np.tile(np.arange(1, DEALERS + 1), 18 + 10 + 1)
+    usable = np.r_[np.zeros(18 * DEALERS), np.ones(11 * DEALERS)].astype(np.int64)
+    rows = (totals * 11 + dealers) * 2 + usable
+    rows.setflags(write=False)
+    return rows
+
+
+def _model_index() -> np.ndarray:
+    """`[29, 10]`: the model state of each of the solver's live states per dealer card."""
+    index = np.empty((_N_LIVE, DEALERS), dtype=np.int64)
+    for i, (total, usable) in enumerate(_STATE_OBS):
+        for d in range(1, DEALERS + 1):
+            index[i, d - 1] = (N_BASE + d - 1 if i == _NATURAL
+                               else _base_index(total, usable, d))
+    return index
+
+
+def _stick_chances(rules: BlackjackRules) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`[29, 10]` each: the chances that a stick loses, pushes and wins."""
+    final = _dealer_final()
+    made = np.column_stack([final[:, _D17:_D21], final[:, _D21] + final[:, _DNAT]])
+    scores = np.arange(17, 22)
+    win = np.empty((_N_LIVE, DEALERS))
+    lose = np.empty((_N_LIVE, DEALERS))
+    for s in range(_N_LIVE):
+        total = _STATE_TOTAL[s]
+        win[s] = final[:, _DBUST] + made[:, scores < total].sum(axis=1)
+        lose[s] = made[:, scores > total].sum(axis=1)
+    if rules.sab:  # a natural beats every dealer hand but a natural
+        win[_NATURAL], lose[_NATURAL] = 1.0 - final[:, _DNAT], 0.0
+    elif rules.natural:  # it pays more, and draws against any dealer 21
+        win[_NATURAL], lose[_NATURAL] = 1.0 - made[:, -1], 0.0
+    return lose, np.maximum(0.0, 1.0 - win - lose), win
+
+
+@cache
+def blackjack_model(rules: BlackjackRules = DEFAULT_RULES) -> FiniteMDP:
+    """The game's model under `rules` (kept per rules)."""
+    lose_pay, push_pay, win_pay, natural_pay = rules.payoffs
+    index = _model_index()
+    n_states = N_BASE + DEALERS
+    width = _N_LIVE + 1  # a hit: any live state or a bust; a stick: three endings
+    next_state = np.repeat(np.arange(n_states)[:, None, None], 2, axis=1)
+    next_state = np.repeat(next_state, width, axis=2)
+    prob = np.zeros((n_states, 2, width))
+    reward = np.zeros((n_states, 2, width))
+    terminal = np.zeros((n_states, 2, width), dtype=bool)
+    lose, push, win = _stick_chances(rules)
+    paid = np.full(_N_LIVE, win_pay)
+    if rules.natural and not rules.sab:
+        paid[_NATURAL] = natural_pay
+    rows = index.reshape(-1)  # live state major, dealer card minor
+    live = np.repeat(np.arange(_N_LIVE), DEALERS)
+    for k, (chance, pay) in enumerate(((lose, lose_pay), (push, push_pay), (win, None))):
+        prob[rows, 0, k] = chance.reshape(-1)
+        reward[rows, 0, k] = paid[live] if pay is None else pay
+        terminal[rows, 0, k] = True
+    for j in range(_N_LIVE):
+        prob[rows, 1, j] = _HIT_MATRIX[live, j]
+        next_state[rows, 1, j] = index[j][np.tile(np.arange(DEALERS), _N_LIVE)]
+        reward[rows, 1, j] = push_pay
+    prob[rows, 1, _N_LIVE] = _HIT_MATRIX[live, _BUST]
+    reward[rows, 1, _N_LIVE] = lose_pay
+    terminal[rows, 1, _N_LIVE] = True
+    initial = np.zeros(n_states)
+    initial[rows] = (_INITIAL[:, None] * _CARD_PROBS[None, :]).reshape(-1)
+    return FiniteMDP(next_state, prob, reward, terminal, initial,
+                     action_names=("stick", "hit"))

@@ -1,0 +1,205 @@
+"""gambler: Sutton & Barto's Example 4.3, the gambler's problem.
+
+## Action Space
+The stake, 1 to 50 (action `a` stakes `a + 1`); a stake larger than the
+capital, or than what is missing to the goal, stakes that much instead.
+
+## Observation Space
+The capital, 0 to `goal`.
+
+## Rewards
++1 on reaching the goal, 0 otherwise: the value of a capital is the chance
+of reaching the goal from it.
+
+## Starting State
+Any capital from 1 to `goal - 1`, uniformly.
+
+## Episode End
+Terminated at the goal or at 0; truncated after `EPISODE_LIMIT` bets.
+
+## Arguments
+`p_heads` (0.4, the chance of winning a bet), `goal` (100).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from tui_gym.core.heatmap import Heatmap
+from tui_gym.core.mdp import FiniteMDP
+from tui_gym.core.params import Param
+from tui_gym.envs.gambler import MAX_STAKE, GamblerEnv, gambler_arrays, stake_of
+from tui_gym.games.base import UNREADABLE, HeatmapLayout, Narrator, TallyWord
+from tui_gym.games.model import DiscreteStates, ModelGame
+from tui_gym.games.planning import PlanModel, StateLine
+from tui_gym.games.words import plural
+
+__all__ = ["EPISODE_LIMIT", "GamblerGame"]
+
+EPISODE_LIMIT = 1000  # bets (the env's registration)
+ROW = 10  # capitals a heatmap row
+TIED = "·"
+
+
+@lru_cache(maxsize=16)
+def _model(p_heads: float, goal: int) -> FiniteMDP:
+    arrays = gambler_arrays(p_heads, goal)
+    return FiniteMDP(arrays.next_state, arrays.prob, arrays.reward, arrays.terminal,
+                     arrays.initial, action_names=GamblerEnv.action_names)
+
+
+def _goal(kwargs: Mapping[str, Any]) -> int:
+    return int(kwargs.get("goal", 100))
+
+
+def stakes(goal: int) -> np.ndarray:
+    """`[capital, action]`: the stake each action puts down at each capital."""
+    return np.array([[stake_of(c, a, goal) for a in range(MAX_STAKE)] for c in range(goal + 1)],
+                    dtype=np.float64)
+
+
+class GamblerStates(DiscreteStates):
+    """The capital; the dial board's scene."""
+
+    def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
+        return f"capital ${int(observation)} of ${_goal(kwargs)}"
+
+    def read_scene(self, game_env: Any, before: Mapping[str, Any]) -> dict[str, Any]:
+        capital, goal = game_env.s, int(game_env.goal)
+        if capital is None:
+            return {}
+        capital = int(capital)
+        lines = []
+        if game_env.lastaction is not None and game_env.last_flip:
+            won = game_env.last_flip == "heads"
+            lines.append(f"{{who}} staked ${game_env.last_stake}: {game_env.last_flip}, "
+                         f"{'won' if won else 'lost'}")
+        return {
+            "title": "Gambler",
+            "bars": [["capital", capital, goal]],
+            "lines": lines,
+            "actions": list(self.game.action_names),
+            "labels": [f"${k}" for k in range(1, MAX_STAKE + 1)],
+            "allowed": max(1, min(capital, goal - capital)),
+            "unit": "$",
+            "prompt": f"Stake on heads (chance {game_env.p_heads:g}); reach ${goal} to win.",
+        }
+
+
+class GamblerLayout(HeatmapLayout):
+    """The capitals in rows of ten: max Q colours each, the greedy stake in it."""
+
+    def heatmaps(
+        self,
+        q: np.ndarray,
+        kwargs: Mapping[str, Any],
+        focus: Any = None,
+        marks: Any = None,
+    ) -> list[Heatmap]:
+        goal = _goal(kwargs)
+        try:
+            values = np.asarray(q, dtype=float).reshape(goal + 1, MAX_STAKE)
+        except UNREADABLE:
+            return []
+        has_marks = isinstance(marks, np.ndarray) and marks.shape == values.shape
+        rows = goal // ROW + 1
+        grid = np.full((rows, ROW), np.nan)
+        marked = np.zeros((rows, ROW), dtype=bool)
+        labels = [[""] * ROW for _ in range(rows)]
+        for capital in range(goal + 1):
+            r, c = divmod(capital, ROW)
+            if capital in (0, goal):
+                labels[r][c] = "✗" if capital == 0 else "★"
+                continue
+            legal = values[capital, : min(capital, goal - capital)]
+            grid[r, c] = float(legal.max())
+            if len(legal) > 1 and (legal == legal[0]).all():
+                labels[r][c] = TIED
+                continue
+            action = int(np.argmax(legal))
+            labels[r][c] = str(action + 1)
+            marked[r, c] = has_marks and not marks[capital, action]
+        return [
+            Heatmap(
+                title="max Q and the greedy stake",
+                row_labels=tuple(f"{r * ROW}+" for r in range(rows)),
+                col_labels=tuple(str(c) for c in range(ROW)),
+                values=grid,
+                labels=tuple(tuple(line) for line in labels),
+                marked=marked,
+                legend=f"rows: capital by tens  number: greedy stake  {TIED} tie  ✗ ruined  "
+                       "★ goal  * not an optimal stake",
+            )
+        ]
+
+
+class GamblerNarrator(Narrator):
+    """Reached the goal, ruined, or out of bets."""
+
+    tally_words = (TallyWord("won", "good"), TallyWord("ruined", "bad"),
+                   TallyWord("timed out", always=False))
+    agreement_words = "stakes as the optimum"
+
+    def tally_word(self, last: Any) -> str:
+        if not last.terminated:
+            return "timed out"
+        return "won" if last.episode_return > 0 else "ruined"
+
+    def outcome_text(self, last: Any, first_info: Mapping[str, Any],
+                     scene: Mapping[str, Any]) -> str:
+        bets = plural(last.steps, "bet")
+        if not last.terminated:
+            return f"Out of time after {bets}"
+        if last.episode_return > 0:
+            return f"Reached the goal after {bets}: +1"
+        return f"Ruined after {bets}"
+
+    def progress_text(self, last: Any, first_info: Mapping[str, Any]) -> str:
+        return f"{plural(last.steps, 'bet')} so far" if last.steps else ""
+
+
+class GamblerGame(ModelGame):
+    """Bet on coin flips to reach the goal before losing everything."""
+
+    name = "gambler"
+    title = "Gambler"
+    env_id = "tui_gym/Gambler-v0"
+    key = "G"
+    description = "Example 4.3: stake on coin flips (heads 0.4) to reach $100 before ruin."
+    teaches = "value iteration: bold play, and many equally optimal policies"
+    action_names = GamblerEnv.action_names
+    params = (
+        Param("p_heads", float, 0.4, 0.01, 0.99, help="the chance of heads, which wins a bet",
+              owner="Gambler"),
+        Param("goal", int, 100, 2, 2 * MAX_STAKE, help="the capital that wins", owner="Gambler"),
+    )
+    board = "dial"
+    episode_noun = "game"
+    # Many stakes are worth almost the same, so sampled returns barely tell them apart and
+    # the max over 50 noisy estimates runs high; discounting keeps that bias from
+    # compounding and favours the bold play that is optimal (see the README).
+    hyperparameters = {"*": {"discount": 0.9, "learning_rate": 0.05, "episodes": 20_000}}
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.states = GamblerStates(self)
+        self.layout = GamblerLayout(self)
+        self.narrator = GamblerNarrator(self)
+
+    def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP:
+        return _model(float(kwargs.get("p_heads", 0.4)), _goal(kwargs))
+
+    def gap_tolerance(self, kwargs: Mapping[str, Any]) -> float:
+        """A fifth of the optimum: learners get within it, not much closer (the README)."""
+        return 0.2
+
+    def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel:
+        goal = _goal(kwargs)
+        capital = np.arange(1, goal)
+        line = StateLine("capital", capital, capital.astype(float), stakes(goal), "stake")
+        return PlanModel(self.base_model(kwargs), self.plan_gamma, self.episode_limit(kwargs),
+                         line=line)

@@ -1,0 +1,41 @@
+"""Sutton & Barto's figures, run and checked: the registry behind `tui-gym book`.
+
+Each figure is one module here holding a `FIGURE` (see `figure`), listed in
+`FIGURE_MODULES`; `figures()` imports and returns them in the book's order,
+`figure_named("4.3")` finds one (by its number, or an alias such as "example
+4.2"). The dynamic-programming figures are exact: they run the planner
+(`tui_gym.core.mdp.planning`) on the book's worlds and take no runs or seeds.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+from tui_gym.session.book.figure import BookFigure
+
+__all__ = ["FIGURE_MODULES", "BookFigure", "figure_named", "figures"]
+
+# One module a figure (in the book's order).
+FIGURE_MODULES = (
+    "fig_3_2",
+    "fig_3_5",
+    "fig_4_1",
+    "fig_4_2",
+    "fig_4_3",
+)
+
+
+def figures() -> list[BookFigure]:
+    """Every figure, in the book's order."""
+    found = [importlib.import_module(f"{__name__}.{module}").FIGURE for module in FIGURE_MODULES]
+    return sorted(found, key=lambda f: tuple(int(part) for part in f.name.split(".")))
+
+
+def figure_named(name: str) -> BookFigure:
+    """The figure with this number or alias; `ValueError` naming the figures otherwise."""
+    text = name.strip().lower().removeprefix("figure").strip()
+    for figure in figures():
+        if text == figure.name or text in figure.aliases:
+            return figure
+    names = ", ".join(f.name for f in figures())
+    raise ValueError(f"no book figure {name!r}; the figures: {names}")

@@ -1,0 +1,123 @@
+"""What a book figure is and what it gives back: `BookFigure`, `FigureOptions`, `FigureResult`.
+
+A figure is one module under `tui_gym.session.book` holding a `FIGURE`: its
+number as the book prints it ("4.3"), a title, a short paragraph of what it
+shows, the world it runs on, its default run and episode counts (None where
+they do not apply: an exact figure is computed, not sampled), and `run`, which
+takes the `FigureOptions` and a progress callback and returns a
+`FigureResult`: its `series` (the curves the book plots, with a band where
+runs vary), the grids it draws (heatmap panels), and its `checks`, each of
+the book's claims beside the measured figure with a verdict.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from tui_gym.core.heatmap import Heatmap
+
+__all__ = ["BookFigure", "Chart", "Check", "FigureOptions", "FigureResult", "Progress", "Series"]
+
+Progress = Callable[[int, int, str], None]  # (done, total, what is being done)
+
+
+@dataclass(frozen=True)
+class FigureOptions:
+    """How a figure is run: `runs` and `episodes` (None: the figure's defaults) and the
+    first `seed`."""
+
+    runs: int | None = None
+    episodes: int | None = None
+    seed: int = 0
+
+
+@dataclass(frozen=True, eq=False)
+class Series:
+    """One curve: `y` over `x`, with its band `lo`..`hi` (the same as `y` when exact)."""
+
+    label: str
+    x: npt.NDArray[np.float64]
+    y: npt.NDArray[np.float64]
+    lo: npt.NDArray[np.float64] | None = None
+    hi: npt.NDArray[np.float64] | None = None
+
+    def as_json(self) -> dict[str, Any]:
+        lo = self.y if self.lo is None else self.lo
+        hi = self.y if self.hi is None else self.hi
+        return {"label": self.label, "x": np.asarray(self.x).tolist(),
+                "y": np.asarray(self.y).tolist(), "lo": np.asarray(lo).tolist(),
+                "hi": np.asarray(hi).tolist()}
+
+
+@dataclass(frozen=True)
+class Chart:
+    """Series drawn together, over `x_label`."""
+
+    title: str
+    x_label: str
+    series: tuple[Series, ...]
+
+
+@dataclass(frozen=True)
+class Check:
+    """One of the book's claims: what the book says, what was measured, and whether the
+    measurement bears the claim out."""
+
+    claim: str
+    book: float | str
+    measured: float | str
+    ok: bool
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "ok", bool(self.ok))
+
+    def as_json(self) -> dict[str, Any]:
+        return {"claim": self.claim, "book": self.book, "measured": self.measured,
+                "ok": bool(self.ok)}
+
+
+@dataclass(frozen=True)
+class FigureResult:
+    """A figure as measured: charts and grids to draw, and the checks."""
+
+    figure: str
+    title: str
+    runs: int
+    charts: tuple[Chart, ...] = ()
+    panels: tuple[Heatmap, ...] = ()
+    checks: tuple[Check, ...] = ()
+    notes: tuple[str, ...] = ()
+
+    @property
+    def series(self) -> tuple[Series, ...]:
+        """Every chart's series, in order."""
+        return tuple(s for chart in self.charts for s in chart.series)
+
+    @property
+    def ok(self) -> bool:
+        return all(check.ok for check in self.checks)
+
+    def as_json(self) -> dict[str, Any]:
+        """What `tui-gym book FIGURE --json` prints."""
+        return {"figure": self.figure, "title": self.title, "runs": self.runs,
+                "series": [s.as_json() for s in self.series],
+                "checks": [c.as_json() for c in self.checks]}
+
+
+@dataclass(frozen=True)
+class BookFigure:
+    """One of Sutton & Barto's figures, reproduced (see the module docstring)."""
+
+    name: str
+    title: str
+    about: str
+    world: str  # the game it runs on
+    run: Callable[[FigureOptions, Progress], FigureResult]
+    runs: int | None = None
+    episodes: int | None = None
+    aliases: Sequence[str] = field(default=())

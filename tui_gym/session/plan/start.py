@@ -1,0 +1,67 @@
+"""Where planning starts: the policy a person or `tui-gym plan` picks.
+
+`START_POLICIES`: "random" (every action equally likely), "optimal" (the
+optimum at the chosen discount with no episode limit, ties shared), "agent"
+(an agent's greedy policy from its Q-table rows of the base states, ties
+shared as the agent breaks them at random). `start_policy` returns the `[S, A]`
+policy on the plan model's states; `saved_agent_q` reads a saved agent's
+table for `tui-gym plan --policy PATH`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+
+from tui_gym.core.mdp import optimal_actions, solve
+from tui_gym.core.mdp.planning import uniform_policy
+from tui_gym.games import Game
+from tui_gym.games.base import greedy_probabilities
+from tui_gym.games.planning import PlanModel
+
+__all__ = ["START_POLICIES", "StartError", "saved_agent_q", "start_policy"]
+
+START_POLICIES = ("random", "optimal", "agent")
+FloatArray = npt.NDArray[np.float64]
+
+
+class StartError(ValueError):
+    """A start policy that cannot be had (no agent table, another game's agent)."""
+
+
+def start_policy(
+    plan: PlanModel, choice: str, gamma: float, agent_q: npt.ArrayLike | None = None
+) -> FloatArray:
+    """The `[S, A]` policy `choice` names on `plan`'s states."""
+    model = plan.model
+    if choice == "random":
+        return uniform_policy(model)
+    if choice == "optimal":
+        best = optimal_actions(solve(model, gamma).q)
+        return best / best.sum(axis=1, keepdims=True)
+    if choice == "agent":
+        if agent_q is None:
+            raise StartError("no agent table here (wrappers hide the states)")
+        q = np.asarray(agent_q, dtype=np.float64)
+        if q.shape != (plan.n_base, model.n_actions):
+            raise StartError(f"the agent's table has shape {q.shape}, the game "
+                             f"{(plan.n_base, model.n_actions)}")
+        return plan.model_policy(greedy_probabilities(q))
+    raise StartError(f"the start policy is one of {', '.join(START_POLICIES)}, not {choice!r}")
+
+
+def saved_agent_q(path: str | Path, game: Game, kwargs: dict) -> FloatArray:
+    """The Q-table rows of the base states of the agent saved at `path`, which must be an
+    agent of `game` with these arguments."""
+    from tui_gym.session.session import Session
+
+    session = Session.load(path)
+    if session.game is not game or session.env_kwargs != kwargs:
+        raise StartError(f"{path} holds an agent of {session.game.title} "
+                         f"{session.env_kwargs}, not {game.title} {kwargs}")
+    q = session.base_q()
+    if q is None:
+        raise StartError(f"{path}: {session.hidden_reason()}")
+    return q

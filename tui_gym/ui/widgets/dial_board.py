@@ -1,0 +1,174 @@
+"""`DialBoard`: a game whose move is a number picked from a range (a stake, cars to move).
+
+The scene is plain data:
+
+- "title": the board's title;
+- "bars": `[label, value, maximum]` rows, drawn as gauges (the capital, the
+  cars at each site), with "unit" before each number ("$");
+- "lines": what the last move did, in words (`{who}` stands for the player);
+- "actions": the action names in order (the numbers the dial runs through),
+  and "labels", shorter words for them on the dial ("$5" for "stake 5");
+- "allowed": how many of the first actions are moves of their own here (the
+  rest repeat the last: a stake beyond the capital); the dial stops there;
+- "start": the action the dial points at when an episode starts;
+- "prompt": what to do, in a few words.
+
+Keys: ← → (or h l) turn the dial by one, ↑ ↓ (or k j) by five, home / end to
+either end, enter or space makes the move the dial points at; n or r starts a
+new episode at any time, enter once the episode is over. `keys_for(action)`
+says which keys pick an action from where the dial stands.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+from rich.text import Text
+from textual.binding import Binding, BindingType
+
+from tui_gym.ui.widgets.board_drawing import stack
+from tui_gym.ui.widgets.boards import Board
+
+DIAL_GROUP = Binding.Group("Dial")
+BAR = 24  # gauge width at most
+
+
+class DialBoard(Board):
+    """Turn a dial to a number, then make the move."""
+
+    DEFAULT_CSS = """
+    DialBoard .dial--gauge { color: $accent; }
+    DialBoard .dial--empty { color: $foreground 25%; }
+    DialBoard .dial--pointer { color: $text; background: $accent; text-style: bold; }
+    DialBoard .dial--muted { color: $text-muted; }
+    """
+    COMPONENT_CLASSES: ClassVar[set[str]] = {"dial--gauge", "dial--empty", "dial--pointer",
+                                             "dial--muted"}
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("left,h", "turn(-1)", "−1", key_display="←", group=DIAL_GROUP),
+        Binding("right,l", "turn(1)", "+1", key_display="→", group=DIAL_GROUP),
+        Binding("down,j", "turn(-5)", "−5", key_display="↓", show=False),
+        Binding("up,k", "turn(5)", "+5", key_display="↑", show=False),
+        Binding("home", "turn(-1000)", "first", show=False),
+        Binding("end", "turn(1000)", "last", show=False),
+        Binding("enter,space", "take", "Go", key_display="enter"),
+        Binding("n,r", "new_episode", "New", key_display="n", tooltip="Start a new episode"),
+    ]
+    BUTTONS = (("◀", "turn(-1)"), ("Go [dim]enter[/]", "take"), ("▶", "turn(1)"),
+               ("↺ New [dim]n[/]", "new_episode"))
+
+    def __init__(self, *, interactive: bool = True, name: str | None = None,
+                 id: str | None = None, classes: str | None = None) -> None:  # noqa: A002
+        super().__init__(interactive=interactive, name=name, id=id, classes=classes)
+        self.pointer = 0
+        self._fresh = True
+
+    def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
+        self.border_title = str(self.scene.get("title") or "Game")
+
+    # --- the dial ----------------------------------------------------------
+    @property
+    def actions(self) -> list[str]:
+        return [str(a) for a in self.scene.get("actions", [])]
+
+    @property
+    def allowed(self) -> int:
+        names = self.actions
+        return max(1, min(len(names), int(self.scene.get("allowed", len(names)) or 1)))
+
+    def start_episode(self) -> None:
+        self._fresh = True
+
+    def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
+        self.scene = dict(scene)
+        if self._fresh and "start" in scene:
+            self.pointer = int(scene["start"])
+        self._fresh = False
+        self.pointer = max(0, min(self.pointer, self.allowed - 1))
+        if self.is_mounted:
+            self.border_title = str(scene.get("title") or "Game")
+        super().show_scene(scene, reveal)
+
+    def action_turn(self, by: int) -> None:
+        if self.agent_playing:
+            self.post_message(self.TakeOver())
+            return
+        self.pointer = max(0, min(self.allowed - 1, self.pointer + by))
+        self.redraw()
+
+    def action_take(self) -> None:
+        if self.episode_over and not self.agent_playing:
+            self.action_new_episode()
+        elif self.actions:
+            self.action_act(self.actions[self.pointer])
+
+    def keys_for(self, action: str) -> list[str]:
+        """The keys that make `action` from where the dial points now."""
+        index = self.actions.index(action)
+        steps = index - self.pointer
+        return ["right" if steps > 0 else "left"] * abs(steps) + ["enter"]
+
+    # --- what the board says ------------------------------------------------
+    def key_help(self) -> list[tuple[str, str]]:
+        return [
+            ("← / →", "turn the dial by one"),
+            ("↓ / ↑", "turn the dial by five"),
+            ("home / end", "the dial to either end"),
+            ("enter / space", "make the move the dial points at (a new episode once over)"),
+            ("n / r", "start a new episode (at any time)"),
+        ]
+
+    @property
+    def prompt(self) -> str:
+        return str(self.scene.get("prompt") or "Turn the dial with ← →, then enter.")
+
+    @property
+    def over_hint(self) -> str:
+        return "This episode is over: press n, r or Enter for a new one."
+
+    def button_suggested(self, action: str) -> bool:
+        return action == "new_episode" if self.episode_over else action == "take"
+
+    # --- drawing --------------------------------------------------------------
+    def picture(self, width: int, height: int) -> Text:
+        scene = self.scene
+        if not scene:
+            return stack([Text("No episode yet.")], width, height)
+        muted = self.get_component_rich_style("dial--muted")
+        lines: list[Text] = []
+        bars = [bar for bar in scene.get("bars", []) if len(bar) == 3]
+        label_w = max((len(str(bar[0])) for bar in bars), default=0)
+        unit = str(scene.get("unit", ""))
+        for label, value, top in bars:
+            room = max(4, min(BAR, width - label_w - 14))
+            filled = round(room * float(value) / max(1.0, float(top)))
+            line = Text(f"{str(label):<{label_w}}  ", style=muted)
+            line.append("█" * filled, self.get_component_rich_style("dial--gauge"))
+            line.append("░" * (room - filled), self.get_component_rich_style("dial--empty"))
+            line.append(f"  {unit}{value:g}/{unit}{top:g}")
+            lines.append(line)
+        for said in scene.get("lines", []):
+            lines.append(Text(str(said).format(who=self.player_name)[:width], style=muted))
+        lines.append(Text(""))
+        lines.append(self._dial(width))
+        return stack(lines, width, height)
+
+    def _dial(self, width: int) -> Text:
+        """The actions around the pointer, the pointed one highlighted, as many as fit."""
+        labels = self.scene.get("labels") or self.actions
+        names = [str(label) for label in labels][: self.allowed]
+        if not names:
+            return Text("")
+        cell = max(len(name) for name in names) + 2
+        fit = max(1, (width - 4) // cell)
+        first = max(0, min(self.pointer - fit // 2, len(names) - fit))
+        shown = range(first, min(len(names), first + fit))
+        line = Text("◀ " if first > 0 else "  ", style=self.get_component_rich_style("dial--muted"))
+        for i in shown:
+            style = "dial--pointer" if i == self.pointer else "dial--muted"
+            line.append(names[i].center(cell), self.get_component_rich_style(style))
+        line.append(" ▶" if shown.stop < len(names) else "  ",
+                    self.get_component_rich_style("dial--muted"))
+        return line

@@ -1,0 +1,66 @@
+"""`PlanStatus`: the Plan view's lines of words, drawn from kept lines on every sweep.
+
+Four lines: the method, start policy and sweep kind (with their keys); where
+the planner is (running, paused or done, the sweep, the largest change Δ, the
+improvements, what the last step did); which value the view shows beside the
+tool's own; and a warning when there is one. A label's update lays the whole
+screen out again, which at dozens of sweeps a second would cost more than the
+sweeps: this widget redraws its own lines only (`show(lines)`), and at 80x24
+leaves out the line on values.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Hashable, Sequence
+from typing import ClassVar
+
+from rich.segment import Segment
+
+from tui_gym.ui.widgets.strip_widget import Line, StripWidget
+
+__all__ = ["PlanStatus"]
+
+STYLES = ("plan-status--settings", "plan-status--state", "plan-status--meaning",
+          "plan-status--note")
+
+
+class PlanStatus(StripWidget):
+    """The planner's settings, state, the value shown and a warning, a line each."""
+
+    COMPONENT_CLASSES: ClassVar[set[str]] = set(STYLES)
+    DEFAULT_CSS = """
+    PlanStatus { height: 4; width: 1fr; }
+    Screen.compact PlanStatus { height: 3; }
+    PlanStatus > .plan-status--settings { color: $text-muted; }
+    PlanStatus > .plan-status--state { color: $text; text-style: bold; }
+    PlanStatus > .plan-status--meaning { color: $text-muted; }
+    PlanStatus > .plan-status--note { color: $text-warning; }
+    """
+
+    def __init__(self, *, id: str | None = None) -> None:  # noqa: A002
+        super().__init__(id=id)
+        self.lines: tuple[str, ...] = ("", "", "", "")
+
+    def show(self, lines: Sequence[str]) -> None:
+        """Settings, state, meaning and note (each may be '')."""
+        lines = tuple(lines)
+        if lines != self.lines:
+            self.lines = lines
+            self.redraw()
+
+    @property
+    def plain(self) -> str:
+        return "\n".join(self.lines)
+
+    def picture_key(self) -> Hashable:
+        return (self._version, self._compact(), self.rich_style)
+
+    def draw(self, width: int) -> list[Line]:
+        styles = self.component_styles()
+        shown = [(text, style) for text, style in zip(self.lines, STYLES, strict=True)
+                 if not (self._compact() and style == "plan-status--meaning")]
+        out: list[Line] = []
+        for text, style in shown:
+            cut = text if len(text) <= width else text[: max(0, width - 1)] + "…"
+            out.append([Segment(cut, styles[style])])
+        return out

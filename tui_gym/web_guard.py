@@ -1,0 +1,120 @@
+"""Who may drive the apps `tui-gym serve` runs: `ServeGuard`, an aiohttp middleware.
+
+Each websocket to `/ws` starts an app that can read and write files as the person who
+started the server, so the guard lets one through only when:
+
+- its `Origin` is the served page's own (the host and port the request came to): a page
+  of another site open in the same browser cannot open one, and neither can a request
+  with no `Origin` at all;
+- served on this machine only (`host_allowed` given), the address the request came to
+  is a local one, so a site whose name is made to resolve to 127.0.0.1 (DNS rebinding)
+  is refused too;
+- fewer than `max_apps` apps are live: beyond that the page and the socket are answered
+  with a page that says so;
+- with a token (`--public` always has one), the page was opened with `?token=...` (the
+  page then keeps it in a cookie for its socket) or the request carries that cookie.
+
+Refusals are short HTML pages with the HTTP status that fits (403, 401, 503).
+"""
+
+from __future__ import annotations
+
+import html
+import secrets
+from collections.abc import Awaitable, Callable
+from urllib.parse import urlsplit
+
+from aiohttp import web
+
+from tui_gym.core.text import visible
+
+__all__ = ["COOKIE", "ServeGuard", "new_token"]
+
+COOKIE = "tui_gym_token"
+SOCKET_PATH = "/ws"
+OPEN_PATHS = ("/static/",)  # the page's scripts, fonts and styles: nothing to guard
+
+Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
+
+
+def new_token() -> str:
+    """A token for `--public`: 128 random bits, URL-safe."""
+    return secrets.token_urlsafe(16)
+
+
+def _page(status: int, text: str) -> web.Response:
+    body = (f"<!doctype html><meta charset=utf-8><title>tui-gym</title>"
+            f"<p style='font:16px monospace;margin:2em'>{html.escape(text)}</p>\n")
+    return web.Response(status=status, text=body, content_type="text/html")
+
+
+def _host_name(host: str) -> str:
+    """`example.org` of `example.org:8000`, `::1` of `[::1]:8000`."""
+    return urlsplit(f"//{host}").hostname or ""
+
+
+class ServeGuard:
+    """The middleware: `app.middlewares.append(ServeGuard(...).middleware)`."""
+
+    def __init__(
+        self, *, max_apps: int, token: str | None,
+        host_allowed: Callable[[str], bool] | None = None,
+    ) -> None:
+        if max_apps < 1:
+            raise ValueError(f"max_apps must be at least 1, got {max_apps}")
+        self.max_apps = max_apps
+        self.token = token
+        self.host_allowed = host_allowed
+        self.live = 0  # apps running now (open sockets)
+
+    @web.middleware
+    async def middleware(self, request: web.Request, handler: Handler) -> web.StreamResponse:
+        if request.path.startswith(OPEN_PATHS):
+            return await handler(request)
+        refusal = self._host_refusal(request) or self._token_refusal(request)
+        if refusal is not None:
+            return refusal
+        if request.path == SOCKET_PATH:
+            return await self._socket(request, handler)
+        if request.path == "/" and self.live >= self.max_apps:
+            return self._full()
+        response = await handler(request)
+        if self.token is not None and request.query.get("token") == self.token:
+            response.set_cookie(COOKIE, self.token, httponly=True, samesite="Strict")
+        return response
+
+    async def _socket(self, request: web.Request, handler: Handler) -> web.StreamResponse:
+        origin = request.headers.get("Origin")
+        if origin is None or urlsplit(origin).netloc.lower() != request.host.lower():
+            seen = "none" if origin is None else visible(origin, 60)
+            return _page(403, f"tui-gym: only the page this server serves may open an app "
+                              f"(the request's Origin: {seen})")
+        if self.live >= self.max_apps:
+            return self._full()
+        self.live += 1
+        try:
+            return await handler(request)
+        finally:
+            self.live -= 1
+
+    def _host_refusal(self, request: web.Request) -> web.Response | None:
+        if self.host_allowed is None or self.host_allowed(_host_name(request.host)):
+            return None
+        return _page(403, f"tui-gym serves this machine only; open it at a local address "
+                          f"such as 127.0.0.1, not {visible(request.host, 60)}")
+
+    def _token_refusal(self, request: web.Request) -> web.Response | None:
+        token = self.token
+        if token is None:
+            return None
+        given = request.query.get("token") or request.cookies.get(COOKIE) or ""
+        if secrets.compare_digest(given.encode(), token.encode()):
+            return None
+        return _page(401, "tui-gym: this server needs its token: open the address "
+                          "`tui-gym serve` printed, with ?token=... at its end")
+
+    def _full(self) -> web.Response:
+        noun = "app is" if self.max_apps == 1 else "apps are"
+        return _page(503, f"tui-gym: {self.live} {noun} running, the most this server runs "
+                          f"at once (--max-apps {self.max_apps}); close a tab with the app, "
+                          "then reload this page")
