@@ -35,8 +35,8 @@ import signal
 import threading
 import time
 import traceback
-from multiprocessing import resource_tracker
 from dataclasses import dataclass
+from multiprocessing import resource_tracker
 from typing import TYPE_CHECKING, Any
 
 from tui_gym.core.engine.stats import StepEvent, TrainingSnapshot
