@@ -268,7 +268,8 @@ def to_json(results: BenchResults) -> dict[str, Any]:
 
     `games` holds every game's figures; the top-level throughput and gap figures are
     those of the first game measured."""
-    names = list(dict.fromkeys([*(x.game for x in results.speed or ()), *results.gap]))
+    names = list(dict.fromkeys([*(x.game for x in results.speed or ()), *results.gap,
+                                *(d.game for d in results.defaults or ())]))
     memory, startup, found_compile = results.memory, results.startup, results.compile
     default = results.live_for(results.default_runner)
     machine = results.machine
