@@ -135,10 +135,19 @@ def sample_outcome(cumulative: Any, base: int, outcomes: int, rng: Any) -> int:
     if outcomes == 1:
         return 0
     u = rng.random()
-    k = 0
-    while k < outcomes - 1 and u >= cumulative[base + k]:
-        k += 1
-    return k
+    if outcomes <= 16:  # few outcomes (most games): a scan
+        k = 0
+        while k < outcomes - 1 and u >= cumulative[base + k]:
+            k += 1
+        return k
+    low, high = 0, outcomes - 1  # many (a day of Poisson rentals): a bisection, same k
+    while low < high:
+        middle = (low + high) // 2
+        if u >= cumulative[base + middle]:
+            low = middle + 1
+        else:
+            high = middle
+    return low
 
 
 @kernel
