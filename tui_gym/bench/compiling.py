@@ -2,7 +2,7 @@
 
 In a fresh process with an empty cache folder (`NUMBA_CACHE_DIR`), every
 algorithm learns one episode on the model and takes one step on the env of
-every game the bench measures: the time that takes, games built included, is
+every game: the time that takes, games built included, is
 the cold compile of every learner on every game. Then a second fresh process
 with the same folder starts the engine (importing Numba, reported apart) and
 makes every learner ready again: that is the warm load.
@@ -31,15 +31,15 @@ class CompileResult:
 
 
 def _every_learner() -> float:
-    """Seconds to make every learner ready on every benched game (run in the child)."""
+    """Seconds to make every learner ready on every game (run in the child)."""
     from tui_gym.algorithms import ALGORITHMS
-    from tui_gym.bench.gap import bench_kwargs, benched
+    from tui_gym.games import GAMES
     from tui_gym.session.session import Session
 
     began = time.perf_counter()
-    for game in benched():
+    for game in GAMES:
         for cls in ALGORITHMS:
-            session = Session(game.env_id, bench_kwargs(game), algorithm=cls.name, seed=0)
+            session = Session(game.name, algorithm=cls.name, seed=0)
             session.trainer.run(episodes=1)
             session.trainer.step()
             session.env.close()
