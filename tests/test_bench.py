@@ -55,14 +55,26 @@ def test_the_tutorial_tasks_run_in_a_process_with_nothing_compiled() -> None:
     rate, gap, learners = tutorial.measure([
         {"kind": "rate", "game": "frozenlake", "algorithm": "sarsa", "hp": {"episodes": 10**9},
          "seconds": 0.2, "seed": 0},
-        {"kind": "gap", "game": "blackjack", "hp": {"episodes": 200}, "target": 1e-9,
-         "seed": 0, "cap": 60.0, "check_every": 100},
+        {"kind": "gap", "game": "blackjack", "kwargs": {}, "hp": {"episodes": 200},
+         "target": 1e-9, "seed": 0, "cap": 60.0, "check_every": 100},
         {"kind": "learners", "game": "cliffwalking", "algorithms": ["q-learning"],
          "hp": {"episodes": 3}, "seeds": 2, "episodes": 3},
     ])
     assert rate["steps_per_second"] > 0 and rate["seconds"] >= 0.2
     assert gap["episodes"] == 200 and not gap["reached"] and gap["gap"] > 1e-9
     assert learners["seconds"] > 0
+
+
+def test_the_tutorial_trains_to_the_gap_on_the_game_the_bench_names(monkeypatch) -> None:
+    from tui_gym.bench import gap
+    from tui_gym.games import game_for
+
+    asked: list[dict] = []
+    monkeypatch.setattr(tutorial, "measure", lambda tasks: asked.extend(tasks) or [
+        {"seconds": 1.0, "episodes": 1, "gap": 0.0, "reached": True}])
+    lake = game_for("frozenlake")
+    gap.tutorial_runs(lake, [0], 1.0, 0.1)
+    assert asked[0]["kwargs"] == gap.bench_kwargs(lake) and asked[0]["kwargs"]["map"] == "8x8"
 
 
 # --- the report -----------------------------------------------------------------

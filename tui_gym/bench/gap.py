@@ -128,7 +128,8 @@ def tutorial_runs(game: Game, seeds: Sequence[int], cap_seconds: float,
                   target: float) -> list[GapRun]:
     """The tutorial loop with the same hyperparameters and budget, capped in time."""
     hp = default_hyperparameters(game)
-    tasks = [{"kind": "gap", "game": game.name, "hp": dict(hp), "target": target,
+    tasks = [{"kind": "gap", "game": game.name, "kwargs": bench_kwargs(game), "hp": dict(hp),
+              "target": target,
               "seed": seed, "cap": cap_seconds, "check_every": check_every_for(hp.episodes)}
              for seed in seeds]
     return [GapRun(seed, run["seconds"], run["episodes"], run["gap"], run["reached"])

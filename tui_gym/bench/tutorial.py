@@ -12,7 +12,7 @@ a comparison is about speed, not settings; nothing is recorded per episode.
 
 - `{"kind": "rate", "game", "algorithm", "hp", "seconds", "seed"}`: steps and
   episodes played in a window of that many seconds;
-- `{"kind": "gap", "game", "hp", "target", "seed", "cap", "check_every"}`:
+- `{"kind": "gap", "game", "kwargs", "hp", "target", "seed", "cap", "check_every"}`:
   Q-learning until its greedy policy's exact gap is at most the target
   (checked as `train --target-gap` checks it), the budget ends or the time cap;
 - `{"kind": "learners", "game", "algorithms", "hp", "seeds", "episodes"}`: the
@@ -61,10 +61,11 @@ def play(session: Any, episodes: int | None = None, seconds: float | None = None
     return steps
 
 
-def _session(game: str, algorithm: str, hp: dict[str, Any], seed: int) -> Any:
+def _session(game: str, algorithm: str, hp: dict[str, Any], seed: int,
+             kwargs: dict[str, Any] | None = None) -> Any:
     from tui_gym.session.session import Session
 
-    session = Session(game, algorithm=algorithm, hp=hp, seed=seed, engine="env")
+    session = Session(game, kwargs, algorithm=algorithm, hp=hp, seed=seed, engine="env")
     session.env.reset(seed=seed)
     return session
 
@@ -81,7 +82,7 @@ def _run(task: dict[str, Any]) -> dict[str, Any]:
                 "seconds": elapsed}
     if kind == "gap":
         began = time.perf_counter()
-        session = _session(task["game"], "q-learning", task["hp"], task["seed"])
+        session = _session(task["game"], "q-learning", task["hp"], task["seed"], task["kwargs"])
         budget, gap = session.hp.episodes, float("inf")
         while session.agent.episode < budget:
             play(session, min(task["check_every"], budget - session.agent.episode))
