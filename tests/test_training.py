@@ -400,3 +400,15 @@ def test_the_rate_shown_is_the_rate_of_the_loop_training_now() -> None:
     assert trainer.latest.episodes_per_second > 1_000
     assert trainer.latest.episodes_per_second == pytest.approx(
         20_000 / (trainer.seconds - 2.0), rel=0.5)
+
+
+def test_a_trainer_that_takes_over_shows_the_rate_of_the_run_it_took_over() -> None:
+    # The app's process runner hands a run back to the app's own trainer: after a run at
+    # max speed that followed two animated steps, the rate shown is the max-speed one.
+    child, parent = Session("blackjack", seed=1).trainer, Session("blackjack", seed=1).trainer
+    parent.step()
+    parent.step()
+    child.restore(parent.progress())
+    child.run(episodes=20_000)
+    parent.restore(child.progress())
+    assert parent.latest.episodes_per_second == child.latest.episodes_per_second > 1_000

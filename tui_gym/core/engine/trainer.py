@@ -81,6 +81,7 @@ class TrainerProgress:
     last: EpisodeStats | None
     version: int
     engine: str = "model"
+    rate: float = 0.0  # the episodes per second last shown
 
 
 class Trainer:
@@ -356,7 +357,8 @@ class Trainer:
     def progress(self) -> TrainerProgress:
         """Counts and statistics so far (to carry on elsewhere)."""
         return TrainerProgress(self.episodes, self.steps, self.seconds, self.windows,
-                               self.series, self.last, self._version, self.engine)
+                               self.series, self.last, self._version, self.engine,
+                               self._recent_rate())
 
     def restore(self, progress: TrainerProgress) -> None:
         """Carry on from `progress` (this trainer's agent is the one that made it, and
@@ -365,9 +367,9 @@ class Trainer:
         self.seconds, self.windows = progress.seconds, progress.windows
         self.series, self.last = progress.series, progress.last
         self._version = progress.version
-        if progress.engine != self.engine:
-            self.engine = progress.engine
-            self._samples.clear()
+        self.engine = progress.engine
+        self._samples.clear()  # the rate goes on from the one shown
+        self._rate = progress.rate
         self.publish()
 
     @property
