@@ -67,3 +67,12 @@ def test_blackjack_defaults_are_undiscounted_with_visit_count_step_sizes() -> No
     ):
         assert hp.discount == 1.0
         assert hp.learning_rate_schedule == "visits"
+
+
+def test_train_says_why_a_run_ends_short_of_the_bound(capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["train", "cliffwalking", "--algorithm", "sarsa", "--no-record",
+                 "--eval-episodes", "10"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert "It ends short of the bound (gap <= 0.13" in " ".join(out.split())
+    assert "Example 6.6" in out

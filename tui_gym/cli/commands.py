@@ -411,6 +411,9 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
     if run_id is not None:
         rows.append(("run history", f"run {run_id} in {recording.path}"))
     out.print(key_value_table("Training summary", rows))
+    reference = session.reference()
+    if reference is not None and session.shortfall(reference):  # why it ends short, if it does
+        out.print(session.shortfall(reference), markup=False)
     return 0
 
 
