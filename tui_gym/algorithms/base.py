@@ -482,7 +482,7 @@ class Learner(ABC):
 
     def _td_record(self, step: Transition, log: np.ndarray, future_term: str,
                    *more: tuple[str, float], formula: str = "", **extra: Any) -> UpdateRecord:
-        """The record of a one-step TD update logged by `rules.note`: the target is r
+        """The record of a one-step TD update logged by `rules.td_update`: the target is r
         after termination, else r + γ·(the future term), `formula` (default: the
         algorithm's)."""
         target, future, before, after, alpha = (float(v) for v in log[0, :5])

@@ -22,7 +22,7 @@ import numpy as np
 
 from tui_gym.algorithms.base import Learner, TableSpec, Transition, UpdateRecord
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, note, register, step_size, uniform
+from tui_gym.core.engine.rules import Rule, register, td_update, uniform
 
 __all__ = ["DoubleQLearning"]
 
@@ -69,16 +69,10 @@ def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
     mine, other, counts = (q_a, q_b, counts_a) if first else (q_b, q_a, counts_b)
     chosen = best(mine, rng, s2)
     future = 0.0 if terminated else other[s2, chosen]
-    target = r + hp.discount * future
-    counts[s, a] += 1
-    visits[s] += 1
-    alpha = step_size(hp.learning_rate, hp.by_visits, counts[s, a])
-    before = mine[s, a]
-    mine[s, a] = before + alpha * (target - before)
-    note(log, target, future, before, mine[s, a], alpha, counts[s, a])
+    td = td_update(mine, counts, visits, hp, s, a, r, future, log)
     log[0, 6] = 0.0 if first else 1.0
     log[0, 7] = chosen
-    return abs(target - before)
+    return td
 
 
 register(Params, Rule(update, value=value))

@@ -23,10 +23,10 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from tui_gym.algorithms.base import Learner, TableSpec, Transition, UpdateRecord
-from tui_gym.algorithms.qlearning import QLearning, q_update
+from tui_gym.algorithms.qlearning import QLearning
 from tui_gym.algorithms.settings import COMMON_PARAMS
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, register, step_size, uniform
+from tui_gym.core.engine.rules import Rule, max_value, register, step_size, td_update, uniform
 from tui_gym.core.params import Param
 
 __all__ = ["DynaQ"]
@@ -43,8 +43,7 @@ class Params(NamedTuple):
 def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     q, counts, visits, model_reward, model_next, model_terminated, tried, n_tried = tables
-    td = q_update(q, counts, visits, hp.learning_rate, hp.by_visits, hp.discount,
-                  s, a, r, s2, terminated, log)
+    td = td_update(q, counts, visits, hp, s, a, r, 0.0 if terminated else max_value(q, s2), log)
     n_actions = q.shape[1]
     if model_next[s, a] < 0:  # a pair new to the model joins the tried list
         tried[n_tried[0]] = s * n_actions + a
@@ -56,11 +55,7 @@ def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
         cell = tried[uniform(rng, n_tried[0])]
         ps, pa = cell // n_actions, cell % n_actions
         ns = model_next[ps, pa]
-        future = 0.0
-        if not model_terminated[ps, pa]:
-            future = q[ns, 0]
-            for b in range(1, n_actions):
-                future = max(future, q[ns, b])
+        future = 0.0 if model_terminated[ps, pa] else max_value(q, ns)
         target = model_reward[ps, pa] + hp.discount * future
         alpha = step_size(hp.learning_rate, hp.by_visits, max(counts[ps, pa], 1))
         q[ps, pa] += alpha * (target - q[ps, pa])

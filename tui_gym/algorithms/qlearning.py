@@ -16,9 +16,9 @@ import numpy as np
 
 from tui_gym.algorithms.base import Learner, Transition, UpdateRecord
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, note, register, step_size
+from tui_gym.core.engine.rules import Rule, max_value, register, td_update
 
-__all__ = ["QLearning", "q_update"]
+__all__ = ["QLearning"]
 
 
 class Params(NamedTuple):
@@ -28,31 +28,11 @@ class Params(NamedTuple):
 
 
 @kernel
-def q_update(q: Any, counts: Any, visits: Any, learning_rate: float, by_visits: bool,
-             discount: float, s: int, a: int, r: float, s2: int, terminated: bool,
-             log: Any) -> float:
-    """Move Q(s, a) toward r + γ max Q(s', ·) (r alone after termination); |TD error|."""
-    future = 0.0
-    if not terminated:
-        future = q[s2, 0]
-        for b in range(1, q.shape[1]):
-            future = max(future, q[s2, b])
-    target = r + discount * future
-    counts[s, a] += 1
-    visits[s] += 1
-    alpha = step_size(learning_rate, by_visits, counts[s, a])
-    before = q[s, a]
-    q[s, a] = before + alpha * (target - before)
-    note(log, target, future, before, q[s, a], alpha, counts[s, a])
-    return abs(target - before)
-
-
-@kernel
 def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     q, counts, visits = tables
-    return q_update(q, counts, visits, hp.learning_rate, hp.by_visits, hp.discount,
-                    s, a, r, s2, terminated, log)
+    future = 0.0 if terminated else max_value(q, s2)
+    return td_update(q, counts, visits, hp, s, a, r, future, log)
 
 
 register(Params, Rule(update))

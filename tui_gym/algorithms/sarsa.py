@@ -19,7 +19,7 @@ import numpy as np
 
 from tui_gym.algorithms.base import Learner, Transition, UpdateRecord
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, note, register, step_size
+from tui_gym.core.engine.rules import Rule, register, td_update
 
 __all__ = ["Sarsa"]
 
@@ -35,14 +35,7 @@ def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     q, counts, visits = tables
     future = 0.0 if terminated else q[s2, a2]
-    target = r + hp.discount * future
-    counts[s, a] += 1
-    visits[s] += 1
-    alpha = step_size(hp.learning_rate, hp.by_visits, counts[s, a])
-    before = q[s, a]
-    q[s, a] = before + alpha * (target - before)
-    note(log, target, future, before, q[s, a], alpha, counts[s, a])
-    return abs(target - before)
+    return td_update(q, counts, visits, hp, s, a, r, future, log)
 
 
 register(Params, Rule(update, next_first=True))

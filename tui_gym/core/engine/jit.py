@@ -85,8 +85,8 @@ def cache_folder(environ: dict[str, str] | None = None) -> Path:
     env = os.environ if environ is None else environ
     name = f"numba-{sources_hash()}"
     given = env.get("NUMBA_CACHE_DIR", "")
-    if given:
-        return Path(given) / name
+    if given:  # a child process inherits the folder its parent chose: the same one
+        return Path(given) if Path(given).name == name else Path(given) / name
     beside = _PACKAGE / "__pycache__" / name
     if _writable(beside):
         return beside

@@ -39,9 +39,11 @@ __all__ = [
     "expected_value",
     "full",
     "greedy",
+    "max_value",
     "next_first",
     "register",
     "step_size",
+    "td_update",
     "uniform",
     "update",
     "value",
@@ -171,16 +173,33 @@ def expected_value(tables: Any, hp: Any, s: int, epsilon: float) -> float:
 
 
 @kernel(inline=True)
-def note(log: Any, target: float, future: float, before: float, after: float,
-         alpha: float, count: float) -> None:
-    """Row 0 of an update's log: target, the future term, Q before and after, step size,
-    the cell's count."""
+def max_value(q: Any, s: int) -> float:
+    """The largest value in row `s` of `q`."""
+    top = q[s, 0]
+    for b in range(1, q.shape[1]):
+        top = max(top, q[s, b])
+    return top
+
+
+@kernel(inline=True)
+def td_update(q: Any, counts: Any, visits: Any, hp: Any, s: int, a: int, r: float,
+              future: float, log: Any) -> float:
+    """Move q[s, a] toward r + γ·future by the step size of its next update, counting the
+    visit; row 0 of `log` gets the target, the future term, Q before and after, the step
+    size and the cell's count. The |TD error|."""
+    target = r + hp.discount * future
+    counts[s, a] += 1
+    visits[s] += 1
+    alpha = step_size(hp.learning_rate, hp.by_visits, counts[s, a])
+    before = q[s, a]
+    q[s, a] = before + alpha * (target - before)
     log[0, 0] = target
     log[0, 1] = future
     log[0, 2] = before
-    log[0, 3] = after
+    log[0, 3] = q[s, a]
     log[0, 4] = alpha
-    log[0, 5] = count
+    log[0, 5] = counts[s, a]
+    return abs(target - before)
 
 
 def new_log(rows: int = 1) -> np.ndarray:
