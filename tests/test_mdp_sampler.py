@@ -30,7 +30,7 @@ def draws(model: FiniteMDP, state: int, action: int, n: int, rng) -> list[tuple]
     base = (state * model.n_actions + action) * arrays.outcomes
     found = []
     for _ in range(n):
-        at = base + sample_outcome(arrays.cumulative, base, arrays.outcomes, rng)
+        at = base + sample_outcome(arrays.cumulative, arrays.guide, base, arrays.outcomes, rng)
         found.append((int(arrays.next_state[at]), float(arrays.reward[at]),
                       bool(arrays.terminal[at])))
     return found
@@ -108,6 +108,34 @@ def test_an_impossible_outcome_is_never_drawn():
         found = draws(m, 0, 0, 20_000, np.random.default_rng(2))
         assert {r for _, r, _ in found} == {1.0, 2.0}
         assert abs(np.mean([t for _, _, t in found]) - 0.5) < 0.02
+
+
+def test_among_many_outcomes_the_guide_finds_the_outcome_the_scan_finds():
+    # Jack's car rental (441 outcomes a move) and a row of many outcomes where every
+    # other one is impossible: each draw is the first outcome whose cumulative
+    # probability exceeds u, as a scan from the first finds it.
+    from tui_gym.games import game_for
+
+    rental = game_for("car-rental").base_model({})
+    k = 40
+    prob = np.zeros((1, 1, k))
+    prob[0, 0, ::2] = np.linspace(1.0, 3.0, k // 2)
+    prob /= prob.sum()
+    sparse = FiniteMDP(np.zeros((1, 1, k), dtype=np.int64), prob, np.arange(k)[None, None, :],
+                       np.ones((1, 1, k), dtype=bool), [1.0])
+    for model, pairs in ((rental, range(0, rental.n_states * rental.n_actions, 97)),
+                         (sparse, [0])):
+        arrays = ModelArrays.of(model)
+        assert arrays.outcomes > 16
+        for pair in pairs:
+            base = pair * arrays.outcomes
+            row = arrays.cumulative[base: base + arrays.outcomes]
+            drawn, again = np.random.default_rng(pair), np.random.default_rng(pair)
+            for _ in range(300):
+                scanned = min(int(np.searchsorted(row, again.random(), side="right")),
+                              arrays.outcomes - 1)
+                assert sample_outcome(arrays.cumulative, arrays.guide, base,
+                                      arrays.outcomes, drawn) == scanned
 
 
 def test_the_same_seed_gives_the_same_draws():

@@ -51,6 +51,7 @@ __all__ = [
     "warm",
 ]
 
+GUIDED = 16  # pairs with more outcomes than this are sampled through a guide table
 GROW = 1  # `run_model`'s status when the learner needs room (Monte Carlo's longest episode)
 
 # Columns of `run_model`'s per-episode output.
@@ -64,6 +65,7 @@ class ModelArrays:
 
     next_state: np.ndarray
     cumulative: np.ndarray
+    guide: np.ndarray  # [S * A * K]: per pair, where outcome j / K falls (see `sample_outcome`)
     reward: np.ndarray
     terminal: np.ndarray
     outcomes: int
@@ -82,13 +84,22 @@ class ModelArrays:
         table_rows = np.arange(model.n_states) if rows is None else np.asarray(rows)
         if table_rows.shape != (model.n_states,):
             raise ValueError(f"rows must have one entry per model state ({model.n_states})")
+        outcomes = model.max_outcomes
+        guide = np.zeros(1, dtype=np.int32)
+        if outcomes > GUIDED:
+            marks = np.arange(outcomes) / outcomes
+            rows_of_pairs = model.cumulative.reshape(-1, outcomes)
+            guide = np.empty(rows_of_pairs.shape, dtype=np.int32)
+            for pair, row in enumerate(rows_of_pairs):
+                guide[pair] = np.minimum(np.searchsorted(row, marks, side="right"), outcomes - 1)
         # Writable copies: Numba types a read-only array on its slow path, every call.
         return cls(
             next_state=np.array(model.next_state.reshape(-1), dtype=np.int64),
             cumulative=np.array(model.cumulative.reshape(-1), dtype=np.float64),
+            guide=guide.reshape(-1),
             reward=np.array(model.reward.reshape(-1), dtype=np.float64),
             terminal=np.array(model.terminal.reshape(-1), dtype=np.bool_),
-            outcomes=model.max_outcomes,
+            outcomes=outcomes,
             starts=starts,
             start_cumulative=np.ascontiguousarray(start_cumulative, dtype=np.float64),
             rows=np.array(table_rows, dtype=np.int64),
@@ -129,29 +140,27 @@ def sample_start(starts: Any, start_cumulative: Any, rng: Any) -> int:
 
 
 @kernel(inline=True)
-def sample_outcome(cumulative: Any, base: int, outcomes: int, rng: Any) -> int:
+def sample_outcome(cumulative: Any, guide: Any, base: int, outcomes: int, rng: Any) -> int:
     """Outcome k of the pair whose outcomes start at `base`: drawn when cumulative[k - 1]
-    <= u < cumulative[k] (no draw when the pair has one outcome)."""
+    <= u < cumulative[k] (no draw when the pair has one outcome). Among many outcomes
+    (a day of Poisson rentals) the search starts where the pair's guide table points
+    for u, and moves back if need be: the same k as the scan from 0."""
     if outcomes == 1:
         return 0
     u = rng.random()
-    if outcomes <= 16:  # few outcomes (most games): a scan
-        k = 0
-        while k < outcomes - 1 and u >= cumulative[base + k]:
-            k += 1
-        return k
-    low, high = 0, outcomes - 1  # many (a day of Poisson rentals): a bisection, same k
-    while low < high:
-        middle = (low + high) // 2
-        if u >= cumulative[base + middle]:
-            low = middle + 1
-        else:
-            high = middle
-    return low
+    k = 0
+    if outcomes > GUIDED:
+        k = guide[base + int(u * outcomes)]
+        while k > 0 and u < cumulative[base + k - 1]:
+            k -= 1
+    while k < outcomes - 1 and u >= cumulative[base + k]:
+        k += 1
+    return k
 
 
 @kernel
-def run_model(next_state: Any, cumulative: Any, reward: Any, terminal: Any, outcomes: int,
+def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, terminal: Any,
+              outcomes: int,
               starts: Any, start_cumulative: Any, rows: Any, horizon: int,
               tables: Any, hp: Any, rng: Any, explore: Any, episode0: int,
               cursor: Any, acc: Any, max_episodes: int, max_steps: int,
@@ -183,7 +192,7 @@ def run_model(next_state: Any, cumulative: Any, reward: Any, terminal: Any, outc
         if a < 0:
             a = act(tables, hp, rng, rows[s], eps)
         at = (s * n_actions + a) * outcomes
-        at += sample_outcome(cumulative, at, outcomes, rng)
+        at += sample_outcome(cumulative, guide, at, outcomes, rng)
         s2 = next_state[at]
         r = reward[at]
         ended = terminal[at]
@@ -234,8 +243,8 @@ def play(learner: Any, model: ModelArrays, cursor: Cursor, max_episodes: int,
     schedule on by the episodes finished): (episodes, steps)."""
     hp = learner.compiled_params()
     status = entries(hp).run_model(
-        model.next_state, model.cumulative, model.reward, model.terminal, model.outcomes,
-        model.starts, model.start_cumulative, model.rows, model.horizon,
+        model.next_state, model.cumulative, model.guide, model.reward, model.terminal,
+        model.outcomes, model.starts, model.start_cumulative, model.rows, model.horizon,
         learner.arrays(), hp, learner.rng, learner.exploration(), learner.episode,
         cursor.ints, cursor.floats, min(max_episodes, len(out)), max_steps, out, log,
     )
@@ -290,10 +299,10 @@ def compile_learner(tables: Any, hp: Any) -> None:
     cursor = Cursor()
     out = np.zeros((1, 4))
     explore = np.zeros(3)
-    calls.run_model(model.next_state, model.cumulative, model.reward, model.terminal,
-                    model.outcomes, model.starts, model.start_cumulative, model.rows,
-                    model.horizon, copies, hp, spare, explore, 0, cursor.ints, cursor.floats,
-                    1, 1, out, log)
+    calls.run_model(model.next_state, model.cumulative, model.guide, model.reward,
+                    model.terminal, model.outcomes, model.starts, model.start_cumulative,
+                    model.rows, model.horizon, copies, hp, spare, explore, 0, cursor.ints,
+                    cursor.floats, 1, 1, out, log)
     calls.transition(copies, hp, spare, 0, 0, 0.0, 0, True, False, -1, 0.0, log)
     calls.act(copies, hp, spare, 0, 0.0)
     calls.greedy(copies, hp, spare, 0)
