@@ -140,7 +140,8 @@ class Trainer:
         self._obs: Any = None
         self._row = 0
         self._pending = -1  # the next action, chosen before the update (SARSA)
-        self._episode = np.zeros(3)  # return, length, sum of |TD|
+        self._episode: list[float] = [0.0, 0.0, 0.0]  # return, length, sum of |TD|
+        self._warmed = False
         self._env_seeded = False
         self.latest: TrainingSnapshot = self.snapshot()
 
@@ -166,9 +167,12 @@ class Trainer:
                 self.on_status(text)
             self.publish()
 
+        if self._warmed:
+            return
         agent = self.agent
         if loop.warm([(agent.name, agent.arrays(), agent.compiled_params())], say):
             say("")
+        self._warmed = True
 
     # --- chunks ----------------------------------------------------------
     def run(
@@ -231,6 +235,17 @@ class Trainer:
     def _record(self, rows: np.ndarray) -> None:
         """Count finished episodes (rows of return, length, mean |TD|, epsilon) into the
         windows and curves."""
+        if len(rows) == 1:  # one at a time (the env loop): no arrays to build
+            values = rows[0].tolist()
+            for name, value in zip(SERIES_NAMES, values, strict=True):
+                window = self.windows[name]
+                window.push(value)
+                self.series[name].push(window.mean)
+            self.series[EPISODE_RETURNS].push(values[0])
+            ret, length, td, eps = values
+            self.last = EpisodeStats(ret, int(length), td, eps)
+            self.episodes += 1
+            return
         for name, values in zip(SERIES_NAMES, rows.T, strict=True):
             means = self.windows[name].push_many(values)
             self.series[name].push_many(means)
@@ -269,7 +284,7 @@ class Trainer:
                 obs, _ = self.env.reset()
             agent.begin_episode()
             self._obs, self._row, self._pending = obs, agent.row(self.keyer.key(obs)), -1
-            self._episode[:] = 0.0
+            self._episode = [0.0, 0.0, 0.0]
         obs, row = self._obs, self._row
         action = self._pending if self._pending >= 0 else agent.act(self.keyer.key(obs))
         next_obs, reward, terminated, truncated, _ = self.env.step(action)
@@ -278,11 +293,14 @@ class Trainer:
                                       bool(truncated), explain=explain)
         record = agent.last_update if explain else None
         self.steps += 1
-        self._episode += (float(reward), 1.0, td)
-        episode, length = self.episodes + 1, int(self._episode[1])
+        totals = self._episode
+        totals[0] += float(reward)
+        totals[1] += 1
+        totals[2] += td
+        episode, length = self.episodes + 1, int(totals[1])
         done_stats = None
         if terminated or truncated:
-            ret, _, total = self._episode
+            ret, _, total = totals
             self._record(np.array([[ret, length, total / length, agent.epsilon]]))
             agent.end_episodes(1)
             done_stats = self.last
