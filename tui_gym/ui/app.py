@@ -12,12 +12,14 @@ hands it to the Train view; the side panel asks for rebuilds
 through a message; nothing in the trainer calls into widgets. Whatever would
 lose a trained agent (a reset, a change that resets it, loading over it,
 saving over a file) asks first (`ConfirmScreen`); saving and loading take a
-file name the person types (`FileScreen`). `MainScreen` is the app's screen;
-below the minimum size `TooSmallScreen` covers it and takes every key; and
+file name the person types (`FileScreen`). Below the minimum size
+`TooSmallScreen` covers the main screen and takes every key; and
 `tune_gc_for_ui` paces the garbage collector for an app that owns its process.
 `run_app` runs the app as `tui-gym` does: SIGTERM, SIGHUP and SIGINT end it
-cleanly, and an unexpected error ends it with one line and a crash log
-(`tui_gym.crash_log`) instead of a traceback on the screen.
+cleanly, so does its terminal (or a served app's pipes) closing, and an
+unexpected error ends it with one line and a crash log (`tui_gym.crash_log`)
+instead of a traceback on the screen. What it does through Textual's private
+names lives in `tui_gym.ui.textual_internals`.
 """
 
 from __future__ import annotations
@@ -35,16 +37,13 @@ from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
-from textual._compositor import ChopsUpdate, Compositor, ReflowResult
 from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal
-from textual.events import Resize, ScreenResume
-from textual.geometry import Region, Size
-from textual.reactive import Reactive
+from textual.driver import Driver
+from textual.events import Resize
 from textual.screen import Screen
-from textual.strip import Strip
-from textual.widget import AwaitMount, Widget
+from textual.widget import AwaitMount
 from textual.widgets import ContentSwitcher, Header
 
 from tui_gym.core.training import continue_run
@@ -55,8 +54,10 @@ from tui_gym.session.runners import make_runner
 from tui_gym.session.session import Session
 from tui_gym.session.speeds import SPEEDS
 from tui_gym.session.storage import StorageError
+from tui_gym.ui.key_order import KeysInOrder
 from tui_gym.ui.play_view import PlayView
 from tui_gym.ui.side_panel import SidePanel
+from tui_gym.ui.textual_internals import CrashHook, TerminalGone, guarded_driver, main_screen
 from tui_gym.ui.too_small_screen import TooSmallScreen
 from tui_gym.ui.widgets.key_bar import KeyBar
 
@@ -84,72 +85,7 @@ IDLE_POLL = 0.02  # seconds between looks for the agent handed back before a cha
 IDLE_TIMEOUT = 10.0  # and how long to look before giving up
 
 
-class _Compositor(Compositor):
-    """Textual's compositor, keeping the full map a layout pass has just made, and
-    drawing in a partial update only the widgets it repaints.
-
-    Textual marks the map stale before a layout pass and leaves it so after the
-    pass, so the first widget that asks for its region while the frame is drawn
-    (a strip widget does) had the whole screen laid out a second time, for each
-    view switch."""
-
-    def reflow(self, parent: Widget, size: Size) -> ReflowResult:
-        result = super().reflow(parent, size)
-        self._full_map_invalidated = False  # the map just made is the full one
-        return result
-
-    _updating: tuple[Region, ...] = ()  # the regions a partial update repaints
-
-    def render_partial_update(self) -> ChopsUpdate | None:
-        self._updating = tuple(self._dirty_regions)
-        try:
-            return super().render_partial_update()
-        finally:
-            self._updating = ()
-
-    def _get_renders(
-        self, crop: Region | None = None
-    ) -> Iterable[tuple[Region, Region, list[Strip]]]:
-        """Textual's renders, leaving out in a partial update the widgets whose visible
-        part misses every region it repaints. Textual tests each widget's container's
-        clip against the box around them all, so a snapshot that changed the Train
-        view's curves, stats and heatmap drew every widget on the screen."""
-        if crop is None:
-            yield from super()._get_renders(crop)
-            return
-        updating = self._updating or (crop,)
-        for widget, (region, clip) in self.visible_widgets.items():
-            visible = region.intersection(clip)
-            if not (visible.width and visible.height):
-                continue
-            if not any(visible.overlaps(part) for part in updating):
-                continue
-            yield region, clip, widget.render_lines(visible.translate(-region.offset))
-
-
-class MainScreen(Screen):
-    """The app's screen. A focus change repaints the widgets whose look it changes
-    (their `:focus` styles), not the whole screen as Textual's `Screen` does: a
-    view switch moves the focus, and a whole-screen repaint doubled its cost. Its
-    compositor keeps the layout it has just made (`_Compositor`). When it first
-    shows, its widgets keep the styles they were given as they were mounted instead
-    of being styled all over again."""
-
-    focused: Reactive[Widget | None] = Reactive(None, repaint=False)
-
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
-        self._compositor = _Compositor()
-        self._shown = False
-
-    def _on_screen_resume(self, event: ScreenResume) -> None:
-        # Runs before `Screen`'s own handler, which restyles every node when asked to.
-        if not self._shown:
-            self._shown = True
-            event.refresh_styles = False
-
-
-class TuiGymApp(App[int]):
+class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     """Play, train and tinker: the tui-gym terminal playground."""
 
     TITLE = "tui-gym"
@@ -216,7 +152,6 @@ class TuiGymApp(App[int]):
         self.gc_seconds = gc_seconds or (YOUNG_GC_SECONDS, FULL_GC_SECONDS)
         self.gc_pacer: GcPacer | None = None
         self.standalone = standalone
-        self.crash: BaseException | None = None  # the first unexpected error, if any
         self.thread_crash: BaseException | None = None  # one from a background thread
         self._signals: list[int] = []
         self.session = session or Session()
@@ -242,8 +177,16 @@ class TuiGymApp(App[int]):
 
     # --- layout ------------------------------------------------------------
     def get_default_screen(self) -> Screen:
-        self._main_screen = MainScreen(id="_default")
+        self._main_screen = main_screen(id="_default")
         return self._main_screen
+
+    def get_driver_class(self) -> type[Driver]:
+        return guarded_driver(super().get_driver_class())
+
+    @property
+    def quiet_crash(self) -> bool:  # type: ignore[override]
+        """An app that owns its terminal logs a crash's traceback instead (`run_app`)."""
+        return self.standalone
 
     def compose(self) -> ComposeResult:
         yield Header()
@@ -1030,16 +973,9 @@ class TuiGymApp(App[int]):
     def _end_on_signal(self, signum: int) -> None:
         self.exit(return_code=128 + signum)
 
-    def _handle_exception(self, error: Exception) -> None:
-        # Textual's one path for an unhandled error: it ends the app with code 1 and
-        # keeps a traceback to print on the terminal. A standalone app logs it
-        # instead (`run_app`), so the person sees one line.
-        if self.crash is None:
-            self.crash = error
-        super()._handle_exception(error)
-        if self.standalone:
-            self._exit_renderables.clear()
-
+    def on_terminal_gone(self, message: TerminalGone) -> None:
+        """Nobody can see the app or type to it any more: end it, as a hang-up would."""
+        self.exit(return_code=128 + signal.SIGHUP)
 
 YOUNG_GC_SECONDS = 0.5  # collect the young generations this often
 FULL_GC_SECONDS = 20.0  # and everything this often

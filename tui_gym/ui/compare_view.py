@@ -28,7 +28,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
-from rich.segment import Segment
 from rich.text import Text
 from textual import on
 from textual.app import ComposeResult
@@ -36,7 +35,6 @@ from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.strip import Strip
 from textual.widgets import Button, Input, Label, SelectionList
-from textual.widgets._toggle_button import ToggleButton
 from textual.widgets.selection_list import Selection
 
 from tui_gym.core.experiments import (
@@ -57,6 +55,7 @@ from tui_gym.ui.compare_series import (
     series_of_outcome,
     series_of_record,
 )
+from tui_gym.ui.textual_internals import ticked_line
 from tui_gym.ui.widgets.compare_chart import PALETTE, CompareChart
 from tui_gym.ui.widgets.figures_table import FiguresTable, with_interval
 from tui_gym.ui.widgets.numbers import compact_count
@@ -156,18 +155,11 @@ class RunList(SelectionList[int]):
     """
 
     def render_line(self, y: int) -> Strip:
-        strip = super().render_line(y)
-        segments = list(strip)
         # Textual's box draws the same X on and off; say the state with the mark itself.
-        if len(segments) > 2 and segments[1].text == ToggleButton.BUTTON_INNER:
-            try:
-                value = self.get_option_at_index(self.scroll_offset.y + y).value
-            except Exception:
-                return strip
-            mark = "✓" if value in self.selected else " "
-            segments[1] = Segment(mark, segments[1].style)
-            return Strip(segments, strip.cell_length)
-        return strip
+        return ticked_line(
+            super().render_line(y),
+            lambda: self.get_option_at_index(self.scroll_offset.y + y).value in self.selected,
+        )
 
 
 def describe_run(run: RunSummary) -> Text:

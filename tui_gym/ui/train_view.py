@@ -336,7 +336,7 @@ class TrainView(Vertical):
         self._editor_game = game.name
         self.add_class("-mapping")
         self._show_editor()
-        self.call_after_refresh(self._editor.focus_canvas)
+        self._editor.focus_canvas()  # at once: the keys typed after `m` go to the map
         return True
 
     def close_editor(self) -> None:
@@ -669,7 +669,7 @@ class TrainView(Vertical):
 
     def action_edit_hyperparameters(self) -> None:
         self.add_class("-editing")
-        self.call_after_refresh(self.form.input("learning_rate").focus)
+        self.form.input("learning_rate").focus()  # at once: the keys typed after `e` go there
 
     def on_resize(self) -> None:
         compact = self.screen.has_class("compact")
