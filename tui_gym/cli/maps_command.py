@@ -19,6 +19,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from tui_gym.cli.output import CliError, print_json
+from tui_gym.cli.types import finite_number, seed_number
 from tui_gym.games.maps import GridMap, format_map
 from tui_gym.games.maps.builtin import BUILTIN_MAPS, builtin_map, fits
 from tui_gym.games.maps.files import read_map_file
@@ -33,9 +34,9 @@ def add_maps_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[ty
     maps = sub.add_parser("maps", help="list the built-in maps, print one, or draw a random one")
     maps.add_argument("name", nargs="?", metavar="NAME", help="print this built-in map's text")
     maps.add_argument("--random", metavar="ROWSxCOLS", help="print a random solvable map")
-    maps.add_argument("--density", type=float, default=0.2, metavar="X",
+    maps.add_argument("--density", type=finite_number, default=0.2, metavar="X",
                       help=f"share of obstacle cells in a random map (0 to {MAX_DENSITY})")
-    maps.add_argument("--map-seed", type=int, default=0, metavar="N", dest="maps_seed",
+    maps.add_argument("--map-seed", type=seed_number, default=0, metavar="N", dest="maps_seed",
                       help="seed of a random map")
     maps.add_argument("--obstacle", default="H", choices=("H", "C", "W"),
                       help="what a random map's obstacles are: holes, cliff or walls")

@@ -7,7 +7,7 @@ import argparse
 import math
 from collections.abc import Callable
 
-from tui_gym.core.params import read_number, shown_value
+from tui_gym.core.params import digits_note, read_number, shown_value
 
 __all__ = ["MAX_SEED", "file_name", "finite_number", "int_in", "positive_int", "seed_number"]
 
@@ -20,7 +20,8 @@ def int_in(minimum: int, maximum: int, noun: str) -> Callable[[str], int]:
     def parse(text: str) -> int:
         value = read_number(text)
         if value is None or math.isnan(value) or (math.isfinite(value) and value % 1):
-            raise argparse.ArgumentTypeError(f"expected {noun}, got {shown_value(text)}")
+            raise argparse.ArgumentTypeError(
+                f"expected {noun}, got {shown_value(text)}{digits_note(text)}")
         if not minimum <= value <= maximum:
             raise argparse.ArgumentTypeError(
                 f"{shown_value(text)} is out of range: expected {noun}"
@@ -38,7 +39,8 @@ def finite_number(text: str) -> float:
     """An argparse type: a finite number (ASCII digits)."""
     value = read_number(text)
     if value is None or math.isnan(value):
-        raise argparse.ArgumentTypeError(f"expected a number, got {shown_value(text)}")
+        raise argparse.ArgumentTypeError(
+            f"expected a number, got {shown_value(text)}{digits_note(text)}")
     if math.isinf(value):
         raise argparse.ArgumentTypeError(
             f"{shown_value(text)} is out of range: expected a finite number"

@@ -23,7 +23,7 @@ switches game or quits (`stop_comparison`, `close`).
 from __future__ import annotations
 
 import time
-from collections.abc import Hashable, Sequence
+from collections.abc import Hashable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
@@ -44,11 +44,13 @@ from tui_gym.core.experiments import (
     RunSummary,
     resolve_db_path,
 )
+from tui_gym.core.params import digits_note, read_number, shown_value
 from tui_gym.ui.compare_job import CompareJob
 from tui_gym.ui.compare_series import (
     FigureRow,
     Series,
     algorithm_title,
+    bounded,
     row_of_outcome,
     row_of_record,
     run_label,
@@ -79,16 +81,14 @@ DEFAULT_ALGORITHMS = ("q-learning", "sarsa")
 
 
 def parse_count(text: str, what: str, high: int) -> int:
-    """A whole number from 1 to `high` typed in a field; ValueError saying what is wanted."""
-    cleaned = text.strip().replace(",", "").replace("_", "")
-    try:
-        value = int(cleaned)
-    except ValueError:
-        value = 0
-    if not 1 <= value <= high:
-        shown = repr(text.strip()) if text.strip() else "nothing"
-        raise ValueError(f"{what}: a whole number from 1 to {high:,} (got {shown})")
-    return value
+    """A whole number from 1 to `high` typed in a field (digits 0-9, `,` or `_` between
+    them); ValueError saying what is wanted."""
+    value = read_number(text.strip().replace(",", ""))
+    if value is None or not 1 <= value <= high or value % 1:
+        shown = shown_value(text.strip()) if text.strip() else "nothing"
+        digits = ", in digits 0-9" if digits_note(text) else ""
+        raise ValueError(f"{what}: a whole number from 1 to {high:,}{digits} (got {shown})")
+    return int(value)
 
 
 @dataclass(frozen=True)
@@ -485,15 +485,31 @@ class CompareView(Vertical):
         self._colours[key] = place
         return place
 
+    def _allowed(
+        self, kwargs: Mapping[str, Any], wrappers: Iterable[tuple[str, Mapping[str, Any]]]
+    ) -> tuple[float, float] | None:
+        """The returns the current game allows with these arguments and wrappers."""
+        from tui_gym.session.returns import return_range_of
+
+        session = self.session
+        return return_range_of(session.game, session.env_id, kwargs, wrappers)
+
     def _redraw(self) -> None:
         entries: list[tuple[Series | None, FigureRow, Hashable]] = []
         for run_id in self.run_list.selected:
             record = self._record(run_id)
             if record is not None:
-                entries.append((series_of_record(record, self.smooth), row_of_record(record),
-                                run_id))
+                series = series_of_record(record, self.smooth)
+                if series is not None:
+                    allowed = self._allowed(record.game_params,
+                                            ((w.name, w.params) for w in record.wrappers))
+                    series = bounded(series, allowed)
+                entries.append((series, row_of_record(record), run_id))
+        job = self._job
+        live_allowed = None if job is None or not self._live else self._allowed(
+            job.spec.game_params, ((c.name, c.values()) for c in job.spec.wrappers))
         for series, row in self._live:
-            entries.append((series, row, series.key))
+            entries.append((bounded(series, live_allowed), row, series.key))
         shown = {key for _, _, key in entries}
         for key in [k for k in self._colours if k not in shown]:
             del self._colours[key]

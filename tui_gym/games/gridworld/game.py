@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
-from tui_gym.core.mdp import NotAvailable, evaluate
+from tui_gym.core.mdp import NotAvailable, evaluate, return_range
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.envs.walls import Walls, cell_distances, cell_moves, check_walls
@@ -176,12 +176,17 @@ def _exact_return(
     model as the wrappers make it (the unwrapped game's when they change its dynamics)."""
     if changes.others:
         changes = GameChanges(time_limit=changes.time_limit)
-    args = (_size(kwargs), float(kwargs.get("reward_scale", 1.0)),
-            float(kwargs.get("step_penalty", 0.0)), changes, _walls(kwargs))
+    args = _model_args(kwargs, changes)
     model = gridworld_model(*args)
     value = evaluate(model, greedy_probabilities(q)).value
     best = gridworld_optimum(*args).value
     return {"exact_value": value, "optimal_value": best, "gap": exact_gap_of(best, value)}
+
+
+def _model_args(kwargs: Mapping[str, Any], changes: GameChanges) -> tuple[Any, ...]:
+    """`gridworld_model`'s arguments for the game's arguments and the wrappers' changes."""
+    return (_size(kwargs), float(kwargs.get("reward_scale", 1.0)),
+            float(kwargs.get("step_penalty", 0.0)), changes, _walls(kwargs))
 
 
 def _distance(scene: Mapping[str, Any]) -> int:
@@ -230,6 +235,13 @@ class GridWorldOracle(Oracle):
                          "a shortest path need not pay best")
         return Scope(False, "shortest-path figures: with these rewards a shortest path "
                      "need not pay best")
+
+    def return_range(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> tuple[float, float] | NotAvailable:
+        if changes.others:
+            return NotAvailable(unwrapped_note(changes.others))
+        return return_range(gridworld_model(*_model_args(kwargs, changes)))
 
     def reference(
         self, q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
