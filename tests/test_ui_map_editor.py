@@ -89,3 +89,28 @@ async def test_paint_undo_and_the_optimum_on_a_small_cliff_and_a_game_without_a_
         await pilot.pause()
         assert not view.editing_map
         assert any("no map to edit" in n.message for n in app._notifications)
+
+
+async def test_the_status_names_cells_as_the_axes_do_and_says_when_nothing_is_left() -> None:
+    """GridWorld numbers its rows from the bottom up: the status says what the axes say.
+    An undo past the first edit says there is nothing to undo, not "undone" again."""
+    app = TuiGymApp(Session("gridworld", seed=0))
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.press("m")
+        view = app.query_one(TrainView)
+        await wait_for(pilot, lambda: view.editor is not None and view.editor.canvas.has_focus,
+                       "the editor")
+        editor = view.editor
+        assert editor is not None
+        await pilot.press("down", "down", "down", "right", "right")  # the map's row 3, col 2
+        assert editor.cursor == (3, 2)
+        assert editor.canvas.panels[0].row_labels[3] == "1"
+        assert "row 1, col 2: floor" in status(editor)
+        await pilot.press("2")  # a wall there
+        await wait_for(pilot, lambda: not editor.pending, "the edit played")
+        assert "wall at row 1, col 2" in status(editor)
+        await pilot.press("u")
+        await wait_for(pilot, lambda: not editor.pending, "the undo played")
+        assert "· undone" in status(editor)
+        await pilot.press("u")
+        assert "· nothing to undo" in status(editor) and "undone" not in status(editor)
