@@ -49,6 +49,7 @@ from textual.widgets import ContentSwitcher, Header
 from tui_gym.core.training import continue_run
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games import GAMES, Game, game_for, game_named
+from tui_gym.games.words import plural
 from tui_gym.session.recording.switch import RecordingSwitch
 from tui_gym.session.runners import make_runner
 from tui_gym.session.session import Session
@@ -432,7 +433,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             notice = f"{game.title}: a new agent with the game's own settings."
         else:
             episodes = session.trainer.episodes
-            notice = (f"{game.title}: your agent ({episodes:,} episodes), settings "
+            notice = (f"{game.title}: your agent ({plural(episodes, 'episode')}), settings "
                       "and wrappers as you left them.")
         if was_running:
             notice = "Training paused. " + notice
@@ -498,7 +499,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self.push_screen(
             _confirm_screen(
                 "Reset the agent?",
-                f"It has trained {episodes:,} episodes. An empty Q-table and fresh "
+                f"It has trained {plural(episodes, 'episode')}. An empty Q-table and fresh "
                 "statistics replace them (ctrl+s saves it first).",
                 "Reset",
             ),
@@ -647,7 +648,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
                 self.runner.start()
         self._files[self.session.game.name] = path
         episodes = self.session.trainer.episodes
-        self.notify(f"Agent saved to {path} ({episodes:,} episodes).", title="Saved")
+        self.notify(f"Agent saved to {path} ({plural(episodes, 'episode')}).", title="Saved")
         return None
 
     def _read_file(self, path: Path) -> str | None:
@@ -677,7 +678,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self.push_screen(
             _confirm_screen(
                 f"Replace the {game.title} agent?",
-                f"The {game.title} agent here has trained {episodes:,} episodes; "
+                f"The {game.title} agent here has trained {plural(episodes, 'episode')}; "
                 f"{path.name} replaces it, its settings and its wrappers.",
                 "Load",
             ),
@@ -694,7 +695,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self._files[session.game.name] = path
         self._use_session(session)
         self.notify(f"Loaded {path}: {session.game.title}, "
-                    f"{session.trainer.episodes:,} episodes trained.", title="Loaded")
+                    f"{plural(session.trainer.episodes, 'episode')} trained.", title="Loaded")
 
     def action_save_screenshot(self) -> None:
         """Save an SVG picture of the screen in the current folder, and say where."""
@@ -801,8 +802,9 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self.push_screen(
             _confirm_screen(
                 f"Train with {cls.title} instead?",
-                f"Another algorithm needs a fresh learner: the agent, trained {episodes:,} "
-                f"episodes with {self.session.learner_class.title}, would start over with "
+                "Another algorithm needs a fresh learner: the agent, trained "
+                f"{plural(episodes, 'episode')} with {self.session.learner_class.title}, "
+                "would start over with "
                 f"{cls.title}'s defaults for this game (ctrl+s saves it first). "
                 "ε, the learning rate and the other fields change without this.",
                 "Switch and reset",
@@ -847,8 +849,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self.push_screen(
             _confirm_screen(
                 "Reset the agent for this change?",
-                f"It changes what observations mean, so the agent, trained {episodes:,} "
-                "episodes, would start over (ctrl+s saves it first).",
+                "It changes what observations mean, so the agent, trained "
+                f"{plural(episodes, 'episode')}, would start over (ctrl+s saves it first).",
                 "Apply and reset",
             ),
             answer,

@@ -584,9 +584,13 @@ class TrainView(Vertical):
                 self.heatmap.step_cell = None
             return
         session = self.session
-        game = session.game
-        self._step.show(explain(event, record, game.action_names, game.states.describe,
-                                session.learner_class.title))
+        game, kwargs = session.game, session.env_kwargs
+        self._step.show(explain(
+            event, record, game.action_names,
+            lambda observation: game.states.describe(observation, kwargs),
+            session.learner_class.title,
+            lambda row: game.states.describe(session.keyer.observation(row), kwargs),
+        ))
         found = session.heatmap_cell(event.observation, self.focus_target)
         if found is None:
             self.heatmap.step_cell = None

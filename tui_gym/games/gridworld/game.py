@@ -315,9 +315,9 @@ class GridWorldOracle(Oracle):
         names = " or ".join(self.game.action_names[a] for a in optimal)
         scope = self.scope(kwargs, GameChanges.of(env))
         if not scope.exact:
-            return Advice((), None, f"shortest path: {names}  ({steps} steps to go; "
+            return Advice((), None, f"shortest path: {names}  ({plural(steps, 'step')} to go; "
                           f"{scope.note.split(': ', 1)[-1]})", unwrapped_optimal=optimal)
-        return Advice(optimal, None, f"optimal: {names}  ({steps} steps to go)")
+        return Advice(optimal, None, f"optimal: {names}  ({plural(steps, 'step')} to go)")
 
     def optimal_marks(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
