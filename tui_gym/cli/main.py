@@ -28,7 +28,7 @@ from tui_gym.algorithms import ALGORITHMS, DEFAULT_ALGORITHM
 from tui_gym.cli.flags import add_game_flags, add_hyperparameter_flags
 from tui_gym.cli.maps_command import add_maps_parser
 from tui_gym.cli.output import CliError, OutConsole
-from tui_gym.cli.types import file_name, finite_number, positive_int, seed_number
+from tui_gym.cli.types import file_name, finite_number, fresh_seed, positive_int, seed_number
 
 ENV_HELP = "a game (`tui-gym envs` lists them), a Gymnasium id, or MODULE:ID"
 EXIT_USAGE = 2
@@ -91,7 +91,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"tui-gym {__version__}")
     parser.add_argument("--env", default="", help="game to open (default: the first of `envs`)")
-    parser.add_argument("--seed", type=seed_number, default=0, help="seed for every random thing")
+    parser.add_argument("--seed", type=seed_number, default=None,
+                        help="seed for every random thing (default: drawn afresh each launch, "
+                        "shown in the app's header)")
     parser.add_argument("--load", metavar="PATH", help="open a saved agent")
     parser.add_argument("--map-file", metavar="PATH", dest="app_map_file",
                         help="open a grid game (--env) on the map in this file")
@@ -203,6 +205,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     err = Console(stderr=True)
     try:
         args = build_parser().parse_args(argv)
+        if args.seed is None:
+            args.seed = fresh_seed()
         out = OutConsole()
         if args.command is None:
             return _run_app(args)

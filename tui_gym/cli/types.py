@@ -9,9 +9,20 @@ from collections.abc import Callable
 
 from tui_gym.core.params import digits_note, read_number, shown_value
 
-__all__ = ["MAX_SEED", "file_name", "finite_number", "int_in", "positive_int", "seed_number"]
+__all__ = [
+    "MAX_SEED", "file_name", "finite_number", "fresh_seed", "int_in", "positive_int",
+    "seed_number",
+]
 
 MAX_SEED = 2**63 - 2**32  # room for the seeds derived from it (evaluation adds to it)
+FRESH_SEEDS = 1_000_000  # a seed drawn afresh is below this: short enough to type again
+
+
+def fresh_seed() -> int:
+    """A seed drawn from the system's randomness, for a run the user gave none."""
+    import secrets
+
+    return secrets.randbelow(FRESH_SEEDS)
 
 
 def int_in(minimum: int, maximum: int, noun: str) -> Callable[[str], int]:

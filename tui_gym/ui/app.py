@@ -201,7 +201,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         if self.standalone:
             self._catch_signals()
         self._switcher = self.query_one("#views", ContentSwitcher)
-        self.sub_title = self.session.game.title
+        self._show_title()
         self.set_interval(1 / REFRESH_HZ, self._tick)
         self._apply_size(self.size.width, self.size.height)
         self.call_after_refresh(self._focus_at_start)
@@ -222,6 +222,10 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             self.run_log, self._make_run_log = self._make_run_log(), None
         if self.tune_gc:
             self.call_after_refresh(self._tune_gc)
+
+    def _show_title(self) -> None:
+        """The header: the game and the seed (`--seed` repeats a run)."""
+        self.sub_title = f"{self.session.game.title} · seed {self.session.seed}"
 
     def _tune_gc(self) -> None:
         if self.gc_pacer is None and self.is_running:
@@ -477,7 +481,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         with contextlib.suppress(AttributeError):  # read-only where tied to the agent
             # The other game's last move.
             runner.last_event = runner.last_scene = None  # type: ignore[misc]
-        self.sub_title = session.game.title
+        self._show_title()
         self._last_version = -1
         self.play_view.reload()
         self._reload_train()
@@ -763,7 +767,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             if was_running:
                 self.runner.start()
             return False
-        self.sub_title = self.session.game.title
+        self._show_title()
         self._last_version = -1
         self.play_view.reload()
         self._reload_train()
