@@ -329,6 +329,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             return action == "quit"  # nothing else behind a screen that hides the app
         if action in self.TRAIN_ACTIONS:
             return self.current_view == "train"
+        if action == "edit_map":  # offered only where the game has a map
+            return self.session.game.editable
         return True
 
     def action_show_view(self, view: str) -> None:
@@ -488,6 +490,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         if self._compare is not None:
             self._compare.reload()
         self.side_panel.reload()
+        self.refresh_bindings()  # the keys the game offers (`m` for a map)
 
     def _episodes_trained(self) -> int:
         """Episodes the current agent has trained (the runner's count while it trains)."""

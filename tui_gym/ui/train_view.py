@@ -119,7 +119,8 @@ class TrainView(Vertical):
     TrainView #train-board-caption {
         color: $text-muted;
         width: 100%;
-        height: 3;
+        height: auto;
+        min-height: 3;
         padding: 0 1;
     }
     TrainView #train-step {
@@ -442,7 +443,7 @@ class TrainView(Vertical):
         """The keys this view adds to the app's own training keys."""
         keys = [
             ("e", "edit the hyperparameters (enter applies, also while training runs; "
-                  "esc: back)"),
+                  "esc: back, dropping an edit not applied)"),
             ("tab / shift+tab", "move between fields and buttons"),
         ]
         layout = self.session.game.layout
@@ -612,7 +613,7 @@ class TrainView(Vertical):
         step = f"→ {action}, reward {event.reward:+g}"
         if event.episode_done is not None:
             step += f" · return {event.episode_done.episode_return:+g}"
-        # The state comes last: when it wraps, the board above shows it anyway.
+        # The state comes last: it may take two lines.
         return "\n".join(line for line in (count, step, state) if line)
 
     # --- events ------------------------------------------------------------
@@ -663,7 +664,10 @@ class TrainView(Vertical):
 
     @on(HyperparameterForm.Left)
     def _form_left(self, event: HyperparameterForm.Left) -> None:
+        """Escape: what was typed and not applied goes; the fields show what is in force."""
         event.stop()
+        if self.session.hp is not None:
+            self.form.load(self.session.hp)
         self._leave_form()
 
     def _leave_form(self) -> None:
