@@ -6,20 +6,22 @@ from __future__ import annotations
 from pathlib import Path
 
 from textual import events
+from textual.app import App, ComposeResult
 from textual.widgets import Checkbox
 
 from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.side_panel import ParamField, WrapperRow
 from tui_gym.ui.textual_internals import deliver_key
+from tui_gym.ui.widgets.text_field import TextField
 
 from .terminal import Terminal, console_script
 from .waiting import settle, wait_until
 
-_CHARACTERS = {"backspace": "\x7f", "full_stop": ".", "enter": "\r", "end": None, "tab": "\t"}
+_CHARACTERS = {"backspace": "\x7f", "full_stop": ".", "enter": "\r", "tab": "\t"}
 
 
-def burst(app: TuiGymApp, *keys: str) -> None:
+def burst(app: App, *keys: str) -> None:
     """Hand the app every key at once, as the terminal's input thread does for a paste."""
     for key in keys:
         event = events.Key(key, _CHARACTERS.get(key, key if len(key) == 1 else None))
@@ -63,6 +65,23 @@ async def test_a_burst_in_a_wrapper_field_applies_what_was_typed() -> None:
         await settle(pilot)
         assert app.session.choices[0].values() == {"max_episode_steps": 10}
         assert field.value == "10"
+
+
+async def test_a_text_field_edits_in_the_order_typed_by_itself() -> None:
+    """Its editing keys are handled in the field, in line with the characters: no trip up
+    to the app for the next character to overtake."""
+
+    class Host(App[None]):
+        def compose(self) -> ComposeResult:
+            yield TextField("0.001")
+
+    app = Host()
+    async with app.run_test() as pilot:
+        field = app.query_one(TextField)
+        field.focus()
+        await settle(pilot)
+        burst(app, "end", *["backspace"] * 3, "2", "5", "home", "delete", "9")
+        await wait_until(pilot, lambda: field.value == "9.25", "the edits, in order")
 
 
 def test_a_burst_typed_in_a_terminal_is_kept(tmp_path: Path) -> None:

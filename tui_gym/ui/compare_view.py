@@ -63,6 +63,7 @@ from tui_gym.ui.widgets.figures_table import FiguresTable, with_interval
 from tui_gym.ui.widgets.numbers import compact_count
 from tui_gym.ui.widgets.progress_line import ProgressLine
 from tui_gym.ui.widgets.stats_panel import format_duration
+from tui_gym.ui.widgets.text_field import TextField
 from tui_gym.ui.widgets.tick_box import TickBox
 
 if TYPE_CHECKING:
@@ -271,9 +272,9 @@ class CompareView(Vertical):
                               id=f"algo-{cls.name}", tooltip=cls.summary)
             for cls in ALGORITHMS
         }
-        self._seeds = Input(str(DEFAULT_SEEDS), id="compare-seeds", compact=True,
+        self._seeds = TextField(str(DEFAULT_SEEDS), id="compare-seeds", compact=True,
                             tooltip=f"independent learners per algorithm, 1 to {MAX_SEEDS:,}")
-        self._episodes = Input("", id="compare-episodes", compact=True,
+        self._episodes = TextField("", id="compare-episodes", compact=True,
                                tooltip=f"episodes each learner trains, 1 to {MAX_EPISODES:,}")
         self._launch = Button("▶ Compare", id="btn-compare", variant="success", compact=True,
                               tooltip="Run the comparison for this game and its settings (l)")

@@ -31,6 +31,7 @@ from textual.widgets import Input, Label, Select, Static
 from tui_gym.algorithms import Field, QLearning, Settings
 from tui_gym.core.params import Param, ParamError, digits_note, read_number
 from tui_gym.ui.widgets.numbers import compact_count
+from tui_gym.ui.widgets.text_field import TextField
 
 
 def _typed(field: Field) -> bool:
@@ -232,7 +233,7 @@ class HyperparameterForm(Vertical):
         box: Widget
         if _typed(field):
             assert isinstance(field, Param)
-            box = Input(
+            box = TextField(
                 _text(field, value),
                 id=f"hp-{field.name}",
                 compact=True,
