@@ -56,6 +56,7 @@ def test_the_app_ends_when_its_terminal_closes(tmp_path: Path, hangup_signal: bo
         wait_ended(term.process, "terminal closed")
     finally:
         term.close()
+    assert term.process.returncode == 128 + signal.SIGHUP
     deadline = time.monotonic() + DEADLINE
     while not all(ended(pid) for pid in trainers):
         assert time.monotonic() < deadline, "the training process outlived the app"
@@ -63,9 +64,9 @@ def test_the_app_ends_when_its_terminal_closes(tmp_path: Path, hangup_signal: bo
     assert not (tmp_path / "logs").exists(), "a closed terminal is no crash"
 
 
-def test_a_served_app_ends_when_its_pipes_close() -> None:
+def test_a_served_app_ends_when_its_pipes_close(tmp_path: Path) -> None:
     env = {**os.environ, "TEXTUAL_DRIVER": "textual.drivers.web_driver:WebDriver",
-           "COLUMNS": "120", "ROWS": "40"}
+           "COLUMNS": "120", "ROWS": "40", "TUI_GYM_LOG_DIR": str(tmp_path / "logs")}
     process = subprocess.Popen(
         [sys.executable, "-m", "tui_gym", "--env", "blackjack", "--no-history"],
         stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=env,
@@ -85,3 +86,5 @@ def test_a_served_app_ends_when_its_pipes_close() -> None:
         if process.poll() is None:
             os.killpg(process.pid, signal.SIGKILL)
             process.wait()
+    assert process.returncode == 128 + signal.SIGHUP
+    assert not (tmp_path / "logs").exists(), "closed pipes are no crash"

@@ -264,7 +264,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             view = self._train = TrainView(id="train")
             view.display = self.current_view == "train"
             assert self._switcher is not None
-            self._train_mounted = self._switcher.mount(view)  # it reads the session then
+            if self._switcher.is_attached:  # else the app is being taken apart
+                self._train_mounted = self._switcher.mount(view)  # it reads the session then
         return view
 
     async def _mounted_train(self) -> TrainView:

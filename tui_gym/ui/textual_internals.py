@@ -356,7 +356,11 @@ def guarded_driver(base: type[Driver]) -> type[Driver]:
 
         def stop_application_mode(self) -> None:
             self.guard.stopped.set()
-            super().stop_application_mode()
+            try:
+                super().stop_application_mode()  # a web driver writes its goodbye itself
+            except OSError:
+                if not self.guard.hung_up():
+                    raise
 
         def close(self) -> None:
             if not self.guard.hung_up():
