@@ -38,7 +38,8 @@ def wait_ended(process: subprocess.Popen[bytes], what: str) -> None:
         time.sleep(0.02)  # polling a condition: the app runs on its own
 
 
-@pytest.mark.parametrize("hangup_signal", [False, True], ids=["closed", "closed-and-SIGHUP"])
+@pytest.mark.parametrize("hangup_signal", [False, True],
+                         ids=["closed", "closed-then-SIGHUP-and-SIGCONT"])
 def test_the_app_ends_when_its_terminal_closes(tmp_path: Path, hangup_signal: bool) -> None:
     term = Terminal([console_script(), "--env", "gridworld", "--no-history"],
                     {"TUI_GYM_LOG_DIR": str(tmp_path / "logs")})
@@ -53,6 +54,7 @@ def test_the_app_ends_when_its_terminal_closes(tmp_path: Path, hangup_signal: bo
         term.hang_up()
         if hangup_signal:  # as a terminal that closes signals its processes
             os.killpg(term.process.pid, signal.SIGHUP)
+            os.killpg(term.process.pid, signal.SIGCONT)
         wait_ended(term.process, "terminal closed")
     finally:
         term.close()

@@ -4,6 +4,7 @@ is missing or has changed shape."""
 
 from __future__ import annotations
 
+import threading
 from pathlib import Path
 
 import pytest
@@ -102,3 +103,16 @@ async def test_a_widget_restyles_as_textual_does_without_the_component_hook(
         monkeypatch.setenv(internals.STOCK_ENV, "restyle")
         internals.restyle_alone(box)
         assert calls == ["stock"]
+
+
+def test_a_writer_finding_its_terminal_gone_is_told_from_a_crash(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    def failure(name: str, error: BaseException) -> threading.ExceptHookArgs:
+        return threading.ExceptHookArgs((type(error), error, None, threading.Thread(name=name)))
+
+    assert internals.terminal_write_failed(failure("textual-output", OSError(5, "I/O error")))
+    assert not internals.terminal_write_failed(failure("textual-output", ValueError("x")))
+    assert not internals.terminal_write_failed(failure("run-history", OSError(5, "I/O error")))
+    monkeypatch.setenv(internals.STOCK_ENV, "terminal")
+    assert not internals.terminal_write_failed(failure("textual-output", OSError(5, "I/O")))

@@ -58,7 +58,13 @@ from tui_gym.session.storage import StorageError
 from tui_gym.ui.key_order import KeysInOrder
 from tui_gym.ui.play_view import PlayView
 from tui_gym.ui.side_panel import SidePanel
-from tui_gym.ui.textual_internals import CrashHook, TerminalGone, guarded_driver, main_screen
+from tui_gym.ui.textual_internals import (
+    CrashHook,
+    TerminalGone,
+    guarded_driver,
+    main_screen,
+    terminal_write_failed,
+)
 from tui_gym.ui.too_small_screen import TooSmallScreen
 from tui_gym.ui.widgets.key_bar import KeyBar
 
@@ -1111,7 +1117,9 @@ def run_standalone(app: TuiGymApp) -> int:
     previous_hook = threading.excepthook
 
     def thread_failed(args: threading.ExceptHookArgs) -> None:
-        if args.exc_value is not None and app.thread_crash is None:
+        if terminal_write_failed(args):  # the terminal went away: no crash
+            app.post_message(TerminalGone())
+        elif args.exc_value is not None and app.thread_crash is None:
             app.thread_crash = args.exc_value  # raised on the app's next tick
 
     threading.excepthook = thread_failed

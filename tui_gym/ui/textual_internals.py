@@ -23,7 +23,7 @@ one; the tests run the app so), it leaves Textual to do what it does by itself:
   `SelectionList`'s rendering of `ToggleButton.BUTTON_INNER`);
 - `terminal`: the app ends when its terminal or its pipes close, and a write to
   a closed terminal never blocks (`guarded_driver`: a driver's input thread and
-  output writer);
+  output writer; `terminal_write_failed`: the writer thread's name);
 - `keys`: a key that a widget took (a character typed into a field) is known to
   go no further, so the next key need not wait for it to bubble up to the app
   (`key_stopped`: `Message._stop_propagation`);
@@ -68,6 +68,7 @@ __all__ = [
     "key_stopped",
     "main_screen",
     "restyle_alone",
+    "terminal_write_failed",
     "ticked_line",
     "watch_frames",
 ]
@@ -267,24 +268,20 @@ WATCH_SECONDS = 0.25  # how often the watcher looks at the terminal
 
 class _Guard:
     """The file descriptors a driver reads and writes, watched for a hang-up (a poll
-    object for the writes, another for the watcher's thread: one is not shared)."""
+    object for each look: they may come from several threads at once)."""
 
     def __init__(self, fds: Iterable[int]) -> None:
         self.fds = tuple(fds)
-        self._polls = (self._poll(), self._poll())
         self.gone = False
         self.stopped = threading.Event()
 
-    def _poll(self) -> Any:
-        poll = select.poll()
-        for fd in self.fds:
-            poll.register(fd, _HANGUP)
-        return poll
-
     def hung_up(self, timeout_ms: int = 0) -> bool:
-        """Whether the terminal or a pipe closed (waiting up to `timeout_ms`: the watcher)."""
-        if not self.gone and self._polls[bool(timeout_ms)].poll(timeout_ms):
-            self.gone = True
+        """Whether the terminal or a pipe closed, waiting up to `timeout_ms` for it."""
+        if not self.gone:
+            poll = select.poll()
+            for fd in self.fds:
+                poll.register(fd, _HANGUP)
+            self.gone = bool(poll.poll(timeout_ms))
         return self.gone
 
 
@@ -320,9 +317,16 @@ def guarded_driver(base: type[Driver]) -> type[Driver]:
             super().__init__(app, **kwargs)
             self.owner = app
             self.guard = _Guard(_driver_fds(self))
+            self.watcher: threading.Thread | None = None
 
         def start_application_mode(self) -> None:
-            threading.Thread(target=self._watch, name="tui-gym-terminal", daemon=True).start()
+            # Again on a resume (after ctrl+z, or the SIGCONT a hang-up may send): one
+            # watcher at a time.
+            self.guard.stopped.clear()
+            if self.watcher is None or not self.watcher.is_alive():
+                self.watcher = threading.Thread(target=self._watch, name="tui-gym-terminal",
+                                                daemon=True)
+                self.watcher.start()
             super().start_application_mode()
 
         def _watch(self) -> None:
@@ -368,6 +372,17 @@ def guarded_driver(base: type[Driver]) -> type[Driver]:
 
     Guarded.__name__ = Guarded.__qualname__ = f"Guarded{base.__name__}"
     return Guarded
+
+
+WRITER_THREAD = "textual-output"  # the name of the thread a terminal driver writes from
+
+
+def terminal_write_failed(args: threading.ExceptHookArgs) -> bool:
+    """Whether a thread's failure is the terminal driver's writer finding the terminal
+    gone (a write it had queued before the app knew); False when not known."""
+    thread = args.thread
+    return (enabled("terminal") and thread is not None and thread.name == WRITER_THREAD
+            and isinstance(args.exc_value, OSError))
 
 
 # --- a key taken ---------------------------------------------------------------------------
