@@ -27,8 +27,6 @@ from typing import Any
 from textual import events
 from textual.message_pump import MessagePump
 
-from tui_gym.ui.textual_internals import key_stopped
-
 __all__ = ["KEY_PATIENCE", "KeysInOrder"]
 
 KEY_PATIENCE = 1.0  # seconds a key waits on the one before it, at most
@@ -39,6 +37,7 @@ class KeysInOrder:
 
     _key_under_way: events.Key | None = None
     _key_since = 0.0  # when the key under way was handed on
+    _key_screen: Any = None  # the screen it was handed on in
     _keys_waiting: deque[events.Key] | None = None
 
     async def on_event(self, event: events.Event) -> None:
@@ -71,11 +70,12 @@ class KeysInOrder:
 
     def _follow(self, key: events.Key, path: list[MessagePump]) -> None:
         """Look again once the first of `path` (the widgets the key bubbles up through,
-        the focused one first) has handled it: when one took it, it goes no further;
-        when it reaches the app, `on_event` sees it come back."""
+        the focused one first) has handled it, and so on up: once the last has, the key
+        is done, whether one of them took it or it went on to the app (`on_event`
+        sees it come back, and that is sooner)."""
         if key is not self._key_under_way:
             return
-        if key_stopped(key) or not path:
+        if not path:
             self._done(key)
             return
         pump, rest = path[0], path[1:]

@@ -24,9 +24,6 @@ one; the tests run the app so), it leaves Textual to do what it does by itself:
 - `terminal`: the app ends when its terminal or its pipes close, and a write to
   a closed terminal never blocks (`guarded_driver`: a driver's input thread and
   output writer; `terminal_write_failed`: the writer thread's name);
-- `keys`: a key that a widget took (a character typed into a field) is known to
-  go no further, so the next key need not wait for it to bubble up to the app
-  (`key_stopped`: `Message._stop_propagation`);
 - `frames`: `tui-gym bench` times the frames the app hands to its terminal and
   delivers keys as the terminal driver does (`watch_frames`, `deliver_key`:
   `App._display`, `App._driver`).
@@ -53,9 +50,7 @@ from textual.strip import Strip
 from textual.widget import Widget
 
 STOCK_ENV = "TUI_GYM_STOCK_TEXTUAL"
-PARTS = (
-    "compositor", "focus", "resume", "restyle", "crash", "ticks", "terminal", "keys", "frames",
-)
+PARTS = ("compositor", "focus", "resume", "restyle", "crash", "ticks", "terminal", "frames")
 
 __all__ = [
     "PARTS",
@@ -65,7 +60,6 @@ __all__ = [
     "deliver_key",
     "enabled",
     "guarded_driver",
-    "key_stopped",
     "main_screen",
     "restyle_alone",
     "terminal_write_failed",
@@ -383,13 +377,6 @@ def terminal_write_failed(args: threading.ExceptHookArgs) -> bool:
     thread = args.thread
     return (enabled("terminal") and thread is not None and thread.name == WRITER_THREAD
             and isinstance(args.exc_value, OSError))
-
-
-# --- a key taken ---------------------------------------------------------------------------
-def key_stopped(event: Message) -> bool:
-    """Whether a widget stopped `event` from bubbling further (False when not known)."""
-    stopped = getattr(event, "_stop_propagation", False) if enabled("keys") else False
-    return stopped is True
 
 
 # --- the bench's hooks -----------------------------------------------------------------------
