@@ -92,17 +92,22 @@ def field_error(field: Param, text: str) -> str | None:
         field.parse(text.strip())
     except ParamError as exc:
         value = read_number(text)
-        if not exc.out_of_range or value is None or not math.isfinite(value):
+        if not exc.out_of_range or value is None or math.isnan(value):
             return f"{exc.shown} is not {field.expected()}{digits_note(text)}"
-        if field.maximum is not None and value > field.maximum:
-            return f"{exc.shown} is above {_full(field.maximum)}"
-        if field.minimum is not None and not field.min_inclusive and value <= field.minimum:
-            return f"{exc.shown} must be above {_full(field.minimum)}"
-        return f"{exc.shown} is below {_full(field.minimum or 0)}"
+        high = math.inf if field.maximum is None else field.maximum
+        low = -math.inf if field.minimum is None else field.minimum
+        if value > high or value == math.inf:
+            return f"{exc.shown} is above {_full(high)}"
+        if value == low and not field.min_inclusive:
+            return f"{exc.shown} must be above {_full(low)}"
+        return f"{exc.shown} is below {_full(low)}"
     return None
 
 
 def _full(value: float) -> str:
+    """'1,000,000,000', '0.5', 'every number' (no bound)."""
+    if math.isinf(value):
+        return "every number"
     return f"{int(value):,}" if float(value).is_integer() else f"{value:g}"
 
 
