@@ -49,10 +49,19 @@ async def test_the_dyna_q_form_and_its_errors_fit_whole() -> None:
         assert "'1234567890' is above" in text and "1,000,000,000" in text  # on two lines
 
 
-async def test_the_key_bar_leaves_keys_out_whole_and_keeps_help() -> None:
+async def test_the_key_bar_the_map_key_and_the_board_caption_in_blackjack() -> None:
+    """One app for facts about one game: the key bar leaves keys out whole and keeps help;
+    a game without a map offers no `m` (and `m` does nothing); the board's caption takes
+    the lines the state needs."""
     app = TuiGymApp(Session("blackjack", seed=0), runner="thread")
     async with app.run_test(size=SIZE) as pilot:
         await pilot.pause()
+        assert not app.check_action("edit_map", ())
+        assert "m Map" not in screen_text(app)
+        await pilot.press("m")
+        await pilot.pause()
+        assert app.current_view == "play", "m does nothing where there is no map"
+        assert not any("no map" in n.message for n in app._notifications)
         for view in ("p", "t"):
             await pilot.press(view)
             await pilot.pause()
@@ -60,30 +69,8 @@ async def test_the_key_bar_leaves_keys_out_whole_and_keeps_help() -> None:
             assert entries[-1] == "…" and "? Help" in entries, entries
             shown = {binding.description for _, binding, *_ in app.screen.active_bindings.values()}
             for entry in entries[:-1]:  # each entry whole: a key and its full description
-                key, _, description = entry.partition(" ")
-                assert description in shown, (entry, entries)
+                assert entry.partition(" ")[2] in shown, (entry, entries)
 
-
-async def test_a_game_without_a_map_offers_no_map_key() -> None:
-    app = TuiGymApp(Session("blackjack", seed=0), runner="thread")
-    async with app.run_test(size=SIZE) as pilot:
-        await pilot.pause()
-        assert not app.check_action("edit_map", ())
-        assert "Map" not in key_bar_entries(app) and "m Map" not in screen_text(app)
-        await pilot.press("m")
-        await pilot.pause()
-        assert app.current_view == "play", "m does nothing where there is no map"
-        assert not any("no map" in n.message for n in app._notifications)
-        await pilot.press("g")
-        await wait_for(pilot, lambda: app.session.game.name == "gridworld", "GridWorld")
-        assert app.check_action("edit_map", ())
-
-
-async def test_the_board_caption_shows_the_whole_state() -> None:
-    app = TuiGymApp(Session("blackjack", seed=0), runner="thread")
-    async with app.run_test(size=SIZE) as pilot:
-        await pilot.press("t")
-        await pilot.pause()
         caption = app.train_view.query_one("#train-board-caption")
         for _ in range(40):  # until a step's state is too long for one line
             await pilot.press("n")
@@ -94,3 +81,7 @@ async def test_the_board_caption_shows_the_whole_state() -> None:
         assert len(text.splitlines()[-1]) > width, text
         lines = sum(len(textwrap.wrap(line, width)) for line in text.splitlines())
         assert caption.content_region.height >= lines
+
+        await pilot.press("g")
+        await wait_for(pilot, lambda: app.session.game.name == "gridworld", "GridWorld")
+        assert app.check_action("edit_map", ())
