@@ -258,6 +258,14 @@ class Oracle(Role):
         reach it (an episode limit rewards playing differently as time runs out)."""
         return NotAvailable(f"{self.game.title} has no exact optimum")
 
+    def return_range(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> tuple[float, float] | NotAvailable:
+        """The lowest and the highest return one episode can have, in the game as the
+        wrappers make it (±inf on a side with no bound; `core.mdp.return_range` reads
+        them off a model): what a chart of returns never needs to show beyond."""
+        return NotAvailable(f"{self.game.title} has no exact model")
+
     def bound(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> Bound | NotAvailable:

@@ -42,6 +42,7 @@ from tui_gym.core.mdp import (
     evaluate,
     model_from_env,
     optimal_actions,
+    return_range,
     solve,
     with_horizon,
 )
@@ -392,6 +393,16 @@ class ModelOracle(Oracle):
             text += f", beyond the best fixed policy's {fixed.shortfall:.4g})" if (
                 fixed.shortfall) else ")"
         return Bound("gap", limit, text)
+
+    def return_range(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> tuple[float, float] | NotAvailable:
+        exact = self.exact(kwargs, changes)
+        if isinstance(exact, NotAvailable):
+            return exact
+        if not exact.scope.exact:
+            return NotAvailable(exact.scope.note)
+        return return_range(exact.model)
 
     def fixed_policy_bound(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES

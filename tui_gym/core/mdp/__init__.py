@@ -36,6 +36,7 @@ Modules, one job each:
 - `optimum`: `solve`, the optimum (`Solution`, with `Q*` and `V*`); `optimal_actions`;
 - `gap`: `exact_gap`, a policy's value beside the optimum (`Gap`);
 - `ending`: which states a policy (or any policy) ends episodes from;
+- `returns`: `return_range`, the lowest and highest return one episode can have;
 - `sampler`: `BatchSampler`, batched steps and resets for the vector engine;
 - `policy_arrays`: `PolicyArrays`, a policy's Bellman expectation, swept synchronously
   or in place;
@@ -49,6 +50,7 @@ from tui_gym.core.mdp.gap import Gap, exact_gap
 from tui_gym.core.mdp.model import FiniteMDP, ModelError
 from tui_gym.core.mdp.optimum import Solution, optimal_actions, solve
 from tui_gym.core.mdp.policy import PolicyError, greedy_policy, policy_matrix
+from tui_gym.core.mdp.returns import return_range
 from tui_gym.core.mdp.sampler import BatchSampler, SampledStep
 from tui_gym.core.mdp.transforms import clip_reward, scale_reward, step_penalty, with_horizon
 
@@ -69,6 +71,7 @@ __all__ = [
     "model_from_env",
     "optimal_actions",
     "policy_matrix",
+    "return_range",
     "scale_reward",
     "solve",
     "step_penalty",
