@@ -89,7 +89,7 @@ class MazeEnv(GridEnv):
         self.phase = 0
 
     def _enter_phase(self) -> None:
-        phase = bisect_right([start for start, _, _ in self.phases], self.world_steps) - 1
+        phase = max(0, bisect_right([start for start, _, _ in self.phases], self.world_steps) - 1)
         if phase != self.phase:
             _, self.grid, self.arrays = self.phases[phase]
             self.phase, self._P = phase, None
