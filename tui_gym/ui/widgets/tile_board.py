@@ -725,12 +725,14 @@ class TileBoard(Board):
         rows, cols = len(self.cells), len(self.cells[0])
         if not self.KEEP_SHAPE:
             self._kept.release()
+        wind = 1 if self.wind else 0  # a line kept for the wind under the columns
         shape = self._kept.get(
-            (rows, cols), width, height, lambda w, h: choose_shape(rows, cols, w, h), shape_fits
+            (rows, cols), width, height - wind,
+            lambda w, h: choose_shape(rows, cols, w, h), shape_fits
         )
         lines = self._draw_map(shape)
         spare = height - shape.height - CAPTION_LINES
-        if self.wind and spare > 0 and not shape.half:
+        if wind and spare > 0 and not shape.half:
             lines.append(self._wind_line(shape))
             spare -= 1
         caption = self._caption(width)
