@@ -66,7 +66,7 @@ async def test_b_offers_its_actions_by_digit_and_a_its_two_moves() -> None:
         env.step(0)
         board.show_scene(game.states.scene(env, before))
         await pilot.pause()
-        assert "You went left to B" in text_of(board)
+        assert "You went left to B: pick one of its actions (1 to 3)" in text_of(board)
         app.posted.clear()
         await pilot.press("left", "2", "3", "4")
         await pilot.pause()

@@ -127,8 +127,8 @@ class Grid:
         return TileArrays(next_state, prob, reward, terminal, initial / initial.sum())
 
     def cells(self) -> list[str]:
-        """The grid as tile rows: F floor, S the start, W a wall, G a terminal cell (unless
-        `tiles` says otherwise), a special cell's letter."""
+        """The grid as tile rows: F floor, S the start, W a wall, G a terminal cell, unless
+        `tiles` says otherwise (a cell's letter is a mark drawn over its tile)."""
         rows = [["F"] * self.cols for _ in range(self.rows)]
         if self.start is not None:
             rows[self.start[0]][self.start[1]] = "S"
@@ -136,9 +136,8 @@ class Grid:
             rows[r][c] = "W"
         for r, c in self.terminals:
             rows[r][c] = "G"
-        for (r, c), tile in {**self.tiles, **self.letters}.items():
-            if len(tile) == 1:  # longer names are marks only ("19")
-                rows[r][c] = tile
+        for (r, c), tile in self.tiles.items():
+            rows[r][c] = tile
         return ["".join(row) for row in rows]
 
 

@@ -48,7 +48,7 @@ class DPGridGame(ModelGame):
     """A grid world of the book (see the module docstring)."""
 
     board = "tile"
-    action_names = GRID_ACTIONS
+    action_names: tuple[str, ...] = GRID_ACTIONS
 
     def __init__(self) -> None:
         super().__init__()

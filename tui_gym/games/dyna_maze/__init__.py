@@ -118,9 +118,13 @@ class MazeGame(DPGridGame):
     change_words = ""  # what the change does, for the board
     extra_steps = 0.0  # the bound: steps beyond the fewest a trained greedy policy takes
     # A changing maze is learned as the book's figures do (epsilon 0.1 throughout), so that
-    # the world changes once the agent knows its way.
+    # the world changes once the agent knows its way. SARSA's values are those of the
+    # policy it follows, whose exploration can leave two cells' greedy moves pointing at
+    # each other: its exploration falls to 0.01, so that its greedy policy is the one it
+    # learns about.
     CHANGING = {"discount": DISCOUNT, "learning_rate": 0.5, "learning_rate_schedule": "constant",
                 "epsilon_start": 0.1, "epsilon_final": 0.1}
+    CHANGING_SARSA = {"epsilon_final": 0.01}
     plan_gamma = DISCOUNT
     hyperparameters = {"*": {"discount": DISCOUNT, "learning_rate": 0.1, "episodes": 300}}
 
@@ -178,7 +182,8 @@ class BlockingMazeGame(MazeGame):
     params = (Param("change_at", int, 1000, 1, 100_000_000,
                     help="the step, over all episodes, at which the wall moves",
                     owner="Blocking maze"),)
-    hyperparameters = {"*": {**MazeGame.CHANGING, "episodes": 300}}
+    hyperparameters = {"*": {**MazeGame.CHANGING, "episodes": 300},
+                       "sarsa": MazeGame.CHANGING_SARSA}
 
 
 class ShortcutMazeGame(MazeGame):
@@ -197,4 +202,5 @@ class ShortcutMazeGame(MazeGame):
                     help="the step, over all episodes, at which the wall opens",
                     owner="Shortcut maze"),)
     extra_steps = 6.0  # the long way, which a learner that does not explore keeps to
-    hyperparameters = {"*": {**MazeGame.CHANGING, "episodes": 400}}
+    hyperparameters = {"*": {**MazeGame.CHANGING, "episodes": 400},
+                       "sarsa": MazeGame.CHANGING_SARSA}

@@ -168,7 +168,10 @@ class MaxBiasGame(DPGridGame):
               move: str) -> Event | None:
         if was[1] == B:
             return f"{{who}} took {move} in B: the episode ends", "caption"
+        if was[1] == A and now[1] == B:
+            count = int(game_env.offered[B].sum())
+            keys = "1" if count == 1 else f"1 to {count}" if count < 10 else "1 to 9 and 0"
+            return f"{{who}} went left to B: pick one of its actions ({keys})", "caption"
         if was[1] == A:
-            where = "to B" if now[1] == B else "and ends at 0"
-            return f"{{who}} went {'left' if now[1] == B else 'right'} {where}", "caption"
+            return "{who} went right: the episode ends at 0", "caption"
         return None

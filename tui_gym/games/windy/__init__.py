@@ -51,7 +51,7 @@ class WindyGame(DPGridGame):
     description = ("Example 6.5's 7x10 grid: a wind blows up through the middle columns; "
                    "-1 a move until the goal.")
     teaches = "TD control where moves are not what they seem: Sarsa learns to use the wind"
-    action_names = GRID_ACTIONS
+    action_names: tuple[str, ...] = GRID_ACTIONS
     params = (Param("stochastic_wind", bool, False,
                     help="the wind varies by one a third of the time each way (Exercise 6.10)",
                     owner="Windy GridWorld"),)
