@@ -150,6 +150,22 @@ class MainScreen(Screen):
             event.refresh_styles = False
 
 
+GAME_KEYS_A_LINE = 8  # the help's game keys, a line of at most this many
+
+
+def _game_keys() -> list[tuple[str, str]]:
+    """The help's rows of game keys: a few a line, so the key column stays narrow."""
+    keys = [g.key for g in GAMES if g.key]
+    lines = [" ".join(keys[i:i + GAME_KEYS_A_LINE])
+             for i in range(0, len(keys), GAME_KEYS_A_LINE)]
+    words = ["switch game, as the picker names them;",
+             "each keeps its agent, settings and curves"]
+    words += [""] * (len(lines) - len(words))
+    if len(lines) < len(words):
+        return [(lines[0], " ".join(words))]
+    return list(zip(lines, words, strict=True))
+
+
 class TuiGymApp(App[int]):
     """Play, train and tinker: the tui-gym terminal playground."""
 
@@ -958,9 +974,7 @@ class TuiGymApp(App[int]):
             ("Everywhere", [
                 ("p / t / v", "Play view / Train view / Compare view"),
                 ("P", "Plan view: planning, sweep by sweep"),
-                (" ".join(g.key for g in GAMES if g.key),
-                 "switch game, as the picker names them; each keeps its agent, "
-                 "settings and curves"),
+                *_game_keys(),
                 ("w / W", "focus the wrapper panel (W while a board that moves with WASD "
                           "has focus)"),
                 ("m", "edit a grid game's map (training or planning)"),
