@@ -279,3 +279,15 @@ def test_phases_start_at_step_0_and_follow_one_another() -> None:
             Phases((model,) * len(starts), starts)
     with pytest.raises(ModelError, match="differ in size"):
         Phases((model, _game("max-bias").base_model({})), (0, 5))
+
+
+def test_the_coach_advises_for_the_phase_of_the_env_being_played() -> None:
+    game = _game("blocking-maze")
+    kwargs = game.normalize_kwargs({"change_at": 1})
+    env = gym.make(game.env_id, **game.make_kwargs(kwargs))
+    env.reset(seed=0)
+    start = 5 * 9 + 3
+    assert game.oracle.advice(env, kwargs).optimal == (3,)  # right: round the wall's right
+    env.step(1)  # down, into the bottom edge: still at the start, and the wall has moved
+    assert env.unwrapped.s == start and env.unwrapped.phase == 1
+    assert game.oracle.advice(env, kwargs).optimal == (2,)  # left: round its left now

@@ -52,6 +52,7 @@ class WindyGame(DPGridGame):
                    "-1 a move until the goal.")
     teaches = "TD control where moves are not what they seem: Sarsa learns to use the wind"
     action_names: tuple[str, ...] = GRID_ACTIONS
+    king_moves = False
     params = (Param("stochastic_wind", bool, False,
                     help="the wind varies by one a third of the time each way (Exercise 6.10)",
                     owner="Windy GridWorld"),)
@@ -72,8 +73,7 @@ class WindyGame(DPGridGame):
         self.narrator = ReachNarrator(self)
 
     def grid(self, kwargs: Mapping[str, Any]) -> Grid:
-        return windy_grid(len(self.action_names) == len(KING_ACTIONS),
-                          bool(kwargs.get("stochastic_wind", False)))
+        return windy_grid(self.king_moves, bool(kwargs.get("stochastic_wind", False)))
 
     def event(self, game_env: Any, before: Mapping[str, Any], was: Cell, now: Cell,
               move: str) -> Event | None:
@@ -100,6 +100,7 @@ class KingWindyGame(WindyGame):
                    "until the goal.")
     teaches = "the same wind with diagonal moves: a shorter path, 7 moves instead of 15"
     action_names = KING_ACTIONS
+    king_moves = True
     params = (Param("stochastic_wind", bool, False,
                     help="the wind varies by one a third of the time each way (Exercise 6.10)",
                     owner="Windy GridWorld, king's moves"),)
