@@ -563,6 +563,11 @@ class Game:
         """The exact model the Plan view and `tui-gym plan` sweep, or why there is none."""
         return NotAvailable(f"{self.title} has no exact model to plan on")
 
+    def at_step(self, kwargs: Mapping[str, Any], steps: int) -> dict[str, Any]:
+        """The arguments the exact figures take after `steps` steps (counted over episodes):
+        these, in a world that never changes; with its phase then, in one that does."""
+        return dict(kwargs)
+
     def make_id(self, env_id: str, kwargs: Mapping[str, Any]) -> str:
         """The id `gym.make` builds for these arguments: `env_id` (the one asked for),
         unless they need another env (an edited map)."""

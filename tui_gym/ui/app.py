@@ -93,6 +93,22 @@ IDLE_POLL = 0.02  # seconds between looks for the agent handed back before a cha
 IDLE_TIMEOUT = 10.0  # and how long to look before giving up
 
 
+GAME_KEYS_A_LINE = 8  # the help's game keys, a line of at most this many
+
+
+def _game_keys() -> list[tuple[str, str]]:
+    """The help's rows of game keys: a few a line, so the key column stays narrow."""
+    keys = [g.key for g in GAMES if g.key]
+    lines = [" ".join(keys[i:i + GAME_KEYS_A_LINE])
+             for i in range(0, len(keys), GAME_KEYS_A_LINE)]
+    words = ["switch game, as the picker names them;",
+             "each keeps its agent, settings and curves"]
+    words += [""] * (len(lines) - len(words))
+    if len(lines) < len(words):
+        return [(lines[0], " ".join(words))]
+    return list(zip(lines, words, strict=True))
+
+
 class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     """Play, train and tinker: the tui-gym terminal playground."""
 
@@ -917,9 +933,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             ("Everywhere", [
                 ("p / t / v", "Play view / Train view / Compare view"),
                 ("P", "Plan view: planning, sweep by sweep"),
-                (" ".join(g.key for g in GAMES if g.key),
-                 "switch game, as the picker names them; each keeps its agent, "
-                 "settings and curves"),
+                *_game_keys(),
                 ("w / W", "focus the wrapper panel (W while a board that moves with WASD "
                           "has focus)"),
                 ("m", "edit a grid game's map (training or planning)"),

@@ -28,7 +28,9 @@ answering mid-episode asks for them with the steps that are left.
 
 Modules, one job each:
 
-- `model`: `FiniteMDP`, dense `[S, A, K]` transition arrays; `ModelError`;
+- `model`: `FiniteMDP`, dense `[S, A, K]` transition arrays (rewards with noise keep
+  their mean and give their deviation); `ModelError`;
+- `phases`: `Phases`, a world that changes as it is played, the model of each phase;
 - `from_env`: `model_from_env` for envs with a `P` table, or `NotAvailable`;
 - `transforms`: the model under `ScaleReward`, `StepPenalty`, `ClipReward`, `TimeLimit`;
 - `policy`: deterministic and stochastic policies, `greedy_policy`;
@@ -49,6 +51,7 @@ from tui_gym.core.mdp.from_env import NotAvailable, model_from_env
 from tui_gym.core.mdp.gap import Gap, exact_gap
 from tui_gym.core.mdp.model import FiniteMDP, ModelError
 from tui_gym.core.mdp.optimum import Solution, optimal_actions, solve
+from tui_gym.core.mdp.phases import Phases
 from tui_gym.core.mdp.policy import PolicyError, greedy_policy, policy_matrix
 from tui_gym.core.mdp.returns import return_range
 from tui_gym.core.mdp.sampler import BatchSampler, SampledStep
@@ -60,6 +63,7 @@ __all__ = [
     "Gap",
     "ModelError",
     "NotAvailable",
+    "Phases",
     "PolicyError",
     "PolicyValue",
     "SampledStep",
