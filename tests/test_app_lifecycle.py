@@ -9,22 +9,13 @@ terminal. Every wait polls a condition with a deadline.
 
 from __future__ import annotations
 
-import contextlib
-import fcntl
 import inspect
 import os
 import re
-import select
-import shutil
 import signal
-import struct
-import subprocess
 import sys
-import termios
 import textwrap
-import threading
 import time
-from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -37,6 +28,7 @@ from tui_gym.session.session import Session, default_settings
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.train_view import TrainView
 
+from .terminal import Terminal, console_script
 from .waiting import wait_for
 
 DEADLINE = 20.0  # seconds; generous for a loaded machine, never reached when things work
@@ -213,95 +205,6 @@ async def test_a_stopped_or_killed_training_process_never_stops_the_app() -> Non
 
 
 # --- the console script in a pseudo-terminal -----------------------------------------
-class Terminal:
-    """A program in a pseudo-terminal of 120×40, with everything it writes kept."""
-
-    def __init__(self, argv: list[str], env: dict[str, str]) -> None:
-        master, slave = os.openpty()
-        fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 40, 120, 0, 0))
-        # The terminal's size is the pseudo-terminal's, not one left in the environment.
-        inherited = {k: v for k, v in os.environ.items() if k not in ("COLUMNS", "LINES")}
-        self.process = subprocess.Popen(
-            argv, stdin=slave, stdout=slave, stderr=slave, start_new_session=True,
-            env={**inherited, "TERM": "xterm-256color", **env},
-        )
-        os.close(slave)
-        self.master = master
-        self.output = bytearray()
-        self._lock = threading.Lock()
-        self._reader = threading.Thread(target=self._read, daemon=True)
-        self._reader.start()
-
-    def _read(self) -> None:
-        while True:
-            ready, _, _ = select.select([self.master], [], [], 0.05)
-            if not ready:
-                if self.process.poll() is not None:
-                    return
-                continue
-            try:
-                data = os.read(self.master, 65536)
-            except OSError:
-                return
-            if not data:
-                return
-            with self._lock:
-                self.output.extend(data)
-
-    @property
-    def text(self) -> str:
-        with self._lock:
-            return self.output.decode("utf-8", "replace")
-
-    def wait_for(self, predicate: Callable[[], bool], what: str) -> None:
-        deadline = time.monotonic() + DEADLINE
-        while not predicate():
-            if time.monotonic() > deadline:
-                self.kill()
-                raise AssertionError(f"timed out waiting for {what}; the screen ended:\n"
-                                     f"{self.text[-2000:]}")
-            time.sleep(0.02)  # polling a condition: the program runs on its own
-
-    def wait_for_text(self, words: str) -> None:
-        self.wait_for(lambda: words in self.text, repr(words))
-
-    def type(self, keys: str) -> None:
-        os.write(self.master, keys.encode())
-
-    def after(self, seconds: float) -> None:
-        """Let the program run this long (it trains meanwhile)."""
-        until = time.monotonic() + seconds
-        self.wait_for(lambda: time.monotonic() >= until or self.process.poll() is not None,
-                      f"{seconds} s to pass")
-
-    def exit_code(self) -> int:
-        try:
-            code = self.process.wait(timeout=DEADLINE)
-        except subprocess.TimeoutExpired:
-            self.kill()
-            raise AssertionError(f"did not end; the screen ended:\n{self.text[-2000:]}") from None
-        self._reader.join(timeout=5)
-        return code
-
-    def kill(self) -> None:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(self.process.pid, signal.SIGKILL)
-
-    def close(self) -> None:
-        if self.process.poll() is None:
-            self.kill()
-            self.process.wait()
-        with contextlib.suppress(OSError):
-            os.close(self.master)
-
-
-def console_script() -> str:
-    found = shutil.which("tui-gym", path=str(Path(sys.executable).parent))
-    if found is None:
-        pytest.skip("the tui-gym console script is not installed beside this Python")
-    return found
-
-
 @pytest.fixture
 def log_dir(tmp_path: Path) -> Path:
     return tmp_path / "logs"

@@ -122,7 +122,9 @@ def test_envs_json(capsys: pytest.CaptureFixture[str]) -> None:
     data = run_json(capsys, "envs", "--json")
     games = {game["name"]: game for game in data["envs"]}
     assert set(games) == {"blackjack", "gridworld", "frozenlake", "cliffwalking", "taxi",
-                          "ab-grid", "corner-grid", "gambler", "car-rental"}
+                          "ab-grid", "corner-grid", "gambler", "car-rental", "random-walk",
+                          "windy", "windy-king", "dyna-maze", "blocking-maze",
+                          "shortcut-maze", "max-bias"}
     assert games["blackjack"]["env_id"] == "Blackjack-v1"
     assert games["blackjack"]["actions"] == ["stick", "hit"]
     assert "gymnasium_env/GridWorld-v0" in games["gridworld"]["other_ids"]

@@ -33,33 +33,47 @@ from tui_gym.session.session import Session
 NAMES = [cls.name for cls in ALGORITHMS]
 
 GAMES = ("blackjack", "gridworld", "frozenlake", "cliffwalking", "taxi", "ab-grid",
-         "corner-grid", "gambler", "car-rental")
+         "corner-grid", "gambler", "car-rental", "random-walk", "windy", "windy-king",
+         "dyna-maze", "max-bias")
+# Rewards drawn with noise: trained on the env (the compiled loop pays their means).
+ENV_LOOP = frozenset({"max-bias"})
 
 # The pairs a game names a lesson for (its defaults end short of its bound by the
 # learner's nature) and how far short they end, over the seeds measured (the README's
 # defaults table): CliffWalking's on-policy learners take the safe path two rows up
 # (-17 against -13), as in Sutton & Barto's Example 6.6.
-LESSONS: dict[tuple[str, str], float] = {
+LESSONS: dict[tuple[str, str], float | None] = {
     ("cliffwalking", "sarsa"): 4.0,
     ("cliffwalking", "expected-sarsa"): 4.0,
     ("cliffwalking", "monte-carlo"): 4.0,
     ("frozenlake", "dyna-q"): 0.3,
     ("taxi", "monte-carlo"): 0.25,
+    # Monte Carlo's greedy policy may never cross the wind (the book: "termination is not
+    # guaranteed for all policies"): no figure to hold it to.
+    ("windy", "monte-carlo"): None,
+    ("windy", "double-q"): 2.0,
+    ("windy-king", "monte-carlo"): None,
+    ("windy-king", "double-q"): 6.0,
+    # Every way to the goal is worth +1: SARSA and Monte Carlo may keep a detour of 2.
+    ("dyna-maze", "sarsa"): 2.0,
+    ("dyna-maze", "monte-carlo"): 2.0,
 }
 
 
 @pytest.mark.parametrize("game", GAMES)
 @pytest.mark.parametrize("name", NAMES)
 def test_each_algorithm_meets_the_games_bound_with_its_defaults(name: str, game: str):
-    session = Session(game, seed=0, algorithm=name, engine="model")
-    assert session.trainer.engine == "model"
+    engine = "env" if game in ENV_LOOP else "model"
+    session = Session(game, seed=0, algorithm=name, engine=engine)
+    assert session.trainer.engine == engine
     session.train()
     assert session.trainer.episodes == session.hp.episodes
     bound = session.game.oracle.bound(session.env_kwargs)
     figures = session.reference().figures
     assert (name in session.game.lessons) == ((game, name) in LESSONS)
     if (game, name) in LESSONS:
-        assert figures[bound.figure] <= LESSONS[game, name]
+        short = LESSONS[game, name]
+        assert short is None or figures[bound.figure] <= short
     else:
         assert bound.met(figures), (bound.text, figures[bound.figure])
 

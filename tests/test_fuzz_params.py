@@ -239,3 +239,11 @@ def test_the_command_line_answers_every_value(capsys: pytest.CaptureFixture[str]
             check_one_line(str(exc), flag)
     assert set(HP_FLAGS) == {f.name for f in ALL_PARAMS}
     assert isinstance(parser, argparse.ArgumentParser)
+
+
+def test_digits_of_another_script_are_refused_saying_which_to_type() -> None:
+    steps = Param("max_episode_steps", int, 100, 1, 10_000, owner="TimeLimit")
+    with pytest.raises(ParamError) as refused:
+        steps.parse("١٢")
+    assert str(refused.value) == ("TimeLimit.max_episode_steps must be an integer in "
+                                  "[1, 10000], got '١٢' (digits 0-9 only)")

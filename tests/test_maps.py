@@ -236,3 +236,10 @@ def test_gymnasium_maps_move_the_same_on_the_tile_map_env(name: str, slippery: b
     for s in standing:  # where an agent can stand: the cliff and the ends never act
         for a in range(4):
             assert _outcomes(tiles.P, s, a) == _outcomes(own.P, s, a), (s, a)
+
+
+@pytest.mark.parametrize(("flag", "text"), [("--map-seed", "١٢"), ("--density", "٠.٢")])
+def test_random_map_numbers_take_digits_0_to_9_only(capsys, flag: str, text: str) -> None:
+    code, out, err = run(capsys, "maps", "--random", "4x4", flag, text)
+    assert code == 2 and not out
+    assert f"argument {flag}:" in err and f"got {text!r} (digits 0-9 only)" in err

@@ -220,7 +220,7 @@ async def test_charts_of_no_episodes_read_as_a_dash() -> None:
         for name in ("mean return", "ep. length", "mean |TD|"):
             assert chart_ends_value(text, name) == "–"
         assert chart_ends_value(text, "epsilon") == "0.050"  # known, as the stats say
-        assert "max" not in text and "rolling mean" not in str(charts.border_title)
+        assert "max" not in text and "rolling mean" not in str(charts.border_subtitle)
 
 
 def chart_ends_value(text: str, name: str) -> str:

@@ -55,7 +55,7 @@ async def test_keys_key_bar_help_wrappers_the_game_picker_and_the_gridworld_pane
         await pilot.press("g")
         await pilot.pause()
         assert app.session.game.name == "gridworld"
-        assert app.sub_title == "GridWorld"
+        assert app.sub_title == "GridWorld · seed 0"
         await pilot.press("b")
         await pilot.pause()
         assert app.session.game.name == "blackjack"

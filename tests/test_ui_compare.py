@@ -7,6 +7,7 @@ history in a temporary folder; waits poll a condition with a deadline.
 
 from __future__ import annotations
 
+import re
 import sqlite3
 from pathlib import Path
 
@@ -26,7 +27,7 @@ from tui_gym.core.experiments.schema import MIGRATIONS
 from tui_gym.session.session import Session
 from tui_gym.ui.compare_series import series_of_record
 from tui_gym.ui.compare_view import CompareView, parse_count, read_launch
-from tui_gym.ui.widgets.compare_chart import BRAILLE_BASE, plot_cells
+from tui_gym.ui.widgets.compare_chart import BRAILLE_BASE, plot_cells, value_range
 from tui_gym.ui.widgets.figures_table import with_interval
 
 from .screen import screen_text
@@ -178,6 +179,12 @@ def test_launch_values() -> None:
         read_launch((), "3", "10")
     launch = read_launch(("sarsa",), "3", "10_000")
     assert (launch.algorithms, launch.seeds, launch.episodes) == (("sarsa",), 3, 10_000)
+    # Digits of another script are not read as numbers, and the message says which to type.
+    with pytest.raises(ValueError) as refused:
+        read_launch(("sarsa",), "١٢", "٣٠٠")
+    assert str(refused.value) == (
+        "Seeds: a whole number from 1 to 1,000, in digits 0-9 (got '١٢'); "
+        "Episodes: a whole number from 1 to 10,000,000, in digits 0-9 (got '٣٠٠')")
 
 
 def test_plot_draws_the_band_under_the_line(tmp_path: Path) -> None:
@@ -191,6 +198,37 @@ def test_plot_draws_the_band_under_the_line(tmp_path: Path) -> None:
     assert all(any(bits[row][col] for row in range(8)) for col in range(40))
     # Every dot of the mean lies in a cell its band shades.
     assert all(band[row][col] == 1 for row in range(8) for col in range(40) if ink[row][col] == 0)
+
+
+async def test_the_chart_keeps_to_the_returns_the_game_allows_and_to_its_box(
+    tmp_path: Path,
+) -> None:
+    db = tmp_path / "runs.db"
+    rng = np.random.default_rng(1)
+    # Three CliffWalking seeds of -13 (the shortest path) or -100 (the cliff) an episode:
+    # their 95% band runs far above -13, which no episode can beat.
+    data = rng.choice([-13.0, -100.0], size=(3, 400), p=[0.8, 0.2])
+    spec = RunSpec("compare", "cliffwalking", "sarsa", seeds=range(3))
+    with RunHistory(db) as history, RunRecorder(history, spec) as run:
+        for curve in aggregate(data).as_curves("return"):
+            run.put_curve(curve)
+    app = ViewApp(Session("cliffwalking", seed=0), db)
+    async with app.run_test(size=SIZE) as pilot:
+        view = app.query_one(CompareView)
+        await pilot.pause()
+        view.focus_default()
+        await pilot.press("space")
+        await wait_for(pilot, lambda: len(view.chart.series) == 1, "the curve")
+        (series,) = view.chart.series
+        assert series.bounds == (-20_000.0, -13.0)
+        assert series.hi is not None and series.hi.max() <= -13.0
+        low, high = value_range(view.chart.series)
+        assert low < high <= -13.0
+        # Each dot of the curve is drawn in its own cell of the picture, so that a viewer
+        # whose font draws braille wider than a cell keeps the dots inside the chart.
+        texts = re.findall(r"<text[^>]*>([^<]*)</text>", app.export_screenshot())
+        dots = [t for t in texts if any("⠁" <= ch <= "⣿" for ch in t)]
+        assert dots and all(len(t) == 1 for t in dots)
 
 
 async def test_the_app_key_v_opens_it_and_another_view_stops_it(

@@ -1,6 +1,6 @@
 """The map editor, driven like a person would: paint, undo and redo, the optimum following
 each edit, the agent kept through edits that keep its states and reset on a resize; a
-game without a map says so. One app drives it all in turn.
+game without a map offers no map key. One app drives it all in turn.
 
 Waits poll a condition with a deadline; nothing sleeps.
 """
@@ -26,7 +26,7 @@ async def test_paint_undo_and_the_optimum_on_a_small_cliff_and_a_game_without_a_
 ) -> None:
     """CliffWalking's rules on SFF/FFG: every step costs 1, so the optimum is minus the
     fewest steps (3), and with the goal walled off the whole 200-step limit. Then
-    Blackjack, a game without a map, says so."""
+    Blackjack, a game without a map, offers no map key."""
     session = Session("cliffwalking", env_kwargs={"layout": "SFF\nFFG\n"}, seed=0,
                       hp={"episodes": 1_000_000_000})
     app = TuiGymApp(session)
@@ -82,10 +82,34 @@ async def test_paint_undo_and_the_optimum_on_a_small_cliff_and_a_game_without_a_
         await pilot.press("escape")
         assert not view.editing_map
 
-        # A game without a map says so.
+        # A game without a map offers no map key: m does nothing there.
         await pilot.press("b")
         await wait_for(pilot, lambda: app.session.game.name == "blackjack", "Blackjack")
         await pilot.press("m")
         await pilot.pause()
         assert not view.editing_map
-        assert any("no map to edit" in n.message for n in app._notifications)
+        assert not app.check_action("edit_map", ())
+
+
+async def test_the_status_names_cells_as_the_axes_do_and_says_when_nothing_is_left() -> None:
+    """GridWorld numbers its rows from the bottom up: the status says what the axes say.
+    An undo past the first edit says there is nothing to undo, not "undone" again."""
+    app = TuiGymApp(Session("gridworld", seed=0))
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.press("m")
+        view = app.query_one(TrainView)
+        await wait_for(pilot, lambda: view.editor is not None and view.editor.canvas.has_focus,
+                       "the editor")
+        editor = view.editor
+        assert editor is not None
+        await pilot.press("down", "down", "down", "right", "right")  # the map's row 3, col 2
+        await wait_for(pilot, lambda: editor.cursor == (3, 2), "the cursor")
+        assert editor.canvas.panels[0].row_labels[3] == "1"
+        await wait_for(pilot, lambda: "row 1, col 2: floor" in status(editor), "the cell")
+        await pilot.press("2")  # a wall there
+        await wait_for(pilot, lambda: "wall at row 1, col 2" in status(editor), "the edit")
+        await pilot.press("u")
+        await wait_for(pilot, lambda: "· undone" in status(editor), "the undo")
+        await pilot.press("u")
+        await wait_for(pilot, lambda: "· nothing to undo" in status(editor), "nothing left")
+        assert "undone" not in status(editor)

@@ -29,10 +29,10 @@ For each runner ("thread": training on a worker thread of the app's process;
    - end: the moment the first screen update that shows the new view with
      the focus in it (so the key bar lists the new view's keys: the whole
      answer to the key, not a part of it) is handed to the driver
-     (`App._display`), including encoding it into the terminal's byte string
-     (`render_segments`, which a real terminal pays and the headless driver
-     would skip). Not included: the terminal emulator's own parsing and
-     painting.
+     (`tui_gym.ui.textual_internals.watch_frames`), including encoding it
+     into the terminal's byte string (`render_segments`, which a real
+     terminal pays and the headless driver would skip). Not included: the
+     terminal emulator's own parsing and painting.
    `Pilot.press` itself is not awaited: after delivering the key it waits for
    the process to go idle (`wait_for_idle`, up to 1 s), which never happens
    while a training thread keeps the process busy. Each press is also split
@@ -172,17 +172,15 @@ class _Instruments:
     """Counters and clocks hooked onto one app instance (never onto its class)."""
 
     def __init__(self, app: Any) -> None:
+        from tui_gym.ui.textual_internals import watch_frames
+
         self.app = app
         self.frames: list[tuple[float, str | None, str | None]] = []  # (time, view, focus's view)
         self.snapshot_calls = 0
         self.action_marks: list[tuple[float, float]] = []  # (start, end) of show_view
-        display = app._display
         show_view = app.action_show_view
 
-        def timed_display(screen: Any, renderable: Any) -> None:
-            display(screen, renderable)
-            if renderable is None:
-                return
+        def on_frame(renderable: Any) -> None:
             render = getattr(renderable, "render_segments", None)
             if render is not None:
                 render(app.console)  # what a real terminal's write costs
@@ -193,7 +191,8 @@ class _Instruments:
             show_view(view)
             self.action_marks.append((start, time.perf_counter()))
 
-        app._display = timed_display
+        if not watch_frames(app, on_frame):
+            raise RuntimeError("this Textual has no frame step to time keys by")
         app.action_show_view = timed_show_view
 
     def count_snapshots(self, view: Any) -> None:
@@ -229,10 +228,12 @@ def _send_key(app: Any, key: str) -> None:
     """Deliver a key the way `Pilot.press` does (and a terminal's input thread)."""
     from textual import events
 
+    from tui_gym.ui.textual_internals import deliver_key
+
     char = " " if key == "space" else key if len(key) == 1 else None
     event = events.Key(key, char)
     event.set_sender(app)
-    app._driver.send_message(event)
+    deliver_key(app, event)
 
 
 async def _until(predicate: Callable[[], bool], what: str, timeout: float = WAIT_TIMEOUT) -> None:

@@ -29,7 +29,7 @@ from tui_gym.algorithms import ALGORITHMS, DEFAULT_ALGORITHM
 from tui_gym.cli.flags import add_game_flags, add_hyperparameter_flags
 from tui_gym.cli.maps_command import add_maps_parser
 from tui_gym.cli.output import JSON_SCHEMAS, CliError, OutConsole, readable
-from tui_gym.cli.types import finite_number, output_file, positive_int, seed_number
+from tui_gym.cli.types import finite_number, fresh_seed, output_file, positive_int, seed_number
 
 ENV_HELP = "a game (`tui-gym envs` lists them), a Gymnasium id, or MODULE:ID"
 WRAPPER_HELP = "add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable, in order)"
@@ -95,8 +95,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"tui-gym {__version__}")
     parser.add_argument("--env", default="", help="game to open (default: the first of `envs`)")
-    parser.add_argument("--seed", type=seed_number, default=0, metavar="S",
-                        help="seed for every random thing (default 0)")
+    parser.add_argument("--seed", type=seed_number, default=None, metavar="S",
+                        help="seed for every random thing (default 0; the app draws one afresh "
+                        "each launch and shows it in its header)")
     parser.add_argument("--load", metavar="PATH", help="open a saved agent")
     parser.add_argument("--map-file", metavar="PATH", dest="app_map_file",
                         help="open a grid game (--env) on the map in this file")
@@ -251,6 +252,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     err = Console(stderr=True)
     try:
         args = build_parser().parse_args(argv)
+        if args.seed is None:  # the app draws one afresh and shows it; commands take 0
+            args.seed = fresh_seed() if args.command is None else 0
         out = OutConsole()
         if args.command is None:
             return _run_app(args)

@@ -9,14 +9,22 @@ import argparse
 import math
 from collections.abc import Callable
 
-from tui_gym.core.params import read_number, shown_value
+from tui_gym.core.params import digits_note, read_number, shown_value
 
 __all__ = [
-    "MAX_SEED", "file_name", "finite_number", "int_in", "number_in", "output_file",
-    "positive_int", "seed_number",
+    "MAX_SEED", "file_name", "finite_number", "fresh_seed", "int_in", "number_in",
+    "output_file", "positive_int", "seed_number",
 ]
 
 MAX_SEED = 2**63 - 2**32  # room for the seeds derived from it (evaluation adds to it)
+FRESH_SEEDS = 1_000_000  # a seed drawn afresh is below this: short enough to type again
+
+
+def fresh_seed() -> int:
+    """A seed drawn from the system's randomness, for a run the user gave none."""
+    import secrets
+
+    return secrets.randbelow(FRESH_SEEDS)
 
 
 def int_in(minimum: int, maximum: int, noun: str) -> Callable[[str], int]:
@@ -25,7 +33,8 @@ def int_in(minimum: int, maximum: int, noun: str) -> Callable[[str], int]:
     def parse(text: str) -> int:
         value = read_number(text)
         if value is None or math.isnan(value) or (math.isfinite(value) and value % 1):
-            raise argparse.ArgumentTypeError(f"expected {noun}, got {shown_value(text)}")
+            raise argparse.ArgumentTypeError(
+                f"expected {noun}, got {shown_value(text)}{digits_note(text)}")
         if not minimum <= value <= maximum:
             raise argparse.ArgumentTypeError(
                 f"{shown_value(text)} is out of range: expected {noun}"
@@ -43,7 +52,8 @@ def finite_number(text: str) -> float:
     """An argparse type: a finite number (ASCII digits)."""
     value = read_number(text)
     if value is None or math.isnan(value):
-        raise argparse.ArgumentTypeError(f"expected a number, got {shown_value(text)}")
+        raise argparse.ArgumentTypeError(
+            f"expected a number, got {shown_value(text)}{digits_note(text)}")
     if math.isinf(value):
         raise argparse.ArgumentTypeError(
             f"{shown_value(text)} is out of range: expected a finite number"
@@ -57,7 +67,8 @@ def number_in(minimum: float, maximum: float, noun: str) -> Callable[[str], floa
     def parse(text: str) -> float:
         value = read_number(text)
         if value is None or math.isnan(value):
-            raise argparse.ArgumentTypeError(f"expected {noun}, got {shown_value(text)}")
+            raise argparse.ArgumentTypeError(
+                f"expected {noun}, got {shown_value(text)}{digits_note(text)}")
         if not minimum <= value <= maximum:
             raise argparse.ArgumentTypeError(
                 f"{shown_value(text)} is out of range: expected {noun}"

@@ -16,7 +16,7 @@ from an observation space and turns observations of that space into keys:
 
 from __future__ import annotations
 
-from collections.abc import Callable, Hashable
+from collections.abc import Callable, Hashable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -115,6 +115,19 @@ def _leaf_flattener(space: spaces.Space) -> Callable[[Any], list[Hashable]]:
     return lambda x: [int(v) for v in np.asarray(x).ravel().tolist()]
 
 
+def _shaped(space: spaces.Space, values: Iterator[int]) -> Any:
+    """An observation of `space` from its flat values (`_flattener`'s order)."""
+    if isinstance(space, spaces.Tuple):
+        return tuple(_shaped(sub, values) for sub in space.spaces)
+    if isinstance(space, spaces.Dict):
+        return {name: _shaped(sub, values) for name, sub in space.spaces.items()}
+    if isinstance(space, spaces.Discrete):
+        return next(values)
+    shape = space.shape or ()
+    flat = [next(values) for _ in range(int(np.prod(shape)))]
+    return np.array(flat, dtype=space.dtype).reshape(shape)
+
+
 def _flattener(space: spaces.Space) -> Callable[[Any], list[Hashable]]:
     """A function giving every scalar of an observation, in space order, as Python numbers."""
     if isinstance(space, spaces.Tuple):
@@ -144,7 +157,8 @@ class ObservationKeyer:
     """Turns observations of one space into hashable table keys.
 
     `key(obs)` is the key; for dense spaces it is an `int` in
-    `range(n_states)` and `decode(index)` gives back the flat tuple of values.
+    `range(n_states)`, `decode(index)` gives back the flat tuple of values and
+    `observation(index)` the observation itself.
     `signature` identifies what keys mean: two keyers with the same signature
     map the same observation to the same key.
     """
@@ -220,6 +234,11 @@ class ObservationKeyer:
             digit, rest = divmod(rest, stride)
             out.append(digit + lo)
         return tuple(out)
+
+    def observation(self, index: int) -> Any:
+        """The observation behind a dense key, shaped as its space gives one (an `int`
+        for `Discrete`, a tuple for `Tuple`, arrays for the others)."""
+        return _shaped(self.space, iter(self.decode(index)))
 
     def __repr__(self) -> str:
         kind = f"dense, {self.n_states} states" if self.dense else "sparse"

@@ -10,7 +10,8 @@ range.
 `read_number` is the reader behind it, for any text that must be a number:
 ASCII digits only (a person's `١` or `²` is not read as a digit), an optional
 sign, decimal point, exponent and `_` between digits, or `inf` / `nan`.
-Numbers too large for a float read as infinite instead of raising.
+Numbers too large for a float read as infinite instead of raising; text that
+holds other digits is refused with `digits_note` saying which digits to type.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Param", "ParamError", "ParamValue", "read_number", "shown_value"]
+__all__ = ["Param", "ParamError", "ParamValue", "digits_note", "read_number", "shown_value"]
 
 ParamValue = int | float | bool | str
 
@@ -60,6 +61,14 @@ def read_number(text: str) -> int | float | None:
     sign = -1.0 if word.startswith("-") else 1.0
     value = _WORDS.get(word.lstrip("+-"))
     return None if value is None else sign * value
+
+
+def digits_note(raw: object) -> str:
+    """' (digits 0-9 only)' when `raw` is text holding digits of another script ('١٢',
+    '²'), which `read_number` does not read; '' otherwise."""
+    if isinstance(raw, str) and any(ch.isdigit() and not ch.isascii() for ch in raw):
+        return " (digits 0-9 only)"
+    return ""
 
 
 def shown_value(raw: object) -> str:
@@ -103,7 +112,7 @@ class ParamError(ValueError):
         if out_of_range:
             self.reason = f"is out of range: {self.shown} is not in {param.describe_range()}"
         else:
-            self.reason = f"must be {param.expected()}, got {self.shown}"
+            self.reason = f"must be {param.expected()}, got {self.shown}{digits_note(raw)}"
         super().__init__(f"{param.label} {self.reason}")
 
 

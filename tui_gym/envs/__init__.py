@@ -23,6 +23,13 @@ BOOK_WORLDS: dict[str, tuple[str, int]] = {
     "tui_gym/CornerGrid-v0": ("tui_gym.envs.dp_grid:CornerGridEnv", 100),
     "tui_gym/Gambler-v0": ("tui_gym.envs.gambler:GamblerEnv", 1000),
     "tui_gym/CarRental-v0": ("tui_gym.envs.car_rental:CarRentalEnv", 20),
+    "tui_gym/RandomWalk-v0": ("tui_gym.envs.random_walk:RandomWalkEnv", 1000),
+    "tui_gym/WindyGridWorld-v0": ("tui_gym.envs.windy:WindyGridWorldEnv", 2000),
+    "tui_gym/WindyGridWorldKing-v0": ("tui_gym.envs.windy:KingWindyGridWorldEnv", 2000),
+    "tui_gym/DynaMaze-v0": ("tui_gym.envs.dyna_maze:DynaMazeEnv", 5000),
+    "tui_gym/BlockingMaze-v0": ("tui_gym.envs.dyna_maze:BlockingMazeEnv", 5000),
+    "tui_gym/ShortcutMaze-v0": ("tui_gym.envs.dyna_maze:ShortcutMazeEnv", 5000),
+    "tui_gym/MaxBias-v0": ("tui_gym.envs.max_bias:MaxBiasEnv", 10),
 }
 
 

@@ -1,87 +1,178 @@
-"""The grids of Sutton & Barto's chapters 3 and 4: `ABGridEnv` and `CornerGridEnv`.
+"""The grids of Sutton & Barto's book: `Grid`, its transitions, and the envs on it.
 
-Both are small grids where a move goes one cell up, down, left or right, and
-a move off the grid leaves the agent where it was; `grid_arrays` gives their
-transitions, for the env and for the exact model alike. A cell is (row, col),
-row 0 at the top; a state is `row * cols + col`.
+A `Grid` says what a small grid world is: its size, the moves (the four
+steps, or the eight king's moves), what a move pays, its terminal cells,
+walls, jumps, wind and start; `Grid.arrays()` gives its transitions, for
+the env and for the exact model alike. A cell is (row, col), row 0 at the
+top; a state is `row * cols + col`. `GridEnv` plays a grid, drawn as text.
+This module's envs are the book's chapters 3 and 4 grids: `ABGridEnv`
+(Example 3.5) and `CornerGridEnv` (Example 4.1).
 """
 
 from __future__ import annotations
 
-from collections.abc import Collection, Mapping
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from tui_gym.envs.table_env import TableEnv
 from tui_gym.envs.tile_map import TileArrays
 
-__all__ = ["AB_JUMPS", "CORNERS", "GRID_ACTIONS", "ABGridEnv", "CornerGridEnv", "grid_arrays"]
+__all__ = [
+    "AB_JUMPS", "CORNERS", "GRID_ACTIONS", "KING_ACTIONS", "STEPS", "ABGridEnv",
+    "CornerGridEnv", "Grid", "GridEnv",
+]
 
 Cell = tuple[int, int]
 GRID_ACTIONS = ("up", "down", "left", "right")
-STEPS = {"up": (-1, 0), "down": (1, 0), "left": (0, -1), "right": (0, 1)}
+KING_ACTIONS = (*GRID_ACTIONS, "up-left", "up-right", "down-left", "down-right")
+STEPS: dict[str, Cell] = {
+    "up": (-1, 0), "down": (1, 0), "left": (0, -1), "right": (0, 1),
+    "up-left": (-1, -1), "up-right": (-1, 1), "down-left": (1, -1), "down-right": (1, 1),
+}
 AB_JUMPS: dict[Cell, tuple[Cell, float]] = {(0, 1): ((4, 1), 10.0), (0, 3): ((2, 3), 5.0)}
 CORNERS: tuple[Cell, ...] = ((0, 0), (3, 3))
+GUST = 1.0 / 3.0  # the chance of each of a gusty wind's three strengths
 
 
-def grid_arrays(
-    rows: int,
-    cols: int,
-    *,
-    step: float,
-    edge: float,
-    jumps: Mapping[Cell, tuple[Cell, float]] = {},  # noqa: B006 - read only
-    terminals: Collection[Cell] = (),
-) -> TileArrays:
-    """A grid's transitions: a move pays `step` (`edge` when it would leave the grid, and
-    the agent stays); from a `jumps` cell every action pays its reward and lands on its
-    target; entering a `terminals` cell ends the episode, and from one nothing happens.
-    Episodes start uniformly on the cells that are not terminal."""
-    n = rows * cols
-    next_state = np.zeros((n, len(GRID_ACTIONS)), dtype=np.int64)
-    reward = np.zeros((n, len(GRID_ACTIONS)))
-    terminal = np.zeros((n, len(GRID_ACTIONS)), dtype=bool)
-    ends = {r * cols + c for r, c in terminals}
-    for s in range(n):
-        r, c = divmod(s, cols)
-        for a, name in enumerate(GRID_ACTIONS):
-            dr, dc = STEPS[name]
-            if s in ends:
-                next_state[s, a], terminal[s, a] = s, True
-            elif (r, c) in jumps:
-                (tr, tc), pay = jumps[r, c]
-                next_state[s, a], reward[s, a] = tr * cols + tc, pay
-            elif 0 <= r + dr < rows and 0 <= c + dc < cols:
-                next_state[s, a], reward[s, a] = (r + dr) * cols + c + dc, step
-                terminal[s, a] = next_state[s, a] in ends
-            else:
-                next_state[s, a], reward[s, a] = s, edge
-    initial = np.array([0.0 if s in ends else 1.0 for s in range(n)])
-    return TileArrays(next_state[..., None], np.ones((n, len(GRID_ACTIONS), 1)),
-                      reward[..., None], terminal[..., None], initial / initial.sum())
+@dataclass(frozen=True, eq=False)
+class Grid:
+    """A small grid world.
+
+    A move (one of `moves`, named as in `STEPS`) goes one cell that way, then
+    the wind of the column it started from (`wind[col]`, none when `wind` is
+    empty) pushes it that many cells up; with `gusts`, where there is wind it
+    blows one stronger a third of the time and one weaker a third of the time.
+    Entering a cell pays `pays[cell]`, else `step`. A move that would leave the
+    grid pays `edge` and leaves the agent where it was, or, with `edge` None,
+    ends on the grid's border (each coordinate clipped) paying as any move. A
+    move into a wall leaves the agent where it was and pays `step`; from a
+    `jumps` cell every move pays the jump's reward and lands on its target;
+    entering a `terminals` cell ends the episode. Episodes start at `start`,
+    or uniformly on the cells that are neither terminal nor walls.
+    `letters`, `primes` and `tiles` are for drawing: a cell's letter (A, B),
+    a jump's landing mark (A′), and a tile other than the usual one (an end
+    that loses drawn as a pit, H).
+    """
+
+    rows: int
+    cols: int
+    moves: tuple[str, ...] = GRID_ACTIONS
+    step: float = 0.0
+    edge: float | None = 0.0
+    terminals: tuple[Cell, ...] = ()
+    walls: frozenset[Cell] = frozenset()
+    pays: Mapping[Cell, float] = field(default_factory=dict)
+    jumps: Mapping[Cell, tuple[Cell, float]] = field(default_factory=dict)
+    wind: tuple[int, ...] = ()
+    gusts: bool = False
+    start: Cell | None = None
+    letters: Mapping[Cell, str] = field(default_factory=dict)
+    primes: Mapping[Cell, str] = field(default_factory=dict)
+    tiles: Mapping[Cell, str] = field(default_factory=dict)
+
+    def state(self, cell: Cell) -> int:
+        return cell[0] * self.cols + cell[1]
+
+    def winds(self, col: int) -> list[tuple[int, float]]:
+        """The wind's strengths in a column and their chances."""
+        strength = self.wind[col] if self.wind else 0
+        if self.gusts and strength:
+            return [(strength - 1, GUST), (strength, GUST), (strength + 1, GUST)]
+        return [(strength, 1.0)]
+
+    def landing(self, cell: Cell, move: str, push: int) -> tuple[Cell, float]:
+        """Where a move from `cell` pushed `push` cells up by the wind ends, and what it pays."""
+        (r, c), (dr, dc) = cell, STEPS[move]
+        row, col = r + dr - push, c + dc
+        if not (0 <= row < self.rows and 0 <= col < self.cols):
+            if self.edge is not None:
+                return cell, self.edge
+            row, col = min(max(row, 0), self.rows - 1), min(max(col, 0), self.cols - 1)
+        if (row, col) in self.walls:
+            return cell, self.step
+        return (row, col), self.pays.get((row, col), self.step)
+
+    def arrays(self) -> TileArrays:
+        """The grid's transitions, `[S, A, K]` with K the most wind strengths a column has."""
+        n, n_moves = self.rows * self.cols, len(self.moves)
+        k = max(len(self.winds(c)) for c in range(self.cols))
+        shape = (n, n_moves, k)
+        next_state = np.broadcast_to(np.arange(n)[:, None, None], shape).copy()
+        prob, reward = np.zeros(shape), np.zeros(shape)
+        terminal = np.zeros(shape, dtype=bool)
+        ends = set(self.terminals)
+        for s in range(n):
+            cell = divmod(s, self.cols)
+            for a, move in enumerate(self.moves):
+                if cell in ends:
+                    prob[s, a, 0], terminal[s, a, 0] = 1.0, True
+                    continue
+                if cell in self.jumps:
+                    target, pay = self.jumps[cell]
+                    next_state[s, a, 0], prob[s, a, 0], reward[s, a, 0] = (
+                        self.state(target), 1.0, pay)
+                    continue
+                for j, (push, chance) in enumerate(self.winds(cell[1])):
+                    to, pay = self.landing(cell, move, push)
+                    next_state[s, a, j], prob[s, a, j] = self.state(to), chance
+                    reward[s, a, j], terminal[s, a, j] = pay, to in ends
+        initial = np.zeros(n)
+        if self.start is not None:
+            initial[self.state(self.start)] = 1.0
+        else:
+            for s in range(n):
+                initial[s] = divmod(s, self.cols) not in (ends | self.walls)
+        return TileArrays(next_state, prob, reward, terminal, initial / initial.sum())
+
+    def cells(self) -> list[str]:
+        """The grid as tile rows: F floor, S the start, W a wall, G a terminal cell, unless
+        `tiles` says otherwise (a cell's letter is a mark drawn over its tile)."""
+        rows = [["F"] * self.cols for _ in range(self.rows)]
+        if self.start is not None:
+            rows[self.start[0]][self.start[1]] = "S"
+        for r, c in self.walls:
+            rows[r][c] = "W"
+        for r, c in self.terminals:
+            rows[r][c] = "G"
+        for (r, c), tile in self.tiles.items():
+            rows[r][c] = tile
+        return ["".join(row) for row in rows]
 
 
-class _GridEnv(TableEnv):
-    """A grid drawn as text: `.` a cell, `@` the agent, and the world's own letters."""
+class GridEnv(TableEnv):
+    """A `Grid` played, drawn as text: `.` a cell, `#` a wall, `*` a terminal cell, `@` the
+    agent, and the grid's letters; the wind's strengths under the columns."""
 
-    action_names = GRID_ACTIONS
-    rows = cols = 0
-    letters: Mapping[Cell, str] = {}
+    def __init__(self, grid: Grid, render_mode: str | None = None) -> None:
+        super().__init__(grid.arrays(), render_mode)
+        self.grid = grid
+        self.action_names = grid.moves
 
     def picture(self) -> str:
-        lines = [["."] * self.cols for _ in range(self.rows)]
-        for (r, c), letter in self.letters.items():
-            lines[r][c] = letter
+        grid = self.grid
+        lines = [["."] * grid.cols for _ in range(grid.rows)]
+        for r, c in grid.walls:
+            lines[r][c] = "#"
+        for r, c in grid.terminals:
+            lines[r][c] = "*"
+        for (r, c), letter in grid.letters.items():
+            lines[r][c] = letter[0]
+        for (r, c), mark in grid.primes.items():
+            lines[r][c] = mark[0].lower()  # where a jump lands: A′ drawn as a
         if self.s is not None:
-            r, c = divmod(self.s, self.cols)
+            r, c = divmod(self.s, grid.cols)
             lines[r][c] = "@"
         text = "\n".join(" ".join(line) for line in lines) + "\n"
+        if grid.wind:
+            text += " ".join(str(w) for w in grid.wind) + "   (wind)\n"
         if self.lastaction is not None:
-            text = f"  ({GRID_ACTIONS[self.lastaction]})\n" + text
+            text = f"  ({self.action_names[self.lastaction]})\n" + text
         return text
 
 
-class ABGridEnv(_GridEnv):
+class ABGridEnv(GridEnv):
     """Sutton & Barto's Example 3.5: the 5 x 5 grid with the special cells A and B.
 
     ## Action Space
@@ -105,14 +196,14 @@ class ABGridEnv(_GridEnv):
     `render_mode`: "ansi" draws the grid as text.
     """
 
-    rows = cols = 5
-    letters = {(0, 1): "A", (0, 3): "B", (4, 1): "a", (2, 3): "b"}
+    GRID = Grid(5, 5, step=0.0, edge=-1.0, jumps=AB_JUMPS,
+                letters={(0, 1): "A", (0, 3): "B"}, primes={(4, 1): "A′", (2, 3): "B′"})
 
     def __init__(self, render_mode: str | None = None) -> None:
-        super().__init__(grid_arrays(5, 5, step=0.0, edge=-1.0, jumps=AB_JUMPS), render_mode)
+        super().__init__(self.GRID, render_mode)
 
 
-class CornerGridEnv(_GridEnv):
+class CornerGridEnv(GridEnv):
     """Sutton & Barto's Example 4.1: the 4 x 4 grid with a terminal cell in two corners.
 
     ## Action Space
@@ -134,9 +225,7 @@ class CornerGridEnv(_GridEnv):
     `render_mode`: "ansi" draws the grid as text.
     """
 
-    rows = cols = 4
-    letters = {(0, 0): "#", (3, 3): "#"}
+    GRID = Grid(4, 4, step=-1.0, edge=-1.0, terminals=CORNERS)
 
     def __init__(self, render_mode: str | None = None) -> None:
-        super().__init__(grid_arrays(4, 4, step=-1.0, edge=-1.0, terminals=CORNERS),
-                         render_mode)
+        super().__init__(self.GRID, render_mode)

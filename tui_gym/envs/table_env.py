@@ -5,7 +5,10 @@ state, action and outcome, and the start distribution) are the one source for
 the env and for the exact model built from them without making an env. The
 env draws each step's outcome from them, keeps its state in `s` and its last
 action in `lastaction` as Gymnasium's toy-text envs do, and hands out the
-toy-text table `P` when asked. A subclass draws its text picture (`picture`).
+toy-text table `P` when asked (each outcome's mean reward). Where rewards are
+drawn with noise (`reward_std`, per outcome), the env draws each from a normal
+distribution around the mean with its own seeded generator. A subclass draws
+its text picture (`picture`).
 """
 
 from __future__ import annotations
@@ -27,11 +30,13 @@ class TableEnv(gym.Env[Any, Any]):
     metadata: dict[str, Any] = {"render_modes": ["ansi"], "render_fps": 4}
     action_names: tuple[str, ...] = ()
 
-    def __init__(self, arrays: TileArrays, render_mode: str | None = None) -> None:
+    def __init__(self, arrays: TileArrays, render_mode: str | None = None,
+                 reward_std: np.ndarray | None = None) -> None:
         if render_mode not in (None, "ansi"):
             raise ValueError(f"{type(self).__name__} renders 'ansi' only, got {render_mode!r}")
         n_states, n_actions, _ = arrays.prob.shape
         self.arrays = arrays
+        self.reward_std = reward_std
         self.initial_state_distrib = arrays.initial.copy()
         self.observation_space = spaces.Discrete(n_states)
         self.action_space = spaces.Discrete(n_actions)
@@ -61,8 +66,11 @@ class TableEnv(gym.Env[Any, Any]):
         index = min(index, int(np.flatnonzero(weights)[-1]))
         self.s = int(arrays.next_state[s, a, index])
         self.lastaction = a
-        return (self.s, float(arrays.reward[s, a, index]), bool(arrays.terminal[s, a, index]),
-                False, {"prob": float(weights[index])})
+        reward = float(arrays.reward[s, a, index])
+        if self.reward_std is not None and self.reward_std[s, a, index] > 0:
+            reward = float(self.np_random.normal(reward, self.reward_std[s, a, index]))
+        return (self.s, reward, bool(arrays.terminal[s, a, index]), False,
+                {"prob": float(weights[index])})
 
     @property
     def P(self) -> dict[int, dict[int, list[tuple[float, int, float, bool]]]]:  # noqa: N802

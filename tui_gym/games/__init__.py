@@ -22,10 +22,11 @@ Modules:
 - `generic`: `GenericGame`, any env with a transition table;
 - `words`: numbers and words for people;
 - `planning`: `PlanModel`, what a game hands the Plan view and `tui-gym plan`;
-- `dp_grid`: what the book's small grids share;
+- `dp_grid`: what the book's grid worlds share;
 - one package per game: `blackjack`, `gridworld`, `frozenlake`,
   `cliffwalking`, `taxi`, and Sutton & Barto's worlds `ab_grid`, `corner_grid`,
-  `gambler`, `car_rental`.
+  `gambler`, `car_rental`, `random_walk`, `windy` (with its king's moves),
+  `dyna_maze` (with the blocking and shortcut mazes), `max_bias`.
 """
 
 from __future__ import annotations
@@ -40,10 +41,14 @@ from tui_gym.games.blackjack import BlackjackGame
 from tui_gym.games.car_rental import CarRentalGame
 from tui_gym.games.cliffwalking import CliffWalkingGame
 from tui_gym.games.corner_grid import CornerGridGame
+from tui_gym.games.dyna_maze import BlockingMazeGame, DynaMazeGame, ShortcutMazeGame
 from tui_gym.games.frozenlake import FrozenLakeGame
 from tui_gym.games.gambler import GamblerGame
 from tui_gym.games.gridworld import GridWorldGame
+from tui_gym.games.max_bias import MaxBiasGame
+from tui_gym.games.random_walk import RandomWalkGame
 from tui_gym.games.taxi import TaxiGame
+from tui_gym.games.windy import KingWindyGame, WindyGame
 
 __all__ = [
     "GAMES", "Game", "ImportRefusedError", "UnknownGameError", "game_for", "game_named",
@@ -60,6 +65,13 @@ GAMES: tuple[Game, ...] = (
     CornerGridGame(),
     GamblerGame(),
     CarRentalGame(),
+    RandomWalkGame(),
+    WindyGame(),
+    KingWindyGame(),
+    DynaMazeGame(),
+    BlockingMazeGame(),
+    ShortcutMazeGame(),
+    MaxBiasGame(),
 )
 
 _generic: dict[str, Game] = {}

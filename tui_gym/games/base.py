@@ -268,6 +268,14 @@ class Oracle(Role):
         reach it (an episode limit rewards playing differently as time runs out)."""
         return NotAvailable(f"{self.game.title} has no exact optimum")
 
+    def return_range(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> tuple[float, float] | NotAvailable:
+        """The lowest and the highest return one episode can have, in the game as the
+        wrappers make it (±inf on a side with no bound; `core.mdp.return_range` reads
+        them off a model): what a chart of returns never needs to show beyond."""
+        return NotAvailable(f"{self.game.title} has no exact model")
+
     def bound(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> Bound | NotAvailable:
@@ -567,6 +575,11 @@ class Game:
     def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel | NotAvailable:
         """The exact model the Plan view and `tui-gym plan` sweep, or why there is none."""
         return NotAvailable(f"{self.title} has no exact model to plan on")
+
+    def at_step(self, kwargs: Mapping[str, Any], steps: int) -> dict[str, Any]:
+        """The arguments the exact figures take after `steps` steps (counted over episodes):
+        these, in a world that never changes; with its phase then, in one that does."""
+        return dict(kwargs)
 
     def make_id(self, env_id: str, kwargs: Mapping[str, Any]) -> str:
         """The id `gym.make` builds for these arguments: `env_id` (the one asked for),

@@ -1,14 +1,20 @@
-"""What the book's small grids share (`ab-grid`, `corner-grid`): a `ModelGame` on a grid.
+"""What the book's grid worlds share: a `ModelGame` on a `Grid` (`tui_gym.envs.dp_grid`).
 
-A `DPGridGame` names its grid's size, its special cells and the transitions
-(`arrays`, from `tui_gym.envs.dp_grid`); from them it gets:
+A `DPGridGame` says which grid its arguments make (`grid(kwargs)`); from it
+it gets:
 
 - `DPGridStates`: a cell in words, and the tile board's scene (the grid as
-  rows of tiles, the agent, the last move, a jump's words and rewards);
+  rows of tiles, the agent, the last move, what it did in the game's words,
+  the rewards of its special cells);
 - `DPGridLayout`: one heatmap panel shaped like the grid, the greedy move's
   arrow in each cell, the special cells by their letters where every move is
-  worth the same (A and B, from which every move jumps), terminal cells as ★;
-- its exact model, built from the same arrays as the env.
+  worth the same (A and B, from which every move jumps), terminal cells as ★,
+  walls as █;
+- `ReachNarrator`: words for reaching the end of an episode or running out
+  of time;
+- its exact model, built from the same grid as the env.
+
+A game words what a move did in `event` (a jump, the wind, an end reached).
 """
 
 from __future__ import annotations
@@ -20,56 +26,61 @@ import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP
-from tui_gym.envs.dp_grid import GRID_ACTIONS
-from tui_gym.envs.tile_map import TileArrays
-from tui_gym.games.base import UNREADABLE, HeatmapLayout
-from tui_gym.games.model import DiscreteStates, ModelGame
+from tui_gym.envs.dp_grid import GRID_ACTIONS, Cell, Grid
+from tui_gym.games.base import UNREADABLE, HeatmapLayout, Narrator, TallyWord
+from tui_gym.games.model import DiscreteStates, ModelGame, freeze
+from tui_gym.games.words import format_reward, plural
 
-__all__ = ["DPGridGame", "DPGridLayout", "DPGridStates"]
+__all__ = ["ARROWS", "DPGridGame", "DPGridLayout", "DPGridStates", "Event", "ReachNarrator"]
 
-Cell = tuple[int, int]
-ARROWS = {"up": "↑", "down": "↓", "left": "←", "right": "→"}
+ARROWS = {"up": "↑", "down": "↓", "left": "←", "right": "→",
+          "up-left": "↖", "up-right": "↗", "down-left": "↙", "down-right": "↘"}
+STRAIGHT = GRID_ACTIONS
 TIED = "·"
 END = "★"  # a terminal cell: the tile board's goal
+WALL = "█"
+KEPT_MODELS = 16  # models kept per game (one per set of arguments)
+
+Event = tuple[str, str]  # what a move did ('{who} ...'), and its tone on the board
 
 
 class DPGridGame(ModelGame):
-    """A grid world of the book's chapters 3 and 4 (see the module docstring)."""
+    """A grid world of the book (see the module docstring)."""
 
     board = "tile"
-    action_names = GRID_ACTIONS
-    rows = cols = 0
-    letters: Mapping[Cell, str] = {}  # cells drawn as a letter on board and heatmap
-    primes: Mapping[Cell, str] = {}  # cells marked on the board (where a jump lands)
-    terminals: tuple[Cell, ...] = ()
-    jumps: Mapping[Cell, tuple[Cell, float]] = {}
+    action_names: tuple[str, ...] = GRID_ACTIONS
 
     def __init__(self) -> None:
         super().__init__()
         self.states = DPGridStates(self)
         self.layout = DPGridLayout(self)
-        self._model: FiniteMDP | None = None
+        self._models: dict[Any, FiniteMDP] = {}
 
-    def arrays(self) -> TileArrays:
-        """The grid's transitions."""
+    def grid(self, kwargs: Mapping[str, Any]) -> Grid:
+        """The grid these arguments make."""
         raise NotImplementedError
 
     def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP:
-        if self._model is None:
-            arrays = self.arrays()
-            self._model = FiniteMDP(arrays.next_state, arrays.prob, arrays.reward,
-                                    arrays.terminal, arrays.initial,
-                                    action_names=self.action_names)
-        return self._model
+        key = freeze(kwargs)
+        if key not in self._models:
+            if len(self._models) >= KEPT_MODELS:
+                self._models.pop(next(iter(self._models)))
+            arrays = self.grid(kwargs).arrays()
+            self._models[key] = FiniteMDP(arrays.next_state, arrays.prob, arrays.reward,
+                                          arrays.terminal, arrays.initial,
+                                          action_names=self.action_names)
+        return self._models[key]
 
-    def cells(self) -> list[str]:
-        """The grid as tile rows: F floor, G a terminal cell, a special cell's letter."""
-        rows = [["F"] * self.cols for _ in range(self.rows)]
-        for r, c in self.terminals:
-            rows[r][c] = "G"
-        for (r, c), letter in self.letters.items():
-            rows[r][c] = letter
-        return ["".join(row) for row in rows]
+    def event(self, game_env: Any, before: Mapping[str, Any], was: Cell, now: Cell,
+              move: str) -> Event | None:
+        """What the move `move` from `was` to `now` did, in the game's words (None: the
+        board's own words); `before` is the scene before it."""
+        grid: Grid = game_env.grid
+        jump = grid.jumps.get(was)
+        if jump is not None and now == jump[0]:
+            name = grid.letters[was]
+            return f"{{who}} jumped from {name} to {name}′: +{jump[1]:g}", "good"
+        return None
 
 
 def _game(role: Any) -> DPGridGame:
@@ -78,43 +89,57 @@ def _game(role: Any) -> DPGridGame:
     return game
 
 
+def _cell(value: Any) -> Cell | None:
+    return None if value is None else (int(value[0]), int(value[1]))
+
+
 class DPGridStates(DiscreteStates):
     """Cells of the grid; the tile board's scene."""
 
     def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
-        game = _game(self)
-        row, col = divmod(int(observation), game.cols)
-        name = game.letters.get((row, col)) or game.primes.get((row, col))
-        if (row, col) in game.terminals:
+        grid = _game(self).grid(kwargs)
+        cell = divmod(int(observation), grid.cols)
+        if not 0 <= cell[0] < grid.rows:
+            raise ValueError(f"no cell {observation}")
+        name = grid.letters.get(cell) or grid.primes.get(cell)
+        if cell in grid.terminals:
             name = "terminal"
-        return f"row {row}, col {col}" + (f" ({name})" if name else "")
+        return f"row {cell[0]}, col {cell[1]}" + (f" ({name})" if name else "")
 
     def json_observation(self, observation: Any) -> Any:
         """A cell as [row, col]."""
-        return list(divmod(int(observation), _game(self).cols))
+        game = _game(self)
+        return list(divmod(int(observation), game.grid(game.default_kwargs()).cols))
 
     def read_scene(self, game_env: Any, before: Mapping[str, Any]) -> dict[str, Any]:
         game = _game(self)
+        grid: Grid = game_env.grid
         state, last = game_env.s, game_env.lastaction
-        agent = None if state is None else divmod(int(state), game.cols)
+        agent = None if state is None else divmod(int(state), grid.cols)
+        move = None if last is None else grid.moves[int(last)]
+        shown = {**grid.pays, **{cell: pay for cell, (_, pay) in grid.jumps.items()}}
         scene: dict[str, Any] = {
-            "rows": game.rows,
-            "cols": game.cols,
-            "cells": game.cells(),
+            "rows": grid.rows,
+            "cols": grid.cols,
+            "cells": grid.cells(),
             "theme": "plain",
             "agent": agent,
-            "last_action": None if last is None else game.action_names[int(last)],
+            "last_action": move,
             "slipped": False,
-            "rewards": {f"{r},{c}": pay for (r, c), (_, pay) in game.jumps.items()},
+            "rewards": {f"{r},{c}": pay for (r, c), pay in shown.items()},
             "marks": {f"{r},{c}": text
-                      for (r, c), text in {**game.letters, **game.primes}.items()},
+                      for (r, c), text in {**grid.letters, **grid.primes}.items()},
+            "moves": list(grid.moves),
         }
-        was = before.get("agent")
-        if was is not None and agent is not None and last is not None:
-            jump = game.jumps.get((int(was[0]), int(was[1])))
-            if jump is not None and tuple(agent) == jump[0]:
-                name = game.letters[int(was[0]), int(was[1])]
-                scene["event"] = f"{{who}} jumped from {name} to {name}′: +{jump[1]:g}"
+        if not set(STRAIGHT) <= set(grid.moves):
+            scene["offered"] = list(grid.moves)
+        if grid.wind:
+            scene["wind"], scene["gusts"] = list(grid.wind), grid.gusts
+        was = _cell(before.get("agent"))
+        if was is not None and agent is not None and move is not None:
+            event = game.event(game_env, before, was, agent, move)
+            if event is not None:
+                scene["event"], scene["event_tone"] = event
         return scene
 
 
@@ -129,41 +154,63 @@ class DPGridLayout(HeatmapLayout):
         marks: Any = None,
     ) -> list[Heatmap]:
         game = _game(self)
-        rows, cols = game.rows, game.cols
         try:
-            values = np.asarray(q, dtype=float).reshape(rows * cols, len(game.action_names))
+            grid = game.grid(kwargs)
+            rows, cols = grid.rows, grid.cols
+            values = np.asarray(q, dtype=float).reshape(rows * cols, len(grid.moves))
         except UNREADABLE:
             return []
         has_marks = isinstance(marks, np.ndarray) and marks.shape == values.shape
-        grid = np.full((rows, cols), np.nan)
+        panel = np.full((rows, cols), np.nan)
         marked = np.zeros((rows, cols), dtype=bool)
         labels = []
         for r in range(rows):
             line = []
             for c in range(cols):
-                if (r, c) in game.terminals:
-                    line.append(END)
+                if (r, c) in grid.terminals or (r, c) in grid.walls:
+                    line.append(END if (r, c) in grid.terminals else WALL)
                     continue
                 qs = values[r * cols + c]
-                grid[r, c] = float(qs.max())
+                panel[r, c] = float(qs.max())
                 if (qs == qs[0]).all():
-                    line.append(game.letters.get((r, c), TIED))
+                    line.append(grid.letters.get((r, c), TIED))
                     continue
                 action = int(np.argmax(qs))
-                line.append(ARROWS[game.action_names[action]])
+                line.append(ARROWS.get(grid.moves[action], grid.moves[action]))
                 marked[r, c] = has_marks and not marks[r * cols + c, action]
             labels.append(tuple(line))
         parts = ["arrow: greedy move", f"{TIED} tie",
-                 *(f"{letter} jumps" for letter in game.letters.values()),
-                 *([f"{END} terminal"] if game.terminals else []), "* not an optimal move"]
+                 *(f"{grid.letters[cell]} jumps" for cell in grid.jumps),
+                 *([f"{END} terminal"] if grid.terminals else []),
+                 *([f"{WALL} wall"] if grid.walls else []), "* not an optimal move"]
         return [
             Heatmap(
                 title="max Q and the greedy move",
                 row_labels=tuple(str(r) for r in range(rows)),
                 col_labels=tuple(str(c) for c in range(cols)),
-                values=grid,
+                values=panel,
                 labels=tuple(labels),
                 marked=marked,
                 legend="  ".join(parts),
             )
         ]
+
+
+class ReachNarrator(Narrator):
+    """Reached the episode's end (`goal_words`), or ran out of time."""
+
+    tally_words = (TallyWord("reached", "good"), TallyWord("timed out", "even"))
+    goal_words = "the goal"
+
+    def tally_word(self, last: Any) -> str:
+        return "reached" if last.terminated else "timed out"
+
+    def outcome_text(self, last: Any, first_info: Mapping[str, Any],
+                     scene: Mapping[str, Any]) -> str:
+        total = format_reward(last.episode_return)
+        if last.terminated:
+            return f"Reached {self.goal_words} in {plural(last.steps, 'step')}, return {total}"
+        return f"Out of time after {plural(last.steps, 'step')}, return {total}"
+
+    def progress_text(self, last: Any, first_info: Mapping[str, Any]) -> str:
+        return f"{plural(last.steps, 'step')} taken" if last.steps else ""

@@ -18,6 +18,13 @@ heatmaps call optimal only the quickest of them: among the actions of
 optimal value, those that are also best with rewards discounted by
 `TIE_GAMMA` per step. The others are listed in `Advice.equal`.
 
+**A world that changes** as it is played (the book's blocking maze) lists
+the step each phase starts at (`phase_starts`); the exact figures of a
+phase take the arguments with `PHASE` set (`at_step(kwargs, steps)` gives
+those of the phase in force after `steps` steps), and `world(kwargs,
+changes)` hands whoever samples the game every phase's model. A game whose
+states do not offer every action says which they do (`offered_actions`).
+
 **Fixed policies.** With an episode limit the optimum may play differently
 as the limit nears, which no fixed (greedy) policy does.
 `ModelOracle.fixed_policy_bound` says how close a fixed policy gets: the best
@@ -28,6 +35,7 @@ one a local search finds (a lower bound on the best there is), for
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import lru_cache
@@ -39,9 +47,11 @@ import numpy.typing as npt
 from tui_gym.core.mdp import (
     FiniteMDP,
     NotAvailable,
+    Phases,
     evaluate,
     model_from_env,
     optimal_actions,
+    return_range,
     solve,
     with_horizon,
 )
@@ -65,6 +75,7 @@ from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import signed, unwrapped_note
 
 __all__ = [
+    "PHASE",
     "TIE_GAMMA",
     "DiscreteStates",
     "ModelGame",
@@ -75,6 +86,7 @@ __all__ = [
     "model_under",
 ]
 
+PHASE = "phase"  # the argument naming a changing world's phase, for its exact figures
 TIE_GAMMA = 0.99  # the discount that breaks ties between moves of equal exact value
 LADDER_LIMIT = 4_000_000  # Q-values kept per ladder (steps x states x actions) at most
 SEARCH_LIMIT = 4096  # state-action pairs a fixed-policy search looks at, at most
@@ -123,12 +135,33 @@ def _thaw(value: Any) -> Any:
 
 def model_under(model: FiniteMDP, changes: GameChanges) -> FiniteMDP:
     """`model` as the wrappers read into `changes` make it: their rewards (each distinct
-    reward passed once through the wrappers' own code) and the tightest time limit."""
+    reward passed once through the wrappers' own code; a reward drawn with noise through
+    wrappers that scale and shift it, its deviation scaled alike) and the tightest time
+    limit. `ValueError` for wrappers that bend a reward drawn with noise."""
     if changes.changes_rewards:
+        noise = model.reward_std
+        if noise is not None and noise.any():
+            slope = _slope(changes)
+            if slope is None:
+                raise ValueError(f"{changes.reward_names()} on rewards drawn with noise is "
+                                 "not modelled")
+            noise = abs(slope) * noise
         unique, inverse = np.unique(model.reward, return_inverse=True)
         mapped = np.array([changes.reward(float(r)) for r in unique])
-        model = model.replace(reward=mapped[inverse].reshape(model.reward.shape))
+        model = model.replace(reward=mapped[inverse].reshape(model.reward.shape),
+                              reward_std=noise)
     return with_horizon(model, changes.time_limit)
+
+
+def _slope(changes: GameChanges) -> float | None:
+    """The factor of the wrappers' reward change when it is `a * r + b` (None otherwise)."""
+    shift = changes.reward(0.0)
+    slope = changes.reward(1.0) - shift
+    probes = (-100.0, -3.5, -0.25, 0.75, 2.0, 100.0)
+    if all(math.isclose(changes.reward(r), slope * r + shift, rel_tol=1e-9, abs_tol=1e-9)
+           for r in probes):
+        return slope
+    return None
 
 
 def elapsed_steps(env: Any) -> int | None:
@@ -267,7 +300,12 @@ class ModelOracle(Oracle):
         if changes.others:
             model = with_horizon(base, game.episode_limit(kwargs))
             return _Exact(model, Ladder(model), Scope(False, unwrapped_note(changes.others)))
-        model = model_under(base, changes)
+        try:
+            model = model_under(base, changes)
+        except ValueError as error:
+            model = with_horizon(base, game.episode_limit(kwargs))
+            return _Exact(model, Ladder(model), Scope(False, f"figures of the unwrapped game: "
+                                                             f"{error}"))
         notes = []
         if changes.changes_rewards:
             notes.append(changes.reward_names())
@@ -392,6 +430,16 @@ class ModelOracle(Oracle):
                 fixed.shortfall) else ")"
         return Bound("gap", limit, text)
 
+    def return_range(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> tuple[float, float] | NotAvailable:
+        exact = self.exact(kwargs, changes)
+        if isinstance(exact, NotAvailable):
+            return exact
+        if not exact.scope.exact:
+            return NotAvailable(exact.scope.note)
+        return return_range(exact.model)
+
     def fixed_policy_bound(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> FixedBound | NotAvailable:
@@ -501,6 +549,46 @@ class ModelGame(Game):
             return model
         return PlanModel(model, self.plan_gamma, self.episode_limit(kwargs))
 
+    def phase_starts(self, kwargs: Mapping[str, Any]) -> tuple[int, ...]:
+        """The step (over episodes) each phase of the world starts at: one phase, from step
+        0, for a world that never changes."""
+        return (0,)
+
+    def in_phase(self, kwargs: Mapping[str, Any], phase: int) -> dict[str, Any]:
+        """The arguments of one phase of the world, for its exact figures."""
+        if len(self.phase_starts(kwargs)) == 1:
+            return dict(kwargs)
+        return {**kwargs, PHASE: phase}
+
+    def at_step(self, kwargs: Mapping[str, Any], steps: int) -> dict[str, Any]:
+        starts = self.phase_starts(kwargs)
+        return self.in_phase(kwargs, max(0, bisect_right(starts, int(steps)) - 1))
+
+    def world(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> Phases | NotAvailable:
+        """The model as the wrappers make it, phase by phase (one phase for a world that
+        never changes), or why there is none that follows the game as played."""
+        models = []
+        for phase in range(len(self.phase_starts(kwargs))):
+            exact = self.model_oracle.exact(self.in_phase(kwargs, phase), changes)
+            if isinstance(exact, NotAvailable):
+                return exact
+            if not exact.scope.exact:
+                return NotAvailable(exact.scope.note)
+            models.append(exact.model)
+        return Phases(tuple(models), self.phase_starts(kwargs))
+
+    def offered_actions(self, kwargs: Mapping[str, Any]) -> BoolArray | None:
+        """`[states, actions]`: the actions each state offers, for a game whose states do
+        not all offer every action (None: every state offers every action)."""
+        return None
+
+    @property
+    def model_oracle(self) -> ModelOracle:
+        assert isinstance(self.oracle, ModelOracle)
+        return self.oracle
+
     def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP | NotAvailable:
         """The game's model with no wrappers and no episode limit (kept per arguments)."""
         make = self.make_kwargs(kwargs)
@@ -530,6 +618,10 @@ class ModelGame(Game):
         exact = oracle.exact(kwargs, changes)
         if isinstance(exact, NotAvailable):
             return exact
+        if len(self.phase_starts(kwargs)) > 1:
+            return NotAvailable(f"{self.title} changes as it is played")
+        if exact.model.reward_std is not None and exact.model.reward_std.any():
+            return NotAvailable(f"{self.title} draws rewards with noise")
         if not exact.scope.exact:
             return NotAvailable(exact.scope.note)
         return TrainingModel(exact.model)

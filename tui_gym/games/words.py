@@ -74,8 +74,8 @@ def signed(value: float, places: int) -> str:
 
 
 def plural(count: int, noun: str) -> str:
-    """'1 hand', '3 hands'."""
-    return f"{count} {noun}{'' if count == 1 else 's'}"
+    """'1 hand', '3 hands', '1,200 hands'."""
+    return f"{count:,} {noun}{'' if count == 1 else 's'}"
 
 
 def return_summary(tally: Tally, noun: str, short: bool = False) -> str:

@@ -394,13 +394,20 @@ class Session:
             return snapshot.values(keys)
         return self.agent.values(keys)
 
+    def exact_kwargs(self, snapshot: TrainingSnapshot | None = None) -> dict[str, Any]:
+        """The game's arguments for the exact figures: in a world that changes as it is
+        played, with the phase in force after the steps trained (the live trainer's, or a
+        snapshot's)."""
+        steps = self.trainer.steps if snapshot is None else snapshot.steps
+        return self.game.at_step(self.env_kwargs, steps)
+
     def reference(self, snapshot: TrainingSnapshot | None = None) -> ReferenceMetrics | None:
         """The exact comparison of the greedy policy with the optimum (None when there
         is none: `exact_reason` says why)."""
         q = self.base_q(snapshot)
         if q is None:
             return None
-        reference = self.game.oracle.reference(q, self.env_kwargs, self.changes)
+        reference = self.game.oracle.reference(q, self.exact_kwargs(snapshot), self.changes)
         return None if isinstance(reference, NotAvailable) else reference
 
     def evaluation_reference(self) -> ReferenceMetrics | None:
@@ -408,7 +415,7 @@ class Session:
         q = self.base_q()
         if q is None:
             return None
-        reference = self.game.oracle.evaluation_reference(q, self.env_kwargs, self.changes)
+        reference = self.game.oracle.evaluation_reference(q, self.exact_kwargs(), self.changes)
         return None if isinstance(reference, NotAvailable) else reference
 
     def exact_reason(self) -> str:
@@ -419,7 +426,7 @@ class Session:
         q = self.base_q()
         if q is None:
             return "no per-state view of this table"
-        reference = self.game.oracle.reference(q, self.env_kwargs, self.changes)
+        reference = self.game.oracle.reference(q, self.exact_kwargs(), self.changes)
         return reference.reason if isinstance(reference, NotAvailable) else ""
 
     def heatmaps(
@@ -429,8 +436,9 @@ class Session:
         q = self.base_q(snapshot)
         if q is None:
             return None
-        marks = self.game.oracle.optimal_marks(self.env_kwargs, self.changes)
-        return self.game.layout.heatmaps(q, self.env_kwargs, focus, marks)
+        kwargs = self.exact_kwargs(snapshot)
+        marks = self.game.oracle.optimal_marks(kwargs, self.changes)
+        return self.game.layout.heatmaps(q, kwargs, focus, marks)
 
     def heatmap_cell(
         self, observation: Any, focus: Any = None
@@ -470,8 +478,8 @@ class Session:
         """Exact scoreboard figures of the agent's greedy policy (the live agent's, or a
         snapshot's) and of the optimum (`Oracle.agent_figures`); only the optimum's
         when wrappers hide the base states."""
-        return self.game.oracle.agent_figures(self.base_q(snapshot), self.env_kwargs,
-                                              self.changes)
+        return self.game.oracle.agent_figures(self.base_q(snapshot),
+                                              self.exact_kwargs(snapshot), self.changes)
 
     def shortfall(self, reference: ReferenceMetrics) -> str:
         """When the greedy policy `reference` measured ends short of the game's stated
@@ -488,7 +496,7 @@ class Session:
 
     def fixed_policy_bound(self) -> FixedBound | None:
         """How close a fixed (greedy) policy gets to the optimum here, when known."""
-        bound = self.game.oracle.fixed_policy_bound(self.env_kwargs, self.changes)
+        bound = self.game.oracle.fixed_policy_bound(self.exact_kwargs(), self.changes)
         return None if isinstance(bound, NotAvailable) else bound
 
     def greedy_actions_for(

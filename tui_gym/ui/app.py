@@ -12,12 +12,14 @@ hands it to the Train view; the side panel asks for rebuilds
 through a message; nothing in the trainer calls into widgets. Whatever would
 lose a trained agent (a reset, a change that resets it, loading over it,
 saving over a file) asks first (`ConfirmScreen`); saving and loading take a
-file name the person types (`FileScreen`). `MainScreen` is the app's screen;
-below the minimum size `TooSmallScreen` covers it and takes every key; and
+file name the person types (`FileScreen`). Below the minimum size
+`TooSmallScreen` covers the main screen and takes every key; and
 `tune_gc_for_ui` paces the garbage collector for an app that owns its process.
 `run_app` runs the app as `tui-gym` does: SIGTERM, SIGHUP and SIGINT end it
-cleanly, and an unexpected error ends it with one line and a crash log
-(`tui_gym.crash_log`) instead of a traceback on the screen.
+cleanly, so does its terminal (or a served app's pipes) closing, and an
+unexpected error ends it with one line and a crash log (`tui_gym.crash_log`)
+instead of a traceback on the screen. What it does through Textual's private
+names lives in `tui_gym.ui.textual_internals`.
 """
 
 from __future__ import annotations
@@ -35,28 +37,34 @@ from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
-from textual._compositor import ChopsUpdate, Compositor, ReflowResult
 from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal
-from textual.events import Resize, ScreenResume
-from textual.geometry import Region, Size
-from textual.reactive import Reactive
+from textual.driver import Driver
+from textual.events import Resize
 from textual.screen import Screen
-from textual.strip import Strip
-from textual.widget import AwaitMount, Widget
+from textual.widget import AwaitMount
 from textual.widgets import ContentSwitcher, Header
 
 from tui_gym.core.engine.trainer import continue_run
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games import GAMES, Game, game_for, game_named
+from tui_gym.games.words import plural
 from tui_gym.session.recording.switch import RecordingSwitch
 from tui_gym.session.runners import make_runner
 from tui_gym.session.session import Session
 from tui_gym.session.speeds import SPEEDS
 from tui_gym.session.storage import StorageError
+from tui_gym.ui.key_order import KeysInOrder
 from tui_gym.ui.play_view import PlayView
 from tui_gym.ui.side_panel import SidePanel
+from tui_gym.ui.textual_internals import (
+    CrashHook,
+    TerminalGone,
+    guarded_driver,
+    main_screen,
+    terminal_write_failed,
+)
 from tui_gym.ui.too_small_screen import TooSmallScreen
 from tui_gym.ui.widgets.key_bar import KeyBar
 
@@ -85,72 +93,23 @@ IDLE_POLL = 0.02  # seconds between looks for the agent handed back before a cha
 IDLE_TIMEOUT = 10.0  # and how long to look before giving up
 
 
-class _Compositor(Compositor):
-    """Textual's compositor, keeping the full map a layout pass has just made, and
-    drawing in a partial update only the widgets it repaints.
-
-    Textual marks the map stale before a layout pass and leaves it so after the
-    pass, so the first widget that asks for its region while the frame is drawn
-    (a strip widget does) had the whole screen laid out a second time, for each
-    view switch."""
-
-    def reflow(self, parent: Widget, size: Size) -> ReflowResult:
-        result = super().reflow(parent, size)
-        self._full_map_invalidated = False  # the map just made is the full one
-        return result
-
-    _updating: tuple[Region, ...] = ()  # the regions a partial update repaints
-
-    def render_partial_update(self) -> ChopsUpdate | None:
-        self._updating = tuple(self._dirty_regions)
-        try:
-            return super().render_partial_update()
-        finally:
-            self._updating = ()
-
-    def _get_renders(
-        self, crop: Region | None = None
-    ) -> Iterable[tuple[Region, Region, list[Strip]]]:
-        """Textual's renders, leaving out in a partial update the widgets whose visible
-        part misses every region it repaints. Textual tests each widget's container's
-        clip against the box around them all, so a snapshot that changed the Train
-        view's curves, stats and heatmap drew every widget on the screen."""
-        if crop is None:
-            yield from super()._get_renders(crop)
-            return
-        updating = self._updating or (crop,)
-        for widget, (region, clip) in self.visible_widgets.items():
-            visible = region.intersection(clip)
-            if not (visible.width and visible.height):
-                continue
-            if not any(visible.overlaps(part) for part in updating):
-                continue
-            yield region, clip, widget.render_lines(visible.translate(-region.offset))
+GAME_KEYS_A_LINE = 8  # the help's game keys, a line of at most this many
 
 
-class MainScreen(Screen):
-    """The app's screen. A focus change repaints the widgets whose look it changes
-    (their `:focus` styles), not the whole screen as Textual's `Screen` does: a
-    view switch moves the focus, and a whole-screen repaint doubled its cost. Its
-    compositor keeps the layout it has just made (`_Compositor`). When it first
-    shows, its widgets keep the styles they were given as they were mounted instead
-    of being styled all over again."""
-
-    focused: Reactive[Widget | None] = Reactive(None, repaint=False)
-
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
-        self._compositor = _Compositor()
-        self._shown = False
-
-    def _on_screen_resume(self, event: ScreenResume) -> None:
-        # Runs before `Screen`'s own handler, which restyles every node when asked to.
-        if not self._shown:
-            self._shown = True
-            event.refresh_styles = False
+def _game_keys() -> list[tuple[str, str]]:
+    """The help's rows of game keys: a few a line, so the key column stays narrow."""
+    keys = [g.key for g in GAMES if g.key]
+    lines = [" ".join(keys[i:i + GAME_KEYS_A_LINE])
+             for i in range(0, len(keys), GAME_KEYS_A_LINE)]
+    words = ["switch game, as the picker names them;",
+             "each keeps its agent, settings and curves"]
+    words += [""] * (len(lines) - len(words))
+    if len(lines) < len(words):
+        return [(lines[0], " ".join(words))]
+    return list(zip(lines, words, strict=True))
 
 
-class TuiGymApp(App[int]):
+class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     """Play, train and tinker: the tui-gym terminal playground."""
 
     TITLE = "tui-gym"
@@ -219,7 +178,6 @@ class TuiGymApp(App[int]):
         self.gc_seconds = gc_seconds or (YOUNG_GC_SECONDS, FULL_GC_SECONDS)
         self.gc_pacer: GcPacer | None = None
         self.standalone = standalone
-        self.crash: BaseException | None = None  # the first unexpected error, if any
         self.thread_crash: BaseException | None = None  # one from a background thread
         self._signals: list[int] = []
         self.session = session or Session()
@@ -246,8 +204,16 @@ class TuiGymApp(App[int]):
 
     # --- layout ------------------------------------------------------------
     def get_default_screen(self) -> Screen:
-        self._main_screen = MainScreen(id="_default")
+        self._main_screen = main_screen(id="_default")
         return self._main_screen
+
+    def get_driver_class(self) -> type[Driver]:
+        return guarded_driver(super().get_driver_class())
+
+    @property
+    def quiet_crash(self) -> bool:  # type: ignore[override]
+        """An app that owns its terminal logs a crash's traceback instead (`run_app`)."""
+        return self.standalone
 
     def compose(self) -> ComposeResult:
         yield Header()
@@ -261,7 +227,7 @@ class TuiGymApp(App[int]):
         if self.standalone:
             self._catch_signals()
         self._switcher = self.query_one("#views", ContentSwitcher)
-        self.sub_title = self.session.game.title
+        self._show_title()
         self.set_interval(1 / REFRESH_HZ, self._tick)
         self._apply_size(self.size.width, self.size.height)
         self.call_after_refresh(self._focus_at_start)
@@ -282,6 +248,10 @@ class TuiGymApp(App[int]):
             self.run_log, self._make_run_log = self._make_run_log(), None
         if self.tune_gc:
             self.call_after_refresh(self._tune_gc)
+
+    def _show_title(self) -> None:
+        """The header: the game and the seed (`--seed` repeats a run)."""
+        self.sub_title = f"{self.session.game.title} · seed {self.session.seed}"
 
     def _tune_gc(self) -> None:
         if self.gc_pacer is None and self.is_running:
@@ -320,7 +290,8 @@ class TuiGymApp(App[int]):
             view = self._train = TrainView(id="train")
             view.display = self.current_view == "train"
             assert self._switcher is not None
-            self._train_mounted = self._switcher.mount(view)  # it reads the session then
+            if self._switcher.is_attached:  # else the app is being taken apart
+                self._train_mounted = self._switcher.mount(view)  # it reads the session then
         return view
 
     async def _mounted_train(self) -> TrainView:
@@ -395,6 +366,8 @@ class TuiGymApp(App[int]):
             return action == "quit"  # nothing else behind a screen that hides the app
         if action in self.TRAIN_ACTIONS:
             return self.current_view == "train"
+        if action == "edit_map":  # offered only where the game has a map
+            return self.session.game.editable
         return True
 
     def action_show_view(self, view: str) -> None:
@@ -516,7 +489,7 @@ class TuiGymApp(App[int]):
             notice = f"{game.title}: a new agent with the game's own settings."
         else:
             episodes = session.trainer.episodes
-            notice = (f"{game.title}: your agent ({episodes:,} episodes), settings "
+            notice = (f"{game.title}: your agent ({plural(episodes, 'episode')}), settings "
                       "and wrappers as you left them.")
         if was_running:
             notice = "Training paused. " + notice
@@ -560,7 +533,7 @@ class TuiGymApp(App[int]):
         with contextlib.suppress(AttributeError):  # read-only where tied to the agent
             # The other game's last move.
             runner.last_event = runner.last_scene = None  # type: ignore[misc]
-        self.sub_title = session.game.title
+        self._show_title()
         self._last_version = -1
         self.play_view.reload()
         self._reload_train()
@@ -568,6 +541,7 @@ class TuiGymApp(App[int]):
             self._compare.reload()
         self._reload_plan()
         self.side_panel.reload()
+        self.refresh_bindings()  # the keys the game offers (`m` for a map)
 
     def _episodes_trained(self) -> int:
         """Episodes the current agent has trained (the runner's count while it trains)."""
@@ -583,7 +557,7 @@ class TuiGymApp(App[int]):
         self.push_screen(
             _confirm_screen(
                 "Reset the agent?",
-                f"It has trained {episodes:,} episodes. An empty Q-table and fresh "
+                f"It has trained {plural(episodes, 'episode')}. An empty Q-table and fresh "
                 "statistics replace them (ctrl+s saves it first).",
                 "Reset",
             ),
@@ -737,7 +711,7 @@ class TuiGymApp(App[int]):
         if self.run_log is not None:
             self.run_log.saved(self.session, path)  # the run in the history says where
         episodes = self.session.trainer.episodes
-        self.notify(f"Agent saved to {path} ({episodes:,} episodes).", title="Saved")
+        self.notify(f"Agent saved to {path} ({plural(episodes, 'episode')}).", title="Saved")
         return None
 
     def _read_file(self, path: Path) -> str | None:
@@ -767,7 +741,7 @@ class TuiGymApp(App[int]):
         self.push_screen(
             _confirm_screen(
                 f"Replace the {game.title} agent?",
-                f"The {game.title} agent here has trained {episodes:,} episodes; "
+                f"The {game.title} agent here has trained {plural(episodes, 'episode')}; "
                 f"{path.name} replaces it, its settings and its wrappers.",
                 "Load",
             ),
@@ -784,7 +758,7 @@ class TuiGymApp(App[int]):
         self._files[session.game.name] = path
         self._use_session(session)
         self.notify(f"Loaded {path}: {session.game.title}, "
-                    f"{session.trainer.episodes:,} episodes trained.", title="Loaded")
+                    f"{plural(session.trainer.episodes, 'episode')} trained.", title="Loaded")
 
     def action_save_screenshot(self) -> None:
         """Save an SVG picture of the screen in the current folder, and say where."""
@@ -858,7 +832,7 @@ class TuiGymApp(App[int]):
             if was_running:
                 self.runner.start()
             return False
-        self.sub_title = self.session.game.title
+        self._show_title()
         self._last_version = -1
         self.play_view.reload()
         self._reload_train()
@@ -898,8 +872,9 @@ class TuiGymApp(App[int]):
         self.push_screen(
             _confirm_screen(
                 f"Train with {cls.title} instead?",
-                f"Another algorithm needs a fresh learner: the agent, trained {episodes:,} "
-                f"episodes with {self.session.learner_class.title}, would start over with "
+                "Another algorithm needs a fresh learner: the agent, trained "
+                f"{plural(episodes, 'episode')} with {self.session.learner_class.title}, "
+                "would start over with "
                 f"{cls.title}'s defaults for this game (ctrl+s saves it first). "
                 "ε, the learning rate and the other fields change without this.",
                 "Switch and reset",
@@ -944,8 +919,8 @@ class TuiGymApp(App[int]):
         self.push_screen(
             _confirm_screen(
                 "Reset the agent for this change?",
-                f"It changes what observations mean, so the agent, trained {episodes:,} "
-                "episodes, would start over (ctrl+s saves it first).",
+                "It changes what observations mean, so the agent, trained "
+                f"{plural(episodes, 'episode')}, would start over (ctrl+s saves it first).",
                 "Apply and reset",
             ),
             answer,
@@ -961,9 +936,7 @@ class TuiGymApp(App[int]):
             ("Everywhere", [
                 ("p / t / v", "Play view / Train view / Compare view"),
                 ("P", "Plan view: planning, sweep by sweep"),
-                (" ".join(g.key for g in GAMES if g.key),
-                 "switch game, as the picker names them; each keeps its agent, "
-                 "settings and curves"),
+                *_game_keys(),
                 ("w / W", "focus the wrapper panel (W while a board that moves with WASD "
                           "has focus)"),
                 ("m", "edit a grid game's map (training or planning)"),
@@ -1075,16 +1048,9 @@ class TuiGymApp(App[int]):
     def _end_on_signal(self, signum: int) -> None:
         self.exit(return_code=128 + signum)
 
-    def _handle_exception(self, error: Exception) -> None:
-        # Textual's one path for an unhandled error: it ends the app with code 1 and
-        # keeps a traceback to print on the terminal. A standalone app logs it
-        # instead (`run_app`), so the person sees one line.
-        if self.crash is None:
-            self.crash = error
-        super()._handle_exception(error)
-        if self.standalone:
-            self._exit_renderables.clear()
-
+    def on_terminal_gone(self, message: TerminalGone) -> None:
+        """Nobody can see the app or type to it any more: end it, as a hang-up would."""
+        self.exit(return_code=128 + signal.SIGHUP)
 
 YOUNG_GC_SECONDS = 0.5  # collect the young generations this often
 FULL_GC_SECONDS = 20.0  # and everything this often
@@ -1210,7 +1176,9 @@ def run_standalone(app: TuiGymApp) -> int:
     previous_hook = threading.excepthook
 
     def thread_failed(args: threading.ExceptHookArgs) -> None:
-        if args.exc_value is not None and app.thread_crash is None:
+        if terminal_write_failed(args):  # the terminal went away: no crash
+            app.post_message(TerminalGone())
+        elif args.exc_value is not None and app.thread_crash is None:
             app.thread_crash = args.exc_value  # raised on the app's next tick
 
     threading.excepthook = thread_failed

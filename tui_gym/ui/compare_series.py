@@ -10,12 +10,14 @@ trailing mean over a tenth of its points, and the legend says so. A band is
 smoothed the same way, edge by edge: the mean of the points' half-widths is
 never narrower than the half-width of the smoothed mean, so the band stays a
 95% band, if a wide one. `smooth=False` draws the curves as recorded.
+`bounded` clips a curve's band to the returns its game allows (a band of a
+few seeds runs far past them), and the chart's axis stays within them.
 """
 
 from __future__ import annotations
 
 from collections.abc import Hashable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -55,6 +57,7 @@ class Series:
     seeds: int = 1
     smoothing: int = 1  # the trailing mean's window over points (1: as recorded)
     smoothing_episodes: int = 1  # about how many episodes that window spans
+    bounds: tuple[float, float] | None = None  # the returns the game allows, when known
 
     @property
     def has_band(self) -> bool:
@@ -68,6 +71,17 @@ class Series:
         if self.smoothing > 1:
             words.append(f"smoothed over {self.smoothing_episodes:,} episodes")
         return " · ".join(words)
+
+
+def bounded(series: Series, bounds: tuple[float, float] | None) -> Series:
+    """`series` within the returns its game allows (`bounds`, ±inf on a side without
+    one): its band clipped to them, and the bounds kept for the chart's axis."""
+    if bounds is None:
+        return series
+    low, high = bounds
+    lo = None if series.lo is None else np.clip(series.lo, low, high)
+    hi = None if series.hi is None else np.clip(series.hi, low, high)
+    return replace(series, lo=lo, hi=hi, bounds=(low, high))
 
 
 def smoothing_window(points: int, smooth: bool = True) -> int:
@@ -205,6 +219,7 @@ __all__ = [
     "FigureRow",
     "Series",
     "algorithm_title",
+    "bounded",
     "row_of_outcome",
     "row_of_record",
     "run_label",

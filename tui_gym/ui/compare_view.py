@@ -26,12 +26,11 @@ switches game or quits (`stop_comparison`, `close`).
 from __future__ import annotations
 
 import time
-from collections.abc import Hashable, Sequence
+from collections.abc import Hashable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
-from rich.segment import Segment
 from rich.text import Text
 from textual import on
 from textual.app import ComposeResult
@@ -39,7 +38,6 @@ from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.strip import Strip
 from textual.widgets import Button, Input, Label, SelectionList
-from textual.widgets._toggle_button import ToggleButton
 from textual.widgets.selection_list import Selection
 
 from tui_gym.core.experiments import (
@@ -52,23 +50,27 @@ from tui_gym.core.experiments import (
     resolve_db_path,
 )
 from tui_gym.core.experiments.connection import examine
+from tui_gym.core.params import digits_note, read_number, shown_value
 from tui_gym.core.text import visible
 from tui_gym.ui.compare_job import CompareJob
 from tui_gym.ui.compare_series import (
     FigureRow,
     Series,
     algorithm_title,
+    bounded,
     row_of_outcome,
     row_of_record,
     run_label,
     series_of_outcome,
     series_of_record,
 )
+from tui_gym.ui.textual_internals import ticked_line
 from tui_gym.ui.widgets.compare_chart import PALETTE, CompareChart
 from tui_gym.ui.widgets.figures_table import FiguresTable, with_interval
 from tui_gym.ui.widgets.numbers import compact_count
 from tui_gym.ui.widgets.progress_line import ProgressLine
 from tui_gym.ui.widgets.stats_panel import format_duration
+from tui_gym.ui.widgets.text_field import TextField
 from tui_gym.ui.widgets.tick_box import TickBox
 
 if TYPE_CHECKING:
@@ -87,16 +89,14 @@ DEFAULT_ALGORITHMS = ("q-learning", "sarsa")
 
 
 def parse_count(text: str, what: str, high: int) -> int:
-    """A whole number from 1 to `high` typed in a field; ValueError saying what is wanted."""
-    cleaned = text.strip().replace(",", "").replace("_", "")
-    try:
-        value = int(cleaned)
-    except ValueError:
-        value = 0
-    if not 1 <= value <= high:
-        shown = repr(text.strip()) if text.strip() else "nothing"
-        raise ValueError(f"{what}: a whole number from 1 to {high:,} (got {shown})")
-    return value
+    """A whole number from 1 to `high` typed in a field (digits 0-9, `,` or `_` between
+    them); ValueError saying what is wanted."""
+    value = read_number(text.strip().replace(",", ""))
+    if value is None or not 1 <= value <= high or value % 1:
+        shown = shown_value(text.strip()) if text.strip() else "nothing"
+        digits = ", in digits 0-9" if digits_note(text) else ""
+        raise ValueError(f"{what}: a whole number from 1 to {high:,}{digits} (got {shown})")
+    return int(value)
 
 
 @dataclass(frozen=True)
@@ -163,18 +163,11 @@ class RunList(SelectionList[int]):
     """
 
     def render_line(self, y: int) -> Strip:
-        strip = super().render_line(y)
-        segments = list(strip)
         # Textual's box draws the same X on and off; say the state with the mark itself.
-        if len(segments) > 2 and segments[1].text == ToggleButton.BUTTON_INNER:
-            try:
-                value = self.get_option_at_index(self.scroll_offset.y + y).value
-            except Exception:
-                return strip
-            mark = "✓" if value in self.selected else " "
-            segments[1] = Segment(mark, segments[1].style)
-            return Strip(segments, strip.cell_length)
-        return strip
+        return ticked_line(
+            super().render_line(y),
+            lambda: self.get_option_at_index(self.scroll_offset.y + y).value in self.selected,
+        )
 
 
 def describe_run(run: RunSummary) -> Text:
@@ -297,9 +290,9 @@ class CompareView(Vertical):
                               id=f"algo-{cls.name}", tooltip=cls.summary)
             for cls in ALGORITHMS
         }
-        self._seeds = Input(str(DEFAULT_SEEDS), id="compare-seeds", compact=True,
+        self._seeds = TextField(str(DEFAULT_SEEDS), id="compare-seeds", compact=True,
                             tooltip=f"independent learners per algorithm, 1 to {MAX_SEEDS:,}")
-        self._episodes = Input("", id="compare-episodes", compact=True,
+        self._episodes = TextField("", id="compare-episodes", compact=True,
                                tooltip=f"episodes each learner trains, 1 to {MAX_EPISODES:,}")
         self._launch = Button("▶ Compare", id="btn-compare", variant="success", compact=True,
                               tooltip="Run the comparison for this game and its settings (l)")
@@ -521,15 +514,31 @@ class CompareView(Vertical):
         self._colours[key] = place
         return place
 
+    def _allowed(
+        self, kwargs: Mapping[str, Any], wrappers: Iterable[tuple[str, Mapping[str, Any]]]
+    ) -> tuple[float, float] | None:
+        """The returns the current game allows with these arguments and wrappers."""
+        from tui_gym.session.returns import return_range_of
+
+        session = self.session
+        return return_range_of(session.game, session.env_id, kwargs, wrappers)
+
     def _redraw(self) -> None:
         entries: list[tuple[Series | None, FigureRow, Hashable]] = []
         for run_id in self.run_list.selected:
             record = self._record(run_id)
             if record is not None:
-                entries.append((series_of_record(record, self.smooth), row_of_record(record),
-                                run_id))
+                series = series_of_record(record, self.smooth)
+                if series is not None:
+                    allowed = self._allowed(record.game_params,
+                                            ((w.name, w.params) for w in record.wrappers))
+                    series = bounded(series, allowed)
+                entries.append((series, row_of_record(record), run_id))
+        job = self._job
+        live_allowed = None if job is None or not self._live else self._allowed(
+            job.spec.game_params, ((c.name, c.values()) for c in job.spec.wrappers))
         for series, row in self._live:
-            entries.append((series, row, series.key))
+            entries.append((bounded(series, live_allowed), row, series.key))
         shown = {key for _, _, key in entries}
         for key in [k for k in self._colours if k not in shown]:
             del self._colours[key]

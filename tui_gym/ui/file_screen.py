@@ -26,6 +26,7 @@ from textual.screen import ModalScreen
 from textual.widgets import Button, Input, Static
 
 from tui_gym.ui.confirm_screen import ConfirmScreen
+from tui_gym.ui.widgets.text_field import TextField
 
 SUFFIX = ".tgym"
 
@@ -85,7 +86,7 @@ class FileScreen(ModalScreen[Path | None]):
         verb = "Save" if self.saving else "Load"
         with Vertical():
             yield Static(self.title_text, id="file-title", markup=False)
-            yield Input(self.suggestion, placeholder="file name, e.g. my-agent.tgym",
+            yield TextField(self.suggestion, placeholder="file name, e.g. my-agent.tgym",
                         id="file-name")
             yield Static("", id="file-target")
             yield Static("", id="file-error")

@@ -12,6 +12,8 @@ from textual.containers import Vertical
 from textual.screen import ModalScreen
 from textual.widgets import Input, Static
 
+from tui_gym.ui.widgets.text_field import TextField
+
 
 class JumpScreen(ModalScreen[int | None]):
     """Type an episode number (1 to `count`); enter jumps, escape cancels."""
@@ -37,7 +39,7 @@ class JumpScreen(ModalScreen[int | None]):
     def compose(self) -> ComposeResult:
         with Vertical():
             yield Static(Text(f"Jump to {self.noun} (1 to {self.count:,})"), id="jump-title")
-            yield Input(str(self.current), placeholder=f"a number, 1 to {self.count}",
+            yield TextField(str(self.current), placeholder=f"a number, 1 to {self.count}",
                         id="jump-number", type="integer")
             yield Static("", id="jump-error")
 

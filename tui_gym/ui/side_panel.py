@@ -29,6 +29,7 @@ from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet, Stati
 from tui_gym.algorithms import ALGORITHMS
 from tui_gym.core.wrappers import CATALOG, Param, WrapperChoice, format_wrapper_spec
 from tui_gym.games import GAMES
+from tui_gym.ui.widgets.text_field import TextField
 from tui_gym.ui.widgets.tick_box import TickBox
 
 if TYPE_CHECKING:
@@ -94,7 +95,7 @@ class ParamField(Horizontal):
             box.tooltip = tooltip
             yield box
             return
-        field = Input(
+        field = TextField(
             value=_value_text(self._value),
             compact=True,
             validators=[ParamValidator(self.param)],

@@ -119,7 +119,8 @@ class TrainView(Vertical):
     TrainView #train-board-caption {
         color: $text-muted;
         width: 100%;
-        height: 3;
+        height: auto;
+        min-height: 3;
         padding: 0 1;
     }
     TrainView #train-step {
@@ -336,7 +337,7 @@ class TrainView(Vertical):
         self._editor_game = game.name
         self.add_class("-mapping")
         self._show_editor()
-        self.call_after_refresh(self._editor.focus_canvas)
+        self._editor.focus_canvas()  # at once: the keys typed after `m` go to the map
         return True
 
     def close_editor(self) -> None:
@@ -403,7 +404,7 @@ class TrainView(Vertical):
         """The keys this view adds to the app's own training keys."""
         keys = [
             ("e", "edit the hyperparameters (enter applies, also while training runs; "
-                  "esc: back)"),
+                  "esc: back, dropping an edit not applied)"),
             ("tab / shift+tab", "move between fields and buttons"),
         ]
         layout = self.session.game.layout
@@ -550,9 +551,13 @@ class TrainView(Vertical):
                 self.heatmap.step_cell = None
             return
         session = self.session
-        game = session.game
-        self._step.show(explain(event, record, game.action_names, game.states.describe,
-                                session.learner_class.title))
+        game, kwargs = session.game, session.env_kwargs
+        self._step.show(explain(
+            event, record, game.action_names,
+            lambda observation: game.states.describe(observation, kwargs),
+            session.learner_class.title,
+            lambda row: game.states.describe(session.keyer.observation(row), kwargs),
+        ))
         found = session.heatmap_cell(event.observation, self.focus_target)
         if found is None:
             self.heatmap.step_cell = None
@@ -574,7 +579,7 @@ class TrainView(Vertical):
         step = f"→ {action}, reward {event.reward:+g}"
         if event.episode_done is not None:
             step += f" · return {event.episode_done.episode_return:+g}"
-        # The state comes last: when it wraps, the board above shows it anyway.
+        # The state comes last: it may take two lines.
         return "\n".join(line for line in (count, step, state) if line)
 
     # --- events ------------------------------------------------------------
@@ -625,7 +630,10 @@ class TrainView(Vertical):
 
     @on(HyperparameterForm.Left)
     def _form_left(self, event: HyperparameterForm.Left) -> None:
+        """Escape: what was typed and not applied goes; the fields show what is in force."""
         event.stop()
+        if self.session.hp is not None:
+            self.form.load(self.session.hp)
         self._leave_form()
 
     def _leave_form(self) -> None:
@@ -635,7 +643,7 @@ class TrainView(Vertical):
 
     def action_edit_hyperparameters(self) -> None:
         self.add_class("-editing")
-        self.call_after_refresh(self.form.input("learning_rate").focus)
+        self.form.input("learning_rate").focus()  # at once: the keys typed after `e` go there
 
     def on_resize(self) -> None:
         compact = self.screen.has_class("compact")

@@ -28,7 +28,9 @@ answering mid-episode asks for them with the steps that are left.
 
 Modules, one job each:
 
-- `model`: `FiniteMDP`, dense `[S, A, K]` transition arrays; `ModelError`;
+- `model`: `FiniteMDP`, dense `[S, A, K]` transition arrays (rewards with noise keep
+  their mean and give their deviation); `ModelError`;
+- `phases`: `Phases`, a world that changes as it is played, the model of each phase;
 - `from_env`: `model_from_env` for envs with a `P` table, or `NotAvailable`;
 - `transforms`: the model under `ScaleReward`, `StepPenalty`, `ClipReward`, `TimeLimit`;
 - `policy`: deterministic and stochastic policies, `greedy_policy`;
@@ -36,6 +38,7 @@ Modules, one job each:
 - `optimum`: `solve`, the optimum (`Solution`, with `Q*` and `V*`); `optimal_actions`;
 - `gap`: `exact_gap`, a policy's value beside the optimum (`Gap`);
 - `ending`: which states a policy (or any policy) ends episodes from;
+- `returns`: `return_range`, the lowest and highest return one episode can have;
 - `policy_arrays`: `PolicyArrays`, a policy's Bellman expectation, swept synchronously
   or in place;
 - `planning`: dynamic programming sweep by sweep (`Planner`: policy evaluation, policy
@@ -47,7 +50,9 @@ from tui_gym.core.mdp.from_env import NotAvailable, model_from_env
 from tui_gym.core.mdp.gap import Gap, exact_gap
 from tui_gym.core.mdp.model import FiniteMDP, ModelError
 from tui_gym.core.mdp.optimum import Solution, optimal_actions, solve
+from tui_gym.core.mdp.phases import Phases
 from tui_gym.core.mdp.policy import PolicyError, greedy_policy, policy_matrix
+from tui_gym.core.mdp.returns import return_range
 from tui_gym.core.mdp.transforms import clip_reward, scale_reward, step_penalty, with_horizon
 
 __all__ = [
@@ -55,6 +60,7 @@ __all__ = [
     "Gap",
     "ModelError",
     "NotAvailable",
+    "Phases",
     "PolicyError",
     "PolicyValue",
     "Solution",
@@ -65,6 +71,7 @@ __all__ = [
     "model_from_env",
     "optimal_actions",
     "policy_matrix",
+    "return_range",
     "scale_reward",
     "solve",
     "step_penalty",

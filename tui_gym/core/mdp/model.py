@@ -10,6 +10,12 @@ Gymnasium-style table (`table[s][a] = [(prob, next_state, reward, terminated),
 A model is immutable: its arrays are read-only, so it can be shared between
 threads and kept in snapshots. `ModelError` (a `ValueError`) says in one line
 what is wrong with arrays or a table that do not make a model.
+
+**Rewards with noise.** `reward` holds each outcome's mean reward, so every
+exact figure (values, the optimum, planning) is the same as with the mean
+paid. Where an outcome's reward is drawn at random, `reward_std` gives its
+standard deviation (0 where it is certain), and whoever samples the model
+draws the reward from a normal distribution with that mean and deviation.
 """
 
 from __future__ import annotations
@@ -56,6 +62,9 @@ class FiniteMDP:
         initial: `[S]` float, the distribution of the state an episode starts in.
         horizon: the episode limit H (an episode is cut off after H steps), or None.
         action_names: a name per action, or None.
+        reward_std: `[S, A, K]` float >= 0, the standard deviation of the normal
+            distribution each outcome's reward is drawn from (mean `reward`), or None
+            where every reward is certain.
 
     Arrays are copied, checked and made read-only; a bad one raises `ModelError`.
     """
@@ -67,6 +76,7 @@ class FiniteMDP:
     initial: FloatArray
     horizon: int | None = None
     action_names: tuple[str, ...] | None = None
+    reward_std: FloatArray | None = None
 
     def __post_init__(self) -> None:
         prob = np.array(self.prob, dtype=np.float64)
@@ -115,6 +125,16 @@ class FiniteMDP:
             if horizon < 1:
                 raise ModelError(f"horizon must be >= 1 step, got {horizon}")
             horizon = int(horizon)
+        reward_std = self.reward_std
+        if reward_std is not None:
+            reward_std = np.array(reward_std, dtype=np.float64)
+            if reward_std.shape != shape:
+                raise ModelError(f"reward_std has shape {reward_std.shape}, prob has {shape}")
+            if not np.isfinite(reward_std).all() or (reward_std < 0).any():
+                s, a, _ = np.argwhere(~(reward_std >= 0) | ~np.isfinite(reward_std))[0]
+                raise ModelError(f"state {s}, action {a} has a reward deviation that is not "
+                                 "a finite number >= 0")
+            reward_std = _frozen(reward_std)
         names = self.action_names
         if names is not None:
             names = tuple(str(name) for name in names)
@@ -127,6 +147,7 @@ class FiniteMDP:
         object.__setattr__(self, "initial", _frozen(initial))
         object.__setattr__(self, "horizon", horizon)
         object.__setattr__(self, "action_names", names)
+        object.__setattr__(self, "reward_std", reward_std)
 
     # -- sizes ------------------------------------------------------------------
 
@@ -193,6 +214,7 @@ class FiniteMDP:
             "initial": self.initial,
             "horizon": self.horizon,
             "action_names": self.action_names,
+            "reward_std": self.reward_std,
         }
         unknown = set(changes) - set(fields)
         if unknown:

@@ -7,7 +7,9 @@ last one included), `clip_reward` (Gymnasium's `ClipReward`: each reward
 clipped to `[low, high]`, either bound optional), and `with_horizon`
 (`TimeLimit`: a different episode limit, or None for none). Rewards are
 transformed outcome by outcome, so clipping stays exact however an action's
-outcomes differ. The arguments are checked as the wrappers check theirs.
+outcomes differ; a reward drawn with noise (`FiniteMDP.reward_std`) scales
+with its deviation, and is not clipped (its clipped mean is no longer one
+outcome's reward). The arguments are checked as the wrappers check theirs.
 """
 
 from __future__ import annotations
@@ -32,7 +34,8 @@ def _finite(name: str, value: float, *, minimum: float | None = None) -> float:
 def scale_reward(model: FiniteMDP, factor: float) -> FiniteMDP:
     """The model with every reward multiplied by `factor`."""
     factor = _finite("ScaleReward factor", factor)
-    return model.replace(reward=factor * model.reward)
+    noise = None if model.reward_std is None else abs(factor) * model.reward_std
+    return model.replace(reward=factor * model.reward, reward_std=noise)
 
 
 def step_penalty(model: FiniteMDP, penalty: float) -> FiniteMDP:
@@ -45,6 +48,9 @@ def clip_reward(model: FiniteMDP, low: float | None = None, high: float | None =
     """The model with every reward clipped to `[low, high]` (None: no bound on that side)."""
     if low is None and high is None:
         raise ValueError("ClipReward needs min_reward, max_reward or both")
+    if model.reward_std is not None and model.reward_std.any():
+        raise ValueError("ClipReward on rewards drawn with noise: the clipped mean is not "
+                         "modelled")
     low = None if low is None else _finite("ClipReward min_reward", low)
     high = None if high is None else _finite("ClipReward max_reward", high)
     if low is not None and high is not None and low > high:

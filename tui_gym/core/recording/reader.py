@@ -483,9 +483,15 @@ def _int_or_none(value: Any) -> int | None:
 
 
 def _number(value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+    if isinstance(value, bool) or not isinstance(value, int | float):
         raise _Bad
-    return float(value)
+    try:
+        number = float(value)  # an integer beyond every float does not convert
+    except OverflowError:
+        raise _Bad from None
+    if not math.isfinite(number):
+        raise _Bad
+    return number
 
 
 def _number_or_none(value: Any) -> float | None:

@@ -29,8 +29,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from tui_gym.envs.dp_grid import AB_JUMPS, grid_arrays
-from tui_gym.envs.tile_map import TileArrays
+from tui_gym.envs.dp_grid import ABGridEnv, Grid
 from tui_gym.games.base import Narrator
 from tui_gym.games.dp_grid import DPGridGame
 from tui_gym.games.words import format_reward, plural
@@ -68,10 +67,6 @@ class ABGridGame(DPGridGame):
     key = "B"
     description = "Example 3.5's 5x5 grid: any move from A pays +10 (to A′), from B +5 (to B′)."
     teaches = "discounting in a task that never ends: why A beats B though A′ is farther"
-    rows = cols = 5
-    letters = {(0, 1): "A", (0, 3): "B"}
-    primes = {(4, 1): "A′", (2, 3): "B′"}
-    jumps = AB_JUMPS
     plan_gamma = 0.9
     hyperparameters = {"*": {"discount": 0.9, "learning_rate": 0.1, "episodes": 2_000}}
 
@@ -79,5 +74,5 @@ class ABGridGame(DPGridGame):
         super().__init__()
         self.narrator = ABGridNarrator(self)
 
-    def arrays(self) -> TileArrays:
-        return grid_arrays(5, 5, step=0.0, edge=-1.0, jumps=AB_JUMPS)
+    def grid(self, kwargs: Mapping[str, Any]) -> Grid:
+        return ABGridEnv.GRID

@@ -262,6 +262,20 @@ class BlackjackOracle(Oracle):
     ) -> Bound:
         return Bound("gap", TRAINED_GAP, f"gap <= {TRAINED_GAP}")
 
+    def return_range(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> tuple[float, float] | NotAvailable:
+        """A hand is up to `LONGEST_HAND` - 1 hits, then a loss, a push, a win or (on
+        the first two cards, when the rules pay one) a natural."""
+        scope = self.scope(kwargs, changes)
+        if not scope.exact:
+            return NotAvailable(scope.note)
+        rules = self.rules(kwargs, changes)
+        lose, hit, win, natural = rules.payoffs
+        ends = [lose, hit, win] + ([natural] if rules.natural and not rules.sab else [])
+        hits = LONGEST_HAND - 1
+        return min(ends) + hits * min(0.0, hit), max(ends) + hits * max(0.0, hit)
+
     def fixed_policy_bound(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> FixedBound:

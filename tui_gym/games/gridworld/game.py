@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
-from tui_gym.core.mdp import NotAvailable, evaluate
+from tui_gym.core.mdp import NotAvailable, evaluate, return_range
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.envs import GRIDWORLD_MAX_STEPS
@@ -183,12 +183,17 @@ def _exact_return(
     model as the wrappers make it (the unwrapped game's when they change its dynamics)."""
     if changes.others:
         changes = GameChanges(time_limit=changes.time_limit)
-    args = (_size(kwargs), float(kwargs.get("reward_scale", 1.0)),
-            float(kwargs.get("step_penalty", 0.0)), changes, _walls(kwargs))
+    args = _model_args(kwargs, changes)
     model = gridworld_model(*args)
     value = evaluate(model, greedy_probabilities(q)).value
     best = gridworld_optimum(*args).value
     return {"exact_value": value, "optimal_value": best, "gap": exact_gap_of(best, value)}
+
+
+def _model_args(kwargs: Mapping[str, Any], changes: GameChanges) -> tuple[Any, ...]:
+    """`gridworld_model`'s arguments for the game's arguments and the wrappers' changes."""
+    return (_size(kwargs), float(kwargs.get("reward_scale", 1.0)),
+            float(kwargs.get("step_penalty", 0.0)), changes, _walls(kwargs))
 
 
 def _distance(scene: Mapping[str, Any]) -> int:
@@ -237,6 +242,13 @@ class GridWorldOracle(Oracle):
                          "a shortest path need not pay best")
         return Scope(False, "shortest-path figures: with these rewards a shortest path "
                      "need not pay best")
+
+    def return_range(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> tuple[float, float] | NotAvailable:
+        if changes.others:
+            return NotAvailable(unwrapped_note(changes.others))
+        return return_range(gridworld_model(*_model_args(kwargs, changes)))
 
     def reference(
         self, q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
@@ -310,9 +322,9 @@ class GridWorldOracle(Oracle):
         names = " or ".join(self.game.action_names[a] for a in optimal)
         scope = self.scope(kwargs, GameChanges.of(env))
         if not scope.exact:
-            return Advice((), None, f"shortest path: {names}  ({steps} steps to go; "
+            return Advice((), None, f"shortest path: {names}  ({plural(steps, 'step')} to go; "
                           f"{scope.note.split(': ', 1)[-1]})", unwrapped_optimal=optimal)
-        return Advice(optimal, None, f"optimal: {names}  ({steps} steps to go)")
+        return Advice(optimal, None, f"optimal: {names}  ({plural(steps, 'step')} to go)")
 
     def optimal_marks(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES

@@ -168,9 +168,9 @@ class GridMap:
         return len(seen) == len(free)
 
     def describe(self, cell: Cell) -> str:
-        """A cell in words: 'row 2, col 3: hole, reward -5', with its slip."""
+        """What a cell holds, in words: 'hole, reward -5', with its slip."""
         tile = self.tile(cell)
-        text = f"row {cell[0]}, col {cell[1]}: {TILE_NAMES[tile]}"
+        text = TILE_NAMES[tile]
         reward = self.reward_table().get(cell)
         if reward is not None:
             text += f", reward {reward:+g}"

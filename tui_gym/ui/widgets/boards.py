@@ -31,7 +31,7 @@ from textual.message import Message
 from textual.widget import Widget
 from textual.widgets import Button
 
-from tui_gym.ui.widgets.focus_style import restyle_on_focus
+from tui_gym.ui.textual_internals import restyle_alone
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget, segments_of
 
 
@@ -256,7 +256,7 @@ class Board(Widget):
     def watch_has_focus(self, has_focus: bool) -> None:
         # Only the board's own border follows its focus, not the canvas and buttons
         # below it nor the colours it draws with.
-        restyle_on_focus(self)
+        restyle_alone(self)
 
     def on_focus(self) -> None:
         self._update_subtitle(focused=True)

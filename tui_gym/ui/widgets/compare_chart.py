@@ -8,11 +8,13 @@ the first tenth of the episodes, where a learner's first random walks would
 flatten the rest: what lies beyond is drawn along the edge), the line below
 the plot the episodes, and one legend line per curve says whose it is, how
 many seeds, and whether its band is a confidence band or its line smoothed.
-A curve shorter than the others stops where its episodes stop.
+A curve shorter than the others stops where its episodes stop. A curve that
+knows the returns its game allows (`Series.bounds`) keeps the axis within them.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Hashable, Sequence
 from typing import ClassVar
 
@@ -54,7 +56,8 @@ def _mix(a: RichColor, b: RichColor, t: float) -> RichColor:
 
 def value_range(series: Sequence[Series]) -> tuple[float, float]:
     """The y range the curves and bands fit in past the first `EARLY_SHARE` of the
-    episodes (widened when it is a single value); what lies outside is drawn at the edge."""
+    episodes (widened when it is a single value, never past the returns the games
+    allow when every curve knows them); what lies outside is drawn at the edge."""
     first, last = episode_range(series)
     start = first + EARLY_SHARE * (last - first)
     lows, highs = [], []
@@ -67,8 +70,20 @@ def value_range(series: Sequence[Series]) -> tuple[float, float]:
     low, high = min(lows), max(highs)
     if high - low < 1e-12:
         pad = max(0.5, abs(low) * 0.1)
-        low, high = low - pad, high + pad
+        floor, ceiling = allowed_range(series)
+        low, high = max(floor, low - pad), min(ceiling, high + pad)
+        if high - low < 1e-12:  # the games allow this one return only
+            low, high = low - pad, high + pad
     return low, high
+
+
+def allowed_range(series: Sequence[Series]) -> tuple[float, float]:
+    """The returns every curve's game allows, together (±inf where some curve does not
+    know its own)."""
+    if not series or any(s.bounds is None for s in series):
+        return -math.inf, math.inf
+    return (min(s.bounds[0] for s in series if s.bounds is not None),
+            max(s.bounds[1] for s in series if s.bounds is not None))
 
 
 def episode_range(series: Sequence[Series]) -> tuple[int, int]:
@@ -234,8 +249,11 @@ class CompareChart(StripWidget):
                     bg = tint(key[1]) if key[1] else None
                     style = cache[key] = Style(color=fg, bgcolor=bg)
                 glyph = chr(BRAILLE_BASE + bits[row][col]) if bits[row][col] else " "
-                if line and line[-1].style is style:
-                    line[-1] = Segment(line[-1].text + glyph, style)
+                # A dot is a segment of its own: an SVG viewer whose font draws braille
+                # wider than a cell then still puts each dot in its cell, inside the box.
+                before = line[-1] if line else None
+                if before is not None and before.style is style and glyph == " " == before.text[-1]:
+                    line[-1] = Segment(before.text + glyph, style)
                 else:
                     line.append(Segment(glyph, style))
             lines.append(line)

@@ -32,7 +32,7 @@ from textual.message import Message
 from textual.reactive import reactive
 
 from tui_gym.core.heatmap import Heatmap
-from tui_gym.ui.widgets.focus_style import restyle_on_focus
+from tui_gym.ui.textual_internals import restyle_alone
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget, line_text, segments_of
 
 RGB = tuple[int, int, int]
@@ -183,7 +183,7 @@ class HeatmapView(StripWidget, can_focus=True):
             return self.view
 
     def watch_has_focus(self, has_focus: bool) -> None:
-        restyle_on_focus(self)  # only its tint follows the focus
+        restyle_alone(self)  # only its tint follows the focus
 
     focus_cell: reactive[tuple[int, int] | None] = reactive(None, init=False)
     """(row, col) of the focus cell, or None when the game has no focus concept."""

@@ -10,11 +10,13 @@ describe, or None (with every problem marked, including ones between fields
 such as epsilon final above epsilon start); `load(settings)` fills the
 fields, and rebuilds them when the schema is another algorithm's. Enter
 posts `Submitted` so the owner can hand the keyboard back to the view;
-Escape does the same without checking.
+Escape posts `Left`, on which the owner drops what was typed and not applied
+(it loads the settings in force again).
 """
 
 from __future__ import annotations
 
+import math
 from typing import ClassVar
 
 from textual import on
@@ -27,7 +29,9 @@ from textual.widget import Widget
 from textual.widgets import Input, Label, Select, Static
 
 from tui_gym.algorithms import Field, QLearning, Settings
-from tui_gym.core.params import Param, ParamError
+from tui_gym.core.params import Param, ParamError, digits_note, read_number
+from tui_gym.ui.widgets.numbers import compact_count
+from tui_gym.ui.widgets.text_field import TextField
 
 
 def _typed(field: Field) -> bool:
@@ -55,25 +59,56 @@ def format_value(field: Param, value: float) -> str:
     return f"{value:g}"
 
 
+_SUPERSCRIPTS = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def bound_text(value: float) -> str:
+    """A bound, short: '1', '0.5', '1000', '10⁹', '12.3k'."""
+    if not float(value).is_integer():
+        return f"{value:g}"
+    number = int(value)
+    if abs(number) < 10_000:
+        return str(number)
+    digits = str(abs(number))
+    if digits.strip("0") == "1":  # a power of ten
+        return ("-" if number < 0 else "") + "10" + str(len(digits) - 1).translate(_SUPERSCRIPTS)
+    return compact_count(number)
+
+
 def range_hint(field: Param) -> str:
-    """The accepted range, short: '(0, 1]', or '≥ 1' when the top is out of sight."""
-    if field.maximum is not None and field.minimum is not None and field.maximum >= 1e6:
-        low = f"{int(field.minimum)}" if field.kind is int else f"{field.minimum:g}"
-        return f"≥ {low}" if field.min_inclusive else f"> {low}"
-    return field.expected().split(" in ", 1)[-1]
+    """The accepted range, short enough for the hint column: '(0, 1]', '[1, 10⁹]'."""
+    if field.minimum is None or field.maximum is None:
+        return field.expected().split(" in ", 1)[-1]
+    low = ("[" if field.min_inclusive else "(") + bound_text(field.minimum)
+    return f"{low}, {bound_text(field.maximum)}]"
 
 
 def field_error(field: Param, text: str) -> str | None:
-    """Why `text` is not a valid value of the field (None when it is)."""
+    """Why `text` is not a valid value of the field (None when it is), short enough to
+    sit under it: '5' is above 1, '0' must be above 0, 'abc' is not a number in (0, 1]."""
     if not text.strip():
         return f"empty: needs {field.expected()}"
     try:
         field.parse(text.strip())
     except ParamError as exc:
-        if exc.out_of_range:
-            return f"{exc.shown} is out of range {field.describe_range()}"
-        return f"{exc.shown} is not {field.expected()}"
+        value = read_number(text)
+        if not exc.out_of_range or value is None or math.isnan(value):
+            return f"{exc.shown} is not {field.expected()}{digits_note(text)}"
+        high = math.inf if field.maximum is None else field.maximum
+        low = -math.inf if field.minimum is None else field.minimum
+        if value > high or value == math.inf:
+            return f"{exc.shown} is above {_full(high)}"
+        if value == low and not field.min_inclusive:
+            return f"{exc.shown} must be above {_full(low)}"
+        return f"{exc.shown} is below {_full(low)}"
     return None
+
+
+def _full(value: float) -> str:
+    """'1,000,000,000', '0.5', 'every number' (no bound)."""
+    if math.isinf(value):
+        return "every number"
+    return f"{int(value):,}" if float(value).is_integer() else f"{value:g}"
 
 
 class FieldValidator(Validator):
@@ -121,7 +156,7 @@ class HyperparameterForm(Vertical):
         text-style: bold;
     }
     HyperparameterForm .hp-hint {
-        width: 8;
+        width: 10;
         padding-left: 1;
         color: $text-disabled;
     }
@@ -203,7 +238,7 @@ class HyperparameterForm(Vertical):
         box: Widget
         if _typed(field):
             assert isinstance(field, Param)
-            box = Input(
+            box = TextField(
                 _text(field, value),
                 id=f"hp-{field.name}",
                 compact=True,

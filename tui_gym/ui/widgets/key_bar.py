@@ -2,7 +2,9 @@
 
 It shows what Textual's `Footer` shows (the bindings active for the focused
 widget and the app, grouped keys together, the command palette key on the
-right) and a click on a key presses it. Unlike `Footer`, which rebuilds a
+right) and a click on a key presses it. A key that does not fit is left out
+whole, never cut, from the end of the line (help's own key stays), and a "…"
+says there are more (`?` lists them all). Unlike `Footer`, which rebuilds a
 widget per key on every focus change (three times per view switch here, the
 largest part of a switch's cost), it draws one line, and keeps the last few
 lines drawn: a view switch flips between the same two sets of keys.
@@ -20,6 +22,8 @@ from textual.binding import Binding
 from textual.screen import Screen
 
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget, segments_of
+
+HELP_KEYS = frozenset({"question_mark,f1", "question_mark", "f1"})  # kept when keys are left out
 
 
 class KeyBar(StripWidget):
@@ -90,12 +94,35 @@ class KeyBar(StripWidget):
         text, _spans = self._line(width)
         return segments_of(text, self.app.console)[:1]
 
+    def _fitting(self, room: int) -> tuple[list[tuple[str, str, bool, str]], bool]:
+        """The entries that fit whole in `room` cells, and whether some were left out
+        (then one cell is kept for the "…")."""
+        entries = list(self._entries)
+
+        def width(entry: tuple[str, str, bool, str]) -> int:
+            keys, description = entry[0], entry[1]
+            return cell_len(f" {keys} ") + (cell_len(description) + 1 if description else 0)
+
+        if sum(width(e) for e in entries) <= room:
+            return entries, False
+        while entries and sum(width(e) for e in entries) > room - 1:
+            last = next((i for i in range(len(entries) - 1, -1, -1)
+                         if entries[i][3] not in HELP_KEYS), None)
+            entries.pop(len(entries) - 1 if last is None else last)
+        return entries, True
+
     def _line(self, width: int) -> tuple[Text, list[tuple[int, int, str]]]:
         """The line and the (start, end, key) of each key on it, for clicks."""
         key_style = self.get_component_rich_style("keybar--key", partial=True)
-        text = Text(no_wrap=True, overflow="ellipsis", end="")
+        text = Text(no_wrap=True, overflow="crop", end="")
         spans: list[tuple[int, int, str]] = []
-        for keys, description, enabled, key in self._entries:
+        tail = ""
+        if self._palette is not None and width:
+            keys, description = self._palette
+            tail = f"▏{keys} {description} "
+        room = max(0, width - cell_len(tail))
+        entries, more = self._fitting(room)
+        for keys, description, enabled, key in entries:
             start = text.cell_len
             text.append(f" {keys} ", style=key_style)
             text.append(f"{description} " if description else "",
@@ -103,13 +130,10 @@ class KeyBar(StripWidget):
             if not enabled:
                 text.stylize("dim", start)
             spans.append((start, text.cell_len, key))
-        if self._palette is not None and width:
-            keys, description = self._palette
-            tail = f"▏{keys} {description} "
-            room = width - cell_len(tail)
-            if text.cell_len > room:
-                text.truncate(max(0, room), overflow="ellipsis")
-                spans = [s for s in spans if s[1] <= room]
+        if more:
+            text.append("…", style="dim")
+        if tail:
+            keys, description = self._palette or ("", "")
             text.append(" " * max(0, room - text.cell_len))
             text.append(tail[0], style="dim")
             text.append(f"{keys} ", style=key_style)

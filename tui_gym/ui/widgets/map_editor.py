@@ -124,6 +124,7 @@ class MapEditor(Vertical):
         self.redo_stack: list[GridMap] = []
         self.last_edit = ""
         self._optimum_text = ""
+        self._axes: tuple[tuple[str, ...], tuple[str, ...]] = ((), ())  # the canvas's labels
         self.pending = 0  # edits posted that the owner has not taken yet
 
     def compose(self) -> ComposeResult:
@@ -162,8 +163,11 @@ class MapEditor(Vertical):
         if not self.pending:
             self.grid_map = grid_map
         canvas = self.canvas
+        self._axes = ((), ())
         if panels:
             canvas.show([self._dress(panels[0], grid_map)])
+            if panels[0].shape == (grid_map.rows, grid_map.cols):
+                self._axes = (panels[0].row_labels, panels[0].col_labels)
         else:
             canvas.show_message("No exact optimum to show for this map.")
         r, c = self.cursor
@@ -224,7 +228,9 @@ class MapEditor(Vertical):
         if grid_map is None:
             return
         status = self.query_one("#editor-status", Label)
-        cell = grid_map.describe(self.cursor) if grid_map.inside(self.cursor) else ""
+        cursor = self.cursor
+        cell = f"{self.where(cursor)}: {grid_map.describe(cursor)}" if grid_map.inside(
+            cursor) else ""
         reachable = grid_map.start is None or grid_map.goal_reachable()
         if grid_map.start is None and not grid_map.free_connected():
             reachable = False
@@ -232,6 +238,15 @@ class MapEditor(Vertical):
         status.set_class(not reachable, "-unreachable")
         done = f"  · {self.last_edit}" if self.last_edit else ""
         status.update(f"{grid_map.size_text} · {cell}{done}\n{self._optimum_text}{warning}")
+
+    def where(self, cell: tuple[int, int]) -> str:
+        """'row 1, col 2': a cell as the map's axes label it (a game may number its rows
+        from the bottom up, as GridWorld does)."""
+        rows, cols = self._axes
+        row, col = cell
+        row_label = rows[row] if row < len(rows) else str(row)
+        col_label = cols[col] if col < len(cols) else str(col)
+        return f"row {row_label}, col {col_label}"
 
     # --- edits ---------------------------------------------------------------------
     def _apply(self, new: GridMap, what: str) -> None:
@@ -263,7 +278,7 @@ class MapEditor(Vertical):
         except ValueError as error:
             self.app.notify(str(error), severity="warning", timeout=3)
             return
-        self._apply(new, f"{tool.name} at row {cell[0]}, col {cell[1]}")
+        self._apply(new, f"{tool.name} at {self.where(cell)}")
 
     def drop_last(self, shown: GridMap) -> None:
         """Forget the last edit posted: the owner could not apply it and plays `shown`."""
@@ -311,7 +326,7 @@ class MapEditor(Vertical):
 
     def action_undo(self) -> None:
         if not self.undo_stack or self.grid_map is None:
-            self.app.notify("Nothing to undo.", timeout=2)
+            self._nothing_to("undo")
             return
         new = self.undo_stack.pop()
         self.redo_stack.append(self.grid_map)
@@ -319,11 +334,16 @@ class MapEditor(Vertical):
 
     def action_redo(self) -> None:
         if not self.redo_stack or self.grid_map is None:
-            self.app.notify("Nothing to redo.", timeout=2)
+            self._nothing_to("redo")
             return
         new = self.redo_stack.pop()
         self.undo_stack.append(self.grid_map)
         self._post(new, self.grid_map, "redone")
+
+    def _nothing_to(self, what: str) -> None:
+        self.last_edit = f"nothing to {what}"
+        self._show_status()
+        self.app.notify(f"Nothing to {what}.", timeout=2)
 
     def action_save(self) -> None:
         if self.grid_map is not None:

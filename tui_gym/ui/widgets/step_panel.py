@@ -18,6 +18,7 @@ from rich.text import Text
 from textual.widgets import Static
 
 from tui_gym.algorithms import UpdateRecord
+from tui_gym.games.words import plural
 
 __all__ = ["StepPanel", "explain"]
 
@@ -25,7 +26,8 @@ EPISODE_UPDATES_SHOWN = 4  # Monte Carlo: the first few of an episode's updates
 
 
 def _num(value: float) -> str:
-    return f"{value:+.4g}" if value else "0"
+    """'+0.5', '−1' (a true minus, as the operators around it), '0'."""
+    return f"{value:+.4g}".replace("-", "−") if value else "0"
 
 
 def explain(
@@ -34,18 +36,27 @@ def explain(
     action_names: Sequence[str],
     describe: Callable[[Any], str],
     title: str = "",
+    describe_row: Callable[[int], str] | None = None,
 ) -> list[tuple[str, str]]:
-    """The panel's lines as (label, text) pairs for one step and its update record."""
+    """The panel's lines as (label, text) pairs for one step and its update record.
+    `describe` puts an observation in words; `describe_row` a row of the table (the
+    states Monte Carlo updates at an episode's end are rows)."""
 
     def name(action: int | None) -> str:
         if action is None:
-            return "-"
+            return "–"
         return action_names[action] if 0 <= action < len(action_names) else str(action)
 
     def state(observation: Any, row: int) -> str:
         try:
             return describe(observation)
         except Exception:  # wrappers may change what an observation looks like
+            return row_words(row)
+
+    def row_words(row: int) -> str:
+        try:
+            return describe_row(row) if describe_row is not None else f"state {row}"
+        except Exception:  # a table whose rows are not states in words
             return f"state {row}"
 
     lines: list[tuple[str, str]] = []
@@ -63,20 +74,25 @@ def explain(
         )
         lines.append(("a'", f"{name(record.target_action)}  ({what})"))
     terms = "   ".join(f"{symbol} = {_num(value)}" for symbol, value in record.terms)
+    if len(record.terms) == 1 and record.formula.rpartition("=")[2].strip() == record.terms[0][0]:
+        terms = ""  # the target is the one term ('r' at the end): said once, on its line
     if record.target is None:
         lines.append(("target", f"{record.formula}: nothing is updated before then"))
-        lines.append(("", terms))
+        if terms:
+            lines.append(("", terms))
         lines.append(("Q(s,a)", f"{_num(record.before)} (unchanged)"))
         return lines
     lines.append(("target", f"{record.formula} = {_num(record.target)}"))
-    lines.append(("", terms))
+    if terms:
+        lines.append(("", terms))
     if record.episode_return is not None:
         count = len(record.episode_updates)
         lines.append(("return", f"G = {_num(record.episode_return)} from the episode's start; "
                                 f"{count} update{'s' if count != 1 else ''} at its end"))
         for update in record.episode_updates[:EPISODE_UPDATES_SHOWN]:
-            lines.append(("", f"s{update.state} {name(update.action)}: G = {_num(update.target)}"
-                              f"  Q {_num(update.before)} → {_num(update.after)}"))
+            lines.append(("", f"{row_words(update.state)}, {name(update.action)}: "
+                              f"G = {_num(update.target)}  "
+                              f"Q {_num(update.before)} → {_num(update.after)}"))
         if count > EPISODE_UPDATES_SHOWN:
             lines.append(("", f"... {count - EPISODE_UPDATES_SHOWN} more"))
     assert record.td_error is not None and record.step_size is not None
@@ -85,8 +101,8 @@ def explain(
     lines.append(("Q(s,a)", f"{_num(record.before)} → {_num(record.after)}   "
                             f"(step α = {record.step_size:.4g})"))
     if record.planning_updates:
-        lines.append(("planning", f"then {record.planning_updates} simulated updates from the "
-                                  "model"))
+        updates = plural(record.planning_updates, "simulated update")
+        lines.append(("planning", f"then {updates} from the model"))
     return lines
 
 

@@ -10,7 +10,8 @@ Gymnasium's maps; where a key names a cell it is a "r,c" string or a (row, col) 
 - "theme": "lake" (ice, holes in the ice), "cliff" (ground and a cliff) or
   "plain" (floor and pits): the colours and the words.
 - "agent": (row, col), or None.
-- "last_action": the move just asked, "left" | "down" | "right" | "up", or None.
+- "last_action": the move just asked, "left" | "down" | "right" | "up" (or a king's
+  move: "up-left" | "up-right" | "down-left" | "down-right"), or None.
 - "slipped": whether that move went elsewhere than asked.
 - "rewards": {cell: value}, optional. A reward cell shows its value; any other
   cell's value (a hole's, the cliff's) is written on tiles tall enough for it.
@@ -18,7 +19,18 @@ Gymnasium's maps; where a key names a cell it is a "r,c" string or a (row, col) 
 - "marks": {cell: text}, optional: a short overlay on a tile (an arrow, a value).
 - "cursor": (row, col), or None, optional: an editing cursor, drawn as a frame.
 - "event": text, optional: what the last move did in the game's own words (a jump),
-  `{who}` standing for the player; it replaces the board's own words.
+  `{who}` standing for the player; it replaces the board's own words; "event_tone"
+  ("good", "bad", "slipped" or "caption"; "good" by default) colours it.
+- "wind": [strength per column], optional: a move from a column is pushed that many
+  cells up; "gusts": whether the wind varies around those strengths. Drawn as ↑
+  marks in the corner of wide tiles and, with a line to spare, the strengths
+  under the columns.
+- "moves": [move names], optional: the moves the game has (the four straight ones
+  when not given; with the diagonals, king's moves).
+- "offered": [action names], optional: the only moves the state offers (other
+  moves are not made: the caption says what is offered); "choices": [action
+  names], optional: moves the digits 1-9 and 0 pick, in order (a choice among
+  many, such as one of a state's ten actions).
 
 Every kind of tile has its colour and its glyph, so the map reads on a
 monochrome terminal too: ⌂ start, · floor, ○ hole, ★ goal, ▒ cliff, █ wall,
@@ -30,8 +42,11 @@ legend names the tiles. Tiles are drawn as large as fit, with row and column
 numbers when there is room; the smallest drawing puts two map rows in one
 line, in colour only. The size chosen is kept while it fits (see `KeptShape`).
 
-Keys: arrows or WASD move (the moves are named, never numbered); n or r starts
-a new episode at any time, Enter once the episode is over. A click on a cell
+Keys: arrows or WASD move (the moves are named, never numbered); on a map with
+king's moves, home, page up, end and page down (the keypad's 7 9 1 3) move
+diagonally, and the keypad's digits move its way; a scene's "choices" are
+picked by digit; n or r starts a new episode at any time, Enter once the
+episode is over. A click on a cell
 posts `TileBoard.CellClicked(row, col)` and calls `cell_clicked(row, col)`,
 which steps the agent one cell towards it.
 """
@@ -68,9 +83,16 @@ FILLED = frozenset({CLIFF, WALL})  # drawn as a texture over the whole tile
 GLYPHS = {START: "⌂", FLOOR: "·", HOLE: "○", GOAL: "★", CLIFF: "▒", WALL: "█"}
 AGENT = "●"
 
-MOVES: dict[str, Cell] = {"left": (0, -1), "down": (1, 0), "right": (0, 1), "up": (-1, 0)}
+STRAIGHT: dict[str, Cell] = {"left": (0, -1), "down": (1, 0), "right": (0, 1), "up": (-1, 0)}
+MOVES: dict[str, Cell] = {**STRAIGHT, "up-left": (-1, -1), "up-right": (-1, 1),
+                          "down-left": (1, -1), "down-right": (1, 1)}
 MOVE_OF: dict[Cell, str] = {step: name for name, step in MOVES.items()}
-ARROWS = {"left": "←", "down": "↓", "right": "→", "up": "↑"}
+ARROWS = {"left": "←", "down": "↓", "right": "→", "up": "↑",
+          "up-left": "↖", "up-right": "↗", "down-left": "↙", "down-right": "↘"}
+# The keypad's digits, as the moves they point to.
+KEYPAD = {7: "up-left", 8: "up", 9: "up-right", 4: "left", 6: "right",
+          1: "down-left", 2: "down", 3: "down-right"}
+WIND = "↑"
 
 
 @dataclass(frozen=True)
@@ -90,6 +112,7 @@ THEMES = {
     "plain": Theme("Map", "floor", "pit", "fell into a pit", "slipped"),
 }
 
+TONES = ("good", "bad", "slipped", "caption")  # the styles a scene's event may take
 Event = tuple[tuple[str, ...], str]  # what a move did: ('{who} ...' longest first), its style
 MOVE_GROUP = Binding.Group("Move")
 CAPTION_LINES = 1  # the line under the map is always kept free: tiles keep their size
@@ -208,6 +231,11 @@ def map_rows(scene: Mapping[str, Any]) -> list[str]:
     return [row.ljust(cols, FLOOR) for row in rows_text] if cols else []
 
 
+def _listed(value: Any) -> list[Any]:
+    """A scene's list (anything else: empty)."""
+    return list(value) if isinstance(value, list | tuple) else []
+
+
 def _number(value: Any) -> float | None:
     try:
         return float(value)
@@ -240,6 +268,7 @@ class TileBoard(Board):
     TileBoard .tile--mark { color: #1b1b1b; text-style: bold; }
     TileBoard .tile--value { color: #ffffff; text-style: bold; }
     TileBoard .tile--slip { color: #4d87b3; }
+    TileBoard .tile--wind { color: #5b6f86; text-style: bold; }
     TileBoard .tile--cursor { background: $accent; color: $text; text-style: bold; }
     TileBoard .tile--axis { color: $text-muted; }
     TileBoard .tile--caption { color: $text-muted; }
@@ -269,6 +298,7 @@ class TileBoard(Board):
         "tile--mark",
         "tile--value",
         "tile--slip",
+        "tile--wind",
         "tile--cursor",
         "tile--axis",
         "tile--caption",
@@ -282,6 +312,11 @@ class TileBoard(Board):
         Binding("down,s", "act('down')", "down", key_display="↓/s", group=MOVE_GROUP),
         Binding("left,a", "act('left')", "left", key_display="←/a", group=MOVE_GROUP),
         Binding("right,d", "act('right')", "right", key_display="→/d", group=MOVE_GROUP),
+        Binding("home", "act('up-left')", "up-left", show=False),
+        Binding("pageup", "act('up-right')", "up-right", show=False),
+        Binding("end", "act('down-left')", "down-left", show=False),
+        Binding("pagedown", "act('down-right')", "down-right", show=False),
+        *(Binding(str(d), f"digit({d})", str(d), show=False) for d in range(10)),
         Binding("n,r", "new_episode", "New", key_display="n", tooltip="Start a new episode"),
         Binding("enter", "next_episode", "Next", show=False),
     ]
@@ -313,6 +348,11 @@ class TileBoard(Board):
         self.rewards: dict[Cell, Any] = {}
         self.slip: dict[Cell, Any] = {}
         self.marks: dict[Cell, str] = {}
+        self.wind: list[int] = []
+        self.gusts = False
+        self.offered: list[str] | None = None
+        self.choices: list[str] = []
+        self.king = False  # the map's moves include the diagonals
         self.cursor: Cell | None = None
         self._event: Event | None = None
         self._fresh = True
@@ -326,10 +366,40 @@ class TileBoard(Board):
     def key_help(self) -> list[tuple[str, str]]:
         return [
             ("↑ ↓ ← →  or  w a s d", "move up, down, left, right"),
+            ("home pgup end pgdn", "king's moves: up-left, up-right, down-left, down-right"),
+            ("1-9, 0", "the keypad's way (king's moves), or the choice of that number"),
             ("n / r", "start a new episode (at any time)"),
             ("enter", "start a new episode once this one is over"),
             ("click a cell", "step one cell towards it"),
         ]
+
+    def action_act(self, action: str) -> None:
+        """A move, unless the state offers others only (the caption then says which)."""
+        if self.offered is not None and action not in self.offered and not self.agent_playing:
+            shown = ", ".join(self.offered[:4]) + (" ..." if len(self.offered) > 4 else "")
+            self._event = (f"No {action} here: the moves are {shown}", f"No {action} here"), \
+                "slipped"
+            self.redraw()
+            return
+        super().action_act(action)
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        """Diagonals on a map with king's moves only, digits where they pick something: other
+        keys go on to whoever else takes them."""
+        if action == "act" and parameters and parameters[0] not in STRAIGHT:
+            return self.king
+        if action == "digit":
+            return bool(self.choices) or self.king
+        return True
+
+    def action_digit(self, digit: int) -> None:
+        """A digit: the scene's choice of that number (0 the tenth), else the keypad's move."""
+        if self.choices:
+            index = (digit - 1) % 10
+            if index < len(self.choices):
+                self.action_act(self.choices[index])
+        elif digit in KEYPAD:
+            self.action_act(KEYPAD[digit])
 
     @property
     def prompt(self) -> str:
@@ -369,18 +439,27 @@ class TileBoard(Board):
         self.rewards = cell_table(scene.get("rewards"))
         self.slip = cell_table(scene.get("slip"))
         self.marks = {cell: str(text) for cell, text in cell_table(scene.get("marks")).items()}
+        self.wind = [int(w) for w in _listed(scene.get("wind")) if _number(w) is not None]
+        self.gusts = bool(scene.get("gusts"))
+        offered = scene.get("offered")
+        self.offered = None if offered is None else [str(a) for a in _listed(offered)]
+        self.choices = [str(a) for a in _listed(scene.get("choices"))]
+        self.king = "up-left" in _listed(scene.get("moves"))
         self.cursor = cell_of(scene.get("cursor"))
         action = scene.get("last_action")
         action = action if action in MOVES else None
         self._event = self._event_of(previous, agent, action, bool(scene.get("slipped")))
         if scene.get("event"):
-            self._event = (str(scene["event"]),), "good"
+            tone = str(scene.get("event_tone", "good"))
+            self._event = (str(scene["event"]),), tone if tone in TONES else "good"
         if self._fresh or previous is None or agent is None:
             self.trail = {}
         elif agent != previous:
             step = (agent[0] - previous[0], agent[1] - previous[1])
             if step in MOVE_OF:
                 self.trail[previous] = ARROWS[MOVE_OF[step]]
+            elif self.wind and action is not None:  # blown on: the move that was asked
+                self.trail[previous] = ARROWS[action]
             else:  # a jump (back to the start after a fall): the walk starts over
                 self.trail = {}
         self.agent = agent
@@ -448,7 +527,8 @@ class TileBoard(Board):
             return True
         far = abs(agent[0] - previous[0]) + abs(agent[1] - previous[1]) > 1
         beside = (
-            self.kind((previous[0] + dr, previous[1] + dc)) == CLIFF for dr, dc in MOVES.values()
+            self.kind((previous[0] + dr, previous[1] + dc)) == CLIFF
+            for dr, dc in STRAIGHT.values()
         )
         return far and slipped and any(beside)
 
@@ -526,6 +606,9 @@ class TileBoard(Board):
         slip = _number(self.slip.get(cell))
         if slip and w >= 5 and kind not in FILLED:
             grid.put(x0 + w - 1, y0, "≈", on_tile(self._style("slip"), tile))
+        wind = self.wind[cell[1]] if cell[1] < len(self.wind) else 0
+        if wind > 0 and w >= 5 and kind not in FILLED:
+            grid.put(x0, y0, WIND * min(wind, w - 2), on_tile(self._style("wind"), tile))
         if cell == self.agent:
             agent = self._agent_style(kind)
             if big:
@@ -621,7 +704,19 @@ class TileBoard(Board):
                 items.append(("◆" if kind == REWARD else GLYPHS[kind], ink, words[kind]))
         if self.agent is not None:
             items.append((AGENT, self._style("agent"), self.player_name.lower()))
+        if any(self.wind):
+            items.append((WIND, self._style("wind"), "wind ±1" if self.gusts else "wind"))
         return legend(items, self._style("caption"), width)
+
+    def _wind_line(self, shape: TileShape) -> Text:
+        """Each column's wind under it, as the book draws it."""
+        line = Text(" " * shape.label_w, end="")
+        for col in range(shape.cols):
+            strength = self.wind[col] if col < len(self.wind) else 0
+            text = f"{WIND}{strength}" if strength and shape.cell_w >= 3 else str(strength)
+            line.append(text[: shape.cell_w].center(shape.cell_w),
+                        self._style("wind" if strength else "axis"))
+        return line
 
     def picture(self, width: int, height: int) -> Text:
         if not self.cells:
@@ -630,14 +725,20 @@ class TileBoard(Board):
         rows, cols = len(self.cells), len(self.cells[0])
         if not self.KEEP_SHAPE:
             self._kept.release()
+        wind = 1 if self.wind else 0  # a line kept for the wind under the columns
         shape = self._kept.get(
-            (rows, cols), width, height, lambda w, h: choose_shape(rows, cols, w, h), shape_fits
+            (rows, cols), width, height - wind,
+            lambda w, h: choose_shape(rows, cols, w, h), shape_fits
         )
         lines = self._draw_map(shape)
+        spare = height - shape.height - CAPTION_LINES
+        if wind and spare > 0 and not shape.half:
+            lines.append(self._wind_line(shape))
+            spare -= 1
         caption = self._caption(width)
         caption.truncate(width, overflow="ellipsis")
         lines.append(caption)
-        if shape.height + CAPTION_LINES < height:
+        if spare > 0:
             names = self._legend(width)
             if names is not None:
                 lines.append(names)

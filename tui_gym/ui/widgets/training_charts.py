@@ -160,6 +160,7 @@ class TrainingCharts(StripWidget):
         height: auto;
         border: round $primary-background-lighten-2;
         border-title-color: $text-muted;
+        border-subtitle-color: $text-disabled;
         padding: 0 1;
     }
     TrainingCharts > .charts--name { color: $text-muted; }
@@ -206,15 +207,17 @@ class TrainingCharts(StripWidget):
         self._values.clear()
         self._current.clear()
         self.border_title = "Learning curves"
+        self.border_subtitle = ""
         self.redraw()
 
     def update_from(self, snapshot: TrainingSnapshot) -> None:
         """Show a snapshot's curves; nothing is drawn when nothing changed."""
         recorded = snapshot.recorded  # episodes in the statistics (none just after a load)
         window = min(snapshot.window, max(1, recorded))
-        title = f"Learning curves · rolling mean of {window:,}" if recorded else "Learning curves"
-        if title != self.border_title:
-            self.border_title = title
+        # Below the box: at animated speeds the board beside it leaves the title little room.
+        subtitle = f"rolling mean of {window:,}" if recorded else ""
+        if subtitle != self.border_subtitle:
+            self.border_subtitle = subtitle
         changed = False
         for curve in CURVES:
             key = curve.key

@@ -1,0 +1,118 @@
+"""Textual's private names, each with a fallback: the app runs with every fallback forced
+(`TUI_GYM_STOCK_TEXTUAL=all`), and each part falls back on its own when a name it needs
+is missing or has changed shape."""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+
+import pytest
+from rich.segment import Segment
+from textual.app import App
+from textual.drivers.headless_driver import HeadlessDriver
+from textual.strip import Strip
+from textual.widgets import Checkbox
+
+from tui_gym.core.experiments import RunHistory, RunRecorder, RunSpec
+from tui_gym.session.session import Session
+from tui_gym.ui import textual_internals as internals
+from tui_gym.ui.app import TuiGymApp
+
+from .screen import screen_text
+from .waiting import wait_for
+
+
+@pytest.fixture
+def stock(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv(internals.STOCK_ENV, "all")
+
+
+def test_every_part_can_be_forced_to_textuals_own_behaviour(stock: None) -> None:
+    assert not any(internals.enabled(part) for part in internals.PARTS)
+    screen = internals.main_screen()
+    assert type(screen).focused is internals._STOCK_FOCUSED
+    assert internals.guarded_driver(HeadlessDriver) is HeadlessDriver
+    assert not internals.watch_frames(App(), lambda renderable: None)
+    line = Strip([Segment("▐"), Segment("X"), Segment("▌ #1")])
+    assert internals.ticked_line(line, lambda: True) is line
+
+
+async def test_the_app_runs_with_every_fallback_forced(stock: None, tmp_path: Path) -> None:
+    db = tmp_path / "runs.db"
+    spec = RunSpec("train", "frozenlake", "q-learning", seeds=(0,))
+    with RunHistory(db) as history, RunRecorder(history, spec) as run:
+        run.extend("return", [0.0, 1.0, 0.0, 1.0])
+    app = TuiGymApp(Session("frozenlake", seed=0), runner="thread", db=db)
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.press("t", "e", "tab", "escape", "p", "w", "escape", "v")
+        view = app.compare_view
+        assert view is not None
+        await wait_for(pilot, lambda: len(view.runs) == 1, "the recorded run listed")
+        await pilot.press("space")  # ticks the run: its curve is drawn
+        await wait_for(pilot, lambda: len(view.chart.series) == 1, "the curve")
+        assert "#1 Q-learning" in screen_text(app)
+        await pilot.press("t", "space")
+        await wait_for(pilot, lambda: app.runner.latest.episodes > 0, "training")
+        await pilot.press("space", "q")
+    assert app.return_code == 0
+
+
+def test_each_part_falls_back_when_textual_changes_shape(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # A compositor without the private method it narrows: the stock compositor stays.
+    import textual._compositor
+
+    monkeypatch.setattr(internals, "_COMPOSITOR", False)
+    monkeypatch.delattr(textual._compositor.Compositor, "_get_renders")
+    assert internals._kept_layout_compositor() is None
+    # A toggle button without its inner mark: the run list's line as Textual drew it.
+    import textual.widgets._toggle_button as toggle
+
+    monkeypatch.delattr(toggle.ToggleButton, "BUTTON_INNER")
+    line = Strip([Segment("▐"), Segment("X"), Segment("▌ #1")])
+    assert internals.ticked_line(line, lambda: True) is line
+    # An app without the step that hands frames to its driver: nothing hooked.
+    app = App()
+    monkeypatch.setattr(app, "_display", None, raising=False)
+    assert not internals.watch_frames(app, lambda renderable: None)
+    # A driver that cannot be told apart by its arguments: Textual's, unchanged.
+    class Odd(HeadlessDriver):
+        def __init__(self, application: App, **kwargs: object) -> None:
+            super().__init__(application, **kwargs)  # type: ignore[arg-type]
+
+    assert internals.guarded_driver(Odd) is Odd
+
+
+async def test_a_widget_restyles_as_textual_does_without_the_component_hook(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    calls: list[str] = []
+
+    class Host(App[None]):
+        def compose(self):
+            yield Checkbox("x")
+
+    async with Host().run_test() as pilot:
+        box = pilot.app.query_one(Checkbox)
+        monkeypatch.setattr(type(box), "update_node_styles",
+                            lambda self, animate=True: calls.append("stock"))
+        internals.restyle_alone(box)
+        assert calls == []  # restyled alone
+        monkeypatch.setenv(internals.STOCK_ENV, "restyle")
+        internals.restyle_alone(box)
+        assert calls == ["stock"]
+
+
+def test_a_writer_finding_its_terminal_gone_is_told_from_a_crash(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    def failure(name: str, error: BaseException) -> threading.ExceptHookArgs:
+        return threading.ExceptHookArgs((type(error), error, None, threading.Thread(name=name)))
+
+    assert internals.terminal_write_failed(failure("textual-output", OSError(5, "I/O error")))
+    assert not internals.terminal_write_failed(failure("textual-output", ValueError("x")))
+    assert not internals.terminal_write_failed(failure("run-history", OSError(5, "I/O error")))
+    monkeypatch.setenv(internals.STOCK_ENV, "terminal")
+    assert not internals.terminal_write_failed(failure("textual-output", OSError(5, "I/O")))

@@ -1,0 +1,141 @@
+"""Sutton & Barto's mazes of chapter 8: the Dyna maze, and the blocking and shortcut mazes
+whose wall moves after a number of steps.
+
+`MazeEnv` plays a maze that may change: a list of phases, each a `Grid` in
+force from a step on, counting steps over every episode since the world was
+made. `maze_phases(name, change_at)` lists the book's: `DynaMazeEnv` (Figure
+8.2), `BlockingMazeEnv` (Figure 8.4: the short way round the wall closes and a
+long one opens) and `ShortcutMazeEnv` (Figure 8.5: a short way opens).
+"""
+
+from __future__ import annotations
+
+from bisect import bisect_right
+from collections.abc import Sequence
+from typing import Any
+
+from tui_gym.envs.dp_grid import Grid, GridEnv
+
+__all__ = ["MAZES", "BlockingMazeEnv", "DynaMazeEnv", "MazeEnv", "ShortcutMazeEnv",
+           "maze_phases"]
+
+Cell = tuple[int, int]
+ROWS, COLS = 6, 9
+GOAL = (0, 8)
+
+
+def _maze(start: Cell, walls: Sequence[Cell]) -> Grid:
+    return Grid(ROWS, COLS, terminals=(GOAL,), walls=frozenset(walls), pays={GOAL: 1.0},
+                start=start)
+
+
+# name -> the walls of each phase, and the start
+MAZES: dict[str, tuple[Cell, tuple[tuple[Cell, ...], ...]]] = {
+    "dyna": ((2, 0), (((1, 2), (2, 2), (3, 2), (4, 5), (0, 7), (1, 7), (2, 7)),)),
+    "blocking": ((5, 3), (tuple((3, c) for c in range(0, 8)),
+                          tuple((3, c) for c in range(1, 9)))),
+    "shortcut": ((5, 3), (tuple((3, c) for c in range(1, 9)),
+                          tuple((3, c) for c in range(1, 8)))),
+}
+
+
+def maze_phases(name: str, change_at: int | None = None) -> list[tuple[int, Grid]]:
+    """The book's maze `name` as (first step, grid) phases: one phase for the Dyna maze,
+    two for the blocking and shortcut mazes, the second from step `change_at` on."""
+    start, walls = MAZES[name]
+    grids = [_maze(start, w) for w in walls]
+    if len(grids) == 1:
+        return [(0, grids[0])]
+    if change_at is None or isinstance(change_at, bool) or int(change_at) < 1:
+        raise ValueError(f"the {name} maze changes after a number of steps >= 1, "
+                         f"not {change_at!r}")
+    return [(0, grids[0]), (int(change_at), grids[1])]
+
+
+class MazeEnv(GridEnv):
+    """A maze of the book's chapter 8, whose wall may move after a number of steps.
+
+    ## Action Space
+    up (0), down (1), left (2), right (3).
+
+    ## Observation Space
+    The cell, `row * 9 + col`, on a 6 x 9 grid, row 0 at the top.
+
+    ## Rewards
+    +1 on reaching the goal (row 0, column 8); every other move 0.
+
+    ## Starting State
+    The maze's start.
+
+    ## Episode End
+    Terminated at the goal. A move into a wall or off the grid leaves the agent
+    where it was.
+
+    ## A world that changes
+    The env counts its steps over every episode (`world_steps`) and from step
+    `change_at` on plays the maze's second phase, as the book's figures do; a
+    reset with a seed starts the world over, a reset without one carries on.
+    `info` tells `world_steps` and `phase` after every reset and step, and
+    `changes_in`, the steps left before the next change, while one is ahead.
+
+    ## Arguments
+    `change_at` (the changing mazes); `render_mode`: "ansi" draws the maze.
+    """
+
+    def __init__(self, phases: Sequence[tuple[int, Grid]], render_mode: str | None = None) -> None:
+        self.phases = [(start, grid, grid.arrays()) for start, grid in phases]
+        super().__init__(self.phases[0][1], render_mode)
+        self.world_steps = 0
+        self.phase = 0
+
+    def _enter_phase(self) -> None:
+        phase = max(0, bisect_right([start for start, _, _ in self.phases], self.world_steps) - 1)
+        if phase != self.phase:
+            _, self.grid, self.arrays = self.phases[phase]
+            self.phase, self._P = phase, None
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[int, dict[str, Any]]:
+        if seed is not None:
+            self.world_steps = 0
+            self._enter_phase()
+        obs, info = super().reset(seed=seed, options=options)
+        return obs, {**info, **self._clock()}
+
+    def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
+        obs, reward, terminated, truncated, info = super().step(action)
+        self.world_steps += 1
+        self._enter_phase()
+        return obs, reward, terminated, truncated, {**info, **self._clock()}
+
+    def _clock(self) -> dict[str, int]:
+        clock = {"world_steps": self.world_steps, "phase": self.phase}
+        if self.phase + 1 < len(self.phases):
+            clock["changes_in"] = self.phases[self.phase + 1][0] - self.world_steps
+        return clock
+
+
+class DynaMazeEnv(MazeEnv):
+    """Figure 8.2's maze (see `MazeEnv`): it never changes."""
+
+    def __init__(self, render_mode: str | None = None) -> None:
+        super().__init__(maze_phases("dyna"), render_mode)
+
+
+class BlockingMazeEnv(MazeEnv):
+    """Figure 8.4's maze (see `MazeEnv`): after `change_at` steps the way round the right of
+    the wall closes and one round its left opens."""
+
+    def __init__(self, change_at: int = 1000, render_mode: str | None = None) -> None:
+        super().__init__(maze_phases("blocking", change_at), render_mode)
+        self.change_at = change_at
+
+
+class ShortcutMazeEnv(MazeEnv):
+    """Figure 8.5's maze (see `MazeEnv`): after `change_at` steps a shorter way opens round
+    the right of the wall, the long way round its left staying open."""
+
+    def __init__(self, change_at: int = 3000, render_mode: str | None = None) -> None:
+        super().__init__(maze_phases("shortcut", change_at), render_mode)
+        self.change_at = change_at

@@ -1,0 +1,103 @@
+"""Sutton & Barto's Example 6.7: `MaxBiasEnv`, the MDP that shows maximization bias."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from tui_gym.envs.dp_grid import Grid
+from tui_gym.envs.table_env import TableEnv
+from tui_gym.envs.tile_map import TileArrays
+
+__all__ = ["A", "ACTIONS", "B", "MAX_B_ACTIONS", "MaxBiasEnv", "max_bias_arrays", "offered"]
+
+MAX_B_ACTIONS = 10  # B's actions at most: one digit key each
+ACTIONS = ("left", "right", *(f"b{i}" for i in range(1, MAX_B_ACTIONS + 1)))
+B_END, B, A, A_END = range(4)  # the states, left to right as the book draws them
+B_MEAN, B_STD = -0.1, 1.0  # the reward of each of B's actions: N(-0.1, 1)
+GRID = Grid(1, 4, moves=ACTIONS, terminals=((0, B_END), (0, A_END)),
+            pays={(0, B_END): B_MEAN, (0, A_END): 0.0}, start=(0, A),
+            letters={(0, B): "B", (0, A): "A"}, tiles={(0, B_END): "H"})
+
+
+def offered(actions: int) -> np.ndarray:
+    """`[4, len(ACTIONS)]`: the actions each state offers (A: left and right; B: its first
+    `actions`; the ends: all, as nothing happens there)."""
+    mask = np.ones((4, len(ACTIONS)), dtype=bool)
+    mask[A] = [name in ("left", "right") for name in ACTIONS]
+    mask[B] = [name.startswith("b") and int(name[1:]) <= actions for name in ACTIONS]
+    return mask
+
+
+def max_bias_arrays() -> tuple[TileArrays, np.ndarray]:
+    """The transitions (mean rewards) and each outcome's reward deviation."""
+    shape = (4, len(ACTIONS), 1)
+    next_state = np.broadcast_to(np.arange(4)[:, None, None], shape).copy()
+    reward, std = np.zeros(shape), np.zeros(shape)
+    terminal = np.ones(shape, dtype=bool)
+    next_state[A, :, 0] = A_END  # right, and any action A does not offer
+    next_state[A, 0, 0], terminal[A, 0, 0] = B, False  # left
+    next_state[B, :, 0], reward[B, :, 0], std[B, :, 0] = B_END, B_MEAN, B_STD
+    initial = np.zeros(4)
+    initial[A] = 1.0
+    return TileArrays(next_state, np.ones(shape), reward, terminal, initial), std
+
+
+class MaxBiasEnv(TableEnv):
+    """Sutton & Barto's Example 6.7: from A, left leads to B and right ends at 0; each of B's
+    actions ends with a reward drawn from a normal distribution of mean -0.1, deviation 1.
+
+    ## Action Space
+    left (0), right (1), b1 (2) to b10 (11). A offers left and right; B offers
+    its first `actions` (b1 to b10 with the default 10). An action a state does
+    not offer counts as right in A and as one of B's in B; `info["action_mask"]`
+    lists what the new state offers, as Gymnasium's Taxi does.
+
+    ## Observation Space
+    0 the end after B, 1 B, 2 A, 3 the end right of A.
+
+    ## Rewards
+    0 for left and right; N(-0.1, 1) for any action from B, drawn with the
+    env's own generator (seeded by `reset(seed=...)`).
+
+    ## Starting State
+    A.
+
+    ## Episode End
+    Terminated at either end: after right from A, or after any action from B.
+
+    ## Arguments
+    `actions`: how many actions B offers, 1 to 10; `render_mode`: "ansi".
+    """
+
+    action_names = ACTIONS
+
+    def __init__(self, actions: int = MAX_B_ACTIONS, render_mode: str | None = None) -> None:
+        if isinstance(actions, bool) or not 1 <= int(actions) <= MAX_B_ACTIONS:
+            raise ValueError(f"B offers 1 to {MAX_B_ACTIONS} actions, not {actions!r}")
+        arrays, std = max_bias_arrays()
+        super().__init__(arrays, render_mode, reward_std=std)
+        self.actions = int(actions)
+        self.grid = GRID
+        self.offered = offered(self.actions)
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[int, dict[str, Any]]:
+        obs, info = super().reset(seed=seed, options=options)
+        return obs, {**info, "action_mask": self.offered[obs].astype(np.int8)}
+
+    def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
+        obs, reward, terminated, truncated, info = super().step(action)
+        return obs, reward, terminated, truncated, {
+            **info, "action_mask": self.offered[obs].astype(np.int8)}
+
+    def picture(self) -> str:
+        cells = ["*", "B", "A", "*"]
+        if self.s is not None:
+            cells[self.s] = "@"
+        text = f"{' '.join(cells)}\n"
+        if self.lastaction is not None:
+            text = f"  ({ACTIONS[self.lastaction]})\n" + text
+        return text

@@ -1,0 +1,211 @@
+"""dyna-maze, blocking-maze, shortcut-maze: Sutton & Barto's mazes of chapter 8.
+
+## Action Space
+up (0), down (1), left (2), right (3).
+
+## Observation Space
+The cell, `row * 9 + col` on the 6 x 9 maze, row 0 at the top.
+
+## Rewards
++1 on reaching the goal (top right); 0 for every other move. The book
+discounts by 0.95, which makes a shorter way worth more: the learners'
+default discount here, and the Plan view's.
+
+## Starting State
+Row 2, column 0 (the Dyna maze); row 5, column 3 (the other two).
+
+## Episode End
+Terminated at the goal; truncated after `EPISODE_LIMIT` steps.
+
+## A world that changes
+The blocking maze (Figure 8.4) and the shortcut maze (Figure 8.5) change
+after `change_at` steps, counted over every episode: the blocking maze's
+way round the right end of its wall closes and one round the left opens;
+the shortcut maze's wall opens at its right end beside the long way round
+its left. Each phase has its own model (`phase_starts`, `world`); the exact
+figures and the coach are those of the phase in force, the heatmaps draw
+its walls, and the board shows the wall move as it happens.
+
+Undiscounted, every way to the goal is worth the same +1, so the exact
+figures add the greedy policy's expected steps to the goal beside the
+fewest (`mean_steps`, `optimal_steps`, `extra_steps`), and the bound a
+trained agent meets is on `extra_steps`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from tui_gym.core.mdp import FiniteMDP, NotAvailable, evaluate, solve, with_horizon
+from tui_gym.core.params import Param
+from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
+from tui_gym.envs.dp_grid import Cell, Grid
+from tui_gym.envs.dyna_maze import maze_phases
+from tui_gym.games.base import Advice, Bound, ReferenceMetrics, greedy_probabilities
+from tui_gym.games.dp_grid import DPGridGame, Event, ReachNarrator
+from tui_gym.games.model import PHASE, ModelOracle, freeze
+from tui_gym.games.words import plural
+
+__all__ = ["EPISODE_LIMIT", "BlockingMazeGame", "DynaMazeGame", "ShortcutMazeGame"]
+
+EPISODE_LIMIT = 5000  # steps (the env's registration)
+DISCOUNT = 0.95  # the book's
+
+
+def _steps_model(model: FiniteMDP) -> FiniteMDP:
+    """The model paying -1 a step: a policy's value is minus its expected steps."""
+    return model.replace(reward=np.full(model.reward.shape, -1.0), reward_std=None)
+
+
+class MazeOracle(ModelOracle):
+    """The exact figures of the phase in force, with the steps to the goal beside them."""
+
+    def __init__(self, game: MazeGame) -> None:
+        super().__init__(game)
+        self._fewest: dict[Any, float] = {}
+
+    def reference(
+        self, q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> ReferenceMetrics | NotAvailable:
+        reference = super().reference(q, kwargs, changes)
+        exact = self.exact(kwargs, changes)
+        if isinstance(reference, NotAvailable) or isinstance(exact, NotAvailable):
+            return reference
+        steps = _steps_model(exact.model)
+        mean = -evaluate(steps, greedy_probabilities(q)).value
+        key = (freeze(kwargs), changes)
+        if key not in self._fewest:
+            self._fewest[key] = -solve(with_horizon(steps, None)).value
+        fewest = self._fewest[key]
+        figures = {**reference.figures, "mean_steps": mean, "optimal_steps": fewest,
+                   "extra_steps": max(0.0, mean - fewest)}
+        return ReferenceMetrics(figures, f"{reference.summary}  {mean:.1f} steps "
+                                f"(fewest {fewest:g})", reference.scope)
+
+    def advice(self, env: Any, kwargs: Mapping[str, Any]) -> Advice:
+        phase = int(getattr(env.unwrapped, "phase", 0))
+        return super().advice(env, self.model_game.in_phase(kwargs, phase))
+
+    def bound(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> Bound | NotAvailable:
+        game = self.game
+        assert isinstance(game, MazeGame)
+        limit = game.extra_steps
+        return Bound("extra_steps", limit, f"extra_steps <= {limit:g} (steps beyond the fewest)")
+
+
+class MazeNarrator(ReachNarrator):
+    """Reached the goal, or ran out of time; when the wall moves."""
+
+    def progress_text(self, last: Any, first_info: Mapping[str, Any]) -> str:
+        text = super().progress_text(last, first_info)
+        info = last.info if last.steps else first_info
+        left = info.get("changes_in")
+        if isinstance(left, int):
+            moves = f"the wall moves in {plural(left, 'step')}"
+            return f"{text}; {moves}" if text else moves.capitalize()
+        return text
+
+
+class MazeGame(DPGridGame):
+    """A maze of the book's chapter 8 (see the module docstring)."""
+
+    maze = "dyna"
+    change_words = ""  # what the change does, for the board
+    extra_steps = 0.0  # the bound: steps beyond the fewest a trained greedy policy takes
+    # A changing maze is learned as the book's figures do (epsilon 0.1 throughout), so that
+    # the world changes once the agent knows its way. SARSA's values are those of the
+    # policy it follows, whose exploration can leave two cells' greedy moves pointing at
+    # each other: its exploration falls to 0.01, so that its greedy policy is the one it
+    # learns about.
+    CHANGING = {"discount": DISCOUNT, "learning_rate": 0.5, "learning_rate_schedule": "constant",
+                "epsilon_start": 0.1, "epsilon_final": 0.1}
+    CHANGING_SARSA = {"epsilon_final": 0.01}
+    plan_gamma = DISCOUNT
+    hyperparameters = {"*": {"discount": DISCOUNT, "learning_rate": 0.1, "episodes": 1000}}
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.oracle = MazeOracle(self)
+        self.narrator = MazeNarrator(self)
+
+    def phases(self, kwargs: Mapping[str, Any]) -> list[tuple[int, Grid]]:
+        change_at = kwargs.get("change_at")
+        return maze_phases(self.maze, None if change_at is None else int(change_at))
+
+    def phase_starts(self, kwargs: Mapping[str, Any]) -> tuple[int, ...]:
+        return tuple(start for start, _ in self.phases(kwargs))
+
+    def grid(self, kwargs: Mapping[str, Any]) -> Grid:
+        return self.phases(kwargs)[int(kwargs.get(PHASE, 0))][1]
+
+    def make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+        return {k: v for k, v in kwargs.items() if k != PHASE}
+
+    def event(self, game_env: Any, before: Mapping[str, Any], was: Cell, now: Cell,
+              move: str) -> Event | None:
+        cells = before.get("cells")
+        if cells is not None and list(cells) != game_env.grid.cells():
+            return (f"The wall moved after {plural(game_env.world_steps, 'step')}: "
+                    f"{self.change_words}", "slipped")
+        return super().event(game_env, before, was, now, move)
+
+
+class DynaMazeGame(MazeGame):
+    """Figure 8.2's maze: walk from S to the goal round the walls."""
+
+    name = "dyna-maze"
+    title = "Dyna maze"
+    env_id = "tui_gym/DynaMaze-v0"
+    key = "D"
+    lessons = dict.fromkeys(
+        ("sarsa", "monte-carlo"),
+        "every way to the goal is worth +1 undiscounted, so an on-policy learner that explores "
+        "may keep a detour of a step out and back",
+    )
+    description = "Figure 8.2's 6x9 maze: +1 at the goal, 0 elsewhere; 14 steps at best."
+    teaches = "planning: Dyna-Q's simulated steps find the way in far fewer episodes"
+
+
+class BlockingMazeGame(MazeGame):
+    """Figure 8.4's maze: the short way round the wall closes after `change_at` steps."""
+
+    name = "blocking-maze"
+    title = "Blocking maze"
+    env_id = "tui_gym/BlockingMaze-v0"
+    key = "L"
+    description = ("Figure 8.4's maze: after 1000 steps the way round the wall's right end "
+                   "closes and one round its left opens (10 steps, then 16).")
+    teaches = "a world that gets worse: a learner must notice its way is gone"
+    maze = "blocking"
+    change_words = "the way round its right end closed, one round its left opened"
+    extra_steps = 2.0  # a detour of a step out and back some learners keep (seeds 0-4: 0-2)
+    params = (Param("change_at", int, 1000, 1, 100_000_000,
+                    help="the step, over all episodes, at which the wall moves",
+                    owner="Blocking maze"),)
+    hyperparameters = {"*": {**MazeGame.CHANGING, "episodes": 300},
+                       "sarsa": MazeGame.CHANGING_SARSA}
+
+
+class ShortcutMazeGame(MazeGame):
+    """Figure 8.5's maze: a shortcut opens round the wall's right end after `change_at` steps."""
+
+    name = "shortcut-maze"
+    title = "Shortcut maze"
+    env_id = "tui_gym/ShortcutMaze-v0"
+    key = "S"
+    description = ("Figure 8.5's maze: after 3000 steps a shorter way opens round the "
+                   "wall's right end (16 steps, then 10).")
+    teaches = "a world that gets better: only a learner that explores finds the shortcut"
+    maze = "shortcut"
+    change_words = "a shorter way opened round its right end"
+    params = (Param("change_at", int, 3000, 1, 100_000_000,
+                    help="the step, over all episodes, at which the wall opens",
+                    owner="Shortcut maze"),)
+    extra_steps = 6.0  # the long way, which a learner that does not explore keeps to
+    hyperparameters = {"*": {**MazeGame.CHANGING, "episodes": 400},
+                       "sarsa": MazeGame.CHANGING_SARSA}

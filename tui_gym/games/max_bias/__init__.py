@@ -1,0 +1,177 @@
+"""max-bias: Sutton & Barto's Example 6.7, the MDP that shows maximization bias.
+
+## Action Space
+left (0), right (1), b1 (2) to b10 (11). A offers left and right, B its
+first `actions` of b1 to b10 (`offered_actions`; `info["action_mask"]`).
+An action a state does not offer counts as right in A and as one of B's in
+B, so a learner that tries every action everywhere still plays this MDP;
+one that honours the offered actions plays the book's exactly.
+
+## Observation Space
+0 the end after B, 1 B, 2 A, 3 the end right of A, as the book draws them.
+
+## Rewards
+0 for left and right; any action from B ends the episode with a reward drawn
+from N(-0.1, 1) (the model keeps the mean, -0.1, and the deviation, 1).
+
+## Starting State
+A.
+
+## Episode End
+Terminated at either end (one or two moves); truncated after
+`EPISODE_LIMIT` steps, which no episode reaches.
+
+## Arguments
+`actions`: how many actions B offers, 1 to 10 (the book's figure: 10).
+
+The optimum goes right (0); left is worth -0.1. A learner that takes the
+largest of B's noisy estimates as B's value thinks left is worth more than
+it is at first (Q-learning), which Double Q-learning avoids (Figure 6.5).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from tui_gym.core.mdp import FiniteMDP
+from tui_gym.core.params import Param
+from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
+from tui_gym.envs.dp_grid import Cell, Grid
+from tui_gym.envs.max_bias import (
+    ACTIONS,
+    GRID,
+    MAX_B_ACTIONS,
+    A,
+    B,
+    max_bias_arrays,
+    offered,
+)
+from tui_gym.games.base import Advice, Narrator, TallyWord
+from tui_gym.games.dp_grid import DPGridGame, DPGridStates, Event
+from tui_gym.games.model import ModelOracle
+from tui_gym.games.words import format_reward, plural
+
+__all__ = ["EPISODE_LIMIT", "MaxBiasGame"]
+
+EPISODE_LIMIT = 10  # steps (the env's registration)
+NAMES = {0: "the end after B", B: "B", A: "A", 3: "the end right of A"}
+
+
+def _offered(kwargs: Mapping[str, Any]) -> np.ndarray:
+    return offered(int(kwargs.get("actions", MAX_B_ACTIONS)))
+
+
+class MaxBiasStates(DPGridStates):
+    """A, B and the ends; the board offers A's two moves or B's choices."""
+
+    def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
+        return NAMES[int(observation)]
+
+    def json_observation(self, observation: Any) -> Any:
+        """The state's number, 0 to 3."""
+        return int(observation)
+
+    def read_scene(self, game_env: Any, before: Mapping[str, Any]) -> dict[str, Any]:
+        scene = super().read_scene(game_env, before)
+        state = game_env.s
+        if state is not None:
+            names = [a for a, on in zip(ACTIONS, game_env.offered[int(state)], strict=True) if on]
+            scene["offered"] = names if int(state) in (A, B) else []
+            scene["choices"] = names if int(state) == B else []
+        return scene
+
+
+class MaxBiasOracle(ModelOracle):
+    """The optimum among the actions each state offers."""
+
+    def advice(self, env: Any, kwargs: Mapping[str, Any]) -> Advice:
+        advice = super().advice(env, kwargs)
+        state = self.model_game.state_of(env)
+        if state is None or not advice.values:
+            return advice
+        mask = _offered(kwargs)[state]
+        values = {a: v for a, v in advice.values.items() if mask[a]}
+        best = max(values.values())
+        optimal = tuple(a for a, v in values.items() if v >= best - 1e-12)
+        names = ", ".join(f"{ACTIONS[a]} {v:+.3f}" for a, v in values.items())
+        chosen = " or ".join(ACTIONS[a] for a in optimal)
+        if len(optimal) > 3:
+            chosen = f"any of {ACTIONS[optimal[0]]} to {ACTIONS[optimal[-1]]}"
+            names = f"each {best:+.3f}"
+        return Advice(optimal, values, f"optimal: {chosen}  ({names} expected)")
+
+    def optimal_marks(self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> Any:
+        marks = super().optimal_marks(kwargs, changes)
+        return marks & _offered(kwargs) if isinstance(marks, np.ndarray) else marks
+
+
+class MaxBiasNarrator(Narrator):
+    """Right at once, or left and one of B's actions."""
+
+    tally_words = (TallyWord("right", "good"), TallyWord("left", "bad"),
+                   TallyWord("truncated", always=False))
+
+    def tally_word(self, last: Any) -> str:
+        if not last.terminated:
+            return "truncated"
+        return "left" if last.steps > 1 else "right"
+
+    def outcome_text(self, last: Any, first_info: Mapping[str, Any],
+                     scene: Mapping[str, Any]) -> str:
+        total = format_reward(last.episode_return)
+        if not last.terminated:
+            return f"Out of time after {plural(last.steps, 'step')}, return {total}"
+        if last.steps > 1:
+            return f"Went left to B, then ended with {total}"
+        return f"Went right: the episode ends at {total}"
+
+
+class MaxBiasGame(DPGridGame):
+    """Go right from A for 0, or left to B and one of its actions for N(-0.1, 1)."""
+
+    name = "max-bias"
+    title = "Maximization bias"
+    env_id = "tui_gym/MaxBias-v0"
+    key = "M"
+    description = ("Example 6.7: from A, right ends at 0; left leads to B, whose actions "
+                   "each end with a reward drawn from N(-0.1, 1).")
+    teaches = "maximization bias: Q-learning's max over noisy estimates, and Double Q's cure"
+    action_names = ACTIONS
+    params = (Param("actions", int, MAX_B_ACTIONS, 1, MAX_B_ACTIONS,
+                    help="how many actions B offers", owner="Maximization bias"),)
+    # The book's Figure 6.5: alpha 0.1, epsilon 0.1.
+    hyperparameters = {"*": {"learning_rate": 0.1, "learning_rate_schedule": "constant",
+                             "epsilon_start": 0.1, "epsilon_final": 0.1, "episodes": 300}}
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.states = MaxBiasStates(self)
+        self.oracle = MaxBiasOracle(self)
+        self.narrator = MaxBiasNarrator(self)
+        arrays, std = max_bias_arrays()
+        self._model = FiniteMDP(arrays.next_state, arrays.prob, arrays.reward, arrays.terminal,
+                                arrays.initial, action_names=ACTIONS, reward_std=std)
+
+    def grid(self, kwargs: Mapping[str, Any]) -> Grid:
+        return GRID
+
+    def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP:
+        return self._model
+
+    def offered_actions(self, kwargs: Mapping[str, Any]) -> np.ndarray:
+        return _offered(kwargs)
+
+    def event(self, game_env: Any, before: Mapping[str, Any], was: Cell, now: Cell,
+              move: str) -> Event | None:
+        if was[1] == B:
+            return f"{{who}} took {move} in B: the episode ends", "caption"
+        if was[1] == A and now[1] == B:
+            count = int(game_env.offered[B].sum())
+            keys = "1" if count == 1 else f"1 to {count}" if count < 10 else "1 to 9 and 0"
+            return f"{{who}} went left to B: pick one of its actions ({keys})", "caption"
+        if was[1] == A:
+            return "{who} went right: the episode ends at 0", "caption"
+        return None

@@ -1,0 +1,127 @@
+"""windy, windy-king: Sutton & Barto's Windy GridWorld (Example 6.5; king's moves, Exercise 6.9).
+
+## Action Space
+up (0), down (1), left (2), right (3); `windy-king` adds up-left (4),
+up-right (5), down-left (6), down-right (7). The moves a game offers are
+part of what it is (its keys, the protocol's list, recordings), so the
+king's moves are a game of their own.
+
+## Observation Space
+The cell, `row * 10 + col` on the 7 x 10 grid, row 0 at the top.
+
+## Rewards
+-1 for every move until the goal.
+
+## Starting State
+Row 3, column 0; the goal is row 3, column 7.
+
+## Episode End
+Terminated at the goal; truncated after `EPISODE_LIMIT` steps. A move is
+pushed up by the wind of the column it starts from (0 0 0 1 1 1 2 2 1 0).
+
+## Arguments
+`stochastic_wind` (Exercise 6.10): where there is wind it blows one cell
+stronger a third of the time and one weaker a third of the time.
+
+The optimum takes 15 steps (-15), 7 with king's moves (-7).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from tui_gym.core.params import Param
+from tui_gym.envs.dp_grid import GRID_ACTIONS, KING_ACTIONS, STEPS, Cell, Grid
+from tui_gym.envs.windy import windy_grid
+from tui_gym.games.dp_grid import DPGridGame, Event, ReachNarrator
+
+__all__ = ["EPISODE_LIMIT", "KingWindyGame", "WindyGame"]
+
+EPISODE_LIMIT = 2000  # steps (the env's registration)
+
+
+MONTE_CARLO_LESSON = (
+    "Monte Carlo learns only from episodes that end, and a greedy policy that walks into the "
+    "wind may never end one (Sutton & Barto: termination is not guaranteed for all "
+    "policies), so its greedy policy need not reach the goal"
+)
+
+DOUBLE_Q_LESSON = (
+    "Double Q-learning splits its experience between two tables, and once it stops "
+    "exploring each sees half the updates of the path it walks, so it may keep a detour "
+    "of a step or a few within the budget"
+)
+
+
+class WindyGame(DPGridGame):
+    """Cross the windy grid to the goal; every move costs 1."""
+
+    name = "windy"
+    title = "Windy GridWorld"
+    env_id = "tui_gym/WindyGridWorld-v0"
+    key = "I"
+    lessons = {"monte-carlo": MONTE_CARLO_LESSON, "double-q": DOUBLE_Q_LESSON}
+    description = ("Example 6.5's 7x10 grid: a wind blows up through the middle columns; "
+                   "-1 a move until the goal.")
+    teaches = "TD control where moves are not what they seem: Sarsa learns to use the wind"
+    action_names: tuple[str, ...] = GRID_ACTIONS
+    king_moves = False
+    params = (Param("stochastic_wind", bool, False,
+                    help="the wind varies by one a third of the time each way (Exercise 6.10)",
+                    owner="Windy GridWorld"),)
+    # Sarsa as the book runs it (Figure 6.3: alpha 0.5, Q starting at 0), exploring a little
+    # more at first and less at the end, so the greedy policy settles. Double Q splits its
+    # experience over two tables; Monte Carlo may never see its greedy policy end an
+    # episode (the book: "termination is not guaranteed for all policies").
+    hyperparameters = {
+        "*": {"learning_rate": 0.5, "learning_rate_schedule": "constant",
+              "epsilon_start": 0.2, "epsilon_final": 0.01, "episodes": 2000},
+        "sarsa": {"learning_rate": 0.1, "learning_rate_schedule": "visits",
+                  "epsilon_final": 0.0},
+        "double-q": {"learning_rate": 0.05, "learning_rate_schedule": "visits",
+                     "epsilon_final": 0.0, "episodes": 10000},
+        "monte-carlo": {"learning_rate": 0.1, "learning_rate_schedule": "visits",
+                        "epsilon_start": 1.0, "epsilon_final": 0.05},
+    }
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.narrator = ReachNarrator(self)
+
+    def grid(self, kwargs: Mapping[str, Any]) -> Grid:
+        return windy_grid(self.king_moves, bool(kwargs.get("stochastic_wind", False)))
+
+    def event(self, game_env: Any, before: Mapping[str, Any], was: Cell, now: Cell,
+              move: str) -> Event | None:
+        grid: Grid = game_env.grid
+        if now in grid.terminals:
+            return None
+        (dr, dc), last_row, last_col = STEPS[move], grid.rows - 1, grid.cols - 1
+        moved = (min(max(was[0] + dr, 0), last_row), min(max(was[1] + dc, 0), last_col))
+        blown = moved[0] - now[0]
+        if blown <= 0:
+            return None
+        where = "to the top row" if now[0] == 0 else f"{blown} up"
+        return f"{{who}} moved {move}, blown {where} by the wind", "slipped"
+
+
+class KingWindyGame(WindyGame):
+    """Windy GridWorld with king's moves (Exercise 6.9)."""
+
+    name = "windy-king"
+    title = "Windy GridWorld, king's moves"
+    env_id = "tui_gym/WindyGridWorldKing-v0"
+    key = "Y"
+    lessons = {
+        "monte-carlo": MONTE_CARLO_LESSON,
+        "double-q": DOUBLE_Q_LESSON,
+    }
+    description = ("Exercise 6.9: the windy grid with the eight king's moves; -1 a move "
+                   "until the goal.")
+    teaches = "the same wind with diagonal moves: a shorter path, 7 moves instead of 15"
+    action_names = KING_ACTIONS
+    king_moves = True
+    params = (Param("stochastic_wind", bool, False,
+                    help="the wind varies by one a third of the time each way (Exercise 6.10)",
+                    owner="Windy GridWorld, king's moves"),)

@@ -1,0 +1,408 @@
+"""Every private name of Textual the app uses, each with a fallback to Textual's own behaviour.
+
+Textual's public API leaves a few costs and looks that the app improves on
+through private names. Each part below first checks that the names it needs
+are there and have the shape it expects; where they are not (another Textual
+release), or where `TUI_GYM_STOCK_TEXTUAL` names the part (`all` names every
+one; the tests run the app so), it leaves Textual to do what it does by itself:
+
+- `compositor`: the main screen's compositor (`Screen._compositor`, a
+  `textual._compositor.Compositor`) keeps the layout a pass has just made, and
+  draws in a partial update only the widgets it repaints (`main_screen`);
+- `focus`: on the main screen a focus change repaints only the widgets whose
+  `:focus` styles change, not the whole screen (its `focused` reactive, redefined);
+- `resume`: when the main screen first shows, its widgets keep the styles they
+  were mounted with (`Screen._on_screen_resume`);
+- `restyle`: a board or heatmap that gains or loses the focus restyles itself
+  alone, keeping its component styles (`restyle_alone`, through
+  `Widget._get_component_classes`);
+- `crash`: an app that owns its terminal keeps an unexpected error's traceback
+  off the screen, for a crash log (`CrashHook`: `App._handle_exception`,
+  `App._exit_renderables`);
+- `ticks`: the run list's tick boxes read ✓ when ticked (`ticked_line`:
+  `SelectionList`'s rendering of `ToggleButton.BUTTON_INNER`);
+- `terminal`: the app ends when its terminal or its pipes close, and a write to
+  a closed terminal never blocks (`guarded_driver`: a driver's input thread and
+  output writer; `terminal_write_failed`: the writer thread's name);
+- `frames`: `tui-gym bench` times the frames the app hands to its terminal and
+  delivers keys as the terminal driver does (`watch_frames`, `deliver_key`:
+  `App._display`, `App._driver`).
+"""
+
+from __future__ import annotations
+
+import inspect
+import os
+import select
+import threading
+from collections.abc import Callable, Iterable
+from typing import Any
+
+from rich.segment import Segment
+from textual.app import App
+from textual.driver import Driver
+from textual.events import ScreenResume
+from textual.geometry import Region, Size
+from textual.message import Message
+from textual.reactive import Reactive
+from textual.screen import Screen
+from textual.strip import Strip
+from textual.widget import Widget
+
+STOCK_ENV = "TUI_GYM_STOCK_TEXTUAL"
+PARTS = ("compositor", "focus", "resume", "restyle", "crash", "ticks", "terminal", "frames")
+
+__all__ = [
+    "PARTS",
+    "STOCK_ENV",
+    "CrashHook",
+    "TerminalGone",
+    "deliver_key",
+    "enabled",
+    "guarded_driver",
+    "main_screen",
+    "restyle_alone",
+    "terminal_write_failed",
+    "ticked_line",
+    "watch_frames",
+]
+
+
+def enabled(part: str) -> bool:
+    """Whether `part` uses Textual's private names (`TUI_GYM_STOCK_TEXTUAL` may turn it off)."""
+    stock = {word.strip() for word in os.environ.get(STOCK_ENV, "").lower().split(",")}
+    return not ({"all", "1", part} & stock)
+
+
+def _parameters(function: Any) -> list[str]:
+    try:
+        return list(inspect.signature(function).parameters)
+    except (TypeError, ValueError):
+        return []
+
+
+# --- the main screen: compositor, focus and first show -----------------------------------
+def _compositor_class() -> type | None:
+    """`Compositor` subclassed to keep its layout (None when its shape is not the one known)."""
+    try:
+        from textual._compositor import Compositor
+    except ImportError:
+        return None
+    needed = ("reflow", "render_partial_update", "_get_renders", "visible_widgets")
+    if not all(hasattr(Compositor, name) for name in needed):
+        return None
+    if _parameters(Compositor._get_renders) != ["self", "crop"]:
+        return None
+
+    class KeptLayoutCompositor(Compositor):  # type: ignore[misc, valid-type]
+        """Textual's compositor, keeping the full map a layout pass has just made, and
+        drawing in a partial update only the widgets it repaints.
+
+        Textual marks the map stale before a layout pass and leaves it so after the
+        pass, so the first widget that asks for its region while the frame is drawn
+        (a strip widget does) had the whole screen laid out a second time, for each
+        view switch. And Textual tests each widget's container's clip against the box
+        around every region to repaint, so a snapshot that changed the Train view's
+        curves, stats and heatmap drew every widget on the screen."""
+
+        _updating: tuple[Region, ...] = ()  # the regions a partial update repaints
+
+        def reflow(self, parent: Widget, size: Size) -> Any:
+            result = super().reflow(parent, size)
+            self._full_map_invalidated = False  # the map just made is the full one
+            return result
+
+        def render_partial_update(self) -> Any:
+            self._updating = tuple(getattr(self, "_dirty_regions", ()))
+            try:
+                return super().render_partial_update()
+            finally:
+                self._updating = ()
+
+        def _get_renders(
+            self, crop: Region | None = None
+        ) -> Iterable[tuple[Region, Region, list[Strip]]]:
+            if crop is None:
+                yield from super()._get_renders(crop)
+                return
+            updating = self._updating or (crop,)
+            for widget, (region, clip) in self.visible_widgets.items():
+                visible = region.intersection(clip)
+                if not (visible.width and visible.height):
+                    continue
+                if not any(visible.overlaps(part) for part in updating):
+                    continue
+                yield region, clip, widget.render_lines(visible.translate(-region.offset))
+
+    probe = KeptLayoutCompositor()
+    if not hasattr(probe, "_full_map_invalidated") or not hasattr(probe, "_dirty_regions"):
+        return None
+    return KeptLayoutCompositor
+
+
+_COMPOSITOR: type | None | bool = False  # False: not looked for yet
+
+
+def _kept_layout_compositor() -> Any:
+    global _COMPOSITOR
+    if _COMPOSITOR is False:
+        _COMPOSITOR = _compositor_class()
+    return None if _COMPOSITOR is None or _COMPOSITOR is True else _COMPOSITOR()
+
+
+class _ResumingScreen(Screen):
+    """A screen that, the first time it shows, keeps the styles its widgets were
+    mounted with instead of styling them all over again."""
+
+    _shown = False
+
+    def _on_screen_resume(self, event: ScreenResume) -> None:
+        # Runs before `Screen`'s own handler, which restyles every node when asked to.
+        if not self._shown:
+            self._shown = True
+            if enabled("resume") and hasattr(event, "refresh_styles"):
+                event.refresh_styles = False
+
+
+_STOCK_FOCUSED = Screen.__dict__.get("focused")
+
+
+class _QuietFocusScreen(_ResumingScreen):
+    """A screen whose focus changes repaint only the widgets whose `:focus` styles
+    change (their style updates do that), not the whole screen: a view switch moves
+    the focus, and a whole-screen repaint doubled its cost."""
+
+    if isinstance(_STOCK_FOCUSED, Reactive):
+        focused: Reactive[Widget | None] = Reactive(None, repaint=False)
+
+
+def main_screen(**kwargs: Any) -> Screen:
+    """The app's main screen, with the parts that are enabled and fit this Textual."""
+    quiet = enabled("focus") and isinstance(_STOCK_FOCUSED, Reactive)
+    screen = (_QuietFocusScreen if quiet else _ResumingScreen)(**kwargs)
+    if enabled("compositor") and hasattr(screen, "_compositor"):
+        compositor = _kept_layout_compositor()
+        if compositor is not None:
+            screen._compositor = compositor
+    return screen
+
+
+# --- a widget restyled alone --------------------------------------------------------------
+def restyle_alone(widget: Widget) -> None:
+    """Restyle `widget` after its focus changed, keeping its component styles (the
+    colours a board draws with), which no `:focus` rule of ours touches; Textual's
+    own answer restyles it and everything below it, component styles too."""
+    stylesheet = getattr(widget.app, "stylesheet", None)
+    if not enabled("restyle") or not hasattr(widget, "_get_component_classes") or not hasattr(
+        stylesheet, "update_nodes"
+    ):
+        widget.update_node_styles()
+        return
+    # The stylesheet asks the node for its component classes; none means "keep them".
+    widget._get_component_classes = frozenset  # type: ignore[method-assign,assignment]
+    try:
+        stylesheet.update_nodes([widget], animate=True)  # type: ignore[union-attr]
+    finally:
+        del widget._get_component_classes
+
+
+# --- an unexpected error --------------------------------------------------------------------
+class CrashHook:
+    """An `App` mixin: `crash` holds the first unexpected error; with `quiet_crash` set,
+    its traceback is not printed on the terminal when the app ends (the app logs it)."""
+
+    crash: BaseException | None = None
+    quiet_crash = False
+
+    def _handle_exception(self, error: Exception) -> None:
+        # Textual's one path for an unhandled error: it ends the app with code 1 and
+        # keeps a traceback to print on the terminal.
+        if self.crash is None:
+            self.crash = error
+        super()._handle_exception(error)  # type: ignore[misc]
+        kept = getattr(self, "_exit_renderables", None)
+        if self.quiet_crash and enabled("crash") and isinstance(kept, list):
+            kept.clear()
+
+
+# --- the run list's tick marks -----------------------------------------------------------
+def _button_inner() -> str | None:
+    try:
+        from textual.widgets._toggle_button import ToggleButton
+    except ImportError:
+        return None
+    inner = getattr(ToggleButton, "BUTTON_INNER", None)
+    return inner if isinstance(inner, str) and len(inner) == 1 else None
+
+
+def ticked_line(strip: Strip, ticked: Callable[[], bool]) -> Strip:
+    """A `SelectionList` line with its tick box reading ✓ when `ticked()` (Textual's box
+    draws the same mark on and off); the line as Textual drew it otherwise."""
+    inner = _button_inner() if enabled("ticks") else None
+    segments = list(strip)
+    if inner is None or len(segments) < 3 or segments[1].text != inner:
+        return strip
+    try:
+        mark = "✓" if ticked() else " "
+    except Exception:  # the option asked about is gone: leave the line as drawn
+        return strip
+    segments[1] = Segment(mark, segments[1].style)
+    return Strip(segments, strip.cell_length)
+
+
+# --- the terminal going away ----------------------------------------------------------------
+class TerminalGone(Message):
+    """The terminal, or the pipes a served app talks through, closed: nobody is left to
+    see the app or type to it."""
+
+
+_HANGUP = select.POLLHUP | select.POLLERR | select.POLLNVAL
+WATCH_SECONDS = 0.25  # how often the watcher looks at the terminal
+
+
+class _Guard:
+    """The file descriptors a driver reads and writes, watched for a hang-up (a poll
+    object for each look: they may come from several threads at once)."""
+
+    def __init__(self, fds: Iterable[int]) -> None:
+        self.fds = tuple(fds)
+        self.gone = False
+        self.stopped = threading.Event()
+
+    def hung_up(self, timeout_ms: int = 0) -> bool:
+        """Whether the terminal or a pipe closed, waiting up to `timeout_ms` for it."""
+        if not self.gone:
+            poll = select.poll()
+            for fd in self.fds:
+                poll.register(fd, _HANGUP)
+            self.gone = bool(poll.poll(timeout_ms))
+        return self.gone
+
+
+def _driver_fds(driver: Driver) -> list[int]:
+    """The input and the output a driver uses (stdin, and stdout or stderr)."""
+    import sys
+
+    streams = (sys.__stdin__, sys.__stdout__ if driver.is_web else sys.__stderr__)
+    fds = []
+    for stream in streams:
+        try:
+            fds.append(stream.fileno())  # type: ignore[union-attr]
+        except (AttributeError, OSError, ValueError):
+            continue
+    return fds
+
+
+def guarded_driver(base: type[Driver]) -> type[Driver]:
+    """`base` (the driver Textual picked) made to notice a closed terminal or closed
+    pipes: it posts `TerminalGone` to the app, drops what it would write from then on
+    (Textual's writer thread dies on the first failed write, and a write queued
+    behind it would wait for good), and stops without waiting on that writer."""
+    if not enabled("terminal") or not hasattr(select, "poll"):
+        return base
+    needed = ("write", "flush", "close", "start_application_mode", "stop_application_mode")
+    if not all(callable(getattr(base, name, None)) for name in needed):
+        return base
+    if _parameters(base.__init__)[:2] != ["self", "app"]:
+        return base
+
+    class Guarded(base):  # type: ignore[misc, valid-type]
+        def __init__(self, app: App[Any], **kwargs: Any) -> None:
+            super().__init__(app, **kwargs)
+            self.owner = app
+            self.guard = _Guard(_driver_fds(self))
+            self.watcher: threading.Thread | None = None
+
+        def start_application_mode(self) -> None:
+            # Again on a resume (after ctrl+z, or the SIGCONT a hang-up may send): one
+            # watcher at a time.
+            self.guard.stopped.clear()
+            if self.watcher is None or not self.watcher.is_alive():
+                self.watcher = threading.Thread(target=self._watch, name="tui-gym-terminal",
+                                                daemon=True)
+                self.watcher.start()
+            super().start_application_mode()
+
+        def _watch(self) -> None:
+            guard = self.guard
+            while not guard.stopped.is_set():
+                if guard.hung_up(int(WATCH_SECONDS * 1000)):
+                    self.owner.post_message(TerminalGone())
+                    return
+
+        def write(self, data: str) -> None:
+            if self.guard.hung_up():
+                return
+            try:
+                super().write(data)
+            except OSError:
+                self.guard.gone = True
+
+        def flush(self) -> None:
+            if self.guard.hung_up():
+                return
+            try:
+                super().flush()
+            except OSError:
+                self.guard.gone = True
+
+        def run_input_thread(self) -> None:
+            try:
+                super().run_input_thread()
+            except OSError:  # reading a closed terminal: the watcher says so
+                self.guard.gone = True
+
+        def stop_application_mode(self) -> None:
+            self.guard.stopped.set()
+            try:
+                super().stop_application_mode()  # a web driver writes its goodbye itself
+            except OSError:
+                if not self.guard.hung_up():
+                    raise
+
+        def close(self) -> None:
+            if not self.guard.hung_up():
+                super().close()  # else its writer may never take another line
+
+    Guarded.__name__ = Guarded.__qualname__ = f"Guarded{base.__name__}"
+    return Guarded
+
+
+WRITER_THREAD = "textual-output"  # the name of the thread a terminal driver writes from
+
+
+def terminal_write_failed(args: threading.ExceptHookArgs) -> bool:
+    """Whether a thread's failure is the terminal driver's writer finding the terminal
+    gone (a write it had queued before the app knew); False when not known."""
+    thread = args.thread
+    return (enabled("terminal") and thread is not None and thread.name == WRITER_THREAD
+            and isinstance(args.exc_value, OSError))
+
+
+# --- the bench's hooks -----------------------------------------------------------------------
+def watch_frames(app: App[Any], on_frame: Callable[[Any], None]) -> bool:
+    """Call `on_frame(renderable)` each time `app` hands a screen update to its driver;
+    False (and nothing hooked) when this Textual has no such step to hook."""
+    display = getattr(app, "_display", None)
+    if not enabled("frames") or not callable(display) or _parameters(display) != [
+        "screen", "renderable"
+    ]:
+        return False
+
+    def timed_display(screen: Any, renderable: Any) -> None:
+        display(screen, renderable)
+        if renderable is not None:
+            on_frame(renderable)
+
+    app._display = timed_display  # type: ignore[method-assign]
+    return True
+
+
+def deliver_key(app: App[Any], event: Message) -> None:
+    """Hand `app` a key event as the terminal driver does (from outside its queue)."""
+    driver = getattr(app, "_driver", None)
+    send = getattr(driver, "send_message", None)
+    if enabled("frames") and callable(send):
+        send(event)
+    else:
+        app.post_message(event)
