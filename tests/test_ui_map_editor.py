@@ -37,6 +37,11 @@ async def test_paint_undo_and_the_optimum_on_a_small_cliff_and_a_game_without_a_
                        "the editor")
         editor = view.editor
         assert editor is not None
+        # The Train view showing again (its first frame, a view switch) keeps the keyboard
+        # on the map while the editor is open.
+        app.action_show_view("train")
+        await pilot.pause()
+        assert editor.canvas.has_focus
         assert "exact optimum -3.0000 return" in status(editor)
 
         await pilot.press("down", "right", "2")  # a wall at row 1, col 1: the top way is left

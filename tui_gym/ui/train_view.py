@@ -393,8 +393,12 @@ class TrainView(Vertical):
         return hp
 
     def focus_default(self) -> None:
-        """Give the keyboard to the heatmap (its keys move the focus where there is one)."""
-        self.heatmap.focus()
+        """Give the keyboard to the map while the editor is open, else to the heatmap (its
+        keys move the focus where there is one)."""
+        if self.editing_map and self._editor is not None:
+            self._editor.focus_canvas()
+        else:
+            self.heatmap.focus()
 
     @property
     def step_panel(self) -> StepPanel:
