@@ -132,6 +132,7 @@ def test_a_closed_child_ends_by_itself(monkeypatch) -> None:
     child = runner.child_pid
     assert child is not None
     runner.close(wait=True)
-    assert reaped(child) and killed == []
+    # (An earlier test's child may still be reaped in the background: only this one counts.)
+    assert reaped(child) and child not in killed
     runner.close(wait=True)  # again: nothing left to end
-    assert killed == []
+    assert child not in killed
