@@ -1,10 +1,4 @@
-"""Tiny deterministic MDPs in numpy and a minimal batched loop that drives a learner.
-
-`train` follows the learner protocol of `tui_gym.algorithms.base` step by
-step (first actions, next actions before the update for SARSA, after it for
-the others, `end_episodes`), so the algorithm tests exercise the same call
-order the engines use.
-"""
+"""Tiny deterministic grids in numpy, played by the engine's compiled loop (`train`)."""
 
 from __future__ import annotations
 
@@ -13,7 +7,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tui_gym.algorithms import Learner, Transitions
+from tui_gym.algorithms import Learner
+from tui_gym.core.engine.loop import ModelArrays
+from tui_gym.core.engine.seeds import play_learner
+from tui_gym.core.mdp import FiniteMDP
 
 UP, RIGHT, DOWN, LEFT = 0, 1, 2, 3
 _MOVES = ((-1, 0), (0, 1), (1, 0), (0, -1))
@@ -79,42 +76,22 @@ def cliff_walk() -> GridMDP:
                 cliff=tuple((3, c) for c in range(1, 11)), max_steps=1000)
 
 
-def train(learner: Learner, mdp: GridMDP, episodes: int, num_envs: int = 4) -> np.ndarray:
-    """Play `episodes` episodes on `num_envs` envs side by side; returns in finishing order."""
-    states = np.full(num_envs, mdp.start)
-    actions = learner.act_batch(states)
-    elapsed = np.zeros(num_envs, dtype=np.int64)
-    totals = np.zeros(num_envs)
-    live = np.ones(num_envs, dtype=bool)
-    started, returns = num_envs, []
-    while live.any():
-        idx = np.flatnonzero(live)
-        s, a = states[idx], actions[idx]
-        nxt = mdp.next_state[s, a]
-        reward = mdp.reward[s, a]
-        elapsed[idx] += 1
-        terminated = nxt == mdp.goal
-        truncated = ~terminated & (elapsed[idx] >= mdp.max_steps)
-        next_actions = learner.act_batch(nxt) if learner.needs_next_action else None
-        learner.update(Transitions(s, a, reward, nxt, terminated, truncated, next_actions, idx))
-        totals[idx] += reward
-        states[idx] = nxt
-        if next_actions is not None:
-            actions[idx] = next_actions
-        done = idx[terminated | truncated]
-        if done.size:
-            returns.extend(totals[done].tolist())
-            learner.end_episodes(done.size)
-            again = done[: max(0, episodes - started)]
-            started += again.size
-            live[done[again.size:]] = False
-            states[again], elapsed[again], totals[again] = mdp.start, 0, 0.0
-            if next_actions is not None and again.size:
-                actions[again] = learner.act_batch(states[again])
-        if next_actions is None:
-            going = np.flatnonzero(live)
-            actions[going] = learner.act_batch(states[going])
-    return np.asarray(returns)
+def as_model(mdp: GridMDP) -> FiniteMDP:
+    """The grid as a finite model: every move certain, the goal ends the episode."""
+    return FiniteMDP(
+        next_state=mdp.next_state[..., None],
+        prob=np.ones(mdp.next_state.shape + (1,)),
+        reward=mdp.reward[..., None],
+        terminal=(mdp.next_state == mdp.goal)[..., None],
+        initial=np.eye(mdp.n_states)[mdp.start],
+        horizon=mdp.max_steps,
+    )
+
+
+def train(learner: Learner, mdp: GridMDP, episodes: int) -> np.ndarray:
+    """Play `episodes` episodes with the engine's loop; their returns."""
+    returns, _ = play_learner(learner, ModelArrays.of(as_model(mdp)), episodes)
+    return returns
 
 
 def greedy_is_optimal(learner: Learner, mdp: GridMDP) -> bool:

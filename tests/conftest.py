@@ -1,6 +1,7 @@
 """Shared pytest setup: the `slow` marker, run only when TUI_GYM_SLOW=1; bytecode kept
-for the processes the tests start; one xdist worker more than CPUs; long modules first;
-every run's history in a file of its own."""
+for the processes the tests start; one compiled-code cache for every process, filled once
+before the workers start; one xdist worker more than CPUs; long modules first; every
+run's history in a file of its own."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ import pytest
 SLOW_ENV = "TUI_GYM_SLOW"
 GC_THRESHOLDS = (20_000, 20, 100)  # young, middle and full generations
 PYCACHE = Path(__file__).resolve().parent.parent / ".pytest_cache" / "pycache"
+NUMBA_CACHE = PYCACHE.parent / "numba"
 
 
 def _keep_bytecode() -> None:
@@ -52,7 +54,31 @@ def _warm_bytecode() -> None:
 _warm_bytecode()
 
 
+def _share_compiled_code() -> None:
+    """Every process of the run (the workers, the app's and the comparisons' children)
+    loads compiled code from one folder (the engine keys it by its sources)."""
+    os.environ.setdefault("NUMBA_CACHE_DIR", str(NUMBA_CACHE))
+
+
+_share_compiled_code()
+
+
+def _compile_once(config: pytest.Config) -> None:
+    """With workers, compile every learner here first, so no two workers compile the same
+    code at once (a second run finds it all in the cache)."""
+    if os.environ.get("PYTEST_XDIST_WORKER") or not getattr(config.option, "numprocesses", 0):
+        return
+    if os.environ.get("NUMBA_DISABLE_JIT"):
+        return
+    from tui_gym.algorithms import ALGORITHMS
+    from tui_gym.core.engine import loop
+
+    learners = [cls(2, n_states=2) for cls in ALGORITHMS]
+    loop.warm([(x.name, x.arrays(), x.compiled_params()) for x in learners])
+
+
 def pytest_configure(config: pytest.Config) -> None:
+    _compile_once(config)
     config.addinivalue_line(
         "markers",
         f"slow: takes tens of seconds; skipped unless the environment variable {SLOW_ENV}=1",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 
-from tui_gym.core.mdp import BatchSampler, FiniteMDP, policy_matrix
+from tui_gym.core.mdp import FiniteMDP, policy_matrix
 
 
 def random_model(
@@ -38,11 +38,13 @@ def sampled_returns(
     gamma: float = 1.0,
     max_steps: int | None = None,
 ) -> np.ndarray:
-    """Returns of `episodes` episodes played at once by the batched sampler."""
+    """Returns of `episodes` episodes played at once, drawn from the model's cumulative
+    probabilities with numpy (a check of the model apart from the engine's sampler)."""
     matrix = policy_matrix(model, policy)
     cumulative = np.cumsum(matrix, axis=1)
-    sampler = BatchSampler(model)
-    states = sampler.reset(episodes, rng)
+    starts = np.cumsum(model.initial)
+    states = np.minimum(np.searchsorted(starts, rng.random(episodes), side="right"),
+                        model.n_states - 1)
     totals = np.zeros(episodes)
     alive = np.ones(episodes, dtype=bool)
     limit = model.horizon if model.horizon is not None else max_steps
@@ -53,10 +55,13 @@ def sampled_returns(
             break
         actions = (rng.random(rows.size)[:, None] >= cumulative[states[rows]]).sum(axis=1)
         actions = np.minimum(actions, model.n_actions - 1)
-        step = sampler.step(states[rows], actions, rng)
-        totals[rows] += gamma**t * step.reward
-        states[rows] = step.next_state
-        alive[rows[step.terminated]] = False
+        pairs = model.cumulative[states[rows], actions]
+        outcome = (rng.random(rows.size)[:, None] >= pairs).sum(axis=1)
+        outcome = np.minimum(outcome, model.max_outcomes - 1)
+        at = (states[rows], actions, outcome)
+        totals[rows] += gamma**t * model.reward[at]
+        states[rows] = model.next_state[at]
+        alive[rows[model.terminal[at]]] = False
     return totals
 
 

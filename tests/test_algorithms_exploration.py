@@ -1,9 +1,10 @@
 """Shared exploration, hyperparameter schemas and the registry.
 
-Epsilon-greedy picks a random action with probability ε and otherwise the
-best one, ties broken uniformly: the frequencies from a fixed seed sit within
-a few standard errors of those probabilities, in both draw orders, and match
-`policy_probabilities`. The epsilon schedule is linear, then flat. Each
+Epsilon-greedy (the engine's `act`) picks a random action with probability ε
+and otherwise the best one, ties broken uniformly: the frequencies from a
+fixed seed sit within a few standard errors of those probabilities, and
+`expected_value` is the mean value under them. The epsilon schedule is
+linear, then flat. Each
 algorithm's schema has valid defaults and refuses bad values with a message
 that names the field. The package stays free of the UI and of
 Gymnasium.
@@ -17,15 +18,23 @@ import numpy as np
 import pytest
 
 from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, QLearning, Settings, algorithm
-from tui_gym.algorithms.exploration import (
-    epsilon_greedy_batch,
-    epsilon_greedy_one,
-    greedy_batch,
-    linear_epsilon,
-    policy_probabilities,
-)
+from tui_gym.core.engine.loop import entries
+from tui_gym.core.engine.rules import epsilon_at, expected_value
 
 VALUES = np.array([1.0, 3.0, 3.0, -2.0, 3.0])  # three actions tie for the best
+
+
+def _learner(values: np.ndarray, seed: int = 0) -> QLearning:
+    """A learner whose row s holds `values[s]`."""
+    learner = QLearning(values.shape[1], n_states=len(values), seed=seed)
+    learner.q[:] = values
+    return learner
+
+
+def _policy(values: np.ndarray, epsilon: float) -> np.ndarray:
+    """ε/n each, and the greedy share split evenly among the actions tied for the best."""
+    tied = values == values.max()
+    return epsilon / len(values) + (1 - epsilon) * tied / tied.sum()
 
 
 def _within(counts: np.ndarray, probs: np.ndarray, n: int) -> bool:
@@ -35,34 +44,38 @@ def _within(counts: np.ndarray, probs: np.ndarray, n: int) -> bool:
 
 
 @pytest.mark.parametrize("epsilon", [0.0, 0.3, 1.0])
-def test_epsilon_greedy_frequencies_in_both_draw_orders(epsilon: float) -> None:
-    probs = policy_probabilities(VALUES[None, :], epsilon)[0]
-    # ε/5 each, plus (1 - ε)/3 for each of the three tied best
-    assert probs == pytest.approx(epsilon / 5 + (1 - epsilon) / 3 * (VALUES == 3.0))
-    n = 60_000
-    batch = epsilon_greedy_batch(np.tile(VALUES, (n, 1)), epsilon, np.random.default_rng(0))
-    assert _within(np.bincount(batch, minlength=5), probs, n)
-    rng = np.random.default_rng(1)
-    one = [epsilon_greedy_one(VALUES, epsilon, rng) for _ in range(6_000)]
-    assert _within(np.bincount(one, minlength=5), probs, 6_000)
+def test_epsilon_greedy_frequencies(epsilon: float) -> None:
+    probs = _policy(VALUES, epsilon)
+    learner = _learner(VALUES[None, :])
+    tables, hp = learner.arrays(), learner.compiled_params()
+    n = 20_000
+    act = entries(hp).act
+    picks = [act(tables, hp, learner.rng, 0, epsilon) for _ in range(n)]
+    assert _within(np.bincount(picks, minlength=5), probs, n)
     if epsilon == 0.0:
-        assert set(batch.tolist()) == {1, 2, 4}  # never an action outside the tie
+        assert set(picks) == {1, 2, 4}  # never an action outside the tie
 
 
 def test_ties_are_broken_uniformly_and_a_single_best_wins() -> None:
-    rng = np.random.default_rng(2)
     values = np.array([[0.0, 0.0, 0.0, 0.0], [1.0, 5.0, 5.0, 0.0], [0.0, 0.0, 9.0, 0.0]])
-    picks = greedy_batch(np.repeat(values, 20_000, axis=0), rng).reshape(3, -1)
-    assert _within(np.bincount(picks[0], minlength=4), np.full(4, 0.25), 20_000)
-    assert _within(np.bincount(picks[1], minlength=4), np.array([0, 0.5, 0.5, 0]), 20_000)
+    learner = _learner(values, seed=2)
+    tables, hp = learner.arrays(), learner.compiled_params()
+    greedy = entries(hp).greedy
+    picks = np.array([[greedy(tables, hp, learner.rng, s) for _ in range(10_000)]
+                      for s in range(3)])
+    assert _within(np.bincount(picks[0], minlength=4), np.full(4, 0.25), 10_000)
+    assert _within(np.bincount(picks[1], minlength=4), np.array([0, 0.5, 0.5, 0]), 10_000)
     assert set(picks[2].tolist()) == {2}
 
 
-def test_policy_probabilities_sum_to_one_per_row() -> None:
+def test_the_expected_value_is_the_mean_under_epsilon_greedy() -> None:
     values = np.random.default_rng(3).integers(0, 3, (50, 4)).astype(float)  # many ties
-    probs = policy_probabilities(values, 0.17)
-    np.testing.assert_allclose(probs.sum(axis=1), 1.0)
-    assert (probs >= 0.17 / 4 - 1e-15).all()
+    learner = _learner(values)
+    tables, hp = learner.arrays(), learner.compiled_params()
+    for s, row in enumerate(values):
+        probs = _policy(row, 0.17)
+        assert probs.sum() == pytest.approx(1.0)
+        assert expected_value(tables, hp, s, 0.17) == pytest.approx(probs @ row)
 
 
 def test_the_epsilon_schedule_is_linear_then_flat() -> None:
@@ -73,7 +86,7 @@ def test_the_epsilon_schedule_is_linear_then_flat() -> None:
         for episode in (0, 1, 150, 299, 300, 499, 500, 999, 5000):
             expected = 0.1 if episode >= decay else 0.9 + episode / decay * (0.1 - 0.9)
             assert settings.epsilon_at(episode) == expected
-    assert linear_epsilon(50, 1.0, 0.0, 0.5, 200) == 0.5
+    assert epsilon_at(50.0, 1.0, 0.0, 100.0) == 0.5
 
 
 def test_the_learner_follows_its_schedule_and_live_changes() -> None:
@@ -124,7 +137,8 @@ def test_the_registry() -> None:
         fields = [f.name for f in cls.params]
         assert len(fields) == len(set(fields)) and all(f.help for f in cls.params)
         assert isinstance(cls.settings(), Settings)
-    assert [cls.name for cls in ALGORITHMS if cls.needs_next_action] == ["sarsa"]
+    learners = [cls(2, n_states=1) for cls in ALGORITHMS]
+    assert [learner.name for learner in learners if learner.next_first] == ["sarsa"]
 
 
 def test_the_package_imports_neither_textual_nor_gymnasium() -> None:

@@ -59,7 +59,7 @@ def test_on_the_cliff_sarsa_walks_safer_than_q_learning() -> None:
     for name in ("sarsa", "expected-sarsa", "q-learning"):
         hp = {**TD, "epsilon_start": 0.1, "epsilon_final": 0.1, "episodes": 640}
         learner = algorithm(name)(4, hp, n_states=mdp.n_states, seed=0)
-        returns = train(learner, mdp, 640, num_envs=16)
+        returns = train(learner, mdp, 640)
         online[name] = returns[160:].mean()
     # The book's figure: about -25 for SARSA, about -50 for Q-learning.
     assert online["sarsa"] > online["q-learning"] + 10
@@ -71,7 +71,7 @@ def _episodes_to_optimal(learner: Learner, limit: int) -> int:
     mdp = open_grid()
     done = 0
     while not greedy_is_optimal(learner, mdp) and done < limit:
-        train(learner, mdp, 2, num_envs=1)
+        train(learner, mdp, 2)
         done += 2
     return done
 
@@ -91,7 +91,7 @@ def test_monte_carlo_averages_approach_the_values_of_a_fixed_policy(first_visit:
     hp = {"discount": 1.0, "learning_rate": 1e-6, "epsilon_start": 1.0, "epsilon_final": 1.0,
           "first_visit": first_visit}
     learner = algorithm("monte-carlo")(4, hp, n_states=5, seed=0)
-    train(learner, mdp, 1200, num_envs=16)
+    train(learner, mdp, 1200)
     # Exact: v = mean over actions of (-1 + v(next)), v(goal) = 0; q = -1 + v(next).
     n = mdp.n_states
     system = np.eye(n)

@@ -88,7 +88,8 @@ def test_double_q_keeps_both_tables_and_dyna_q_its_model() -> None:
     again = DynaQ.from_state(_through_a_file(dyna.state()))
     assert np.array_equal(again.model_next, dyna.model_next)
     assert np.array_equal(again.model_reward, dyna.model_reward)
-    assert again._tried[: again._n_tried].tolist() == dyna._tried[: dyna._n_tried].tolist()
+    tried = again.state().arrays["model_tried"]
+    assert tried.tolist() == dyna.state().arrays["model_tried"].tolist()
     assert again.hp.planning_steps == 3
 
 

@@ -8,28 +8,28 @@ from __future__ import annotations
 
 import json
 
-import numpy as np
 import pytest
 from rich.console import Console
 
-from tui_gym.algorithms import QLearning
 from tui_gym.bench import tutorial
+from tui_gym.bench.compiling import CompileResult
+from tui_gym.bench.defaults import DefaultsResult
 from tui_gym.bench.gap import GapResult, GapRun
 from tui_gym.bench.live import KeySample, LiveRepeat, LiveResult
 from tui_gym.bench.memory import MemoryResult
 from tui_gym.bench.report import MISS, PASS, UNDECIDED, notes, table, to_json, verdicts
 from tui_gym.bench.results import BenchResults, MachineInfo
+from tui_gym.bench.speed import Speed
 from tui_gym.bench.startup import StartupResult
-from tui_gym.bench.throughput import ThroughputResult
 from tui_gym.cli import build_parser
 from tui_gym.cli.commands import COMMANDS
 from tui_gym.cli.output import _clean
-from tui_gym.games import game_for
-from tui_gym.games.blackjack.solver import DECISION_MASK, optimal_policy
+from tui_gym.session.session import Session
 
 REQUIRED_KEYS = (
-    "tutorial_episodes_per_second",
-    "engine_episodes_per_second",
+    "cold_compile_s",
+    "warm_load_s",
+    "games",
     "time_to_gap_s",
     "tutorial_time_to_gap_s",
     "live_ratio",
@@ -41,36 +41,40 @@ REQUIRED_KEYS = (
 
 
 # --- the tutorial baseline ------------------------------------------------------
-BLACKJACK = game_for("blackjack")
 
 
-def test_the_tutorial_loop_learns() -> None:
-    agent = tutorial.make_agent(BLACKJACK, {}, QLearning.hyperparameters(episodes=10_000), seed=0)
-    untrained = agent.gap()  # sticks everywhere: about 0.14 below the optimum
-    tutorial.train_episodes(agent, 10_000)
-    trained = agent.gap()
-    assert agent.episode == 10_000
-    assert agent.epsilon == pytest.approx(QLearning.hyperparameters(episodes=10_000).epsilon_final)
-    # 10,000 episodes bring it to about 0.015-0.03 (seeds 0-5); half the start is a wide margin.
-    assert 0 <= trained < untrained / 2
+def test_the_tutorial_loop_learns_with_the_rule_uncompiled() -> None:
+    session = Session("blackjack", hp={"episodes": 3_000}, seed=0, engine="env")
+    untrained = session.reference().figures["gap"]  # ties everywhere: far from the optimum
+    steps = tutorial.play(session, episodes=3_000)
+    assert session.agent.episode == 3_000 and steps >= 3_000
+    assert session.reference().figures["gap"] < untrained / 2
 
 
-def test_the_tutorial_gap_is_exact_for_the_optimal_policy() -> None:
-    agent = tutorial.make_agent(BLACKJACK, {}, QLearning.hyperparameters(), seed=0)
-    best = optimal_policy()
-    for player, dealer, usable in zip(*np.nonzero(DECISION_MASK), strict=True):
-        values = np.zeros(2)
-        values[best[player, dealer, usable]] = 1.0
-        agent.q_values[(int(player), int(dealer), int(usable))] = values
-    assert agent.gap() == pytest.approx(0.0, abs=1e-12)
+def test_the_tutorial_tasks_run_in_a_process_with_nothing_compiled() -> None:
+    rate, gap, learners = tutorial.measure([
+        {"kind": "rate", "game": "frozenlake", "algorithm": "sarsa", "hp": {"episodes": 10**9},
+         "seconds": 0.2, "seed": 0},
+        {"kind": "gap", "game": "blackjack", "kwargs": {}, "hp": {"episodes": 200},
+         "target": 1e-9, "seed": 0, "cap": 60.0, "check_every": 100},
+        {"kind": "learners", "game": "cliffwalking", "algorithms": ["q-learning"],
+         "hp": {"episodes": 3}, "seeds": 2, "episodes": 3},
+    ])
+    assert rate["steps_per_second"] > 0 and rate["seconds"] >= 0.2
+    assert gap["episodes"] == 200 and not gap["reached"] and gap["gap"] > 1e-9
+    assert learners["seconds"] > 0
 
 
-def test_a_capped_tutorial_run_says_it_did_not_reach_the_target() -> None:
-    hp = QLearning.hyperparameters(episodes=2_000)
-    run = tutorial.time_to_gap(1e-9, BLACKJACK, {}, hp, seed=0, check_every=1_000)
-    assert not run.reached
-    assert run.episodes == 2_000
-    assert run.gap > 1e-9
+def test_the_tutorial_trains_to_the_gap_on_the_game_the_bench_names(monkeypatch) -> None:
+    from tui_gym.bench import gap
+    from tui_gym.games import game_for
+
+    asked: list[dict] = []
+    monkeypatch.setattr(tutorial, "measure", lambda tasks: asked.extend(tasks) or [
+        {"seconds": 1.0, "episodes": 1, "gap": 0.0, "reached": True}])
+    lake = game_for("frozenlake")
+    gap.tutorial_runs(lake, [0], 1.0, 0.1)
+    assert asked[0]["kwargs"] == gap.bench_kwargs(lake) and asked[0]["kwargs"]["map"] == "8x8"
 
 
 # --- the report -----------------------------------------------------------------
@@ -91,10 +95,10 @@ def fake_results(
         title="Blackjack",
     )
     thread = LiveResult(
-        "thread", (LiveRepeat(1_600_000, 500_000, 14.0, 13.0, "vector", _keys(100.0)),), 3.0
+        "thread", (LiveRepeat(1_600_000, 500_000, 14.0, 13.0, "model", _keys(100.0)),), 3.0
     )
     process = LiveResult(
-        "process", (LiveRepeat(1_600_000, 1_550_000, 14.5, 14.0, "vector", _keys(20.0)),), 3.0
+        "process", (LiveRepeat(1_600_000, 1_550_000, 14.5, 14.0, "model", _keys(20.0)),), 3.0
     )
     if failed_live:
         thread = LiveResult("thread", (), 3.0, ("TimeoutError: timed out waiting for x",))
@@ -102,11 +106,14 @@ def fake_results(
         quick=True,
         seconds=55.0,
         machine=MachineInfo(2, (1.5, 1.0, 0.5), (1.2, 1.0, 0.5)),
-        throughput={"blackjack": ThroughputResult(15_000.0, 12_000.0, 1_500_000.0, 3, 0.5,
-                                                  "Blackjack")},
+        compile=CompileResult(24.0, 0.9, 0.4),
+        speed=(Speed("blackjack", "sarsa", 2_000_000.0, 15_000.0, 1.5),
+               Speed("blackjack", "dyna-q", 400_000.0, 5_000.0, 1.5)),
         gap={"blackjack": gap},
+        defaults=(DefaultsResult("blackjack", "sarsa", "gap <= 0.005", 39, 40, 0.0061),
+                  DefaultsResult("blackjack", "dyna-q", "gap <= 0.005", 36, 40, 0.009)),
         live={"thread": thread, "process": process},
-        memory=MemoryResult(2_000_000, 100_000, "vector", 40.0, 40.6, 40.7, 1.5),
+        memory=MemoryResult(2_000_000, 100_000, "model", 40.0, 40.6, 40.7, 1.5),
         startup=StartupResult((0.8, 0.9, 0.85)),
     )
 
@@ -123,8 +130,16 @@ def test_the_json_has_every_required_figure() -> None:
     data = json.loads(json.dumps(_clean(to_json(fake_results()))))
     for key in REQUIRED_KEYS:
         assert key in data, key
-    assert set(data["engine_episodes_per_second"]) == {"scalar", "vector"}
-    assert data["engine_episodes_per_second"]["vector"] == 1_500_000.0
+    assert (data["cold_compile_s"], data["warm_load_s"]) == (24.0, 0.4)
+    speed = data["games"]["blackjack"]["speed"]
+    assert [s["speedup"] for s in speed] == pytest.approx([2_000_000 / 15_000, 80.0])
+    assert speed[0]["episodes_per_second"] == pytest.approx(2_000_000 / 1.5)
+    assert data["games"]["blackjack"]["defaults"][0]["share"] == pytest.approx(39 / 40)
+    assert data["verdicts"]["speedup[blackjack/sarsa]"] == PASS
+    assert data["verdicts"]["speedup[blackjack/dyna-q]"] == MISS
+    assert data["verdicts"]["defaults[blackjack/sarsa]"] == PASS
+    assert data["verdicts"]["defaults[blackjack/dyna-q]"] == MISS
+    assert data["verdicts"]["cold_compile_s"] == PASS == data["verdicts"]["warm_load_s"]
     assert data["time_to_gap_s"] == pytest.approx(0.11)
     assert data["tutorial_reached"] is True
     assert data["time_to_gap_speedup"] == pytest.approx(10.0 / 0.11)
@@ -142,7 +157,8 @@ def test_the_json_has_every_required_figure() -> None:
 
 def test_the_table_shows_each_figure_its_target_and_verdict() -> None:
     text = rendered(fake_results())
-    for words in ("tutorial loop", "vector engine", "1,500,000", "time to gap", "≥ 20×",
+    for words in ("tutorial loop", "blackjack, sarsa", "1,333,333", "time to gap", "≥ 50×",
+                  "≥ 100×", "39 of 40", "every learner compiled", "24.0 s",
                   "thread runner", "process runner (default)", "≥ 0.80", "Hz", "p95",
                   "RSS growth", "start to first frame", "PASS", "MISS"):
         assert words in text, words
@@ -156,7 +172,7 @@ def test_a_comparison_runner_that_misses_is_explained() -> None:
 
 def test_a_capped_tutorial_gives_a_lower_bound() -> None:
     decided = fake_results(tutorial_reached=False, tutorial_seconds=15.0)
-    assert verdicts(decided)["time_to_gap[blackjack]"] == PASS  # >= 136x already beats 8x
+    assert verdicts(decided)["time_to_gap[blackjack]"] == PASS  # >= 136x already beats 50x
     assert to_json(decided)["time_to_gap_speedup_is_lower_bound"] is True
     text = rendered(decided)
     assert "≥ 15.0 s (capped)" in text and "lower bounds" in text
@@ -172,11 +188,11 @@ def test_a_failed_stage_is_reported_not_raised() -> None:
     assert data["live_ratio"] is not None  # the default (process) runner still measured
     assert "timed out waiting" in rendered(results)
     empty = BenchResults(quick=False, seconds=1.0, machine=MachineInfo(None, None, None),
-                         errors={"throughput": "RuntimeError: boom"})
+                         errors={"speed": "RuntimeError: boom"})
     data = json.loads(json.dumps(_clean(to_json(empty))))
     for key in REQUIRED_KEYS:
         assert key in data, key
-    assert data["time_to_gap_s"] is None and data["errors"] == {"throughput": "RuntimeError: boom"}
+    assert data["time_to_gap_s"] is None and data["errors"] == {"speed": "RuntimeError: boom"}
     assert "boom" in rendered(empty)
 
 
@@ -189,47 +205,22 @@ def test_the_parser_accepts_bench_quick_json() -> None:
     assert "bench" in COMMANDS
 
 
-# --- per-algorithm figures ----------------------------------------------------------
+# --- planning -----------------------------------------------------------------------
 
 
-def test_every_algorithm_has_a_tutorial_loop_that_learns() -> None:
-    import gymnasium as gym
-
-    from tui_gym.algorithms import ALGORITHMS
-    from tui_gym.bench.tutorial_learners import TutorialLearner
-
-    for cls in ALGORITHMS:
-        env = gym.make("Blackjack-v1")
-        env.reset(seed=0)
-        hp = cls.settings({"episodes": 200})
-        learner = TutorialLearner(env, cls.name, hp, seed=0)
-        for _ in range(200):
-            learner.train_episode()
-        assert learner.episode == 200 and learner.epsilon == hp.epsilon_final
-        assert any(v.any() for v in learner.q.values()), cls.name  # it updated its table
-        env.close()
-
-
-def test_the_algorithm_figures_have_targets_and_verdicts() -> None:
+def test_the_planning_figure_has_a_target_and_a_verdict() -> None:
     from dataclasses import replace
 
-    from tui_gym.bench.learners import AlgorithmSpeed, PlanningResult, PlanningRun
+    from tui_gym.bench.learners import PlanningResult, PlanningRun
 
-    speeds = (AlgorithmSpeed("blackjack", "sarsa", 1_000_000.0, 10_000.0, 3),
-              AlgorithmSpeed("gridworld", "dyna-q", 8_000.0, 200.0, 3))
     planning = PlanningResult(
         "gridworld", "share of pairs", 0.02,
         (PlanningRun("q-learning", 0, 3_000, True),),
         (PlanningRun("dyna-q", 0, 500, True),),
     )
-    results = replace(fake_results(), algorithms=speeds, planning=planning)
-    verdict = verdicts(results)
-    assert verdict["algorithm_speedup[blackjack/sarsa]"] == PASS
-    assert verdict["algorithm_speedup[gridworld/dyna-q]"] == MISS  # 40x
-    assert verdict["planning"] == PASS
+    results = replace(fake_results(), planning=planning)
+    assert verdicts(results)["planning"] == PASS
     data = to_json(results)
-    assert data["algorithms"][0]["speedup"] == pytest.approx(100.0)
     assert (data["planning"]["q_learning_episodes"], data["planning"]["dyna_q_episodes"]) == (
         3_000, 500)
-    text = rendered(results)
-    assert "sarsa on blackjack" in text and "3,000 / 500" in text and "≥ 50×" in text
+    assert "3,000 / 500" in rendered(results)

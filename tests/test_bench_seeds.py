@@ -12,22 +12,26 @@ from tui_gym.bench.seeds import SeedsSpeed
 
 
 def _results(compare_s: float) -> BenchResults:
-    speed = SeedsSpeed("cliffwalking", ("q-learning", "sarsa"), 50, 500, compare_s, 30.0, 20, 2)
+    speed = SeedsSpeed("cliffwalking", ("q-learning", "sarsa"), 50, 500, compare_s, 300.0, 20,
+                       (-55.0, -36.5))
     return BenchResults(quick=True, seconds=1.0, machine=MachineInfo(2, None, None),
                         seeds=speed)
 
 
 def test_the_comparison_figure_has_a_target_a_row_and_json() -> None:
-    fast, slow = _results(1.0), _results(3.0)
+    fast, slow = _results(1.0), _results(4.0)
     assert verdicts(fast)["compare_speedup"] == PASS
     assert verdicts(slow)["compare_speedup"] == MISS
+    assert verdicts(fast)["example_6_6"] == PASS
     data = to_json(fast)["compare"]
-    assert data["speedup"] == 30.0 and data["tutorial_learners_run"] == 20
+    assert data["speedup"] == 300.0 and data["tutorial_learners_run"] == 20
+    assert data["online_return"] == {"q-learning": -55.0, "sarsa": -36.5}
     console = Console(record=True, width=160)
     console.print(table(fast))
     text = console.export_text()
     assert "compare on cliffwalking, 50 seeds × 500 ep" in text
-    assert "30.0× (30.0 s, 20 of 100 run, scaled / 1.00 s)" in text and "≥ 20×" in text
+    assert "300.0× (300.0 s, 20 of 100 run, scaled / 1.00 s)" in text and "≥ 100×" in text
+    assert "-55.0 / -36.5" in text
     whole = replace(fast, seeds=replace(fast.seeds, tutorial_learners=100))
     console = Console(record=True, width=160)
     console.print(table(whole))

@@ -36,7 +36,9 @@ def test_compare_json_shape_csv_and_records(
     for result in data["results"]:
         assert result["hyperparameters"]["learning_rate"] == 0.5
         assert isinstance(result["mean_return_last"], float) and result["ci95"] > 0
-        assert result["exact_value"] is None and result["exact_gap"] is None
+        # Blackjack has an exact model: its greedy policy's exact value and gap.
+        assert result["exact_gap"] == pytest.approx(data["optimum"] - result["exact_value"])
+        assert result["exact_gap"] >= 0 and data["optimum"] == pytest.approx(-0.0465558, abs=1e-6)
         assert len(result["curve"]) == 30
         assert [p["episode"] for p in result["curve"]] == list(range(1, 31))
     lines = csv.read_text().splitlines()

@@ -1,33 +1,48 @@
-"""Comparisons: seeds batched with one table each, aggregated, recorded, stopped cleanly."""
+"""Comparisons: every seed its own learner (the run `train --seed` makes), aggregated,
+recorded, stopped cleanly, the same in child processes; exact figures wherever the game
+has a model, Blackjack included."""
 
 from __future__ import annotations
 
 import threading
 
+import gymnasium as gym
 import numpy as np
 import pytest
 
+from tui_gym.algorithms import algorithm
+from tui_gym.core.engine.loop import ModelArrays
+from tui_gym.core.engine.seeds import checkpoint_episodes, greedy_values, play_learner
 from tui_gym.core.experiments import RunHistory, RunKind, RunStatus
-from tui_gym.core.experiments.seed_batch import checkpoint_episodes, greedy_values
-from tui_gym.core.mdp import FiniteMDP, evaluate, greedy_policy, solve
+from tui_gym.core.mdp import (
+    FiniteMDP,
+    evaluate,
+    greedy_policy,
+    model_from_env,
+    solve,
+    with_horizon,
+)
+from tui_gym.session.experiments import compare
 from tui_gym.session.experiments.compare import CompareProgress, CompareSpec, run_compare
-
-from .seed_batches import cliff_model
-from .seed_batches import seed_batch as _batch
+from tui_gym.session.session import Session
 
 
 @pytest.fixture(scope="module")
 def cliff() -> FiniteMDP:
-    return cliff_model()
+    env = gym.make("CliffWalking-v1", max_episode_steps=200)
+    model = model_from_env(env)
+    env.close()
+    assert isinstance(model, FiniteMDP)
+    return model
 
 
 @pytest.mark.parametrize("dense_states", [0, 256])
 def test_greedy_values_agree_with_policy_evaluation(
     cliff: FiniteMDP, dense_states: int, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from tui_gym.core.experiments import seed_batch
+    from tui_gym.core.engine import seeds
 
-    monkeypatch.setattr(seed_batch, "_DENSE_STATES", dense_states)
+    monkeypatch.setattr(seeds, "_DENSE_STATES", dense_states)
     rng = np.random.default_rng(0)
     q = rng.integers(-3, 1, size=(4, cliff.n_states, cliff.n_actions)).astype(float)
     # Tables with no ties: their paths are walked (one that loops runs into the limit).
@@ -35,6 +50,17 @@ def test_greedy_values_agree_with_policy_evaluation(
     values = greedy_values(cliff, q)
     for table, value in zip(q, values, strict=True):
         assert value == pytest.approx(evaluate(cliff, greedy_policy(table)).value)
+
+
+def test_greedy_values_with_no_limit_agree_with_policy_evaluation(cliff: FiniteMDP) -> None:
+    # Blackjack's hands cannot loop: every policy is valued by backward steps at once.
+    # CliffWalking's can: each is valued on its own (minus infinity when it never ends).
+    training = Session("blackjack").training
+    assert training is not None and training.model.horizon is None
+    for model in (training.model, with_horizon(cliff, None)):
+        q = np.random.default_rng(1).normal(size=(3, model.n_states, model.n_actions))
+        for table, value in zip(q, greedy_values(model, q), strict=True):
+            assert value == pytest.approx(evaluate(model, greedy_policy(table)).value)
 
 
 def test_checkpoints_end_on_the_last_episode() -> None:
@@ -46,45 +72,47 @@ def test_sarsa_walks_safer_than_q_learning_on_the_cliff(cliff: FiniteMDP) -> Non
     # Sutton & Barto, Example 6.6: with epsilon 0.1, SARSA's online return is above
     # Q-learning's, while Q-learning's greedy policy is the optimal one along the edge.
     hp = {"epsilon_start": 0.1, "epsilon_final": 0.1, "learning_rate": 0.5,
-          "learning_rate_schedule": "constant"}
-    q = _batch("q-learning", cliff, 4, 80, **hp)
-    sarsa = _batch("sarsa", cliff, 4, 80, **hp)
-    assert q.run() and sarsa.run()
-    assert (q.done == 80).all() and not np.isnan(q.returns).any()
-    last_q, last_sarsa = q.returns[:, -30:].mean(), sarsa.returns[:, -30:].mean()
-    assert last_sarsa > last_q + 10
-    assert q.exact is not None
-    assert q.exact[:, -1].mean() == pytest.approx(solve(cliff).value)
+          "learning_rate_schedule": "constant", "episodes": 200}
+    arrays = ModelArrays.of(cliff)
+    online: dict[str, float] = {}
+    for name in ("q-learning", "sarsa"):
+        runs = []
+        for seed in range(4):
+            learner = algorithm(name)(4, hp, n_states=cliff.n_states, seed=seed)
+            returns, tables = play_learner(learner, arrays, 200, [200])
+            runs.append(returns[-100:].mean())
+            if name == "q-learning":
+                assert greedy_values(cliff, np.stack(tables))[0] == solve(cliff).value
+        online[name] = float(np.mean(runs))
+    assert online["sarsa"] > online["q-learning"] + 10
 
 
-def test_each_seed_is_its_own_learner(cliff: FiniteMDP) -> None:
-    batch = _batch("q-learning", cliff, 3, 5)
-    steps = np.zeros(3, dtype=np.int64)
-    step = batch.steps.step
-
-    def counted(envs: np.ndarray, actions: np.ndarray) -> tuple[np.ndarray, ...]:
-        steps[envs] += 1
-        return step(envs, actions)
-
-    batch.steps.step = counted  # type: ignore[method-assign]
-    batch.run()
-    # Seed i's updates all land in its own rows: one per step it took.
-    counts = batch.learner.counts.reshape(3, cliff.n_states, -1).sum(axis=(1, 2))
-    np.testing.assert_array_equal(counts, steps)
-    assert (batch.done == 5).all()
+def test_a_seed_runs_the_same_in_a_comparison_and_in_train() -> None:
+    spec = CompareSpec("frozenlake", ["expected-sarsa"], 1, 300, first_seed=7)
+    (outcome,) = run_compare(spec, processes=0).outcomes
+    session = Session("frozenlake", algorithm="expected-sarsa", hp={"episodes": 300}, seed=7)
+    learner = algorithm("expected-sarsa")(4, session.hp, n_states=16, seed=7)
+    returns, _ = play_learner(learner, session.trainer.model, 300)
+    np.testing.assert_array_equal(outcome.curve.mean, returns)
+    session.trainer.run(episodes=300)
+    np.testing.assert_array_equal(session.agent.q, learner.q)
 
 
-def test_a_stopped_batch_keeps_the_episodes_it_finished(cliff: FiniteMDP) -> None:
-    batch = _batch("sarsa", cliff, 4, 1000)
+def test_a_stopped_job_keeps_the_episodes_it_finished() -> None:
+    spec = CompareSpec("cliffwalking", ["sarsa"], 3, 1000)
+    setup = compare.Setup("cliffwalking", 3, 1000, {}, (), 0)
+    arms = [compare.Arm("sarsa", {}, "sarsa")]
+    prepared = compare.prepare(setup, arms)
+    (job,) = compare._jobs(setup, arms, prepared, 0, 3)
     calls = iter(range(1_000_000))
-    complete = batch.run(stop=lambda: next(calls) >= 20)
-    assert not complete
-    state = batch.state()
-    assert (state.done < 1000).all()
-    for seed in range(4):
-        played = state.returns[seed, : state.done[seed]]
-        assert not np.isnan(played).any()
-        assert np.isnan(state.returns[seed, state.done[seed]:]).all()
+    tally = compare._Tally(setup, arms, prepared)
+    (job,) = tally.add([job])
+    tally.take(job.index, compare._run_job(job, lambda: next(calls) >= 5, lambda _: None))
+    assert spec.seeds == 3 and 0 < tally.count() < 3000 and not tally.finished(job)
+    for seed in range(3):
+        done = tally.done[0, seed]
+        assert not np.isnan(tally.returns[0, seed, :done]).any()
+        assert np.isnan(tally.returns[0, seed, done:]).all()
 
 
 def test_settings_go_only_where_they_belong() -> None:
@@ -116,7 +144,9 @@ def test_compare_output_shape_and_records(tmp_path) -> None:
         assert len(entry["curve"]) == 40
         assert set(entry["curve"][0]) == {"episode", "mean", "lo", "hi"}
         assert entry["curve"][0]["lo"] <= entry["curve"][0]["mean"] <= entry["curve"][0]["hi"]
-        assert entry["exact_value"] is None  # Blackjack has no transition table
+        assert -0.5 < entry["exact_value"] < data["optimum"] < entry["exact_value"] + 0.5
+        assert entry["exact_gap"] == pytest.approx(data["optimum"] - entry["exact_value"])
+    assert data["optimum"] == pytest.approx(-0.046556, abs=1e-6)  # the exact optimum
     assert not result.interrupted and seen and seen[-1].done == seen[-1].total == 240
     # One run per algorithm, kind compare, the first one's id as the group.
     assert len(records) == 2
@@ -126,7 +156,8 @@ def test_compare_output_shape_and_records(tmp_path) -> None:
         assert record.summary.kind is RunKind.COMPARE
         assert record.summary.status is RunStatus.FINISHED
         assert record.summary.seeds == (5, 6, 7)
-        assert {c.name for c in record.curves} == {"return", "return.lo", "return.hi"}
+        assert {c.name for c in record.curves} >= {"return", "return.lo", "return.hi",
+                                                   "exact_value"}
         assert record.summary.figure("mean_return_last") is not None
         if record.id != first.id:
             assert record.summary.group == first.id
@@ -138,14 +169,18 @@ def test_compare_output_shape_and_records(tmp_path) -> None:
 
 @pytest.fixture
 def quick_progress(monkeypatch: pytest.MonkeyPatch) -> None:
-    from tui_gym.session.experiments import compare
-
     monkeypatch.setattr(compare, "PROGRESS_INTERVAL", 0.02)
+
+
+@pytest.fixture
+def spread(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Seeds after the first go to child processes however short the work."""
+    monkeypatch.setattr(compare, "SPREAD_SECONDS", 0.0)
 
 
 @pytest.mark.usefixtures("quick_progress")
 def test_stop_keeps_and_records_what_finished(tmp_path) -> None:
-    spec = CompareSpec("blackjack", ["q-learning"], 2, 100_000)
+    spec = CompareSpec("blackjack", ["q-learning"], 1, 2_000_000)
     stop = threading.Event()
 
     def progress(update: CompareProgress) -> None:
@@ -158,22 +193,23 @@ def test_stop_keeps_and_records_what_finished(tmp_path) -> None:
         record = history.get_run(run.id)
     assert result.interrupted
     (outcome,) = result.outcomes
-    assert 1 <= outcome.episodes < 100_000 and outcome.seeds_done == 0
+    assert 1 <= outcome.episodes < 2_000_000 and outcome.seeds_done == 0
     assert record.summary.status is RunStatus.INTERRUPTED
     assert record.curve("return") is not None
 
 
-def test_batches_in_child_processes_match_the_calling_thread() -> None:
-    spec = CompareSpec("blackjack", ["q-learning", "sarsa"], 2, 30)
+@pytest.mark.usefixtures("spread")
+def test_seeds_in_child_processes_match_the_calling_thread() -> None:
+    spec = CompareSpec("blackjack", ["q-learning", "sarsa"], 3, 30)
     here = run_compare(spec, processes=0)
     there = run_compare(spec, processes=2)
     for a, b in zip(here.outcomes, there.outcomes, strict=True):
         np.testing.assert_array_equal(a.curve.mean, b.curve.mean)
 
 
-@pytest.mark.usefixtures("quick_progress")
-def test_stop_reaches_batches_in_child_processes(tmp_path) -> None:
-    spec = CompareSpec("blackjack", ["q-learning", "sarsa"], 2, 100_000)
+@pytest.mark.usefixtures("quick_progress", "spread")
+def test_stop_reaches_seeds_in_child_processes(tmp_path) -> None:
+    spec = CompareSpec("taxi", ["q-learning", "sarsa"], 1, 1_000_000)
     stop = threading.Event()
 
     def progress(update: CompareProgress) -> None:
@@ -184,11 +220,11 @@ def test_stop_reaches_batches_in_child_processes(tmp_path) -> None:
         result = run_compare(spec, progress=progress, stop=stop, history=history, processes=2)
         statuses = {r.status for r in history.list_runs()}
     assert result.interrupted and len(result.outcomes) == 2
-    assert all(1 <= o.episodes < 100_000 for o in result.outcomes)
+    assert all(1 <= o.episodes < 1_000_000 for o in result.outcomes)
     assert statuses == {RunStatus.INTERRUPTED}
 
 
-def test_wrappers_without_a_batched_form_play_seed_by_seed() -> None:
+def test_wrappers_no_model_follows_play_seed_by_seed_on_the_env() -> None:
     from tui_gym.core.wrappers import parse_wrapper_spec
 
     spec = CompareSpec("blackjack", ["sarsa"], 2, 6,

@@ -23,9 +23,9 @@ TOLERANCE = 0.005
 @pytest.mark.parametrize(
     "engine",
     [
-        "auto",  # what `tui-gym train blackjack` runs: the vector engine, well under a second
-        # The whole default budget on the scalar trainer: about 20 s, so opt-in (TUI_GYM_SLOW=1).
-        pytest.param("scalar", marks=pytest.mark.slow),
+        "auto",  # what `tui-gym train blackjack` runs: the compiled loop on the model
+        # The whole default budget on the env, one step at a time: opt-in (TUI_GYM_SLOW=1).
+        pytest.param("env", marks=pytest.mark.slow),
     ],
 )
 def test_default_blackjack_training_is_within_tolerance_of_the_optimum(
@@ -38,7 +38,7 @@ def test_default_blackjack_training_is_within_tolerance_of_the_optimum(
     out, err = capsys.readouterr()
     assert code == 0, err
     data = json.loads(out)
-    assert data["engine"] == ("vector" if engine == "auto" else engine)
+    assert data["engine"] == ("model" if engine == "auto" else engine)
     assert data["episodes"] == QLearning.hyperparameters().episodes  # the default budget, all of it
     evaluation = data["eval"]
     assert evaluation["optimal_value"] == pytest.approx(-0.0466, abs=5e-5)
@@ -67,3 +67,12 @@ def test_blackjack_defaults_are_undiscounted_with_visit_count_step_sizes() -> No
     ):
         assert hp.discount == 1.0
         assert hp.learning_rate_schedule == "visits"
+
+
+def test_train_says_why_a_run_ends_short_of_the_bound(capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["train", "cliffwalking", "--algorithm", "sarsa", "--no-record",
+                 "--eval-episodes", "10"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert "It ends short of the bound (gap <= 0.13" in " ".join(out.split())
+    assert "Example 6.6" in out

@@ -4,8 +4,8 @@ Every game builds, keys its base states, round-trips through a save file,
 plays one episode through the CLI, the JSON-lines protocol and the app, and
 with its default hyperparameters trains to the bound its oracle states.
 Where a game has an exact value, the sampled returns of a fixed policy on the
-real env and on the batched form agree with it within a bound computed from
-the sample (four standard errors); a model read from a transition table
+real env and on the model the engine trains on agree with it within a bound
+computed from the sample (four standard errors); a model read from a transition table
 agrees with the env's every move. Sample sizes are small: a bound from the
 sample size is as strict as the sample allows, and the suite stays fast.
 """
@@ -23,9 +23,9 @@ import numpy as np
 import pytest
 from textual.binding import Binding
 
+from tests.mdp_support import sampled_returns
 from tui_gym.cli import main
 from tui_gym.core.mdp import NotAvailable
-from tui_gym.core.vector import BatchedForm
 from tui_gym.core.wrappers import parse_wrapper_spec
 from tui_gym.games import GAMES, Game, game_for
 from tui_gym.games.model import ModelGame
@@ -121,7 +121,7 @@ def test_base_states_have_keys_and_heatmaps(game: Game) -> None:
 
 @pytest.mark.parametrize("game", GAMES, ids=IDS)
 def test_save_and_load_round_trip(game: Game, tmp_path) -> None:
-    session = _session(game.name, engine="scalar")
+    session = _session(game.name, engine="env")
     session.trainer.run(episodes=15)
     loaded = Session.load(session.save(tmp_path / "agent.tgym"))
     assert (loaded.env_id, loaded.env_kwargs) == (session.env_id, session.env_kwargs)
@@ -141,7 +141,7 @@ def test_default_training_reaches_the_stated_bound(game: Game) -> None:
 
 @pytest.mark.parametrize("game", GAMES, ids=IDS)
 def test_the_cli_trains_and_plays(game: Game, capsys, monkeypatch) -> None:
-    code = main(["train", game.name, "--episodes", "3", "--engine", "scalar",
+    code = main(["train", game.name, "--episodes", "3", "--engine", "env",
                  "--eval-episodes", "2", "--json"])
     data = json.loads(capsys.readouterr().out)
     assert code == 0 and data["episodes"] == 3
@@ -218,7 +218,7 @@ async def test_a_person_plays_one_episode_of_every_game_in_the_app() -> None:
 # --- exact values against play ---------------------------------------------------
 
 
-def _play_scalar(session: Session, q: np.ndarray, episodes: int) -> np.ndarray:
+def _play_env(session: Session, q: np.ndarray, episodes: int) -> np.ndarray:
     """Returns of `episodes` episodes of the real env, greedy on `q` (rows: base states)."""
     rows = _policy_rows(session)
     env = session.make_env()
@@ -238,26 +238,19 @@ def _play_scalar(session: Session, q: np.ndarray, episodes: int) -> np.ndarray:
     return returns
 
 
-def _play_batched(session: Session, q: np.ndarray, episodes: int) -> np.ndarray:
-    """The same policy played on the game's batched form, `episodes` at once."""
-    form = session.game.batched_form(session.env_kwargs)
-    assert isinstance(form, BatchedForm)
-    venv = form.make(episodes, 5, session.changes.time_limit)
+def _play_model(session: Session, q: np.ndarray, episodes: int) -> np.ndarray:
+    """The same policy played on the model the engine trains on, `episodes` at once."""
+    training = session.training
+    assert training is not None, session.engine_reason
+    model = training.model
+    rows = np.arange(model.n_states) if training.rows is None else training.rows
     keys = session.base_keys()
     assert keys is not None
-    row_of = np.full(session.keyer.n_states, -1)
-    row_of[np.asarray(keys)] = np.arange(len(keys))
-    obs = venv.reset()
-    live = np.arange(episodes)
-    returns = np.zeros(episodes)
-    while live.size:
-        rows = row_of[session.keyer.keys(obs)]
-        actions = np.where(rows >= 0, np.argmax(q[np.maximum(rows, 0)], axis=1), 0)
-        step = venv.step(actions.astype(np.int64), live, autoreset=False)
-        returns[live] += step.reward  # no wrappers here: the bare rewards
-        going = ~(step.terminated | step.truncated)
-        live, obs = live[going], step.next_obs[going]
-    return returns
+    base_of = np.full(session.keyer.n_states, -1)
+    base_of[np.asarray(keys)] = np.arange(len(keys))
+    bases = base_of[rows]
+    policy = np.where(bases >= 0, np.argmax(q[np.maximum(bases, 0)], axis=1), 0)
+    return sampled_returns(model, policy, episodes, np.random.default_rng(5), max_steps=1000)
 
 
 def _exact_value(session: Session, q: np.ndarray) -> float | None:
@@ -277,19 +270,19 @@ def test_sampled_returns_of_a_fixed_policy_agree_with_its_exact_value(
     q = _optimal_q(session)
     exact = _exact_value(session, q)
     assert exact is not None
-    _within(_play_scalar(session, q, 300), exact)
-    # The vector engine plays one model with its mean rewards: not a world that changes,
+    _within(_play_env(session, q, 300), exact)
+    # The compiled loop plays one model with its mean rewards: not a world that changes,
     # nor rewards drawn with noise (the env loop trains those).
-    if not isinstance(session.game.batched_form(session.env_kwargs), NotAvailable):
-        _within(_play_batched(session, q, 4000), exact)
+    if session.training is not None:
+        _within(_play_model(session, q, 4000), exact)
 
 
-def test_grid_batched_form_agrees_with_the_scalar_env() -> None:
+def test_the_grid_model_agrees_with_the_env() -> None:
     session = _session("gridworld")
     q = _optimal_q_grid(session)
-    scalar, batched = _play_scalar(session, q, 200), _play_batched(session, q, 4000)
+    played, model = _play_env(session, q, 200), _play_model(session, q, 4000)
     # The shortest-path policy reaches the target from every placement: both pay 1.
-    assert scalar.min() == scalar.max() == batched.min() == batched.max() == 1.0
+    assert played.min() == played.max() == model.min() == model.max() == 1.0
 
 
 def _optimal_q_grid(session: Session) -> np.ndarray:

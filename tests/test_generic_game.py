@@ -39,7 +39,7 @@ def test_the_env_is_a_generic_game_with_an_exact_optimum() -> None:
     session.train()
     reference = session.reference()
     assert reference is not None and reference.figures["gap"] < 0.01
-    assert session.trainer.engine == "vector"
+    assert session.trainer.engine == "model"
     panels = session.heatmaps()
     assert panels and panels[0].shape == (5, 2)
 

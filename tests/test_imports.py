@@ -6,6 +6,10 @@ those under `if TYPE_CHECKING:` left out (they never run). Then:
 
 - nothing under `core/`, `games/`, `algorithms/` or `envs/` imports `textual`;
 - nothing under `ui/` imports `gymnasium`;
+- the layers of DESIGN.md: `core/` imports neither games, algorithms, the
+  composition (`session/`) nor a front end (`ui/`, `cli/`); `games/` and
+  `algorithms/` import neither the composition nor a front end; `session/`
+  imports no front end;
 - nothing outside `games/` and `envs/` names a game: no game's module is
   imported from outside `games/` (the registry is the way in);
 - the modules of `tui_gym` import one another without cycles.
@@ -104,6 +108,25 @@ def test_no_game_module_is_imported_from_outside_games(graph) -> None:
         if _layer(module) != "games"
         and imported.startswith("tui_gym.games.")
         and imported.split(".")[2] in GAME_PACKAGES
+    )
+    assert not offenders, offenders
+
+
+# Which layers each layer may not import (DESIGN.md's rules of the house).
+FORBIDDEN = {
+    "core": ("games", "algorithms", "session", "ui", "cli"),
+    "games": ("session", "ui", "cli"),
+    "algorithms": ("session", "ui", "cli"),
+    "session": ("ui", "cli"),
+}
+
+
+def test_the_layers_import_only_downwards(graph) -> None:
+    offenders = sorted(
+        f"{module} imports {imported}"
+        for module, imported_set in graph.items()
+        for imported in imported_set
+        if imported.startswith("tui_gym.") and _layer(imported) in FORBIDDEN.get(_layer(module), ())
     )
     assert not offenders, offenders
 

@@ -34,7 +34,7 @@ def test_one_step_is_one_transition_explained(name: str) -> None:
         record = event.last_update
         assert record is not None and record.algorithm == name
         assert record.action == event.action and record.reward == event.reward
-        assert runner.session.trainer.engine == "scalar"
+        assert runner.session.trainer.engine == "env"
     finally:
         runner.close()
 

@@ -168,26 +168,27 @@ def test_the_edit_to_optimum_figure_exists() -> None:
     assert set(verdicts(found)) >= {"map_edit_ms[FrozenLake]", "map_edit_ms[CliffWalking]"}
 
 
-def test_batched_gridworld_steps_round_walls_as_the_env_does() -> None:
+def test_the_walled_gridworld_model_moves_round_walls_as_the_env_does() -> None:
+    from tui_gym.core.obskey import ObservationKeyer
+    from tui_gym.core.wrappers.changes import NO_CHANGES
     from tui_gym.envs.gridworld import GridWorldEnv
-    from tui_gym.games.gridworld.batched import BatchedGridWorld
+    from tui_gym.games.gridworld.model import gridworld_model
 
     walls = ((2, 1), (2, 2), (1, 3))
-    batch = BatchedGridWorld(200, size=5, walls=walls, seed=1)
-    start = batch.reset()
-    assert not any(tuple(r[:2]) in walls or tuple(r[2:]) in walls for r in start.tolist())
+    model = gridworld_model(5, 1.0, 0.0, NO_CHANGES, walls)
     env = GridWorldEnv(size=5, walls=walls)
+    keyer = ObservationKeyer(env.observation_space)
+    starts = np.flatnonzero(model.initial)
+    placements = [keyer.decode(int(s)) for s in starts]
+    assert not any(p[:2] in walls or p[2:] in walls for p in placements)
     rng = np.random.default_rng(0)
-    for _ in range(10):
-        actions = rng.integers(0, 4, size=200)
-        before = batch.state.copy()
-        step = batch.step(actions)
-        for i in range(0, 200, 7):
-            env.reset(options={"agent": tuple(before[i, :2]), "target": tuple(before[i, 2:])})
-            obs, reward, terminated, _, info = env.step(int(actions[i]))
-            assert tuple(obs["agent"]) == tuple(step.next_obs[i, :2])
-            assert (reward, terminated) == (step.reward[i], step.terminated[i])
-            assert info["distance"] == step.info["distance"][i]
+    for state in rng.choice(starts, size=60):
+        ax, ay, tx, ty = keyer.decode(int(state))
+        action = int(rng.integers(4))
+        env.reset(options={"agent": (ax, ay), "target": (tx, ty)})
+        obs, reward, terminated, _, _ = env.step(action)
+        assert model.outcomes(int(state), action) == [
+            (1.0, keyer.key(obs), reward, terminated)]
 
 
 def test_train_and_play_on_a_map_file(tmp_path: Path, capsys, monkeypatch) -> None:

@@ -1,4 +1,4 @@
-"""BatchSampler: batched steps and resets that agree in distribution with the env."""
+"""The engine's one sampler: outcomes and starts that agree in distribution with the env."""
 
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from tests.mdp_support import sampled_returns, within_standard_errors
-from tui_gym.core.mdp import BatchSampler, FiniteMDP, evaluate, model_from_env, solve
+from tui_gym.core.engine.loop import ModelArrays, sample_outcome, sample_start
+from tui_gym.core.mdp import FiniteMDP, evaluate, model_from_env, solve
 
 
 def frequencies_agree(counts: dict, expected: dict, n: int, sigmas: float = 5.0) -> bool:
@@ -23,6 +24,18 @@ def frequencies_agree(counts: dict, expected: dict, n: int, sigmas: float = 5.0)
     return True
 
 
+def draws(model: FiniteMDP, state: int, action: int, n: int, rng) -> list[tuple]:
+    """`n` outcomes of one state-action pair drawn by the engine's sampler."""
+    arrays = ModelArrays.of(model)
+    base = (state * model.n_actions + action) * arrays.outcomes
+    found = []
+    for _ in range(n):
+        at = base + sample_outcome(arrays.cumulative, arrays.guide, base, arrays.outcomes, rng)
+        found.append((int(arrays.next_state[at]), float(arrays.reward[at]),
+                      bool(arrays.terminal[at])))
+    return found
+
+
 def table_distribution(table, state, action) -> dict:
     merged = defaultdict(float)
     for p, nxt, reward, terminated in table[state][action]:
@@ -34,24 +47,15 @@ def table_distribution(table, state, action) -> dict:
 def test_every_state_action_follows_the_table(map_name):
     env = gym.make("FrozenLake-v1", map_name=map_name, is_slippery=True)
     model = model_from_env(env)
-    sampler = BatchSampler(model)
-    n = 3000
-    pairs = np.array([(s, a) for s in range(model.n_states) for a in range(model.n_actions)])
-    states = np.repeat(pairs[:, 0], n)
-    actions = np.repeat(pairs[:, 1], n)
-    step = sampler.step(states, actions, np.random.default_rng(0))
-    for index, (state, action) in enumerate(pairs):
-        rows = slice(index * n, (index + 1) * n)
-        counts = defaultdict(int)
-        for key in zip(
-            step.next_state[rows].tolist(),
-            step.reward[rows].tolist(),
-            step.terminated[rows].tolist(),
-            strict=True,
-        ):
-            counts[key] += 1
-        expected = table_distribution(env.unwrapped.P, state, action)
-        assert frequencies_agree(counts, expected, n), (state, action, dict(counts))
+    n = 1500
+    rng = np.random.default_rng(0)
+    for state in range(model.n_states):
+        for action in range(model.n_actions):
+            counts = defaultdict(int)
+            for key in draws(model, state, action, n, rng):
+                counts[key] += 1
+            expected = table_distribution(env.unwrapped.P, state, action)
+            assert frequencies_agree(counts, expected, n), (state, action, dict(counts))
 
 
 def test_the_real_env_follows_the_model():
@@ -73,9 +77,11 @@ def test_the_real_env_follows_the_model():
 
 def test_resets_follow_the_initial_distribution():
     model = model_from_env(gym.make("Taxi-v4"))
-    sampler = BatchSampler(model)
+    arrays = ModelArrays.of(model)
     n = 60_000
-    starts = sampler.reset(n, np.random.default_rng(1))
+    rng = np.random.default_rng(1)
+    starts = np.array([sample_start(arrays.starts, arrays.start_cumulative, rng)
+                       for _ in range(n)])
     counts = np.bincount(starts, minlength=model.n_states)
     assert (counts[model.initial == 0] == 0).all()
     expected = n * model.initial
@@ -99,40 +105,43 @@ def test_an_impossible_outcome_is_never_drawn():
         initial=[1.0, 0.0],
     )
     for m in (model, padded):
-        step = BatchSampler(m).step(
-            np.zeros(20_000, dtype=int), np.zeros(20_000, dtype=int), np.random.default_rng(2)
-        )
-        assert set(step.reward.tolist()) == {1.0, 2.0}
-        assert abs(step.terminated.mean() - 0.5) < 0.02
+        found = draws(m, 0, 0, 20_000, np.random.default_rng(2))
+        assert {r for _, r, _ in found} == {1.0, 2.0}
+        assert abs(np.mean([t for _, _, t in found]) - 0.5) < 0.02
+
+
+def test_among_many_outcomes_the_guide_finds_the_outcome_the_scan_finds():
+    # Jack's car rental (441 outcomes a move) and a row of many outcomes where every
+    # other one is impossible: each draw is the first outcome whose cumulative
+    # probability exceeds u, as a scan from the first finds it.
+    from tui_gym.games import game_for
+
+    rental = game_for("car-rental").base_model({})
+    k = 40
+    prob = np.zeros((1, 1, k))
+    prob[0, 0, ::2] = np.linspace(1.0, 3.0, k // 2)
+    prob /= prob.sum()
+    sparse = FiniteMDP(np.zeros((1, 1, k), dtype=np.int64), prob, np.arange(k)[None, None, :],
+                       np.ones((1, 1, k), dtype=bool), [1.0])
+    for model, pairs in ((rental, range(0, rental.n_states * rental.n_actions, 97)),
+                         (sparse, [0])):
+        arrays = ModelArrays.of(model)
+        assert arrays.outcomes > 16
+        for pair in pairs:
+            base = pair * arrays.outcomes
+            row = arrays.cumulative[base: base + arrays.outcomes]
+            drawn, again = np.random.default_rng(pair), np.random.default_rng(pair)
+            for _ in range(300):
+                scanned = min(int(np.searchsorted(row, again.random(), side="right")),
+                              arrays.outcomes - 1)
+                assert sample_outcome(arrays.cumulative, arrays.guide, base,
+                                      arrays.outcomes, drawn) == scanned
 
 
 def test_the_same_seed_gives_the_same_draws():
     model = model_from_env(gym.make("FrozenLake-v1"))
-    sampler = BatchSampler(model)
-    states = np.arange(16).repeat(4)
-    actions = np.tile(np.arange(4), 16)
-    first = sampler.step(states, actions, np.random.default_rng(9))
-    second = sampler.step(states, actions, np.random.default_rng(9))
-    np.testing.assert_array_equal(first.next_state, second.next_state)
-    np.testing.assert_array_equal(
-        sampler.reset(10, np.random.default_rng(3)), sampler.reset(10, np.random.default_rng(3))
-    )
-
-
-@pytest.mark.parametrize(
-    ("states", "actions", "message"),
-    [
-        (np.array([0, 1]), np.array([0]), "one length"),
-        (np.array([[0]]), np.array([[0]]), "1-D"),
-        (np.array([0.0]), np.array([0]), "states must be integers"),
-        (np.array([16]), np.array([0]), "states must be in \\[0, 15\\]"),
-        (np.array([0]), np.array([-1]), "actions must be in \\[0, 3\\]"),
-    ],
-)
-def test_bad_input_is_refused(states, actions, message):
-    sampler = BatchSampler(model_from_env(gym.make("FrozenLake-v1")))
-    with pytest.raises(ValueError, match=message):
-        sampler.step(states, actions, np.random.default_rng(0))
+    assert draws(model, 5, 2, 200, np.random.default_rng(9)) == draws(
+        model, 5, 2, 200, np.random.default_rng(9))
 
 
 @pytest.mark.parametrize(

@@ -2,8 +2,9 @@
 
 The exact optimum, the value of a policy and the advice are computed for the
 game as its wrappers make it where that can be done exactly, and checked here
-against games actually played (the batched engine's cards with the wrappers'
-own reward code, or `Session.evaluate`, the `tui-gym eval` path). Where a
+against games actually played (hands drawn from the model the engine trains
+on, its rewards passed through the wrappers' own reward code, or
+`Session.evaluate`, the `tui-gym eval` path). Where a
 wrapper changes the game beyond them, nothing claims an optimum. An agent
 that has not learned breaks its ties at random, and its exact figures are
 those of what it does. Every sample is seeded.
@@ -16,9 +17,9 @@ import math
 import numpy as np
 import pytest
 
+from tests.mdp_support import sampled_returns
 from tui_gym.algorithms import QLearning
 from tui_gym.core.wrappers import parse_wrapper_spec
-from tui_gym.games.blackjack.batched import BatchedBlackjack
 from tui_gym.games.blackjack.solver import (
     POLICY_SHAPE,
     mixed_policy_value,
@@ -47,25 +48,16 @@ def session(env: str, *wrappers: str, **env_kwargs) -> Session:
 
 
 def play_blackjack(session: Session, hit: np.ndarray, n: int, seed: int) -> np.ndarray:
-    """Returns of `n` hands of the bare game's cards, hitting with probability `hit`,
-    each step's reward passed through the session's wrappers' own code."""
-    rules = session.game.oracle.rules(session.env_kwargs)
-    env = BatchedBlackjack(n, rules, seed=seed)
-    rng = np.random.default_rng(seed + 1)
-
-    def reward(bare: np.ndarray) -> np.ndarray:  # the wrappers' code, once per distinct reward
-        values, where = np.unique(bare, return_inverse=True)
-        return np.array([session.changes.reward(v) for v in values])[where]
-
-    obs, live, returns = env.reset(), np.arange(n), np.zeros(n)
-    while live.size:
-        p = hit[obs[:, 0], obs[:, 1], obs[:, 2]]
-        actions = (rng.random(len(live)) < p).astype(np.int64)
-        result = env.step(actions, live, autoreset=False)
-        returns[live] += reward(result.reward)
-        going = ~result.done
-        live, obs = live[going], result.next_obs[going]
-    return returns
+    """Returns of `n` hands drawn from the model the session trains on (its rewards the
+    wrappers' own code made), hitting with probability `hit` (indexed by observation)."""
+    training = session.training
+    assert training is not None and training.rows is not None
+    rest, usable = np.divmod(training.rows, 2)
+    total, dealer = np.divmod(rest, 11)
+    p = hit[total, dealer, usable]
+    policy = np.column_stack([1.0 - p, p])
+    return sampled_returns(training.model, policy, n, np.random.default_rng(seed),
+                           max_steps=30)
 
 
 def assert_close(returns: np.ndarray, exact: float) -> None:

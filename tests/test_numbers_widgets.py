@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 from textual.app import App, ComposeResult
 
-from tui_gym.core.training import SERIES_NAMES, TrainingSnapshot
+from tui_gym.core.engine.stats import TrainingSnapshot
+from tui_gym.core.engine.trainer import SERIES_NAMES
 from tui_gym.games.base import ReferenceMetrics, Scope
 from tui_gym.ui.widgets.numbers import compact_count, fit, number_forms
 from tui_gym.ui.widgets.progress_line import ProgressLine
@@ -39,7 +40,7 @@ def drawn(widget) -> list[str]:
 
 def snapshot(**changes) -> TrainingSnapshot:
     fields = dict(
-        engine="vector", episodes=0, steps=0, seconds=0.0, episodes_per_second=0.0,
+        engine="model", episodes=0, steps=0, seconds=0.0, episodes_per_second=0.0,
         epsilon=1.0, mean_return=0.0, mean_length=0.0, mean_abs_td=0.0, window=1000,
         series={name: () for name in SERIES_NAMES}, q=np.zeros((1, 2)), keys=None,
         budget=100, recorded=0,

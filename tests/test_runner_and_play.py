@@ -168,8 +168,8 @@ def test_tally_interval_shrinks_with_more_hands():
 
 
 def slow_gridworld_runner() -> TrainingRunner:
-    # The scalar engine throughout: max speed then goes on with the same episode.
-    return TrainingRunner(Session("gridworld", seed=0, engine="scalar"), speed=0)
+    # The env loop throughout: max speed then goes on with the same episode.
+    return TrainingRunner(Session("gridworld", seed=0, engine="env"), speed=0)
 
 
 def test_a_pause_stops_an_animated_episode_mid_way_at_once():

@@ -1,9 +1,13 @@
-"""Raising the episode budget after a run continues that run, epsilon schedule included."""
+"""Raising the episode budget after a run continues that run, epsilon schedule included;
+a used-up budget stops `n` and `.` as it stops space."""
 
 from __future__ import annotations
 
+import pytest
+
 from tui_gym.algorithms import QLearning
-from tui_gym.core.training import continue_run
+from tui_gym.core.engine.trainer import continue_run
+from tui_gym.session.runners import make_runner
 from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.train_view import TrainView
@@ -65,3 +69,34 @@ async def test_raising_the_budget_after_a_finished_run_continues_it_in_the_app()
         # The curve (rolling means of epsilon) never rises: exploration did not restart.
         epsilons = app.runner.latest.series["epsilon"]
         assert all(b <= a + 1e-12 for a, b in zip(epsilons, epsilons[1:], strict=False))
+
+
+@pytest.mark.parametrize("kind", ["thread", "process"])
+def test_a_used_up_budget_refuses_a_step_and_an_episode_as_it_refuses_a_start(kind: str) -> None:
+    session = Session("blackjack", seed=0, hp={"episodes": 30})
+    session.trainer.run(episodes=30)
+    runner = make_runner(session, kind)
+    try:
+        assert not runner.start() and runner.finished
+        runner.finished = False
+        assert not runner.run_one_step() and runner.finished
+        runner.finished = False
+        assert not runner.run_one_episode() and runner.finished
+        assert runner.wait_idle(DEADLINE)
+        assert session.trainer.episodes == 30 and not runner.busy
+    finally:
+        runner.close()
+
+
+async def test_n_and_dot_say_the_budget_is_used_up_in_the_app() -> None:
+    hp = QLearning.hyperparameters(episodes=20)
+    session = Session("blackjack", seed=0, hp=hp)
+    session.trainer.run(episodes=20)
+    app = TuiGymApp(session, runner="thread")
+    notes: list[str] = []
+    app.notify = lambda message, **kw: notes.append(message)  # type: ignore[method-assign]
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.press("t", "n", "full_stop")
+        await pilot.pause()
+        assert sum("budget is used up" in note for note in notes) == 2, notes
+        assert app.session.trainer.episodes == 20 and app.runner.latest.episodes == 20

@@ -105,7 +105,7 @@ def test_one_animated_episode_streams_every_step_from_the_child() -> None:
 
         assert wait_for(episode_over, 60)
         assert session.trainer.episodes == 1
-        assert session.trainer.engine == "scalar", "the session carries on as the child left it"
+        assert session.trainer.engine == "env", "the session carries on as the child left it"
         assert steps == sorted(steps) and len(steps) >= 2
         last = runner.last_event
         assert last is not None and last.episode_done is not None
@@ -132,6 +132,7 @@ def test_a_closed_child_ends_by_itself(monkeypatch) -> None:
     child = runner.child_pid
     assert child is not None
     runner.close(wait=True)
-    assert reaped(child) and killed == []
+    # (An earlier test's child may still be reaped in the background: only this one counts.)
+    assert reaped(child) and child not in killed
     runner.close(wait=True)  # again: nothing left to end
-    assert killed == []
+    assert child not in killed

@@ -161,7 +161,7 @@ def _train_three(db: str, first_seed: int) -> None:
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
         for seed in range(first_seed, first_seed + 3):
             code = main(["train", "blackjack", "--episodes", "300", "--eval-episodes", "5",
-                         "--engine", "scalar", "--seed", str(seed), "--db", db])
+                         "--engine", "env", "--seed", str(seed), "--db", db])
             if code != 0:
                 raise SystemExit(code)
 

@@ -207,7 +207,7 @@ def test_heatmaps_and_reference_of_bare_envs() -> None:
 def test_flatten_observation_shows_the_same_table_as_the_bare_env(name: str) -> None:
     # FlattenObservation only reshapes: the same seed learns the same values, and the
     # heatmaps and the reference see through the wrapper to them.
-    bare = _trained(name, episodes=150, engine="scalar")
+    bare = _trained(name, episodes=150, engine="env")
     flat = _trained(name, episodes=150, choices=(W("FlattenObservation"),))
     assert flat.hidden_reason() == ""
     assert np.array_equal(flat.base_q(), bare.base_q())
@@ -279,6 +279,22 @@ def test_short_gridworld_training_solves_the_grid() -> None:
     assert session.reference().figures["optimal_pair_fraction"] > 0.9
 
 
+def test_a_run_short_of_the_bound_says_why_in_a_sentence() -> None:
+    solved = Session("gridworld", seed=0)
+    solved.train()
+    assert solved.shortfall(solved.reference()) == ""
+    # Too few episodes: the settings are why.
+    early = Session("frozenlake", seed=0, hp=QLearning.hyperparameters(episodes=20))
+    early.train()
+    sentence = early.shortfall(early.reference())
+    assert sentence.startswith("It ends short of the bound (gap <= ")
+    assert "more episodes" in sentence
+    # SARSA's safe path on CliffWalking: the game's lesson is why.
+    safe = Session("cliffwalking", algorithm="sarsa", seed=0)
+    safe.train()
+    assert safe.game.lessons["sarsa"] in safe.shortfall(safe.reference())
+
+
 def test_set_hyperparameters_keeps_the_table() -> None:
     session = _trained(episodes=100)
     q = session.agent.q.copy()
@@ -314,15 +330,15 @@ def test_blackjack_heatmap_cells_read_the_q_table() -> None:
                 assert panel.marked[r, c] == (action != best[player, dealer, usable])
 
 
-def test_an_animated_step_after_vector_training_is_seeded() -> None:
-    """The scalar engine takes over a run the vector engine began: its first episode's
+def test_an_animated_step_after_training_on_the_model_is_seeded() -> None:
+    """The env loop takes over a run the model loop began: its first episode's
     placement comes from the session's seed, the same on every run, not from the OS."""
     firsts = []
     for _ in range(3):
         session = Session("gridworld", seed=3)
         session.trainer.run(episodes=300)
-        assert session.trainer.engine == "vector"
-        scalar = session.scalar_trainer()
-        scalar.step()
-        firsts.append(repr(scalar.current_observation()))
+        assert session.trainer.engine == "model"
+        session.trainer.step()
+        assert session.trainer.engine == "env"
+        firsts.append(repr(session.trainer.current_observation()))
     assert len(set(firsts)) == 1, firsts

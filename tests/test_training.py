@@ -1,4 +1,6 @@
-"""Bounded statistics and the trainer: episodes counted right, memory fixed, snapshots frozen."""
+"""Bounded statistics and the trainer: episodes counted right, memory fixed, snapshots frozen,
+on the env and on a game's model; a run cut into chunks is the same run; the rate shown is
+the recent one."""
 
 from __future__ import annotations
 
@@ -13,9 +15,16 @@ from gymnasium.wrappers import RecordEpisodeStatistics
 
 import tui_gym  # noqa: F401  (registers GridWorld)
 from tui_gym.algorithms import QLearning, Settings
+from tui_gym.core.engine.stats import (
+    EpisodeStats,
+    RollingWindow,
+    Series,
+    StepEvent,
+    TrainingSnapshot,
+)
+from tui_gym.core.engine.trainer import SERIES_NAMES, Trainer
 from tui_gym.core.obskey import ObservationKeyer
-from tui_gym.core.stats import EpisodeStats, RollingWindow, Series
-from tui_gym.core.training import SERIES_NAMES, StepEvent, Trainer, TrainingSnapshot
+from tui_gym.session.session import Session
 
 GRID = "tui_gym/GridWorld-v0"
 
@@ -54,7 +63,36 @@ def test_rolling_window_values_is_a_copy_and_size_must_be_positive() -> None:
         RollingWindow(0)
 
 
+@pytest.mark.parametrize("size", [1, 7, 100])
+def test_window_many_equals_pushing_one_by_one(size: int) -> None:
+    rng = np.random.default_rng(size)
+    one, many = RollingWindow(size), RollingWindow(size)
+    for chunk in (3, 0, 1, 250, 5, 99, 1000, 2):
+        values = rng.normal(size=chunk)
+        expected = []
+        for v in values:
+            one.push(float(v))
+            expected.append(one.mean)
+        means = many.push_many(values)
+        np.testing.assert_allclose(means, expected, rtol=1e-9, atol=1e-12)
+        assert many.count == one.count and many.filled == one.filled
+        np.testing.assert_allclose(many.values(), one.values())
+        assert many.mean == pytest.approx(one.mean, abs=1e-12)
+
+
 # -- Series ---------------------------------------------------------------------
+
+
+def test_series_many_equals_pushing_one_by_one() -> None:
+    rng = np.random.default_rng(0)
+    one, many = Series(8), Series(8)
+    for chunk in (1, 3, 0, 17, 2, 64, 5, 300, 1, 1000):
+        values = rng.normal(size=chunk)
+        for v in values:
+            one.push(float(v))
+        many.push_many(values)
+        assert many.span == one.span
+        np.testing.assert_allclose(many.points(), one.points(), rtol=1e-9, atol=1e-12)
 
 
 def test_series_stays_within_capacity_and_covers_the_whole_run() -> None:
@@ -304,12 +342,73 @@ def test_epsilon_follows_the_budget_during_training() -> None:
     assert trainer.remaining == 40
 
 
-def test_adopt_progress_carries_counts_and_statistics() -> None:
+def test_restore_carries_counts_and_statistics() -> None:
     old = _trainer(gym.make("Blackjack-v1"))
     old.run(episodes=50)
     new = Trainer(gym.make("Blackjack-v1"), old.agent, old.keyer, seed=0)
-    new.adopt_progress(old)
+    new.restore(old.progress())
     assert (new.episodes, new.steps) == (old.episodes, old.steps)
     assert new.latest.mean_return == old.latest.mean_return
     new.run(episodes=10)
     assert new.episodes == 60
+
+
+# -- on the model -----------------------------------------------------------------
+
+
+def _model_session(seed: int = 3, **hp: Any) -> Session:
+    session = Session("frozenlake", hp={"episodes": 5_000, **hp}, seed=seed)
+    assert session.trainer.model is not None and session.engine_reason == "model: FrozenLake"
+    return session
+
+
+def test_the_model_loop_runs_exactly_the_episodes_asked_for() -> None:
+    trainer = _model_session().trainer
+    assert trainer.run(episodes=1) == 1 and trainer.run(episodes=250) == 250
+    assert trainer.episodes == trainer.agent.episode == 251
+    assert trainer.latest.episodes == 251 and trainer.engine == "model"
+    stop = threading.Event()
+    stop.set()
+    assert trainer.run(stop=stop) >= 0 and trainer.episodes == trainer.agent.episode
+
+
+def test_a_run_cut_into_chunks_is_the_same_run() -> None:
+    whole = _model_session()
+    whole.trainer.run(episodes=3_000)
+    cut = _model_session()
+    for size in (1, 2, 997, 1, 1_999):
+        cut.trainer.run(episodes=size)
+    cut.trainer._call_steps = 7  # calls of a few transitions each, episodes carried over
+    cut.trainer.run(episodes=3_000 - cut.trainer.episodes)
+    assert np.array_equal(whole.agent.q, cut.agent.q)
+    assert whole.trainer.steps == cut.trainer.steps
+    for name, points in whole.trainer.latest.series.items():  # sums in another order
+        assert cut.trainer.latest.series[name] == pytest.approx(points, rel=1e-9, abs=1e-12)
+    assert whole.agent.rng.random() == cut.agent.rng.random()
+
+
+def test_the_rate_shown_is_the_rate_of_the_loop_training_now() -> None:
+    # Animated steps are slow (the pause between them counts as training time); at max
+    # speed the rate shown must be that of the max-speed run, not the animated pace.
+    trainer = Session("blackjack", seed=1).trainer
+    for _ in range(4):
+        trainer.step()
+        trainer.seconds += 0.5
+        trainer.publish()
+    assert trainer.latest.episodes_per_second < 5
+    trainer.run(episodes=20_000)
+    assert trainer.latest.episodes_per_second > 1_000
+    assert trainer.latest.episodes_per_second == pytest.approx(
+        20_000 / (trainer.seconds - 2.0), rel=0.5)
+
+
+def test_a_trainer_that_takes_over_shows_the_rate_of_the_run_it_took_over() -> None:
+    # The app's process runner hands a run back to the app's own trainer: after a run at
+    # max speed that followed two animated steps, the rate shown is the max-speed one.
+    child, parent = Session("blackjack", seed=1).trainer, Session("blackjack", seed=1).trainer
+    parent.step()
+    parent.step()
+    child.restore(parent.progress())
+    child.run(episodes=20_000)
+    parent.restore(child.progress())
+    assert parent.latest.episodes_per_second == child.latest.episodes_per_second > 1_000

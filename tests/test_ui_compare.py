@@ -249,7 +249,7 @@ async def test_the_app_key_v_opens_it_and_another_view_stops_it(
         await wait_for(pilot, lambda: app.focused is view.run_list, "the list's focus")
         assert " l Launch " in screen_text(app)
         # Another view stops the comparison; what finished is recorded.
-        await launch(pilot, view, {"sarsa"}, seeds=2, episodes=200_000)
+        await launch(pilot, view, {"sarsa"}, seeds=2, episodes=10_000_000)
         await wait_busy(pilot, lambda: view.chart.series, "a live curve")
         await pilot.press("t")
         await wait_for(pilot, lambda: view.job is None, "the comparison to stop")
@@ -320,7 +320,7 @@ async def test_progress_draws_live_curves_and_stopping_keeps_what_finished(tmp_p
         view = app.query_one(CompareView)
         view.processes = 0
         await pilot.pause()
-        await launch(pilot, view, {"q-learning"}, seeds=2, episodes=200_000)
+        await launch(pilot, view, {"q-learning"}, seeds=2, episodes=10_000_000)
         await wait_busy(pilot, lambda: [s.key for s in view.chart.series]
                         == [("live", "q-learning")], "a live curve")
         live = view.table.rows[0]
@@ -332,9 +332,9 @@ async def test_progress_draws_live_curves_and_stopping_keeps_what_finished(tmp_p
         (run,) = view.runs
         assert str(run.status) == "interrupted" and view.run_list.selected == [run.id]
         (row,) = view.table.rows
-        assert row.note == "interrupted" and 1 <= row.episodes < 200_000
+        assert row.note == "interrupted" and 1 <= row.episodes < 10_000_000
         # Closing the app stops a comparison and records what finished.
-        await launch(pilot, view, {"sarsa"}, seeds=2, episodes=200_000)
+        await launch(pilot, view, {"sarsa"}, seeds=2, episodes=10_000_000)
         job = view.job
         await wait_busy(pilot, lambda: job.progress_count > 0, "progress")
     assert job.done and job.error is None and job.result.interrupted

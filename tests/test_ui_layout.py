@@ -168,15 +168,15 @@ async def train_controls_stay_in_sight_whatever_the_engine_says(pilot) -> None:
     await pilot.pause()
     # A small budget (the note does not depend on it), applied when training starts.
     app.train_view.form.input("episodes").value = "300"
-    await pilot.press("escape", "space")  # back to the view, and train (scalar engine)
+    await pilot.press("escape", "space")  # back to the view, and train (on the env)
     await wait_for(pilot, lambda: app.runner.finished and not app.runner.running,
                    "the budget to finish")
     assert app.runner.wait_idle(DEADLINE)
     assert app.session.trainer.episodes == 300
     view = app.train_view
     note = view.engine_note
-    assert "FlattenObservation has no batched form" in note
-    assert "batched form" not in view.stats.plain  # no longer wrapped over five lines
+    assert "FlattenObservation changes the observations" in note
+    assert "changes the observations" not in view.stats.plain  # not wrapped over lines
     assert view.stats.tooltip == note
     for size in SIZES:
         if size != SIZES[0]:

@@ -132,7 +132,7 @@ async def test_epsilon_changes_live_then_the_form_follows_the_algorithm() -> Non
         await wait_for(pilot, lambda: bool(view.form.query("#hp-planning_steps")),
                        "the planning field")
         assert isinstance(view.form.control("planning_steps"), Input)
-        assert view.form.input("episodes").value == "500000"  # Dyna-Q's default here
+        assert view.form.input("episodes").value == "700000"  # Dyna-Q's default here
         view.form.input("episodes").value = "2000"
         await pilot.press("escape", "space")  # back to the view; applies the form and trains
         await wait_for(pilot, lambda: app.runner.finished and not app.runner.running, "a run")

@@ -111,7 +111,7 @@ async def test_each_game_keeps_its_agent_settings_wrappers_curves_and_play():
 
 async def test_the_child_process_trains_the_restored_agent():
     session = Session("blackjack", hp=QLearning.hyperparameters(episodes=1_000_000), seed=0,
-                      engine="scalar")  # slow enough to be mid-run at the switch
+                      engine="env")  # slow enough to be mid-run at the switch
     app = TuiGymApp(session, runner="process")
     async with app.run_test(size=(80, 24)) as pilot:
         await pilot.press("t", "space")

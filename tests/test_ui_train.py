@@ -47,13 +47,13 @@ async def paused(pilot) -> None:
     )
 
 
-def blackjack_app(episodes: int = 1_000_000, engine: str = "scalar") -> TuiGymApp:
-    # The scalar engine by default: slow enough to watch a run between two checks.
+def blackjack_app(episodes: int = 1_000_000, engine: str = "env") -> TuiGymApp:
+    # The env loop by default: slow enough to watch a run between two checks.
     hp = QLearning.hyperparameters(episodes=episodes)
     return TuiGymApp(Session("blackjack", seed=0, hp=hp, engine=engine))
 
 
-async def test_the_vector_engine_reaches_near_optimal_play_live() -> None:
+async def test_the_model_loop_reaches_near_optimal_play_live() -> None:
     app = blackjack_app(episodes=500_000, engine="auto")
     async with app.run_test(size=(120, 40)) as pilot:
         view = await open_train(pilot)
@@ -61,7 +61,7 @@ async def test_the_vector_engine_reaches_near_optimal_play_live() -> None:
         await wait_for(pilot, lambda: not app.runner.running and app.runner.finished,
                        "the budget to finish", timeout=60)
         await wait_for(pilot, lambda: view._snapshot.episodes == 500_000, "the last frame")
-        assert "vector" in view.stats.plain
+        assert "model" in view.stats.plain
         gap = app.session.reference().figures["gap"]
         assert gap < 0.002
         assert "gap" in screen_text(app)
@@ -121,7 +121,7 @@ async def test_one_episode_reset_live_training_speed_keys_then_gridworld_targets
         assert "running" in view.stats.plain
         assert "exact value" in view.stats.plain and "optimal value" in view.stats.plain
         assert view.heatmap.plain != untrained  # the greedy policy has moved
-        assert "scalar" in view.stats.plain and "max" in view.stats.plain
+        assert "env" in view.stats.plain and "max" in view.stats.plain
 
         await paused(pilot)
         stopped = app.runner.latest.episodes
@@ -316,3 +316,13 @@ async def test_hidden_heatmaps_say_why() -> None:
         assert reason
         assert view.heatmap.plain == reason
         assert reason in view.stats.plain
+
+
+async def test_a_run_that_ends_short_of_the_bound_says_why() -> None:
+    session = Session("frozenlake", seed=0, hp=QLearning.hyperparameters(episodes=20))
+    session.train()  # to the budget's end
+    app = TrainHost(session)
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.pause()
+        assert "It ends short of the bound" in app.query_one(TrainView).stats.plain
+        assert "more episodes" in screen_text(app)

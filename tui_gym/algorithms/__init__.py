@@ -1,7 +1,7 @@
 """Tabular learners, one file each, and the `ALGORITHMS` registry.
 
-Every learner is a `Learner` (see `base` for the protocol engines follow):
-its hyperparameters as `Param`s, its tables, its batched update rule, and a
+Every learner is a `Learner` (see `base`): its hyperparameters as `Param`s,
+its tables, its update rule written once as compiled scalar code, and a
 record of a single update for the step-by-step view. `algorithm(name)` finds
 one by its registry name (`q-learning`, `sarsa`, `expected-sarsa`,
 `double-q`, `monte-carlo`, `dyna-q`).
@@ -10,12 +10,11 @@ one by its registry name (`q-learning`, `sarsa`, `expected-sarsa`,
 from __future__ import annotations
 
 from tui_gym.algorithms.base import (
-    SCALAR_ENV,
     CellUpdate,
     Learner,
     LearnerState,
     TableSpec,
-    Transitions,
+    Transition,
     UpdateRecord,
 )
 from tui_gym.algorithms.double_q import DoubleQLearning
@@ -31,7 +30,6 @@ __all__ = [
     "ALL_PARAMS",
     "COMMON_PARAMS",
     "DEFAULT_ALGORITHM",
-    "SCALAR_ENV",
     "CellUpdate",
     "Choice",
     "DoubleQLearning",
@@ -45,7 +43,7 @@ __all__ = [
     "Sarsa",
     "Settings",
     "TableSpec",
-    "Transitions",
+    "Transition",
     "UpdateRecord",
     "algorithm",
     "owners",

@@ -1,138 +1,53 @@
-"""The learner protocol: what every tabular algorithm provides and how engines drive it.
+"""The learner: what a tabular algorithm declares, and what the engine drives.
 
-A learner is one subclass of `Learner` that declares its name, its
-hyperparameter schema (`params`), the per-(state, action) tables it keeps
-(`tables`), and writes two methods: `update(batch)`, its rule, batched, and
-`_describe`, the record of a batch of one (built only when asked for, from
-figures `update` kept). The base class owns everything else: the rows of
-the tables (dense observation keys are rows; other keys get the next free
-row, and the tables grow), epsilon-greedy acting, the epsilon schedule,
-reading values for heatmaps and evaluation, and saving (`state()` /
-`load_state()`).
+An algorithm is one subclass of `Learner` in one file. It declares its name,
+its hyperparameter schema (`params`), the per-(state, action) tables it keeps
+(`tables`), `Params` (the NamedTuple of its compiled hyperparameters, filled
+from the schema by name; `by_visits` is the step-size schedule) and writes
+its update rule once, as plain scalar code registered with the engine
+(`tui_gym.core.engine.rules.register(Params, Rule(...))`) and compiled by
+Numba. It writes `_describe`, the step-by-step view's record of one update
+from the numbers its rule logs, and `arrays`, the tables its rule takes, when
+they are not `(q, counts, visits)`.
 
-How an engine drives a learner, each step of a batch of envs:
-
-1. Actions: `act_batch(rows)` for every stepping env, from the table as the
-   last update left it; but for a learner with `needs_next_action` (SARSA)
-   the actions chosen in step 3 of the previous step, and `act_batch` only
-   for episodes that just started.
-2. Step the envs; table rows of the next observations (`rows(keys)`; dense
-   keys are rows).
-3. With `needs_next_action`: every row's next action now, `act_batch(next
-   rows)`, before the update; the engine then takes exactly these (for
-   ended episodes they are only read, to bootstrap after a truncation).
-4. `update(Transitions(...))`: the rule, once per step; a TD error per row
-   (for the mean |TD| statistic).
-5. `end_episodes(count)` for the episodes that ended: epsilon moves on.
-6. `forget_episodes(envs)` for episodes abandoned before their end (the
-   engine rebuilt or reset mid-way).
-
-The scalar engine is the same with one env, through `act(key)` and
-`update_one(key, ...)`: they draw from the generator and round as the
-one-at-a-time agent always did (`Transitions.one` is `sequential`), while
-`act_batch` and `update` do as the batched trainer did, so Q-learning gives
-each engine's old numbers. `last_update` explains a batch of one for the
-step-by-step view.
-
-`Transitions.env` names the episode each row belongs to, so Monte Carlo can
-keep one trajectory per env: ids are non-negative and distinct among all
-episodes in progress on the learner; engines that share one learner use
-disjoint ids (the scalar engine `SCALAR_ENV`, a vector engine `1 + index`).
+The base class owns everything else: table rows (dense keys are rows; other
+keys get the next free row and the tables grow), the epsilon schedule, acting
+and learning one transition from Python through the same compiled code the
+engine's loop runs, reading values for heatmaps and evaluation, and saving
+(`state()` / `load_state()`).
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Hashable, Iterable, Mapping, Sequence
+from collections.abc import Hashable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from functools import cache
+from typing import Any, ClassVar, get_type_hints
 
 import numpy as np
 
-from tui_gym.algorithms.exploration import (
-    epsilon_greedy_batch,
-    epsilon_greedy_one,
-    greedy_batch,
-    greedy_one,
-)
 from tui_gym.algorithms.settings import COMMON_PARAMS, Field, Settings
-from tui_gym.algorithms.steps import move_toward, step_size
+from tui_gym.core.engine import loop, rules
 
 __all__ = [
-    "SCALAR_ENV",
     "CellUpdate",
     "Learner",
     "LearnerState",
     "TableSpec",
-    "Transitions",
+    "Transition",
     "UpdateRecord",
 ]
 
-SCALAR_ENV = 0
-"""The env id the scalar engine gives its one episode stream."""
+@cache
+def _field_types(params: type) -> dict[str, Any]:
+    return get_type_hints(params)
+
 
 # Rows a growing (sparse) table starts with; it doubles when full.
 _INITIAL_ROWS = 256
 # The largest count a saved table may hold (far beyond any run; keeps sums in int64).
 MAX_SAVED_COUNT = 2**62
-
-
-@dataclass(frozen=True)
-class Transitions:
-    """A batch of B transitions, row i from env `env[i]`.
-
-    `state`, `next_state`: table rows (`Learner.rows`); `next_state` is the
-    observation after the action, for an ended episode its final one (the
-    one to bootstrap from after a truncation). `next_action`: the action
-    the engine will take in `next_state` (learners with `needs_next_action`).
-    `terminated` ends the bootstrap; `truncated` ends the episode but the
-    value of `next_state` still counts. `env`: None for `arange(B)`.
-    `sequential` marks one transition of a one-at-a-time stream (the scalar
-    engine, `Transitions.one`): its update is the textbook `Q + α(t - Q)`,
-    where batches use a closed form that agrees up to rounding. Each engine
-    thus keeps the exact numbers of its one-rule-per-engine predecessor.
-    """
-
-    state: np.ndarray  # int64 (B,)
-    action: np.ndarray  # int64 (B,)
-    reward: np.ndarray  # float64 (B,)
-    next_state: np.ndarray  # int64 (B,)
-    terminated: np.ndarray  # bool (B,)
-    truncated: np.ndarray  # bool (B,)
-    next_action: np.ndarray | None = None  # int64 (B,)
-    env: np.ndarray | None = None  # int64 (B,), distinct
-    sequential: bool = False
-
-    def __len__(self) -> int:
-        return len(self.state)
-
-    @classmethod
-    def one(
-        cls,
-        state: int,
-        action: int,
-        reward: float,
-        next_state: int,
-        terminated: bool,
-        truncated: bool = False,
-        next_action: int | None = None,
-        env: int = SCALAR_ENV,
-    ) -> Transitions:
-        """A batch of one transition."""
-        return cls(
-            np.array([state], dtype=np.int64),
-            np.array([action], dtype=np.int64),
-            np.array([reward], dtype=np.float64),
-            np.array([next_state], dtype=np.int64),
-            np.array([terminated], dtype=bool),
-            np.array([truncated], dtype=bool),
-            None if next_action is None else np.array([next_action], dtype=np.int64),
-            np.array([env], dtype=np.int64),
-            sequential=True,
-        )
-
-    def envs(self) -> np.ndarray:
-        return np.arange(len(self.state)) if self.env is None else self.env
 
 
 @dataclass(frozen=True)
@@ -149,6 +64,20 @@ class CellUpdate:
     @property
     def td_error(self) -> float:
         return self.target - self.before
+
+
+@dataclass(frozen=True)
+class Transition:
+    """One transition between table rows, as a learner learned from it."""
+
+    state: int
+    action: int
+    reward: float
+    next_state: int
+    terminated: bool
+    truncated: bool
+    next_action: int | None
+    epsilon: float
 
 
 @dataclass(frozen=True)
@@ -216,12 +145,12 @@ class LearnerState:
 
 
 class Learner(ABC):
-    """A tabular learner over `n_actions` actions (see the module docstring for the protocol).
+    """A tabular learner over `n_actions` actions (see the module docstring).
 
     `n_states` fixes a dense table (keys are rows); None grows the table as
     new keys come. `hyperparameters` is a mapping of values for `params`
     (missing ones take their defaults) or `Settings`. `seed` seeds the one
-    generator behind acting and any randomness in the rule.
+    generator behind acting, the model's outcomes and any draw of the rule.
     """
 
     name: ClassVar[str]  # the registry name: `--algorithm NAME`, save files
@@ -233,7 +162,7 @@ class Learner(ABC):
         TableSpec("q", np.float64),
         TableSpec("counts", np.int64),
     )
-    needs_next_action: ClassVar[bool] = False
+    Params: ClassVar[Any]  # the compiled hyperparameters' NamedTuple (see the docstring)
     # The tables named in `tables` (these two for most learners) are attributes.
     q: np.ndarray
     counts: np.ndarray
@@ -253,10 +182,11 @@ class Learner(ABC):
         self.n_actions = int(n_actions)
         self.n_states = None if n_states is None else int(n_states)
         self.hp = self.settings(hyperparameters)
+        self._params: Any = None
         self.rng = np.random.default_rng(seed)
         self.episode = 0  # episodes finished; drives the epsilon schedule
         self.epsilon = self.hp.epsilon_at(0)
-        self._last: tuple[Transitions, tuple[Any, ...]] | None = None  # see `last_update`
+        self._last: tuple[Transition, np.ndarray] | None = None  # see `last_update`
         self._last_record: UpdateRecord | None = None
         self._index: dict[Hashable, int] | None = None if n_states is not None else {}
         capacity = self.n_states if self.n_states is not None else _INITIAL_ROWS
@@ -264,6 +194,7 @@ class Learner(ABC):
         self.visits = np.zeros(capacity, dtype=np.int64)  # updates per state
         for spec in self.tables:
             setattr(self, spec.name, np.full((capacity, self.n_actions), spec.fill, spec.dtype))
+        self._make_extra(capacity)
 
     @classmethod
     def settings(cls, values: Mapping[str, Any] | None = None) -> Settings:
@@ -277,86 +208,119 @@ class Learner(ABC):
         """Settings for this algorithm from keyword values (defaults for the rest)."""
         return cls.settings(values)
 
-    # --- the rule: what a subclass writes --------------------------------------
-    @abstractmethod
-    def update(self, batch: Transitions) -> np.ndarray:
-        """Learn from a batch of transitions; one TD error per row.
-
-        A batch of one also leaves `last_update`, a record of the update.
-        """
+    # --- what a subclass may write -------------------------------------------------------
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        """The tables the compiled rule takes, in its order."""
+        return (self.q, self.counts, self.visits)
 
     def action_values(self, rows: np.ndarray | slice) -> np.ndarray:
-        """The values the policy acts on, per row (k, n_actions)."""
+        """The values shown and evaluated, per row (k, n_actions); the policy's best."""
         return self.q[rows]
 
-    def forget_episodes(self, envs: Sequence[int] | np.ndarray | None = None) -> None:
-        """Drop what is kept of unfinished episodes (all envs when None)."""
-        return None  # only learners that keep episodes (Monte Carlo) have any
+    def _make_extra(self, capacity: int) -> None:  # noqa: B027 - most learners have none
+        """Arrays beyond the tables, for `capacity` rows."""
+
+    def _grow_extra(self, capacity: int) -> None:  # noqa: B027 - most learners have none
+        """Make the arrays beyond the tables fit `capacity` rows, keeping what they hold."""
+
+    def log_rows(self) -> int:
+        """Rows of log an explained update of the next transition may write."""
+        return 1
+
+    def make_room(self) -> None:  # noqa: B027 - only a learner that keeps episodes asks
+        """Room for what the rule asked for room for (`rules.full`)."""
 
     def _extra_arrays(self) -> dict[str, np.ndarray]:
         """Arrays to save beyond the tables (copies)."""
         return {}
 
-    def _load_extra_arrays(self, arrays: Mapping[str, np.ndarray], rows: int) -> None:
-        """Take back what `_extra_arrays` saved; raise ValueError before changing anything."""
-        return None
+    def _load_extra_arrays(self, arrays: Mapping[str, np.ndarray], rows: int,
+                           capacity: int) -> None:
+        """Check what `_extra_arrays` saved (ValueError before changing anything), then
+        make the arrays beyond the tables for `capacity` rows holding it."""
+        self._make_extra(capacity)
 
-    def _check_arrays(self, arrays: Mapping[str, np.ndarray], rows: int) -> None:
-        """Raise ValueError, naming the array, for saved values this learner could not
-        have made: another kind of number, NaN or infinite values, counts below the
-        table's fill or beyond `MAX_SAVED_COUNT`. Shapes are checked before."""
-        specs = (TableSpec("visits", np.int64), *self.tables)
-        for spec in specs:
-            array = np.asarray(arrays[spec.name])
-            kind = array.dtype.kind
-            if spec.dtype is bool:
-                if kind != "b":
-                    raise ValueError(f"saved {spec.name!r} holds {array.dtype} values, not bool")
-            elif np.issubdtype(spec.dtype, np.floating):
-                if kind not in "fiu":
-                    raise ValueError(f"saved {spec.name!r} holds {array.dtype} values")
-                if not np.isfinite(array).all():
-                    raise ValueError(f"saved {spec.name!r} holds NaN or infinite values")
-            else:
-                if kind not in "iu":
-                    raise ValueError(f"saved {spec.name!r} holds {array.dtype} values")
-                low = min(0, int(spec.fill))
-                if array.size and (array.min() < low or array.max() > MAX_SAVED_COUNT):
-                    raise ValueError(f"saved {spec.name!r} holds negative or impossible counts")
+    @abstractmethod
+    def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
+        """The record of one update from the numbers its rule wrote into `log`."""
 
-    def _move(
-        self,
-        table: np.ndarray,
-        counts: np.ndarray,
-        cells: np.ndarray,
-        targets: np.ndarray,
-        sequential: bool,
-        *,
-        count: bool = True,
-    ) -> np.ndarray:
-        """`move_toward` with this learner's step sizes and visit counts; the TD errors."""
-        hp = self.hp
-        return move_toward(
-            table, counts, self.visits, cells, targets, hp.learning_rate,
-            hp.learning_rate_schedule, count=count, sequential=sequential,
+    # --- the compiled side ---------------------------------------------------------------
+    def compiled_params(self) -> Any:
+        """The compiled hyperparameters (`Params`) of the current settings."""
+        if self._params is None:
+            hp, kinds = self.hp, _field_types(self.Params)
+            values = {
+                name: (hp.learning_rate_schedule == "visits") if name == "by_visits"
+                else kinds[name](hp[name])
+                for name in self.Params._fields
+            }
+            self._params = self.Params(**values)
+            self._exploration = np.array([hp.epsilon_start, hp.epsilon_final,
+                                          hp.epsilon_decay_fraction * hp.episodes])
+        return self._params
+
+    def exploration(self) -> np.ndarray:
+        """(epsilon start, final, episodes of the decay) for the compiled schedule."""
+        self.compiled_params()
+        return self._exploration
+
+    @property
+    def next_first(self) -> bool:
+        """Whether the rule needs the next action before its update (SARSA)."""
+        return rules.next_first(self.compiled_params())
+
+    def needs_room(self) -> bool:
+        return bool(rules.full(self.arrays(), self.compiled_params()))
+
+    def begin_episode(self) -> None:
+        """An episode starts: whatever was kept of an unfinished one goes."""
+        rules.begin(self.arrays(), self.compiled_params())
+
+    forget_episode = begin_episode
+
+    def learn(
+        self, state: int, action: int, reward: float, next_state: int, terminated: bool,
+        truncated: bool = False, next_action: int = -1, explain: bool = False,
+    ) -> tuple[int, float]:
+        """One transition between rows through the compiled rule: (the next action the
+        rule chose first, or `next_action`; |TD error|). With `explain`, `last_update`
+        explains it."""
+        if self.needs_room():
+            self.make_room()
+        log = rules.new_log(self.log_rows() if explain else 1)
+        hp = self.compiled_params()
+        a2, td = loop.entries(hp).transition(
+            self.arrays(), hp, self.rng, int(state), int(action), float(reward),
+            int(next_state), bool(terminated), bool(truncated), int(next_action),
+            float(self.epsilon), log,
         )
-
-    def _move_q(
-        self, batch: Transitions, targets: np.ndarray, future: np.ndarray, *extra: Any
-    ) -> np.ndarray:
-        """Move `q` at the batch's (state, action) cells toward `targets`; the TD errors.
-        A batch of one keeps its figures for `_describe`: target, future, Q before and
-        after, the cell's count, then `extra`."""
-        cells = batch.state * self.n_actions + batch.action
-        q_flat = self.q.reshape(-1)
-        before = q_flat[cells[0]] if len(cells) == 1 else None
-        td = self._move(self.q, self.counts, cells, targets, batch.sequential)
-        if before is None:
-            self._last = None
+        if explain:
+            picked = int(a2) if int(a2) >= 0 else None
+            self._last = (Transition(int(state), int(action), float(reward), int(next_state),
+                                     bool(terminated), bool(truncated), picked,
+                                     float(self.epsilon)), log)
+            self._last_record = None
         else:
-            self._keep(batch, targets[0], future[0], before, q_flat[cells[0]],
-                       self.counts.reshape(-1)[cells[0]], *extra)
-        return td
+            self._last = None
+        return int(a2), float(td)
+
+    def update_one(
+        self,
+        key: Hashable,
+        action: int,
+        reward: float,
+        next_key: Hashable,
+        terminated: bool,
+        truncated: bool = False,
+        next_action: int | None = None,
+    ) -> float:
+        """One transition by observation keys, explained in `last_update`; its |TD error|.
+        A rule that needs the next action (SARSA) takes `next_action`."""
+        if self.next_first and next_action is None and not terminated:
+            raise ValueError(f"{self.title} needs the next action of a transition (next_action)")
+        state, next_state = self.row(key), self.row(next_key)
+        return self.learn(state, action, reward, next_state, terminated, truncated,
+                          -1 if next_action is None else next_action, explain=True)[1]
 
     # --- rows ----------------------------------------------------------------------
     @property
@@ -381,12 +345,6 @@ class Learner(ABC):
             self._rows_used += 1
         return row
 
-    def rows(self, keys: Iterable[Hashable]) -> np.ndarray:
-        """The rows of many keys (adding new sparse keys), as an int64 array."""
-        if self._index is None:
-            return np.asarray(keys if isinstance(keys, np.ndarray) else list(keys), dtype=np.int64)
-        return np.fromiter((self.row(k) for k in keys), dtype=np.int64)
-
     def find(self, key: Hashable) -> int | None:
         """The row of a key, or None when a sparse table has never seen it."""
         if self._index is None:
@@ -394,13 +352,11 @@ class Learner(ABC):
         return self._index.get(key)
 
     def _grow(self) -> None:
-        def doubled(array: np.ndarray) -> np.ndarray:
-            return np.concatenate([array, np.zeros_like(array)])
-
-        self.visits = doubled(self.visits)
+        self.visits = np.concatenate([self.visits, np.zeros_like(self.visits)])
         for spec in self.tables:
             old = getattr(self, spec.name)
             setattr(self, spec.name, np.concatenate([old, np.full_like(old, spec.fill)]))
+        self._grow_extra(len(self.visits))
 
     def _row_values(self, key: Hashable) -> np.ndarray:
         row = self.find(key)
@@ -410,19 +366,15 @@ class Learner(ABC):
 
     # --- acting ----------------------------------------------------------------------
     def act(self, key: Hashable) -> int:
-        """Epsilon-greedy for one state (the scalar engine's draw order)."""
-        return epsilon_greedy_one(self._row_values(key), self.epsilon, self.rng)
-
-    def act_batch(self, rows: np.ndarray) -> np.ndarray:
-        """Epsilon-greedy for many rows (the vector engine's draw order)."""
-        return epsilon_greedy_batch(self.action_values(rows), self.epsilon, self.rng)
+        """Epsilon-greedy in a state, ties broken at random (the engine's own draws)."""
+        hp = self.compiled_params()
+        return int(loop.entries(hp).act(self.arrays(), hp, self.rng, self.row(key),
+                                        float(self.epsilon)))
 
     def greedy(self, key: Hashable) -> int:
         """The best-valued action in a state, ties broken at random."""
-        return greedy_one(self._row_values(key), self.rng)
-
-    def greedy_batch(self, rows: np.ndarray) -> np.ndarray:
-        return greedy_batch(self.action_values(rows), self.rng)
+        hp = self.compiled_params()
+        return int(loop.entries(hp).greedy(self.arrays(), hp, self.rng, self.row(key)))
 
     def greedy_actions(self, key: Hashable) -> tuple[int, ...]:
         """Every action tied for the best value in a state."""
@@ -441,26 +393,8 @@ class Learner(ABC):
     def set_hyperparameters(self, hyperparameters: Mapping[str, Any]) -> None:
         """New values for the rest of the run, taking effect at once; tables and episodes stay."""
         self.hp = self.settings(hyperparameters)
+        self._params = None
         self.epsilon = self.hp.epsilon_at(self.episode)
-
-    # --- the scalar engine's convenience -------------------------------------------------
-    def update_one(
-        self,
-        key: Hashable,
-        action: int,
-        reward: float,
-        next_key: Hashable,
-        terminated: bool,
-        truncated: bool = False,
-        next_action: int | None = None,
-        env: int = SCALAR_ENV,
-    ) -> float:
-        """One transition by observation keys, as a batch of one; its TD error."""
-        state = self.row(key)
-        batch = Transitions.one(
-            state, action, reward, self.row(next_key), terminated, truncated, next_action, env
-        )
-        return float(self.update(batch)[0])
 
     # --- reading the table ----------------------------------------------------------------
     def values(self, keys: Iterable[Hashable]) -> np.ndarray:
@@ -505,65 +439,84 @@ class Learner(ABC):
         """How many states have been updated at least once."""
         return int(np.count_nonzero(self.visits[: self._rows_used]))
 
-    # --- the record of a batch of one ---------------------------------------------------
+    # --- the record of one update ---------------------------------------------------------
     @property
     def last_update(self) -> UpdateRecord | None:
-        """How the latest update used its transition, when that update was a batch of one."""
+        """How the latest explained update used its transition."""
         if self._last is None:
             return None
         if self._last_record is None:
-            batch, numbers = self._last
-            self._last_record = self._describe(batch, *numbers)
+            self._last_record = self._describe(*self._last)
         return self._last_record
-
-    def _keep(self, batch: Transitions, *numbers: Any) -> None:
-        """Keep a batch of one's figures (plain numbers read now); the record is built on demand."""
-        self._last = (batch, numbers)
-        self._last_record = None
-
-    @abstractmethod
-    def _describe(self, batch: Transitions, *numbers: Any) -> UpdateRecord:
-        """The record of a batch of one from the figures `update` kept with `_keep`."""
 
     def _record(
         self,
-        batch: Transitions,
+        step: Transition,
         formula: str,
         terms: tuple[tuple[str, float], ...],
         target: float | None,
         before: float,
         after: float,
-        n: int = 0,
         alpha: float | None = None,
         **extra: Any,
     ) -> UpdateRecord:
-        """An `UpdateRecord` for a batch of one.
-
-        The step size is `alpha`, or else the schedule's for the cell's n-th
-        update (`n` counting this one).
-        """
-        if target is not None and alpha is None:
-            alpha = step_size(self.hp.learning_rate, self.hp.learning_rate_schedule, max(n, 1))
+        """An `UpdateRecord` for one transition (no step size when there is no target)."""
         return UpdateRecord(
             algorithm=self.name,
-            state=int(batch.state[0]),
-            action=int(batch.action[0]),
-            reward=float(batch.reward[0]),
-            next_state=int(batch.next_state[0]),
-            next_action=None if batch.next_action is None else int(batch.next_action[0]),
-            terminated=bool(batch.terminated[0]),
-            truncated=bool(batch.truncated[0]),
+            state=step.state,
+            action=step.action,
+            reward=step.reward,
+            next_state=step.next_state,
+            next_action=step.next_action,
+            terminated=step.terminated,
+            truncated=step.truncated,
             formula=formula,
             terms=terms,
             target=None if target is None else float(target),
             td_error=None if target is None else float(target) - float(before),
-            step_size=alpha,
+            step_size=None if target is None else alpha,
             before=float(before),
             after=float(after),
             **extra,
         )
 
+    def _td_record(self, step: Transition, log: np.ndarray, future_term: str,
+                   *more: tuple[str, float], formula: str = "", **extra: Any) -> UpdateRecord:
+        """The record of a one-step TD update logged by `rules.td_update`: the target is r
+        after termination, else r + γ·(the future term), `formula` (default: the
+        algorithm's)."""
+        target, future, before, after, alpha = (float(v) for v in log[0, :5])
+        terms: tuple[tuple[str, float], ...] = (("r", step.reward),)
+        written = "r"
+        if not step.terminated:
+            written = formula or self.formula
+            terms = (("r", step.reward), ("γ", self.hp.discount), *more, (future_term, future))
+        return self._record(step, written, terms, target, before, after, alpha, **extra)
+
     # --- saving ------------------------------------------------------------------------------
+    def _check_arrays(self, arrays: Mapping[str, np.ndarray], rows: int) -> None:
+        """Raise ValueError, naming the array, for saved values this learner could not
+        have made: another kind of number, NaN or infinite values, counts below the
+        table's fill or beyond `MAX_SAVED_COUNT`. Shapes are checked before."""
+        specs = (TableSpec("visits", np.int64), *self.tables)
+        for spec in specs:
+            array = np.asarray(arrays[spec.name])
+            kind = array.dtype.kind
+            if spec.dtype is bool:
+                if kind != "b":
+                    raise ValueError(f"saved {spec.name!r} holds {array.dtype} values, not bool")
+            elif np.dtype(spec.dtype).kind == "f":
+                if kind not in "fiu":
+                    raise ValueError(f"saved {spec.name!r} holds {array.dtype} values")
+                if not np.isfinite(array).all():
+                    raise ValueError(f"saved {spec.name!r} holds NaN or infinite values")
+            else:
+                if kind not in "iu":
+                    raise ValueError(f"saved {spec.name!r} holds {array.dtype} values")
+                low = min(0, int(spec.fill))
+                if array.size and (array.min() < low or array.max() > MAX_SAVED_COUNT):
+                    raise ValueError(f"saved {spec.name!r} holds negative or impossible counts")
+
     def state(self) -> LearnerState:
         """Copies of everything that defines this learner, to save or send elsewhere."""
         used = self._rows_used
@@ -623,17 +576,17 @@ class Learner(ABC):
             loaded[spec.name] = filled
         visits = np.zeros(capacity, dtype=np.int64)
         visits[:rows] = arrays["visits"]
-        self._load_extra_arrays(arrays, rows)
+        self._load_extra_arrays(arrays, rows, capacity)
         for name, table in loaded.items():
             setattr(self, name, table)
         self.visits = visits
         self._rows_used = rows
         self._index = None if dense else {k: i for i, k in enumerate(state.keys)}  # type: ignore[arg-type]
         self.hp = hp
+        self._params = None
         self.episode = int(meta.get("episode", 0))
         self.epsilon = hp.epsilon_at(self.episode)
         self._last = self._last_record = None
-        self.forget_episodes()
 
     @classmethod
     def from_state(cls, state: LearnerState, seed: int | None = None) -> Learner:

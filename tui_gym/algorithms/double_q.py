@@ -16,14 +16,66 @@ the tie-breaks of argmax come from the learner's seeded generator.
 
 from __future__ import annotations
 
+from typing import Any, NamedTuple
+
 import numpy as np
 
-from tui_gym.algorithms.base import Learner, TableSpec, Transitions, UpdateRecord
-from tui_gym.algorithms.exploration import greedy_batch
+from tui_gym.algorithms.base import Learner, TableSpec, Transition, UpdateRecord
+from tui_gym.core.engine.kernel import kernel
+from tui_gym.core.engine.rules import Rule, register, td_update, uniform
 
 __all__ = ["DoubleQLearning"]
 
 _NAMES = ("A", "B")
+
+
+class Params(NamedTuple):
+    learning_rate: float
+    discount: float
+    by_visits: bool
+
+
+@kernel(inline=True)
+def value(tables: Any, hp: Any, s: int, a: int) -> float:
+    return tables[0][s, a] + tables[1][s, a]
+
+
+@kernel
+def best(table: Any, rng: Any, s: int) -> int:
+    """The best action of one table in row `s`, ties broken uniformly."""
+    n = table.shape[1]
+    top = table[s, 0]
+    choice, ties = 0, 1
+    for a in range(1, n):
+        if table[s, a] > top:
+            top, choice, ties = table[s, a], a, 1
+        elif table[s, a] == top:
+            ties += 1
+    if ties > 1:
+        pick = uniform(rng, ties)
+        for a in range(n):
+            if table[s, a] == top:
+                if pick == 0:
+                    return a
+                pick -= 1
+    return choice
+
+
+@kernel
+def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+           terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
+    q_a, q_b, counts_a, counts_b, visits = tables
+    first = rng.random() < 0.5
+    mine, other, counts = (q_a, q_b, counts_a) if first else (q_b, q_a, counts_b)
+    chosen = best(mine, rng, s2)
+    future = 0.0 if terminated else other[s2, chosen]
+    td = td_update(mine, counts, visits, hp, s, a, r, future, log)
+    log[0, 6] = 0.0 if first else 1.0
+    log[0, 7] = chosen
+    return td
+
+
+register(Params, Rule(update, value=value))
 
 
 class DoubleQLearning(Learner):
@@ -33,6 +85,7 @@ class DoubleQLearning(Learner):
     title = "Double Q-learning"
     summary = "two tables, a coin per update: Q-learning without the maximization bias"
     formula = "r + γ·Q_B(s', a*), a* = argmax Q_A(s',·)"
+    Params = Params
     tables = (
         TableSpec("q_a", np.float64),
         TableSpec("q_b", np.float64),
@@ -45,6 +98,9 @@ class DoubleQLearning(Learner):
     counts_a: np.ndarray
     counts_b: np.ndarray
 
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        return (self.q_a, self.q_b, self.counts_a, self.counts_b, self.visits)
+
     def action_values(self, rows: np.ndarray | slice) -> np.ndarray:
         return (self.q_a[rows] + self.q_b[rows]) / 2.0
 
@@ -52,53 +108,12 @@ class DoubleQLearning(Learner):
         used = self.rows_used
         return self.counts_a[:used] + self.counts_b[:used]
 
-    def update(self, batch: Transitions) -> np.ndarray:
-        hp = self.hp
-        n = len(batch)
-        update_a = self._coins(n)
-        cells = batch.state * self.n_actions + batch.action
-        pairs = (
-            (np.flatnonzero(update_a), self.q_a, self.counts_a, self.q_b),
-            (np.flatnonzero(~update_a), self.q_b, self.counts_b, self.q_a),
+    def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
+        which = int(log[0, 6])
+        mine, other = _NAMES[which], _NAMES[1 - which]
+        picked = None if step.terminated else int(log[0, 7])
+        return self._td_record(
+            step, log, f"Q_{other}(s',a*)",
+            formula=f"r + γ·Q_{other}(s', a*), a* = argmax Q_{mine}(s',·)",
+            table=mine, target_action=picked,
         )
-        # Every target is read from both tables as they are before the batch.
-        planned = []
-        for rows, chooser, counts, judge in pairs:
-            next_states = batch.next_state[rows]
-            best = greedy_batch(chooser[next_states], self.rng)
-            future = judge[next_states, best]
-            future[batch.terminated[rows]] = 0.0
-            planned.append((rows, chooser, counts, batch.reward[rows] + hp.discount * future,
-                            best, future))
-        before = self._flat_value(cells[0], bool(update_a[0])) if n == 1 else None
-        td = np.empty(n)
-        for rows, table, counts, targets, _, _ in planned:
-            td[rows] = self._move(table, counts, cells[rows], targets, batch.sequential)
-        if before is None:
-            self._last = None
-        else:
-            which = 0 if update_a[0] else 1
-            _, _, counts, targets, best, future = planned[which]
-            self._keep(batch, which, targets[0], best[0], future[0], before,
-                       self._flat_value(cells[0], which == 0), counts.reshape(-1)[cells[0]])
-        return td
-
-    def _coins(self, n: int) -> np.ndarray:
-        """For each of n updates, whether it goes to Q_A: a fair coin from the generator."""
-        return self.rng.random(n) < 0.5
-
-    def _flat_value(self, cell: int, table_a: bool) -> float:
-        return (self.q_a if table_a else self.q_b).reshape(-1)[cell]
-
-    def _describe(self, batch: Transitions, *numbers: float) -> UpdateRecord:
-        which, target, best, future, before, after, n = numbers
-        mine, other = _NAMES[int(which)], _NAMES[1 - int(which)]
-        r = float(batch.reward[0])
-        terms: tuple[tuple[str, float], ...] = (("r", r),)
-        formula, picked = "r", None
-        if not batch.terminated[0]:
-            formula = f"r + γ·Q_{other}(s', a*), a* = argmax Q_{mine}(s',·)"
-            terms = (("r", r), ("γ", self.hp.discount), (f"Q_{other}(s',a*)", float(future)))
-            picked = int(best)
-        return self._record(batch, formula, terms, target, before, after, int(n), table=mine,
-                            target_action=picked)

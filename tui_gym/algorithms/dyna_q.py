@@ -2,9 +2,9 @@
 
 Each real transition makes a Q-learning update, then teaches a model: for
 the (state, action) just taken, the reward, next state and whether it
-terminated. Then `planning_steps` simulated updates follow per real
-transition: a (state, action) drawn uniformly from those seen so far, its
-outcome read from the model, and the same Q-learning update applied to it.
+terminated. Then `planning_steps` simulated updates follow: a (state,
+action) drawn uniformly from those seen so far, its outcome read from the
+model, and the same Q-learning update applied to it.
 
 The model keeps the last outcome of each (state, action), as the book's
 tabular Dyna-Q does: exact for deterministic games; for stochastic ones
@@ -12,32 +12,68 @@ tabular Dyna-Q does: exact for deterministic games; for stochastic ones
 the pair is tried again, so it speeds learning less and adds noise.
 
 Planning updates use the step size of the pair's real updates (`counts`
-counts experience, not simulation); a batch of B real transitions is
-followed by `planning_steps` rounds of B simulated ones. Draws come from the
-learner's seeded generator; with `planning_steps` = 0 this is Q-learning.
+counts experience, not simulation). Draws come from the learner's seeded
+generator; with `planning_steps` = 0 this is Q-learning.
 """
 
 from __future__ import annotations
 
-from dataclasses import replace
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from tui_gym.algorithms.base import Learner, TableSpec, Transitions, UpdateRecord
-from tui_gym.algorithms.qlearning import QLearning, q_learning_targets
+from tui_gym.algorithms.base import Learner, TableSpec, Transition, UpdateRecord
+from tui_gym.algorithms.qlearning import QLearning
 from tui_gym.algorithms.settings import COMMON_PARAMS
+from tui_gym.core.engine.kernel import kernel
+from tui_gym.core.engine.rules import Rule, max_value, register, step_size, td_update, uniform
 from tui_gym.core.params import Param
 
 __all__ = ["DynaQ"]
 
 
-class DynaQ(QLearning):
+class Params(NamedTuple):
+    learning_rate: float
+    discount: float
+    by_visits: bool
+    planning_steps: int
+
+
+@kernel
+def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+           terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
+    q, counts, visits, model_reward, model_next, model_terminated, tried, n_tried = tables
+    td = td_update(q, counts, visits, hp, s, a, r, 0.0 if terminated else max_value(q, s2), log)
+    n_actions = q.shape[1]
+    if model_next[s, a] < 0:  # a pair new to the model joins the tried list
+        tried[n_tried[0]] = s * n_actions + a
+        n_tried[0] += 1
+    model_reward[s, a] = r
+    model_next[s, a] = s2
+    model_terminated[s, a] = terminated
+    for _ in range(hp.planning_steps):
+        cell = tried[uniform(rng, n_tried[0])]
+        ps, pa = cell // n_actions, cell % n_actions
+        ns = model_next[ps, pa]
+        future = 0.0 if model_terminated[ps, pa] else max_value(q, ns)
+        target = model_reward[ps, pa] + hp.discount * future
+        alpha = step_size(hp.learning_rate, hp.by_visits, max(counts[ps, pa], 1))
+        q[ps, pa] += alpha * (target - q[ps, pa])
+    log[0, 6] = hp.planning_steps
+    return td
+
+
+register(Params, Rule(update))
+
+
+class DynaQ(Learner):
     """Q-learning with a learned last-outcome model and simulated updates."""
 
     name = "dyna-q"
     title = "Dyna-Q"
     summary = "planning: replays a learned model between real steps, learning from fewer episodes"
+    formula = QLearning.formula
+    Params = Params
     params = (
         *COMMON_PARAMS,
         Param("planning_steps", int, 10, 0, 1000,
@@ -54,69 +90,25 @@ class DynaQ(QLearning):
     model_next: np.ndarray
     model_terminated: np.ndarray
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
-        self._tried = np.zeros(64, dtype=np.int64)  # flat cells in the order first tried
-        self._n_tried = 0
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        return (self.q, self.counts, self.visits, self.model_reward, self.model_next,
+                self.model_terminated, self._tried, self._n_tried)
 
-    def update(self, batch: Transitions) -> np.ndarray:
-        td = super().update(batch)
-        if not len(batch):
-            return td
-        self._learn_model(batch)
-        planned = self._plan(len(batch), batch.sequential)
-        if self._last is not None:
-            self._keep(batch, *self._last[1], planned)
-        return td
+    def _make_extra(self, capacity: int) -> None:
+        self._tried = np.zeros(capacity * self.n_actions, dtype=np.int64)  # in order first tried
+        self._n_tried = np.zeros(1, dtype=np.int64)
 
-    def _learn_model(self, batch: Transitions) -> None:
-        cells = batch.state * self.n_actions + batch.action
-        first = at = np.zeros(1, dtype=np.int64)
-        if len(cells) > 1:
-            # The model keeps the last of several transitions from one pair, and
-            # pairs new to it join the tried list in the order they first appear.
-            unique, first = np.unique(cells, return_index=True)
-            _, from_end = np.unique(cells[::-1], return_index=True)
-            cells, at = unique, len(batch.state) - 1 - from_end
-        model_next = self.model_next.reshape(-1)
-        fresh = model_next[cells] < 0
-        new = cells[fresh][np.argsort(first[fresh], kind="stable")]
-        model_next[cells] = batch.next_state[at]
-        self.model_reward.reshape(-1)[cells] = batch.reward[at]
-        self.model_terminated.reshape(-1)[cells] = batch.terminated[at]
-        if new.size:
-            need = self._n_tried + new.size
-            if need > len(self._tried):
-                grown = np.zeros(max(need, 2 * len(self._tried)), dtype=np.int64)
-                grown[: self._n_tried] = self._tried[: self._n_tried]
-                self._tried = grown
-            self._tried[self._n_tried : need] = new
-            self._n_tried = need
+    def _grow_extra(self, capacity: int) -> None:
+        grown = np.zeros(capacity * self.n_actions, dtype=np.int64)
+        grown[: len(self._tried)] = self._tried
+        self._tried = grown
 
-    def _plan(self, size: int, sequential: bool) -> int:
-        """`planning_steps` rounds of `size` simulated updates; how many were made."""
-        hp = self.hp
-        if not hp.planning_steps or not self._n_tried:
-            return 0
-        for _ in range(hp.planning_steps):
-            cells = self._tried[self.rng.integers(self._n_tried, size=size)]
-            targets, _ = q_learning_targets(
-                self.q,
-                self.model_reward.reshape(-1)[cells],
-                self.model_next.reshape(-1)[cells],
-                self.model_terminated.reshape(-1)[cells],
-                hp.discount,
-            )
-            self._move(self.q, self.counts, cells, targets, sequential, count=False)
-        return hp.planning_steps * size
-
-    def _describe(self, batch: Transitions, *numbers: float) -> UpdateRecord:
-        *real, planned = numbers
-        return replace(super()._describe(batch, *real), planning_updates=int(planned))
+    def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
+        return self._td_record(step, log, "max Q(s',·)", planning_updates=int(log[0, 6]))
 
     # --- saving: the order pairs were first tried drives which ones planning draws --------
     def _extra_arrays(self) -> dict[str, np.ndarray]:
-        return {"model_tried": self._tried[: self._n_tried].copy()}
+        return {"model_tried": self._tried[: int(self._n_tried[0])].copy()}
 
     def _check_arrays(self, arrays: Any, rows: int) -> None:
         super()._check_arrays(arrays, rows)
@@ -124,7 +116,7 @@ class DynaQ(QLearning):
         if model_next.size and model_next.max() >= rows:
             raise ValueError("saved 'model_next' names a state past the table")
 
-    def _load_extra_arrays(self, arrays: Any, rows: int) -> None:
+    def _load_extra_arrays(self, arrays: Any, rows: int, capacity: int) -> None:
         if "model_tried" not in arrays:
             raise ValueError("the saved state has no 'model_tried' array")
         tried = np.asarray(arrays["model_tried"], dtype=np.int64)
@@ -133,5 +125,8 @@ class DynaQ(QLearning):
             raise ValueError("saved 'model_tried' does not fit the table")
         if (np.asarray(arrays["model_next"]).reshape(-1)[tried] < 0).any():
             raise ValueError("saved 'model_tried' names a pair the model has never seen")
-        self._tried = np.concatenate([tried, np.zeros(max(64, tried.size), dtype=np.int64)])
-        self._n_tried = int(tried.size)
+        if len(np.unique(tried)) != tried.size:
+            raise ValueError("saved 'model_tried' names a pair twice")
+        self._make_extra(capacity)
+        self._tried[: tried.size] = tried
+        self._n_tried[0] = tried.size

@@ -12,12 +12,32 @@ alone; after a truncation it bootstraps from the expectation in s'.
 
 from __future__ import annotations
 
+from typing import Any, NamedTuple
+
 import numpy as np
 
-from tui_gym.algorithms.base import Learner, Transitions, UpdateRecord
-from tui_gym.algorithms.exploration import expected_values
+from tui_gym.algorithms.base import Learner, Transition, UpdateRecord
+from tui_gym.core.engine.kernel import kernel
+from tui_gym.core.engine.rules import Rule, expected_value, register, td_update
 
 __all__ = ["ExpectedSarsa"]
+
+
+class Params(NamedTuple):
+    learning_rate: float
+    discount: float
+    by_visits: bool
+
+
+@kernel
+def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+           terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
+    q, counts, visits = tables
+    future = 0.0 if terminated else expected_value(tables, hp, s2, epsilon)
+    return td_update(q, counts, visits, hp, s, a, r, future, log)
+
+
+register(Params, Rule(update))
 
 
 class ExpectedSarsa(Learner):
@@ -27,21 +47,7 @@ class ExpectedSarsa(Learner):
     title = "Expected SARSA"
     summary = "SARSA with the expectation over the next action: the same values, less noise"
     formula = "r + γ·Σ π(a|s')·Q(s',a)"
+    Params = Params
 
-    def update(self, batch: Transitions) -> np.ndarray:
-        hp = self.hp
-        future = expected_values(self.q[batch.next_state], self.epsilon)
-        future[batch.terminated] = 0.0
-        targets = batch.reward + hp.discount * future
-        return self._move_q(batch, targets, future, self.epsilon)
-
-    def _describe(self, batch: Transitions, *numbers: float) -> UpdateRecord:
-        target, future, before, after, n, epsilon = numbers
-        r = float(batch.reward[0])
-        terms: tuple[tuple[str, float], ...] = (("r", r),)
-        formula = "r"
-        if not batch.terminated[0]:
-            formula = self.formula
-            terms = (("r", r), ("γ", self.hp.discount), ("ε", float(epsilon)),
-                     ("Σ π(a|s')·Q(s',a)", float(future)))
-        return self._record(batch, formula, terms, target, before, after, int(n))
+    def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
+        return self._td_record(step, log, "Σ π(a|s')·Q(s',a)", ("ε", step.epsilon))

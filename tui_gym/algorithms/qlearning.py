@@ -10,22 +10,32 @@ still bootstraps (the time limit is not part of the game).
 
 from __future__ import annotations
 
+from typing import Any, NamedTuple
+
 import numpy as np
 
-from tui_gym.algorithms.base import Learner, Transitions, UpdateRecord
-from tui_gym.algorithms.exploration import row_max
+from tui_gym.algorithms.base import Learner, Transition, UpdateRecord
+from tui_gym.core.engine.kernel import kernel
+from tui_gym.core.engine.rules import Rule, max_value, register, td_update
 
-__all__ = ["QLearning", "q_learning_targets"]
+__all__ = ["QLearning"]
 
 
-def q_learning_targets(
-    q: np.ndarray, reward: np.ndarray, next_state: np.ndarray, terminated: np.ndarray,
-    discount: float,
-) -> tuple[np.ndarray, np.ndarray]:
-    """`r + γ max Q(s', ·)` per row (r alone after termination), and the max used."""
-    future = row_max(q[next_state])
-    future[terminated] = 0.0
-    return reward + discount * future, future
+class Params(NamedTuple):
+    learning_rate: float
+    discount: float
+    by_visits: bool
+
+
+@kernel
+def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+           terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
+    q, counts, visits = tables
+    future = 0.0 if terminated else max_value(q, s2)
+    return td_update(q, counts, visits, hp, s, a, r, future, log)
+
+
+register(Params, Rule(update))
 
 
 class QLearning(Learner):
@@ -35,20 +45,7 @@ class QLearning(Learner):
     title = "Q-learning"
     summary = "off-policy TD: learns the optimal values while it explores"
     formula = "r + γ·max Q(s',·)"
+    Params = Params
 
-    def update(self, batch: Transitions) -> np.ndarray:
-        hp = self.hp
-        targets, future = q_learning_targets(
-            self.q, batch.reward, batch.next_state, batch.terminated, hp.discount
-        )
-        return self._move_q(batch, targets, future)
-
-    def _describe(self, batch: Transitions, *numbers: float) -> UpdateRecord:
-        target, future, before, after, n = numbers
-        r = float(batch.reward[0])
-        terms: tuple[tuple[str, float], ...] = (("r", r),)
-        formula = "r"
-        if not batch.terminated[0]:
-            formula = self.formula
-            terms = (("r", r), ("γ", self.hp.discount), ("max Q(s',·)", float(future)))
-        return self._record(batch, formula, terms, target, before, after, int(n))
+    def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
+        return self._td_record(step, log, "max Q(s',·)")

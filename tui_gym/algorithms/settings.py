@@ -15,11 +15,14 @@ from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-from tui_gym.algorithms.exploration import linear_epsilon
-from tui_gym.algorithms.steps import LEARNING_RATE_SCHEDULES
+from tui_gym.core.engine.rules import epsilon_at
 from tui_gym.core.params import Param
 
-__all__ = ["COMMON_PARAMS", "Choice", "Field", "Settings"]
+__all__ = ["COMMON_PARAMS", "LEARNING_RATE_SCHEDULES", "Choice", "Field", "Settings"]
+
+# Shared by every learner: `constant` (always the learning rate) and `visits`
+# (`max(learning_rate, 1/n)` for the n-th update of a (state, action)).
+LEARNING_RATE_SCHEDULES = ("constant", "visits")
 
 
 @dataclass(frozen=True)
@@ -132,10 +135,9 @@ class Settings(Mapping[str, Any]):
     # --- deriving -----------------------------------------------------------
     def epsilon_at(self, episode: int) -> float:
         """The exploration rate for a 0-based episode number (linear decay, then flat)."""
-        return linear_epsilon(
-            episode, self.epsilon_start, self.epsilon_final, self.epsilon_decay_fraction,
-            self.episodes,
-        )
+        return float(epsilon_at(float(episode), float(self.epsilon_start),
+                                float(self.epsilon_final),
+                                float(self.epsilon_decay_fraction * self.episodes)))
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self._values)

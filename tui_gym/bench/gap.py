@@ -4,13 +4,13 @@ For every game of the registry with `bench_kwargs`, to its `bench_gap` (else
 the bound its oracle states: for a model game, 1% of the optimum's magnitude,
 beyond what no fixed policy found reaches).
 
-Ours: exactly what `tui-gym train GAME --target-gap G` runs, a `Session` on
-the default engine ("auto": the vector engine) with the game's default
-hyperparameters and the CLI's budget for a target gap (five times the
-default), `session.train(target_gap=...)` checking the exact gap as it does.
+Ours: exactly what `tui-gym train GAME --target-gap G` runs, a `Session` with
+the game's default hyperparameters and the CLI's budget for a target gap (five
+times the default), `session.train(target_gap=...)` checking the exact gap as
+it does.
 
-The tutorial: the tutorial-style loop (`tutorial.py`) with the same
-hyperparameters and budget, checking its exact gap as often.
+The tutorial: the tutorial loop (`tutorial`) with the same hyperparameters
+and budget, checking its exact gap as often.
 
 Both clocks start before the env is built and stop when the check that met
 the target returns, so both include their gap checks. Ours runs once per
@@ -124,35 +124,25 @@ def ours_once(game: Game, seed: int, target: float) -> GapRun:
     return GapRun(seed, seconds, episodes, gap, bool(outcome.reached_target))
 
 
-def tutorial_once(game: Game, seed: int, cap_seconds: float | None, target: float) -> GapRun:
+def tutorial_runs(game: Game, seeds: Sequence[int], cap_seconds: float,
+                  target: float) -> list[GapRun]:
     """The tutorial loop with the same hyperparameters and budget, capped in time."""
     hp = default_hyperparameters(game)
-    run = tutorial.time_to_gap(target, game, bench_kwargs(game), hp, seed, cap_seconds,
-                               check_every=check_every_for(hp.episodes))
-    return GapRun(seed, run.seconds, run.episodes, run.gap, run.reached)
+    tasks = [{"kind": "gap", "game": game.name, "kwargs": bench_kwargs(game), "hp": dict(hp),
+              "target": target,
+              "seed": seed, "cap": cap_seconds, "check_every": check_every_for(hp.episodes)}
+             for seed in seeds]
+    return [GapRun(seed, run["seconds"], run["episodes"], run["gap"], run["reached"])
+            for seed, run in zip(seeds, tutorial.measure(tasks), strict=True)]
 
 
-def measure_game(
-    game: Game, seeds: Sequence[int], tutorial_cap_s: float, tutorial_stage_s: float
-) -> GapResult:
-    """Ours on every seed; the tutorial on seeds in turn while the stage has time left.
-
-    The tutorial always runs at least once; each of its runs stops at
-    `tutorial_cap_s` (or at the budget), and no new run starts once the
-    tutorial has used `tutorial_stage_s` in all (so the stage takes at most
-    about `tutorial_stage_s + tutorial_cap_s`).
-    """
+def measure_game(game: Game, seeds: Sequence[int], tutorial_seeds: int,
+                 tutorial_cap_s: float) -> GapResult:
+    """Ours on every seed; the tutorial on the first `tutorial_seeds` of them, each run
+    stopped at `tutorial_cap_s` (or at the budget)."""
     target = target_for(game)
-    ours: list[GapRun] = []
-    theirs: list[GapRun] = []
-    used = 0.0
-    for seed in seeds:
-        ours.append(ours_once(game, seed, target))
-        if theirs and used >= tutorial_stage_s:
-            continue
-        run = tutorial_once(game, seed, tutorial_cap_s, target)
-        theirs.append(run)
-        used += run.seconds
+    ours = [ours_once(game, seed, target) for seed in seeds]
+    theirs = tutorial_runs(game, seeds[: max(1, tutorial_seeds)], tutorial_cap_s, target)
     return GapResult(target, tuple(ours), tuple(theirs), title_of(game))
 
 
@@ -161,10 +151,3 @@ def title_of(game: Game) -> str:
     extra = " ".join(f"{v}" if k == "map" else f"{k}={v}" for k, v in kwargs.items())
     return f"{game.title} {extra}".strip()
 
-
-def measure(
-    seeds: Sequence[int], tutorial_cap_s: float, tutorial_stage_s: float
-) -> dict[str, GapResult]:
-    """`measure_game` for every game the bench measures, by game name."""
-    return {game.name: measure_game(game, seeds, tutorial_cap_s, tutorial_stage_s)
-            for game in benched()}

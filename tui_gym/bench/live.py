@@ -3,7 +3,7 @@
 For each runner ("thread": training on a worker thread of the app's process;
 "process": training in a child process, the app's default), one repeat is:
 
-1. Headless: a `Session` of the first game (engine "auto", i.e. the vector engine)
+1. Headless: a `Session` of the first game (engine "auto": the model loop)
    trains in this process with `trainer.run(seconds=W)`, after a warm-up:
    headless episodes per second.
 2. Live: the real `TuiGymApp(session, runner=...)` on a session like it runs

@@ -1,7 +1,7 @@
 """Memory: how much the resident set grows over a long training run.
 
 A fresh Python process (so nothing else measured in this run shares its heap)
-builds a `Session` of the first game on the vector engine, trains a warm-up (the
+builds a `Session` of the first game on the engine, trains a warm-up (the
 table, numpy's buffers and the rolling statistics reach their working size),
 reads its resident set size (RSS, from /proc/self/statm; the peak from
 `resource` where /proc is missing), then trains `episodes` more the way the
@@ -54,7 +54,7 @@ def rss_bytes() -> int:
 
 
 def train_and_watch(
-    episodes: int, warmup: int, engine: str = "vector"
+    episodes: int, warmup: int, engine: str = "auto"
 ) -> dict[str, float | str]:
     """The measurement itself (run in the child process); figures as a dict."""
     import time
@@ -86,7 +86,7 @@ def train_and_watch(
     }
 
 
-def measure(episodes: int, warmup: int, engine: str = "vector") -> MemoryResult:
+def measure(episodes: int, warmup: int, engine: str = "auto") -> MemoryResult:
     """Run `train_and_watch` in a fresh interpreter and read its figures."""
     code = (
         "import json, sys; from tui_gym.bench.memory import train_and_watch; "

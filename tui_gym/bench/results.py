@@ -4,17 +4,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from tui_gym.bench.compiling import CompileResult
+from tui_gym.bench.defaults import DefaultsResult
 from tui_gym.bench.dp import DPResult
 from tui_gym.bench.gap import GapResult
 from tui_gym.bench.history import HistoryResult
-from tui_gym.bench.learners import AlgorithmSpeed, PlanningResult
+from tui_gym.bench.learners import PlanningResult
 from tui_gym.bench.live import DEFAULT_RUNNER, LiveResult
 from tui_gym.bench.map_edit import MapEditResult
 from tui_gym.bench.memory import MemoryResult
 from tui_gym.bench.programs import ProgramsResult
 from tui_gym.bench.seeds import SeedsSpeed
+from tui_gym.bench.speed import Speed
 from tui_gym.bench.startup import StartupResult
-from tui_gym.bench.throughput import ThroughputResult
 
 
 @dataclass(frozen=True)
@@ -33,17 +35,18 @@ class BenchResults:
     quick: bool
     seconds: float  # the whole run
     machine: MachineInfo
-    throughput: dict[str, ThroughputResult] = field(default_factory=dict)  # by game name
+    compile: CompileResult | None = None
+    speed: tuple[Speed, ...] | None = None  # every (game, algorithm) against the tutorial
     gap: dict[str, GapResult] = field(default_factory=dict)  # by game name
     live: dict[str, LiveResult] = field(default_factory=dict)  # by runner
     memory: MemoryResult | None = None
     startup: StartupResult | None = None
-    algorithms: tuple[AlgorithmSpeed, ...] | None = None  # vector engine vs tutorial, each
     planning: PlanningResult | None = None  # Dyna-Q against Q-learning, real episodes
     programs: ProgramsResult | None = None
     map_edit: tuple[MapEditResult, ...] | None = None  # edit to new optimum, per grid game
     history: HistoryResult | None = None  # the run history's overhead and size
     seeds: SeedsSpeed | None = None  # `compare` against the same learners in a loop
+    defaults: tuple[DefaultsResult, ...] | None = None  # the share of seeds at the bound
     dp: DPResult | None = None  # planning: sweeps, Jack's car rental, the Plan view
     errors: dict[str, str] = field(default_factory=dict)  # stage -> what went wrong
     default_runner: str = DEFAULT_RUNNER

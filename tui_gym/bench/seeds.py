@@ -1,17 +1,15 @@
-"""The comparison figure: `compare` against the same learners one after another.
+"""The comparison figure: `compare` against the same learners one after another, in the loop.
 
-`measure(seeds, episodes, tutorial_share)` times `run_compare` (the median
-of `COMPARE_REPEATS` runs) on the first game of `GAMES` the registry has:
-Q-learning and SARSA, `seeds` seeds each, `episodes` episodes each, Sutton &
-Barto's Example 6.6 settings (epsilon 0.1 throughout, step size 0.5), seeds
-batched and the batches spread over every core (the calling thread plays
-one, child processes the others, their start included). Then it times the
-same learners, algorithm by algorithm and seed by seed, in a tutorial-style
-loop (`tutorial_learners`) on the Gymnasium env the game is played on, with
-the same settings. With `tutorial_share` below 1 only that share of each
-algorithm's seeds run the loop, and its time is scaled up to all of them
-(the learners are alike, so each takes about as long).
-The speed-up is the ratio of the two times.
+`measure(seeds, episodes, tutorial_share)` times `run_compare` (the median of
+`COMPARE_REPEATS` runs) on CliffWalking: Q-learning and SARSA, `seeds` seeds
+each, `episodes` episodes each, Sutton & Barto's Example 6.6 settings
+(epsilon 0.1 throughout, step size 0.5), as the command runs it (on this
+thread or spread over the cores, as it judges). Then the tutorial loop
+(`tutorial`) plays the same learners one after another with the same
+settings; with `tutorial_share` below 1 only that share of each algorithm's
+seeds run, and the time is scaled up to all of them (the learners are alike).
+The speed-up is the ratio of the two times. The comparison's own figures are
+kept: Example 6.6 is SARSA's online return above Q-learning's.
 """
 
 from __future__ import annotations
@@ -20,18 +18,20 @@ import math
 import time
 from dataclasses import dataclass
 
+from tui_gym.bench import tutorial
 from tui_gym.bench.figures import median, ratio
-from tui_gym.bench.tutorial_learners import TutorialLearner
 
-GAMES = ("cliffwalking", "gridworld")  # the first the registry has is measured
+GAME = "cliffwalking"
 ALGORITHMS = ("q-learning", "sarsa")
-SETTINGS = {"epsilon_start": 0.1, "epsilon_final": 0.1, "learning_rate": 0.5}
+SETTINGS = {"epsilon_start": 0.1, "epsilon_final": 0.1, "learning_rate": 0.5,
+            "learning_rate_schedule": "constant"}
 COMPARE_REPEATS = 3  # the comparison is short, so its time is the median of a few runs
 
 
 @dataclass(frozen=True)
 class SeedsSpeed:
-    """`compare` against the tutorial loop on the same learners (seconds each)."""
+    """`compare` against the tutorial loop on the same learners (seconds each), and the
+    comparison's mean online return per algorithm over all its episodes."""
 
     game: str
     algorithms: tuple[str, ...]
@@ -40,7 +40,7 @@ class SeedsSpeed:
     compare_s: float
     tutorial_s: float  # all the learners (scaled up from `tutorial_learners` of them)
     tutorial_learners: int  # learners the tutorial loop actually ran
-    processes: int
+    online_returns: tuple[float, ...] = ()
 
     @property
     def speedup(self) -> float | None:
@@ -51,51 +51,25 @@ class SeedsSpeed:
         return self.seeds * len(self.algorithms)
 
 
-def pick_game() -> str:
-    """The first of `GAMES` the registry plays."""
-    from tui_gym.session.session import Session
-
-    for name in GAMES:
-        try:
-            Session(env_id=name, engine="scalar").env.close()
-        except ValueError:
-            continue
-        return name
-    raise ValueError(f"none of {', '.join(GAMES)} is a game here")
-
-
 def measure(seeds: int, episodes: int, tutorial_share: float = 1.0) -> SeedsSpeed:
     """Time the comparison, then the tutorial loop (see the module docstring)."""
-    from tui_gym.session.experiments.compare import CompareSpec, _cores, run_compare
-    from tui_gym.session.session import Session
+    from tui_gym.session.experiments.compare import CompareSpec, run_compare
 
-    game = pick_game()
-    spec = CompareSpec(game, ALGORITHMS, seeds, episodes, settings=SETTINGS)
-    compare_times = []
+    spec = CompareSpec(GAME, ALGORITHMS, seeds, episodes, settings=SETTINGS)
+    run_compare(CompareSpec(GAME, ALGORITHMS, 1, 1, settings=SETTINGS))  # compiled, once
+    times, result = [], None
     for _ in range(COMPARE_REPEATS):
         started = time.perf_counter()
-        run_compare(spec)
-        compare_times.append(time.perf_counter() - started)
-    compare_s = median(compare_times)
-
+        result = run_compare(spec)
+        times.append(time.perf_counter() - started)
+    assert result is not None
+    online = tuple(float(o.curve.mean.mean()) for o in result.outcomes)
     per_algorithm = max(1, min(seeds, math.ceil(seeds * tutorial_share)))
-    tutorial_s = 0.0
-    for name in ALGORITHMS:
-        session = Session(env_id=game, engine="scalar", algorithm=name,
-                          hp={**SETTINGS, "episodes": episodes})
-        hp = session.learner_class.settings(session.hp)
-        for seed in range(per_algorithm):
-            env = session.make_env()
-            env.reset(seed=seed)
-            learner = TutorialLearner(env, name, hp, seed)
-            started = time.perf_counter()
-            for _ in range(episodes):
-                learner.train_episode()
-            tutorial_s += time.perf_counter() - started
-            env.close()
-        session.env.close()
+    (run,) = tutorial.measure([{"kind": "learners", "game": GAME, "algorithms": ALGORITHMS,
+                                "hp": {**SETTINGS, "episodes": episodes},
+                                "seeds": per_algorithm, "episodes": episodes}])
     return SeedsSpeed(
-        game=game, algorithms=ALGORITHMS, seeds=seeds, episodes=episodes,
-        compare_s=compare_s, tutorial_s=tutorial_s * seeds / per_algorithm,
-        tutorial_learners=per_algorithm * len(ALGORITHMS), processes=_cores(),
+        game=GAME, algorithms=ALGORITHMS, seeds=seeds, episodes=episodes,
+        compare_s=median(times), tutorial_s=run["seconds"] * seeds / per_algorithm,
+        tutorial_learners=per_algorithm * len(ALGORITHMS), online_returns=online,
     )

@@ -1,198 +1,114 @@
-"""The baseline: a tutorial-style Q-learning loop on the game's own Gymnasium env.
+"""The baseline: a tutorial-style loop on the game's own Gymnasium env, the rule uncompiled.
 
-This is how Gymnasium's Q-learning tutorial trains (its card-game agent),
-written the tutorial's way and run on any game of the registry: one
-`gym.make(...)` of the game's id and arguments, a
-`defaultdict(lambda: np.zeros(n_actions))` Q-table keyed by the observation,
-epsilon-greedy with `env.action_space.sample()` and `np.argmax`, one
-Python-level update per step. Only the hyperparameters are ours, so that the
-comparison is about speed, not about settings: the game's default ones (the
-discount, the "visits" step size `max(lr, 1/n(s, a))`, epsilon from 1.0 to
-0.05 linearly over the first half of the budget).
+One loop for every game and algorithm, the one Gymnasium's tutorial writes
+for its card-game agent: `gym.make` of the game's id and arguments, and per
+step the learner's epsilon-greedy action, `env.step`, and the algorithm's own
+update rule: the same code the engine compiles, run here as plain Python
+(`NUMBA_DISABLE_JIT=1`, in a process of its own, so nothing compiled is
+reached). The hyperparameters are the game's defaults for the algorithm, so
+a comparison is about speed, not settings; nothing is recorded per episode.
 
-To keep the baseline honest rather than a strawman, the loop leaves out what
-only slows the tutorial down: no `RecordEpisodeStatistics` wrapper, no
-`training_error` list, no progress bar. What remains is what any tutorial-style
-loop must do per step: step the env, pick an action, update one Q-value.
+`measure(tasks)` runs the tasks in that process and gives each one's answer:
 
-`TutorialAgent.gap()` scores the agent's greedy policy exactly, with the
-game's own oracle (no sampling), as `Session.reference()` does for our agent:
-unseen states get the tutorial's `np.argmax` of zeros (the first action).
+- `{"kind": "rate", "game", "algorithm", "hp", "seconds", "seed"}`: steps and
+  episodes played in a window of that many seconds;
+- `{"kind": "gap", "game", "kwargs", "hp", "target", "seed", "cap", "check_every"}`:
+  Q-learning until its greedy policy's exact gap is at most the target
+  (checked as `train --target-gap` checks it), the budget ends or the time cap;
+- `{"kind": "learners", "game", "algorithms", "hp", "seeds", "episodes"}`: the
+  learners of a comparison one after another, and the seconds they took.
 """
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
 import time
-from collections import defaultdict
-from collections.abc import Hashable, Mapping
-from dataclasses import dataclass
+from collections.abc import Sequence
 from typing import Any
 
-import gymnasium as gym
-import numpy as np
+__all__ = ["measure", "play"]
 
-from tui_gym.algorithms import Settings
-from tui_gym.core.mdp import NotAvailable
-from tui_gym.core.wrappers.changes import GameChanges
-from tui_gym.games import Game
-
-GAP_CHECK_EVERY = 10_000  # episodes between exact gap checks (as `Session.train`)
+TASK_TIMEOUT_S = 3600.0  # the whole process, at most
+WARMUP_S = 0.05
 
 
-def _key(obs: Any) -> Hashable:
-    """An observation as the tutorial keys its table: as it comes (tuples, ints)."""
-    if isinstance(obs, np.ndarray):
-        return tuple(obs.tolist())
-    if isinstance(obs, np.integer):
-        return int(obs)
-    return obs
+def play(session: Any, episodes: int | None = None, seconds: float | None = None) -> int:
+    """Train the session's agent on its env in the tutorial's loop: `episodes`, or until
+    `seconds` pass (checked every step); the steps taken."""
+    env, keyer, agent = session.env, session.keyer, session.agent
+    end = time.perf_counter() + seconds if seconds is not None else None
+    steps = played = 0
+    while episodes is None or played < episodes:
+        obs, _ = env.reset()
+        state = keyer.key(obs)
+        action = agent.act(state)
+        while True:
+            obs, reward, terminated, truncated, _ = env.step(action)
+            after = keyer.key(obs)
+            chosen, _ = agent.learn(state, action, float(reward), after, terminated, truncated)
+            steps += 1
+            if end is not None and time.perf_counter() >= end:
+                return steps
+            if terminated or truncated:
+                break
+            state, action = after, chosen if chosen >= 0 else agent.act(after)
+        agent.end_episodes(1)
+        agent.begin_episode()
+        played += 1
+    return steps
 
 
-class TutorialAgent:
-    """The tutorial's agent, with the game's default schedules (see the module docstring)."""
+def _session(game: str, algorithm: str, hp: dict[str, Any], seed: int,
+             kwargs: dict[str, Any] | None = None) -> Any:
+    from tui_gym.session.session import Session
 
-    def __init__(
-        self, env: gym.Env, hp: Settings, game: Game, kwargs: Mapping[str, Any],
-        seed: int = 0,
-    ) -> None:
-        self.env = env
-        self.hp = hp
-        self.game = game
-        self.kwargs = dict(kwargs)
-        self.n_actions = len(game.action_names)
-        self.q_values: defaultdict[Hashable, np.ndarray] = defaultdict(
-            lambda: np.zeros(self.n_actions)
-        )
-        self.counts: defaultdict[Hashable, np.ndarray] = defaultdict(
-            lambda: np.zeros(self.n_actions, dtype=np.int64)
-        )
-        self.rng = np.random.default_rng(seed)
-        env.action_space.seed(seed)
-        self.episode = 0
-        self.epsilon = hp.epsilon_at(0)
-        self._changes = GameChanges.of(env, game.episode_limit(self.kwargs))
-
-    def get_action(self, obs: Hashable) -> int:
-        if self.rng.random() < self.epsilon:
-            return int(self.env.action_space.sample())
-        return int(np.argmax(self.q_values[obs]))
-
-    def update(
-        self, obs: Hashable, action: int, reward: float, terminated: bool, next_obs: Hashable
-    ) -> None:
-        future_q_value = (not terminated) * np.max(self.q_values[next_obs])
-        temporal_difference = (
-            reward + self.hp.discount * future_q_value - self.q_values[obs][action]
-        )
-        n = self.counts[obs]
-        n[action] += 1
-        lr = max(self.hp.learning_rate, 1.0 / n[action])  # the "visits" schedule
-        self.q_values[obs][action] += lr * temporal_difference
-
-    def decay_epsilon(self) -> None:
-        self.episode += 1
-        self.epsilon = self.hp.epsilon_at(self.episode)
-
-    def policy(self) -> np.ndarray:
-        """The greedy policy on the game's base states, one-hot rows: `np.argmax`'s choice."""
-        states = self.game.states.base_observations(self.kwargs)
-        assert not isinstance(states, NotAvailable), states
-        one_hot = np.zeros((len(states), self.n_actions))
-        for row, obs in enumerate(states):
-            values = self.q_values.get(_key(obs))
-            one_hot[row, int(np.argmax(values)) if values is not None else 0] = 1.0
-        return one_hot
-
-    def gap(self) -> float:
-        """The exact distance of the greedy policy's value from the optimum's."""
-        reference = self.game.oracle.reference(self.policy(), self.kwargs, self._changes)
-        assert not isinstance(reference, NotAvailable), reference
-        return float(reference.figures["gap"])
+    session = Session(game, kwargs, algorithm=algorithm, hp=hp, seed=seed, engine="env")
+    session.env.reset(seed=seed)
+    return session
 
 
-def train_episodes(agent: TutorialAgent, episodes: int) -> None:
-    """The tutorial's training loop, for `episodes` more episodes."""
-    env = agent.env
-    for _ in range(episodes):
-        obs, _info = env.reset()
-        obs = _key(obs)
-        done = False
-        while not done:
-            action = agent.get_action(obs)
-            next_obs, reward, terminated, truncated, _info = env.step(action)
-            next_obs = _key(next_obs)
-            agent.update(obs, action, float(reward), terminated, next_obs)
-            done = terminated or truncated
-            obs = next_obs
-        agent.decay_epsilon()
+def _run(task: dict[str, Any]) -> dict[str, Any]:
+    kind = task["kind"]
+    if kind == "rate":
+        session = _session(task["game"], task["algorithm"], task["hp"], task["seed"])
+        play(session, seconds=WARMUP_S)  # first calls (imports, tables) off the clock
+        first, began = session.agent.episode, time.perf_counter()
+        steps = play(session, seconds=task["seconds"])
+        elapsed = time.perf_counter() - began
+        return {"steps_per_second": steps / elapsed, "episodes": session.agent.episode - first,
+                "seconds": elapsed}
+    if kind == "gap":
+        began = time.perf_counter()
+        session = _session(task["game"], "q-learning", task["hp"], task["seed"], task["kwargs"])
+        budget, gap = session.hp.episodes, float("inf")
+        while session.agent.episode < budget:
+            play(session, min(task["check_every"], budget - session.agent.episode))
+            gap = session.reference().figures["gap"]
+            if gap <= task["target"] or time.perf_counter() - began >= task["cap"]:
+                break
+        return {"seconds": time.perf_counter() - began, "episodes": session.agent.episode,
+                "gap": gap, "reached": gap <= task["target"]}
+    began = time.perf_counter()
+    for algorithm in task["algorithms"]:
+        for seed in range(task["seeds"]):
+            play(_session(task["game"], algorithm, task["hp"], seed), task["episodes"])
+    return {"seconds": time.perf_counter() - began}
 
 
-def make_agent(
-    game: Game, kwargs: Mapping[str, Any], hp: Settings | None = None, seed: int = 0
-) -> TutorialAgent:
-    """A fresh tutorial agent on a fresh `gym.make` of the game, seeded."""
-    import tui_gym.envs
-    from tui_gym.session.session import default_settings
-
-    tui_gym.envs.register_envs()
-    normal = game.normalize_kwargs(kwargs)
-    env = gym.make(game.env_id, **game.make_kwargs(normal))
-    env.reset(seed=seed)
-    hp = hp or default_settings(game, "q-learning", normal)
-    return TutorialAgent(env, hp, game, normal, seed=seed)
+def measure(tasks: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Run `tasks` in a process where nothing is compiled; their answers, in order."""
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1"}
+    done = subprocess.run(
+        [sys.executable, "-m", "tui_gym.bench.tutorial"], input=json.dumps(list(tasks)),
+        capture_output=True, text=True, env=env, timeout=TASK_TIMEOUT_S, check=False,
+    )
+    if done.returncode != 0:
+        raise RuntimeError(f"the tutorial loop failed: {done.stderr.strip()[-300:]}")
+    return list(json.loads(done.stdout))
 
 
-def episodes_per_second(
-    seconds: float, game: Game, kwargs: Mapping[str, Any], hp: Settings, seed: int = 0
-) -> float:
-    """Train a fresh agent for about `seconds`; its episodes per second."""
-    agent = make_agent(game, kwargs, hp, seed)
-    done = 0
-    batch = 50
-    start = time.perf_counter()
-    while True:
-        train_episodes(agent, batch)
-        done += batch
-        elapsed = time.perf_counter() - start
-        if elapsed >= seconds:
-            agent.env.close()
-            return done / elapsed
-
-
-@dataclass(frozen=True)
-class GapRun:
-    """How a run toward a target gap went."""
-
-    seconds: float  # wall time, building the env included
-    episodes: int
-    gap: float  # the last gap checked
-    reached: bool  # False: stopped by the budget or the time cap (seconds is a lower bound)
-
-
-def time_to_gap(
-    target: float,
-    game: Game,
-    kwargs: Mapping[str, Any],
-    hp: Settings,
-    seed: int = 0,
-    cap_seconds: float | None = None,
-    check_every: int = GAP_CHECK_EVERY,
-) -> GapRun:
-    """Train until the exact gap is at most `target` (checked every `check_every` episodes),
-    the budget `hp.episodes` runs out, or `cap_seconds` pass."""
-    start = time.perf_counter()
-    agent = make_agent(game, kwargs, hp, seed)
-    done = 0
-    gap = float("inf")
-    while done < hp.episodes:
-        n = min(check_every, hp.episodes - done)
-        train_episodes(agent, n)
-        done += n
-        gap = agent.gap()
-        if gap <= target:
-            break
-        if cap_seconds is not None and time.perf_counter() - start >= cap_seconds:
-            break
-    seconds = time.perf_counter() - start
-    agent.env.close()
-    return GapRun(seconds, done, gap, gap <= target)
+if __name__ == "__main__":
+    print(json.dumps([_run(task) for task in json.loads(sys.stdin.read())]))

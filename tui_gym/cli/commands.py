@@ -28,7 +28,7 @@ from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, Field, Learner, algori
 from tui_gym.benchmark.command import cmd_benchmark
 from tui_gym.cli.flags import flag, game_kwargs, hyperparameters
 from tui_gym.cli.maps_command import cmd_maps
-from tui_gym.cli.output import CliError, key_value_table, print_json
+from tui_gym.cli.output import CliError, key_value_table, print_json, say_status
 from tui_gym.cli.runs_command import recorded
 from tui_gym.core.params import Param
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
@@ -242,6 +242,7 @@ def _session_from_args(args: argparse.Namespace) -> Session:
     if session.skipped:
         reasons = "; ".join(reason for _, reason in session.skipped)
         raise CliError(f"wrapper does not fit {env_id}: {reasons}")
+    session.trainer.on_status = say_status
     return session
 
 
@@ -410,6 +411,9 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
     if run_id is not None:
         rows.append(("run history", f"run {run_id} in {recording.path}"))
     out.print(key_value_table("Training summary", rows))
+    reference = session.reference()
+    if reference is not None and session.shortfall(reference):  # why it ends short, if it does
+        out.print(session.shortfall(reference), markup=False)
     return 0
 
 

@@ -29,7 +29,7 @@ from rich.table import Table
 from rich.text import Text
 
 from tui_gym.algorithms import ALGORITHMS
-from tui_gym.cli.output import CliError, print_json
+from tui_gym.cli.output import CliError, print_json, say_status
 from tui_gym.cli.types import file_name as _path
 from tui_gym.cli.types import int_in as _int_in
 from tui_gym.cli.types import output_file
@@ -252,7 +252,8 @@ def cmd_compare(args: argparse.Namespace, out: Console) -> int:
             result = _run_with_progress(
                 out, args.json, "comparing",
                 lambda progress, stop: run_compare(spec, progress=progress, stop=stop,
-                                                   history=history, processes=args.processes),
+                                                   history=history, processes=args.processes,
+                                                   status=say_status),
             )
         except CompareError as exc:
             raise CliError(str(exc)) from None
@@ -388,7 +389,8 @@ def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
             result = _run_with_progress(
                 out, args.json, "sweeping",
                 lambda progress, stop: run_sweep(spec, progress=progress, stop=stop,
-                                                 history=history, processes=args.processes),
+                                                 history=history, processes=args.processes,
+                                                 status=say_status),
             )
         except CompareError as exc:
             raise CliError(str(exc)) from None

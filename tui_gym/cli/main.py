@@ -136,8 +136,9 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--wrapper", action="append", default=[], metavar="SPEC",
                        help=WRAPPER_HELP)
     train.add_argument(
-        "--engine", choices=("auto", "scalar", "vector"), default="auto",
-        help="auto: the vector engine when the wrappers have a batched form (default)",
+        "--engine", choices=("auto", "model", "env"), default="auto",
+        help="auto: the compiled loop on the game's model when the wrappers let it follow "
+        "(default); env: one transition at a time on the Gymnasium env",
     )
     train.add_argument(
         "--target-gap", type=finite_number, metavar="G",

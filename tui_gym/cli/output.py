@@ -17,11 +17,13 @@ from collections.abc import Sequence
 from typing import Any
 
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from tui_gym.core.text import visible
 
-__all__ = ["JSON_SCHEMAS", "CliError", "OutConsole", "key_value_table", "print_json", "readable"]
+__all__ = ["JSON_SCHEMAS", "CliError", "OutConsole", "key_value_table", "print_json", "readable",
+           "say_status"]
 
 # The version of each command's JSON object (see the module docstring).
 JSON_SCHEMAS: dict[str, int] = {
@@ -43,7 +45,7 @@ JSON_SCHEMAS: dict[str, int] = {
     "compare": 1,
     "sweep": 1,
     "screenshots": 1,
-    "bench": 1,
+    "bench": 2,
     "benchmark": 1,
 }
 
@@ -99,3 +101,9 @@ def key_value_table(title: str, rows: Sequence[tuple[str, str]]) -> Table:
     for key, value in rows:
         table.add_row(key, value)
     return table
+
+
+def say_status(text: str) -> None:
+    """A line of the engine's ("compiling the learners, once"), on standard error."""
+    if text:
+        Console(stderr=True).print(escape(text), style="dim")

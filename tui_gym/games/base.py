@@ -15,8 +15,8 @@ its board kind and its words for an episode, and hands out four roles:
 
 Every role method is total: where a game has nothing to say it returns
 `NotAvailable` (with the reason), an empty answer or a plain fallback, and
-never raises for a state it cannot read. Optionally a game supplies a
-batched form for the vector engine (`batched_form`).
+never raises for a state it cannot read. A game with finitely many states
+hands the engine its model as the wrappers make it (`training_model`).
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ from tui_gym.games.words import (
 )
 
 if TYPE_CHECKING:
-    from tui_gym.core.vector.plan import BatchedForm
+    from tui_gym.core.mdp import FiniteMDP
     from tui_gym.games.planning import PlanModel
     from tui_gym.session.play import PlayStep, Scorecard
 
@@ -62,6 +62,7 @@ __all__ = [
     "Scope",
     "StateSpace",
     "TallyWord",
+    "TrainingModel",
     "all_tied",
     "greedy_probabilities",
 ]
@@ -124,6 +125,15 @@ class TallyWord(NamedTuple):
     label: str
     tone: str = ""
     always: bool = True
+
+
+@dataclass(frozen=True, eq=False)
+class TrainingModel:
+    """A game's model as the wrappers make it, for the engine: `model`, and `rows`, the
+    agent's table row of each model state (None: state s is row s)."""
+
+    model: FiniteMDP
+    rows: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -503,6 +513,9 @@ class Game:
     # Hyperparameters that learn this game well, over each algorithm's own defaults:
     # "*" for every algorithm, then an algorithm's registry name for its own (see the README).
     hyperparameters: ClassVar[Mapping[str, Mapping[str, Any]]] = {}
+    # Algorithms (by registry name) whose defaults end short of the game's bound by their
+    # nature, not by chance, and why, in a sentence: what the run teaches (see the README).
+    lessons: ClassVar[Mapping[str, str]] = {}
 
     def __init__(self) -> None:
         self.states: StateSpace = StateSpace(self)
@@ -616,10 +629,13 @@ class Game:
         listed = ", ".join(f"{i}={n}" for i, n in enumerate(names))
         raise ValueError(f"invalid action {action!r}; valid actions: {listed}")
 
-    # --- the vector engine --------------------------------------------------
-    def batched_form(self, kwargs: Mapping[str, Any]) -> BatchedForm | NotAvailable:
-        """The game on numpy arrays for the vector engine, or why there is none."""
-        return NotAvailable(f"{self.title} has no batched form")
+    # --- the engine --------------------------------------------------------
+    def training_model(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> TrainingModel | NotAvailable:
+        """The game's model as the wrappers read into `changes` make it, whose states the
+        agent's table rows follow, or why there is none."""
+        return NotAvailable(f"{self.title} has no exact model")
 
 
 def strip_ansi(text: str) -> str:

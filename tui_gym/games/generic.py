@@ -2,8 +2,8 @@
 
 `GenericGame(env_id)` plays an env whose unwrapped form has `Discrete`
 observation and action spaces and a table `P` (as Gymnasium's toy-text envs
-do), with no code written for it: its exact model, optimum and batched form
-come from the table (`ModelGame`); its board is its own text render (kind
+do), with no code written for it: its exact model, optimum and the model it
+trains on come from the table (`ModelGame`); its board is its own text render (kind
 "text"); its actions are named by their numbers; its heatmap is a state x
 action table, in pages of `PAGE` states picked on a small panel when there
 are more.

@@ -10,7 +10,7 @@ code at all:
   definition of `tui_gym.core.mdp` (over the episode limit in force, gamma 1),
   with the wrappers' reward changes and time limits taken into account;
 - the coach's action values in the current state, for the steps left;
-- the heatmap's marks, and the batched form the vector engine runs.
+- the heatmap's marks, and the model the engine trains on.
 
 **Ties.** With gamma 1 a wasted step costs nothing while time remains, so in
 a deterministic game many moves keep the optimum's value. The coach and the
@@ -68,6 +68,7 @@ from tui_gym.games.base import (
     ReferenceMetrics,
     Scope,
     StateSpace,
+    TrainingModel,
     greedy_probabilities,
 )
 from tui_gym.games.planning import PlanModel
@@ -165,17 +166,15 @@ def _slope(changes: GameChanges) -> float | None:
 
 def elapsed_steps(env: Any) -> int | None:
     """Steps taken this episode as the env's tightest `TimeLimit` counts them, or None."""
-    from gymnasium.wrappers import TimeLimit
+    from tui_gym.core.wrappers import chain
 
     best: tuple[int, int] | None = None  # (steps left, elapsed)
-    layer = env
-    while hasattr(layer, "env"):
-        if isinstance(layer, TimeLimit):
-            limit = int(layer._max_episode_steps)
-            elapsed = int(getattr(layer, "_elapsed_steps", 0) or 0)
-            if best is None or limit - elapsed < best[0]:
-                best = (limit - elapsed, elapsed)
-        layer = layer.env
+    for layer in chain.layers(env):
+        limit = chain.time_limit(layer)
+        if limit is not None:
+            done = chain.elapsed(layer)
+            if best is None or limit - done < best[0]:
+                best = (limit - done, done)
     return None if best is None else best[1]
 
 
@@ -611,16 +610,18 @@ class ModelGame(Game):
             return None
         return None if state is None else int(state)
 
-    def batched_form(self, kwargs: Mapping[str, Any]) -> Any:
-        model = self.base_model(kwargs)
-        if isinstance(model, NotAvailable):
-            return model
+    def training_model(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> TrainingModel | NotAvailable:
+        oracle = self.oracle
+        assert isinstance(oracle, ModelOracle)
+        exact = oracle.exact(kwargs, changes)
+        if isinstance(exact, NotAvailable):
+            return exact
         if len(self.phase_starts(kwargs)) > 1:
-            return NotAvailable(f"{self.title} changes as it is played; the vector engine "
-                                "plays one model")
-        if model.reward_std is not None and model.reward_std.any():
-            return NotAvailable(f"{self.title} draws rewards with noise; the vector engine "
-                                "pays their means")
-        from tui_gym.core.vector.model import model_form
-
-        return model_form(self.title, model)
+            return NotAvailable(f"{self.title} changes as it is played")
+        if exact.model.reward_std is not None and exact.model.reward_std.any():
+            return NotAvailable(f"{self.title} draws rewards with noise")
+        if not exact.scope.exact:
+            return NotAvailable(exact.scope.note)
+        return TrainingModel(exact.model)

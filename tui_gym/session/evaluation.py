@@ -28,7 +28,7 @@ from tui_gym.core.obskey import ObservationKeyer
 if TYPE_CHECKING:
     from tui_gym.games.base import Narrator
 
-# Steps one evaluation may spend, about a second of scalar stepping: 10,000 short
+# Steps one evaluation may spend, about a second of stepping the env: 10,000 short
 # card hands fit (about 15,000 steps), while a policy that loops until a 300-step
 # time limit stops after some 70 episodes instead of 3,000,000 steps. Games with an
 # exact model get their policy's value from it; the sample only adds tallies.

@@ -36,9 +36,11 @@ import threading
 import time
 import traceback
 from dataclasses import dataclass
+from multiprocessing import resource_tracker
 from typing import TYPE_CHECKING, Any
 
-from tui_gym.core.training import StepEvent, TrainerProgress, TrainingSnapshot
+from tui_gym.core.engine.stats import StepEvent, TrainingSnapshot
+from tui_gym.core.engine.trainer import TrainerProgress
 from tui_gym.session.runner import TrainingRunner
 from tui_gym.session.speeds import DEFAULT_SPEED, SPEEDS, Speed
 
@@ -48,12 +50,14 @@ if TYPE_CHECKING:
     from tui_gym.session.session import Session
 
 SNAPSHOT_INTERVAL = 0.05  # seconds between snapshots sent by the child
+ALIVE_SECONDS = 0.1  # a child holding the agent speaks at least this often (while compiling)
 ANIMATED_POLL = 0.01  # the child's look-out at animated speeds: every step is sent
 REPLY_TIMEOUT = 10.0  # seconds `wait_idle()` waits by default for the agent to come back
 HANG_SECONDS = 10.0  # silence while holding the agent after which the child is replaced
 RESPAWN_LIMIT = 3  # deaths within RESPAWN_WINDOW after which no new child is started
 RESPAWN_WINDOW = 60.0
 EXIT_SECONDS = 1.0  # how long `close()` lets the child end by itself before killing it
+SPAWN_DELAY = 1.0  # the first child waits this long (or for a request): the app draws first
 
 
 @dataclass(frozen=True)
@@ -87,12 +91,11 @@ class Handover:
     hp: Any  # the algorithm's Settings
     agent: Any  # the learner (any tui_gym.algorithms.Learner)
     progress: TrainerProgress
-    engine: str = ""  # the engine that trained last ("scalar" while animating)
 
 
 def _handover(session: Session) -> Handover:
     return Handover(SessionSpec.of(session), session.hp, session.agent,
-                    session.trainer.progress(), session.trainer.engine)
+                    session.trainer.progress())
 
 
 @dataclass
@@ -229,7 +232,12 @@ class ProcessRunner:
         self._broken = ""  # why no new child is started (it kept dying), or empty
         self._closed = False
         self._ended: _Child | None = None  # the child `close()` ended
-        self._child: _Child | None = _Child(self._inbox, self._heard)
+        # The first child starts once the app has drawn (or at the first request). The
+        # resource tracker every child registers with starts now: under a running app the
+        # standard error it hands on is Textual's capture, which has no file descriptor.
+        resource_tracker.ensure_running()
+        self._child: _Child | None = None
+        self._spawn_at = time.monotonic() + SPAWN_DELAY
 
     # --- what the owner reads ---------------------------------------------------
     @property
@@ -296,6 +304,7 @@ class ProcessRunner:
     @property
     def child_pid(self) -> int | None:
         """The training process's id (None when there is none)."""
+        self._spawn()
         child = self._child
         return None if child is None else child.process.pid
 
@@ -342,30 +351,34 @@ class ProcessRunner:
             return False
         return self.start()
 
-    def run_one_episode(self) -> None:
-        """Play one training episode in the child (ignored while running or busy)."""
-        self.update()
-        if self._broken:
-            self._error = RuntimeError(self._broken)
-            return
-        if self._want_run or self._pending is not None:
-            return
-        self._error = None
-        self._want_one = True
-        self._sync()
+    def run_one_episode(self) -> bool:
+        """Play one training episode in the child (ignored while running or busy); False,
+        as `start`, when the budget is used up."""
+        return self._one("one", self._want_run or self._pending is not None)
 
-    def run_one_step(self) -> None:
+    def run_one_step(self) -> bool:
         """Take one training step (one transition) in the child, explained in
-        `last_event.last_update` (ignored while running or busy)."""
+        `last_event.last_update` (ignored while running or busy); False, as `start`,
+        when the budget is used up."""
+        return self._one("step", self._wanted() or self._pending is not None)
+
+    def _one(self, kind: str, busy: bool) -> bool:
         self.update()
         if self._broken:
             self._error = RuntimeError(self._broken)
-            return
-        if self._wanted() or self._pending is not None:
-            return
+            return True
+        if self.session.trainer.remaining == 0 and self._pending is None:
+            self._finished = True
+            return False
+        if busy:
+            return True
         self._error = None
-        self._want_step = True
+        if kind == "one":
+            self._want_one = True
+        else:
+            self._want_step = True
         self._sync()
+        return True
 
     def set_hyperparameters(self, hp: Any) -> None:
         """New hyperparameters for the session, taking effect at once: the child training
@@ -447,7 +460,7 @@ class ProcessRunner:
             trainer = request.trainer
             if current:
                 # The session may have been rebuilt around the same agent meanwhile.
-                trainer = self.session.trainer_for(handover.engine == "scalar")
+                trainer = self.session.trainer
                 request.agent.set_hyperparameters(self.session.hp)
             trainer.restore(handover.progress)
         except Exception as exc:  # a handover that does not fit: keep what we have
@@ -513,8 +526,15 @@ class ProcessRunner:
             request.pause_sent = True
             self._child.send(("pause", request.number))
 
+    def _spawn(self) -> None:
+        """The first child, once it is due (see `SPAWN_DELAY`) or asked for."""
+        if self._child is None and self._ended is None and not (self._closed or self._broken):
+            self._child = _Child(self._inbox, self._heard)
+
     def _sync(self) -> None:
         """Send the request the owner wants, once the child holds no agent."""
+        if self._wanted() or time.monotonic() >= self._spawn_at:
+            self._spawn()
         child = self._child
         if self._pending is not None or child is None or self._closed:
             return
@@ -554,6 +574,7 @@ def child_main(conn: Connection) -> None:
     holding: int | None = None  # the number of the request whose agent the child holds
     holding_kind = ""
     last_sent = -1
+    last_word = time.monotonic()
 
     def hand_back(reason: str, error: str | None = None) -> None:
         nonlocal holding
@@ -596,7 +617,7 @@ def child_main(conn: Connection) -> None:
         session.hp = handover.hp
         session.agent.assign_from(handover.agent)
         session.agent.set_hyperparameters(handover.hp)
-        session.trainer_for(handover.engine == "scalar").restore(handover.progress)
+        session.trainer.restore(handover.progress)
 
     while True:
         try:
@@ -622,6 +643,10 @@ def child_main(conn: Connection) -> None:
             if snapshot.version != last_sent:
                 last_sent = snapshot.version
                 conn.send(("snapshot", holding, snapshot, runner.last_scene, runner.last_event))
+                last_word = time.monotonic()
+            elif time.monotonic() - last_word > ALIVE_SECONDS:  # e.g. the engine compiling
+                conn.send(("alive",))
+                last_word = time.monotonic()
             if idle:
                 if runner.error is not None:
                     hand_back("error", f"{runner.error}")

@@ -24,7 +24,8 @@ import threading
 import time
 from typing import TYPE_CHECKING, Any
 
-from tui_gym.core.training import StepEvent, Trainer, TrainingSnapshot
+from tui_gym.core.engine.stats import StepEvent, TrainingSnapshot
+from tui_gym.core.engine.trainer import Trainer
 from tui_gym.session.speeds import DEFAULT_SPEED, SPEEDS, Speed
 
 if TYPE_CHECKING:
@@ -124,18 +125,28 @@ class TrainingRunner:
             return False
         return self.start()
 
-    def run_one_episode(self) -> None:
-        """Play one training episode on the worker (ignored while running)."""
+    def run_one_episode(self) -> bool:
+        """Play one training episode on the worker (ignored while running); False, as
+        `start`, when the budget is used up."""
+        if self.session.trainer.remaining == 0:
+            self.finished = True
+            return False
         if not self._want_run:
             self.error = None
             self._control(want_one=True)
+        return True
 
-    def run_one_step(self) -> None:
-        """Take one training step (one transition) on the scalar engine, explained in
-        `last_event.last_update` (ignored while running or busy with an episode)."""
+    def run_one_step(self) -> bool:
+        """Take one training step (one transition) on the env, explained in
+        `last_event.last_update` (ignored while running or busy with an episode); False,
+        as `start`, when the budget is used up."""
+        if self.session.trainer.remaining == 0:
+            self.finished = True
+            return False
         if not (self._want_run or self._want_one or self._want_step):
             self.error = None
             self._control(want_step=True)
+        return True
 
     def set_hyperparameters(self, hp: Any) -> None:
         """New hyperparameters for the session, taking effect at once, mid-run too
@@ -201,13 +212,13 @@ class TrainingRunner:
     def _piece(self) -> float | None:
         """One piece of work; returns how long to pause before the next one."""
         speed = self.speed
+        trainer = self.session.trainer
         if self._want_step and not self._want_run:
-            self._animated_step(self.session.scalar_trainer())
+            self._animated_step(trainer)
             with self._cond:
                 self._want_step = False
                 self._cond.notify_all()
             return None
-        trainer = self.session.trainer_for(speed.animated)
         if self._want_run:
             if trainer.remaining == 0:
                 self.finished = True
@@ -216,7 +227,7 @@ class TrainingRunner:
                 trainer.publish()
                 return None
             if speed.animated:
-                self._animated_step(self.session.scalar_trainer())
+                self._animated_step(trainer)
                 return speed.step_delay
             trainer.run(
                 episodes=trainer.remaining, seconds=CHUNK_SECONDS, stop=_Stopped(self)
@@ -225,7 +236,7 @@ class TrainingRunner:
         if not self._want_one:
             return None
         if speed.animated:
-            event = self._animated_step(self.session.scalar_trainer())
+            event = self._animated_step(trainer)
             if event.episode_done is None:
                 return speed.step_delay
         else:

@@ -5,13 +5,12 @@ tests, the JSON-lines protocol). It is where game, wrappers, learner and engine
 meet: it finds the game (`tui_gym.games.game_for`), builds the env through
 the wrapper catalog with the game's arguments and the learner from the
 `ALGORITHMS` registry with the game's defaults for that algorithm, hands the
-vector engine the game's batched form, keeps the agent when a rebuild leaves
+trainer the game's model as the wrappers make it (when the game has one and
+the wrappers let the model follow), keeps the agent when a rebuild leaves
 the observation keys meaning the same thing (and says so when it cannot),
 changes hyperparameters live (only a change of algorithm needs a fresh
 learner), projects the learner's values onto the game's base states for
 heatmaps and the exact reference, evaluates, saves and loads.
-`vector_support` says whether the vector engine can run a game with some
-wrappers.
 """
 
 from __future__ import annotations
@@ -26,23 +25,25 @@ import numpy as np
 
 from tui_gym.algorithms import DEFAULT_ALGORITHM, Learner, Settings
 from tui_gym.algorithms import algorithm as learner_class_named
+from tui_gym.core.engine.loop import ModelArrays
+from tui_gym.core.engine.stats import TrainingSnapshot
+from tui_gym.core.engine.trainer import Trainer
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.obskey import ObservationKeyer
-from tui_gym.core.training import Engine, Trainer, TrainingSnapshot
-from tui_gym.core.vector import NoBatchedForm, VectorTrainer, plan_for_env
 from tui_gym.core.wrappers import (
     CATALOG,
     WrapperChoice,
     build_env,
     build_env_lenient,
+    chain,
 )
 from tui_gym.core.wrappers.changes import GameChanges
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
-from tui_gym.games.base import FixedBound, ReferenceMetrics
+from tui_gym.games.base import FixedBound, ReferenceMetrics, TrainingModel
 from tui_gym.session.evaluation import EvalReport, evaluate
 
-ENGINES = ("auto", "scalar", "vector")
+ENGINES = ("auto", "model", "env")
 # With a target gap and no budget given, the budget is the game's default times this,
 # so epsilon decays more slowly (the run stops at the target anyway).
 TARGET_GAP_BUDGET_FACTOR = 5
@@ -124,7 +125,7 @@ class Session:
     choices: tuple[WrapperChoice, ...]
     hp: Settings
     seed: int
-    engine: str  # "auto" (vector when the wrappers allow), "scalar" or "vector"
+    engine: str  # "auto" (the model when the wrappers allow), "model" or "env"
     algorithm: str  # a name in the ALGORITHMS registry
 
     def __init__(
@@ -176,57 +177,48 @@ class Session:
             self._built.n_actions, self.hp, n_states=self.keyer.n_states, seed=self.seed
         )
 
-    def _new_trainer(self) -> Engine:
-        """The trainer for the chosen engine; `engine_reason` says which and why."""
-        self._scalar: Trainer | None = None
-        self._vector: VectorTrainer | None = None
-        if self.engine != "scalar":
-            try:
-                vector = self.vector_trainer(seed=self.seed)
-            except (NoBatchedForm, ValueError) as exc:
-                reason = str(exc).removeprefix("scalar engine: ")
-                if self.engine == "vector":
-                    raise ValueError(f"the vector engine cannot run this: {reason}") from None
-                self.engine_reason = f"scalar engine: {reason}"
-            else:
-                self._vector = vector
-                self.engine_reason = vector.plan.describe()
-                return vector
+    def _new_trainer(self) -> Trainer:
+        """The trainer, on the game's model where there is one (`engine_reason` says which
+        loop trains and why)."""
+        model, self.engine_reason = self._training_model()
+        return Trainer(self.env, self.agent, self.keyer, model=model, seed=self.seed,
+                       reason=self.engine_reason)
+
+    def _training_model(self) -> tuple[ModelArrays | None, str]:
+        """The model the compiled loop trains on, or None and why not (`training` keeps
+        the game's model itself)."""
+        self.training: TrainingModel | None = None
+        if self.engine == "env":
+            return None, "env: chosen"
+        changed = [c.name for c in self.applied if CATALOG[c.name].changes_observation]
+        others = self.changes.others
+        found: Any = None
+        if changed:
+            reason = f"{', '.join(changed)} change{'s' if len(changed) == 1 else ''} the " \
+                "observations"
+        elif others:
+            reason = f"{', '.join(others)} change{'s' if len(others) == 1 else ''} the " \
+                "game beyond what its model follows"
+        elif not self.keyer.dense:
+            reason = "its observations are not table rows"
         else:
-            self.engine_reason = "scalar engine: chosen"
-        self._scalar = Trainer(self.env, self.agent, self.keyer, seed=self.seed)
-        return self._scalar
-
-    def vector_trainer(self, **options: Any) -> VectorTrainer:
-        """A vector engine on this session's env and learner, with the game's batched form
-        (`NoBatchedForm` when there is none); `options` go to `VectorTrainer` (`seed`,
-        `num_envs`, ...). The session's own trainer is left as it is."""
-        form = self.game.batched_form(self.env_kwargs)
-        limit = self.game.episode_limit(self.env_kwargs)
-        return VectorTrainer(self.env, self.agent, self.keyer, form=form, made_limit=limit,
-                             **options)
-
-    def scalar_trainer(self) -> Trainer:
-        """The scalar engine, made the session's trainer (animation needs single steps);
-        switching hands the counts and statistics over, so the run reads as one."""
-        if self._scalar is None or self.trainer is not self._scalar:
-            if self._scalar is None:
-                self._scalar = Trainer(self.env, self.agent, self.keyer, seed=self.seed + 1)
-            self._scalar.adopt_progress(self.trainer)
-            self.trainer = self._scalar
-        return self._scalar
-
-    def trainer_for(self, animated: bool) -> Engine:
-        """The trainer to use now: animation needs single steps, so the scalar engine.
-
-        Switching hands the counts and statistics over, so the run reads as one.
-        """
-        if animated:
-            return self.scalar_trainer()
-        if self._vector is not None and self.trainer is not self._vector:
-            self._vector.adopt_progress(self.trainer)
-            self.trainer = self._vector
-        return self.trainer
+            found = self.game.training_model(self.env_kwargs, self.changes)
+            reason = found.reason if isinstance(found, NotAvailable) else ""
+        if not reason:
+            model = found.model
+            rows = np.arange(model.n_states) if found.rows is None else found.rows
+            if model.n_actions != self._built.n_actions or rows.max() >= (self.keyer.n_states or 0):
+                reason = "its model does not fit the env's observations and actions"
+            else:
+                names = [label.partition("(")[0] for label in self.changes.reward_wrappers]
+                if self.changes.chosen_time_limit:
+                    names.append("TimeLimit")
+                text = f"model: {self.game.title}" + (f" with {', '.join(names)}" if names else "")
+                self.training = TrainingModel(model, rows)
+                return ModelArrays.of(model, rows), text
+        if self.engine == "model":
+            raise ValueError(f"the model loop cannot train this: {reason}")
+        return None, f"env: {reason}"
 
     @property
     def applied(self) -> tuple[WrapperChoice, ...]:
@@ -277,7 +269,7 @@ class Session:
         self._install(built)
         if keep:
             self.trainer = self._new_trainer()
-            self.trainer.adopt_progress(old_trainer)
+            self.trainer.restore(old_trainer.progress())
             notice = "Env rebuilt; the agent is kept (observations mean the same)."
         else:
             self.agent = self._new_agent()
@@ -367,13 +359,8 @@ class Session:
             spec = CATALOG[choice.name]
             if spec.changes_observation and choice.name not in STATELESS_OBSERVATION_WRAPPERS:
                 return None
-        layers = []
-        env: Any = self.env
-        while isinstance(env, gym.Wrapper):
-            if isinstance(env, gym.ObservationWrapper):
-                layers.append(env)
-            env = env.env
-        layers.reverse()  # innermost first
+        layers = [layer for layer in chain.layers(self.env)
+                  if isinstance(layer, gym.ObservationWrapper)]
         observations = self.game.states.base_observations(self.env_kwargs)
         if isinstance(observations, NotAvailable):
             return None
@@ -493,6 +480,19 @@ class Session:
         when wrappers hide the base states."""
         return self.game.oracle.agent_figures(self.base_q(snapshot),
                                               self.exact_kwargs(snapshot), self.changes)
+
+    def shortfall(self, reference: ReferenceMetrics) -> str:
+        """When the greedy policy `reference` measured ends short of the game's stated
+        bound, a sentence saying so and why ('' when it meets it, or there is none)."""
+        bound = self.game.oracle.bound(self.env_kwargs, self.changes)
+        if isinstance(bound, NotAvailable) or bound.met(reference.figures):
+            return ""
+        value = reference.figures.get(bound.figure, float("nan"))
+        why = self.game.lessons.get(self.algorithm) or (
+            "the greedy policy has not got there yet with these settings; more episodes "
+            "or a smaller learning rate would close the rest")
+        figure = bound.figure.replace("_", " ")
+        return f"It ends short of the bound ({bound.text}; {figure} {value:.4g}): {why}."
 
     def fixed_policy_bound(self) -> FixedBound | None:
         """How close a fixed (greedy) policy gets to the optimum here, when known."""
@@ -694,32 +694,3 @@ def _round_up(value: float) -> str:
     digits = 1 - int(math.floor(math.log10(value)))
     scale = 10.0**digits
     return f"{math.ceil(value * scale - 1e-9) / scale:.{max(digits, 0)}f}"
-
-
-def vector_support(
-    env_id: str,
-    env_kwargs: Mapping[str, Any] | None = None,
-    choices: Sequence[WrapperChoice] = (),
-) -> tuple[bool, str]:
-    """Whether the vector engine can train on this game and wrapper choice, and why.
-
-    The env is built as a `Session` builds it (choices that do not fit are
-    left out, as there), read with `plan_for_env`, and closed. Returns e.g.
-    `(True, "vector engine: <the game's title> with StepPenalty")` or
-    `(False, "scalar engine: DelayObservation has no batched form (...)")`.
-    """
-    try:
-        env_id = resolve_env_id(env_id)
-        game = game_for(env_id)
-        kwargs = game.normalize_kwargs(env_kwargs or {})
-        env, _ = build_env_lenient(game.make_id(env_id, kwargs), game.make_kwargs(kwargs),
-                                   choices)
-    except (ValueError, TypeError, gym.error.Error) as error:
-        return False, f"scalar engine: {error}"
-    try:
-        form, limit = game.batched_form(kwargs), game.episode_limit(kwargs)
-        return True, plan_for_env(env, form, limit).describe()
-    except NoBatchedForm as error:
-        return False, error.reason
-    finally:
-        env.close()

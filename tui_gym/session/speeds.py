@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
 if TYPE_CHECKING:
-    from tui_gym.core.training import StepEvent, TrainingSnapshot
+    from tui_gym.core.engine.stats import StepEvent, TrainingSnapshot
     from tui_gym.session.session import Session
 
 __all__ = ["DEFAULT_SPEED", "SPEEDS", "Runner", "Speed"]
@@ -72,9 +72,9 @@ class Runner(Protocol):
 
     def toggle(self) -> bool: ...
 
-    def run_one_episode(self) -> None: ...
+    def run_one_episode(self) -> bool: ...
 
-    def run_one_step(self) -> None: ...
+    def run_one_step(self) -> bool: ...
 
     def set_hyperparameters(self, hp: Any) -> None: ...
 

@@ -46,7 +46,7 @@ from textual.screen import Screen
 from textual.widget import AwaitMount
 from textual.widgets import ContentSwitcher, Header
 
-from tui_gym.core.training import continue_run
+from tui_gym.core.engine.trainer import continue_run
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games import GAMES, Game, game_for, game_named
 from tui_gym.games.words import plural
@@ -575,10 +575,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         if runner.start():
             return
         if runner.finished:
-            self.notify(
-                "The episode budget is used up: raise Episodes or reset the agent (x).",
-                severity="warning",
-            )
+            self._budget_used_up()
         else:  # no training process can run
             error, runner.error = runner.error, None
             self.notify(f"Cannot train: {error}", severity="error", timeout=10)
@@ -587,24 +584,30 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         if self.runner.running:
             self.notify("Pause training first (space).", severity="warning", timeout=3)
             return
-        if self._apply_form():
-            self.runner.run_one_episode()
+        if self._apply_form() and not self.runner.run_one_episode():
+            self._budget_used_up()
+
+    def _budget_used_up(self) -> None:
+        self.notify("The episode budget is used up: raise Episodes or reset the agent (x).",
+                    severity="warning")
 
     def action_one_step(self) -> None:
-        """One transition on the scalar engine, explained in the Train view's step panel
-        (the speed goes to animated, where the panel and the board show)."""
+        """One transition on the env, explained in the Train view's step panel (the speed
+        goes to animated, where the panel and the board show)."""
         runner = self.runner
         if runner.running:
             self.notify("Pause training first (space).", severity="warning", timeout=3)
             return
         if not self._apply_form():
             return
+        if not runner.run_one_step():
+            self._budget_used_up()
+            return
         if not runner.speed.animated:
             speed = runner.set_speed(ANIMATED_SPEED)
             self._show_speed(speed.name)
             self.notify(f"Speed: {speed.name}, so each step shows on the board and in the "
                         "step panel.", timeout=4)
-        runner.run_one_step()
 
     def _apply_form(self) -> bool:
         """Apply the form's hyperparameters (a raised budget continues the run); False when

@@ -43,7 +43,7 @@ from textual.markup import escape
 from textual.timer import Timer
 from textual.widgets import Static
 
-from tui_gym.core.training import TrainingSnapshot
+from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.games.base import Advice
 from tui_gym.games.words import (
     ScoreRow,

@@ -34,7 +34,8 @@ from textual.widget import Widget
 from textual.widgets import Button, Label
 
 from tui_gym.algorithms import Settings
-from tui_gym.core.training import TrainingSnapshot, continue_run
+from tui_gym.core.engine.stats import TrainingSnapshot
+from tui_gym.core.engine.trainer import continue_run
 from tui_gym.ui.map_editing import apply_edit, save_map, show_optimum
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
@@ -445,11 +446,16 @@ class TrainView(Vertical):
         if snapshot is None:
             return
         reference = session.reference(snapshot)
-        note = "" if reference is not None else session.exact_reason()
+        if reference is None:
+            note = session.exact_reason()
+        else:  # at the budget's end: why it ends short of the bound, if it does
+            note = session.shortfall(reference) if snapshot.episodes >= snapshot.budget else ""
         self.stats.show_reference(reference, note)
         reason = session.engine_reason
-        if snapshot.engine == "scalar" and reason.startswith("vector"):
-            reason = "scalar engine while animating (the vector engine runs at max speed)"
+        if snapshot.status:
+            reason = snapshot.status  # "compiling the learners, once"
+        elif snapshot.engine == "env" and reason.startswith("model"):
+            reason = "env: one step at a time while animating (the model at max speed)"
         self.show_engine(reason)
 
     @property
@@ -518,7 +524,7 @@ class TrainView(Vertical):
     def _show_board(self, runner: TrainingRunner) -> None:
         box = self._board_box
         scene = runner.last_scene
-        animated = runner.speed.animated and getattr(self._snapshot, "engine", "") == "scalar"
+        animated = runner.speed.animated and getattr(self._snapshot, "engine", "") == "env"
         shown = animated and scene is not None
         box.set_class(shown, "-shown")
         self.set_class(runner.speed.animated, "-animated")

@@ -39,7 +39,6 @@ Modules, one job each:
 - `gap`: `exact_gap`, a policy's value beside the optimum (`Gap`);
 - `ending`: which states a policy (or any policy) ends episodes from;
 - `returns`: `return_range`, the lowest and highest return one episode can have;
-- `sampler`: `BatchSampler`, batched steps and resets for the vector engine;
 - `policy_arrays`: `PolicyArrays`, a policy's Bellman expectation, swept synchronously
   or in place;
 - `planning`: dynamic programming sweep by sweep (`Planner`: policy evaluation, policy
@@ -54,11 +53,9 @@ from tui_gym.core.mdp.optimum import Solution, optimal_actions, solve
 from tui_gym.core.mdp.phases import Phases
 from tui_gym.core.mdp.policy import PolicyError, greedy_policy, policy_matrix
 from tui_gym.core.mdp.returns import return_range
-from tui_gym.core.mdp.sampler import BatchSampler, SampledStep
 from tui_gym.core.mdp.transforms import clip_reward, scale_reward, step_penalty, with_horizon
 
 __all__ = [
-    "BatchSampler",
     "FiniteMDP",
     "Gap",
     "ModelError",
@@ -66,7 +63,6 @@ __all__ = [
     "Phases",
     "PolicyError",
     "PolicyValue",
-    "SampledStep",
     "Solution",
     "clip_reward",
     "evaluate",

@@ -33,11 +33,11 @@ from gymnasium.wrappers import (
     PassiveEnvChecker,
     RecordEpisodeStatistics,
     RenderCollection,
-    TimeLimit,
 )
 
 from tui_gym.core.mdp.model import FiniteMDP, ModelError
 from tui_gym.core.mdp.transforms import clip_reward, scale_reward, step_penalty, with_horizon
+from tui_gym.core.wrappers.chain import layers, time_limit
 
 __all__ = ["NotAvailable", "model_from_env"]
 
@@ -149,22 +149,16 @@ def model_from_env(
             raise ValueError("initial must be a probability distribution over the states")
     if not isinstance(env, gym.Env):
         return NotAvailable(f"{type(env).__name__} is not a Gymnasium env")
-    layers: list[gym.Wrapper] = []
-    inner: gym.Env = env
-    while isinstance(inner, gym.Wrapper):
-        layers.append(inner)
-        inner = inner.env
-    layers.reverse()  # innermost first
-
-    model = _table_model(inner, given, action_names)
+    stack = layers(env)
+    model = _table_model(env.unwrapped, given, action_names)
     if isinstance(model, NotAvailable):
         return model
     limit: int | None = None
-    for layer in layers:
+    for layer in stack:
         if type(layer) in _NEUTRAL:
             continue
-        if type(layer) is TimeLimit:
-            steps = int(layer._max_episode_steps)
+        steps = time_limit(layer)
+        if steps is not None:
             limit = steps if limit is None else min(limit, steps)
             continue
         try:

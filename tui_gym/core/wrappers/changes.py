@@ -25,8 +25,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import gymnasium as gym
-from gymnasium.wrappers import OrderEnforcing, PassiveEnvChecker, TimeLimit
+from gymnasium.wrappers import OrderEnforcing, PassiveEnvChecker
 
+from tui_gym.core.wrappers.chain import layers, time_limit
 from tui_gym.core.wrappers.custom import DistanceShaping
 
 __all__ = ["NO_CHANGES", "GameChanges", "registry_limit"]
@@ -54,25 +55,21 @@ class GameChanges:
         own `max_episode_steps` says which); by default the registry's. A `TimeLimit`
         other than that one is a chosen one.
         """
-        layers: list[gym.Env] = []
-        inner: gym.Env = env
-        while isinstance(inner, gym.Wrapper):
-            layers.append(inner)
-            inner = inner.env
-        layers.reverse()  # innermost first
-        registered = made_limit if not isinstance(made_limit, str) else registry_limit(inner)
+        stack = layers(env)
+        registered = made_limit if not isinstance(made_limit, str) else registry_limit(
+            env.unwrapped)
         labels: list[str] = []
         steps: list[RewardStep] = []
         others: list[str] = []
         limit: int | None = None
         chosen = False
-        for position, layer in enumerate(layers):
+        for position, layer in enumerate(stack):
             if isinstance(layer, (*_TRANSPARENT, gym.ObservationWrapper)):
                 continue
-            if isinstance(layer, TimeLimit):
-                n = int(layer._max_episode_steps)
+            n = time_limit(layer)
+            if n is not None:
                 limit = n if limit is None else min(limit, n)
-                below = layers[position - 1] if position else None
+                below = stack[position - 1] if position else None
                 if not (isinstance(below, _TRANSPARENT) and n == registered):
                     chosen = True
                 continue

@@ -12,8 +12,9 @@ from typing import Any
 
 import gymnasium as gym
 from gymnasium import spaces
-from gymnasium.wrappers import TimeLimit
 from gymnasium.wrappers.utils import create_zero_array
+
+from tui_gym.core.wrappers.chain import layers, time_limit
 
 __all__ = [
     "env_label",
@@ -34,18 +35,13 @@ def env_label(env: gym.Env) -> str:
 
 def _time_limits(env: gym.Env) -> list[int]:
     """The limits of every `TimeLimit` in the stack, outermost first."""
-    limits = []
-    layer: gym.Env = env
-    while isinstance(layer, gym.Wrapper):
-        if isinstance(layer, TimeLimit):
-            limits.append(int(layer._max_episode_steps))
-        layer = layer.env
-    return limits
+    found = (time_limit(layer) for layer in reversed(layers(env)))
+    return [limit for limit in found if limit is not None]
 
 
 def fits_time_limit(env: gym.Env, values: Mapping[str, Any] | None) -> str | None:
     # An outermost TimeLimit is replaced, not stacked on; only the ones below count.
-    limits = _time_limits(env.env if isinstance(env, TimeLimit) else env)
+    limits = _time_limits(getattr(env, "env", env) if time_limit(env) else env)
     if values is None or not limits:
         return None
     steps, inner = values["max_episode_steps"], min(limits)

@@ -1,5 +1,5 @@
 """Blackjack: the game (`game`), its exact dynamic programme (`solver`) and its
-batched form for the vector engine (`batched`)."""
+finite model over the observations (`model`)."""
 
 from tui_gym.games.blackjack.game import BlackjackGame
 

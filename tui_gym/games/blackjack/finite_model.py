@@ -37,7 +37,7 @@ from tui_gym.games.blackjack.solver import (
     _dealer_final,
 )
 
-__all__ = ["N_BASE", "blackjack_model", "natural_base_rows"]
+__all__ = ["N_BASE", "blackjack_model", "natural_base_rows", "observation_rows"]
 
 DEALERS = 10
 N_BASE = (18 + 10) * DEALERS  # the game's base states: 4-21 hard and 12-21 soft, per dealer card
@@ -53,6 +53,19 @@ def _base_index(total: int, usable: int, dealer: int) -> int:
 def natural_base_rows() -> np.ndarray:
     """`[10]`: the base state (a soft 21 against each dealer card) each natural plays as."""
     return np.array([_base_index(21, 1, d) for d in range(1, DEALERS + 1)], dtype=np.int64)
+
+
+def observation_rows() -> np.ndarray:
+    """The row of the learners' table (the observation keyer's: mixed radix 32 x 11 x 2
+    over (player_sum, dealer_card, usable_ace)) of each model state; a natural's is
+    the soft 21's, which it shows as."""
+    totals = np.r_[np.repeat(np.arange(4, 22), DEALERS), np.repeat(np.arange(12, 22), DEALERS),
+                   np.full(DEALERS, 21)]
+    dealers = np.tile(np.arange(1, DEALERS + 1), 18 + 10 + 1)
+    usable = np.r_[np.zeros(18 * DEALERS), np.ones(11 * DEALERS)].astype(np.int64)
+    rows = (totals * 11 + dealers) * 2 + usable
+    rows.setflags(write=False)
+    return rows
 
 
 def _model_index() -> np.ndarray:

@@ -38,6 +38,7 @@ from tui_gym.games.base import (
     ReferenceMetrics,
     Scope,
     StateSpace,
+    TrainingModel,
     greedy_probabilities,
 )
 from tui_gym.games.blackjack.solver import (
@@ -52,7 +53,6 @@ from tui_gym.games.blackjack.solver import (
 from tui_gym.games.words import format_reward, unwrapped_note
 
 if TYPE_CHECKING:
-    from tui_gym.core.vector.base import BatchedForm
     from tui_gym.games.planning import PlanModel
     from tui_gym.session.play import PlayStep
 
@@ -399,9 +399,9 @@ class BlackjackGame(Game):
                   "episodes": 500_000},
         "expected-sarsa": {"learning_rate": 0.01, "epsilon_final": 0.0,
                            "epsilon_decay_fraction": 0.3, "episodes": 500_000},
-        "monte-carlo": {"learning_rate": 0.005, "epsilon_final": 0.0,
-                        "epsilon_decay_fraction": 0.5, "episodes": 1_000_000},
-        "dyna-q": {"planning_steps": 1, "learning_rate": 0.0003, "episodes": 500_000},
+        "monte-carlo": {"learning_rate": 0.003, "epsilon_final": 0.0,
+                        "epsilon_decay_fraction": 0.5, "episodes": 1_500_000},
+        "dyna-q": {"planning_steps": 1, "learning_rate": 0.0003, "episodes": 700_000},
     }
 
     def __init__(self) -> None:
@@ -420,14 +420,17 @@ class BlackjackGame(Game):
         return PlanModel(blackjack_model(rules_of(kwargs)), 1.0, None, base_of=base_of,
                          shown=np.arange(N_BASE))
 
-    def batched_form(self, kwargs: Mapping[str, Any]) -> BatchedForm:
-        from tui_gym.core.vector.base import BatchedForm
-        from tui_gym.games.blackjack.batched import BatchedBlackjack
+    def training_model(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> TrainingModel | NotAvailable:
+        from tui_gym.games.blackjack.finite_model import blackjack_model, observation_rows
 
+        if changes.others:
+            return NotAvailable(unwrapped_note(changes.others))
         rules = rules_of(kwargs)
-
-        def make(num_envs: int, seed: Any, max_episode_steps: int | None) -> BatchedBlackjack:
-            return BatchedBlackjack(num_envs, rules, seed=seed,
-                                    max_episode_steps=max_episode_steps)
-
-        return BatchedForm("Blackjack", make, key=("blackjack", rules))
+        if changes.changes_rewards:
+            rules = rules.with_rewards(changes.reward)
+        model = blackjack_model(rules)
+        if changes.time_limit is not None:
+            model = model.replace(horizon=changes.time_limit)
+        return TrainingModel(model, observation_rows())

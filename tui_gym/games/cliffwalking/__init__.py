@@ -102,6 +102,12 @@ class CliffWalkingGame(TileGame):
     # Sutton & Barto's Example 6.6: SARSA's online return above Q-learning's at ε = 0.1.
     demo_compare = ({"epsilon_start": 0.1, "epsilon_final": 0.1, "learning_rate": 0.5,
                      "learning_rate_schedule": "constant"}, 500)
+    lessons = dict.fromkeys(
+        ("sarsa", "expected-sarsa", "monte-carlo"),
+        "an on-policy learner learns the values of the exploring policy it follows, and "
+        "while it explores a step along the edge risks the cliff, so it keeps to a safer "
+        "path (Sutton & Barto, Example 6.6); Q-learning learns the edge",
+    )
 
     def __init__(self) -> None:
         super().__init__()

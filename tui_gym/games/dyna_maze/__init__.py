@@ -126,7 +126,7 @@ class MazeGame(DPGridGame):
                 "epsilon_start": 0.1, "epsilon_final": 0.1}
     CHANGING_SARSA = {"epsilon_final": 0.01}
     plan_gamma = DISCOUNT
-    hyperparameters = {"*": {"discount": DISCOUNT, "learning_rate": 0.1, "episodes": 300}}
+    hyperparameters = {"*": {"discount": DISCOUNT, "learning_rate": 0.1, "episodes": 1000}}
 
     def __init__(self) -> None:
         super().__init__()
@@ -162,6 +162,11 @@ class DynaMazeGame(MazeGame):
     title = "Dyna maze"
     env_id = "tui_gym/DynaMaze-v0"
     key = "D"
+    lessons = dict.fromkeys(
+        ("sarsa", "monte-carlo"),
+        "every way to the goal is worth +1 undiscounted, so an on-policy learner that explores "
+        "may keep a detour of a step out and back",
+    )
     description = "Figure 8.2's 6x9 maze: +1 at the goal, 0 elsewhere; 14 steps at best."
     teaches = "planning: Dyna-Q's simulated steps find the way in far fewer episodes"
 

@@ -120,15 +120,28 @@ class FrozenLakeGame(TileGame):
     ) -> Mapping[str, Mapping[str, Any]]:
         # A discount just below 1: with 1 the values of a cautious move that stays put
         # and of one that heads for the goal tie, and the greedy policy may never arrive.
-        # Dyna-Q's model keeps one outcome per pair, which misleads on slippery ice: one
-        # planning step with a small step size keeps that noise down. Monte Carlo
-        # learns only at episodes' ends, from returns of a slowly improving policy: a
-        # small step size and a longer budget (see the README).
+        # Slippery moves make every target noisy: a small step size averages it out over
+        # a longer budget. Monte Carlo learns only at episodes' ends, from returns of a
+        # slowly improving policy: a smaller step still, exploration kept a little, and
+        # a longer budget. Dyna-Q's model keeps one outcome per pair, which misleads on
+        # slippery ice (its lesson): one planning step with a small step size.
         small = len(self.cells(kwargs or {})) <= 4
-        common = {"learning_rate": 0.05 if small else 0.02, "discount": 0.999,
-                  "episodes": 20_000 if small else 100_000}
+        common = {"learning_rate": 0.01 if small else 0.02, "discount": 0.999,
+                  "episodes": 60_000 if small else 100_000}
         return {
             "*": common,
             "dyna-q": {"planning_steps": 1, "learning_rate": 0.001},
-            "monte-carlo": {"learning_rate": 0.001, "episodes": 50_000 if small else 250_000},
+            "monte-carlo": {"learning_rate": 0.003 if small else 0.001,
+                            "epsilon_final": 0.01, "episodes": 200_000 if small else 250_000},
         }
+
+    lessons = {
+        "dyna-q": "Dyna-Q's model keeps the last outcome of each move, which on slippery ice "
+        "is wrong most of the time: planning from it pulls the values away from the optimum "
+        "(with no planning steps it is Q-learning, which gets there)",
+    }
+
+    def gap_tolerance(self, kwargs: Mapping[str, Any]) -> float:
+        # Slippery ice: a few states have two moves within a hair of each other, and a
+        # learner that settles on the other one ends about 2% short of the optimum.
+        return 0.02

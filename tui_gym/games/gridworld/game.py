@@ -52,6 +52,7 @@ from tui_gym.games.base import (
     Scope,
     StateSpace,
     TallyWord,
+    TrainingModel,
     greedy_probabilities,
 )
 from tui_gym.games.gridworld.model import (
@@ -85,7 +86,6 @@ from tui_gym.games.words import (
 )
 
 if TYPE_CHECKING:
-    from tui_gym.core.vector.base import BatchedForm
     from tui_gym.session.play import PlayStep, Scorecard
 
 __all__ = ["GridWorldGame"]
@@ -687,24 +687,11 @@ class GridWorldGame(Game):
             out["walls"] = [list(w) for w in walls]
         return out
 
-    def batched_form(self, kwargs: Mapping[str, Any]) -> BatchedForm:
-        from tui_gym.core.vector.base import BatchedForm
-        from tui_gym.core.vector.model import MODEL_NUM_ENVS
-        from tui_gym.games.gridworld.batched import BatchedGridWorld
-
-
-        size = _size(kwargs)
-        reward_scale = float(kwargs.get("reward_scale", 1.0))
-        step_penalty = float(kwargs.get("step_penalty", 0.0))
-
-        walls = _walls(kwargs)
-
-        def make(num_envs: int, seed: Any, max_episode_steps: int | None) -> BatchedGridWorld:
-            return BatchedGridWorld(num_envs, size=size, reward_scale=reward_scale,
-                                    step_penalty=step_penalty,
-                                    max_episode_steps=max_episode_steps, seed=seed, walls=walls)
-
-        # As wide as the model games: numpy's per-call cost is spread over more rows.
-        return BatchedForm(f"GridWorld {size}x{size}", make, info=("distance",),
-                           key=("gridworld", size, reward_scale, step_penalty, walls),
-                           num_envs=MODEL_NUM_ENVS)
+    def training_model(
+        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
+    ) -> TrainingModel | NotAvailable:
+        if changes.others:
+            return NotAvailable(unwrapped_note(changes.others))
+        return TrainingModel(gridworld_model(
+            _size(kwargs), float(kwargs.get("reward_scale", 1.0)),
+            float(kwargs.get("step_penalty", 0.0)), changes, _walls(kwargs)))

@@ -287,6 +287,12 @@ class TaxiGame(ModelGame):
         # Every move is certain without rain: a trained greedy policy is the optimum.
         return 0.01 if kwargs.get("rainy") else 0.0
 
+    lessons = {
+        "monte-carlo": "Monte Carlo learns only from whole returns of a policy that keeps "
+        "exploring: its values of the starts it meets seldom late in a run lag behind, and "
+        "the greedy policy takes a step more than it needs from some of them",
+    }
+
     def hyperparameter_table(
         self, kwargs: Mapping[str, Any] | None = None
     ) -> Mapping[str, Mapping[str, Any]]:
@@ -295,11 +301,11 @@ class TaxiGame(ModelGame):
         # The on-policy learners learn the values of the exploring policy: exploration
         # falls to 0 so that those become the greedy policy's; Double Q splits its
         # experience over two tables. Each takes a longer budget (see the README).
-        on_policy = {"epsilon_final": 0.0, "episodes": 10_000}
         return {
-            "*": {"learning_rate": 0.1, "episodes": 5_000},
-            "sarsa": on_policy,
-            "expected-sarsa": on_policy,
-            "double-q": {"episodes": 10_000},
-            "monte-carlo": {"epsilon_final": 0.0, "episodes": 20_000},
+            "*": {"learning_rate": 0.1, "episodes": 10_000},
+            "sarsa": {"epsilon_final": 0.0, "epsilon_decay_fraction": 0.9,
+                      "learning_rate": 0.2, "episodes": 40_000},
+            "expected-sarsa": {"epsilon_final": 0.0},
+            "double-q": {"episodes": 20_000},
+            "monte-carlo": {"epsilon_final": 0.01, "learning_rate": 0.02, "episodes": 100_000},
         }

@@ -41,6 +41,19 @@ __all__ = ["EPISODE_LIMIT", "KingWindyGame", "WindyGame"]
 EPISODE_LIMIT = 2000  # steps (the env's registration)
 
 
+MONTE_CARLO_LESSON = (
+    "Monte Carlo learns only from episodes that end, and a greedy policy that walks into the "
+    "wind may never end one (Sutton & Barto: termination is not guaranteed for all "
+    "policies), so its greedy policy need not reach the goal"
+)
+
+DOUBLE_Q_LESSON = (
+    "Double Q-learning splits its experience between two tables, and once it stops "
+    "exploring each sees half the updates of the path it walks, so it may keep a detour "
+    "of a step or a few within the budget"
+)
+
+
 class WindyGame(DPGridGame):
     """Cross the windy grid to the goal; every move costs 1."""
 
@@ -48,6 +61,7 @@ class WindyGame(DPGridGame):
     title = "Windy GridWorld"
     env_id = "tui_gym/WindyGridWorld-v0"
     key = "I"
+    lessons = {"monte-carlo": MONTE_CARLO_LESSON, "double-q": DOUBLE_Q_LESSON}
     description = ("Example 6.5's 7x10 grid: a wind blows up through the middle columns; "
                    "-1 a move until the goal.")
     teaches = "TD control where moves are not what they seem: Sarsa learns to use the wind"
@@ -63,7 +77,10 @@ class WindyGame(DPGridGame):
     hyperparameters = {
         "*": {"learning_rate": 0.5, "learning_rate_schedule": "constant",
               "epsilon_start": 0.2, "epsilon_final": 0.01, "episodes": 2000},
-        "double-q": {"episodes": 6000},
+        "sarsa": {"learning_rate": 0.1, "learning_rate_schedule": "visits",
+                  "epsilon_final": 0.0},
+        "double-q": {"learning_rate": 0.05, "learning_rate_schedule": "visits",
+                     "epsilon_final": 0.0, "episodes": 10000},
         "monte-carlo": {"learning_rate": 0.1, "learning_rate_schedule": "visits",
                         "epsilon_start": 1.0, "epsilon_final": 0.05},
     }
@@ -96,6 +113,10 @@ class KingWindyGame(WindyGame):
     title = "Windy GridWorld, king's moves"
     env_id = "tui_gym/WindyGridWorldKing-v0"
     key = "Y"
+    lessons = {
+        "monte-carlo": MONTE_CARLO_LESSON,
+        "double-q": DOUBLE_Q_LESSON,
+    }
     description = ("Exercise 6.9: the windy grid with the eight king's moves; -1 a move "
                    "until the goal.")
     teaches = "the same wind with diagonal moves: a shorter path, 7 moves instead of 15"

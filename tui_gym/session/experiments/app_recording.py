@@ -28,10 +28,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.history import RunHistory
 from tui_gym.core.experiments.records import Curve, RunKind, RunSpec, RunStatus
-from tui_gym.core.training import TrainingSnapshot
 from tui_gym.session.experiments.live import (
     ExactCheckpoints,
     episodes_figure,

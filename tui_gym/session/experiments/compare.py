@@ -8,13 +8,14 @@ the last 10% of episodes with its interval, and, where the game has an exact
 model, the greedy policy's exact value at checkpoints and its gap to the
 optimum at the end.
 
-Seeds run as batches (`seed_batch.SeedBatch`: one table per seed, all stepped
-together); the batches (an algorithm's seeds, `MAX_SEEDS_PER_BATCH` at most in
-each) run in child processes, as many at once as there are cores. Called on
-the main thread with no more batches than cores, the calling thread plays the
-last batch itself while the children play the others.
-A game with neither an exact model nor a batched form, or a wrapper without
-one, is played seed after seed by the session's scalar engine.
+Every (algorithm, seed) is a learner of its own, trained on the game's model
+by the engine's compiled loop exactly as `train --seed` trains it
+(`core.engine.seeds`), so the figures do not depend on where or in what
+order seeds run. They run on the calling thread when the whole takes less
+than `SPREAD_SECONDS` (throwaway learners played for a moment tell), else
+they are spread over child processes, one per core (`core.engine.processes`:
+they never outlive the caller). A game or wrapper
+no model follows is played seed after seed on the Gymnasium env.
 
 `progress(CompareProgress)` is called on the calling thread about every
 `PROGRESS_INTERVAL` seconds with the outcomes so far; setting `stop` (a
@@ -29,20 +30,20 @@ others name the first one as their `group`), with curves `return` and
 from __future__ import annotations
 
 import math
-import multiprocessing
 import os
 import queue
-import signal
-import sys
 import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
 from tui_gym.algorithms import ALGORITHMS, algorithm
+from tui_gym.core.engine import processes as processes_module
+from tui_gym.core.engine.loop import ModelArrays, warm
+from tui_gym.core.engine.seeds import checkpoint_episodes, greedy_values, play_learner
 from tui_gym.core.experiments.aggregate import (
     AggregateCurve,
     Estimate,
@@ -53,14 +54,7 @@ from tui_gym.core.experiments.aggregate import (
 from tui_gym.core.experiments.figures import Figure
 from tui_gym.core.experiments.history import STORED_POINTS, RunHistory
 from tui_gym.core.experiments.records import RunKind, RunSpec, RunStatus, WrapperSetting
-from tui_gym.core.experiments.seed_batch import (
-    ModelSteps,
-    PlanSteps,
-    SeedBatch,
-    SeedBatchState,
-    checkpoint_episodes,
-)
-from tui_gym.core.mdp import FiniteMDP, model_from_env, solve
+from tui_gym.core.mdp import FiniteMDP, solve
 from tui_gym.core.wrappers import WrapperChoice
 
 __all__ = [
@@ -70,14 +64,14 @@ __all__ = [
     "CompareProgress",
     "CompareResult",
     "CompareSpec",
+    "SeedsUpdate",
     "run_compare",
 ]
 
 PROGRESS_INTERVAL = 0.4  # seconds between progress calls
 JSON_CURVE_POINTS = 500  # curve points in `to_json`
-# Seeds per batch at most. The split depends on the seed count only, never on the cores,
-# so a comparison gives the same figures on any machine (a seed's draws depend on its batch).
-MAX_SEEDS_PER_BATCH = 64
+SPREAD_SECONDS = 1.0  # work that takes longer than this here is spread over child processes
+PROBE_SECONDS = 0.1  # how long throwaway learners play to tell how long the work is
 SMOOTHING_SHARE = 50  # charts smooth each seed's returns over 1/50 of the episodes
 
 
@@ -256,9 +250,21 @@ class Setup:
         return tuple(range(self.first_seed, self.first_seed + self.seeds))
 
 
+@dataclass(frozen=True, eq=False)
+class _Model:
+    """The game's model for the jobs: the loop's arrays, the model itself (for exact
+    values) and the table row of each of its states, and the learners' table shape."""
+
+    arrays: ModelArrays
+    mdp: FiniteMDP
+    rows: np.ndarray
+    n_states: int
+    n_actions: int
+
+
 @dataclass(frozen=True)
 class _Job:
-    """One batch: an arm's seeds `seeds` (indices `rows` of its seed list)."""
+    """An arm's seeds `seeds` (indices `rows` of its seed list)."""
 
     index: int
     arm: int
@@ -270,20 +276,32 @@ class _Job:
     seeds: tuple[int, ...]
     rows: tuple[int, ...]
     episodes: int
-    model: FiniteMDP | None = None  # the game's exact model, when it has one
+    model: _Model | None = None  # the game's model, when it has one
+
+
+@dataclass(frozen=True)
+class SeedsUpdate:
+    """What a job played since its last update: per seed, its episodes done, and the
+    online returns of episodes `first[i]` to `done[i] - 1`; `exact[i, j]` its greedy
+    policy's exact value at checkpoint j (NaN until reached; None without a model)."""
+
+    done: np.ndarray
+    first: np.ndarray
+    returns: tuple[np.ndarray, ...]
+    exact: np.ndarray | None
 
 
 @dataclass
 class Prepared:
     """The game as built once: its name, id and arguments, each arm's hyperparameters,
-    and its exact model and optimum when it has one."""
+    and its model and optimum when it has one."""
 
     game: str
     env_id: str
     env_kwargs: dict[str, Any]
     wrappers: tuple[WrapperSetting, ...]
     hyperparameters: list[dict[str, Any]]
-    model: FiniteMDP | None
+    model: _Model | None
     optimum: float | None
 
 
@@ -295,22 +313,8 @@ def _session(
 
     return Session(
         env_id=env_id, env_kwargs=dict(env_kwargs), choices=tuple(wrappers), hp=dict(hp),
-        seed=seed, engine="scalar", algorithm=name,
+        seed=seed, algorithm=name,
     )
-
-
-def _game_name(session: Any) -> str:
-    game = getattr(session, "game", None) or session.profile
-    return str(game.name)
-
-
-def _exact_model(session: Any) -> FiniteMDP | None:
-    """The model of the session's env when its keys are the model's states."""
-    keyer = session.keyer
-    model = model_from_env(session.env)
-    if not isinstance(model, FiniteMDP) or not keyer.dense or keyer.n_states != model.n_states:
-        return None
-    return model
 
 
 def prepare(setup: Setup, arms: Sequence[Arm]) -> Prepared:
@@ -333,13 +337,15 @@ def prepare(setup: Setup, arms: Sequence[Arm]) -> Prepared:
     wrappers = tuple(
         WrapperSetting(c.name, get_spec(c.name).validate(c.values())) for c in first.applied
     )
-    model = _exact_model(first)
-    optimum = None
-    if model is not None:
-        value = solve(model).value
+    model = optimum = None
+    training = first.training
+    if training is not None and first.trainer.model is not None:
+        model = _Model(first.trainer.model, training.model, np.asarray(training.rows),
+                       int(first.keyer.n_states), int(first.agent.n_actions))
+        value = solve(training.model).value
         optimum = value if math.isfinite(value) else None
     prepared = Prepared(
-        game=_game_name(first),
+        game=first.game.name,
         env_id=first.env_id,
         env_kwargs=dict(first.env_kwargs),
         wrappers=wrappers,
@@ -358,134 +364,96 @@ def _cores() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared) -> list[_Job]:
-    chunks = math.ceil(setup.seeds / MAX_SEEDS_PER_BATCH)
-    bounds = np.linspace(0, setup.seeds, chunks + 1).round().astype(int)
+def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared, first: int, end: int,
+          pieces: int = 1) -> list[_Job]:
+    """Each arm's seeds of indices `first` to `end` - 1, in `pieces` jobs of about the
+    same size (a seed's run is its own, so the split changes no figure)."""
     seeds = setup.seed_list
+    count = end - first
+    bounds = first + np.linspace(0, count, max(1, min(pieces, count)) + 1).round().astype(int)
     jobs: list[_Job] = []
     for a, arm in enumerate(arms):
         for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
-            jobs.append(_Job(
-                index=len(jobs), arm=a, algorithm=arm.algorithm, env_id=prepared.env_id,
-                env_kwargs=prepared.env_kwargs, wrappers=tuple(setup.wrappers),
-                hp=prepared.hyperparameters[a], seeds=seeds[lo:hi],
-                rows=tuple(range(lo, hi)), episodes=setup.episodes, model=prepared.model,
-            ))
+            if hi > lo:
+                jobs.append(_Job(
+                    index=-1, arm=a, algorithm=arm.algorithm, env_id=prepared.env_id,
+                    env_kwargs=prepared.env_kwargs, wrappers=tuple(setup.wrappers),
+                    hp=prepared.hyperparameters[a], seeds=seeds[lo:hi],
+                    rows=tuple(range(lo, hi)), episodes=setup.episodes, model=prepared.model,
+                ))
     return jobs
 
 
-# --- running one batch (in a child process or on the calling thread) -------------------
+# --- running one job (in a child process or on the calling thread) -------------------------
 
 
 def _run_job(
     job: _Job,
     stop: Callable[[], bool],
-    report: Callable[[SeedBatchState], None],
-) -> SeedBatchState:
-    """Train a job's seeds; its state at the end (complete or stopped)."""
-    if job.model is not None:  # the game as its model: no env to build
-        learner_class = algorithm(job.algorithm)
-        env_seed, learner_seed = _seeds(job)
-        batch = SeedBatch(
-            learner_class, learner_class.settings(job.hp),
-            ModelSteps(job.model, len(job.seeds), env_seed), len(job.seeds), job.episodes,
-            seed=learner_seed, model=job.model,
-        )
-        batch.run(stop=stop, report=lambda b: report(b.state()), interval=PROGRESS_INTERVAL / 2)
-        return batch.state()
-    session = _session(job.env_id, job.env_kwargs, job.wrappers, job.algorithm, job.hp,
-                       job.seeds[0])
-    try:
-        model = _exact_model(session)
-        env_seed, learner_seed = _seeds(job)
-        steps: Any = None
+    report: Callable[[SeedsUpdate], None],
+) -> SeedsUpdate:
+    """Train a job's seeds one after another, `report`ing what they play as they go; the
+    last update (complete or stopped)."""
+    n, episodes = len(job.seeds), job.episodes
+    checkpoints = checkpoint_episodes(episodes)
+    done = np.zeros(n, dtype=np.int64)
+    returns = np.full((n, episodes), np.nan)
+    model = job.model
+    exact = None if model is None else np.full((n, len(checkpoints)), np.nan)
+
+    sent = np.zeros(n, dtype=np.int64)
+
+    def state() -> SeedsUpdate:
+        first = sent.copy()
+        sent[:] = done
+        news = tuple(returns[i, first[i] : done[i]].copy() for i in range(n))
+        return SeedsUpdate(done.copy(), first, news, None if exact is None else exact.copy())
+
+    last = [time.monotonic()]
+
+    def counter(i: int) -> Callable[[int], None]:
+        def counted(played: int) -> None:
+            done[i] = played
+            if time.monotonic() - last[0] >= PROGRESS_INTERVAL / 2:
+                report(state())
+                last[0] = time.monotonic()
+
+        return counted
+
+    for i, seed in enumerate(job.seeds):
+        if stop():
+            break
         if model is not None:
-            steps = ModelSteps(model, len(job.seeds), env_seed)
+            cls = algorithm(job.algorithm)
+            learner = cls(model.n_actions, cls.settings(job.hp), n_states=model.n_states,
+                          seed=seed)
+            _, tables = play_learner(learner, model.arrays, episodes, checkpoints, stop,
+                                     returns[i], counter(i))
+            if tables and exact is not None:
+                q = np.stack(tables)[:, model.rows]
+                exact[i, : len(tables)] = greedy_values(model.mdp, q)
         else:
-            steps = _plan_steps(job, session.keyer, len(job.seeds), env_seed)
-        if steps is None:
-            return _run_scalar(job, model, stop, report)
-        batch = SeedBatch(
-            session.learner_class, session.hp, steps, len(job.seeds), job.episodes,
-            seed=learner_seed, model=model,
-        )
-        batch.run(stop=stop, report=lambda b: report(b.state()), interval=PROGRESS_INTERVAL / 2)
-        return batch.state()
+            _play_env(job, seed, returns[i], counter(i), stop)
+    return state()
+
+
+def _play_env(job: _Job, seed: int, returns: np.ndarray, progress: Callable[[int], None],
+              stop: Callable[[], bool]) -> None:
+    """One seed on the Gymnasium env, one transition at a time (games no model follows)."""
+    session = _session(job.env_id, job.env_kwargs, job.wrappers, job.algorithm, job.hp, seed)
+    try:
+        for e in range(job.episodes):
+            if stop():
+                return
+            returns[e] = session.trainer.run_episode().episode_return
+            progress(e + 1)
     finally:
         session.env.close()
 
 
-def _seeds(job: _Job) -> list[np.random.SeedSequence]:
-    """The seeds of a job's envs and of its learner."""
-    return np.random.SeedSequence([job.seeds[0], len(job.seeds), job.episodes]).spawn(2)
-
-
-def _plan_steps(job: _Job, keyer: Any, n: int, seed: Any) -> PlanSteps | None:
-    """The vector engine's batched form of the job's game and wrappers, if it has one
-    (read from a session on the vector engine, as `train` would build it)."""
-    from tui_gym.core.vector import VectorTrainer
-    from tui_gym.session.session import Session
-
-    if not keyer.dense:
-        return None
-    try:
-        session = Session(env_id=job.env_id, env_kwargs=dict(job.env_kwargs),
-                          choices=tuple(job.wrappers), hp=dict(job.hp), seed=job.seeds[0],
-                          engine="vector", algorithm=job.algorithm)
-    except ValueError:  # no batched form for this game or these wrappers
-        return None
-    trainer = session.trainer
-    session.env.close()
-    if not isinstance(trainer, VectorTrainer):
-        return None
-    return PlanSteps(trainer.plan, keyer, n, seed)
-
-
-def _run_scalar(
-    job: _Job,
-    model: FiniteMDP | None,
-    stop: Callable[[], bool],
-    report: Callable[[SeedBatchState], None],
-) -> SeedBatchState:
-    """The seeds one after another on the scalar engine (games with no batched form)."""
-    from tui_gym.core.experiments.seed_batch import greedy_values
-
-    n, episodes = len(job.seeds), job.episodes
-    checkpoints = checkpoint_episodes(episodes)
-    at = {int(c): j for j, c in enumerate(checkpoints)}
-    done = np.zeros(n, dtype=np.int64)
-    returns = np.full((n, episodes), np.nan)
-    exact = None if model is None else np.full((n, len(checkpoints)), np.nan)
-
-    def state() -> SeedBatchState:
-        return SeedBatchState(done.copy(), returns[:, : int(done.max())].copy(),
-                              checkpoints.copy(), None if exact is None else exact.copy())
-
-    last = time.monotonic()
-    for i, seed in enumerate(job.seeds):
-        session = _session(job.env_id, job.env_kwargs, job.wrappers, job.algorithm, job.hp,
-                           seed)
-        try:
-            for e in range(episodes):
-                if stop():
-                    return state()
-                returns[i, e] = session.trainer.run_episode().episode_return
-                done[i] = e + 1
-                j = at.get(e + 1)
-                if exact is not None and model is not None and j is not None:
-                    q = session.agent.action_values(slice(0, model.n_states))
-                    exact[i, j] = greedy_values(model, q[np.newaxis])[0]
-                if time.monotonic() - last >= PROGRESS_INTERVAL / 2:
-                    report(state())
-                    last = time.monotonic()
-        finally:
-            session.env.close()
-    return state()
-
-
-def _child(job: _Job, messages: Any, stop_flag: Any) -> None:
+def _child(parent: int, job: _Job, messages: Any, stop_flag: Any) -> None:
     """A child process's work: one job, its states sent on `messages`."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides how Ctrl+C ends a run
+    processes_module.watch_parent(parent)
     try:
         final = _run_job(
             job, stop_flag.is_set, lambda s: messages.put(("state", job.index, s))
@@ -496,33 +464,45 @@ def _child(job: _Job, messages: Any, stop_flag: Any) -> None:
         messages.put(("end", job.index, final))
 
 
-def _context() -> Any:
-    """Fork on Linux: the quickest start, and it runs no part of the caller's main module
-    again. The children only run batches (no terminal, no locks of the caller's threads),
-    so forking from a program with threads (the app) is safe here. Elsewhere, spawn."""
-    if sys.platform.startswith("linux") and "fork" in multiprocessing.get_all_start_methods():
-        return multiprocessing.get_context("fork")
-    return multiprocessing.get_context("spawn")
-
-
 # --- putting it together ----------------------------------------------------------------
 
 
 class _Tally:
     """The jobs' latest states, merged per arm."""
 
-    def __init__(
-        self, setup: Setup, arms: Sequence[Arm], prepared: Prepared, jobs: list[_Job]
-    ) -> None:
+    def __init__(self, setup: Setup, arms: Sequence[Arm], prepared: Prepared) -> None:
         self.setup = setup
         self.arms = arms
         self.prepared = prepared
-        self.jobs = jobs
-        self.states: dict[int, SeedBatchState] = {}
+        self.jobs: list[_Job] = []
         self.run_ids: list[int | None] = [None] * len(arms)
+        shape = (len(arms), setup.seeds)
+        self.checkpoints = checkpoint_episodes(setup.episodes)
+        self.done = np.zeros(shape, dtype=np.int64)
+        self.returns = np.full((*shape, setup.episodes), np.nan)
+        self.exact = None if prepared.model is None else np.full(
+            (*shape, len(self.checkpoints)), np.nan)
 
-    def done(self) -> int:
-        return int(sum(int(s.done.sum()) for s in self.states.values()))
+    def take(self, index: int, update: SeedsUpdate) -> None:
+        """Count in what job `index` played since its last update."""
+        job = self.jobs[index]
+        for i, row in enumerate(job.rows):
+            self.returns[job.arm, row, update.first[i] : update.done[i]] = update.returns[i]
+        self.done[job.arm, list(job.rows)] = update.done
+        if self.exact is not None and update.exact is not None:
+            self.exact[job.arm, list(job.rows)] = update.exact
+
+    def finished(self, job: _Job) -> bool:
+        return bool((self.done[job.arm, list(job.rows)] >= job.episodes).all())
+
+    def add(self, jobs: list[_Job]) -> list[_Job]:
+        """The jobs, numbered after those there are, and counted in."""
+        numbered = [replace(job, index=len(self.jobs) + i) for i, job in enumerate(jobs)]
+        self.jobs.extend(numbered)
+        return numbered
+
+    def count(self) -> int:
+        return int(self.done.sum())
 
     def total(self) -> int:
         return len(self.arms) * self.setup.seeds * self.setup.episodes
@@ -531,27 +511,9 @@ class _Tally:
         """Each arm's outcome so far (None for one with no episode finished by every seed)."""
         return [self._outcome(a) for a in range(len(self.arms))]
 
-    def _merged(self, arm: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
-        setup = self.setup
-        checkpoints = checkpoint_episodes(setup.episodes)
-        done = np.zeros(setup.seeds, dtype=np.int64)
-        returns = np.full((setup.seeds, setup.episodes), np.nan)
-        exact = None if self.prepared.model is None else np.full(
-            (setup.seeds, len(checkpoints)), np.nan
-        )
-        for job in self.jobs:
-            state = self.states.get(job.index)
-            if job.arm != arm or state is None:
-                continue
-            rows = list(job.rows)
-            done[rows] = state.done
-            returns[rows, : state.returns.shape[1]] = state.returns
-            if exact is not None and state.exact is not None:
-                exact[rows] = state.exact
-        return done, returns, checkpoints, exact
-
     def _outcome(self, arm: int) -> AlgorithmOutcome | None:
-        done, returns, checkpoints, exact = self._merged(arm)
+        done, returns, checkpoints = self.done[arm], self.returns[arm], self.checkpoints
+        exact = None if self.exact is None else self.exact[arm]
         common = int(done.min())
         if common < 1:
             return None
@@ -645,12 +607,14 @@ def execute(
     stop: threading.Event | None = None,
     history: RunHistory | None = None,
     processes: int | None = None,
+    status: Callable[[str], None] | None = None,
 ) -> Executed:
-    """Train every arm over the setup's seeds (what `run_compare` and `run_sweep` share)."""
+    """Train every arm over the setup's seeds (what `run_compare` and `run_sweep` share):
+    here when the whole takes less than `SPREAD_SECONDS` (`_estimate`), else in child
+    processes, one per core."""
     prepared = prepare(setup, arms)
     cores = _cores() if processes is None else max(1, processes)
-    jobs = _jobs(setup, arms, prepared)
-    tally = _Tally(setup, arms, prepared, jobs)
+    tally = _Tally(setup, arms, prepared)
     if history is not None:
         tally.run_ids = _start_runs(history, kind, setup, arms, prepared)
     last = [time.monotonic()]
@@ -662,16 +626,22 @@ def execute(
         if force or now - last[0] >= PROGRESS_INTERVAL:
             last[0] = now
             found = tuple(o for o in tally.outcomes() if o is not None)
-            progress(CompareProgress(tally.done(), tally.total(), found))
+            progress(CompareProgress(tally.count(), tally.total(), found))
 
-    stopped = stop.is_set if stop is not None else (lambda: False)
+    halt = threading.Event()
+    stopped = halt.is_set if stop is None else (lambda: stop.is_set() or halt.is_set())
     complete = False
     failure: BaseException | None = None
     try:
-        if processes == 0:
-            complete = _run_here(jobs, tally, stopped, tell)
-        else:
-            complete = _run_children(jobs, tally, stopped, tell, cores)
+        with processes_module.stops_on_signals(halt):
+            jobs = _jobs(setup, arms, prepared, 0, setup.seeds)
+            if processes == 0 or cores == 1 or _estimate(prepared, arms, setup,
+                                                          status) < SPREAD_SECONDS:
+                complete = _run_here(tally.add(jobs), tally, stopped, tell)
+            else:
+                pieces = max(1, -(-2 * cores // len(arms)))
+                spread = _jobs(setup, arms, prepared, 0, setup.seeds, pieces)
+                complete = _run_children(tally.add(spread), tally, stopped, tell, cores)
     except BaseException as exc:
         failure = exc
     outcomes = tally.outcomes()
@@ -692,6 +662,36 @@ def execute(
     )
 
 
+def _estimate(prepared: Prepared, arms: Sequence[Arm], setup: Setup,
+              status: Callable[[str], None] | None) -> float:
+    """Seconds the whole would take on this thread, by a throwaway learner of each arm
+    played for `PROBE_SECONDS` (which also compiles the arms' learners, once, saying so
+    through `status`); 0 for a game no model follows (its seeds stay here)."""
+    model = prepared.model
+    if model is None:
+        return 0.0
+    learners = []
+    for a, arm in enumerate(arms):
+        cls = algorithm(arm.algorithm)
+        learners.append(cls(model.n_actions, cls.settings(prepared.hyperparameters[a]),
+                            n_states=model.n_states, seed=setup.first_seed))
+    if warm([(x.name, x.arrays(), x.compiled_params()) for x in learners], status) and status:
+        status("")
+    total = 0.0
+    for learner in learners:
+        began = time.perf_counter()
+        played, _ = play_learner(learner, model.arrays, setup.episodes,
+                                 stop=_deadline(began + PROBE_SECONDS / len(learners)))
+        rate = len(played) / max(time.perf_counter() - began, 1e-9)
+        total += setup.seeds * setup.episodes / max(rate, 1e-9)
+    return total
+
+
+def _deadline(end: float) -> Callable[[], bool]:
+    """A stop flag that is set once the clock passes `end`."""
+    return lambda: time.perf_counter() >= end
+
+
 def run_compare(
     spec: CompareSpec,
     *,
@@ -699,12 +699,14 @@ def run_compare(
     stop: threading.Event | None = None,
     history: RunHistory | None = None,
     processes: int | None = None,
+    status: Callable[[str], None] | None = None,
 ) -> CompareResult:
     """Run a comparison (see the module docstring).
 
-    `processes`: batches run at once in child processes (None: one per core);
-    0 runs them one after another on the calling thread. ValueError, before
-    anything runs, for an unknown game, algorithm or setting, or a bad value.
+    `processes`: child processes at once at most (None: one per core); 0 runs
+    everything on the calling thread. `status` hears the engine's lines
+    ("compiling the learners, once"). ValueError, before anything runs, for an
+    unknown game, algorithm or setting, or a bad value.
     """
     setup = Setup(spec.game, spec.seeds, spec.episodes, spec.game_params,
                   tuple(spec.wrappers), spec.first_seed)
@@ -713,7 +715,7 @@ def run_compare(
         for name in spec.algorithms
     ]
     done = execute(setup, arms, RunKind.COMPARE, progress=progress, stop=stop,
-                   history=history, processes=processes)
+                   history=history, processes=processes, status=status)
     return CompareResult(
         outcomes=tuple(o for o in done.outcomes if o is not None),
         interrupted=done.interrupted, group=done.group, spec=spec,
@@ -728,20 +730,19 @@ def _run_here(
         if stopped():
             return False
 
-        def report(state: SeedBatchState, index: int = job.index) -> None:
-            tally.states[index] = state
+        def report(update: SeedsUpdate, index: int = job.index) -> None:
+            tally.take(index, update)
             tell()
 
-        state = _run_job(job, stopped, report)
-        tally.states[job.index] = state
-        if (state.done < job.episodes).any():
+        tally.take(job.index, _run_job(job, stopped, report))
+        if not tally.finished(job):
             return False
         tell()
     return True
 
 
 class CompareError(RuntimeError):
-    """A batch of a comparison failed; the message says which and why."""
+    """A job of a comparison failed; the message says which and why."""
 
 
 def _run_children(
@@ -751,13 +752,14 @@ def _run_children(
     tell: Callable[..., None],
     cores: int,
 ) -> bool:
-    # When every batch runs at once and this is the main thread (a command, not the app's
-    # worker thread), the calling thread plays the last batch itself instead of waiting:
+    # When every job runs at once and this is the main thread (a command, not the app's
+    # worker thread), the calling thread plays the last job itself instead of waiting:
     # one process fewer to start, and its results need no passing over.
     own = None
     if 1 < len(jobs) <= cores and threading.current_thread() is threading.main_thread():
         own = jobs[-1]
-    ctx = _context()
+    ctx = processes_module.context()
+    parent = os.getpid()
     messages = ctx.Queue()
     stop_flag = ctx.Event()
     waiting = [job for job in jobs if job is not own]
@@ -772,7 +774,8 @@ def _run_children(
             stop_flag.set()
         while waiting and len(running) < cores and not stop_flag.is_set():
             job = waiting.pop(0)
-            process = ctx.Process(target=_child, args=(job, messages, stop_flag), daemon=True)
+            process = ctx.Process(target=_child, args=(parent, job, messages, stop_flag),
+                                  daemon=True)
             process.start()
             running[job.index] = process
         if stop_flag.is_set():
@@ -792,7 +795,7 @@ def _run_children(
                 # Gone without its last word: allow a moment for it to arrive.
                 if now - dead_since.setdefault(index, now) > 2.0:
                     running.pop(index)
-                    errors.append(f"a batch process ended with code {process.exitcode}")
+                    errors.append(f"a training process ended with code {process.exitcode}")
                     stop_flag.set()
             return False
         message = _take(kind, index, payload, tally, ended, running, gone)
@@ -810,13 +813,13 @@ def _run_children(
                     stop_flag.set()
                 return bool(stop_flag.is_set())
 
-            def report(state: SeedBatchState) -> None:
-                tally.states[own.index] = state
+            def report(update: SeedsUpdate) -> None:
+                tally.take(own.index, update)
                 while take(0):
                     pass
                 tell()
 
-            tally.states[own.index] = _run_job(own, own_stop, report)
+            tally.take(own.index, _run_job(own, own_stop, report))
             ended.add(own.index)
         while waiting or running:
             start()
@@ -824,16 +827,16 @@ def _run_children(
             tell()
     finally:
         stop_flag.set()
-        for process in [*running.values(), *gone]:
+        for process in gone:
             process.join(timeout=5)
-            if process.is_alive():
-                process.terminate()
+        for process in running.values():
+            processes_module.end(process)
         messages.close()
     if errors:
         raise CompareError(errors[0])
     return all(
-        index in ended and (tally.states[index].done >= job.episodes).all()
-        for index, job in enumerate(jobs)
+        job.index in ended and tally.finished(job)
+        for job in jobs
     )
 
 
@@ -847,7 +850,7 @@ def _take(
         if process is not None:
             gone.append(process)
         return str(payload)
-    tally.states[index] = payload
+    tally.take(index, payload)
     if kind == "end":
         ended.add(index)
         process = running.pop(index, None)

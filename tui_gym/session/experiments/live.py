@@ -18,10 +18,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from tui_gym.core.engine.stats import TrainingSnapshot
+from tui_gym.core.engine.trainer import EPISODE_RETURNS
 from tui_gym.core.experiments.aggregate import LAST_FRACTION
 from tui_gym.core.experiments.figures import Figure
 from tui_gym.core.experiments.records import Curve, RunKind, RunSpec, WrapperSetting
-from tui_gym.core.training import EPISODE_RETURNS, TrainingSnapshot
 
 if TYPE_CHECKING:
     from tui_gym.session.evaluation import EvalReport

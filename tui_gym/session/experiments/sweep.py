@@ -2,9 +2,10 @@
 
 `run_sweep(SweepSpec(...))` trains the algorithm at every point of the grid
 (the product of each key's values, the first key slowest) exactly as a
-comparison trains its algorithms (`compare.execute`: seeds batched, batches
-in child processes), and returns a `SweepResult` with one `SweepPoint` per
-grid point: its values and its `AlgorithmOutcome`. With a `RunHistory` each
+comparison trains its algorithms (`compare.execute`: every seed a learner of
+its own, spread over child processes when the work is long), and returns a
+`SweepResult` with one `SweepPoint` per grid point: its values and its
+`AlgorithmOutcome`. With a `RunHistory` each
 point is recorded as one run of kind `sweep`, grouped as a comparison's are.
 """
 
@@ -161,6 +162,7 @@ def run_sweep(
     stop: threading.Event | None = None,
     history: RunHistory | None = None,
     processes: int | None = None,
+    status: Callable[[str], None] | None = None,
 ) -> SweepResult:
     """Run a sweep (see the module docstring); arguments as `run_compare`'s."""
     setup = Setup(spec.game, spec.seeds, spec.episodes, spec.game_params,
@@ -170,7 +172,7 @@ def run_sweep(
                 ", ".join(f"{k}={v}" for k, v in values.items()))
             for values in points]
     done = execute(setup, arms, RunKind.SWEEP, progress=progress, stop=stop,
-                   history=history, processes=processes)
+                   history=history, processes=processes, status=status)
     hps = done.prepared.hyperparameters
     swept = [{k: hp[k] for k in spec.grid} for hp in hps]
     fixed = {k: v for k, v in hps[0].items() if k not in spec.grid}

@@ -18,11 +18,11 @@ from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING
 
+from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.history import RunHistory
 from tui_gym.core.experiments.paths import resolve_db_path
 from tui_gym.core.experiments.records import RunKind, RunSpec, RunStatus
-from tui_gym.core.training import TrainingSnapshot
 from tui_gym.session.experiments.live import (
     ExactCheckpoints,
     episodes_figure,

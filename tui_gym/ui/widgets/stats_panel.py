@@ -26,7 +26,7 @@ from rich.segment import Segment
 from rich.style import Style
 from rich.text import Text
 
-from tui_gym.core.training import TrainingSnapshot
+from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.games.base import ReferenceMetrics
 from tui_gym.ui.widgets.numbers import Forms, compact_count, count_forms, fit, number_forms
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget
@@ -233,10 +233,10 @@ class StatsPanel(StripWidget):
         if self._reference:
             lines += _grid([[(name, "dim"), (forms, "bold")] for name, forms in self._reference],
                            width)
-        elif self._reference_note:
-            lines += _note(self._reference_note, width)
         if self._reference and self._scope_note:
             lines += _note(self._scope_note, width)
+        if self._reference_note:
+            lines += _note(self._reference_note, width)
         if self._engine_reason:
             lines += _note(self._engine_reason, width)
         return lines

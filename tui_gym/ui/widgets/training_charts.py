@@ -31,7 +31,7 @@ from rich.color import Color as RichColor
 from rich.segment import Segment
 from rich.style import Style
 
-from tui_gym.core.training import TrainingSnapshot
+from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.ui.widgets.numbers import Forms, fit, number_forms
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget
 

@@ -1,16 +1,19 @@
-"""Bounded statistics for runs of any length.
+"""Bounded statistics for runs of any length, and the immutable views of a run.
 
 `RollingWindow` keeps the last `size` values of a quantity in a ring buffer
 with a running sum (moving average in O(1)). `Series` keeps a whole run's
 history as at most `capacity` points: when full it merges neighbouring points
 pairwise and doubles the span each point covers, so memory stays fixed and
 the picture still covers episode 0 to now. `EpisodeStats` bundles the four
-per-episode quantities the trainer tracks.
+per-episode quantities the trainer tracks; `TrainingSnapshot` is one frame of
+a run for viewers on other threads, `StepEvent` one move of the agent.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Hashable
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -140,3 +143,65 @@ class EpisodeStats:
     length: int
     mean_abs_td: float
     epsilon: float
+
+
+@dataclass(frozen=True)
+class TrainingSnapshot:
+    """What a viewer needs to draw one frame of training; never changes."""
+
+    engine: str  # the loop that trained last: "model" or "env"
+    episodes: int
+    steps: int
+    seconds: float  # time spent training
+    episodes_per_second: float  # recent rate
+    epsilon: float
+    mean_return: float  # over the rolling window
+    mean_length: float
+    mean_abs_td: float
+    window: int
+    series: dict[str, tuple[float, ...]]  # whole-run history per quantity
+    q: np.ndarray  # copy of the learner's action values (rows used)
+    keys: list[Hashable] | None  # the key of each row for sparse tables, None when dense
+    budget: int  # the episode budget from the hyperparameters
+    last: EpisodeStats | None = None
+    version: int = 0  # increases with every snapshot of a run
+    recorded: int = 0  # episodes in the statistics (fewer than `episodes` after a load)
+    status: str = ""  # what the engine is doing besides training, e.g. compiling
+    _lookup: dict[Hashable, int] | None = field(default=None, repr=False, compare=False)
+
+    def values(self, keys: list[Hashable]) -> np.ndarray:
+        """Action values for the given keys (zeros for unseen states), like `Learner.values`."""
+        out = np.zeros((len(keys), self.q.shape[1]))
+        if self.keys is None:
+            if keys:
+                out[:] = self.q[np.asarray(keys, dtype=np.int64)]
+            return out
+        lookup = self._lookup
+        if lookup is None:
+            lookup = {k: i for i, k in enumerate(self.keys)}
+            object.__setattr__(self, "_lookup", lookup)
+        for i, key in enumerate(keys):
+            row = lookup.get(key)
+            if row is not None:
+                out[i] = self.q[row]
+        return out
+
+    @property
+    def progress(self) -> float:
+        return min(1.0, self.episodes / self.budget) if self.budget else 0.0
+
+
+@dataclass(frozen=True)
+class StepEvent:
+    """One move of the agent, for animated training."""
+
+    observation: Any
+    action: int
+    reward: float
+    next_observation: Any
+    terminated: bool
+    truncated: bool
+    episode_done: EpisodeStats | None
+    episode: int = 0  # the 1-based number of the episode this step belongs to
+    step: int = 0  # the 1-based number of this step within its episode
+    last_update: Any = None  # the learner's record of the update, when asked to explain

@@ -1,0 +1,83 @@
+"""Compiling the learners: once with an empty cache, then loaded from the disk cache.
+
+In a fresh process with an empty cache folder (`NUMBA_CACHE_DIR`), every
+algorithm learns one episode on the model and takes one step on the env of
+every game: the time that takes, games built included, is
+the cold compile of every learner on every game. Then a second fresh process
+with the same folder starts the engine (importing Numba, reported apart) and
+makes every learner ready again: that is the warm load.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+
+TIMEOUT_S = 900.0
+
+
+@dataclass(frozen=True)
+class CompileResult:
+    """Seconds: every learner compiled from nothing, Numba's import, the warm load."""
+
+    cold_s: float
+    import_s: float
+    warm_s: float
+
+
+def _every_learner() -> float:
+    """Seconds to make every learner ready on every game (run in the child)."""
+    from tui_gym.algorithms import ALGORITHMS
+    from tui_gym.games import GAMES
+    from tui_gym.session.session import Session
+
+    began = time.perf_counter()
+    for game in GAMES:
+        for cls in ALGORITHMS:
+            session = Session(game.name, algorithm=cls.name, seed=0)
+            session.trainer.run(episodes=1)
+            session.trainer.step()
+            session.env.close()
+    return time.perf_counter() - began
+
+
+def _child(kind: str) -> dict[str, float]:
+    if kind == "cold":
+        return {"seconds": _every_learner()}
+    from tui_gym.algorithms import ALGORITHMS
+    from tui_gym.core.engine import jit, loop
+
+    began = time.perf_counter()
+    jit.start()
+    imported = time.perf_counter()
+    for cls in ALGORITHMS:
+        learner = cls(4, n_states=4)
+        loop.compile_learner(learner.arrays(), learner.compiled_params())
+    return {"import": imported - began, "seconds": time.perf_counter() - imported}
+
+
+def _run(kind: str, folder: str) -> dict[str, float]:
+    env = {**os.environ, "NUMBA_CACHE_DIR": folder}
+    done = subprocess.run([sys.executable, "-m", "tui_gym.bench.compiling", kind],
+                          capture_output=True, text=True, env=env, timeout=TIMEOUT_S,
+                          check=False)
+    if done.returncode != 0:
+        raise RuntimeError(f"compiling failed: {done.stderr.strip()[-300:]}")
+    return dict(json.loads(done.stdout.strip().splitlines()[-1]))
+
+
+def measure() -> CompileResult:
+    """The cold compile and the warm load (see the module docstring)."""
+    with tempfile.TemporaryDirectory(prefix="tui-gym-numba-") as folder:
+        cold = _run("cold", folder)
+        warm = _run("warm", folder)
+    return CompileResult(cold["seconds"], warm["import"], warm["seconds"])
+
+
+if __name__ == "__main__":
+    print(json.dumps(_child(sys.argv[1])))

@@ -1,0 +1,330 @@
+"""The compiled loop over a finite model, the one outcome sampler, and the per-transition entry.
+
+`run_model` plays a learner on a model's arrays (`ModelArrays`), one
+transition at a time: epsilon-greedy acting (the algorithm's acting values),
+an outcome drawn from the model, the episode limit, the algorithm's update.
+It runs at most `max_episodes` episodes and `max_steps` transitions per call
+and keeps the episode in progress in `cursor` and `acc` between calls, so a
+run cut into calls of any size is the same run: one transition from Python
+(the `n` step), a chunk at max speed, a whole headless run. Every random
+number comes from the learner's generator, in one order: the start, then per
+transition the action (when not chosen already), the outcome, the next
+action (SARSA), and what the rule draws.
+
+`transition` is the same update for a transition that happened elsewhere (a
+Gymnasium env played from Python), choosing the next action first where the
+rule needs it. `sample_start` and `sample_outcome` are the one sampler.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from tui_gym.core.engine import jit
+from tui_gym.core.engine.kernel import kernel
+from tui_gym.core.engine.rules import (
+    act,
+    begin,
+    epsilon_at,
+    full,
+    greedy,
+    next_first,
+    update,
+)
+from tui_gym.core.mdp.model import FiniteMDP
+
+__all__ = [
+    "GROW",
+    "Cursor",
+    "ModelArrays",
+    "entries",
+    "play",
+    "run_model",
+    "sample_outcome",
+    "sample_start",
+    "transition",
+    "warm",
+]
+
+GUIDED = 16  # pairs with more outcomes than this are sampled through a guide table
+GROW = 1  # `run_model`'s status when the learner needs room (Monte Carlo's longest episode)
+
+# Columns of `run_model`'s per-episode output.
+RETURN, LENGTH, MEAN_TD, EPSILON = range(4)
+
+
+@dataclass(frozen=True, eq=False)
+class ModelArrays:
+    """A model as the loop reads it: flat `[S * A * K]` arrays, where the episodes start,
+    the table row of each model state, and the episode limit (0: none)."""
+
+    next_state: np.ndarray
+    cumulative: np.ndarray
+    guide: np.ndarray  # [S * A * K]: per pair, where outcome j / K falls (see `sample_outcome`)
+    reward: np.ndarray
+    terminal: np.ndarray
+    outcomes: int
+    starts: np.ndarray
+    start_cumulative: np.ndarray
+    rows: np.ndarray
+    horizon: int
+    n_actions: int
+
+    @classmethod
+    def of(cls, model: FiniteMDP, rows: np.ndarray | None = None) -> ModelArrays:
+        """The arrays of `model`; `rows[s]` is the table row of model state s (default: s)."""
+        starts = np.flatnonzero(model.initial > 0).astype(np.int64)
+        start_cumulative = np.cumsum(model.initial[starts])
+        start_cumulative[-1] = 1.0
+        table_rows = np.arange(model.n_states) if rows is None else np.asarray(rows)
+        if table_rows.shape != (model.n_states,):
+            raise ValueError(f"rows must have one entry per model state ({model.n_states})")
+        outcomes = model.max_outcomes
+        guide = np.zeros(1, dtype=np.int32)
+        if outcomes > GUIDED:
+            marks = np.arange(outcomes) / outcomes
+            rows_of_pairs = model.cumulative.reshape(-1, outcomes)
+            guide = np.empty(rows_of_pairs.shape, dtype=np.int32)
+            for pair, row in enumerate(rows_of_pairs):
+                guide[pair] = np.minimum(np.searchsorted(row, marks, side="right"), outcomes - 1)
+        # Writable copies: Numba types a read-only array on its slow path, every call.
+        return cls(
+            next_state=np.array(model.next_state.reshape(-1), dtype=np.int64),
+            cumulative=np.array(model.cumulative.reshape(-1), dtype=np.float64),
+            guide=guide.reshape(-1),
+            reward=np.array(model.reward.reshape(-1), dtype=np.float64),
+            terminal=np.array(model.terminal.reshape(-1), dtype=np.bool_),
+            outcomes=outcomes,
+            starts=starts,
+            start_cumulative=np.ascontiguousarray(start_cumulative, dtype=np.float64),
+            rows=np.array(table_rows, dtype=np.int64),
+            horizon=int(model.horizon or 0),
+            n_actions=model.n_actions,
+        )
+
+
+class Cursor:
+    """An episode in progress between calls of `run_model`: whether one is running, its
+    model state, the action chosen for it (-1: none yet), its steps, return and |TD| sum."""
+
+    def __init__(self) -> None:
+        self.ints = np.zeros(6, dtype=np.int64)  # live, state, action, steps; episodes, steps
+        self.floats = np.zeros(2, dtype=np.float64)  # return, sum of |TD|
+
+    @property
+    def live(self) -> bool:
+        return bool(self.ints[0])
+
+    @property
+    def state(self) -> int:
+        return int(self.ints[1])
+
+    def drop(self) -> None:
+        """Abandon the episode in progress (the next call starts a new one)."""
+        self.ints[0] = 0
+
+
+@kernel(inline=True)
+def sample_start(starts: Any, start_cumulative: Any, rng: Any) -> int:
+    """A start state drawn from the initial distribution (no draw when there is one)."""
+    n = starts.shape[0]
+    if n == 1:
+        return starts[0]
+    i = np.searchsorted(start_cumulative, rng.random(), side="right")
+    return starts[min(i, n - 1)]
+
+
+@kernel(inline=True)
+def sample_outcome(cumulative: Any, guide: Any, base: int, outcomes: int, rng: Any) -> int:
+    """Outcome k of the pair whose outcomes start at `base`: drawn when cumulative[k - 1]
+    <= u < cumulative[k] (no draw when the pair has one outcome). Among many outcomes
+    (a day of Poisson rentals) the search starts where the pair's guide table points
+    for u, and moves back if need be: the same k as the scan from 0."""
+    if outcomes == 1:
+        return 0
+    u = rng.random()
+    k = 0
+    if outcomes > GUIDED:
+        k = guide[base + int(u * outcomes)]
+        while k > 0 and u < cumulative[base + k - 1]:
+            k -= 1
+    while k < outcomes - 1 and u >= cumulative[base + k]:
+        k += 1
+    return k
+
+
+@kernel
+def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, terminal: Any,
+              outcomes: int,
+              starts: Any, start_cumulative: Any, rows: Any, horizon: int,
+              tables: Any, hp: Any, rng: Any, explore: Any, episode0: int,
+              cursor: Any, acc: Any, max_episodes: int, max_steps: int,
+              out: Any, log: Any) -> int:
+    """Play up to `max_episodes` episodes and `max_steps` transitions (see the module
+    docstring); `explore` is (epsilon start, final, decay episodes), `episode0` the
+    learner's episodes so far. Finished episodes go into `out` rows (return, length,
+    mean |TD|, epsilon); `cursor[4]`, `cursor[5]` count the episodes and steps of this
+    call. Returns 0, or `GROW` when the learner needs room first."""
+    n_actions = tables[0].shape[1]
+    done = 0
+    steps = 0
+    status = 0
+    eps = epsilon_at(float(episode0), explore[0], explore[1], explore[2])
+    while done < max_episodes and steps < max_steps:
+        if cursor[0] == 0:
+            cursor[0] = 1
+            cursor[1] = sample_start(starts, start_cumulative, rng)
+            cursor[2] = -1
+            cursor[3] = 0
+            acc[0] = 0.0
+            acc[1] = 0.0
+            begin(tables, hp)
+        if full(tables, hp):
+            status = GROW
+            break
+        s = cursor[1]
+        a = cursor[2]
+        if a < 0:
+            a = act(tables, hp, rng, rows[s], eps)
+        at = (s * n_actions + a) * outcomes
+        at += sample_outcome(cumulative, guide, at, outcomes, rng)
+        s2 = next_state[at]
+        r = reward[at]
+        ended = terminal[at]
+        cursor[3] += 1
+        cut = (not ended) and horizon > 0 and cursor[3] >= horizon
+        a2 = -1
+        if next_first(hp) and not ended:
+            a2 = act(tables, hp, rng, rows[s2], eps)
+        td = update(tables, hp, rng, rows[s], a, r, rows[s2], ended, cut, a2, eps, log)
+        acc[0] += r
+        acc[1] += td
+        steps += 1
+        if ended or cut:
+            length = cursor[3]
+            out[done, 0] = acc[0]
+            out[done, 1] = length
+            out[done, 2] = acc[1] / length
+            out[done, 3] = eps
+            done += 1
+            cursor[0] = 0
+            eps = epsilon_at(float(episode0 + done), explore[0], explore[1], explore[2])
+        else:
+            cursor[1] = s2
+            cursor[2] = a2
+    cursor[4] = done
+    cursor[5] = steps
+    return status
+
+
+@kernel
+def transition(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+               terminated: bool, truncated: bool, a2: int, epsilon: float,
+               log: Any) -> tuple[int, float]:
+    """The update for one transition played elsewhere; the next action is chosen first
+    (when `a2` < 0) for a rule that needs it. Returns (that action or -1, |TD|)."""
+    if a2 < 0 and next_first(hp) and not terminated:
+        a2 = act(tables, hp, rng, s2, epsilon)
+    td = update(tables, hp, rng, s, a, r, s2, terminated, truncated, a2, epsilon, log)
+    return a2, td
+
+
+# --- called from Python ------------------------------------------------------------------
+
+
+def play(learner: Any, model: ModelArrays, cursor: Cursor, max_episodes: int,
+         max_steps: int, out: np.ndarray, log: np.ndarray) -> tuple[int, int]:
+    """One call of `run_model` for `learner` (giving it room when it asks, and moving its
+    schedule on by the episodes finished): (episodes, steps)."""
+    hp = learner.compiled_params()
+    status = entries(hp).run_model(
+        model.next_state, model.cumulative, model.guide, model.reward, model.terminal,
+        model.outcomes, model.starts, model.start_cumulative, model.rows, model.horizon,
+        learner.arrays(), hp, learner.rng, learner.exploration(), learner.episode,
+        cursor.ints, cursor.floats, min(max_episodes, len(out)), max_steps, out, log,
+    )
+    if status == GROW:
+        learner.make_room()
+    done = int(cursor.ints[4])
+    learner.end_episodes(done)
+    return done, int(cursor.ints[5])
+
+
+class Entries:
+    """The kernels Python calls for one algorithm (`jit.entry`): `run_model`,
+    `transition`, `act` and `greedy`."""
+
+    def __init__(self, kind: type) -> None:
+        self.run_model = jit.entry(run_model, kind)
+        self.transition = jit.entry(transition, kind)
+        self.act = jit.entry(act, kind)
+        self.greedy = jit.entry(greedy, kind)
+
+
+_ENTRIES: dict[type, Entries] = {}
+
+
+def entries(hp: Any) -> Entries:
+    """The entry points for the algorithm whose compiled hyperparameters are `hp`."""
+    kind = type(hp)
+    found = _ENTRIES.get(kind)
+    if found is None:
+        found = _ENTRIES[kind] = Entries(kind)
+    return found
+
+
+# --- compiling once ---------------------------------------------------------------------
+
+
+def _tiny_model(n_actions: int) -> ModelArrays:
+    """One state, every action ending the episode: enough to compile the loop's types."""
+    shape = (1, n_actions, 1)
+    return ModelArrays.of(FiniteMDP(np.zeros(shape, dtype=np.int64), np.ones(shape),
+                                    np.zeros(shape), np.ones(shape, dtype=bool), np.ones(1)))
+
+
+def compile_learner(tables: Any, hp: Any) -> None:
+    """Compile (or load) the entry points for one learner's types, on copies of its
+    tables."""
+    calls = entries(hp)
+    copies = tuple(np.array(t) for t in tables)
+    spare = np.random.default_rng(0)
+    log = np.zeros((1, 8))
+    model = _tiny_model(copies[0].shape[1])
+    cursor = Cursor()
+    out = np.zeros((1, 4))
+    explore = np.zeros(3)
+    calls.run_model(model.next_state, model.cumulative, model.guide, model.reward,
+                    model.terminal, model.outcomes, model.starts, model.start_cumulative,
+                    model.rows, model.horizon, copies, hp, spare, explore, 0, cursor.ints,
+                    cursor.floats, 1, 1, out, log)
+    calls.transition(copies, hp, spare, 0, 0, 0.0, 0, True, False, -1, 0.0, log)
+    calls.act(copies, hp, spare, 0, 0.0)
+    calls.greedy(copies, hp, spare, 0)
+
+
+def warm(learners: Sequence[tuple[str, Any, Any]],
+         progress: Callable[[str], None] | None = None) -> bool:
+    """Compile (or load) each `(name, tables, hp)` learner's entry points; tells
+    `progress` "compiling the learners, once (i/n: name)" for those not compiled before.
+    True when anything had to be compiled."""
+    if all(name in _WARM for name, _, _ in learners):
+        return False
+    folder = jit.folder()
+    cold = [(n, t, h) for n, t, h in learners if not (folder / f"warm-{n}").exists()]
+    for index, (name, tables, hp) in enumerate(cold, start=1):
+        if progress is not None:
+            progress(f"{jit.COMPILING} ({index}/{len(cold)}: {name})")
+        compile_learner(tables, hp)
+        with contextlib.suppress(OSError):  # a read-only cache works, only looked at again
+            (folder / f"warm-{name}").write_text("ok\n")
+    _WARM.update(name for name, _, _ in learners)
+    return bool(cold)
+
+
+_WARM: set[str] = set()  # learners whose entry points this process has made ready

@@ -1,0 +1,431 @@
+"""The trainer: one learner trained in chunks, with bounded statistics and snapshots.
+
+`Trainer` trains a learner (any `tui_gym.algorithms.Learner`) one of two
+ways, through the same compiled rule:
+
+- on the game's finite model (`ModelArrays`: the model as the wrappers make
+  it), with the compiled loop (`loop.run_model`): max-speed training and
+  every headless run;
+- on the Gymnasium env itself, one transition at a time from Python (`step`):
+  the animated board and the `n` step, which show the env, and games or
+  wrapper chains no model follows.
+
+`run(episodes=…)` / `run(seconds=…)` works in chunks of milliseconds so a
+front end can interleave drawing, pausing and changing settings; an episode
+in progress carries over between calls, so cutting a run into chunks never
+changes it. Per-episode return, length, mean |TD error| and epsilon go into
+`RollingWindow`s and whole-run `Series` (memory is fixed however long it
+runs); `snapshot()` is an immutable `TrainingSnapshot` for viewers on other
+threads, `latest` the most recent one. Its episodes per second are the recent
+rate of the loop training now. `continue_run` decides how new
+hyperparameters apply to a run under way.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import gymnasium as gym
+import numpy as np
+
+from tui_gym.core.engine import loop
+from tui_gym.core.engine.loop import ModelArrays
+from tui_gym.core.engine.stats import (
+    EpisodeStats,
+    RollingWindow,
+    Series,
+    StepEvent,
+    TrainingSnapshot,
+)
+from tui_gym.core.obskey import ObservationKeyer
+
+__all__ = [
+    "EPISODE_RETURNS",
+    "SERIES_NAMES",
+    "StopFlag",
+    "Trainer",
+    "TrainerProgress",
+    "continue_run",
+]
+
+SERIES_NAMES = ("return", "length", "td_error", "epsilon")
+# The series of each episode's own return (bucket means, not rolling means): what the run
+# history records as a run's `return` curve.
+EPISODE_RETURNS = "episode_return"
+ENV_CHUNK_STEPS = 256  # env-loop steps after which `run` checks the clock and its stop flag
+CHUNK_SECONDS = 0.004  # the model loop's calls aim at this long
+MAX_CALL_EPISODES = 65_536  # episodes one call of the model loop reports at most
+RATE_SECONDS = 1.0  # the episodes per second shown are over about this much training time
+
+
+class StopFlag(Protocol):
+    """What `Trainer.run` checks between pieces of work (a `threading.Event` will do)."""
+
+    def is_set(self) -> bool: ...
+
+
+@dataclass(frozen=True)
+class TrainerProgress:
+    """A trainer's counts and bounded statistics, to hand to another trainer."""
+
+    episodes: int
+    steps: int
+    seconds: float
+    windows: dict[str, RollingWindow]
+    series: dict[str, Series]
+    last: EpisodeStats | None
+    version: int
+    engine: str = "model"
+    rate: float = 0.0  # the episodes per second last shown
+
+
+class Trainer:
+    """Trains `agent` on `model` (when given) or on `env` (see the module docstring).
+
+    Args:
+        env: the env as built with its wrappers (the board shows it; with no
+            model it is what training plays).
+        agent: the learner (shared with the session).
+        keyer: the keyer of `env`'s observation space.
+        model: the game's model as the wrappers make it, whose states map to
+            the agent's table rows; None to train on the env.
+        seed: seeds the env's first reset (the agent's own generator drives
+            everything else).
+        reason: which loop trains and why, for people.
+    """
+
+    def __init__(
+        self,
+        env: gym.Env,
+        agent: Any,
+        keyer: ObservationKeyer,
+        *,
+        model: ModelArrays | None = None,
+        seed: int | None = None,
+        reason: str = "",
+        window: int = 1000,
+        series_capacity: int = 256,
+        publish_interval: float = 0.1,
+    ) -> None:
+        self.env = env
+        self.agent = agent
+        self.keyer = keyer
+        self.model = model
+        self.seed = seed
+        self.reason = reason
+        self.publish_interval = publish_interval
+        self.on_status: Callable[[str], None] | None = None  # hears "compiling…" lines
+        self.status = ""
+        self.episodes = 0
+        self.steps = 0
+        self.seconds = 0.0
+        self.windows = {name: RollingWindow(window) for name in SERIES_NAMES}
+        self.series = {name: Series(series_capacity) for name in (*SERIES_NAMES, EPISODE_RETURNS)}
+        self.last: EpisodeStats | None = None
+        self.engine = "model" if model is not None else "env"
+        self._version = 0
+        self._samples: deque[tuple[float, int]] = deque(maxlen=64)  # (seconds, episodes)
+        self._rate = 0.0
+        # The model loop's episode in progress and its buffers.
+        self._cursor = loop.Cursor()
+        self._out = np.zeros((MAX_CALL_EPISODES, 4))
+        self._log = np.zeros((1, 8))
+        self._call_steps = 4096
+        # The env loop's episode in progress.
+        self._obs: Any = None
+        self._row = 0
+        self._pending = -1  # the next action, chosen before the update (SARSA)
+        self._episode: list[float] = [0.0, 0.0, 0.0]  # return, length, sum of |TD|
+        self._warmed = False
+        self._env_seeded = False
+        self.latest: TrainingSnapshot = self.snapshot()
+
+    # --- which loop ----------------------------------------------------------------
+    def _use(self, engine: str) -> None:
+        """Train with `engine` from now on: the other loop's episode in progress is dropped
+        (the learner forgets what it kept of it), and the rate starts afresh."""
+        if engine == self.engine:
+            return
+        self.engine = engine
+        self._cursor.drop()
+        self._obs = None
+        self.agent.begin_episode()
+        self._samples.clear()
+        self._rate = 0.0
+
+    def _warm(self) -> None:
+        """Compile the learner's loop, saying so (once: it is cached on disk)."""
+
+        def say(text: str) -> None:
+            self.status = text
+            if self.on_status is not None:
+                self.on_status(text)
+            self.publish()
+
+        if self._warmed:
+            return
+        agent = self.agent
+        if loop.warm([(agent.name, agent.arrays(), agent.compiled_params())], say):
+            say("")
+        self._warmed = True
+
+    # --- chunks ----------------------------------------------------------
+    def run(
+        self,
+        episodes: int | None = None,
+        seconds: float | None = None,
+        stop: StopFlag | None = None,
+        on_publish: Callable[[TrainingSnapshot], None] | None = None,
+    ) -> int:
+        """Run until `episodes` more episodes, `seconds` elapse, or `stop` is set.
+
+        Exactly `episodes` finish when that limit is what stops the run;
+        `seconds` and `stop` are checked between chunks of milliseconds.
+        Returns the number of episodes finished, and publishes a snapshot to
+        `latest` (and `on_publish`) every `publish_interval` seconds and at the
+        end.
+        """
+        if episodes is None and seconds is None and stop is None:
+            raise ValueError("run() needs episodes, seconds or a stop event")
+        self._use("model" if self.model is not None else "env")
+        if self.model is not None:
+            self._warm()
+        start = began = time.perf_counter()
+        next_publish = start + self.publish_interval
+        self._samples.append((self.seconds, self.episodes))
+        done = 0
+        while episodes is None or done < episodes:
+            quota = None if episodes is None else episodes - done
+            done += self._chunk_model(quota) if self.model is not None else self._chunk_env(quota)
+            now = time.perf_counter()
+            if seconds is not None and now - began >= seconds:
+                break
+            if stop is not None and stop.is_set():
+                break
+            if now >= next_publish:
+                self.seconds += now - start
+                start = now
+                self.publish(on_publish)
+                next_publish = now + self.publish_interval
+        self.seconds += time.perf_counter() - start
+        self.publish(on_publish)
+        return done
+
+    def _chunk_model(self, quota: int | None) -> int:
+        """One call of the compiled loop (a few milliseconds); the episodes it finished."""
+        assert self.model is not None
+        limit = MAX_CALL_EPISODES if quota is None else min(quota, MAX_CALL_EPISODES)
+        began = time.perf_counter()
+        done, steps = loop.play(self.agent, self.model, self._cursor, limit, self._call_steps,
+                                self._out, self._log)
+        elapsed = time.perf_counter() - began
+        if elapsed > 0 and steps:  # aim the next call at CHUNK_SECONDS
+            wanted = self._call_steps * CHUNK_SECONDS / elapsed
+            self._call_steps = int(min(max(wanted, 256), 1 << 22))
+        self.steps += steps
+        if done:
+            self._record(self._out[:done])
+        return done
+
+    def _record(self, rows: np.ndarray) -> None:
+        """Count finished episodes (rows of return, length, mean |TD|, epsilon) into the
+        windows and curves."""
+        if len(rows) == 1:  # one at a time (the env loop): no arrays to build
+            values = rows[0].tolist()
+            for name, value in zip(SERIES_NAMES, values, strict=True):
+                window = self.windows[name]
+                window.push(value)
+                self.series[name].push(window.mean)
+            self.series[EPISODE_RETURNS].push(values[0])
+            ret, length, td, eps = values
+            self.last = EpisodeStats(ret, int(length), td, eps)
+            self.episodes += 1
+            return
+        for name, values in zip(SERIES_NAMES, rows.T, strict=True):
+            means = self.windows[name].push_many(values)
+            self.series[name].push_many(means)
+        self.series[EPISODE_RETURNS].push_many(rows[:, 0])
+        ret, length, td, eps = rows[-1].tolist()
+        self.last = EpisodeStats(ret, int(length), td, eps)
+        self.episodes += len(rows)
+
+    def _chunk_env(self, quota: int | None) -> int:
+        """A few episodes on the env (at most `quota`), fewer once they add up to
+        `ENV_CHUNK_STEPS` steps, so a stop is seen within milliseconds."""
+        count = 16 if quota is None else min(16, quota)
+        first_step = self.steps
+        done = 0
+        while done < count:
+            if self.step().episode_done is not None:
+                done += 1
+                if self.steps - first_step >= ENV_CHUNK_STEPS:
+                    break
+        return done
+
+    # --- one transition on the env ------------------------------------------------------
+    def step(self, explain: bool = False) -> StepEvent:
+        """Take one transition on the env (starting an episode if none is running).
+
+        With `explain` the event carries the learner's record of the update.
+        """
+        self._use("env")
+        self._warm()
+        agent = self.agent
+        if self._obs is None:
+            if not self._env_seeded and self.seed is not None:
+                obs, _ = self.env.reset(seed=self.seed)
+                self._env_seeded = True
+            else:
+                obs, _ = self.env.reset()
+            agent.begin_episode()
+            self._obs, self._row, self._pending = obs, agent.row(self.keyer.key(obs)), -1
+            self._episode = [0.0, 0.0, 0.0]
+        obs, row = self._obs, self._row
+        action = self._pending if self._pending >= 0 else agent.act(self.keyer.key(obs))
+        next_obs, reward, terminated, truncated, _ = self.env.step(action)
+        next_row = agent.row(self.keyer.key(next_obs))
+        next_action, td = agent.learn(row, action, float(reward), next_row, bool(terminated),
+                                      bool(truncated), explain=explain)
+        record = agent.last_update if explain else None
+        self.steps += 1
+        totals = self._episode
+        totals[0] += float(reward)
+        totals[1] += 1
+        totals[2] += td
+        episode, length = self.episodes + 1, int(totals[1])
+        done_stats = None
+        if terminated or truncated:
+            ret, _, total = totals
+            self._record(np.array([[ret, length, total / length, agent.epsilon]]))
+            agent.end_episodes(1)
+            done_stats = self.last
+            self._obs = None
+        else:
+            self._obs, self._row, self._pending = next_obs, next_row, next_action
+        return StepEvent(obs, action, float(reward), next_obs, bool(terminated),
+                         bool(truncated), done_stats, episode, length, record)
+
+    def run_episode(self) -> EpisodeStats:
+        """Finish one more episode and return its statistics."""
+        self.run(episodes=1)
+        assert self.last is not None
+        return self.last
+
+    def episode_in_progress(self) -> bool:
+        """Whether an episode has started and not ended."""
+        return self._obs is not None or self._cursor.live
+
+    def current_observation(self) -> Any:
+        """The observation the agent is about to act on, on the env (None otherwise)."""
+        return self._obs
+
+    # --- snapshots -----------------------------------------------------------------------
+    def publish(self, callback: Callable[[TrainingSnapshot], None] | None = None) -> None:
+        snap = self.snapshot()
+        self.latest = snap
+        if callback is not None:
+            callback(snap)
+
+    def _recent_rate(self) -> float:
+        """Episodes per second over about the last `RATE_SECONDS` of training by the loop
+        training now (the last rate while nothing new has been trained)."""
+        samples = self._samples
+        now, count = self.seconds, self.episodes
+        if not samples or samples[-1] != (now, count):
+            samples.append((now, count))
+        # The first sample kept is the newest one at least RATE_SECONDS old, if any.
+        while len(samples) > 2 and now - samples[1][0] >= RATE_SECONDS:
+            samples.popleft()
+        then, before = samples[0]
+        if now > then and count > before:
+            self._rate = (count - before) / (now - then)
+        return self._rate
+
+    def snapshot(self) -> TrainingSnapshot:
+        """An immutable copy of the current statistics and the learner's action values."""
+        q, keys = self.agent.table()
+        self._version += 1
+        w = self.windows
+        return TrainingSnapshot(
+            engine=self.engine,
+            episodes=self.episodes,
+            steps=self.steps,
+            seconds=self.seconds,
+            episodes_per_second=self._recent_rate(),
+            epsilon=self.agent.epsilon,
+            mean_return=w["return"].mean,
+            mean_length=w["length"].mean,
+            mean_abs_td=w["td_error"].mean,
+            window=w["return"].size,
+            series={name: s.points() for name, s in self.series.items()},
+            q=q,
+            keys=keys,
+            budget=self.agent.hp.episodes,
+            last=self.last,
+            version=self._version,
+            recorded=w["return"].count,
+            status=self.status,
+        )
+
+    def progress(self) -> TrainerProgress:
+        """Counts and statistics so far (to carry on elsewhere)."""
+        return TrainerProgress(self.episodes, self.steps, self.seconds, self.windows,
+                               self.series, self.last, self._version, self.engine,
+                               self._recent_rate())
+
+    def restore(self, progress: TrainerProgress) -> None:
+        """Carry on from `progress` (this trainer's agent is the one that made it, and
+        an episode this trainer has in progress goes on)."""
+        self.episodes, self.steps = progress.episodes, progress.steps
+        self.seconds, self.windows = progress.seconds, progress.windows
+        self.series, self.last = progress.series, progress.last
+        self._version = progress.version
+        self.engine = progress.engine
+        self._samples.clear()  # the rate goes on from the one shown
+        self._rate = progress.rate
+        self.publish()
+
+    @property
+    def remaining(self) -> int:
+        return max(0, self.agent.hp.episodes - self.episodes)
+
+
+def continue_run(
+    current: Any, wanted: Any, episodes_done: int
+) -> tuple[Any, str | None]:
+    """The hyperparameters to train on with, and what to tell the person, if anything.
+
+    Raising the episode budget of an agent that has trained continues its run:
+    the epsilon decay keeps its length in episodes (the decay fraction is scaled
+    down to match), so epsilon carries on from where it is instead of jumping
+    back up. When the decay fraction or the epsilons are changed too, they are
+    taken as asked; if that sends epsilon back up, the note says so plainly.
+    """
+    if current is None or episodes_done <= 0:
+        return wanted, None
+    hp, note = wanted, None
+    same_fraction = math.isclose(
+        wanted.epsilon_decay_fraction, current.epsilon_decay_fraction, rel_tol=1e-5, abs_tol=1e-9
+    )
+    if wanted.episodes > current.episodes and same_fraction:
+        decay_episodes = current.epsilon_decay_fraction * current.episodes
+        hp = wanted.replace(epsilon_decay_fraction=min(1.0, decay_episodes / wanted.episodes))
+        note = (
+            f"Budget raised to {wanted.episodes:,} episodes: the run goes on from episode "
+            f"{episodes_done:,} with epsilon on its schedule (decay fraction "
+            f"{hp.epsilon_decay_fraction:.4g}: the decay still ends at episode "
+            f"{decay_episodes:,.0f})."
+        )
+    before, after = current.epsilon_at(episodes_done), hp.epsilon_at(episodes_done)
+    if after > before + 1e-6:
+        note = (
+            f"Exploration restarts: with these settings epsilon goes back up from "
+            f"{before:.3g} to {after:.3g} at episode {episodes_done:,}."
+        )
+    return hp, note
+

@@ -1,0 +1,37 @@
+"""The one reader of a built env's wrapper chain.
+
+`layers(env)` is every wrapper around the bare env, innermost first;
+`time_limit(layer)` the steps a `TimeLimit` layer allows (None for any other
+layer) and `elapsed(layer)` the steps it has counted this episode. The exact
+model, the change list, the fits checks, the engine's choice of loop and the
+per-state views all read the chain through these.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+from gymnasium.wrappers import TimeLimit
+
+__all__ = ["elapsed", "layers", "time_limit"]
+
+
+def layers(env: Any) -> list[gym.Wrapper]:
+    """The wrappers of `env`, innermost first (none for a bare env)."""
+    found: list[gym.Wrapper] = []
+    while isinstance(env, gym.Wrapper):
+        found.append(env)
+        env = env.env
+    found.reverse()
+    return found
+
+
+def time_limit(layer: Any) -> int | None:
+    """The episode limit of a `TimeLimit` layer; None for any other layer."""
+    return int(layer._max_episode_steps) if isinstance(layer, TimeLimit) else None
+
+
+def elapsed(layer: Any) -> int:
+    """The steps a `TimeLimit` layer has counted this episode (0 before the first)."""
+    return int(getattr(layer, "_elapsed_steps", 0) or 0)
