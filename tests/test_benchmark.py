@@ -90,6 +90,11 @@ def test_the_example_player_through_the_cli_and_the_leaderboard(
     assert [r["rank"] for r in runs] == [1, 2]
     code, out, _ = _cli(capsys, "benchmark", "--leaderboard", "blackjack", "--db", db)
     assert "best first" in out and "optimal" in out
+    # A player's name is data: its control characters never reach the terminal.
+    _cli(capsys, "benchmark", "blackjack", "--agent", "optimal", "--episodes", "20", "--db", db,
+         "--name", "evil\x1b[2Jname")
+    code, out, _ = _cli(capsys, "benchmark", "--leaderboard", "blackjack", "--db", db)
+    assert code == 0 and "evil\\x1b[2Jname" in out and "\x1b" not in out
 
 
 def test_record_writes_every_episode_of_a_benchmark(

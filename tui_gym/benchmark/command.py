@@ -12,6 +12,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from tui_gym.cli.output import print_json
+from tui_gym.core.text import visible
 
 BUILT_IN = ("random", "optimal")
 
@@ -183,7 +184,7 @@ def _show_leaderboard(args: argparse.Namespace, out: Console) -> int:
         run = standing.run
         agreement = run.figure("agreement")
         table.add_row(
-            str(standing.rank), escape(run.algorithm), _count(run, "episodes"),
+            str(standing.rank), escape(visible(run.algorithm, 60)), _count(run, "episodes"),
             _figure(run, "mean_return", 3, True), _figure(run, "regret_per_episode", 3, False),
             "–" if agreement is None else f"{agreement.value:.1%}",
             f"{_count(run, 'invalid_actions')}/{_count(run, 'timeouts')}",

@@ -110,7 +110,8 @@ def _temp_pattern(name: str) -> re.Pattern[str]:
     return re.compile(rf"\.{re.escape(name)}\.(?:(\d+)\.[0-9a-f]+|[a-z0-9_]{{8}})\.tmp")
 
 
-def _pid_alive(pid: int) -> bool:
+def pid_alive(pid: int) -> bool:
+    """Whether process `pid` may be alive (someone else's process, or no pid at all: yes)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
@@ -144,7 +145,7 @@ def remove_stale_temp_files(path: Path) -> list[Path]:
                 continue
             pid = match.group(1)
             stale = (
-                not _pid_alive(int(pid)) if pid is not None
+                not pid_alive(int(pid)) if pid is not None
                 else now - info.st_mtime > _STALE_AFTER
             )
             if stale:

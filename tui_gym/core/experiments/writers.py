@@ -15,6 +15,8 @@ import os
 import socket
 from functools import cache
 
+from tui_gym.core.files import pid_alive
+
 _PROC = "/proc"
 
 
@@ -49,15 +51,6 @@ def current_writer() -> str:
     return f"{_host()} {_boot()} {pid} {_start_ticks(pid)}"
 
 
-def _pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except (PermissionError, OverflowError, ValueError):
-        return True  # someone else's process (or an id this system cannot hold): say alive
-    return True
-
 
 class WriterCheck:
     """Tells whether the writer of a run is gone; remembers each answer for one listing."""
@@ -83,6 +76,6 @@ class WriterCheck:
         boot, pid, start = parts[1], int(parts[2]), parts[3]
         if boot and self._boot and boot != self._boot:
             return True  # written before the machine restarted
-        if not _pid_alive(pid):
+        if not pid_alive(pid):
             return True
         return bool(start) and _start_ticks(pid) not in ("", start)
