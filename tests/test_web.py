@@ -248,3 +248,12 @@ def test_which_hosts_are_this_machine_only(host: str, local: bool) -> None:
     from tui_gym.web import is_local
 
     assert is_local(host) is local
+
+
+def test_each_tab_draws_its_own_seed_unless_one_is_given() -> None:
+    from tui_gym.cli.main import build_parser
+    from tui_gym.web import app_command
+
+    parser = build_parser()
+    assert "--seed" not in app_command(parser.parse_args(["serve"]))
+    assert "--seed 7" in app_command(parser.parse_args(["--seed", "7", "serve"]))

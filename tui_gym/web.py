@@ -93,8 +93,9 @@ def serve_token(token: str | None, public: bool) -> str | None:
 
 def app_command(args: argparse.Namespace) -> str:
     """The shell command that runs one app for one browser tab."""
-    command = [sys.executable, "-m", "tui_gym", "--env", args.env, "--seed", str(args.seed),
-               "--runner", args.runner]
+    command = [sys.executable, "-m", "tui_gym", "--env", args.env, "--runner", args.runner]
+    if args.seed is not None:  # else each tab draws its own
+        command += ["--seed", str(args.seed)]
     if args.load:
         command += ["--load", args.load]
     return shlex.join(command)

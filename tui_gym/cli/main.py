@@ -252,7 +252,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     err = Console(stderr=True)
     try:
         args = build_parser().parse_args(argv)
-        if args.seed is None:  # the app draws one afresh and shows it; commands take 0
+        # The app draws a seed afresh and shows it (so does each tab `serve` opens); commands
+        # take 0.
+        if args.seed is None and args.command != "serve":
             args.seed = fresh_seed() if args.command is None else 0
         out = OutConsole()
         if args.command is None:
