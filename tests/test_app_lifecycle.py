@@ -26,6 +26,7 @@ from tui_gym.algorithms import QLearning
 from tui_gym.games import game_for
 from tui_gym.session.session import Session, default_settings
 from tui_gym.ui.app import TuiGymApp
+from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.train_view import TrainView
 
 from .terminal import Terminal, console_script
@@ -146,6 +147,8 @@ async def test_pause_reset_switch_and_quit_take_effect_at_once_mid_episode(runne
         await pilot.press("g", "space")
         await wait_for(pilot, lambda: app.runner.last_event is not None, "an animated step")
         await pilot.press("x")
+        if isinstance(app.screen, ConfirmScreen):  # an episode ended first: it asks
+            await pilot.press("y")
         assert not app.runner.running and app.runner.latest.episodes == 0
         await wait_for(pilot, lambda: not app.runner.busy, "the old agent to come back")
         assert app.session.trainer.episodes == 0, "the reset lost to the old agent"

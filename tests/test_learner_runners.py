@@ -86,3 +86,19 @@ def test_the_handover_carries_the_algorithm_and_refuses_another() -> None:
     assert isinstance(copy, Sarsa)
     with pytest.raises(ValueError, match="sarsa"):
         QLearning(2, n_states=704).assign_from(copy)
+
+
+@pytest.mark.parametrize("kind", ["thread", "process"])
+def test_a_burst_of_steps_takes_every_one(kind: str) -> None:
+    """Steps asked for while one is under way follow it, one transition each (a burst of
+    `n` lost all but the first while the first step of a new session was slow)."""
+    session = Session("cliffwalking", seed=0)
+    runner = (TrainingRunner if kind == "thread" else ProcessRunner)(session)
+    try:
+        for _ in range(5):
+            assert runner.run_one_step()
+        assert wait_for(lambda: not runner.busy, DEADLINE)
+        assert runner.session.trainer.steps == 5
+        assert runner.last_event is not None and runner.last_event.last_update is not None
+    finally:
+        runner.close()

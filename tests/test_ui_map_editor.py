@@ -33,8 +33,7 @@ async def test_paint_undo_and_the_optimum_on_a_small_cliff_and_a_game_without_a_
     async with app.run_test(size=SIZE) as pilot:
         await pilot.press("m")
         view = app.query_one(TrainView)
-        await wait_for(pilot, lambda: view.editor is not None and view.editor.canvas.has_focus,
-                       "the editor")
+        await wait_for(pilot, lambda: editing(view), "the editor")
         editor = view.editor
         assert editor is not None
         # The Train view showing again (its first frame, a view switch) keeps the keyboard
@@ -103,8 +102,7 @@ async def test_the_status_names_cells_as_the_axes_do_and_says_when_nothing_is_le
     async with app.run_test(size=(120, 40)) as pilot:
         await pilot.press("m")
         view = app.query_one(TrainView)
-        await wait_for(pilot, lambda: view.editor is not None and view.editor.canvas.has_focus,
-                       "the editor")
+        await wait_for(pilot, lambda: editing(view), "the editor")
         editor = view.editor
         assert editor is not None
         await pilot.press("down", "down", "down", "right", "right")  # the map's row 3, col 2
@@ -118,3 +116,8 @@ async def test_the_status_names_cells_as_the_axes_do_and_says_when_nothing_is_le
         await pilot.press("u")
         await wait_for(pilot, lambda: "· nothing to undo" in status(editor), "nothing left")
         assert "undone" not in status(editor)
+
+
+def editing(view: TrainView) -> bool:
+    """The editor is open, its canvas mounted and focused (`m` mounts it)."""
+    return view.editor is not None and any(c.has_focus for c in view.editor.query(MapCanvas))

@@ -221,7 +221,7 @@ class ProcessRunner:
         self._finished = False
         self._want_run = False
         self._want_one = False
-        self._want_step = False
+        self._want_step = 0  # steps asked for and not sent yet (a burst of `n` keeps each)
         self._pending: _Request | None = None
         self._numbers = 0
         self._last_sent_agent: Any = None  # to tell the child when the agent is a new one
@@ -278,7 +278,7 @@ class ProcessRunner:
         return self._wanted() or self._pending is not None
 
     def _wanted(self) -> bool:
-        return self._want_run or self._want_one or self._want_step
+        return self._want_run or self._want_one or self._want_step > 0
 
     @property
     def latest(self) -> TrainingSnapshot:
@@ -325,7 +325,8 @@ class ProcessRunner:
         self._finished = False
         self._error = None
         self._want_run = True
-        self._want_one = self._want_step = False
+        self._want_one = False
+        self._want_step = 0
         request = self._pending
         if request is not None and request.kind in ("one", "step"):
             self._ask_back(request)  # then start from where the episode got to
@@ -340,7 +341,8 @@ class ProcessRunner:
         `update()` take the agent in when it comes.
         """
         self.update()
-        self._want_run = self._want_one = self._want_step = False
+        self._want_run = self._want_one = False
+        self._want_step = 0
         if self._pending is not None:
             self._ask_back(self._pending)
         return self.wait_idle(timeout) if wait else True
@@ -359,8 +361,10 @@ class ProcessRunner:
     def run_one_step(self) -> bool:
         """Take one training step (one transition) in the child, explained in
         `last_event.last_update` (ignored while running or busy); False, as `start`,
-        when the budget is used up."""
-        return self._one("step", self._wanted() or self._pending is not None)
+        when the budget is used up. Steps asked for while one is under way follow it."""
+        pending = self._pending
+        return self._one("step", self._want_run or self._want_one
+                         or (pending is not None and pending.kind != "step"))
 
     def _one(self, kind: str, busy: bool) -> bool:
         self.update()
@@ -376,7 +380,7 @@ class ProcessRunner:
         if kind == "one":
             self._want_one = True
         else:
-            self._want_step = True
+            self._want_step += 1
         self._sync()
         return True
 
@@ -416,7 +420,8 @@ class ProcessRunner:
     def close(self, wait: bool = True) -> None:
         """End the child (with `wait`, return once it has ended; it is killed if it must be)."""
         self._closed = True
-        self._want_run = self._want_one = self._want_step = False
+        self._want_run = self._want_one = False
+        self._want_step = 0
         child, self._child = self._child, None
         self._ended = child or self._ended
         if self._ended is not None:
@@ -479,7 +484,8 @@ class ProcessRunner:
     def _replace_child(self, child: _Child, exitcode: int | None) -> None:
         request, self._pending = self._pending, None
         was_training = self._wanted() or request is not None
-        self._want_run = self._want_one = self._want_step = False
+        self._want_run = self._want_one = False
+        self._want_step = 0
         self._last_sent_agent = None
         self._child = None
         if self._closed:
@@ -549,7 +555,7 @@ class ProcessRunner:
             self._want_one = False
         elif self._want_step:
             kind = "step"
-            self._want_step = False
+            self._want_step -= 1
         else:
             return
         session = self.session

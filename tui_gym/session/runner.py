@@ -51,7 +51,7 @@ class TrainingRunner:
         self._cond = threading.Condition()
         self._want_run = False
         self._want_one = False
-        self._want_step = False
+        self._want_step = 0  # steps asked for and not taken yet (a burst of `n` keeps each)
         self._quit = False
         self._working = False  # the worker is inside a piece of work
         self._controls = 0  # counts control changes, to cut an animated pause short
@@ -71,7 +71,7 @@ class TrainingRunner:
     @property
     def busy(self) -> bool:
         """True while training is on, an episode or step is asked for, or work is under way."""
-        return self._want_run or self._want_one or self._want_step or self._working
+        return self._want_run or self._want_one or self._want_step > 0 or self._working
 
     @property
     def last_scene(self) -> dict | None:
@@ -85,7 +85,7 @@ class TrainingRunner:
         agent, _, event = self._shown
         return event if agent is self.session.agent else None
 
-    def _control(self, **flags: bool) -> None:
+    def _control(self, **flags: bool | int) -> None:
         with self._cond:
             for name, value in flags.items():
                 setattr(self, f"_{name}", value)
@@ -113,7 +113,8 @@ class TrainingRunner:
         whose child may take longer to hand the agent back. False on a timeout.
         """
         with self._cond:
-            self._want_run = self._want_one = self._want_step = False
+            self._want_run = self._want_one = False
+            self._want_step = 0
             self._controls += 1
             self._cond.notify_all()
             return self._cond.wait_for(lambda: not self._working, timeout)
@@ -138,14 +139,17 @@ class TrainingRunner:
 
     def run_one_step(self) -> bool:
         """Take one training step (one transition) on the env, explained in
-        `last_event.last_update` (ignored while running or busy with an episode); False,
-        as `start`, when the budget is used up."""
+        `last_event.last_update`, after the steps asked for before it (ignored while
+        running or busy with an episode); False, as `start`, when the budget is used up."""
         if self.session.trainer.remaining == 0:
             self.finished = True
             return False
-        if not (self._want_run or self._want_one or self._want_step):
+        if not (self._want_run or self._want_one):
             self.error = None
-            self._control(want_step=True)
+            with self._cond:
+                self._want_step += 1
+                self._controls += 1
+                self._cond.notify_all()
         return True
 
     def set_hyperparameters(self, hp: Any) -> None:
@@ -175,7 +179,7 @@ class TrainingRunner:
 
     def close(self, wait: bool = True) -> None:
         """Stop the worker thread for good (with `wait`, return once it has ended)."""
-        self._control(quit=True, want_run=False, want_one=False, want_step=False)
+        self._control(quit=True, want_run=False, want_one=False, want_step=0)
         if wait and self._thread is not threading.current_thread():
             self._thread.join(timeout=STOP_TIMEOUT)
 
@@ -196,7 +200,8 @@ class TrainingRunner:
             except Exception as exc:  # shown to the user by the front end
                 self.error = exc
                 with self._cond:
-                    self._want_run = self._want_one = self._want_step = False
+                    self._want_run = self._want_one = False
+                    self._want_step = 0
             finally:
                 with self._cond:
                     self._working = False
@@ -216,7 +221,7 @@ class TrainingRunner:
         if self._want_step and not self._want_run:
             self._animated_step(trainer)
             with self._cond:
-                self._want_step = False
+                self._want_step = max(0, self._want_step - 1)
                 self._cond.notify_all()
             return None
         if self._want_run:
