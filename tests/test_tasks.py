@@ -20,6 +20,7 @@ import pytest
 from tui_gym.core.experiments import RunHistory, RunKind, RunSpec
 from tui_gym.core.experiments.schema import MIGRATIONS
 from tui_gym.core.experiments.tasks import TaskRecord
+from tui_gym.session.experiments import compare
 from tui_gym.session.experiments.compare import (
     CompareProgress,
     CompareSpec,
@@ -165,8 +166,10 @@ def test_a_sweep_killed_with_sigkill_resumes_to_the_uninterrupted_figures(
     assert {s for _, s in stored(db, 1)} == {"finished"}
 
 
-def test_a_local_cluster_gives_the_local_numbers() -> None:
+def test_a_local_cluster_gives_the_local_numbers(monkeypatch: pytest.MonkeyPatch) -> None:
     distributed = pytest.importorskip("distributed")
+    # Workers report as often as they can: every update a task makes comes back.
+    monkeypatch.setattr(compare, "PROGRESS_INTERVAL", 0.0)
     spec = CompareSpec("frozenlake", ["q-learning"], seeds=4, episodes=150)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
                                   dashboard_address=None) as cluster, \

@@ -13,6 +13,7 @@ worker costs time, never a duplicate or a gap. Dask is optional
 from __future__ import annotations
 
 import contextlib
+import logging
 import uuid
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any, TypeVar
@@ -53,7 +54,7 @@ def _client(cluster: Any) -> Iterator[Any]:
     workers = local_workers(cluster)
     if workers is not None:
         with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                          dashboard_address=None) as local, Client(local) as client:
+                          dashboard_address=None, silence_logs=logging.ERROR) as local, Client(local) as client:
             yield client
         return
     try:

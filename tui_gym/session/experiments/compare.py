@@ -463,9 +463,11 @@ def _play_env(job: _Job, seed: int, returns: np.ndarray, progress: Callable[[int
         session.env.close()
 
 
-def run_task(job: _Job) -> SeedsUpdate:
-    """A whole task at once (what a cluster's worker runs)."""
-    return _run_job(job, lambda: False, lambda update: None)
+def run_task(job: _Job) -> list[SeedsUpdate]:
+    """A whole task at once (what a cluster's worker runs): its updates, in order."""
+    updates: list[SeedsUpdate] = []
+    updates.append(_run_job(job, lambda: False, updates.append))
+    return updates
 
 
 def _child(parent: int, job: _Job, messages: Any, stop_flag: Any) -> None:
@@ -776,8 +778,9 @@ def execute(
                 else:
                     from tui_gym.session.experiments.cluster import run_on_cluster
 
-                    def take(job: _Job, update: SeedsUpdate) -> None:
-                        tally.take(job.index, update)
+                    def take(job: _Job, updates: list[SeedsUpdate]) -> None:
+                        for update in updates:
+                            tally.take(job.index, update)
                         landed(job)
 
                     complete = run_on_cluster(cluster, jobs, run_task, take, stopped)

@@ -259,14 +259,14 @@ def run_sweep(
     hps = done.prepared.hyperparameters
     swept = [{k: hp[k] for k in spec.keys} for hp in hps]
     fixed = {k: v for k, v in hps[0].items() if k not in spec.keys}
-    points = [SweepPoint(v, o) for v, o in zip(swept, done.outcomes, strict=True)]
-    order = sorted((i for i, p in enumerate(points) if p.figure is not None),
-                   key=lambda i: -(points[i].figure or 0.0))
+    found = [SweepPoint(v, o) for v, o in zip(swept, done.outcomes, strict=True)]
+    order = sorted((i for i, p in enumerate(found) if p.figure is not None),
+                   key=lambda i: -(found[i].figure or 0.0))
     for rank, i in enumerate(order, start=1):
-        points[i] = replace(points[i], rank=rank)
+        found[i] = replace(found[i], rank=rank)
     return SweepResult(
         spec=spec,
-        points=tuple(points),
+        points=tuple(found),
         tasks=done.tasks,
         interrupted=done.interrupted,
         group=done.group,
