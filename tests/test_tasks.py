@@ -232,3 +232,19 @@ def test_four_concurrent_writers_lose_nothing(tmp_path: Path) -> None:
     assert sorted(t.rows[0] for t in tasks) == list(range(80))
     assert all(t.returns.tolist() == [[t.rows[0]] * 3] for t in tasks)
     assert os.path.getsize(db) > 0
+
+
+def test_tasks_in_child_processes_are_each_kept_once(tmp_path: Path,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    # Spread however short the work, in tasks of one or two seeds.
+    monkeypatch.setattr(compare, "SPREAD_SECONDS", 0.0)
+    spec = CompareSpec("frozenlake", ["q-learning", "sarsa"], seeds=4, episodes=150)
+    setup = compare.Setup("frozenlake", 4, 150, {}, (), 0)
+    arms = [compare.Arm(name, {}, name) for name in spec.algorithms]
+    with RunHistory(tmp_path / "runs.db") as history:
+        done = compare.execute(setup, arms, RunKind.COMPARE, history=history, processes=2,
+                               task_seconds=1e-9)
+        tasks = [history.read_tasks(run_id) for run_id in history.group_ids(done.group or 0)]
+    assert done.tasks == {"done": 8, "total": 8}
+    assert [sorted(r for t in ts for r in t.rows) for ts in tasks] == [[0, 1, 2, 3]] * 2
+    assert figures(done) == figures(run_compare(spec, processes=0))

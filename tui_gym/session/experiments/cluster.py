@@ -54,7 +54,8 @@ def _client(cluster: Any) -> Iterator[Any]:
     workers = local_workers(cluster)
     if workers is not None:
         with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                          dashboard_address=None, silence_logs=logging.ERROR) as local, Client(local) as client:
+                          dashboard_address=None, silence_logs=logging.ERROR) as local, \
+                Client(local) as client:
             yield client
         return
     try:

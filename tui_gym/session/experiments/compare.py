@@ -719,12 +719,14 @@ def execute(
     status: Callable[[str], None] | None = None,
     resume: int | None = None,
     cluster: Any = None,
+    task_seconds: float = TASK_SECONDS,
 ) -> Executed:
     """Train every arm over the setup's seeds (what `run_compare` and `run_sweep` share)
     as tasks, each kept in the run history as it finishes: here when the whole takes less
     than `SPREAD_SECONDS` (`_estimate`), else in child processes, one per core, or on a
     Dask cluster (`cluster`: an address, `local:N`, or a `distributed.Client`). `resume`
-    (a run's id) runs only the tasks its runs miss."""
+    (a run's id) runs only the tasks its runs miss. A task runs for about `task_seconds`
+    or more (infinity: one per core)."""
     prepared = prepare(setup, arms)
     cores = _cores() if processes is None else max(1, processes)
     tally = _Tally(setup, arms, prepared)
@@ -770,7 +772,7 @@ def execute(
             else:
                 per_seed = seconds / (len(arms) * setup.seeds)
                 pieces = max(-(-cores // len(arms)), max(
-                    -(-len(rows) * per_seed // TASK_SECONDS) for rows in missing))
+                    -(-len(rows) * per_seed // task_seconds) for rows in missing))
                 jobs = tally.add(_jobs(setup, arms, prepared, missing, int(pieces)))
                 tally.tasks_total += len(jobs)
                 if cluster is None:
