@@ -248,3 +248,18 @@ def test_tasks_in_child_processes_are_each_kept_once(tmp_path: Path,
     assert done.tasks == {"done": 8, "total": 8}
     assert [sorted(r for t in ts for r in t.rows) for ts in tasks] == [[0, 1, 2, 3]] * 2
     assert figures(done) == figures(run_compare(spec, processes=0))
+
+
+def test_a_run_stopped_before_some_tasks_began_shows_the_seeds_that_finished() -> None:
+    setup = compare.Setup("frozenlake", 4, 100, {}, (), 0)
+    arms = [compare.Arm("q-learning", {}, "q-learning")]
+    prepared = compare.prepare(setup, arms)
+    tally = compare._Tally(setup, arms, prepared)
+    jobs = tally.add(compare._jobs(setup, arms, prepared, [[0, 1, 2, 3]], pieces=4))
+    landed: list[Any] = []
+    complete = compare._run_here(jobs, tally, lambda: len(landed) >= 2, lambda: None,
+                                 landed.append)
+    (outcome,) = tally.outcomes()
+    assert not complete and len(landed) == 2 and outcome is not None
+    assert outcome.seeds_done == 2 and outcome.episodes == 100
+    assert outcome.curve.mean.tolist() == tally.returns[0, :2].mean(axis=0).tolist()

@@ -297,9 +297,10 @@ def cmd_compare(args: argparse.Namespace, out: Console) -> int:
     width = args.width or max(20, min(100, out.width - 12))
     out.print(_compare_chart(result, width))
     if result.interrupted:
-        out.print(f"[yellow]interrupted:[/] kept the first "
-                  f"{min(o.episodes for o in result.outcomes):,} episodes of every seed"
-                  + _resume_hint(result.group))
+        kept = min(o.episodes for o in result.outcomes)
+        what = (f"the first {kept:,} episodes of every seed" if kept < spec.episodes else
+                "the seeds that finished")
+        out.print(f"[yellow]interrupted:[/] kept {what}" + _resume_hint(result.group))
     if args.csv:
         out.print(f"curves written to {args.csv}", style="dim")
     if not _unrecorded(history) and result.group is not None:

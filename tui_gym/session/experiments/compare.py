@@ -11,20 +11,25 @@ optimum at the end.
 Every (algorithm, seed) is a learner of its own, trained on the game's model
 by the engine's compiled loop exactly as `train --seed` trains it
 (`core.engine.seeds`), so the figures do not depend on where or in what
-order seeds run. They run on the calling thread when the whole takes less
-than `SPREAD_SECONDS` (throwaway learners played for a moment tell), else
-they are spread over child processes, one per core (`core.engine.processes`:
-they never outlive the caller). A game or wrapper
-no model follows is played seed after seed on the Gymnasium env.
+order seeds run. The work is tasks: an algorithm × a block of its seeds.
+They run on the calling thread, one task per algorithm, when the whole takes
+less than `SPREAD_SECONDS` (throwaway learners played for a moment tell),
+else in tasks of about `TASK_SECONDS` or more, spread over child processes,
+one per core (`core.engine.processes`: they never outlive the caller), or on
+a Dask cluster (`cluster`). A game or wrapper no model follows is played seed
+after seed on the Gymnasium env.
 
 `progress(CompareProgress)` is called on the calling thread about every
-`PROGRESS_INTERVAL` seconds with the outcomes so far; setting `stop` (a
-`threading.Event`) ends the run at the next step: each algorithm keeps the
-episodes all its seeds finished, and the result says `interrupted`. With a
+`PROGRESS_INTERVAL` seconds and as each task lands, with the outcomes so far;
+setting `stop` (a `threading.Event`) ends the run at the next step: each
+algorithm keeps the episodes all its seeds finished (the seeds that finished,
+when some tasks had not begun), and the result says `interrupted`. With a
 `RunHistory`, each algorithm is recorded as one run of kind `compare` (the
-others name the first one as their `group`), with curves `return` and
+others name the first one as their `group`); each finished task is kept in
+it at once (`RunHistory.put_task`), and a finished run's curves `return` and
 `exact_value` (each with `.lo` / `.hi`) and figures `mean_return_last`,
-`exact_value` and `exact_gap`.
+`exact_value` and `exact_gap` are aggregated from its stored tasks. `resume`
+runs only the tasks a recorded run misses, after checking its settings.
 """
 
 from __future__ import annotations
@@ -558,6 +563,10 @@ class _Tally:
     def _outcome(self, arm: int) -> AlgorithmOutcome | None:
         done, returns, checkpoints = self.done[arm], self.returns[arm], self.checkpoints
         exact = None if self.exact is None else self.exact[arm]
+        finished = done >= self.setup.episodes
+        if done.min() < 1 and finished.any():  # tasks not begun: the seeds that finished
+            done, returns = done[finished], returns[finished]
+            exact = None if exact is None else exact[finished]
         common = int(done.min())
         if common < 1:
             return None
@@ -579,7 +588,7 @@ class _Tally:
         return AlgorithmOutcome(
             algorithm=self.arms[arm].algorithm,
             hyperparameters=self.prepared.hyperparameters[arm],
-            seeds_done=int((done >= self.setup.episodes).sum()),
+            seeds_done=int(finished.sum()),
             curve=aggregate(seen),
             mean_return_last=mean_return_last(seen),
             exact_value=exact_value,
