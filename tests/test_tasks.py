@@ -263,3 +263,35 @@ def test_a_run_stopped_before_some_tasks_began_shows_the_seeds_that_finished() -
     assert not complete and len(landed) == 2 and outcome is not None
     assert outcome.seeds_done == 2 and outcome.episodes == 100
     assert outcome.curve.mean.tolist() == tally.returns[0, :2].mean(axis=0).tolist()
+
+
+def test_the_cluster_comes_from_the_environment_too(
+        monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    from tui_gym.cli.main import main
+
+    monkeypatch.setenv("TUI_GYM_CLUSTER", "local:0")
+    code = main(["compare", "frozenlake", "--algorithms", "q-learning", "--seeds", "1",
+                 "--episodes", "10", "--no-record"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and err.endswith("--cluster local:0: expected local:N with N from 1 to 256")
+
+
+def test_a_worker_lost_mid_sweep_costs_a_retry_not_a_result(tmp_path: Path) -> None:
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        lost: list[str] = []
+
+        def progress(p: CompareProgress) -> None:
+            if p.tasks_done >= 1 and not lost:  # the first landed: a worker goes
+                name, worker = next(iter(cluster.workers.items()))
+                lost.append(str(name))
+                client.sync(worker.close)
+
+        with RunHistory(tmp_path / "runs.db") as history:
+            swept = run_sweep(SWEEP, history=history, cluster=client, progress=progress)
+            tasks = [history.read_tasks(i) for i in history.group_ids(swept.group or 0)]
+    assert lost and swept.tasks["done"] == swept.tasks["total"] >= 4
+    assert [sorted(r for t in ts for r in t.rows) for ts in tasks] == [[0, 1]] * 4
+    assert figures(swept) == figures(run_sweep(SWEEP, processes=0))
