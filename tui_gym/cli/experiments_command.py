@@ -200,7 +200,6 @@ def _run_with_progress(
 ) -> Any:
     from rich.progress import (
         BarColumn,
-        MofNCompleteColumn,
         Progress,
         TaskProgressColumn,
         TextColumn,
@@ -214,14 +213,18 @@ def _run_with_progress(
         if as_json or not out.is_terminal:
             return run(None, stop)
         progress = Progress(
-            TextColumn(f"[bold]{label}[/]"), BarColumn(), MofNCompleteColumn(),
-            TextColumn("tasks"), TaskProgressColumn(), TimeElapsedColumn(),
+            TextColumn(f"[bold]{label}[/]"), BarColumn(),
+            TextColumn("{task.fields[landed]}/{task.fields[tasks]} tasks"),
+            TaskProgressColumn(), TimeElapsedColumn(),
             TextColumn("ETA"), TimeRemainingColumn(), console=out, transient=True,
         )
-        task = progress.add_task(label, total=None)
+        task = progress.add_task(label, total=None, landed=0, tasks="?")
 
+        # The bar and the time left follow the episodes (they move while a task runs);
+        # the count is of the tasks finished.
         def update(p: CompareProgress) -> None:
-            progress.update(task, completed=p.tasks_done, total=p.tasks_total or None)
+            progress.update(task, completed=p.done, total=p.total, landed=p.tasks_done,
+                            tasks=p.tasks_total or "?")
 
         with progress:
             return run(update, stop)
