@@ -295,3 +295,18 @@ def test_a_worker_lost_mid_sweep_costs_a_retry_not_a_result(tmp_path: Path) -> N
     assert lost and swept.tasks["done"] == swept.tasks["total"] >= 4
     assert [sorted(r for t in ts for r in t.rows) for ts in tasks] == [[0, 1]] * 4
     assert figures(swept) == figures(run_sweep(SWEEP, processes=0))
+
+
+def test_recovering_a_history_keeps_the_tasks_so_its_runs_still_resume(tmp_path: Path) -> None:
+    from tui_gym.core.experiments.recover import recover
+
+    db = tmp_path / "runs.db"
+    with RunHistory(db) as history:
+        stop, progress = stop_after(1)
+        first = run_compare(SPEC, history=history, processes=0, stop=stop, progress=progress)
+    recovery = recover(db)
+    assert recovery.target is not None and recovery.copied == 2
+    with RunHistory(recovery.target) as history:
+        assert [len(history.read_tasks(i)) for i in (1, 2)] == [1, 0]
+        resumed = run_compare(SPEC, history=history, processes=0, resume=first.group)
+    assert figures(resumed) == figures(run_compare(SPEC, processes=0))
