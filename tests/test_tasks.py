@@ -310,3 +310,20 @@ def test_recovering_a_history_keeps_the_tasks_so_its_runs_still_resume(tmp_path:
         assert [len(history.read_tasks(i)) for i in (1, 2)] == [1, 0]
         resumed = run_compare(SPEC, history=history, processes=0, resume=first.group)
     assert figures(resumed) == figures(run_compare(SPEC, processes=0))
+
+
+def test_the_estimate_that_sizes_tasks_counts_the_exact_valuations(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    setup = compare.Setup("frozenlake", 3, 10, {}, (), 0)
+    arms = [compare.Arm("q-learning", {}, "q-learning")]
+    prepared = compare.prepare(setup, arms)
+    clock = [0.0]
+
+    def valued(mdp: Any, tables: np.ndarray) -> np.ndarray:
+        clock[0] += 1.0  # each valuation takes a second of this clock; training none
+        return np.zeros(len(tables))
+
+    monkeypatch.setattr(compare.time, "perf_counter", lambda: clock[0])
+    monkeypatch.setattr(compare, "greedy_values", valued)
+    checkpoints = len(compare.checkpoint_episodes(10))
+    assert compare._estimate(prepared, arms, setup, None) == pytest.approx(3 * checkpoints)

@@ -847,12 +847,22 @@ def _estimate(prepared: Prepared, arms: Sequence[Arm], setup: Setup,
     if warm([(x.name, x.arrays(), x.compiled_params()) for x in learners], status) and status:
         status("")
     total = 0.0
+    checkpoints = len(checkpoint_episodes(setup.episodes))
     for learner in learners:
         began = time.perf_counter()
         played, _ = play_learner(learner, model.arrays, setup.episodes,
                                  stop=_deadline(began + PROBE_SECONDS / len(learners)))
         rate = len(played) / max(time.perf_counter() - began, 1e-9)
-        total += setup.seeds * setup.episodes / max(rate, 1e-9)
+        # Each seed's greedy policy is valued exactly at every checkpoint: on a large
+        # model that can cost more than the training.
+        table = learner.action_values(slice(None))[None][:, model.rows]
+        times = []
+        for _ in range(2):  # the quicker of two: the first may pay for imports
+            began = time.perf_counter()
+            greedy_values(model.mdp, table)
+            times.append(time.perf_counter() - began)
+        valuing = checkpoints * min(times)
+        total += setup.seeds * (setup.episodes / max(rate, 1e-9) + valuing)
     return total
 
 
