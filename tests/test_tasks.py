@@ -327,3 +327,13 @@ def test_the_estimate_that_sizes_tasks_counts_the_exact_valuations(
     monkeypatch.setattr(compare, "greedy_values", valued)
     checkpoints = len(compare.checkpoint_episodes(10))
     assert compare._estimate(prepared, arms, setup, None) == pytest.approx(3 * checkpoints)
+
+
+def test_a_cluster_out_of_reach_records_no_run(tmp_path: Path) -> None:
+    from tui_gym.session.experiments.cluster import ClusterError
+
+    with RunHistory(tmp_path / "runs.db") as history:
+        with pytest.raises(ClusterError, match="local:N with N from 1 to 256"):
+            run_compare(CompareSpec("frozenlake", ["q-learning"], 2, 20), history=history,
+                        cluster="local:0")
+        assert history.count_runs() == 0

@@ -1,4 +1,5 @@
-"""Tasks on a Dask cluster: `run_on_cluster(cluster, tasks, work, take, stopped)`.
+"""Tasks on a Dask cluster: `connect(cluster)`, then `run_on_cluster(client, tasks, work,
+take, stopped)`.
 
 `cluster` is a scheduler's address (`tcp://host:8786`), `local:N` (a
 `LocalCluster` of N worker processes started here and ended after), or a
@@ -18,7 +19,7 @@ import uuid
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any, TypeVar
 
-__all__ = ["ClusterError", "DASK_HINT", "run_on_cluster"]
+__all__ = ["DASK_HINT", "ClusterError", "connect", "run_on_cluster"]
 
 DASK_HINT = "--cluster needs Dask: pip install 'tui-gym[dask]'"
 WAIT_SECONDS = 0.2  # how often the stop flag is looked at while tasks run
@@ -43,7 +44,8 @@ def local_workers(address: str) -> int | None:
 
 
 @contextlib.contextmanager
-def _client(cluster: Any) -> Iterator[Any]:
+def connect(cluster: Any) -> Iterator[Any]:
+    """A client of `cluster` while the block runs; ClusterError (one line) if there is none."""
     if not isinstance(cluster, str):
         yield cluster  # a Client the caller owns
         return
@@ -67,36 +69,35 @@ def _client(cluster: Any) -> Iterator[Any]:
 
 
 def run_on_cluster(
-    cluster: Any,
+    client: Any,
     tasks: Sequence[T],
     work: Callable[[T], R],
     take: Callable[[T, R], None],
     stopped: Callable[[], bool],
 ) -> bool:
-    """Run `work(task)` for every task on the cluster, `take(task, result)` as each lands
-    (here, on the calling thread); True when all landed, False when `stopped` ended it
-    first (the tasks not landed are cancelled). A task that raises raises here."""
-    with _client(cluster) as client:
-        from distributed import wait
+    """Run `work(task)` for every task on the cluster of `client`, `take(task, result)` as
+    each lands (here, on the calling thread); True when all landed, False when `stopped`
+    ended it first (the tasks not landed are cancelled). A task that raises raises here."""
+    from distributed import wait
 
-        run = uuid.uuid4().hex[:12]
-        pending = {
-            client.submit(work, task, key=f"tui-gym-{run}-{i}", pure=False): task
-            for i, task in enumerate(tasks)
-        }
-        try:
-            while pending:
-                if stopped():
-                    return False
-                try:
-                    done, _ = wait(list(pending), timeout=WAIT_SECONDS,
-                                   return_when="FIRST_COMPLETED")
-                except TimeoutError:
-                    continue
-                for future in done:
-                    task = pending.pop(future)
-                    take(task, future.result())
-            return True
-        finally:
-            if pending:
-                client.cancel(list(pending))
+    run = uuid.uuid4().hex[:12]
+    pending = {
+        client.submit(work, task, key=f"tui-gym-{run}-{i}", pure=False): task
+        for i, task in enumerate(tasks)
+    }
+    try:
+        while pending:
+            if stopped():
+                return False
+            try:
+                done, _ = wait(list(pending), timeout=WAIT_SECONDS,
+                               return_when="FIRST_COMPLETED")
+            except TimeoutError:
+                continue
+            for future in done:
+                task = pending.pop(future)
+                take(task, future.result())
+        return True
+    finally:
+        if pending:
+            client.cancel(list(pending))

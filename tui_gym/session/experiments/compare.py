@@ -738,6 +738,22 @@ def execute(
     (a run's id) runs only the tasks its runs miss. A task runs for about `task_seconds`
     or more (infinity: one per core)."""
     prepared = prepare(setup, arms)
+    with contextlib.ExitStack() as stack:
+        client = None
+        if cluster is not None:  # reached (or started) before any run is recorded
+            from tui_gym.session.experiments.cluster import connect
+
+            client = stack.enter_context(connect(cluster))
+        return _execute(setup, arms, kind, prepared, progress, stop, history, processes,
+                        status, resume, client, task_seconds)
+
+
+def _execute(
+    setup: Setup, arms: Sequence[Arm], kind: RunKind, prepared: Prepared,
+    progress: Callable[[CompareProgress], None] | None, stop: threading.Event | None,
+    history: RunHistory | None, processes: int | None, status: Callable[[str], None] | None,
+    resume: int | None, client: Any, task_seconds: float,
+) -> Executed:
     cores = _cores() if processes is None else max(1, processes)
     tally = _Tally(setup, arms, prepared)
     if resume is not None:
@@ -774,8 +790,8 @@ def execute(
         with processes_module.stops_on_signals(halt):
             missing = tally.missing()
             seconds = _estimate(prepared, arms, setup, status) if (
-                cluster is not None or (processes != 0 and cores > 1)) else 0.0
-            if cluster is None and seconds < SPREAD_SECONDS:
+                client is not None or (processes != 0 and cores > 1)) else 0.0
+            if client is None and seconds < SPREAD_SECONDS:
                 jobs = tally.add(_jobs(setup, arms, prepared, missing))
                 tally.tasks_total += len(jobs)
                 complete = _run_here(jobs, tally, stopped, tell, landed)
@@ -785,7 +801,7 @@ def execute(
                     -(-len(rows) * per_seed // task_seconds) for rows in missing))
                 jobs = tally.add(_jobs(setup, arms, prepared, missing, int(pieces)))
                 tally.tasks_total += len(jobs)
-                if cluster is None:
+                if client is None:
                     complete = _run_children(jobs, tally, stopped, tell, cores, landed)
                 else:
                     from tui_gym.session.experiments.cluster import run_on_cluster
@@ -795,7 +811,7 @@ def execute(
                             tally.take(job.index, update)
                         landed(job)
 
-                    complete = run_on_cluster(cluster, jobs, run_task, take, stopped)
+                    complete = run_on_cluster(client, jobs, run_task, take, stopped)
     except BaseException as exc:
         failure = exc
     if complete and history is not None and None not in tally.run_ids and (
