@@ -217,15 +217,23 @@ def test_compare_and_sweep_keys(capsys: pytest.CaptureFixture[str], tmp_path: Pa
     compared = run_json(capsys, "compare", "blackjack", "--algorithms", "q-learning,sarsa",
                         *common)
     pinned("compare", compared, {"game", "episodes", "seeds", "first_seed", "optimum",
-                                 "interrupted", "group", "results"})
+                                 "interrupted", "group", "tasks", "results"})
+    assert compared["tasks"] == {"done": 2, "total": 2}
     for result in compared["results"]:
         assert set(result) == {"algorithm", "hyperparameters"} | OUTCOME
         assert all(set(p) == {"episode", "mean", "lo", "hi"} for p in result["curve"])
     swept = run_json(capsys, "sweep", "blackjack", "--algorithm", "q-learning", "--grid",
                      "learning_rate=0.1,0.2", *common)
     pinned("sweep", swept, {"game", "algorithm", "episodes", "seeds", "first_seed", "grid",
-                            "hyperparameters", "optimum", "interrupted", "group", "points"})
-    assert all(set(point) == {"values"} | OUTCOME for point in swept["points"])
+                            "sample", "tasks", "hyperparameters", "optimum", "interrupted",
+                            "group", "points"})
+    assert all(set(point) == {"values", "rank"} | OUTCOME for point in swept["points"])
+    sampled = run_json(capsys, "sweep", "blackjack", "--algorithm", "q-learning", "--sample",
+                       "2", "--range", "learning_rate=0.01:1:log", *common)
+    assert set(sampled["sample"]) == {"n", "seed", "ranges"}
+    assert sampled["sample"]["ranges"]["learning_rate"] == {"low": 0.01, "high": 1.0,
+                                                            "log": True}
+    assert sorted(p["rank"] for p in sampled["points"]) == [1, 2]
 
 
 def test_screenshots_keys(

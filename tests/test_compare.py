@@ -103,7 +103,7 @@ def test_a_stopped_job_keeps_the_episodes_it_finished() -> None:
     setup = compare.Setup("cliffwalking", 3, 1000, {}, (), 0)
     arms = [compare.Arm("sarsa", {}, "sarsa")]
     prepared = compare.prepare(setup, arms)
-    (job,) = compare._jobs(setup, arms, prepared, 0, 3)
+    (job,) = compare._jobs(setup, arms, prepared, [[0, 1, 2]])
     calls = iter(range(1_000_000))
     tally = compare._Tally(setup, arms, prepared)
     (job,) = tally.add([job])

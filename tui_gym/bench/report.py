@@ -24,6 +24,9 @@ Targets:
 - `compare` of Q-learning and SARSA, 50 seeds x 500 episodes, >= 100x faster than the
   same 100 learners one after another in the tutorial loop, with SARSA's online return
   above Q-learning's (Sutton & Barto's Example 6.6);
+- that comparison as tasks, each recorded as it lands, within 10% of the same work in
+  one batch; a sweep on a Dask LocalCluster of 2 workers >= 0.8 of the local executor's
+  throughput;
 - the defaults bring >= 95% of the seeds to the game's bound, every game and algorithm
   but those whose nature keeps them short (the game's lessons: verdict "lesson").
 
@@ -38,7 +41,7 @@ from typing import Any
 
 from rich.table import Table
 
-from tui_gym.bench import dp, history, programs
+from tui_gym.bench import dp, history, programs, tasks
 from tui_gym.bench.live import RUNNERS
 from tui_gym.bench.results import BenchResults
 
@@ -143,6 +146,7 @@ def verdicts(results: BenchResults) -> dict[str, str]:
     out["example_6_6"] = _ok(online[1] if len(online) == 2 else None,
                              len(online) == 2 and online[1] > online[0])
     out.update(history.verdicts(results.history, MISSING, _ok))
+    out.update(tasks.verdicts(results.tasks, MISSING, _ok))
     out.update(dp.verdicts(results.dp, MISSING, _ok))
     return out
 
@@ -316,6 +320,7 @@ def to_json(results: BenchResults) -> dict[str, Any]:
             for e in results.map_edit or ()
         ],
         "history": history.to_json(results.history),
+        "tasks": tasks.to_json(results.tasks),
         "compare": _seeds_dict(results),
         "planning_dp": dp.to_json(results.dp),
         "verdicts": verdicts(results),
@@ -462,6 +467,7 @@ def table(results: BenchResults) -> Table:
             f" {found_defaults.bound})", f"≥ {DEFAULTS_SHARE_TARGET:.0%}",
             f"defaults[{found_defaults.game}/{found_defaults.algorithm}]")
     for label, value, target, verdict_key in (*history.rows(results.history),
+                                              *tasks.rows(results.tasks),
                                               *dp.rows(results.dp)):
         row(label, value, target, verdict_key)
     for stage, error in results.errors.items():

@@ -17,6 +17,7 @@ from tui_gym.bench.programs import ProgramsResult
 from tui_gym.bench.seeds import SeedsSpeed
 from tui_gym.bench.speed import Speed
 from tui_gym.bench.startup import StartupResult
+from tui_gym.bench.tasks import TasksResult
 
 
 @dataclass(frozen=True)
@@ -48,6 +49,7 @@ class BenchResults:
     seeds: SeedsSpeed | None = None  # `compare` against the same learners in a loop
     defaults: tuple[DefaultsResult, ...] | None = None  # the share of seeds at the bound
     dp: DPResult | None = None  # planning: sweeps, Jack's car rental, the Plan view
+    tasks: TasksResult | None = None  # the task split's overhead, a Dask cluster's share
     errors: dict[str, str] = field(default_factory=dict)  # stage -> what went wrong
     default_runner: str = DEFAULT_RUNNER
 

@@ -6,7 +6,8 @@ tutorial loop (or the named algorithms'), time to the target gap on every
 game, Dyna-Q's planning against Q-learning, `compare` against the same
 learners one after another, the defaults' share of seeds that reach their
 bound, live training (both runners), memory, start-up, programs as players,
-the map editor and the run history's cost, and returns `BenchResults`. A
+the map editor, the run history's cost, and the cost of running experiments
+as tasks (the split, a Dask cluster's scheduler), and returns `BenchResults`. A
 stage that fails is recorded in `errors` and the others still run.
 `progress` (if given) hears the name of each stage as it starts.
 """
@@ -35,6 +36,7 @@ from tui_gym.bench import (
     seeds,
     speed,
     startup,
+    tasks,
 )
 from tui_gym.bench.figures import load_average
 from tui_gym.bench.results import BenchResults, MachineInfo
@@ -64,6 +66,7 @@ class Plan:
     compare_seeds: int = 50  # `compare`: seeds per algorithm, episodes per seed
     compare_episodes: int = 500
     compare_tutorial_share: float = 1.0  # of the learners the tutorial loop runs
+    tasks_scale: int = 20  # the task split is timed on `compare_episodes` × this many (spread)
 
 
 # About 5 minutes on an idle 2-CPU machine.
@@ -126,6 +129,10 @@ def run_bench(
           "Q-learning and SARSA, against the same learners in a tutorial loop",
           lambda: seeds.measure(plan.compare_seeds, plan.compare_episodes,
                                 plan.compare_tutorial_share))
+    stage("tasks", f"compare in tasks against one batch, {plan.compare_seeds} seeds; a sweep "
+          f"on LocalCluster({tasks.CLUSTER_WORKERS}) against the local executor",
+          lambda: tasks.measure(plan.compare_seeds, plan.compare_episodes * plan.tasks_scale,
+                                1 if quick else 3))
     stage("defaults", f"the defaults over {plan.defaults_seeds} seeds: the share that reaches "
           "the bound", lambda: defaults.measure(games, names, plan.defaults_seeds))
     stage("live", "live training in the app",
@@ -162,5 +169,6 @@ def run_bench(
         seeds=found.get("seeds"),
         defaults=found.get("defaults"),
         dp=found.get("dp"),
+        tasks=found.get("tasks"),
         errors=errors,
     )

@@ -11,12 +11,16 @@ the run history (`--db PATH`, else `TUI_GYM_DB`, else the data folder's file;
 `--no-record` opts out). A history that fails while they run (a full disk)
 loses nothing: the results are printed, then one line says they were not
 recorded. `compare --csv PATH` writes every episode's mean and band per
-algorithm.
+algorithm. The work is tasks (one setting × a block of seeds), each kept in the
+history as it lands: `--resume RUN` runs only the tasks run RUN misses, and
+`--cluster ADDRESS` (or `$TUI_GYM_CLUSTER`) runs them on a Dask scheduler, or
+on `local:N` workers started here.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 import threading
@@ -39,6 +43,7 @@ if TYPE_CHECKING:
     from tui_gym.core.experiments import BestEffortHistory
     from tui_gym.session.experiments.compare import AlgorithmOutcome, CompareProgress
 
+CLUSTER_ENV = "TUI_GYM_CLUSTER"
 DB_HELP = "the run history file (default: $TUI_GYM_DB, else the data folder's runs.db)"
 # Every seed's return of every episode is kept while a run lasts: these bound that memory.
 _seeds = _int_in(1, 1000, "a number of seeds from 1 to 1,000")
@@ -63,6 +68,13 @@ def _common_options(parser: argparse.ArgumentParser) -> None:
                         default=None, metavar="P",
                         help="batches at once in child processes (default: one per core; "
                         "0: in this process)")
+    parser.add_argument("--resume", type=_int_in(1, 2**62, "a run id"), metavar="RUN",
+                        help="carry on run RUN (the first id the command printed): only its "
+                        "missing tasks run; the settings must be the same")
+    parser.add_argument("--cluster", metavar="ADDRESS", default=os.environ.get(CLUSTER_ENV),
+                        help="run the tasks on a Dask scheduler (tcp://host:8786), or on "
+                        f"local:N workers started here (default: ${CLUSTER_ENV}, else "
+                        "processes of this machine)")
     parser.add_argument("--db", type=_path, metavar="PATH", help=DB_HELP)
     parser.add_argument("--no-record", action="store_true",
                         help="do not keep these runs in the run history")
@@ -94,8 +106,16 @@ def add_experiment_parsers(sub: Any) -> None:
     )
     sweep.add_argument("game", metavar="GAME", help="a game name or Gymnasium id")
     sweep.add_argument("--algorithm", required=True, metavar="NAME", help=f"the learner: {names}")
-    sweep.add_argument("--grid", action="append", required=True, metavar="KEY=V1,V2",
+    sweep.add_argument("--grid", action="append", default=[], metavar="KEY=V1,V2",
                        help="a hyperparameter and its values (repeatable)")
+    sweep.add_argument("--sample", type=_int_in(1, 400, "a number of points from 1 to 400"),
+                       default=0, metavar="N", help="a random search: N points drawn from "
+                       "the --range values instead of a grid")
+    sweep.add_argument("--range", action="append", default=[], metavar="KEY=LOW:HIGH[:log]",
+                       dest="ranges", help="where --sample draws a hyperparameter (repeatable), "
+                       "e.g. --range learning_rate=0.01:1:log")
+    sweep.add_argument("--sample-seed", type=_seed, default=0, metavar="S",
+                       help="the seed of the points --sample draws (default 0)")
     _common_options(sweep)
 
 
@@ -180,7 +200,6 @@ def _run_with_progress(
 ) -> Any:
     from rich.progress import (
         BarColumn,
-        MofNCompleteColumn,
         Progress,
         TaskProgressColumn,
         TextColumn,
@@ -194,17 +213,25 @@ def _run_with_progress(
         if as_json or not out.is_terminal:
             return run(None, stop)
         progress = Progress(
-            TextColumn(f"[bold]{label}[/]"), BarColumn(), MofNCompleteColumn(),
-            TextColumn("episodes"), TaskProgressColumn(), TimeElapsedColumn(),
+            TextColumn(f"[bold]{label}[/]"), BarColumn(),
+            TextColumn("{task.fields[landed]}/{task.fields[tasks]} tasks"),
+            TaskProgressColumn(), TimeElapsedColumn(),
             TextColumn("ETA"), TimeRemainingColumn(), console=out, transient=True,
         )
-        task = progress.add_task(label, total=None)
+        task = progress.add_task(label, total=None, landed=0, tasks="?")
 
+        # The bar and the time left follow the episodes (they move while a task runs);
+        # the count is of the tasks finished.
         def update(p: CompareProgress) -> None:
-            progress.update(task, completed=p.done, total=p.total)
+            progress.update(task, completed=p.done, total=p.total, landed=p.tasks_done,
+                            tasks=p.tasks_total or "?")
 
         with progress:
             return run(update, stop)
+
+
+def _resume_hint(group: int | None) -> str:
+    return "" if group is None else f"; the same command with --resume {group} carries on"
 
 
 def _number_text(value: float | None, ci: float | None = None) -> str:
@@ -239,6 +266,7 @@ def _algorithm_names(text: str) -> list[str]:
 
 
 def cmd_compare(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.session.experiments.cluster import ClusterError
     from tui_gym.session.experiments.compare import CompareError, CompareSpec, run_compare
 
     spec = CompareSpec(
@@ -252,10 +280,11 @@ def cmd_compare(args: argparse.Namespace, out: Console) -> int:
             result = _run_with_progress(
                 out, args.json, "comparing",
                 lambda progress, stop: run_compare(spec, progress=progress, stop=stop,
+                                                   resume=args.resume, cluster=args.cluster,
                                                    history=history, processes=args.processes,
                                                    status=say_status),
             )
-        except CompareError as exc:
+        except (CompareError, ClusterError) as exc:
             raise CliError(str(exc)) from None
     if args.csv:
         _write_csv(args.csv, result.outcomes)
@@ -271,8 +300,10 @@ def cmd_compare(args: argparse.Namespace, out: Console) -> int:
     width = args.width or max(20, min(100, out.width - 12))
     out.print(_compare_chart(result, width))
     if result.interrupted:
-        out.print(f"[yellow]interrupted:[/] kept the first "
-                  f"{min(o.episodes for o in result.outcomes):,} episodes of every seed")
+        kept = min(o.episodes for o in result.outcomes)
+        what = (f"the first {kept:,} episodes of every seed" if kept < spec.episodes else
+                "the seeds that finished")
+        out.print(f"[yellow]interrupted:[/] kept {what}" + _resume_hint(result.group))
     if args.csv:
         out.print(f"curves written to {args.csv}", style="dim")
     if not _unrecorded(history) and result.group is not None:
@@ -374,7 +405,20 @@ def _grid(items: Sequence[str]) -> dict[str, list[str]]:
     return grid
 
 
+def _ranges(items: Sequence[str]) -> dict[str, Any]:
+    from tui_gym.session.experiments.sweep import Range
+
+    ranges: dict[str, Any] = {}
+    for key, text in _pairs(items, "--range").items():
+        try:
+            ranges[key] = Range.parse(text)
+        except ValueError as exc:
+            raise CliError(f"--range {key}: {exc}") from None
+    return ranges
+
+
 def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.session.experiments.cluster import ClusterError
     from tui_gym.session.experiments.compare import CompareError
     from tui_gym.session.experiments.sweep import SweepSpec, run_sweep
 
@@ -382,27 +426,30 @@ def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
         game=args.game, algorithm=args.algorithm, grid=_grid(args.grid), seeds=args.seeds,
         episodes=args.episodes, settings=_pairs(args.settings, "--set"),
         game_params=_pairs(args.params, "--param"), wrappers=_wrappers(args.wrapper),
-        first_seed=args.first_seed,
+        first_seed=args.first_seed, ranges=_ranges(args.ranges), samples=args.sample,
+        sample_seed=args.sample_seed,
     )
     with _history(args) as history:
         try:
             result = _run_with_progress(
                 out, args.json, "sweeping",
                 lambda progress, stop: run_sweep(spec, progress=progress, stop=stop,
+                                                 resume=args.resume, cluster=args.cluster,
                                                  history=history, processes=args.processes,
                                                  status=say_status),
             )
-        except CompareError as exc:
+        except (CompareError, ClusterError) as exc:
             raise CliError(str(exc)) from None
     if args.json:
         print_json("sweep", result.to_json())
         _unrecorded(history)
         return 130 if result.interrupted else 0
     out.print(_sweep_table(result))
-    if len(spec.grid) == 2:
+    if len(spec.grid) == 2 and not spec.ranges:
         out.print(_sweep_grid(result))
     if result.interrupted:
-        out.print("[yellow]interrupted:[/] points show the episodes every seed finished")
+        out.print("[yellow]interrupted:[/] points show the episodes every seed finished"
+                  + _resume_hint(result.group))
     _unrecorded(history)
     return 130 if result.interrupted else 0
 
@@ -414,11 +461,16 @@ def _figure_of(o: AlgorithmOutcome | None) -> float | None:
     return o.exact_value if o.exact_value is not None else o.mean_return_last.mean
 
 
+def _value_text(value: Any) -> str:
+    return f"{value:.4g}" if isinstance(value, float) else str(value)
+
+
 def _sweep_table(result: Any) -> Table:
     spec = result.spec
     title = f"{result.game}, {spec.algorithm}: {spec.seeds} seeds × {spec.episodes:,} episodes"
     table = Table(title=title, title_justify="left")
-    for key in spec.grid:
+    table.add_column("rank", justify="right")
+    for key in spec.keys:
         table.add_column(key, justify="right", style="bold")
     table.add_column("return, last 10%", justify="right")
     has_exact = any(p.outcome is not None and p.outcome.exact_value is not None
@@ -427,12 +479,11 @@ def _sweep_table(result: Any) -> Table:
         table.add_column("greedy exact value", justify="right")
         table.add_column("gap", justify="right")
     table.add_column("seeds", justify="right")
-    best = max((v for p in result.points if (v := _figure_of(p.outcome)) is not None),
-               default=None)
-    for point in result.points:
+    # A grid keeps its order (its rows follow the values); drawn points come best first.
+    for point in result.ranked() if spec.ranges else result.points:
         o = point.outcome
-        row = [f"{point.values[k]:g}" if isinstance(point.values[k], float)
-               else str(point.values[k]) for k in spec.grid]
+        row = ["—" if point.rank is None else str(point.rank)]
+        row += [_value_text(point.values[k]) for k in spec.keys]
         if o is None:
             row += ["—"] * (4 if has_exact else 2)
         else:
@@ -440,8 +491,7 @@ def _sweep_table(result: Any) -> Table:
             if has_exact:
                 row += [_number_text(o.exact_value, o.exact_ci95), _number_text(o.exact_gap)]
             row.append(f"{o.seeds_done}/{o.seeds}")
-        top = best is not None and _figure_of(o) == best
-        table.add_row(*row, style="green" if top else None)
+        table.add_row(*row, style="green" if point.rank == 1 else None)
     return table
 
 

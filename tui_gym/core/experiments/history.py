@@ -16,6 +16,9 @@ every run in. A run is written when it starts (status running, with its
 writer's mark, see `writers`) and updated as it goes: curves (kept to at most
 `STORED_POINTS` bucket means each, see `curve_codec` for the bytes), figures,
 its settings, the saved agent's path, and finally its status and end time.
+A comparison's or a sweep's runs also
+keep each finished task (`put_task`, one transaction each; `read_tasks`), and
+`reopen_run` marks an interrupted run running again to resume it.
 Every row is checked as it is read (`rows`): a run that does not read is one
 line naming it (`DamagedRunError`), and the others stay readable.
 `BestEffortHistory` never raises on a write: a command keeps its results when
@@ -66,6 +69,7 @@ from tui_gym.core.experiments.records import (
     to_json_text,
 )
 from tui_gym.core.experiments.schema import MIGRATIONS, Migration, check_migrations
+from tui_gym.core.experiments.tasks import BadTask, TaskRecord, decode, decode_rows, encode
 from tui_gym.core.experiments.writers import WriterCheck, current_writer
 
 # Points kept per stored curve: about a terminal chart's width, and few enough that a
@@ -289,6 +293,62 @@ class RunHistory:
         """Mark a run finished, interrupted or failed, now or at `ended_at`."""
         self.update(run_id, status=status, ended_at=ended_at)
 
+    def put_task(self, run_id: int, task: TaskRecord, finished_at: float | None = None) -> bool:
+        """Keep a finished task of a run, in a transaction of its own; False (and nothing
+        written) when the run already holds one of its seeds, so a task that lands twice
+        is kept once."""
+        first, inputs, returns, exact = encode(task)
+        when = time.time() if finished_at is None else finished_at
+
+        def write(conn: sqlite3.Connection) -> bool:
+            self._require_run(conn, run_id)
+            held: set[int] = set()
+            for (text,) in conn.execute("SELECT inputs FROM tasks WHERE run_id = ?", (run_id,)):
+                try:
+                    held.update(decode_rows(text))
+                except BadTask as exc:
+                    raise self._damaged_run(run_id, f"a task: {exc}") from None
+            if held.intersection(task.rows):
+                return False
+            conn.execute(
+                "INSERT INTO tasks (run_id, first_row, inputs, returns, exact, finished_at)"
+                " VALUES (?, ?, ?, ?, ?, ?)", (run_id, first, inputs, returns, exact, when))
+            return True
+
+        return bool(self._write(write))
+
+    def read_tasks(self, run_id: int) -> list[TaskRecord]:
+        """A run's finished tasks, by their first row; DamagedRunError if one does not read."""
+        found = self._read(lambda conn: conn.execute(
+            "SELECT inputs, returns, exact FROM tasks WHERE run_id = ? ORDER BY first_row",
+            (run_id,)).fetchall())
+        try:
+            return [decode(*row) for row in found]
+        except BadTask as exc:
+            raise self._damaged_run(run_id, f"a task: {exc}") from None
+
+    def group_ids(self, run_id: int) -> list[int]:
+        """Run `run_id` and the runs that name it as their group, by id; UnknownRunError
+        if there is no such run."""
+
+        def read(conn: sqlite3.Connection) -> list[int]:
+            self._require_run(conn, run_id)
+            return [int(r[0]) for r in conn.execute(
+                "SELECT id FROM runs WHERE id = ? OR group_id = ? ORDER BY id", (run_id, run_id))]
+
+        return self._read(read)
+
+    def reopen_run(self, run_id: int) -> None:
+        """Mark a run running again, by this process (it resumes)."""
+        writer = current_writer()
+
+        def write(conn: sqlite3.Connection) -> None:
+            self._require_run(conn, run_id)
+            conn.execute("UPDATE runs SET status = ?, ended_at = NULL, writer = ? WHERE id = ?",
+                         (str(RunStatus.RUNNING), writer, run_id))
+
+        self._write(write)
+
     def restore_run(self, record: RunRecord, writer: str | None = None) -> None:
         """Write a run read elsewhere under its own id (`recover`): its settings, times,
         status, figures, curves and saved agent's path, and the mark of its writer."""
@@ -403,6 +463,7 @@ class RunHistory:
                 was = DamagedRun(run_id, str(exc))
             settings_id, platform_id = row[-2:]
             conn.execute("DELETE FROM curves WHERE run_id = ?", (run_id,))
+            conn.execute("DELETE FROM tasks WHERE run_id = ?", (run_id,))
             conn.execute("DELETE FROM runs WHERE id = ?", (run_id,))
             _drop_unused(conn, "settings", "settings_id", settings_id)
             _drop_unused(conn, "platforms", "platform_id", platform_id)

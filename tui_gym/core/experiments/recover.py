@@ -1,8 +1,8 @@
 """Saving what can be read of a damaged run history: `recover`.
 
 `recover(path)` reads the file through SQLite, for reading only, and copies
-every run that still reads (its settings, figures, status and times, and its
-curves when they decode) into a fresh history beside it,
+every run that still reads (its settings, figures, status and times, its
+curves when they decode, and its finished tasks that read) into a fresh history beside it,
 `NAME.recovered.EXT` (`NAME.recovered-2.EXT`, ... when that exists), keeping
 the run ids. The original is never written. Runs are found by a scan of the
 runs table and, where the scan stops at damage, by asking for each id in turn.
@@ -10,6 +10,7 @@ runs table and, where the scan stops at damage, by asking for each id in turn.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sqlite3
 from collections.abc import Iterator
@@ -22,6 +23,7 @@ from tui_gym.core.experiments.connection import examine, shown
 from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.history import RunHistory
 from tui_gym.core.experiments.records import RunStatus
+from tui_gym.core.experiments.tasks import BadTask, TaskRecord, decode
 from tui_gym.core.experiments.writers import WriterCheck
 from tui_gym.core.text import visible
 
@@ -182,6 +184,21 @@ def _one(conn: sqlite3.Connection, columns: str, run_id: int
     return row, blob
 
 
+def _tasks(conn: sqlite3.Connection, run_id: int) -> list[TaskRecord]:
+    """A run's finished tasks that read (none from a file without them, or where their
+    table is damaged)."""
+    try:
+        found = conn.execute("SELECT inputs, returns, exact FROM tasks WHERE run_id = ?",
+                             (run_id,)).fetchall()
+    except sqlite3.Error:
+        return []
+    kept = []
+    for row in found:
+        with contextlib.suppress(BadTask):
+            kept.append(decode(*row))
+    return kept
+
+
 def recover(source: str | Path) -> Recovery:
     """Copy what can be read of the history at `source` into a fresh file beside it."""
     source = Path(source).expanduser()
@@ -212,6 +229,8 @@ def recover(source: str | Path) -> Recovery:
                         continue
                     alive = record.summary.status is RunStatus.RUNNING
                     history.restore_run(record, writer=row[10] if alive else None)
+                    for task in _tasks(conn, run_id):
+                        history.put_task(run_id, task)
                     copied += 1
         except BaseException:
             target.unlink(missing_ok=True)

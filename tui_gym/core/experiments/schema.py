@@ -15,6 +15,11 @@ curves in one blob (see `curve_codec`).
 Version 2: `runs.writer` marks the process that records a run (see
 `writers`), so that a run left running by a process that died reads as
 interrupted; an index on the start time keeps the newest runs quick to list.
+
+Version 3: `tasks` holds each finished task of a comparison or a sweep (a block
+of one run's seeds), written as it lands with the inputs that define it (see
+`tasks`), so a run's figures come from what is stored and an interrupted run
+resumes from its missing tasks.
 """
 
 from __future__ import annotations
@@ -86,9 +91,22 @@ _V2 = _statements(
     "CREATE INDEX runs_by_start ON runs (started_at, id)",
 )
 
+_V3 = _statements(
+    """CREATE TABLE tasks (
+        run_id INTEGER NOT NULL REFERENCES runs(id) ON DELETE CASCADE,
+        first_row INTEGER NOT NULL,
+        inputs TEXT NOT NULL,
+        returns BLOB NOT NULL,
+        exact BLOB,
+        finished_at REAL NOT NULL,
+        PRIMARY KEY (run_id, first_row)
+    )""",
+)
+
 MIGRATIONS: tuple[Migration, ...] = (
     Migration(1, "runs, their settings and curves", _V1),
     Migration(2, "the process writing each run; runs indexed by start", _V2),
+    Migration(3, "each finished task of a run, with its inputs", _V3),
 )
 
 

@@ -11,24 +11,31 @@ optimum at the end.
 Every (algorithm, seed) is a learner of its own, trained on the game's model
 by the engine's compiled loop exactly as `train --seed` trains it
 (`core.engine.seeds`), so the figures do not depend on where or in what
-order seeds run. They run on the calling thread when the whole takes less
-than `SPREAD_SECONDS` (throwaway learners played for a moment tell), else
-they are spread over child processes, one per core (`core.engine.processes`:
-they never outlive the caller). A game or wrapper
-no model follows is played seed after seed on the Gymnasium env.
+order seeds run. The work is tasks: an algorithm × a block of its seeds.
+They run on the calling thread, one task per algorithm, when the whole takes
+less than `SPREAD_SECONDS` (throwaway learners played for a moment tell),
+else in tasks of about `TASK_SECONDS` or more, spread over child processes,
+one per core (`core.engine.processes`: they never outlive the caller), or on
+a Dask cluster (`cluster`). A game or wrapper no model follows is played seed
+after seed on the Gymnasium env.
 
 `progress(CompareProgress)` is called on the calling thread about every
-`PROGRESS_INTERVAL` seconds with the outcomes so far; setting `stop` (a
-`threading.Event`) ends the run at the next step: each algorithm keeps the
-episodes all its seeds finished, and the result says `interrupted`. With a
+`PROGRESS_INTERVAL` seconds and as each task lands, with the outcomes so far;
+setting `stop` (a `threading.Event`) ends the run at the next step: each
+algorithm keeps the episodes all its seeds finished (the seeds that finished,
+when some tasks had not begun), and the result says `interrupted`. With a
 `RunHistory`, each algorithm is recorded as one run of kind `compare` (the
-others name the first one as their `group`), with curves `return` and
+others name the first one as their `group`); each finished task is kept in
+it at once (`RunHistory.put_task`), and a finished run's curves `return` and
 `exact_value` (each with `.lo` / `.hi`) and figures `mean_return_last`,
-`exact_value` and `exact_gap`.
+`exact_value` and `exact_gap` are aggregated from its stored tasks. `resume`
+runs only the tasks a recorded run misses, after checking its settings.
 """
 
 from __future__ import annotations
 
+import contextlib
+import json
 import math
 import os
 import queue
@@ -51,10 +58,13 @@ from tui_gym.core.experiments.aggregate import (
     mean_return_last,
     mean_with_ci,
 )
+from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.figures import Figure
 from tui_gym.core.experiments.history import STORED_POINTS, RunHistory
 from tui_gym.core.experiments.records import RunKind, RunSpec, RunStatus, WrapperSetting
+from tui_gym.core.experiments.tasks import TaskRecord
 from tui_gym.core.mdp import FiniteMDP, solve
+from tui_gym.core.text import visible
 from tui_gym.core.wrappers import WrapperChoice
 
 __all__ = [
@@ -64,6 +74,7 @@ __all__ = [
     "CompareProgress",
     "CompareResult",
     "CompareSpec",
+    "ResumeError",
     "SeedsUpdate",
     "run_compare",
 ]
@@ -73,6 +84,7 @@ JSON_CURVE_POINTS = 500  # curve points in `to_json`
 SPREAD_SECONDS = 1.0  # work that takes longer than this here is spread over child processes
 PROBE_SECONDS = 0.1  # how long throwaway learners play to tell how long the work is
 SMOOTHING_SHARE = 50  # charts smooth each seed's returns over 1/50 of the episodes
+TASK_SECONDS = 1.0  # a task (a block of one arm's seeds) runs about this long at least
 
 
 @dataclass(frozen=True)
@@ -190,11 +202,14 @@ def _finite(value: float | None) -> float | None:
 
 @dataclass(frozen=True)
 class CompareProgress:
-    """Episodes finished of the total (over every algorithm and seed), and the outcomes so far."""
+    """Episodes finished of the total (over every algorithm and seed), the outcomes so far,
+    and the tasks finished of the run's tasks (those a resumed run found done count in)."""
 
     done: int
     total: int
     outcomes: tuple[AlgorithmOutcome, ...]
+    tasks_done: int = 0
+    tasks_total: int = 0
 
 
 @dataclass(frozen=True)
@@ -207,6 +222,7 @@ class CompareResult:
     spec: CompareSpec | None = None
     game: str = ""
     optimum: float | None = None
+    tasks: Mapping[str, int] = field(default_factory=dict)  # "done" and "total"
 
     def to_json(self) -> dict[str, Any]:
         spec = self.spec
@@ -218,6 +234,7 @@ class CompareResult:
             "optimum": _finite(self.optimum),
             "interrupted": self.interrupted,
             "group": self.group,
+            "tasks": dict(self.tasks),
             "results": [o.to_json() for o in self.outcomes],
         }
 
@@ -364,22 +381,23 @@ def _cores() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared, first: int, end: int,
-          pieces: int = 1) -> list[_Job]:
-    """Each arm's seeds of indices `first` to `end` - 1, in `pieces` jobs of about the
-    same size (a seed's run is its own, so the split changes no figure)."""
+def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared,
+          missing: Sequence[Sequence[int]], pieces: int = 1) -> list[_Job]:
+    """The tasks: each arm's `missing` seed rows in `pieces` blocks of about the same size
+    (a seed's run is its own, so the split changes no figure)."""
     seeds = setup.seed_list
-    count = end - first
-    bounds = first + np.linspace(0, count, max(1, min(pieces, count)) + 1).round().astype(int)
     jobs: list[_Job] = []
     for a, arm in enumerate(arms):
-        for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
-            if hi > lo:
+        rows = list(missing[a])
+        for block in np.array_split(np.asarray(rows, dtype=np.int64),
+                                    max(1, min(pieces, len(rows)))):
+            if block.size:
                 jobs.append(_Job(
                     index=-1, arm=a, algorithm=arm.algorithm, env_id=prepared.env_id,
                     env_kwargs=prepared.env_kwargs, wrappers=tuple(setup.wrappers),
-                    hp=prepared.hyperparameters[a], seeds=seeds[lo:hi],
-                    rows=tuple(range(lo, hi)), episodes=setup.episodes, model=prepared.model,
+                    hp=prepared.hyperparameters[a], seeds=tuple(seeds[r] for r in block),
+                    rows=tuple(int(r) for r in block), episodes=setup.episodes,
+                    model=prepared.model,
                 ))
     return jobs
 
@@ -451,6 +469,13 @@ def _play_env(job: _Job, seed: int, returns: np.ndarray, progress: Callable[[int
         session.env.close()
 
 
+def run_task(job: _Job) -> list[SeedsUpdate]:
+    """A whole task at once (what a cluster's worker runs): its updates, in order."""
+    updates: list[SeedsUpdate] = []
+    updates.append(_run_job(job, lambda: False, updates.append))
+    return updates
+
+
 def _child(parent: int, job: _Job, messages: Any, stop_flag: Any) -> None:
     """A child process's work: one job, its states sent on `messages`."""
     processes_module.watch_parent(parent)
@@ -482,6 +507,31 @@ class _Tally:
         self.returns = np.full((*shape, setup.episodes), np.nan)
         self.exact = None if prepared.model is None else np.full(
             (*shape, len(self.checkpoints)), np.nan)
+        self.tasks_done = 0
+        self.tasks_total = 0
+
+    def load(self, arm: int, task: TaskRecord) -> None:
+        """Count in a stored task of arm `arm`."""
+        rows = list(task.rows)
+        self.returns[arm, rows] = task.returns
+        self.done[arm, rows] = task.episodes
+        if self.exact is not None and task.exact is not None:
+            self.exact[arm, rows] = task.exact
+        self.tasks_done += 1
+        self.tasks_total += 1
+
+    def missing(self) -> list[list[int]]:
+        """Each arm's seed rows that have not finished."""
+        return [np.flatnonzero(d < self.setup.episodes).tolist() for d in self.done]
+
+    def record_of(self, job: _Job) -> TaskRecord:
+        """A finished job as the run history keeps it."""
+        rows = list(job.rows)
+        return TaskRecord(
+            rows=job.rows, seeds=job.seeds, episodes=job.episodes,
+            returns=self.returns[job.arm, rows],
+            exact=None if self.exact is None else self.exact[job.arm, rows],
+            algorithm=job.algorithm, hyperparameters=job.hp)
 
     def take(self, index: int, update: SeedsUpdate) -> None:
         """Count in what job `index` played since its last update."""
@@ -514,6 +564,10 @@ class _Tally:
     def _outcome(self, arm: int) -> AlgorithmOutcome | None:
         done, returns, checkpoints = self.done[arm], self.returns[arm], self.checkpoints
         exact = None if self.exact is None else self.exact[arm]
+        finished = done >= self.setup.episodes
+        if done.min() < 1 and finished.any():  # tasks not begun: the seeds that finished
+            done, returns = done[finished], returns[finished]
+            exact = None if exact is None else exact[finished]
         common = int(done.min())
         if common < 1:
             return None
@@ -535,7 +589,7 @@ class _Tally:
         return AlgorithmOutcome(
             algorithm=self.arms[arm].algorithm,
             hyperparameters=self.prepared.hyperparameters[arm],
-            seeds_done=int((done >= self.setup.episodes).sum()),
+            seeds_done=int(finished.sum()),
             curve=aggregate(seen),
             mean_return_last=mean_return_last(seen),
             exact_value=exact_value,
@@ -571,6 +625,70 @@ def _start_runs(
     return ids
 
 
+class CompareError(RuntimeError):
+    """A job of a comparison failed; the message says which and why."""
+
+
+class ResumeError(CompareError):
+    """A run that cannot be resumed with these settings; the message says why."""
+
+
+def _plain(value: Any) -> Any:
+    """`value` as JSON reads it back (tuples as lists), to compare with what is stored."""
+    return json.loads(json.dumps(value, default=str))
+
+
+def _resume_runs(
+    history: RunHistory, kind: RunKind, setup: Setup, arms: Sequence[Arm], prepared: Prepared,
+    run_id: int, tally: _Tally,
+) -> list[int | None]:
+    """The runs of `run_id`'s group, checked against these settings, marked running again,
+    their stored tasks counted into `tally`; ResumeError (one line) if they differ."""
+    try:
+        first = history.get_run(run_id).summary
+        if first.group is not None:
+            raise ResumeError(f"run {run_id} is part of run {first.group}'s {first.kind}: "
+                              f"resume run {first.group}")
+        records = [history.get_run(i) for i in history.group_ids(run_id)]
+    except RunHistoryError as exc:
+        raise ResumeError(str(exc)) from None
+    advice = "; give the command that started it to resume it"
+    if len(records) != len(arms) or any(r.summary.kind != kind for r in records):
+        raise ResumeError(f"run {run_id} is a {first.kind} of {len(records)} run(s), not this "
+                          f"{kind} of {len(arms)}{advice}")
+    for a, record in enumerate(records):
+        run = record.summary
+        here: dict[str, Any] = {
+            "game": prepared.game, "algorithm": arms[a].algorithm,
+            "game parameters": _plain(prepared.env_kwargs),
+            "wrappers": _plain([w.to_json() for w in prepared.wrappers]),
+            "seeds": list(setup.seed_list),
+        }
+        there: dict[str, Any] = {
+            "game": run.game, "algorithm": run.algorithm,
+            "game parameters": _plain(dict(record.game_params)),
+            "wrappers": _plain([w.to_json() for w in record.wrappers]),
+            "seeds": list(run.seeds),
+        }
+        stored_hp, hp = _plain(dict(record.hyperparameters)), _plain(prepared.hyperparameters[a])
+        for key in sorted(set(stored_hp) | set(hp)):
+            here[key], there[key] = hp.get(key), stored_hp.get(key)
+        tasks = history.read_tasks(run.id)
+        here["episodes"], there["episodes"] = setup.episodes, (
+            tasks[0].episodes if tasks else setup.episodes)
+        for key, value in here.items():
+            if there[key] != value:
+                raise ResumeError(
+                    f"run {run.id} was recorded with other settings ({key} "
+                    f"{visible(str(there[key]), 60)} there, {visible(str(value), 60)} here)"
+                    f"{advice}")
+        for task in tasks:
+            tally.load(a, task)
+    for record in records:
+        history.reopen_run(record.summary.id)
+    return [r.summary.id for r in records]
+
+
 def _record(
     history: RunHistory, tally: _Tally, outcomes: Sequence[AlgorithmOutcome | None],
     interrupted: bool,
@@ -596,6 +714,7 @@ class Executed:
     interrupted: bool
     group: int | None
     prepared: Prepared
+    tasks: Mapping[str, int] = field(default_factory=dict)  # "done" and "total"
 
 
 def execute(
@@ -608,14 +727,40 @@ def execute(
     history: RunHistory | None = None,
     processes: int | None = None,
     status: Callable[[str], None] | None = None,
+    resume: int | None = None,
+    cluster: Any = None,
+    task_seconds: float = TASK_SECONDS,
 ) -> Executed:
-    """Train every arm over the setup's seeds (what `run_compare` and `run_sweep` share):
-    here when the whole takes less than `SPREAD_SECONDS` (`_estimate`), else in child
-    processes, one per core."""
+    """Train every arm over the setup's seeds (what `run_compare` and `run_sweep` share)
+    as tasks, each kept in the run history as it finishes: here when the whole takes less
+    than `SPREAD_SECONDS` (`_estimate`), else in child processes, one per core, or on a
+    Dask cluster (`cluster`: an address, `local:N`, or a `distributed.Client`). `resume`
+    (a run's id) runs only the tasks its runs miss. A task runs for about `task_seconds`
+    or more (infinity: one per core)."""
     prepared = prepare(setup, arms)
+    with contextlib.ExitStack() as stack:
+        client = None
+        if cluster is not None:  # reached (or started) before any run is recorded
+            from tui_gym.session.experiments.cluster import connect
+
+            client = stack.enter_context(connect(cluster))
+        return _execute(setup, arms, kind, prepared, progress, stop, history, processes,
+                        status, resume, client, task_seconds)
+
+
+def _execute(
+    setup: Setup, arms: Sequence[Arm], kind: RunKind, prepared: Prepared,
+    progress: Callable[[CompareProgress], None] | None, stop: threading.Event | None,
+    history: RunHistory | None, processes: int | None, status: Callable[[str], None] | None,
+    resume: int | None, client: Any, task_seconds: float,
+) -> Executed:
     cores = _cores() if processes is None else max(1, processes)
     tally = _Tally(setup, arms, prepared)
-    if history is not None:
+    if resume is not None:
+        if history is None:
+            raise ResumeError(f"run {resume} cannot be resumed without the run history")
+        tally.run_ids = _resume_runs(history, kind, setup, arms, prepared, resume, tally)
+    elif history is not None:
         tally.run_ids = _start_runs(history, kind, setup, arms, prepared)
     last = [time.monotonic()]
 
@@ -626,7 +771,16 @@ def execute(
         if force or now - last[0] >= PROGRESS_INTERVAL:
             last[0] = now
             found = tuple(o for o in tally.outcomes() if o is not None)
-            progress(CompareProgress(tally.count(), tally.total(), found))
+            progress(CompareProgress(tally.count(), tally.total(), found, tally.tasks_done,
+                                     tally.tasks_total))
+
+    def landed(job: _Job) -> None:
+        """A task finished: kept at once, and told."""
+        tally.tasks_done += 1
+        run_id = tally.run_ids[job.arm]
+        if history is not None and run_id is not None:
+            history.put_task(run_id, tally.record_of(job))
+        tell(force=True)
 
     halt = threading.Event()
     stopped = halt.is_set if stop is None else (lambda: stop.is_set() or halt.is_set())
@@ -634,16 +788,36 @@ def execute(
     failure: BaseException | None = None
     try:
         with processes_module.stops_on_signals(halt):
-            jobs = _jobs(setup, arms, prepared, 0, setup.seeds)
-            if processes == 0 or cores == 1 or _estimate(prepared, arms, setup,
-                                                          status) < SPREAD_SECONDS:
-                complete = _run_here(tally.add(jobs), tally, stopped, tell)
+            missing = tally.missing()
+            seconds = _estimate(prepared, arms, setup, status) if (
+                client is not None or (processes != 0 and cores > 1)) else 0.0
+            if client is None and seconds < SPREAD_SECONDS:
+                jobs = tally.add(_jobs(setup, arms, prepared, missing))
+                tally.tasks_total += len(jobs)
+                complete = _run_here(jobs, tally, stopped, tell, landed)
             else:
-                pieces = max(1, -(-2 * cores // len(arms)))
-                spread = _jobs(setup, arms, prepared, 0, setup.seeds, pieces)
-                complete = _run_children(tally.add(spread), tally, stopped, tell, cores)
+                per_seed = seconds / (len(arms) * setup.seeds)
+                pieces = max(-(-cores // len(arms)), max(
+                    -(-len(rows) * per_seed // task_seconds) for rows in missing))
+                jobs = tally.add(_jobs(setup, arms, prepared, missing, int(pieces)))
+                tally.tasks_total += len(jobs)
+                if client is None:
+                    complete = _run_children(jobs, tally, stopped, tell, cores, landed)
+                else:
+                    from tui_gym.session.experiments.cluster import run_on_cluster
+
+                    def take(job: _Job, updates: list[SeedsUpdate]) -> None:
+                        for update in updates:
+                            tally.take(job.index, update)
+                        landed(job)
+
+                    complete = run_on_cluster(client, jobs, run_task, take, stopped)
     except BaseException as exc:
         failure = exc
+    if complete and history is not None and None not in tally.run_ids and (
+            getattr(history, "failure", None) is None):
+        with contextlib.suppress(RunHistoryError):  # a task that does not read: as run
+            tally = _stored(history, setup, arms, prepared, tally.run_ids) or tally
     outcomes = tally.outcomes()
     interrupted = not complete
     if history is not None:
@@ -659,7 +833,20 @@ def execute(
     return Executed(
         outcomes=tuple(outcomes), interrupted=interrupted,
         group=tally.run_ids[0] if tally.run_ids else None, prepared=prepared,
+        tasks={"done": tally.tasks_done, "total": tally.tasks_total},
     )
+
+
+def _stored(history: RunHistory, setup: Setup, arms: Sequence[Arm], prepared: Prepared,
+            run_ids: list[int | None]) -> _Tally | None:
+    """The runs' figures as their stored tasks give them (None if some task is missing)."""
+    stored = _Tally(setup, arms, prepared)
+    stored.run_ids = run_ids
+    for a, run_id in enumerate(run_ids):
+        assert run_id is not None
+        for task in history.read_tasks(run_id):
+            stored.load(a, task)
+    return stored if not any(stored.missing()) else None
 
 
 def _estimate(prepared: Prepared, arms: Sequence[Arm], setup: Setup,
@@ -678,12 +865,22 @@ def _estimate(prepared: Prepared, arms: Sequence[Arm], setup: Setup,
     if warm([(x.name, x.arrays(), x.compiled_params()) for x in learners], status) and status:
         status("")
     total = 0.0
+    checkpoints = len(checkpoint_episodes(setup.episodes))
     for learner in learners:
         began = time.perf_counter()
         played, _ = play_learner(learner, model.arrays, setup.episodes,
                                  stop=_deadline(began + PROBE_SECONDS / len(learners)))
         rate = len(played) / max(time.perf_counter() - began, 1e-9)
-        total += setup.seeds * setup.episodes / max(rate, 1e-9)
+        # Each seed's greedy policy is valued exactly at every checkpoint: on a large
+        # model that can cost more than the training.
+        table = learner.action_values(slice(None))[None][:, model.rows]
+        times = []
+        for _ in range(2):  # the quicker of two: the first may pay for imports
+            began = time.perf_counter()
+            greedy_values(model.mdp, table)
+            times.append(time.perf_counter() - began)
+        valuing = checkpoints * min(times)
+        total += setup.seeds * (setup.episodes / max(rate, 1e-9) + valuing)
     return total
 
 
@@ -700,13 +897,18 @@ def run_compare(
     history: RunHistory | None = None,
     processes: int | None = None,
     status: Callable[[str], None] | None = None,
+    resume: int | None = None,
+    cluster: Any = None,
 ) -> CompareResult:
     """Run a comparison (see the module docstring).
 
     `processes`: child processes at once at most (None: one per core); 0 runs
     everything on the calling thread. `status` hears the engine's lines
-    ("compiling the learners, once"). ValueError, before anything runs, for an
-    unknown game, algorithm or setting, or a bad value.
+    ("compiling the learners, once"). `resume`: a run's id, to run only the
+    tasks it misses (ResumeError if its settings differ); `cluster`: a Dask
+    scheduler's address, `local:N`, or a `distributed.Client`. ValueError,
+    before anything runs, for an unknown game, algorithm or setting, or a bad
+    value.
     """
     setup = Setup(spec.game, spec.seeds, spec.episodes, spec.game_params,
                   tuple(spec.wrappers), spec.first_seed)
@@ -715,16 +917,18 @@ def run_compare(
         for name in spec.algorithms
     ]
     done = execute(setup, arms, RunKind.COMPARE, progress=progress, stop=stop,
-                   history=history, processes=processes, status=status)
+                   history=history, processes=processes, status=status, resume=resume,
+                   cluster=cluster)
     return CompareResult(
         outcomes=tuple(o for o in done.outcomes if o is not None),
         interrupted=done.interrupted, group=done.group, spec=spec,
-        game=done.prepared.game, optimum=done.prepared.optimum,
+        game=done.prepared.game, optimum=done.prepared.optimum, tasks=done.tasks,
     )
 
 
 def _run_here(
-    jobs: list[_Job], tally: _Tally, stopped: Callable[[], bool], tell: Callable[..., None]
+    jobs: list[_Job], tally: _Tally, stopped: Callable[[], bool], tell: Callable[..., None],
+    landed: Callable[[_Job], None],
 ) -> bool:
     for job in jobs:
         if stopped():
@@ -737,12 +941,9 @@ def _run_here(
         tally.take(job.index, _run_job(job, stopped, report))
         if not tally.finished(job):
             return False
+        landed(job)
         tell()
     return True
-
-
-class CompareError(RuntimeError):
-    """A job of a comparison failed; the message says which and why."""
 
 
 def _run_children(
@@ -751,6 +952,7 @@ def _run_children(
     stopped: Callable[[], bool],
     tell: Callable[..., None],
     cores: int,
+    landed: Callable[[_Job], None],
 ) -> bool:
     # When every job runs at once and this is the main thread (a command, not the app's
     # worker thread), the calling thread plays the last job itself instead of waiting:
@@ -802,6 +1004,8 @@ def _run_children(
         if message:
             errors.append(message)
             stop_flag.set()
+        elif kind == "end" and tally.finished(tally.jobs[index]):
+            landed(tally.jobs[index])
         return True
 
     try:
@@ -821,6 +1025,8 @@ def _run_children(
 
             tally.take(own.index, _run_job(own, own_stop, report))
             ended.add(own.index)
+            if tally.finished(own):
+                landed(own)
         while waiting or running:
             start()
             take(0.05)

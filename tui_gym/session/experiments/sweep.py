@@ -5,17 +5,22 @@
 comparison trains its algorithms (`compare.execute`: every seed a learner of
 its own, spread over child processes when the work is long), and returns a
 `SweepResult` with one `SweepPoint` per grid point: its values and its
-`AlgorithmOutcome`. With a `RunHistory` each
+`AlgorithmOutcome`. A random search draws `samples` points instead, each key
+from its `Range` (uniform, or log-uniform), seeded by `sample_seed`, and the
+same seed draws the same points. `rank` orders the points best first. With a `RunHistory` each
 point is recorded as one run of kind `sweep`, grouped as a comparison's are.
 """
 
 from __future__ import annotations
 
 import itertools
+import math
 import threading
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
+
+import numpy as np
 
 from tui_gym.algorithms import algorithm
 from tui_gym.core.experiments.history import RunHistory
@@ -30,17 +35,50 @@ from tui_gym.session.experiments.compare import (
     execute,
 )
 
-__all__ = ["SWEEP_CURVE_POINTS", "SweepPoint", "SweepResult", "SweepSpec", "run_sweep"]
+__all__ = ["SWEEP_CURVE_POINTS", "Range", "SweepPoint", "SweepResult", "SweepSpec", "run_sweep"]
 
 SWEEP_CURVE_POINTS = 100  # curve points per grid point in `to_json`
 MAX_POINTS = 400  # grid points in one sweep at most
 
 
 @dataclass(frozen=True)
-class SweepSpec:
-    """`algorithm` on `game` at every point of `grid` (key -> values), `seeds` seeds each.
+class Range:
+    """Where a random search draws a key's values: `low` to `high`, log-uniform when `log`."""
 
-    `settings` are fixed values for the other hyperparameters."""
+    low: float
+    high: float
+    log: bool = False
+
+    @classmethod
+    def parse(cls, text: str) -> Range:
+        """`LOW:HIGH` or `LOW:HIGH:log` (or `:lin`); ValueError saying what is wrong."""
+        parts = text.split(":")
+        scale = parts.pop() if len(parts) == 3 else "lin"
+        try:
+            low, high = (float(v) for v in parts) if len(parts) == 2 else (math.nan, math.nan)
+        except ValueError:
+            low = high = math.nan
+        if not (math.isfinite(low) and math.isfinite(high)) or scale not in ("lin", "log"):
+            raise ValueError(f"range {text!r}: expected LOW:HIGH or LOW:HIGH:log")
+        if low >= high or (scale == "log" and low <= 0):
+            raise ValueError(f"range {text!r}: LOW must be below HIGH"
+                             + (" and above 0 for log" if scale == "log" else ""))
+        return cls(low, high, scale == "log")
+
+    def draw(self, rng: np.random.Generator) -> float:
+        if self.log:
+            return float(math.exp(rng.uniform(math.log(self.low), math.log(self.high))))
+        return float(rng.uniform(self.low, self.high))
+
+    def to_json(self) -> dict[str, Any]:
+        return {"low": self.low, "high": self.high, "log": self.log}
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """`algorithm` on `game` at every point of `grid` (key -> values), or at `samples`
+    points drawn from `ranges` (key -> `Range`, seeded by `sample_seed`), `seeds` seeds
+    each. `settings` are fixed values for the other hyperparameters."""
 
     game: str
     algorithm: str
@@ -51,14 +89,28 @@ class SweepSpec:
     game_params: Mapping[str, Any] = field(default_factory=dict)
     wrappers: Sequence[WrapperChoice] = ()
     first_seed: int = 0
+    ranges: Mapping[str, Range] = field(default_factory=dict)
+    samples: int = 0
+    sample_seed: int = 0
 
     def __post_init__(self) -> None:
         cls = algorithm(self.algorithm)
         object.__setattr__(self, "algorithm", cls.name)
         grid = {str(k): tuple(v) for k, v in self.grid.items()}
-        if not grid:
-            raise ValueError("a sweep needs at least one --grid KEY=V1,V2")
+        ranges = {str(k): v for k, v in self.ranges.items()}
+        if bool(ranges) != bool(self.samples):
+            raise ValueError("a random search needs both --sample N and --range KEY=LOW:HIGH")
+        if ranges and grid:
+            raise ValueError("give --grid or --sample with --range, not both")
+        if not grid and not ranges:
+            raise ValueError("a sweep needs at least one --grid KEY=V1,V2 "
+                             "(or --sample N --range KEY=LOW:HIGH)")
         fields = {f.name for f in cls.params}
+        for key in ranges:
+            if key not in fields:
+                raise ValueError(
+                    f"{cls.name} has no hyperparameter {key!r}; it has {', '.join(sorted(fields))}"
+                )
         for key, values in grid.items():
             if key not in fields:
                 raise ValueError(
@@ -69,25 +121,34 @@ class SweepSpec:
             if len(set(map(str, values))) != len(values):
                 raise ValueError(f"--grid {key}: a value is listed twice")
         for key in self.settings:
-            if key in grid:
+            if key in grid or key in ranges:
                 raise ValueError(f"{key} is both swept and set")
             if key not in fields:
                 raise ValueError(f"{cls.name} has no hyperparameter {key!r}")
-        count = 1
-        for values in grid.values():
-            count *= len(values)
-        if count > MAX_POINTS:
-            raise ValueError(f"the grid has {count} points; at most {MAX_POINTS} at once")
+        count = self.samples if ranges else math.prod(len(v) for v in grid.values())
+        if not 1 <= count <= MAX_POINTS:
+            raise ValueError(f"the sweep has {count} points; from 1 to {MAX_POINTS} at once")
         for name, value in (("seeds", self.seeds), ("episodes", self.episodes)):
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
         object.__setattr__(self, "grid", grid)
+        object.__setattr__(self, "ranges", ranges)
         object.__setattr__(self, "settings", dict(self.settings))
         object.__setattr__(self, "game_params", dict(self.game_params))
         object.__setattr__(self, "wrappers", tuple(self.wrappers))
 
+    @property
+    def keys(self) -> list[str]:
+        """The keys swept."""
+        return list(self.ranges or self.grid)
+
     def points(self) -> list[dict[str, Any]]:
-        """Every grid point as {key: value}, the first key's values slowest."""
+        """Every grid point as {key: value}, the first key's values slowest; or the points
+        drawn, in the order drawn."""
+        if self.ranges:
+            rng = np.random.default_rng(self.sample_seed)
+            return [{k: r.draw(rng) for k, r in self.ranges.items()}
+                    for _ in range(self.samples)]
         keys = list(self.grid)
         return [dict(zip(keys, combo, strict=True))
                 for combo in itertools.product(*self.grid.values())]
@@ -99,9 +160,20 @@ class SweepPoint:
 
     values: Mapping[str, Any]
     outcome: AlgorithmOutcome | None
+    rank: int | None = None  # 1 for the best point's figure; None without one
+
+    @property
+    def figure(self) -> float | None:
+        """What points rank by: the greedy policy's exact value where the game has one, else
+        the online return over the last 10% of episodes."""
+        o = self.outcome
+        if o is None:
+            return None
+        value = o.exact_value if o.exact_value is not None else o.mean_return_last.mean
+        return value if math.isfinite(value) else None
 
     def to_json(self) -> dict[str, Any]:
-        data: dict[str, Any] = {"values": dict(self.values)}
+        data: dict[str, Any] = {"values": dict(self.values), "rank": self.rank}
         o = self.outcome
         if o is None:
             data.update(seeds_done=0, episodes_done=0, mean_return_last=None, ci95=None,
@@ -131,12 +203,16 @@ class SweepResult:
     game: str
     optimum: float | None = None
     hyperparameters: Mapping[str, Any] = field(default_factory=dict)
+    tasks: Mapping[str, int] = field(default_factory=dict)  # "done" and "total"
 
     @property
     def grid(self) -> dict[str, list[Any]]:
         """Each key's values as the hyperparameters read them, in the order given."""
-        keys = list(self.spec.grid)
-        return {k: list(dict.fromkeys(p.values[k] for p in self.points)) for k in keys}
+        return {k: list(dict.fromkeys(p.values[k] for p in self.points)) for k in self.spec.keys}
+
+    def ranked(self) -> list[SweepPoint]:
+        """The points best first (those without a figure last, in their order)."""
+        return sorted(self.points, key=lambda p: (p.rank is None, p.rank or 0))
 
     def to_json(self) -> dict[str, Any]:
         spec = self.spec
@@ -147,6 +223,10 @@ class SweepResult:
             "seeds": spec.seeds,
             "first_seed": spec.first_seed,
             "grid": self.grid,
+            "sample": None if not spec.ranges else {
+                "n": spec.samples, "seed": spec.sample_seed,
+                "ranges": {k: r.to_json() for k, r in spec.ranges.items()}},
+            "tasks": dict(self.tasks),
             "hyperparameters": dict(self.hyperparameters),
             "optimum": _finite(self.optimum),
             "interrupted": self.interrupted,
@@ -163,6 +243,8 @@ def run_sweep(
     history: RunHistory | None = None,
     processes: int | None = None,
     status: Callable[[str], None] | None = None,
+    resume: int | None = None,
+    cluster: Any = None,
 ) -> SweepResult:
     """Run a sweep (see the module docstring); arguments as `run_compare`'s."""
     setup = Setup(spec.game, spec.seeds, spec.episodes, spec.game_params,
@@ -172,13 +254,20 @@ def run_sweep(
                 ", ".join(f"{k}={v}" for k, v in values.items()))
             for values in points]
     done = execute(setup, arms, RunKind.SWEEP, progress=progress, stop=stop,
-                   history=history, processes=processes, status=status)
+                   history=history, processes=processes, status=status, resume=resume,
+                   cluster=cluster)
     hps = done.prepared.hyperparameters
-    swept = [{k: hp[k] for k in spec.grid} for hp in hps]
-    fixed = {k: v for k, v in hps[0].items() if k not in spec.grid}
+    swept = [{k: hp[k] for k in spec.keys} for hp in hps]
+    fixed = {k: v for k, v in hps[0].items() if k not in spec.keys}
+    found = [SweepPoint(v, o) for v, o in zip(swept, done.outcomes, strict=True)]
+    order = sorted((i for i, p in enumerate(found) if p.figure is not None),
+                   key=lambda i: -(found[i].figure or 0.0))
+    for rank, i in enumerate(order, start=1):
+        found[i] = replace(found[i], rank=rank)
     return SweepResult(
         spec=spec,
-        points=tuple(SweepPoint(v, o) for v, o in zip(swept, done.outcomes, strict=True)),
+        points=tuple(found),
+        tasks=done.tasks,
         interrupted=done.interrupted,
         group=done.group,
         game=done.prepared.game,

@@ -1,0 +1,166 @@
+"""The cost of running experiments as tasks: the task split, and a Dask cluster's scheduler.
+
+`measure(seeds, episodes, repeats)` times (the median of `repeats` runs each):
+- the comparison of the `seeds` stage (Q-learning and SARSA on CliffWalking,
+  `seeds` seeds × `episodes` episodes; long enough that it is spread over the
+  cores) as the command runs it, in tasks each written to a run history as it
+  lands, against the same work in one batch per core, unrecorded: the
+  overhead of the split is their ratio;
+- a sweep (Q-learning over four step sizes, the same seeds and episodes) on
+  the local executor against a Dask `LocalCluster` of two workers, each
+  started and warmed before the clock runs: the cluster's throughput as a
+  share of the local executor's. Without Dask that figure is None, and says so.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from tui_gym.bench.figures import median, ratio
+
+GAME = "cliffwalking"
+SETTINGS = {"epsilon_start": 0.1, "epsilon_final": 0.1, "learning_rate": 0.5,
+            "learning_rate_schedule": "constant"}
+SWEEP_RATES = ("0.1", "0.2", "0.4", "0.8")
+CLUSTER_WORKERS = 2
+SPLIT_TARGET = 1.10  # tasks ÷ one batch, at most
+CLUSTER_TARGET = 0.8  # the cluster's throughput ÷ the local executor's, at least
+
+
+@dataclass(frozen=True)
+class TasksResult:
+    """Seconds of each side (medians), the tasks each split made, and why a side is
+    missing (`cluster_note`)."""
+
+    game: str
+    seeds: int
+    episodes: int
+    tasks_s: float
+    batch_s: float
+    tasks: int
+    local_s: float | None = None
+    cluster_s: float | None = None
+    cluster_tasks: int = 0
+    cluster_note: str = ""
+
+    @property
+    def split_overhead(self) -> float | None:
+        """The comparison's time in tasks, recorded, ÷ in one batch per core."""
+        return ratio(self.tasks_s, self.batch_s)
+
+    @property
+    def cluster_share(self) -> float | None:
+        """The cluster's throughput ÷ the local executor's on the same sweep."""
+        if self.local_s is None or self.cluster_s is None:
+            return None
+        return ratio(self.local_s, self.cluster_s)
+
+
+def _timed(run: Callable[[], Any], repeats: int) -> tuple[float, Any]:
+    times, result = [], None
+    for _ in range(repeats):
+        began = time.perf_counter()
+        result = run()
+        times.append(time.perf_counter() - began)
+    return median(times), result
+
+
+def measure(seeds: int, episodes: int, repeats: int = 3) -> TasksResult:
+    """Time both figures (see the module docstring)."""
+    from tui_gym.core.experiments import RunHistory, RunKind
+    from tui_gym.session.experiments.compare import (
+        Arm,
+        CompareSpec,
+        Setup,
+        execute,
+        run_compare,
+    )
+    from tui_gym.session.experiments.sweep import SweepSpec, run_sweep
+
+    spec = CompareSpec(GAME, ("q-learning", "sarsa"), seeds, episodes, settings=SETTINGS)
+    run_compare(CompareSpec(GAME, spec.algorithms, 1, 1, settings=SETTINGS))  # compiled, once
+    setup = Setup(GAME, seeds, episodes, {}, (), 0)
+    arms = [Arm(name, SETTINGS, name) for name in spec.algorithms]
+    with tempfile.TemporaryDirectory(prefix="tui-gym-bench-") as tmp:
+        with RunHistory(Path(tmp) / "runs.db") as history:
+            tasks_s, result = _timed(lambda: run_compare(spec, history=history), repeats)
+        batch_s, _ = _timed(lambda: execute(setup, arms, RunKind.COMPARE,
+                                            task_seconds=math.inf), repeats)
+    found = TasksResult(GAME, seeds, episodes, tasks_s, batch_s, int(result.tasks["total"]))
+    sweep = SweepSpec(GAME, "q-learning", {"learning_rate": SWEEP_RATES}, seeds, episodes,
+                      settings={k: v for k, v in SETTINGS.items() if k != "learning_rate"})
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        return _with(found, note="Dask is not installed (pip install 'tui-gym[dask]')")
+    local_s, _ = _timed(lambda: run_sweep(sweep, processes=CLUSTER_WORKERS), repeats)
+    import logging
+
+    with LocalCluster(n_workers=CLUSTER_WORKERS, threads_per_worker=1, processes=True,
+                      dashboard_address=None, silence_logs=logging.ERROR) as cluster, \
+            Client(cluster) as client:
+        run_sweep(sweep, cluster=client)  # the workers import and compile, once
+        cluster_s, swept = _timed(lambda: run_sweep(sweep, cluster=client), repeats)
+    return _with(found, local_s=local_s, cluster_s=cluster_s,
+                 cluster_tasks=int(swept.tasks["total"]))
+
+
+def _with(found: TasksResult, **changes: Any) -> TasksResult:
+    from dataclasses import replace
+
+    return replace(found, **{("cluster_note" if k == "note" else k): v
+                             for k, v in changes.items()})
+
+
+# --- what the report shows ---------------------------------------------------------
+def verdicts(result: TasksResult | None, missing: str, ok: Any) -> dict[str, str]:
+    """The verdicts of the two targets (`ok(value, good)` as the report's)."""
+    if result is None:
+        return {"task_split_overhead": missing, "cluster_throughput_share": missing}
+    split, share = result.split_overhead, result.cluster_share
+    return {
+        "task_split_overhead": ok(split, split is not None and split <= SPLIT_TARGET),
+        "cluster_throughput_share": missing if share is None else ok(
+            share, share >= CLUSTER_TARGET),
+    }
+
+
+def to_json(result: TasksResult | None) -> dict[str, Any] | None:
+    if result is None:
+        return None
+    return {
+        "game": result.game, "seeds": result.seeds, "episodes": result.episodes,
+        "tasks_s": result.tasks_s, "batch_s": result.batch_s, "tasks": result.tasks,
+        "split_overhead": result.split_overhead, "local_s": result.local_s,
+        "cluster_s": result.cluster_s, "cluster_tasks": result.cluster_tasks,
+        "cluster_workers": CLUSTER_WORKERS, "cluster_share": result.cluster_share,
+        "cluster_note": result.cluster_note or None,
+    }
+
+
+def rows(result: TasksResult | None) -> list[tuple[str, str, str, str | None]]:
+    """(figure, measured, target, verdict key) rows for the bench table."""
+    if result is None:
+        return []
+    split, share = result.split_overhead, result.cluster_share
+    out: list[tuple[str, str, str, str | None]] = [
+        (f"compare on {result.game}, {result.seeds} seeds: {result.tasks} tasks, recorded "
+         "÷ one batch", "n/a" if split is None else
+         f"{split:.3f} ({result.tasks_s:.2f} s / {result.batch_s:.2f} s)",
+         f"≤ {SPLIT_TARGET:g}", "task_split_overhead"),
+    ]
+    if share is None:
+        out.append((f"LocalCluster({CLUSTER_WORKERS}) ÷ local executor, throughput",
+                    result.cluster_note or "n/a", f"≥ {CLUSTER_TARGET:g}", None))
+    else:
+        out.append((f"LocalCluster({CLUSTER_WORKERS}) ÷ local executor, throughput, sweep of "
+                    f"{len(SWEEP_RATES)} points", f"{share:.3f} ({result.local_s:.2f} s / "
+                    f"{result.cluster_s:.2f} s)", f"≥ {CLUSTER_TARGET:g}",
+                    "cluster_throughput_share"))
+    return out

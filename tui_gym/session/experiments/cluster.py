@@ -1,0 +1,103 @@
+"""Tasks on a Dask cluster: `connect(cluster)`, then `run_on_cluster(client, tasks, work,
+take, stopped)`.
+
+`cluster` is a scheduler's address (`tcp://host:8786`), `local:N` (a
+`LocalCluster` of N worker processes started here and ended after), or a
+`distributed.Client` already connected. Every task is submitted at once; each
+result is handed to `take` on the calling thread as it lands, so the caller
+alone writes the run history. A task whose worker dies is run again by the
+scheduler (Dask's own retry), and a task's result is taken once, so a lost
+worker costs time, never a duplicate or a gap. Dask is optional
+(`tui-gym[dask]`): without it the run stops with a one-line hint.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import uuid
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any, TypeVar
+
+__all__ = ["DASK_HINT", "ClusterError", "connect", "run_on_cluster"]
+
+DASK_HINT = "--cluster needs Dask: pip install 'tui-gym[dask]'"
+WAIT_SECONDS = 0.2  # how often the stop flag is looked at while tasks run
+CONNECT_SECONDS = 10  # how long a scheduler's address is tried
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+
+class ClusterError(RuntimeError):
+    """The cluster cannot be used (Dask missing, a scheduler out of reach, a bad address)."""
+
+
+def local_workers(address: str) -> int | None:
+    """N for `local:N`; None for any other address; ClusterError for a bad N."""
+    if not address.startswith("local:"):
+        return None
+    count = address.removeprefix("local:")
+    if not count.isdigit() or not 1 <= int(count) <= 256:
+        raise ClusterError(f"--cluster {address}: expected local:N with N from 1 to 256")
+    return int(count)
+
+
+@contextlib.contextmanager
+def connect(cluster: Any) -> Iterator[Any]:
+    """A client of `cluster` while the block runs; ClusterError (one line) if there is none."""
+    if not isinstance(cluster, str):
+        yield cluster  # a Client the caller owns
+        return
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise ClusterError(DASK_HINT) from None
+    workers = local_workers(cluster)
+    if workers is not None:
+        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                          dashboard_address=None, silence_logs=logging.ERROR) as local, \
+                Client(local) as client:
+            yield client
+        return
+    try:
+        client = Client(cluster, timeout=CONNECT_SECONDS)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise ClusterError(f"cannot reach the Dask scheduler at {cluster}: {exc}") from None
+    with client:
+        yield client
+
+
+def run_on_cluster(
+    client: Any,
+    tasks: Sequence[T],
+    work: Callable[[T], R],
+    take: Callable[[T, R], None],
+    stopped: Callable[[], bool],
+) -> bool:
+    """Run `work(task)` for every task on the cluster of `client`, `take(task, result)` as
+    each lands (here, on the calling thread); True when all landed, False when `stopped`
+    ended it first (the tasks not landed are cancelled). A task that raises raises here."""
+    from distributed import wait
+
+    run = uuid.uuid4().hex[:12]
+    pending = {
+        client.submit(work, task, key=f"tui-gym-{run}-{i}", pure=False): task
+        for i, task in enumerate(tasks)
+    }
+    try:
+        while pending:
+            if stopped():
+                return False
+            try:
+                done, _ = wait(list(pending), timeout=WAIT_SECONDS,
+                               return_when="FIRST_COMPLETED")
+            except TimeoutError:
+                continue
+            for future in done:
+                task = pending.pop(future)
+                take(task, future.result())
+        return True
+    finally:
+        if pending:
+            client.cancel(list(pending))
