@@ -32,6 +32,19 @@ def test_the_loop_records_each_episodes_first_action_and_length() -> None:
     assert ((lengths == 2) == (firsts == 0)).all() and set(lengths.tolist()) == {1.0, 2.0}
 
 
+def test_the_loop_draws_a_rewards_noise_around_its_mean() -> None:
+    # Max-bias: every action from B ends with a reward drawn from N(-0.1, 1); right from A
+    # ends at 0.
+    model = game_named("max-bias").base_model({})
+    hp = {"epsilon_start": 1.0, "epsilon_final": 1.0, "episodes": 20_000}
+    learner = algorithm("q-learning")(12, hp, n_states=4, seed=5)
+    returns, _ = play_learner(learner, ModelArrays.of(model), 20_000)
+    left = returns[returns != 0.0]
+    assert len(left) == pytest.approx(20_000 / 12, rel=0.1)
+    assert abs(left.mean() + 0.1) < 4 / np.sqrt(len(left))
+    assert left.std() == pytest.approx(1.0, abs=0.06)
+
+
 def test_a_verdicts_tolerance_is_the_99_percent_interval_of_the_runs() -> None:
     samples = np.array([1.0, 2.0, 3.0, 4.0])
     half = t_quantile(0.995, 3) * samples.std(ddof=1) / 2
@@ -69,3 +82,25 @@ def test_cliff_walking_as_json_at_five_runs(capsys: pytest.CaptureFixture[str]) 
                                                        strict=True))
     assert all(set(c) == {"claim", "book", "measured", "ok"} and c["ok"]
                for c in data["checks"]), data["checks"]
+
+
+@pytest.mark.parametrize(("name", "runs"), [("6.3", 5), ("6.5", 200), ("8.2", 10)])
+def test_the_books_claims_at_a_few_runs(name: str, runs: int) -> None:
+    seen: list[tuple[int, int]] = []
+    result = figure_named(name).run(FigureOptions(runs=runs, seed=100),
+                                    lambda done, total, _: seen.append((done, total)))
+    assert result.runs == runs and result.checks
+    assert result.ok, [c for c in result.checks if not c.ok]
+    assert seen and seen[-1][0] == seen[-1][1]
+    for series in result.series:
+        assert series.lo is not None and series.hi is not None
+        assert (series.lo <= series.y + 1e-9).all() and (series.y <= series.hi + 1e-9).all()
+
+
+def test_a_claim_the_runs_do_not_bear_out_fails(monkeypatch: pytest.MonkeyPatch) -> None:
+    from tui_gym.session.book import fig_8_2
+
+    # Without planning the maze is far from learned by episode 3.
+    monkeypatch.setattr(fig_8_2, "SETTLED", {0: 3, 5: 5, 50: 3})
+    result = fig_8_2.FIGURE.run(FigureOptions(runs=10, seed=100), lambda *_: None)
+    assert [c.ok for c in result.checks] == [True, True, False, True, True]

@@ -22,7 +22,10 @@ FIGURE_MODULES = (
     "fig_4_1",
     "fig_4_2",
     "fig_4_3",
+    "fig_6_3",
     "fig_6_4",
+    "fig_6_5",
+    "fig_8_2",
 )
 
 

@@ -20,7 +20,9 @@ A run figure is a module like the exact ones (a `FIGURE`, see `figure`), whose
 3. **Check** the book's claims with a tolerance that follows from the run count:
    `near(claim, book, samples, slack)` (the mean of one number per run within
    `slack`, the precision the book gives it, plus `margin(samples)` of the
-   book's value), `above(claim, book, higher, lower)` (one mean above the
+   book's value), `one_run(claim, book, samples, slack)` (the same for a figure
+   the book draws from a single run: within the spread of one run, t · s ·
+   √(1 + 1/runs)), `above(claim, book, higher, lower)` (one mean above the
    other by more than the margin of their difference). `margin` is the
    half-width of a 99% Student-t interval: t · s / √runs, 0 for one run.
 
@@ -50,9 +52,11 @@ __all__ = [
     "Learner",
     "Played",
     "above",
+    "completed",
     "counts",
     "margin",
     "near",
+    "one_run",
     "per_episode",
     "per_time_step",
     "play",
@@ -134,6 +138,16 @@ def near(claim: str, book: float, samples: Samples, slack: float = 0.0, digits: 
                  abs(mean - book) <= tolerance)
 
 
+def one_run(claim: str, book: float, samples: Samples, slack: float = 0.0,
+            digits: int = 1, unit: str = "") -> Check:
+    """`book`, read off a figure of a single run, within `slack` + the 99% prediction interval
+    of one run around the mean of `samples` (one a run)."""
+    values = np.asarray(samples, dtype=np.float64).ravel()
+    mean, tolerance = float(values.mean()), slack + margin(values) * np.sqrt(len(values) + 1)
+    return Check(claim, f"{book:g}{unit} (one run)",
+                 f"{mean:.{digits}f}{unit} ± {tolerance:.{digits}f}", abs(mean - book) <= tolerance)
+
+
 def above(claim: str, book: str, higher: Samples, lower: Samples, digits: int = 1,
           unit: str = "") -> Check:
     """The mean of `higher` above that of `lower` by more than the margin of the difference
@@ -146,22 +160,28 @@ def above(claim: str, book: str, higher: Samples, lower: Samples, digits: int = 
                  gap > spread)
 
 
-def per_episode(played: Played, scale: float = 1.0, window: int = 1) -> Series:
-    """The mean over runs of each episode's measure (times `scale`; each run smoothed over a
-    trailing `window` of episodes first), with its band."""
-    curve = aggregate(played.values * scale, window=window)
+def per_episode(played: Played, window: int = 1) -> Series:
+    """The mean over runs of each episode's measure (each run smoothed over a trailing
+    `window` of episodes first), with its band."""
+    curve = aggregate(played.values, window=window)
     return Series(played.label, curve.episodes.astype(np.float64), curve.mean,
                   curve.lo, curve.hi)
 
 
-def per_time_step(played: Played, points: int = 200) -> Series:
-    """Episodes completed against time steps (the measure must be `LENGTH`), up to the time
-    step every run reached."""
+def completed(played: Played, steps: npt.ArrayLike) -> np.ndarray:
+    """`[run, i]`: the episodes each run completed by time step `steps[i]` (the measure must
+    be `LENGTH`)."""
     ends = np.cumsum(played.values, axis=1)  # the time step each episode ended at, per run
-    last = float(ends[:, -1].min())
+    return np.stack([np.searchsorted(row, steps, side="right") for row in ends]).astype(float)
+
+
+def per_time_step(played: Played, points: int = 200, until: float | None = None) -> Series:
+    """Episodes completed against time steps (the measure must be `LENGTH`), up to `until`
+    or the time step every run reached, whichever comes first."""
+    last = float(played.values.sum(axis=1).min())
+    last = last if until is None else min(last, until)
     steps = np.unique(np.linspace(0, last, points).round())
-    completed = np.stack([np.searchsorted(row, steps, side="right") for row in ends])
-    curve = aggregate(completed.astype(np.float64), episodes=steps.astype(np.int64))
+    curve = aggregate(completed(played, steps), episodes=steps.astype(np.int64))
     return Series(played.label, steps, curve.mean, curve.lo, curve.hi)
 
 
