@@ -8,10 +8,11 @@ A run figure is a module like the exact ones (a `FIGURE`, see `figure`), whose
    over `runs` seeds (from `options.seed`) for `episodes` episodes each, on the
    world's model by the engine's compiled loop, through the comparison machinery
    (`session.experiments.compare.execute`: spread over the cores, progress as
-   it goes). `measure` is what each episode records: `RETURN` (the online
-   return), `LENGTH` (time steps) or `FIRST_ACTION` (the action taken in the
-   start state). Each `Played` holds `values[run, episode]` and the greedy
-   policy's exact value at the end of each run (`final`). A swept parameter
+   it goes; setting `options.stop` ends it with `FigureStopped`). `measure` is
+   what each episode records: `RETURN` (the online return), `LENGTH` (time
+   steps) or `FIRST_ACTION` (the action taken in the start state). Each
+   `Played` holds `values[run, episode]` and the greedy policy's exact value
+   at the end of each run (`final`). A swept parameter
    (α, n, λ) is one `Learner` per value.
 2. **Draw** them as `Series` with bands: `per_episode(played)` (the mean over
    runs per episode), `per_time_step(played)` (episodes completed against time
@@ -42,7 +43,14 @@ import numpy.typing as npt
 from tui_gym.core.engine.loop import FIRST_ACTION, LENGTH, RETURN
 from tui_gym.core.experiments.aggregate import aggregate, t_half_width
 from tui_gym.core.experiments.records import RunKind
-from tui_gym.session.book.figure import BookFigure, Check, FigureOptions, Progress, Series
+from tui_gym.session.book.figure import (
+    BookFigure,
+    Check,
+    FigureOptions,
+    FigureStopped,
+    Progress,
+    Series,
+)
 from tui_gym.session.experiments.compare import Arm, CompareProgress, Setup, execute
 
 __all__ = [
@@ -111,10 +119,10 @@ def play(figure: BookFigure, world: str, learners: Sequence[Learner], options: F
     def told(state: CompareProgress) -> None:
         progress(state.done, state.total, about)
 
-    done = execute(setup, arms, RunKind.COMPARE, progress=told,
+    done = execute(setup, arms, RunKind.COMPARE, progress=told, stop=options.stop,
                    status=lambda line: progress(0, 1, line or about))
     if done.interrupted:
-        raise KeyboardInterrupt
+        raise FigureStopped(f"Figure {figure.name} stopped")
     return [Played(learner.label, done.values[index],
                    None if done.exact is None else done.exact[index, :, -1].copy(),
                    done.prepared.optimum)
