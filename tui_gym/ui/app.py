@@ -951,8 +951,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         sections = [
             ("Everywhere", [
                 ("p / t / v", "Play view / Train view / Compare view"),
-                ("P", "Plan view: planning, sweep by sweep"),
-                ("f", "Book view: the book's figures, learners run over seeds"),
+                ("P / f", "Plan view (sweep by sweep) / Book view"),
                 *_game_keys(),
                 ("w / W", "focus the wrapper panel (W while a board that moves with WASD "
                           "has focus)"),
