@@ -25,7 +25,8 @@ A run figure is a module like the exact ones (a `FIGURE`, see `figure`), whose
    the book draws from a single run: within the spread of one run, t · s ·
    √(1 + 1/runs)), `above(claim, book, higher, lower)` (one mean above the
    other by more than the margin of their difference). `margin` is the
-   half-width of a 99% Student-t interval: t · s / √runs, 0 for one run.
+   half-width of a 99% Student-t interval: t · s / √runs; one run has none,
+   so no claim it measures is borne out.
 
 `counts(figure, options)` resolves runs and episodes: the flags, else the
 figure's defaults (`--full`: the book's own counts).
@@ -33,6 +34,7 @@ figure's defaults (`--full`: the book's own counts).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -130,11 +132,18 @@ def play(figure: BookFigure, world: str, learners: Sequence[Learner], options: F
 
 
 def margin(samples: Samples) -> float:
-    """The half-width of the 99% Student-t interval of the mean of `samples` (0 for one)."""
+    """The half-width of the 99% Student-t interval of the mean of `samples` (NaN for one
+    sample, which no comparison passes)."""
     values = np.asarray(samples, dtype=np.float64).ravel()
     if len(values) < 2:
-        return 0.0
+        return math.nan
     return float(t_half_width(values.std(ddof=1), len(values), CHECK_CONFIDENCE))
+
+
+def _within(mean: float, tolerance: float, digits: int, unit: str) -> str:
+    if math.isnan(tolerance):
+        return f"{mean:.{digits}f}{unit} (one run: no interval)"
+    return f"{mean:.{digits}f}{unit} ± {tolerance:.{digits}f}"
 
 
 def near(claim: str, book: float, samples: Samples, slack: float = 0.0, digits: int = 1,
@@ -142,7 +151,7 @@ def near(claim: str, book: float, samples: Samples, slack: float = 0.0, digits: 
     """The mean of `samples` (one a run) within `slack` + `margin(samples)` of `book`."""
     values = np.asarray(samples, dtype=np.float64).ravel()
     mean, tolerance = float(values.mean()), slack + margin(values)
-    return Check(claim, f"{book:g}{unit}", f"{mean:.{digits}f}{unit} ± {tolerance:.{digits}f}",
+    return Check(claim, f"{book:g}{unit}", _within(mean, tolerance, digits, unit),
                  abs(mean - book) <= tolerance)
 
 
@@ -152,8 +161,8 @@ def one_run(claim: str, book: float, samples: Samples, slack: float = 0.0,
     of one run around the mean of `samples` (one a run)."""
     values = np.asarray(samples, dtype=np.float64).ravel()
     mean, tolerance = float(values.mean()), slack + margin(values) * np.sqrt(len(values) + 1)
-    return Check(claim, f"{book:g}{unit} (one run)",
-                 f"{mean:.{digits}f}{unit} ± {tolerance:.{digits}f}", abs(mean - book) <= tolerance)
+    return Check(claim, f"{book:g}{unit} (one run)", _within(mean, tolerance, digits, unit),
+                 abs(mean - book) <= tolerance)
 
 
 def above(claim: str, book: str, higher: Samples, lower: Samples, digits: int = 1,
@@ -164,8 +173,10 @@ def above(claim: str, book: str, higher: Samples, lower: Samples, digits: int = 
     b = np.asarray(lower, dtype=np.float64).ravel()
     gap = float(a.mean() - b.mean())
     spread = float(np.hypot(margin(a), margin(b)))
-    return Check(claim, book, f"{a.mean():.{digits}f}{unit} vs {b.mean():.{digits}f}{unit}",
-                 gap > spread)
+    measured = f"{a.mean():.{digits}f}{unit} vs {b.mean():.{digits}f}{unit}"
+    if len(a) < 2:
+        measured += " (one run: no interval)"
+    return Check(claim, book, measured, gap > spread)
 
 
 def per_episode(played: Played, window: int = 1) -> Series:
