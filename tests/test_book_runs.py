@@ -16,7 +16,15 @@ from tui_gym.core.experiments.student_t import t_quantile
 from tui_gym.games import game_named
 from tui_gym.session.book import figure_named
 from tui_gym.session.book.figure import FigureOptions
-from tui_gym.session.book.runs import Played, above, counts, margin, near, per_time_step
+from tui_gym.session.book.runs import (
+    Played,
+    above,
+    counts,
+    margin,
+    near,
+    per_time_step,
+    swept,
+)
 
 
 def test_the_loop_records_each_episodes_first_action_and_length() -> None:
@@ -63,6 +71,16 @@ def test_episodes_completed_against_time_steps() -> None:
     series = per_time_step(Played("x", lengths, None, None), points=11)
     assert series.x.tolist() == list(range(11))
     assert series.y.tolist() == [0, 0.5, 1, 1.5, 1.5, 2, 2, 2, 2, 2, 3]
+
+
+def test_a_swept_parameter_is_one_point_a_learner_with_its_band() -> None:
+    runs = [Played("α", np.array([[1.0, 3.0], [3.0, 5.0]]), None, None),
+            Played("α", np.array([[0.0, 0.0], [2.0, 2.0]]), None, None)]
+    series = swept("n = 1", [0.1, 0.2], runs, lambda values: values.mean(axis=1))
+    assert series.x.tolist() == [0.1, 0.2] and series.y.tolist() == [3.0, 1.0]
+    half = t_quantile(0.975, 1) * np.sqrt(2) / np.sqrt(2)  # per-run means 2, 4 and 0, 2
+    assert series.hi.tolist() == pytest.approx([3.0 + half, 1.0 + half])
+    assert series.lo.tolist() == pytest.approx([3.0 - half, 1.0 - half])
 
 
 def test_full_gives_the_books_counts_and_flags_win() -> None:
