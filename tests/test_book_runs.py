@@ -124,3 +124,22 @@ def test_a_claim_the_runs_do_not_bear_out_fails(monkeypatch: pytest.MonkeyPatch)
     monkeypatch.setattr(fig_8_2, "SETTLED", {0: 3, 5: 5, 50: 3})
     result = fig_8_2.FIGURE.run(FigureOptions(runs=10, seed=100), lambda *_: None)
     assert [c.ok for c in result.checks] == [True, True, False, True, True]
+
+
+def test_the_full_flag_reaches_the_figure(monkeypatch: pytest.MonkeyPatch,
+                                          capsys: pytest.CaptureFixture[str]) -> None:
+    from tui_gym.cli import book_command
+    from tui_gym.session.book.figure import BookFigure, FigureResult
+
+    seen: list[FigureOptions] = []
+
+    def run(options: FigureOptions, progress) -> FigureResult:
+        seen.append(options)
+        return FigureResult("9.9", "a test figure", 1)
+
+    fake = BookFigure("9.9", "a test figure", "", "windy", run, runs=2, episodes=3)
+    monkeypatch.setattr(book_command, "figure_named", lambda name: fake)
+    assert main(["book", "9.9", "--full", "--seed", "4", "--json"]) == 0
+    assert main(["book", "9.9", "--runs", "7", "--json"]) == 0
+    capsys.readouterr()
+    assert [(o.full, o.seed, o.runs) for o in seen] == [(True, 4, None), (False, 0, 7)]
