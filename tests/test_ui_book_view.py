@@ -1,5 +1,5 @@
-"""The Book view mounted alone: a figure run from the list, drawn with its verdicts, and one
-stopped half-way."""
+"""The Book view mounted alone: a figure run from the list, drawn with its verdicts (anew
+when the terminal narrows), and one stopped half-way."""
 
 from __future__ import annotations
 
@@ -68,6 +68,10 @@ def _text(app: App[None], selector: str) -> str:
     return console.export_text()
 
 
+def _widest(app: App[None]) -> int:
+    return max(len(line.rstrip()) for line in _text(app, "#book-figure").splitlines())
+
+
 async def test_a_figure_runs_from_the_list_and_shows_its_verdicts() -> None:
     app = BookHost()
     async with app.run_test(size=(100, 40)) as pilot:
@@ -81,6 +85,10 @@ async def test_a_figure_runs_from_the_list_and_shows_its_verdicts() -> None:
         assert "1 of 2 claims reproduced" in status
         drawn = _text(app, "#book-figure")
         assert "it rises" in drawn and "✓ reproduced" in drawn and "✗ differs" in drawn
+        # A narrower terminal draws the chart anew to fit.
+        widest = max(len(line.rstrip()) for line in drawn.splitlines())
+        await pilot.resize_terminal(70, 40)
+        await wait_for(pilot, lambda: _widest(app) < widest - 20, "the chart to fit")
 
 
 async def test_s_stops_a_figure_that_runs() -> None:

@@ -61,6 +61,7 @@ class BookView(Vertical):
         # Written by the worker thread, read by the timer: (done, total, what), the result.
         self._progress: tuple[int, int, str] | None = None
         self._outcome: FigureResult | str | None = None
+        self.result: FigureResult | None = None  # the last figure drawn
 
     @staticmethod
     def key_help() -> list[tuple[str, str]]:
@@ -113,6 +114,7 @@ class BookView(Vertical):
         self._busy, self._stop = figure, threading.Event()
         self._progress, self._outcome = (0, 1, "starting"), None
         self.query_one("#book-figure", Static).update("")
+        self.result = None
         stop = self._stop
         self.run_worker(lambda: self._compute(figure, stop), thread=True, group="book",
                         exit_on_error=False)
@@ -154,8 +156,17 @@ class BookView(Vertical):
         verdicts = sum(c.ok for c in outcome.checks)
         status.update(f"Figure {outcome.figure}: {verdicts} of {len(outcome.checks)} claims "
                       "reproduced")
-        bar = self.query_one(ProgressBar)
-        bar.update(total=1, progress=1)
+        self.query_one(ProgressBar).update(total=1, progress=1)
+        self.result = outcome
+        self._draw()
+
+    def on_resize(self) -> None:
+        self.call_after_refresh(self._draw)  # the charts fit the new width
+
+    def _draw(self) -> None:
+        result = self.result
+        if result is None:
+            return
         width = max(40, self.query_one("#book-body").size.width - 4)
         self.query_one("#book-figure", Static).update(
-            Group(*figure_parts(outcome, width), *claims_table(outcome)))
+            Group(*figure_parts(result, width), *claims_table(result)))
