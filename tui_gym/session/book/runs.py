@@ -10,7 +10,8 @@ A run figure is a module like the exact ones (a `FIGURE`, see `figure`), whose
    (`session.experiments.compare.execute`: spread over the cores, progress as
    it goes; setting `options.stop` ends it with `FigureStopped`). `measure` is
    what each episode records: `RETURN` (the online return), `LENGTH` (time
-   steps) or `FIRST_ACTION` (the action taken in the start state). Each
+   steps) or `FIRST_ACTION` (the action taken in the start state); another
+   per-episode quantity is one more column of that loop's output. Each
    `Played` holds `values[run, episode]` and the greedy policy's exact value
    at the end of each run (`final`). A swept parameter
    (α, n, λ) is one `Learner` per value.
