@@ -2,14 +2,16 @@
 
 `run_model` plays a learner on a model's arrays (`ModelArrays`), one
 transition at a time: epsilon-greedy acting (the algorithm's acting values),
-an outcome drawn from the model, the episode limit, the algorithm's update.
+an outcome drawn from the model (a reward with noise drawn around its mean),
+the episode limit, the algorithm's update.
 It runs at most `max_episodes` episodes and `max_steps` transitions per call
 and keeps the episode in progress in `cursor` and `acc` between calls, so a
 run cut into calls of any size is the same run: one transition from Python
 (the `n` step), a chunk at max speed, a whole headless run. Every random
 number comes from the learner's generator, in one order: the start, then per
-transition the action (when not chosen already), the outcome, the next
-action (SARSA), and what the rule draws.
+transition the action (when not chosen already), the outcome, its reward's
+noise (only where it has any), the next action (SARSA), and what the rule
+draws.
 
 `transition` is the same update for a transition that happened elsewhere (a
 Gymnasium env played from Python), choosing the next action first where the
@@ -39,7 +41,11 @@ from tui_gym.core.engine.rules import (
 from tui_gym.core.mdp.model import FiniteMDP
 
 __all__ = [
+    "COLUMNS",
+    "FIRST_ACTION",
     "GROW",
+    "LENGTH",
+    "RETURN",
     "Cursor",
     "ModelArrays",
     "entries",
@@ -54,8 +60,9 @@ __all__ = [
 GUIDED = 16  # pairs with more outcomes than this are sampled through a guide table
 GROW = 1  # `run_model`'s status when the learner needs room (Monte Carlo's longest episode)
 
-# Columns of `run_model`'s per-episode output.
-RETURN, LENGTH, MEAN_TD, EPSILON = range(4)
+# Columns of `run_model`'s per-episode output (`COLUMNS` of them).
+RETURN, LENGTH, MEAN_TD, EPSILON, FIRST_ACTION = range(5)
+COLUMNS = 5
 
 
 @dataclass(frozen=True, eq=False)
@@ -67,6 +74,7 @@ class ModelArrays:
     cumulative: np.ndarray
     guide: np.ndarray  # [S * A * K]: per pair, where outcome j / K falls (see `sample_outcome`)
     reward: np.ndarray
+    noise: np.ndarray  # [S * A * K]: each reward's standard deviation ([0.0]: none has any)
     terminal: np.ndarray
     outcomes: int
     starts: np.ndarray
@@ -98,6 +106,8 @@ class ModelArrays:
             cumulative=np.array(model.cumulative.reshape(-1), dtype=np.float64),
             guide=guide.reshape(-1),
             reward=np.array(model.reward.reshape(-1), dtype=np.float64),
+            noise=(np.zeros(1) if model.reward_std is None or not model.reward_std.any()
+                   else np.array(model.reward_std.reshape(-1), dtype=np.float64)),
             terminal=np.array(model.terminal.reshape(-1), dtype=np.bool_),
             outcomes=outcomes,
             starts=starts,
@@ -110,10 +120,12 @@ class ModelArrays:
 
 class Cursor:
     """An episode in progress between calls of `run_model`: whether one is running, its
-    model state, the action chosen for it (-1: none yet), its steps, return and |TD| sum."""
+    model state, the action chosen for it (-1: none yet), its steps, the action it began
+    with, its return and |TD| sum."""
 
     def __init__(self) -> None:
-        self.ints = np.zeros(6, dtype=np.int64)  # live, state, action, steps; episodes, steps
+        # live, state, action, steps; this call's episodes and steps; the first action
+        self.ints = np.zeros(7, dtype=np.int64)
         self.floats = np.zeros(2, dtype=np.float64)  # return, sum of |TD|
 
     @property
@@ -159,8 +171,8 @@ def sample_outcome(cumulative: Any, guide: Any, base: int, outcomes: int, rng: A
 
 
 @kernel
-def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, terminal: Any,
-              outcomes: int,
+def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: Any,
+              terminal: Any, outcomes: int,
               starts: Any, start_cumulative: Any, rows: Any, horizon: int,
               tables: Any, hp: Any, rng: Any, explore: Any, episode0: int,
               cursor: Any, acc: Any, max_episodes: int, max_steps: int,
@@ -168,8 +180,8 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, termina
     """Play up to `max_episodes` episodes and `max_steps` transitions (see the module
     docstring); `explore` is (epsilon start, final, decay episodes), `episode0` the
     learner's episodes so far. Finished episodes go into `out` rows (return, length,
-    mean |TD|, epsilon); `cursor[4]`, `cursor[5]` count the episodes and steps of this
-    call. Returns 0, or `GROW` when the learner needs room first."""
+    mean |TD|, epsilon, the action it began with); `cursor[4]`, `cursor[5]` count the
+    episodes and steps of this call. Returns 0, or `GROW` when the learner needs room first."""
     n_actions = tables[0].shape[1]
     done = 0
     steps = 0
@@ -191,10 +203,14 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, termina
         a = cursor[2]
         if a < 0:
             a = act(tables, hp, rng, rows[s], eps)
+        if cursor[3] == 0:
+            cursor[6] = a
         at = (s * n_actions + a) * outcomes
         at += sample_outcome(cumulative, guide, at, outcomes, rng)
         s2 = next_state[at]
         r = reward[at]
+        if noise.shape[0] > 1 and noise[at] > 0.0:
+            r += noise[at] * rng.standard_normal()
         ended = terminal[at]
         cursor[3] += 1
         cut = (not ended) and horizon > 0 and cursor[3] >= horizon
@@ -211,6 +227,7 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, termina
             out[done, 1] = length
             out[done, 2] = acc[1] / length
             out[done, 3] = eps
+            out[done, 4] = cursor[6]
             done += 1
             cursor[0] = 0
             eps = epsilon_at(float(episode0 + done), explore[0], explore[1], explore[2])
@@ -243,8 +260,9 @@ def play(learner: Any, model: ModelArrays, cursor: Cursor, max_episodes: int,
     schedule on by the episodes finished): (episodes, steps)."""
     hp = learner.compiled_params()
     status = entries(hp).run_model(
-        model.next_state, model.cumulative, model.guide, model.reward, model.terminal,
-        model.outcomes, model.starts, model.start_cumulative, model.rows, model.horizon,
+        model.next_state, model.cumulative, model.guide, model.reward, model.noise,
+        model.terminal, model.outcomes, model.starts, model.start_cumulative, model.rows,
+        model.horizon,
         learner.arrays(), hp, learner.rng, learner.exploration(), learner.episode,
         cursor.ints, cursor.floats, min(max_episodes, len(out)), max_steps, out, log,
     )
@@ -297,9 +315,9 @@ def compile_learner(tables: Any, hp: Any) -> None:
     log = np.zeros((1, 8))
     model = _tiny_model(copies[0].shape[1])
     cursor = Cursor()
-    out = np.zeros((1, 4))
+    out = np.zeros((1, COLUMNS))
     explore = np.zeros(3)
-    calls.run_model(model.next_state, model.cumulative, model.guide, model.reward,
+    calls.run_model(model.next_state, model.cumulative, model.guide, model.reward, model.noise,
                     model.terminal, model.outcomes, model.starts, model.start_cumulative,
                     model.rows, model.horizon, copies, hp, spare, explore, 0, cursor.ints,
                     cursor.floats, 1, 1, out, log)

@@ -49,7 +49,7 @@ import numpy as np
 
 from tui_gym.algorithms import ALGORITHMS, algorithm
 from tui_gym.core.engine import processes as processes_module
-from tui_gym.core.engine.loop import ModelArrays, warm
+from tui_gym.core.engine.loop import FIRST_ACTION, LENGTH, RETURN, ModelArrays, warm
 from tui_gym.core.engine.seeds import checkpoint_episodes, greedy_values, play_learner
 from tui_gym.core.experiments.aggregate import (
     AggregateCurve,
@@ -253,7 +253,9 @@ class Arm:
 
 @dataclass(frozen=True)
 class Setup:
-    """What every arm of an experiment shares: the game, its seeds and episodes."""
+    """What every arm of an experiment shares: the game, its seeds and episodes, and the
+    per-episode quantity recorded (`measure`, a column of the engine's loop: the online
+    return, or `loop.LENGTH`, `loop.FIRST_ACTION`)."""
 
     game: str
     seeds: int
@@ -261,6 +263,7 @@ class Setup:
     game_params: Mapping[str, Any]
     wrappers: tuple[WrapperChoice, ...]
     first_seed: int
+    measure: int = RETURN
 
     @property
     def seed_list(self) -> tuple[int, ...]:
@@ -294,6 +297,7 @@ class _Job:
     rows: tuple[int, ...]
     episodes: int
     model: _Model | None = None  # the game's model, when it has one
+    measure: int = RETURN
 
 
 @dataclass(frozen=True)
@@ -397,7 +401,7 @@ def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared,
                     env_kwargs=prepared.env_kwargs, wrappers=tuple(setup.wrappers),
                     hp=prepared.hyperparameters[a], seeds=tuple(seeds[r] for r in block),
                     rows=tuple(int(r) for r in block), episodes=setup.episodes,
-                    model=prepared.model,
+                    model=prepared.model, measure=setup.measure,
                 ))
     return jobs
 
@@ -446,7 +450,7 @@ def _run_job(
             learner = cls(model.n_actions, cls.settings(job.hp), n_states=model.n_states,
                           seed=seed)
             _, tables = play_learner(learner, model.arrays, episodes, checkpoints, stop,
-                                     returns[i], counter(i))
+                                     returns[i], counter(i), job.measure)
             if tables and exact is not None:
                 q = np.stack(tables)[:, model.rows]
                 exact[i, : len(tables)] = greedy_values(model.mdp, q)
@@ -463,7 +467,9 @@ def _play_env(job: _Job, seed: int, returns: np.ndarray, progress: Callable[[int
         for e in range(job.episodes):
             if stop():
                 return
-            returns[e] = session.trainer.run_episode().episode_return
+            stats = session.trainer.run_episode()
+            returns[e] = (stats.length if job.measure == LENGTH else stats.first_action
+                          if job.measure == FIRST_ACTION else stats.episode_return)
             progress(e + 1)
     finally:
         session.env.close()
@@ -708,12 +714,16 @@ def _record(
 
 @dataclass(frozen=True)
 class Executed:
-    """What `execute` gives back: each arm's outcome (None if it finished no episode)."""
+    """What `execute` gives back: each arm's outcome (None if it finished no episode), and
+    `values[arm, seed, episode]`, the measure of every episode (NaN where not played), and
+    `exact[arm, seed, checkpoint]`, the greedy policies' exact values (None without a model)."""
 
     outcomes: tuple[AlgorithmOutcome | None, ...]
     interrupted: bool
     group: int | None
     prepared: Prepared
+    values: np.ndarray
+    exact: np.ndarray | None
     tasks: Mapping[str, int] = field(default_factory=dict)  # "done" and "total"
 
 
@@ -833,6 +843,7 @@ def _execute(
     return Executed(
         outcomes=tuple(outcomes), interrupted=interrupted,
         group=tally.run_ids[0] if tally.run_ids else None, prepared=prepared,
+        values=tally.returns, exact=tally.exact,
         tasks={"done": tally.tasks_done, "total": tally.tasks_total},
     )
 
