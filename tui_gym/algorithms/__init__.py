@@ -4,7 +4,8 @@ Every learner is a `Learner` (see `base`): its hyperparameters as `Param`s,
 its tables, its update rule written once as compiled scalar code, and a
 record of a single update for the step-by-step view. `algorithm(name)` finds
 one by its registry name (`q-learning`, `sarsa`, `expected-sarsa`,
-`double-q`, `monte-carlo`, `dyna-q`).
+`double-q`, `monte-carlo`, `dyna-q`, `n-step-sarsa`,
+`sarsa-lambda`, `q-lambda`).
 """
 
 from __future__ import annotations
@@ -21,8 +22,11 @@ from tui_gym.algorithms.double_q import DoubleQLearning
 from tui_gym.algorithms.dyna_q import DynaQ
 from tui_gym.algorithms.expected_sarsa import ExpectedSarsa
 from tui_gym.algorithms.monte_carlo import MonteCarlo
+from tui_gym.algorithms.nstep_sarsa import NStepSarsa
+from tui_gym.algorithms.q_lambda import WatkinsQLambda
 from tui_gym.algorithms.qlearning import QLearning
 from tui_gym.algorithms.sarsa import Sarsa
+from tui_gym.algorithms.sarsa_lambda import SarsaLambda
 from tui_gym.algorithms.settings import COMMON_PARAMS, Choice, Field, Settings
 
 __all__ = [
@@ -39,12 +43,15 @@ __all__ = [
     "Learner",
     "LearnerState",
     "MonteCarlo",
+    "NStepSarsa",
     "QLearning",
     "Sarsa",
+    "SarsaLambda",
     "Settings",
     "TableSpec",
     "Transition",
     "UpdateRecord",
+    "WatkinsQLambda",
     "algorithm",
     "owners",
 ]
@@ -56,6 +63,9 @@ ALGORITHMS: tuple[type[Learner], ...] = (
     DoubleQLearning,
     MonteCarlo,
     DynaQ,
+    NStepSarsa,
+    SarsaLambda,
+    WatkinsQLambda,
 )
 
 DEFAULT_ALGORITHM = QLearning.name

@@ -52,7 +52,8 @@ MAX_SAVED_COUNT = 2**62
 
 @dataclass(frozen=True)
 class CellUpdate:
-    """One (state, action) moved toward a target: a row of an update's explanation."""
+    """One (state, action) moved toward a target: a row of an update's explanation
+    (`trace`: its eligibility, for a learner that moves pairs by their traces)."""
 
     state: int
     action: int
@@ -60,6 +61,7 @@ class CellUpdate:
     step_size: float
     before: float
     after: float
+    trace: float | None = None
 
     @property
     def td_error(self) -> float:
@@ -95,6 +97,8 @@ class UpdateRecord:
     `episode_updates`: Monte Carlo's updates at the episode's end, each with
     its return; `planning_updates`: Dyna-Q's simulated updates after the
     real one (`after` is Q(s, a) before planning).
+    `notes`: more (label, text) lines of what the learner did this step (the
+    n-step window, the traces, the priority queue).
     """
 
     algorithm: str
@@ -117,6 +121,7 @@ class UpdateRecord:
     episode_return: float | None = None
     episode_updates: tuple[CellUpdate, ...] = ()
     planning_updates: int = 0
+    notes: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -249,15 +254,19 @@ class Learner(ABC):
         """The compiled hyperparameters (`Params`) of the current settings."""
         if self._params is None:
             hp, kinds = self.hp, _field_types(self.Params)
-            values = {
-                name: (hp.learning_rate_schedule == "visits") if name == "by_visits"
-                else kinds[name](hp[name])
-                for name in self.Params._fields
-            }
-            self._params = self.Params(**values)
+            self._params = self.Params(**{name: self._compiled(name, kinds[name])
+                                          for name in self.Params._fields})
             self._exploration = np.array([hp.epsilon_start, hp.epsilon_final,
                                           hp.epsilon_decay_fraction * hp.episodes])
         return self._params
+
+    def _compiled(self, name: str, kind: type) -> Any:
+        """The value of the `Params` field `name` from the settings: the setting of that
+        name (a trailing `_` dropped: `lambda_` is `lambda`), `by_visits` from the
+        step-size schedule."""
+        if name == "by_visits":
+            return self.hp.learning_rate_schedule == "visits"
+        return kind(self.hp[name.rstrip("_")])
 
     def exploration(self) -> np.ndarray:
         """(epsilon start, final, episodes of the decay) for the compiled schedule."""

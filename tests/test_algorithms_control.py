@@ -1,0 +1,128 @@
+"""Hand-computed updates of the chapter 7, 8 and 12 control learners, and what the step
+panel says of them.
+
+Every number is worked out in the comments from the rule in Sutton & Barto (2nd ed.),
+with α = 0.5 (constant) and γ = 0.9: the learners must reproduce them exactly.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tui_gym.algorithms import NStepSarsa, SarsaLambda, WatkinsQLambda
+from tui_gym.ui.widgets.step_panel import explain
+
+CONSTANT = {"learning_rate": 0.5, "learning_rate_schedule": "constant", "discount": 0.9}
+
+
+class _Event:
+    episode, step, observation, next_observation = 1, 1, 0, 1
+
+
+def _panel(record, names=("left", "right")) -> str:
+    lines = explain(_Event(), record, names, lambda obs: f"obs {obs}",
+                    describe_row=lambda row: f"row {row}")
+    return "\n".join(f"{label} {text}" for label, text in lines)
+
+
+def test_n_step_sarsa_waits_n_rewards_then_updates_the_pair_n_steps_back() -> None:
+    learner = NStepSarsa(2, {**CONSTANT, "n": 2}, n_states=4, seed=0)
+    learner.q[2] = [2.0, 4.0]
+    # Step 0: one reward in the window, nothing updated.
+    assert learner.update_one(0, 0, 1.0, 1, False, next_action=1) == 0.0
+    record = learner.last_update
+    assert record.target is None and not learner.q.any(axis=1)[:2].any()
+    assert record.notes[0] == ("window", "r = +1  (1 of n = 2)")
+    # Step 1: G = 1 + 0.9·2 + 0.81·Q(2,0) = 1 + 1.8 + 1.62 = 4.42 for (0,0); Q = 2.21.
+    assert learner.update_one(1, 1, 2.0, 2, False, next_action=0) == pytest.approx(4.42)
+    assert learner.q[0, 0] == pytest.approx(2.21) and learner.q[1, 1] == 0.0
+    (pair,) = learner.last_update.episode_updates
+    assert (pair.state, pair.action, pair.target) == (0, 0, pytest.approx(4.42))
+    assert "row 0, left: G = +4.42  Q 0 → +2.21" in _panel(learner.last_update)
+    # Step 2 ends: (1,1) gets G = 2 + 0.9·3 = 4.7 (Q 2.35), then (2,0) G = 3 (Q 2 → 2.5).
+    learner.update_one(2, 0, 3.0, 3, True)
+    assert learner.q[1, 1] == pytest.approx(2.35) and learner.q[2, 0] == pytest.approx(2.5)
+    record = learner.last_update
+    assert [(u.state, u.target) for u in record.episode_updates] == [
+        (1, pytest.approx(4.7)), (2, pytest.approx(3.0))]
+    assert (record.formula, record.target, record.before, record.after) == (
+        "G = r", 3.0, 2.0, 2.5)
+    # A new episode starts with an empty window.
+    learner.update_one(3, 1, 5.0, 0, False, next_action=0)
+    assert learner.last_update.notes[0] == ("window", "r = +5  (1 of n = 2)")
+
+
+def test_n_step_sarsa_with_n_1_is_sarsa_and_a_truncation_bootstraps() -> None:
+    learner = NStepSarsa(2, {**CONSTANT, "n": 1}, n_states=3, seed=0)
+    learner.q[1] = [1.0, 3.0]
+    # target = 1 + 0.9·Q(1,0) = 1.9; Q(0,1) = 0.95, as SARSA
+    learner.update_one(0, 1, 1.0, 1, False, next_action=0)
+    assert learner.q[0, 1] == pytest.approx(0.95)
+    assert learner.last_update.formula == "G = r + γ·Q(s',a')"
+    long = NStepSarsa(2, {**CONSTANT, "n": 3}, n_states=3, seed=0)
+    long.q[1] = [1.0, 3.0]
+    long.update_one(0, 0, 1.0, 2, False, next_action=0)
+    # Truncated after two steps: (0,0) G = 1 + 0.9·(0 + 0.9·Q(1,1)) = 1 + 2.43 = 3.43;
+    # (2,1) G = 0 + 0.9·3 = 2.7.
+    long.update_one(2, 1, 0.0, 1, False, truncated=True, next_action=1)
+    assert long.q[0, 0] == pytest.approx(1.715) and long.q[2, 1] == pytest.approx(1.35)
+
+
+@pytest.mark.parametrize("cls", [SarsaLambda, WatkinsQLambda])
+def test_a_td_error_spreads_over_the_traces_and_they_end_with_the_episode(cls) -> None:
+    hp = {**CONSTANT, "lambda": 0.5, "traces": "accumulating"}
+    learner = cls(2, hp, n_states=4, seed=0)
+    learner.q[2] = [2.0, 0.0]
+    # δ = 1 + 0.9·Q(1,·) - 0 = 1 (Q(1,·) = 0, a' greedy by a tie); Q(0,0) = 0.5;
+    # then e(0,0) = γλ = 0.45.
+    learner.update_one(0, 0, 1.0, 1, False, next_action=1)
+    assert learner.q[0, 0] == pytest.approx(0.5)
+    assert learner.traces[0, 0] == pytest.approx(0.45)
+    # δ = 0 + 0.9·2 - 0 = 1.8 (a' = 0 is greedy in state 2); Q(0,0) += 0.5·1.8·0.45 = 0.405
+    # (0.905), Q(1,1) = 0.9; traces 0.2025 and 0.45.
+    learner.update_one(1, 1, 0.0, 2, False, next_action=0)
+    assert learner.q[0, 0] == pytest.approx(0.905) and learner.q[1, 1] == pytest.approx(0.9)
+    assert learner.traces[[0, 1], [0, 1]] == pytest.approx([0.2025, 0.45])
+    record = learner.last_update
+    assert [(u.state, u.trace) for u in record.episode_updates] == [
+        (0, pytest.approx(0.45)), (1, 1.0)]
+    assert "row 0, left: e = +0.45  Q +0.5 → +0.905" in _panel(record)
+    assert "then every e × γλ = 0.45" in _panel(record)
+    # Terminal: δ = 1 - Q(2,0) = -1; Q(0,0) -= 0.5·0.2025 (0.80375), Q(1,1) -= 0.225
+    # (0.675), Q(2,0) = 1.5; every trace ends.
+    learner.update_one(2, 0, 1.0, 3, True)
+    assert learner.q[[0, 1, 2], [0, 1, 0]] == pytest.approx([0.80375, 0.675, 1.5])
+    assert not learner.traces.any()
+
+
+def test_replacing_traces_set_a_revisited_pair_to_one() -> None:
+    hp = {**CONSTANT, "lambda": 1.0, "discount": 1.0}
+    for kind, expected in (("replacing", 1.0), ("accumulating", 2.0)):
+        learner = SarsaLambda(2, {**hp, "traces": kind}, n_states=2, seed=0)
+        learner.update_one(0, 0, 0.0, 1, False, next_action=0)
+        learner.update_one(1, 0, 0.0, 0, False, next_action=0)
+        learner.update_one(0, 0, 0.0, 1, False, next_action=0)
+        assert learner.traces[0, 0] == expected, kind
+
+
+def test_watkins_q_lambda_cuts_its_traces_after_an_exploratory_action() -> None:
+    hp = {**CONSTANT, "lambda": 0.5, "traces": "accumulating"}
+    learner = WatkinsQLambda(2, hp, n_states=4, seed=0)
+    learner.q[2] = [2.0, 0.0]
+    learner.update_one(0, 0, 1.0, 1, False, next_action=1)  # Q(0,0) = 0.5, e = 0.45
+    # a' = 1 in state 2 is exploratory (Q(2,1) = 0 < 2): the update is Q-learning's with
+    # the traces (δ = 1.8: Q(0,0) 0.905, Q(1,1) 0.9), then every trace is cut.
+    learner.update_one(1, 1, 0.0, 2, False, next_action=1)
+    assert learner.q[0, 0] == pytest.approx(0.905) and learner.q[1, 1] == pytest.approx(0.9)
+    assert not learner.traces.any()
+    assert ("a'", "exploratory: the traces are cut") in learner.last_update.notes
+    # The next TD error (δ = 1 + 0.9·max Q(3,·) - 0 = 1) reaches (2,1) alone: Q = 0.5.
+    learner.update_one(2, 1, 1.0, 3, False, next_action=0)
+    assert learner.q[0, 0] == pytest.approx(0.905) and learner.q[2, 1] == pytest.approx(0.5)
+    # Sarsa(λ) on the same steps keeps the trace of (0,0): it moves again.
+    sarsa = SarsaLambda(2, hp, n_states=4, seed=0)
+    sarsa.q[2] = [2.0, 0.0]
+    sarsa.update_one(0, 0, 1.0, 1, False, next_action=1)
+    sarsa.update_one(1, 1, 0.0, 2, False, next_action=1)
+    assert np.count_nonzero(sarsa.traces) == 2
