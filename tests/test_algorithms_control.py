@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tui_gym.algorithms import NStepSarsa, SarsaLambda, WatkinsQLambda
+from tui_gym.algorithms import DynaQPlus, NStepSarsa, SarsaLambda, WatkinsQLambda
 from tui_gym.ui.widgets.step_panel import explain
 
 CONSTANT = {"learning_rate": 0.5, "learning_rate_schedule": "constant", "discount": 0.9}
@@ -126,3 +126,25 @@ def test_watkins_q_lambda_cuts_its_traces_after_an_exploratory_action() -> None:
     sarsa.update_one(0, 0, 1.0, 1, False, next_action=1)
     sarsa.update_one(1, 1, 0.0, 2, False, next_action=1)
     assert np.count_nonzero(sarsa.traces) == 2
+
+
+def test_dyna_q_plus_adds_kappa_sqrt_tau_to_a_long_untried_pair() -> None:
+    hp = {**CONSTANT, "kappa": 0.5, "planning_steps": 0}
+    learner = DynaQPlus(2, hp, n_states=3, seed=2)
+    # Real step 1: Q(0,0) = 0.5 (target 1). State 0 is new: its untried action 1 joins the
+    # model as "back to 0, reward 0", last tried never (τ counts from the start).
+    learner.update_one(0, 0, 1.0, 1, False)
+    assert learner.q[0, 0] == 0.5
+    assert learner.model_next[0].tolist() == [1, 0] and learner.model_reward[0, 1] == 0.0
+    assert learner.last_tried[0].tolist() == [1, 0]
+    learner.update_one(1, 0, 0.0, 2, True)  # real step 2 (state 1's action 1 joins too)
+    learner.update_one(1, 0, 0.0, 2, True)  # real step 3
+    # One planning step at real step 4 on (1,0), terminal: seed 2 draws the pair (0,1),
+    # untried for τ = 4 steps: target = 0 + 0.5·√4 + 0.9·max Q(0,·) = 1 + 0.45 = 1.45,
+    # Q(0,1) = 0.725.
+    learner.set_hyperparameters({**hp, "planning_steps": 1})
+    learner.update_one(1, 0, 0.0, 2, True)
+    assert learner.q[0, 1] == pytest.approx(0.725)
+    assert learner.last_update.notes == (
+        ("bonus", "planning adds κ√τ (κ = 0.5): +1 (τ = 4)"),)
+    assert "bonus planning adds κ√τ" in _panel(learner.last_update)

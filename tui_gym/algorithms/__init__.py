@@ -5,7 +5,7 @@ its tables, its update rule written once as compiled scalar code, and a
 record of a single update for the step-by-step view. `algorithm(name)` finds
 one by its registry name (`q-learning`, `sarsa`, `expected-sarsa`,
 `double-q`, `monte-carlo`, `dyna-q`, `n-step-sarsa`,
-`sarsa-lambda`, `q-lambda`).
+`sarsa-lambda`, `q-lambda`, `dyna-q-plus`).
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from tui_gym.algorithms.base import (
 )
 from tui_gym.algorithms.double_q import DoubleQLearning
 from tui_gym.algorithms.dyna_q import DynaQ
+from tui_gym.algorithms.dyna_q_plus import DynaQPlus
 from tui_gym.algorithms.expected_sarsa import ExpectedSarsa
 from tui_gym.algorithms.monte_carlo import MonteCarlo
 from tui_gym.algorithms.nstep_sarsa import NStepSarsa
@@ -38,6 +39,7 @@ __all__ = [
     "Choice",
     "DoubleQLearning",
     "DynaQ",
+    "DynaQPlus",
     "ExpectedSarsa",
     "Field",
     "Learner",
@@ -66,6 +68,7 @@ ALGORITHMS: tuple[type[Learner], ...] = (
     NStepSarsa,
     SarsaLambda,
     WatkinsQLambda,
+    DynaQPlus,
 )
 
 DEFAULT_ALGORITHM = QLearning.name
