@@ -10,7 +10,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tui_gym.algorithms import DynaQPlus, NStepSarsa, SarsaLambda, WatkinsQLambda
+from tui_gym.algorithms import (
+    DynaQPlus,
+    NStepSarsa,
+    PrioritizedSweeping,
+    SarsaLambda,
+    WatkinsQLambda,
+)
 from tui_gym.ui.widgets.step_panel import explain
 
 CONSTANT = {"learning_rate": 0.5, "learning_rate_schedule": "constant", "discount": 0.9}
@@ -148,3 +154,51 @@ def test_dyna_q_plus_adds_kappa_sqrt_tau_to_a_long_untried_pair() -> None:
     assert learner.last_update.notes == (
         ("bonus", "planning adds κ√τ (κ = 0.5): +1 (τ = 4)"),)
     assert "bonus planning adds κ√τ" in _panel(learner.last_update)
+
+
+def test_prioritized_sweeping_takes_the_queue_in_order_and_sweeps_to_predecessors() -> None:
+    hp = {**CONSTANT, "theta": 0.1, "planning_steps": 0}
+    learner = PrioritizedSweeping(2, hp, n_states=4, seed=0)
+    # No planning yet: each pair enters the queue with P = |r + γ·max Q(s',·) - Q(s,a)|
+    # = |r| (Q is 0), but (2,0) with P = 0.05 <= θ stays out. Q changes only through it.
+    learner.update_one(0, 0, 1.0, 1, False)
+    learner.update_one(1, 1, 3.0, 2, False)
+    learner.update_one(2, 0, 0.05, 3, True)
+    learner.update_one(0, 1, -2.0, 3, True)
+    assert learner.queue() == [(1, 1, 3.0), (0, 1, 2.0), (0, 0, 1.0)]
+    assert not learner.q.any()
+    # Two planning steps after (1,0) -> state 0 with r = 0 (P = 0: out):
+    # 1. the top (1,1): target 3 + 0.9·max Q(2,·) = 3, Q = 1.5. Its predecessor (0,0) has
+    #    P = |1 + 0.9·1.5 - 0| = 2.35 and rises past (0,1)'s 2.
+    # 2. (0,0): target 2.35, Q = 1.175. Its predecessor (1,0), just modelled, enters with
+    #    P = 0.9·1.175 = 1.0575.
+    learner.set_hyperparameters({**hp, "planning_steps": 2})
+    learner.update_one(1, 0, 0.0, 0, False)
+    assert learner.q[1, 1] == 1.5 and learner.q[0, 0] == pytest.approx(1.175)
+    assert learner.queue() == [(0, 1, 2.0), (1, 0, pytest.approx(1.0575))]
+    record = learner.last_update
+    assert [(u.state, u.action, u.target) for u in record.episode_updates] == [
+        (1, 1, 3.0), (0, 0, pytest.approx(2.35))]
+    assert record.notes[1] == ("queue", "2 taken from the top (P 3, 2.35), 2 left, "
+                                        "the top at P 2")
+    assert "P |r + γ·max Q(s',·) − Q(s,a)| = 0: (s,a) stays out (P ≤ θ)" in _panel(record)
+
+
+@pytest.mark.parametrize("cls", [NStepSarsa, SarsaLambda, WatkinsQLambda, DynaQPlus,
+                                 PrioritizedSweeping])
+def test_the_compiled_rule_and_the_plain_rule_agree_exactly(cls) -> None:
+    from tui_gym.core.engine.rules import RULES, new_log
+
+    hp = {"learning_rate": 0.3, "discount": 0.9, "learning_rate_schedule": "constant"}
+    compiled, plain = (cls(3, hp, n_states=12, seed=5) for _ in range(2))
+    params = compiled.compiled_params()
+    rule = RULES[type(params)].update  # the Python function the engine compiles
+    assert not hasattr(rule, "py_func")
+    draws = np.random.default_rng(1)
+    for _ in range(600):
+        s, a, s2, a2 = (int(x) for x in draws.integers(0, [12, 3, 12, 3]))
+        r, ended = float(draws.normal()), bool(draws.random() < 0.1)
+        compiled.learn(s, a, r, s2, ended, next_action=-1 if ended else a2)
+        rule(plain.arrays(), params, plain.rng, s, a, r, s2, ended, False,
+             -1 if ended else a2, 0.1, new_log())
+    assert np.array_equal(compiled.q, plain.q) and compiled.q.any()

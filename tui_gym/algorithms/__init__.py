@@ -5,7 +5,8 @@ its tables, its update rule written once as compiled scalar code, and a
 record of a single update for the step-by-step view. `algorithm(name)` finds
 one by its registry name (`q-learning`, `sarsa`, `expected-sarsa`,
 `double-q`, `monte-carlo`, `dyna-q`, `n-step-sarsa`,
-`sarsa-lambda`, `q-lambda`, `dyna-q-plus`).
+`sarsa-lambda`, `q-lambda`, `dyna-q-plus`,
+`prioritized-sweeping`).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from tui_gym.algorithms.dyna_q_plus import DynaQPlus
 from tui_gym.algorithms.expected_sarsa import ExpectedSarsa
 from tui_gym.algorithms.monte_carlo import MonteCarlo
 from tui_gym.algorithms.nstep_sarsa import NStepSarsa
+from tui_gym.algorithms.prioritized_sweeping import PrioritizedSweeping
 from tui_gym.algorithms.q_lambda import WatkinsQLambda
 from tui_gym.algorithms.qlearning import QLearning
 from tui_gym.algorithms.sarsa import Sarsa
@@ -46,6 +48,7 @@ __all__ = [
     "LearnerState",
     "MonteCarlo",
     "NStepSarsa",
+    "PrioritizedSweeping",
     "QLearning",
     "Sarsa",
     "SarsaLambda",
@@ -69,6 +72,7 @@ ALGORITHMS: tuple[type[Learner], ...] = (
     SarsaLambda,
     WatkinsQLambda,
     DynaQPlus,
+    PrioritizedSweeping,
 )
 
 DEFAULT_ALGORITHM = QLearning.name
