@@ -202,3 +202,25 @@ def test_the_compiled_rule_and_the_plain_rule_agree_exactly(cls) -> None:
         rule(plain.arrays(), params, plain.rng, s, a, r, s2, ended, False,
              -1 if ended else a2, 0.1, new_log())
     assert np.array_equal(compiled.q, plain.q) and compiled.q.any()
+
+
+def test_an_optimistic_initial_value_starts_every_pair_and_draws_the_greedy_choice() -> None:
+    from tui_gym.algorithms import ALGORITHMS, DoubleQLearning, QLearning
+
+    hp = {**CONSTANT, "initial_value": 5.0}
+    for cls in ALGORITHMS:
+        assert cls(2, hp, n_states=3, seed=0).values([0, 2]).tolist() == [[5.0, 5.0]] * 2
+    learner = QLearning(2, hp, n_states=3, seed=0)
+    # target = 1 + 0.9·max Q(1,·) = 1 + 4.5 = 5.5; Q(0,1) = 5 + 0.5·0.5 = 5.25; r = 0 next:
+    # Q(0,0) = 5 + 0.5·(4.5 - 5) = 4.75, so the untried action 1 now looks best.
+    learner.update_one(0, 1, 1.0, 1, False)
+    learner.update_one(0, 0, 0.0, 1, False)
+    assert learner.q[0].tolist() == [4.75, 5.25] and learner.greedy(0) == 1
+    double = DoubleQLearning(2, hp, n_states=1, seed=0)
+    assert double.q_a[0, 0] == double.q_b[0, 0] == 5.0
+    sparse = QLearning(2, hp, seed=0)  # rows made as keys come, and grown, start at 5 too
+    for key in range(300):
+        sparse.row(("key", key))
+    assert (sparse.q == 5.0).all() and sparse.values([("never", 0)]).tolist() == [[5.0, 5.0]]
+    loaded = QLearning.from_state(sparse.state())
+    assert (loaded.q == 5.0).all()

@@ -167,6 +167,7 @@ class Learner(ABC):
         TableSpec("q", np.float64),
         TableSpec("counts", np.int64),
     )
+    value_tables: ClassVar[tuple[str, ...]] = ("q",)  # start at `initial_value`
     Params: ClassVar[Any]  # the compiled hyperparameters' NamedTuple (see the docstring)
     # The tables named in `tables` (these two for most learners) are attributes.
     q: np.ndarray
@@ -198,8 +199,14 @@ class Learner(ABC):
         self._rows_used = self.n_states if self.n_states is not None else 0
         self.visits = np.zeros(capacity, dtype=np.int64)  # updates per state
         for spec in self.tables:
-            setattr(self, spec.name, np.full((capacity, self.n_actions), spec.fill, spec.dtype))
+            setattr(self, spec.name,
+                    np.full((capacity, self.n_actions), self._fill(spec), spec.dtype))
         self._make_extra(capacity)
+
+    def _fill(self, spec: TableSpec) -> float | int | bool:
+        """What a new row of a table holds: the initial value (`initial_value`) for the
+        action values, the table's own fill for the others."""
+        return self.hp.initial_value if spec.name in self.value_tables else spec.fill
 
     @classmethod
     def settings(cls, values: Mapping[str, Any] | None = None) -> Settings:
@@ -364,13 +371,13 @@ class Learner(ABC):
         self.visits = np.concatenate([self.visits, np.zeros_like(self.visits)])
         for spec in self.tables:
             old = getattr(self, spec.name)
-            setattr(self, spec.name, np.concatenate([old, np.full_like(old, spec.fill)]))
+            setattr(self, spec.name, np.concatenate([old, np.full_like(old, self._fill(spec))]))
         self._grow_extra(len(self.visits))
 
     def _row_values(self, key: Hashable) -> np.ndarray:
         row = self.find(key)
-        if row is None:  # an unseen state reads as all zeros, as an untouched row does
-            return np.zeros(self.n_actions)
+        if row is None:  # an unseen state reads as an untouched row does
+            return np.full(self.n_actions, float(self.hp.initial_value))
         return self.action_values(np.array([row]))[0]
 
     # --- acting ----------------------------------------------------------------------
@@ -407,9 +414,10 @@ class Learner(ABC):
 
     # --- reading the table ----------------------------------------------------------------
     def values(self, keys: Iterable[Hashable]) -> np.ndarray:
-        """Action values for many states: (len(keys), n_actions); unseen states are 0."""
+        """Action values for many states: (len(keys), n_actions); unseen states hold the
+        initial value."""
         keys = list(keys)
-        out = np.zeros((len(keys), self.n_actions), dtype=np.float64)
+        out = np.full((len(keys), self.n_actions), float(self.hp.initial_value))
         if self._index is None:
             if keys:
                 out[:] = self.action_values(np.asarray(keys, dtype=np.int64))
@@ -579,8 +587,11 @@ class Learner(ABC):
         self._check_arrays(arrays, rows)
         capacity = rows if dense else max(_INITIAL_ROWS, rows)
         loaded: dict[str, np.ndarray] = {}
+        fills = {spec.name: hp.initial_value if spec.name in self.value_tables else spec.fill
+                 for spec in self.tables}
         for spec in self.tables:
-            filled: np.ndarray = np.full((capacity, self.n_actions), spec.fill, spec.dtype)
+            filled: np.ndarray = np.full((capacity, self.n_actions), fills[spec.name],
+                                         spec.dtype)
             filled[:rows] = arrays[spec.name]
             loaded[spec.name] = filled
         visits = np.zeros(capacity, dtype=np.int64)

@@ -97,7 +97,7 @@ class DynaQPlus(DynaQ):
     title = "Dyna-Q+"
     summary = "Dyna-Q with a bonus κ√τ for what it has not tried for τ steps: finds a changed world"
     formula = "r + κ√τ + γ·max Q(s',·)"
-    Params = Params
+    Params = Params  # type: ignore[assignment]  # its own, as every learner's
     params = (
         *DynaQ.params,
         Param("kappa", float, 0.0001, 0.0, 10.0,

@@ -131,7 +131,7 @@ class NStepSarsa(Learner):
                                    float(w[6]), float(w[7]))
                         for w in window if w[3])
         rewards = ", ".join(f"{w[2]:+.4g}" for w in window)
-        notes = (("window", f"r = {rewards}  ({width} of n = {n})"),)
+        notes: tuple[tuple[str, str], ...] = (("window", f"r = {rewards}  ({width} of n = {n})"),)
         if made:
             back = width - 1 if made == 1 else 0
             what = (f"the pair {back} step{'s' if back != 1 else ''} back moves toward its G"

@@ -8,7 +8,7 @@ pair the model says leads into its state (its predecessors) is checked the
 same way and enters the queue (or rises in it) when its P exceeds θ. So a
 change at the goal sweeps backwards along the paths that lead to it, and no
 update is spent where nothing changed. As in the book, Q changes only
-through the queue. The queue starts empty after a load.
+through the queue. A save keeps the queue.
 """
 
 from __future__ import annotations
@@ -228,9 +228,52 @@ class PrioritizedSweeping(Learner):
                             own.before, own.after, own.step_size, episode_updates=updates,
                             notes=notes, planning_updates=int(done))
 
+    # --- saving: the queue in its heap order (pushed back in that order, it is the same)
+    # and the predecessor lists in their order (the order their pairs rise in the queue),
+    # each link saved plus 1 (0: the list ends) ---
+    def _extra_arrays(self) -> dict[str, np.ndarray]:
+        size, used = int(self._size[0]), self.rows_used
+        return {"queue_cells": self._cells[:size].copy(),
+                "queue_priorities": self._prio[:size].copy(),
+                "model_first_into": self._first_into[:used] + 1,
+                "model_next_into": self._next_into[: used * self.n_actions] + 1}
+
     def _load_extra_arrays(self, arrays: Any, rows: int, capacity: int) -> None:
+        names = ("queue_cells", "queue_priorities", "model_first_into", "model_next_into")
+        if any(name not in arrays for name in names):
+            raise ValueError("the saved state has no priority queue or predecessor lists")
+        cells, priorities, first, after = (np.asarray(arrays[name]) for name in names)
+        first, after = first.astype(np.int64) - 1, after.astype(np.int64) - 1
+        n_cells = rows * self.n_actions
+        if (cells.ndim != 1 or cells.dtype.kind not in "iu" or priorities.shape != cells.shape
+                or (cells.size and (cells.min() < 0 or cells.max() >= n_cells))
+                or len(np.unique(cells)) != cells.size
+                or not np.isfinite(priorities.astype(float)).all()):
+            raise ValueError("saved 'queue_cells' or 'queue_priorities' do not fit the table")
+        model_next = np.asarray(arrays["model_next"]).reshape(-1)
+        if (first.shape != (rows,) or after.shape != (n_cells,)
+                or np.asarray(arrays["model_first_into"]).dtype.kind not in "iu"
+                or np.asarray(arrays["model_next_into"]).dtype.kind not in "iu"
+                or sorted(_walk(first, after, model_next)) != np.flatnonzero(
+                    model_next >= 0).tolist()):
+            raise ValueError("saved predecessor lists do not follow 'model_next'")
         self._make_extra(capacity)
-        for cell, into in enumerate(np.asarray(arrays["model_next"]).reshape(-1)):
-            if into >= 0:
-                self._next_into[cell] = self._first_into[into]
-                self._first_into[into] = cell
+        self._first_into[:rows] = first
+        self._next_into[:n_cells] = after
+        for cell, priority in zip(cells.tolist(), priorities.tolist(), strict=True):
+            push(self._cells, self._prio, self._pos, self._size, cell, priority)
+
+
+def _walk(first: np.ndarray, after: np.ndarray, model_next: np.ndarray) -> list[int]:
+    """Every cell on the lists, each checked to lead into its list's state; stops at a
+    cell seen twice (a loop) or out of range, which the caller's count then refuses."""
+    seen: list[int] = []
+    met: set[int] = set()
+    for state, cell in enumerate(first.tolist()):
+        while cell >= 0:
+            if cell >= len(after) or cell in met or model_next[cell] != state:
+                return [-1]
+            met.add(cell)
+            seen.append(cell)
+            cell = int(after[cell])
+    return seen
