@@ -93,8 +93,9 @@ def test_each_algorithm_meets_the_games_bound_with_its_defaults(name: str, game:
 
 
 # Prioritized sweeping's sweeps follow the rows a transition leads into, and Blackjack's
-# model and env end a hand in different rows: its learning speed differs between the loops
-# (the compiled and plain rule agree exactly: tests/test_algorithms_control.py).
+# model ends a bust in the hand's own row where the env ends it in a bust observation's
+# row: its learning speed differs between the loops (the compiled and the plain rule agree
+# exactly: tests/test_algorithms_control.py).
 @pytest.mark.parametrize("name", [n for n in NAMES if n != "prioritized-sweeping"])
 def test_the_model_and_env_loops_agree_in_distribution(name: str) -> None:
     values: dict[str, list[float]] = {"env": [], "model": []}
