@@ -11,7 +11,8 @@ from the numbers its rule logs, and `arrays`, the tables its rule takes, when
 they are not `(q, counts, visits)`.
 
 The base class owns everything else: table rows (dense keys are rows; other
-keys get the next free row and the tables grow), the epsilon schedule, acting
+keys get the next free row and the tables grow; the action-value tables,
+`value_tables`, start at the shared `initial_value`), the epsilon schedule, acting
 and learning one transition from Python through the same compiled code the
 engine's loop runs, reading values for heatmaps and evaluation, and saving
 (`state()` / `load_state()`).
