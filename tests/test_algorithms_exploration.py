@@ -102,7 +102,8 @@ def test_the_learner_follows_its_schedule_and_live_changes() -> None:
 def test_common_params_keep_the_defaults_blackjack_learns_with() -> None:
     assert QLearning.settings().to_dict() == {
         "learning_rate": 0.001, "discount": 1.0, "epsilon_start": 1.0, "epsilon_final": 0.05,
-        "epsilon_decay_fraction": 0.5, "episodes": 200_000, "learning_rate_schedule": "visits",
+        "epsilon_decay_fraction": 0.5, "episodes": 200_000, "initial_value": 0.0,
+        "learning_rate_schedule": "visits",
     }
     assert [f.name for f in COMMON_PARAMS] == list(QLearning.settings())
 
@@ -128,7 +129,9 @@ def test_settings_parse_text_and_refuse_bad_values() -> None:
 
 def test_the_registry() -> None:
     names = [cls.name for cls in ALGORITHMS]
-    assert names == ["q-learning", "sarsa", "expected-sarsa", "double-q", "monte-carlo", "dyna-q"]
+    assert names == ["q-learning", "sarsa", "expected-sarsa", "double-q", "monte-carlo", "dyna-q",
+                     "n-step-sarsa", "sarsa-lambda", "q-lambda", "dyna-q-plus",
+                     "prioritized-sweeping"]
     assert algorithm("Expected_SARSA").name == "expected-sarsa"
     with pytest.raises(ValueError, match="unknown algorithm 'td-lambda'; choose one of q-learning"):
         algorithm("td-lambda")
@@ -138,7 +141,8 @@ def test_the_registry() -> None:
         assert len(fields) == len(set(fields)) and all(f.help for f in cls.params)
         assert isinstance(cls.settings(), Settings)
     learners = [cls(2, n_states=1) for cls in ALGORITHMS]
-    assert [learner.name for learner in learners if learner.next_first] == ["sarsa"]
+    assert [learner.name for learner in learners if learner.next_first] == [
+        "sarsa", "n-step-sarsa", "sarsa-lambda", "q-lambda"]
 
 
 def test_the_package_imports_neither_textual_nor_gymnasium() -> None:

@@ -64,6 +64,14 @@ def test_a_trained_learner_survives_a_save_file_exactly(name: str) -> None:
         "monte-carlo": {"q", "counts", "visits"},
         "dyna-q": {"q", "counts", "visits", "model_reward", "model_next", "model_terminated",
                    "model_tried"},
+        "n-step-sarsa": {"q", "counts", "visits"},
+        "sarsa-lambda": {"q", "counts", "visits"},
+        "q-lambda": {"q", "counts", "visits"},
+        "dyna-q-plus": {"q", "counts", "visits", "model_reward", "model_next",
+                        "model_terminated", "model_tried", "last_tried", "model_clock"},
+        "prioritized-sweeping": {"q", "counts", "visits", "model_reward", "model_next",
+                                 "model_terminated", "queue_cells", "queue_priorities",
+                                 "model_first_into", "model_next_into"},
     }[name]
     assert set(saved.arrays) == expected
     assert saved.meta["algorithm"] == name and saved.meta["episode"] == 30

@@ -47,7 +47,8 @@ def test_train_with_an_algorithm_and_its_own_flag(capsys, tmp_path: Path) -> Non
     ("argv", "message"),
     [
         (["--algorithm", "tabu"], "--algorithm: unknown algorithm 'tabu'; choose one of"),
-        (["--planning-steps", "3"], "--planning-steps applies to dyna-q, not q-learning"),
+        (["--planning-steps", "3"],
+         "--planning-steps applies to dyna-q, dyna-q-plus, prioritized-sweeping, not q-learning"),
         (["--algorithm", "monte-carlo", "--first-visit", "maybe"],
          "--first-visit must be true or false, got 'maybe'"),
         (["--algorithm", "sarsa", "--learning-rate-schedule", "cosine"],

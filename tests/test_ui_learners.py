@@ -41,9 +41,9 @@ def _hand_target(name: str, agent, record) -> float:
     q = 0.01 * s2 + 0.1 * np.arange(agent.n_actions)
     if record.terminated:
         return r
-    if name in ("q-learning", "dyna-q"):
+    if name in ("q-learning", "dyna-q", "q-lambda", "dyna-q-plus", "prioritized-sweeping"):
         return r + gamma * q.max()
-    if name == "sarsa":
+    if name in ("sarsa", "sarsa-lambda"):
         return r + gamma * q[record.target_action]
     if name == "expected-sarsa":
         eps = 0.3
@@ -83,7 +83,7 @@ async def test_each_algorithm_explains_a_hand_computed_step() -> None:
             record = app.runner.last_event.last_update
             text = "\n".join(body for _, body in view.step_panel.lines)
             assert app.runner.speed.animated
-            if cls.name == "monte-carlo" and record.target is None:
+            if cls.name in ("monte-carlo", "n-step-sarsa") and record.target is None:
                 assert "nothing is updated before then" in text
                 continue
             target = record.reward if cls.name == "monte-carlo" else _hand_target(

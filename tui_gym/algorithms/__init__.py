@@ -4,7 +4,9 @@ Every learner is a `Learner` (see `base`): its hyperparameters as `Param`s,
 its tables, its update rule written once as compiled scalar code, and a
 record of a single update for the step-by-step view. `algorithm(name)` finds
 one by its registry name (`q-learning`, `sarsa`, `expected-sarsa`,
-`double-q`, `monte-carlo`, `dyna-q`).
+`double-q`, `monte-carlo`, `dyna-q`, `n-step-sarsa`,
+`sarsa-lambda`, `q-lambda`, `dyna-q-plus`,
+`prioritized-sweeping`).
 """
 
 from __future__ import annotations
@@ -19,10 +21,15 @@ from tui_gym.algorithms.base import (
 )
 from tui_gym.algorithms.double_q import DoubleQLearning
 from tui_gym.algorithms.dyna_q import DynaQ
+from tui_gym.algorithms.dyna_q_plus import DynaQPlus
 from tui_gym.algorithms.expected_sarsa import ExpectedSarsa
 from tui_gym.algorithms.monte_carlo import MonteCarlo
+from tui_gym.algorithms.nstep_sarsa import NStepSarsa
+from tui_gym.algorithms.prioritized_sweeping import PrioritizedSweeping
+from tui_gym.algorithms.q_lambda import WatkinsQLambda
 from tui_gym.algorithms.qlearning import QLearning
 from tui_gym.algorithms.sarsa import Sarsa
+from tui_gym.algorithms.sarsa_lambda import SarsaLambda
 from tui_gym.algorithms.settings import COMMON_PARAMS, Choice, Field, Settings
 
 __all__ = [
@@ -34,17 +41,22 @@ __all__ = [
     "Choice",
     "DoubleQLearning",
     "DynaQ",
+    "DynaQPlus",
     "ExpectedSarsa",
     "Field",
     "Learner",
     "LearnerState",
     "MonteCarlo",
+    "NStepSarsa",
+    "PrioritizedSweeping",
     "QLearning",
     "Sarsa",
+    "SarsaLambda",
     "Settings",
     "TableSpec",
     "Transition",
     "UpdateRecord",
+    "WatkinsQLambda",
     "algorithm",
     "owners",
 ]
@@ -56,6 +68,11 @@ ALGORITHMS: tuple[type[Learner], ...] = (
     DoubleQLearning,
     MonteCarlo,
     DynaQ,
+    NStepSarsa,
+    SarsaLambda,
+    WatkinsQLambda,
+    DynaQPlus,
+    PrioritizedSweeping,
 )
 
 DEFAULT_ALGORITHM = QLearning.name

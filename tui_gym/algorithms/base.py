@@ -11,7 +11,8 @@ from the numbers its rule logs, and `arrays`, the tables its rule takes, when
 they are not `(q, counts, visits)`.
 
 The base class owns everything else: table rows (dense keys are rows; other
-keys get the next free row and the tables grow), the epsilon schedule, acting
+keys get the next free row and the tables grow; the action-value tables,
+`value_tables`, start at the shared `initial_value`), the epsilon schedule, acting
 and learning one transition from Python through the same compiled code the
 engine's loop runs, reading values for heatmaps and evaluation, and saving
 (`state()` / `load_state()`).
@@ -52,7 +53,8 @@ MAX_SAVED_COUNT = 2**62
 
 @dataclass(frozen=True)
 class CellUpdate:
-    """One (state, action) moved toward a target: a row of an update's explanation."""
+    """One (state, action) moved toward a target: a row of an update's explanation
+    (`trace`: its eligibility, for a learner that moves pairs by their traces)."""
 
     state: int
     action: int
@@ -60,6 +62,7 @@ class CellUpdate:
     step_size: float
     before: float
     after: float
+    trace: float | None = None
 
     @property
     def td_error(self) -> float:
@@ -95,6 +98,8 @@ class UpdateRecord:
     `episode_updates`: Monte Carlo's updates at the episode's end, each with
     its return; `planning_updates`: Dyna-Q's simulated updates after the
     real one (`after` is Q(s, a) before planning).
+    `notes`: more (label, text) lines of what the learner did this step (the
+    n-step window, the traces, the priority queue).
     """
 
     algorithm: str
@@ -117,6 +122,7 @@ class UpdateRecord:
     episode_return: float | None = None
     episode_updates: tuple[CellUpdate, ...] = ()
     planning_updates: int = 0
+    notes: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -162,6 +168,7 @@ class Learner(ABC):
         TableSpec("q", np.float64),
         TableSpec("counts", np.int64),
     )
+    value_tables: ClassVar[tuple[str, ...]] = ("q",)  # start at `initial_value`
     Params: ClassVar[Any]  # the compiled hyperparameters' NamedTuple (see the docstring)
     # The tables named in `tables` (these two for most learners) are attributes.
     q: np.ndarray
@@ -193,8 +200,14 @@ class Learner(ABC):
         self._rows_used = self.n_states if self.n_states is not None else 0
         self.visits = np.zeros(capacity, dtype=np.int64)  # updates per state
         for spec in self.tables:
-            setattr(self, spec.name, np.full((capacity, self.n_actions), spec.fill, spec.dtype))
+            setattr(self, spec.name,
+                    np.full((capacity, self.n_actions), self._fill(spec), spec.dtype))
         self._make_extra(capacity)
+
+    def _fill(self, spec: TableSpec) -> float | int | bool:
+        """What a new row of a table holds: the initial value (`initial_value`) for the
+        action values, the table's own fill for the others."""
+        return self.hp.initial_value if spec.name in self.value_tables else spec.fill
 
     @classmethod
     def settings(cls, values: Mapping[str, Any] | None = None) -> Settings:
@@ -249,15 +262,19 @@ class Learner(ABC):
         """The compiled hyperparameters (`Params`) of the current settings."""
         if self._params is None:
             hp, kinds = self.hp, _field_types(self.Params)
-            values = {
-                name: (hp.learning_rate_schedule == "visits") if name == "by_visits"
-                else kinds[name](hp[name])
-                for name in self.Params._fields
-            }
-            self._params = self.Params(**values)
+            self._params = self.Params(**{name: self._compiled(name, kinds[name])
+                                          for name in self.Params._fields})
             self._exploration = np.array([hp.epsilon_start, hp.epsilon_final,
                                           hp.epsilon_decay_fraction * hp.episodes])
         return self._params
+
+    def _compiled(self, name: str, kind: type) -> Any:
+        """The value of the `Params` field `name` from the settings: the setting of that
+        name (a trailing `_` dropped: `lambda_` is `lambda`), `by_visits` from the
+        step-size schedule."""
+        if name == "by_visits":
+            return self.hp.learning_rate_schedule == "visits"
+        return kind(self.hp[name.rstrip("_")])
 
     def exploration(self) -> np.ndarray:
         """(epsilon start, final, episodes of the decay) for the compiled schedule."""
@@ -355,13 +372,13 @@ class Learner(ABC):
         self.visits = np.concatenate([self.visits, np.zeros_like(self.visits)])
         for spec in self.tables:
             old = getattr(self, spec.name)
-            setattr(self, spec.name, np.concatenate([old, np.full_like(old, spec.fill)]))
+            setattr(self, spec.name, np.concatenate([old, np.full_like(old, self._fill(spec))]))
         self._grow_extra(len(self.visits))
 
     def _row_values(self, key: Hashable) -> np.ndarray:
         row = self.find(key)
-        if row is None:  # an unseen state reads as all zeros, as an untouched row does
-            return np.zeros(self.n_actions)
+        if row is None:  # an unseen state reads as an untouched row does
+            return np.full(self.n_actions, float(self.hp.initial_value))
         return self.action_values(np.array([row]))[0]
 
     # --- acting ----------------------------------------------------------------------
@@ -398,9 +415,10 @@ class Learner(ABC):
 
     # --- reading the table ----------------------------------------------------------------
     def values(self, keys: Iterable[Hashable]) -> np.ndarray:
-        """Action values for many states: (len(keys), n_actions); unseen states are 0."""
+        """Action values for many states: (len(keys), n_actions); unseen states hold the
+        initial value."""
         keys = list(keys)
-        out = np.zeros((len(keys), self.n_actions), dtype=np.float64)
+        out = np.full((len(keys), self.n_actions), float(self.hp.initial_value))
         if self._index is None:
             if keys:
                 out[:] = self.action_values(np.asarray(keys, dtype=np.int64))
@@ -570,8 +588,11 @@ class Learner(ABC):
         self._check_arrays(arrays, rows)
         capacity = rows if dense else max(_INITIAL_ROWS, rows)
         loaded: dict[str, np.ndarray] = {}
+        fills = {spec.name: hp.initial_value if spec.name in self.value_tables else spec.fill
+                 for spec in self.tables}
         for spec in self.tables:
-            filled: np.ndarray = np.full((capacity, self.n_actions), spec.fill, spec.dtype)
+            filled: np.ndarray = np.full((capacity, self.n_actions), fills[spec.name],
+                                         spec.dtype)
             filled[:rows] = arrays[spec.name]
             loaded[spec.name] = filled
         visits = np.zeros(capacity, dtype=np.int64)

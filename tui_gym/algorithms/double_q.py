@@ -93,6 +93,8 @@ class DoubleQLearning(Learner):
         TableSpec("counts_b", np.int64),
     )
 
+    value_tables = ("q_a", "q_b")
+
     q_a: np.ndarray
     q_b: np.ndarray
     counts_a: np.ndarray

@@ -3,7 +3,7 @@
 Every learner declares its hyperparameters as a tuple of `Param`s (numbers
 and switches) and `Choice`s (one word out of a few, e.g. the step-size
 schedule). `COMMON_PARAMS` are the ones every learner shares: step size,
-discount, the linear epsilon decay and the episode budget. `Settings` holds
+discount, the linear epsilon decay, the episode budget and the initial value of Q. `Settings` holds
 one validated value per field of a schema, read as attributes or items
 (`hp.learning_rate`, `hp.epsilon_at(episode)`, `hp.replace(...)`,
 `hp.to_dict()`), and pickles, so it crosses processes.
@@ -70,6 +70,9 @@ COMMON_PARAMS: tuple[Field, ...] = (
     Param("epsilon_decay_fraction", float, 0.5, 0.0, 1.0,
           "share of the budget spent decaying epsilon", title="Decay fraction"),
     Param("episodes", int, 200_000, 1, 1_000_000_000, "training budget", title="Episodes"),
+    Param("initial_value", float, 0.0, -1e6, 1e6,
+          "Q of every pair before any update: above every return, it draws the agent to "
+          "what it has not tried (optimistic starts)", title="Initial Q"),
     Choice("learning_rate_schedule", LEARNING_RATE_SCHEDULES, "visits",
            "constant: the learning rate; visits: max(learning rate, 1/n) for the n-th update "
            "of a state-action", title="Step sizes"),

@@ -4,7 +4,8 @@
 action, the reward and the next state; the target as the algorithm forms it
 (Q-learning's max, SARSA's Q(s',a') with the a' it picked, Expected SARSA's
 expectation, Double Q's table, Monte Carlo's return at the episode's end,
-Dyna-Q's planning updates counted), each symbol with its value, the TD error
+Dyna-Q's planning updates counted, and the lines a learner adds: the
+n-step window, the traces, the priority queue), each symbol with its value, the TD error
 and Q(s, a) before → after. `explain` writes those lines as plain text, so
 what the panel says can be read and tested without a screen.
 """
@@ -73,13 +74,26 @@ def explain(
             "a* = argmax of the updated table"
         )
         lines.append(("a'", f"{name(record.target_action)}  ({what})"))
+    lines.extend(record.notes)
     terms = "   ".join(f"{symbol} = {_num(value)}" for symbol, value in record.terms)
     if len(record.terms) == 1 and record.formula.rpartition("=")[2].strip() == record.terms[0][0]:
         terms = ""  # the target is the one term ('r' at the end): said once, on its line
+
+    def pairs() -> None:
+        count = len(record.episode_updates)
+        for update in record.episode_updates[:EPISODE_UPDATES_SHOWN]:
+            moved = (f"e = {_num(update.trace)}" if update.trace is not None
+                     else f"G = {_num(update.target)}")
+            lines.append(("", f"{row_words(update.state)}, {name(update.action)}: {moved}  "
+                              f"Q {_num(update.before)} → {_num(update.after)}"))
+        if count > EPISODE_UPDATES_SHOWN:
+            lines.append(("", f"... {count - EPISODE_UPDATES_SHOWN} more"))
+
     if record.target is None:
         lines.append(("target", f"{record.formula}: nothing is updated before then"))
         if terms:
             lines.append(("", terms))
+        pairs()
         lines.append(("Q(s,a)", f"{_num(record.before)} (unchanged)"))
         return lines
     lines.append(("target", f"{record.formula} = {_num(record.target)}"))
@@ -89,12 +103,7 @@ def explain(
         count = len(record.episode_updates)
         lines.append(("return", f"G = {_num(record.episode_return)} from the episode's start; "
                                 f"{count} update{'s' if count != 1 else ''} at its end"))
-        for update in record.episode_updates[:EPISODE_UPDATES_SHOWN]:
-            lines.append(("", f"{row_words(update.state)}, {name(update.action)}: "
-                              f"G = {_num(update.target)}  "
-                              f"Q {_num(update.before)} → {_num(update.after)}"))
-        if count > EPISODE_UPDATES_SHOWN:
-            lines.append(("", f"... {count - EPISODE_UPDATES_SHOWN} more"))
+    pairs()
     assert record.td_error is not None and record.step_size is not None
     lines.append(("TD error", f"target − Q(s,a) = {_num(record.target)} − {_num(record.before)}"
                               f" = {_num(record.td_error)}"))

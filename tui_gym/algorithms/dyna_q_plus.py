@@ -1,0 +1,140 @@
+"""Dyna-Q+ (Sutton & Barto, 2nd ed., section 8.3): Dyna-Q that explores what it has not
+tried for long.
+
+As Dyna-Q (`dyna_q`): a Q-learning update per real transition, the last
+outcome of each pair in a model, then `planning_steps` simulated updates.
+Each pair also remembers the real step it was last tried at; a simulated
+update of a pair not tried for τ steps adds a bonus to the modelled reward,
+
+    target = r + κ √τ + γ max_a' Q(s', a'),
+
+so long-untried actions look better and better in planning until the agent
+tries them again: a world that changes (a wall that moves) is found out. As
+in the book's footnote, the first visit of a state also lets planning
+consider its untried actions, modelled as leading back to the same state
+with reward 0 (their τ counts from the run's start).
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from tui_gym.algorithms.base import TableSpec, Transition, UpdateRecord
+from tui_gym.algorithms.dyna_q import DynaQ
+from tui_gym.core.engine.kernel import kernel
+from tui_gym.core.engine.rules import Rule, max_value, register, step_size, td_update, uniform
+from tui_gym.core.params import Param
+
+__all__ = ["DynaQPlus"]
+
+SHOWN = 4  # simulated updates the step panel lists
+
+
+class Params(NamedTuple):
+    learning_rate: float
+    discount: float
+    by_visits: bool
+    planning_steps: int
+    kappa: float
+
+
+@kernel
+def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+           terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
+    (q, counts, visits, model_reward, model_next, model_terminated, tried, n_tried,
+     last_tried, clock) = tables
+    clock[0] += 1
+    td = td_update(q, counts, visits, hp, s, a, r, 0.0 if terminated else max_value(q, s2), log)
+    n_actions = q.shape[1]
+    if model_next[s, a] < 0:
+        fresh = True  # a state new to the model: its untried actions join, going nowhere
+        for b in range(n_actions):
+            if model_next[s, b] >= 0:
+                fresh = False
+        for b in range(n_actions):
+            if b == a or fresh:
+                tried[n_tried[0]] = s * n_actions + b
+                n_tried[0] += 1
+                model_next[s, b] = s
+                model_reward[s, b] = 0.0
+    model_reward[s, a] = r
+    model_next[s, a] = s2
+    model_terminated[s, a] = terminated
+    last_tried[s, a] = clock[0]
+    for i in range(hp.planning_steps):
+        cell = tried[uniform(rng, n_tried[0])]
+        ps, pa = cell // n_actions, cell % n_actions
+        ns = model_next[ps, pa]
+        tau = clock[0] - last_tried[ps, pa]
+        bonus = hp.kappa * np.sqrt(tau)
+        future = 0.0 if model_terminated[ps, pa] else max_value(q, ns)
+        target = model_reward[ps, pa] + bonus + hp.discount * future
+        alpha = step_size(hp.learning_rate, hp.by_visits, max(counts[ps, pa], 1))
+        before = q[ps, pa]
+        q[ps, pa] += alpha * (target - before)
+        if i + 1 < log.shape[0]:
+            log[i + 1, 0] = ps
+            log[i + 1, 1] = pa
+            log[i + 1, 2] = target
+            log[i + 1, 3] = alpha
+            log[i + 1, 4] = before
+            log[i + 1, 5] = q[ps, pa]
+            log[i + 1, 6] = tau
+            log[i + 1, 7] = bonus
+    log[0, 6] = hp.planning_steps
+    return td
+
+
+register(Params, Rule(update))
+
+
+class DynaQPlus(DynaQ):
+    """Dyna-Q with an exploration bonus κ√τ in planning for pairs untried for τ steps."""
+
+    name = "dyna-q-plus"
+    title = "Dyna-Q+"
+    summary = "Dyna-Q with a bonus κ√τ for what it has not tried for τ steps: finds a changed world"
+    formula = "r + κ√τ + γ·max Q(s',·)"
+    Params = Params  # type: ignore[assignment]  # its own, as every learner's
+    params = (
+        *DynaQ.params,
+        Param("kappa", float, 0.0001, 0.0, 10.0,
+              "exploration bonus κ√τ in planning for a pair untried for τ steps",
+              title="Bonus κ"),
+    )
+    tables = (*DynaQ.tables, TableSpec("last_tried", np.int64))  # the real step, 0: never
+
+    last_tried: np.ndarray
+
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        return (*super().arrays(), self.last_tried, self._clock)
+
+    def _make_extra(self, capacity: int) -> None:
+        super()._make_extra(capacity)
+        self._clock = np.zeros(1, dtype=np.int64)  # real steps taken
+
+    def log_rows(self) -> int:
+        return min(int(self.hp.planning_steps), SHOWN) + 1
+
+    def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
+        rows = log[1 : 1 + min(int(log[0, 6]), SHOWN)]
+        bonuses = ", ".join(f"{w[7]:+.4g} (τ = {int(w[6])})" for w in rows)
+        more = " …" if int(log[0, 6]) > len(rows) else ""
+        notes = (("bonus", f"planning adds κ√τ (κ = {self.hp.kappa:g}): {bonuses}{more}"),
+                 ) if len(rows) else ()
+        return self._td_record(step, log, "max Q(s',·)", formula="r + γ·max Q(s',·)",
+                               planning_updates=int(log[0, 6]), notes=notes)
+
+    # --- saving: the clock the τ count from --------------------------------------------
+    def _extra_arrays(self) -> dict[str, np.ndarray]:
+        return {**super()._extra_arrays(), "model_clock": self._clock.copy()}
+
+    def _load_extra_arrays(self, arrays: Any, rows: int, capacity: int) -> None:
+        clock = np.asarray(arrays.get("model_clock", [-1]), dtype=np.int64).reshape(-1)
+        last = np.asarray(arrays["last_tried"])
+        if clock.size != 1 or clock[0] < 0 or (last.size and last.max() > clock[0]):
+            raise ValueError("saved 'model_clock' is missing or behind 'last_tried'")
+        super()._load_extra_arrays(arrays, rows, capacity)
+        self._clock[0] = clock[0]

@@ -1,0 +1,153 @@
+"""n-step SARSA (Sutton & Barto, 2nd ed., section 7.2): on-policy control with n-step returns.
+
+The last n transitions of the episode are kept in a window. Once n rewards
+are in, the pair n steps back moves toward the n-step return
+
+    G = r_{τ+1} + γ r_{τ+2} + ... + γ^{n-1} r_{τ+n} + γ^n Q(s_{τ+n}, a_{τ+n}),
+
+with a_{τ+n} the action the agent will really take (chosen before the
+update, as SARSA does). When the episode ends, every pair still in the
+window is updated, oldest first: after termination its return is the sum of
+the rewards left; after a truncation it bootstraps from Q(s', a') (the time
+limit is not part of the game). n = 1 is SARSA; n past the episode's length
+is every-visit Monte Carlo on the exploring policy. Unfinished episodes are
+not saved.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from tui_gym.algorithms.base import CellUpdate, Learner, Transition, UpdateRecord
+from tui_gym.algorithms.settings import COMMON_PARAMS
+from tui_gym.core.engine.kernel import kernel
+from tui_gym.core.engine.rules import Rule, register, step_size
+from tui_gym.core.params import Param
+
+__all__ = ["NStepSarsa"]
+
+MAX_N = 64
+
+
+class Params(NamedTuple):
+    learning_rate: float
+    discount: float
+    by_visits: bool
+    n: int
+
+
+@kernel(inline=True)
+def begin(tables: Any, hp: Any) -> None:
+    tables[6][0] = 0
+
+
+@kernel
+def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+           terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
+    q, counts, visits, states, actions, rewards, length = tables
+    n = hp.n
+    t = length[0]  # transitions of the episode before this one: this is step t
+    states[t % n] = s
+    actions[t % n] = a
+    rewards[t % n] = r
+    t += 1
+    length[0] = t
+    ended = terminated or truncated
+    tail = 0.0 if terminated else q[s2, a2]
+    oldest = max(0, t - n)  # the window holds steps oldest .. t - 1
+    stop = t if ended else t - n + 1  # the pairs updated now: oldest .. stop - 1
+    for k in range(oldest, t):
+        row = k - oldest + 1
+        if row < log.shape[0]:
+            log[row, 0] = states[k % n]
+            log[row, 1] = actions[k % n]
+            log[row, 2] = rewards[k % n]
+            log[row, 3] = 0.0
+    total = 0.0
+    for tau in range(oldest, stop):
+        g = tail
+        for k in range(t - 1, tau - 1, -1):
+            g = rewards[k % n] + hp.discount * g
+        ps, pa = states[tau % n], actions[tau % n]
+        counts[ps, pa] += 1
+        visits[ps] += 1
+        alpha = step_size(hp.learning_rate, hp.by_visits, counts[ps, pa])
+        before = q[ps, pa]
+        q[ps, pa] = before + alpha * (g - before)
+        total += abs(g - before)
+        row = tau - oldest + 1
+        if row < log.shape[0]:
+            log[row, 3] = 1.0
+            log[row, 4] = g
+            log[row, 5] = alpha
+            log[row, 6] = before
+            log[row, 7] = q[ps, pa]
+    if ended:
+        length[0] = 0
+    log[0, 0] = max(0, stop - oldest)
+    log[0, 1] = t - oldest
+    log[0, 2] = tail
+    log[0, 3] = q[s, a]
+    return total
+
+
+register(Params, Rule(update, begin=begin, next_first=True))
+
+
+class NStepSarsa(Learner):
+    """n-step SARSA: SARSA whose target waits n rewards."""
+
+    name = "n-step-sarsa"
+    title = "n-step SARSA"
+    summary = "between SARSA and Monte Carlo: n real rewards, then bootstrap"
+    formula = "G = r + γ·r' + … + γⁿ·Q(sₙ,aₙ)"
+    Params = Params
+    params = (
+        *COMMON_PARAMS,
+        Param("n", int, 4, 1, MAX_N, "rewards summed before the target bootstraps",
+              title="Steps n"),
+    )
+
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        return (self.q, self.counts, self.visits, self._states, self._actions, self._rewards,
+                self._length)
+
+    def _make_extra(self, capacity: int) -> None:
+        self._states = np.zeros(MAX_N, dtype=np.int64)  # the window, a ring of n steps
+        self._actions = np.zeros(MAX_N, dtype=np.int64)
+        self._rewards = np.zeros(MAX_N, dtype=np.float64)
+        self._length = np.zeros(1, dtype=np.int64)
+
+    def log_rows(self) -> int:
+        return int(self.hp.n) + 1
+
+    def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
+        n, gamma = int(self.hp.n), float(self.hp.discount)
+        made, width, tail, now = int(log[0, 0]), int(log[0, 1]), float(log[0, 2]), float(log[0, 3])
+        window = log[1 : 1 + width]
+        updates = tuple(CellUpdate(int(w[0]), int(w[1]), float(w[4]), float(w[5]),
+                                   float(w[6]), float(w[7]))
+                        for w in window if w[3])
+        rewards = ", ".join(f"{w[2]:+.4g}" for w in window)
+        notes: tuple[tuple[str, str], ...] = (("window", f"r = {rewards}  ({width} of n = {n})"),)
+        if made:
+            back = width - 1 if made == 1 else 0
+            what = (f"the pair {back} step{'s' if back != 1 else ''} back moves toward its G"
+                    if made == 1 else f"the episode ended: all {made} pairs move toward their G")
+            notes += (("update", what),)
+        bootstrap: tuple[tuple[str, float], ...] = (
+            () if step.terminated else (("γ", gamma), ("Q(s',a')", tail)))
+        own = window[-1]  # this transition's own pair: updated when n = 1 or at the end
+        picked = None if step.terminated else step.next_action
+        if not own[3]:
+            more = f"{n - 1} more reward{'s' if n > 2 else ''}"
+            return self._record(step, f"G of (s,a), after {more}", bootstrap, None,
+                                now, now, episode_updates=updates, notes=notes,
+                                target_action=picked)
+        terms = (("r", step.reward), *bootstrap)
+        formula = "G = r" if step.terminated else "G = r + γ·Q(s',a')"
+        return self._record(step, formula, terms, float(own[4]), float(own[6]),
+                            float(own[7]), float(own[5]), episode_updates=updates,
+                            notes=notes, target_action=picked)

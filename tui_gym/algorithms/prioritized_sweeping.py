@@ -1,0 +1,279 @@
+"""Prioritized sweeping (Sutton & Barto, 2nd ed., section 8.4): planning where values change.
+
+Each real transition teaches the model (the last outcome of each pair, as
+Dyna-Q's) and enters the queue with priority P = |r + γ max Q(s', ·) - Q(s, a)|
+when P > θ. Then up to `planning_steps` times: the pair of highest priority
+leaves the queue and makes a Q-learning update from its model outcome; every
+pair the model says leads into its state (its predecessors) is checked the
+same way and enters the queue (or rises in it) when its P exceeds θ. So a
+change at the goal sweeps backwards along the paths that lead to it, and no
+update is spent where nothing changed. As in the book, Q changes only
+through the queue. A save keeps the queue.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from tui_gym.algorithms.base import CellUpdate, Learner, Transition, UpdateRecord
+from tui_gym.algorithms.dyna_q import DynaQ
+from tui_gym.algorithms.settings import COMMON_PARAMS
+from tui_gym.core.engine.kernel import kernel
+from tui_gym.core.engine.rules import Rule, max_value, register, step_size
+from tui_gym.core.params import Param
+
+__all__ = ["PrioritizedSweeping"]
+
+SHOWN = 4  # queue entries the step panel lists
+
+
+class Params(NamedTuple):
+    learning_rate: float
+    discount: float
+    by_visits: bool
+    planning_steps: int
+    theta: float
+
+
+@kernel(inline=True)
+def swap(cells: Any, prio: Any, pos: Any, i: int, j: int) -> None:
+    cells[i], cells[j] = cells[j], cells[i]
+    prio[i], prio[j] = prio[j], prio[i]
+    pos[cells[i]] = i
+    pos[cells[j]] = j
+
+
+@kernel
+def push(cells: Any, prio: Any, pos: Any, size: Any, cell: int, p: float) -> None:
+    """Put `cell` in the queue (a binary max-heap) with priority `p`, or raise it to `p`."""
+    i = pos[cell]
+    if i < 0:
+        i = size[0]
+        size[0] += 1
+        cells[i] = cell
+        pos[cell] = i
+    elif p <= prio[i]:
+        return
+    prio[i] = p
+    while i > 0 and prio[(i - 1) // 2] < prio[i]:
+        swap(cells, prio, pos, i, (i - 1) // 2)
+        i = (i - 1) // 2
+
+
+@kernel
+def pop(cells: Any, prio: Any, pos: Any, size: Any) -> int:
+    """The cell of highest priority, taken out of the queue."""
+    top = cells[0]
+    size[0] -= 1
+    n = size[0]
+    pos[top] = -1
+    if n > 0:
+        cells[0], prio[0] = cells[n], prio[n]
+        pos[cells[0]] = 0
+        i = 0
+        while True:
+            big, left = i, 2 * i + 1
+            if left < n and prio[left] > prio[big]:
+                big = left
+            if left + 1 < n and prio[left + 1] > prio[big]:
+                big = left + 1
+            if big == i:
+                break
+            swap(cells, prio, pos, i, big)
+            i = big
+    return top
+
+
+@kernel
+def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+           terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
+    (q, counts, visits, model_reward, model_next, model_terminated, cells, prio, pos, size,
+     first_into, next_into) = tables
+    n_actions = q.shape[1]
+    cell = s * n_actions + a
+    old = model_next[s, a]
+    if old != s2:  # (s, a) now leads into s2: it moves to s2's list of predecessors
+        if old >= 0:
+            at, before_at = first_into[old], -1
+            while at != cell:
+                before_at, at = at, next_into[at]
+            if before_at < 0:
+                first_into[old] = next_into[cell]
+            else:
+                next_into[before_at] = next_into[cell]
+        next_into[cell] = first_into[s2]
+        first_into[s2] = cell
+    model_reward[s, a] = r
+    model_next[s, a] = s2
+    model_terminated[s, a] = terminated
+    counts[s, a] += 1
+    visits[s] += 1
+    p = abs(r + hp.discount * (0.0 if terminated else max_value(q, s2)) - q[s, a])
+    if p > hp.theta:
+        push(cells, prio, pos, size, cell, p)
+    log[0, 0] = p
+    done = 0
+    while done < hp.planning_steps and size[0] > 0:
+        top_priority = prio[0]
+        c = pop(cells, prio, pos, size)
+        ps, pa = c // n_actions, c % n_actions
+        future = 0.0 if model_terminated[ps, pa] else max_value(q, model_next[ps, pa])
+        target = model_reward[ps, pa] + hp.discount * future
+        alpha = step_size(hp.learning_rate, hp.by_visits, max(counts[ps, pa], 1))
+        before = q[ps, pa]
+        q[ps, pa] = before + alpha * (target - before)
+        done += 1
+        if done < log.shape[0]:
+            log[done, 0] = ps
+            log[done, 1] = pa
+            log[done, 2] = target
+            log[done, 3] = alpha
+            log[done, 4] = before
+            log[done, 5] = q[ps, pa]
+            log[done, 6] = top_priority
+        best = max_value(q, ps)
+        into = first_into[ps]
+        while into >= 0:
+            xs, xa = into // n_actions, into % n_actions
+            reach = 0.0 if model_terminated[xs, xa] else best
+            p = abs(model_reward[xs, xa] + hp.discount * reach - q[xs, xa])
+            if p > hp.theta:
+                push(cells, prio, pos, size, into, p)
+            into = next_into[into]
+    log[0, 1] = done
+    log[0, 2] = size[0]
+    log[0, 3] = prio[0] if size[0] > 0 else 0.0
+    log[0, 4] = q[s, a]
+    return log[0, 0]
+
+
+register(Params, Rule(update))
+
+
+class PrioritizedSweeping(Learner):
+    """Model-based planning in order of priority |TD error|, sweeping back to predecessors."""
+
+    name = "prioritized-sweeping"
+    title = "Prioritized sweeping"
+    summary = "plans where values change: a queue by |TD error| sweeps back from the goal"
+    formula = "r + γ·max Q(s',·)"
+    Params = Params
+    params = (
+        *COMMON_PARAMS,
+        DynaQ.params[-1],  # planning steps
+        Param("theta", float, 0.0001, 0.0, 1000.0,
+              "a pair enters the queue when its |TD error| exceeds this", title="Threshold θ"),
+    )
+    tables = DynaQ.tables
+
+    model_reward: np.ndarray
+    model_next: np.ndarray
+    model_terminated: np.ndarray
+
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        return (self.q, self.counts, self.visits, self.model_reward, self.model_next,
+                self.model_terminated, self._cells, self._prio, self._pos, self._size,
+                self._first_into, self._next_into)
+
+    def _make_extra(self, capacity: int) -> None:
+        cells = capacity * self.n_actions
+        self._cells = np.zeros(cells, dtype=np.int64)  # the queue, a binary max-heap
+        self._prio = np.zeros(cells)
+        self._pos = np.full(cells, -1, dtype=np.int64)  # each cell's place in it, -1: out
+        self._size = np.zeros(1, dtype=np.int64)
+        self._first_into = np.full(capacity, -1, dtype=np.int64)  # predecessors: lists
+        self._next_into = np.full(cells, -1, dtype=np.int64)
+
+    def _grow_extra(self, capacity: int) -> None:
+        def longer(array: np.ndarray, length: int, fill: float) -> np.ndarray:
+            return np.concatenate([array, np.full(length - len(array), fill, array.dtype)])
+
+        cells = capacity * self.n_actions
+        self._cells = longer(self._cells, cells, 0)
+        self._prio = longer(self._prio, cells, 0.0)
+        self._pos = longer(self._pos, cells, -1)
+        self._first_into = longer(self._first_into, capacity, -1)
+        self._next_into = longer(self._next_into, cells, -1)
+
+    def queue(self) -> list[tuple[int, int, float]]:
+        """The queue's entries, highest priority first: (row, action, priority)."""
+        size = int(self._size[0])
+        order = sorted(range(size), key=lambda i: -self._prio[i])
+        return [(int(self._cells[i]) // self.n_actions, int(self._cells[i]) % self.n_actions,
+                 float(self._prio[i])) for i in order]
+
+    def log_rows(self) -> int:
+        return min(int(self.hp.planning_steps), SHOWN) + 1
+
+    def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
+        p, done, left, top, now = log[0, :5]
+        rows = log[1 : 1 + min(int(done), SHOWN)]
+        updates = tuple(CellUpdate(int(w[0]), int(w[1]), float(w[2]), float(w[3]),
+                                   float(w[4]), float(w[5])) for w in rows)
+        entered = "enters the queue" if p > self.hp.theta else "stays out (P ≤ θ)"
+        taken = ", ".join(f"{w[6]:.4g}" for w in rows) + (" …" if done > len(rows) else "")
+        notes = (
+            ("P", f"|r + γ·max Q(s',·) − Q(s,a)| = {p:.4g}: (s,a) {entered}"),
+            ("queue", f"{int(done)} taken from the top (P {taken or '–'}), "
+                      f"{int(left)} left" + (f", the top at P {top:.4g}" if left else "")),
+        )
+        own = next((u for u in updates if (u.state, u.action) == (step.state, step.action)),
+                   None)
+        if own is None:
+            return self._record(step, "when (s,a) reaches the queue's top", (), None, now, now,
+                                episode_updates=updates, notes=notes)
+        return self._record(step, "r + γ·max Q(s',·), from the model", (), own.target,
+                            own.before, own.after, own.step_size, episode_updates=updates,
+                            notes=notes, planning_updates=int(done))
+
+    # --- saving: the queue in its heap order (pushed back in that order, it is the same)
+    # and the predecessor lists in their order (the order their pairs rise in the queue),
+    # each link saved plus 1 (0: the list ends) ---
+    def _extra_arrays(self) -> dict[str, np.ndarray]:
+        size, used = int(self._size[0]), self.rows_used
+        return {"queue_cells": self._cells[:size].copy(),
+                "queue_priorities": self._prio[:size].copy(),
+                "model_first_into": self._first_into[:used] + 1,
+                "model_next_into": self._next_into[: used * self.n_actions] + 1}
+
+    def _load_extra_arrays(self, arrays: Any, rows: int, capacity: int) -> None:
+        names = ("queue_cells", "queue_priorities", "model_first_into", "model_next_into")
+        if any(name not in arrays for name in names):
+            raise ValueError("the saved state has no priority queue or predecessor lists")
+        cells, priorities, first, after = (np.asarray(arrays[name]) for name in names)
+        first, after = first.astype(np.int64) - 1, after.astype(np.int64) - 1
+        n_cells = rows * self.n_actions
+        if (cells.ndim != 1 or cells.dtype.kind not in "iu" or priorities.shape != cells.shape
+                or (cells.size and (cells.min() < 0 or cells.max() >= n_cells))
+                or len(np.unique(cells)) != cells.size
+                or not np.isfinite(priorities.astype(float)).all()):
+            raise ValueError("saved 'queue_cells' or 'queue_priorities' do not fit the table")
+        model_next = np.asarray(arrays["model_next"]).reshape(-1)
+        if (first.shape != (rows,) or after.shape != (n_cells,)
+                or np.asarray(arrays["model_first_into"]).dtype.kind not in "iu"
+                or np.asarray(arrays["model_next_into"]).dtype.kind not in "iu"
+                or sorted(_walk(first, after, model_next)) != np.flatnonzero(
+                    model_next >= 0).tolist()):
+            raise ValueError("saved predecessor lists do not follow 'model_next'")
+        self._make_extra(capacity)
+        self._first_into[:rows] = first
+        self._next_into[:n_cells] = after
+        for cell, priority in zip(cells.tolist(), priorities.tolist(), strict=True):
+            push(self._cells, self._prio, self._pos, self._size, cell, priority)
+
+
+def _walk(first: np.ndarray, after: np.ndarray, model_next: np.ndarray) -> list[int]:
+    """Every cell on the lists, each checked to lead into its list's state; stops at a
+    cell seen twice (a loop) or out of range, which the caller's count then refuses."""
+    seen: list[int] = []
+    met: set[int] = set()
+    for state, cell in enumerate(first.tolist()):
+        while cell >= 0:
+            if cell >= len(after) or cell in met or model_next[cell] != state:
+                return [-1]
+            met.add(cell)
+            seen.append(cell)
+            cell = int(after[cell])
+    return seen

@@ -1,0 +1,71 @@
+"""Watkins's Q(λ) (Sutton & Barto, 2nd ed., section 12.10): Q-learning with eligibility traces.
+
+The next action a' is chosen (epsilon-greedy) before the update. The target
+bootstraps from the best action in s', as Q-learning's does, and the TD
+error spreads over the traces as in Sarsa(λ) (`sarsa_lambda`):
+
+    δ = r + γ max_b Q(s', b) - Q(s, a)
+    e(s, a) <- e(s, a) + 1  (accumulating)  or  1  (replacing)
+    for every pair with a trace:  Q <- Q + α δ e
+    e <- γ λ e  if a' is greedy (ties for the best in s'),  else  e <- 0
+
+The traces follow the greedy policy only as long as the agent does: after an
+exploratory action the earlier pairs did not lead where the greedy policy
+goes, so their traces are cut. λ = 0 is Q-learning.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from tui_gym.algorithms.base import Transition, UpdateRecord
+from tui_gym.algorithms.sarsa_lambda import TracedLearner, clear, spread
+from tui_gym.core.engine.kernel import kernel
+from tui_gym.core.engine.rules import Rule, max_value, register
+
+__all__ = ["WatkinsQLambda"]
+
+
+class Params(NamedTuple):
+    learning_rate: float
+    discount: float
+    by_visits: bool
+    lambda_: float
+    replacing: bool
+
+
+@kernel
+def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+           terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
+    q = tables[0]
+    future = 0.0 if terminated else max_value(q, s2)
+    greedy = terminated or q[s2, a2] == future  # judged before the update, as the book does
+    decay = hp.discount * hp.lambda_ if greedy else 0.0
+    td = spread(tables, hp, s, a, r + hp.discount * future, future, decay, log)
+    log[0, 7] = 1.0 if greedy else 0.0
+    if terminated or truncated:
+        clear(tables, hp)
+    return td
+
+
+register(Params, Rule(update, begin=clear, next_first=True))
+
+
+class WatkinsQLambda(TracedLearner):
+    """Watkins's Q(λ): off-policy control; traces cut after an exploratory action."""
+
+    name = "q-lambda"
+    title = "Watkins's Q(λ)"
+    summary = "Q-learning with traces, cut whenever the agent explores"
+    formula = "r + γ·max Q(s',·)"
+    Params = Params
+
+    def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
+        ended = step.terminated or step.truncated
+        cut = not ended and not log[0, 7]
+        notes = (("a'", f"{'exploratory' if cut else 'greedy'}: "
+                        f"{'the traces are cut' if cut else 'the traces go on'}"),) if (
+            not ended) else ()
+        return self._traced_record(step, log, "max Q(s',·)", *notes)

@@ -1,0 +1,183 @@
+"""Sarsa(λ) (Sutton & Barto, 2nd ed., section 12.7): SARSA with eligibility traces.
+
+Every pair visited in the episode keeps a trace e(s, a). Each transition
+
+    δ = r + γ Q(s', a') - Q(s, a)        (r - Q(s, a) after termination)
+    e(s, a) <- e(s, a) + 1  (accumulating)  or  1  (replacing)
+    for every pair with a trace:  Q <- Q + α δ e,  then  e <- γ λ e
+
+so one TD error reaches back along the whole path, the most recent pairs
+most. λ = 0 is SARSA; λ = 1 (accumulating, constant step) is close to Monte
+Carlo. A trace that falls below `FADED` is dropped (its pair leaves the
+list: the work per step follows the pairs that still matter). Traces end
+with the episode; each pair's step size follows its own updates' count. The
+trace kernel here is also Watkins's Q(λ)'s (`q_lambda`).
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from tui_gym.algorithms.base import CellUpdate, Learner, Transition, UpdateRecord
+from tui_gym.algorithms.settings import COMMON_PARAMS, Choice
+from tui_gym.core.engine.kernel import kernel
+from tui_gym.core.engine.rules import Rule, register, step_size
+from tui_gym.core.params import Param
+
+__all__ = ["TRACE_PARAMS", "SarsaLambda", "TracedLearner", "spread"]
+
+FADED = 1e-10  # a trace below this is dropped
+
+TRACE_PARAMS = (
+    *COMMON_PARAMS,
+    Param("lambda", float, 0.9, 0.0, 1.0, "how far back each TD error reaches (trace decay)",
+          title="λ"),
+    Choice("traces", ("replacing", "accumulating"), "replacing",
+           "replacing: a visited pair's trace is set to 1; accumulating: 1 is added",
+           title="Traces"),
+)
+
+
+class Params(NamedTuple):
+    learning_rate: float
+    discount: float
+    by_visits: bool
+    lambda_: float
+    replacing: bool
+
+
+@kernel(inline=True)
+def clear(tables: Any, hp: Any) -> None:
+    """Every trace back to 0."""
+    trace, cells, n_cells = tables[3], tables[4], tables[5]
+    n_actions = trace.shape[1]
+    for i in range(n_cells[0]):
+        trace[cells[i] // n_actions, cells[i] % n_actions] = 0.0
+    n_cells[0] = 0
+
+
+@kernel
+def spread(tables: Any, hp: Any, s: int, a: int, target: float, future: float, decay: float,
+           log: Any) -> float:
+    """Mark (s, a) eligible, move every traced pair by α δ e toward `target`'s TD error,
+    then decay the traces by `decay` (0 cuts them). Row 0 of `log` as `td_update` writes
+    it (the target, the future term, Q(s, a) before and after, its step size, its count)
+    with the pairs updated and `decay`; one row per pair (s, a, e, α, Q before, after)."""
+    q, counts, visits, trace, cells, n_cells = tables[:6]
+    n_actions = q.shape[1]
+    before = q[s, a]
+    delta = target - before
+    if trace[s, a] == 0.0:
+        cells[n_cells[0]] = s * n_actions + a
+        n_cells[0] += 1
+    trace[s, a] = 1.0 if hp.replacing else trace[s, a] + 1.0
+    counts[s, a] += 1
+    visits[s] += 1
+    kept = 0
+    for i in range(n_cells[0]):
+        cell = cells[i]
+        x, b = cell // n_actions, cell % n_actions
+        alpha = step_size(hp.learning_rate, hp.by_visits, max(counts[x, b], 1))
+        was = q[x, b]
+        q[x, b] = was + alpha * delta * trace[x, b]
+        if i + 1 < log.shape[0]:
+            log[i + 1, 0] = x
+            log[i + 1, 1] = b
+            log[i + 1, 2] = trace[x, b]
+            log[i + 1, 3] = alpha
+            log[i + 1, 4] = was
+            log[i + 1, 5] = q[x, b]
+        trace[x, b] *= decay
+        if trace[x, b] >= FADED:
+            cells[kept] = cell
+            kept += 1
+        else:
+            trace[x, b] = 0.0
+    log[0, 0] = target
+    log[0, 1] = future
+    log[0, 2] = before
+    log[0, 3] = q[s, a]
+    log[0, 4] = step_size(hp.learning_rate, hp.by_visits, counts[s, a])
+    log[0, 5] = n_cells[0]
+    log[0, 6] = decay
+    n_cells[0] = kept
+    return abs(delta)
+
+
+@kernel
+def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+           terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
+    future = 0.0 if terminated else tables[0][s2, a2]
+    td = spread(tables, hp, s, a, r + hp.discount * future, future,
+                hp.discount * hp.lambda_, log)
+    if terminated or truncated:
+        clear(tables, hp)
+    return td
+
+
+register(Params, Rule(update, begin=clear, next_first=True))
+
+
+class TracedLearner(Learner):
+    """What the λ learners share: the traces, their list, and the record of a traced
+    update."""
+
+    params = TRACE_PARAMS
+
+    def _compiled(self, name: str, kind: type) -> Any:
+        if name == "replacing":
+            return self.hp.traces == "replacing"
+        return super()._compiled(name, kind)
+
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        return (self.q, self.counts, self.visits, self._trace, self._cells, self._n_cells)
+
+    def _make_extra(self, capacity: int) -> None:
+        self._trace = np.zeros((capacity, self.n_actions))  # e(s, a) in this episode
+        self._cells = np.zeros(capacity * self.n_actions, dtype=np.int64)  # pairs with e > 0
+        self._n_cells = np.zeros(1, dtype=np.int64)
+
+    def _grow_extra(self, capacity: int) -> None:
+        self._trace = np.concatenate([self._trace, np.zeros_like(self._trace)])
+        self._cells = np.concatenate([self._cells, np.zeros_like(self._cells)])
+
+    def log_rows(self) -> int:
+        return int(self._n_cells[0]) + 2
+
+    @property
+    def traces(self) -> np.ndarray:
+        """e(s, a) of the used rows (a copy): the episode's eligibility traces."""
+        return self._trace[: self.rows_used].copy()
+
+    def _traced_record(self, step: Transition, log: np.ndarray, future_term: str,
+                       *notes: tuple[str, str], **extra: Any) -> UpdateRecord:
+        pairs, decay = int(log[0, 5]), float(log[0, 6])
+        target, before = float(log[0, 0]), float(log[0, 2])
+        delta = target - before
+        updates = tuple(CellUpdate(int(row[0]), int(row[1]), float(row[4] + delta * row[2]),
+                                   float(row[3]), float(row[4]), float(row[5]), float(row[2]))
+                        for row in log[1 : 1 + pairs])
+        kind = self.hp.traces
+        spread_note = (f"δ = {delta:+.4g} moves {pairs} pair{'s' if pairs != 1 else ''} "
+                       f"by α·δ·e ({kind} traces)")
+        ended = step.terminated or step.truncated
+        then = ("the episode ended: the traces end" if ended
+                else f"then every e × γλ = {decay:.4g}" if decay else "then every e is cut to 0")
+        return self._td_record(step, log, future_term, episode_updates=updates,
+                               notes=(*notes, ("traces", spread_note), ("", then)), **extra)
+
+
+class SarsaLambda(TracedLearner):
+    """Sarsa(λ): on-policy control with eligibility traces."""
+
+    name = "sarsa-lambda"
+    title = "Sarsa(λ)"
+    summary = "SARSA with traces: each TD error reaches back along the path, decaying by γλ"
+    formula = "r + γ·Q(s',a')"
+    Params = Params
+
+    def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
+        picked = None if step.terminated else step.next_action
+        return self._traced_record(step, log, "Q(s',a')", target_action=picked)
