@@ -4,7 +4,9 @@ Every learner is a `Learner` (see `base`): its hyperparameters as `Param`s,
 its tables, its update rule written once as compiled scalar code, and a
 record of a single update for the step-by-step view. `algorithm(name)` finds
 one by its registry name (`q-learning`, `sarsa`, `expected-sarsa`,
-`double-q`, `monte-carlo`, `dyna-q`).
+`double-q`, `monte-carlo`, `dyna-q`; the prediction learners `td0`,
+`mc-prediction`, `n-step-td`, `td-lambda`, which score a fixed policy: see
+`prediction`).
 """
 
 from __future__ import annotations
@@ -20,10 +22,15 @@ from tui_gym.algorithms.base import (
 from tui_gym.algorithms.double_q import DoubleQLearning
 from tui_gym.algorithms.dyna_q import DynaQ
 from tui_gym.algorithms.expected_sarsa import ExpectedSarsa
+from tui_gym.algorithms.mc_prediction import MonteCarloPrediction
 from tui_gym.algorithms.monte_carlo import MonteCarlo
+from tui_gym.algorithms.nstep_td import NStepTD
+from tui_gym.algorithms.prediction import Predictor
 from tui_gym.algorithms.qlearning import QLearning
 from tui_gym.algorithms.sarsa import Sarsa
 from tui_gym.algorithms.settings import COMMON_PARAMS, Choice, Field, Settings
+from tui_gym.algorithms.td0 import TD0
+from tui_gym.algorithms.td_lambda import TDLambda
 
 __all__ = [
     "ALGORITHMS",
@@ -39,9 +46,14 @@ __all__ = [
     "Learner",
     "LearnerState",
     "MonteCarlo",
+    "MonteCarloPrediction",
+    "NStepTD",
+    "Predictor",
     "QLearning",
     "Sarsa",
     "Settings",
+    "TD0",
+    "TDLambda",
     "TableSpec",
     "Transition",
     "UpdateRecord",
@@ -56,6 +68,10 @@ ALGORITHMS: tuple[type[Learner], ...] = (
     DoubleQLearning,
     MonteCarlo,
     DynaQ,
+    TD0,
+    MonteCarloPrediction,
+    NStepTD,
+    TDLambda,
 )
 
 DEFAULT_ALGORITHM = QLearning.name

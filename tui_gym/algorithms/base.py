@@ -251,7 +251,7 @@ class Learner(ABC):
             hp, kinds = self.hp, _field_types(self.Params)
             values = {
                 name: (hp.learning_rate_schedule == "visits") if name == "by_visits"
-                else kinds[name](hp[name])
+                else kinds[name](hp[name.rstrip("_")])  # `lambda_`: the field `lambda`
                 for name in self.Params._fields
             }
             self._params = self.Params(**values)
