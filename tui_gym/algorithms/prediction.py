@@ -12,7 +12,7 @@ the compiled loop and the env loop run a predictor like any learner.
 Its figure of merit is the RMS error of `v` against the exact V^π of the
 policy it follows (`Truth`, over the states the policy reaches): `truth`
 computes it from the game's model, `rms_error` scores an estimate, and
-`rms_curve` runs episodes one at a time and scores each. The table it shows
+`rms_curve` runs episodes and scores each (compiled: `run_scored`). The table it shows
 (`action_values`, the heatmaps) is V, the same in every action.
 """
 
@@ -26,9 +26,9 @@ import numpy as np
 
 from tui_gym.algorithms.base import Learner, Transition, UpdateRecord
 from tui_gym.algorithms.settings import COMMON_PARAMS, Field
-from tui_gym.core.engine import loop
+from tui_gym.core.engine import jit, loop
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.loop import ModelArrays
+from tui_gym.core.engine.loop import ModelArrays, run_model
 from tui_gym.core.engine.rules import step_size
 from tui_gym.core.mdp.model import FiniteMDP
 from tui_gym.core.mdp.policy import greedy_policy
@@ -147,17 +147,48 @@ class Predictor(Learner):
         self.v[:rows] = v
 
 
-def rms_curve(learner: Predictor, model: ModelArrays, truth: Truth, episodes: int) -> np.ndarray:
-    """Play `episodes` episodes on `model`, one at a time: the RMS error after each."""
-    cursor = loop.Cursor()
-    out = np.zeros((1, 4))
-    log = np.zeros((1, 8))
-    curve = np.empty(episodes)
-    rows = model.rows
-    for episode in range(episodes):
-        done = 0
-        while not done:
-            done, _ = loop.play(learner, model, cursor, 1, 1 << 30, out, log)
-        curve[episode] = truth.rms(learner.v[rows])
-    return curve
+@kernel
+def run_scored(next_state: Any, cumulative: Any, guide: Any, reward: Any, terminal: Any,
+               outcomes: int, starts: Any, start_cumulative: Any, rows: Any, horizon: int,
+               tables: Any, hp: Any, rng: Any, explore: Any, episode0: int, cursor: Any,
+               acc: Any, out: Any, log: Any, scored_rows: Any, truth: Any, curve: Any,
+               first: int) -> int:
+    """`run_model` one episode at a time from `curve[first]` on, writing after each the
+    RMS error of V (`tables[3]`) at table rows `scored_rows` against `truth`. Returns
+    the episodes finished: fewer than asked when the learner needs room first."""
+    n = scored_rows.shape[0]
+    for e in range(first, curve.shape[0]):
+        status = run_model(next_state, cumulative, guide, reward, terminal, outcomes, starts,
+                           start_cumulative, rows, horizon, tables, hp, rng, explore,
+                           episode0 + e - first, cursor, acc, 1, 1 << 62, out, log)
+        if status != 0:
+            return e - first
+        v = tables[3]
+        total = 0.0
+        for i in range(n):
+            error = v[scored_rows[i]] - truth[i]
+            total += error * error
+        curve[e] = np.sqrt(total / n)
+    return curve.shape[0] - first
 
+
+def rms_curve(learner: Predictor, model: ModelArrays, truth: Truth, episodes: int) -> np.ndarray:
+    """Play `episodes` episodes on `model`: the RMS error of V against `truth` after each."""
+    hp = learner.compiled_params()
+    run = jit.entry(run_scored, type(hp))
+    where = np.flatnonzero(truth.reached)
+    scored_rows, values = model.rows[where], np.array(truth.v[where])
+    cursor, out, log = loop.Cursor(), np.zeros((1, 4)), np.zeros((1, 8))
+    curve = np.zeros(episodes)
+    done = 0
+    while done < episodes:
+        made = run(model.next_state, model.cumulative, model.guide, model.reward,
+                   model.terminal, model.outcomes, model.starts, model.start_cumulative,
+                   model.rows, model.horizon, learner.arrays(), hp, learner.rng,
+                   learner.exploration(), learner.episode, cursor.ints, cursor.floats, out,
+                   log, scored_rows, values, curve, done)
+        learner.end_episodes(int(made))
+        done += int(made)
+        if done < episodes:
+            learner.make_room()
+    return curve
