@@ -42,6 +42,8 @@ def add_book_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[ty
                       help="episodes a run (default: the figure's)")
     book.add_argument("--seed", type=seed_number, default=0, dest="book_seed", metavar="S",
                       help="the first run's seed (default 0)")
+    book.add_argument("--full", action="store_true",
+                      help="the book's own run and episode counts (slower)")
     book.add_argument("--json", action="store_true", help="print one JSON object")
 
 
@@ -49,7 +51,7 @@ def cmd_book(args: argparse.Namespace, out: Console) -> int:
     if args.figure is None:
         return _list(args, out)
     figure = figure_named(args.figure)
-    options = FigureOptions(args.runs, args.episodes, args.book_seed)
+    options = FigureOptions(args.runs, args.episodes, args.book_seed, args.full)
     if args.json:
         result = figure.run(options, lambda done, total, what: None)
         print_json("book", result.as_json())
@@ -92,7 +94,7 @@ def _draw(out: Console, result: FigureResult) -> None:
     for chart in result.charts:
         series = [ChartSeries(s.label, s.x, s.y, s.lo, s.hi) for s in chart.series]
         out.print(band_chart(series, width, CHART_HEIGHT, x_label=chart.x_label,
-                             y_label=chart.title))
+                             y_label=chart.title, skip_start=chart.skip_start))
     for panel in result.panels:
         out.print(panel_text(panel, out.width), soft_wrap=True)
     checks = Table(title="The book's claims", title_justify="left")

@@ -39,7 +39,11 @@ from tui_gym.core.engine.rules import (
 from tui_gym.core.mdp.model import FiniteMDP
 
 __all__ = [
+    "COLUMNS",
+    "FIRST_ACTION",
     "GROW",
+    "LENGTH",
+    "RETURN",
     "Cursor",
     "ModelArrays",
     "entries",
@@ -54,8 +58,9 @@ __all__ = [
 GUIDED = 16  # pairs with more outcomes than this are sampled through a guide table
 GROW = 1  # `run_model`'s status when the learner needs room (Monte Carlo's longest episode)
 
-# Columns of `run_model`'s per-episode output.
-RETURN, LENGTH, MEAN_TD, EPSILON = range(4)
+# Columns of `run_model`'s per-episode output (`COLUMNS` of them).
+RETURN, LENGTH, MEAN_TD, EPSILON, FIRST_ACTION = range(5)
+COLUMNS = 5
 
 
 @dataclass(frozen=True, eq=False)
@@ -110,10 +115,12 @@ class ModelArrays:
 
 class Cursor:
     """An episode in progress between calls of `run_model`: whether one is running, its
-    model state, the action chosen for it (-1: none yet), its steps, return and |TD| sum."""
+    model state, the action chosen for it (-1: none yet), its steps, the action it began
+    with, its return and |TD| sum."""
 
     def __init__(self) -> None:
-        self.ints = np.zeros(6, dtype=np.int64)  # live, state, action, steps; episodes, steps
+        # live, state, action, steps; this call's episodes and steps; the first action
+        self.ints = np.zeros(7, dtype=np.int64)
         self.floats = np.zeros(2, dtype=np.float64)  # return, sum of |TD|
 
     @property
@@ -168,8 +175,8 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, termina
     """Play up to `max_episodes` episodes and `max_steps` transitions (see the module
     docstring); `explore` is (epsilon start, final, decay episodes), `episode0` the
     learner's episodes so far. Finished episodes go into `out` rows (return, length,
-    mean |TD|, epsilon); `cursor[4]`, `cursor[5]` count the episodes and steps of this
-    call. Returns 0, or `GROW` when the learner needs room first."""
+    mean |TD|, epsilon, the action it began with); `cursor[4]`, `cursor[5]` count the
+    episodes and steps of this call. Returns 0, or `GROW` when the learner needs room first."""
     n_actions = tables[0].shape[1]
     done = 0
     steps = 0
@@ -191,6 +198,8 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, termina
         a = cursor[2]
         if a < 0:
             a = act(tables, hp, rng, rows[s], eps)
+        if cursor[3] == 0:
+            cursor[6] = a
         at = (s * n_actions + a) * outcomes
         at += sample_outcome(cumulative, guide, at, outcomes, rng)
         s2 = next_state[at]
@@ -211,6 +220,7 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, termina
             out[done, 1] = length
             out[done, 2] = acc[1] / length
             out[done, 3] = eps
+            out[done, 4] = cursor[6]
             done += 1
             cursor[0] = 0
             eps = epsilon_at(float(episode0 + done), explore[0], explore[1], explore[2])
@@ -297,7 +307,7 @@ def compile_learner(tables: Any, hp: Any) -> None:
     log = np.zeros((1, 8))
     model = _tiny_model(copies[0].shape[1])
     cursor = Cursor()
-    out = np.zeros((1, 4))
+    out = np.zeros((1, COLUMNS))
     explore = np.zeros(3)
     calls.run_model(model.next_state, model.cumulative, model.guide, model.reward,
                     model.terminal, model.outcomes, model.starts, model.start_cumulative,

@@ -34,14 +34,16 @@ def play_learner(
     stop: Callable[[], bool] | None = None,
     returns: np.ndarray | None = None,
     progress: Callable[[int], None] | None = None,
+    column: int = loop.RETURN,
 ) -> tuple[np.ndarray, list[np.ndarray]]:
     """Play `learner` for `episodes` episodes on `model` (fewer when `stop()` says so,
-    asked between calls of the loop): the return of each episode played (written into
+    asked between calls of the loop): the return of each episode played (or the loop's
+    other per-episode `column`: `loop.LENGTH`, `loop.FIRST_ACTION`; written into
     `returns` as they come, when given; `progress` hears how many there are after each
     call), and its action values (every row) after each checkpoint (episode counts)
     reached."""
     cursor = loop.Cursor()
-    out = np.zeros((min(episodes, 65_536), 4))
+    out = np.zeros((min(episodes, 65_536), loop.COLUMNS))
     log = np.zeros((1, 8))
     returns = np.empty(episodes) if returns is None else returns
     tables: list[np.ndarray] = []
@@ -50,7 +52,7 @@ def play_learner(
     while done < episodes:
         goal = next((m for m in marks if m > done), episodes)
         played, _ = loop.play(learner, model, cursor, goal - done, CALL_STEPS, out, log)
-        returns[done : done + played] = out[:played, 0]
+        returns[done : done + played] = out[:played, column]
         done += played
         if done in marks and played:
             tables.append(learner.action_values(slice(None)).copy())

@@ -4,7 +4,7 @@
 with a running sum (moving average in O(1)). `Series` keeps a whole run's
 history as at most `capacity` points: when full it merges neighbouring points
 pairwise and doubles the span each point covers, so memory stays fixed and
-the picture still covers episode 0 to now. `EpisodeStats` bundles the four
+the picture still covers episode 0 to now. `EpisodeStats` bundles the five
 per-episode quantities the trainer tracks; `TrainingSnapshot` is one frame of
 a run for viewers on other threads, `StepEvent` one move of the agent.
 """
@@ -143,6 +143,7 @@ class EpisodeStats:
     length: int
     mean_abs_td: float
     epsilon: float
+    first_action: int = -1  # the action taken in the episode's first state
 
 
 @dataclass(frozen=True)

@@ -133,7 +133,7 @@ class Trainer:
         self._rate = 0.0
         # The model loop's episode in progress and its buffers.
         self._cursor = loop.Cursor()
-        self._out = np.zeros((MAX_CALL_EPISODES, 4))
+        self._out = np.zeros((MAX_CALL_EPISODES, loop.COLUMNS))
         self._log = np.zeros((1, 8))
         self._call_steps = 4096
         # The env loop's episode in progress.
@@ -233,25 +233,25 @@ class Trainer:
         return done
 
     def _record(self, rows: np.ndarray) -> None:
-        """Count finished episodes (rows of return, length, mean |TD|, epsilon) into the
-        windows and curves."""
+        """Count finished episodes (rows of return, length, mean |TD|, epsilon, first action)
+        into the windows and curves."""
         if len(rows) == 1:  # one at a time (the env loop): no arrays to build
             values = rows[0].tolist()
-            for name, value in zip(SERIES_NAMES, values, strict=True):
+            for name, value in zip(SERIES_NAMES, values[: len(SERIES_NAMES)], strict=True):
                 window = self.windows[name]
                 window.push(value)
                 self.series[name].push(window.mean)
             self.series[EPISODE_RETURNS].push(values[0])
-            ret, length, td, eps = values
-            self.last = EpisodeStats(ret, int(length), td, eps)
+            ret, length, td, eps, first = values
+            self.last = EpisodeStats(ret, int(length), td, eps, int(first))
             self.episodes += 1
             return
-        for name, values in zip(SERIES_NAMES, rows.T, strict=True):
+        for name, values in zip(SERIES_NAMES, rows.T[: len(SERIES_NAMES)], strict=True):
             means = self.windows[name].push_many(values)
             self.series[name].push_many(means)
         self.series[EPISODE_RETURNS].push_many(rows[:, 0])
-        ret, length, td, eps = rows[-1].tolist()
-        self.last = EpisodeStats(ret, int(length), td, eps)
+        ret, length, td, eps, first = rows[-1].tolist()
+        self.last = EpisodeStats(ret, int(length), td, eps, int(first))
         self.episodes += len(rows)
 
     def _chunk_env(self, quota: int | None) -> int:
@@ -284,7 +284,7 @@ class Trainer:
                 obs, _ = self.env.reset()
             agent.begin_episode()
             self._obs, self._row, self._pending = obs, agent.row(self.keyer.key(obs)), -1
-            self._episode = [0.0, 0.0, 0.0]
+            self._episode = [0.0, 0.0, 0.0, -1.0]  # return, steps, |TD| sum, first action
         obs, row = self._obs, self._row
         action = self._pending if self._pending >= 0 else agent.act(self.keyer.key(obs))
         next_obs, reward, terminated, truncated, _ = self.env.step(action)
@@ -297,11 +297,13 @@ class Trainer:
         totals[0] += float(reward)
         totals[1] += 1
         totals[2] += td
+        if totals[3] < 0:
+            totals[3] = action
         episode, length = self.episodes + 1, int(totals[1])
         done_stats = None
         if terminated or truncated:
-            ret, _, total = totals
-            self._record(np.array([[ret, length, total / length, agent.epsilon]]))
+            ret, _, total, first = totals
+            self._record(np.array([[ret, length, total / length, agent.epsilon, first]]))
             agent.end_episodes(1)
             done_stats = self.last
             self._obs = None

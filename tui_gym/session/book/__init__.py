@@ -22,6 +22,7 @@ FIGURE_MODULES = (
     "fig_4_1",
     "fig_4_2",
     "fig_4_3",
+    "fig_6_4",
 )
 
 

@@ -3,7 +3,8 @@
 A figure is one module under `tui_gym.session.book` holding a `FIGURE`: its
 number as the book prints it ("4.3"), a title, a short paragraph of what it
 shows, the world it runs on, its default run and episode counts (None where
-they do not apply: an exact figure is computed, not sampled), and `run`, which
+they do not apply: an exact figure is computed, not sampled) and the book's
+own counts (`--full`), and `run`, which
 takes the `FigureOptions` and a progress callback and returns a
 `FigureResult`: its `series` (the curves the book plots, with a band where
 runs vary), the grids it draws (heatmap panels), and its `checks`, each of
@@ -28,12 +29,13 @@ Progress = Callable[[int, int, str], None]  # (done, total, what is being done)
 
 @dataclass(frozen=True)
 class FigureOptions:
-    """How a figure is run: `runs` and `episodes` (None: the figure's defaults) and the
-    first `seed`."""
+    """How a figure is run: `runs` and `episodes` (None: the figure's defaults, or with
+    `full` the book's own counts) and the first `seed`."""
 
     runs: int | None = None
     episodes: int | None = None
     seed: int = 0
+    full: bool = False
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,11 +58,13 @@ class Series:
 
 @dataclass(frozen=True)
 class Chart:
-    """Series drawn together, over `x_label`."""
+    """Series drawn together, over `x_label` (`skip_start`: the y range fits the curves
+    after their first few points, as the book's axes do)."""
 
     title: str
     x_label: str
     series: tuple[Series, ...]
+    skip_start: bool = False
 
 
 @dataclass(frozen=True)
@@ -121,3 +125,5 @@ class BookFigure:
     runs: int | None = None
     episodes: int | None = None
     aliases: Sequence[str] = field(default=())
+    full_runs: int | None = None  # the book's counts, where they are more than the defaults
+    full_episodes: int | None = None

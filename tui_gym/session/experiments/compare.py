@@ -42,7 +42,7 @@ import numpy as np
 
 from tui_gym.algorithms import ALGORITHMS, algorithm
 from tui_gym.core.engine import processes as processes_module
-from tui_gym.core.engine.loop import ModelArrays, warm
+from tui_gym.core.engine.loop import RETURN, ModelArrays, warm
 from tui_gym.core.engine.seeds import checkpoint_episodes, greedy_values, play_learner
 from tui_gym.core.experiments.aggregate import (
     AggregateCurve,
@@ -236,7 +236,9 @@ class Arm:
 
 @dataclass(frozen=True)
 class Setup:
-    """What every arm of an experiment shares: the game, its seeds and episodes."""
+    """What every arm of an experiment shares: the game, its seeds and episodes, and the
+    per-episode quantity recorded (`measure`, a column of the engine's loop: the online
+    return, or `loop.LENGTH`, `loop.FIRST_ACTION` where the game has a model)."""
 
     game: str
     seeds: int
@@ -244,6 +246,7 @@ class Setup:
     game_params: Mapping[str, Any]
     wrappers: tuple[WrapperChoice, ...]
     first_seed: int
+    measure: int = RETURN
 
     @property
     def seed_list(self) -> tuple[int, ...]:
@@ -277,6 +280,7 @@ class _Job:
     rows: tuple[int, ...]
     episodes: int
     model: _Model | None = None  # the game's model, when it has one
+    measure: int = RETURN
 
 
 @dataclass(frozen=True)
@@ -344,6 +348,9 @@ def prepare(setup: Setup, arms: Sequence[Arm]) -> Prepared:
                        int(first.keyer.n_states), int(first.agent.n_actions))
         value = solve(training.model).value
         optimum = value if math.isfinite(value) else None
+    if model is None and setup.measure != RETURN:
+        first.env.close()
+        raise ValueError(f"{first.game.name} has no model: only its returns are recorded")
     prepared = Prepared(
         game=first.game.name,
         env_id=first.env_id,
@@ -380,6 +387,7 @@ def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared, first: int, end
                     env_kwargs=prepared.env_kwargs, wrappers=tuple(setup.wrappers),
                     hp=prepared.hyperparameters[a], seeds=seeds[lo:hi],
                     rows=tuple(range(lo, hi)), episodes=setup.episodes, model=prepared.model,
+                    measure=setup.measure,
                 ))
     return jobs
 
@@ -428,7 +436,7 @@ def _run_job(
             learner = cls(model.n_actions, cls.settings(job.hp), n_states=model.n_states,
                           seed=seed)
             _, tables = play_learner(learner, model.arrays, episodes, checkpoints, stop,
-                                     returns[i], counter(i))
+                                     returns[i], counter(i), job.measure)
             if tables and exact is not None:
                 q = np.stack(tables)[:, model.rows]
                 exact[i, : len(tables)] = greedy_values(model.mdp, q)
@@ -590,12 +598,16 @@ def _record(
 
 @dataclass(frozen=True)
 class Executed:
-    """What `execute` gives back: each arm's outcome (None if it finished no episode)."""
+    """What `execute` gives back: each arm's outcome (None if it finished no episode), and
+    `values[arm, seed, episode]`, the measure of every episode (NaN where not played), and
+    `exact[arm, seed, checkpoint]`, the greedy policies' exact values (None without a model)."""
 
     outcomes: tuple[AlgorithmOutcome | None, ...]
     interrupted: bool
     group: int | None
     prepared: Prepared
+    values: np.ndarray
+    exact: np.ndarray | None
 
 
 def execute(
@@ -659,6 +671,7 @@ def execute(
     return Executed(
         outcomes=tuple(outcomes), interrupted=interrupted,
         group=tally.run_ids[0] if tally.run_ids else None, prepared=prepared,
+        values=tally.returns, exact=tally.exact,
     )
 
 

@@ -1,0 +1,71 @@
+"""The book's figures that run learners over seeds: the engine's per-episode measures they read,
+the verdicts' tolerances from the run count, and each figure's claims at a few runs."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from tui_gym.algorithms import algorithm
+from tui_gym.cli import main
+from tui_gym.core.engine.loop import FIRST_ACTION, LENGTH, ModelArrays
+from tui_gym.core.engine.seeds import play_learner
+from tui_gym.core.experiments.student_t import t_quantile
+from tui_gym.games import game_named
+from tui_gym.session.book import figure_named
+from tui_gym.session.book.figure import FigureOptions
+from tui_gym.session.book.runs import Played, above, counts, margin, near, per_time_step
+
+
+def test_the_loop_records_each_episodes_first_action_and_length() -> None:
+    # Max-bias: from A, left (0) leads on to B (two steps); any other action ends at once.
+    model = game_named("max-bias").base_model({})
+    arrays = ModelArrays.of(model)
+    hp = {"epsilon_start": 1.0, "epsilon_final": 1.0, "episodes": 400}
+    firsts, _ = play_learner(algorithm("q-learning")(12, hp, n_states=4, seed=3), arrays, 400,
+                             column=FIRST_ACTION)
+    lengths, _ = play_learner(algorithm("q-learning")(12, hp, n_states=4, seed=3), arrays,
+                              400, column=LENGTH)
+    assert set(np.unique(firsts).tolist()) == set(range(12))
+    assert ((lengths == 2) == (firsts == 0)).all() and set(lengths.tolist()) == {1.0, 2.0}
+
+
+def test_a_verdicts_tolerance_is_the_99_percent_interval_of_the_runs() -> None:
+    samples = np.array([1.0, 2.0, 3.0, 4.0])
+    half = t_quantile(0.995, 3) * samples.std(ddof=1) / 2
+    assert margin(samples) == pytest.approx(half) and margin([5.0]) == 0.0
+    assert near("", 2.5 + half - 1e-9, samples).ok and not near("", 2.5 + half + 1e-6,
+                                                                  samples).ok
+    assert near("", 2.5 + half + 0.4, samples, slack=0.5).ok
+    assert above("", "", samples + 2 * half, samples).ok
+    assert not above("", "", samples + 1.4 * half, samples).ok  # within √2 · margin
+
+
+def test_episodes_completed_against_time_steps() -> None:
+    lengths = np.array([[3.0, 2.0, 5.0], [1.0, 1.0, 8.0]])  # ends at 3, 5, 10 and 1, 2, 10
+    series = per_time_step(Played("x", lengths, None, None), points=11)
+    assert series.x.tolist() == list(range(11))
+    assert series.y.tolist() == [0, 0.5, 1, 1.5, 1.5, 2, 2, 2, 2, 2, 3]
+
+
+def test_full_gives_the_books_counts_and_flags_win() -> None:
+    figure = figure_named("6.4")
+    assert counts(figure, FigureOptions()) == (figure.runs, figure.episodes)
+    assert counts(figure, FigureOptions(full=True)) == (figure.full_runs, figure.episodes)
+    assert counts(figure, FigureOptions(runs=3, episodes=9, full=True)) == (3, 9)
+
+
+def test_cliff_walking_as_json_at_five_runs(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["book", "6.4", "--runs", "5", "--seed", "11", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert set(data) == {"schema", "figure", "title", "runs", "series", "checks"}
+    assert data["figure"] == "6.4" and data["runs"] == 5
+    assert [s["label"] for s in data["series"]] == ["Sarsa", "Q-learning"]
+    for series in data["series"]:
+        assert set(series) == {"label", "x", "y", "lo", "hi"} and len(series["x"]) == 500
+        assert all(lo <= y <= hi for lo, y, hi in zip(series["lo"], series["y"], series["hi"],
+                                                       strict=True))
+    assert all(set(c) == {"claim", "book", "measured", "ok"} and c["ok"]
+               for c in data["checks"]), data["checks"]

@@ -1,0 +1,182 @@
+"""Figures that run learners over seeds: what a run figure declares, plays, draws and checks.
+
+A run figure is a module like the exact ones (a `FIGURE`, see `figure`), whose
+`run(options, progress)` does three things with the helpers here:
+
+1. **Play** its series: `played = play(FIGURE, world, learners, options, progress,
+   measure=...)`, each `Learner(label, algorithm, settings)` trained from scratch
+   over `runs` seeds (from `options.seed`) for `episodes` episodes each, on the
+   world's model by the engine's compiled loop, through the comparison machinery
+   (`session.experiments.compare.execute`: spread over the cores, progress as
+   it goes). `measure` is what each episode records: `RETURN` (the online
+   return), `LENGTH` (time steps) or `FIRST_ACTION` (the action taken in the
+   start state). Each `Played` holds `values[run, episode]` and the greedy
+   policy's exact value at the end of each run (`final`). A swept parameter
+   (α, n, λ) is one `Learner` per value.
+2. **Draw** them as `Series` with bands: `per_episode(played)` (the mean over
+   runs per episode), `per_time_step(played)` (episodes completed against time
+   steps, from `LENGTH`), `swept(label, xs, played, summary)` (one point per
+   learner of a sweep). Bands are 95% Student-t intervals of the mean over runs.
+3. **Check** the book's claims with a tolerance that follows from the run count:
+   `near(claim, book, samples, slack)` (the mean of one number per run within
+   `slack`, the precision the book gives it, plus `margin(samples)` of the
+   book's value), `above(claim, book, higher, lower)` (one mean above the
+   other by more than the margin of their difference). `margin` is the
+   half-width of a 99% Student-t interval: t · s / √runs, 0 for one run.
+
+`counts(figure, options)` resolves runs and episodes: the flags, else the
+figure's defaults (`--full`: the book's own counts).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from tui_gym.core.engine.loop import FIRST_ACTION, LENGTH, RETURN
+from tui_gym.core.experiments.aggregate import aggregate, t_half_width
+from tui_gym.core.experiments.records import RunKind
+from tui_gym.session.book.figure import BookFigure, Check, FigureOptions, Progress, Series
+from tui_gym.session.experiments.compare import Arm, CompareProgress, Setup, execute
+
+__all__ = [
+    "FIRST_ACTION",
+    "LENGTH",
+    "RETURN",
+    "Learner",
+    "Played",
+    "above",
+    "counts",
+    "margin",
+    "near",
+    "per_episode",
+    "per_time_step",
+    "play",
+    "swept",
+]
+
+CHECK_CONFIDENCE = 0.99  # the verdicts' intervals
+Samples = npt.ArrayLike
+
+
+@dataclass(frozen=True)
+class Learner:
+    """One series of a run figure: an algorithm with the book's settings for it."""
+
+    label: str
+    algorithm: str
+    settings: Mapping[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, eq=False)
+class Played:
+    """A learner's runs: `values[run, episode]` (the figure's measure), and `final[run]`,
+    its greedy policy's exact value after the last episode (None without a model)."""
+
+    label: str
+    values: np.ndarray
+    final: np.ndarray | None
+    optimum: float | None
+
+    @property
+    def runs(self) -> int:
+        return int(self.values.shape[0])
+
+
+def counts(figure: BookFigure, options: FigureOptions) -> tuple[int, int]:
+    """(runs, episodes): the flags', else the figure's defaults (or its full counts)."""
+    runs = options.runs or (figure.full_runs if options.full else None) or figure.runs or 1
+    episodes = (options.episodes or (figure.full_episodes if options.full else None)
+                or figure.episodes or 1)
+    return runs, episodes
+
+
+def play(figure: BookFigure, world: str, learners: Sequence[Learner], options: FigureOptions,
+         progress: Progress, *, measure: int = RETURN,
+         game_params: Mapping[str, Any] | None = None) -> list[Played]:
+    """Every learner over the figure's runs (see the module docstring)."""
+    runs, episodes = counts(figure, options)
+    setup = Setup(world, runs, episodes, dict(game_params or {}), (), options.seed, measure)
+    arms = [Arm(x.algorithm, dict(x.settings), x.label) for x in learners]
+    about = f"{runs} runs × {episodes} episodes of {', '.join(x.label for x in learners)}"
+
+    def told(state: CompareProgress) -> None:
+        progress(state.done, state.total, about)
+
+    done = execute(setup, arms, RunKind.COMPARE, progress=told,
+                   status=lambda line: progress(0, 1, line or about))
+    if done.interrupted:
+        raise KeyboardInterrupt
+    return [Played(learner.label, done.values[index],
+                   None if done.exact is None else done.exact[index, :, -1].copy(),
+                   done.prepared.optimum)
+            for index, learner in enumerate(learners)]
+
+
+def margin(samples: Samples) -> float:
+    """The half-width of the 99% Student-t interval of the mean of `samples` (0 for one)."""
+    values = np.asarray(samples, dtype=np.float64).ravel()
+    if len(values) < 2:
+        return 0.0
+    return float(t_half_width(values.std(ddof=1), len(values), CHECK_CONFIDENCE))
+
+
+def near(claim: str, book: float, samples: Samples, slack: float = 0.0, digits: int = 1,
+         unit: str = "") -> Check:
+    """The mean of `samples` (one a run) within `slack` + `margin(samples)` of `book`."""
+    values = np.asarray(samples, dtype=np.float64).ravel()
+    mean, tolerance = float(values.mean()), slack + margin(values)
+    return Check(claim, f"{book:g}{unit}", f"{mean:.{digits}f}{unit} ± {tolerance:.{digits}f}",
+                 abs(mean - book) <= tolerance)
+
+
+def above(claim: str, book: str, higher: Samples, lower: Samples, digits: int = 1,
+          unit: str = "") -> Check:
+    """The mean of `higher` above that of `lower` by more than the margin of the difference
+    (each one number a run)."""
+    a = np.asarray(higher, dtype=np.float64).ravel()
+    b = np.asarray(lower, dtype=np.float64).ravel()
+    gap = float(a.mean() - b.mean())
+    spread = float(np.hypot(margin(a), margin(b)))
+    return Check(claim, book, f"{a.mean():.{digits}f}{unit} vs {b.mean():.{digits}f}{unit}",
+                 gap > spread)
+
+
+def per_episode(played: Played, scale: float = 1.0, window: int = 1) -> Series:
+    """The mean over runs of each episode's measure (times `scale`; each run smoothed over a
+    trailing `window` of episodes first), with its band."""
+    curve = aggregate(played.values * scale, window=window)
+    return Series(played.label, curve.episodes.astype(np.float64), curve.mean,
+                  curve.lo, curve.hi)
+
+
+def per_time_step(played: Played, points: int = 200) -> Series:
+    """Episodes completed against time steps (the measure must be `LENGTH`), up to the time
+    step every run reached."""
+    ends = np.cumsum(played.values, axis=1)  # the time step each episode ended at, per run
+    last = float(ends[:, -1].min())
+    steps = np.unique(np.linspace(0, last, points).round())
+    completed = np.stack([np.searchsorted(row, steps, side="right") for row in ends])
+    curve = aggregate(completed.astype(np.float64), episodes=steps.astype(np.int64))
+    return Series(played.label, steps, curve.mean, curve.lo, curve.hi)
+
+
+def swept(label: str, xs: Sequence[float], played: Sequence[Played],
+          summary: Callable[[np.ndarray], np.ndarray]) -> Series:
+    """One point per learner of a sweep: `summary(values)` gives one number a run, and the
+    point is their mean with its band."""
+    ys, los, his = [], [], []
+    for one in played:
+        per_run = np.asarray(summary(one.values), dtype=np.float64)
+        mean = float(per_run.mean())
+        half = (float(t_half_width(per_run.std(ddof=1), len(per_run)))
+                if len(per_run) > 1 else 0.0)
+        ys.append(mean)
+        los.append(mean - half)
+        his.append(mean + half)
+    return Series(label, np.asarray(xs, dtype=np.float64), np.asarray(ys), np.asarray(los),
+                  np.asarray(his))
