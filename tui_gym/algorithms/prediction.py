@@ -178,7 +178,7 @@ def rms_curve(learner: Predictor, model: ModelArrays, truth: Truth, episodes: in
     run = jit.entry(run_scored, type(hp))
     where = np.flatnonzero(truth.reached)
     scored_rows, values = model.rows[where], np.array(truth.v[where])
-    cursor, out, log = loop.Cursor(), np.zeros((1, 4)), np.zeros((1, 8))
+    cursor, out, log = loop.Cursor(), np.zeros((1, loop.COLUMNS)), np.zeros((1, 8))
     curve = np.zeros(episodes)
     done = 0
     while done < episodes:
