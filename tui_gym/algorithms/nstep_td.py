@@ -77,11 +77,14 @@ def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
         total += v_update(v, visits, hp, states[tau % size], g, log, made)
         made += 1
     if terminated or truncated:  # the last n - 1 states, with the rewards there are
-        for tau in range(max(0, t + 2 - n), t + 1):
-            g = n_step_return(rewards, tau, t, hp.discount)
-            if not terminated:
-                g += hp.discount ** (t + 1 - tau) * v[s2]
-            total += v_update(v, visits, hp, states[tau % size], g, log, made)
+        first = max(0, t + 2 - n)
+        g = 0.0 if terminated else v[s2]
+        for tau in range(t, first - 1, -1):  # their returns, backwards, in the ring
+            g = rewards[tau % size] + hp.discount * g
+            rewards[tau % size] = g
+        for tau in range(first, t + 1):  # their updates, in the book's order
+            total += v_update(v, visits, hp, states[tau % size], rewards[tau % size], log,
+                              made)
             made += 1
         step[0] = 0
     return total

@@ -22,7 +22,10 @@ FIGURE_MODULES = (
     "fig_4_1",
     "fig_4_2",
     "fig_4_3",
+    "fig_6_2",
     "fig_6_4",
+    "fig_7_2",
+    "fig_12_6",
 )
 
 
