@@ -25,7 +25,8 @@ class Sweep:
         self.label = label
         self.played = tuple(played)
         self.per_run = [p.values.mean(axis=1) for p in played]  # one number a run, per α
-        means = np.array([v.mean() for v in self.per_run])
+        with np.errstate(invalid="ignore", over="ignore"):
+            means = np.array([v.mean() for v in self.per_run])
         self.means = np.where(np.isfinite(means), means, np.inf)
 
     @property
@@ -43,7 +44,8 @@ class Sweep:
 
     def series(self) -> Series:
         """The curve over α, without the points off the book's chart (diverging ones)."""
-        full = swept(self.label, ALPHAS, self.played, lambda v: v.mean(axis=1))
+        with np.errstate(invalid="ignore", over="ignore"):  # diverged runs: inf, NaN
+            full = swept(self.label, ALPHAS, self.played, lambda v: v.mean(axis=1))
         keep = np.isfinite(full.hi) & (full.y <= SHOWN)
         return Series(full.label, full.x[keep], full.y[keep], full.lo[keep], full.hi[keep])
 
