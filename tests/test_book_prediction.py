@@ -11,8 +11,8 @@ import pytest
 from tui_gym.cli import main
 from tui_gym.session.book import figure_named
 from tui_gym.session.book.figure import FigureOptions
-from tui_gym.session.book.sweeps import ALPHAS, Sweep
 from tui_gym.session.book.runs import Played
+from tui_gym.session.book.sweeps import ALPHAS, Sweep
 
 RUNS = 10
 

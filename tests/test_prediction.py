@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tui_gym.algorithms import MonteCarloPrediction, NStepTD, Predictor, TD0, TDLambda
+from tui_gym.algorithms import TD0, MonteCarloPrediction, NStepTD, Predictor, TDLambda
 from tui_gym.algorithms.prediction import rms_curve
 from tui_gym.core.engine.loop import ModelArrays
 from tui_gym.games import game_for

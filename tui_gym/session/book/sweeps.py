@@ -46,6 +46,7 @@ class Sweep:
         """The curve over α, without the points off the book's chart (diverging ones)."""
         with np.errstate(invalid="ignore", over="ignore"):  # diverged runs: inf, NaN
             full = swept(self.label, ALPHAS, self.played, lambda v: v.mean(axis=1))
+        assert full.lo is not None and full.hi is not None  # a sweep has bands
         keep = np.isfinite(full.hi) & (full.y <= SHOWN)
         return Series(full.label, full.x[keep], full.y[keep], full.lo[keep], full.hi[keep])
 
