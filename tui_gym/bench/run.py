@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from functools import partial
 from typing import Any
 
-from tui_gym.algorithms import ALGORITHMS
+from tui_gym.algorithms import ALGORITHMS, Predictor, algorithm
 from tui_gym.bench import (
     compiling,
     defaults,
@@ -126,8 +126,9 @@ def run_bench(
           "Q-learning and SARSA, against the same learners in a tutorial loop",
           lambda: seeds.measure(plan.compare_seeds, plan.compare_episodes,
                                 plan.compare_tutorial_share))
+    control = tuple(n for n in names if not issubclass(algorithm(n), Predictor))  # bounds
     stage("defaults", f"the defaults over {plan.defaults_seeds} seeds: the share that reaches "
-          "the bound", lambda: defaults.measure(games, names, plan.defaults_seeds))
+          "the bound", lambda: defaults.measure(games, control, plan.defaults_seeds))
     stage("live", "live training in the app",
           lambda: live.measure(plan.live_seconds, plan.key_presses, plan.live_repeats,
                                progress=say))
