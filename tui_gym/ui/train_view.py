@@ -10,8 +10,8 @@ numbers (`StatsPanel`) beside the hyperparameter fields
 (`TrainingCharts`) with, at animated speeds, the game's board replaying the
 agent's moves, for a prediction learner its RMS error of V and V against the
 exact values state by state (`PredictionChart`), the step panel (`StepPanel`)
-explaining each update, and the Q-table heatmaps (`HeatmapView`), where the explained step's state is
-marked. On a grid game `m` opens the map editor (`MapEditor`) above the
+explaining each update, and the Q-table heatmaps (`HeatmapView`), where the
+explained step's state is marked. On a grid game `m` opens the map editor (`MapEditor`) above the
 heatmaps: each edit rebuilds the game through the app (the agent kept while
 its states keep their meaning, training going on) and the editor shows the new
 map solved exactly.
