@@ -198,3 +198,33 @@ def test_a_session_scores_a_predictor_on_either_loop_with_the_books_settings() -
         assert after is not None and snap is not None
         assert after.rms < before.rms / 2 and snap.rms == after.rms
     assert Session("random-walk", algorithm="sarsa").prediction() is None
+
+
+def test_a_predictor_follows_a_saved_agents_policy(tmp_path: Path,
+                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    from tui_gym.cli import main
+
+    control = Session("random-walk", algorithm="q-learning", seed=0, hp={"episodes": 300})
+    control.train()
+    path = control.save(tmp_path / "q.tgym")
+    follower = Session("random-walk", algorithm="td0", seed=0)
+    follower.follow(Session.load(path), epsilon=0.0)
+    assert follower.hp.epsilon_final == 0.0 == follower.agent.epsilon
+    greedy = control.agent.values(range(7)).argmax(axis=1)
+    assert (follower.agent.q[:7].argmax(axis=1) == greedy).all()
+    follower.train()
+    figures = follower.prediction()
+    assert figures is not None and figures.truth == pytest.approx([1.0] * len(figures.states))
+    assert figures.rms < 0.01
+    with pytest.raises(ValueError, match="SARSA is not a prediction learner"):
+        Session("random-walk", algorithm="sarsa").follow(follower)
+    with pytest.raises(ValueError, match=r"plays Random walk \{'states': 5\}, not Random"):
+        Session("random-walk", {"states": 19}, algorithm="td0").follow(control)
+    assert main(["train", "random-walk", "--algorithm", "td0", "--follow", str(path),
+                 "--epsilon-final", "0.2", "--eval-episodes", "5", "--no-record",
+                 "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["hyperparameters"]["epsilon_final"] == 0.2 and data["rms_error"] < 1.0
+    assert main(["train", "random-walk", "--algorithm", "td0", "--follow",
+                 str(tmp_path / "none.tgym"), "--no-record"]) == 2
+    assert "--follow:" in capsys.readouterr().err

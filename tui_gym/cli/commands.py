@@ -361,6 +361,12 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
         raise CliError(f"--target-gap must be a positive number, got {args.target_gap:g}")
     save_path = args.save  # checked as the arguments were read (`output_file`)
     session = _session_from_args(args)
+    if args.follow is not None:
+        epsilon = float(hyperparameters(args, session.learner_class).get("epsilon_final", 0.0))
+        try:
+            session.follow(Session.load(args.follow), epsilon)
+        except ValueError as exc:
+            raise CliError(f"--follow: {exc}") from None
     recording = args.recording  # the run history's record of this run (see `recorded`)
     recording.begin(session)
     hp = session.hp

@@ -342,6 +342,23 @@ class Session:
         self.agent.set_hyperparameters(settings)
         self.hp = settings
 
+    def follow(self, other: Session, epsilon: float = 0.0) -> None:
+        """The prediction learner follows `other`'s agent's epsilon-greedy policy from now
+        on (its table as it is now). ValueError, changing nothing, when this is not a
+        prediction learner or the two do not play the same game with the same states."""
+        agent = self.agent
+        if not isinstance(agent, Predictor):
+            raise ValueError(f"{self.learner_class.title} is not a prediction learner: it "
+                             "follows its own policy")
+        same = (other.env_id, other.env_kwargs, other._built.meaning) == (
+            self.env_id, self.env_kwargs, self._built.meaning)
+        if not (same and self.keyer.dense and other.keyer.dense):
+            raise ValueError(f"the agent to follow plays {other.game.title} "
+                             f"{other.env_kwargs or ''}, not {self.game.title} "
+                             f"{self.env_kwargs or ''} with the same wrappers")
+        agent.follow(other.agent.values(range(agent.rows_used)), epsilon)
+        self.hp = agent.hp
+
     def set_algorithm(self, name: str) -> None:
         """Train with another algorithm: a fresh learner with the game's defaults for it,
         and fresh statistics (nothing of the old learner carries over). ValueError for
