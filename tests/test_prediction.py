@@ -228,3 +228,21 @@ def test_a_predictor_follows_a_saved_agents_policy(tmp_path: Path,
     assert main(["train", "random-walk", "--algorithm", "td0", "--follow",
                  str(tmp_path / "none.tgym"), "--no-record"]) == 2
     assert "--follow:" in capsys.readouterr().err
+
+
+def test_the_step_panels_record_of_a_prediction_update() -> None:
+    td = learner(TD0, learning_rate=0.5, initial_value=0.2)
+    td.update_one(3, 1, 1.0, 4, False)
+    record = td.last_update
+    assert record is not None and record.formula == "r + γ·V(s')"
+    assert (record.target, record.before, record.after, record.step_size) == pytest.approx(
+        (1.2, 0.2, 0.7, 0.5))
+    nstep = learner(NStepTD, n=3)
+    nstep.update_one(3, 1, 0.0, 4, False)
+    waiting = nstep.last_update
+    assert waiting is not None and waiting.target is None and waiting.before == 0.0
+    mc = learner(MonteCarloPrediction, learning_rate=0.5)
+    mc.update_one(4, 1, 0.0, 5, False)
+    mc.update_one(5, 1, 1.0, 6, True)
+    end = mc.last_update  # the last state's own update comes first in the book's order
+    assert end is not None and (end.target, end.after) == pytest.approx((1.0, 0.5))
