@@ -58,7 +58,10 @@ def test_the_train_view_shows_it_for_a_prediction_learner_only() -> None:
             session.trainer.run(episodes=40)
             view.show_snapshot(session.trainer.latest, app.runner)
             await pilot.pause()
-            assert chart.rms_points[-1] == (40, session.prediction().rms)
+            rms = session.prediction().rms
+            assert chart.rms_points[-1] == (40, rms)
+            assert f"RMS error of V {rms:.4f}" in view.stats.plain
+            assert "gap" not in view.stats.plain  # no greedy policy's figures
         control = TrainHost(Session("random-walk", algorithm="sarsa", seed=0))
         async with control.run_test(size=(120, 40)):
             assert not control.train_view.query_one(PredictionChart).display

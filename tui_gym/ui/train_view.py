@@ -464,8 +464,13 @@ class TrainView(Vertical):
         session, snapshot = self.session, self._snapshot
         if snapshot is None:
             return
-        reference = session.reference(snapshot)
-        if reference is None:
+        reference = None if session.predicts else session.reference(snapshot)
+        if session.predicts:  # its figure is V's error, not a greedy policy's gap
+            figures = session.prediction(snapshot)
+            note = (f"RMS error of V {figures.rms:.4f} against the exact values of the "
+                    "policy it follows" if figures is not None
+                    else f"no RMS error: {session.prediction_reason()}")
+        elif reference is None:
             note = session.exact_reason()
         else:  # at the budget's end: why it ends short of the bound, if it does
             note = session.shortfall(reference) if snapshot.episodes >= snapshot.budget else ""
