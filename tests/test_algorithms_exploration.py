@@ -129,7 +129,7 @@ def test_settings_parse_text_and_refuse_bad_values() -> None:
 def test_the_registry() -> None:
     names = [cls.name for cls in ALGORITHMS]
     assert names == ["q-learning", "sarsa", "expected-sarsa", "double-q", "monte-carlo", "dyna-q",
-                     "td0", "mc-prediction", "n-step-td", "td-lambda"]
+                     "td0", "mc-prediction", "n-step-td", "td-lambda", "offline-lambda-return"]
     assert algorithm("Expected_SARSA").name == "expected-sarsa"
     with pytest.raises(ValueError, match="unknown algorithm 'td-1'; choose one of q-learning"):
         algorithm("td-1")

@@ -13,7 +13,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tui_gym.algorithms import TD0, MonteCarloPrediction, NStepTD, Predictor, TDLambda
+from tui_gym.algorithms import (
+    TD0,
+    MonteCarloPrediction,
+    NStepTD,
+    OfflineLambdaReturn,
+    Predictor,
+    TDLambda,
+)
 from tui_gym.algorithms.prediction import rms_curve
 from tui_gym.core.engine.loop import ModelArrays
 from tui_gym.games import game_for
@@ -85,6 +92,17 @@ def test_td_lambda_spreads_the_td_error_over_the_traces(replacing: bool, first: 
     assert lam.v[3] == pytest.approx(0.5) and lam.v[2] == pytest.approx(0.5 * 0.45)
 
 
+def test_the_offline_lambda_return_updates_toward_lambda_returns_at_the_end() -> None:
+    offline = learner(OfflineLambdaReturn, learning_rate=0.5, discount=0.9,
+                      **{"lambda": 0.5})
+    offline.v[3], offline.v[4] = 0.2, 0.4
+    offline.learn(3, 1, 0.0, 4, False)
+    assert offline.v[3] == 0.2  # nothing before the end
+    offline.learn(4, 1, 1.0, 5, True)
+    # G(4) = 1; G(3) = 0 + 0.9·(0.5·V(4) + 0.5·G(4)) = 0.63, with V as the episode had it.
+    assert offline.v[[3, 4]] == pytest.approx([0.2 + 0.5 * (0.63 - 0.2), 0.4 + 0.5 * 0.6])
+
+
 # --- the ruler -----------------------------------------------------------------------------
 
 
@@ -118,7 +136,8 @@ RUNS = 20
 # (learner, hyperparameters): the book's Example 6.2 settings, V starting at 0.5.
 LEARNERS = [(TD0, {"learning_rate": 0.1}), (MonteCarloPrediction, {"learning_rate": 0.02}),
             (NStepTD, {"learning_rate": 0.1, "n": 2}),
-            (TDLambda, {"learning_rate": 0.1, "lambda": 0.5})]
+            (TDLambda, {"learning_rate": 0.1, "lambda": 0.5}),
+            (OfflineLambdaReturn, {"learning_rate": 0.1, "lambda": 0.5})]
 
 
 @pytest.mark.parametrize(("cls", "hp"), LEARNERS, ids=[c.name for c, _ in LEARNERS])

@@ -5,8 +5,8 @@ its tables, its update rule written once as compiled scalar code, and a
 record of a single update for the step-by-step view. `algorithm(name)` finds
 one by its registry name (`q-learning`, `sarsa`, `expected-sarsa`,
 `double-q`, `monte-carlo`, `dyna-q`; the prediction learners `td0`,
-`mc-prediction`, `n-step-td`, `td-lambda`, which score a fixed policy: see
-`prediction`).
+`mc-prediction`, `n-step-td`, `td-lambda`, `offline-lambda-return`, which
+score a fixed policy: see `prediction`).
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ from tui_gym.algorithms.expected_sarsa import ExpectedSarsa
 from tui_gym.algorithms.mc_prediction import MonteCarloPrediction
 from tui_gym.algorithms.monte_carlo import MonteCarlo
 from tui_gym.algorithms.nstep_td import NStepTD
+from tui_gym.algorithms.offline_lambda import OfflineLambdaReturn
 from tui_gym.algorithms.prediction import Predictor
 from tui_gym.algorithms.qlearning import QLearning
 from tui_gym.algorithms.sarsa import Sarsa
@@ -48,6 +49,7 @@ __all__ = [
     "MonteCarlo",
     "MonteCarloPrediction",
     "NStepTD",
+    "OfflineLambdaReturn",
     "Predictor",
     "QLearning",
     "Sarsa",
@@ -72,6 +74,7 @@ ALGORITHMS: tuple[type[Learner], ...] = (
     MonteCarloPrediction,
     NStepTD,
     TDLambda,
+    OfflineLambdaReturn,
 )
 
 DEFAULT_ALGORITHM = QLearning.name

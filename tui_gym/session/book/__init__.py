@@ -25,6 +25,7 @@ FIGURE_MODULES = (
     "fig_6_2",
     "fig_6_4",
     "fig_7_2",
+    "fig_12_3",
     "fig_12_6",
 )
 
