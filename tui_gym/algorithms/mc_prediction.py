@@ -22,7 +22,7 @@ from tui_gym.algorithms.prediction import Predictor, v_update
 from tui_gym.core.engine.kernel import kernel
 from tui_gym.core.engine.rules import Rule, register
 
-__all__ = ["MonteCarloPrediction"]
+__all__ = ["EpisodePredictor", "MonteCarloPrediction"]
 
 _FIRST_BUFFER = 64  # steps of an episode kept before the buffer doubles
 
@@ -66,15 +66,9 @@ def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
 register(Params, Rule(update, begin=begin, full=full))
 
 
-class MonteCarloPrediction(Predictor):
-    """Constant-α MC: V of the policy followed, from each episode's returns at its end."""
-
-    name = "mc-prediction"
-    title = "Constant-α MC"
-    summary = "prediction: V of a fixed policy, toward whole-episode returns at their end"
-    formula = "G = r + γ·G'"
-    target_text = formula
-    Params = Params
+class EpisodePredictor(Predictor):
+    """A predictor that keeps each episode's states and rewards until its end (`begin` and
+    `full` above, tables 4 to 6)."""
 
     def arrays(self) -> tuple[np.ndarray, ...]:
         return (*super().arrays(), self._states, self._rewards, self._length)
@@ -92,3 +86,14 @@ class MonteCarloPrediction(Predictor):
 
     def log_rows(self) -> int:
         return int(self._length[0]) + 1
+
+
+class MonteCarloPrediction(EpisodePredictor):
+    """Constant-α MC: V of the policy followed, from each episode's returns at its end."""
+
+    name = "mc-prediction"
+    title = "Constant-α MC"
+    summary = "prediction: V of a fixed policy, toward whole-episode returns at their end"
+    formula = "G = r + γ·G'"
+    target_text = formula
+    Params = Params

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import Any, NamedTuple
 
-from tui_gym.algorithms.mc_prediction import MonteCarloPrediction, begin, full
+from tui_gym.algorithms.mc_prediction import EpisodePredictor, begin, full
 from tui_gym.algorithms.prediction import PREDICTION_PARAMS, v_update
 from tui_gym.core.engine.kernel import kernel
 from tui_gym.core.engine.rules import Rule, register
@@ -60,7 +60,7 @@ def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
 register(Params, Rule(update, begin=begin, full=full))
 
 
-class OfflineLambdaReturn(MonteCarloPrediction):
+class OfflineLambdaReturn(EpisodePredictor):
     """Offline λ-return: V of the policy followed, toward λ-returns at each episode's end."""
 
     name = "offline-lambda-return"
