@@ -38,7 +38,8 @@ CONTROL = [cls.name for cls in ALGORITHMS if not issubclass(cls, Predictor)]
 GAMES = ("blackjack", "gridworld", "frozenlake", "cliffwalking", "taxi", "ab-grid",
          "corner-grid", "gambler", "car-rental", "random-walk", "windy", "windy-king",
          "dyna-maze", "max-bias")
-# Rewards drawn with noise: trained on the env (the compiled loop pays their means).
+# Rewards drawn with noise: trained on the env loop here (the compiled loop's draws:
+# test_book_runs.py).
 ENV_LOOP = frozenset({"max-bias"})
 
 # The pairs a game names a lesson for (its defaults end short of its bound by the

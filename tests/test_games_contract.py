@@ -271,8 +271,8 @@ def test_sampled_returns_of_a_fixed_policy_agree_with_its_exact_value(
     exact = _exact_value(session, q)
     assert exact is not None
     _within(_play_env(session, q, 300), exact)
-    # The compiled loop plays one model with its mean rewards: not a world that changes,
-    # nor rewards drawn with noise (the env loop trains those).
+    # The compiled loop plays one model (drawing the noise of rewards that have it): not a
+    # world that changes.
     if session.training is not None:
         _within(_play_model(session, q, 4000), exact)
 

@@ -19,17 +19,14 @@ from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from tui_gym.book_text import claims_table, figure_parts
 from tui_gym.cli.grids import panel_text
 from tui_gym.cli.output import print_json
 from tui_gym.cli.types import positive_int, seed_number
 from tui_gym.session.book import figure_named, figures
-from tui_gym.session.book.figure import FigureOptions, FigureResult
-from tui_gym.terminal_chart import ChartSeries, band_chart
+from tui_gym.session.book.figure import BookFigure, FigureOptions, FigureResult, FigureStopped
 
 __all__ = ["BOOK_COMMANDS", "add_book_parser"]
-
-CHART_HEIGHT = 10
-
 
 def add_book_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     book = sub.add_parser("book", help="Sutton & Barto's figures: list them, or run one and "
@@ -52,6 +49,14 @@ def cmd_book(args: argparse.Namespace, out: Console) -> int:
         return _list(args, out)
     figure = figure_named(args.figure)
     options = FigureOptions(args.runs, args.episodes, args.book_seed, args.full)
+    try:
+        return _run(figure, options, args, out)
+    except FigureStopped as stopped:  # Ctrl+C: the runs end at their next step
+        raise KeyboardInterrupt from stopped
+
+
+def _run(figure: BookFigure, options: FigureOptions, args: argparse.Namespace,
+         out: Console) -> int:
     if args.json:
         result = figure.run(options, lambda done, total, what: None)
         print_json("book", result.as_json())
@@ -89,26 +94,12 @@ def _list(args: argparse.Namespace, out: Console) -> int:
 
 
 def _draw(out: Console, result: FigureResult) -> None:
-    out.print(f"[bold]Figure {result.figure}[/]: {escape(result.title)}")
-    width = max(20, min(100, out.width) - 14)
-    for chart in result.charts:
-        series = [ChartSeries(s.label, s.x, s.y, s.lo, s.hi) for s in chart.series]
-        out.print(band_chart(series, width, CHART_HEIGHT, x_label=chart.x_label,
-                             y_label=chart.title, skip_start=chart.skip_start))
+    for part in figure_parts(result, out.width):
+        out.print(part)
     for panel in result.panels:
         out.print(panel_text(panel, out.width), soft_wrap=True)
-    checks = Table(title="The book's claims", title_justify="left")
-    checks.add_column("claim")
-    checks.add_column("book", justify="right")
-    checks.add_column("measured", justify="right")
-    checks.add_column("")
-    for check in result.checks:
-        verdict = "[green]✓ reproduced[/]" if check.ok else "[red]✗ differs[/]"
-        checks.add_row(escape(check.claim), escape(str(check.book)), escape(str(check.measured)),
-                       verdict)
-    out.print(checks)
-    for note in result.notes:
-        out.print(f"[dim]{escape(note)}[/]")
+    for part in claims_table(result):
+        out.print(part)
 
 
 BOOK_COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {"book": cmd_book}

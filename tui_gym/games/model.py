@@ -620,8 +620,6 @@ class ModelGame(Game):
             return exact
         if len(self.phase_starts(kwargs)) > 1:
             return NotAvailable(f"{self.title} changes as it is played")
-        if exact.model.reward_std is not None and exact.model.reward_std.any():
-            return NotAvailable(f"{self.title} draws rewards with noise")
         if not exact.scope.exact:
             return NotAvailable(exact.scope.note)
         return TrainingModel(exact.model)

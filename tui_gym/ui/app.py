@@ -71,6 +71,7 @@ from tui_gym.ui.widgets.key_bar import KeyBar
 if TYPE_CHECKING:
     from tui_gym.core.recording import Recording
     from tui_gym.session.experiments.app_recording import SessionRunLog
+    from tui_gym.ui.book_view import BookView
     from tui_gym.ui.compare_view import CompareView
     from tui_gym.ui.confirm_screen import ConfirmScreen
     from tui_gym.ui.plan_view import PlanView
@@ -129,6 +130,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
                 tooltip="Compare learners across seeds; the runs recorded for this game"),
         Binding("P", "show_view('plan')", "Plan",
                 tooltip="Plan: policy evaluation, policy and value iteration, sweep by sweep"),
+        Binding("f", "show_view('book')", "Book",
+                tooltip="The book's figures: learners run over seeds, the claims checked"),
         Binding("question_mark,f1", "help", "Help", key_display="?"),
         Binding("q", "quit", "Quit"),
         Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
@@ -199,6 +202,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self.history_kept = history_kept
         self._compare: CompareView | None = None
         self._plan: PlanView | None = None
+        self._book: BookView | None = None
         self._train: TrainView | None = None
         self._train_mounted: AwaitMount | None = None
 
@@ -327,8 +331,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
 
     @property
     def current_view(self) -> str:
-        """"play", "train", "compare" or "plan" (asked often: by every binding check and every
-        tick)."""
+        """"play", "train", "compare", "plan" or "book" (asked often: by every binding check
+        and every tick)."""
         switcher = self._switcher
         if switcher is None or not switcher.is_attached:  # not yet, or being taken apart
             return "play"
@@ -390,8 +394,14 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
 
             self._plan = PlanView(id="plan")
             self._switcher.mount(self._plan)
+        if view == "book" and self._book is None:
+            from tui_gym.ui.book_view import BookView
+
+            self._book = BookView(id="book")
+            self._switcher.mount(self._book)
         self._switcher.current = view
         self._main_screen.set_class(view == "compare", "-view-compare")
+        self._main_screen.set_class(view == "book", "-view-book")
         if view == "play":
             self.play_view.focus_board()
         elif view == "compare":
@@ -402,6 +412,9 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         elif view == "plan":
             assert self._plan is not None
             self.call_after_refresh(self._plan.focus_default)
+        elif view == "book":
+            assert self._book is not None
+            self.call_after_refresh(self._book.focus_default)
         else:
             self._train_shown()
         self.refresh_bindings()  # the view's keys, even when the focus stays put
@@ -452,6 +465,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             self._compare.focus_default()
         elif self.current_view == "plan" and self._plan is not None:
             self._plan.focus_default()
+        elif self.current_view == "book" and self._book is not None:
+            self._book.focus_default()
         elif (view := self._train_ready()) is not None:
             view.focus_default()  # else it takes the keyboard when it mounts
 
@@ -929,13 +944,14 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     # --- help and the command palette ---------------------------------------
     def key_help(self) -> list[tuple[str, list[tuple[str, str]]]]:
         """Every key, grouped by where it works: (section, [(key, what it does)])."""
+        from tui_gym.ui.book_view import BookView
         from tui_gym.ui.compare_view import CompareView
         from tui_gym.ui.plan_view import PlanView
 
         sections = [
             ("Everywhere", [
                 ("p / t / v", "Play view / Train view / Compare view"),
-                ("P", "Plan view: planning, sweep by sweep"),
+                ("P / f", "Plan view (sweep by sweep) / Book view"),
                 *_game_keys(),
                 ("w / W", "focus the wrapper panel (W while a board that moves with WASD "
                           "has focus)"),
@@ -960,6 +976,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             ]),
             ("Compare", CompareView.key_help()),
             ("Plan", PlanView.key_help()),
+            ("Book", BookView.key_help()),
             ("Side panel", [
                 ("tab / shift+tab", "move between fields"),
                 ("space / enter", "tick a wrapper, press a button, pick a game or an "
@@ -990,6 +1007,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
              lambda: self.action_show_view("compare")),
             ("Plan view", "Policy evaluation, policy iteration and value iteration on the "
              "game's exact model, sweep by sweep (P)", lambda: self.action_show_view("plan")),
+            ("Book view", "Sutton & Barto's figures: learners run over seeds, the book's claims "
+             "checked (f)", lambda: self.action_show_view("book")),
             *(
                 (f"Game: {g.title}", g.description,
                  lambda name=g.name: self.action_switch_game(name))

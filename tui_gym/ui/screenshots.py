@@ -213,6 +213,22 @@ async def _plan(app, pilot, keys: tuple[str, ...], edit: tuple[str, ...] = ()) -
         await pilot.pause()
 
 
+async def _book(app, pilot, figure: str) -> None:
+    """The Book view: `figure` run at its defaults, drawn with its verdicts."""
+    from tui_gym.ui.book_view import BookView
+
+    await pilot.press("f")
+    while not app.query(BookView):
+        await pilot.pause()
+    view = app.query_one(BookView)
+    await pilot.pause()
+    index = next(i for i, f in enumerate(view.figures) if f.name == figure)
+    await pilot.press(*["down"] * index, "enter")
+    while view.running:
+        await pilot.pause(0.1)
+    await pilot.pause()
+
+
 async def _wrappers(app, pilot) -> None:
     await pilot.press("w")
     await pilot.pause()
@@ -257,6 +273,8 @@ def _scenarios() -> tuple[Scenario, ...]:
                  partial(Session, "gambler", seed=0), partial(_plan, keys=("3", "c"))),
         Scenario("plan-car-rental.svg", "Jack's car rental: policy iteration (Figure 4.2)",
                  partial(Session, "car-rental", seed=0), partial(_plan, keys=("2", "c"))),
+        Scenario("book.svg", "Figure 8.2: Dyna-Q's planning steps on the Dyna maze, checked",
+                 partial(Session, "dyna-maze", seed=0), partial(_book, figure="8.2")),
         Scenario("help.svg", "Every key", partial(Session, first.env_id, seed=0), _help),
         Scenario("compact-80x24.svg", "The compact layout at 80x24",
                  partial(Session, first.env_id, seed=4), _play, size=(80, 24)),

@@ -2,14 +2,16 @@
 
 `run_model` plays a learner on a model's arrays (`ModelArrays`), one
 transition at a time: epsilon-greedy acting (the algorithm's acting values),
-an outcome drawn from the model, the episode limit, the algorithm's update.
+an outcome drawn from the model (a reward with noise drawn around its mean),
+the episode limit, the algorithm's update.
 It runs at most `max_episodes` episodes and `max_steps` transitions per call
 and keeps the episode in progress in `cursor` and `acc` between calls, so a
 run cut into calls of any size is the same run: one transition from Python
 (the `n` step), a chunk at max speed, a whole headless run. Every random
 number comes from the learner's generator, in one order: the start, then per
-transition the action (when not chosen already), the outcome, the next
-action (SARSA), and what the rule draws.
+transition the action (when not chosen already), the outcome, its reward's
+noise (only where it has any), the next action (SARSA), and what the rule
+draws.
 
 `transition` is the same update for a transition that happened elsewhere (a
 Gymnasium env played from Python), choosing the next action first where the
@@ -72,6 +74,7 @@ class ModelArrays:
     cumulative: np.ndarray
     guide: np.ndarray  # [S * A * K]: per pair, where outcome j / K falls (see `sample_outcome`)
     reward: np.ndarray
+    noise: np.ndarray  # [S * A * K]: each reward's standard deviation ([0.0]: none has any)
     terminal: np.ndarray
     outcomes: int
     starts: np.ndarray
@@ -103,6 +106,8 @@ class ModelArrays:
             cumulative=np.array(model.cumulative.reshape(-1), dtype=np.float64),
             guide=guide.reshape(-1),
             reward=np.array(model.reward.reshape(-1), dtype=np.float64),
+            noise=(np.zeros(1) if model.reward_std is None or not model.reward_std.any()
+                   else np.array(model.reward_std.reshape(-1), dtype=np.float64)),
             terminal=np.array(model.terminal.reshape(-1), dtype=np.bool_),
             outcomes=outcomes,
             starts=starts,
@@ -166,8 +171,8 @@ def sample_outcome(cumulative: Any, guide: Any, base: int, outcomes: int, rng: A
 
 
 @kernel
-def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, terminal: Any,
-              outcomes: int,
+def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: Any,
+              terminal: Any, outcomes: int,
               starts: Any, start_cumulative: Any, rows: Any, horizon: int,
               tables: Any, hp: Any, rng: Any, explore: Any, episode0: int,
               cursor: Any, acc: Any, max_episodes: int, max_steps: int,
@@ -204,6 +209,8 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, termina
         at += sample_outcome(cumulative, guide, at, outcomes, rng)
         s2 = next_state[at]
         r = reward[at]
+        if noise.shape[0] > 1 and noise[at] > 0.0:
+            r += noise[at] * rng.standard_normal()
         ended = terminal[at]
         cursor[3] += 1
         cut = (not ended) and horizon > 0 and cursor[3] >= horizon
@@ -253,8 +260,9 @@ def play(learner: Any, model: ModelArrays, cursor: Cursor, max_episodes: int,
     schedule on by the episodes finished): (episodes, steps)."""
     hp = learner.compiled_params()
     status = entries(hp).run_model(
-        model.next_state, model.cumulative, model.guide, model.reward, model.terminal,
-        model.outcomes, model.starts, model.start_cumulative, model.rows, model.horizon,
+        model.next_state, model.cumulative, model.guide, model.reward, model.noise,
+        model.terminal, model.outcomes, model.starts, model.start_cumulative, model.rows,
+        model.horizon,
         learner.arrays(), hp, learner.rng, learner.exploration(), learner.episode,
         cursor.ints, cursor.floats, min(max_episodes, len(out)), max_steps, out, log,
     )
@@ -309,7 +317,7 @@ def compile_learner(tables: Any, hp: Any) -> None:
     cursor = Cursor()
     out = np.zeros((1, COLUMNS))
     explore = np.zeros(3)
-    calls.run_model(model.next_state, model.cumulative, model.guide, model.reward,
+    calls.run_model(model.next_state, model.cumulative, model.guide, model.reward, model.noise,
                     model.terminal, model.outcomes, model.starts, model.start_cumulative,
                     model.rows, model.horizon, copies, hp, spare, explore, 0, cursor.ints,
                     cursor.floats, 1, 1, out, log)

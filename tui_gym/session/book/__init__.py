@@ -5,6 +5,9 @@ Each figure is one module here holding a `FIGURE` (see `figure`), listed in
 `figure_named("4.3")` finds one (by its number, or an alias such as "example
 4.2"). The dynamic-programming figures are exact: they run the planner
 (`tui_gym.core.mdp.planning`) on the book's worlds and take no runs or seeds.
+The others train learners over seeds and check the book's claims with
+tolerances from the run count: `runs` says how they declare, play, draw and
+check them.
 """
 
 from __future__ import annotations
@@ -23,8 +26,11 @@ FIGURE_MODULES = (
     "fig_4_2",
     "fig_4_3",
     "fig_6_2",
+    "fig_6_3",
     "fig_6_4",
+    "fig_6_5",
     "fig_7_2",
+    "fig_8_2",
     "fig_12_3",
     "fig_12_6",
 )

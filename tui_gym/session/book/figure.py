@@ -13,6 +13,7 @@ the book's claims beside the measured figure with a verdict.
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -22,7 +23,8 @@ import numpy.typing as npt
 
 from tui_gym.core.heatmap import Heatmap
 
-__all__ = ["BookFigure", "Chart", "Check", "FigureOptions", "FigureResult", "Progress", "Series"]
+__all__ = ["BookFigure", "Chart", "Check", "FigureOptions", "FigureResult", "FigureStopped",
+           "Progress", "Series"]
 
 Progress = Callable[[int, int, str], None]  # (done, total, what is being done)
 
@@ -30,12 +32,18 @@ Progress = Callable[[int, int, str], None]  # (done, total, what is being done)
 @dataclass(frozen=True)
 class FigureOptions:
     """How a figure is run: `runs` and `episodes` (None: the figure's defaults, or with
-    `full` the book's own counts) and the first `seed`."""
+    `full` the book's own counts) and the first `seed`; setting `stop` ends a figure that
+    runs learners early (`FigureStopped`)."""
 
     runs: int | None = None
     episodes: int | None = None
     seed: int = 0
     full: bool = False
+    stop: threading.Event | None = field(default=None, compare=False)
+
+
+class FigureStopped(Exception):
+    """A figure's run was stopped before it finished (`FigureOptions.stop`)."""
 
 
 @dataclass(frozen=True, eq=False)

@@ -8,10 +8,11 @@ A run figure is a module like the exact ones (a `FIGURE`, see `figure`), whose
    over `runs` seeds (from `options.seed`) for `episodes` episodes each, on the
    world's model by the engine's compiled loop, through the comparison machinery
    (`session.experiments.compare.execute`: spread over the cores, progress as
-   it goes). `measure` is what each episode records: `RETURN` (the online
-   return), `LENGTH` (time steps) or `FIRST_ACTION` (the action taken in the
-   start state). Each `Played` holds `values[run, episode]` and the greedy
-   policy's exact value at the end of each run (`final`). A swept parameter
+   it goes; setting `options.stop` ends it with `FigureStopped`). `measure` is
+   what each episode records: `RETURN` (the online return), `LENGTH` (time
+   steps) or `FIRST_ACTION` (the action taken in the start state). Each
+   `Played` holds `values[run, episode]` and the greedy policy's exact value
+   at the end of each run (`final`). A swept parameter
    (α, n, λ) is one `Learner` per value.
 2. **Draw** them as `Series` with bands: `per_episode(played)` (the mean over
    runs per episode), `per_time_step(played)` (episodes completed against time
@@ -20,9 +21,12 @@ A run figure is a module like the exact ones (a `FIGURE`, see `figure`), whose
 3. **Check** the book's claims with a tolerance that follows from the run count:
    `near(claim, book, samples, slack)` (the mean of one number per run within
    `slack`, the precision the book gives it, plus `margin(samples)` of the
-   book's value), `above(claim, book, higher, lower)` (one mean above the
+   book's value), `one_run(claim, book, samples, slack)` (the same for a figure
+   the book draws from a single run: within the spread of one run, t · s ·
+   √(1 + 1/runs)), `above(claim, book, higher, lower)` (one mean above the
    other by more than the margin of their difference). `margin` is the
-   half-width of a 99% Student-t interval: t · s / √runs, 0 for one run.
+   half-width of a 99% Student-t interval: t · s / √runs; one run has none,
+   so no claim it measures is borne out.
 
 `counts(figure, options)` resolves runs and episodes: the flags, else the
 figure's defaults (`--full`: the book's own counts).
@@ -30,6 +34,7 @@ figure's defaults (`--full`: the book's own counts).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -40,7 +45,14 @@ import numpy.typing as npt
 from tui_gym.core.engine.loop import FIRST_ACTION, LENGTH, RETURN
 from tui_gym.core.experiments.aggregate import aggregate, t_half_width
 from tui_gym.core.experiments.records import RunKind
-from tui_gym.session.book.figure import BookFigure, Check, FigureOptions, Progress, Series
+from tui_gym.session.book.figure import (
+    BookFigure,
+    Check,
+    FigureOptions,
+    FigureStopped,
+    Progress,
+    Series,
+)
 from tui_gym.session.experiments.compare import Arm, CompareProgress, Setup, execute
 
 __all__ = [
@@ -50,9 +62,11 @@ __all__ = [
     "Learner",
     "Played",
     "above",
+    "completed",
     "counts",
     "margin",
     "near",
+    "one_run",
     "per_episode",
     "per_time_step",
     "play",
@@ -107,10 +121,10 @@ def play(figure: BookFigure, world: str, learners: Sequence[Learner], options: F
     def told(state: CompareProgress) -> None:
         progress(state.done, state.total, about)
 
-    done = execute(setup, arms, RunKind.COMPARE, progress=told,
+    done = execute(setup, arms, RunKind.COMPARE, progress=told, stop=options.stop,
                    status=lambda line: progress(0, 1, line or about))
     if done.interrupted:
-        raise KeyboardInterrupt
+        raise FigureStopped(f"Figure {figure.name} stopped")
     return [Played(learner.label, done.values[index],
                    None if done.exact is None else done.exact[index, :, -1].copy(),
                    done.prepared.optimum)
@@ -118,11 +132,18 @@ def play(figure: BookFigure, world: str, learners: Sequence[Learner], options: F
 
 
 def margin(samples: Samples) -> float:
-    """The half-width of the 99% Student-t interval of the mean of `samples` (0 for one)."""
+    """The half-width of the 99% Student-t interval of the mean of `samples` (NaN for one
+    sample, which no comparison passes)."""
     values = np.asarray(samples, dtype=np.float64).ravel()
     if len(values) < 2:
-        return 0.0
+        return math.nan
     return float(t_half_width(values.std(ddof=1), len(values), CHECK_CONFIDENCE))
+
+
+def _within(mean: float, tolerance: float, digits: int, unit: str) -> str:
+    if math.isnan(tolerance):
+        return f"{mean:.{digits}f}{unit} (one run: no interval)"
+    return f"{mean:.{digits}f}{unit} ± {tolerance:.{digits}f}"
 
 
 def near(claim: str, book: float, samples: Samples, slack: float = 0.0, digits: int = 1,
@@ -130,7 +151,17 @@ def near(claim: str, book: float, samples: Samples, slack: float = 0.0, digits: 
     """The mean of `samples` (one a run) within `slack` + `margin(samples)` of `book`."""
     values = np.asarray(samples, dtype=np.float64).ravel()
     mean, tolerance = float(values.mean()), slack + margin(values)
-    return Check(claim, f"{book:g}{unit}", f"{mean:.{digits}f}{unit} ± {tolerance:.{digits}f}",
+    return Check(claim, f"{book:g}{unit}", _within(mean, tolerance, digits, unit),
+                 abs(mean - book) <= tolerance)
+
+
+def one_run(claim: str, book: float, samples: Samples, slack: float = 0.0,
+            digits: int = 1, unit: str = "") -> Check:
+    """`book`, read off a figure of a single run, within `slack` + the 99% prediction interval
+    of one run around the mean of `samples` (one a run)."""
+    values = np.asarray(samples, dtype=np.float64).ravel()
+    mean, tolerance = float(values.mean()), slack + margin(values) * np.sqrt(len(values) + 1)
+    return Check(claim, f"{book:g}{unit} (one run)", _within(mean, tolerance, digits, unit),
                  abs(mean - book) <= tolerance)
 
 
@@ -142,26 +173,34 @@ def above(claim: str, book: str, higher: Samples, lower: Samples, digits: int = 
     b = np.asarray(lower, dtype=np.float64).ravel()
     gap = float(a.mean() - b.mean())
     spread = float(np.hypot(margin(a), margin(b)))
-    return Check(claim, book, f"{a.mean():.{digits}f}{unit} vs {b.mean():.{digits}f}{unit}",
-                 gap > spread)
+    measured = f"{a.mean():.{digits}f}{unit} vs {b.mean():.{digits}f}{unit}"
+    if len(a) < 2:
+        measured += " (one run: no interval)"
+    return Check(claim, book, measured, gap > spread)
 
 
-def per_episode(played: Played, scale: float = 1.0, window: int = 1) -> Series:
-    """The mean over runs of each episode's measure (times `scale`; each run smoothed over a
-    trailing `window` of episodes first), with its band."""
-    curve = aggregate(played.values * scale, window=window)
+def per_episode(played: Played, window: int = 1) -> Series:
+    """The mean over runs of each episode's measure (each run smoothed over a trailing
+    `window` of episodes first), with its band."""
+    curve = aggregate(played.values, window=window)
     return Series(played.label, curve.episodes.astype(np.float64), curve.mean,
                   curve.lo, curve.hi)
 
 
-def per_time_step(played: Played, points: int = 200) -> Series:
-    """Episodes completed against time steps (the measure must be `LENGTH`), up to the time
-    step every run reached."""
+def completed(played: Played, steps: npt.ArrayLike) -> np.ndarray:
+    """`[run, i]`: the episodes each run completed by time step `steps[i]` (the measure must
+    be `LENGTH`)."""
     ends = np.cumsum(played.values, axis=1)  # the time step each episode ended at, per run
-    last = float(ends[:, -1].min())
+    return np.stack([np.searchsorted(row, steps, side="right") for row in ends]).astype(float)
+
+
+def per_time_step(played: Played, points: int = 200, until: float | None = None) -> Series:
+    """Episodes completed against time steps (the measure must be `LENGTH`), up to `until`
+    or the time step every run reached, whichever comes first."""
+    last = float(played.values.sum(axis=1).min())
+    last = last if until is None else min(last, until)
     steps = np.unique(np.linspace(0, last, points).round())
-    completed = np.stack([np.searchsorted(row, steps, side="right") for row in ends])
-    curve = aggregate(completed.astype(np.float64), episodes=steps.astype(np.int64))
+    curve = aggregate(completed(played, steps), episodes=steps.astype(np.int64))
     return Series(played.label, steps, curve.mean, curve.lo, curve.hi)
 
 

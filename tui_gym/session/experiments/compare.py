@@ -42,7 +42,7 @@ import numpy as np
 
 from tui_gym.algorithms import ALGORITHMS, algorithm
 from tui_gym.core.engine import processes as processes_module
-from tui_gym.core.engine.loop import RETURN, ModelArrays, warm
+from tui_gym.core.engine.loop import FIRST_ACTION, LENGTH, RETURN, ModelArrays, warm
 from tui_gym.core.engine.seeds import checkpoint_episodes, greedy_values, play_learner
 from tui_gym.core.experiments.aggregate import (
     AggregateCurve,
@@ -238,7 +238,7 @@ class Arm:
 class Setup:
     """What every arm of an experiment shares: the game, its seeds and episodes, and the
     per-episode quantity recorded (`measure`, a column of the engine's loop: the online
-    return, or `loop.LENGTH`, `loop.FIRST_ACTION` where the game has a model)."""
+    return, or `loop.LENGTH`, `loop.FIRST_ACTION`)."""
 
     game: str
     seeds: int
@@ -348,9 +348,6 @@ def prepare(setup: Setup, arms: Sequence[Arm]) -> Prepared:
                        int(first.keyer.n_states), int(first.agent.n_actions))
         value = solve(training.model).value
         optimum = value if math.isfinite(value) else None
-    if model is None and setup.measure != RETURN:
-        first.env.close()
-        raise ValueError(f"{first.game.name} has no model: only its returns are recorded")
     prepared = Prepared(
         game=first.game.name,
         env_id=first.env_id,
@@ -453,7 +450,9 @@ def _play_env(job: _Job, seed: int, returns: np.ndarray, progress: Callable[[int
         for e in range(job.episodes):
             if stop():
                 return
-            returns[e] = session.trainer.run_episode().episode_return
+            stats = session.trainer.run_episode()
+            returns[e] = (stats.length if job.measure == LENGTH else stats.first_action
+                          if job.measure == FIRST_ACTION else stats.episode_return)
             progress(e + 1)
     finally:
         session.env.close()

@@ -1,0 +1,74 @@
+"""Figure 6.5 (Example 6.7): Q-learning against Double Q-learning on the maximization-bias MDP,
+% of episodes that go left from A."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from tui_gym.envs.max_bias import ACTIONS
+from tui_gym.session.book.figure import BookFigure, Chart, FigureOptions, FigureResult, Progress
+from tui_gym.session.book.runs import FIRST_ACTION, Learner, above, near, per_episode, play
+
+# The book's settings: ε = 0.1, α = 0.1, undiscounted.
+EPSILON = 0.1
+SETTINGS = {"learning_rate": 0.1, "learning_rate_schedule": "constant", "discount": 1.0,
+            "epsilon_start": EPSILON, "epsilon_final": EPSILON}
+LEARNERS = (Learner("Q-learning", "q-learning", SETTINGS),
+            Learner("Double Q-learning", "double-q", SETTINGS))
+LEFT = ACTIONS.index("left")
+EARLY = 100  # episodes: the first ones, where the bias shows, and the last ones
+READING = 1.0  # percentage points: how closely the book's figure is read
+
+
+def run(options: FigureOptions, progress: Progress) -> FigureResult:
+    q, double = play(FIGURE, "max-bias", LEARNERS, options, progress, measure=FIRST_ACTION)
+    q_left, d_left = 100.0 * (q.values == LEFT), 100.0 * (double.values == LEFT)
+    early = min(EARLY, q_left.shape[1])
+    # A learner may take any action in A (those A does not offer count as right), so the
+    # ε-greedy optimum goes left ε / (the number of actions) of the time, not the book's ε/2.
+    optimum = 100.0 * EPSILON / len(ACTIONS)
+    floor = np.full(q.runs, optimum)
+    checks = (
+        above(f"Q-learning goes left far more often than the optimum ({optimum:.2f}%) at first "
+              f"(episodes 1 to {early})", "up to about 70%", q_left[:, :early].mean(axis=1),
+              floor, unit="%"),
+        above(f"Double Q-learning goes left less than Q-learning (episodes 1 to {early})",
+              "far less", q_left[:, :early].mean(axis=1), d_left[:, :early].mean(axis=1),
+              unit="%"),
+        near(f"Double Q-learning settles near the ε-greedy optimum (the last {early} episodes)",
+             round(optimum, 2), d_left[:, -early:].mean(axis=1), slack=READING, digits=2,
+             unit="%"),
+        above(f"Q-learning is still biased at the end (the last {early} episodes)",
+              "above Double Q-learning", q_left[:, -early:].mean(axis=1),
+              d_left[:, -early:].mean(axis=1), unit="%"),
+    )
+    return FigureResult(
+        figure=FIGURE.name, title=FIGURE.title, runs=q.runs,
+        charts=(Chart("% left actions from A", "episodes",
+                      (per_episode(replace(q, values=q_left)),
+                       per_episode(replace(double, values=d_left)))),),
+        checks=checks,
+        notes=(f"ε = {EPSILON}, α = 0.1; every action from B ends with a reward drawn from "
+               "N(-0.1, 1)",
+               f"the book's A offers two actions, so its ε-greedy optimum goes left 5% (ε/2) of "
+               f"the time; here a learner may take any of the {len(ACTIONS)} actions in A (the "
+               f"others count as right), so the optimum goes left {optimum:.2f}% of the time",
+               "bands: 95% intervals of the mean over runs; verdicts: 99% intervals"),
+    )
+
+
+FIGURE = BookFigure(
+    name="6.5",
+    title="Q-learning against Double Q-learning (Example 6.7): % left actions from A",
+    about="Left leads to B, worth -0.1 on average; right ends at 0. Q-learning's max over B's "
+          "noisy estimates makes left look good at first, so it goes left far more often "
+          "than it should; Double Q-learning is hardly fooled.",
+    world="max-bias",
+    run=run,
+    runs=1000,
+    episodes=300,
+    full_runs=10_000,
+    aliases=("example 6.7",),
+)
