@@ -148,18 +148,18 @@ class Predictor(Learner):
 
 
 @kernel
-def run_scored(next_state: Any, cumulative: Any, guide: Any, reward: Any, terminal: Any,
-               outcomes: int, starts: Any, start_cumulative: Any, rows: Any, horizon: int,
-               tables: Any, hp: Any, rng: Any, explore: Any, episode0: int, cursor: Any,
-               acc: Any, out: Any, log: Any, scored_rows: Any, truth: Any, curve: Any,
-               first: int) -> int:
+def run_scored(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: Any,
+               terminal: Any, outcomes: int, starts: Any, start_cumulative: Any, rows: Any,
+               horizon: int, tables: Any, hp: Any, rng: Any, explore: Any, episode0: int,
+               cursor: Any, acc: Any, out: Any, log: Any, scored_rows: Any, truth: Any,
+               curve: Any, first: int) -> int:
     """`run_model` one episode at a time from `curve[first]` on, writing after each the
     RMS error of V (`tables[3]`) at table rows `scored_rows` against `truth`. Returns
     the episodes finished: fewer than asked when the learner needs room first."""
     n = scored_rows.shape[0]
     for e in range(first, curve.shape[0]):
-        status = run_model(next_state, cumulative, guide, reward, terminal, outcomes, starts,
-                           start_cumulative, rows, horizon, tables, hp, rng, explore,
+        status = run_model(next_state, cumulative, guide, reward, noise, terminal, outcomes,
+                           starts, start_cumulative, rows, horizon, tables, hp, rng, explore,
                            episode0 + e - first, cursor, acc, 1, 1 << 62, out, log)
         if status != 0:
             return e - first
@@ -182,7 +182,7 @@ def rms_curve(learner: Predictor, model: ModelArrays, truth: Truth, episodes: in
     curve = np.zeros(episodes)
     done = 0
     while done < episodes:
-        made = run(model.next_state, model.cumulative, model.guide, model.reward,
+        made = run(model.next_state, model.cumulative, model.guide, model.reward, model.noise,
                    model.terminal, model.outcomes, model.starts, model.start_cumulative,
                    model.rows, model.horizon, learner.arrays(), hp, learner.rng,
                    learner.exploration(), learner.episode, cursor.ints, cursor.floats, out,
