@@ -59,3 +59,21 @@ def test_the_figures_default_counts_are_the_books() -> None:
         figure = figure_named(name)
         assert figure.runs == 100 and FigureOptions().runs is None
     assert figure_named("example 6.2").name == "6.2"
+
+
+def test_a_stop_ends_a_prediction_figure_between_runs() -> None:
+    import threading
+
+    from tui_gym.session.book.figure import FigureStopped
+
+    stop = threading.Event()
+    seen: list[int] = []
+
+    def progress(done: int, total: int, what: str) -> None:
+        seen.append(done)
+        if done == 2:
+            stop.set()
+
+    with pytest.raises(FigureStopped, match="Figure 7.2 stopped"):
+        figure_named("7.2").run(FigureOptions(runs=2, stop=stop), progress)
+    assert max(seen) == 2  # of 110 learners

@@ -6,7 +6,8 @@ the figure's runs (seeds from `options.seed`) on the `states`-state random
 walk's model, and gives a `Played` per learner whose `values[run, episode]`
 is the RMS error of V against the random policy's exact values after that
 episode (`rms_curve`), so the drawing and the checks of `runs` apply as they
-are. The runs are short and compiled, so they run in this process.
+are. The runs are short and compiled, so they run in this process; setting
+`options.stop` ends them between runs (`FigureStopped`).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from tui_gym.algorithms.prediction import rms_curve
 from tui_gym.core.engine.loop import ModelArrays
 from tui_gym.games import game_named
 from tui_gym.games.base import TrainingModel
-from tui_gym.session.book.figure import BookFigure, FigureOptions, Progress
+from tui_gym.session.book.figure import BookFigure, FigureOptions, FigureStopped, Progress
 from tui_gym.session.book.runs import Learner, Played, counts
 
 __all__ = ["play_prediction"]
@@ -44,6 +45,8 @@ def play_prediction(figure: BookFigure, states: int, learners: Sequence[Learner]
         settings = cls.settings(learner.settings)
         truth = None
         for run in range(runs):
+            if options.stop is not None and options.stop.is_set():
+                raise FigureStopped(f"Figure {figure.name} stopped")
             agent = cls(found.model.n_actions, settings, n_states=found.model.n_states,
                         seed=options.seed + run)
             truth = truth or agent.truth(found.model)  # one policy: the random one
