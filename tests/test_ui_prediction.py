@@ -55,6 +55,8 @@ def test_the_train_view_shows_it_for_a_prediction_learner_only() -> None:
             view = app.train_view
             chart = view.query_one(PredictionChart)
             assert chart.display
+            assert view.query_one("#train-heatmap-box").border_title == (
+                "V, in every action's place")
             session.trainer.run(episodes=40)
             view.show_snapshot(session.trainer.latest, app.runner)
             await pilot.pause()

@@ -259,7 +259,6 @@ class TrainView(Vertical):
                 yield self._heatmap
 
     def on_mount(self) -> None:
-        self._heatmap_box.border_title = "Q-table"
         self.set_interval(STATE_POLL_SECONDS, self._poll_state)
         self.reload()
 
@@ -313,6 +312,8 @@ class TrainView(Vertical):
         self.charts.clear()
         self._prediction.clear()
         self._prediction.display = session.predicts
+        self._heatmap_box.border_title = "V, in every action's place" if session.predicts \
+            else "Q-table"
         self._heatmap_box.border_subtitle = (
             f"←↑↓→ / hjkl / click: {game.layout.focus_help}" if game.layout.has_focus else ""
         )
