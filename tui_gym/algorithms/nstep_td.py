@@ -9,7 +9,8 @@ before. When the episode ends, the states of its last n - 1 steps are
 updated with the rewards there are (after termination, no V term; after a
 truncation, V of the last state). n = 1 is TD(0); n at least the episode's
 length is constant-α Monte Carlo. The last n states and rewards are kept
-in a ring; a larger n takes effect at the next episode.
+in a ring; raising n mid-episode makes a larger ring and drops the updates
+the episode so far still owed.
 """
 
 from __future__ import annotations
