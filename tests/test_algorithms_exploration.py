@@ -131,10 +131,11 @@ def test_the_registry() -> None:
     names = [cls.name for cls in ALGORITHMS]
     assert names == ["q-learning", "sarsa", "expected-sarsa", "double-q", "monte-carlo", "dyna-q",
                      "n-step-sarsa", "sarsa-lambda", "q-lambda", "dyna-q-plus",
-                     "prioritized-sweeping"]
+                     "prioritized-sweeping", "td0", "mc-prediction", "n-step-td", "td-lambda",
+                     "offline-lambda-return"]
     assert algorithm("Expected_SARSA").name == "expected-sarsa"
-    with pytest.raises(ValueError, match="unknown algorithm 'td-lambda'; choose one of q-learning"):
-        algorithm("td-lambda")
+    with pytest.raises(ValueError, match="unknown algorithm 'td-1'; choose one of q-learning"):
+        algorithm("td-1")
     for cls in ALGORITHMS:
         assert cls.title and cls.summary and cls.formula
         fields = [f.name for f in cls.params]

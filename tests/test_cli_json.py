@@ -177,6 +177,16 @@ def test_train_and_eval_keys(capsys: pytest.CaptureFixture[str], tmp_path: Path)
                         "10", "--target-gap", "0.5", "--no-record", "--json")
     pinned("train", targeted, train | {"target_gap", "reached_target", "checked_gap"})
     pinned("eval", run_json(capsys, "eval", str(path), "--episodes", "10", "--json"), EVAL)
+    walk = {key for key in train if key != "eval"} | {"eval", "rms_error", "prediction"}
+    predicted = run_json(capsys, "train", "random-walk", "--algorithm", "td0", "--episodes",
+                         "20", "--eval-episodes", "5", "--no-record", "--json")
+    pinned("train", predicted, walk)
+    assert set(predicted["prediction"]) == {"states", "estimate", "truth"}
+    unscored = run_json(capsys, "train", "random-walk", "--algorithm", "td0", "--episodes",
+                        "5", "--eval-episodes", "5", "--wrapper", "TimeAwareObservation",
+                        "--no-record", "--json")
+    pinned("train", unscored, walk - {"prediction"} | {"rms_reason"})
+    assert unscored["rms_error"] is None
 
 
 def test_optimal_keys(capsys: pytest.CaptureFixture[str]) -> None:

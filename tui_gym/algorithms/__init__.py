@@ -4,9 +4,10 @@ Every learner is a `Learner` (see `base`): its hyperparameters as `Param`s,
 its tables, its update rule written once as compiled scalar code, and a
 record of a single update for the step-by-step view. `algorithm(name)` finds
 one by its registry name (`q-learning`, `sarsa`, `expected-sarsa`,
-`double-q`, `monte-carlo`, `dyna-q`, `n-step-sarsa`,
-`sarsa-lambda`, `q-lambda`, `dyna-q-plus`,
-`prioritized-sweeping`).
+`double-q`, `monte-carlo`, `dyna-q`, `n-step-sarsa`, `sarsa-lambda`, `q-lambda`,
+`dyna-q-plus`, `prioritized-sweeping`; the prediction learners `td0`,
+`mc-prediction`, `n-step-td`, `td-lambda`, `offline-lambda-return`, which
+score a fixed policy: see `prediction`).
 """
 
 from __future__ import annotations
@@ -23,14 +24,20 @@ from tui_gym.algorithms.double_q import DoubleQLearning
 from tui_gym.algorithms.dyna_q import DynaQ
 from tui_gym.algorithms.dyna_q_plus import DynaQPlus
 from tui_gym.algorithms.expected_sarsa import ExpectedSarsa
+from tui_gym.algorithms.mc_prediction import MonteCarloPrediction
 from tui_gym.algorithms.monte_carlo import MonteCarlo
 from tui_gym.algorithms.nstep_sarsa import NStepSarsa
+from tui_gym.algorithms.nstep_td import NStepTD
+from tui_gym.algorithms.offline_lambda import OfflineLambdaReturn
+from tui_gym.algorithms.prediction import Predictor
 from tui_gym.algorithms.prioritized_sweeping import PrioritizedSweeping
 from tui_gym.algorithms.q_lambda import WatkinsQLambda
 from tui_gym.algorithms.qlearning import QLearning
 from tui_gym.algorithms.sarsa import Sarsa
 from tui_gym.algorithms.sarsa_lambda import SarsaLambda
 from tui_gym.algorithms.settings import COMMON_PARAMS, Choice, Field, Settings
+from tui_gym.algorithms.td0 import TD0
+from tui_gym.algorithms.td_lambda import TDLambda
 
 __all__ = [
     "ALGORITHMS",
@@ -49,10 +56,16 @@ __all__ = [
     "MonteCarlo",
     "NStepSarsa",
     "PrioritizedSweeping",
+    "MonteCarloPrediction",
+    "NStepTD",
+    "OfflineLambdaReturn",
+    "Predictor",
     "QLearning",
     "Sarsa",
     "SarsaLambda",
     "Settings",
+    "TD0",
+    "TDLambda",
     "TableSpec",
     "Transition",
     "UpdateRecord",
@@ -73,6 +86,11 @@ ALGORITHMS: tuple[type[Learner], ...] = (
     WatkinsQLambda,
     DynaQPlus,
     PrioritizedSweeping,
+    TD0,
+    MonteCarloPrediction,
+    NStepTD,
+    TDLambda,
+    OfflineLambdaReturn,
 )
 
 DEFAULT_ALGORITHM = QLearning.name

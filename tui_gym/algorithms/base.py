@@ -271,9 +271,11 @@ class Learner(ABC):
     def _compiled(self, name: str, kind: type) -> Any:
         """The value of the `Params` field `name` from the settings: the setting of that
         name (a trailing `_` dropped: `lambda_` is `lambda`), `by_visits` from the
-        step-size schedule."""
+        step-size schedule, `replacing` from the traces."""
         if name == "by_visits":
             return self.hp.learning_rate_schedule == "visits"
+        if name == "replacing":
+            return self.hp.traces == "replacing"
         return kind(self.hp[name.rstrip("_")])
 
     def exploration(self) -> np.ndarray:

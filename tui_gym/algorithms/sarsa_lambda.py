@@ -21,7 +21,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from tui_gym.algorithms.base import CellUpdate, Learner, Transition, UpdateRecord
-from tui_gym.algorithms.settings import COMMON_PARAMS, Choice
+from tui_gym.algorithms.settings import COMMON_PARAMS, TRACES
 from tui_gym.core.engine.kernel import kernel
 from tui_gym.core.engine.rules import Rule, register, step_size
 from tui_gym.core.params import Param
@@ -34,9 +34,7 @@ TRACE_PARAMS = (
     *COMMON_PARAMS,
     Param("lambda", float, 0.9, 0.0, 1.0, "how far back each TD error reaches (trace decay)",
           title="λ"),
-    Choice("traces", ("replacing", "accumulating"), "replacing",
-           "replacing: a visited pair's trace is set to 1; accumulating: 1 is added",
-           title="Traces"),
+    TRACES,
 )
 
 
@@ -125,11 +123,6 @@ class TracedLearner(Learner):
     update."""
 
     params = TRACE_PARAMS
-
-    def _compiled(self, name: str, kind: type) -> Any:
-        if name == "replacing":
-            return self.hp.traces == "replacing"
-        return super()._compiled(name, kind)
 
     def arrays(self) -> tuple[np.ndarray, ...]:
         return (self.q, self.counts, self.visits, self._trace, self._cells, self._n_cells)

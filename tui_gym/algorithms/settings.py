@@ -78,6 +78,11 @@ COMMON_PARAMS: tuple[Field, ...] = (
            "of a state-action", title="Step sizes"),
 )
 
+# The λ learners' traces (compiled as `replacing: bool`).
+TRACES = Choice("traces", ("replacing", "accumulating"), "replacing",
+                "replacing: a visited state's (or pair's) trace is set to 1; accumulating: 1 "
+                "is added", title="Traces")
+
 
 class Settings(Mapping[str, Any]):
     """One validated value per field of a schema; unknown names are refused.

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from functools import partial
 from typing import Any
 
-from tui_gym.algorithms import ALGORITHMS
+from tui_gym.algorithms import ALGORITHMS, Predictor, algorithm
 from tui_gym.bench import (
     compiling,
     defaults,
@@ -133,8 +133,9 @@ def run_bench(
           f"on LocalCluster({tasks.CLUSTER_WORKERS}) against the local executor",
           lambda: tasks.measure(plan.compare_seeds, plan.compare_episodes * plan.tasks_scale,
                                 1 if quick else 3))
+    control = tuple(n for n in names if not issubclass(algorithm(n), Predictor))  # bounds
     stage("defaults", f"the defaults over {plan.defaults_seeds} seeds: the share that reaches "
-          "the bound", lambda: defaults.measure(games, names, plan.defaults_seeds))
+          "the bound", lambda: defaults.measure(games, control, plan.defaults_seeds))
     stage("live", "live training in the app",
           lambda: live.measure(plan.live_seconds, plan.key_presses, plan.live_repeats,
                                progress=say))

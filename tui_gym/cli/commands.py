@@ -345,11 +345,28 @@ def _wrapper_dicts(session: Session) -> list[dict[str, Any]]:
     ]
 
 
+def _prediction_dict(session: Session) -> dict[str, Any]:
+    """A prediction learner's figures for `train --json`: `rms_error` and `prediction`
+    (per reached model state its `estimate` and `truth`), or `rms_error` null and why."""
+    figures = session.prediction()
+    if figures is None:
+        return {"rms_error": None, "rms_reason": session.prediction_reason()}
+    return {"rms_error": figures.rms,
+            "prediction": {"states": list(figures.states), "estimate": list(figures.estimate),
+                           "truth": list(figures.truth)}}
+
+
 def cmd_train(args: argparse.Namespace, out: Console) -> int:
     if args.target_gap is not None and args.target_gap <= 0:
         raise CliError(f"--target-gap must be a positive number, got {args.target_gap:g}")
     save_path = args.save  # checked as the arguments were read (`output_file`)
     session = _session_from_args(args)
+    if args.follow is not None:
+        epsilon = float(hyperparameters(args, session.learner_class).get("epsilon_final", 0.0))
+        try:
+            session.follow(Session.load(args.follow), epsilon)
+        except ValueError as exc:
+            raise CliError(f"--follow: {exc}") from None
     recording = args.recording  # the run history's record of this run (see `recorded`)
     recording.begin(session)
     hp = session.hp
@@ -388,6 +405,8 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
     if args.target_gap is not None:
         data.update(target_gap=args.target_gap, reached_target=outcome.reached_target,
                     checked_gap=outcome.gap)
+    if session.predicts:
+        data.update(_prediction_dict(session))
     if args.json:
         print_json("train", data)
         return 0
@@ -405,13 +424,17 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
     if args.target_gap is not None:
         verdict = "reached" if outcome.reached_target else "NOT reached"
         rows.append(("target gap", f"{args.target_gap:g} {verdict} (gap {outcome.gap:.4f})"))
+    if session.predicts:
+        rms = data["rms_error"]
+        rows.append(("RMS error of V (exact V^π)", f"{rms:.4f}" if rms is not None
+                     else f"n/a ({data['rms_reason']})"))
     rows += _eval_rows(evaluation)
     if saved:
         rows.append(("saved to", saved))
     if run_id is not None:
         rows.append(("run history", f"run {run_id} in {recording.path}"))
     out.print(key_value_table("Training summary", rows))
-    reference = session.reference()
+    reference = None if session.predicts else session.reference()  # a fixed policy: no bound
     if reference is not None and session.shortfall(reference):  # why it ends short, if it does
         out.print(session.shortfall(reference), markup=False)
     return 0

@@ -150,6 +150,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="greedy episodes to sample after the exact evaluation (default 10,000; "
         "a long-looping policy stops at the evaluation's step budget)",
     )
+    train.add_argument("--follow", metavar="PATH",
+                       help="a prediction learner follows this saved agent's greedy policy "
+                       "(epsilon-greedy with --epsilon-final)")
     train.add_argument("--save", type=output_file, metavar="PATH",
                        help="save the trained agent here (the folder is checked first)")
     train.add_argument("--json", action="store_true", help="print one JSON object, no bar")

@@ -593,13 +593,14 @@ class Game:
         return self.hyperparameters
 
     def default_hyperparameters(
-        self, algorithm: str, kwargs: Mapping[str, Any] | None = None
+        self, algorithm: str, kwargs: Mapping[str, Any] | None = None, prediction: bool = False
     ) -> dict[str, Any]:
         """The values this game sets for an algorithm (by registry name) with these
         arguments, over the algorithm's own defaults; parameters the algorithm lacks
-        are left to the caller (see the README)."""
+        are left to the caller (see the README). Its "*" entry is for the control
+        learners; a prediction learner takes its "prediction" entry instead."""
         table = self.hyperparameter_table(kwargs)
-        return {**table.get("*", {}), **table.get(algorithm, {})}
+        return {**table.get("prediction" if prediction else "*", {}), **table.get(algorithm, {})}
 
     def episode_limit(self, kwargs: Mapping[str, Any]) -> int | None:
         """The limit `gym.make` puts on the game with these arguments (None: none)."""

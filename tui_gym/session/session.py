@@ -23,7 +23,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from tui_gym.algorithms import DEFAULT_ALGORITHM, Learner, Settings
+from tui_gym.algorithms import DEFAULT_ALGORITHM, Learner, Predictor, Settings
 from tui_gym.algorithms import algorithm as learner_class_named
 from tui_gym.core.engine.loop import ModelArrays
 from tui_gym.core.engine.stats import TrainingSnapshot
@@ -42,6 +42,7 @@ from tui_gym.core.wrappers.changes import GameChanges
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 from tui_gym.games.base import FixedBound, ReferenceMetrics, TrainingModel
 from tui_gym.session.evaluation import EvalReport, evaluate
+from tui_gym.session.prediction import PredictionFigures, PredictionRuler
 
 ENGINES = ("auto", "model", "env")
 # With a target gap and no budget given, the budget is the game's default times this,
@@ -106,7 +107,8 @@ def default_settings(
     sets)."""
     cls = learner_class_named(name)
     fields = {f.name for f in cls.params}
-    overrides = game.default_hyperparameters(cls.name, kwargs)
+    overrides = game.default_hyperparameters(cls.name, kwargs,
+                                             prediction=issubclass(cls, Predictor))
     return cls.settings({k: v for k, v in overrides.items() if k in fields})
 
 
@@ -186,10 +188,9 @@ class Session:
 
     def _training_model(self) -> tuple[ModelArrays | None, str]:
         """The model the compiled loop trains on, or None and why not (`training` keeps
-        the game's model itself)."""
+        the game's model itself, also when the env loop is chosen)."""
         self.training: TrainingModel | None = None
-        if self.engine == "env":
-            return None, "env: chosen"
+        self._ruler = PredictionRuler()
         changed = [c.name for c in self.applied if CATALOG[c.name].changes_observation]
         others = self.changes.others
         found: Any = None
@@ -215,7 +216,11 @@ class Session:
                     names.append("TimeLimit")
                 text = f"model: {self.game.title}" + (f" with {', '.join(names)}" if names else "")
                 self.training = TrainingModel(model, rows)
+                if self.engine == "env":
+                    return None, "env: chosen"
                 return ModelArrays.of(model, rows), text
+        if self.engine == "env":
+            return None, "env: chosen"
         if self.engine == "model":
             raise ValueError(f"the model loop cannot train this: {reason}")
         return None, f"env: {reason}"
@@ -337,6 +342,23 @@ class Session:
         self.agent.set_hyperparameters(settings)
         self.hp = settings
 
+    def follow(self, other: Session, epsilon: float = 0.0) -> None:
+        """The prediction learner follows `other`'s agent's epsilon-greedy policy from now
+        on (its table as it is now). ValueError, changing nothing, when this is not a
+        prediction learner or the two do not play the same game with the same states."""
+        agent = self.agent
+        if not isinstance(agent, Predictor):
+            raise ValueError(f"{self.learner_class.title} is not a prediction learner: it "
+                             "follows its own policy")
+        same = (other.env_id, other.env_kwargs, other._built.meaning) == (
+            self.env_id, self.env_kwargs, self._built.meaning)
+        if not (same and self.keyer.dense and other.keyer.dense):
+            raise ValueError(f"the agent to follow plays {other.game.title} "
+                             f"{other.env_kwargs or ''}, not {self.game.title} "
+                             f"{self.env_kwargs or ''} with the same wrappers")
+        agent.follow(other.agent.values(range(agent.rows_used)), epsilon)
+        self.hp = agent.hp
+
     def set_algorithm(self, name: str) -> None:
         """Train with another algorithm: a fresh learner with the game's defaults for it,
         and fresh statistics (nothing of the old learner carries over). ValueError for
@@ -393,6 +415,35 @@ class Session:
         if snapshot is not None:
             return snapshot.values(keys)
         return self.agent.values(keys)
+
+    @property
+    def predicts(self) -> bool:
+        """Whether the learner is a prediction learner (it scores a fixed policy)."""
+        return isinstance(self.agent, Predictor)
+
+    def prediction(self, snapshot: TrainingSnapshot | None = None) -> PredictionFigures | None:
+        """A prediction learner's V (the live agent's, or a snapshot's) against the exact
+        values of the policy it follows; None for a control learner, or when there are no
+        exact values (`prediction_reason` says why)."""
+        if not self.predicts or self.training is None:
+            return None
+        try:
+            return self._ruler.figures(self.agent, self.training,  # type: ignore[arg-type]
+                                       None if snapshot is None else snapshot.q)
+        except ValueError:
+            return None
+
+    def prediction_reason(self) -> str:
+        """Why a prediction learner has no RMS error here ('' when it has one)."""
+        if not self.predicts:
+            return "not a prediction learner"
+        if self.training is None:
+            return f"no exact values here ({self.engine_reason})"
+        try:
+            self._ruler.truth(self.agent, self.training)  # type: ignore[arg-type]
+        except ValueError as error:
+            return str(error)
+        return ""
 
     def exact_kwargs(self, snapshot: TrainingSnapshot | None = None) -> dict[str, Any]:
         """The game's arguments for the exact figures: in a world that changes as it is

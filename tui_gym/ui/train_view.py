@@ -8,9 +8,10 @@ always in sight; below them, scrolling when the window is short, the run's
 numbers (`StatsPanel`) beside the hyperparameter fields
 (`HyperparameterForm`, the algorithm's own fields), the learning curves
 (`TrainingCharts`) with, at animated speeds, the game's board replaying the
-agent's moves and the step panel (`StepPanel`) explaining each update, and
-the Q-table heatmaps (`HeatmapView`), where the explained step's state is
-marked. On a grid game `m` opens the map editor (`MapEditor`) above the
+agent's moves, for a prediction learner its RMS error of V and V against the
+exact values state by state (`PredictionChart`), the step panel (`StepPanel`)
+explaining each update, and the Q-table heatmaps (`HeatmapView`), where the
+explained step's state is marked. On a grid game `m` opens the map editor (`MapEditor`) above the
 heatmaps: each edit rebuilds the game through the app (the agent kept while
 its states keep their meaning, training going on) and the editor shows the new
 map solved exactly.
@@ -40,6 +41,7 @@ from tui_gym.ui.map_editing import apply_edit, save_map, show_optimum
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
 from tui_gym.ui.widgets.map_editor import MapEditor
+from tui_gym.ui.widgets.prediction_chart import PredictionChart
 from tui_gym.ui.widgets.progress_line import ProgressLine
 from tui_gym.ui.widgets.stats_panel import StatsPanel, format_duration, run_state
 from tui_gym.ui.widgets.step_panel import StepPanel, explain
@@ -224,6 +226,8 @@ class TrainView(Vertical):
         self._stats = StatsPanel(id="train-stats")
         self._form = HyperparameterForm(session.hp, id="train-form")
         self._charts = TrainingCharts(id="train-charts")
+        self._prediction = PredictionChart(id="train-prediction")
+        self._prediction.display = session.predicts
         self._board_box = Vertical(id="train-board-box")
         self._caption = Label("", id="train-board-caption")
         self._heatmap_box = Vertical(id="train-heatmap-box")
@@ -249,12 +253,12 @@ class TrainView(Vertical):
                 yield self._charts
                 with self._board_box:
                     yield self._caption
+            yield self._prediction
             yield self._step
             with self._heatmap_box:
                 yield self._heatmap
 
     def on_mount(self) -> None:
-        self._heatmap_box.border_title = "Q-table"
         self.set_interval(STATE_POLL_SECONDS, self._poll_state)
         self.reload()
 
@@ -306,6 +310,10 @@ class TrainView(Vertical):
         if session.hp is not None:
             self.form.load(session.hp)
         self.charts.clear()
+        self._prediction.clear()
+        self._prediction.display = session.predicts
+        self._heatmap_box.border_title = "V, in every action's place" if session.predicts \
+            else "Q-table"
         self._heatmap_box.border_subtitle = (
             f"←↑↓→ / hjkl / click: {game.layout.focus_help}" if game.layout.has_focus else ""
         )
@@ -374,6 +382,7 @@ class TrainView(Vertical):
             self._show_progress(snapshot, runner)
             self._show_heatmaps()
             self._show_reference()
+            self._show_prediction()
         self._show_state(runner)
         self._show_board(runner)
 
@@ -441,12 +450,28 @@ class TrainView(Vertical):
         )
         view.show(panels)
 
+    def _show_prediction(self) -> None:
+        """A prediction learner's RMS error and V against the exact values."""
+        session, snapshot = self.session, self._snapshot
+        if snapshot is None or not session.predicts:
+            return
+        figures = session.prediction(snapshot)
+        if figures is None:
+            self._prediction.show_reason(session.prediction_reason())
+        else:
+            self._prediction.show(snapshot.episodes, figures)
+
     def _show_reference(self) -> None:
         session, snapshot = self.session, self._snapshot
         if snapshot is None:
             return
-        reference = session.reference(snapshot)
-        if reference is None:
+        reference = None if session.predicts else session.reference(snapshot)
+        if session.predicts:  # its figure is V's error, not a greedy policy's gap
+            figures = session.prediction(snapshot)
+            note = (f"RMS error of V {figures.rms:.4f} against the exact values of the "
+                    "policy it follows" if figures is not None
+                    else f"no RMS error: {session.prediction_reason()}")
+        elif reference is None:
             note = session.exact_reason()
         else:  # at the budget's end: why it ends short of the bound, if it does
             note = session.shortfall(reference) if snapshot.episodes >= snapshot.budget else ""

@@ -25,10 +25,14 @@ FIGURE_MODULES = (
     "fig_4_1",
     "fig_4_2",
     "fig_4_3",
+    "fig_6_2",
     "fig_6_3",
     "fig_6_4",
     "fig_6_5",
+    "fig_7_2",
     "fig_8_2",
+    "fig_12_3",
+    "fig_12_6",
 )
 
 

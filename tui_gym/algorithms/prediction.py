@@ -1,0 +1,193 @@
+"""Prediction: learners that estimate V of a fixed policy, scored against its exact values.
+
+A `Predictor` follows a fixed policy and learns a state-value table `v`; the
+rule of each one (TD(0), constant-α Monte Carlo, n-step TD, TD(λ)) is its own
+file. The policy it follows is epsilon-greedy on its action-value table `q`,
+which it never changes: all zeros by default, every action tied, so every
+step is uniform (the book's random policy, whatever epsilon); `follow` puts
+another learner's action values there (its greedy policy with epsilon 0, its
+epsilon-greedy one with its epsilon). That is the engine's own acting, so
+the compiled loop and the env loop run a predictor like any learner.
+
+Its figure of merit is the RMS error of `v` against the exact V^π of the
+policy it follows (`Truth`, over the states the policy reaches): `truth`
+computes it from the game's model, `rms_error` scores an estimate, and
+`rms_curve` runs episodes and scores each (compiled: `run_scored`). The table it shows
+(`action_values`, the heatmaps) is V, the same in every action.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import numpy as np
+
+from tui_gym.algorithms.base import Learner, Transition, UpdateRecord
+from tui_gym.algorithms.settings import COMMON_PARAMS, Field
+from tui_gym.core.engine import jit, loop
+from tui_gym.core.engine.kernel import kernel
+from tui_gym.core.engine.loop import ModelArrays, run_model
+from tui_gym.core.engine.rules import step_size
+from tui_gym.core.mdp.model import FiniteMDP
+from tui_gym.core.mdp.policy import greedy_policy
+from tui_gym.core.mdp.prediction import Truth
+
+__all__ = ["PREDICTION_PARAMS", "Predictor", "rms_curve", "v_update"]
+
+# The book's prediction settings: a constant step, no discount, the random policy.
+_DEFAULTS = {"learning_rate": 0.1, "discount": 1.0, "epsilon_start": 1.0,
+             "epsilon_final": 1.0, "episodes": 100, "learning_rate_schedule": "constant"}
+
+PREDICTION_PARAMS: tuple[Field, ...] = tuple(
+    dataclasses.replace(f, default=_DEFAULTS[f.name]) if f.name in _DEFAULTS  # type: ignore[arg-type]
+    else dataclasses.replace(f, help="every state's value before learning",  # type: ignore[arg-type]
+                             title="Initial V") if f.name == "initial_value" else f
+    for f in COMMON_PARAMS
+)
+
+
+@kernel(inline=True)
+def v_update(v: Any, visits: Any, hp: Any, s: int, target: float, log: Any, row: int) -> float:
+    """Move v[s] toward `target` by the step size of its next update, counting the visit;
+    row `row` of `log` (when there is one) gets the state, target, V before and after, the
+    step size and the state's count. The |error|."""
+    visits[s] += 1
+    alpha = step_size(hp.learning_rate, hp.by_visits, visits[s])
+    before = v[s]
+    v[s] = before + alpha * (target - before)
+    if row < log.shape[0]:
+        log[row, 0] = s
+        log[row, 1] = target
+        log[row, 2] = before
+        log[row, 3] = v[s]
+        log[row, 4] = alpha
+        log[row, 5] = visits[s]
+    return abs(target - before)
+
+
+class Predictor(Learner):
+    """A learner of V for the fixed policy it follows (see the module docstring)."""
+
+    params: ClassVar[tuple[Field, ...]] = PREDICTION_PARAMS
+    v: np.ndarray
+
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        return (self.q, self.counts, self.visits, self.v)
+
+    def _make_extra(self, capacity: int) -> None:
+        self.v = np.full(capacity, float(self.hp.initial_value))
+
+    def _grow_extra(self, capacity: int) -> None:
+        grown = np.full(capacity, float(self.hp.initial_value))
+        grown[: len(self.v)] = self.v
+        self.v = grown
+
+    def action_values(self, rows: np.ndarray | slice) -> np.ndarray:
+        """V of each row, the same in every action (what the heatmaps show)."""
+        return np.repeat(self.v[rows][:, None], self.n_actions, axis=1)
+
+    # --- the policy followed and the ruler ------------------------------------------------
+    def follow(self, action_values: np.ndarray, epsilon: float) -> None:
+        """Follow the epsilon-greedy policy on `action_values` (one row per table row, as
+        another learner's `table()` gives them) from now on."""
+        values = np.asarray(action_values, dtype=np.float64)
+        if values.shape != (self._rows_used, self.n_actions):
+            raise ValueError(f"a policy to follow has one row of {self.n_actions} action "
+                             f"values per state ({self._rows_used}), got {values.shape}")
+        self.q[: self._rows_used] = values
+        self.set_hyperparameters(self.hp.replace(epsilon_start=epsilon, epsilon_final=epsilon))
+
+    def policy(self, rows: np.ndarray) -> np.ndarray:
+        """`[len(rows), A]`: the probabilities of the policy followed now, per row."""
+        return greedy_policy(self.q[rows], self.epsilon)
+
+    def truth(self, model: FiniteMDP, rows: np.ndarray | None = None) -> Truth:
+        """The exact values of the policy followed now on `model`, whose state s is table
+        row `rows[s]` (default: s). ValueError when it has none (see `Truth.of`)."""
+        at = np.arange(model.n_states) if rows is None else np.asarray(rows)
+        if self.hp.discount <= 0.0:
+            raise ValueError("exact values need a discount above 0")
+        return Truth.of(model, self.policy(at), self.hp.discount)
+
+    def rms_error(self, truth: Truth, rows: np.ndarray | None = None) -> float:
+        """The RMS error of V against `truth` (model state s is table row `rows[s]`)."""
+        return truth.rms(self.v if rows is None else self.v[np.asarray(rows)])
+
+    # --- the step-by-step view -------------------------------------------------------------
+    target_text: ClassVar[str]  # the target, as the step panel writes it
+
+    def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
+        """The update of V(s) the rule logged in row 0, when there was one."""
+        made = bool(log[0, 4])  # a step size: V moved
+        now = float(self.v[step.state])
+        if not made:
+            return self._record(step, self.target_text, (("r", step.reward),), None, now, now)
+        state, target, before, after, alpha = (float(x) for x in log[0, :5])
+        record = self._record(step, self.target_text, (("r", step.reward),), target, before,
+                              after, alpha)
+        if int(state) != step.state:  # an earlier state's update (n-step, Monte Carlo)
+            record = dataclasses.replace(record, table=f"V of row {int(state)}")
+        return record
+
+    # --- saving ----------------------------------------------------------------------------
+    def _extra_arrays(self) -> dict[str, np.ndarray]:
+        return {"v": self.v[: self._rows_used].copy()}
+
+    def _load_extra_arrays(self, arrays: Mapping[str, np.ndarray], rows: int,
+                           capacity: int) -> None:
+        if "v" not in arrays:
+            raise ValueError("the saved state has no 'v' array")
+        v = np.asarray(arrays["v"])
+        if v.shape != (rows,) or v.dtype.kind not in "fiu" or not np.isfinite(v).all():
+            raise ValueError("saved 'v' does not fit the table")
+        self._make_extra(capacity)
+        self.v[:rows] = v
+
+
+@kernel
+def run_scored(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: Any,
+               terminal: Any, outcomes: int, starts: Any, start_cumulative: Any, rows: Any,
+               horizon: int, tables: Any, hp: Any, rng: Any, explore: Any, episode0: int,
+               cursor: Any, acc: Any, out: Any, log: Any, scored_rows: Any, truth: Any,
+               curve: Any, first: int) -> int:
+    """`run_model` one episode at a time from `curve[first]` on, writing after each the
+    RMS error of V (`tables[3]`) at table rows `scored_rows` against `truth`. Returns
+    the episodes finished: fewer than asked when the learner needs room first."""
+    n = scored_rows.shape[0]
+    for e in range(first, curve.shape[0]):
+        status = run_model(next_state, cumulative, guide, reward, noise, terminal, outcomes,
+                           starts, start_cumulative, rows, horizon, tables, hp, rng, explore,
+                           episode0 + e - first, cursor, acc, 1, 1 << 62, out, log)
+        if status != 0:
+            return e - first
+        v = tables[3]
+        total = 0.0
+        for i in range(n):
+            error = v[scored_rows[i]] - truth[i]
+            total += error * error
+        curve[e] = np.sqrt(total / n)
+    return curve.shape[0] - first
+
+
+def rms_curve(learner: Predictor, model: ModelArrays, truth: Truth, episodes: int) -> np.ndarray:
+    """Play `episodes` episodes on `model`: the RMS error of V against `truth` after each."""
+    hp = learner.compiled_params()
+    run = jit.entry(run_scored, type(hp))
+    where = np.flatnonzero(truth.reached)
+    scored_rows, values = model.rows[where], np.array(truth.v[where])
+    cursor, out, log = loop.Cursor(), np.zeros((1, loop.COLUMNS)), np.zeros((1, 8))
+    curve = np.zeros(episodes)
+    done = 0
+    while done < episodes:
+        made = run(model.next_state, model.cumulative, model.guide, model.reward, model.noise,
+                   model.terminal, model.outcomes, model.starts, model.start_cumulative,
+                   model.rows, model.horizon, learner.arrays(), hp, learner.rng,
+                   learner.exploration(), learner.episode, cursor.ints, cursor.floats, out,
+                   log, scored_rows, values, curve, done)
+        learner.end_episodes(int(made))
+        done += int(made)
+        if done < episodes:
+            learner.make_room()
+    return curve

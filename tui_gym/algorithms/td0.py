@@ -1,0 +1,46 @@
+"""TD(0) prediction (Sutton & Barto, 2nd ed., section 6.1): V of a fixed policy.
+
+    V(s) <- V(s) + α [r + γ V(s') - V(s)]
+
+after every step of the policy followed (see `prediction`). After
+termination the target is r alone; after a truncation it bootstraps from
+V(s'), since the time limit is not part of the game.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+from tui_gym.algorithms.prediction import Predictor, v_update
+from tui_gym.core.engine.kernel import kernel
+from tui_gym.core.engine.rules import Rule, register
+
+__all__ = ["TD0"]
+
+
+class Params(NamedTuple):
+    learning_rate: float
+    discount: float
+    by_visits: bool
+
+
+@kernel
+def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+           terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
+    v, visits = tables[3], tables[2]
+    future = 0.0 if terminated else v[s2]
+    return v_update(v, visits, hp, s, r + hp.discount * future, log, 0)
+
+
+register(Params, Rule(update))
+
+
+class TD0(Predictor):
+    """TD(0): V of the policy followed, bootstrapping from the next state each step."""
+
+    name = "td0"
+    title = "TD(0)"
+    summary = "prediction: V of a fixed policy, each step toward r + γ·V(s')"
+    formula = "r + γ·V(s')"
+    target_text = formula
+    Params = Params

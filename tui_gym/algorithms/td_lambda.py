@@ -1,0 +1,101 @@
+"""TD(λ) prediction (Sutton & Barto, 2nd ed., section 12.2): V of a fixed policy with
+eligibility traces.
+
+Each step every state's trace decays by γλ and the state just left gains 1
+(accumulating) or is set to 1 (replacing); the TD error then moves every
+state in proportion to its trace,
+
+    δ = r + γ V(s') - V(s),      V <- V + α δ e.
+
+λ = 0 is TD(0); λ = 1 approaches constant-α Monte Carlo. After termination
+the target is r alone; after a truncation it bootstraps from V(s'). The
+traces start at zero with each episode.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from tui_gym.algorithms.prediction import PREDICTION_PARAMS, Predictor
+from tui_gym.algorithms.settings import TRACES
+from tui_gym.core.engine.kernel import kernel
+from tui_gym.core.engine.rules import Rule, register, step_size
+from tui_gym.core.params import Param
+
+__all__ = ["TDLambda"]
+
+
+class Params(NamedTuple):
+    learning_rate: float
+    discount: float
+    by_visits: bool
+    lambda_: float
+    replacing: bool
+
+
+@kernel(inline=True)
+def begin(tables: Any, hp: Any) -> None:
+    tables[4][:] = 0.0
+
+
+@kernel
+def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+           terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
+    v, visits, trace = tables[3], tables[2], tables[4]
+    decay = hp.discount * hp.lambda_
+    for i in range(trace.shape[0]):
+        trace[i] *= decay
+    trace[s] = 1.0 if hp.replacing else trace[s] + 1.0
+    visits[s] += 1
+    future = 0.0 if terminated else v[s2]
+    target = r + hp.discount * future
+    before = v[s]
+    delta = target - before
+    alpha = step_size(hp.learning_rate, hp.by_visits, visits[s])
+    for i in range(v.shape[0]):
+        if trace[i] != 0.0:
+            v[i] += alpha * delta * trace[i]
+    log[0, 0] = s
+    log[0, 1] = target
+    log[0, 2] = before
+    log[0, 3] = v[s]
+    log[0, 4] = alpha
+    log[0, 5] = visits[s]
+    log[0, 6] = trace[s]
+    return abs(delta)
+
+
+register(Params, Rule(update, begin=begin))
+
+
+class TDLambda(Predictor):
+    """TD(λ): V of the policy followed, the TD error spread back along the traces."""
+
+    name = "td-lambda"
+    title = "TD(λ)"
+    summary = "prediction: V of a fixed policy, each TD error spread over the states' traces"
+    formula = "δ = r + γ·V(s') - V(s), V += α·δ·e"
+    target_text = "r + γ·V(s')"
+    Params = Params
+    params = (
+        *PREDICTION_PARAMS,
+        Param("lambda", float, 0.8, 0.0, 1.0, "trace decay: 0 is TD(0), 1 nears Monte Carlo",
+              title="λ"),
+        dataclasses.replace(TRACES, default="accumulating"),
+    )
+
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        return (*super().arrays(), self._trace)
+
+    def _make_extra(self, capacity: int) -> None:
+        super()._make_extra(capacity)
+        self._trace = np.zeros(capacity)  # per state, this episode
+
+    def _grow_extra(self, capacity: int) -> None:
+        super()._grow_extra(capacity)
+        grown = np.zeros(capacity)
+        grown[: len(self._trace)] = self._trace
+        self._trace = grown

@@ -1,0 +1,65 @@
+"""A prediction learner's figures in a session: its V against the exact V^π, state by state.
+
+`PredictionRuler` keeps the exact values of the policy a `Predictor` follows
+on the game's model (computed again only when the policy, discount or model
+changes) and scores an estimate of V, the live learner's or a snapshot's, as
+`PredictionFigures`: the RMS error over the states the policy reaches, and
+each of those states' estimate beside its true value.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from tui_gym.algorithms.prediction import Predictor
+from tui_gym.core.mdp.prediction import Truth
+from tui_gym.games.base import TrainingModel
+
+__all__ = ["PredictionFigures", "PredictionRuler"]
+
+
+@dataclass(frozen=True)
+class PredictionFigures:
+    """The RMS error of V, and per reached model state its estimate and true value."""
+
+    rms: float
+    states: tuple[int, ...]
+    estimate: tuple[float, ...]
+    truth: tuple[float, ...]
+
+
+class PredictionRuler:
+    """Scores a predictor's V against the exact values of the policy it follows."""
+
+    def __init__(self) -> None:
+        self._key: Any = None
+        self._truth: Truth | None = None
+
+    def truth(self, agent: Predictor, training: TrainingModel) -> Truth:
+        """The exact values of the policy `agent` follows on `training`'s model."""
+        rows = self.rows(training)
+        key = (id(training.model), agent.hp.discount, agent.epsilon, agent.q[rows].tobytes())
+        if key != self._key or self._truth is None:
+            self._truth = agent.truth(training.model, rows)
+            self._key = key
+        return self._truth
+
+    @staticmethod
+    def rows(training: TrainingModel) -> np.ndarray:
+        n = training.model.n_states
+        return np.arange(n) if training.rows is None else np.asarray(training.rows)
+
+    def figures(self, agent: Predictor, training: TrainingModel,
+                table: np.ndarray | None = None) -> PredictionFigures:
+        """The figures of V: the live agent's, or `table`'s (a snapshot's values, V in
+        every action). ValueError when the policy has no exact values."""
+        truth = self.truth(agent, training)
+        rows = self.rows(training)
+        v = agent.v[rows] if table is None else np.asarray(table)[rows, 0]
+        where = np.flatnonzero(truth.reached)
+        return PredictionFigures(truth.rms(v), tuple(int(s) for s in where),
+                                 tuple(float(x) for x in v[where]),
+                                 tuple(float(x) for x in truth.v[where]))
