@@ -45,7 +45,8 @@ def _trained(algorithm: str) -> np.ndarray:
 
 def test_the_smallest_games_contract_holds_with_the_kernels_as_plain_python() -> None:
     # Its default training as plain Python is the compiled one's (below), which
-    # tests/test_games_contract.py::test_default_training_reaches_the_stated_bound checks.
+    # tests/test_contract_learners.py::test_each_algorithm_meets_the_games_bound_with_its_defaults
+    # checks.
     done = subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-n", "0", "-p", "no:cacheprovider",
          "tests/test_games_contract.py", "-k", "frozenlake and not default_training"],
