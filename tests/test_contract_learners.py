@@ -86,7 +86,7 @@ def test_each_algorithm_meets_the_games_bound_with_its_defaults(name: str, game:
     assert session.trainer.engine == engine
     session.train()
     assert session.trainer.episodes == session.hp.episodes
-    bound = session.game.oracle.bound(session.env_kwargs)
+    bound = session.game.oracle.bound(session.env_kwargs, session.changes)
     figures = session.reference().figures
     assert (name in session.game.lessons) == ((game, name) in LESSONS)
     if (game, name) in LESSONS:

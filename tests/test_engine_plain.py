@@ -1,5 +1,6 @@
 """With `NUMBA_DISABLE_JIT=1` every kernel runs as plain Python: the smallest game's contract
-still holds (training to its bound included), so coverage and a debugger see the engine."""
+still holds, and every learner trains to the very tables it trains to compiled, so coverage
+and a debugger see the engine as it runs."""
 
 from __future__ import annotations
 
@@ -8,16 +9,62 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+
+from tui_gym.algorithms import ALGORITHMS
+from tui_gym.session.session import Session
+
 ROOT = Path(__file__).resolve().parent.parent
+EPISODES = 400  # a whole budget: exploration runs from its start to its end
+NAMES = [cls.name for cls in ALGORITHMS]
+# Trains every learner as `_trained` does, in a process where every kernel is plain Python.
+PLAIN_RUN = """
+import sys
+import numba
+import numpy as np
+from tests.test_engine_plain import NAMES, _trained
+assert numba.config.DISABLE_JIT
+np.savez(sys.argv[1], **{name: _trained(name) for name in NAMES})
+"""
+
+
+def _plain_env() -> dict[str, str]:
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1"}
+    env.pop("PYTEST_XDIST_WORKER", None)
+    return env
+
+
+def _trained(algorithm: str) -> np.ndarray:
+    """The action values of `algorithm` after a whole budget on the smallest game."""
+    session = Session("frozenlake", seed=0, algorithm=algorithm, hp={"episodes": EPISODES})
+    assert session.training is not None, session.engine_reason  # the compiled loop's model
+    session.trainer.run(episodes=EPISODES)
+    assert session.trainer.remaining == 0
+    return session.agent.table()[0]
 
 
 def test_the_smallest_games_contract_holds_with_the_kernels_as_plain_python() -> None:
-    env = {**os.environ, "NUMBA_DISABLE_JIT": "1"}
-    env.pop("PYTEST_XDIST_WORKER", None)
+    # Its default training as plain Python is the compiled one's (below), which
+    # tests/test_contract_learners.py::test_each_algorithm_meets_the_games_bound_with_its_defaults
+    # checks.
     done = subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-n", "0", "-p", "no:cacheprovider",
-         "tests/test_games_contract.py", "-k", "frozenlake"],
-        cwd=ROOT, env=env, capture_output=True, text=True, timeout=600, check=False,
+         "tests/test_games_contract.py", "-k", "frozenlake and not default_training"],
+        cwd=ROOT, env=_plain_env(), capture_output=True, text=True, timeout=600, check=False,
     )
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-2000:]
     assert " passed" in done.stdout and "failed" not in done.stdout
+
+
+def test_every_learner_trains_to_the_same_tables_as_plain_python(tmp_path: Path) -> None:
+    out = tmp_path / "plain.npz"
+    done = subprocess.run(
+        [sys.executable, "-c", PLAIN_RUN, str(out)],
+        cwd=ROOT, env=_plain_env(), capture_output=True, text=True, timeout=600, check=False,
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    plain = np.load(out)
+    for name in NAMES:
+        compiled = _trained(name)
+        assert compiled.any(), f"{name}: a budget that changes nothing proves nothing"
+        assert np.array_equal(plain[name], compiled), (name, np.abs(plain[name] - compiled).max())
