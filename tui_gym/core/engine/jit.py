@@ -19,23 +19,32 @@ Kernels allocate nothing, so they run without Numba's reference counting
 then), at optimisation level 1 (`NUMBA_OPT`, unless set: the loops run as
 fast as at level 3 and compile in two thirds of the time).
 
-Python calls a kernel that takes an algorithm's `Params` through `entry`.
+Python calls a kernel that takes an algorithm's `Params` through `entry`. Its
+first call for new argument types compiles (or loads) under a lock on the
+cache folder (`compiling`), shared by every process: Numba names a function's
+cache entries by counting those in its index, so two processes saving two
+algorithms' forms of the loop at once could each file their code under the
+other's name.
 
 `NUMBA_DISABLE_JIT=1` leaves every kernel plain Python.
 """
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import hashlib
 import os
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
 from tui_gym.core.engine import kernel
 
-__all__ = ["COMPILING", "cache_folder", "compiled", "entry", "folder", "start", "started"]
+__all__ = [
+    "COMPILING", "cache_folder", "compiled", "compiling", "entry", "folder", "start", "started",
+]
 
 COMPILING = "compiling the learners, once"
 
@@ -152,11 +161,31 @@ class _Entry:
                 return direct(*args)
             except TypeError:  # other argument types: the dispatcher sorts them out
                 pass
-        found = self.dispatcher(*args)
+        dispatcher = self.dispatcher
+        if hasattr(dispatcher, "compile"):  # not with NUMBA_DISABLE_JIT
+            types = tuple(dispatcher.typeof_pyval(arg) for arg in args)
+            if types not in dispatcher.overloads:
+                with compiling():
+                    dispatcher.compile(types)
+        found = dispatcher(*args)
         signatures: Any = getattr(self.dispatcher, "signatures", ())
         if len(signatures) == 1 and hasattr(self.dispatcher, "get_overload"):
             self._direct = self.dispatcher.get_overload(signatures[0])
         return found
+
+
+@contextlib.contextmanager
+def compiling() -> Iterator[None]:
+    """Hold the cache folder's compile lock (every process and thread takes turns; where
+    the folder takes no lock file, nothing is held)."""
+    try:
+        handle = open(folder() / ".compile.lock", "a")  # noqa: SIM115 (held while compiling)
+    except OSError:
+        yield
+        return
+    with handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        yield  # closing the file lets the lock go
 
 
 def entry(fn: Callable[..., Any], kind: type) -> Any:
