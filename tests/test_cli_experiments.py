@@ -68,7 +68,8 @@ def test_set_fails_clearly_when_no_algorithm_has_it(capsys: pytest.CaptureFixtur
                          "--set", "planning_steps=5", "--no-record")
     assert code == 2 and out == ""
     assert err.strip() == ("tui-gym: error: no algorithm in the comparison (q-learning, sarsa) "
-                           "has 'planning_steps' (planning_steps belongs to dyna-q)")
+                           "has 'planning_steps' (planning_steps belongs to dyna-q, dyna-q-plus, "
+                           "prioritized-sweeping)")
     code, _, err = run(capsys, "compare", "blackjack", "--algorithms", "q-learning",
                        "--set", "learning_rate", "--no-record")
     assert code == 2 and "expected KEY=VALUE" in err

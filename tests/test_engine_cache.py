@@ -34,7 +34,7 @@ def test_a_process_compiles_only_while_no_other_does(tmp_path: Path) -> None:
     folder = jit.cache_folder(env)
     folder.mkdir(parents=True)
     with open(folder / ".compile.lock", "a") as held:
-        fcntl.flock(held, fcntl.LOCK_EX)
+        fcntl.lockf(held, fcntl.LOCK_EX)
         child = subprocess.Popen([sys.executable, "-c", script], env=env, text=True,
                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         try:

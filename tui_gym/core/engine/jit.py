@@ -176,15 +176,17 @@ class _Entry:
 
 @contextlib.contextmanager
 def compiling() -> Iterator[None]:
-    """Hold the cache folder's compile lock (every process and thread takes turns; where
-    the folder takes no lock file, nothing is held)."""
+    """Hold the cache folder's compile lock while compiling: processes take turns (the
+    threads of one process take turns on Numba's own lock). A POSIX lock: a training
+    process forked meanwhile does not inherit it. Where the folder takes no lock file,
+    nothing is held."""
     try:
         handle = open(folder() / ".compile.lock", "a")  # noqa: SIM115 (held while compiling)
     except OSError:
         yield
         return
     with handle:
-        fcntl.flock(handle, fcntl.LOCK_EX)
+        fcntl.lockf(handle, fcntl.LOCK_EX)
         yield  # closing the file lets the lock go
 
 
