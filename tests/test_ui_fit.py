@@ -21,6 +21,7 @@ def test_ranges_and_errors_are_short_and_say_the_bound() -> None:
     assert range_hint(FIELDS["episodes"]) == "[1, 10⁹]"
     assert range_hint(FIELDS["planning_steps"]) == "[0, 1000]"
     assert range_hint(FIELDS["learning_rate"]) == "(0, 1]"
+    assert range_hint(FIELDS["initial_value"]) == "±10⁶"
     assert field_error(FIELDS["episodes"], "1234567890") == "'1234567890' is above 1,000,000,000"
     assert field_error(FIELDS["episodes"], "0") == "'0' is below 1"
     assert field_error(FIELDS["learning_rate"], "0.") == "'0.' must be above 0"
@@ -76,7 +77,8 @@ async def test_the_key_bar_the_map_key_and_the_board_caption_in_blackjack() -> N
             await pilot.press("n")
             await pilot.pause()
             text, width = str(caption.render()), caption.content_region.width
-            if len(text.splitlines()[-1]) > width:  # 'sum 16 vs dealer 10, no usable ace'
+            lines = text.splitlines()  # none until the first step lands
+            if lines and len(lines[-1]) > width:  # 'sum 16 vs dealer 10, no usable ace'
                 break
         assert len(text.splitlines()[-1]) > width, text
         lines = sum(len(textwrap.wrap(line, width)) for line in text.splitlines())

@@ -76,9 +76,12 @@ def bound_text(value: float) -> str:
 
 
 def range_hint(field: Param) -> str:
-    """The accepted range, short enough for the hint column: '(0, 1]', '[1, 10⁹]'."""
+    """The accepted range, short enough for the hint column: '(0, 1]', '[1, 10⁹]',
+    '±10⁶' (a range around 0, both ends in it)."""
     if field.minimum is None or field.maximum is None:
         return field.expected().split(" in ", 1)[-1]
+    if field.minimum == -field.maximum and field.min_inclusive:
+        return f"±{bound_text(field.maximum)}"
     low = ("[" if field.min_inclusive else "(") + bound_text(field.minimum)
     return f"{low}, {bound_text(field.maximum)}]"
 
