@@ -1,6 +1,7 @@
 """What the swept prediction figures (7.2, 12.3, 12.6) share: one curve per setting over α,
 each point the mean RMS error of the first episodes, and the best point of each curve;
-`lambda_figure` is the whole of a figure with one curve per λ (12.3, 12.6)."""
+`swept_figure` is the whole of such a figure, `lambda_figure` one with a curve per λ
+(12.3, 12.6)."""
 
 from __future__ import annotations
 
@@ -21,7 +22,7 @@ from tui_gym.session.book.figure import (
 from tui_gym.session.book.prediction_runs import play_prediction
 from tui_gym.session.book.runs import Learner, Played, above, swept
 
-__all__ = ["ALPHAS", "LAMBDAS", "SHOWN", "Sweep", "lambda_figure", "sweep"]
+__all__ = ["ALPHAS", "LAMBDAS", "SHOWN", "Sweep", "lambda_figure", "sweep", "swept_figure"]
 
 ALPHAS = (0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
 SHOWN = 0.55  # the book's axis ends here: points above it are off the chart
@@ -75,30 +76,42 @@ def sweep(figure: BookFigure, algorithm: str, name: str, settings: Sequence[Any]
                   played[i * size: (i + 1) * size]) for i, value in enumerate(settings)]
 
 
+def swept_figure(figure: BookFigure, algorithm: str, name: str, settings: Sequence[Any],
+                 middle: Sequence[Any], chosen: Any, book_best: str,
+                 ends: Sequence[tuple[Any, str]], how: str, options: FigureOptions,
+                 progress: Progress) -> FigureResult:
+    """A figure of `algorithm` with one curve over α per value of `name` on the 19-state
+    walk, and the book's claims: the best value is an intermediate one (in `middle`), and
+    `chosen` lies below each of `ends` (a value and how the claim names it)."""
+    curves = dict(zip(settings, sweep(figure, algorithm, name, settings, options, progress),
+                      strict=True))
+    symbol = "λ" if name == "lambda" else name
+    best = min(settings, key=lambda value: curves[value].means.min())
+    picked = curves[chosen]
+    checks = (
+        Check(f"The best {symbol} is an intermediate one (the lowest point of every curve)",
+              book_best, f"{symbol} = {best:g} (α = {curves[best].best_alpha:g}, "
+              f"{curves[best].means.min():.3f})", best in middle),
+        *(above(f"{symbol} = {chosen:g} below {words}, each at its best α", "lower",
+                curves[end].best, picked.best, digits=3) for end, words in ends),
+    )
+    return FigureResult(
+        figure=figure.name, title=figure.title, runs=len(picked.best),
+        charts=(Chart(f"mean RMS error over the first {picked.episodes} episodes "
+                      f"(points above {SHOWN:g} left out)", "α",
+                      tuple(c.series() for c in curves.values())),),
+        checks=checks,
+        notes=(f"{how}the random policy's values -0.9 … 0.9, from policy evaluation on "
+               "the model; V starts at 0, undiscounted",
+               "bands: 95% intervals of the mean over runs; verdicts: 99% intervals"),
+    )
+
+
 def lambda_figure(figure: BookFigure, algorithm: str, how: str, options: FigureOptions,
                   progress: Progress) -> FigureResult:
     """A figure of `algorithm` with one curve per λ over α on the 19-state walk, and the
     book's claims: an intermediate λ does best, below λ = 0 and λ = 1."""
-    curves = dict(zip(LAMBDAS, sweep(figure, algorithm, "lambda", LAMBDAS, options,
-                                     progress), strict=True))
-    best = min(LAMBDAS, key=lambda lam: curves[lam].means.min())
-    middle = curves[0.8]
-    checks = (
-        Check("The best λ is an intermediate one (the lowest point of every curve)",
-              "λ about 0.8 to 0.9", f"λ = {best:g} (α = {curves[best].best_alpha:g}, "
-              f"{curves[best].means.min():.3f})", best in MIDDLE_LAMBDAS),
-        above("λ = 0.8 below λ = 0 (one-step TD), each at its best α", "lower",
-              curves[0.0].best, middle.best, digits=3),
-        above("λ = 0.8 below λ = 1 (Monte Carlo), each at its best α", "lower",
-              curves[1.0].best, middle.best, digits=3),
-    )
-    return FigureResult(
-        figure=figure.name, title=figure.title, runs=len(middle.best),
-        charts=(Chart(f"mean RMS error over the first {middle.episodes} episodes "
-                      f"(points above {SHOWN:g} left out)", "α",
-                      tuple(c.series() for c in curves.values())),),
-        checks=checks,
-        notes=(f"{how}; the random policy's values -0.9 … 0.9, from policy evaluation on "
-               "the model; V starts at 0, undiscounted",
-               "bands: 95% intervals of the mean over runs; verdicts: 99% intervals"),
-    )
+    return swept_figure(figure, algorithm, "lambda", LAMBDAS, MIDDLE_LAMBDAS, 0.8,
+                        "λ about 0.8 to 0.9",
+                        ((0.0, "λ = 0 (one-step TD)"), (1.0, "λ = 1 (Monte Carlo)")),
+                        f"{how}; ", options, progress)
