@@ -169,6 +169,7 @@ class Learner(ABC):
         TableSpec("counts", np.int64),
     )
     value_tables: ClassVar[tuple[str, ...]] = ("q",)  # start at `initial_value`
+    has_traces: ClassVar[bool] = False  # keeps eligibility traces (`eligibility`)
     Params: ClassVar[Any]  # the compiled hyperparameters' NamedTuple (see the docstring)
     # The tables named in `tables` (these two for most learners) are attributes.
     q: np.ndarray
@@ -229,6 +230,12 @@ class Learner(ABC):
     def action_values(self, rows: np.ndarray | slice) -> np.ndarray:
         """The values shown and evaluated, per row (k, n_actions); the policy's best."""
         return self.q[rows]
+
+    def eligibility(self) -> np.ndarray | None:
+        """The eligibility traces of the episode in progress, as `table()` gives the values
+        (a copy, one row per used row; a learner of V has its state's trace in every
+        action's place); None for a learner without traces."""
+        return None
 
     def _make_extra(self, capacity: int) -> None:  # noqa: B027 - most learners have none
         """Arrays beyond the tables, for `capacity` rows."""

@@ -123,6 +123,7 @@ class TracedLearner(Learner):
     update."""
 
     params = TRACE_PARAMS
+    has_traces = True
 
     def arrays(self) -> tuple[np.ndarray, ...]:
         return (self.q, self.counts, self.visits, self._trace, self._cells, self._n_cells)
@@ -143,6 +144,9 @@ class TracedLearner(Learner):
     def traces(self) -> np.ndarray:
         """e(s, a) of the used rows (a copy): the episode's eligibility traces."""
         return self._trace[: self.rows_used].copy()
+
+    def eligibility(self) -> np.ndarray:
+        return self.traces
 
     def _traced_record(self, step: Transition, log: np.ndarray, future_term: str,
                        *notes: tuple[str, str], **extra: Any) -> UpdateRecord:

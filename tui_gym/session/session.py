@@ -481,15 +481,25 @@ class Session:
         return reference.reason if isinstance(reference, NotAvailable) else ""
 
     def heatmaps(
-        self, snapshot: TrainingSnapshot | None = None, focus: Any = None
+        self, snapshot: TrainingSnapshot | None = None, focus: Any = None,
+        traces: bool = False,
     ) -> list[Heatmap] | None:
-        """The game's heatmap panels of the table (None when wrappers hide the states)."""
-        q = self.base_q(snapshot)
-        if q is None:
-            return None
+        """The game's heatmap panels of the table (None when wrappers hide the states);
+        with `traces`, of a snapshot's eligibility traces in the table's place, unmarked
+        (ValueError when it has none)."""
         kwargs = self.exact_kwargs(snapshot)
-        marks = self.game.oracle.optimal_marks(kwargs, self.changes)
-        return self.game.layout.heatmaps(q, kwargs, focus, marks)
+        if not traces:
+            q = self.base_q(snapshot)
+            if q is None:
+                return None
+            marks = self.game.oracle.optimal_marks(kwargs, self.changes)
+            return self.game.layout.heatmaps(q, kwargs, focus, marks)
+        if snapshot is None:
+            raise ValueError("the traces shown are a snapshot's")
+        keys = self.base_keys()
+        if keys is None:
+            return None
+        return self.game.layout.heatmaps(snapshot.values(keys, traces=True), kwargs, focus)
 
     def heatmap_cell(
         self, observation: Any, focus: Any = None
