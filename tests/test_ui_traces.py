@@ -89,9 +89,10 @@ async def test_the_toggle_outlives_a_reset_and_leaves_with_the_traces() -> None:
         view = app.train_view
         await pilot.press("E")
         assert not view.shows_traces and title(view) == "Q-table"
+        await pilot.press("E", "E", "E")  # a burst: said once
         assert [n.message for n in app._notifications] == [
-            "Q-learning keeps no eligibility traces: the heatmap shows Q (the λ learners "
-            "have them: sarsa-lambda, q-lambda, td-lambda)."]
+            "Q-learning keeps no eligibility traces (the λ learners do: sarsa-lambda, "
+            "q-lambda, td-lambda)."]
         session.set_algorithm("q-lambda")
         view.reload()
         await pilot.press("E")
@@ -105,8 +106,10 @@ async def test_the_toggle_outlives_a_reset_and_leaves_with_the_traces() -> None:
         session.set_algorithm("sarsa")
         view.reload()
         assert not view.shows_traces and title(view) == "Q-table"
+        view._no_traces_until = 0.0  # as when the first notice has gone
         await pilot.press("E")
         assert not view.shows_traces and len(app._notifications) == 2
+        assert "SARSA keeps no eligibility traces" in list(app._notifications)[-1].message
 
 
 async def test_td_lambda_shows_the_trace_of_each_state_and_none_after_the_episode() -> None:

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
+import time
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from textual import on
@@ -56,6 +57,7 @@ if TYPE_CHECKING:
     from tui_gym.session.speeds import Runner as TrainingRunner
 
 STATE_POLL_SECONDS = 0.25  # how often the view checks for a pause with no new snapshot
+NO_TRACES_SECONDS = 4.0  # how long `E` says a learner has no traces (once, for a burst)
 # How the layouts' words for values read for traces: "max Q and the greedy move" is then
 # "max e and the most eligible move", and no `*` marks a move that is not optimal.
 TRACE_WORDS = (
@@ -229,6 +231,7 @@ class TrainView(Vertical):
         self._layout_key: Any = None  # (game, env kwargs) the focus belongs to
         self._editor_game = ""  # the game the editor's undo history belongs to
         self._traces = False  # the heatmap shows the traces (a λ learner's) instead of Q
+        self._no_traces_until = 0.0  # while that is said, `E` says it no more
 
     # --- the app and its session ---------------------------------------------
     @property
@@ -728,11 +731,13 @@ class TrainView(Vertical):
         self._show_heatmaps()
 
     def action_no_traces(self) -> None:
-        learner = self.session.learner_class
+        now = time.monotonic()
+        if now < self._no_traces_until:
+            return
+        self._no_traces_until = now + NO_TRACES_SECONDS
         names = ", ".join(cls.name for cls in ALGORITHMS if cls.has_traces)
-        self.app.notify(f"{learner.title} keeps no eligibility traces: the heatmap shows "
-                        f"{'V' if self.session.predicts else 'Q'} (the λ learners have them: "
-                        f"{names}).", severity="warning", timeout=4)
+        self.app.notify(f"{self.session.learner_class.title} keeps no eligibility traces (the "
+                        f"λ learners do: {names}).", severity="warning", timeout=NO_TRACES_SECONDS)
 
     def action_edit_hyperparameters(self) -> None:
         self.add_class("-editing")
