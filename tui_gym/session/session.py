@@ -15,6 +15,7 @@ heatmaps and the exact reference, evaluates, saves and loads.
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,7 +30,7 @@ from tui_gym.core.engine.loop import ModelArrays
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.engine.trainer import Trainer
 from tui_gym.core.heatmap import Heatmap
-from tui_gym.core.mdp import NotAvailable
+from tui_gym.core.mdp import FiniteMDP, NotAvailable
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.wrappers import (
     CATALOG,
@@ -52,6 +53,10 @@ TARGET_GAP_BUDGET_FACTOR = 5
 # Observation wrappers whose `observation()` is a pure function of the bare
 # observation: the heatmaps and the exact reference can see through them.
 STATELESS_OBSERVATION_WRAPPERS = frozenset({"FlattenObservation"})
+# The loop's arrays of each model a game keeps (its exact model), by table rows: a second
+# session or learner on the same model reuses them (the loop only reads them).
+_ARRAYS: weakref.WeakKeyDictionary[FiniteMDP, dict[bytes, ModelArrays]] = (
+    weakref.WeakKeyDictionary())
 
 
 @dataclass(frozen=True)
@@ -218,7 +223,7 @@ class Session:
                 self.training = TrainingModel(model, rows)
                 if self.engine == "env":
                     return None, "env: chosen"
-                return ModelArrays.of(model, rows), text
+                return _arrays_of(model, rows), text
         if self.engine == "env":
             return None, "env: chosen"
         if self.engine == "model":
@@ -755,3 +760,12 @@ def _round_up(value: float) -> str:
     digits = 1 - int(math.floor(math.log10(value)))
     scale = 10.0**digits
     return f"{math.ceil(value * scale - 1e-9) / scale:.{max(digits, 0)}f}"
+
+
+def _arrays_of(model: FiniteMDP, rows: np.ndarray) -> ModelArrays:
+    """`ModelArrays.of(model, rows)`, built once per model and rows."""
+    built = _ARRAYS.setdefault(model, {})
+    key = np.asarray(rows, dtype=np.int64).tobytes()
+    if key not in built:
+        built[key] = ModelArrays.of(model, rows)
+    return built[key]
