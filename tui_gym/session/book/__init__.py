@@ -31,6 +31,8 @@ FIGURE_MODULES = (
     "fig_6_5",
     "fig_7_2",
     "fig_8_2",
+    "fig_8_4",
+    "fig_8_5",
     "fig_12_3",
     "fig_12_6",
 )
