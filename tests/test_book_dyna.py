@@ -7,8 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tui_gym.session.book import figure_named
-from tui_gym.session.book import changing_mazes
+from tui_gym.session.book import changing_mazes, figure_named
 from tui_gym.session.book.figure import BookFigure, FigureOptions
 from tui_gym.session.book.runs import Learner, Played, play_steps
 

@@ -14,10 +14,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from tui_gym.core.mdp import NotAvailable, solve, with_horizon
-from tui_gym.games import game_named
+from tui_gym.core.mdp import solve, with_horizon
 from tui_gym.session.book.figure import BookFigure, FigureOptions, Progress
-from tui_gym.session.book.runs import Learner, Played, play_steps
+from tui_gym.session.book.runs import Learner, Played, play_steps, world_phases
 
 __all__ = ["KAPPA", "LEARNERS", "PLANNING", "SETTINGS", "episodes_after", "fewest_steps",
            "found_after", "play_maze", "reward_between"]
@@ -77,12 +76,8 @@ def found_after(played: Played, step: int) -> np.ndarray:
 
 def fewest_steps(world: str, change_at: int) -> tuple[int, ...]:
     """The fewest steps from the start to the goal in each phase of the maze (exact)."""
-    game = game_named(world)
-    kwargs = {"change_at": change_at}
-    phases = game.world(kwargs, game.own_changes(kwargs))
-    assert not isinstance(phases, NotAvailable), phases
     fewest = []
-    for model in phases.models:
+    for model in world_phases(world, {"change_at": change_at}).models:
         steps = model.replace(reward=np.full(model.reward.shape, -1.0), reward_std=None)
         fewest.append(round(-solve(with_horizon(steps, None)).value))
     return tuple(fewest)

@@ -40,6 +40,7 @@ figure's defaults (`--full`: the book's own counts).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -53,6 +54,9 @@ from tui_gym.core.engine import loop
 from tui_gym.core.engine.loop import FIRST_ACTION, LENGTH, RETURN
 from tui_gym.core.experiments.aggregate import aggregate, t_half_width
 from tui_gym.core.experiments.records import RunKind
+from tui_gym.core.mdp import NotAvailable, Phases
+from tui_gym.games import game_named
+from tui_gym.games.model import ModelGame
 from tui_gym.session.book.figure import (
     BookFigure,
     Check,
@@ -61,8 +65,6 @@ from tui_gym.session.book.figure import (
     Progress,
     Series,
 )
-from tui_gym.core.mdp import NotAvailable
-from tui_gym.games import game_named
 from tui_gym.session.experiments.compare import Arm, CompareProgress, Setup, execute, prepare
 
 __all__ = [
@@ -83,6 +85,7 @@ __all__ = [
     "play",
     "play_steps",
     "swept",
+    "world_phases",
 ]
 
 CHECK_CONFIDENCE = 0.99  # the verdicts' intervals
@@ -155,10 +158,7 @@ def play_steps(figure: BookFigure, world: str, learners: Sequence[Learner],
     setup = Setup(world, runs, 1, dict(game_params or {}), (), options.seed)
     arms = [Arm(x.algorithm, dict(x.settings), x.label) for x in learners]
     prepared = prepare(setup, arms)
-    game = game_named(world)
-    phases = game.world(prepared.env_kwargs, game.own_changes(prepared.env_kwargs))
-    if isinstance(phases, NotAvailable):
-        raise ValueError(f"{world} has no model to play: {phases.reason}")
+    phases = world_phases(world, prepared.env_kwargs)
     arrays = [loop.ModelArrays.of(model) for model in phases.models]
     ends = [*phases.starts[1:], steps]
     n_states, n_actions = phases.models[0].n_states, phases.models[0].n_actions
@@ -170,14 +170,30 @@ def play_steps(figure: BookFigure, world: str, learners: Sequence[Learner],
         for run in range(runs):
             if options.stop is not None and options.stop.is_set():
                 raise FigureStopped(f"Figure {figure.name} stopped")
-            progress(index * runs + run, len(learners) * runs, about)
+            at = index * runs + run
+            progress(at, len(learners) * runs, about)
             agent = cls(n_actions, cls.settings(hp), n_states=n_states, seed=options.seed + run)
             loop.warm([(agent.name, agent.arrays(), agent.compiled_params())],
-                      lambda line: progress(index * runs + run, len(learners) * runs, line))
+                      functools.partial(_told, progress, at, len(learners) * runs))
             values[run] = _cumulative_reward(agent, arrays, phases.starts, ends, steps)
         played.append(Played(learner.label, values, None, None))
     progress(len(learners) * runs, len(learners) * runs, about)
     return played
+
+
+def _told(progress: Progress, done: int, total: int, line: str) -> None:
+    progress(done, total, line)
+
+
+def world_phases(world: str, kwargs: Mapping[str, Any]) -> Phases:
+    """The model of each phase of the game `world` with its arguments `kwargs` and its own
+    episode limit (ValueError for a game without one)."""
+    game = game_named(world)
+    phases = (game.world(kwargs, game.own_changes(kwargs)) if isinstance(game, ModelGame)
+              else NotAvailable("it has no exact model"))
+    if isinstance(phases, NotAvailable):
+        raise ValueError(f"{world} has no model to play: {phases.reason}")
+    return phases
 
 
 def _cumulative_reward(agent: Any, arrays: Sequence[loop.ModelArrays], starts: Sequence[int],
