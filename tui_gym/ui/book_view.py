@@ -97,7 +97,8 @@ class BookView(Vertical):
     @on(OptionList.OptionHighlighted, "#book-list")
     def _highlighted(self, event: OptionList.OptionHighlighted) -> None:
         figure = self.figures[event.option_index]
-        runs = f"{figure.runs} runs × {figure.episodes} episodes"
+        runs = f"{figure.runs} runs" + (f" × {figure.episodes} episodes"
+                                        if figure.episodes is not None else "")
         self.query_one("#book-about", Static).update(
             f"[bold]{escape(figure.title)}[/]\n{escape(figure.about)}\n"
             f"[dim]{figure.world} · {runs} · enter runs it[/]")

@@ -182,11 +182,10 @@ FIGURE = BookFigure(
     name="example 8.4",
     title="Prioritized sweeping against Dyna-Q on finer Dyna mazes (Example 8.4): updates "
           "until optimal",
-    about="The Dyna maze with each cell made 2 x 2, 3 x 3, ... cells: the same structure, "
+    about="The Dyna maze with each cell made 2 x 2 and 4 x 4 cells: the same structure, "
           "more states. Dyna-Q plans from pairs drawn at random, most of whose updates "
           "change nothing; prioritized sweeping plans where values change, backwards from "
-          "the goal, and finds the optimal path with several times fewer updates, the more "
-          "so the larger the maze.",
+          "the goal, and its greedy policy is optimal after many times fewer updates.",
     world="dyna-maze",
     run=run,
     runs=10,
