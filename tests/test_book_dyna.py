@@ -11,8 +11,8 @@ import pytest
 from tui_gym.algorithms import algorithm
 from tui_gym.core.engine import loop
 from tui_gym.core.mdp import solve, with_horizon
-from tui_gym.session.book import changing_mazes, example_8_4, figure_named
-from tui_gym.session.book.figure import BookFigure, FigureOptions
+from tui_gym.session.book import changing_mazes, example_8_4, figure_named, figures
+from tui_gym.session.book.figure import BookFigure, FigureOptions, heading
 from tui_gym.session.book.runs import Learner, Played, play_steps
 
 FIGURE = BookFigure("x", "a test figure", "", "blocking-maze", lambda *_: None, runs=3)
@@ -129,3 +129,11 @@ def test_dyna_q_against_itself_shows_no_advantage(monkeypatch: pytest.MonkeyPatc
                                                                 dyna.settings)))
     result = example_8_4.FIGURE.run(FigureOptions(runs=5, seed=100), lambda *_: None)
     assert [c.ok for c in result.checks] == [False, False]
+
+
+def test_an_example_is_listed_in_its_chapter_and_called_by_its_name() -> None:
+    names = [f.name for f in figures()]
+    assert names[names.index("8.2"):names.index("8.2") + 4] == [
+        "8.2", "8.4", "8.5", "example 8.4"]
+    assert figure_named("Example 8.4") is figure_named("e8.4") is example_8_4.FIGURE
+    assert heading("example 8.4") == "Example 8.4" and heading("8.4") == "Figure 8.4"

@@ -18,6 +18,7 @@ from tui_gym.session.book.figure import (
     FigureResult,
     FigureStopped,
     Progress,
+    heading,
 )
 from tui_gym.session.book.runs import (
     Learner,
@@ -60,7 +61,7 @@ def run(options: FigureOptions, progress: Progress) -> FigureResult:
         for i, (learner, hp) in enumerate(zip(LEARNERS, hps, strict=True)):
             for r in range(runs):
                 if options.stop is not None and options.stop.is_set():
-                    raise FigureStopped(f"Figure {FIGURE.name} stopped")
+                    raise FigureStopped(f"{heading(FIGURE.name)} stopped")
                 done = (j * len(LEARNERS) + i) * runs + r
                 progress(done, total, f"{sizes[-1]} states: {learner.label}, run {r + 1}")
                 cls = algorithm(learner.algorithm)
