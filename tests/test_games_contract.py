@@ -57,6 +57,7 @@ VARIANTS = [
     ("windy", {"stochastic_wind": True}),
     ("windy-king", {"stochastic_wind": True}),
     ("dyna-maze", {}),
+    ("dyna-maze", {"scale": 2}),
     # The changing mazes' first phase for as long as these tests play (the second phase
     # against the env: tests/test_book_worlds.py).
     ("blocking-maze", {"change_at": 100_000_000}),

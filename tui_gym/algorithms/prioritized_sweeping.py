@@ -8,7 +8,8 @@ pair the model says leads into its state (its predecessors) is checked the
 same way and enters the queue (or rises in it) when its P exceeds θ. So a
 change at the goal sweeps backwards along the paths that lead to it, and no
 update is spent where nothing changed. As in the book, Q changes only
-through the queue. A save keeps the queue.
+through the queue; the log's `[0, 7]` adds up the updates made over every
+call it is passed to (Example 8.4 counts them). A save keeps the queue.
 """
 
 from __future__ import annotations
@@ -143,6 +144,7 @@ def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
                 push(cells, prio, pos, size, into, p)
             into = next_into[into]
     log[0, 1] = done
+    log[0, 7] += done  # the updates over every call with this log (a caller that counts them)
     log[0, 2] = size[0]
     log[0, 3] = prio[0] if size[0] > 0 else 0.0
     log[0, 4] = q[s, a]
