@@ -20,7 +20,10 @@ LEARNERS = (Learner("Q-learning", "q-learning", SETTINGS),
 LEFT = ACTIONS.index("left")
 IN_A = int(offered(MAX_B_ACTIONS)[A].sum())  # the actions A offers: left and right
 EARLY = 100  # episodes: the first ones, where the bias shows, and the last ones
-READING = 1.0  # percentage points: how closely the book's figure is read
+# Percentage points: how closely the book's figure is read (its axis is marked every 25
+# points; Double Q-learning's curve comes down to just above the 5% line, still coming down
+# at episode 300, as a constant α keeps its estimate of left noisy).
+READING = 2.5
 
 
 def run(options: FigureOptions, progress: Progress) -> FigureResult:
@@ -38,12 +41,16 @@ def run(options: FigureOptions, progress: Progress) -> FigureResult:
         above(f"Double Q-learning goes left less than Q-learning (episodes 1 to {early})",
               "far less", q_left[:, :early].mean(axis=1), d_left[:, :early].mean(axis=1),
               unit="%"),
-        near(f"Double Q-learning settles near the ε-greedy optimum (the last {early} episodes)",
+        near(f"Double Q-learning comes down near the ε-greedy optimum (the last {early} "
+             "episodes)",
              round(optimum, 2), d_left[:, -early:].mean(axis=1), slack=READING, digits=2,
              unit="%"),
         above(f"Q-learning is still biased at the end (the last {early} episodes)",
               "above Double Q-learning", q_left[:, -early:].mean(axis=1),
               d_left[:, -early:].mean(axis=1), unit="%"),
+        above(f"Q-learning always goes left more often than the {optimum:g}% ε-greedy "
+              f"enforces (the last {early} episodes)", "significantly more",
+              q_left[:, -early:].mean(axis=1), floor, unit="%"),
     )
     return FigureResult(
         figure=FIGURE.name, title=FIGURE.title, runs=q.runs,
