@@ -27,7 +27,7 @@ overloads), so each algorithm gets a specialisation of the one loop, cached.
 a rule passes `offered` on to them and needs nothing else. `offers` and
 `draw` are stubs compiled by the type of `offered`: for `None` they are the
 constant True and `uniform(rng, n)`, so a game that offers every action runs
-the very code, and draws the very numbers, it ran before masks existed.
+no mask code at all; a mask that offers everything draws the same numbers.
 """
 
 from __future__ import annotations
