@@ -113,3 +113,16 @@ def test_the_exact_reference_values_the_greedy_policy_among_the_offered_actions(
         assert found.figures["exact_value"] == pytest.approx(-0.1)
     finally:
         session.env.close()
+
+
+def test_the_play_views_greedy_actions_are_among_the_offered_ones() -> None:
+    session = Session("tui_gym/MaxBias-v0", algorithm="q-learning", seed=0,
+                      env_kwargs={"actions": 3})
+    try:
+        agent = session.agent
+        agent.q[B] = [0.0, 0.0, -0.3, -0.2, -0.2] + [0.0] * 7  # b4 to b10: not offered
+        agent.visits[B] = 1
+        found = session.greedy_actions_for(B)
+        assert found is not None and found[0] == (3, 4)
+    finally:
+        session.env.close()
