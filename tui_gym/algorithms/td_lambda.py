@@ -42,7 +42,7 @@ def begin(tables: Any, hp: Any) -> None:
 
 
 @kernel
-def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     v, visits, trace = tables[3], tables[2], tables[4]
     decay = hp.discount * hp.lambda_

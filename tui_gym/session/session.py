@@ -42,6 +42,7 @@ from tui_gym.core.wrappers import (
 from tui_gym.core.wrappers.changes import GameChanges
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 from tui_gym.games.base import FixedBound, ReferenceMetrics, TrainingModel
+from tui_gym.games.model import ModelGame
 from tui_gym.session.evaluation import EvalReport, evaluate
 from tui_gym.session.prediction import PredictionFigures, PredictionRuler
 
@@ -188,8 +189,23 @@ class Session:
         """The trainer, on the game's model where there is one (`engine_reason` says which
         loop trains and why)."""
         model, self.engine_reason = self._training_model()
+        self.agent.offer(self._offered())
         return Trainer(self.env, self.agent, self.keyer, model=model, seed=self.seed,
                        reason=self.engine_reason)
+
+    def _offered(self) -> np.ndarray | None:
+        """The actions each table row offers, for a game whose states do not all offer
+        every action and whose model says which state each row is (None otherwise)."""
+        training, rows = self.training, self.keyer.n_states
+        if training is None or rows is None or not isinstance(self.game, ModelGame):
+            return None
+        offered = self.game.offered_actions(self.env_kwargs)
+        model = training.model
+        if offered is None or offered.shape != (model.n_states, model.n_actions):
+            return None
+        mask = np.ones((rows, model.n_actions), dtype=bool)
+        mask[np.arange(model.n_states) if training.rows is None else training.rows] = offered
+        return mask
 
     def _training_model(self) -> tuple[ModelArrays | None, str]:
         """The model the compiled loop trains on, or None and why not (`training` keeps
@@ -569,7 +585,8 @@ class Session:
         self, observation: Any, snapshot: TrainingSnapshot | None = None
     ) -> tuple[tuple[int, ...], np.ndarray] | None:
         """What the agent's greedy policy does on an observation of this env (wrappers
-        applied): every action tied for the best value, and the state's Q-values.
+        applied): every action the state offers tied for the best value, and the state's
+        Q-values.
 
         Reads the live agent, or `snapshot` (e.g. the runner's latest while a child
         process trains). None when the agent has never updated that state (with a
@@ -588,10 +605,12 @@ class Session:
                 if not agent.seen(key):
                     return None
                 q = agent.values([key])[0]
+            row = agent.find(key)
+            among = q if agent.offered is None or row is None else np.where(
+                agent.offered[row], q, -np.inf)  # the actions the state offers
         except (IndexError, KeyError, TypeError, ValueError):  # a mismatched or moving table
             return None
-        best = q.max()
-        return tuple(int(a) for a in np.flatnonzero(q == best)), q
+        return tuple(int(a) for a in np.flatnonzero(among == among.max())), q
 
     # --- headless training ------------------------------------------------
     def train(

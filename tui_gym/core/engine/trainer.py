@@ -170,7 +170,7 @@ class Trainer:
         if self._warmed:
             return
         agent = self.agent
-        if loop.warm([(agent.name, agent.arrays(), agent.compiled_params())], say):
+        if loop.warm([(agent.name, agent.arrays(), agent.compiled_params(), agent.offered)], say):
             say("")
         self._warmed = True
 
