@@ -69,6 +69,7 @@ from tui_gym.core.wrappers import WrapperChoice
 
 __all__ = [
     "JSON_CURVE_POINTS",
+    "RESUME_ADVICE",
     "AlgorithmOutcome",
     "CompareError",
     "CompareProgress",
@@ -85,6 +86,7 @@ SPREAD_SECONDS = 1.0  # work that takes longer than this here is spread over chi
 PROBE_SECONDS = 0.1  # how long throwaway learners play to tell how long the work is
 SMOOTHING_SHARE = 50  # charts smooth each seed's returns over 1/50 of the episodes
 TASK_SECONDS = 1.0  # a task (a block of one arm's seeds) runs about this long at least
+RESUME_ADVICE = "; give the command that started it to resume it"  # ends ResumeError's lines
 
 
 @dataclass(frozen=True)
@@ -664,7 +666,7 @@ def _resume_runs(
     except RunHistoryError as exc:
         raise ResumeError(str(exc)) from None
     run_id = first.id
-    advice = "; give the command that started it to resume it"
+    advice = RESUME_ADVICE
     if len(records) != len(arms) or any(r.summary.kind != kind for r in records):
         raise ResumeError(f"run {run_id} is a {first.kind} of {len(records)} run(s), not this "
                           f"{kind} of {len(arms)}{advice}")
