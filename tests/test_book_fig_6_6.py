@@ -90,3 +90,23 @@ def test_resuming_with_other_settings_or_from_a_later_run_is_refused(
         with pytest.raises(ResumeError, match=f"resume run {first.group}$"):
             fig_6_6.FIGURE.run(FigureOptions(runs=2, episodes=20, tasks=FigureTasks(
                 history, resume=first.group + 1)), lambda *_: None)
+
+
+def test_the_command_records_full_runs_and_resumes_them(
+        tmp_path: Any, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    from tui_gym.cli import main
+
+    monkeypatch.setattr(fig_6_6, "FULL_ASYMPTOTIC_RUNS", 2)
+    db = str(tmp_path / "runs.db")
+    small = ["book", "6.6", "--full", "--runs", "2", "--episodes", "20", "--db", db]
+    main(small)
+    out = capsys.readouterr().out
+    assert "tasks in" in out and "kept in the run history as runs 1…" in out
+    main([*small, "--resume", "1"])
+    assert "kept in the run history as runs 1…" in capsys.readouterr().out
+    assert main([*small[:4], "3", *small[5:], "--resume", "1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and err.startswith("tui-gym: error: run 1 was recorded with other")
+    with RunHistory(tmp_path / "runs.db") as history:
+        assert len(history.group_ids(1)) == 60
