@@ -11,9 +11,12 @@ from __future__ import annotations
 import threading
 from pathlib import Path
 
+import pytest
 from textual.app import App, ComposeResult
 
 from tui_gym.core.experiments import RunHistory, RunRecorder, RunSpec
+from tui_gym.session.book import fig_6_6
+from tui_gym.session.book.figure import FigureOptions, FigureStopped, FigureTasks
 from tui_gym.session.experiments.compare import CompareProgress, CompareSpec, run_compare
 from tui_gym.session.session import Session
 from tui_gym.ui.compare_view import CompareView
@@ -109,3 +112,27 @@ async def test_other_settings_or_a_run_of_another_kind_are_one_line(tmp_path: Pa
     with RunHistory(db) as history:
         assert [len(history.read_tasks(r.id)) for r in history.list_runs()
                 if str(r.kind) == "compare"] in ([0, 1], [1, 0])
+
+
+async def test_a_book_figures_runs_are_not_resumed_here(tmp_path: Path) -> None:
+    db = tmp_path / "runs.db"
+    stop = threading.Event()
+    with RunHistory(db) as history:
+        tasks = FigureTasks(history)
+
+        def told(*_: object) -> None:
+            if tasks.played:  # the asymptotic runs have begun
+                stop.set()
+
+        with pytest.raises(FigureStopped):
+            fig_6_6.FIGURE.run(FigureOptions(runs=2, episodes=20, stop=stop, tasks=tasks), told)
+    app = ViewApp(Session("cliffwalking", seed=0), db)
+    async with app.run_test(size=SIZE) as pilot:
+        view = app.query_one(CompareView)
+        await pilot.pause()
+        assert len(view.runs) == 60
+        await pilot.press("c")
+        assert view.message == (
+            f"Not resumed: run {tasks.group}'s runs are not one comparison of learners: resume "
+            f"them with the command that started them (--resume {tasks.group})"), view.message
+        assert view.job is None

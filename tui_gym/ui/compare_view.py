@@ -649,6 +649,11 @@ class CompareView(Vertical):
             raise ValueError(f"run {head} does not say its seeds and episodes as a comparison "
                              "does")
         algorithms = tuple(r.summary.algorithm for r in records)
+        if len(set(algorithms)) < len(algorithms) or any(
+                r.summary.seeds != seeds or r.hyperparameters.get("episodes") != episodes
+                for r in records):  # a book figure's runs, say: not one comparison
+            raise ValueError(f"run {head}'s runs are not one comparison of learners: resume "
+                             f"them with the command that started them (--resume {head})")
         return head, Launch(algorithms, len(seeds), episodes), seeds[0]
 
     def start_job(self, job: CompareJob) -> None:
