@@ -131,8 +131,9 @@ def play(figure: BookFigure, world: str, learners: Sequence[Learner], options: F
     runs, episodes = runs or counted[0], episodes or counted[1]
     setup = Setup(world, runs, episodes, dict(game_params or {}), (), options.seed, measure)
     arms = [Arm(x.algorithm, dict(x.settings), x.label) for x in learners]
-    about = (f"{runs:,} runs × {episodes:,} episodes of "
-             f"{', '.join(dict.fromkeys(x.label.split(' α')[0] for x in learners))}")
+    names = ", ".join(x.label for x in learners) if len(learners) <= 4 else (
+        f"{len(learners)} learners")
+    about = f"{runs:,} runs × {episodes:,} episodes of {names}"
     tasks = options.tasks or FigureTasks()
 
     def told(state: CompareProgress) -> None:
