@@ -888,6 +888,9 @@ def _estimate(prepared: Prepared, arms: Sequence[Arm], setup: Setup,
     total = 0.0
     checkpoints = len(checkpoint_episodes(setup.episodes))
     for learner in learners:
+        # A learner's first call loads its compiled loop (a good part of a second for the
+        # first of its kind): paid here, outside the time that is measured.
+        play_learner(learner, model.arrays, 1)
         began = time.perf_counter()
         played, _ = play_learner(learner, model.arrays, setup.episodes,
                                  stop=_deadline(began + PROBE_SECONDS / len(learners)))
