@@ -219,6 +219,8 @@ def test_runs_keys(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     removed = run_json(capsys, "runs", "rm", str(run["id"]), "--db", db, "--json")
     pinned("runs rm", removed, {"db", "removed"})
     assert set(removed["removed"]) == SUMMARY
+    pruned = run_json(capsys, "runs", "prune", "--db", db, "--json")
+    pinned("runs prune", pruned, {"db", "runs", "tasks"})
 
 
 def test_compare_and_sweep_keys(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:

@@ -329,6 +329,25 @@ def test_the_estimate_that_sizes_tasks_counts_the_exact_valuations(
     assert compare._estimate(prepared, arms, setup, None) == pytest.approx(3 * checkpoints)
 
 
+def test_the_estimate_leaves_out_a_learners_first_call(monkeypatch: pytest.MonkeyPatch) -> None:
+    # The first call of a learner's loop loads its compiled code: a second of this clock,
+    # which would size the tasks as if every seed took that long.
+    setup = compare.Setup("frozenlake", 100, 10, {}, (), 0)
+    arms = [compare.Arm("q-learning", {}, "q-learning")]
+    prepared = compare.prepare(setup, arms)
+    clock, called = [0.0], []
+
+    def play(learner: Any, arrays: Any, episodes: int, *_: Any, **__: Any) -> Any:
+        clock[0] += 0.001 * episodes + (0.0 if called else 1.0)
+        called.append(episodes)
+        return np.zeros(episodes), []
+
+    monkeypatch.setattr(compare.time, "perf_counter", lambda: clock[0])
+    monkeypatch.setattr(compare, "play_learner", play)
+    monkeypatch.setattr(compare, "greedy_values", lambda mdp, tables: np.zeros(len(tables)))
+    assert compare._estimate(prepared, arms, setup, None) == pytest.approx(100 * 10 * 0.001)
+
+
 def test_a_cluster_out_of_reach_records_no_run(tmp_path: Path) -> None:
     from tui_gym.session.experiments.cluster import ClusterError
 

@@ -4,7 +4,10 @@
 [--episodes E] [--seed S] [--json]` runs one headless with a progress bar, draws
 it in the terminal (its curves as band charts, its grids as tables) and prints
 each of the book's claims beside the measured figure with a verdict; the exit
-status is 1 when a claim is not borne out. `--json` prints `{"schema": 1,
+status is 1 when a claim is not borne out. `--full` runs the book's own counts
+and keeps each finished task in the run history (`--db`, `--no-record`), so
+`--resume RUN` carries an interrupted figure on; `--cluster` sends the tasks
+to Dask; it ends with the tasks' count and the wall time. `--json` prints `{"schema": 1,
 "figure", "title", "runs", "series": [{"label", "x", "y", "lo", "hi"}],
 "checks": [{"claim", "book", "measured", "ok"}]}`.
 """
@@ -12,6 +15,7 @@ status is 1 when a claim is not borne out. `--json` prints `{"schema": 1,
 from __future__ import annotations
 
 import argparse
+import time
 from collections.abc import Callable
 
 from rich.console import Console
@@ -20,8 +24,9 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from tui_gym.book_text import claims_table, figure_parts
+from tui_gym.cli.experiments_command import add_task_flags, run_history, unrecorded
 from tui_gym.cli.grids import panel_text
-from tui_gym.cli.output import print_json
+from tui_gym.cli.output import CliError, print_json
 from tui_gym.cli.types import positive_int, seed_number
 from tui_gym.session.book import figure_named, figures
 from tui_gym.session.book.figure import (
@@ -29,6 +34,7 @@ from tui_gym.session.book.figure import (
     FigureOptions,
     FigureResult,
     FigureStopped,
+    FigureTasks,
     heading,
 )
 
@@ -46,19 +52,46 @@ def add_book_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[ty
     book.add_argument("--seed", type=seed_number, default=0, dest="book_seed", metavar="S",
                       help="the first run's seed (default 0)")
     book.add_argument("--full", action="store_true",
-                      help="the book's own run and episode counts (slower)")
+                      help="the book's own run and episode counts (slower); each finished "
+                      "task is kept in the run history, so --resume carries it on")
+    add_task_flags(book)
     book.add_argument("--json", action="store_true", help="print one JSON object")
 
 
 def cmd_book(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.session.experiments.cluster import ClusterError
+    from tui_gym.session.experiments.compare import CompareError
+
     if args.figure is None:
         return _list(args, out)
     figure = figure_named(args.figure)
-    options = FigureOptions(args.runs, args.episodes, args.book_seed, args.full)
-    try:
-        return _run(figure, options, args, out)
-    except FigureStopped as stopped:  # Ctrl+C: the runs end at their next step
-        raise KeyboardInterrupt from stopped
+    recorded = args.full or args.resume is not None
+    if not recorded:
+        args.no_record = True
+    with run_history(args) as history:
+        if args.resume is not None and history is None:
+            raise CliError(f"--resume {args.resume}: the run history is needed to resume")
+        tasks = FigureTasks(history, args.resume, args.cluster)
+        options = FigureOptions(args.runs, args.episodes, args.book_seed, args.full,
+                                tasks=tasks)
+        began = time.perf_counter()
+        try:
+            code = _run(figure, options, args, out)
+        except FigureStopped as stopped:  # Ctrl+C: the runs end at their next step
+            if tasks.group is not None and not unrecorded(history):
+                Console(stderr=True).print(
+                    f"kept {tasks.landed} of {tasks.tasks} tasks as runs {tasks.group}…; the "
+                    f"same command with --resume {tasks.group} carries on", style="yellow")
+            raise KeyboardInterrupt from stopped
+        except (CompareError, ClusterError) as exc:
+            raise CliError(str(exc)) from None
+        if tasks.tasks and not args.json:
+            kept = "" if tasks.group is None or unrecorded(history) else (
+                f"; kept in the run history as runs {tasks.group}… (tui-gym runs show "
+                f"{tasks.group})")
+            out.print(f"{tasks.tasks:,} tasks in {time.perf_counter() - began:,.0f} s{kept}",
+                      style="dim")
+    return code
 
 
 def _run(figure: BookFigure, options: FigureOptions, args: argparse.Namespace,

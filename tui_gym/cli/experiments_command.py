@@ -68,6 +68,13 @@ def _common_options(parser: argparse.ArgumentParser) -> None:
                         default=None, metavar="P",
                         help="batches at once in child processes (default: one per core; "
                         "0: in this process)")
+    add_task_flags(parser)
+    parser.add_argument("--json", action="store_true", help="print one JSON object, no bar")
+
+
+def add_task_flags(parser: argparse.ArgumentParser) -> None:
+    """`--resume`, `--cluster`, `--db` and `--no-record`: where an experiment's tasks run and
+    are kept."""
     parser.add_argument("--resume", type=_int_in(1, 2**62, "a run id"), metavar="RUN",
                         help="carry on run RUN (the first id the command printed): only its "
                         "missing tasks run; the settings must be the same")
@@ -78,7 +85,6 @@ def _common_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--db", type=_path, metavar="PATH", help=DB_HELP)
     parser.add_argument("--no-record", action="store_true",
                         help="do not keep these runs in the run history")
-    parser.add_argument("--json", action="store_true", help="print one JSON object, no bar")
 
 
 def add_experiment_parsers(sub: Any) -> None:
@@ -142,9 +148,9 @@ def _wrappers(specs: Sequence[str]) -> tuple[Any, ...]:
 
 
 @contextmanager
-def _history(args: argparse.Namespace) -> Iterator[BestEffortHistory | None]:
+def run_history(args: argparse.Namespace) -> Iterator[BestEffortHistory | None]:
     """The run history to record in (None with --no-record, or when it cannot be opened);
-    its writes never raise (see `_unrecorded`)."""
+    its writes never raise (see `unrecorded`)."""
     if args.no_record:
         yield None
         return
@@ -162,7 +168,7 @@ def _history(args: argparse.Namespace) -> Iterator[BestEffortHistory | None]:
         yield history
 
 
-def _unrecorded(history: BestEffortHistory | None) -> bool:
+def unrecorded(history: BestEffortHistory | None) -> bool:
     """Say, after the results, that they were not recorded when a write failed; whether so."""
     if history is None or history.failure is None:
         return False
@@ -275,7 +281,7 @@ def cmd_compare(args: argparse.Namespace, out: Console) -> int:
         game_params=_pairs(args.params, "--param"), wrappers=_wrappers(args.wrapper),
         first_seed=args.first_seed,
     )
-    with _history(args) as history:
+    with run_history(args) as history:
         try:
             result = _run_with_progress(
                 out, args.json, "comparing",
@@ -290,11 +296,11 @@ def cmd_compare(args: argparse.Namespace, out: Console) -> int:
         _write_csv(args.csv, result.outcomes)
     if args.json:
         print_json("compare", result.to_json())
-        _unrecorded(history)
+        unrecorded(history)
         return 130 if result.interrupted else 0
     if not result.outcomes:
         out.print("stopped before any episode finished; nothing to show")
-        _unrecorded(history)
+        unrecorded(history)
         return 130
     out.print(_compare_table(result))
     width = args.width or max(20, min(100, out.width - 12))
@@ -306,7 +312,7 @@ def cmd_compare(args: argparse.Namespace, out: Console) -> int:
         out.print(f"[yellow]interrupted:[/] kept {what}" + _resume_hint(result.group))
     if args.csv:
         out.print(f"curves written to {args.csv}", style="dim")
-    if not _unrecorded(history) and result.group is not None:
+    if not unrecorded(history) and result.group is not None:
         ids = [str(o.run_id) for o in result.outcomes]
         noun = "run" if len(ids) == 1 else "runs"
         out.print(f"recorded in the run history as {noun} {', '.join(ids)} "
@@ -429,7 +435,7 @@ def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
         first_seed=args.first_seed, ranges=_ranges(args.ranges), samples=args.sample,
         sample_seed=args.sample_seed,
     )
-    with _history(args) as history:
+    with run_history(args) as history:
         try:
             result = _run_with_progress(
                 out, args.json, "sweeping",
@@ -442,7 +448,7 @@ def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
             raise CliError(str(exc)) from None
     if args.json:
         print_json("sweep", result.to_json())
-        _unrecorded(history)
+        unrecorded(history)
         return 130 if result.interrupted else 0
     out.print(_sweep_table(result))
     if len(spec.grid) == 2 and not spec.ranges:
@@ -450,7 +456,7 @@ def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
     if result.interrupted:
         out.print("[yellow]interrupted:[/] points show the episodes every seed finished"
                   + _resume_hint(result.group))
-    _unrecorded(history)
+    unrecorded(history)
     return 130 if result.interrupted else 0
 
 

@@ -38,6 +38,7 @@ JSON_SCHEMAS: dict[str, int] = {
     "runs show": 1,
     "runs export": 1,
     "runs rm": 1,
+    "runs prune": 1,
     "runs recover": 1,
     "plan": 1,
     "book": 1,

@@ -4,8 +4,9 @@
 runs, newest first (a screenful by default; every run with `--json`), in the
 columns that fit the terminal (the least needed go first; names are never
 cut); `runs show ID`, `runs export ID --csv PATH | --tensorboard DIR` and
-`runs rm ID` work on one; `runs --recover` copies what can be read of a
-damaged history into a new file beside it. Every one takes `--db PATH` (else
+`runs rm ID` work on one; `runs prune` removes the stored tasks of finished
+runs (only an unfinished run needs them, to resume); `runs --recover` copies
+what can be read of a damaged history into a new file beside it. Every one takes `--db PATH` (else
 `TUI_GYM_DB`, else the data folder's `runs.db`). `add_train_options` puts
 `--db` and `--no-record` on `train`, and `recorded` wraps the `train` command
 so that its run is recorded (see `TrainRecording`). A history that cannot be
@@ -93,6 +94,11 @@ def add_runs_parser(sub: Any) -> None:
     rm.add_argument("run_id", type=_run_id, metavar="ID", help=RUN_ID_HELP)
     _json_option(rm, inherit=True)
     _db_option(rm, inherit=True)
+
+    prune = verbs.add_parser("prune", help="remove the stored tasks of finished runs (their "
+                             "curves and figures stay) and give the space back")
+    _json_option(prune, inherit=True)
+    _db_option(prune, inherit=True)
 
 
 def add_train_options(train: argparse.ArgumentParser) -> None:
@@ -223,7 +229,8 @@ def cmd_runs(args: argparse.Namespace, out: Console) -> int:
             raise CliError(f"--recover works on the whole history, not with `runs {verb}`")
         return _cmd_recover(args, out)
     if verb is not None:
-        return {"show": _cmd_show, "export": _cmd_export, "rm": _cmd_rm}[verb](args, out)
+        return {"show": _cmd_show, "export": _cmd_export, "rm": _cmd_rm,
+                "prune": _cmd_prune}[verb](args, out)
     from tui_gym.core.experiments import list_runs
 
     game = args.game.strip().lower() if args.game else None
@@ -365,6 +372,20 @@ def _cmd_rm(args: argparse.Namespace, out: Console) -> int:
     what = (f"it could not be read: {run.reason}" if isinstance(run, DamagedRun)
             else f"{run.kind} {run.game} {run.algorithm}")
     out.print(Text(visible(f"removed run {run.id} ({what}) from {removed.db}", None)))
+    return 0
+
+
+def _cmd_prune(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.core.experiments import prune_tasks
+
+    pruned = _history_call(lambda: prune_tasks(args.db))
+    if args.json:
+        print_json("runs prune", pruned.to_json())
+        return 0
+    out.print(Text(visible(
+        f"removed {pruned.tasks:,} stored tasks of {pruned.runs:,} finished runs from "
+        f"{pruned.db} (their curves and figures stay; unfinished runs keep theirs, to "
+        "resume)", None)))
     return 0
 
 

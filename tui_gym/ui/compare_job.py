@@ -37,9 +37,11 @@ class CompareJob:
         db: Path,
         run: Callable[..., Any] | None = None,
         processes: int | None = None,
+        resume: int | None = None,
     ) -> None:
-        """`run` is `run_compare` (or a function with its signature); `processes` is its
-        own (None: one child process per core, 0: all on the job's thread)."""
+        """`run` is `run_compare` (or a function with its signature); `processes` and
+        `resume` are its own (None: one child process per core, 0: all on the job's
+        thread; the recorded comparison to carry on)."""
         if run is None:
             from tui_gym.session.experiments.compare import run_compare
 
@@ -48,6 +50,7 @@ class CompareJob:
         self.db = db
         self._run = run
         self.processes = processes
+        self.resume = resume
         self.stop_event = threading.Event()
         self.progress: CompareProgress | None = None  # the latest report
         self.progress_count = 0  # how many reports came
@@ -93,13 +96,17 @@ class CompareJob:
         self.progress_count += 1
 
     def _work(self) -> None:
+        from tui_gym.session.experiments.compare import RESUME_ADVICE, ResumeError
+
         _lower_priority()
         try:
             with RunHistory(self.db) as history:
                 self.result = self._run(
                     self.spec, progress=self._report, stop=self.stop_event, history=history,
-                    processes=self.processes,
+                    processes=self.processes, resume=self.resume,
                 )
+        except ResumeError as exc:  # other settings: one line, without the command's advice
+            self.error = f"Not resumed: {_one_line(exc).removesuffix(RESUME_ADVICE)}"
         except RunHistoryError as exc:
             self.error = f"Not recorded: {_one_line(exc)}"
         except ValueError as exc:  # settings a learner or the game refuses

@@ -11,11 +11,14 @@ its wrappers and the hyperparameters edited in the Train view (each given
 to the chosen algorithms that have it), through `run_compare` on a worker thread
 (`CompareJob`). The view's timer draws its progress as it comes: the curves
 so far, a progress line, and the figures; `s` (or the Stop button) stops
-it, keeping what finished. Once it ends, the runs it recorded appear in the
-list, ticked. A history that cannot be opened (damaged, another program's,
-from a newer tui-gym, a path that cannot be examined) is one message in the
-view, and a run that does not read is named in the message while the others
-are listed; nothing else changes. Text from the history is shown as data
+it, keeping what finished, and `c` on an unfinished comparison in the list
+carries it on: only its missing tasks run (with the game's settings and the
+Train view's hyperparameters as they are: other ones are refused in one line).
+Once it ends, the runs it recorded appear in the list, ticked. A history
+that cannot be opened (damaged, another program's, from a newer tui-gym, a
+path that cannot be examined) is one message in the view, and a run that
+does not read is named in the message while the others are listed; nothing
+else changes. Text from the history is shown as data
 (`visible`).
 
 The view reads the session and the history; it sends nothing up but
@@ -185,7 +188,8 @@ def describe_run(run: RunSummary) -> Text:
     if str(run.status) == "running" and str(run.kind) == "app":
         parts.append("open in the app")  # it ends when the app lets the agent go
     elif str(run.status) != "finished":
-        parts.append(str(run.status))
+        resumes = str(run.kind) == "compare" and str(run.status) != "running"
+        parts.append(f"{run.status}{', c resumes' if resumes else ''}")
     parts.append(when)
     return Text(" · ".join(parts), no_wrap=True, overflow="ellipsis")
 
@@ -235,6 +239,8 @@ class CompareView(Vertical):
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("l", "launch", "Launch", tooltip="Run a comparison with the chosen algorithms"),
         Binding("s", "stop", "Stop", tooltip="Stop the comparison; what finished is kept"),
+        Binding("c", "resume", "Resume", tooltip="Carry on the highlighted unfinished "
+                "comparison: only its missing tasks run"),
         Binding("o", "toggle_smoothing", "Smooth", tooltip="Smoothed curves, or as recorded"),
         Binding("r", "reload", "Reload", tooltip="Read the run history again"),
         Binding("escape", "focus_list", "Back to the runs", show=False),
@@ -412,6 +418,7 @@ class CompareView(Vertical):
             ("tab / shift+tab", "the algorithms, Seeds, Episodes and the buttons"),
             ("l / enter", "run the comparison (enter in Seeds or Episodes)"),
             ("s", "stop the comparison; what finished is recorded"),
+            ("c", "resume the highlighted unfinished comparison: only its missing tasks run"),
             ("o", "smoothed curves (a trailing mean over a tenth of each) / as recorded"),
             ("r", "read the run history again (runs recorded elsewhere)"),
             ("esc", "leave a field or a button: back to the list of runs"),
@@ -583,7 +590,7 @@ class CompareView(Vertical):
             return
         self.start_job(CompareJob(spec, self.db_path, processes=self.processes))
 
-    def _spec(self, launch: Launch) -> CompareSpec:
+    def _spec(self, launch: Launch, first_seed: int | None = None) -> CompareSpec:
         from tui_gym.session.experiments.compare import CompareSpec
 
         session = self.session
@@ -595,8 +602,59 @@ class CompareView(Vertical):
             settings=edited_settings(session, launch.algorithms),
             game_params=dict(session.env_kwargs),
             wrappers=tuple(session.choices),
-            first_seed=session.seed,
+            first_seed=session.seed if first_seed is None else first_seed,
         )
+
+    def action_resume(self) -> None:
+        """Carry on the highlighted run's comparison: its algorithms, seeds and episodes,
+        with the game's settings and the Train view's hyperparameters as they are now (the
+        comparison refuses, in one line, if they are not the run's)."""
+        if self.running:
+            self._say("A comparison is running: stop it first (s).", error=True)
+            return
+        index = self.run_list.highlighted
+        if self._history_error is not None or index is None or index >= len(self._runs):
+            self._say("Not resumed: highlight an unfinished comparison in the list of runs.",
+                      error=True)
+            return
+        try:
+            head, launch, first_seed = self._resumable(self._runs[index])
+            spec = self._spec(launch, first_seed)
+        except (ValueError, RunHistoryError, OSError) as exc:
+            self._say(f"Not resumed: {exc}", error=True)
+            return
+        self.start_job(CompareJob(spec, self.db_path, processes=self.processes, resume=head))
+
+    def _resumable(self, run: RunSummary) -> tuple[int, Launch, int]:
+        """The first run of `run`'s comparison, and its algorithms, seeds and episodes, and
+        first seed; ValueError saying why it cannot be resumed."""
+        head = run.id if run.group is None else run.group
+        history = self._open()
+        if history is None:
+            raise ValueError("the run history is gone")
+        with history:
+            records = [history.get_run(i) for i in history.group_ids(head)]
+        first = records[0]
+        if str(first.summary.kind) != "compare":
+            raise ValueError(f"run {head} is a {first.summary.kind} run: only a comparison "
+                             "resumes here")
+        statuses = {str(r.summary.status) for r in records}
+        if "running" in statuses:
+            raise ValueError(f"run {head}'s comparison is still running in another process")
+        if statuses == {"finished"}:
+            raise ValueError(f"run {head}'s comparison finished: nothing is missing")
+        seeds, episodes = first.summary.seeds, first.hyperparameters.get("episodes")
+        if not seeds or list(seeds) != list(range(seeds[0], seeds[0] + len(seeds))) or not (
+                isinstance(episodes, int) and episodes >= 1):
+            raise ValueError(f"run {head} does not say its seeds and episodes as a comparison "
+                             "does")
+        algorithms = tuple(r.summary.algorithm for r in records)
+        if len(set(algorithms)) < len(algorithms) or any(
+                r.summary.seeds != seeds or r.hyperparameters.get("episodes") != episodes
+                for r in records):  # a book figure's runs, say: not one comparison
+            raise ValueError(f"run {head}'s runs are not one comparison of learners: resume "
+                             f"them with the command that started them (--resume {head})")
+        return head, Launch(algorithms, len(seeds), episodes), seeds[0]
 
     def start_job(self, job: CompareJob) -> None:
         """Run `job` and follow it (the launch button's end; tests hand in their own)."""
@@ -611,7 +669,8 @@ class CompareView(Vertical):
         spec = job.spec
         names = ", ".join(algorithm_title(a) for a in spec.algorithms)
         settings = ", ".join(f"{k}={v}" for k, v in spec.settings.items())
-        self._say(f"Comparing {names}: {spec.seeds:,} seeds × {compact_count(spec.episodes)} "
+        doing = "Comparing" if job.resume is None else f"Resuming run #{job.resume}:"
+        self._say(f"{doing} {names}: {spec.seeds:,} seeds × {compact_count(spec.episodes)} "
                   f"episodes" + (f", with {settings} from the Train view" if settings else "")
                   + "…")
         self._progress.show(0, 1)
@@ -636,7 +695,7 @@ class CompareView(Vertical):
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         if action == "stop":
             return self.running
-        if action == "launch":
+        if action in ("launch", "resume"):
             return not self.running
         return True
 

@@ -42,10 +42,12 @@ from tui_gym.core.experiments.records import (
 from tui_gym.core.experiments.recover import Recovery
 from tui_gym.core.experiments.runs import (
     CsvExport,
+    PrunedTasks,
     RemovedRun,
     RunListing,
     export_run_csv,
     list_runs,
+    prune_tasks,
     recover_history,
     remove_run,
     show_run,
@@ -66,6 +68,7 @@ __all__ = [
     "NewerRunHistoryError",
     "NotARunHistoryError",
     "Recovery",
+    "PrunedTasks",
     "RemovedRun",
     "RunHistory",
     "RunHistoryBusyError",
@@ -87,6 +90,7 @@ __all__ = [
     "mean_return_last",
     "mean_with_ci",
     "recover_history",
+    "prune_tasks",
     "remove_run",
     "resolve_db_path",
     "rolling_mean",

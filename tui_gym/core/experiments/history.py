@@ -327,6 +327,26 @@ class RunHistory:
         except BadTask as exc:
             raise self._damaged_run(run_id, f"a task: {exc}") from None
 
+    def prune_tasks(self) -> tuple[int, int]:
+        """Delete the stored tasks of the finished runs (their curves and figures stay: only
+        an unfinished run needs its tasks, to resume) and give their space back to the disk;
+        (runs, tasks) pruned."""
+        finished = (str(RunStatus.FINISHED),)
+        where = "WHERE run_id IN (SELECT id FROM runs WHERE status = ?)"
+
+        def write(conn: sqlite3.Connection) -> tuple[int, int]:
+            runs, tasks = conn.execute(
+                f"SELECT COUNT(DISTINCT run_id), COUNT(*) FROM tasks {where}", finished).fetchone()
+            conn.execute(f"DELETE FROM tasks {where}", finished)
+            return int(runs), int(tasks)
+
+        pruned = self._write(write)
+        if pruned[1]:
+            with self._errors():
+                self._shared.attempt(lambda conn: conn.execute("VACUUM"), self.timeout,
+                                     busy_error(self.path, self.timeout), begin=None)
+        return pruned
+
     def group_ids(self, run_id: int) -> list[int]:
         """Run `run_id` and the runs that name it as their group, by id; UnknownRunError
         if there is no such run."""

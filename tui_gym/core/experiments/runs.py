@@ -2,8 +2,8 @@
 
 `list_runs` (`runs [--json] [--game G] [--limit N]`), `show_run` (`runs show
 ID`), `export_run_csv` (`runs export ID --csv PATH`), `remove_run` (`runs rm
-ID`) and `recover_history` (`runs --recover`). Each takes `db`, the `--db`
-value (None for `TUI_GYM_DB` or the data folder's file). Reading never
+ID`), `prune_tasks` (`runs prune`) and `recover_history` (`runs --recover`).
+Each takes `db`, the `--db` value (None for `TUI_GYM_DB` or the data folder's file). Reading never
 creates a file: with no history yet there are no runs; a history that can
 only be read (a read-only folder) can still be listed and shown. A listing
 names the runs that do not read beside those that do. Every problem raises a
@@ -136,6 +136,27 @@ def remove_run(run_id: int, db: str | None = None) -> RemovedRun:
         raise _none_yet(run_id, path)
     with RunHistory(path) as history:
         return RemovedRun(db=path, run=history.remove_run(run_id))
+
+
+@dataclass(frozen=True)
+class PrunedTasks:
+    """The stored tasks `prune_tasks` removed from `db`: `tasks` of `runs` finished runs."""
+
+    db: Path
+    runs: int
+    tasks: int
+
+    def to_json(self) -> dict[str, Any]:
+        return {"db": str(self.db), "runs": self.runs, "tasks": self.tasks}
+
+
+def prune_tasks(db: str | None = None) -> PrunedTasks:
+    """Remove the stored tasks of the finished runs (see `RunHistory.prune_tasks`)."""
+    path, exists = _existing(db)
+    if not exists:
+        return PrunedTasks(path, 0, 0)
+    with RunHistory(path) as history:
+        return PrunedTasks(path, *history.prune_tasks())
 
 
 def recover_history(db: str | None = None) -> Recovery:

@@ -29,6 +29,7 @@ FIGURE_MODULES = (
     "fig_6_3",
     "fig_6_4",
     "fig_6_5",
+    "fig_6_6",
     "fig_7_2",
     "fig_8_2",
     "fig_8_4",

@@ -16,15 +16,18 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
 
 from tui_gym.core.heatmap import Heatmap
 
+if TYPE_CHECKING:
+    from tui_gym.core.experiments.history import RunHistory
+
 __all__ = ["BookFigure", "Chart", "Check", "FigureOptions", "FigureResult", "FigureStopped",
-           "Progress", "Series", "heading"]
+           "FigureTasks", "Progress", "Series", "heading"]
 
 Progress = Callable[[int, int, str], None]  # (done, total, what is being done)
 
@@ -35,17 +38,36 @@ def heading(name: str) -> str:
     return name.capitalize() if name[:1].isalpha() else f"Figure {name}"
 
 
+@dataclass
+class FigureTasks:
+    """Where a figure's learners run as tasks (`runs.play`): the run history each finished
+    task is kept in (each `play` a group of runs, all joining the figure's first run,
+    `group`), the run to resume (`resume`: the figure's first run; only the missing tasks
+    run), and the Dask cluster (`cluster`, as `compare --cluster` takes it). `tasks` and
+    `landed` count the figure's tasks and those finished so far."""
+
+    history: RunHistory | None = None
+    resume: int | None = None
+    cluster: Any = None
+    group: int | None = None
+    played: int = 0  # the learners played so far: where the next play's runs start in `group`
+    tasks: int = 0
+    landed: int = 0
+
+
 @dataclass(frozen=True)
 class FigureOptions:
     """How a figure is run: `runs` and `episodes` (None: the figure's defaults, or with
     `full` the book's own counts) and the first `seed`; setting `stop` ends a figure that
-    runs learners early (`FigureStopped`)."""
+    runs learners early (`FigureStopped`); `tasks` keeps them in the run history or sends
+    them to a cluster."""
 
     runs: int | None = None
     episodes: int | None = None
     seed: int = 0
     full: bool = False
     stop: threading.Event | None = field(default=None, compare=False)
+    tasks: FigureTasks | None = field(default=None, compare=False)
 
 
 class FigureStopped(Exception):

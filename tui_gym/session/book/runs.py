@@ -18,7 +18,10 @@ A run figure is a module like the exact ones (a `FIGURE`, see `figure`), whose
    in a world that changes as it is played (the book's blocking and shortcut
    mazes) plays `play_steps(..., steps)` instead: each run a number of time
    steps, phase after phase of the world, and `values[run, t]` the
-   cumulative reward after t + 1 steps.
+   cumulative reward after t + 1 steps. With `options.tasks` (a `FigureTasks`) each
+   finished task is kept in the run history (each `play` a group of runs joining the
+   figure's first run, so `--resume` carries the whole figure on) or the tasks run on a
+   Dask cluster.
 2. **Draw** them as `Series` with bands: `per_episode(played)` (the mean over
    runs per episode), `per_time_step(played)` (episodes completed against time
    steps, from `LENGTH`), `per_step(played)` (the mean over runs of what
@@ -53,6 +56,7 @@ from tui_gym.algorithms import algorithm
 from tui_gym.core.engine import loop
 from tui_gym.core.engine.loop import FIRST_ACTION, LENGTH, RETURN
 from tui_gym.core.experiments.aggregate import aggregate, t_half_width
+from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.records import RunKind
 from tui_gym.core.mdp import NotAvailable, Phases
 from tui_gym.games import game_named
@@ -62,10 +66,18 @@ from tui_gym.session.book.figure import (
     Check,
     FigureOptions,
     FigureStopped,
+    FigureTasks,
     Progress,
     Series,
 )
-from tui_gym.session.experiments.compare import Arm, CompareProgress, Setup, execute, prepare
+from tui_gym.session.experiments.compare import (
+    Arm,
+    CompareProgress,
+    ResumeError,
+    Setup,
+    execute,
+    prepare,
+)
 
 __all__ = [
     "FIRST_ACTION",
@@ -126,18 +138,32 @@ def counts(figure: BookFigure, options: FigureOptions) -> tuple[int, int]:
 
 def play(figure: BookFigure, world: str, learners: Sequence[Learner], options: FigureOptions,
          progress: Progress, *, measure: int = RETURN,
-         game_params: Mapping[str, Any] | None = None) -> list[Played]:
-    """Every learner over the figure's runs (see the module docstring)."""
-    runs, episodes = counts(figure, options)
+         game_params: Mapping[str, Any] | None = None, runs: int | None = None,
+         episodes: int | None = None) -> list[Played]:
+    """Every learner over the figure's runs (see the module docstring); `runs` and
+    `episodes` override `counts(figure, options)` (a figure of two experiments)."""
+    counted = counts(figure, options)
+    runs, episodes = runs or counted[0], episodes or counted[1]
     setup = Setup(world, runs, episodes, dict(game_params or {}), (), options.seed, measure)
     arms = [Arm(x.algorithm, dict(x.settings), x.label) for x in learners]
-    about = f"{runs} runs × {episodes} episodes of {', '.join(x.label for x in learners)}"
+    names = ", ".join(x.label for x in learners) if len(learners) <= 4 else (
+        f"{len(learners)} learners")
+    about = f"{runs:,} runs × {episodes:,} episodes of {names}"
+    tasks = options.tasks or FigureTasks()
 
     def told(state: CompareProgress) -> None:
-        progress(state.done, state.total, about)
+        progress(state.done, state.total, about + (
+            f" ({tasks.landed + state.tasks_done}/{tasks.tasks + state.tasks_total} tasks)"
+            if options.tasks else ""))
 
+    resume = _resumed(tasks, len(arms))  # sets `tasks.group` when resuming
     done = execute(setup, arms, RunKind.COMPARE, progress=told, stop=options.stop,
-                   status=lambda line: progress(0, 1, line or about))
+                   status=lambda line: progress(0, 1, line or about), history=tasks.history,
+                   resume=resume, cluster=tasks.cluster, group=tasks.group)
+    tasks.group = tasks.group or done.group
+    tasks.played += len(arms)
+    tasks.tasks += done.tasks.get("total", 0)
+    tasks.landed += done.tasks.get("done", 0)
     if done.interrupted:
         raise FigureStopped(f"Figure {figure.name} stopped")
     return [Played(learner.label, done.values[index],
@@ -214,6 +240,23 @@ def _cumulative_reward(agent: Any, arrays: Sequence[loop.ModelArrays], starts: S
     finished = np.cumsum(np.concatenate(lengths)).astype(np.int64)  # the step each ended at
     np.add.at(paid, finished, np.concatenate(returns))
     return np.cumsum(paid)[1:]
+
+
+def _resumed(tasks: FigureTasks, arms: int) -> list[int] | None:
+    """The runs of `tasks.resume`'s group the next play carries on (None: it had not begun,
+    or nothing is resumed); ResumeError (one line) if that run does not head a figure."""
+    if tasks.resume is None or tasks.history is None:
+        return None
+    try:
+        head = tasks.history.get_run(tasks.resume).summary
+        if head.group is not None:
+            raise ResumeError(f"run {head.id} is part of run {head.group}'s figure: "
+                              f"resume run {head.group}")
+        ids = tasks.history.group_ids(tasks.resume)
+    except RunHistoryError as exc:
+        raise ResumeError(str(exc)) from None
+    tasks.group = tasks.resume
+    return ids[tasks.played: tasks.played + arms] or None
 
 
 def margin(samples: Samples) -> float:

@@ -69,6 +69,7 @@ from tui_gym.core.wrappers import WrapperChoice
 
 __all__ = [
     "JSON_CURVE_POINTS",
+    "RESUME_ADVICE",
     "AlgorithmOutcome",
     "CompareError",
     "CompareProgress",
@@ -85,6 +86,7 @@ SPREAD_SECONDS = 1.0  # work that takes longer than this here is spread over chi
 PROBE_SECONDS = 0.1  # how long throwaway learners play to tell how long the work is
 SMOOTHING_SHARE = 50  # charts smooth each seed's returns over 1/50 of the episodes
 TASK_SECONDS = 1.0  # a task (a block of one arm's seeds) runs about this long at least
+RESUME_ADVICE = "; give the command that started it to resume it"  # ends ResumeError's lines
 
 
 @dataclass(frozen=True)
@@ -625,10 +627,10 @@ class _Tally:
 
 
 def _start_runs(
-    history: RunHistory, kind: RunKind, setup: Setup, arms: Sequence[Arm], prepared: Prepared
+    history: RunHistory, kind: RunKind, setup: Setup, arms: Sequence[Arm], prepared: Prepared,
+    group: int | None = None,
 ) -> list[int | None]:
     ids: list[int | None] = []
-    group: int | None = None
     for a, arm in enumerate(arms):
         run_id = history.start_run(RunSpec(
             kind=kind,
@@ -661,19 +663,25 @@ def _plain(value: Any) -> Any:
 
 def _resume_runs(
     history: RunHistory, kind: RunKind, setup: Setup, arms: Sequence[Arm], prepared: Prepared,
-    run_id: int, tally: _Tally,
+    resume: int | Sequence[int], tally: _Tally,
 ) -> list[int | None]:
-    """The runs of `run_id`'s group, checked against these settings, marked running again,
-    their stored tasks counted into `tally`; ResumeError (one line) if they differ."""
+    """The runs of `resume`'s group (or the runs `resume` lists), checked against these
+    settings, marked running again, their stored tasks counted into `tally`; ResumeError
+    (one line) if they differ."""
     try:
-        first = history.get_run(run_id).summary
-        if first.group is not None:
-            raise ResumeError(f"run {run_id} is part of run {first.group}'s {first.kind}: "
-                              f"resume run {first.group}")
-        records = [history.get_run(i) for i in history.group_ids(run_id)]
+        if isinstance(resume, int):
+            first = history.get_run(resume).summary
+            if first.group is not None:
+                raise ResumeError(f"run {resume} is part of run {first.group}'s {first.kind}: "
+                                  f"resume run {first.group}")
+            records = [history.get_run(i) for i in history.group_ids(resume)]
+        else:
+            records = [history.get_run(i) for i in resume]
+            first = records[0].summary
     except RunHistoryError as exc:
         raise ResumeError(str(exc)) from None
-    advice = "; give the command that started it to resume it"
+    run_id = first.id
+    advice = RESUME_ADVICE
     if len(records) != len(arms) or any(r.summary.kind != kind for r in records):
         raise ResumeError(f"run {run_id} is a {first.kind} of {len(records)} run(s), not this "
                           f"{kind} of {len(arms)}{advice}")
@@ -752,16 +760,18 @@ def execute(
     history: RunHistory | None = None,
     processes: int | None = None,
     status: Callable[[str], None] | None = None,
-    resume: int | None = None,
+    resume: int | Sequence[int] | None = None,
     cluster: Any = None,
     task_seconds: float = TASK_SECONDS,
+    group: int | None = None,
 ) -> Executed:
     """Train every arm over the setup's seeds (what `run_compare` and `run_sweep` share)
     as tasks, each kept in the run history as it finishes: here when the whole takes less
     than `SPREAD_SECONDS` (`_estimate`), else in child processes, one per core, or on a
     Dask cluster (`cluster`: an address, `local:N`, or a `distributed.Client`). `resume`
-    (a run's id) runs only the tasks its runs miss. A task runs for about `task_seconds`
-    or more (infinity: one per core)."""
+    (a run's id, or the ids of the arms' runs in order) runs only the tasks its runs miss;
+    `group` names the run the new runs join (one experiment of several). A task runs for
+    about `task_seconds` or more (infinity: one per core)."""
     prepared = prepare(setup, arms)
     with contextlib.ExitStack() as stack:
         client = None
@@ -770,14 +780,14 @@ def execute(
 
             client = stack.enter_context(connect(cluster))
         return _execute(setup, arms, kind, prepared, progress, stop, history, processes,
-                        status, resume, client, task_seconds)
+                        status, resume, client, task_seconds, group)
 
 
 def _execute(
     setup: Setup, arms: Sequence[Arm], kind: RunKind, prepared: Prepared,
     progress: Callable[[CompareProgress], None] | None, stop: threading.Event | None,
     history: RunHistory | None, processes: int | None, status: Callable[[str], None] | None,
-    resume: int | None, client: Any, task_seconds: float,
+    resume: int | Sequence[int] | None, client: Any, task_seconds: float, group: int | None,
 ) -> Executed:
     cores = _cores() if processes is None else max(1, processes)
     tally = _Tally(setup, arms, prepared)
@@ -786,7 +796,7 @@ def _execute(
             raise ResumeError(f"run {resume} cannot be resumed without the run history")
         tally.run_ids = _resume_runs(history, kind, setup, arms, prepared, resume, tally)
     elif history is not None:
-        tally.run_ids = _start_runs(history, kind, setup, arms, prepared)
+        tally.run_ids = _start_runs(history, kind, setup, arms, prepared, group)
     last = [time.monotonic()]
 
     def tell(force: bool = False) -> None:
@@ -891,6 +901,9 @@ def _estimate(prepared: Prepared, arms: Sequence[Arm], setup: Setup,
     total = 0.0
     checkpoints = len(checkpoint_episodes(setup.episodes))
     for learner in learners:
+        # A learner's first call loads its compiled loop (a good part of a second for the
+        # first of its kind): paid here, outside the time that is measured.
+        play_learner(learner, model.arrays, 1)
         began = time.perf_counter()
         played, _ = play_learner(learner, model.arrays, setup.episodes,
                                  stop=_deadline(began + PROBE_SECONDS / len(learners)))
