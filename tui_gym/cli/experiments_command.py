@@ -531,7 +531,8 @@ def _sweep_grid(result: Any) -> Table:
             share = 0.5 if high == low else (v - low) / (high - low)
             share = 1 - share if rms else share  # the lowest error is the best
             red, green = int(200 * (1 - share)) + 30, int(200 * share) + 30
-            cells.append(Text(f" {v:.3f} " if rms else f" {v:+.3f} ", style=f"bold black on rgb({red},{green},60)"))
+            text = f" {v:.3f} " if rms else f" {v:+.3f} "
+            cells.append(Text(text, style=f"bold black on rgb({red},{green},60)"))
         table.add_row(*cells)
     return table
 

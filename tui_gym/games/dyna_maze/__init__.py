@@ -168,6 +168,13 @@ class DynaMazeGame(MazeGame):
         "may keep a detour of a step out and back",
     )
     description = "Figure 8.2's 6x9 maze: +1 at the goal, 0 elsewhere; 14 steps at best."
+    # The multi-step on-policy learners stop exploring at the end, over a longer budget:
+    # what they learn becomes the greedy policy's values, with no detour kept.
+    hyperparameters = {
+        **MazeGame.hyperparameters,
+        "n-step-sarsa": {"epsilon_final": 0.0, "episodes": 3000},
+        "sarsa-lambda": {"epsilon_final": 0.0, "episodes": 3000},
+    }
     teaches = "planning: Dyna-Q's simulated steps find the way in far fewer episodes"
 
 
