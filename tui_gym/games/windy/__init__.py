@@ -78,8 +78,8 @@ class WindyGame(DPGridGame):
     # more at first and less at the end, so the greedy policy settles. Double Q splits its
     # experience over two tables; Monte Carlo may never see its greedy policy end an
     # episode (the book: "termination is not guaranteed for all policies"). The multi-step
-    # learners look two steps or half a trace ahead: a long look-ahead carries early
-    # exploration's detours into the values of the path; the on-policy ones, as Sarsa.
+    # learners look two steps or half a trace ahead (further, some seeds keep a detour
+    # within the budget); the on-policy ones learn as Sarsa does, for longer.
     hyperparameters = {
         "*": {"learning_rate": 0.5, "learning_rate_schedule": "constant",
               "epsilon_start": 0.2, "epsilon_final": 0.01, "episodes": 2000},
