@@ -618,12 +618,13 @@ class _Tally:
                 curve = aggregate(values[:, keep], episodes=checkpoints[keep])
             if reached and finite[reached - 1]:
                 final = mean_with_ci(values[:, reached - 1])
+        predicts = self.predicts[arm]
         exact_value = exact_gap = None
-        if final is not None and not self.predicts[arm]:
+        if final is not None and not predicts:
             exact_value = final.mean
             if self.prepared.optimum is not None:
                 exact_gap = self.prepared.optimum - exact_value
-        rms = final if self.predicts[arm] else None
+        rms = final if predicts else None
         window = max(1, common // SMOOTHING_SHARE)
         return AlgorithmOutcome(
             algorithm=self.arms[arm].algorithm,
@@ -634,14 +635,14 @@ class _Tally:
             exact_value=exact_value,
             exact_gap=exact_gap,
             run_id=self.run_ids[arm],
-            exact_curve=None if self.predicts[arm] else curve,
-            exact_ci95=None if rms is not None or final is None else final.ci95,
+            exact_curve=None if predicts else curve,
+            exact_ci95=None if predicts or final is None else final.ci95,
             seeds=self.setup.seeds,
             smoothed=aggregate(seen, window=window) if window > 1 else None,
             smoothing=window,
             rms_error=None if rms is None else rms.mean,
             rms_ci95=None if rms is None else rms.ci95,
-            rms_curve=curve if self.predicts[arm] else None,
+            rms_curve=curve if predicts else None,
         )
 
 
