@@ -125,6 +125,10 @@ class MazeGame(DPGridGame):
     CHANGING = {"discount": DISCOUNT, "learning_rate": 0.5, "learning_rate_schedule": "constant",
                 "epsilon_start": 0.1, "epsilon_final": 0.1}
     CHANGING_SARSA = {"epsilon_final": 0.01}
+    # The multi-step on-policy learners as SARSA, looking two steps or half a trace ahead:
+    # further, the greedy policy of some seeds loses the goal once the wall moves.
+    CHANGING_MULTI_STEP = {"n-step-sarsa": {"n": 2, **CHANGING_SARSA},
+                           "sarsa-lambda": {"lambda": 0.5, **CHANGING_SARSA}}
     plan_gamma = DISCOUNT
     hyperparameters = {"*": {"discount": DISCOUNT, "learning_rate": 0.1, "episodes": 1000}}
 
@@ -195,7 +199,7 @@ class BlockingMazeGame(MazeGame):
                     help="the step, over all episodes, at which the wall moves",
                     owner="Blocking maze"),)
     hyperparameters = {"*": {**MazeGame.CHANGING, "episodes": 300},
-                       "sarsa": MazeGame.CHANGING_SARSA}
+                       "sarsa": MazeGame.CHANGING_SARSA, **MazeGame.CHANGING_MULTI_STEP}
 
 
 class ShortcutMazeGame(MazeGame):
@@ -215,4 +219,4 @@ class ShortcutMazeGame(MazeGame):
                     owner="Shortcut maze"),)
     extra_steps = 6.0  # the long way, which a learner that does not explore keeps to
     hyperparameters = {"*": {**MazeGame.CHANGING, "episodes": 400},
-                       "sarsa": MazeGame.CHANGING_SARSA}
+                       "sarsa": MazeGame.CHANGING_SARSA, **MazeGame.CHANGING_MULTI_STEP}
