@@ -38,12 +38,13 @@ class PlayHost(App[None]):
 
 
 class TrainHost(App[None]):
-    """Only a `TrainView` over `session`, trained (when asked) on a worker thread."""
+    """Only a `TrainView` over `session`, trained (when asked) on a worker thread, or in a
+    child process with `runner="process"`."""
 
-    def __init__(self, session: Session) -> None:
+    def __init__(self, session: Session, runner: str = "thread") -> None:
         super().__init__()
         self.session = session
-        self.runner = make_runner(session, "thread")
+        self.runner = make_runner(session, runner)
 
     @property
     def train_view(self) -> TrainView:

@@ -50,7 +50,7 @@ def test_epsilon_greedy_frequencies(epsilon: float) -> None:
     tables, hp = learner.arrays(), learner.compiled_params()
     n = 20_000
     act = entries(hp).act
-    picks = [act(tables, hp, learner.rng, 0, epsilon) for _ in range(n)]
+    picks = [act(tables, hp, learner.rng, None, 0, epsilon) for _ in range(n)]
     assert _within(np.bincount(picks, minlength=5), probs, n)
     if epsilon == 0.0:
         assert set(picks) == {1, 2, 4}  # never an action outside the tie
@@ -61,7 +61,7 @@ def test_ties_are_broken_uniformly_and_a_single_best_wins() -> None:
     learner = _learner(values, seed=2)
     tables, hp = learner.arrays(), learner.compiled_params()
     greedy = entries(hp).greedy
-    picks = np.array([[greedy(tables, hp, learner.rng, s) for _ in range(10_000)]
+    picks = np.array([[greedy(tables, hp, learner.rng, None, s) for _ in range(10_000)]
                       for s in range(3)])
     assert _within(np.bincount(picks[0], minlength=4), np.full(4, 0.25), 10_000)
     assert _within(np.bincount(picks[1], minlength=4), np.array([0, 0.5, 0.5, 0]), 10_000)
@@ -75,7 +75,7 @@ def test_the_expected_value_is_the_mean_under_epsilon_greedy() -> None:
     for s, row in enumerate(values):
         probs = _policy(row, 0.17)
         assert probs.sum() == pytest.approx(1.0)
-        assert expected_value(tables, hp, s, 0.17) == pytest.approx(probs @ row)
+        assert expected_value(tables, hp, None, s, 0.17) == pytest.approx(probs @ row)
 
 
 def test_the_epsilon_schedule_is_linear_then_flat() -> None:

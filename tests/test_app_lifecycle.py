@@ -137,7 +137,7 @@ async def test_pause_reset_switch_and_quit_take_effect_at_once_mid_episode(runne
         # The switch lands at once though the episode has many slow steps to go.
         gridworld = app.session
         await pilot.press("b")
-        assert app.session.game.name == "blackjack"
+        await wait_for(pilot, lambda: app.session.game.name == "blackjack", "Blackjack")
         assert gridworld.trainer.episodes == 0, "the switch waited for the episode to end"
         # space then runs at once: no "running" at 0 episodes for seconds.
         await pilot.press("plus", "plus", "space")  # animated (fast)
@@ -160,6 +160,54 @@ async def test_pause_reset_switch_and_quit_take_effect_at_once_mid_episode(runne
 
 
 # --- the training process ----------------------------------------------------------
+async def test_a_new_game_is_built_while_the_app_answers(monkeypatch) -> None:
+    """A game whose model takes long to build: the app keeps handling keys, says it is
+    loading, and switches once the build is done, unless another game was asked for
+    meanwhile; a build that fails is said in one line and changes nothing."""
+    import threading
+
+    from tui_gym.ui import app as app_module
+
+    release = threading.Event()
+    built: list[str] = []
+
+    class SlowSession(Session):
+        def __init__(self, env_id: str, **kwargs) -> None:
+            if env_id.startswith("Taxi"):
+                raise ValueError("taxi\x1b[2J is out of order")
+            assert release.wait(DEADLINE), "the test never released the build"
+            super().__init__(env_id, **kwargs)
+            built.append(env_id)
+
+    monkeypatch.setattr(app_module, "Session", SlowSession)
+    monkeypatch.setattr(app_module, "LOADING_NOTICE", 0.01)
+    app = TuiGymApp(Session("gridworld", seed=0))
+    said: list[str] = []  # every notice, also those gone from the screen by now
+    notify = app.notify
+    monkeypatch.setattr(app, "notify", lambda message, **kw: (said.append(message),
+                                                              notify(message, **kw)))
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.press("b", "t")  # Blackjack's build waits; the view switch does not
+        assert app.current_view == "train" and app.session.game.name == "gridworld"
+        await wait_for(pilot, lambda: "Loading Blackjack…" in said, "the loading notice")
+        release.set()
+        await wait_for(pilot, lambda: app.session.game.name == "blackjack", "Blackjack")
+
+        release.clear()
+        await pilot.press("F", "g")  # FrozenLake asked for, then GridWorld (kept)
+        await wait_for(pilot, lambda: app.session.game.name == "gridworld", "GridWorld")
+        release.set()
+        await wait_for(pilot, lambda: any("FrozenLake" in e for e in built), "FrozenLake")
+        await pilot.pause()
+        assert app.session.game.name == "gridworld", "a build finished late took the screen"
+
+        await pilot.press("T")  # Taxi's build fails
+        await wait_for(pilot, lambda: any("could not start" in m for m in said), "the error")
+        message = next(m for m in said if "could not start" in m)
+        assert "\x1b" not in message and "out of order" in message
+        assert app.session.game.name == "gridworld"
+
+
 async def test_a_stopped_or_killed_training_process_never_stops_the_app() -> None:
     hp = QLearning.hyperparameters(episodes=10_000_000)
     app = TuiGymApp(Session("blackjack", seed=0, hp=hp), runner="process")

@@ -25,6 +25,7 @@ from textual.binding import Binding
 
 from tests.mdp_support import sampled_returns
 from tests.test_contract_learners import GAMES as LEARNER_GAMES
+from tests.waiting import wait_for
 from tui_gym.cli import main
 from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.wrappers import parse_wrapper_spec
@@ -56,6 +57,7 @@ VARIANTS = [
     ("windy", {"stochastic_wind": True}),
     ("windy-king", {"stochastic_wind": True}),
     ("dyna-maze", {}),
+    ("dyna-maze", {"scale": 2}),
     # The changing mazes' first phase for as long as these tests play (the second phase
     # against the env: tests/test_book_worlds.py).
     ("blocking-maze", {"change_at": 100_000_000}),
@@ -204,8 +206,8 @@ async def test_a_person_plays_one_episode_of_every_game_in_the_app(games: list[G
         view = app.play_view
         for game in games:
             if app.session.game is not game:
-                await pilot.press(game.key)
-                assert app.session.game is game, game.name
+                await pilot.press(game.key)  # built off the event loop
+                await wait_for(pilot, lambda g=game: app.session.game is g, game.name)
             if game.name in LONG_EPISODES:
                 assert app.rebuild(choices=(limit,)), game.name
             await pilot.pause()

@@ -52,13 +52,11 @@ async def test_keys_key_bar_help_wrappers_the_game_picker_and_the_gridworld_pane
         await pilot.pause()
         assert screen_lines(app)[-1] == play_keys  # the kept picture, and the right one
         assert app.focused is app.play_view.board
-        await pilot.press("g")
-        await pilot.pause()
-        assert app.session.game.name == "gridworld"
+        await pilot.press("g")  # a new game's session is built off the event loop
+        await wait_for(pilot, lambda: app.session.game.name == "gridworld", "GridWorld")
         assert app.sub_title == "GridWorld · seed 0"
         await pilot.press("b")
-        await pilot.pause()
-        assert app.session.game.name == "blackjack"
+        await wait_for(pilot, lambda: app.session.game.name == "blackjack", "Blackjack")
 
         # Help lists every app key and closes.
         await pilot.press("f1")
@@ -103,8 +101,7 @@ async def test_keys_key_bar_help_wrappers_the_game_picker_and_the_gridworld_pane
 
         # The game picker switches game.
         await pilot.click("#game-gridworld")
-        await pilot.pause()
-        assert app.session.game.name == "gridworld"
+        await wait_for(pilot, lambda: app.session.game.name == "gridworld", "GridWorld")
         assert app.query_one("#game-gridworld", RadioButton).value
 
         # GridWorld's panel: an invalid parameter is marked and not applied.
@@ -221,8 +218,7 @@ async def test_sizes_too_small_and_compact_and_random_keys_never_break_the_app()
         assert app.query_one(SidePanel).region.width > 0
         assert app.focused is app.play_view.board  # back where it was
         await pilot.press("g")  # and keys act again
-        await pilot.pause()
-        assert app.session.game.name == "gridworld"
+        await wait_for(pilot, lambda: app.session.game.name == "gridworld", "GridWorld")
         app.train_view.form.input("episodes").value = "2000"  # applied at a start
 
         # Random keys in each view of both games (b switches back).

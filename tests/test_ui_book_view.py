@@ -48,7 +48,9 @@ def _endless(options: FigureOptions, progress: Progress) -> FigureResult:
 FIGURES = [BookFigure("9.1", "A quick figure (Example 9.1): rising", "It rises.", "windy",
                       _quick, runs=3, episodes=10),
            BookFigure("9.2", "An endless figure", "It never ends.", "windy", _endless, runs=3,
-                      episodes=10)]
+                      episodes=10),
+           BookFigure("9.3", "A figure over time steps", "Its runs count steps.", "windy",
+                      _quick, runs=4)]
 
 
 class BookHost(App[None]):
@@ -103,3 +105,14 @@ async def test_s_stops_a_figure_that_runs() -> None:
         await pilot.press("s")
         await wait_for(pilot, lambda: not view.running, "the figure to stop")
         assert "Figure 9.2 stopped" in str(app.query_one("#book-status", Label).render())
+
+
+async def test_a_figure_without_episodes_shows_its_runs_alone() -> None:
+    app = BookHost()
+    async with app.run_test(size=(80, 24)) as pilot:
+        app.query_one(BookView).focus_default()
+        await pilot.press("down", "down")
+        await wait_for(pilot, lambda: "Its runs count steps." in _text(app, "#book-about"),
+                       "the figure to be highlighted")
+        about = _text(app, "#book-about")
+        assert "4 runs · enter runs it" in about and "None" not in about

@@ -12,7 +12,7 @@ from rich.markup import escape
 from rich.table import Table
 from rich.text import Text
 
-from tui_gym.session.book.figure import FigureResult
+from tui_gym.session.book.figure import FigureResult, heading
 from tui_gym.terminal_chart import ChartSeries, band_chart
 
 __all__ = ["CHART_HEIGHT", "claims_table", "figure_parts"]
@@ -22,7 +22,7 @@ CHART_HEIGHT = 10
 
 def figure_parts(result: FigureResult, width: int) -> list[RenderableType]:
     """The figure's title, charts (in `width` columns at most), claims and notes."""
-    parts: list[RenderableType] = [f"[bold]Figure {result.figure}[/]: {escape(result.title)}"]
+    parts: list[RenderableType] = [f"[bold]{heading(result.figure)}[/]: {escape(result.title)}"]
     plot = max(20, min(100, width) - 14)
     for chart in result.charts:
         series = [ChartSeries(s.label, s.x, s.y, s.lo, s.hi) for s in chart.series]

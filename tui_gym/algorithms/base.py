@@ -12,7 +12,9 @@ they are not `(q, counts, visits)`.
 
 The base class owns everything else: table rows (dense keys are rows; other
 keys get the next free row and the tables grow; the action-value tables,
-`value_tables`, start at the shared `initial_value`), the epsilon schedule, acting
+`value_tables`, start at the shared `initial_value`), the actions each row offers
+(`offer`: a game whose states do not all offer every action; acting, the max and the
+expectation of every rule range over those), the epsilon schedule, acting
 and learning one transition from Python through the same compiled code the
 engine's loop runs, reading values for heatmaps and evaluation, and saving
 (`state()` / `load_state()`).
@@ -169,6 +171,7 @@ class Learner(ABC):
         TableSpec("counts", np.int64),
     )
     value_tables: ClassVar[tuple[str, ...]] = ("q",)  # start at `initial_value`
+    has_traces: ClassVar[bool] = False  # keeps eligibility traces (`eligibility`)
     Params: ClassVar[Any]  # the compiled hyperparameters' NamedTuple (see the docstring)
     # The tables named in `tables` (these two for most learners) are attributes.
     q: np.ndarray
@@ -195,6 +198,7 @@ class Learner(ABC):
         self.epsilon = self.hp.epsilon_at(0)
         self._last: tuple[Transition, np.ndarray] | None = None  # see `last_update`
         self._last_record: UpdateRecord | None = None
+        self.offered: np.ndarray | None = None  # see `offer`
         self._index: dict[Hashable, int] | None = None if n_states is not None else {}
         capacity = self.n_states if self.n_states is not None else _INITIAL_ROWS
         self._rows_used = self.n_states if self.n_states is not None else 0
@@ -229,6 +233,12 @@ class Learner(ABC):
     def action_values(self, rows: np.ndarray | slice) -> np.ndarray:
         """The values shown and evaluated, per row (k, n_actions); the policy's best."""
         return self.q[rows]
+
+    def eligibility(self) -> np.ndarray | None:
+        """The eligibility traces of the episode in progress, as `table()` gives the values
+        (a copy, one row per used row; a learner of V has its state's trace in every
+        action's place); None for a learner without traces."""
+        return None
 
     def _make_extra(self, capacity: int) -> None:  # noqa: B027 - most learners have none
         """Arrays beyond the tables, for `capacity` rows."""
@@ -283,6 +293,19 @@ class Learner(ABC):
         self.compiled_params()
         return self._exploration
 
+    def offer(self, offered: np.ndarray | None) -> None:
+        """The actions each row of a dense table offers (`[n_states, n_actions]` bool), or
+        None: every row offers every action. A row that offers none offers all."""
+        if offered is None:
+            self.offered = None
+            return
+        mask = np.array(offered, dtype=np.bool_)  # a writable copy: one compiled form
+        if self.n_states is None or mask.shape != (self.n_states, self.n_actions):
+            raise ValueError(f"offered actions of shape {mask.shape} do not fit a table of "
+                             f"{self.n_states} states and {self.n_actions} actions")
+        mask[~mask.any(axis=1)] = True
+        self.offered = None if mask.all() else mask
+
     @property
     def next_first(self) -> bool:
         """Whether the rule needs the next action before its update (SARSA)."""
@@ -308,8 +331,8 @@ class Learner(ABC):
             self.make_room()
         log = rules.new_log(self.log_rows() if explain else 1)
         hp = self.compiled_params()
-        a2, td = loop.entries(hp).transition(
-            self.arrays(), hp, self.rng, int(state), int(action), float(reward),
+        a2, td = loop.entries(hp, self.offered).transition(
+            self.arrays(), hp, self.rng, self.offered, int(state), int(action), float(reward),
             int(next_state), bool(terminated), bool(truncated), int(next_action),
             float(self.epsilon), log,
         )
@@ -387,17 +410,21 @@ class Learner(ABC):
     def act(self, key: Hashable) -> int:
         """Epsilon-greedy in a state, ties broken at random (the engine's own draws)."""
         hp = self.compiled_params()
-        return int(loop.entries(hp).act(self.arrays(), hp, self.rng, self.row(key),
-                                        float(self.epsilon)))
+        return int(loop.entries(hp, self.offered).act(self.arrays(), hp, self.rng, self.offered,
+                                                      self.row(key), float(self.epsilon)))
 
     def greedy(self, key: Hashable) -> int:
         """The best-valued action in a state, ties broken at random."""
         hp = self.compiled_params()
-        return int(loop.entries(hp).greedy(self.arrays(), hp, self.rng, self.row(key)))
+        return int(loop.entries(hp, self.offered).greedy(self.arrays(), hp, self.rng,
+                                                         self.offered, self.row(key)))
 
     def greedy_actions(self, key: Hashable) -> tuple[int, ...]:
-        """Every action tied for the best value in a state."""
+        """Every action tied for the best value among those a state offers."""
         values = self._row_values(key)
+        row = self.find(key)
+        if self.offered is not None and row is not None:
+            values = np.where(self.offered[row], values, -np.inf)
         return tuple(int(a) for a in np.flatnonzero(values == values.max()))
 
     # --- the schedule ------------------------------------------------------------------

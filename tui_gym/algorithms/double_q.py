@@ -22,7 +22,7 @@ import numpy as np
 
 from tui_gym.algorithms.base import Learner, TableSpec, Transition, UpdateRecord
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, register, td_update, uniform
+from tui_gym.core.engine.rules import Rule, best_action, register, td_update
 
 __all__ = ["DoubleQLearning"]
 
@@ -41,33 +41,12 @@ def value(tables: Any, hp: Any, s: int, a: int) -> float:
 
 
 @kernel
-def best(table: Any, rng: Any, s: int) -> int:
-    """The best action of one table in row `s`, ties broken uniformly."""
-    n = table.shape[1]
-    top = table[s, 0]
-    choice, ties = 0, 1
-    for a in range(1, n):
-        if table[s, a] > top:
-            top, choice, ties = table[s, a], a, 1
-        elif table[s, a] == top:
-            ties += 1
-    if ties > 1:
-        pick = uniform(rng, ties)
-        for a in range(n):
-            if table[s, a] == top:
-                if pick == 0:
-                    return a
-                pick -= 1
-    return choice
-
-
-@kernel
-def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     q_a, q_b, counts_a, counts_b, visits = tables
     first = rng.random() < 0.5
     mine, other, counts = (q_a, q_b, counts_a) if first else (q_b, q_a, counts_b)
-    chosen = best(mine, rng, s2)
+    chosen = best_action(mine, rng, offered, s2)
     future = 0.0 if terminated else other[s2, chosen]
     td = td_update(mine, counts, visits, hp, s, a, r, future, log)
     log[0, 6] = 0.0 if first else 1.0

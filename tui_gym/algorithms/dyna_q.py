@@ -40,10 +40,11 @@ class Params(NamedTuple):
 
 
 @kernel
-def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     q, counts, visits, model_reward, model_next, model_terminated, tried, n_tried = tables
-    td = td_update(q, counts, visits, hp, s, a, r, 0.0 if terminated else max_value(q, s2), log)
+    future = 0.0 if terminated else max_value(q, offered, s2)
+    td = td_update(q, counts, visits, hp, s, a, r, future, log)
     n_actions = q.shape[1]
     if model_next[s, a] < 0:  # a pair new to the model joins the tried list
         tried[n_tried[0]] = s * n_actions + a
@@ -55,7 +56,7 @@ def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
         cell = tried[uniform(rng, n_tried[0])]
         ps, pa = cell // n_actions, cell % n_actions
         ns = model_next[ps, pa]
-        future = 0.0 if model_terminated[ps, pa] else max_value(q, ns)
+        future = 0.0 if model_terminated[ps, pa] else max_value(q, offered, ns)
         target = model_reward[ps, pa] + hp.discount * future
         alpha = step_size(hp.learning_rate, hp.by_visits, max(counts[ps, pa], 1))
         q[ps, pa] += alpha * (target - q[ps, pa])

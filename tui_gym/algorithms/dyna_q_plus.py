@@ -11,8 +11,8 @@ update of a pair not tried for τ steps adds a bonus to the modelled reward,
 so long-untried actions look better and better in planning until the agent
 tries them again: a world that changes (a wall that moves) is found out. As
 in the book's footnote, the first visit of a state also lets planning
-consider its untried actions, modelled as leading back to the same state
-with reward 0 (their τ counts from the run's start).
+consider its untried actions (those the state offers), modelled as leading
+back to the same state with reward 0 (their τ counts from the run's start).
 """
 
 from __future__ import annotations
@@ -24,7 +24,15 @@ import numpy as np
 from tui_gym.algorithms.base import TableSpec, Transition, UpdateRecord
 from tui_gym.algorithms.dyna_q import DynaQ
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, max_value, register, step_size, td_update, uniform
+from tui_gym.core.engine.rules import (
+    Rule,
+    max_value,
+    offers,
+    register,
+    step_size,
+    td_update,
+    uniform,
+)
 from tui_gym.core.params import Param
 
 __all__ = ["DynaQPlus"]
@@ -41,20 +49,21 @@ class Params(NamedTuple):
 
 
 @kernel
-def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     (q, counts, visits, model_reward, model_next, model_terminated, tried, n_tried,
      last_tried, clock) = tables
     clock[0] += 1
-    td = td_update(q, counts, visits, hp, s, a, r, 0.0 if terminated else max_value(q, s2), log)
+    future = 0.0 if terminated else max_value(q, offered, s2)
+    td = td_update(q, counts, visits, hp, s, a, r, future, log)
     n_actions = q.shape[1]
     if model_next[s, a] < 0:
-        fresh = True  # a state new to the model: its untried actions join, going nowhere
+        fresh = True  # a state new to the model: its untried offered actions join, going nowhere
         for b in range(n_actions):
             if model_next[s, b] >= 0:
                 fresh = False
         for b in range(n_actions):
-            if b == a or fresh:
+            if b == a or (fresh and offers(offered, s, b)):
                 tried[n_tried[0]] = s * n_actions + b
                 n_tried[0] += 1
                 model_next[s, b] = s
@@ -69,7 +78,7 @@ def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
         ns = model_next[ps, pa]
         tau = clock[0] - last_tried[ps, pa]
         bonus = hp.kappa * np.sqrt(tau)
-        future = 0.0 if model_terminated[ps, pa] else max_value(q, ns)
+        future = 0.0 if model_terminated[ps, pa] else max_value(q, offered, ns)
         target = model_reward[ps, pa] + bonus + hp.discount * future
         alpha = step_size(hp.learning_rate, hp.by_visits, max(counts[ps, pa], 1))
         before = q[ps, pa]

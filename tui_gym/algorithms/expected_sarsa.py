@@ -3,8 +3,8 @@
     Q(s, a) <- Q(s, a) + α [r + γ Σ_a' π(a'|s') Q(s', a') - Q(s, a)]
 
 π is the current epsilon-greedy policy, tie-breaking included: every action
-has probability ε/|A|, and the greedy share 1 - ε is split evenly among the
-actions tied for the best value in s'. The expectation replaces SARSA's
+s' offers has probability ε/|A(s')|, and the greedy share 1 - ε is split
+evenly among those tied for the best value in s'. The expectation replaces SARSA's
 sampled a', so the target varies less: the same on-policy values with less
 noise, which tolerates larger step sizes. After termination the target is r
 alone; after a truncation it bootstraps from the expectation in s'.
@@ -30,10 +30,10 @@ class Params(NamedTuple):
 
 
 @kernel
-def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     q, counts, visits = tables
-    future = 0.0 if terminated else expected_value(tables, hp, s2, epsilon)
+    future = 0.0 if terminated else expected_value(tables, hp, offered, s2, epsilon)
     return td_update(q, counts, visits, hp, s, a, r, future, log)
 
 

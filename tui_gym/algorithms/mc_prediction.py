@@ -44,7 +44,7 @@ def full(tables: Any, hp: Any) -> bool:
 
 
 @kernel
-def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     v, visits, states, rewards, length = tables[3], tables[2], tables[4], tables[5], tables[6]
     steps = length[0] + 1

@@ -52,7 +52,7 @@ def full(tables: Any, hp: Any) -> bool:
 
 
 @kernel
-def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     q, counts, visits, cells, rewards, length, first = tables
     n_actions = q.shape[1]
@@ -64,7 +64,7 @@ def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
         log[0, 0] = 0.0  # nothing learned yet
         log[0, 3] = q[s, a]
         return 0.0
-    g = 0.0 if terminated else expected_value(tables, hp, s2, epsilon)
+    g = 0.0 if terminated else expected_value(tables, hp, offered, s2, epsilon)
     tail = g
     if hp.first_visit:
         for t in range(steps):

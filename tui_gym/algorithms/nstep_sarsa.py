@@ -44,7 +44,7 @@ def begin(tables: Any, hp: Any) -> None:
 
 
 @kernel
-def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     q, counts, visits, states, actions, rewards, length = tables
     n = hp.n

@@ -58,7 +58,7 @@ def n_step_return(rewards: Any, first: int, last: int, discount: float) -> float
 
 
 @kernel
-def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     v, visits, states, rewards, step = tables[3], tables[2], tables[4], tables[5], tables[6]
     size = states.shape[0]

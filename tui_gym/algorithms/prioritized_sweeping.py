@@ -8,7 +8,8 @@ pair the model says leads into its state (its predecessors) is checked the
 same way and enters the queue (or rises in it) when its P exceeds θ. So a
 change at the goal sweeps backwards along the paths that lead to it, and no
 update is spent where nothing changed. As in the book, Q changes only
-through the queue. A save keeps the queue.
+through the queue; the log's `[0, 7]` adds up the updates made over every
+call it is passed to (Example 8.4 counts them). A save keeps the queue.
 """
 
 from __future__ import annotations
@@ -87,7 +88,7 @@ def pop(cells: Any, prio: Any, pos: Any, size: Any) -> int:
 
 
 @kernel
-def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     (q, counts, visits, model_reward, model_next, model_terminated, cells, prio, pos, size,
      first_into, next_into) = tables
@@ -110,7 +111,7 @@ def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
     model_terminated[s, a] = terminated
     counts[s, a] += 1
     visits[s] += 1
-    p = abs(r + hp.discount * (0.0 if terminated else max_value(q, s2)) - q[s, a])
+    p = abs(r + hp.discount * (0.0 if terminated else max_value(q, offered, s2)) - q[s, a])
     if p > hp.theta:
         push(cells, prio, pos, size, cell, p)
     log[0, 0] = p
@@ -119,7 +120,7 @@ def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
         top_priority = prio[0]
         c = pop(cells, prio, pos, size)
         ps, pa = c // n_actions, c % n_actions
-        future = 0.0 if model_terminated[ps, pa] else max_value(q, model_next[ps, pa])
+        future = 0.0 if model_terminated[ps, pa] else max_value(q, offered, model_next[ps, pa])
         target = model_reward[ps, pa] + hp.discount * future
         alpha = step_size(hp.learning_rate, hp.by_visits, max(counts[ps, pa], 1))
         before = q[ps, pa]
@@ -133,7 +134,7 @@ def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
             log[done, 4] = before
             log[done, 5] = q[ps, pa]
             log[done, 6] = top_priority
-        best = max_value(q, ps)
+        best = max_value(q, offered, ps)
         into = first_into[ps]
         while into >= 0:
             xs, xa = into // n_actions, into % n_actions
@@ -143,6 +144,7 @@ def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
                 push(cells, prio, pos, size, into, p)
             into = next_into[into]
     log[0, 1] = done
+    log[0, 7] += done  # the updates over every call with this log (a caller that counts them)
     log[0, 2] = size[0]
     log[0, 3] = prio[0] if size[0] > 0 else 0.0
     log[0, 4] = q[s, a]

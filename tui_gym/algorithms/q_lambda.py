@@ -37,10 +37,10 @@ class Params(NamedTuple):
 
 
 @kernel
-def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     q = tables[0]
-    future = 0.0 if terminated else max_value(q, s2)
+    future = 0.0 if terminated else max_value(q, offered, s2)
     greedy = terminated or q[s2, a2] == future  # judged before the update, as the book does
     decay = hp.discount * hp.lambda_ if greedy else 0.0
     td = spread(tables, hp, s, a, r + hp.discount * future, future, decay, log)

@@ -28,10 +28,10 @@ class Params(NamedTuple):
 
 
 @kernel
-def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     q, counts, visits = tables
-    future = 0.0 if terminated else max_value(q, s2)
+    future = 0.0 if terminated else max_value(q, offered, s2)
     return td_update(q, counts, visits, hp, s, a, r, future, log)
 
 

@@ -31,7 +31,7 @@ class Params(NamedTuple):
 
 
 @kernel
-def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     q, counts, visits = tables
     future = 0.0 if terminated else q[s2, a2]

@@ -105,7 +105,7 @@ def spread(tables: Any, hp: Any, s: int, a: int, target: float, future: float, d
 
 
 @kernel
-def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     future = 0.0 if terminated else tables[0][s2, a2]
     td = spread(tables, hp, s, a, r + hp.discount * future, future,
@@ -123,6 +123,7 @@ class TracedLearner(Learner):
     update."""
 
     params = TRACE_PARAMS
+    has_traces = True
 
     def arrays(self) -> tuple[np.ndarray, ...]:
         return (self.q, self.counts, self.visits, self._trace, self._cells, self._n_cells)
@@ -143,6 +144,9 @@ class TracedLearner(Learner):
     def traces(self) -> np.ndarray:
         """e(s, a) of the used rows (a copy): the episode's eligibility traces."""
         return self._trace[: self.rows_used].copy()
+
+    def eligibility(self) -> np.ndarray:
+        return self.traces
 
     def _traced_record(self, step: Transition, log: np.ndarray, future_term: str,
                        *notes: tuple[str, str], **extra: Any) -> UpdateRecord:

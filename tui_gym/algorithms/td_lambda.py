@@ -9,7 +9,7 @@ state in proportion to its trace,
 
 λ = 0 is TD(0); λ = 1 approaches constant-α Monte Carlo. After termination
 the target is r alone; after a truncation it bootstraps from V(s'). The
-traces start at zero with each episode.
+traces end with the episode (and start at zero with each one).
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ def begin(tables: Any, hp: Any) -> None:
 
 
 @kernel
-def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     v, visits, trace = tables[3], tables[2], tables[4]
     decay = hp.discount * hp.lambda_
@@ -65,6 +65,8 @@ def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
     log[0, 4] = alpha
     log[0, 5] = visits[s]
     log[0, 6] = trace[s]
+    if terminated or truncated:
+        begin(tables, hp)
     return abs(delta)
 
 
@@ -80,6 +82,7 @@ class TDLambda(Predictor):
     formula = "δ = r + γ·V(s') - V(s), V += α·δ·e"
     target_text = "r + γ·V(s')"
     Params = Params
+    has_traces = True
     params = (
         *PREDICTION_PARAMS,
         Param("lambda", float, 0.8, 0.0, 1.0, "trace decay: 0 is TD(0), 1 nears Monte Carlo",
@@ -89,6 +92,9 @@ class TDLambda(Predictor):
 
     def arrays(self) -> tuple[np.ndarray, ...]:
         return (*super().arrays(), self._trace)
+
+    def eligibility(self) -> np.ndarray:
+        return np.repeat(self._trace[: self.rows_used, None], self.n_actions, axis=1)
 
     def _make_extra(self, capacity: int) -> None:
         super()._make_extra(capacity)

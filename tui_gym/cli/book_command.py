@@ -24,7 +24,13 @@ from tui_gym.cli.grids import panel_text
 from tui_gym.cli.output import print_json
 from tui_gym.cli.types import positive_int, seed_number
 from tui_gym.session.book import figure_named, figures
-from tui_gym.session.book.figure import BookFigure, FigureOptions, FigureResult, FigureStopped
+from tui_gym.session.book.figure import (
+    BookFigure,
+    FigureOptions,
+    FigureResult,
+    FigureStopped,
+    heading,
+)
 
 __all__ = ["BOOK_COMMANDS", "add_book_parser"]
 
@@ -62,7 +68,7 @@ def _run(figure: BookFigure, options: FigureOptions, args: argparse.Namespace,
         print_json("book", result.as_json())
         return 0 if result.ok else 1
     err = Console(stderr=True)
-    progress = Progress(TextColumn(f"[bold]Figure {figure.name}[/]"), BarColumn(),
+    progress = Progress(TextColumn(f"[bold]{heading(figure.name)}[/]"), BarColumn(),
                         MofNCompleteColumn(), TextColumn("{task.description}"),
                         TimeElapsedColumn(), console=err, transient=True)
     task = progress.add_task("", total=None)

@@ -24,9 +24,14 @@ ROWS, COLS = 6, 9
 GOAL = (0, 8)
 
 
-def _maze(start: Cell, walls: Sequence[Cell]) -> Grid:
-    return Grid(ROWS, COLS, terminals=(GOAL,), walls=frozenset(walls), pays={GOAL: 1.0},
-                start=start)
+def _maze(start: Cell, walls: Sequence[Cell], scale: int = 1) -> Grid:
+    """The maze with each cell made `scale` x `scale` cells (the start and the goal stay
+    single cells in their blocks' outer corners: the left edge, the top right corner)."""
+    goal = (0, COLS * scale - 1)
+    cells = frozenset((r * scale + i, c * scale + j) for r, c in walls
+                      for i in range(scale) for j in range(scale))
+    return Grid(ROWS * scale, COLS * scale, terminals=(goal,), walls=cells, pays={goal: 1.0},
+                start=(start[0] * scale, start[1] * scale))
 
 
 # name -> the walls of each phase, and the start
@@ -39,11 +44,15 @@ MAZES: dict[str, tuple[Cell, tuple[tuple[Cell, ...], ...]]] = {
 }
 
 
-def maze_phases(name: str, change_at: int | None = None) -> list[tuple[int, Grid]]:
+def maze_phases(name: str, change_at: int | None = None,
+                scale: int = 1) -> list[tuple[int, Grid]]:
     """The book's maze `name` as (first step, grid) phases: one phase for the Dyna maze,
-    two for the blocking and shortcut mazes, the second from step `change_at` on."""
+    two for the blocking and shortcut mazes, the second from step `change_at` on; with
+    `scale` > 1, each cell made a `scale` x `scale` block (Example 8.4's mazes)."""
+    if isinstance(scale, bool) or int(scale) < 1:
+        raise ValueError(f"a maze's scale is a whole number >= 1, not {scale!r}")
     start, walls = MAZES[name]
-    grids = [_maze(start, w) for w in walls]
+    grids = [_maze(start, w, int(scale)) for w in walls]
     if len(grids) == 1:
         return [(0, grids[0])]
     if change_at is None or isinstance(change_at, bool) or int(change_at) < 1:
@@ -59,7 +68,8 @@ class MazeEnv(GridEnv):
     up (0), down (1), left (2), right (3).
 
     ## Observation Space
-    The cell, `row * 9 + col`, on a 6 x 9 grid, row 0 at the top.
+    The cell, `row * 9 + col`, on a 6 x 9 grid, row 0 at the top (`row * 9 * scale + col`
+    on the Dyna maze made `scale` times finer).
 
     ## Rewards
     +1 on reaching the goal (row 0, column 8); every other move 0.
@@ -117,10 +127,12 @@ class MazeEnv(GridEnv):
 
 
 class DynaMazeEnv(MazeEnv):
-    """Figure 8.2's maze (see `MazeEnv`): it never changes."""
+    """Figure 8.2's maze (see `MazeEnv`): it never changes; `scale` makes each cell a
+    `scale` x `scale` block (Example 8.4's finer mazes of the same structure)."""
 
-    def __init__(self, render_mode: str | None = None) -> None:
-        super().__init__(maze_phases("dyna"), render_mode)
+    def __init__(self, scale: int = 1, render_mode: str | None = None) -> None:
+        super().__init__(maze_phases("dyna", scale=scale), render_mode)
+        self.scale = scale
 
 
 class BlockingMazeEnv(MazeEnv):

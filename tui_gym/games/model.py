@@ -335,6 +335,9 @@ class ModelOracle(Oracle):
                 f"and {model.n_actions} actions"
             )
         optimum = exact.ladder.q()
+        offered = self.model_game.offered_actions(kwargs)
+        if offered is not None and offered.shape == values.shape:  # greedy among those
+            values = np.where(offered, values, -np.inf)
         policy = greedy_probabilities(values)
         value = evaluate(model, policy).value
         best = _initial_value(model, optimum.max(axis=1))

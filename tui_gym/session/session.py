@@ -15,6 +15,7 @@ heatmaps and the exact reference, evaluates, saves and loads.
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,7 +30,7 @@ from tui_gym.core.engine.loop import ModelArrays
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.engine.trainer import Trainer
 from tui_gym.core.heatmap import Heatmap
-from tui_gym.core.mdp import NotAvailable
+from tui_gym.core.mdp import FiniteMDP, NotAvailable
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.wrappers import (
     CATALOG,
@@ -41,6 +42,7 @@ from tui_gym.core.wrappers import (
 from tui_gym.core.wrappers.changes import GameChanges
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 from tui_gym.games.base import FixedBound, ReferenceMetrics, TrainingModel
+from tui_gym.games.model import ModelGame
 from tui_gym.session.evaluation import EvalReport, evaluate
 from tui_gym.session.prediction import PredictionFigures, PredictionRuler
 
@@ -52,6 +54,10 @@ TARGET_GAP_BUDGET_FACTOR = 5
 # Observation wrappers whose `observation()` is a pure function of the bare
 # observation: the heatmaps and the exact reference can see through them.
 STATELESS_OBSERVATION_WRAPPERS = frozenset({"FlattenObservation"})
+# The loop's arrays of each model a game keeps (its exact model), by table rows: a second
+# session or learner on the same model reuses them (the loop only reads them).
+_ARRAYS: weakref.WeakKeyDictionary[FiniteMDP, dict[bytes, ModelArrays]] = (
+    weakref.WeakKeyDictionary())
 
 
 @dataclass(frozen=True)
@@ -183,8 +189,23 @@ class Session:
         """The trainer, on the game's model where there is one (`engine_reason` says which
         loop trains and why)."""
         model, self.engine_reason = self._training_model()
+        self.agent.offer(self._offered())
         return Trainer(self.env, self.agent, self.keyer, model=model, seed=self.seed,
                        reason=self.engine_reason)
+
+    def _offered(self) -> np.ndarray | None:
+        """The actions each table row offers, for a game whose states do not all offer
+        every action and whose model says which state each row is (None otherwise)."""
+        training, rows = self.training, self.keyer.n_states
+        if training is None or rows is None or not isinstance(self.game, ModelGame):
+            return None
+        offered = self.game.offered_actions(self.env_kwargs)
+        model = training.model
+        if offered is None or offered.shape != (model.n_states, model.n_actions):
+            return None
+        mask = np.ones((rows, model.n_actions), dtype=bool)
+        mask[np.arange(model.n_states) if training.rows is None else training.rows] = offered
+        return mask
 
     def _training_model(self) -> tuple[ModelArrays | None, str]:
         """The model the compiled loop trains on, or None and why not (`training` keeps
@@ -218,7 +239,7 @@ class Session:
                 self.training = TrainingModel(model, rows)
                 if self.engine == "env":
                     return None, "env: chosen"
-                return ModelArrays.of(model, rows), text
+                return _arrays_of(model, rows), text
         if self.engine == "env":
             return None, "env: chosen"
         if self.engine == "model":
@@ -481,15 +502,25 @@ class Session:
         return reference.reason if isinstance(reference, NotAvailable) else ""
 
     def heatmaps(
-        self, snapshot: TrainingSnapshot | None = None, focus: Any = None
+        self, snapshot: TrainingSnapshot | None = None, focus: Any = None,
+        traces: bool = False,
     ) -> list[Heatmap] | None:
-        """The game's heatmap panels of the table (None when wrappers hide the states)."""
-        q = self.base_q(snapshot)
-        if q is None:
-            return None
+        """The game's heatmap panels of the table (None when wrappers hide the states);
+        with `traces`, of a snapshot's eligibility traces in the table's place, unmarked
+        (ValueError when it has none)."""
         kwargs = self.exact_kwargs(snapshot)
-        marks = self.game.oracle.optimal_marks(kwargs, self.changes)
-        return self.game.layout.heatmaps(q, kwargs, focus, marks)
+        if not traces:
+            q = self.base_q(snapshot)
+            if q is None:
+                return None
+            marks = self.game.oracle.optimal_marks(kwargs, self.changes)
+            return self.game.layout.heatmaps(q, kwargs, focus, marks)
+        if snapshot is None:
+            raise ValueError("the traces shown are a snapshot's")
+        keys = self.base_keys()
+        if keys is None:
+            return None
+        return self.game.layout.heatmaps(snapshot.values(keys, traces=True), kwargs, focus)
 
     def heatmap_cell(
         self, observation: Any, focus: Any = None
@@ -554,7 +585,8 @@ class Session:
         self, observation: Any, snapshot: TrainingSnapshot | None = None
     ) -> tuple[tuple[int, ...], np.ndarray] | None:
         """What the agent's greedy policy does on an observation of this env (wrappers
-        applied): every action tied for the best value, and the state's Q-values.
+        applied): every action the state offers tied for the best value, and the state's
+        Q-values.
 
         Reads the live agent, or `snapshot` (e.g. the runner's latest while a child
         process trains). None when the agent has never updated that state (with a
@@ -573,10 +605,12 @@ class Session:
                 if not agent.seen(key):
                     return None
                 q = agent.values([key])[0]
+            row = agent.find(key)
+            among = q if agent.offered is None or row is None else np.where(
+                agent.offered[row], q, -np.inf)  # the actions the state offers
         except (IndexError, KeyError, TypeError, ValueError):  # a mismatched or moving table
             return None
-        best = q.max()
-        return tuple(int(a) for a in np.flatnonzero(q == best)), q
+        return tuple(int(a) for a in np.flatnonzero(among == among.max())), q
 
     # --- headless training ------------------------------------------------
     def train(
@@ -745,3 +779,12 @@ def _round_up(value: float) -> str:
     digits = 1 - int(math.floor(math.log10(value)))
     scale = 10.0**digits
     return f"{math.ceil(value * scale - 1e-9) / scale:.{max(digits, 0)}f}"
+
+
+def _arrays_of(model: FiniteMDP, rows: np.ndarray) -> ModelArrays:
+    """`ModelArrays.of(model, rows)`, built once per model and rows."""
+    built = _ARRAYS.setdefault(model, {})
+    key = np.asarray(rows, dtype=np.int64).tobytes()
+    if key not in built:
+        built[key] = ModelArrays.of(model, rows)
+    return built[key]

@@ -47,6 +47,7 @@ from textual.widget import AwaitMount
 from textual.widgets import ContentSwitcher, Header
 
 from tui_gym.core.engine.trainer import continue_run
+from tui_gym.core.text import visible
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games import GAMES, Game, game_for, game_named
 from tui_gym.games.words import plural
@@ -92,6 +93,7 @@ REFRESH_HZ = 15
 ANIMATED_SPEED = next(i for i, speed in enumerate(SPEEDS) if speed.name == "animated")
 IDLE_POLL = 0.02  # seconds between looks for the agent handed back before a change
 IDLE_TIMEOUT = 10.0  # and how long to look before giving up
+LOADING_NOTICE = 0.3  # seconds a new game's build takes before the app says it is loading
 
 
 GAME_KEYS_A_LINE = 8  # the help's game keys, a line of at most this many
@@ -187,6 +189,9 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self.runner = make_runner(self.session, runner)
         self.play_seed = self.session.seed if play_seed is None else play_seed
         self._sessions: dict[str, Session] = {self.session.game.name: self.session}
+        self._building: set[str] = set()  # games whose new session a worker builds
+        self._fresh: set[str] = set()  # games whose session is new, not yet shown
+        self._wanted_game = self.session.game.name  # the game last asked for
         self._files: dict[str, Path] = {}  # the last file each game was saved to or loaded from
         self._loaded: tuple[Session, Path] | None = None  # read, waiting to be put in place
         self._too_small: TooSmallScreen | None = None
@@ -484,20 +489,59 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self, game: Game, otherwise: Callable[[], None] | None = None
     ) -> None:
         """Play `game`: its session from earlier in this run (agent, settings,
-        wrappers, curves) or a new one. Training pauses first; `otherwise` runs if the
-        runner never hands the agent back."""
-        was_running = self.runner.running
-        self._when_idle(lambda: self._switch_now(game, was_running), otherwise)
+        wrappers, curves) or a new one, built off the event loop (a game's model can take
+        a second). Training pauses first; `otherwise` runs if the runner never hands the
+        agent back or the game cannot be built."""
+        self._wanted_game = game.name
+        if game.name in self._sessions:
+            was_running = self.runner.running
+            self._when_idle(lambda: self._switch_now(game, was_running), otherwise)
+        elif game.name not in self._building:
+            self._building.add(game.name)
+            current = self.session
+            self.run_worker(lambda: self._build_session(game, current, otherwise),
+                            thread=True, exit_on_error=False, group="sessions")
+            self.set_timer(LOADING_NOTICE, lambda: self._say_loading(game))
+
+    def _build_session(
+        self, game: Game, current: Session, otherwise: Callable[[], None] | None
+    ) -> None:
+        """A new session for `game` (in a worker thread), handed to the event loop."""
+        try:
+            session = Session(game.env_id, seed=current.seed, engine=current.engine)
+        except Exception as exc:  # noqa: BLE001  (a game that cannot be built is said)
+            self.call_from_thread(self._not_built, game, exc, otherwise)
+        else:
+            self.call_from_thread(self._built, game, session, otherwise)
+
+    def _built(
+        self, game: Game, session: Session, otherwise: Callable[[], None] | None
+    ) -> None:
+        self._building.discard(game.name)
+        if self._sessions.setdefault(game.name, session) is session:  # not loaded meanwhile
+            self._fresh.add(game.name)
+        if self._wanted_game == game.name:  # no other game asked for meanwhile
+            self.switch_game(game, otherwise)
+
+    def _not_built(
+        self, game: Game, exc: Exception, otherwise: Callable[[], None] | None
+    ) -> None:
+        self._building.discard(game.name)
+        self.notify(f"{game.title} could not start: {visible(str(exc), 200)}",
+                    severity="error")
+        if otherwise is not None:
+            otherwise()
+
+    def _say_loading(self, game: Game) -> None:
+        if game.name in self._building and self._wanted_game == game.name:
+            self.notify(f"Loading {game.title}…", timeout=2)
 
     def _switch_now(self, game: Game, was_running: bool) -> None:
         if game is self.session.game:  # two switches asked for in a row
             return
-        session = self._sessions.get(game.name)
-        fresh = session is None
-        if session is None:
-            current = self.session
-            session = Session(game.env_id, seed=current.seed, engine=current.engine)
-            self._sessions[game.name] = session
+        session = self._sessions[game.name]
+        fresh = game.name in self._fresh
+        self._fresh.discard(game.name)
         self.play_view.put_away()
         self._use_session(session)
         if fresh:
@@ -770,6 +814,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         if session.game is not self.session.game:
             self.play_view.put_away()
         self._sessions[session.game.name] = session
+        self._fresh.discard(session.game.name)
+        self._wanted_game = session.game.name
         self._files[session.game.name] = path
         self._use_session(session)
         self.notify(f"Loaded {path}: {session.game.title}, "

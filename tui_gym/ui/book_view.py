@@ -26,7 +26,7 @@ from textual.widgets.option_list import Option
 
 from tui_gym.book_text import claims_table, figure_parts
 from tui_gym.session.book import BookFigure, figures
-from tui_gym.session.book.figure import FigureOptions, FigureResult, FigureStopped
+from tui_gym.session.book.figure import FigureOptions, FigureResult, FigureStopped, heading
 
 __all__ = ["BookView"]
 
@@ -97,7 +97,8 @@ class BookView(Vertical):
     @on(OptionList.OptionHighlighted, "#book-list")
     def _highlighted(self, event: OptionList.OptionHighlighted) -> None:
         figure = self.figures[event.option_index]
-        runs = f"{figure.runs} runs × {figure.episodes} episodes"
+        runs = f"{figure.runs} runs" + (f" × {figure.episodes} episodes"
+                                        if figure.episodes is not None else "")
         self.query_one("#book-about", Static).update(
             f"[bold]{escape(figure.title)}[/]\n{escape(figure.about)}\n"
             f"[dim]{figure.world} · {runs} · enter runs it[/]")
@@ -109,7 +110,7 @@ class BookView(Vertical):
     def run_figure(self, figure: BookFigure) -> None:
         """Run `figure` at its defaults on a worker thread (unless one runs already)."""
         if self._busy is not None:
-            self.app.notify(f"Figure {self._busy.name} is running: s stops it.")
+            self.app.notify(f"{heading(self._busy.name)} is running: s stops it.")
             return
         self._busy, self._stop = figure, threading.Event()
         self._progress, self._outcome = (0, 1, "starting"), None
@@ -128,9 +129,9 @@ class BookView(Vertical):
         try:
             self._outcome = figure.run(FigureOptions(stop=stop), progress)
         except FigureStopped:
-            self._outcome = f"Figure {figure.name} stopped."
+            self._outcome = f"{heading(figure.name)} stopped."
         except Exception as exc:  # noqa: BLE001 - said in one line, the app goes on
-            self._outcome = f"Figure {figure.name} failed: {type(exc).__name__}: {exc}"
+            self._outcome = f"{heading(figure.name)} failed: {type(exc).__name__}: {exc}"
 
     def action_stop(self) -> None:
         if self._stop is not None and self._busy is not None:
@@ -154,7 +155,7 @@ class BookView(Vertical):
             status.update(escape(outcome))
             return
         verdicts = sum(c.ok for c in outcome.checks)
-        status.update(f"Figure {outcome.figure}: {verdicts} of {len(outcome.checks)} claims "
+        status.update(f"{heading(outcome.figure)}: {verdicts} of {len(outcome.checks)} claims "
                       "reproduced")
         self.query_one(ProgressBar).update(total=1, progress=1)
         self.result = outcome

@@ -1,7 +1,8 @@
 """`tui-gym screenshots`: deterministic SVG screenshots of the app.
 
 Each game of the registry gets two pictures (played a few moves, and training
-mid-run), then the wrapper panel, the keys and the compact layout. Each
+mid-run), then an update step by step, the traces of a λ learner, the wrapper
+panel, the keys and the compact layout. Each
 scenario builds a seeded Session, drives the real app headless with Textual's
 pilot (keys a person would press), trains synchronously where a
 training picture is wanted (so the picture does not depend on thread timing),
@@ -98,9 +99,9 @@ async def _train(app, pilot) -> None:
     await _train_view(app, pilot, max(1, app.session.hp.episodes // 4))
 
 
-async def _step_by_step(app, pilot) -> None:
+async def _step_by_step(app, pilot, steps: int = 2) -> None:
     await _train_view(app, pilot, 300)
-    for _ in range(2):  # a step into the episode, so the board and the panel have history
+    for _ in range(steps):  # into the episode, so the board and the panel have history
         await pilot.press("n")
         await pilot.pause()
         app.runner.wait_idle(10.0)
@@ -234,14 +235,23 @@ async def _wrappers(app, pilot) -> None:
     await pilot.pause()
 
 
+async def _traces(app, pilot) -> None:
+    """A few steps into an episode, the heatmap turned to the traces they left."""
+    await _step_by_step(app, pilot, steps=6)
+    await pilot.press("E")
+    await pilot.pause()
+    app.train_view.heatmap.scroll_visible(animate=False)
+    await pilot.pause()
+
+
 async def _help(app, pilot) -> None:
     await pilot.press("question_mark")
     await pilot.pause()
 
 
 def _scenarios() -> tuple[Scenario, ...]:
-    """Each game played and training, one update step by step, then the wrapper panel,
-    a comparison, the keys and 80x24."""
+    """Each game played and training, one update step by step, a λ learner's traces, then
+    the wrapper panel, a comparison, the keys and 80x24."""
     shots: list[Scenario] = []
     for game in GAMES:
         shots.append(Scenario(f"{game.name}-play.svg", f"{game.title}: play",
@@ -262,6 +272,8 @@ def _scenarios() -> tuple[Scenario, ...]:
     shots += [
         Scenario("step-by-step.svg", f"{focused.title}: one SARSA update, step by step",
                  partial(Session, focused.env_id, seed=3, algorithm="sarsa"), _step_by_step),
+        Scenario("traces.svg", "CliffWalking: Sarsa(λ)'s eligibility traces, six steps in",
+                 partial(Session, "cliffwalking", seed=0, algorithm="sarsa-lambda"), _traces),
         Scenario("wrappers.svg", "The wrapper panel in use",
                  partial(Session, shown.env_id, choices=choices, seed=1), _wrappers),
         Scenario("compare.svg", f"{compared.title}: Q-learning against SARSA over 10 seeds",

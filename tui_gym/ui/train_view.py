@@ -11,10 +11,11 @@ numbers (`StatsPanel`) beside the hyperparameter fields
 agent's moves, for a prediction learner its RMS error of V and V against the
 exact values state by state (`PredictionChart`), the step panel (`StepPanel`)
 explaining each update, and the Q-table heatmaps (`HeatmapView`), where the
-explained step's state is marked. On a grid game `m` opens the map editor (`MapEditor`) above the
-heatmaps: each edit rebuilds the game through the app (the agent kept while
-its states keep their meaning, training going on) and the editor shows the new
-map solved exactly.
+explained step's state is marked; for a λ learner `E` turns them to its
+eligibility traces of the episode in progress, live, and back. On a grid game
+`m` opens the map editor (`MapEditor`) above the heatmaps: each edit rebuilds
+the game through the app (the agent kept while its states keep their meaning,
+training going on) and the editor shows the new map solved exactly.
 
 It never trains anything: the app's timer hands it the runner's latest
 snapshot through `show_snapshot()`, which redraws only what changed and
@@ -25,6 +26,9 @@ slice) and what a heatmap cell means; it never branches on a game's name.
 
 from __future__ import annotations
 
+import dataclasses
+import re
+import time
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from textual import on
@@ -34,9 +38,10 @@ from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widget import Widget
 from textual.widgets import Button, Label
 
-from tui_gym.algorithms import Settings
+from tui_gym.algorithms import ALGORITHMS, Settings
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.engine.trainer import continue_run
+from tui_gym.core.heatmap import Heatmap
 from tui_gym.ui.map_editing import apply_edit, save_map, show_optimum
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
@@ -52,6 +57,25 @@ if TYPE_CHECKING:
     from tui_gym.session.speeds import Runner as TrainingRunner
 
 STATE_POLL_SECONDS = 0.25  # how often the view checks for a pause with no new snapshot
+NO_TRACES_SECONDS = 4.0  # how long `E` says a learner has no traces (once, for a burst)
+# How the layouts' words for values read for traces: "max Q and the greedy move" is then
+# "max e and the most eligible move", and no `*` marks a move that is not optimal.
+TRACE_WORDS = (
+    (re.compile(r"\bQ(-values)?\b"), "e"),
+    (re.compile(r"\bgreedy\b"), "most eligible"),
+    (re.compile(r"\s+\* [^,]*$|,? n\* [^,]*"), ""),
+)
+
+
+def traced(panel: Heatmap) -> Heatmap:
+    """A heatmap panel drawn from the traces, its title and legend saying so."""
+
+    def say(text: str) -> str:
+        for pattern, word in TRACE_WORDS:
+            text = pattern.sub(word, text)
+        return text
+
+    return dataclasses.replace(panel, title=say(panel.title), legend=say(panel.legend))
 
 
 class TrainView(Vertical):
@@ -187,6 +211,11 @@ class TrainView(Vertical):
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("e", "edit_hyperparameters", "Edit", tooltip="Edit the hyperparameters"),
+        # One key, two answers: a λ learner's toggle (in the key bar), or one line saying
+        # that this learner has no traces.
+        Binding("E", "toggle_traces", "Traces",
+                tooltip="The heatmap: the values, or the eligibility traces of this episode"),
+        Binding("E", "no_traces", show=False),
     ]
 
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
@@ -201,6 +230,8 @@ class TrainView(Vertical):
         self._scene_event: Any = None
         self._layout_key: Any = None  # (game, env kwargs) the focus belongs to
         self._editor_game = ""  # the game the editor's undo history belongs to
+        self._traces = False  # the heatmap shows the traces (a λ learner's) instead of Q
+        self._no_traces_until = 0.0  # while that is said, `E` says it no more
 
     # --- the app and its session ---------------------------------------------
     @property
@@ -292,6 +323,11 @@ class TrainView(Vertical):
         return self._progress
 
     @property
+    def shows_traces(self) -> bool:
+        """Whether the heatmap shows the eligibility traces (else Q, or V)."""
+        return self._traces
+
+    @property
     def speed_name(self) -> str:
         return str(self._speed.content)
 
@@ -312,8 +348,9 @@ class TrainView(Vertical):
         self.charts.clear()
         self._prediction.clear()
         self._prediction.display = session.predicts
-        self._heatmap_box.border_title = "V, in every action's place" if session.predicts \
-            else "Q-table"
+        self._traces = self._traces and session.learner_class.has_traces
+        self.refresh_bindings()  # `E` toggles, or says there are no traces
+        self._show_heatmap_title()
         self._heatmap_box.border_subtitle = (
             f"←↑↓→ / hjkl / click: {game.layout.focus_help}" if game.layout.has_focus else ""
         )
@@ -419,6 +456,8 @@ class TrainView(Vertical):
             ("e", "edit the hyperparameters (enter applies, also while training runs; "
                   "esc: back, dropping an edit not applied)"),
             ("tab / shift+tab", "move between fields and buttons"),
+            ("E", "the heatmap: Q (or V) / the eligibility traces e of the episode in "
+                  "progress, live (the λ learners)"),
         ]
         layout = self.session.game.layout
         if layout.has_focus:
@@ -434,12 +473,22 @@ class TrainView(Vertical):
         eta = format_duration(remaining / rate) if runner.running and rate > 0 and remaining else ""
         self.progress.show(snapshot.episodes, snapshot.budget, eta)
 
+    def _show_heatmap_title(self) -> None:
+        predicts = self.session.predicts
+        if self._traces:
+            title = ("e(s): the traces of this episode, in every action's place" if predicts
+                     else "e(s,a): the eligibility traces of this episode")
+        else:
+            title = "V, in every action's place" if predicts else "Q-table"
+        self._heatmap_box.border_title = title
+
     def _show_heatmaps(self) -> None:
         session, snapshot = self.session, self._snapshot
         if snapshot is None:
             return
         layout = session.game.layout
-        panels = session.heatmaps(snapshot, focus=self.focus_target)
+        traces = self._traces and snapshot.traces is not None
+        panels = session.heatmaps(snapshot, focus=self.focus_target, traces=traces)
         view = self.heatmap
         if panels is None:
             view.focus_cell = None
@@ -448,7 +497,7 @@ class TrainView(Vertical):
         view.focus_cell = (
             layout.focus_cell(self.focus_target, session.env_kwargs) if layout.has_focus else None
         )
-        view.show(panels)
+        view.show([traced(panel) for panel in panels] if traces else panels)
 
     def _show_prediction(self) -> None:
         """A prediction learner's RMS error and V against the exact values."""
@@ -669,6 +718,26 @@ class TrainView(Vertical):
         if self.form.valid:
             self.remove_class("-editing")
         self.focus_default()
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action in ("toggle_traces", "no_traces"):
+            return self.session.learner_class.has_traces == (action == "toggle_traces")
+        return True
+
+    def action_toggle_traces(self) -> None:
+        """The heatmap: Q (V) or the learner's eligibility traces."""
+        self._traces = not self._traces
+        self._show_heatmap_title()
+        self._show_heatmaps()
+
+    def action_no_traces(self) -> None:
+        now = time.monotonic()
+        if now < self._no_traces_until:
+            return
+        self._no_traces_until = now + NO_TRACES_SECONDS
+        names = ", ".join(cls.name for cls in ALGORITHMS if cls.has_traces)
+        self.app.notify(f"{self.session.learner_class.title} keeps no eligibility traces (the "
+                        f"λ learners do: {names}).", severity="warning", timeout=NO_TRACES_SECONDS)
 
     def action_edit_hyperparameters(self) -> None:
         self.add_class("-editing")

@@ -52,7 +52,7 @@ _PACKAGE = Path(__file__).resolve().parents[2]  # tui_gym/
 _SOURCES = ("core/engine", "algorithms")  # what compiled code is made of
 _OPTIONS: Any = {"cache": True, "_nrt": False}  # see the module docstring
 _COMPILED: dict[Callable[..., Any], Any] = {}
-_ENTRIES: dict[tuple[Callable[..., Any], type], Any] = {}
+_ENTRIES: dict[tuple[Callable[..., Any], type, bool], Any] = {}
 _started = False
 _folder: Path | None = None
 
@@ -190,15 +190,17 @@ def compiling() -> Iterator[None]:
         yield  # closing the file lets the lock go
 
 
-def entry(fn: Callable[..., Any], kind: type) -> Any:
+def entry(fn: Callable[..., Any], kind: type, masked: bool = False) -> Any:
     """Kernel `fn` as called from Python with one algorithm's `Params` (`kind`),
     compiled apart: Numba types a NamedTuple from Python by its fields alone, so one
     dispatcher would run the code it has for another algorithm's `Params` of the same
     field types (or take its slow path on every call), while compiled callers tell
-    them apart. Once compiled, it is called directly (no dispatch). It lets go of the
-    interpreter lock while it runs, so a trainer's thread never holds up the UI."""
+    them apart. `masked`: called with an array of offered actions rather than None,
+    apart too (Numba would take an array for the None it was compiled for). Once
+    compiled, it is called directly (no dispatch). It lets go of the interpreter lock
+    while it runs, so a trainer's thread never holds up the UI."""
     start()
-    key = (fn, kind)
+    key = (fn, kind, masked)
     found = _ENTRIES.get(key)
     if found is None:
         from numba import njit
@@ -217,6 +219,7 @@ def compiled(fn: Callable[..., Any] | None) -> Any:
 
 def _register_overloads(rules: Any) -> None:
     """Each rule stub, compiled, dispatches on the type of its `hp` at compile time."""
+    from numba.core import types
     from numba.extending import overload
 
     _CACHED: Any = {"cache": True}
@@ -225,13 +228,45 @@ def _register_overloads(rules: Any) -> None:
         return rules.RULES[hp.instance_class]
 
     @overload(rules.update, jit_options=_CACHED, inline="always")
-    def _update(tables, hp, rng, s, a, r, s2, terminated, truncated, a2, epsilon, log):  # type: ignore[no-untyped-def]
+    def _update(tables, hp, rng, offered, s, a, r, s2, terminated, truncated, a2, epsilon,  # type: ignore[no-untyped-def]
+                log):
         rule = compiled(rule_of(hp).update)
 
-        def impl(tables, hp, rng, s, a, r, s2, terminated, truncated, a2, epsilon, log):  # type: ignore[no-untyped-def]
-            return rule(tables, hp, rng, s, a, r, s2, terminated, truncated, a2, epsilon, log)
+        def impl(tables, hp, rng, offered, s, a, r, s2, terminated, truncated, a2, epsilon,  # type: ignore[no-untyped-def]
+                 log):
+            return rule(tables, hp, rng, offered, s, a, r, s2, terminated, truncated, a2,
+                        epsilon, log)
 
         return impl
+
+    @overload(rules.offers, jit_options=_CACHED, inline="always")
+    def _offers(offered, s, a):  # type: ignore[no-untyped-def]
+        if isinstance(offered, types.NoneType):
+            def every(offered, s, a):  # type: ignore[no-untyped-def]
+                return True
+
+            return every
+
+        def marked(offered, s, a):  # type: ignore[no-untyped-def]
+            return offered[s, a]
+
+        return marked
+
+    @overload(rules.draw, jit_options=_CACHED, inline="always")
+    def _draw(rng, offered, s, n):  # type: ignore[no-untyped-def]
+        if isinstance(offered, types.NoneType):
+            uniform = compiled(rules.uniform)
+
+            def any_action(rng, offered, s, n):  # type: ignore[no-untyped-def]
+                return uniform(rng, n)
+
+            return any_action
+        draw_offered = compiled(rules.draw_offered)
+
+        def one_offered(rng, offered, s, n):  # type: ignore[no-untyped-def]
+            return draw_offered(rng, offered, s, n)
+
+        return one_offered
 
     @overload(rules.value, jit_options=_CACHED, inline="always")
     def _value(tables, hp, s, a):  # type: ignore[no-untyped-def]

@@ -174,11 +174,12 @@ def sample_outcome(cumulative: Any, guide: Any, base: int, outcomes: int, rng: A
 def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: Any,
               terminal: Any, outcomes: int,
               starts: Any, start_cumulative: Any, rows: Any, horizon: int,
-              tables: Any, hp: Any, rng: Any, explore: Any, episode0: int,
+              tables: Any, hp: Any, rng: Any, offered: Any, explore: Any, episode0: int,
               cursor: Any, acc: Any, max_episodes: int, max_steps: int,
               out: Any, log: Any) -> int:
     """Play up to `max_episodes` episodes and `max_steps` transitions (see the module
-    docstring); `explore` is (epsilon start, final, decay episodes), `episode0` the
+    docstring); `offered`: the actions each table row offers (None: all, see `rules`);
+    `explore` is (epsilon start, final, decay episodes), `episode0` the
     learner's episodes so far. Finished episodes go into `out` rows (return, length,
     mean |TD|, epsilon, the action it began with); `cursor[4]`, `cursor[5]` count the
     episodes and steps of this call. Returns 0, or `GROW` when the learner needs room first."""
@@ -202,7 +203,7 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: 
         s = cursor[1]
         a = cursor[2]
         if a < 0:
-            a = act(tables, hp, rng, rows[s], eps)
+            a = act(tables, hp, rng, offered, rows[s], eps)
         if cursor[3] == 0:
             cursor[6] = a
         at = (s * n_actions + a) * outcomes
@@ -216,8 +217,9 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: 
         cut = (not ended) and horizon > 0 and cursor[3] >= horizon
         a2 = -1
         if next_first(hp) and not ended:
-            a2 = act(tables, hp, rng, rows[s2], eps)
-        td = update(tables, hp, rng, rows[s], a, r, rows[s2], ended, cut, a2, eps, log)
+            a2 = act(tables, hp, rng, offered, rows[s2], eps)
+        td = update(tables, hp, rng, offered, rows[s], a, r, rows[s2], ended, cut, a2, eps,
+                    log)
         acc[0] += r
         acc[1] += td
         steps += 1
@@ -240,14 +242,15 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: 
 
 
 @kernel
-def transition(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
-               terminated: bool, truncated: bool, a2: int, epsilon: float,
+def transition(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float,
+               s2: int, terminated: bool, truncated: bool, a2: int, epsilon: float,
                log: Any) -> tuple[int, float]:
     """The update for one transition played elsewhere; the next action is chosen first
     (when `a2` < 0) for a rule that needs it. Returns (that action or -1, |TD|)."""
     if a2 < 0 and next_first(hp) and not terminated:
-        a2 = act(tables, hp, rng, s2, epsilon)
-    td = update(tables, hp, rng, s, a, r, s2, terminated, truncated, a2, epsilon, log)
+        a2 = act(tables, hp, rng, offered, s2, epsilon)
+    td = update(tables, hp, rng, offered, s, a, r, s2, terminated, truncated, a2, epsilon,
+                log)
     return a2, td
 
 
@@ -259,11 +262,12 @@ def play(learner: Any, model: ModelArrays, cursor: Cursor, max_episodes: int,
     """One call of `run_model` for `learner` (giving it room when it asks, and moving its
     schedule on by the episodes finished): (episodes, steps)."""
     hp = learner.compiled_params()
-    status = entries(hp).run_model(
+    offered = learner.offered
+    status = entries(hp, offered).run_model(
         model.next_state, model.cumulative, model.guide, model.reward, model.noise,
         model.terminal, model.outcomes, model.starts, model.start_cumulative, model.rows,
         model.horizon,
-        learner.arrays(), hp, learner.rng, learner.exploration(), learner.episode,
+        learner.arrays(), hp, learner.rng, offered, learner.exploration(), learner.episode,
         cursor.ints, cursor.floats, min(max_episodes, len(out)), max_steps, out, log,
     )
     if status == GROW:
@@ -274,25 +278,26 @@ def play(learner: Any, model: ModelArrays, cursor: Cursor, max_episodes: int,
 
 
 class Entries:
-    """The kernels Python calls for one algorithm (`jit.entry`): `run_model`,
-    `transition`, `act` and `greedy`."""
+    """The kernels Python calls for one algorithm (`jit.entry`), with or without a mask
+    of offered actions: `run_model`, `transition`, `act` and `greedy`."""
 
-    def __init__(self, kind: type) -> None:
-        self.run_model = jit.entry(run_model, kind)
-        self.transition = jit.entry(transition, kind)
-        self.act = jit.entry(act, kind)
-        self.greedy = jit.entry(greedy, kind)
-
-
-_ENTRIES: dict[type, Entries] = {}
+    def __init__(self, kind: type, masked: bool) -> None:
+        self.run_model = jit.entry(run_model, kind, masked)
+        self.transition = jit.entry(transition, kind, masked)
+        self.act = jit.entry(act, kind, masked)
+        self.greedy = jit.entry(greedy, kind, masked)
 
 
-def entries(hp: Any) -> Entries:
-    """The entry points for the algorithm whose compiled hyperparameters are `hp`."""
-    kind = type(hp)
-    found = _ENTRIES.get(kind)
+_ENTRIES: dict[tuple[type, bool], Entries] = {}
+
+
+def entries(hp: Any, offered: np.ndarray | None = None) -> Entries:
+    """The entry points for the algorithm whose compiled hyperparameters are `hp`, called
+    with `offered` (None: every action offered, or a mask: see `rules`)."""
+    key = (type(hp), offered is not None)
+    found = _ENTRIES.get(key)
     if found is None:
-        found = _ENTRIES[kind] = Entries(kind)
+        found = _ENTRIES[key] = Entries(*key)
     return found
 
 
@@ -306,11 +311,12 @@ def _tiny_model(n_actions: int) -> ModelArrays:
                                     np.zeros(shape), np.ones(shape, dtype=bool), np.ones(1)))
 
 
-def compile_learner(tables: Any, hp: Any) -> None:
-    """Compile (or load) the entry points for one learner's types, on copies of its
-    tables."""
-    calls = entries(hp)
+def compile_learner(tables: Any, hp: Any, offered: np.ndarray | None = None) -> None:
+    """Compile (or load) the entry points for one learner's types (with its mask of
+    offered actions, if any), on copies of its tables."""
+    calls = entries(hp, offered)
     copies = tuple(np.array(t) for t in tables)
+    mask = None if offered is None else np.ones((1, copies[0].shape[1]), dtype=np.bool_)
     spare = np.random.default_rng(0)
     log = np.zeros((1, 8))
     model = _tiny_model(copies[0].shape[1])
@@ -319,29 +325,34 @@ def compile_learner(tables: Any, hp: Any) -> None:
     explore = np.zeros(3)
     calls.run_model(model.next_state, model.cumulative, model.guide, model.reward, model.noise,
                     model.terminal, model.outcomes, model.starts, model.start_cumulative,
-                    model.rows, model.horizon, copies, hp, spare, explore, 0, cursor.ints,
+                    model.rows, model.horizon, copies, hp, spare, mask, explore, 0, cursor.ints,
                     cursor.floats, 1, 1, out, log)
-    calls.transition(copies, hp, spare, 0, 0, 0.0, 0, True, False, -1, 0.0, log)
-    calls.act(copies, hp, spare, 0, 0.0)
-    calls.greedy(copies, hp, spare, 0)
+    calls.transition(copies, hp, spare, mask, 0, 0, 0.0, 0, True, False, -1, 0.0, log)
+    calls.act(copies, hp, spare, mask, 0, 0.0)
+    calls.greedy(copies, hp, spare, mask, 0)
 
 
-def warm(learners: Sequence[tuple[str, Any, Any]],
+def warm(learners: Sequence[tuple[Any, ...]],
          progress: Callable[[str], None] | None = None) -> bool:
-    """Compile (or load) each `(name, tables, hp)` learner's entry points; tells
-    `progress` "compiling the learners, once (i/n: name)" for those not compiled before.
-    True when anything had to be compiled."""
-    if all(name in _WARM for name, _, _ in learners):
+    """Compile (or load) each `(name, tables, hp)` learner's entry points (`(name, tables,
+    hp, offered)`: with that mask of offered actions, if not None); tells `progress`
+    "compiling the learners, once (i/n: name)" for those not compiled before. True when
+    anything had to be compiled."""
+    wanted = {}
+    for name, tables, hp, *mask in learners:
+        offered = mask[0] if mask else None
+        wanted[name if offered is None else f"{name}-offered"] = (name, tables, hp, offered)
+    if all(key in _WARM for key in wanted):
         return False
     folder = jit.folder()
-    cold = [(n, t, h) for n, t, h in learners if not (folder / f"warm-{n}").exists()]
-    for index, (name, tables, hp) in enumerate(cold, start=1):
+    cold = [(k, x) for k, x in wanted.items() if not (folder / f"warm-{k}").exists()]
+    for index, (key, (name, tables, hp, offered)) in enumerate(cold, start=1):
         if progress is not None:
             progress(f"{jit.COMPILING} ({index}/{len(cold)}: {name})")
-        compile_learner(tables, hp)
+        compile_learner(tables, hp, offered)
         with contextlib.suppress(OSError):  # a read-only cache works, only looked at again
-            (folder / f"warm-{name}").write_text("ok\n")
-    _WARM.update(name for name, _, _ in learners)
+            (folder / f"warm-{key}").write_text("ok\n")
+    _WARM.update(wanted)
     return bool(cold)
 
 

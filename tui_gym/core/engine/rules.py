@@ -3,8 +3,8 @@
 An algorithm registers a `Rule` for its `Params` (a NamedTuple of its compiled
 hyperparameters, `register(Params, Rule(...))`):
 
-- `update(tables, hp, rng, s, a, r, s2, terminated, truncated, a2, epsilon, log)`:
-  its update rule for one transition from table row `s` by action `a` to row
+- `update(tables, hp, rng, offered, s, a, r, s2, terminated, truncated, a2, epsilon,
+  log)`: its update rule for one transition from table row `s` by action `a` to row
   `s2` (`a2`: the next action when `next_first`, else -1), returning |TD error|
   (Monte Carlo: the sum over the episode's updates at its end, else 0); it
   writes the numbers the step-by-step view explains into `log[0]` (and more
@@ -18,6 +18,16 @@ The stubs below dispatch on the type of `hp`: in plain Python by looking the
 rule up; in compiled code at compile time (`jit.start` registers them as Numba
 overloads), so each algorithm gets a specialisation of the one loop, cached.
 `act` is epsilon-greedy with a random tie-break, drawing only what it needs.
+
+**Offered actions.** Where a game's states do not all offer every action,
+`offered[row, action]` (a bool array) marks those each table row offers;
+`None` where every row offers every action. Acting (`act`, `greedy`,
+`draw`), the best action (`best_action`), the max (`max_value`) and the
+ε-greedy expectation (`expected_value`) range over the offered actions only;
+a rule passes `offered` on to them and needs nothing else. `offers` and
+`draw` are stubs compiled by the type of `offered`: for `None` they are the
+constant True and `uniform(rng, n)`, so a game that offers every action runs
+no mask code at all; a mask that offers everything draws the same numbers.
 """
 
 from __future__ import annotations
@@ -35,12 +45,15 @@ __all__ = [
     "Rule",
     "act",
     "begin",
+    "best_action",
+    "draw",
     "epsilon_at",
     "expected_value",
     "full",
     "greedy",
     "max_value",
     "next_first",
+    "offers",
     "register",
     "step_size",
     "td_update",
@@ -74,10 +87,10 @@ def register(params: type, rule: Rule) -> None:
 # --- the stubs the loop calls ------------------------------------------------------------
 
 
-def update(tables: Any, hp: Any, rng: Any, s: int, a: int, r: float, s2: int,
+def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
-    return RULES[type(hp)].update(tables, hp, rng, s, a, r, s2, terminated, truncated, a2,
-                                  epsilon, log)
+    return RULES[type(hp)].update(tables, hp, rng, offered, s, a, r, s2, terminated,
+                                  truncated, a2, epsilon, log)
 
 
 def value(tables: Any, hp: Any, s: int, a: int) -> float:
@@ -98,6 +111,18 @@ def full(tables: Any, hp: Any) -> bool:
 
 def next_first(hp: Any) -> bool:
     return RULES[type(hp)].next_first
+
+
+def offers(offered: Any, s: int, a: int) -> bool:
+    """Whether row `s` offers action `a` (`offered` None: every row offers every action;
+    compiled, that is the constant True)."""
+    return offered is None or bool(offered[s, a])
+
+
+def draw(rng: Any, offered: Any, s: int, n: int) -> int:
+    """An action drawn uniformly from those row `s` offers (of `n`): `uniform(rng, n)` when
+    every action is offered."""
+    return uniform(rng, n) if offered is None else draw_offered(rng, offered, s, n)
 
 
 # --- shared by every learner ---------------------------------------------------------------
@@ -127,13 +152,41 @@ def uniform(rng: Any, n: int) -> int:
     return min(int(rng.random() * n), n - 1)
 
 
+@kernel(inline=True)
+def first_offered(offered: Any, s: int, n: int) -> int:
+    """The first action row `s` offers (0 when every action is offered)."""
+    a = 0
+    while a < n - 1 and not offers(offered, s, a):
+        a += 1
+    return a
+
+
 @kernel
-def greedy(tables: Any, hp: Any, rng: Any, s: int) -> int:
-    """The best-valued action in row `s`, ties broken uniformly (a draw only on a tie)."""
+def draw_offered(rng: Any, offered: Any, s: int, n: int) -> int:
+    """An action drawn uniformly from those `offered[s]` marks."""
+    count = 0
+    for a in range(n):
+        if offered[s, a]:
+            count += 1
+    pick = uniform(rng, count)
+    for a in range(n):
+        if offered[s, a]:
+            if pick == 0:
+                return a
+            pick -= 1
+    return n - 1
+
+
+@kernel
+def greedy(tables: Any, hp: Any, rng: Any, offered: Any, s: int) -> int:
+    """The best-valued action row `s` offers, ties broken uniformly (a draw only on a tie)."""
     n = tables[0].shape[1]
-    best = value(tables, hp, s, 0)
-    choice, ties = 0, 1
-    for a in range(1, n):
+    choice = first_offered(offered, s, n)
+    best = value(tables, hp, s, choice)
+    ties = 1
+    for a in range(choice + 1, n):
+        if not offers(offered, s, a):
+            continue
         v = value(tables, hp, s, a)
         if v > best:
             best, choice, ties = v, a, 1
@@ -143,7 +196,7 @@ def greedy(tables: Any, hp: Any, rng: Any, s: int) -> int:
         return choice
     pick = uniform(rng, ties)
     for a in range(n):
-        if value(tables, hp, s, a) == best:
+        if offers(offered, s, a) and value(tables, hp, s, a) == best:
             if pick == 0:
                 return a
             pick -= 1
@@ -151,33 +204,65 @@ def greedy(tables: Any, hp: Any, rng: Any, s: int) -> int:
 
 
 @kernel
-def act(tables: Any, hp: Any, rng: Any, s: int, epsilon: float) -> int:
-    """Epsilon-greedy in row `s`: a uniform action with probability epsilon, else greedy."""
-    if epsilon > 0.0 and rng.random() < epsilon:
-        return uniform(rng, tables[0].shape[1])
-    return greedy(tables, hp, rng, s)
+def best_action(table: Any, rng: Any, offered: Any, s: int) -> int:
+    """The best action of one table in row `s` among those offered, ties broken uniformly."""
+    n = table.shape[1]
+    choice = first_offered(offered, s, n)
+    top = table[s, choice]
+    ties = 1
+    for a in range(choice + 1, n):
+        if not offers(offered, s, a):
+            continue
+        if table[s, a] > top:
+            top, choice, ties = table[s, a], a, 1
+        elif table[s, a] == top:
+            ties += 1
+    if ties > 1:
+        pick = uniform(rng, ties)
+        for a in range(n):
+            if offers(offered, s, a) and table[s, a] == top:
+                if pick == 0:
+                    return a
+                pick -= 1
+    return choice
 
 
 @kernel
-def expected_value(tables: Any, hp: Any, s: int, epsilon: float) -> float:
-    """Σ_a π(a|s) value(s, a) under epsilon-greedy with ties sharing the greedy part:
-    epsilon times the mean value plus (1 - epsilon) times the best."""
+def act(tables: Any, hp: Any, rng: Any, offered: Any, s: int, epsilon: float) -> int:
+    """Epsilon-greedy in row `s`: an offered action drawn uniformly with probability
+    epsilon, else greedy."""
+    if epsilon > 0.0 and rng.random() < epsilon:
+        return draw(rng, offered, s, tables[0].shape[1])
+    return greedy(tables, hp, rng, offered, s)
+
+
+@kernel
+def expected_value(tables: Any, hp: Any, offered: Any, s: int, epsilon: float) -> float:
+    """Σ_a π(a|s) value(s, a) under epsilon-greedy over the offered actions, ties sharing
+    the greedy part: epsilon times their mean value plus (1 - epsilon) times the best."""
     n = tables[0].shape[1]
-    best = value(tables, hp, s, 0)
+    first = first_offered(offered, s, n)
+    best = value(tables, hp, s, first)
     total = best
-    for a in range(1, n):
-        v = value(tables, hp, s, a)
-        total += v
-        best = max(best, v)
-    return epsilon * total / n + (1.0 - epsilon) * best
+    count = 1
+    for a in range(first + 1, n):
+        if offers(offered, s, a):
+            v = value(tables, hp, s, a)
+            total += v
+            best = max(best, v)
+            count += 1
+    return epsilon * total / count + (1.0 - epsilon) * best
 
 
 @kernel(inline=True)
-def max_value(q: Any, s: int) -> float:
-    """The largest value in row `s` of `q`."""
-    top = q[s, 0]
-    for b in range(1, q.shape[1]):
-        top = max(top, q[s, b])
+def max_value(q: Any, offered: Any, s: int) -> float:
+    """The largest value in row `s` of `q` among the actions it offers."""
+    n = q.shape[1]
+    first = first_offered(offered, s, n)
+    top = q[s, first]
+    for b in range(first + 1, n):
+        if offers(offered, s, b):
+            top = max(top, q[s, b])
     return top
 
 

@@ -168,14 +168,19 @@ class TrainingSnapshot:
     version: int = 0  # increases with every snapshot of a run
     recorded: int = 0  # episodes in the statistics (fewer than `episodes` after a load)
     status: str = ""  # what the engine is doing besides training, e.g. compiling
+    traces: np.ndarray | None = None  # the episode's eligibility traces, shaped as `q`
     _lookup: dict[Hashable, int] | None = field(default=None, repr=False, compare=False)
 
-    def values(self, keys: list[Hashable]) -> np.ndarray:
-        """Action values for the given keys (zeros for unseen states), like `Learner.values`."""
-        out = np.zeros((len(keys), self.q.shape[1]))
+    def values(self, keys: list[Hashable], traces: bool = False) -> np.ndarray:
+        """Action values for the given keys (zeros for unseen states), like `Learner.values`;
+        with `traces`, the eligibility traces (a snapshot without them has none)."""
+        table = self.traces if traces else self.q
+        if table is None:
+            raise ValueError("this learner keeps no eligibility traces")
+        out = np.zeros((len(keys), table.shape[1]))
         if self.keys is None:
             if keys:
-                out[:] = self.q[np.asarray(keys, dtype=np.int64)]
+                out[:] = table[np.asarray(keys, dtype=np.int64)]
             return out
         lookup = self._lookup
         if lookup is None:
@@ -184,7 +189,7 @@ class TrainingSnapshot:
         for i, key in enumerate(keys):
             row = lookup.get(key)
             if row is not None:
-                out[i] = self.q[row]
+                out[i] = table[row]
         return out
 
     @property

@@ -170,7 +170,7 @@ class Trainer:
         if self._warmed:
             return
         agent = self.agent
-        if loop.warm([(agent.name, agent.arrays(), agent.compiled_params())], say):
+        if loop.warm([(agent.name, agent.arrays(), agent.compiled_params(), agent.offered)], say):
             say("")
         self._warmed = True
 
@@ -349,7 +349,8 @@ class Trainer:
         return self._rate
 
     def snapshot(self) -> TrainingSnapshot:
-        """An immutable copy of the current statistics and the learner's action values."""
+        """An immutable copy of the current statistics and the learner's action values (and
+        eligibility traces, for a learner that keeps them)."""
         q, keys = self.agent.table()
         self._version += 1
         w = self.windows
@@ -372,6 +373,7 @@ class Trainer:
             version=self._version,
             recorded=w["return"].count,
             status=self.status,
+            traces=self.agent.eligibility(),
         )
 
     def progress(self) -> TrainerProgress:

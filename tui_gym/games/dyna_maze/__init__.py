@@ -4,7 +4,9 @@
 up (0), down (1), left (2), right (3).
 
 ## Observation Space
-The cell, `row * 9 + col` on the 6 x 9 maze, row 0 at the top.
+The cell, `row * 9 + col` on the 6 x 9 maze, row 0 at the top; the Dyna maze's
+`scale` makes each cell a block of `scale` x `scale` (Example 8.4's mazes),
+`row * 9 * scale + col`.
 
 ## Rewards
 +1 on reaching the goal (top right); 0 for every other move. The book
@@ -139,7 +141,8 @@ class MazeGame(DPGridGame):
 
     def phases(self, kwargs: Mapping[str, Any]) -> list[tuple[int, Grid]]:
         change_at = kwargs.get("change_at")
-        return maze_phases(self.maze, None if change_at is None else int(change_at))
+        return maze_phases(self.maze, None if change_at is None else int(change_at),
+                           int(kwargs.get("scale", 1)))
 
     def phase_starts(self, kwargs: Mapping[str, Any]) -> tuple[int, ...]:
         return tuple(start for start, _ in self.phases(kwargs))
@@ -172,6 +175,10 @@ class DynaMazeGame(MazeGame):
         "may keep a detour of a step out and back",
     )
     description = "Figure 8.2's 6x9 maze: +1 at the goal, 0 elsewhere; 14 steps at best."
+    teaches = "planning: Dyna-Q's simulated steps find the way in far fewer episodes"
+    params = (Param("scale", int, 1, 1, 8,
+                    help="each cell made scale x scale cells (Example 8.4's finer mazes)",
+                    owner="Dyna maze"),)
     # The multi-step on-policy learners stop exploring at the end, over a longer budget:
     # what they learn becomes the greedy policy's values, with no detour kept.
     hyperparameters = {
@@ -179,7 +186,6 @@ class DynaMazeGame(MazeGame):
         "n-step-sarsa": {"epsilon_final": 0.0, "episodes": 3000},
         "sarsa-lambda": {"epsilon_final": 0.0, "episodes": 3000},
     }
-    teaches = "planning: Dyna-Q's simulated steps find the way in far fewer episodes"
 
 
 class BlockingMazeGame(MazeGame):

@@ -31,15 +31,18 @@ FIGURE_MODULES = (
     "fig_6_5",
     "fig_7_2",
     "fig_8_2",
+    "fig_8_4",
+    "fig_8_5",
+    "example_8_4",
     "fig_12_3",
     "fig_12_6",
 )
 
 
 def figures() -> list[BookFigure]:
-    """Every figure, in the book's order."""
+    """Every figure, in the book's order (by chapter, and within one as listed)."""
     found = [importlib.import_module(f"{__name__}.{module}").FIGURE for module in FIGURE_MODULES]
-    return sorted(found, key=lambda f: tuple(int(part) for part in f.name.split(".")))
+    return sorted(found, key=lambda f: int(f.name.split()[-1].split(".")[0]))
 
 
 def figure_named(name: str) -> BookFigure:

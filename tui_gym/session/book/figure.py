@@ -24,9 +24,15 @@ import numpy.typing as npt
 from tui_gym.core.heatmap import Heatmap
 
 __all__ = ["BookFigure", "Chart", "Check", "FigureOptions", "FigureResult", "FigureStopped",
-           "Progress", "Series"]
+           "Progress", "Series", "heading"]
 
 Progress = Callable[[int, int, str], None]  # (done, total, what is being done)
+
+
+def heading(name: str) -> str:
+    """What a figure is called: "Figure 8.4" for a numbered figure, "Example 8.4" for the
+    one of an example (named "example 8.4")."""
+    return name.capitalize() if name[:1].isalpha() else f"Figure {name}"
 
 
 @dataclass(frozen=True)

@@ -14,10 +14,15 @@ A run figure is a module like the exact ones (a `FIGURE`, see `figure`), whose
    per-episode quantity is one more column of that loop's output. Each
    `Played` holds `values[run, episode]` and the greedy policy's exact value
    at the end of each run (`final`). A swept parameter
-   (α, n, λ) is one `Learner` per value.
+   (α, n, λ) is one `Learner` per value. A figure drawn against time steps
+   in a world that changes as it is played (the book's blocking and shortcut
+   mazes) plays `play_steps(..., steps)` instead: each run a number of time
+   steps, phase after phase of the world, and `values[run, t]` the
+   cumulative reward after t + 1 steps.
 2. **Draw** them as `Series` with bands: `per_episode(played)` (the mean over
    runs per episode), `per_time_step(played)` (episodes completed against time
-   steps, from `LENGTH`), `swept(label, xs, played, summary)` (one point per
+   steps, from `LENGTH`), `per_step(played)` (the mean over runs of what
+   `play_steps` records a time step), `swept(label, xs, played, summary)` (one point per
    learner of a sweep). Bands are 95% Student-t intervals of the mean over runs.
 3. **Check** the book's claims with a tolerance that follows from the run count:
    `near(claim, book, samples, slack)` (the mean of one number per run within
@@ -35,6 +40,7 @@ figure's defaults (`--full`: the book's own counts).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -43,9 +49,14 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from tui_gym.algorithms import algorithm
+from tui_gym.core.engine import loop
 from tui_gym.core.engine.loop import FIRST_ACTION, LENGTH, RETURN
 from tui_gym.core.experiments.aggregate import aggregate, t_half_width
 from tui_gym.core.experiments.records import RunKind
+from tui_gym.core.mdp import NotAvailable, Phases
+from tui_gym.games import game_named
+from tui_gym.games.model import ModelGame
 from tui_gym.session.book.figure import (
     BookFigure,
     Check,
@@ -54,7 +65,7 @@ from tui_gym.session.book.figure import (
     Progress,
     Series,
 )
-from tui_gym.session.experiments.compare import Arm, CompareProgress, Setup, execute
+from tui_gym.session.experiments.compare import Arm, CompareProgress, Setup, execute, prepare
 
 __all__ = [
     "FIRST_ACTION",
@@ -69,9 +80,12 @@ __all__ = [
     "near",
     "one_run",
     "per_episode",
+    "per_step",
     "per_time_step",
     "play",
+    "play_steps",
     "swept",
+    "world_phases",
 ]
 
 CHECK_CONFIDENCE = 0.99  # the verdicts' intervals
@@ -132,6 +146,76 @@ def play(figure: BookFigure, world: str, learners: Sequence[Learner], options: F
             for index, learner in enumerate(learners)]
 
 
+def play_steps(figure: BookFigure, world: str, learners: Sequence[Learner],
+               options: FigureOptions, progress: Progress, steps: int, *,
+               game_params: Mapping[str, Any] | None = None) -> list[Played]:
+    """Every learner over the figure's runs, each run `steps` time steps of the world's
+    model by the compiled loop, phase after phase (the learner and its episode in progress
+    go on in the next phase's model from the step it starts at): `values[run, t]`, the
+    returns of the episodes finished in the first t + 1 steps (the cumulative reward, where
+    a world pays only as an episode ends, as the book's mazes do)."""
+    runs, _ = counts(figure, options)
+    setup = Setup(world, runs, 1, dict(game_params or {}), (), options.seed)
+    arms = [Arm(x.algorithm, dict(x.settings), x.label) for x in learners]
+    prepared = prepare(setup, arms)
+    phases = world_phases(world, prepared.env_kwargs)
+    arrays = [loop.ModelArrays.of(model) for model in phases.models]
+    ends = [*phases.starts[1:], steps]
+    n_states, n_actions = phases.models[0].n_states, phases.models[0].n_actions
+    about = f"{runs} runs × {steps} time steps of {', '.join(x.label for x in learners)}"
+    played = []
+    for index, (learner, hp) in enumerate(zip(learners, prepared.hyperparameters, strict=True)):
+        cls = algorithm(learner.algorithm)
+        values = np.zeros((runs, steps))
+        for run in range(runs):
+            if options.stop is not None and options.stop.is_set():
+                raise FigureStopped(f"Figure {figure.name} stopped")
+            at = index * runs + run
+            progress(at, len(learners) * runs, about)
+            agent = cls(n_actions, cls.settings(hp), n_states=n_states, seed=options.seed + run)
+            loop.warm([(agent.name, agent.arrays(), agent.compiled_params())],
+                      functools.partial(_told, progress, at, len(learners) * runs))
+            values[run] = _cumulative_reward(agent, arrays, phases.starts, ends, steps)
+        played.append(Played(learner.label, values, None, None))
+    progress(len(learners) * runs, len(learners) * runs, about)
+    return played
+
+
+def _told(progress: Progress, done: int, total: int, line: str) -> None:
+    progress(done, total, line)
+
+
+def world_phases(world: str, kwargs: Mapping[str, Any]) -> Phases:
+    """The model of each phase of the game `world` with its arguments `kwargs` and its own
+    episode limit (ValueError for a game without one)."""
+    game = game_named(world)
+    phases = (game.world(kwargs, game.own_changes(kwargs)) if isinstance(game, ModelGame)
+              else NotAvailable("it has no exact model"))
+    if isinstance(phases, NotAvailable):
+        raise ValueError(f"{world} has no model to play: {phases.reason}")
+    return phases
+
+
+def _cumulative_reward(agent: Any, arrays: Sequence[loop.ModelArrays], starts: Sequence[int],
+                       ends: Sequence[int], steps: int) -> np.ndarray:
+    """One learner's cumulative reward after each of `steps` time steps, phase by phase."""
+    cursor, log = loop.Cursor(), np.zeros((1, 8))
+    out = np.zeros((4096, loop.COLUMNS))
+    returns, lengths = [], []
+    for model, start, end in zip(arrays, starts, ends, strict=False):
+        at = max(start, 0)
+        while at < min(end, steps):
+            done, played = loop.play(agent, model, cursor, len(out), min(end, steps) - at,
+                                     out, log)
+            returns.append(out[:done, RETURN].copy())
+            lengths.append(out[:done, LENGTH].copy())
+            at += played
+    paid = np.zeros(steps + 1)
+    finished = np.cumsum(np.concatenate(lengths)).astype(np.int64)  # the step each ended at
+    np.add.at(paid, finished, np.concatenate(returns))
+    return np.cumsum(paid)[1:]
+
+
 def margin(samples: Samples) -> float:
     """The half-width of the 99% Student-t interval of the mean of `samples` (NaN for one
     sample, which no comparison passes)."""
@@ -184,6 +268,14 @@ def per_episode(played: Played, window: int = 1) -> Series:
     """The mean over runs of each episode's measure (each run smoothed over a trailing
     `window` of episodes first), with its band."""
     curve = aggregate(played.values, window=window)
+    return Series(played.label, curve.episodes.astype(np.float64), curve.mean,
+                  curve.lo, curve.hi)
+
+
+def per_step(played: Played, points: int = 300) -> Series:
+    """The mean over runs at each time step (as `play_steps` records them), with its band,
+    at most `points` of them."""
+    curve = aggregate(played.values, max_points=points)
     return Series(played.label, curve.episodes.astype(np.float64), curve.mean,
                   curve.lo, curve.hi)
 

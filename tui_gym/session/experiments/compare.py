@@ -287,13 +287,30 @@ class Setup:
 @dataclass(frozen=True, eq=False)
 class _Model:
     """The game's model for the jobs: the loop's arrays, the model itself (for exact
-    values) and the table row of each of its states, and the learners' table shape."""
+    values) and the table row of each of its states, the learners' table shape and the
+    actions each row offers (None: all)."""
 
     arrays: ModelArrays
     mdp: FiniteMDP
     rows: np.ndarray
     n_states: int
     n_actions: int
+    offered: np.ndarray | None = None
+
+    def learner(self, name: str, hp: Mapping[str, Any], seed: int | None) -> Any:
+        """A new learner of algorithm `name` for this model."""
+        cls = algorithm(name)
+        learner = cls(self.n_actions, cls.settings(hp), n_states=self.n_states, seed=seed)
+        learner.offer(self.offered)
+        return learner
+
+    def greedy_values(self, tables: np.ndarray) -> np.ndarray:
+        """The exact values of the greedy policies of action-value `tables[m, rows, A]`,
+        each greedy among the actions each state offers."""
+        q = tables[:, self.rows]
+        if self.offered is not None:
+            q = np.where(self.offered[self.rows], q, -np.inf)
+        return greedy_values(self.mdp, q)
 
 
 @dataclass(frozen=True)
@@ -377,7 +394,8 @@ def prepare(setup: Setup, arms: Sequence[Arm]) -> Prepared:
     training = first.training
     if training is not None and first.trainer.model is not None:
         model = _Model(first.trainer.model, training.model, np.asarray(training.rows),
-                       int(first.keyer.n_states), int(first.agent.n_actions))
+                       int(first.keyer.n_states), int(first.agent.n_actions),
+                       first.agent.offered)
         value = solve(training.model).value
         optimum = value if math.isfinite(value) else None
     prepared = Prepared(
@@ -461,29 +479,27 @@ def _run_job(
         if stop():
             break
         if model is not None:
-            cls = algorithm(job.algorithm)
-            learner = cls(model.n_actions, cls.settings(job.hp), n_states=model.n_states,
-                          seed=seed)
+            learner = model.learner(job.algorithm, job.hp, seed)
             _, tables = play_learner(learner, model.arrays, episodes, checkpoints, stop,
                                      returns[i], counter(i), job.measure)
             if tables and exact is not None:
-                q = np.stack(tables)[:, model.rows]
-                exact[i, : len(tables)] = (_rms_errors(learner, model, q)
+                found = np.stack(tables)
+                exact[i, : len(tables)] = (_rms_errors(learner, model, found)
                                            if isinstance(learner, Predictor)
-                                           else greedy_values(model.mdp, q))
+                                           else model.greedy_values(found))
         else:
             _play_env(job, seed, returns[i], counter(i), stop)
     return state()
 
 
 def _rms_errors(learner: Predictor, model: _Model, tables: np.ndarray) -> np.ndarray:
-    """Per table (`[m, S, A]`, V in every action), the RMS error of V against the exact
+    """Per table (`[m, rows, A]`, V in every action), the RMS error of V against the exact
     values of the policy `learner` follows; NaN where that policy has none."""
     try:
         truth = learner.truth(model.mdp, model.rows)
     except ValueError:
         return np.full(len(tables), np.nan)
-    return np.array([truth.rms(table[:, 0]) for table in tables])
+    return np.array([truth.rms(table[model.rows, 0]) for table in tables])
 
 
 def _play_env(job: _Job, seed: int, returns: np.ndarray, progress: Callable[[int], None],
@@ -908,12 +924,10 @@ def _estimate(prepared: Prepared, arms: Sequence[Arm], setup: Setup,
     model = prepared.model
     if model is None:
         return 0.0
-    learners = []
-    for a, arm in enumerate(arms):
-        cls = algorithm(arm.algorithm)
-        learners.append(cls(model.n_actions, cls.settings(prepared.hyperparameters[a]),
-                            n_states=model.n_states, seed=setup.first_seed))
-    if warm([(x.name, x.arrays(), x.compiled_params()) for x in learners], status) and status:
+    learners = [model.learner(arm.algorithm, prepared.hyperparameters[a], setup.first_seed)
+                for a, arm in enumerate(arms)]
+    if warm([(x.name, x.arrays(), x.compiled_params(), x.offered) for x in learners],
+            status) and status:
         status("")
     total = 0.0
     checkpoints = len(checkpoint_episodes(setup.episodes))
@@ -924,11 +938,11 @@ def _estimate(prepared: Prepared, arms: Sequence[Arm], setup: Setup,
         rate = len(played) / max(time.perf_counter() - began, 1e-9)
         # Each seed's greedy policy is valued exactly at every checkpoint: on a large
         # model that can cost more than the training.
-        table = learner.action_values(slice(None))[None][:, model.rows]
+        table = learner.action_values(slice(None))[None]
         times = []
         for _ in range(2):  # the quicker of two: the first may pay for imports
             began = time.perf_counter()
-            greedy_values(model.mdp, table)
+            model.greedy_values(table)
             times.append(time.perf_counter() - began)
         valuing = checkpoints * min(times)
         total += setup.seeds * (setup.episodes / max(rate, 1e-9) + valuing)
