@@ -142,12 +142,9 @@ class MaxBiasGame(DPGridGame):
     action_names = ACTIONS
     params = (Param("actions", int, MAX_B_ACTIONS, 1, MAX_B_ACTIONS,
                     help="how many actions B offers", owner="Maximization bias"),)
-    # The book's Figure 6.5: alpha 0.1, epsilon 0.1. Dyna-Q+'s model keeps the last reward
-    # each of B's actions drew, and planning replays those noisy draws: one planning step a
-    # move keeps their max from drawing the agent left.
+    # The book's Figure 6.5: alpha 0.1, epsilon 0.1.
     hyperparameters = {"*": {"learning_rate": 0.1, "learning_rate_schedule": "constant",
-                             "epsilon_start": 0.1, "epsilon_final": 0.1, "episodes": 300},
-                       "dyna-q-plus": {"planning_steps": 1}}
+                             "epsilon_start": 0.1, "epsilon_final": 0.1, "episodes": 300}}
 
     def __init__(self) -> None:
         super().__init__()
