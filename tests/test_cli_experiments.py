@@ -138,3 +138,36 @@ def test_first_ctrl_c_asks_to_stop_and_a_second_one_interrupts() -> None:
         assert stop.is_set()
         with pytest.raises(KeyboardInterrupt):
             signal.raise_signal(signal.SIGINT)
+
+
+def test_compare_scores_prediction_learners_by_the_rms_error(
+    capsys: pytest.CaptureFixture[str]
+) -> None:
+    args = ("compare", "random-walk", "--algorithms", "td0,n-step-td", "--seeds", "2",
+            "--episodes", "40", "--processes", "0", "--no-record")
+    data = run_json(capsys, *args, "--json")
+    for result in data["results"]:
+        assert result["exact_value"] is None and result["exact_gap"] is None
+        assert 0 < result["rms_error"] < 1 and result["rms_ci95"] >= 0
+        last = result["rms_curve"][-1]
+        assert set(last) == {"episode", "mean", "lo", "hi"} and last["episode"] == 40
+        assert last["mean"] == pytest.approx(result["rms_error"])
+    code, out, err = run(capsys, *args)
+    assert code == 0, err
+    assert out.count("RMS error of V") == 2  # the table's column and the second chart
+    assert "greedy exact value" not in out
+
+
+def test_sweep_ranks_prediction_learners_by_the_lowest_rms_error(
+    capsys: pytest.CaptureFixture[str]
+) -> None:
+    args = ("sweep", "random-walk", "--algorithm", "n-step-td", "--grid",
+            "learning_rate=0.01,0.1,0.5", "--grid", "n=1,4", "--seeds", "2", "--episodes", "60",
+            "--processes", "0", "--no-record")
+    data = run_json(capsys, *args, "--json")
+    errors = [p["rms_error"] for p in data["points"]]
+    assert all(p["exact_value"] is None and p["rms_curve"] for p in data["points"])
+    assert [p["rank"] for p in data["points"]] == [sorted(errors).index(e) + 1 for e in errors]
+    code, out, err = run(capsys, *args)
+    assert code == 0, err
+    assert "RMS error of V: learning_rate (rows)" in out  # the grid, the lowest best

@@ -113,7 +113,7 @@ SUMMARY = {"id", "kind", "game", "algorithm", "seeds", "status", "started_at", "
            "seconds", "group", "figures"}
 FIGURE = {"name", "value", "unit", "ci95"}
 OUTCOME = {"seeds_done", "episodes_done", "mean_return_last", "ci95", "exact_value",
-           "exact_gap", "run_id", "curve"}
+           "exact_gap", "rms_error", "rms_ci95", "rms_curve", "run_id", "curve"}
 EVAL = {"env_id", "algorithm", "episodes", "episodes_requested", "mean_return", "std_return",
         "win_rate", "draw_rate", "loss_rate", "exact_value", "optimal_value", "gap"}
 BENCHMARK = {

@@ -231,3 +231,36 @@ def test_wrappers_no_model_follows_play_seed_by_seed_on_the_env() -> None:
                        wrappers=(parse_wrapper_spec("DelayObservation"),))
     (outcome,) = run_compare(spec, processes=0).outcomes
     assert outcome.seeds_done == 2 and len(outcome.curve) == 6
+
+
+def test_prediction_learners_are_scored_by_the_rms_error_of_v(tmp_path) -> None:
+    spec = CompareSpec("random-walk", ["td0", "mc-prediction", "q-learning"], 3, 60)
+    with RunHistory(tmp_path / "runs.db") as history:
+        result = run_compare(spec, history=history, processes=0)
+        records = {run.algorithm: history.get_run(run.id) for run in history.list_runs()}
+    by_name = {o.algorithm: o for o in result.outcomes}
+    for name in ("td0", "mc-prediction"):
+        outcome = by_name[name]
+        rms = []
+        for seed in spec.seed_list:  # each seed scored as `train --seed` scores it
+            session = Session("random-walk", algorithm=name, seed=seed, hp={"episodes": 60})
+            session.train()
+            figures = session.prediction()
+            assert figures is not None
+            rms.append(figures.rms)
+        assert outcome.rms_error == pytest.approx(np.mean(rms))
+        assert outcome.rms_ci95 is not None and outcome.rms_ci95 > 0
+        assert outcome.exact_value is None and outcome.exact_gap is None
+        assert outcome.exact_curve is None and outcome.rms_curve is not None
+        assert outcome.rms_curve.episodes[-1] == 60
+        assert outcome.rms_curve.mean[-1] == pytest.approx(outcome.rms_error)
+        assert outcome.rms_curve.mean[0] > outcome.rms_error  # V learned
+        stored = records[name]
+        figure = stored.summary.figure("rms_error")
+        assert figure is not None and figure.value == pytest.approx(outcome.rms_error)
+        assert stored.curve("rms_error") is not None and stored.curve("exact_value") is None
+        assert outcome.to_json()["rms_error"] == pytest.approx(outcome.rms_error)
+    control = by_name["q-learning"]
+    assert control.rms_error is None and control.rms_curve is None
+    assert control.exact_value is not None
+    assert records["q-learning"].summary.figure("rms_error") is None

@@ -44,6 +44,7 @@ if TYPE_CHECKING:
     from tui_gym.session.experiments.compare import AlgorithmOutcome, CompareProgress
 
 CLUSTER_ENV = "TUI_GYM_CLUSTER"
+RMS_LABEL = "RMS error of V"  # a prediction learner's figure, against the exact values
 DB_HELP = "the run history file (default: $TUI_GYM_DB, else the data folder's runs.db)"
 # Every seed's return of every episode is kept while a run lasts: these bound that memory.
 _seeds = _int_in(1, 1000, "a number of seeds from 1 to 1,000")
@@ -240,12 +241,13 @@ def _resume_hint(group: int | None) -> str:
     return "" if group is None else f"; the same command with --resume {group} carries on"
 
 
-def _number_text(value: float | None, ci: float | None = None) -> str:
-    """A figure with 3 significant digits or so, and its 95% interval."""
+def _number_text(value: float | None, ci: float | None = None, sign: bool = True) -> str:
+    """A figure with 3 significant digits or so (signed unless `sign` is False), and its
+    95% interval."""
     if value is None:
         return "—"
     digits = 3 if abs(value) < 1 else 2 if abs(value) < 10 else 1
-    text = f"{value:+.{digits}f}"
+    text = f"{value:{'+' if sign else ''}.{digits}f}"
     return f"{text} ± {ci:.{digits}f}" if ci is not None else text
 
 
@@ -332,6 +334,9 @@ def _compare_table(result: Any) -> Table:
     if has_exact:
         table.add_column("greedy exact value", justify="right")
         table.add_column("gap", justify="right")
+    has_rms = any(o.rms_error is not None for o in result.outcomes)
+    if has_rms:
+        table.add_column(RMS_LABEL, justify="right")
     table.add_column("seeds", justify="right")
     from tui_gym.terminal_chart import PALETTE
 
@@ -343,6 +348,8 @@ def _compare_table(result: Any) -> Table:
         ]
         if has_exact:
             row += [_number_text(o.exact_value, o.exact_ci95), _number_text(o.exact_gap)]
+        if has_rms:
+            row.append(_number_text(o.rms_error, o.rms_ci95, sign=False))
         row.append(f"{o.seeds_done}/{o.seeds}")
         table.add_row(*row)
     return table
@@ -365,6 +372,12 @@ def _compare_chart(result: Any, width: int) -> Text:
         curves = [ChartSeries(o.algorithm, o.exact_curve.episodes, o.exact_curve.mean,
                               o.exact_curve.lo, o.exact_curve.hi) for o in exact]
         chart.append_text(band_chart(curves, width, 8, y_label="greedy policy's exact value"))
+    rms = [o for o in result.outcomes if o.rms_curve is not None]
+    if rms:
+        chart.append("\n\n")
+        curves = [ChartSeries(o.algorithm, o.rms_curve.episodes, o.rms_curve.mean,
+                              o.rms_curve.lo, o.rms_curve.hi) for o in rms]
+        chart.append_text(band_chart(curves, width, 8, y_label=RMS_LABEL))
     return chart
 
 
@@ -460,13 +473,6 @@ def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
     return 130 if result.interrupted else 0
 
 
-def _figure_of(o: AlgorithmOutcome | None) -> float | None:
-    """The figure a sweep ranks by: the exact value where there is one, else the online return."""
-    if o is None:
-        return None
-    return o.exact_value if o.exact_value is not None else o.mean_return_last.mean
-
-
 def _value_text(value: Any) -> str:
     return f"{value:.4g}" if isinstance(value, float) else str(value)
 
@@ -484,6 +490,10 @@ def _sweep_table(result: Any) -> Table:
     if has_exact:
         table.add_column("greedy exact value", justify="right")
         table.add_column("gap", justify="right")
+    has_rms = any(p.outcome is not None and p.outcome.rms_error is not None
+                  for p in result.points)
+    if has_rms:
+        table.add_column(RMS_LABEL, justify="right")
     table.add_column("seeds", justify="right")
     # A grid keeps its order (its rows follow the values); drawn points come best first.
     for point in result.ranked() if spec.ranges else result.points:
@@ -491,11 +501,13 @@ def _sweep_table(result: Any) -> Table:
         row = ["—" if point.rank is None else str(point.rank)]
         row += [_value_text(point.values[k]) for k in spec.keys]
         if o is None:
-            row += ["—"] * (4 if has_exact else 2)
+            row += ["—"] * (2 + 2 * has_exact + has_rms)
         else:
             row.append(_number_text(o.mean_return_last.mean, o.mean_return_last.ci95))
             if has_exact:
                 row += [_number_text(o.exact_value, o.exact_ci95), _number_text(o.exact_gap)]
+            if has_rms:
+                row.append(_number_text(o.rms_error, o.rms_ci95, sign=False))
             row.append(f"{o.seeds_done}/{o.seeds}")
         table.add_row(*row, style="green" if point.rank == 1 else None)
     return table
@@ -504,13 +516,13 @@ def _sweep_table(result: Any) -> Table:
 def _sweep_grid(result: Any) -> Table:
     """Two keys as rows and columns, each cell the final figure on a red-to-green scale."""
     (row_key, rows), (col_key, cols) = list(result.grid.items())
-    figure = {(p.values[row_key], p.values[col_key]): _figure_of(p.outcome)
-              for p in result.points}
+    figure = {(p.values[row_key], p.values[col_key]): p.figure for p in result.points}
     values = [v for v in figure.values() if v is not None]
     low, high = (min(values), max(values)) if values else (0.0, 1.0)
     exact = any(p.outcome is not None and p.outcome.exact_value is not None
                 for p in result.points)
-    what = "greedy exact value" if exact else "online return, last 10%"
+    rms = any(p.outcome is not None and p.outcome.rms_error is not None for p in result.points)
+    what = RMS_LABEL if rms else "greedy exact value" if exact else "online return, last 10%"
     table = Table(title=f"{what}: {row_key} (rows) × {col_key} (columns)", title_justify="left")
     table.add_column(f"{row_key} \\ {col_key}", style="bold", justify="right")
     for c in cols:
@@ -523,8 +535,10 @@ def _sweep_grid(result: Any) -> Table:
                 cells.append("—")
                 continue
             share = 0.5 if high == low else (v - low) / (high - low)
+            share = 1 - share if rms else share  # the lowest error is the best
             red, green = int(200 * (1 - share)) + 30, int(200 * share) + 30
-            cells.append(Text(f" {v:+.3f} ", style=f"bold black on rgb({red},{green},60)"))
+            text = f" {v:.3f} " if rms else f" {v:+.3f} "
+            cells.append(Text(text, style=f"bold black on rgb({red},{green},60)"))
         table.add_row(*cells)
     return table
 

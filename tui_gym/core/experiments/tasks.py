@@ -4,7 +4,8 @@ A task is a block of one run's seeds trained for the same episodes: its row
 holds the inputs that define it (the seeds, their rows in the run's seed list,
 the episodes, the algorithm and its hyperparameters, as JSON) and what it
 gave: every seed's online return of every episode and, where the game has an
-exact model, the greedy policy's exact value at each checkpoint (float64,
+exact model, the greedy policy's exact value at each checkpoint (a prediction
+learner's RMS error of V against the exact values of its policy; float64,
 zlib-compressed, so a stored figure is the figure computed). `decode` checks a
 row as it reads it and raises `BadTask` saying why.
 """
@@ -33,7 +34,8 @@ class BadTask(ValueError):
 class TaskRecord:
     """A finished task: seeds `seeds` (rows `rows` of the run's seed list), `episodes`
     each; `returns[i, e]` seed i's online return in episode e; `exact[i, j]` its greedy
-    policy's exact value at checkpoint j (None without a model)."""
+    policy's exact value at checkpoint j, a prediction learner's RMS error of V (None
+    without a model)."""
 
     rows: tuple[int, ...]
     seeds: tuple[int, ...]

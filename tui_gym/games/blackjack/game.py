@@ -392,8 +392,10 @@ class BlackjackGame(Game):
     # 1 -> 0.05 over half of 200,000 episodes) suit the off-policy learners. The on-policy
     # ones learn the values of the exploring policy: exploration falls to 0 (so what they
     # learn becomes the greedy policy's values) and a larger step size forgets the early,
-    # exploratory returns. Dyna-Q's model keeps one outcome per pair, which misleads in a
-    # card game; one planning step with a small step size keeps that noise down.
+    # exploratory returns; the multi-step ones, whose targets hold more of the cards'
+    # noise, a smaller step size over more hands (n-step SARSA two steps ahead). Dyna-Q's
+    # (and Dyna-Q+'s) model keeps one outcome per pair, which misleads in a card game; one
+    # planning step with a small step size keeps that noise down.
     hyperparameters = {
         "sarsa": {"learning_rate": 0.01, "epsilon_final": 0.0, "epsilon_decay_fraction": 0.3,
                   "episodes": 500_000},
@@ -402,6 +404,16 @@ class BlackjackGame(Game):
         "monte-carlo": {"learning_rate": 0.003, "epsilon_final": 0.0,
                         "epsilon_decay_fraction": 0.5, "episodes": 1_500_000},
         "dyna-q": {"planning_steps": 1, "learning_rate": 0.0003, "episodes": 700_000},
+        "n-step-sarsa": {"n": 2, "learning_rate": 0.005, "epsilon_final": 0.0,
+                         "epsilon_decay_fraction": 0.3, "episodes": 1_000_000},
+        "sarsa-lambda": {"learning_rate": 0.005, "epsilon_final": 0.0,
+                         "epsilon_decay_fraction": 0.3, "episodes": 1_000_000},
+        "dyna-q-plus": {"planning_steps": 1, "learning_rate": 0.0003, "episodes": 700_000},
+    }
+    lessons = {
+        "prioritized-sweeping": "prioritized sweeping's model keeps the last card each move "
+        "drew, and its queue updates first the pairs whose last draw surprised most: the "
+        "surprising cards weigh more than their chance, and the values drift from the optimum",
     }
 
     def __init__(self) -> None:

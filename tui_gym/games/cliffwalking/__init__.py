@@ -103,7 +103,7 @@ class CliffWalkingGame(TileGame):
     demo_compare = ({"epsilon_start": 0.1, "epsilon_final": 0.1, "learning_rate": 0.5,
                      "learning_rate_schedule": "constant"}, 500)
     lessons = dict.fromkeys(
-        ("sarsa", "expected-sarsa", "monte-carlo"),
+        ("sarsa", "expected-sarsa", "monte-carlo", "n-step-sarsa", "sarsa-lambda"),
         "an on-policy learner learns the values of the exploring policy it follows, and "
         "while it explores a step along the edge risks the cliff, so it keeps to a safer "
         "path (Sutton & Barto, Example 6.6); Q-learning learns the edge",
@@ -140,8 +140,11 @@ class CliffWalkingGame(TileGame):
             return {"*": {"learning_rate": 0.01, "episodes": 50_000}}
         # Double Q splits its experience over two tables; Monte Carlo averages whole
         # returns, which a step size of 0.1 leaves too noisy to settle (see the README).
+        # n-step SARSA stops exploring at the end, or its greedy policy may not reach the
+        # goal.
         return {
             "*": {"learning_rate": 0.1, "episodes": 2_000},
             "double-q": {"episodes": 8_000},
             "monte-carlo": {"learning_rate": 0.01, "episodes": 4_000},
+            "n-step-sarsa": {"epsilon_final": 0.0},
         }

@@ -127,6 +127,10 @@ class MazeGame(DPGridGame):
     CHANGING = {"discount": DISCOUNT, "learning_rate": 0.5, "learning_rate_schedule": "constant",
                 "epsilon_start": 0.1, "epsilon_final": 0.1}
     CHANGING_SARSA = {"epsilon_final": 0.01}
+    # The multi-step on-policy learners as SARSA, looking two steps or half a trace ahead:
+    # further, the greedy policy of some seeds loses the goal once the wall moves.
+    CHANGING_MULTI_STEP = {"n-step-sarsa": {"n": 2, **CHANGING_SARSA},
+                           "sarsa-lambda": {"lambda": 0.5, **CHANGING_SARSA}}
     plan_gamma = DISCOUNT
     hyperparameters = {"*": {"discount": DISCOUNT, "learning_rate": 0.1, "episodes": 1000}}
 
@@ -175,6 +179,13 @@ class DynaMazeGame(MazeGame):
     params = (Param("scale", int, 1, 1, 8,
                     help="each cell made scale x scale cells (Example 8.4's finer mazes)",
                     owner="Dyna maze"),)
+    # The multi-step on-policy learners stop exploring at the end, over a longer budget:
+    # what they learn becomes the greedy policy's values, with no detour kept.
+    hyperparameters = {
+        **MazeGame.hyperparameters,
+        "n-step-sarsa": {"epsilon_final": 0.0, "episodes": 3000},
+        "sarsa-lambda": {"epsilon_final": 0.0, "episodes": 3000},
+    }
 
 
 class BlockingMazeGame(MazeGame):
@@ -194,7 +205,7 @@ class BlockingMazeGame(MazeGame):
                     help="the step, over all episodes, at which the wall moves",
                     owner="Blocking maze"),)
     hyperparameters = {"*": {**MazeGame.CHANGING, "episodes": 300},
-                       "sarsa": MazeGame.CHANGING_SARSA}
+                       "sarsa": MazeGame.CHANGING_SARSA, **MazeGame.CHANGING_MULTI_STEP}
 
 
 class ShortcutMazeGame(MazeGame):
@@ -214,4 +225,4 @@ class ShortcutMazeGame(MazeGame):
                     owner="Shortcut maze"),)
     extra_steps = 6.0  # the long way, which a learner that does not explore keeps to
     hyperparameters = {"*": {**MazeGame.CHANGING, "episodes": 400},
-                       "sarsa": MazeGame.CHANGING_SARSA}
+                       "sarsa": MazeGame.CHANGING_SARSA, **MazeGame.CHANGING_MULTI_STEP}

@@ -124,13 +124,18 @@ class FrozenLakeGame(TileGame):
         # a longer budget. Monte Carlo learns only at episodes' ends, from returns of a
         # slowly improving policy: a smaller step still, exploration kept a little, and
         # a longer budget. Dyna-Q's model keeps one outcome per pair, which misleads on
-        # slippery ice (its lesson): one planning step with a small step size.
+        # slippery ice (its lesson): one planning step with a small step size, which brings
+        # Dyna-Q+ (whose bonus keeps it trying every move) to the optimum. Q(λ)'s traces
+        # reach a little less far back (λ 0.8).
+        planning = {"planning_steps": 1, "learning_rate": 0.001}
         small = len(self.cells(kwargs or {})) <= 4
         common = {"learning_rate": 0.01 if small else 0.02, "discount": 0.999,
                   "episodes": 60_000 if small else 100_000}
         return {
             "*": common,
-            "dyna-q": {"planning_steps": 1, "learning_rate": 0.001},
+            "dyna-q": planning,
+            "dyna-q-plus": planning,
+            "q-lambda": {"lambda": 0.8},
             "monte-carlo": {"learning_rate": 0.003 if small else 0.001,
                             "epsilon_final": 0.01, "episodes": 200_000 if small else 250_000},
         }
@@ -139,6 +144,9 @@ class FrozenLakeGame(TileGame):
         "dyna-q": "Dyna-Q's model keeps the last outcome of each move, which on slippery ice "
         "is wrong most of the time: planning from it pulls the values away from the optimum "
         "(with no planning steps it is Q-learning, which gets there)",
+        "prioritized-sweeping": "prioritized sweeping's model keeps the last outcome of each "
+        "move, and its queue updates first the pairs whose last slip surprised most: the "
+        "surprising slips weigh more than their chance, and the values drift from the optimum",
     }
 
     def gap_tolerance(self, kwargs: Mapping[str, Any]) -> float:

@@ -299,8 +299,10 @@ class TaxiGame(ModelGame):
         if (kwargs or {}).get("rainy"):
             return {"*": {"learning_rate": 0.05, "episodes": 50_000}}
         # The on-policy learners learn the values of the exploring policy: exploration
-        # falls to 0 so that those become the greedy policy's; Double Q splits its
-        # experience over two tables. Each takes a longer budget (see the README).
+        # falls to 0 so that those become the greedy policy's (the multi-step ones looking
+        # two steps or half a trace ahead); Double Q splits its experience over two tables.
+        # Each takes a longer budget (see the README).
+        on_policy = {"epsilon_final": 0.0, "epsilon_decay_fraction": 0.9, "episodes": 40_000}
         return {
             "*": {"learning_rate": 0.1, "episodes": 10_000},
             "sarsa": {"epsilon_final": 0.0, "epsilon_decay_fraction": 0.9,
@@ -308,4 +310,7 @@ class TaxiGame(ModelGame):
             "expected-sarsa": {"epsilon_final": 0.0},
             "double-q": {"episodes": 20_000},
             "monte-carlo": {"epsilon_final": 0.01, "learning_rate": 0.02, "episodes": 100_000},
+            "n-step-sarsa": {"n": 2, **on_policy},
+            "sarsa-lambda": {"lambda": 0.5, **on_policy},
+            "q-lambda": {"episodes": 20_000},
         }

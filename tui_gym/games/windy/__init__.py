@@ -53,6 +53,10 @@ DOUBLE_Q_LESSON = (
     "of a step or a few within the budget"
 )
 
+# Sarsa's settings, with the longer budget the multi-step on-policy learners need.
+ON_POLICY = {"learning_rate": 0.1, "learning_rate_schedule": "visits", "epsilon_final": 0.0,
+             "episodes": 5000}
+
 
 class WindyGame(DPGridGame):
     """Cross the windy grid to the goal; every move costs 1."""
@@ -73,7 +77,9 @@ class WindyGame(DPGridGame):
     # Sarsa as the book runs it (Figure 6.3: alpha 0.5, Q starting at 0), exploring a little
     # more at first and less at the end, so the greedy policy settles. Double Q splits its
     # experience over two tables; Monte Carlo may never see its greedy policy end an
-    # episode (the book: "termination is not guaranteed for all policies").
+    # episode (the book: "termination is not guaranteed for all policies"). The multi-step
+    # learners look two steps or half a trace ahead (further, some seeds keep a detour
+    # within the budget); the on-policy ones learn as Sarsa does, for longer.
     hyperparameters = {
         "*": {"learning_rate": 0.5, "learning_rate_schedule": "constant",
               "epsilon_start": 0.2, "epsilon_final": 0.01, "episodes": 2000},
@@ -83,6 +89,9 @@ class WindyGame(DPGridGame):
                      "epsilon_final": 0.0, "episodes": 10000},
         "monte-carlo": {"learning_rate": 0.1, "learning_rate_schedule": "visits",
                         "epsilon_start": 1.0, "epsilon_final": 0.05},
+        "n-step-sarsa": {"n": 2, **ON_POLICY},
+        "sarsa-lambda": {"lambda": 0.5, **ON_POLICY},
+        "q-lambda": {"lambda": 0.5},
     }
 
     def __init__(self) -> None:

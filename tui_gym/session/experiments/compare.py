@@ -28,7 +28,10 @@ when some tasks had not begun), and the result says `interrupted`. With a
 others name the first one as their `group`); each finished task is kept in
 it at once (`RunHistory.put_task`), and a finished run's curves `return` and
 `exact_value` (each with `.lo` / `.hi`) and figures `mean_return_last`,
-`exact_value` and `exact_gap` are aggregated from its stored tasks. `resume`
+`exact_value` and `exact_gap` are aggregated from its stored tasks. A prediction
+learner (`algorithms.Predictor`) has the RMS error of its V against the exact
+values of the policy it follows in their place, at the same checkpoints (curve
+and figure `rms_error`). `resume`
 runs only the tasks a recorded run misses, after checking its settings.
 """
 
@@ -47,7 +50,7 @@ from typing import Any
 
 import numpy as np
 
-from tui_gym.algorithms import ALGORITHMS, algorithm
+from tui_gym.algorithms import ALGORITHMS, Predictor, algorithm
 from tui_gym.core.engine import processes as processes_module
 from tui_gym.core.engine.loop import FIRST_ACTION, LENGTH, RETURN, ModelArrays, warm
 from tui_gym.core.engine.seeds import checkpoint_episodes, greedy_values, play_learner
@@ -153,7 +156,9 @@ class AlgorithmOutcome:
     finished all their episodes. `exact_value` / `exact_gap` (None without a
     model) are the mean over seeds of the greedy policy's exact value at the
     last checkpoint every seed reached, and the optimum minus it; `exact_curve`
-    is that value at each checkpoint. `run_id` is its run in the history.
+    is that value at each checkpoint. A prediction learner has none of those but
+    `rms_error`, the mean RMS error of V against the exact values of the policy it
+    follows there, and `rms_curve`. `run_id` is its run in the history.
     """
 
     algorithm: str
@@ -169,6 +174,9 @@ class AlgorithmOutcome:
     seeds: int = 0
     smoothed: AggregateCurve | None = None  # each seed's trailing mean over `smoothing` episodes
     smoothing: int = 1
+    rms_error: float | None = None
+    rms_ci95: float | None = None
+    rms_curve: AggregateCurve | None = None
 
     @property
     def episodes(self) -> int:
@@ -181,6 +189,8 @@ class AlgorithmOutcome:
             figures.append(Figure("exact_value", self.exact_value, ci95=self.exact_ci95))
         if self.exact_gap is not None:
             figures.append(Figure("exact_gap", self.exact_gap))
+        if self.rms_error is not None:
+            figures.append(Figure("rms_error", self.rms_error, ci95=self.rms_ci95))
         return tuple(figures)
 
     def to_json(self, max_points: int = JSON_CURVE_POINTS) -> dict[str, Any]:
@@ -193,6 +203,10 @@ class AlgorithmOutcome:
             "ci95": self.mean_return_last.ci95,
             "exact_value": _finite(self.exact_value),
             "exact_gap": _finite(self.exact_gap),
+            "rms_error": _finite(self.rms_error),
+            "rms_ci95": _finite(self.rms_ci95),
+            "rms_curve": None if self.rms_curve is None else [
+                p.to_json() for p in self.rms_curve.downsample(max_points).points()],
             "run_id": self.run_id,
             "curve": [p.to_json() for p in self.curve.downsample(max_points).points()],
         }
@@ -323,7 +337,8 @@ class _Job:
 class SeedsUpdate:
     """What a job played since its last update: per seed, its episodes done, and the
     online returns of episodes `first[i]` to `done[i] - 1`; `exact[i, j]` its greedy
-    policy's exact value at checkpoint j (NaN until reached; None without a model)."""
+    policy's exact value at checkpoint j, a prediction learner's RMS error of V (NaN
+    until reached; None without a model)."""
 
     done: np.ndarray
     first: np.ndarray
@@ -470,10 +485,23 @@ def _run_job(
             _, tables = play_learner(learner, model.arrays, episodes, checkpoints, stop,
                                      returns[i], counter(i), job.measure)
             if tables and exact is not None:
-                exact[i, : len(tables)] = model.greedy_values(np.stack(tables))
+                found = np.stack(tables)
+                exact[i, : len(tables)] = (_rms_errors(learner, model, found)
+                                           if isinstance(learner, Predictor)
+                                           else model.greedy_values(found))
         else:
             _play_env(job, seed, returns[i], counter(i), stop)
     return state()
+
+
+def _rms_errors(learner: Predictor, model: _Model, tables: np.ndarray) -> np.ndarray:
+    """Per table (`[m, rows, A]`, V in every action), the RMS error of V against the exact
+    values of the policy `learner` follows; NaN where that policy has none."""
+    try:
+        truth = learner.truth(model.mdp, model.rows)
+    except ValueError:
+        return np.full(len(tables), np.nan)
+    return np.array([truth.rms(table[model.rows, 0]) for table in tables])
 
 
 def _play_env(job: _Job, seed: int, returns: np.ndarray, progress: Callable[[int], None],
@@ -532,6 +560,7 @@ class _Tally:
             (*shape, len(self.checkpoints)), np.nan)
         self.tasks_done = 0
         self.tasks_total = 0
+        self.predicts = [issubclass(algorithm(arm.algorithm), Predictor) for arm in arms]
 
     def load(self, arm: int, task: TaskRecord) -> None:
         """Count in a stored task of arm `arm`."""
@@ -595,19 +624,25 @@ class _Tally:
         if common < 1:
             return None
         seen = returns[:, :common]
-        exact_curve = exact_value = exact_gap = exact_ci = None
+        # The checkpoints' figure: the greedy policy's exact value, or a prediction
+        # learner's RMS error of V.
+        curve = final = None
         if exact is not None:
             reached = int(np.searchsorted(checkpoints, common, side="right"))
             values = exact[:, :reached]
             finite = np.isfinite(values).all(axis=0)
             keep = np.flatnonzero(finite)
             if keep.size:
-                exact_curve = aggregate(values[:, keep], episodes=checkpoints[keep])
+                curve = aggregate(values[:, keep], episodes=checkpoints[keep])
             if reached and finite[reached - 1]:
-                estimate = mean_with_ci(values[:, reached - 1])
-                exact_value, exact_ci = estimate.mean, estimate.ci95
-                if self.prepared.optimum is not None:
-                    exact_gap = self.prepared.optimum - exact_value
+                final = mean_with_ci(values[:, reached - 1])
+        predicts = self.predicts[arm]
+        exact_value = exact_gap = None
+        if final is not None and not predicts:
+            exact_value = final.mean
+            if self.prepared.optimum is not None:
+                exact_gap = self.prepared.optimum - exact_value
+        rms = final if predicts else None
         window = max(1, common // SMOOTHING_SHARE)
         return AlgorithmOutcome(
             algorithm=self.arms[arm].algorithm,
@@ -618,11 +653,14 @@ class _Tally:
             exact_value=exact_value,
             exact_gap=exact_gap,
             run_id=self.run_ids[arm],
-            exact_curve=exact_curve,
-            exact_ci95=exact_ci,
+            exact_curve=None if predicts else curve,
+            exact_ci95=None if predicts or final is None else final.ci95,
             seeds=self.setup.seeds,
             smoothed=aggregate(seen, window=window) if window > 1 else None,
             smoothing=window,
+            rms_error=None if rms is None else rms.mean,
+            rms_ci95=None if rms is None else rms.ci95,
+            rms_curve=curve if predicts else None,
         )
 
 
@@ -732,6 +770,8 @@ def _record(
         curves = list(outcome.curve.downsample(STORED_POINTS).as_curves("return"))
         if outcome.exact_curve is not None:
             curves.extend(outcome.exact_curve.as_curves("exact_value"))
+        if outcome.rms_curve is not None:
+            curves.extend(outcome.rms_curve.as_curves("rms_error"))
         history.update(run_id, curves=curves, figures=outcome.figures(), status=status)
 
 
@@ -739,7 +779,8 @@ def _record(
 class Executed:
     """What `execute` gives back: each arm's outcome (None if it finished no episode), and
     `values[arm, seed, episode]`, the measure of every episode (NaN where not played), and
-    `exact[arm, seed, checkpoint]`, the greedy policies' exact values (None without a model)."""
+    `exact[arm, seed, checkpoint]`, the greedy policies' exact values, a prediction
+    learner's RMS errors of V (None without a model)."""
 
     outcomes: tuple[AlgorithmOutcome | None, ...]
     interrupted: bool

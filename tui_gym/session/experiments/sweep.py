@@ -7,7 +7,9 @@ its own, spread over child processes when the work is long), and returns a
 `SweepResult` with one `SweepPoint` per grid point: its values and its
 `AlgorithmOutcome`. A random search draws `samples` points instead, each key
 from its `Range` (uniform, or log-uniform), seeded by `sample_seed`, and the
-same seed draws the same points. `rank` orders the points best first. With a `RunHistory` each
+same seed draws the same points. `rank` orders the points best first: by the
+greedy policy's exact value (or the online return, without a model), or for a
+prediction learner by the lowest RMS error of V. With a `RunHistory` each
 point is recorded as one run of kind `sweep`, grouped as a comparison's are.
 """
 
@@ -22,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from tui_gym.algorithms import algorithm
+from tui_gym.algorithms import Predictor, algorithm
 from tui_gym.core.experiments.history import RunHistory
 from tui_gym.core.experiments.records import RunKind
 from tui_gym.core.wrappers import WrapperChoice
@@ -164,12 +166,14 @@ class SweepPoint:
 
     @property
     def figure(self) -> float | None:
-        """What points rank by: the greedy policy's exact value where the game has one, else
-        the online return over the last 10% of episodes."""
+        """What points rank by: a prediction learner's RMS error of V (the lower the
+        better); else the greedy policy's exact value where the game has one, else the
+        online return over the last 10% of episodes (the higher the better)."""
         o = self.outcome
-        if o is None:
+        if o is None or (o.rms_error is None and issubclass(algorithm(o.algorithm), Predictor)):
             return None
-        value = o.exact_value if o.exact_value is not None else o.mean_return_last.mean
+        value = (o.rms_error if o.rms_error is not None else o.exact_value
+                 if o.exact_value is not None else o.mean_return_last.mean)
         return value if math.isfinite(value) else None
 
     def to_json(self) -> dict[str, Any]:
@@ -177,18 +181,11 @@ class SweepPoint:
         o = self.outcome
         if o is None:
             data.update(seeds_done=0, episodes_done=0, mean_return_last=None, ci95=None,
-                        exact_value=None, exact_gap=None, run_id=None, curve=[])
+                        exact_value=None, exact_gap=None, rms_error=None, rms_ci95=None,
+                        rms_curve=None, run_id=None, curve=[])
             return data
-        data.update(
-            seeds_done=o.seeds_done,
-            episodes_done=o.episodes,
-            mean_return_last=_finite(o.mean_return_last.mean),
-            ci95=o.mean_return_last.ci95,
-            exact_value=_finite(o.exact_value),
-            exact_gap=_finite(o.exact_gap),
-            run_id=o.run_id,
-            curve=[p.to_json() for p in o.curve.downsample(SWEEP_CURVE_POINTS).points()],
-        )
+        found = o.to_json(SWEEP_CURVE_POINTS)
+        data.update((k, v) for k, v in found.items() if k not in ("algorithm", "hyperparameters"))
         return data
 
 
@@ -260,8 +257,9 @@ def run_sweep(
     swept = [{k: hp[k] for k in spec.keys} for hp in hps]
     fixed = {k: v for k, v in hps[0].items() if k not in spec.keys}
     found = [SweepPoint(v, o) for v, o in zip(swept, done.outcomes, strict=True)]
+    lowest = issubclass(algorithm(spec.algorithm), Predictor)  # an RMS error
     order = sorted((i for i, p in enumerate(found) if p.figure is not None),
-                   key=lambda i: -(found[i].figure or 0.0))
+                   key=lambda i: (found[i].figure or 0.0) * (1 if lowest else -1))
     for rank, i in enumerate(order, start=1):
         found[i] = replace(found[i], rank=rank)
     return SweepResult(
