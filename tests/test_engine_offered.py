@@ -126,3 +126,18 @@ def test_the_play_views_greedy_actions_are_among_the_offered_ones() -> None:
         assert found is not None and found[0] == (3, 4)
     finally:
         session.env.close()
+
+
+def test_the_heatmap_shows_the_max_and_greedy_move_among_the_offered_actions() -> None:
+    session = Session("tui_gym/MaxBias-v0", algorithm="q-learning", seed=0)
+    try:
+        agent = session.agent
+        agent.q[A] = [-0.5, -0.2] + [1.0] * 10  # A offers left and right only
+        agent.q[B] = [2.0, 2.0, -0.3, -0.1] + [-0.4] * 8  # B offers b1 to b10
+        agent.visits[[A, B]] = 1
+        panel = session.heatmaps()[0]
+        at = {label: float(value) for label, value in zip(panel.labels[0], panel.values[0],
+                                                          strict=True) if label != "★"}
+        assert at == {"→": pytest.approx(-0.2), "b2": pytest.approx(-0.1)}, at
+    finally:
+        session.env.close()

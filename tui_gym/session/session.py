@@ -514,13 +514,25 @@ class Session:
             if q is None:
                 return None
             marks = self.game.oracle.optimal_marks(kwargs, self.changes)
-            return self.game.layout.heatmaps(q, kwargs, focus, marks)
+            return self.game.layout.heatmaps(self._among_offered(q, kwargs), kwargs, focus,
+                                             marks)
         if snapshot is None:
             raise ValueError("the traces shown are a snapshot's")
         keys = self.base_keys()
         if keys is None:
             return None
         return self.game.layout.heatmaps(snapshot.values(keys, traces=True), kwargs, focus)
+
+    def _among_offered(self, q: np.ndarray, kwargs: Mapping[str, Any]) -> np.ndarray:
+        """`q` of the base states with the actions a state does not offer at -inf, so the
+        heatmaps' max and greedy move are among those it offers (as the agent's are)."""
+        if self.agent.offered is None or not isinstance(self.game, ModelGame):
+            return q
+        offered = self.game.offered_actions(kwargs)
+        if offered is None or offered.shape != q.shape:
+            return q
+        offered = offered | ~offered.any(axis=1, keepdims=True)  # none offered: all are
+        return np.where(offered, q, -np.inf)
 
     def heatmap_cell(
         self, observation: Any, focus: Any = None
