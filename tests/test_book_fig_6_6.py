@@ -110,3 +110,32 @@ def test_the_command_records_full_runs_and_resumes_them(
     assert "\n" not in err and err.startswith("tui-gym: error: run 1 was recorded with other")
     with RunHistory(tmp_path / "runs.db") as history:
         assert len(history.group_ids(1)) == 60
+
+
+def test_ctrl_c_keeps_the_finished_tasks_and_says_how_to_resume(
+        tmp_path: Any, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    import signal
+
+    from tui_gym.cli import main
+    from tui_gym.session.book import runs
+
+    monkeypatch.setattr(fig_6_6, "FULL_ASYMPTOTIC_RUNS", 2)
+    calls: list[int] = []
+    execute = runs.execute
+
+    def interrupted_second(*args: Any, **kwargs: Any) -> Any:
+        calls.append(1)
+        if len(calls) == 2:  # the interim part is kept; Ctrl+C as the asymptotic one starts
+            signal.raise_signal(signal.SIGINT)
+        return execute(*args, **kwargs)
+
+    monkeypatch.setattr(runs, "execute", interrupted_second)
+    db = str(tmp_path / "runs.db")
+    small = ["book", "6.6", "--full", "--runs", "2", "--episodes", "20", "--db", db]
+    assert main(small) == 130
+    err = capsys.readouterr().err
+    assert "kept 30 of 60 tasks as runs 1…; the same command with --resume 1" in err, err
+    monkeypatch.setattr(runs, "execute", execute)
+    main([*small, "--resume", "1"])
+    assert "kept in the run history as runs 1…" in capsys.readouterr().out

@@ -130,10 +130,10 @@ def test_first_ctrl_c_asks_to_stop_and_a_second_one_interrupts() -> None:
     import signal
     import threading
 
-    from tui_gym.cli.experiments_command import _ctrl_c_stops
+    from tui_gym.cli.experiments_command import ctrl_c_stops
 
     stop = threading.Event()
-    with _ctrl_c_stops(stop, Console(stderr=True, quiet=True)):
+    with ctrl_c_stops(stop, Console(stderr=True, quiet=True)):
         signal.raise_signal(signal.SIGINT)
         assert stop.is_set()
         with pytest.raises(KeyboardInterrupt):

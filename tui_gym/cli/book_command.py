@@ -15,6 +15,7 @@ to Dask; it ends with the tasks' count and the wall time. `--json` prints `{"sch
 from __future__ import annotations
 
 import argparse
+import threading
 import time
 from collections.abc import Callable
 
@@ -24,7 +25,12 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from tui_gym.book_text import claims_table, figure_parts
-from tui_gym.cli.experiments_command import add_task_flags, run_history, unrecorded
+from tui_gym.cli.experiments_command import (
+    add_task_flags,
+    ctrl_c_stops,
+    run_history,
+    unrecorded,
+)
 from tui_gym.cli.grids import panel_text
 from tui_gym.cli.output import CliError, print_json
 from tui_gym.cli.types import positive_int, seed_number
@@ -72,11 +78,13 @@ def cmd_book(args: argparse.Namespace, out: Console) -> int:
         if args.resume is not None and history is None:
             raise CliError(f"--resume {args.resume}: the run history is needed to resume")
         tasks = FigureTasks(history, args.resume, args.cluster)
+        stop = threading.Event()  # the first Ctrl+C: the runs end at their next step
         options = FigureOptions(args.runs, args.episodes, args.book_seed, args.full,
-                                tasks=tasks)
+                                stop=stop, tasks=tasks)
         began = time.perf_counter()
         try:
-            code = _run(figure, options, args, out)
+            with ctrl_c_stops(stop, Console(stderr=True)):
+                code = _run(figure, options, args, out)
         except FigureStopped as stopped:  # Ctrl+C: the runs end at their next step
             if tasks.group is not None and not unrecorded(history):
                 Console(stderr=True).print(

@@ -179,7 +179,7 @@ def unrecorded(history: BestEffortHistory | None) -> bool:
 
 
 @contextmanager
-def _ctrl_c_stops(stop: threading.Event, err: Console) -> Iterator[None]:
+def ctrl_c_stops(stop: threading.Event, err: Console) -> Iterator[None]:
     """The first Ctrl+C sets `stop` (the run ends cleanly); a second one interrupts at once."""
     if threading.current_thread() is not threading.main_thread():
         yield
@@ -216,7 +216,7 @@ def _run_with_progress(
 
     stop = threading.Event()
     err = Console(stderr=True)
-    with _ctrl_c_stops(stop, err):
+    with ctrl_c_stops(stop, err):
         if as_json or not out.is_terminal:
             return run(None, stop)
         progress = Progress(
