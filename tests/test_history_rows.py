@@ -212,3 +212,14 @@ def test_adding_curves_to_a_run_whose_curves_do_not_read_names_it(tmp_path: Path
             history.put_curves(2, [Curve("more", [1], [0.5])])
         history.put_curves(3, [Curve("more", [1], [0.5])])  # the others take theirs
         assert history.get_run(3).curve("more") is not None
+
+
+def test_a_run_of_a_book_figures_fifty_thousand_seeds_reads_back(tmp_path: Path) -> None:
+    db = tmp_path / "runs.db"
+    seeds = tuple(range(50_000))  # Figure 6.6 at full size: 50,000 runs of each arm
+    with RunHistory(db) as history:
+        run_id = history.start_run(RunSpec(RunKind.COMPARE, "cliffwalking", "sarsa",
+                                           seeds=seeds))
+    with RunHistory(db) as history:
+        assert history.get_run(run_id).summary.seeds == seeds
+        assert [r.id for r in history.list_runs()] == [run_id]

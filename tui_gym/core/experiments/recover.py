@@ -134,7 +134,7 @@ def _run_columns(conn: sqlite3.Connection) -> str:
     return ", ".join((
         "id", field("kind", rows.text_column("kind", rows.MAX_NAME)),
         field("settings_id", "settings_id"), field("platform_id", "platform_id"),
-        field("seeds", rows.text_column("seeds", rows.MAX_JSON)),
+        field("seeds", rows.text_column("seeds", rows.MAX_SEEDS_JSON)),
         field("status", rows.text_column("status", rows.MAX_NAME)),
         field("started_at", rows.number_column("started_at")),
         field("ended_at", rows.number_column("ended_at")),

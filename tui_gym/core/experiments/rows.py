@@ -34,6 +34,7 @@ from tui_gym.core.text import visible
 
 MAX_NAME = 200  # characters of a game, algorithm, kind, status, figure or version
 MAX_JSON = 256 * 1024  # characters of a settings or figures JSON text
+MAX_SEEDS_JSON = 8 * 1024 * 1024  # characters of a run's seeds (a book figure's: 50,000)
 MAX_PATH = 4096  # characters of a saved agent's path
 MAX_DEPTH = 16  # nesting of a settings JSON value
 MAX_CURVES_BYTES = 1024 * 1024  # a run's curves blob
@@ -60,7 +61,7 @@ _text, _number = text_column, number_column
 
 SUMMARY_COLUMNS = ", ".join((
     "r.id", _text("r.kind", MAX_NAME), _text("s.game", MAX_NAME), _text("s.algorithm", MAX_NAME),
-    _text("r.seeds", MAX_JSON), _text("r.status", MAX_NAME), _number("r.started_at"),
+    _text("r.seeds", MAX_SEEDS_JSON), _text("r.status", MAX_NAME), _number("r.started_at"),
     _number("r.ended_at"), _number("r.group_id"), _text("r.figures", MAX_JSON),
     _text("r.writer", MAX_NAME),
 ))
@@ -127,11 +128,11 @@ def _depth(value: Any) -> int:
     return deepest
 
 
-def _json(text: object, what: str) -> Any:
+def _json(text: object, what: str, limit: int = MAX_JSON) -> Any:
     if not isinstance(text, str):
         raise BadRow(f"its {what} are not JSON text ({_shown(text)})")
-    if len(text) > MAX_JSON:
-        raise BadRow(f"its {what} are longer than {MAX_JSON:,} characters")
+    if len(text) > limit:
+        raise BadRow(f"its {what} are longer than {limit:,} characters")
     try:
         value = json.loads(text, parse_constant=_refuse_constant)
     except RecursionError:
@@ -172,7 +173,7 @@ def figures(text: object) -> tuple[Figure, ...]:
 
 
 def _seeds(text: object) -> tuple[int, ...]:
-    value = _json(text, "seeds")
+    value = _json(text, "seeds", MAX_SEEDS_JSON)
     if not isinstance(value, list) or not all(
         isinstance(s, int) and not isinstance(s, bool) and -(2**63) <= s < 2**64 for s in value
     ):
