@@ -21,7 +21,7 @@ from tui_gym.ui.train_view import TrainView
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
 
-from .hosts import TrainHost
+from .hosts import VIEW_SIZE, TrainHost
 from .screen import screen_text
 from .waiting import DEADLINE, send_key, wait_for, wait_until
 
@@ -316,6 +316,21 @@ async def test_hidden_heatmaps_say_why() -> None:
         assert reason
         assert view.heatmap.plain == reason
         assert reason in view.stats.plain
+
+
+async def test_the_heatmap_takes_the_keyboard_without_scrolling_the_state_away() -> None:
+    """A heatmap taller than the room left under the stats is not scrolled to: the run's
+    state (the stats panel's title) stays on the screen."""
+    app = TrainHost(Session("blackjack", seed=1))
+    async with app.run_test(size=VIEW_SIZE) as pilot:
+        await pilot.pause()
+        view = app.query_one(TrainView)
+        body = view.query_one("#train-body")
+        assert body.max_scroll_y > 0  # the Q-table reaches under the screen's edge
+        app.set_focus(None)
+        view.focus_default()
+        await pilot.pause()
+        assert app.focused is view.heatmap and body.scroll_y == 0
 
 
 async def test_a_run_that_ends_short_of_the_bound_says_why() -> None:

@@ -440,11 +440,12 @@ class TrainView(Vertical):
 
     def focus_default(self) -> None:
         """Give the keyboard to the map while the editor is open, else to the heatmap (its
-        keys move the focus where there is one)."""
+        keys move the focus where there is one). The view stays where it is: scrolled to
+        a heatmap taller than the screen's rest, it would hide the run's state above."""
         if self.editing_map and self._editor is not None:
             self._editor.focus_canvas()
         else:
-            self.heatmap.focus()
+            self.heatmap.focus(scroll_visible=False)
 
     @property
     def step_panel(self) -> StepPanel:
