@@ -178,6 +178,25 @@ def spread(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(compare, "SPREAD_SECONDS", 0.0)
 
 
+def test_progress_aggregates_the_outcomes_only_when_they_are_read(monkeypatch) -> None:
+    """A caller that counts (a progress bar) never pays for aggregating every seed; one
+    that reads `outcomes` in the callback gets them as they stand then."""
+    aggregated = []
+    outcomes_of = compare._Tally.outcomes
+    monkeypatch.setattr(compare._Tally, "outcomes",
+                        lambda self: aggregated.append(1) or outcomes_of(self))
+    monkeypatch.setattr(compare, "PROGRESS_INTERVAL", 0.0)
+    spec = CompareSpec("frozenlake", ["q-learning", "sarsa"], 4, 100)
+    counted: list[CompareProgress] = []
+    run_compare(spec, progress=counted.append, processes=0)
+    assert len(counted) > 4 and len(aggregated) == 1  # the result's own
+    aggregated.clear()
+    read = []
+    run_compare(spec, progress=lambda p: read.append((p.done, p.outcomes)), processes=0)
+    assert len(aggregated) == len(read) + 1
+    assert read[-1][0] == 800 and [o.seeds_done for o in read[-1][1]] == [4, 4]
+
+
 @pytest.mark.usefixtures("quick_progress")
 def test_stop_keeps_and_records_what_finished(tmp_path) -> None:
     spec = CompareSpec("blackjack", ["q-learning"], 1, 2_000_000)

@@ -24,7 +24,9 @@ from tui_gym.core.experiments import (
     mean_return_last,
 )
 from tui_gym.core.experiments.schema import MIGRATIONS
+from tui_gym.session.experiments.compare import CompareProgress, CompareSpec
 from tui_gym.session.session import Session
+from tui_gym.ui.compare_job import CompareJob
 from tui_gym.ui.compare_series import series_of_record
 from tui_gym.ui.compare_view import CompareView, parse_count, read_launch
 from tui_gym.ui.widgets.compare_chart import BRAILLE_BASE, plot_cells, value_range
@@ -341,6 +343,26 @@ async def test_progress_draws_live_curves_and_stopping_keeps_what_finished(tmp_p
     with RunHistory(db) as history:
         assert [(r.algorithm, str(r.status)) for r in history.list_runs()] == [
             ("sarsa", "interrupted"), ("q-learning", "interrupted")]
+
+
+def test_the_job_aggregates_the_live_outcomes_now_and_then_and_at_the_end(
+        tmp_path: Path) -> None:
+    """Each landed task reports; the outcomes (every seed aggregated) are read at most every
+    `OUTCOMES_SECONDS`, and from the last report, on the comparison's thread."""
+    aggregated: list[int] = []
+
+    def run(spec, progress, **_: object) -> None:
+        for done in range(1, 51):
+            progress(CompareProgress(done, 50, done, 50,
+                                     lambda d=done: aggregated.append(d) or (d,)))
+
+    job = CompareJob(CompareSpec("frozenlake", ["q-learning"], 1, 10), tmp_path / "runs.db",
+                     run=run, processes=0)
+    job.start()
+    job.close()
+    assert job.progress_count == 50 and job.progress is not None and job.progress.done == 50
+    assert aggregated[0] == 1 and aggregated[-1] == 50 and len(aggregated) < 10
+    assert job.outcomes == (50,)
 
 
 def test_seeds_times_episodes_is_bounded() -> None:

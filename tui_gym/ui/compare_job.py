@@ -1,8 +1,9 @@
 """`CompareJob`: one comparison running on a worker thread, watched by the Compare view.
 
 The view never waits on it: `run_compare` runs on the job's own thread,
-its progress callbacks only keep the latest `CompareProgress`, and the
-view's timer reads `progress`, `result` and `error` when it draws. `stop()`
+its progress callbacks keep the latest `CompareProgress` and, now and then,
+the outcomes so far (`outcomes`), and the view's timer reads `progress`,
+`outcomes`, `result` and `error` when it draws. `stop()`
 sets the event `run_compare` watches, so what finished is still recorded;
 `close()` stops and waits a bounded time for the thread (the app's exit
 and a switch of game or view use it). A failure becomes one line in
@@ -23,9 +24,16 @@ from typing import TYPE_CHECKING, Any
 from tui_gym.core.experiments import RunHistory, RunHistoryError
 
 if TYPE_CHECKING:
-    from tui_gym.session.experiments.compare import CompareProgress, CompareResult, CompareSpec
+    from tui_gym.session.experiments.compare import (
+        AlgorithmOutcome,
+        CompareProgress,
+        CompareResult,
+        CompareSpec,
+    )
 
 CLOSE_SECONDS = 5.0  # how long `close()` waits for the thread to end
+OUTCOMES_SECONDS = 0.4  # the live outcomes are aggregated at most this often
+OUTCOMES_SHARE = 10  # and after this many times as long as aggregating them last took
 
 
 class CompareJob:
@@ -53,6 +61,8 @@ class CompareJob:
         self.resume = resume
         self.stop_event = threading.Event()
         self.progress: CompareProgress | None = None  # the latest report
+        self.outcomes: tuple[AlgorithmOutcome, ...] = ()  # the latest ones aggregated
+        self._aggregated = (float("-inf"), 0.0)  # when they were, and what it took
         self.progress_count = 0  # how many reports came
         self.result: CompareResult | None = None  # once it ends
         self.error: str | None = None
@@ -92,6 +102,14 @@ class CompareJob:
         return not self._thread.is_alive()
 
     def _report(self, progress: CompareProgress) -> None:
+        """Keep the latest report; aggregate its outcomes here, on the comparison's thread,
+        when due (a run of many seeds would spend its time aggregating each task's)."""
+        start = time.monotonic()
+        at, cost = self._aggregated
+        if progress.done >= progress.total or start - at >= max(OUTCOMES_SECONDS,
+                                                                OUTCOMES_SHARE * cost):
+            self.outcomes = progress.outcomes
+            self._aggregated = (start, time.monotonic() - start)
         self.progress = progress  # one assignment: the view reads whichever is latest
         self.progress_count += 1
 

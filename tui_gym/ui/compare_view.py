@@ -716,7 +716,7 @@ class CompareView(Vertical):
         elapsed = max(1e-9, time.monotonic() - job.started_at)
         eta = format_duration(elapsed / done * (total - done)) if 0 < done < total else ""
         self._progress.show(done, total, eta)
-        self._live_outcomes = progress.outcomes
+        self._live_outcomes = job.outcomes
         self._live = self._live_entries()
         self._redraw()
 

@@ -38,6 +38,7 @@ runs only the tasks a recorded run misses, after checking its settings.
 from __future__ import annotations
 
 import contextlib
+import functools
 import json
 import math
 import os
@@ -218,14 +219,21 @@ def _finite(value: float | None) -> float | None:
 
 @dataclass(frozen=True)
 class CompareProgress:
-    """Episodes finished of the total (over every algorithm and seed), the outcomes so far,
-    and the tasks finished of the run's tasks (those a resumed run found done count in)."""
+    """Episodes finished of the total (over every algorithm and seed), the tasks finished
+    of the run's tasks (those a resumed run found done count in), and `outcomes`: each
+    arm's outcome so far, aggregated over every seed when first read (read it in the
+    callback, on the run's thread; a caller that only counts never pays for it)."""
 
     done: int
     total: int
-    outcomes: tuple[AlgorithmOutcome, ...]
     tasks_done: int = 0
     tasks_total: int = 0
+    outcomes_of: Callable[[], tuple[AlgorithmOutcome, ...]] = field(
+        default=tuple, repr=False, compare=False)
+
+    @functools.cached_property
+    def outcomes(self) -> tuple[AlgorithmOutcome, ...]:
+        return self.outcomes_of()
 
 
 @dataclass(frozen=True)
@@ -846,9 +854,9 @@ def _execute(
         now = time.monotonic()
         if force or now - last[0] >= PROGRESS_INTERVAL:
             last[0] = now
-            found = tuple(o for o in tally.outcomes() if o is not None)
-            progress(CompareProgress(tally.count(), tally.total(), found, tally.tasks_done,
-                                     tally.tasks_total))
+            progress(CompareProgress(
+                tally.count(), tally.total(), tally.tasks_done, tally.tasks_total,
+                lambda: tuple(o for o in tally.outcomes() if o is not None)))
 
     def landed(job: _Job) -> None:
         """A task finished: kept at once, and told."""
