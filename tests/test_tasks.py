@@ -238,6 +238,15 @@ def test_tasks_in_child_processes_are_each_kept_once(tmp_path: Path,
                                                      monkeypatch: pytest.MonkeyPatch) -> None:
     # Spread however short the work, in tasks of one or two seeds.
     monkeypatch.setattr(compare, "SPREAD_SECONDS", 0.0)
+    ran = tmp_path / "ran"  # a file per task played: the process and the task
+    ran.mkdir()
+    run_job = compare._run_job
+
+    def noted(job: Any, stop: Any, report: Any) -> Any:
+        (ran / f"{os.getpid()}.{job.index}").touch()
+        return run_job(job, stop, report)
+
+    monkeypatch.setattr(compare, "_run_job", noted)
     spec = CompareSpec("frozenlake", ["q-learning", "sarsa"], seeds=4, episodes=150)
     setup = compare.Setup("frozenlake", 4, 150, {}, (), 0)
     arms = [compare.Arm(name, {}, name) for name in spec.algorithms]
@@ -246,8 +255,52 @@ def test_tasks_in_child_processes_are_each_kept_once(tmp_path: Path,
                                task_seconds=1e-9)
         tasks = [history.read_tasks(run_id) for run_id in history.group_ids(done.group or 0)]
     assert done.tasks == {"done": 8, "total": 8}
+    # Played in two long-lived processes, task after task (not a process forked per task).
+    played = [name.split(".") for name in os.listdir(ran)]
+    assert len(played) == 8 and len({pid for pid, _ in played} - {str(os.getpid())}) <= 2
     assert [sorted(r for t in ts for r in t.rows) for ts in tasks] == [[0, 1, 2, 3]] * 2
     assert figures(done) == figures(run_compare(spec, processes=0))
+
+
+def test_a_task_process_hands_over_after_its_share_of_seeds(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(compare, "SPREAD_SECONDS", 0.0)
+    monkeypatch.setattr(compare, "WORKER_SEEDS", 1)  # each process: one task, then another
+    ran = tmp_path / "ran"
+    ran.mkdir()
+    run_job = compare._run_job
+
+    def noted(job: Any, stop: Any, report: Any) -> Any:
+        (ran / f"{os.getpid()}.{job.index}").touch()
+        return run_job(job, stop, report)
+
+    monkeypatch.setattr(compare, "_run_job", noted)
+    setup = compare.Setup("frozenlake", 4, 150, {}, (), 0)
+    arms = [compare.Arm(name, {}, name) for name in SPEC.algorithms]
+    done = compare.execute(setup, arms, RunKind.COMPARE, processes=2, task_seconds=1e-9)
+    played = [name.split(".") for name in os.listdir(ran)]
+    assert done.tasks == {"done": 8, "total": 8} and not done.interrupted
+    assert len(played) == 8 and len({pid for pid, _ in played}) == 8
+    spec = CompareSpec("frozenlake", list(SPEC.algorithms), seeds=4, episodes=150)
+    assert figures(done) == figures(run_compare(spec, processes=0))
+
+
+def test_a_task_process_killed_mid_run_ends_the_run_in_one_line(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(compare, "SPREAD_SECONDS", 0.0)
+    parent = os.getpid()
+    run_job = compare._run_job
+
+    def dies(job: Any, stop: Any, report: Any) -> Any:
+        if os.getpid() != parent and job.index == 2:
+            os.kill(os.getpid(), signal.SIGKILL)
+        return run_job(job, stop, report)
+
+    monkeypatch.setattr(compare, "_run_job", dies)
+    setup = compare.Setup("frozenlake", 6, 150, {}, (), 0)
+    arms = [compare.Arm("q-learning", {}, "q-learning")]
+    with pytest.raises(compare.CompareError, match="^a training process ended with code -9$"):
+        compare.execute(setup, arms, RunKind.COMPARE, processes=2, task_seconds=1e-9)
 
 
 def test_a_run_stopped_before_some_tasks_began_shows_the_seeds_that_finished() -> None:

@@ -87,6 +87,9 @@ __all__ = [
 PROGRESS_INTERVAL = 0.4  # seconds between progress calls
 JSON_CURVE_POINTS = 500  # curve points in `to_json`
 SPREAD_SECONDS = 1.0  # work that takes longer than this here is spread over child processes
+# A task process ends after this many seeds and another takes over: Numba keeps every
+# learner's random generator it was called with (numba/numba#9103), a few kB a seed.
+WORKER_SEEDS = 2000
 PROBE_SECONDS = 0.1  # how long throwaway learners play to tell how long the work is
 SMOOTHING_SHARE = 50  # charts smooth each seed's returns over 1/50 of the episodes
 TASK_SECONDS = 1.0  # a task (a block of one arm's seeds) runs about this long at least
@@ -535,17 +538,29 @@ def run_task(job: _Job) -> list[SeedsUpdate]:
     return updates
 
 
-def _child(parent: int, job: _Job, messages: Any, stop_flag: Any) -> None:
-    """A child process's work: one job, its states sent on `messages`."""
+def _worker(parent: int, jobs: Mapping[int, _Job], numbers: Any, messages: Any,
+            stop_flag: Any) -> None:
+    """A child process's work: the jobs whose numbers it takes from `numbers`, one after
+    another until a None or a stop, each one's start and states sent on `messages`; it
+    ends after `WORKER_SEEDS` seeds (the parent starts another)."""
     processes_module.watch_parent(parent)
-    try:
-        final = _run_job(
-            job, stop_flag.is_set, lambda s: messages.put(("state", job.index, s))
-        )
-    except Exception as exc:  # noqa: BLE001 - sent to the parent, which says it in one line
-        messages.put(("error", job.index, f"{type(exc).__name__}: {exc}"))
-    else:
-        messages.put(("end", job.index, final))
+    played = 0
+    while played < WORKER_SEEDS and not stop_flag.is_set():
+        index = numbers.get()
+        if index is None:
+            return
+        messages.put(("begin", index, None))
+
+        def report(update: SeedsUpdate, index: int = index) -> None:
+            messages.put(("state", index, update))
+
+        try:
+            final = _run_job(jobs[index], stop_flag.is_set, report)
+        except Exception as exc:  # noqa: BLE001 - sent to the parent, which says it in one line
+            messages.put(("error", index, f"{type(exc).__name__}: {exc}"))
+            return
+        messages.put(("end", index, final))
+        played += len(jobs[index].seeds)
 
 
 # --- putting it together ----------------------------------------------------------------
@@ -1047,55 +1062,69 @@ def _run_children(
     if 1 < len(jobs) <= cores and threading.current_thread() is threading.main_thread():
         own = jobs[-1]
     ctx = processes_module.context()
-    parent = os.getpid()
     messages = ctx.Queue()
+    numbers = ctx.Queue()  # the jobs' numbers, then a None for each worker
     stop_flag = ctx.Event()
-    waiting = [job for job in jobs if job is not own]
-    running: dict[int, Any] = {}
-    gone: list[Any] = []  # processes that sent their last word, joined at the end
+    given = {job.index: job for job in jobs if job is not own}
+    # Long-lived workers, each taking job after job: a process forked per job would copy
+    # the tally's pages, which grow with the seeds (a 50,000-run figure's are gigabytes).
+    parent = os.getpid()
+    width = min(cores, len(given))  # workers at a time
+
+    def hire() -> Any:
+        process = ctx.Process(target=_worker, args=(parent, given, numbers, messages,
+                                                    stop_flag), daemon=True)
+        process.start()
+        return process
+
+    workers: list[Any] = []
+    left = set(given)  # the workers' jobs not ended yet
+    begun: set[int] = set()
+    dead_since: dict[int, float] = {}  # workers found ended other than by themselves
     ended: set[int] = set()
     errors: list[str] = []
-    dead_since: dict[int, float] = {}
 
-    def start() -> None:
-        if stopped() and not stop_flag.is_set():
-            stop_flag.set()
-        while waiting and len(running) < cores and not stop_flag.is_set():
-            job = waiting.pop(0)
-            process = ctx.Process(target=_child, args=(parent, job, messages, stop_flag),
-                                  daemon=True)
-            process.start()
-            running[job.index] = process
-        if stop_flag.is_set():
-            waiting.clear()
+    def fail(message: str) -> None:
+        errors.append(message)
+        stop_flag.set()
 
     def take(timeout: float) -> bool:
         """Take one message (waiting up to `timeout`); False when there was none."""
+        if stopped() and not stop_flag.is_set():
+            stop_flag.set()
         try:
             kind, index, payload = messages.get(timeout=timeout) if timeout else (
                 messages.get_nowait()
             )
         except queue.Empty:
-            now = time.monotonic()
-            for index, process in list(running.items()):
-                if process.is_alive():
-                    continue
-                # Gone without its last word: allow a moment for it to arrive.
-                if now - dead_since.setdefault(index, now) > 2.0:
-                    running.pop(index)
-                    errors.append(f"a training process ended with code {process.exitcode}")
-                    stop_flag.set()
             return False
-        message = _take(kind, index, payload, tally, ended, running, gone)
-        if message:
-            errors.append(message)
-            stop_flag.set()
-        elif kind == "end" and tally.finished(tally.jobs[index]):
-            landed(tally.jobs[index])
+        if kind == "begin":
+            begun.add(index)
+        elif kind == "error":
+            fail(str(payload))
+        else:
+            tally.take(index, payload)
+            if kind == "end":
+                left.discard(index)
+                ended.add(index)
+                if tally.finished(tally.jobs[index]):
+                    landed(tally.jobs[index])
         return True
 
+    def lost(grace: float) -> None:
+        """A worker that ended other than by itself (killed, or crashed): an error, once
+        its last words had `grace` seconds to arrive."""
+        now = time.monotonic()
+        for w in workers:
+            if w.exitcode not in (None, 0) and now - dead_since.setdefault(w.pid, now) >= grace:
+                fail(f"a training process ended with code {w.exitcode}")
+                return
+
+    finished = False
     try:
-        start()
+        workers.extend(hire() for _ in range(width))
+        for index in [*given, *[None] * width]:  # once forked: no feeder thread yet
+            numbers.put(index)
         if own is not None:
 
             def own_stop() -> bool:
@@ -1113,39 +1142,33 @@ def _run_children(
             ended.add(own.index)
             if tally.finished(own):
                 landed(own)
-        while waiting or running:
-            start()
-            take(0.05)
+        while left and not errors:
+            took = take(0.05)
             tell()
+            if took:
+                continue
+            if not stop_flag.is_set():
+                lost(2.0)
+                alive = sum(w.is_alive() for w in workers)
+                if len(begun) < len(given) and not errors:  # one that played its share
+                    workers.extend(hire() for _ in range(width - alive))
+            if not any(w.is_alive() for w in workers):  # stopped, or gone too soon
+                while take(0):  # their last words
+                    pass
+                if left and not errors and not stop_flag.is_set():
+                    lost(0.0)
+                    if not errors:
+                        fail("the training processes ended before their tasks did")
+                break
+        finished = not errors
     finally:
         stop_flag.set()
-        for process in gone:
-            process.join(timeout=5)
-        for process in running.values():
-            processes_module.end(process)
+        for worker in workers:
+            if finished:
+                worker.join(timeout=5)
+            processes_module.end(worker)
         messages.close()
+        numbers.close()
     if errors:
         raise CompareError(errors[0])
-    return all(
-        job.index in ended and tally.finished(job)
-        for job in jobs
-    )
-
-
-def _take(
-    kind: str, index: int, payload: Any, tally: _Tally, ended: set[int],
-    running: dict[int, Any], gone: list[Any],
-) -> str | None:
-    """Take one message from a child; an error's text, if it is one."""
-    if kind == "error":
-        process = running.pop(index, None)
-        if process is not None:
-            gone.append(process)
-        return str(payload)
-    tally.take(index, payload)
-    if kind == "end":
-        ended.add(index)
-        process = running.pop(index, None)
-        if process is not None:
-            gone.append(process)
-    return None
+    return all(job.index in ended and tally.finished(job) for job in jobs)
