@@ -234,11 +234,9 @@ def test_four_concurrent_writers_lose_nothing(tmp_path: Path) -> None:
     assert os.path.getsize(db) > 0
 
 
-def test_tasks_in_child_processes_are_each_kept_once(tmp_path: Path,
-                                                     monkeypatch: pytest.MonkeyPatch) -> None:
-    # Spread however short the work, in tasks of one or two seeds.
-    monkeypatch.setattr(compare, "SPREAD_SECONDS", 0.0)
-    ran = tmp_path / "ran"  # a file per task played: the process and the task
+def note_tasks(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """A folder where each task played leaves a file named by its process and its number."""
+    ran = tmp_path / "ran"
     ran.mkdir()
     run_job = compare._run_job
 
@@ -247,6 +245,14 @@ def test_tasks_in_child_processes_are_each_kept_once(tmp_path: Path,
         return run_job(job, stop, report)
 
     monkeypatch.setattr(compare, "_run_job", noted)
+    return ran
+
+
+def test_tasks_in_child_processes_are_each_kept_once(tmp_path: Path,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    # Spread however short the work, in tasks of one or two seeds.
+    monkeypatch.setattr(compare, "SPREAD_SECONDS", 0.0)
+    ran = note_tasks(tmp_path, monkeypatch)
     spec = CompareSpec("frozenlake", ["q-learning", "sarsa"], seeds=4, episodes=150)
     setup = compare.Setup("frozenlake", 4, 150, {}, (), 0)
     arms = [compare.Arm(name, {}, name) for name in spec.algorithms]
@@ -266,15 +272,7 @@ def test_a_task_process_hands_over_after_its_share_of_seeds(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(compare, "SPREAD_SECONDS", 0.0)
     monkeypatch.setattr(compare, "WORKER_SEEDS", 1)  # each process: one task, then another
-    ran = tmp_path / "ran"
-    ran.mkdir()
-    run_job = compare._run_job
-
-    def noted(job: Any, stop: Any, report: Any) -> Any:
-        (ran / f"{os.getpid()}.{job.index}").touch()
-        return run_job(job, stop, report)
-
-    monkeypatch.setattr(compare, "_run_job", noted)
+    ran = note_tasks(tmp_path, monkeypatch)
     setup = compare.Setup("frozenlake", 4, 150, {}, (), 0)
     arms = [compare.Arm(name, {}, name) for name in SPEC.algorithms]
     done = compare.execute(setup, arms, RunKind.COMPARE, processes=2, task_seconds=1e-9)
