@@ -18,9 +18,9 @@ from tui_gym.session.experiments.compare import ResumeError
 
 def test_the_books_claims_at_a_few_runs(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(fig_6_6, "ASYMPTOTIC_RUNS", 6)
-    result = figure_named("6.6").run(FigureOptions(runs=200, episodes=1500, seed=100),
+    result = figure_named("6.6").run(FigureOptions(runs=100, episodes=1500, seed=100),
                                      lambda *_: None)
-    assert result.runs == 200 and len(result.checks) == 6
+    assert result.runs == 100 and len(result.checks) == 6
     assert result.ok, [c for c in result.checks if not c.ok]
     assert [s.label for s in result.series] == ["Sarsa", "Expected Sarsa", "Q-learning"] * 2
     assert all(len(s.x) == 10 for s in result.series[:3])  # every interim point is on the chart
