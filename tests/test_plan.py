@@ -16,6 +16,7 @@ from tui_gym.games import GAMES, game_named
 from tui_gym.games.blackjack.solver import BlackjackRules, optimal_value
 from tui_gym.games.planning import PlanModel
 from tui_gym.session.plan import plan
+from tui_gym.session.plan import runner as plan_runner
 from tui_gym.session.plan.runner import PlanRunner
 from tui_gym.session.session import Session
 
@@ -132,7 +133,8 @@ def test_the_runner_steps_runs_improves_and_follows_an_edited_world() -> None:
         runner.close()
 
 
-def test_a_run_that_never_settles_stops_and_says_why() -> None:
+def test_a_run_that_never_settles_stops_and_says_why(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(plan_runner, "MAX_SWEEPS", 2_000)  # the limit's size is not the point
     model = game_named("ab-grid").plan_model({})
     assert isinstance(model, PlanModel)
     runner = PlanRunner(model.model, method="evaluate", gamma=1.0, speed=6)
@@ -142,5 +144,6 @@ def test_a_run_that_never_settles_stops_and_says_why() -> None:
         runner.run()
         wait_for(lambda: not runner.latest.running and runner.latest.sweeps > 0, "the stop")
         assert "do not settle" in runner.latest.note or runner.latest.done
+        assert runner.latest.sweeps == 2_000
     finally:
         runner.close()
