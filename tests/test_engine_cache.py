@@ -18,21 +18,28 @@ def test_a_child_process_uses_the_folder_its_parent_chose(tmp_path: Path) -> Non
 def test_a_process_compiles_only_while_no_other_does(tmp_path: Path) -> None:
     """Processes compiling into one folder take turns (Numba could file two algorithms'
     loops under one name when two processes save at once): a process that must compile
-    waits on the folder's lock, then runs."""
+    (or load what another compiled) waits on the folder's lock, then runs. The folder is
+    a copy of this process's, so the child loads rather than compiles once it runs."""
     import fcntl
     import os
+    import shutil
     import subprocess
     import sys
     import time
+
+    from tui_gym.algorithms import Sarsa
+    from tui_gym.core.engine import loop
 
     script = ("from tui_gym.algorithms import Sarsa\n"
               "from tui_gym.core.engine import loop\n"
               "x = Sarsa(2, n_states=2)\n"
               "loop.warm([(x.name, x.arrays(), x.compiled_params())])\n"
               "print('compiled')\n")
+    x = Sarsa(2, n_states=2)
+    loop.warm([(x.name, x.arrays(), x.compiled_params())])  # here, in the shared folder
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
     folder = jit.cache_folder(env)
-    folder.mkdir(parents=True)
+    shutil.copytree(jit.folder(), folder, ignore=shutil.ignore_patterns(".compile.lock", "warm-*"))
     with open(folder / ".compile.lock", "a") as held:
         fcntl.lockf(held, fcntl.LOCK_EX)
         child = subprocess.Popen([sys.executable, "-c", script], env=env, text=True,
