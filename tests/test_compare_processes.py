@@ -9,7 +9,6 @@ its runs as interrupted.
 
 from __future__ import annotations
 
-import json
 import os
 import signal
 import subprocess
@@ -17,6 +16,8 @@ import sys
 from pathlib import Path
 
 import pytest
+
+from tui_gym.core.experiments.history import RunHistory
 
 from .test_runner_and_play import wait_for
 
@@ -66,11 +67,11 @@ def _start(db: Path) -> subprocess.Popen[str]:
 
 
 def _statuses(db: Path) -> set[str]:
-    done = subprocess.run([sys.executable, "-m", "tui_gym", "runs", "--db", str(db), "--json"],
-                          capture_output=True, text=True, timeout=DEADLINE, check=False)
-    data = json.loads(done.stdout)
-    runs = data["runs"] if isinstance(data, dict) else data
-    return {run["status"] for run in runs}
+    """The recorded runs' statuses, as `tui-gym runs` reads them."""
+    with RunHistory(db) as history:
+        found = history.read_runs()
+    assert not found.damaged, found.damaged
+    return {str(run.status) for run in found.runs}
 
 
 @pytest.mark.parametrize("kind", ["SIGKILL", "SIGTERM", "SIGHUP", "SIGINT"])
