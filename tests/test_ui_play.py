@@ -235,6 +235,37 @@ async def test_gridworld_walk_by_arrows_wasd_and_clicks_and_reset() -> None:
         assert not game.done and game.last.steps == 0
 
 
+async def test_a_move_in_mid_episode_leaves_the_agents_exact_figures_as_they_were() -> None:
+    """The agent's table does not change while a person plays: its exact figures (a
+    policy evaluation each, a tenth of a second on a maze) and the reason there are none
+    are read when the view is shown and when an episode ends, never on every key."""
+    app = make_host("gridworld")
+    async with app.run_test(size=VIEW_SIZE) as pilot:
+        await pilot.pause()
+        view = app.play_view
+        game = view.game
+        assert game is not None
+        oracle = app.session.game.oracle
+        asked: list[object] = []
+        reference = oracle.reference
+
+        def counted(*args: object, **kwargs: object) -> object:
+            asked.append(args)
+            return reference(*args, **kwargs)
+
+        oracle.reference = counted  # type: ignore[method-assign]
+        try:
+            path = path_keys(view, ARROWS)
+            assert len(path) > 1
+            await pilot.press(*path[:-1])
+            assert game.last.steps == len(path) - 1 and not game.done
+            assert asked == [], "a move re-evaluated the agent"
+            await pilot.press(path[-1])
+            assert game.done and asked, "the episode's end reads the agent's figures"
+        finally:
+            del oracle.reference
+
+
 def _agent_row(picture: str) -> int:
     return next(i for i, line in enumerate(picture.splitlines()) if "●" in line)
 

@@ -169,6 +169,7 @@ class PlayView(Vertical):
         self.scorecard = Scorecard()  # the person's record (tally, agreement, figures)
         # The agent's exact scoreboard figures, as of the last refresh (not per frame).
         self.agent_figures: dict[str, float] | None = None
+        self._exact_reason = ""  # why there are no exact figures, read with them
         # Watching the agent play on the board.
         self.watch_interval = WATCH_INTERVAL
         self.watch_pause_ticks = WATCH_PAUSE_TICKS
@@ -514,7 +515,9 @@ class PlayView(Vertical):
     # --- the scoreboard --------------------------------------------------------
     def refresh_agent_figures(self) -> None:
         """Recompute the agent's exact figures (a few ms) and redraw the scoreboard."""
-        self.agent_figures = self.tui.session.agent_figures(self._training_snapshot())
+        session = self.tui.session
+        self.agent_figures = session.agent_figures(self._training_snapshot())
+        self._exact_reason = session.exact_reason()
         self._show_scoreboard()
 
     def _training_snapshot(self) -> TrainingSnapshot | None:
@@ -529,7 +532,7 @@ class PlayView(Vertical):
         watched = self.agent_card if self.agent_card.tally.episodes else None
         scope = session.game.oracle.scope(session.env_kwargs, session.changes)
         return session.game.narrator.scoreboard(
-            self.scorecard, self.agent_figures, watched, session.exact_reason(), scope
+            self.scorecard, self.agent_figures, watched, self._exact_reason, scope
         )
 
     def _show_scoreboard(self) -> None:
