@@ -196,6 +196,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self._loaded: tuple[Session, Path] | None = None  # read, waiting to be put in place
         self._too_small: TooSmallScreen | None = None
         self._last_version = -1
+        self._train_appearing = False  # shown, its first frame not yet drawn
         self._was_running = False
         self._switcher: ContentSwitcher | None = None
         self.recording = RecordingSwitch(record, on_failure=self._recording_failed)
@@ -362,7 +363,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             if not running and runner.finished:
                 self.notify("Training reached its episode budget.", title="Done")
         view = self._train_ready()
-        if view is None or self.current_view != "train":
+        if view is None or self.current_view != "train" or self._train_appearing:
             return
         snapshot = runner.latest
         if snapshot.version != self._last_version or running:
@@ -425,18 +426,24 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self.refresh_bindings()  # the view's keys, even when the focus stays put
 
     def _train_shown(self) -> None:
-        """The Train view takes the keyboard and draws the latest snapshot (once it is
-        mounted, when it is shown before)."""
+        """The Train view takes the keyboard (once it is mounted, when it is shown before).
+        The frame that shows it shows what it drew last; the latest snapshot is drawn
+        right after that frame, so a view switch waits for one drawing, not two."""
         if self.current_view != "train":
             return
         view = self._train_ready()
         if view is None:
             self.call_after_refresh(self._train_shown)
             return
-        self._last_version = -1
         view.focus_default()
-        self._tick()
         self.refresh_bindings()
+        self._train_appearing = True
+        self.call_after_refresh(self._train_appeared)
+
+    def _train_appeared(self) -> None:
+        self._train_appearing = False
+        self._last_version = -1
+        self._tick()
 
     def action_switch_game(self, name: str) -> None:
         game = game_named(name)
