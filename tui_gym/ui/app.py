@@ -1125,19 +1125,30 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self.exit(return_code=128 + signal.SIGHUP)
 
 YOUNG_GC_SECONDS = 0.5  # collect the young generations this often
+KEY_QUIET_SECONDS = 0.15  # but not this soon after a key was handed on
 FULL_GC_SECONDS = 20.0  # and everything this often
 GC_SECONDS_ENV = "TUI_GYM_GC_SECONDS"  # "YOUNG,FULL" seconds, to override both
 
 
 class GcPacer:
-    """The collections `tune_gc_for_ui` runs on the app's timers, counted."""
+    """The collections `tune_gc_for_ui` runs on the app's timers, counted. A young
+    collection due while a key is being answered (`key_since()`: when the last key was
+    handed on, `time.monotonic()`) waits for the next turn, once."""
 
-    def __init__(self) -> None:
+    def __init__(self, key_since: Callable[[], float] = lambda: -KEY_QUIET_SECONDS) -> None:
         self.young_collections = 0
         self.full_collections = 0
+        self.young_postponed = 0
+        self._key_since = key_since
+        self._postponed = False
 
     # Methods, not `gc.collect` itself: Textual's timers take Python callables only.
     def collect_young(self) -> None:
+        if not self._postponed and time.monotonic() - self._key_since() < KEY_QUIET_SECONDS:
+            self._postponed = True  # a collection takes milliseconds the key's frame needs
+            self.young_postponed += 1
+            return
+        self._postponed = False
         gc.collect(1)
         self.young_collections += 1
 
@@ -1156,11 +1167,11 @@ def tune_gc_for_ui(
     objects made the collection take up to 25 ms. Here what is alive once the
     app is up moves to the permanent generation (`gc.freeze`: never collected
     again, hence one app a process), automatic collection is off, and timers
-    collect the young generations every `young_seconds` (about a
-    millisecond) and everything every `full_seconds`; a timer callback
-    never runs in the middle of a frame.
+    collect the young generations every `young_seconds` (a few milliseconds;
+    one due just after a key waits a turn) and everything every
+    `full_seconds`; a timer callback never runs in the middle of a frame.
     """
-    pacer = GcPacer()
+    pacer = GcPacer(lambda: getattr(app, "_key_since", -KEY_QUIET_SECONDS))
     gc.collect()
     gc.freeze()
     gc.disable()
