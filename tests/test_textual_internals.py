@@ -65,7 +65,7 @@ def test_each_part_falls_back_when_textual_changes_shape(
     import textual._compositor
 
     monkeypatch.setattr(internals, "_COMPOSITOR", False)
-    monkeypatch.delattr(textual._compositor.Compositor, "_get_renders")
+    monkeypatch.delattr(textual._compositor.Compositor, "_render_chops")
     assert internals._kept_layout_compositor() is None
     # A toggle button without its inner mark: the run list's line as Textual drew it.
     import textual.widgets._toggle_button as toggle

@@ -248,3 +248,32 @@ async def test_sizes_too_small_and_compact_and_random_keys_never_break_the_app()
         await pilot.press("q")
         await pilot.pause()
     assert app.return_code == 0
+
+
+async def test_the_train_view_shown_again_appears_then_draws_what_was_trained_meanwhile():
+    """Shown again, the Train view's first frame shows what it drew last; the snapshot
+    trained while it was hidden is drawn right after that frame, not into it."""
+    from tui_gym.ui.textual_internals import watch_frames
+
+    app = TuiGymApp(Session("frozenlake", seed=0), runner="thread")
+    events: list[tuple[str, int]] = []  # ("frame", 0) on the Train view, ("drawn", version)
+    watch_frames(app, lambda update: events.append(("frame", 0))
+                 if app.current_view == "train" else None)
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.press("t")
+        view = app.train_view
+        show = view.show_snapshot
+        view.show_snapshot = lambda snapshot, runner: (  # type: ignore[method-assign]
+            events.append(("drawn", snapshot.version)), show(snapshot, runner))
+        await pilot.press("p")
+        runner = app.runner
+        version = runner.latest.version
+        runner.run_one_episode()
+        await wait_for(pilot, lambda: runner.latest.version != version, "an episode trained")
+        latest = runner.latest.version
+        events.clear()
+        await pilot.press("t")
+        await wait_for(pilot, lambda: ("drawn", latest) in events, "the latest snapshot drawn")
+        assert events.index(("frame", 0)) < events.index(("drawn", latest))
+        await wait_for(pilot, lambda: events[-1] == ("frame", 0), "a frame with the snapshot")
+        assert app.focused is view.heatmap

@@ -63,3 +63,31 @@ def test_the_app_draws_a_change_within_a_few_milliseconds() -> None:
 def test_a_frame_rate_set_by_the_user_is_kept() -> None:
     env = {**os.environ, "TEXTUAL_FPS": "30"}
     assert _update_period(env) == 1 / 30
+
+
+def test_a_young_collection_due_just_after_a_key_waits_one_turn() -> None:
+    import gc
+    import time
+
+    from tui_gym.ui.app import GcPacer
+
+    collected: list[int] = []
+
+    def heard(phase: str, info: dict) -> None:
+        if phase == "stop":
+            collected.append(info["generation"])
+
+    gc.disable()  # only the pacer's collections are heard
+    gc.callbacks.append(heard)
+    try:
+        answering = GcPacer(key_since=time.monotonic)  # a key handed on just now
+        answering.collect_young()
+        assert collected == [] and answering.young_postponed == 1
+        answering.collect_young()  # the next turn collects, key or not
+        assert collected == [1] and answering.young_collections == 1
+        idle = GcPacer()  # no key
+        idle.collect_young()
+        assert collected == [1, 1] and idle.young_postponed == 0
+    finally:
+        gc.callbacks.remove(heard)
+        gc.enable()

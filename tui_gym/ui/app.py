@@ -196,6 +196,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self._loaded: tuple[Session, Path] | None = None  # read, waiting to be put in place
         self._too_small: TooSmallScreen | None = None
         self._last_version = -1
+        self._train_appearing = False  # shown, its first frame not yet drawn
         self._was_running = False
         self._switcher: ContentSwitcher | None = None
         self.recording = RecordingSwitch(record, on_failure=self._recording_failed)
@@ -362,7 +363,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             if not running and runner.finished:
                 self.notify("Training reached its episode budget.", title="Done")
         view = self._train_ready()
-        if view is None or self.current_view != "train":
+        if view is None or self.current_view != "train" or self._train_appearing:
             return
         snapshot = runner.latest
         if snapshot.version != self._last_version or running:
@@ -425,18 +426,24 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self.refresh_bindings()  # the view's keys, even when the focus stays put
 
     def _train_shown(self) -> None:
-        """The Train view takes the keyboard and draws the latest snapshot (once it is
-        mounted, when it is shown before)."""
+        """The Train view takes the keyboard (once it is mounted, when it is shown before).
+        The frame that shows it shows what it drew last; the latest snapshot is drawn
+        right after that frame, so a view switch waits for one drawing, not two."""
         if self.current_view != "train":
             return
         view = self._train_ready()
         if view is None:
             self.call_after_refresh(self._train_shown)
             return
-        self._last_version = -1
         view.focus_default()
-        self._tick()
         self.refresh_bindings()
+        self._train_appearing = True
+        self.call_after_refresh(self._train_appeared)
+
+    def _train_appeared(self) -> None:
+        self._train_appearing = False
+        self._last_version = -1
+        self._tick()
 
     def action_switch_game(self, name: str) -> None:
         game = game_named(name)
@@ -1118,19 +1125,30 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self.exit(return_code=128 + signal.SIGHUP)
 
 YOUNG_GC_SECONDS = 0.5  # collect the young generations this often
+KEY_QUIET_SECONDS = 0.15  # but not this soon after a key was handed on
 FULL_GC_SECONDS = 20.0  # and everything this often
 GC_SECONDS_ENV = "TUI_GYM_GC_SECONDS"  # "YOUNG,FULL" seconds, to override both
 
 
 class GcPacer:
-    """The collections `tune_gc_for_ui` runs on the app's timers, counted."""
+    """The collections `tune_gc_for_ui` runs on the app's timers, counted. A young
+    collection due while a key is being answered (`key_since()`: when the last key was
+    handed on, `time.monotonic()`) waits for the next turn, once."""
 
-    def __init__(self) -> None:
+    def __init__(self, key_since: Callable[[], float] = lambda: -KEY_QUIET_SECONDS) -> None:
         self.young_collections = 0
         self.full_collections = 0
+        self.young_postponed = 0
+        self._key_since = key_since
+        self._postponed = False
 
     # Methods, not `gc.collect` itself: Textual's timers take Python callables only.
     def collect_young(self) -> None:
+        if not self._postponed and time.monotonic() - self._key_since() < KEY_QUIET_SECONDS:
+            self._postponed = True  # a collection takes milliseconds the key's frame needs
+            self.young_postponed += 1
+            return
+        self._postponed = False
         gc.collect(1)
         self.young_collections += 1
 
@@ -1149,11 +1167,11 @@ def tune_gc_for_ui(
     objects made the collection take up to 25 ms. Here what is alive once the
     app is up moves to the permanent generation (`gc.freeze`: never collected
     again, hence one app a process), automatic collection is off, and timers
-    collect the young generations every `young_seconds` (about a
-    millisecond) and everything every `full_seconds`; a timer callback
-    never runs in the middle of a frame.
+    collect the young generations every `young_seconds` (a few milliseconds;
+    one due just after a key waits a turn) and everything every
+    `full_seconds`; a timer callback never runs in the middle of a frame.
     """
-    pacer = GcPacer()
+    pacer = GcPacer(lambda: getattr(app, "_key_since", -KEY_QUIET_SECONDS))
     gc.collect()
     gc.freeze()
     gc.disable()

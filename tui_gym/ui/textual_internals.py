@@ -8,7 +8,8 @@ one; the tests run the app so), it leaves Textual to do what it does by itself:
 
 - `compositor`: the main screen's compositor (`Screen._compositor`, a
   `textual._compositor.Compositor`) keeps the layout a pass has just made, and
-  draws in a partial update only the widgets it repaints (`main_screen`);
+  draws of each widget only the lines an update shows and no widget in front of it
+  covers (`main_screen`);
 - `focus`: on the main screen a focus change repaints only the widgets whose
   `:focus` styles change, not the whole screen (its `focused` reactive, redefined);
 - `resume`: when the main screen first shows, its widgets keep the styles they
@@ -88,24 +89,28 @@ def _compositor_class() -> type | None:
         from textual._compositor import Compositor
     except ImportError:
         return None
-    needed = ("reflow", "render_partial_update", "_get_renders", "visible_widgets")
+    needed = ("reflow", "render_partial_update", "_render_chops", "_regions_to_spans",
+              "visible_widgets", "cuts")
     if not all(hasattr(Compositor, name) for name in needed):
         return None
-    if _parameters(Compositor._get_renders) != ["self", "crop"]:
+    if _parameters(Compositor._render_chops) != ["self", "crop", "is_rendered_line"]:
         return None
 
     class KeptLayoutCompositor(Compositor):  # type: ignore[misc, valid-type]
         """Textual's compositor, keeping the full map a layout pass has just made, and
-        drawing in a partial update only the widgets it repaints.
+        drawing in an update only the lines of a widget that the update shows.
 
         Textual marks the map stale before a layout pass and leaves it so after the
         pass, so the first widget that asks for its region while the frame is drawn
         (a strip widget does) had the whole screen laid out a second time, for each
-        view switch. And Textual tests each widget's container's clip against the box
-        around every region to repaint, so a snapshot that changed the Train view's
-        curves, stats and heatmap drew every widget on the screen."""
+        view switch. And Textual draws every widget that meets the box around the
+        regions to repaint in full, front to back, keeping the first piece of each
+        stretch of a line: a snapshot that changed the Train view's curves, stats and
+        heatmap drew every widget on the screen, and a view switch drew the switcher
+        and the view behind the view's widgets, to be thrown away. Here a widget draws
+        only the lines where a stretch to repaint is still open in front of it."""
 
-        _updating: tuple[Region, ...] = ()  # the regions a partial update repaints
+        _spans: list[tuple[int, int, int]] | None = None  # (y, x1, x2) a partial update repaints
 
         def reflow(self, parent: Widget, size: Size) -> Any:
             result = super().reflow(parent, size)
@@ -113,26 +118,59 @@ def _compositor_class() -> type | None:
             return result
 
         def render_partial_update(self) -> Any:
-            self._updating = tuple(getattr(self, "_dirty_regions", ()))
+            self._spans = list(self._regions_to_spans(getattr(self, "_dirty_regions", ())))
             try:
                 return super().render_partial_update()
             finally:
-                self._updating = ()
+                self._spans = None
 
-        def _get_renders(
-            self, crop: Region | None = None
-        ) -> Iterable[tuple[Region, Region, list[Strip]]]:
-            if crop is None:
-                yield from super()._get_renders(crop)
-                return
-            updating = self._updating or (crop,)
-            for widget, (region, clip) in self.visible_widgets.items():
+        def _render_chops(
+            self, crop: Region, is_rendered_line: Callable[[int], bool]
+        ) -> Any:
+            cuts = self.cuts
+            chops: list[dict[int, Strip | None]] = [dict.fromkeys(line[:-1]) for line in cuts]
+            wanted = self._wanted(cuts, is_rendered_line)  # per line, the stretches still open
+            for widget, (region, clip) in self.visible_widgets.items():  # front to back
                 visible = region.intersection(clip)
-                if not (visible.width and visible.height):
+                if not (visible.width and visible.height and crop.overlaps(visible)):
                     continue
-                if not any(visible.overlaps(part) for part in updating):
-                    continue
-                yield region, clip, widget.render_lines(visible.translate(-region.offset))
+                left, right = visible.column_span
+                open_lines = [
+                    y for y in visible.line_range
+                    if any(left <= cut < right for cut in wanted[y])
+                ]
+                if not open_lines:
+                    continue  # nothing to repaint, or covered by the widgets in front
+                top, bottom = open_lines[0], open_lines[-1] + 1
+                drawn = Region(left, top, right - left, bottom - top)
+                strips = widget.render_lines(drawn.translate(-region.offset))
+                for y, strip in zip(range(top, bottom), strips, strict=False):
+                    if not is_rendered_line(y):
+                        continue
+                    line, want = chops[y], wanted[y]
+                    line_cuts = [cut for cut in cuts[y] if left <= cut <= right]
+                    pieces = strip.divide([cut - left for cut in line_cuts[1:]])
+                    for cut, piece in zip(line_cuts, pieces, strict=False):  # the last cut ends it
+                        if line.get(cut) is None:
+                            line[cut] = piece
+                            want.discard(cut)
+            return chops
+
+        def _wanted(
+            self, cuts: list[list[int]], is_rendered_line: Callable[[int], bool]
+        ) -> list[set[int]]:
+            """For each line, the cuts starting a stretch the update shows."""
+            spans = self._spans
+            if spans is None:  # the whole screen
+                return [set(line[:-1]) if is_rendered_line(y) else set()
+                        for y, line in enumerate(cuts)]
+            wanted: list[set[int]] = [set() for _ in cuts]
+            for y, x1, x2 in spans:
+                if 0 <= y < len(cuts):
+                    line = cuts[y]
+                    wanted[y].update(cut for cut, end in zip(line, line[1:], strict=False)
+                                     if cut < x2 and end > x1)
+            return wanted
 
     probe = KeptLayoutCompositor()
     if not hasattr(probe, "_full_map_invalidated") or not hasattr(probe, "_dirty_regions"):
