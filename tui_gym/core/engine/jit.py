@@ -16,7 +16,9 @@ nothing and it runs as Python until `start()` is called, which
 
 Kernels allocate nothing, so they run without Numba's reference counting
 (`_nrt=False`: an array passed between compiled functions costs nothing
-then), at optimisation level 1 (`NUMBA_OPT`, unless set: the loops run as
+then), without the C-callable wrapper Numba otherwise builds for each one
+(`no_cfunc_wrapper`: only a `cfunc` or a function passed as a value calls
+it), at optimisation level 1 (`NUMBA_OPT`, unless set: the loops run as
 fast as at level 3 and compile in two thirds of the time).
 
 Python calls a kernel that takes an algorithm's `Params` through `entry`. Its
@@ -50,7 +52,7 @@ COMPILING = "compiling the learners, once"
 
 _PACKAGE = Path(__file__).resolve().parents[2]  # tui_gym/
 _SOURCES = ("core/engine", "algorithms")  # what compiled code is made of
-_OPTIONS: Any = {"cache": True, "_nrt": False}  # see the module docstring
+_OPTIONS: Any = {"cache": True, "_nrt": False, "no_cfunc_wrapper": True}  # see the docstring
 _COMPILED: dict[Callable[..., Any], Any] = {}
 _ENTRIES: dict[tuple[Callable[..., Any], type, bool], Any] = {}
 _started = False
@@ -222,7 +224,7 @@ def _register_overloads(rules: Any) -> None:
     from numba.core import types
     from numba.extending import overload
 
-    _CACHED: Any = {"cache": True}
+    _CACHED: Any = {"cache": True, "no_cfunc_wrapper": True}
 
     def rule_of(hp: Any) -> Any:
         return rules.RULES[hp.instance_class]
