@@ -270,17 +270,17 @@ def _register_overloads(rules: Any) -> None:
 
         return one_offered
 
-    @overload(rules.value, jit_options=_CACHED, inline="always")
-    def _value(tables, hp, s, a):  # type: ignore[no-untyped-def]
-        own = compiled(rule_of(hp).value)
+    @overload(rules.acting, jit_options=_CACHED, inline="always")
+    def _acting(tables, hp):  # type: ignore[no-untyped-def]
+        own = compiled(rule_of(hp).acting)
         if own is None:
-            def plain(tables, hp, s, a):  # type: ignore[no-untyped-def]
-                return tables[0][s, a]
+            def first(tables, hp):  # type: ignore[no-untyped-def]
+                return (tables[0],)
 
-            return plain
+            return first
 
-        def impl(tables, hp, s, a):  # type: ignore[no-untyped-def]
-            return own(tables, hp, s, a)
+        def impl(tables, hp):  # type: ignore[no-untyped-def]
+            return own(tables, hp)
 
         return impl
 
