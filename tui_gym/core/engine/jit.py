@@ -54,7 +54,7 @@ _PACKAGE = Path(__file__).resolve().parents[2]  # tui_gym/
 _SOURCES = ("core/engine", "algorithms")  # what compiled code is made of
 _OPTIONS: Any = {"cache": True, "_nrt": False, "no_cfunc_wrapper": True}  # see the docstring
 _COMPILED: dict[Callable[..., Any], Any] = {}
-_ENTRIES: dict[tuple[Callable[..., Any], type, bool], Any] = {}
+_ENTRIES: dict[tuple[Callable[..., Any], object, bool], Any] = {}
 _started = False
 _folder: Path | None = None
 
@@ -192,9 +192,10 @@ def compiling() -> Iterator[None]:
         yield  # closing the file lets the lock go
 
 
-def entry(fn: Callable[..., Any], kind: type, masked: bool = False) -> Any:
-    """Kernel `fn` as called from Python with one algorithm's `Params` (`kind`),
-    compiled apart: Numba types a NamedTuple from Python by its fields alone, so one
+def entry(fn: Callable[..., Any], kind: object, masked: bool = False) -> Any:
+    """Kernel `fn` as called from Python with one algorithm's `Params` (`kind`; for a
+    kernel that takes none, what else sets its argument types apart), compiled apart:
+    Numba types a NamedTuple from Python by its fields alone, so one
     dispatcher would run the code it has for another algorithm's `Params` of the same
     field types (or take its slow path on every call), while compiled callers tell
     them apart. `masked`: called with an array of offered actions rather than None,

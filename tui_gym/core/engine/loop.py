@@ -288,8 +288,9 @@ class Entries:
     def __init__(self, kind: type, masked: bool) -> None:
         self.run_model = jit.entry(run_model, kind, masked)
         self.transition = jit.entry(transition, kind, masked)
-        self._act = jit.entry(act, kind, masked)
-        self._greedy = jit.entry(greedy, kind, masked)
+        own = rules.RULES[kind].acting  # None: every such algorithm acts on one table
+        self._act = jit.entry(act, own, masked)
+        self._greedy = jit.entry(greedy, own, masked)
 
     def act(self, tables: Any, hp: Any, rng: Any, offered: Any, s: int, epsilon: float) -> int:
         return int(self._act(rules.acting(tables, hp), rng, offered, s, epsilon))
