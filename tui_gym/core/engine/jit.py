@@ -14,6 +14,11 @@ nothing and it runs as Python until `start()` is called, which
   replaces every kernel, in every `tui_gym` module that holds it, by its
   compiled form (`njit(cache=True)`), so kernels call kernels compiled.
 
+The rule stubs, and the small kernels marked `inline`, are inlined into
+their callers by Numba (`inline="always"`): typing each caller costs more so,
+but LLVM does not inline one Numba function into another here, and a call
+left in the loop's per-action code slows training down markedly.
+
 Kernels allocate nothing, so they run without Numba's reference counting
 (`_nrt=False`: an array passed between compiled functions costs nothing
 then), without the C-callable wrapper Numba otherwise builds for each one
