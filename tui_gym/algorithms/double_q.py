@@ -22,7 +22,7 @@ import numpy as np
 
 from tui_gym.algorithms.base import Learner, TableSpec, Transition, UpdateRecord
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, best_action, register, td_update
+from tui_gym.core.engine.rules import Rule, greedy, register, td_update
 
 __all__ = ["DoubleQLearning"]
 
@@ -36,8 +36,8 @@ class Params(NamedTuple):
 
 
 @kernel(inline=True)
-def value(tables: Any, hp: Any, s: int, a: int) -> float:
-    return tables[0][s, a] + tables[1][s, a]
+def acting(tables: Any, hp: Any) -> tuple[Any, ...]:
+    return tables[0], tables[1]  # acting on their sum
 
 
 @kernel
@@ -46,7 +46,7 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     q_a, q_b, counts_a, counts_b, visits = tables
     first = rng.random() < 0.5
     mine, other, counts = (q_a, q_b, counts_a) if first else (q_b, q_a, counts_b)
-    chosen = best_action(mine, rng, offered, s2)
+    chosen = greedy((mine,), rng, offered, s2)
     future = 0.0 if terminated else other[s2, chosen]
     td = td_update(mine, counts, visits, hp, s, a, r, future, log)
     log[0, 6] = 0.0 if first else 1.0
@@ -54,7 +54,7 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     return td
 
 
-register(Params, Rule(update, value=value))
+register(Params, Rule(update, acting=acting))
 
 
 class DoubleQLearning(Learner):

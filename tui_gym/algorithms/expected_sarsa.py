@@ -33,7 +33,7 @@ class Params(NamedTuple):
 def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     q, counts, visits = tables
-    future = 0.0 if terminated else expected_value(tables, hp, offered, s2, epsilon)
+    future = 0.0 if terminated else expected_value((q,), offered, s2, epsilon)
     return td_update(q, counts, visits, hp, s, a, r, future, log)
 
 

@@ -64,7 +64,7 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
         log[0, 0] = 0.0  # nothing learned yet
         log[0, 3] = q[s, a]
         return 0.0
-    g = 0.0 if terminated else expected_value(tables, hp, offered, s2, epsilon)
+    g = 0.0 if terminated else expected_value((q,), offered, s2, epsilon)
     tail = g
     if hp.first_visit:
         for t in range(steps):

@@ -14,9 +14,16 @@ nothing and it runs as Python until `start()` is called, which
   replaces every kernel, in every `tui_gym` module that holds it, by its
   compiled form (`njit(cache=True)`), so kernels call kernels compiled.
 
+The rule stubs, and the small kernels marked `inline`, are inlined into
+their callers by Numba (`inline="always"`): typing each caller costs more so,
+but LLVM does not inline one Numba function into another here, and a call
+left in the loop's per-action code slows training down markedly.
+
 Kernels allocate nothing, so they run without Numba's reference counting
 (`_nrt=False`: an array passed between compiled functions costs nothing
-then), at optimisation level 1 (`NUMBA_OPT`, unless set: the loops run as
+then), without the C-callable wrapper Numba otherwise builds for each one
+(`no_cfunc_wrapper`: only a `cfunc` or a function passed as a value calls
+it), at optimisation level 1 (`NUMBA_OPT`, unless set: the loops run as
 fast as at level 3 and compile in two thirds of the time).
 
 Python calls a kernel that takes an algorithm's `Params` through `entry`. Its
@@ -50,9 +57,9 @@ COMPILING = "compiling the learners, once"
 
 _PACKAGE = Path(__file__).resolve().parents[2]  # tui_gym/
 _SOURCES = ("core/engine", "algorithms")  # what compiled code is made of
-_OPTIONS: Any = {"cache": True, "_nrt": False}  # see the module docstring
+_OPTIONS: Any = {"cache": True, "_nrt": False, "no_cfunc_wrapper": True}  # see the docstring
 _COMPILED: dict[Callable[..., Any], Any] = {}
-_ENTRIES: dict[tuple[Callable[..., Any], type, bool], Any] = {}
+_ENTRIES: dict[tuple[Callable[..., Any], object, bool], Any] = {}
 _started = False
 _folder: Path | None = None
 
@@ -190,9 +197,10 @@ def compiling() -> Iterator[None]:
         yield  # closing the file lets the lock go
 
 
-def entry(fn: Callable[..., Any], kind: type, masked: bool = False) -> Any:
-    """Kernel `fn` as called from Python with one algorithm's `Params` (`kind`),
-    compiled apart: Numba types a NamedTuple from Python by its fields alone, so one
+def entry(fn: Callable[..., Any], kind: object, masked: bool = False) -> Any:
+    """Kernel `fn` as called from Python with one algorithm's `Params` (`kind`; for a
+    kernel that takes none, what else sets its argument types apart), compiled apart:
+    Numba types a NamedTuple from Python by its fields alone, so one
     dispatcher would run the code it has for another algorithm's `Params` of the same
     field types (or take its slow path on every call), while compiled callers tell
     them apart. `masked`: called with an array of offered actions rather than None,
@@ -222,7 +230,7 @@ def _register_overloads(rules: Any) -> None:
     from numba.core import types
     from numba.extending import overload
 
-    _CACHED: Any = {"cache": True}
+    _CACHED: Any = {"cache": True, "no_cfunc_wrapper": True}
 
     def rule_of(hp: Any) -> Any:
         return rules.RULES[hp.instance_class]
@@ -268,17 +276,17 @@ def _register_overloads(rules: Any) -> None:
 
         return one_offered
 
-    @overload(rules.value, jit_options=_CACHED, inline="always")
-    def _value(tables, hp, s, a):  # type: ignore[no-untyped-def]
-        own = compiled(rule_of(hp).value)
+    @overload(rules.acting, jit_options=_CACHED, inline="always")
+    def _acting(tables, hp):  # type: ignore[no-untyped-def]
+        own = compiled(rule_of(hp).acting)
         if own is None:
-            def plain(tables, hp, s, a):  # type: ignore[no-untyped-def]
-                return tables[0][s, a]
+            def first(tables, hp):  # type: ignore[no-untyped-def]
+                return (tables[0],)
 
-            return plain
+            return first
 
-        def impl(tables, hp, s, a):  # type: ignore[no-untyped-def]
-            return own(tables, hp, s, a)
+        def impl(tables, hp):  # type: ignore[no-untyped-def]
+            return own(tables, hp)
 
         return impl
 

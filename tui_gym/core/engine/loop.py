@@ -27,10 +27,11 @@ from typing import Any
 
 import numpy as np
 
-from tui_gym.core.engine import jit
+from tui_gym.core.engine import jit, rules
 from tui_gym.core.engine.kernel import kernel
 from tui_gym.core.engine.rules import (
     act,
+    acting,
     begin,
     epsilon_at,
     full,
@@ -184,6 +185,7 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: 
     mean |TD|, epsilon, the action it began with); `cursor[4]`, `cursor[5]` count the
     episodes and steps of this call. Returns 0, or `GROW` when the learner needs room first."""
     n_actions = tables[0].shape[1]
+    values = acting(tables, hp)
     done = 0
     steps = 0
     status = 0
@@ -203,7 +205,7 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: 
         s = cursor[1]
         a = cursor[2]
         if a < 0:
-            a = act(tables, hp, rng, offered, rows[s], eps)
+            a = act(values, rng, offered, rows[s], eps)
         if cursor[3] == 0:
             cursor[6] = a
         at = (s * n_actions + a) * outcomes
@@ -217,7 +219,7 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: 
         cut = (not ended) and horizon > 0 and cursor[3] >= horizon
         a2 = -1
         if next_first(hp) and not ended:
-            a2 = act(tables, hp, rng, offered, rows[s2], eps)
+            a2 = act(values, rng, offered, rows[s2], eps)
         td = update(tables, hp, rng, offered, rows[s], a, r, rows[s2], ended, cut, a2, eps,
                     log)
         acc[0] += r
@@ -248,7 +250,7 @@ def transition(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: 
     """The update for one transition played elsewhere; the next action is chosen first
     (when `a2` < 0) for a rule that needs it. Returns (that action or -1, |TD|)."""
     if a2 < 0 and next_first(hp) and not terminated:
-        a2 = act(tables, hp, rng, offered, s2, epsilon)
+        a2 = act(acting(tables, hp), rng, offered, s2, epsilon)
     td = update(tables, hp, rng, offered, s, a, r, s2, terminated, truncated, a2, epsilon,
                 log)
     return a2, td
@@ -279,13 +281,22 @@ def play(learner: Any, model: ModelArrays, cursor: Cursor, max_episodes: int,
 
 class Entries:
     """The kernels Python calls for one algorithm (`jit.entry`), with or without a mask
-    of offered actions: `run_model`, `transition`, `act` and `greedy`."""
+    of offered actions: `run_model`, `transition`, and `act(tables, hp, rng, offered, s,
+    epsilon)` and `greedy(tables, hp, rng, offered, s)` (the compiled code of these two
+    is the same for every algorithm acting on as many tables: see `rules`)."""
 
     def __init__(self, kind: type, masked: bool) -> None:
         self.run_model = jit.entry(run_model, kind, masked)
         self.transition = jit.entry(transition, kind, masked)
-        self.act = jit.entry(act, kind, masked)
-        self.greedy = jit.entry(greedy, kind, masked)
+        own = rules.RULES[kind].acting  # None: every such algorithm acts on one table
+        self._act = jit.entry(act, own, masked)
+        self._greedy = jit.entry(greedy, own, masked)
+
+    def act(self, tables: Any, hp: Any, rng: Any, offered: Any, s: int, epsilon: float) -> int:
+        return int(self._act(rules.acting(tables, hp), rng, offered, s, epsilon))
+
+    def greedy(self, tables: Any, hp: Any, rng: Any, offered: Any, s: int) -> int:
+        return int(self._greedy(rules.acting(tables, hp), rng, offered, s))
 
 
 _ENTRIES: dict[tuple[type, bool], Entries] = {}

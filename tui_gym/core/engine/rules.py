@@ -9,7 +9,8 @@ hyperparameters, `register(Params, Rule(...))`):
   (Monte Carlo: the sum over the episode's updates at its end, else 0); it
   writes the numbers the step-by-step view explains into `log[0]` (and more
   rows when there is room: Monte Carlo's updates at an episode's end);
-- `value(tables, hp, s, a)`: the action values it acts on (default: `tables[0]`);
+- `acting(tables, hp)`: the tables whose sum is the action values it acts on
+  (default: `(tables[0],)`);
 - `begin(tables, hp)`: what it does as an episode starts (default: nothing);
 - `full(tables, hp)`: whether it needs room before one more step (default: never);
 - `next_first`: the next action is chosen before the update (SARSA).
@@ -17,12 +18,14 @@ hyperparameters, `register(Params, Rule(...))`):
 The stubs below dispatch on the type of `hp`: in plain Python by looking the
 rule up; in compiled code at compile time (`jit.start` registers them as Numba
 overloads), so each algorithm gets a specialisation of the one loop, cached.
-`act` is epsilon-greedy with a random tie-break, drawing only what it needs.
+`act` is epsilon-greedy with a random tie-break, drawing only what it needs;
+it and `greedy` read the action values through `acting`, so one compiled form
+serves every algorithm that acts on the same number of tables.
 
 **Offered actions.** Where a game's states do not all offer every action,
 `offered[row, action]` (a bool array) marks those each table row offers;
 `None` where every row offers every action. Acting (`act`, `greedy`,
-`draw`), the best action (`best_action`), the max (`max_value`) and the
+`draw`), the best action (`greedy`), the max (`max_value`) and the
 ε-greedy expectation (`expected_value`) range over the offered actions only;
 a rule passes `offered` on to them and needs nothing else. `offers` and
 `draw` are stubs compiled by the type of `offered`: for `None` they are the
@@ -44,8 +47,8 @@ __all__ = [
     "RULES",
     "Rule",
     "act",
+    "acting",
     "begin",
-    "best_action",
     "draw",
     "epsilon_at",
     "expected_value",
@@ -70,7 +73,7 @@ class Rule:
     """One algorithm's compiled parts (see the module docstring)."""
 
     update: Callable[..., float]
-    value: Callable[..., float] | None = None
+    acting: Callable[..., tuple[Any, ...]] | None = None
     begin: Callable[..., None] | None = None
     full: Callable[..., bool] | None = None
     next_first: bool = False
@@ -93,9 +96,9 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
                                   truncated, a2, epsilon, log)
 
 
-def value(tables: Any, hp: Any, s: int, a: int) -> float:
-    own = RULES[type(hp)].value
-    return float(tables[0][s, a]) if own is None else own(tables, hp, s, a)
+def acting(tables: Any, hp: Any) -> tuple[Any, ...]:
+    own = RULES[type(hp)].acting
+    return (tables[0],) if own is None else own(tables, hp)
 
 
 def begin(tables: Any, hp: Any) -> None:
@@ -177,17 +180,27 @@ def draw_offered(rng: Any, offered: Any, s: int, n: int) -> int:
     return n - 1
 
 
+@kernel(inline=True)
+def value(values: Any, s: int, a: int) -> float:
+    """The action value of (s, a): the sum over the tables `values` (see `acting`)."""
+    total = values[0][s, a]
+    for i in range(1, len(values)):
+        total += values[i][s, a]
+    return total
+
+
 @kernel
-def greedy(tables: Any, hp: Any, rng: Any, offered: Any, s: int) -> int:
-    """The best-valued action row `s` offers, ties broken uniformly (a draw only on a tie)."""
-    n = tables[0].shape[1]
+def greedy(values: Any, rng: Any, offered: Any, s: int) -> int:
+    """The best-valued action row `s` offers (`values`: the tables `acting` gives), ties
+    broken uniformly (a draw only on a tie)."""
+    n = values[0].shape[1]
     choice = first_offered(offered, s, n)
-    best = value(tables, hp, s, choice)
+    best = value(values, s, choice)
     ties = 1
     for a in range(choice + 1, n):
         if not offers(offered, s, a):
             continue
-        v = value(tables, hp, s, a)
+        v = value(values, s, a)
         if v > best:
             best, choice, ties = v, a, 1
         elif v == best:
@@ -196,7 +209,7 @@ def greedy(tables: Any, hp: Any, rng: Any, offered: Any, s: int) -> int:
         return choice
     pick = uniform(rng, ties)
     for a in range(n):
-        if offers(offered, s, a) and value(tables, hp, s, a) == best:
+        if offers(offered, s, a) and value(values, s, a) == best:
             if pick == 0:
                 return a
             pick -= 1
@@ -204,50 +217,26 @@ def greedy(tables: Any, hp: Any, rng: Any, offered: Any, s: int) -> int:
 
 
 @kernel
-def best_action(table: Any, rng: Any, offered: Any, s: int) -> int:
-    """The best action of one table in row `s` among those offered, ties broken uniformly."""
-    n = table.shape[1]
-    choice = first_offered(offered, s, n)
-    top = table[s, choice]
-    ties = 1
-    for a in range(choice + 1, n):
-        if not offers(offered, s, a):
-            continue
-        if table[s, a] > top:
-            top, choice, ties = table[s, a], a, 1
-        elif table[s, a] == top:
-            ties += 1
-    if ties > 1:
-        pick = uniform(rng, ties)
-        for a in range(n):
-            if offers(offered, s, a) and table[s, a] == top:
-                if pick == 0:
-                    return a
-                pick -= 1
-    return choice
-
-
-@kernel
-def act(tables: Any, hp: Any, rng: Any, offered: Any, s: int, epsilon: float) -> int:
+def act(values: Any, rng: Any, offered: Any, s: int, epsilon: float) -> int:
     """Epsilon-greedy in row `s`: an offered action drawn uniformly with probability
     epsilon, else greedy."""
     if epsilon > 0.0 and rng.random() < epsilon:
-        return draw(rng, offered, s, tables[0].shape[1])
-    return greedy(tables, hp, rng, offered, s)
+        return draw(rng, offered, s, values[0].shape[1])
+    return greedy(values, rng, offered, s)
 
 
 @kernel
-def expected_value(tables: Any, hp: Any, offered: Any, s: int, epsilon: float) -> float:
+def expected_value(values: Any, offered: Any, s: int, epsilon: float) -> float:
     """Σ_a π(a|s) value(s, a) under epsilon-greedy over the offered actions, ties sharing
     the greedy part: epsilon times their mean value plus (1 - epsilon) times the best."""
-    n = tables[0].shape[1]
+    n = values[0].shape[1]
     first = first_offered(offered, s, n)
-    best = value(tables, hp, s, first)
+    best = value(values, s, first)
     total = best
     count = 1
     for a in range(first + 1, n):
         if offers(offered, s, a):
-            v = value(tables, hp, s, a)
+            v = value(values, s, a)
             total += v
             best = max(best, v)
             count += 1
