@@ -3,6 +3,8 @@ session as it is once they are in."""
 
 from __future__ import annotations
 
+import asyncio
+
 from textual.app import App, ComposeResult
 from textual.widgets import Checkbox
 
@@ -15,33 +17,36 @@ from .waiting import wait_until
 
 class PanelHost(App[None]):
     """A `SidePanel` over `session`; as it mounts, a person presses `w` and a wrapper is
-    chosen (the app reloads the panel after a rebuild)."""
+    chosen (the app reloads the panel after a rebuild) while the rows are being made."""
 
     def __init__(self, session: Session) -> None:
         super().__init__()
         self.session = session
         self.listed_at_mount: bool | None = None
+        self.focusing: asyncio.Task[None] | None = None
 
     def compose(self) -> ComposeResult:
         yield SidePanel(id="side")
 
-    def on_mount(self) -> None:
+    async def on_mount(self) -> None:
         panel = self.query_one(SidePanel)
         self.listed_at_mount = panel.wrappers_listed
-        panel.focus_wrappers()  # the rows start mounting now
+        self.focusing = asyncio.create_task(panel.focus_wrappers())
+        await asyncio.sleep(0)  # it starts making the rows and waits for them
         self.session.rebuild(choices=(WrapperChoice("TimeLimit", (("max_episode_steps", 40),)),))
-        panel.reload()  # while they mount
+        panel.reload()
 
 
 async def test_wrapper_rows_made_after_mounting_show_the_session_and_take_the_focus() -> None:
     app = PanelHost(Session("frozenlake", seed=0))
     async with app.run_test(size=(44, 40)) as pilot:
         panel = app.query_one(SidePanel)
-        await wait_until(pilot, lambda: panel.wrappers_listed, "the wrapper rows")
-        assert app.listed_at_mount is False
+        await wait_until(pilot, lambda: app.focusing is not None and app.focusing.done(),
+                         "w's focus")
+        assert app.listed_at_mount is False and panel.wrappers_listed
         row = app.query_one("#wrapper-TimeLimit", WrapperRow)
         box = row.query_one(Checkbox)
         assert box.value and str(box.label) == "TimeLimit  #1"
         assert row.query_one(ParamField).input.value == "40"
         assert not app.query_one("#wrapper-StepPenalty").query_one(Checkbox).value
-        assert app.focused is box  # `w`, pressed before the rows were in
+        assert app.focused is box

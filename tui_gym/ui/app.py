@@ -458,9 +458,9 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         meaning; a new size resets the agent (with a notice) and training goes on."""
         return self.rebuild(env_kwargs=env_kwargs, quiet=True, keep_running=True)
 
-    def action_focus_wrappers(self) -> None:
+    async def action_focus_wrappers(self) -> None:
         self._main_screen.remove_class("-view-compare")  # the compact Compare view hides it
-        self.side_panel.focus_wrappers()
+        await self.side_panel.focus_wrappers()
 
     def action_focus_view(self) -> None:
         """Give the keyboard back to the view shown (its board, or the heatmap)."""

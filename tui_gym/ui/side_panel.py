@@ -331,7 +331,6 @@ class SidePanel(VerticalScroll):
         self._rows: AwaitMount | None = None  # the wrapper rows' mount, once started
         self._rows_in = False  # every row is mounted: they show the session and are read
         self._rows_stale = False  # the session changed while they were mounting
-        self._focus_asked = False  # focus the first wrapper once the rows are in
 
     def compose(self) -> ComposeResult:
         self._order = [c.name for c in self.session.choices]  # the chain, innermost first
@@ -366,21 +365,23 @@ class SidePanel(VerticalScroll):
         rows = [WrapperRow(name, chosen.get(name), reasons.get(name), self._place(name))
                 for name in CATALOG]
         self._rows = self.query_one("#wrapper-list", Vertical).mount_all(rows)
-        self.call_later(self._rows_mounted)
+        self.call_later(self._rows_ready)
 
     @property
     def wrappers_listed(self) -> bool:
         """Whether the wrapper rows are all in (they come after the first frame)."""
         return self._rows_in
 
-    async def _rows_mounted(self) -> None:
+    async def _rows_ready(self) -> None:
+        """Make the rows if they are not made yet, and wait until they are in and show
+        the session as it is now."""
+        self._list_wrappers()
         assert self._rows is not None
         await self._rows
-        self._rows_in = True
-        if self._rows_stale:
-            self._show_wrappers()
-        if self._focus_asked:
-            self.focus_wrappers()
+        if not self._rows_in:
+            self._rows_in = True
+            if self._rows_stale:
+                self._show_wrappers()
 
     def _algorithm_summary(self) -> str:
         cls = self.session.learner_class
@@ -476,13 +477,10 @@ class SidePanel(VerticalScroll):
             row.set_state(chosen.get(row.spec.name), reasons.get(row.spec.name))
             row.show_place(self._place(row.spec.name))
 
-    def focus_wrappers(self) -> None:
-        """Move the keyboard focus to the first wrapper checkbox (once the rows are in)."""
-        if not self._rows_in:
-            self._focus_asked = True
-            self._list_wrappers()
-            return
-        self._focus_asked = False
+    async def focus_wrappers(self) -> None:
+        """Move the keyboard focus to the first wrapper checkbox (a key that asks before
+        the rows are in waits for them, and so do the keys after it)."""
+        await self._rows_ready()
         boxes = self.query_one("#wrapper-list").query(Checkbox)  # not the game's own
         if boxes:
             boxes.first().focus()
