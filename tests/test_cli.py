@@ -14,8 +14,9 @@ from typing import Any
 import pytest
 
 from tui_gym import __version__
-from tui_gym.cli import attach_negative_values, main
+from tui_gym.cli import attach_negative_values, build_parser, main
 from tui_gym.cli.commands import _eval_rows
+from tui_gym.cli.main import app_arguments
 from tui_gym.core.wrappers import CATALOG
 
 REPO = Path(__file__).resolve().parents[1]
@@ -256,6 +257,21 @@ def test_a_negative_value_after_its_flag_is_a_value(capsys: pytest.CaptureFixtur
     data = run_json(capsys, "train", "gridworld", "--size", "2", "--episodes", "20",
                     "--eval-episodes", "5", "--wrapper", "ScaleReward:factor=-2", "--json")
     assert data["wrappers"][0]["params"] == {"factor": -2.0}
+
+
+@pytest.mark.parametrize("argv", [
+    [], ["--env", "gridworld", "--seed=7"], ["--seed", "3", "--runner", "thread", "--no-h"],
+    ["--db", "runs.db", "--load", "a.tgym", "--map-file", "m.txt"],
+])
+def test_the_apps_arguments_read_as_the_full_parser_reads_them(argv: list[str]) -> None:
+    assert app_arguments(argv) == build_parser().parse_args(argv)
+
+
+@pytest.mark.parametrize("argv", [
+    ["envs"], ["-h"], ["--help"], ["--seed", "3", "train", "gridworld"], ["--bogus"], ["x"],
+])
+def test_anything_but_the_apps_options_goes_to_the_full_parser(argv: list[str]) -> None:
+    assert app_arguments(argv) is None
 
 
 def test_hyperparameter_flags_reach_the_run(capsys: pytest.CaptureFixture[str]) -> None:

@@ -25,7 +25,7 @@ from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.games import GAMES
 from tui_gym.games.base import Advice
 from tui_gym.session.play import HumanGame
-from tui_gym.session.recording import Recorder
+from tui_gym.session.recording.recorder import Recorder
 from tui_gym.session.recording.switch import RecordingSwitch
 from tui_gym.session.session import Session
 

@@ -51,6 +51,7 @@ async def test_a_burst_in_the_train_view_edits_the_field_and_applies_on_enter() 
 async def test_a_burst_in_a_wrapper_field_applies_what_was_typed() -> None:
     app = TuiGymApp(Session("frozenlake", seed=0), runner="thread")
     async with app.run_test(size=(120, 40)) as pilot:
+        await wait_until(pilot, lambda: app.side_panel.wrappers_listed, "the wrapper rows")
         row = app.query_one("#wrapper-TimeLimit", WrapperRow)
         row.query_one(Checkbox).value = True
         await wait_until(pilot, lambda: [c.name for c in app.session.choices] == ["TimeLimit"],

@@ -15,7 +15,7 @@ from textual.widgets import OptionList, Static
 from tui_gym.core.recording import Recording, read_recording
 from tui_gym.games import GAMES
 from tui_gym.session.play import HumanGame
-from tui_gym.session.recording import Recorder
+from tui_gym.session.recording.recorder import Recorder
 from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.jump_screen import JumpScreen

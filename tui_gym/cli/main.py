@@ -74,8 +74,8 @@ def attach_negative_values(argv: Sequence[str]) -> list[str]:
     return out
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The full argument parser (also used to document the CLI)."""
+def _app_parser(add_help: bool = True) -> argparse.ArgumentParser:
+    """The parser of the app's own options, those before any sub-command."""
     parser = _Parser(
         prog="tui-gym",
         description="A terminal playground for reinforcement learning. "
@@ -92,6 +92,7 @@ def build_parser() -> argparse.ArgumentParser:
         "  tui-gym play GAME --jsonl        a program plays through JSON lines\n"
         "  tui-gym COMMAND --help           the options of one command",
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        add_help=add_help,
     )
     parser.add_argument("--version", action="version", version=f"tui-gym {__version__}")
     parser.add_argument("--env", default="", help="game to open (default: the first of `envs`)")
@@ -107,9 +108,31 @@ def build_parser() -> argparse.ArgumentParser:
         "--runner", choices=("process", "thread"), default="process",
         help="train in a child process (default) or on a thread of the app's process",
     )
-    from tui_gym.cli.runs_command import add_app_options, add_runs_parser, add_train_options
+    from tui_gym.cli.runs_command import add_app_options
 
     add_app_options(parser)
+    return parser
+
+
+def app_arguments(argv: Sequence[str]) -> argparse.Namespace | None:
+    """The app's arguments when `argv` holds nothing but the app's options (no sub-command,
+    no help), read as the full parser reads them without making every sub-command's
+    parser; else None."""
+    parser = _app_parser(add_help=False)
+    parser.add_argument("rest", nargs=argparse.REMAINDER)  # a sub-command and what follows
+    args, unknown = parser.parse_known_args(argv)
+    if args.rest or unknown:
+        return None
+    del args.rest
+    args.command = None
+    return args
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The full argument parser (also used to document the CLI)."""
+    parser = _app_parser()
+    from tui_gym.cli.runs_command import add_runs_parser, add_train_options
+
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
     envs = sub.add_parser("envs", help="list the games")
@@ -254,7 +277,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = attach_negative_values(sys.argv[1:] if argv is None else argv)
     err = Console(stderr=True)
     try:
-        args = build_parser().parse_args(argv)
+        args = app_arguments(argv) or build_parser().parse_args(argv)
         # The app draws a seed afresh and shows it (so does each tab `serve` opens); commands
         # take 0.
         if args.seed is None and args.command != "serve":

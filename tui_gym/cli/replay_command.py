@@ -19,7 +19,7 @@ from tui_gym.cli.types import output_file
 
 if TYPE_CHECKING:
     from tui_gym.core.recording import Recording
-    from tui_gym.session.recording import Recorder
+    from tui_gym.session.recording.recorder import Recorder
     from tui_gym.session.session import Session
 
 RECORD_HELP = "record every episode to this file, as JSON lines (tui-gym replay PATH plays it back)"
@@ -41,7 +41,7 @@ def open_recorder(
     """
     import sys
 
-    from tui_gym.session.recording import Recorder
+    from tui_gym.session.recording.recorder import Recorder
 
     def failed(message: str) -> None:
         sys.stderr.write(f"tui-gym: {message}\n")

@@ -5,15 +5,15 @@ that trains it (in a child process, as `tui-gym` opens it, or on a worker
 thread). It keeps one `Session` per game for the whole run: switching game
 hands the runner the other game's session, and switching back finds its agent,
 settings, wrappers and curves as they were. The first frame shows the Play
-view and the side panel; the Train view is built right after it (or at once
-when asked for first), the Compare and Plan views the first time they show, and dialogs
-are imported when first used. A timer pulls the runner's latest snapshot and
-hands it to the Train view; the side panel asks for rebuilds
-through a message; nothing in the trainer calls into widgets. Whatever would
-lose a trained agent (a reset, a change that resets it, loading over it,
-saving over a file) asks first (`ConfirmScreen`); saving and loading take a
-file name the person types (`FileScreen`). Below the minimum size
-`TooSmallScreen` covers the main screen and takes every key; and
+view and the side panel; the Train view and the panel's wrapper rows are built
+right after it (or at once when asked for first), the Compare, Plan and Book
+views the first time they show, and dialogs are imported when first used. A
+timer pulls the runner's latest snapshot and hands it to the Train view; the
+side panel asks for rebuilds through a message; nothing in the trainer calls
+into widgets. Whatever would lose a trained agent (a reset, a change that
+resets it, loading over it, saving over a file) asks first (`ConfirmScreen`);
+saving and loading take a file name the person types (`FileScreen`). Below the
+minimum size `TooSmallScreen` covers the main screen and takes every key; and
 `tune_gc_for_ui` paces the garbage collector for an app that owns its process.
 `run_app` runs the app as `tui-gym` does: SIGTERM, SIGHUP and SIGINT end it
 cleanly, so does its terminal (or a served app's pipes) closing, and an
@@ -465,9 +465,9 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         meaning; a new size resets the agent (with a notice) and training goes on."""
         return self.rebuild(env_kwargs=env_kwargs, quiet=True, keep_running=True)
 
-    def action_focus_wrappers(self) -> None:
+    async def action_focus_wrappers(self) -> None:
         self._main_screen.remove_class("-view-compare")  # the compact Compare view hides it
-        self.side_panel.focus_wrappers()
+        await self.side_panel.focus_wrappers()
 
     def action_focus_view(self) -> None:
         """Give the keyboard back to the view shown (its board, or the heatmap)."""

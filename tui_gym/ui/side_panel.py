@@ -4,7 +4,8 @@
 algorithm picker (the `ALGORITHMS` registry, with what the chosen one
 teaches; picking another posts `SidePanel.AlgorithmPicked`), the whole
 wrapper catalog as checkboxes (each with its one-line lesson, its parameter
-fields and, when it does not fit the game, the reason), and the resulting
+fields and, when it does not fit the game, the reason; these rows are made
+after the first frame), and the resulting
 wrapper chain: each wrapper in order, innermost first, with its parameters,
 then Gymnasium's repr of the env (`chain_text`). A newly ticked wrapper goes outermost; `[`
 and `]` move the focused one in or out. It never rebuilds anything itself: it
@@ -24,6 +25,7 @@ from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.message import Message
 from textual.validation import ValidationResult, Validator
+from textual.widget import AwaitMount
 from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet, Static
 
 from tui_gym.algorithms import ALGORITHMS
@@ -324,6 +326,12 @@ class SidePanel(VerticalScroll):
             self.env_kwargs = env_kwargs
             self.choices = choices
 
+    def __init__(self, *, id: str | None = None) -> None:  # noqa: A002  (Textual's name)
+        super().__init__(id=id)
+        self._rows: AwaitMount | None = None  # the wrapper rows' mount, once started
+        self._rows_in = False  # every row is mounted: they show the session and are read
+        self._rows_stale = False  # the session changed while they were mounting
+
     def compose(self) -> ComposeResult:
         self._order = [c.name for c in self.session.choices]  # the chain, innermost first
         yield Static("Game", classes="section")
@@ -340,14 +348,40 @@ class SidePanel(VerticalScroll):
         yield Static("Wrapper chain  (innermost first)", classes="section")
         yield Static(chain_text(self.session), id="chain")
         yield Static("Wrappers  ([ ] move the focused one)", classes="section")
-        chosen, reasons = self._wrapper_states()
-        with Vertical(id="wrapper-list"):
-            for name in CATALOG:
-                yield WrapperRow(name, chosen.get(name), reasons.get(name), self._place(name))
+        yield Vertical(id="wrapper-list")  # its rows come after the first frame
 
     def on_mount(self) -> None:
         self._check_game()
         self._check_algorithm()
+        self.call_after_refresh(self._list_wrappers)
+
+    def _list_wrappers(self) -> None:
+        """The catalog's rows, made after the first frame: they sit below both pickers
+        and are most of what the panel costs to build. Until they are all in, the
+        session's own wrappers stand for them."""
+        if self._rows is not None:
+            return
+        chosen, reasons = self._wrapper_states()
+        rows = [WrapperRow(name, chosen.get(name), reasons.get(name), self._place(name))
+                for name in CATALOG]
+        self._rows = self.query_one("#wrapper-list", Vertical).mount_all(rows)
+        self.call_later(self._rows_ready)
+
+    @property
+    def wrappers_listed(self) -> bool:
+        """Whether the wrapper rows are all in (they come after the first frame)."""
+        return self._rows_in
+
+    async def _rows_ready(self) -> None:
+        """Make the rows if they are not made yet, and wait until they are in and show
+        the session as it is now."""
+        self._list_wrappers()
+        assert self._rows is not None
+        await self._rows
+        if not self._rows_in:
+            self._rows_in = True
+            if self._rows_stale:
+                self._show_wrappers()
 
     def _algorithm_summary(self) -> str:
         cls = self.session.learner_class
@@ -429,15 +463,24 @@ class SidePanel(VerticalScroll):
         else:
             env_box.remove_children()
             env_box.mount_all(self._env_fields())
+        self._show_wrappers()
+        self._show_error("#env-error", None)
+        self.query_one("#chain", Static).update(chain_text(self.session))
+
+    def _show_wrappers(self) -> None:
+        """Each wrapper row shows the session's choice, its place and why it does not fit."""
+        if not self._rows_in:
+            self._rows_stale = self._rows is not None  # rows not yet made read it as made
+            return
         chosen, reasons = self._wrapper_states()
         for row in self.query(WrapperRow):
             row.set_state(chosen.get(row.spec.name), reasons.get(row.spec.name))
             row.show_place(self._place(row.spec.name))
-        self._show_error("#env-error", None)
-        self.query_one("#chain", Static).update(chain_text(self.session))
 
-    def focus_wrappers(self) -> None:
-        """Move the keyboard focus to the first wrapper checkbox."""
+    async def focus_wrappers(self) -> None:
+        """Move the keyboard focus to the first wrapper checkbox (a key that asks before
+        the rows are in waits for them, and so do the keys after it)."""
+        await self._rows_ready()
         boxes = self.query_one("#wrapper-list").query(Checkbox)  # not the game's own
         if boxes:
             boxes.first().focus()
@@ -480,6 +523,8 @@ class SidePanel(VerticalScroll):
     def _read_choices(self) -> tuple[WrapperChoice, ...] | None:
         """The ticked wrappers in chain order: the order kept so far, then any newly
         ticked one outermost."""
+        if not self._rows_in:  # nothing edited yet
+            return self.session.choices
         chosen: dict[str, WrapperChoice] = {}
         first_error = None
         for row in self.query(WrapperRow):

@@ -15,15 +15,15 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from tui_gym.core.recording.format import SUFFIX
-from tui_gym.session.recording.recorder import Recorder
-
 if TYPE_CHECKING:
     from tui_gym.session.play import HumanGame
+    from tui_gym.session.recording.recorder import Recorder
 
 
 def default_path(game: str, folder: Path | None = None) -> Path:
     """`tui-gym-blackjack-20250101-120000.jsonl` in `folder` (the current one by default)."""
+    from tui_gym.core.recording.format import SUFFIX
+
     stamp = time.strftime("%Y%m%d-%H%M%S")
     return (folder or Path.cwd()) / f"tui-gym-{game}-{stamp}{SUFFIX}"
 
@@ -50,6 +50,8 @@ class RecordingSwitch:
 
     def turn_on(self, game: HumanGame) -> Path:
         """Start recording `game` (OSError when the file cannot be opened); the file's path."""
+        from tui_gym.session.recording.recorder import Recorder  # most runs never record
+
         if self.on:
             assert self.path is not None
             return self.path

@@ -1,0 +1,52 @@
+"""The side panel mounted alone: its wrapper rows come after the first frame, and show the
+session as it is once they are in."""
+
+from __future__ import annotations
+
+import asyncio
+
+from textual.app import App, ComposeResult
+from textual.widgets import Checkbox
+
+from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.session.session import Session
+from tui_gym.ui.side_panel import ParamField, SidePanel, WrapperRow
+
+from .waiting import wait_until
+
+
+class PanelHost(App[None]):
+    """A `SidePanel` over `session`; as it mounts, a person presses `w` and a wrapper is
+    chosen (the app reloads the panel after a rebuild) while the rows are being made."""
+
+    def __init__(self, session: Session) -> None:
+        super().__init__()
+        self.session = session
+        self.listed_at_mount: bool | None = None
+        self.focusing: asyncio.Task[None] | None = None
+
+    def compose(self) -> ComposeResult:
+        yield SidePanel(id="side")
+
+    async def on_mount(self) -> None:
+        panel = self.query_one(SidePanel)
+        self.listed_at_mount = panel.wrappers_listed
+        self.focusing = asyncio.create_task(panel.focus_wrappers())
+        await asyncio.sleep(0)  # it starts making the rows and waits for them
+        self.session.rebuild(choices=(WrapperChoice("TimeLimit", (("max_episode_steps", 40),)),))
+        panel.reload()
+
+
+async def test_wrapper_rows_made_after_mounting_show_the_session_and_take_the_focus() -> None:
+    app = PanelHost(Session("frozenlake", seed=0))
+    async with app.run_test(size=(44, 40)) as pilot:
+        panel = app.query_one(SidePanel)
+        await wait_until(pilot, lambda: app.focusing is not None and app.focusing.done(),
+                         "w's focus")
+        assert app.listed_at_mount is False and panel.wrappers_listed
+        row = app.query_one("#wrapper-TimeLimit", WrapperRow)
+        box = row.query_one(Checkbox)
+        assert box.value and str(box.label) == "TimeLimit  #1"
+        assert row.query_one(ParamField).input.value == "40"
+        assert not app.query_one("#wrapper-StepPenalty").query_one(Checkbox).value
+        assert app.focused is box
