@@ -69,6 +69,27 @@ def test_a_child_that_keeps_dying_turns_training_off(blackjack_runner, monkeypat
     assert runner.child_pid is None
 
 
+def test_a_child_that_cannot_be_replaced_turns_training_off(blackjack_runner,
+                                                             monkeypatch) -> None:
+    """A dead child whose successor cannot start (as when the terminal and the process
+    group went while the app ends: the resource tracker's descriptors are gone) turns
+    training off with a message; the caller never sees the exception."""
+    runner = blackjack_runner
+    dead = runner.child_pid
+    assert dead is not None
+
+    def cannot_start(*_: object) -> None:
+        raise ValueError("bad value(s) in fds_to_keep")
+
+    monkeypatch.setattr(process_runner, "_Child", cannot_start)
+    os.kill(dead, signal.SIGKILL)
+    assert wait_for(lambda: runner.error is not None, DEADLINE)
+    message = str(runner.error)
+    assert "a new one could not start (bad value(s) in fds_to_keep)" in message
+    assert "training is off" in message
+    assert not runner.start() and not runner.running
+
+
 def test_a_rebuild_that_keeps_the_agent_loses_no_episode() -> None:
     hp = default_settings(game_for("gridworld"), "q-learning").replace(episodes=10_000_000)
     session = Session("gridworld", hp=hp, seed=0)

@@ -515,12 +515,8 @@ class ProcessRunner:
             )
             self._error = RuntimeError(self._broken)
             return
-        try:
-            self._child = _Child(self._inbox, self._heard)
-        except OSError as exc:
-            self._broken = (f"the training process {how}, and a new one could not start "
-                            f"({exc}); {kept}, but training is off for this session")
-            self._error = RuntimeError(self._broken)
+        if not self._start_child(f"the training process {how}, and a new one",
+                                 f"{kept}, but training is off for this session"):
             return
         self._error = RuntimeError(
             f"the training process {how}; a new one is ready and {kept}"
@@ -535,7 +531,18 @@ class ProcessRunner:
     def _spawn(self) -> None:
         """The first child, once it is due (see `SPAWN_DELAY`) or asked for."""
         if self._child is None and self._ended is None and not (self._closed or self._broken):
+            self._start_child("a training process", "training is off for this session")
+
+    def _start_child(self, what: str, then: str) -> bool:
+        """A new child; when none can start (no processes left, or the terminal and the
+        process group gone as the app ends), training goes off with `error` saying so."""
+        try:
             self._child = _Child(self._inbox, self._heard)
+        except (OSError, ValueError) as exc:  # ValueError: the resource tracker's fds gone
+            self._broken = f"{what} could not start ({exc}); {then}"
+            self._error = RuntimeError(self._broken)
+            return False
+        return True
 
     def _sync(self) -> None:
         """Send the request the owner wants, once the child holds no agent."""
