@@ -25,7 +25,7 @@ serves every algorithm that acts on the same number of tables.
 **Offered actions.** Where a game's states do not all offer every action,
 `offered[row, action]` (a bool array) marks those each table row offers;
 `None` where every row offers every action. Acting (`act`, `greedy`,
-`draw`), the best action (`greedy`), the max (`max_value`) and the
+`draw`), the max (`max_value`) and the
 ε-greedy expectation (`expected_value`) range over the offered actions only;
 a rule passes `offered` on to them and needs nothing else. `offers` and
 `draw` are stubs compiled by the type of `offered`: for `None` they are the
