@@ -318,8 +318,6 @@ class Learner(ABC):
         """An episode starts: whatever was kept of an unfinished one goes."""
         rules.begin(self.arrays(), self.compiled_params())
 
-    forget_episode = begin_episode
-
     def learn(
         self, state: int, action: int, reward: float, next_state: int, terminated: bool,
         truncated: bool = False, next_action: int = -1, explain: bool = False,

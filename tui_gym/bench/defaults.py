@@ -18,7 +18,6 @@ from tui_gym.core.engine import processes
 from tui_gym.core.mdp import NotAvailable
 
 SEEDS = 40
-SHARE_TARGET = 0.95
 
 
 @dataclass(frozen=True)

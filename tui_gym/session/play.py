@@ -203,8 +203,3 @@ class HumanGame:
     def text(self) -> str:
         """A text picture of the state (hidden cards stay hidden until the end)."""
         return self.game.states.text(self.env, reveal=self.done, before=self._before)
-
-    def observation_json(self) -> Any:
-        if self.last is None:
-            return None
-        return self.game.states.json_observation(self.last.observation)

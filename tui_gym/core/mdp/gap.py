@@ -34,15 +34,6 @@ class Gap:
     gap: float
     never_ends: bool = False
 
-    @property
-    def relative(self) -> float:
-        """The gap as a share of the optimum's magnitude (infinite for a gap on an optimum of 0)."""
-        if self.gap == 0.0:
-            return 0.0
-        if self.optimal_value == 0.0 or not math.isfinite(self.optimal_value):
-            return math.inf
-        return self.gap / abs(self.optimal_value)
-
 
 ROUND_OFF = 1e-9
 """Differences within this share of the optimum's magnitude (at least 1) count as 0."""

@@ -54,15 +54,6 @@ class Phases:
         """From (start step, model) pairs."""
         return cls(tuple(m for _, m in phases), tuple(s for s, _ in phases))
 
-    @property
-    def changing(self) -> bool:
-        """Whether the world changes at all."""
-        return len(self.models) > 1
-
     def index_at(self, steps: int) -> int:
         """The phase in force for the transition after `steps` transitions (steps >= 0)."""
         return max(0, bisect_right(self.starts, int(steps)) - 1)
-
-    def model_at(self, steps: int) -> FiniteMDP:
-        """The model in force for the transition after `steps` transitions."""
-        return self.models[self.index_at(steps)]

@@ -225,13 +225,6 @@ class Planner:
         else:
             self.restart()
 
-    def set_policy(self, policy: npt.ArrayLike) -> None:
-        """Follow another policy from the current values."""
-        self.policy = policy_matrix(self.model, policy)
-        self.changed = np.zeros(self.model.n_states, dtype=bool)
-        self._arrays = None
-        self._unsettled()
-
     @property
     def tolerance(self) -> float:
         """How close to the best an action's value must be to count as tied."""

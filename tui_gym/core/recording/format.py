@@ -39,7 +39,6 @@ FORMAT_VERSION = 1
 SUFFIX = ".jsonl"
 
 HEADER, START, STEP, END = "header", "start", "step", "end"
-LINE_TYPES = (HEADER, START, STEP, END)
 
 VERDICTS = ("optimal", "not optimal")
 

@@ -55,7 +55,6 @@ IN_TAXI = 4
 WHERE = (*STAND_NAMES, "taxi")
 ACTION_MARKS = ("↓", "↑", "→", "←", "P", "D")
 TIED = "·"
-DELIVERY = 20.0
 ILLEGAL = -10.0
 FICKLE = ("with a fickle passenger Taxi has no exact model: the change of mind is a hidden "
           "draw its table does not list")

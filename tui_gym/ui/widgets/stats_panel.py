@@ -119,7 +119,6 @@ class StatsPanel(StripWidget):
         self._rows: list[tuple[str, Forms, str]] = []  # (name, value's forms, style)
         self._reference: list[tuple[str, Forms]] = []
         self._scope_note = ""
-        self._engine_reason = ""
         self._shape: tuple = ()
         self._reference_note = ""
         self._state = "idle"
@@ -164,12 +163,6 @@ class StatsPanel(StripWidget):
             self._window = window
             self._changed()
 
-    def show_engine_reason(self, reason: str) -> None:
-        """Say which engine trains and why (e.g. a wrapper with no batched form)."""
-        if reason != self._engine_reason:
-            self._engine_reason = reason
-            self._changed()
-
     def show_reference(self, reference: ReferenceMetrics | None, note: str = "") -> None:
         """The exact comparison with the optimum (and a word on what it takes into
         account), or a note on why there is none."""
@@ -198,7 +191,7 @@ class StatsPanel(StripWidget):
         self.border_subtitle = " · ".join(parts)
         # A layout pass only when the panel's height may change (new rows or notes).
         shape = (len(self._rows), len(self._reference), bool(self._reference_note),
-                 self._scope_note, self._engine_reason, self._compact())
+                 self._scope_note, self._compact())
         self.redraw(layout=shape != self._shape)
         self._shape = shape
 
@@ -211,8 +204,6 @@ class StatsPanel(StripWidget):
             lines.append(self._scope_note)
         if self._reference_note:
             lines.append(self._reference_note)
-        if self._engine_reason:
-            lines.append(self._engine_reason)
         return "\n".join(lines)
 
     def picture_key(self) -> Hashable:
@@ -237,8 +228,6 @@ class StatsPanel(StripWidget):
             lines += _note(self._scope_note, width)
         if self._reference_note:
             lines += _note(self._reference_note, width)
-        if self._engine_reason:
-            lines += _note(self._engine_reason, width)
         return lines
 
 
