@@ -1,11 +1,4 @@
-"""Crash logs: an unexpected error's full traceback goes to a file, the person gets one line.
-
-`write_crash_log` writes the traceback (with the version, Python and the
-command line) to a new file in `log_dir()`: `$TUI_GYM_LOG_DIR` when set,
-else `$XDG_STATE_HOME/tui-gym`, else `~/.local/state/tui-gym`; it keeps the
-newest `KEEP` logs. `crash_line` is the one line to print instead of the
-traceback.
-"""
+"""Crash logs: an unexpected error's full traceback goes to a file, the person gets one line."""
 
 from __future__ import annotations
 

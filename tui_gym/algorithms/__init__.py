@@ -1,13 +1,7 @@
 """Tabular learners, one file each, and the `ALGORITHMS` registry.
 
-Every learner is a `Learner` (see `base`): its hyperparameters as `Param`s,
-its tables, its update rule written once as compiled scalar code, and a
-record of a single update for the step-by-step view. `algorithm(name)` finds
-one by its registry name (`q-learning`, `sarsa`, `expected-sarsa`,
-`double-q`, `monte-carlo`, `dyna-q`, `n-step-sarsa`, `sarsa-lambda`, `q-lambda`,
-`dyna-q-plus`, `prioritized-sweeping`; the prediction learners `td0`,
-`mc-prediction`, `n-step-td`, `td-lambda`, `offline-lambda-return`, which
-score a fixed policy: see `prediction`).
+After a truncation every rule bootstraps from the next state: the time limit is not part
+of the game.
 """
 
 from __future__ import annotations

@@ -1,24 +1,4 @@
-"""The learner: what a tabular algorithm declares, and what the engine drives.
-
-An algorithm is one subclass of `Learner` in one file. It declares its name,
-its hyperparameter schema (`params`), the per-(state, action) tables it keeps
-(`tables`), `Params` (the NamedTuple of its compiled hyperparameters, filled
-from the schema by name; `by_visits` is the step-size schedule) and writes
-its update rule once, as plain scalar code registered with the engine
-(`tui_gym.core.engine.rules.register(Params, Rule(...))`) and compiled by
-Numba. It writes `_describe`, the step-by-step view's record of one update
-from the numbers its rule logs, and `arrays`, the tables its rule takes, when
-they are not `(q, counts, visits)`.
-
-The base class owns everything else: table rows (dense keys are rows; other
-keys get the next free row and the tables grow; the action-value tables,
-`value_tables`, start at the shared `initial_value`), the actions each row offers
-(`offer`: a game whose states do not all offer every action; acting, the max and the
-expectation of every rule range over those), the epsilon schedule, acting
-and learning one transition from Python through the same compiled code the
-engine's loop runs, reading values for heatmaps and evaluation, and saving
-(`state()` / `load_state()`).
-"""
+"""The learner: what a tabular algorithm declares, and what the engine drives."""
 
 from __future__ import annotations
 

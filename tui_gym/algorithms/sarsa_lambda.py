@@ -1,18 +1,4 @@
-"""Sarsa(λ) (Sutton & Barto, 2nd ed., section 12.7): SARSA with eligibility traces.
-
-Every pair visited in the episode keeps a trace e(s, a). Each transition
-
-    δ = r + γ Q(s', a') - Q(s, a)        (r - Q(s, a) after termination)
-    e(s, a) <- e(s, a) + 1  (accumulating)  or  1  (replacing)
-    for every pair with a trace:  Q <- Q + α δ e,  then  e <- γ λ e
-
-so one TD error reaches back along the whole path, the most recent pairs
-most. λ = 0 is SARSA; λ = 1 (accumulating, constant step) is close to Monte
-Carlo. A trace that falls below `FADED` is dropped (its pair leaves the
-list: the work per step follows the pairs that still matter). Traces end
-with the episode; each pair's step size follows its own updates' count. The
-trace kernel here is also Watkins's Q(λ)'s (`q_lambda`).
-"""
+"""Sarsa(λ) (Sutton & Barto, 2nd ed., section 12.7): SARSA with eligibility traces."""
 
 from __future__ import annotations
 

@@ -1,13 +1,4 @@
-"""Hyperparameter schemas and validated values for the learners.
-
-Every learner declares its hyperparameters as a tuple of `Param`s (numbers
-and switches) and `Choice`s (one word out of a few, e.g. the step-size
-schedule). `COMMON_PARAMS` are the ones every learner shares: step size,
-discount, the linear epsilon decay, the episode budget and the initial value of Q. `Settings` holds
-one validated value per field of a schema, read as attributes or items
-(`hp.learning_rate`, `hp.epsilon_at(episode)`, `hp.replace(...)`,
-`hp.to_dict()`), and pickles, so it crosses processes.
-"""
+"""Hyperparameter schemas and validated values for the learners."""
 
 from __future__ import annotations
 

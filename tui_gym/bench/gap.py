@@ -1,24 +1,4 @@
-"""Time to a target gap: how long until the greedy policy is within the target of the optimum.
-
-For every game of the registry with `bench_kwargs`, to its `bench_gap` (else
-the bound its oracle states: for a model game, 1% of the optimum's magnitude,
-beyond what no fixed policy found reaches).
-
-Ours: exactly what `tui-gym train GAME --target-gap G` runs, a `Session` with
-the game's default hyperparameters and the CLI's budget for a target gap (five
-times the default), `session.train(target_gap=...)` checking the exact gap as
-it does.
-
-The tutorial: the tutorial loop (`tutorial`) with the same hyperparameters
-and budget, checking its exact gap as often.
-
-Both clocks start before the env is built and stop when the check that met
-the target returns, so both include their gap checks. Ours runs once per
-seed and the tutorial on seeds in turn while the stage has time; the figures
-are medians over seeds. A tutorial run stopped by its time cap or the stage's
-budget only gives a lower bound on its time, and the figure says so
-(`tutorial_reached` false, speed-up ">= x").
-"""
+"""Time to a target gap: how long until the greedy policy is within the target of the optimum."""
 
 from __future__ import annotations
 

@@ -1,14 +1,4 @@
-"""Memory: how much the resident set grows over a long training run.
-
-A fresh Python process (so nothing else measured in this run shares its heap)
-builds a `Session` of the first game on the engine, trains a warm-up (the
-table, numpy's buffers and the rolling statistics reach their working size),
-reads its resident set size (RSS, from /proc/self/statm; the peak from
-`resource` where /proc is missing), then trains `episodes` more the way the
-app's runner does (chunks of `trainer.run(seconds=0.05)`, each publishing a
-snapshot), sampling RSS after every chunk. The growth is the RSS at the end
-minus the RSS after the warm-up; the largest sample is reported beside it.
-"""
+"""Memory: how much the resident set grows over a long training run."""
 
 from __future__ import annotations
 

@@ -1,38 +1,4 @@
-"""The bench's output: one table (each figure, its target, PASS or MISS) or one JSON object.
-
-Targets:
-- every learner compiled from an empty cache within 30 s in all, loaded from the
-  cache within 1 s;
-- every algorithm >= 100x the episodes/s of the tutorial loop of the same
-  algorithm, on every game measured;
-- time to the target gap at most 1/50 of the tutorial loop's (a speed-up >= 50),
-  on every game measured;
-- live episodes/s >= 80% of headless with the same engine, per runner;
-- the UI draws snapshots at >= 10 Hz;
-- key press to screen update p95 <= 50 ms while training at max speed;
-- RSS growth < 20 MB over 2,000,000 training episodes;
-- app start to first frame <= 1.0 s;
-- Dyna-Q (planning_steps = 10) reaches the bound on a grid game in fewer
-  real episodes than Q-learning.
-- exact-regret scoring separates `optimal` from a player deviating on 5% of
-  Blackjack decisions with >= 10x fewer episodes than mean returns do;
-- the JSON-lines protocol steps >= 20,000 times a second over a pipe (with requests
-  in flight; the round trip of one request at a time is shown beside it), MCP >= 1,000
-  (with several games at once);
-- recording a run in the run history takes <= 2% of a `train` run's time, and the
-  history stays under 1 MB per 1,000 runs of default settings;
-- `compare` of Q-learning and SARSA, 50 seeds x 500 episodes, >= 100x faster than the
-  same 100 learners one after another in the tutorial loop, with SARSA's online return
-  above Q-learning's (Sutton & Barto's Example 6.6);
-- that comparison as tasks, each recorded as it lands, within 10% of the same work in
-  one batch; a sweep on a Dask LocalCluster of 2 workers >= 0.8 of the local executor's
-  throughput;
-- the defaults bring >= 95% of the seeds to the game's bound, every game and algorithm
-  but those whose nature keeps them short (the game's lessons: verdict "lesson").
-
-A verdict is PASS or MISS; "?" when a lower bound cannot decide it, "n/a"
-when the figure is missing (its stage failed: see `errors`).
-"""
+"""The bench's output: one table (each figure, its target, PASS or MISS) or one JSON object."""
 
 from __future__ import annotations
 

@@ -1,16 +1,4 @@
-"""One bench run: every stage in turn, with the sizes of the quick or the full plan.
-
-`run_bench(quick, progress, algorithms)` measures compiling every learner
-(cold and warm), every algorithm's training speed on every game against the
-tutorial loop (or the named algorithms'), time to the target gap on every
-game, Dyna-Q's planning against Q-learning, `compare` against the same
-learners one after another, the defaults' share of seeds that reach their
-bound, live training (both runners), memory, start-up, programs as players,
-the map editor, the run history's cost, and the cost of running experiments
-as tasks (the split, a Dask cluster's scheduler), and returns `BenchResults`. A
-stage that fails is recorded in `errors` and the others still run.
-`progress` (if given) hears the name of each stage as it starts.
-"""
+"""One bench run: every stage in turn, with the sizes of the quick or the full plan."""
 
 from __future__ import annotations
 

@@ -1,16 +1,4 @@
-"""The cost of running experiments as tasks: the task split, and a Dask cluster's scheduler.
-
-`measure(seeds, episodes, repeats)` times (the median of `repeats` runs each):
-- the comparison of the `seeds` stage (Q-learning and SARSA on CliffWalking,
-  `seeds` seeds × `episodes` episodes; long enough that it is spread over the
-  cores) as the command runs it, in tasks each written to a run history as it
-  lands, against the same work in one batch per core, unrecorded: the
-  overhead of the split is their ratio;
-- a sweep (Q-learning over four step sizes, the same seeds and episodes) on
-  the local executor against a Dask `LocalCluster` of two workers, each
-  started and warmed before the clock runs: the cluster's throughput as a
-  share of the local executor's. Without Dask that figure is None, and says so.
-"""
+"""The cost of running experiments as tasks: the task split, and a Dask cluster's scheduler."""
 
 from __future__ import annotations
 

@@ -1,12 +1,4 @@
-"""Benchmark results in the run history, and the leaderboard: a game's runs, best first.
-
-A result is recorded as a run of kind `benchmark`: the player as its
-algorithm, the game's parameters and wrappers, the benchmark's settings as its
-hyperparameters, its figures (mean return and exact regret per episode with
-their 95% intervals, agreement, fouls, time per decision) and per-episode
-curves of return and regret. Best first means the lowest mean exact regret
-per episode; for a game without exact regret, the highest mean return.
-"""
+"""Benchmark results in the run history, and the leaderboard: a game's runs, best first."""
 
 from __future__ import annotations
 

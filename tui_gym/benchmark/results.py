@@ -1,10 +1,4 @@
-"""`BenchmarkResult`: what a benchmark measured, with 95% intervals, as rows or JSON.
-
-Means come with the half-width of their 95% Student-t interval over episodes.
-The exact regret of an episode is the sum over its decisions of
-`max_a Q*(s, a) - Q*(s, a_taken)`; it is unavailable (None) for a game whose
-hint gives no exact action values, and the result says why.
-"""
+"""`BenchmarkResult`: what a benchmark measured, with 95% intervals, as rows or JSON."""
 
 from __future__ import annotations
 

@@ -1,16 +1,4 @@
-"""`tui-gym book`: Sutton & Barto's figures, listed, or run one at a time and checked.
-
-`tui-gym book` lists the figures it reproduces. `tui-gym book FIGURE [--runs N]
-[--episodes E] [--seed S] [--json]` runs one headless with a progress bar, draws
-it in the terminal (its curves as band charts, its grids as tables) and prints
-each of the book's claims beside the measured figure with a verdict; the exit
-status is 1 when a claim is not borne out. `--full` runs the book's own counts
-and keeps each finished task in the run history (`--db`, `--no-record`), so
-`--resume RUN` carries an interrupted figure on; `--cluster` sends the tasks
-to Dask; it ends with the tasks' count and the wall time. `--json` prints `{"schema": 1,
-"figure", "title", "runs", "series": [{"label", "x", "y", "lo", "hi"}],
-"checks": [{"claim", "book", "measured", "ok"}]}`.
-"""
+"""`tui-gym book`: Sutton & Barto's figures, listed, or run one at a time and checked."""
 
 from __future__ import annotations
 

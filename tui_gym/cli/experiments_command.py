@@ -1,21 +1,4 @@
-"""The `compare` and `sweep` commands: learners across seeds, and settings across a grid.
-
-`compare GAME --algorithms A,B --seeds N --episodes E [--set KEY=VALUE ...]`
-prints a table of final figures and a line chart of the mean online return
-with its 95% band; `sweep GAME --algorithm A --grid KEY=V1,V2 [--grid ...]`
-prints a table of every grid point and, for two keys, a coloured grid of the
-final figure. Both take `--json` (one object), show a progress bar with an
-ETA on a terminal, stop cleanly on the first Ctrl+C (what finished is kept,
-printed and recorded; a second Ctrl+C ends at once), and record their runs in
-the run history (`--db PATH`, else `TUI_GYM_DB`, else the data folder's file;
-`--no-record` opts out). A history that fails while they run (a full disk)
-loses nothing: the results are printed, then one line says they were not
-recorded. `compare --csv PATH` writes every episode's mean and band per
-algorithm. The work is tasks (one setting × a block of seeds), each kept in the
-history as it lands: `--resume RUN` runs only the tasks run RUN misses, and
-`--cluster ADDRESS` (or `$TUI_GYM_CLUSTER`) runs them on a Dask scheduler, or
-on `local:N` workers started here.
-"""
+"""The `compare` and `sweep` commands: learners across seeds, and settings across a grid."""
 
 from __future__ import annotations
 

@@ -1,11 +1,4 @@
-"""What the `tui-gym` command prints: one-line errors, JSON objects and summary tables.
-
-Every `--json` object starts with `"schema"`, its command's version in
-`JSON_SCHEMAS`. A version goes up by one when a key of its command's object is
-removed or renamed, or a value changes its type or meaning; a new key leaves
-it as it is (a reader ignores keys it does not know). The README lists every
-command's keys.
-"""
+"""What the `tui-gym` command prints: one-line errors, JSON objects and summary tables."""
 
 from __future__ import annotations
 

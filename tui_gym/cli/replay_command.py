@@ -1,11 +1,4 @@
-"""`--record PATH` for the commands that play, and the `replay` command.
-
-`add_record_option` puts `--record PATH` on a parser; `open_recorder` opens
-the file for a session (one clear line when it cannot be written). `replay
-PATH` reads a recording (bad lines skipped, scenes checked against their game's
-board, see `tui_gym.core.recording`) and opens the app on it, on the game of
-its first episode (refused when that game's id would import a module).
-"""
+"""`--record PATH` for the commands that play, and the `replay` command."""
 
 from __future__ import annotations
 

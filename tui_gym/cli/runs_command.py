@@ -1,19 +1,4 @@
-"""The run history on the command line: `runs`, and recording `train` runs into it.
-
-`tui-gym runs [--json] [--game G] [--kind K] [--limit N]` lists the recorded
-runs, newest first (a screenful by default; every run with `--json`), in the
-columns that fit the terminal (the least needed go first; names are never
-cut); `runs show ID`, `runs export ID --csv PATH | --tensorboard DIR` and
-`runs rm ID` work on one; `runs prune` removes the stored tasks of finished
-runs (only an unfinished run needs them, to resume); `runs --recover` copies
-what can be read of a damaged history into a new file beside it. Every one takes `--db PATH` (else
-`TUI_GYM_DB`, else the data folder's `runs.db`). `add_train_options` puts
-`--db` and `--no-record` on `train`, and `recorded` wraps the `train` command
-so that its run is recorded (see `TrainRecording`). A history that cannot be
-read, an unknown id or a file that cannot be written is one line and exit
-code 2; a run that does not read is one line naming it, after the others.
-Text from the history reaches the terminal through `visible`, as data.
-"""
+"""The run history on the command line: `runs`, and recording `train` runs into it."""
 
 from __future__ import annotations
 

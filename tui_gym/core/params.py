@@ -1,18 +1,4 @@
-"""`Param`: one typed, ranged parameter that parses what a person types.
-
-Wrapper parameters, env arguments and hyperparameters are all `Param`s. A
-CLI argument and a UI input field both arrive as text; `Param.parse` turns
-that text into an `int`, `float` or `bool`, checks the inclusive range, and
-otherwise raises a `ParamError` (a `ValueError`) that names the field and
-says whether the text is not a number of the right kind or a number out of
-range.
-
-`read_number` is the reader behind it, for any text that must be a number:
-ASCII digits only (a person's `١` or `²` is not read as a digit), an optional
-sign, decimal point, exponent and `_` between digits, or `inf` / `nan`.
-Numbers too large for a float read as infinite instead of raising; text that
-holds other digits is refused with `digits_note` saying which digits to type.
-"""
+"""`Param`: one typed, ranged parameter that parses what a person types."""
 
 from __future__ import annotations
 

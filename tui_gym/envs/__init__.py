@@ -1,12 +1,4 @@
-"""Gymnasium environments of our own, and their registration.
-
-`register_envs()` registers GridWorld as `tui_gym/GridWorld-v0` and under the
-tutorial's id `gymnasium_env/GridWorld-v0` (both with `max_episode_steps=300`),
-and the tile map FrozenLake and CliffWalking play edited maps on as
-`tui_gym/TileMap-v0` (no limit of its own), and Sutton & Barto's worlds
-(`BOOK_WORLDS`, each with its episode limit). It is idempotent and runs on
-`import tui_gym`.
-"""
+"""Gymnasium environments of our own, and their registration."""
 
 from __future__ import annotations
 

@@ -1,11 +1,5 @@
 """Sutton & Barto's mazes of chapter 8: the Dyna maze, and the blocking and shortcut mazes
 whose wall moves after a number of steps.
-
-`MazeEnv` plays a maze that may change: a list of phases, each a `Grid` in
-force from a step on, counting steps over every episode since the world was
-made. `maze_phases(name, change_at)` lists the book's: `DynaMazeEnv` (Figure
-8.2), `BlockingMazeEnv` (Figure 8.4: the short way round the wall closes and a
-long one opens) and `ShortcutMazeEnv` (Figure 8.5: a short way opens).
 """
 
 from __future__ import annotations

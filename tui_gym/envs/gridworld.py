@@ -1,17 +1,4 @@
-"""GridWorld: Gymnasium's quick-start custom environment, made correct.
-
-Provides `GridWorldEnv` (registered as `tui_gym/GridWorld-v0` and
-`gymnasium_env/GridWorld-v0`), the action tables `ACTION_NAMES` and
-`ACTION_DELTAS`, the `manhattan` distance helper, and the colours and cell size
-the `rgb_array` renderer draws with. Rendering needs no pygame: text for
-"ansi"/"human", a numpy-drawn image for "rgb_array".
-
-Differences from the tutorial's version: every observation is a new array (the
-tutorial hands back the same objects each step, which Gymnasium's checker
-flags), arguments are validated, reset can place the agent and target
-explicitly, the reward can be scaled or given a per-step penalty, and cells
-can be walls (`tui_gym.envs.walls` finds the moves and distances around them).
-"""
+"""GridWorld: Gymnasium's quick-start custom environment, made correct."""
 
 from __future__ import annotations
 

@@ -1,15 +1,4 @@
-"""`TableEnv`: a Gymnasium env that plays its own transition arrays, toy-text style.
-
-The arrays (`TileArrays`: next state, probability, reward and terminated per
-state, action and outcome, and the start distribution) are the one source for
-the env and for the exact model built from them without making an env. The
-env draws each step's outcome from them, keeps its state in `s` and its last
-action in `lastaction` as Gymnasium's toy-text envs do, and hands out the
-toy-text table `P` when asked (each outcome's mean reward). Where rewards are
-drawn with noise (`reward_std`, per outcome), the env draws each from a normal
-distribution around the mean with its own seeded generator. A subclass draws
-its text picture (`picture`).
-"""
+"""`TableEnv`: a Gymnasium env that plays its own transition arrays, toy-text style."""
 
 from __future__ import annotations
 

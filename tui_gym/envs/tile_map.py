@@ -1,16 +1,4 @@
-"""TileMap: FrozenLake and CliffWalking played on any map of tiles.
-
-Provides `TileMapEnv` (registered as `tui_gym/TileMap-v0`), `TileRules` (the
-rewards and slip a game gives tiles by default) and `tile_arrays`, the
-transition arrays the env's table is read from (one source for the env and
-for the exact model built from a map without making an env).
-
-A map is rows of tiles: S start (exactly one), F floor, H hole (ends the
-episode), G goal (ends the episode), C cliff (sends the agent back to the
-start, the episode goes on), W wall (cannot be entered), R reward cell (pays
-its reward on every entry). Gymnasium's FrozenLake and CliffWalking are this
-env on their own maps with their own rules, move for move.
-"""
+"""TileMap: FrozenLake and CliffWalking played on any map of tiles."""
 
 from __future__ import annotations
 

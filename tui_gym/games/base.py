@@ -1,23 +1,4 @@
-"""What a game is: its identity and parameters, and four small roles.
-
-A `Game` names itself (alias, title, Gymnasium ids, app hotkey), lists its
-typed `Param`s (they become CLI flags and side-panel fields), its actions,
-its board kind and its words for an episode, and hands out four roles:
-
-- `StateSpace` (`game.states`): the base states heatmaps and exact figures
-  look at, a state in words, the board's scene and a text picture;
-- `Oracle` (`game.oracle`): the exact figures: how far a greedy policy is
-  from the optimum, the optimal actions in a state, the optimum itself;
-- `Narrator` (`game.narrator`): outcomes, coach lines, the tally's words,
-  the scoreboard, evaluation figures;
-- `HeatmapLayout` (`game.layout`): the Q-table as heatmap panels, and the
-  focus cell some games let a person move (GridWorld's target, Taxi's slice).
-
-Every role method is total: where a game has nothing to say it returns
-`NotAvailable` (with the reason), an empty answer or a plain fallback, and
-never raises for a state it cannot read. A game with finitely many states
-hands the engine its model as the wrappers make it (`training_model`).
-"""
+"""What a game is: its identity and parameters, and four small roles."""
 
 from __future__ import annotations
 

@@ -1,21 +1,4 @@
-"""What the book's grid worlds share: a `ModelGame` on a `Grid` (`tui_gym.envs.dp_grid`).
-
-A `DPGridGame` says which grid its arguments make (`grid(kwargs)`); from it
-it gets:
-
-- `DPGridStates`: a cell in words, and the tile board's scene (the grid as
-  rows of tiles, the agent, the last move, what it did in the game's words,
-  the rewards of its special cells);
-- `DPGridLayout`: one heatmap panel shaped like the grid, the greedy move's
-  arrow in each cell, the special cells by their letters where every move is
-  worth the same (A and B, from which every move jumps), terminal cells as ★,
-  walls as █;
-- `ReachNarrator`: words for reaching the end of an episode or running out
-  of time;
-- its exact model, built from the same grid as the env.
-
-A game words what a move did in `event` (a jump, the wind, an end reached).
-"""
+"""What the book's grid worlds share: a `ModelGame` on a `Grid` (`tui_gym.envs.dp_grid`)."""
 
 from __future__ import annotations
 

@@ -1,15 +1,4 @@
-"""Bring your own env: any registered Gymnasium env with a transition table.
-
-`GenericGame(env_id)` plays an env whose unwrapped form has `Discrete`
-observation and action spaces and a table `P` (as Gymnasium's toy-text envs
-do), with no code written for it: its exact model, optimum and the model it
-trains on come from the table (`ModelGame`); its board is its own text render (kind
-"text"); its actions are named by their numbers; its heatmap is a state x
-action table, in pages of `PAGE` states picked on a small panel when there
-are more.
-
-`check_fit(env_id)` says in one sentence what an env that does not fit lacks.
-"""
+"""Bring your own env: any registered Gymnasium env with a transition table."""
 
 from __future__ import annotations
 

@@ -1,35 +1,8 @@
 """Games with an exact model: the oracle every finite game shares.
 
-`ModelGame` is a game whose exact model comes from its env's transition table
-(`env.unwrapped.P`, as Gymnasium's toy-text envs carry it; `base_model`),
-read once per set of arguments and kept. Its states are the model's states
-(the env's `Discrete` observations), and from the model come, with no game
-code at all:
-
-- the optimum and the exact value of the agent's greedy policy, in the
-  definition of `tui_gym.core.mdp` (over the episode limit in force, gamma 1),
-  with the wrappers' reward changes and time limits taken into account;
-- the coach's action values in the current state, for the steps left;
-- the heatmap's marks, and the model the engine trains on.
-
-**Ties.** With gamma 1 a wasted step costs nothing while time remains, so in
-a deterministic game many moves keep the optimum's value. The coach and the
-heatmaps call optimal only the quickest of them: among the actions of
-optimal value, those that are also best with rewards discounted by
-`TIE_GAMMA` per step. The others are listed in `Advice.equal`.
-
-**A world that changes** as it is played (the book's blocking maze) lists
-the step each phase starts at (`phase_starts`); the exact figures of a
-phase take the arguments with `PHASE` set (`at_step(kwargs, steps)` gives
-those of the phase in force after `steps` steps), and `world(kwargs,
-changes)` hands whoever samples the game every phase's model. A game whose
-states do not offer every action says which they do (`offered_actions`).
-
-**Fixed policies.** With an episode limit the optimum may play differently
-as the limit nears, which no fixed (greedy) policy does.
-`ModelOracle.fixed_policy_bound` says how close a fixed policy gets: the best
-one a local search finds (a lower bound on the best there is), for
-`--target-gap` and the bench to set targets a greedy policy can reach.
+With gamma 1 a wasted step costs nothing, so the coach and the heatmaps call optimal
+only the quickest actions of optimal value (best again when discounted by `TIE_GAMMA`);
+the others are `Advice.equal`.
 """
 
 from __future__ import annotations

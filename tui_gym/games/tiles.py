@@ -1,25 +1,4 @@
-"""Grid-map games: what FrozenLake and CliffWalking share.
-
-A grid-map game is a `ModelGame` whose states are the cells of a map, row by
-row (state = row * cols + col), with four moves named left, down, right, up
-in the env's own action order. This module gives such a game:
-
-- `TileStates`: a cell in words, and the tile board's scene (the map as rows
-  of S F H G C W R letters, its rewards and slip, the agent, the last move and
-  whether it slipped);
-- `TileLayout`: one heatmap panel shaped like the map, the greedy move's
-  arrow in each cell, the tiles with no decision drawn as themselves;
-- `TileNarrator`: words for reaching the goal, falling and running out of time.
-
-A game says which map its parameters choose (`builtin_cells(kwargs)`), what
-its tiles pay and how they slip (`rules(kwargs)`), its board theme and words.
-
-**Edited maps.** The argument `layout` holds a map as text (`games.maps`);
-with it the parameter `map` reads "custom" and the game is played on
-`tui_gym/TileMap-v0` (`envs.tile_map`) with the game's rules and action
-numbers, and its exact model is built from the map directly. Gymnasium's own
-maps are played on Gymnasium's own envs.
-"""
+"""Grid-map games: what FrozenLake and CliffWalking share."""
 
 from __future__ import annotations
 

@@ -1,11 +1,4 @@
-"""Words and numbers for people, shared by every game's narrator.
-
-Rewards and values with a true minus sign (`format_reward`, `signed`),
-counts (`plural`), a mean return with its 95% interval (`return_summary`,
-`interval_text`), agreement with the optimum (`agreement_summary`), the
-scoreboard's "Watched" row (`watched_row`), and observations as JSON data
-(`to_jsonable`).
-"""
+"""Words and numbers for people, shared by every game's narrator."""
 
 from __future__ import annotations
 

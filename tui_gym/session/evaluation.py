@@ -1,16 +1,4 @@
-"""Greedy evaluation: how well the learned policy plays, measured by playing.
-
-`evaluate` plays N episodes with exploration off (ties between equally valued
-actions broken by its own seeded generator, so the agent's generator is left
-alone) and reports mean and standard deviation of the return plus the game's
-own figures (its narrator's: win rates, success rates, steps over the
-optimum).
-
-The cost of an evaluation follows the game, not only N: it also stops once a
-step budget is spent (at the end of the episode that spends it), so a policy
-that walks in circles until a long time limit is measured on fewer episodes
-instead of for minutes. The report says how many were played and asked for.
-"""
+"""Greedy evaluation: how well the learned policy plays, measured by playing."""
 
 from __future__ import annotations
 

@@ -1,12 +1,4 @@
-"""Human play: one game a person (or a program) plays move by move.
-
-`HumanGame` plays on its own env, built like the session's (same game, same
-wrappers), so playing never disturbs training. It remembers the current
-episode (steps, return, how it ended) and keeps a running `Tally` of finished
-episodes in constant memory. A `Scorecard` sets a player's record beside the
-exact optimum: how many moves agreed with it, and per-episode figures (such as
-steps over optimal) as running means.
-"""
+"""Human play: one game a person (or a program) plays move by move."""
 
 from __future__ import annotations
 

@@ -1,17 +1,4 @@
-"""The session: one env, a choice of wrappers, one learner (the agent) and its trainer.
-
-`Session` is the object every front end drives (the Textual app, the CLI,
-tests, the JSON-lines protocol). It is where game, wrappers, learner and engine
-meet: it finds the game (`tui_gym.games.game_for`), builds the env through
-the wrapper catalog with the game's arguments and the learner from the
-`ALGORITHMS` registry with the game's defaults for that algorithm, hands the
-trainer the game's model as the wrappers make it (when the game has one and
-the wrappers let the model follow), keeps the agent when a rebuild leaves
-the observation keys meaning the same thing (and says so when it cannot),
-changes hyperparameters live (only a change of algorithm needs a fresh
-learner), projects the learner's values onto the game's base states for
-heatmaps and the exact reference, evaluates, saves and loads.
-"""
+"""The session: one env, a choice of wrappers, one learner (the agent) and its trainer."""
 
 from __future__ import annotations
 

@@ -1,10 +1,4 @@
-"""Training speeds and the `Runner` protocol every runner (thread, child process) follows.
-
-Speeds run from *animated* (one agent step at a time, slow enough to follow,
-with the last move kept for a board to draw) to *max* (whole chunks of
-episodes, no pauses). A front end drives any runner through `Runner`; which
-one it gets is `tui_gym.session.runners.make_runner`'s business.
-"""
+"""Training speeds and the `Runner` protocol every runner (thread, child process) follows."""
 
 from __future__ import annotations
 

@@ -1,14 +1,4 @@
-"""`CompareJob`: one comparison running on a worker thread, watched by the Compare view.
-
-The view never waits on it: `run_compare` runs on the job's own thread,
-its progress callbacks keep the latest `CompareProgress` and, now and then,
-the outcomes so far (`outcomes`), and the view's timer reads `progress`,
-`outcomes`, `result` and `error` when it draws. `stop()`
-sets the event `run_compare` watches, so what finished is still recorded;
-`close()` stops and waits a bounded time for the thread (the app's exit
-and a switch of game or view use it). A failure becomes one line in
-`error`, never a traceback.
-"""
+"""`CompareJob`: one comparison running on a worker thread, watched by the Compare view."""
 
 from __future__ import annotations
 

@@ -1,18 +1,4 @@
-"""What the Compare view draws: a run's return curve with its band, and its final figures.
-
-`Series` is one curve as the chart draws it (mean per episode, the 95%
-band's edges when the run has one) and `FigureRow` one row of the figures
-table; both come from a recorded run (`series_of_record`, `row_of_record`)
-or from a comparison still running (`series_of_outcome`, `row_of_outcome`).
-Curves are noisy (a single run's per-episode return; on a game like
-Blackjack even a mean over seeds), so by default each is smoothed with a
-trailing mean over a tenth of its points, and the legend says so. A band is
-smoothed the same way, edge by edge: the mean of the points' half-widths is
-never narrower than the half-width of the smoothed mean, so the band stays a
-95% band, if a wide one. `smooth=False` draws the curves as recorded.
-`bounded` clips a curve's band to the returns its game allows (a band of a
-few seeds runs far past them), and the chart's axis stays within them.
-"""
+"""What the Compare view draws: a run's return curve with its band, and its final figures."""
 
 from __future__ import annotations
 

@@ -1,30 +1,4 @@
-"""The Compare view: the current game's recorded runs side by side, and comparisons launched here.
-
-`CompareView` lists the current game's runs from the run history, newest
-first, each with a tick box (`RunList`); the runs ticked are drawn together
-(`CompareChart`: their return curves with 95% bands, a legend, a colour
-each) above a table of their final figures with intervals (`FiguresTable`).
-Above the list, the launch form: the algorithms to compare, the number of
-seeds and of episodes (checked, each wrong field named in one message),
-and a button that runs the comparison for the current game, its parameters,
-its wrappers and the hyperparameters edited in the Train view (each given
-to the chosen algorithms that have it), through `run_compare` on a worker thread
-(`CompareJob`). The view's timer draws its progress as it comes: the curves
-so far, a progress line, and the figures; `s` (or the Stop button) stops
-it, keeping what finished, and `c` on an unfinished comparison in the list
-carries it on: only its missing tasks run (with the game's settings and the
-Train view's hyperparameters as they are: other ones are refused in one line).
-Once it ends, the runs it recorded appear in the list, ticked. A history
-that cannot be opened (damaged, another program's, from a newer tui-gym, a
-path that cannot be examined) is one message in the view, and a run that
-does not read is named in the message while the others are listed; nothing
-else changes. Text from the history is shown as data
-(`visible`).
-
-The view reads the session and the history; it sends nothing up but
-notifications. The app stops a comparison when the person leaves the view,
-switches game or quits (`stop_comparison`, `close`).
-"""
+"""The Compare view: the game's recorded runs side by side, and comparisons launched here."""
 
 from __future__ import annotations
 

@@ -1,14 +1,4 @@
-"""`FileScreen`: type the name of a file to save the agent to, or to load one from.
-
-The field starts with a suggestion (selected, so typing replaces it) and the
-line under it shows the full path that will be used; a name without a suffix
-gets `.tgym`. Enter goes ahead, escape cancels. Saving over an existing file
-asks first (`ConfirmScreen`). What goes wrong (no name, a folder, a missing
-folder, an unreadable or corrupt file) is said on an error line inside the
-dialog, which stays open so the name can be fixed. The work itself is the
-caller's `perform(path)`, which returns an error message or None; on success
-the dialog dismisses with the path.
-"""
+"""`FileScreen`: type the name of a file to save the agent to, or to load one from."""
 
 from __future__ import annotations
 

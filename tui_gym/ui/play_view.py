@@ -1,32 +1,4 @@
-"""The Play view: a person plays the session's game move by move.
-
-`PlayView` owns a `HumanGame` (its own env, built like the session's, so the
-wrappers chosen in the side panel apply to human play too) and the board the
-game asks for (`board_class(game.board)`). The board turns keys and
-clicks into `Board.Act` / `Board.NewEpisode` messages; this view answers them,
-states what happened in plain words (the game's narrator words outcomes, so
-nothing here knows which game it is) and keeps a running tally of finished
-episodes, counted under the narrator's `tally_words`. A game switch puts the person's
-game and record away (`put_away`) and switching back brings them back.
-
-Beside the game:
-
-- the coach (`c`): after each move, one line from the narrator on whether it
-  was optimal and what it cost (judged on the advice taken *before* the move);
-- advice (`i`): what the exact optimum and the agent's greedy policy would do
-  in the current state (and, with the coach off, a ✓/✗ after each move);
-- the `Scoreboard`: the person, the agent and the optimum as the narrator words
-  them; the person's agreement with the optimum is counted whether or not the
-  coach is on; the agent's exact figures are recomputed when the view is shown
-  and after each episode, never per frame;
-- watching the agent (`a`, or `A` where the board uses `a`): the greedy agent
-  plays fresh episodes of its own game on the board, one move every
-  `watch_interval` seconds (ties broken by a seeded generator); any key stops
-  it and is swallowed, and the person's own game comes back as it was. The
-  agent's episodes never count in the person's tally.
-
-The app calls `reload()` after a rebuild, `focus_board()` and `key_help()`.
-"""
+"""The Play view: a person plays the session's game move by move."""
 
 from __future__ import annotations
 

@@ -1,19 +1,4 @@
-"""`ReplayScreen`: step through a recording, move by move, with the coach's word on each move.
-
-The screen shows one position of one recorded episode at a time: the game's
-board drawing the recorded scene (the board kind the recording names, not
-interactive; where this tui-gym has no such board, the state in words), the
-move that led there with its reward, the coach's verdict and regret, the
-episode's running regret and return, and on the right the episode's moves,
-each marked ✓ or ✗ (click one, or move along the list, to stand there).
-
-Keys: → / ← (or l / h) one move forward / back, home / end the episode's
-first / last position, n / N (or ] / [) the next / previous episode, j asks
-for an episode's number, escape goes back to the app. The buttons under the
-board do the same with the mouse. Boards that draw a trail (the cells the
-agent left) get the episode's scenes from its start, so a step back draws
-what a step forward would.
-"""
+"""`ReplayScreen`: step through a recording, move by move, with the coach's word on each move."""
 
 from __future__ import annotations
 

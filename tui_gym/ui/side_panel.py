@@ -1,18 +1,4 @@
-"""The side panel: pick the game and the algorithm, tick wrappers, edit them, see the chain.
-
-`SidePanel` shows the game picker with the game's own arguments, the
-algorithm picker (the `ALGORITHMS` registry, with what the chosen one
-teaches; picking another posts `SidePanel.AlgorithmPicked`), the whole
-wrapper catalog as checkboxes (each with its one-line lesson, its parameter
-fields and, when it does not fit the game, the reason; these rows are made
-after the first frame), and the resulting
-wrapper chain: each wrapper in order, innermost first, with its parameters,
-then Gymnasium's repr of the env (`chain_text`). A newly ticked wrapper goes outermost; `[`
-and `]` move the focused one in or out. It never rebuilds anything itself: it
-posts `SidePanel.Changed` and the app asks the Session, then calls `reload()`.
-Invalid parameter text marks its field, says why, and is not applied; escape
-drops an edit not yet applied and posts `SidePanel.Left`.
-"""
+"""The side panel: pick the game and the algorithm, tick wrappers, edit them, see the chain."""
 
 from __future__ import annotations
 

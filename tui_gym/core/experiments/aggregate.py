@@ -1,13 +1,4 @@
-"""Curves from several seeds, as one: the mean per episode and its 95% confidence band.
-
-`aggregate` takes per-episode curves from N seeds (an array [N, E]), smooths
-each seed's curve with a trailing rolling mean if asked, and returns the mean
-over seeds with the half-width of a Student-t interval (N - 1 degrees of
-freedom): `t(0.975, N - 1) * s / sqrt(N)`, s the sample standard deviation.
-One seed has no band (None), not a zero-width one. `mean_return_last` is the
-mean over the last 10% of episodes of each seed, averaged over seeds, with its
-own interval across seeds.
-"""
+"""Curves from several seeds, as one: the mean per episode and its 95% confidence band."""
 
 from __future__ import annotations
 

@@ -1,29 +1,4 @@
-"""The run history: every run recorded in one SQLite file that any number of processes share.
-
-`RunHistory(path)` opens the file, creating it (and its folder) when missing,
-and brings an older schema up to date; every `RunHistory` on one file in a
-process shares the process's one connection to it (see `connection`). Before
-writing anything it checks that the file is a tui-gym run history: a file that
-is not SQLite, another program's database, a damaged history or one made by a
-newer tui-gym raises a `RunHistoryError` naming the file, and the file is left
-as it was; a damaged one's message says how to copy what is readable
-(`recover`). `read_only=True` is for callers that only read: a missing file is
-not created, and a history in a read-only place can still be listed.
-
-The file is in WAL mode, so readers never wait; writers take the write lock
-up front and wait their turn, so two processes recording at once both get
-every run in. A run is written when it starts (status running, with its
-writer's mark, see `writers`) and updated as it goes: curves (kept to at most
-`STORED_POINTS` bucket means each, see `curve_codec` for the bytes), figures,
-its settings, the saved agent's path, and finally its status and end time.
-A comparison's or a sweep's runs also
-keep each finished task (`put_task`, one transaction each; `read_tasks`), and
-`reopen_run` marks an interrupted run running again to resume it.
-Every row is checked as it is read (`rows`): a run that does not read is one
-line naming it (`DamagedRunError`), and the others stay readable.
-`BestEffortHistory` never raises on a write: a command keeps its results when
-the disk is full and says afterwards that they were not recorded.
-"""
+"""The run history: every run recorded in one SQLite file that any number of processes share."""
 
 from __future__ import annotations
 

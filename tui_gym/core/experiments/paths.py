@@ -1,10 +1,4 @@
-"""Where the run history lives: `--db PATH`, else `TUI_GYM_DB`, else the user's data folder.
-
-The data folder is `$XDG_DATA_HOME/tui-gym` when XDG_DATA_HOME is set to an
-absolute path (on any platform), else the platform's own: `~/.local/share/tui-gym`
-on Linux and other Unixes, `~/Library/Application Support/tui-gym` on macOS,
-`%APPDATA%\\tui-gym` on Windows.
-"""
+"""Where the run history lives: `--db PATH`, else `TUI_GYM_DB`, else the user's data folder."""
 
 from __future__ import annotations
 

@@ -1,12 +1,4 @@
-"""`RunRecorder`: one run being recorded, from its start to how it ended.
-
-Creating one writes the run (status running). Per-episode values go into
-bounded accumulators (`extend`), so memory stays fixed however long the run;
-whole curves and figures wait in memory too. `flush` writes them, `finish`
-writes them with the final status. Used as a context manager it finishes the
-run on the way out: finished, interrupted on Ctrl+C (KeyboardInterrupt), failed
-on any other exception, keeping whatever it had, and lets the exception go on.
-"""
+"""`RunRecorder`: one run being recorded, from its start to how it ended."""
 
 from __future__ import annotations
 

@@ -1,11 +1,4 @@
-"""What the run history holds, as types: a run's settings, its curves, and what a query returns.
-
-`RunSpec` is what a run is started with (kind, game and its parameters,
-wrappers in order, algorithm and hyperparameters, seeds, package versions);
-`Curve` is one named curve; `RunSummary` is one row of a listing and
-`RunRecord` everything about one run. Each has `to_json()`, the one place its
-JSON shape is decided.
-"""
+"""What the run history holds, as types: a run's settings, its curves, and what a query returns."""
 
 from __future__ import annotations
 

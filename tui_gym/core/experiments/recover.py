@@ -1,12 +1,4 @@
-"""Saving what can be read of a damaged run history: `recover`.
-
-`recover(path)` reads the file through SQLite, for reading only, and copies
-every run that still reads (its settings, figures, status and times, its
-curves when they decode, and its finished tasks that read) into a fresh history beside it,
-`NAME.recovered.EXT` (`NAME.recovered-2.EXT`, ... when that exists), keeping
-the run ids. The original is never written. Runs are found by a scan of the
-runs table and, where the scan stops at damage, by asking for each id in turn.
-"""
+"""Saving what can be read of a damaged run history: `recover`."""
 
 from __future__ import annotations
 

@@ -1,15 +1,4 @@
-"""Reading the run history's rows as runs, each checked as it is read: `summary`, `record`.
-
-A row holds what some process wrote, or what someone edited. Each field is
-checked for its type and size before it is used: names are text of a bounded
-length, times are seconds between 1970 and 3000, figures finite numbers, the
-settings JSON objects of bounded size and depth, the curves a blob of bounded
-size that decodes (see `curve_codec`). The queries cut every text to its bound
-inside SQLite, so an oversized field never reaches Python whole. A row that
-does not read raises `BadRow` saying which field and why (never echoing more
-than a few characters of it); the history turns that into one line naming the
-run, and the other runs stay readable.
-"""
+"""Reading the run history's rows as runs, each checked as it is read: `summary`, `record`."""
 
 from __future__ import annotations
 

@@ -1,14 +1,4 @@
-"""What `tui-gym runs` does, as plain functions returning typed results for the CLI to print.
-
-`list_runs` (`runs [--json] [--game G] [--limit N]`), `show_run` (`runs show
-ID`), `export_run_csv` (`runs export ID --csv PATH`), `remove_run` (`runs rm
-ID`), `prune_tasks` (`runs prune`) and `recover_history` (`runs --recover`).
-Each takes `db`, the `--db` value (None for `TUI_GYM_DB` or the data folder's file). Reading never
-creates a file: with no history yet there are no runs; a history that can
-only be read (a read-only folder) can still be listed and shown. A listing
-names the runs that do not read beside those that do. Every problem raises a
-`RunHistoryError` whose message is one line to show.
-"""
+"""What `tui-gym runs` does, as plain functions returning typed results for the CLI to print."""
 
 from __future__ import annotations
 

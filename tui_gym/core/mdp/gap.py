@@ -1,10 +1,4 @@
-"""How far a policy is from the optimum: `exact_gap` and the `Gap` it returns.
-
-Both figures are exact values in the package's one definition, so the gap is
-free of sampling noise and never negative: with an episode limit the optimum is
-the best over every policy, stationary or not; with none, stationary policies
-are optimal. Differences below round-off (`ROUND_OFF`) are reported as 0.
-"""
+"""How far a policy is from the optimum: `exact_gap` and the `Gap` it returns."""
 
 from __future__ import annotations
 

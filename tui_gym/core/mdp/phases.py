@@ -1,16 +1,4 @@
-"""`Phases`: a world that changes as it is played, as the model of each phase.
-
-A world like the book's blocking maze (Sutton & Barto, Figure 8.4) changes
-after a number of steps counted over every episode played in it: its walls
-move, and from then on another model is in force. `Phases` lists the model of
-each phase and the step it starts at (the first at step 0); `index_at(steps)`
-says which is in force for the transition that follows `steps` transitions.
-A world that never changes has one phase (`Phases.of(model)`).
-
-Whoever samples such a world (a training engine) takes the model in force
-before each transition, counting transitions over episodes; the exact
-figures of a learner are those of the phase in force after its steps.
-"""
+"""`Phases`: a world that changes as it is played, as the model of each phase."""
 
 from __future__ import annotations
 

@@ -1,23 +1,4 @@
-"""Dynamic programming one sweep at a time, as Sutton & Barto's chapter 4 writes it.
-
-The values here are the book's: the expected discounted return with no
-episode limit (a model's limit is not looked at), a terminal transition
-ending the sum. Every function works on the model's `[S, A, K]` arrays at
-once, except the in-place sweeps, which go through the states in index order
-so that each reads the values already updated in the same sweep.
-
-- `evaluation_sweep(model, policy, v, gamma, in_place)`: one sweep of
-  iterative policy evaluation; the new values and the largest change;
-- `value_sweep(model, v, gamma, in_place)`: one sweep of value iteration,
-  with the greedy actions it took its maxima from;
-- `greedy(model, v, gamma, tolerance)` and `improve(...)`: policy improvement,
-  the actions within `tolerance` of the best shared equally, a state's old
-  actions kept while they are all still among them;
-- `Planner`: a policy and its values stepped by one of `METHODS` (policy
-  evaluation, policy iteration, value iteration), sweep by sweep, with the
-  counts, the last change and the states an improvement changed, for the
-  Plan view, `tui-gym plan` and the book's figures.
-"""
+"""Dynamic programming one sweep at a time, as Sutton & Barto's chapter 4 writes it."""
 
 from __future__ import annotations
 

@@ -1,16 +1,4 @@
-"""A model as a reward or time-limit wrapper changes it.
-
-Each function returns a new model whose exact values are those of the wrapped
-game: `scale_reward` (`ScaleReward`: every reward times `factor`),
-`step_penalty` (`StepPenalty`: `penalty` taken off every step's reward, the
-last one included), `clip_reward` (Gymnasium's `ClipReward`: each reward
-clipped to `[low, high]`, either bound optional), and `with_horizon`
-(`TimeLimit`: a different episode limit, or None for none). Rewards are
-transformed outcome by outcome, so clipping stays exact however an action's
-outcomes differ; a reward drawn with noise (`FiniteMDP.reward_std`) scales
-with its deviation, and is not clipped (its clipped mean is no longer one
-outcome's reward). The arguments are checked as the wrappers check theirs.
-"""
+"""A model as a reward or time-limit wrapper changes it."""
 
 from __future__ import annotations
 

@@ -1,18 +1,4 @@
-"""`read_recording`: a recording file read back, tolerantly, for replay.
-
-Every line is read on its own: a line that is not JSON, not a known record or
-missing a field it needs is skipped and its number kept; a file from another
-format version is read as far as its lines fit this one. Whatever went wrong
-comes back as one message (`Recording.message`), and everything that could
-be read replays. Episodes are numbered in the order they appear in the file,
-from 1.
-
-A recording is data from a file: only its first `MAX_READ_BYTES` are read (the
-message says so past them), text meant for people (names, notes, the state in
-words) comes back with its control characters made visible and cut to a
-readable length, and a scene that the caller's `scene_fits(board, scene)` says
-its board cannot draw is dropped (and counted in the message).
-"""
+"""`read_recording`: a recording file read back, tolerantly, for replay."""
 
 from __future__ import annotations
 

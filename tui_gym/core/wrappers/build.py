@@ -1,18 +1,4 @@
-"""Building an env from an id and a list of wrapper choices.
-
-Provides `build_env` (strict: a choice that does not fit raises
-`WrapperMismatchError`), `build_env_lenient` (applies what fits, returns what it
-skipped and why), `check_choices` (the same verdicts without keeping the env)
-and `UnknownEnvError`.
-
-Choices apply in order, the first innermost; a chain of more than `MAX_CHAIN`
-is refused. A `TimeLimit` put directly on
-top of another replaces it (see `catalog.replace_time_limit`), so choosing
-`TimeLimit:max_episode_steps=500` first on an env registered with 300 steps
-gives 500-step episodes,
-just as `gym.make(..., max_episode_steps=500)` would, not a second limit that
-could only shorten the registered 300.
-"""
+"""Building an env from an id and a list of wrapper choices."""
 
 from __future__ import annotations
 

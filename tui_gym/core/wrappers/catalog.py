@@ -1,15 +1,4 @@
-"""The catalog of swappable wrappers: what each one is, takes and needs.
-
-Provides `WrapperSpec` (one catalog entry: a one-line summary, its `Param`s,
-whether it fits an env, how to build it), `CATALOG` in teaching order and
-`get_spec`, `WrapperChoice` (a hashable, validated pick of one wrapper and its
-values), the CLI syntax `parse_wrapper_spec` / `format_wrapper_spec`
-(`Name` or `Name:key=value,key=value`), and `check_chain_length`: a chain holds
-at most `MAX_CHAIN` wrappers, wherever it comes from.
-
-Parameter names are the wrapped classes' own keyword arguments, so a choice's
-values go straight into the constructor.
-"""
+"""The catalog of swappable wrappers: what each one is, takes and needs."""
 
 from __future__ import annotations
 

@@ -1,11 +1,4 @@
-"""Our own reward wrappers: `ScaleReward`, `StepPenalty` and `DistanceShaping`.
-
-Gymnasium has no ready-made wrapper for these three lessons, so they live here,
-written the way Gymnasium writes its own: each records its constructor
-arguments (`RecordConstructorArgs`), so `env.spec` lists it and
-`gym.make(env.spec)` rebuilds the same stack, and its class name is what
-`str(env)` shows, e.g. `<StepPenalty<TimeLimit<...>>>`.
-"""
+"""Our own reward wrappers: `ScaleReward`, `StepPenalty` and `DistanceShaping`."""
 
 from __future__ import annotations
 

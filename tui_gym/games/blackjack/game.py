@@ -1,16 +1,4 @@
-"""Blackjack: Gymnasium's `Blackjack-v1` as the app sees it.
-
-Actions are stick (0) and hit (1). Base states are every decision state
-(player sum 4-21, dealer card A-10, usable ace); the exact figures come from
-the game's own dynamic programme (`solver`, an infinite deck, exact), and the
-heatmaps are the two halves of a basic-strategy chart.
-
-Reward wrappers (`ScaleReward`, `StepPenalty`, `ClipReward`, any function of
-a step's reward) and a `TimeLimit` too long to cut a hand short are taken into
-account exactly: the dynamic programme runs on the rewards the wrapped env
-hands out. Anything else that changes the game (`StickyAction`, a shorter
-`TimeLimit`) leaves the figures those of the unwrapped game, and they say so.
-"""
+"""Blackjack: Gymnasium's `Blackjack-v1` as the app sees it."""
 
 from __future__ import annotations
 

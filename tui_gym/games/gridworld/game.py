@@ -1,27 +1,4 @@
-"""GridWorld: our `tui_gym/GridWorld-v0` as the app sees it.
-
-Actions are right, up, left, down (the tutorial's mapping). Base states are
-every (agent, target) pair; the exact figures are shortest-path ones (`paths`):
-the share of pairs the greedy policy solves in the Manhattan number of steps
-and its steps over the fewest (ties broken at random, as the agent breaks
-them), for evaluations also the greedy policy's exact expected return beside
-the optimum's on the game's model (`model`, rewards and time limit as the
-wrappers make them), and the heatmap shows max Q over the grid for one target (the focus a person
-moves) with the greedy move in each cell.
-
-The optimum is a shortest path. That holds whenever reaching the target pays
-(its reward is positive) and no other step does (rewards of at most zero, no
-better farther away): then every step a route wastes costs, and the target
-comes later. The wrappers' rewards are checked against that (`scope`); when
-they break it, the figures are shortest-path figures and say so, and the
-advice claims no optimum.
-
-**Walls.** The argument `layout` holds a square map of floor (F) and walls (W)
-as text (`games.maps`; `walls`, a list of (x, y) cells, is read into one): the
-env's `walls`, and the shortest paths and figures go around them (`walled`).
-The state space stays every (agent, target) pair, so painting walls keeps an
-agent's table meaningful.
-"""
+"""GridWorld: our `tui_gym/GridWorld-v0` as the app sees it."""
 
 from __future__ import annotations
 

@@ -1,17 +1,4 @@
-"""GridWorld's exact model, so a greedy policy gets an exact expected return.
-
-States are the (agent, target) placements in the row-major order of the
-game's table (`ax, ay, tx, ty`), actions right, up, left, down; a move is
-clipped at the grid's edges, stays put against a wall cell (`walls`), and ends
-the episode on the target. Every move has one outcome, so the model is
-`[S, 4, 1]`. Episodes start uniformly over the placements of agent and target
-on different free cells (the env's draws). Rewards are the env's
-(`+reward_scale` on the target, `-step_penalty` otherwise) passed through the
-wrappers' reward code with the distance after the move (the fewest moves
-around the walls, -1 where they part the two, as the env reports it), so
-`StepPenalty`, `ScaleReward` and `DistanceShaping` are followed exactly; the
-episode limit is the tightest `TimeLimit`.
-"""
+"""GridWorld's exact model, so a greedy policy gets an exact expected return."""
 
 from __future__ import annotations
 

@@ -1,17 +1,4 @@
-"""`GridMap`: a map of tiles with its rewards and slip, and the edits a person makes.
-
-A map is rows of tiles (row 0 at the top, as FrozenLake's `desc`): S start,
-F floor, H hole, G goal, C cliff, W wall, R reward cell; `rewards` sets what
-entering an R, H, G or C cell pays, `slip` how likely a move from an S, F or R
-cell goes to one side instead (`tui_gym.envs.tile_map` plays it). A map is
-immutable and hashable: every edit returns a new one, so an undo is the map
-before.
-
-`painted(cell, tool, value)` paints one cell with a `TOOLS` entry;
-`resized(rows, cols)` crops or extends with floor; `goal_reachable()` says
-whether any goal can be reached from the start; `walls_xy()` reads the walls
-in GridWorld's (x, y) terms.
-"""
+"""`GridMap`: a map of tiles with its rewards and slip, and the edits a person makes."""
 
 from __future__ import annotations
 

@@ -1,12 +1,4 @@
-"""A player's score beside the exact optimum: returns, exact decision regret, agreement.
-
-`Verdict` is one move's judgement, made from the game's hint before the move:
-whether it was a decision at all (the optimum had a say), whether the move
-was one of the optimal ones, and its exact regret `max_a Q*(s, a) - Q*(s, a_taken)`
-when the hint carries exact action values. `ArenaScore` adds verdicts and
-rewards up per episode and over all episodes, in constant memory apart from a
-bounded list of the latest episodes.
-"""
+"""A player's score beside the exact optimum: returns, exact decision regret, agreement."""
 
 from __future__ import annotations
 

@@ -1,10 +1,5 @@
 """Figure 6.6 (Example 6.6): Sarsa, Expected Sarsa and Q-learning on CliffWalking against α,
 the mean return of the first 100 episodes (interim) and of long runs (asymptotic).
-
-The default is a short version; `--full` plays the book's counts (interim over 50,000 runs,
-asymptotic over 10 runs of 100,000 episodes) as tasks kept in the run history, so an
-interrupted figure resumes (`--resume RUN`) and a Dask cluster can run them (`--cluster`).
-`--runs` sets the interim's runs, `--episodes` the asymptotic runs' length.
 """
 
 from __future__ import annotations

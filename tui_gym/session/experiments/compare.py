@@ -1,39 +1,4 @@
-"""Comparisons: several algorithms on one game, each over many seeds, aggregated and recorded.
-
-`run_compare(CompareSpec(...))` trains every (algorithm, seed) from scratch
-for the same number of episodes and returns a `CompareResult`: per algorithm,
-the per-episode *online* return (what the learner got while exploring)
-averaged over seeds with a 95% Student-t band, the mean online return over
-the last 10% of episodes with its interval, and, where the game has an exact
-model, the greedy policy's exact value at checkpoints and its gap to the
-optimum at the end.
-
-Every (algorithm, seed) is a learner of its own, trained on the game's model
-by the engine's compiled loop exactly as `train --seed` trains it
-(`core.engine.seeds`), so the figures do not depend on where or in what
-order seeds run. The work is tasks: an algorithm × a block of its seeds.
-They run on the calling thread, one task per algorithm, when the whole takes
-less than `SPREAD_SECONDS` (throwaway learners played for a moment tell),
-else in tasks of about `TASK_SECONDS` or more, spread over child processes,
-one per core (`core.engine.processes`: they never outlive the caller), or on
-a Dask cluster (`cluster`). A game or wrapper no model follows is played seed
-after seed on the Gymnasium env.
-
-`progress(CompareProgress)` is called on the calling thread about every
-`PROGRESS_INTERVAL` seconds and as each task lands, with the outcomes so far;
-setting `stop` (a `threading.Event`) ends the run at the next step: each
-algorithm keeps the episodes all its seeds finished (the seeds that finished,
-when some tasks had not begun), and the result says `interrupted`. With a
-`RunHistory`, each algorithm is recorded as one run of kind `compare` (the
-others name the first one as their `group`); each finished task is kept in
-it at once (`RunHistory.put_task`), and a finished run's curves `return` and
-`exact_value` (each with `.lo` / `.hi`) and figures `mean_return_last`,
-`exact_value` and `exact_gap` are aggregated from its stored tasks. A prediction
-learner (`algorithms.Predictor`) has the RMS error of its V against the exact
-values of the policy it follows in their place, at the same checkpoints (curve
-and figure `rms_error`). `resume`
-runs only the tasks a recorded run misses, after checking its settings.
-"""
+"""Comparisons: several algorithms on one game, each over many seeds, aggregated and recorded."""
 
 from __future__ import annotations
 

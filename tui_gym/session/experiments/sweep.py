@@ -1,17 +1,4 @@
-"""Sweeps: one algorithm over a grid of hyperparameter values, each point over many seeds.
-
-`run_sweep(SweepSpec(...))` trains the algorithm at every point of the grid
-(the product of each key's values, the first key slowest) exactly as a
-comparison trains its algorithms (`compare.execute`: every seed a learner of
-its own, spread over child processes when the work is long), and returns a
-`SweepResult` with one `SweepPoint` per grid point: its values and its
-`AlgorithmOutcome`. A random search draws `samples` points instead, each key
-from its `Range` (uniform, or log-uniform), seeded by `sample_seed`, and the
-same seed draws the same points. `rank` orders the points best first: by the
-greedy policy's exact value (or the online return, without a model), or for a
-prediction learner by the lowest RMS error of V. With a `RunHistory` each
-point is recorded as one run of kind `sweep`, grouped as a comparison's are.
-"""
+"""Sweeps: one algorithm over a grid of hyperparameter values, each point over many seeds."""
 
 from __future__ import annotations
 

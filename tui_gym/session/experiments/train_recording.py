@@ -1,14 +1,4 @@
-"""`TrainRecording`: one headless training run (`tui-gym train`) kept in the run history.
-
-Used as a context manager around the run: `begin(session)` writes the run
-(status running) once the session is built, on a thread of its own so the
-training does not wait for the disk, `on_chunk` (Session.train's
-callback) takes exact-value checkpoints, and `finish` writes the curves, the
-final figures and the saved agent's path. Leaving the block by an exception
-marks the run interrupted (Ctrl+C) or failed, with what it had. A history
-that cannot be opened or written never stops the training: `warn` gets one
-line and the run goes on unrecorded.
-"""
+"""`TrainRecording`: one headless training run (`tui-gym train`) kept in the run history."""
 
 from __future__ import annotations
 

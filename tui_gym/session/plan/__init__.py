@@ -1,10 +1,4 @@
-"""Planning on a game's exact model: headless (`tui-gym plan`, the book) and live (the Plan view).
-
-- `start`: the policies planning starts from (random, the optimum, an agent's);
-- `runner`: `PlanRunner`, a planner stepped on a thread of its own for the Plan view;
-- here: `plan(...)`, one method run to its end on a game, and `plan_json`, what
-  `tui-gym plan --json` prints.
-"""
+"""Planning on a game's exact model: headless (`tui-gym plan`, the book) and live (Plan view)."""
 
 from __future__ import annotations
 

@@ -1,19 +1,4 @@
-"""`PlanRunner`: a `Planner` stepped on a thread of its own, for the Plan view.
-
-Every command (a step, a run, a pause, an improvement, new settings, a new
-start, an edited world) is queued and carried out by the runner's thread, so
-a sweep of a large model never holds up the screen; after each the thread
-publishes an immutable `PlanSnapshot` (numpy copies) in `latest`, which the
-view pulls on its timer. A run steps the chosen method at the chosen speed
-(`SPEEDS`, sweeps a second; "max" publishes at most `MAX_FRAMES` a second)
-until the method is done or is paused. A run the person did not pause starts
-again when the world changes, from the values it had (as the book's demos
-re-plan after an edit). With `limited`, a snapshot taken while no run is on
-also carries the policy's value by that function (the tool's own exact value,
-over the episode limit), computed again only when the policy has changed. With `on_command`, the
-thread calls it (from its own thread) after publishing what a command did, so
-a view can draw a setting's effect without waiting for its next look.
-"""
+"""`PlanRunner`: a `Planner` stepped on a thread of its own, for the Plan view."""
 
 from __future__ import annotations
 

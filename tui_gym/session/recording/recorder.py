@@ -1,22 +1,4 @@
-"""`Recorder`: writes the episodes a player plays to a recording file (see `format`).
-
-Front ends drive it with four calls, each one line in the file, written whole
-and flushed as it happens:
-
-    recorder = Recorder("games.jsonl", session, source="benchmark", seed=7)
-    recorder.start_episode(env, observation, seed=episode_seed)   # after env.reset
-    recorder.step(env, action, observation, reward, terminated, truncated)  # after env.step
-    recorder.end_episode()
-    recorder.close()
-
-`step` judges the move against the state the env was in before it (the
-recorder looks at each state as it is reached) and returns the `Judgement`.
-A `HumanGame` with a recorder attached calls `game_reset` and `game_step`
-itself; `use_session` starts a new header when the game, its parameters or
-its wrappers change. A write that fails (a full disk, a vanished folder)
-stops the recording, never the game: `failure` says why, and `on_failure`
-is told once.
-"""
+"""`Recorder`: writes the episodes a player plays to a recording file (see `format`)."""
 
 from __future__ import annotations
 

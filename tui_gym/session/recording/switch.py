@@ -1,12 +1,4 @@
-"""`RecordingSwitch`: recording that a person turns on and off while playing.
-
-The switch stands where a `HumanGame` expects its recorder, on and off alike:
-while on, each reset and move goes to a `Recorder`; while off, nothing is
-written. Turned on, it records to the file it was given (`tui-gym --record
-PATH`) or else to a new `tui-gym-GAME-TIME.jsonl` in the current folder, and
-every later turn on adds to that same file. An episode under way when it is
-turned on is recorded from its next reset, unless no move has been made yet.
-"""
+"""`RecordingSwitch`: recording that a person turns on and off while playing."""
 
 from __future__ import annotations
 

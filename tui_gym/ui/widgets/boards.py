@@ -1,20 +1,4 @@
-"""The board every game is drawn on: the `Board` base and its messages.
-
-A board draws a game's *scene* (plain data from `game.states.scene(env)`) and,
-when `interactive`, turns keys and clicks into messages that bubble up:
-`Board.Act(action_name)` for a move and `Board.NewEpisode()` for a new
-episode. It never touches an env or a game itself: the Play view owns the
-game and answers the messages; the Train view shows the agent's moves on a
-non-interactive board. While the Play view lets the agent play on an
-interactive board, `set_agent_playing(True)` says so on the board (the
-player's hand is the agent's, the border changes colour) and a person's
-click or move posts `Board.TakeOver()` instead. `board_kinds.BOARDS` maps a
-game's `board` kind to its class.
-
-A board is a small vertical stack: a `BoardCanvas` that renders the board's
-`picture()` at whatever size it is given (a board picks the largest drawing
-that fits), and, when interactive, a row of compact buttons for the mouse.
-"""
+"""The board every game is drawn on: the `Board` base and its messages."""
 
 from __future__ import annotations
 

@@ -1,15 +1,4 @@
-"""`CardsBoard`: a card table that draws the dealer's and the player's hands.
-
-The scene is `{"player": [cards], "dealer": [cards]}` with 1 for an ace and 10
-for a ten or a face card, and each hand's total as the game counts it
-(`player_total`, `player_usable`: an ace counted 11; `dealer_total`, shown
-once the dealer's hand is). The dealer's second card lies face down until the
-scene is shown with `reveal=True`. Cards are drawn as little boxes in one of
-three sizes, the largest that fits; suits are decorative (the game has none)
-and follow the card's place in the hand, so a redraw never reshuffles them.
-Keys: h hit, s stick, n or Enter deals the next hand; the buttons under the
-table do the same with the mouse.
-"""
+"""`CardsBoard`: a card table that draws the dealer's and the player's hands."""
 
 from __future__ import annotations
 

@@ -1,16 +1,4 @@
-"""`CompareChart`: several return curves overlaid, each with its 95% band, a legend and colours.
-
-Each curve is a line of braille dots (two columns and four rows of dots a
-cell) in its own colour; its band, where it has one, shades the cells
-between its edges with a dim tint of that colour (where bands overlap, a tint
-of their colours' mean). The left margin gives the y range (fitted to all but
-the first tenth of the episodes, where a learner's first random walks would
-flatten the rest: what lies beyond is drawn along the edge), the line below
-the plot the episodes, and one legend line per curve says whose it is, how
-many seeds, and whether its band is a confidence band or its line smoothed.
-A curve shorter than the others stops where its episodes stop. A curve that
-knows the returns its game allows (`Series.bounds`) keeps the axis within them.
-"""
+"""`CompareChart`: several return curves overlaid, each with its 95% band, a legend and colours."""
 
 from __future__ import annotations
 

@@ -1,23 +1,4 @@
-"""`DialBoard`: a game whose move is a number picked from a range (a stake, cars to move).
-
-The scene is plain data:
-
-- "title": the board's title;
-- "bars": `[label, value, maximum]` rows, drawn as gauges (the capital, the
-  cars at each site), with "unit" before each number ("$");
-- "lines": what the last move did, in words (`{who}` stands for the player);
-- "actions": the action names in order (the numbers the dial runs through),
-  and "labels", shorter words for them on the dial ("$5" for "stake 5");
-- "allowed": how many of the first actions are moves of their own here (the
-  rest repeat the last: a stake beyond the capital); the dial stops there;
-- "start": the action the dial points at when an episode starts;
-- "prompt": what to do, in a few words.
-
-Keys: ← → (or h l) turn the dial by one, ↑ ↓ (or k j) by five, home / end to
-either end, enter or space makes the move the dial points at; n or r starts a
-new episode at any time, enter once the episode is over. `keys_for(action)`
-says which keys pick an action from where the dial stands.
-"""
+"""`DialBoard`: a game whose move is a number picked from a range (a stake, cars to move)."""
 
 from __future__ import annotations
 

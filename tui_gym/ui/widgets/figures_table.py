@@ -1,14 +1,4 @@
-"""`FiguresTable`: the final figures of the runs compared, with their 95% intervals.
-
-One row per run shown in the chart, marked in the curve's colour: its seeds,
-episodes, the mean online return over the last 10% of episodes (± the
-half-width of its 95% interval when there are several seeds), and, for
-games with an exact model, the greedy policy's exact value and its gap to
-the optimum; a status column when a run is not finished (running,
-interrupted). A figure a run does not have reads "–". Columns that do not fit
-the width are left out: one no run has a figure in first, then the episodes;
-the run's name is shortened last.
-"""
+"""`FiguresTable`: the final figures of the runs compared, with their 95% intervals."""
 
 from __future__ import annotations
 

@@ -1,15 +1,4 @@
-"""`GridBoard`: a square grid with the agent, the target and the agent's trail.
-
-The scene is `{"size": n, "agent": (x, y), "target": (x, y), "walls": [(x, y)]}` in the
-tutorial's coordinates: x grows to the right and y grows *upwards*, so y = 0
-is the bottom row on screen. The board remembers the cells the agent left
-this episode and draws each with the arrow of the move that left it, a trail
-that shows the path taken. Cells are drawn as large as the space allows, and
-keep their size while the space around the board changes (until the terminal
-is resized or the grid changes size, or they no longer fit).
-Keys: arrows or WASD move, r resets; a click on a cell steps the agent one
-cell towards it.
-"""
+"""`GridBoard`: a square grid with the agent, the target and the agent's trail."""
 
 from __future__ import annotations
 

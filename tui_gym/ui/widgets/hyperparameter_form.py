@@ -1,18 +1,4 @@
-"""The hyperparameter form: one checked field per knob of the algorithm in use.
-
-`HyperparameterForm` is generated from the schema of the `Settings` it
-shows (the algorithm's `params`): an `Input` for every number, with its
-label and the range it accepts, and a `Select` for every `Choice` (the
-step-size schedule) and switch (Monte Carlo's first visit). Every keystroke
-is checked with the field's own `Param.parse`: a bad value turns the field
-red and says why under it. `read()` returns the `Settings` the fields
-describe, or None (with every problem marked, including ones between fields
-such as epsilon final above epsilon start); `load(settings)` fills the
-fields, and rebuilds them when the schema is another algorithm's. Enter
-posts `Submitted` so the owner can hand the keyboard back to the view;
-Escape posts `Left`, on which the owner drops what was typed and not applied
-(it loads the settings in force again).
-"""
+"""The hyperparameter form: one checked field per knob of the algorithm in use."""
 
 from __future__ import annotations
 

@@ -1,14 +1,4 @@
-"""`KeyBar`: the live key bindings along the bottom, drawn as one line of text.
-
-It shows what Textual's `Footer` shows (the bindings active for the focused
-widget and the app, grouped keys together, the command palette key on the
-right) and a click on a key presses it. A key that does not fit is left out
-whole, never cut, from the end of the line (help's own key stays), and a "…"
-says there are more (`?` lists them all). Unlike `Footer`, which rebuilds a
-widget per key on every focus change (three times per view switch here, the
-largest part of a switch's cost), it draws one line, and keeps the last few
-lines drawn: a view switch flips between the same two sets of keys.
-"""
+"""`KeyBar`: the live key bindings along the bottom, drawn as one line of text."""
 
 from __future__ import annotations
 

@@ -1,11 +1,4 @@
-"""`Scoreboard`: the person, the agent and the exact optimum, one row each.
-
-The rows come from the game's narrator (`Narrator.scoreboard(...)`, a list of
-`ScoreRow(who, text, short)`), so nothing here knows which game it is: the
-widget lays them out as two columns, the name on the left and the words
-wrapping beside it. On a compact screen it shows each row's `short` words
-and drops its border, so it stays a few lines tall.
-"""
+"""`Scoreboard`: the person, the agent and the exact optimum, one row each."""
 
 from __future__ import annotations
 

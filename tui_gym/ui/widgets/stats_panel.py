@@ -1,20 +1,4 @@
-"""The training stats table: counts, rates, rolling means and the exact yardstick.
-
-`StatsPanel` shows the state of the run (`run_state`: running, paused,
-finished or ready), the speed and the engine, then episodes, steps, episodes
-per second, time, epsilon and the rolling means of return, length and |TD
-error|, then the reference figures the game's oracle computes for the
-current greedy policy (its exact value beside the optimum and the gap, or a
-game's own figures such as the share of placements solved in the fewest
-steps) with a word on what they take into account. The figures are shown
-generically, by name, so a new game needs no change here.
-
-A figure with nothing behind it yet (no episode in the statistics, e.g. just
-after loading a saved agent) reads "–". No number is ever cut: where the
-full forms do not fit, the widest column takes shorter forms ("5.50M",
-"-1.23e+03") as far as it must, and when that is not enough the table drops
-to one figure a row.
-"""
+"""The training stats table: counts, rates, rolling means and the exact yardstick."""
 
 from __future__ import annotations
 

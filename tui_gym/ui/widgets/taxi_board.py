@@ -1,34 +1,8 @@
 """`TaxiBoard`: Taxi's city: walls, four coloured stands, the passenger, the destination, the cab.
 
-The scene is plain data; cells are (row, col) with row 0 at the top:
-
-- "taxi": (row, col) of the cab.
-- "passenger": the stand the passenger waits at (an index into "stands"), or
-  `len(stands)` (4 on Taxi's map) while in the cab.
-- "destination": the index of the stand the passenger is going to.
-- "stands": [[row, col], ...], the pick-up and drop-off points, and
-  "stand_names": their letters (["R", "G", "Y", "B"] by default); stands are
-  coloured in that order: red, green, yellow, blue.
-- "walls": [[row, col], ...]: a wall on the east side of each of these cells.
-- "rows", "cols": the size of the city (5 x 5 unless given).
-- "last_action": the action just taken, one of "south", "north", "east",
-  "west", "pickup", "dropoff", or None.
-- "last_illegal": whether it was a pick-up or drop-off that could not be made.
-- "rainy": whether moves may veer sideways (rain streaks on the road).
-
-The cab is a yellow chip marked T (TAXI on wide tiles); with the passenger
-aboard it turns green and shows ☺ beside the T. A waiting passenger is ☺ on
-their stand, the destination's stand carries ◎, walls are heavy lines and the
-lanes between cells dotted ones. A line under the city says what the last
-action did (a drive, a wall in the way, the rain pushing the cab aside, a
-pick-up, a drop-off, an illegal one and why, a passenger changing their
-mind) or where the passenger is going; with room to spare a legend follows.
-Tiles are drawn as large as fit and keep their size while they fit.
-
-Keys: arrows or WASD drive (north is up), k picks up, l or o drops off
-(p is the app's Play key), n or r starts a new episode at any time, Enter
-once the episode is over. A click on a cell drives one cell towards it; a
-click on the cab picks up or drops off.
+Scene keys: "taxi", "passenger" (a stand, or `len(stands)` aboard), "destination",
+"stands", "stand_names", "walls" (east side of each cell), "rows", "cols",
+"last_action", "last_illegal", "rainy".
 """
 
 from __future__ import annotations

@@ -1,11 +1,4 @@
-"""`TextBoard`: a game drawn as its own text picture, for envs with no board of their own.
-
-The scene is `{"text": picture, "state": n, "actions": [names]}`: the env's
-text render (colour codes removed), its state number, and the names of its
-actions. The picture is drawn as it is, centred, with the actions and the
-keys that take them under it. Keys: a digit takes the action of that number,
-n or r starts a new episode at any time, Enter once the episode is over.
-"""
+"""`TextBoard`: a game drawn as its own text picture, for envs with no board of their own."""
 
 from __future__ import annotations
 

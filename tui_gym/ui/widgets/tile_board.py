@@ -1,54 +1,8 @@
 """`TileBoard`: a map of tiles: FrozenLake's ice, CliffWalking's cliff, edited grid maps.
 
-The scene is plain data. Cells are (row, col) with row 0 at the top, as in
-Gymnasium's maps; where a key names a cell it is a "r,c" string or a (row, col) pair.
-
-- "cells": the map, one string per row and one character per cell: S start,
-  F floor (ice on a lake), H hole, G goal, C cliff, W wall, R reward cell (its
-  value in "rewards"). Any other character is floor showing that character.
-  Without "cells", "rows" and "cols" give the size of an all-floor map.
-- "theme": "lake" (ice, holes in the ice), "cliff" (ground and a cliff) or
-  "plain" (floor and pits): the colours and the words.
-- "agent": (row, col), or None.
-- "last_action": the move just asked, "left" | "down" | "right" | "up" (or a king's
-  move: "up-left" | "up-right" | "down-left" | "down-right"), or None.
-- "slipped": whether that move went elsewhere than asked.
-- "rewards": {cell: value}, optional. A reward cell shows its value; any other
-  cell's value (a hole's, the cliff's) is written on tiles tall enough for it.
-- "slip": {cell: probability}, optional: a faint ≈ in the corner of tiles wide enough.
-- "marks": {cell: text}, optional: a short overlay on a tile (an arrow, a value).
-- "cursor": (row, col), or None, optional: an editing cursor, drawn as a frame.
-- "event": text, optional: what the last move did in the game's own words (a jump),
-  `{who}` standing for the player; it replaces the board's own words; "event_tone"
-  ("good", "bad", "slipped" or "caption"; "good" by default) colours it.
-- "wind": [strength per column], optional: a move from a column is pushed that many
-  cells up; "gusts": whether the wind varies around those strengths. Drawn as ↑
-  marks in the corner of wide tiles and, with a line to spare, the strengths
-  under the columns.
-- "moves": [move names], optional: the moves the game has (the four straight ones
-  when not given; with the diagonals, king's moves).
-- "offered": [action names], optional: the only moves the state offers (other
-  moves are not made: the caption says what is offered); "choices": [action
-  names], optional: moves the digits 1-9 and 0 pick, in order (a choice among
-  many, such as one of a state's ten actions).
-
-Every kind of tile has its colour and its glyph, so the map reads on a
-monochrome terminal too: ⌂ start, · floor, ○ hole, ★ goal, ▒ cliff, █ wall,
-a reward cell its value. The agent ● is drawn on top (in other colours on the
-goal and in a hole), and each cell the agent left this episode shows the arrow
-of the move that left it. Under the map a line says what the last move did
-(moved, bumped, slipped, fell, reached the goal) and, with room to spare, a
-legend names the tiles. Tiles are drawn as large as fit, with row and column
-numbers when there is room; the smallest drawing puts two map rows in one
-line, in colour only. The size chosen is kept while it fits (see `KeptShape`).
-
-Keys: arrows or WASD move (the moves are named, never numbered); on a map with
-king's moves, home, page up, end and page down (the keypad's 7 9 1 3) move
-diagonally, and the keypad's digits move its way; a scene's "choices" are
-picked by digit; n or r starts a new episode at any time, Enter once the
-episode is over. A click on a cell
-posts `TileBoard.CellClicked(row, col)` and calls `cell_clicked(row, col)`,
-which steps the agent one cell towards it.
+Scene keys: "cells" (S F H G C W R rows), "theme", "agent", "last_action", "slipped",
+"rewards", "slip", "marks", "cursor", "event"/"event_tone", "wind"/"gusts", "moves",
+"offered", "choices"; cells are (row, col) or "r,c", row 0 at the top.
 """
 
 from __future__ import annotations
