@@ -34,8 +34,7 @@ def write_crash_log(error: BaseException) -> Path:
     lines = [
         f"tui-gym {__version__} crashed at {time.strftime('%Y-%m-%d %H:%M:%S %z')}\n",
         f"python {platform.python_version()} on {platform.platform()}\n",
-        f"command: {' '.join(sys.argv)}\n\n",
-        *traceback.format_exception(error),
+        f"command: {' '.join(sys.argv)}\n\n", *traceback.format_exception(error),
     ]
     fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
     with os.fdopen(fd, "w", encoding="utf-8", errors="replace") as out:

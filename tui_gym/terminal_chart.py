@@ -61,13 +61,8 @@ def _fill_gaps(values: np.ndarray) -> np.ndarray:
 
 
 def band_chart(
-    series: Sequence[ChartSeries],
-    width: int = 72,
-    height: int = 16,
-    *,
-    x_label: str = "episode",
-    y_label: str = "",
-    skip_start: bool = False,
+    series: Sequence[ChartSeries], width: int = 72, height: int = 16, *, x_label: str = "episode",
+    y_label: str = "", skip_start: bool = False,
 ) -> Text:
     """The chart of `series` in `width` x `height` character cells of plot, plus axes and legend.
 

@@ -13,14 +13,7 @@ import numpy as np
 from tui_gym.algorithms.settings import COMMON_PARAMS, Field, Settings
 from tui_gym.core.engine import loop, rules
 
-__all__ = [
-    "CellUpdate",
-    "Learner",
-    "LearnerState",
-    "TableSpec",
-    "Transition",
-    "UpdateRecord",
-]
+__all__ = ["CellUpdate", "Learner", "LearnerState", "TableSpec", "Transition", "UpdateRecord"]
 
 @cache
 def _field_types(params: type) -> dict[str, Any]:
@@ -147,8 +140,7 @@ class Learner(ABC):
     formula: ClassVar[str]  # its target, as the step-by-step view writes it
     params: ClassVar[tuple[Field, ...]] = COMMON_PARAMS
     tables: ClassVar[tuple[TableSpec, ...]] = (
-        TableSpec("q", np.float64),
-        TableSpec("counts", np.int64),
+        TableSpec("q", np.float64), TableSpec("counts", np.int64),
     )
     value_tables: ClassVar[tuple[str, ...]] = ("q",)  # start at `initial_value`
     has_traces: ClassVar[bool] = False  # keeps eligibility traces (`eligibility`)
@@ -158,12 +150,8 @@ class Learner(ABC):
     counts: np.ndarray
 
     def __init__(
-        self,
-        n_actions: int,
-        hyperparameters: Mapping[str, Any] | None = None,
-        *,
-        n_states: int | None = None,
-        seed: int | None = None,
+        self, n_actions: int, hyperparameters: Mapping[str, Any] | None = None, *,
+        n_states: int | None = None, seed: int | None = None,
     ) -> None:
         if n_actions < 1:
             raise ValueError(f"n_actions must be >= 1, got {n_actions}")
@@ -325,14 +313,8 @@ class Learner(ABC):
         return int(a2), float(td)
 
     def update_one(
-        self,
-        key: Hashable,
-        action: int,
-        reward: float,
-        next_key: Hashable,
-        terminated: bool,
-        truncated: bool = False,
-        next_action: int | None = None,
+        self, key: Hashable, action: int, reward: float, next_key: Hashable, terminated: bool,
+        truncated: bool = False, next_action: int | None = None,
     ) -> float:
         """One transition by observation keys, explained in `last_update`; its |TD error|.
         A rule that needs the next action (SARSA) takes `next_action`."""
@@ -475,33 +457,17 @@ class Learner(ABC):
         return self._last_record
 
     def _record(
-        self,
-        step: Transition,
-        formula: str,
-        terms: tuple[tuple[str, float], ...],
-        target: float | None,
-        before: float,
-        after: float,
-        alpha: float | None = None,
-        **extra: Any,
+        self, step: Transition, formula: str, terms: tuple[tuple[str, float], ...],
+        target: float | None, before: float, after: float, alpha: float | None = None, **extra: Any,
     ) -> UpdateRecord:
         """An `UpdateRecord` for one transition (no step size when there is no target)."""
         return UpdateRecord(
-            algorithm=self.name,
-            state=step.state,
-            action=step.action,
-            reward=step.reward,
-            next_state=step.next_state,
-            next_action=step.next_action,
-            terminated=step.terminated,
-            truncated=step.truncated,
-            formula=formula,
-            terms=terms,
+            algorithm=self.name, state=step.state, action=step.action, reward=step.reward,
+            next_state=step.next_state, next_action=step.next_action, terminated=step.terminated,
+            truncated=step.truncated, formula=formula, terms=terms,
             target=None if target is None else float(target),
             td_error=None if target is None else float(target) - float(before),
-            step_size=None if target is None else alpha,
-            before=float(before),
-            after=float(after),
+            step_size=None if target is None else alpha, before=float(before), after=float(after),
             **extra,
         )
 
@@ -550,12 +516,8 @@ class Learner(ABC):
             arrays[spec.name] = getattr(self, spec.name)[:used].copy()
         arrays.update(self._extra_arrays())
         meta = {
-            "algorithm": self.name,
-            "n_actions": self.n_actions,
-            "n_states": self.n_states,
-            "rows": used,
-            "episode": self.episode,
-            "hyperparameters": self.hp.to_dict(),
+            "algorithm": self.name, "n_actions": self.n_actions, "n_states": self.n_states,
+            "rows": used, "episode": self.episode, "hyperparameters": self.hp.to_dict(),
         }
         return LearnerState(self.name, arrays, meta, self._keys())
 
@@ -621,10 +583,8 @@ class Learner(ABC):
         """A new learner of this class restored from `state`."""
         meta = state.meta
         learner = cls(
-            int(meta["n_actions"]),
-            meta.get("hyperparameters"),
-            n_states=None if state.keys is not None else int(meta["rows"]),
-            seed=seed,
+            int(meta["n_actions"]), meta.get("hyperparameters"),
+            n_states=None if state.keys is not None else int(meta["rows"]), seed=seed,
         )
         learner.load_state(state)
         return learner

@@ -52,9 +52,7 @@ class DoubleQLearning(Learner):
     formula = "r + γ·Q_B(s', a*), a* = argmax Q_A(s',·)"
     Params = Params
     tables = (
-        TableSpec("q_a", np.float64),
-        TableSpec("q_b", np.float64),
-        TableSpec("counts_a", np.int64),
+        TableSpec("q_a", np.float64), TableSpec("q_b", np.float64), TableSpec("counts_a", np.int64),
         TableSpec("counts_b", np.int64),
     )
 

@@ -142,15 +142,10 @@ def to_json(result: HistoryResult | None) -> dict[str, Any] | None:
     if result is None:
         return None
     return {
-        "game": result.game,
-        "overhead": result.overhead,
-        "overhead_samples": list(result.shares),
-        "recorded_run_s": list(result.recorded_s),
-        "unrecorded_run_s": list(result.unrecorded_s),
-        "fastest_recorded_over_unrecorded": result.ab_ratio,
-        "runs_written": result.runs,
-        "size_bytes": result.size_bytes,
-        "bytes_per_1000_runs": result.bytes_per_1000,
+        "game": result.game, "overhead": result.overhead, "overhead_samples": list(result.shares),
+        "recorded_run_s": list(result.recorded_s), "unrecorded_run_s": list(result.unrecorded_s),
+        "fastest_recorded_over_unrecorded": result.ab_ratio, "runs_written": result.runs,
+        "size_bytes": result.size_bytes, "bytes_per_1000_runs": result.bytes_per_1000,
     }
 
 

@@ -230,11 +230,8 @@ async def _key_latencies(
         marks = tools.action_marks[actions_before:]
         began, ended = marks[0] if marks else (sent, sent)
         samples.append(KeySample(
-            key=key,
-            total_ms=(frame_at - sent) * 1000,
-            queue_ms=(began - sent) * 1000,
-            action_ms=(ended - began) * 1000,
-            frame_ms=(frame_at - ended) * 1000,
+            key=key, total_ms=(frame_at - sent) * 1000, queue_ms=(began - sent) * 1000,
+            action_ms=(ended - began) * 1000, frame_ms=(frame_at - ended) * 1000,
         ))
     return samples
 

@@ -67,12 +67,8 @@ def train_and_watch(
     gc.collect()
     end = rss_bytes()
     return {
-        "episodes": trainer.episodes - warmup,
-        "engine": trainer.engine,
-        "rss_start_mb": start / MB,
-        "rss_end_mb": end / MB,
-        "rss_peak_mb": max(peak, end) / MB,
-        "seconds": seconds,
+        "episodes": trainer.episodes - warmup, "engine": trainer.engine, "rss_start_mb": start / MB,
+        "rss_end_mb": end / MB, "rss_peak_mb": max(peak, end) / MB, "seconds": seconds,
     }
 
 
@@ -90,11 +86,7 @@ def measure(episodes: int, warmup: int, engine: str = "auto") -> MemoryResult:
         raise RuntimeError(f"the memory run failed: {last}")
     data = json.loads(proc.stdout.strip().splitlines()[-1])
     return MemoryResult(
-        episodes=int(data["episodes"]),
-        warmup=warmup,
-        engine=str(data["engine"]),
-        rss_start_mb=float(data["rss_start_mb"]),
-        rss_end_mb=float(data["rss_end_mb"]),
-        rss_peak_mb=float(data["rss_peak_mb"]),
-        seconds=float(data["seconds"]),
+        episodes=int(data["episodes"]), warmup=warmup, engine=str(data["engine"]),
+        rss_start_mb=float(data["rss_start_mb"]), rss_end_mb=float(data["rss_end_mb"]),
+        rss_peak_mb=float(data["rss_peak_mb"]), seconds=float(data["seconds"]),
     )

@@ -79,8 +79,7 @@ def measure_separation(episodes: int, seed: int = 0) -> SeparationResult:
                           seed=seed)
     assert best.regrets is not None and worse.regrets is not None
     return SeparationResult(
-        episodes=episodes,
-        delta=float(worse.regrets.mean() - best.regrets.mean()),
+        episodes=episodes, delta=float(worse.regrets.mean() - best.regrets.mean()),
         return_sd=(float(best.returns.std(ddof=1)), float(worse.returns.std(ddof=1))),
         regret_sd=(float(best.regrets.std(ddof=1)), float(worse.regrets.std(ddof=1))),
         return_gap=float(best.returns.mean() - worse.returns.mean()),
@@ -286,8 +285,6 @@ def measure(separation_episodes: int, seconds: float, repeats: int) -> ProgramsR
     one, together = measure_mcp(seconds, repeats)
     return ProgramsResult(
         separation=measure_separation(separation_episodes),
-        protocol=measure_protocol(seconds, repeats),
-        mcp_one=one,
-        mcp_together=together,
+        protocol=measure_protocol(seconds, repeats), mcp_one=one, mcp_together=together,
         protocol_round_trip=measure_round_trip(seconds, repeats),
     )

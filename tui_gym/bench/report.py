@@ -122,14 +122,9 @@ def _seeds_dict(results: BenchResults) -> dict[str, Any] | None:
     if found is None:
         return None
     return {
-        "game": found.game,
-        "algorithms": list(found.algorithms),
-        "seeds": found.seeds,
-        "episodes": found.episodes,
-        "compare_s": found.compare_s,
-        "tutorial_s": found.tutorial_s,
-        "tutorial_learners_run": found.tutorial_learners,
-        "speedup": found.speedup,
+        "game": found.game, "algorithms": list(found.algorithms), "seeds": found.seeds,
+        "episodes": found.episodes, "compare_s": found.compare_s, "tutorial_s": found.tutorial_s,
+        "tutorial_learners_run": found.tutorial_learners, "speedup": found.speedup,
         "online_return": dict(zip(found.algorithms, found.online_returns, strict=False)),
     }
 
@@ -142,15 +137,10 @@ def _programs_dict(results: BenchResults) -> dict[str, Any] | None:
     trip = found.protocol_round_trip
     return {
         "separation": {
-            "episodes_each": sep.episodes,
-            "deviation": programs.DEVIATION,
-            "delta": sep.delta,
-            "return_gap_measured": sep.return_gap,
-            "return_sd": list(sep.return_sd),
-            "regret_sd": list(sep.regret_sd),
-            "episodes_needed_by_return": sep.by_return,
-            "episodes_needed_by_regret": sep.by_regret,
-            "ratio": sep.ratio,
+            "episodes_each": sep.episodes, "deviation": programs.DEVIATION, "delta": sep.delta,
+            "return_gap_measured": sep.return_gap, "return_sd": list(sep.return_sd),
+            "regret_sd": list(sep.regret_sd), "episodes_needed_by_return": sep.by_return,
+            "episodes_needed_by_regret": sep.by_regret, "ratio": sep.ratio,
             "formula": "n = 1.96^2 (sd_a^2 + sd_b^2) / delta^2",
         },
         "protocol_steps_per_second": found.protocol.steps_per_second,
@@ -173,19 +163,13 @@ def _runner_dict(results: BenchResults, runner: str) -> dict[str, Any]:
     if live is None or not live.repeats:
         return {"error": "; ".join(live.errors) if live is not None else "not measured"}
     return {
-        "engine": live.engine,
-        "live_ratio": live.live_ratio,
+        "engine": live.engine, "live_ratio": live.live_ratio,
         "headless_episodes_per_second": live.headless_eps,
-        "live_episodes_per_second": live.live_eps,
-        "ui_refresh_hz": live.refresh_hz,
-        "frames_hz": live.frames_hz,
-        "key_latency_p50_ms": live.key_latency_ms(50),
-        "key_latency_p95_ms": live.key_latency_ms(95),
-        "key_presses": live.presses,
-        "key_latency_by_key_ms": live.breakdown_ms(),
-        "repeats": len(live.repeats),
-        "window_s": live.seconds,
-        "ratios": [r.ratio for r in live.repeats],
+        "live_episodes_per_second": live.live_eps, "ui_refresh_hz": live.refresh_hz,
+        "frames_hz": live.frames_hz, "key_latency_p50_ms": live.key_latency_ms(50),
+        "key_latency_p95_ms": live.key_latency_ms(95), "key_presses": live.presses,
+        "key_latency_by_key_ms": live.breakdown_ms(), "repeats": len(live.repeats),
+        "window_s": live.seconds, "ratios": [r.ratio for r in live.repeats],
     }
 
 
@@ -266,12 +250,9 @@ def to_json(results: BenchResults) -> dict[str, Any]:
         "rss_growth_mb": memory.growth_mb if memory else None,
         "rss": (
             {
-                "episodes": memory.episodes,
-                "warmup_episodes": memory.warmup,
-                "engine": memory.engine,
-                "start_mb": memory.rss_start_mb,
-                "end_mb": memory.rss_end_mb,
-                "peak_mb": memory.rss_peak_mb,
+                "episodes": memory.episodes, "warmup_episodes": memory.warmup,
+                "engine": memory.engine, "start_mb": memory.rss_start_mb,
+                "end_mb": memory.rss_end_mb, "peak_mb": memory.rss_peak_mb,
             }
             if memory
             else None

@@ -75,8 +75,7 @@ FULL = Plan(
 
 
 def run_bench(
-    quick: bool = False,
-    progress: Callable[[str], None] | None = None,
+    quick: bool = False, progress: Callable[[str], None] | None = None,
     algorithms: tuple[str, ...] | None = None,
 ) -> BenchResults:
     """Measure everything (see the module docstring); `algorithms` (registry names)
@@ -142,22 +141,11 @@ def run_bench(
     stage("dp", "planning: sweeps, Jack's car rental, the Plan view",
           lambda: dp.measure(plan.live_seconds, plan.key_presses, plan.live_repeats, say))
     return BenchResults(
-        quick=quick,
-        seconds=time.perf_counter() - started,
+        quick=quick, seconds=time.perf_counter() - started,
         machine=MachineInfo(os.cpu_count(), load_before, load_average()),
-        compile=found.get("compile"),
-        speed=found.get("speed"),
-        gap=gaps,
-        live=found.get("live", {}),
-        memory=found.get("memory"),
-        startup=found.get("startup"),
-        planning=found.get("planning"),
-        programs=found.get("programs"),
-        map_edit=found.get("map_edit"),
-        history=found.get("history"),
-        seeds=found.get("seeds"),
-        defaults=found.get("defaults"),
-        dp=found.get("dp"),
-        tasks=found.get("tasks"),
-        errors=errors,
+        compile=found.get("compile"), speed=found.get("speed"), gap=gaps,
+        live=found.get("live", {}), memory=found.get("memory"), startup=found.get("startup"),
+        planning=found.get("planning"), programs=found.get("programs"),
+        map_edit=found.get("map_edit"), history=found.get("history"), seeds=found.get("seeds"),
+        defaults=found.get("defaults"), dp=found.get("dp"), tasks=found.get("tasks"), errors=errors,
     )

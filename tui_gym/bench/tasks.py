@@ -62,13 +62,7 @@ def _timed(run: Callable[[], Any], repeats: int) -> tuple[float, Any]:
 def measure(seeds: int, episodes: int, repeats: int = 3) -> TasksResult:
     """Time both figures (see the module docstring)."""
     from tui_gym.core.experiments import RunHistory, RunKind
-    from tui_gym.session.experiments.compare import (
-        Arm,
-        CompareSpec,
-        Setup,
-        execute,
-        run_compare,
-    )
+    from tui_gym.session.experiments.compare import Arm, CompareSpec, Setup, execute, run_compare
     from tui_gym.session.experiments.sweep import SweepSpec, run_sweep
 
     spec = CompareSpec(GAME, ("q-learning", "sarsa"), seeds, episodes, settings=SETTINGS)

@@ -35,21 +35,17 @@ def record(result: BenchmarkResult, db: str | None = None) -> int:
         game_params=result.params,
         wrappers=wrappers,
         hyperparameters={
-            "episodes": result.episodes,
-            "first_seed": result.seed,
-            "decision_timeout": result.decision_timeout,
-            "allow_hints": result.allow_hints,
+            "episodes": result.episodes, "first_seed": result.seed,
+            "decision_timeout": result.decision_timeout, "allow_hints": result.allow_hints,
         },
         seeds=(result.seed,),
     )
     ret = result.mean_return
     figures = [
-        Figure("episodes", result.episodes),
-        ret.figure("mean_return"),
+        Figure("episodes", result.episodes), ret.figure("mean_return"),
         Figure("decisions", result.decisions),
         Figure("invalid_actions", result.fouls.invalid_actions),
-        Figure("timeouts", result.fouls.timeouts),
-        Figure("defaulted", result.fouls.defaulted),
+        Figure("timeouts", result.fouls.timeouts), Figure("defaulted", result.fouls.defaulted),
     ]
     regret = result.mean_regret
     if regret is not None:

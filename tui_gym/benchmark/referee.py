@@ -23,10 +23,8 @@ class Fouls:
 
     def to_json(self) -> dict[str, int]:
         return {
-            "invalid_actions": self.invalid_actions,
-            "timeouts": self.timeouts,
-            "defaulted": self.defaulted,
-            "bad_requests": self.bad_requests,
+            "invalid_actions": self.invalid_actions, "timeouts": self.timeouts,
+            "defaulted": self.defaulted, "bad_requests": self.bad_requests,
             "hints_refused": self.hints_refused,
         }
 

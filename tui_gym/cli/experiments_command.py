@@ -183,9 +183,7 @@ def ctrl_c_stops(stop: threading.Event, err: Console) -> Iterator[None]:
 
 
 def _run_with_progress(
-    out: Console,
-    as_json: bool,
-    label: str,
+    out: Console, as_json: bool, label: str,
     run: Callable[[Callable[[CompareProgress], None] | None, threading.Event], Any],
 ) -> Any:
     from rich.progress import (

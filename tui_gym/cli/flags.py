@@ -11,11 +11,7 @@ from tui_gym.core.params import Param, ParamError
 from tui_gym.games import GAMES, Game
 
 __all__ = [
-    "HP_FLAGS",
-    "add_game_flags",
-    "add_hyperparameter_flags",
-    "flag",
-    "game_kwargs",
+    "HP_FLAGS", "add_game_flags", "add_hyperparameter_flags", "flag", "game_kwargs",
     "hyperparameters",
 ]
 

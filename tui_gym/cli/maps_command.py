@@ -41,10 +41,8 @@ def add_maps_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[ty
 
 def _summary(grid_map: GridMap) -> dict[str, object]:
     return {
-        "size": grid_map.size_text,
-        "games": list(fits(grid_map)),
-        "goal_reachable": grid_map.goal_reachable(),
-        "text": format_map(grid_map),
+        "size": grid_map.size_text, "games": list(fits(grid_map)),
+        "goal_reachable": grid_map.goal_reachable(), "text": format_map(grid_map),
     }
 
 

@@ -88,10 +88,8 @@ def session_for(recording: Recording) -> Session | None:
         return None
     try:
         return Session(
-            env_id=env_id,
-            env_kwargs=dict(game.env_kwargs),
-            choices=tuple(parse_wrapper_spec(spec) for spec in game.wrappers),
-            seed=game.seed or 0,
+            env_id=env_id, env_kwargs=dict(game.env_kwargs),
+            choices=tuple(parse_wrapper_spec(spec) for spec in game.wrappers), seed=game.seed or 0,
         )
     except Exception:  # another version's game or wrapper: replay needs none of it
         return None

@@ -298,16 +298,11 @@ def _cmd_show(args: argparse.Namespace, out: Console) -> int:
     params = ", ".join(f"{k}={v}" for k, v in record.game_params.items())
     versions = record.versions
     rows = [
-        ("kind", str(run.kind)),
-        ("game", run.game + (f" ({params})" if params else "")),
-        ("wrappers", wrappers or "none"),
-        ("algorithm", run.algorithm),
-        ("hyperparameters", settings),
-        ("seeds", ", ".join(str(s) for s in run.seeds) or "none"),
-        ("status", str(run.status)),
-        ("started", _when(run.started_at, full=True)),
-        ("ended", _when(run.ended_at, full=True)),
-        ("took", _duration(run.seconds)),
+        ("kind", str(run.kind)), ("game", run.game + (f" ({params})" if params else "")),
+        ("wrappers", wrappers or "none"), ("algorithm", run.algorithm),
+        ("hyperparameters", settings), ("seeds", ", ".join(str(s) for s in run.seeds) or "none"),
+        ("status", str(run.status)), ("started", _when(run.started_at, full=True)),
+        ("ended", _when(run.ended_at, full=True)), ("took", _duration(run.seconds)),
     ]
     if run.group is not None:
         rows.append(("launched with run", str(run.group)))

@@ -30,9 +30,7 @@ def register_envs() -> None:
     for env_id in GRIDWORLD_IDS:
         if env_id not in gym.registry:
             gym.register(
-                id=env_id,
-                entry_point=GRIDWORLD_ENTRY_POINT,
-                max_episode_steps=GRIDWORLD_MAX_STEPS,
+                id=env_id, entry_point=GRIDWORLD_ENTRY_POINT, max_episode_steps=GRIDWORLD_MAX_STEPS,
             )
     if TILE_MAP_ID not in gym.registry:
         gym.register(id=TILE_MAP_ID, entry_point=TILE_MAP_ENTRY_POINT)

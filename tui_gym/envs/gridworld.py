@@ -16,16 +16,8 @@ from numpy.typing import NDArray
 from tui_gym.envs.walls import Walls, cell_distances, check_walls
 
 __all__ = [
-    "ACTION_DELTAS",
-    "ACTION_NAMES",
-    "AGENT_COLOR",
-    "BACKGROUND_COLOR",
-    "CELL_PIXELS",
-    "GRID_LINE_COLOR",
-    "TARGET_COLOR",
-    "WALL_COLOR",
-    "GridWorldEnv",
-    "manhattan",
+    "ACTION_DELTAS", "ACTION_NAMES", "AGENT_COLOR", "BACKGROUND_COLOR", "CELL_PIXELS",
+    "GRID_LINE_COLOR", "TARGET_COLOR", "WALL_COLOR", "GridWorldEnv", "manhattan",
 ]
 
 Position = tuple[int, int]
@@ -152,12 +144,8 @@ class GridWorldEnv(gym.Env[ObsType, int]):
     reports_distance = True  # every step's info holds "distance" (DistanceShaping reads it)
 
     def __init__(
-        self,
-        render_mode: str | None = None,
-        size: int = 5,
-        reward_scale: float = 1.0,
-        step_penalty: float = 0.0,
-        walls: Sequence[Sequence[int]] = (),
+        self, render_mode: str | None = None, size: int = 5, reward_scale: float = 1.0,
+        step_penalty: float = 0.0, walls: Sequence[Sequence[int]] = (),
     ) -> None:
         if not _is_int(size) or size < 2:
             raise ValueError(f"GridWorld size must be an integer >= 2, got {size!r}")
@@ -214,8 +202,7 @@ class GridWorldEnv(gym.Env[ObsType, int]):
     def _get_obs(self) -> ObsType:
         agent, target = self._require_state()
         return {
-            "agent": np.array(agent, dtype=np.int64),
-            "target": np.array(target, dtype=np.int64),
+            "agent": np.array(agent, dtype=np.int64), "target": np.array(target, dtype=np.int64),
         }
 
     def _get_info(self) -> dict[str, Any]:

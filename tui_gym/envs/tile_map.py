@@ -13,13 +13,7 @@ import numpy.typing as npt
 from gymnasium import spaces
 
 __all__ = [
-    "ACTION_ORDERS",
-    "TILES",
-    "TileArrays",
-    "TileMapEnv",
-    "TileRules",
-    "cell_key",
-    "read_cell",
+    "ACTION_ORDERS", "TILES", "TileArrays", "TileMapEnv", "TileRules", "cell_key", "read_cell",
     "tile_arrays",
 ]
 
@@ -32,8 +26,7 @@ ENDING = "HG"
 STEPS = {"left": (0, -1), "down": (1, 0), "right": (0, 1), "up": (-1, 0)}
 # The action numbers of Gymnasium's two games: FrozenLake's and CliffWalking's.
 ACTION_ORDERS: dict[str, tuple[str, ...]] = {
-    "lake": ("left", "down", "right", "up"),
-    "cliff": ("up", "right", "down", "left"),
+    "lake": ("left", "down", "right", "up"), "cliff": ("up", "right", "down", "left"),
 }
 
 Cell = tuple[int, int]
@@ -81,9 +74,7 @@ def _where(cell: Cell) -> str:
 
 
 def check_map(
-    cells: Sequence[str],
-    rewards: Mapping[Any, Any] | None,
-    slip: Mapping[Any, Any] | None,
+    cells: Sequence[str], rewards: Mapping[Any, Any] | None, slip: Mapping[Any, Any] | None,
     need_start: bool = True,
 ) -> tuple[tuple[str, ...], dict[Cell, float], dict[Cell, float]]:
     """The map checked: rows, rewards and slip by cell. `ValueError` names the cell at fault.
@@ -164,11 +155,8 @@ class TileArrays:
 
 
 def tile_arrays(
-    cells: Sequence[str],
-    rewards: Mapping[Cell, float],
-    slip: Mapping[Cell, float],
-    actions: Sequence[str],
-    rules: TileRules,
+    cells: Sequence[str], rewards: Mapping[Cell, float], slip: Mapping[Cell, float],
+    actions: Sequence[str], rules: TileRules,
 ) -> TileArrays:
     """The transitions of a checked map (`check_map`), vectorized over cells."""
     n_rows, n_cols = len(cells), len(cells[0])
@@ -273,16 +261,10 @@ class TileMapEnv(gym.Env[Any, Any]):
     metadata: dict[str, Any] = {"render_modes": ["ansi"], "render_fps": 4}
 
     def __init__(
-        self,
-        cells: Sequence[str] = ("SFFF", "FHFH", "FFFH", "HFFG"),
-        rewards: Mapping[Any, float] | None = None,
-        slip: Mapping[Any, float] | None = None,
-        slip_default: float = 0.0,
-        actions: str = "lake",
-        step_reward: float = 0.0,
-        goal_reward: float = 1.0,
-        hole_reward: float = 0.0,
-        cliff_reward: float = -100.0,
+        self, cells: Sequence[str] = ("SFFF", "FHFH", "FFFH", "HFFG"),
+        rewards: Mapping[Any, float] | None = None, slip: Mapping[Any, float] | None = None,
+        slip_default: float = 0.0, actions: str = "lake", step_reward: float = 0.0,
+        goal_reward: float = 1.0, hole_reward: float = 0.0, cliff_reward: float = -100.0,
         render_mode: str | None = None,
     ) -> None:
         if actions not in ACTION_ORDERS:
@@ -291,10 +273,8 @@ class TileMapEnv(gym.Env[Any, Any]):
             raise ValueError(f"TileMap renders 'ansi' only, got {render_mode!r}")
         rows, reward_of, slip_of = check_map(cells, rewards, slip)
         self.rules = TileRules(
-            step=_finite(step_reward, "step_reward"),
-            goal=_finite(goal_reward, "goal_reward"),
-            hole=_finite(hole_reward, "hole_reward"),
-            cliff=_finite(cliff_reward, "cliff_reward"),
+            step=_finite(step_reward, "step_reward"), goal=_finite(goal_reward, "goal_reward"),
+            hole=_finite(hole_reward, "hole_reward"), cliff=_finite(cliff_reward, "cliff_reward"),
             slip=_probability(slip_default, "slip_default"),
         )
         self.cells = rows

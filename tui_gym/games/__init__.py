@@ -31,22 +31,9 @@ __all__ = [
 ]
 
 GAMES: tuple[Game, ...] = (
-    BlackjackGame(),
-    GridWorldGame(),
-    FrozenLakeGame(),
-    CliffWalkingGame(),
-    TaxiGame(),
-    ABGridGame(),
-    CornerGridGame(),
-    GamblerGame(),
-    CarRentalGame(),
-    RandomWalkGame(),
-    WindyGame(),
-    KingWindyGame(),
-    DynaMazeGame(),
-    BlockingMazeGame(),
-    ShortcutMazeGame(),
-    MaxBiasGame(),
+    BlackjackGame(), GridWorldGame(), FrozenLakeGame(), CliffWalkingGame(), TaxiGame(),
+    ABGridGame(), CornerGridGame(), GamblerGame(), CarRentalGame(), RandomWalkGame(), WindyGame(),
+    KingWindyGame(), DynaMazeGame(), BlockingMazeGame(), ShortcutMazeGame(), MaxBiasGame(),
 )
 
 _generic: dict[str, Game] = {}

@@ -30,21 +30,8 @@ if TYPE_CHECKING:
     from tui_gym.session.play import PlayStep, Scorecard
 
 __all__ = [
-    "EXACT",
-    "Advice",
-    "Bound",
-    "EvalOutcome",
-    "Game",
-    "HeatmapLayout",
-    "Narrator",
-    "NotAvailable",
-    "Oracle",
-    "ReferenceMetrics",
-    "Scope",
-    "StateSpace",
-    "TallyWord",
-    "TrainingModel",
-    "all_tied",
+    "EXACT", "Advice", "Bound", "EvalOutcome", "Game", "HeatmapLayout", "Narrator", "NotAvailable",
+    "Oracle", "ReferenceMetrics", "Scope", "StateSpace", "TallyWord", "TrainingModel", "all_tied",
     "greedy_probabilities",
 ]
 
@@ -313,9 +300,7 @@ class Narrator(Role):
     agreement_words = "moves as the optimum"
 
     tally_words: tuple[TallyWord, ...] = (
-        TallyWord("wins", "good"),
-        TallyWord("draws", "even"),
-        TallyWord("losses", "bad"),
+        TallyWord("wins", "good"), TallyWord("draws", "even"), TallyWord("losses", "bad"),
         TallyWord("truncated", always=False),
     )
 
@@ -342,10 +327,7 @@ class Narrator(Role):
         return ""
 
     def coach_text(
-        self,
-        before: Advice,
-        action: int,
-        scene_before: Mapping[str, Any],
+        self, before: Advice, action: int, scene_before: Mapping[str, Any],
         scene_after: Mapping[str, Any],
     ) -> str:
         """One line judging `action`, taken where `before` was the advice ('' without a
@@ -372,12 +354,8 @@ class Narrator(Role):
         return {}
 
     def scoreboard(
-        self,
-        you: Scorecard,
-        figures: Mapping[str, float] | None,
-        watched: Scorecard | None = None,
-        agent_note: str = "",
-        scope: Scope = EXACT,
+        self, you: Scorecard, figures: Mapping[str, float] | None, watched: Scorecard | None = None,
+        agent_note: str = "", scope: Scope = EXACT,
     ) -> list[ScoreRow]:
         """The rows: the person's mean return and agreement, the agent's and the
         optimum's exact values (`figures` from `Oracle.agent_figures`), the episodes
@@ -390,8 +368,7 @@ class Narrator(Role):
                 "You",
                 join_parts(return_summary(you.tally, noun), agreement_summary(you, words)),
                 join_parts(
-                    return_summary(you.tally, noun, short=True),
-                    agreement_summary(you, short=True),
+                    return_summary(you.tally, noun, short=True), agreement_summary(you, short=True),
                 ),
             )
         ]
@@ -440,10 +417,7 @@ class HeatmapLayout(Role):
     focus_help = ""  # what moving the focus does, for the key help
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None,
         marks: BoolArray | NotAvailable | None = None,
     ) -> list[Heatmap]:
         """Panels for `q` (rows: base states); `marks` ([states, actions], from

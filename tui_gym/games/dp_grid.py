@@ -130,11 +130,7 @@ class DPGridLayout(HeatmapLayout):
     """One panel shaped like the grid: max Q colours each cell, the greedy move's arrow."""
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
-        marks: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
         game = _game(self)
         try:
@@ -168,13 +164,9 @@ class DPGridLayout(HeatmapLayout):
                  *([f"{WALL} wall"] if grid.walls else []), "* not an optimal move"]
         return [
             Heatmap(
-                title="max Q and the greedy move",
-                row_labels=tuple(str(r) for r in range(rows)),
-                col_labels=tuple(str(c) for c in range(cols)),
-                values=panel,
-                labels=tuple(labels),
-                marked=marked,
-                legend="  ".join(parts),
+                title="max Q and the greedy move", row_labels=tuple(str(r) for r in range(rows)),
+                col_labels=tuple(str(c) for c in range(cols)), values=panel, labels=tuple(labels),
+                marked=marked, legend="  ".join(parts),
             )
         ]
 

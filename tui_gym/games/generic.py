@@ -72,11 +72,7 @@ class TableLayout(HeatmapLayout):
     focus_help = "choose a page of states"
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
-        marks: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
         values = np.asarray(q, dtype=float)
         if values.ndim != 2 or 0 in values.shape:
@@ -100,12 +96,9 @@ class TableLayout(HeatmapLayout):
         for i, s in enumerate(rows):
             marked[i, greedy[s]] = wrong[s]
         table = Heatmap(
-            title=f"Q, states {rows.start}-{rows.stop - 1}",
-            row_labels=tuple(str(s) for s in rows),
-            col_labels=tuple(self.game.action_names),
-            values=values[rows.start:rows.stop].copy(),
-            labels=labels,
-            marked=marked,
+            title=f"Q, states {rows.start}-{rows.stop - 1}", row_labels=tuple(str(s) for s in rows),
+            col_labels=tuple(self.game.action_names), values=values[rows.start:rows.stop].copy(),
+            labels=labels, marked=marked,
             legend=f"rows: states  cols: actions  ● greedy  {TIED} tie  * not optimal",
         )
         if pages == 1:

@@ -48,15 +48,8 @@ from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import signed, unwrapped_note
 
 __all__ = [
-    "PHASE",
-    "TIE_GAMMA",
-    "DiscreteStates",
-    "ModelGame",
-    "ModelOracle",
-    "Ladder",
-    "elapsed_steps",
-    "freeze",
-    "model_under",
+    "PHASE", "TIE_GAMMA", "DiscreteStates", "ModelGame", "ModelOracle", "Ladder", "elapsed_steps",
+    "freeze", "model_under",
 ]
 
 PHASE = "phase"  # the argument naming a changing world's phase, for its exact figures
@@ -383,10 +376,8 @@ class ModelOracle(Oracle):
         value = _initial_value(model, q.max(axis=1))
         limit = "no episode limit" if model.horizon is None else f"{model.horizon}-step episodes"
         return Optimum(
-            value=value,
-            summary=f"the best expected return of an episode ({limit}, undiscounted)",
-            q=q,
-            marks=ladder.choices()[1],
+            value=value, summary=f"the best expected return of an episode ({limit}, undiscounted)",
+            q=q, marks=ladder.choices()[1],
         )
 
     def bound(

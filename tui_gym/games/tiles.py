@@ -130,13 +130,9 @@ class TileGame(ModelGame):
         """What `gym.make` takes to play an edited map on `tui_gym/TileMap-v0`."""
         rules = self.rules(kwargs)
         return {
-            **self.grid_map(kwargs).env_kwargs(),
-            "slip_default": rules.slip,
-            "actions": self.action_order,
-            "step_reward": rules.step,
-            "goal_reward": rules.goal,
-            "hole_reward": rules.hole,
-            "cliff_reward": rules.cliff,
+            **self.grid_map(kwargs).env_kwargs(), "slip_default": rules.slip,
+            "actions": self.action_order, "step_reward": rules.step, "goal_reward": rules.goal,
+            "hole_reward": rules.hole, "cliff_reward": rules.cliff,
             "max_episode_steps": self.episode_limit(kwargs),
         }
 
@@ -186,13 +182,8 @@ class TileStates(DiscreteStates):
         last = getattr(game_env, "lastaction", None)
         action = game.action_names[int(last)] if last is not None else None
         scene: dict[str, Any] = {
-            "rows": len(cells),
-            "cols": cols,
-            "cells": cells,
-            "theme": game.theme,
-            "agent": agent,
-            "last_action": action,
-            "slipped": _slipped(cells, before.get("agent"), agent, action),
+            "rows": len(cells), "cols": cols, "cells": cells, "theme": game.theme, "agent": agent,
+            "last_action": action, "slipped": _slipped(cells, before.get("agent"), agent, action),
         }
         if isinstance(game_env, TileMapEnv):
             scene["rewards"] = {cell_key(c): v for c, v in game_env.rewards.items()}
@@ -275,11 +266,7 @@ class TileLayout(HeatmapLayout):
     """One panel shaped like the map: max Q colours each cell, the greedy move's arrow."""
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
-        marks: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
         game = _game(self)
         try:
@@ -313,11 +300,8 @@ class TileLayout(HeatmapLayout):
         tiles = "  ".join(f"{NO_DECISION[t]} {TILE_WORDS[t]}" for t in "HGCW" if t in shown)
         return [
             Heatmap(
-                title="max Q and the greedy move",
-                row_labels=tuple(str(r) for r in range(rows)),
-                col_labels=tuple(str(c) for c in range(cols)),
-                values=values,
-                labels=tuple(labels),
+                title="max Q and the greedy move", row_labels=tuple(str(r) for r in range(rows)),
+                col_labels=tuple(str(c) for c in range(cols)), values=values, labels=tuple(labels),
                 marked=marked,
                 legend=f"arrow: greedy move  {TIED} tie  {tiles}  * not an optimal move",
             )
@@ -328,8 +312,7 @@ class TileNarrator(Narrator):
     """Reached the goal, fell, or ran out of time."""
 
     tally_words: tuple[TallyWord, ...] = (
-        TallyWord("reached", "good"),
-        TallyWord("fell in", "bad", always=False),
+        TallyWord("reached", "good"), TallyWord("fell in", "bad", always=False),
         TallyWord("timed out", "even"),
     )
 
@@ -365,6 +348,5 @@ class TileNarrator(Narrator):
         ended = [d for d in details if d["terminated"]]
         reached = [d for d in ended if d["return"] > 0 or not self.holes]
         return EvalOutcome(figures={
-            "success_rate": len(reached) / n,
-            "timeout_rate": (len(details) - len(ended)) / n,
+            "success_rate": len(reached) / n, "timeout_rate": (len(details) - len(ended)) / n,
         })

@@ -77,10 +77,7 @@ class _Server(MCPServer):
 def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
     """An `MCPServer` whose tools play the games of `table`."""
     server: MCPServer = _Server(
-        name="tui-gym",
-        instructions=INSTRUCTIONS,
-        version=__version__,
-        log_level="WARNING",
+        name="tui-gym", instructions=INSTRUCTIONS, version=__version__, log_level="WARNING",
     )
 
     def seat_of(game_id: int) -> Seat:
@@ -98,10 +95,8 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
     async def list_games() -> CallToolResult:
         """The games: name, parameters (type, default, range) and action names."""
         return _result({
-            "games": [entry.to_json() for entry in catalog()],
-            "hints": hints,
-            "max_games": table.max_games,
-            "idle_timeout_seconds": table.idle_timeout,
+            "games": [entry.to_json() for entry in catalog()], "hints": hints,
+            "max_games": table.max_games, "idle_timeout_seconds": table.idle_timeout,
         })
 
     @server.tool()

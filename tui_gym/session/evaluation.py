@@ -39,22 +39,14 @@ class EvalReport:
 
     def to_dict(self) -> dict[str, Any]:
         return {
-            "episodes": self.episodes,
-            "episodes_requested": self.requested or self.episodes,
-            "mean_return": self.mean_return,
-            "std_return": self.std_return,
-            **self.figures,
+            "episodes": self.episodes, "episodes_requested": self.requested or self.episodes,
+            "mean_return": self.mean_return, "std_return": self.std_return, **self.figures,
         }
 
 
 def evaluate(
-    env: gym.Env,
-    agent: Learner,
-    keyer: ObservationKeyer,
-    narrator: Narrator,
-    episodes: int,
-    seed: int | None = 0,
-    progress: Callable[[int], None] | None = None,
+    env: gym.Env, agent: Learner, keyer: ObservationKeyer, narrator: Narrator, episodes: int,
+    seed: int | None = 0, progress: Callable[[int], None] | None = None,
     max_steps: int | None = None,
 ) -> EvalReport:
     """Play `episodes` greedy episodes on `env` (fewer once `max_steps` steps are
@@ -90,9 +82,7 @@ def evaluate(
     played = len(returns)
     outcome = narrator.eval_outcome(returns, details)
     return EvalReport(
-        episodes=played,
-        mean_return=float(r.mean()),
-        std_return=float(r.std(ddof=1)) if played > 1 else 0.0,
-        figures=outcome.figures,
+        episodes=played, mean_return=float(r.mean()),
+        std_return=float(r.std(ddof=1)) if played > 1 else 0.0, figures=outcome.figures,
         requested=episodes if played < episodes else None,
     )

@@ -146,12 +146,8 @@ class JsonlPlayer:
         self.rules = session.game  # the game's names and roles
         self.game = HumanGame(session, seed=seed)
         self._handlers: dict[str, Callable[[dict[str, Any]], dict[str, Any]]] = {
-            "spaces": self._spaces,
-            "reset": self._reset,
-            "step": self._step,
-            "render": self._render,
-            "hint": self._hint,
-            "help": self._help,
+            "spaces": self._spaces, "reset": self._reset, "step": self._step,
+            "render": self._render, "hint": self._hint, "help": self._help,
         }
 
     def handle(self, line: str | bytes) -> dict[str, Any]:
@@ -193,20 +189,16 @@ class JsonlPlayer:
             info = to_jsonable(info)
         return {
             "observation": self.rules.states.json_observation(step.observation),
-            "reward": step.reward,
-            "terminated": step.terminated,
-            "truncated": step.truncated,
+            "reward": step.reward, "terminated": step.terminated, "truncated": step.truncated,
             "info": info,
         }
 
     def _spaces(self, request: dict[str, Any]) -> dict[str, Any]:
         env = self.game.env
         return {
-            "env_id": self.session.env_id,
-            "env_kwargs": self.session.env_kwargs,
+            "env_id": self.session.env_id, "env_kwargs": self.session.env_kwargs,
             "wrappers": [str(c) for c in self.session.applied],
-            "observation_space": str(env.observation_space),
-            "action_space": str(env.action_space),
+            "observation_space": str(env.observation_space), "action_space": str(env.action_space),
             "actions": list(self.rules.action_names),
         }
 
@@ -250,8 +242,7 @@ class JsonlPlayer:
         advice = self.rules.oracle.advice(self.game.env, self.session.env_kwargs)
         names = self.rules.action_names
         response: dict[str, Any] = {
-            "optimal_actions": [names[a] for a in advice.optimal],
-            "note": advice.note,
+            "optimal_actions": [names[a] for a in advice.optimal], "note": advice.note,
         }
         if advice.values is not None:
             response["action_values"] = {names[a]: v for a, v in advice.values.items()}

@@ -19,13 +19,7 @@ from tui_gym.core.engine.trainer import Trainer
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP, NotAvailable
 from tui_gym.core.obskey import ObservationKeyer
-from tui_gym.core.wrappers import (
-    CATALOG,
-    WrapperChoice,
-    build_env,
-    build_env_lenient,
-    chain,
-)
+from tui_gym.core.wrappers import CATALOG, WrapperChoice, build_env, build_env_lenient, chain
 from tui_gym.core.wrappers.changes import GameChanges
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 from tui_gym.games.base import FixedBound, ReferenceMetrics, TrainingModel
@@ -124,14 +118,9 @@ class Session:
     algorithm: str  # a name in the ALGORITHMS registry
 
     def __init__(
-        self,
-        env_id: str = "",
-        env_kwargs: Mapping[str, Any] | None = None,
-        choices: Sequence[WrapperChoice] = (),
-        hp: Settings | Mapping[str, Any] | None = None,
-        seed: int = 0,
-        engine: str = "auto",
-        algorithm: str = DEFAULT_ALGORITHM,
+        self, env_id: str = "", env_kwargs: Mapping[str, Any] | None = None,
+        choices: Sequence[WrapperChoice] = (), hp: Settings | Mapping[str, Any] | None = None,
+        seed: int = 0, engine: str = "auto", algorithm: str = DEFAULT_ALGORITHM,
     ) -> None:
         self.env_id = resolve_env_id(env_id or GAMES[0].env_id)
         self.game: Game = game_for(self.env_id)
@@ -254,9 +243,7 @@ class Session:
                          render_mode=render_mode)
 
     def rebuild(
-        self,
-        env_id: str | None = None,
-        env_kwargs: Mapping[str, Any] | None = None,
+        self, env_id: str | None = None, env_kwargs: Mapping[str, Any] | None = None,
         choices: Sequence[WrapperChoice] | None = None,
     ) -> RebuildReport:
         """Change game, env arguments or wrappers; keep the agent when keys keep their meaning.
@@ -273,12 +260,7 @@ class Session:
             self.hp = default_settings(game, self.algorithm, kwargs)
         old_trainer = self.trainer
         self.env.close()
-        self.env_id, self.env_kwargs, self.choices, self.game = (
-            new_id,
-            kwargs,
-            new_choices,
-            game,
-        )
+        self.env_id, self.env_kwargs, self.choices, self.game = (new_id, kwargs, new_choices, game)
         self._install(built)
         if keep:
             self.trainer = self._new_trainer()
@@ -293,9 +275,7 @@ class Session:
         return RebuildReport(keep, notice, built.skipped)
 
     def rebuild_keeps_agent(
-        self,
-        env_id: str | None = None,
-        env_kwargs: Mapping[str, Any] | None = None,
+        self, env_id: str | None = None, env_kwargs: Mapping[str, Any] | None = None,
         choices: Sequence[WrapperChoice] | None = None,
     ) -> bool:
         """Whether `rebuild` with the same arguments would keep the agent (e.g. to ask
@@ -311,9 +291,7 @@ class Session:
             built.env.close()
 
     def _rebuild_args(
-        self,
-        env_id: str | None,
-        env_kwargs: Mapping[str, Any] | None,
+        self, env_id: str | None, env_kwargs: Mapping[str, Any] | None,
         choices: Sequence[WrapperChoice] | None,
     ) -> tuple[str, dict[str, Any], tuple[WrapperChoice, ...], Game]:
         """The env id, checked arguments, wrappers and game a rebuild would use."""
@@ -489,8 +467,7 @@ class Session:
         return reference.reason if isinstance(reference, NotAvailable) else ""
 
     def heatmaps(
-        self, snapshot: TrainingSnapshot | None = None, focus: Any = None,
-        traces: bool = False,
+        self, snapshot: TrainingSnapshot | None = None, focus: Any = None, traces: bool = False,
     ) -> list[Heatmap] | None:
         """The game's heatmap panels of the table (None when wrappers hide the states);
         with `traces`, of a snapshot's eligibility traces in the table's place, unmarked
@@ -613,11 +590,8 @@ class Session:
 
     # --- headless training ------------------------------------------------
     def train(
-        self,
-        target_gap: float | None = None,
-        check_every: int | None = None,
-        chunk_seconds: float = 0.2,
-        on_chunk: Callable[[TrainingSnapshot], None] | None = None,
+        self, target_gap: float | None = None, check_every: int | None = None,
+        chunk_seconds: float = 0.2, on_chunk: Callable[[TrainingSnapshot], None] | None = None,
     ) -> TrainOutcome:
         """Train to the end of the budget, or until the exact gap is at most `target_gap`.
 
@@ -687,16 +661,11 @@ class Session:
 
         assert self.hp is not None  # set when the session is built
         return {
-            "env_id": self.env_id,
-            "env_kwargs": self.env_kwargs,
-            "wrappers": [format_wrapper_spec(c) for c in self.choices],
-            "algorithm": self.algorithm,
-            "hyperparameters": self.hp.to_dict(),
-            "seed": self.seed,
-            "episodes_trained": self.trainer.episodes,
-            "steps_trained": self.trainer.steps,
-            "agent_episode": self.agent.episode,
-            "n_actions": self.agent.n_actions,
+            "env_id": self.env_id, "env_kwargs": self.env_kwargs,
+            "wrappers": [format_wrapper_spec(c) for c in self.choices], "algorithm": self.algorithm,
+            "hyperparameters": self.hp.to_dict(), "seed": self.seed,
+            "episodes_trained": self.trainer.episodes, "steps_trained": self.trainer.steps,
+            "agent_episode": self.agent.episode, "n_actions": self.agent.n_actions,
             "observation_space": self.keyer.signature,
         }
 

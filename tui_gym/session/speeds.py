@@ -25,9 +25,7 @@ class Speed:
 
 
 SPEEDS: tuple[Speed, ...] = (
-    Speed("animated (slow)", 0.35),
-    Speed("animated", 0.12),
-    Speed("animated (fast)", 0.03),
+    Speed("animated (slow)", 0.35), Speed("animated", 0.12), Speed("animated (fast)", 0.03),
     Speed("max", None),
 )
 DEFAULT_SPEED = len(SPEEDS) - 1

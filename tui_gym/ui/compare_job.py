@@ -30,12 +30,8 @@ class CompareJob:
     """A comparison on a thread: `start()`, then read `progress`, `result`, `error`."""
 
     def __init__(
-        self,
-        spec: CompareSpec,
-        db: Path,
-        run: Callable[..., Any] | None = None,
-        processes: int | None = None,
-        resume: int | None = None,
+        self, spec: CompareSpec, db: Path, run: Callable[..., Any] | None = None,
+        processes: int | None = None, resume: int | None = None,
     ) -> None:
         """`run` is `run_compare` (or a function with its signature); `processes` and
         `resume` are its own (None: one child process per core, 0: all on the job's

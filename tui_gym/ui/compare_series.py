@@ -170,13 +170,9 @@ def row_of_record(record: RunRecord) -> FigureRow:
         episodes = int(curve.episodes[-1]) if curve is not None and len(curve) else None
     status = str(summary.status)
     return FigureRow(
-        key=record.id,
-        label=run_label(summary),
-        seeds=max(1, len(summary.seeds)),
-        episodes=episodes,
-        mean_return_last=summary.figure("mean_return_last"),
-        exact_value=summary.figure("exact_value"),
-        exact_gap=summary.figure("exact_gap"),
+        key=record.id, label=run_label(summary), seeds=max(1, len(summary.seeds)),
+        episodes=episodes, mean_return_last=summary.figure("mean_return_last"),
+        exact_value=summary.figure("exact_value"), exact_gap=summary.figure("exact_gap"),
         note="" if status == "finished" else status,
     )
 
@@ -189,26 +185,15 @@ def row_of_outcome(outcome: AlgorithmOutcome, label: str, note: str = "running")
     """The figures so far: over the episodes every seed has finished."""
     estimate = outcome.mean_return_last
     return FigureRow(
-        key=("live", outcome.algorithm),
-        label=label,
-        seeds=int(outcome.curve.seeds),
+        key=("live", outcome.algorithm), label=label, seeds=int(outcome.curve.seeds),
         episodes=outcome.episodes or None,
         mean_return_last=Figure("mean_return_last", estimate.mean, ci95=estimate.ci95),
         exact_value=_figure("exact_value", outcome.exact_value, outcome.exact_ci95),
-        exact_gap=_figure("exact_gap", outcome.exact_gap),
-        note=note,
+        exact_gap=_figure("exact_gap", outcome.exact_gap), note=note,
     )
 
 
 __all__ = [
-    "CURVE",
-    "FigureRow",
-    "Series",
-    "algorithm_title",
-    "bounded",
-    "row_of_outcome",
-    "row_of_record",
-    "run_label",
-    "series_of_outcome",
-    "series_of_record",
+    "CURVE", "FigureRow", "Series", "algorithm_title", "bounded", "row_of_outcome", "row_of_record",
+    "run_label", "series_of_outcome", "series_of_record",
 ]

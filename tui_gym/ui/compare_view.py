@@ -221,13 +221,8 @@ class CompareView(Vertical):
     ]
 
     def __init__(
-        self,
-        *,
-        db: str | Path | None = None,
-        kept: bool = True,
-        processes: int | None = None,
-        id: str | None = None,
-        classes: str | None = None,
+        self, *, db: str | Path | None = None, kept: bool = True, processes: int | None = None,
+        id: str | None = None, classes: str | None = None,
     ) -> None:
         """`db` is the run history's file (None: `TUI_GYM_DB`, else the data folder's);
         `kept` False says it is a scratch file that goes when the app ends
@@ -537,11 +532,7 @@ class CompareView(Vertical):
     def read_launch(self) -> Launch | None:
         """The form's values, or None (and the message saying what is wrong)."""
         try:
-            return read_launch(
-                self.chosen_algorithms(),
-                self._seeds.value,
-                self._episodes.value,
-            )
+            return read_launch(self.chosen_algorithms(), self._seeds.value, self._episodes.value)
         except ValueError as exc:
             self._say(f"Not started: {exc}.", error=True)
             return None
@@ -569,13 +560,9 @@ class CompareView(Vertical):
 
         session = self.session
         return CompareSpec(
-            game=session.env_id,
-            algorithms=launch.algorithms,
-            seeds=launch.seeds,
-            episodes=launch.episodes,
-            settings=edited_settings(session, launch.algorithms),
-            game_params=dict(session.env_kwargs),
-            wrappers=tuple(session.choices),
+            game=session.env_id, algorithms=launch.algorithms, seeds=launch.seeds,
+            episodes=launch.episodes, settings=edited_settings(session, launch.algorithms),
+            game_params=dict(session.env_kwargs), wrappers=tuple(session.choices),
             first_seed=session.seed if first_seed is None else first_seed,
         )
 

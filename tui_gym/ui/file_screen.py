@@ -59,12 +59,7 @@ class FileScreen(ModalScreen[Path | None]):
     ]
 
     def __init__(
-        self,
-        title: str,
-        suggestion: str,
-        perform: Callable[[Path], str | None],
-        *,
-        saving: bool,
+        self, title: str, suggestion: str, perform: Callable[[Path], str | None], *, saving: bool,
     ) -> None:
         super().__init__()
         self.title_text = title
@@ -152,8 +147,7 @@ class FileScreen(ModalScreen[Path | None]):
             self.app.push_screen(
                 ConfirmScreen(
                     f"Replace {path.name}?",
-                    f"{path} already exists. Saving replaces what it holds.",
-                    "Replace",
+                    f"{path} already exists. Saving replaces what it holds.", "Replace",
                 ),
                 lambda yes: self._replace(path, bool(yes)),
             )

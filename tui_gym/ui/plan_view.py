@@ -257,8 +257,7 @@ class PlanView(Vertical):
         self._status.show((
             f"{METHOD_WORDS[snapshot.method]} (1 2 3) · start: {self.start} (o) · {sweep} (s)",
             f"{state} · sweep {snapshot.sweeps} · Δ {delta}{improvements}{last}",
-            self._meaning(snapshot),
-            snapshot.note or self._never_ends(snapshot),
+            self._meaning(snapshot), snapshot.note or self._never_ends(snapshot),
         ))
         self._show_lines(snapshot)
 

@@ -17,13 +17,7 @@ from textual.widgets import Static
 
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.games.base import Advice
-from tui_gym.games.words import (
-    ScoreRow,
-    format_reward,
-    interval_text,
-    plural,
-    signed,
-)
+from tui_gym.games.words import ScoreRow, format_reward, interval_text, plural, signed
 from tui_gym.session.play import HumanGame, PlayError, PlayStep, Scorecard
 from tui_gym.ui.widgets.board_kinds import board_class
 from tui_gym.ui.widgets.boards import Board
@@ -262,10 +256,8 @@ class PlayView(Vertical):
         else:
             watch = ("a / A", "watch the agent play; any key takes over")
         return [
-            *keys,
-            ("c", "coach: after each move, was it optimal and what did it cost"),
-            ("i", "advice: what the exact optimum and the agent would do here"),
-            watch,
+            *keys, ("c", "coach: after each move, was it optimal and what did it cost"),
+            ("i", "advice: what the exact optimum and the agent would do here"), watch,
         ]
 
     # --- playing -------------------------------------------------------------

@@ -51,8 +51,7 @@ def replay_board(kind: str, player: str) -> Board | None:
     replay_class = _REPLAY_BOARDS.get(board_class)
     if replay_class is None:
         replay_class = type(
-            f"Replay{board_class.__name__}",
-            (board_class,),
+            f"Replay{board_class.__name__}", (board_class,),
             {"player_name": property(lambda self: self.replay_player), "KEEP_SHAPE": False},
         )
         _REPLAY_BOARDS[board_class] = replay_class
@@ -213,12 +212,9 @@ class ReplayScreen(ModalScreen[None]):
             ("→ / l", "one move forward (on into the next episode at the end)"),
             ("← / h", "one move back"),
             ("↑ / ↓", "along the list of moves (click one to stand there)"),
-            ("home / end", "the episode's start / its last move"),
-            ("n / ]", "the next episode"),
-            ("N / [", "the previous episode"),
-            ("j", "jump to an episode by its number"),
-            ("esc", "close the replay, back to the app"),
-            ("q", "quit"),
+            ("home / end", "the episode's start / its last move"), ("n / ]", "the next episode"),
+            ("N / [", "the previous episode"), ("j", "jump to an episode by its number"),
+            ("esc", "close the replay, back to the app"), ("q", "quit"),
         ]
 
     @on(ReplayButton.Pressed)

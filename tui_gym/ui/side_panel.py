@@ -84,9 +84,7 @@ class ParamField(Horizontal):
             yield box
             return
         field = TextField(
-            value=_value_text(self._value),
-            compact=True,
-            validators=[ParamValidator(self.param)],
+            value=_value_text(self._value), compact=True, validators=[ParamValidator(self.param)],
             validate_on=["changed", "submitted"],
         )
         field.tooltip = tooltip

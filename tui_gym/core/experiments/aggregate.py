@@ -89,10 +89,8 @@ class AggregateCurve:
         """At most `max_points` evenly spaced points, the first and last episode kept."""
         keep = pick_indices(len(self.mean), max_points)
         return AggregateCurve(
-            episodes=self.episodes[keep],
-            mean=self.mean[keep],
-            half_width=None if self.half_width is None else self.half_width[keep],
-            seeds=self.seeds,
+            episodes=self.episodes[keep], mean=self.mean[keep],
+            half_width=None if self.half_width is None else self.half_width[keep], seeds=self.seeds,
             confidence=self.confidence,
         )
 
@@ -100,10 +98,8 @@ class AggregateCurve:
         lo, hi = self.lo, self.hi
         return [
             CurvePoint(
-                episode=int(self.episodes[i]),
-                mean=float(self.mean[i]),
-                lo=None if lo is None else float(lo[i]),
-                hi=None if hi is None else float(hi[i]),
+                episode=int(self.episodes[i]), mean=float(self.mean[i]),
+                lo=None if lo is None else float(lo[i]), hi=None if hi is None else float(hi[i]),
             )
             for i in range(len(self.mean))
         ]
@@ -119,12 +115,8 @@ class AggregateCurve:
 
 
 def aggregate(
-    curves: np.ndarray | list[Any],
-    *,
-    episodes: np.ndarray | None = None,
-    window: int = 1,
-    max_points: int | None = None,
-    confidence: float = CONFIDENCE,
+    curves: np.ndarray | list[Any], *, episodes: np.ndarray | None = None, window: int = 1,
+    max_points: int | None = None, confidence: float = CONFIDENCE,
 ) -> AggregateCurve:
     """Mean and confidence band per episode of `curves` [seeds, episodes].
 

@@ -29,10 +29,7 @@ def downsample(
 
 
 def bucket_means(
-    episodes: np.ndarray,
-    values: np.ndarray,
-    max_points: int,
-    weights: np.ndarray | None = None,
+    episodes: np.ndarray, values: np.ndarray, max_points: int, weights: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Consecutive points averaged into at most `max_points` buckets of near-equal size.
 

@@ -27,11 +27,7 @@ from tui_gym.core.experiments.curve_codec import (
     unpack_curves,
 )
 from tui_gym.core.experiments.downsample import bucket_means
-from tui_gym.core.experiments.errors import (
-    DamagedRunError,
-    RunHistoryError,
-    UnknownRunError,
-)
+from tui_gym.core.experiments.errors import DamagedRunError, RunHistoryError, UnknownRunError
 from tui_gym.core.experiments.figures import Figure
 from tui_gym.core.experiments.records import (
     Curve,
@@ -79,12 +75,8 @@ class RunHistory:
     """One run history file, open for reading and recording (thread-safe)."""
 
     def __init__(
-        self,
-        path: str | Path,
-        *,
-        timeout: float = BUSY_TIMEOUT_S,
-        migrations: Sequence[Migration] = MIGRATIONS,
-        read_only: bool = False,
+        self, path: str | Path, *, timeout: float = BUSY_TIMEOUT_S,
+        migrations: Sequence[Migration] = MIGRATIONS, read_only: bool = False,
     ) -> None:
         self.path = Path(path)
         self.timeout = timeout
@@ -176,16 +168,9 @@ class RunHistory:
         return self._write(write)
 
     def update(
-        self,
-        run_id: int,
-        *,
-        curves: Iterable[Curve] = (),
-        figures: Iterable[Figure] = (),
-        agent_path: str | Path | None = None,
-        status: RunStatus | None = None,
-        ended_at: float | None = None,
-        max_points: int = STORED_POINTS,
-        spec: RunSpec | None = None,
+        self, run_id: int, *, curves: Iterable[Curve] = (), figures: Iterable[Figure] = (),
+        agent_path: str | Path | None = None, status: RunStatus | None = None,
+        ended_at: float | None = None, max_points: int = STORED_POINTS, spec: RunSpec | None = None,
     ) -> None:
         """Add or replace curves (each bounded to `max_points`) and figures (by name), set the
         saved agent's path (None: leave it), the run's settings to `spec`'s (its game,
@@ -377,10 +362,7 @@ class RunHistory:
     # -- queries -------------------------------------------------------------
 
     def read_runs(
-        self,
-        *,
-        game: str | None = None,
-        kind: RunKind | str | None = None,
+        self, *, game: str | None = None, kind: RunKind | str | None = None,
         limit: int | None = None,
     ) -> RunRows:
         """The runs, newest first (at most `limit`; only those of `game` and `kind` when
@@ -403,10 +385,7 @@ class RunHistory:
         return RunRows(tuple(runs), tuple(bad))
 
     def list_runs(
-        self,
-        *,
-        game: str | None = None,
-        kind: RunKind | str | None = None,
+        self, *, game: str | None = None, kind: RunKind | str | None = None,
         limit: int | None = None,
     ) -> list[RunSummary]:
         """The runs that read, newest first (see `read_runs`, which also names the others)."""
@@ -501,10 +480,8 @@ _PLATFORM = ("tui_gym", "gymnasium", "numpy", "python")
 
 def _settings(spec: RunSpec) -> tuple[str, ...]:
     return (
-        spec.game,
-        to_json_text(dict(spec.game_params), "the game's parameters"),
-        to_json_text([w.to_json() for w in spec.wrappers], "the wrappers"),
-        spec.algorithm,
+        spec.game, to_json_text(dict(spec.game_params), "the game's parameters"),
+        to_json_text([w.to_json() for w in spec.wrappers], "the wrappers"), spec.algorithm,
         to_json_text(dict(spec.hyperparameters), "the hyperparameters"),
     )
 

@@ -13,9 +13,7 @@ DB_ENV = "TUI_GYM_DB"
 
 
 def data_dir(
-    environ: Mapping[str, str] | None = None,
-    platform: str | None = None,
-    home: Path | None = None,
+    environ: Mapping[str, str] | None = None, platform: str | None = None, home: Path | None = None,
 ) -> Path:
     """The user's data folder for tui-gym (not created here)."""
     env = os.environ if environ is None else environ
@@ -34,9 +32,7 @@ def data_dir(
 
 
 def resolve_db_path(
-    explicit: str | None,
-    environ: Mapping[str, str] | None = None,
-    platform: str | None = None,
+    explicit: str | None, environ: Mapping[str, str] | None = None, platform: str | None = None,
     home: Path | None = None,
 ) -> Path:
     """The run history's file: `explicit` (from --db), else $TUI_GYM_DB, else the data folder's."""

@@ -36,12 +36,9 @@ class Recovery:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "source": str(self.source),
-            "target": None if self.target is None else str(self.target),
-            "copied": self.copied,
-            "unreadable": self.unreadable,
-            "curves_dropped": self.curves_dropped,
-            "check": self.check,
+            "source": str(self.source), "target": None if self.target is None else str(self.target),
+            "copied": self.copied, "unreadable": self.unreadable,
+            "curves_dropped": self.curves_dropped, "check": self.check,
         }
 
 

@@ -28,10 +28,8 @@ class RunListing:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "db": str(self.db),
-            "runs": [run.to_json() for run in self.runs],
-            "damaged": [run.to_json() for run in self.damaged],
-            "total": self.total,
+            "db": str(self.db), "runs": [run.to_json() for run in self.runs],
+            "damaged": [run.to_json() for run in self.damaged], "total": self.total,
         }
 
 
@@ -46,9 +44,7 @@ class CsvExport:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "run": self.run_id,
-            "path": str(self.path),
-            "columns": list(self.columns),
+            "run": self.run_id, "path": str(self.path), "columns": list(self.columns),
             "rows": self.rows,
         }
 
@@ -75,10 +71,7 @@ def _none_yet(run_id: int, path: Path) -> UnknownRunError:
 
 
 def list_runs(
-    db: str | None = None,
-    *,
-    game: str | None = None,
-    kind: RunKind | str | None = None,
+    db: str | None = None, *, game: str | None = None, kind: RunKind | str | None = None,
     limit: int | None = None,
 ) -> RunListing:
     """The recorded runs, newest first (the newest `limit`, only `game`'s and `kind`'s

@@ -35,11 +35,8 @@ class TensorBoardExport:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "run": self.run_id,
-            "path": str(self.path),
-            "logdir": str(self.directory),
-            "tags": list(self.tags),
-            "scalars": self.scalars,
+            "run": self.run_id, "path": str(self.path), "logdir": str(self.directory),
+            "tags": list(self.tags), "scalars": self.scalars,
         }
 
 

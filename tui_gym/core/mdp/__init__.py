@@ -17,24 +17,8 @@ from tui_gym.core.mdp.returns import return_range
 from tui_gym.core.mdp.transforms import clip_reward, scale_reward, step_penalty, with_horizon
 
 __all__ = [
-    "FiniteMDP",
-    "Gap",
-    "ModelError",
-    "NotAvailable",
-    "Phases",
-    "PolicyError",
-    "PolicyValue",
-    "Solution",
-    "clip_reward",
-    "evaluate",
-    "exact_gap",
-    "greedy_policy",
-    "model_from_env",
-    "optimal_actions",
-    "policy_matrix",
-    "return_range",
-    "scale_reward",
-    "solve",
-    "step_penalty",
+    "FiniteMDP", "Gap", "ModelError", "NotAvailable", "Phases", "PolicyError", "PolicyValue",
+    "Solution", "clip_reward", "evaluate", "exact_gap", "greedy_policy", "model_from_env",
+    "optimal_actions", "policy_matrix", "return_range", "scale_reward", "solve", "step_penalty",
     "with_horizon",
 ]

@@ -14,12 +14,7 @@ from tui_gym.core.mdp.policy import policy_matrix
 from tui_gym.core.mdp.policy_arrays import PolicyArrays
 
 __all__ = [
-    "DENSE_LIMIT",
-    "PolicyValue",
-    "backup",
-    "check_gamma",
-    "evaluate",
-    "expected_value",
+    "DENSE_LIMIT", "PolicyValue", "backup", "check_gamma", "evaluate", "expected_value",
     "solve_linear",
 ]
 

@@ -64,9 +64,7 @@ def _discrete_size(name: str, role: str, space: gym.Space[Any]) -> int | NotAvai
 
 
 def _table_model(
-    env: gym.Env,
-    initial: np.ndarray | None,
-    action_names: Sequence[str] | None,
+    env: gym.Env, initial: np.ndarray | None, action_names: Sequence[str] | None,
 ) -> FiniteMDP | NotAvailable:
     name = _label(env)
     n_states = _discrete_size(name, "observation", env.observation_space)
@@ -99,11 +97,8 @@ def _table_model(
 
 
 def model_from_env(
-    env: gym.Env,
-    *,
-    initial: Sequence[float] | np.ndarray | None = None,
-    horizon: int | None | Literal["env"] = "env",
-    action_names: Sequence[str] | None = None,
+    env: gym.Env, *, initial: Sequence[float] | np.ndarray | None = None,
+    horizon: int | None | Literal["env"] = "env", action_names: Sequence[str] | None = None,
 ) -> FiniteMDP | NotAvailable:
     """The exact model of `env` and its wrappers, or `NotAvailable` saying why there is none.
 

@@ -43,10 +43,7 @@ def _difference(optimum: float, value: float) -> float:
 
 
 def exact_gap(
-    model: FiniteMDP,
-    policy: npt.ArrayLike,
-    gamma: float = 1.0,
-    optimum: Solution | None = None,
+    model: FiniteMDP, policy: npt.ArrayLike, gamma: float = 1.0, optimum: Solution | None = None,
 ) -> Gap:
     """The exact value of `policy`, the optimum, and the gap between them.
 
@@ -62,8 +59,6 @@ def exact_gap(
         )
     value = evaluate(model, policy, gamma)
     return Gap(
-        exact_value=value.value,
-        optimal_value=optimum.value,
-        gap=_difference(optimum.value, value.value),
-        never_ends=value.never_ends,
+        exact_value=value.value, optimal_value=optimum.value,
+        gap=_difference(optimum.value, value.value), never_ends=value.never_ends,
     )

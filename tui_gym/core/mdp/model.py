@@ -178,25 +178,17 @@ class FiniteMDP:
         return [
             (float(p), int(s), float(r), bool(t))
             for p, s, r, t in zip(
-                self.prob[state, action][row],
-                self.next_state[state, action][row],
-                self.reward[state, action][row],
-                self.terminal[state, action][row],
-                strict=True,
+                self.prob[state, action][row], self.next_state[state, action][row],
+                self.reward[state, action][row], self.terminal[state, action][row], strict=True,
             )
         ]
 
     def replace(self, **changes: Any) -> FiniteMDP:
         """A copy with some fields replaced (checked again)."""
         fields: dict[str, Any] = {
-            "next_state": self.next_state,
-            "prob": self.prob,
-            "reward": self.reward,
-            "terminal": self.terminal,
-            "initial": self.initial,
-            "horizon": self.horizon,
-            "action_names": self.action_names,
-            "reward_std": self.reward_std,
+            "next_state": self.next_state, "prob": self.prob, "reward": self.reward,
+            "terminal": self.terminal, "initial": self.initial, "horizon": self.horizon,
+            "action_names": self.action_names, "reward_std": self.reward_std,
         }
         unknown = set(changes) - set(fields)
         if unknown:
@@ -257,18 +249,11 @@ class FiniteMDP:
             for a, outcomes in enumerate(row):
                 for k, (p, nxt, r, t) in enumerate(outcomes):
                     prob[s, a, k], next_state[s, a, k], reward[s, a, k], terminal[s, a, k] = (
-                        p,
-                        nxt,
-                        r,
-                        t,
+                        p, nxt, r, t,
                     )
         return cls(
-            next_state=next_state,
-            prob=prob,
-            reward=reward,
-            terminal=terminal,
-            initial=np.asarray(initial, dtype=np.float64),
-            horizon=horizon,
+            next_state=next_state, prob=prob, reward=reward, terminal=terminal,
+            initial=np.asarray(initial, dtype=np.float64), horizon=horizon,
             action_names=None if action_names is None else tuple(action_names),
         )
 

@@ -15,16 +15,8 @@ from tui_gym.core.mdp.policy import policy_matrix
 from tui_gym.core.mdp.policy_arrays import PolicyArrays
 
 __all__ = [
-    "METHODS",
-    "Improvement",
-    "Planner",
-    "check_method",
-    "check_theta",
-    "evaluation_sweep",
-    "greedy",
-    "improve",
-    "uniform_policy",
-    "value_sweep",
+    "METHODS", "Improvement", "Planner", "check_method", "check_theta", "evaluation_sweep",
+    "greedy", "improve", "uniform_policy", "value_sweep",
 ]
 
 FloatArray = npt.NDArray[np.float64]
@@ -151,13 +143,8 @@ class Planner:
     """
 
     def __init__(
-        self,
-        model: FiniteMDP,
-        *,
-        gamma: float = 1.0,
-        theta: float = 1e-6,
-        policy: npt.ArrayLike | None = None,
-        values: npt.ArrayLike | None = None,
+        self, model: FiniteMDP, *, gamma: float = 1.0, theta: float = 1e-6,
+        policy: npt.ArrayLike | None = None, values: npt.ArrayLike | None = None,
         in_place: bool = False,
     ) -> None:
         self.model = model

@@ -16,17 +16,6 @@ from tui_gym.core.recording.reader import (
 )
 
 __all__ = [
-    "FORMAT_NAME",
-    "FORMAT_VERSION",
-    "Assessment",
-    "Episode",
-    "Frame",
-    "Judgement",
-    "Move",
-    "MoveJudge",
-    "Position",
-    "RecordedGame",
-    "Recording",
-    "RecordingError",
-    "read_recording",
+    "FORMAT_NAME", "FORMAT_VERSION", "Assessment", "Episode", "Frame", "Judgement", "Move",
+    "MoveJudge", "Position", "RecordedGame", "Recording", "RecordingError", "read_recording",
 ]

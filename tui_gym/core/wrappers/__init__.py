@@ -22,22 +22,8 @@ from tui_gym.core.wrappers.catalog import (
 from tui_gym.core.wrappers.custom import DistanceShaping, ScaleReward, StepPenalty
 
 __all__ = [
-    "CATALOG",
-    "MAX_CHAIN",
-    "DistanceShaping",
-    "Param",
-    "ScaleReward",
-    "StepPenalty",
-    "UnknownEnvError",
-    "UnknownWrapperError",
-    "WrapperChoice",
-    "WrapperMismatchError",
-    "WrapperSpec",
-    "build_env",
-    "build_env_lenient",
-    "check_chain_length",
-    "check_choices",
-    "format_wrapper_spec",
-    "get_spec",
-    "parse_wrapper_spec",
+    "CATALOG", "MAX_CHAIN", "DistanceShaping", "Param", "ScaleReward", "StepPenalty",
+    "UnknownEnvError", "UnknownWrapperError", "WrapperChoice", "WrapperMismatchError",
+    "WrapperSpec", "build_env", "build_env_lenient", "check_chain_length", "check_choices",
+    "format_wrapper_spec", "get_spec", "parse_wrapper_spec",
 ]

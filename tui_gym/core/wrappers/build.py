@@ -49,12 +49,8 @@ def _make(env_id: str, kwargs: Mapping[str, Any], render_mode: str | None) -> gy
 
 
 def _assemble(
-    env_id: str,
-    env_kwargs: Mapping[str, Any] | None,
-    choices: Sequence[WrapperChoice],
-    render_mode: str | None,
-    *,
-    strict: bool,
+    env_id: str, env_kwargs: Mapping[str, Any] | None, choices: Sequence[WrapperChoice],
+    render_mode: str | None, *, strict: bool,
 ) -> tuple[gym.Env, list[str | None]]:
     """The env, and per choice None (applied) or the reason it was skipped."""
     check_chain_length(len(choices))
@@ -87,9 +83,7 @@ def _assemble(
 
 
 def build_env(
-    env_id: str,
-    env_kwargs: Mapping[str, Any] | None = None,
-    choices: Sequence[WrapperChoice] = (),
+    env_id: str, env_kwargs: Mapping[str, Any] | None = None, choices: Sequence[WrapperChoice] = (),
     render_mode: str | None = None,
 ) -> gym.Env:
     """`gym.make(env_id, render_mode=..., **env_kwargs)` wrapped by `choices`, first innermost.
@@ -103,9 +97,7 @@ def build_env(
 
 
 def build_env_lenient(
-    env_id: str,
-    env_kwargs: Mapping[str, Any] | None = None,
-    choices: Sequence[WrapperChoice] = (),
+    env_id: str, env_kwargs: Mapping[str, Any] | None = None, choices: Sequence[WrapperChoice] = (),
     render_mode: str | None = None,
 ) -> tuple[gym.Env, list[tuple[WrapperChoice, str]]]:
     """Like `build_env`, but skips the choices that do not fit (or are invalid).
@@ -118,9 +110,7 @@ def build_env_lenient(
 
 
 def check_choices(
-    env_id: str,
-    env_kwargs: Mapping[str, Any] | None = None,
-    choices: Sequence[WrapperChoice] = (),
+    env_id: str, env_kwargs: Mapping[str, Any] | None = None, choices: Sequence[WrapperChoice] = (),
 ) -> list[tuple[WrapperChoice, str | None]]:
     """For each choice, None if it would apply, else why not.
 

@@ -17,12 +17,7 @@ from gymnasium.wrappers.utils import create_zero_array
 from tui_gym.core.wrappers.chain import layers, time_limit
 
 __all__ = [
-    "env_label",
-    "fits_any",
-    "fits_delay",
-    "fits_distance",
-    "fits_flatten",
-    "fits_time_aware",
+    "env_label", "fits_any", "fits_delay", "fits_distance", "fits_flatten", "fits_time_aware",
     "fits_time_limit",
 ]
 

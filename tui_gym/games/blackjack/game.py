@@ -122,11 +122,8 @@ class BlackjackStates(StateSpace):
         dealer = [int(c) for c in getattr(game_env, "dealer", [])]
         player_total, usable = hand_value(player)
         return {
-            "player": player,
-            "dealer": dealer,
-            "player_total": player_total,
-            "player_usable": usable,
-            "dealer_total": hand_value(dealer)[0],
+            "player": player, "dealer": dealer, "player_total": player_total,
+            "player_usable": usable, "dealer_total": hand_value(dealer)[0],
         }
 
     def text(
@@ -240,8 +237,7 @@ class BlackjackOracle(Oracle):
         q = optimal_action_values(rules, soft_21="drawn")[_base_index()]
         return Optimum(
             value=optimal_value(rules),
-            summary="the exact expected return per hand of the optimal strategy",
-            q=q,
+            summary="the exact expected return per hand of the optimal strategy", q=q,
             marks=self.optimal_marks(kwargs),
         )
 
@@ -318,11 +314,7 @@ class BlackjackLayout(HeatmapLayout):
     """The two halves of a basic-strategy chart: with and without a usable ace."""
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
-        marks: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
         if np.shape(q) != (len(_base_states()), 2):
             return []

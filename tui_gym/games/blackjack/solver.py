@@ -14,18 +14,9 @@ from typing import Any, Literal
 import numpy as np
 
 __all__ = [
-    "DEFAULT_RULES",
-    "DECISION_MASK",
-    "HIT",
-    "POLICY_SHAPE",
-    "STICK",
-    "BlackjackRules",
-    "optimal_action_values",
-    "optimal_policy",
-    "mixed_policy_value",
-    "optimal_value",
-    "policy_from_function",
-    "policy_value",
+    "DEFAULT_RULES", "DECISION_MASK", "HIT", "POLICY_SHAPE", "STICK", "BlackjackRules",
+    "optimal_action_values", "optimal_policy", "mixed_policy_value", "optimal_value",
+    "policy_from_function", "policy_value",
 ]
 
 

@@ -71,12 +71,8 @@ _COLS = tuple(str(n) for n in range(SIDE))
 def value_panel(v: np.ndarray) -> Heatmap:
     """The state values on the policy's grid (the book's lower right surface, from above)."""
     return Heatmap(
-        title="values",
-        row_labels=_ROWS,
-        col_labels=_COLS,
-        values=_grid(v).astype(float),
-        labels=tuple(("",) * SIDE for _ in range(SIDE)),
-        marked=np.zeros((SIDE, SIDE), dtype=bool),
+        title="values", row_labels=_ROWS, col_labels=_COLS, values=_grid(v).astype(float),
+        labels=tuple(("",) * SIDE for _ in range(SIDE)), marked=np.zeros((SIDE, SIDE), dtype=bool),
         legend="rows: cars at the first site  cols: at the second",
     )
 
@@ -106,11 +102,8 @@ class CarRentalStates(DiscreteStates):
         return {
             "title": "Jack's car rental",
             "bars": [["first site", first, MAX_CARS], ["second site", second, MAX_CARS]],
-            "lines": lines,
-            "actions": list(self.game.action_names),
-            "start": MOVES.index(0),
-            "unit": "",
-            "prompt": "Cars to move tonight, first site to second (negative: back).",
+            "lines": lines, "actions": list(self.game.action_names), "start": MOVES.index(0),
+            "unit": "", "prompt": "Cars to move tonight, first site to second (negative: back).",
         }
 
 
@@ -119,11 +112,7 @@ class CarRentalLayout(HeatmapLayout):
     the cars at each site."""
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
-        marks: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
         try:
             values = np.asarray(q, dtype=float).reshape(SIDE * SIDE, len(MOVES))

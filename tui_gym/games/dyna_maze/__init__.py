@@ -182,8 +182,7 @@ class DynaMazeGame(MazeGame):
     # The multi-step on-policy learners stop exploring at the end, over a longer budget:
     # what they learn becomes the greedy policy's values, with no detour kept.
     hyperparameters = {
-        **MazeGame.hyperparameters,
-        "n-step-sarsa": {"epsilon_final": 0.0, "episodes": 3000},
+        **MazeGame.hyperparameters, "n-step-sarsa": {"epsilon_final": 0.0, "episodes": 3000},
         "sarsa-lambda": {"epsilon_final": 0.0, "episodes": 3000},
     }
 

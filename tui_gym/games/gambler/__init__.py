@@ -79,13 +79,10 @@ class GamblerStates(DiscreteStates):
             lines.append(f"{{who}} staked ${game_env.last_stake}: {game_env.last_flip}, "
                          f"{'won' if won else 'lost'}")
         return {
-            "title": "Gambler",
-            "bars": [["capital", capital, goal]],
-            "lines": lines,
+            "title": "Gambler", "bars": [["capital", capital, goal]], "lines": lines,
             "actions": list(self.game.action_names),
             "labels": [f"${k}" for k in range(1, MAX_STAKE + 1)],
-            "allowed": max(1, min(capital, goal - capital)),
-            "unit": "$",
+            "allowed": max(1, min(capital, goal - capital)), "unit": "$",
             "prompt": f"Stake on heads (chance {game_env.p_heads:g}); reach ${goal} to win.",
         }
 
@@ -94,11 +91,7 @@ class GamblerLayout(HeatmapLayout):
     """The capitals in rows of ten: max Q colours each, the greedy stake in it."""
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
-        marks: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
         goal = _goal(kwargs)
         try:

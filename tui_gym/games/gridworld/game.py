@@ -44,11 +44,7 @@ from tui_gym.games.gridworld.paths import (
     optimal_pair_fraction,
     policy_steps_over_optimal,
 )
-from tui_gym.games.gridworld.walled import (
-    walled_figures,
-    walled_marks,
-    walled_mean_steps,
-)
+from tui_gym.games.gridworld.walled import walled_figures, walled_marks, walled_mean_steps
 from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
 from tui_gym.games.model import exact_gap_of
 from tui_gym.games.planning import PlanModel
@@ -382,10 +378,7 @@ class GridWorldNarrator(Narrator):
         return f"{last.steps} step{'' if last.steps == 1 else 's'} taken, optimal {optimal}"
 
     def coach_text(
-        self,
-        before: Advice,
-        action: int,
-        scene_before: Mapping[str, Any],
+        self, before: Advice, action: int, scene_before: Mapping[str, Any],
         scene_after: Mapping[str, Any],
     ) -> str:
         """'✓ right is on a shortest path (3 steps to go)' or
@@ -407,12 +400,8 @@ class GridWorldNarrator(Narrator):
         return {"steps_over_optimal": float(last.steps - int(first_info["distance"]))}
 
     def scoreboard(
-        self,
-        you: Scorecard,
-        figures: Mapping[str, float] | None,
-        watched: Scorecard | None = None,
-        agent_note: str = "",
-        scope: Scope = EXACT,
+        self, you: Scorecard, figures: Mapping[str, float] | None, watched: Scorecard | None = None,
+        agent_note: str = "", scope: Scope = EXACT,
     ) -> list[ScoreRow]:
         """Steps over optimal: yours over the episodes you finished, the agent's exactly."""
         figures = figures or {}
@@ -425,8 +414,7 @@ class GridWorldNarrator(Narrator):
             mine_short = f"{mean:.2f} extra steps ({reached} reached)"
         rows = [
             ScoreRow(
-                "You",
-                join_parts(mine, agreement_summary(you, AGREEMENT)),
+                "You", join_parts(mine, agreement_summary(you, AGREEMENT)),
                 join_parts(mine_short, agreement_summary(you, short=True)),
             )
         ]
@@ -459,9 +447,7 @@ class GridWorldNarrator(Narrator):
         self, first_info: Mapping[str, Any], length: int, total: float, terminated: bool
     ) -> dict[str, Any]:
         return {
-            "length": length,
-            "return": total,
-            "terminated": terminated,
+            "length": length, "return": total, "terminated": terminated,
             "optimal": int(first_info.get("distance", 0)),
         }
 
@@ -486,11 +472,7 @@ class GridWorldLayout(HeatmapLayout):
     focus_help = "move the heatmap's target"
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
-        marks: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
         size = _size(kwargs)
         if np.shape(q) != (size**4, 4):

@@ -15,8 +15,7 @@ __all__ = ["gridworld_model", "gridworld_optimum", "shortest_path_optimum"]
 
 @lru_cache(maxsize=8)
 def gridworld_model(
-    size: int, reward_scale: float, step_penalty: float, changes: GameChanges,
-    walls: Walls = (),
+    size: int, reward_scale: float, step_penalty: float, changes: GameChanges, walls: Walls = (),
 ) -> FiniteMDP:
     """The model of a `size` x `size` GridWorld with `walls` as the wrappers in `changes`
     make it."""
@@ -35,19 +34,15 @@ def gridworld_model(
     free = free_cells(size, walls)
     start = free[agent] & free[target] & (agent != target)
     return FiniteMDP(
-        next_state=next_state[..., None],
-        prob=np.ones(next_state.shape + (1,)),
-        reward=reward[..., None],
-        terminal=terminal[..., None],
-        initial=start / start.sum(),
+        next_state=next_state[..., None], prob=np.ones(next_state.shape + (1,)),
+        reward=reward[..., None], terminal=terminal[..., None], initial=start / start.sum(),
         horizon=changes.time_limit,
     )
 
 
 @lru_cache(maxsize=8)
 def gridworld_optimum(
-    size: int, reward_scale: float, step_penalty: float, changes: GameChanges,
-    walls: Walls = (),
+    size: int, reward_scale: float, step_penalty: float, changes: GameChanges, walls: Walls = (),
 ) -> Solution:
     """The optimum of `gridworld_model` with the same arguments (kept)."""
     return solve(gridworld_model(size, reward_scale, step_penalty, changes, walls))

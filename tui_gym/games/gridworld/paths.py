@@ -8,14 +8,8 @@ from functools import lru_cache
 import numpy as np
 
 __all__ = [
-    "GRID_ACTION_DELTAS",
-    "all_pairs",
-    "mixed_pair_fraction",
-    "mixed_steps_over_optimal",
-    "optimal_actions",
-    "optimal_pair_fraction",
-    "policy_steps_over_optimal",
-    "shortest_path_length",
+    "GRID_ACTION_DELTAS", "all_pairs", "mixed_pair_fraction", "mixed_steps_over_optimal",
+    "optimal_actions", "optimal_pair_fraction", "policy_steps_over_optimal", "shortest_path_length",
     "shortest_path_policy",
 ]
 

@@ -14,9 +14,7 @@ __all__ = ["MAX_FILE_BYTES", "read_map_file", "read_map_text", "write_map_file"]
 MAX_FILE_BYTES = MAX_TEXT * 4  # UTF-8 takes at most four bytes a character
 
 _KINDS = (
-    (stat.S_ISFIFO, "a named pipe"),
-    (stat.S_ISCHR, "a device"),
-    (stat.S_ISBLK, "a device"),
+    (stat.S_ISFIFO, "a named pipe"), (stat.S_ISCHR, "a device"), (stat.S_ISBLK, "a device"),
     (stat.S_ISSOCK, "a socket"),
 )
 

@@ -26,13 +26,8 @@ class Tool:
 
 
 TOOLS: tuple[Tool, ...] = (
-    Tool("floor", "F"),
-    Tool("wall", "W"),
-    Tool("hole", "H", "reward"),
-    Tool("goal", "G", "reward"),
-    Tool("start", "S"),
-    Tool("reward", "R", "reward", 1.0),
-    Tool("ice", "", "slip", 0.5),
+    Tool("floor", "F"), Tool("wall", "W"), Tool("hole", "H", "reward"), Tool("goal", "G", "reward"),
+    Tool("start", "S"), Tool("reward", "R", "reward", 1.0), Tool("ice", "", "slip", 0.5),
     Tool("cliff", "C", "reward"),
 )
 TOOL_NAMED = {tool.name: tool for tool in TOOLS}
@@ -62,9 +57,7 @@ class GridMap:
 
     @classmethod
     def of(
-        cls,
-        cells: Iterable[str],
-        rewards: Mapping[Cell, float] | None = None,
+        cls, cells: Iterable[str], rewards: Mapping[Cell, float] | None = None,
         slip: Mapping[Cell, float] | None = None,
     ) -> GridMap:
         return cls(tuple(cells), _sorted(rewards or {}), _sorted(slip or {}))
@@ -106,8 +99,7 @@ class GridMap:
     def env_kwargs(self) -> dict[str, Any]:
         """The map as `TileMapEnv` takes it (JSON-friendly "r,c" keys)."""
         return {
-            "cells": list(self.cells),
-            "rewards": {cell_key(c): v for c, v in self.rewards},
+            "cells": list(self.cells), "rewards": {cell_key(c): v for c, v in self.rewards},
             "slip": {cell_key(c): v for c, v in self.slip},
         }
 

@@ -13,11 +13,7 @@ ATTEMPTS = 2000  # draws before giving up on a density too high to leave a way t
 
 
 def random_map(
-    rows: int,
-    cols: int,
-    density: float = 0.2,
-    seed: int = 0,
-    obstacle: str = "H",
+    rows: int, cols: int, density: float = 0.2, seed: int = 0, obstacle: str = "H",
     walled: bool = False,
 ) -> GridMap:
     """A map that can be solved (see the module docstring); `ValueError` for arguments out

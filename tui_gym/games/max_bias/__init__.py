@@ -40,15 +40,7 @@ from tui_gym.core.mdp import FiniteMDP
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.envs.dp_grid import Cell, Grid
-from tui_gym.envs.max_bias import (
-    ACTIONS,
-    GRID,
-    MAX_B_ACTIONS,
-    A,
-    B,
-    max_bias_arrays,
-    offered,
-)
+from tui_gym.envs.max_bias import ACTIONS, GRID, MAX_B_ACTIONS, A, B, max_bias_arrays, offered
 from tui_gym.games.base import Advice, Narrator, TallyWord
 from tui_gym.games.dp_grid import DPGridGame, DPGridStates, Event
 from tui_gym.games.model import ModelOracle

@@ -174,11 +174,7 @@ class TaxiLayout(HeatmapLayout):
     focus_help = "choose the passenger's place (rows) and destination (columns)"
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
-        marks: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
         if np.shape(q) != (500, 6):
             return []
@@ -202,12 +198,8 @@ class TaxiLayout(HeatmapLayout):
             for p, row in enumerate(done)
         )
         picker = Heatmap(
-            title="slice: passenger × dest.",
-            row_labels=WHERE,
-            col_labels=STAND_NAMES,
-            values=picker_values,
-            labels=picker_labels,
-            marked=np.zeros((5, 4), dtype=bool),
+            title="slice: passenger × dest.", row_labels=WHERE, col_labels=STAND_NAMES,
+            values=picker_values, labels=picker_labels, marked=np.zeros((5, 4), dtype=bool),
             legend="picker: mean max Q of a slice, n* its cells not optimal, ✓ delivered",
         )
         cells = best[:, :, passenger, destination].astype(float)

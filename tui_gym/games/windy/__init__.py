@@ -122,10 +122,7 @@ class KingWindyGame(WindyGame):
     title = "Windy GridWorld, king's moves"
     env_id = "tui_gym/WindyGridWorldKing-v0"
     key = "Y"
-    lessons = {
-        "monte-carlo": MONTE_CARLO_LESSON,
-        "double-q": DOUBLE_Q_LESSON,
-    }
+    lessons = {"monte-carlo": MONTE_CARLO_LESSON, "double-q": DOUBLE_Q_LESSON}
     description = ("Exercise 6.9: the windy grid with the eight king's moves; -1 a move "
                    "until the goal.")
     teaches = "the same wind with diagonal moves: a shorter path, 7 moves instead of 15"

@@ -6,15 +6,6 @@ from tui_gym.session.arena.seat import Seat, SeatError
 from tui_gym.session.arena.table import GameTable, TableError
 
 __all__ = [
-    "ArenaScore",
-    "EpisodeScore",
-    "GameEntry",
-    "GameTable",
-    "Seat",
-    "SeatError",
-    "TableError",
-    "Verdict",
-    "catalog",
-    "find_game",
-    "open_handler",
+    "ArenaScore", "EpisodeScore", "GameEntry", "GameTable", "Seat", "SeatError", "TableError",
+    "Verdict", "catalog", "find_game", "open_handler",
 ]

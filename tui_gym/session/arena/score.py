@@ -82,14 +82,9 @@ class EpisodeScore:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "episode": self.index,
-            "seed": self.seed,
-            "return": self.episode_return,
-            "steps": self.steps,
-            "decisions": self.decisions,
-            "agreed": self.agreed,
-            "regret": self.exact_regret,
-            "done": self.done,
+            "episode": self.index, "seed": self.seed, "return": self.episode_return,
+            "steps": self.steps, "decisions": self.decisions, "agreed": self.agreed,
+            "regret": self.exact_regret, "done": self.done,
         }
 
 
@@ -201,8 +196,7 @@ class ArenaScore:
                 "mean_per_episode": self.mean_regret,
                 "ci95": _interval(self.regret_sum, self.regret_sq, self.regret_episodes),
                 "total": self.regret_sum if self.regret_episodes else None,
-                "episodes": self.regret_episodes,
-                "unit": "expected return lost to the optimum",
+                "episodes": self.regret_episodes, "unit": "expected return lost to the optimum",
                 "note": regret_note,
             },
             "decisions": self.decisions,

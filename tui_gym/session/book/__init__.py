@@ -10,22 +10,8 @@ __all__ = ["FIGURE_MODULES", "BookFigure", "figure_named", "figures"]
 
 # One module a figure (in the book's order).
 FIGURE_MODULES = (
-    "fig_3_2",
-    "fig_3_5",
-    "fig_4_1",
-    "fig_4_2",
-    "fig_4_3",
-    "fig_6_2",
-    "fig_6_3",
-    "fig_6_4",
-    "fig_6_5",
-    "fig_6_6",
-    "fig_7_2",
-    "fig_8_2",
-    "fig_8_4",
-    "fig_8_5",
-    "example_8_4",
-    "fig_12_3",
+    "fig_3_2", "fig_3_5", "fig_4_1", "fig_4_2", "fig_4_3", "fig_6_2", "fig_6_3", "fig_6_4",
+    "fig_6_5", "fig_6_6", "fig_7_2", "fig_8_2", "fig_8_4", "fig_8_5", "example_8_4", "fig_12_3",
     "fig_12_6",
 )
 

@@ -20,15 +20,7 @@ from tui_gym.session.book.figure import (
     Progress,
     heading,
 )
-from tui_gym.session.book.runs import (
-    Learner,
-    Played,
-    above,
-    counts,
-    margin,
-    swept,
-    world_phases,
-)
+from tui_gym.session.book.runs import Learner, Played, above, counts, margin, swept, world_phases
 from tui_gym.session.experiments.compare import Arm, Setup, prepare
 
 # The book: "both systems made at most n = 5 updates per environmental interaction"; the

@@ -39,24 +39,9 @@ from tui_gym.session.experiments.compare import (
 )
 
 __all__ = [
-    "FIRST_ACTION",
-    "LENGTH",
-    "RETURN",
-    "Learner",
-    "Played",
-    "above",
-    "completed",
-    "counts",
-    "margin",
-    "near",
-    "one_run",
-    "per_episode",
-    "per_step",
-    "per_time_step",
-    "play",
-    "play_steps",
-    "swept",
-    "world_phases",
+    "FIRST_ACTION", "LENGTH", "RETURN", "Learner", "Played", "above", "completed", "counts",
+    "margin", "near", "one_run", "per_episode", "per_step", "per_time_step", "play", "play_steps",
+    "swept", "world_phases",
 ]
 
 CHECK_CONFIDENCE = 0.99  # the verdicts' intervals

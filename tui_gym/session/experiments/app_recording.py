@@ -52,10 +52,7 @@ class SessionRunLog:
     """Records the app's runs into the history at `path` (see the module)."""
 
     def __init__(
-        self,
-        path: str | Path,
-        *,
-        flush_seconds: float = FLUSH_SECONDS,
+        self, path: str | Path, *, flush_seconds: float = FLUSH_SECONDS,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.path = Path(path)

@@ -60,10 +60,7 @@ def connect(cluster: Any) -> Iterator[Any]:
 
 
 def run_on_cluster(
-    client: Any,
-    tasks: Sequence[T],
-    work: Callable[[T], R],
-    take: Callable[[T, R], None],
+    client: Any, tasks: Sequence[T], work: Callable[[T], R], take: Callable[[T, R], None],
     stopped: Callable[[], bool],
 ) -> bool:
     """Run `work(task)` for every task on the cluster of `client`, `take(task, result)` as

@@ -117,10 +117,7 @@ class ExactCheckpoints:
 
 
 def run_figures(
-    curve: Curve | None,
-    exact: dict[str, float],
-    extra: tuple[Figure, ...] = (),
-    after: int = 0,
+    curve: Curve | None, exact: dict[str, float], extra: tuple[Figure, ...] = (), after: int = 0,
 ) -> list[Figure]:
     """`mean_return_last`, `exact_value` and `exact_gap` (those known), then `extra`;
     the run's episodes are those after `after`."""

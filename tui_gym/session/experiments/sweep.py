@@ -220,15 +220,10 @@ class SweepResult:
 
 
 def run_sweep(
-    spec: SweepSpec,
-    *,
-    progress: Callable[[CompareProgress], None] | None = None,
-    stop: threading.Event | None = None,
-    history: RunHistory | None = None,
-    processes: int | None = None,
-    status: Callable[[str], None] | None = None,
-    resume: int | None = None,
-    cluster: Any = None,
+    spec: SweepSpec, *, progress: Callable[[CompareProgress], None] | None = None,
+    stop: threading.Event | None = None, history: RunHistory | None = None,
+    processes: int | None = None, status: Callable[[str], None] | None = None,
+    resume: int | None = None, cluster: Any = None,
 ) -> SweepResult:
     """Run a sweep (see the module docstring); arguments as `run_compare`'s."""
     setup = Setup(spec.game, spec.seeds, spec.episodes, spec.game_params,
@@ -250,12 +245,7 @@ def run_sweep(
     for rank, i in enumerate(order, start=1):
         found[i] = replace(found[i], rank=rank)
     return SweepResult(
-        spec=spec,
-        points=tuple(found),
-        tasks=done.tasks,
-        interrupted=done.interrupted,
-        group=done.group,
-        game=done.prepared.game,
-        optimum=done.prepared.optimum,
+        spec=spec, points=tuple(found), tasks=done.tasks, interrupted=done.interrupted,
+        group=done.group, game=done.prepared.game, optimum=done.prepared.optimum,
         hyperparameters=fixed,
     )

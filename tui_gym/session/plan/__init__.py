@@ -33,16 +33,9 @@ class PlanResult:
 
 
 def plan(
-    game: Game,
-    kwargs: Mapping[str, Any],
-    method: str,
-    *,
-    start: str = "random",
-    gamma: float | None = None,
-    theta: float = 1e-6,
-    in_place: bool = False,
-    agent_q: npt.ArrayLike | None = None,
-    max_sweeps: int = 100_000,
+    game: Game, kwargs: Mapping[str, Any], method: str, *, start: str = "random",
+    gamma: float | None = None, theta: float = 1e-6, in_place: bool = False,
+    agent_q: npt.ArrayLike | None = None, max_sweeps: int = 100_000,
 ) -> PlanResult:
     """Run `method` from the `start` policy (see `start.START_POLICIES`; an agent's policy
     from `agent_q`) on the game's model; `ValueError` with one line when it cannot."""

@@ -54,14 +54,8 @@ def numbered(panel: Heatmap) -> Heatmap:
 
 
 def plan_panels(
-    game: Game,
-    kwargs: Mapping[str, Any],
-    plan: PlanModel,
-    v: npt.ArrayLike,
-    policy: npt.ArrayLike,
-    changed: npt.ArrayLike,
-    focus: Any = None,
-    numbers: bool = False,
+    game: Game, kwargs: Mapping[str, Any], plan: PlanModel, v: npt.ArrayLike, policy: npt.ArrayLike,
+    changed: npt.ArrayLike, focus: Any = None, numbers: bool = False,
 ) -> list[Heatmap]:
     """The game's heatmap panels of the plan, the changed states marked."""
     q = plan_table(plan, v, policy)

@@ -24,10 +24,7 @@ class RecordingSwitch:
     """Records a person's games while on; `path` is the file it writes (or will)."""
 
     def __init__(
-        self,
-        path: str | Path | None = None,
-        *,
-        source: str = "app",
+        self, path: str | Path | None = None, *, source: str = "app",
         on_failure: Callable[[str], None] | None = None,
     ) -> None:
         self.path = Path(path) if path is not None else None

@@ -108,11 +108,7 @@ class KeptShape(Generic[Shape]):
         self._shape = None
 
     def get(
-        self,
-        key: Hashable,
-        width: int,
-        height: int,
-        choose: Callable[[int, int], Shape],
+        self, key: Hashable, width: int, height: int, choose: Callable[[int, int], Shape],
         fits: Callable[[Shape, int, int], bool],
     ) -> Shape:
         """The kept shape if the map (`key`) and width are the same and it still fits,
@@ -153,13 +149,6 @@ def reward_text(value: float) -> str:
 
 
 __all__ = [
-    "Cell",
-    "CharGrid",
-    "KeptShape",
-    "cell_of",
-    "legend",
-    "on_tile",
-    "reward_text",
-    "stack",
+    "Cell", "CharGrid", "KeptShape", "cell_of", "legend", "on_tile", "reward_text", "stack",
     "step_toward",
 ]

@@ -62,17 +62,8 @@ class CardsBoard(Board):
     """
 
     COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "cards--face",
-        "cards--red",
-        "cards--edge",
-        "cards--back",
-        "cards--back-fill",
-        "cards--label",
-        "cards--muted",
-        "cards--total",
-        "cards--bust",
-        "cards--best",
-        "cards--tag",
+        "cards--face", "cards--red", "cards--edge", "cards--back", "cards--back-fill",
+        "cards--label", "cards--muted", "cards--total", "cards--bust", "cards--best", "cards--tag",
     }
 
     BINDINGS: ClassVar[list[BindingType]] = [
@@ -82,8 +73,7 @@ class CardsBoard(Board):
     ]
 
     BUTTONS = (
-        ("Hit [dim]h[/]", "act('hit')"),
-        ("Stick [dim]s[/]", "act('stick')"),
+        ("Hit [dim]h[/]", "act('hit')"), ("Stick [dim]s[/]", "act('stick')"),
         ("Deal [dim]n[/]", "new_episode"),
     )
     RESTART_ANYTIME = False
@@ -94,8 +84,7 @@ class CardsBoard(Board):
     # --- what the board says ---------------------------------------------------
     def key_help(self) -> list[tuple[str, str]]:
         return [
-            ("h", "hit: take another card"),
-            ("s", "stick: keep your hand, the dealer plays"),
+            ("h", "hit: take another card"), ("s", "stick: keep your hand, the dealer plays"),
             ("n / enter", "deal the next hand"),
             ("click", "the Hit / Stick / Deal buttons under the table"),
         ]

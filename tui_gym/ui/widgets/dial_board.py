@@ -94,8 +94,7 @@ class DialBoard(Board):
     # --- what the board says ------------------------------------------------
     def key_help(self) -> list[tuple[str, str]]:
         return [
-            ("← / →", "turn the dial by one"),
-            ("↓ / ↑", "turn the dial by five"),
+            ("← / →", "turn the dial by one"), ("↓ / ↑", "turn the dial by five"),
             ("home / end", "the dial to either end"),
             ("enter / space", "make the move the dial points at (a new episode once over)"),
             ("n / r", "start a new episode (at any time)"),

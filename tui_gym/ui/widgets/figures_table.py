@@ -50,10 +50,8 @@ def cells(row: FigureRow) -> dict[str, str]:
     return {
         "seeds": f"{row.seeds:,}",
         "episodes": MISSING if row.episodes is None else compact_count(row.episodes),
-        "return": with_interval(row.mean_return_last),
-        "exact": plain(row.exact_value),
-        "gap": plain(row.exact_gap, sign=False),
-        "note": row.note,
+        "return": with_interval(row.mean_return_last), "exact": plain(row.exact_value),
+        "gap": plain(row.exact_gap, sign=False), "note": row.note,
     }
 
 
@@ -130,8 +128,7 @@ class FiguresTable(StripWidget):
             if len(label) > label_width:
                 label = label[: label_width - 1] + "…"
             line: Line = [
-                Segment("▍ ", Style(color=colour(place))),
-                Segment(label.ljust(label_width)),
+                Segment("▍ ", Style(color=colour(place))), Segment(label.ljust(label_width)),
             ]
             for _header, key, w in columns:
                 if key == "note":

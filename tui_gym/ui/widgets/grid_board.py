@@ -82,12 +82,7 @@ class GridLayout:
 
 
 CELL_SHAPES = (
-    (7, 3, True),
-    (5, 2, True),
-    (5, 1, True),
-    (3, 1, True),
-    (3, 1, False),
-    (2, 1, False),
+    (7, 3, True), (5, 2, True), (5, 1, True), (3, 1, True), (3, 1, False), (2, 1, False),
     (1, 1, False),
 )
 
@@ -144,14 +139,8 @@ class GridBoard(Board):
     """
 
     COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "grid--line",
-        "grid--empty",
-        "grid--trail",
-        "grid--agent",
-        "grid--target",
-        "grid--home",
-        "grid--axis",
-        "grid--wall",
+        "grid--line", "grid--empty", "grid--trail", "grid--agent", "grid--target", "grid--home",
+        "grid--axis", "grid--wall",
     }
 
     BINDINGS: ClassVar[list[BindingType]] = [
@@ -201,8 +190,7 @@ class GridBoard(Board):
     def key_help(self) -> list[tuple[str, str]]:
         return [
             ("↑ ↓ ← →  or  w a s d", "move up, down, left, right (+y is up)"),
-            ("r", "reset: a new episode"),
-            ("click a cell", "step one cell towards it"),
+            ("r", "reset: a new episode"), ("click a cell", "step one cell towards it"),
         ]
 
     @property

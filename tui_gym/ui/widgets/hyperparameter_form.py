@@ -193,10 +193,7 @@ class HyperparameterForm(Vertical):
         """Escape in a field: the person wants the keyboard back for the view."""
 
     def __init__(
-        self,
-        hyperparameters: Settings | None = None,
-        *,
-        id: str | None = None,
+        self, hyperparameters: Settings | None = None, *, id: str | None = None,
         classes: str | None = None,
     ) -> None:
         super().__init__(id=id, classes=classes)
@@ -228,11 +225,8 @@ class HyperparameterForm(Vertical):
         if _typed(field):
             assert isinstance(field, Param)
             box = TextField(
-                _text(field, value),
-                id=f"hp-{field.name}",
-                compact=True,
-                validators=[FieldValidator(field)],
-                select_on_focus=True,
+                _text(field, value), id=f"hp-{field.name}", compact=True,
+                validators=[FieldValidator(field)], select_on_focus=True,
             )
             hint = Label(range_hint(field), classes="hp-hint")
         else:

@@ -183,8 +183,7 @@ class MapEditor(Vertical):
             labels.append(tuple(row))
         present = [word for mark, word, here in (
             ("S", "start", grid_map.start is not None),
-            ("$", "reward cell", "R" in grid_map.tiles()),
-            (ICE, "ice", bool(slip)),
+            ("$", "reward cell", "R" in grid_map.tiles()), (ICE, "ice", bool(slip)),
         ) if here for word in [f"{mark} {word}"]]
         legend = "  ".join(present) + "  " + panel.legend.replace(
             "* not an optimal move", "").replace("  * off every shortest path", "")

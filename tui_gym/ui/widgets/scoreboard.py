@@ -34,18 +34,11 @@ class Scoreboard(Widget):
     """
 
     COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "scoreboard--who",
-        "scoreboard--you",
-        "scoreboard--agent",
-        "scoreboard--optimum",
+        "scoreboard--who", "scoreboard--you", "scoreboard--agent", "scoreboard--optimum",
         "scoreboard--other",
     }
 
-    WHO_STYLES: ClassVar[dict[str, str]] = {
-        "You": "you",
-        "Agent": "agent",
-        "Optimum": "optimum",
-    }
+    WHO_STYLES: ClassVar[dict[str, str]] = {"You": "you", "Agent": "agent", "Optimum": "optimum"}
 
     def __init__(
         self,

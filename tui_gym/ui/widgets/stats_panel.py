@@ -16,10 +16,8 @@ from tui_gym.ui.widgets.numbers import Forms, compact_count, count_forms, fit, n
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget
 
 STATE_STYLES = {
-    "running": ("● running", "bold green"),
-    "paused": ("‖ paused", "bold yellow"),
-    "finished": ("✓ finished", "bold cyan"),
-    "idle": ("○ ready", "bold"),
+    "running": ("● running", "bold green"), "paused": ("‖ paused", "bold yellow"),
+    "finished": ("✓ finished", "bold cyan"), "idle": ("○ ready", "bold"),
 }
 
 

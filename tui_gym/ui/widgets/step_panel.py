@@ -22,12 +22,8 @@ def _num(value: float) -> str:
 
 
 def explain(
-    event: Any,
-    record: UpdateRecord,
-    action_names: Sequence[str],
-    describe: Callable[[Any], str],
-    title: str = "",
-    describe_row: Callable[[int], str] | None = None,
+    event: Any, record: UpdateRecord, action_names: Sequence[str], describe: Callable[[Any], str],
+    title: str = "", describe_row: Callable[[int], str] | None = None,
 ) -> list[tuple[str, str]]:
     """The panel's lines as (label, text) pairs for one step and its update record.
     `describe` puts an observation in words; `describe_row` a row of the table (the

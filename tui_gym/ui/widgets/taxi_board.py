@@ -72,17 +72,7 @@ class TaxiShape:
 
 
 TAXI_SIZES = (
-    (11, 4),
-    (9, 4),
-    (11, 3),
-    (9, 3),
-    (7, 3),
-    (9, 2),
-    (7, 2),
-    (5, 2),
-    (9, 1),
-    (7, 1),
-    (5, 1),
+    (11, 4), (9, 4), (11, 3), (9, 3), (7, 3), (9, 2), (7, 2), (5, 2), (9, 1), (7, 1), (5, 1),
     (3, 1),
 )
 
@@ -169,23 +159,9 @@ class TaxiBoard(Board):
     """
 
     COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "taxi--road",
-        "taxi--road-alt",
-        "taxi--lane",
-        "taxi--wall",
-        "taxi--rain",
-        "taxi--stand-0",
-        "taxi--stand-1",
-        "taxi--stand-2",
-        "taxi--stand-3",
-        "taxi--passenger",
-        "taxi--destination",
-        "taxi--cab",
-        "taxi--cab-full",
-        "taxi--caption",
-        "taxi--note",
-        "taxi--good",
-        "taxi--bad",
+        "taxi--road", "taxi--road-alt", "taxi--lane", "taxi--wall", "taxi--rain", "taxi--stand-0",
+        "taxi--stand-1", "taxi--stand-2", "taxi--stand-3", "taxi--passenger", "taxi--destination",
+        "taxi--cab", "taxi--cab-full", "taxi--caption", "taxi--note", "taxi--good", "taxi--bad",
     }
 
     BINDINGS: ClassVar[list[BindingType]] = [
@@ -200,8 +176,7 @@ class TaxiBoard(Board):
     ]
 
     BUTTONS = (
-        ("Pick up [dim]k[/]", "act('pickup')"),
-        ("Drop off [dim]l[/]", "act('dropoff')"),
+        ("Pick up [dim]k[/]", "act('pickup')"), ("Drop off [dim]l[/]", "act('dropoff')"),
         ("↺ New [dim]n[/]", "new_episode"),
     )
     RESTART_ANYTIME = True
@@ -235,8 +210,7 @@ class TaxiBoard(Board):
     def key_help(self) -> list[tuple[str, str]]:
         return [
             ("↑ ↓ ← →  or  w a s d", "drive north, south, west, east"),
-            ("k", "pick the passenger up"),
-            ("l / o", "drop the passenger off"),
+            ("k", "pick the passenger up"), ("l / o", "drop the passenger off"),
             ("n / r", "start a new episode (at any time)"),
             ("enter", "start a new episode once this one is over"),
             ("click a cell", "drive one cell towards it; click the cab to pick up or drop off"),
@@ -292,9 +266,7 @@ class TaxiBoard(Board):
         self.rainy = bool(scene.get("rainy"))
         action = scene.get("last_action")
         self._event = self._event_of(
-            previous_taxi,
-            previous_destination,
-            str(action) if action is not None else None,
+            previous_taxi, previous_destination, str(action) if action is not None else None,
             bool(scene.get("last_illegal")),
         )
         self._fresh = False
@@ -320,10 +292,7 @@ class TaxiBoard(Board):
         return False
 
     def _event_of(
-        self,
-        previous: Cell | None,
-        previous_destination: int | None,
-        action: str | None,
+        self, previous: Cell | None, previous_destination: int | None, action: str | None,
         illegal: bool,
     ) -> Event | None:
         """What the last action did, in words from longest to shortest, and their style."""
@@ -356,8 +325,7 @@ class TaxiBoard(Board):
             outcome = f"went {went}" if went else "stayed put"
             rain = (
                 f"The rain pushed the cab: asked {action}, {outcome}",
-                f"Rain: asked {action}, {outcome}",
-                f"Rain: {outcome}",
+                f"Rain: asked {action}, {outcome}", f"Rain: {outcome}",
             )
             return rain, "note", True
         if went is None:

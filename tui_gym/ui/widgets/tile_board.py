@@ -232,33 +232,11 @@ class TileBoard(Board):
     """
 
     COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "tile--ice",
-        "tile--ice-alt",
-        "tile--ground",
-        "tile--ground-alt",
-        "tile--floor",
-        "tile--floor-alt",
-        "tile--start",
-        "tile--hole",
-        "tile--goal",
-        "tile--cliff",
-        "tile--wall",
-        "tile--reward",
-        "tile--penalty",
-        "tile--agent",
-        "tile--agent-home",
-        "tile--agent-lost",
-        "tile--trail",
-        "tile--mark",
-        "tile--value",
-        "tile--slip",
-        "tile--wind",
-        "tile--cursor",
-        "tile--axis",
-        "tile--caption",
-        "tile--slipped",
-        "tile--good",
-        "tile--bad",
+        "tile--ice", "tile--ice-alt", "tile--ground", "tile--ground-alt", "tile--floor",
+        "tile--floor-alt", "tile--start", "tile--hole", "tile--goal", "tile--cliff", "tile--wall",
+        "tile--reward", "tile--penalty", "tile--agent", "tile--agent-home", "tile--agent-lost",
+        "tile--trail", "tile--mark", "tile--value", "tile--slip", "tile--wind", "tile--cursor",
+        "tile--axis", "tile--caption", "tile--slipped", "tile--good", "tile--bad",
     }
 
     BINDINGS: ClassVar[list[BindingType]] = [
@@ -439,8 +417,7 @@ class TileBoard(Board):
         if kind == HOLE:
             if slipped:
                 return (
-                    f"{{who}} {theme.slipped} into a {theme.hole}",
-                    f"Slipped into a {theme.hole}",
+                    f"{{who}} {theme.slipped} into a {theme.hole}", f"Slipped into a {theme.hole}",
                 ), "bad"
             return (f"{{who}} {theme.fell_in}", theme.fell_in.capitalize()), "bad"
         if kind == GOAL:
@@ -461,15 +438,13 @@ class TileBoard(Board):
             short = f"{action} → {went or ('stayed' if agent == previous else '?')}"
             texts: tuple[str, ...] = (
                 f"{{who}} {theme.slipped}: asked {action}, {outcome}",
-                f"Slipped: asked {action}, {outcome}",
-                f"Slipped: {short}",
+                f"Slipped: asked {action}, {outcome}", f"Slipped: {short}",
             )
             return texts, "slipped"
         if agent == previous:
             blocker = "a wall" if self.kind(intended) == WALL else "the edge"
             return (
-                f"{{who}} bumped into {blocker} (asked {action})",
-                f"Bumped into {blocker}",
+                f"{{who}} bumped into {blocker} (asked {action})", f"Bumped into {blocker}",
             ), "caption"
         return (f"{{who}} moved {action}", f"Moved {action}"), "caption"
 
@@ -642,13 +617,8 @@ class TileBoard(Board):
         """'⌂ start  · ice  ○ hole  ★ goal  ● you': the tiles this map has (None if too wide)."""
         present = {kind for row in self.cells for kind in row}
         words = {
-            START: "start",
-            FLOOR: self.theme.floor,
-            HOLE: self.theme.hole,
-            GOAL: "goal",
-            CLIFF: "cliff",
-            WALL: "wall",
-            REWARD: "reward",
+            START: "start", FLOOR: self.theme.floor, HOLE: self.theme.hole, GOAL: "goal",
+            CLIFF: "cliff", WALL: "wall", REWARD: "reward",
         }
         items = []
         for kind in KINDS:

@@ -71,12 +71,7 @@ def plotted(data: Sequence[float], width: int, current: float | None = None) -> 
 
 
 def sparkline_rows(
-    data: Sequence[float],
-    width: int,
-    height: int,
-    low: RichColor,
-    high: RichColor,
-    *,
+    data: Sequence[float], width: int, height: int, low: RichColor, high: RichColor, *,
     flat: bool = False,
 ) -> list[Line]:
     """A sparkline of `data`, `width` x `height` cells, as lines of segments (top first).
@@ -244,9 +239,7 @@ class TrainingCharts(StripWidget):
                 line: Line = [
                     *_cell(curve.name if row == 0 else "", NAME_WIDTH, name_style),
                     *_cell(value if row == 0 else "", VALUE_WIDTH, value_style, right=True),
-                    Segment(" "),
-                    *spark[row],
-                    Segment(" "),
+                    Segment(" "), *spark[row], Segment(" "),
                 ]
                 if range_width:
                     line += _cell(ends[row], range_width, range_style, right=True)
