@@ -76,10 +76,8 @@ class CardsBoard(Board):
         ("Hit [dim]h[/]", "act('hit')"), ("Stick [dim]s[/]", "act('stick')"),
         ("Deal [dim]n[/]", "new_episode"),
     )
+    BORDER_TITLE = "Table"
     RESTART_ANYTIME = False
-
-    def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
-        self.border_title = "Table"
 
     # --- what the board says ---------------------------------------------------
     def key_help(self) -> list[tuple[str, str]]:
@@ -89,17 +87,9 @@ class CardsBoard(Board):
             ("click", "the Hit / Stick / Deal buttons under the table"),
         ]
 
-    @property
-    def prompt(self) -> str:
-        return "Hit (h) or stick (s)?"
-
-    @property
-    def over_hint(self) -> str:
-        return "This hand is over: press n or Enter (or click Deal) for the next one."
-
-    @property
-    def unfinished_hint(self) -> str:
-        return "Finish this hand first: hit (h) or stick (s)."
+    prompt = "Hit (h) or stick (s)?"
+    over_hint = "This hand is over: press n or Enter (or click Deal) for the next one."
+    unfinished_hint = "Finish this hand first: hit (h) or stick (s)."
 
     def button_enabled(self, action: str) -> bool:
         return self.episode_over if action == "new_episode" else not self.episode_over

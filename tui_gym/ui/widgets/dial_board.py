@@ -104,9 +104,7 @@ class DialBoard(Board):
     def prompt(self) -> str:
         return str(self.scene.get("prompt") or "Turn the dial with ← →, then enter.")
 
-    @property
-    def over_hint(self) -> str:
-        return "This episode is over: press n, r or Enter for a new one."
+    over_hint = "This episode is over: press n, r or Enter for a new one."
 
     def button_suggested(self, action: str) -> bool:
         return action == "new_episode" if self.episode_over else action == "take"

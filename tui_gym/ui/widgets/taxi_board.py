@@ -179,17 +179,10 @@ class TaxiBoard(Board):
         ("Pick up [dim]k[/]", "act('pickup')"), ("Drop off [dim]l[/]", "act('dropoff')"),
         ("↺ New [dim]n[/]", "new_episode"),
     )
-    RESTART_ANYTIME = True
+    BORDER_TITLE = "Taxi"
 
-    def __init__(
-        self,
-        *,
-        interactive: bool = True,
-        name: str | None = None,
-        id: str | None = None,  # noqa: A002 - Textual's own name for it
-        classes: str | None = None,
-    ) -> None:
-        super().__init__(interactive=interactive, name=name, id=id, classes=classes)
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
         self.rows = self.cols = 0
         self.taxi: Cell | None = None
         self.passenger: int | None = None
@@ -201,10 +194,7 @@ class TaxiBoard(Board):
         self._event: Event | None = None
         self._fresh = True
         self._kept: KeptShape[TaxiShape] = KeptShape()
-        self._layout: TaxiLayout | None = None
-
-    def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
-        self.border_title = "Taxi"
+        self.layout_drawn: TaxiLayout | None = None
 
     # --- what the board says ---------------------------------------------------
     def key_help(self) -> list[tuple[str, str]]:
@@ -216,24 +206,14 @@ class TaxiBoard(Board):
             ("click a cell", "drive one cell towards it; click the cab to pick up or drop off"),
         ]
 
-    @property
-    def prompt(self) -> str:
-        return "Drive with the arrows or WASD; k picks up, l drops off."
-
-    @property
-    def over_hint(self) -> str:
-        return "This ride is over: press n, r or Enter (or click New) for another."
+    prompt = "Drive with the arrows or WASD; k picks up, l drops off."
+    over_hint = "This ride is over: press n, r or Enter (or click New) for another."
 
     def button_enabled(self, action: str) -> bool:
         return action == "new_episode" or not self.episode_over
 
     def button_suggested(self, action: str) -> bool:
         return self.episode_over and action == "new_episode"
-
-    @property
-    def layout_drawn(self) -> TaxiLayout | None:
-        """The geometry of the last drawing (None before the first)."""
-        return self._layout
 
     @property
     def aboard(self) -> bool:
@@ -458,7 +438,7 @@ class TaxiBoard(Board):
 
     def picture(self, width: int, height: int) -> Text:
         if self.taxi is None or self.rows <= 0 or self.cols <= 0:
-            self._layout = None
+            self.layout_drawn = None
             return stack([Text("No city yet.", self._style("caption"))], width, height)
         rows, cols = self.rows, self.cols
         if not self.KEEP_SHAPE:
@@ -474,7 +454,7 @@ class TaxiBoard(Board):
                 lines.append(legend)
         left = max(0, (width - shape.width) // 2)
         top = max(0, (height - len(lines)) // 2)
-        self._layout = TaxiLayout(shape, left, top)
+        self.layout_drawn = TaxiLayout(shape, left, top)
         return stack(lines, width, height)
 
     # --- keys and clicks -----------------------------------------------------------
@@ -485,9 +465,9 @@ class TaxiBoard(Board):
 
     def canvas_clicked(self, offset: Offset) -> None:
         """Drive one cell towards the clicked cell; a click on the cab picks up or drops off."""
-        if self._layout is None or self.taxi is None:
+        if self.layout_drawn is None or self.taxi is None:
             return
-        cell = self._layout.cell_at(offset)
+        cell = self.layout_drawn.cell_at(offset)
         if cell is None:
             return
         if cell == self.taxi:

@@ -15,6 +15,7 @@ ACTION_GROUP = Binding.Group("Act")
 class TextBoard(Board):
     """Any game's text picture; digits take actions."""
 
+    BORDER_TITLE = "Game"
     DEFAULT_CSS = """
     TextBoard > BoardCanvas { content-align: center middle; }
     """
@@ -26,9 +27,6 @@ class TextBoard(Board):
         Binding("enter", "next_episode", "Next", show=False),
     ]
 
-    def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
-        self.border_title = "Game"
-
     def key_help(self) -> list[tuple[str, str]]:
         return [
             ("0-9", "take the action of that number"),
@@ -36,13 +34,8 @@ class TextBoard(Board):
             ("enter", "start a new episode once this one is over"),
         ]
 
-    @property
-    def prompt(self) -> str:
-        return "Press an action's number; r starts over."
-
-    @property
-    def over_hint(self) -> str:
-        return "This episode is over: press n, r or Enter for a new one."
+    prompt = "Press an action's number; r starts over."
+    over_hint = "This episode is over: press n, r or Enter for a new one."
 
     def action_next_episode(self) -> None:
         if self.episode_over:

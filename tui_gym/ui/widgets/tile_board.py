@@ -254,7 +254,6 @@ class TileBoard(Board):
     ]
 
     BUTTONS = (("↺ Reset [dim]r[/]", "new_episode"),)
-    RESTART_ANYTIME = True
 
     class CellClicked(Message):
         """A person clicked map cell (row, col) (an editor paints it; play steps towards it)."""
@@ -264,15 +263,8 @@ class TileBoard(Board):
             self.row = row
             self.col = col
 
-    def __init__(
-        self,
-        *,
-        interactive: bool = True,
-        name: str | None = None,
-        id: str | None = None,  # noqa: A002 - Textual's own name for it
-        classes: str | None = None,
-    ) -> None:
-        super().__init__(interactive=interactive, name=name, id=id, classes=classes)
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
         self.cells: list[str] = []
         self.trail: dict[Cell, str] = {}  # cell the agent left -> arrow of that move
         self.agent: Cell | None = None
@@ -289,7 +281,7 @@ class TileBoard(Board):
         self._event: Event | None = None
         self._fresh = True
         self._kept: KeptShape[TileShape] = KeptShape()
-        self._layout: TileLayout | None = None
+        self.layout_drawn: TileLayout | None = None
 
     def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
         self.border_title = self.theme.title
@@ -333,21 +325,11 @@ class TileBoard(Board):
         elif digit in KEYPAD:
             self.action_act(KEYPAD[digit])
 
-    @property
-    def prompt(self) -> str:
-        return "Move with the arrows or WASD, or click a cell; r starts over."
-
-    @property
-    def over_hint(self) -> str:
-        return "This episode is over: press n, r or Enter (or click Reset) for a new one."
+    prompt = "Move with the arrows or WASD, or click a cell; r starts over."
+    over_hint = "This episode is over: press n, r or Enter (or click Reset) for a new one."
 
     def button_suggested(self, action: str) -> bool:
         return self.episode_over
-
-    @property
-    def layout_drawn(self) -> TileLayout | None:
-        """The geometry of the last drawing (None before the first)."""
-        return self._layout
 
     @property
     def event_text(self) -> str:
@@ -644,7 +626,7 @@ class TileBoard(Board):
 
     def picture(self, width: int, height: int) -> Text:
         if not self.cells:
-            self._layout = None
+            self.layout_drawn = None
             return stack([Text("No map yet.", self._style("caption"))], width, height)
         rows, cols = len(self.cells), len(self.cells[0])
         if not self.KEEP_SHAPE:
@@ -668,7 +650,7 @@ class TileBoard(Board):
                 lines.append(names)
         left = max(0, (width - shape.width) // 2)
         top = max(0, (height - len(lines)) // 2)
-        self._layout = TileLayout(shape, left + shape.label_w, top)
+        self.layout_drawn = TileLayout(shape, left + shape.label_w, top)
         return stack(lines, width, height)
 
     # --- keys and clicks -----------------------------------------------------------
@@ -678,7 +660,7 @@ class TileBoard(Board):
             self.action_new_episode()
 
     def canvas_clicked(self, offset: Offset) -> None:
-        layout = self._layout
+        layout = self.layout_drawn
         if layout is None:
             return
         rows, col = layout.rows_at(offset), layout.col_at(offset)
