@@ -27,6 +27,15 @@ _MAX_INT_DIGITS = 400
 _FLOAT_MAX = float(np.finfo(np.float64).max)
 
 
+def finite_number(name: str, value: float, *, minimum: float | None = None) -> float:
+    """`value` as a float; ValueError naming `name` unless finite and at least `minimum`."""
+    number = float(value)
+    if not math.isfinite(number) or (minimum is not None and number < minimum):
+        bound = "" if minimum is None else f" >= {minimum:g}"
+        raise ValueError(f"{name} must be a finite number{bound}, got {value!r}")
+    return number
+
+
 def read_number(text: str) -> int | float | None:
     """The number `text` spells, or None when it is not one.
 

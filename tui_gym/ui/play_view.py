@@ -112,14 +112,8 @@ class PlayView(Vertical):
         Binding("a,A", "watch_agent", "Watch agent", tooltip="Let the greedy agent play"),
     ]
 
-    def __init__(
-        self,
-        *,
-        name: str | None = None,
-        id: str | None = None,
-        classes: str | None = None,  # noqa: A002
-    ) -> None:
-        super().__init__(name=name, id=id, classes=classes)
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
         self.game: HumanGame | None = None
         self.board: Board | None = None
         self.outcomes: dict[str, int] = {}  # finished episodes by the narrator's tally word

@@ -40,9 +40,8 @@ class DialBoard(Board):
     BUTTONS = (("◀", "turn(-1)"), ("Go [dim]enter[/]", "take"), ("▶", "turn(1)"),
                ("↺ New [dim]n[/]", "new_episode"))
 
-    def __init__(self, *, interactive: bool = True, name: str | None = None,
-                 id: str | None = None, classes: str | None = None) -> None:  # noqa: A002
-        super().__init__(interactive=interactive, name=name, id=id, classes=classes)
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
         self.pointer = 0
         self._fresh = True
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import ClassVar
+from typing import Any, ClassVar
 
 from rich.console import RenderableType
 from rich.table import Table
@@ -40,18 +40,11 @@ class Scoreboard(Widget):
 
     WHO_STYLES: ClassVar[dict[str, str]] = {"You": "you", "Agent": "agent", "Optimum": "optimum"}
 
-    def __init__(
-        self,
-        *,
-        name: str | None = None,
-        id: str | None = None,  # noqa: A002 - Textual's own name for it
-        classes: str | None = None,
-    ) -> None:
-        super().__init__(name=name, id=id, classes=classes)
-        self.rows: tuple[ScoreRow, ...] = ()
+    BORDER_TITLE = "Scoreboard"
 
-    def on_mount(self) -> None:
-        self.border_title = "Scoreboard"
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self.rows: tuple[ScoreRow, ...] = ()
 
     def show_rows(self, rows: Sequence[ScoreRow]) -> None:
         """Show these rows (redraws only when they changed)."""
