@@ -10,7 +10,7 @@ import numpy as np
 import numpy.typing as npt
 from gymnasium import spaces
 
-from tui_gym.envs.tile_map import TileArrays
+from tui_gym.envs.table_env import TileArrays
 
 __all__ = ["MAX_CARS", "MAX_MOVE", "MOVES", "CarRentalEnv", "car_rental_arrays", "night",
            "nights"]

@@ -7,8 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from tui_gym.envs.table_env import TableEnv
-from tui_gym.envs.tile_map import TileArrays
+from tui_gym.envs.table_env import TableEnv, TileArrays
 
 __all__ = [
     "AB_JUMPS", "CORNERS", "GRID_ACTIONS", "KING_ACTIONS", "STEPS", "ABGridEnv",
