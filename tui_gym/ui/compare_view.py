@@ -185,9 +185,7 @@ class CompareView(Vertical):
     SCOPED_CSS = False  # the compact rules start at Screen
     DEFAULT_CSS = """
     CompareView { height: 1fr; padding: 0 0 0 1; }
-    CompareView #compare-algorithms {
-        layout: grid; grid-size: 3; grid-gutter: 0 1; height: auto;
-    }
+    CompareView #compare-algorithms { layout: grid; grid-size: 3; grid-gutter: 0 1; height: auto; }
     CompareView #compare-algorithms TickBox { width: 1fr; }
     CompareView #compare-fields { height: 1; }
     CompareView #compare-fields Label { padding: 0 1 0 0; color: $text-muted; }
@@ -196,9 +194,7 @@ class CompareView(Vertical):
     CompareView #compare-fields Button { min-width: 0; margin-right: 1; }
     CompareView #compare-progress { display: none; }
     CompareView.-running #compare-progress { display: block; }
-    CompareView #compare-message {
-        width: 1fr; color: $text-muted; text-wrap: wrap; height: auto;
-    }
+    CompareView #compare-message { width: 1fr; color: $text-muted; text-wrap: wrap; height: auto; }
     CompareView #compare-message.-error { color: $text-error; }
     CompareView #compare-body { height: 1fr; scrollbar-size-vertical: 1; }
     CompareView #compare-runs-title { color: $text-muted; text-style: bold; margin-top: 1; }

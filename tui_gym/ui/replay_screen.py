@@ -80,9 +80,7 @@ class ReplayScreen(ModalScreen[None]):
     ReplayScreen #replay-board { height: 1fr; min-height: 7; }
     ReplayScreen #replay-board > Board { height: 1fr; }
     ReplayScreen #replay-words { height: 1fr; padding: 1 2; color: $text-muted; }
-    ReplayScreen #replay-status {
-        height: auto; padding: 0 1; border-left: outer $foreground 30%;
-    }
+    ReplayScreen #replay-status { height: auto; padding: 0 1; border-left: outer $foreground 30%; }
     ReplayScreen #replay-status.-good { border-left: outer $success; }
     ReplayScreen #replay-status.-bad { border-left: outer $error; }
     ReplayScreen #replay-headline { text-style: bold; }

@@ -58,11 +58,7 @@ class Board(Widget):
 
     SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
     DEFAULT_CSS = """
-    Board {
-        width: 1fr;
-        height: 1fr;
-        layout: vertical;
-    }
+    Board { width: 1fr; height: 1fr; layout: vertical; }
     Board.-interactive {
         border: round $foreground 25%;
         border-title-color: $text-muted;
@@ -79,18 +75,9 @@ class Board(Widget):
         border-title-color: $text-warning;
         border-subtitle-color: $text-warning;
     }
-    Board > .board-buttons {
-        width: 1fr;
-        height: 1;
-        align-horizontal: center;
-    }
-    Board > .board-buttons > BoardButton {
-        margin: 0 1;
-        min-width: 10;
-    }
-    Board > .board-buttons > BoardButton.-suggested {
-        text-style: bold;
-    }
+    Board > .board-buttons { width: 1fr; height: 1; align-horizontal: center; }
+    Board > .board-buttons > BoardButton { margin: 0 1; min-width: 10; }
+    Board > .board-buttons > BoardButton.-suggested { text-style: bold; }
     """
 
     BUTTONS: ClassVar[tuple[tuple[str, str], ...]] = ()

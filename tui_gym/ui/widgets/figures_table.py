@@ -80,10 +80,7 @@ class FiguresTable(StripWidget):
 
     COMPONENT_CLASSES: ClassVar[set[str]] = {"figures--header", "figures--note"}
     DEFAULT_CSS = """
-    FiguresTable {
-        height: auto;
-        padding: 0 1;
-    }
+    FiguresTable { height: auto; padding: 0 1; }
     FiguresTable > .figures--header { color: $text-muted; text-style: bold; }
     FiguresTable > .figures--note { color: $text-warning; }
     """

@@ -128,39 +128,14 @@ class HyperparameterForm(Vertical):
         border-subtitle-color: $text-disabled;
         padding: 0 1;
     }
-    HyperparameterForm .hp-row {
-        height: 1;
-    }
-    HyperparameterForm .hp-label {
-        width: 15;
-        color: $text-muted;
-    }
-    HyperparameterForm Input {
-        width: 1fr;
-        min-width: 8;
-        max-width: 14;
-    }
-    HyperparameterForm Input.-invalid {
-        color: $text-error;
-        text-style: bold;
-    }
-    HyperparameterForm .hp-hint {
-        width: 10;
-        padding-left: 1;
-        color: $text-disabled;
-    }
-    HyperparameterForm .hp-error {
-        display: none;
-        color: $text-error;
-        padding-left: 2;
-    }
-    HyperparameterForm .hp-error.-shown {
-        display: block;
-    }
-    HyperparameterForm .hp-row.-invalid .hp-label {
-        color: $text-error;
-        text-style: bold;
-    }
+    HyperparameterForm .hp-row { height: 1; }
+    HyperparameterForm .hp-label { width: 15; color: $text-muted; }
+    HyperparameterForm Input { width: 1fr; min-width: 8; max-width: 14; }
+    HyperparameterForm Input.-invalid { color: $text-error; text-style: bold; }
+    HyperparameterForm .hp-hint { width: 10; padding-left: 1; color: $text-disabled; }
+    HyperparameterForm .hp-error { display: none; color: $text-error; padding-left: 2; }
+    HyperparameterForm .hp-error.-shown { display: block; }
+    HyperparameterForm .hp-row.-invalid .hp-label { color: $text-error; text-style: bold; }
     Screen.compact HyperparameterForm {
         width: 1fr;
         min-width: 0;
@@ -168,9 +143,7 @@ class HyperparameterForm(Vertical):
         border: none;
         padding: 0;
     }
-    Screen.compact HyperparameterForm .hp-hint {
-        display: none;
-    }
+    Screen.compact HyperparameterForm .hp-hint { display: none; }
     """
 
     BINDINGS: ClassVar[list[BindingType]] = [

@@ -23,12 +23,7 @@ class KeyBar(StripWidget):
 
     COMPONENT_CLASSES = {"keybar--key"}
     DEFAULT_CSS = """
-    KeyBar {
-        dock: bottom;
-        height: 1;
-        background: $footer-background;
-        color: $footer-foreground;
-    }
+    KeyBar { dock: bottom; height: 1; background: $footer-background; color: $footer-foreground; }
     KeyBar > .keybar--key {
         color: $footer-key-foreground;
         background: $footer-key-background;

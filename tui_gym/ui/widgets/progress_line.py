@@ -21,10 +21,7 @@ class ProgressLine(StripWidget):
         "progress--done", "progress--left", "progress--percent", "progress--text",
     }
     DEFAULT_CSS = """
-    ProgressLine {
-        height: 1;
-        width: 1fr;
-    }
+    ProgressLine { height: 1; width: 1fr; }
     ProgressLine > .progress--done { color: $accent; }
     ProgressLine > .progress--left { color: $foreground 10%; }
     ProgressLine > .progress--percent { color: $text; }

@@ -87,12 +87,7 @@ class StatsPanel(StripWidget):
         border-subtitle-color: $text-disabled;
         padding: 0 1;
     }
-    Screen.compact StatsPanel {
-        max-width: 100%;
-        border: none;
-        padding: 0;
-        min-height: 0;
-    }
+    Screen.compact StatsPanel { max-width: 100%; border: none; padding: 0; min-height: 0; }
     """
 
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:

@@ -149,10 +149,7 @@ class TrainingCharts(StripWidget):
     TrainingCharts > .charts--epsilon-high { color: $primary; }
     TrainingCharts > .charts--epsilon-low { color: $primary 40%; }
 
-    Screen.compact TrainingCharts {
-        border: none;
-        padding: 0;
-    }
+    Screen.compact TrainingCharts { border: none; padding: 0; }
     """
 
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
