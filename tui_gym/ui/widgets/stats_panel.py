@@ -21,11 +21,6 @@ STATE_STYLES = {
 }
 
 
-def figure_name(key: str) -> str:
-    """'optimal_pair_fraction' -> 'optimal pair fraction'."""
-    return key.replace("_", " ")
-
-
 def run_state(running: bool, episodes: int, steps: int, budget: int) -> str:
     """'running', 'finished' (a budget of `budget` episodes was used up), 'paused'
     (training has begun: an episode, or a step of one) or 'idle' (nothing yet)."""
@@ -144,7 +139,7 @@ class StatsPanel(StripWidget):
         """The exact comparison with the optimum (and a word on what it takes into
         account), or a note on why there is none."""
         figures: Mapping[str, float] = reference.figures if reference else {}
-        items = [(figure_name(k), figure_forms(k, v)) for k, v in figures.items()]
+        items = [(k.replace("_", " "), figure_forms(k, v)) for k, v in figures.items()]
         if reference is not None and not items:
             items = [("reference", (reference.summary,))]
         scope = reference.scope.note if reference is not None else ""
