@@ -95,16 +95,12 @@ class SweepSpec:
             raise ValueError("a sweep needs at least one --grid KEY=V1,V2 "
                              "(or --sample N --range KEY=LOW:HIGH)")
         fields = {f.name for f in cls.params}
-        for key in ranges:
+        for key in [*ranges, *grid]:
             if key not in fields:
                 raise ValueError(
                     f"{cls.name} has no hyperparameter {key!r}; it has {', '.join(sorted(fields))}"
                 )
         for key, values in grid.items():
-            if key not in fields:
-                raise ValueError(
-                    f"{cls.name} has no hyperparameter {key!r}; it has {', '.join(sorted(fields))}"
-                )
             if not values:
                 raise ValueError(f"--grid {key}: give at least one value")
             if len(set(map(str, values))) != len(values):
