@@ -9,7 +9,7 @@ import sys
 import threading
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from rich.console import Console
 from rich.table import Table
@@ -32,6 +32,8 @@ DB_HELP = "the run history file (default: $TUI_GYM_DB, else the data folder's ru
 # Every seed's return of every episode is kept while a run lasts: these bound that memory.
 _seeds = _int_in(1, 1000, "a number of seeds from 1 to 1,000")
 _episodes = _int_in(1, 200_000, "a number of episodes from 1 to 200,000")
+
+R = TypeVar("R")
 
 
 def _common_options(parser: argparse.ArgumentParser) -> None:
@@ -218,6 +220,25 @@ def _run_with_progress(
             return run(update, stop)
 
 
+def _run_recorded(args: argparse.Namespace, out: Console, label: str, run: Callable[..., R],
+                  spec: Any) -> tuple[R, BestEffortHistory | None]:
+    """`run(spec, ...)` (a comparison or a sweep) with a progress bar, kept in the run history;
+    its refusals as one line."""
+    from tui_gym.session.experiments.cluster import ClusterError
+    from tui_gym.session.experiments.compare import CompareError
+
+    with run_history(args) as history:
+        try:
+            return _run_with_progress(
+                out, args.json, label,
+                lambda progress, stop: run(spec, progress=progress, stop=stop, resume=args.resume,
+                                           cluster=args.cluster, history=history,
+                                           processes=args.processes, status=say_status),
+            ), history
+        except (CompareError, ClusterError) as exc:
+            raise CliError(str(exc)) from None
+
+
 def _resume_hint(group: int | None) -> str:
     return "" if group is None else f"; the same command with --resume {group} carries on"
 
@@ -255,8 +276,7 @@ def _algorithm_names(text: str) -> list[str]:
 
 
 def cmd_compare(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.session.experiments.cluster import ClusterError
-    from tui_gym.session.experiments.compare import CompareError, CompareSpec, run_compare
+    from tui_gym.session.experiments.compare import CompareSpec, run_compare
 
     spec = CompareSpec(
         game=args.game, algorithms=_algorithm_names(args.algorithms), seeds=args.seeds,
@@ -264,17 +284,7 @@ def cmd_compare(args: argparse.Namespace, out: Console) -> int:
         game_params=_pairs(args.params, "--param"), wrappers=_wrappers(args.wrapper),
         first_seed=args.first_seed,
     )
-    with run_history(args) as history:
-        try:
-            result = _run_with_progress(
-                out, args.json, "comparing",
-                lambda progress, stop: run_compare(spec, progress=progress, stop=stop,
-                                                   resume=args.resume, cluster=args.cluster,
-                                                   history=history, processes=args.processes,
-                                                   status=say_status),
-            )
-        except (CompareError, ClusterError) as exc:
-            raise CliError(str(exc)) from None
+    result, history = _run_recorded(args, out, "comparing", run_compare, spec)
     if args.csv:
         _write_csv(args.csv, result.outcomes)
     if args.json:
@@ -418,8 +428,6 @@ def _ranges(items: Sequence[str]) -> dict[str, Any]:
 
 
 def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.session.experiments.cluster import ClusterError
-    from tui_gym.session.experiments.compare import CompareError
     from tui_gym.session.experiments.sweep import SweepSpec, run_sweep
 
     spec = SweepSpec(
@@ -429,17 +437,7 @@ def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
         first_seed=args.first_seed, ranges=_ranges(args.ranges), samples=args.sample,
         sample_seed=args.sample_seed,
     )
-    with run_history(args) as history:
-        try:
-            result = _run_with_progress(
-                out, args.json, "sweeping",
-                lambda progress, stop: run_sweep(spec, progress=progress, stop=stop,
-                                                 resume=args.resume, cluster=args.cluster,
-                                                 history=history, processes=args.processes,
-                                                 status=say_status),
-            )
-        except (CompareError, ClusterError) as exc:
-            raise CliError(str(exc)) from None
+    result, history = _run_recorded(args, out, "sweeping", run_sweep, spec)
     if args.json:
         print_json("sweep", result.to_json())
         unrecorded(history)
