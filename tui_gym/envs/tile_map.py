@@ -14,8 +14,7 @@ import numpy.typing as npt
 from tui_gym.envs.table_env import TableEnv, TileArrays
 
 __all__ = [
-    "ACTION_ORDERS", "TILES", "TileMapEnv", "TileRules", "cell_key", "read_cell",
-    "tile_arrays",
+    "ACTION_ORDERS", "TILES", "TileMapEnv", "TileRules", "cell_key", "read_cell", "tile_arrays",
 ]
 
 TILES = "SFHGCWR"
