@@ -77,7 +77,5 @@ def algorithm(name: str) -> type[Learner]:
     wanted = str(name).strip().lower().replace("_", "-")
     found = _BY_NAME.get(wanted)
     if found is None:
-        raise ValueError(
-            f"unknown algorithm {name!r}; choose one of {', '.join(_BY_NAME)}"
-        )
+        raise ValueError(f"unknown algorithm {name!r}; choose one of {', '.join(_BY_NAME)}")
     return found

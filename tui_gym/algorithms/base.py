@@ -560,8 +560,7 @@ class Learner(ABC):
         fills = {spec.name: hp.initial_value if spec.name in self.value_tables else spec.fill
                  for spec in self.tables}
         for spec in self.tables:
-            filled: np.ndarray = np.full((capacity, self.n_actions), fills[spec.name],
-                                         spec.dtype)
+            filled: np.ndarray = np.full((capacity, self.n_actions), fills[spec.name], spec.dtype)
             filled[:rows] = arrays[spec.name]
             loaded[spec.name] = filled
         visits = np.zeros(capacity, dtype=np.int64)

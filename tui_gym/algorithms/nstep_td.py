@@ -71,8 +71,7 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
             g = rewards[tau % size] + hp.discount * g
             rewards[tau % size] = g
         for tau in range(first, t + 1):  # their updates, in the book's order
-            total += v_update(v, visits, hp, states[tau % size], rewards[tau % size], log,
-                              made)
+            total += v_update(v, visits, hp, states[tau % size], rewards[tau % size], log, made)
             made += 1
         step[0] = 0
     return total

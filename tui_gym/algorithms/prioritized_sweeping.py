@@ -209,8 +209,7 @@ class PrioritizedSweeping(Learner):
             ("queue", f"{int(done)} taken from the top (P {taken or '–'}), "
                       f"{int(left)} left" + (f", the top at P {top:.4g}" if left else "")),
         )
-        own = next((u for u in updates if (u.state, u.action) == (step.state, step.action)),
-                   None)
+        own = next((u for u in updates if (u.state, u.action) == (step.state, step.action)), None)
         if own is None:
             return self._record(step, "when (s,a) reaches the queue's top", (), None, now, now,
                                 episode_updates=updates, notes=notes)

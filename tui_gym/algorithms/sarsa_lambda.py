@@ -94,8 +94,7 @@ def spread(tables: Any, hp: Any, s: int, a: int, target: float, future: float, d
 def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     future = 0.0 if terminated else tables[0][s2, a2]
-    td = spread(tables, hp, s, a, r + hp.discount * future, future,
-                hp.discount * hp.lambda_, log)
+    td = spread(tables, hp, s, a, r + hp.discount * future, future, hp.discount * hp.lambda_, log)
     if terminated or truncated:
         clear(tables, hp)
     return td

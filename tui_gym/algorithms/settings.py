@@ -88,14 +88,10 @@ class Settings(Mapping[str, Any]):
         unknown = sorted(set(given) - set(by_name))
         if unknown:
             raise ValueError(f"unknown hyperparameter(s): {', '.join(unknown)}")
-        parsed = {
-            f.name: f.parse(given[f.name]) if f.name in given else f.default for f in schema
-        }
+        parsed = {f.name: f.parse(given[f.name]) if f.name in given else f.default for f in schema}
         start, final = parsed.get("epsilon_start"), parsed.get("epsilon_final")
         if isinstance(start, float) and isinstance(final, float) and final > start:
-            raise ValueError(
-                f"epsilon_final ({final:g}) must not exceed epsilon_start ({start:g})"
-            )
+            raise ValueError(f"epsilon_final ({final:g}) must not exceed epsilon_start ({start:g})")
         self.__dict__["_schema"] = tuple(schema)
         self.__dict__["_values"] = parsed
 

@@ -170,8 +170,7 @@ def verdicts(result: DPResult | None, missing: str,
              ok: Callable[[float | None, bool], str]) -> dict[str, str]:
     """The targets' verdicts, keyed as in the JSON."""
     if result is None:
-        return {"taxi_sweep_ms": missing, "jack_policy_iteration_s": missing,
-                "plan_view": missing}
+        return {"taxi_sweep_ms": missing, "jack_policy_iteration_s": missing, "plan_view": missing}
     out = {
         "taxi_sweep_ms": ok(result.taxi_sweep_ms, result.taxi_sweep_ms <= TAXI_SWEEP_MS_TARGET),
         "jack_policy_iteration_s": ok(result.jack_seconds,

@@ -78,8 +78,7 @@ def target_for(game: Game) -> float:
     """The gap the bench trains `game` to."""
     if game.bench_gap is not None:
         return game.bench_gap
-    bound = game.oracle.bound(bench_kwargs(game), Session(game.env_id,
-                                                          bench_kwargs(game)).changes)
+    bound = game.oracle.bound(bench_kwargs(game), Session(game.env_id, bench_kwargs(game)).changes)
     if isinstance(bound, NotAvailable) or bound.figure != "gap":
         raise ValueError(f"{game.title} states no gap to train to")
     return bound.limit
@@ -94,8 +93,7 @@ def default_hyperparameters(game: Game) -> Settings:
 def ours_once(game: Game, seed: int, target: float) -> GapRun:
     """Our default engine, as the CLI runs it for `--target-gap`."""
     start = time.perf_counter()
-    session = Session(game.env_id, bench_kwargs(game), hp=default_hyperparameters(game),
-                      seed=seed)
+    session = Session(game.env_id, bench_kwargs(game), hp=default_hyperparameters(game), seed=seed)
     outcome = session.train(target_gap=target)
     seconds = time.perf_counter() - start
     episodes = session.trainer.episodes

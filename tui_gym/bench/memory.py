@@ -43,9 +43,7 @@ def rss_bytes() -> int:
         return peak if sys.platform == "darwin" else peak * 1024
 
 
-def train_and_watch(
-    episodes: int, warmup: int, engine: str = "auto"
-) -> dict[str, float | str]:
+def train_and_watch(episodes: int, warmup: int, engine: str = "auto") -> dict[str, float | str]:
     """The measurement itself (run in the child process); figures as a dict."""
     import time
 

@@ -86,8 +86,7 @@ def verdicts(results: BenchResults) -> dict[str, str]:
     seconds = startup.seconds if startup is not None else None
     out["startup_s"] = _ok(seconds, seconds is not None and seconds <= STARTUP_S_TARGET)
     for edit in results.map_edit or ():
-        out[f"map_edit_ms[{edit.game}]"] = _ok(edit.median_ms,
-                                                edit.median_ms <= MAP_EDIT_MS_TARGET)
+        out[f"map_edit_ms[{edit.game}]"] = _ok(edit.median_ms, edit.median_ms <= MAP_EDIT_MS_TARGET)
     if "map_edit" in results.errors:
         out["map_edit_ms"] = MISSING
     planning = results.planning
@@ -101,8 +100,7 @@ def verdicts(results: BenchResults) -> dict[str, str]:
     out["regret_separation_ratio"] = _ok(ratio, ratio is not None and
                                          ratio >= SEPARATION_RATIO_TARGET)
     rate = found.protocol.steps_per_second if found else None
-    out["protocol_steps_per_second"] = _ok(rate, rate is not None and
-                                           rate >= PROTOCOL_STEPS_TARGET)
+    out["protocol_steps_per_second"] = _ok(rate, rate is not None and rate >= PROTOCOL_STEPS_TARGET)
     rate = found.mcp_together.steps_per_second if found else None
     out["mcp_steps_per_second"] = _ok(rate, rate is not None and rate >= MCP_STEPS_TARGET)
     found_seeds = results.seeds
@@ -388,8 +386,7 @@ def table(results: BenchResults) -> Table:
                 f"{_num(trip.p50_us, '.0f', ' µs')} (p95 {_num(trip.p95_us, '.0f')}; "
                 f"{_num(trip.rate.steps_per_second, ',.0f')} steps/s)")
         if found.mcp_together.reason:
-            out.add_row("MCP, steps/s", f"[dim]{found.mcp_together.reason}[/]", "",
-                        _STYLE[MISSING])
+            out.add_row("MCP, steps/s", f"[dim]{found.mcp_together.reason}[/]", "", _STYLE[MISSING])
         else:
             row(f"MCP, steps/s, {programs.MCP_GAMES} games at once",
                 _num(found.mcp_together.steps_per_second, ",.0f"),

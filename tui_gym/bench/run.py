@@ -128,12 +128,10 @@ def run_bench(
                                progress=say))
     stage("memory", f"memory over {plan.memory_episodes:,} episodes",
           lambda: memory.measure(plan.memory_episodes, plan.memory_warmup))
-    stage("startup", "start-up to the first frame",
-          lambda: startup.measure(plan.startup_repeats))
+    stage("startup", "start-up to the first frame", lambda: startup.measure(plan.startup_repeats))
     stage("programs", "programs as players: episodes to separate two players, protocol "
           "and MCP steps/s",
-          lambda: programs.measure(plan.separation_episodes, plan.pipe_seconds,
-                                   plan.pipe_repeats))
+          lambda: programs.measure(plan.separation_episodes, plan.pipe_seconds, plan.pipe_repeats))
     stage("map_edit", f"map editor: an edit to the new optimum on {map_edit.MAP_SIDE}x"
           f"{map_edit.MAP_SIDE} maps", lambda: tuple(map_edit.measure()))
     stage("history", "the run history: recording's share of a train run, the file's size",

@@ -96,8 +96,7 @@ def measure(seeds: int, episodes: int, repeats: int = 3) -> TasksResult:
 def _with(found: TasksResult, **changes: Any) -> TasksResult:
     from dataclasses import replace
 
-    return replace(found, **{("cluster_note" if k == "note" else k): v
-                             for k, v in changes.items()})
+    return replace(found, **{("cluster_note" if k == "note" else k): v for k, v in changes.items()})
 
 
 # --- what the report shows ---------------------------------------------------------

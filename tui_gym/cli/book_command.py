@@ -85,8 +85,7 @@ def cmd_book(args: argparse.Namespace, out: Console) -> int:
     return code
 
 
-def _run(figure: BookFigure, options: FigureOptions, args: argparse.Namespace,
-         out: Console) -> int:
+def _run(figure: BookFigure, options: FigureOptions, args: argparse.Namespace, out: Console) -> int:
     if args.json:
         result = figure.run(options, lambda done, total, what: None)
         print_json("book", result.as_json())

@@ -144,9 +144,7 @@ def _wrapper_table(catalog: dict[str, Any]) -> Table:
     # Parameter names are typed after --wrapper: never cut, each on a line of its own.
     table.add_column("parameters (default, range)", min_width=longest, overflow="fold")
     for spec in catalog.values():
-        params = "\n".join(
-            f"{p.name}\n  {_default_text(p)}" for p in spec.params
-        ) or "-"
+        params = "\n".join(f"{p.name}\n  {_default_text(p)}" for p in spec.params) or "-"
         table.add_row(spec.name, escape(spec.summary), escape(params))
     return table
 

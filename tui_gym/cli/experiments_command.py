@@ -174,8 +174,7 @@ def ctrl_c_stops(stop: threading.Event, err: Console) -> Iterator[None]:
         if stop.is_set():
             raise KeyboardInterrupt
         stop.set()
-        err.print("stopping: keeping what finished (Ctrl+C again to quit at once)",
-                  style="yellow")
+        err.print("stopping: keeping what finished (Ctrl+C again to quit at once)", style="yellow")
 
     previous = signal.signal(signal.SIGINT, handler)
     try:
@@ -469,8 +468,7 @@ def _sweep_table(result: Any) -> Table:
     if has_exact:
         table.add_column("greedy exact value", justify="right")
         table.add_column("gap", justify="right")
-    has_rms = any(p.outcome is not None and p.outcome.rms_error is not None
-                  for p in result.points)
+    has_rms = any(p.outcome is not None and p.outcome.rms_error is not None for p in result.points)
     if has_rms:
         table.add_column(RMS_LABEL, justify="right")
     table.add_column("seeds", justify="right")
@@ -498,8 +496,7 @@ def _sweep_grid(result: Any) -> Table:
     figure = {(p.values[row_key], p.values[col_key]): p.figure for p in result.points}
     values = [v for v in figure.values() if v is not None]
     low, high = (min(values), max(values)) if values else (0.0, 1.0)
-    exact = any(p.outcome is not None and p.outcome.exact_value is not None
-                for p in result.points)
+    exact = any(p.outcome is not None and p.outcome.exact_value is not None for p in result.points)
     rms = any(p.outcome is not None and p.outcome.rms_error is not None for p in result.points)
     what = RMS_LABEL if rms else "greedy exact value" if exact else "online return, last 10%"
     table = Table(title=f"{what}: {row_key} (rows) × {col_key} (columns)", title_justify="left")

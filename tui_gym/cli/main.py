@@ -148,8 +148,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="seed of the training run (default 0; the evaluation after it "
                        "plays on S + 1)")
     add_game_flags(train)
-    train.add_argument("--wrapper", action="append", default=[], metavar="SPEC",
-                       help=WRAPPER_HELP)
+    train.add_argument("--wrapper", action="append", default=[], metavar="SPEC", help=WRAPPER_HELP)
     train.add_argument(
         "--engine", choices=("auto", "model", "env"), default="auto",
         help="auto: the compiled loop on the game's model when the wrappers let it follow "
@@ -195,8 +194,7 @@ def build_parser() -> argparse.ArgumentParser:
     play.add_argument("--seed", type=seed_number, default=None, dest="play_seed", metavar="S",
                       help="seed of the first episode (a reset may give its own)")
     add_game_flags(play)
-    play.add_argument("--wrapper", action="append", default=[], metavar="SPEC",
-                      help=WRAPPER_HELP)
+    play.add_argument("--wrapper", action="append", default=[], metavar="SPEC", help=WRAPPER_HELP)
     from tui_gym.cli.replay_command import add_record_option, add_replay_parser
     from tui_gym.web import add_serve_parser
 

@@ -20,13 +20,10 @@ RECORD_HELP = "record every episode to this file, as JSON lines (tui-gym replay 
 
 def add_record_option(parser: argparse.ArgumentParser, dest: str = "record") -> None:
     """`--record PATH` on `parser`."""
-    parser.add_argument("--record", type=output_file, metavar="PATH", dest=dest,
-                        help=RECORD_HELP)
+    parser.add_argument("--record", type=output_file, metavar="PATH", dest=dest, help=RECORD_HELP)
 
 
-def open_recorder(
-    path: str, session: Session, *, source: str, seed: int | None = None
-) -> Recorder:
+def open_recorder(path: str, session: Session, *, source: str, seed: int | None = None) -> Recorder:
     """A `Recorder` writing `session`'s episodes to `path`; CliError when it cannot be opened.
 
     A write that fails later stops the recording with one line on stderr; the

@@ -196,8 +196,7 @@ def _runs_table(title: str, rows: list[dict[str, str]], width: int) -> tuple[Tex
 
     def line(cells: dict[str, str]) -> str:
         pads = {n: " " * (widths[n] - cell_len(cells[n])) for n in shown}  # wide characters
-        parts = [pads[n] + cells[n] if justify[n] == "right" else cells[n] + pads[n]
-                 for n in shown]
+        parts = [pads[n] + cells[n] if justify[n] == "right" else cells[n] + pads[n] for n in shown]
         return (" " * _GAP).join(parts).rstrip()
 
     total = sum(widths[n] for n in shown) + _GAP * (len(shown) - 1)
@@ -330,8 +329,7 @@ def _cmd_export(args: argparse.Namespace, out: Console) -> int:
     else:
         from tui_gym.core.experiments.tensorboard import export_run_tensorboard
 
-        done = _history_call(lambda: export_run_tensorboard(args.run_id, args.tensorboard,
-                                                            args.db))
+        done = _history_call(lambda: export_run_tensorboard(args.run_id, args.tensorboard, args.db))
         line = (f"wrote {done.scalars} values of {', '.join(done.tags)} to {done.path} "
                 f"(tensorboard --logdir {done.directory})")
     if args.json:

@@ -31,9 +31,7 @@ def visible(text: object, limit: int | None = 80) -> str:
     else:
         raw_cut = None
     source = raw if raw_cut is None else raw_cut
-    shown = "".join(
-        _escaped(c) if unicodedata.category(c) in _HIDDEN else c for c in source
-    )
+    shown = "".join(_escaped(c) if unicodedata.category(c) in _HIDDEN else c for c in source)
     if limit is None or (raw_cut is None and len(shown) <= limit):
         return shown
     keep = max(1, limit - 1)

@@ -12,8 +12,7 @@ from gymnasium import spaces
 
 from tui_gym.envs.table_env import TileArrays
 
-__all__ = ["MAX_CARS", "MAX_MOVE", "MOVES", "CarRentalEnv", "car_rental_arrays", "night",
-           "nights"]
+__all__ = ["MAX_CARS", "MAX_MOVE", "MOVES", "CarRentalEnv", "car_rental_arrays", "night", "nights"]
 
 MAX_CARS = 20  # at each site; more are sent back to the company
 MAX_MOVE = 5  # cars moved overnight, either way

@@ -168,9 +168,7 @@ class StateSpace(Role):
         """`scene` of the unwrapped env; may raise before the first reset."""
         return {}
 
-    def text(
-        self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None
-    ) -> str:
+    def text(self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None) -> str:
         """A plain-text picture of the env's state ('' when it has none); `reveal` shows
         what is hidden during an episode, `before` is as for `scene`."""
         if self.game.render_mode != "ansi":

@@ -110,8 +110,7 @@ class DPGridStates(DiscreteStates):
             "last_action": move,
             "slipped": False,
             "rewards": {f"{r},{c}": pay for (r, c), pay in shown.items()},
-            "marks": {f"{r},{c}": text
-                      for (r, c), text in {**grid.letters, **grid.primes}.items()},
+            "marks": {f"{r},{c}": text for (r, c), text in {**grid.letters, **grid.primes}.items()},
             "moves": list(grid.moves),
         }
         if not set(STRAIGHT) <= set(grid.moves):

@@ -114,8 +114,7 @@ def model_under(model: FiniteMDP, changes: GameChanges) -> FiniteMDP:
             noise = abs(slope) * noise
         unique, inverse = np.unique(model.reward, return_inverse=True)
         mapped = np.array([changes.reward(float(r)) for r in unique])
-        model = model.replace(reward=mapped[inverse].reshape(model.reward.shape),
-                              reward_std=noise)
+        model = model.replace(reward=mapped[inverse].reshape(model.reward.shape), reward_std=noise)
     return with_horizon(model, changes.time_limit)
 
 
@@ -192,8 +191,7 @@ def _induction(model: FiniteMDP, gamma: float, horizon: int) -> FloatArray:
     """
     reward = model.expected_reward
     going = [np.ascontiguousarray(model.continue_prob[..., k]) for k in range(model.max_outcomes)]
-    following = [np.ascontiguousarray(model.next_state[..., k])
-                 for k in range(model.max_outcomes)]
+    following = [np.ascontiguousarray(model.next_state[..., k]) for k in range(model.max_outcomes)]
     rungs = np.empty((horizon, model.n_states, model.n_actions))
     v = np.zeros(model.n_states)
     for i in range(horizon):

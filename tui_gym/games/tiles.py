@@ -36,9 +36,7 @@ TIED = "·"
 
 
 @lru_cache(maxsize=32)
-def _layout_model(
-    grid_map: GridMap, actions: tuple[str, ...], rules: TileRules
-) -> FiniteMDP:
+def _layout_model(grid_map: GridMap, actions: tuple[str, ...], rules: TileRules) -> FiniteMDP:
     arrays = tile_arrays(grid_map.cells, grid_map.reward_table(), grid_map.slip_table(),
                          actions, rules)
     return FiniteMDP(arrays.next_state, arrays.prob, arrays.reward, arrays.terminal,
@@ -160,9 +158,7 @@ def _game(role: Any) -> TileGame:
 class TileStates(DiscreteStates):
     """Cells of the map; the tile board's scene; the map as text."""
 
-    def text(
-        self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None
-    ) -> str:
+    def text(self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None) -> str:
         scene = self.scene(env, before)
         return tile_text(scene, _game(self)) if scene else ""
 

@@ -51,9 +51,7 @@ class Tally:
         var = (self.total_sq - n * self.mean**2) / (n - 1)
         return math.sqrt(max(0.0, var))
 
-    def confidence_interval(
-        self, z: float = 1.96, min_episodes: int = 2
-    ) -> tuple[float, float]:
+    def confidence_interval(self, z: float = 1.96, min_episodes: int = 2) -> tuple[float, float]:
         """Normal-approximation interval for the mean return (NaN below `min_episodes`,
         and never below 2)."""
         n = self.episodes

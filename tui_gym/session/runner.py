@@ -220,9 +220,7 @@ class TrainingRunner:
             if speed.animated:
                 self._animated_step(trainer)
                 return speed.step_delay
-            trainer.run(
-                episodes=trainer.remaining, seconds=CHUNK_SECONDS, stop=_Stopped(self)
-            )
+            trainer.run(episodes=trainer.remaining, seconds=CHUNK_SECONDS, stop=_Stopped(self))
             return None
         if not self._want_one:
             return None

@@ -86,9 +86,7 @@ def _build(
     return _Built(env, applied, tuple(skipped), keyer, int(env.action_space.n), meaning)
 
 
-def default_settings(
-    game: Game, name: str, kwargs: Mapping[str, Any] | None = None
-) -> Settings:
+def default_settings(game: Game, name: str, kwargs: Mapping[str, Any] | None = None) -> Settings:
     """The hyperparameters algorithm `name` starts with on a game with arguments `kwargs`:
     its own defaults with the game's overrides for it (those of its parameters the game
     sets)."""
@@ -478,8 +476,7 @@ class Session:
             if q is None:
                 return None
             marks = self.game.oracle.optimal_marks(kwargs, self.changes)
-            return self.game.layout.heatmaps(self._among_offered(q, kwargs), kwargs, focus,
-                                             marks)
+            return self.game.layout.heatmaps(self._among_offered(q, kwargs), kwargs, focus, marks)
         if snapshot is None:
             raise ValueError("the traces shown are a snapshot's")
         keys = self.base_keys()
@@ -523,8 +520,7 @@ class Session:
         if layout.has_focus:
             panels = layout.heatmaps(q, kwargs, focus)
             height, width = panels[0].shape if panels else (0, 0)
-            focuses += [layout.focus_at(r, c, kwargs)
-                        for r in range(height) for c in range(width)]
+            focuses += [layout.focus_at(r, c, kwargs) for r in range(height) for c in range(width)]
         for candidate in focuses:
             for index, panel in enumerate(layout.heatmaps(q, kwargs, candidate)):
                 found = np.argwhere(np.nan_to_num(panel.values) == 1.0)

@@ -382,9 +382,7 @@ def short_reason(exc: BaseException) -> str:
 
 def _check_version(reader: _Reader, version: Any) -> int:
     if version is None or isinstance(version, bool) or not isinstance(version, int):
-        raise reader.error(
-            f"save file has no valid format version (got {shown_value(version)})"
-        )
+        raise reader.error(f"save file has no valid format version (got {shown_value(version)})")
     if version < 1:
         raise reader.field("version", f"must be positive, got {shown_value(version)}")
     if version > FORMAT_VERSION:

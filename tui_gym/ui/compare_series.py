@@ -113,9 +113,7 @@ def series_of_record(record: RunRecord, smooth: bool = True) -> Series | None:
     return _smoothed(record.id, label, episodes, values, None, None, seeds, smooth)
 
 
-def series_of_outcome(
-    outcome: AlgorithmOutcome, label: str, smooth: bool = True
-) -> Series | None:
+def series_of_outcome(outcome: AlgorithmOutcome, label: str, smooth: bool = True) -> Series | None:
     """A running comparison's aggregate curve for one algorithm, None before any point.
     Smoothed, it is the comparison's own smoothed curve where it has one (each seed's
     returns smoothed before the band is formed)."""

@@ -54,9 +54,7 @@ class FileScreen(ModalScreen[Path | None]):
     FileScreen Button { margin-left: 2; }
     """
 
-    BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("escape", "cancel", "Cancel", show=False),
-    ]
+    BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "cancel", "Cancel", show=False)]
 
     def __init__(
         self, title: str, suggestion: str, perform: Callable[[Path], str | None], *, saving: bool,

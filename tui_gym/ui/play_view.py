@@ -296,8 +296,7 @@ class PlayView(Vertical):
             self._verdict = _verdict(before, step, rules.action_names)
         self._coach, self._coach_tone = "", ""
         if before is not None and step.action is not None and agreed is not None:
-            self._coach = rules.narrator.coach_text(before, step.action, scene_before,
-                                                    game.scene())
+            self._coach = rules.narrator.coach_text(before, step.action, scene_before, game.scene())
             self._coach_tone = "-good" if agreed else "-bad"
         elif before is not None and before.unwrapped_optimal:  # no optimum to judge against
             self._coach = "no verdict: " + before.note
@@ -446,29 +445,20 @@ class PlayView(Vertical):
 
     def action_toggle_advice(self) -> None:
         self.show_advice = not self.show_advice
-        self._verdict = ""
-        self._show_title()
-        if not self.watching:
-            self._show_status()
-        self.notify(
-            "Advice on: what the exact optimum and the agent would do here."
-            if self.show_advice
-            else "Advice off.",
-            timeout=3,
-        )
+        self._toggled("Advice on: what the exact optimum and the agent would do here."
+                      if self.show_advice else "Advice off.")
 
     def action_toggle_coach(self) -> None:
         self.coach_on = not self.coach_on
+        self._toggled("Coach on: each move is judged against the exact optimum."
+                      if self.coach_on else "Coach off.")
+
+    def _toggled(self, message: str) -> None:
         self._verdict = ""
         self._show_title()
         if not self.watching:
             self._show_status()
-        self.notify(
-            "Coach on: each move is judged against the exact optimum."
-            if self.coach_on
-            else "Coach off.",
-            timeout=3,
-        )
+        self.notify(message, timeout=3)
 
     # --- the scoreboard --------------------------------------------------------
     def refresh_agent_figures(self) -> None:

@@ -147,8 +147,7 @@ def _fetch(conn: sqlite3.Connection, sql: str, key: object) -> tuple[Any, ...] |
     return None if row is None else tuple(row)
 
 
-def _one(conn: sqlite3.Connection, columns: str, run_id: int
-         ) -> tuple[tuple[Any, ...], Any] | None:
+def _one(conn: sqlite3.Connection, columns: str, run_id: int) -> tuple[tuple[Any, ...], Any] | None:
     """A run's row, as `rows.record` reads it, and its curves; each table read on its own
     so that a damaged one loses only what it holds (a platform: the versions)."""
     run = _fetch(conn, f"SELECT {columns} FROM runs WHERE id = ?", run_id)

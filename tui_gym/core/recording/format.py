@@ -36,6 +36,4 @@ def clean(value: Any) -> Any:
 
 def encode_line(record: dict[str, Any]) -> bytes:
     """One record as a line of ASCII JSON ending in a newline."""
-    return (json.dumps(clean(record), allow_nan=False, default=str) + "\n").encode(
-        "ascii"
-    )
+    return (json.dumps(clean(record), allow_nan=False, default=str) + "\n").encode("ascii")

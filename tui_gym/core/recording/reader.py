@@ -236,9 +236,7 @@ def read_recording(path: str | Path, scene_fits: SceneCheck | None = None) -> Re
     return recording
 
 
-def read_lines_of(
-    handle: IO[bytes], path: Path, scene_fits: SceneCheck | None = None
-) -> Recording:
+def read_lines_of(handle: IO[bytes], path: Path, scene_fits: SceneCheck | None = None) -> Recording:
     """Read a recording from an open binary file (see `read_recording`)."""
     recording = Recording(path)
     reader = _Reader(recording, scene_fits)

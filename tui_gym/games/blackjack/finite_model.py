@@ -61,8 +61,7 @@ def _model_index() -> np.ndarray:
     index = np.empty((_N_LIVE, DEALERS), dtype=np.int64)
     for i, (total, usable) in enumerate(_STATE_OBS):
         for d in range(1, DEALERS + 1):
-            index[i, d - 1] = (N_BASE + d - 1 if i == _NATURAL
-                               else _base_index(total, usable, d))
+            index[i, d - 1] = (N_BASE + d - 1 if i == _NATURAL else _base_index(total, usable, d))
     return index
 
 
@@ -115,5 +114,4 @@ def blackjack_model(rules: BlackjackRules = DEFAULT_RULES) -> FiniteMDP:
     terminal[rows, 1, _N_LIVE] = True
     initial = np.zeros(n_states)
     initial[rows] = (_INITIAL[:, None] * _CARD_PROBS[None, :]).reshape(-1)
-    return FiniteMDP(next_state, prob, reward, terminal, initial,
-                     action_names=("stick", "hit"))
+    return FiniteMDP(next_state, prob, reward, terminal, initial, action_names=("stick", "hit"))

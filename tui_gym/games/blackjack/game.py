@@ -126,9 +126,7 @@ class BlackjackStates(StateSpace):
             "player_usable": usable, "dealer_total": hand_value(dealer)[0],
         }
 
-    def text(
-        self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None
-    ) -> str:
+    def text(self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None) -> str:
         """Both hands as text; the dealer's hole card shows only with `reveal`."""
         hands = self.scene(env)
         dealer = hands.get("dealer", [])
@@ -241,9 +239,7 @@ class BlackjackOracle(Oracle):
             marks=self.optimal_marks(kwargs),
         )
 
-    def bound(
-        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
-    ) -> Bound:
+    def bound(self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> Bound:
         return Bound("gap", TRAINED_GAP, f"gap <= {TRAINED_GAP}")
 
     def return_range(

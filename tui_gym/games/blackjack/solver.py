@@ -277,9 +277,7 @@ def policy_value(policy: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> f
     return _start_value(_evaluate(_check_policy(policy), rules))
 
 
-def mixed_policy_value(
-    hit_probability: np.ndarray, rules: BlackjackRules = DEFAULT_RULES
-) -> float:
+def mixed_policy_value(hit_probability: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> float:
     """The exact expected return of a policy that hits with the given probability.
 
     ``hit_probability`` has shape `POLICY_SHAPE` like a policy array, with a

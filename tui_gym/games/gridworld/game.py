@@ -307,9 +307,7 @@ class GridWorldOracle(Oracle):
             return walled_marks(_size(kwargs), walls)
         return _optimal_marks(_size(kwargs))
 
-    def bound(
-        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
-    ) -> Bound:
+    def bound(self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> Bound:
         return Bound("optimal_pair_fraction", TRAINED_SHARE,
                      f"{TRAINED_SHARE:.0%} of placements solved in the fewest steps",
                      at_least=True)
@@ -432,8 +430,7 @@ class GridWorldNarrator(Narrator):
             )
             rows.append(ScoreRow("Agent", text, f"{extra:.2f} extra steps, reaches {solved:.0%}"))
         if scope.exact:
-            rows.append(ScoreRow("Optimum", "0 steps over optimal from every placement",
-                                 "0 extra"))
+            rows.append(ScoreRow("Optimum", "0 steps over optimal from every placement", "0 extra"))
         else:
             rows.append(ScoreRow("Optimum", f"a shortest path from every placement ({scope.note})",
                                  "shortest path (unwrapped)"))

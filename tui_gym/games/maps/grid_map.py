@@ -90,8 +90,7 @@ class GridMap:
     @property
     def start(self) -> Cell | None:
         """The start cell (None on a map without one, as GridWorld's)."""
-        return next(((r, row.index("S")) for r, row in enumerate(self.cells) if "S" in row),
-                    None)
+        return next(((r, row.index("S")) for r, row in enumerate(self.cells) if "S" in row), None)
 
     def tiles(self) -> set[str]:
         return {tile for row in self.cells for tile in row}

@@ -86,9 +86,7 @@ def _walls(game_env: Any) -> list[list[int]]:
 class TaxiStates(DiscreteStates):
     """The 500 states; the taxi board's scene; the city as text."""
 
-    def text(
-        self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None
-    ) -> str:
+    def text(self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None) -> str:
         """Gymnasium's map with the taxi as `T` (`@` with the passenger aboard) and the
         waiting passenger's stand in lower case, and a line saying where they go."""
         try:

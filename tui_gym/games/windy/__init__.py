@@ -83,8 +83,7 @@ class WindyGame(DPGridGame):
     hyperparameters = {
         "*": {"learning_rate": 0.5, "learning_rate_schedule": "constant",
               "epsilon_start": 0.2, "epsilon_final": 0.01, "episodes": 2000},
-        "sarsa": {"learning_rate": 0.1, "learning_rate_schedule": "visits",
-                  "epsilon_final": 0.0},
+        "sarsa": {"learning_rate": 0.1, "learning_rate_schedule": "visits", "epsilon_final": 0.0},
         "double-q": {"learning_rate": 0.05, "learning_rate_schedule": "visits",
                      "epsilon_final": 0.0, "episodes": 10000},
         "monte-carlo": {"learning_rate": 0.1, "learning_rate_schedule": "visits",

@@ -101,9 +101,7 @@ class GameTable:
             if why is not None:
                 raise TableError(f"game {game_id} {why}; start a new one with start_game")
             running = ", ".join(map(str, self.ids())) or "none"
-            raise TableError(
-                f"no game {game_id}: start one with start_game (running: {running})"
-            )
+            raise TableError(f"no game {game_id}: start one with start_game (running: {running})")
         entry.used = self.clock()
         return entry.seat
 

@@ -28,8 +28,7 @@ def run(options: FigureOptions, progress: Progress) -> FigureResult:
     v = planner.v.reshape(5, 5)
     progress(1, 1, f"converged in {planner.sweeps} sweeps")
     checks = (
-        value_check("V(A): below its +10, for A′ lies by the edge, where moves cost", 8.8,
-                    v[0, 1]),
+        value_check("V(A): below its +10, for A′ lies by the edge, where moves cost", 8.8, v[0, 1]),
         value_check("V(B): above its +5, for B′ is central", 5.3, v[0, 3]),
         Check("the values near the lower edge are negative: moves off the grid cost 1",
               "negative", round(float(v[4].max()), 3), bool((v[4] < 0).all())),

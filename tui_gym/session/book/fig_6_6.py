@@ -99,8 +99,7 @@ def _highest(phase: str, per_run: PerRun) -> Check:
     """Expected Sarsa above neither other at any α, and above both over a wide range."""
     es = per_run["Expected Sarsa"]
     others = [v for label, v in per_run.items() if label != "Expected Sarsa"]
-    first = [all(above("", "", es[i], other[i]).ok for other in others)
-             for i in range(len(ALPHAS))]
+    first = [all(above("", "", es[i], other[i]).ok for other in others) for i in range(len(ALPHAS))]
     below = [a for i, a in enumerate(ALPHAS)
              if any(above("", "", other[i], es[i]).ok for other in others)]
     measured = f"above both at {sum(first)} of {len(ALPHAS)} α" + (

@@ -175,8 +175,7 @@ def _cumulative_reward(agent: Any, arrays: Sequence[loop.ModelArrays], starts: S
     for model, start, end in zip(arrays, starts, ends, strict=False):
         at = max(start, 0)
         while at < min(end, steps):
-            done, played = loop.play(agent, model, cursor, len(out), min(end, steps) - at,
-                                     out, log)
+            done, played = loop.play(agent, model, cursor, len(out), min(end, steps) - at, out, log)
             returns.append(out[:done, RETURN].copy())
             lengths.append(out[:done, LENGTH].copy())
             at += played
@@ -255,16 +254,14 @@ def per_episode(played: Played, window: int = 1) -> Series:
     """The mean over runs of each episode's measure (each run smoothed over a trailing
     `window` of episodes first), with its band."""
     curve = aggregate(played.values, window=window)
-    return Series(played.label, curve.episodes.astype(np.float64), curve.mean,
-                  curve.lo, curve.hi)
+    return Series(played.label, curve.episodes.astype(np.float64), curve.mean, curve.lo, curve.hi)
 
 
 def per_step(played: Played, points: int = 300) -> Series:
     """The mean over runs at each time step (as `play_steps` records them), with its band,
     at most `points` of them."""
     curve = aggregate(played.values, max_points=points)
-    return Series(played.label, curve.episodes.astype(np.float64), curve.mean,
-                  curve.lo, curve.hi)
+    return Series(played.label, curve.episodes.astype(np.float64), curve.mean, curve.lo, curve.hi)
 
 
 def completed(played: Played, steps: npt.ArrayLike) -> np.ndarray:
@@ -292,8 +289,7 @@ def swept(label: str, xs: Sequence[float], played: Sequence[Played],
     for one in played:
         per_run = np.asarray(summary(one.values), dtype=np.float64)
         mean = float(per_run.mean())
-        half = (float(t_half_width(per_run.std(ddof=1), len(per_run)))
-                if len(per_run) > 1 else 0.0)
+        half = (float(t_half_width(per_run.std(ddof=1), len(per_run))) if len(per_run) > 1 else 0.0)
         ys.append(mean)
         los.append(mean - half)
         his.append(mean + half)

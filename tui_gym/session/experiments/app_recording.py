@@ -147,8 +147,7 @@ class SessionRunLog:
     # --- the writer thread ---------------------------------------------------
     def _send(self, kind: str, run: _OpenRun, *payload: Any) -> None:
         if self._writer is None:
-            self._writer = threading.Thread(target=self._write_all, name="run-history",
-                                            daemon=True)
+            self._writer = threading.Thread(target=self._write_all, name="run-history", daemon=True)
             self._writer.start()
         self._jobs.put((kind, run.token, *payload))
 

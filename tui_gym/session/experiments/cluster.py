@@ -78,8 +78,7 @@ def run_on_cluster(
             if stopped():
                 return False
             try:
-                done, _ = wait(list(pending), timeout=WAIT_SECONDS,
-                               return_when="FIRST_COMPLETED")
+                done, _ = wait(list(pending), timeout=WAIT_SECONDS, return_when="FIRST_COMPLETED")
             except TimeoutError:
                 continue
             for future in done:

@@ -132,8 +132,7 @@ class SweepSpec:
         drawn, in the order drawn."""
         if self.ranges:
             rng = np.random.default_rng(self.sample_seed)
-            return [{k: r.draw(rng) for k, r in self.ranges.items()}
-                    for _ in range(self.samples)]
+            return [{k: r.draw(rng) for k, r in self.ranges.items()} for _ in range(self.samples)]
         keys = list(self.grid)
         return [dict(zip(keys, combo, strict=True))
                 for combo in itertools.product(*self.grid.values())]

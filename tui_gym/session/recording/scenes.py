@@ -70,8 +70,7 @@ def _tile(scene: Mapping[str, Any]) -> bool:
             and isinstance(cells, list)):
         return False
     rows, cols = int(scene["rows"]), int(scene["cols"])
-    if len(cells) != rows or not all(isinstance(line, str) and len(line) == cols
-                                     for line in cells):
+    if len(cells) != rows or not all(isinstance(line, str) and len(line) == cols for line in cells):
         return False
     return (all(scene.get(key) is None or _cell(scene.get(key), rows, cols)
                 for key in ("agent", "cursor"))

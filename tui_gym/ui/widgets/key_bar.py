@@ -110,8 +110,7 @@ class KeyBar(StripWidget):
         for keys, description, enabled, key in entries:
             start = text.cell_len
             text.append(f" {keys} ", style=key_style)
-            text.append(f"{description} " if description else "",
-                        style="" if enabled else "dim")
+            text.append(f"{description} " if description else "", style="" if enabled else "dim")
             if not enabled:
                 text.stylize("dim", start)
             spans.append((start, text.cell_len, key))

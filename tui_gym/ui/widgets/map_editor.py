@@ -63,8 +63,7 @@ class MapEditor(Vertical):
     """
 
     BINDINGS: ClassVar[list[BindingType]] = [
-        *(Binding(str(i + 1), f"tool({i})", tool.name, show=False)
-          for i, tool in enumerate(TOOLS)),
+        *(Binding(str(i + 1), f"tool({i})", tool.name, show=False) for i, tool in enumerate(TOOLS)),
         Binding("enter", "paint", "Paint", show=False),
         Binding("left_square_bracket", "value(-1)", "Less", show=False, key_display="["),
         Binding("right_square_bracket", "value(1)", "More", show=False, key_display="]"),
@@ -81,8 +80,7 @@ class MapEditor(Vertical):
     class Changed(Message):
         """A new map: painted, resized, undone or redone."""
 
-        def __init__(self, editor: MapEditor, grid_map: GridMap, resized: bool,
-                     what: str) -> None:
+        def __init__(self, editor: MapEditor, grid_map: GridMap, resized: bool, what: str) -> None:
             super().__init__()
             self.editor = editor
             self.grid_map = grid_map

@@ -280,5 +280,4 @@ def _lay_out(rows: list[list], width: int, fit_only: bool) -> list[Line] | None:
 
 
 def _note(text: str, width: int) -> list[Line]:
-    return [[Segment(part, _style("italic dim"))]
-            for part in textwrap.wrap(text, max(1, width))]
+    return [[Segment(part, _style("italic dim"))] for part in textwrap.wrap(text, max(1, width))]
