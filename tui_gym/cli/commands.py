@@ -30,7 +30,7 @@ from tui_gym.cli.flags import flag, game_kwargs, hyperparameters
 from tui_gym.cli.maps_command import cmd_maps
 from tui_gym.cli.output import CliError, key_value_table, print_json, say_status
 from tui_gym.cli.runs_command import recorded
-from tui_gym.core.params import Param
+from tui_gym.core.params import Param, typed_text
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 from tui_gym.mcp_server.command import cmd_mcp
 from tui_gym.session import evaluation
@@ -58,18 +58,11 @@ def _param_dict(param: Field) -> dict[str, Any]:
     return data
 
 
-def _shown(value: Any) -> str:
-    """A default as a person types it: `true`, `0.333333`, `4x4`."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    return f"{value:g}" if isinstance(value, float) else str(value)
-
-
 def _default_text(field: Field) -> str:
     """A parameter's default and what it takes: `=100 in [1, 100000]`, `=true (true or false)`."""
     allowed = field.describe_range()
     where = f"in {allowed}" if allowed[:1] in "[(" else f"({allowed})"
-    return f"={_shown(field.default)} {where}"
+    return f"={typed_text(field.default)} {where}"
 
 
 def cmd_envs(args: argparse.Namespace, out: Console) -> int:
@@ -95,7 +88,7 @@ def cmd_envs(args: argparse.Namespace, out: Console) -> int:
         out.print(f"  [dim]actions:[/] {', '.join(g.action_names)}", overflow="fold")
         for p in g.params:
             flag = "--" + p.name.replace("_", "-")
-            out.print(f"  {flag} {escape(p.describe_range())}, default {_shown(p.default)}: "
+            out.print(f"  {flag} {escape(p.describe_range())}, default {typed_text(p.default)}: "
                       f"{escape(p.help)}", overflow="fold")
     out.print("\nAny other Gymnasium id with Discrete spaces and a transition table P works "
               "too (MODULE:ID imports the module that registers it).", overflow="fold")

@@ -6,6 +6,7 @@ import math
 import numbers
 import re
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -64,6 +65,13 @@ def digits_note(raw: object) -> str:
     if isinstance(raw, str) and any(ch.isdigit() and not ch.isascii() for ch in raw):
         return " (digits 0-9 only)"
     return ""
+
+
+def typed_text(value: Any) -> str:
+    """A value as a person types it: `true`, `0.333333`, `4x4`."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 def shown_value(raw: object) -> str:

@@ -220,6 +220,11 @@ class Board(Widget):
         elif self.interactive:
             self.post_message(self.NewEpisode())
 
+    def action_next_episode(self) -> None:
+        """Enter: a new episode, once this one is over (so a stray Enter loses nothing)."""
+        if self.episode_over or self.agent_playing:
+            self.action_new_episode()
+
     def on_mount(self) -> None:
         self._update_buttons()
         self._update_subtitle(focused=self.has_focus)

@@ -8,6 +8,7 @@ from typing import ClassVar
 
 import numpy as np
 from rich.color import Color as RichColor
+from rich.color import blend_rgb
 from rich.segment import Segment
 from rich.style import Style
 
@@ -36,10 +37,9 @@ def colour(index: int) -> RichColor:
     return RichColor.parse(PALETTE[index % len(PALETTE)])
 
 
-def _mix(a: RichColor, b: RichColor, t: float) -> RichColor:
-    ra, ga, ba = a.get_truecolor()
-    rb, gb, bb = b.get_truecolor()
-    return RichColor.from_rgb(ra + (rb - ra) * t, ga + (gb - ga) * t, ba + (bb - ba) * t)
+def mix(a: RichColor, b: RichColor, t: float) -> RichColor:
+    """`a` moved a share `t` of the way to `b`."""
+    return RichColor.from_triplet(blend_rgb(a.get_truecolor(), b.get_truecolor(), t))
 
 
 def value_range(series: Sequence[Series]) -> tuple[float, float]:
@@ -217,8 +217,8 @@ class CompareChart(StripWidget):
                 members = [c for i, c in enumerate(colours) if mask >> i & 1]
                 mean = members[0]
                 for n, other in enumerate(members[1:], start=2):
-                    mean = _mix(mean, other, 1 / n)
-                found = tints[mask] = _mix(background, mean, BAND_TINT)
+                    mean = mix(mean, other, 1 / n)
+                found = tints[mask] = mix(background, mean, BAND_TINT)
             return found
 
         labels = {0: _label(high, LABEL_WIDTH - 1), height - 1: _label(low, LABEL_WIDTH - 1)}

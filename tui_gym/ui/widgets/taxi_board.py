@@ -458,11 +458,6 @@ class TaxiBoard(Board):
         return stack(lines, width, height)
 
     # --- keys and clicks -----------------------------------------------------------
-    def action_next_episode(self) -> None:
-        """Enter: a new episode, once this one is over (so a stray Enter loses nothing)."""
-        if self.episode_over or self.agent_playing:
-            self.action_new_episode()
-
     def canvas_clicked(self, offset: Offset) -> None:
         """Drive one cell towards the clicked cell; a click on the cab picks up or drops off."""
         if self.layout_drawn is None or self.taxi is None:

@@ -654,11 +654,6 @@ class TileBoard(Board):
         return stack(lines, width, height)
 
     # --- keys and clicks -----------------------------------------------------------
-    def action_next_episode(self) -> None:
-        """Enter: a new episode, once this one is over (so a stray Enter loses nothing)."""
-        if self.episode_over or self.agent_playing:
-            self.action_new_episode()
-
     def canvas_clicked(self, offset: Offset) -> None:
         layout = self.layout_drawn
         if layout is None:

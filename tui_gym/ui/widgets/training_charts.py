@@ -11,6 +11,7 @@ from rich.segment import Segment
 from rich.style import Style
 
 from tui_gym.core.engine.stats import TrainingSnapshot
+from tui_gym.ui.widgets.compare_chart import mix
 from tui_gym.ui.widgets.numbers import Forms, fit, number_forms
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget
 
@@ -92,7 +93,7 @@ def sparkline_rows(
         step = round(ratio * COLOUR_STEPS)
         style = styles.get(step)
         if style is None:
-            style = Style(color=_blend(low, high, step / COLOUR_STEPS))
+            style = Style(color=mix(low, high, step / COLOUR_STEPS))
             styles[step] = style
         cells.append((int(ratio * levels), style))
     rows: list[Line] = []
@@ -112,12 +113,6 @@ def sparkline_rows(
                 line.append(Segment(glyph, glyph_style))
         rows.append(line)
     return rows
-
-
-def _blend(a: RichColor, b: RichColor, t: float) -> RichColor:
-    ra, ga, ba = a.get_truecolor()
-    rb, gb, bb = b.get_truecolor()
-    return RichColor.from_rgb(ra + (rb - ra) * t, ga + (gb - ga) * t, ba + (bb - ba) * t)
 
 
 class TrainingCharts(StripWidget):
