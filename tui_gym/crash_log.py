@@ -1,4 +1,8 @@
-"""Crash logs: an unexpected error's full traceback goes to a file, the person gets one line."""
+"""Crash logs: an unexpected error's full traceback goes to a file, the person gets one line.
+
+Logs go to `$TUI_GYM_LOG_DIR`, else `$XDG_STATE_HOME/tui-gym`, else
+`~/.local/state/tui-gym`; the newest `KEEP` are kept.
+"""
 
 from __future__ import annotations
 

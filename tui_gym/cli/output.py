@@ -1,4 +1,8 @@
-"""What the `tui-gym` command prints: one-line errors, JSON objects and summary tables."""
+"""What the `tui-gym` command prints: one-line errors, JSON objects and summary tables.
+
+Every `--json` object starts with `"schema"` (`JSON_SCHEMAS`), which goes up by one when
+a key is removed or renamed or changes its type or meaning; a new key leaves it as it is.
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,8 @@
-"""`PlanModel`: what a game hands the Plan view, `tui-gym plan` and the book to plan on."""
+"""`PlanModel`: what a game hands the Plan view, `tui-gym plan` and the book to plan on.
+
+`value_panel` (state values on the heatmap's grid, as for Jack's car rental) and `line`
+(states along one axis, as the gambler's capital) draw values as the book does.
+"""
 
 from __future__ import annotations
 
