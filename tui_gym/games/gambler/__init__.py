@@ -1,24 +1,6 @@
 """gambler: Sutton & Barto's Example 4.3, the gambler's problem.
 
-## Action Space
-The stake, 1 to 50 (action `a` stakes `a + 1`); a stake larger than the
-capital, or than what is missing to the goal, stakes that much instead.
-
-## Observation Space
-The capital, 0 to `goal`.
-
-## Rewards
-+1 on reaching the goal, 0 otherwise: the value of a capital is the chance
-of reaching the goal from it.
-
-## Starting State
-Any capital from 1 to `goal - 1`, uniformly.
-
-## Episode End
-Terminated at the goal or at 0; truncated after `EPISODE_LIMIT` bets.
-
-## Arguments
-`p_heads` (0.4, the chance of winning a bet), `goal` (100).
+Spaces and rewards: `tui_gym.envs.gambler.GamblerEnv`; truncated after `EPISODE_LIMIT` bets.
 """
 
 from __future__ import annotations
