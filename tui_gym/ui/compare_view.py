@@ -271,9 +271,9 @@ class CompareView(Vertical):
                             disabled=True, tooltip="Stop it; what finished is recorded (s)")
         self._progress = ProgressLine(id="compare-progress")
         self._message_label = Label("", id="compare-message", markup=False)
-        self._run_list = RunList(id="compare-runs")
-        self._chart = CompareChart(id="compare-chart")
-        self._table = FiguresTable(id="compare-table")
+        self.run_list = RunList(id="compare-runs")
+        self.chart = CompareChart(id="compare-chart")
+        self.table = FiguresTable(id="compare-table")
 
         with Horizontal(id="compare-algorithms"):
             yield from self._boxes.values()
@@ -288,28 +288,15 @@ class CompareView(Vertical):
         yield self._message_label
         with VerticalScroll(id="compare-body"):
             yield Label("Runs of this game (space ticks a run)", id="compare-runs-title")
-            yield self._run_list
-            yield self._chart
-            yield self._table
+            yield self.run_list
+            yield self.chart
+            yield self.table
 
     def on_mount(self) -> None:
         self.set_interval(POLL_SECONDS, self._poll)
         self.reload()
         if self.display:
             self.focus_default()
-
-    # --- parts -------------------------------------------------------------------
-    @property
-    def run_list(self) -> RunList:
-        return self._run_list
-
-    @property
-    def chart(self) -> CompareChart:
-        return self._chart
-
-    @property
-    def table(self) -> FiguresTable:
-        return self._table
 
     @property
     def message(self) -> str:
