@@ -1,7 +1,21 @@
 """Background training: runs a session's trainer on a worker thread.
 
-Nothing here calls back into a front end: the UI pulls snapshots on a timer, so a slow
-viewer never slows training and training never blocks the viewer.
+`TrainingRunner` owns one daemon thread. Front ends call `start()`,
+`pause()`, `run_one_episode()`, `run_one_step()` (one transition, explained
+in `last_event.last_update`), `set_speed()` and `set_hyperparameters()`
+(live: the next step uses them); the thread trains in small
+pieces of work and publishes snapshots (the trainer's `latest`), which a UI
+pulls on a timer. Nothing here calls back into a front end, so a slow viewer
+can never slow training down, and a fast trainer never blocks the viewer.
+
+Every control takes effect after the piece of work under way: a few
+milliseconds of episodes at max speed, one agent step at animated speeds (the
+pause between animated steps is cut short). `pause()` returns once the worker
+has stopped, so the session can be changed right after it.
+
+Speeds (`tui_gym.session.speeds`) run from *animated* (one agent step at a time,
+slow enough to follow, with the last move kept in `last_event` for a board to
+draw) to *max* (whole chunks of episodes, no pauses).
 """
 
 from __future__ import annotations
@@ -220,7 +234,9 @@ class TrainingRunner:
             if speed.animated:
                 self._animated_step(trainer)
                 return speed.step_delay
-            trainer.run(episodes=trainer.remaining, seconds=CHUNK_SECONDS, stop=_Stopped(self))
+            trainer.run(
+                episodes=trainer.remaining, seconds=CHUNK_SECONDS, stop=_Stopped(self)
+            )
             return None
         if not self._want_one:
             return None

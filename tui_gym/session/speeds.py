@@ -1,4 +1,10 @@
-"""Training speeds and the `Runner` protocol every runner (thread, child process) follows."""
+"""Training speeds and the `Runner` protocol every runner (thread, child process) follows.
+
+Speeds run from *animated* (one agent step at a time, slow enough to follow,
+with the last move kept for a board to draw) to *max* (whole chunks of
+episodes, no pauses). A front end drives any runner through `Runner`; which
+one it gets is `tui_gym.session.runners.make_runner`'s business.
+"""
 
 from __future__ import annotations
 
@@ -25,7 +31,9 @@ class Speed:
 
 
 SPEEDS: tuple[Speed, ...] = (
-    Speed("animated (slow)", 0.35), Speed("animated", 0.12), Speed("animated (fast)", 0.03),
+    Speed("animated (slow)", 0.35),
+    Speed("animated", 0.12),
+    Speed("animated (fast)", 0.03),
     Speed("max", None),
 )
 DEFAULT_SPEED = len(SPEEDS) - 1

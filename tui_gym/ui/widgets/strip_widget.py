@@ -1,4 +1,21 @@
-"""Widgets that keep their drawing between frames: `StripWidget` and `segments_of`."""
+"""Widgets that keep their drawing between frames: `StripWidget` and `segments_of`.
+
+Textual turns a widget's `render()` result into lines of segments again
+whenever the widget is refreshed, and a focus change or a view switch
+refreshes the whole screen; for a heatmap of 200 coloured cells or a table of
+figures that costs milliseconds a frame, most of a key press's budget.
+
+A `StripWidget` draws through Textual's line API instead. A subclass says
+what its picture depends on (`picture_key()`; by default a counter that
+`redraw()` bumps) and draws it as lines of Rich segments (`draw(width)`).
+Lines are drawn once per key and width (the last `PICTURES` pictures are
+kept, for widgets that flip between a few), and styled with the widget's own
+colours once per style, so a frame that finds nothing changed costs a lookup.
+`component_styles()` keeps the Rich styles of the widget's component classes
+until its own style changes (a theme switch), and a resize asks for a layout
+pass only when the width or the compact layout changed, not when a view is
+shown again at its old size.
+"""
 
 from __future__ import annotations
 

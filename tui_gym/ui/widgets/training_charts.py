@@ -1,4 +1,25 @@
-"""Learning curves: four labelled text sparklines of a training run."""
+"""Learning curves: four labelled text sparklines of a training run.
+
+`TrainingCharts` shows the rolling mean return, episode length, mean |TD
+error| and epsilon as sparklines over the whole run (the trainer's bounded
+`series`), each with its name, its current value and the range the curve
+spans. The whole box is one widget drawn from cached lines: a snapshot that
+changes nothing costs nothing, and one that does costs a single drawing
+rather than a dozen widgets' (`update_from`).
+
+What is drawn and what is written agree (`plotted`): the curve's columns are
+bucket means of the series with the current value as the last column, and
+"max" and "min" are the highest and lowest of those columns, so the value
+beside a curve always lies within its range. A curve whose range rounds to
+one number is drawn flat. In a narrow box (the animated board beside it) the
+ranges make way so the curves keep `MIN_SPARK` columns. Figures too long for
+their column are shortened, never cut; a mean with no episodes behind it (just after loading a saved
+agent) reads "–".
+
+A sparkline draws bars of eighths of a cell, `height` cells tall, coloured
+from the curve's low colour to its high colour (each curve's two colours are
+CSS component classes, e.g. `charts--return-high`).
+"""
 
 from __future__ import annotations
 
@@ -11,7 +32,6 @@ from rich.segment import Segment
 from rich.style import Style
 
 from tui_gym.core.engine.stats import TrainingSnapshot
-from tui_gym.ui.widgets.compare_chart import mix
 from tui_gym.ui.widgets.numbers import Forms, fit, number_forms
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget
 
@@ -72,7 +92,12 @@ def plotted(data: Sequence[float], width: int, current: float | None = None) -> 
 
 
 def sparkline_rows(
-    data: Sequence[float], width: int, height: int, low: RichColor, high: RichColor, *,
+    data: Sequence[float],
+    width: int,
+    height: int,
+    low: RichColor,
+    high: RichColor,
+    *,
     flat: bool = False,
 ) -> list[Line]:
     """A sparkline of `data`, `width` x `height` cells, as lines of segments (top first).
@@ -93,7 +118,7 @@ def sparkline_rows(
         step = round(ratio * COLOUR_STEPS)
         style = styles.get(step)
         if style is None:
-            style = Style(color=mix(low, high, step / COLOUR_STEPS))
+            style = Style(color=_blend(low, high, step / COLOUR_STEPS))
             styles[step] = style
         cells.append((int(ratio * levels), style))
     rows: list[Line] = []
@@ -113,6 +138,12 @@ def sparkline_rows(
                 line.append(Segment(glyph, glyph_style))
         rows.append(line)
     return rows
+
+
+def _blend(a: RichColor, b: RichColor, t: float) -> RichColor:
+    ra, ga, ba = a.get_truecolor()
+    rb, gb, bb = b.get_truecolor()
+    return RichColor.from_rgb(ra + (rb - ra) * t, ga + (gb - ga) * t, ba + (bb - ba) * t)
 
 
 class TrainingCharts(StripWidget):
@@ -144,7 +175,10 @@ class TrainingCharts(StripWidget):
     TrainingCharts > .charts--epsilon-high { color: $primary; }
     TrainingCharts > .charts--epsilon-low { color: $primary 40%; }
 
-    Screen.compact TrainingCharts { border: none; padding: 0; }
+    Screen.compact TrainingCharts {
+        border: none;
+        padding: 0;
+    }
     """
 
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
@@ -231,7 +265,9 @@ class TrainingCharts(StripWidget):
                 line: Line = [
                     *_cell(curve.name if row == 0 else "", NAME_WIDTH, name_style),
                     *_cell(value if row == 0 else "", VALUE_WIDTH, value_style, right=True),
-                    Segment(" "), *spark[row], Segment(" "),
+                    Segment(" "),
+                    *spark[row],
+                    Segment(" "),
                 ]
                 if range_width:
                     line += _cell(ends[row], range_width, range_style, right=True)
