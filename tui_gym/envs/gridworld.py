@@ -112,19 +112,7 @@ class GridWorldEnv(gym.Env[ObsType, int]):
            registered ids). The environment itself never truncates.
 
     ## Arguments
-    ```python
-    import gymnasium as gym
-    import tui_gym  # registers the ids
-
-    gym.make(
-        "tui_gym/GridWorld-v0",
-        render_mode=None,
-        size=5,
-        reward_scale=1.0,
-        step_penalty=0.0,
-        walls=(),
-    )
-    ```
+    `gym.make("tui_gym/GridWorld-v0", ...)` after `import tui_gym` (which registers it):
 
     * `render_mode=None`: one of `None`, `"ansi"` (`render()` returns the grid as
       text), `"human"` (the text is printed on every reset and step) or
