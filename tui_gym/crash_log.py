@@ -1,10 +1,7 @@
 """Crash logs: an unexpected error's full traceback goes to a file, the person gets one line.
 
-`write_crash_log` writes the traceback (with the version, Python and the
-command line) to a new file in `log_dir()`: `$TUI_GYM_LOG_DIR` when set,
-else `$XDG_STATE_HOME/tui-gym`, else `~/.local/state/tui-gym`; it keeps the
-newest `KEEP` logs. `crash_line` is the one line to print instead of the
-traceback.
+Logs go to `$TUI_GYM_LOG_DIR`, else `$XDG_STATE_HOME/tui-gym`, else
+`~/.local/state/tui-gym`; the newest `KEEP` are kept.
 """
 
 from __future__ import annotations
@@ -41,8 +38,7 @@ def write_crash_log(error: BaseException) -> Path:
     lines = [
         f"tui-gym {__version__} crashed at {time.strftime('%Y-%m-%d %H:%M:%S %z')}\n",
         f"python {platform.python_version()} on {platform.platform()}\n",
-        f"command: {' '.join(sys.argv)}\n\n",
-        *traceback.format_exception(error),
+        f"command: {' '.join(sys.argv)}\n\n", *traceback.format_exception(error),
     ]
     fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
     with os.fdopen(fd, "w", encoding="utf-8", errors="replace") as out:

@@ -1,13 +1,4 @@
-"""Line charts with confidence bands in the terminal, for `compare` and `sweep`.
-
-`band_chart(series, width, height)` draws each `ChartSeries` (x, mean and
-optionally lo/hi) as a braille line (2 x 4 dots a character) in its colour,
-over its band drawn as shaded blocks in the same colour, with the y range on
-the left, the x range below and a legend. Points that share a dot column are
-averaged, so a long noisy curve reads as its trend. The result is a rich
-`Text`: coloured on a terminal, plain characters (lines and shaded bands)
-everywhere else.
-"""
+"""Line charts with confidence bands in the terminal, for `compare` and `sweep`."""
 
 from __future__ import annotations
 
@@ -70,13 +61,8 @@ def _fill_gaps(values: np.ndarray) -> np.ndarray:
 
 
 def band_chart(
-    series: Sequence[ChartSeries],
-    width: int = 72,
-    height: int = 16,
-    *,
-    x_label: str = "episode",
-    y_label: str = "",
-    skip_start: bool = False,
+    series: Sequence[ChartSeries], width: int = 72, height: int = 16, *, x_label: str = "episode",
+    y_label: str = "", skip_start: bool = False,
 ) -> Text:
     """The chart of `series` in `width` x `height` character cells of plot, plus axes and legend.
 

@@ -1,16 +1,4 @@
-"""`tui-gym serve`: the app in a browser tab, through textual-serve (the `web` extra).
-
-Each browser tab that opens the page runs its own `tui-gym` app (with the
-options given before `serve`: `tui-gym --env gridworld serve`) in a process of
-its own, its screen drawn in the page by textual-serve's terminal. The server
-listens on 127.0.0.1 unless told otherwise, so only this machine reaches it;
-a host that is not a loopback address is refused unless `--public` says that
-everyone who can reach it and has its token may use the app (which can read and
-write files here, as the person who started it). The page's links follow the
-address the browser used. `web_guard.ServeGuard`, a middleware on textual-serve's
-aiohttp application, decides who may open an app: the served page only (its
-Origin), at most `--max-apps` at once, and with `--public` only with the token.
-"""
+"""`tui-gym serve`: the app in a browser tab, through textual-serve (the `web` extra)."""
 
 from __future__ import annotations
 

@@ -1,20 +1,8 @@
 """Who may drive the apps `tui-gym serve` runs: `ServeGuard`, an aiohttp middleware.
 
-Each websocket to `/ws` starts an app that can read and write files as the person who
-started the server, so the guard lets one through only when:
-
-- its `Origin` is the served page's own (the host and port the request came to): a page
-  of another site open in the same browser cannot open one, and neither can a request
-  with no `Origin` at all;
-- served on this machine only (`host_allowed` given), the address the request came to
-  is a local one, so a site whose name is made to resolve to 127.0.0.1 (DNS rebinding)
-  is refused too;
-- fewer than `max_apps` apps are live: beyond that the page and the socket are answered
-  with a page that says so;
-- with a token (`--public` always has one), the page was opened with `?token=...` (the
-  page then keeps it in a cookie for its socket) or the request carries that cookie.
-
-Refusals are short HTML pages with the HTTP status that fits (403, 401, 503).
+Each websocket starts an app that can touch the user's files, so one gets through only
+from the page's own Origin, to a local address when served locally (DNS rebinding),
+below `max_apps`, and with the token where there is one.
 """
 
 from __future__ import annotations

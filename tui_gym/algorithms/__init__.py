@@ -1,13 +1,7 @@
 """Tabular learners, one file each, and the `ALGORITHMS` registry.
 
-Every learner is a `Learner` (see `base`): its hyperparameters as `Param`s,
-its tables, its update rule written once as compiled scalar code, and a
-record of a single update for the step-by-step view. `algorithm(name)` finds
-one by its registry name (`q-learning`, `sarsa`, `expected-sarsa`,
-`double-q`, `monte-carlo`, `dyna-q`, `n-step-sarsa`, `sarsa-lambda`, `q-lambda`,
-`dyna-q-plus`, `prioritized-sweeping`; the prediction learners `td0`,
-`mc-prediction`, `n-step-td`, `td-lambda`, `offline-lambda-return`, which
-score a fixed policy: see `prediction`).
+After a truncation every rule bootstraps from the next state: the time limit is not part
+of the game.
 """
 
 from __future__ import annotations
@@ -40,56 +34,16 @@ from tui_gym.algorithms.td0 import TD0
 from tui_gym.algorithms.td_lambda import TDLambda
 
 __all__ = [
-    "ALGORITHMS",
-    "ALL_PARAMS",
-    "COMMON_PARAMS",
-    "DEFAULT_ALGORITHM",
-    "CellUpdate",
-    "Choice",
-    "DoubleQLearning",
-    "DynaQ",
-    "DynaQPlus",
-    "ExpectedSarsa",
-    "Field",
-    "Learner",
-    "LearnerState",
-    "MonteCarlo",
-    "NStepSarsa",
-    "PrioritizedSweeping",
-    "MonteCarloPrediction",
-    "NStepTD",
-    "OfflineLambdaReturn",
-    "Predictor",
-    "QLearning",
-    "Sarsa",
-    "SarsaLambda",
-    "Settings",
-    "TD0",
-    "TDLambda",
-    "TableSpec",
-    "Transition",
-    "UpdateRecord",
-    "WatkinsQLambda",
-    "algorithm",
-    "owners",
+    "ALGORITHMS", "ALL_PARAMS", "COMMON_PARAMS", "DEFAULT_ALGORITHM", "CellUpdate", "Choice",
+    "DoubleQLearning", "DynaQ", "DynaQPlus", "ExpectedSarsa", "Field", "Learner", "LearnerState",
+    "MonteCarlo", "NStepSarsa", "PrioritizedSweeping", "MonteCarloPrediction", "NStepTD",
+    "OfflineLambdaReturn", "Predictor", "QLearning", "Sarsa", "SarsaLambda", "Settings", "TD0",
+    "TDLambda", "TableSpec", "Transition", "UpdateRecord", "WatkinsQLambda", "algorithm", "owners",
 ]
 
 ALGORITHMS: tuple[type[Learner], ...] = (
-    QLearning,
-    Sarsa,
-    ExpectedSarsa,
-    DoubleQLearning,
-    MonteCarlo,
-    DynaQ,
-    NStepSarsa,
-    SarsaLambda,
-    WatkinsQLambda,
-    DynaQPlus,
-    PrioritizedSweeping,
-    TD0,
-    MonteCarloPrediction,
-    NStepTD,
-    TDLambda,
+    QLearning, Sarsa, ExpectedSarsa, DoubleQLearning, MonteCarlo, DynaQ, NStepSarsa, SarsaLambda,
+    WatkinsQLambda, DynaQPlus, PrioritizedSweeping, TD0, MonteCarloPrediction, NStepTD, TDLambda,
     OfflineLambdaReturn,
 )
 
@@ -123,7 +77,5 @@ def algorithm(name: str) -> type[Learner]:
     wanted = str(name).strip().lower().replace("_", "-")
     found = _BY_NAME.get(wanted)
     if found is None:
-        raise ValueError(
-            f"unknown algorithm {name!r}; choose one of {', '.join(_BY_NAME)}"
-        )
+        raise ValueError(f"unknown algorithm {name!r}; choose one of {', '.join(_BY_NAME)}")
     return found

@@ -1,24 +1,4 @@
-"""The learner: what a tabular algorithm declares, and what the engine drives.
-
-An algorithm is one subclass of `Learner` in one file. It declares its name,
-its hyperparameter schema (`params`), the per-(state, action) tables it keeps
-(`tables`), `Params` (the NamedTuple of its compiled hyperparameters, filled
-from the schema by name; `by_visits` is the step-size schedule) and writes
-its update rule once, as plain scalar code registered with the engine
-(`tui_gym.core.engine.rules.register(Params, Rule(...))`) and compiled by
-Numba. It writes `_describe`, the step-by-step view's record of one update
-from the numbers its rule logs, and `arrays`, the tables its rule takes, when
-they are not `(q, counts, visits)`.
-
-The base class owns everything else: table rows (dense keys are rows; other
-keys get the next free row and the tables grow; the action-value tables,
-`value_tables`, start at the shared `initial_value`), the actions each row offers
-(`offer`: a game whose states do not all offer every action; acting, the max and the
-expectation of every rule range over those), the epsilon schedule, acting
-and learning one transition from Python through the same compiled code the
-engine's loop runs, reading values for heatmaps and evaluation, and saving
-(`state()` / `load_state()`).
-"""
+"""The learner: what a tabular algorithm declares, and what the engine drives."""
 
 from __future__ import annotations
 
@@ -33,14 +13,7 @@ import numpy as np
 from tui_gym.algorithms.settings import COMMON_PARAMS, Field, Settings
 from tui_gym.core.engine import loop, rules
 
-__all__ = [
-    "CellUpdate",
-    "Learner",
-    "LearnerState",
-    "TableSpec",
-    "Transition",
-    "UpdateRecord",
-]
+__all__ = ["CellUpdate", "Learner", "LearnerState", "TableSpec", "Transition", "UpdateRecord"]
 
 @cache
 def _field_types(params: type) -> dict[str, Any]:
@@ -167,8 +140,7 @@ class Learner(ABC):
     formula: ClassVar[str]  # its target, as the step-by-step view writes it
     params: ClassVar[tuple[Field, ...]] = COMMON_PARAMS
     tables: ClassVar[tuple[TableSpec, ...]] = (
-        TableSpec("q", np.float64),
-        TableSpec("counts", np.int64),
+        TableSpec("q", np.float64), TableSpec("counts", np.int64),
     )
     value_tables: ClassVar[tuple[str, ...]] = ("q",)  # start at `initial_value`
     has_traces: ClassVar[bool] = False  # keeps eligibility traces (`eligibility`)
@@ -178,12 +150,8 @@ class Learner(ABC):
     counts: np.ndarray
 
     def __init__(
-        self,
-        n_actions: int,
-        hyperparameters: Mapping[str, Any] | None = None,
-        *,
-        n_states: int | None = None,
-        seed: int | None = None,
+        self, n_actions: int, hyperparameters: Mapping[str, Any] | None = None, *,
+        n_states: int | None = None, seed: int | None = None,
     ) -> None:
         if n_actions < 1:
             raise ValueError(f"n_actions must be >= 1, got {n_actions}")
@@ -318,8 +286,6 @@ class Learner(ABC):
         """An episode starts: whatever was kept of an unfinished one goes."""
         rules.begin(self.arrays(), self.compiled_params())
 
-    forget_episode = begin_episode
-
     def learn(
         self, state: int, action: int, reward: float, next_state: int, terminated: bool,
         truncated: bool = False, next_action: int = -1, explain: bool = False,
@@ -347,14 +313,8 @@ class Learner(ABC):
         return int(a2), float(td)
 
     def update_one(
-        self,
-        key: Hashable,
-        action: int,
-        reward: float,
-        next_key: Hashable,
-        terminated: bool,
-        truncated: bool = False,
-        next_action: int | None = None,
+        self, key: Hashable, action: int, reward: float, next_key: Hashable, terminated: bool,
+        truncated: bool = False, next_action: int | None = None,
     ) -> float:
         """One transition by observation keys, explained in `last_update`; its |TD error|.
         A rule that needs the next action (SARSA) takes `next_action`."""
@@ -497,33 +457,17 @@ class Learner(ABC):
         return self._last_record
 
     def _record(
-        self,
-        step: Transition,
-        formula: str,
-        terms: tuple[tuple[str, float], ...],
-        target: float | None,
-        before: float,
-        after: float,
-        alpha: float | None = None,
-        **extra: Any,
+        self, step: Transition, formula: str, terms: tuple[tuple[str, float], ...],
+        target: float | None, before: float, after: float, alpha: float | None = None, **extra: Any,
     ) -> UpdateRecord:
         """An `UpdateRecord` for one transition (no step size when there is no target)."""
         return UpdateRecord(
-            algorithm=self.name,
-            state=step.state,
-            action=step.action,
-            reward=step.reward,
-            next_state=step.next_state,
-            next_action=step.next_action,
-            terminated=step.terminated,
-            truncated=step.truncated,
-            formula=formula,
-            terms=terms,
+            algorithm=self.name, state=step.state, action=step.action, reward=step.reward,
+            next_state=step.next_state, next_action=step.next_action, terminated=step.terminated,
+            truncated=step.truncated, formula=formula, terms=terms,
             target=None if target is None else float(target),
             td_error=None if target is None else float(target) - float(before),
-            step_size=None if target is None else alpha,
-            before=float(before),
-            after=float(after),
+            step_size=None if target is None else alpha, before=float(before), after=float(after),
             **extra,
         )
 
@@ -572,12 +516,8 @@ class Learner(ABC):
             arrays[spec.name] = getattr(self, spec.name)[:used].copy()
         arrays.update(self._extra_arrays())
         meta = {
-            "algorithm": self.name,
-            "n_actions": self.n_actions,
-            "n_states": self.n_states,
-            "rows": used,
-            "episode": self.episode,
-            "hyperparameters": self.hp.to_dict(),
+            "algorithm": self.name, "n_actions": self.n_actions, "n_states": self.n_states,
+            "rows": used, "episode": self.episode, "hyperparameters": self.hp.to_dict(),
         }
         return LearnerState(self.name, arrays, meta, self._keys())
 
@@ -620,8 +560,7 @@ class Learner(ABC):
         fills = {spec.name: hp.initial_value if spec.name in self.value_tables else spec.fill
                  for spec in self.tables}
         for spec in self.tables:
-            filled: np.ndarray = np.full((capacity, self.n_actions), fills[spec.name],
-                                         spec.dtype)
+            filled: np.ndarray = np.full((capacity, self.n_actions), fills[spec.name], spec.dtype)
             filled[:rows] = arrays[spec.name]
             loaded[spec.name] = filled
         visits = np.zeros(capacity, dtype=np.int64)
@@ -643,10 +582,8 @@ class Learner(ABC):
         """A new learner of this class restored from `state`."""
         meta = state.meta
         learner = cls(
-            int(meta["n_actions"]),
-            meta.get("hyperparameters"),
-            n_states=None if state.keys is not None else int(meta["rows"]),
-            seed=seed,
+            int(meta["n_actions"]), meta.get("hyperparameters"),
+            n_states=None if state.keys is not None else int(meta["rows"]), seed=seed,
         )
         learner.load_state(state)
         return learner

@@ -1,18 +1,4 @@
-"""Double Q-learning (Sutton & Barto, 2nd ed., section 6.7).
-
-Two tables, Q_A and Q_B. For each transition a fair coin picks the table to
-update; the other one evaluates the action the picked one thinks best:
-
-    with probability 1/2:
-        Q_A(s, a) <- Q_A(s, a) + α [r + γ Q_B(s', argmax_a' Q_A(s', a')) - Q_A(s, a)]
-    otherwise the same with A and B swapped.
-
-Choosing and evaluating the next action with independent estimates removes
-the maximization bias of Q-learning's max over noisy estimates. The policy
-acts on Q_A + Q_B; the values shown and saved are their mean, which has the
-same best actions (halving is exact) on the scale of one table. The coins and
-the tie-breaks of argmax come from the learner's seeded generator.
-"""
+"""Double Q-learning (Sutton & Barto, 2nd ed., section 6.7)."""
 
 from __future__ import annotations
 
@@ -66,9 +52,7 @@ class DoubleQLearning(Learner):
     formula = "r + γ·Q_B(s', a*), a* = argmax Q_A(s',·)"
     Params = Params
     tables = (
-        TableSpec("q_a", np.float64),
-        TableSpec("q_b", np.float64),
-        TableSpec("counts_a", np.int64),
+        TableSpec("q_a", np.float64), TableSpec("q_b", np.float64), TableSpec("counts_a", np.int64),
         TableSpec("counts_b", np.int64),
     )
 

@@ -1,19 +1,7 @@
 """Tabular Dyna-Q (Sutton & Barto, 2nd ed., section 8.2): Q-learning plus planning.
 
-Each real transition makes a Q-learning update, then teaches a model: for
-the (state, action) just taken, the reward, next state and whether it
-terminated. Then `planning_steps` simulated updates follow: a (state,
-action) drawn uniformly from those seen so far, its outcome read from the
-model, and the same Q-learning update applied to it.
-
-The model keeps the last outcome of each (state, action), as the book's
-tabular Dyna-Q does: exact for deterministic games; for stochastic ones
-(Blackjack, slippery FrozenLake) planning repeats one sampled outcome until
-the pair is tried again, so it speeds learning less and adds noise.
-
-Planning updates use the step size of the pair's real updates (`counts`
-counts experience, not simulation). Draws come from the learner's seeded
-generator; with `planning_steps` = 0 this is Q-learning.
+The model keeps the last outcome of each pair, as the book's tabular Dyna-Q does, so
+on stochastic games planning repeats one sampled outcome until the pair is tried again.
 """
 
 from __future__ import annotations

@@ -1,18 +1,5 @@
 """Dyna-Q+ (Sutton & Barto, 2nd ed., section 8.3): Dyna-Q that explores what it has not
 tried for long.
-
-As Dyna-Q (`dyna_q`): a Q-learning update per real transition, the last
-outcome of each pair in a model, then `planning_steps` simulated updates.
-Each pair also remembers the real step it was last tried at; a simulated
-update of a pair not tried for τ steps adds a bonus to the modelled reward,
-
-    target = r + κ √τ + γ max_a' Q(s', a'),
-
-so long-untried actions look better and better in planning until the agent
-tries them again: a world that changes (a wall that moves) is found out. As
-in the book's footnote, the first visit of a state also lets planning
-consider its untried actions (those the state offers), modelled as leading
-back to the same state with reward 0 (their τ counts from the run's start).
 """
 
 from __future__ import annotations

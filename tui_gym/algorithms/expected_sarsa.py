@@ -1,14 +1,4 @@
-"""Expected SARSA (Sutton & Barto, 2nd ed., section 6.6).
-
-    Q(s, a) <- Q(s, a) + α [r + γ Σ_a' π(a'|s') Q(s', a') - Q(s, a)]
-
-π is the current epsilon-greedy policy, tie-breaking included: every action
-s' offers has probability ε/|A(s')|, and the greedy share 1 - ε is split
-evenly among those tied for the best value in s'. The expectation replaces SARSA's
-sampled a', so the target varies less: the same on-policy values with less
-noise, which tolerates larger step sizes. After termination the target is r
-alone; after a truncation it bootstraps from the expectation in s'.
-"""
+"""Expected SARSA (Sutton & Barto, 2nd ed., section 6.6)."""
 
 from __future__ import annotations
 

@@ -1,15 +1,5 @@
 """Constant-α Monte Carlo prediction (Sutton & Barto, 2nd ed., section 6.1): V of a fixed
 policy from whole-episode returns.
-
-Nothing is learned during an episode: its states and rewards are kept, and
-when it ends the returns are computed backwards,
-
-    G_T = 0 (termination)  or  V(s_T) (truncation),
-    G_t = r_{t+1} + γ G_{t+1},      V(s_t) <- V(s_t) + α [G_t - V(s_t)]
-
-at every visit of every state, in the order t = T-1, ..., 0. A truncated
-episode ends on V of its last state, since the time limit is not part of
-the game.
 """
 
 from __future__ import annotations

@@ -1,20 +1,7 @@
 """Monte Carlo control with an epsilon-soft policy (Sutton & Barto, 2nd ed., section 5.4).
 
-Nothing is learned during an episode: its states, actions and rewards are
-kept, and when it ends the returns are computed backwards,
-
-    G_T = 0 (termination)  or  Σ_a π(a|s_T) Q(s_T, a) (truncation),
-    G_t = r_{t+1} + γ G_{t+1},
-
-and every (s_t, a_t) moves toward its G_t, in the order t = T-1, ..., 0 as in
-the book's loop: only at its first visit in the episode (`first_visit`) or at
-every visit. With the "visits" schedule the step is 1/n (the incremental
-average of the returns seen) until it reaches the learning rate; "constant"
-is a constant step. A truncated episode ends on the expected value of its
-last state under the current epsilon-greedy policy, since the time limit is
-not part of the game. The policy is epsilon-greedy on Q (epsilon-soft), so
-Q estimates the values of the exploring policy, as on-policy control does.
-Unfinished episodes are not saved.
+A truncated episode ends on its last state's expected value under the current policy,
+since the time limit is not part of the game.
 """
 
 from __future__ import annotations

@@ -1,18 +1,4 @@
-"""n-step SARSA (Sutton & Barto, 2nd ed., section 7.2): on-policy control with n-step returns.
-
-The last n transitions of the episode are kept in a window. Once n rewards
-are in, the pair n steps back moves toward the n-step return
-
-    G = r_{τ+1} + γ r_{τ+2} + ... + γ^{n-1} r_{τ+n} + γ^n Q(s_{τ+n}, a_{τ+n}),
-
-with a_{τ+n} the action the agent will really take (chosen before the
-update, as SARSA does). When the episode ends, every pair still in the
-window is updated, oldest first: after termination its return is the sum of
-the rewards left; after a truncation it bootstraps from Q(s', a') (the time
-limit is not part of the game). n = 1 is SARSA; n past the episode's length
-is every-visit Monte Carlo on the exploring policy. Unfinished episodes are
-not saved.
-"""
+"""n-step SARSA (Sutton & Barto, 2nd ed., section 7.2): on-policy control with n-step returns."""
 
 from __future__ import annotations
 

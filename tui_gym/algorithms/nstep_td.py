@@ -1,17 +1,4 @@
-"""n-step TD prediction (Sutton & Barto, 2nd ed., section 7.1): V of a fixed policy.
-
-The target of the state visited at time τ is the n-step return,
-
-    G = r_{τ+1} + γ r_{τ+2} + ... + γ^{n-1} r_{τ+n} + γ^n V(s_{τ+n}),
-
-formed once n more rewards are in: each step updates the state of n steps
-before. When the episode ends, the states of its last n - 1 steps are
-updated with the rewards there are (after termination, no V term; after a
-truncation, V of the last state). n = 1 is TD(0); n at least the episode's
-length is constant-α Monte Carlo. The last n states and rewards are kept
-in a ring; raising n mid-episode makes a larger ring and drops the updates
-the episode so far still owed.
-"""
+"""n-step TD prediction (Sutton & Barto, 2nd ed., section 7.1): V of a fixed policy."""
 
 from __future__ import annotations
 
@@ -84,8 +71,7 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
             g = rewards[tau % size] + hp.discount * g
             rewards[tau % size] = g
         for tau in range(first, t + 1):  # their updates, in the book's order
-            total += v_update(v, visits, hp, states[tau % size], rewards[tau % size], log,
-                              made)
+            total += v_update(v, visits, hp, states[tau % size], rewards[tau % size], log, made)
             made += 1
         step[0] = 0
     return total

@@ -1,15 +1,5 @@
 """The offline λ-return algorithm (Sutton & Barto, 2nd ed., section 12.1): V of a fixed
 policy toward λ-returns, at each episode's end.
-
-The λ-return averages the n-step returns of every n, weighted (1 - λ) λ^{n-1},
-the rest on the full return. Computed backwards from the episode's end with
-the values V had during the episode,
-
-    G^λ_t = r_{t+1} + γ [(1 - λ) V(s_{t+1}) + λ G^λ_{t+1}],
-
-(0 past termination; V of the last state after a truncation), then every
-visited state moves toward its λ-return, in the order t = 0, ..., T-1.
-λ = 0 is TD(0) applied at the episode's end; λ = 1 is constant-α Monte Carlo.
 """
 
 from __future__ import annotations

@@ -1,20 +1,4 @@
-"""Prediction: learners that estimate V of a fixed policy, scored against its exact values.
-
-A `Predictor` follows a fixed policy and learns a state-value table `v`; the
-rule of each one (TD(0), constant-α Monte Carlo, n-step TD, TD(λ)) is its own
-file. The policy it follows is epsilon-greedy on its action-value table `q`,
-which it never changes: all zeros by default, every action tied, so every
-step is uniform (the book's random policy, whatever epsilon); `follow` puts
-another learner's action values there (its greedy policy with epsilon 0, its
-epsilon-greedy one with its epsilon). That is the engine's own acting, so
-the compiled loop and the env loop run a predictor like any learner.
-
-Its figure of merit is the RMS error of `v` against the exact V^π of the
-policy it follows (`Truth`, over the states the policy reaches): `truth`
-computes it from the game's model, `rms_error` scores an estimate, and
-`rms_curve` runs episodes and scores each (compiled: `run_scored`). The table it shows
-(`action_values`, the heatmaps) is V, the same in every action.
-"""
+"""Prediction: learners that estimate V of a fixed policy, scored against its exact values."""
 
 from __future__ import annotations
 

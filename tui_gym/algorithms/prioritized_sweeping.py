@@ -1,16 +1,4 @@
-"""Prioritized sweeping (Sutton & Barto, 2nd ed., section 8.4): planning where values change.
-
-Each real transition teaches the model (the last outcome of each pair, as
-Dyna-Q's) and enters the queue with priority P = |r + γ max Q(s', ·) - Q(s, a)|
-when P > θ. Then up to `planning_steps` times: the pair of highest priority
-leaves the queue and makes a Q-learning update from its model outcome; every
-pair the model says leads into its state (its predecessors) is checked the
-same way and enters the queue (or rises in it) when its P exceeds θ. So a
-change at the goal sweeps backwards along the paths that lead to it, and no
-update is spent where nothing changed. As in the book, Q changes only
-through the queue; the log's `[0, 7]` adds up the updates made over every
-call it is passed to (Example 8.4 counts them). A save keeps the queue.
-"""
+"""Prioritized sweeping (Sutton & Barto, 2nd ed., section 8.4): planning where values change."""
 
 from __future__ import annotations
 
@@ -221,8 +209,7 @@ class PrioritizedSweeping(Learner):
             ("queue", f"{int(done)} taken from the top (P {taken or '–'}), "
                       f"{int(left)} left" + (f", the top at P {top:.4g}" if left else "")),
         )
-        own = next((u for u in updates if (u.state, u.action) == (step.state, step.action)),
-                   None)
+        own = next((u for u in updates if (u.state, u.action) == (step.state, step.action)), None)
         if own is None:
             return self._record(step, "when (s,a) reaches the queue's top", (), None, now, now,
                                 episode_updates=updates, notes=notes)

@@ -1,18 +1,4 @@
-"""Watkins's Q(λ) (Sutton & Barto, 2nd ed., section 12.10): Q-learning with eligibility traces.
-
-The next action a' is chosen (epsilon-greedy) before the update. The target
-bootstraps from the best action in s', as Q-learning's does, and the TD
-error spreads over the traces as in Sarsa(λ) (`sarsa_lambda`):
-
-    δ = r + γ max_b Q(s', b) - Q(s, a)
-    e(s, a) <- e(s, a) + 1  (accumulating)  or  1  (replacing)
-    for every pair with a trace:  Q <- Q + α δ e
-    e <- γ λ e  if a' is greedy (ties for the best in s'),  else  e <- 0
-
-The traces follow the greedy policy only as long as the agent does: after an
-exploratory action the earlier pairs did not lead where the greedy policy
-goes, so their traces are cut. λ = 0 is Q-learning.
-"""
+"""Watkins's Q(λ) (Sutton & Barto, 2nd ed., section 12.10): Q-learning with eligibility traces."""
 
 from __future__ import annotations
 

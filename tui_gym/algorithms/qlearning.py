@@ -1,12 +1,4 @@
-"""Q-learning (Sutton & Barto, 2nd ed., section 6.5): off-policy TD control.
-
-    Q(s, a) <- Q(s, a) + α [r + γ max_a' Q(s', a') - Q(s, a)]
-
-The target bootstraps from the best action in s' whatever the behaviour
-policy does next, so Q approaches the optimal action values while the agent
-explores. After termination the target is r alone; after a truncation it
-still bootstraps (the time limit is not part of the game).
-"""
+"""Q-learning (Sutton & Barto, 2nd ed., section 6.5): off-policy TD control."""
 
 from __future__ import annotations
 

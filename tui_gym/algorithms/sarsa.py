@@ -1,15 +1,4 @@
-"""SARSA (Sutton & Barto, 2nd ed., section 6.4): on-policy TD control.
-
-    Q(s, a) <- Q(s, a) + α [r + γ Q(s', a') - Q(s, a)]
-
-a' is the action the agent will really take in s': the engine chooses it
-(epsilon-greedy, from the table before this update) before the update and
-then takes it. So Q learns the values of the policy being followed,
-exploration included: near a cliff it prefers the safer path that an
-occasional random step does not spoil. After termination the target is r
-alone; after a truncation it bootstraps from Q(s', a') with the a' the policy
-picked there.
-"""
+"""SARSA (Sutton & Barto, 2nd ed., section 6.4): on-policy TD control."""
 
 from __future__ import annotations
 

@@ -1,18 +1,4 @@
-"""Sarsa(λ) (Sutton & Barto, 2nd ed., section 12.7): SARSA with eligibility traces.
-
-Every pair visited in the episode keeps a trace e(s, a). Each transition
-
-    δ = r + γ Q(s', a') - Q(s, a)        (r - Q(s, a) after termination)
-    e(s, a) <- e(s, a) + 1  (accumulating)  or  1  (replacing)
-    for every pair with a trace:  Q <- Q + α δ e,  then  e <- γ λ e
-
-so one TD error reaches back along the whole path, the most recent pairs
-most. λ = 0 is SARSA; λ = 1 (accumulating, constant step) is close to Monte
-Carlo. A trace that falls below `FADED` is dropped (its pair leaves the
-list: the work per step follows the pairs that still matter). Traces end
-with the episode; each pair's step size follows its own updates' count. The
-trace kernel here is also Watkins's Q(λ)'s (`q_lambda`).
-"""
+"""Sarsa(λ) (Sutton & Barto, 2nd ed., section 12.7): SARSA with eligibility traces."""
 
 from __future__ import annotations
 
@@ -108,8 +94,7 @@ def spread(tables: Any, hp: Any, s: int, a: int, target: float, future: float, d
 def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
     future = 0.0 if terminated else tables[0][s2, a2]
-    td = spread(tables, hp, s, a, r + hp.discount * future, future,
-                hp.discount * hp.lambda_, log)
+    td = spread(tables, hp, s, a, r + hp.discount * future, future, hp.discount * hp.lambda_, log)
     if terminated or truncated:
         clear(tables, hp)
     return td

@@ -1,13 +1,4 @@
-"""Hyperparameter schemas and validated values for the learners.
-
-Every learner declares its hyperparameters as a tuple of `Param`s (numbers
-and switches) and `Choice`s (one word out of a few, e.g. the step-size
-schedule). `COMMON_PARAMS` are the ones every learner shares: step size,
-discount, the linear epsilon decay, the episode budget and the initial value of Q. `Settings` holds
-one validated value per field of a schema, read as attributes or items
-(`hp.learning_rate`, `hp.epsilon_at(episode)`, `hp.replace(...)`,
-`hp.to_dict()`), and pickles, so it crosses processes.
-"""
+"""Hyperparameter schemas and validated values for the learners."""
 
 from __future__ import annotations
 
@@ -97,14 +88,10 @@ class Settings(Mapping[str, Any]):
         unknown = sorted(set(given) - set(by_name))
         if unknown:
             raise ValueError(f"unknown hyperparameter(s): {', '.join(unknown)}")
-        parsed = {
-            f.name: f.parse(given[f.name]) if f.name in given else f.default for f in schema
-        }
+        parsed = {f.name: f.parse(given[f.name]) if f.name in given else f.default for f in schema}
         start, final = parsed.get("epsilon_start"), parsed.get("epsilon_final")
         if isinstance(start, float) and isinstance(final, float) and final > start:
-            raise ValueError(
-                f"epsilon_final ({final:g}) must not exceed epsilon_start ({start:g})"
-            )
+            raise ValueError(f"epsilon_final ({final:g}) must not exceed epsilon_start ({start:g})")
         self.__dict__["_schema"] = tuple(schema)
         self.__dict__["_values"] = parsed
 

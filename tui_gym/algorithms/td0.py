@@ -1,11 +1,4 @@
-"""TD(0) prediction (Sutton & Barto, 2nd ed., section 6.1): V of a fixed policy.
-
-    V(s) <- V(s) + α [r + γ V(s') - V(s)]
-
-after every step of the policy followed (see `prediction`). After
-termination the target is r alone; after a truncation it bootstraps from
-V(s'), since the time limit is not part of the game.
-"""
+"""TD(0) prediction (Sutton & Barto, 2nd ed., section 6.1): V of a fixed policy."""
 
 from __future__ import annotations
 

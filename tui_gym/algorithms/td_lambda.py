@@ -1,15 +1,5 @@
 """TD(λ) prediction (Sutton & Barto, 2nd ed., section 12.2): V of a fixed policy with
 eligibility traces.
-
-Each step every state's trace decays by γλ and the state just left gains 1
-(accumulating) or is set to 1 (replacing); the TD error then moves every
-state in proportion to its trace,
-
-    δ = r + γ V(s') - V(s),      V <- V + α δ e.
-
-λ = 0 is TD(0); λ = 1 approaches constant-α Monte Carlo. After termination
-the target is r alone; after a truncation it bootstraps from V(s'). The
-traces end with the episode (and start at zero with each one).
 """
 
 from __future__ import annotations

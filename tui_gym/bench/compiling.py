@@ -1,12 +1,4 @@
-"""Compiling the learners: once with an empty cache, then loaded from the disk cache.
-
-In a fresh process with an empty cache folder (`NUMBA_CACHE_DIR`), every
-algorithm learns one episode on the model and takes one step on the env of
-every game: the time that takes, games built included, is
-the cold compile of every learner on every game. Then a second fresh process
-with the same folder starts the engine (importing Numba, reported apart) and
-makes every learner ready again: that is the warm load.
-"""
+"""Compiling the learners: once with an empty cache, then loaded from the disk cache."""
 
 from __future__ import annotations
 

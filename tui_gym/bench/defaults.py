@@ -1,11 +1,4 @@
-"""Defaults that reach their bound: the share of seeds, per game and algorithm.
-
-Every game the bench measures, every algorithm, with the game's defaults for
-it and seeds 0 to n - 1: `train` as the command runs it (`Session.train()`),
-then the bound the game's oracle states, checked exactly. A pair the game
-names a lesson for ends short by the learner's nature (the lesson says why).
-Seeds run in child processes, one per core.
-"""
+"""Defaults that reach their bound: the share of seeds, per game and algorithm."""
 
 from __future__ import annotations
 
@@ -18,7 +11,6 @@ from tui_gym.core.engine import processes
 from tui_gym.core.mdp import NotAvailable
 
 SEEDS = 40
-SHARE_TARGET = 0.95
 
 
 @dataclass(frozen=True)

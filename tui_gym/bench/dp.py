@@ -1,18 +1,5 @@
 """Planning's figures: a value-iteration sweep on Taxi, Jack's car rental solved by policy
 iteration, and the Plan view animating sweeps while it answers keys.
-
-- `taxi_sweep_ms`: the median time of one synchronous value-iteration sweep on
-  Taxi's 500 states x 6 actions (the model built beforehand);
-- `jack_seconds`: Figure 4.2's policy iteration on Jack's car rental (441 states
-  x 11 actions, 441 outcomes each), from moving nothing to the optimal policy,
-  median of repeats (the model, built once beforehand, is not counted);
-- per grid game, the real app at 120x40 on the Plan view, policy evaluation
-  running at 50 sweeps a second (θ so small it never ends): the sweeps the view
-  drew per second of wall time over the window, and, at a person's pace, the
-  time from a key to the first screen update that shows its effect, for `d`
-  (values as numbers: the view's own) and `s` (in place: through the planner's
-  thread), as `live` times keys (the key handed to the driver, the frame handed
-  back, its terminal encoding included).
 """
 
 from __future__ import annotations
@@ -183,8 +170,7 @@ def verdicts(result: DPResult | None, missing: str,
              ok: Callable[[float | None, bool], str]) -> dict[str, str]:
     """The targets' verdicts, keyed as in the JSON."""
     if result is None:
-        return {"taxi_sweep_ms": missing, "jack_policy_iteration_s": missing,
-                "plan_view": missing}
+        return {"taxi_sweep_ms": missing, "jack_policy_iteration_s": missing, "plan_view": missing}
     out = {
         "taxi_sweep_ms": ok(result.taxi_sweep_ms, result.taxi_sweep_ms <= TAXI_SWEEP_MS_TARGET),
         "jack_policy_iteration_s": ok(result.jack_seconds,

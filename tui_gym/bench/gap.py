@@ -1,24 +1,4 @@
-"""Time to a target gap: how long until the greedy policy is within the target of the optimum.
-
-For every game of the registry with `bench_kwargs`, to its `bench_gap` (else
-the bound its oracle states: for a model game, 1% of the optimum's magnitude,
-beyond what no fixed policy found reaches).
-
-Ours: exactly what `tui-gym train GAME --target-gap G` runs, a `Session` with
-the game's default hyperparameters and the CLI's budget for a target gap (five
-times the default), `session.train(target_gap=...)` checking the exact gap as
-it does.
-
-The tutorial: the tutorial loop (`tutorial`) with the same hyperparameters
-and budget, checking its exact gap as often.
-
-Both clocks start before the env is built and stop when the check that met
-the target returns, so both include their gap checks. Ours runs once per
-seed and the tutorial on seeds in turn while the stage has time; the figures
-are medians over seeds. A tutorial run stopped by its time cap or the stage's
-budget only gives a lower bound on its time, and the figure says so
-(`tutorial_reached` false, speed-up ">= x").
-"""
+"""Time to a target gap: how long until the greedy policy is within the target of the optimum."""
 
 from __future__ import annotations
 
@@ -98,8 +78,7 @@ def target_for(game: Game) -> float:
     """The gap the bench trains `game` to."""
     if game.bench_gap is not None:
         return game.bench_gap
-    bound = game.oracle.bound(bench_kwargs(game), Session(game.env_id,
-                                                          bench_kwargs(game)).changes)
+    bound = game.oracle.bound(bench_kwargs(game), Session(game.env_id, bench_kwargs(game)).changes)
     if isinstance(bound, NotAvailable) or bound.figure != "gap":
         raise ValueError(f"{game.title} states no gap to train to")
     return bound.limit
@@ -114,8 +93,7 @@ def default_hyperparameters(game: Game) -> Settings:
 def ours_once(game: Game, seed: int, target: float) -> GapRun:
     """Our default engine, as the CLI runs it for `--target-gap`."""
     start = time.perf_counter()
-    session = Session(game.env_id, bench_kwargs(game), hp=default_hyperparameters(game),
-                      seed=seed)
+    session = Session(game.env_id, bench_kwargs(game), hp=default_hyperparameters(game), seed=seed)
     outcome = session.train(target_gap=target)
     seconds = time.perf_counter() - start
     episodes = session.trainer.episodes

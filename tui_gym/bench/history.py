@@ -1,20 +1,4 @@
-"""The run history's cost: recording's share of a `train` run, and the file's size.
-
-Overhead: a train run as `tui-gym train blackjack` makes it with its default
-settings (the session with the game's defaults, the training, the
-10,000-episode greedy evaluation) runs `repeats` times in this process into a
-fresh history file, and every call that records
-(opening the file, writing the run, the exact-value checkpoints, the curves
-and figures at the end, closing it) is timed. The figure is that time's share
-of the whole run, the median over repeats. Beside it, the same run with
-`--no-record` alternates with the recorded one, and the ratio of their
-fastest times says what the whole run sees (noisier on a busy machine).
-
-Size: the curves, figures and settings of one real default run are written
-`runs` times (each with its own seed and its curves jittered, as different
-seeds give) into a fresh file through `RunHistory`, which is then closed
-(its write-ahead log folded in); the figure is the file's size per 1,000 runs.
-"""
+"""The run history's cost: recording's share of a `train` run, and the file's size."""
 
 from __future__ import annotations
 
@@ -158,15 +142,10 @@ def to_json(result: HistoryResult | None) -> dict[str, Any] | None:
     if result is None:
         return None
     return {
-        "game": result.game,
-        "overhead": result.overhead,
-        "overhead_samples": list(result.shares),
-        "recorded_run_s": list(result.recorded_s),
-        "unrecorded_run_s": list(result.unrecorded_s),
-        "fastest_recorded_over_unrecorded": result.ab_ratio,
-        "runs_written": result.runs,
-        "size_bytes": result.size_bytes,
-        "bytes_per_1000_runs": result.bytes_per_1000,
+        "game": result.game, "overhead": result.overhead, "overhead_samples": list(result.shares),
+        "recorded_run_s": list(result.recorded_s), "unrecorded_run_s": list(result.unrecorded_s),
+        "fastest_recorded_over_unrecorded": result.ab_ratio, "runs_written": result.runs,
+        "size_bytes": result.size_bytes, "bytes_per_1000_runs": result.bytes_per_1000,
     }
 
 

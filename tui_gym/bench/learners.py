@@ -1,10 +1,4 @@
-"""Planning's worth: real episodes to a bound, Q-learning against Dyna-Q.
-
-`measure_planning`: how many real episodes Q-learning and Dyna-Q (with
-`planning_steps` = 10) take to bring their greedy policy within a bound of
-the optimum on a grid game, trained by the engine and checked every few
-episodes; the median over seeds of each.
-"""
+"""Planning's worth: real episodes to a bound, Q-learning against Dyna-Q."""
 
 from __future__ import annotations
 

@@ -1,47 +1,4 @@
-"""Live training: what the real app does to training speed, its refresh rate and key latency.
-
-For each runner ("thread": training on a worker thread of the app's process;
-"process": training in a child process, the app's default), one repeat is:
-
-1. Headless: a `Session` of the first game (engine "auto": the model loop)
-   trains in this process with `trainer.run(seconds=W)`, after a warm-up:
-   headless episodes per second.
-2. Live: the real `TuiGymApp(session, runner=...)` on a session like it runs
-   headless with Textual's `app.run_test(size=(120, 40))`. The Train view is
-   opened (`t`) and training started at max speed (`space`, the default
-   speed); after a warm-up, over W seconds of wall time:
-   - episodes per second: the episode counts of the runner's latest snapshot
-     at both ends, each taken the moment a new snapshot shows up (so both ends
-     lag the trainer equally), over the wall time between them;
-   - `ui_refresh_hz`: how many times `TrainView.show_snapshot` ran per second
-     (the method is wrapped with a counter; the app's 15 Hz timer calls it);
-   - `frames_hz`: how many screen updates the app handed to its driver.
-   `live_ratio` = live episodes/s / headless episodes/s of the same repeat.
-3. Key latency, with training still at max speed: the view is toggled
-   (`p` to the Play view, `t` back to the Train view) `presses` times, with a
-   random pause of 150-400 ms (seeded) before each press, so that presses land
-   at every phase of the app's timer and the previous switch has settled (its
-   follow-up work, such as moving the focus, is done), as between a person's
-   key presses. What is timed, per press:
-   - start: just before the key event is handed to the driver
-     (`driver.send_message(Key)`), which is exactly how `Pilot.press` delivers
-     a key and what a terminal driver's input thread does on a keystroke;
-   - end: the moment the first screen update that shows the new view with
-     the focus in it (so the key bar lists the new view's keys: the whole
-     answer to the key, not a part of it) is handed to the driver
-     (`tui_gym.ui.textual_internals.watch_frames`), including encoding it
-     into the terminal's byte string (`render_segments`, which a real
-     terminal pays and the headless driver would skip). Not included: the
-     terminal emulator's own parsing and painting.
-   `Pilot.press` itself is not awaited: after delivering the key it waits for
-   the process to go idle (`wait_for_idle`, up to 1 s), which never happens
-   while a training thread keeps the process busy. Each press is also split
-   into queue (key sent -> the view action starts), action (the action's own
-   time: switching views and, for `t`, drawing the latest snapshot) and frame
-   (action done -> the update is handed to the driver), medians per key.
-
-The app's default runner is named in `DEFAULT_RUNNER`.
-"""
+"""Live training: what the real app does to training speed, its refresh rate and key latency."""
 
 from __future__ import annotations
 
@@ -273,11 +230,8 @@ async def _key_latencies(
         marks = tools.action_marks[actions_before:]
         began, ended = marks[0] if marks else (sent, sent)
         samples.append(KeySample(
-            key=key,
-            total_ms=(frame_at - sent) * 1000,
-            queue_ms=(began - sent) * 1000,
-            action_ms=(ended - began) * 1000,
-            frame_ms=(frame_at - ended) * 1000,
+            key=key, total_ms=(frame_at - sent) * 1000, queue_ms=(began - sent) * 1000,
+            action_ms=(ended - began) * 1000, frame_ms=(frame_at - ended) * 1000,
         ))
     return samples
 

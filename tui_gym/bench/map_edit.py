@@ -1,12 +1,4 @@
-"""The map editor's figure: from an edit to the new optimum, on a 12x12 map.
-
-`measure(edits, seed)` paints random cells of a random solvable 12x12 map
-(walls, holes, reward cells and ice in turn) on each grid game with tiles, and
-times what one edit in the app does before the editor shows the new optimum:
-the new map read into the game's arguments, the session rebuilt (the agent
-kept), the exact model built and solved, and the optimum's heatmap drawn as
-data. `tui-gym bench` holds the median edit against its target.
-"""
+"""The map editor's figure: from an edit to the new optimum, on a 12x12 map."""
 
 from __future__ import annotations
 

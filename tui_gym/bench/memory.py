@@ -1,14 +1,4 @@
-"""Memory: how much the resident set grows over a long training run.
-
-A fresh Python process (so nothing else measured in this run shares its heap)
-builds a `Session` of the first game on the engine, trains a warm-up (the
-table, numpy's buffers and the rolling statistics reach their working size),
-reads its resident set size (RSS, from /proc/self/statm; the peak from
-`resource` where /proc is missing), then trains `episodes` more the way the
-app's runner does (chunks of `trainer.run(seconds=0.05)`, each publishing a
-snapshot), sampling RSS after every chunk. The growth is the RSS at the end
-minus the RSS after the warm-up; the largest sample is reported beside it.
-"""
+"""Memory: how much the resident set grows over a long training run."""
 
 from __future__ import annotations
 
@@ -53,9 +43,7 @@ def rss_bytes() -> int:
         return peak if sys.platform == "darwin" else peak * 1024
 
 
-def train_and_watch(
-    episodes: int, warmup: int, engine: str = "auto"
-) -> dict[str, float | str]:
+def train_and_watch(episodes: int, warmup: int, engine: str = "auto") -> dict[str, float | str]:
     """The measurement itself (run in the child process); figures as a dict."""
     import time
 
@@ -77,12 +65,8 @@ def train_and_watch(
     gc.collect()
     end = rss_bytes()
     return {
-        "episodes": trainer.episodes - warmup,
-        "engine": trainer.engine,
-        "rss_start_mb": start / MB,
-        "rss_end_mb": end / MB,
-        "rss_peak_mb": max(peak, end) / MB,
-        "seconds": seconds,
+        "episodes": trainer.episodes - warmup, "engine": trainer.engine, "rss_start_mb": start / MB,
+        "rss_end_mb": end / MB, "rss_peak_mb": max(peak, end) / MB, "seconds": seconds,
     }
 
 
@@ -100,11 +84,7 @@ def measure(episodes: int, warmup: int, engine: str = "auto") -> MemoryResult:
         raise RuntimeError(f"the memory run failed: {last}")
     data = json.loads(proc.stdout.strip().splitlines()[-1])
     return MemoryResult(
-        episodes=int(data["episodes"]),
-        warmup=warmup,
-        engine=str(data["engine"]),
-        rss_start_mb=float(data["rss_start_mb"]),
-        rss_end_mb=float(data["rss_end_mb"]),
-        rss_peak_mb=float(data["rss_peak_mb"]),
-        seconds=float(data["seconds"]),
+        episodes=int(data["episodes"]), warmup=warmup, engine=str(data["engine"]),
+        rss_start_mb=float(data["rss_start_mb"]), rss_end_mb=float(data["rss_end_mb"]),
+        rss_peak_mb=float(data["rss_peak_mb"]), seconds=float(data["seconds"]),
     )

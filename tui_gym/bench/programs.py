@@ -1,36 +1,4 @@
-"""Programs as players: how many episodes exact-regret scoring needs, and protocol speeds.
-
-**Episodes for a 95% separation.** The built-in `optimal` player and one that
-deviates on 5% of Blackjack decisions (`DeviatingPlayer`: with probability
-0.05 it takes an action that is not optimal) each play the same fixed-seed
-benchmark. From the measured per-episode standard deviations of each score
-(the return, and the exact regret) and the gap between the two players'
-means, the episodes each player needs before the difference of the means is
-1.96 standard errors wide is
-
-    n = z^2 * (sd_a^2 + sd_b^2) / delta^2,    z = 1.96,
-
-for two independent samples of n episodes. The gap `delta` is the same for
-both scores in expectation (a player's expected regret per episode is its
-expected return's gap to the optimum's), so the two counts differ by their
-variances alone; both use the measured regret gap, the better-measured of the two.
-
-**Protocol speed over a pipe.** `tui-gym play gridworld --jsonl` runs as a
-child process. Throughput: this process keeps `WINDOW` step requests in flight
-(it writes a new one for each answer it reads, as a program evaluating a policy
-or collecting transitions would), every step with `"auto_reset": true` so that
-steps sent ahead never land on a finished episode; steps answered per second
-over a window, median over repeats. Round trip: one step at a time, each
-written only once the previous answer is read (as a player thinking between
-moves must), its time from writing the request to reading the answer; the
-median over all round trips, and steps per second over each window.
-
-**MCP speed.** `tui-gym mcp` runs as a child process and the MCP SDK's own
-client calls `step` on GridWorld games: one call at a time on one game, and
-`MCP_GAMES` games played at once (calls in flight together, as a program
-evaluating several episodes would make them); measured only where the `mcp`
-extra is installed.
-"""
+"""Programs as players: how many episodes exact-regret scoring needs, and protocol speeds."""
 
 from __future__ import annotations
 
@@ -111,8 +79,7 @@ def measure_separation(episodes: int, seed: int = 0) -> SeparationResult:
                           seed=seed)
     assert best.regrets is not None and worse.regrets is not None
     return SeparationResult(
-        episodes=episodes,
-        delta=float(worse.regrets.mean() - best.regrets.mean()),
+        episodes=episodes, delta=float(worse.regrets.mean() - best.regrets.mean()),
         return_sd=(float(best.returns.std(ddof=1)), float(worse.returns.std(ddof=1))),
         regret_sd=(float(best.regrets.std(ddof=1)), float(worse.regrets.std(ddof=1))),
         return_gap=float(best.returns.mean() - worse.returns.mean()),
@@ -318,8 +285,6 @@ def measure(separation_episodes: int, seconds: float, repeats: int) -> ProgramsR
     one, together = measure_mcp(seconds, repeats)
     return ProgramsResult(
         separation=measure_separation(separation_episodes),
-        protocol=measure_protocol(seconds, repeats),
-        mcp_one=one,
-        mcp_together=together,
+        protocol=measure_protocol(seconds, repeats), mcp_one=one, mcp_together=together,
         protocol_round_trip=measure_round_trip(seconds, repeats),
     )

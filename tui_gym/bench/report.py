@@ -1,38 +1,4 @@
-"""The bench's output: one table (each figure, its target, PASS or MISS) or one JSON object.
-
-Targets:
-- every learner compiled from an empty cache within 30 s in all, loaded from the
-  cache within 1 s;
-- every algorithm >= 100x the episodes/s of the tutorial loop of the same
-  algorithm, on every game measured;
-- time to the target gap at most 1/50 of the tutorial loop's (a speed-up >= 50),
-  on every game measured;
-- live episodes/s >= 80% of headless with the same engine, per runner;
-- the UI draws snapshots at >= 10 Hz;
-- key press to screen update p95 <= 50 ms while training at max speed;
-- RSS growth < 20 MB over 2,000,000 training episodes;
-- app start to first frame <= 1.0 s;
-- Dyna-Q (planning_steps = 10) reaches the bound on a grid game in fewer
-  real episodes than Q-learning.
-- exact-regret scoring separates `optimal` from a player deviating on 5% of
-  Blackjack decisions with >= 10x fewer episodes than mean returns do;
-- the JSON-lines protocol steps >= 20,000 times a second over a pipe (with requests
-  in flight; the round trip of one request at a time is shown beside it), MCP >= 1,000
-  (with several games at once);
-- recording a run in the run history takes <= 2% of a `train` run's time, and the
-  history stays under 1 MB per 1,000 runs of default settings;
-- `compare` of Q-learning and SARSA, 50 seeds x 500 episodes, >= 100x faster than the
-  same 100 learners one after another in the tutorial loop, with SARSA's online return
-  above Q-learning's (Sutton & Barto's Example 6.6);
-- that comparison as tasks, each recorded as it lands, within 10% of the same work in
-  one batch; a sweep on a Dask LocalCluster of 2 workers >= 0.8 of the local executor's
-  throughput;
-- the defaults bring >= 95% of the seeds to the game's bound, every game and algorithm
-  but those whose nature keeps them short (the game's lessons: verdict "lesson").
-
-A verdict is PASS or MISS; "?" when a lower bound cannot decide it, "n/a"
-when the figure is missing (its stage failed: see `errors`).
-"""
+"""The bench's output: one table (each figure, its target, PASS or MISS) or one JSON object."""
 
 from __future__ import annotations
 
@@ -120,8 +86,7 @@ def verdicts(results: BenchResults) -> dict[str, str]:
     seconds = startup.seconds if startup is not None else None
     out["startup_s"] = _ok(seconds, seconds is not None and seconds <= STARTUP_S_TARGET)
     for edit in results.map_edit or ():
-        out[f"map_edit_ms[{edit.game}]"] = _ok(edit.median_ms,
-                                                edit.median_ms <= MAP_EDIT_MS_TARGET)
+        out[f"map_edit_ms[{edit.game}]"] = _ok(edit.median_ms, edit.median_ms <= MAP_EDIT_MS_TARGET)
     if "map_edit" in results.errors:
         out["map_edit_ms"] = MISSING
     planning = results.planning
@@ -135,8 +100,7 @@ def verdicts(results: BenchResults) -> dict[str, str]:
     out["regret_separation_ratio"] = _ok(ratio, ratio is not None and
                                          ratio >= SEPARATION_RATIO_TARGET)
     rate = found.protocol.steps_per_second if found else None
-    out["protocol_steps_per_second"] = _ok(rate, rate is not None and
-                                           rate >= PROTOCOL_STEPS_TARGET)
+    out["protocol_steps_per_second"] = _ok(rate, rate is not None and rate >= PROTOCOL_STEPS_TARGET)
     rate = found.mcp_together.steps_per_second if found else None
     out["mcp_steps_per_second"] = _ok(rate, rate is not None and rate >= MCP_STEPS_TARGET)
     found_seeds = results.seeds
@@ -156,14 +120,9 @@ def _seeds_dict(results: BenchResults) -> dict[str, Any] | None:
     if found is None:
         return None
     return {
-        "game": found.game,
-        "algorithms": list(found.algorithms),
-        "seeds": found.seeds,
-        "episodes": found.episodes,
-        "compare_s": found.compare_s,
-        "tutorial_s": found.tutorial_s,
-        "tutorial_learners_run": found.tutorial_learners,
-        "speedup": found.speedup,
+        "game": found.game, "algorithms": list(found.algorithms), "seeds": found.seeds,
+        "episodes": found.episodes, "compare_s": found.compare_s, "tutorial_s": found.tutorial_s,
+        "tutorial_learners_run": found.tutorial_learners, "speedup": found.speedup,
         "online_return": dict(zip(found.algorithms, found.online_returns, strict=False)),
     }
 
@@ -176,15 +135,10 @@ def _programs_dict(results: BenchResults) -> dict[str, Any] | None:
     trip = found.protocol_round_trip
     return {
         "separation": {
-            "episodes_each": sep.episodes,
-            "deviation": programs.DEVIATION,
-            "delta": sep.delta,
-            "return_gap_measured": sep.return_gap,
-            "return_sd": list(sep.return_sd),
-            "regret_sd": list(sep.regret_sd),
-            "episodes_needed_by_return": sep.by_return,
-            "episodes_needed_by_regret": sep.by_regret,
-            "ratio": sep.ratio,
+            "episodes_each": sep.episodes, "deviation": programs.DEVIATION, "delta": sep.delta,
+            "return_gap_measured": sep.return_gap, "return_sd": list(sep.return_sd),
+            "regret_sd": list(sep.regret_sd), "episodes_needed_by_return": sep.by_return,
+            "episodes_needed_by_regret": sep.by_regret, "ratio": sep.ratio,
             "formula": "n = 1.96^2 (sd_a^2 + sd_b^2) / delta^2",
         },
         "protocol_steps_per_second": found.protocol.steps_per_second,
@@ -207,19 +161,13 @@ def _runner_dict(results: BenchResults, runner: str) -> dict[str, Any]:
     if live is None or not live.repeats:
         return {"error": "; ".join(live.errors) if live is not None else "not measured"}
     return {
-        "engine": live.engine,
-        "live_ratio": live.live_ratio,
+        "engine": live.engine, "live_ratio": live.live_ratio,
         "headless_episodes_per_second": live.headless_eps,
-        "live_episodes_per_second": live.live_eps,
-        "ui_refresh_hz": live.refresh_hz,
-        "frames_hz": live.frames_hz,
-        "key_latency_p50_ms": live.key_latency_ms(50),
-        "key_latency_p95_ms": live.key_latency_ms(95),
-        "key_presses": live.presses,
-        "key_latency_by_key_ms": live.breakdown_ms(),
-        "repeats": len(live.repeats),
-        "window_s": live.seconds,
-        "ratios": [r.ratio for r in live.repeats],
+        "live_episodes_per_second": live.live_eps, "ui_refresh_hz": live.refresh_hz,
+        "frames_hz": live.frames_hz, "key_latency_p50_ms": live.key_latency_ms(50),
+        "key_latency_p95_ms": live.key_latency_ms(95), "key_presses": live.presses,
+        "key_latency_by_key_ms": live.breakdown_ms(), "repeats": len(live.repeats),
+        "window_s": live.seconds, "ratios": [r.ratio for r in live.repeats],
     }
 
 
@@ -300,12 +248,9 @@ def to_json(results: BenchResults) -> dict[str, Any]:
         "rss_growth_mb": memory.growth_mb if memory else None,
         "rss": (
             {
-                "episodes": memory.episodes,
-                "warmup_episodes": memory.warmup,
-                "engine": memory.engine,
-                "start_mb": memory.rss_start_mb,
-                "end_mb": memory.rss_end_mb,
-                "peak_mb": memory.rss_peak_mb,
+                "episodes": memory.episodes, "warmup_episodes": memory.warmup,
+                "engine": memory.engine, "start_mb": memory.rss_start_mb,
+                "end_mb": memory.rss_end_mb, "peak_mb": memory.rss_peak_mb,
             }
             if memory
             else None
@@ -441,8 +386,7 @@ def table(results: BenchResults) -> Table:
                 f"{_num(trip.p50_us, '.0f', ' µs')} (p95 {_num(trip.p95_us, '.0f')}; "
                 f"{_num(trip.rate.steps_per_second, ',.0f')} steps/s)")
         if found.mcp_together.reason:
-            out.add_row("MCP, steps/s", f"[dim]{found.mcp_together.reason}[/]", "",
-                        _STYLE[MISSING])
+            out.add_row("MCP, steps/s", f"[dim]{found.mcp_together.reason}[/]", "", _STYLE[MISSING])
         else:
             row(f"MCP, steps/s, {programs.MCP_GAMES} games at once",
                 _num(found.mcp_together.steps_per_second, ",.0f"),

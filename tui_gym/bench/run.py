@@ -1,16 +1,4 @@
-"""One bench run: every stage in turn, with the sizes of the quick or the full plan.
-
-`run_bench(quick, progress, algorithms)` measures compiling every learner
-(cold and warm), every algorithm's training speed on every game against the
-tutorial loop (or the named algorithms'), time to the target gap on every
-game, Dyna-Q's planning against Q-learning, `compare` against the same
-learners one after another, the defaults' share of seeds that reach their
-bound, live training (both runners), memory, start-up, programs as players,
-the map editor, the run history's cost, and the cost of running experiments
-as tasks (the split, a Dask cluster's scheduler), and returns `BenchResults`. A
-stage that fails is recorded in `errors` and the others still run.
-`progress` (if given) hears the name of each stage as it starts.
-"""
+"""One bench run: every stage in turn, with the sizes of the quick or the full plan."""
 
 from __future__ import annotations
 
@@ -87,8 +75,7 @@ FULL = Plan(
 
 
 def run_bench(
-    quick: bool = False,
-    progress: Callable[[str], None] | None = None,
+    quick: bool = False, progress: Callable[[str], None] | None = None,
     algorithms: tuple[str, ...] | None = None,
 ) -> BenchResults:
     """Measure everything (see the module docstring); `algorithms` (registry names)
@@ -141,12 +128,10 @@ def run_bench(
                                progress=say))
     stage("memory", f"memory over {plan.memory_episodes:,} episodes",
           lambda: memory.measure(plan.memory_episodes, plan.memory_warmup))
-    stage("startup", "start-up to the first frame",
-          lambda: startup.measure(plan.startup_repeats))
+    stage("startup", "start-up to the first frame", lambda: startup.measure(plan.startup_repeats))
     stage("programs", "programs as players: episodes to separate two players, protocol "
           "and MCP steps/s",
-          lambda: programs.measure(plan.separation_episodes, plan.pipe_seconds,
-                                   plan.pipe_repeats))
+          lambda: programs.measure(plan.separation_episodes, plan.pipe_seconds, plan.pipe_repeats))
     stage("map_edit", f"map editor: an edit to the new optimum on {map_edit.MAP_SIDE}x"
           f"{map_edit.MAP_SIDE} maps", lambda: tuple(map_edit.measure()))
     stage("history", "the run history: recording's share of a train run, the file's size",
@@ -154,22 +139,11 @@ def run_bench(
     stage("dp", "planning: sweeps, Jack's car rental, the Plan view",
           lambda: dp.measure(plan.live_seconds, plan.key_presses, plan.live_repeats, say))
     return BenchResults(
-        quick=quick,
-        seconds=time.perf_counter() - started,
+        quick=quick, seconds=time.perf_counter() - started,
         machine=MachineInfo(os.cpu_count(), load_before, load_average()),
-        compile=found.get("compile"),
-        speed=found.get("speed"),
-        gap=gaps,
-        live=found.get("live", {}),
-        memory=found.get("memory"),
-        startup=found.get("startup"),
-        planning=found.get("planning"),
-        programs=found.get("programs"),
-        map_edit=found.get("map_edit"),
-        history=found.get("history"),
-        seeds=found.get("seeds"),
-        defaults=found.get("defaults"),
-        dp=found.get("dp"),
-        tasks=found.get("tasks"),
-        errors=errors,
+        compile=found.get("compile"), speed=found.get("speed"), gap=gaps,
+        live=found.get("live", {}), memory=found.get("memory"), startup=found.get("startup"),
+        planning=found.get("planning"), programs=found.get("programs"),
+        map_edit=found.get("map_edit"), history=found.get("history"), seeds=found.get("seeds"),
+        defaults=found.get("defaults"), dp=found.get("dp"), tasks=found.get("tasks"), errors=errors,
     )

@@ -1,16 +1,4 @@
-"""The comparison figure: `compare` against the same learners one after another, in the loop.
-
-`measure(seeds, episodes, tutorial_share)` times `run_compare` (the median of
-`COMPARE_REPEATS` runs) on CliffWalking: Q-learning and SARSA, `seeds` seeds
-each, `episodes` episodes each, Sutton & Barto's Example 6.6 settings
-(epsilon 0.1 throughout, step size 0.5), as the command runs it (on this
-thread or spread over the cores, as it judges). Then the tutorial loop
-(`tutorial`) plays the same learners one after another with the same
-settings; with `tutorial_share` below 1 only that share of each algorithm's
-seeds run, and the time is scaled up to all of them (the learners are alike).
-The speed-up is the ratio of the two times. The comparison's own figures are
-kept: Example 6.6 is SARSA's online return above Q-learning's.
-"""
+"""The comparison figure: `compare` against the same learners one after another, in the loop."""
 
 from __future__ import annotations
 

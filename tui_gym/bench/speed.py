@@ -1,16 +1,4 @@
-"""Training speed per game and algorithm: ours against the tutorial loop of the same algorithm.
-
-For every game the bench measures and every algorithm, with the algorithm's
-defaults for the game and a budget far beyond the window (so epsilon stays at
-its start and both sides play the same kind of episodes, near-random ones):
-the engine as `train` runs it (`Session.trainer.run(seconds=...)`, after a
-warm-up) and the tutorial loop (`tutorial`) on the game's Gymnasium env, each
-for a window of wall-clock time. Random episodes on a game without a time
-limit can be long, so both are measured in steps per second, and episodes per
-second are those divided by the mean episode length the engine measured over
-its many episodes (both sides play the same policy). Figures are medians over
-repeats; the speed-up is their ratio.
-"""
+"""Training speed per game and algorithm: ours against the tutorial loop of the same algorithm."""
 
 from __future__ import annotations
 

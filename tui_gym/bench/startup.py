@@ -1,13 +1,4 @@
-"""Start-up: from launching the app to its first frame on a terminal.
-
-`python -m tui_gym` (what `tui-gym` runs: the CLI, the default game's
-session and the default process runner) is started on a fresh pseudo-terminal
-of 120x40. The clock starts just before the process is launched and stops
-when the first frame arrives on the terminal: the first full-screen paint
-(cursor home followed by styled cells; what comes before it only sets terminal
-modes). Then `q` quits the app (not timed). Each figure is the median over
-`repeats` launches. Needs a POSIX pseudo-terminal.
-"""
+"""Start-up: from launching the app to its first frame on a terminal."""
 
 from __future__ import annotations
 

@@ -1,16 +1,4 @@
-"""The cost of running experiments as tasks: the task split, and a Dask cluster's scheduler.
-
-`measure(seeds, episodes, repeats)` times (the median of `repeats` runs each):
-- the comparison of the `seeds` stage (Q-learning and SARSA on CliffWalking,
-  `seeds` seeds × `episodes` episodes; long enough that it is spread over the
-  cores) as the command runs it, in tasks each written to a run history as it
-  lands, against the same work in one batch per core, unrecorded: the
-  overhead of the split is their ratio;
-- a sweep (Q-learning over four step sizes, the same seeds and episodes) on
-  the local executor against a Dask `LocalCluster` of two workers, each
-  started and warmed before the clock runs: the cluster's throughput as a
-  share of the local executor's. Without Dask that figure is None, and says so.
-"""
+"""The cost of running experiments as tasks: the task split, and a Dask cluster's scheduler."""
 
 from __future__ import annotations
 
@@ -74,13 +62,7 @@ def _timed(run: Callable[[], Any], repeats: int) -> tuple[float, Any]:
 def measure(seeds: int, episodes: int, repeats: int = 3) -> TasksResult:
     """Time both figures (see the module docstring)."""
     from tui_gym.core.experiments import RunHistory, RunKind
-    from tui_gym.session.experiments.compare import (
-        Arm,
-        CompareSpec,
-        Setup,
-        execute,
-        run_compare,
-    )
+    from tui_gym.session.experiments.compare import Arm, CompareSpec, Setup, execute, run_compare
     from tui_gym.session.experiments.sweep import SweepSpec, run_sweep
 
     spec = CompareSpec(GAME, ("q-learning", "sarsa"), seeds, episodes, settings=SETTINGS)
@@ -114,8 +96,7 @@ def measure(seeds: int, episodes: int, repeats: int = 3) -> TasksResult:
 def _with(found: TasksResult, **changes: Any) -> TasksResult:
     from dataclasses import replace
 
-    return replace(found, **{("cluster_note" if k == "note" else k): v
-                             for k, v in changes.items()})
+    return replace(found, **{("cluster_note" if k == "note" else k): v for k, v in changes.items()})
 
 
 # --- what the report shows ---------------------------------------------------------

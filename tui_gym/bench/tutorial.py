@@ -1,23 +1,4 @@
-"""The baseline: a tutorial-style loop on the game's own Gymnasium env, the rule uncompiled.
-
-One loop for every game and algorithm, the one Gymnasium's tutorial writes
-for its card-game agent: `gym.make` of the game's id and arguments, and per
-step the learner's epsilon-greedy action, `env.step`, and the algorithm's own
-update rule: the same code the engine compiles, run here as plain Python
-(`NUMBA_DISABLE_JIT=1`, in a process of its own, so nothing compiled is
-reached). The hyperparameters are the game's defaults for the algorithm, so
-a comparison is about speed, not settings; nothing is recorded per episode.
-
-`measure(tasks)` runs the tasks in that process and gives each one's answer:
-
-- `{"kind": "rate", "game", "algorithm", "hp", "seconds", "seed"}`: steps and
-  episodes played in a window of that many seconds;
-- `{"kind": "gap", "game", "kwargs", "hp", "target", "seed", "cap", "check_every"}`:
-  Q-learning until its greedy policy's exact gap is at most the target
-  (checked as `train --target-gap` checks it), the budget ends or the time cap;
-- `{"kind": "learners", "game", "algorithms", "hp", "seeds", "episodes"}`: the
-  learners of a comparison one after another, and the seconds they took.
-"""
+"""The baseline: a tutorial-style loop on the game's own Gymnasium env, the rule uncompiled."""
 
 from __future__ import annotations
 

@@ -74,12 +74,7 @@ def _params(pairs: list[str]) -> dict[str, str]:
 
 def _player(args: argparse.Namespace, game: str) -> tuple[Any, dict[str, Any], tuple[str, ...]]:
     """The player, and the game's parameters and wrappers it plays with."""
-    from tui_gym.benchmark.players import (
-        AgentPlayer,
-        OptimalPlayer,
-        ProcessPlayer,
-        RandomPlayer,
-    )
+    from tui_gym.benchmark.players import AgentPlayer, OptimalPlayer, ProcessPlayer, RandomPlayer
     from tui_gym.session.arena import find_game
 
     params: dict[str, Any] = _params(args.param)

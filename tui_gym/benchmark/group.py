@@ -1,18 +1,4 @@
-"""A program run in a process group of its own, ended whole on every way out: `start_group`.
-
-A player's program may be a shell script that starts others, or fork children of its
-own; ending only the process that was started would leave the rest running. So the
-program starts in a new session (its own process group, away from the terminal's
-signals), and `GroupProcess.end` ends the whole group: the leader is given `grace`
-seconds to exit on its own once its input is closed, then every process left in the
-group is killed. The benchmark ends it in a `finally`, and turns SIGTERM and SIGHUP
-into an exit that runs it (`ending_on_signals`).
-
-A parent killed outright (SIGKILL) runs no `finally`: for that a small watcher
-process, started first and in a session of its own, holds the read end of a pipe
-from the parent. When the pipe closes without the parent's word that the group is
-already ended, the parent is gone, and the watcher kills the group.
-"""
+"""A program run in a process group of its own, ended whole on every way out: `start_group`."""
 
 from __future__ import annotations
 

@@ -1,12 +1,4 @@
-"""Benchmark results in the run history, and the leaderboard: a game's runs, best first.
-
-A result is recorded as a run of kind `benchmark`: the player as its
-algorithm, the game's parameters and wrappers, the benchmark's settings as its
-hyperparameters, its figures (mean return and exact regret per episode with
-their 95% intervals, agreement, fouls, time per decision) and per-episode
-curves of return and regret. Best first means the lowest mean exact regret
-per episode; for a game without exact regret, the highest mean return.
-"""
+"""Benchmark results in the run history, and the leaderboard: a game's runs, best first."""
 
 from __future__ import annotations
 
@@ -43,21 +35,17 @@ def record(result: BenchmarkResult, db: str | None = None) -> int:
         game_params=result.params,
         wrappers=wrappers,
         hyperparameters={
-            "episodes": result.episodes,
-            "first_seed": result.seed,
-            "decision_timeout": result.decision_timeout,
-            "allow_hints": result.allow_hints,
+            "episodes": result.episodes, "first_seed": result.seed,
+            "decision_timeout": result.decision_timeout, "allow_hints": result.allow_hints,
         },
         seeds=(result.seed,),
     )
     ret = result.mean_return
     figures = [
-        Figure("episodes", result.episodes),
-        ret.figure("mean_return"),
+        Figure("episodes", result.episodes), ret.figure("mean_return"),
         Figure("decisions", result.decisions),
         Figure("invalid_actions", result.fouls.invalid_actions),
-        Figure("timeouts", result.fouls.timeouts),
-        Figure("defaulted", result.fouls.defaulted),
+        Figure("timeouts", result.fouls.timeouts), Figure("defaulted", result.fouls.defaulted),
     ]
     regret = result.mean_regret
     if regret is not None:

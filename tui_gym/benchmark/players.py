@@ -1,20 +1,4 @@
-"""The players a benchmark runs: built-in ones in this process, or a program.
-
-Every player plays through a `Referee`. The built-ins: `random` (a uniform
-legal action, seeded), `optimal` (an optimal action from the game's exact
-hint, the lowest-numbered where several are), and a saved agent (its greedy
-action, ties broken at random, a random action in a state it never learned).
-
-`ProcessPlayer` runs a program that speaks the JSON-lines protocol: it writes
-requests on its stdout and reads the answers on its stdin. Each decision has a
-time limit; a decision not made in time is made with the default action, and
-the late request is answered with the state the game is in by then. A player
-that misses `MAX_STRIKES` decisions in a row, exits, closes its output, or
-stops reading is done for: the rest of the benchmark is played with the
-default action, and the program is ended at the end. The program runs in a process
-group of its own, ended whole (its children with it) however the benchmark ends,
-even when it is killed outright (see `group`).
-"""
+"""The players a benchmark runs: built-in ones in this process, or a program."""
 
 from __future__ import annotations
 

@@ -1,20 +1,4 @@
-"""`Referee`: one game served to a player under benchmark rules.
-
-The player sends protocol requests (`tui-gym play GAME --jsonl`); the referee
-answers them as the game would, except that:
-
-- episode i (from 0) always starts on seed S+i: a `reset` takes no seed of
-  the player's, may only come once the episode is over, and after the last
-  episode is refused with "the benchmark is over" (a program's input simply
-  ends then);
-- `hint` is refused unless hints are allowed;
-- a step with an invalid action plays the default action (the first legal
-  one) and says so in the answer (`"invalid"`), so the episode goes on;
-- `timeout()` plays the default for a player that did not decide in time.
-
-Every move is judged against the exact optimum (the arena's `Seat`), and the
-referee counts what went wrong.
-"""
+"""`Referee`: one game served to a player under benchmark rules."""
 
 from __future__ import annotations
 
@@ -39,10 +23,8 @@ class Fouls:
 
     def to_json(self) -> dict[str, int]:
         return {
-            "invalid_actions": self.invalid_actions,
-            "timeouts": self.timeouts,
-            "defaulted": self.defaulted,
-            "bad_requests": self.bad_requests,
+            "invalid_actions": self.invalid_actions, "timeouts": self.timeouts,
+            "defaulted": self.defaulted, "bad_requests": self.bad_requests,
             "hints_refused": self.hints_refused,
         }
 

@@ -1,10 +1,4 @@
-"""`BenchmarkResult`: what a benchmark measured, with 95% intervals, as rows or JSON.
-
-Means come with the half-width of their 95% Student-t interval over episodes.
-The exact regret of an episode is the sum over its decisions of
-`max_a Q*(s, a) - Q*(s, a_taken)`; it is unavailable (None) for a game whose
-hint gives no exact action values, and the result says why.
-"""
+"""`BenchmarkResult`: what a benchmark measured, with 95% intervals, as rows or JSON."""
 
 from __future__ import annotations
 
@@ -66,29 +60,17 @@ class BenchmarkResult:
         regret = self.mean_regret
         times = self.decision_ms()
         return {
-            "game": self.game,
-            "env_id": self.env_id,
-            "params": self.params,
-            "wrappers": list(self.wrappers),
-            "player": self.player,
-            "episodes": self.episodes,
+            "game": self.game, "env_id": self.env_id, "params": self.params,
+            "wrappers": list(self.wrappers), "player": self.player, "episodes": self.episodes,
             "seeds": [self.seed, self.seed + self.episodes - 1],
-            "decision_timeout": self.decision_timeout,
-            "allow_hints": self.allow_hints,
-            "mean_return": ret.mean,
-            "return_ci95": ret.ci95,
+            "decision_timeout": self.decision_timeout, "allow_hints": self.allow_hints,
+            "mean_return": ret.mean, "return_ci95": ret.ci95,
             "mean_regret": None if regret is None else regret.mean,
-            "regret_ci95": None if regret is None else regret.ci95,
-            "regret_note": self.regret_note,
-            "decisions": self.decisions,
-            "agreement": self.agreement,
-            **self.fouls.to_json(),
+            "regret_ci95": None if regret is None else regret.ci95, "regret_note": self.regret_note,
+            "decisions": self.decisions, "agreement": self.agreement, **self.fouls.to_json(),
             "decision_ms_median": None if times is None else times[0],
-            "decision_ms_p95": None if times is None else times[1],
-            "player_status": self.status,
-            "player_stderr": self.stderr_tail,
-            "seconds": self.seconds,
-            "run_id": self.run_id,
+            "decision_ms_p95": None if times is None else times[1], "player_status": self.status,
+            "player_stderr": self.stderr_tail, "seconds": self.seconds, "run_id": self.run_id,
         }
 
     def rows(self) -> list[tuple[str, str]]:

@@ -17,15 +17,8 @@ from tui_gym.session.arena.games import attach_recorder
 
 
 def run_benchmark(
-    game: str,
-    player: Player,
-    *,
-    episodes: int,
-    seed: int,
-    params: Mapping[str, Any] | None = None,
-    wrappers: Sequence[str] = (),
-    decision_timeout: float = 5.0,
-    allow_hints: bool = False,
+    game: str, player: Player, *, episodes: int, seed: int, params: Mapping[str, Any] | None = None,
+    wrappers: Sequence[str] = (), decision_timeout: float = 5.0, allow_hints: bool = False,
     recorder: Callable[[Any], AbstractContextManager[Any]] | None = None,
 ) -> BenchmarkResult:
     """Play `episodes` episodes of `game` (episode i on seed `seed + i`) with `player`;
@@ -57,23 +50,12 @@ def run_benchmark(
             counted.append(f"{score.unjudged:,} moves not judged")
         note = f"{why} ({'; '.join(counted)})"
     return BenchmarkResult(
-        game=referee.entry.name,
-        env_id=referee.entry.env_id,
-        params=referee.params,
-        wrappers=referee.wrappers,
-        player=player.label,
-        episodes=len(played),
-        seed=seed,
-        decision_timeout=decision_timeout,
-        allow_hints=allow_hints,
+        game=referee.entry.name, env_id=referee.entry.env_id, params=referee.params,
+        wrappers=referee.wrappers, player=player.label, episodes=len(played), seed=seed,
+        decision_timeout=decision_timeout, allow_hints=allow_hints,
         returns=np.array([e.episode_return for e in played], dtype=np.float64),
-        regrets=np.array(regrets, dtype=np.float64) if exact else None,
-        regret_note=note,
-        decisions=score.decisions,
-        agreed=score.agreed,
-        fouls=referee.fouls,
-        decision_times=np.array(outcome.decision_times, dtype=np.float64),
-        status=outcome.status,
-        stderr_tail=outcome.stderr_tail,
-        seconds=seconds,
+        regrets=np.array(regrets, dtype=np.float64) if exact else None, regret_note=note,
+        decisions=score.decisions, agreed=score.agreed, fouls=referee.fouls,
+        decision_times=np.array(outcome.decision_times, dtype=np.float64), status=outcome.status,
+        stderr_tail=outcome.stderr_tail, seconds=seconds,
     )

@@ -1,16 +1,4 @@
-"""`tui-gym book`: Sutton & Barto's figures, listed, or run one at a time and checked.
-
-`tui-gym book` lists the figures it reproduces. `tui-gym book FIGURE [--runs N]
-[--episodes E] [--seed S] [--json]` runs one headless with a progress bar, draws
-it in the terminal (its curves as band charts, its grids as tables) and prints
-each of the book's claims beside the measured figure with a verdict; the exit
-status is 1 when a claim is not borne out. `--full` runs the book's own counts
-and keeps each finished task in the run history (`--db`, `--no-record`), so
-`--resume RUN` carries an interrupted figure on; `--cluster` sends the tasks
-to Dask; it ends with the tasks' count and the wall time. `--json` prints `{"schema": 1,
-"figure", "title", "runs", "series": [{"label", "x", "y", "lo", "hi"}],
-"checks": [{"claim", "book", "measured", "ok"}]}`.
-"""
+"""`tui-gym book`: Sutton & Barto's figures, listed, or run one at a time and checked."""
 
 from __future__ import annotations
 
@@ -25,12 +13,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from tui_gym.book_text import claims_table, figure_parts
-from tui_gym.cli.experiments_command import (
-    add_task_flags,
-    ctrl_c_stops,
-    run_history,
-    unrecorded,
-)
+from tui_gym.cli.experiments_command import add_task_flags, ctrl_c_stops, run_history, unrecorded
 from tui_gym.cli.grids import panel_text
 from tui_gym.cli.output import CliError, print_json
 from tui_gym.cli.types import positive_int, seed_number
@@ -102,8 +85,7 @@ def cmd_book(args: argparse.Namespace, out: Console) -> int:
     return code
 
 
-def _run(figure: BookFigure, options: FigureOptions, args: argparse.Namespace,
-         out: Console) -> int:
+def _run(figure: BookFigure, options: FigureOptions, args: argparse.Namespace, out: Console) -> int:
     if args.json:
         result = figure.run(options, lambda done, total, what: None)
         print_json("book", result.as_json())

@@ -30,7 +30,7 @@ from tui_gym.cli.flags import flag, game_kwargs, hyperparameters
 from tui_gym.cli.maps_command import cmd_maps
 from tui_gym.cli.output import CliError, key_value_table, print_json, say_status
 from tui_gym.cli.runs_command import recorded
-from tui_gym.core.params import Param
+from tui_gym.core.params import Param, typed_text
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 from tui_gym.mcp_server.command import cmd_mcp
 from tui_gym.session import evaluation
@@ -45,20 +45,12 @@ WRAPPER_SYNTAX = "--wrapper NAME or --wrapper NAME:key=value,key=value, repeatab
 def _param_dict(param: Field) -> dict[str, Any]:
     if not isinstance(param, Param):  # a Choice: one word out of a few
         return {
-            "name": param.name,
-            "type": "choice",
-            "default": param.default,
-            "choices": list(param.choices),
-            "range": param.describe_range(),
-            "help": param.help,
+            "name": param.name, "type": "choice", "default": param.default,
+            "choices": list(param.choices), "range": param.describe_range(), "help": param.help,
         }
     data: dict[str, Any] = {
-        "name": param.name,
-        "type": param.kind.__name__,
-        "default": param.default,
-        "minimum": param.minimum,
-        "maximum": param.maximum,
-        "range": param.describe_range(),
+        "name": param.name, "type": param.kind.__name__, "default": param.default,
+        "minimum": param.minimum, "maximum": param.maximum, "range": param.describe_range(),
         "help": param.help,
     }
     if param.choices:
@@ -66,31 +58,19 @@ def _param_dict(param: Field) -> dict[str, Any]:
     return data
 
 
-def _shown(value: Any) -> str:
-    """A default as a person types it: `true`, `0.333333`, `4x4`."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    return f"{value:g}" if isinstance(value, float) else str(value)
-
-
 def _default_text(field: Field) -> str:
     """A parameter's default and what it takes: `=100 in [1, 100000]`, `=true (true or false)`."""
     allowed = field.describe_range()
     where = f"in {allowed}" if allowed[:1] in "[(" else f"({allowed})"
-    return f"={_shown(field.default)} {where}"
+    return f"={typed_text(field.default)} {where}"
 
 
 def cmd_envs(args: argparse.Namespace, out: Console) -> int:
     if args.json:
         print_json("envs", {"envs": [
             {
-                "name": g.name,
-                "env_id": g.env_id,
-                "other_ids": list(g.other_ids),
-                "key": g.key,
-                "actions": list(g.action_names),
-                "description": g.description,
-                "teaches": g.teaches,
+                "name": g.name, "env_id": g.env_id, "other_ids": list(g.other_ids), "key": g.key,
+                "actions": list(g.action_names), "description": g.description, "teaches": g.teaches,
                 "params": [_param_dict(param) for param in g.params],
             }
             for g in GAMES
@@ -108,7 +88,7 @@ def cmd_envs(args: argparse.Namespace, out: Console) -> int:
         out.print(f"  [dim]actions:[/] {', '.join(g.action_names)}", overflow="fold")
         for p in g.params:
             flag = "--" + p.name.replace("_", "-")
-            out.print(f"  {flag} {escape(p.describe_range())}, default {_shown(p.default)}: "
+            out.print(f"  {flag} {escape(p.describe_range())}, default {typed_text(p.default)}: "
                       f"{escape(p.help)}", overflow="fold")
     out.print("\nAny other Gymnasium id with Discrete spaces and a transition table P works "
               "too (MODULE:ID imports the module that registers it).", overflow="fold")
@@ -122,8 +102,7 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
         print_json("wrappers", {
             "wrappers": [
                 {
-                    "name": spec.name,
-                    "summary": spec.summary,
+                    "name": spec.name, "summary": spec.summary,
                     "changes_observation": spec.changes_observation,
                     "params": [_param_dict(param) for param in spec.params],
                 }
@@ -158,9 +137,7 @@ def _wrapper_table(catalog: dict[str, Any]) -> Table:
     # Parameter names are typed after --wrapper: never cut, each on a line of its own.
     table.add_column("parameters (default, range)", min_width=longest, overflow="fold")
     for spec in catalog.values():
-        params = "\n".join(
-            f"{p.name}\n  {_default_text(p)}" for p in spec.params
-        ) or "-"
+        params = "\n".join(f"{p.name}\n  {_default_text(p)}" for p in spec.params) or "-"
         table.add_row(spec.name, escape(spec.summary), escape(params))
     return table
 
@@ -169,10 +146,7 @@ def cmd_algorithms(args: argparse.Namespace, out: Console) -> int:
     if args.json:
         print_json("algorithms", {"algorithms": [
             {
-                "name": cls.name,
-                "title": cls.title,
-                "summary": cls.summary,
-                "target": cls.formula,
+                "name": cls.name, "title": cls.title, "summary": cls.summary, "target": cls.formula,
                 "params": [_param_dict(field) for field in cls.params],
             }
             for cls in ALGORITHMS
@@ -226,13 +200,8 @@ def _session_from_args(args: argparse.Namespace) -> Session:
     hp = _base_hyperparameters(args, game, kwargs, cls)
     try:
         session = Session(
-            env_id=env_id,
-            env_kwargs=kwargs,
-            choices=choices,
-            hp=hp,
-            seed=args.train_seed,
-            engine=args.engine,
-            algorithm=cls.name,
+            env_id=env_id, env_kwargs=kwargs, choices=choices, hp=hp, seed=args.train_seed,
+            engine=args.engine, algorithm=cls.name,
         )
     except ValueError as exc:
         text = str(exc)
@@ -290,8 +259,7 @@ def _eval_rows(data: dict[str, Any]) -> list[tuple[str, str]]:
         budget = data.get("step_budget", evaluation.EVAL_STEP_BUDGET)
         played += f" of {requested:,} (stopped at the {budget:,}-step budget)"
     rows += [
-        ("sampled episodes", played),
-        ("sampled mean return", f"{data['mean_return']:+.4f}"),
+        ("sampled episodes", played), ("sampled mean return", f"{data['mean_return']:+.4f}"),
         ("sampled std of return", f"{data['std_return']:.4f}"),
     ]
     exact_keys = {key for key, _ in _EXACT_ROWS}
@@ -312,13 +280,9 @@ def _eval_rows(data: dict[str, Any]) -> list[tuple[str, str]]:
 
 def _progress_bar(out: Console, budget: int) -> tuple[Progress, Callable[..., None]]:
     columns = (
-        TextColumn("[bold]training[/]"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TaskProgressColumn(),
+        TextColumn("[bold]training[/]"), BarColumn(), MofNCompleteColumn(), TaskProgressColumn(),
         TextColumn("{task.fields[rate]:>11,.0f} ep/s"),
-        TextColumn("mean return {task.fields[mean]:+.3f}"),
-        TimeElapsedColumn(),
+        TextColumn("mean return {task.fields[mean]:+.3f}"), TimeElapsedColumn(),
         TimeRemainingColumn(),
     )
     progress = Progress(*columns, console=out, transient=False)
@@ -337,8 +301,7 @@ def _wrapper_dicts(session: Session) -> list[dict[str, Any]]:
 
     return [
         {
-            "name": choice.name,
-            "params": get_spec(choice.name).validate(choice.values()),
+            "name": choice.name, "params": get_spec(choice.name).validate(choice.values()),
             "spec": format_wrapper_spec(choice),
         }
         for choice in session.applied
@@ -386,21 +349,13 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
     saved = str(session.save(save_path)) if save_path is not None else None
     run_id = recording.finish(report, saved)
     data = {
-        "env_id": session.env_id,
-        "env_kwargs": session.env_kwargs,
-        "algorithm": session.algorithm,
-        "wrappers": _wrapper_dicts(session),
-        "engine": trainer.engine,
-        "engine_reason": session.engine_reason,
-        "episodes": trainer.episodes,
-        "steps": trainer.steps,
-        "seconds": seconds,
+        "env_id": session.env_id, "env_kwargs": session.env_kwargs, "algorithm": session.algorithm,
+        "wrappers": _wrapper_dicts(session), "engine": trainer.engine,
+        "engine_reason": session.engine_reason, "episodes": trainer.episodes,
+        "steps": trainer.steps, "seconds": seconds,
         "episodes_per_second": trainer.episodes / seconds if seconds else None,
-        "hyperparameters": hp.to_dict(),
-        "rolling_mean_return": trainer.latest.mean_return,
-        "eval": evaluation,
-        "saved": saved,
-        "run": run_id,
+        "hyperparameters": hp.to_dict(), "rolling_mean_return": trainer.latest.mean_return,
+        "eval": evaluation, "saved": saved, "run": run_id,
     }
     if args.target_gap is not None:
         data.update(target_gap=args.target_gap, reached_target=outcome.reached_target,
@@ -412,12 +367,9 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
         return 0
     rows = [
         ("env", f"{session.env_id} {session.env_kwargs or ''}".strip()),
-        ("algorithm", session.learner_class.title),
-        ("wrappers", session.chain_repr()),
-        ("engine", session.engine_reason),
-        ("episodes", f"{trainer.episodes:,}"),
-        ("steps", f"{trainer.steps:,}"),
-        ("seconds", f"{seconds:.2f}"),
+        ("algorithm", session.learner_class.title), ("wrappers", session.chain_repr()),
+        ("engine", session.engine_reason), ("episodes", f"{trainer.episodes:,}"),
+        ("steps", f"{trainer.steps:,}"), ("seconds", f"{seconds:.2f}"),
         ("episodes/s", f"{data['episodes_per_second']:,.0f}"),
         (f"rolling mean return ({trainer.latest.window})", f"{trainer.latest.mean_return:+.4f}"),
     ]
@@ -520,10 +472,8 @@ def cmd_play(args: argparse.Namespace, out: Console) -> int:
 
     env_id = resolve_env_id(args.env)
     session = Session(
-        env_id=env_id,
-        env_kwargs=game_kwargs(args, game_for(env_id)),
-        choices=tuple(parse_wrapper_spec(text) for text in args.wrapper),
-        seed=args.play_seed or 0,
+        env_id=env_id, env_kwargs=game_kwargs(args, game_for(env_id)),
+        choices=tuple(parse_wrapper_spec(text) for text in args.wrapper), seed=args.play_seed or 0,
     )
     if session.skipped:
         reasons = "; ".join(reason for _, reason in session.skipped)
@@ -579,16 +529,8 @@ def cmd_bench(args: argparse.Namespace, out: Console) -> int:
 
 
 COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {
-    "envs": cmd_envs,
-    "wrappers": cmd_wrappers,
-    "algorithms": cmd_algorithms,
-    "train": recorded(cmd_train),
-    "eval": cmd_eval,
-    "optimal": cmd_optimal,
-    "play": cmd_play,
-    "screenshots": cmd_screenshots,
-    "bench": cmd_bench,
-    "maps": cmd_maps,
-    "mcp": cmd_mcp,
+    "envs": cmd_envs, "wrappers": cmd_wrappers, "algorithms": cmd_algorithms,
+    "train": recorded(cmd_train), "eval": cmd_eval, "optimal": cmd_optimal, "play": cmd_play,
+    "screenshots": cmd_screenshots, "bench": cmd_bench, "maps": cmd_maps, "mcp": cmd_mcp,
     "benchmark": cmd_benchmark,
 }

@@ -1,21 +1,4 @@
-"""The `compare` and `sweep` commands: learners across seeds, and settings across a grid.
-
-`compare GAME --algorithms A,B --seeds N --episodes E [--set KEY=VALUE ...]`
-prints a table of final figures and a line chart of the mean online return
-with its 95% band; `sweep GAME --algorithm A --grid KEY=V1,V2 [--grid ...]`
-prints a table of every grid point and, for two keys, a coloured grid of the
-final figure. Both take `--json` (one object), show a progress bar with an
-ETA on a terminal, stop cleanly on the first Ctrl+C (what finished is kept,
-printed and recorded; a second Ctrl+C ends at once), and record their runs in
-the run history (`--db PATH`, else `TUI_GYM_DB`, else the data folder's file;
-`--no-record` opts out). A history that fails while they run (a full disk)
-loses nothing: the results are printed, then one line says they were not
-recorded. `compare --csv PATH` writes every episode's mean and band per
-algorithm. The work is tasks (one setting × a block of seeds), each kept in the
-history as it lands: `--resume RUN` runs only the tasks run RUN misses, and
-`--cluster ADDRESS` (or `$TUI_GYM_CLUSTER`) runs them on a Dask scheduler, or
-on `local:N` workers started here.
-"""
+"""The `compare` and `sweep` commands: learners across seeds, and settings across a grid."""
 
 from __future__ import annotations
 
@@ -26,7 +9,7 @@ import sys
 import threading
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from rich.console import Console
 from rich.table import Table
@@ -49,6 +32,8 @@ DB_HELP = "the run history file (default: $TUI_GYM_DB, else the data folder's ru
 # Every seed's return of every episode is kept while a run lasts: these bound that memory.
 _seeds = _int_in(1, 1000, "a number of seeds from 1 to 1,000")
 _episodes = _int_in(1, 200_000, "a number of episodes from 1 to 200,000")
+
+R = TypeVar("R")
 
 
 def _common_options(parser: argparse.ArgumentParser) -> None:
@@ -189,8 +174,7 @@ def ctrl_c_stops(stop: threading.Event, err: Console) -> Iterator[None]:
         if stop.is_set():
             raise KeyboardInterrupt
         stop.set()
-        err.print("stopping: keeping what finished (Ctrl+C again to quit at once)",
-                  style="yellow")
+        err.print("stopping: keeping what finished (Ctrl+C again to quit at once)", style="yellow")
 
     previous = signal.signal(signal.SIGINT, handler)
     try:
@@ -200,9 +184,7 @@ def ctrl_c_stops(stop: threading.Event, err: Console) -> Iterator[None]:
 
 
 def _run_with_progress(
-    out: Console,
-    as_json: bool,
-    label: str,
+    out: Console, as_json: bool, label: str,
     run: Callable[[Callable[[CompareProgress], None] | None, threading.Event], Any],
 ) -> Any:
     from rich.progress import (
@@ -235,6 +217,25 @@ def _run_with_progress(
 
         with progress:
             return run(update, stop)
+
+
+def _run_recorded(args: argparse.Namespace, out: Console, label: str, run: Callable[..., R],
+                  spec: Any) -> tuple[R, BestEffortHistory | None]:
+    """`run(spec, ...)` (a comparison or a sweep) with a progress bar, kept in the run history;
+    its refusals as one line."""
+    from tui_gym.session.experiments.cluster import ClusterError
+    from tui_gym.session.experiments.compare import CompareError
+
+    with run_history(args) as history:
+        try:
+            return _run_with_progress(
+                out, args.json, label,
+                lambda progress, stop: run(spec, progress=progress, stop=stop, resume=args.resume,
+                                           cluster=args.cluster, history=history,
+                                           processes=args.processes, status=say_status),
+            ), history
+        except (CompareError, ClusterError) as exc:
+            raise CliError(str(exc)) from None
 
 
 def _resume_hint(group: int | None) -> str:
@@ -274,8 +275,7 @@ def _algorithm_names(text: str) -> list[str]:
 
 
 def cmd_compare(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.session.experiments.cluster import ClusterError
-    from tui_gym.session.experiments.compare import CompareError, CompareSpec, run_compare
+    from tui_gym.session.experiments.compare import CompareSpec, run_compare
 
     spec = CompareSpec(
         game=args.game, algorithms=_algorithm_names(args.algorithms), seeds=args.seeds,
@@ -283,17 +283,7 @@ def cmd_compare(args: argparse.Namespace, out: Console) -> int:
         game_params=_pairs(args.params, "--param"), wrappers=_wrappers(args.wrapper),
         first_seed=args.first_seed,
     )
-    with run_history(args) as history:
-        try:
-            result = _run_with_progress(
-                out, args.json, "comparing",
-                lambda progress, stop: run_compare(spec, progress=progress, stop=stop,
-                                                   resume=args.resume, cluster=args.cluster,
-                                                   history=history, processes=args.processes,
-                                                   status=say_status),
-            )
-        except (CompareError, ClusterError) as exc:
-            raise CliError(str(exc)) from None
+    result, history = _run_recorded(args, out, "comparing", run_compare, spec)
     if args.csv:
         _write_csv(args.csv, result.outcomes)
     if args.json:
@@ -437,8 +427,6 @@ def _ranges(items: Sequence[str]) -> dict[str, Any]:
 
 
 def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.session.experiments.cluster import ClusterError
-    from tui_gym.session.experiments.compare import CompareError
     from tui_gym.session.experiments.sweep import SweepSpec, run_sweep
 
     spec = SweepSpec(
@@ -448,17 +436,7 @@ def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
         first_seed=args.first_seed, ranges=_ranges(args.ranges), samples=args.sample,
         sample_seed=args.sample_seed,
     )
-    with run_history(args) as history:
-        try:
-            result = _run_with_progress(
-                out, args.json, "sweeping",
-                lambda progress, stop: run_sweep(spec, progress=progress, stop=stop,
-                                                 resume=args.resume, cluster=args.cluster,
-                                                 history=history, processes=args.processes,
-                                                 status=say_status),
-            )
-        except (CompareError, ClusterError) as exc:
-            raise CliError(str(exc)) from None
+    result, history = _run_recorded(args, out, "sweeping", run_sweep, spec)
     if args.json:
         print_json("sweep", result.to_json())
         unrecorded(history)
@@ -490,8 +468,7 @@ def _sweep_table(result: Any) -> Table:
     if has_exact:
         table.add_column("greedy exact value", justify="right")
         table.add_column("gap", justify="right")
-    has_rms = any(p.outcome is not None and p.outcome.rms_error is not None
-                  for p in result.points)
+    has_rms = any(p.outcome is not None and p.outcome.rms_error is not None for p in result.points)
     if has_rms:
         table.add_column(RMS_LABEL, justify="right")
     table.add_column("seeds", justify="right")
@@ -519,8 +496,7 @@ def _sweep_grid(result: Any) -> Table:
     figure = {(p.values[row_key], p.values[col_key]): p.figure for p in result.points}
     values = [v for v in figure.values() if v is not None]
     low, high = (min(values), max(values)) if values else (0.0, 1.0)
-    exact = any(p.outcome is not None and p.outcome.exact_value is not None
-                for p in result.points)
+    exact = any(p.outcome is not None and p.outcome.exact_value is not None for p in result.points)
     rms = any(p.outcome is not None and p.outcome.rms_error is not None for p in result.points)
     what = RMS_LABEL if rms else "greedy exact value" if exact else "online return, last 10%"
     table = Table(title=f"{what}: {row_key} (rows) × {col_key} (columns)", title_justify="left")

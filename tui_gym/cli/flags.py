@@ -1,16 +1,4 @@
-"""Flags generated from `Param` schemas: every game's arguments and the hyperparameters.
-
-`add_game_flags(parser)` adds one flag per game argument name across `GAMES`
-(`--map 8x8`, `--slippery false`, `--sab`; a flag several games share says
-whose it is), read as text. `game_kwargs(args, game)` reads the flags given
-for one game with that game's own `Param`s, so an error names the flag and
-what it takes, and a flag of another game says which games take it.
-`--map-file PATH` gives a grid game a map (`tui_gym.games.maps`); a bad file
-is one line naming the row and column at fault.
-`add_hyperparameter_flags` adds one flag per hyperparameter of any
-algorithm, and `hyperparameters(args, cls)` reads those given with the
-algorithm's own fields (a flag of another algorithm says which take it).
-"""
+"""Flags generated from `Param` schemas: every game's arguments and the hyperparameters."""
 
 from __future__ import annotations
 
@@ -23,11 +11,7 @@ from tui_gym.core.params import Param, ParamError
 from tui_gym.games import GAMES, Game
 
 __all__ = [
-    "HP_FLAGS",
-    "add_game_flags",
-    "add_hyperparameter_flags",
-    "flag",
-    "game_kwargs",
+    "HP_FLAGS", "add_game_flags", "add_hyperparameter_flags", "flag", "game_kwargs",
     "hyperparameters",
 ]
 

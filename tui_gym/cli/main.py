@@ -1,15 +1,7 @@
 """The `tui-gym` command's entry point and parser: the app with no sub-command.
 
-Every sub-command (`commands`) is a thin call into `tui_gym.core`: `envs`, `wrappers`,
-`algorithms`, `train`, `eval`, `optimal`, `screenshots` and `bench` print rich tables or
-lines (or one JSON object with `--json`); `play --jsonl` speaks JSON lines.
-Bad arguments, an unknown env or wrapper, or an unreadable file exit with
-code 2 and one clear line on stderr, never a traceback. Numbers are read as
-`Param`s read them (ASCII digits only; a value out of range says so), and a
-negative value may follow its flag (`--learning-rate -inf` is a value, not a
-flag). Each game's arguments are flags generated from its `Param`s (`flags`).
-A reader that closes the pipe early (`| head -1`) ends the command
-quietly with status 141, as it would end `cat`.
+Bad arguments exit with code 2 and one line on stderr; a reader that closes the pipe
+early (`| head -1`) ends the command quietly with status 141, as it would end `cat`.
 """
 
 from __future__ import annotations
@@ -156,8 +148,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="seed of the training run (default 0; the evaluation after it "
                        "plays on S + 1)")
     add_game_flags(train)
-    train.add_argument("--wrapper", action="append", default=[], metavar="SPEC",
-                       help=WRAPPER_HELP)
+    train.add_argument("--wrapper", action="append", default=[], metavar="SPEC", help=WRAPPER_HELP)
     train.add_argument(
         "--engine", choices=("auto", "model", "env"), default="auto",
         help="auto: the compiled loop on the game's model when the wrappers let it follow "
@@ -203,8 +194,7 @@ def build_parser() -> argparse.ArgumentParser:
     play.add_argument("--seed", type=seed_number, default=None, dest="play_seed", metavar="S",
                       help="seed of the first episode (a reset may give its own)")
     add_game_flags(play)
-    play.add_argument("--wrapper", action="append", default=[], metavar="SPEC",
-                      help=WRAPPER_HELP)
+    play.add_argument("--wrapper", action="append", default=[], metavar="SPEC", help=WRAPPER_HELP)
     from tui_gym.cli.replay_command import add_record_option, add_replay_parser
     from tui_gym.web import add_serve_parser
 

@@ -1,12 +1,4 @@
-"""`tui-gym maps`: the built-in maps, one map's text, or a random map that can be solved.
-
-`tui-gym maps` lists the built-in maps (name, size, the games that play it,
-what it is); `tui-gym maps NAME` prints that map's text, ready to save and pass
-to `--map-file`; `tui-gym maps --random 8x8 --density 0.2 --map-seed 3` prints a
-random map with a way from start to goal (`--obstacle W --walled` for
-GridWorld's walls); `--check PATH` reads a map file and says what it holds or,
-in one line, what is wrong where. `--json` prints one JSON object instead.
-"""
+"""`tui-gym maps`: the built-in maps, one map's text, or a random map that can be solved."""
 
 from __future__ import annotations
 
@@ -49,10 +41,8 @@ def add_maps_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[ty
 
 def _summary(grid_map: GridMap) -> dict[str, object]:
     return {
-        "size": grid_map.size_text,
-        "games": list(fits(grid_map)),
-        "goal_reachable": grid_map.goal_reachable(),
-        "text": format_map(grid_map),
+        "size": grid_map.size_text, "games": list(fits(grid_map)),
+        "goal_reachable": grid_map.goal_reachable(), "text": format_map(grid_map),
     }
 
 

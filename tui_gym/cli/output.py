@@ -1,10 +1,7 @@
 """What the `tui-gym` command prints: one-line errors, JSON objects and summary tables.
 
-Every `--json` object starts with `"schema"`, its command's version in
-`JSON_SCHEMAS`. A version goes up by one when a key of its command's object is
-removed or renamed, or a value changes its type or meaning; a new key leaves
-it as it is (a reader ignores keys it does not know). The README lists every
-command's keys.
+Every `--json` object starts with `"schema"` (`JSON_SCHEMAS`), which goes up by one when
+a key is removed or renamed or changes its type or meaning; a new key leaves it as it is.
 """
 
 from __future__ import annotations
@@ -27,26 +24,9 @@ __all__ = ["JSON_SCHEMAS", "CliError", "OutConsole", "key_value_table", "print_j
 
 # The version of each command's JSON object (see the module docstring).
 JSON_SCHEMAS: dict[str, int] = {
-    "envs": 1,
-    "wrappers": 1,
-    "maps": 1,
-    "algorithms": 1,
-    "train": 1,
-    "eval": 1,
-    "optimal": 1,
-    "runs": 1,
-    "runs show": 1,
-    "runs export": 1,
-    "runs rm": 1,
-    "runs prune": 1,
-    "runs recover": 1,
-    "plan": 1,
-    "book": 1,
-    "book list": 1,
-    "compare": 1,
-    "sweep": 1,
-    "screenshots": 1,
-    "bench": 2,
+    "envs": 1, "wrappers": 1, "maps": 1, "algorithms": 1, "train": 1, "eval": 1, "optimal": 1,
+    "runs": 1, "runs show": 1, "runs export": 1, "runs rm": 1, "runs prune": 1, "runs recover": 1,
+    "plan": 1, "book": 1, "book list": 1, "compare": 1, "sweep": 1, "screenshots": 1, "bench": 2,
     "benchmark": 1,
 }
 

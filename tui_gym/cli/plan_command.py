@@ -1,13 +1,4 @@
-"""`tui-gym plan GAME`: policy evaluation, policy iteration or value iteration, headless.
-
-The method runs to its end (the largest change below θ; policy iteration until
-an improvement changes nothing) from the start policy (`--policy random`,
-`optimal`, or a saved agent's greedy policy), and the result is printed as the
-game's heatmaps (values and actions) with the sweep and improvement counts
-and the start distribution's value, or with `--json` as one object: the
-settings, the counts, and per base state (named as `tui-gym optimal --json`
-names it) its value and the actions the policy takes.
-"""
+"""`tui-gym plan GAME`: policy evaluation, policy iteration or value iteration, headless."""
 
 from __future__ import annotations
 

@@ -1,11 +1,4 @@
-"""`--record PATH` for the commands that play, and the `replay` command.
-
-`add_record_option` puts `--record PATH` on a parser; `open_recorder` opens
-the file for a session (one clear line when it cannot be written). `replay
-PATH` reads a recording (bad lines skipped, scenes checked against their game's
-board, see `tui_gym.core.recording`) and opens the app on it, on the game of
-its first episode (refused when that game's id would import a module).
-"""
+"""`--record PATH` for the commands that play, and the `replay` command."""
 
 from __future__ import annotations
 
@@ -27,13 +20,10 @@ RECORD_HELP = "record every episode to this file, as JSON lines (tui-gym replay 
 
 def add_record_option(parser: argparse.ArgumentParser, dest: str = "record") -> None:
     """`--record PATH` on `parser`."""
-    parser.add_argument("--record", type=output_file, metavar="PATH", dest=dest,
-                        help=RECORD_HELP)
+    parser.add_argument("--record", type=output_file, metavar="PATH", dest=dest, help=RECORD_HELP)
 
 
-def open_recorder(
-    path: str, session: Session, *, source: str, seed: int | None = None
-) -> Recorder:
+def open_recorder(path: str, session: Session, *, source: str, seed: int | None = None) -> Recorder:
     """A `Recorder` writing `session`'s episodes to `path`; CliError when it cannot be opened.
 
     A write that fails later stops the recording with one line on stderr; the
@@ -95,10 +85,8 @@ def session_for(recording: Recording) -> Session | None:
         return None
     try:
         return Session(
-            env_id=env_id,
-            env_kwargs=dict(game.env_kwargs),
-            choices=tuple(parse_wrapper_spec(spec) for spec in game.wrappers),
-            seed=game.seed or 0,
+            env_id=env_id, env_kwargs=dict(game.env_kwargs),
+            choices=tuple(parse_wrapper_spec(spec) for spec in game.wrappers), seed=game.seed or 0,
         )
     except Exception:  # another version's game or wrapper: replay needs none of it
         return None

@@ -1,19 +1,4 @@
-"""The run history on the command line: `runs`, and recording `train` runs into it.
-
-`tui-gym runs [--json] [--game G] [--kind K] [--limit N]` lists the recorded
-runs, newest first (a screenful by default; every run with `--json`), in the
-columns that fit the terminal (the least needed go first; names are never
-cut); `runs show ID`, `runs export ID --csv PATH | --tensorboard DIR` and
-`runs rm ID` work on one; `runs prune` removes the stored tasks of finished
-runs (only an unfinished run needs them, to resume); `runs --recover` copies
-what can be read of a damaged history into a new file beside it. Every one takes `--db PATH` (else
-`TUI_GYM_DB`, else the data folder's `runs.db`). `add_train_options` puts
-`--db` and `--no-record` on `train`, and `recorded` wraps the `train` command
-so that its run is recorded (see `TrainRecording`). A history that cannot be
-read, an unknown id or a file that cannot be written is one line and exit
-code 2; a run that does not read is one line naming it, after the others.
-Text from the history reaches the terminal through `visible`, as data.
-"""
+"""The run history on the command line: `runs`, and recording `train` runs into it."""
 
 from __future__ import annotations
 
@@ -211,8 +196,7 @@ def _runs_table(title: str, rows: list[dict[str, str]], width: int) -> tuple[Tex
 
     def line(cells: dict[str, str]) -> str:
         pads = {n: " " * (widths[n] - cell_len(cells[n])) for n in shown}  # wide characters
-        parts = [pads[n] + cells[n] if justify[n] == "right" else cells[n] + pads[n]
-                 for n in shown]
+        parts = [pads[n] + cells[n] if justify[n] == "right" else cells[n] + pads[n] for n in shown]
         return (" " * _GAP).join(parts).rstrip()
 
     total = sum(widths[n] for n in shown) + _GAP * (len(shown) - 1)
@@ -313,16 +297,11 @@ def _cmd_show(args: argparse.Namespace, out: Console) -> int:
     params = ", ".join(f"{k}={v}" for k, v in record.game_params.items())
     versions = record.versions
     rows = [
-        ("kind", str(run.kind)),
-        ("game", run.game + (f" ({params})" if params else "")),
-        ("wrappers", wrappers or "none"),
-        ("algorithm", run.algorithm),
-        ("hyperparameters", settings),
-        ("seeds", ", ".join(str(s) for s in run.seeds) or "none"),
-        ("status", str(run.status)),
-        ("started", _when(run.started_at, full=True)),
-        ("ended", _when(run.ended_at, full=True)),
-        ("took", _duration(run.seconds)),
+        ("kind", str(run.kind)), ("game", run.game + (f" ({params})" if params else "")),
+        ("wrappers", wrappers or "none"), ("algorithm", run.algorithm),
+        ("hyperparameters", settings), ("seeds", ", ".join(str(s) for s in run.seeds) or "none"),
+        ("status", str(run.status)), ("started", _when(run.started_at, full=True)),
+        ("ended", _when(run.ended_at, full=True)), ("took", _duration(run.seconds)),
     ]
     if run.group is not None:
         rows.append(("launched with run", str(run.group)))
@@ -350,8 +329,7 @@ def _cmd_export(args: argparse.Namespace, out: Console) -> int:
     else:
         from tui_gym.core.experiments.tensorboard import export_run_tensorboard
 
-        done = _history_call(lambda: export_run_tensorboard(args.run_id, args.tensorboard,
-                                                            args.db))
+        done = _history_call(lambda: export_run_tensorboard(args.run_id, args.tensorboard, args.db))
         line = (f"wrote {done.scalars} values of {', '.join(done.tags)} to {done.path} "
                 f"(tensorboard --logdir {done.directory})")
     if args.json:

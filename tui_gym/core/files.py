@@ -1,18 +1,4 @@
-"""Writing the files a user names: checked before any work, written atomically.
-
-`check_output_path(path)` says before a long run whether a file can be written
-there at all: a file name is given, its folder exists and is writable, and the
-name is not a folder, a device, a pipe or anything else that is not a regular
-file (through a symbolic link, of the file it points to). `write_atomically(path,
-data)` checks again and writes through a temporary file in the target's folder
-(`.NAME.PID.RANDOM.tmp`), flushed to disk and renamed into place, so a crash
-never leaves half a file. A path that is a symbolic link writes the file it
-points to (the link stays); a new file gets the permissions the umask gives, a
-replaced one keeps its own. Termination signals that arrive during the write
-wait until it is done, and temporary files that a killed writer left behind
-are removed by the next write to the same name. Every refusal is an
-`OutputPathError` of one line that names the path.
-"""
+"""Writing the files a user names: checked before any work, written atomically."""
 
 from __future__ import annotations
 

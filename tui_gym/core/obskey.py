@@ -1,18 +1,4 @@
-"""Observation keys: turning any observation our envs produce into a table key.
-
-A tabular agent needs a hashable key per state. `ObservationKeyer` is built
-from an observation space and turns observations of that space into keys:
-
-- spaces made only of bounded integers (`Discrete`, `MultiDiscrete`,
-  `MultiBinary`, integer `Box`, and `Tuple`/`Dict` of those) are *dense*: every
-  observation maps to an `int` in `range(keyer.n_states)` (mixed-radix over the
-  leaves in space order), so the Q-table can be one numpy array;
-- spaces with floats (the time `TimeAwareObservation` adds, a flattened
-  one-hot) are *sparse*: keys are tuples of Python numbers, with floats rounded
-  so that equal values give equal keys;
-- spaces that cannot be tabulated (text, graphs, unbounded integers, huge
-  float vectors) raise `NotTabularError` with the reason.
-"""
+"""Observation keys: turning any observation our envs produce into a table key."""
 
 from __future__ import annotations
 

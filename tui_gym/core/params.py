@@ -1,18 +1,4 @@
-"""`Param`: one typed, ranged parameter that parses what a person types.
-
-Wrapper parameters, env arguments and hyperparameters are all `Param`s. A
-CLI argument and a UI input field both arrive as text; `Param.parse` turns
-that text into an `int`, `float` or `bool`, checks the inclusive range, and
-otherwise raises a `ParamError` (a `ValueError`) that names the field and
-says whether the text is not a number of the right kind or a number out of
-range.
-
-`read_number` is the reader behind it, for any text that must be a number:
-ASCII digits only (a person's `١` or `²` is not read as a digit), an optional
-sign, decimal point, exponent and `_` between digits, or `inf` / `nan`.
-Numbers too large for a float read as infinite instead of raising; text that
-holds other digits is refused with `digits_note` saying which digits to type.
-"""
+"""`Param`: one typed, ranged parameter that parses what a person types."""
 
 from __future__ import annotations
 
@@ -20,6 +6,7 @@ import math
 import numbers
 import re
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -39,6 +26,15 @@ _WORDS = {"inf": math.inf, "infinity": math.inf, "nan": math.nan}
 # Beyond every float, and far below the 4,300 digits Python refuses to convert to an int.
 _MAX_INT_DIGITS = 400
 _FLOAT_MAX = float(np.finfo(np.float64).max)
+
+
+def finite_number(name: str, value: float, *, minimum: float | None = None) -> float:
+    """`value` as a float; ValueError naming `name` unless finite and at least `minimum`."""
+    number = float(value)
+    if not math.isfinite(number) or (minimum is not None and number < minimum):
+        bound = "" if minimum is None else f" >= {minimum:g}"
+        raise ValueError(f"{name} must be a finite number{bound}, got {value!r}")
+    return number
 
 
 def read_number(text: str) -> int | float | None:
@@ -69,6 +65,13 @@ def digits_note(raw: object) -> str:
     if isinstance(raw, str) and any(ch.isdigit() and not ch.isascii() for ch in raw):
         return " (digits 0-9 only)"
     return ""
+
+
+def typed_text(value: Any) -> str:
+    """A value as a person types it: `true`, `0.333333`, `4x4`."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 def shown_value(raw: object) -> str:

@@ -1,11 +1,4 @@
-"""Text that came from a file or another program, made safe to show: `visible`.
-
-A string read from a run history, a recording, a save file or a tool call is data. Shown
-as it is, its control characters would drive the terminal (an escape sequence can set the
-window title, clear the screen or write the clipboard), so everything that is not plain
-printable text is written as an escape (`\\x1b`, `\\u202e`), and a long string is cut to a
-readable length with an ellipsis and its full length.
-"""
+"""Text that came from a file or another program, made safe to show: `visible`."""
 
 from __future__ import annotations
 
@@ -38,9 +31,7 @@ def visible(text: object, limit: int | None = 80) -> str:
     else:
         raw_cut = None
     source = raw if raw_cut is None else raw_cut
-    shown = "".join(
-        _escaped(c) if unicodedata.category(c) in _HIDDEN else c for c in source
-    )
+    shown = "".join(_escaped(c) if unicodedata.category(c) in _HIDDEN else c for c in source)
     if limit is None or (raw_cut is None and len(shown) <= limit):
         return shown
     keep = max(1, limit - 1)

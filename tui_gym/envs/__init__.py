@@ -1,12 +1,4 @@
-"""Gymnasium environments of our own, and their registration.
-
-`register_envs()` registers GridWorld as `tui_gym/GridWorld-v0` and under the
-tutorial's id `gymnasium_env/GridWorld-v0` (both with `max_episode_steps=300`),
-and the tile map FrozenLake and CliffWalking play edited maps on as
-`tui_gym/TileMap-v0` (no limit of its own), and Sutton & Barto's worlds
-(`BOOK_WORLDS`, each with its episode limit). It is idempotent and runs on
-`import tui_gym`.
-"""
+"""Gymnasium environments of our own, and their registration."""
 
 from __future__ import annotations
 
@@ -38,9 +30,7 @@ def register_envs() -> None:
     for env_id in GRIDWORLD_IDS:
         if env_id not in gym.registry:
             gym.register(
-                id=env_id,
-                entry_point=GRIDWORLD_ENTRY_POINT,
-                max_episode_steps=GRIDWORLD_MAX_STEPS,
+                id=env_id, entry_point=GRIDWORLD_ENTRY_POINT, max_episode_steps=GRIDWORLD_MAX_STEPS,
             )
     if TILE_MAP_ID not in gym.registry:
         gym.register(id=TILE_MAP_ID, entry_point=TILE_MAP_ENTRY_POINT)

@@ -1,13 +1,4 @@
-"""`CarRentalEnv`: Sutton & Barto's Example 4.2, Jack's car rental (and Exercise 4.7's variant).
-
-`car_rental_arrays(exercise)` gives the exact transitions the model is built
-from: the day's rentals and returns at each site are independent, so each
-site's chances of ending the day with each number of cars (and the rentals
-expected on the way there) are computed once and multiplied. An outcome is
-the next state; its reward is the night's costs and the rentals expected
-given that outcome, so every expected reward is exact while the arrays stay
-441 outcomes wide. The env itself draws the day's requests and returns.
-"""
+"""`CarRentalEnv`: Sutton & Barto's Example 4.2, Jack's car rental (and Exercise 4.7's variant)."""
 
 from __future__ import annotations
 
@@ -19,10 +10,9 @@ import numpy as np
 import numpy.typing as npt
 from gymnasium import spaces
 
-from tui_gym.envs.tile_map import TileArrays
+from tui_gym.envs.table_env import TileArrays
 
-__all__ = ["MAX_CARS", "MAX_MOVE", "MOVES", "CarRentalEnv", "car_rental_arrays", "night",
-           "nights"]
+__all__ = ["MAX_CARS", "MAX_MOVE", "MOVES", "CarRentalEnv", "car_rental_arrays", "night", "nights"]
 
 MAX_CARS = 20  # at each site; more are sent back to the company
 MAX_MOVE = 5  # cars moved overnight, either way

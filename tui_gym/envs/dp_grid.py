@@ -1,13 +1,4 @@
-"""The grids of Sutton & Barto's book: `Grid`, its transitions, and the envs on it.
-
-A `Grid` says what a small grid world is: its size, the moves (the four
-steps, or the eight king's moves), what a move pays, its terminal cells,
-walls, jumps, wind and start; `Grid.arrays()` gives its transitions, for
-the env and for the exact model alike. A cell is (row, col), row 0 at the
-top; a state is `row * cols + col`. `GridEnv` plays a grid, drawn as text.
-This module's envs are the book's chapters 3 and 4 grids: `ABGridEnv`
-(Example 3.5) and `CornerGridEnv` (Example 4.1).
-"""
+"""The grids of Sutton & Barto's book: `Grid`, its transitions, and the envs on it."""
 
 from __future__ import annotations
 
@@ -16,8 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from tui_gym.envs.table_env import TableEnv
-from tui_gym.envs.tile_map import TileArrays
+from tui_gym.envs.table_env import TableEnv, TileArrays
 
 __all__ = [
     "AB_JUMPS", "CORNERS", "GRID_ACTIONS", "KING_ACTIONS", "STEPS", "ABGridEnv",

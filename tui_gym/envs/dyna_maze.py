@@ -1,11 +1,5 @@
 """Sutton & Barto's mazes of chapter 8: the Dyna maze, and the blocking and shortcut mazes
 whose wall moves after a number of steps.
-
-`MazeEnv` plays a maze that may change: a list of phases, each a `Grid` in
-force from a step on, counting steps over every episode since the world was
-made. `maze_phases(name, change_at)` lists the book's: `DynaMazeEnv` (Figure
-8.2), `BlockingMazeEnv` (Figure 8.4: the short way round the wall closes and a
-long one opens) and `ShortcutMazeEnv` (Figure 8.5: a short way opens).
 """
 
 from __future__ import annotations
@@ -16,8 +10,7 @@ from typing import Any
 
 from tui_gym.envs.dp_grid import Grid, GridEnv
 
-__all__ = ["MAZES", "BlockingMazeEnv", "DynaMazeEnv", "MazeEnv", "ShortcutMazeEnv",
-           "maze_phases"]
+__all__ = ["MAZES", "BlockingMazeEnv", "DynaMazeEnv", "MazeEnv", "ShortcutMazeEnv", "maze_phases"]
 
 Cell = tuple[int, int]
 ROWS, COLS = 6, 9
@@ -37,15 +30,12 @@ def _maze(start: Cell, walls: Sequence[Cell], scale: int = 1) -> Grid:
 # name -> the walls of each phase, and the start
 MAZES: dict[str, tuple[Cell, tuple[tuple[Cell, ...], ...]]] = {
     "dyna": ((2, 0), (((1, 2), (2, 2), (3, 2), (4, 5), (0, 7), (1, 7), (2, 7)),)),
-    "blocking": ((5, 3), (tuple((3, c) for c in range(0, 8)),
-                          tuple((3, c) for c in range(1, 9)))),
-    "shortcut": ((5, 3), (tuple((3, c) for c in range(1, 9)),
-                          tuple((3, c) for c in range(1, 8)))),
+    "blocking": ((5, 3), (tuple((3, c) for c in range(0, 8)), tuple((3, c) for c in range(1, 9)))),
+    "shortcut": ((5, 3), (tuple((3, c) for c in range(1, 9)), tuple((3, c) for c in range(1, 8)))),
 }
 
 
-def maze_phases(name: str, change_at: int | None = None,
-                scale: int = 1) -> list[tuple[int, Grid]]:
+def maze_phases(name: str, change_at: int | None = None, scale: int = 1) -> list[tuple[int, Grid]]:
     """The book's maze `name` as (first step, grid) phases: one phase for the Dyna maze,
     two for the blocking and shortcut mazes, the second from step `change_at` on; with
     `scale` > 1, each cell made a `scale` x `scale` block (Example 8.4's mazes)."""

@@ -8,8 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tui_gym.envs.table_env import TableEnv
-from tui_gym.envs.tile_map import TileArrays
+from tui_gym.envs.table_env import TableEnv, TileArrays
 
 __all__ = ["MAX_STAKE", "GamblerEnv", "gambler_arrays", "stake_of"]
 

@@ -1,17 +1,4 @@
-"""GridWorld: Gymnasium's quick-start custom environment, made correct.
-
-Provides `GridWorldEnv` (registered as `tui_gym/GridWorld-v0` and
-`gymnasium_env/GridWorld-v0`), the action tables `ACTION_NAMES` and
-`ACTION_DELTAS`, the `manhattan` distance helper, and the colours and cell size
-the `rgb_array` renderer draws with. Rendering needs no pygame: text for
-"ansi"/"human", a numpy-drawn image for "rgb_array".
-
-Differences from the tutorial's version: every observation is a new array (the
-tutorial hands back the same objects each step, which Gymnasium's checker
-flags), arguments are validated, reset can place the agent and target
-explicitly, the reward can be scaled or given a per-step penalty, and cells
-can be walls (`tui_gym.envs.walls` finds the moves and distances around them).
-"""
+"""GridWorld: Gymnasium's quick-start custom environment, made correct."""
 
 from __future__ import annotations
 
@@ -29,16 +16,8 @@ from numpy.typing import NDArray
 from tui_gym.envs.walls import Walls, cell_distances, check_walls
 
 __all__ = [
-    "ACTION_DELTAS",
-    "ACTION_NAMES",
-    "AGENT_COLOR",
-    "BACKGROUND_COLOR",
-    "CELL_PIXELS",
-    "GRID_LINE_COLOR",
-    "TARGET_COLOR",
-    "WALL_COLOR",
-    "GridWorldEnv",
-    "manhattan",
+    "ACTION_DELTAS", "ACTION_NAMES", "AGENT_COLOR", "BACKGROUND_COLOR", "CELL_PIXELS",
+    "GRID_LINE_COLOR", "TARGET_COLOR", "WALL_COLOR", "GridWorldEnv", "manhattan",
 ]
 
 Position = tuple[int, int]
@@ -133,19 +112,7 @@ class GridWorldEnv(gym.Env[ObsType, int]):
            registered ids). The environment itself never truncates.
 
     ## Arguments
-    ```python
-    import gymnasium as gym
-    import tui_gym  # registers the ids
-
-    gym.make(
-        "tui_gym/GridWorld-v0",
-        render_mode=None,
-        size=5,
-        reward_scale=1.0,
-        step_penalty=0.0,
-        walls=(),
-    )
-    ```
+    `gym.make("tui_gym/GridWorld-v0", ...)` after `import tui_gym` (which registers it):
 
     * `render_mode=None`: one of `None`, `"ansi"` (`render()` returns the grid as
       text), `"human"` (the text is printed on every reset and step) or
@@ -165,12 +132,8 @@ class GridWorldEnv(gym.Env[ObsType, int]):
     reports_distance = True  # every step's info holds "distance" (DistanceShaping reads it)
 
     def __init__(
-        self,
-        render_mode: str | None = None,
-        size: int = 5,
-        reward_scale: float = 1.0,
-        step_penalty: float = 0.0,
-        walls: Sequence[Sequence[int]] = (),
+        self, render_mode: str | None = None, size: int = 5, reward_scale: float = 1.0,
+        step_penalty: float = 0.0, walls: Sequence[Sequence[int]] = (),
     ) -> None:
         if not _is_int(size) or size < 2:
             raise ValueError(f"GridWorld size must be an integer >= 2, got {size!r}")
@@ -227,8 +190,7 @@ class GridWorldEnv(gym.Env[ObsType, int]):
     def _get_obs(self) -> ObsType:
         agent, target = self._require_state()
         return {
-            "agent": np.array(agent, dtype=np.int64),
-            "target": np.array(target, dtype=np.int64),
+            "agent": np.array(agent, dtype=np.int64), "target": np.array(target, dtype=np.int64),
         }
 
     def _get_info(self) -> dict[str, Any]:

@@ -7,8 +7,7 @@ from typing import Any
 import numpy as np
 
 from tui_gym.envs.dp_grid import Grid
-from tui_gym.envs.table_env import TableEnv
-from tui_gym.envs.tile_map import TileArrays
+from tui_gym.envs.table_env import TableEnv, TileArrays
 
 __all__ = ["A", "ACTIONS", "B", "MAX_B_ACTIONS", "MaxBiasEnv", "max_bias_arrays", "offered"]
 

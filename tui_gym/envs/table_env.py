@@ -1,27 +1,31 @@
-"""`TableEnv`: a Gymnasium env that plays its own transition arrays, toy-text style.
-
-The arrays (`TileArrays`: next state, probability, reward and terminated per
-state, action and outcome, and the start distribution) are the one source for
-the env and for the exact model built from them without making an env. The
-env draws each step's outcome from them, keeps its state in `s` and its last
-action in `lastaction` as Gymnasium's toy-text envs do, and hands out the
-toy-text table `P` when asked (each outcome's mean reward). Where rewards are
-drawn with noise (`reward_std`, per outcome), the env draws each from a normal
-distribution around the mean with its own seeded generator. A subclass draws
-its text picture (`picture`).
-"""
+"""`TableEnv`: a Gymnasium env that plays its own transition arrays, toy-text style."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
+import numpy.typing as npt
 from gymnasium import spaces
 
-from tui_gym.envs.tile_map import TileArrays, _table
+__all__ = ["TableEnv", "TileArrays"]
 
-__all__ = ["TableEnv"]
+FloatArray = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class TileArrays:
+    """A map's transitions as `[S, A, K]` arrays (see `tui_gym.core.mdp.FiniteMDP`):
+    K is 3 (as asked, then the two sides) where anything slips, else 1; outcomes that
+    cannot happen stay in place, pay 0 and do not end."""
+
+    next_state: npt.NDArray[np.int64]
+    prob: FloatArray
+    reward: FloatArray
+    terminal: npt.NDArray[np.bool_]
+    initial: FloatArray
 
 
 class TableEnv(gym.Env[Any, Any]):
@@ -62,6 +66,8 @@ class TableEnv(gym.Env[Any, Any]):
                              f"[0, {self.arrays.prob.shape[1] - 1}], got {action!r}")
         arrays, s, a = self.arrays, self.s, int(action)
         weights = arrays.prob[s, a]
+        # Outcomes that cannot happen weigh 0, so they are never drawn: the draw is the
+        # one over the toy-text table `P`, which leaves them out.
         index = int(np.searchsorted(np.cumsum(weights), self.np_random.random(), side="right"))
         index = min(index, int(np.flatnonzero(weights)[-1]))
         self.s = int(arrays.next_state[s, a, index])
@@ -89,3 +95,18 @@ class TableEnv(gym.Env[Any, Any]):
     def picture(self) -> str:
         """The state as text."""
         return f"state {self.s}\n"
+
+
+def _table(arrays: TileArrays) -> dict[int, dict[int, list[tuple[float, int, float, bool]]]]:
+    """The toy-text table `P[s][a] = [(prob, next_state, reward, terminated), ...]`."""
+    table: dict[int, dict[int, list[tuple[float, int, float, bool]]]] = {}
+    n_states, n_actions, _ = arrays.prob.shape
+    probs, nexts = arrays.prob.tolist(), arrays.next_state.tolist()
+    rewards, terminals = arrays.reward.tolist(), arrays.terminal.tolist()
+    for s in range(n_states):
+        table[s] = {
+            a: [(p, n, r, t) for p, n, r, t in zip(probs[s][a], nexts[s][a], rewards[s][a],
+                                                   terminals[s][a], strict=True) if p > 0]
+            for a in range(n_actions)
+        }
+    return table

@@ -1,16 +1,4 @@
-"""TileMap: FrozenLake and CliffWalking played on any map of tiles.
-
-Provides `TileMapEnv` (registered as `tui_gym/TileMap-v0`), `TileRules` (the
-rewards and slip a game gives tiles by default) and `tile_arrays`, the
-transition arrays the env's table is read from (one source for the env and
-for the exact model built from a map without making an env).
-
-A map is rows of tiles: S start (exactly one), F floor, H hole (ends the
-episode), G goal (ends the episode), C cliff (sends the agent back to the
-start, the episode goes on), W wall (cannot be entered), R reward cell (pays
-its reward on every entry). Gymnasium's FrozenLake and CliffWalking are this
-env on their own maps with their own rules, move for move.
-"""
+"""TileMap: FrozenLake and CliffWalking played on any map of tiles."""
 
 from __future__ import annotations
 
@@ -22,17 +10,11 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import numpy.typing as npt
-from gymnasium import spaces
+
+from tui_gym.envs.table_env import TableEnv, TileArrays
 
 __all__ = [
-    "ACTION_ORDERS",
-    "TILES",
-    "TileArrays",
-    "TileMapEnv",
-    "TileRules",
-    "cell_key",
-    "read_cell",
-    "tile_arrays",
+    "ACTION_ORDERS", "TILES", "TileMapEnv", "TileRules", "cell_key", "read_cell", "tile_arrays",
 ]
 
 TILES = "SFHGCWR"
@@ -44,8 +26,7 @@ ENDING = "HG"
 STEPS = {"left": (0, -1), "down": (1, 0), "right": (0, 1), "up": (-1, 0)}
 # The action numbers of Gymnasium's two games: FrozenLake's and CliffWalking's.
 ACTION_ORDERS: dict[str, tuple[str, ...]] = {
-    "lake": ("left", "down", "right", "up"),
-    "cliff": ("up", "right", "down", "left"),
+    "lake": ("left", "down", "right", "up"), "cliff": ("up", "right", "down", "left"),
 }
 
 Cell = tuple[int, int]
@@ -93,9 +74,7 @@ def _where(cell: Cell) -> str:
 
 
 def check_map(
-    cells: Sequence[str],
-    rewards: Mapping[Any, Any] | None,
-    slip: Mapping[Any, Any] | None,
+    cells: Sequence[str], rewards: Mapping[Any, Any] | None, slip: Mapping[Any, Any] | None,
     need_start: bool = True,
 ) -> tuple[tuple[str, ...], dict[Cell, float], dict[Cell, float]]:
     """The map checked: rows, rewards and slip by cell. `ValueError` names the cell at fault.
@@ -162,25 +141,9 @@ def _probability(value: Any, what: str) -> float:
     return number
 
 
-@dataclass(frozen=True)
-class TileArrays:
-    """A map's transitions as `[S, A, K]` arrays (see `tui_gym.core.mdp.FiniteMDP`):
-    K is 3 (as asked, then the two sides) where anything slips, else 1; outcomes that
-    cannot happen stay in place, pay 0 and do not end."""
-
-    next_state: npt.NDArray[np.int64]
-    prob: FloatArray
-    reward: FloatArray
-    terminal: npt.NDArray[np.bool_]
-    initial: FloatArray
-
-
 def tile_arrays(
-    cells: Sequence[str],
-    rewards: Mapping[Cell, float],
-    slip: Mapping[Cell, float],
-    actions: Sequence[str],
-    rules: TileRules,
+    cells: Sequence[str], rewards: Mapping[Cell, float], slip: Mapping[Cell, float],
+    actions: Sequence[str], rules: TileRules,
 ) -> TileArrays:
     """The transitions of a checked map (`check_map`), vectorized over cells."""
     n_rows, n_cols = len(cells), len(cells[0])
@@ -240,7 +203,7 @@ def _perpendicular(a: str, b: str) -> bool:
     return ar * br + ac * bc == 0
 
 
-class TileMapEnv(gym.Env[Any, Any]):
+class TileMapEnv(TableEnv):
     """
     Walk a map of tiles from the start to a goal: FrozenLake and CliffWalking on any map.
 
@@ -282,31 +245,19 @@ class TileMapEnv(gym.Env[Any, Any]):
     highlighted.
     """
 
-    metadata: dict[str, Any] = {"render_modes": ["ansi"], "render_fps": 4}
-
     def __init__(
-        self,
-        cells: Sequence[str] = ("SFFF", "FHFH", "FFFH", "HFFG"),
-        rewards: Mapping[Any, float] | None = None,
-        slip: Mapping[Any, float] | None = None,
-        slip_default: float = 0.0,
-        actions: str = "lake",
-        step_reward: float = 0.0,
-        goal_reward: float = 1.0,
-        hole_reward: float = 0.0,
-        cliff_reward: float = -100.0,
+        self, cells: Sequence[str] = ("SFFF", "FHFH", "FFFH", "HFFG"),
+        rewards: Mapping[Any, float] | None = None, slip: Mapping[Any, float] | None = None,
+        slip_default: float = 0.0, actions: str = "lake", step_reward: float = 0.0,
+        goal_reward: float = 1.0, hole_reward: float = 0.0, cliff_reward: float = -100.0,
         render_mode: str | None = None,
     ) -> None:
         if actions not in ACTION_ORDERS:
             raise ValueError(f"actions must be one of {', '.join(ACTION_ORDERS)}, got {actions!r}")
-        if render_mode not in (None, "ansi"):
-            raise ValueError(f"TileMap renders 'ansi' only, got {render_mode!r}")
         rows, reward_of, slip_of = check_map(cells, rewards, slip)
         self.rules = TileRules(
-            step=_finite(step_reward, "step_reward"),
-            goal=_finite(goal_reward, "goal_reward"),
-            hole=_finite(hole_reward, "hole_reward"),
-            cliff=_finite(cliff_reward, "cliff_reward"),
+            step=_finite(step_reward, "step_reward"), goal=_finite(goal_reward, "goal_reward"),
+            hole=_finite(hole_reward, "hole_reward"), cliff=_finite(cliff_reward, "cliff_reward"),
             slip=_probability(slip_default, "slip_default"),
         )
         self.cells = rows
@@ -315,52 +266,18 @@ class TileMapEnv(gym.Env[Any, Any]):
         self.action_order = ACTION_ORDERS[actions]
         self.nrow, self.ncol = len(rows), len(rows[0])
         self.desc = np.asarray([list(row) for row in rows], dtype="c")
-        arrays = tile_arrays(rows, reward_of, slip_of, self.action_order, self.rules)
-        self.arrays = arrays
-        self._table: dict[int, dict[int, list[tuple[float, int, float, bool]]]] | None = None
-        self.initial_state_distrib = arrays.initial.copy()
-        self.observation_space = spaces.Discrete(self.nrow * self.ncol)
-        self.action_space = spaces.Discrete(4)
-        self.render_mode = render_mode
-        self.s: int | None = None
-        self.lastaction: int | None = None
+        super().__init__(tile_arrays(rows, reward_of, slip_of, self.action_order, self.rules),
+                         render_mode)
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[int, dict[str, Any]]:
-        super().reset(seed=seed)
+        gym.Env.reset(self, seed=seed)  # the one start, with no draw (as FrozenLake's)
         self.s = int(np.flatnonzero(self.initial_state_distrib)[0])
         self.lastaction = None
         return self.s, {"prob": 1.0}
 
-    def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
-        if self.s is None:
-            raise gym.error.ResetNeeded("TileMap: call reset() before step()")
-        if not self.action_space.contains(action):
-            raise ValueError(f"TileMap action must be an integer in [0, 3], got {action!r}")
-        arrays, s, a = self.arrays, self.s, int(action)
-        weights = arrays.prob[s, a]
-        # Outcomes that cannot happen weigh 0, so they are never drawn: the draw is the
-        # one over the toy-text table `P`, which leaves them out.
-        index = int(np.searchsorted(np.cumsum(weights), self.np_random.random(), side="right"))
-        index = min(index, int(np.flatnonzero(weights)[-1]))
-        self.s = int(arrays.next_state[s, a, index])
-        self.lastaction = a
-        return (self.s, float(arrays.reward[s, a, index]), bool(arrays.terminal[s, a, index]),
-                False, {"prob": float(weights[index])})
-
-    @property
-    def P(self) -> dict[int, dict[int, list[tuple[float, int, float, bool]]]]:  # noqa: N802
-        """The toy-text table `P[s][a] = [(prob, next_state, reward, terminated), ...]`
-        (Gymnasium's name), made when first asked for."""
-        if self._table is None:
-            self._table = _table(self.arrays)
-        return self._table
-
-    def render(self) -> str | None:
-        if self.render_mode is None:
-            gym.logger.warn("TileMap: no render_mode given; pass render_mode='ansi'")
-            return None
+    def picture(self) -> str:
         lines = [list(row) for row in self.cells]
         if self.s is not None:
             r, c = divmod(self.s, self.ncol)
@@ -370,17 +287,3 @@ class TileMapEnv(gym.Env[Any, Any]):
             text = f"  ({self.action_order[self.lastaction].capitalize()})\n"
         return text + "\n".join("".join(line) for line in lines) + "\n"
 
-
-def _table(arrays: TileArrays) -> dict[int, dict[int, list[tuple[float, int, float, bool]]]]:
-    """The toy-text table `P[s][a] = [(prob, next_state, reward, terminated), ...]`."""
-    table: dict[int, dict[int, list[tuple[float, int, float, bool]]]] = {}
-    n_states, n_actions, _ = arrays.prob.shape
-    probs, nexts = arrays.prob.tolist(), arrays.next_state.tolist()
-    rewards, terminals = arrays.reward.tolist(), arrays.terminal.tolist()
-    for s in range(n_states):
-        table[s] = {
-            a: [(p, n, r, t) for p, n, r, t in zip(probs[s][a], nexts[s][a], rewards[s][a],
-                                                   terminals[s][a], strict=True) if p > 0]
-            for a in range(n_actions)
-        }
-    return table

@@ -1,19 +1,4 @@
-"""Moves and shortest distances on GridWorld's square grid, with walls.
-
-Cells are numbered `x * size + y` (x grows to the right, y upwards, as in the
-tutorial). A move into a wall, like a move off the grid, leaves the agent
-where it was. Provides:
-
-- `check_walls(size, walls)`: the walls as a sorted tuple of `(x, y)`, checked;
-- `cell_moves(size, walls)`: per action (right, up, left, down), the cell each
-  cell's move leads to, `[4, cells]`;
-- `cell_distances(size, walls)`: the fewest moves from every cell to every
-  cell, `[cells, cells]`, -1 where no way leads (a wall, or walled off).
-
-Every move can be undone by the opposite one, so distances are symmetric. The
-distance table is found for all targets at once, one breadth-first layer a
-round, and kept for the last few grids asked about.
-"""
+"""Moves and shortest distances on GridWorld's square grid, with walls."""
 
 from __future__ import annotations
 

@@ -1,32 +1,7 @@
 """The games, one folder each, and the `GAMES` registry.
 
-`GAMES` lists the games the app offers (each with its hotkey, parameters and
-roles; see `base`). `resolve_env_id(name)` turns an alias (`frozenlake`) or a
-Gymnasium id into the id a session builds; `game_for(env_id)` finds the game
-that plays it. An id no registered game plays is played by a `GenericGame`
-when its env fits (Discrete spaces and a transition table), including
-Gymnasium's `module:EnvId` form, which imports the module that registers it;
-one that does not fit raises `UnknownGameError` saying what it lacks.
-
-Text that came from data (a save file, a recording, the run history, a tool
-call) is resolved with `from_data=True`: it names registered ids only, and a
-`module:` id is refused unless that module is imported already (the user named
-it with `--env`), so a file never makes tui-gym import code.
-
-Modules:
-
-- `base`: `Game` and its roles (`StateSpace`, `Oracle`, `Narrator`,
-  `HeatmapLayout`), and the data they hand out;
-- `model`: `ModelGame`, the exact figures of any game with a transition table;
-- `tiles`: what grid-map games share (FrozenLake, CliffWalking);
-- `generic`: `GenericGame`, any env with a transition table;
-- `words`: numbers and words for people;
-- `planning`: `PlanModel`, what a game hands the Plan view and `tui-gym plan`;
-- `dp_grid`: what the book's grid worlds share;
-- one package per game: `blackjack`, `gridworld`, `frozenlake`,
-  `cliffwalking`, `taxi`, and Sutton & Barto's worlds `ab_grid`, `corner_grid`,
-  `gambler`, `car_rental`, `random_walk`, `windy` (with its king's moves),
-  `dyna_maze` (with the blocking and shortcut mazes), `max_bias`.
+Ids that came from data (`from_data=True`) name registered games only: a file never
+makes tui-gym import code.
 """
 
 from __future__ import annotations
@@ -56,22 +31,9 @@ __all__ = [
 ]
 
 GAMES: tuple[Game, ...] = (
-    BlackjackGame(),
-    GridWorldGame(),
-    FrozenLakeGame(),
-    CliffWalkingGame(),
-    TaxiGame(),
-    ABGridGame(),
-    CornerGridGame(),
-    GamblerGame(),
-    CarRentalGame(),
-    RandomWalkGame(),
-    WindyGame(),
-    KingWindyGame(),
-    DynaMazeGame(),
-    BlockingMazeGame(),
-    ShortcutMazeGame(),
-    MaxBiasGame(),
+    BlackjackGame(), GridWorldGame(), FrozenLakeGame(), CliffWalkingGame(), TaxiGame(),
+    ABGridGame(), CornerGridGame(), GamblerGame(), CarRentalGame(), RandomWalkGame(), WindyGame(),
+    KingWindyGame(), DynaMazeGame(), BlockingMazeGame(), ShortcutMazeGame(), MaxBiasGame(),
 )
 
 _generic: dict[str, Game] = {}

@@ -1,23 +1,4 @@
-"""What a game is: its identity and parameters, and four small roles.
-
-A `Game` names itself (alias, title, Gymnasium ids, app hotkey), lists its
-typed `Param`s (they become CLI flags and side-panel fields), its actions,
-its board kind and its words for an episode, and hands out four roles:
-
-- `StateSpace` (`game.states`): the base states heatmaps and exact figures
-  look at, a state in words, the board's scene and a text picture;
-- `Oracle` (`game.oracle`): the exact figures: how far a greedy policy is
-  from the optimum, the optimal actions in a state, the optimum itself;
-- `Narrator` (`game.narrator`): outcomes, coach lines, the tally's words,
-  the scoreboard, evaluation figures;
-- `HeatmapLayout` (`game.layout`): the Q-table as heatmap panels, and the
-  focus cell some games let a person move (GridWorld's target, Taxi's slice).
-
-Every role method is total: where a game has nothing to say it returns
-`NotAvailable` (with the reason), an empty answer or a plain fallback, and
-never raises for a state it cannot read. A game with finitely many states
-hands the engine its model as the wrappers make it (`training_model`).
-"""
+"""What a game is: its identity and parameters, and four small roles."""
 
 from __future__ import annotations
 
@@ -49,21 +30,8 @@ if TYPE_CHECKING:
     from tui_gym.session.play import PlayStep, Scorecard
 
 __all__ = [
-    "EXACT",
-    "Advice",
-    "Bound",
-    "EvalOutcome",
-    "Game",
-    "HeatmapLayout",
-    "Narrator",
-    "NotAvailable",
-    "Oracle",
-    "ReferenceMetrics",
-    "Scope",
-    "StateSpace",
-    "TallyWord",
-    "TrainingModel",
-    "all_tied",
+    "EXACT", "Advice", "Bound", "EvalOutcome", "Game", "HeatmapLayout", "Narrator", "NotAvailable",
+    "Oracle", "ReferenceMetrics", "Scope", "StateSpace", "TallyWord", "TrainingModel", "all_tied",
     "greedy_probabilities",
 ]
 
@@ -200,9 +168,7 @@ class StateSpace(Role):
         """`scene` of the unwrapped env; may raise before the first reset."""
         return {}
 
-    def text(
-        self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None
-    ) -> str:
+    def text(self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None) -> str:
         """A plain-text picture of the env's state ('' when it has none); `reveal` shows
         what is hidden during an episode, `before` is as for `scene`."""
         if self.game.render_mode != "ansi":
@@ -332,9 +298,7 @@ class Narrator(Role):
     agreement_words = "moves as the optimum"
 
     tally_words: tuple[TallyWord, ...] = (
-        TallyWord("wins", "good"),
-        TallyWord("draws", "even"),
-        TallyWord("losses", "bad"),
+        TallyWord("wins", "good"), TallyWord("draws", "even"), TallyWord("losses", "bad"),
         TallyWord("truncated", always=False),
     )
 
@@ -361,10 +325,7 @@ class Narrator(Role):
         return ""
 
     def coach_text(
-        self,
-        before: Advice,
-        action: int,
-        scene_before: Mapping[str, Any],
+        self, before: Advice, action: int, scene_before: Mapping[str, Any],
         scene_after: Mapping[str, Any],
     ) -> str:
         """One line judging `action`, taken where `before` was the advice ('' without a
@@ -391,12 +352,8 @@ class Narrator(Role):
         return {}
 
     def scoreboard(
-        self,
-        you: Scorecard,
-        figures: Mapping[str, float] | None,
-        watched: Scorecard | None = None,
-        agent_note: str = "",
-        scope: Scope = EXACT,
+        self, you: Scorecard, figures: Mapping[str, float] | None, watched: Scorecard | None = None,
+        agent_note: str = "", scope: Scope = EXACT,
     ) -> list[ScoreRow]:
         """The rows: the person's mean return and agreement, the agent's and the
         optimum's exact values (`figures` from `Oracle.agent_figures`), the episodes
@@ -409,8 +366,7 @@ class Narrator(Role):
                 "You",
                 join_parts(return_summary(you.tally, noun), agreement_summary(you, words)),
                 join_parts(
-                    return_summary(you.tally, noun, short=True),
-                    agreement_summary(you, short=True),
+                    return_summary(you.tally, noun, short=True), agreement_summary(you, short=True),
                 ),
             )
         ]
@@ -459,10 +415,7 @@ class HeatmapLayout(Role):
     focus_help = ""  # what moving the focus does, for the key help
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None,
         marks: BoolArray | NotAvailable | None = None,
     ) -> list[Heatmap]:
         """Panels for `q` (rows: base states); `marks` ([states, actions], from

@@ -1,21 +1,4 @@
-"""What the book's grid worlds share: a `ModelGame` on a `Grid` (`tui_gym.envs.dp_grid`).
-
-A `DPGridGame` says which grid its arguments make (`grid(kwargs)`); from it
-it gets:
-
-- `DPGridStates`: a cell in words, and the tile board's scene (the grid as
-  rows of tiles, the agent, the last move, what it did in the game's words,
-  the rewards of its special cells);
-- `DPGridLayout`: one heatmap panel shaped like the grid, the greedy move's
-  arrow in each cell, the special cells by their letters where every move is
-  worth the same (A and B, from which every move jumps), terminal cells as ★,
-  walls as █;
-- `ReachNarrator`: words for reaching the end of an episode or running out
-  of time;
-- its exact model, built from the same grid as the env.
-
-A game words what a move did in `event` (a jump, the wind, an end reached).
-"""
+"""What the book's grid worlds share: a `ModelGame` on a `Grid` (`tui_gym.envs.dp_grid`)."""
 
 from __future__ import annotations
 
@@ -127,8 +110,7 @@ class DPGridStates(DiscreteStates):
             "last_action": move,
             "slipped": False,
             "rewards": {f"{r},{c}": pay for (r, c), pay in shown.items()},
-            "marks": {f"{r},{c}": text
-                      for (r, c), text in {**grid.letters, **grid.primes}.items()},
+            "marks": {f"{r},{c}": text for (r, c), text in {**grid.letters, **grid.primes}.items()},
             "moves": list(grid.moves),
         }
         if not set(STRAIGHT) <= set(grid.moves):
@@ -147,11 +129,7 @@ class DPGridLayout(HeatmapLayout):
     """One panel shaped like the grid: max Q colours each cell, the greedy move's arrow."""
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
-        marks: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
         game = _game(self)
         try:
@@ -185,13 +163,9 @@ class DPGridLayout(HeatmapLayout):
                  *([f"{WALL} wall"] if grid.walls else []), "* not an optimal move"]
         return [
             Heatmap(
-                title="max Q and the greedy move",
-                row_labels=tuple(str(r) for r in range(rows)),
-                col_labels=tuple(str(c) for c in range(cols)),
-                values=panel,
-                labels=tuple(labels),
-                marked=marked,
-                legend="  ".join(parts),
+                title="max Q and the greedy move", row_labels=tuple(str(r) for r in range(rows)),
+                col_labels=tuple(str(c) for c in range(cols)), values=panel, labels=tuple(labels),
+                marked=marked, legend="  ".join(parts),
             )
         ]
 

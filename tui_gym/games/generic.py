@@ -1,15 +1,4 @@
-"""Bring your own env: any registered Gymnasium env with a transition table.
-
-`GenericGame(env_id)` plays an env whose unwrapped form has `Discrete`
-observation and action spaces and a table `P` (as Gymnasium's toy-text envs
-do), with no code written for it: its exact model, optimum and the model it
-trains on come from the table (`ModelGame`); its board is its own text render (kind
-"text"); its actions are named by their numbers; its heatmap is a state x
-action table, in pages of `PAGE` states picked on a small panel when there
-are more.
-
-`check_fit(env_id)` says in one sentence what an env that does not fit lacks.
-"""
+"""Bring your own env: any registered Gymnasium env with a transition table."""
 
 from __future__ import annotations
 
@@ -83,11 +72,7 @@ class TableLayout(HeatmapLayout):
     focus_help = "choose a page of states"
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
-        marks: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
         values = np.asarray(q, dtype=float)
         if values.ndim != 2 or 0 in values.shape:
@@ -111,12 +96,9 @@ class TableLayout(HeatmapLayout):
         for i, s in enumerate(rows):
             marked[i, greedy[s]] = wrong[s]
         table = Heatmap(
-            title=f"Q, states {rows.start}-{rows.stop - 1}",
-            row_labels=tuple(str(s) for s in rows),
-            col_labels=tuple(self.game.action_names),
-            values=values[rows.start:rows.stop].copy(),
-            labels=labels,
-            marked=marked,
+            title=f"Q, states {rows.start}-{rows.stop - 1}", row_labels=tuple(str(s) for s in rows),
+            col_labels=tuple(self.game.action_names), values=values[rows.start:rows.stop].copy(),
+            labels=labels, marked=marked,
             legend=f"rows: states  cols: actions  ● greedy  {TIED} tie  * not optimal",
         )
         if pages == 1:

@@ -1,35 +1,8 @@
 """Games with an exact model: the oracle every finite game shares.
 
-`ModelGame` is a game whose exact model comes from its env's transition table
-(`env.unwrapped.P`, as Gymnasium's toy-text envs carry it; `base_model`),
-read once per set of arguments and kept. Its states are the model's states
-(the env's `Discrete` observations), and from the model come, with no game
-code at all:
-
-- the optimum and the exact value of the agent's greedy policy, in the
-  definition of `tui_gym.core.mdp` (over the episode limit in force, gamma 1),
-  with the wrappers' reward changes and time limits taken into account;
-- the coach's action values in the current state, for the steps left;
-- the heatmap's marks, and the model the engine trains on.
-
-**Ties.** With gamma 1 a wasted step costs nothing while time remains, so in
-a deterministic game many moves keep the optimum's value. The coach and the
-heatmaps call optimal only the quickest of them: among the actions of
-optimal value, those that are also best with rewards discounted by
-`TIE_GAMMA` per step. The others are listed in `Advice.equal`.
-
-**A world that changes** as it is played (the book's blocking maze) lists
-the step each phase starts at (`phase_starts`); the exact figures of a
-phase take the arguments with `PHASE` set (`at_step(kwargs, steps)` gives
-those of the phase in force after `steps` steps), and `world(kwargs,
-changes)` hands whoever samples the game every phase's model. A game whose
-states do not offer every action says which they do (`offered_actions`).
-
-**Fixed policies.** With an episode limit the optimum may play differently
-as the limit nears, which no fixed (greedy) policy does.
-`ModelOracle.fixed_policy_bound` says how close a fixed policy gets: the best
-one a local search finds (a lower bound on the best there is), for
-`--target-gap` and the bench to set targets a greedy policy can reach.
+With gamma 1 a wasted step costs nothing, so the coach and the heatmaps call optimal
+only the quickest actions of optimal value (best again when discounted by `TIE_GAMMA`);
+the others are `Advice.equal`.
 """
 
 from __future__ import annotations
@@ -75,15 +48,8 @@ from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import signed, unwrapped_note
 
 __all__ = [
-    "PHASE",
-    "TIE_GAMMA",
-    "DiscreteStates",
-    "ModelGame",
-    "ModelOracle",
-    "Ladder",
-    "elapsed_steps",
-    "freeze",
-    "model_under",
+    "PHASE", "TIE_GAMMA", "DiscreteStates", "ModelGame", "ModelOracle", "Ladder", "elapsed_steps",
+    "freeze", "model_under",
 ]
 
 PHASE = "phase"  # the argument naming a changing world's phase, for its exact figures
@@ -148,8 +114,7 @@ def model_under(model: FiniteMDP, changes: GameChanges) -> FiniteMDP:
             noise = abs(slope) * noise
         unique, inverse = np.unique(model.reward, return_inverse=True)
         mapped = np.array([changes.reward(float(r)) for r in unique])
-        model = model.replace(reward=mapped[inverse].reshape(model.reward.shape),
-                              reward_std=noise)
+        model = model.replace(reward=mapped[inverse].reshape(model.reward.shape), reward_std=noise)
     return with_horizon(model, changes.time_limit)
 
 
@@ -226,8 +191,7 @@ def _induction(model: FiniteMDP, gamma: float, horizon: int) -> FloatArray:
     """
     reward = model.expected_reward
     going = [np.ascontiguousarray(model.continue_prob[..., k]) for k in range(model.max_outcomes)]
-    following = [np.ascontiguousarray(model.next_state[..., k])
-                 for k in range(model.max_outcomes)]
+    following = [np.ascontiguousarray(model.next_state[..., k]) for k in range(model.max_outcomes)]
     rungs = np.empty((horizon, model.n_states, model.n_actions))
     v = np.zeros(model.n_states)
     for i in range(horizon):
@@ -410,10 +374,8 @@ class ModelOracle(Oracle):
         value = _initial_value(model, q.max(axis=1))
         limit = "no episode limit" if model.horizon is None else f"{model.horizon}-step episodes"
         return Optimum(
-            value=value,
-            summary=f"the best expected return of an episode ({limit}, undiscounted)",
-            q=q,
-            marks=ladder.choices()[1],
+            value=value, summary=f"the best expected return of an episode ({limit}, undiscounted)",
+            q=q, marks=ladder.choices()[1],
         )
 
     def bound(

@@ -1,18 +1,7 @@
 """`PlanModel`: what a game hands the Plan view, `tui-gym plan` and the book to plan on.
 
-A game with an exact model gives it with no episode limit and no wrappers
-(the book's setting), with the discount its worlds are solved at by default,
-the episode limit the rest of the tool counts its exact values over, and how
-the model's states sit on the game's base states (the rows of its heatmaps
-and of `tui-gym optimal --json`): usually one to one, but a base state may
-stand for several model states that look the same to the player (Blackjack's
-natural and a drawn soft 21 share an observation and so an action).
-
-Two pictures a game may add where its heatmaps do not show the values as the
-book draws them: `value_panel`, the state values on the heatmap's own grid
-(Jack's car rental, whose heatmap is the book's contour of cars moved), and
-`line`, the states along one axis (the gambler's capital), drawn as the book
-draws its value estimates by sweep and its final policy.
+`value_panel` (state values on the heatmap's grid, as for Jack's car rental) and `line`
+(states along one axis, as the gambler's capital) draw values as the book does.
 """
 
 from __future__ import annotations

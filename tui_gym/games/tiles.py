@@ -1,25 +1,4 @@
-"""Grid-map games: what FrozenLake and CliffWalking share.
-
-A grid-map game is a `ModelGame` whose states are the cells of a map, row by
-row (state = row * cols + col), with four moves named left, down, right, up
-in the env's own action order. This module gives such a game:
-
-- `TileStates`: a cell in words, and the tile board's scene (the map as rows
-  of S F H G C W R letters, its rewards and slip, the agent, the last move and
-  whether it slipped);
-- `TileLayout`: one heatmap panel shaped like the map, the greedy move's
-  arrow in each cell, the tiles with no decision drawn as themselves;
-- `TileNarrator`: words for reaching the goal, falling and running out of time.
-
-A game says which map its parameters choose (`builtin_cells(kwargs)`), what
-its tiles pay and how they slip (`rules(kwargs)`), its board theme and words.
-
-**Edited maps.** The argument `layout` holds a map as text (`games.maps`);
-with it the parameter `map` reads "custom" and the game is played on
-`tui_gym/TileMap-v0` (`envs.tile_map`) with the game's rules and action
-numbers, and its exact model is built from the map directly. Gymnasium's own
-maps are played on Gymnasium's own envs.
-"""
+"""Grid-map games: what FrozenLake and CliffWalking share."""
 
 from __future__ import annotations
 
@@ -57,9 +36,7 @@ TIED = "·"
 
 
 @lru_cache(maxsize=32)
-def _layout_model(
-    grid_map: GridMap, actions: tuple[str, ...], rules: TileRules
-) -> FiniteMDP:
+def _layout_model(grid_map: GridMap, actions: tuple[str, ...], rules: TileRules) -> FiniteMDP:
     arrays = tile_arrays(grid_map.cells, grid_map.reward_table(), grid_map.slip_table(),
                          actions, rules)
     return FiniteMDP(arrays.next_state, arrays.prob, arrays.reward, arrays.terminal,
@@ -151,13 +128,9 @@ class TileGame(ModelGame):
         """What `gym.make` takes to play an edited map on `tui_gym/TileMap-v0`."""
         rules = self.rules(kwargs)
         return {
-            **self.grid_map(kwargs).env_kwargs(),
-            "slip_default": rules.slip,
-            "actions": self.action_order,
-            "step_reward": rules.step,
-            "goal_reward": rules.goal,
-            "hole_reward": rules.hole,
-            "cliff_reward": rules.cliff,
+            **self.grid_map(kwargs).env_kwargs(), "slip_default": rules.slip,
+            "actions": self.action_order, "step_reward": rules.step, "goal_reward": rules.goal,
+            "hole_reward": rules.hole, "cliff_reward": rules.cliff,
             "max_episode_steps": self.episode_limit(kwargs),
         }
 
@@ -185,9 +158,7 @@ def _game(role: Any) -> TileGame:
 class TileStates(DiscreteStates):
     """Cells of the map; the tile board's scene; the map as text."""
 
-    def text(
-        self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None
-    ) -> str:
+    def text(self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None) -> str:
         scene = self.scene(env, before)
         return tile_text(scene, _game(self)) if scene else ""
 
@@ -207,13 +178,8 @@ class TileStates(DiscreteStates):
         last = getattr(game_env, "lastaction", None)
         action = game.action_names[int(last)] if last is not None else None
         scene: dict[str, Any] = {
-            "rows": len(cells),
-            "cols": cols,
-            "cells": cells,
-            "theme": game.theme,
-            "agent": agent,
-            "last_action": action,
-            "slipped": _slipped(cells, before.get("agent"), agent, action),
+            "rows": len(cells), "cols": cols, "cells": cells, "theme": game.theme, "agent": agent,
+            "last_action": action, "slipped": _slipped(cells, before.get("agent"), agent, action),
         }
         if isinstance(game_env, TileMapEnv):
             scene["rewards"] = {cell_key(c): v for c, v in game_env.rewards.items()}
@@ -296,11 +262,7 @@ class TileLayout(HeatmapLayout):
     """One panel shaped like the map: max Q colours each cell, the greedy move's arrow."""
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
-        marks: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
         game = _game(self)
         try:
@@ -334,11 +296,8 @@ class TileLayout(HeatmapLayout):
         tiles = "  ".join(f"{NO_DECISION[t]} {TILE_WORDS[t]}" for t in "HGCW" if t in shown)
         return [
             Heatmap(
-                title="max Q and the greedy move",
-                row_labels=tuple(str(r) for r in range(rows)),
-                col_labels=tuple(str(c) for c in range(cols)),
-                values=values,
-                labels=tuple(labels),
+                title="max Q and the greedy move", row_labels=tuple(str(r) for r in range(rows)),
+                col_labels=tuple(str(c) for c in range(cols)), values=values, labels=tuple(labels),
                 marked=marked,
                 legend=f"arrow: greedy move  {TIED} tie  {tiles}  * not an optimal move",
             )
@@ -349,8 +308,7 @@ class TileNarrator(Narrator):
     """Reached the goal, fell, or ran out of time."""
 
     tally_words: tuple[TallyWord, ...] = (
-        TallyWord("reached", "good"),
-        TallyWord("fell in", "bad", always=False),
+        TallyWord("reached", "good"), TallyWord("fell in", "bad", always=False),
         TallyWord("timed out", "even"),
     )
 
@@ -386,6 +344,5 @@ class TileNarrator(Narrator):
         ended = [d for d in details if d["terminated"]]
         reached = [d for d in ended if d["return"] > 0 or not self.holes]
         return EvalOutcome(figures={
-            "success_rate": len(reached) / n,
-            "timeout_rate": (len(details) - len(ended)) / n,
+            "success_rate": len(reached) / n, "timeout_rate": (len(details) - len(ended)) / n,
         })

@@ -1,11 +1,4 @@
-"""Words and numbers for people, shared by every game's narrator.
-
-Rewards and values with a true minus sign (`format_reward`, `signed`),
-counts (`plural`), a mean return with its 95% interval (`return_summary`,
-`interval_text`), agreement with the optimum (`agreement_summary`), the
-scoreboard's "Watched" row (`watched_row`), and observations as JSON data
-(`to_jsonable`).
-"""
+"""Words and numbers for people, shared by every game's narrator."""
 
 from __future__ import annotations
 
@@ -18,17 +11,8 @@ if TYPE_CHECKING:
     from tui_gym.session.play import Scorecard, Tally
 
 __all__ = [
-    "MIN_CI_EPISODES",
-    "ScoreRow",
-    "agreement_summary",
-    "format_reward",
-    "interval_text",
-    "join_parts",
-    "plural",
-    "return_summary",
-    "signed",
-    "to_jsonable",
-    "unwrapped_note",
+    "MIN_CI_EPISODES", "ScoreRow", "agreement_summary", "format_reward", "interval_text",
+    "join_parts", "plural", "return_summary", "signed", "to_jsonable", "unwrapped_note",
     "watched_row",
 ]
 
@@ -115,8 +99,7 @@ def watched_row(
     text = f"the agent played {plural(tally.episodes, noun)}, mean return {signed(tally.mean, 3)}"
     short = f"agent: {plural(tally.episodes, noun)}, {signed(tally.mean, 3)}"
     return ScoreRow(
-        "Watched",
-        join_parts(text, agreement_summary(card, words), extra),
+        "Watched", join_parts(text, agreement_summary(card, words), extra),
         join_parts(short, extra),
     )
 

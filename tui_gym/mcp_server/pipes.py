@@ -1,16 +1,4 @@
-"""Stdin and stdout as event-loop streams, for the MCP server's stdio transport.
-
-The SDK's own stdio transport reads and writes through worker threads (one
-hand-off per line read, per write and per flush), which bounds a tool call's
-round trip at a few hundred a second. Where stdin and stdout are pipes (as an
-MCP client starts a server), `open_pipes` reads and writes them on the event
-loop instead, and hands them to the SDK's transport as its explicit streams.
-
-As the SDK does, it keeps stray output off the wire: while it serves, file
-descriptor 1 points at stderr and 0 at the null device, and the wire goes
-through private duplicates. Anything that is not a pipe (a file, a terminal)
-gets None, and the caller uses the SDK's own transport.
-"""
+"""Stdin and stdout as event-loop streams, for the MCP server's stdio transport."""
 
 from __future__ import annotations
 

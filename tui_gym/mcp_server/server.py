@@ -1,17 +1,8 @@
 """The MCP server: each tool is a thin call into a `GameTable` of the arena.
 
-Tools: `list_games`, `start_game`, `observe`, `step`, `reset`, `hint`,
-`score` and `end_game`. A refused call raises the SDK's `ToolError`, which the
-client gets as an error result with the message; the server goes on. Arguments
-are taken as their types are, strictly (`true` is no action and no game id); an
-argument of the wrong type is answered in one line naming it and what it takes,
-and text from the call is echoed cut to a readable length. Tools are
-coroutines that never wait, so calls run one at a time on the event loop and
-the table needs no lock.
-
-With `hints` off the `hint` tool refuses, and a move's verdict and the running
-episode's figures stay hidden until the episode ends (`score` then counts
-finished episodes only), so a player cannot read the optimum off its answers.
+Tools are coroutines that never wait, so calls run one at a time and the table needs no
+lock. With `hints` off, verdicts stay hidden until an episode ends, so a player cannot
+read the optimum off its answers.
 """
 
 from __future__ import annotations
@@ -86,10 +77,7 @@ class _Server(MCPServer):
 def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
     """An `MCPServer` whose tools play the games of `table`."""
     server: MCPServer = _Server(
-        name="tui-gym",
-        instructions=INSTRUCTIONS,
-        version=__version__,
-        log_level="WARNING",
+        name="tui-gym", instructions=INSTRUCTIONS, version=__version__, log_level="WARNING",
     )
 
     def seat_of(game_id: int) -> Seat:
@@ -107,10 +95,8 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
     async def list_games() -> CallToolResult:
         """The games: name, parameters (type, default, range) and action names."""
         return _result({
-            "games": [entry.to_json() for entry in catalog()],
-            "hints": hints,
-            "max_games": table.max_games,
-            "idle_timeout_seconds": table.idle_timeout,
+            "games": [entry.to_json() for entry in catalog()], "hints": hints,
+            "max_games": table.max_games, "idle_timeout_seconds": table.idle_timeout,
         })
 
     @server.tool()

@@ -1,16 +1,4 @@
-"""Greedy evaluation: how well the learned policy plays, measured by playing.
-
-`evaluate` plays N episodes with exploration off (ties between equally valued
-actions broken by its own seeded generator, so the agent's generator is left
-alone) and reports mean and standard deviation of the return plus the game's
-own figures (its narrator's: win rates, success rates, steps over the
-optimum).
-
-The cost of an evaluation follows the game, not only N: it also stops once a
-step budget is spent (at the end of the episode that spends it), so a policy
-that walks in circles until a long time limit is measured on fewer episodes
-instead of for minutes. The report says how many were played and asked for.
-"""
+"""Greedy evaluation: how well the learned policy plays, measured by playing."""
 
 from __future__ import annotations
 
@@ -51,22 +39,14 @@ class EvalReport:
 
     def to_dict(self) -> dict[str, Any]:
         return {
-            "episodes": self.episodes,
-            "episodes_requested": self.requested or self.episodes,
-            "mean_return": self.mean_return,
-            "std_return": self.std_return,
-            **self.figures,
+            "episodes": self.episodes, "episodes_requested": self.requested or self.episodes,
+            "mean_return": self.mean_return, "std_return": self.std_return, **self.figures,
         }
 
 
 def evaluate(
-    env: gym.Env,
-    agent: Learner,
-    keyer: ObservationKeyer,
-    narrator: Narrator,
-    episodes: int,
-    seed: int | None = 0,
-    progress: Callable[[int], None] | None = None,
+    env: gym.Env, agent: Learner, keyer: ObservationKeyer, narrator: Narrator, episodes: int,
+    seed: int | None = 0, progress: Callable[[int], None] | None = None,
     max_steps: int | None = None,
 ) -> EvalReport:
     """Play `episodes` greedy episodes on `env` (fewer once `max_steps` steps are
@@ -102,9 +82,7 @@ def evaluate(
     played = len(returns)
     outcome = narrator.eval_outcome(returns, details)
     return EvalReport(
-        episodes=played,
-        mean_return=float(r.mean()),
-        std_return=float(r.std(ddof=1)) if played > 1 else 0.0,
-        figures=outcome.figures,
+        episodes=played, mean_return=float(r.mean()),
+        std_return=float(r.std(ddof=1)) if played > 1 else 0.0, figures=outcome.figures,
         requested=episodes if played < episodes else None,
     )

@@ -1,12 +1,4 @@
-"""Human play: one game a person (or a program) plays move by move.
-
-`HumanGame` plays on its own env, built like the session's (same game, same
-wrappers), so playing never disturbs training. It remembers the current
-episode (steps, return, how it ended) and keeps a running `Tally` of finished
-episodes in constant memory. A `Scorecard` sets a player's record beside the
-exact optimum: how many moves agreed with it, and per-episode figures (such as
-steps over optimal) as running means.
-"""
+"""Human play: one game a person (or a program) plays move by move."""
 
 from __future__ import annotations
 
@@ -59,9 +51,7 @@ class Tally:
         var = (self.total_sq - n * self.mean**2) / (n - 1)
         return math.sqrt(max(0.0, var))
 
-    def confidence_interval(
-        self, z: float = 1.96, min_episodes: int = 2
-    ) -> tuple[float, float]:
+    def confidence_interval(self, z: float = 1.96, min_episodes: int = 2) -> tuple[float, float]:
         """Normal-approximation interval for the mean return (NaN below `min_episodes`,
         and never below 2)."""
         n = self.episodes
@@ -203,8 +193,3 @@ class HumanGame:
     def text(self) -> str:
         """A text picture of the state (hidden cards stay hidden until the end)."""
         return self.game.states.text(self.env, reveal=self.done, before=self._before)
-
-    def observation_json(self) -> Any:
-        if self.last is None:
-            return None
-        return self.game.states.json_observation(self.last.observation)

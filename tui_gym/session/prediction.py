@@ -1,11 +1,4 @@
-"""A prediction learner's figures in a session: its V against the exact V^π, state by state.
-
-`PredictionRuler` keeps the exact values of the policy a `Predictor` follows
-on the game's model (computed again only when the policy, discount or model
-changes) and scores an estimate of V, the live learner's or a snapshot's, as
-`PredictionFigures`: the RMS error over the states the policy reaches, and
-each of those states' estimate beside its true value.
-"""
+"""A prediction learner's figures in a session: its V against the exact V^π, state by state."""
 
 from __future__ import annotations
 

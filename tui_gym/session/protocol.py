@@ -1,31 +1,7 @@
 """The JSON-lines protocol: programs play the same games people do.
 
-`JsonlPlayer.handle(line)` takes one request line and returns one response
-object; `serve(stdin, stdout)` runs the loop behind `tui-gym play ENV --jsonl`
-(one JSON object a line in, one a line out, in order; end of input ends it).
-A program may send requests without waiting for their answers: the loop reads
-whatever has arrived, answers every complete line, and flushes the answers
-before it waits for more input.
-
-Requests (an optional `"id"` is echoed back in the response):
-
-- `{"cmd": "spaces"}`: observation and action spaces, action names, wrappers;
-- `{"cmd": "reset"}` (optional `"seed"`): a new episode;
-- `{"cmd": "step", "action": A}`: A as the integer or the action's name;
-  with `"auto_reset": true`, a step that ends the episode also starts the
-  next one and answers it under `"reset"` (so steps sent ahead of their
-  answers never land on a finished episode);
-- `{"cmd": "render"}`: the text picture (hidden cards stay hidden);
-- `{"cmd": "hint"}`: the exact optimal action(s) in the current state, in the
-  game as its wrappers make it;
-- `{"cmd": "help"}`: the list of commands.
-
-Reset and step answer with `observation` (JSON-friendly), `reward`,
-`terminated`, `truncated`, `info`. Any bad line gets `{"error": "..."}` and
-the session goes on: bytes that are not UTF-8 (each line is decoded on its
-own), JSON nested too deeply, numbers too long to read, lines too long to
-hold. Every response is plain ASCII JSON with no lone surrogates, so any
-strict reader can read it.
+A bad line gets `{"error": "..."}` and the session goes on; every response is plain
+ASCII JSON. The requests are listed in the README.
 """
 
 from __future__ import annotations
@@ -170,12 +146,8 @@ class JsonlPlayer:
         self.rules = session.game  # the game's names and roles
         self.game = HumanGame(session, seed=seed)
         self._handlers: dict[str, Callable[[dict[str, Any]], dict[str, Any]]] = {
-            "spaces": self._spaces,
-            "reset": self._reset,
-            "step": self._step,
-            "render": self._render,
-            "hint": self._hint,
-            "help": self._help,
+            "spaces": self._spaces, "reset": self._reset, "step": self._step,
+            "render": self._render, "hint": self._hint, "help": self._help,
         }
 
     def handle(self, line: str | bytes) -> dict[str, Any]:
@@ -217,20 +189,16 @@ class JsonlPlayer:
             info = to_jsonable(info)
         return {
             "observation": self.rules.states.json_observation(step.observation),
-            "reward": step.reward,
-            "terminated": step.terminated,
-            "truncated": step.truncated,
+            "reward": step.reward, "terminated": step.terminated, "truncated": step.truncated,
             "info": info,
         }
 
     def _spaces(self, request: dict[str, Any]) -> dict[str, Any]:
         env = self.game.env
         return {
-            "env_id": self.session.env_id,
-            "env_kwargs": self.session.env_kwargs,
+            "env_id": self.session.env_id, "env_kwargs": self.session.env_kwargs,
             "wrappers": [str(c) for c in self.session.applied],
-            "observation_space": str(env.observation_space),
-            "action_space": str(env.action_space),
+            "observation_space": str(env.observation_space), "action_space": str(env.action_space),
             "actions": list(self.rules.action_names),
         }
 
@@ -274,8 +242,7 @@ class JsonlPlayer:
         advice = self.rules.oracle.advice(self.game.env, self.session.env_kwargs)
         names = self.rules.action_names
         response: dict[str, Any] = {
-            "optimal_actions": [names[a] for a in advice.optimal],
-            "note": advice.note,
+            "optimal_actions": [names[a] for a in advice.optimal], "note": advice.note,
         }
         if advice.values is not None:
             response["action_values"] = {names[a]: v for a, v in advice.values.items()}

@@ -1,17 +1,4 @@
-"""The session: one env, a choice of wrappers, one learner (the agent) and its trainer.
-
-`Session` is the object every front end drives (the Textual app, the CLI,
-tests, the JSON-lines protocol). It is where game, wrappers, learner and engine
-meet: it finds the game (`tui_gym.games.game_for`), builds the env through
-the wrapper catalog with the game's arguments and the learner from the
-`ALGORITHMS` registry with the game's defaults for that algorithm, hands the
-trainer the game's model as the wrappers make it (when the game has one and
-the wrappers let the model follow), keeps the agent when a rebuild leaves
-the observation keys meaning the same thing (and says so when it cannot),
-changes hyperparameters live (only a change of algorithm needs a fresh
-learner), projects the learner's values onto the game's base states for
-heatmaps and the exact reference, evaluates, saves and loads.
-"""
+"""The session: one env, a choice of wrappers, one learner (the agent) and its trainer."""
 
 from __future__ import annotations
 
@@ -32,13 +19,7 @@ from tui_gym.core.engine.trainer import Trainer
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP, NotAvailable
 from tui_gym.core.obskey import ObservationKeyer
-from tui_gym.core.wrappers import (
-    CATALOG,
-    WrapperChoice,
-    build_env,
-    build_env_lenient,
-    chain,
-)
+from tui_gym.core.wrappers import CATALOG, WrapperChoice, build_env, build_env_lenient, chain
 from tui_gym.core.wrappers.changes import GameChanges
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 from tui_gym.games.base import FixedBound, ReferenceMetrics, TrainingModel
@@ -105,9 +86,7 @@ def _build(
     return _Built(env, applied, tuple(skipped), keyer, int(env.action_space.n), meaning)
 
 
-def default_settings(
-    game: Game, name: str, kwargs: Mapping[str, Any] | None = None
-) -> Settings:
+def default_settings(game: Game, name: str, kwargs: Mapping[str, Any] | None = None) -> Settings:
     """The hyperparameters algorithm `name` starts with on a game with arguments `kwargs`:
     its own defaults with the game's overrides for it (those of its parameters the game
     sets)."""
@@ -137,14 +116,9 @@ class Session:
     algorithm: str  # a name in the ALGORITHMS registry
 
     def __init__(
-        self,
-        env_id: str = "",
-        env_kwargs: Mapping[str, Any] | None = None,
-        choices: Sequence[WrapperChoice] = (),
-        hp: Settings | Mapping[str, Any] | None = None,
-        seed: int = 0,
-        engine: str = "auto",
-        algorithm: str = DEFAULT_ALGORITHM,
+        self, env_id: str = "", env_kwargs: Mapping[str, Any] | None = None,
+        choices: Sequence[WrapperChoice] = (), hp: Settings | Mapping[str, Any] | None = None,
+        seed: int = 0, engine: str = "auto", algorithm: str = DEFAULT_ALGORITHM,
     ) -> None:
         self.env_id = resolve_env_id(env_id or GAMES[0].env_id)
         self.game: Game = game_for(self.env_id)
@@ -267,9 +241,7 @@ class Session:
                          render_mode=render_mode)
 
     def rebuild(
-        self,
-        env_id: str | None = None,
-        env_kwargs: Mapping[str, Any] | None = None,
+        self, env_id: str | None = None, env_kwargs: Mapping[str, Any] | None = None,
         choices: Sequence[WrapperChoice] | None = None,
     ) -> RebuildReport:
         """Change game, env arguments or wrappers; keep the agent when keys keep their meaning.
@@ -286,12 +258,7 @@ class Session:
             self.hp = default_settings(game, self.algorithm, kwargs)
         old_trainer = self.trainer
         self.env.close()
-        self.env_id, self.env_kwargs, self.choices, self.game = (
-            new_id,
-            kwargs,
-            new_choices,
-            game,
-        )
+        self.env_id, self.env_kwargs, self.choices, self.game = (new_id, kwargs, new_choices, game)
         self._install(built)
         if keep:
             self.trainer = self._new_trainer()
@@ -306,9 +273,7 @@ class Session:
         return RebuildReport(keep, notice, built.skipped)
 
     def rebuild_keeps_agent(
-        self,
-        env_id: str | None = None,
-        env_kwargs: Mapping[str, Any] | None = None,
+        self, env_id: str | None = None, env_kwargs: Mapping[str, Any] | None = None,
         choices: Sequence[WrapperChoice] | None = None,
     ) -> bool:
         """Whether `rebuild` with the same arguments would keep the agent (e.g. to ask
@@ -324,9 +289,7 @@ class Session:
             built.env.close()
 
     def _rebuild_args(
-        self,
-        env_id: str | None,
-        env_kwargs: Mapping[str, Any] | None,
+        self, env_id: str | None, env_kwargs: Mapping[str, Any] | None,
         choices: Sequence[WrapperChoice] | None,
     ) -> tuple[str, dict[str, Any], tuple[WrapperChoice, ...], Game]:
         """The env id, checked arguments, wrappers and game a rebuild would use."""
@@ -502,8 +465,7 @@ class Session:
         return reference.reason if isinstance(reference, NotAvailable) else ""
 
     def heatmaps(
-        self, snapshot: TrainingSnapshot | None = None, focus: Any = None,
-        traces: bool = False,
+        self, snapshot: TrainingSnapshot | None = None, focus: Any = None, traces: bool = False,
     ) -> list[Heatmap] | None:
         """The game's heatmap panels of the table (None when wrappers hide the states);
         with `traces`, of a snapshot's eligibility traces in the table's place, unmarked
@@ -514,8 +476,7 @@ class Session:
             if q is None:
                 return None
             marks = self.game.oracle.optimal_marks(kwargs, self.changes)
-            return self.game.layout.heatmaps(self._among_offered(q, kwargs), kwargs, focus,
-                                             marks)
+            return self.game.layout.heatmaps(self._among_offered(q, kwargs), kwargs, focus, marks)
         if snapshot is None:
             raise ValueError("the traces shown are a snapshot's")
         keys = self.base_keys()
@@ -559,8 +520,7 @@ class Session:
         if layout.has_focus:
             panels = layout.heatmaps(q, kwargs, focus)
             height, width = panels[0].shape if panels else (0, 0)
-            focuses += [layout.focus_at(r, c, kwargs)
-                        for r in range(height) for c in range(width)]
+            focuses += [layout.focus_at(r, c, kwargs) for r in range(height) for c in range(width)]
         for candidate in focuses:
             for index, panel in enumerate(layout.heatmaps(q, kwargs, candidate)):
                 found = np.argwhere(np.nan_to_num(panel.values) == 1.0)
@@ -626,11 +586,8 @@ class Session:
 
     # --- headless training ------------------------------------------------
     def train(
-        self,
-        target_gap: float | None = None,
-        check_every: int | None = None,
-        chunk_seconds: float = 0.2,
-        on_chunk: Callable[[TrainingSnapshot], None] | None = None,
+        self, target_gap: float | None = None, check_every: int | None = None,
+        chunk_seconds: float = 0.2, on_chunk: Callable[[TrainingSnapshot], None] | None = None,
     ) -> TrainOutcome:
         """Train to the end of the budget, or until the exact gap is at most `target_gap`.
 
@@ -700,16 +657,11 @@ class Session:
 
         assert self.hp is not None  # set when the session is built
         return {
-            "env_id": self.env_id,
-            "env_kwargs": self.env_kwargs,
-            "wrappers": [format_wrapper_spec(c) for c in self.choices],
-            "algorithm": self.algorithm,
-            "hyperparameters": self.hp.to_dict(),
-            "seed": self.seed,
-            "episodes_trained": self.trainer.episodes,
-            "steps_trained": self.trainer.steps,
-            "agent_episode": self.agent.episode,
-            "n_actions": self.agent.n_actions,
+            "env_id": self.env_id, "env_kwargs": self.env_kwargs,
+            "wrappers": [format_wrapper_spec(c) for c in self.choices], "algorithm": self.algorithm,
+            "hyperparameters": self.hp.to_dict(), "seed": self.seed,
+            "episodes_trained": self.trainer.episodes, "steps_trained": self.trainer.steps,
+            "agent_episode": self.agent.episode, "n_actions": self.agent.n_actions,
             "observation_space": self.keyer.signature,
         }
 

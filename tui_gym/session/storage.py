@@ -1,29 +1,8 @@
 """Saving and loading agents: one versioned file, written atomically, read with care.
 
-The file is a zip archive (numpy's `.npz`) holding `meta.json` (format name
-and version, env id and arguments, wrapper choices, hyperparameters, seed,
-training counts), `q.npy` (the Q-table) and `counts.npy` (updates per state
-and action); sparse tables add `keys.json`.
-
-Storage takes and returns plain data and knows no game: `save_agent` writes
-a meta dict and a learner's state, `read_agent` returns them as a checked
-`SavedAgent` (the session rebuilds itself from it, and reports what does not
-fit the game through `SavedAgent.field_error`). The env id a file names is
-resolved as data (`tui_gym.games.resolve_env_id(from_data=True)`): a file
-never makes tui-gym import a module.
-
-Writing (`save_agent`) goes through `tui_gym.core.files.write_atomically`: a
-temporary file renamed into place, through symbolic links, never over what is
-not a regular file; `check_save_path` says before a long run whether a path
-can be written at all.
-
-Reading (`read_file`, `read_agent`) trusts nothing in the file: only a
-regular file of bounded size is read, every archive member's unpacked size is
-capped before and while it is unpacked, numpy headers are checked against the
-bytes that follow before any array is built, JSON nesting is bounded, and
-every field is validated. Anything that is not a save this version can open
-raises `StorageError`: one line naming the file and, where one is at fault,
-the field.
+Reading trusts nothing: a regular file of bounded size, unpacked sizes capped, numpy
+headers checked, JSON nesting bounded, every field validated; anything else is one
+`StorageError` line. The env id a file names is resolved as data, never imported.
 """
 
 from __future__ import annotations
@@ -135,9 +114,7 @@ class _Reader:
 
 
 _FILE_KINDS = (
-    (stat.S_ISFIFO, "a named pipe"),
-    (stat.S_ISCHR, "a device"),
-    (stat.S_ISBLK, "a device"),
+    (stat.S_ISFIFO, "a named pipe"), (stat.S_ISCHR, "a device"), (stat.S_ISBLK, "a device"),
     (stat.S_ISSOCK, "a socket"),
 )
 
@@ -405,9 +382,7 @@ def short_reason(exc: BaseException) -> str:
 
 def _check_version(reader: _Reader, version: Any) -> int:
     if version is None or isinstance(version, bool) or not isinstance(version, int):
-        raise reader.error(
-            f"save file has no valid format version (got {shown_value(version)})"
-        )
+        raise reader.error(f"save file has no valid format version (got {shown_value(version)})")
     if version < 1:
         raise reader.field("version", f"must be positive, got {shown_value(version)}")
     if version > FORMAT_VERSION:

@@ -1,14 +1,4 @@
-"""The Book view: Sutton & Barto's figures that run learners over seeds, run in the app.
-
-`BookView` lists the figures of `tui-gym book` that train learners (an exact
-figure is one command away: `tui-gym book 4.3`), each with its paragraph.
-Enter runs the highlighted one at its default runs and episodes on a worker
-thread (the learners themselves in child processes, as `compare` runs them),
-with a progress bar; `s` stops it. When it ends, the view draws its band
-charts and the book's claims beside the measured figures with their
-verdicts, as the command prints them. The worker publishes its progress and
-result; the view's timer draws the latest.
-"""
+"""The Book view: Sutton & Barto's figures that run learners over seeds, run in the app."""
 
 from __future__ import annotations
 

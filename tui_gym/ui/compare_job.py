@@ -1,14 +1,4 @@
-"""`CompareJob`: one comparison running on a worker thread, watched by the Compare view.
-
-The view never waits on it: `run_compare` runs on the job's own thread,
-its progress callbacks keep the latest `CompareProgress` and, now and then,
-the outcomes so far (`outcomes`), and the view's timer reads `progress`,
-`outcomes`, `result` and `error` when it draws. `stop()`
-sets the event `run_compare` watches, so what finished is still recorded;
-`close()` stops and waits a bounded time for the thread (the app's exit
-and a switch of game or view use it). A failure becomes one line in
-`error`, never a traceback.
-"""
+"""`CompareJob`: one comparison running on a worker thread, watched by the Compare view."""
 
 from __future__ import annotations
 
@@ -40,12 +30,8 @@ class CompareJob:
     """A comparison on a thread: `start()`, then read `progress`, `result`, `error`."""
 
     def __init__(
-        self,
-        spec: CompareSpec,
-        db: Path,
-        run: Callable[..., Any] | None = None,
-        processes: int | None = None,
-        resume: int | None = None,
+        self, spec: CompareSpec, db: Path, run: Callable[..., Any] | None = None,
+        processes: int | None = None, resume: int | None = None,
     ) -> None:
         """`run` is `run_compare` (or a function with its signature); `processes` and
         `resume` are its own (None: one child process per core, 0: all on the job's

@@ -1,18 +1,4 @@
-"""What the Compare view draws: a run's return curve with its band, and its final figures.
-
-`Series` is one curve as the chart draws it (mean per episode, the 95%
-band's edges when the run has one) and `FigureRow` one row of the figures
-table; both come from a recorded run (`series_of_record`, `row_of_record`)
-or from a comparison still running (`series_of_outcome`, `row_of_outcome`).
-Curves are noisy (a single run's per-episode return; on a game like
-Blackjack even a mean over seeds), so by default each is smoothed with a
-trailing mean over a tenth of its points, and the legend says so. A band is
-smoothed the same way, edge by edge: the mean of the points' half-widths is
-never narrower than the half-width of the smoothed mean, so the band stays a
-95% band, if a wide one. `smooth=False` draws the curves as recorded.
-`bounded` clips a curve's band to the returns its game allows (a band of a
-few seeds runs far past them), and the chart's axis stays within them.
-"""
+"""What the Compare view draws: a run's return curve with its band, and its final figures."""
 
 from __future__ import annotations
 
@@ -127,9 +113,7 @@ def series_of_record(record: RunRecord, smooth: bool = True) -> Series | None:
     return _smoothed(record.id, label, episodes, values, None, None, seeds, smooth)
 
 
-def series_of_outcome(
-    outcome: AlgorithmOutcome, label: str, smooth: bool = True
-) -> Series | None:
+def series_of_outcome(outcome: AlgorithmOutcome, label: str, smooth: bool = True) -> Series | None:
     """A running comparison's aggregate curve for one algorithm, None before any point.
     Smoothed, it is the comparison's own smoothed curve where it has one (each seed's
     returns smoothed before the band is formed)."""
@@ -184,13 +168,9 @@ def row_of_record(record: RunRecord) -> FigureRow:
         episodes = int(curve.episodes[-1]) if curve is not None and len(curve) else None
     status = str(summary.status)
     return FigureRow(
-        key=record.id,
-        label=run_label(summary),
-        seeds=max(1, len(summary.seeds)),
-        episodes=episodes,
-        mean_return_last=summary.figure("mean_return_last"),
-        exact_value=summary.figure("exact_value"),
-        exact_gap=summary.figure("exact_gap"),
+        key=record.id, label=run_label(summary), seeds=max(1, len(summary.seeds)),
+        episodes=episodes, mean_return_last=summary.figure("mean_return_last"),
+        exact_value=summary.figure("exact_value"), exact_gap=summary.figure("exact_gap"),
         note="" if status == "finished" else status,
     )
 
@@ -203,26 +183,15 @@ def row_of_outcome(outcome: AlgorithmOutcome, label: str, note: str = "running")
     """The figures so far: over the episodes every seed has finished."""
     estimate = outcome.mean_return_last
     return FigureRow(
-        key=("live", outcome.algorithm),
-        label=label,
-        seeds=int(outcome.curve.seeds),
+        key=("live", outcome.algorithm), label=label, seeds=int(outcome.curve.seeds),
         episodes=outcome.episodes or None,
         mean_return_last=Figure("mean_return_last", estimate.mean, ci95=estimate.ci95),
         exact_value=_figure("exact_value", outcome.exact_value, outcome.exact_ci95),
-        exact_gap=_figure("exact_gap", outcome.exact_gap),
-        note=note,
+        exact_gap=_figure("exact_gap", outcome.exact_gap), note=note,
     )
 
 
 __all__ = [
-    "CURVE",
-    "FigureRow",
-    "Series",
-    "algorithm_title",
-    "bounded",
-    "row_of_outcome",
-    "row_of_record",
-    "run_label",
-    "series_of_outcome",
-    "series_of_record",
+    "CURVE", "FigureRow", "Series", "algorithm_title", "bounded", "row_of_outcome", "row_of_record",
+    "run_label", "series_of_outcome", "series_of_record",
 ]

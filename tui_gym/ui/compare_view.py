@@ -1,30 +1,4 @@
-"""The Compare view: the current game's recorded runs side by side, and comparisons launched here.
-
-`CompareView` lists the current game's runs from the run history, newest
-first, each with a tick box (`RunList`); the runs ticked are drawn together
-(`CompareChart`: their return curves with 95% bands, a legend, a colour
-each) above a table of their final figures with intervals (`FiguresTable`).
-Above the list, the launch form: the algorithms to compare, the number of
-seeds and of episodes (checked, each wrong field named in one message),
-and a button that runs the comparison for the current game, its parameters,
-its wrappers and the hyperparameters edited in the Train view (each given
-to the chosen algorithms that have it), through `run_compare` on a worker thread
-(`CompareJob`). The view's timer draws its progress as it comes: the curves
-so far, a progress line, and the figures; `s` (or the Stop button) stops
-it, keeping what finished, and `c` on an unfinished comparison in the list
-carries it on: only its missing tasks run (with the game's settings and the
-Train view's hyperparameters as they are: other ones are refused in one line).
-Once it ends, the runs it recorded appear in the list, ticked. A history
-that cannot be opened (damaged, another program's, from a newer tui-gym, a
-path that cannot be examined) is one message in the view, and a run that
-does not read is named in the message while the others are listed; nothing
-else changes. Text from the history is shown as data
-(`visible`).
-
-The view reads the session and the history; it sends nothing up but
-notifications. The app stops a comparison when the person leaves the view,
-switches game or quits (`stop_comparison`, `close`).
-"""
+"""The Compare view: the game's recorded runs side by side, and comparisons launched here."""
 
 from __future__ import annotations
 
@@ -211,9 +185,7 @@ class CompareView(Vertical):
     SCOPED_CSS = False  # the compact rules start at Screen
     DEFAULT_CSS = """
     CompareView { height: 1fr; padding: 0 0 0 1; }
-    CompareView #compare-algorithms {
-        layout: grid; grid-size: 3; grid-gutter: 0 1; height: auto;
-    }
+    CompareView #compare-algorithms { layout: grid; grid-size: 3; grid-gutter: 0 1; height: auto; }
     CompareView #compare-algorithms TickBox { width: 1fr; }
     CompareView #compare-fields { height: 1; }
     CompareView #compare-fields Label { padding: 0 1 0 0; color: $text-muted; }
@@ -222,9 +194,7 @@ class CompareView(Vertical):
     CompareView #compare-fields Button { min-width: 0; margin-right: 1; }
     CompareView #compare-progress { display: none; }
     CompareView.-running #compare-progress { display: block; }
-    CompareView #compare-message {
-        width: 1fr; color: $text-muted; text-wrap: wrap; height: auto;
-    }
+    CompareView #compare-message { width: 1fr; color: $text-muted; text-wrap: wrap; height: auto; }
     CompareView #compare-message.-error { color: $text-error; }
     CompareView #compare-body { height: 1fr; scrollbar-size-vertical: 1; }
     CompareView #compare-runs-title { color: $text-muted; text-style: bold; margin-top: 1; }
@@ -247,13 +217,8 @@ class CompareView(Vertical):
     ]
 
     def __init__(
-        self,
-        *,
-        db: str | Path | None = None,
-        kept: bool = True,
-        processes: int | None = None,
-        id: str | None = None,
-        classes: str | None = None,
+        self, *, db: str | Path | None = None, kept: bool = True, processes: int | None = None,
+        id: str | None = None, classes: str | None = None,
     ) -> None:
         """`db` is the run history's file (None: `TUI_GYM_DB`, else the data folder's);
         `kept` False says it is a scratch file that goes when the app ends
@@ -306,9 +271,9 @@ class CompareView(Vertical):
                             disabled=True, tooltip="Stop it; what finished is recorded (s)")
         self._progress = ProgressLine(id="compare-progress")
         self._message_label = Label("", id="compare-message", markup=False)
-        self._run_list = RunList(id="compare-runs")
-        self._chart = CompareChart(id="compare-chart")
-        self._table = FiguresTable(id="compare-table")
+        self.run_list = RunList(id="compare-runs")
+        self.chart = CompareChart(id="compare-chart")
+        self.table = FiguresTable(id="compare-table")
 
         with Horizontal(id="compare-algorithms"):
             yield from self._boxes.values()
@@ -323,28 +288,15 @@ class CompareView(Vertical):
         yield self._message_label
         with VerticalScroll(id="compare-body"):
             yield Label("Runs of this game (space ticks a run)", id="compare-runs-title")
-            yield self._run_list
-            yield self._chart
-            yield self._table
+            yield self.run_list
+            yield self.chart
+            yield self.table
 
     def on_mount(self) -> None:
         self.set_interval(POLL_SECONDS, self._poll)
         self.reload()
         if self.display:
             self.focus_default()
-
-    # --- parts -------------------------------------------------------------------
-    @property
-    def run_list(self) -> RunList:
-        return self._run_list
-
-    @property
-    def chart(self) -> CompareChart:
-        return self._chart
-
-    @property
-    def table(self) -> FiguresTable:
-        return self._table
 
     @property
     def message(self) -> str:
@@ -563,11 +515,7 @@ class CompareView(Vertical):
     def read_launch(self) -> Launch | None:
         """The form's values, or None (and the message saying what is wrong)."""
         try:
-            return read_launch(
-                self.chosen_algorithms(),
-                self._seeds.value,
-                self._episodes.value,
-            )
+            return read_launch(self.chosen_algorithms(), self._seeds.value, self._episodes.value)
         except ValueError as exc:
             self._say(f"Not started: {exc}.", error=True)
             return None
@@ -595,13 +543,9 @@ class CompareView(Vertical):
 
         session = self.session
         return CompareSpec(
-            game=session.env_id,
-            algorithms=launch.algorithms,
-            seeds=launch.seeds,
-            episodes=launch.episodes,
-            settings=edited_settings(session, launch.algorithms),
-            game_params=dict(session.env_kwargs),
-            wrappers=tuple(session.choices),
+            game=session.env_id, algorithms=launch.algorithms, seeds=launch.seeds,
+            episodes=launch.episodes, settings=edited_settings(session, launch.algorithms),
+            game_params=dict(session.env_kwargs), wrappers=tuple(session.choices),
             first_seed=session.seed if first_seed is None else first_seed,
         )
 

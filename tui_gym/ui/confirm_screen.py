@@ -1,10 +1,4 @@
-"""`ConfirmScreen`: a small yes-or-no question before something that cannot be undone.
-
-It names what will happen and what will be lost, offers two buttons (the
-action, and Cancel, which has the focus), and answers the keyboard: `y`
-confirms, `n` or escape cancels, enter presses the focused button and the
-arrows or tab move between them. It dismisses with True (confirmed) or False.
-"""
+"""`ConfirmScreen`: a small yes-or-no question before something that cannot be undone."""
 
 from __future__ import annotations
 

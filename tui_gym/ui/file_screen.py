@@ -1,14 +1,4 @@
-"""`FileScreen`: type the name of a file to save the agent to, or to load one from.
-
-The field starts with a suggestion (selected, so typing replaces it) and the
-line under it shows the full path that will be used; a name without a suffix
-gets `.tgym`. Enter goes ahead, escape cancels. Saving over an existing file
-asks first (`ConfirmScreen`). What goes wrong (no name, a folder, a missing
-folder, an unreadable or corrupt file) is said on an error line inside the
-dialog, which stays open so the name can be fixed. The work itself is the
-caller's `perform(path)`, which returns an error message or None; on success
-the dialog dismisses with the path.
-"""
+"""`FileScreen`: type the name of a file to save the agent to, or to load one from."""
 
 from __future__ import annotations
 
@@ -64,17 +54,10 @@ class FileScreen(ModalScreen[Path | None]):
     FileScreen Button { margin-left: 2; }
     """
 
-    BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("escape", "cancel", "Cancel", show=False),
-    ]
+    BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "cancel", "Cancel", show=False)]
 
     def __init__(
-        self,
-        title: str,
-        suggestion: str,
-        perform: Callable[[Path], str | None],
-        *,
-        saving: bool,
+        self, title: str, suggestion: str, perform: Callable[[Path], str | None], *, saving: bool,
     ) -> None:
         super().__init__()
         self.title_text = title
@@ -162,8 +145,7 @@ class FileScreen(ModalScreen[Path | None]):
             self.app.push_screen(
                 ConfirmScreen(
                     f"Replace {path.name}?",
-                    f"{path} already exists. Saving replaces what it holds.",
-                    "Replace",
+                    f"{path} already exists. Saving replaces what it holds.", "Replace",
                 ),
                 lambda yes: self._replace(path, bool(yes)),
             )

@@ -1,21 +1,8 @@
 """`KeysInOrder`: an app mixin that handles the keys typed one after the other, in order.
 
-Textual hands each key to the focused widget, and the key's bindings run only
-once it has bubbled up from there to the app, through a queue per widget. A
-key that a widget takes itself (a character in a text field) is handled on the
-way, at once. So in a burst of keys, as a paste or a fast typist sends them,
-the characters typed after a Backspace or an End landed before it ("0.5"
-after three Backspaces came out "0."), and keys typed after one that moves
-the focus (`e`, tab, enter) went to where the focus had been.
-
-With this mixin a key is handed on only once the one before it has been
-handled all the way: taken by a widget on its way up, or back at the app with
-its bindings run and what they asked for done (a focus moved; a dialog shown,
-and drawn, so it has the focus). A key that comes while another is under way
-waits in line; a single key goes at once. (A view that moved the focus only
-after the next refresh would see the keys after it go elsewhere: views move it
-at once.) Should a key's answer never come to an end, the keys behind it go on
-after `KEY_PATIENCE`.
+Textual lets a key that a widget takes itself overtake earlier keys still bubbling up
+(characters after a Backspace, keys after one that moves the focus); here each key
+waits until the one before is handled, at most `KEY_PATIENCE`.
 """
 
 from __future__ import annotations

@@ -1,10 +1,4 @@
-"""The map editor's side of a view that shows it (the Train view, the Plan view).
-
-`show_optimum(editor, session, focus)` draws the session's map solved exactly in
-the editor; `apply_edit(app, session, event)` plays an edited map through the
-app (`rebuild_map`), taking the edit back in the editor when it cannot be
-played; `save_map(app, session, grid_map)` writes it as `GAME-map.txt` here.
-"""
+"""The map editor's side of a view that shows it (the Train view, the Plan view)."""
 
 from __future__ import annotations
 

@@ -1,23 +1,4 @@
-"""The Plan view: dynamic programming on the current game's exact model, sweep by sweep.
-
-`PlanView` shows the values of the current policy, coloured per state with
-the policy's actions, as the game's heatmaps draw a Q-table (the states the
-last improvement or value sweep changed are marked `*`), and the controls of
-Sutton & Barto's chapter 4: policy evaluation (`n` one sweep, `c` on to
-convergence: the largest change below θ), synchronous or in place (`s`);
-policy improvement (`u`, ties shared); policy iteration and value iteration
-(`1` `2` `3` pick the method, space runs it at the chosen speed, `+` `-`, and
-pauses); γ and θ as fields (`e`); the start policy (`o`: random, the optimum,
-the agent's greedy policy) and `r` to start over from it. On a grid game `m`
-opens the map editor above the values: each edit rebuilds the world and the
-planning goes on from the values it had. A line says which value it shows:
-the book's (discounted by γ, no episode limit) beside the tool's exact value
-of the same policy (undiscounted, over the episode limit) where they differ.
-
-The sweeps run on the `PlanRunner`'s thread; the view's timer draws its latest
-snapshot. A game's model is built on a worker thread too (Jack's car rental
-takes a moment the first time).
-"""
+"""The Plan view: dynamic programming on the current game's exact model, sweep by sweep."""
 
 from __future__ import annotations
 
@@ -276,8 +257,7 @@ class PlanView(Vertical):
         self._status.show((
             f"{METHOD_WORDS[snapshot.method]} (1 2 3) · start: {self.start} (o) · {sweep} (s)",
             f"{state} · sweep {snapshot.sweeps} · Δ {delta}{improvements}{last}",
-            self._meaning(snapshot),
-            snapshot.note or self._never_ends(snapshot),
+            self._meaning(snapshot), snapshot.note or self._never_ends(snapshot),
         ))
         self._show_lines(snapshot)
 

@@ -1,32 +1,4 @@
-"""The Play view: a person plays the session's game move by move.
-
-`PlayView` owns a `HumanGame` (its own env, built like the session's, so the
-wrappers chosen in the side panel apply to human play too) and the board the
-game asks for (`board_class(game.board)`). The board turns keys and
-clicks into `Board.Act` / `Board.NewEpisode` messages; this view answers them,
-states what happened in plain words (the game's narrator words outcomes, so
-nothing here knows which game it is) and keeps a running tally of finished
-episodes, counted under the narrator's `tally_words`. A game switch puts the person's
-game and record away (`put_away`) and switching back brings them back.
-
-Beside the game:
-
-- the coach (`c`): after each move, one line from the narrator on whether it
-  was optimal and what it cost (judged on the advice taken *before* the move);
-- advice (`i`): what the exact optimum and the agent's greedy policy would do
-  in the current state (and, with the coach off, a ✓/✗ after each move);
-- the `Scoreboard`: the person, the agent and the optimum as the narrator words
-  them; the person's agreement with the optimum is counted whether or not the
-  coach is on; the agent's exact figures are recomputed when the view is shown
-  and after each episode, never per frame;
-- watching the agent (`a`, or `A` where the board uses `a`): the greedy agent
-  plays fresh episodes of its own game on the board, one move every
-  `watch_interval` seconds (ties broken by a seeded generator); any key stops
-  it and is swallowed, and the person's own game comes back as it was. The
-  agent's episodes never count in the person's tally.
-
-The app calls `reload()` after a rebuild, `focus_board()` and `key_help()`.
-"""
+"""The Play view: a person plays the session's game move by move."""
 
 from __future__ import annotations
 
@@ -45,13 +17,7 @@ from textual.widgets import Static
 
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.games.base import Advice
-from tui_gym.games.words import (
-    ScoreRow,
-    format_reward,
-    interval_text,
-    plural,
-    signed,
-)
+from tui_gym.games.words import ScoreRow, format_reward, interval_text, plural, signed
 from tui_gym.session.play import HumanGame, PlayError, PlayStep, Scorecard
 from tui_gym.ui.widgets.board_kinds import board_class
 from tui_gym.ui.widgets.boards import Board
@@ -146,14 +112,8 @@ class PlayView(Vertical):
         Binding("a,A", "watch_agent", "Watch agent", tooltip="Let the greedy agent play"),
     ]
 
-    def __init__(
-        self,
-        *,
-        name: str | None = None,
-        id: str | None = None,
-        classes: str | None = None,  # noqa: A002
-    ) -> None:
-        super().__init__(name=name, id=id, classes=classes)
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
         self.game: HumanGame | None = None
         self.board: Board | None = None
         self.outcomes: dict[str, int] = {}  # finished episodes by the narrator's tally word
@@ -290,10 +250,8 @@ class PlayView(Vertical):
         else:
             watch = ("a / A", "watch the agent play; any key takes over")
         return [
-            *keys,
-            ("c", "coach: after each move, was it optimal and what did it cost"),
-            ("i", "advice: what the exact optimum and the agent would do here"),
-            watch,
+            *keys, ("c", "coach: after each move, was it optimal and what did it cost"),
+            ("i", "advice: what the exact optimum and the agent would do here"), watch,
         ]
 
     # --- playing -------------------------------------------------------------
@@ -338,8 +296,7 @@ class PlayView(Vertical):
             self._verdict = _verdict(before, step, rules.action_names)
         self._coach, self._coach_tone = "", ""
         if before is not None and step.action is not None and agreed is not None:
-            self._coach = rules.narrator.coach_text(before, step.action, scene_before,
-                                                    game.scene())
+            self._coach = rules.narrator.coach_text(before, step.action, scene_before, game.scene())
             self._coach_tone = "-good" if agreed else "-bad"
         elif before is not None and before.unwrapped_optimal:  # no optimum to judge against
             self._coach = "no verdict: " + before.note
@@ -488,29 +445,20 @@ class PlayView(Vertical):
 
     def action_toggle_advice(self) -> None:
         self.show_advice = not self.show_advice
-        self._verdict = ""
-        self._show_title()
-        if not self.watching:
-            self._show_status()
-        self.notify(
-            "Advice on: what the exact optimum and the agent would do here."
-            if self.show_advice
-            else "Advice off.",
-            timeout=3,
-        )
+        self._toggled("Advice on: what the exact optimum and the agent would do here."
+                      if self.show_advice else "Advice off.")
 
     def action_toggle_coach(self) -> None:
         self.coach_on = not self.coach_on
+        self._toggled("Coach on: each move is judged against the exact optimum."
+                      if self.coach_on else "Coach off.")
+
+    def _toggled(self, message: str) -> None:
         self._verdict = ""
         self._show_title()
         if not self.watching:
             self._show_status()
-        self.notify(
-            "Coach on: each move is judged against the exact optimum."
-            if self.coach_on
-            else "Coach off.",
-            timeout=3,
-        )
+        self.notify(message, timeout=3)
 
     # --- the scoreboard --------------------------------------------------------
     def refresh_agent_figures(self) -> None:

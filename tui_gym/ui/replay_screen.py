@@ -1,19 +1,4 @@
-"""`ReplayScreen`: step through a recording, move by move, with the coach's word on each move.
-
-The screen shows one position of one recorded episode at a time: the game's
-board drawing the recorded scene (the board kind the recording names, not
-interactive; where this tui-gym has no such board, the state in words), the
-move that led there with its reward, the coach's verdict and regret, the
-episode's running regret and return, and on the right the episode's moves,
-each marked ✓ or ✗ (click one, or move along the list, to stand there).
-
-Keys: → / ← (or l / h) one move forward / back, home / end the episode's
-first / last position, n / N (or ] / [) the next / previous episode, j asks
-for an episode's number, escape goes back to the app. The buttons under the
-board do the same with the mouse. Boards that draw a trail (the cells the
-agent left) get the episode's scenes from its start, so a step back draws
-what a step forward would.
-"""
+"""`ReplayScreen`: step through a recording, move by move, with the coach's word on each move."""
 
 from __future__ import annotations
 
@@ -66,8 +51,7 @@ def replay_board(kind: str, player: str) -> Board | None:
     replay_class = _REPLAY_BOARDS.get(board_class)
     if replay_class is None:
         replay_class = type(
-            f"Replay{board_class.__name__}",
-            (board_class,),
+            f"Replay{board_class.__name__}", (board_class,),
             {"player_name": property(lambda self: self.replay_player), "KEEP_SHAPE": False},
         )
         _REPLAY_BOARDS[board_class] = replay_class
@@ -96,9 +80,7 @@ class ReplayScreen(ModalScreen[None]):
     ReplayScreen #replay-board { height: 1fr; min-height: 7; }
     ReplayScreen #replay-board > Board { height: 1fr; }
     ReplayScreen #replay-words { height: 1fr; padding: 1 2; color: $text-muted; }
-    ReplayScreen #replay-status {
-        height: auto; padding: 0 1; border-left: outer $foreground 30%;
-    }
+    ReplayScreen #replay-status { height: auto; padding: 0 1; border-left: outer $foreground 30%; }
     ReplayScreen #replay-status.-good { border-left: outer $success; }
     ReplayScreen #replay-status.-bad { border-left: outer $error; }
     ReplayScreen #replay-headline { text-style: bold; }
@@ -228,12 +210,9 @@ class ReplayScreen(ModalScreen[None]):
             ("→ / l", "one move forward (on into the next episode at the end)"),
             ("← / h", "one move back"),
             ("↑ / ↓", "along the list of moves (click one to stand there)"),
-            ("home / end", "the episode's start / its last move"),
-            ("n / ]", "the next episode"),
-            ("N / [", "the previous episode"),
-            ("j", "jump to an episode by its number"),
-            ("esc", "close the replay, back to the app"),
-            ("q", "quit"),
+            ("home / end", "the episode's start / its last move"), ("n / ]", "the next episode"),
+            ("N / [", "the previous episode"), ("j", "jump to an episode by its number"),
+            ("esc", "close the replay, back to the app"), ("q", "quit"),
         ]
 
     @on(ReplayButton.Pressed)

@@ -1,14 +1,4 @@
-"""`tui-gym screenshots`: deterministic SVG screenshots of the app.
-
-Each game of the registry gets two pictures (played a few moves, and training
-mid-run), then an update step by step, the traces of a λ learner, the wrapper
-panel, the keys and the compact layout. Each
-scenario builds a seeded Session, drives the real app headless with Textual's
-pilot (keys a person would press), trains synchronously where a
-training picture is wanted (so the picture does not depend on thread timing),
-and saves an SVG. Timing figures (episodes/s, seconds) are pinned to nominal
-values in these pictures only, so the files change only when the app does.
-"""
+"""`tui-gym screenshots`: deterministic SVG screenshots of the app."""
 
 from __future__ import annotations
 

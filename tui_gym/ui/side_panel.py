@@ -1,18 +1,4 @@
-"""The side panel: pick the game and the algorithm, tick wrappers, edit them, see the chain.
-
-`SidePanel` shows the game picker with the game's own arguments, the
-algorithm picker (the `ALGORITHMS` registry, with what the chosen one
-teaches; picking another posts `SidePanel.AlgorithmPicked`), the whole
-wrapper catalog as checkboxes (each with its one-line lesson, its parameter
-fields and, when it does not fit the game, the reason; these rows are made
-after the first frame), and the resulting
-wrapper chain: each wrapper in order, innermost first, with its parameters,
-then Gymnasium's repr of the env (`chain_text`). A newly ticked wrapper goes outermost; `[`
-and `]` move the focused one in or out. It never rebuilds anything itself: it
-posts `SidePanel.Changed` and the app asks the Session, then calls `reload()`.
-Invalid parameter text marks its field, says why, and is not applied; escape
-drops an edit not yet applied and posts `SidePanel.Left`.
-"""
+"""The side panel: pick the game and the algorithm, tick wrappers, edit them, see the chain."""
 
 from __future__ import annotations
 
@@ -29,6 +15,7 @@ from textual.widget import AwaitMount
 from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet, Static
 
 from tui_gym.algorithms import ALGORITHMS
+from tui_gym.core.params import typed_text
 from tui_gym.core.wrappers import CATALOG, Param, WrapperChoice, format_wrapper_spec
 from tui_gym.games import GAMES
 from tui_gym.ui.widgets.text_field import TextField
@@ -38,12 +25,6 @@ if TYPE_CHECKING:
     from tui_gym.session.session import Session
 
 OTHER = "game-other"  # the picker's button for an env the registry does not list
-
-
-def _value_text(value: Any) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 class ParamValidator(Validator):
@@ -98,9 +79,7 @@ class ParamField(Horizontal):
             yield box
             return
         field = TextField(
-            value=_value_text(self._value),
-            compact=True,
-            validators=[ParamValidator(self.param)],
+            value=typed_text(self._value), compact=True, validators=[ParamValidator(self.param)],
             validate_on=["changed", "submitted"],
         )
         field.tooltip = tooltip
@@ -124,7 +103,7 @@ class ParamField(Horizontal):
                 box.value = bool(value)
             return
         with self.input.prevent(Input.Changed):
-            self.input.value = _value_text(value)
+            self.input.value = typed_text(value)
 
     def read(self) -> tuple[Any, str | None]:
         """(value, None) when the text is valid, else (None, the reason)."""

@@ -1,10 +1,4 @@
-"""`TooSmallScreen`: what shows while the terminal is smaller than the app needs.
-
-It covers the whole app and, being modal, takes every key: nothing behind it
-acts on a key a person cannot see the effect of. Only `q` (and ctrl+q) quit.
-The app pushes it when the terminal shrinks below its minimum and pops it
-when the terminal is large enough again.
-"""
+"""`TooSmallScreen`: what shows while the terminal is smaller than the app needs."""
 
 from __future__ import annotations
 

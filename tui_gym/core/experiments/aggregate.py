@@ -1,13 +1,4 @@
-"""Curves from several seeds, as one: the mean per episode and its 95% confidence band.
-
-`aggregate` takes per-episode curves from N seeds (an array [N, E]), smooths
-each seed's curve with a trailing rolling mean if asked, and returns the mean
-over seeds with the half-width of a Student-t interval (N - 1 degrees of
-freedom): `t(0.975, N - 1) * s / sqrt(N)`, s the sample standard deviation.
-One seed has no band (None), not a zero-width one. `mean_return_last` is the
-mean over the last 10% of episodes of each seed, averaged over seeds, with its
-own interval across seeds.
-"""
+"""Curves from several seeds, as one: the mean per episode and its 95% confidence band."""
 
 from __future__ import annotations
 
@@ -98,10 +89,8 @@ class AggregateCurve:
         """At most `max_points` evenly spaced points, the first and last episode kept."""
         keep = pick_indices(len(self.mean), max_points)
         return AggregateCurve(
-            episodes=self.episodes[keep],
-            mean=self.mean[keep],
-            half_width=None if self.half_width is None else self.half_width[keep],
-            seeds=self.seeds,
+            episodes=self.episodes[keep], mean=self.mean[keep],
+            half_width=None if self.half_width is None else self.half_width[keep], seeds=self.seeds,
             confidence=self.confidence,
         )
 
@@ -109,10 +98,8 @@ class AggregateCurve:
         lo, hi = self.lo, self.hi
         return [
             CurvePoint(
-                episode=int(self.episodes[i]),
-                mean=float(self.mean[i]),
-                lo=None if lo is None else float(lo[i]),
-                hi=None if hi is None else float(hi[i]),
+                episode=int(self.episodes[i]), mean=float(self.mean[i]),
+                lo=None if lo is None else float(lo[i]), hi=None if hi is None else float(hi[i]),
             )
             for i in range(len(self.mean))
         ]
@@ -128,12 +115,8 @@ class AggregateCurve:
 
 
 def aggregate(
-    curves: np.ndarray | list[Any],
-    *,
-    episodes: np.ndarray | None = None,
-    window: int = 1,
-    max_points: int | None = None,
-    confidence: float = CONFIDENCE,
+    curves: np.ndarray | list[Any], *, episodes: np.ndarray | None = None, window: int = 1,
+    max_points: int | None = None, confidence: float = CONFIDENCE,
 ) -> AggregateCurve:
     """Mean and confidence band per episode of `curves` [seeds, episodes].
 

@@ -1,21 +1,4 @@
-"""The one SQLite connection a process keeps to a run history file: `open_shared`, `Connection`.
-
-Every `RunHistory` on the same file in one process shares one connection (by
-the file's real path; a child process opens its own). SQLite's locks belong to
-the process, and closing any handle a process has on a file drops every lock
-it holds there, so nothing here opens the file but SQLite: the file is
-examined with `stat` only, and recognised (not SQLite, another program's
-database, a damaged or a newer history) by SQLite reading it, before anything
-is written. A refused file is left as it was, and the empty `-wal`/`-shm`
-files SQLite made beside it while reading are removed again.
-
-Writers take the write lock up front (`BEGIN IMMEDIATE`). The connection does
-not wait inside SQLite: a busy file is tried again from here, with the
-connection's lock free between tries, so a thread that only reads never waits
-behind another thread's wait for a different process. A history that can only
-be read (a read-only folder or file) is opened for reading when the caller
-only reads; with no write-ahead log beside it, as a file nothing changes.
-"""
+"""The one SQLite connection a process keeps to a run history file: `open_shared`, `Connection`."""
 
 from __future__ import annotations
 

@@ -1,15 +1,4 @@
-"""Curves as a few bytes: how the run history stores a run's curves.
-
-A run's curves are one blob: the number of curves, then each curve's name and
-bytes, each preceded by its length (varints).
-
-Episodes are stored as their first value and the gaps between them (unsigned
-LEB128 varints): as one gap when they are evenly spaced, else every gap,
-zlib-compressed when that is shorter. Values are float16 after scaling by a power of two
-chosen so the largest magnitude sits at the top of float16's range: every
-value down to 2**-28 times the largest keeps a relative error of at most
-2**-11, whatever the curve's scale. NaN (no value at that episode) is kept.
-"""
+"""Curves as a few bytes: how the run history stores a run's curves."""
 
 from __future__ import annotations
 

@@ -1,14 +1,4 @@
-"""Bounded curves: fewer points for a long curve, and a run's curve kept in fixed memory.
-
-`pick_indices` / `downsample` thin a curve to at most P points, evenly spaced
-and always keeping the first and the last episode (for curves that are already
-smooth, such as a mean over seeds). `bucket_means` instead averages
-consecutive points into at most P buckets, each labelled with its last
-episode, so every episode counts (for noisy per-episode values).
-`CurveAccumulator` takes a run's per-episode values as they come and keeps at
-most a fixed number of bucket means however long the run: when full it merges
-neighbours pairwise and doubles the span of each bucket.
-"""
+"""Bounded curves: fewer points for a long curve, and a run's curve kept in fixed memory."""
 
 from __future__ import annotations
 
@@ -39,10 +29,7 @@ def downsample(
 
 
 def bucket_means(
-    episodes: np.ndarray,
-    values: np.ndarray,
-    max_points: int,
-    weights: np.ndarray | None = None,
+    episodes: np.ndarray, values: np.ndarray, max_points: int, weights: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Consecutive points averaged into at most `max_points` buckets of near-equal size.
 

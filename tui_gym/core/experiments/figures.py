@@ -26,8 +26,6 @@ class Figure:
     def to_json(self) -> dict[str, Any]:
         """The figure as JSON data (NaN, which JSON cannot hold, as null)."""
         return {
-            "name": self.name,
-            "value": self.value if math.isfinite(self.value) else None,
-            "unit": self.unit,
-            "ci95": self.ci95,
+            "name": self.name, "value": self.value if math.isfinite(self.value) else None,
+            "unit": self.unit, "ci95": self.ci95,
         }

@@ -1,29 +1,4 @@
-"""The run history: every run recorded in one SQLite file that any number of processes share.
-
-`RunHistory(path)` opens the file, creating it (and its folder) when missing,
-and brings an older schema up to date; every `RunHistory` on one file in a
-process shares the process's one connection to it (see `connection`). Before
-writing anything it checks that the file is a tui-gym run history: a file that
-is not SQLite, another program's database, a damaged history or one made by a
-newer tui-gym raises a `RunHistoryError` naming the file, and the file is left
-as it was; a damaged one's message says how to copy what is readable
-(`recover`). `read_only=True` is for callers that only read: a missing file is
-not created, and a history in a read-only place can still be listed.
-
-The file is in WAL mode, so readers never wait; writers take the write lock
-up front and wait their turn, so two processes recording at once both get
-every run in. A run is written when it starts (status running, with its
-writer's mark, see `writers`) and updated as it goes: curves (kept to at most
-`STORED_POINTS` bucket means each, see `curve_codec` for the bytes), figures,
-its settings, the saved agent's path, and finally its status and end time.
-A comparison's or a sweep's runs also
-keep each finished task (`put_task`, one transaction each; `read_tasks`), and
-`reopen_run` marks an interrupted run running again to resume it.
-Every row is checked as it is read (`rows`): a run that does not read is one
-line naming it (`DamagedRunError`), and the others stay readable.
-`BestEffortHistory` never raises on a write: a command keeps its results when
-the disk is full and says afterwards that they were not recorded.
-"""
+"""The run history: every run recorded in one SQLite file that any number of processes share."""
 
 from __future__ import annotations
 
@@ -52,11 +27,7 @@ from tui_gym.core.experiments.curve_codec import (
     unpack_curves,
 )
 from tui_gym.core.experiments.downsample import bucket_means
-from tui_gym.core.experiments.errors import (
-    DamagedRunError,
-    RunHistoryError,
-    UnknownRunError,
-)
+from tui_gym.core.experiments.errors import DamagedRunError, RunHistoryError, UnknownRunError
 from tui_gym.core.experiments.figures import Figure
 from tui_gym.core.experiments.records import (
     Curve,
@@ -104,12 +75,8 @@ class RunHistory:
     """One run history file, open for reading and recording (thread-safe)."""
 
     def __init__(
-        self,
-        path: str | Path,
-        *,
-        timeout: float = BUSY_TIMEOUT_S,
-        migrations: Sequence[Migration] = MIGRATIONS,
-        read_only: bool = False,
+        self, path: str | Path, *, timeout: float = BUSY_TIMEOUT_S,
+        migrations: Sequence[Migration] = MIGRATIONS, read_only: bool = False,
     ) -> None:
         self.path = Path(path)
         self.timeout = timeout
@@ -201,16 +168,9 @@ class RunHistory:
         return self._write(write)
 
     def update(
-        self,
-        run_id: int,
-        *,
-        curves: Iterable[Curve] = (),
-        figures: Iterable[Figure] = (),
-        agent_path: str | Path | None = None,
-        status: RunStatus | None = None,
-        ended_at: float | None = None,
-        max_points: int = STORED_POINTS,
-        spec: RunSpec | None = None,
+        self, run_id: int, *, curves: Iterable[Curve] = (), figures: Iterable[Figure] = (),
+        agent_path: str | Path | None = None, status: RunStatus | None = None,
+        ended_at: float | None = None, max_points: int = STORED_POINTS, spec: RunSpec | None = None,
     ) -> None:
         """Add or replace curves (each bounded to `max_points`) and figures (by name), set the
         saved agent's path (None: leave it), the run's settings to `spec`'s (its game,
@@ -402,10 +362,7 @@ class RunHistory:
     # -- queries -------------------------------------------------------------
 
     def read_runs(
-        self,
-        *,
-        game: str | None = None,
-        kind: RunKind | str | None = None,
+        self, *, game: str | None = None, kind: RunKind | str | None = None,
         limit: int | None = None,
     ) -> RunRows:
         """The runs, newest first (at most `limit`; only those of `game` and `kind` when
@@ -428,10 +385,7 @@ class RunHistory:
         return RunRows(tuple(runs), tuple(bad))
 
     def list_runs(
-        self,
-        *,
-        game: str | None = None,
-        kind: RunKind | str | None = None,
+        self, *, game: str | None = None, kind: RunKind | str | None = None,
         limit: int | None = None,
     ) -> list[RunSummary]:
         """The runs that read, newest first (see `read_runs`, which also names the others)."""
@@ -526,10 +480,8 @@ _PLATFORM = ("tui_gym", "gymnasium", "numpy", "python")
 
 def _settings(spec: RunSpec) -> tuple[str, ...]:
     return (
-        spec.game,
-        to_json_text(dict(spec.game_params), "the game's parameters"),
-        to_json_text([w.to_json() for w in spec.wrappers], "the wrappers"),
-        spec.algorithm,
+        spec.game, to_json_text(dict(spec.game_params), "the game's parameters"),
+        to_json_text([w.to_json() for w in spec.wrappers], "the wrappers"), spec.algorithm,
         to_json_text(dict(spec.hyperparameters), "the hyperparameters"),
     )
 

@@ -1,10 +1,4 @@
-"""Where the run history lives: `--db PATH`, else `TUI_GYM_DB`, else the user's data folder.
-
-The data folder is `$XDG_DATA_HOME/tui-gym` when XDG_DATA_HOME is set to an
-absolute path (on any platform), else the platform's own: `~/.local/share/tui-gym`
-on Linux and other Unixes, `~/Library/Application Support/tui-gym` on macOS,
-`%APPDATA%\\tui-gym` on Windows.
-"""
+"""Where the run history lives: `--db PATH`, else `TUI_GYM_DB`, else the user's data folder."""
 
 from __future__ import annotations
 
@@ -19,9 +13,7 @@ DB_ENV = "TUI_GYM_DB"
 
 
 def data_dir(
-    environ: Mapping[str, str] | None = None,
-    platform: str | None = None,
-    home: Path | None = None,
+    environ: Mapping[str, str] | None = None, platform: str | None = None, home: Path | None = None,
 ) -> Path:
     """The user's data folder for tui-gym (not created here)."""
     env = os.environ if environ is None else environ
@@ -40,9 +32,7 @@ def data_dir(
 
 
 def resolve_db_path(
-    explicit: str | None,
-    environ: Mapping[str, str] | None = None,
-    platform: str | None = None,
+    explicit: str | None, environ: Mapping[str, str] | None = None, platform: str | None = None,
     home: Path | None = None,
 ) -> Path:
     """The run history's file: `explicit` (from --db), else $TUI_GYM_DB, else the data folder's."""

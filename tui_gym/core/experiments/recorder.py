@@ -1,12 +1,4 @@
-"""`RunRecorder`: one run being recorded, from its start to how it ended.
-
-Creating one writes the run (status running). Per-episode values go into
-bounded accumulators (`extend`), so memory stays fixed however long the run;
-whole curves and figures wait in memory too. `flush` writes them, `finish`
-writes them with the final status. Used as a context manager it finishes the
-run on the way out: finished, interrupted on Ctrl+C (KeyboardInterrupt), failed
-on any other exception, keeping whatever it had, and lets the exception go on.
-"""
+"""`RunRecorder`: one run being recorded, from its start to how it ended."""
 
 from __future__ import annotations
 
@@ -26,11 +18,7 @@ class RunRecorder:
     """Records one run into a `RunHistory`; `run_id` is its id there."""
 
     def __init__(
-        self,
-        history: RunHistory,
-        spec: RunSpec,
-        *,
-        max_points: int = STORED_POINTS,
+        self, history: RunHistory, spec: RunSpec, *, max_points: int = STORED_POINTS,
         first_episode: int = 1,
     ) -> None:
         self.history = history
@@ -75,12 +63,8 @@ class RunRecorder:
     def flush(self, status: RunStatus | None = None) -> None:
         """Write what the run has so far (and `status`, if given) in one transaction."""
         self.history.update(
-            self.run_id,
-            curves=self._pending_curves(),
-            figures=list(self._figures.values()),
-            agent_path=self._agent_path,
-            status=status,
-            max_points=self.max_points,
+            self.run_id, curves=self._pending_curves(), figures=list(self._figures.values()),
+            agent_path=self._agent_path, status=status, max_points=self.max_points,
         )
 
     def finish(self, status: RunStatus = RunStatus.FINISHED) -> None:
@@ -92,9 +76,7 @@ class RunRecorder:
         return self
 
     def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
+        self, exc_type: type[BaseException] | None, exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
         if self.status is not RunStatus.RUNNING:

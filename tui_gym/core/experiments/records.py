@@ -1,11 +1,4 @@
-"""What the run history holds, as types: a run's settings, its curves, and what a query returns.
-
-`RunSpec` is what a run is started with (kind, game and its parameters,
-wrappers in order, algorithm and hyperparameters, seeds, package versions);
-`Curve` is one named curve; `RunSummary` is one row of a listing and
-`RunRecord` everything about one run. Each has `to_json()`, the one place its
-JSON shape is decided.
-"""
+"""What the run history holds, as types: a run's settings, its curves, and what a query returns."""
 
 from __future__ import annotations
 
@@ -104,9 +97,7 @@ class Versions:
 
     def to_json(self) -> dict[str, str]:
         return {
-            "tui_gym": self.tui_gym,
-            "gymnasium": self.gymnasium,
-            "numpy": self.numpy,
+            "tui_gym": self.tui_gym, "gymnasium": self.gymnasium, "numpy": self.numpy,
             "python": self.python,
         }
 
@@ -116,9 +107,7 @@ def _current_versions() -> Versions:
     from tui_gym import __version__
 
     return Versions(
-        tui_gym=__version__,
-        gymnasium=_package_version("gymnasium"),
-        numpy=np.__version__,
+        tui_gym=__version__, gymnasium=_package_version("gymnasium"), numpy=np.__version__,
         python=platform.python_version(),
     )
 
@@ -184,8 +173,7 @@ class Curve:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "name": self.name,
-            "episodes": self.episodes.tolist(),
+            "name": self.name, "episodes": self.episodes.tolist(),
             "values": [v if np.isfinite(v) else None for v in self.values.tolist()],
         }
 
@@ -215,16 +203,10 @@ class RunSummary:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "id": self.id,
-            "kind": str(self.kind),
-            "game": self.game,
-            "algorithm": self.algorithm,
-            "seeds": list(self.seeds),
-            "status": str(self.status),
-            "started_at": _timestamp(self.started_at),
-            "ended_at": _timestamp(self.ended_at),
-            "seconds": self.seconds,
-            "group": self.group,
+            "id": self.id, "kind": str(self.kind), "game": self.game, "algorithm": self.algorithm,
+            "seeds": list(self.seeds), "status": str(self.status),
+            "started_at": _timestamp(self.started_at), "ended_at": _timestamp(self.ended_at),
+            "seconds": self.seconds, "group": self.group,
             "figures": [f.to_json() for f in self.figures],
         }
 
@@ -251,10 +233,8 @@ class RunRecord:
     def to_json(self, *, curves: bool = True) -> dict[str, Any]:
         data = self.summary.to_json()
         data.update(
-            game_params=dict(self.game_params),
-            wrappers=[w.to_json() for w in self.wrappers],
-            hyperparameters=dict(self.hyperparameters),
-            versions=self.versions.to_json(),
+            game_params=dict(self.game_params), wrappers=[w.to_json() for w in self.wrappers],
+            hyperparameters=dict(self.hyperparameters), versions=self.versions.to_json(),
             agent_path=self.agent_path,
         )
         if curves:

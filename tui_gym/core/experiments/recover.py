@@ -1,12 +1,4 @@
-"""Saving what can be read of a damaged run history: `recover`.
-
-`recover(path)` reads the file through SQLite, for reading only, and copies
-every run that still reads (its settings, figures, status and times, its
-curves when they decode, and its finished tasks that read) into a fresh history beside it,
-`NAME.recovered.EXT` (`NAME.recovered-2.EXT`, ... when that exists), keeping
-the run ids. The original is never written. Runs are found by a scan of the
-runs table and, where the scan stops at damage, by asking for each id in turn.
-"""
+"""Saving what can be read of a damaged run history: `recover`."""
 
 from __future__ import annotations
 
@@ -44,12 +36,9 @@ class Recovery:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "source": str(self.source),
-            "target": None if self.target is None else str(self.target),
-            "copied": self.copied,
-            "unreadable": self.unreadable,
-            "curves_dropped": self.curves_dropped,
-            "check": self.check,
+            "source": str(self.source), "target": None if self.target is None else str(self.target),
+            "copied": self.copied, "unreadable": self.unreadable,
+            "curves_dropped": self.curves_dropped, "check": self.check,
         }
 
 
@@ -158,8 +147,7 @@ def _fetch(conn: sqlite3.Connection, sql: str, key: object) -> tuple[Any, ...] |
     return None if row is None else tuple(row)
 
 
-def _one(conn: sqlite3.Connection, columns: str, run_id: int
-         ) -> tuple[tuple[Any, ...], Any] | None:
+def _one(conn: sqlite3.Connection, columns: str, run_id: int) -> tuple[tuple[Any, ...], Any] | None:
     """A run's row, as `rows.record` reads it, and its curves; each table read on its own
     so that a damaged one loses only what it holds (a platform: the versions)."""
     run = _fetch(conn, f"SELECT {columns} FROM runs WHERE id = ?", run_id)

@@ -1,15 +1,4 @@
-"""Reading the run history's rows as runs, each checked as it is read: `summary`, `record`.
-
-A row holds what some process wrote, or what someone edited. Each field is
-checked for its type and size before it is used: names are text of a bounded
-length, times are seconds between 1970 and 3000, figures finite numbers, the
-settings JSON objects of bounded size and depth, the curves a blob of bounded
-size that decodes (see `curve_codec`). The queries cut every text to its bound
-inside SQLite, so an oversized field never reaches Python whole. A row that
-does not read raises `BadRow` saying which field and why (never echoing more
-than a few characters of it); the history turns that into one line naming the
-run, and the other runs stay readable.
-"""
+"""Reading the run history's rows as runs, each checked as it is read: `summary`, `record`."""
 
 from __future__ import annotations
 
@@ -164,8 +153,7 @@ def figures(text: object) -> tuple[Figure, ...]:
         name = _name(name, "figure's name")
         what = f"figure {visible(name, 40)}"
         found.append(Figure(
-            name,
-            float("nan") if number is None else _finite(number, what),
+            name, float("nan") if number is None else _finite(number, what),
             _name(unit, f"{what}'s unit", optional=True),
             None if ci95 is None else _finite(ci95, f"{what}'s interval"),
         ))
@@ -199,15 +187,9 @@ def summary(row: Sequence[Any], writers: WriterCheck) -> RunSummary:
     if group is not None and (isinstance(group, bool) or not isinstance(group, int)):
         raise BadRow(f"its group is not a run id ({_shown(group)})")
     return RunSummary(
-        id=run_id,
-        kind=run_kind,
-        game=_name(game, "game"),
-        algorithm=_name(algorithm, "algorithm"),
-        seeds=_seeds(seeds),
-        status=run_status,
-        started_at=_time(started, "start"),
-        ended_at=None if ended is None else _time(ended, "end"),
-        figures=figures(figures_text),
+        id=run_id, kind=run_kind, game=_name(game, "game"), algorithm=_name(algorithm, "algorithm"),
+        seeds=_seeds(seeds), status=run_status, started_at=_time(started, "start"),
+        ended_at=None if ended is None else _time(ended, "end"), figures=figures(figures_text),
         group=group,
     )
 
@@ -245,11 +227,7 @@ def record(row: Sequence[Any], run_curves: tuple[Curve, ...], writers: WriterChe
     if agent_path is not None and (not isinstance(agent_path, str) or len(agent_path) > MAX_PATH):
         raise BadRow(f"its saved agent's path is not a path ({_shown(agent_path)})")
     return RunRecord(
-        summary=summary(row, writers),
-        game_params=_object(game_params, "game parameters"),
-        wrappers=_wrappers(wrappers),
-        hyperparameters=_object(hyperparameters, "hyperparameters"),
-        versions=Versions(*versions),
-        curves=run_curves,
-        agent_path=agent_path,
+        summary=summary(row, writers), game_params=_object(game_params, "game parameters"),
+        wrappers=_wrappers(wrappers), hyperparameters=_object(hyperparameters, "hyperparameters"),
+        versions=Versions(*versions), curves=run_curves, agent_path=agent_path,
     )

@@ -1,14 +1,4 @@
-"""What `tui-gym runs` does, as plain functions returning typed results for the CLI to print.
-
-`list_runs` (`runs [--json] [--game G] [--limit N]`), `show_run` (`runs show
-ID`), `export_run_csv` (`runs export ID --csv PATH`), `remove_run` (`runs rm
-ID`), `prune_tasks` (`runs prune`) and `recover_history` (`runs --recover`).
-Each takes `db`, the `--db` value (None for `TUI_GYM_DB` or the data folder's file). Reading never
-creates a file: with no history yet there are no runs; a history that can
-only be read (a read-only folder) can still be listed and shown. A listing
-names the runs that do not read beside those that do. Every problem raises a
-`RunHistoryError` whose message is one line to show.
-"""
+"""What `tui-gym runs` does, as plain functions returning typed results for the CLI to print."""
 
 from __future__ import annotations
 
@@ -38,10 +28,8 @@ class RunListing:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "db": str(self.db),
-            "runs": [run.to_json() for run in self.runs],
-            "damaged": [run.to_json() for run in self.damaged],
-            "total": self.total,
+            "db": str(self.db), "runs": [run.to_json() for run in self.runs],
+            "damaged": [run.to_json() for run in self.damaged], "total": self.total,
         }
 
 
@@ -56,9 +44,7 @@ class CsvExport:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "run": self.run_id,
-            "path": str(self.path),
-            "columns": list(self.columns),
+            "run": self.run_id, "path": str(self.path), "columns": list(self.columns),
             "rows": self.rows,
         }
 
@@ -85,10 +71,7 @@ def _none_yet(run_id: int, path: Path) -> UnknownRunError:
 
 
 def list_runs(
-    db: str | None = None,
-    *,
-    game: str | None = None,
-    kind: RunKind | str | None = None,
+    db: str | None = None, *, game: str | None = None, kind: RunKind | str | None = None,
     limit: int | None = None,
 ) -> RunListing:
     """The recorded runs, newest first (the newest `limit`, only `game`'s and `kind`'s

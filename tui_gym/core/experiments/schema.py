@@ -1,26 +1,4 @@
-"""The run history's schema: migrations applied in order, the version in `PRAGMA user_version`.
-
-A file is ours when its `PRAGMA application_id` is `APPLICATION_ID`; a new
-file gets it together with the first migration. `MIGRATIONS[i]` takes the
-schema from version i to i + 1 and runs inside the caller's transaction, so an
-upgrade is all or nothing. Add a migration to change the schema; never edit
-one that has shipped.
-
-Version 1: `platforms` and `settings` hold each distinct set of package
-versions and of run settings once (a thousand runs of the same settings share
-one row); `runs` is one row per run, its final figures a JSON list of
-[name, value, unit, ci95] in the order given; `curves` holds each run's named
-curves in one blob (see `curve_codec`).
-
-Version 2: `runs.writer` marks the process that records a run (see
-`writers`), so that a run left running by a process that died reads as
-interrupted; an index on the start time keeps the newest runs quick to list.
-
-Version 3: `tasks` holds each finished task of a comparison or a sweep (a block
-of one run's seeds), written as it lands with the inputs that define it (see
-`tasks`), so a run's figures come from what is stored and an interrupted run
-resumes from its missing tasks.
-"""
+"""The run history's schema: migrations applied in order, the version in `PRAGMA user_version`."""
 
 from __future__ import annotations
 

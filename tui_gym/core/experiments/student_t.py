@@ -1,11 +1,4 @@
-"""Student's t distribution: its CDF and its quantile, without scipy.
-
-The CDF comes from the regularized incomplete beta function (a continued
-fraction); the quantile starts from the Cornish-Fisher expansion around the
-normal quantile and is refined by safeguarded Newton steps on that CDF, so it
-is exact to rounding for any degrees of freedom. One and two degrees of
-freedom have closed forms and use them.
-"""
+"""Student's t distribution: its CDF and its quantile, without scipy."""
 
 from __future__ import annotations
 

@@ -1,14 +1,4 @@
-"""A run's finished tasks as the run history keeps them: `TaskRecord`, its row and back.
-
-A task is a block of one run's seeds trained for the same episodes: its row
-holds the inputs that define it (the seeds, their rows in the run's seed list,
-the episodes, the algorithm and its hyperparameters, as JSON) and what it
-gave: every seed's online return of every episode and, where the game has an
-exact model, the greedy policy's exact value at each checkpoint (a prediction
-learner's RMS error of V against the exact values of its policy; float64,
-zlib-compressed, so a stored figure is the figure computed). `decode` checks a
-row as it reads it and raises `BadTask` saying why.
-"""
+"""A run's finished tasks as the run history keeps them: `TaskRecord`, its row and back."""
 
 from __future__ import annotations
 

@@ -1,15 +1,4 @@
-"""A recorded run as TensorBoard event files (`tui-gym runs export ID --tensorboard DIR`).
-
-Each run goes to a folder of its own under DIR, `run-<id>-<game>-<algorithm>`,
-so `tensorboard --logdir DIR` shows every exported run side by side. Curves
-become scalars over the episode number with CleanRL's tags: `return` is
-`charts/episodic_return`, `exact_value` is `charts/exact_value`, a band's
-edges `..._lo` / `..._hi`; the final figures are scalars `figures/<name>` at
-the last episode, and the settings a text summary. Exporting a run again
-replaces its earlier event file. The writer is tensorboardX, from the
-optional extra `tui-gym[tensorboard]`; without it the error says how to
-install it.
-"""
+"""A recorded run as TensorBoard event files (`tui-gym runs export ID --tensorboard DIR`)."""
 
 from __future__ import annotations
 
@@ -46,11 +35,8 @@ class TensorBoardExport:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "run": self.run_id,
-            "path": str(self.path),
-            "logdir": str(self.directory),
-            "tags": list(self.tags),
-            "scalars": self.scalars,
+            "run": self.run_id, "path": str(self.path), "logdir": str(self.directory),
+            "tags": list(self.tags), "scalars": self.scalars,
         }
 
 

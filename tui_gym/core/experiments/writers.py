@@ -1,13 +1,4 @@
-"""Which process records a run, and whether it is still there: `current_writer`, `WriterCheck`.
-
-A run is written with its writer's mark: the host, the boot (Linux's boot id),
-the process id and the process's start time (Linux's clock ticks since boot).
-A run still marked running whose writer is gone (killed, crashed) reads as
-interrupted. On Linux the start time tells a live writer from a later process
-that got the same id; elsewhere a live process with that id counts as the
-writer. A run written on another host, or before runs carried a mark, is taken
-at its word.
-"""
+"""Which process records a run, and whether it is still there: `current_writer`, `WriterCheck`."""
 
 from __future__ import annotations
 

@@ -1,15 +1,4 @@
-"""Which episodes end: the graph facts behind values with no limit and no discount.
-
-With no episode limit and gamma = 1, a value is only defined for play that
-ends the episode with probability 1. These functions answer that exactly, from
-which outcomes are possible (probability > 0), not from the sizes of
-probabilities, so no round-off enters:
-
-- `policy_ends(model, policy)`: the states from which a policy ends the episode
-  with probability 1;
-- `surely_ending(model)`: the states from which some policy does, the actions
-  that keep that possible ("safe"), and one policy that does it from each.
-"""
+"""Which episodes end: the graph facts behind values with no limit and no discount."""
 
 from __future__ import annotations
 

@@ -1,11 +1,4 @@
-"""Exact policy evaluation: `evaluate(model, policy)` and the `PolicyValue` it returns.
-
-The value is the one the package docstring defines: over the model's episode
-limit when it has one (H backward steps of the Bellman expectation), else the
-discounted infinite sum (one linear solve), else with gamma = 1 the expected
-total reward of episodes that surely end, and minus infinity, "never ends",
-for a policy that may not end them.
-"""
+"""Exact policy evaluation: `evaluate(model, policy)` and the `PolicyValue` it returns."""
 
 from __future__ import annotations
 
@@ -21,12 +14,7 @@ from tui_gym.core.mdp.policy import policy_matrix
 from tui_gym.core.mdp.policy_arrays import PolicyArrays
 
 __all__ = [
-    "DENSE_LIMIT",
-    "PolicyValue",
-    "backup",
-    "check_gamma",
-    "evaluate",
-    "expected_value",
+    "DENSE_LIMIT", "PolicyValue", "backup", "check_gamma", "evaluate", "expected_value",
     "solve_linear",
 ]
 

@@ -1,22 +1,4 @@
-"""`model_from_env`: the exact model of a Gymnasium env that carries its own table.
-
-An env fits when its unwrapped form has `Discrete` observation and action
-spaces (starting at 0) and a transition table `P`, with `P[s][a]` the list of
-`(prob, next_state, reward, terminated)` outcomes, as Gymnasium's toy-text
-envs have. The initial distribution is read from `initial_state_distrib` (or
-`isd`), else taken from the caller; it is never estimated by sampling.
-
-The wrappers around the env are read too, innermost first: Gymnasium's
-bookkeeping wrappers change nothing; `TimeLimit` sets the episode limit (the
-tightest one counts); `ScaleReward`, `StepPenalty` and `ClipReward` transform
-the rewards as they do. Any other wrapper has no exact form here.
-
-The result is a `FiniteMDP`, or `NotAvailable` with one sentence saying what
-is missing: callers never need to catch anything for an env that does not
-fit. The model is the table: an env whose `step` does something its table
-does not list (a hidden variable, a second random draw) gets a model of the
-table, not of its play, and must not be modelled this way.
-"""
+"""`model_from_env`: the exact model of a Gymnasium env that carries its own table."""
 
 from __future__ import annotations
 
@@ -82,9 +64,7 @@ def _discrete_size(name: str, role: str, space: gym.Space[Any]) -> int | NotAvai
 
 
 def _table_model(
-    env: gym.Env,
-    initial: np.ndarray | None,
-    action_names: Sequence[str] | None,
+    env: gym.Env, initial: np.ndarray | None, action_names: Sequence[str] | None,
 ) -> FiniteMDP | NotAvailable:
     name = _label(env)
     n_states = _discrete_size(name, "observation", env.observation_space)
@@ -117,11 +97,8 @@ def _table_model(
 
 
 def model_from_env(
-    env: gym.Env,
-    *,
-    initial: Sequence[float] | np.ndarray | None = None,
-    horizon: int | None | Literal["env"] = "env",
-    action_names: Sequence[str] | None = None,
+    env: gym.Env, *, initial: Sequence[float] | np.ndarray | None = None,
+    horizon: int | None | Literal["env"] = "env", action_names: Sequence[str] | None = None,
 ) -> FiniteMDP | NotAvailable:
     """The exact model of `env` and its wrappers, or `NotAvailable` saying why there is none.
 

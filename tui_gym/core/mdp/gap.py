@@ -1,10 +1,4 @@
-"""How far a policy is from the optimum: `exact_gap` and the `Gap` it returns.
-
-Both figures are exact values in the package's one definition, so the gap is
-free of sampling noise and never negative: with an episode limit the optimum is
-the best over every policy, stationary or not; with none, stationary policies
-are optimal. Differences below round-off (`ROUND_OFF`) are reported as 0.
-"""
+"""How far a policy is from the optimum: `exact_gap` and the `Gap` it returns."""
 
 from __future__ import annotations
 
@@ -34,15 +28,6 @@ class Gap:
     gap: float
     never_ends: bool = False
 
-    @property
-    def relative(self) -> float:
-        """The gap as a share of the optimum's magnitude (infinite for a gap on an optimum of 0)."""
-        if self.gap == 0.0:
-            return 0.0
-        if self.optimal_value == 0.0 or not math.isfinite(self.optimal_value):
-            return math.inf
-        return self.gap / abs(self.optimal_value)
-
 
 ROUND_OFF = 1e-9
 """Differences within this share of the optimum's magnitude (at least 1) count as 0."""
@@ -58,10 +43,7 @@ def _difference(optimum: float, value: float) -> float:
 
 
 def exact_gap(
-    model: FiniteMDP,
-    policy: npt.ArrayLike,
-    gamma: float = 1.0,
-    optimum: Solution | None = None,
+    model: FiniteMDP, policy: npt.ArrayLike, gamma: float = 1.0, optimum: Solution | None = None,
 ) -> Gap:
     """The exact value of `policy`, the optimum, and the gap between them.
 
@@ -77,8 +59,6 @@ def exact_gap(
         )
     value = evaluate(model, policy, gamma)
     return Gap(
-        exact_value=value.value,
-        optimal_value=optimum.value,
-        gap=_difference(optimum.value, value.value),
-        never_ends=value.never_ends,
+        exact_value=value.value, optimal_value=optimum.value,
+        gap=_difference(optimum.value, value.value), never_ends=value.never_ends,
     )

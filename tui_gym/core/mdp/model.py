@@ -1,22 +1,4 @@
-"""`FiniteMDP`: a game's exact model as dense transition arrays.
-
-Every state-action pair has up to K outcomes (K the most any pair has); pairs
-with fewer are padded with outcomes of probability 0 that go back to the same
-state, pay nothing and do not end the episode, so every array is `[S, A, K]`
-and every computation is one gather. `FiniteMDP.from_table` builds one from a
-Gymnasium-style table (`table[s][a] = [(prob, next_state, reward, terminated),
-...]`), merging outcomes that are the same and dropping impossible ones.
-
-A model is immutable: its arrays are read-only, so it can be shared between
-threads and kept in snapshots. `ModelError` (a `ValueError`) says in one line
-what is wrong with arrays or a table that do not make a model.
-
-**Rewards with noise.** `reward` holds each outcome's mean reward, so every
-exact figure (values, the optimum, planning) is the same as with the mean
-paid. Where an outcome's reward is drawn at random, `reward_std` gives its
-standard deviation (0 where it is certain), and whoever samples the model
-draws the reward from a normal distribution with that mean and deviation.
-"""
+"""`FiniteMDP`: a game's exact model as dense transition arrays."""
 
 from __future__ import annotations
 
@@ -196,25 +178,17 @@ class FiniteMDP:
         return [
             (float(p), int(s), float(r), bool(t))
             for p, s, r, t in zip(
-                self.prob[state, action][row],
-                self.next_state[state, action][row],
-                self.reward[state, action][row],
-                self.terminal[state, action][row],
-                strict=True,
+                self.prob[state, action][row], self.next_state[state, action][row],
+                self.reward[state, action][row], self.terminal[state, action][row], strict=True,
             )
         ]
 
     def replace(self, **changes: Any) -> FiniteMDP:
         """A copy with some fields replaced (checked again)."""
         fields: dict[str, Any] = {
-            "next_state": self.next_state,
-            "prob": self.prob,
-            "reward": self.reward,
-            "terminal": self.terminal,
-            "initial": self.initial,
-            "horizon": self.horizon,
-            "action_names": self.action_names,
-            "reward_std": self.reward_std,
+            "next_state": self.next_state, "prob": self.prob, "reward": self.reward,
+            "terminal": self.terminal, "initial": self.initial, "horizon": self.horizon,
+            "action_names": self.action_names, "reward_std": self.reward_std,
         }
         unknown = set(changes) - set(fields)
         if unknown:
@@ -275,18 +249,11 @@ class FiniteMDP:
             for a, outcomes in enumerate(row):
                 for k, (p, nxt, r, t) in enumerate(outcomes):
                     prob[s, a, k], next_state[s, a, k], reward[s, a, k], terminal[s, a, k] = (
-                        p,
-                        nxt,
-                        r,
-                        t,
+                        p, nxt, r, t,
                     )
         return cls(
-            next_state=next_state,
-            prob=prob,
-            reward=reward,
-            terminal=terminal,
-            initial=np.asarray(initial, dtype=np.float64),
-            horizon=horizon,
+            next_state=next_state, prob=prob, reward=reward, terminal=terminal,
+            initial=np.asarray(initial, dtype=np.float64), horizon=horizon,
             action_names=None if action_names is None else tuple(action_names),
         )
 

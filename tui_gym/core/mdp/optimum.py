@@ -1,16 +1,4 @@
-"""The optimum: `solve(model)` and the `Solution` it returns, and `optimal_actions`.
-
-With an episode limit H the optimum is found by backward induction over the H
-steps (value iteration run exactly H times), so it is the best any policy can
-do, including one that acts differently as the limit nears. With no limit and
-gamma < 1 it is found by policy iteration; with gamma = 1 by policy iteration
-over the policies that end the episode surely, started from one that does.
-Each policy iteration step is an exact linear solve, so the optimum carries no
-stopping tolerance.
-
-`optimal_actions(q)` marks, per state, every action within a tolerance of the
-best: the actions a coach calls optimal and a heatmap does not mark.
-"""
+"""The optimum: `solve(model)` and the `Solution` it returns, and `optimal_actions`."""
 
 from __future__ import annotations
 

@@ -1,16 +1,4 @@
-"""`Phases`: a world that changes as it is played, as the model of each phase.
-
-A world like the book's blocking maze (Sutton & Barto, Figure 8.4) changes
-after a number of steps counted over every episode played in it: its walls
-move, and from then on another model is in force. `Phases` lists the model of
-each phase and the step it starts at (the first at step 0); `index_at(steps)`
-says which is in force for the transition that follows `steps` transitions.
-A world that never changes has one phase (`Phases.of(model)`).
-
-Whoever samples such a world (a training engine) takes the model in force
-before each transition, counting transitions over episodes; the exact
-figures of a learner are those of the phase in force after its steps.
-"""
+"""`Phases`: a world that changes as it is played, as the model of each phase."""
 
 from __future__ import annotations
 
@@ -54,15 +42,6 @@ class Phases:
         """From (start step, model) pairs."""
         return cls(tuple(m for _, m in phases), tuple(s for s, _ in phases))
 
-    @property
-    def changing(self) -> bool:
-        """Whether the world changes at all."""
-        return len(self.models) > 1
-
     def index_at(self, steps: int) -> int:
         """The phase in force for the transition after `steps` transitions (steps >= 0)."""
         return max(0, bisect_right(self.starts, int(steps)) - 1)
-
-    def model_at(self, steps: int) -> FiniteMDP:
-        """The model in force for the transition after `steps` transitions."""
-        return self.models[self.index_at(steps)]

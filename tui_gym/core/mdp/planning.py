@@ -1,23 +1,4 @@
-"""Dynamic programming one sweep at a time, as Sutton & Barto's chapter 4 writes it.
-
-The values here are the book's: the expected discounted return with no
-episode limit (a model's limit is not looked at), a terminal transition
-ending the sum. Every function works on the model's `[S, A, K]` arrays at
-once, except the in-place sweeps, which go through the states in index order
-so that each reads the values already updated in the same sweep.
-
-- `evaluation_sweep(model, policy, v, gamma, in_place)`: one sweep of
-  iterative policy evaluation; the new values and the largest change;
-- `value_sweep(model, v, gamma, in_place)`: one sweep of value iteration,
-  with the greedy actions it took its maxima from;
-- `greedy(model, v, gamma, tolerance)` and `improve(...)`: policy improvement,
-  the actions within `tolerance` of the best shared equally, a state's old
-  actions kept while they are all still among them;
-- `Planner`: a policy and its values stepped by one of `METHODS` (policy
-  evaluation, policy iteration, value iteration), sweep by sweep, with the
-  counts, the last change and the states an improvement changed, for the
-  Plan view, `tui-gym plan` and the book's figures.
-"""
+"""Dynamic programming one sweep at a time, as Sutton & Barto's chapter 4 writes it."""
 
 from __future__ import annotations
 
@@ -34,16 +15,8 @@ from tui_gym.core.mdp.policy import policy_matrix
 from tui_gym.core.mdp.policy_arrays import PolicyArrays
 
 __all__ = [
-    "METHODS",
-    "Improvement",
-    "Planner",
-    "check_method",
-    "check_theta",
-    "evaluation_sweep",
-    "greedy",
-    "improve",
-    "uniform_policy",
-    "value_sweep",
+    "METHODS", "Improvement", "Planner", "check_method", "check_theta", "evaluation_sweep",
+    "greedy", "improve", "uniform_policy", "value_sweep",
 ]
 
 FloatArray = npt.NDArray[np.float64]
@@ -170,13 +143,8 @@ class Planner:
     """
 
     def __init__(
-        self,
-        model: FiniteMDP,
-        *,
-        gamma: float = 1.0,
-        theta: float = 1e-6,
-        policy: npt.ArrayLike | None = None,
-        values: npt.ArrayLike | None = None,
+        self, model: FiniteMDP, *, gamma: float = 1.0, theta: float = 1e-6,
+        policy: npt.ArrayLike | None = None, values: npt.ArrayLike | None = None,
         in_place: bool = False,
     ) -> None:
         self.model = model
@@ -224,13 +192,6 @@ class Planner:
             self._unsettled()
         else:
             self.restart()
-
-    def set_policy(self, policy: npt.ArrayLike) -> None:
-        """Follow another policy from the current values."""
-        self.policy = policy_matrix(self.model, policy)
-        self.changed = np.zeros(self.model.n_states, dtype=bool)
-        self._arrays = None
-        self._unsettled()
 
     @property
     def tolerance(self) -> float:

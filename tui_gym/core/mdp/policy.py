@@ -1,13 +1,4 @@
-"""Policies for a `FiniteMDP`, in the two forms the package accepts.
-
-A policy is either deterministic, an int array `[S]` holding the action taken
-in each state, or stochastic, a float array `[S, A]` holding each action's
-probability (rows sum to 1). `policy_matrix` turns either into the `[S, A]`
-form (checked, `PolicyError` when it is not a policy of the model), and
-`greedy_policy` builds the stochastic policy an agent follows from its action
-values: ties for the best value shared equally, as an agent that breaks ties
-at random plays them, and with `epsilon` the epsilon-greedy mix.
-"""
+"""Policies for a `FiniteMDP`, in the two forms the package accepts."""
 
 from __future__ import annotations
 

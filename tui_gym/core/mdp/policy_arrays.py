@@ -1,14 +1,4 @@
-"""`PolicyArrays`: a policy's one-step Bellman expectation, gathered once, swept many times.
-
-Only the outcomes the policy can reach are kept (one per state for a
-deterministic policy on a deterministic game), so a sweep reads a few numbers
-a state instead of every action's; up to `DENSE_STATES` states they are added
-up into one `[S, S]` matrix, so that a sweep is one matrix product however
-many outcomes an action has (Jack's car rental has 441).
-`sweep(v, gamma)` is the synchronous sweep (a new array, all states from the
-old values); `sweep_in_place(v, gamma)` updates `v` state by state in index
-order, each state reading the values already updated this sweep.
-"""
+"""`PolicyArrays`: a policy's one-step Bellman expectation, gathered once, swept many times."""
 
 from __future__ import annotations
 

@@ -1,12 +1,4 @@
-"""The ruler of prediction: a fixed policy's exact values, and the RMS error of an estimate.
-
-`Truth.of(model, policy, gamma)` holds V^π on every model state (`evaluate`)
-and which states the policy reaches from the initial distribution (the states
-an episode passes through before it ends; ends themselves are not states an
-estimate is scored on). `Truth.rms(v)` is the root mean square of `v - V^π`
-over those states, equally weighted, as the book's prediction figures
-average them.
-"""
+"""The ruler of prediction: a fixed policy's exact values, and the RMS error of an estimate."""
 
 from __future__ import annotations
 

@@ -1,14 +1,4 @@
-"""`return_range`: the lowest and the highest return one episode of a finite MDP can have.
-
-The returns any way of playing can meet, over every outcome the model allows
-(probability above 0), from any state an episode may start in, counted until
-the episode ends or its limit cuts it off (gamma 1). With a limit H it is H
-steps of backward induction (fewer once a step changes nothing), taking the
-best and the worst outcome instead of the expected one; with none, the same
-steps until they change nothing. A
-return that can grow (or fall) without end, by a loop that pays (or costs) and
-may be repeated at will, has no bound on that side: ±inf.
-"""
+"""`return_range`: the lowest and the highest return one episode of a finite MDP can have."""
 
 from __future__ import annotations
 

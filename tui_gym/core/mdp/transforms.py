@@ -1,46 +1,25 @@
-"""A model as a reward or time-limit wrapper changes it.
-
-Each function returns a new model whose exact values are those of the wrapped
-game: `scale_reward` (`ScaleReward`: every reward times `factor`),
-`step_penalty` (`StepPenalty`: `penalty` taken off every step's reward, the
-last one included), `clip_reward` (Gymnasium's `ClipReward`: each reward
-clipped to `[low, high]`, either bound optional), and `with_horizon`
-(`TimeLimit`: a different episode limit, or None for none). Rewards are
-transformed outcome by outcome, so clipping stays exact however an action's
-outcomes differ; a reward drawn with noise (`FiniteMDP.reward_std`) scales
-with its deviation, and is not clipped (its clipped mean is no longer one
-outcome's reward). The arguments are checked as the wrappers check theirs.
-"""
+"""A model as a reward or time-limit wrapper changes it."""
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 
 from tui_gym.core.mdp.model import FiniteMDP
+from tui_gym.core.params import finite_number
 
 __all__ = ["clip_reward", "scale_reward", "step_penalty", "with_horizon"]
 
 
-def _finite(name: str, value: float, *, minimum: float | None = None) -> float:
-    number = float(value)
-    if not math.isfinite(number) or (minimum is not None and number < minimum):
-        bound = "" if minimum is None else f" >= {minimum:g}"
-        raise ValueError(f"{name} must be a finite number{bound}, got {value!r}")
-    return number
-
-
 def scale_reward(model: FiniteMDP, factor: float) -> FiniteMDP:
     """The model with every reward multiplied by `factor`."""
-    factor = _finite("ScaleReward factor", factor)
+    factor = finite_number("ScaleReward factor", factor)
     noise = None if model.reward_std is None else abs(factor) * model.reward_std
     return model.replace(reward=factor * model.reward, reward_std=noise)
 
 
 def step_penalty(model: FiniteMDP, penalty: float) -> FiniteMDP:
     """The model with `penalty` (>= 0) subtracted from every step's reward."""
-    penalty = _finite("StepPenalty penalty", penalty, minimum=0.0)
+    penalty = finite_number("StepPenalty penalty", penalty, minimum=0.0)
     return model.replace(reward=model.reward - penalty)
 
 
@@ -51,8 +30,8 @@ def clip_reward(model: FiniteMDP, low: float | None = None, high: float | None =
     if model.reward_std is not None and model.reward_std.any():
         raise ValueError("ClipReward on rewards drawn with noise: the clipped mean is not "
                          "modelled")
-    low = None if low is None else _finite("ClipReward min_reward", low)
-    high = None if high is None else _finite("ClipReward max_reward", high)
+    low = None if low is None else finite_number("ClipReward min_reward", low)
+    high = None if high is None else finite_number("ClipReward max_reward", high)
     if low is not None and high is not None and low > high:
         raise ValueError(f"ClipReward min_reward ({low:g}) must be <= max_reward ({high:g})")
     return model.replace(reward=np.clip(model.reward, low, high))

@@ -1,21 +1,4 @@
-"""The coach's judgement of a move: a verdict, and the exact regret where it is known.
-
-`MoveJudge.assess(env, steps_taken)` looks at the env's state *before* a move
-and returns an `Assessment`; `Assessment.judge(action)` is then the
-`Judgement` of the move taken there:
-
-- the **regret** is `max_a Q*(s,·) − Q*(s, a)`, in exact expected return. The
-  action values come from the game's own advice when it has them (Blackjack's
-  dynamic programme), else from the exact model of the env (a table `P`, as
-  Gymnasium's toy-text games carry) solved by `tui_gym.core.mdp` with the
-  steps that are left under a time limit. Both are of the game as its
-  wrappers make it. Summed over an episode it estimates, without bias, how
-  far the player's play is from the optimum's.
-- the **verdict** is "optimal" or "not optimal", from those values or, where
-  there are none, from the advice's set of optimal actions; None where there
-  is no optimum to judge by (a wrapper changes the game beyond the exact
-  figures, or no decision is left).
-"""
+"""The coach's judgement of a move: a verdict, and the exact regret where it is known."""
 
 from __future__ import annotations
 

@@ -1,18 +1,4 @@
-"""`read_recording`: a recording file read back, tolerantly, for replay.
-
-Every line is read on its own: a line that is not JSON, not a known record or
-missing a field it needs is skipped and its number kept; a file from another
-format version is read as far as its lines fit this one. Whatever went wrong
-comes back as one message (`Recording.message`), and everything that could
-be read replays. Episodes are numbered in the order they appear in the file,
-from 1.
-
-A recording is data from a file: only its first `MAX_READ_BYTES` are read (the
-message says so past them), text meant for people (names, notes, the state in
-words) comes back with its control characters made visible and cut to a
-readable length, and a scene that the caller's `scene_fits(board, scene)` says
-its board cannot draw is dropped (and counted in the message).
-"""
+"""`read_recording`: a recording file read back, tolerantly, for replay."""
 
 from __future__ import annotations
 
@@ -250,9 +236,7 @@ def read_recording(path: str | Path, scene_fits: SceneCheck | None = None) -> Re
     return recording
 
 
-def read_lines_of(
-    handle: IO[bytes], path: Path, scene_fits: SceneCheck | None = None
-) -> Recording:
+def read_lines_of(handle: IO[bytes], path: Path, scene_fits: SceneCheck | None = None) -> Recording:
     """Read a recording from an open binary file (see `read_recording`)."""
     recording = Recording(path)
     reader = _Reader(recording, scene_fits)
@@ -353,17 +337,14 @@ class _Reader:
         if len(wrappers) > MAX_WRAPPERS:
             raise _Bad
         game = RecordedGame(
-            line=number,
-            version=version if isinstance(version, int) else None,
-            tui_gym=_name(record.get("tui_gym")),
-            source=_name(record.get("source")),
+            line=number, version=version if isinstance(version, int) else None,
+            tui_gym=_name(record.get("tui_gym")), source=_name(record.get("source")),
             game=_name(record.get("game")),
             title=_name(record.get("title")) or _name(record.get("game")) or "unknown game",
             env_id=_text(record.get("env_id")),
             env_kwargs=record["env_kwargs"] if isinstance(record.get("env_kwargs"), dict) else {},
             wrappers=tuple(visible(w, NAME_CHARS) for w in wrappers),
-            seed=_int_or_none(record.get("seed")),
-            board=_text(record.get("board")),
+            seed=_int_or_none(record.get("seed")), board=_text(record.get("board")),
             actions=tuple(visible(a, NAME_CHARS) for a in _list(record.get("actions"))[:1024]),
             episode_noun=_name(record.get("episode_noun")) or "episode",
         )
@@ -381,10 +362,8 @@ class _Reader:
         number = _int(record.get("episode"))
         frame = self._frame(record)
         episode = Episode(
-            index=len(self.recording.episodes) + 1,
-            game=self._current_game(),
-            seed=_int_or_none(record.get("seed")),
-            positions=[Position(frame, None)],
+            index=len(self.recording.episodes) + 1, game=self._current_game(),
+            seed=_int_or_none(record.get("seed")), positions=[Position(frame, None)],
             recorded_number=number,
         )
         self.recording.episodes.append(episode)
@@ -399,14 +378,10 @@ class _Reader:
             raise _Bad
         name = _name(record.get("action_name"))
         move = Move(
-            step=_int(record.get("step")),
-            action=action,
-            action_name=name or game.action_name(action),
-            reward=_number(record.get("reward")),
-            terminated=_bool(record.get("terminated")),
-            truncated=_bool(record.get("truncated")),
-            verdict=verdict,
-            regret=_number_or_none(record.get("regret")),
+            step=_int(record.get("step")), action=action,
+            action_name=name or game.action_name(action), reward=_number(record.get("reward")),
+            terminated=_bool(record.get("terminated")), truncated=_bool(record.get("truncated")),
+            verdict=verdict, regret=_number_or_none(record.get("regret")),
             optimal=tuple(visible(a, NAME_CHARS) for a in _list(record.get("optimal"))[:64]),
             note=_words(record.get("note")),
         )
@@ -415,9 +390,7 @@ class _Reader:
         if episode is None or episode.recorded_number != number or episode.end is not None:
             # Its start line was lost: the episode begins at this move.
             episode = Episode(
-                index=len(self.recording.episodes) + 1,
-                game=game,
-                started=False,
+                index=len(self.recording.episodes) + 1, game=game, started=False,
                 recorded_number=number,
             )
             self.recording.episodes.append(episode)
@@ -427,10 +400,8 @@ class _Reader:
     def _end(self, record: dict[str, Any]) -> None:
         number = _int(record.get("episode"))
         end = EpisodeEnd(
-            steps=_int(record.get("steps")),
-            episode_return=_number(record.get("return")),
-            terminated=_bool(record.get("terminated")),
-            truncated=_bool(record.get("truncated")),
+            steps=_int(record.get("steps")), episode_return=_number(record.get("return")),
+            terminated=_bool(record.get("terminated")), truncated=_bool(record.get("truncated")),
             regret=_number_or_none(record.get("regret")),
         )
         episode = self.episode
@@ -453,8 +424,7 @@ class _Reader:
         info = record.get("info")
         text = record.get("text")
         return Frame(
-            observation=record.get("observation"),
-            scene=scene,
+            observation=record.get("observation"), scene=scene,
             text=_words(text) if isinstance(text, str) else None,
             info=info if isinstance(info, dict) else {},
         )

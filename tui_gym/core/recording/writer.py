@@ -1,13 +1,4 @@
-"""`LineWriter`: appends whole lines to a file, each one flushed to the OS as it is written.
-
-Each line goes to the file in a single `write` on a descriptor opened for
-appending, so a crash (or a kill) of the program leaves every line written
-before it whole and no part of the next one. A write the disk cuts short
-(full, quota) is taken back: the file is truncated to where the line began
-and the error raised, so the file never ends in half a line written here.
-Only a regular file is written (through a symbolic link, the file it points to); a
-device, a pipe or a socket is refused before anything is written.
-"""
+"""`LineWriter`: appends whole lines to a file, each one flushed to the OS as it is written."""
 
 from __future__ import annotations
 

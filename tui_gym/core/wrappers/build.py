@@ -1,18 +1,4 @@
-"""Building an env from an id and a list of wrapper choices.
-
-Provides `build_env` (strict: a choice that does not fit raises
-`WrapperMismatchError`), `build_env_lenient` (applies what fits, returns what it
-skipped and why), `check_choices` (the same verdicts without keeping the env)
-and `UnknownEnvError`.
-
-Choices apply in order, the first innermost; a chain of more than `MAX_CHAIN`
-is refused. A `TimeLimit` put directly on
-top of another replaces it (see `catalog.replace_time_limit`), so choosing
-`TimeLimit:max_episode_steps=500` first on an env registered with 300 steps
-gives 500-step episodes,
-just as `gym.make(..., max_episode_steps=500)` would, not a second limit that
-could only shorten the registered 300.
-"""
+"""Building an env from an id and a list of wrapper choices."""
 
 from __future__ import annotations
 
@@ -63,12 +49,8 @@ def _make(env_id: str, kwargs: Mapping[str, Any], render_mode: str | None) -> gy
 
 
 def _assemble(
-    env_id: str,
-    env_kwargs: Mapping[str, Any] | None,
-    choices: Sequence[WrapperChoice],
-    render_mode: str | None,
-    *,
-    strict: bool,
+    env_id: str, env_kwargs: Mapping[str, Any] | None, choices: Sequence[WrapperChoice],
+    render_mode: str | None, *, strict: bool,
 ) -> tuple[gym.Env, list[str | None]]:
     """The env, and per choice None (applied) or the reason it was skipped."""
     check_chain_length(len(choices))
@@ -101,9 +83,7 @@ def _assemble(
 
 
 def build_env(
-    env_id: str,
-    env_kwargs: Mapping[str, Any] | None = None,
-    choices: Sequence[WrapperChoice] = (),
+    env_id: str, env_kwargs: Mapping[str, Any] | None = None, choices: Sequence[WrapperChoice] = (),
     render_mode: str | None = None,
 ) -> gym.Env:
     """`gym.make(env_id, render_mode=..., **env_kwargs)` wrapped by `choices`, first innermost.
@@ -117,9 +97,7 @@ def build_env(
 
 
 def build_env_lenient(
-    env_id: str,
-    env_kwargs: Mapping[str, Any] | None = None,
-    choices: Sequence[WrapperChoice] = (),
+    env_id: str, env_kwargs: Mapping[str, Any] | None = None, choices: Sequence[WrapperChoice] = (),
     render_mode: str | None = None,
 ) -> tuple[gym.Env, list[tuple[WrapperChoice, str]]]:
     """Like `build_env`, but skips the choices that do not fit (or are invalid).
@@ -132,9 +110,7 @@ def build_env_lenient(
 
 
 def check_choices(
-    env_id: str,
-    env_kwargs: Mapping[str, Any] | None = None,
-    choices: Sequence[WrapperChoice] = (),
+    env_id: str, env_kwargs: Mapping[str, Any] | None = None, choices: Sequence[WrapperChoice] = (),
 ) -> list[tuple[WrapperChoice, str | None]]:
     """For each choice, None if it would apply, else why not.
 

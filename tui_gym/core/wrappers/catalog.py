@@ -1,15 +1,4 @@
-"""The catalog of swappable wrappers: what each one is, takes and needs.
-
-Provides `WrapperSpec` (one catalog entry: a one-line summary, its `Param`s,
-whether it fits an env, how to build it), `CATALOG` in teaching order and
-`get_spec`, `WrapperChoice` (a hashable, validated pick of one wrapper and its
-values), the CLI syntax `parse_wrapper_spec` / `format_wrapper_spec`
-(`Name` or `Name:key=value,key=value`), and `check_chain_length`: a chain holds
-at most `MAX_CHAIN` wrappers, wherever it comes from.
-
-Parameter names are the wrapped classes' own keyword arguments, so a choice's
-values go straight into the constructor.
-"""
+"""The catalog of swappable wrappers: what each one is, takes and needs."""
 
 from __future__ import annotations
 
@@ -41,16 +30,8 @@ from tui_gym.core.wrappers.fits import (
 )
 
 __all__ = [
-    "CATALOG",
-    "MAX_CHAIN",
-    "UnknownWrapperError",
-    "WrapperChoice",
-    "WrapperMismatchError",
-    "WrapperSpec",
-    "check_chain_length",
-    "format_wrapper_spec",
-    "get_spec",
-    "parse_wrapper_spec",
+    "CATALOG", "MAX_CHAIN", "UnknownWrapperError", "WrapperChoice", "WrapperMismatchError",
+    "WrapperSpec", "check_chain_length", "format_wrapper_spec", "get_spec", "parse_wrapper_spec",
 ]
 
 MAX_CHAIN = 32  # wrappers in one chain: far more than any lesson needs, far below a stack's depth
@@ -181,11 +162,7 @@ CATALOG: dict[str, WrapperSpec] = {
             "the goal must be reached in time.",
             params=(
                 Param(
-                    "max_episode_steps",
-                    int,
-                    default=100,
-                    minimum=1,
-                    maximum=100_000,
+                    "max_episode_steps", int, default=100, minimum=1, maximum=100_000,
                     help="steps after which the episode is truncated",
                 ),
             ),
@@ -208,15 +185,11 @@ CATALOG: dict[str, WrapperSpec] = {
             "near the time limit become different states.",
             params=(
                 Param(
-                    "flatten",
-                    bool,
-                    default=True,
+                    "flatten", bool, default=True,
                     help="flatten the result into one vector (discrete parts one-hot)",
                 ),
                 Param(
-                    "normalize_time",
-                    bool,
-                    default=False,
+                    "normalize_time", bool, default=False,
                     help="time as a fraction of the limit in [0, 1] instead of a step count",
                 ),
             ),
@@ -230,19 +203,11 @@ CATALOG: dict[str, WrapperSpec] = {
             "the world no longer obeys exactly, so plans must be robust.",
             params=(
                 Param(
-                    "repeat_action_probability",
-                    float,
-                    default=0.25,
-                    minimum=0.0,
-                    maximum=0.99,
+                    "repeat_action_probability", float, default=0.25, minimum=0.0, maximum=0.99,
                     help="chance that a step repeats the previous action (Machado et al.: 0.25)",
                 ),
                 Param(
-                    "repeat_action_duration",
-                    int,
-                    default=1,
-                    minimum=1,
-                    maximum=100,
+                    "repeat_action_duration", int, default=1, minimum=1, maximum=100,
                     help="how many steps a repeat lasts once it starts",
                 ),
             ),
@@ -255,11 +220,7 @@ CATALOG: dict[str, WrapperSpec] = {
             "the agent must act on stale information.",
             params=(
                 Param(
-                    "delay",
-                    int,
-                    default=1,
-                    minimum=1,
-                    maximum=100,
+                    "delay", int, default=1, minimum=1, maximum=100,
                     help="steps by which observations arrive late",
                 ),
             ),
@@ -273,19 +234,11 @@ CATALOG: dict[str, WrapperSpec] = {
             "alike, which changes what is worth chasing.",
             params=(
                 Param(
-                    "min_reward",
-                    float,
-                    default=-1.0,
-                    minimum=-1000.0,
-                    maximum=1000.0,
+                    "min_reward", float, default=-1.0, minimum=-1000.0, maximum=1000.0,
                     help="lowest reward let through",
                 ),
                 Param(
-                    "max_reward",
-                    float,
-                    default=1.0,
-                    minimum=-1000.0,
-                    maximum=1000.0,
+                    "max_reward", float, default=1.0, minimum=-1000.0, maximum=1000.0,
                     help="highest reward let through",
                 ),
             ),
@@ -299,11 +252,7 @@ CATALOG: dict[str, WrapperSpec] = {
             "the same, but the values learned and the pace of learning change.",
             params=(
                 Param(
-                    "factor",
-                    float,
-                    default=10.0,
-                    minimum=-100.0,
-                    maximum=100.0,
+                    "factor", float, default=10.0, minimum=-100.0, maximum=100.0,
                     help="multiplier applied to every reward",
                 ),
             ),
@@ -316,11 +265,7 @@ CATALOG: dict[str, WrapperSpec] = {
             "so shorter episodes win.",
             params=(
                 Param(
-                    "penalty",
-                    float,
-                    default=0.01,
-                    minimum=0.0,
-                    maximum=10.0,
+                    "penalty", float, default=0.01, minimum=0.0, maximum=10.0,
                     help="cost subtracted from each step's reward",
                 ),
             ),
@@ -333,11 +278,7 @@ CATALOG: dict[str, WrapperSpec] = {
             "Option 2): a dense hint that speeds learning but can mislead if k is large.",
             params=(
                 Param(
-                    "k",
-                    float,
-                    default=0.1,
-                    minimum=0.0,
-                    maximum=10.0,
+                    "k", float, default=0.1, minimum=0.0, maximum=10.0,
                     help="reward lost per cell of distance still to go",
                 ),
             ),

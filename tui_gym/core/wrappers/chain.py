@@ -1,11 +1,4 @@
-"""The one reader of a built env's wrapper chain.
-
-`layers(env)` is every wrapper around the bare env, innermost first;
-`time_limit(layer)` the steps a `TimeLimit` layer allows (None for any other
-layer) and `elapsed(layer)` the steps it has counted this episode. The exact
-model, the change list, the fits checks, the engine's choice of loop and the
-per-state views all read the chain through these.
-"""
+"""The one reader of a built env's wrapper chain."""
 
 from __future__ import annotations
 

@@ -1,22 +1,4 @@
-"""How the wrappers around a game change it, as far as its exact figures care.
-
-`GameChanges.of(env)` reads a built env's wrapper stack, innermost first:
-
-- reward wrappers (any `gymnasium.RewardWrapper`, e.g. `ScaleReward`,
-  `StepPenalty`, `ClipReward`, and our `DistanceShaping`) become one function
-  `reward(base, distance)`: the reward the wrapped env hands out for a step
-  whose bare reward is `base` and after which the agent is `distance` cells
-  from its target (the env's `info["distance"]`; unused elsewhere). It calls
-  the wrappers' own `reward` code, so it is exactly what they do;
-- the tightest `TimeLimit` is `time_limit`;
-- wrappers that change only what the agent observes change nothing here;
-- anything else (`StickyAction`, an unknown wrapper) changes the game's
-  dynamics in a way no exact figure here models: it is named in `others`.
-
-A game's oracle decides from this whether its exact figures (optimum,
-advice, the value of a policy) can be computed for the game as played, or
-must be given as figures of the unwrapped game.
-"""
+"""How the wrappers around a game change it, as far as its exact figures care."""
 
 from __future__ import annotations
 

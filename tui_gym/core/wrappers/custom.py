@@ -1,29 +1,15 @@
-"""Our own reward wrappers: `ScaleReward`, `StepPenalty` and `DistanceShaping`.
-
-Gymnasium has no ready-made wrapper for these three lessons, so they live here,
-written the way Gymnasium writes its own: each records its constructor
-arguments (`RecordConstructorArgs`), so `env.spec` lists it and
-`gym.make(env.spec)` rebuilds the same stack, and its class name is what
-`str(env)` shows, e.g. `<StepPenalty<TimeLimit<...>>>`.
-"""
+"""Our own reward wrappers: `ScaleReward`, `StepPenalty` and `DistanceShaping`."""
 
 from __future__ import annotations
 
-import math
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
 from gymnasium.core import ActType, ObsType
 
+from tui_gym.core.params import finite_number
+
 __all__ = ["DistanceShaping", "ScaleReward", "StepPenalty"]
-
-
-def _finite(name: str, value: float, *, minimum: float | None = None) -> float:
-    number = float(value)
-    if not math.isfinite(number) or (minimum is not None and number < minimum):
-        bound = "" if minimum is None else f" >= {minimum:g}"
-        raise ValueError(f"{name} must be a finite number{bound}, got {value!r}")
-    return number
 
 
 class ScaleReward(gym.RewardWrapper[ObsType, ActType], gym.utils.RecordConstructorArgs):
@@ -40,7 +26,7 @@ class ScaleReward(gym.RewardWrapper[ObsType, ActType], gym.utils.RecordConstruct
     """
 
     def __init__(self, env: gym.Env[ObsType, ActType], factor: float) -> None:
-        factor = _finite("ScaleReward factor", factor)
+        factor = finite_number("ScaleReward factor", factor)
         gym.utils.RecordConstructorArgs.__init__(self, factor=factor)
         gym.RewardWrapper.__init__(self, env)
         self.factor = factor
@@ -61,7 +47,7 @@ class StepPenalty(gym.RewardWrapper[ObsType, ActType], gym.utils.RecordConstruct
     """
 
     def __init__(self, env: gym.Env[ObsType, ActType], penalty: float) -> None:
-        penalty = _finite("StepPenalty penalty", penalty, minimum=0.0)
+        penalty = finite_number("StepPenalty penalty", penalty, minimum=0.0)
         gym.utils.RecordConstructorArgs.__init__(self, penalty=penalty)
         gym.RewardWrapper.__init__(self, env)
         self.penalty = penalty
@@ -90,7 +76,7 @@ class DistanceShaping(
     """
 
     def __init__(self, env: gym.Env[ObsType, ActType], k: float) -> None:
-        k = _finite("DistanceShaping k", k, minimum=0.0)
+        k = finite_number("DistanceShaping k", k, minimum=0.0)
         gym.utils.RecordConstructorArgs.__init__(self, k=k)
         gym.Wrapper.__init__(self, env)
         self.k = k

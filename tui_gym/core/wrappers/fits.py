@@ -17,12 +17,7 @@ from gymnasium.wrappers.utils import create_zero_array
 from tui_gym.core.wrappers.chain import layers, time_limit
 
 __all__ = [
-    "env_label",
-    "fits_any",
-    "fits_delay",
-    "fits_distance",
-    "fits_flatten",
-    "fits_time_aware",
+    "env_label", "fits_any", "fits_delay", "fits_distance", "fits_flatten", "fits_time_aware",
     "fits_time_limit",
 ]
 
@@ -97,13 +92,8 @@ def fits_delay(env: gym.Env, values: Mapping[str, Any] | None) -> str | None:
     return None
 
 
-def _reports_distance(env: gym.Env) -> bool:
-    """Whether the env says it puts `info["distance"]` in every step (`reports_distance`)."""
-    return bool(getattr(env.unwrapped, "reports_distance", False))
-
-
 def fits_distance(env: gym.Env, values: Mapping[str, Any] | None) -> str | None:
-    if _reports_distance(env):
+    if getattr(env.unwrapped, "reports_distance", False):  # info["distance"] every step
         return None
     return (
         "DistanceShaping needs an env that reports info['distance'] each step; "

@@ -1,27 +1,8 @@
 """ab-grid: Sutton & Barto's Example 3.5, the 5 x 5 grid with the special cells A and B.
 
-## Action Space
-up (0), down (1), left (2), right (3).
-
-## Observation Space
-The cell, `row * 5 + col`.
-
-## Rewards
-From A (row 0, col 1) any move pays +10 and lands on A′ (row 4, col 1); from
-B (row 0, col 3) +5 and lands on B′ (row 2, col 3); a move off the grid pays
--1 and stays; every other move pays 0.
-
-## Starting State
-Any cell, uniformly.
-
-## Episode End
-The book's task never ends; tui-gym plays it in episodes of `EPISODE_LIMIT`
-steps (truncated), and its exact values count those steps undiscounted, as
-for every game. The book's values are discounted by 0.9 with no end: the
-Plan view and `tui-gym plan` show those (Figures 3.2 and 3.5).
-
-## Arguments
-None.
+Spaces and rewards: `tui_gym.envs.dp_grid.ABGridEnv`. The book's task never ends; tui-gym
+plays it in episodes of `EPISODE_LIMIT` steps, undiscounted, while the Plan view and
+`tui-gym plan` show the book's values, discounted by 0.9 with no end (Figures 3.2, 3.5).
 """
 
 from __future__ import annotations

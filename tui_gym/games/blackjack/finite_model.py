@@ -1,16 +1,4 @@
-"""Blackjack as a `FiniteMDP`, for planning sweep by sweep (the Plan view, `tui-gym plan`).
-
-The states are the game's base states, in their order (player sum 4-21
-without a usable ace, then 12-21 with one, each against dealer cards A-10),
-followed by the opening natural against each dealer card: the hidden state
-behind the soft-21 observation that pays differently under the `natural`
-and `sab` rules (see `solver`). Actions are stick (0) and hit (1). A hit
-that does not bust goes on, with the step's reward; a bust ends the hand;
-a stick ends it with a loss, a push or a win, with the chances of the
-dealer's final hand against the player's total (an infinite deck, exactly
-as `solver` computes them). Hands start as dealt: the player's two cards
-and the dealer's up card.
-"""
+"""Blackjack as a `FiniteMDP`, for planning sweep by sweep (the Plan view, `tui-gym plan`)."""
 
 from __future__ import annotations
 
@@ -73,8 +61,7 @@ def _model_index() -> np.ndarray:
     index = np.empty((_N_LIVE, DEALERS), dtype=np.int64)
     for i, (total, usable) in enumerate(_STATE_OBS):
         for d in range(1, DEALERS + 1):
-            index[i, d - 1] = (N_BASE + d - 1 if i == _NATURAL
-                               else _base_index(total, usable, d))
+            index[i, d - 1] = (N_BASE + d - 1 if i == _NATURAL else _base_index(total, usable, d))
     return index
 
 
@@ -127,5 +114,4 @@ def blackjack_model(rules: BlackjackRules = DEFAULT_RULES) -> FiniteMDP:
     terminal[rows, 1, _N_LIVE] = True
     initial = np.zeros(n_states)
     initial[rows] = (_INITIAL[:, None] * _CARD_PROBS[None, :]).reshape(-1)
-    return FiniteMDP(next_state, prob, reward, terminal, initial,
-                     action_names=("stick", "hit"))
+    return FiniteMDP(next_state, prob, reward, terminal, initial, action_names=("stick", "hit"))

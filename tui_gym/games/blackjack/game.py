@@ -1,16 +1,4 @@
-"""Blackjack: Gymnasium's `Blackjack-v1` as the app sees it.
-
-Actions are stick (0) and hit (1). Base states are every decision state
-(player sum 4-21, dealer card A-10, usable ace); the exact figures come from
-the game's own dynamic programme (`solver`, an infinite deck, exact), and the
-heatmaps are the two halves of a basic-strategy chart.
-
-Reward wrappers (`ScaleReward`, `StepPenalty`, `ClipReward`, any function of
-a step's reward) and a `TimeLimit` too long to cut a hand short are taken into
-account exactly: the dynamic programme runs on the rewards the wrapped env
-hands out. Anything else that changes the game (`StickyAction`, a shorter
-`TimeLimit`) leaves the figures those of the unwrapped game, and they say so.
-"""
+"""Blackjack: Gymnasium's `Blackjack-v1` as the app sees it."""
 
 from __future__ import annotations
 
@@ -134,16 +122,11 @@ class BlackjackStates(StateSpace):
         dealer = [int(c) for c in getattr(game_env, "dealer", [])]
         player_total, usable = hand_value(player)
         return {
-            "player": player,
-            "dealer": dealer,
-            "player_total": player_total,
-            "player_usable": usable,
-            "dealer_total": hand_value(dealer)[0],
+            "player": player, "dealer": dealer, "player_total": player_total,
+            "player_usable": usable, "dealer_total": hand_value(dealer)[0],
         }
 
-    def text(
-        self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None
-    ) -> str:
+    def text(self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None) -> str:
         """Both hands as text; the dealer's hole card shows only with `reveal`."""
         hands = self.scene(env)
         dealer = hands.get("dealer", [])
@@ -252,14 +235,11 @@ class BlackjackOracle(Oracle):
         q = optimal_action_values(rules, soft_21="drawn")[_base_index()]
         return Optimum(
             value=optimal_value(rules),
-            summary="the exact expected return per hand of the optimal strategy",
-            q=q,
+            summary="the exact expected return per hand of the optimal strategy", q=q,
             marks=self.optimal_marks(kwargs),
         )
 
-    def bound(
-        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
-    ) -> Bound:
+    def bound(self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> Bound:
         return Bound("gap", TRAINED_GAP, f"gap <= {TRAINED_GAP}")
 
     def return_range(
@@ -330,11 +310,7 @@ class BlackjackLayout(HeatmapLayout):
     """The two halves of a basic-strategy chart: with and without a usable ace."""
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
-        marks: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
         if np.shape(q) != (len(_base_states()), 2):
             return []

@@ -1,36 +1,7 @@
 """Exact dynamic programming for Gymnasium's ``Blackjack-v1``.
 
-Provides the yardsticks the app shows beside a learning agent, with no sampling
-noise:
-
-- `policy_value(policy, rules)`: the exact expected return of any deterministic
-  hit/stick policy from the initial deal (fast enough to call on a UI timer),
-  and `mixed_policy_value(hit_probability, rules)` for a policy that hits with
-  a given probability (e.g. an agent breaking ties at random);
-- `optimal_action_values(rules)`: Q*(observation, action) for every reachable
-  decision state, for a coach ("your hit cost X in expected value");
-- `optimal_policy(rules)` and `optimal_value(rules)`: the best policy over
-  observations and its exact value;
-- `BlackjackRules`: the env's ``natural`` / ``sab`` reward variants, and what
-  reward wrappers make of each step's reward (`with_rewards`);
-- `policy_from_function(fn)`: build a policy array from a Python function.
-
-The model follows the env's source exactly: an infinite deck (cards 1..10, a 10
-with probability 4/13, each other value 1/13); two cards each at reset; an ace
-counts 11 while that does not bust the hand; the dealer draws while below 17
-(so a soft 17 stands). Observations are ``(player_sum, dealer_card,
-usable_ace)``; a policy is an int8 array of shape `POLICY_SHAPE` indexed the
-same way, 0 = stick, 1 = hit.
-
-One piece of state is hidden from the observation and changes the pay-off:
-whether a soft 21 is the opening two-card natural or was drawn to. Under
-``natural=True`` a natural win pays 1.5, and under ``sab=True`` a natural beats
-any dealer hand but a dealer natural. The DP keeps the natural as a state of its
-own while every policy stays a function of the observation alone, so both kinds
-of soft 21 share one action. Nothing else about the player's cards matters with
-an infinite deck, and the dealer's hole card (independent of the player's cards,
-never revealed before the player stops) enters only through the distribution of
-the dealer's final hand given the up card, computed once per rule set.
+A natural is a hidden state of its own (it pays differently under `natural` and `sab`)
+while every policy stays a function of the observation.
 """
 
 from __future__ import annotations
@@ -43,18 +14,9 @@ from typing import Any, Literal
 import numpy as np
 
 __all__ = [
-    "DEFAULT_RULES",
-    "DECISION_MASK",
-    "HIT",
-    "POLICY_SHAPE",
-    "STICK",
-    "BlackjackRules",
-    "optimal_action_values",
-    "optimal_policy",
-    "mixed_policy_value",
-    "optimal_value",
-    "policy_from_function",
-    "policy_value",
+    "DEFAULT_RULES", "DECISION_MASK", "HIT", "POLICY_SHAPE", "STICK", "BlackjackRules",
+    "optimal_action_values", "optimal_policy", "mixed_policy_value", "optimal_value",
+    "policy_from_function", "policy_value",
 ]
 
 
@@ -315,9 +277,7 @@ def policy_value(policy: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> f
     return _start_value(_evaluate(_check_policy(policy), rules))
 
 
-def mixed_policy_value(
-    hit_probability: np.ndarray, rules: BlackjackRules = DEFAULT_RULES
-) -> float:
+def mixed_policy_value(hit_probability: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> float:
     """The exact expected return of a policy that hits with the given probability.
 
     ``hit_probability`` has shape `POLICY_SHAPE` like a policy array, with a

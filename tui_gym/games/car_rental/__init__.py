@@ -1,30 +1,8 @@
 """car-rental: Sutton & Barto's Example 4.2, Jack's car rental, and Exercise 4.7's variant.
 
-## Action Space
-Cars moved overnight from the first site to the second, -5 to +5 (action
-`a` moves `a - 5`; negative numbers move cars the other way), at most the
-cars the site has.
-
-## Observation Space
-The cars at each site at the end of the day, `first * 21 + second`.
-
-## Rewards
-$10 a car rented, less $2 a car moved. Requests are Poisson with means 3 and
-4, returns (available the next day) Poisson with means 3 and 2; a site holds
-at most 20 cars. With `exercise`, Exercise 4.7: one car moved to the second
-site is free, and a site keeping more than 10 cars overnight costs $4.
-
-## Starting State
-Any number of cars at each site, uniformly.
-
-## Episode End
-The book's task never ends; tui-gym plays it in episodes of `EPISODE_LIMIT`
-days (truncated), and its exact values count those days undiscounted. The
-book's values are discounted by 0.9 with no end: the Plan view and `tui-gym
-plan` show those (Figure 4.2).
-
-## Arguments
-`exercise` (false).
+Spaces and rewards: `tui_gym.envs.car_rental.CarRentalEnv`. The book's task never ends;
+tui-gym plays it in episodes of `EPISODE_LIMIT` days, undiscounted, while the Plan view
+and `tui-gym plan` show the book's values, discounted by 0.9 with no end (Figure 4.2).
 """
 
 from __future__ import annotations
@@ -71,12 +49,8 @@ _COLS = tuple(str(n) for n in range(SIDE))
 def value_panel(v: np.ndarray) -> Heatmap:
     """The state values on the policy's grid (the book's lower right surface, from above)."""
     return Heatmap(
-        title="values",
-        row_labels=_ROWS,
-        col_labels=_COLS,
-        values=_grid(v).astype(float),
-        labels=tuple(("",) * SIDE for _ in range(SIDE)),
-        marked=np.zeros((SIDE, SIDE), dtype=bool),
+        title="values", row_labels=_ROWS, col_labels=_COLS, values=_grid(v).astype(float),
+        labels=tuple(("",) * SIDE for _ in range(SIDE)), marked=np.zeros((SIDE, SIDE), dtype=bool),
         legend="rows: cars at the first site  cols: at the second",
     )
 
@@ -106,11 +80,8 @@ class CarRentalStates(DiscreteStates):
         return {
             "title": "Jack's car rental",
             "bars": [["first site", first, MAX_CARS], ["second site", second, MAX_CARS]],
-            "lines": lines,
-            "actions": list(self.game.action_names),
-            "start": MOVES.index(0),
-            "unit": "",
-            "prompt": "Cars to move tonight, first site to second (negative: back).",
+            "lines": lines, "actions": list(self.game.action_names), "start": MOVES.index(0),
+            "unit": "", "prompt": "Cars to move tonight, first site to second (negative: back).",
         }
 
 
@@ -119,11 +90,7 @@ class CarRentalLayout(HeatmapLayout):
     the cars at each site."""
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
-        marks: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
         try:
             values = np.asarray(q, dtype=float).reshape(SIDE * SIDE, len(MOVES))

@@ -42,12 +42,7 @@ from tui_gym.games.tiles import CUSTOM, TileGame, TileLayout, TileNarrator, Tile
 __all__ = ["EPISODE_LIMIT", "CliffWalkingGame"]
 
 EPISODE_LIMIT = 200  # steps
-CLIFF_MAP = (
-    "FFFFFFFFFFFF",
-    "FFFFFFFFFFFF",
-    "FFFFFFFFFFFF",
-    "SCCCCCCCCCCG",
-)
+CLIFF_MAP = ("FFFFFFFFFFFF", "FFFFFFFFFFFF", "FFFFFFFFFFFF", "SCCCCCCCCCCG")
 FALL = -100.0  # the reward for stepping onto the cliff
 
 
@@ -143,8 +138,7 @@ class CliffWalkingGame(TileGame):
         # n-step SARSA stops exploring at the end, or its greedy policy may not reach the
         # goal.
         return {
-            "*": {"learning_rate": 0.1, "episodes": 2_000},
-            "double-q": {"episodes": 8_000},
+            "*": {"learning_rate": 0.1, "episodes": 2_000}, "double-q": {"episodes": 8_000},
             "monte-carlo": {"learning_rate": 0.01, "episodes": 4_000},
             "n-step-sarsa": {"epsilon_final": 0.0},
         }

@@ -1,23 +1,7 @@
 """corner-grid: Sutton & Barto's Example 4.1, the 4 x 4 grid with two terminal corners.
 
-## Action Space
-up (0), down (1), left (2), right (3).
-
-## Observation Space
-The cell, `row * 4 + col`; cells 0 (top left) and 15 (bottom right) are
-the terminal corners.
-
-## Rewards
--1 for every move, off the grid (the agent stays) and into a corner too.
-
-## Starting State
-Any of the 14 cells that are not corners, uniformly.
-
-## Episode End
-Terminated on entering a corner; truncated after `EPISODE_LIMIT` steps.
-
-## Arguments
-None.
+Spaces and rewards: `tui_gym.envs.dp_grid.CornerGridEnv`; truncated after `EPISODE_LIMIT`
+steps.
 """
 
 from __future__ import annotations

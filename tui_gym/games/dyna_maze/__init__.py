@@ -1,37 +1,10 @@
 """dyna-maze, blocking-maze, shortcut-maze: Sutton & Barto's mazes of chapter 8.
 
-## Action Space
-up (0), down (1), left (2), right (3).
-
-## Observation Space
-The cell, `row * 9 + col` on the 6 x 9 maze, row 0 at the top; the Dyna maze's
-`scale` makes each cell a block of `scale` x `scale` (Example 8.4's mazes),
-`row * 9 * scale + col`.
-
-## Rewards
-+1 on reaching the goal (top right); 0 for every other move. The book
-discounts by 0.95, which makes a shorter way worth more: the learners'
-default discount here, and the Plan view's.
-
-## Starting State
-Row 2, column 0 (the Dyna maze); row 5, column 3 (the other two).
-
-## Episode End
-Terminated at the goal; truncated after `EPISODE_LIMIT` steps.
-
-## A world that changes
-The blocking maze (Figure 8.4) and the shortcut maze (Figure 8.5) change
-after `change_at` steps, counted over every episode: the blocking maze's
-way round the right end of its wall closes and one round the left opens;
-the shortcut maze's wall opens at its right end beside the long way round
-its left. Each phase has its own model (`phase_starts`, `world`); the exact
-figures and the coach are those of the phase in force, the heatmaps draw
-its walls, and the board shows the wall move as it happens.
-
-Undiscounted, every way to the goal is worth the same +1, so the exact
-figures add the greedy policy's expected steps to the goal beside the
-fewest (`mean_steps`, `optimal_steps`, `extra_steps`), and the bound a
-trained agent meets is on `extra_steps`.
+Spaces and rewards: `tui_gym.envs.dyna_maze.MazeEnv`; truncated after `EPISODE_LIMIT`
+steps. The blocking and shortcut mazes change after `change_at` steps: each phase has its
+own model (`phase_starts`, `world`), which the exact figures and the coach follow.
+Undiscounted, every way to the goal is worth +1, so the exact figures add the greedy
+policy's steps beside the fewest (`extra_steps`, which the bound is on).
 """
 
 from __future__ import annotations
@@ -182,8 +155,7 @@ class DynaMazeGame(MazeGame):
     # The multi-step on-policy learners stop exploring at the end, over a longer budget:
     # what they learn becomes the greedy policy's values, with no detour kept.
     hyperparameters = {
-        **MazeGame.hyperparameters,
-        "n-step-sarsa": {"epsilon_final": 0.0, "episodes": 3000},
+        **MazeGame.hyperparameters, "n-step-sarsa": {"epsilon_final": 0.0, "episodes": 3000},
         "sarsa-lambda": {"epsilon_final": 0.0, "episodes": 3000},
     }
 

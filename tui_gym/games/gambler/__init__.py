@@ -1,24 +1,6 @@
 """gambler: Sutton & Barto's Example 4.3, the gambler's problem.
 
-## Action Space
-The stake, 1 to 50 (action `a` stakes `a + 1`); a stake larger than the
-capital, or than what is missing to the goal, stakes that much instead.
-
-## Observation Space
-The capital, 0 to `goal`.
-
-## Rewards
-+1 on reaching the goal, 0 otherwise: the value of a capital is the chance
-of reaching the goal from it.
-
-## Starting State
-Any capital from 1 to `goal - 1`, uniformly.
-
-## Episode End
-Terminated at the goal or at 0; truncated after `EPISODE_LIMIT` bets.
-
-## Arguments
-`p_heads` (0.4, the chance of winning a bet), `goal` (100).
+Spaces and rewards: `tui_gym.envs.gambler.GamblerEnv`; truncated after `EPISODE_LIMIT` bets.
 """
 
 from __future__ import annotations
@@ -79,13 +61,10 @@ class GamblerStates(DiscreteStates):
             lines.append(f"{{who}} staked ${game_env.last_stake}: {game_env.last_flip}, "
                          f"{'won' if won else 'lost'}")
         return {
-            "title": "Gambler",
-            "bars": [["capital", capital, goal]],
-            "lines": lines,
+            "title": "Gambler", "bars": [["capital", capital, goal]], "lines": lines,
             "actions": list(self.game.action_names),
             "labels": [f"${k}" for k in range(1, MAX_STAKE + 1)],
-            "allowed": max(1, min(capital, goal - capital)),
-            "unit": "$",
+            "allowed": max(1, min(capital, goal - capital)), "unit": "$",
             "prompt": f"Stake on heads (chance {game_env.p_heads:g}); reach ${goal} to win.",
         }
 
@@ -94,11 +73,7 @@ class GamblerLayout(HeatmapLayout):
     """The capitals in rows of ten: max Q colours each, the greedy stake in it."""
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
-        marks: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
         goal = _goal(kwargs)
         try:

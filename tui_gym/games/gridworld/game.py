@@ -1,27 +1,4 @@
-"""GridWorld: our `tui_gym/GridWorld-v0` as the app sees it.
-
-Actions are right, up, left, down (the tutorial's mapping). Base states are
-every (agent, target) pair; the exact figures are shortest-path ones (`paths`):
-the share of pairs the greedy policy solves in the Manhattan number of steps
-and its steps over the fewest (ties broken at random, as the agent breaks
-them), for evaluations also the greedy policy's exact expected return beside
-the optimum's on the game's model (`model`, rewards and time limit as the
-wrappers make them), and the heatmap shows max Q over the grid for one target (the focus a person
-moves) with the greedy move in each cell.
-
-The optimum is a shortest path. That holds whenever reaching the target pays
-(its reward is positive) and no other step does (rewards of at most zero, no
-better farther away): then every step a route wastes costs, and the target
-comes later. The wrappers' rewards are checked against that (`scope`); when
-they break it, the figures are shortest-path figures and say so, and the
-advice claims no optimum.
-
-**Walls.** The argument `layout` holds a square map of floor (F) and walls (W)
-as text (`games.maps`; `walls`, a list of (x, y) cells, is read into one): the
-env's `walls`, and the shortest paths and figures go around them (`walled`).
-The state space stays every (agent, target) pair, so painting walls keeps an
-agent's table meaningful.
-"""
+"""GridWorld: our `tui_gym/GridWorld-v0` as the app sees it."""
 
 from __future__ import annotations
 
@@ -67,11 +44,7 @@ from tui_gym.games.gridworld.paths import (
     optimal_pair_fraction,
     policy_steps_over_optimal,
 )
-from tui_gym.games.gridworld.walled import (
-    walled_figures,
-    walled_marks,
-    walled_mean_steps,
-)
+from tui_gym.games.gridworld.walled import walled_figures, walled_marks, walled_mean_steps
 from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
 from tui_gym.games.model import exact_gap_of
 from tui_gym.games.planning import PlanModel
@@ -334,9 +307,7 @@ class GridWorldOracle(Oracle):
             return walled_marks(_size(kwargs), walls)
         return _optimal_marks(_size(kwargs))
 
-    def bound(
-        self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
-    ) -> Bound:
+    def bound(self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> Bound:
         return Bound("optimal_pair_fraction", TRAINED_SHARE,
                      f"{TRAINED_SHARE:.0%} of placements solved in the fewest steps",
                      at_least=True)
@@ -405,10 +376,7 @@ class GridWorldNarrator(Narrator):
         return f"{last.steps} step{'' if last.steps == 1 else 's'} taken, optimal {optimal}"
 
     def coach_text(
-        self,
-        before: Advice,
-        action: int,
-        scene_before: Mapping[str, Any],
+        self, before: Advice, action: int, scene_before: Mapping[str, Any],
         scene_after: Mapping[str, Any],
     ) -> str:
         """'✓ right is on a shortest path (3 steps to go)' or
@@ -430,12 +398,8 @@ class GridWorldNarrator(Narrator):
         return {"steps_over_optimal": float(last.steps - int(first_info["distance"]))}
 
     def scoreboard(
-        self,
-        you: Scorecard,
-        figures: Mapping[str, float] | None,
-        watched: Scorecard | None = None,
-        agent_note: str = "",
-        scope: Scope = EXACT,
+        self, you: Scorecard, figures: Mapping[str, float] | None, watched: Scorecard | None = None,
+        agent_note: str = "", scope: Scope = EXACT,
     ) -> list[ScoreRow]:
         """Steps over optimal: yours over the episodes you finished, the agent's exactly."""
         figures = figures or {}
@@ -448,8 +412,7 @@ class GridWorldNarrator(Narrator):
             mine_short = f"{mean:.2f} extra steps ({reached} reached)"
         rows = [
             ScoreRow(
-                "You",
-                join_parts(mine, agreement_summary(you, AGREEMENT)),
+                "You", join_parts(mine, agreement_summary(you, AGREEMENT)),
                 join_parts(mine_short, agreement_summary(you, short=True)),
             )
         ]
@@ -467,8 +430,7 @@ class GridWorldNarrator(Narrator):
             )
             rows.append(ScoreRow("Agent", text, f"{extra:.2f} extra steps, reaches {solved:.0%}"))
         if scope.exact:
-            rows.append(ScoreRow("Optimum", "0 steps over optimal from every placement",
-                                 "0 extra"))
+            rows.append(ScoreRow("Optimum", "0 steps over optimal from every placement", "0 extra"))
         else:
             rows.append(ScoreRow("Optimum", f"a shortest path from every placement ({scope.note})",
                                  "shortest path (unwrapped)"))
@@ -482,9 +444,7 @@ class GridWorldNarrator(Narrator):
         self, first_info: Mapping[str, Any], length: int, total: float, terminated: bool
     ) -> dict[str, Any]:
         return {
-            "length": length,
-            "return": total,
-            "terminated": terminated,
+            "length": length, "return": total, "terminated": terminated,
             "optimal": int(first_info.get("distance", 0)),
         }
 
@@ -509,11 +469,7 @@ class GridWorldLayout(HeatmapLayout):
     focus_help = "move the heatmap's target"
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
-        marks: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
         size = _size(kwargs)
         if np.shape(q) != (size**4, 4):

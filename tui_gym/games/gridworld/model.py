@@ -1,17 +1,4 @@
-"""GridWorld's exact model, so a greedy policy gets an exact expected return.
-
-States are the (agent, target) placements in the row-major order of the
-game's table (`ax, ay, tx, ty`), actions right, up, left, down; a move is
-clipped at the grid's edges, stays put against a wall cell (`walls`), and ends
-the episode on the target. Every move has one outcome, so the model is
-`[S, 4, 1]`. Episodes start uniformly over the placements of agent and target
-on different free cells (the env's draws). Rewards are the env's
-(`+reward_scale` on the target, `-step_penalty` otherwise) passed through the
-wrappers' reward code with the distance after the move (the fewest moves
-around the walls, -1 where they part the two, as the env reports it), so
-`StepPenalty`, `ScaleReward` and `DistanceShaping` are followed exactly; the
-episode limit is the tightest `TimeLimit`.
-"""
+"""GridWorld's exact model, so a greedy policy gets an exact expected return."""
 
 from __future__ import annotations
 
@@ -28,8 +15,7 @@ __all__ = ["gridworld_model", "gridworld_optimum", "shortest_path_optimum"]
 
 @lru_cache(maxsize=8)
 def gridworld_model(
-    size: int, reward_scale: float, step_penalty: float, changes: GameChanges,
-    walls: Walls = (),
+    size: int, reward_scale: float, step_penalty: float, changes: GameChanges, walls: Walls = (),
 ) -> FiniteMDP:
     """The model of a `size` x `size` GridWorld with `walls` as the wrappers in `changes`
     make it."""
@@ -48,19 +34,15 @@ def gridworld_model(
     free = free_cells(size, walls)
     start = free[agent] & free[target] & (agent != target)
     return FiniteMDP(
-        next_state=next_state[..., None],
-        prob=np.ones(next_state.shape + (1,)),
-        reward=reward[..., None],
-        terminal=terminal[..., None],
-        initial=start / start.sum(),
+        next_state=next_state[..., None], prob=np.ones(next_state.shape + (1,)),
+        reward=reward[..., None], terminal=terminal[..., None], initial=start / start.sum(),
         horizon=changes.time_limit,
     )
 
 
 @lru_cache(maxsize=8)
 def gridworld_optimum(
-    size: int, reward_scale: float, step_penalty: float, changes: GameChanges,
-    walls: Walls = (),
+    size: int, reward_scale: float, step_penalty: float, changes: GameChanges, walls: Walls = (),
 ) -> Solution:
     """The optimum of `gridworld_model` with the same arguments (kept)."""
     return solve(gridworld_model(size, reward_scale, step_penalty, changes, walls))

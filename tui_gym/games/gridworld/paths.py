@@ -1,31 +1,4 @@
-"""Exact answers for GridWorld: shortest paths, and how often a policy takes one.
-
-GridWorld (``tui_gym/GridWorld-v0``) is a square grid of ``size`` cells a side
-with four moves, 0 right (+x), 1 up (+y), 2 left (-x), 3 down (-y), positions
-clipped at the walls, and an episode that ends when the agent reaches the
-target. With no obstacles the shortest path is the Manhattan distance, and a
-move is optimal exactly when it shortens that distance.
-
-Provides:
-
-- `shortest_path_length(agent, target)`: the Manhattan distance;
-- `optimal_actions(agent, target)`: every action that starts a shortest path;
-- `shortest_path_policy(size)`: one optimal greedy policy as an array;
-- `all_pairs(size)`: every (agent, target) placement the env can start from;
-- `optimal_pair_fraction(size, policy)`: the share of start placements from
-  which a deterministic policy reaches the target in the fewest possible steps;
-- `policy_steps_over_optimal(size, policy)`: how many steps more than the
-  fewest a deterministic policy takes on average, and from how many placements
-  it reaches the target at all;
-- `mixed_pair_fraction` and `mixed_steps_over_optimal`: the same two figures,
-  exactly, for a policy that picks among actions at random (e.g. an agent
-  breaking ties between equal values).
-
-A policy here is an int array of shape ``(size, size, size, size)`` indexed
-``[agent_x, agent_y, target_x, target_y]`` holding the action taken there; a
-random policy is a float array of shape ``(size, size, size, size, 4)``
-holding each action's probability there.
-"""
+"""Exact answers for GridWorld: shortest paths, and how often a policy takes one."""
 
 from __future__ import annotations
 
@@ -35,14 +8,8 @@ from functools import lru_cache
 import numpy as np
 
 __all__ = [
-    "GRID_ACTION_DELTAS",
-    "all_pairs",
-    "mixed_pair_fraction",
-    "mixed_steps_over_optimal",
-    "optimal_actions",
-    "optimal_pair_fraction",
-    "policy_steps_over_optimal",
-    "shortest_path_length",
+    "GRID_ACTION_DELTAS", "all_pairs", "mixed_pair_fraction", "mixed_steps_over_optimal",
+    "optimal_actions", "optimal_pair_fraction", "policy_steps_over_optimal", "shortest_path_length",
     "shortest_path_policy",
 ]
 

@@ -1,22 +1,5 @@
 """Exact answers for GridWorld with walls: shortest paths around them, and how often a
 policy takes one.
-
-The same figures as `paths`, on a grid whose walls (`tui_gym.envs.walls`) block
-moves. A placement counts when the agent and the target stand on different free
-cells with a way between them; a pair the walls part can be solved by no policy,
-so it is left out of every share, as a wall cell is.
-
-Provides:
-
-- `walled_marks(size, walls)`: `[pairs, 4]`, the actions that start a shortest
-  path from each (agent, target) placement (in `_pairs` order);
-- `walled_mean_steps(size, walls)`: the mean fewest steps over placements;
-- `walled_figures(size, walls, probabilities, max_steps)`: the share of
-  placements a policy solves in the fewest steps, its mean steps over the
-  fewest where it arrives, and the share it arrives from (within `max_steps`).
-
-A policy is given as action probabilities `[cells, cells, 4]` (agent cell, target
-cell, action), cells numbered `x * size + y`; a deterministic one is one-hot.
 """
 
 from __future__ import annotations

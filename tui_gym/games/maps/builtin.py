@@ -1,11 +1,4 @@
-"""The maps that come with tui-gym, which `tui-gym maps` lists.
-
-Each `BuiltinMap` has a name, a line saying what it is, and its text (the
-form map files take). Gymnasium's own maps are here as they are (FrozenLake's
-4x4 and 8x8 lakes, the cliff of Sutton & Barto's Example 6.6); the others are
-mazes and worlds for the editor to start from. `fits(grid_map)` says which
-grid games can play a map.
-"""
+"""The maps that come with tui-gym, which `tui-gym maps` lists."""
 
 from __future__ import annotations
 

@@ -1,12 +1,4 @@
-"""Map files: read as carefully as save files, written atomically.
-
-`read_map_file(path)` reads a regular file of at most `MAX_FILE_BYTES` (a
-pipe, a device or a folder is refused without reading it), decodes it as
-UTF-8 and parses it; every refusal is a `MapError` of one line that names the
-file (and the line, row and column at fault). `write_map_file(path, map)`
-writes through `tui_gym.core.files.write_atomically`: a temporary file and a
-rename, so an old file stays whole until the new one is.
-"""
+"""Map files: read as carefully as save files, written atomically."""
 
 from __future__ import annotations
 
@@ -22,9 +14,7 @@ __all__ = ["MAX_FILE_BYTES", "read_map_file", "read_map_text", "write_map_file"]
 MAX_FILE_BYTES = MAX_TEXT * 4  # UTF-8 takes at most four bytes a character
 
 _KINDS = (
-    (stat.S_ISFIFO, "a named pipe"),
-    (stat.S_ISCHR, "a device"),
-    (stat.S_ISBLK, "a device"),
+    (stat.S_ISFIFO, "a named pipe"), (stat.S_ISCHR, "a device"), (stat.S_ISBLK, "a device"),
     (stat.S_ISSOCK, "a socket"),
 )
 

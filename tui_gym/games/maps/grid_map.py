@@ -1,17 +1,4 @@
-"""`GridMap`: a map of tiles with its rewards and slip, and the edits a person makes.
-
-A map is rows of tiles (row 0 at the top, as FrozenLake's `desc`): S start,
-F floor, H hole, G goal, C cliff, W wall, R reward cell; `rewards` sets what
-entering an R, H, G or C cell pays, `slip` how likely a move from an S, F or R
-cell goes to one side instead (`tui_gym.envs.tile_map` plays it). A map is
-immutable and hashable: every edit returns a new one, so an undo is the map
-before.
-
-`painted(cell, tool, value)` paints one cell with a `TOOLS` entry;
-`resized(rows, cols)` crops or extends with floor; `goal_reachable()` says
-whether any goal can be reached from the start; `walls_xy()` reads the walls
-in GridWorld's (x, y) terms.
-"""
+"""`GridMap`: a map of tiles with its rewards and slip, and the edits a person makes."""
 
 from __future__ import annotations
 
@@ -39,13 +26,8 @@ class Tool:
 
 
 TOOLS: tuple[Tool, ...] = (
-    Tool("floor", "F"),
-    Tool("wall", "W"),
-    Tool("hole", "H", "reward"),
-    Tool("goal", "G", "reward"),
-    Tool("start", "S"),
-    Tool("reward", "R", "reward", 1.0),
-    Tool("ice", "", "slip", 0.5),
+    Tool("floor", "F"), Tool("wall", "W"), Tool("hole", "H", "reward"), Tool("goal", "G", "reward"),
+    Tool("start", "S"), Tool("reward", "R", "reward", 1.0), Tool("ice", "", "slip", 0.5),
     Tool("cliff", "C", "reward"),
 )
 TOOL_NAMED = {tool.name: tool for tool in TOOLS}
@@ -75,9 +57,7 @@ class GridMap:
 
     @classmethod
     def of(
-        cls,
-        cells: Iterable[str],
-        rewards: Mapping[Cell, float] | None = None,
+        cls, cells: Iterable[str], rewards: Mapping[Cell, float] | None = None,
         slip: Mapping[Cell, float] | None = None,
     ) -> GridMap:
         return cls(tuple(cells), _sorted(rewards or {}), _sorted(slip or {}))
@@ -110,8 +90,7 @@ class GridMap:
     @property
     def start(self) -> Cell | None:
         """The start cell (None on a map without one, as GridWorld's)."""
-        return next(((r, row.index("S")) for r, row in enumerate(self.cells) if "S" in row),
-                    None)
+        return next(((r, row.index("S")) for r, row in enumerate(self.cells) if "S" in row), None)
 
     def tiles(self) -> set[str]:
         return {tile for row in self.cells for tile in row}
@@ -119,8 +98,7 @@ class GridMap:
     def env_kwargs(self) -> dict[str, Any]:
         """The map as `TileMapEnv` takes it (JSON-friendly "r,c" keys)."""
         return {
-            "cells": list(self.cells),
-            "rewards": {cell_key(c): v for c, v in self.rewards},
+            "cells": list(self.cells), "rewards": {cell_key(c): v for c, v in self.rewards},
             "slip": {cell_key(c): v for c, v in self.slip},
         }
 

@@ -1,13 +1,4 @@
-"""Random maps that can be solved: a size, a density of obstacles and a seed.
-
-`random_map(rows, cols, density, seed, obstacle)` fills each cell with
-`obstacle` (H hole, C cliff or W wall) with chance `density`, the start top
-left and the goal bottom right, and draws again until the goal can be reached
-from the start (as Gymnasium's `generate_random_map` does). With `obstacle`
-W and no start or goal (`walled=True`) it draws GridWorld's walls, again
-until every free cell can reach every other. The same arguments give the
-same map.
-"""
+"""Random maps that can be solved: a size, a density of obstacles and a seed."""
 
 from __future__ import annotations
 
@@ -22,11 +13,7 @@ ATTEMPTS = 2000  # draws before giving up on a density too high to leave a way t
 
 
 def random_map(
-    rows: int,
-    cols: int,
-    density: float = 0.2,
-    seed: int = 0,
-    obstacle: str = "H",
+    rows: int, cols: int, density: float = 0.2, seed: int = 0, obstacle: str = "H",
     walled: bool = False,
 ) -> GridMap:
     """A map that can be solved (see the module docstring); `ValueError` for arguments out

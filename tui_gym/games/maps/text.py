@@ -1,23 +1,4 @@
-"""Maps as text: FrozenLake's rows of tiles, with a small header for rewards and slip.
-
-    # a comment: lines starting with '#' and blank lines are skipped
-    reward 1,1: -5
-    slip 0,1: 0.25
-    SFFF
-    FHFH
-    FFFH
-    HFFG
-
-A file of just the rows (`SFFF`, `FHFH`, `FFFH`, `HFFG` on four lines) is
-FrozenLake's 4x4 map. Tiles: S start, F floor, H hole, G goal, C cliff, W
-wall, R reward cell. Header lines name a cell as `row,col`, row 0 being the
-first line of tiles: `reward ROW,COL: VALUE` for an R, H, G or C cell (every
-R needs one), `slip ROW,COL: P` for an S, F or R cell.
-
-`parse_map(text)` reads a map; the first thing wrong raises `MapError` with
-one line naming the file line and, for a tile, the map row and column.
-`format_map(grid_map)` writes one that reads back the same.
-"""
+"""Maps as text: FrozenLake's rows of tiles, with a small header for rewards and slip."""
 
 from __future__ import annotations
 

@@ -1,32 +1,8 @@
 """max-bias: Sutton & Barto's Example 6.7, the MDP that shows maximization bias.
 
-## Action Space
-left (0), right (1), b1 (2) to b10 (11). A offers left and right, B its
-first `actions` of b1 to b10 (`offered_actions`; `info["action_mask"]`).
-An action a state does not offer counts as right in A and as one of B's in
-B, so a learner that tries every action everywhere still plays this MDP;
-one that honours the offered actions plays the book's exactly.
-
-## Observation Space
-0 the end after B, 1 B, 2 A, 3 the end right of A, as the book draws them.
-
-## Rewards
-0 for left and right; any action from B ends the episode with a reward drawn
-from N(-0.1, 1) (the model keeps the mean, -0.1, and the deviation, 1).
-
-## Starting State
-A.
-
-## Episode End
-Terminated at either end (one or two moves); truncated after
-`EPISODE_LIMIT` steps, which no episode reaches.
-
-## Arguments
-`actions`: how many actions B offers, 1 to 10 (the book's figure: 10).
-
-The optimum goes right (0); left is worth -0.1. A learner that takes the
-largest of B's noisy estimates as B's value thinks left is worth more than
-it is at first (Q-learning), which Double Q-learning avoids (Figure 6.5).
+Spaces and rewards: `tui_gym.envs.max_bias.MaxBiasEnv`; truncated after `EPISODE_LIMIT`
+steps, which no episode reaches. An action a state does not offer counts as one it does,
+so a learner that tries every action everywhere still plays this MDP.
 """
 
 from __future__ import annotations
@@ -40,15 +16,7 @@ from tui_gym.core.mdp import FiniteMDP
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.envs.dp_grid import Cell, Grid
-from tui_gym.envs.max_bias import (
-    ACTIONS,
-    GRID,
-    MAX_B_ACTIONS,
-    A,
-    B,
-    max_bias_arrays,
-    offered,
-)
+from tui_gym.envs.max_bias import ACTIONS, GRID, MAX_B_ACTIONS, A, B, max_bias_arrays, offered
 from tui_gym.games.base import Advice, Narrator, TallyWord
 from tui_gym.games.dp_grid import DPGridGame, DPGridStates, Event
 from tui_gym.games.model import ModelOracle

@@ -1,29 +1,8 @@
 """random-walk: Sutton & Barto's random walk (Example 6.2; Figure 7.2 with 19 states).
 
-## Action Space
-left (0), right (1).
-
-## Observation Space
-The position, 0 to `states + 1`: the two ends and, between them, the states
-the book names A to E (5 states) or 1 to 19.
-
-## Rewards
-+1 for stepping off the right end; off the left end 0 (5 states) or -1 (19
-states); 0 otherwise.
-
-## Starting State
-The middle state (C; 10).
-
-## Episode End
-Terminated at either end; truncated after `EPISODE_LIMIT` steps.
-
-## Arguments
-`states`: 5 or 19.
-
-The book's prediction figures evaluate the equiprobable random policy (left
-or right, half and half): its exact values, from policy evaluation on the
-model, are 1/6 to 5/6 on the 5-state walk and -0.9 to 0.9 in steps of 0.1 on
-the 19-state walk. As a control problem the walk is simple (always right).
+Spaces and rewards: `tui_gym.envs.random_walk.RandomWalkEnv`; truncated after
+`EPISODE_LIMIT` steps. The book's prediction figures evaluate the equiprobable random
+policy; as a control problem the walk is simple (always right).
 """
 
 from __future__ import annotations

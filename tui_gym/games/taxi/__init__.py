@@ -55,7 +55,6 @@ IN_TAXI = 4
 WHERE = (*STAND_NAMES, "taxi")
 ACTION_MARKS = ("↓", "↑", "→", "←", "P", "D")
 TIED = "·"
-DELIVERY = 20.0
 ILLEGAL = -10.0
 FICKLE = ("with a fickle passenger Taxi has no exact model: the change of mind is a hidden "
           "draw its table does not list")
@@ -87,9 +86,7 @@ def _walls(game_env: Any) -> list[list[int]]:
 class TaxiStates(DiscreteStates):
     """The 500 states; the taxi board's scene; the city as text."""
 
-    def text(
-        self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None
-    ) -> str:
+    def text(self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None) -> str:
         """Gymnasium's map with the taxi as `T` (`@` with the passenger aboard) and the
         waiting passenger's stand in lower case, and a line saying where they go."""
         try:
@@ -175,11 +172,7 @@ class TaxiLayout(HeatmapLayout):
     focus_help = "choose the passenger's place (rows) and destination (columns)"
 
     def heatmaps(
-        self,
-        q: np.ndarray,
-        kwargs: Mapping[str, Any],
-        focus: Any = None,
-        marks: Any = None,
+        self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
         if np.shape(q) != (500, 6):
             return []
@@ -203,12 +196,8 @@ class TaxiLayout(HeatmapLayout):
             for p, row in enumerate(done)
         )
         picker = Heatmap(
-            title="slice: passenger × dest.",
-            row_labels=WHERE,
-            col_labels=STAND_NAMES,
-            values=picker_values,
-            labels=picker_labels,
-            marked=np.zeros((5, 4), dtype=bool),
+            title="slice: passenger × dest.", row_labels=WHERE, col_labels=STAND_NAMES,
+            values=picker_values, labels=picker_labels, marked=np.zeros((5, 4), dtype=bool),
             legend="picker: mean max Q of a slice, n* its cells not optimal, ✓ delivered",
         )
         cells = best[:, :, passenger, destination].astype(float)

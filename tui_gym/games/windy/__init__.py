@@ -1,29 +1,8 @@
 """windy, windy-king: Sutton & Barto's Windy GridWorld (Example 6.5; king's moves, Exercise 6.9).
 
-## Action Space
-up (0), down (1), left (2), right (3); `windy-king` adds up-left (4),
-up-right (5), down-left (6), down-right (7). The moves a game offers are
-part of what it is (its keys, the protocol's list, recordings), so the
-king's moves are a game of their own.
-
-## Observation Space
-The cell, `row * 10 + col` on the 7 x 10 grid, row 0 at the top.
-
-## Rewards
--1 for every move until the goal.
-
-## Starting State
-Row 3, column 0; the goal is row 3, column 7.
-
-## Episode End
-Terminated at the goal; truncated after `EPISODE_LIMIT` steps. A move is
-pushed up by the wind of the column it starts from (0 0 0 1 1 1 2 2 1 0).
-
-## Arguments
-`stochastic_wind` (Exercise 6.10): where there is wind it blows one cell
-stronger a third of the time and one weaker a third of the time.
-
-The optimum takes 15 steps (-15), 7 with king's moves (-7).
+Spaces, rewards and wind: `tui_gym.envs.windy.WindyGridWorldEnv`. Episodes are truncated
+after `EPISODE_LIMIT` steps. The moves a game offers are part of what it is (its keys,
+the protocol's list, recordings), so the king's moves are a game of their own.
 """
 
 from __future__ import annotations
@@ -83,8 +62,7 @@ class WindyGame(DPGridGame):
     hyperparameters = {
         "*": {"learning_rate": 0.5, "learning_rate_schedule": "constant",
               "epsilon_start": 0.2, "epsilon_final": 0.01, "episodes": 2000},
-        "sarsa": {"learning_rate": 0.1, "learning_rate_schedule": "visits",
-                  "epsilon_final": 0.0},
+        "sarsa": {"learning_rate": 0.1, "learning_rate_schedule": "visits", "epsilon_final": 0.0},
         "double-q": {"learning_rate": 0.05, "learning_rate_schedule": "visits",
                      "epsilon_final": 0.0, "episodes": 10000},
         "monte-carlo": {"learning_rate": 0.1, "learning_rate_schedule": "visits",
@@ -122,10 +100,7 @@ class KingWindyGame(WindyGame):
     title = "Windy GridWorld, king's moves"
     env_id = "tui_gym/WindyGridWorldKing-v0"
     key = "Y"
-    lessons = {
-        "monte-carlo": MONTE_CARLO_LESSON,
-        "double-q": DOUBLE_Q_LESSON,
-    }
+    lessons = {"monte-carlo": MONTE_CARLO_LESSON, "double-q": DOUBLE_Q_LESSON}
     description = ("Exercise 6.9: the windy grid with the eight king's moves; -1 a move "
                    "until the goal.")
     teaches = "the same wind with diagonal moves: a shorter path, 7 moves instead of 15"

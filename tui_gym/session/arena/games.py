@@ -35,11 +35,8 @@ class GameEntry:
             "actions": list(self.actions),
             "parameters": [
                 {
-                    "name": p.name,
-                    "type": p.kind.__name__,
-                    "default": p.default,
-                    "range": p.describe_range(),
-                    "help": p.help,
+                    "name": p.name, "type": p.kind.__name__, "default": p.default,
+                    "range": p.describe_range(), "help": p.help,
                 }
                 for p in self.params
             ],
@@ -49,12 +46,8 @@ class GameEntry:
 
 def _entry(game: Game) -> GameEntry:
     return GameEntry(
-        name=game.name,
-        title=game.title,
-        env_id=game.env_id,
-        actions=tuple(game.action_names),
-        params=tuple(game.params),
-        description=game.description,
+        name=game.name, title=game.title, env_id=game.env_id, actions=tuple(game.action_names),
+        params=tuple(game.params), description=game.description,
     )
 
 
@@ -72,9 +65,7 @@ def find_game(name: str, *, from_data: bool = False) -> GameEntry:
 
 
 def open_handler(
-    name: str,
-    params: Mapping[str, Any] | None = None,
-    seed: int | None = None,
+    name: str, params: Mapping[str, Any] | None = None, seed: int | None = None,
     wrappers: Sequence[str] = (),
 ) -> JsonlPlayer:
     """A protocol handler playing game `name` with `params` and `wrappers` (specs as

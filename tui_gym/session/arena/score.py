@@ -1,12 +1,4 @@
-"""A player's score beside the exact optimum: returns, exact decision regret, agreement.
-
-`Verdict` is one move's judgement, made from the game's hint before the move:
-whether it was a decision at all (the optimum had a say), whether the move
-was one of the optimal ones, and its exact regret `max_a Q*(s, a) - Q*(s, a_taken)`
-when the hint carries exact action values. `ArenaScore` adds verdicts and
-rewards up per episode and over all episodes, in constant memory apart from a
-bounded list of the latest episodes.
-"""
+"""A player's score beside the exact optimum: returns, exact decision regret, agreement."""
 
 from __future__ import annotations
 
@@ -90,14 +82,9 @@ class EpisodeScore:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "episode": self.index,
-            "seed": self.seed,
-            "return": self.episode_return,
-            "steps": self.steps,
-            "decisions": self.decisions,
-            "agreed": self.agreed,
-            "regret": self.exact_regret,
-            "done": self.done,
+            "episode": self.index, "seed": self.seed, "return": self.episode_return,
+            "steps": self.steps, "decisions": self.decisions, "agreed": self.agreed,
+            "regret": self.exact_regret, "done": self.done,
         }
 
 
@@ -209,8 +196,7 @@ class ArenaScore:
                 "mean_per_episode": self.mean_regret,
                 "ci95": _interval(self.regret_sum, self.regret_sq, self.regret_episodes),
                 "total": self.regret_sum if self.regret_episodes else None,
-                "episodes": self.regret_episodes,
-                "unit": "expected return lost to the optimum",
+                "episodes": self.regret_episodes, "unit": "expected return lost to the optimum",
                 "note": regret_note,
             },
             "decisions": self.decisions,

@@ -107,17 +107,12 @@ class Seat:
         episode = self.score.current
         last = self.last
         return {
-            "observation": last["observation"],
-            "text": self.ask({"cmd": "render"})["text"],
+            "observation": last["observation"], "text": self.ask({"cmd": "render"})["text"],
             "legal_actions": [] if self.done else self.legal_actions(),
-            "last_reward": last["reward"],
-            "terminated": last["terminated"],
-            "truncated": last["truncated"],
-            "done": self.done,
-            "episode": episode.index if episode else 0,
-            "steps": episode.steps if episode else 0,
-            "episode_return": episode.episode_return if episode else 0.0,
-            "info": last["info"],
+            "last_reward": last["reward"], "terminated": last["terminated"],
+            "truncated": last["truncated"], "done": self.done,
+            "episode": episode.index if episode else 0, "steps": episode.steps if episode else 0,
+            "episode_return": episode.episode_return if episode else 0.0, "info": last["info"],
         }
 
     def hint(self) -> dict[str, Any]:

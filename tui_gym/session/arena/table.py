@@ -33,9 +33,7 @@ class GameTable:
     """The games a server plays at once."""
 
     def __init__(
-        self,
-        max_games: int = 8,
-        idle_timeout: float = 600.0,
+        self, max_games: int = 8, idle_timeout: float = 600.0,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         if max_games < 1:
@@ -71,10 +69,7 @@ class GameTable:
         return idle
 
     def start(
-        self,
-        game: str,
-        params: Mapping[str, Any] | None = None,
-        seed: int | None = None,
+        self, game: str, params: Mapping[str, Any] | None = None, seed: int | None = None,
         wrappers: Sequence[str] = (),
     ) -> tuple[int, Seat]:
         """Open a game and deal its first episode; its id and seat."""
@@ -106,9 +101,7 @@ class GameTable:
             if why is not None:
                 raise TableError(f"game {game_id} {why}; start a new one with start_game")
             running = ", ".join(map(str, self.ids())) or "none"
-            raise TableError(
-                f"no game {game_id}: start one with start_game (running: {running})"
-            )
+            raise TableError(f"no game {game_id}: start one with start_game (running: {running})")
         entry.used = self.clock()
         return entry.seat
 

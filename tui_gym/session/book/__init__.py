@@ -1,14 +1,4 @@
-"""Sutton & Barto's figures, run and checked: the registry behind `tui-gym book`.
-
-Each figure is one module here holding a `FIGURE` (see `figure`), listed in
-`FIGURE_MODULES`; `figures()` imports and returns them in the book's order,
-`figure_named("4.3")` finds one (by its number, or an alias such as "example
-4.2"). The dynamic-programming figures are exact: they run the planner
-(`tui_gym.core.mdp.planning`) on the book's worlds and take no runs or seeds.
-The others train learners over seeds and check the book's claims with
-tolerances from the run count: `runs` says how they declare, play, draw and
-check them.
-"""
+"""Sutton & Barto's figures, run and checked: the registry behind `tui-gym book`."""
 
 from __future__ import annotations
 
@@ -20,22 +10,8 @@ __all__ = ["FIGURE_MODULES", "BookFigure", "figure_named", "figures"]
 
 # One module a figure (in the book's order).
 FIGURE_MODULES = (
-    "fig_3_2",
-    "fig_3_5",
-    "fig_4_1",
-    "fig_4_2",
-    "fig_4_3",
-    "fig_6_2",
-    "fig_6_3",
-    "fig_6_4",
-    "fig_6_5",
-    "fig_6_6",
-    "fig_7_2",
-    "fig_8_2",
-    "fig_8_4",
-    "fig_8_5",
-    "example_8_4",
-    "fig_12_3",
+    "fig_3_2", "fig_3_5", "fig_4_1", "fig_4_2", "fig_4_3", "fig_6_2", "fig_6_3", "fig_6_4",
+    "fig_6_5", "fig_6_6", "fig_7_2", "fig_8_2", "fig_8_4", "fig_8_5", "example_8_4", "fig_12_3",
     "fig_12_6",
 )
 

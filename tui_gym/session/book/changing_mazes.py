@@ -1,14 +1,4 @@
-"""What Figures 8.4 and 8.5 share: Dyna-Q against Dyna-Q+ on a maze whose wall moves.
-
-`LEARNERS` are the two agents at one setting; `play_maze` plays them for a
-number of time steps with the wall moving at `change_at`, recording the
-cumulative reward after each step (`runs.play_steps`). The book's mazes pay
-+1 at the goal only, so each rise of that curve is an episode ending there:
-`reward_between` reads the reward of a stretch of steps, `episodes_after` the
-lengths of the episodes begun after a step, `found_after` how long after the
-change the first episode begun after it took to reach the goal, and
-`fewest_steps` gives each phase's shortest way exactly, from its model.
-"""
+"""What Figures 8.4 and 8.5 share: Dyna-Q against Dyna-Q+ on a maze whose wall moves."""
 
 from __future__ import annotations
 

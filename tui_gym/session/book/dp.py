@@ -1,12 +1,4 @@
-"""What the dynamic-programming figures share: their grids of values and their checks.
-
-- `number_grid(title, values, legend)`: a heatmap panel of a grid of values,
-  each cell coloured and written to one decimal, as the book prints them;
-- `value_check(claim, book, measured)`: a value the book prints to one decimal
-  (so within 0.05 of it); `grid_check(claim, book, measured)`: a whole grid so;
-- `planner_on(world, gamma, theta)`: a planner on a game's model;
-- `exact_note`: what an exact figure says about runs and seeds.
-"""
+"""What the dynamic-programming figures share: their grids of values and their checks."""
 
 from __future__ import annotations
 

@@ -20,15 +20,7 @@ from tui_gym.session.book.figure import (
     Progress,
     heading,
 )
-from tui_gym.session.book.runs import (
-    Learner,
-    Played,
-    above,
-    counts,
-    margin,
-    swept,
-    world_phases,
-)
+from tui_gym.session.book.runs import Learner, Played, above, counts, margin, swept, world_phases
 from tui_gym.session.experiments.compare import Arm, Setup, prepare
 
 # The book: "both systems made at most n = 5 updates per environmental interaction"; the
@@ -38,8 +30,7 @@ PLANNING = 5
 SETTINGS = {"learning_rate": 1.0, "learning_rate_schedule": "constant", "discount": 0.95,
             "epsilon_start": 0.1, "epsilon_final": 0.1, "planning_steps": PLANNING}
 LEARNERS = (Learner("Dyna-Q", "dyna-q", SETTINGS),
-            Learner("Prioritized sweeping", "prioritized-sweeping",
-                    {**SETTINGS, "theta": 0.0001}))
+            Learner("Prioritized sweeping", "prioritized-sweeping", {**SETTINGS, "theta": 0.0001}))
 SCALES = (1, 2, 4)  # each cell of the Dyna maze made scale x scale cells: 47 to 752 states
 FULL_SCALES = (1, 2, 4, 8)  # to 3008 states, the book's axis doubling twice a step
 STEPS_PER_STATE = 10_000  # real steps a run may take to become optimal, per state
@@ -91,8 +82,7 @@ def run(options: FigureOptions, progress: Progress) -> FigureResult:
                for j, size in enumerate(sizes)]
     return FigureResult(
         figure=FIGURE.name, title=FIGURE.title, runs=runs,
-        charts=(Chart("log10 updates until the greedy policy is optimal", "states",
-                      series),),
+        charts=(Chart("log10 updates until the greedy policy is optimal", "states", series),),
         checks=tuple(checks),
         notes=(f"ε = 0.1, γ = 0.95, α = 1, at most {PLANNING} updates a step (Dyna-Q: "
                f"its own and {PLANNING} planned; prioritized sweeping: what it takes from "

@@ -16,11 +16,8 @@ from tui_gym.session.book.figure import (
 )
 
 BOOK = np.array([
-    [3.3, 8.8, 4.4, 5.3, 1.5],
-    [1.5, 3.0, 2.3, 1.9, 0.5],
-    [0.1, 0.7, 0.7, 0.4, -0.4],
-    [-1.0, -0.4, -0.4, -0.6, -1.2],
-    [-1.9, -1.3, -1.2, -1.4, -2.0],
+    [3.3, 8.8, 4.4, 5.3, 1.5], [1.5, 3.0, 2.3, 1.9, 0.5], [0.1, 0.7, 0.7, 0.4, -0.4],
+    [-1.0, -0.4, -0.4, -0.6, -1.2], [-1.9, -1.3, -1.2, -1.4, -2.0],
 ])
 
 
@@ -31,8 +28,7 @@ def run(options: FigureOptions, progress: Progress) -> FigureResult:
     v = planner.v.reshape(5, 5)
     progress(1, 1, f"converged in {planner.sweeps} sweeps")
     checks = (
-        value_check("V(A): below its +10, for A′ lies by the edge, where moves cost", 8.8,
-                    v[0, 1]),
+        value_check("V(A): below its +10, for A′ lies by the edge, where moves cost", 8.8, v[0, 1]),
         value_check("V(B): above its +5, for B′ is central", 5.3, v[0, 3]),
         Check("the values near the lower edge are negative: moves off the grid cost 1",
               "negative", round(float(v[4].max()), 3), bool((v[4] < 0).all())),

@@ -28,8 +28,7 @@ def run(options: FigureOptions, progress: Progress) -> FigureResult:
     while not planner.done("value-iteration"):
         planner.value_sweep()
         if planner.sweeps in SHOWN:
-            series.append(Series(f"sweep {planner.sweeps}", capital,
-                                 planner.v[line.states].copy()))
+            series.append(Series(f"sweep {planner.sweeps}", capital, planner.v[line.states].copy()))
         progress(min(planner.sweeps, 32), 32, f"sweep {planner.sweeps}")
     progress(planner.sweeps, planner.sweeps, f"converged in {planner.sweeps} sweeps")
     v = planner.v
@@ -37,8 +36,7 @@ def run(options: FigureOptions, progress: Progress) -> FigureResult:
     best = greedy(plan.model, v, 1.0, TIES)
     stakes = line.policy_numbers(best / best.sum(axis=1, keepdims=True))
     stake = dict(zip(capital.astype(int).tolist(), stakes.tolist(), strict=True))
-    rising = all(bool((a.y <= b.y + 1e-12).all()) for a, b in zip(series, series[1:],
-                                                                     strict=False))
+    rising = all(bool((a.y <= b.y + 1e-12).all()) for a, b in zip(series, series[1:], strict=False))
     checks = (
         Check("V(50) = p_h: bet everything once", 0.4, round(float(v[50]), 6),
               abs(v[50] - 0.4) < 1e-6),
@@ -53,8 +51,7 @@ def run(options: FigureOptions, progress: Progress) -> FigureResult:
     return FigureResult(
         figure=FIGURE.name, title=FIGURE.title, runs=1,
         charts=(Chart("value estimates by sweep", "capital", tuple(series)),
-                Chart("final policy (stake)", "capital",
-                      (Series("stake", capital, stakes),))),
+                Chart("final policy (stake)", "capital", (Series("stake", capital, stakes),))),
         checks=checks,
         notes=(f"value iteration to a largest change below {THETA:g}",
                f"many policies are optimal: the stakes drawn are the smallest of those within "

@@ -21,8 +21,7 @@ def run(options: FigureOptions, progress: Progress) -> FigureResult:
     checks = (
         above("Sarsa's online return is higher than Q-learning's (later half of the episodes)",
               "about -25 vs -50", sarsa_online, q_online),
-        near("Q-learning's greedy policy is the optimal path along the cliff", q.optimum,
-             q.final),
+        near("Q-learning's greedy policy is the optimal path along the cliff", q.optimum, q.final),
         near("Sarsa's greedy policy keeps off the cliff's edge: % of runs on the optimal path",
              0.0, 100.0 * (sarsa.final == q.optimum), unit="%"),
     )

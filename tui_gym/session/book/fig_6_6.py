@@ -1,10 +1,5 @@
 """Figure 6.6 (Example 6.6): Sarsa, Expected Sarsa and Q-learning on CliffWalking against α,
 the mean return of the first 100 episodes (interim) and of long runs (asymptotic).
-
-The default is a short version; `--full` plays the book's counts (interim over 50,000 runs,
-asymptotic over 10 runs of 100,000 episodes) as tasks kept in the run history, so an
-interrupted figure resumes (`--resume RUN`) and a Dask cluster can run them (`--cluster`).
-`--runs` sets the interim's runs, `--episodes` the asymptotic runs' length.
 """
 
 from __future__ import annotations
@@ -104,8 +99,7 @@ def _highest(phase: str, per_run: PerRun) -> Check:
     """Expected Sarsa above neither other at any α, and above both over a wide range."""
     es = per_run["Expected Sarsa"]
     others = [v for label, v in per_run.items() if label != "Expected Sarsa"]
-    first = [all(above("", "", es[i], other[i]).ok for other in others)
-             for i in range(len(ALPHAS))]
+    first = [all(above("", "", es[i], other[i]).ok for other in others) for i in range(len(ALPHAS))]
     below = [a for i, a in enumerate(ALPHAS)
              if any(above("", "", other[i], es[i]).ok for other in others)]
     measured = f"above both at {sum(first)} of {len(ALPHAS)} α" + (

@@ -1,15 +1,4 @@
-"""What a book figure is and what it gives back: `BookFigure`, `FigureOptions`, `FigureResult`.
-
-A figure is one module under `tui_gym.session.book` holding a `FIGURE`: its
-number as the book prints it ("4.3"), a title, a short paragraph of what it
-shows, the world it runs on, its default run and episode counts (None where
-they do not apply: an exact figure is computed, not sampled) and the book's
-own counts (`--full`), and `run`, which
-takes the `FigureOptions` and a progress callback and returns a
-`FigureResult`: its `series` (the curves the book plots, with a band where
-runs vary), the grids it draws (heatmap panels), and its `checks`, each of
-the book's claims beside the measured figure with a verdict.
-"""
+"""What a book figure is and what it gives back: `BookFigure`, `FigureOptions`, `FigureResult`."""
 
 from __future__ import annotations
 

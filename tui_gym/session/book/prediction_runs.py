@@ -1,14 +1,4 @@
-"""Run figures of prediction: learners of V on the random walk, scored by RMS error per episode.
-
-`play_prediction(figure, states, learners, options, progress)` trains each
-`Learner` (a prediction algorithm with the book's settings) from scratch over
-the figure's runs (seeds from `options.seed`) on the `states`-state random
-walk's model, and gives a `Played` per learner whose `values[run, episode]`
-is the RMS error of V against the random policy's exact values after that
-episode (`rms_curve`), so the drawing and the checks of `runs` apply as they
-are. The runs are short and compiled, so they run in this process; setting
-`options.stop` ends them between runs (`FigureStopped`).
-"""
+"""Run figures of prediction: learners of V on the random walk, scored by RMS error per episode."""
 
 from __future__ import annotations
 

@@ -1,45 +1,4 @@
-"""Figures that run learners over seeds: what a run figure declares, plays, draws and checks.
-
-A run figure is a module like the exact ones (a `FIGURE`, see `figure`), whose
-`run(options, progress)` does three things with the helpers here:
-
-1. **Play** its series: `played = play(FIGURE, world, learners, options, progress,
-   measure=...)`, each `Learner(label, algorithm, settings)` trained from scratch
-   over `runs` seeds (from `options.seed`) for `episodes` episodes each, on the
-   world's model by the engine's compiled loop, through the comparison machinery
-   (`session.experiments.compare.execute`: spread over the cores, progress as
-   it goes; setting `options.stop` ends it with `FigureStopped`). `measure` is
-   what each episode records: `RETURN` (the online return), `LENGTH` (time
-   steps) or `FIRST_ACTION` (the action taken in the start state); another
-   per-episode quantity is one more column of that loop's output. Each
-   `Played` holds `values[run, episode]` and the greedy policy's exact value
-   at the end of each run (`final`). A swept parameter
-   (α, n, λ) is one `Learner` per value. A figure drawn against time steps
-   in a world that changes as it is played (the book's blocking and shortcut
-   mazes) plays `play_steps(..., steps)` instead: each run a number of time
-   steps, phase after phase of the world, and `values[run, t]` the
-   cumulative reward after t + 1 steps. With `options.tasks` (a `FigureTasks`) each
-   finished task is kept in the run history (each `play` a group of runs joining the
-   figure's first run, so `--resume` carries the whole figure on) or the tasks run on a
-   Dask cluster.
-2. **Draw** them as `Series` with bands: `per_episode(played)` (the mean over
-   runs per episode), `per_time_step(played)` (episodes completed against time
-   steps, from `LENGTH`), `per_step(played)` (the mean over runs of what
-   `play_steps` records a time step), `swept(label, xs, played, summary)` (one point per
-   learner of a sweep). Bands are 95% Student-t intervals of the mean over runs.
-3. **Check** the book's claims with a tolerance that follows from the run count:
-   `near(claim, book, samples, slack)` (the mean of one number per run within
-   `slack`, the precision the book gives it, plus `margin(samples)` of the
-   book's value), `one_run(claim, book, samples, slack)` (the same for a figure
-   the book draws from a single run: within the spread of one run, t · s ·
-   √(1 + 1/runs)), `above(claim, book, higher, lower)` (one mean above the
-   other by more than the margin of their difference). `margin` is the
-   half-width of a 99% Student-t interval: t · s / √runs; one run has none,
-   so no claim it measures is borne out.
-
-`counts(figure, options)` resolves runs and episodes: the flags, else the
-figure's defaults (`--full`: the book's own counts).
-"""
+"""Figures that run learners over seeds: what a run figure declares, plays, draws and checks."""
 
 from __future__ import annotations
 
@@ -80,24 +39,9 @@ from tui_gym.session.experiments.compare import (
 )
 
 __all__ = [
-    "FIRST_ACTION",
-    "LENGTH",
-    "RETURN",
-    "Learner",
-    "Played",
-    "above",
-    "completed",
-    "counts",
-    "margin",
-    "near",
-    "one_run",
-    "per_episode",
-    "per_step",
-    "per_time_step",
-    "play",
-    "play_steps",
-    "swept",
-    "world_phases",
+    "FIRST_ACTION", "LENGTH", "RETURN", "Learner", "Played", "above", "completed", "counts",
+    "margin", "near", "one_run", "per_episode", "per_step", "per_time_step", "play", "play_steps",
+    "swept", "world_phases",
 ]
 
 CHECK_CONFIDENCE = 0.99  # the verdicts' intervals
@@ -231,8 +175,7 @@ def _cumulative_reward(agent: Any, arrays: Sequence[loop.ModelArrays], starts: S
     for model, start, end in zip(arrays, starts, ends, strict=False):
         at = max(start, 0)
         while at < min(end, steps):
-            done, played = loop.play(agent, model, cursor, len(out), min(end, steps) - at,
-                                     out, log)
+            done, played = loop.play(agent, model, cursor, len(out), min(end, steps) - at, out, log)
             returns.append(out[:done, RETURN].copy())
             lengths.append(out[:done, LENGTH].copy())
             at += played
@@ -311,16 +254,14 @@ def per_episode(played: Played, window: int = 1) -> Series:
     """The mean over runs of each episode's measure (each run smoothed over a trailing
     `window` of episodes first), with its band."""
     curve = aggregate(played.values, window=window)
-    return Series(played.label, curve.episodes.astype(np.float64), curve.mean,
-                  curve.lo, curve.hi)
+    return Series(played.label, curve.episodes.astype(np.float64), curve.mean, curve.lo, curve.hi)
 
 
 def per_step(played: Played, points: int = 300) -> Series:
     """The mean over runs at each time step (as `play_steps` records them), with its band,
     at most `points` of them."""
     curve = aggregate(played.values, max_points=points)
-    return Series(played.label, curve.episodes.astype(np.float64), curve.mean,
-                  curve.lo, curve.hi)
+    return Series(played.label, curve.episodes.astype(np.float64), curve.mean, curve.lo, curve.hi)
 
 
 def completed(played: Played, steps: npt.ArrayLike) -> np.ndarray:
@@ -348,8 +289,7 @@ def swept(label: str, xs: Sequence[float], played: Sequence[Played],
     for one in played:
         per_run = np.asarray(summary(one.values), dtype=np.float64)
         mean = float(per_run.mean())
-        half = (float(t_half_width(per_run.std(ddof=1), len(per_run)))
-                if len(per_run) > 1 else 0.0)
+        half = (float(t_half_width(per_run.std(ddof=1), len(per_run))) if len(per_run) > 1 else 0.0)
         ys.append(mean)
         los.append(mean - half)
         his.append(mean + half)

@@ -67,8 +67,7 @@ def sweep(figure: BookFigure, algorithm: str, name: str, settings: Sequence[Any]
           options: FigureOptions, progress: Progress) -> list[Sweep]:
     """One `Sweep` a value of hyperparameter `name`, each over `ALPHAS`, on the 19-state
     walk."""
-    learners = [Learner(f"{name}={value}|{alpha}", algorithm,
-                        {"learning_rate": alpha, name: value})
+    learners = [Learner(f"{name}={value}|{alpha}", algorithm, {"learning_rate": alpha, name: value})
                 for value in settings for alpha in ALPHAS]
     played = play_prediction(figure, 19, learners, options, progress)
     size = len(ALPHAS)

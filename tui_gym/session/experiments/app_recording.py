@@ -1,21 +1,4 @@
-"""`SessionRunLog`: every run trained in the app, kept in the run history.
-
-A run starts at the first episode an agent trains and ends when the agent
-goes: a reset, another algorithm, a change that needs a fresh agent, a
-switch to another game (training that agent again later is a new run, of
-the episodes after the switch back) or the app's end. The app calls
-`observe(session, snapshot)` on its timer: it only compares a few numbers,
-and every `flush_seconds` builds the run's curves and figures from the
-snapshot (a few hundred points). A run records what ran: the settings it
-trains with last (the Episodes or the decay raised mid-run), the episodes it
-trained, and where its agent was saved (`saved`, after ctrl+s). Opening the
-file and writing happen on a writer thread, so the event loop never waits on
-the disk or on another process holding the file. When the history cannot be
-opened or written (a path that cannot be examined, a damaged file: the line
-says how to recover it), the next `observe` returns one line to show, once,
-and nothing more is recorded; the app goes on without the history. `close()`
-ends the open run and waits briefly for the writes to land.
-"""
+"""`SessionRunLog`: every run trained in the app, kept in the run history."""
 
 from __future__ import annotations
 
@@ -69,10 +52,7 @@ class SessionRunLog:
     """Records the app's runs into the history at `path` (see the module)."""
 
     def __init__(
-        self,
-        path: str | Path,
-        *,
-        flush_seconds: float = FLUSH_SECONDS,
+        self, path: str | Path, *, flush_seconds: float = FLUSH_SECONDS,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.path = Path(path)
@@ -167,8 +147,7 @@ class SessionRunLog:
     # --- the writer thread ---------------------------------------------------
     def _send(self, kind: str, run: _OpenRun, *payload: Any) -> None:
         if self._writer is None:
-            self._writer = threading.Thread(target=self._write_all, name="run-history",
-                                            daemon=True)
+            self._writer = threading.Thread(target=self._write_all, name="run-history", daemon=True)
             self._writer.start()
         self._jobs.put((kind, run.token, *payload))
 

@@ -1,14 +1,5 @@
 """Tasks on a Dask cluster: `connect(cluster)`, then `run_on_cluster(client, tasks, work,
 take, stopped)`.
-
-`cluster` is a scheduler's address (`tcp://host:8786`), `local:N` (a
-`LocalCluster` of N worker processes started here and ended after), or a
-`distributed.Client` already connected. Every task is submitted at once; each
-result is handed to `take` on the calling thread as it lands, so the caller
-alone writes the run history. A task whose worker dies is run again by the
-scheduler (Dask's own retry), and a task's result is taken once, so a lost
-worker costs time, never a duplicate or a gap. Dask is optional
-(`tui-gym[dask]`): without it the run stops with a one-line hint.
 """
 
 from __future__ import annotations
@@ -69,10 +60,7 @@ def connect(cluster: Any) -> Iterator[Any]:
 
 
 def run_on_cluster(
-    client: Any,
-    tasks: Sequence[T],
-    work: Callable[[T], R],
-    take: Callable[[T, R], None],
+    client: Any, tasks: Sequence[T], work: Callable[[T], R], take: Callable[[T, R], None],
     stopped: Callable[[], bool],
 ) -> bool:
     """Run `work(task)` for every task on the cluster of `client`, `take(task, result)` as
@@ -90,8 +78,7 @@ def run_on_cluster(
             if stopped():
                 return False
             try:
-                done, _ = wait(list(pending), timeout=WAIT_SECONDS,
-                               return_when="FIRST_COMPLETED")
+                done, _ = wait(list(pending), timeout=WAIT_SECONDS, return_when="FIRST_COMPLETED")
             except TimeoutError:
                 continue
             for future in done:

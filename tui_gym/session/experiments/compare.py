@@ -1,39 +1,4 @@
-"""Comparisons: several algorithms on one game, each over many seeds, aggregated and recorded.
-
-`run_compare(CompareSpec(...))` trains every (algorithm, seed) from scratch
-for the same number of episodes and returns a `CompareResult`: per algorithm,
-the per-episode *online* return (what the learner got while exploring)
-averaged over seeds with a 95% Student-t band, the mean online return over
-the last 10% of episodes with its interval, and, where the game has an exact
-model, the greedy policy's exact value at checkpoints and its gap to the
-optimum at the end.
-
-Every (algorithm, seed) is a learner of its own, trained on the game's model
-by the engine's compiled loop exactly as `train --seed` trains it
-(`core.engine.seeds`), so the figures do not depend on where or in what
-order seeds run. The work is tasks: an algorithm × a block of its seeds.
-They run on the calling thread, one task per algorithm, when the whole takes
-less than `SPREAD_SECONDS` (throwaway learners played for a moment tell),
-else in tasks of about `TASK_SECONDS` or more, spread over child processes,
-one per core (`core.engine.processes`: they never outlive the caller), or on
-a Dask cluster (`cluster`). A game or wrapper no model follows is played seed
-after seed on the Gymnasium env.
-
-`progress(CompareProgress)` is called on the calling thread about every
-`PROGRESS_INTERVAL` seconds and as each task lands, with the outcomes so far;
-setting `stop` (a `threading.Event`) ends the run at the next step: each
-algorithm keeps the episodes all its seeds finished (the seeds that finished,
-when some tasks had not begun), and the result says `interrupted`. With a
-`RunHistory`, each algorithm is recorded as one run of kind `compare` (the
-others name the first one as their `group`); each finished task is kept in
-it at once (`RunHistory.put_task`), and a finished run's curves `return` and
-`exact_value` (each with `.lo` / `.hi`) and figures `mean_return_last`,
-`exact_value` and `exact_gap` are aggregated from its stored tasks. A prediction
-learner (`algorithms.Predictor`) has the RMS error of its V against the exact
-values of the policy it follows in their place, at the same checkpoints (curve
-and figure `rms_error`). `resume`
-runs only the tasks a recorded run misses, after checking its settings.
-"""
+"""Comparisons: several algorithms on one game, each over many seeds, aggregated and recorded."""
 
 from __future__ import annotations
 
@@ -72,16 +37,8 @@ from tui_gym.core.text import visible
 from tui_gym.core.wrappers import WrapperChoice
 
 __all__ = [
-    "JSON_CURVE_POINTS",
-    "RESUME_ADVICE",
-    "AlgorithmOutcome",
-    "CompareError",
-    "CompareProgress",
-    "CompareResult",
-    "CompareSpec",
-    "ResumeError",
-    "SeedsUpdate",
-    "run_compare",
+    "JSON_CURVE_POINTS", "RESUME_ADVICE", "AlgorithmOutcome", "CompareError", "CompareProgress",
+    "CompareResult", "CompareSpec", "ResumeError", "SeedsUpdate", "run_compare",
 ]
 
 PROGRESS_INTERVAL = 0.4  # seconds between progress calls
@@ -255,13 +212,9 @@ class CompareResult:
         spec = self.spec
         return {
             "game": self.game or (spec.game if spec else ""),
-            "episodes": spec.episodes if spec else None,
-            "seeds": spec.seeds if spec else None,
-            "first_seed": spec.first_seed if spec else None,
-            "optimum": _finite(self.optimum),
-            "interrupted": self.interrupted,
-            "group": self.group,
-            "tasks": dict(self.tasks),
+            "episodes": spec.episodes if spec else None, "seeds": spec.seeds if spec else None,
+            "first_seed": spec.first_seed if spec else None, "optimum": _finite(self.optimum),
+            "interrupted": self.interrupted, "group": self.group, "tasks": dict(self.tasks),
             "results": [o.to_json() for o in self.outcomes],
         }
 
@@ -412,13 +365,8 @@ def prepare(setup: Setup, arms: Sequence[Arm]) -> Prepared:
         value = solve(training.model).value
         optimum = value if math.isfinite(value) else None
     prepared = Prepared(
-        game=first.game.name,
-        env_id=first.env_id,
-        env_kwargs=dict(first.env_kwargs),
-        wrappers=wrappers,
-        hyperparameters=hyperparameters,
-        model=model,
-        optimum=optimum,
+        game=first.game.name, env_id=first.env_id, env_kwargs=dict(first.env_kwargs),
+        wrappers=wrappers, hyperparameters=hyperparameters, model=model, optimum=optimum,
     )
     first.env.close()
     return prepared
@@ -456,9 +404,7 @@ def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared,
 
 
 def _run_job(
-    job: _Job,
-    stop: Callable[[], bool],
-    report: Callable[[SeedsUpdate], None],
+    job: _Job, stop: Callable[[], bool], report: Callable[[SeedsUpdate], None],
 ) -> SeedsUpdate:
     """Train a job's seeds one after another, `report`ing what they play as they go; the
     last update (complete or stopped)."""
@@ -668,21 +614,13 @@ class _Tally:
         rms = final if predicts else None
         window = max(1, common // SMOOTHING_SHARE)
         return AlgorithmOutcome(
-            algorithm=self.arms[arm].algorithm,
-            hyperparameters=self.prepared.hyperparameters[arm],
-            seeds_done=int(finished.sum()),
-            curve=aggregate(seen),
-            mean_return_last=mean_return_last(seen),
-            exact_value=exact_value,
-            exact_gap=exact_gap,
-            run_id=self.run_ids[arm],
-            exact_curve=None if predicts else curve,
-            exact_ci95=None if predicts or final is None else final.ci95,
-            seeds=self.setup.seeds,
-            smoothed=aggregate(seen, window=window) if window > 1 else None,
-            smoothing=window,
-            rms_error=None if rms is None else rms.mean,
-            rms_ci95=None if rms is None else rms.ci95,
+            algorithm=self.arms[arm].algorithm, hyperparameters=self.prepared.hyperparameters[arm],
+            seeds_done=int(finished.sum()), curve=aggregate(seen),
+            mean_return_last=mean_return_last(seen), exact_value=exact_value, exact_gap=exact_gap,
+            run_id=self.run_ids[arm], exact_curve=None if predicts else curve,
+            exact_ci95=None if predicts or final is None else final.ci95, seeds=self.setup.seeds,
+            smoothed=aggregate(seen, window=window) if window > 1 else None, smoothing=window,
+            rms_error=None if rms is None else rms.mean, rms_ci95=None if rms is None else rms.ci95,
             rms_curve=curve if predicts else None,
         )
 
@@ -694,14 +632,9 @@ def _start_runs(
     ids: list[int | None] = []
     for a, arm in enumerate(arms):
         run_id = history.start_run(RunSpec(
-            kind=kind,
-            game=prepared.game,
-            algorithm=arm.algorithm,
-            game_params=prepared.env_kwargs,
-            wrappers=prepared.wrappers,
-            hyperparameters=prepared.hyperparameters[a],
-            seeds=setup.seed_list,
-            group=group,
+            kind=kind, game=prepared.game, algorithm=arm.algorithm, game_params=prepared.env_kwargs,
+            wrappers=prepared.wrappers, hyperparameters=prepared.hyperparameters[a],
+            seeds=setup.seed_list, group=group,
         ))
         ids.append(run_id)
         if group is None:
@@ -757,8 +690,7 @@ def _resume_runs(
         there: dict[str, Any] = {
             "game": run.game, "algorithm": run.algorithm,
             "game parameters": _plain(dict(record.game_params)),
-            "wrappers": _plain([w.to_json() for w in record.wrappers]),
-            "seeds": list(run.seeds),
+            "wrappers": _plain([w.to_json() for w in record.wrappers]), "seeds": list(run.seeds),
         }
         stored_hp, hp = _plain(dict(record.hyperparameters)), _plain(prepared.hyperparameters[a])
         for key in sorted(set(stored_hp) | set(hp)):
@@ -815,19 +747,11 @@ class Executed:
 
 
 def execute(
-    setup: Setup,
-    arms: Sequence[Arm],
-    kind: RunKind,
-    *,
-    progress: Callable[[CompareProgress], None] | None = None,
-    stop: threading.Event | None = None,
-    history: RunHistory | None = None,
-    processes: int | None = None,
-    status: Callable[[str], None] | None = None,
-    resume: int | Sequence[int] | None = None,
-    cluster: Any = None,
-    task_seconds: float = TASK_SECONDS,
-    group: int | None = None,
+    setup: Setup, arms: Sequence[Arm], kind: RunKind, *,
+    progress: Callable[[CompareProgress], None] | None = None, stop: threading.Event | None = None,
+    history: RunHistory | None = None, processes: int | None = None,
+    status: Callable[[str], None] | None = None, resume: int | Sequence[int] | None = None,
+    cluster: Any = None, task_seconds: float = TASK_SECONDS, group: int | None = None,
 ) -> Executed:
     """Train every arm over the setup's seeds (what `run_compare` and `run_sweep` share)
     as tasks, each kept in the run history as it finishes: here when the whole takes less
@@ -991,15 +915,10 @@ def _deadline(end: float) -> Callable[[], bool]:
 
 
 def run_compare(
-    spec: CompareSpec,
-    *,
-    progress: Callable[[CompareProgress], None] | None = None,
-    stop: threading.Event | None = None,
-    history: RunHistory | None = None,
-    processes: int | None = None,
-    status: Callable[[str], None] | None = None,
-    resume: int | None = None,
-    cluster: Any = None,
+    spec: CompareSpec, *, progress: Callable[[CompareProgress], None] | None = None,
+    stop: threading.Event | None = None, history: RunHistory | None = None,
+    processes: int | None = None, status: Callable[[str], None] | None = None,
+    resume: int | None = None, cluster: Any = None,
 ) -> CompareResult:
     """Run a comparison (see the module docstring).
 
@@ -1048,12 +967,8 @@ def _run_here(
 
 
 def _run_children(
-    jobs: list[_Job],
-    tally: _Tally,
-    stopped: Callable[[], bool],
-    tell: Callable[..., None],
-    cores: int,
-    landed: Callable[[_Job], None],
+    jobs: list[_Job], tally: _Tally, stopped: Callable[[], bool], tell: Callable[..., None],
+    cores: int, landed: Callable[[_Job], None],
 ) -> bool:
     # When every job runs at once and this is the main thread (a command, not the app's
     # worker thread), the calling thread plays the last job itself instead of waiting:

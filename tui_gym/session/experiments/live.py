@@ -1,14 +1,4 @@
-"""What the run history keeps of a session's training: its settings, curves and figures.
-
-`run_spec` is a session's settings as a `RunSpec`; `return_curve` reads a
-training snapshot's per-episode returns (the engine's bucket means) as the
-`return` curve; `ExactCheckpoints` collects the greedy policy's exact value at
-checkpoints for games with an exact model, and stops taking them when one is
-not cheap; `run_figures` gives the final figures: `mean_return_last` (the
-online return over the last 10% of the run's episodes), `exact_value` and
-`exact_gap`; `episodes_figure` how many episodes the run trained (a curve's
-last point is the end of its last full bucket, not the run's last episode).
-"""
+"""What the run history keeps of a session's training: its settings, curves and figures."""
 
 from __future__ import annotations
 
@@ -127,10 +117,7 @@ class ExactCheckpoints:
 
 
 def run_figures(
-    curve: Curve | None,
-    exact: dict[str, float],
-    extra: tuple[Figure, ...] = (),
-    after: int = 0,
+    curve: Curve | None, exact: dict[str, float], extra: tuple[Figure, ...] = (), after: int = 0,
 ) -> list[Figure]:
     """`mean_return_last`, `exact_value` and `exact_gap` (those known), then `extra`;
     the run's episodes are those after `after`."""

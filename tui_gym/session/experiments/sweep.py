@@ -1,17 +1,4 @@
-"""Sweeps: one algorithm over a grid of hyperparameter values, each point over many seeds.
-
-`run_sweep(SweepSpec(...))` trains the algorithm at every point of the grid
-(the product of each key's values, the first key slowest) exactly as a
-comparison trains its algorithms (`compare.execute`: every seed a learner of
-its own, spread over child processes when the work is long), and returns a
-`SweepResult` with one `SweepPoint` per grid point: its values and its
-`AlgorithmOutcome`. A random search draws `samples` points instead, each key
-from its `Range` (uniform, or log-uniform), seeded by `sample_seed`, and the
-same seed draws the same points. `rank` orders the points best first: by the
-greedy policy's exact value (or the online return, without a model), or for a
-prediction learner by the lowest RMS error of V. With a `RunHistory` each
-point is recorded as one run of kind `sweep`, grouped as a comparison's are.
-"""
+"""Sweeps: one algorithm over a grid of hyperparameter values, each point over many seeds."""
 
 from __future__ import annotations
 
@@ -108,16 +95,12 @@ class SweepSpec:
             raise ValueError("a sweep needs at least one --grid KEY=V1,V2 "
                              "(or --sample N --range KEY=LOW:HIGH)")
         fields = {f.name for f in cls.params}
-        for key in ranges:
+        for key in [*ranges, *grid]:
             if key not in fields:
                 raise ValueError(
                     f"{cls.name} has no hyperparameter {key!r}; it has {', '.join(sorted(fields))}"
                 )
         for key, values in grid.items():
-            if key not in fields:
-                raise ValueError(
-                    f"{cls.name} has no hyperparameter {key!r}; it has {', '.join(sorted(fields))}"
-                )
             if not values:
                 raise ValueError(f"--grid {key}: give at least one value")
             if len(set(map(str, values))) != len(values):
@@ -149,8 +132,7 @@ class SweepSpec:
         drawn, in the order drawn."""
         if self.ranges:
             rng = np.random.default_rng(self.sample_seed)
-            return [{k: r.draw(rng) for k, r in self.ranges.items()}
-                    for _ in range(self.samples)]
+            return [{k: r.draw(rng) for k, r in self.ranges.items()} for _ in range(self.samples)]
         keys = list(self.grid)
         return [dict(zip(keys, combo, strict=True))
                 for combo in itertools.product(*self.grid.values())]
@@ -233,15 +215,10 @@ class SweepResult:
 
 
 def run_sweep(
-    spec: SweepSpec,
-    *,
-    progress: Callable[[CompareProgress], None] | None = None,
-    stop: threading.Event | None = None,
-    history: RunHistory | None = None,
-    processes: int | None = None,
-    status: Callable[[str], None] | None = None,
-    resume: int | None = None,
-    cluster: Any = None,
+    spec: SweepSpec, *, progress: Callable[[CompareProgress], None] | None = None,
+    stop: threading.Event | None = None, history: RunHistory | None = None,
+    processes: int | None = None, status: Callable[[str], None] | None = None,
+    resume: int | None = None, cluster: Any = None,
 ) -> SweepResult:
     """Run a sweep (see the module docstring); arguments as `run_compare`'s."""
     setup = Setup(spec.game, spec.seeds, spec.episodes, spec.game_params,
@@ -263,12 +240,7 @@ def run_sweep(
     for rank, i in enumerate(order, start=1):
         found[i] = replace(found[i], rank=rank)
     return SweepResult(
-        spec=spec,
-        points=tuple(found),
-        tasks=done.tasks,
-        interrupted=done.interrupted,
-        group=done.group,
-        game=done.prepared.game,
-        optimum=done.prepared.optimum,
+        spec=spec, points=tuple(found), tasks=done.tasks, interrupted=done.interrupted,
+        group=done.group, game=done.prepared.game, optimum=done.prepared.optimum,
         hyperparameters=fixed,
     )

@@ -1,14 +1,4 @@
-"""`TrainRecording`: one headless training run (`tui-gym train`) kept in the run history.
-
-Used as a context manager around the run: `begin(session)` writes the run
-(status running) once the session is built, on a thread of its own so the
-training does not wait for the disk, `on_chunk` (Session.train's
-callback) takes exact-value checkpoints, and `finish` writes the curves, the
-final figures and the saved agent's path. Leaving the block by an exception
-marks the run interrupted (Ctrl+C) or failed, with what it had. A history
-that cannot be opened or written never stops the training: `warn` gets one
-line and the run goes on unrecorded.
-"""
+"""`TrainRecording`: one headless training run (`tui-gym train`) kept in the run history."""
 
 from __future__ import annotations
 
@@ -42,10 +32,7 @@ class TrainRecording:
     folder's); with `enabled` False it records nothing."""
 
     def __init__(
-        self,
-        db: str | None = None,
-        *,
-        enabled: bool = True,
+        self, db: str | None = None, *, enabled: bool = True,
         warn: Callable[[str], None] = lambda line: None,
     ) -> None:
         self.enabled = enabled
@@ -110,9 +97,7 @@ class TrainRecording:
         return both
 
     def finish(
-        self,
-        report: EvalReport | None = None,
-        saved: str | Path | None = None,
+        self, report: EvalReport | None = None, saved: str | Path | None = None,
         status: RunStatus = RunStatus.FINISHED,
     ) -> int | None:
         """Write the curves, figures and saved agent's path with the final status; the
@@ -130,11 +115,9 @@ class TrainRecording:
         curves = [c for c in (curve, checkpoints.curve()) if c is not None]
         try:
             history.update(
-                self.run_id,
-                curves=curves,
+                self.run_id, curves=curves,
                 figures=run_figures(curve, checkpoints.last, extra, self._after),
-                agent_path=None if saved is None else Path(saved).resolve(),
-                status=status,
+                agent_path=None if saved is None else Path(saved).resolve(), status=status,
             )
         except (RunHistoryError, ValueError) as exc:
             self._give_up(exc)
@@ -163,9 +146,7 @@ class TrainRecording:
         return self
 
     def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
+        self, exc_type: type[BaseException] | None, exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
         try:

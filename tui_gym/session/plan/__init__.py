@@ -1,10 +1,4 @@
-"""Planning on a game's exact model: headless (`tui-gym plan`, the book) and live (the Plan view).
-
-- `start`: the policies planning starts from (random, the optimum, an agent's);
-- `runner`: `PlanRunner`, a planner stepped on a thread of its own for the Plan view;
-- here: `plan(...)`, one method run to its end on a game, and `plan_json`, what
-  `tui-gym plan --json` prints.
-"""
+"""Planning on a game's exact model: headless (`tui-gym plan`, the book) and live (Plan view)."""
 
 from __future__ import annotations
 
@@ -39,16 +33,9 @@ class PlanResult:
 
 
 def plan(
-    game: Game,
-    kwargs: Mapping[str, Any],
-    method: str,
-    *,
-    start: str = "random",
-    gamma: float | None = None,
-    theta: float = 1e-6,
-    in_place: bool = False,
-    agent_q: npt.ArrayLike | None = None,
-    max_sweeps: int = 100_000,
+    game: Game, kwargs: Mapping[str, Any], method: str, *, start: str = "random",
+    gamma: float | None = None, theta: float = 1e-6, in_place: bool = False,
+    agent_q: npt.ArrayLike | None = None, max_sweeps: int = 100_000,
 ) -> PlanResult:
     """Run `method` from the `start` policy (see `start.START_POLICIES`; an agent's policy
     from `agent_q`) on the game's model; `ValueError` with one line when it cannot."""

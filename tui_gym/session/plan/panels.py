@@ -1,11 +1,4 @@
-"""A plan drawn as the game's heatmaps draw a Q-table: each state's value and its actions.
-
-`plan_panels` hands the game's heatmap layout a table whose best value in each
-base state is the state's value and whose best actions are the ones the policy
-takes there (every action, a tie, for the random policy), and words the
-layout's mark as the states the last improvement changed. With `numbers`, each
-cell with a value shows the value instead of the action, as the book's figures do.
-"""
+"""A plan drawn as the game's heatmaps draw a Q-table: each state's value and its actions."""
 
 from __future__ import annotations
 
@@ -61,14 +54,8 @@ def numbered(panel: Heatmap) -> Heatmap:
 
 
 def plan_panels(
-    game: Game,
-    kwargs: Mapping[str, Any],
-    plan: PlanModel,
-    v: npt.ArrayLike,
-    policy: npt.ArrayLike,
-    changed: npt.ArrayLike,
-    focus: Any = None,
-    numbers: bool = False,
+    game: Game, kwargs: Mapping[str, Any], plan: PlanModel, v: npt.ArrayLike, policy: npt.ArrayLike,
+    changed: npt.ArrayLike, focus: Any = None, numbers: bool = False,
 ) -> list[Heatmap]:
     """The game's heatmap panels of the plan, the changed states marked."""
     q = plan_table(plan, v, policy)

@@ -1,19 +1,4 @@
-"""`PlanRunner`: a `Planner` stepped on a thread of its own, for the Plan view.
-
-Every command (a step, a run, a pause, an improvement, new settings, a new
-start, an edited world) is queued and carried out by the runner's thread, so
-a sweep of a large model never holds up the screen; after each the thread
-publishes an immutable `PlanSnapshot` (numpy copies) in `latest`, which the
-view pulls on its timer. A run steps the chosen method at the chosen speed
-(`SPEEDS`, sweeps a second; "max" publishes at most `MAX_FRAMES` a second)
-until the method is done or is paused. A run the person did not pause starts
-again when the world changes, from the values it had (as the book's demos
-re-plan after an edit). With `limited`, a snapshot taken while no run is on
-also carries the policy's value by that function (the tool's own exact value,
-over the episode limit), computed again only when the policy has changed. With `on_command`, the
-thread calls it (from its own thread) after publishing what a command did, so
-a view can draw a setting's effect without waiting for its next look.
-"""
+"""`PlanRunner`: a `Planner` stepped on a thread of its own, for the Plan view."""
 
 from __future__ import annotations
 
@@ -34,8 +19,7 @@ __all__ = ["DEFAULT_SPEED", "KEPT_SWEEPS", "MAX_SWEEPS", "SPEEDS", "PlanRunner",
 
 FloatArray = npt.NDArray[np.float64]
 SPEEDS: tuple[tuple[str, float], ...] = (
-    ("1/s", 1), ("2/s", 2), ("5/s", 5), ("10/s", 10), ("20/s", 20), ("50/s", 50),
-    ("max", math.inf),
+    ("1/s", 1), ("2/s", 2), ("5/s", 5), ("10/s", 10), ("20/s", 20), ("50/s", 50), ("max", math.inf),
 )
 DEFAULT_SPEED = 3
 MAX_FRAMES = 30  # snapshots a second at the "max" speed
@@ -72,16 +56,9 @@ class PlanRunner:
     """A planner behind a command queue, stepped on its own thread (see the module)."""
 
     def __init__(
-        self,
-        model: FiniteMDP,
-        *,
-        method: str = "value-iteration",
-        gamma: float = 1.0,
-        theta: float = 1e-6,
-        policy: npt.ArrayLike | None = None,
-        in_place: bool = False,
-        speed: int = DEFAULT_SPEED,
-        limited: Callable[[FloatArray], float] | None = None,
+        self, model: FiniteMDP, *, method: str = "value-iteration", gamma: float = 1.0,
+        theta: float = 1e-6, policy: npt.ArrayLike | None = None, in_place: bool = False,
+        speed: int = DEFAULT_SPEED, limited: Callable[[FloatArray], float] | None = None,
         on_command: Callable[[], None] | None = None,
     ) -> None:
         self._limited = limited
@@ -285,24 +262,12 @@ class PlanRunner:
         for array in arrays:
             array.setflags(write=False)
         return PlanSnapshot(
-            version=self._version,
-            method=self._method,
-            v=arrays[0],
-            policy=arrays[1],
-            changed=arrays[2],
-            sweeps=planner.sweeps,
-            iterations=planner.iterations,
-            delta=planner.delta,
-            gamma=planner.gamma,
-            theta=planner.theta,
-            in_place=planner.in_place,
-            speed=self._speed,
-            running=self._running,
-            done=planner.done(self._method),
-            step=self._step_words,
-            note=self._note,
-            kept=tuple(self._kept),
-            **({} if self._running else self._policy_figures(arrays[1])),
+            version=self._version, method=self._method, v=arrays[0], policy=arrays[1],
+            changed=arrays[2], sweeps=planner.sweeps, iterations=planner.iterations,
+            delta=planner.delta, gamma=planner.gamma, theta=planner.theta,
+            in_place=planner.in_place, speed=self._speed, running=self._running,
+            done=planner.done(self._method), step=self._step_words, note=self._note,
+            kept=tuple(self._kept), **({} if self._running else self._policy_figures(arrays[1])),
         )
 
     def _policy_figures(self, policy: FloatArray) -> dict[str, Any]:

@@ -1,12 +1,4 @@
-"""Where planning starts: the policy a person or `tui-gym plan` picks.
-
-`START_POLICIES`: "random" (every action equally likely), "optimal" (the
-optimum at the chosen discount with no episode limit, ties shared), "agent"
-(an agent's greedy policy from its Q-table rows of the base states, ties
-shared as the agent breaks them at random). `start_policy` returns the `[S, A]`
-policy on the plan model's states; `saved_agent_q` reads a saved agent's
-table for `tui-gym plan --policy PATH`.
-"""
+"""Where planning starts: the policy a person or `tui-gym plan` picks."""
 
 from __future__ import annotations
 

@@ -1,22 +1,4 @@
-"""`Recorder`: writes the episodes a player plays to a recording file (see `format`).
-
-Front ends drive it with four calls, each one line in the file, written whole
-and flushed as it happens:
-
-    recorder = Recorder("games.jsonl", session, source="benchmark", seed=7)
-    recorder.start_episode(env, observation, seed=episode_seed)   # after env.reset
-    recorder.step(env, action, observation, reward, terminated, truncated)  # after env.step
-    recorder.end_episode()
-    recorder.close()
-
-`step` judges the move against the state the env was in before it (the
-recorder looks at each state as it is reached) and returns the `Judgement`.
-A `HumanGame` with a recorder attached calls `game_reset` and `game_step`
-itself; `use_session` starts a new header when the game, its parameters or
-its wrappers change. A write that fails (a full disk, a vanished folder)
-stops the recording, never the game: `failure` says why, and `on_failure`
-is told once.
-"""
+"""`Recorder`: writes the episodes a player plays to a recording file (see `format`)."""
 
 from __future__ import annotations
 
@@ -59,20 +41,11 @@ def header_record(session: Session, *, source: str, seed: int | None) -> dict[st
 
     game = session.game
     return {
-        "type": HEADER,
-        "format": FORMAT_NAME,
-        "version": FORMAT_VERSION,
-        "tui_gym": __version__,
-        "source": source,
-        "game": game.name,
-        "title": game.title,
-        "env_id": session.env_id,
+        "type": HEADER, "format": FORMAT_NAME, "version": FORMAT_VERSION, "tui_gym": __version__,
+        "source": source, "game": game.name, "title": game.title, "env_id": session.env_id,
         "env_kwargs": dict(session.env_kwargs),
-        "wrappers": [format_wrapper_spec(choice) for choice in session.applied],
-        "seed": seed,
-        "board": game.board,
-        "actions": list(game.action_names),
-        "episode_noun": game.episode_noun,
+        "wrappers": [format_wrapper_spec(choice) for choice in session.applied], "seed": seed,
+        "board": game.board, "actions": list(game.action_names), "episode_noun": game.episode_noun,
         "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
     }
 
@@ -94,13 +67,8 @@ class Recorder:
     """Records episodes of one session's game (or several, in turn) as JSON lines."""
 
     def __init__(
-        self,
-        path: str | Path,
-        session: Session | None = None,
-        *,
-        source: str = "play",
-        seed: int | None = None,
-        append: bool = False,
+        self, path: str | Path, session: Session | None = None, *, source: str = "play",
+        seed: int | None = None, append: bool = False,
         on_failure: Callable[[str], None] | None = None,
     ) -> None:
         """Open `path` (emptied unless `append`; OSError when it cannot be opened) and,
@@ -136,8 +104,7 @@ class Recorder:
         if seed is not None:
             self.seed = seed
         key = (
-            session.env_id,
-            tuple(sorted((k, repr(v)) for k, v in session.env_kwargs.items())),
+            session.env_id, tuple(sorted((k, repr(v)) for k, v in session.env_kwargs.items())),
             tuple(session.applied),
         )
         self._played = session.game
@@ -149,11 +116,7 @@ class Recorder:
         self._write(header_record(session, source=self.source, seed=self.seed))
 
     def start_episode(
-        self,
-        env: Any,
-        observation: Any,
-        *,
-        seed: int | None = None,
+        self, env: Any, observation: Any, *, seed: int | None = None,
         info: Mapping[str, Any] | None = None,
     ) -> None:
         """A new episode has been reset to `observation` (an open one ends, abandoned)."""
@@ -169,16 +132,8 @@ class Recorder:
         episode.pending = self._assess(env, 0)
 
     def step(
-        self,
-        env: Any,
-        action: int,
-        observation: Any,
-        reward: float,
-        terminated: bool,
-        truncated: bool,
-        *,
-        info: Mapping[str, Any] | None = None,
-        note: str | None = None,
+        self, env: Any, action: int, observation: Any, reward: float, terminated: bool,
+        truncated: bool, *, info: Mapping[str, Any] | None = None, note: str | None = None,
     ) -> Judgement:
         """Record one move (made on `env`, now in its resulting state); its judgement."""
         episode = self._episode
@@ -193,17 +148,11 @@ class Recorder:
         episode.terminated, episode.truncated = bool(terminated), bool(truncated)
         names = self._played.action_names
         record: dict[str, Any] = {
-            "type": STEP,
-            "episode": episode.number,
-            "step": episode.steps,
-            "action": action,
+            "type": STEP, "episode": episode.number, "step": episode.steps, "action": action,
             "action_name": names[action] if 0 <= action < len(names) else str(action),
-            "reward": float(reward),
-            "terminated": episode.terminated,
-            "truncated": episode.truncated,
-            **self._state(env, observation, info),
-            "verdict": judgement.verdict,
-            "regret": judgement.regret,
+            "reward": float(reward), "terminated": episode.terminated,
+            "truncated": episode.truncated, **self._state(env, observation, info),
+            "verdict": judgement.verdict, "regret": judgement.regret,
             "optimal": [names[a] for a in judgement.optimal if 0 <= a < len(names)],
         }
         if note:
@@ -220,12 +169,8 @@ class Recorder:
         if episode is None:
             return
         self._write({
-            "type": END,
-            "episode": episode.number,
-            "steps": episode.steps,
-            "return": episode.total,
-            "terminated": episode.terminated,
-            "truncated": episode.truncated,
+            "type": END, "episode": episode.number, "steps": episode.steps, "return": episode.total,
+            "terminated": episode.terminated, "truncated": episode.truncated,
             "regret": episode.regret,
         })
 

@@ -1,11 +1,4 @@
-"""`scene_fits(board, scene)`: whether a recorded scene is one the game's board can draw.
-
-A scene from a file is data: a hand of a hundred thousand cards or a grid a hundred
-thousand cells a side would have the board build a picture that size. Each kind of
-board takes the scenes its games make, within the games' own bounds (no grid is
-larger than the largest map, no Blackjack hand holds more than 21 cards); a scene
-that does not fit is not drawn.
-"""
+"""`scene_fits(board, scene)`: whether a recorded scene is one the game's board can draw."""
 
 from __future__ import annotations
 
@@ -77,8 +70,7 @@ def _tile(scene: Mapping[str, Any]) -> bool:
             and isinstance(cells, list)):
         return False
     rows, cols = int(scene["rows"]), int(scene["cols"])
-    if len(cells) != rows or not all(isinstance(line, str) and len(line) == cols
-                                     for line in cells):
+    if len(cells) != rows or not all(isinstance(line, str) and len(line) == cols for line in cells):
         return False
     return (all(scene.get(key) is None or _cell(scene.get(key), rows, cols)
                 for key in ("agent", "cursor"))

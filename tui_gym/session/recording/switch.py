@@ -1,12 +1,4 @@
-"""`RecordingSwitch`: recording that a person turns on and off while playing.
-
-The switch stands where a `HumanGame` expects its recorder, on and off alike:
-while on, each reset and move goes to a `Recorder`; while off, nothing is
-written. Turned on, it records to the file it was given (`tui-gym --record
-PATH`) or else to a new `tui-gym-GAME-TIME.jsonl` in the current folder, and
-every later turn on adds to that same file. An episode under way when it is
-turned on is recorded from its next reset, unless no move has been made yet.
-"""
+"""`RecordingSwitch`: recording that a person turns on and off while playing."""
 
 from __future__ import annotations
 
@@ -32,10 +24,7 @@ class RecordingSwitch:
     """Records a person's games while on; `path` is the file it writes (or will)."""
 
     def __init__(
-        self,
-        path: str | Path | None = None,
-        *,
-        source: str = "app",
+        self, path: str | Path | None = None, *, source: str = "app",
         on_failure: Callable[[str], None] | None = None,
     ) -> None:
         self.path = Path(path) if path is not None else None

@@ -1,18 +1,4 @@
-"""Drawing helpers for the map boards (`TileBoard`, `TaxiBoard`).
-
-- `CharGrid`: a rectangle of styled characters painted piece by piece, then
-  turned into Rich lines (runs of one style become one segment).
-- `on_tile(ink, tile)`: a glyph's colour and attributes over a tile's background.
-- `stack(lines, width, height)`: lines as one picture, each centred across
-  `width`, the block centred in `height`.
-- `legend(items, label, width)`: a line naming the glyphs a board draws.
-- `KeptShape`: the shape (cell size) a board drew with, kept while it still
-  fits, so cells do not change size move by move when the space around the
-  board grows or shrinks by a line; a new episode or a new width chooses again.
-- `cell_of(value)`: a scene's cell, from a (row, col) pair or a "r,c" string.
-- `step_toward(origin, target)`: the one-cell step from `origin` towards `target`.
-- `reward_text(value)`: a reward as people read it ('+5', '−100', '+0.5').
-"""
+"""Drawing helpers for the map boards (`TileBoard`, `TaxiBoard`)."""
 
 from __future__ import annotations
 
@@ -122,11 +108,7 @@ class KeptShape(Generic[Shape]):
         self._shape = None
 
     def get(
-        self,
-        key: Hashable,
-        width: int,
-        height: int,
-        choose: Callable[[int, int], Shape],
+        self, key: Hashable, width: int, height: int, choose: Callable[[int, int], Shape],
         fits: Callable[[Shape, int, int], bool],
     ) -> Shape:
         """The kept shape if the map (`key`) and width are the same and it still fits,
@@ -167,13 +149,6 @@ def reward_text(value: float) -> str:
 
 
 __all__ = [
-    "Cell",
-    "CharGrid",
-    "KeptShape",
-    "cell_of",
-    "legend",
-    "on_tile",
-    "reward_text",
-    "stack",
+    "Cell", "CharGrid", "KeptShape", "cell_of", "legend", "on_tile", "reward_text", "stack",
     "step_toward",
 ]

@@ -15,12 +15,9 @@ __all__ = ["BOARDS", "board_class"]
 
 # kind -> (module under tui_gym.ui.widgets, class name)
 _WHERE: dict[str, tuple[str, str]] = {
-    "cards": ("cards_board", "CardsBoard"),
-    "dial": ("dial_board", "DialBoard"),
-    "grid": ("grid_board", "GridBoard"),
-    "tile": ("tile_board", "TileBoard"),
-    "taxi": ("taxi_board", "TaxiBoard"),
-    "text": ("text_board", "TextBoard"),
+    "cards": ("cards_board", "CardsBoard"), "dial": ("dial_board", "DialBoard"),
+    "grid": ("grid_board", "GridBoard"), "tile": ("tile_board", "TileBoard"),
+    "taxi": ("taxi_board", "TaxiBoard"), "text": ("text_board", "TextBoard"),
 }
 
 

@@ -1,20 +1,4 @@
-"""The board every game is drawn on: the `Board` base and its messages.
-
-A board draws a game's *scene* (plain data from `game.states.scene(env)`) and,
-when `interactive`, turns keys and clicks into messages that bubble up:
-`Board.Act(action_name)` for a move and `Board.NewEpisode()` for a new
-episode. It never touches an env or a game itself: the Play view owns the
-game and answers the messages; the Train view shows the agent's moves on a
-non-interactive board. While the Play view lets the agent play on an
-interactive board, `set_agent_playing(True)` says so on the board (the
-player's hand is the agent's, the border changes colour) and a person's
-click or move posts `Board.TakeOver()` instead. `board_kinds.BOARDS` maps a
-game's `board` kind to its class.
-
-A board is a small vertical stack: a `BoardCanvas` that renders the board's
-`picture()` at whatever size it is given (a board picks the largest drawing
-that fits), and, when interactive, a row of compact buttons for the mouse.
-"""
+"""The board every game is drawn on: the `Board` base and its messages."""
 
 from __future__ import annotations
 
@@ -74,11 +58,7 @@ class Board(Widget):
 
     SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
     DEFAULT_CSS = """
-    Board {
-        width: 1fr;
-        height: 1fr;
-        layout: vertical;
-    }
+    Board { width: 1fr; height: 1fr; layout: vertical; }
     Board.-interactive {
         border: round $foreground 25%;
         border-title-color: $text-muted;
@@ -95,18 +75,9 @@ class Board(Widget):
         border-title-color: $text-warning;
         border-subtitle-color: $text-warning;
     }
-    Board > .board-buttons {
-        width: 1fr;
-        height: 1;
-        align-horizontal: center;
-    }
-    Board > .board-buttons > BoardButton {
-        margin: 0 1;
-        min-width: 10;
-    }
-    Board > .board-buttons > BoardButton.-suggested {
-        text-style: bold;
-    }
+    Board > .board-buttons { width: 1fr; height: 1; align-horizontal: center; }
+    Board > .board-buttons > BoardButton { margin: 0 1; min-width: 10; }
+    Board > .board-buttons > BoardButton.-suggested { text-style: bold; }
     """
 
     BUTTONS: ClassVar[tuple[tuple[str, str], ...]] = ()
@@ -248,6 +219,11 @@ class Board(Widget):
             self.post_message(self.TakeOver())
         elif self.interactive:
             self.post_message(self.NewEpisode())
+
+    def action_next_episode(self) -> None:
+        """Enter: a new episode, once this one is over (so a stray Enter loses nothing)."""
+        if self.episode_over or self.agent_playing:
+            self.action_new_episode()
 
     def on_mount(self) -> None:
         self._update_buttons()

@@ -1,15 +1,4 @@
-"""`CardsBoard`: a card table that draws the dealer's and the player's hands.
-
-The scene is `{"player": [cards], "dealer": [cards]}` with 1 for an ace and 10
-for a ten or a face card, and each hand's total as the game counts it
-(`player_total`, `player_usable`: an ace counted 11; `dealer_total`, shown
-once the dealer's hand is). The dealer's second card lies face down until the
-scene is shown with `reveal=True`. Cards are drawn as little boxes in one of
-three sizes, the largest that fits; suits are decorative (the game has none)
-and follow the card's place in the hand, so a redraw never reshuffles them.
-Keys: h hit, s stick, n or Enter deals the next hand; the buttons under the
-table do the same with the mouse.
-"""
+"""`CardsBoard`: a card table that draws the dealer's and the player's hands."""
 
 from __future__ import annotations
 
@@ -73,17 +62,8 @@ class CardsBoard(Board):
     """
 
     COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "cards--face",
-        "cards--red",
-        "cards--edge",
-        "cards--back",
-        "cards--back-fill",
-        "cards--label",
-        "cards--muted",
-        "cards--total",
-        "cards--bust",
-        "cards--best",
-        "cards--tag",
+        "cards--face", "cards--red", "cards--edge", "cards--back", "cards--back-fill",
+        "cards--label", "cards--muted", "cards--total", "cards--bust", "cards--best", "cards--tag",
     }
 
     BINDINGS: ClassVar[list[BindingType]] = [
@@ -93,35 +73,23 @@ class CardsBoard(Board):
     ]
 
     BUTTONS = (
-        ("Hit [dim]h[/]", "act('hit')"),
-        ("Stick [dim]s[/]", "act('stick')"),
+        ("Hit [dim]h[/]", "act('hit')"), ("Stick [dim]s[/]", "act('stick')"),
         ("Deal [dim]n[/]", "new_episode"),
     )
+    BORDER_TITLE = "Table"
     RESTART_ANYTIME = False
-
-    def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
-        self.border_title = "Table"
 
     # --- what the board says ---------------------------------------------------
     def key_help(self) -> list[tuple[str, str]]:
         return [
-            ("h", "hit: take another card"),
-            ("s", "stick: keep your hand, the dealer plays"),
+            ("h", "hit: take another card"), ("s", "stick: keep your hand, the dealer plays"),
             ("n / enter", "deal the next hand"),
             ("click", "the Hit / Stick / Deal buttons under the table"),
         ]
 
-    @property
-    def prompt(self) -> str:
-        return "Hit (h) or stick (s)?"
-
-    @property
-    def over_hint(self) -> str:
-        return "This hand is over: press n or Enter (or click Deal) for the next one."
-
-    @property
-    def unfinished_hint(self) -> str:
-        return "Finish this hand first: hit (h) or stick (s)."
+    prompt = "Hit (h) or stick (s)?"
+    over_hint = "This hand is over: press n or Enter (or click Deal) for the next one."
+    unfinished_hint = "Finish this hand first: hit (h) or stick (s)."
 
     def button_enabled(self, action: str) -> bool:
         return self.episode_over if action == "new_episode" else not self.episode_over

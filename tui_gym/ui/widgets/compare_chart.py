@@ -1,16 +1,4 @@
-"""`CompareChart`: several return curves overlaid, each with its 95% band, a legend and colours.
-
-Each curve is a line of braille dots (two columns and four rows of dots a
-cell) in its own colour; its band, where it has one, shades the cells
-between its edges with a dim tint of that colour (where bands overlap, a tint
-of their colours' mean). The left margin gives the y range (fitted to all but
-the first tenth of the episodes, where a learner's first random walks would
-flatten the rest: what lies beyond is drawn along the edge), the line below
-the plot the episodes, and one legend line per curve says whose it is, how
-many seeds, and whether its band is a confidence band or its line smoothed.
-A curve shorter than the others stops where its episodes stop. A curve that
-knows the returns its game allows (`Series.bounds`) keeps the axis within them.
-"""
+"""`CompareChart`: several return curves overlaid, each with its 95% band, a legend and colours."""
 
 from __future__ import annotations
 
@@ -20,6 +8,7 @@ from typing import ClassVar
 
 import numpy as np
 from rich.color import Color as RichColor
+from rich.color import blend_rgb
 from rich.segment import Segment
 from rich.style import Style
 
@@ -48,10 +37,9 @@ def colour(index: int) -> RichColor:
     return RichColor.parse(PALETTE[index % len(PALETTE)])
 
 
-def _mix(a: RichColor, b: RichColor, t: float) -> RichColor:
-    ra, ga, ba = a.get_truecolor()
-    rb, gb, bb = b.get_truecolor()
-    return RichColor.from_rgb(ra + (rb - ra) * t, ga + (gb - ga) * t, ba + (bb - ba) * t)
+def mix(a: RichColor, b: RichColor, t: float) -> RichColor:
+    """`a` moved a share `t` of the way to `b`."""
+    return RichColor.from_triplet(blend_rgb(a.get_truecolor(), b.get_truecolor(), t))
 
 
 def value_range(series: Sequence[Series]) -> tuple[float, float]:
@@ -229,8 +217,8 @@ class CompareChart(StripWidget):
                 members = [c for i, c in enumerate(colours) if mask >> i & 1]
                 mean = members[0]
                 for n, other in enumerate(members[1:], start=2):
-                    mean = _mix(mean, other, 1 / n)
-                found = tints[mask] = _mix(background, mean, BAND_TINT)
+                    mean = mix(mean, other, 1 / n)
+                found = tints[mask] = mix(background, mean, BAND_TINT)
             return found
 
         labels = {0: _label(high, LABEL_WIDTH - 1), height - 1: _label(low, LABEL_WIDTH - 1)}

@@ -1,23 +1,4 @@
-"""`DialBoard`: a game whose move is a number picked from a range (a stake, cars to move).
-
-The scene is plain data:
-
-- "title": the board's title;
-- "bars": `[label, value, maximum]` rows, drawn as gauges (the capital, the
-  cars at each site), with "unit" before each number ("$");
-- "lines": what the last move did, in words (`{who}` stands for the player);
-- "actions": the action names in order (the numbers the dial runs through),
-  and "labels", shorter words for them on the dial ("$5" for "stake 5");
-- "allowed": how many of the first actions are moves of their own here (the
-  rest repeat the last: a stake beyond the capital); the dial stops there;
-- "start": the action the dial points at when an episode starts;
-- "prompt": what to do, in a few words.
-
-Keys: ← → (or h l) turn the dial by one, ↑ ↓ (or k j) by five, home / end to
-either end, enter or space makes the move the dial points at; n or r starts a
-new episode at any time, enter once the episode is over. `keys_for(action)`
-says which keys pick an action from where the dial stands.
-"""
+"""`DialBoard`: a game whose move is a number picked from a range (a stake, cars to move)."""
 
 from __future__ import annotations
 
@@ -59,9 +40,8 @@ class DialBoard(Board):
     BUTTONS = (("◀", "turn(-1)"), ("Go [dim]enter[/]", "take"), ("▶", "turn(1)"),
                ("↺ New [dim]n[/]", "new_episode"))
 
-    def __init__(self, *, interactive: bool = True, name: str | None = None,
-                 id: str | None = None, classes: str | None = None) -> None:  # noqa: A002
-        super().__init__(interactive=interactive, name=name, id=id, classes=classes)
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
         self.pointer = 0
         self._fresh = True
 
@@ -113,8 +93,7 @@ class DialBoard(Board):
     # --- what the board says ------------------------------------------------
     def key_help(self) -> list[tuple[str, str]]:
         return [
-            ("← / →", "turn the dial by one"),
-            ("↓ / ↑", "turn the dial by five"),
+            ("← / →", "turn the dial by one"), ("↓ / ↑", "turn the dial by five"),
             ("home / end", "the dial to either end"),
             ("enter / space", "make the move the dial points at (a new episode once over)"),
             ("n / r", "start a new episode (at any time)"),
@@ -124,9 +103,7 @@ class DialBoard(Board):
     def prompt(self) -> str:
         return str(self.scene.get("prompt") or "Turn the dial with ← →, then enter.")
 
-    @property
-    def over_hint(self) -> str:
-        return "This episode is over: press n, r or Enter for a new one."
+    over_hint = "This episode is over: press n, r or Enter for a new one."
 
     def button_suggested(self, action: str) -> bool:
         return action == "new_episode" if self.episode_over else action == "take"

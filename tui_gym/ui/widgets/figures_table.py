@@ -1,14 +1,4 @@
-"""`FiguresTable`: the final figures of the runs compared, with their 95% intervals.
-
-One row per run shown in the chart, marked in the curve's colour: its seeds,
-episodes, the mean online return over the last 10% of episodes (± the
-half-width of its 95% interval when there are several seeds), and, for
-games with an exact model, the greedy policy's exact value and its gap to
-the optimum; a status column when a run is not finished (running,
-interrupted). A figure a run does not have reads "–". Columns that do not fit
-the width are left out: one no run has a figure in first, then the episodes;
-the run's name is shortened last.
-"""
+"""`FiguresTable`: the final figures of the runs compared, with their 95% intervals."""
 
 from __future__ import annotations
 
@@ -60,10 +50,8 @@ def cells(row: FigureRow) -> dict[str, str]:
     return {
         "seeds": f"{row.seeds:,}",
         "episodes": MISSING if row.episodes is None else compact_count(row.episodes),
-        "return": with_interval(row.mean_return_last),
-        "exact": plain(row.exact_value),
-        "gap": plain(row.exact_gap, sign=False),
-        "note": row.note,
+        "return": with_interval(row.mean_return_last), "exact": plain(row.exact_value),
+        "gap": plain(row.exact_gap, sign=False), "note": row.note,
     }
 
 
@@ -92,10 +80,7 @@ class FiguresTable(StripWidget):
 
     COMPONENT_CLASSES: ClassVar[set[str]] = {"figures--header", "figures--note"}
     DEFAULT_CSS = """
-    FiguresTable {
-        height: auto;
-        padding: 0 1;
-    }
+    FiguresTable { height: auto; padding: 0 1; }
     FiguresTable > .figures--header { color: $text-muted; text-style: bold; }
     FiguresTable > .figures--note { color: $text-warning; }
     """
@@ -140,8 +125,7 @@ class FiguresTable(StripWidget):
             if len(label) > label_width:
                 label = label[: label_width - 1] + "…"
             line: Line = [
-                Segment("▍ ", Style(color=colour(place))),
-                Segment(label.ljust(label_width)),
+                Segment("▍ ", Style(color=colour(place))), Segment(label.ljust(label_width)),
             ]
             for _header, key, w in columns:
                 if key == "note":

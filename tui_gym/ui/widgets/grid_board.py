@@ -1,15 +1,4 @@
-"""`GridBoard`: a square grid with the agent, the target and the agent's trail.
-
-The scene is `{"size": n, "agent": (x, y), "target": (x, y), "walls": [(x, y)]}` in the
-tutorial's coordinates: x grows to the right and y grows *upwards*, so y = 0
-is the bottom row on screen. The board remembers the cells the agent left
-this episode and draws each with the arrow of the move that left it, a trail
-that shows the path taken. Cells are drawn as large as the space allows, and
-keep their size while the space around the board changes (until the terminal
-is resized or the grid changes size, or they no longer fit).
-Keys: arrows or WASD move, r resets; a click on a cell steps the agent one
-cell towards it.
-"""
+"""`GridBoard`: a square grid with the agent, the target and the agent's trail."""
 
 from __future__ import annotations
 
@@ -93,12 +82,7 @@ class GridLayout:
 
 
 CELL_SHAPES = (
-    (7, 3, True),
-    (5, 2, True),
-    (5, 1, True),
-    (3, 1, True),
-    (3, 1, False),
-    (2, 1, False),
+    (7, 3, True), (5, 2, True), (5, 1, True), (3, 1, True), (3, 1, False), (2, 1, False),
     (1, 1, False),
 )
 
@@ -155,14 +139,8 @@ class GridBoard(Board):
     """
 
     COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "grid--line",
-        "grid--empty",
-        "grid--trail",
-        "grid--agent",
-        "grid--target",
-        "grid--home",
-        "grid--axis",
-        "grid--wall",
+        "grid--line", "grid--empty", "grid--trail", "grid--agent", "grid--target", "grid--home",
+        "grid--axis", "grid--wall",
     }
 
     BINDINGS: ClassVar[list[BindingType]] = [
@@ -174,29 +152,19 @@ class GridBoard(Board):
     ]
 
     BUTTONS = (("↺ Reset [dim]r[/]", "new_episode"),)
-    RESTART_ANYTIME = True
+    BORDER_TITLE = "Grid"
 
-    def __init__(
-        self,
-        *,
-        interactive: bool = True,
-        name: str | None = None,
-        id: str | None = None,  # noqa: A002 - Textual's own name for it
-        classes: str | None = None,
-    ) -> None:
-        super().__init__(interactive=interactive, name=name, id=id, classes=classes)
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
         self.trail: dict[Cell, str] = {}  # cell the agent left -> arrow of that move
         self._grid_agent: Cell | None = None
         self._grid_target: Cell | None = None
         self._grid_size = 0
         self._grid_walls: frozenset[Cell] = frozenset()
         self._grid_fresh = True
-        self._grid_layout: GridLayout | None = None
+        self.layout_drawn: GridLayout | None = None
         self._layout_n = 0  # the grid size the kept cell shape is for (0: choose afresh)
         self._laid_out: tuple[Any, int] | None = None  # (terminal size, board width) last seen
-
-    def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
-        self.border_title = "Grid"
 
     def on_resize(self, event: events.Resize) -> None:
         # A new terminal size, or a new width (the layout around the board changed, or
@@ -212,25 +180,14 @@ class GridBoard(Board):
     def key_help(self) -> list[tuple[str, str]]:
         return [
             ("↑ ↓ ← →  or  w a s d", "move up, down, left, right (+y is up)"),
-            ("r", "reset: a new episode"),
-            ("click a cell", "step one cell towards it"),
+            ("r", "reset: a new episode"), ("click a cell", "step one cell towards it"),
         ]
 
-    @property
-    def prompt(self) -> str:
-        return "Move with the arrows or WASD, or click a cell; r resets."
-
-    @property
-    def over_hint(self) -> str:
-        return "This episode is over: press r (or click Reset) for a new one."
+    prompt = "Move with the arrows or WASD, or click a cell; r resets."
+    over_hint = "This episode is over: press r (or click Reset) for a new one."
 
     def button_suggested(self, action: str) -> bool:
         return self.episode_over
-
-    @property
-    def layout_drawn(self) -> GridLayout | None:
-        """The geometry of the last drawing (None before the first)."""
-        return self._grid_layout
 
     # --- the scene and the trail -----------------------------------------------
     def start_episode(self) -> None:
@@ -278,11 +235,11 @@ class GridBoard(Board):
         n = self._grid_size
         out = Text(no_wrap=True, overflow="crop", end="")
         if n <= 0:
-            self._grid_layout = None
+            self.layout_drawn = None
             out.append("No grid yet.", self._style("axis"))
             return out
         layout = self._steady_layout(n, width, height)
-        self._grid_layout = layout
+        self.layout_drawn = layout
         line, axis = self._style("line"), self._style("axis")
         cw, ch = layout.cell_w, layout.cell_h
         margin = " " * (layout.left - layout.label_w)
@@ -332,7 +289,7 @@ class GridBoard(Board):
         """The cell shape stays while the space around the board changes (status lines
         wrapping, a scoreboard row coming): it is chosen afresh for a new grid size or
         terminal size, and otherwise only gives way when it no longer fits."""
-        kept = self._grid_layout
+        kept = self.layout_drawn
         if kept is not None and self._layout_n == n and fits(kept, width, height):
             return place_layout(kept, width, height)
         self._layout_n = n
@@ -340,9 +297,9 @@ class GridBoard(Board):
 
     def canvas_clicked(self, offset: Offset) -> None:
         """Step one cell towards the clicked cell (the longer way first)."""
-        if self._grid_layout is None or self._grid_agent is None:
+        if self.layout_drawn is None or self._grid_agent is None:
             return
-        cell = self._grid_layout.cell_at(offset)
+        cell = self.layout_drawn.cell_at(offset)
         if cell is None or cell == self._grid_agent:
             return
         dx, dy = cell[0] - self._grid_agent[0], cell[1] - self._grid_agent[1]

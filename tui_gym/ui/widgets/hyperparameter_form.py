@@ -1,18 +1,4 @@
-"""The hyperparameter form: one checked field per knob of the algorithm in use.
-
-`HyperparameterForm` is generated from the schema of the `Settings` it
-shows (the algorithm's `params`): an `Input` for every number, with its
-label and the range it accepts, and a `Select` for every `Choice` (the
-step-size schedule) and switch (Monte Carlo's first visit). Every keystroke
-is checked with the field's own `Param.parse`: a bad value turns the field
-red and says why under it. `read()` returns the `Settings` the fields
-describe, or None (with every problem marked, including ones between fields
-such as epsilon final above epsilon start); `load(settings)` fills the
-fields, and rebuilds them when the schema is another algorithm's. Enter
-posts `Submitted` so the owner can hand the keyboard back to the view;
-Escape posts `Left`, on which the owner drops what was typed and not applied
-(it loads the settings in force again).
-"""
+"""The hyperparameter form: one checked field per knob of the algorithm in use."""
 
 from __future__ import annotations
 
@@ -142,39 +128,14 @@ class HyperparameterForm(Vertical):
         border-subtitle-color: $text-disabled;
         padding: 0 1;
     }
-    HyperparameterForm .hp-row {
-        height: 1;
-    }
-    HyperparameterForm .hp-label {
-        width: 15;
-        color: $text-muted;
-    }
-    HyperparameterForm Input {
-        width: 1fr;
-        min-width: 8;
-        max-width: 14;
-    }
-    HyperparameterForm Input.-invalid {
-        color: $text-error;
-        text-style: bold;
-    }
-    HyperparameterForm .hp-hint {
-        width: 10;
-        padding-left: 1;
-        color: $text-disabled;
-    }
-    HyperparameterForm .hp-error {
-        display: none;
-        color: $text-error;
-        padding-left: 2;
-    }
-    HyperparameterForm .hp-error.-shown {
-        display: block;
-    }
-    HyperparameterForm .hp-row.-invalid .hp-label {
-        color: $text-error;
-        text-style: bold;
-    }
+    HyperparameterForm .hp-row { height: 1; }
+    HyperparameterForm .hp-label { width: 15; color: $text-muted; }
+    HyperparameterForm Input { width: 1fr; min-width: 8; max-width: 14; }
+    HyperparameterForm Input.-invalid { color: $text-error; text-style: bold; }
+    HyperparameterForm .hp-hint { width: 10; padding-left: 1; color: $text-disabled; }
+    HyperparameterForm .hp-error { display: none; color: $text-error; padding-left: 2; }
+    HyperparameterForm .hp-error.-shown { display: block; }
+    HyperparameterForm .hp-row.-invalid .hp-label { color: $text-error; text-style: bold; }
     Screen.compact HyperparameterForm {
         width: 1fr;
         min-width: 0;
@@ -182,9 +143,7 @@ class HyperparameterForm(Vertical):
         border: none;
         padding: 0;
     }
-    Screen.compact HyperparameterForm .hp-hint {
-        display: none;
-    }
+    Screen.compact HyperparameterForm .hp-hint { display: none; }
     """
 
     BINDINGS: ClassVar[list[BindingType]] = [
@@ -207,10 +166,7 @@ class HyperparameterForm(Vertical):
         """Escape in a field: the person wants the keyboard back for the view."""
 
     def __init__(
-        self,
-        hyperparameters: Settings | None = None,
-        *,
-        id: str | None = None,
+        self, hyperparameters: Settings | None = None, *, id: str | None = None,
         classes: str | None = None,
     ) -> None:
         super().__init__(id=id, classes=classes)
@@ -242,11 +198,8 @@ class HyperparameterForm(Vertical):
         if _typed(field):
             assert isinstance(field, Param)
             box = TextField(
-                _text(field, value),
-                id=f"hp-{field.name}",
-                compact=True,
-                validators=[FieldValidator(field)],
-                select_on_focus=True,
+                _text(field, value), id=f"hp-{field.name}", compact=True,
+                validators=[FieldValidator(field)], select_on_focus=True,
             )
             hint = Label(range_hint(field), classes="hp-hint")
         else:

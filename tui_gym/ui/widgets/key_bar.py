@@ -1,14 +1,4 @@
-"""`KeyBar`: the live key bindings along the bottom, drawn as one line of text.
-
-It shows what Textual's `Footer` shows (the bindings active for the focused
-widget and the app, grouped keys together, the command palette key on the
-right) and a click on a key presses it. A key that does not fit is left out
-whole, never cut, from the end of the line (help's own key stays), and a "…"
-says there are more (`?` lists them all). Unlike `Footer`, which rebuilds a
-widget per key on every focus change (three times per view switch here, the
-largest part of a switch's cost), it draws one line, and keeps the last few
-lines drawn: a view switch flips between the same two sets of keys.
-"""
+"""`KeyBar`: the live key bindings along the bottom, drawn as one line of text."""
 
 from __future__ import annotations
 
@@ -33,12 +23,7 @@ class KeyBar(StripWidget):
 
     COMPONENT_CLASSES = {"keybar--key"}
     DEFAULT_CSS = """
-    KeyBar {
-        dock: bottom;
-        height: 1;
-        background: $footer-background;
-        color: $footer-foreground;
-    }
+    KeyBar { dock: bottom; height: 1; background: $footer-background; color: $footer-foreground; }
     KeyBar > .keybar--key {
         color: $footer-key-foreground;
         background: $footer-key-background;
@@ -125,8 +110,7 @@ class KeyBar(StripWidget):
         for keys, description, enabled, key in entries:
             start = text.cell_len
             text.append(f" {keys} ", style=key_style)
-            text.append(f"{description} " if description else "",
-                        style="" if enabled else "dim")
+            text.append(f"{description} " if description else "", style="" if enabled else "dim")
             if not enabled:
                 text.stylize("dim", start)
             spans.append((start, text.cell_len, key))

@@ -1,20 +1,4 @@
-"""`MapEditor`: paint a grid game's map while the agent learns on it.
-
-The editor shows the map as a heatmap of the exact optimum (each cell coloured
-by its optimal value, with the optimal move's arrow; holes, goals, the cliff
-and walls drawn as themselves) and a cursor. The arrows or hjkl move the
-cursor and a click picks a cell and paints it; a number key picks a tool and
-paints the cursor's cell with it (1 floor, 2 wall, 3 hole, 4 goal, 5 start,
-6 reward, 7 ice, 8 cliff: the ones the game takes), enter paints again, and
-[ ] change the tool's number (a reward, or ice's slip). Shift with an arrow
-adds or takes away a row or a column. u undoes, y redoes, s saves the map
-to a file, esc closes the editor.
-
-It edits nothing itself: every change is posted as `MapEditor.Changed` with
-the new map, and the owner rebuilds the game and hands the editor the new map
-and its solved optimum through `show()`. Undo and redo keep the maps before
-and after (maps are immutable values).
-"""
+"""`MapEditor`: paint a grid game's map while the agent learns on it."""
 
 from __future__ import annotations
 
@@ -79,8 +63,7 @@ class MapEditor(Vertical):
     """
 
     BINDINGS: ClassVar[list[BindingType]] = [
-        *(Binding(str(i + 1), f"tool({i})", tool.name, show=False)
-          for i, tool in enumerate(TOOLS)),
+        *(Binding(str(i + 1), f"tool({i})", tool.name, show=False) for i, tool in enumerate(TOOLS)),
         Binding("enter", "paint", "Paint", show=False),
         Binding("left_square_bracket", "value(-1)", "Less", show=False, key_display="["),
         Binding("right_square_bracket", "value(1)", "More", show=False, key_display="]"),
@@ -97,8 +80,7 @@ class MapEditor(Vertical):
     class Changed(Message):
         """A new map: painted, resized, undone or redone."""
 
-        def __init__(self, editor: MapEditor, grid_map: GridMap, resized: bool,
-                     what: str) -> None:
+        def __init__(self, editor: MapEditor, grid_map: GridMap, resized: bool, what: str) -> None:
             super().__init__()
             self.editor = editor
             self.grid_map = grid_map
@@ -199,8 +181,7 @@ class MapEditor(Vertical):
             labels.append(tuple(row))
         present = [word for mark, word, here in (
             ("S", "start", grid_map.start is not None),
-            ("$", "reward cell", "R" in grid_map.tiles()),
-            (ICE, "ice", bool(slip)),
+            ("$", "reward cell", "R" in grid_map.tiles()), (ICE, "ice", bool(slip)),
         ) if here for word in [f"{mark} {word}"]]
         legend = "  ".join(present) + "  " + panel.legend.replace(
             "* not an optimal move", "").replace("  * off every shortest path", "")

@@ -1,13 +1,4 @@
-"""`PlanStatus`: the Plan view's lines of words, drawn from kept lines on every sweep.
-
-Four lines: the method, start policy and sweep kind (with their keys); where
-the planner is (running, paused or done, the sweep, the largest change Δ, the
-improvements, what the last step did); which value the view shows beside the
-tool's own; and a warning when there is one. A label's update lays the whole
-screen out again, which at dozens of sweeps a second would cost more than the
-sweeps: this widget redraws its own lines only (`show(lines)`), and at 80x24
-leaves out the line on values.
-"""
+"""`PlanStatus`: the Plan view's lines of words, drawn from kept lines on every sweep."""
 
 from __future__ import annotations
 

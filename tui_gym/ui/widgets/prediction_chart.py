@@ -1,13 +1,4 @@
-"""`PredictionChart`: a prediction learner's RMS error over episodes, and V state by state.
-
-Two braille charts (`tui_gym.terminal_chart`), sized to the widget: the RMS
-error of V against the exact values of the policy followed, one point per
-snapshot shown (kept to `MAX_POINTS`, every other one dropped when full), and
-per state the estimate beside the true value. `show(episodes, figures)` adds
-a snapshot's figures (a run that starts over, fewer episodes than before,
-starts the curve over); `show_reason(text)` says why there are none; `clear()`
-forgets the curve.
-"""
+"""`PredictionChart`: a prediction learner's RMS error over episodes, and V state by state."""
 
 from __future__ import annotations
 

@@ -1,13 +1,4 @@
-"""`ProgressLine`: one line with a bar toward the episode budget and its numbers.
-
-It shows what a Textual `ProgressBar` beside a label showed (the bar, the
-percentage, "60,000 / 200,000 episodes" and, while training runs, the time
-left), drawn as one widget from kept lines: the Train view updates it on
-every snapshot, and three widgets with reactive attributes cost more than a
-line of text (`show(done, total, eta)`). Where the words do not fit they lose
-"episodes", then take compact counts ("1.23M / 5.00M"), then the time left:
-the counts are never cut.
-"""
+"""`ProgressLine`: one line with a bar toward the episode budget and its numbers."""
 
 from __future__ import annotations
 
@@ -30,10 +21,7 @@ class ProgressLine(StripWidget):
         "progress--done", "progress--left", "progress--percent", "progress--text",
     }
     DEFAULT_CSS = """
-    ProgressLine {
-        height: 1;
-        width: 1fr;
-    }
+    ProgressLine { height: 1; width: 1fr; }
     ProgressLine > .progress--done { color: $accent; }
     ProgressLine > .progress--left { color: $foreground 10%; }
     ProgressLine > .progress--percent { color: $text; }

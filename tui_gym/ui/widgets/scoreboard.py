@@ -1,16 +1,9 @@
-"""`Scoreboard`: the person, the agent and the exact optimum, one row each.
-
-The rows come from the game's narrator (`Narrator.scoreboard(...)`, a list of
-`ScoreRow(who, text, short)`), so nothing here knows which game it is: the
-widget lays them out as two columns, the name on the left and the words
-wrapping beside it. On a compact screen it shows each row's `short` words
-and drops its border, so it stays a few lines tall.
-"""
+"""`Scoreboard`: the person, the agent and the exact optimum, one row each."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import ClassVar
+from typing import Any, ClassVar
 
 from rich.console import RenderableType
 from rich.table import Table
@@ -41,31 +34,17 @@ class Scoreboard(Widget):
     """
 
     COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "scoreboard--who",
-        "scoreboard--you",
-        "scoreboard--agent",
-        "scoreboard--optimum",
+        "scoreboard--who", "scoreboard--you", "scoreboard--agent", "scoreboard--optimum",
         "scoreboard--other",
     }
 
-    WHO_STYLES: ClassVar[dict[str, str]] = {
-        "You": "you",
-        "Agent": "agent",
-        "Optimum": "optimum",
-    }
+    WHO_STYLES: ClassVar[dict[str, str]] = {"You": "you", "Agent": "agent", "Optimum": "optimum"}
 
-    def __init__(
-        self,
-        *,
-        name: str | None = None,
-        id: str | None = None,  # noqa: A002 - Textual's own name for it
-        classes: str | None = None,
-    ) -> None:
-        super().__init__(name=name, id=id, classes=classes)
+    BORDER_TITLE = "Scoreboard"
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
         self.rows: tuple[ScoreRow, ...] = ()
-
-    def on_mount(self) -> None:
-        self.border_title = "Scoreboard"
 
     def show_rows(self, rows: Sequence[ScoreRow]) -> None:
         """Show these rows (redraws only when they changed)."""

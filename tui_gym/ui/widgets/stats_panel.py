@@ -1,20 +1,4 @@
-"""The training stats table: counts, rates, rolling means and the exact yardstick.
-
-`StatsPanel` shows the state of the run (`run_state`: running, paused,
-finished or ready), the speed and the engine, then episodes, steps, episodes
-per second, time, epsilon and the rolling means of return, length and |TD
-error|, then the reference figures the game's oracle computes for the
-current greedy policy (its exact value beside the optimum and the gap, or a
-game's own figures such as the share of placements solved in the fewest
-steps) with a word on what they take into account. The figures are shown
-generically, by name, so a new game needs no change here.
-
-A figure with nothing behind it yet (no episode in the statistics, e.g. just
-after loading a saved agent) reads "–". No number is ever cut: where the
-full forms do not fit, the widest column takes shorter forms ("5.50M",
-"-1.23e+03") as far as it must, and when that is not enough the table drops
-to one figure a row.
-"""
+"""The training stats table: counts, rates, rolling means and the exact yardstick."""
 
 from __future__ import annotations
 
@@ -32,16 +16,9 @@ from tui_gym.ui.widgets.numbers import Forms, compact_count, count_forms, fit, n
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget
 
 STATE_STYLES = {
-    "running": ("● running", "bold green"),
-    "paused": ("‖ paused", "bold yellow"),
-    "finished": ("✓ finished", "bold cyan"),
-    "idle": ("○ ready", "bold"),
+    "running": ("● running", "bold green"), "paused": ("‖ paused", "bold yellow"),
+    "finished": ("✓ finished", "bold cyan"), "idle": ("○ ready", "bold"),
 }
-
-
-def figure_name(key: str) -> str:
-    """'optimal_pair_fraction' -> 'optimal pair fraction'."""
-    return key.replace("_", " ")
 
 
 def run_state(running: bool, episodes: int, steps: int, budget: int) -> str:
@@ -105,12 +82,7 @@ class StatsPanel(StripWidget):
         border-subtitle-color: $text-disabled;
         padding: 0 1;
     }
-    Screen.compact StatsPanel {
-        max-width: 100%;
-        border: none;
-        padding: 0;
-        min-height: 0;
-    }
+    Screen.compact StatsPanel { max-width: 100%; border: none; padding: 0; min-height: 0; }
     """
 
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
@@ -119,7 +91,6 @@ class StatsPanel(StripWidget):
         self._rows: list[tuple[str, Forms, str]] = []  # (name, value's forms, style)
         self._reference: list[tuple[str, Forms]] = []
         self._scope_note = ""
-        self._engine_reason = ""
         self._shape: tuple = ()
         self._reference_note = ""
         self._state = "idle"
@@ -164,17 +135,11 @@ class StatsPanel(StripWidget):
             self._window = window
             self._changed()
 
-    def show_engine_reason(self, reason: str) -> None:
-        """Say which engine trains and why (e.g. a wrapper with no batched form)."""
-        if reason != self._engine_reason:
-            self._engine_reason = reason
-            self._changed()
-
     def show_reference(self, reference: ReferenceMetrics | None, note: str = "") -> None:
         """The exact comparison with the optimum (and a word on what it takes into
         account), or a note on why there is none."""
         figures: Mapping[str, float] = reference.figures if reference else {}
-        items = [(figure_name(k), figure_forms(k, v)) for k, v in figures.items()]
+        items = [(k.replace("_", " "), figure_forms(k, v)) for k, v in figures.items()]
         if reference is not None and not items:
             items = [("reference", (reference.summary,))]
         scope = reference.scope.note if reference is not None else ""
@@ -198,7 +163,7 @@ class StatsPanel(StripWidget):
         self.border_subtitle = " · ".join(parts)
         # A layout pass only when the panel's height may change (new rows or notes).
         shape = (len(self._rows), len(self._reference), bool(self._reference_note),
-                 self._scope_note, self._engine_reason, self._compact())
+                 self._scope_note, self._compact())
         self.redraw(layout=shape != self._shape)
         self._shape = shape
 
@@ -211,8 +176,6 @@ class StatsPanel(StripWidget):
             lines.append(self._scope_note)
         if self._reference_note:
             lines.append(self._reference_note)
-        if self._engine_reason:
-            lines.append(self._engine_reason)
         return "\n".join(lines)
 
     def picture_key(self) -> Hashable:
@@ -237,8 +200,6 @@ class StatsPanel(StripWidget):
             lines += _note(self._scope_note, width)
         if self._reference_note:
             lines += _note(self._reference_note, width)
-        if self._engine_reason:
-            lines += _note(self._engine_reason, width)
         return lines
 
 
@@ -319,5 +280,4 @@ def _lay_out(rows: list[list], width: int, fit_only: bool) -> list[Line] | None:
 
 
 def _note(text: str, width: int) -> list[Line]:
-    return [[Segment(part, _style("italic dim"))]
-            for part in textwrap.wrap(text, max(1, width))]
+    return [[Segment(part, _style("italic dim"))] for part in textwrap.wrap(text, max(1, width))]

@@ -1,14 +1,4 @@
-"""The step-by-step panel: how the learner used the transition just taken.
-
-`StepPanel` shows one `StepEvent` and its `UpdateRecord`: the state, the
-action, the reward and the next state; the target as the algorithm forms it
-(Q-learning's max, SARSA's Q(s',a') with the a' it picked, Expected SARSA's
-expectation, Double Q's table, Monte Carlo's return at the episode's end,
-Dyna-Q's planning updates counted, and the lines a learner adds: the
-n-step window, the traces, the priority queue), each symbol with its value, the TD error
-and Q(s, a) before → after. `explain` writes those lines as plain text, so
-what the panel says can be read and tested without a screen.
-"""
+"""The step-by-step panel: how the learner used the transition just taken."""
 
 from __future__ import annotations
 
@@ -32,12 +22,8 @@ def _num(value: float) -> str:
 
 
 def explain(
-    event: Any,
-    record: UpdateRecord,
-    action_names: Sequence[str],
-    describe: Callable[[Any], str],
-    title: str = "",
-    describe_row: Callable[[int], str] | None = None,
+    event: Any, record: UpdateRecord, action_names: Sequence[str], describe: Callable[[Any], str],
+    title: str = "", describe_row: Callable[[int], str] | None = None,
 ) -> list[tuple[str, str]]:
     """The panel's lines as (label, text) pairs for one step and its update record.
     `describe` puts an observation in words; `describe_row` a row of the table (the

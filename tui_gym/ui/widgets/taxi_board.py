@@ -1,34 +1,8 @@
 """`TaxiBoard`: Taxi's city: walls, four coloured stands, the passenger, the destination, the cab.
 
-The scene is plain data; cells are (row, col) with row 0 at the top:
-
-- "taxi": (row, col) of the cab.
-- "passenger": the stand the passenger waits at (an index into "stands"), or
-  `len(stands)` (4 on Taxi's map) while in the cab.
-- "destination": the index of the stand the passenger is going to.
-- "stands": [[row, col], ...], the pick-up and drop-off points, and
-  "stand_names": their letters (["R", "G", "Y", "B"] by default); stands are
-  coloured in that order: red, green, yellow, blue.
-- "walls": [[row, col], ...]: a wall on the east side of each of these cells.
-- "rows", "cols": the size of the city (5 x 5 unless given).
-- "last_action": the action just taken, one of "south", "north", "east",
-  "west", "pickup", "dropoff", or None.
-- "last_illegal": whether it was a pick-up or drop-off that could not be made.
-- "rainy": whether moves may veer sideways (rain streaks on the road).
-
-The cab is a yellow chip marked T (TAXI on wide tiles); with the passenger
-aboard it turns green and shows ☺ beside the T. A waiting passenger is ☺ on
-their stand, the destination's stand carries ◎, walls are heavy lines and the
-lanes between cells dotted ones. A line under the city says what the last
-action did (a drive, a wall in the way, the rain pushing the cab aside, a
-pick-up, a drop-off, an illegal one and why, a passenger changing their
-mind) or where the passenger is going; with room to spare a legend follows.
-Tiles are drawn as large as fit and keep their size while they fit.
-
-Keys: arrows or WASD drive (north is up), k picks up, l or o drops off
-(p is the app's Play key), n or r starts a new episode at any time, Enter
-once the episode is over. A click on a cell drives one cell towards it; a
-click on the cab picks up or drops off.
+Scene keys: "taxi", "passenger" (a stand, or `len(stands)` aboard), "destination",
+"stands", "stand_names", "walls" (east side of each cell), "rows", "cols",
+"last_action", "last_illegal", "rainy".
 """
 
 from __future__ import annotations
@@ -98,17 +72,7 @@ class TaxiShape:
 
 
 TAXI_SIZES = (
-    (11, 4),
-    (9, 4),
-    (11, 3),
-    (9, 3),
-    (7, 3),
-    (9, 2),
-    (7, 2),
-    (5, 2),
-    (9, 1),
-    (7, 1),
-    (5, 1),
+    (11, 4), (9, 4), (11, 3), (9, 3), (7, 3), (9, 2), (7, 2), (5, 2), (9, 1), (7, 1), (5, 1),
     (3, 1),
 )
 
@@ -195,23 +159,9 @@ class TaxiBoard(Board):
     """
 
     COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "taxi--road",
-        "taxi--road-alt",
-        "taxi--lane",
-        "taxi--wall",
-        "taxi--rain",
-        "taxi--stand-0",
-        "taxi--stand-1",
-        "taxi--stand-2",
-        "taxi--stand-3",
-        "taxi--passenger",
-        "taxi--destination",
-        "taxi--cab",
-        "taxi--cab-full",
-        "taxi--caption",
-        "taxi--note",
-        "taxi--good",
-        "taxi--bad",
+        "taxi--road", "taxi--road-alt", "taxi--lane", "taxi--wall", "taxi--rain", "taxi--stand-0",
+        "taxi--stand-1", "taxi--stand-2", "taxi--stand-3", "taxi--passenger", "taxi--destination",
+        "taxi--cab", "taxi--cab-full", "taxi--caption", "taxi--note", "taxi--good", "taxi--bad",
     }
 
     BINDINGS: ClassVar[list[BindingType]] = [
@@ -226,21 +176,13 @@ class TaxiBoard(Board):
     ]
 
     BUTTONS = (
-        ("Pick up [dim]k[/]", "act('pickup')"),
-        ("Drop off [dim]l[/]", "act('dropoff')"),
+        ("Pick up [dim]k[/]", "act('pickup')"), ("Drop off [dim]l[/]", "act('dropoff')"),
         ("↺ New [dim]n[/]", "new_episode"),
     )
-    RESTART_ANYTIME = True
+    BORDER_TITLE = "Taxi"
 
-    def __init__(
-        self,
-        *,
-        interactive: bool = True,
-        name: str | None = None,
-        id: str | None = None,  # noqa: A002 - Textual's own name for it
-        classes: str | None = None,
-    ) -> None:
-        super().__init__(interactive=interactive, name=name, id=id, classes=classes)
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
         self.rows = self.cols = 0
         self.taxi: Cell | None = None
         self.passenger: int | None = None
@@ -252,40 +194,26 @@ class TaxiBoard(Board):
         self._event: Event | None = None
         self._fresh = True
         self._kept: KeptShape[TaxiShape] = KeptShape()
-        self._layout: TaxiLayout | None = None
-
-    def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
-        self.border_title = "Taxi"
+        self.layout_drawn: TaxiLayout | None = None
 
     # --- what the board says ---------------------------------------------------
     def key_help(self) -> list[tuple[str, str]]:
         return [
             ("↑ ↓ ← →  or  w a s d", "drive north, south, west, east"),
-            ("k", "pick the passenger up"),
-            ("l / o", "drop the passenger off"),
+            ("k", "pick the passenger up"), ("l / o", "drop the passenger off"),
             ("n / r", "start a new episode (at any time)"),
             ("enter", "start a new episode once this one is over"),
             ("click a cell", "drive one cell towards it; click the cab to pick up or drop off"),
         ]
 
-    @property
-    def prompt(self) -> str:
-        return "Drive with the arrows or WASD; k picks up, l drops off."
-
-    @property
-    def over_hint(self) -> str:
-        return "This ride is over: press n, r or Enter (or click New) for another."
+    prompt = "Drive with the arrows or WASD; k picks up, l drops off."
+    over_hint = "This ride is over: press n, r or Enter (or click New) for another."
 
     def button_enabled(self, action: str) -> bool:
         return action == "new_episode" or not self.episode_over
 
     def button_suggested(self, action: str) -> bool:
         return self.episode_over and action == "new_episode"
-
-    @property
-    def layout_drawn(self) -> TaxiLayout | None:
-        """The geometry of the last drawing (None before the first)."""
-        return self._layout
 
     @property
     def aboard(self) -> bool:
@@ -318,9 +246,7 @@ class TaxiBoard(Board):
         self.rainy = bool(scene.get("rainy"))
         action = scene.get("last_action")
         self._event = self._event_of(
-            previous_taxi,
-            previous_destination,
-            str(action) if action is not None else None,
+            previous_taxi, previous_destination, str(action) if action is not None else None,
             bool(scene.get("last_illegal")),
         )
         self._fresh = False
@@ -346,10 +272,7 @@ class TaxiBoard(Board):
         return False
 
     def _event_of(
-        self,
-        previous: Cell | None,
-        previous_destination: int | None,
-        action: str | None,
+        self, previous: Cell | None, previous_destination: int | None, action: str | None,
         illegal: bool,
     ) -> Event | None:
         """What the last action did, in words from longest to shortest, and their style."""
@@ -382,8 +305,7 @@ class TaxiBoard(Board):
             outcome = f"went {went}" if went else "stayed put"
             rain = (
                 f"The rain pushed the cab: asked {action}, {outcome}",
-                f"Rain: asked {action}, {outcome}",
-                f"Rain: {outcome}",
+                f"Rain: asked {action}, {outcome}", f"Rain: {outcome}",
             )
             return rain, "note", True
         if went is None:
@@ -516,7 +438,7 @@ class TaxiBoard(Board):
 
     def picture(self, width: int, height: int) -> Text:
         if self.taxi is None or self.rows <= 0 or self.cols <= 0:
-            self._layout = None
+            self.layout_drawn = None
             return stack([Text("No city yet.", self._style("caption"))], width, height)
         rows, cols = self.rows, self.cols
         if not self.KEEP_SHAPE:
@@ -532,20 +454,15 @@ class TaxiBoard(Board):
                 lines.append(legend)
         left = max(0, (width - shape.width) // 2)
         top = max(0, (height - len(lines)) // 2)
-        self._layout = TaxiLayout(shape, left, top)
+        self.layout_drawn = TaxiLayout(shape, left, top)
         return stack(lines, width, height)
 
     # --- keys and clicks -----------------------------------------------------------
-    def action_next_episode(self) -> None:
-        """Enter: a new episode, once this one is over (so a stray Enter loses nothing)."""
-        if self.episode_over or self.agent_playing:
-            self.action_new_episode()
-
     def canvas_clicked(self, offset: Offset) -> None:
         """Drive one cell towards the clicked cell; a click on the cab picks up or drops off."""
-        if self._layout is None or self.taxi is None:
+        if self.layout_drawn is None or self.taxi is None:
             return
-        cell = self._layout.cell_at(offset)
+        cell = self.layout_drawn.cell_at(offset)
         if cell is None:
             return
         if cell == self.taxi:

@@ -1,11 +1,4 @@
-"""`TextBoard`: a game drawn as its own text picture, for envs with no board of their own.
-
-The scene is `{"text": picture, "state": n, "actions": [names]}`: the env's
-text render (colour codes removed), its state number, and the names of its
-actions. The picture is drawn as it is, centred, with the actions and the
-keys that take them under it. Keys: a digit takes the action of that number,
-n or r starts a new episode at any time, Enter once the episode is over.
-"""
+"""`TextBoard`: a game drawn as its own text picture, for envs with no board of their own."""
 
 from __future__ import annotations
 
@@ -22,6 +15,7 @@ ACTION_GROUP = Binding.Group("Act")
 class TextBoard(Board):
     """Any game's text picture; digits take actions."""
 
+    BORDER_TITLE = "Game"
     DEFAULT_CSS = """
     TextBoard > BoardCanvas { content-align: center middle; }
     """
@@ -33,9 +27,6 @@ class TextBoard(Board):
         Binding("enter", "next_episode", "Next", show=False),
     ]
 
-    def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
-        self.border_title = "Game"
-
     def key_help(self) -> list[tuple[str, str]]:
         return [
             ("0-9", "take the action of that number"),
@@ -43,13 +34,8 @@ class TextBoard(Board):
             ("enter", "start a new episode once this one is over"),
         ]
 
-    @property
-    def prompt(self) -> str:
-        return "Press an action's number; r starts over."
-
-    @property
-    def over_hint(self) -> str:
-        return "This episode is over: press n, r or Enter for a new one."
+    prompt = "Press an action's number; r starts over."
+    over_hint = "This episode is over: press n, r or Enter for a new one."
 
     def action_next_episode(self) -> None:
         if self.episode_over:

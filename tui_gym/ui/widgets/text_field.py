@@ -1,12 +1,4 @@
-"""`TextField`: Textual's `Input`, with its editing keys handled in the field itself.
-
-Textual runs an `Input`'s own bindings (Backspace, Delete, End, Home, the
-arrows, Enter...) only once the key has bubbled from the field up to the
-app, widget by widget, while a character is typed into the field at once. A
-`TextField` runs those bindings as the key arrives, in the field: in order
-with the characters around it, and without the trip up (which, with keys
-handled in order, the next key would wait for).
-"""
+"""`TextField`: Textual's `Input`, with its editing keys handled in the field itself."""
 
 from __future__ import annotations
 

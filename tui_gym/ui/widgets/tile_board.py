@@ -1,54 +1,8 @@
 """`TileBoard`: a map of tiles: FrozenLake's ice, CliffWalking's cliff, edited grid maps.
 
-The scene is plain data. Cells are (row, col) with row 0 at the top, as in
-Gymnasium's maps; where a key names a cell it is a "r,c" string or a (row, col) pair.
-
-- "cells": the map, one string per row and one character per cell: S start,
-  F floor (ice on a lake), H hole, G goal, C cliff, W wall, R reward cell (its
-  value in "rewards"). Any other character is floor showing that character.
-  Without "cells", "rows" and "cols" give the size of an all-floor map.
-- "theme": "lake" (ice, holes in the ice), "cliff" (ground and a cliff) or
-  "plain" (floor and pits): the colours and the words.
-- "agent": (row, col), or None.
-- "last_action": the move just asked, "left" | "down" | "right" | "up" (or a king's
-  move: "up-left" | "up-right" | "down-left" | "down-right"), or None.
-- "slipped": whether that move went elsewhere than asked.
-- "rewards": {cell: value}, optional. A reward cell shows its value; any other
-  cell's value (a hole's, the cliff's) is written on tiles tall enough for it.
-- "slip": {cell: probability}, optional: a faint ≈ in the corner of tiles wide enough.
-- "marks": {cell: text}, optional: a short overlay on a tile (an arrow, a value).
-- "cursor": (row, col), or None, optional: an editing cursor, drawn as a frame.
-- "event": text, optional: what the last move did in the game's own words (a jump),
-  `{who}` standing for the player; it replaces the board's own words; "event_tone"
-  ("good", "bad", "slipped" or "caption"; "good" by default) colours it.
-- "wind": [strength per column], optional: a move from a column is pushed that many
-  cells up; "gusts": whether the wind varies around those strengths. Drawn as ↑
-  marks in the corner of wide tiles and, with a line to spare, the strengths
-  under the columns.
-- "moves": [move names], optional: the moves the game has (the four straight ones
-  when not given; with the diagonals, king's moves).
-- "offered": [action names], optional: the only moves the state offers (other
-  moves are not made: the caption says what is offered); "choices": [action
-  names], optional: moves the digits 1-9 and 0 pick, in order (a choice among
-  many, such as one of a state's ten actions).
-
-Every kind of tile has its colour and its glyph, so the map reads on a
-monochrome terminal too: ⌂ start, · floor, ○ hole, ★ goal, ▒ cliff, █ wall,
-a reward cell its value. The agent ● is drawn on top (in other colours on the
-goal and in a hole), and each cell the agent left this episode shows the arrow
-of the move that left it. Under the map a line says what the last move did
-(moved, bumped, slipped, fell, reached the goal) and, with room to spare, a
-legend names the tiles. Tiles are drawn as large as fit, with row and column
-numbers when there is room; the smallest drawing puts two map rows in one
-line, in colour only. The size chosen is kept while it fits (see `KeptShape`).
-
-Keys: arrows or WASD move (the moves are named, never numbered); on a map with
-king's moves, home, page up, end and page down (the keypad's 7 9 1 3) move
-diagonally, and the keypad's digits move its way; a scene's "choices" are
-picked by digit; n or r starts a new episode at any time, Enter once the
-episode is over. A click on a cell
-posts `TileBoard.CellClicked(row, col)` and calls `cell_clicked(row, col)`,
-which steps the agent one cell towards it.
+Scene keys: "cells" (S F H G C W R rows), "theme", "agent", "last_action", "slipped",
+"rewards", "slip", "marks", "cursor", "event"/"event_tone", "wind"/"gusts", "moves",
+"offered", "choices"; cells are (row, col) or "r,c", row 0 at the top.
 """
 
 from __future__ import annotations
@@ -278,33 +232,11 @@ class TileBoard(Board):
     """
 
     COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "tile--ice",
-        "tile--ice-alt",
-        "tile--ground",
-        "tile--ground-alt",
-        "tile--floor",
-        "tile--floor-alt",
-        "tile--start",
-        "tile--hole",
-        "tile--goal",
-        "tile--cliff",
-        "tile--wall",
-        "tile--reward",
-        "tile--penalty",
-        "tile--agent",
-        "tile--agent-home",
-        "tile--agent-lost",
-        "tile--trail",
-        "tile--mark",
-        "tile--value",
-        "tile--slip",
-        "tile--wind",
-        "tile--cursor",
-        "tile--axis",
-        "tile--caption",
-        "tile--slipped",
-        "tile--good",
-        "tile--bad",
+        "tile--ice", "tile--ice-alt", "tile--ground", "tile--ground-alt", "tile--floor",
+        "tile--floor-alt", "tile--start", "tile--hole", "tile--goal", "tile--cliff", "tile--wall",
+        "tile--reward", "tile--penalty", "tile--agent", "tile--agent-home", "tile--agent-lost",
+        "tile--trail", "tile--mark", "tile--value", "tile--slip", "tile--wind", "tile--cursor",
+        "tile--axis", "tile--caption", "tile--slipped", "tile--good", "tile--bad",
     }
 
     BINDINGS: ClassVar[list[BindingType]] = [
@@ -322,7 +254,6 @@ class TileBoard(Board):
     ]
 
     BUTTONS = (("↺ Reset [dim]r[/]", "new_episode"),)
-    RESTART_ANYTIME = True
 
     class CellClicked(Message):
         """A person clicked map cell (row, col) (an editor paints it; play steps towards it)."""
@@ -332,15 +263,8 @@ class TileBoard(Board):
             self.row = row
             self.col = col
 
-    def __init__(
-        self,
-        *,
-        interactive: bool = True,
-        name: str | None = None,
-        id: str | None = None,  # noqa: A002 - Textual's own name for it
-        classes: str | None = None,
-    ) -> None:
-        super().__init__(interactive=interactive, name=name, id=id, classes=classes)
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
         self.cells: list[str] = []
         self.trail: dict[Cell, str] = {}  # cell the agent left -> arrow of that move
         self.agent: Cell | None = None
@@ -357,7 +281,7 @@ class TileBoard(Board):
         self._event: Event | None = None
         self._fresh = True
         self._kept: KeptShape[TileShape] = KeptShape()
-        self._layout: TileLayout | None = None
+        self.layout_drawn: TileLayout | None = None
 
     def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
         self.border_title = self.theme.title
@@ -401,21 +325,11 @@ class TileBoard(Board):
         elif digit in KEYPAD:
             self.action_act(KEYPAD[digit])
 
-    @property
-    def prompt(self) -> str:
-        return "Move with the arrows or WASD, or click a cell; r starts over."
-
-    @property
-    def over_hint(self) -> str:
-        return "This episode is over: press n, r or Enter (or click Reset) for a new one."
+    prompt = "Move with the arrows or WASD, or click a cell; r starts over."
+    over_hint = "This episode is over: press n, r or Enter (or click Reset) for a new one."
 
     def button_suggested(self, action: str) -> bool:
         return self.episode_over
-
-    @property
-    def layout_drawn(self) -> TileLayout | None:
-        """The geometry of the last drawing (None before the first)."""
-        return self._layout
 
     @property
     def event_text(self) -> str:
@@ -485,8 +399,7 @@ class TileBoard(Board):
         if kind == HOLE:
             if slipped:
                 return (
-                    f"{{who}} {theme.slipped} into a {theme.hole}",
-                    f"Slipped into a {theme.hole}",
+                    f"{{who}} {theme.slipped} into a {theme.hole}", f"Slipped into a {theme.hole}",
                 ), "bad"
             return (f"{{who}} {theme.fell_in}", theme.fell_in.capitalize()), "bad"
         if kind == GOAL:
@@ -507,15 +420,13 @@ class TileBoard(Board):
             short = f"{action} → {went or ('stayed' if agent == previous else '?')}"
             texts: tuple[str, ...] = (
                 f"{{who}} {theme.slipped}: asked {action}, {outcome}",
-                f"Slipped: asked {action}, {outcome}",
-                f"Slipped: {short}",
+                f"Slipped: asked {action}, {outcome}", f"Slipped: {short}",
             )
             return texts, "slipped"
         if agent == previous:
             blocker = "a wall" if self.kind(intended) == WALL else "the edge"
             return (
-                f"{{who}} bumped into {blocker} (asked {action})",
-                f"Bumped into {blocker}",
+                f"{{who}} bumped into {blocker} (asked {action})", f"Bumped into {blocker}",
             ), "caption"
         return (f"{{who}} moved {action}", f"Moved {action}"), "caption"
 
@@ -688,13 +599,8 @@ class TileBoard(Board):
         """'⌂ start  · ice  ○ hole  ★ goal  ● you': the tiles this map has (None if too wide)."""
         present = {kind for row in self.cells for kind in row}
         words = {
-            START: "start",
-            FLOOR: self.theme.floor,
-            HOLE: self.theme.hole,
-            GOAL: "goal",
-            CLIFF: "cliff",
-            WALL: "wall",
-            REWARD: "reward",
+            START: "start", FLOOR: self.theme.floor, HOLE: self.theme.hole, GOAL: "goal",
+            CLIFF: "cliff", WALL: "wall", REWARD: "reward",
         }
         items = []
         for kind in KINDS:
@@ -720,7 +626,7 @@ class TileBoard(Board):
 
     def picture(self, width: int, height: int) -> Text:
         if not self.cells:
-            self._layout = None
+            self.layout_drawn = None
             return stack([Text("No map yet.", self._style("caption"))], width, height)
         rows, cols = len(self.cells), len(self.cells[0])
         if not self.KEEP_SHAPE:
@@ -744,17 +650,12 @@ class TileBoard(Board):
                 lines.append(names)
         left = max(0, (width - shape.width) // 2)
         top = max(0, (height - len(lines)) // 2)
-        self._layout = TileLayout(shape, left + shape.label_w, top)
+        self.layout_drawn = TileLayout(shape, left + shape.label_w, top)
         return stack(lines, width, height)
 
     # --- keys and clicks -----------------------------------------------------------
-    def action_next_episode(self) -> None:
-        """Enter: a new episode, once this one is over (so a stray Enter loses nothing)."""
-        if self.episode_over or self.agent_playing:
-            self.action_new_episode()
-
     def canvas_clicked(self, offset: Offset) -> None:
-        layout = self._layout
+        layout = self.layout_drawn
         if layout is None:
             return
         rows, col = layout.rows_at(offset), layout.col_at(offset)

@@ -1,11 +1,4 @@
-"""`ValueLines`: values along one axis of states, drawn as the book draws the gambler's.
-
-Two braille charts (`tui_gym.terminal_chart`), sized to the widget: the value
-estimates after the first sweeps and the latest, one curve each, and below
-them the policy as a number per state (the stake), the smallest where the
-policy takes several (the book's tie-breaking). `show(x, curves, numbers,
-x_label, number_label)` gives it what to draw.
-"""
+"""`ValueLines`: values along one axis of states, drawn as the book draws the gambler's."""
 
 from __future__ import annotations
 
