@@ -6,7 +6,8 @@ a state instead of every action's; up to `DENSE_STATES` states they are added
 up into one `[S, S]` matrix, so that a sweep is one matrix product however
 many outcomes an action has (Jack's car rental has 441).
 `sweep(v, gamma)` is the synchronous sweep (a new array, all states from the
-old values); `sweep_in_place(v, gamma)` updates `v` state by state in index
+old values); `over(steps, gamma)` the values over a number of steps at once;
+`sweep_in_place(v, gamma)` updates `v` state by state in index
 order, each state reading the values already updated this sweep.
 """
 
@@ -67,6 +68,21 @@ class PolicyArrays:
         if self.dense is not None and np.isfinite(v).all():
             return self.reward + gamma * (self.dense @ v)
         return self.reward + gamma * (self.weight * v[self.target]).sum(axis=1)
+
+    def over(self, steps: int, gamma: float) -> FloatArray:
+        """The values over `steps` steps, `sum over t < steps of (gamma P)^t r`, from the
+        dense matrix by doubling: two matrix products per binary digit of `steps`."""
+        assert self.dense is not None
+        step = gamma * self.dense
+        total = np.zeros_like(self.reward)  # the sum over the first k steps
+        power = np.eye(len(total))  # (gamma P)^k
+        for digit in bin(steps)[2:]:
+            total = total + power @ total  # k -> 2k
+            power = power @ power
+            if digit == "1":  # k -> k + 1
+                total = self.reward + step @ total
+                power = step @ power
+        return total
 
     def sweep_in_place(self, v: FloatArray, gamma: float) -> float:
         """One in-place sweep of `v`, state 0 first; the largest change."""
