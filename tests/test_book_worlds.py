@@ -139,6 +139,12 @@ def test_the_maze_changes_at_the_given_step_over_episodes_and_a_seed_starts_it_o
     assert env.grid.cells()[3] == "FWWWWWWWW"  # the way round the left end is open
     _, info = env.reset(seed=1)
     assert info["phase"] == 0 and env.grid.cells() == before
+    _, info = env.reset(options={"world_steps": 4})  # a clock set from elsewhere
+    assert (info["world_steps"], info["phase"], info["changes_in"]) == (4, 0, 1)
+    _, info = env.reset(options={"world_steps": 7})
+    assert info["phase"] == 1 and env.grid.cells()[3] == "FWWWWWWWW"
+    with pytest.raises(ValueError, match="world_steps must be an integer >= 0"):
+        env.reset(options={"world_steps": -1})
 
 
 @pytest.mark.parametrize("env_class", [BlockingMazeEnv, ShortcutMazeEnv])
@@ -167,6 +173,35 @@ def test_a_session_measures_against_the_phase_in_force_after_its_steps() -> None
     panels = session.heatmaps()
     assert panels  # the wall as it is now: open at its left end, closed at its right
     assert panels[0].labels[3][0] != "█" and panels[0].labels[3][1:] == ("█",) * 8
+
+
+@pytest.mark.parametrize(("name", "algorithm"), [("blocking-maze", "dyna-q"),
+                                               ("shortcut-maze", "sarsa")])
+def test_the_compiled_loop_plays_the_world_that_changes_as_the_env_does(name: str,
+                                                                       algorithm: str) -> None:
+    tables = {}
+    for engine in ("model", "env"):
+        session = Session(name, {"change_at": 300}, seed=2, algorithm=algorithm, engine=engine,
+                          hp={"episodes": 60})
+        assert session.trainer.engine == engine
+        session.trainer.run(episodes=60)
+        assert session.trainer.steps > 300 and session.exact_kwargs()[PHASE] == 1
+        tables[engine] = (session.trainer.steps, session.agent.table()[0])
+    assert tables["model"][0] == tables["env"][0]
+    assert np.array_equal(tables["model"][1], tables["env"][1])
+
+
+def test_the_env_goes_on_at_the_step_the_compiled_loop_reached() -> None:
+    session = Session("blocking-maze", {"change_at": 40}, seed=0, hp={"episodes": 50})
+    trainer = session.trainer
+    assert session.engine_reason.startswith("model:") and len(trainer.phases) == 2
+    trainer.run(episodes=1)
+    while trainer.steps < 40:  # past the change, on the compiled loop
+        trainer.run(episodes=1)
+    trainer.step()  # the animated board's next move, on the env
+    maze = session.env.unwrapped
+    assert (maze.world_steps, maze.phase) == (trainer.steps, 1)
+    assert maze.grid.cells()[3] == "FWWWWWWWW"
 
 
 def test_the_world_hands_out_each_phase_as_the_wrappers_make_it() -> None:

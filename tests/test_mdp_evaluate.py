@@ -10,6 +10,7 @@ from gymnasium.wrappers import TimeLimit
 from tests.mdp_support import env_returns, random_model, within_standard_errors
 from tests.test_mdp_solve import GO, STAY, two_rooms
 from tui_gym.core.mdp import (
+    FiniteMDP,
     PolicyError,
     evaluate,
     exact_gap,
@@ -194,6 +195,34 @@ def test_large_models_iterate_to_the_same_values(monkeypatch):
         monkeypatch.setattr(evaluation, "DENSE_LIMIT", 10)
         np.testing.assert_allclose(evaluate(cliff, policy, gamma).v, dense, rtol=1e-9)
         monkeypatch.setattr(evaluation, "DENSE_LIMIT", 2000)
+
+
+@pytest.mark.parametrize("horizon", [1, 2, 7, 64, 1000, 4099])
+@pytest.mark.parametrize("gamma", [1.0, 0.97])
+def test_a_long_limit_summed_at_once_is_the_limits_sweeps(horizon, gamma, monkeypatch):
+    import tui_gym.core.mdp.evaluation as evaluation
+
+    rng = np.random.default_rng(horizon)
+    model = random_model(rng, n_states=12, horizon=horizon, end_chance=0.002)
+    policy = rng.dirichlet(np.ones(model.n_actions), size=model.n_states)
+    swept = np.zeros(model.n_states)
+    matrix = policy_matrix(model, policy)
+    for _ in range(horizon):  # the definition: `horizon` backward steps
+        swept = (matrix * (model.expected_reward + gamma * (
+            model.continue_prob * swept[model.next_state]).sum(axis=2))).sum(axis=1)
+    np.testing.assert_allclose(evaluate(model, policy, gamma).v, swept, rtol=1e-10, atol=1e-12)
+    monkeypatch.setattr(evaluation, "DOUBLING_STATES", 0)  # sweeps only, as many as it takes
+    np.testing.assert_allclose(evaluate(model, policy, gamma).v, swept, rtol=1e-10, atol=1e-12)
+
+
+def test_a_policy_that_rarely_ends_is_valued_over_the_whole_limit():
+    # Room 0 pays 1 a step and is left with chance 1/1000: over 5,000 steps it is worth
+    # the sum of 0.999^t, which sweeps settle on only after thousands of them.
+    prob = np.array([[[0.999, 0.001]]])
+    model = FiniteMDP(np.array([[[0, 0]]]), prob, np.ones((1, 1, 2)),
+                      np.array([[[False, True]]]), np.ones(1), horizon=5000)
+    value = evaluate(model, np.array([0])).value
+    assert value == pytest.approx((1 - 0.999**5000) / 0.001, rel=1e-12)
 
 
 def test_a_model_survives_pickling():

@@ -68,6 +68,25 @@ def test_train_is_recorded_with_settings_curves_and_figures(
     assert code == 0 and "exact gap" in out and "q-learning" in out
 
 
+def test_a_prediction_learners_train_run_records_the_rms_error_of_its_values(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = tmp_path / "runs.db"
+    code, out, err = run_cli(capsys, "train", "random-walk", "--algorithm", "td0", "--episodes",
+                             "200", "--eval-episodes", "20", "--json", "--db", str(db))
+    assert code == 0, err
+    trained = json.loads(out)
+    [run] = runs_json(capsys, db)
+    figures = {f["name"]: f["value"] for f in run["figures"]}
+    # Its greedy policy is no figure of a prediction learner: the error of V is.
+    assert "exact_value" not in figures and "exact_gap" not in figures
+    assert figures["rms_error"] == pytest.approx(trained["rms_error"])
+    code, out, err = run_cli(capsys, "runs", "show", str(run["id"]), "--json", "--db", str(db))
+    curves = {c["name"]: c for c in json.loads(out)["curves"]}
+    assert set(curves) == {"return", "rms_error"}
+    assert curves["rms_error"]["episodes"][0] == 0 and curves["rms_error"]["values"][0] > 0
+
+
 def test_list_filter_export_and_remove(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -77,6 +77,8 @@ class MazeEnv(GridEnv):
     reset with a seed starts the world over, a reset without one carries on.
     `info` tells `world_steps` and `phase` after every reset and step, and
     `changes_in`, the steps left before the next change, while one is ahead.
+    `reset(options={"world_steps": n})` sets the count (a learner trained elsewhere
+    for n steps goes on in the phase in force after them).
 
     ## Arguments
     `change_at` (the changing mazes); `render_mode`: "ansi" draws the maze.
@@ -99,7 +101,12 @@ class MazeEnv(GridEnv):
     ) -> tuple[int, dict[str, Any]]:
         if seed is not None:
             self.world_steps = 0
-            self._enter_phase()
+        if options is not None and "world_steps" in options:
+            steps = options["world_steps"]
+            if isinstance(steps, bool) or not isinstance(steps, int) or steps < 0:
+                raise ValueError(f"world_steps must be an integer >= 0, not {steps!r}")
+            self.world_steps = steps
+        self._enter_phase()
         obs, info = super().reset(seed=seed, options=options)
         return obs, {**info, **self._clock()}
 

@@ -98,10 +98,13 @@ class TallyWord(NamedTuple):
 @dataclass(frozen=True, eq=False)
 class TrainingModel:
     """A game's model as the wrappers make it, for the engine: `model`, and `rows`, the
-    agent's table row of each model state (None: state s is row s)."""
+    agent's table row of each model state (None: state s is row s); in a world that
+    changes as it is played, `model` is its first phase and `later` each later phase's
+    (start step, model)."""
 
     model: FiniteMDP
     rows: np.ndarray | None = None
+    later: tuple[tuple[int, FiniteMDP], ...] = ()
 
 
 @dataclass(frozen=True)

@@ -42,7 +42,6 @@ from tui_gym.games.base import (
     Scope,
     StateSpace,
     TrainingModel,
-    greedy_probabilities,
 )
 from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import signed, unwrapped_note
@@ -237,6 +236,7 @@ class ModelOracle(Oracle):
         super().__init__(game)
         self._kept: dict[Any, _Exact | NotAvailable] = {}
         self._bounds: dict[Any, FixedBound | NotAvailable] = {}
+        self._references: dict[Any, ReferenceMetrics] = {}  # per greedy policy
 
     @property
     def model_game(self) -> ModelGame:
@@ -298,13 +298,27 @@ class ModelOracle(Oracle):
                 f"a table of shape {values.shape} does not fit {model.n_states} states "
                 f"and {model.n_actions} actions"
             )
-        optimum = exact.ladder.q()
         offered = self.model_game.offered_actions(kwargs)
         if offered is not None and offered.shape == values.shape:  # greedy among those
             values = np.where(offered, values, -np.inf)
-        policy = greedy_probabilities(values)
+        # The figures follow from the greedy policy alone, which training changes less
+        # often than the values: kept per policy.
+        tied = values == values.max(axis=1, keepdims=True)
+        key = (freeze(kwargs), changes, tied.tobytes())
+        found = self._references.get(key)
+        if found is None:
+            if len(self._references) >= 64:
+                self._references.pop(next(iter(self._references)))
+            policy = tied / tied.sum(axis=1, keepdims=True)
+            found = self._references[key] = self.policy_reference(policy, exact, kwargs, changes)
+        return found
+
+    def policy_reference(self, policy: FloatArray, exact: _Exact, kwargs: Mapping[str, Any],
+                         changes: GameChanges) -> ReferenceMetrics:
+        """The exact figures of `policy` (`[S, A]`, a greedy policy) beside the optimum."""
+        model = exact.model
         value = evaluate(model, policy).value
-        best = _initial_value(model, optimum.max(axis=1))
+        best = _initial_value(model, exact.ladder.q().max(axis=1))
         gap = exact_gap_of(best, value)
         places = self.model_game.narrator.value_places
         return ReferenceMetrics(
@@ -580,11 +594,15 @@ class ModelGame(Game):
     ) -> TrainingModel | NotAvailable:
         oracle = self.oracle
         assert isinstance(oracle, ModelOracle)
+        if len(self.phase_starts(kwargs)) > 1:
+            world = self.world(kwargs, changes)
+            if isinstance(world, NotAvailable):
+                return world
+            return TrainingModel(world.models[0], later=tuple(
+                zip(world.starts[1:], world.models[1:], strict=True)))
         exact = oracle.exact(kwargs, changes)
         if isinstance(exact, NotAvailable):
             return exact
-        if len(self.phase_starts(kwargs)) > 1:
-            return NotAvailable(f"{self.title} changes as it is played")
         if not exact.scope.exact:
             return NotAvailable(exact.scope.note)
         return TrainingModel(exact.model)

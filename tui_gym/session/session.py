@@ -162,10 +162,10 @@ class Session:
     def _new_trainer(self) -> Trainer:
         """The trainer, on the game's model where there is one (`engine_reason` says which
         loop trains and why)."""
-        model, self.engine_reason = self._training_model()
+        phases, self.engine_reason = self._training_model()
         self.agent.offer(self._offered())
-        return Trainer(self.env, self.agent, self.keyer, model=model, seed=self.seed,
-                       reason=self.engine_reason)
+        return Trainer(self.env, self.agent, self.keyer, model=phases[0][1] if phases else None,
+                       later=phases[1:], seed=self.seed, reason=self.engine_reason)
 
     def _offered(self) -> np.ndarray | None:
         """The actions each table row offers, for a game whose states do not all offer
@@ -181,9 +181,10 @@ class Session:
         mask[np.arange(model.n_states) if training.rows is None else training.rows] = offered
         return mask
 
-    def _training_model(self) -> tuple[ModelArrays | None, str]:
-        """The model the compiled loop trains on, or None and why not (`training` keeps
-        the game's model itself, also when the env loop is chosen)."""
+    def _training_model(self) -> tuple[tuple[tuple[int, ModelArrays], ...], str]:
+        """The model the compiled loop trains on, as (start step, arrays) of each phase of
+        the world, or none and why not (`training` keeps the game's model itself, also
+        when the env loop is chosen)."""
         self.training: TrainingModel | None = None
         self._ruler = PredictionRuler()
         changed = [c.name for c in self.applied if CATALOG[c.name].changes_observation]
@@ -210,15 +211,16 @@ class Session:
                 if self.changes.chosen_time_limit:
                     names.append("TimeLimit")
                 text = f"model: {self.game.title}" + (f" with {', '.join(names)}" if names else "")
-                self.training = TrainingModel(model, rows)
+                self.training = TrainingModel(model, rows, found.later)
                 if self.engine == "env":
-                    return None, "env: chosen"
-                return _arrays_of(model, rows), text
+                    return (), "env: chosen"
+                phases = ((0, model), *found.later)
+                return tuple((start, _arrays_of(m, rows)) for start, m in phases), text
         if self.engine == "env":
-            return None, "env: chosen"
+            return (), "env: chosen"
         if self.engine == "model":
             raise ValueError(f"the model loop cannot train this: {reason}")
-        return None, f"env: {reason}"
+        return (), f"env: {reason}"
 
     @property
     def applied(self) -> tuple[WrapperChoice, ...]:

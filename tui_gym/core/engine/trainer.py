@@ -10,6 +10,12 @@ ways, through the same compiled rule:
   the animated board and the `n` step, which show the env, and games or
   wrapper chains no model follows.
 
+In a world that changes as it is played (`later` phases, from a step counted
+over every episode), the compiled loop trains on the model in force, its
+calls ending where a phase does, and the env starts each episode with the
+world's clock set to the steps trained (`reset` option `world_steps`), so
+both loops play the same world at the same step.
+
 `run(episodes=…)` / `run(seconds=…)` works in chunks of milliseconds so a
 front end can interleave drawing, pausing and changing settings; an episode
 in progress carries over between calls, so cutting a run into chunks never
@@ -26,7 +32,7 @@ from __future__ import annotations
 import math
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -94,6 +100,7 @@ class Trainer:
         keyer: the keyer of `env`'s observation space.
         model: the game's model as the wrappers make it, whose states map to
             the agent's table rows; None to train on the env.
+        later: in a world that changes, each later phase's start step and model.
         seed: seeds the env's first reset (the agent's own generator drives
             everything else).
         reason: which loop trains and why, for people.
@@ -106,6 +113,7 @@ class Trainer:
         keyer: ObservationKeyer,
         *,
         model: ModelArrays | None = None,
+        later: Sequence[tuple[int, ModelArrays]] = (),
         seed: int | None = None,
         reason: str = "",
         window: int = 1000,
@@ -116,6 +124,7 @@ class Trainer:
         self.agent = agent
         self.keyer = keyer
         self.model = model
+        self.phases = ((0, model), *later) if model is not None else ()
         self.seed = seed
         self.reason = reason
         self.publish_interval = publish_interval
@@ -220,12 +229,18 @@ class Trainer:
         """One call of the compiled loop (a few milliseconds); the episodes it finished."""
         assert self.model is not None
         limit = MAX_CALL_EPISODES if quota is None else min(quota, MAX_CALL_EPISODES)
+        max_steps = self._call_steps
+        for start, model in self.phases:  # the phase in force, up to where the next starts
+            if start > self.steps:
+                max_steps = min(max_steps, start - self.steps)
+                break
+            self.model = model
         began = time.perf_counter()
-        done, steps = loop.play(self.agent, self.model, self._cursor, limit, self._call_steps,
+        done, steps = loop.play(self.agent, self.model, self._cursor, limit, max_steps,
                                 self._out, self._log)
         elapsed = time.perf_counter() - began
         if elapsed > 0 and steps:  # aim the next call at CHUNK_SECONDS
-            wanted = self._call_steps * CHUNK_SECONDS / elapsed
+            wanted = steps * CHUNK_SECONDS / elapsed
             self._call_steps = int(min(max(wanted, 256), 1 << 22))
         self.steps += steps
         if done:
@@ -277,11 +292,11 @@ class Trainer:
         self._warm()
         agent = self.agent
         if self._obs is None:
-            if not self._env_seeded and self.seed is not None:
-                obs, _ = self.env.reset(seed=self.seed)
-                self._env_seeded = True
-            else:
-                obs, _ = self.env.reset()
+            seed = None if self._env_seeded else self.seed
+            self._env_seeded = self._env_seeded or seed is not None
+            # A world that changes goes on at the step the trainer has reached.
+            options = {"world_steps": self.steps} if len(self.phases) > 1 else None
+            obs, _ = self.env.reset(seed=seed, options=options)
             agent.begin_episode()
             self._obs, self._row, self._pending = obs, agent.row(self.keyer.key(obs)), -1
             self._episode = [0.0, 0.0, 0.0, -1.0]  # return, steps, |TD| sum, first action

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,6 +21,9 @@ FloatArray = npt.NDArray[np.float64]
 
 DENSE_LIMIT = 2000
 """Up to this many states a policy's value is one dense linear solve; above, an iteration."""
+
+DOUBLING_STATES = 80
+"""Up to this many states a long episode limit is summed by doubling (`PolicyArrays.over`)."""
 
 _MAX_SWEEPS = 1_000_000
 
@@ -82,14 +84,6 @@ def backup(model: FiniteMDP, v: FloatArray, gamma: float) -> FloatArray:
     return q
 
 
-def _policy_sweep(
-    model: FiniteMDP, matrix: FloatArray, gamma: float
-) -> Callable[[FloatArray], FloatArray]:
-    """One step of the Bellman expectation under a policy, for finite values."""
-    arrays = PolicyArrays.of(model, matrix)
-    return lambda v: arrays.sweep(v, gamma)
-
-
 def _transition_matrix(
     model: FiniteMDP, matrix: FloatArray, rows: npt.NDArray[np.bool_]
 ) -> FloatArray:
@@ -139,13 +133,22 @@ def evaluate(model: FiniteMDP, policy: npt.ArrayLike, gamma: float = 1.0) -> Pol
     matrix = policy_matrix(model, policy)
     horizon = model.horizon
     if horizon is not None:
-        sweep = _policy_sweep(model, matrix, gamma)
+        arrays = PolicyArrays.of(model, matrix)
+        # Sweeps until they settle; where that takes long, the whole limit by doubling:
+        # two matrix products per binary digit of it, which up to `DOUBLING_STATES`
+        # states cost about as much as a sweep each.
+        limit = horizon
+        if arrays.dense is not None and model.n_states <= DOUBLING_STATES:
+            limit = min(horizon, 4 * horizon.bit_length())
         v = np.zeros(model.n_states)
-        for _ in range(horizon):
-            step = sweep(v)
+        for _ in range(limit):
+            step = arrays.sweep(v, gamma)
             if np.array_equal(step, v):  # the same sweep from the same values: settled
                 break
             v = step
+        else:
+            if limit < horizon:
+                v = arrays.over(horizon, gamma)
         return PolicyValue(v, expected_value(model, v), gamma, horizon)
     if gamma < 1.0:
         every = np.ones(model.n_states, dtype=bool)

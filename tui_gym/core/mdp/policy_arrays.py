@@ -58,6 +58,21 @@ class PolicyArrays:
             return self.reward + gamma * (self.dense @ v)
         return self.reward + gamma * (self.weight * v[self.target]).sum(axis=1)
 
+    def over(self, steps: int, gamma: float) -> FloatArray:
+        """The values over `steps` steps, `sum over t < steps of (gamma P)^t r`, from the
+        dense matrix by doubling: two matrix products per binary digit of `steps`."""
+        assert self.dense is not None
+        step = gamma * self.dense
+        total = np.zeros_like(self.reward)  # the sum over the first k steps
+        power = np.eye(len(total))  # (gamma P)^k
+        for digit in bin(steps)[2:]:
+            total = total + power @ total  # k -> 2k
+            power = power @ power
+            if digit == "1":  # k -> k + 1
+                total = self.reward + step @ total
+                power = step @ power
+        return total
+
     def sweep_in_place(self, v: FloatArray, gamma: float) -> float:
         """One in-place sweep of `v`, state 0 first; the largest change."""
         reward, weight, target, dense = self.reward, self.weight, self.target, self.dense

@@ -19,7 +19,7 @@ from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.envs.dp_grid import Cell, Grid
 from tui_gym.envs.dyna_maze import maze_phases
-from tui_gym.games.base import Advice, Bound, ReferenceMetrics, greedy_probabilities
+from tui_gym.games.base import Advice, Bound, ReferenceMetrics
 from tui_gym.games.dp_grid import DPGridGame, Event, ReachNarrator
 from tui_gym.games.model import PHASE, ModelOracle, freeze
 from tui_gym.games.words import plural
@@ -42,15 +42,11 @@ class MazeOracle(ModelOracle):
         super().__init__(game)
         self._fewest: dict[Any, float] = {}
 
-    def reference(
-        self, q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
-    ) -> ReferenceMetrics | NotAvailable:
-        reference = super().reference(q, kwargs, changes)
-        exact = self.exact(kwargs, changes)
-        if isinstance(reference, NotAvailable) or isinstance(exact, NotAvailable):
-            return reference
+    def policy_reference(self, policy: np.ndarray, exact: Any, kwargs: Mapping[str, Any],
+                         changes: GameChanges) -> ReferenceMetrics:
+        reference = super().policy_reference(policy, exact, kwargs, changes)
         steps = _steps_model(exact.model)
-        mean = -evaluate(steps, greedy_probabilities(q)).value
+        mean = -evaluate(steps, policy).value
         key = (freeze(kwargs), changes)
         if key not in self._fewest:
             self._fewest[key] = -solve(with_horizon(steps, None)).value

@@ -358,7 +358,9 @@ def prepare(setup: Setup, arms: Sequence[Arm]) -> Prepared:
     )
     model = optimum = None
     training = first.training
-    if training is not None and first.trainer.model is not None:
+    # A world that changes plays each seed through its session's trainer (`_play_env`),
+    # which follows the phases.
+    if training is not None and first.trainer.model is not None and len(first.trainer.phases) == 1:
         model = _Model(first.trainer.model, training.model, np.asarray(training.rows),
                        int(first.keyer.n_states), int(first.agent.n_actions),
                        first.agent.offered)
@@ -463,7 +465,8 @@ def _rms_errors(learner: Predictor, model: _Model, tables: np.ndarray) -> np.nda
 
 def _play_env(job: _Job, seed: int, returns: np.ndarray, progress: Callable[[int], None],
               stop: Callable[[], bool]) -> None:
-    """One seed on the Gymnasium env, one transition at a time (games no model follows)."""
+    """One seed through its session's trainer, an episode at a time: on the Gymnasium env
+    (games no model follows), or on a world that changes, phase after phase."""
     session = _session(job.env_id, job.env_kwargs, job.wrappers, job.algorithm, job.hp, seed)
     try:
         for e in range(job.episodes):

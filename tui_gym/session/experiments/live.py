@@ -68,7 +68,8 @@ def return_curve(snapshot: TrainingSnapshot, after: int = 0) -> Curve | None:
 
 
 class ExactCheckpoints:
-    """The greedy policy's exact value at checkpoints, for games with an exact model."""
+    """The greedy policy's exact value at checkpoints, for games with an exact model (a
+    prediction learner's RMS error of V against the exact values of its policy)."""
 
     def __init__(self, session: Session) -> None:
         self.session = session
@@ -79,7 +80,15 @@ class ExactCheckpoints:
         self._began = time.perf_counter()
         self._spent = 0.0  # seconds spent on checkpoints
 
+    @property
+    def name(self) -> str:
+        """The figure the checkpoints follow."""
+        return "rms_error" if self.session.predicts else "exact_value"
+
     def _reference(self, snapshot: TrainingSnapshot | None) -> dict[str, float]:
+        if self.session.predicts:
+            prediction = self.session.prediction(snapshot)
+            return {} if prediction is None else {"rms_error": prediction.rms}
         try:
             ref = self.session.reference(snapshot)
         except (ValueError, KeyError, IndexError):  # a table that does not fit the game now
@@ -97,7 +106,7 @@ class ExactCheckpoints:
         episode = self.session.trainer.episodes if snapshot is None else snapshot.episodes
         figures = self._reference(snapshot)
         self._spent += time.perf_counter() - started
-        value = figures.get("exact_value")
+        value = figures.get(self.name)
         if value is None or not math.isfinite(value):
             self.available = False
             return
@@ -113,14 +122,14 @@ class ExactCheckpoints:
     def curve(self) -> Curve | None:
         if not self.episodes:
             return None
-        return Curve("exact_value", np.asarray(self.episodes), np.asarray(self.values))
+        return Curve(self.name, np.asarray(self.episodes), np.asarray(self.values))
 
 
 def run_figures(
     curve: Curve | None, exact: dict[str, float], extra: tuple[Figure, ...] = (), after: int = 0,
 ) -> list[Figure]:
-    """`mean_return_last`, `exact_value` and `exact_gap` (those known), then `extra`;
-    the run's episodes are those after `after`."""
+    """`mean_return_last`, `exact_value` and `exact_gap` (or `rms_error`: those known),
+    then `extra`; the run's episodes are those after `after`."""
     figures: list[Figure] = []
     if curve is not None and len(curve):
         last = int(curve.episodes[-1])
@@ -134,6 +143,8 @@ def run_figures(
         figures.append(Figure("exact_value", exact["exact_value"], "return"))
     if "gap" in exact:
         figures.append(Figure("exact_gap", exact["gap"], "return"))
+    if "rms_error" in exact:
+        figures.append(Figure("rms_error", exact["rms_error"]))
     figures.extend(extra)
     return figures
 
