@@ -37,7 +37,7 @@ from __future__ import annotations
 import math
 from bisect import bisect_right
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
 
@@ -244,11 +244,23 @@ def _induction(model: FiniteMDP, gamma: float, horizon: int) -> FloatArray:
 
 @dataclass(frozen=True)
 class _Exact:
-    """A model with its optimum, kept per (arguments, wrappers)."""
+    """A model with its optimum, kept per (arguments, wrappers), and the exact value of the
+    greedy policy valued last (a live run's snapshots mostly share their greedy policy)."""
 
     model: FiniteMDP
     ladder: Ladder
     scope: Scope
+    last_valued: dict[bytes, float] = field(default_factory=dict, compare=False)
+
+    def value_of(self, policy: np.ndarray) -> float:
+        """The exact value of `policy` (`[S, A]` probabilities) from the start."""
+        key = policy.tobytes()
+        value = self.last_valued.get(key)
+        if value is None:
+            value = evaluate(self.model, policy).value
+            self.last_valued.clear()
+            self.last_valued[key] = value
+        return value
 
 
 class DiscreteStates(StateSpace):
@@ -338,8 +350,7 @@ class ModelOracle(Oracle):
         offered = self.model_game.offered_actions(kwargs)
         if offered is not None and offered.shape == values.shape:  # greedy among those
             values = np.where(offered, values, -np.inf)
-        policy = greedy_probabilities(values)
-        value = evaluate(model, policy).value
+        value = exact.value_of(greedy_probabilities(values))
         best = _initial_value(model, optimum.max(axis=1))
         gap = exact_gap_of(best, value)
         places = self.model_game.narrator.value_places
