@@ -311,3 +311,27 @@ def test_the_interval_shows_from_thirty_episodes() -> None:
     low, high = tally.confidence_interval()
     assert f"± {(high - low) / 2:.3f} (95% CI) over 30 hands" in return_summary(tally, "hand")
     assert f"± {(high - low) / 2:.3f} over 30 hands" in return_summary(tally, "hand", short=True)
+
+
+def test_a_greedy_policy_is_valued_once_while_the_table_keeps_it(monkeypatch) -> None:
+    """A live run's snapshots mostly keep their greedy policy: its exact figures are not
+    computed again, and a new greedy policy gets its own."""
+    import tui_gym.games.model as model_module
+
+    valued: list[int] = []
+    evaluate = model_module.evaluate
+    monkeypatch.setattr(model_module, "evaluate",
+                        lambda model, policy: valued.append(1) or evaluate(model, policy))
+    session = Session("frozenlake", seed=0)
+    oracle, kwargs = session.game.oracle, session.exact_kwargs()
+    rng = np.random.default_rng(0)
+    q = rng.uniform(0.1, 1.0, (16, 4))
+    first = oracle.reference(q, kwargs).figures
+    same = oracle.reference(q * 2.0, kwargs).figures  # other values, the same greedy moves
+    assert same == first and len(valued) == 1
+    other = np.roll(q, 1, axis=1)
+    figures = oracle.reference(other, kwargs).figures
+    assert len(valued) == 2 and figures != first
+    assert oracle.reference(q, kwargs).figures == first  # each policy's figures are kept
+    assert oracle.reference(other, kwargs).figures == figures
+    assert len(valued) == 2

@@ -245,3 +245,21 @@ def test_compact_forms_keep_their_value() -> None:
         "9,999", "12.3k", "1.00M", "5.50M", "1.23B"]
     forms = number_forms("+1234567.000", 1234567.0, "+")
     assert fit(forms, 9) == "+1.23e+06" and fit(forms, 20) == "+1234567.000"
+
+
+async def test_a_new_snapshot_repaints_the_figures_that_changed_not_the_border() -> None:
+    panel = StatsPanel()
+    app = Alone(panel)
+    asked: list[int] = []
+    line_of = panel.render_line
+    panel.render_line = lambda y: asked.append(y) or line_of(y)  # type: ignore[method-assign]
+    async with app.run_test(size=(60, 14)) as pilot:
+        panel.show_state("running")
+        panel.show_snapshot(snapshot(episodes=1_000, steps=1_500, recorded=1_000))
+        await pilot.pause()
+        asked.clear()
+        panel.show_snapshot(snapshot(episodes=2_000, steps=1_500, recorded=1_000))
+        await pilot.pause()
+        assert len(set(asked)) == 1, "more than the line of the episode count was drawn again"
+        assert row_values(panel.plain)["episodes"] == "2,000"
+        assert "running" in str(panel.border_title)

@@ -221,3 +221,45 @@ def test_a_faster_speed_applies_without_waiting_out_the_slow_step():
         assert wait_for(lambda: r.latest.episodes > 50, timeout=5)
     finally:
         r.close()
+
+
+def test_beside_a_ui_each_compiled_call_aims_at_call_seconds(monkeypatch):
+    """The worker's calls of the compiled loop are longer than a headless run's: each time
+    one comes back it may wait for the interpreter lock the UI's thread holds."""
+    import tui_gym.core.engine.trainer as trainer_module
+    from tui_gym.session import runner as runner_module
+
+    assert runner_module.CALL_SECONDS > trainer_module.CHUNK_SECONDS
+    session = Session("blackjack", hp=QLearning.hyperparameters(episodes=10**9), seed=0)
+    trainer = session.trainer
+    aims: list[float] = []
+    chunk = trainer._chunk_model
+
+    def noted(quota, call_seconds=trainer_module.CHUNK_SECONDS):
+        aims.append(call_seconds)
+        return chunk(quota, call_seconds)
+
+    monkeypatch.setattr(trainer, "_chunk_model", noted)
+    runner = TrainingRunner(session)
+    try:
+        assert runner.start()
+        assert wait_for(lambda: len(aims) >= 3)
+        runner.pause()
+    finally:
+        runner.close()
+    assert set(aims) == {runner_module.CALL_SECONDS}
+    trainer.run(episodes=10)  # headless: the trainer's own aim
+    assert aims[-1] == trainer_module.CHUNK_SECONDS
+
+
+def test_a_compiled_call_aims_the_next_one_at_its_length(monkeypatch):
+    import tui_gym.core.engine.trainer as trainer_module
+
+    session = Session("blackjack", hp=QLearning.hyperparameters(episodes=10**9), seed=0)
+    trainer = session.trainer
+    trainer.run(episodes=1)  # compiled and warm
+    clock = iter([0.0, 0.002])  # the next call takes 2 ms, by this clock
+    monkeypatch.setattr(trainer_module.time, "perf_counter", lambda: next(clock))
+    steps = trainer._call_steps
+    trainer._chunk_model(None, call_seconds=0.016)
+    assert trainer._call_steps == min(steps * 8, 1 << 22)  # 8 times as long next time

@@ -116,3 +116,21 @@ def test_a_writer_finding_its_terminal_gone_is_told_from_a_crash(
     assert not internals.terminal_write_failed(failure("run-history", OSError(5, "I/O error")))
     monkeypatch.setenv(internals.STOCK_ENV, "terminal")
     assert not internals.terminal_write_failed(failure("textual-output", OSError(5, "I/O")))
+
+
+async def test_a_strip_widget_repaints_whole_when_it_cannot_tell_it_is_in_sight(
+    stock: None,
+) -> None:
+    from .test_ui_strips import OneRows, Rows, rows_shown
+
+    app = OneRows()
+    async with app.run_test(size=(20, 6)) as pilot:
+        widget = app.query_one(Rows)
+        await pilot.pause()
+        assert not internals.in_sight(widget)
+        widget.asked.clear()
+        widget.rows = ["one", "TWO", "three"]
+        widget.redraw()
+        await pilot.pause()
+        assert sorted(widget.asked) == [0, 1, 2]  # Textual's own way: the whole widget
+        assert rows_shown(app) == ["one", "TWO", "three"]

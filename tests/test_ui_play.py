@@ -399,3 +399,24 @@ async def test_passive_boards_draw_but_never_take_keys() -> None:
         text = str(cards.canvas.render())
         assert "usable ace" in text and "17" in text and "Agent" in text
         assert "●" in str(grid.canvas.render()) and "◎" in str(grid.canvas.render())
+
+
+async def test_shown_again_with_nothing_new_the_status_lines_are_left_as_they_are() -> None:
+    app = make_host()
+    async with app.run_test(size=VIEW_SIZE) as pilot:
+        view = app.play_view
+        await pilot.pause()
+        headline = shown(view, "#play-headline")
+        updates: list[str] = []
+        for line in view.query("#play-status Static").results(Static):
+            update = line.update
+            line.update = (  # type: ignore[method-assign]
+                lambda content="", *, layout=True, update=update, line=line:
+                updates.append(str(line.id)) or update(content, layout=layout))
+        view.on_show()  # back from another view: nothing happened meanwhile
+        await pilot.pause()
+        assert updates == [], "unchanged status lines were laid out again"
+        view._say_hint("a hint")
+        await pilot.pause()
+        assert "play-hint" in updates
+        assert shown(view, "#play-headline") == headline

@@ -13,6 +13,7 @@ from __future__ import annotations
 from rich.segment import Segment
 from textual.app import App, ComposeResult
 
+from tui_gym.ui.textual_internals import in_sight
 from tui_gym.ui.widgets.stats_panel import _grid
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget, line_text
 from tui_gym.ui.widgets.training_charts import (
@@ -72,6 +73,72 @@ async def test_a_strip_widget_draws_once_until_its_picture_changes() -> None:
         await pilot.resize_terminal(30, 5)
         await pilot.pause()
         assert drawn_lines(app, "beta") == ["beta 30"] * 3, "a new width is a new picture"
+
+
+class Rows(StripWidget):
+    """Draws its `rows`, and notes which lines Textual asks it for."""
+
+    DEFAULT_CSS = "Rows { height: auto; }"
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.rows = ["one", "two", "three"]
+        self.asked: list[int] = []
+
+    def draw(self, width: int) -> list[Line]:
+        return [[Segment(row)] for row in self.rows]
+
+    def get_content_height(self, container: object, viewport: object, width: int) -> int:
+        return len(self.rows)
+
+    def render_line(self, y: int):  # type: ignore[no-untyped-def]
+        self.asked.append(y)
+        return super().render_line(y)
+
+
+class OneRows(App[None]):
+    def compose(self) -> ComposeResult:
+        yield Rows()
+
+
+def rows_shown(app: App[None]) -> list[str]:
+    """The screen's rows that are not blank, without trailing blanks (the screenshot's
+    title left out)."""
+    return [line.rstrip() for line in screen_lines(app) if line.strip() not in ("", app.title)]
+
+
+async def test_a_redraw_repaints_only_the_lines_that_changed() -> None:
+    app = OneRows()
+    async with app.run_test(size=(20, 6)) as pilot:
+        widget = app.query_one(Rows)
+        await pilot.pause()
+        assert set(widget.asked) == {0, 1, 2}
+        assert in_sight(widget)
+
+        widget.asked.clear()
+        widget.rows = ["one", "TWO", "three"]
+        widget.redraw()
+        await pilot.pause()
+        assert widget.asked == [1], "lines that did not change were drawn again"
+        assert rows_shown(app) == ["one", "TWO", "three"]
+
+        widget.asked.clear()
+        widget.redraw()  # the same picture: nothing to repaint
+        await pilot.pause()
+        assert widget.asked == []
+
+        widget.rows = ["one", "two", "three", "four"]  # a new height: all of it again
+        widget.redraw(layout=True)
+        await pilot.pause()
+        assert rows_shown(app) == ["one", "two", "three", "four"]
+
+        widget.display = False  # hidden, a redraw waits for the widget to show again
+        await pilot.pause()
+        widget.rows = ["uno", "two", "three", "four"]
+        widget.redraw()
+        widget.display = True
+        await pilot.pause()
+        assert rows_shown(app) == ["uno", "two", "three", "four"]
 
 
 async def test_a_strip_widget_pads_and_crops_to_its_width() -> None:

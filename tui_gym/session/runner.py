@@ -8,8 +8,8 @@ pieces of work and publishes snapshots (the trainer's `latest`), which a UI
 pulls on a timer. Nothing here calls back into a front end, so a slow viewer
 can never slow training down, and a fast trainer never blocks the viewer.
 
-Every control takes effect after the piece of work under way: a few
-milliseconds of episodes at max speed, one agent step at animated speeds (the
+Every control takes effect after the piece of work under way: one call of
+the compiled loop at max speed (`CALL_SECONDS`), one agent step at animated speeds (the
 pause between animated steps is cut short). `pause()` returns once the worker
 has stopped, so the session can be changed right after it.
 
@@ -33,6 +33,10 @@ if TYPE_CHECKING:
 
 
 CHUNK_SECONDS = 0.05  # how long one max-speed chunk trains before publishing
+# Each call of the compiled loop (which lets go of the interpreter lock) aims at this long:
+# coming back, the worker waits for the lock while the UI's thread draws a frame (up to
+# `sys.getswitchinterval()`, 5 ms), once a call; a few calls a chunk keep that wait small.
+CALL_SECONDS = 0.016
 STOP_TIMEOUT = 5.0  # seconds `pause()` and `close()` wait at most for the worker
 
 
@@ -234,9 +238,8 @@ class TrainingRunner:
             if speed.animated:
                 self._animated_step(trainer)
                 return speed.step_delay
-            trainer.run(
-                episodes=trainer.remaining, seconds=CHUNK_SECONDS, stop=_Stopped(self)
-            )
+            trainer.run(episodes=trainer.remaining, seconds=CHUNK_SECONDS, stop=_Stopped(self),
+                        call_seconds=CALL_SECONDS)
             return None
         if not self._want_one:
             return None

@@ -121,6 +121,7 @@ class PlayView(Vertical):
         self._headline = Content()
         self._tone = ""
         self._hint = ""
+        self._status_shown: tuple[Any, ...] = ()  # what the status lines say
         self.show_advice = False  # say what the exact optimum and the agent would do
         self._verdict = ""  # advice's short judgement of the last move (coach off)
         self.coach_on = False  # judge each move in words
@@ -410,6 +411,10 @@ class PlayView(Vertical):
     def _update_status(
         self, headline: Content, detail: str, coach: str, coach_tone: str, tone: str
     ) -> None:
+        shown = (headline, detail, coach, coach_tone, tone, self._hint)
+        if shown == self._status_shown:  # an update lays the view out again: none needed
+            return
+        self._status_shown = shown
         status = self.query_one("#play-status")
         self.query_one("#play-headline", Static).update(headline)
         coach_line = self.query_one("#play-coach", Static)

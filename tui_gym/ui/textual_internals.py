@@ -9,7 +9,8 @@ one; the tests run the app so), it leaves Textual to do what it does by itself:
 - `compositor`: the main screen's compositor (`Screen._compositor`, a
   `textual._compositor.Compositor`) keeps the layout a pass has just made, and
   draws of each widget only the lines an update shows and no widget in front of it
-  covers (`main_screen`);
+  covers (`main_screen`); a widget asks whether it was in sight in the last frame
+  (`in_sight`: its visible widgets; stock: never, so the widget repaints whole);
 - `focus`: on the main screen a focus change repaints only the widgets whose
   `:focus` styles change, not the whole screen (its `focused` reactive, redefined);
 - `resume`: when the main screen first shows, its widgets keep the styles they
@@ -61,6 +62,7 @@ __all__ = [
     "deliver_key",
     "enabled",
     "guarded_driver",
+    "in_sight",
     "main_screen",
     "restyle_alone",
     "terminal_write_failed",
@@ -223,6 +225,17 @@ def main_screen(**kwargs: Any) -> Screen:
         if compositor is not None:
             screen._compositor = compositor
     return screen
+
+
+def in_sight(widget: Widget) -> bool:
+    """Whether `widget` was in sight in its screen's last frame: on the screen's map, not
+    hidden, scrolled or clipped away (False when this Textual does not tell cheaply)."""
+    if not enabled("compositor"):
+        return False
+    try:
+        return widget in widget.screen._compositor.visible_widgets
+    except Exception:  # no screen, or a compositor of another shape
+        return False
 
 
 # --- a widget restyled alone --------------------------------------------------------------

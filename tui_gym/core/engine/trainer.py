@@ -190,11 +190,13 @@ class Trainer:
         seconds: float | None = None,
         stop: StopFlag | None = None,
         on_publish: Callable[[TrainingSnapshot], None] | None = None,
+        call_seconds: float = CHUNK_SECONDS,
     ) -> int:
         """Run until `episodes` more episodes, `seconds` elapse, or `stop` is set.
 
         Exactly `episodes` finish when that limit is what stops the run;
-        `seconds` and `stop` are checked between chunks of milliseconds.
+        `seconds` and `stop` are checked between chunks of milliseconds (each
+        call of the model loop aims at `call_seconds`).
         Returns the number of episodes finished, and publishes a snapshot to
         `latest` (and `on_publish`) every `publish_interval` seconds and at the
         end.
@@ -210,7 +212,8 @@ class Trainer:
         done = 0
         while episodes is None or done < episodes:
             quota = None if episodes is None else episodes - done
-            done += self._chunk_model(quota) if self.model is not None else self._chunk_env(quota)
+            done += (self._chunk_model(quota, call_seconds) if self.model is not None
+                     else self._chunk_env(quota))
             now = time.perf_counter()
             if seconds is not None and now - began >= seconds:
                 break
@@ -225,8 +228,8 @@ class Trainer:
         self.publish(on_publish)
         return done
 
-    def _chunk_model(self, quota: int | None) -> int:
-        """One call of the compiled loop (a few milliseconds); the episodes it finished."""
+    def _chunk_model(self, quota: int | None, call_seconds: float = CHUNK_SECONDS) -> int:
+        """One call of the compiled loop (about `call_seconds`); the episodes it finished."""
         assert self.model is not None
         limit = MAX_CALL_EPISODES if quota is None else min(quota, MAX_CALL_EPISODES)
         max_steps = self._call_steps
@@ -239,8 +242,8 @@ class Trainer:
         done, steps = loop.play(self.agent, self.model, self._cursor, limit, max_steps,
                                 self._out, self._log)
         elapsed = time.perf_counter() - began
-        if elapsed > 0 and steps:  # aim the next call at CHUNK_SECONDS
-            wanted = steps * CHUNK_SECONDS / elapsed
+        if elapsed > 0 and steps:  # aim the next call at call_seconds
+            wanted = steps * call_seconds / elapsed
             self._call_steps = int(min(max(wanted, 256), 1 << 22))
         self.steps += steps
         if done:

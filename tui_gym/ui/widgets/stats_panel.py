@@ -97,6 +97,7 @@ class StatsPanel(StripWidget):
         self._speed = ""
         self._engine = ""
         self._window = 0
+        self._border: tuple[str, str, str] | None = None  # (state, speed, subtitle) shown
         self.plain = ""  # what the panel says, as plain text (tests, screen readers)
 
     # --- data in -----------------------------------------------------------
@@ -152,15 +153,18 @@ class StatsPanel(StripWidget):
     # --- drawing -----------------------------------------------------------
     def _changed(self) -> None:
         self.plain = self._plain()
-        label, style = STATE_STYLES.get(self._state, (self._state, "bold"))
-        title = Text.assemble((label, style))
-        if self._speed:
-            title.append_text(Text.assemble((" · ", "dim"), (self._speed, "bold")))
-        self.border_title = title
         parts = [f"last {self._window:,}"] if self._window else []
         if self._engine:
             parts.append(f"{self._engine} engine")
-        self.border_subtitle = " · ".join(parts)
+        border = (self._state, self._speed, " · ".join(parts))
+        if border != self._border:  # setting a border's words repaints the whole panel
+            self._border = border
+            label, style = STATE_STYLES.get(self._state, (self._state, "bold"))
+            title = Text.assemble((label, style))
+            if self._speed:
+                title.append_text(Text.assemble((" · ", "dim"), (self._speed, "bold")))
+            self.border_title = title
+            self.border_subtitle = border[2]
         # A layout pass only when the panel's height may change (new rows or notes).
         shape = (len(self._rows), len(self._reference), bool(self._reference_note),
                  self._scope_note, self._compact())

@@ -11,6 +11,9 @@ what its picture depends on (`picture_key()`; by default a counter that
 Lines are drawn once per key and width (the last `PICTURES` pictures are
 kept, for widgets that flip between a few), and styled with the widget's own
 colours once per style, so a frame that finds nothing changed costs a lookup.
+`redraw()` of a widget on screen draws the new picture at once and repaints
+only the lines that differ from the picture shown (a new snapshot changes a
+few figures of a table, not the table), unless its height may change.
 `component_styles()` keeps the Rich styles of the widget's component classes
 until its own style changes (a theme switch), and a resize asks for a layout
 pass only when the width or the compact layout changed, not when a view is
@@ -31,6 +34,8 @@ from textual import events
 from textual.geometry import Region
 from textual.strip import Strip
 from textual.widget import Widget
+
+from tui_gym.ui.textual_internals import in_sight
 
 Line = list[Segment]
 
@@ -82,9 +87,29 @@ class StripWidget(Widget):
 
     # --- what owners call --------------------------------------------------
     def redraw(self, layout: bool = False) -> None:
-        """The picture changed: draw it again on the next frame."""
+        """The picture changed: draw it again on the next frame (only its changed lines,
+        when the picture shown is there to compare with and `layout` is not asked)."""
         self._version += 1
-        self.refresh(layout=layout)
+        shown = self._strips_lines
+        if layout or shown is None or not self._shown_as_now():
+            self.refresh(layout=layout)
+            return
+        lines = self.picture(self._strips_of[2])  # type: ignore[index]
+        if len(lines) != len(shown):
+            self.refresh()
+            return
+        changed = [y for y, (old, new) in enumerate(zip(shown, lines, strict=True))
+                   if old != new]
+        if changed:
+            width = self.content_size.width
+            self.refresh(*(Region(0, y, width, 1) for y in changed))
+
+    def _shown_as_now(self) -> bool:
+        """Whether the widget is on screen, in sight, showing a picture as wide as it is now
+        (one out of sight draws when it comes into sight, as Textual asks it to)."""
+        shown = self._strips_of
+        return (shown is not None and self.is_mounted and shown[2] == self.content_size.width
+                and in_sight(self))
 
     def picture(self, width: int) -> list[Line]:
         """The lines for `width` (drawn now unless kept from before)."""
@@ -138,7 +163,14 @@ class StripWidget(Widget):
         if self._strips_of != (id(lines), style, width) or self._strips_lines is not lines:
             combined: dict[Style | None, Style] = {}  # a picture uses a few styles, many times
             strips = []
-            for line in lines:
+            # A line as it was in the picture styled before keeps its strip (same style, width).
+            before = self._strips_lines if self._strips_of is not None and \
+                self._strips_of[1:] == (style, width) else None
+            kept = self._strips
+            for y, line in enumerate(lines):
+                if before is not None and y < len(before) and y < len(kept) and before[y] == line:
+                    strips.append(kept[y])
+                    continue
                 segments = []
                 for segment in line:
                     own = segment.style
