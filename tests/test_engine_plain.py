@@ -16,6 +16,9 @@ from tui_gym.session.session import Session
 
 ROOT = Path(__file__).resolve().parent.parent
 EPISODES = 400  # a whole budget: exploration runs from its start to its end
+# Prioritized sweeping plans several sweeps per move, each a queue walk in plain Python: a
+# shorter whole budget.
+BUDGETS = {"prioritized-sweeping": 100}
 NAMES = [cls.name for cls in ALGORITHMS]
 # Trains every learner as `_trained` does, in a process where every kernel is plain Python.
 PLAIN_RUN = """
@@ -36,9 +39,10 @@ def _plain_env() -> dict[str, str]:
 
 def _trained(algorithm: str) -> np.ndarray:
     """The action values of `algorithm` after a whole budget on the smallest game."""
-    session = Session("frozenlake", seed=0, algorithm=algorithm, hp={"episodes": EPISODES})
+    episodes = BUDGETS.get(algorithm, EPISODES)
+    session = Session("frozenlake", seed=0, algorithm=algorithm, hp={"episodes": episodes})
     assert session.training is not None, session.engine_reason  # the compiled loop's model
-    session.trainer.run(episodes=EPISODES)
+    session.trainer.run(episodes=episodes)
     assert session.trainer.remaining == 0
     return session.agent.table()[0]
 
