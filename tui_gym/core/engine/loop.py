@@ -21,13 +21,15 @@ rule needs it. `sample_start` and `sample_outcome` are the one sampler.
 from __future__ import annotations
 
 import contextlib
+import os
 from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from tui_gym.core.engine import jit, rules
+from tui_gym.core.engine import jit, processes, rules
 from tui_gym.core.engine.kernel import kernel
 from tui_gym.core.engine.rules import (
     act,
@@ -347,8 +349,9 @@ def warm(learners: Sequence[tuple[Any, ...]],
          progress: Callable[[str], None] | None = None) -> bool:
     """Compile (or load) each `(name, tables, hp)` learner's entry points (`(name, tables,
     hp, offered)`: with that mask of offered actions, if not None); tells `progress`
-    "compiling the learners, once (i/n: name)" for those not compiled before. True when
-    anything had to be compiled."""
+    "compiling the learners, once (i/n: name)" for those not compiled before. Several of
+    them compile at once in worker processes, one per core (`compile_apart`), and load
+    here from the cache. True when anything had to be compiled."""
     wanted = {}
     for name, tables, hp, *mask in learners:
         offered = mask[0] if mask else None
@@ -357,14 +360,39 @@ def warm(learners: Sequence[tuple[Any, ...]],
         return False
     folder = jit.folder()
     cold = [(k, x) for k, x in wanted.items() if not (folder / f"warm-{k}").exists()]
+    apart = compile_apart([x for _, x in cold], progress)
     for index, (key, (name, tables, hp, offered)) in enumerate(cold, start=1):
-        if progress is not None:
+        if progress is not None and not apart[index - 1]:
             progress(f"{jit.COMPILING} ({index}/{len(cold)}: {name})")
         compile_learner(tables, hp, offered)
         with contextlib.suppress(OSError):  # a read-only cache works, only looked at again
             (folder / f"warm-{key}").write_text("ok\n")
     _WARM.update(wanted)
     return bool(cold)
+
+
+def compile_apart(learners: Sequence[tuple[str, Any, Any, np.ndarray | None]],
+                  progress: Callable[[str], None] | None = None) -> list[bool]:
+    """Compile each `(name, tables, hp, offered)` learner's entry points into the cache in worker
+    processes, one per core, all at once (`jit` files what each compiled in turn); tells
+    `progress` as each is done. Per learner, whether it was (False for all with fewer than
+    two learners or cores, or where workers cannot start: the caller compiles them)."""
+    workers = min(len(learners), len(os.sched_getaffinity(0)))
+    if workers < 2 or not jit.compiles():
+        return [False] * len(learners)
+    done = [False] * len(learners)
+    with contextlib.suppress(OSError, RuntimeError), ProcessPoolExecutor(
+        workers, mp_context=processes.context(), initializer=processes.watch_parent,
+        initargs=(os.getpid(),),
+    ) as pool:
+        futures = {pool.submit(compile_learner, *learner[1:]): i
+                   for i, learner in enumerate(learners)}
+        for count, future in enumerate(as_completed(futures), start=1):
+            index = futures[future]
+            done[index] = future.exception() is None
+            if progress is not None:
+                progress(f"{jit.COMPILING} ({count}/{len(learners)}: {learners[index][0]})")
+    return done
 
 
 _WARM: set[str] = set()  # learners whose entry points this process has made ready
