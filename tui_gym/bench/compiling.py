@@ -1,8 +1,9 @@
 """Compiling the learners: once with an empty cache, then loaded from the disk cache.
 
 In a fresh process with an empty cache folder (`NUMBA_CACHE_DIR`), every
-algorithm learns one episode on the model and takes one step on the env of
-every game: the time that takes, games built included, is
+algorithm is made ready for every game (`loop.warm`: worker processes, one
+per core, compile them at once), then learns one episode on the model and
+takes one step on the env: the time that takes, games built included, is
 the cold compile of every learner on every game. Then a second fresh process
 with the same folder starts the engine (importing Numba, reported apart) and
 makes every learner ready again: that is the warm load.
@@ -33,16 +34,19 @@ class CompileResult:
 def _every_learner() -> float:
     """Seconds to make every learner ready on every game (run in the child)."""
     from tui_gym.algorithms import ALGORITHMS
+    from tui_gym.core.engine import loop
     from tui_gym.games import GAMES
     from tui_gym.session.session import Session
 
     began = time.perf_counter()
-    for game in GAMES:
-        for cls in ALGORITHMS:
-            session = Session(game.name, algorithm=cls.name, seed=0)
-            session.trainer.run(episodes=1)
-            session.trainer.step()
-            session.env.close()
+    sessions = [Session(game.name, algorithm=cls.name, seed=0)
+                for game in GAMES for cls in ALGORITHMS]
+    agents = [session.trainer.agent for session in sessions]
+    loop.warm([(x.name, x.arrays(), x.compiled_params(), x.offered) for x in agents])
+    for session in sessions:
+        session.trainer.run(episodes=1)
+        session.trainer.step()
+        session.env.close()
     return time.perf_counter() - began
 
 
