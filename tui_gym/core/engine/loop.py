@@ -146,12 +146,21 @@ class Cursor:
 
 @kernel(inline=True)
 def sample_start(starts: Any, start_cumulative: Any, rng: Any) -> int:
-    """A start state drawn from the initial distribution (no draw when there is one)."""
+    """A start state drawn from the initial distribution (no draw when there is one): the
+    first whose cumulative probability exceeds a uniform u, found by bisection as
+    `np.searchsorted(start_cumulative, u, side="right")` finds it (which compiles slowly)."""
     n = starts.shape[0]
     if n == 1:
         return starts[0]
-    i = np.searchsorted(start_cumulative, rng.random(), side="right")
-    return starts[min(i, n - 1)]
+    u = rng.random()
+    low, high = 0, n
+    while low < high:
+        middle = low + ((high - low) >> 1)
+        if start_cumulative[middle] <= u:
+            low = middle + 1
+        else:
+            high = middle
+    return starts[min(low, n - 1)]
 
 
 @kernel(inline=True)
