@@ -382,18 +382,18 @@ def warm(learners: Sequence[tuple[Any, ...]],
 
 def compile_apart(learners: Sequence[tuple[str, Any, Any, np.ndarray | None]],
                   progress: Callable[[str], None] | None = None) -> list[bool]:
-    """Compile each `(name, tables, hp, offered)` learner's entry points into the cache in worker
-    processes, one per core, all at once (`jit` files what each compiled in turn); tells
+    """Compile each `(name, tables, hp, offered)` learner's entry points into the cache in
+    worker processes, one per core, all at once (`jit` files what each compiled in turn); tells
     `progress` as each is done. Per learner, whether it was (False for all with fewer than
     two learners or cores, or where workers cannot start: the caller compiles them)."""
-    workers = min(len(learners), len(os.sched_getaffinity(0)))
-    if workers < 2 or not jit.compiles():
-        return [False] * len(learners)
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    workers = min(len(learners), cores or 1)
     done = [False] * len(learners)
-    with contextlib.suppress(OSError, RuntimeError), ProcessPoolExecutor(
-        workers, mp_context=processes.context(), initializer=processes.watch_parent,
-        initargs=(os.getpid(),),
-    ) as pool:
+    if workers < 2 or not jit.compiles():
+        return done
+    pool = ProcessPoolExecutor(workers, mp_context=processes.context(),
+                               initializer=processes.watch_parent, initargs=(os.getpid(),))
+    try:
         futures = {pool.submit(compile_learner, *learner[1:]): i
                    for i, learner in enumerate(learners)}
         for count, future in enumerate(as_completed(futures), start=1):
@@ -401,6 +401,10 @@ def compile_apart(learners: Sequence[tuple[str, Any, Any, np.ndarray | None]],
             done[index] = future.exception() is None
             if progress is not None:
                 progress(f"{jit.COMPILING} ({count}/{len(learners)}: {learners[index][0]})")
+    except (OSError, RuntimeError):  # workers that cannot start or died: the caller compiles
+        pass
+    finally:
+        pool.shutdown(wait=False, cancel_futures=True)  # at once, on Ctrl+C too
     return done
 
 
