@@ -358,9 +358,9 @@ def warm(learners: Sequence[tuple[Any, ...]],
          progress: Callable[[str], None] | None = None) -> bool:
     """Compile (or load) each `(name, tables, hp)` learner's entry points (`(name, tables,
     hp, offered)`: with that mask of offered actions, if not None); tells `progress`
-    "compiling the learners, once (i/n: name)" for those not compiled before. Several of
-    them compile at once in worker processes, one per core (`compile_apart`), and load
-    here from the cache. True when anything had to be compiled."""
+    "compiling the learners, once (i/n: name)" for those not compiled before. The first
+    compiles here; the others at once in worker processes, one per core (`compile_apart`),
+    which load here from the cache then. True when anything had to be compiled."""
     wanted = {}
     for name, tables, hp, *mask in learners:
         offered = mask[0] if mask else None
@@ -369,10 +369,19 @@ def warm(learners: Sequence[tuple[Any, ...]],
         return False
     folder = jit.folder()
     cold = [(k, x) for k, x in wanted.items() if not (folder / f"warm-{k}").exists()]
-    apart = compile_apart([x for _, x in cold], progress)
-    for index, (key, (name, tables, hp, offered)) in enumerate(cold, start=1):
-        if progress is not None and not apart[index - 1]:
+    apart = [False] * len(cold)
+    finished = iter(range(2, len(cold) + 1))
+
+    def say(name: str, index: int) -> None:
+        if progress is not None:
             progress(f"{jit.COMPILING} ({index}/{len(cold)}: {name})")
+
+    for index, (key, (name, tables, hp, offered)) in enumerate(cold, start=1):
+        if index == 2:  # what every learner shares is compiled: the workers inherit it
+            apart[1:] = compile_apart([x for _, x in cold[1:]],
+                                      lambda name: say(name, next(finished)))
+        if not apart[index - 1]:
+            say(name, index)
         compile_learner(tables, hp, offered)
         with contextlib.suppress(OSError):  # a read-only cache works, only looked at again
             (folder / f"warm-{key}").write_text("ok\n")
@@ -381,11 +390,12 @@ def warm(learners: Sequence[tuple[Any, ...]],
 
 
 def compile_apart(learners: Sequence[tuple[str, Any, Any, np.ndarray | None]],
-                  progress: Callable[[str], None] | None = None) -> list[bool]:
+                  done_with: Callable[[str], None] | None = None) -> list[bool]:
     """Compile each `(name, tables, hp, offered)` learner's entry points into the cache in
-    worker processes, one per core, all at once (`jit` files what each compiled in turn); tells
-    `progress` as each is done. Per learner, whether it was (False for all with fewer than
-    two learners or cores, or where workers cannot start: the caller compiles them)."""
+    worker processes, one per core, all at once (`jit` files what each compiled in turn);
+    tells `done_with` each one's name as it is done. Per learner, whether it was (False for
+    all with fewer than two learners or cores, or where workers cannot start: the caller
+    compiles them)."""
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     workers = min(len(learners), cores or 1)
     done = [False] * len(learners)
@@ -396,11 +406,11 @@ def compile_apart(learners: Sequence[tuple[str, Any, Any, np.ndarray | None]],
     try:
         futures = {pool.submit(compile_learner, *learner[1:]): i
                    for i, learner in enumerate(learners)}
-        for count, future in enumerate(as_completed(futures), start=1):
+        for future in as_completed(futures):
             index = futures[future]
             done[index] = future.exception() is None
-            if progress is not None:
-                progress(f"{jit.COMPILING} ({count}/{len(learners)}: {learners[index][0]})")
+            if done_with is not None:
+                done_with(learners[index][0])
     except (OSError, RuntimeError):  # workers that cannot start or died: the caller compiles
         pass
     finally:
