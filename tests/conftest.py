@@ -64,8 +64,9 @@ _share_compiled_code()
 
 
 def _compile_once(config: pytest.Config) -> None:
-    """With workers, compile every learner here first, so no two workers compile the same
-    code at once (a second run finds it all in the cache)."""
+    """With workers, compile every learner first (`loop.warm`: in processes, one per core),
+    so no two workers compile the same code at once (a second run finds it all in the
+    cache)."""
     if os.environ.get("PYTEST_XDIST_WORKER") or not getattr(config.option, "numprocesses", 0):
         return
     if os.environ.get("NUMBA_DISABLE_JIT"):

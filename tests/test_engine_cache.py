@@ -3,6 +3,7 @@ shared by a process and the processes it starts."""
 
 from __future__ import annotations
 
+import subprocess
 from pathlib import Path
 
 from tui_gym.core.engine import jit
@@ -15,11 +16,51 @@ def test_a_child_process_uses_the_folder_its_parent_chose(tmp_path: Path) -> Non
     assert jit.cache_folder({"NUMBA_CACHE_DIR": str(chosen)}) == chosen
 
 
-def test_a_process_compiles_only_while_no_other_does(tmp_path: Path) -> None:
-    """Processes compiling into one folder take turns (Numba could file two algorithms'
-    loops under one name when two processes save at once): a process that must compile
-    (or load what another compiled) waits on the folder's lock, then runs. The folder is
-    a copy of this process's, so the child loads rather than compiles once it runs."""
+# A child: sets up learners and a seeded model, says "ready", waits for a line, then
+# trains each learner (compiling or loading its loop, saying "compiling" as the loop's
+# compile starts) and prints its values, and how many functions it compiled.
+_CHILD = """
+import sys
+import numpy as np
+from tui_gym.algorithms import QLearning, Sarsa
+from tui_gym.core.engine import jit, loop, rules
+from tui_gym.core.mdp.model import FiniteMDP
+jit.start()
+from numba.core import event
+compiled = []
+class Said(event.Listener):
+    def on_start(self, ev):
+        compiled.append(ev)
+        if ev.data["dispatcher"].py_func.__name__ == "run_model":
+            print("compiling", flush=True)
+    def on_end(self, ev):
+        pass
+draw = np.random.default_rng(7)
+shape = (5, 3, 2)
+prob = draw.random(shape)
+prob /= prob.sum(-1, keepdims=True)
+model = loop.ModelArrays.of(FiniteMDP(draw.integers(0, 5, shape), prob, draw.normal(size=shape),
+                                      draw.random(shape) < 0.2, np.full(5, 0.2)))
+kinds = {"sarsa": Sarsa, "q-learning": QLearning}
+learners = [kinds[name](3, n_states=5, seed=3) for name in sys.argv[1:]]
+event.register("numba:compile", Said())
+print("ready", flush=True)
+sys.stdin.readline()
+for x in learners:
+    loop.play(x, model, loop.Cursor(), 40, 10**6, np.zeros((40, loop.COLUMNS)), rules.new_log())
+    print(x.name, x.arrays()[0].tolist(), flush=True)
+print("compiled", len(compiled))
+"""
+
+
+def test_two_processes_compile_learners_at_once_and_each_loads_what_the_other_saved(
+        tmp_path: Path) -> None:
+    """Two processes compile two learners' loops into one folder at once, taking turns
+    only to file what they compiled (each waits on the folder's lock to save, after it
+    started compiling); a third loads both, compiling nothing, and each learns what it
+    learned in the process that compiled it (Numba numbers a function's entries by
+    counting its index: saved at once, one's code could be filed under the other's
+    name). The folder is a copy of this process's without the loops."""
     import fcntl
     import os
     import shutil
@@ -27,34 +68,64 @@ def test_a_process_compiles_only_while_no_other_does(tmp_path: Path) -> None:
     import sys
     import time
 
-    from tui_gym.algorithms import Sarsa
+    from tui_gym.algorithms import QLearning, Sarsa
     from tui_gym.core.engine import loop
 
-    script = ("from tui_gym.algorithms import Sarsa\n"
-              "from tui_gym.core.engine import loop\n"
-              "x = Sarsa(2, n_states=2)\n"
-              "loop.warm([(x.name, x.arrays(), x.compiled_params())])\n"
-              "print('compiled')\n")
-    x = Sarsa(2, n_states=2)
-    loop.warm([(x.name, x.arrays(), x.compiled_params())])  # here, in the shared folder
+    learners = [cls(3, n_states=5) for cls in (Sarsa, QLearning)]
+    loop.warm([(x.name, x.arrays(), x.compiled_params()) for x in learners])  # in the shared folder
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
     folder = jit.cache_folder(env)
-    shutil.copytree(jit.folder(), folder, ignore=shutil.ignore_patterns(".compile.lock", "warm-*"))
-    with open(folder / ".compile.lock", "a") as held:
-        fcntl.lockf(held, fcntl.LOCK_EX)
-        child = subprocess.Popen([sys.executable, "-c", script], env=env, text=True,
-                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-        try:
+    shutil.copytree(jit.folder(), folder,
+                    ignore=shutil.ignore_patterns(".compile.lock", "warm-*", "loop.run_model-*"))
+
+    def child(*names: str) -> subprocess.Popen[str]:
+        return subprocess.Popen([sys.executable, "-c", _CHILD, *names], env=env, text=True,
+                                stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE)
+
+    children = [child("sarsa"), child("q-learning")]
+    try:
+        for each in children:
+            assert _line(each) == "ready"
+        with open(folder / ".compile.lock", "a") as held:
+            fcntl.lockf(held, fcntl.LOCK_EX)
+            for each in children:
+                assert each.stdin is not None
+                each.stdin.write("go\n")
+                each.stdin.flush()
+            for each in children:  # each starts compiling while the lock is held
+                assert _line(each) == "compiling"
             deadline = time.monotonic() + 120
-            while not _waits_on_a_lock(child.pid):
-                assert child.poll() is None, child.communicate()
-                assert time.monotonic() < deadline, "the child never waited on the lock"
+            while not all(_waits_on_a_lock(each.pid) for each in children):
+                assert all(each.poll() is None for each in children)
+                assert time.monotonic() < deadline, "a child never waited to save"
                 time.sleep(0.05)
-        except BaseException:
-            child.kill()
-            raise
-    out, err = child.communicate(timeout=300)
-    assert child.returncode == 0 and out.strip() == "compiled", err
+    except BaseException:
+        for each in children:
+            each.kill()
+            each.communicate()
+        raise
+    learned = {}
+    for each in children:
+        out, err = each.communicate(timeout=300)
+        assert each.returncode == 0, err
+        name, values = out.splitlines()[0].split(" ", 1)
+        learned[name] = values
+    out, err = child("sarsa", "q-learning").communicate("go\n", timeout=300)
+    lines = out.splitlines()
+    assert lines[0] == "ready" and lines[-1] == "compiled 0", err
+    assert dict(line.split(" ", 1) for line in lines[1:-1]) == learned
+    assert learned["sarsa"] != learned["q-learning"]
+
+
+def _line(process: subprocess.Popen[str], seconds: float = 120.0) -> str:
+    """The next line `process` prints, waiting at most `seconds` for it."""
+    import select
+
+    assert process.stdout is not None
+    ready, _, _ = select.select([process.stdout], [], [], seconds)
+    assert ready, f"no line within {seconds} s"
+    return process.stdout.readline().strip()
 
 
 def _waits_on_a_lock(pid: int) -> bool:

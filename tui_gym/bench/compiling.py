@@ -1,4 +1,6 @@
-"""Compiling the learners: once with an empty cache, then loaded from the disk cache."""
+"""Compiling the learners: once with an empty cache (every algorithm made ready for every
+game at once, as the engine's warm-up does, worker processes one per core), then loaded
+from the disk cache in a fresh process."""
 
 from __future__ import annotations
 
@@ -25,16 +27,19 @@ class CompileResult:
 def _every_learner() -> float:
     """Seconds to make every learner ready on every game (run in the child)."""
     from tui_gym.algorithms import ALGORITHMS
+    from tui_gym.core.engine import loop
     from tui_gym.games import GAMES
     from tui_gym.session.session import Session
 
     began = time.perf_counter()
-    for game in GAMES:
-        for cls in ALGORITHMS:
-            session = Session(game.name, algorithm=cls.name, seed=0)
-            session.trainer.run(episodes=1)
-            session.trainer.step()
-            session.env.close()
+    sessions = [Session(game.name, algorithm=cls.name, seed=0)
+                for game in GAMES for cls in ALGORITHMS]
+    agents = [session.trainer.agent for session in sessions]
+    loop.warm([(x.name, x.arrays(), x.compiled_params(), x.offered) for x in agents])
+    for session in sessions:
+        session.trainer.run(episodes=1)
+        session.trainer.step()
+        session.env.close()
     return time.perf_counter() - began
 
 

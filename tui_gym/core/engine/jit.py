@@ -26,12 +26,13 @@ then), without the C-callable wrapper Numba otherwise builds for each one
 it), at optimisation level 1 (`NUMBA_OPT`, unless set: the loops run as
 fast as at level 3 and compile in two thirds of the time).
 
-Python calls a kernel that takes an algorithm's `Params` through `entry`. Its
-first call for new argument types compiles (or loads) under a lock on the
-cache folder (`compiling`), shared by every process: Numba names a function's
-cache entries by counting those in its index, so two processes saving two
-algorithms' forms of the loop at once could each file their code under the
-other's name.
+Python calls a kernel that takes an algorithm's `Params` through `entry`.
+Processes compile at once, and take turns on a lock on the cache folder
+(`saving`) only to file what they compiled: Numba names a function's cache
+entries by counting those in its index (read, numbered, written back), so two
+processes saving two algorithms' forms of the loop at once could each file
+their code under the other's name. Where Numba's cache does not have the
+method this wraps, a whole compile holds the lock instead.
 
 `NUMBA_DISABLE_JIT=1` leaves every kernel plain Python.
 """
@@ -50,7 +51,8 @@ from typing import Any
 from tui_gym.core.engine import kernel
 
 __all__ = [
-    "COMPILING", "cache_folder", "compiled", "compiling", "entry", "folder", "start", "started",
+    "COMPILING", "cache_folder", "compiled", "compiles", "entry", "folder", "saving", "start",
+    "started",
 ]
 
 COMPILING = "compiling the learners, once"
@@ -62,10 +64,16 @@ _COMPILED: dict[Callable[..., Any], Any] = {}
 _ENTRIES: dict[tuple[Callable[..., Any], object, bool], Any] = {}
 _started = False
 _folder: Path | None = None
+_saves_in_turn = False  # set by `start` (see the module docstring)
 
 
 def started() -> bool:
     return _started
+
+
+def compiles() -> bool:
+    """Whether kernels compile (not with `NUMBA_DISABLE_JIT`)."""
+    return os.environ.get("NUMBA_DISABLE_JIT", "0") in ("", "0")
 
 
 def folder() -> Path:
@@ -113,7 +121,7 @@ def cache_folder(environ: dict[str, str] | None = None) -> Path:
 
 def start() -> None:
     """Import Numba and compile every kernel on first use (idempotent, thread-safe)."""
-    global _started, _folder
+    global _started, _folder, _saves_in_turn
     if _started:
         return
     with kernel.LOCK:
@@ -130,6 +138,7 @@ def start() -> None:
 
         from tui_gym.core.engine import rules
 
+        _saves_in_turn = _save_in_turn()
         _register_overloads(rules)
         for fn in list(kernel.KERNELS):
             _compile(fn)
@@ -172,7 +181,7 @@ class _Entry:
         if hasattr(dispatcher, "compile"):  # not with NUMBA_DISABLE_JIT
             types = tuple(dispatcher.typeof_pyval(arg) for arg in args)
             if types not in dispatcher.overloads:
-                with compiling():
+                with contextlib.nullcontext() if _saves_in_turn else saving():
                     dispatcher.compile(types)
         found = dispatcher(*args)
         signatures: Any = getattr(self.dispatcher, "signatures", ())
@@ -182,19 +191,39 @@ class _Entry:
 
 
 @contextlib.contextmanager
-def compiling() -> Iterator[None]:
-    """Hold the cache folder's compile lock while compiling: processes take turns (the
-    threads of one process take turns on Numba's own lock). A POSIX lock: a training
-    process forked meanwhile does not inherit it. Where the folder takes no lock file,
-    nothing is held."""
+def saving() -> Iterator[None]:
+    """Hold the cache folder's lock: processes take turns (the threads of one process
+    take turns on Numba's own lock). A POSIX lock: a process forked meanwhile does not
+    inherit it. Where the folder takes no lock file, nothing is held."""
     try:
-        handle = open(folder() / ".compile.lock", "a")  # noqa: SIM115 (held while compiling)
+        handle = open(folder() / ".compile.lock", "a")  # noqa: SIM115 (held while saving)
     except OSError:
         yield
         return
     with handle:
         fcntl.lockf(handle, fcntl.LOCK_EX)
         yield  # closing the file lets the lock go
+
+
+def _save_in_turn() -> bool:
+    """Make Numba file each new cache entry under the folder's lock (`saving`); False
+    where its cache has no `IndexDataCacheFile.save` to wrap (a private API)."""
+    from numba.core import caching
+
+    index = getattr(caching, "IndexDataCacheFile", None)
+    save = getattr(index, "save", None)
+    if index is None or save is None:
+        return False
+    if getattr(save, "in_turn", False):
+        return True
+
+    def save_in_turn(self: Any, key: Any, data: Any) -> None:
+        with saving():
+            save(self, key, data)
+
+    save_in_turn.in_turn = True  # type: ignore[attr-defined]
+    index.save = save_in_turn
+    return True
 
 
 def entry(fn: Callable[..., Any], kind: object, masked: bool = False) -> Any:

@@ -21,13 +21,15 @@ rule needs it. `sample_start` and `sample_outcome` are the one sampler.
 from __future__ import annotations
 
 import contextlib
+import os
 from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from tui_gym.core.engine import jit, rules
+from tui_gym.core.engine import jit, processes, rules
 from tui_gym.core.engine.kernel import kernel
 from tui_gym.core.engine.rules import (
     act,
@@ -144,12 +146,21 @@ class Cursor:
 
 @kernel(inline=True)
 def sample_start(starts: Any, start_cumulative: Any, rng: Any) -> int:
-    """A start state drawn from the initial distribution (no draw when there is one)."""
+    """A start state drawn from the initial distribution (no draw when there is one): the
+    first whose cumulative probability exceeds a uniform u, found by bisection as
+    `np.searchsorted(start_cumulative, u, side="right")` finds it (which compiles slowly)."""
     n = starts.shape[0]
     if n == 1:
         return starts[0]
-    i = np.searchsorted(start_cumulative, rng.random(), side="right")
-    return starts[min(i, n - 1)]
+    u = rng.random()
+    low, high = 0, n
+    while low < high:
+        middle = low + ((high - low) >> 1)
+        if start_cumulative[middle] <= u:
+            low = middle + 1
+        else:
+            high = middle
+    return starts[min(low, n - 1)]
 
 
 @kernel(inline=True)
@@ -347,8 +358,9 @@ def warm(learners: Sequence[tuple[Any, ...]],
          progress: Callable[[str], None] | None = None) -> bool:
     """Compile (or load) each `(name, tables, hp)` learner's entry points (`(name, tables,
     hp, offered)`: with that mask of offered actions, if not None); tells `progress`
-    "compiling the learners, once (i/n: name)" for those not compiled before. True when
-    anything had to be compiled."""
+    "compiling the learners, once (i/n: name)" for those not compiled before. The first
+    compiles here; the others at once in worker processes, one per core (`compile_apart`),
+    which load here from the cache then. True when anything had to be compiled."""
     wanted = {}
     for name, tables, hp, *mask in learners:
         offered = mask[0] if mask else None
@@ -357,14 +369,53 @@ def warm(learners: Sequence[tuple[Any, ...]],
         return False
     folder = jit.folder()
     cold = [(k, x) for k, x in wanted.items() if not (folder / f"warm-{k}").exists()]
-    for index, (key, (name, tables, hp, offered)) in enumerate(cold, start=1):
+    apart = [False] * len(cold)
+    finished = iter(range(2, len(cold) + 1))
+
+    def say(name: str, index: int) -> None:
         if progress is not None:
             progress(f"{jit.COMPILING} ({index}/{len(cold)}: {name})")
+
+    for index, (key, (name, tables, hp, offered)) in enumerate(cold, start=1):
+        if index == 2:  # what every learner shares is compiled: the workers inherit it
+            apart[1:] = compile_apart([x for _, x in cold[1:]],
+                                      lambda name: say(name, next(finished)))
+        if not apart[index - 1]:
+            say(name, index)
         compile_learner(tables, hp, offered)
         with contextlib.suppress(OSError):  # a read-only cache works, only looked at again
             (folder / f"warm-{key}").write_text("ok\n")
     _WARM.update(wanted)
     return bool(cold)
+
+
+def compile_apart(learners: Sequence[tuple[str, Any, Any, np.ndarray | None]],
+                  done_with: Callable[[str], None] | None = None) -> list[bool]:
+    """Compile each `(name, tables, hp, offered)` learner's entry points into the cache in
+    worker processes, one per core, all at once (`jit` files what each compiled in turn);
+    tells `done_with` each one's name as it is done. Per learner, whether it was (False for
+    all with fewer than two learners or cores, or where workers cannot start: the caller
+    compiles them)."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    workers = min(len(learners), cores or 1)
+    done = [False] * len(learners)
+    if workers < 2 or not jit.compiles():
+        return done
+    pool = ProcessPoolExecutor(workers, mp_context=processes.context(),
+                               initializer=processes.watch_parent, initargs=(os.getpid(),))
+    try:
+        futures = {pool.submit(compile_learner, *learner[1:]): i
+                   for i, learner in enumerate(learners)}
+        for future in as_completed(futures):
+            index = futures[future]
+            done[index] = future.exception() is None
+            if done_with is not None:
+                done_with(learners[index][0])
+    except (OSError, RuntimeError):  # workers that cannot start or died: the caller compiles
+        pass
+    finally:
+        pool.shutdown(wait=False, cancel_futures=True)  # at once, on Ctrl+C too
+    return done
 
 
 _WARM: set[str] = set()  # learners whose entry points this process has made ready
