@@ -42,6 +42,7 @@ from tui_gym.games.base import (
     Scope,
     StateSpace,
     TrainingModel,
+    greedy_probabilities,
 )
 from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import signed, unwrapped_note
@@ -303,13 +304,12 @@ class ModelOracle(Oracle):
             values = np.where(offered, values, -np.inf)
         # The figures follow from the greedy policy alone, which training changes less
         # often than the values: kept per policy.
-        tied = values == values.max(axis=1, keepdims=True)
-        key = (freeze(kwargs), changes, tied.tobytes())
+        policy = greedy_probabilities(values)
+        key = (freeze(kwargs), changes, policy.tobytes())
         found = self._references.get(key)
         if found is None:
             if len(self._references) >= 64:
                 self._references.pop(next(iter(self._references)))
-            policy = tied / tied.sum(axis=1, keepdims=True)
             found = self._references[key] = self.policy_reference(policy, exact, kwargs, changes)
         return found
 
