@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
 
 import numpy as np
@@ -472,6 +472,10 @@ class Game:
     # Algorithms (by registry name) whose defaults end short of the game's bound by their
     # nature, not by chance, and why, in a sentence: what the run teaches (see the README).
     lessons: ClassVar[Mapping[str, str]] = {}
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        cls.params = tuple(replace(param, owner=cls.title) for param in cls.params)
 
     def __init__(self) -> None:
         self.states: StateSpace = StateSpace(self)

@@ -357,8 +357,8 @@ class BlackjackGame(Game):
     teaches = "acting on probabilities: the same hand calls for a hit or a stick by the dealer"
     action_names = ("stick", "hit")
     params = (
-        Param("natural", bool, False, help="a natural blackjack pays 1.5", owner="Blackjack"),
-        Param("sab", bool, False, help="Sutton & Barto's rules", owner="Blackjack"),
+        Param("natural", bool, False, help="a natural blackjack pays 1.5"),
+        Param("sab", bool, False, help="Sutton & Barto's rules"),
     )
     board = "cards"
     episode_noun = "hand"

@@ -152,8 +152,7 @@ class CarRentalGame(ModelGame):
     teaches = "policy iteration on a large stochastic model: four improvements to optimal"
     action_names = CarRentalEnv.action_names
     params = (
-        Param("exercise", bool, False, help="Exercise 4.7: a free move, parking over 10 cars",
-              owner="Jack's car rental"),
+        Param("exercise", bool, False, help="Exercise 4.7: a free move, parking over 10 cars"),
     )
     board = "dial"
     episode_noun = "episode"

@@ -87,9 +87,9 @@ class CliffWalkingGame(TileGame):
     action_names = ("up", "right", "down", "left")
     action_order = "cliff"
     params = (
-        Param("slippery", bool, False, help="moves may slide sideways", owner="CliffWalking"),
+        Param("slippery", bool, False, help="moves may slide sideways"),
         Param("map", str, "4x12", help="the 4x12 cliff or an edited map (custom)",
-              owner="CliffWalking", choices=("4x12", CUSTOM)),
+              choices=("4x12", CUSTOM)),
     )
     theme = "cliff"
     floor_word = "ground"

@@ -146,8 +146,7 @@ class DynaMazeGame(MazeGame):
     description = "Figure 8.2's 6x9 maze: +1 at the goal, 0 elsewhere; 14 steps at best."
     teaches = "planning: Dyna-Q's simulated steps find the way in far fewer episodes"
     params = (Param("scale", int, 1, 1, 8,
-                    help="each cell made scale x scale cells (Example 8.4's finer mazes)",
-                    owner="Dyna maze"),)
+                    help="each cell made scale x scale cells (Example 8.4's finer mazes)"),)
     # The multi-step on-policy learners stop exploring at the end, over a longer budget:
     # what they learn becomes the greedy policy's values, with no detour kept.
     hyperparameters = {
@@ -170,8 +169,7 @@ class BlockingMazeGame(MazeGame):
     change_words = "the way round its right end closed, one round its left opened"
     extra_steps = 2.0  # a detour of a step out and back some learners keep (seeds 0-4: 0-2)
     params = (Param("change_at", int, 1000, 1, 100_000_000,
-                    help="the step, over all episodes, at which the wall moves",
-                    owner="Blocking maze"),)
+                    help="the step, over all episodes, at which the wall moves"),)
     hyperparameters = {"*": {**MazeGame.CHANGING, "episodes": 300},
                        "sarsa": MazeGame.CHANGING_SARSA, **MazeGame.CHANGING_MULTI_STEP}
 
@@ -189,8 +187,7 @@ class ShortcutMazeGame(MazeGame):
     maze = "shortcut"
     change_words = "a shorter way opened round its right end"
     params = (Param("change_at", int, 3000, 1, 100_000_000,
-                    help="the step, over all episodes, at which the wall opens",
-                    owner="Shortcut maze"),)
+                    help="the step, over all episodes, at which the wall opens"),)
     extra_steps = 6.0  # the long way, which a learner that does not explore keeps to
     hyperparameters = {"*": {**MazeGame.CHANGING, "episodes": 400},
                        "sarsa": MazeGame.CHANGING_SARSA, **MazeGame.CHANGING_MULTI_STEP}

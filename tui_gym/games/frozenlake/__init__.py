@@ -74,12 +74,12 @@ class FrozenLakeGame(TileGame):
     teaches = "acting under uncertain moves: on slippery ice the safest path is not the shortest"
     params = (
         Param("map", str, "4x4", help="4x4, 8x8, a random map or an edited one (custom)",
-              owner="FrozenLake", choices=MAPS),
-        Param("size", int, 8, 3, 12, help="cells a side of a random map", owner="FrozenLake"),
-        Param("map_seed", int, 0, 0, 1_000_000, help="seed of a random map", owner="FrozenLake"),
-        Param("slippery", bool, True, help="moves may slide sideways", owner="FrozenLake"),
+              choices=MAPS),
+        Param("size", int, 8, 3, 12, help="cells a side of a random map"),
+        Param("map_seed", int, 0, 0, 1_000_000, help="seed of a random map"),
+        Param("slippery", bool, True, help="moves may slide sideways"),
         Param("success_rate", float, 1 / 3, 0.0, 1.0, help="chance a slippery move goes as asked",
-              owner="FrozenLake", min_inclusive=False),
+              min_inclusive=False),
     )
     theme = "lake"
     floor_word = "ice"

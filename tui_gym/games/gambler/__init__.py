@@ -148,9 +148,8 @@ class GamblerGame(ModelGame):
     teaches = "value iteration: bold play, and many equally optimal policies"
     action_names = GamblerEnv.action_names
     params = (
-        Param("p_heads", float, 0.4, 0.01, 0.99, help="the chance of heads, which wins a bet",
-              owner="Gambler"),
-        Param("goal", int, 100, 2, 2 * MAX_STAKE, help="the capital that wins", owner="Gambler"),
+        Param("p_heads", float, 0.4, 0.01, 0.99, help="the chance of heads, which wins a bet"),
+        Param("goal", int, 100, 2, 2 * MAX_STAKE, help="the capital that wins"),
     )
     board = "dial"
     episode_noun = "game"

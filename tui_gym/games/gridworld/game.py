@@ -541,11 +541,9 @@ class GridWorldGame(Game):
     teaches = "goal-conditioned states and discounting: why a shorter path is worth more"
     action_names = ("right", "up", "left", "down")
     params = (
-        Param("size", int, 5, MIN_SIZE, MAX_SIZE, help="cells a side", owner="GridWorld"),
-        Param("reward_scale", float, 1.0, -100.0, 100.0, help="reward for reaching the target",
-              owner="GridWorld"),
-        Param("step_penalty", float, 0.0, 0.0, 10.0, help="subtracted every other step",
-              owner="GridWorld"),
+        Param("size", int, 5, MIN_SIZE, MAX_SIZE, help="cells a side"),
+        Param("reward_scale", float, 1.0, -100.0, 100.0, help="reward for reaching the target"),
+        Param("step_penalty", float, 0.0, 0.0, 10.0, help="subtracted every other step"),
     )
     board = "grid"
     render_mode = "ansi"

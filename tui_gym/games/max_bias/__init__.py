@@ -109,7 +109,7 @@ class MaxBiasGame(DPGridGame):
     teaches = "maximization bias: Q-learning's max over noisy estimates, and Double Q's cure"
     action_names = ACTIONS
     params = (Param("actions", int, MAX_B_ACTIONS, 1, MAX_B_ACTIONS,
-                    help="how many actions B offers", owner="Maximization bias"),)
+                    help="how many actions B offers"),)
     # The book's Figure 6.5 explores with epsilon 0.1 at a constant alpha 0.1, which keeps the
     # estimate of left noisy (about ±0.2 around -0.1): an agent's greedy move from A is left
     # on one seed in three at any time. A step size averaging each move's first hundred

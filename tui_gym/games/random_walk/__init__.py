@@ -77,8 +77,7 @@ class RandomWalkGame(DPGridGame):
                    "0 (or -1) off the left.")
     teaches = "prediction: the random policy's values, which TD and Monte Carlo estimate"
     action_names = ("left", "right")
-    params = (Param("states", int, 5, 5, 19, help="5 (Example 6.2) or 19 (Figure 7.2)",
-                    owner="Random walk"),)
+    params = (Param("states", int, 5, 5, 19, help="5 (Example 6.2) or 19 (Figure 7.2)"),)
     # Undiscounted, going back and forth is worth as much as going right: a discount
     # makes the quicker way the better one.
     hyperparameters = {"*": {"discount": 0.9, "learning_rate": 0.1, "episodes": 300}}

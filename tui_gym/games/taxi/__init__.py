@@ -246,8 +246,8 @@ class TaxiGame(ModelGame):
     teaches = "a larger state (500 states), subgoals, and penalties for illegal actions"
     action_names = ("south", "north", "east", "west", "pickup", "dropoff")
     params = (
-        Param("rainy", bool, False, help="moves may veer sideways (chance 0.2)", owner="Taxi"),
-        Param("fickle", bool, False, help="the passenger may change destination", owner="Taxi"),
+        Param("rainy", bool, False, help="moves may veer sideways (chance 0.2)"),
+        Param("fickle", bool, False, help="the passenger may change destination"),
     )
     board = "taxi"
     bench_kwargs: dict[str, Any] | None = {}

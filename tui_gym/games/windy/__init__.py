@@ -51,8 +51,7 @@ class WindyGame(DPGridGame):
     action_names: tuple[str, ...] = GRID_ACTIONS
     king_moves = False
     params = (Param("stochastic_wind", bool, False,
-                    help="the wind varies by one a third of the time each way (Exercise 6.10)",
-                    owner="Windy GridWorld"),)
+                    help="the wind varies by one a third of the time each way (Exercise 6.10)"),)
     # Sarsa as the book runs it (Figure 6.3: alpha 0.5, Q starting at 0), exploring a little
     # more at first and less at the end, so the greedy policy settles. Double Q splits its
     # experience over two tables; Monte Carlo may never see its greedy policy end an
@@ -100,12 +99,8 @@ class KingWindyGame(WindyGame):
     title = "Windy GridWorld, king's moves"
     env_id = "tui_gym/WindyGridWorldKing-v0"
     key = "Y"
-    lessons = {"monte-carlo": MONTE_CARLO_LESSON, "double-q": DOUBLE_Q_LESSON}
     description = ("Exercise 6.9: the windy grid with the eight king's moves; -1 a move "
                    "until the goal.")
     teaches = "the same wind with diagonal moves: a shorter path, 7 moves instead of 15"
     action_names = KING_ACTIONS
     king_moves = True
-    params = (Param("stochastic_wind", bool, False,
-                    help="the wind varies by one a third of the time each way (Exercise 6.10)",
-                    owner="Windy GridWorld, king's moves"),)
