@@ -186,6 +186,12 @@ def _base_hyperparameters(
     return hp
 
 
+def _check_fit(session: Session, env_id: str) -> None:
+    if session.skipped:
+        reasons = "; ".join(reason for _, reason in session.skipped)
+        raise CliError(f"wrapper does not fit {env_id}: {reasons}")
+
+
 def _session_from_args(args: argparse.Namespace) -> Session:
     from tui_gym.core.wrappers import parse_wrapper_spec
 
@@ -208,9 +214,7 @@ def _session_from_args(args: argparse.Namespace) -> Session:
         for name in hp:  # e.g. epsilon_final above epsilon_start: say it with the flags
             text = text.replace(name, flag(name))
         raise CliError(text) from None
-    if session.skipped:
-        reasons = "; ".join(reason for _, reason in session.skipped)
-        raise CliError(f"wrapper does not fit {env_id}: {reasons}")
+    _check_fit(session, env_id)
     session.trainer.on_status = say_status
     return session
 
@@ -475,9 +479,7 @@ def cmd_play(args: argparse.Namespace, out: Console) -> int:
         env_id=env_id, env_kwargs=game_kwargs(args, game_for(env_id)),
         choices=tuple(parse_wrapper_spec(text) for text in args.wrapper), seed=args.play_seed or 0,
     )
-    if session.skipped:
-        reasons = "; ".join(reason for _, reason in session.skipped)
-        raise CliError(f"wrapper does not fit {env_id}: {reasons}")
+    _check_fit(session, env_id)
     player = JsonlPlayer(session, seed=args.play_seed)
     if args.record is None:
         return serve(player, sys.stdin.buffer, sys.stdout)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import math
 from collections.abc import Callable
+from typing import cast
 
 from tui_gym.core.params import digits_note, read_number, shown_value
 
@@ -27,55 +28,32 @@ def fresh_seed() -> int:
     return secrets.randbelow(FRESH_SEEDS)
 
 
-def int_in(minimum: int, maximum: int, noun: str) -> Callable[[str], int]:
-    """An argparse type: an integer (ASCII digits, `_` allowed) in [minimum, maximum]."""
+def number_in(minimum: float, maximum: float, noun: str,
+              integer: bool = False) -> Callable[[str], float]:
+    """An argparse type: a number (ASCII digits, `_` allowed) in [minimum, maximum], a whole
+    one if `integer`."""
 
-    def parse(text: str) -> int:
+    def parse(text: str) -> float:
         value = read_number(text)
-        if value is None or math.isnan(value) or (math.isfinite(value) and value % 1):
+        if value is None or math.isnan(value) or (integer and math.isfinite(value) and value % 1):
             raise argparse.ArgumentTypeError(
                 f"expected {noun}, got {shown_value(text)}{digits_note(text)}")
-        if not minimum <= value <= maximum:
+        if not (math.isfinite(value) and minimum <= value <= maximum):
             raise argparse.ArgumentTypeError(
-                f"{shown_value(text)} is out of range: expected {noun}"
-            )
-        return int(value)
+                f"{shown_value(text)} is out of range: expected {noun}")
+        return int(value) if integer else float(value)
 
     return parse
+
+
+def int_in(minimum: int, maximum: int, noun: str) -> Callable[[str], int]:
+    """An argparse type: an integer (ASCII digits, `_` allowed) in [minimum, maximum]."""
+    return cast(Callable[[str], int], number_in(minimum, maximum, noun, integer=True))
 
 
 positive_int = int_in(1, 10**9, "a positive integer up to 1,000,000,000")
 seed_number = int_in(0, MAX_SEED, f"an integer in [0, {MAX_SEED}]")
-
-
-def finite_number(text: str) -> float:
-    """An argparse type: a finite number (ASCII digits)."""
-    value = read_number(text)
-    if value is None or math.isnan(value):
-        raise argparse.ArgumentTypeError(
-            f"expected a number, got {shown_value(text)}{digits_note(text)}")
-    if math.isinf(value):
-        raise argparse.ArgumentTypeError(
-            f"{shown_value(text)} is out of range: expected a finite number"
-        )
-    return float(value)
-
-
-def number_in(minimum: float, maximum: float, noun: str) -> Callable[[str], float]:
-    """An argparse type: a number (ASCII digits) in [minimum, maximum]."""
-
-    def parse(text: str) -> float:
-        value = read_number(text)
-        if value is None or math.isnan(value):
-            raise argparse.ArgumentTypeError(
-                f"expected {noun}, got {shown_value(text)}{digits_note(text)}")
-        if not minimum <= value <= maximum:
-            raise argparse.ArgumentTypeError(
-                f"{shown_value(text)} is out of range: expected {noun}"
-            )
-        return float(value)
-
-    return parse
+finite_number = number_in(-math.inf, math.inf, "a finite number")
 
 
 def file_name(text: str) -> str:

@@ -1,10 +1,12 @@
-"""Text that came from a file or another program, made safe to show: `visible`."""
+"""Text that came from a file or another program, made safe to show (`visible`), and its
+JSON data checked for nesting (`nested_deeper`)."""
 
 from __future__ import annotations
 
 import unicodedata
+from typing import Any
 
-__all__ = ["visible"]
+__all__ = ["nested_deeper", "visible"]
 
 # Control (Cc), format (Cf: bidirectional overrides, zero-width marks), line and paragraph
 # separators, surrogates and unassigned code points.
@@ -36,3 +38,18 @@ def visible(text: object, limit: int | None = 80) -> str:
         return shown
     keep = max(1, limit - 1)
     return f"{shown[:keep]}… ({len(raw):,} characters)"
+
+
+def nested_deeper(value: Any, limit: int) -> bool:
+    """Whether lists and objects in `value` nest deeper than `limit` (checked without
+    recursion)."""
+    stack = [(value, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, dict | list):
+            if depth > limit:
+                return True
+            stack.extend((child, depth + 1) for child in (
+                item.values() if isinstance(item, dict) else item
+            ))
+    return False

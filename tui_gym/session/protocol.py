@@ -13,6 +13,7 @@ from collections.abc import Callable, Iterator
 from typing import IO, Any
 
 from tui_gym.core.params import shown_value
+from tui_gym.core.text import nested_deeper
 from tui_gym.games.words import to_jsonable
 from tui_gym.session.play import HumanGame, PlayError
 from tui_gym.session.session import Session
@@ -72,19 +73,6 @@ def _decode(line: str) -> Any:
         raise ValueError(f"not a usable request: nested deeper than {MAX_DEPTH} levels") from None
 
 
-def _too_deep(value: Any, limit: int = MAX_DEPTH) -> bool:
-    """Whether arrays and objects nest deeper than `limit` (checked without recursion)."""
-    stack = [(value, 1)]
-    while stack:
-        item, depth = stack.pop()
-        if isinstance(item, dict | list):
-            if depth > limit:
-                return True
-            children = item.values() if isinstance(item, dict) else item
-            stack.extend((child, depth + 1) for child in children)
-    return False
-
-
 def _clean_text(value: Any) -> str | None:
     """`value` as JSON text when it is JSON-safe as it is (no NaN or infinity, no surrogate
     in any text), else None: one pass of the C encoder, which most responses need alone."""
@@ -133,7 +121,7 @@ def _parse(line: str | bytes) -> dict[str, Any]:
     if not isinstance(request, dict):
         raise ValueError('a request must be a JSON object like {"cmd": "reset"}')
     # Fewer brackets than levels cannot nest too deep: most requests skip the walk.
-    if line.count("[") + line.count("{") > MAX_DEPTH and _too_deep(request):
+    if line.count("[") + line.count("{") > MAX_DEPTH and nested_deeper(request, MAX_DEPTH):
         raise ValueError(f"not a usable request: nested deeper than {MAX_DEPTH} levels")
     return request
 

@@ -26,6 +26,7 @@ import numpy as np
 from tui_gym.algorithms import Learner, LearnerState, QLearning, Settings, algorithm
 from tui_gym.core.files import OutputPathError, check_output_path, write_atomically
 from tui_gym.core.params import shown_value
+from tui_gym.core.text import nested_deeper
 from tui_gym.core.wrappers.catalog import WrapperChoice
 
 FORMAT_NAME = "tui-gym-agent"
@@ -186,23 +187,9 @@ def _json(reader: _Reader, name: str, data: bytes) -> Any:
         raise reader.field(name, f"nests deeper than {MAX_JSON_DEPTH} levels") from None
     except ValueError:  # an integer too long to read
         raise reader.field(name, "holds a number too long to read") from None
-    if _depth_over(value, MAX_JSON_DEPTH):
+    if nested_deeper(value, MAX_JSON_DEPTH):
         raise reader.field(name, f"nests deeper than {MAX_JSON_DEPTH} levels")
     return value
-
-
-def _depth_over(value: Any, limit: int) -> bool:
-    """Whether lists and objects nest deeper than `limit` (checked without recursion)."""
-    stack = [(value, 1)]
-    while stack:
-        item, depth = stack.pop()
-        if isinstance(item, dict | list):
-            if depth > limit:
-                return True
-            stack.extend((child, depth + 1) for child in (
-                item.values() if isinstance(item, dict) else item
-            ))
-    return False
 
 
 def _array(reader: _Reader, name: str, data: bytes, kinds: str, ndim: int = 2) -> np.ndarray:
