@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
 
@@ -438,6 +438,38 @@ class HeatmapLayout(Role):
         return None
 
 
+TIED = "·"  # a heatmap cell whose actions tie
+
+
+def greedy_cells(
+    rows: int, cols: int, fixed: Callable[[int, int], str | None],
+    q_at: Callable[[int, int], np.ndarray], arrow: Callable[[int], str],
+    wrong: Callable[[int, int, int], bool], tied: Callable[[int, int], str] = lambda r, c: TIED,
+) -> tuple[np.ndarray, tuple[tuple[str, ...], ...], np.ndarray]:
+    """A panel's max Q, labels and marks, cell by cell: the `fixed` label where there is one
+    (and no value), else max Q with the `tied` label where every action ties, or else the
+    greedy action's `arrow`, marked where that action is `wrong`."""
+    values = np.full((rows, cols), np.nan)
+    marked = np.zeros((rows, cols), dtype=bool)
+    labels = []
+    for r in range(rows):
+        line = []
+        for c in range(cols):
+            label = fixed(r, c)
+            if label is None:
+                qs = q_at(r, c)
+                values[r, c] = float(qs.max())
+                action = int(np.argmax(qs))
+                if (qs == qs[0]).all():
+                    label = tied(r, c)
+                else:
+                    label = arrow(action)
+                    marked[r, c] = wrong(r, c, action)
+            line.append(label)
+        labels.append(tuple(line))
+    return values, tuple(labels), marked
+
+
 # --- the game ----------------------------------------------------------------------
 
 
@@ -477,11 +509,17 @@ class Game:
         super().__init_subclass__(**kwargs)
         cls.params = tuple(replace(param, owner=cls.title) for param in cls.params)
 
+    # The classes of its roles, each made with the game.
+    states_type: ClassVar[type[StateSpace]] = StateSpace
+    oracle_type: ClassVar[type[Oracle]] = Oracle
+    narrator_type: ClassVar[type[Narrator]] = Narrator
+    layout_type: ClassVar[type[HeatmapLayout]] = HeatmapLayout
+
     def __init__(self) -> None:
-        self.states: StateSpace = StateSpace(self)
-        self.oracle: Oracle = Oracle(self)
-        self.narrator: Narrator = Narrator(self)
-        self.layout: HeatmapLayout = HeatmapLayout(self)
+        self.states: StateSpace = self.states_type(self)
+        self.oracle: Oracle = self.oracle_type(self)
+        self.narrator: Narrator = self.narrator_type(self)
+        self.layout: HeatmapLayout = self.layout_type(self)
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.env_id}>"

@@ -10,7 +10,7 @@ import numpy as np
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP
 from tui_gym.envs.dp_grid import GRID_ACTIONS, Cell, Grid
-from tui_gym.games.base import UNREADABLE, HeatmapLayout, Narrator, TallyWord
+from tui_gym.games.base import TIED, UNREADABLE, HeatmapLayout, Narrator, TallyWord, greedy_cells
 from tui_gym.games.model import DiscreteStates, ModelGame, freeze
 from tui_gym.games.words import format_reward, plural
 
@@ -19,51 +19,11 @@ __all__ = ["ARROWS", "DPGridGame", "DPGridLayout", "DPGridStates", "Event", "Rea
 ARROWS = {"up": "↑", "down": "↓", "left": "←", "right": "→",
           "up-left": "↖", "up-right": "↗", "down-left": "↙", "down-right": "↘"}
 STRAIGHT = GRID_ACTIONS
-TIED = "·"
 END = "★"  # a terminal cell: the tile board's goal
 WALL = "█"
 KEPT_MODELS = 16  # models kept per game (one per set of arguments)
 
 Event = tuple[str, str]  # what a move did ('{who} ...'), and its tone on the board
-
-
-class DPGridGame(ModelGame):
-    """A grid world of the book (see the module docstring)."""
-
-    board = "tile"
-    action_names: tuple[str, ...] = GRID_ACTIONS
-
-    def __init__(self) -> None:
-        super().__init__()
-        self.states = DPGridStates(self)
-        self.layout = DPGridLayout(self)
-        self._models: dict[Any, FiniteMDP] = {}
-
-    def grid(self, kwargs: Mapping[str, Any]) -> Grid:
-        """The grid these arguments make."""
-        raise NotImplementedError
-
-    def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP:
-        key = freeze(kwargs)
-        if key not in self._models:
-            if len(self._models) >= KEPT_MODELS:
-                self._models.pop(next(iter(self._models)))
-            arrays = self.grid(kwargs).arrays()
-            self._models[key] = FiniteMDP(arrays.next_state, arrays.prob, arrays.reward,
-                                          arrays.terminal, arrays.initial,
-                                          action_names=self.action_names)
-        return self._models[key]
-
-    def event(self, game_env: Any, before: Mapping[str, Any], was: Cell, now: Cell,
-              move: str) -> Event | None:
-        """What the move `move` from `was` to `now` did, in the game's words (None: the
-        board's own words); `before` is the scene before it."""
-        grid: Grid = game_env.grid
-        jump = grid.jumps.get(was)
-        if jump is not None and now == jump[0]:
-            name = grid.letters[was]
-            return f"{{who}} jumped from {name} to {name}′: +{jump[1]:g}", "good"
-        return None
 
 
 def _game(role: Any) -> DPGridGame:
@@ -139,24 +99,15 @@ class DPGridLayout(HeatmapLayout):
         except UNREADABLE:
             return []
         has_marks = isinstance(marks, np.ndarray) and marks.shape == values.shape
-        panel = np.full((rows, cols), np.nan)
-        marked = np.zeros((rows, cols), dtype=bool)
-        labels = []
-        for r in range(rows):
-            line = []
-            for c in range(cols):
-                if (r, c) in grid.terminals or (r, c) in grid.walls:
-                    line.append(END if (r, c) in grid.terminals else WALL)
-                    continue
-                qs = values[r * cols + c]
-                panel[r, c] = float(qs.max())
-                if (qs == qs[0]).all():
-                    line.append(grid.letters.get((r, c), TIED))
-                    continue
-                action = int(np.argmax(qs))
-                line.append(ARROWS.get(grid.moves[action], grid.moves[action]))
-                marked[r, c] = has_marks and not marks[r * cols + c, action]
-            labels.append(tuple(line))
+        panel, labels, marked = greedy_cells(
+            rows, cols,
+            lambda r, c: END if (r, c) in grid.terminals else WALL if (r, c) in grid.walls
+            else None,
+            lambda r, c: values[r * cols + c],
+            lambda action: ARROWS.get(grid.moves[action], grid.moves[action]),
+            lambda r, c, action: has_marks and not marks[r * cols + c, action],
+            lambda r, c: grid.letters.get((r, c), TIED),
+        )
         parts = ["arrow: greedy move", f"{TIED} tie",
                  *(f"{grid.letters[cell]} jumps" for cell in grid.jumps),
                  *([f"{END} terminal"] if grid.terminals else []),
@@ -164,7 +115,7 @@ class DPGridLayout(HeatmapLayout):
         return [
             Heatmap(
                 title="max Q and the greedy move", row_labels=tuple(str(r) for r in range(rows)),
-                col_labels=tuple(str(c) for c in range(cols)), values=panel, labels=tuple(labels),
+                col_labels=tuple(str(c) for c in range(cols)), values=panel, labels=labels,
                 marked=marked, legend="  ".join(parts),
             )
         ]
@@ -188,3 +139,43 @@ class ReachNarrator(Narrator):
 
     def progress_text(self, last: Any, first_info: Mapping[str, Any]) -> str:
         return f"{plural(last.steps, 'step')} taken" if last.steps else ""
+
+
+class DPGridGame(ModelGame):
+    """A grid world of the book (see the module docstring)."""
+
+    board = "tile"
+    action_names: tuple[str, ...] = GRID_ACTIONS
+
+    states_type = DPGridStates
+    layout_type = DPGridLayout
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._models: dict[Any, FiniteMDP] = {}
+
+    def grid(self, kwargs: Mapping[str, Any]) -> Grid:
+        """The grid these arguments make."""
+        raise NotImplementedError
+
+    def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP:
+        key = freeze(kwargs)
+        if key not in self._models:
+            if len(self._models) >= KEPT_MODELS:
+                self._models.pop(next(iter(self._models)))
+            arrays = self.grid(kwargs).arrays()
+            self._models[key] = FiniteMDP(arrays.next_state, arrays.prob, arrays.reward,
+                                          arrays.terminal, arrays.initial,
+                                          action_names=self.action_names)
+        return self._models[key]
+
+    def event(self, game_env: Any, before: Mapping[str, Any], was: Cell, now: Cell,
+              move: str) -> Event | None:
+        """What the move `move` from `was` to `now` did, in the game's words (None: the
+        board's own words); `before` is the scene before it."""
+        grid: Grid = game_env.grid
+        jump = grid.jumps.get(was)
+        if jump is not None and now == jump[0]:
+            name = grid.letters[was]
+            return f"{{who}} jumped from {name} to {name}′: +{jump[1]:g}", "good"
+        return None

@@ -9,13 +9,12 @@ import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import NotAvailable
-from tui_gym.games.base import UNREADABLE, HeatmapLayout, strip_ansi
+from tui_gym.games.base import TIED, UNREADABLE, HeatmapLayout, strip_ansi
 from tui_gym.games.model import DiscreteStates, ModelGame
 
 __all__ = ["PAGE", "GenericGame", "check_fit"]
 
 PAGE = 25  # states a heatmap page shows
-TIED = "·"
 
 
 def _make(env_id: str, render_mode: str | None = None) -> Any:

@@ -12,7 +12,7 @@ from bisect import bisect_right
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import numpy.typing as npt
@@ -517,10 +517,8 @@ class ModelGame(Game):
     render_mode: str | None = "ansi"
     plan_gamma = 1.0  # the discount the Plan view starts with
 
-    def __init__(self) -> None:
-        super().__init__()
-        self.states = DiscreteStates(self)
-        self.oracle = ModelOracle(self)
+    states_type: ClassVar[type[StateSpace]] = DiscreteStates
+    oracle_type: ClassVar[type[Oracle]] = ModelOracle
 
     def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel | NotAvailable:
         model = self.base_model(kwargs)

@@ -12,7 +12,15 @@ from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP, NotAvailable
 from tui_gym.envs import TILE_MAP_ID
 from tui_gym.envs.tile_map import STANDING, TileMapEnv, TileRules, cell_key, tile_arrays
-from tui_gym.games.base import UNREADABLE, EvalOutcome, HeatmapLayout, Narrator, TallyWord
+from tui_gym.games.base import (
+    TIED,
+    UNREADABLE,
+    EvalOutcome,
+    HeatmapLayout,
+    Narrator,
+    TallyWord,
+    greedy_cells,
+)
 from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
 from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.words import format_reward, plural
@@ -32,7 +40,6 @@ ARROWS = {"left": "←", "down": "↓", "right": "→", "up": "↑"}
 TILE_WORDS = {"S": "start", "F": "floor", "H": "hole", "G": "goal", "C": "cliff", "W": "wall",
               "R": "reward cell"}
 NO_DECISION = {"H": "○", "G": "★", "C": "▒", "W": "█"}  # tiles the agent never acts on
-TIED = "·"
 
 
 @lru_cache(maxsize=32)
@@ -272,32 +279,18 @@ class TileLayout(HeatmapLayout):
         rows, cols = len(cells), len(cells[0])
         if np.shape(q) != (rows * cols, len(game.action_names)):
             return []
-        values = np.full((rows, cols), np.nan)
-        marked = np.zeros((rows, cols), dtype=bool)
         has_marks = isinstance(marks, np.ndarray) and marks.shape == np.shape(q)
-        labels = []
-        for r in range(rows):
-            line = []
-            for c in range(cols):
-                tile = cells[r][c]
-                if tile in NO_DECISION:
-                    line.append(NO_DECISION[tile])
-                    continue
-                qs = q[r * cols + c]
-                values[r, c] = float(qs.max())
-                if (qs == qs[0]).all():
-                    line.append(TIED)
-                    continue
-                action = int(np.argmax(qs))
-                line.append(ARROWS[game.action_names[action]])
-                marked[r, c] = has_marks and not marks[r * cols + c, action]
-            labels.append(tuple(line))
+        values, labels, marked = greedy_cells(
+            rows, cols, lambda r, c: NO_DECISION.get(cells[r][c]), lambda r, c: q[r * cols + c],
+            lambda action: ARROWS[game.action_names[action]],
+            lambda r, c, action: has_marks and not marks[r * cols + c, action],
+        )
         shown = "".join(sorted({t for line in cells for t in line if t in NO_DECISION}))
         tiles = "  ".join(f"{NO_DECISION[t]} {TILE_WORDS[t]}" for t in "HGCW" if t in shown)
         return [
             Heatmap(
                 title="max Q and the greedy move", row_labels=tuple(str(r) for r in range(rows)),
-                col_labels=tuple(str(c) for c in range(cols)), values=values, labels=tuple(labels),
+                col_labels=tuple(str(c) for c in range(cols)), values=values, labels=labels,
                 marked=marked,
                 legend=f"arrow: greedy move  {TIED} tie  {tiles}  * not an optimal move",
             )

@@ -51,9 +51,7 @@ class ABGridGame(DPGridGame):
     plan_gamma = 0.9
     hyperparameters = {"*": {"discount": 0.9, "learning_rate": 0.1, "episodes": 2_000}}
 
-    def __init__(self) -> None:
-        super().__init__()
-        self.narrator = ABGridNarrator(self)
+    narrator_type = ABGridNarrator
 
     def grid(self, kwargs: Mapping[str, Any]) -> Grid:
         return ABGridEnv.GRID

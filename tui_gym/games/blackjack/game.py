@@ -14,6 +14,7 @@ from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.games.base import (
     EXACT,
+    TIED,
     Advice,
     Bound,
     EvalOutcome,
@@ -52,7 +53,6 @@ DEALER_CARDS = tuple(range(1, 11))  # columns: A, 2 .. 10
 DEALER_LABELS = ("A", "2", "3", "4", "5", "6", "7", "8", "9", "10")
 ACTION_LETTERS = ("S", "H")
 LONGEST_HAND = 20  # steps: 19 hits from two aces to 21 aces-as-one, then a stick or a bust
-TIED = "·"  # a heatmap cell whose actions tie
 TRAINED_GAP = 0.005  # what the default training reaches (see the README)
 
 
@@ -392,12 +392,10 @@ class BlackjackGame(Game):
         "surprising cards weigh more than their chance, and the values drift from the optimum",
     }
 
-    def __init__(self) -> None:
-        super().__init__()
-        self.states = BlackjackStates(self)
-        self.oracle = BlackjackOracle(self)
-        self.narrator = BlackjackNarrator(self)
-        self.layout = BlackjackLayout(self)
+    states_type = BlackjackStates
+    oracle_type = BlackjackOracle
+    narrator_type = BlackjackNarrator
+    layout_type = BlackjackLayout
 
     def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel:
         """The hands as a finite model (`finite_model`); a natural plays as a soft 21."""

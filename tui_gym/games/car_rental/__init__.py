@@ -17,7 +17,7 @@ from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP
 from tui_gym.core.params import Param
 from tui_gym.envs.car_rental import MAX_CARS, MOVES, CarRentalEnv, car_rental_arrays
-from tui_gym.games.base import UNREADABLE, HeatmapLayout, Narrator
+from tui_gym.games.base import TIED, UNREADABLE, HeatmapLayout, Narrator
 from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import format_reward, plural
@@ -26,7 +26,6 @@ __all__ = ["EPISODE_LIMIT", "CarRentalGame"]
 
 EPISODE_LIMIT = 20  # days (the env's registration)
 SIDE = MAX_CARS + 1
-TIED = "·"
 
 
 @lru_cache(maxsize=2)
@@ -164,11 +163,9 @@ class CarRentalGame(ModelGame):
     hyperparameters = {"*": {"discount": 0.9, "learning_rate": 0.2, "episodes": 10_000},
                        "double-q": {"learning_rate": 0.05, "episodes": 60_000}}
 
-    def __init__(self) -> None:
-        super().__init__()
-        self.states = CarRentalStates(self)
-        self.layout = CarRentalLayout(self)
-        self.narrator = CarRentalNarrator(self)
+    states_type = CarRentalStates
+    layout_type = CarRentalLayout
+    narrator_type = CarRentalNarrator
 
     def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP:
         return _model(bool(kwargs.get("exercise", False)))

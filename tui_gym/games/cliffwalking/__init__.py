@@ -104,11 +104,9 @@ class CliffWalkingGame(TileGame):
         "path (Sutton & Barto, Example 6.6); Q-learning learns the edge",
     )
 
-    def __init__(self) -> None:
-        super().__init__()
-        self.states = TileStates(self)
-        self.narrator = CliffNarrator(self)
-        self.layout = TileLayout(self)
+    states_type = TileStates
+    narrator_type = CliffNarrator
+    layout_type = TileLayout
 
     def builtin_cells(self, kwargs: Mapping[str, Any]) -> list[str]:
         return list(CLIFF_MAP)

@@ -34,9 +34,7 @@ class CornerGridGame(DPGridGame):
     teaches = "policy evaluation: the random policy's values, then one greedy step to optimal"
     hyperparameters = {"*": {"learning_rate": 0.1, "episodes": 2_000}}
 
-    def __init__(self) -> None:
-        super().__init__()
-        self.narrator = CornerNarrator(self)
+    narrator_type = CornerNarrator
 
     def grid(self, kwargs: Mapping[str, Any]) -> Grid:
         return CornerGridEnv.GRID

@@ -103,10 +103,8 @@ class MazeGame(DPGridGame):
     plan_gamma = DISCOUNT
     hyperparameters = {"*": {"discount": DISCOUNT, "learning_rate": 0.1, "episodes": 1000}}
 
-    def __init__(self) -> None:
-        super().__init__()
-        self.oracle = MazeOracle(self)
-        self.narrator = MazeNarrator(self)
+    oracle_type = MazeOracle
+    narrator_type = MazeNarrator
 
     def phases(self, kwargs: Mapping[str, Any]) -> list[tuple[int, Grid]]:
         change_at = kwargs.get("change_at")

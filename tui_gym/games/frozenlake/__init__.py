@@ -85,11 +85,9 @@ class FrozenLakeGame(TileGame):
     floor_word = "ice"
     bench_kwargs: dict[str, Any] | None = {"map": "8x8"}
 
-    def __init__(self) -> None:
-        super().__init__()
-        self.states = TileStates(self)
-        self.narrator = TileNarrator(self)
-        self.layout = TileLayout(self)
+    states_type = TileStates
+    narrator_type = TileNarrator
+    layout_type = TileLayout
 
     def builtin_cells(self, kwargs: Mapping[str, Any]) -> list[str]:
         return lake_map(kwargs)

@@ -15,7 +15,7 @@ from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP
 from tui_gym.core.params import Param
 from tui_gym.envs.gambler import MAX_STAKE, GamblerEnv, gambler_arrays, stake_of
-from tui_gym.games.base import UNREADABLE, HeatmapLayout, Narrator, TallyWord
+from tui_gym.games.base import TIED, UNREADABLE, HeatmapLayout, Narrator, TallyWord
 from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.planning import PlanModel, StateLine
 from tui_gym.games.words import plural
@@ -24,7 +24,6 @@ __all__ = ["EPISODE_LIMIT", "GamblerGame"]
 
 EPISODE_LIMIT = 1000  # bets (the env's registration)
 ROW = 10  # capitals a heatmap row
-TIED = "·"
 
 
 @lru_cache(maxsize=16)
@@ -160,11 +159,9 @@ class GamblerGame(ModelGame):
     hyperparameters = {"*": {"discount": 0.9, "learning_rate": 0.05, "episodes": 20_000},
                        "prioritized-sweeping": {"learning_rate": 0.02}}
 
-    def __init__(self) -> None:
-        super().__init__()
-        self.states = GamblerStates(self)
-        self.layout = GamblerLayout(self)
-        self.narrator = GamblerNarrator(self)
+    states_type = GamblerStates
+    layout_type = GamblerLayout
+    narrator_type = GamblerNarrator
 
     def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP:
         return _model(float(kwargs.get("p_heads", 0.4)), _goal(kwargs))

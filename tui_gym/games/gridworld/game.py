@@ -17,6 +17,7 @@ from tui_gym.envs import GRIDWORLD_MAX_STEPS
 from tui_gym.envs.walls import Walls, cell_distances, cell_moves, check_walls
 from tui_gym.games.base import (
     EXACT,
+    TIED,
     Advice,
     Bound,
     EvalOutcome,
@@ -30,6 +31,7 @@ from tui_gym.games.base import (
     StateSpace,
     TallyWord,
     TrainingModel,
+    greedy_cells,
     greedy_probabilities,
 )
 from tui_gym.games.gridworld.model import (
@@ -66,7 +68,6 @@ __all__ = ["GridWorldGame"]
 ARROWS = ("→", "↑", "←", "↓")
 MIN_SIZE, MAX_SIZE = 2, 12
 AGREEMENT = "moves on a shortest path"  # how a scoreboard words moves that match the optimum
-TIED = "·"  # a heatmap cell whose actions tie
 WALL = "█"  # a heatmap cell that is a wall
 TRAINED_SHARE = 0.95  # what the default training reaches (see the README)
 
@@ -478,35 +479,22 @@ class GridWorldLayout(HeatmapLayout):
         walls = _walls(kwargs)
         wall_set = set(walls)
         q4 = q.reshape(size, size, size, size, q.shape[1])
-        values = np.full((size, size), np.nan)
-        marked = np.zeros((size, size), dtype=bool)
-        labels = []
-        for r in range(size):
-            y = size - 1 - r  # +y is up: the top row is y = size-1
-            row = []
-            for x in range(size):
-                if (x, y) == (tx, ty):
-                    row.append("T")
-                    continue
-                if (x, y) in wall_set:
-                    row.append(WALL)
-                    continue
-                qs = q4[x, y, tx, ty]
-                action = int(np.argmax(qs))
-                values[r, x] = float(qs.max())
-                if (qs == qs[0]).all():  # no preference: the agent picks at random
-                    row.append(TIED)
-                    continue
-                row.append(ARROWS[action])
-                marked[r, x] = action not in _optimal_from(size, walls, (x, y), (tx, ty))
-            labels.append(tuple(row))
+        top = size - 1  # +y is up: row r is y = size-1-r
+
+        def fixed(r: int, x: int) -> str | None:
+            return "T" if (x, top - r) == (tx, ty) else WALL if (x, top - r) in wall_set else None
+
+        values, labels, marked = greedy_cells(
+            size, size, fixed, lambda r, x: q4[x, top - r, tx, ty], ARROWS.__getitem__,
+            lambda r, x, action: action not in _optimal_from(size, walls, (x, top - r), (tx, ty)),
+        )
         return [
             Heatmap(
                 title=f"max Q with the target at ({tx}, {ty})",
                 row_labels=tuple(str(size - 1 - r) for r in range(size)),
                 col_labels=tuple(str(x) for x in range(size)),
                 values=values,
-                labels=tuple(labels),
+                labels=labels,
                 marked=marked,
                 legend=f"arrow: greedy move  {TIED} tie  T target  * off every shortest path"
                 + (f"  {WALL} wall" if walls else ""),
@@ -559,12 +547,10 @@ class GridWorldGame(Game):
               "epsilon_decay_fraction": 0.5},
     }
 
-    def __init__(self) -> None:
-        super().__init__()
-        self.states = GridWorldStates(self)
-        self.oracle = GridWorldOracle(self)
-        self.narrator = GridWorldNarrator(self)
-        self.layout = GridWorldLayout(self)
+    states_type = GridWorldStates
+    oracle_type = GridWorldOracle
+    narrator_type = GridWorldNarrator
+    layout_type = GridWorldLayout
 
     def solution(self, kwargs: Mapping[str, Any]) -> Optimum | NotAvailable:
         """The optimum with action values that point its moves: minus the steps to the

@@ -121,11 +121,12 @@ class MaxBiasGame(DPGridGame):
         **dict.fromkeys(("dyna-q", "dyna-q-plus"), {"planning_steps": 1, "episodes": 5000}),
     }
 
+    states_type = MaxBiasStates
+    oracle_type = MaxBiasOracle
+    narrator_type = MaxBiasNarrator
+
     def __init__(self) -> None:
         super().__init__()
-        self.states = MaxBiasStates(self)
-        self.oracle = MaxBiasOracle(self)
-        self.narrator = MaxBiasNarrator(self)
         arrays, std = max_bias_arrays()
         self._model = FiniteMDP(arrays.next_state, arrays.prob, arrays.reward, arrays.terminal,
                                 arrays.initial, action_names=ACTIONS, reward_std=std)

@@ -82,10 +82,8 @@ class RandomWalkGame(DPGridGame):
     # makes the quicker way the better one.
     hyperparameters = {"*": {"discount": 0.9, "learning_rate": 0.1, "episodes": 300}}
 
-    def __init__(self) -> None:
-        super().__init__()
-        self.states = WalkStates(self)
-        self.narrator = WalkNarrator(self)
+    states_type = WalkStates
+    narrator_type = WalkNarrator
 
     def check_kwargs(self, kwargs: Mapping[str, Any]) -> None:
         if _states(kwargs) not in LEFT_END_PAYS:

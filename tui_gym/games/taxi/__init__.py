@@ -39,7 +39,7 @@ import numpy as np
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP, NotAvailable
 from tui_gym.core.params import Param
-from tui_gym.games.base import EvalOutcome, HeatmapLayout, Narrator, TallyWord
+from tui_gym.games.base import TIED, EvalOutcome, HeatmapLayout, Narrator, TallyWord
 from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.words import format_reward, plural
 
@@ -54,7 +54,6 @@ STAND_NAMES = ("R", "G", "Y", "B")
 IN_TAXI = 4
 WHERE = (*STAND_NAMES, "taxi")
 ACTION_MARKS = ("↓", "↑", "→", "←", "P", "D")
-TIED = "·"
 ILLEGAL = -10.0
 FICKLE = ("with a fickle passenger Taxi has no exact model: the change of mind is a hidden "
           "draw its table does not list")
@@ -252,11 +251,9 @@ class TaxiGame(ModelGame):
     board = "taxi"
     bench_kwargs: dict[str, Any] | None = {}
 
-    def __init__(self) -> None:
-        super().__init__()
-        self.states = TaxiStates(self)
-        self.narrator = TaxiNarrator(self)
-        self.layout = TaxiLayout(self)
+    states_type = TaxiStates
+    narrator_type = TaxiNarrator
+    layout_type = TaxiLayout
 
     def make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         out: dict[str, Any] = {}

@@ -71,9 +71,7 @@ class WindyGame(DPGridGame):
         "q-lambda": {"lambda": 0.5},
     }
 
-    def __init__(self) -> None:
-        super().__init__()
-        self.narrator = ReachNarrator(self)
+    narrator_type = ReachNarrator
 
     def grid(self, kwargs: Mapping[str, Any]) -> Grid:
         return windy_grid(self.king_moves, bool(kwargs.get("stochastic_wind", False)))

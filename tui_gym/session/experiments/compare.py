@@ -75,13 +75,8 @@ class CompareSpec:
         duplicate = next((n for n in names if names.count(n) > 1), None)
         if duplicate:
             raise ValueError(f"algorithm {duplicate} is listed twice")
-        for name, value in (("seeds", self.seeds), ("episodes", self.episodes)):
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
         object.__setattr__(self, "algorithms", names)
-        object.__setattr__(self, "settings", dict(self.settings))
-        object.__setattr__(self, "game_params", dict(self.game_params))
-        object.__setattr__(self, "wrappers", tuple(self.wrappers))
+        settle_runs(self)
         unknown = [k for k in self.settings if not _owners(k, names)]
         if unknown:
             raise ValueError(
@@ -93,6 +88,17 @@ class CompareSpec:
     @property
     def seed_list(self) -> tuple[int, ...]:
         return tuple(range(self.first_seed, self.first_seed + self.seeds))
+
+
+def settle_runs(spec: Any) -> None:
+    """Check a spec's `seeds` and `episodes`, and keep its settings, game parameters and
+    wrappers as copies of their own."""
+    for name, value in (("seeds", spec.seeds), ("episodes", spec.episodes)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
+    object.__setattr__(spec, "settings", dict(spec.settings))
+    object.__setattr__(spec, "game_params", dict(spec.game_params))
+    object.__setattr__(spec, "wrappers", tuple(spec.wrappers))
 
 
 def _owners(key: str, names: Sequence[str]) -> list[str]:

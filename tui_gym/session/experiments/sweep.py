@@ -22,6 +22,7 @@ from tui_gym.session.experiments.compare import (
     Setup,
     _finite,
     execute,
+    settle_runs,
 )
 
 __all__ = ["SWEEP_CURVE_POINTS", "Range", "SweepPoint", "SweepResult", "SweepSpec", "run_sweep"]
@@ -113,14 +114,9 @@ class SweepSpec:
         count = self.samples if ranges else math.prod(len(v) for v in grid.values())
         if not 1 <= count <= MAX_POINTS:
             raise ValueError(f"the sweep has {count} points; from 1 to {MAX_POINTS} at once")
-        for name, value in (("seeds", self.seeds), ("episodes", self.episodes)):
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
+        settle_runs(self)
         object.__setattr__(self, "grid", grid)
         object.__setattr__(self, "ranges", ranges)
-        object.__setattr__(self, "settings", dict(self.settings))
-        object.__setattr__(self, "game_params", dict(self.game_params))
-        object.__setattr__(self, "wrappers", tuple(self.wrappers))
 
     @property
     def keys(self) -> list[str]:
