@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from tui_gym.session.arena import Seat, SeatError, find_game, open_handler
@@ -22,11 +22,7 @@ class Fouls:
     hints_refused: int = 0
 
     def to_json(self) -> dict[str, int]:
-        return {
-            "invalid_actions": self.invalid_actions, "timeouts": self.timeouts,
-            "defaulted": self.defaulted, "bad_requests": self.bad_requests,
-            "hints_refused": self.hints_refused,
-        }
+        return asdict(self)
 
 
 @dataclass

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import platform
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
 from enum import StrEnum
 from functools import cache
@@ -96,10 +96,7 @@ class Versions:
         return _current_versions()
 
     def to_json(self) -> dict[str, str]:
-        return {
-            "tui_gym": self.tui_gym, "gymnasium": self.gymnasium, "numpy": self.numpy,
-            "python": self.python,
-        }
+        return asdict(self)
 
 
 @cache
