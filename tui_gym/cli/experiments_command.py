@@ -319,30 +319,40 @@ def _compare_table(result: Any) -> Table:
     table = Table(title=title, title_justify="left")
     table.add_column("algorithm", style="bold")
     table.add_column("settings")
-    table.add_column("return, last 10%", justify="right")
-    has_exact = any(o.exact_value is not None for o in result.outcomes)
-    if has_exact:
-        table.add_column("greedy exact value", justify="right")
-        table.add_column("gap", justify="right")
-    has_rms = any(o.rms_error is not None for o in result.outcomes)
-    if has_rms:
-        table.add_column(RMS_LABEL, justify="right")
-    table.add_column("seeds", justify="right")
+    figures = _figure_columns(table, result.outcomes)
     from tui_gym.terminal_chart import PALETTE
 
     for k, o in enumerate(result.outcomes):
-        row: list[Text | str] = [
-            Text(o.algorithm, style=PALETTE[k % len(PALETTE)]),
-            _settings_text(dict(o.hyperparameters)),
-            _number_text(o.mean_return_last.mean, o.mean_return_last.ci95),
-        ]
+        table.add_row(Text(o.algorithm, style=PALETTE[k % len(PALETTE)]),
+                      _settings_text(dict(o.hyperparameters)), *figures(o))
+    return table
+
+
+def _figure_columns(table: Table, outcomes: Sequence[AlgorithmOutcome | None]
+                    ) -> Callable[[AlgorithmOutcome | None], list[str]]:
+    """Add the columns of an outcome's figures (the exact value and gap, and the RMS error,
+    where any outcome has them); the cells of one outcome in them."""
+    table.add_column("return, last 10%", justify="right")
+    has_exact = any(o is not None and o.exact_value is not None for o in outcomes)
+    if has_exact:
+        table.add_column("greedy exact value", justify="right")
+        table.add_column("gap", justify="right")
+    has_rms = any(o is not None and o.rms_error is not None for o in outcomes)
+    if has_rms:
+        table.add_column(RMS_LABEL, justify="right")
+    table.add_column("seeds", justify="right")
+
+    def cells(o: AlgorithmOutcome | None) -> list[str]:
+        if o is None:
+            return ["—"] * (2 + 2 * has_exact + has_rms)
+        row = [_number_text(o.mean_return_last.mean, o.mean_return_last.ci95)]
         if has_exact:
             row += [_number_text(o.exact_value, o.exact_ci95), _number_text(o.exact_gap)]
         if has_rms:
             row.append(_number_text(o.rms_error, o.rms_ci95, sign=False))
-        row.append(f"{o.seeds_done}/{o.seeds}")
-        table.add_row(*row)
-    return table
+        return [*row, f"{o.seeds_done}/{o.seeds}"]
+
+    return cells
 
 
 def _compare_chart(result: Any, width: int) -> Text:
@@ -462,31 +472,12 @@ def _sweep_table(result: Any) -> Table:
     table.add_column("rank", justify="right")
     for key in spec.keys:
         table.add_column(key, justify="right", style="bold")
-    table.add_column("return, last 10%", justify="right")
-    has_exact = any(p.outcome is not None and p.outcome.exact_value is not None
-                    for p in result.points)
-    if has_exact:
-        table.add_column("greedy exact value", justify="right")
-        table.add_column("gap", justify="right")
-    has_rms = any(p.outcome is not None and p.outcome.rms_error is not None for p in result.points)
-    if has_rms:
-        table.add_column(RMS_LABEL, justify="right")
-    table.add_column("seeds", justify="right")
+    figures = _figure_columns(table, [p.outcome for p in result.points])
     # A grid keeps its order (its rows follow the values); drawn points come best first.
     for point in result.ranked() if spec.ranges else result.points:
-        o = point.outcome
-        row = ["—" if point.rank is None else str(point.rank)]
-        row += [_value_text(point.values[k]) for k in spec.keys]
-        if o is None:
-            row += ["—"] * (2 + 2 * has_exact + has_rms)
-        else:
-            row.append(_number_text(o.mean_return_last.mean, o.mean_return_last.ci95))
-            if has_exact:
-                row += [_number_text(o.exact_value, o.exact_ci95), _number_text(o.exact_gap)]
-            if has_rms:
-                row.append(_number_text(o.rms_error, o.rms_ci95, sign=False))
-            row.append(f"{o.seeds_done}/{o.seeds}")
-        table.add_row(*row, style="green" if point.rank == 1 else None)
+        table.add_row("—" if point.rank is None else str(point.rank),
+                      *(_value_text(point.values[k]) for k in spec.keys), *figures(point.outcome),
+                      style="green" if point.rank == 1 else None)
     return table
 
 
