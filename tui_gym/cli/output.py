@@ -7,7 +7,6 @@ a key is removed or renamed or changes its type or meaning; a new key leaves it 
 from __future__ import annotations
 
 import json
-import math
 import re
 import sys
 from collections.abc import Sequence
@@ -17,6 +16,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from tui_gym.core.text import json_safe as _clean
 from tui_gym.core.text import visible
 
 __all__ = ["JSON_SCHEMAS", "CliError", "OutConsole", "key_value_table", "print_json", "readable",
@@ -62,16 +62,6 @@ def print_json(command: str, data: dict[str, Any]) -> None:
     data = {"schema": JSON_SCHEMAS[command], **data}
     sys.stdout.write(json.dumps(_clean(data)) + "\n")
     sys.stdout.flush()
-
-
-def _clean(value: Any) -> Any:
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _clean(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_clean(v) for v in value]
-    return value
 
 
 def key_value_table(title: str, rows: Sequence[tuple[str, str]]) -> Table:

@@ -1,12 +1,14 @@
-"""Text that came from a file or another program, made safe to show (`visible`), and its
-JSON data checked for nesting (`nested_deeper`)."""
+"""Text that came from a file or another program, made safe to show (`visible`); JSON data
+checked for nesting (`nested_deeper`) and made safe to write (`json_safe`)."""
 
 from __future__ import annotations
 
+import math
+import re
 import unicodedata
 from typing import Any
 
-__all__ = ["nested_deeper", "visible"]
+__all__ = ["json_safe", "nested_deeper", "visible"]
 
 # Control (Cc), format (Cf: bidirectional overrides, zero-width marks), line and paragraph
 # separators, surrogates and unassigned code points.
@@ -53,3 +55,22 @@ def nested_deeper(value: Any, limit: int) -> bool:
                 item.values() if isinstance(item, dict) else item
             ))
     return False
+
+
+_SURROGATE = re.compile("[\ud800-\udfff]")
+
+
+def json_safe(value: Any) -> Any:
+    """JSON-safe data: numpy values as plain ones, NaN and infinities as null, lone
+    surrogates as U+FFFD, keys as text, tuples as lists."""
+    if hasattr(value, "tolist") and not isinstance(value, str | bytes):  # numpy arrays, scalars
+        value = value.tolist()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, str):
+        return _SURROGATE.sub("\ufffd", value)
+    if isinstance(value, dict):
+        return {json_safe(str(k)): json_safe(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [json_safe(v) for v in value]
+    return value

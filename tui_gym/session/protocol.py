@@ -8,12 +8,11 @@ from __future__ import annotations
 
 import json
 import math
-import re
 from collections.abc import Callable, Iterator
 from typing import IO, Any
 
 from tui_gym.core.params import shown_value
-from tui_gym.core.text import nested_deeper
+from tui_gym.core.text import json_safe, nested_deeper
 from tui_gym.games.words import to_jsonable
 from tui_gym.session.play import HumanGame, PlayError
 from tui_gym.session.session import Session
@@ -24,7 +23,6 @@ MAX_LINE_BYTES = 1 << 20  # a request is a few dozen bytes; longer lines are ref
 MAX_DEPTH = 32  # nesting of arrays and objects in a request
 MAX_INT_DIGITS = 64  # integer literals in a request (ids, seeds, actions)
 MAX_SEED = 2**64 - 1
-_SURROGATE = re.compile("[\ud800-\udfff]")
 _ENCODER = json.JSONEncoder(allow_nan=False)  # once: `json.dumps` with options builds one a call
 _PLAIN = (str, int, float, bool, type(None))
 _CACHED_LINE_BYTES = 256  # a program repeats a handful of short requests: each is parsed once
@@ -83,19 +81,6 @@ def _clean_text(value: Any) -> str | None:
     return None if "\\ud" in text else text  # the encoder writes every surrogate as \udXXX
 
 
-def _clean(value: Any) -> Any:
-    """JSON-safe data: NaN and infinities as null, lone surrogates as U+FFFD."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, str):
-        return _SURROGATE.sub("\ufffd", value)
-    if isinstance(value, dict):
-        return {_clean(str(k)): _clean(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_clean(v) for v in value]
-    return value
-
-
 def parse_request(line: str | bytes) -> dict[str, Any]:
     """A request line as the JSON object it holds; ValueError saying why it is not one
     (not UTF-8, not JSON, not an object, nested too deeply, a number too long)."""
@@ -141,13 +126,13 @@ class JsonlPlayer:
     def handle(self, line: str | bytes) -> dict[str, Any]:
         """One request line in, one response object out (never raises for bad input)."""
         response = self._respond(line)
-        return response if _clean_text(response) is not None else _clean(response)
+        return response if _clean_text(response) is not None else json_safe(response)
 
     def handle_text(self, line: str | bytes) -> str:
         """`handle`, answered as the JSON text of the response (no newline)."""
         response = self._respond(line)
         text = _clean_text(response)
-        return text if text is not None else json.dumps(_clean(response))
+        return text if text is not None else json.dumps(json_safe(response))
 
     def _respond(self, line: str | bytes) -> dict[str, Any]:
         try:
