@@ -18,6 +18,7 @@ from tui_gym.games.planning import PlanModel
 from tui_gym.session.plan import plan
 from tui_gym.session.plan import runner as plan_runner
 from tui_gym.session.plan.runner import PlanRunner
+from tui_gym.session.plan.start import START_POLICIES, start_policy
 from tui_gym.session.session import Session
 
 DEADLINE = 20.0
@@ -50,6 +51,24 @@ def test_blackjack_planned_is_the_solvers_optimum() -> None:
         result = plan(game, rules.env_kwargs(), "value-iteration", theta=1e-12)
         assert result.model.start_value(result.planner.v) == pytest.approx(
             optimal_value(rules), abs=1e-9)
+
+
+def test_start_policies_keep_to_the_actions_each_state_offers() -> None:
+    """Example 6.7's A offers left and right only: the random policy goes left half the
+    time (to B, whose actions are worth -0.1), so A is worth -0.05; the optimal and an
+    agent's policies never name an action A or B does not offer."""
+    game = game_named("max-bias")
+    kwargs = {**game.default_kwargs(), "actions": 3}
+    model = game.plan_model(kwargs)
+    assert isinstance(model, PlanModel) and model.offered is not None
+    result = plan(game, kwargs, "evaluate", theta=1e-12)
+    assert result.planner.v[2] == pytest.approx(-0.05)  # A, as the env numbers its states
+    agent_q = np.zeros((model.n_base, model.model.n_actions))
+    agent_q[2, 5] = 1.0  # a table that prefers an action A does not offer
+    for choice in START_POLICIES:
+        policy = start_policy(model, choice, 1.0, agent_q)
+        assert np.allclose(policy.sum(axis=1), 1.0)
+        assert not (policy[~model.offered] > 0).any(), choice
 
 
 def test_the_json_names_states_as_optimal_does(capsys) -> None:

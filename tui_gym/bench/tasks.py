@@ -85,7 +85,7 @@ def measure(seeds: int, episodes: int, repeats: int = 3) -> TasksResult:
     import logging
 
     with LocalCluster(n_workers=CLUSTER_WORKERS, threads_per_worker=1, processes=True,
-                      dashboard_address=None, silence_logs=logging.ERROR) as cluster, \
+                      dashboard_address=":0", silence_logs=logging.ERROR) as cluster, \
             Client(cluster) as client:
         run_sweep(sweep, cluster=client)  # the workers import and compile, once
         cluster_s, swept = _timed(lambda: run_sweep(sweep, cluster=client), repeats)

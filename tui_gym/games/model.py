@@ -524,7 +524,8 @@ class ModelGame(Game):
         model = self.base_model(kwargs)
         if isinstance(model, NotAvailable):
             return model
-        return PlanModel(model, self.plan_gamma, self.episode_limit(kwargs))
+        return PlanModel(model, self.plan_gamma, self.episode_limit(kwargs),
+                         offered=self.offered_actions(kwargs))
 
     def phase_starts(self, kwargs: Mapping[str, Any]) -> tuple[int, ...]:
         """The step (over episodes) each phase of the world starts at: one phase, from step

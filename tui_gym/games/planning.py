@@ -47,7 +47,8 @@ class PlanModel:
     `base_of[s]`: the base state whose action model state `s` takes; `shown[b]`:
     the model state whose value base state `b` shows. `gamma`: the discount
     planning starts with; `horizon`: the episode limit of the tool's exact values;
-    `value_panel` and `line`: see the module docstring.
+    `value_panel` and `line`: see the module docstring. `offered`: `[B, A]`, the actions
+    each base state offers (None: every action everywhere); start policies keep to them.
     """
 
     model: FiniteMDP
@@ -57,6 +58,7 @@ class PlanModel:
     shown: IntArray | None = None
     value_panel: Callable[[FloatArray], Heatmap] | None = None
     line: StateLine | None = None
+    offered: npt.NDArray[np.bool_] | None = None
 
     def __post_init__(self) -> None:
         if self.model.horizon is not None:
@@ -81,6 +83,12 @@ class PlanModel:
     def base_rows(self, table: npt.ArrayLike) -> FloatArray:
         """`[B, ...]`: the rows of a model-state table the base states show."""
         return np.asarray(table)[self.shown]
+
+    def allowed(self) -> npt.NDArray[np.bool_]:
+        """`[S, A]`: the actions each model state offers."""
+        if self.offered is None:
+            return np.ones((self.model.n_states, self.model.n_actions), dtype=bool)
+        return np.asarray(self.offered, dtype=bool)[self.base_of]
 
     def model_policy(self, base_policy: npt.ArrayLike) -> FloatArray:
         """`[S, A]`: a policy of the base states (`[B, A]` probabilities) on every model state."""

@@ -275,6 +275,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         small = width < MIN_WIDTH or height < MIN_HEIGHT
         screen.set_class(small, "too-small")
         screen.set_class(width < COMPACT_WIDTH or height < COMPACT_HEIGHT, "compact")
+        self._show_side()
         if small and self._too_small is None:
             self._too_small = TooSmallScreen(MIN_WIDTH, MIN_HEIGHT)
             self.push_screen(self._too_small)
@@ -406,8 +407,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             self._book = BookView(id="book")
             self._switcher.mount(self._book)
         self._switcher.current = view
-        self._main_screen.set_class(view == "compare", "-view-compare")
-        self._main_screen.set_class(view == "book", "-view-book")
+        self._show_side()
         if view == "play":
             self.play_view.focus_board()
         elif view == "compare":
@@ -415,12 +415,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             if compare.is_mounted:
                 compare.reload(fresh=True)
                 compare.focus_default()
-        elif view == "plan":
-            assert self._plan is not None
-            self.call_after_refresh(self._plan.focus_default)
-        elif view == "book":
-            assert self._book is not None
-            self.call_after_refresh(self._book.focus_default)
+        elif view in ("plan", "book"):
+            self.call_after_refresh(self._focus_shown, view)
         else:
             self._train_shown()
         self.refresh_bindings()  # the view's keys, even when the focus stays put
@@ -465,8 +461,21 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         meaning; a new size resets the agent (with a notice) and training goes on."""
         return self.rebuild(env_kwargs=env_kwargs, quiet=True, keep_running=True)
 
+    def _focus_shown(self, view: str) -> None:
+        """A view's keys once it is drawn, unless a key typed since went elsewhere."""
+        if self.current_view == view and not self.side_panel.has_focus_within:
+            self.action_focus_view()
+
+    def _show_side(self) -> None:
+        """The side panel, but in the compact Compare and Book views, which take the whole
+        width. Its display, not a class of the screen: a class of the screen restyles
+        every widget on it."""
+        if self._switcher is not None:
+            wide = self.current_view in ("compare", "book")
+            self.side_panel.display = not (wide and self._main_screen.has_class("compact"))
+
     async def action_focus_wrappers(self) -> None:
-        self._main_screen.remove_class("-view-compare")  # the compact Compare view hides it
+        self.side_panel.display = True  # back beside a view that takes the whole width
         await self.side_panel.focus_wrappers()
 
     def action_focus_view(self) -> None:
@@ -488,7 +497,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             self.action_focus_view()
 
     def on_side_panel_left(self, message: SidePanel.Left) -> None:
-        self._main_screen.set_class(self.current_view == "compare", "-view-compare")
+        self._show_side()
         self.action_focus_view()
 
     # --- one session per game -------------------------------------------------

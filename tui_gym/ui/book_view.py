@@ -78,7 +78,8 @@ class BookView(Vertical):
             self._stop.set()
 
     def focus_default(self) -> None:
-        self.query_one(OptionList).focus()
+        for options in self.query(OptionList):  # none while it is being mounted
+            options.focus()
 
     @property
     def running(self) -> bool:

@@ -47,7 +47,7 @@ def connect(cluster: Any) -> Iterator[Any]:
     workers = local_workers(cluster)
     if workers is not None:
         with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                          dashboard_address=None, silence_logs=logging.ERROR) as local, \
+                          dashboard_address=":0", silence_logs=logging.ERROR) as local, \
                 Client(local) as client:
             yield client
         return

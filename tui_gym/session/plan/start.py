@@ -8,7 +8,6 @@ import numpy as np
 import numpy.typing as npt
 
 from tui_gym.core.mdp import optimal_actions, solve
-from tui_gym.core.mdp.planning import uniform_policy
 from tui_gym.games import Game
 from tui_gym.games.base import greedy_probabilities
 from tui_gym.games.planning import PlanModel
@@ -26,22 +25,28 @@ class StartError(ValueError):
 def start_policy(
     plan: PlanModel, choice: str, gamma: float, agent_q: npt.ArrayLike | None = None
 ) -> FloatArray:
-    """The `[S, A]` policy `choice` names on `plan`'s states."""
-    model = plan.model
+    """The `[S, A]` policy `choice` names on `plan`'s states, among the actions each state
+    offers."""
+    model, allowed = plan.model, plan.allowed()
+    weights: npt.NDArray[np.generic]
     if choice == "random":
-        return uniform_policy(model)
-    if choice == "optimal":
-        best = optimal_actions(solve(model, gamma).q)
-        return best / best.sum(axis=1, keepdims=True)
-    if choice == "agent":
+        weights = allowed
+    elif choice == "optimal":
+        weights = optimal_actions(np.where(allowed, solve(model, gamma).q, -np.inf))
+    elif choice == "agent":
         if agent_q is None:
             raise StartError("no agent table here (wrappers hide the states)")
         q = np.asarray(agent_q, dtype=np.float64)
         if q.shape != (plan.n_base, model.n_actions):
             raise StartError(f"the agent's table has shape {q.shape}, the game "
                              f"{(plan.n_base, model.n_actions)}")
-        return plan.model_policy(greedy_probabilities(q))
-    raise StartError(f"the start policy is one of {', '.join(START_POLICIES)}, not {choice!r}")
+        weights = plan.model_policy(greedy_probabilities(np.where(
+            plan.allowed()[plan.shown], q, -np.inf)))
+    else:
+        raise StartError(f"the start policy is one of {', '.join(START_POLICIES)}, "
+                         f"not {choice!r}")
+    chances = np.asarray(weights, dtype=np.float64)
+    return chances / chances.sum(axis=1, keepdims=True)
 
 
 def saved_agent_q(path: str | Path, game: Game, kwargs: dict) -> FloatArray:
