@@ -47,7 +47,7 @@ async def paused(pilot) -> None:
     """Pause training and wait until the worker has stopped."""
     app = pilot.app
     if app.runner.running:
-        await pilot.press("space")
+        send_key(pilot, "space")  # the pilot would wait out training
     await wait_for(pilot, lambda: not app.runner.running, "training to pause")
     assert app.runner.wait_idle(DEADLINE)
     view = app.query_one(TrainView)
@@ -163,7 +163,7 @@ async def test_one_episode_reset_live_training_speed_keys_then_gridworld_targets
 
         # Animated training shows the agent on a board; max hides it.
         await pilot.press("minus")  # animated (fast)
-        await pilot.press("space")
+        send_key(pilot, "space")  # the pilot would wait out training
         await wait_for(pilot, lambda: app.runner.last_scene is not None, "an animated step")
         box = view.query_one("#train-board-box")
         await wait_for(pilot, lambda: box.has_class("-shown"), "the board")
@@ -214,7 +214,7 @@ async def test_one_episode_reset_live_training_speed_keys_then_gridworld_targets
 
         # Training fills the heatmap, and the view says when the budget is done.
         before = view.heatmap.plain
-        await pilot.press("space")
+        send_key(pilot, "space")  # the pilot would wait out training
         await wait_for(pilot, lambda: app.runner.latest.episodes == 300, "the whole budget")
         await paused(pilot)
         assert view.heatmap.plain != before
@@ -269,7 +269,7 @@ async def test_invalid_fields_buttons_and_the_compact_layout() -> None:
         assert app.focused is view.heatmap
         assert form.input("learning_rate").value == "0.01"
         assert not form.is_invalid("learning_rate") and form.error("learning_rate") == ""
-        await pilot.press("space")
+        send_key(pilot, "space")  # the pilot would wait out training
         await wait_for(pilot, lambda: app.runner.latest.episodes == 300, "the whole budget")
         assert app.session.hp.learning_rate == pytest.approx(0.01)
         await paused(pilot)
