@@ -118,8 +118,8 @@ async def test_the_toggle_outlives_a_reset_and_leaves_with_the_traces() -> None:
         assert not view.shows_traces and title(view) == "Q-table"
         view._no_traces_until = 0.0  # as when the first notice has gone
         await pilot.press("E")
-        assert not view.shows_traces and len(app._notifications) == 2
-        assert "SARSA keeps no eligibility traces" in list(app._notifications)[-1].message
+        notices = [n.message for n in app._notifications]  # the first may have timed out
+        assert not view.shows_traces and "SARSA keeps no eligibility traces" in notices[-1]
 
 
 async def test_td_lambda_shows_the_trace_of_each_state_and_none_after_the_episode() -> None:

@@ -495,7 +495,10 @@ class TrainView(Vertical):
         self._figures = figures
         request = figures.request
         session, view = request.session, self.heatmap
-        if figures.panels is None:
+        traces = self._traces and request.snapshot.traces is not None
+        if request.focus != self.focus_target or request.traces != traces:
+            pass  # keys have moved the heatmaps on: theirs are asked for, the cursor stays
+        elif figures.panels is None:
             view.focus_cell = None
             view.show_message(figures.hidden)
         else:
