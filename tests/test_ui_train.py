@@ -1,13 +1,16 @@
 """The Train view, driven like a person would: keys, clicks, and what the screen says.
 
 Every wait polls a condition with a deadline (`wait_for`); nothing sleeps.
-Training runs on the runner's worker thread, so these tests also check that
-the view follows it without ever training on the event loop. Checks of one
-setup share one app, run in sequence; the view's own drawing of a session is
-checked on the view mounted alone.
+Training runs on the runner's worker thread, and the exact figures of a snapshot
+on one of the view's own, so these tests also check that the view follows them
+without ever training or evaluating on the event loop. Checks of one setup share
+one app, run in sequence; the view's own drawing of a session is checked on the
+view mounted alone.
 """
 
 from __future__ import annotations
+
+import threading
 
 import pytest
 
@@ -33,18 +36,24 @@ async def open_train(pilot) -> TrainView:
     return view
 
 
+async def figures_shown(pilot, view: TrainView) -> None:
+    """Wait until the heatmaps and the exact figures on screen are the shown snapshot's,
+    and drawn."""
+    await wait_until(pilot, lambda: view.figures_shown, "the exact figures")
+    await pilot.pause()
+
+
 async def paused(pilot) -> None:
     """Pause training and wait until the worker has stopped."""
     app = pilot.app
     if app.runner.running:
-        await pilot.press("space")
+        send_key(pilot, "space")  # the pilot would wait out training
     await wait_for(pilot, lambda: not app.runner.running, "training to pause")
     assert app.runner.wait_idle(DEADLINE)
-    await wait_for(
-        pilot,
-        lambda: app.query_one(TrainView)._version == app.runner.latest.version,
-        "the view to show the last snapshot",
-    )
+    view = app.query_one(TrainView)
+    await wait_for(pilot, lambda: view._version == app.runner.latest.version,
+                   "the view to show the last snapshot")
+    await figures_shown(pilot, view)
 
 
 def blackjack_app(episodes: int = 1_000_000, engine: str = "env") -> TuiGymApp:
@@ -61,6 +70,7 @@ async def test_the_model_loop_reaches_near_optimal_play_live() -> None:
         await wait_for(pilot, lambda: not app.runner.running and app.runner.finished,
                        "the budget to finish", timeout=60)
         await wait_for(pilot, lambda: view._snapshot.episodes == 500_000, "the last frame")
+        await figures_shown(pilot, view)
         assert "model" in view.stats.plain
         gap = app.session.reference().figures["gap"]
         assert gap < 0.002
@@ -120,7 +130,8 @@ async def test_one_episode_reset_live_training_speed_keys_then_gridworld_targets
         shown = view._snapshot.episodes
         assert f"episodes {shown:,}" in view.stats.plain
         assert "running" in view.stats.plain
-        assert "exact value" in view.stats.plain and "optimal value" in view.stats.plain
+        await wait_until(pilot, lambda: "exact value" in view.stats.plain, "the exact value")
+        assert "optimal value" in view.stats.plain
         assert view.heatmap.plain != untrained  # the greedy policy has moved
         assert "env" in view.stats.plain and "max" in view.stats.plain
 
@@ -152,7 +163,7 @@ async def test_one_episode_reset_live_training_speed_keys_then_gridworld_targets
 
         # Animated training shows the agent on a board; max hides it.
         await pilot.press("minus")  # animated (fast)
-        await pilot.press("space")
+        send_key(pilot, "space")  # the pilot would wait out training
         await wait_for(pilot, lambda: app.runner.last_scene is not None, "an animated step")
         box = view.query_one("#train-board-box")
         await wait_for(pilot, lambda: box.has_class("-shown"), "the board")
@@ -164,7 +175,7 @@ async def test_one_episode_reset_live_training_speed_keys_then_gridworld_targets
         assert view.heatmap.focus_cell is None
         await pilot.press("g")
         await wait_for(pilot, lambda: app.session.game.name == "gridworld", "GridWorld")
-        await pilot.pause()
+        await figures_shown(pilot, view)
         assert "target at (4, 4)" in view.heatmap.plain
         assert view.heatmap.focus_cell == (0, 4)
         assert any("target" in text for _, text in view.key_help())
@@ -186,7 +197,7 @@ async def test_one_episode_reset_live_training_speed_keys_then_gridworld_targets
         assert view.focus_target == (3, 3)
         await pilot.press("up", "up", "up")  # clipped at the top edge
         assert view.focus_target == (3, 4)
-        await pilot.pause()
+        await figures_shown(pilot, view)
         assert "target at (3, 4)" in heatmap.plain
         assert heatmap.focus_cell == (0, 3)
 
@@ -197,13 +208,13 @@ async def test_one_episode_reset_live_training_speed_keys_then_gridworld_targets
         y = place.y + 4 * cell_h
         assert await pilot.click(HeatmapView, offset=(x, y))
         assert view.focus_target == (0, 0)
-        await pilot.pause()
+        await figures_shown(pilot, view)
         assert "target at (0, 0)" in heatmap.plain
         assert "optimal pair fraction" in view.stats.plain
 
         # Training fills the heatmap, and the view says when the budget is done.
         before = view.heatmap.plain
-        await pilot.press("space")
+        send_key(pilot, "space")  # the pilot would wait out training
         await wait_for(pilot, lambda: app.runner.latest.episodes == 300, "the whole budget")
         await paused(pilot)
         assert view.heatmap.plain != before
@@ -258,7 +269,7 @@ async def test_invalid_fields_buttons_and_the_compact_layout() -> None:
         assert app.focused is view.heatmap
         assert form.input("learning_rate").value == "0.01"
         assert not form.is_invalid("learning_rate") and form.error("learning_rate") == ""
-        await pilot.press("space")
+        send_key(pilot, "space")  # the pilot would wait out training
         await wait_for(pilot, lambda: app.runner.latest.episodes == 300, "the whole budget")
         assert app.session.hp.learning_rate == pytest.approx(0.01)
         await paused(pilot)
@@ -311,8 +322,8 @@ async def test_invalid_fields_buttons_and_the_compact_layout() -> None:
 async def test_hidden_heatmaps_say_why() -> None:
     app = TrainHost(Session("blackjack", seed=0, choices=(WrapperChoice("DelayObservation"),)))
     async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.pause()
         view = app.query_one(TrainView)
+        await figures_shown(pilot, view)
         reason = app.session.hidden_reason()
         assert reason
         assert view.heatmap.plain == reason
@@ -324,8 +335,8 @@ async def test_the_heatmap_takes_the_keyboard_without_scrolling_the_state_away()
     state (the stats panel's title) stays on the screen."""
     app = TrainHost(Session("blackjack", seed=1))
     async with app.run_test(size=VIEW_SIZE) as pilot:
-        await pilot.pause()
         view = app.query_one(TrainView)
+        await figures_shown(pilot, view)
         body = view.query_one("#train-body")
         assert body.max_scroll_y > 0  # the Q-table reaches under the screen's edge
         app.set_focus(None)
@@ -339,6 +350,66 @@ async def test_a_run_that_ends_short_of_the_bound_says_why() -> None:
     session.train()  # to the budget's end
     app = TrainHost(session)
     async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.pause()
+        await figures_shown(pilot, app.query_one(TrainView))
         assert "It ends short of the bound" in app.query_one(TrainView).stats.plain
         assert "more episodes" in screen_text(app)
+
+
+class SlowReference:
+    """`Session.reference` that blocks, on one game, until `release` (on its caller's
+    thread: the event loop would freeze there), counting the snapshots it was asked."""
+
+    def __init__(self, monkeypatch, game: str) -> None:
+        self.game, self.release, self.asked = game, threading.Event(), []
+        reference = Session.reference
+
+        def slow(session: Session, snapshot=None):
+            if session.game.name == self.game:
+                self.asked.append(snapshot.version)
+                self.release.wait(DEADLINE)
+            return reference(session, snapshot)
+
+        monkeypatch.setattr(Session, "reference", slow)
+
+
+async def test_a_slow_reference_blocks_no_key_and_the_latest_snapshot_wins(monkeypatch) -> None:
+    slow = SlowReference(monkeypatch, "frozenlake")
+    app = TrainHost(Session("frozenlake", seed=0, hp=QLearning.hyperparameters(episodes=50)))
+    try:
+        async with app.run_test(size=(120, 40)) as pilot:
+            view = app.train_view
+            await wait_until(pilot, lambda: slow.asked, "the reference asked for")
+            first = slow.asked[0]
+            await pilot.press("e")  # the key takes effect while the reference is computed
+            assert app.focused is view.form.input("learning_rate")
+            assert not slow.release.is_set() and not view.figures_shown
+            runner = app.runner
+            for _ in range(3):  # three newer snapshots: only the last one is computed
+                assert runner.run_one_episode() and runner.wait_idle(DEADLINE)
+                view.show_snapshot(runner.latest, runner)
+            slow.release.set()
+            await figures_shown(pilot, view)
+            assert slow.asked == [first, runner.latest.version]
+            assert "exact value" in view.stats.plain
+    finally:
+        slow.release.set()
+
+
+async def test_a_stale_result_is_dropped_after_a_game_switch(monkeypatch) -> None:
+    slow = SlowReference(monkeypatch, "frozenlake")
+    app = TrainHost(Session("frozenlake", seed=0))
+    try:
+        async with app.run_test(size=(120, 40)) as pilot:
+            view = app.train_view
+            shown = []
+            draw = view._show_figures
+            view._show_figures = lambda figures: (shown.append(figures), draw(figures))
+            await wait_until(pilot, lambda: slow.asked, "the reference asked for")
+            app.session = app.runner.session = Session("cliffwalking", seed=0)
+            view.reload()  # as the app does on a game switch
+            slow.release.set()
+            await figures_shown(pilot, view)
+            assert [f.request.session.game.name for f in shown] == ["cliffwalking"]
+            assert view._figures.reference == app.session.reference(app.runner.latest)
+    finally:
+        slow.release.set()

@@ -8,6 +8,7 @@ the others are `Advice.equal`.
 from __future__ import annotations
 
 import math
+import threading
 from bisect import bisect_right
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -238,6 +239,7 @@ class ModelOracle(Oracle):
         self._kept: dict[Any, _Exact | NotAvailable] = {}
         self._bounds: dict[Any, FixedBound | NotAvailable] = {}
         self._references: dict[Any, ReferenceMetrics] = {}  # per greedy policy
+        self._lock = threading.Lock()  # the Train view's worker thread reads them too
 
     @property
     def model_game(self) -> ModelGame:
@@ -251,11 +253,18 @@ class ModelOracle(Oracle):
         """The model as the wrappers make it (or the unwrapped game's, when they change it
         beyond what a model follows: `scope` says so), with its optimum."""
         key = (freeze(kwargs), changes)
-        if key not in self._kept:
-            if len(self._kept) >= 16:
-                self._kept.pop(next(iter(self._kept)))
-            self._kept[key] = self._build(kwargs, changes)
-        return self._kept[key]
+        found = self._kept.get(key)
+        if found is None:
+            found = self._keep(self._kept, 16, key, self._build(kwargs, changes))
+        return found
+
+    def _keep(self, memo: dict[Any, Any], size: int, key: Any, value: Any) -> Any:
+        """Keep `value` in `memo` under `key`, the oldest going past `size`; `value`."""
+        with self._lock:
+            if len(memo) >= size:
+                memo.pop(next(iter(memo)))
+            memo[key] = value
+        return value
 
     def _build(self, kwargs: Mapping[str, Any], changes: GameChanges) -> _Exact | NotAvailable:
         game = self.model_game
@@ -308,9 +317,8 @@ class ModelOracle(Oracle):
         key = (freeze(kwargs), changes, policy.tobytes())
         found = self._references.get(key)
         if found is None:
-            if len(self._references) >= 64:
-                self._references.pop(next(iter(self._references)))
-            found = self._references[key] = self.policy_reference(policy, exact, kwargs, changes)
+            found = self._keep(self._references, 64, key,
+                               self.policy_reference(policy, exact, kwargs, changes))
         return found
 
     def policy_reference(self, policy: FloatArray, exact: _Exact, kwargs: Mapping[str, Any],

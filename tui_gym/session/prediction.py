@@ -28,17 +28,16 @@ class PredictionRuler:
     """Scores a predictor's V against the exact values of the policy it follows."""
 
     def __init__(self) -> None:
-        self._key: Any = None
-        self._truth: Truth | None = None
+        self._kept: tuple[Any, Truth] | None = None  # one assignment: safe across threads
 
     def truth(self, agent: Predictor, training: TrainingModel) -> Truth:
         """The exact values of the policy `agent` follows on `training`'s model."""
         rows = self.rows(training)
         key = (id(training.model), agent.hp.discount, agent.epsilon, agent.q[rows].tobytes())
-        if key != self._key or self._truth is None:
-            self._truth = agent.truth(training.model, rows)
-            self._key = key
-        return self._truth
+        kept = self._kept
+        if kept is None or kept[0] != key:
+            kept = self._kept = (key, agent.truth(training.model, rows))
+        return kept[1]
 
     @staticmethod
     def rows(training: TrainingModel) -> np.ndarray:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import weakref
 from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass
@@ -353,6 +354,13 @@ class Session:
         self.learner_class, self.algorithm = cls, cls.name
         self.hp = default_settings(self.game, cls.name, self.env_kwargs)
         self.reset_agent()
+
+    def detached(self) -> Session:
+        """This session as it is now, for a thread to read exact figures from: the fields
+        a rebuild, a reset or another algorithm rebinds stay as they are in the copy (it
+        shares the game, the agent and the env); its base keys are computed here first."""
+        self.base_keys()
+        return copy.copy(self)
 
     # --- seeing the table -------------------------------------------------
     def base_keys(self) -> list[Hashable] | None:

@@ -18,16 +18,15 @@ the game through the app (the agent kept while its states keep their meaning,
 training going on) and the editor shows the new map solved exactly.
 
 It never trains anything: the app's timer hands it the runner's latest
-snapshot through `show_snapshot()`, which redraws only what changed and
-recomputes heatmaps and the exact reference only for a new snapshot. It asks
+snapshot through `show_snapshot()`, which redraws only what changed and has a
+new snapshot's heatmaps and exact figures computed off the event loop
+(`exact_figures`: the latest snapshot wins, a stale result is dropped). It asks
 the game's heatmap layout whether the heatmaps follow a focus (a target, a
 slice) and what a heatmap cell means; it never branches on a game's name.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import re
 import time
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -41,7 +40,7 @@ from textual.widgets import Button, Label
 from tui_gym.algorithms import ALGORITHMS, Settings
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.engine.trainer import continue_run
-from tui_gym.core.heatmap import Heatmap
+from tui_gym.ui.exact_figures import Figures, LatestOnly, Request
 from tui_gym.ui.map_editing import apply_edit, save_map, show_optimum
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
@@ -58,24 +57,6 @@ if TYPE_CHECKING:
 
 STATE_POLL_SECONDS = 0.25  # how often the view checks for a pause with no new snapshot
 NO_TRACES_SECONDS = 4.0  # how long `E` says a learner has no traces (once, for a burst)
-# How the layouts' words for values read for traces: "max Q and the greedy move" is then
-# "max e and the most eligible move", and no `*` marks a move that is not optimal.
-TRACE_WORDS = (
-    (re.compile(r"\bQ(-values)?\b"), "e"),
-    (re.compile(r"\bgreedy\b"), "most eligible"),
-    (re.compile(r"\s+\* [^,]*$|,? n\* [^,]*"), ""),
-)
-
-
-def traced(panel: Heatmap) -> Heatmap:
-    """A heatmap panel drawn from the traces, its title and legend saying so."""
-
-    def say(text: str) -> str:
-        for pattern, word in TRACE_WORDS:
-            text = pattern.sub(word, text)
-        return text
-
-    return dataclasses.replace(panel, title=say(panel.title), legend=say(panel.legend))
 
 
 class TrainView(Vertical):
@@ -232,6 +213,8 @@ class TrainView(Vertical):
         self._editor_game = ""  # the game the editor's undo history belongs to
         self._traces = False  # the heatmap shows the traces (a λ learner's) instead of Q
         self._no_traces_until = 0.0  # while that is said, `E` says it no more
+        self._exact = LatestOnly(self)  # the exact figures, computed off the event loop
+        self._figures: Figures | None = None  # the ones shown
 
     # --- the app and its session ---------------------------------------------
     @property
@@ -356,6 +339,7 @@ class TrainView(Vertical):
         )
         self._version = -1
         self._state = ""
+        self._exact.drop()  # figures of what was shown before never reach the screen
         self.show_speed(runner.speed.name)
         self.show_snapshot(runner.latest, runner)
         if self.editing_map and self._editor is not None:
@@ -417,9 +401,8 @@ class TrainView(Vertical):
             self.stats.show_snapshot(snapshot)
             self.charts.update_from(snapshot)
             self._show_progress(snapshot, runner)
-            self._show_heatmaps()
-            self._show_reference()
-            self._show_prediction()
+            self._show_engine(snapshot)
+            self._ask_figures()
         self._show_state(runner)
         self._show_board(runner)
 
@@ -483,50 +466,55 @@ class TrainView(Vertical):
             title = "V, in every action's place" if predicts else "Q-table"
         self._heatmap_box.border_title = title
 
-    def _show_heatmaps(self) -> None:
-        session, snapshot = self.session, self._snapshot
-        if snapshot is None:
-            return
-        layout = session.game.layout
-        traces = self._traces and snapshot.traces is not None
-        panels = session.heatmaps(snapshot, focus=self.focus_target, traces=traces)
-        view = self.heatmap
-        if panels is None:
+    def _ask_figures(self) -> None:
+        """Have the heatmaps and the exact figures of the snapshot shown computed off the
+        event loop (`_show_figures` draws them)."""
+        snapshot = self._snapshot
+        if snapshot is not None:
+            traces = self._traces and snapshot.traces is not None
+            self._exact.ask(Request(self.session.detached(), snapshot, self.focus_target,
+                                    traces))
+
+    @on(LatestOnly.Computed)
+    def _computed(self, message: LatestOnly.Computed) -> None:
+        message.stop()
+        figures = self._exact.done(message)
+        if figures is not None and self.is_attached:
+            self._show_figures(figures)
+
+    @property
+    def figures_shown(self) -> bool:
+        """Whether the exact figures on screen are the shown snapshot's, none to come."""
+        figures = self._figures
+        return (self._exact.idle and figures is not None
+                and figures.request.snapshot is self._snapshot)
+
+    def _show_figures(self, figures: Figures) -> None:
+        """Draw one computation's heatmaps, exact reference and prediction figures: the
+        stats panel, its note and the prediction chart all from the same snapshot."""
+        self._figures = figures
+        request = figures.request
+        session, view = request.session, self.heatmap
+        traces = self._traces and request.snapshot.traces is not None
+        if request.focus != self.focus_target or request.traces != traces:
+            pass  # keys have moved the heatmaps on: theirs are asked for, the cursor stays
+        elif figures.panels is None:
             view.focus_cell = None
-            view.show_message(session.hidden_reason() or "No per-state view of this table.")
-            return
-        view.focus_cell = (
-            layout.focus_cell(self.focus_target, session.env_kwargs) if layout.has_focus else None
-        )
-        view.show([traced(panel) for panel in panels] if traces else panels)
-
-    def _show_prediction(self) -> None:
-        """A prediction learner's RMS error and V against the exact values."""
-        session, snapshot = self.session, self._snapshot
-        if snapshot is None or not session.predicts:
-            return
-        figures = session.prediction(snapshot)
-        if figures is None:
-            self._prediction.show_reason(session.prediction_reason())
+            view.show_message(figures.hidden)
         else:
-            self._prediction.show(snapshot.episodes, figures)
+            layout = session.game.layout
+            view.focus_cell = (layout.focus_cell(request.focus, session.env_kwargs)
+                               if layout.has_focus else None)
+            view.show(figures.panels)
+        self.stats.show_reference(figures.reference, figures.note)
+        if session.predicts:  # a prediction learner's RMS error and V against the exact values
+            if figures.prediction is None:
+                self._prediction.show_reason(figures.prediction_reason)
+            else:
+                self._prediction.show(request.snapshot.episodes, figures.prediction)
 
-    def _show_reference(self) -> None:
-        session, snapshot = self.session, self._snapshot
-        if snapshot is None:
-            return
-        reference = None if session.predicts else session.reference(snapshot)
-        if session.predicts:  # its figure is V's error, not a greedy policy's gap
-            figures = session.prediction(snapshot)
-            note = (f"RMS error of V {figures.rms:.4f} against the exact values of the "
-                    "policy it follows" if figures is not None
-                    else f"no RMS error: {session.prediction_reason()}")
-        elif reference is None:
-            note = session.exact_reason()
-        else:  # at the budget's end: why it ends short of the bound, if it does
-            note = session.shortfall(reference) if snapshot.episodes >= snapshot.budget else ""
-        self.stats.show_reference(reference, note)
-        reason = session.engine_reason
+    def _show_engine(self, snapshot: TrainingSnapshot) -> None:
+        reason = self.session.engine_reason
         if snapshot.status:
             reason = snapshot.status  # "compiling the learners, once"
         elif snapshot.engine == "env" and reason.startswith("model"):
@@ -644,7 +632,7 @@ class TrainView(Vertical):
         focus, cell = found
         if focus != self.focus_target:  # show the state under its own target (GridWorld)
             self.focus_target = focus
-            self._show_heatmaps()
+            self._ask_figures()
         self.heatmap.step_cell = cell
 
     def _describe(self, event: Any) -> str:
@@ -682,7 +670,7 @@ class TrainView(Vertical):
         session = self.session
         row, col = event.cell
         self.focus_target = session.game.layout.focus_at(row, col, session.env_kwargs)
-        self._show_heatmaps()
+        self._ask_figures()
 
     @on(HyperparameterForm.Submitted)
     def _form_submitted(self, event: HyperparameterForm.Submitted) -> None:
@@ -729,7 +717,7 @@ class TrainView(Vertical):
         """The heatmap: Q (V) or the learner's eligibility traces."""
         self._traces = not self._traces
         self._show_heatmap_title()
-        self._show_heatmaps()
+        self._ask_figures()
 
     def action_no_traces(self) -> None:
         now = time.monotonic()
