@@ -275,14 +275,14 @@ def test_the_console_script_trains_at_max_past_every_periodic_job_and_quits(
     agent = tmp_path / "long.tgym"  # a budget that lasts: training stays at max throughout
     Session("blackjack", seed=1, hp=QLearning.hyperparameters(episodes=100_000_000)).save(agent)
     term = Terminal([console_script(), "--load", str(agent)],
-                    {"TUI_GYM_GC_SECONDS": "0.1,0.4", "TUI_GYM_LOG_DIR": str(log_dir)})
+                    {"TUI_GYM_GC_SECONDS": "0.05,0.2", "TUI_GYM_LOG_DIR": str(log_dir)})
     try:
         term.wait_for_text("tui-gym")  # the header: the app is up
         term.type("t")
         term.wait_for_text("Hyperparameters")
         term.type(" ")
         term.wait_for_text("running")
-        term.after(1.0)  # two full collections and more, at max speed
+        term.after(0.5)  # two full collections and more, at max speed
         for key in "-+.":
             term.type(key)
         term.type(" ")
