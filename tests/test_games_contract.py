@@ -201,7 +201,7 @@ async def test_a_person_plays_one_episode_of_every_game_in_the_app(games: list[G
     # optimum takes its time.
     limit = parse_wrapper_spec("TimeLimit:max_episode_steps=15")
     app = TuiGymApp(_session(GAMES[0].name))
-    async with app.run_test(size=(80, 24)) as pilot:  # the smallest size it lays out
+    async with app.run_test(size=(120, 40)) as pilot:
         await pilot.pause()
         view = app.play_view
         for game in games:
