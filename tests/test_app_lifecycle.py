@@ -30,7 +30,7 @@ from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.train_view import TrainView
 
 from .terminal import Terminal, console_script
-from .waiting import press_busy, quit_busy, send_key, wait_busy, wait_for, wait_until
+from .waiting import press_busy, quit_busy, send_key, wait_for, wait_until
 
 DEADLINE = 20.0  # seconds; generous for a loaded machine, never reached when things work
 LEAVE_ALT_SCREEN = b"\x1b[?1049l"
@@ -141,19 +141,20 @@ async def test_pause_reset_switch_and_quit_take_effect_at_once_mid_episode(runne
         await pilot.press("b")
         await wait_for(pilot, lambda: app.session.game.name == "blackjack", "Blackjack")
         assert gridworld.trainer.episodes == 0, "the switch waited for the episode to end"
-        # space then runs at once: no "running" at 0 episodes for seconds. While training
-        # runs, keys go without the pilot's wait for an idle process (it would train on).
+        # space then runs at once: no "running" at 0 episodes for seconds. A key that
+        # starts training goes without the pilot's wait for an idle process (it would
+        # train on meanwhile); one that stops it is pressed as usual.
         await pilot.press("plus", "plus")  # animated (fast)
-        await press_busy(pilot, "space")
-        await wait_busy(pilot, lambda: app.runner.latest.episodes >= 1, "the first hand")
-        await press_busy(pilot, "space")
+        send_key(pilot, "space")
+        await wait_until(pilot, lambda: app.runner.latest.episodes >= 1, "the first hand")
+        await pilot.press("space")
         assert not app.runner.running
         await pilot.press("g")
-        await press_busy(pilot, "space")
-        await wait_busy(pilot, lambda: app.runner.last_event is not None, "an animated step")
-        await press_busy(pilot, "x")
+        send_key(pilot, "space")
+        await wait_until(pilot, lambda: app.runner.last_event is not None, "an animated step")
+        await pilot.press("x")
         if isinstance(app.screen, ConfirmScreen):  # an episode ended first: it asks
-            await press_busy(pilot, "y")
+            await pilot.press("y")
         assert not app.runner.running and app.runner.latest.episodes == 0
         await wait_for(pilot, lambda: not app.runner.busy, "the old agent to come back")
         assert app.session.trainer.episodes == 0, "the reset lost to the old agent"
