@@ -70,7 +70,9 @@ def test_a_served_app_ends_when_its_pipes_close(tmp_path: Path) -> None:
     env = {**os.environ, "TEXTUAL_DRIVER": "textual.drivers.web_driver:WebDriver",
            "COLUMNS": "120", "ROWS": "40", "TUI_GYM_LOG_DIR": str(tmp_path / "logs")}
     process = subprocess.Popen(
-        [sys.executable, "-m", "tui_gym", "--env", "blackjack", "--no-history"],
+        # Nothing trains here: the thread runner, so no training process starts at all.
+        [sys.executable, "-m", "tui_gym", "--env", "blackjack", "--no-history", "--runner",
+         "thread"],
         stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=env,
         start_new_session=True,
     )

@@ -30,7 +30,7 @@ from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.train_view import TrainView
 
 from .terminal import Terminal, console_script
-from .waiting import wait_for
+from .waiting import press_busy, quit_busy, send_key, wait_for, wait_until
 
 DEADLINE = 20.0  # seconds; generous for a loaded machine, never reached when things work
 LEAVE_ALT_SCREEN = b"\x1b[?1049l"
@@ -59,7 +59,9 @@ async def test_the_real_app_outlives_the_first_firing_of_every_periodic_job() ->
     try:
         async with app.run_test(size=(120, 40)) as pilot:
             began = time.monotonic()
-            await pilot.press("t", "space")
+            await pilot.press("t")
+            send_key(pilot, "space")  # training from here: no wait for an idle process
+            await wait_until(pilot, lambda: app.runner.running, "training")
             timers = all_timers(app)
             assert {"young-gc", "full-gc"} <= {t.name for t in timers}
             for timer in timers:  # a built-in here is what crashed the app at 20 s
@@ -71,7 +73,7 @@ async def test_the_real_app_outlives_the_first_firing_of_every_periodic_job() ->
             assert longest <= 1.0, "every periodic job must fire within the test"
             pacer = app.gc_pacer
             assert pacer is not None
-            await wait_for(
+            await wait_until(
                 pilot,
                 lambda: pacer.full_collections >= 2 and time.monotonic() - began > longest * 1.5
                 and app.runner.latest.episodes > 0,  # the child loads the compiled learners first
@@ -80,7 +82,7 @@ async def test_the_real_app_outlives_the_first_firing_of_every_periodic_job() ->
             assert pacer.young_collections > pacer.full_collections
             assert app.is_running and app.return_code is None
             assert app.runner.running and app.runner.latest.episodes > 0
-            await pilot.press("q")
+            await quit_busy(pilot)
         assert app.return_code == 0
     finally:
         gc.enable()
@@ -139,21 +141,26 @@ async def test_pause_reset_switch_and_quit_take_effect_at_once_mid_episode(runne
         await pilot.press("b")
         await wait_for(pilot, lambda: app.session.game.name == "blackjack", "Blackjack")
         assert gridworld.trainer.episodes == 0, "the switch waited for the episode to end"
-        # space then runs at once: no "running" at 0 episodes for seconds.
-        await pilot.press("plus", "plus", "space")  # animated (fast)
-        await wait_for(pilot, lambda: app.runner.latest.episodes >= 1, "the first hand")
+        # space then runs at once: no "running" at 0 episodes for seconds. A key that
+        # starts training goes without the pilot's wait for an idle process (it would
+        # train on meanwhile); one that stops it is pressed as usual.
+        await pilot.press("plus", "plus")  # animated (fast)
+        send_key(pilot, "space")
+        await wait_until(pilot, lambda: app.runner.latest.episodes >= 1, "the first hand")
         await pilot.press("space")
         assert not app.runner.running
-        await pilot.press("g", "space")
-        await wait_for(pilot, lambda: app.runner.last_event is not None, "an animated step")
+        await pilot.press("g")
+        send_key(pilot, "space")
+        await wait_until(pilot, lambda: app.runner.last_event is not None, "an animated step")
         await pilot.press("x")
         if isinstance(app.screen, ConfirmScreen):  # an episode ended first: it asks
             await pilot.press("y")
         assert not app.runner.running and app.runner.latest.episodes == 0
         await wait_for(pilot, lambda: not app.runner.busy, "the old agent to come back")
         assert app.session.trainer.episodes == 0, "the reset lost to the old agent"
-        await pilot.press("space")
-        await pilot.press("q")
+        send_key(pilot, "space")
+        await wait_until(pilot, lambda: app.runner.running, "training")
+        await quit_busy(pilot)
     assert app.return_code == 0
     assert {"pause", "start", "close"} <= {name for name, _ in calls}
     assert waits(calls) == []
@@ -215,15 +222,16 @@ async def test_a_stopped_or_killed_training_process_never_stops_the_app() -> Non
     app.notify = lambda message, **kw: notices.append(message)  # type: ignore[method-assign]
     async with app.run_test(size=(120, 40)) as pilot:
         runner = app.runner
-        await pilot.press("t", "space")
-        await wait_for(pilot, lambda: runner.latest.episodes > 1000, "some training")
+        # While training runs, keys go without the pilot's wait for an idle process.
+        await pilot.press("t")
+        send_key(pilot, "space")
+        await wait_until(pilot, lambda: runner.latest.episodes > 1000, "some training")
         # A stopped child: the reset lands at once, and wins over the agent it hands back.
         stopped = runner.child_pid
         os.kill(stopped, signal.SIGSTOP)
         try:
             calls = record_runner_calls(app)
-            await pilot.press("x")  # it has trained: it asks
-            await pilot.press("y")
+            await press_busy(pilot, "x", "y")  # it has trained: it asks
             assert runner.latest.episodes == 0
             assert waits(calls) == []
             # Nothing waited until the child counted as hung: the same child, still stopped.
@@ -234,24 +242,25 @@ async def test_a_stopped_or_killed_training_process_never_stops_the_app() -> Non
         assert app.session.trainer.episodes == 0 and app.session.agent.episode == 0
         assert not app.session.agent.q.any(), "the old table must not come back"
         # A killed child: reaped, replaced, and the agent handed back last is kept.
-        await pilot.press("space")
-        await wait_for(pilot, lambda: runner.latest.episodes > 1000, "some training")
-        await pilot.press("space")
-        await wait_for(pilot, lambda: not runner.busy, "the agent to come back")
+        send_key(pilot, "space")
+        await wait_until(pilot, lambda: runner.latest.episodes > 1000, "some training")
+        send_key(pilot, "space")
+        await wait_for(pilot, lambda: not runner.running and not runner.busy,
+                       "the agent to come back")
         kept = app.session.trainer.episodes
-        await pilot.press("space")
-        await wait_for(pilot, lambda: runner.latest.episodes > kept, "training again")
+        send_key(pilot, "space")
+        await wait_until(pilot, lambda: runner.latest.episodes > kept, "training again")
         dead = runner.child_pid
         os.kill(dead, signal.SIGKILL)
         await wait_for(pilot, lambda: any("killed" in n for n in notices), "the notice")
         assert not runner.running
         assert not Path(f"/proc/{dead}").exists(), "the dead child must be reaped, not a zombie"
         assert app.session.trainer.episodes == kept, "the last handed-over agent is kept"
-        for key in ("minus", "plus", "full_stop", "space"):  # these raised BrokenPipeError
-            await pilot.press(key)
-        await wait_for(pilot, lambda: runner.latest.episodes > kept + 1000, "training again")
+        await pilot.press("minus", "plus", "full_stop")  # these raised BrokenPipeError,
+        send_key(pilot, "space")  # and this
+        await wait_until(pilot, lambda: runner.latest.episodes > kept + 1000, "training again")
         assert runner.child_pid != dead
-        await pilot.press("q")
+        await quit_busy(pilot)
     assert app.return_code == 0
 
 
@@ -267,14 +276,14 @@ def test_the_console_script_trains_at_max_past_every_periodic_job_and_quits(
     agent = tmp_path / "long.tgym"  # a budget that lasts: training stays at max throughout
     Session("blackjack", seed=1, hp=QLearning.hyperparameters(episodes=100_000_000)).save(agent)
     term = Terminal([console_script(), "--load", str(agent)],
-                    {"TUI_GYM_GC_SECONDS": "0.1,0.4", "TUI_GYM_LOG_DIR": str(log_dir)})
+                    {"TUI_GYM_GC_SECONDS": "0.05,0.2", "TUI_GYM_LOG_DIR": str(log_dir)})
     try:
         term.wait_for_text("tui-gym")  # the header: the app is up
         term.type("t")
         term.wait_for_text("Hyperparameters")
         term.type(" ")
         term.wait_for_text("running")
-        term.after(1.0)  # two full collections and more, at max speed
+        term.after(0.5)  # two full collections and more, at max speed
         for key in "-+.":
             term.type(key)
         term.type(" ")

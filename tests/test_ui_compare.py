@@ -33,7 +33,7 @@ from tui_gym.ui.widgets.compare_chart import BRAILLE_BASE, plot_cells, value_ran
 from tui_gym.ui.widgets.figures_table import with_interval
 
 from .screen import screen_text
-from .waiting import press_busy, wait_busy, wait_for
+from .waiting import press_busy, send_key, wait_busy, wait_for
 
 DEADLINE = 20.0
 SIZE = (100, 40)
@@ -253,7 +253,7 @@ async def test_the_app_key_v_opens_it_and_another_view_stops_it(
         # Another view stops the comparison; what finished is recorded.
         await launch(pilot, view, {"sarsa"}, seeds=2, episodes=10_000_000)
         await wait_busy(pilot, lambda: view.chart.series, "a live curve")
-        await pilot.press("t")
+        send_key(pilot, "t")  # no wait for an idle process while the comparison computes
         await wait_for(pilot, lambda: view.job is None, "the comparison to stop")
         assert app.current_view == "train"
         with RunHistory(db) as history:
@@ -328,7 +328,7 @@ async def test_progress_draws_live_curves_and_stopping_keeps_what_finished(tmp_p
         live = view.table.rows[0]
         assert live.note == "running" and live.seeds == 2 and live.episodes >= 1
         await wait_busy(pilot, lambda: "Q-learning (live)" in screen_text(app), "the legend")
-        await pilot.press("s")
+        send_key(pilot, "s")  # no wait for an idle process while the comparison computes
         await wait_for(pilot, lambda: view.job is None, "the comparison to stop")
         assert "Comparison stopped" in view.message
         (run,) = view.runs

@@ -87,7 +87,9 @@ async def test_a_text_field_edits_in_the_order_typed_by_itself() -> None:
 
 def test_a_burst_typed_in_a_terminal_is_kept(tmp_path: Path) -> None:
     saved = tmp_path / "agent.tgym"
-    term = Terminal([console_script(), "--env", "blackjack", "--no-history"],
+    # Nothing trains here: the thread runner, so no training process starts at all.
+    term = Terminal([console_script(), "--env", "blackjack", "--no-history", "--runner",
+                     "thread"],
                     {"TUI_GYM_LOG_DIR": str(tmp_path / "logs")})
     try:
         term.wait_for_text("tui-gym")  # the header: the app is up

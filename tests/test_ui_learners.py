@@ -18,7 +18,7 @@ from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.widgets.step_panel import _num
 
 from .test_ui_train import open_train
-from .waiting import wait_for
+from .waiting import send_key, wait_for, wait_until
 
 KNOWN = {"learning_rate": 0.5, "learning_rate_schedule": "constant", "discount": 0.9,
          "epsilon_start": 0.3, "epsilon_final": 0.3}
@@ -109,23 +109,28 @@ async def test_epsilon_changes_live_then_the_form_follows_the_algorithm() -> Non
     app = TuiGymApp(Session("blackjack", seed=0, hp={"episodes": 100_000_000}), runner="process")
     async with app.run_test(size=(120, 40)) as pilot:
         view = await open_train(pilot)
-        await pilot.press("space")
-        await wait_for(pilot, lambda: app.runner.latest.episodes > 200, "training")
-        await pilot.press("e")
+        # While it trains, keys go without the pilot's wait for an idle process.
+        send_key(pilot, "space")
+        await wait_until(pilot, lambda: app.runner.latest.episodes > 200, "training")
+        send_key(pilot, "e")
+        await wait_until(pilot, lambda: app.focused is not None
+                         and view.form in app.focused.ancestors, "the form's first field")
         for name, value in (("epsilon_start", "0.2"), ("epsilon_final", "0.2"),
                             ("learning_rate", "0.05")):
             view.form.input(name).value = value
         view.form.input("learning_rate").focus()
-        await pilot.press("enter")
-        await wait_for(pilot, lambda: app.session.agent.epsilon == 0.2, "epsilon in force")
+        send_key(pilot, "enter")
+        await wait_until(pilot, lambda: app.session.agent.epsilon == 0.2, "epsilon in force")
         assert app.runner.running and app.session.agent.hp.learning_rate == 0.05
         seen = app.runner.latest.episodes
-        await wait_for(pilot, lambda: app.runner.latest.episodes > seen + 5_000, "more episodes")
+        await wait_until(pilot, lambda: app.runner.latest.episodes > seen + 5_000,
+                         "more episodes")
         assert app.runner.latest.series["epsilon"][-1] < 0.25  # the curve shows it
 
         # The form follows the algorithm, and a trained agent asks before a switch.
-        await pilot.press("space")  # pause
-        await wait_for(pilot, lambda: app.runner.wait_idle(0), "the agent handed back")
+        send_key(pilot, "space")  # pause
+        await wait_for(pilot, lambda: not app.runner.running and app.runner.wait_idle(0),
+                       "the agent handed back")
         await pilot.press("x", "y")  # a fresh agent: it has trained, so it asks first
         await wait_for(pilot, lambda: app.session.trainer.episodes == 0, "the reset")
         assert isinstance(view.form.control("learning_rate_schedule"), Select)

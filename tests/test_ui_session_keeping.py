@@ -18,7 +18,7 @@ from tui_gym.session.session import Session, default_settings
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.confirm_screen import ConfirmScreen
 
-from .waiting import DEADLINE, wait_for
+from .waiting import DEADLINE, send_key, wait_for, wait_until
 
 
 def blackjack(episodes: int = 300, runner: str = "thread") -> TuiGymApp:
@@ -114,10 +114,12 @@ async def test_the_child_process_trains_the_restored_agent():
                       engine="env")  # slow enough to be mid-run at the switch
     app = TuiGymApp(session, runner="process")
     async with app.run_test(size=(80, 24)) as pilot:
-        await pilot.press("t", "space")
-        await wait_for(pilot, lambda: app.runner.latest.episodes > 500, "some training")
+        # While the child trains, keys go without the pilot's wait for an idle process.
+        await pilot.press("t")
+        send_key(pilot, "space")
+        await wait_until(pilot, lambda: app.runner.latest.episodes > 500, "some training")
         agent = session.agent
-        await pilot.press("g")  # while the child trains: it pauses and hands back
+        send_key(pilot, "g")  # while the child trains: it pauses and hands back
         await wait_for(pilot, lambda: app.session.game.name == "gridworld", "the switch")
         assert not app.runner.running
         trained = session.trainer.episodes

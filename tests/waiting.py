@@ -4,8 +4,8 @@ the test's process.
 
 The pilot's `press()` and `pause()` wait until the process stops using the CPU, for up
 to a second each time; while training or a comparison computes, that second always
-runs out, and the work spends it. `send_key`, `wait_until`, `press_busy` and
-`wait_busy` do without that wait.
+runs out, and the work spends it. `send_key`, `wait_until`, `press_busy`, `wait_busy`
+and `quit_busy` do without that wait.
 """
 
 from __future__ import annotations
@@ -77,6 +77,12 @@ async def press_busy(pilot, *keys: str) -> None:
     for key in keys:
         pilot.app.simulate_key(key)
         await settle(pilot)
+
+
+async def quit_busy(pilot) -> None:
+    """Press q (through the app's bindings) and wait until the app has ended."""
+    send_key(pilot, "q")
+    await wait_until(pilot, lambda: pilot.app.return_code is not None, "the app to quit")
 
 
 async def wait_busy(pilot, predicate: Callable[[], bool], what: str,
