@@ -41,6 +41,7 @@ from tui_gym.core.engine.rules import (
     next_first,
     update,
 )
+from tui_gym.core.engine.stats import RollingWindow
 from tui_gym.core.mdp.model import FiniteMDP
 
 __all__ = [
@@ -368,6 +369,7 @@ def compile_learner(tables: Any, hp: Any, offered: np.ndarray | None = None) -> 
     calls.transition(copies, hp, spare, mask, 0, 0, 0.0, 0, True, False, -1, 0.0, log)
     calls.act(copies, hp, spare, mask, 0, 0.0)
     calls.greedy(copies, hp, spare, mask, 0)
+    RollingWindow(1).push_many(np.zeros(1))  # the trainer's statistics of each call
 
 
 def warm(learners: Sequence[tuple[Any, ...]],
