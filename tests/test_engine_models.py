@@ -202,26 +202,3 @@ def test_a_chain_no_model_follows_cannot_be_forced_onto_the_model() -> None:
     with pytest.raises(ValueError, match="the model loop cannot train this: StickyAction"):
         Session("blackjack", choices=(WrapperChoice.make("StickyAction"),), engine="model")
     assert Session("frozenlake", engine="env").engine_reason == "env: chosen"
-
-
-def test_the_guide_table_answers_most_draws_among_many_outcomes_without_a_search() -> None:
-    # Jack's car rental: where the guide says every u of [j / K, (j + 1) / K) draws
-    # outcome k, the first outcome whose cumulative probability exceeds u is k at both
-    # ends of that interval; elsewhere it says where the search starts.
-    from tui_gym.core.engine.loop import ModelArrays
-    from tui_gym.games import game_for
-
-    model = game_for("car-rental").base_model({})
-    arrays = ModelArrays.of(model)
-    k = arrays.outcomes
-    guide = arrays.guide.reshape(-1, k)
-    assert (guide < 0).mean() > 0.5
-    cumulative = model.cumulative.reshape(-1, k)
-    low = np.arange(k) / k
-    high = np.nextafter((np.arange(k) + 1) / k, 0.0)
-    for pair in range(0, len(guide), 37):
-        row, certain = cumulative[pair], guide[pair] < 0
-        for u in (low, high):
-            scanned = np.minimum(np.searchsorted(row, u, side="right"), k - 1)
-            assert np.array_equal(scanned[certain], -1 - guide[pair][certain])
-        assert (guide[pair][~certain] >= 0).all()

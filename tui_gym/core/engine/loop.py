@@ -76,7 +76,7 @@ class ModelArrays:
 
     next_state: np.ndarray
     cumulative: np.ndarray
-    guide: np.ndarray  # [S * A * K]: per pair, where u = j / K falls (see `_guide`)
+    guide: np.ndarray  # [S * A * K]: per pair, where outcome j / K falls (see `sample_outcome`)
     reward: np.ndarray
     noise: np.ndarray  # [S * A * K]: each reward's standard deviation ([0.0]: none has any)
     terminal: np.ndarray
@@ -99,7 +99,11 @@ class ModelArrays:
         outcomes = model.max_outcomes
         guide = np.zeros(1, dtype=np.int32)
         if outcomes > GUIDED:
-            guide = _guide(model.cumulative.reshape(-1, outcomes))
+            marks = np.arange(outcomes) / outcomes
+            rows_of_pairs = model.cumulative.reshape(-1, outcomes)
+            guide = np.empty(rows_of_pairs.shape, dtype=np.int32)
+            for pair, row in enumerate(rows_of_pairs):
+                guide[pair] = np.minimum(np.searchsorted(row, marks, side="right"), outcomes - 1)
         # Writable copies: Numba types a read-only array on its slow path, every call.
         return cls(
             next_state=np.array(model.next_state.reshape(-1), dtype=np.int64),
@@ -116,24 +120,6 @@ class ModelArrays:
             horizon=int(model.horizon or 0),
             n_actions=model.n_actions,
         )
-
-
-def _guide(cumulative: np.ndarray) -> np.ndarray:
-    """`[pairs, K]`: for each pair and j, the outcome drawn at u = j / K, as a negative
-    -1 - k where every u of [j / K, (j + 1) / K) draws that outcome k (with a margin for
-    rounding), else k itself, where `sample_outcome`'s search starts."""
-    pairs, outcomes = cumulative.shape
-    marks = np.arange(outcomes) / outcomes
-    # Every row searched at once: row i shifted up by 2 i (each row lies in [0, 1]).
-    shift = 2.0 * np.arange(pairs)[:, None]
-    k = np.searchsorted((cumulative + shift).ravel(), (marks + shift).ravel(), side="right")
-    k = np.minimum(k.reshape(pairs, outcomes) - outcomes * np.arange(pairs)[:, None],
-                   outcomes - 1)
-    below = np.where(k > 0, np.take_along_axis(cumulative, np.maximum(k - 1, 0), 1), -np.inf)
-    above = np.where(k < outcomes - 1, np.take_along_axis(cumulative, k, 1), np.inf)
-    margin = 1e-9
-    certain = (below <= marks - margin) & (above > marks + 1.0 / outcomes + margin)
-    return np.where(certain, -1 - k, k).astype(np.int32)
 
 
 class Cursor:
@@ -182,16 +168,14 @@ def sample_start(starts: Any, start_cumulative: Any, rng: Any) -> int:
 def sample_outcome(cumulative: Any, guide: Any, base: int, outcomes: int, rng: Any) -> int:
     """Outcome k of the pair whose outcomes start at `base`: drawn when cumulative[k - 1]
     <= u < cumulative[k] (no draw when the pair has one outcome). Among many outcomes
-    (a day of Poisson rentals) the pair's guide table gives k for most u (no search), or
-    where the search starts, which moves back if need be: the same k as the scan from 0."""
+    (a day of Poisson rentals) the search starts where the pair's guide table points
+    for u, and moves back if need be: the same k as the scan from 0."""
     if outcomes == 1:
         return 0
     u = rng.random()
     k = 0
     if outcomes > GUIDED:
         k = guide[base + int(u * outcomes)]
-        if k < 0:
-            return -1 - k
         while k > 0 and u < cumulative[base + k - 1]:
             k -= 1
     while k < outcomes - 1 and u >= cumulative[base + k]:
