@@ -8,6 +8,7 @@ import tempfile
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from tui_gym.bench import tutorial
 from tui_gym.bench.figures import median, ratio
@@ -65,7 +66,8 @@ def measure(games: Sequence[str], algorithms: Sequence[str], seconds: float,
     along: a model as full to plan over, as many predecessors to sweep)."""
     pairs = [(game, algorithm) for game in games for algorithm in algorithms]
     with tempfile.TemporaryDirectory(prefix="tui-gym-speed-") as folder:
-        ours, tasks = [], []
+        ours: list[tuple[float, float]] = []
+        tasks: list[dict[str, Any]] = []
         for game, algorithm in pairs:
             for seed in range(repeats):
                 handover = f"{folder}/{len(tasks)}.pickle"

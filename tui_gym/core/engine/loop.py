@@ -116,8 +116,7 @@ class ModelArrays:
                        + terminal[pair].tobytes())
                 pair_rows[pair] = shared.setdefault(key, len(shared))
             first = np.unique(pair_rows, return_index=True)[1]
-            cumulative, next_state, terminal = (x[first] for x in (cumulative, next_state,
-                                                                   terminal))
+            cumulative, next_state, terminal = cumulative[first], next_state[first], terminal[first]
             marks = np.arange(outcomes) / outcomes
             guide = np.empty(cumulative.shape, dtype=np.int32)
             for row, values in enumerate(cumulative):
