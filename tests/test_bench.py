@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 from rich.console import Console
 
@@ -63,6 +64,31 @@ def test_the_tutorial_tasks_run_in_a_process_with_nothing_compiled() -> None:
     assert rate["steps_per_second"] > 0 and rate["seconds"] >= 0.2
     assert gap["episodes"] == 200 and not gap["reached"] and gap["gap"] > 1e-9
     assert learners["seconds"] > 0
+
+
+def test_the_tutorial_loop_goes_on_from_the_learner_the_engine_hands_over(
+        monkeypatch, tmp_path) -> None:
+    # The speed stage times both loops on a learner as far along: the tutorial's rate
+    # task loads the learner the engine had when its window began.
+    from tui_gym.bench import speed
+
+    handed: list[object] = []
+
+    def tutorial_runs(tasks: list[dict]) -> list[dict]:
+        for task in tasks:
+            session = tutorial._session(task["game"], task["algorithm"], task["hp"], 0)
+            played = session.agent.episode
+            monkeypatch.setattr(tutorial, "play", lambda s, **_: handed.append(
+                (s.agent.episode, s.agent.q.copy())) or 1)
+            tutorial._run(task)
+            handed.append(played)
+        return [{"steps_per_second": 1.0}] * len(tasks)
+
+    monkeypatch.setattr(tutorial, "measure", tutorial_runs)
+    (found,) = speed.measure(["gridworld"], ["q-learning"], 0.01, 1)
+    (warm_episode, warm_q), (_, _), fresh = handed
+    assert fresh == 0 and warm_episode > 0 and np.abs(warm_q).sum() > 0
+    assert found.tutorial_steps == 1.0 and found.steps > 0
 
 
 def test_the_tutorial_trains_to_the_gap_on_the_game_the_bench_names(monkeypatch) -> None:

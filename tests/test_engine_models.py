@@ -202,3 +202,23 @@ def test_a_chain_no_model_follows_cannot_be_forced_onto_the_model() -> None:
     with pytest.raises(ValueError, match="the model loop cannot train this: StickyAction"):
         Session("blackjack", choices=(WrapperChoice.make("StickyAction"),), engine="model")
     assert Session("frozenlake", engine="env").engine_reason == "env: chosen"
+
+
+def test_pairs_with_the_same_many_outcomes_share_one_row_of_them() -> None:
+    # Jack's car rental: a move's outcomes depend on the cars in the morning only, so its
+    # 4,851 pairs read 441 rows of where to and with what probability; each pair's own
+    # rewards stay its own.
+    from tui_gym.core.engine.loop import ModelArrays
+    from tui_gym.games import game_for
+
+    model = game_for("car-rental").base_model({})
+    arrays = ModelArrays.of(model)
+    k, pairs = arrays.outcomes, model.n_states * model.n_actions
+    assert arrays.pair_rows.shape == (pairs,) and arrays.cumulative.size == 441 * k
+    shared = {name: getattr(arrays, name).reshape(-1, k)[arrays.pair_rows]
+              for name in ("cumulative", "next_state", "terminal")}
+    for name, rows in shared.items():
+        assert np.array_equal(rows, getattr(model, name).reshape(pairs, k)), name
+    assert np.array_equal(arrays.reward.reshape(pairs, k), model.reward.reshape(pairs, k))
+    small = ModelArrays.of(game_for("cliffwalking").base_model({}))
+    assert np.array_equal(small.pair_rows, np.arange(small.pair_rows.size))

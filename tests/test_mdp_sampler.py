@@ -128,7 +128,7 @@ def test_among_many_outcomes_the_guide_finds_the_outcome_the_scan_finds():
         arrays = ModelArrays.of(model)
         assert arrays.outcomes > 16
         for pair in pairs:
-            base = pair * arrays.outcomes
+            base = int(arrays.pair_rows[pair]) * arrays.outcomes
             row = arrays.cumulative[base: base + arrays.outcomes]
             drawn, again = np.random.default_rng(pair), np.random.default_rng(pair)
             for _ in range(300):

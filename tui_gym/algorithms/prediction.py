@@ -132,18 +132,19 @@ class Predictor(Learner):
 
 @kernel
 def run_scored(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: Any,
-               terminal: Any, outcomes: int, starts: Any, start_cumulative: Any, rows: Any,
-               horizon: int, tables: Any, hp: Any, rng: Any, offered: Any, explore: Any,
-               episode0: int, cursor: Any, acc: Any, out: Any, log: Any, scored_rows: Any,
-               truth: Any, curve: Any, first: int) -> int:
+               terminal: Any, pair_rows: Any, outcomes: int, starts: Any,
+               start_cumulative: Any, rows: Any, horizon: int, tables: Any, hp: Any, rng: Any,
+               offered: Any, explore: Any, episode0: int, cursor: Any, acc: Any, out: Any,
+               log: Any, scored_rows: Any, truth: Any, curve: Any, first: int) -> int:
     """`run_model` one episode at a time from `curve[first]` on, writing after each the
     RMS error of V (`tables[3]`) at table rows `scored_rows` against `truth`. Returns
     the episodes finished: fewer than asked when the learner needs room first."""
     n = scored_rows.shape[0]
     for e in range(first, curve.shape[0]):
-        status = run_model(next_state, cumulative, guide, reward, noise, terminal, outcomes,
-                           starts, start_cumulative, rows, horizon, tables, hp, rng, offered,
-                           explore, episode0 + e - first, cursor, acc, 1, 1 << 62, out, log)
+        status = run_model(next_state, cumulative, guide, reward, noise, terminal, pair_rows,
+                           outcomes, starts, start_cumulative, rows, horizon, tables, hp, rng,
+                           offered, explore, episode0 + e - first, cursor, acc, 1, 1 << 62,
+                           out, log)
         if status != 0:
             return e - first
         v = tables[3]
@@ -166,10 +167,10 @@ def rms_curve(learner: Predictor, model: ModelArrays, truth: Truth, episodes: in
     done = 0
     while done < episodes:
         made = run(model.next_state, model.cumulative, model.guide, model.reward, model.noise,
-                   model.terminal, model.outcomes, model.starts, model.start_cumulative,
-                   model.rows, model.horizon, learner.arrays(), hp, learner.rng,
-                   learner.offered, learner.exploration(), learner.episode, cursor.ints,
-                   cursor.floats, out, log, scored_rows, values, curve, done)
+                   model.terminal, model.pair_rows, model.outcomes, model.starts,
+                   model.start_cumulative, model.rows, model.horizon, learner.arrays(), hp,
+                   learner.rng, learner.offered, learner.exploration(), learner.episode,
+                   cursor.ints, cursor.floats, out, log, scored_rows, values, curve, done)
         learner.end_episodes(int(made))
         done += int(made)
         if done < episodes:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import pickle
 import subprocess
 import sys
 import time
@@ -55,6 +56,9 @@ def _run(task: dict[str, Any]) -> dict[str, Any]:
     kind = task["kind"]
     if kind == "rate":
         session = _session(task["game"], task["algorithm"], task["hp"], task["seed"])
+        if task.get("learner"):  # the bench's own file: the learner to go on from
+            with open(task["learner"], "rb") as file:
+                session.agent.load_state(pickle.load(file))
         play(session, seconds=WARMUP_S)  # first calls (imports, tables) off the clock
         first, began = session.agent.episode, time.perf_counter()
         steps = play(session, seconds=task["seconds"])

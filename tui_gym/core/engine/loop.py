@@ -41,6 +41,7 @@ from tui_gym.core.engine.rules import (
     next_first,
     update,
 )
+from tui_gym.core.engine.stats import RollingWindow
 from tui_gym.core.mdp.model import FiniteMDP
 
 __all__ = [
@@ -70,15 +71,22 @@ COLUMNS = 5
 
 @dataclass(frozen=True, eq=False)
 class ModelArrays:
-    """A model as the loop reads it: flat `[S * A * K]` arrays, where the episodes start,
-    the table row of each model state, and the episode limit (0: none)."""
+    """A model as the loop reads it: flat arrays of K outcomes per row, where the episodes
+    start, the table row of each model state, and the episode limit (0: none).
+
+    Rewards (and their noise) are `[S * A * K]`, one row per (state, action) pair; where
+    to, with what probability and whether it ends are `[R * K]`, row `pair_rows[pair]`:
+    among many outcomes (more than `GUIDED`) pairs with the same ones share a row (Jack's
+    car rental: one per count of cars in the morning, 441 rows for 4,851 pairs), so the
+    loop's draws stay in the cache; else R = S * A, a row per pair."""
 
     next_state: np.ndarray
     cumulative: np.ndarray
-    guide: np.ndarray  # [S * A * K]: per pair, where outcome j / K falls (see `sample_outcome`)
+    guide: np.ndarray  # [R * K]: per row, where outcome j / K falls (see `sample_outcome`)
     reward: np.ndarray
     noise: np.ndarray  # [S * A * K]: each reward's standard deviation ([0.0]: none has any)
     terminal: np.ndarray
+    pair_rows: np.ndarray  # [S * A]
     outcomes: int
     starts: np.ndarray
     start_cumulative: np.ndarray
@@ -96,22 +104,34 @@ class ModelArrays:
         if table_rows.shape != (model.n_states,):
             raise ValueError(f"rows must have one entry per model state ({model.n_states})")
         outcomes = model.max_outcomes
+        cumulative = model.cumulative.reshape(-1, outcomes)
+        next_state = model.next_state.reshape(-1, outcomes)
+        terminal = model.terminal.reshape(-1, outcomes)
+        pair_rows = np.arange(len(cumulative))
         guide = np.zeros(1, dtype=np.int32)
         if outcomes > GUIDED:
+            shared: dict[bytes, int] = {}
+            for pair in range(len(cumulative)):
+                key = (cumulative[pair].tobytes() + next_state[pair].tobytes()
+                       + terminal[pair].tobytes())
+                pair_rows[pair] = shared.setdefault(key, len(shared))
+            first = np.unique(pair_rows, return_index=True)[1]
+            cumulative, next_state, terminal = cumulative[first], next_state[first], terminal[first]
             marks = np.arange(outcomes) / outcomes
-            rows_of_pairs = model.cumulative.reshape(-1, outcomes)
-            guide = np.empty(rows_of_pairs.shape, dtype=np.int32)
-            for pair, row in enumerate(rows_of_pairs):
-                guide[pair] = np.minimum(np.searchsorted(row, marks, side="right"), outcomes - 1)
+            guide = np.empty(cumulative.shape, dtype=np.int32)
+            for row, values in enumerate(cumulative):
+                guide[row] = np.minimum(np.searchsorted(values, marks, side="right"),
+                                        outcomes - 1)
         # Writable copies: Numba types a read-only array on its slow path, every call.
         return cls(
-            next_state=np.array(model.next_state.reshape(-1), dtype=np.int64),
-            cumulative=np.array(model.cumulative.reshape(-1), dtype=np.float64),
+            next_state=np.array(next_state.reshape(-1), dtype=np.int64),
+            cumulative=np.array(cumulative.reshape(-1), dtype=np.float64),
             guide=guide.reshape(-1),
             reward=np.array(model.reward.reshape(-1), dtype=np.float64),
             noise=(np.zeros(1) if model.reward_std is None or not model.reward_std.any()
                    else np.array(model.reward_std.reshape(-1), dtype=np.float64)),
-            terminal=np.array(model.terminal.reshape(-1), dtype=np.bool_),
+            terminal=np.array(terminal.reshape(-1), dtype=np.bool_),
+            pair_rows=pair_rows.astype(np.int64),
             outcomes=outcomes,
             starts=starts,
             start_cumulative=np.ascontiguousarray(start_cumulative, dtype=np.float64),
@@ -165,9 +185,9 @@ def sample_start(starts: Any, start_cumulative: Any, rng: Any) -> int:
 
 @kernel(inline=True)
 def sample_outcome(cumulative: Any, guide: Any, base: int, outcomes: int, rng: Any) -> int:
-    """Outcome k of the pair whose outcomes start at `base`: drawn when cumulative[k - 1]
+    """Outcome k of the row whose outcomes start at `base`: drawn when cumulative[k - 1]
     <= u < cumulative[k] (no draw when the pair has one outcome). Among many outcomes
-    (a day of Poisson rentals) the search starts where the pair's guide table points
+    (a day of Poisson rentals) the search starts where the row's guide table points
     for u, and moves back if need be: the same k as the scan from 0."""
     if outcomes == 1:
         return 0
@@ -184,7 +204,7 @@ def sample_outcome(cumulative: Any, guide: Any, base: int, outcomes: int, rng: A
 
 @kernel
 def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: Any,
-              terminal: Any, outcomes: int,
+              terminal: Any, pair_rows: Any, outcomes: int,
               starts: Any, start_cumulative: Any, rows: Any, horizon: int,
               tables: Any, hp: Any, rng: Any, offered: Any, explore: Any, episode0: int,
               cursor: Any, acc: Any, max_episodes: int, max_steps: int,
@@ -219,13 +239,15 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: 
             a = act(values, rng, offered, rows[s], eps)
         if cursor[3] == 0:
             cursor[6] = a
-        at = (s * n_actions + a) * outcomes
-        at += sample_outcome(cumulative, guide, at, outcomes, rng)
-        s2 = next_state[at]
+        pair = s * n_actions + a
+        row = pair_rows[pair] * outcomes
+        k = sample_outcome(cumulative, guide, row, outcomes, rng)
+        at = pair * outcomes + k
+        s2 = next_state[row + k]
         r = reward[at]
         if noise.shape[0] > 1 and noise[at] > 0.0:
             r += noise[at] * rng.standard_normal()
-        ended = terminal[at]
+        ended = terminal[row + k]
         cursor[3] += 1
         cut = (not ended) and horizon > 0 and cursor[3] >= horizon
         a2 = -1
@@ -278,8 +300,8 @@ def play(learner: Any, model: ModelArrays, cursor: Cursor, max_episodes: int,
     offered = learner.offered
     status = entries(hp, offered).run_model(
         model.next_state, model.cumulative, model.guide, model.reward, model.noise,
-        model.terminal, model.outcomes, model.starts, model.start_cumulative, model.rows,
-        model.horizon,
+        model.terminal, model.pair_rows, model.outcomes, model.starts,
+        model.start_cumulative, model.rows, model.horizon,
         learner.arrays(), hp, learner.rng, offered, learner.exploration(), learner.episode,
         cursor.ints, cursor.floats, min(max_episodes, len(out)), max_steps, out, log,
     )
@@ -346,12 +368,13 @@ def compile_learner(tables: Any, hp: Any, offered: np.ndarray | None = None) -> 
     out = np.zeros((1, COLUMNS))
     explore = np.zeros(3)
     calls.run_model(model.next_state, model.cumulative, model.guide, model.reward, model.noise,
-                    model.terminal, model.outcomes, model.starts, model.start_cumulative,
-                    model.rows, model.horizon, copies, hp, spare, mask, explore, 0, cursor.ints,
-                    cursor.floats, 1, 1, out, log)
+                    model.terminal, model.pair_rows, model.outcomes, model.starts,
+                    model.start_cumulative, model.rows, model.horizon, copies, hp, spare, mask,
+                    explore, 0, cursor.ints, cursor.floats, 1, 1, out, log)
     calls.transition(copies, hp, spare, mask, 0, 0, 0.0, 0, True, False, -1, 0.0, log)
     calls.act(copies, hp, spare, mask, 0, 0.0)
     calls.greedy(copies, hp, spare, mask, 0)
+    RollingWindow(1).push_many(np.zeros(1))  # the trainer's statistics of each call
 
 
 def warm(learners: Sequence[tuple[Any, ...]],

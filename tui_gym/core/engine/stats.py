@@ -17,6 +17,31 @@ from typing import Any
 
 import numpy as np
 
+from tui_gym.core.engine.kernel import kernel
+
+
+@kernel
+def push_all(ring: Any, values: Any, means: Any, at: int, count: int,
+             total: float) -> tuple[int, int, float]:
+    """`RollingWindow.push` of each of `values` in turn on the ring buffer `ring` (next
+    slot `at`, `count` pushed so far, running sum `total`), the mean after each into
+    `means`; the next slot, count and sum after them."""
+    size = ring.shape[0]
+    for i in range(values.shape[0]):
+        if count >= size:
+            total -= ring[at]
+        ring[at] = values[i]
+        total += values[i]
+        at += 1
+        count += 1
+        if at == size:  # re-summed once per lap, as `push` does
+            at = 0
+            total = 0.0
+            for j in range(size):
+                total += ring[j]
+        means[i] = total / min(count, size)
+    return at, count, total
+
 
 class RollingWindow:
     """The last `size` values of one quantity, with their mean."""
@@ -43,22 +68,12 @@ class RollingWindow:
             self._sum = float(self._values.sum())
 
     def push_many(self, values: np.ndarray) -> np.ndarray:
-        """Push `values` in order (as many `push` calls would); returns the mean after each."""
-        values = np.asarray(values, dtype=np.float64)
-        k = len(values)
-        if k == 0:
-            return values
-        old = self.values()
-        history = np.concatenate([[0.0], old, values]).cumsum()
-        totals = len(old) + np.arange(1, k + 1)  # values seen after each push
-        lengths = np.minimum(totals, self.size)
-        means = (history[totals] - history[totals - lengths]) / lengths
-        last = values[-self.size :]  # only the newest `size` values can stay
-        slots = (self._next + np.arange(k - len(last), k)) % self.size
-        self._values[slots] = last
-        self._next = (self._next + k) % self.size
-        self.count += k
-        self._sum = float(self._values.sum())  # slots not yet filled hold zeros
+        """Push `values` in order (as many `push` calls do, compiled); the mean after each."""
+        values = np.ascontiguousarray(values, dtype=np.float64)
+        means = np.empty(len(values))
+        at, count, total = push_all(self._values, values, means, self._next, self.count,
+                                    self._sum)
+        self._next, self.count, self._sum = int(at), int(count), float(total)
         return means
 
     @property
