@@ -117,7 +117,23 @@ def _long_modules_first(items: list[pytest.Item]) -> None:
     items[:] = [item for module in ordered for item in module]
 
 
+def _name_groups(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """On a worker under `--dist loadgroup`, end the node id of each test of an
+    `xdist_group` with `@GROUP`, as xdist means to: the controller sends a group's tests to
+    one worker by that suffix. xdist sets it where pytest 9 no longer reads a node id, and
+    without it every worker ran a group's tests and started its module's servers."""
+    if not getattr(config.option, "loadgroup", False):
+        return
+    for item in items:
+        names = sorted({str(mark.args[0] if mark.args else mark.kwargs.get("name", "default"))
+                        for mark in item.iter_markers("xdist_group")})
+        suffix = "@" + "_".join(names)
+        if names and not item.nodeid.endswith(suffix) and hasattr(item, "_id"):
+            item._id = type(item._id).parse(item.nodeid + suffix)
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    _name_groups(config, items)
     _long_modules_first(items)
     if os.environ.get(SLOW_ENV) == "1":
         return

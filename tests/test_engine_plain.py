@@ -10,9 +10,13 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from tui_gym.algorithms import ALGORITHMS
 from tui_gym.session.session import Session
+
+# One worker runs this module, so the plain Python process below starts once.
+pytestmark = pytest.mark.xdist_group("engine_plain")
 
 ROOT = Path(__file__).resolve().parent.parent
 EPISODES = 400  # a whole budget: exploration runs from its start to its end
@@ -20,15 +24,33 @@ EPISODES = 400  # a whole budget: exploration runs from its start to its end
 # shorter whole budget.
 BUDGETS = {"prioritized-sweeping": 100}
 NAMES = [cls.name for cls in ALGORITHMS]
-# Trains every learner as `_trained` does, in a process where every kernel is plain Python.
+# One process where every kernel is plain Python: the smallest game's contract (then its
+# pytest run's exit code on a line), then every learner trained as `_trained` does.
 PLAIN_RUN = """
 import sys
 import numba
 import numpy as np
-from tests.test_engine_plain import NAMES, _trained
+import pytest
 assert numba.config.DISABLE_JIT
+code = pytest.main(["-q", "-n", "0", "-p", "no:cacheprovider", "tests/test_games_contract.py",
+                    "-k", "frozenlake and not default_training"])
+print("contract exit", int(code), flush=True)
+from tests.test_engine_plain import NAMES, _trained
 np.savez(sys.argv[1], **{name: _trained(name) for name in NAMES})
 """
+
+
+@pytest.fixture(scope="module")
+def plain(
+    tmp_path_factory: pytest.TempPathFactory,
+) -> tuple[subprocess.CompletedProcess[str], Path]:
+    """The plain Python process's run, and the tables it trained."""
+    out = tmp_path_factory.mktemp("plain") / "plain.npz"
+    done = subprocess.run(
+        [sys.executable, "-c", PLAIN_RUN, str(out)],
+        cwd=ROOT, env=_plain_env(), capture_output=True, text=True, timeout=600, check=False,
+    )
+    return done, out
 
 
 def _plain_env() -> dict[str, str]:
@@ -47,28 +69,22 @@ def _trained(algorithm: str) -> np.ndarray:
     return session.agent.table()[0]
 
 
-def test_the_smallest_games_contract_holds_with_the_kernels_as_plain_python() -> None:
+def test_the_smallest_games_contract_holds_with_the_kernels_as_plain_python(plain) -> None:
     # Its default training as plain Python is the compiled one's (below), which
     # tests/test_contract_learners.py::test_each_algorithm_meets_the_games_bound_with_its_defaults
     # checks.
-    done = subprocess.run(
-        [sys.executable, "-m", "pytest", "-q", "-n", "0", "-p", "no:cacheprovider",
-         "tests/test_games_contract.py", "-k", "frozenlake and not default_training"],
-        cwd=ROOT, env=_plain_env(), capture_output=True, text=True, timeout=600, check=False,
-    )
-    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-2000:]
+    done, _ = plain
+    assert "\ncontract exit 0\n" in done.stdout, (
+        done.stdout[-3000:] + done.stderr[-2000:])
     assert " passed" in done.stdout and "failed" not in done.stdout
 
 
-def test_every_learner_trains_to_the_same_tables_as_plain_python(tmp_path: Path) -> None:
-    out = tmp_path / "plain.npz"
-    done = subprocess.run(
-        [sys.executable, "-c", PLAIN_RUN, str(out)],
-        cwd=ROOT, env=_plain_env(), capture_output=True, text=True, timeout=600, check=False,
-    )
+def test_every_learner_trains_to_the_same_tables_as_plain_python(plain) -> None:
+    done, out = plain
     assert done.returncode == 0, done.stderr[-3000:]
-    plain = np.load(out)
+    plain_tables = np.load(out)
     for name in NAMES:
         compiled = _trained(name)
         assert compiled.any(), f"{name}: a budget that changes nothing proves nothing"
-        assert np.array_equal(plain[name], compiled), (name, np.abs(plain[name] - compiled).max())
+        assert np.array_equal(plain_tables[name], compiled), (
+            name, np.abs(plain_tables[name] - compiled).max())

@@ -19,7 +19,7 @@ from .test_app_lifecycle import Terminal, console_script
 # Two waves, one after the other: between them no command has the file open, so a
 # process that had lost its locks on the file would see its write-ahead log go.
 WAVES = (
-    (["train", "blackjack", "--episodes", "3000", "--eval-episodes", "100", "--seed", "11"],
+    (["train", "blackjack", "--episodes", "500", "--eval-episodes", "20", "--seed", "11"],
      ["compare", "blackjack", "--algorithms", "q-learning,sarsa", "--seeds", "2",
       "--episodes", "400", "--processes", "0"]),
     (["sweep", "blackjack", "--algorithm", "q-learning", "--grid", "learning_rate=0.05,0.1",
@@ -44,6 +44,8 @@ def record_beside_the_app(scratch: Path) -> None:
         term.wait_for_text("Hyperparameters")
         term.type(" ")
         term.wait_for_text("running")
+        term.type("---")  # the slowest speed: it records all the same, and spares a core
+        term.wait_for_text("animated (slow)")
         term.type("v")
         term.wait_for_text("Runs of this game")
         for wave in WAVES:

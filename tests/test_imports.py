@@ -22,6 +22,9 @@ from pathlib import Path
 
 import pytest
 
+# One worker runs this module, so the import graph below is read once.
+pytestmark = pytest.mark.xdist_group("imports")
+
 ROOT = Path(__file__).resolve().parent.parent / "tui_gym"
 NO_TEXTUAL = ("core", "games", "algorithms", "envs")
 GAME_PACKAGES = ("blackjack", "gridworld", "frozenlake", "cliffwalking", "taxi")

@@ -1,7 +1,10 @@
-"""The JSON-lines protocol, driven as a program would: through a subprocess."""
+"""The JSON-lines protocol, driven as a program would: lines in, one response a line out.
+The command runs in this process (`main` on a stdin of bytes) where the game's answers are
+the point, and as a subprocess where the process's own pipes, encoding and exit are."""
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import subprocess
@@ -9,24 +12,30 @@ import sys
 
 import pytest
 
+from tui_gym.cli import main
 from tui_gym.games.blackjack.solver import BlackjackRules, optimal_policy
 from tui_gym.session.protocol import JsonlPlayer
 from tui_gym.session.session import Session
 
 
-def run_protocol(env: str, lines: list[str], *extra: str) -> tuple[list[dict], str, int]:
-    proc = subprocess.run(
-        [sys.executable, "-m", "tui_gym", "play", env, "--jsonl", *extra],
-        input="".join(line + "\n" for line in lines),
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
-    responses = [json.loads(line) for line in proc.stdout.splitlines()]
-    return responses, proc.stderr, proc.returncode
+@pytest.fixture
+def run_protocol(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]):
+    """`play ENV --jsonl EXTRA` in this process, fed `lines`: responses, stderr, exit code."""
+
+    def run(env: str, lines: list[str], *extra: str) -> tuple[list[dict], str, int]:
+        data = "".join(line + "\n" for line in lines).encode()
+        monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(data)))
+        try:
+            code = main(["play", env, "--jsonl", *extra])
+        except SystemExit as exit_:  # argparse's errors exit this way
+            code = exit_.code
+        out, err = capsys.readouterr()
+        return [json.loads(line) for line in out.splitlines()], err, code
+
+    return run
 
 
-def test_blackjack_session_with_bad_lines_goes_on():
+def test_blackjack_session_with_bad_lines_goes_on(run_protocol):
     lines = [
         '{"cmd": "spaces"}',
         '{"cmd": "step", "action": "hit"}',  # before reset
@@ -64,7 +73,7 @@ def test_blackjack_session_with_bad_lines_goes_on():
     assert final["reward"] in (-1.0, 0.0, 1.0)
 
 
-def test_gridworld_program_walks_to_the_target():
+def test_gridworld_program_walks_to_the_target(run_protocol):
     # Reset first to learn the positions, then plan the walk in-process with the same seed.
     session = Session("gridworld", seed=0)
     probe = JsonlPlayer(session, seed=11)
@@ -83,7 +92,7 @@ def test_gridworld_program_walks_to_the_target():
     assert "error" in responses[-1]  # no hint after the end
 
 
-def test_integer_actions_and_wrappers_apply():
+def test_integer_actions_and_wrappers_apply(run_protocol):
     lines = ['{"cmd": "spaces"}', '{"cmd": "reset", "seed": 1}', '{"cmd": "step", "action": 0}']
     responses, stderr, code = run_protocol(
         "gridworld", lines, "--wrapper", "StepPenalty:penalty=0.5"
@@ -95,22 +104,17 @@ def test_integer_actions_and_wrappers_apply():
     assert responses[2]["reward"] == pytest.approx(-0.5)
 
 
-def test_bad_arguments_exit_2_with_one_line():
-    proc = subprocess.run(
-        [sys.executable, "-m", "tui_gym", "play", "chess", "--jsonl"],
-        capture_output=True,
-        text=True,
-        timeout=60,
-        input="",
-    )
-    assert proc.returncode == 2
-    assert len(proc.stderr.strip().splitlines()) == 1
-    assert "chess" in proc.stderr
+def test_bad_arguments_exit_2_with_one_line(run_protocol):
+    responses, stderr, code = run_protocol("chess", [])
+    assert code == 2 and responses == []
+    assert len(stderr.strip().splitlines()) == 1
+    assert "chess" in stderr
 
 
 def test_end_of_input_exits_zero():
-    responses, stderr, code = run_protocol("blackjack", [])
-    assert code == 0 and responses == [] and stderr == ""
+    proc = subprocess.run([sys.executable, "-m", "tui_gym", "play", "blackjack", "--jsonl"],
+                          input="", capture_output=True, text=True, timeout=60)
+    assert (proc.returncode, proc.stdout, proc.stderr) == (0, "", "")
 
 
 @pytest.mark.parametrize(
