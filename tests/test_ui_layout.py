@@ -36,6 +36,14 @@ def inside(app: TuiGymApp, selector: str) -> bool:
     return bool(region.height) and app.screen.region.contains_region(region)
 
 
+async def laid_out(pilot) -> None:
+    """Wait until every parameter field has a place on screen (a busy machine lays the
+    side panel out a few frames after a new size)."""
+    app = pilot.app
+    await wait_for(pilot, lambda: all(f.query_one(Label).region.width
+                                      for f in app.query(ParamField)), "the side panel")
+
+
 def names_whole(app: TuiGymApp) -> None:
     """Every parameter field shows its whole name beside (or above) a usable input."""
     fields = list(app.query(ParamField))
@@ -81,6 +89,7 @@ async def board_keeps_its_cells_and_names_stay_whole(pilot) -> None:
     for size in SIZES:
         if size != SIZES[0]:
             await resize(*size)  # a new terminal size: the largest shape that fits
+        await laid_out(pilot)
         names_whole(app)
         shapes = {shape()}
         # Advice, the coach, moves, a reset and the watched agent change the lines
@@ -92,6 +101,7 @@ async def board_keeps_its_cells_and_names_stay_whole(pilot) -> None:
         kept[size] = shape()
     # And back, the other way: the largest that fits, the shape drawn there before.
     await resize(*SIZES[0])
+    await laid_out(pilot)
     names_whole(app)
     assert shape() == kept[SIZES[0]]
 
