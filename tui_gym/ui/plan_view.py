@@ -48,6 +48,10 @@ class PlanView(Vertical):
     PlanView #plan-controls { height: 1; }
     PlanView #plan-controls Button { min-width: 0; margin-right: 1; padding: 0; }
     PlanView #plan-controls #plan-run { width: 9; }
+    /* At 80x24 the row drops Improve and Converge (u and c, in the key bar) so that
+       Restart and the speed fit. */
+    Screen.compact PlanView #plan-improve, Screen.compact PlanView #plan-converge {
+        display: none; }
     PlanView #plan-speed { width: auto; min-width: 5; padding: 0 1; color: $text-accent;
                            text-style: bold; }
     PlanView #plan-knobs { height: 1; }

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import stat
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -223,11 +224,15 @@ def read_recording(path: str | Path, scene_fits: SceneCheck | None = None) -> Re
     path = Path(path)
     if path.is_dir():
         raise RecordingError(f"{path} is a folder, not a recording")
-    try:
-        handle = path.open("rb")
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
+    try:  # non-blocking: a named pipe with no writer is refused, not waited on
+        handle = os.fdopen(os.open(path, flags), "rb")
     except OSError as exc:
         raise RecordingError(f"{path}: {exc.strerror or exc}") from None
     with handle:
+        if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):
+            raise RecordingError(f"{path} is not a regular file (a pipe or a device), "
+                                 "not a recording")
         recording = read_lines_of(handle, path, scene_fits)
     if not recording.episodes:
         if not recording.games and recording.skipped:
