@@ -553,8 +553,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             self.notify(f"Loading {game.title}…", timeout=2)
 
     def _switch_now(self, game: Game, was_running: bool) -> None:
-        if game is self.session.game:  # two switches asked for in a row
-            return
+        if game is self.session.game or self._wanted_game != game.name:
+            return  # two switches asked for in a row, or another game asked for since
         session = self._sessions[game.name]
         fresh = game.name in self._fresh
         self._fresh.discard(game.name)
