@@ -444,7 +444,9 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     def action_switch_game(self, name: str) -> None:
         game = game_named(name)
         if game is self.session.game:
-            self.notify(f"Already playing {game.title}.")
+            if self._wanted_game == game.name:
+                self.notify(f"Already playing {game.title}.")
+            self._wanted_game = game.name  # a switch still waiting for training is dropped
             return
         self.switch_game(game)
 
