@@ -335,3 +335,21 @@ def test_a_greedy_policy_is_valued_once_while_the_table_keeps_it(monkeypatch) ->
     assert oracle.reference(q, kwargs).figures == first  # each policy's figures are kept
     assert oracle.reference(other, kwargs).figures == figures
     assert len(valued) == 2
+
+
+def test_the_optimums_marks_are_solved_once_for_every_snapshots_heatmap(monkeypatch) -> None:
+    """Gambler's ladder is too long to keep (each rung is solved when asked for): its
+    heatmap's optimal marks are kept, so a live run's next snapshots solve nothing."""
+    import tui_gym.games.model as model_module
+
+    solved: list[int] = []
+    solve = model_module.solve
+    monkeypatch.setattr(model_module, "solve",
+                        lambda *args, **kwargs: solved.append(1) or solve(*args, **kwargs))
+    session = Session("gambler", seed=0)
+    session.trainer.run(episodes=50)
+    first = session.heatmaps(session.trainer.snapshot())
+    assert solved and first
+    count = len(solved)
+    session.trainer.run(episodes=50)
+    assert session.heatmaps(session.trainer.snapshot()) and len(solved) == count

@@ -56,6 +56,7 @@ __all__ = [
 PHASE = "phase"  # the argument naming a changing world's phase, for its exact figures
 TIE_GAMMA = 0.99  # the discount that breaks ties between moves of equal exact value
 LADDER_LIMIT = 4_000_000  # Q-values kept per ladder (steps x states x actions) at most
+CHOICES_KEPT = 8  # optimal-action masks kept per ladder (one per steps left asked for)
 SEARCH_LIMIT = 4096  # state-action pairs a fixed-policy search looks at, at most
 
 BoolArray = npt.NDArray[np.bool_]
@@ -157,6 +158,7 @@ class Ladder:
         self.model = model
         self._rungs: dict[float, FloatArray] = {}
         self._stationary: dict[float, FloatArray] = {}
+        self._choices: dict[int | None, tuple[BoolArray, BoolArray]] = {}
 
     def q(self, steps_left: int | None = None, gamma: float = 1.0) -> FloatArray:
         model = self.model
@@ -173,13 +175,24 @@ class Ladder:
         return self._rungs[gamma][k - 1]
 
     def choices(self, steps_left: int | None = None) -> tuple[BoolArray, BoolArray]:
-        """`[S, A]` twice: the actions of optimal value, and the quickest of them."""
+        """`[S, A]` twice, read-only: the actions of optimal value, and the quickest of
+        them (kept for the last few `steps_left`: past `LADDER_LIMIT` each is two solves)."""
+        found = self._choices.get(steps_left)
+        if found is None:
+            if len(self._choices) >= CHOICES_KEPT:
+                self._choices.clear()
+            found = self._choices[steps_left] = self._choose(steps_left)
+        return found
+
+    def _choose(self, steps_left: int | None) -> tuple[BoolArray, BoolArray]:
         best = optimal_actions(self.q(steps_left))
         tie = np.where(best, self.q(steps_left, TIE_GAMMA), -np.inf)
         with np.errstate(invalid="ignore"):
             quickest = best & optimal_actions(tie)
         # A row where the discounted values say nothing (all -inf) keeps every optimal action.
         quickest[~quickest.any(axis=1)] = best[~quickest.any(axis=1)]
+        best.setflags(write=False)
+        quickest.setflags(write=False)
         return best, quickest
 
 
