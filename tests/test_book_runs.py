@@ -19,6 +19,7 @@ from tui_gym.session.book.figure import FigureOptions
 from tui_gym.session.book.runs import (
     Played,
     above,
+    below,
     counts,
     margin,
     near,
@@ -64,6 +65,10 @@ def test_a_verdicts_tolerance_is_the_99_percent_interval_of_the_runs() -> None:
     assert not above("", "", samples + 1.4 * half, samples).ok  # within √2 · margin
     # One run gives no interval: nothing it measures is borne out.
     assert not near("", 1.0, [1.0]).ok and not above("", "", [2.0], [1.0]).ok
+    # A claim about the lower one ("TD ends lower than MC") shows its mean first.
+    lower = below("", "", samples, samples + 2 * half)
+    assert lower.ok and lower.measured == f"2.5 vs {2.5 + 2 * half:.1f}"
+    assert above("", "", samples + 2 * half, samples).measured == f"{2.5 + 2 * half:.1f} vs 2.5"
 
 
 def test_episodes_completed_against_time_steps() -> None:

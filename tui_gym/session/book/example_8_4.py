@@ -20,7 +20,7 @@ from tui_gym.session.book.figure import (
     Progress,
     heading,
 )
-from tui_gym.session.book.runs import Learner, Played, above, counts, margin, swept, world_phases
+from tui_gym.session.book.runs import Learner, Played, below, counts, margin, swept, world_phases
 from tui_gym.session.experiments.compare import Arm, Setup, prepare
 
 # The book: "both systems made at most n = 5 updates per environmental interaction"; the
@@ -72,8 +72,8 @@ def run(options: FigureOptions, progress: Progress) -> FigureResult:
                    for learner, rows in zip(LEARNERS, played, strict=True))
     dyna, sweeping = np.log10(updates[0]), np.log10(updates[1])
     gap = dyna - sweeping  # per scale and run: log10 of how many times fewer
-    checks = [above(f"{size} states: prioritized sweeping needs fewer updates (log10 of "
-                    "Dyna-Q's against its own)", "fewer", dyna[j], sweeping[j], digits=2)
+    checks = [below(f"{size} states: prioritized sweeping needs fewer updates (log10 of "
+                    "its own against Dyna-Q's)", "fewer", sweeping[j], dyna[j], digits=2)
               for j, size in enumerate(sizes)]
     checks += [Check(f"{size} states: a decisive advantage, at least {FACTOR} times fewer "
                      "updates (log10 of the factor per run)", f"often {FACTOR} to 10 times",

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from tui_gym.session.book.figure import BookFigure, Chart, FigureOptions, FigureResult, Progress
 from tui_gym.session.book.prediction_runs import play_prediction
-from tui_gym.session.book.runs import Learner, above, per_episode
+from tui_gym.session.book.runs import Learner, above, below, per_episode
 
 TD_ALPHAS = (0.15, 0.1, 0.05)
 MC_ALPHAS = (0.01, 0.02, 0.03, 0.04)
@@ -26,8 +26,8 @@ def run(options: FigureOptions, progress: Progress) -> FigureResult:
     mc = [late[x.label] for x in LEARNERS[len(TD_ALPHAS):]]
     best_td, best_mc = min(td, key=lambda v: v.mean()), min(mc, key=lambda v: v.mean())
     checks = (
-        above(f"TD(0) ends lower than constant-α MC, each at its best α (mean RMS error of "
-              f"the last {LATE} episodes)", "TD lower", best_mc, best_td, digits=3),
+        below(f"TD(0) ends lower than constant-α MC, each at its best α (mean RMS error of "
+              f"the last {LATE} episodes)", "TD lower", best_td, best_mc, digits=3),
         above(f"A larger step settles higher: TD(0) with α = {TD_ALPHAS[0]:g} against "
               f"{TD_ALPHAS[-1]:g} (last {LATE} episodes)", "higher", td[0], td[-1], digits=3),
     )

@@ -9,7 +9,7 @@ import numpy as np
 
 from tui_gym.envs.max_bias import ACTIONS, MAX_B_ACTIONS, A, offered
 from tui_gym.session.book.figure import BookFigure, Chart, FigureOptions, FigureResult, Progress
-from tui_gym.session.book.runs import FIRST_ACTION, Learner, above, near, per_episode, play
+from tui_gym.session.book.runs import FIRST_ACTION, Learner, above, below, near, per_episode, play
 
 # The book's settings: ε = 0.1, α = 0.1, undiscounted.
 EPSILON = 0.1
@@ -38,8 +38,8 @@ def run(options: FigureOptions, progress: Progress) -> FigureResult:
         above(f"Q-learning goes left far more often than the optimum ({optimum:.2f}%) at first "
               f"(episodes 1 to {early})", "up to about 70%", q_left[:, :early].mean(axis=1),
               floor, unit="%"),
-        above(f"Double Q-learning goes left less than Q-learning (episodes 1 to {early})",
-              "far less", q_left[:, :early].mean(axis=1), d_left[:, :early].mean(axis=1),
+        below(f"Double Q-learning goes left less than Q-learning (episodes 1 to {early})",
+              "far less", d_left[:, :early].mean(axis=1), q_left[:, :early].mean(axis=1),
               unit="%"),
         near(f"Double Q-learning comes down near the ε-greedy optimum (the last {early} "
              "episodes)",

@@ -239,12 +239,25 @@ def one_run(claim: str, book: float, samples: Samples, slack: float = 0.0,
 def above(claim: str, book: str, higher: Samples, lower: Samples, digits: int = 1,
           unit: str = "") -> Check:
     """The mean of `higher` above that of `lower` by more than the margin of the difference
-    (each one number a run)."""
+    (each one number a run); measured: the higher mean first, as the claim names them."""
+    return _apart(claim, book, higher, lower, digits, unit, lower_first=False)
+
+
+def below(claim: str, book: str, lower: Samples, higher: Samples, digits: int = 1,
+          unit: str = "") -> Check:
+    """`above` for a claim whose subject is the lower one ("TD ends lower than MC"):
+    measured, the lower mean first."""
+    return _apart(claim, book, higher, lower, digits, unit, lower_first=True)
+
+
+def _apart(claim: str, book: str, higher: Samples, lower: Samples, digits: int, unit: str,
+           lower_first: bool) -> Check:
     a = np.asarray(higher, dtype=np.float64).ravel()
     b = np.asarray(lower, dtype=np.float64).ravel()
     gap = float(a.mean() - b.mean())
     spread = float(np.hypot(margin(a), margin(b)))
-    measured = f"{a.mean():.{digits}f}{unit} vs {b.mean():.{digits}f}{unit}"
+    means = [f"{x.mean():.{digits}f}{unit}" for x in ((b, a) if lower_first else (a, b))]
+    measured = " vs ".join(means)
     if len(a) < 2:
         measured += " (one run: no interval)"
     return Check(claim, book, measured, gap > spread)

@@ -20,7 +20,7 @@ from tui_gym.session.book.figure import (
     Series,
 )
 from tui_gym.session.book.prediction_runs import play_prediction
-from tui_gym.session.book.runs import Learner, Played, above, swept
+from tui_gym.session.book.runs import Learner, Played, below, swept
 
 __all__ = ["ALPHAS", "LAMBDAS", "SHOWN", "Sweep", "lambda_figure", "sweep", "swept_figure"]
 
@@ -91,8 +91,8 @@ def swept_figure(figure: BookFigure, algorithm: str, name: str, settings: Sequen
         Check(f"The best {symbol} is an intermediate one (the lowest point of every curve)",
               book_best, f"{symbol} = {best:g} (α = {curves[best].best_alpha:g}, "
               f"{curves[best].means.min():.3f})", best in middle),
-        *(above(f"{symbol} = {chosen:g} below {words}, each at its best α", "lower",
-                curves[end].best, picked.best, digits=3) for end, words in ends),
+        *(below(f"{symbol} = {chosen:g} below {words}, each at its best α", "lower",
+                picked.best, curves[end].best, digits=3) for end, words in ends),
     )
     return FigureResult(
         figure=figure.name, title=figure.title, runs=len(picked.best),
