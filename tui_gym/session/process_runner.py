@@ -125,6 +125,7 @@ class _Child:
         self._inbox, self._wake = inbox, wake
         self._outbox: queue.SimpleQueue[bytes | None] = queue.SimpleQueue()
         self._lock = threading.Lock()
+        self._reaping = threading.Lock()  # one join at a time (see `_join`)
         self.ready = False  # the child has said its first word
         self.awaited = 0  # requests sent and not yet answered
         self.last_heard = time.monotonic()
@@ -176,7 +177,7 @@ class _Child:
                     self.awaited = max(0, self.awaited - 1)
             self._inbox.append((self, message))
             self._wake.set()
-        self.process.join(timeout=5.0)  # reap it: no zombie left behind
+        self._join(5.0)  # reap it: no zombie left behind
         self.gone = True
         self._outbox.put(None)
         self._inbox.append((self, ("gone", self.process.exitcode)))
@@ -201,14 +202,20 @@ class _Child:
 
     def reap(self) -> None:
         """Wait for the child to end, killing it when it does not by itself."""
-        process = self.process
-        process.join(timeout=EXIT_SECONDS)
-        if process.is_alive():
+        if self._join(EXIT_SECONDS):
             with contextlib.suppress(OSError):
-                process.kill()
-            process.join(timeout=EXIT_SECONDS)
+                self.process.kill()
+            self._join(EXIT_SECONDS)
         with contextlib.suppress(OSError):
             self.conn.close()
+
+    def _join(self, timeout: float) -> bool:
+        """Wait for the child to end; whether it is still alive. One thread at a time:
+        a join that found the child reaped by another thread's join, not yet marked,
+        would take it for alive (and a kill then could reach a new process with its pid)."""
+        with self._reaping:
+            self.process.join(timeout=timeout)
+            return self.process.is_alive()
 
 
 class ProcessRunner:
