@@ -114,13 +114,14 @@ def add_experiment_parsers(sub: Any) -> None:
 # --- reading the arguments ---------------------------------------------------------------
 
 
-def _pairs(items: Sequence[str], flag: str) -> dict[str, str]:
+def _pairs(items: Sequence[str], flag: str, shape: str = "KEY=VALUE") -> dict[str, str]:
     out: dict[str, str] = {}
     for item in items:
         key, sep, value = item.partition("=")
         key = key.strip().replace("-", "_")
-        if not sep or not key or not value.strip():
-            raise CliError(f"{flag} {item!r}: expected KEY=VALUE")
+        filled = value.replace(",", " ") if "," in shape else value  # a list: not commas only
+        if not sep or not key or not filled.strip():
+            raise CliError(f"{flag} {item!r}: expected {shape}")
         if key in out:
             raise CliError(f"{flag} {key} is given twice")
         out[key] = value.strip()
@@ -366,18 +367,12 @@ def _compare_chart(result: Any, width: int) -> Text:
     smoothed = f", each seed's averaged over its last {window} episodes" if window > 1 else ""
     chart = band_chart(series, width, 14, y_label=f"online return per episode, mean of "
                        f"{result.spec.seeds} seeds{smoothed}", skip_start=True)
-    exact = [o for o in result.outcomes if o.exact_curve is not None]
-    if exact:
-        chart.append("\n\n")
-        curves = [ChartSeries(o.algorithm, o.exact_curve.episodes, o.exact_curve.mean,
-                              o.exact_curve.lo, o.exact_curve.hi) for o in exact]
-        chart.append_text(band_chart(curves, width, 8, y_label="greedy policy's exact value"))
-    rms = [o for o in result.outcomes if o.rms_curve is not None]
-    if rms:
-        chart.append("\n\n")
-        curves = [ChartSeries(o.algorithm, o.rms_curve.episodes, o.rms_curve.mean,
-                              o.rms_curve.lo, o.rms_curve.hi) for o in rms]
-        chart.append_text(band_chart(curves, width, 8, y_label=RMS_LABEL))
+    for name, label in (("exact_curve", "greedy policy's exact value"), ("rms_curve", RMS_LABEL)):
+        curves = [ChartSeries(o.algorithm, c.episodes, c.mean, c.lo, c.hi)
+                  for o in result.outcomes if (c := getattr(o, name)) is not None]
+        if curves:
+            chart.append("\n\n")
+            chart.append_text(band_chart(curves, width, 8, y_label=label))
     return chart
 
 
@@ -411,17 +406,8 @@ def _write_csv(path: str, outcomes: Sequence[AlgorithmOutcome]) -> None:
 
 
 def _grid(items: Sequence[str]) -> dict[str, list[str]]:
-    grid: dict[str, list[str]] = {}
-    for item in items:
-        key, sep, values = item.partition("=")
-        key = key.strip().replace("-", "_")
-        parts = [v.strip() for v in values.split(",") if v.strip()]
-        if not sep or not key or not parts:
-            raise CliError(f"--grid {item!r}: expected KEY=V1,V2,...")
-        if key in grid:
-            raise CliError(f"--grid {key} is given twice")
-        grid[key] = parts
-    return grid
+    return {key: [v.strip() for v in values.split(",") if v.strip()]
+            for key, values in _pairs(items, "--grid", "KEY=V1,V2,...").items()}
 
 
 def _ranges(items: Sequence[str]) -> dict[str, Any]:
