@@ -41,8 +41,8 @@ from typing import TYPE_CHECKING, Any
 
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.engine.trainer import TrainerProgress
-from tui_gym.session.runner import RunnerBase, TrainingRunner
-from tui_gym.session.speeds import DEFAULT_SPEED
+from tui_gym.session.runner import TrainingRunner
+from tui_gym.session.speeds import DEFAULT_SPEED, Runner
 
 if TYPE_CHECKING:
     from multiprocessing.connection import Connection
@@ -211,7 +211,7 @@ class _Child:
             self.conn.close()
 
 
-class ProcessRunner(RunnerBase):
+class ProcessRunner(Runner):
     """Trains a session in a child process, on request (see the module docstring)."""
 
     def __init__(self, session: Session, speed: int = DEFAULT_SPEED) -> None:

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 from tui_gym.core.engine.stats import StepEvent, TrainingSnapshot
 from tui_gym.core.engine.trainer import Trainer
-from tui_gym.session.speeds import DEFAULT_SPEED, SPEEDS, Speed
+from tui_gym.session.speeds import DEFAULT_SPEED, SPEEDS, Runner, Speed
 
 if TYPE_CHECKING:
     from tui_gym.session.session import Session
@@ -40,68 +40,7 @@ CALL_SECONDS = 0.016
 STOP_TIMEOUT = 5.0  # seconds `pause()` and `close()` wait at most for the worker
 
 
-class RunnerBase:
-    """What the thread and the process runner share: the speed, toggling, and the last
-    animated step of the session's agent."""
-
-    session: Session
-    speed_index: int
-    _shown: tuple[Any, dict | None, StepEvent | None] = (None, None, None)
-
-    @property
-    def running(self) -> bool:
-        raise NotImplementedError
-
-    def update(self) -> None:
-        """Take in what the trainer has published (nothing to collect on a thread)."""
-
-    def start(self) -> bool:
-        raise NotImplementedError
-
-    def pause(self, wait: bool = True, timeout: float = STOP_TIMEOUT) -> bool:
-        raise NotImplementedError
-
-    def _speed_changed(self) -> None:
-        raise NotImplementedError
-
-    @property
-    def speed(self) -> Speed:
-        return SPEEDS[self.speed_index]
-
-    @property
-    def last_scene(self) -> dict | None:
-        """The board after the last animated step of the session's agent."""
-        self.update()
-        agent, scene, _ = self._shown
-        return scene if agent is self.session.agent else None
-
-    @property
-    def last_event(self) -> StepEvent | None:
-        """The last animated step of the session's agent."""
-        self.update()
-        agent, _, event = self._shown
-        return event if agent is self.session.agent else None
-
-    def toggle(self) -> bool:
-        """Start when paused, pause when running; returns whether it now runs."""
-        if self.running:
-            self.pause(wait=False)
-            return False
-        return self.start()
-
-    def set_speed(self, index: int) -> Speed:
-        self.speed_index = max(0, min(len(SPEEDS) - 1, index))
-        self._speed_changed()
-        return self.speed
-
-    def faster(self) -> Speed:
-        return self.set_speed(self.speed_index + 1)
-
-    def slower(self) -> Speed:
-        return self.set_speed(self.speed_index - 1)
-
-
-class TrainingRunner(RunnerBase):
+class TrainingRunner(Runner):
     """Trains `session.trainer` on a background thread, on request."""
 
     def __init__(self, session: Session, speed: int = DEFAULT_SPEED) -> None:
@@ -138,6 +77,9 @@ class TrainingRunner(RunnerBase):
                 setattr(self, f"_{name}", value)
             self._controls += 1
             self._cond.notify_all()
+
+    def update(self) -> None:
+        """Nothing to collect: the worker trains the session's own objects."""
 
     def start(self) -> bool:
         """Train until paused or the budget is reached; False when the budget is used up."""
@@ -310,4 +252,4 @@ class _Stopped:
         return runner._quit or not (runner._want_one if self._one else runner._want_run)
 
 
-__all__ = ["DEFAULT_SPEED", "SPEEDS", "RunnerBase", "Speed", "TrainingRunner"]
+__all__ = ["DEFAULT_SPEED", "SPEEDS", "Runner", "Speed", "TrainingRunner"]
