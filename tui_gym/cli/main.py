@@ -127,13 +127,13 @@ def build_parser() -> argparse.ArgumentParser:
 
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
-    envs = sub.add_parser("envs", help="list the games")
-    envs.add_argument("--json", action="store_true", help="print one JSON object")
-    wrappers = sub.add_parser("wrappers", help="list the wrapper catalog and the --wrapper syntax")
-    wrappers.add_argument("--json", action="store_true", help="print one JSON object")
+    # Each `--json`'s help says its schema (`_document_json`).
+    for name, text in (("envs", "list the games"),
+                       ("wrappers", "list the wrapper catalog and the --wrapper syntax")):
+        sub.add_parser(name, help=text).add_argument("--json", action="store_true")
     add_maps_parser(sub)
-    algorithms = sub.add_parser("algorithms", help="list the learners and their parameters")
-    algorithms.add_argument("--json", action="store_true", help="print one JSON object")
+    sub.add_parser("algorithms", help="list the learners and their parameters").add_argument(
+        "--json", action="store_true")
     names = ", ".join(cls.name for cls in ALGORITHMS)
 
     train = sub.add_parser("train", help="train an agent headless")
