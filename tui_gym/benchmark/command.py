@@ -52,10 +52,9 @@ def add_parser(sub: Any, int_type: Any, seed_type: Any, float_type: Any) -> None
                        help="add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable)")
     bench.add_argument("--leaderboard", action="store_true",
                        help="list GAME's recorded benchmarks, best first, instead of running one")
-    bench.add_argument("--db", metavar="PATH", help="the run history file (default: "
-                       "$TUI_GYM_DB, else the user's data folder)")
-    bench.add_argument("--no-record", action="store_true",
-                       help="do not record the result in the run history")
+    from tui_gym.cli.runs_command import add_history_flags
+
+    add_history_flags(bench, "the result")
     bench.add_argument("--json", action="store_true", help="print one JSON object")
     from tui_gym.cli.replay_command import add_record_option
 

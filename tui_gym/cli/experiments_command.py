@@ -17,7 +17,6 @@ from rich.text import Text
 
 from tui_gym.algorithms import ALGORITHMS
 from tui_gym.cli.output import CliError, print_json, say_status
-from tui_gym.cli.types import file_name as _path
 from tui_gym.cli.types import int_in as _int_in
 from tui_gym.cli.types import output_file
 from tui_gym.cli.types import seed_number as _seed
@@ -28,7 +27,6 @@ if TYPE_CHECKING:
 
 CLUSTER_ENV = "TUI_GYM_CLUSTER"
 RMS_LABEL = "RMS error of V"  # a prediction learner's figure, against the exact values
-DB_HELP = "the run history file (default: $TUI_GYM_DB, else the data folder's runs.db)"
 # Every seed's return of every episode is kept while a run lasts: these bound that memory.
 _seeds = _int_in(1, 1000, "a number of seeds from 1 to 1,000")
 _episodes = _int_in(1, 200_000, "a number of episodes from 1 to 200,000")
@@ -68,9 +66,9 @@ def add_task_flags(parser: argparse.ArgumentParser) -> None:
                         help="run the tasks on a Dask scheduler (tcp://host:8786), or on "
                         f"local:N workers started here (default: ${CLUSTER_ENV}, else "
                         "processes of this machine)")
-    parser.add_argument("--db", type=_path, metavar="PATH", help=DB_HELP)
-    parser.add_argument("--no-record", action="store_true",
-                        help="do not keep these runs in the run history")
+    from tui_gym.cli.runs_command import add_history_flags
+
+    add_history_flags(parser, "these runs")
 
 
 def add_experiment_parsers(sub: Any) -> None:

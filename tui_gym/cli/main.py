@@ -123,7 +123,7 @@ def app_arguments(argv: Sequence[str]) -> argparse.Namespace | None:
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser (also used to document the CLI)."""
     parser = _app_parser()
-    from tui_gym.cli.runs_command import add_runs_parser, add_train_options
+    from tui_gym.cli.runs_command import add_history_flags, add_runs_parser
 
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
@@ -170,7 +170,7 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--save", type=output_file, metavar="PATH",
                        help="save the trained agent here (the folder is checked first)")
     train.add_argument("--json", action="store_true", help="print one JSON object, no bar")
-    add_train_options(train)
+    add_history_flags(train, "this run", inherit=True)
 
     ev = sub.add_parser("eval", help="evaluate a saved agent (greedy play + exact reference)")
     ev.add_argument("path", metavar="PATH", help="a saved agent (train --save, or ctrl+s in "
