@@ -11,7 +11,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from tui_gym.cli.output import print_json
+from tui_gym.cli.output import key_value_table, print_json
 from tui_gym.core.text import visible
 
 BUILT_IN = ("random", "optimal")
@@ -95,15 +95,6 @@ def _player(args: argparse.Namespace, game: str) -> tuple[Any, dict[str, Any], t
     return agent, dict(session.env_kwargs), tuple(str(c) for c in session.applied)
 
 
-def _summary(title: str, rows: list[tuple[str, str]]) -> Table:
-    table = Table(title=title, show_header=False, title_justify="left")
-    table.add_column(style="bold")
-    table.add_column(justify="right")
-    for label, value in rows:
-        table.add_row(label, escape(value))
-    return table
-
-
 def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
     if args.leaderboard:
         return _show_leaderboard(args, out)
@@ -147,7 +138,8 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
     if args.json:
         print_json("benchmark", result.to_json())
     else:
-        out.print(_summary(f"Benchmark: {result.game}", result.rows()))
+        out.print(key_value_table(f"Benchmark: {result.game}",
+                                  [(label, escape(value)) for label, value in result.rows()]))
         if recorded:
             out.print(escape(recorded))
     sys.stderr.write(unrecorded)
