@@ -110,14 +110,23 @@ def app_arguments(argv: Sequence[str]) -> argparse.Namespace | None:
     """The app's arguments when `argv` holds nothing but the app's options (no sub-command,
     no help), read as the full parser reads them without making every sub-command's
     parser; else None."""
+    _, args, rest = _read_app_options(argv)
+    if rest:
+        return None
+    args.command = None
+    return args
+
+
+def _read_app_options(
+    argv: Sequence[str]
+) -> tuple[argparse.ArgumentParser, argparse.Namespace, list[str]]:
+    """The app's parser, the app options `argv` starts with, and the rest of `argv`."""
     parser = _app_parser(add_help=False)
     parser.add_argument("rest", nargs=argparse.REMAINDER)  # a sub-command and what follows
     args, unknown = parser.parse_known_args(argv)
-    if args.rest or unknown:
-        return None
+    rest = [*args.rest, *unknown]
     del args.rest
-    args.command = None
-    return args
+    return parser, args, rest
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -320,9 +329,7 @@ def _pass_app_options(
     parser: argparse.ArgumentParser, argv: Sequence[str], args: argparse.Namespace
 ) -> None:
     """Hand the app options given before the sub-command to it, or say where they go."""
-    app = _app_parser(add_help=False)
-    app.add_argument("rest", nargs=argparse.REMAINDER)
-    before, _ = app.parse_known_args(argv)
+    app, before, _ = _read_app_options(argv)
     commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
     command = commands.choices[args.command]
     for action in app._actions:
