@@ -285,7 +285,7 @@ def test_an_episode_whose_start_was_lost_begins_at_its_first_move(tmp_path: Path
 
 
 def test_files_with_nothing_to_replay_are_refused_with_one_line(tmp_path: Path) -> None:
-    with pytest.raises(RecordingError, match="missing.jsonl: No such file"):
+    with pytest.raises(RecordingError, match="missing.jsonl: no such file"):
         read_recording(tmp_path / "missing.jsonl")
     with pytest.raises(RecordingError, match="is a folder"):
         read_recording(tmp_path)
@@ -336,4 +336,4 @@ def test_record_paths_that_cannot_be_written_are_refused(
             main(argv)
         assert exit_.value.code == 2 and capsys.readouterr().err == said
     assert main(["replay", str(tmp_path / "none.jsonl")]) == 2
-    assert "none.jsonl: No such file or directory" in capsys.readouterr().err
+    assert "none.jsonl: no such file\n" in capsys.readouterr().err

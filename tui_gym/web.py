@@ -38,7 +38,8 @@ def add_serve_parser(sub: Any) -> None:
     serve = sub.add_parser(
         "serve", help="serve the app in a browser (needs the web extra)",
         description="Serve the app in a browser tab, one app per tab, through textual-serve. "
-        "Options before `serve` (--env, --seed, --load, --runner) open each tab's app.",
+        "Options before `serve` (--env, --seed, --load, --map-file, --runner, --db, "
+        "--no-history) open each tab's app.",
     )
     serve.add_argument("--host", default=DEFAULT_HOST,
                        help=f"address to listen on (default {DEFAULT_HOST}: this machine only)")
@@ -84,8 +85,12 @@ def app_command(args: argparse.Namespace) -> str:
     command = [sys.executable, "-m", "tui_gym", "--env", args.env, "--runner", args.runner]
     if args.seed is not None:  # else each tab draws its own
         command += ["--seed", str(args.seed)]
-    if args.load:
-        command += ["--load", args.load]
+    for flag, value in (("--load", args.load), ("--map-file", args.app_map_file),
+                        ("--db", args.db)):
+        if value:
+            command += [flag, str(value)]
+    if args.no_history:
+        command.append("--no-history")
     return shlex.join(command)
 
 
@@ -94,6 +99,13 @@ def cmd_serve(args: argparse.Namespace, out: Console) -> int:
         raise CliError("--record records the app in this terminal; it does not go with serve")
     check_host(args.host, args.public)
     token = serve_token(args.token, args.public)
+    from tui_gym.cli.main import app_env
+
+    app_env(args)  # a file that cannot be opened is said now, not in each tab
+    if args.load:
+        from tui_gym.session.session import Session
+
+        Session.load(args.load)
     try:
         from textual_serve.server import Server
     except ImportError:
@@ -102,10 +114,6 @@ def cmd_serve(args: argparse.Namespace, out: Console) -> int:
 
     guard = ServeGuard(max_apps=args.max_apps, token=token,
                        host_allowed=None if args.public else is_local)
-    if args.load:
-        from tui_gym.session.session import Session
-
-        Session.load(args.load)  # a file that cannot be opened is said now, not in each tab
 
     class AppServer(Server):
         """textual-serve's server, saying what it serves and to whom in its own words."""

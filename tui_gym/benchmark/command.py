@@ -11,7 +11,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from tui_gym.cli.output import print_json
+from tui_gym.cli.output import key_value_table, print_json
 from tui_gym.core.text import visible
 
 BUILT_IN = ("random", "optimal")
@@ -52,10 +52,9 @@ def add_parser(sub: Any, int_type: Any, seed_type: Any, float_type: Any) -> None
                        help="add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable)")
     bench.add_argument("--leaderboard", action="store_true",
                        help="list GAME's recorded benchmarks, best first, instead of running one")
-    bench.add_argument("--db", metavar="PATH", help="the run history file (default: "
-                       "$TUI_GYM_DB, else the user's data folder)")
-    bench.add_argument("--no-record", action="store_true",
-                       help="do not record the result in the run history")
+    from tui_gym.cli.runs_command import add_history_flags
+
+    add_history_flags(bench, "the result")
     bench.add_argument("--json", action="store_true", help="print one JSON object")
     from tui_gym.cli.replay_command import add_record_option
 
@@ -94,15 +93,6 @@ def _player(args: argparse.Namespace, game: str) -> tuple[Any, dict[str, Any], t
                          "--wrapper")
     session = agent.session
     return agent, dict(session.env_kwargs), tuple(str(c) for c in session.applied)
-
-
-def _summary(title: str, rows: list[tuple[str, str]]) -> Table:
-    table = Table(title=title, show_header=False, title_justify="left")
-    table.add_column(style="bold")
-    table.add_column(justify="right")
-    for label, value in rows:
-        table.add_row(label, escape(value))
-    return table
 
 
 def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
@@ -148,7 +138,8 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
     if args.json:
         print_json("benchmark", result.to_json())
     else:
-        out.print(_summary(f"Benchmark: {result.game}", result.rows()))
+        out.print(key_value_table(f"Benchmark: {result.game}",
+                                  [(label, escape(value)) for label, value in result.rows()]))
         if recorded:
             out.print(escape(recorded))
     sys.stderr.write(unrecorded)

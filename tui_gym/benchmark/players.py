@@ -21,7 +21,7 @@ import numpy as np
 from tui_gym.benchmark.group import start_group
 from tui_gym.benchmark.referee import Referee
 from tui_gym.session.arena.games import raw_observation, session_entry
-from tui_gym.session.protocol import parse_request, read_lines
+from tui_gym.session.protocol import parse_request, read_batches
 
 MAX_STRIKES = 3  # decisions in a row not made in time before a player counts as gone
 STARTUP_S = 10.0  # a program's first request may take this long (its start-up)
@@ -158,16 +158,17 @@ class _Program:
 
     def _read(self, stream: IO[bytes]) -> None:
         with contextlib.suppress(OSError, ValueError):
-            for line in read_lines(stream):
+            for batch in read_batches(stream):
                 # Stamped here, as read: the main thread may be slow to take it.
-                self.lines.put((time.monotonic(), _TOO_LONG if line is None else line))
+                for line in batch:
+                    self.lines.put((time.monotonic(), _TOO_LONG if line is None else line))
         self.lines.put((time.monotonic(), _EOF))
 
     def _drain(self, stream: IO[bytes]) -> None:
         with contextlib.suppress(OSError, ValueError):
-            for line in read_lines(stream, limit=4096):
-                if line is not None and line.strip():
-                    self.stderr.append(line.decode("utf-8", "replace").rstrip()[:200])
+            for batch in read_batches(stream, limit=4096):
+                self.stderr.extend(line.decode("utf-8", "replace").rstrip()[:200]
+                                   for line in batch if line is not None and line.strip())
 
     def next_line(self, timeout: float) -> tuple[float, Any]:
         """When it was read, and the next line it wrote (or `_EOF`, `_TOO_LONG`);

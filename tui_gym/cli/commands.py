@@ -87,9 +87,8 @@ def cmd_envs(args: argparse.Namespace, out: Console) -> int:
             out.print(f"  [dim]teaches:[/] {escape(g.teaches)}", overflow="fold")
         out.print(f"  [dim]actions:[/] {', '.join(g.action_names)}", overflow="fold")
         for p in g.params:
-            flag = "--" + p.name.replace("_", "-")
-            out.print(f"  {flag} {escape(p.describe_range())}, default {typed_text(p.default)}: "
-                      f"{escape(p.help)}", overflow="fold")
+            out.print(f"  {flag(p.name)} {escape(p.describe_range())}, default "
+                      f"{typed_text(p.default)}: {escape(p.help)}", overflow="fold")
     out.print("\nAny other Gymnasium id with Discrete spaces and a transition table P works "
               "too (MODULE:ID imports the module that registers it).", overflow="fold")
     return 0
@@ -192,12 +191,16 @@ def _check_fit(session: Session, env_id: str) -> None:
         raise CliError(f"wrapper does not fit {env_id}: {reasons}")
 
 
-def _session_from_args(args: argparse.Namespace) -> Session:
+def _wrappers(args: argparse.Namespace) -> tuple[Any, ...]:
     from tui_gym.core.wrappers import parse_wrapper_spec
 
+    return tuple(parse_wrapper_spec(text) for text in args.wrapper)
+
+
+def _session_from_args(args: argparse.Namespace) -> Session:
     env_id = resolve_env_id(args.env)
     game = game_for(env_id)
-    choices = tuple(parse_wrapper_spec(text) for text in args.wrapper)
+    choices = _wrappers(args)
     try:
         cls = algorithm(args.algorithm)
     except ValueError as exc:
@@ -338,7 +341,6 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
     recording.begin(session)
     hp = session.hp
     assert hp is not None  # a built session has its hyperparameters
-    trainer = session.trainer
     started = time.perf_counter()
     if args.json or not out.is_terminal:
         outcome = session.train(target_gap=args.target_gap, on_chunk=recording.on_chunk)
@@ -471,14 +473,11 @@ def _panel_table(panel: Any) -> Table:
 def cmd_play(args: argparse.Namespace, out: Console) -> int:
     import sys
 
-    from tui_gym.core.wrappers import parse_wrapper_spec
     from tui_gym.session.protocol import JsonlPlayer, serve
 
     env_id = resolve_env_id(args.env)
-    session = Session(
-        env_id=env_id, env_kwargs=game_kwargs(args, game_for(env_id)),
-        choices=tuple(parse_wrapper_spec(text) for text in args.wrapper), seed=args.play_seed or 0,
-    )
+    session = Session(env_id=env_id, env_kwargs=game_kwargs(args, game_for(env_id)),
+                      choices=_wrappers(args), seed=args.play_seed or 0)
     _check_fit(session, env_id)
     player = JsonlPlayer(session, seed=args.play_seed)
     if args.record is None:

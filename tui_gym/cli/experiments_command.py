@@ -17,7 +17,6 @@ from rich.text import Text
 
 from tui_gym.algorithms import ALGORITHMS
 from tui_gym.cli.output import CliError, print_json, say_status
-from tui_gym.cli.types import file_name as _path
 from tui_gym.cli.types import int_in as _int_in
 from tui_gym.cli.types import output_file
 from tui_gym.cli.types import seed_number as _seed
@@ -28,7 +27,6 @@ if TYPE_CHECKING:
 
 CLUSTER_ENV = "TUI_GYM_CLUSTER"
 RMS_LABEL = "RMS error of V"  # a prediction learner's figure, against the exact values
-DB_HELP = "the run history file (default: $TUI_GYM_DB, else the data folder's runs.db)"
 # Every seed's return of every episode is kept while a run lasts: these bound that memory.
 _seeds = _int_in(1, 1000, "a number of seeds from 1 to 1,000")
 _episodes = _int_in(1, 200_000, "a number of episodes from 1 to 200,000")
@@ -68,9 +66,9 @@ def add_task_flags(parser: argparse.ArgumentParser) -> None:
                         help="run the tasks on a Dask scheduler (tcp://host:8786), or on "
                         f"local:N workers started here (default: ${CLUSTER_ENV}, else "
                         "processes of this machine)")
-    parser.add_argument("--db", type=_path, metavar="PATH", help=DB_HELP)
-    parser.add_argument("--no-record", action="store_true",
-                        help="do not keep these runs in the run history")
+    from tui_gym.cli.runs_command import add_history_flags
+
+    add_history_flags(parser, "these runs")
 
 
 def add_experiment_parsers(sub: Any) -> None:
@@ -114,13 +112,14 @@ def add_experiment_parsers(sub: Any) -> None:
 # --- reading the arguments ---------------------------------------------------------------
 
 
-def _pairs(items: Sequence[str], flag: str) -> dict[str, str]:
+def _pairs(items: Sequence[str], flag: str, shape: str = "KEY=VALUE") -> dict[str, str]:
     out: dict[str, str] = {}
     for item in items:
         key, sep, value = item.partition("=")
         key = key.strip().replace("-", "_")
-        if not sep or not key or not value.strip():
-            raise CliError(f"{flag} {item!r}: expected KEY=VALUE")
+        filled = value.replace(",", " ") if "," in shape else value  # a list: not commas only
+        if not sep or not key or not filled.strip():
+            raise CliError(f"{flag} {item!r}: expected {shape}")
         if key in out:
             raise CliError(f"{flag} {key} is given twice")
         out[key] = value.strip()
@@ -366,18 +365,12 @@ def _compare_chart(result: Any, width: int) -> Text:
     smoothed = f", each seed's averaged over its last {window} episodes" if window > 1 else ""
     chart = band_chart(series, width, 14, y_label=f"online return per episode, mean of "
                        f"{result.spec.seeds} seeds{smoothed}", skip_start=True)
-    exact = [o for o in result.outcomes if o.exact_curve is not None]
-    if exact:
-        chart.append("\n\n")
-        curves = [ChartSeries(o.algorithm, o.exact_curve.episodes, o.exact_curve.mean,
-                              o.exact_curve.lo, o.exact_curve.hi) for o in exact]
-        chart.append_text(band_chart(curves, width, 8, y_label="greedy policy's exact value"))
-    rms = [o for o in result.outcomes if o.rms_curve is not None]
-    if rms:
-        chart.append("\n\n")
-        curves = [ChartSeries(o.algorithm, o.rms_curve.episodes, o.rms_curve.mean,
-                              o.rms_curve.lo, o.rms_curve.hi) for o in rms]
-        chart.append_text(band_chart(curves, width, 8, y_label=RMS_LABEL))
+    for name, label in (("exact_curve", "greedy policy's exact value"), ("rms_curve", RMS_LABEL)):
+        curves = [ChartSeries(o.algorithm, c.episodes, c.mean, c.lo, c.hi)
+                  for o in result.outcomes if (c := getattr(o, name)) is not None]
+        if curves:
+            chart.append("\n\n")
+            chart.append_text(band_chart(curves, width, 8, y_label=label))
     return chart
 
 
@@ -411,17 +404,8 @@ def _write_csv(path: str, outcomes: Sequence[AlgorithmOutcome]) -> None:
 
 
 def _grid(items: Sequence[str]) -> dict[str, list[str]]:
-    grid: dict[str, list[str]] = {}
-    for item in items:
-        key, sep, values = item.partition("=")
-        key = key.strip().replace("-", "_")
-        parts = [v.strip() for v in values.split(",") if v.strip()]
-        if not sep or not key or not parts:
-            raise CliError(f"--grid {item!r}: expected KEY=V1,V2,...")
-        if key in grid:
-            raise CliError(f"--grid {key} is given twice")
-        grid[key] = parts
-    return grid
+    return {key: [v.strip() for v in values.split(",") if v.strip()]
+            for key, values in _pairs(items, "--grid", "KEY=V1,V2,...").items()}
 
 
 def _ranges(items: Sequence[str]) -> dict[str, Any]:

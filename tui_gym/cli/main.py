@@ -110,30 +110,39 @@ def app_arguments(argv: Sequence[str]) -> argparse.Namespace | None:
     """The app's arguments when `argv` holds nothing but the app's options (no sub-command,
     no help), read as the full parser reads them without making every sub-command's
     parser; else None."""
+    _, args, rest = _read_app_options(argv)
+    if rest:
+        return None
+    args.command = None
+    return args
+
+
+def _read_app_options(
+    argv: Sequence[str]
+) -> tuple[argparse.ArgumentParser, argparse.Namespace, list[str]]:
+    """The app's parser, the app options `argv` starts with, and the rest of `argv`."""
     parser = _app_parser(add_help=False)
     parser.add_argument("rest", nargs=argparse.REMAINDER)  # a sub-command and what follows
     args, unknown = parser.parse_known_args(argv)
-    if args.rest or unknown:
-        return None
+    rest = [*args.rest, *unknown]
     del args.rest
-    args.command = None
-    return args
+    return parser, args, rest
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser (also used to document the CLI)."""
     parser = _app_parser()
-    from tui_gym.cli.runs_command import add_runs_parser, add_train_options
+    from tui_gym.cli.runs_command import add_history_flags, add_runs_parser
 
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
-    envs = sub.add_parser("envs", help="list the games")
-    envs.add_argument("--json", action="store_true", help="print one JSON object")
-    wrappers = sub.add_parser("wrappers", help="list the wrapper catalog and the --wrapper syntax")
-    wrappers.add_argument("--json", action="store_true", help="print one JSON object")
+    # Each `--json`'s help says its schema (`_document_json`).
+    for name, text in (("envs", "list the games"),
+                       ("wrappers", "list the wrapper catalog and the --wrapper syntax")):
+        sub.add_parser(name, help=text).add_argument("--json", action="store_true")
     add_maps_parser(sub)
-    algorithms = sub.add_parser("algorithms", help="list the learners and their parameters")
-    algorithms.add_argument("--json", action="store_true", help="print one JSON object")
+    sub.add_parser("algorithms", help="list the learners and their parameters").add_argument(
+        "--json", action="store_true")
     names = ", ".join(cls.name for cls in ALGORITHMS)
 
     train = sub.add_parser("train", help="train an agent headless")
@@ -170,7 +179,7 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--save", type=output_file, metavar="PATH",
                        help="save the trained agent here (the folder is checked first)")
     train.add_argument("--json", action="store_true", help="print one JSON object, no bar")
-    add_train_options(train)
+    add_history_flags(train, "this run", inherit=True)
 
     ev = sub.add_parser("eval", help="evaluate a saved agent (greedy play + exact reference)")
     ev.add_argument("path", metavar="PATH", help="a saved agent (train --save, or ctrl+s in "
@@ -267,7 +276,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = attach_negative_values(sys.argv[1:] if argv is None else argv)
     err = Console(stderr=True)
     try:
-        args = app_arguments(argv) or build_parser().parse_args(argv)
+        args = app_arguments(argv)
+        if args is None:
+            parser = build_parser()
+            args = parser.parse_args(argv)
         # The app draws a seed afresh and shows it (so does each tab `serve` opens); commands
         # take 0.
         if args.seed is None and args.command != "serve":
@@ -275,6 +287,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         out = OutConsole()
         if args.command is None:
             return _run_app(args)
+        _pass_app_options(parser, argv, args)
         if ":" in args.env:
             from tui_gym.games import resolve_env_id
 
@@ -305,6 +318,38 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_USAGE
 
 
+# The app options a command opens its apps with; any other command takes an app option
+# as its own flag of the same name (`tui-gym --db F runs` is `runs --db F`).
+_OPENS_APPS = {"serve": ("--env", "--seed", "--load", "--map-file", "--runner", "--db",
+                         "--no-history", "--record"), "replay": ("--runner",)}
+_SAME_FLAG = {"--no-history": "--no-record"}
+
+
+def _pass_app_options(
+    parser: argparse.ArgumentParser, argv: Sequence[str], args: argparse.Namespace
+) -> None:
+    """Hand the app options given before the sub-command to it, or say where they go."""
+    app, before, _ = _read_app_options(argv)
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    command = commands.choices[args.command]
+    for action in app._actions:
+        value = getattr(before, action.dest, action.default)
+        if not action.option_strings or value == action.default:
+            continue
+        name = action.option_strings[0]
+        if name in _OPENS_APPS.get(args.command, ()) or (name == "--env" and ":" in value):
+            continue  # the command reads it (`--env MODULE:ID` imports the module)
+        own = command._option_string_actions.get(_SAME_FLAG.get(name, name))
+        if own is None and name == "--env":
+            raise CliError(f"--env before `{args.command}` opens the app or serve; "
+                           f"`{args.command}` takes its game after its name (see --help)")
+        if own is None:
+            raise CliError(f"{name} before `{args.command}` is an option of the app (and of "
+                           f"serve), not of {args.command}: see `tui-gym {args.command} --help`")
+        if getattr(args, own.dest, own.default) == own.default:
+            setattr(args, own.dest, value)
+
+
 def _quiet_stdout() -> None:
     """Point stdout at /dev/null so the interpreter's own flush at exit finds no pipe."""
     try:
@@ -322,18 +367,23 @@ def _one_line(exc: BaseException) -> str:
     return readable(text)
 
 
-def _run_app(args: argparse.Namespace) -> int:
+def app_env(args: argparse.Namespace) -> tuple[str | None, dict[str, Any] | None]:
+    """The env id and arguments the app opens on (`--env`, `--map-file`); CliError of one
+    line for an unknown game or a map that cannot be read."""
     from tui_gym.games import resolve_env_id
 
     env_id = resolve_env_id(args.env) if args.env else None
-    env_kwargs = None
-    if args.app_map_file:
-        from tui_gym.cli.flags import map_kwargs
-        from tui_gym.games import GAMES, game_for
+    if not args.app_map_file:
+        return env_id, None
+    from tui_gym.cli.flags import map_kwargs
+    from tui_gym.games import GAMES, game_for
 
-        game = game_for(env_id) if env_id else GAMES[0]
-        env_kwargs = map_kwargs(args.app_map_file, game, {})
-        env_id = env_id or game.env_id
+    game = game_for(env_id) if env_id else GAMES[0]
+    return env_id or game.env_id, map_kwargs(args.app_map_file, game, {})
+
+
+def _run_app(args: argparse.Namespace) -> int:
+    env_id, env_kwargs = app_env(args)
     try:
         from tui_gym.ui.app import run_app
     except ImportError as exc:  # pragma: no cover - only without the UI installed

@@ -86,11 +86,12 @@ def add_runs_parser(sub: Any) -> None:
     _db_option(prune, inherit=True)
 
 
-def add_train_options(train: argparse.ArgumentParser) -> None:
-    """`--db PATH` and `--no-record` on `train`."""
-    _db_option(train, inherit=True)
-    train.add_argument("--no-record", action="store_true",
-                       help="do not keep this run in the run history")
+def add_history_flags(parser: argparse.ArgumentParser, runs: str, *, inherit: bool = False
+                      ) -> None:
+    """`--db PATH` and `--no-record` (do not keep `runs` in the history) on a command."""
+    _db_option(parser, inherit=inherit)
+    parser.add_argument("--no-record", action="store_true",
+                        help=f"do not keep {runs} in the run history")
 
 
 def add_app_options(parser: argparse.ArgumentParser) -> None:

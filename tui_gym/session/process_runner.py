@@ -39,10 +39,10 @@ from dataclasses import dataclass
 from multiprocessing import resource_tracker
 from typing import TYPE_CHECKING, Any
 
-from tui_gym.core.engine.stats import StepEvent, TrainingSnapshot
+from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.engine.trainer import TrainerProgress
 from tui_gym.session.runner import TrainingRunner
-from tui_gym.session.speeds import DEFAULT_SPEED, SPEEDS, Speed
+from tui_gym.session.speeds import DEFAULT_SPEED, Runner
 
 if TYPE_CHECKING:
     from multiprocessing.connection import Connection
@@ -218,7 +218,7 @@ class _Child:
             return self.process.is_alive()
 
 
-class ProcessRunner:
+class ProcessRunner(Runner):
     """Trains a session in a child process, on request (see the module docstring)."""
 
     def __init__(self, session: Session, speed: int = DEFAULT_SPEED) -> None:
@@ -232,7 +232,6 @@ class ProcessRunner:
         self._pending: _Request | None = None
         self._numbers = 0
         self._last_sent_agent: Any = None  # to tell the child when the agent is a new one
-        self._shown: tuple[Any, dict | None, StepEvent | None] = (None, None, None)
         self._inbox: collections.deque[tuple[_Child, tuple]] = collections.deque()
         self._heard = threading.Event()
         self._deaths: collections.deque[float] = collections.deque()
@@ -245,11 +244,6 @@ class ProcessRunner:
         resource_tracker.ensure_running()
         self._child: _Child | None = None
         self._spawn_at = time.monotonic() + SPAWN_DELAY
-
-    # --- what the owner reads ---------------------------------------------------
-    @property
-    def speed(self) -> Speed:
-        return SPEEDS[self.speed_index]
 
     @property
     def error(self) -> BaseException | None:
@@ -297,18 +291,6 @@ class ProcessRunner:
         return self.session.trainer.latest
 
     @property
-    def last_scene(self) -> dict | None:
-        self.update()
-        agent, scene, _ = self._shown
-        return scene if agent is self.session.agent else None
-
-    @property
-    def last_event(self) -> StepEvent | None:
-        self.update()
-        agent, _, event = self._shown
-        return event if agent is self.session.agent else None
-
-    @property
     def child_pid(self) -> int | None:
         """The training process's id (None when there is none)."""
         self._spawn()
@@ -354,12 +336,6 @@ class ProcessRunner:
             self._ask_back(self._pending)
         return self.wait_idle(timeout) if wait else True
 
-    def toggle(self) -> bool:
-        if self.running:
-            self.pause(wait=False)
-            return False
-        return self.start()
-
     def run_one_episode(self) -> bool:
         """Play one training episode in the child (ignored while running or busy); False,
         as `start`, when the budget is used up."""
@@ -399,17 +375,10 @@ class ProcessRunner:
         request = self._pending
         if request is not None and self._current(request) and self._child is not None:
             self._child.send(("hyperparameters", request.number, self.session.hp))
-    def set_speed(self, index: int) -> Speed:
-        self.speed_index = max(0, min(len(SPEEDS) - 1, index))
+
+    def _speed_changed(self) -> None:
         if self._child is not None:
             self._child.send(("speed", self.speed_index))
-        return self.speed
-
-    def faster(self) -> Speed:
-        return self.set_speed(self.speed_index + 1)
-
-    def slower(self) -> Speed:
-        return self.set_speed(self.speed_index - 1)
 
     def wait_idle(self, timeout: float = REPLY_TIMEOUT) -> bool:
         """Wait until the child holds no agent (nothing running, nothing asked for)."""

@@ -227,21 +227,6 @@ class JsonlPlayer:
         return {"commands": list(COMMANDS), "actions": list(self.rules.action_names)}
 
 
-def read_lines(stdin: IO[bytes], limit: int = MAX_LINE_BYTES) -> Iterator[bytes | None]:
-    """Each line of `stdin` as bytes, as soon as it is complete; a line longer than
-    `limit` comes back as None (its bytes are read and dropped, not held)."""
-    while True:
-        line = stdin.readline(limit + 1)
-        if not line:
-            return
-        if len(line) > limit:
-            while line and not line.endswith(b"\n"):
-                line = stdin.readline(limit)
-            yield None
-            continue
-        yield line
-
-
 def read_batches(stdin: IO[bytes], limit: int = MAX_LINE_BYTES,
                  chunk: int = 1 << 16) -> Iterator[list[bytes | None]]:
     """The lines of `stdin` (without their newlines) in batches: each batch holds every

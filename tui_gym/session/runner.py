@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 from tui_gym.core.engine.stats import StepEvent, TrainingSnapshot
 from tui_gym.core.engine.trainer import Trainer
-from tui_gym.session.speeds import DEFAULT_SPEED, SPEEDS, Speed
+from tui_gym.session.speeds import DEFAULT_SPEED, SPEEDS, Runner, Speed
 
 if TYPE_CHECKING:
     from tui_gym.session.session import Session
@@ -40,7 +40,7 @@ CALL_SECONDS = 0.016
 STOP_TIMEOUT = 5.0  # seconds `pause()` and `close()` wait at most for the worker
 
 
-class TrainingRunner:
+class TrainingRunner(Runner):
     """Trains `session.trainer` on a background thread, on request."""
 
     def __init__(self, session: Session, speed: int = DEFAULT_SPEED) -> None:
@@ -48,7 +48,6 @@ class TrainingRunner:
         self.speed_index = speed
         self.error: BaseException | None = None
         self.finished = False  # the episode budget was reached
-        self._shown: tuple[Any, dict | None, StepEvent | None] = (None, None, None)
         self._anim_mark = 0.0  # when the last animated step was taken
         # Every flag below changes under `_cond`, and every change notifies it:
         # the worker sleeps on it, between animated steps too.
@@ -62,11 +61,6 @@ class TrainingRunner:
         self._thread = threading.Thread(target=self._loop, name="tui-gym-trainer", daemon=True)
         self._thread.start()
 
-    # --- controls (the thread that owns the session) ------------------------
-    @property
-    def speed(self) -> Speed:
-        return SPEEDS[self.speed_index]
-
     @property
     def running(self) -> bool:
         """True while training is switched on (it may be between pieces of work)."""
@@ -76,18 +70,6 @@ class TrainingRunner:
     def busy(self) -> bool:
         """True while training is on, an episode or step is asked for, or work is under way."""
         return self._want_run or self._want_one or self._want_step > 0 or self._working
-
-    @property
-    def last_scene(self) -> dict | None:
-        """The board after the last animated step of the session's agent."""
-        agent, scene, _ = self._shown
-        return scene if agent is self.session.agent else None
-
-    @property
-    def last_event(self) -> StepEvent | None:
-        """The last animated step of the session's agent."""
-        agent, _, event = self._shown
-        return event if agent is self.session.agent else None
 
     def _control(self, **flags: bool | int) -> None:
         with self._cond:
@@ -123,13 +105,6 @@ class TrainingRunner:
             self._cond.notify_all()
             return self._cond.wait_for(lambda: not self._working, timeout)
 
-    def toggle(self) -> bool:
-        """Start when paused, pause when running; returns whether it now runs."""
-        if self.running:
-            self.pause(wait=False)
-            return False
-        return self.start()
-
     def run_one_episode(self) -> bool:
         """Play one training episode on the worker (ignored while running); False, as
         `start`, when the budget is used up."""
@@ -161,16 +136,8 @@ class TrainingRunner:
         (ValueError, changing nothing, for bad ones)."""
         self.session.set_hyperparameters(hp)
 
-    def set_speed(self, index: int) -> Speed:
-        self.speed_index = max(0, min(len(SPEEDS) - 1, index))
+    def _speed_changed(self) -> None:
         self._control()  # an animated pause in progress ends: the new pace applies now
-        return self.speed
-
-    def faster(self) -> Speed:
-        return self.set_speed(self.speed_index + 1)
-
-    def slower(self) -> Speed:
-        return self.set_speed(self.speed_index - 1)
 
     @property
     def latest(self) -> TrainingSnapshot:
@@ -285,4 +252,4 @@ class _Stopped:
         return runner._quit or not (runner._want_one if self._one else runner._want_run)
 
 
-__all__ = ["DEFAULT_SPEED", "SPEEDS", "Speed", "TrainingRunner"]
+__all__ = ["DEFAULT_SPEED", "SPEEDS", "Runner", "Speed", "TrainingRunner"]

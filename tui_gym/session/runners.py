@@ -1,4 +1,4 @@
-"""`make_runner`: a runner of the kind asked for, behind the one `Runner` protocol."""
+"""`make_runner`: a runner of the kind asked for, behind the one `Runner` base."""
 
 from __future__ import annotations
 

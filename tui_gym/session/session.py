@@ -370,11 +370,14 @@ class Session:
             self._base_keys = self._compute_base_keys()
         return self._base_keys  # type: ignore[return-value]
 
+    def _history_wrappers(self) -> list[str]:
+        """The applied wrappers whose observations depend on more than the bare one."""
+        return [c.name for c in self.applied if CATALOG[c.name].changes_observation
+                and c.name not in STATELESS_OBSERVATION_WRAPPERS]
+
     def _compute_base_keys(self) -> list[Hashable] | None:
-        for choice in self.applied:
-            spec = CATALOG[choice.name]
-            if spec.changes_observation and choice.name not in STATELESS_OBSERVATION_WRAPPERS:
-                return None
+        if self._history_wrappers():
+            return None
         layers = [layer for layer in chain.layers(self.env)
                   if isinstance(layer, gym.ObservationWrapper)]
         observations = self.game.states.base_observations(self.env_kwargs)
@@ -394,12 +397,8 @@ class Session:
         observations = self.game.states.base_observations(self.env_kwargs)
         if isinstance(observations, NotAvailable):
             return observations.reason
-        names = [
-            c.name
-            for c in self.applied
-            if CATALOG[c.name].changes_observation and c.name not in STATELESS_OBSERVATION_WRAPPERS
-        ]
-        return f"{', '.join(names)} makes observations depend on history; no per-state view"
+        return (f"{', '.join(self._history_wrappers())} makes observations depend on history; "
+                "no per-state view")
 
     def base_q(self, snapshot: TrainingSnapshot | None = None) -> np.ndarray | None:
         """Q-values of the base states (from a snapshot, or the live agent)."""

@@ -1,4 +1,4 @@
-"""Training speeds and the `Runner` protocol every runner (thread, child process) follows.
+"""Training speeds and `Runner`, the base of every runner (thread, child process).
 
 Speeds run from *animated* (one agent step at a time, slow enough to follow,
 with the last move kept for a board to draw) to *max* (whole chunks of
@@ -8,8 +8,9 @@ one it gets is `tui_gym.session.runners.make_runner`'s business.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from tui_gym.core.engine.stats import StepEvent, TrainingSnapshot
@@ -39,51 +40,89 @@ SPEEDS: tuple[Speed, ...] = (
 DEFAULT_SPEED = len(SPEEDS) - 1
 
 
-class Runner(Protocol):
-    """What a front end asks of a runner: controls, the latest snapshot, the last move."""
+class Runner(ABC):
+    """What a front end asks of a runner: controls, the latest snapshot, the last move.
+    The speed, toggling and the last animated step are the same for every runner."""
 
     session: Session
     error: BaseException | None
     finished: bool
+    speed_index: int
+    _shown: tuple[Any, dict[str, Any] | None, StepEvent | None] = (None, None, None)
 
     @property
-    def speed(self) -> Speed: ...
+    @abstractmethod
+    def running(self) -> bool:
+        """True while training is switched on (it may be between pieces of work)."""
 
     @property
-    def running(self) -> bool: ...
-
-    @property
+    @abstractmethod
     def busy(self) -> bool: ...
 
     @property
+    @abstractmethod
     def latest(self) -> TrainingSnapshot: ...
 
-    @property
-    def last_scene(self) -> dict[str, Any] | None: ...
+    @abstractmethod
+    def update(self) -> None:
+        """Take in what the trainer has published."""
 
-    @property
-    def last_event(self) -> StepEvent | None: ...
-
-    def update(self) -> None: ...
-
+    @abstractmethod
     def start(self) -> bool: ...
 
-    def pause(self, wait: bool = True, timeout: float = ...) -> Any: ...
+    @abstractmethod
+    def pause(self, wait: bool = True, timeout: float = ...) -> bool: ...
 
-    def toggle(self) -> bool: ...
-
+    @abstractmethod
     def run_one_episode(self) -> bool: ...
 
+    @abstractmethod
     def run_one_step(self) -> bool: ...
 
+    @abstractmethod
     def set_hyperparameters(self, hp: Any) -> None: ...
 
-    def set_speed(self, index: int) -> Speed: ...
-
-    def faster(self) -> Speed: ...
-
-    def slower(self) -> Speed: ...
-
+    @abstractmethod
     def wait_idle(self, timeout: float = ...) -> bool: ...
 
+    @abstractmethod
     def close(self, wait: bool = True) -> None: ...
+
+    @abstractmethod
+    def _speed_changed(self) -> None: ...
+
+    @property
+    def speed(self) -> Speed:
+        return SPEEDS[self.speed_index]
+
+    @property
+    def last_scene(self) -> dict[str, Any] | None:
+        """The board after the last animated step of the session's agent."""
+        self.update()
+        agent, scene, _ = self._shown
+        return scene if agent is self.session.agent else None
+
+    @property
+    def last_event(self) -> StepEvent | None:
+        """The last animated step of the session's agent."""
+        self.update()
+        agent, _, event = self._shown
+        return event if agent is self.session.agent else None
+
+    def toggle(self) -> bool:
+        """Start when paused, pause when running; returns whether it now runs."""
+        if self.running:
+            self.pause(wait=False)
+            return False
+        return self.start()
+
+    def set_speed(self, index: int) -> Speed:
+        self.speed_index = max(0, min(len(SPEEDS) - 1, index))
+        self._speed_changed()
+        return self.speed
+
+    def faster(self) -> Speed:
+        return self.set_speed(self.speed_index + 1)
+
+    def slower(self) -> Speed:
+        return self.set_speed(self.speed_index - 1)

@@ -223,12 +223,14 @@ def read_recording(path: str | Path, scene_fits: SceneCheck | None = None) -> Re
     `scene_fits(board, scene)`, when given, says which scenes can be drawn."""
     path = Path(path)
     if path.is_dir():
-        raise RecordingError(f"{path} is a folder, not a recording")
+        raise RecordingError(f"{path}: is a folder, not a recording")
     flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
     try:  # non-blocking: a named pipe with no writer is refused, not waited on
         handle = os.fdopen(os.open(path, flags), "rb")
+    except FileNotFoundError:
+        raise RecordingError(f"{path}: no such file") from None
     except OSError as exc:
-        raise RecordingError(f"{path}: {exc.strerror or exc}") from None
+        raise RecordingError(f"{path}: cannot read ({exc.strerror or exc})") from None
     with handle:
         if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):
             raise RecordingError(f"{path} is not a regular file (a pipe or a device), "
