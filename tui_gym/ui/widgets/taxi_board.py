@@ -82,9 +82,10 @@ def shape_fits(shape: TaxiShape, width: int, height: int) -> bool:
 
 
 def choose_shape(rows: int, cols: int, width: int, height: int) -> TaxiShape:
-    """The largest drawing of the city that fits (the smallest one if none does)."""
-    for cell_w, cell_h in TAXI_SIZES:
-        for frame in (True, False):
+    """The largest drawing of the city that fits with its wall all round, else the largest
+    without it (the smallest one if none does): the city's edge is a wall too."""
+    for frame in (True, False):
+        for cell_w, cell_h in TAXI_SIZES:
             shape = TaxiShape(rows, cols, cell_w, cell_h, frame)
             if shape_fits(shape, width, height):
                 return shape
