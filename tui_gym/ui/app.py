@@ -42,6 +42,7 @@ from textual.binding import Binding, BindingType
 from textual.containers import Horizontal
 from textual.driver import Driver
 from textual.events import Resize
+from textual.notifications import Notification, Notify, SeverityLevel
 from textual.screen import Screen
 from textual.widget import AwaitMount
 from textual.widgets import ContentSwitcher, Header
@@ -211,6 +212,20 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self._book: BookView | None = None
         self._train: TrainView | None = None
         self._train_mounted: AwaitMount | None = None
+        self._notices: dict[tuple[str, str, str], Notification] = {}  # the last of each
+
+    def notify(self, message: str, *, title: str = "", severity: SeverityLevel = "information",
+               timeout: float | None = None, markup: bool = True) -> None:
+        """A notice; the same notice again while it shows takes its place (a burst of keys
+        that each say the same leaves one notice, not a stack of them)."""
+        notice = Notification(message, title, severity,
+                              self.NOTIFICATION_TIMEOUT if timeout is None else timeout, markup)
+        self._notices = {key: n for key, n in self._notices.items() if not n.has_expired}
+        shown = self._notices.get((message, title, severity))
+        if shown is not None:
+            notice.identity = shown.identity
+        self._notices[message, title, severity] = notice
+        self.post_message(Notify(notice))
 
     # --- layout ------------------------------------------------------------
     def get_default_screen(self) -> Screen:
