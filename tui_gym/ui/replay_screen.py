@@ -24,7 +24,7 @@ from tui_gym.session.play import PlayStep
 from tui_gym.session.recording.games import game_named
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.jump_screen import JumpScreen
-from tui_gym.ui.widgets.board_kinds import BOARDS
+from tui_gym.ui.widgets.board_kinds import KINDS, board_class
 from tui_gym.ui.widgets.boards import Board
 from tui_gym.ui.widgets.key_bar import KeyBar
 
@@ -45,16 +45,16 @@ def replay_board(kind: str, player: str) -> Board | None:
     """A passive board of `kind` whose player is called `player` (None: no such board here).
 
     A passive board calls its player "Agent"; in a replay it is whoever played."""
-    board_class = BOARDS.get(kind)
-    if board_class is None:
+    if kind not in KINDS:
         return None
-    replay_class = _REPLAY_BOARDS.get(board_class)
+    kind_class = board_class(kind)
+    replay_class = _REPLAY_BOARDS.get(kind_class)
     if replay_class is None:
         replay_class = type(
-            f"Replay{board_class.__name__}", (board_class,),
+            f"Replay{kind_class.__name__}", (kind_class,),
             {"player_name": property(lambda self: self.replay_player), "KEEP_SHAPE": False},
         )
-        _REPLAY_BOARDS[board_class] = replay_class
+        _REPLAY_BOARDS[kind_class] = replay_class
     board = replay_class(interactive=False)
     board.replay_player = player  # type: ignore[attr-defined]
     return board
