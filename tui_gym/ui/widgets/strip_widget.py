@@ -22,6 +22,7 @@ shown again at its old size.
 
 from __future__ import annotations
 
+import re
 from collections import OrderedDict
 from collections.abc import Hashable, Iterable
 from typing import ClassVar
@@ -51,6 +52,11 @@ def segments_of(text: Text, console: Console) -> list[Line]:
             if part:
                 lines[-1].append(Segment(part, segment.style))
     return lines
+
+
+def component_classes(css: str) -> set[str]:
+    """The component classes a widget's CSS styles (its `.name--part` selectors)."""
+    return set(re.findall(r"\.(\w+--[\w-]+)", css))
 
 
 def line_text(line: Iterable[Segment]) -> str:

@@ -27,6 +27,7 @@ from tui_gym.ui.widgets.board_drawing import (
     step_toward,
 )
 from tui_gym.ui.widgets.boards import Board
+from tui_gym.ui.widgets.strip_widget import component_classes
 
 MOVES: dict[str, Cell] = {"south": (1, 0), "north": (-1, 0), "east": (0, 1), "west": (0, -1)}
 MOVE_OF: dict[Cell, str] = {step: name for name, step in MOVES.items()}
@@ -158,12 +159,7 @@ class TaxiBoard(Board):
     TaxiBoard .taxi--good { color: $text-success; text-style: bold; }
     TaxiBoard .taxi--bad { color: $text-error; text-style: bold; }
     """
-
-    COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "taxi--road", "taxi--road-alt", "taxi--lane", "taxi--wall", "taxi--rain", "taxi--stand-0",
-        "taxi--stand-1", "taxi--stand-2", "taxi--stand-3", "taxi--passenger", "taxi--destination",
-        "taxi--cab", "taxi--cab-full", "taxi--caption", "taxi--note", "taxi--good", "taxi--bad",
-    }
+    COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("up,w", "act('north')", "north", key_display="↑/w", group=MOVE_GROUP),

@@ -30,6 +30,7 @@ from tui_gym.ui.widgets.board_drawing import (
     step_toward,
 )
 from tui_gym.ui.widgets.boards import Board
+from tui_gym.ui.widgets.strip_widget import component_classes
 
 START, FLOOR, HOLE, GOAL, CLIFF, WALL, REWARD = "S", "F", "H", "G", "C", "W", "R"
 KINDS = (START, FLOOR, HOLE, GOAL, CLIFF, WALL, REWARD)  # the legend's order
@@ -231,13 +232,7 @@ class TileBoard(Board):
     TileBoard .tile--bad { color: $text-error; text-style: bold; }
     """
 
-    COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "tile--ice", "tile--ice-alt", "tile--ground", "tile--ground-alt", "tile--floor",
-        "tile--floor-alt", "tile--start", "tile--hole", "tile--goal", "tile--cliff", "tile--wall",
-        "tile--reward", "tile--penalty", "tile--agent", "tile--agent-home", "tile--agent-lost",
-        "tile--trail", "tile--mark", "tile--value", "tile--slip", "tile--wind", "tile--cursor",
-        "tile--axis", "tile--caption", "tile--slipped", "tile--good", "tile--bad",
-    }
+    COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("up,w", "act('up')", "up", key_display="↑/w", group=MOVE_GROUP),

@@ -33,7 +33,7 @@ from rich.style import Style
 
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.ui.widgets.numbers import Forms, fit, number_forms
-from tui_gym.ui.widgets.strip_widget import Line, StripWidget
+from tui_gym.ui.widgets.strip_widget import Line, StripWidget, component_classes
 
 BARS = "▁▂▃▄▅▆▇█"
 NAME_WIDTH, VALUE_WIDTH, RANGE_WIDTH = 12, 9, 13
@@ -151,10 +151,6 @@ class TrainingCharts(StripWidget):
 
     # Not scoped: the `Screen.compact ...` rules must match from the screen down.
     SCOPED_CSS = False
-    COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "charts--name", "charts--value", "charts--range",
-        *(f"charts--{curve.key}-{end}" for curve in CURVES for end in ("low", "high")),
-    }
     DEFAULT_CSS = """
     TrainingCharts {
         height: auto;
@@ -180,6 +176,7 @@ class TrainingCharts(StripWidget):
         padding: 0;
     }
     """
+    COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
         super().__init__(id=id, classes=classes)
