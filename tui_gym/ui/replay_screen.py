@@ -65,6 +65,12 @@ def player_of(source: str) -> str:
     return "You" if source == "app" else "Player"
 
 
+BUTTONS = (  # under the board: (label, id after "replay-", action on the screen)
+    ("⏮ episode", "previous-episode", "episode(-1)"), ("◀ back", "back", "step(-1)"),
+    ("forward ▶", "forward", "step(1)"), ("episode ⏭", "next-episode", "episode(1)"),
+)
+
+
 class ReplayButton(Button, can_focus=False):
     """A compact button under the board; the keyboard stays where it was."""
 
@@ -128,10 +134,9 @@ class ReplayScreen(ModalScreen[None]):
                     yield Static(id="replay-coach")
                     yield Static(id="replay-detail")
                 with Horizontal(id="replay-buttons"):
-                    yield ReplayButton("⏮ episode", id="replay-previous-episode", compact=True)
-                    yield ReplayButton("◀ back", id="replay-back", compact=True)
-                    yield ReplayButton("forward ▶", id="replay-forward", compact=True)
-                    yield ReplayButton("episode ⏭", id="replay-next-episode", compact=True)
+                    for label, name, action in BUTTONS:
+                        yield ReplayButton(label, id=f"replay-{name}", action=f"screen.{action}",
+                                           compact=True)
             yield OptionList(id="replay-moves")
         yield KeyBar()
 
@@ -214,19 +219,6 @@ class ReplayScreen(ModalScreen[None]):
             ("N / [", "the previous episode"), ("j", "jump to an episode by its number"),
             ("esc", "close the replay, back to the app"), ("q", "quit"),
         ]
-
-    @on(ReplayButton.Pressed)
-    def _pressed(self, event: Button.Pressed) -> None:
-        event.stop()
-        actions = {
-            "replay-previous-episode": lambda: self.action_episode(-1),
-            "replay-back": lambda: self.action_step(-1),
-            "replay-forward": lambda: self.action_step(1),
-            "replay-next-episode": lambda: self.action_episode(1),
-        }
-        action = actions.get(event.button.id or "")
-        if action is not None:
-            action()
 
     @on(OptionList.OptionHighlighted, "#replay-moves")
     def _highlighted(self, event: OptionList.OptionHighlighted) -> None:
