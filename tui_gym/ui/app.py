@@ -1,25 +1,16 @@
-"""The Textual app: Play, Train, Compare and Plan views and a wrapper side panel over one Session.
+"""The Textual app: Play, Train, Compare, Plan and Book views and a wrapper side panel.
 
-`TuiGymApp` owns the `Session` (env, wrappers, agent, trainer) and the runner
-that trains it (in a child process, as `tui-gym` opens it, or on a worker
-thread). It keeps one `Session` per game for the whole run: switching game
-hands the runner the other game's session, and switching back finds its agent,
-settings, wrappers and curves as they were. The first frame shows the Play
-view and the side panel; the Train view and the panel's wrapper rows are built
-right after it (or at once when asked for first), the Compare, Plan and Book
-views the first time they show, and dialogs are imported when first used. A
-timer pulls the runner's latest snapshot and hands it to the Train view; the
-side panel asks for rebuilds through a message; nothing in the trainer calls
-into widgets. Whatever would lose a trained agent (a reset, a change that
-resets it, loading over it, saving over a file) asks first (`ConfirmScreen`);
-saving and loading take a file name the person types (`FileScreen`). Below the
-minimum size `TooSmallScreen` covers the main screen and takes every key; and
-`tune_gc_for_ui` paces the garbage collector for an app that owns its process.
-`run_app` runs the app as `tui-gym` does: SIGTERM, SIGHUP and SIGINT end it
-cleanly, so does its terminal (or a served app's pipes) closing, and an
-unexpected error ends it with one line and a crash log (`tui_gym.crash_log`)
-instead of a traceback on the screen. What it does through Textual's private
-names lives in `tui_gym.ui.textual_internals`.
+`TuiGymApp` keeps one `Session` per game for the whole run (switching back finds
+its agent, settings, wrappers and curves) and the runner that trains the one
+shown, in a child process as `tui-gym` opens it or on a worker thread. The first
+frame shows the Play view and the side panel; the other views are built after it
+or when first shown. A timer hands the runner's latest snapshot to the Train
+view; the side panel asks for rebuilds by message. What would lose a trained
+agent asks first (`ConfirmScreen`); files are named in `FileScreen`; below the
+minimum size `TooSmallScreen` takes every key. `run_app` runs the app as
+`tui-gym` does: signals and a closed terminal end it cleanly, an unexpected
+error with one line and a crash log. Textual's private names it uses live in
+`tui_gym.ui.textual_internals`.
 """
 
 from __future__ import annotations
@@ -1186,16 +1177,12 @@ class GcPacer:
 def tune_gc_for_ui(
     app: App[Any], young_seconds: float = YOUNG_GC_SECONDS, full_seconds: float = FULL_GC_SECONDS
 ) -> GcPacer:
-    """Collect garbage between frames, on the app's own timers.
+    """Collect garbage between frames, on the app's own timers, not mid-frame.
 
-    Python's collector runs whenever enough objects have been allocated, so
-    it often ran in the middle of drawing a frame, when the frame's own
-    objects made the collection take up to 25 ms. Here what is alive once the
-    app is up moves to the permanent generation (`gc.freeze`: never collected
-    again, hence one app a process), automatic collection is off, and timers
-    collect the young generations every `young_seconds` (a few milliseconds;
-    one due just after a key waits a turn) and everything every
-    `full_seconds`; a timer callback never runs in the middle of a frame.
+    What is alive once the app is up is frozen (`gc.freeze`: one app a process),
+    automatic collection is off, and timers collect the young generations every
+    `young_seconds` (one due just after a key waits a turn) and everything every
+    `full_seconds`.
     """
     pacer = GcPacer(lambda: getattr(app, "_key_since", -KEY_QUIET_SECONDS))
     gc.collect()
