@@ -36,6 +36,7 @@ START, FLOOR, HOLE, GOAL, CLIFF, WALL, REWARD = "S", "F", "H", "G", "C", "W", "R
 KINDS = (START, FLOOR, HOLE, GOAL, CLIFF, WALL, REWARD)  # the legend's order
 FILLED = frozenset({CLIFF, WALL})  # drawn as a texture over the whole tile
 GLYPHS = {START: "⌂", FLOOR: "·", HOLE: "○", GOAL: "★", CLIFF: "▒", WALL: "█"}
+GROUNDS = {HOLE: "hole", GOAL: "goal", CLIFF: "cliff", WALL: "wall"}  # a tile's own style
 AGENT = "●"
 
 STRAIGHT: dict[str, Cell] = {"left": (0, -1), "down": (1, 0), "right": (0, 1), "up": (-1, 0)}
@@ -447,14 +448,8 @@ class TileBoard(Board):
 
     def _ground(self, cell: Cell, kind: str) -> Style:
         """The style of a tile's background (and of its glyph, unless it has its own)."""
-        if kind == HOLE:
-            return self._style("hole")
-        if kind == GOAL:
-            return self._style("goal")
-        if kind == CLIFF:
-            return self._style("cliff")
-        if kind == WALL:
-            return self._style("wall")
+        if kind in GROUNDS:
+            return self._style(GROUNDS[kind])
         if kind == REWARD:
             value = self._reward(cell)
             return self._style("penalty" if value is not None and value < 0 else "reward")
