@@ -664,11 +664,16 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             self.notify(f"Cannot train: {error}", severity="error", timeout=10)
 
     def action_one_episode(self) -> None:
+        if self._paused_and_applied() and not self.runner.run_one_episode():
+            self._budget_used_up()
+
+    def _paused_and_applied(self) -> bool:
+        """Whether one episode or step may run: training paused (else it says so) and the
+        form's values applied."""
         if self.runner.running:
             self.notify("Pause training first (space).", severity="warning", timeout=3)
-            return
-        if self._apply_form() and not self.runner.run_one_episode():
-            self._budget_used_up()
+            return False
+        return self._apply_form()
 
     def _budget_used_up(self) -> None:
         self.notify("The episode budget is used up: raise Episodes or reset the agent (x).",
@@ -678,10 +683,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         """One transition on the env, explained in the Train view's step panel (the speed
         goes to animated, where the panel and the board show)."""
         runner = self.runner
-        if runner.running:
-            self.notify("Pause training first (space).", severity="warning", timeout=3)
-            return
-        if not self._apply_form():
+        if not self._paused_and_applied():
             return
         if not runner.run_one_step():
             self._budget_used_up()
@@ -855,12 +857,9 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         stamp = time.strftime("%Y-%m-%dT%H_%M_%S")
         try:
             path = write_atomically(Path.cwd() / f"tui-gym {stamp}.svg", self.export_screenshot())
-        except OutputPathError as error:
-            self.notify(f"Screenshot not saved: {error}", title="Screenshot", severity="error")
-            return
-        except OSError as exc:
-            self.notify(f"Screenshot not saved: {exc.strerror or exc}", title="Screenshot",
-                        severity="error")
+        except (OutputPathError, OSError) as exc:
+            reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
+            self.notify(f"Screenshot not saved: {reason}", title="Screenshot", severity="error")
             return
         self.notify(f"Screenshot saved to {path}", title="Screenshot")
 
