@@ -20,7 +20,7 @@ from tui_gym.games.blackjack.game import card_label
 from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.play_view import PlayView
-from tui_gym.ui.widgets.board_kinds import BOARDS
+from tui_gym.ui.widgets.board_kinds import board_class
 from tui_gym.ui.widgets.boards import BoardButton
 from tui_gym.ui.widgets.cards_board import CardsBoard
 from tui_gym.ui.widgets.grid_board import GridBoard
@@ -380,8 +380,8 @@ async def test_compact_layout_at_80x24_and_switching_games_swaps_the_board_keeps
 
 class PassiveBoards(App[None]):
     def compose(self) -> ComposeResult:
-        yield BOARDS["cards"](interactive=False)
-        yield BOARDS["grid"](interactive=False)
+        yield board_class("cards")(interactive=False)
+        yield board_class("grid")(interactive=False)
 
 
 async def test_passive_boards_draw_but_never_take_keys() -> None:

@@ -1,25 +1,16 @@
-"""The Textual app: Play, Train, Compare and Plan views and a wrapper side panel over one Session.
+"""The Textual app: Play, Train, Compare, Plan and Book views and a wrapper side panel.
 
-`TuiGymApp` owns the `Session` (env, wrappers, agent, trainer) and the runner
-that trains it (in a child process, as `tui-gym` opens it, or on a worker
-thread). It keeps one `Session` per game for the whole run: switching game
-hands the runner the other game's session, and switching back finds its agent,
-settings, wrappers and curves as they were. The first frame shows the Play
-view and the side panel; the Train view and the panel's wrapper rows are built
-right after it (or at once when asked for first), the Compare, Plan and Book
-views the first time they show, and dialogs are imported when first used. A
-timer pulls the runner's latest snapshot and hands it to the Train view; the
-side panel asks for rebuilds through a message; nothing in the trainer calls
-into widgets. Whatever would lose a trained agent (a reset, a change that
-resets it, loading over it, saving over a file) asks first (`ConfirmScreen`);
-saving and loading take a file name the person types (`FileScreen`). Below the
-minimum size `TooSmallScreen` covers the main screen and takes every key; and
-`tune_gc_for_ui` paces the garbage collector for an app that owns its process.
-`run_app` runs the app as `tui-gym` does: SIGTERM, SIGHUP and SIGINT end it
-cleanly, so does its terminal (or a served app's pipes) closing, and an
-unexpected error ends it with one line and a crash log (`tui_gym.crash_log`)
-instead of a traceback on the screen. What it does through Textual's private
-names lives in `tui_gym.ui.textual_internals`.
+`TuiGymApp` keeps one `Session` per game for the whole run (switching back finds
+its agent, settings, wrappers and curves) and the runner that trains the one
+shown, in a child process as `tui-gym` opens it or on a worker thread. The first
+frame shows the Play view and the side panel; the other views are built after it
+or when first shown. A timer hands the runner's latest snapshot to the Train
+view; the side panel asks for rebuilds by message. What would lose a trained
+agent asks first (`ConfirmScreen`); files are named in `FileScreen`; below the
+minimum size `TooSmallScreen` takes every key. `run_app` runs the app as
+`tui-gym` does: signals and a closed terminal end it cleanly, an unexpected
+error with one line and a crash log. Textual's private names it uses live in
+`tui_gym.ui.textual_internals`.
 """
 
 from __future__ import annotations
@@ -42,6 +33,7 @@ from textual.binding import Binding, BindingType
 from textual.containers import Horizontal
 from textual.driver import Driver
 from textual.events import Resize
+from textual.notifications import Notification, Notify, SeverityLevel
 from textual.screen import Screen
 from textual.widget import AwaitMount
 from textual.widgets import ContentSwitcher, Header
@@ -211,6 +203,20 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self._book: BookView | None = None
         self._train: TrainView | None = None
         self._train_mounted: AwaitMount | None = None
+        self._notices: dict[tuple[str, str, str], Notification] = {}  # the last of each
+
+    def notify(self, message: str, *, title: str = "", severity: SeverityLevel = "information",
+               timeout: float | None = None, markup: bool = True) -> None:
+        """A notice; the same notice again while it shows takes its place (a burst of keys
+        that each say the same leaves one notice, not a stack of them)."""
+        notice = Notification(message, title, severity,
+                              self.NOTIFICATION_TIMEOUT if timeout is None else timeout, markup)
+        self._notices = {key: n for key, n in self._notices.items() if not n.has_expired}
+        shown = self._notices.get((message, title, severity))
+        if shown is not None:
+            notice.identity = shown.identity
+        self._notices[message, title, severity] = notice
+        self.post_message(Notify(notice))
 
     # --- layout ------------------------------------------------------------
     def get_default_screen(self) -> Screen:
@@ -658,11 +664,16 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             self.notify(f"Cannot train: {error}", severity="error", timeout=10)
 
     def action_one_episode(self) -> None:
+        if self._paused_and_applied() and not self.runner.run_one_episode():
+            self._budget_used_up()
+
+    def _paused_and_applied(self) -> bool:
+        """Whether one episode or step may run: training paused (else it says so) and the
+        form's values applied."""
         if self.runner.running:
             self.notify("Pause training first (space).", severity="warning", timeout=3)
-            return
-        if self._apply_form() and not self.runner.run_one_episode():
-            self._budget_used_up()
+            return False
+        return self._apply_form()
 
     def _budget_used_up(self) -> None:
         self.notify("The episode budget is used up: raise Episodes or reset the agent (x).",
@@ -672,10 +683,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         """One transition on the env, explained in the Train view's step panel (the speed
         goes to animated, where the panel and the board show)."""
         runner = self.runner
-        if runner.running:
-            self.notify("Pause training first (space).", severity="warning", timeout=3)
-            return
-        if not self._apply_form():
+        if not self._paused_and_applied():
             return
         if not runner.run_one_step():
             self._budget_used_up()
@@ -849,12 +857,9 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         stamp = time.strftime("%Y-%m-%dT%H_%M_%S")
         try:
             path = write_atomically(Path.cwd() / f"tui-gym {stamp}.svg", self.export_screenshot())
-        except OutputPathError as error:
-            self.notify(f"Screenshot not saved: {error}", title="Screenshot", severity="error")
-            return
-        except OSError as exc:
-            self.notify(f"Screenshot not saved: {exc.strerror or exc}", title="Screenshot",
-                        severity="error")
+        except (OutputPathError, OSError) as exc:
+            reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
+            self.notify(f"Screenshot not saved: {reason}", title="Screenshot", severity="error")
             return
         self.notify(f"Screenshot saved to {path}", title="Screenshot")
 
@@ -1171,16 +1176,12 @@ class GcPacer:
 def tune_gc_for_ui(
     app: App[Any], young_seconds: float = YOUNG_GC_SECONDS, full_seconds: float = FULL_GC_SECONDS
 ) -> GcPacer:
-    """Collect garbage between frames, on the app's own timers.
+    """Collect garbage between frames, on the app's own timers, not mid-frame.
 
-    Python's collector runs whenever enough objects have been allocated, so
-    it often ran in the middle of drawing a frame, when the frame's own
-    objects made the collection take up to 25 ms. Here what is alive once the
-    app is up moves to the permanent generation (`gc.freeze`: never collected
-    again, hence one app a process), automatic collection is off, and timers
-    collect the young generations every `young_seconds` (a few milliseconds;
-    one due just after a key waits a turn) and everything every
-    `full_seconds`; a timer callback never runs in the middle of a frame.
+    What is alive once the app is up is frozen (`gc.freeze`: one app a process),
+    automatic collection is off, and timers collect the young generations every
+    `young_seconds` (one due just after a key waits a turn) and everything every
+    `full_seconds`.
     """
     pacer = GcPacer(lambda: getattr(app, "_key_since", -KEY_QUIET_SECONDS))
     gc.collect()

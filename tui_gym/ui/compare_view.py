@@ -228,18 +228,18 @@ class CompareView(Vertical):
         self.db = db  # read at each look, so the app can point the view elsewhere
         self.kept = kept
         self.processes = processes
-        self._runs: tuple[RunSummary, ...] = ()
+        self.runs: tuple[RunSummary, ...] = ()  # the game's runs the list offers, newest first
         self._records: dict[int, RunRecord] = {}
         self._colours: dict[Hashable, int] = {}
-        self._history_error: str | None = None
+        self.history_error: str | None = None
         self._game_key: frozenset[str] = frozenset()
-        self._job: CompareJob | None = None
+        self.job: CompareJob | None = None
         self._job_game: frozenset[str] = frozenset()
         self._seen_progress = -1
         self._live: tuple[tuple[Series, FigureRow], ...] = ()
         self._live_outcomes: tuple[AlgorithmOutcome, ...] = ()
         self.smooth = True  # curves drawn through a trailing mean (o toggles)
-        self._message = ""
+        self.message = ""  # the line under the form: an error, the job's state
         self._stale = True  # the list has not been read for the current game
 
     # --- the app and its session ---------------------------------------------
@@ -299,29 +299,11 @@ class CompareView(Vertical):
             self.focus_default()
 
     @property
-    def message(self) -> str:
-        """The line under the form: what the view has to say (an error, the job's state)."""
-        return self._message
-
-    @property
-    def history_error(self) -> str | None:
-        return self._history_error
-
-    @property
-    def runs(self) -> tuple[RunSummary, ...]:
-        """The current game's runs the list offers, newest first."""
-        return self._runs
-
-    @property
-    def job(self) -> CompareJob | None:
-        return self._job
-
-    @property
     def running(self) -> bool:
-        return self._job is not None and self._job.running
+        return self.job is not None and self.job.running
 
     def _say(self, text: str, error: bool = False) -> None:
-        self._message = text
+        self.message = text
         label = self._message_label
         label.update(text)
         label.set_class(error, "-error")
@@ -350,7 +332,7 @@ class CompareView(Vertical):
 
     def stop_comparison(self) -> bool:
         """Ask a running comparison to stop (it records what finished); whether one ran."""
-        job = self._job
+        job = self.job
         if job is None or not job.running or job.stopping:
             return False
         job.stop()
@@ -359,8 +341,8 @@ class CompareView(Vertical):
 
     def close(self) -> None:
         """Stop a running comparison and wait (bounded) for it to record what finished."""
-        if self._job is not None:
-            self._job.close()
+        if self.job is not None:
+            self.job.close()
 
     @staticmethod
     def key_help() -> list[tuple[str, str]]:
@@ -402,15 +384,15 @@ class CompareView(Vertical):
                         damaged.update((d.id, d) for d in read.damaged)
                 runs = sorted(found.values(), key=lambda r: (-r.started_at, -r.id))[:LISTED_RUNS]
         except (RunHistoryError, OSError) as exc:
-            self._history_error = str(exc)
-            self._runs = ()
+            self.history_error = str(exc)
+            self.runs = ()
             self._records.clear()
             self._fill_list(())
             self._say(f"The run history cannot be read: {exc}", error=True)
             self._redraw()
             return
-        self._history_error = None
-        self._runs = tuple(runs)
+        self.history_error = None
+        self.runs = tuple(runs)
         known = {r.id for r in runs}
         ticked = [i for i in self.run_list.selected if i in known]
         ticked += [i for i in select if i in known and i not in ticked]
@@ -440,10 +422,10 @@ class CompareView(Vertical):
         highlighted = run_list.highlighted
         run_list.clear_options()
         run_list.add_options(
-            Selection(describe_run(run), run.id, run.id in ticked) for run in self._runs
+            Selection(describe_run(run), run.id, run.id in ticked) for run in self.runs
         )
-        if self._runs:
-            run_list.highlighted = min(highlighted or 0, len(self._runs) - 1)
+        if self.runs:
+            run_list.highlighted = min(highlighted or 0, len(self.runs) - 1)
 
     def _record(self, run_id: int) -> RunRecord | None:
         record = self._records.get(run_id)
@@ -493,7 +475,7 @@ class CompareView(Vertical):
                                             ((w.name, w.params) for w in record.wrappers))
                     series = bounded(series, allowed)
                 entries.append((series, row_of_record(record), run_id))
-        job = self._job
+        job = self.job
         live_allowed = None if job is None or not self._live else self._allowed(
             job.spec.game_params, ((c.name, c.values()) for c in job.spec.wrappers))
         for series, row in self._live:
@@ -524,8 +506,8 @@ class CompareView(Vertical):
         if self.running:
             self._say("A comparison is running: stop it first (s).", error=True)
             return
-        if self._history_error is not None:
-            self._say(f"Not started: the run history cannot be read ({self._history_error}).",
+        if self.history_error is not None:
+            self._say(f"Not started: the run history cannot be read ({self.history_error}).",
                       error=True)
             return
         launch = self.read_launch()
@@ -557,12 +539,12 @@ class CompareView(Vertical):
             self._say("A comparison is running: stop it first (s).", error=True)
             return
         index = self.run_list.highlighted
-        if self._history_error is not None or index is None or index >= len(self._runs):
+        if self.history_error is not None or index is None or index >= len(self.runs):
             self._say("Not resumed: highlight an unfinished comparison in the list of runs.",
                       error=True)
             return
         try:
-            head, launch, first_seed = self._resumable(self._runs[index])
+            head, launch, first_seed = self._resumable(self.runs[index])
             spec = self._spec(launch, first_seed)
         except (ValueError, RunHistoryError, OSError) as exc:
             self._say(f"Not resumed: {exc}", error=True)
@@ -602,7 +584,7 @@ class CompareView(Vertical):
 
     def start_job(self, job: CompareJob) -> None:
         """Run `job` and follow it (the launch button's end; tests hand in their own)."""
-        self._job = job
+        self.job = job
         self._job_game = self._game_key
         self._seen_progress = -1
         self._live, self._live_outcomes = (), ()
@@ -645,7 +627,7 @@ class CompareView(Vertical):
 
     # --- following a comparison ------------------------------------------------------
     def _poll(self) -> None:
-        job = self._job
+        job = self.job
         if job is None:
             return
         progress = job.progress
@@ -674,7 +656,7 @@ class CompareView(Vertical):
         return tuple(entries)
 
     def _finished(self, job: CompareJob) -> None:
-        self._job = None
+        self.job = None
         self.remove_class("-running")
         self._stop.disabled = True
         self._launch.disabled = False

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from typing import ClassVar
 
-from textual import on
 from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
@@ -46,16 +45,13 @@ class ConfirmScreen(ModalScreen[bool]):
             yield Static(self.title_text, id="confirm-title", markup=False)
             yield Static(self.detail, id="confirm-detail", markup=False)
             with Horizontal(id="confirm-buttons"):
-                yield Button(f"{self.confirm_label} (y)", id="confirm-yes", variant="error")
-                yield Button("Cancel (esc)", id="confirm-no", variant="primary")
+                yield Button(f"{self.confirm_label} (y)", id="confirm-yes", variant="error",
+                             action="screen.answer(True)")
+                yield Button("Cancel (esc)", id="confirm-no", variant="primary",
+                             action="screen.answer(False)")
 
     def on_mount(self) -> None:
         self.query_one("#confirm-no", Button).focus()
-
-    @on(Button.Pressed)
-    def _pressed(self, event: Button.Pressed) -> None:
-        event.stop()
-        self.dismiss(event.button.id == "confirm-yes")
 
     def action_answer(self, yes: bool) -> None:
         self.dismiss(yes)

@@ -74,8 +74,9 @@ class FileScreen(ModalScreen[Path | None]):
             yield Static("", id="file-target")
             yield Static("", id="file-error")
             with Horizontal(id="file-buttons"):
-                yield Button(f"{verb} (enter)", id="file-go", variant="primary")
-                yield Button("Cancel (esc)", id="file-cancel")
+                yield Button(f"{verb} (enter)", id="file-go", variant="primary",
+                             action="screen.go")
+                yield Button("Cancel (esc)", id="file-cancel", action="screen.cancel")
 
     def on_mount(self) -> None:
         self._show_target(self.suggestion)
@@ -110,20 +111,12 @@ class FileScreen(ModalScreen[Path | None]):
     @on(Input.Submitted, "#file-name")
     def _submitted(self, event: Input.Submitted) -> None:
         event.stop()
-        self._go()
-
-    @on(Button.Pressed)
-    def _pressed(self, event: Button.Pressed) -> None:
-        event.stop()
-        if event.button.id == "file-go":
-            self._go()
-        else:
-            self.dismiss(None)
+        self.action_go()
 
     def action_cancel(self) -> None:
         self.dismiss(None)
 
-    def _go(self) -> None:
+    def action_go(self) -> None:
         text = self.query_one(Input).value
         if not text.strip():
             self._say("Type a file name first.")

@@ -293,14 +293,12 @@ class PlanView(Vertical):
         plan = self.plan
         panel = plan.value_panel if plan is not None else None
         shown = snapshot is not None and panel is not None
-        if self._values.has_class("-shown") != shown:
-            self._values.set_class(shown, "-shown")
+        self._values.set_class(shown, "-shown")
         if snapshot is not None and panel is not None:
             self._values.show([panel(snapshot.v)])
         line = plan.line if plan is not None else None
         shown = snapshot is not None and line is not None
-        if self._lines.has_class("-shown") != shown:
-            self._lines.set_class(shown, "-shown")
+        self._lines.set_class(shown, "-shown")
         if snapshot is not None and line is not None:
             curves = [(f"sweep {sweep}", values[line.states]) for sweep, values in snapshot.kept]
             if snapshot.sweeps not in {sweep for sweep, _ in snapshot.kept}:

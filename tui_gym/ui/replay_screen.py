@@ -24,7 +24,7 @@ from tui_gym.session.play import PlayStep
 from tui_gym.session.recording.games import game_named
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.jump_screen import JumpScreen
-from tui_gym.ui.widgets.board_kinds import BOARDS
+from tui_gym.ui.widgets.board_kinds import KINDS, board_class
 from tui_gym.ui.widgets.boards import Board
 from tui_gym.ui.widgets.key_bar import KeyBar
 
@@ -45,16 +45,16 @@ def replay_board(kind: str, player: str) -> Board | None:
     """A passive board of `kind` whose player is called `player` (None: no such board here).
 
     A passive board calls its player "Agent"; in a replay it is whoever played."""
-    board_class = BOARDS.get(kind)
-    if board_class is None:
+    if kind not in KINDS:
         return None
-    replay_class = _REPLAY_BOARDS.get(board_class)
+    kind_class = board_class(kind)
+    replay_class = _REPLAY_BOARDS.get(kind_class)
     if replay_class is None:
         replay_class = type(
-            f"Replay{board_class.__name__}", (board_class,),
+            f"Replay{kind_class.__name__}", (kind_class,),
             {"player_name": property(lambda self: self.replay_player), "KEEP_SHAPE": False},
         )
-        _REPLAY_BOARDS[board_class] = replay_class
+        _REPLAY_BOARDS[kind_class] = replay_class
     board = replay_class(interactive=False)
     board.replay_player = player  # type: ignore[attr-defined]
     return board
@@ -63,6 +63,12 @@ def replay_board(kind: str, player: str) -> Board | None:
 def player_of(source: str) -> str:
     """Who played, as a board names them: "You" in the app, else "Player"."""
     return "You" if source == "app" else "Player"
+
+
+BUTTONS = (  # under the board: (label, id after "replay-", action on the screen)
+    ("⏮ episode", "previous-episode", "episode(-1)"), ("◀ back", "back", "step(-1)"),
+    ("forward ▶", "forward", "step(1)"), ("episode ⏭", "next-episode", "episode(1)"),
+)
 
 
 class ReplayButton(Button, can_focus=False):
@@ -128,10 +134,9 @@ class ReplayScreen(ModalScreen[None]):
                     yield Static(id="replay-coach")
                     yield Static(id="replay-detail")
                 with Horizontal(id="replay-buttons"):
-                    yield ReplayButton("⏮ episode", id="replay-previous-episode", compact=True)
-                    yield ReplayButton("◀ back", id="replay-back", compact=True)
-                    yield ReplayButton("forward ▶", id="replay-forward", compact=True)
-                    yield ReplayButton("episode ⏭", id="replay-next-episode", compact=True)
+                    for label, name, action in BUTTONS:
+                        yield ReplayButton(label, id=f"replay-{name}", action=f"screen.{action}",
+                                           compact=True)
             yield OptionList(id="replay-moves")
         yield KeyBar()
 
@@ -214,19 +219,6 @@ class ReplayScreen(ModalScreen[None]):
             ("N / [", "the previous episode"), ("j", "jump to an episode by its number"),
             ("esc", "close the replay, back to the app"), ("q", "quit"),
         ]
-
-    @on(ReplayButton.Pressed)
-    def _pressed(self, event: Button.Pressed) -> None:
-        event.stop()
-        actions = {
-            "replay-previous-episode": lambda: self.action_episode(-1),
-            "replay-back": lambda: self.action_step(-1),
-            "replay-forward": lambda: self.action_step(1),
-            "replay-next-episode": lambda: self.action_episode(1),
-        }
-        action = actions.get(event.button.id or "")
-        if action is not None:
-            action()
 
     @on(OptionList.OptionHighlighted, "#replay-moves")
     def _highlighted(self, event: OptionList.OptionHighlighted) -> None:

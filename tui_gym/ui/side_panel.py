@@ -207,10 +207,7 @@ class WrapperRow(Vertical):
 
     def _line(self, kind: str) -> Static | None:
         """The row's error or reason line, if it has been made."""
-        for child in self.children:
-            if child.has_class(kind) and isinstance(child, Static):
-                return child
-        return None
+        return self.query_one_optional(f"WrapperRow > .{kind}", Static)
 
     def read(self) -> tuple[WrapperChoice | None, str | None]:
         """The choice this row stands for (None when unticked), or the reason it is invalid."""

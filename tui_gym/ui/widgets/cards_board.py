@@ -11,6 +11,7 @@ from rich.text import Text
 from textual.binding import Binding, BindingType
 
 from tui_gym.ui.widgets.boards import Board
+from tui_gym.ui.widgets.strip_widget import component_classes
 
 SUITS = ("♠", "♥", "♦", "♣")
 RED_SUITS = frozenset({"♥", "♦"})
@@ -61,10 +62,7 @@ class CardsBoard(Board):
     CardsBoard .cards--tag { background: $warning 70%; color: #1b1b1b; text-style: bold; }
     """
 
-    COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "cards--face", "cards--red", "cards--edge", "cards--back", "cards--back-fill",
-        "cards--label", "cards--muted", "cards--total", "cards--bust", "cards--best", "cards--tag",
-    }
+    COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("h", "act('hit')", "Hit", tooltip="Take another card"),

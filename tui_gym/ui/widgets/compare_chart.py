@@ -161,19 +161,10 @@ class CompareChart(StripWidget):
 
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
         super().__init__(id=id, classes=classes)
-        self._series: tuple[Series, ...] = ()
-        self._colours: tuple[int, ...] = ()
+        self.series: tuple[Series, ...] = ()
+        self.colours: tuple[int, ...] = ()  # each shown curve's place in the palette
         self.empty_text = "Tick runs in the list to draw their return curves here."
         self.border_title = "Return per episode"
-
-    @property
-    def series(self) -> tuple[Series, ...]:
-        return self._series
-
-    @property
-    def colours(self) -> tuple[int, ...]:
-        """Each shown curve's place in the palette."""
-        return self._colours
 
     def show(self, series: Sequence[Series], colours: Sequence[int] | None = None) -> None:
         """Draw these curves, each in its palette colour (by default, in order)."""
@@ -181,8 +172,8 @@ class CompareChart(StripWidget):
         colours = tuple(colours) if colours is not None else tuple(range(len(series)))
         if len(colours) != len(series):
             raise ValueError("one colour per curve")
-        if series != self._series or colours != self._colours:
-            self._series, self._colours = series, colours
+        if series != self.series or colours != self.colours:
+            self.series, self.colours = series, colours
             self.redraw(layout=True)
 
     def picture_key(self) -> Hashable:
@@ -192,22 +183,22 @@ class CompareChart(StripWidget):
         return self.COMPACT_PLOT_HEIGHT if self._compact() else self.PLOT_HEIGHT
 
     def get_content_height(self, container: object, viewport: object, width: int) -> int:
-        if not self._series:
+        if not self.series:
             return 1
-        return self.plot_height() + 1 + len(self._series)
+        return self.plot_height() + 1 + len(self.series)
 
     def draw(self, width: int) -> list[Line]:
         styles = self.component_styles()
         axis = styles["chart--axis"]
-        if not self._series:
+        if not self.series:
             return [[Segment(self.empty_text[:width], styles["chart--empty"])]]
         height = max(MIN_PLOT_HEIGHT, self.plot_height())
         plot_width = max(1, width - LABEL_WIDTH)
-        bits, ink, band = plot_cells(self._series, plot_width, height)
-        low, high = value_range(self._series)
+        bits, ink, band = plot_cells(self.series, plot_width, height)
+        low, high = value_range(self.series)
         background = self.rich_style.bgcolor or RichColor.parse("#000000")
-        line_styles = [Style(color=colour(c)) for c in self._colours]
-        colours = [colour(c) for c in self._colours]
+        line_styles = [Style(color=colour(c)) for c in self.colours]
+        colours = [colour(c) for c in self.colours]
         tints: dict[int, RichColor] = {}
 
         def tint(mask: int) -> RichColor:
@@ -245,14 +236,14 @@ class CompareChart(StripWidget):
                 else:
                     line.append(Segment(glyph, style))
             lines.append(line)
-        first, last = episode_range(self._series)
+        first, last = episode_range(self.series)
         left, right = f"{first:,}", f"{last:,} episodes"
         gap = plot_width - len(left) - len(right)
         if gap < 1:
             right = f"{last:,}"
             gap = max(1, plot_width - len(left) - len(right))
         lines.append([Segment(" " * LABEL_WIDTH + left + " " * gap + right, axis)])
-        for s, style in zip(self._series, line_styles, strict=True):
+        for s, style in zip(self.series, line_styles, strict=True):
             lines.append([Segment("━━ ", style), Segment(s.legend()[: max(0, width - 3)])])
         return lines
 

@@ -10,6 +10,7 @@ from textual.binding import Binding, BindingType
 
 from tui_gym.ui.widgets.board_drawing import stack
 from tui_gym.ui.widgets.boards import Board
+from tui_gym.ui.widgets.strip_widget import component_classes
 
 DIAL_GROUP = Binding.Group("Dial")
 BAR = 24  # gauge width at most
@@ -24,8 +25,7 @@ class DialBoard(Board):
     DialBoard .dial--pointer { color: $text; background: $accent; text-style: bold; }
     DialBoard .dial--muted { color: $text-muted; }
     """
-    COMPONENT_CLASSES: ClassVar[set[str]] = {"dial--gauge", "dial--empty", "dial--pointer",
-                                             "dial--muted"}
+    COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("left,h", "turn(-1)", "−1", key_display="←", group=DIAL_GROUP),

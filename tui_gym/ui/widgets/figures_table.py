@@ -87,39 +87,35 @@ class FiguresTable(StripWidget):
 
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
         super().__init__(id=id, classes=classes)
-        self._rows: tuple[FigureRow, ...] = ()
+        self.rows: tuple[FigureRow, ...] = ()
         self._colours: tuple[int, ...] = ()
-
-    @property
-    def rows(self) -> tuple[FigureRow, ...]:
-        return self._rows
 
     def show(self, rows: Sequence[FigureRow], colours: Sequence[int] | None = None) -> None:
         rows = tuple(rows)
         colours = tuple(colours) if colours is not None else tuple(range(len(rows)))
-        if rows != self._rows or colours != self._colours:
-            self._rows, self._colours = rows, colours
+        if rows != self.rows or colours != self._colours:
+            self.rows, self._colours = rows, colours
             self.redraw(layout=True)
 
     def picture_key(self) -> Hashable:
         return (self._version, self.rich_style)
 
     def get_content_height(self, container: object, viewport: object, width: int) -> int:
-        return len(self._rows) + 1 if self._rows else 0
+        return len(self.rows) + 1 if self.rows else 0
 
     def draw(self, width: int) -> list[Line]:
-        if not self._rows:
+        if not self.rows:
             return []
         styles = self.component_styles()
         header_style, note_style = styles["figures--header"], styles["figures--note"]
-        columns = layout(self._rows, width)
+        columns = layout(self.rows, width)
         label_width = max(MIN_LABEL, width - 2 - sum(w + 2 for _, _, w in columns))
         head: Line = [Segment("  " + "Run".ljust(label_width), header_style)]
         for header, key, w in columns:
             text = header.ljust(w) if key == "note" else header.rjust(w)
             head.append(Segment("  " + text, header_style))
         lines = [head]
-        for row, place in zip(self._rows, self._colours, strict=True):
+        for row, place in zip(self.rows, self._colours, strict=True):
             texts = cells(row)
             label = row.label
             if len(label) > label_width:

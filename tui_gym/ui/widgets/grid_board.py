@@ -14,6 +14,7 @@ from textual.binding import Binding, BindingType
 from textual.geometry import Offset
 
 from tui_gym.ui.widgets.boards import Board
+from tui_gym.ui.widgets.strip_widget import component_classes
 
 Cell = tuple[int, int]
 
@@ -138,10 +139,7 @@ class GridBoard(Board):
     GridBoard .grid--wall { color: $foreground 55%; }
     """
 
-    COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "grid--line", "grid--empty", "grid--trail", "grid--agent", "grid--target", "grid--home",
-        "grid--axis", "grid--wall",
-    }
+    COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("up,w", "act('up')", "up", key_display="↑/w", group=MOVE_GROUP),

@@ -9,8 +9,10 @@ import numpy as np
 from textual import events
 from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
-from textual.containers import Vertical
+from textual.containers import HorizontalScroll, Vertical
+from textual.geometry import Region
 from textual.message import Message
+from textual.widget import Widget
 from textual.widgets import Label
 
 from tui_gym.core.heatmap import Heatmap
@@ -46,6 +48,14 @@ class MapCanvas(HeatmapView):
         self.focus_cell = (hit[1], hit[2])
         self.post_message(self.Clicked((hit[1], hit[2])))
 
+    def cursor_region(self) -> Region | None:
+        """Where the focus cell is drawn, in the canvas's content (None before it is)."""
+        if self.focus_cell is None or not self._placements:
+            return None
+        place, (width, height) = self._placements[0], self._cell_geometry
+        row, col = self.focus_cell
+        return Region(place.x + col * width, place.y + row * height, width, height)
+
 
 class MapEditor(Vertical):
     """The map, its exact optimum and a cursor; edits posted up as `Changed`."""
@@ -58,6 +68,8 @@ class MapEditor(Vertical):
         border-subtitle-color: $text-muted;
     }
     MapEditor > Label { width: 100%; padding: 0 1; }
+    MapEditor > HorizontalScroll { height: auto; scrollbar-size-horizontal: 1; }
+    MapEditor MapCanvas { width: auto; min-width: 100%; }
     MapEditor #editor-tools { color: $text-muted; }
     MapEditor #editor-status.-unreachable { color: $text-warning; text-style: bold; }
     """
@@ -111,7 +123,8 @@ class MapEditor(Vertical):
 
     def compose(self) -> ComposeResult:
         yield Label("", id="editor-tools")
-        yield MapCanvas(id="editor-canvas")
+        with HorizontalScroll():  # a map wider than the editor scrolls with the cursor
+            yield MapCanvas(id="editor-canvas")
         yield Label("", id="editor-status")
 
     def on_mount(self) -> None:
@@ -157,6 +170,7 @@ class MapEditor(Vertical):
         self._optimum_text = optimum
         self._show_tools()
         self._show_status()
+        self.call_after_refresh(self.cursor_in_sight)
 
     def _dress(self, panel: Heatmap, grid_map: GridMap) -> Heatmap:
         """The optimum's panel with the start, reward cells and ice marked."""
@@ -341,6 +355,23 @@ class MapEditor(Vertical):
     def on_heatmap_view_focus_changed(self, event: HeatmapView.FocusChanged) -> None:
         event.stop()  # the cursor moved: the train view's own heatmap must not follow
         self._show_status()
+        self.cursor_in_sight()
+
+    def cursor_in_sight(self) -> None:
+        """Scroll the boxes around the map, this one's and the view's, until the cursor's
+        cell shows (as Textual's `scroll_to_widget` does for a widget)."""
+        canvas = self.canvas
+        region = canvas.cursor_region()
+        if region is None:
+            return
+        region = region.translate(canvas.virtual_region.offset + canvas.styles.gutter.top_left)
+        widget: Widget = canvas
+        while isinstance(widget.parent, Widget) and region:
+            box = widget.parent
+            scrolled = box.scroll_to_region(region, animate=False, immediate=True)
+            region = region.translate(
+                box.virtual_region.offset + box.styles.border.spacing.top_left - scrolled)
+            widget = box
 
     def focus_canvas(self) -> None:
         self.canvas.focus()

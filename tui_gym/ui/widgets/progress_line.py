@@ -8,7 +8,7 @@ from typing import ClassVar
 from rich.segment import Segment
 
 from tui_gym.ui.widgets.numbers import compact_count
-from tui_gym.ui.widgets.strip_widget import Line, StripWidget
+from tui_gym.ui.widgets.strip_widget import Line, StripWidget, component_classes
 
 DONE, HALF = "━", "╸"
 MIN_BAR = 4  # cells: narrower than this, the bar is left out
@@ -17,9 +17,6 @@ MIN_BAR = 4  # cells: narrower than this, the bar is left out
 class ProgressLine(StripWidget):
     """A bar toward the episode budget, the percentage, the counts and the time left."""
 
-    COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "progress--done", "progress--left", "progress--percent", "progress--text",
-    }
     DEFAULT_CSS = """
     ProgressLine { height: 1; width: 1fr; }
     ProgressLine > .progress--done { color: $accent; }
@@ -27,6 +24,7 @@ class ProgressLine(StripWidget):
     ProgressLine > .progress--percent { color: $text; }
     ProgressLine > .progress--text { color: $text-muted; }
     """
+    COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     def __init__(self, *, id: str | None = None) -> None:
         super().__init__(id=id)

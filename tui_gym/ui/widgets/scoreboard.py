@@ -11,6 +11,7 @@ from rich.text import Text
 from textual.widget import Widget
 
 from tui_gym.games.words import ScoreRow
+from tui_gym.ui.widgets.strip_widget import component_classes
 
 
 class Scoreboard(Widget):
@@ -32,11 +33,7 @@ class Scoreboard(Widget):
     Scoreboard .scoreboard--other { color: $text-muted; }
     Screen.compact Scoreboard { border: none; padding: 0 1; }
     """
-
-    COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "scoreboard--who", "scoreboard--you", "scoreboard--agent", "scoreboard--optimum",
-        "scoreboard--other",
-    }
+    COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     WHO_STYLES: ClassVar[dict[str, str]] = {"You": "you", "Agent": "agent", "Optimum": "optimum"}
 

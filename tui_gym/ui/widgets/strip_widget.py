@@ -1,27 +1,19 @@
 """Widgets that keep their drawing between frames: `StripWidget` and `segments_of`.
 
-Textual turns a widget's `render()` result into lines of segments again
-whenever the widget is refreshed, and a focus change or a view switch
-refreshes the whole screen; for a heatmap of 200 coloured cells or a table of
-figures that costs milliseconds a frame, most of a key press's budget.
-
-A `StripWidget` draws through Textual's line API instead. A subclass says
-what its picture depends on (`picture_key()`; by default a counter that
-`redraw()` bumps) and draws it as lines of Rich segments (`draw(width)`).
-Lines are drawn once per key and width (the last `PICTURES` pictures are
-kept, for widgets that flip between a few), and styled with the widget's own
-colours once per style, so a frame that finds nothing changed costs a lookup.
-`redraw()` of a widget on screen draws the new picture at once and repaints
-only the lines that differ from the picture shown (a new snapshot changes a
-few figures of a table, not the table), unless its height may change.
-`component_styles()` keeps the Rich styles of the widget's component classes
-until its own style changes (a theme switch), and a resize asks for a layout
-pass only when the width or the compact layout changed, not when a view is
-shown again at its old size.
+A `StripWidget` draws through Textual's line API rather than `render()`, which
+Textual turns into segments again on every refresh (a focus change or a view
+switch refreshes the whole screen). A subclass says what its picture depends on
+(`picture_key()`; by default a counter `redraw()` bumps) and draws it as lines
+of Rich segments (`draw(width)`), kept per key and width (the last `PICTURES`)
+and styled once per style. `redraw()` repaints only the lines that changed,
+unless the height may change; `component_styles()` keeps the component classes'
+Rich styles until a theme switch; a resize asks for a layout pass only when the
+width or the compact layout changed.
 """
 
 from __future__ import annotations
 
+import re
 from collections import OrderedDict
 from collections.abc import Hashable, Iterable
 from typing import ClassVar
@@ -51,6 +43,11 @@ def segments_of(text: Text, console: Console) -> list[Line]:
             if part:
                 lines[-1].append(Segment(part, segment.style))
     return lines
+
+
+def component_classes(css: str) -> set[str]:
+    """The component classes a widget's CSS styles (its `.name--part` selectors)."""
+    return set(re.findall(r"\.(\w+--[\w-]+)", css))
 
 
 def line_text(line: Iterable[Segment]) -> str:

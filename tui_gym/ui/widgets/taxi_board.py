@@ -27,6 +27,7 @@ from tui_gym.ui.widgets.board_drawing import (
     step_toward,
 )
 from tui_gym.ui.widgets.boards import Board
+from tui_gym.ui.widgets.strip_widget import component_classes
 
 MOVES: dict[str, Cell] = {"south": (1, 0), "north": (-1, 0), "east": (0, 1), "west": (0, -1)}
 MOVE_OF: dict[Cell, str] = {step: name for name, step in MOVES.items()}
@@ -82,9 +83,10 @@ def shape_fits(shape: TaxiShape, width: int, height: int) -> bool:
 
 
 def choose_shape(rows: int, cols: int, width: int, height: int) -> TaxiShape:
-    """The largest drawing of the city that fits (the smallest one if none does)."""
-    for cell_w, cell_h in TAXI_SIZES:
-        for frame in (True, False):
+    """The largest drawing of the city that fits with its wall all round, else the largest
+    without it (the smallest one if none does): the city's edge is a wall too."""
+    for frame in (True, False):
+        for cell_w, cell_h in TAXI_SIZES:
             shape = TaxiShape(rows, cols, cell_w, cell_h, frame)
             if shape_fits(shape, width, height):
                 return shape
@@ -157,12 +159,7 @@ class TaxiBoard(Board):
     TaxiBoard .taxi--good { color: $text-success; text-style: bold; }
     TaxiBoard .taxi--bad { color: $text-error; text-style: bold; }
     """
-
-    COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "taxi--road", "taxi--road-alt", "taxi--lane", "taxi--wall", "taxi--rain", "taxi--stand-0",
-        "taxi--stand-1", "taxi--stand-2", "taxi--stand-3", "taxi--passenger", "taxi--destination",
-        "taxi--cab", "taxi--cab-full", "taxi--caption", "taxi--note", "taxi--good", "taxi--bad",
-    }
+    COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("up,w", "act('north')", "north", key_display="↑/w", group=MOVE_GROUP),

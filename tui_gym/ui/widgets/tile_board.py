@@ -30,11 +30,13 @@ from tui_gym.ui.widgets.board_drawing import (
     step_toward,
 )
 from tui_gym.ui.widgets.boards import Board
+from tui_gym.ui.widgets.strip_widget import component_classes
 
 START, FLOOR, HOLE, GOAL, CLIFF, WALL, REWARD = "S", "F", "H", "G", "C", "W", "R"
 KINDS = (START, FLOOR, HOLE, GOAL, CLIFF, WALL, REWARD)  # the legend's order
 FILLED = frozenset({CLIFF, WALL})  # drawn as a texture over the whole tile
 GLYPHS = {START: "⌂", FLOOR: "·", HOLE: "○", GOAL: "★", CLIFF: "▒", WALL: "█"}
+GROUNDS = {HOLE: "hole", GOAL: "goal", CLIFF: "cliff", WALL: "wall"}  # a tile's own style
 AGENT = "●"
 
 STRAIGHT: dict[str, Cell] = {"left": (0, -1), "down": (1, 0), "right": (0, 1), "up": (-1, 0)}
@@ -231,13 +233,7 @@ class TileBoard(Board):
     TileBoard .tile--bad { color: $text-error; text-style: bold; }
     """
 
-    COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "tile--ice", "tile--ice-alt", "tile--ground", "tile--ground-alt", "tile--floor",
-        "tile--floor-alt", "tile--start", "tile--hole", "tile--goal", "tile--cliff", "tile--wall",
-        "tile--reward", "tile--penalty", "tile--agent", "tile--agent-home", "tile--agent-lost",
-        "tile--trail", "tile--mark", "tile--value", "tile--slip", "tile--wind", "tile--cursor",
-        "tile--axis", "tile--caption", "tile--slipped", "tile--good", "tile--bad",
-    }
+    COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("up,w", "act('up')", "up", key_display="↑/w", group=MOVE_GROUP),
@@ -452,14 +448,8 @@ class TileBoard(Board):
 
     def _ground(self, cell: Cell, kind: str) -> Style:
         """The style of a tile's background (and of its glyph, unless it has its own)."""
-        if kind == HOLE:
-            return self._style("hole")
-        if kind == GOAL:
-            return self._style("goal")
-        if kind == CLIFF:
-            return self._style("cliff")
-        if kind == WALL:
-            return self._style("wall")
+        if kind in GROUNDS:
+            return self._style(GROUNDS[kind])
         if kind == REWARD:
             value = self._reward(cell)
             return self._style("penalty" if value is not None and value < 0 else "reward")

@@ -1,24 +1,12 @@
 """Learning curves: four labelled text sparklines of a training run.
 
-`TrainingCharts` shows the rolling mean return, episode length, mean |TD
-error| and epsilon as sparklines over the whole run (the trainer's bounded
-`series`), each with its name, its current value and the range the curve
-spans. The whole box is one widget drawn from cached lines: a snapshot that
-changes nothing costs nothing, and one that does costs a single drawing
-rather than a dozen widgets' (`update_from`).
-
-What is drawn and what is written agree (`plotted`): the curve's columns are
-bucket means of the series with the current value as the last column, and
-"max" and "min" are the highest and lowest of those columns, so the value
-beside a curve always lies within its range. A curve whose range rounds to
-one number is drawn flat. In a narrow box (the animated board beside it) the
-ranges make way so the curves keep `MIN_SPARK` columns. Figures too long for
-their column are shortened, never cut; a mean with no episodes behind it (just after loading a saved
-agent) reads "–".
-
-A sparkline draws bars of eighths of a cell, `height` cells tall, coloured
-from the curve's low colour to its high colour (each curve's two colours are
-CSS component classes, e.g. `charts--return-high`).
+`TrainingCharts` draws the rolling mean return, episode length, mean |TD error|
+and epsilon over the whole run, each with its name, current value and range, as
+one widget of cached lines (`update_from`). What is drawn and what is written
+agree (`plotted`): the columns are bucket means ending on the current value, and
+the range is theirs. A narrow box drops the ranges before the curves shrink
+below `MIN_SPARK` columns; a mean with no episodes behind it reads "–". Each
+curve's low and high colours are component classes (`charts--return-high`).
 """
 
 from __future__ import annotations
@@ -33,7 +21,7 @@ from rich.style import Style
 
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.ui.widgets.numbers import Forms, fit, number_forms
-from tui_gym.ui.widgets.strip_widget import Line, StripWidget
+from tui_gym.ui.widgets.strip_widget import Line, StripWidget, component_classes
 
 BARS = "▁▂▃▄▅▆▇█"
 NAME_WIDTH, VALUE_WIDTH, RANGE_WIDTH = 12, 9, 13
@@ -151,10 +139,6 @@ class TrainingCharts(StripWidget):
 
     # Not scoped: the `Screen.compact ...` rules must match from the screen down.
     SCOPED_CSS = False
-    COMPONENT_CLASSES: ClassVar[set[str]] = {
-        "charts--name", "charts--value", "charts--range",
-        *(f"charts--{curve.key}-{end}" for curve in CURVES for end in ("low", "high")),
-    }
     DEFAULT_CSS = """
     TrainingCharts {
         height: auto;
@@ -180,6 +164,7 @@ class TrainingCharts(StripWidget):
         padding: 0;
     }
     """
+    COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
         super().__init__(id=id, classes=classes)
