@@ -288,6 +288,18 @@ def test_unknown_env_gets_a_short_message_with_suggestions() -> None:
         build_env("tui_gym/Gridworld-v0")
 
 
+def test_an_id_only_a_newer_version_of_is_registered_gets_the_same_short_message(
+        monkeypatch) -> None:
+    # (as Taxi-v3 once Gymnasium has Taxi-v4: gymnasium raised DeprecatedEnv, a traceback)
+    import gymnasium as gym
+
+    monkeypatch.setitem(gym.registry, "TuiGymOld-v2",
+                        gym.envs.registration.EnvSpec("TuiGymOld-v2", entry_point="no:such"))
+    with pytest.raises(UnknownEnvError, match=r"^unknown environment 'TuiGymOld-v1'; did you "
+                       r"mean 'TuiGymOld-v2'\?$"):
+        build_env("TuiGymOld-v1")
+
+
 def test_build_env_rejects_unknown_wrappers_and_misfits() -> None:
     with pytest.raises(UnknownWrapperError):
         build_env("Blackjack-v1", choices=[WrapperChoice("FrameSkip")])

@@ -44,7 +44,7 @@ def _make(env_id: str, kwargs: Mapping[str, Any], render_mode: str | None) -> gy
     tui_gym.envs.register_envs()  # our ids exist even if `tui_gym` was imported oddly
     try:
         return gym.make(env_id, render_mode=render_mode, **kwargs)
-    except gym.error.UnregisteredEnv as error:
+    except (gym.error.UnregisteredEnv, gym.error.DeprecatedEnv) as error:  # e.g. Taxi-v3
         raise UnknownEnvError(env_id) from error
 
 
