@@ -25,11 +25,13 @@ from tui_gym.core.mdp import (
     NotAvailable,
     Phases,
     evaluate,
+    gap_of,
     model_from_env,
     return_range,
     solve,
     with_horizon,
 )
+from tui_gym.core.mdp.evaluation import expected_value
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.games.base import (
     EXACT,
@@ -262,8 +264,8 @@ class ModelOracle(Oracle):
         """The exact figures of `policy` (`[S, A]`, a greedy policy) beside the optimum."""
         model = exact.model
         value = evaluate(model, policy).value
-        best = _initial_value(model, exact.ladder.q().max(axis=1))
-        gap = exact_gap_of(best, value)
+        best = expected_value(model, exact.ladder.q().max(axis=1))
+        gap = gap_of(best, value)
         places = self.model_game.narrator.value_places
         return ReferenceMetrics(
             figures={"exact_value": value, "optimal_value": best, "gap": gap},
@@ -279,7 +281,7 @@ class ModelOracle(Oracle):
         if isinstance(exact, NotAvailable):
             return {}
         if q is None:
-            return {"optimal_value": _initial_value(exact.model, exact.ladder.q().max(axis=1))}
+            return {"optimal_value": expected_value(exact.model, exact.ladder.q().max(axis=1))}
         reference = self.reference(q, kwargs, changes)
         return {} if isinstance(reference, NotAvailable) else dict(reference.figures)
 
@@ -329,7 +331,7 @@ class ModelOracle(Oracle):
             return exact
         model, ladder = exact.model, exact.ladder
         q = ladder.q()
-        value = _initial_value(model, q.max(axis=1))
+        value = expected_value(model, q.max(axis=1))
         limit = "no episode limit" if model.horizon is None else f"{model.horizon}-step episodes"
         return Optimum(
             value=value, summary=f"the best expected return of an episode ({limit}, undiscounted)",
@@ -375,23 +377,6 @@ class ModelOracle(Oracle):
         return self._bounds[key]
 
 
-def exact_gap_of(optimal: float, value: float) -> float:
-    """The optimum minus a policy's value, never negative (round-off counts as 0)."""
-    if optimal == value:
-        return 0.0
-    difference = optimal - value
-    if math.isfinite(difference) and difference <= 1e-9 * max(1.0, abs(optimal)):
-        return 0.0
-    return difference
-
-
-def _initial_value(model: FiniteMDP, v: FloatArray) -> float:
-    weight = model.initial > 0
-    if np.isneginf(v[weight]).any():
-        return float("-inf")
-    return float(model.initial[weight] @ v[weight])
-
-
 def best_fixed_policy(model: FiniteMDP, ladder: Ladder) -> FixedBound:
     """The best fixed policy a local search finds, beside the optimum.
 
@@ -400,7 +385,7 @@ def best_fixed_policy(model: FiniteMDP, ladder: Ladder) -> FixedBound:
     changes that raise the exact value are taken, the best first, until none
     does (skipped for models past `SEARCH_LIMIT` state-action pairs).
     """
-    optimal = _initial_value(model, ladder.q().max(axis=1))
+    optimal = expected_value(model, ladder.q().max(axis=1))
     candidates = [solve(model).policy]
     if model.horizon is not None:
         free = with_horizon(model, None)
@@ -412,7 +397,7 @@ def best_fixed_policy(model: FiniteMDP, ladder: Ladder) -> FixedBound:
     values = [evaluate(model, np.asarray(p, dtype=np.int64)).value for p in candidates]
     policy = np.asarray(candidates[int(np.argmax(values))], dtype=np.int64).copy()
     value = max(values)
-    if exact_gap_of(optimal, value) == 0.0 or model.horizon is None:
+    if gap_of(optimal, value) == 0.0 or model.horizon is None:
         return FixedBound(optimal, value)
     if model.n_states * model.n_actions <= SEARCH_LIMIT:
         policy, value = _climb(model, policy, value)

@@ -8,7 +8,7 @@ policy that may never end one).
 
 from tui_gym.core.mdp.evaluation import PolicyValue, evaluate
 from tui_gym.core.mdp.from_env import NotAvailable, model_from_env
-from tui_gym.core.mdp.gap import Gap, exact_gap
+from tui_gym.core.mdp.gap import Gap, exact_gap, gap_of
 from tui_gym.core.mdp.model import FiniteMDP, ModelError
 from tui_gym.core.mdp.optimum import TIE_GAMMA, Ladder, Solution, optimal_actions, solve
 from tui_gym.core.mdp.phases import Phases
@@ -19,6 +19,6 @@ from tui_gym.core.mdp.transforms import clip_reward, scale_reward, step_penalty,
 __all__ = [
     "TIE_GAMMA", "FiniteMDP", "Gap", "Ladder", "ModelError", "NotAvailable", "Phases",
     "PolicyError", "PolicyValue", "Solution", "clip_reward", "evaluate", "exact_gap",
-    "greedy_policy", "model_from_env", "optimal_actions", "policy_matrix", "return_range",
+    "gap_of", "greedy_policy", "model_from_env", "optimal_actions", "policy_matrix", "return_range",
     "scale_reward", "solve", "step_penalty", "with_horizon",
 ]

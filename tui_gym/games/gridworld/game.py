@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
-from tui_gym.core.mdp import NotAvailable, evaluate, return_range
+from tui_gym.core.mdp import NotAvailable, evaluate, gap_of, return_range
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.envs import GRIDWORLD_MAX_STEPS
@@ -41,7 +41,6 @@ from tui_gym.games.gridworld.model import (
 )
 from tui_gym.games.gridworld.paths import mean_fewest_steps, path_figures, shortest_marks
 from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
-from tui_gym.games.model import exact_gap_of
 from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import (
     ScoreRow,
@@ -130,7 +129,7 @@ def _exact_return(
     model = gridworld_model(*args)
     value = evaluate(model, greedy_probabilities(q)).value
     best = gridworld_optimum(*args).value
-    return {"exact_value": value, "optimal_value": best, "gap": exact_gap_of(best, value)}
+    return {"exact_value": value, "optimal_value": best, "gap": gap_of(best, value)}
 
 
 def _model_args(kwargs: Mapping[str, Any], changes: GameChanges) -> tuple[Any, ...]:
