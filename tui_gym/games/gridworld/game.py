@@ -34,11 +34,7 @@ from tui_gym.games.base import (
     greedy_cells,
     greedy_probabilities,
 )
-from tui_gym.games.gridworld.model import (
-    gridworld_model,
-    gridworld_optimum,
-    shortest_path_optimum,
-)
+from tui_gym.games.gridworld.model import gridworld_model, gridworld_optimum, shortest_path_optimum
 from tui_gym.games.gridworld.paths import mean_fewest_steps, path_figures, shortest_marks
 from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
 from tui_gym.games.planning import PlanModel
@@ -514,9 +510,7 @@ class GridWorldGame(Game):
     def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel:
         """The model with no limit, discounted as the learners discount it by default: with
         a reward only at the target, every path is worth as much undiscounted."""
-        model = gridworld_model(_size(kwargs), float(kwargs.get("reward_scale", 1.0)),
-                                float(kwargs.get("step_penalty", 0.0)), NO_CHANGES,
-                                _walls(kwargs))
+        model = gridworld_model(*_model_args(kwargs, NO_CHANGES))
         gamma = self.hyperparameters["*"]["discount"]
         return PlanModel(model, gamma, self.episode_limit(kwargs))
 
@@ -577,6 +571,4 @@ class GridWorldGame(Game):
     ) -> TrainingModel | NotAvailable:
         if changes.others:
             return NotAvailable(unwrapped_note(changes.others))
-        return TrainingModel(gridworld_model(
-            _size(kwargs), float(kwargs.get("reward_scale", 1.0)),
-            float(kwargs.get("step_penalty", 0.0)), changes, _walls(kwargs)))
+        return TrainingModel(gridworld_model(*_model_args(kwargs, changes)))
