@@ -174,13 +174,7 @@ class StateSpace(Role):
     def text(self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None) -> str:
         """A plain-text picture of the env's state ('' when it has none); `reveal` shows
         what is hidden during an episode, `before` is as for `scene`."""
-        if self.game.render_mode != "ansi":
-            return ""
-        try:
-            picture = env.render()
-        except UNREADABLE:
-            return ""
-        return strip_ansi(picture) if isinstance(picture, str) else ""
+        return ansi_text(env) if self.game.render_mode == "ansi" else ""
 
     def json_observation(self, observation: Any) -> Any:
         """The observation as JSON-friendly data."""
@@ -637,8 +631,13 @@ class Game:
         return NotAvailable(f"{self.title} has no exact model")
 
 
-def strip_ansi(text: str) -> str:
-    """`text` without terminal colour codes (Gymnasium's text renders use them)."""
+def ansi_text(env: Any) -> str:
+    """The env's text render without terminal colour codes (Gymnasium's text renders use
+    them); '' when it has none."""
     import re
 
-    return re.sub(r"\x1b\[[0-9;]*m", "", text)
+    try:
+        picture = env.render()
+    except UNREADABLE:
+        return ""
+    return re.sub(r"\x1b\[[0-9;]*m", "", picture) if isinstance(picture, str) else ""
