@@ -31,7 +31,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "EXACT", "Advice", "Bound", "EvalOutcome", "Game", "HeatmapLayout", "Narrator", "NotAvailable",
-    "Oracle", "ReferenceMetrics", "Scope", "StateSpace", "TallyWord", "TrainingModel", "all_tied",
+    "Oracle", "ReferenceMetrics", "Scope", "StateSpace", "TallyWord", "TrainingModel",
     "greedy_probabilities",
 ]
 
@@ -120,12 +120,6 @@ def greedy_probabilities(q: npt.ArrayLike) -> npt.NDArray[np.float64]:
     values = np.asarray(q, dtype=np.float64)
     tied = values == values.max(axis=1, keepdims=True)
     return tied / tied.sum(axis=1, keepdims=True)
-
-
-def all_tied(q: npt.ArrayLike) -> BoolArray:
-    """Per row: whether every action ties (the agent has no preference there)."""
-    values = np.asarray(q)
-    return np.asarray((values == values[:, :1]).all(axis=1))
 
 
 # --- the roles ---------------------------------------------------------------------
