@@ -340,7 +340,7 @@ def test_a_greedy_policy_is_valued_once_while_the_table_keeps_it(monkeypatch) ->
 def test_the_optimums_marks_are_solved_once_for_every_snapshots_heatmap(monkeypatch) -> None:
     """Gambler's ladder is too long to keep (each rung is solved when asked for): its
     heatmap's optimal marks are kept, so a live run's next snapshots solve nothing."""
-    import tui_gym.games.model as model_module
+    import tui_gym.core.mdp.optimum as model_module
 
     solved: list[int] = []
     solve = model_module.solve

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Hashable, Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -157,22 +158,16 @@ class ObservationKeyer:
         self.signature = repr(space)
         self.n_states: int | None = None
         self._low = np.zeros(0, dtype=np.int64)
-        self._radix = np.zeros(0, dtype=np.int64)
         self._strides = np.zeros(0, dtype=np.int64)
         if all(d is not None for d in dense):
             low = np.concatenate([d.low for d in dense])  # type: ignore[union-attr]
             radix = np.concatenate([d.radix for d in dense])  # type: ignore[union-attr]
-            total = 1
-            for r in radix.tolist():
-                total *= int(r)
+            total = math.prod(int(r) for r in radix.tolist())
             if total <= DENSE_STATE_LIMIT:
                 self.n_states = total
                 self._low = low
-                self._radix = radix
                 # Row-major: the last element varies fastest.
-                strides = np.ones_like(radix)
-                for i in range(len(radix) - 2, -1, -1):
-                    strides[i] = strides[i + 1] * radix[i + 1]
+                strides = np.append(np.cumprod(radix[:0:-1])[::-1], 1).astype(np.int64)
                 self._strides = strides
                 self._low_list = low.tolist()
                 self._stride_list = strides.tolist()

@@ -53,79 +53,50 @@ def _is_real(value: object) -> bool:
 
 
 class GridWorldEnv(gym.Env[ObsType, int]):
-    """
-    An agent walks a square grid to reach a target.
+    """An agent walks a square grid to reach a target.
 
-    ## Description
-    The grid is `size` x `size` cells. An agent and a target are placed on two
-    different cells at random; the agent moves one cell at a time until it stands
-    on the target. Moves off the grid leave the agent where it was (`np.clip`),
-    and so do moves into a wall cell (`walls`, none by default). Without walls
-    the shortest episode takes exactly the Manhattan distance between the two;
-    with walls, the fewest moves around them.
-
-    This is the environment of Gymnasium's "Create a custom environment"
-    tutorial, with the same spaces and action mapping, but every observation is
-    a new array, so keeping or mutating one never affects the environment.
+    Gymnasium's "Create a custom environment" tutorial, with the same spaces and
+    action mapping, but every observation is a new array (keeping or mutating one
+    never affects the environment), and optional walls.
 
     ## Action Space
-    The action is an `int` in `{0, 3}` (`Discrete(4)`) naming the direction to
-    move. `x` grows to the right and `y` grows upwards:
-
-    - 0: Move right (`x + 1`)
-    - 1: Move up (`y + 1`)
-    - 2: Move left (`x - 1`)
-    - 3: Move down (`y - 1`)
+    `Discrete(4)`, the direction to move; `x` grows to the right, `y` upwards:
+    0 right (`x + 1`), 1 up (`y + 1`), 2 left (`x - 1`), 3 down (`y - 1`). A move
+    off the grid or into a wall leaves the agent where it was.
 
     ## Observation Space
-    A dict of two `np.int64` arrays of shape `(2,)` holding `(x, y)` positions,
-    each coordinate in `[0, size - 1]`:
-
-    - `"agent"`: where the agent stands.
-    - `"target"`: where the target is.
-
-    `reset()` and `step()` also return `info = {"distance": d}`, the fewest
-    moves (a Python `int`) from the agent to the target: the Manhattan distance
-    when there are no walls, and -1 when walls leave no way to it.
+    A dict of two `np.int64` arrays of shape `(2,)`, `(x, y)` in `[0, size - 1]`:
+    `"agent"` and `"target"`. `reset()` and `step()` also return
+    `info = {"distance": d}`, the fewest moves from the agent to the target (a
+    Python `int`): the Manhattan distance without walls, -1 when walls leave no way.
 
     ## Rewards
-    - Reaching the target: `+reward_scale` (default `+1`).
-    - Any other step: `-step_penalty` (default `0`).
+    `+reward_scale` (default `+1`) for reaching the target, `-step_penalty`
+    (default `0`) for any other step.
 
     ## Starting State
-    The agent is placed uniformly at random; the target uniformly at random on a
-    different cell (resampled until it differs from the agent). With walls, both
-    are drawn among the free cells (a draw on a wall is drawn again); the target
-    may be walled off from the agent, and then the episode can only time out.
-    Either or both can be placed explicitly with
-    `reset(options={"agent": (x, y), "target": (x, y)})`; they must differ, on
+    The agent uniformly at random, then the target uniformly on another cell (drawn
+    again until it differs); with walls both among the free cells, and the target
+    may be walled off (the episode can then only time out). Either or both can be
+    placed with `reset(options={"agent": (x, y), "target": (x, y)})`, on different
     free cells.
 
     ## Episode End
-    The episode ends if the following happens:
-
-    - Termination:
-        1. The agent stands on the target.
-
-    - Truncation (using the time_limit wrapper):
-        1. The length of the episode is 300 (`max_episode_steps` of the
-           registered ids). The environment itself never truncates.
+    Terminated when the agent stands on the target; truncated after 300 steps
+    (`max_episode_steps` of the registered ids; the environment itself never
+    truncates).
 
     ## Arguments
-    `gym.make("tui_gym/GridWorld-v0", ...)` after `import tui_gym` (which registers it):
+    `gym.make("tui_gym/GridWorld-v0", ...)` after `import tui_gym`:
 
-    * `render_mode=None`: one of `None`, `"ansi"` (`render()` returns the grid as
-      text), `"human"` (the text is printed on every reset and step) or
-      `"rgb_array"` (`render()` returns a `uint8` image of shape `(H, W, 3)`).
-      In the text, `y = size - 1` is the top row, so "up" moves up on screen;
-      `A` is the agent, `T` the target, `*` the agent on the target, `#` a wall,
-      `.` empty.
+    * `render_mode=None`: `None`, `"ansi"` (`render()` returns the grid as text:
+      `y = size - 1` on top, `A` the agent, `T` the target, `*` the agent on the
+      target, `#` a wall, `.` empty), `"human"` (that text printed on every reset
+      and step) or `"rgb_array"` (a `uint8` image of shape `(H, W, 3)`).
     * `size=5`: cells per side, an integer `>= 2`.
     * `reward_scale=1.0`: reward for reaching the target; any finite number.
-    * `step_penalty=0.0`: cost of every step that does not reach the target;
-      finite and `>= 0`.
-    * `walls=()`: cells `(x, y)` that cannot be entered; at least two cells
-      must stay free.
+    * `step_penalty=0.0`: cost of every other step; finite and `>= 0`.
+    * `walls=()`: cells `(x, y)` that cannot be entered; at least two stay free.
     """
 
     metadata: dict[str, Any] = {"render_modes": ["ansi", "human", "rgb_array"], "render_fps": 4}
@@ -199,8 +170,6 @@ class GridWorldEnv(gym.Env[ObsType, int]):
 
     def distance(self, a: Sequence[int], b: Sequence[int]) -> int:
         """The fewest moves from cell `a` to cell `b` (-1 when walls leave no way)."""
-        if not self.walls:
-            return manhattan(a, b)
         table = cell_distances(self.size, self.walls)
         return int(table[int(a[0]) * self.size + int(a[1]), int(b[0]) * self.size + int(b[1])])
 

@@ -31,7 +31,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "EXACT", "Advice", "Bound", "EvalOutcome", "Game", "HeatmapLayout", "Narrator", "NotAvailable",
-    "Oracle", "ReferenceMetrics", "Scope", "StateSpace", "TallyWord", "TrainingModel", "all_tied",
+    "Oracle", "ReferenceMetrics", "Scope", "StateSpace", "TallyWord", "TrainingModel",
     "greedy_probabilities",
 ]
 
@@ -122,12 +122,6 @@ def greedy_probabilities(q: npt.ArrayLike) -> npt.NDArray[np.float64]:
     return tied / tied.sum(axis=1, keepdims=True)
 
 
-def all_tied(q: npt.ArrayLike) -> BoolArray:
-    """Per row: whether every action ties (the agent has no preference there)."""
-    values = np.asarray(q)
-    return np.asarray((values == values[:, :1]).all(axis=1))
-
-
 # --- the roles ---------------------------------------------------------------------
 
 
@@ -174,13 +168,7 @@ class StateSpace(Role):
     def text(self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None) -> str:
         """A plain-text picture of the env's state ('' when it has none); `reveal` shows
         what is hidden during an episode, `before` is as for `scene`."""
-        if self.game.render_mode != "ansi":
-            return ""
-        try:
-            picture = env.render()
-        except UNREADABLE:
-            return ""
-        return strip_ansi(picture) if isinstance(picture, str) else ""
+        return ansi_text(env) if self.game.render_mode == "ansi" else ""
 
     def json_observation(self, observation: Any) -> Any:
         """The observation as JSON-friendly data."""
@@ -637,8 +625,13 @@ class Game:
         return NotAvailable(f"{self.title} has no exact model")
 
 
-def strip_ansi(text: str) -> str:
-    """`text` without terminal colour codes (Gymnasium's text renders use them)."""
+def ansi_text(env: Any) -> str:
+    """The env's text render without terminal colour codes (Gymnasium's text renders use
+    them); '' when it has none."""
     import re
 
-    return re.sub(r"\x1b\[[0-9;]*m", "", text)
+    try:
+        picture = env.render()
+    except UNREADABLE:
+        return ""
+    return re.sub(r"\x1b\[[0-9;]*m", "", picture) if isinstance(picture, str) else ""

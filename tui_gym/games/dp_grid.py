@@ -62,13 +62,8 @@ class DPGridStates(DiscreteStates):
         move = None if last is None else grid.moves[int(last)]
         shown = {**grid.pays, **{cell: pay for cell, (_, pay) in grid.jumps.items()}}
         scene: dict[str, Any] = {
-            "rows": grid.rows,
-            "cols": grid.cols,
-            "cells": grid.cells(),
-            "theme": "plain",
-            "agent": agent,
-            "last_action": move,
-            "slipped": False,
+            "rows": grid.rows, "cols": grid.cols, "cells": grid.cells(), "theme": "plain",
+            "agent": agent, "last_action": move, "slipped": False,
             "rewards": {f"{r},{c}": pay for (r, c), pay in shown.items()},
             "marks": {f"{r},{c}": text for (r, c), text in {**grid.letters, **grid.primes}.items()},
             "moves": list(grid.moves),

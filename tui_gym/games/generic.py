@@ -9,7 +9,7 @@ import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import NotAvailable
-from tui_gym.games.base import TIED, UNREADABLE, HeatmapLayout, strip_ansi
+from tui_gym.games.base import TIED, HeatmapLayout, ansi_text
 from tui_gym.games.model import DiscreteStates, ModelGame
 
 __all__ = ["PAGE", "GenericGame", "check_fit"]
@@ -53,13 +53,7 @@ class GenericStates(DiscreteStates):
     """The env's `Discrete` states; its text render as the board."""
 
     def read_scene(self, game_env: Any, before: Mapping[str, Any]) -> dict[str, Any]:
-        text = ""
-        if getattr(game_env, "render_mode", None) == "ansi":
-            try:
-                picture = game_env.render()
-            except UNREADABLE:
-                picture = None
-            text = strip_ansi(picture) if isinstance(picture, str) else ""
+        text = ansi_text(game_env) if getattr(game_env, "render_mode", None) == "ansi" else ""
         state = getattr(game_env, "s", None)
         return {"text": text, "state": None if state is None else int(state),
                 "actions": list(self.game.action_names)}

@@ -19,16 +19,19 @@ import numpy as np
 import numpy.typing as npt
 
 from tui_gym.core.mdp import (
+    TIE_GAMMA,
     FiniteMDP,
+    Ladder,
     NotAvailable,
     Phases,
     evaluate,
+    gap_of,
     model_from_env,
-    optimal_actions,
     return_range,
     solve,
     with_horizon,
 )
+from tui_gym.core.mdp.evaluation import expected_value
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.games.base import (
     EXACT,
@@ -54,9 +57,6 @@ __all__ = [
 ]
 
 PHASE = "phase"  # the argument naming a changing world's phase, for its exact figures
-TIE_GAMMA = 0.99  # the discount that breaks ties between moves of equal exact value
-LADDER_LIMIT = 4_000_000  # Q-values kept per ladder (steps x states x actions) at most
-CHOICES_KEPT = 8  # optimal-action masks kept per ladder (one per steps left asked for)
 SEARCH_LIMIT = 4096  # state-action pairs a fixed-policy search looks at, at most
 
 BoolArray = npt.NDArray[np.bool_]
@@ -143,81 +143,6 @@ def elapsed_steps(env: Any) -> int | None:
             if best is None or limit - done < best[0]:
                 best = (limit - done, done)
     return None if best is None else best[1]
-
-
-class Ladder:
-    """Optimal action values of a model for every number of steps left, kept.
-
-    `q(k)` is Q* with `k` steps left (k from 1 to the horizon); with no horizon
-    every `k` gives the stationary optimum. Computed once, by backward
-    induction, for gamma 1 and for `TIE_GAMMA`; past `LADDER_LIMIT` values the
-    rungs are solved when asked for instead.
-    """
-
-    def __init__(self, model: FiniteMDP) -> None:
-        self.model = model
-        self._rungs: dict[float, FloatArray] = {}
-        self._stationary: dict[float, FloatArray] = {}
-        self._choices: dict[int | None, tuple[BoolArray, BoolArray]] = {}
-
-    def q(self, steps_left: int | None = None, gamma: float = 1.0) -> FloatArray:
-        model = self.model
-        horizon = model.horizon
-        if horizon is None:
-            if gamma not in self._stationary:
-                self._stationary[gamma] = solve(model, gamma).q
-            return self._stationary[gamma]
-        k = horizon if steps_left is None else min(max(1, int(steps_left)), horizon)
-        if horizon * model.n_states * model.n_actions > LADDER_LIMIT:
-            return solve(model, gamma, steps_left=k).q
-        if gamma not in self._rungs:
-            self._rungs[gamma] = _induction(model, gamma, horizon)
-        return self._rungs[gamma][k - 1]
-
-    def choices(self, steps_left: int | None = None) -> tuple[BoolArray, BoolArray]:
-        """`[S, A]` twice, read-only: the actions of optimal value, and the quickest of
-        them (kept for the last few `steps_left`: past `LADDER_LIMIT` each is two solves)."""
-        found = self._choices.get(steps_left)
-        if found is None:
-            if len(self._choices) >= CHOICES_KEPT:
-                self._choices.clear()
-            found = self._choices[steps_left] = self._choose(steps_left)
-        return found
-
-    def _choose(self, steps_left: int | None) -> tuple[BoolArray, BoolArray]:
-        best = optimal_actions(self.q(steps_left))
-        tie = np.where(best, self.q(steps_left, TIE_GAMMA), -np.inf)
-        with np.errstate(invalid="ignore"):
-            quickest = best & optimal_actions(tie)
-        # A row where the discounted values say nothing (all -inf) keeps every optimal action.
-        quickest[~quickest.any(axis=1)] = best[~quickest.any(axis=1)]
-        best.setflags(write=False)
-        quickest.setflags(write=False)
-        return best, quickest
-
-
-def _induction(model: FiniteMDP, gamma: float, horizon: int) -> FloatArray:
-    """`[H, S, A]`: Q* for 1 to H steps left, each rung the numbers `backup` gives.
-
-    The outcomes are added one by one, in the order `sum` adds them, rather than
-    reduced over their short axis, which numpy does slowly; values stay finite (a
-    limit, finite rewards), so `backup`'s care for infinities is not needed.
-    """
-    reward = model.expected_reward
-    going = [np.ascontiguousarray(model.continue_prob[..., k]) for k in range(model.max_outcomes)]
-    following = [np.ascontiguousarray(model.next_state[..., k]) for k in range(model.max_outcomes)]
-    rungs = np.empty((horizon, model.n_states, model.n_actions))
-    v = np.zeros(model.n_states)
-    for i in range(horizon):
-        ahead = going[0] * v[following[0]]
-        for k in range(1, len(going)):
-            ahead += going[k] * v[following[k]]
-        q = rungs[i]
-        np.multiply(ahead, gamma, out=q)
-        q += reward
-        v = q.max(axis=1)
-    rungs.setflags(write=False)
-    return rungs
 
 
 @dataclass(frozen=True)
@@ -339,8 +264,8 @@ class ModelOracle(Oracle):
         """The exact figures of `policy` (`[S, A]`, a greedy policy) beside the optimum."""
         model = exact.model
         value = evaluate(model, policy).value
-        best = _initial_value(model, exact.ladder.q().max(axis=1))
-        gap = exact_gap_of(best, value)
+        best = expected_value(model, exact.ladder.q().max(axis=1))
+        gap = gap_of(best, value)
         places = self.model_game.narrator.value_places
         return ReferenceMetrics(
             figures={"exact_value": value, "optimal_value": best, "gap": gap},
@@ -356,7 +281,7 @@ class ModelOracle(Oracle):
         if isinstance(exact, NotAvailable):
             return {}
         if q is None:
-            return {"optimal_value": _initial_value(exact.model, exact.ladder.q().max(axis=1))}
+            return {"optimal_value": expected_value(exact.model, exact.ladder.q().max(axis=1))}
         reference = self.reference(q, kwargs, changes)
         return {} if isinstance(reference, NotAvailable) else dict(reference.figures)
 
@@ -406,7 +331,7 @@ class ModelOracle(Oracle):
             return exact
         model, ladder = exact.model, exact.ladder
         q = ladder.q()
-        value = _initial_value(model, q.max(axis=1))
+        value = expected_value(model, q.max(axis=1))
         limit = "no episode limit" if model.horizon is None else f"{model.horizon}-step episodes"
         return Optimum(
             value=value, summary=f"the best expected return of an episode ({limit}, undiscounted)",
@@ -452,23 +377,6 @@ class ModelOracle(Oracle):
         return self._bounds[key]
 
 
-def exact_gap_of(optimal: float, value: float) -> float:
-    """The optimum minus a policy's value, never negative (round-off counts as 0)."""
-    if optimal == value:
-        return 0.0
-    difference = optimal - value
-    if math.isfinite(difference) and difference <= 1e-9 * max(1.0, abs(optimal)):
-        return 0.0
-    return difference
-
-
-def _initial_value(model: FiniteMDP, v: FloatArray) -> float:
-    weight = model.initial > 0
-    if np.isneginf(v[weight]).any():
-        return float("-inf")
-    return float(model.initial[weight] @ v[weight])
-
-
 def best_fixed_policy(model: FiniteMDP, ladder: Ladder) -> FixedBound:
     """The best fixed policy a local search finds, beside the optimum.
 
@@ -477,7 +385,7 @@ def best_fixed_policy(model: FiniteMDP, ladder: Ladder) -> FixedBound:
     changes that raise the exact value are taken, the best first, until none
     does (skipped for models past `SEARCH_LIMIT` state-action pairs).
     """
-    optimal = _initial_value(model, ladder.q().max(axis=1))
+    optimal = expected_value(model, ladder.q().max(axis=1))
     candidates = [solve(model).policy]
     if model.horizon is not None:
         free = with_horizon(model, None)
@@ -489,7 +397,7 @@ def best_fixed_policy(model: FiniteMDP, ladder: Ladder) -> FixedBound:
     values = [evaluate(model, np.asarray(p, dtype=np.int64)).value for p in candidates]
     policy = np.asarray(candidates[int(np.argmax(values))], dtype=np.int64).copy()
     value = max(values)
-    if exact_gap_of(optimal, value) == 0.0 or model.horizon is None:
+    if gap_of(optimal, value) == 0.0 or model.horizon is None:
         return FixedBound(optimal, value)
     if model.n_states * model.n_actions <= SEARCH_LIMIT:
         policy, value = _climb(model, policy, value)

@@ -14,6 +14,7 @@ import numpy.typing as npt
 
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP, evaluate, with_horizon
+from tui_gym.core.mdp.evaluation import expected_value
 
 __all__ = ["PlanModel", "StateLine"]
 
@@ -101,5 +102,4 @@ class PlanModel:
 
     def start_value(self, v: FloatArray) -> float:
         """The start distribution's average of `v`."""
-        weight = self.model.initial
-        return float(weight[weight > 0] @ np.asarray(v)[weight > 0])
+        return expected_value(self.model, np.asarray(v, dtype=np.float64))

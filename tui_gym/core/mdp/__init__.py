@@ -8,17 +8,17 @@ policy that may never end one).
 
 from tui_gym.core.mdp.evaluation import PolicyValue, evaluate
 from tui_gym.core.mdp.from_env import NotAvailable, model_from_env
-from tui_gym.core.mdp.gap import Gap, exact_gap
+from tui_gym.core.mdp.gap import Gap, exact_gap, gap_of
 from tui_gym.core.mdp.model import FiniteMDP, ModelError
-from tui_gym.core.mdp.optimum import Solution, optimal_actions, solve
+from tui_gym.core.mdp.optimum import TIE_GAMMA, Ladder, Solution, optimal_actions, solve
 from tui_gym.core.mdp.phases import Phases
 from tui_gym.core.mdp.policy import PolicyError, greedy_policy, policy_matrix
 from tui_gym.core.mdp.returns import return_range
 from tui_gym.core.mdp.transforms import clip_reward, scale_reward, step_penalty, with_horizon
 
 __all__ = [
-    "FiniteMDP", "Gap", "ModelError", "NotAvailable", "Phases", "PolicyError", "PolicyValue",
-    "Solution", "clip_reward", "evaluate", "exact_gap", "greedy_policy", "model_from_env",
-    "optimal_actions", "policy_matrix", "return_range", "scale_reward", "solve", "step_penalty",
-    "with_horizon",
+    "TIE_GAMMA", "FiniteMDP", "Gap", "Ladder", "ModelError", "NotAvailable", "Phases",
+    "PolicyError", "PolicyValue", "Solution", "clip_reward", "evaluate", "exact_gap",
+    "gap_of", "greedy_policy", "model_from_env", "optimal_actions", "policy_matrix", "return_range",
+    "scale_reward", "solve", "step_penalty", "with_horizon",
 ]

@@ -20,6 +20,7 @@ from gymnasium.wrappers import (
 from tui_gym.core.mdp.model import FiniteMDP, ModelError
 from tui_gym.core.mdp.transforms import clip_reward, scale_reward, step_penalty, with_horizon
 from tui_gym.core.wrappers.chain import layers, time_limit
+from tui_gym.core.wrappers.fits import env_label
 
 __all__ = ["NotAvailable", "model_from_env"]
 
@@ -32,11 +33,6 @@ class NotAvailable:
     """There is no exact model; `reason` is one sentence saying what is missing."""
 
     reason: str
-
-
-def _label(env: gym.Env) -> str:
-    spec = getattr(env, "spec", None)
-    return spec.id if spec is not None else type(env).__name__
 
 
 def _reward_layer(model: FiniteMDP, layer: gym.Wrapper) -> FiniteMDP | None:
@@ -66,7 +62,7 @@ def _discrete_size(name: str, role: str, space: gym.Space[Any]) -> int | NotAvai
 def _table_model(
     env: gym.Env, initial: np.ndarray | None, action_names: Sequence[str] | None,
 ) -> FiniteMDP | NotAvailable:
-    name = _label(env)
+    name = env_label(env)
     n_states = _discrete_size(name, "observation", env.observation_space)
     if isinstance(n_states, NotAvailable):
         return n_states
@@ -142,11 +138,11 @@ def model_from_env(
             transformed = _reward_layer(model, layer)
         except (TypeError, ValueError) as error:
             return NotAvailable(
-                f"{_label(env)} has no exact model with {type(layer).__name__}: {error}"
+                f"{env_label(env)} has no exact model with {type(layer).__name__}: {error}"
             )
         if transformed is None:
             return NotAvailable(
-                f"{_label(env)} has no exact model with {type(layer).__name__}: only TimeLimit, "
+                f"{env_label(env)} has no exact model with {type(layer).__name__}: only TimeLimit, "
                 "ScaleReward, StepPenalty and ClipReward have exact forms"
             )
         model = transformed

@@ -1,4 +1,4 @@
-"""How far a policy is from the optimum: `exact_gap` and the `Gap` it returns."""
+"""How far a policy is from the optimum: `exact_gap` and the `Gap` it returns, `gap_of`."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from tui_gym.core.mdp.evaluation import evaluate
 from tui_gym.core.mdp.model import FiniteMDP
 from tui_gym.core.mdp.optimum import Solution, solve
 
-__all__ = ["ROUND_OFF", "Gap", "exact_gap"]
+__all__ = ["ROUND_OFF", "Gap", "exact_gap", "gap_of"]
 
 
 @dataclass(frozen=True)
@@ -33,7 +33,8 @@ ROUND_OFF = 1e-9
 """Differences within this share of the optimum's magnitude (at least 1) count as 0."""
 
 
-def _difference(optimum: float, value: float) -> float:
+def gap_of(optimum: float, value: float) -> float:
+    """The optimum minus a policy's value, never negative (round-off counts as 0)."""
     if optimum == value:
         return 0.0
     difference = optimum - value
@@ -60,5 +61,5 @@ def exact_gap(
     value = evaluate(model, policy, gamma)
     return Gap(
         exact_value=value.value, optimal_value=optimum.value,
-        gap=_difference(optimum.value, value.value), never_ends=value.never_ends,
+        gap=gap_of(optimum.value, value.value), never_ends=value.never_ends,
     )

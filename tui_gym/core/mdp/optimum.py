@@ -1,4 +1,5 @@
-"""The optimum: `solve(model)` and the `Solution` it returns, and `optimal_actions`."""
+"""The optimum: `solve(model)` and the `Solution` it returns, `optimal_actions`, and the
+`Ladder` of optimal action values for every number of steps left."""
 
 from __future__ import annotations
 
@@ -11,13 +12,16 @@ from tui_gym.core.mdp.ending import policy_ends, surely_ending
 from tui_gym.core.mdp.evaluation import backup, check_gamma, expected_value, solve_linear
 from tui_gym.core.mdp.model import FiniteMDP
 
-__all__ = ["Solution", "optimal_actions", "solve"]
+__all__ = ["TIE_GAMMA", "Ladder", "Solution", "optimal_actions", "solve"]
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 BoolArray = npt.NDArray[np.bool_]
 
 _MAX_ITERATIONS = 100_000
+TIE_GAMMA = 0.99  # the discount that breaks ties between moves of equal exact value
+LADDER_LIMIT = 4_000_000  # Q-values kept per ladder (steps x states x actions) at most
+CHOICES_KEPT = 8  # optimal-action masks kept per ladder (one per steps left asked for)
 
 
 @dataclass(frozen=True)
@@ -170,3 +174,78 @@ def solve(model: FiniteMDP, gamma: float = 1.0, *, steps_left: int | None = None
     if unbounded:
         q = np.where(ending.safe, np.inf, -np.inf)
     return _solution(model, q, gamma, None, policy)
+
+
+class Ladder:
+    """Optimal action values of a model for every number of steps left, kept.
+
+    `q(k)` is Q* with `k` steps left (k from 1 to the horizon); with no horizon
+    every `k` gives the stationary optimum. Computed once, by backward
+    induction, for gamma 1 and for `TIE_GAMMA`; past `LADDER_LIMIT` values the
+    rungs are solved when asked for instead.
+    """
+
+    def __init__(self, model: FiniteMDP) -> None:
+        self.model = model
+        self._rungs: dict[float, FloatArray] = {}
+        self._stationary: dict[float, FloatArray] = {}
+        self._choices: dict[int | None, tuple[BoolArray, BoolArray]] = {}
+
+    def q(self, steps_left: int | None = None, gamma: float = 1.0) -> FloatArray:
+        model = self.model
+        horizon = model.horizon
+        if horizon is None:
+            if gamma not in self._stationary:
+                self._stationary[gamma] = solve(model, gamma).q
+            return self._stationary[gamma]
+        k = horizon if steps_left is None else min(max(1, int(steps_left)), horizon)
+        if horizon * model.n_states * model.n_actions > LADDER_LIMIT:
+            return solve(model, gamma, steps_left=k).q
+        if gamma not in self._rungs:
+            self._rungs[gamma] = _induction(model, gamma, horizon)
+        return self._rungs[gamma][k - 1]
+
+    def choices(self, steps_left: int | None = None) -> tuple[BoolArray, BoolArray]:
+        """`[S, A]` twice, read-only: the actions of optimal value, and the quickest of
+        them (kept for the last few `steps_left`: past `LADDER_LIMIT` each is two solves)."""
+        found = self._choices.get(steps_left)
+        if found is None:
+            if len(self._choices) >= CHOICES_KEPT:
+                self._choices.clear()
+            found = self._choices[steps_left] = self._choose(steps_left)
+        return found
+
+    def _choose(self, steps_left: int | None) -> tuple[BoolArray, BoolArray]:
+        best = optimal_actions(self.q(steps_left))
+        tie = np.where(best, self.q(steps_left, TIE_GAMMA), -np.inf)
+        with np.errstate(invalid="ignore"):
+            quickest = best & optimal_actions(tie)
+        # A row where the discounted values say nothing (all -inf) keeps every optimal action.
+        quickest[~quickest.any(axis=1)] = best[~quickest.any(axis=1)]
+        best.setflags(write=False)
+        quickest.setflags(write=False)
+        return best, quickest
+
+
+def _induction(model: FiniteMDP, gamma: float, horizon: int) -> FloatArray:
+    """`[H, S, A]`: Q* for 1 to H steps left, each rung the numbers `backup` gives.
+
+    The outcomes are added one by one, in the order `sum` adds them, rather than
+    reduced over their short axis, which numpy does slowly; values stay finite (a
+    limit, finite rewards), so `backup`'s care for infinities is not needed.
+    """
+    reward = model.expected_reward
+    going = [np.ascontiguousarray(model.continue_prob[..., k]) for k in range(model.max_outcomes)]
+    following = [np.ascontiguousarray(model.next_state[..., k]) for k in range(model.max_outcomes)]
+    rungs = np.empty((horizon, model.n_states, model.n_actions))
+    v = np.zeros(model.n_states)
+    for i in range(horizon):
+        ahead = going[0] * v[following[0]]
+        for k in range(1, len(going)):
+            ahead += going[k] * v[following[k]]
+        q = rungs[i]
+        np.multiply(ahead, gamma, out=q)
+        q += reward
+        v = q.max(axis=1)
+    rungs.setflags(write=False)
+    return rungs

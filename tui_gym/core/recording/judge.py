@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import weakref
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 OPTIMAL, NOT_OPTIMAL = "optimal", "not optimal"
-MAX_STORED_VALUES = 4_000_000  # Q* for every step count of a time limit kept up to this size
 
 
 @dataclass(frozen=True)
@@ -49,15 +48,6 @@ class Assessment:
 NOTHING_KNOWN = Assessment()
 
 
-@dataclass
-class _ModelValues:
-    """Q* of one env's exact model: for every step count left (a time limit) or once."""
-
-    horizon: int | None
-    q_by_steps: dict[int, np.ndarray] = field(default_factory=dict)
-    q: np.ndarray | None = None
-
-
 class MoveJudge:
     """Judges moves in one game (a game and its arguments), on any env of it."""
 
@@ -66,7 +56,7 @@ class MoveJudge:
         self.env_kwargs = dict(env_kwargs)
         self._env_ref: weakref.ref[Any] | None = None
         self._model: Any = None  # the env's FiniteMDP, False when it has none
-        self._values: _ModelValues | None = None
+        self._ladder: Any = None  # its optimal action values (a `core.mdp.Ladder`)
 
     def assess(self, env: Any, steps_taken: int = 0) -> Assessment:
         """The optimum's view of `env`'s current state (never raises: a help, not a rule)."""
@@ -98,12 +88,12 @@ class MoveJudge:
             return None
         if not 0 <= state < model.n_states:
             return None
-        q = self._q(model, steps_taken)
-        if q is None:
+        steps_left = None if model.horizon is None else model.horizon - steps_taken
+        if steps_left is not None and steps_left < 1:
             return None
         from tui_gym.core.mdp import optimal_actions
 
-        row = q[state]
+        row = self._ladder.q(steps_left)[state]
         if not np.isfinite(row.max()):
             return None
         optimal = tuple(int(a) for a in np.flatnonzero(optimal_actions(row[None, :])[0]))
@@ -112,51 +102,16 @@ class MoveJudge:
     def _model_of(self, env: Any) -> Any:
         if self._env_ref is not None and self._env_ref() is env:
             return self._model or None
-        from tui_gym.core.mdp import FiniteMDP, model_from_env
+        from tui_gym.core.mdp import FiniteMDP, Ladder, model_from_env
 
         try:
             model = model_from_env(env)
         except Exception:
             model = None
         self._model = model if isinstance(model, FiniteMDP) else False
-        self._values = None
+        self._ladder = Ladder(model) if isinstance(model, FiniteMDP) else None
         try:
             self._env_ref = weakref.ref(env)
         except TypeError:
             self._env_ref = None
         return self._model or None
-
-    def _q(self, model: Any, steps_taken: int) -> np.ndarray | None:
-        from tui_gym.core.mdp import solve
-
-        values = self._values
-        if values is None:
-            values = self._values = _ModelValues(model.horizon)
-        if values.horizon is None:
-            if values.q is None:
-                values.q = np.asarray(solve(model).q)
-            return values.q
-        steps_left = values.horizon - steps_taken
-        if steps_left < 1:
-            return None
-        if not values.q_by_steps:
-            self._fill(model, values)
-        q = values.q_by_steps.get(steps_left)
-        if q is None:  # too large to keep for every step count: solve for this one
-            q = np.asarray(solve(model, steps_left=steps_left).q)
-        return q
-
-    @staticmethod
-    def _fill(model: Any, values: _ModelValues) -> None:
-        """Q* for every number of steps left, by one pass of backward induction."""
-        from tui_gym.core.mdp.evaluation import backup
-
-        horizon = values.horizon
-        assert horizon is not None
-        if horizon * model.n_states * model.n_actions > MAX_STORED_VALUES:
-            return
-        v = np.zeros(model.n_states)
-        for k in range(1, horizon + 1):
-            q = backup(model, v, 1.0)
-            values.q_by_steps[k] = q
-            v = q.max(axis=1)

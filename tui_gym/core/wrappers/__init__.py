@@ -1,12 +1,7 @@
 """The wrapper catalog: Gymnasium wrappers a person can switch on and off."""
 
 from tui_gym.core.params import Param
-from tui_gym.core.wrappers.build import (
-    UnknownEnvError,
-    build_env,
-    build_env_lenient,
-    check_choices,
-)
+from tui_gym.core.wrappers.build import UnknownEnvError, build_env, build_env_lenient, check_choices
 from tui_gym.core.wrappers.catalog import (
     CATALOG,
     MAX_CHAIN,

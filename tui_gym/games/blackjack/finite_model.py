@@ -10,19 +10,15 @@ from tui_gym.core.mdp import FiniteMDP
 from tui_gym.games.blackjack.solver import (
     _BUST,
     _CARD_PROBS,
-    _D17,
-    _D21,
-    _DBUST,
-    _DNAT,
     _HIT_MATRIX,
     _INITIAL,
     _N_LIVE,
     _NATURAL,
     _STATE_OBS,
-    _STATE_TOTAL,
     DEFAULT_RULES,
     BlackjackRules,
-    _dealer_final,
+    stick_chances,
+    stick_paid,
 )
 
 __all__ = ["N_BASE", "blackjack_model", "natural_base_rows", "observation_rows"]
@@ -65,28 +61,10 @@ def _model_index() -> np.ndarray:
     return index
 
 
-def _stick_chances(rules: BlackjackRules) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """`[29, 10]` each: the chances that a stick loses, pushes and wins."""
-    final = _dealer_final()
-    made = np.column_stack([final[:, _D17:_D21], final[:, _D21] + final[:, _DNAT]])
-    scores = np.arange(17, 22)
-    win = np.empty((_N_LIVE, DEALERS))
-    lose = np.empty((_N_LIVE, DEALERS))
-    for s in range(_N_LIVE):
-        total = _STATE_TOTAL[s]
-        win[s] = final[:, _DBUST] + made[:, scores < total].sum(axis=1)
-        lose[s] = made[:, scores > total].sum(axis=1)
-    if rules.sab:  # a natural beats every dealer hand but a natural
-        win[_NATURAL], lose[_NATURAL] = 1.0 - final[:, _DNAT], 0.0
-    elif rules.natural:  # it pays more, and draws against any dealer 21
-        win[_NATURAL], lose[_NATURAL] = 1.0 - made[:, -1], 0.0
-    return lose, np.maximum(0.0, 1.0 - win - lose), win
-
-
 @cache
 def blackjack_model(rules: BlackjackRules = DEFAULT_RULES) -> FiniteMDP:
     """The game's model under `rules` (kept per rules)."""
-    lose_pay, push_pay, win_pay, natural_pay = rules.payoffs
+    lose_pay, push_pay = rules.payoffs[:2]
     index = _model_index()
     n_states = N_BASE + DEALERS
     width = _N_LIVE + 1  # a hit: any live state or a bust; a stick: three endings
@@ -95,10 +73,8 @@ def blackjack_model(rules: BlackjackRules = DEFAULT_RULES) -> FiniteMDP:
     prob = np.zeros((n_states, 2, width))
     reward = np.zeros((n_states, 2, width))
     terminal = np.zeros((n_states, 2, width), dtype=bool)
-    lose, push, win = _stick_chances(rules)
-    paid = np.full(_N_LIVE, win_pay)
-    if rules.natural and not rules.sab:
-        paid[_NATURAL] = natural_pay
+    lose, push, win = stick_chances(rules)
+    paid = stick_paid(rules)
     rows = index.reshape(-1)  # live state major, dealer card minor
     live = np.repeat(np.arange(_N_LIVE), DEALERS)
     for k, (chance, pay) in enumerate(((lose, lose_pay), (push, push_pay), (win, None))):

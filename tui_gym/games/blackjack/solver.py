@@ -16,7 +16,7 @@ import numpy as np
 __all__ = [
     "DEFAULT_RULES", "DECISION_MASK", "HIT", "POLICY_SHAPE", "STICK", "BlackjackRules",
     "optimal_action_values", "optimal_policy", "mixed_policy_value", "optimal_value",
-    "policy_from_function", "policy_value",
+    "policy_from_function", "policy_value", "stick_chances", "stick_paid",
 ]
 
 
@@ -187,27 +187,38 @@ def _dealer_final() -> np.ndarray:
     return table
 
 
+def stick_chances(rules: BlackjackRules) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`[29, 10]` each: the chances that a stick loses, pushes and wins."""
+    final = _dealer_final()
+    made = np.column_stack([final[:, _D17:_D21], final[:, _D21] + final[:, _DNAT]])
+    scores = np.arange(17, 22)
+    win = np.empty((_N_LIVE, 10))
+    lose = np.empty((_N_LIVE, 10))
+    for s in range(_N_LIVE):
+        total = _STATE_TOTAL[s]
+        # cmp(player, dealer): a bust dealer scores 0, below any standing player.
+        win[s] = final[:, _DBUST] + made[:, scores < total].sum(axis=1)
+        lose[s] = made[:, scores > total].sum(axis=1)
+    if rules.sab:  # a natural beats every dealer hand but a natural
+        win[_NATURAL], lose[_NATURAL] = 1.0 - final[:, _DNAT], 0.0
+    elif rules.natural:  # it pays more, and draws against any dealer 21
+        win[_NATURAL], lose[_NATURAL] = 1.0 - made[:, -1], 0.0
+    return lose, np.maximum(0.0, 1.0 - win - lose), win
+
+
+def stick_paid(rules: BlackjackRules) -> np.ndarray:
+    """`[29]`: what a stick that wins pays in each state (a natural more, under `natural`)."""
+    paid = np.full(_N_LIVE, rules.payoffs[2])
+    if rules.natural and not rules.sab:
+        paid[_NATURAL] = rules.payoffs[3]
+    return paid
+
+
 @cache
 def _stick_rewards(rules: BlackjackRules) -> np.ndarray:
     """Expected reward of sticking, shape (29 states, 10 dealer up cards)."""
-    lose, push, win, natural = rules.payoffs
-    final = _dealer_final()
-    dealer_21 = final[:, _D21] + final[:, _DNAT]
-    scores = np.array([17, 18, 19, 20, 21])
-    made = np.column_stack([final[:, :4], dealer_21])  # dealer ends on 17..21
-    rewards = np.empty((_N_LIVE, 10))
-    for s in range(_N_LIVE):
-        t = _STATE_TOTAL[s]
-        # cmp(player, dealer): a bust dealer scores 0, below any standing player.
-        p_win = final[:, _DBUST] + made[:, scores < t].sum(axis=1)
-        p_lose = made[:, scores > t].sum(axis=1)
-        rewards[s] = win * p_win + lose * p_lose + push * (1.0 - p_win - p_lose)
-    if rules.sab:
-        # Player natural: +1 unless the dealer has a natural too (then cmp gives 0).
-        rewards[_NATURAL] = win * (1.0 - final[:, _DNAT]) + push * final[:, _DNAT]
-    elif rules.natural:
-        # A natural that wins (dealer not on 21) pays 1.5; against 21 it draws.
-        rewards[_NATURAL] = natural * (1.0 - dealer_21) + push * dealer_21
+    lose, push, win = stick_chances(rules)
+    rewards = stick_paid(rules)[:, None] * win + rules.payoffs[0] * lose + rules.payoffs[1] * push
     rewards.setflags(write=False)
     return rewards
 

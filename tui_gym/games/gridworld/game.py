@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
-from tui_gym.core.mdp import NotAvailable, evaluate, return_range
+from tui_gym.core.mdp import NotAvailable, evaluate, gap_of, return_range
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.envs import GRIDWORLD_MAX_STEPS
@@ -34,21 +34,9 @@ from tui_gym.games.base import (
     greedy_cells,
     greedy_probabilities,
 )
-from tui_gym.games.gridworld.model import (
-    gridworld_model,
-    gridworld_optimum,
-    shortest_path_optimum,
-)
-from tui_gym.games.gridworld.paths import (
-    mixed_pair_fraction,
-    mixed_steps_over_optimal,
-    optimal_actions,
-    optimal_pair_fraction,
-    policy_steps_over_optimal,
-)
-from tui_gym.games.gridworld.walled import walled_figures, walled_marks, walled_mean_steps
+from tui_gym.games.gridworld.model import gridworld_model, gridworld_optimum, shortest_path_optimum
+from tui_gym.games.gridworld.paths import mean_fewest_steps, path_figures, shortest_marks
 from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
-from tui_gym.games.model import exact_gap_of
 from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import (
     ScoreRow,
@@ -79,17 +67,6 @@ def _pairs(size: int) -> np.ndarray:
     return grid.astype(np.int64)
 
 
-@lru_cache(maxsize=4)
-def _optimal_marks(size: int) -> np.ndarray:
-    """`[pairs, 4]`: the actions that start a shortest path from each placement."""
-    pairs = _pairs(size)
-    dx = pairs[:, 2] - pairs[:, 0]
-    dy = pairs[:, 3] - pairs[:, 1]
-    marks = np.column_stack([dx > 0, dy > 0, dx < 0, dy < 0])
-    marks.setflags(write=False)
-    return marks
-
-
 LAYOUT = "layout"  # the argument that holds the grid's walls, as a map's text
 
 
@@ -112,29 +89,16 @@ def _scene_walls(scene: Mapping[str, Any]) -> Walls:
 def _steps_between(size: int, walls: Walls, a: Any, b: Any) -> int:
     """The fewest moves from cell a to cell b, (x, y) each (-1 when walled off)."""
     (ax, ay), (bx, by) = (int(v) for v in a), (int(v) for v in b)
-    if not walls:
-        return abs(ax - bx) + abs(ay - by)
     return int(cell_distances(size, walls)[ax * size + ay, bx * size + by])
 
 
 def _optimal_from(size: int, walls: Walls, agent: Any, target: Any) -> tuple[int, ...]:
     """The actions that start a shortest path from agent to target."""
-    if not walls:
-        return optimal_actions(agent, target)
     ax, ay = (int(v) for v in agent)
     tx, ty = (int(v) for v in target)
     cells = size * size
-    row = walled_marks(size, walls)[(ax * size + ay) * cells + tx * size + ty]
+    row = shortest_marks(size, walls)[(ax * size + ay) * cells + tx * size + ty]
     return tuple(int(a) for a in np.flatnonzero(row))
-
-
-def _policy(q: np.ndarray, size: int) -> tuple[np.ndarray, bool]:
-    """The greedy policy of `q` as the agent plays it: an action array when no state
-    ties (True), else action probabilities (ties broken at random; False)."""
-    probs = greedy_probabilities(q)
-    if (probs.max(axis=1) == 1.0).all():
-        return np.argmax(q, axis=1).astype(np.int64).reshape((size,) * 4), True
-    return probs.reshape((size,) * 4 + (q.shape[1],)), False
 
 
 def _shortest_pays(kwargs: Mapping[str, Any], changes: GameChanges) -> bool:
@@ -161,7 +125,7 @@ def _exact_return(
     model = gridworld_model(*args)
     value = evaluate(model, greedy_probabilities(q)).value
     best = gridworld_optimum(*args).value
-    return {"exact_value": value, "optimal_value": best, "gap": exact_gap_of(best, value)}
+    return {"exact_value": value, "optimal_value": best, "gap": gap_of(best, value)}
 
 
 def _model_args(kwargs: Mapping[str, Any], changes: GameChanges) -> tuple[Any, ...]:
@@ -230,15 +194,7 @@ class GridWorldOracle(Oracle):
         size = _size(kwargs)
         if np.shape(q) != (size**4, 4):
             return NotAvailable(f"a table of shape {np.shape(q)} does not fit a {size}x{size} grid")
-        walls = _walls(kwargs)
-        if walls:
-            frac = walled_figures(size, walls, greedy_probabilities(q))[0]
-        else:
-            policy, deterministic = _policy(q, size)
-            if deterministic:
-                frac = optimal_pair_fraction(size, policy)
-            else:
-                frac = mixed_pair_fraction(size, policy)
+        frac = path_figures(size, _walls(kwargs), greedy_probabilities(q))[0]
         return ReferenceMetrics(
             figures={"optimal_pair_fraction": frac},
             summary=f"{frac:.1%} of (agent, target) pairs solved in the fewest steps",
@@ -269,16 +225,8 @@ class GridWorldOracle(Oracle):
         size = _size(kwargs)
         if q is None or np.shape(q) != (size**4, 4):
             return {}
-        limit = changes.time_limit
-        walls = _walls(kwargs)
-        if walls:
-            _, extra, solved = walled_figures(size, walls, greedy_probabilities(q), limit)
-            return {"steps_over_optimal": extra, "solved_fraction": solved}
-        policy, deterministic = _policy(q, size)
-        if deterministic:
-            extra, solved = policy_steps_over_optimal(size, policy, limit)
-        else:
-            extra, solved = mixed_steps_over_optimal(size, policy, limit)
+        _, extra, solved = path_figures(size, _walls(kwargs), greedy_probabilities(q),
+                                          changes.time_limit)
         return {"steps_over_optimal": extra, "solved_fraction": solved}
 
     def advice(self, env: Any, kwargs: Mapping[str, Any]) -> Advice:
@@ -303,10 +251,7 @@ class GridWorldOracle(Oracle):
     def optimal_marks(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> np.ndarray:
-        walls = _walls(kwargs)
-        if walls:
-            return walled_marks(_size(kwargs), walls)
-        return _optimal_marks(_size(kwargs))
+        return shortest_marks(_size(kwargs), _walls(kwargs))
 
     def bound(self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> Bound:
         return Bound("optimal_pair_fraction", TRAINED_SHARE,
@@ -326,15 +271,11 @@ class GridWorldOracle(Oracle):
             )
             found = solution.q, solution.value
         optimal_q, value = found
+        mean_steps = mean_fewest_steps(size, walls)
         if walls:
-            mean_steps = walled_mean_steps(size, walls)
             route = f"{size}x{size} with {len(walls)} wall cells: the optimal policy walks a " \
                 "shortest way round the walls"
         else:
-            coords = np.arange(size)
-            diffs = np.abs(coords[:, None] - coords[None, :])
-            # Mean Manhattan distance over ordered pairs of distinct cells.
-            mean_steps = float(2 * diffs.sum() * size * size) / (size * size * (size * size - 1))
             route = f"{size}x{size}: the optimal policy walks any shortest path"
         # On the target the episode is over: every move is as good, and worth nothing more.
         over = np.eye(size * size, dtype=bool).reshape(-1)
@@ -569,9 +510,7 @@ class GridWorldGame(Game):
     def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel:
         """The model with no limit, discounted as the learners discount it by default: with
         a reward only at the target, every path is worth as much undiscounted."""
-        model = gridworld_model(_size(kwargs), float(kwargs.get("reward_scale", 1.0)),
-                                float(kwargs.get("step_penalty", 0.0)), NO_CHANGES,
-                                _walls(kwargs))
+        model = gridworld_model(*_model_args(kwargs, NO_CHANGES))
         gamma = self.hyperparameters["*"]["discount"]
         return PlanModel(model, gamma, self.episode_limit(kwargs))
 
@@ -632,6 +571,4 @@ class GridWorldGame(Game):
     ) -> TrainingModel | NotAvailable:
         if changes.others:
             return NotAvailable(unwrapped_note(changes.others))
-        return TrainingModel(gridworld_model(
-            _size(kwargs), float(kwargs.get("reward_scale", 1.0)),
-            float(kwargs.get("step_penalty", 0.0)), changes, _walls(kwargs)))
+        return TrainingModel(gridworld_model(*_model_args(kwargs, changes)))

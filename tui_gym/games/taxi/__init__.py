@@ -67,10 +67,6 @@ def decode(state: int) -> tuple[int, int, int, int]:
     return row, col, passenger, destination
 
 
-def encode(row: int, col: int, passenger: int, destination: int) -> int:
-    return ((row * 5 + col) * 5 + passenger) * 4 + destination
-
-
 def _walls(game_env: Any) -> list[list[int]]:
     """Cells with a wall on their east side, read from the env's map."""
     desc = np.asarray(game_env.desc)
