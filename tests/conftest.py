@@ -1,7 +1,7 @@
 """Shared pytest setup: the `slow` marker, run only when TUI_GYM_SLOW=1; one BLAS thread
-per process; bytecode kept for the processes the tests start; one compiled-code cache for every process, filled once
-before the workers start; one xdist worker more than CPUs; long modules first; every
-run's history in a file of its own."""
+per process; bytecode kept for the processes the tests start; one compiled-code cache for
+every process, filled once before the workers start; one xdist worker more than CPUs; long
+modules first; every run's history in a file of its own."""
 
 from __future__ import annotations
 
