@@ -1,7 +1,7 @@
-"""Shared pytest setup: the `slow` marker, run only when TUI_GYM_SLOW=1; bytecode kept
-for the processes the tests start; one compiled-code cache for every process, filled once
-before the workers start; one xdist worker more than CPUs; long modules first; every
-run's history in a file of its own."""
+"""Shared pytest setup: the `slow` marker, run only when TUI_GYM_SLOW=1; one BLAS thread
+per process; bytecode kept for the processes the tests start; one compiled-code cache for
+every process, filled once before the workers start; one xdist worker more than CPUs; long
+modules first; every run's history in a file of its own."""
 
 from __future__ import annotations
 
@@ -17,6 +17,18 @@ SLOW_ENV = "TUI_GYM_SLOW"
 GC_THRESHOLDS = (20_000, 20, 100)  # young, middle and full generations
 PYCACHE = Path(__file__).resolve().parent.parent / ".pytest_cache" / "pycache"
 NUMBA_CACHE = PYCACHE.parent / "numba"
+
+
+def _one_blas_thread() -> None:
+    """Every process of the run does its linear algebra on one thread. The exact values'
+    solves are small, and the workers, the apps and their children already share the
+    cores: OpenBLAS's extra threads spun on them, waiting for work, and cost more CPU
+    than the solves. Set before numpy loads here, and inherited by every process the
+    tests start."""
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+
+_one_blas_thread()
 
 
 def _keep_bytecode() -> None:

@@ -4,28 +4,48 @@ games expiring (on an injected clock, through the SDK's in-process client)."""
 
 from __future__ import annotations
 
+import importlib.util
 import math
 import subprocess
 import sys
 import time
 from collections.abc import Iterator
+from typing import TYPE_CHECKING
 
 import pytest
 
-pytest.importorskip("mcp")
-# One worker runs this module, so each server process below starts once.
-pytestmark = pytest.mark.xdist_group("mcp_server")
+from tui_gym.session.arena import GameTable, catalog
 
-from tests.mcp_support import McpInProcess, McpProcess  # noqa: E402
-from tui_gym.mcp_server.server import build_server  # noqa: E402
-from tui_gym.session.arena import GameTable, catalog  # noqa: E402
+if TYPE_CHECKING:
+    from tests.mcp_support import McpInProcess, McpProcess
+
+if importlib.util.find_spec("mcp") is None:
+    pytest.skip("the mcp extra is not installed", allow_module_level=True)
+# One worker runs this module, so each server process below starts once. The SDK loads
+# with the first test: the workers that run none of these do not load it to collect them.
+pytestmark = pytest.mark.xdist_group("mcp_server")
 
 GAMES = [entry.name for entry in catalog()]
 
 
+def in_process_client(table: GameTable) -> McpInProcess:
+    """The SDK's in-process client of a server over `table`."""
+    from tests.mcp_support import McpInProcess
+    from tui_gym.mcp_server.server import build_server
+
+    return McpInProcess(build_server(table))
+
+
+def stdio_server(*args: str) -> McpProcess:
+    """`python -m tui_gym mcp ARGS`, through the SDK's client over stdio."""
+    from tests.mcp_support import McpProcess
+
+    return McpProcess(*args)
+
+
 @pytest.fixture(scope="module")
 def server() -> Iterator[McpProcess]:
-    process = McpProcess("--max-games", "3")
+    process = stdio_server("--max-games", "3")
     yield process
     process.close()
     assert "Traceback" not in process.stderr_text()
@@ -33,7 +53,7 @@ def server() -> Iterator[McpProcess]:
 
 @pytest.fixture(scope="module")
 def no_hints() -> Iterator[McpProcess]:
-    process = McpProcess("--no-hints", "--max-games", "2")
+    process = stdio_server("--no-hints", "--max-games", "2")
     yield process
     process.close()
     assert "Traceback" not in process.stderr_text()
@@ -151,7 +171,7 @@ def test_the_number_of_games_is_bounded(no_hints: McpProcess) -> None:
 
 
 def test_an_idle_game_expires_over_stdio() -> None:
-    server = McpProcess("--max-games", "1", "--idle-timeout", "0.3")
+    server = stdio_server("--max-games", "1", "--idle-timeout", "0.3")
     try:
         idle = server.data("start_game", game="blackjack", seed=1)["game_id"]
         deadline = time.monotonic() + 30
@@ -170,7 +190,7 @@ def test_an_idle_game_expires_over_stdio() -> None:
 def test_idle_games_expire_on_the_tables_clock() -> None:
     now = [0.0]
     table = GameTable(max_games=1, idle_timeout=60, clock=lambda: now[0])
-    client = McpInProcess(build_server(table))
+    client = in_process_client(table)
     try:
         game_id = client.data("start_game", game="blackjack", seed=1)["game_id"]
         now[0] = 59.0
@@ -210,7 +230,7 @@ def test_scores_stay_finite_json(server: McpProcess) -> None:
 @pytest.fixture(scope="module")
 def in_process() -> Iterator[McpInProcess]:
     table = GameTable(max_games=2)
-    client = McpInProcess(build_server(table))
+    client = in_process_client(table)
     yield client
     client.close()
     table.close()
