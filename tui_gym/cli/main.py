@@ -271,8 +271,20 @@ def _document_json(parser: argparse.ArgumentParser) -> None:
     parser.epilog = f"{parser.epilog}\n\nJSON:\n{listed}"
 
 
+def one_blas_thread() -> None:
+    """Linear algebra on one thread here and in the processes this one starts, unless the
+    user chose (`OPENBLAS_NUM_THREADS`): every solve is small, and idle BLAS threads spin on
+    the cores that training and the UI need."""
+    if "OPENBLAS_NUM_THREADS" not in os.environ:
+        from threadpoolctl import threadpool_limits
+
+        os.environ["OPENBLAS_NUM_THREADS"] = "1"
+        threadpool_limits(1, user_api="blas")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the `tui-gym` command; returns the exit code."""
+    one_blas_thread()
     argv = attach_negative_values(sys.argv[1:] if argv is None else argv)
     err = Console(stderr=True)
     try:
