@@ -132,3 +132,18 @@ def _waits_on_a_lock(pid: int) -> bool:
     """Whether process `pid` is blocked on a file lock (/proc/locks marks a waiter "->")."""
     with open("/proc/locks") as locks:
         return any("->" in line and f" {pid} " in line for line in locks)
+
+
+def test_a_learners_calls_from_python_compile_nothing_beyond_its_loop() -> None:
+    """Learning, acting and the greedy choice from Python (the env loop, the `n` step) run
+    the compiled rule, `act` and `greedy` the loop calls: a cold compile makes no
+    separate forms of them."""
+    from tui_gym.algorithms import Sarsa
+
+    learner = Sarsa(3, n_states=5, seed=1)
+    learner.learn(0, 1, 1.0, 2, False)
+    learner.act(2)
+    learner.greedy(3)
+    if jit.compiles():
+        compiled_apart = {getattr(fn, "__name__", "") for fn, *_ in jit._ENTRIES}
+        assert compiled_apart <= {"run_model", "run_scored"}

@@ -51,8 +51,8 @@ from typing import Any
 from tui_gym.core.engine import kernel
 
 __all__ = [
-    "COMPILING", "cache_folder", "compiled", "compiles", "entry", "folder", "saving", "start",
-    "started",
+    "COMPILING", "cache_folder", "compiled", "compiles", "direct", "entry", "folder", "saving",
+    "start", "started",
 ]
 
 COMPILING = "compiling the learners, once"
@@ -62,6 +62,7 @@ _SOURCES = ("core/engine", "algorithms")  # what compiled code is made of
 _OPTIONS: Any = {"cache": True, "_nrt": False, "no_cfunc_wrapper": True}  # see the docstring
 _COMPILED: dict[Callable[..., Any], Any] = {}
 _ENTRIES: dict[tuple[Callable[..., Any], object, bool], Any] = {}
+_DIRECT: dict[tuple[Callable[..., Any], object, bool], Any] = {}
 _started = False
 _folder: Path | None = None
 _saves_in_turn = False  # set by `start` (see the module docstring)
@@ -164,7 +165,8 @@ def _compile(fn: Callable[..., Any]) -> Any:
 
 
 class _Entry:
-    """A kernel compiled for one algorithm's calls from Python (see `entry`)."""
+    """A kernel's compiled form for one algorithm's calls from Python (see `entry`),
+    called directly for the argument types of its last call."""
 
     def __init__(self, dispatcher: Any) -> None:
         self.dispatcher = dispatcher
@@ -175,19 +177,17 @@ class _Entry:
         if direct is not None:
             try:
                 return direct(*args)
-            except TypeError:  # other argument types: the dispatcher sorts them out
+            except (TypeError, ValueError):  # other argument types: look them up
                 pass
         dispatcher = self.dispatcher
-        if hasattr(dispatcher, "compile"):  # not with NUMBA_DISABLE_JIT
-            types = tuple(dispatcher.typeof_pyval(arg) for arg in args)
-            if types not in dispatcher.overloads:
-                with contextlib.nullcontext() if _saves_in_turn else saving():
-                    dispatcher.compile(types)
-        found = dispatcher(*args)
-        signatures: Any = getattr(self.dispatcher, "signatures", ())
-        if len(signatures) == 1 and hasattr(self.dispatcher, "get_overload"):
-            self._direct = self.dispatcher.get_overload(signatures[0])
-        return found
+        if not hasattr(dispatcher, "compile"):  # NUMBA_DISABLE_JIT
+            return dispatcher(*args)
+        types = tuple(dispatcher.typeof_pyval(arg) for arg in args)
+        if types not in dispatcher.overloads:
+            with contextlib.nullcontext() if _saves_in_turn else saving():
+                dispatcher.compile(types)
+        self._direct = dispatcher.overloads[types].entry_point
+        return self._direct(*args)
 
 
 @contextlib.contextmanager
@@ -244,6 +244,20 @@ def entry(fn: Callable[..., Any], kind: object, masked: bool = False) -> Any:
 
         plain = getattr(fn, "py_func", fn)
         found = _ENTRIES[key] = _Entry(njit(**_OPTIONS, nogil=True)(plain))
+    return found
+
+
+def direct(fn: Callable[..., Any], kind: object = None, masked: bool = False) -> Any:
+    """Kernel `fn` as called from Python through its own compiled form, the one its
+    compiled callers call (so Python's calls compile nothing more): one algorithm's
+    rule, or a kernel that takes no `Params` (see `entry`), called with the argument
+    types `kind` and `masked` set apart. Once compiled, it is called directly (no
+    dispatch)."""
+    start()
+    key = (fn, kind, masked)
+    found = _DIRECT.get(key)
+    if found is None:
+        found = _DIRECT[key] = _Entry(compiled(fn))
     return found
 
 

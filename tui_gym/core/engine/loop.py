@@ -13,9 +13,9 @@ transition the action (when not chosen already), the outcome, its reward's
 noise (only where it has any), the next action (SARSA), and what the rule
 draws.
 
-`transition` is the same update for a transition that happened elsewhere (a
-Gymnasium env played from Python), choosing the next action first where the
-rule needs it. `sample_start` and `sample_outcome` are the one sampler.
+`Entries.transition` is the same update for a transition that happened
+elsewhere (a Gymnasium env played from Python), choosing the next action first
+where the rule needs it. `sample_start` and `sample_outcome` are the one sampler.
 """
 
 from __future__ import annotations
@@ -57,7 +57,6 @@ __all__ = [
     "run_model",
     "sample_outcome",
     "sample_start",
-    "transition",
     "warm",
 ]
 
@@ -276,19 +275,6 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: 
     return status
 
 
-@kernel
-def transition(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float,
-               s2: int, terminated: bool, truncated: bool, a2: int, epsilon: float,
-               log: Any) -> tuple[int, float]:
-    """The update for one transition played elsewhere; the next action is chosen first
-    (when `a2` < 0) for a rule that needs it. Returns (that action or -1, |TD|)."""
-    if a2 < 0 and next_first(hp) and not terminated:
-        a2 = act(acting(tables, hp), rng, offered, s2, epsilon)
-    td = update(tables, hp, rng, offered, s, a, r, s2, terminated, truncated, a2, epsilon,
-                log)
-    return a2, td
-
-
 # --- called from Python ------------------------------------------------------------------
 
 
@@ -313,17 +299,29 @@ def play(learner: Any, model: ModelArrays, cursor: Cursor, max_episodes: int,
 
 
 class Entries:
-    """The kernels Python calls for one algorithm (`jit.entry`), with or without a mask
-    of offered actions: `run_model`, `transition`, and `act(tables, hp, rng, offered, s,
-    epsilon)` and `greedy(tables, hp, rng, offered, s)` (the compiled code of these two
-    is the same for every algorithm acting on as many tables: see `rules`)."""
+    """What Python calls for one algorithm, with or without a mask of offered actions:
+    `run_model` (`jit.entry`), and `transition`, `act` and `greedy` through the compiled
+    forms of the rule, `act` and `greedy` that `run_model` calls (`jit.direct`: nothing
+    more to compile; those of `act` and `greedy` are the same for every algorithm acting
+    on as many tables: see `rules`)."""
 
     def __init__(self, kind: type, masked: bool) -> None:
         self.run_model = jit.entry(run_model, kind, masked)
-        self.transition = jit.entry(transition, kind, masked)
+        self._update = jit.direct(rules.RULES[kind].update, None, masked)
         own = rules.RULES[kind].acting  # None: every such algorithm acts on one table
-        self._act = jit.entry(act, own, masked)
-        self._greedy = jit.entry(greedy, own, masked)
+        self._act = jit.direct(act, own, masked)
+        self._greedy = jit.direct(greedy, own, masked)
+
+    def transition(self, tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int,
+                   r: float, s2: int, terminated: bool, truncated: bool, a2: int,
+                   epsilon: float, log: Any) -> tuple[int, float]:
+        """The update for one transition played elsewhere; the next action is chosen first
+        (when `a2` < 0) for a rule that needs it. Returns (that action or -1, |TD|)."""
+        if a2 < 0 and rules.next_first(hp) and not terminated:
+            a2 = self.act(tables, hp, rng, offered, s2, epsilon)
+        td = self._update(tables, hp, rng, offered, s, a, r, s2, terminated, truncated, a2,
+                          epsilon, log)
+        return a2, float(td)
 
     def act(self, tables: Any, hp: Any, rng: Any, offered: Any, s: int, epsilon: float) -> int:
         return int(self._act(rules.acting(tables, hp), rng, offered, s, epsilon))
