@@ -1,5 +1,6 @@
 """`LatestOnly`: the views' exact figures computed off the event loop, one at a time, never
-while a key is answered, resting after each; and the Play view's scoreboard computed so."""
+while a key is answered, resting after each; the Play view's scoreboard computed so, and
+the Train view's snapshots waiting while a key is answered."""
 
 from __future__ import annotations
 
@@ -11,11 +12,12 @@ from textual import on
 from textual.app import App, ComposeResult
 from textual.widget import Widget
 
+from tui_gym.algorithms import QLearning
 from tui_gym.session.session import Session
 from tui_gym.ui import exact_figures
 from tui_gym.ui.exact_figures import TURNS, LatestOnly, key_wait_of
 
-from .hosts import VIEW_SIZE, PlayHost
+from .hosts import VIEW_SIZE, PlayHost, TrainHost
 from .waiting import DEADLINE, wait_until
 
 
@@ -188,3 +190,22 @@ async def test_the_scoreboard_computes_off_the_event_loop(monkeypatch) -> None:
             assert threading.main_thread().name not in asked
     finally:
         release.set()
+
+
+async def test_a_snapshot_waits_while_a_key_is_answered_during_training() -> None:
+    app = TrainHost(Session("frozenlake", seed=0, hp=QLearning.hyperparameters(episodes=10**9)))
+    async with app.run_test(size=(120, 40)) as pilot:
+        view, runner = app.train_view, app.runner
+        assert runner.start()
+        try:
+            shown = view._version
+            await wait_until(pilot, lambda: runner.latest.version != shown, "a new snapshot")
+            app._key_since = time.monotonic() + DEADLINE  # a key being answered
+            view.show_snapshot(runner.latest, runner)
+            assert view._version == shown  # its frame first
+            app._key_since = 0.0  # drawn
+            latest = runner.latest
+            view.show_snapshot(latest, runner)
+            assert view._version == latest.version
+        finally:
+            runner.pause()

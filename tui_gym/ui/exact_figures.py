@@ -31,7 +31,7 @@ if TYPE_CHECKING:
     from tui_gym.session.prediction import PredictionFigures
     from tui_gym.session.session import Session
 
-KEY_QUIET_SECONDS = 0.1  # after a key is handed on, its frame comes before any figures
+KEY_QUIET_SECONDS = 0.15  # after a key is handed on, its frame comes before any figures
 HOLD_STEP = 0.01  # seconds between two looks while held
 MAX_REST = 0.5  # seconds; the longest rest after one computation
 

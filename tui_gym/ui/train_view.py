@@ -40,7 +40,7 @@ from textual.widgets import Button, Label
 from tui_gym.algorithms import ALGORITHMS, Settings
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.engine.trainer import continue_run
-from tui_gym.ui.exact_figures import Figures, LatestOnly, Request, compute
+from tui_gym.ui.exact_figures import Figures, LatestOnly, Request, compute, key_wait_of
 from tui_gym.ui.map_editing import apply_edit, save_map, show_optimum
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
@@ -395,8 +395,11 @@ class TrainView(Vertical):
         self.close_editor()
 
     def show_snapshot(self, snapshot: TrainingSnapshot, runner: TrainingRunner) -> None:
-        """Draw a snapshot; cheap when it is the one already shown."""
-        if snapshot.version != self._version:
+        """Draw a snapshot; cheap when it is the one already shown. While training runs,
+        a new one waits while a key is answered (the key's frame first; the app's timer
+        offers it again)."""
+        held = runner.running and self._version >= 0 and key_wait_of(self.app) > 0
+        if snapshot.version != self._version and not held:
             self._version = snapshot.version
             self._snapshot = snapshot
             self.stats.show_snapshot(snapshot)
