@@ -254,6 +254,7 @@ async def test_scoreboard_matches_the_tally_and_the_exact_reference() -> None:
         assert "± – (95% CI)" in screen_text(app)
 
         # The agent learns on: the figures follow when the Play view is shown again.
+        await wait_for(pilot, lambda: view.agent_figures_shown, "the agent's exact figures")
         session.trainer.run(episodes=500)
         exact = session.reference().figures["exact_value"]
         assert view.agent_figures["exact_value"] != exact, "500 more hands moved the value"
