@@ -123,8 +123,7 @@ class LatestOnly(Generic[Asked, Result]):
     side. A computation holds the interpreter's lock from the event loop as it goes, so
     none starts, and no result is handed over, while a key is answered (`key_wait`: the
     seconds until the app may draw them without a key waiting); and after each, the next
-    rests as long as the last took on the CPU, so the event loop always gets the larger
-    share."""
+    rests as long as the last took on the CPU, so they take at most half of the time."""
 
     class Computed(Message):
         """The result of a request (or the error computing it), on the event loop."""
@@ -144,7 +143,7 @@ class LatestOnly(Generic[Asked, Result]):
         self.key_wait = key_wait or (lambda: key_wait_of(self._app))
         self._app: Any = None  # the widget's, read on the worker thread
         self.generation = 0
-        self.held = False  # the worker waits on a key being answered
+        self.held = False  # the worker waits: a key being answered, or its rest
         self._running = False
         self._waiting: tuple[int, Asked] | None = None
         self._lock = threading.Lock()  # `_waiting` and `generation`, read by the worker

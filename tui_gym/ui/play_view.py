@@ -484,8 +484,8 @@ class PlayView(Vertical):
 
     # --- the scoreboard --------------------------------------------------------
     def refresh_agent_figures(self) -> None:
-        """Have the agent's exact figures computed afresh (a policy evaluation: up to a
-        tenth of a second) off the event loop; the scoreboard shows them when they come."""
+        """Have the agent's exact figures (a policy evaluation) computed afresh off the
+        event loop; the scoreboard shows them when they come."""
         self._agent_exact.ask((self.tui.session.detached(), self._training_snapshot()))
 
     @on(LatestOnly.Computed)
