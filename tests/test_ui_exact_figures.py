@@ -209,3 +209,29 @@ async def test_a_snapshot_waits_while_a_key_is_answered_during_training() -> Non
             assert view._version == latest.version
         finally:
             runner.pause()
+
+
+async def test_the_persons_record_shows_at_once_while_the_agents_figures_compute(
+    monkeypatch,
+) -> None:
+    release = threading.Event()
+    figures = Session.agent_figures
+
+    def slow(session: Session, snapshot=None):
+        release.wait(DEADLINE)
+        return figures(session, snapshot)
+
+    monkeypatch.setattr(Session, "agent_figures", slow)
+    app = PlayHost(Session("blackjack", seed=0))
+    try:
+        async with app.run_test(size=VIEW_SIZE) as pilot:
+            view = app.play_view
+            board = view.query_one("#play-scoreboard")
+            assert "no hands played yet" in board.text(compact=False)
+            await pilot.press("s")  # stick: the hand is over
+            assert view.game.done and not release.is_set()
+            text = board.text(compact=False)
+            assert "no hands played yet" not in text and "over 1 hand" in text
+            assert "being computed" in text
+    finally:
+        release.set()
