@@ -162,6 +162,31 @@ def test_key_wait_reads_when_the_app_handed_a_key_on() -> None:
     assert key_wait_of(object()) == 0.0  # an app that does not keep its keys in order
 
 
+def test_key_wait_lasts_until_the_keys_frame_is_drawn(monkeypatch) -> None:
+    class Keyed:
+        _key_since = 0.0
+
+    app = Keyed()
+    drawn = [0.0]
+    monkeypatch.setitem(exact_figures._DRAWN, app, drawn)
+    # A key handed on past its quiet time, its frame not drawn yet: the figures wait.
+    app._key_since = time.monotonic() - exact_figures.KEY_QUIET_SECONDS
+    assert key_wait_of(app) > 0.0
+    drawn[0] = time.monotonic()  # drawn
+    assert key_wait_of(app) <= 0.0
+
+
+async def test_the_figures_watch_the_apps_frames() -> None:
+    box = Box(Keys())
+    async with BoxHost(box).run_test() as pilot:
+        box.exact.ask(1)
+        await wait_until(pilot, lambda: box.results, "the result")
+        drawn = exact_figures._DRAWN[pilot.app]
+        before = drawn[0]
+        box.refresh()
+        await wait_until(pilot, lambda: drawn[0] > before, "a frame noted")
+
+
 async def test_the_scoreboard_computes_off_the_event_loop(monkeypatch) -> None:
     release = threading.Event()
     figures = Session.agent_figures

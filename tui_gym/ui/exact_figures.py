@@ -17,12 +17,15 @@ import dataclasses
 import re
 import threading
 import time
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from textual.message import Message
 from textual.widget import Widget
+
+from tui_gym.ui.textual_internals import watch_frames
 
 if TYPE_CHECKING:
     from tui_gym.core.engine.stats import TrainingSnapshot
@@ -32,6 +35,7 @@ if TYPE_CHECKING:
     from tui_gym.session.session import Session
 
 KEY_QUIET_SECONDS = 0.15  # after a key is handed on, its frame comes before any figures
+KEY_FRAME_PATIENCE = 0.5  # seconds; and the figures wait for its frame at most this long
 HOLD_STEP = 0.01  # seconds between two looks while held
 MAX_REST = 0.5  # seconds; the longest rest after one computation
 
@@ -156,6 +160,7 @@ class LatestOnly(Generic[Asked, Result]):
     def ask(self, request: Asked) -> None:
         """Compute `request` when the worker comes to it (replacing one waiting)."""
         self._app = self.widget.app
+        watch_drawing(self._app)
         with self._lock:
             self._waiting = (self.generation, request)
         if not self._running:
@@ -213,9 +218,33 @@ class LatestOnly(Generic[Asked, Result]):
 
 
 def key_wait_of(app: Any) -> float:
-    """Seconds until a key the app handed on has had `KEY_QUIET_SECONDS` to be drawn (0:
-    none is being answered); `KeysInOrder` keeps when the last one was handed on."""
+    """Seconds until a key the app handed on (`KeysInOrder` keeps when) has been drawn:
+    `KEY_QUIET_SECONDS` after it, and not before a frame has been drawn since (at most
+    `KEY_FRAME_PATIENCE` after it, where `watch_drawing` watches the app's frames);
+    0 or less: none is being answered."""
     since = getattr(app, "_key_since", None)
     if not isinstance(since, float) or since <= 0:
         return 0.0
-    return since + KEY_QUIET_SECONDS - time.monotonic()
+    now = time.monotonic()
+    wait = since + KEY_QUIET_SECONDS - now
+    drawn = _DRAWN.get(app)
+    if drawn is not None and drawn[0] < since:  # the key's frame is still to come
+        wait = max(wait, min(HOLD_STEP, since + KEY_FRAME_PATIENCE - now))
+    return wait
+
+
+_DRAWN: weakref.WeakKeyDictionary[Any, list[float]] = weakref.WeakKeyDictionary()
+
+
+def watch_drawing(app: Any) -> None:
+    """Keep when `app` last drew a frame, for `key_wait_of` (once per app, on its event
+    loop; nothing kept where this Textual's frames cannot be watched)."""
+    if app is None or app in _DRAWN:
+        return
+    drawn = [0.0]
+
+    def on_frame(renderable: Any) -> None:
+        drawn[0] = time.monotonic()
+
+    if watch_frames(app, on_frame):
+        _DRAWN[app] = drawn
