@@ -239,6 +239,9 @@ async def test_scoreboard_matches_the_tally_and_the_exact_reference() -> None:
                 action = 0 if hand < 2 else advice.optimal[0]
                 optimal_moves += action in advice.optimal
                 await pilot.press(key_of(view, action))
+            # The hand's end has the agent's figures computed on a thread: in before the
+            # next key, so the pilot's wait for an idle process holds for that key.
+            await wait_for(pilot, lambda: view.agent_figures_shown, "the agent's figures")
             if hand < 3:
                 await pilot.press("n")
         tally = game.tally
