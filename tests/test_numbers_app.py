@@ -90,6 +90,7 @@ async def test_the_badge_follows_the_run_then_advice_and_scoreboard_read_the_tra
         values = ", ".join(f"{names[a]} {signed(float(v), 3)}" for a, v in enumerate(q))
         detail = str(view.query_one("#play-detail").render())
         assert f"(Q {values})" in detail  # the advice reads the trained table
+        await wait_for(pilot, lambda: view.agent_figures_shown, "the agent's exact figures")
         figures = session.agent_figures()
         assert view.agent_figures == figures  # ... and so does the scoreboard
         board = view.query_one(Scoreboard).text(compact=False)

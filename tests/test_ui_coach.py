@@ -178,6 +178,7 @@ async def test_coach_flags_moves_off_every_shortest_path() -> None:
         size = game.scene()["size"]
         uniform = np.full((size,) * 4 + (4,), 0.25)
         extra, solved = mixed_steps_over_optimal(size, uniform, 300)
+        await wait_for(pilot, lambda: view.agent_figures_shown, "the agent's exact figures")
         assert view.agent_figures == {"steps_over_optimal": extra, "solved_fraction": solved}
         assert extra > 10 and 0.9 < solved < 1.0
         text = scoreboard_text(view)
@@ -221,6 +222,7 @@ async def test_scoreboard_matches_the_tally_and_the_exact_reference() -> None:
         await pilot.pause()
         view = app.play_view
         game = view.game
+        await wait_for(pilot, lambda: view.agent_figures_shown, "the agent's exact figures")
         text = scoreboard_text(view)
         reference = session.reference().figures
         assert view.agent_figures["exact_value"] == reference["exact_value"]
@@ -237,6 +239,9 @@ async def test_scoreboard_matches_the_tally_and_the_exact_reference() -> None:
                 action = 0 if hand < 2 else advice.optimal[0]
                 optimal_moves += action in advice.optimal
                 await pilot.press(key_of(view, action))
+            # The hand's end has the agent's figures computed on a thread: in before the
+            # next key, so the pilot's wait for an idle process holds for that key.
+            await wait_for(pilot, lambda: view.agent_figures_shown, "the agent's figures")
             if hand < 3:
                 await pilot.press("n")
         tally = game.tally
@@ -252,6 +257,7 @@ async def test_scoreboard_matches_the_tally_and_the_exact_reference() -> None:
         assert "± – (95% CI)" in screen_text(app)
 
         # The agent learns on: the figures follow when the Play view is shown again.
+        await wait_for(pilot, lambda: view.agent_figures_shown, "the agent's exact figures")
         session.trainer.run(episodes=500)
         exact = session.reference().figures["exact_value"]
         assert view.agent_figures["exact_value"] != exact, "500 more hands moved the value"

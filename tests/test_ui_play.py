@@ -26,6 +26,7 @@ from tui_gym.ui.widgets.cards_board import CardsBoard
 from tui_gym.ui.widgets.grid_board import GridBoard
 
 from .hosts import VIEW_SIZE, PlayHost
+from .waiting import wait_for
 
 BIG = (120, 40)
 SMALL = (80, 24)
@@ -333,7 +334,7 @@ async def test_compact_layout_at_80x24_and_switching_games_swaps_the_board_keeps
         for env, key in (("blackjack", "h"), ("gridworld", "up")):
             if env == "gridworld":
                 await pilot.press("g")
-                await pilot.pause()
+                await wait_for(pilot, lambda: view.agent_figures_shown, "the exact figures")
                 assert isinstance(view.board, GridBoard) and len(view.query(GridBoard)) == 1
                 assert not view.query(CardsBoard)
                 assert view.game.game.board == "grid"

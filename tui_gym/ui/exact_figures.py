@@ -1,23 +1,31 @@
-"""The Train view's figures of a snapshot from the game's exact model, off the event loop.
+"""The views' figures from the game's exact model, computed off the event loop.
 
-`compute` gives what the view draws for one snapshot from the exact model: the
-heatmap panels (or why there are none), the greedy policy's exact reference with
-its note (or a prediction learner's RMS error), and a prediction learner's V
-against the exact values. `LatestOnly` runs it on one worker thread at a time:
-a request made while one runs replaces the one waiting (never a queue), and a
-result reaches the view only while the view still shows the generation it was
-asked in (`drop` starts a new one: a reset, a rebuild, another game or algorithm).
+`compute` gives what the Train view draws for one snapshot from the exact model:
+the heatmap panels (or why there are none), the greedy policy's exact reference
+with its note (or a prediction learner's RMS error), and a prediction learner's V
+against the exact values. `LatestOnly` runs such work on a worker thread, one
+computation at a time across the views, never while a key is being answered: a
+request made while one waits or runs replaces the one waiting (never a queue),
+and a result reaches the view only while the view still shows the generation it
+was asked in (`drop` starts a new one: a reset, a rebuild, another game or
+algorithm).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import re
+import threading
+import time
+import weakref
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from textual.message import Message
 from textual.widget import Widget
+
+from tui_gym.ui.textual_internals import watch_frames
 
 if TYPE_CHECKING:
     from tui_gym.core.engine.stats import TrainingSnapshot
@@ -25,6 +33,14 @@ if TYPE_CHECKING:
     from tui_gym.games.base import ReferenceMetrics
     from tui_gym.session.prediction import PredictionFigures
     from tui_gym.session.session import Session
+
+KEY_QUIET_SECONDS = 0.15  # after a key is handed on, its frame comes before any figures
+KEY_FRAME_PATIENCE = 0.5  # seconds; and the figures wait for its frame at most this long
+HOLD_STEP = 0.01  # seconds between two looks while held
+MAX_REST = 0.5  # seconds; the longest rest after one computation
+
+Asked = TypeVar("Asked")
+Result = TypeVar("Result")
 
 # How the layouts' words for values read for traces: "max Q and the greedy move" is then
 # "max e and the most eligible move", and no `*` marks a move that is not optimal.
@@ -93,62 +109,142 @@ def traced(panel: Heatmap) -> Heatmap:
     return dataclasses.replace(panel, title=say(panel.title), legend=say(panel.legend))
 
 
-class LatestOnly:
-    """Computes `Figures` for a widget on one worker thread at a time, the latest request
-    winning; each result comes back to the widget as a `Computed` message."""
+class _Turns:
+    """The one lock every `LatestOnly` computes under, and when the next may start."""
+
+    lock = threading.Lock()
+    rest_until = 0.0  # time.monotonic()
+
+
+TURNS = _Turns()
+
+
+class LatestOnly(Generic[Asked, Result]):
+    """Runs `work` for a widget on a worker thread, the latest request winning; each result
+    comes back to the widget as a `Computed` message.
+
+    All of them take turns on one lock, so the views' exact figures never compute side by
+    side. A computation holds the interpreter's lock from the event loop as it goes, so
+    none starts, and no result is handed over, while a key is answered (`key_wait`: the
+    seconds until the app may draw them without a key waiting); and after each, the next
+    rests as long as the last took on the CPU, so they take at most half of the time."""
 
     class Computed(Message):
-        """The figures of a request (or the error computing them), on the event loop."""
+        """The result of a request (or the error computing it), on the event loop."""
 
-        def __init__(self, generation: int, figures: Figures | None,
+        def __init__(self, owner: LatestOnly[Any, Any], generation: int, result: Any,
                      error: BaseException | None) -> None:
             super().__init__()
+            self.owner = owner
             self.generation = generation
-            self.figures = figures
+            self.result = result
             self.error = error
 
-    def __init__(self, widget: Widget) -> None:
+    def __init__(self, widget: Widget, work: Callable[[Asked], Result],
+                 key_wait: Callable[[], float] | None = None) -> None:
         self.widget = widget
+        self.work = work
+        self.key_wait = key_wait or (lambda: key_wait_of(self._app))
+        self._app: Any = None  # the widget's, read on the worker thread
         self.generation = 0
+        self.held = False  # the worker waits: a key being answered, or its rest
         self._running = False
-        self._waiting: Request | None = None
+        self._waiting: tuple[int, Asked] | None = None
+        self._lock = threading.Lock()  # `_waiting` and `generation`, read by the worker
 
     @property
     def idle(self) -> bool:
         """Nothing computing, nothing waiting."""
         return not self._running and self._waiting is None
 
-    def ask(self, request: Request) -> None:
-        """Compute `request` now, or when the one running ends (replacing one waiting)."""
-        if self._running:
-            self._waiting = request
-            return
+    def ask(self, request: Asked) -> None:
+        """Compute `request` when the worker comes to it (replacing one waiting)."""
+        self._app = self.widget.app
+        watch_drawing(self._app)
+        with self._lock:
+            self._waiting = (self.generation, request)
+        if not self._running:
+            self._start()
+
+    def _start(self) -> None:
         self._running = True
-        generation = self.generation
-        self.widget.run_worker(lambda: self._work(generation, request), thread=True,
-                               group="exact-figures", exit_on_error=False)
+        self.widget.run_worker(self._work, thread=True, group="exact-figures",
+                               exit_on_error=False)
 
     def drop(self) -> None:
         """What is computing or waiting belongs to what was shown before: never show it."""
-        self.generation += 1
-        self._waiting = None
+        with self._lock:
+            self.generation += 1
+            self._waiting = None
 
-    def _work(self, generation: int, request: Request) -> None:
-        try:
-            figures, error = compute(request), None
-        except Exception as exc:  # noqa: BLE001  (raised on the event loop if still wanted)
-            figures, error = None, exc
-        self.widget.post_message(self.Computed(generation, figures, error))
+    def _hold(self, until: float = 0.0) -> None:
+        """Wait (on the worker thread) until `until` and while a key is answered."""
+        while True:
+            wait = max(until - time.monotonic(), self.key_wait())
+            if wait <= 0:
+                self.held = False
+                return
+            self.held = True
+            time.sleep(min(wait, HOLD_STEP))
 
-    def done(self, message: Computed) -> Figures | None:
-        """The message's figures when they are still wanted (ask the next one waiting);
-        an error computing wanted figures is raised here, on the event loop."""
+    def _work(self) -> None:
+        self._hold(TURNS.rest_until)
+        with TURNS.lock:
+            with self._lock:
+                waiting, self._waiting = self._waiting, None
+            generation, result, error = self.generation, None, None
+            if waiting is not None:
+                generation, request = waiting
+                began = time.thread_time()
+                try:
+                    result = self.work(request)
+                except Exception as exc:  # noqa: BLE001  (raised on the event loop if wanted)
+                    error = exc
+                TURNS.rest_until = time.monotonic() + min(MAX_REST, time.thread_time() - began)
+        self._hold()
+        self.widget.post_message(self.Computed(self, generation, result, error))
+
+    def done(self, message: Computed) -> Result | None:
+        """The message's result when it is still wanted (ask the next one waiting);
+        an error computing a wanted result is raised here, on the event loop."""
         self._running = False
-        waiting, self._waiting = self._waiting, None
-        if waiting is not None:
-            self.ask(waiting)
+        if self._waiting is not None:
+            self._start()
         if message.generation != self.generation:
             return None
         if message.error is not None:
             raise message.error
-        return message.figures
+        return message.result  # type: ignore[no-any-return]
+
+
+def key_wait_of(app: Any) -> float:
+    """Seconds until a key the app handed on (`KeysInOrder` keeps when) has been drawn:
+    `KEY_QUIET_SECONDS` after it, and not before a frame has been drawn since (at most
+    `KEY_FRAME_PATIENCE` after it, where `watch_drawing` watches the app's frames);
+    0 or less: none is being answered."""
+    since = getattr(app, "_key_since", None)
+    if not isinstance(since, float) or since <= 0:
+        return 0.0
+    now = time.monotonic()
+    wait = since + KEY_QUIET_SECONDS - now
+    drawn = _DRAWN.get(app)
+    if drawn is not None and drawn[0] < since:  # the key's frame is still to come
+        wait = max(wait, min(HOLD_STEP, since + KEY_FRAME_PATIENCE - now))
+    return wait
+
+
+_DRAWN: weakref.WeakKeyDictionary[Any, list[float]] = weakref.WeakKeyDictionary()
+
+
+def watch_drawing(app: Any) -> None:
+    """Keep when `app` last drew a frame, for `key_wait_of` (once per app, on its event
+    loop; nothing kept where this Textual's frames cannot be watched)."""
+    if app is None or app in _DRAWN:
+        return
+    drawn = [0.0]
+
+    def on_frame(renderable: Any) -> None:
+        drawn[0] = time.monotonic()
+
+    if watch_frames(app, on_frame):
+        _DRAWN[app] = drawn

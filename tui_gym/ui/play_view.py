@@ -6,7 +6,7 @@ import random
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar, cast
 
-from textual import events
+from textual import events, on
 from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Vertical
@@ -19,19 +19,31 @@ from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.games.base import Advice
 from tui_gym.games.words import ScoreRow, format_reward, interval_text, plural, signed
 from tui_gym.session.play import HumanGame, PlayError, PlayStep, Scorecard
+from tui_gym.ui.exact_figures import LatestOnly
 from tui_gym.ui.widgets.board_kinds import board_class
 from tui_gym.ui.widgets.boards import Board
 from tui_gym.ui.widgets.scoreboard import Scoreboard
 
 if TYPE_CHECKING:
+    from tui_gym.session.session import Session
     from tui_gym.ui.app import TuiGymApp
 
 OBSERVATION_CHARS = 64  # a raw observation longer than this is cut short
 WATCH_INTERVAL = 0.4  # seconds between the watched agent's moves: slow enough to follow
 WATCH_PAUSE_TICKS = 3  # moves' worth of time a finished episode stays on the board
 WATCH_SEED_OFFSET = 1  # the watched agent's game: seeded apart from the person's deals
+COMPUTING = "its exact figures are being computed"  # until the first of them come
 WATCHING = "Agent playing — press any key to take over"
 TONE_COLOURS = {"good": "$text-success", "even": "$text-warning", "bad": "$text-error"}
+
+
+AgentAsked = tuple["Session", TrainingSnapshot | None]  # the session detached, its snapshot
+
+
+def _agent_figures(asked: AgentAsked) -> tuple[dict[str, float], str]:
+    """The agent's exact scoreboard figures and why there are none ('' when there are)."""
+    session, snapshot = asked
+    return session.agent_figures(snapshot), session.exact_reason()
 
 
 @dataclass
@@ -128,9 +140,12 @@ class PlayView(Vertical):
         self._coach = ""  # the coach's line on the last move
         self._coach_tone = ""
         self.scorecard = Scorecard()  # the person's record (tally, agreement, figures)
-        # The agent's exact scoreboard figures, as of the last refresh (not per frame).
+        # The agent's exact scoreboard figures, as of the last refresh (not per frame),
+        # computed off the event loop.
         self.agent_figures: dict[str, float] | None = None
-        self._exact_reason = ""  # why there are no exact figures, read with them
+        self._exact_reason = COMPUTING  # why there are no exact figures, read with them
+        self._agent_exact: LatestOnly[AgentAsked, tuple[dict[str, float], str]] = LatestOnly(
+            self, _agent_figures)
         # Watching the agent play on the board.
         self.watch_interval = WATCH_INTERVAL
         self.watch_pause_ticks = WATCH_PAUSE_TICKS
@@ -179,6 +194,8 @@ class PlayView(Vertical):
         the game and its wrappers are still the same, else a new game, tally and board."""
         session = self.tui.session
         self.stop_watching(restore=False)
+        self._agent_exact.drop()  # the figures of what was played before never show
+        self.agent_figures, self._exact_reason = None, COMPUTING
         kept = self._kept.pop(session.game.name, None)
         if kept is not None and (kept.game.session is not session or kept.chain != _chain(session)):
             kept.close()
@@ -467,11 +484,24 @@ class PlayView(Vertical):
 
     # --- the scoreboard --------------------------------------------------------
     def refresh_agent_figures(self) -> None:
-        """Recompute the agent's exact figures (a few ms) and redraw the scoreboard."""
-        session = self.tui.session
-        self.agent_figures = session.agent_figures(self._training_snapshot())
-        self._exact_reason = session.exact_reason()
+        """Redraw the scoreboard (the person's record now, the agent's figures as they
+        were) and have the agent's exact figures (a policy evaluation) computed afresh off
+        the event loop; the scoreboard shows them when they come."""
         self._show_scoreboard()
+        self._agent_exact.ask((self.tui.session.detached(), self._training_snapshot()))
+
+    @on(LatestOnly.Computed)
+    def _agent_figures_computed(self, message: LatestOnly.Computed) -> None:
+        message.stop()
+        result = self._agent_exact.done(message)
+        if result is not None:
+            self.agent_figures, self._exact_reason = result
+            self._show_scoreboard()
+
+    @property
+    def agent_figures_shown(self) -> bool:
+        """Whether the scoreboard shows the agent's figures as last asked, none to come."""
+        return self._agent_exact.idle and self._exact_reason != COMPUTING
 
     def _training_snapshot(self) -> TrainingSnapshot | None:
         """While training runs, its latest snapshot: the freshest table whatever the

@@ -40,7 +40,7 @@ from textual.widgets import Button, Label
 from tui_gym.algorithms import ALGORITHMS, Settings
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.engine.trainer import continue_run
-from tui_gym.ui.exact_figures import Figures, LatestOnly, Request
+from tui_gym.ui.exact_figures import Figures, LatestOnly, Request, compute, key_wait_of
 from tui_gym.ui.map_editing import apply_edit, save_map, show_optimum
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
@@ -213,7 +213,8 @@ class TrainView(Vertical):
         self._editor_game = ""  # the game the editor's undo history belongs to
         self._traces = False  # the heatmap shows the traces (a λ learner's) instead of Q
         self._no_traces_until = 0.0  # while that is said, `E` says it no more
-        self._exact = LatestOnly(self)  # the exact figures, computed off the event loop
+        # The exact figures, computed off the event loop.
+        self._exact: LatestOnly[Request, Figures] = LatestOnly(self, compute)
         self._figures: Figures | None = None  # the ones shown
 
     # --- the app and its session ---------------------------------------------
@@ -394,8 +395,11 @@ class TrainView(Vertical):
         self.close_editor()
 
     def show_snapshot(self, snapshot: TrainingSnapshot, runner: TrainingRunner) -> None:
-        """Draw a snapshot; cheap when it is the one already shown."""
-        if snapshot.version != self._version:
+        """Draw a snapshot; cheap when it is the one already shown. While training runs,
+        a new one waits while a key is answered (the key's frame first; the app's timer
+        offers it again)."""
+        held = runner.running and self._version >= 0 and key_wait_of(self.app) > 0
+        if snapshot.version != self._version and not held:
             self._version = snapshot.version
             self._snapshot = snapshot
             self.stats.show_snapshot(snapshot)
