@@ -339,7 +339,8 @@ def test_a_greedy_policy_is_valued_once_while_the_table_keeps_it(monkeypatch) ->
 
 def test_the_optimums_marks_are_solved_once_for_every_snapshots_heatmap(monkeypatch) -> None:
     """Gambler's ladder is too long to keep (each rung is solved when asked for): its
-    heatmap's optimal marks are kept, so a live run's next snapshots solve nothing."""
+    heatmap's optimal marks and the optimum's values are kept, so a live run's next
+    snapshots solve nothing."""
     import tui_gym.core.mdp.optimum as model_module
 
     solved: list[int] = []
@@ -353,3 +354,8 @@ def test_the_optimums_marks_are_solved_once_for_every_snapshots_heatmap(monkeypa
     count = len(solved)
     session.trainer.run(episodes=50)
     assert session.heatmaps(session.trainer.snapshot()) and len(solved) == count
+    # ... and nor does the exact reference of each new greedy policy (the optimum's values)
+    session.reference(session.trainer.snapshot())
+    count = len(solved)
+    session.trainer.run(episodes=50)
+    assert session.reference(session.trainer.snapshot()) is not None and len(solved) == count

@@ -21,7 +21,7 @@ BoolArray = npt.NDArray[np.bool_]
 _MAX_ITERATIONS = 100_000
 TIE_GAMMA = 0.99  # the discount that breaks ties between moves of equal exact value
 LADDER_LIMIT = 4_000_000  # Q-values kept per ladder (steps x states x actions) at most
-CHOICES_KEPT = 8  # optimal-action masks kept per ladder (one per steps left asked for)
+CHOICES_KEPT = 8  # optimal-action masks (and rungs solved past LADDER_LIMIT) kept per ladder
 
 
 @dataclass(frozen=True)
@@ -182,7 +182,7 @@ class Ladder:
     `q(k)` is Q* with `k` steps left (k from 1 to the horizon); with no horizon
     every `k` gives the stationary optimum. Computed once, by backward
     induction, for gamma 1 and for `TIE_GAMMA`; past `LADDER_LIMIT` values the
-    rungs are solved when asked for instead.
+    rungs are solved when asked for instead (the last few kept).
     """
 
     def __init__(self, model: FiniteMDP) -> None:
@@ -190,6 +190,7 @@ class Ladder:
         self._rungs: dict[float, FloatArray] = {}
         self._stationary: dict[float, FloatArray] = {}
         self._choices: dict[int | None, tuple[BoolArray, BoolArray]] = {}
+        self._solved: dict[tuple[int, float], FloatArray] = {}  # past LADDER_LIMIT, the last few
 
     def q(self, steps_left: int | None = None, gamma: float = 1.0) -> FloatArray:
         model = self.model
@@ -200,7 +201,12 @@ class Ladder:
             return self._stationary[gamma]
         k = horizon if steps_left is None else min(max(1, int(steps_left)), horizon)
         if horizon * model.n_states * model.n_actions > LADDER_LIMIT:
-            return solve(model, gamma, steps_left=k).q
+            found = self._solved.get((k, gamma))
+            if found is None:
+                if len(self._solved) >= CHOICES_KEPT:
+                    self._solved.clear()
+                found = self._solved[k, gamma] = solve(model, gamma, steps_left=k).q
+            return found
         if gamma not in self._rungs:
             self._rungs[gamma] = _induction(model, gamma, horizon)
         return self._rungs[gamma][k - 1]
