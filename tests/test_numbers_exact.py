@@ -20,6 +20,7 @@ import pytest
 from tests.mdp_support import sampled_returns
 from tui_gym.algorithms import QLearning
 from tui_gym.core.wrappers import parse_wrapper_spec
+from tui_gym.games import game_for
 from tui_gym.games.blackjack.solver import (
     POLICY_SHAPE,
     mixed_policy_value,
@@ -347,6 +348,9 @@ def test_the_optimums_marks_are_solved_once_for_every_snapshots_heatmap(monkeypa
     solve = model_module.solve
     monkeypatch.setattr(model_module, "solve",
                         lambda *args, **kwargs: solved.append(1) or solve(*args, **kwargs))
+    oracle = game_for("gambler").oracle  # what an earlier test kept there, put aside
+    monkeypatch.setattr(oracle, "_kept", {})
+    monkeypatch.setattr(oracle, "_references", {})
     session = Session("gambler", seed=0)
     session.trainer.run(episodes=50)
     first = session.heatmaps(session.trainer.snapshot())
