@@ -12,6 +12,7 @@ from tui_gym.core.mdp.model import FiniteMDP
 __all__ = ["DENSE_STATES", "PolicyArrays"]
 
 DENSE_STATES = 1000
+SPARSE_SHARE = 16  # a sweep gathers (no dense product) where a state leads to 1/16 of all or fewer
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -54,7 +55,8 @@ class PolicyArrays:
 
     def sweep(self, v: FloatArray, gamma: float) -> FloatArray:
         """One synchronous sweep: every state backed up from `v`."""
-        if self.dense is not None and np.isfinite(v).all():
+        sparse = self.weight.shape[1] * SPARSE_SHARE <= len(v)  # few outcomes a state
+        if self.dense is not None and not sparse and np.isfinite(v).all():
             return self.reward + gamma * (self.dense @ v)
         return self.reward + gamma * (self.weight * v[self.target]).sum(axis=1)
 
