@@ -99,7 +99,7 @@ def cmd_serve(args: argparse.Namespace, out: Console) -> int:
         raise CliError("--record records the app in this terminal; it does not go with serve")
     check_host(args.host, args.public)
     token = serve_token(args.token, args.public)
-    from tui_gym.cli.main import app_env
+    from tui_gym.cli.flags import app_env
 
     app_env(args)  # a file that cannot be opened is said now, not in each tab
     if args.load:

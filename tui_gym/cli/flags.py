@@ -8,7 +8,7 @@ from typing import Any
 from tui_gym.algorithms import ALGORITHMS, ALL_PARAMS, Learner
 from tui_gym.cli.output import CliError
 from tui_gym.core.params import Param, ParamError
-from tui_gym.games import GAMES, Game
+from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 
 __all__ = [
     "HP_FLAGS", "add_game_flags", "add_hyperparameter_flags", "flag", "game_kwargs",
@@ -123,3 +123,13 @@ def hyperparameters(args: argparse.Namespace, cls: type[Learner]) -> dict[str, A
         except ValueError as exc:
             raise CliError(str(exc).replace(name, flag(name), 1)) from None
     return changes
+
+
+def app_env(args: argparse.Namespace) -> tuple[str | None, dict[str, Any] | None]:
+    """The env id and arguments the app opens on (`--env`, `--map-file`); CliError of one
+    line for an unknown game or a map that cannot be read."""
+    env_id = resolve_env_id(args.env) if args.env else None
+    if not args.app_map_file:
+        return env_id, None
+    game = game_for(env_id) if env_id else GAMES[0]
+    return env_id or game.env_id, map_kwargs(args.app_map_file, game, {})

@@ -18,7 +18,7 @@ from rich.console import Console
 
 from tui_gym import __version__
 from tui_gym.algorithms import ALGORITHMS, DEFAULT_ALGORITHM
-from tui_gym.cli.flags import add_game_flags, add_hyperparameter_flags
+from tui_gym.cli.flags import add_game_flags, add_hyperparameter_flags, app_env
 from tui_gym.cli.maps_command import add_maps_parser
 from tui_gym.cli.output import JSON_SCHEMAS, CliError, OutConsole, readable
 from tui_gym.cli.types import finite_number, fresh_seed, output_file, positive_int, seed_number
@@ -377,21 +377,6 @@ def _one_line(exc: BaseException) -> str:
     if isinstance(exc, OSError) and exc.filename:
         text = f"{exc.filename}: {exc.strerror or text}"
     return readable(text)
-
-
-def app_env(args: argparse.Namespace) -> tuple[str | None, dict[str, Any] | None]:
-    """The env id and arguments the app opens on (`--env`, `--map-file`); CliError of one
-    line for an unknown game or a map that cannot be read."""
-    from tui_gym.games import resolve_env_id
-
-    env_id = resolve_env_id(args.env) if args.env else None
-    if not args.app_map_file:
-        return env_id, None
-    from tui_gym.cli.flags import map_kwargs
-    from tui_gym.games import GAMES, game_for
-
-    game = game_for(env_id) if env_id else GAMES[0]
-    return env_id or game.env_id, map_kwargs(args.app_map_file, game, {})
 
 
 def _run_app(args: argparse.Namespace) -> int:
