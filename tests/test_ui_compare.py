@@ -325,6 +325,8 @@ async def test_progress_draws_live_curves_and_stopping_keeps_what_finished(tmp_p
         await launch(pilot, view, {"q-learning"}, seeds=2, episodes=10_000_000)
         await wait_busy(pilot, lambda: [s.key for s in view.chart.series]
                         == [("live", "q-learning")], "a live curve")
+        # (on a busy machine one seed may report before the other)
+        await wait_busy(pilot, lambda: view.table.rows[0].seeds == 2, "both seeds in the row")
         live = view.table.rows[0]
         assert live.note == "running" and live.seeds == 2 and live.episodes >= 1
         await wait_busy(pilot, lambda: "Q-learning (live)" in screen_text(app), "the legend")

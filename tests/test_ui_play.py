@@ -246,6 +246,8 @@ async def test_a_move_in_mid_episode_leaves_the_agents_exact_figures_as_they_wer
         view = app.play_view
         game = view.game
         assert game is not None
+        # (the figures of the view being shown are computed on a thread: in before counting)
+        await wait_for(pilot, lambda: view.agent_figures_shown, "the agent's exact figures")
         oracle = app.session.game.oracle
         asked: list[object] = []
         reference = oracle.reference
@@ -262,7 +264,8 @@ async def test_a_move_in_mid_episode_leaves_the_agents_exact_figures_as_they_wer
             assert game.last.steps == len(path) - 1 and not game.done
             assert asked == [], "a move re-evaluated the agent"
             await pilot.press(path[-1])
-            assert game.done and asked, "the episode's end reads the agent's figures"
+            assert game.done
+            await wait_for(pilot, lambda: bool(asked), "the episode's end reading the agent")
         finally:
             del oracle.reference
 
