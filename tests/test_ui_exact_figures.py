@@ -15,9 +15,11 @@ from textual.widget import Widget
 from tui_gym.algorithms import QLearning
 from tui_gym.session.session import Session
 from tui_gym.ui import exact_figures
+from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.exact_figures import TURNS, LatestOnly, key_wait_of
 
 from .hosts import VIEW_SIZE, PlayHost, TrainHost
+from .test_ui_train import open_train
 from .waiting import DEADLINE, wait_until
 
 
@@ -234,6 +236,34 @@ async def test_a_snapshot_waits_while_a_key_is_answered_during_training() -> Non
             assert view._version == latest.version
         finally:
             runner.pause()
+
+
+async def test_a_snapshot_held_back_by_a_key_as_training_pauses_is_shown_after(
+    monkeypatch,
+) -> None:
+    """The last snapshot before a pause, held back while the pause key was answered, is
+    the one the view ends on (it stayed on an older one: the app's timer offered a
+    snapshot it had already offered only while training ran)."""
+    hp = QLearning.hyperparameters(episodes=10**9)
+    app = TuiGymApp(Session("frozenlake", seed=0, hp=hp))
+    async with app.run_test(size=(120, 40)) as pilot:
+        view, runner = await open_train(pilot), app.runner
+        assert runner.start()
+        shown = view.shown_version
+        await wait_until(pilot, lambda: runner.latest.version != shown, "a new snapshot")
+        # No await from here on: the app's own timer stays out of it.
+        runner.pause()
+        assert runner.wait_idle(DEADLINE)
+        latest = runner.latest
+        assert view.shown_version != latest.version
+        with monkeypatch.context() as still:  # the tick that saw it while training ran
+            still.setattr(type(runner), "running", property(lambda self: True))
+            app._key_since = time.monotonic() + DEADLINE  # the pause key being answered
+            app._tick()
+        assert view.shown_version != latest.version  # held back
+        app._key_since = 0.0  # its frame drawn
+        app._tick()
+        assert view.shown_version == latest.version
 
 
 async def test_the_persons_record_shows_at_once_while_the_agents_figures_compute(

@@ -374,8 +374,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             return
         snapshot = runner.latest
         if snapshot.version != self._last_version or running:
-            self._last_version = snapshot.version
             view.show_snapshot(snapshot, runner)
+            self._last_version = view.shown_version  # one held back is offered again
 
     # --- actions -----------------------------------------------------------
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:

@@ -394,6 +394,11 @@ class TrainView(Vertical):
         event.stop()
         self.close_editor()
 
+    @property
+    def shown_version(self) -> int:
+        """The version of the snapshot on screen (-1: none yet)."""
+        return self._version
+
     def show_snapshot(self, snapshot: TrainingSnapshot, runner: TrainingRunner) -> None:
         """Draw a snapshot; cheap when it is the one already shown. While training runs,
         a new one waits while a key is answered (the key's frame first; the app's timer
