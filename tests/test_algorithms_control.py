@@ -199,7 +199,7 @@ def test_the_compiled_rule_and_the_plain_rule_agree_exactly(cls) -> None:
         s, a, s2, a2 = (int(x) for x in draws.integers(0, [12, 3, 12, 3]))
         r, ended = float(draws.normal()), bool(draws.random() < 0.1)
         compiled.learn(s, a, r, s2, ended, next_action=-1 if ended else a2)
-        rule(plain.arrays(), params, plain.rng, None, s, a, r, s2, ended, False,
+        rule(plain.arrays(), params, plain.rng, plain.offered_ranges, s, a, r, s2, ended, False,
              -1 if ended else a2, 0.1, new_log())
     assert np.array_equal(compiled.q, plain.q) and compiled.q.any()
 

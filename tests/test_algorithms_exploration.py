@@ -50,7 +50,7 @@ def test_epsilon_greedy_frequencies(epsilon: float) -> None:
     tables, hp = learner.arrays(), learner.compiled_params()
     n = 20_000
     act = entries(hp).act
-    picks = [act(tables, hp, learner.rng, None, 0, epsilon) for _ in range(n)]
+    picks = [act(tables, hp, learner.rng, learner.offered_ranges, 0, epsilon) for _ in range(n)]
     assert _within(np.bincount(picks, minlength=5), probs, n)
     if epsilon == 0.0:
         assert set(picks) == {1, 2, 4}  # never an action outside the tie
@@ -59,9 +59,9 @@ def test_epsilon_greedy_frequencies(epsilon: float) -> None:
 def test_ties_are_broken_uniformly_and_a_single_best_wins() -> None:
     values = np.array([[0.0, 0.0, 0.0, 0.0], [1.0, 5.0, 5.0, 0.0], [0.0, 0.0, 9.0, 0.0]])
     learner = _learner(values, seed=2)
-    tables, hp = learner.arrays(), learner.compiled_params()
+    tables, hp, offered = learner.arrays(), learner.compiled_params(), learner.offered_ranges
     greedy = entries(hp).greedy
-    picks = np.array([[greedy(tables, hp, learner.rng, None, s) for _ in range(10_000)]
+    picks = np.array([[greedy(tables, hp, learner.rng, offered, s) for _ in range(10_000)]
                       for s in range(3)])
     assert _within(np.bincount(picks[0], minlength=4), np.full(4, 0.25), 10_000)
     assert _within(np.bincount(picks[1], minlength=4), np.array([0, 0.5, 0.5, 0]), 10_000)
@@ -71,11 +71,11 @@ def test_ties_are_broken_uniformly_and_a_single_best_wins() -> None:
 def test_the_expected_value_is_the_mean_under_epsilon_greedy() -> None:
     values = np.random.default_rng(3).integers(0, 3, (50, 4)).astype(float)  # many ties
     learner = _learner(values)
-    tables = learner.arrays()
+    tables, offered = learner.arrays(), learner.offered_ranges
     for s, row in enumerate(values):
         probs = _policy(row, 0.17)
         assert probs.sum() == pytest.approx(1.0)
-        assert expected_value(tables[:1], None, s, 0.17) == pytest.approx(probs @ row)
+        assert expected_value(tables[:1], offered, s, 0.17) == pytest.approx(probs @ row)
 
 
 def test_the_epsilon_schedule_is_linear_then_flat() -> None:

@@ -15,9 +15,9 @@ from tui_gym.games import game_named
 from tui_gym.session.session import Session
 
 CONSTANT = {"learning_rate": 0.5, "discount": 0.9, "learning_rate_schedule": "constant"}
-# Row 1 offers actions 0 and 2; action 1, which it does not offer, holds the best value.
-VALUES = np.array([[0.0, 0.0, 0.0], [1.0, 5.0, 2.0]])
-MASK = np.array([[True, True, True], [True, False, True]])
+# Row 1 offers actions 1 and 2; action 0, which it does not offer, holds the best value.
+VALUES = np.array([[0.0, 0.0, 0.0], [5.0, 1.0, 2.0]])
+MASK = np.array([[True, True, True], [False, True, True]])
 
 
 def _masked(cls: type, hp: dict | None = None, seed: int = 0) -> object:
@@ -51,13 +51,13 @@ def test_the_agents_greedy_choice_and_ties_stay_among_the_offered_actions() -> N
     assert learner.greedy_actions(1) == (2,)
     learner.epsilon = 1.0
     picks = np.bincount([learner.act(1) for _ in range(4000)], minlength=3)
-    assert picks[1] == 0 and abs(picks[0] - 2000) < 5 * np.sqrt(1000)
+    assert picks[0] == 0 and abs(picks[1] - 2000) < 5 * np.sqrt(1000)
 
 
 def test_q_learnings_max_skips_an_action_the_state_does_not_offer() -> None:
     learner = _masked(QLearning)
     learner.learn(0, 0, 0.5, 1, False)
-    # target = 0.5 + 0.9·max(Q(1,0), Q(1,2)) = 0.5 + 0.9·2 = 2.3 (not 0.5 + 0.9·5)
+    # target = 0.5 + 0.9·max(Q(1,1), Q(1,2)) = 0.5 + 0.9·2 = 2.3 (not 0.5 + 0.9·5)
     assert learner.q[0, 0] == pytest.approx(0.5 * 2.3)
 
 
@@ -72,11 +72,11 @@ def test_expected_sarsas_expectation_is_over_the_offered_actions() -> None:
 def test_double_qs_argmax_is_over_the_offered_actions() -> None:
     learner = _masked(DoubleQLearning)
     learner.q_b[1] = [10.0, 20.0, 30.0]  # what the other table says of the chosen action
-    learner.q_a[1] = [1.0, 5.0, 2.0]
+    learner.q_a[1] = [5.0, 1.0, 2.0]
     learner.learn(0, 0, 0.0, 1, False, explain=True)
     record = learner.last_update
     assert record is not None and record.target_action == 2
-    # The coin picked one table; the other one values the picked one's argmax over {0, 2}.
+    # The coin picked one table; the other one values the picked one's argmax over {1, 2}.
     evaluated = learner.q_b if record.table == "A" else learner.q_a
     assert record.target == pytest.approx(0.9 * evaluated[1, 2])
 
@@ -84,19 +84,22 @@ def test_double_qs_argmax_is_over_the_offered_actions() -> None:
 def test_an_offer_of_every_action_is_no_mask_and_a_row_offering_none_offers_all() -> None:
     learner = QLearning(3, n_states=2)
     learner.offer(np.ones((2, 3), dtype=bool))
-    assert learner.offered is None
-    learner.offer(np.array([[False, False, False], [True, False, True]]))
+    assert learner.offered is None and learner.offered_ranges.tolist() == [[0, 3]]
+    learner.offer(np.array([[False, False, False], [True, True, False]]))
     assert learner.offered is not None and learner.offered[0].all()
+    assert learner.offered_ranges.tolist() == [[0, 3], [0, 2]]
     with pytest.raises(ValueError, match="do not fit"):
         learner.offer(np.ones((3, 3), dtype=bool))
+    with pytest.raises(ValueError, match=r"one run of actions \(row 1 offers \[0, 2\]"):
+        learner.offer(np.array([[True, True, True], [True, False, True]]))
 
 
 @pytest.mark.parametrize("name", ["q-learning", "double-q"])
-def test_a_mask_offering_everything_plays_the_very_run_of_no_mask(name: str) -> None:
+def test_every_row_offering_everything_plays_the_very_run_of_no_mask(name: str) -> None:
     model = loop.ModelArrays.of(game_named("max-bias").base_model({}))
     hp = {"epsilon_start": 0.3, "epsilon_final": 0.3, "episodes": 400}
     plain, masked = (algorithm(name)(12, hp, n_states=4, seed=11) for _ in range(2))
-    masked.offered = np.ones((4, 12), dtype=bool)  # the masked code, offering everything
+    masked.offered_ranges = np.tile([0, 12], (4, 1))  # a range per row, each every action
     runs = [play_learner(x, model, 400, (400,)) for x in (plain, masked)]
     assert np.array_equal(runs[0][0], runs[1][0])
     assert np.array_equal(runs[0][1][0], runs[1][1][0])

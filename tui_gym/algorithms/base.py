@@ -167,6 +167,7 @@ class Learner(ABC):
         self._last: tuple[Transition, np.ndarray] | None = None  # see `last_update`
         self._last_record: UpdateRecord | None = None
         self.offered: np.ndarray | None = None  # see `offer`
+        self.offered_ranges = rules.offered_ranges(None, self.n_actions)
         self._index: dict[Hashable, int] | None = None if n_states is not None else {}
         capacity = self.n_states if self.n_states is not None else _INITIAL_ROWS
         self._rows_used = self.n_states if self.n_states is not None else 0
@@ -262,17 +263,18 @@ class Learner(ABC):
         return self._exploration
 
     def offer(self, offered: np.ndarray | None) -> None:
-        """The actions each row of a dense table offers (`[n_states, n_actions]` bool), or
-        None: every row offers every action. A row that offers none offers all."""
-        if offered is None:
-            self.offered = None
-            return
-        mask = np.array(offered, dtype=np.bool_)  # a writable copy: one compiled form
-        if self.n_states is None or mask.shape != (self.n_states, self.n_actions):
-            raise ValueError(f"offered actions of shape {mask.shape} do not fit a table of "
-                             f"{self.n_states} states and {self.n_actions} actions")
-        mask[~mask.any(axis=1)] = True
-        self.offered = None if mask.all() else mask
+        """The actions each row of a dense table offers (`[n_states, n_actions]` bool, one
+        run of actions a row), or None: every row offers every action. A row that offers
+        none offers all. `offered_ranges` is what the compiled code reads (see `rules`)."""
+        mask = None
+        if offered is not None:
+            mask = np.array(offered, dtype=np.bool_)
+            if self.n_states is None or mask.shape != (self.n_states, self.n_actions):
+                raise ValueError(f"offered actions of shape {mask.shape} do not fit a table "
+                                 f"of {self.n_states} states and {self.n_actions} actions")
+            mask[~mask.any(axis=1)] = True
+        self.offered = None if mask is None or mask.all() else mask
+        self.offered_ranges = rules.offered_ranges(self.offered, self.n_actions)
 
     @property
     def next_first(self) -> bool:
@@ -297,9 +299,9 @@ class Learner(ABC):
             self.make_room()
         log = rules.new_log(self.log_rows() if explain else 1)
         hp = self.compiled_params()
-        a2, td = loop.entries(hp, self.offered).transition(
-            self.arrays(), hp, self.rng, self.offered, int(state), int(action), float(reward),
-            int(next_state), bool(terminated), bool(truncated), int(next_action),
+        a2, td = loop.entries(hp).transition(
+            self.arrays(), hp, self.rng, self.offered_ranges, int(state), int(action),
+            float(reward), int(next_state), bool(terminated), bool(truncated), int(next_action),
             float(self.epsilon), log,
         )
         if explain:
@@ -370,14 +372,14 @@ class Learner(ABC):
     def act(self, key: Hashable) -> int:
         """Epsilon-greedy in a state, ties broken at random (the engine's own draws)."""
         hp = self.compiled_params()
-        return int(loop.entries(hp, self.offered).act(self.arrays(), hp, self.rng, self.offered,
-                                                      self.row(key), float(self.epsilon)))
+        return int(loop.entries(hp).act(self.arrays(), hp, self.rng, self.offered_ranges,
+                                        self.row(key), float(self.epsilon)))
 
     def greedy(self, key: Hashable) -> int:
         """The best-valued action in a state, ties broken at random."""
         hp = self.compiled_params()
-        return int(loop.entries(hp, self.offered).greedy(self.arrays(), hp, self.rng,
-                                                         self.offered, self.row(key)))
+        return int(loop.entries(hp).greedy(self.arrays(), hp, self.rng, self.offered_ranges,
+                                           self.row(key)))
 
     def greedy_actions(self, key: Hashable) -> tuple[int, ...]:
         """Every action tied for the best value among those a state offers."""

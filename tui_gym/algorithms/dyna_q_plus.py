@@ -14,7 +14,7 @@ from tui_gym.core.engine.kernel import kernel
 from tui_gym.core.engine.rules import (
     Rule,
     max_value,
-    offers,
+    offered_range,
     register,
     step_size,
     td_update,
@@ -49,8 +49,9 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
         for b in range(n_actions):
             if model_next[s, b] >= 0:
                 fresh = False
+        lo, hi = offered_range(offered, s)
         for b in range(n_actions):
-            if b == a or (fresh and offers(offered, s, b)):
+            if b == a or (fresh and lo <= b < hi):
                 tried[n_tried[0]] = s * n_actions + b
                 n_tried[0] += 1
                 model_next[s, b] = s

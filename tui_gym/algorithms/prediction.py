@@ -159,7 +159,7 @@ def run_scored(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise:
 def rms_curve(learner: Predictor, model: ModelArrays, truth: Truth, episodes: int) -> np.ndarray:
     """Play `episodes` episodes on `model`: the RMS error of V against `truth` after each."""
     hp = learner.compiled_params()
-    run = jit.entry(run_scored, type(hp), learner.offered is not None)
+    run = jit.entry(run_scored, type(hp))
     where = np.flatnonzero(truth.reached)
     scored_rows, values = model.rows[where], np.array(truth.v[where])
     cursor, out, log = loop.Cursor(), np.zeros((1, loop.COLUMNS)), np.zeros((1, 8))
@@ -169,7 +169,7 @@ def rms_curve(learner: Predictor, model: ModelArrays, truth: Truth, episodes: in
         made = run(model.next_state, model.cumulative, model.guide, model.reward, model.noise,
                    model.terminal, model.pair_rows, model.outcomes, model.starts,
                    model.start_cumulative, model.rows, model.horizon, learner.arrays(), hp,
-                   learner.rng, learner.offered, learner.exploration(), learner.episode,
+                   learner.rng, learner.offered_ranges, learner.exploration(), learner.episode,
                    cursor.ints, cursor.floats, out, log, scored_rows, values, curve, done)
         learner.end_episodes(int(made))
         done += int(made)

@@ -35,7 +35,7 @@ def _every_learner() -> float:
     sessions = [Session(game.name, algorithm=cls.name, seed=0)
                 for game in GAMES for cls in ALGORITHMS]
     agents = [session.trainer.agent for session in sessions]
-    loop.warm([(x.name, x.arrays(), x.compiled_params(), x.offered) for x in agents])
+    loop.warm([(x.name, x.arrays(), x.compiled_params()) for x in agents])
     for session in sessions:
         session.trainer.run(episodes=1)
         session.trainer.step()

@@ -61,8 +61,8 @@ _PACKAGE = Path(__file__).resolve().parents[2]  # tui_gym/
 _SOURCES = ("core/engine", "algorithms")  # what compiled code is made of
 _OPTIONS: Any = {"cache": True, "_nrt": False, "no_cfunc_wrapper": True}  # see the docstring
 _COMPILED: dict[Callable[..., Any], Any] = {}
-_ENTRIES: dict[tuple[Callable[..., Any], object, bool], Any] = {}
-_DIRECT: dict[tuple[Callable[..., Any], object, bool], Any] = {}
+_ENTRIES: dict[tuple[Callable[..., Any], object], Any] = {}
+_DIRECT: dict[tuple[Callable[..., Any], object], Any] = {}
 _started = False
 _folder: Path | None = None
 _saves_in_turn = False  # set by `start` (see the module docstring)
@@ -226,18 +226,16 @@ def _save_in_turn() -> bool:
     return True
 
 
-def entry(fn: Callable[..., Any], kind: object, masked: bool = False) -> Any:
+def entry(fn: Callable[..., Any], kind: object) -> Any:
     """Kernel `fn` as called from Python with one algorithm's `Params` (`kind`; for a
     kernel that takes none, what else sets its argument types apart), compiled apart:
-    Numba types a NamedTuple from Python by its fields alone, so one
-    dispatcher would run the code it has for another algorithm's `Params` of the same
-    field types (or take its slow path on every call), while compiled callers tell
-    them apart. `masked`: called with an array of offered actions rather than None,
-    apart too (Numba would take an array for the None it was compiled for). Once
+    Numba types a NamedTuple from Python by its fields alone, so one dispatcher would
+    run the code it has for another algorithm's `Params` of the same field types (or
+    take its slow path on every call), while compiled callers tell them apart. Once
     compiled, it is called directly (no dispatch). It lets go of the interpreter lock
     while it runs, so a trainer's thread never holds up the UI."""
     start()
-    key = (fn, kind, masked)
+    key = (fn, kind)
     found = _ENTRIES.get(key)
     if found is None:
         from numba import njit
@@ -247,14 +245,13 @@ def entry(fn: Callable[..., Any], kind: object, masked: bool = False) -> Any:
     return found
 
 
-def direct(fn: Callable[..., Any], kind: object = None, masked: bool = False) -> Any:
+def direct(fn: Callable[..., Any], kind: object = None) -> Any:
     """Kernel `fn` as called from Python through its own compiled form, the one its
     compiled callers call (so Python's calls compile nothing more): one algorithm's
     rule, or a kernel that takes no `Params` (see `entry`), called with the argument
-    types `kind` and `masked` set apart. Once compiled, it is called directly (no
-    dispatch)."""
+    types `kind` sets apart. Once compiled, it is called directly (no dispatch)."""
     start()
-    key = (fn, kind, masked)
+    key = (fn, kind)
     found = _DIRECT.get(key)
     if found is None:
         found = _DIRECT[key] = _Entry(compiled(fn))
@@ -270,7 +267,6 @@ def compiled(fn: Callable[..., Any] | None) -> Any:
 
 def _register_overloads(rules: Any) -> None:
     """Each rule stub, compiled, dispatches on the type of its `hp` at compile time."""
-    from numba.core import types
     from numba.extending import overload
 
     _CACHED: Any = {"cache": True, "no_cfunc_wrapper": True}
@@ -289,35 +285,6 @@ def _register_overloads(rules: Any) -> None:
                         epsilon, log)
 
         return impl
-
-    @overload(rules.offers, jit_options=_CACHED, inline="always")
-    def _offers(offered, s, a):  # type: ignore[no-untyped-def]
-        if isinstance(offered, types.NoneType):
-            def every(offered, s, a):  # type: ignore[no-untyped-def]
-                return True
-
-            return every
-
-        def marked(offered, s, a):  # type: ignore[no-untyped-def]
-            return offered[s, a]
-
-        return marked
-
-    @overload(rules.draw, jit_options=_CACHED, inline="always")
-    def _draw(rng, offered, s, n):  # type: ignore[no-untyped-def]
-        if isinstance(offered, types.NoneType):
-            uniform = compiled(rules.uniform)
-
-            def any_action(rng, offered, s, n):  # type: ignore[no-untyped-def]
-                return uniform(rng, n)
-
-            return any_action
-        draw_offered = compiled(rules.draw_offered)
-
-        def one_offered(rng, offered, s, n):  # type: ignore[no-untyped-def]
-            return draw_offered(rng, offered, s, n)
-
-        return one_offered
 
     @overload(rules.acting, jit_options=_CACHED, inline="always")
     def _acting(tables, hp):  # type: ignore[no-untyped-def]

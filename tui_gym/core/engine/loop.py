@@ -209,7 +209,7 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: 
               cursor: Any, acc: Any, max_episodes: int, max_steps: int,
               out: Any, log: Any) -> int:
     """Play up to `max_episodes` episodes and `max_steps` transitions (see the module
-    docstring); `offered`: the actions each table row offers (None: all, see `rules`);
+    docstring); `offered`: the actions each table row offers (see `rules`);
     `explore` is (epsilon start, final, decay episodes), `episode0` the
     learner's episodes so far. Finished episodes go into `out` rows (return, length,
     mean |TD|, epsilon, the action it began with); `cursor[4]`, `cursor[5]` count the
@@ -283,12 +283,12 @@ def play(learner: Any, model: ModelArrays, cursor: Cursor, max_episodes: int,
     """One call of `run_model` for `learner` (giving it room when it asks, and moving its
     schedule on by the episodes finished): (episodes, steps)."""
     hp = learner.compiled_params()
-    offered = learner.offered
-    status = entries(hp, offered).run_model(
+    status = entries(hp).run_model(
         model.next_state, model.cumulative, model.guide, model.reward, model.noise,
         model.terminal, model.pair_rows, model.outcomes, model.starts,
         model.start_cumulative, model.rows, model.horizon,
-        learner.arrays(), hp, learner.rng, offered, learner.exploration(), learner.episode,
+        learner.arrays(), hp, learner.rng, learner.offered_ranges, learner.exploration(),
+        learner.episode,
         cursor.ints, cursor.floats, min(max_episodes, len(out)), max_steps, out, log,
     )
     if status == GROW:
@@ -299,18 +299,17 @@ def play(learner: Any, model: ModelArrays, cursor: Cursor, max_episodes: int,
 
 
 class Entries:
-    """What Python calls for one algorithm, with or without a mask of offered actions:
-    `run_model` (`jit.entry`), and `transition`, `act` and `greedy` through the compiled
-    forms of the rule, `act` and `greedy` that `run_model` calls (`jit.direct`: nothing
-    more to compile; those of `act` and `greedy` are the same for every algorithm acting
-    on as many tables: see `rules`)."""
+    """What Python calls for one algorithm: `run_model` (`jit.entry`), and `transition`,
+    `act` and `greedy` through the compiled forms of the rule, `act` and `greedy` that
+    `run_model` calls (`jit.direct`: nothing more to compile; those of `act` and `greedy`
+    are the same for every algorithm acting on as many tables: see `rules`)."""
 
-    def __init__(self, kind: type, masked: bool) -> None:
-        self.run_model = jit.entry(run_model, kind, masked)
-        self._update = jit.direct(rules.RULES[kind].update, None, masked)
+    def __init__(self, kind: type) -> None:
+        self.run_model = jit.entry(run_model, kind)
+        self._update = jit.direct(rules.RULES[kind].update)
         own = rules.RULES[kind].acting  # None: every such algorithm acts on one table
-        self._act = jit.direct(act, own, masked)
-        self._greedy = jit.direct(greedy, own, masked)
+        self._act = jit.direct(act, own)
+        self._greedy = jit.direct(greedy, own)
 
     def transition(self, tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int,
                    r: float, s2: int, terminated: bool, truncated: bool, a2: int,
@@ -330,16 +329,14 @@ class Entries:
         return int(self._greedy(rules.acting(tables, hp), rng, offered, s))
 
 
-_ENTRIES: dict[tuple[type, bool], Entries] = {}
+_ENTRIES: dict[type, Entries] = {}
 
 
-def entries(hp: Any, offered: np.ndarray | None = None) -> Entries:
-    """The entry points for the algorithm whose compiled hyperparameters are `hp`, called
-    with `offered` (None: every action offered, or a mask: see `rules`)."""
-    key = (type(hp), offered is not None)
-    found = _ENTRIES.get(key)
+def entries(hp: Any) -> Entries:
+    """The entry points for the algorithm whose compiled hyperparameters are `hp`."""
+    found = _ENTRIES.get(type(hp))
     if found is None:
-        found = _ENTRIES[key] = Entries(*key)
+        found = _ENTRIES[type(hp)] = Entries(type(hp))
     return found
 
 
@@ -353,12 +350,11 @@ def _tiny_model(n_actions: int) -> ModelArrays:
                                     np.zeros(shape), np.ones(shape, dtype=bool), np.ones(1)))
 
 
-def compile_learner(tables: Any, hp: Any, offered: np.ndarray | None = None) -> None:
-    """Compile (or load) the entry points for one learner's types (with its mask of
-    offered actions, if any), on copies of its tables."""
-    calls = entries(hp, offered)
+def compile_learner(tables: Any, hp: Any) -> None:
+    """Compile (or load) the entry points for one learner's types, on copies of its tables."""
+    calls = entries(hp)
     copies = tuple(np.array(t) for t in tables)
-    mask = None if offered is None else np.ones((1, copies[0].shape[1]), dtype=np.bool_)
+    mask = rules.offered_ranges(None, copies[0].shape[1])
     spare = np.random.default_rng(0)
     log = np.zeros((1, 8))
     model = _tiny_model(copies[0].shape[1])
@@ -375,17 +371,13 @@ def compile_learner(tables: Any, hp: Any, offered: np.ndarray | None = None) -> 
     RollingWindow(1).push_many(np.zeros(1))  # the trainer's statistics of each call
 
 
-def warm(learners: Sequence[tuple[Any, ...]],
+def warm(learners: Sequence[tuple[str, Any, Any]],
          progress: Callable[[str], None] | None = None) -> bool:
-    """Compile (or load) each `(name, tables, hp)` learner's entry points (`(name, tables,
-    hp, offered)`: with that mask of offered actions, if not None); tells `progress`
+    """Compile (or load) each `(name, tables, hp)` learner's entry points; tells `progress`
     "compiling the learners, once (i/n: name)" for those not compiled before. The first
     compiles here; the others at once in worker processes, one per core (`compile_apart`),
     which load here from the cache then. True when anything had to be compiled."""
-    wanted = {}
-    for name, tables, hp, *mask in learners:
-        offered = mask[0] if mask else None
-        wanted[name if offered is None else f"{name}-offered"] = (name, tables, hp, offered)
+    wanted = {learner[0]: learner for learner in learners}
     if all(key in _WARM for key in wanted):
         return False
     folder = jit.folder()
@@ -397,22 +389,22 @@ def warm(learners: Sequence[tuple[Any, ...]],
         if progress is not None:
             progress(f"{jit.COMPILING} ({index}/{len(cold)}: {name})")
 
-    for index, (key, (name, tables, hp, offered)) in enumerate(cold, start=1):
+    for index, (key, (name, tables, hp)) in enumerate(cold, start=1):
         if index == 2:  # what every learner shares is compiled: the workers inherit it
             apart[1:] = compile_apart([x for _, x in cold[1:]],
                                       lambda name: say(name, next(finished)))
         if not apart[index - 1]:
             say(name, index)
-        compile_learner(tables, hp, offered)
+        compile_learner(tables, hp)
         with contextlib.suppress(OSError):  # a read-only cache works, only looked at again
             (folder / f"warm-{key}").write_text("ok\n")
     _WARM.update(wanted)
     return bool(cold)
 
 
-def compile_apart(learners: Sequence[tuple[str, Any, Any, np.ndarray | None]],
+def compile_apart(learners: Sequence[tuple[str, Any, Any]],
                   done_with: Callable[[str], None] | None = None) -> list[bool]:
-    """Compile each `(name, tables, hp, offered)` learner's entry points into the cache in
+    """Compile each `(name, tables, hp)` learner's entry points into the cache in
     worker processes, one per core, all at once (`jit` files what each compiled in turn);
     tells `done_with` each one's name as it is done. Per learner, whether it was (False for
     all with fewer than two learners or cores, or where workers cannot start: the caller

@@ -22,15 +22,14 @@ overloads), so each algorithm gets a specialisation of the one loop, cached.
 it and `greedy` read the action values through `acting`, so one compiled form
 serves every algorithm that acts on the same number of tables.
 
-**Offered actions.** Where a game's states do not all offer every action,
-`offered[row, action]` (a bool array) marks those each table row offers;
-`None` where every row offers every action. Acting (`act`, `greedy`,
-`draw`), the max (`max_value`) and the
-ε-greedy expectation (`expected_value`) range over the offered actions only;
-a rule passes `offered` on to them and needs nothing else. `offers` and
-`draw` are stubs compiled by the type of `offered`: for `None` they are the
-constant True and `uniform(rng, n)`, so a game that offers every action runs
-no mask code at all; a mask that offers everything draws the same numbers.
+**Offered actions.** Each table row offers one run of actions, `lo` to `hi - 1`:
+`offered` is an int array `[rows, 2]` of those bounds (`offered_ranges` makes it
+from a bool mask), or `[1, 2]` when every row offers the same (every action:
+`[[0, n_actions]]`), so every game runs the one compiled form. Acting (`act`,
+`greedy`), the max (`max_value`) and the ε-greedy expectation (`expected_value`)
+range over the offered actions only; a rule passes `offered` on to them and needs
+nothing else. A uniform draw among them is `lo + uniform(rng, hi - lo)`: the same
+numbers as a draw over all actions where all are offered.
 """
 
 from __future__ import annotations
@@ -49,14 +48,14 @@ __all__ = [
     "act",
     "acting",
     "begin",
-    "draw",
     "epsilon_at",
     "expected_value",
     "full",
     "greedy",
     "max_value",
     "next_first",
-    "offers",
+    "offered_range",
+    "offered_ranges",
     "register",
     "step_size",
     "td_update",
@@ -116,18 +115,6 @@ def next_first(hp: Any) -> bool:
     return RULES[type(hp)].next_first
 
 
-def offers(offered: Any, s: int, a: int) -> bool:
-    """Whether row `s` offers action `a` (`offered` None: every row offers every action;
-    compiled, that is the constant True)."""
-    return offered is None or bool(offered[s, a])
-
-
-def draw(rng: Any, offered: Any, s: int, n: int) -> int:
-    """An action drawn uniformly from those row `s` offers (of `n`): `uniform(rng, n)` when
-    every action is offered."""
-    return uniform(rng, n) if offered is None else draw_offered(rng, offered, s, n)
-
-
 # --- shared by every learner ---------------------------------------------------------------
 
 
@@ -156,28 +143,10 @@ def uniform(rng: Any, n: int) -> int:
 
 
 @kernel(inline=True)
-def first_offered(offered: Any, s: int, n: int) -> int:
-    """The first action row `s` offers (0 when every action is offered)."""
-    a = 0
-    while a < n - 1 and not offers(offered, s, a):
-        a += 1
-    return a
-
-
-@kernel
-def draw_offered(rng: Any, offered: Any, s: int, n: int) -> int:
-    """An action drawn uniformly from those `offered[s]` marks."""
-    count = 0
-    for a in range(n):
-        if offered[s, a]:
-            count += 1
-    pick = uniform(rng, count)
-    for a in range(n):
-        if offered[s, a]:
-            if pick == 0:
-                return a
-            pick -= 1
-    return n - 1
+def offered_range(offered: Any, s: int) -> tuple[int, int]:
+    """The actions row `s` offers: `lo` to `hi - 1` (a single row of `offered`: every row's)."""
+    row = min(s, offered.shape[0] - 1)
+    return offered[row, 0], offered[row, 1]
 
 
 @kernel(inline=True)
@@ -193,13 +162,11 @@ def value(values: Any, s: int, a: int) -> float:
 def greedy(values: Any, rng: Any, offered: Any, s: int) -> int:
     """The best-valued action row `s` offers (`values`: the tables `acting` gives), ties
     broken uniformly (a draw only on a tie)."""
-    n = values[0].shape[1]
-    choice = first_offered(offered, s, n)
-    best = value(values, s, choice)
+    lo, hi = offered_range(offered, s)
+    choice = lo
+    best = value(values, s, lo)
     ties = 1
-    for a in range(choice + 1, n):
-        if not offers(offered, s, a):
-            continue
+    for a in range(lo + 1, hi):
         v = value(values, s, a)
         if v > best:
             best, choice, ties = v, a, 1
@@ -208,8 +175,8 @@ def greedy(values: Any, rng: Any, offered: Any, s: int) -> int:
     if ties == 1:
         return choice
     pick = uniform(rng, ties)
-    for a in range(n):
-        if offers(offered, s, a) and value(values, s, a) == best:
+    for a in range(lo, hi):
+        if value(values, s, a) == best:
             if pick == 0:
                 return a
             pick -= 1
@@ -221,7 +188,8 @@ def act(values: Any, rng: Any, offered: Any, s: int, epsilon: float) -> int:
     """Epsilon-greedy in row `s`: an offered action drawn uniformly with probability
     epsilon, else greedy."""
     if epsilon > 0.0 and rng.random() < epsilon:
-        return draw(rng, offered, s, values[0].shape[1])
+        lo, hi = offered_range(offered, s)
+        return lo + uniform(rng, hi - lo)
     return greedy(values, rng, offered, s)
 
 
@@ -229,29 +197,23 @@ def act(values: Any, rng: Any, offered: Any, s: int, epsilon: float) -> int:
 def expected_value(values: Any, offered: Any, s: int, epsilon: float) -> float:
     """Σ_a π(a|s) value(s, a) under epsilon-greedy over the offered actions, ties sharing
     the greedy part: epsilon times their mean value plus (1 - epsilon) times the best."""
-    n = values[0].shape[1]
-    first = first_offered(offered, s, n)
-    best = value(values, s, first)
+    lo, hi = offered_range(offered, s)
+    best = value(values, s, lo)
     total = best
-    count = 1
-    for a in range(first + 1, n):
-        if offers(offered, s, a):
-            v = value(values, s, a)
-            total += v
-            best = max(best, v)
-            count += 1
-    return epsilon * total / count + (1.0 - epsilon) * best
+    for a in range(lo + 1, hi):
+        v = value(values, s, a)
+        total += v
+        best = max(best, v)
+    return epsilon * total / (hi - lo) + (1.0 - epsilon) * best
 
 
 @kernel(inline=True)
 def max_value(q: Any, offered: Any, s: int) -> float:
     """The largest value in row `s` of `q` among the actions it offers."""
-    n = q.shape[1]
-    first = first_offered(offered, s, n)
-    top = q[s, first]
-    for b in range(first + 1, n):
-        if offers(offered, s, b):
-            top = max(top, q[s, b])
+    lo, hi = offered_range(offered, s)
+    top = q[s, lo]
+    for b in range(lo + 1, hi):
+        top = max(top, q[s, b])
     return top
 
 
@@ -274,6 +236,24 @@ def td_update(q: Any, counts: Any, visits: Any, hp: Any, s: int, a: int, r: floa
     log[0, 4] = alpha
     log[0, 5] = counts[s, a]
     return abs(target - before)
+
+
+def offered_ranges(mask: np.ndarray | None, n_actions: int) -> np.ndarray:
+    """`offered` (see the module docstring) from a bool mask `[rows, n_actions]` of the
+    actions each row offers (None: every row offers every action). ValueError when a row
+    offers none, or actions apart (not one run)."""
+    if mask is None:
+        return np.array([[0, n_actions]], dtype=np.int64)
+    lo = np.argmax(mask, axis=1)
+    hi = n_actions - np.argmax(mask[:, ::-1], axis=1)
+    runs = np.arange(n_actions) >= lo[:, None]
+    runs &= np.arange(n_actions) < hi[:, None]
+    apart = np.flatnonzero((runs != mask).any(axis=1) | ~mask.any(axis=1))
+    if len(apart):
+        row = int(apart[0])
+        raise ValueError(f"each row must offer one run of actions (row {row} offers "
+                         f"{np.flatnonzero(mask[row]).tolist()}, out of {n_actions})")
+    return np.stack([lo, hi], axis=1).astype(np.int64)
 
 
 def new_log(rows: int = 1) -> np.ndarray:

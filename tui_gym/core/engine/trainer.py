@@ -179,7 +179,7 @@ class Trainer:
         if self._warmed:
             return
         agent = self.agent
-        if loop.warm([(agent.name, agent.arrays(), agent.compiled_params(), agent.offered)], say):
+        if loop.warm([(agent.name, agent.arrays(), agent.compiled_params())], say):
             say("")
         self._warmed = True
 

@@ -892,7 +892,7 @@ def _estimate(prepared: Prepared, arms: Sequence[Arm], setup: Setup,
         return 0.0
     learners = [model.learner(arm.algorithm, prepared.hyperparameters[a], setup.first_seed)
                 for a, arm in enumerate(arms)]
-    if warm([(x.name, x.arrays(), x.compiled_params(), x.offered) for x in learners],
+    if warm([(x.name, x.arrays(), x.compiled_params()) for x in learners],
             status) and status:
         status("")
     total = 0.0
