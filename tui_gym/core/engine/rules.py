@@ -23,7 +23,7 @@ it and `greedy` read the action values through `acting`, so one compiled form
 serves every algorithm that acts on the same number of tables.
 
 **Offered actions.** Each table row offers one run of actions, `lo` to `hi - 1`:
-`offered` is an int array `[rows, 2]` of those bounds (`offered_ranges` makes it
+`offered` is an unsigned array `[rows, 2]` of those bounds (`offered_ranges` makes it
 from a bool mask), or `[1, 2]` when every row offers the same (every action:
 `[[0, n_actions]]`), so every game runs the one compiled form. Acting (`act`,
 `greedy`), the max (`max_value`) and the ε-greedy expectation (`expected_value`)
@@ -143,10 +143,10 @@ def uniform(rng: Any, n: int) -> int:
 
 
 @kernel(inline=True)
-def offered_range(offered: Any, s: int) -> tuple[int, int]:
+def offered_range(offered: Any, s: int) -> tuple[Any, Any]:
     """The actions row `s` offers: `lo` to `hi - 1` (a single row of `offered`: every row's)."""
-    row = min(s, offered.shape[0] - 1)
-    return offered[row, 0], offered[row, 1]
+    row = s if s < offered.shape[0] else 0
+    return np.int64(offered[row, 0]), np.int64(offered[row, 1])  # unsigned: never below 0
 
 
 @kernel(inline=True)
@@ -243,7 +243,7 @@ def offered_ranges(mask: np.ndarray | None, n_actions: int) -> np.ndarray:
     actions each row offers (None: every row offers every action). ValueError when a row
     offers none, or actions apart (not one run)."""
     if mask is None:
-        return np.array([[0, n_actions]], dtype=np.int64)
+        return np.array([[0, n_actions]], dtype=np.uint32)
     lo = np.argmax(mask, axis=1)
     hi = n_actions - np.argmax(mask[:, ::-1], axis=1)
     runs = np.arange(n_actions) >= lo[:, None]
@@ -253,7 +253,7 @@ def offered_ranges(mask: np.ndarray | None, n_actions: int) -> np.ndarray:
         row = int(apart[0])
         raise ValueError(f"each row must offer one run of actions (row {row} offers "
                          f"{np.flatnonzero(mask[row]).tolist()}, out of {n_actions})")
-    return np.stack([lo, hi], axis=1).astype(np.int64)
+    return np.stack([lo, hi], axis=1).astype(np.uint32)
 
 
 def new_log(rows: int = 1) -> np.ndarray:
