@@ -19,8 +19,7 @@ from gymnasium.wrappers import (
 
 from tui_gym.core.mdp.model import FiniteMDP, ModelError
 from tui_gym.core.mdp.transforms import clip_reward, scale_reward, step_penalty, with_horizon
-from tui_gym.core.wrappers.chain import layers, time_limit
-from tui_gym.core.wrappers.fits import env_label
+from tui_gym.core.wrappers.chain import env_label, layers, time_limit
 
 __all__ = ["NotAvailable", "model_from_env"]
 
