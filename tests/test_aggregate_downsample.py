@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tui_gym.core.experiments.downsample import (
+from tui_gym.core.experiments.aggregate import (
     CurveAccumulator,
     bucket_means,
     downsample,

@@ -12,7 +12,7 @@ from tui_gym.algorithms import algorithm
 from tui_gym.cli import main
 from tui_gym.core.engine.loop import FIRST_ACTION, LENGTH, ModelArrays
 from tui_gym.core.engine.seeds import play_learner
-from tui_gym.core.experiments.student_t import t_quantile
+from tui_gym.core.experiments.aggregate import t_quantile
 from tui_gym.games import game_named
 from tui_gym.session.book import figure_named
 from tui_gym.session.book.figure import FigureOptions

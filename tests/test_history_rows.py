@@ -27,7 +27,7 @@ from tui_gym.core.experiments import (
     remove_run,
     show_run,
 )
-from tui_gym.core.experiments.curve_codec import pack_curves
+from tui_gym.core.experiments.codec import pack_curves
 
 
 def record_three(db: Path) -> list[int]:

@@ -24,7 +24,7 @@ from tui_gym.core.experiments import (
     RunSpec,
     list_runs,
 )
-from tui_gym.core.experiments.schema import APPLICATION_ID, MIGRATIONS, Migration
+from tui_gym.core.experiments.connection import APPLICATION_ID, MIGRATIONS, Migration
 
 
 def spec(seed: int = 0) -> RunSpec:

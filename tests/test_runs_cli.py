@@ -11,7 +11,7 @@ import pytest
 
 from tui_gym.cli import main
 from tui_gym.core.experiments import RunHistory, RunSpec
-from tui_gym.core.experiments.schema import APPLICATION_ID
+from tui_gym.core.experiments.connection import APPLICATION_ID
 
 SHORT = ["--episodes", "3000", "--eval-episodes", "200"]
 

@@ -12,21 +12,28 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 import tui_gym.core.experiments.rows as rows
+from tui_gym.core.experiments.aggregate import bucket_means
+from tui_gym.core.experiments.codec import (
+    BadTask,
+    CurveFormatError,
+    decode,
+    decode_rows,
+    encode,
+    encode_curve,
+    pack_curves,
+    unpack_curves,
+)
 from tui_gym.core.experiments.connection import (
+    MIGRATIONS,
+    Migration,
     busy_error,
+    check_migrations,
     damaged,
     is_damage,
     open_shared,
     release,
     shown,
 )
-from tui_gym.core.experiments.curve_codec import (
-    CurveFormatError,
-    encode_curve,
-    pack_curves,
-    unpack_curves,
-)
-from tui_gym.core.experiments.downsample import bucket_means
 from tui_gym.core.experiments.errors import DamagedRunError, RunHistoryError, UnknownRunError
 from tui_gym.core.experiments.figures import Figure
 from tui_gym.core.experiments.records import (
@@ -36,11 +43,10 @@ from tui_gym.core.experiments.records import (
     RunSpec,
     RunStatus,
     RunSummary,
+    TaskRecord,
     Versions,
     to_json_text,
 )
-from tui_gym.core.experiments.schema import MIGRATIONS, Migration, check_migrations
-from tui_gym.core.experiments.tasks import BadTask, TaskRecord, decode, decode_rows, encode
 from tui_gym.core.experiments.writers import WriterCheck, current_writer
 
 # Points kept per stored curve: about a terminal chart's width, and few enough that a

@@ -8,7 +8,7 @@ from types import TracebackType
 
 import numpy as np
 
-from tui_gym.core.experiments.downsample import CurveAccumulator
+from tui_gym.core.experiments.aggregate import CurveAccumulator
 from tui_gym.core.experiments.figures import Figure
 from tui_gym.core.experiments.history import STORED_POINTS, RunHistory
 from tui_gym.core.experiments.records import Curve, RunSpec, RunStatus

@@ -11,11 +11,11 @@ from pathlib import Path
 from typing import Any
 
 import tui_gym.core.experiments.rows as rows
+from tui_gym.core.experiments.codec import BadTask, decode
 from tui_gym.core.experiments.connection import examine, shown
 from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.history import RunHistory
-from tui_gym.core.experiments.records import RunStatus
-from tui_gym.core.experiments.tasks import BadTask, TaskRecord, decode
+from tui_gym.core.experiments.records import RunStatus, TaskRecord
 from tui_gym.core.experiments.writers import WriterCheck
 from tui_gym.core.text import visible
 

@@ -7,7 +7,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from tui_gym.core.experiments.curve_codec import CurveFormatError, decode_curve, unpack_curves
+from tui_gym.core.experiments.codec import CurveFormatError, decode_curve, unpack_curves
 from tui_gym.core.experiments.figures import Figure
 from tui_gym.core.experiments.records import (
     Curve,
@@ -19,7 +19,7 @@ from tui_gym.core.experiments.records import (
     WrapperSetting,
 )
 from tui_gym.core.experiments.writers import WriterCheck
-from tui_gym.core.text import visible
+from tui_gym.core.text import nested_deeper, visible
 
 MAX_NAME = 200  # characters of a game, algorithm, kind, status, figure or version
 MAX_JSON = 256 * 1024  # characters of a settings or figures JSON text
@@ -103,20 +103,6 @@ def _refuse_constant(name: str) -> Any:
     raise ValueError(f"{name} is not JSON data")
 
 
-def _depth(value: Any) -> int:
-    deepest, stack = 0, [(value, 1)]
-    while stack:
-        item, depth = stack.pop()
-        deepest = max(deepest, depth)
-        if depth > MAX_DEPTH:
-            break
-        if isinstance(item, dict):
-            stack.extend((v, depth + 1) for v in item.values())
-        elif isinstance(item, list):
-            stack.extend((v, depth + 1) for v in item)
-    return deepest
-
-
 def _json(text: object, what: str, limit: int = MAX_JSON) -> Any:
     if not isinstance(text, str):
         raise BadRow(f"its {what} are not JSON text ({_shown(text)})")
@@ -129,7 +115,7 @@ def _json(text: object, what: str, limit: int = MAX_JSON) -> Any:
     except ValueError as exc:  # JSONDecodeError, a number too long for Python
         raise BadRow(f"its {what} are not JSON ({visible(exc, 60)})") from None
     # More brackets than the bound is the only way to nest past it: count them first.
-    if text.count("[") + text.count("{") > MAX_DEPTH and _depth(value) > MAX_DEPTH:
+    if text.count("[") + text.count("{") > MAX_DEPTH and nested_deeper(value, MAX_DEPTH):
         raise BadRow(f"its {what} are nested too deeply")
     return value
 

@@ -2,16 +2,20 @@
 
 from __future__ import annotations
 
+import csv
+import io
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from tui_gym.core.experiments.connection import examine, shown
-from tui_gym.core.experiments.csv_export import curves_csv
 from tui_gym.core.experiments.errors import RunHistoryError, UnknownRunError
 from tui_gym.core.experiments.history import DamagedRun, RunHistory
 from tui_gym.core.experiments.paths import resolve_db_path
-from tui_gym.core.experiments.records import RunKind, RunRecord, RunSummary
+from tui_gym.core.experiments.records import Curve, RunKind, RunRecord, RunSummary
 from tui_gym.core.experiments.recover import Recovery, recover
 from tui_gym.core.files import OutputPathError, check_output_path, write_atomically
 
@@ -145,3 +149,24 @@ def prune_tasks(db: str | None = None) -> PrunedTasks:
 def recover_history(db: str | None = None) -> Recovery:
     """Copy what can be read of the history into a fresh file beside it (see `recover`)."""
     return recover(resolve_db_path(db))
+
+
+def curves_csv(curves: Sequence[Curve]) -> tuple[str, int]:
+    """The CSV text of `curves` and its number of data rows: one row per episode any curve
+    has, one column per curve; floats in full (`repr`: read back, the same numbers), an
+    episode a curve has no value at an empty cell."""
+    none: np.ndarray = np.empty(0, dtype=np.int64)
+    episodes = np.unique(np.concatenate([c.episodes for c in curves])) if curves else none
+    columns: list[list[str]] = []
+    for curve in curves:
+        cells = [""] * len(episodes)
+        at = np.searchsorted(episodes, curve.episodes)
+        for i, value in zip(at.tolist(), curve.values.tolist(), strict=True):
+            cells[i] = "" if value != value else repr(value)  # NaN: no value here
+        columns.append(cells)
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(["episode", *(c.name for c in curves)])
+    for row, episode in enumerate(episodes.tolist()):
+        writer.writerow([episode, *(cells[row] for cells in columns)])
+    return out.getvalue(), len(episodes)
