@@ -8,6 +8,7 @@ import pytest
 
 from tests.mdp_support import random_model
 from tui_gym.core.mdp import FiniteMDP, evaluate, optimal_actions, solve
+from tui_gym.core.mdp.evaluation import PolicyArrays
 from tui_gym.core.mdp.planning import (
     Planner,
     evaluation_sweep,
@@ -15,7 +16,6 @@ from tui_gym.core.mdp.planning import (
     uniform_policy,
     value_sweep,
 )
-from tui_gym.core.mdp.policy_arrays import PolicyArrays
 
 UP, DOWN, LEFT, RIGHT = 0, 1, 2, 3
 

@@ -292,7 +292,6 @@ def t_quantile(p: float, df: float) -> float:
     return t
 
 
-
 def _check_points(max_points: int) -> None:
     if max_points < 2:
         raise ValueError(f"a bounded curve keeps at least 2 points, got max_points={max_points}")

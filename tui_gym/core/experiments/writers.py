@@ -42,7 +42,6 @@ def current_writer() -> str:
     return f"{_host()} {_boot()} {pid} {_start_ticks(pid)}"
 
 
-
 class WriterCheck:
     """Tells whether the writer of a run is gone; remembers each answer for one listing."""
 

@@ -17,8 +17,14 @@ from gymnasium.wrappers import (
     RenderCollection,
 )
 
-from tui_gym.core.mdp.model import FiniteMDP, ModelError
-from tui_gym.core.mdp.transforms import clip_reward, scale_reward, step_penalty, with_horizon
+from tui_gym.core.mdp.model import (
+    FiniteMDP,
+    ModelError,
+    clip_reward,
+    scale_reward,
+    step_penalty,
+    with_horizon,
+)
 from tui_gym.core.wrappers.chain import env_label, layers, time_limit
 
 __all__ = ["NotAvailable", "model_from_env"]

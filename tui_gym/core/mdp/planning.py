@@ -8,11 +8,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from tui_gym.core.mdp.ending import policy_ends
-from tui_gym.core.mdp.evaluation import backup, check_gamma
+from tui_gym.core.mdp.evaluation import PolicyArrays, backup, check_gamma, policy_ends
 from tui_gym.core.mdp.model import FiniteMDP
 from tui_gym.core.mdp.policy import policy_matrix
-from tui_gym.core.mdp.policy_arrays import PolicyArrays
 
 __all__ = [
     "METHODS", "Improvement", "Planner", "check_method", "check_theta", "evaluation_sweep",
