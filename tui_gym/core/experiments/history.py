@@ -162,14 +162,10 @@ class RunHistory:
         writer = current_writer()
 
         def write(conn: sqlite3.Connection) -> int:
-            cursor = conn.execute(
-                "INSERT INTO runs (kind, settings_id, platform_id, seeds, status, started_at,"
-                " group_id, writer) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
-                (str(spec.kind), _settings_id(conn, settings), _platform_id(conn, platform),
-                 seeds, str(RunStatus.RUNNING), started, spec.group, writer),
-            )
-            assert cursor.lastrowid is not None
-            return cursor.lastrowid
+            return _insert_run(conn, kind=str(spec.kind), settings_id=_settings_id(conn, settings),
+                               platform_id=_platform_id(conn, platform), seeds=seeds,
+                               status=str(RunStatus.RUNNING), started_at=started,
+                               group_id=spec.group, writer=writer)
 
         return self._write(write)
 
@@ -232,32 +228,6 @@ class RunHistory:
                 )
 
         self._write(write)
-
-    def put_curves(
-        self, run_id: int, curves: Iterable[Curve], max_points: int = STORED_POINTS
-    ) -> None:
-        """Add or replace curves of a run, each kept to at most `max_points` bucket means."""
-        self.update(run_id, curves=curves, max_points=max_points)
-
-    def put_figures(self, run_id: int, figures: Iterable[Figure]) -> None:
-        """Add figures to a run, or replace those with the same name (keeping their place)."""
-        self.update(run_id, figures=figures)
-
-    def set_agent_path(self, run_id: int, path: str | Path | None) -> None:
-        """Where the run's agent was saved (None: it has none)."""
-
-        def write(conn: sqlite3.Connection) -> None:
-            self._require_run(conn, run_id)
-            value = None if path is None else str(path)
-            conn.execute("UPDATE runs SET agent_path = ? WHERE id = ?", (value, run_id))
-
-        self._write(write)
-
-    def finish(
-        self, run_id: int, status: RunStatus = RunStatus.FINISHED, ended_at: float | None = None
-    ) -> None:
-        """Mark a run finished, interrupted or failed, now or at `ended_at`."""
-        self.update(run_id, status=status, ended_at=ended_at)
 
     def put_task(self, run_id: int, task: TaskRecord, finished_at: float | None = None) -> bool:
         """Keep a finished task of a run, in a transaction of its own; False (and nothing
@@ -351,15 +321,13 @@ class RunHistory:
         })
 
         def write(conn: sqlite3.Connection) -> None:
-            conn.execute(
-                "INSERT INTO runs (id, kind, settings_id, platform_id, seeds, status, started_at,"
-                " ended_at, agent_path, group_id, figures, writer)"
-                " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
-                (run.id, str(run.kind), _settings_id(conn, settings),
-                 _platform_id(conn, platform), to_json_text(list(run.seeds), "the seeds"),
-                 str(run.status), run.started_at, run.ended_at, record.agent_path, run.group,
-                 _figures_to_json(run.figures), writer),
-            )
+            _insert_run(conn, id=run.id, kind=str(run.kind),
+                        settings_id=_settings_id(conn, settings),
+                        platform_id=_platform_id(conn, platform),
+                        seeds=to_json_text(list(run.seeds), "the seeds"), status=str(run.status),
+                        started_at=run.started_at, ended_at=run.ended_at,
+                        agent_path=record.agent_path, group_id=run.group,
+                        figures=_figures_to_json(run.figures), writer=writer)
             if record.curves:
                 conn.execute("INSERT INTO curves (run_id, data) VALUES (?, ?)", (run.id, blob))
 
@@ -467,6 +435,14 @@ class BestEffortHistory(RunHistory):
             except RunHistoryError as exc:
                 self.failure = str(exc)
         return None  # type: ignore[return-value]
+
+
+def _insert_run(conn: sqlite3.Connection, **row: Any) -> int:
+    """Insert a run whose fields are `row`; its id."""
+    names, marks = ", ".join(row), ", ".join("?" * len(row))
+    cursor = conn.execute(f"INSERT INTO runs ({names}) VALUES ({marks})", tuple(row.values()))
+    assert cursor.lastrowid is not None
+    return cursor.lastrowid
 
 
 def _where(game: str | None, kind: RunKind | str | None) -> tuple[str, list[Any]]:
