@@ -12,11 +12,10 @@ from typing import Any
 
 import tui_gym.core.experiments.rows as rows
 from tui_gym.core.experiments.codec import BadTask, decode
-from tui_gym.core.experiments.connection import examine, shown
+from tui_gym.core.experiments.connection import WriterCheck, examine, shown
 from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.history import RunHistory
 from tui_gym.core.experiments.records import RunStatus, TaskRecord
-from tui_gym.core.experiments.writers import WriterCheck
 from tui_gym.core.text import visible
 
 PROBE_BEYOND = 100_000  # ids asked for one by one past the last one a damaged scan found

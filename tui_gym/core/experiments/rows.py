@@ -8,6 +8,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from tui_gym.core.experiments.codec import CurveFormatError, decode_curve, unpack_curves
+from tui_gym.core.experiments.connection import WriterCheck
 from tui_gym.core.experiments.figures import Figure
 from tui_gym.core.experiments.records import (
     Curve,
@@ -18,7 +19,6 @@ from tui_gym.core.experiments.records import (
     Versions,
     WrapperSetting,
 )
-from tui_gym.core.experiments.writers import WriterCheck
 from tui_gym.core.text import nested_deeper, visible
 
 MAX_NAME = 200  # characters of a game, algorithm, kind, status, figure or version
