@@ -123,18 +123,18 @@ class RunHistory:
 
     def _write(self, write: Callable[[sqlite3.Connection], T]) -> T:
         """`write(conn)` in one write transaction, taken as soon as no one else holds it."""
-        if self._closed:
-            raise RunHistoryError(f"{shown(self.path)}: this history was closed")
-        with self._errors():
-            return self._shared.attempt(write, self.timeout, busy_error(self.path, self.timeout),
-                                        begin="BEGIN IMMEDIATE")
+        return self._attempt(write, "BEGIN IMMEDIATE")
 
     def _read(self, read: Callable[[sqlite3.Connection], T]) -> T:
         """`read(conn)` in one read transaction (one state of the file)."""
+        return self._attempt(read, "BEGIN")
+
+    def _attempt(self, action: Callable[[sqlite3.Connection], T], begin: str | None) -> T:
         if self._closed:
             raise RunHistoryError(f"{shown(self.path)}: this history was closed")
         with self._errors():
-            return self._shared.attempt(read, self.timeout, busy_error(self.path, self.timeout))
+            return self._shared.attempt(action, self.timeout, busy_error(self.path, self.timeout),
+                                        begin=begin)
 
     def _require_run(self, conn: sqlite3.Connection, run_id: int) -> None:
         if conn.execute("SELECT 1 FROM runs WHERE id = ?", (run_id,)).fetchone() is None:
@@ -283,9 +283,7 @@ class RunHistory:
 
         pruned = self._write(write)
         if pruned[1]:
-            with self._errors():
-                self._shared.attempt(lambda conn: conn.execute("VACUUM"), self.timeout,
-                                     busy_error(self.path, self.timeout), begin=None)
+            self._attempt(lambda conn: conn.execute("VACUUM"), begin=None)
         return pruned
 
     def group_ids(self, run_id: int) -> list[int]:

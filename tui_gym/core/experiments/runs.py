@@ -70,8 +70,12 @@ def _existing(db: str | None) -> tuple[Path, bool]:
     return path, status is not None and status.st_size > 0
 
 
-def _none_yet(run_id: int, path: Path) -> UnknownRunError:
-    return UnknownRunError(f"no run {run_id} in {shown(path)} (no runs are recorded there yet)")
+def _holding(run_id: int, db: str | None) -> Path:
+    """The history's file; UnknownRunError when no run is recorded there yet."""
+    path, exists = _existing(db)
+    if not exists:
+        raise UnknownRunError(f"no run {run_id} in {shown(path)} (no runs are recorded there yet)")
+    return path
 
 
 def list_runs(
@@ -91,10 +95,7 @@ def list_runs(
 
 def show_run(run_id: int, db: str | None = None) -> RunRecord:
     """Everything about one run."""
-    path, exists = _existing(db)
-    if not exists:
-        raise _none_yet(run_id, path)
-    with RunHistory(path, read_only=True) as history:
+    with RunHistory(_holding(run_id, db), read_only=True) as history:
         return history.get_run(run_id)
 
 
@@ -118,9 +119,7 @@ def export_run_csv(run_id: int, csv_path: str | Path, db: str | None = None) -> 
 
 def remove_run(run_id: int, db: str | None = None) -> RemovedRun:
     """Delete one run (its curves and figures with it), whether or not it reads."""
-    path, exists = _existing(db)
-    if not exists:
-        raise _none_yet(run_id, path)
+    path = _holding(run_id, db)
     with RunHistory(path) as history:
         return RemovedRun(db=path, run=history.remove_run(run_id))
 
