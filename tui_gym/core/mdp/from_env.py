@@ -42,7 +42,7 @@ class NotAvailable:
 
 def _reward_layer(model: FiniteMDP, layer: gym.Wrapper) -> FiniteMDP | None:
     """The model under one reward wrapper, or None for a wrapper that is not one we model."""
-    from tui_gym.core.wrappers.custom import ScaleReward, StepPenalty
+    from tui_gym.core.wrappers.catalog import ScaleReward, StepPenalty
 
     if type(layer) is ScaleReward:
         return scale_reward(model, layer.factor)

@@ -8,8 +8,8 @@ from typing import Any
 import gymnasium as gym
 from gymnasium.wrappers import OrderEnforcing, PassiveEnvChecker
 
+from tui_gym.core.wrappers.catalog import DistanceShaping
 from tui_gym.core.wrappers.chain import layers, time_limit
-from tui_gym.core.wrappers.custom import DistanceShaping
 
 __all__ = ["NO_CHANGES", "GameChanges", "registry_limit"]
 
