@@ -11,12 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from tui_gym.core.mdp.model import FiniteMDP
+from tui_gym.core.mdp.model import BoolArray, FiniteMDP, FloatArray, IntArray
 from tui_gym.core.mdp.policy import policy_matrix
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
 
 DENSE_LIMIT = 2000
 """Up to this many states a policy's value is one dense linear solve; above, an iteration."""

@@ -19,11 +19,7 @@ from tui_gym.core.mdp.evaluation import (
     solve_linear,
     surely_ending,
 )
-from tui_gym.core.mdp.model import FiniteMDP
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
+from tui_gym.core.mdp.model import BoolArray, FiniteMDP, FloatArray, IntArray
 
 _MAX_ITERATIONS = 100_000
 TIE_GAMMA = 0.99  # the discount that breaks ties between moves of equal exact value

@@ -9,7 +9,7 @@ import numpy as np
 import numpy.typing as npt
 
 from tui_gym.core.mdp.evaluation import PolicyArrays, backup, check_gamma, policy_ends
-from tui_gym.core.mdp.model import FiniteMDP
+from tui_gym.core.mdp.model import BoolArray, FiniteMDP, FloatArray
 from tui_gym.core.mdp.policy import policy_matrix
 
 __all__ = [
@@ -17,8 +17,6 @@ __all__ = [
     "greedy", "improve", "uniform_policy", "value_sweep",
 ]
 
-FloatArray = npt.NDArray[np.float64]
-BoolArray = npt.NDArray[np.bool_]
 
 METHODS = ("evaluate", "policy-iteration", "value-iteration")
 ROUND_OFF = 1e-9  # ties closer than this share of the values' size are ties whatever theta
