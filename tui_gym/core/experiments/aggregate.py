@@ -306,15 +306,6 @@ def pick_indices(n: int, max_points: int) -> np.ndarray:
     return np.rint(np.linspace(0, n - 1, max_points)).astype(np.int64)
 
 
-def downsample(
-    episodes: np.ndarray, *series: np.ndarray, max_points: int
-) -> tuple[np.ndarray, ...]:
-    """`episodes` and each of `series` at the same at most `max_points` picked points."""
-    episodes = np.asarray(episodes)
-    keep = pick_indices(len(episodes), max_points)
-    return (episodes[keep], *(np.asarray(values)[..., keep] for values in series))
-
-
 def bucket_means(
     episodes: np.ndarray, values: np.ndarray, max_points: int, weights: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:

@@ -205,6 +205,7 @@ class RunHistory:
                     "INSERT OR REPLACE INTO curves (run_id, data) VALUES (?, ?)",
                     (run_id, pack_curves(dict(sorted(stored.items())))),
                 )
+            sets: dict[str, Any] = {}
             if figure_rows:
                 row = conn.execute("SELECT figures FROM runs WHERE id = ?", (run_id,)).fetchone()
                 try:
@@ -212,25 +213,21 @@ class RunHistory:
                 except rows.BadRow as exc:
                     raise self._damaged_run(run_id, str(exc)) from None
                 merged.update((f.name, f) for f in figure_rows)  # a known name keeps its place
-                conn.execute(
-                    "UPDATE runs SET figures = ? WHERE id = ?",
-                    (_figures_to_json(merged.values()), run_id),
-                )
+                sets["figures"] = _figures_to_json(merged.values())
             if settings is not None:
                 old = conn.execute("SELECT settings_id FROM runs WHERE id = ?", (run_id,))
                 old_id = old.fetchone()[0]
-                conn.execute("UPDATE runs SET settings_id = ? WHERE id = ?",
-                             (_settings_id(conn, settings), run_id))
-                _drop_unused(conn, "settings", "settings_id", old_id)
+                sets["settings_id"] = _settings_id(conn, settings)
             if agent_path is not None:
-                conn.execute(
-                    "UPDATE runs SET agent_path = ? WHERE id = ?", (str(agent_path), run_id)
-                )
+                sets["agent_path"] = str(agent_path)
             if final is not None:
-                conn.execute(
-                    "UPDATE runs SET status = ?, ended_at = ? WHERE id = ?",
-                    (str(final), ended, run_id),
-                )
+                sets.update(status=str(final), ended_at=ended)
+            if sets:
+                assignments = ", ".join(f"{name} = ?" for name in sets)
+                conn.execute(f"UPDATE runs SET {assignments} WHERE id = ?",
+                             (*sets.values(), run_id))
+            if settings is not None:
+                _drop_unused(conn, "settings", "settings_id", old_id)
 
         self._write(write)
 
