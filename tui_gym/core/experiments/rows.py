@@ -34,32 +34,32 @@ class BadRow(ValueError):
     """A field of a row that does not read as what tui-gym writes there."""
 
 
-def text_column(expr: str, cap: int) -> str:
-    """`expr` cut inside SQLite, one character past `cap` so that an oversized text shows."""
+# A run's fields as a query reads them, in the order `record` takes them (after the id):
+# a table's alias and column, and the field's bound in characters (None: a number).
+FIELDS: dict[str, int | None] = {
+    "r.kind": MAX_NAME, "s.game": MAX_NAME, "s.algorithm": MAX_NAME, "r.seeds": MAX_SEEDS_JSON,
+    "r.status": MAX_NAME, "r.started_at": None, "r.ended_at": None, "r.group_id": None,
+    "r.figures": MAX_JSON, "r.writer": MAX_NAME, "s.game_params": MAX_JSON,
+    "s.wrappers": MAX_JSON, "s.hyperparameters": MAX_JSON, "p.tui_gym": MAX_NAME,
+    "p.gymnasium": MAX_NAME, "p.numpy": MAX_NAME, "p.python": MAX_NAME, "r.agent_path": MAX_PATH,
+}
+SUMMARY_FIELDS = 10  # the first ten: what a listing shows
+
+
+def column(field: str, alias: bool = True) -> str:
+    """A field of FIELDS as a query reads it (`alias` False: without its table's alias): a
+    text cut inside SQLite one character past its bound, so that an oversized text shows;
+    a number as it is when one (or null), else cut as a short text."""
+    expr, cap = field if alias else field.partition(".")[2], FIELDS[field]
+    if cap is None:
+        return f"CASE WHEN typeof({expr}) IN ('integer', 'real', 'null') THEN {expr} " \
+               f"ELSE substr({expr}, 1, 41) END"
     return f"substr({expr}, 1, {cap + 1})"
 
 
-def number_column(expr: str) -> str:
-    """`expr` as it is when a number (or null), else cut as a short text."""
-    return f"CASE WHEN typeof({expr}) IN ('integer', 'real', 'null') THEN {expr} " \
-           f"ELSE substr({expr}, 1, 41) END"
-
-
-_text, _number = text_column, number_column
-
-
-SUMMARY_COLUMNS = ", ".join((
-    "r.id", _text("r.kind", MAX_NAME), _text("s.game", MAX_NAME), _text("s.algorithm", MAX_NAME),
-    _text("r.seeds", MAX_SEEDS_JSON), _text("r.status", MAX_NAME), _number("r.started_at"),
-    _number("r.ended_at"), _number("r.group_id"), _text("r.figures", MAX_JSON),
-    _text("r.writer", MAX_NAME),
-))
+SUMMARY_COLUMNS = ", ".join(["r.id", *map(column, list(FIELDS)[:SUMMARY_FIELDS])])
 SUMMARY_FROM = "FROM runs r LEFT JOIN settings s ON s.id = r.settings_id"
-RECORD_COLUMNS = ", ".join((
-    SUMMARY_COLUMNS, _text("s.game_params", MAX_JSON), _text("s.wrappers", MAX_JSON),
-    _text("s.hyperparameters", MAX_JSON), *(_text(f"p.{c}", MAX_NAME) for c in (
-        "tui_gym", "gymnasium", "numpy", "python")), _text("r.agent_path", MAX_PATH),
-))
+RECORD_COLUMNS = ", ".join(["r.id", *map(column, FIELDS)])
 RECORD_FROM = SUMMARY_FROM + " LEFT JOIN platforms p ON p.id = r.platform_id"
 CURVES_COLUMNS = (
     f"typeof(data), length(data), CASE WHEN typeof(data) = 'blob' AND length(data) <= "
