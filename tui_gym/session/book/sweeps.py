@@ -1,7 +1,6 @@
-"""What the swept prediction figures (7.2, 12.3, 12.6) share: one curve per setting over α,
-each point the mean RMS error of the first episodes, and the best point of each curve;
-`swept_figure` is the whole of such a figure, `lambda_figure` one with a curve per λ
-(12.3, 12.6)."""
+"""The swept prediction figures (7.2, 12.3, 12.6): on the 19-state walk, one curve per
+setting (n, or λ) over α, each point the mean RMS error of the first episodes, and the
+book's claims about the best point of each curve."""
 
 from __future__ import annotations
 
@@ -19,15 +18,17 @@ from tui_gym.session.book.figure import (
     Progress,
     Series,
 )
-from tui_gym.session.book.prediction_runs import play_prediction
-from tui_gym.session.book.runs import Learner, Played, below, swept
+from tui_gym.session.book.runs import BANDS, Learner, Played, below, play_prediction, swept
 
-__all__ = ["ALPHAS", "LAMBDAS", "SHOWN", "Sweep", "lambda_figure", "sweep", "swept_figure"]
+__all__ = ["ALPHAS", "FIGURES", "LAMBDAS", "SHOWN", "Sweep", "lambda_figure", "sweep",
+           "swept_figure"]
 
 ALPHAS = (0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
 SHOWN = 0.55  # the book's axis ends here: points above it are off the chart
 LAMBDAS = (0.0, 0.4, 0.8, 0.9, 0.95, 0.975, 0.99, 1.0)
 MIDDLE_LAMBDAS = (0.4, 0.8, 0.9, 0.95)  # the intermediate λ
+NS = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)
+MIDDLE_NS = (2, 4, 8, 16)  # the intermediate n
 
 
 class Sweep:
@@ -57,10 +58,8 @@ class Sweep:
     def series(self) -> Series:
         """The curve over α, without the points off the book's chart (diverging ones)."""
         with np.errstate(invalid="ignore", over="ignore"):  # diverged runs: inf, NaN
-            full = swept(self.label, ALPHAS, self.played, lambda v: v.mean(axis=1))
-        assert full.lo is not None and full.hi is not None  # a sweep has bands
-        keep = np.isfinite(full.hi) & (full.y <= SHOWN)
-        return Series(full.label, full.x[keep], full.y[keep], full.lo[keep], full.hi[keep])
+            return swept(self.label, ALPHAS, self.played, lambda v: v.mean(axis=1),
+                         shown=(-np.inf, SHOWN))
 
 
 def sweep(figure: BookFigure, algorithm: str, name: str, settings: Sequence[Any],
@@ -101,8 +100,7 @@ def swept_figure(figure: BookFigure, algorithm: str, name: str, settings: Sequen
                       tuple(c.series() for c in curves.values())),),
         checks=checks,
         notes=(f"{how}the random policy's values -0.9 … 0.9, from policy evaluation on "
-               "the model; V starts at 0, undiscounted",
-               "bands: 95% intervals of the mean over runs; verdicts: 99% intervals"),
+               "the model; V starts at 0, undiscounted", BANDS),
     )
 
 
@@ -114,3 +112,47 @@ def lambda_figure(figure: BookFigure, algorithm: str, how: str, options: FigureO
                         "λ about 0.8 to 0.9",
                         ((0.0, "λ = 0 (one-step TD)"), (1.0, "λ = 1 (Monte Carlo)")),
                         f"{how}; ", options, progress)
+
+
+def _n_step(options: FigureOptions, progress: Progress) -> FigureResult:
+    return swept_figure(FIG_7_2, "n-step-td", "n", NS, MIDDLE_NS, 4, "n = 4",
+                        ((1, "one-step TD (n = 1)"), (512, "n = 512 (Monte Carlo on this walk)")),
+                        "", options, progress)
+
+
+FIG_7_2 = BookFigure(
+    name="7.2",
+    title="n-step TD on the 19-state random walk (Figure 7.2): error against α per n",
+    about="Between one-step TD (n = 1) and Monte Carlo (large n), an intermediate n learns "
+          "the random policy's values fastest: the book's best is n = 4. Large n needs a "
+          "small step.",
+    world="random-walk",
+    run=_n_step,
+    runs=100,
+    episodes=10,
+)
+FIG_12_3: BookFigure = BookFigure(
+    name="12.3",
+    title="Offline λ-return on the 19-state random walk (Figure 12.3): error against α per λ",
+    about="Each state moves toward its λ-return at the episode's end, a blend of every "
+          "n-step return: an intermediate λ does best, much as an intermediate n does for "
+          "n-step TD (Figure 7.2).",
+    world="random-walk",
+    run=lambda options, progress: lambda_figure(
+        FIG_12_3, "offline-lambda-return", "updates at each episode's end", options, progress),
+    runs=100,
+    episodes=10,
+)
+FIG_12_6: BookFigure = BookFigure(
+    name="12.6",
+    title="TD(λ) on the 19-state random walk (Figure 12.6): error against α per λ",
+    about="Traces spread each TD error back over the states just left: an intermediate λ "
+          "learns the random policy's values fastest, between TD(0) (λ = 0) and Monte "
+          "Carlo (λ = 1). With λ near 1 a large step makes the estimates diverge.",
+    world="random-walk",
+    run=lambda options, progress: lambda_figure(FIG_12_6, "td-lambda", "accumulating traces",
+                                                options, progress),
+    runs=100,
+    episodes=10,
+)
+FIGURES = (FIG_7_2, FIG_12_3, FIG_12_6)
