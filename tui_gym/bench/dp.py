@@ -16,12 +16,8 @@ import numpy as np
 from tui_gym.bench.figures import median, percentile
 from tui_gym.bench.live import PAUSE_RANGE, SIZE, _send_key, _until
 
-__all__ = ["DPResult", "measure", "rows", "to_json", "verdicts"]
+__all__ = ["DPResult", "measure", "to_json"]
 
-TAXI_SWEEP_MS_TARGET = 5.0
-JACK_SECONDS_TARGET = 1.0
-SWEEPS_PER_SECOND_TARGET = 20.0
-KEY_P95_MS_TARGET = 50.0
 GRID_GAMES = ("gridworld", "frozenlake", "cliffwalking")
 SPEED = 5  # the Plan view's 50 sweeps a second
 
@@ -164,46 +160,6 @@ def measure(seconds: float, presses: int, repeats: int,
         say(f"planning: the Plan view on {game}")
         views.append(asyncio.run(_view_once(game, seconds, presses, 0)))
     return DPResult(taxi, jack, built, tuple(views))
-
-
-def verdicts(result: DPResult | None, missing: str,
-             ok: Callable[[float | None, bool], str]) -> dict[str, str]:
-    """The targets' verdicts, keyed as in the JSON."""
-    if result is None:
-        return {"taxi_sweep_ms": missing, "jack_policy_iteration_s": missing, "plan_view": missing}
-    out = {
-        "taxi_sweep_ms": ok(result.taxi_sweep_ms, result.taxi_sweep_ms <= TAXI_SWEEP_MS_TARGET),
-        "jack_policy_iteration_s": ok(result.jack_seconds,
-                                      result.jack_seconds <= JACK_SECONDS_TARGET),
-    }
-    for view in result.views:
-        out[f"plan_sweeps_per_second[{view.game}]"] = ok(
-            view.sweeps_per_second, view.sweeps_per_second >= SWEEPS_PER_SECOND_TARGET)
-        out[f"plan_key_p95_ms[{view.game}]"] = ok(view.key_p95_ms,
-                                                  view.key_p95_ms <= KEY_P95_MS_TARGET)
-    return out
-
-
-def rows(result: DPResult | None) -> list[tuple[str, str, str, str | None]]:
-    """(figure, measured, target, verdict key) rows of the bench's table."""
-    if result is None:
-        return []
-    out: list[tuple[str, str, str, str | None]] = [
-        ("planning: a value-iteration sweep on Taxi (500 × 6), median",
-         f"{result.taxi_sweep_ms:.2f} ms", f"≤ {TAXI_SWEEP_MS_TARGET:g} ms", "taxi_sweep_ms"),
-        ("  Jack's car rental by policy iteration (Figure 4.2), median",
-         f"{result.jack_seconds:.2f} s (model built once: {result.jack_model_seconds:.2f} s)",
-         f"≤ {JACK_SECONDS_TARGET:g} s", "jack_policy_iteration_s"),
-    ]
-    for view in result.views:
-        out.append((f"  Plan view on {view.game}: sweeps drawn a second (50/s asked)",
-                    f"{view.sweeps_per_second:.1f}", f"≥ {SWEEPS_PER_SECOND_TARGET:g}",
-                    f"plan_sweeps_per_second[{view.game}]"))
-        out.append((f"  Plan view on {view.game}: key → screen p95 while it runs",
-                    f"{view.key_p95_ms:.0f} ms (p50 {median(list(view.keys_ms)):.0f}, "
-                    f"n={len(view.keys_ms)})", f"≤ {KEY_P95_MS_TARGET:g} ms",
-                    f"plan_key_p95_ms[{view.game}]"))
-    return out
 
 
 def to_json(result: DPResult | None) -> dict[str, Any] | None:

@@ -17,8 +17,6 @@ SETTINGS = {"epsilon_start": 0.1, "epsilon_final": 0.1, "learning_rate": 0.5,
             "learning_rate_schedule": "constant"}
 SWEEP_RATES = ("0.1", "0.2", "0.4", "0.8")
 CLUSTER_WORKERS = 2
-SPLIT_TARGET = 1.10  # tasks ÷ one batch, at most
-CLUSTER_TARGET = 0.8  # the cluster's throughput ÷ the local executor's, at least
 
 
 @dataclass(frozen=True)
@@ -99,19 +97,6 @@ def _with(found: TasksResult, **changes: Any) -> TasksResult:
     return replace(found, **{("cluster_note" if k == "note" else k): v for k, v in changes.items()})
 
 
-# --- what the report shows ---------------------------------------------------------
-def verdicts(result: TasksResult | None, missing: str, ok: Any) -> dict[str, str]:
-    """The verdicts of the two targets (`ok(value, good)` as the report's)."""
-    if result is None:
-        return {"task_split_overhead": missing, "cluster_throughput_share": missing}
-    split, share = result.split_overhead, result.cluster_share
-    return {
-        "task_split_overhead": ok(split, split is not None and split <= SPLIT_TARGET),
-        "cluster_throughput_share": missing if share is None else ok(
-            share, share >= CLUSTER_TARGET),
-    }
-
-
 def to_json(result: TasksResult | None) -> dict[str, Any] | None:
     if result is None:
         return None
@@ -123,25 +108,3 @@ def to_json(result: TasksResult | None) -> dict[str, Any] | None:
         "cluster_workers": CLUSTER_WORKERS, "cluster_share": result.cluster_share,
         "cluster_note": result.cluster_note or None,
     }
-
-
-def rows(result: TasksResult | None) -> list[tuple[str, str, str, str | None]]:
-    """(figure, measured, target, verdict key) rows for the bench table."""
-    if result is None:
-        return []
-    split, share = result.split_overhead, result.cluster_share
-    out: list[tuple[str, str, str, str | None]] = [
-        (f"compare on {result.game}, {result.seeds} seeds: {result.tasks} tasks, recorded "
-         "÷ one batch", "n/a" if split is None else
-         f"{split:.3f} ({result.tasks_s:.2f} s / {result.batch_s:.2f} s)",
-         f"≤ {SPLIT_TARGET:g}", "task_split_overhead"),
-    ]
-    if share is None:
-        out.append((f"LocalCluster({CLUSTER_WORKERS}) ÷ local executor, throughput",
-                    result.cluster_note or "n/a", f"≥ {CLUSTER_TARGET:g}", None))
-    else:
-        out.append((f"LocalCluster({CLUSTER_WORKERS}) ÷ local executor, throughput, sweep of "
-                    f"{len(SWEEP_RATES)} points", f"{share:.3f} ({result.local_s:.2f} s / "
-                    f"{result.cluster_s:.2f} s)", f"≥ {CLUSTER_TARGET:g}",
-                    "cluster_throughput_share"))
-    return out
