@@ -19,7 +19,7 @@ from tui_gym.bench.gap import GapResult, GapRun
 from tui_gym.bench.live import KeySample, LiveRepeat, LiveResult
 from tui_gym.bench.memory import MemoryResult
 from tui_gym.bench.report import MISS, PASS, UNDECIDED, notes, table, to_json, verdicts
-from tui_gym.bench.results import BenchResults, MachineInfo
+from tui_gym.bench.run import BenchResults, MachineInfo
 from tui_gym.bench.speed import Speed
 from tui_gym.bench.startup import StartupResult
 from tui_gym.cli import build_parser

@@ -12,10 +12,10 @@ from typing import Any
 
 from rich.table import Table
 
-from tui_gym.bench import dp, history, programs, tasks
+from tui_gym.bench import compare, dp, history, programs
 from tui_gym.bench.figures import median
 from tui_gym.bench.live import RUNNERS
-from tui_gym.bench.results import BenchResults
+from tui_gym.bench.run import BenchResults
 
 PASS, MISS, UNDECIDED, MISSING, LESSON = "PASS", "MISS", "?", "n/a", "lesson"
 
@@ -295,7 +295,7 @@ def _history_rows(out: _Judged, found: history.HistoryResult | None) -> None:
             "history_bytes_per_1000_runs", found.bytes_per_1000 / 1e6)
 
 
-def _tasks_rows(out: _Judged, found: tasks.TasksResult | None) -> None:
+def _tasks_rows(out: _Judged, found: compare.TasksResult | None) -> None:
     if found is None:
         out.missing("task_split_overhead", "cluster_throughput_share")
         return
@@ -304,12 +304,12 @@ def _tasks_rows(out: _Judged, found: tasks.TasksResult | None) -> None:
             "÷ one batch", "n/a" if split is None else
             f"{split:.3f} ({found.tasks_s:.2f} s / {found.batch_s:.2f} s)", TASK_SPLIT,
             "task_split_overhead", split)
-    workers = f"LocalCluster({tasks.CLUSTER_WORKERS}) ÷ local executor, throughput"
+    workers = f"LocalCluster({compare.CLUSTER_WORKERS}) ÷ local executor, throughput"
     if share is None:
         out.missing("cluster_throughput_share")
         out.row(workers, found.cluster_note or "n/a", CLUSTER_SHARE)
     else:
-        out.row(f"{workers}, sweep of {len(tasks.SWEEP_RATES)} points",
+        out.row(f"{workers}, sweep of {len(compare.SWEEP_RATES)} points",
                 f"{share:.3f} ({found.local_s:.2f} s / {found.cluster_s:.2f} s)", CLUSTER_SHARE,
                 "cluster_throughput_share", share)
 
@@ -489,7 +489,7 @@ def to_json(results: BenchResults) -> dict[str, Any]:
             for e in results.map_edit or ()
         ],
         "history": history.to_json(results.history),
-        "tasks": tasks.to_json(results.tasks),
+        "tasks": compare.to_json(results.tasks),
         "compare": _seeds_dict(results),
         "planning_dp": dp.to_json(results.dp),
         "verdicts": verdicts(results),
