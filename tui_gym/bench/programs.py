@@ -15,7 +15,7 @@ import numpy as np
 from tui_gym.bench.figures import median, percentile
 from tui_gym.benchmark.players import InProcessPlayer, OptimalPlayer
 from tui_gym.benchmark.referee import Referee
-from tui_gym.benchmark.run import run_benchmark
+from tui_gym.benchmark.results import run_benchmark
 
 Z95 = 1.96
 DEVIATION = 0.05

@@ -101,8 +101,7 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
     if not args.decision_timeout > 0:
         raise ValueError("--decision-timeout must be a positive number of seconds")
     from tui_gym.benchmark.group import ending_on_signals
-    from tui_gym.benchmark.leaderboard import record
-    from tui_gym.benchmark.run import run_benchmark
+    from tui_gym.benchmark.results import record, run_benchmark
 
     recorder = None
     if args.record is not None:
@@ -147,7 +146,7 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
 
 
 def _show_leaderboard(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.benchmark.leaderboard import leaderboard
+    from tui_gym.benchmark.results import leaderboard
     from tui_gym.session.arena import find_game
 
     game = find_game(args.game).name

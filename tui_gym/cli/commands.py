@@ -32,7 +32,7 @@ from tui_gym.cli.output import CliError, key_value_table, print_json, say_status
 from tui_gym.cli.runs_command import recorded
 from tui_gym.core.params import Param, typed_text
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
-from tui_gym.mcp_server.command import cmd_mcp
+from tui_gym.mcp_server import cmd_mcp
 from tui_gym.session import evaluation
 from tui_gym.session.evaluation import EvalReport
 from tui_gym.session.session import TARGET_GAP_BUDGET_FACTOR, Session, default_settings

@@ -233,7 +233,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument("--json", action="store_true", help="print one JSON object")
 
-    from tui_gym.mcp_server.command import add_parser as add_mcp_parser
+    from tui_gym.mcp_server import add_parser as add_mcp_parser
 
     add_mcp_parser(sub, positive_int, finite_number)
     from tui_gym.benchmark.command import add_parser as add_benchmark_parser
