@@ -199,6 +199,3 @@ def _url_host(host: str) -> str:
         return f"[{host}]" if ipaddress.ip_address(host.strip("[]")).version == 6 else host
     except ValueError:
         return host
-
-
-SERVE_COMMANDS = {"serve": cmd_serve}

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import threading
 import time
-from collections.abc import Callable
 
 from rich.console import Console
 from rich.markup import escape
@@ -26,7 +25,7 @@ from tui_gym.session.book.figure import (
     heading,
 )
 
-__all__ = ["BOOK_COMMANDS", "add_book_parser"]
+__all__ = ["add_book_parser", "cmd_book"]
 
 def add_book_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     book = sub.add_parser("book", help="Sutton & Barto's figures: list them, or run one and "
@@ -128,6 +127,3 @@ def _draw(out: Console, result: FigureResult) -> None:
         out.print(panel_text(panel, out.width), soft_wrap=True)
     for part in claims_table(result):
         out.print(part)
-
-
-BOOK_COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {"book": cmd_book}

@@ -1,7 +1,5 @@
-"""The headless sub-commands of `tui-gym`, each a thin call into the core.
-
-`COMMANDS` maps a sub-command name to a function `(args, console) -> exit code`.
-"""
+"""The headless sub-commands of `tui-gym`, each a thin call into the core: `cmd_NAME(args,
+console) -> exit code` runs `tui-gym NAME`."""
 
 from __future__ import annotations
 
@@ -25,14 +23,11 @@ from rich.progress import (
 from rich.table import Table
 
 from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, Field, Learner, algorithm
-from tui_gym.benchmark.command import cmd_benchmark
 from tui_gym.cli.flags import flag, game_kwargs, hyperparameters
-from tui_gym.cli.maps_command import cmd_maps
 from tui_gym.cli.output import CliError, key_value_table, print_json, say_status
 from tui_gym.cli.runs_command import recorded
 from tui_gym.core.params import Param, typed_text
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
-from tui_gym.mcp_server import cmd_mcp
 from tui_gym.session import evaluation
 from tui_gym.session.evaluation import EvalReport
 from tui_gym.session.session import TARGET_GAP_BUDGET_FACTOR, Session, default_settings
@@ -326,6 +321,7 @@ def _prediction_dict(session: Session) -> dict[str, Any]:
                            "truth": list(figures.truth)}}
 
 
+@recorded
 def cmd_train(args: argparse.Namespace, out: Console) -> int:
     if args.target_gap is not None and args.target_gap <= 0:
         raise CliError(f"--target-gap must be a positive number, got {args.target_gap:g}")
@@ -527,11 +523,3 @@ def cmd_bench(args: argparse.Namespace, out: Console) -> int:
     for line in notes(results):
         out.print(line)
     return 0
-
-
-COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {
-    "envs": cmd_envs, "wrappers": cmd_wrappers, "algorithms": cmd_algorithms,
-    "train": recorded(cmd_train), "eval": cmd_eval, "optimal": cmd_optimal, "play": cmd_play,
-    "screenshots": cmd_screenshots, "bench": cmd_bench, "maps": cmd_maps, "mcp": cmd_mcp,
-    "benchmark": cmd_benchmark,
-}

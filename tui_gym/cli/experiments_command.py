@@ -492,6 +492,3 @@ def _sweep_grid(result: Any) -> Table:
             cells.append(Text(text, style=f"bold black on rgb({red},{green},60)"))
         table.add_row(*cells)
     return table
-
-
-EXPERIMENT_COMMANDS = {"compare": cmd_compare, "sweep": cmd_sweep}

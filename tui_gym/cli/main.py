@@ -7,6 +7,7 @@ early (`| head -1`) ends the command quietly with status 141, as it would end `c
 from __future__ import annotations
 
 import argparse
+import importlib
 import os
 import re
 import sys
@@ -306,17 +307,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             # The user's own `--env module:Id` imports its module on purpose, so a file that
             # names the same env (which alone never imports code) opens with it.
             resolve_env_id(args.env)
-        from tui_gym.cli.book_command import BOOK_COMMANDS
-        from tui_gym.cli.commands import COMMANDS
-        from tui_gym.cli.experiments_command import EXPERIMENT_COMMANDS
-        from tui_gym.cli.plan_command import PLAN_COMMANDS
-        from tui_gym.cli.replay_command import REPLAY_COMMANDS
-        from tui_gym.cli.runs_command import RUNS_COMMANDS
-        from tui_gym.web import SERVE_COMMANDS
-
-        commands = {**COMMANDS, **REPLAY_COMMANDS, **SERVE_COMMANDS, **RUNS_COMMANDS,
-                    **EXPERIMENT_COMMANDS, **PLAN_COMMANDS, **BOOK_COMMANDS}
-        code = commands[args.command](args, out)
+        module = importlib.import_module(_COMMAND_MODULES.get(args.command, "tui_gym.cli.commands"))
+        code = getattr(module, f"cmd_{args.command}")(args, out)
         sys.stdout.flush()  # a closed pipe shows here, not at exit
         return code
     except BrokenPipeError:
@@ -329,6 +321,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stderr.write(f"tui-gym: error: {_one_line(exc)}\n")
         return EXIT_USAGE
 
+
+# The module of each sub-command `NAME` (its `cmd_NAME(args, console) -> exit code`), imported
+# when it runs; the others are in `tui_gym.cli.commands`.
+_COMMAND_MODULES = {
+    "maps": "tui_gym.cli.maps_command", "replay": "tui_gym.cli.replay_command",
+    "serve": "tui_gym.web", "runs": "tui_gym.cli.runs_command", "plan": "tui_gym.cli.plan_command",
+    "compare": "tui_gym.cli.experiments_command", "sweep": "tui_gym.cli.experiments_command",
+    "book": "tui_gym.cli.book_command", "mcp": "tui_gym.mcp_server",
+    "benchmark": "tui_gym.benchmark.command",
+}
 
 # The app options a command opens its apps with; any other command takes an app option
 # as its own flag of the same name (`tui-gym --db F runs` is `runs --db F`).

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable
 from typing import Any
 
 from rich.console import Console
@@ -18,7 +17,7 @@ from tui_gym.session.plan import PlanResult, plan, plan_json
 from tui_gym.session.plan.panels import numbered, plan_panels
 from tui_gym.session.plan.start import START_POLICIES, saved_agent_q
 
-__all__ = ["PLAN_COMMANDS", "add_plan_parser"]
+__all__ = ["add_plan_parser", "cmd_plan"]
 
 METHOD_WORDS = {"evaluate": "Policy evaluation", "policy-iteration": "Policy iteration",
                 "value-iteration": "Value iteration"}
@@ -80,6 +79,3 @@ def _print(out: Console, result: PlanResult, data: dict[str, Any]) -> None:
         limit = f"{model.horizon}-step episodes" if model.horizon else "no limit"
         out.print(f"The tool's exact value of this policy (undiscounted, {limit}): "
                   f"[bold]{data['limited_value']:+.6g}[/]")
-
-
-PLAN_COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {"plan": cmd_plan}

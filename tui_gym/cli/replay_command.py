@@ -90,6 +90,3 @@ def session_for(recording: Recording) -> Session | None:
         )
     except Exception:  # another version's game or wrapper: replay needs none of it
         return None
-
-
-REPLAY_COMMANDS = {"replay": cmd_replay}

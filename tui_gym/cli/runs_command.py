@@ -356,6 +356,3 @@ _SAY: dict[str, Callable[[Any, argparse.Namespace, Console], int]] = {
     "recover": _say_recover, "show": _say_show, "export": _say_export, "rm": _say_rm,
     "prune": _say_prune,
 }
-
-
-RUNS_COMMANDS: dict[str, Command] = {"runs": cmd_runs}
