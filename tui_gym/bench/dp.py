@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from tui_gym.bench.figures import median, percentile
-from tui_gym.bench.live import PAUSE_RANGE, SIZE, _send_key, _until
+from tui_gym.bench.live import PAUSE_RANGE, SIZE, _send_key, _until, on_frames
 
 __all__ = ["DPResult", "measure", "to_json"]
 
@@ -83,17 +83,7 @@ async def _view_once(game: str, seconds: float, presses: int, seed: int) -> View
     app = TuiGymApp(Session(game, seed=seed), tune_gc=True)
     frames: list[float] = []
     drawn: list[tuple[float, int, bool, bool]] = []  # (time, sweeps, in place, numbers)
-    display = app._display
-
-    def timed_display(screen: Any, renderable: Any) -> None:
-        display(screen, renderable)
-        if renderable is not None:
-            render = getattr(renderable, "render_segments", None)
-            if render is not None:
-                render(app.console)
-            frames.append(time.perf_counter())
-
-    app._display = timed_display  # type: ignore[method-assign]
+    on_frames(app, lambda: frames.append(time.perf_counter()))
     async with app.run_test(size=SIZE) as pilot:
         await pilot.press("P")
         view = app.plan_view
