@@ -236,7 +236,7 @@ def test_the_parser_accepts_bench_quick_json() -> None:
 def test_the_planning_figure_has_a_target_and_a_verdict() -> None:
     from dataclasses import replace
 
-    from tui_gym.bench.learners import PlanningResult, PlanningRun
+    from tui_gym.bench.gap import PlanningResult, PlanningRun
 
     planning = PlanningResult(
         "gridworld", "share of pairs", 0.02,

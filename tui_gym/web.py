@@ -10,8 +10,8 @@ from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
 
+from tui_gym.cli.flags import int_in as _int_in
 from tui_gym.cli.output import CliError
-from tui_gym.cli.types import int_in as _int_in
 
 if TYPE_CHECKING:
     from aiohttp import web

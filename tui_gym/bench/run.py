@@ -18,7 +18,6 @@ from tui_gym.bench import (
     dp,
     gap,
     history,
-    learners,
     live,
     map_edit,
     memory,
@@ -31,9 +30,8 @@ from tui_gym.bench.compiling import CompileResult
 from tui_gym.bench.defaults import DefaultsResult
 from tui_gym.bench.dp import DPResult
 from tui_gym.bench.figures import load_average
-from tui_gym.bench.gap import GapResult
+from tui_gym.bench.gap import GapResult, PlanningResult
 from tui_gym.bench.history import HistoryResult
-from tui_gym.bench.learners import PlanningResult
 from tui_gym.bench.live import DEFAULT_RUNNER, LiveResult
 from tui_gym.bench.map_edit import MapEditResult
 from tui_gym.bench.memory import MemoryResult
@@ -161,8 +159,8 @@ def run_bench(
         if f"gap[{game.name}]" in found:
             gaps[game.name] = found.pop(f"gap[{game.name}]")
     stage("planning", f"real episodes to the bound: Q-learning, then Dyna-Q "
-          f"(planning_steps = {learners.PLANNING_STEPS}) on {learners.PLANNING_GAME}",
-          lambda: learners.measure_planning(plan.planning_seeds, learners.PLANNING_BOUND))
+          f"(planning_steps = {gap.PLANNING_STEPS}) on {gap.PLANNING_GAME}",
+          lambda: gap.measure_planning(plan.planning_seeds, gap.PLANNING_BOUND))
     stage("seeds", f"compare, {plan.compare_seeds} seeds × {plan.compare_episodes} episodes of "
           "Q-learning and SARSA, against the same learners in a tutorial loop",
           lambda: compare.measure_seeds(plan.compare_seeds, plan.compare_episodes,

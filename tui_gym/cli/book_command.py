@@ -13,8 +13,8 @@ from rich.table import Table
 
 from tui_gym.book_text import claims_table, figure_parts, panel_text
 from tui_gym.cli.experiments_command import add_task_flags, ctrl_c_stops, run_history, unrecorded
+from tui_gym.cli.flags import positive_int, seed_number
 from tui_gym.cli.output import CliError, print_json
-from tui_gym.cli.types import positive_int, seed_number
 from tui_gym.session.book import figure_named, figures
 from tui_gym.session.book.figure import (
     BookFigure,

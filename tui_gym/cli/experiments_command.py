@@ -16,10 +16,10 @@ from rich.table import Table
 from rich.text import Text
 
 from tui_gym.algorithms import ALGORITHMS
+from tui_gym.cli.flags import int_in as _int_in
+from tui_gym.cli.flags import output_file
+from tui_gym.cli.flags import seed_number as _seed
 from tui_gym.cli.output import CliError, print_json, say_status
-from tui_gym.cli.types import int_in as _int_in
-from tui_gym.cli.types import output_file
-from tui_gym.cli.types import seed_number as _seed
 
 if TYPE_CHECKING:
     from tui_gym.core.experiments import BestEffortHistory

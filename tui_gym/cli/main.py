@@ -19,10 +19,18 @@ from rich.console import Console
 
 from tui_gym import __version__
 from tui_gym.algorithms import ALGORITHMS, DEFAULT_ALGORITHM
-from tui_gym.cli.flags import add_game_flags, add_hyperparameter_flags, app_env
+from tui_gym.cli.flags import (
+    add_game_flags,
+    add_hyperparameter_flags,
+    app_env,
+    finite_number,
+    fresh_seed,
+    output_file,
+    positive_int,
+    seed_number,
+)
 from tui_gym.cli.maps_command import add_maps_parser
 from tui_gym.cli.output import JSON_SCHEMAS, CliError, OutConsole, readable
-from tui_gym.cli.types import finite_number, fresh_seed, output_file, positive_int, seed_number
 
 ENV_HELP = "a game (`tui-gym envs` lists them), a Gymnasium id, or MODULE:ID"
 WRAPPER_HELP = "add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable, in order)"

@@ -10,8 +10,8 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from tui_gym.cli.flags import number_in, seed_number
 from tui_gym.cli.output import CliError, print_json
-from tui_gym.cli.types import number_in, seed_number
 from tui_gym.games.maps import GridMap, format_map
 from tui_gym.games.maps.builtin import BUILTIN_MAPS, builtin_map, fits
 from tui_gym.games.maps.files import read_map_file

@@ -8,9 +8,8 @@ from typing import Any
 from rich.console import Console
 
 from tui_gym.book_text import panel_text
-from tui_gym.cli.flags import add_game_flags, game_kwargs
+from tui_gym.cli.flags import add_game_flags, finite_number, game_kwargs
 from tui_gym.cli.output import print_json
-from tui_gym.cli.types import finite_number
 from tui_gym.core.mdp.planning import METHODS
 from tui_gym.games import game_for, resolve_env_id
 from tui_gym.session.plan import PlanResult, plan, plan_json

@@ -7,8 +7,8 @@ from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
 
+from tui_gym.cli.flags import output_file
 from tui_gym.cli.output import CliError
-from tui_gym.cli.types import output_file
 
 if TYPE_CHECKING:
     from tui_gym.core.recording import Recording

@@ -13,9 +13,9 @@ from rich.console import Console
 from rich.markup import escape
 from rich.text import Text
 
+from tui_gym.cli.flags import file_name as _path
+from tui_gym.cli.flags import int_in, output_file
 from tui_gym.cli.output import CliError, key_value_table, print_json
-from tui_gym.cli.types import file_name as _path
-from tui_gym.cli.types import int_in, output_file
 from tui_gym.core.text import visible
 
 Command = Callable[[argparse.Namespace, Console], int]
