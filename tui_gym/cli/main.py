@@ -244,10 +244,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     from tui_gym.mcp_server import add_parser as add_mcp_parser
 
-    add_mcp_parser(sub, positive_int, finite_number)
+    add_mcp_parser(sub)
     from tui_gym.benchmark.command import add_parser as add_benchmark_parser
 
-    add_benchmark_parser(sub, positive_int, seed_number, finite_number)
+    add_benchmark_parser(sub)
     _document_json(parser)
     return parser
 

@@ -18,9 +18,9 @@ if TYPE_CHECKING:
 RECORD_HELP = "record every episode to this file, as JSON lines (tui-gym replay PATH plays it back)"
 
 
-def add_record_option(parser: argparse.ArgumentParser, dest: str = "record") -> None:
+def add_record_option(parser: argparse.ArgumentParser) -> None:
     """`--record PATH` on `parser`."""
-    parser.add_argument("--record", type=output_file, metavar="PATH", dest=dest, help=RECORD_HELP)
+    parser.add_argument("--record", type=output_file, metavar="PATH", help=RECORD_HELP)
 
 
 def open_recorder(path: str, session: Session, *, source: str, seed: int | None = None) -> Recorder:

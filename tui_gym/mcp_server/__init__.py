@@ -16,8 +16,10 @@ INSTALL_HINT = "tui-gym mcp needs the MCP SDK: pip install 'tui-gym[mcp]'"
 EXIT_USAGE = 2
 
 
-def add_parser(sub: Any, int_type: Any, float_type: Any) -> None:
+def add_parser(sub: Any) -> None:
     """Add `mcp` to the sub-command parsers `sub`."""
+    from tui_gym.cli.flags import finite_number, positive_int
+
     mcp = sub.add_parser(
         "mcp", help="serve the games to language models (MCP over stdio)",
         description="A Model Context Protocol server over stdin/stdout: tools to list the "
@@ -25,9 +27,9 @@ def add_parser(sub: Any, int_type: Any, float_type: Any) -> None:
     )
     mcp.add_argument("--no-hints", action="store_true",
                      help="refuse the hint tool and hide verdicts (for fair benchmarks)")
-    mcp.add_argument("--max-games", type=int_type, default=8, metavar="N",
+    mcp.add_argument("--max-games", type=positive_int, default=8, metavar="N",
                      help="games running at once (default 8)")
-    mcp.add_argument("--idle-timeout", type=float_type, default=600.0, metavar="S",
+    mcp.add_argument("--idle-timeout", type=finite_number, default=600.0, metavar="S",
                      help="seconds after which an idle game is closed (default 600)")
 
 
