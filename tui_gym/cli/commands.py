@@ -23,7 +23,7 @@ from rich.progress import (
 from rich.table import Table
 
 from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, Field, Learner, algorithm
-from tui_gym.cli.flags import flag, game_kwargs, hyperparameters
+from tui_gym.cli.flags import flag, game_kwargs, hyperparameters, wrapper_choices
 from tui_gym.cli.output import CliError, key_value_table, print_json, say_status
 from tui_gym.cli.runs_command import recorded
 from tui_gym.core.params import Param, typed_text
@@ -186,16 +186,10 @@ def _check_fit(session: Session, env_id: str) -> None:
         raise CliError(f"wrapper does not fit {env_id}: {reasons}")
 
 
-def _wrappers(args: argparse.Namespace) -> tuple[Any, ...]:
-    from tui_gym.core.wrappers import parse_wrapper_spec
-
-    return tuple(parse_wrapper_spec(text) for text in args.wrapper)
-
-
 def _session_from_args(args: argparse.Namespace) -> Session:
     env_id = resolve_env_id(args.env)
     game = game_for(env_id)
-    choices = _wrappers(args)
+    choices = wrapper_choices(args.wrapper)
     try:
         cls = algorithm(args.algorithm)
     except ValueError as exc:
@@ -473,7 +467,7 @@ def cmd_play(args: argparse.Namespace, out: Console) -> int:
 
     env_id = resolve_env_id(args.env)
     session = Session(env_id=env_id, env_kwargs=game_kwargs(args, game_for(env_id)),
-                      choices=_wrappers(args), seed=args.play_seed or 0)
+                      choices=wrapper_choices(args.wrapper), seed=args.play_seed or 0)
     _check_fit(session, env_id)
     player = JsonlPlayer(session, seed=args.play_seed)
     if args.record is None:

@@ -17,7 +17,7 @@ from rich.text import Text
 
 from tui_gym.algorithms import ALGORITHMS
 from tui_gym.cli.flags import int_in as _int_in
-from tui_gym.cli.flags import output_file
+from tui_gym.cli.flags import output_file, wrapper_choices
 from tui_gym.cli.flags import seed_number as _seed
 from tui_gym.cli.output import CliError, print_json, say_status
 
@@ -126,10 +126,12 @@ def _pairs(items: Sequence[str], flag: str, shape: str = "KEY=VALUE") -> dict[st
     return out
 
 
-def _wrappers(specs: Sequence[str]) -> tuple[Any, ...]:
-    from tui_gym.core.wrappers import parse_wrapper_spec
-
-    return tuple(parse_wrapper_spec(spec) for spec in specs)
+def _shared(args: argparse.Namespace) -> dict[str, Any]:
+    """The fields of a comparison's or a sweep's spec that their common flags give."""
+    return {"seeds": args.seeds, "episodes": args.episodes,
+            "settings": _pairs(args.settings, "--set"),
+            "game_params": _pairs(args.params, "--param"),
+            "wrappers": wrapper_choices(args.wrapper), "first_seed": args.first_seed}
 
 
 @contextmanager
@@ -276,12 +278,8 @@ def _algorithm_names(text: str) -> list[str]:
 def cmd_compare(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.session.experiments.compare import CompareSpec, run_compare
 
-    spec = CompareSpec(
-        game=args.game, algorithms=_algorithm_names(args.algorithms), seeds=args.seeds,
-        episodes=args.episodes, settings=_pairs(args.settings, "--set"),
-        game_params=_pairs(args.params, "--param"), wrappers=_wrappers(args.wrapper),
-        first_seed=args.first_seed,
-    )
+    spec = CompareSpec(game=args.game, algorithms=_algorithm_names(args.algorithms),
+                       **_shared(args))
     result, history = _run_recorded(args, out, "comparing", run_compare, spec)
     if args.csv:
         _write_csv(args.csv, result.outcomes)
@@ -423,13 +421,9 @@ def _ranges(items: Sequence[str]) -> dict[str, Any]:
 def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.session.experiments.sweep import SweepSpec, run_sweep
 
-    spec = SweepSpec(
-        game=args.game, algorithm=args.algorithm, grid=_grid(args.grid), seeds=args.seeds,
-        episodes=args.episodes, settings=_pairs(args.settings, "--set"),
-        game_params=_pairs(args.params, "--param"), wrappers=_wrappers(args.wrapper),
-        first_seed=args.first_seed, ranges=_ranges(args.ranges), samples=args.sample,
-        sample_seed=args.sample_seed,
-    )
+    spec = SweepSpec(game=args.game, algorithm=args.algorithm, grid=_grid(args.grid),
+                     **_shared(args), ranges=_ranges(args.ranges), samples=args.sample,
+                     sample_seed=args.sample_seed)
     result, history = _run_recorded(args, out, "sweeping", run_sweep, spec)
     if args.json:
         print_json("sweep", result.to_json())

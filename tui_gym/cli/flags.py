@@ -22,7 +22,7 @@ from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 __all__ = [
     "HP_FLAGS", "MAX_SEED", "add_game_flags", "add_hyperparameter_flags", "file_name",
     "finite_number", "flag", "fresh_seed", "game_kwargs", "hyperparameters", "int_in",
-    "number_in", "output_file", "positive_int", "seed_number",
+    "number_in", "output_file", "positive_int", "seed_number", "wrapper_choices",
 ]
 
 MAX_SEED = 2**63 - 2**32  # room for the seeds derived from it (evaluation adds to it)
@@ -190,6 +190,13 @@ def hyperparameters(args: argparse.Namespace, cls: type[Learner]) -> dict[str, A
         except ValueError as exc:
             raise CliError(str(exc).replace(name, flag(name), 1)) from None
     return changes
+
+
+def wrapper_choices(specs: list[str]) -> tuple[Any, ...]:
+    """The wrappers `--wrapper SPEC` flags name, innermost first."""
+    from tui_gym.core.wrappers import parse_wrapper_spec
+
+    return tuple(parse_wrapper_spec(spec) for spec in specs)
 
 
 def app_env(args: argparse.Namespace) -> tuple[str | None, dict[str, Any] | None]:
