@@ -184,10 +184,11 @@ def ctrl_c_stops(stop: threading.Event, err: Console) -> Iterator[None]:
         signal.signal(signal.SIGINT, previous)
 
 
-def _run_with_progress(
-    out: Console, as_json: bool, label: str,
-    run: Callable[[Callable[[CompareProgress], None] | None, threading.Event], Any],
-) -> Any:
+def _run_recorded(args: argparse.Namespace, out: Console, label: str, run: Callable[..., R],
+                  spec: Any) -> tuple[R, BestEffortHistory | None]:
+    """`run(spec, ...)` (a comparison or a sweep) kept in the run history, with a progress
+    bar on a terminal (not with --json); the first Ctrl+C stops it cleanly; its refusals as
+    one line."""
     from rich.progress import (
         BarColumn,
         Progress,
@@ -197,46 +198,38 @@ def _run_with_progress(
         TimeRemainingColumn,
     )
 
+    from tui_gym.session.experiments.cluster import ClusterError
+    from tui_gym.session.experiments.compare import CompareError
+
     stop = threading.Event()
-    err = Console(stderr=True)
-    with ctrl_c_stops(stop, err):
-        if as_json or not out.is_terminal:
-            return run(None, stop)
-        progress = Progress(
+    with run_history(args) as history, ctrl_c_stops(stop, Console(stderr=True)):
+
+        def running(progress: Callable[[CompareProgress], None] | None) -> R:
+            try:
+                return run(spec, progress=progress, stop=stop, resume=args.resume,
+                           cluster=args.cluster, history=history, processes=args.processes,
+                           status=say_status)
+            except (CompareError, ClusterError) as exc:
+                raise CliError(str(exc)) from None
+
+        if args.json or not out.is_terminal:
+            return running(None), history
+        bar = Progress(
             TextColumn(f"[bold]{label}[/]"), BarColumn(),
             TextColumn("{task.fields[landed]}/{task.fields[tasks]} tasks"),
             TaskProgressColumn(), TimeElapsedColumn(),
             TextColumn("ETA"), TimeRemainingColumn(), console=out, transient=True,
         )
-        task = progress.add_task(label, total=None, landed=0, tasks="?")
+        task = bar.add_task(label, total=None, landed=0, tasks="?")
 
         # The bar and the time left follow the episodes (they move while a task runs);
         # the count is of the tasks finished.
         def update(p: CompareProgress) -> None:
-            progress.update(task, completed=p.done, total=p.total, landed=p.tasks_done,
-                            tasks=p.tasks_total or "?")
+            bar.update(task, completed=p.done, total=p.total, landed=p.tasks_done,
+                       tasks=p.tasks_total or "?")
 
-        with progress:
-            return run(update, stop)
-
-
-def _run_recorded(args: argparse.Namespace, out: Console, label: str, run: Callable[..., R],
-                  spec: Any) -> tuple[R, BestEffortHistory | None]:
-    """`run(spec, ...)` (a comparison or a sweep) with a progress bar, kept in the run history;
-    its refusals as one line."""
-    from tui_gym.session.experiments.cluster import ClusterError
-    from tui_gym.session.experiments.compare import CompareError
-
-    with run_history(args) as history:
-        try:
-            return _run_with_progress(
-                out, args.json, label,
-                lambda progress, stop: run(spec, progress=progress, stop=stop, resume=args.resume,
-                                           cluster=args.cluster, history=history,
-                                           processes=args.processes, status=say_status),
-            ), history
-        except (CompareError, ClusterError) as exc:
-            raise CliError(str(exc)) from None
+        with bar:
+            return running(update), history
 
 
 def _resume_hint(group: int | None) -> str:
