@@ -24,7 +24,7 @@ from rich.table import Table
 
 from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, Field, Learner, algorithm
 from tui_gym.cli.flags import flag, game_kwargs, hyperparameters, wrapper_choices
-from tui_gym.cli.output import CliError, key_value_table, print_json, say_status
+from tui_gym.cli.output import CliError, cli_errors, key_value_table, print_json, say_status
 from tui_gym.cli.runs_command import recorded
 from tui_gym.core.params import Param, typed_text
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
@@ -190,10 +190,8 @@ def _session_from_args(args: argparse.Namespace) -> Session:
     env_id = resolve_env_id(args.env)
     game = game_for(env_id)
     choices = wrapper_choices(args.wrapper)
-    try:
+    with cli_errors(ValueError, prefix="--algorithm: "):
         cls = algorithm(args.algorithm)
-    except ValueError as exc:
-        raise CliError(f"--algorithm: {exc}") from None
     kwargs = game_kwargs(args, game)
     hp = _base_hyperparameters(args, game, kwargs, cls)
     try:
@@ -323,10 +321,8 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
     session = _session_from_args(args)
     if args.follow is not None:
         epsilon = float(hyperparameters(args, session.learner_class).get("epsilon_final", 0.0))
-        try:
+        with cli_errors(ValueError, prefix="--follow: "):
             session.follow(Session.load(args.follow), epsilon)
-        except ValueError as exc:
-            raise CliError(f"--follow: {exc}") from None
     recording = args.recording  # the run history's record of this run (see `recorded`)
     recording.begin(session)
     hp = session.hp
@@ -497,10 +493,8 @@ def cmd_bench(args: argparse.Namespace, out: Console) -> int:
 
     names = None
     if args.algorithm is not None:
-        try:
+        with cli_errors(ValueError, prefix="--algorithm: "):
             names = (algorithm(args.algorithm).name,)
-        except ValueError as exc:
-            raise CliError(f"--algorithm: {exc}") from None
     if args.json:
         print_json("bench", to_json(run_bench(quick=args.quick, algorithms=names)))
         return 0

@@ -19,7 +19,7 @@ from tui_gym.algorithms import ALGORITHMS
 from tui_gym.cli.flags import int_in as _int_in
 from tui_gym.cli.flags import output_file, wrapper_choices
 from tui_gym.cli.flags import seed_number as _seed
-from tui_gym.cli.output import CliError, print_json, say_status
+from tui_gym.cli.output import CliError, cli_errors, print_json, say_status
 
 if TYPE_CHECKING:
     from tui_gym.core.experiments import BestEffortHistory
@@ -205,12 +205,10 @@ def _run_recorded(args: argparse.Namespace, out: Console, label: str, run: Calla
     with run_history(args) as history, ctrl_c_stops(stop, Console(stderr=True)):
 
         def running(progress: Callable[[CompareProgress], None] | None) -> R:
-            try:
+            with cli_errors(CompareError, ClusterError):
                 return run(spec, progress=progress, stop=stop, resume=args.resume,
                            cluster=args.cluster, history=history, processes=args.processes,
                            status=say_status)
-            except (CompareError, ClusterError) as exc:
-                raise CliError(str(exc)) from None
 
         if args.json or not out.is_terminal:
             return running(None), history
@@ -404,10 +402,8 @@ def _ranges(items: Sequence[str]) -> dict[str, Any]:
 
     ranges: dict[str, Any] = {}
     for key, text in _pairs(items, "--range").items():
-        try:
+        with cli_errors(ValueError, prefix=f"--range {key}: "):
             ranges[key] = Range.parse(text)
-        except ValueError as exc:
-            raise CliError(f"--range {key}: {exc}") from None
     return ranges
 
 

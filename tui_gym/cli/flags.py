@@ -15,7 +15,7 @@ from collections.abc import Callable
 from typing import Any, cast
 
 from tui_gym.algorithms import ALGORITHMS, ALL_PARAMS, Learner
-from tui_gym.cli.output import CliError
+from tui_gym.cli.output import CliError, cli_errors
 from tui_gym.core.params import Param, ParamError, digits_note, read_number, shown_value
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 
@@ -145,14 +145,10 @@ def map_kwargs(path: str, game: Game, kwargs: dict[str, Any]) -> dict[str, Any]:
     if not game.editable:
         mapped = ", ".join(g.title for g in GAMES if g.editable)
         raise CliError(f"--map-file applies to {mapped}, not {game.title}")
-    try:
+    with cli_errors(ValueError, prefix="--map-file "):  # a MapError names the file, line, ...
         grid_map = read_map_file(path)
-    except ValueError as exc:  # a MapError names the file, line, row and column
-        raise CliError(f"--map-file {exc}") from None
-    try:
+    with cli_errors(ValueError, prefix=f"--map-file {path}: "):
         return game.with_map(kwargs, grid_map)
-    except ValueError as exc:
-        raise CliError(f"--map-file {path}: {exc}") from None
 
 
 def add_hyperparameter_flags(parser: argparse.ArgumentParser) -> None:

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 from rich.console import Console
 
 from tui_gym.cli.flags import output_file
-from tui_gym.cli.output import CliError
+from tui_gym.cli.output import CliError, cli_errors
 
 if TYPE_CHECKING:
     from tui_gym.core.recording import Recording
@@ -57,10 +57,8 @@ def cmd_replay(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.core.recording import RecordingError, read_recording
     from tui_gym.session.recording.scenes import scene_fits
 
-    try:
+    with cli_errors(RecordingError):
         recording = read_recording(args.path, scene_fits)
-    except RecordingError as exc:
-        raise CliError(str(exc)) from None
     try:
         from tui_gym.ui.app import run_app
     except ImportError as exc:  # pragma: no cover - only without the UI installed

@@ -15,7 +15,7 @@ from rich.text import Text
 
 from tui_gym.cli.flags import file_name as _path
 from tui_gym.cli.flags import int_in, output_file
-from tui_gym.cli.output import CliError, key_value_table, print_json
+from tui_gym.cli.output import CliError, cli_errors, key_value_table, print_json
 from tui_gym.core.text import visible
 
 Command = Callable[[argparse.Namespace, Console], int]
@@ -122,10 +122,8 @@ def recorded(command: Command) -> Command:
 def _history_call(action: Callable[[], Any]) -> Any:
     from tui_gym.core.experiments import RunHistoryError
 
-    try:
+    with cli_errors(RunHistoryError):
         return action()
-    except RunHistoryError as exc:
-        raise CliError(str(exc)) from None
 
 
 def _when(seconds: float | None, full: bool = False) -> str:
