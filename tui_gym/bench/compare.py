@@ -46,6 +46,14 @@ class SeedsSpeed:
     def learners(self) -> int:
         return self.seeds * len(self.algorithms)
 
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "game": self.game, "algorithms": list(self.algorithms), "seeds": self.seeds,
+            "episodes": self.episodes, "compare_s": self.compare_s, "tutorial_s": self.tutorial_s,
+            "tutorial_learners_run": self.tutorial_learners, "speedup": self.speedup,
+            "online_return": dict(zip(self.algorithms, self.online_returns, strict=False)),
+        }
+
 
 @dataclass(frozen=True)
 class TasksResult:
@@ -74,6 +82,16 @@ class TasksResult:
         if self.local_s is None or self.cluster_s is None:
             return None
         return ratio(self.local_s, self.cluster_s)
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "game": self.game, "seeds": self.seeds, "episodes": self.episodes,
+            "tasks_s": self.tasks_s, "batch_s": self.batch_s, "tasks": self.tasks,
+            "split_overhead": self.split_overhead, "local_s": self.local_s,
+            "cluster_s": self.cluster_s, "cluster_tasks": self.cluster_tasks,
+            "cluster_workers": CLUSTER_WORKERS, "cluster_share": self.cluster_share,
+            "cluster_note": self.cluster_note or None,
+        }
 
 
 def _timed(run: Callable[[], Any], repeats: int) -> tuple[float, Any]:
@@ -136,16 +154,3 @@ def measure_tasks(seeds: int, episodes: int, repeats: int = 3) -> TasksResult:
         cluster_s, swept = _timed(lambda: run_sweep(sweep, cluster=client), repeats)
     return replace(found, local_s=local_s, cluster_s=cluster_s,
                    cluster_tasks=int(swept.tasks["total"]))
-
-
-def to_json(result: TasksResult | None) -> dict[str, Any] | None:
-    if result is None:
-        return None
-    return {
-        "game": result.game, "seeds": result.seeds, "episodes": result.episodes,
-        "tasks_s": result.tasks_s, "batch_s": result.batch_s, "tasks": result.tasks,
-        "split_overhead": result.split_overhead, "local_s": result.local_s,
-        "cluster_s": result.cluster_s, "cluster_tasks": result.cluster_tasks,
-        "cluster_workers": CLUSTER_WORKERS, "cluster_share": result.cluster_share,
-        "cluster_note": result.cluster_note or None,
-    }

@@ -16,7 +16,7 @@ import numpy as np
 from tui_gym.bench.figures import median, percentile
 from tui_gym.bench.live import PAUSE_RANGE, SIZE, _send_key, _until, on_frames
 
-__all__ = ["DPResult", "measure", "to_json"]
+__all__ = ["DPResult", "measure"]
 
 GRID_GAMES = ("gridworld", "frozenlake", "cliffwalking")
 SPEED = 5  # the Plan view's 50 sweeps a second
@@ -43,6 +43,16 @@ class DPResult:
     jack_seconds: float
     jack_model_seconds: float
     views: tuple[ViewFigures, ...]
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "taxi_value_sweep_ms": self.taxi_sweep_ms,
+            "jack_policy_iteration_s": self.jack_seconds,
+            "jack_model_build_s": self.jack_model_seconds,
+            "plan_view": [{"game": v.game, "sweeps_per_second": v.sweeps_per_second,
+                           "key_p50_ms": median(list(v.keys_ms)), "key_p95_ms": v.key_p95_ms,
+                           "key_presses": len(v.keys_ms)} for v in self.views],
+        }
 
 
 def _taxi_sweep_ms(repeats: int) -> float:
@@ -150,16 +160,3 @@ def measure(seconds: float, presses: int, repeats: int,
         say(f"planning: the Plan view on {game}")
         views.append(asyncio.run(_view_once(game, seconds, presses, 0)))
     return DPResult(taxi, jack, built, tuple(views))
-
-
-def to_json(result: DPResult | None) -> dict[str, Any] | None:
-    if result is None:
-        return None
-    return {
-        "taxi_value_sweep_ms": result.taxi_sweep_ms,
-        "jack_policy_iteration_s": result.jack_seconds,
-        "jack_model_build_s": result.jack_model_seconds,
-        "plan_view": [{"game": v.game, "sweeps_per_second": v.sweeps_per_second,
-                       "key_p50_ms": median(list(v.keys_ms)), "key_p95_ms": v.key_p95_ms,
-                       "key_presses": len(v.keys_ms)} for v in result.views],
-    }

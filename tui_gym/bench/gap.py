@@ -171,6 +171,17 @@ class PlanningResult:
     def reached(self) -> bool:
         return all(r.reached for r in (*self.q_learning, *self.dyna_q))
 
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "game": self.game, "measure": self.measure, "bound": self.bound,
+            "q_learning_episodes": self.q_learning_episodes,
+            "dyna_q_episodes": self.dyna_q_episodes,
+            "q_learning_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
+                                for r in self.q_learning],
+            "dyna_q_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
+                            for r in self.dyna_q],
+        }
+
 
 def _distance(session: Session) -> tuple[str, float]:
     """What the bound is on, and its value now: the exact gap, or for games scored by

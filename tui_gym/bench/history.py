@@ -40,6 +40,14 @@ class HistoryResult:
     def bytes_per_1000(self) -> float:
         return self.size_bytes * 1000 / self.runs
 
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "game": self.game, "overhead": self.overhead, "overhead_samples": list(self.shares),
+            "recorded_run_s": list(self.recorded_s), "unrecorded_run_s": list(self.unrecorded_s),
+            "fastest_recorded_over_unrecorded": self.ab_ratio, "runs_written": self.runs,
+            "size_bytes": self.size_bytes, "bytes_per_1000_runs": self.bytes_per_1000,
+        }
+
 
 def _timed_recording(db: Path, spent: list[float]) -> Any:
     """A `TrainRecording` that adds the time of each of its calls to `spent[0]`."""
@@ -121,14 +129,3 @@ def measure(repeats: int, runs: int = 1000) -> HistoryResult:
             unrecorded.append(_train_once(db, record=False)[0])
         size = _size(folder / "size.db", db, runs)
     return HistoryResult(GAME, tuple(shares), tuple(recorded), tuple(unrecorded), runs, size)
-
-
-def to_json(result: HistoryResult | None) -> dict[str, Any] | None:
-    if result is None:
-        return None
-    return {
-        "game": result.game, "overhead": result.overhead, "overhead_samples": list(result.shares),
-        "recorded_run_s": list(result.recorded_s), "unrecorded_run_s": list(result.unrecorded_s),
-        "fastest_recorded_over_unrecorded": result.ab_ratio, "runs_written": result.runs,
-        "size_bytes": result.size_bytes, "bytes_per_1000_runs": result.bytes_per_1000,
-    }

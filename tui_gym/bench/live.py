@@ -82,6 +82,19 @@ class LiveResult:
     def presses(self) -> int:
         return len(self._latencies())
 
+    def to_json(self) -> dict[str, Any]:
+        if not self.repeats:
+            return {"error": "; ".join(self.errors)}
+        return {
+            "engine": self.engine, "live_ratio": self.live_ratio,
+            "headless_episodes_per_second": self.headless_eps,
+            "live_episodes_per_second": self.live_eps, "ui_refresh_hz": self.refresh_hz,
+            "frames_hz": self.frames_hz, "key_latency_p50_ms": self.key_latency_ms(50),
+            "key_latency_p95_ms": self.key_latency_ms(95), "key_presses": self.presses,
+            "key_latency_by_key_ms": self.breakdown_ms(), "repeats": len(self.repeats),
+            "window_s": self.seconds, "ratios": [r.ratio for r in self.repeats],
+        }
+
     def breakdown_ms(self) -> dict[str, dict[str, float]]:
         """Median queue / action / frame milliseconds per key."""
         out = {}

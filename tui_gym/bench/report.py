@@ -7,7 +7,7 @@ target, keyed like the JSON's figures, come from the same place.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import Any
 
 from rich.table import Table
@@ -339,62 +339,6 @@ def verdicts(results: BenchResults) -> dict[str, str]:
 
 
 # --- JSON ---------------------------------------------------------------------
-def _seeds_dict(results: BenchResults) -> dict[str, Any] | None:
-    found = results.seeds
-    if found is None:
-        return None
-    return {
-        "game": found.game, "algorithms": list(found.algorithms), "seeds": found.seeds,
-        "episodes": found.episodes, "compare_s": found.compare_s, "tutorial_s": found.tutorial_s,
-        "tutorial_learners_run": found.tutorial_learners, "speedup": found.speedup,
-        "online_return": dict(zip(found.algorithms, found.online_returns, strict=False)),
-    }
-
-
-def _programs_dict(results: BenchResults) -> dict[str, Any] | None:
-    found = results.programs
-    if found is None:
-        return None
-    sep = found.separation
-    trip = found.protocol_round_trip
-    return {
-        "separation": {
-            "episodes_each": sep.episodes, "deviation": programs.DEVIATION, "delta": sep.delta,
-            "return_gap_measured": sep.return_gap, "return_sd": list(sep.return_sd),
-            "regret_sd": list(sep.regret_sd), "episodes_needed_by_return": sep.by_return,
-            "episodes_needed_by_regret": sep.by_regret, "ratio": sep.ratio,
-            "formula": "n = 1.96^2 (sd_a^2 + sd_b^2) / delta^2",
-        },
-        "protocol_steps_per_second": found.protocol.steps_per_second,
-        "protocol_samples": list(found.protocol.samples),
-        "protocol_requests_in_flight": programs.WINDOW,
-        "protocol_steps_per_second_one_request_at_a_time": trip.rate.steps_per_second,
-        "protocol_round_trip_p50_us": trip.p50_us,
-        "protocol_round_trip_p95_us": trip.p95_us,
-        "protocol_round_trips": trip.round_trips,
-        "mcp_steps_per_second_one_call_at_a_time": found.mcp_one.steps_per_second,
-        "mcp_steps_per_second": found.mcp_together.steps_per_second,
-        "mcp_games_at_once": programs.MCP_GAMES,
-        "mcp_note": found.mcp_together.reason,
-    }
-
-
-# --- JSON --------------------------------------------------------------------
-def _runner_dict(results: BenchResults, runner: str) -> dict[str, Any]:
-    live = results.live.get(runner)
-    if live is None or not live.repeats:
-        return {"error": "; ".join(live.errors) if live is not None else "not measured"}
-    return {
-        "engine": live.engine, "live_ratio": live.live_ratio,
-        "headless_episodes_per_second": live.headless_eps,
-        "live_episodes_per_second": live.live_eps, "ui_refresh_hz": live.refresh_hz,
-        "frames_hz": live.frames_hz, "key_latency_p50_ms": live.key_latency_ms(50),
-        "key_latency_p95_ms": live.key_latency_ms(95), "key_presses": live.presses,
-        "key_latency_by_key_ms": live.breakdown_ms(), "repeats": len(live.repeats),
-        "window_s": live.seconds, "ratios": [r.ratio for r in live.repeats],
-    }
-
-
 def _game_dict(results: BenchResults, name: str) -> dict[str, Any]:
     gap = results.gap.get(name)
     return {
@@ -422,21 +366,9 @@ def _game_dict(results: BenchResults, name: str) -> dict[str, Any]:
     }
 
 
-def _planning_dict(results: BenchResults) -> dict[str, Any] | None:
-    planning = results.planning
-    if planning is None:
-        return None
-    return {
-        "game": planning.game,
-        "measure": planning.measure,
-        "bound": planning.bound,
-        "q_learning_episodes": planning.q_learning_episodes,
-        "dyna_q_episodes": planning.dyna_q_episodes,
-        "q_learning_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
-                            for r in planning.q_learning],
-        "dyna_q_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
-                        for r in planning.dyna_q],
-    }
+def _json(found: Any) -> Any:
+    """A stage's JSON object, or None for a stage that did not run."""
+    return None if found is None else found.to_json()
 
 
 def to_json(results: BenchResults) -> dict[str, Any]:
@@ -468,30 +400,19 @@ def to_json(results: BenchResults) -> dict[str, Any]:
         "ui_refresh_hz": default.refresh_hz if default else None,
         "key_latency_p50_ms": default.key_latency_ms(50) if default else None,
         "key_latency_p95_ms": default.key_latency_ms(95) if default else None,
-        "runners": {runner: _runner_dict(results, runner) for runner in RUNNERS},
+        "runners": {runner: results.live[runner].to_json() if runner in results.live
+                    else {"error": "not measured"} for runner in RUNNERS},
         "rss_growth_mb": memory.growth_mb if memory else None,
-        "rss": (
-            {
-                "episodes": memory.episodes, "warmup_episodes": memory.warmup,
-                "engine": memory.engine, "start_mb": memory.rss_start_mb,
-                "end_mb": memory.rss_end_mb, "peak_mb": memory.rss_peak_mb,
-            }
-            if memory
-            else None
-        ),
+        "rss": _json(memory),
         "startup_s": startup.seconds if startup else None,
         "startup_samples_s": list(startup.samples) if startup else None,
-        "planning": _planning_dict(results),
-        "programs": _programs_dict(results),
-        "map_edit": [
-            {"game": e.game, "size": e.size, "edits": e.edits, "median_ms": e.median_ms,
-             "worst_ms": e.worst_ms, "kept_agent": e.kept_agent}
-            for e in results.map_edit or ()
-        ],
-        "history": history.to_json(results.history),
-        "tasks": compare.to_json(results.tasks),
-        "compare": _seeds_dict(results),
-        "planning_dp": dp.to_json(results.dp),
+        "planning": _json(results.planning),
+        "programs": _json(results.programs),
+        "map_edit": [asdict(edit) for edit in results.map_edit or ()],
+        "history": _json(results.history),
+        "tasks": _json(results.tasks),
+        "compare": _json(results.seeds),
+        "planning_dp": _json(results.dp),
         "verdicts": verdicts(results),
         "errors": dict(results.errors),
     }
