@@ -156,7 +156,7 @@ def test_cli_sees_the_same_maps(tmp_path: Path, capsys: pytest.CaptureFixture[st
 def test_the_edit_to_optimum_figure_exists() -> None:
     from tui_gym.bench.map_edit import measure
     from tui_gym.bench.report import verdicts
-    from tui_gym.bench.results import BenchResults, MachineInfo
+    from tui_gym.bench.run import BenchResults, MachineInfo
 
     results = measure(edits=4)
     assert {r.game for r in results} == {"FrozenLake", "CliffWalking"}
