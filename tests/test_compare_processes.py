@@ -98,6 +98,8 @@ def test_the_children_end_with_the_command(kind: str, tmp_path: Path) -> None:
 
 
 def test_sighup_and_sigterm_stop_a_run_alike() -> None:
+    # The handlers go in on the main thread only: elsewhere the signal would end pytest.
+    assert threading.current_thread() is threading.main_thread()
     for kind in (signal.SIGTERM, signal.SIGHUP):
         before = signal.getsignal(kind)
         stop = threading.Event()
