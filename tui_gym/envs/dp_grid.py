@@ -4,10 +4,12 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
-from tui_gym.envs.table_env import TableEnv, TileArrays
+from tui_gym.core.mdp.model import FiniteMDP
+from tui_gym.envs.table_env import TableEnv
 
 __all__ = [
     "AB_JUMPS", "CORNERS", "GRID_ACTIONS", "KING_ACTIONS", "STEPS", "ABGridEnv",
@@ -84,7 +86,8 @@ class Grid:
             return cell, self.step
         return (row, col), self.pays.get((row, col), self.step)
 
-    def arrays(self) -> TileArrays:
+    @cached_property
+    def model(self) -> FiniteMDP:
         """The grid's transitions, `[S, A, K]` with K the most wind strengths a column has."""
         n, n_moves = self.rows * self.cols, len(self.moves)
         k = max(len(self.winds(c)) for c in range(self.cols))
@@ -114,7 +117,8 @@ class Grid:
         else:
             for s in range(n):
                 initial[s] = divmod(s, self.cols) not in (ends | self.walls)
-        return TileArrays(next_state, prob, reward, terminal, initial / initial.sum())
+        return FiniteMDP(next_state, prob, reward, terminal, initial / initial.sum(),
+                         action_names=self.moves)
 
     def cells(self) -> list[str]:
         """The grid as tile rows: F floor, S the start, W a wall, G a terminal cell, unless
@@ -136,7 +140,7 @@ class GridEnv(TableEnv):
     agent, and the grid's letters; the wind's strengths under the columns."""
 
     def __init__(self, grid: Grid, render_mode: str | None = None) -> None:
-        super().__init__(grid.arrays(), render_mode)
+        super().__init__(grid.model, render_mode)
         self.grid = grid
         self.action_names = grid.moves
 

@@ -11,10 +11,11 @@ import gymnasium as gym
 import numpy as np
 import numpy.typing as npt
 
-from tui_gym.envs.table_env import TableEnv, TileArrays
+from tui_gym.core.mdp.model import FiniteMDP
+from tui_gym.envs.table_env import TableEnv
 
 __all__ = [
-    "ACTION_ORDERS", "TILES", "TileMapEnv", "TileRules", "cell_key", "read_cell", "tile_arrays",
+    "ACTION_ORDERS", "TILES", "TileMapEnv", "TileRules", "cell_key", "read_cell", "tile_model",
 ]
 
 TILES = "SFHGCWR"
@@ -141,11 +142,13 @@ def _probability(value: Any, what: str) -> float:
     return number
 
 
-def tile_arrays(
+def tile_model(
     cells: Sequence[str], rewards: Mapping[Cell, float], slip: Mapping[Cell, float],
     actions: Sequence[str], rules: TileRules,
-) -> TileArrays:
-    """The transitions of a checked map (`check_map`), vectorized over cells."""
+) -> FiniteMDP:
+    """The transitions of a checked map (`check_map`), vectorized over cells: K is 3 (as
+    asked, then the two sides) where anything slips, else 1; outcomes that cannot happen
+    stay in place, pay 0 and do not end."""
     n_rows, n_cols = len(cells), len(cells[0])
     n = n_rows * n_cols
     tiles = np.array([list(row) for row in cells]).reshape(-1)
@@ -195,7 +198,7 @@ def tile_arrays(
     terminal[idle, :, 0] = np.isin(tiles[idle], list(ENDING))[:, None]
     initial = np.zeros(n)
     initial[start] = 1.0
-    return TileArrays(next_state, prob, reward, terminal, initial)
+    return FiniteMDP(next_state, prob, reward, terminal, initial, action_names=tuple(actions))
 
 
 def _perpendicular(a: str, b: str) -> bool:
@@ -266,7 +269,7 @@ class TileMapEnv(TableEnv):
         self.action_order = ACTION_ORDERS[actions]
         self.nrow, self.ncol = len(rows), len(rows[0])
         self.desc = np.asarray([list(row) for row in rows], dtype="c")
-        super().__init__(tile_arrays(rows, reward_of, slip_of, self.action_order, self.rules),
+        super().__init__(tile_model(rows, reward_of, slip_of, self.action_order, self.rules),
                          render_mode)
 
     def reset(

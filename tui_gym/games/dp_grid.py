@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -21,7 +22,6 @@ ARROWS = {"up": "↑", "down": "↓", "left": "←", "right": "→",
 STRAIGHT = GRID_ACTIONS
 END = "★"  # a terminal cell: the tile board's goal
 WALL = "█"
-KEPT_MODELS = 16  # models kept per game (one per set of arguments)
 
 Event = tuple[str, str]  # what a move did ('{who} ...'), and its tone on the board
 
@@ -136,6 +136,12 @@ class ReachNarrator(Narrator):
         return f"{plural(last.steps, 'step')} taken" if last.steps else ""
 
 
+@lru_cache(maxsize=64)
+def _grid_model(game: DPGridGame, frozen: Any) -> FiniteMDP:
+    """The model of the grid a game's arguments (frozen) make, kept."""
+    return game.grid(dict(frozen)).model
+
+
 class DPGridGame(ModelGame):
     """A grid world of the book (see the module docstring)."""
 
@@ -145,24 +151,12 @@ class DPGridGame(ModelGame):
     states_type = DPGridStates
     layout_type = DPGridLayout
 
-    def __init__(self) -> None:
-        super().__init__()
-        self._models: dict[Any, FiniteMDP] = {}
-
     def grid(self, kwargs: Mapping[str, Any]) -> Grid:
         """The grid these arguments make."""
         raise NotImplementedError
 
     def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP:
-        key = freeze(kwargs)
-        if key not in self._models:
-            if len(self._models) >= KEPT_MODELS:
-                self._models.pop(next(iter(self._models)))
-            arrays = self.grid(kwargs).arrays()
-            self._models[key] = FiniteMDP(arrays.next_state, arrays.prob, arrays.reward,
-                                          arrays.terminal, arrays.initial,
-                                          action_names=self.action_names)
-        return self._models[key]
+        return _grid_model(self, freeze(kwargs))
 
     def event(self, game_env: Any, before: Mapping[str, Any], was: Cell, now: Cell,
               move: str) -> Event | None:

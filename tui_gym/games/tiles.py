@@ -11,7 +11,7 @@ import numpy as np
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP, NotAvailable
 from tui_gym.envs import TILE_MAP_ID
-from tui_gym.envs.tile_map import STANDING, TileMapEnv, TileRules, cell_key, tile_arrays
+from tui_gym.envs.tile_map import STANDING, TileMapEnv, TileRules, cell_key, tile_model
 from tui_gym.games.base import (
     TIED,
     UNREADABLE,
@@ -44,10 +44,8 @@ NO_DECISION = {"H": "○", "G": "★", "C": "▒", "W": "█"}  # tiles the agen
 
 @lru_cache(maxsize=32)
 def _layout_model(grid_map: GridMap, actions: tuple[str, ...], rules: TileRules) -> FiniteMDP:
-    arrays = tile_arrays(grid_map.cells, grid_map.reward_table(), grid_map.slip_table(),
-                         actions, rules)
-    return FiniteMDP(arrays.next_state, arrays.prob, arrays.reward, arrays.terminal,
-                     arrays.initial, action_names=actions)
+    return tile_model(grid_map.cells, grid_map.reward_table(), grid_map.slip_table(), actions,
+                      rules)
 
 
 class TileGame(ModelGame):

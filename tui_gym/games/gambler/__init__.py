@@ -6,7 +6,6 @@ Spaces and rewards: `tui_gym.envs.gambler.GamblerEnv`; truncated after `EPISODE_
 from __future__ import annotations
 
 from collections.abc import Mapping
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -14,7 +13,7 @@ import numpy as np
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP
 from tui_gym.core.params import Param
-from tui_gym.envs.gambler import MAX_STAKE, GamblerEnv, gambler_arrays, stake_of
+from tui_gym.envs.gambler import MAX_STAKE, GamblerEnv, gambler_model, stake_of
 from tui_gym.games.base import TIED, UNREADABLE, HeatmapLayout, Narrator, TallyWord
 from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.planning import PlanModel, StateLine
@@ -24,13 +23,6 @@ __all__ = ["EPISODE_LIMIT", "GamblerGame"]
 
 EPISODE_LIMIT = 1000  # bets (the env's registration)
 ROW = 10  # capitals a heatmap row
-
-
-@lru_cache(maxsize=16)
-def _model(p_heads: float, goal: int) -> FiniteMDP:
-    arrays = gambler_arrays(p_heads, goal)
-    return FiniteMDP(arrays.next_state, arrays.prob, arrays.reward, arrays.terminal,
-                     arrays.initial, action_names=GamblerEnv.action_names)
 
 
 def _goal(kwargs: Mapping[str, Any]) -> int:
@@ -164,7 +156,7 @@ class GamblerGame(ModelGame):
     narrator_type = GamblerNarrator
 
     def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP:
-        return _model(float(kwargs.get("p_heads", 0.4)), _goal(kwargs))
+        return gambler_model(float(kwargs.get("p_heads", 0.4)), _goal(kwargs))
 
     def gap_tolerance(self, kwargs: Mapping[str, Any]) -> float:
         """A fifth of the optimum: learners get within it, not much closer (the README)."""
