@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from functools import lru_cache
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -31,9 +30,15 @@ from tui_gym.games.base import (
     greedy_probabilities,
 )
 from tui_gym.games.blackjack.solver import (
+    BASE_STATES,
+    DEALERS,
+    N_BASE,
     POLICY_SHAPE,
     BlackjackRules,
+    base_state,
+    blackjack_model,
     mixed_policy_value,
+    observation_rows,
     optimal_action_values,
     optimal_policy,
     optimal_value,
@@ -56,35 +61,13 @@ LONGEST_HAND = 20  # steps: 19 hits from two aces to 21 aces-as-one, then a stic
 TRAINED_GAP = 0.005  # what the default training reaches (see the README)
 
 
-@lru_cache(maxsize=1)
-def _base_states() -> tuple[tuple[int, int, int], ...]:
-    states = []
-    for usable in (0, 1):
-        low = 12 if usable else 4
-        for player in range(low, 22):
-            for dealer in DEALER_CARDS:
-                states.append((player, dealer, usable))
-    return tuple(states)
-
-
-@lru_cache(maxsize=1)
-def _row_of() -> dict[tuple[int, int, int], int]:
-    return {s: i for i, s in enumerate(_base_states())}
-
-
-@lru_cache(maxsize=2)
 def _chart_rows(usable: int) -> np.ndarray:
     """The Q-table row of each chart cell (player sum x dealer card), for one ace state."""
-    row_of = _row_of()
-    return np.array([[row_of[(player, dealer, usable)] for dealer in DEALER_CARDS]
+    return np.array([[base_state(player, dealer, usable) for dealer in DEALER_CARDS]
                      for player in CHART_SUMS])
 
 
-@lru_cache(maxsize=1)
-def _base_index() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Where each base state sits in a (32, 11, 2) policy table."""
-    states = np.array(_base_states())
-    return states[:, 0], states[:, 1], states[:, 2]
+_BASE_INDEX = tuple(np.array(o) for o in zip(*BASE_STATES, strict=True))  # in a (32, 11, 2) table
 
 
 def hand_value(cards: list[int]) -> tuple[int, bool]:
@@ -107,7 +90,7 @@ class BlackjackStates(StateSpace):
     """Decision states `(player sum, dealer card, usable ace)`; the hands as the scene."""
 
     def base_observations(self, kwargs: Mapping[str, Any]) -> list[Any]:
-        return list(_base_states())
+        return list(BASE_STATES)
 
     def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
         player, dealer, usable = (int(v) for v in observation)
@@ -162,7 +145,7 @@ class BlackjackOracle(Oracle):
         """The greedy policy of `q` (rows = base states) as a (32, 11, 2) table of the
         chance to hit: 0 or 1, or 0.5 where the two actions tie (the agent picks at random)."""
         table = np.zeros(POLICY_SHAPE, dtype=np.float64)
-        table[_base_index()] = greedy_probabilities(q)[:, 1]
+        table[_BASE_INDEX] = greedy_probabilities(q)[:, 1]
         return table
 
     def policy_value(self, q: np.ndarray, rules: BlackjackRules) -> float:
@@ -175,7 +158,7 @@ class BlackjackOracle(Oracle):
     def reference(
         self, q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> ReferenceMetrics | NotAvailable:
-        if np.shape(q) != (len(_base_states()), 2):
+        if np.shape(q) != (N_BASE, 2):
             return NotAvailable(f"a table of shape {np.shape(q)} does not fit Blackjack")
         rules = self.rules(kwargs, changes)
         exact = self.policy_value(q, rules)
@@ -225,14 +208,14 @@ class BlackjackOracle(Oracle):
     def optimal_marks(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> np.ndarray:
-        best = optimal_policy(self.rules(kwargs, changes))[_base_index()]
+        best = optimal_policy(self.rules(kwargs, changes))[_BASE_INDEX]
         marks = np.zeros((len(best), 2), dtype=bool)
         marks[np.arange(len(best)), best] = True
         return marks
 
     def optimum(self, kwargs: Mapping[str, Any]) -> Optimum:
         rules = rules_of(kwargs)
-        q = optimal_action_values(rules, soft_21="drawn")[_base_index()]
+        q = optimal_action_values(rules, soft_21="drawn")[_BASE_INDEX]
         return Optimum(
             value=optimal_value(rules),
             summary="the exact expected return per hand of the optimal strategy", q=q,
@@ -312,7 +295,7 @@ class BlackjackLayout(HeatmapLayout):
     def heatmaps(
         self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
-        if np.shape(q) != (len(_base_states()), 2):
+        if np.shape(q) != (N_BASE, 2):
             return []
         has_marks = isinstance(marks, np.ndarray)
         panels = []
@@ -398,19 +381,16 @@ class BlackjackGame(Game):
     layout_type = BlackjackLayout
 
     def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel:
-        """The hands as a finite model (`finite_model`); a natural plays as a soft 21."""
-        from tui_gym.games.blackjack.finite_model import N_BASE, blackjack_model, natural_base_rows
+        """The hands as a finite model (`solver.blackjack_model`); a natural plays as a soft 21."""
         from tui_gym.games.planning import PlanModel
 
-        base_of = np.concatenate([np.arange(N_BASE), natural_base_rows()])
+        base_of = np.r_[np.arange(N_BASE), base_state(21, 1, 1) + np.arange(DEALERS)]
         return PlanModel(blackjack_model(rules_of(kwargs)), 1.0, None, base_of=base_of,
                          shown=np.arange(N_BASE))
 
     def training_model(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> TrainingModel | NotAvailable:
-        from tui_gym.games.blackjack.finite_model import blackjack_model, observation_rows
-
         if changes.others:
             return NotAvailable(unwrapped_note(changes.others))
         rules = rules_of(kwargs)

@@ -1,4 +1,4 @@
-"""Exact dynamic programming for Gymnasium's ``Blackjack-v1``.
+"""Exact dynamic programming for Gymnasium's ``Blackjack-v1``, and the game as a `FiniteMDP`.
 
 A natural is a hidden state of its own (it pays differently under `natural` and `sab`)
 while every policy stays a function of the observation.
@@ -13,10 +13,13 @@ from typing import Any, Literal
 
 import numpy as np
 
+from tui_gym.core.mdp import FiniteMDP
+
 __all__ = [
-    "DEFAULT_RULES", "DECISION_MASK", "HIT", "POLICY_SHAPE", "STICK", "BlackjackRules",
-    "optimal_action_values", "optimal_policy", "mixed_policy_value", "optimal_value",
-    "policy_from_function", "policy_value", "stick_chances", "stick_paid",
+    "BASE_STATES", "DEALERS", "DEFAULT_RULES", "DECISION_MASK", "HIT", "N_BASE", "POLICY_SHAPE",
+    "STICK", "BlackjackRules", "base_state", "blackjack_model", "mixed_policy_value",
+    "observation_rows", "optimal_action_values", "optimal_policy", "optimal_value",
+    "policy_from_function", "policy_value",
 ]
 
 
@@ -139,6 +142,20 @@ assert sorted(_ORDER) == list(range(_N_LIVE))
 assert all(_HIT_MATRIX[s, nxt] == 0.0 for i, s in enumerate(_ORDER) for nxt in _ORDER[i:]), (
     "hit transitions must point to states evaluated earlier"
 )
+
+# The model's states: `live * 10 + dealer - 1` per live player state and dealer card, so the
+# game's base states (every observation asking for a decision) come first, the naturals last.
+DEALERS = 10
+N_BASE = _NATURAL * DEALERS
+_OBSERVED = (np.repeat(_STATE_SUM, DEALERS), np.tile(np.arange(1, DEALERS + 1), _N_LIVE),
+             np.repeat(_STATE_USABLE, DEALERS))  # each model state's (sum, dealer, usable ace)
+BASE_STATES = tuple(zip(*(o[:N_BASE].tolist() for o in _OBSERVED), strict=True))
+
+
+def base_state(total: int, dealer: int, usable: int) -> int:
+    """The base state (and model state) of an observation that asks for a decision."""
+    return ((_SOFT if usable else _HARD)[total]) * DEALERS + dealer - 1
+
 
 DECISION_MASK = np.zeros(POLICY_SHAPE, dtype=bool)
 DECISION_MASK[_STATE_SUM[:, None], np.arange(1, 11)[None, :], _STATE_USABLE[:, None]] = True
@@ -431,3 +448,34 @@ def policy_from_function(fn: Callable[[int, int, int], int]) -> np.ndarray:
             )
         policy[player_sum, dealer_card, usable_ace] = int(action)
     return policy
+
+
+def observation_rows() -> np.ndarray:
+    """The row of the learners' table (the observation keyer's: mixed radix 32 x 11 x 2
+    over (player_sum, dealer_card, usable_ace)) of each model state; a natural's is
+    the soft 21's, which it shows as."""
+    total, dealer, usable = _OBSERVED
+    return (total * 11 + dealer) * 2 + usable
+
+
+@cache
+def blackjack_model(rules: BlackjackRules = DEFAULT_RULES) -> FiniteMDP:
+    """The game under `rules` as a `FiniteMDP` (kept), for the engine and for planning sweep
+    by sweep: a stick ends in a loss, a push or a win; a hit leads to a live state or a bust."""
+    lose_pay, push_pay = rules.payoffs[:2]
+    n_states, width = _N_LIVE * DEALERS, _N_LIVE + 1
+    live = np.repeat(np.arange(_N_LIVE), DEALERS)
+    next_state = np.broadcast_to(np.arange(n_states)[:, None, None], (n_states, 2, width)).copy()
+    prob, reward = np.zeros((n_states, 2, width)), np.zeros((n_states, 2, width))
+    terminal = np.zeros((n_states, 2, width), dtype=bool)
+    lose, push, win = stick_chances(rules)
+    for k, (chance, pay) in enumerate(((lose, lose_pay), (push, push_pay), (win, None))):
+        prob[:, 0, k] = chance.reshape(-1)
+        reward[:, 0, k] = stick_paid(rules)[live] if pay is None else pay
+        terminal[:, 0, k] = True
+    prob[:, 1] = _HIT_MATRIX[live]
+    next_state[:, 1, :_N_LIVE] = np.arange(_N_LIVE) * DEALERS + (_OBSERVED[1] - 1)[:, None]
+    reward[:, 1, :_N_LIVE] = push_pay
+    reward[:, 1, _BUST], terminal[:, 1, _BUST] = lose_pay, True
+    initial = (_INITIAL[:, None] * _CARD_PROBS[None, :]).reshape(-1)
+    return FiniteMDP(next_state, prob, reward, terminal, initial, action_names=("stick", "hit"))
