@@ -27,8 +27,7 @@ from tui_gym.games.blackjack.solver import (
     observation_rows,
     optimal_value,
 )
-from tui_gym.games.gridworld.model import gridworld_model
-from tui_gym.games.gridworld.paths import all_pairs
+from tui_gym.games.gridworld.paths import all_pairs, gridworld_model
 from tui_gym.session.session import Session
 
 RULES = (BlackjackRules(), BlackjackRules(natural=True), BlackjackRules(sab=True))

@@ -172,7 +172,7 @@ def test_the_walled_gridworld_model_moves_round_walls_as_the_env_does() -> None:
     from tui_gym.core.obskey import ObservationKeyer
     from tui_gym.core.wrappers.changes import NO_CHANGES
     from tui_gym.envs.gridworld import GridWorldEnv
-    from tui_gym.games.gridworld.model import gridworld_model
+    from tui_gym.games.gridworld.paths import gridworld_model
 
     walls = ((2, 1), (2, 2), (1, 3))
     model = gridworld_model(5, 1.0, 0.0, NO_CHANGES, walls)

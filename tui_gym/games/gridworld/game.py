@@ -14,7 +14,7 @@ from tui_gym.core.mdp import NotAvailable, evaluate, gap_of, return_range
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.envs import GRIDWORLD_MAX_STEPS
-from tui_gym.envs.walls import Walls, cell_distances, cell_moves, check_walls
+from tui_gym.envs.gridworld import Walls, cell_distances, cell_moves, check_walls
 from tui_gym.games.base import (
     EXACT,
     TIED,
@@ -34,8 +34,14 @@ from tui_gym.games.base import (
     greedy_cells,
     greedy_probabilities,
 )
-from tui_gym.games.gridworld.model import gridworld_model, gridworld_optimum, shortest_path_optimum
-from tui_gym.games.gridworld.paths import mean_fewest_steps, path_figures, shortest_marks
+from tui_gym.games.gridworld.paths import (
+    gridworld_model,
+    gridworld_optimum,
+    mean_fewest_steps,
+    path_figures,
+    shortest_marks,
+    shortest_path_optimum,
+)
 from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
 from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import (

@@ -1,6 +1,6 @@
 """windy, windy-king: Sutton & Barto's Windy GridWorld (Example 6.5; king's moves, Exercise 6.9).
 
-Spaces, rewards and wind: `tui_gym.envs.windy.WindyGridWorldEnv`. Episodes are truncated
+Spaces, rewards and wind: `tui_gym.envs.dp_grid.WindyGridWorldEnv`. Episodes are truncated
 after `EPISODE_LIMIT` steps. The moves a game offers are part of what it is (its keys,
 the protocol's list, recordings), so the king's moves are a game of their own.
 """
@@ -11,8 +11,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from tui_gym.core.params import Param
-from tui_gym.envs.dp_grid import GRID_ACTIONS, KING_ACTIONS, STEPS, Cell, Grid
-from tui_gym.envs.windy import windy_grid
+from tui_gym.envs.dp_grid import GRID_ACTIONS, KING_ACTIONS, STEPS, Cell, Grid, windy_grid
 from tui_gym.games.dp_grid import DPGridGame, Event, ReachNarrator
 
 __all__ = ["EPISODE_LIMIT", "KingWindyGame", "WindyGame"]
