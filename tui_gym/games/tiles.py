@@ -176,7 +176,7 @@ class TileStates(DiscreteStates):
 
     def read_scene(self, game_env: Any, before: Mapping[str, Any]) -> dict[str, Any]:
         game = _game(self)
-        cells = _env_cells(game_env)
+        cells = _env_cells(game_env, game)
         cols = len(cells[0])
         state = game_env.s
         agent = None if state is None else divmod(int(state), cols)
@@ -220,20 +220,14 @@ def tile_text(scene: Mapping[str, Any], game: TileGame) -> str:
     return "\n".join([*lines, legend])
 
 
-def _env_cells(game_env: Any) -> list[str]:
-    """The map of a built env: FrozenLake's `desc`, or a cliff map from its shape."""
+def _env_cells(game_env: Any, game: TileGame) -> list[str]:
+    """The map of a built env: its `desc` (FrozenLake's, a tile map's), else (CliffWalking's
+    env, which has none) the game's own map."""
     desc = getattr(game_env, "desc", None)
-    if desc is not None:
-        return ["".join(c.decode() if isinstance(c, bytes) else str(c) for c in row)
-                for row in np.asarray(desc)]
-    rows, cols = game_env.shape
-    cliff = np.asarray(game_env._cliff)
-    out = []
-    for r in range(rows):
-        line = ["C" if cliff[r, c] else "F" for c in range(cols)]
-        out.append("".join(line))
-    out[rows - 1] = "S" + out[rows - 1][1:-1] + "G"
-    return out
+    if desc is None:
+        return game.builtin_cells({})
+    return ["".join(c.decode() if isinstance(c, bytes) else str(c) for c in row)
+            for row in np.asarray(desc)]
 
 
 def _slip_chance(game_env: Any, cells: Sequence[str]) -> float:

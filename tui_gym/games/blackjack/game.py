@@ -27,6 +27,7 @@ from tui_gym.games.base import (
     Scope,
     StateSpace,
     TrainingModel,
+    greedy_cells,
     greedy_probabilities,
 )
 from tui_gym.games.blackjack.solver import (
@@ -298,35 +299,22 @@ class BlackjackLayout(HeatmapLayout):
         if np.shape(q) != (N_BASE, 2):
             return []
         has_marks = isinstance(marks, np.ndarray)
-        panels = []
-        for usable, title in ((1, "usable ace"), (0, "no usable ace")):
+
+        def chart(usable: int, title: str) -> Heatmap:
             rows = _chart_rows(usable)
-            qs = q[rows]  # (sums, cards, actions)
-            actions = qs.argmax(axis=-1)
-            values = qs.max(axis=-1).astype(float)
-            tied = qs[..., 0] == qs[..., 1]  # no preference: the agent picks at random
-            if has_marks:
-                optimal = np.take_along_axis(marks[rows], actions[..., None], axis=-1)[..., 0]
-                marked = ~optimal & ~tied
-            else:
-                marked = np.zeros(actions.shape, dtype=bool)
-            labels = tuple(
-                tuple(TIED if t else ACTION_LETTERS[a] for a, t in zip(row, ties, strict=True))
-                for row, ties in zip(actions.tolist(), tied.tolist(), strict=True)
+            values, labels, marked = greedy_cells(
+                len(CHART_SUMS), len(DEALER_CARDS), lambda r, c: None, lambda r, c: q[rows[r, c]],
+                ACTION_LETTERS.__getitem__,
+                lambda r, c, action: has_marks and not marks[rows[r, c], action],
             )
-            panels.append(
-                Heatmap(
-                    title=f"Q-values, {title}",
-                    row_labels=tuple(str(s) for s in CHART_SUMS),
-                    col_labels=DEALER_LABELS,
-                    values=values,
-                    labels=labels,
-                    marked=marked,
-                    legend="rows: player sum  cols: dealer card  H hit  S stick  "
-                    f"{TIED} tie  * not optimal",
-                )
+            return Heatmap(
+                title=f"Q-values, {title}", row_labels=tuple(str(s) for s in CHART_SUMS),
+                col_labels=DEALER_LABELS, values=values, labels=labels, marked=marked,
+                legend=f"rows: player sum  cols: dealer card  H hit  S stick  {TIED} tie  "
+                "* not optimal",
             )
-        return panels
+
+        return [chart(1, "usable ace"), chart(0, "no usable ace")]
 
 
 class BlackjackGame(Game):
