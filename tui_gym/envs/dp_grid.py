@@ -152,11 +152,8 @@ class GridEnv(TableEnv):
 
     def picture(self) -> str:
         grid = self.grid
-        lines = [["."] * grid.cols for _ in range(grid.rows)]
-        for r, c in grid.walls:
-            lines[r][c] = "#"
-        for r, c in grid.terminals:
-            lines[r][c] = "*"
+        drawn = {"W": "#", "G": "*", "H": "*"}  # walls and the ends; the rest a plain cell
+        lines = [[drawn.get(tile, ".") for tile in row] for row in grid.cells()]
         for (r, c), letter in grid.letters.items():
             lines[r][c] = letter[0]
         for (r, c), mark in grid.primes.items():

@@ -520,17 +520,8 @@ class ModelGame(Game):
     def training_model(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> TrainingModel | NotAvailable:
-        oracle = self.oracle
-        assert isinstance(oracle, ModelOracle)
-        if len(self.phase_starts(kwargs)) > 1:
-            world = self.world(kwargs, changes)
-            if isinstance(world, NotAvailable):
-                return world
-            return TrainingModel(world.models[0], later=tuple(
-                zip(world.starts[1:], world.models[1:], strict=True)))
-        exact = oracle.exact(kwargs, changes)
-        if isinstance(exact, NotAvailable):
-            return exact
-        if not exact.scope.exact:
-            return NotAvailable(exact.scope.note)
-        return TrainingModel(exact.model)
+        world = self.world(kwargs, changes)
+        if isinstance(world, NotAvailable):
+            return world
+        return TrainingModel(world.models[0], later=tuple(
+            zip(world.starts[1:], world.models[1:], strict=True)))
