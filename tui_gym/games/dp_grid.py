@@ -11,11 +11,10 @@ import numpy as np
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP
 from tui_gym.envs.dp_grid import GRID_ACTIONS, Cell, Grid
-from tui_gym.games.base import TIED, UNREADABLE, HeatmapLayout, Narrator, TallyWord, greedy_cells
+from tui_gym.games.base import TIED, UNREADABLE, HeatmapLayout, greedy_cells
 from tui_gym.games.model import DiscreteStates, ModelGame, freeze
-from tui_gym.games.words import format_reward, plural
 
-__all__ = ["ARROWS", "DPGridGame", "DPGridLayout", "DPGridStates", "Event", "ReachNarrator"]
+__all__ = ["ARROWS", "DPGridGame", "DPGridLayout", "DPGridStates", "Event"]
 
 ARROWS = {"up": "↑", "down": "↓", "left": "←", "right": "→",
           "up-left": "↖", "up-right": "↗", "down-left": "↙", "down-right": "↘"}
@@ -114,26 +113,6 @@ class DPGridLayout(HeatmapLayout):
                 marked=marked, legend="  ".join(parts),
             )
         ]
-
-
-class ReachNarrator(Narrator):
-    """Reached the episode's end (`goal_words`), or ran out of time."""
-
-    tally_words = (TallyWord("reached", "good"), TallyWord("timed out", "even"))
-    goal_words = "the goal"
-
-    def tally_word(self, last: Any) -> str:
-        return "reached" if last.terminated else "timed out"
-
-    def outcome_text(self, last: Any, first_info: Mapping[str, Any],
-                     scene: Mapping[str, Any]) -> str:
-        total = format_reward(last.episode_return)
-        if last.terminated:
-            return f"Reached {self.goal_words} in {plural(last.steps, 'step')}, return {total}"
-        return f"Out of time after {plural(last.steps, 'step')}, return {total}"
-
-    def progress_text(self, last: Any, first_info: Mapping[str, Any]) -> str:
-        return f"{plural(last.steps, 'step')} taken" if last.steps else ""
 
 
 @lru_cache(maxsize=64)

@@ -17,7 +17,7 @@ from tui_gym.games.base import (
     UNREADABLE,
     EvalOutcome,
     HeatmapLayout,
-    Narrator,
+    ReachNarrator,
     TallyWord,
     greedy_cells,
 )
@@ -289,38 +289,30 @@ class TileLayout(HeatmapLayout):
         ]
 
 
-class TileNarrator(Narrator):
+class TileNarrator(ReachNarrator):
     """Reached the goal, fell, or ran out of time."""
 
     tally_words: tuple[TallyWord, ...] = (
         TallyWord("reached", "good"), TallyWord("fell in", "bad", always=False),
         TallyWord("timed out", "even"),
     )
+    missed_words = ": the goal not reached"
+    holes = True  # a terminal tile that is not the goal exists (FrozenLake's holes)
 
     def tally_word(self, last: PlayStep) -> str:
         if not last.terminated:
             return "timed out"
         return "reached" if last.episode_return > 0 or not self.holes else "fell in"
 
-    holes = True  # a terminal tile that is not the goal exists (FrozenLake's holes)
-
     def outcome_text(
         self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]
     ) -> str:
-        steps = plural(last.steps, "step")
-        total = format_reward(last.episode_return)
-        if not last.terminated:
-            return f"Out of time after {steps}: the goal not reached, return {total}"
         agent, cells = scene.get("agent"), scene.get("cells") or []
-        tile = ""
-        if agent is not None and cells:
-            tile = cells[int(agent[0])][int(agent[1])]
-        if tile == "H":
-            return f"Fell into a hole after {steps}, return {total}"
-        return f"Reached the goal in {steps}, return {total}"
-
-    def progress_text(self, last: PlayStep, first_info: Mapping[str, Any]) -> str:
-        return f"{plural(last.steps, 'step')} taken" if last.steps else ""
+        fell = agent is not None and bool(cells) and cells[int(agent[0])][int(agent[1])] == "H"
+        if last.terminated and fell:
+            return (f"Fell into a hole after {plural(last.steps, 'step')}, return "
+                    f"{format_reward(last.episode_return)}")
+        return super().outcome_text(last, first_info, scene)
 
     def eval_outcome(
         self, returns: Sequence[float], details: Sequence[dict[str, Any]]

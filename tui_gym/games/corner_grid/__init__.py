@@ -10,7 +10,8 @@ from collections.abc import Mapping
 from typing import Any
 
 from tui_gym.envs.dp_grid import CornerGridEnv, Grid
-from tui_gym.games.dp_grid import DPGridGame, ReachNarrator
+from tui_gym.games.base import ReachNarrator
+from tui_gym.games.dp_grid import DPGridGame
 
 __all__ = ["EPISODE_LIMIT", "CornerGridGame"]
 
@@ -20,7 +21,7 @@ EPISODE_LIMIT = 100  # steps (the env's registration)
 class CornerNarrator(ReachNarrator):
     """Reached a corner, or ran out of time."""
 
-    goal_words = "a corner"
+    reached_words = "Reached a corner"
 
 
 class CornerGridGame(DPGridGame):

@@ -19,8 +19,8 @@ from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.envs.dp_grid import Cell, Grid
 from tui_gym.envs.dyna_maze import maze_phases
-from tui_gym.games.base import Advice, Bound, ReferenceMetrics
-from tui_gym.games.dp_grid import DPGridGame, Event, ReachNarrator
+from tui_gym.games.base import Advice, Bound, ReachNarrator, ReferenceMetrics
+from tui_gym.games.dp_grid import DPGridGame, Event
 from tui_gym.games.model import PHASE, ModelOracle, freeze
 from tui_gym.games.words import plural
 

@@ -23,9 +23,9 @@ from tui_gym.games.base import (
     EvalOutcome,
     Game,
     HeatmapLayout,
-    Narrator,
     Optimum,
     Oracle,
+    ReachNarrator,
     ReferenceMetrics,
     Scope,
     StateSpace,
@@ -297,14 +297,11 @@ class GridWorldOracle(Oracle):
         )
 
 
-class GridWorldNarrator(Narrator):
+class GridWorldNarrator(ReachNarrator):
     """Steps taken against the fewest; reached or timed out."""
 
     agreement_words = AGREEMENT
     tally_words = (TallyWord("reached", "good"), TallyWord("timed out", "bad"))
-
-    def tally_word(self, last: PlayStep) -> str:
-        return "reached" if last.terminated else "timed out"
 
     def outcome_text(
         self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]

@@ -12,7 +12,8 @@ from typing import Any
 
 from tui_gym.core.params import Param
 from tui_gym.envs.dp_grid import GRID_ACTIONS, KING_ACTIONS, STEPS, Cell, Grid, windy_grid
-from tui_gym.games.dp_grid import DPGridGame, Event, ReachNarrator
+from tui_gym.games.base import ReachNarrator
+from tui_gym.games.dp_grid import DPGridGame, Event
 
 __all__ = ["EPISODE_LIMIT", "KingWindyGame", "WindyGame"]
 
