@@ -1,7 +1,7 @@
 """car-rental: Sutton & Barto's Example 4.2, Jack's car rental, and Exercise 4.7's variant.
 
 Spaces and rewards: `tui_gym.envs.car_rental.CarRentalEnv`. The book's task never ends;
-tui-gym plays it in episodes of `EPISODE_LIMIT` days, undiscounted, while the Plan view
+tui-gym plays it in episodes of 20 days, undiscounted, while the Plan view
 and `tui-gym plan` show the book's values, discounted by 0.9 with no end (Figure 4.2).
 """
 
@@ -21,9 +21,8 @@ from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import format_reward, plural
 
-__all__ = ["EPISODE_LIMIT", "CarRentalGame"]
+__all__ = ["CarRentalGame"]
 
-EPISODE_LIMIT = 20  # days (the env's registration)
 SIDE = MAX_CARS + 1
 
 

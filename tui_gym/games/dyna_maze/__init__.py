@@ -1,6 +1,6 @@
 """dyna-maze, blocking-maze, shortcut-maze: Sutton & Barto's mazes of chapter 8.
 
-Spaces and rewards: `tui_gym.envs.dyna_maze.MazeEnv`; truncated after `EPISODE_LIMIT`
+Spaces and rewards: `tui_gym.envs.dyna_maze.MazeEnv`; truncated after 5000
 steps. The blocking and shortcut mazes change after `change_at` steps: each phase has its
 own model (`phase_starts`, `world`), which the exact figures and the coach follow.
 Undiscounted, every way to the goal is worth +1, so the exact figures add the greedy
@@ -24,9 +24,8 @@ from tui_gym.games.dp_grid import DPGridGame, Event
 from tui_gym.games.model import PHASE, ModelOracle, freeze
 from tui_gym.games.words import plural
 
-__all__ = ["EPISODE_LIMIT", "BlockingMazeGame", "DynaMazeGame", "ShortcutMazeGame"]
+__all__ = ["BlockingMazeGame", "DynaMazeGame", "ShortcutMazeGame"]
 
-EPISODE_LIMIT = 5000  # steps (the env's registration)
 DISCOUNT = 0.95  # the book's
 
 

@@ -1,6 +1,6 @@
 """gambler: Sutton & Barto's Example 4.3, the gambler's problem.
 
-Spaces and rewards: `tui_gym.envs.gambler.GamblerEnv`; truncated after `EPISODE_LIMIT` bets.
+Spaces and rewards: `tui_gym.envs.gambler.GamblerEnv`; truncated after 1000 bets.
 """
 
 from __future__ import annotations
@@ -19,9 +19,8 @@ from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.planning import PlanModel, StateLine
 from tui_gym.games.words import plural
 
-__all__ = ["EPISODE_LIMIT", "GamblerGame"]
+__all__ = ["GamblerGame"]
 
-EPISODE_LIMIT = 1000  # bets (the env's registration)
 ROW = 10  # capitals a heatmap row
 
 

@@ -1,6 +1,6 @@
 """max-bias: Sutton & Barto's Example 6.7, the MDP that shows maximization bias.
 
-Spaces and rewards: `tui_gym.envs.max_bias.MaxBiasEnv`; truncated after `EPISODE_LIMIT`
+Spaces and rewards: `tui_gym.envs.max_bias.MaxBiasEnv`; truncated after 10
 steps, which no episode reaches. An action a state does not offer counts as one it does,
 so a learner that tries every action everywhere still plays this MDP.
 """
@@ -22,9 +22,8 @@ from tui_gym.games.dp_grid import DPGridGame, DPGridStates, Event
 from tui_gym.games.model import ModelOracle
 from tui_gym.games.words import format_reward, plural
 
-__all__ = ["EPISODE_LIMIT", "MaxBiasGame"]
+__all__ = ["MaxBiasGame"]
 
-EPISODE_LIMIT = 10  # steps (the env's registration)
 NAMES = {0: "the end after B", B: "B", A: "A", 3: "the end right of A"}
 
 

@@ -1,7 +1,7 @@
 """random-walk: Sutton & Barto's random walk (Example 6.2; Figure 7.2 with 19 states).
 
 Spaces and rewards: `tui_gym.envs.dp_grid.RandomWalkEnv`; truncated after
-`EPISODE_LIMIT` steps. The book's prediction figures evaluate the equiprobable random
+1000 steps. The book's prediction figures evaluate the equiprobable random
 policy; as a control problem the walk is simple (always right).
 """
 
@@ -16,9 +16,7 @@ from tui_gym.games.base import Narrator, TallyWord
 from tui_gym.games.dp_grid import DPGridGame, DPGridStates, Event
 from tui_gym.games.words import format_reward, plural
 
-__all__ = ["EPISODE_LIMIT", "RandomWalkGame"]
-
-EPISODE_LIMIT = 1000  # steps (the env's registration)
+__all__ = ["RandomWalkGame"]
 
 
 def _states(kwargs: Mapping[str, Any]) -> int:

@@ -1,7 +1,7 @@
 """windy, windy-king: Sutton & Barto's Windy GridWorld (Example 6.5; king's moves, Exercise 6.9).
 
 Spaces, rewards and wind: `tui_gym.envs.dp_grid.WindyGridWorldEnv`. Episodes are truncated
-after `EPISODE_LIMIT` steps. The moves a game offers are part of what it is (its keys,
+after 2000 steps. The moves a game offers are part of what it is (its keys,
 the protocol's list, recordings), so the king's moves are a game of their own.
 """
 
@@ -15,9 +15,7 @@ from tui_gym.envs.dp_grid import GRID_ACTIONS, KING_ACTIONS, STEPS, Cell, Grid, 
 from tui_gym.games.base import ReachNarrator
 from tui_gym.games.dp_grid import DPGridGame, Event
 
-__all__ = ["EPISODE_LIMIT", "KingWindyGame", "WindyGame"]
-
-EPISODE_LIMIT = 2000  # steps (the env's registration)
+__all__ = ["KingWindyGame", "WindyGame"]
 
 
 MONTE_CARLO_LESSON = (
