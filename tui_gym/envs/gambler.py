@@ -13,10 +13,16 @@ import numpy as np
 from tui_gym.core.mdp.model import FiniteMDP
 from tui_gym.envs.table_env import TableEnv
 
-__all__ = ["ACTION_NAMES", "MAX_STAKE", "GamblerEnv", "gambler_model", "stake_of"]
+__all__ = ["ACTION_NAMES", "MAX_STAKE", "GamblerEnv", "gambler_model", "stake_of", "stakes"]
 
 MAX_STAKE = 50  # actions: stakes 1 to 50
 ACTION_NAMES = tuple(f"stake {k}" for k in range(1, MAX_STAKE + 1))
+
+
+def stakes(goal: int) -> np.ndarray:
+    """`[capital, action]`: the stake each action puts down at each capital, 0 to `goal`."""
+    capital = np.arange(goal + 1)[:, None]
+    return np.minimum(np.minimum(np.arange(1, MAX_STAKE + 1)[None, :], capital), goal - capital)
 
 
 def stake_of(capital: int, action: int, goal: int) -> int:
@@ -31,7 +37,7 @@ def gambler_model(p_heads: float, goal: int) -> FiniteMDP:
     A stake is won on heads (chance `p_heads`), lost on tails; +1 for reaching the goal."""
     n = goal + 1
     capital = np.arange(n)[:, None]
-    stake = np.minimum(np.minimum(np.arange(1, MAX_STAKE + 1)[None, :], capital), goal - capital)
+    stake = stakes(goal)
     live = (capital > 0) & (capital < goal)
     win, lose = capital + stake, capital - stake
     next_state = np.stack([win, lose], axis=-1)

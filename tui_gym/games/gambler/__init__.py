@@ -13,7 +13,7 @@ import numpy as np
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP
 from tui_gym.core.params import Param
-from tui_gym.envs.gambler import MAX_STAKE, GamblerEnv, gambler_model, stake_of
+from tui_gym.envs.gambler import MAX_STAKE, GamblerEnv, gambler_model, stakes
 from tui_gym.games.base import TIED, UNREADABLE, HeatmapLayout, Narrator, TallyWord
 from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.planning import PlanModel, StateLine
@@ -26,12 +26,6 @@ ROW = 10  # capitals a heatmap row
 
 def _goal(kwargs: Mapping[str, Any]) -> int:
     return int(kwargs.get("goal", 100))
-
-
-def stakes(goal: int) -> np.ndarray:
-    """`[capital, action]`: the stake each action puts down at each capital."""
-    return np.array([[stake_of(c, a, goal) for a in range(MAX_STAKE)] for c in range(goal + 1)],
-                    dtype=np.float64)
 
 
 class GamblerStates(DiscreteStates):
@@ -164,6 +158,7 @@ class GamblerGame(ModelGame):
     def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel:
         goal = _goal(kwargs)
         capital = np.arange(1, goal)
-        line = StateLine("capital", capital, capital.astype(float), stakes(goal), "stake")
+        line = StateLine(
+            "capital", capital, capital.astype(float), stakes(goal).astype(float), "stake")
         return PlanModel(self.base_model(kwargs), self.plan_gamma, self.episode_limit(kwargs),
                          line=line)

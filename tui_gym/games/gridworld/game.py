@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
-from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -66,13 +65,6 @@ WALL = "█"  # a heatmap cell that is a wall
 TRAINED_SHARE = 0.95  # what the default training reaches (see the README)
 
 
-@lru_cache(maxsize=16)
-def _pairs(size: int) -> np.ndarray:
-    """All (ax, ay, tx, ty) in row-major order: shape (size**4, 4)."""
-    grid = np.indices((size,) * 4).reshape(4, -1).T
-    return grid.astype(np.int64)
-
-
 LAYOUT = "layout"  # the argument that holds the grid's walls, as a map's text
 
 
@@ -86,10 +78,6 @@ def _walls(kwargs: Mapping[str, Any]) -> Walls:
     if not layout:
         return ()
     return read_layout(str(layout)).walls_xy()
-
-
-def _scene_walls(scene: Mapping[str, Any]) -> Walls:
-    return tuple(tuple(int(v) for v in w) for w in scene.get("walls", ()))  # type: ignore[misc]
 
 
 def _steps_between(size: int, walls: Walls, a: Any, b: Any) -> int:
@@ -145,7 +133,8 @@ def _distance(scene: Mapping[str, Any]) -> int:
     agent, target = scene.get("agent"), scene.get("target")
     if agent is None or target is None:
         return 0
-    return _steps_between(int(scene.get("size", 0)), _scene_walls(scene), agent, target)
+    walls = tuple((int(x), int(y)) for x, y in scene.get("walls", ()))
+    return _steps_between(int(scene.get("size", 0)), walls, agent, target)
 
 
 class GridWorldStates(StateSpace):
@@ -153,7 +142,7 @@ class GridWorldStates(StateSpace):
 
     def base_observations(self, kwargs: Mapping[str, Any]) -> list[Any]:
         return [{"agent": row[:2].copy(), "target": row[2:].copy()}
-                for row in _pairs(_size(kwargs))]
+                for row in np.indices((_size(kwargs),) * 4, dtype=np.int64).reshape(4, -1).T]
 
     def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
         ax, ay = (int(v) for v in observation["agent"])
