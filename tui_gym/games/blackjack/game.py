@@ -83,10 +83,6 @@ def card_label(card: int) -> str:
     return "A" if card == 1 else str(card)
 
 
-def rules_of(kwargs: Mapping[str, Any]) -> BlackjackRules:
-    return BlackjackRules.from_env_kwargs(kwargs)
-
-
 class BlackjackStates(StateSpace):
     """Decision states `(player sum, dealer card, usable ace)`; the hands as the scene."""
 
@@ -126,7 +122,7 @@ class BlackjackOracle(Oracle):
 
     def rules(self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> BlackjackRules:
         """The rules the exact figures use: the wrapped game's where `scope` is exact."""
-        rules = rules_of(kwargs)
+        rules = BlackjackRules.from_env_kwargs(kwargs)
         if changes.changes_rewards and self.scope(kwargs, changes).exact:
             rules = rules.with_rewards(changes.reward)
         return rules
@@ -215,7 +211,7 @@ class BlackjackOracle(Oracle):
         return marks
 
     def optimum(self, kwargs: Mapping[str, Any]) -> Optimum:
-        rules = rules_of(kwargs)
+        rules = BlackjackRules.from_env_kwargs(kwargs)
         q = optimal_action_values(rules, soft_21="drawn")[_BASE_INDEX]
         return Optimum(
             value=optimal_value(rules),
@@ -373,15 +369,15 @@ class BlackjackGame(Game):
         from tui_gym.games.planning import PlanModel
 
         base_of = np.r_[np.arange(N_BASE), base_state(21, 1, 1) + np.arange(DEALERS)]
-        return PlanModel(blackjack_model(rules_of(kwargs)), 1.0, None, base_of=base_of,
-                         shown=np.arange(N_BASE))
+        model = blackjack_model(BlackjackRules.from_env_kwargs(kwargs))
+        return PlanModel(model, 1.0, None, base_of=base_of, shown=np.arange(N_BASE))
 
     def training_model(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> TrainingModel | NotAvailable:
         if changes.others:
             return NotAvailable(unwrapped_note(changes.others))
-        rules = rules_of(kwargs)
+        rules = BlackjackRules.from_env_kwargs(kwargs)
         if changes.changes_rewards:
             rules = rules.with_rewards(changes.reward)
         model = blackjack_model(rules)
