@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from tui_gym.core.mdp import FiniteMDP, NotAvailable, evaluate, solve, with_horizon
+from tui_gym.core.mdp import NotAvailable, evaluate, solve, with_horizon
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.envs.dp_grid import Cell, Grid
@@ -29,11 +29,6 @@ __all__ = ["BlockingMazeGame", "DynaMazeGame", "ShortcutMazeGame"]
 DISCOUNT = 0.95  # the book's
 
 
-def _steps_model(model: FiniteMDP) -> FiniteMDP:
-    """The model paying -1 a step: a policy's value is minus its expected steps."""
-    return model.replace(reward=np.full(model.reward.shape, -1.0), reward_std=None)
-
-
 class MazeOracle(ModelOracle):
     """The exact figures of the phase in force, with the steps to the goal beside them."""
 
@@ -44,7 +39,8 @@ class MazeOracle(ModelOracle):
     def policy_reference(self, policy: np.ndarray, exact: Any, kwargs: Mapping[str, Any],
                          changes: GameChanges) -> ReferenceMetrics:
         reference = super().policy_reference(policy, exact, kwargs, changes)
-        steps = _steps_model(exact.model)
+        # The model paying -1 a step: a policy's value is minus its expected steps.
+        steps = exact.model.replace(reward=np.full(exact.model.reward.shape, -1.0), reward_std=None)
         mean = -evaluate(steps, policy).value
         key = (freeze(kwargs), changes)
         if key not in self._fewest:
