@@ -123,11 +123,7 @@ class TileGame(ModelGame):
     def episode_limit(self, kwargs: Mapping[str, Any]) -> int | None:
         if kwargs.get(LAYOUT):
             return self.map_limit(self.grid_map(kwargs))
-        return self.builtin_limit(kwargs)
-
-    def builtin_limit(self, kwargs: Mapping[str, Any]) -> int | None:
-        """The episode limit on the map the parameters choose."""
-        return super().episode_limit(kwargs)
+        return super().episode_limit(kwargs)  # the limit `builtin_make_kwargs` or Gymnasium sets
 
     def map_make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         """What `gym.make` takes to play an edited map on `tui_gym/TileMap-v0`."""
