@@ -112,9 +112,16 @@ class TileGame(ModelGame):
         return TILE_MAP_ID if kwargs.get(LAYOUT) else env_id
 
     def make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
-        if kwargs.get(LAYOUT):
-            return self.map_make_kwargs(kwargs)
-        return self.builtin_make_kwargs(kwargs)
+        """`builtin_make_kwargs`, or what `tui_gym/TileMap-v0` takes to play an edited map."""
+        if not kwargs.get(LAYOUT):
+            return self.builtin_make_kwargs(kwargs)
+        rules = self.rules(kwargs)
+        return {
+            **self.grid_map(kwargs).env_kwargs(), "slip_default": rules.slip,
+            "actions": self.action_order, "step_reward": rules.step, "goal_reward": rules.goal,
+            "hole_reward": rules.hole, "cliff_reward": rules.cliff,
+            "max_episode_steps": self.episode_limit(kwargs),
+        }
 
     def builtin_make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         """What `gym.make` takes for the map the parameters choose."""
@@ -124,16 +131,6 @@ class TileGame(ModelGame):
         if kwargs.get(LAYOUT):
             return self.map_limit(self.grid_map(kwargs))
         return super().episode_limit(kwargs)  # the limit `builtin_make_kwargs` or Gymnasium sets
-
-    def map_make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
-        """What `gym.make` takes to play an edited map on `tui_gym/TileMap-v0`."""
-        rules = self.rules(kwargs)
-        return {
-            **self.grid_map(kwargs).env_kwargs(), "slip_default": rules.slip,
-            "actions": self.action_order, "step_reward": rules.step, "goal_reward": rules.goal,
-            "hole_reward": rules.hole, "cliff_reward": rules.cliff,
-            "max_episode_steps": self.episode_limit(kwargs),
-        }
 
     def map_limit(self, grid_map: GridMap) -> int:
         """The episode limit of an edited map: FrozenLake's (100 steps up to four rows, else
