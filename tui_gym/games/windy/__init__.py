@@ -11,7 +11,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from tui_gym.core.params import Param
-from tui_gym.envs.dp_grid import GRID_ACTIONS, KING_ACTIONS, STEPS, Cell, Grid, windy_grid
+from tui_gym.envs.dp_grid import GRID_ACTIONS, KING_ACTIONS, Cell, Grid, windy_grid
 from tui_gym.games.base import ReachNarrator
 from tui_gym.games.dp_grid import DPGridGame, Event
 
@@ -79,9 +79,7 @@ class WindyGame(DPGridGame):
         grid: Grid = game_env.grid
         if now in grid.terminals:
             return None
-        (dr, dc), last_row, last_col = STEPS[move], grid.rows - 1, grid.cols - 1
-        moved = (min(max(was[0] + dr, 0), last_row), min(max(was[1] + dc, 0), last_col))
-        blown = moved[0] - now[0]
+        blown = grid.landing(was, move, 0)[0][0] - now[0]  # rows up from where no wind leads
         if blown <= 0:
             return None
         where = "to the top row" if now[0] == 0 else f"{blown} up"
