@@ -66,16 +66,8 @@ if TYPE_CHECKING:
     from tui_gym.session.experiments.app_recording import SessionRunLog
     from tui_gym.ui.book_view import BookView
     from tui_gym.ui.compare_view import CompareView
-    from tui_gym.ui.confirm_screen import ConfirmScreen
     from tui_gym.ui.plan_view import PlanView
     from tui_gym.ui.train_view import TrainView
-
-
-def _confirm_screen(title: str, text: str, yes: str) -> ConfirmScreen:
-    """A yes/no question (the dialog's module is imported when first asked)."""
-    from tui_gym.ui.confirm_screen import ConfirmScreen
-
-    return ConfirmScreen(title, text, yes)
 
 
 MIN_WIDTH, MIN_HEIGHT = 80, 24  # below this: a message instead of the layout
@@ -634,17 +626,10 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     def action_request_reset(self) -> None:
         """Reset the agent; when it has trained, only once the person confirms."""
         episodes = self._episodes_trained()
-        if not episodes:
-            self.action_reset_agent()
-            return
-        self.push_screen(
-            _confirm_screen(
-                "Reset the agent?",
-                f"It has trained {plural(episodes, 'episode')}. An empty Q-table and fresh "
-                "statistics replace them (ctrl+s saves it first).",
-                "Reset",
-            ),
-            lambda yes: self.action_reset_agent() if yes else None,
+        self._ask_first(
+            episodes > 0, "Reset the agent?",
+            f"It has trained {plural(episodes, 'episode')}. An empty Q-table and fresh "
+            "statistics replace them (ctrl+s saves it first).", "Reset", self.action_reset_agent,
         )
 
     def action_toggle_training(self) -> None:
@@ -820,21 +805,12 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             episodes = self._episodes_trained()
         else:
             episodes = current.trainer.episodes if current is not None else 0
-        if not episodes:
-            self._install_loaded(session, path)
-            return
-        self.push_screen(
-            _confirm_screen(
-                f"Replace the {game.title} agent?",
-                f"The {game.title} agent here has trained {plural(episodes, 'episode')}; "
-                f"{path.name} replaces it, its settings and its wrappers.",
-                "Load",
-            ),
-            lambda yes: self._install_loaded(session, path) if yes else None,
+        self._ask_first(
+            episodes > 0, f"Replace the {game.title} agent?",
+            f"The {game.title} agent here has trained {plural(episodes, 'episode')}; "
+            f"{path.name} replaces it, its settings and its wrappers.", "Load",
+            lambda: self._when_idle(lambda: self._install_now(session, path)),
         )
-
-    def _install_loaded(self, session: Session, path: Path) -> None:
-        self._when_idle(lambda: self._install_now(session, path))
 
     def _install_now(self, session: Session, path: Path) -> None:
         if session.game is not self.session.game:
@@ -937,34 +913,37 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         if cls.name == self.session.algorithm:
             return
         episodes = self._episodes_trained()
-
-        def switch() -> None:
-            self._when_idle(lambda: self._use_algorithm(cls.name), self.side_panel.reload)
-
-        if not episodes:
-            switch()
-            return
-
-        def answer(yes: bool | None) -> None:
-            if yes:
-                switch()
-            else:
-                self.side_panel.reload()
-                self.notify(f"Still {self.session.learner_class.title}: the agent is kept.",
-                            timeout=3)
-
-        self.push_screen(
-            _confirm_screen(
-                f"Train with {cls.title} instead?",
-                "Another algorithm needs a fresh learner: the agent, trained "
-                f"{plural(episodes, 'episode')} with {self.session.learner_class.title}, "
-                "would start over with "
-                f"{cls.title}'s defaults for this game (ctrl+s saves it first). "
-                "ε, the learning rate and the other fields change without this.",
-                "Switch and reset",
-            ),
-            answer,
+        self._ask_first(
+            episodes > 0, f"Train with {cls.title} instead?",
+            "Another algorithm needs a fresh learner: the agent, trained "
+            f"{plural(episodes, 'episode')} with {self.session.learner_class.title}, "
+            f"would start over with {cls.title}'s defaults for this game (ctrl+s saves it "
+            "first). ε, the learning rate and the other fields change without this.",
+            "Switch and reset",
+            lambda: self._when_idle(lambda: self._use_algorithm(cls.name),
+                                    self.side_panel.reload),
+            kept=f"Still {self.session.learner_class.title}: the agent is kept.",
         )
+
+    def _ask_first(
+        self, asks: bool, title: str, text: str, yes: str, then: Callable[[], object],
+        kept: str = "",
+    ) -> None:
+        """Run `then` at once unless it `asks` (it would lose a trained agent): then only
+        once the person confirms. A no with `kept` puts the side panel back and says it."""
+        if not asks:
+            then()
+            return
+        from tui_gym.ui.confirm_screen import ConfirmScreen
+
+        def answer(confirmed: bool | None) -> None:
+            if confirmed:
+                then()
+            elif kept:
+                self.side_panel.reload()
+                self.notify(kept, timeout=3)
+
+        self.push_screen(ConfirmScreen(title, text, yes), answer)
 
     def _use_algorithm(self, name: str) -> None:
         self.session.set_algorithm(name)
@@ -989,25 +968,12 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             keeps = not episodes or self.session.rebuild_keeps_agent(**change)
         except ValueError:
             keeps = True  # it cannot be built: `rebuild` says why and changes nothing
-        if keeps:
-            self.rebuild(**change)
-            return
-
-        def answer(yes: bool | None) -> None:
-            if yes:
-                self.rebuild(**change)
-            else:
-                self.side_panel.reload()
-                self.notify("Not applied: the agent is kept.", timeout=3)
-
-        self.push_screen(
-            _confirm_screen(
-                "Reset the agent for this change?",
-                "It changes what observations mean, so the agent, trained "
-                f"{plural(episodes, 'episode')}, would start over (ctrl+s saves it first).",
-                "Apply and reset",
-            ),
-            answer,
+        self._ask_first(
+            not keeps, "Reset the agent for this change?",
+            "It changes what observations mean, so the agent, trained "
+            f"{plural(episodes, 'episode')}, would start over (ctrl+s saves it first).",
+            "Apply and reset", lambda: self.rebuild(**change),
+            kept="Not applied: the agent is kept.",
         )
 
     # --- help and the command palette ---------------------------------------
