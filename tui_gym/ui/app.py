@@ -64,7 +64,6 @@ from tui_gym.ui.widgets.key_bar import KeyBar
 if TYPE_CHECKING:
     from tui_gym.core.recording import Recording
     from tui_gym.session.experiments.app_recording import SessionRunLog
-    from tui_gym.ui.book_view import BookView
     from tui_gym.ui.compare_view import CompareView
     from tui_gym.ui.plan_view import PlanView
     from tui_gym.ui.train_view import TrainView
@@ -190,9 +189,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self._make_run_log = run_log if callable(run_log) else None
         self.db = db
         self.history_kept = history_kept
-        self._compare: CompareView | None = None
-        self._plan: PlanView | None = None
-        self._book: BookView | None = None
+        self._views: dict[str, Any] = {}  # the Compare, Plan and Book views, once shown
         self._train: TrainView | None = None
         self._train_mounted: AwaitMount | None = None
         self._notices: dict[tuple[str, str, str], Notification] = {}  # the last of each
@@ -319,16 +316,16 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     @property
     def compare_view(self) -> CompareView | None:
         """The Compare view, once it has been shown (it is built the first time)."""
-        return self._compare
+        return self._views.get("compare")
 
     @property
     def plan_view(self) -> PlanView | None:
         """The Plan view, once it has been shown (it is built the first time)."""
-        return self._plan
+        return self._views.get("plan")
 
     def _reload_plan(self) -> None:
-        if self._plan is not None and self._plan.is_mounted:
-            self._plan.reload()
+        if (plan := self.plan_view) is not None and plan.is_mounted:
+            plan.reload()
 
     @property
     def side_panel(self) -> SidePanel:
@@ -382,34 +379,22 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     def action_show_view(self, view: str) -> None:
         if self._switcher is None:
             return
-        compare = self._compare
+        compare = self.compare_view
         if view != "compare" and compare is not None and compare.stop_comparison():
             self.notify("Comparison stopped: what finished is recorded.", timeout=4)
         if view == "train":
             self._ensure_train()
-        if view == "compare" and compare is None:
-            # Built (and imported) the first time it shows: most runs of the app never open it.
-            from tui_gym.ui.compare_view import CompareView
-
-            compare = self._compare = CompareView(id="compare", db=self.db,
-                                                        kept=self.history_kept)
-            self._switcher.mount(compare)  # it reads the history and takes the focus at mount
-        if view == "plan" and self._plan is None:
-            from tui_gym.ui.plan_view import PlanView
-
-            self._plan = PlanView(id="plan")
-            self._switcher.mount(self._plan)
-        if view == "book" and self._book is None:
-            from tui_gym.ui.book_view import BookView
-
-            self._book = BookView(id="book")
-            self._switcher.mount(self._book)
+        elif view != "play" and view not in self._views:
+            # Built (and imported) the first time it shows: most runs of the app never open
+            # them. The Compare view reads the history and takes the focus at mount.
+            self._views[view] = self._new_view(view)
+            self._switcher.mount(self._views[view])
         self._switcher.current = view
         self._show_side()
         if view == "play":
             self.play_view.focus_board()
         elif view == "compare":
-            assert compare is not None
+            compare = self._views[view]
             if compare.is_mounted:
                 compare.reload(fresh=True)
                 compare.focus_default()
@@ -418,6 +403,20 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         else:
             self._train_shown()
         self.refresh_bindings()  # the view's keys, even when the focus stays put
+
+    def _new_view(self, view: str) -> Any:
+        """The Compare, Plan or Book view."""
+        if view == "compare":
+            from tui_gym.ui.compare_view import CompareView
+
+            return CompareView(id="compare", db=self.db, kept=self.history_kept)
+        if view == "plan":
+            from tui_gym.ui.plan_view import PlanView
+
+            return PlanView(id="plan")
+        from tui_gym.ui.book_view import BookView
+
+        return BookView(id="book")
 
     def _train_shown(self) -> None:
         """The Train view takes the keyboard (once it is mounted, when it is shown before).
@@ -449,8 +448,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self.switch_game(game)
 
     async def action_edit_map(self) -> None:
-        if self.current_view == "plan" and self._plan is not None:
-            self._plan.open_editor()  # it plans on beside the editor
+        if self.current_view == "plan" and (plan := self.plan_view) is not None:
+            plan.open_editor()  # it plans on beside the editor
             return
         self.action_show_view("train")
         view = await self._mounted_train()
@@ -482,12 +481,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         """Give the keyboard back to the view shown (its board, or the heatmap)."""
         if self.current_view == "play":
             self.play_view.focus_board()
-        elif self.current_view == "compare" and self._compare is not None:
-            self._compare.focus_default()
-        elif self.current_view == "plan" and self._plan is not None:
-            self._plan.focus_default()
-        elif self.current_view == "book" and self._book is not None:
-            self._book.focus_default()
+        elif self.current_view in self._views:
+            self._views[self.current_view].focus_default()
         elif (view := self._train_ready()) is not None:
             view.focus_default()  # else it takes the keyboard when it mounts
 
@@ -612,8 +607,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self._last_version = -1
         self.play_view.reload()
         self._reload_train()
-        if self._compare is not None:
-            self._compare.reload()
+        if (compare := self.compare_view) is not None:
+            compare.reload()
         self._reload_plan()
         self.side_panel.reload()
         self.refresh_bindings()  # the keys the game offers (`m` for a map)
@@ -1072,8 +1067,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
 
     async def action_quit(self) -> None:
         self.recording.turn_off()
-        if self._compare is not None:
-            self._compare.stop_comparison()  # it records what finished while the app ends
+        if (compare := self.compare_view) is not None:
+            compare.stop_comparison()  # it records what finished while the app ends
         self.exit(0)  # the runner closes at unmount, without holding the screen up
 
     def on_unmount(self) -> None:
