@@ -34,6 +34,7 @@ from tui_gym.games.base import (
     greedy_probabilities,
 )
 from tui_gym.games.gridworld.paths import (
+    fewest_share,
     gridworld_model,
     gridworld_optimum,
     mean_fewest_steps,
@@ -189,7 +190,7 @@ class GridWorldOracle(Oracle):
         size = _size(kwargs)
         if np.shape(q) != (size**4, 4):
             return NotAvailable(f"a table of shape {np.shape(q)} does not fit a {size}x{size} grid")
-        frac = path_figures(size, _walls(kwargs), greedy_probabilities(q))[0]
+        frac = fewest_share(size, _walls(kwargs), greedy_probabilities(q))
         return ReferenceMetrics(
             figures={"optimal_pair_fraction": frac},
             summary=f"{frac:.1%} of (agent, target) pairs solved in the fewest steps",
