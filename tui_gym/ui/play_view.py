@@ -342,8 +342,9 @@ class PlayView(Vertical):
         self._show_tally()
 
     # --- drawing ---------------------------------------------------------------
-    def _show_board(self) -> None:
-        game, board = self.game, self.board
+    def _show_board(self, game: HumanGame | None = None) -> None:
+        """Draw `game` (the person's when None) on the board."""
+        game, board = self.game if game is None else game, self.board
         if game is None or board is None:
             return
         board.show_scene(game.scene(), reveal=game.done)
@@ -495,8 +496,7 @@ class PlayView(Vertical):
 
     # --- watching the agent ----------------------------------------------------
     def action_watch_agent(self) -> None:
-        if not self.watching:
-            self.start_watching()
+        self.start_watching()
 
     def start_watching(self) -> None:
         """Let the greedy agent play fresh episodes on the board until a key is pressed."""
@@ -608,11 +608,9 @@ class PlayView(Vertical):
             self._show_agent(f"The agent chose {name}: {note.removeprefix('agent: ')}.")
 
     def _show_agent(self, detail: str, tone: str = "-agent") -> None:
-        game, board = self.agent_game, self.board
-        if game is None or board is None:
+        if self.agent_game is None or self.board is None:
             return
-        board.show_scene(game.scene(), reveal=game.done)
-        board.set_episode_over(game.done)
+        self._show_board(self.agent_game)
         self._hint = ""
         self._update_status(Content(WATCHING), detail, "", "", tone)
 
