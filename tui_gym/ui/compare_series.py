@@ -94,23 +94,32 @@ def _finite(episodes: np.ndarray, *columns: np.ndarray) -> tuple[np.ndarray, ...
     return (episodes[keep], *(c[keep] for c in columns))
 
 
+def _curve(
+    key: Hashable, label: str, episodes: np.ndarray, mean: np.ndarray,
+    lo: np.ndarray | None, hi: np.ndarray | None, seeds: int, smooth: bool,
+) -> Series | None:
+    """The curve over its finite points, with its band where the band has some; None
+    without a point."""
+    if lo is not None and hi is not None:
+        xs, ys, low, high = _finite(episodes, mean, lo, hi)
+        if len(xs):
+            return _smoothed(key, label, xs, ys, low, high, seeds, smooth)
+    xs, ys = _finite(episodes, mean)
+    return _smoothed(key, label, xs, ys, None, None, seeds, smooth) if len(xs) else None
+
+
 def series_of_record(record: RunRecord, smooth: bool = True) -> Series | None:
     """The run's `return` curve (with `return.lo`/`return.hi` as its band), None without one."""
     curve = record.curve(CURVE)
     if curve is None or not len(curve):
         return None
-    label = run_label(record.summary)
-    seeds = max(1, len(record.summary.seeds))
     lo, hi = record.curve(f"{CURVE}.lo"), record.curve(f"{CURVE}.hi")
+    band: tuple[np.ndarray | None, np.ndarray | None] = (None, None)
     if (lo is not None and hi is not None and np.array_equal(lo.episodes, curve.episodes)
             and np.array_equal(hi.episodes, curve.episodes)):
-        episodes, mean, low, high = _finite(curve.episodes, curve.values, lo.values, hi.values)
-        if len(episodes):
-            return _smoothed(record.id, label, episodes, mean, low, high, seeds, smooth)
-    episodes, values = _finite(curve.episodes, curve.values)
-    if not len(episodes):
-        return None
-    return _smoothed(record.id, label, episodes, values, None, None, seeds, smooth)
+        band = (lo.values, hi.values)
+    return _curve(record.id, run_label(record.summary), curve.episodes, curve.values, *band,
+                  max(1, len(record.summary.seeds)), smooth)
 
 
 def series_of_outcome(outcome: AlgorithmOutcome, label: str, smooth: bool = True) -> Series | None:
@@ -128,20 +137,11 @@ def series_of_outcome(outcome: AlgorithmOutcome, label: str, smooth: bool = True
                               smoothing_episodes=outcome.smoothing)
     if not len(curve):
         return None
-    episodes = np.asarray(curve.episodes)
-    mean = np.asarray(curve.mean, dtype=np.float64)
     lo, hi = curve.lo, curve.hi
-    seeds = max(1, int(curve.seeds))
-    key = ("live", outcome.algorithm)
-    if lo is not None and hi is not None:
-        episodes, mean, lo, hi = _finite(episodes, mean, np.asarray(lo), np.asarray(hi))
-        if not len(episodes):
-            return None
-        return _smoothed(key, label, episodes, mean, lo, hi, seeds, smooth)
-    episodes, mean = _finite(episodes, mean)
-    if not len(episodes):
-        return None
-    return _smoothed(key, label, episodes, mean, None, None, seeds, smooth)
+    return _curve(("live", outcome.algorithm), label, np.asarray(curve.episodes),
+                  np.asarray(curve.mean, dtype=np.float64),
+                  None if lo is None else np.asarray(lo), None if hi is None else np.asarray(hi),
+                  max(1, int(curve.seeds)), smooth)
 
 
 @dataclass(frozen=True)

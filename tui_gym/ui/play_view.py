@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import random
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar, cast
 
 from textual import events, on
@@ -46,28 +45,11 @@ def _agent_figures(asked: AgentAsked) -> tuple[dict[str, float], str]:
     return session.agent_figures(snapshot), session.exact_reason()
 
 
-@dataclass
-class _KeptPlay:
-    """A game's play put away by a game switch (see `PlayView.put_away`)."""
-
-    game: HumanGame
-    chain: tuple[Any, ...]  # the game and wrappers it was played with
-    scorecard: Scorecard
-    outcomes: dict[str, int]
-    agent_game: HumanGame | None
-    agent_card: Scorecard
-    watch_rng: random.Random
-    headline: Content
-    tone: str
-    hint: str
-    verdict: str
-    coach: str
-    coach_tone: str
-
-    def close(self) -> None:
-        self.game.close()
-        if self.agent_game is not None:
-            self.agent_game.close()
+# What a game switch puts away of the person's play on a game (see `PlayView.put_away`).
+_KEPT_ATTRIBUTES = (
+    "game", "scorecard", "outcomes", "agent_game", "agent_card", "_watch_rng",
+    "_headline", "_tone", "_hint", "_verdict", "_coach", "_coach_tone",
+)
 
 
 def _chain(session: Any) -> tuple[Any, ...]:
@@ -129,7 +111,9 @@ class PlayView(Vertical):
         self.game: HumanGame | None = None
         self.board: Board | None = None
         self.outcomes: dict[str, int] = {}  # finished episodes by the narrator's tally word
-        self._kept: dict[str, _KeptPlay] = {}  # each game's play put away by a game switch
+        # Each game's play put away by a game switch: what it was built from, and the
+        # `_KEPT_ATTRIBUTES` as they were.
+        self._kept: dict[str, tuple[tuple[Any, ...], dict[str, Any]]] = {}
         self._headline = Content()
         self._tone = ""
         self._hint = ""
@@ -196,14 +180,11 @@ class PlayView(Vertical):
         self.stop_watching(restore=False)
         self._agent_exact.drop()  # the figures of what was played before never show
         self.agent_figures, self._exact_reason = None, COMPUTING
-        kept = self._kept.pop(session.game.name, None)
-        if kept is not None and (kept.game.session is not session or kept.chain != _chain(session)):
-            kept.close()
+        chain, kept = self._kept.pop(session.game.name, ((), None))
+        if kept is not None and (kept["game"].session is not session or chain != _chain(session)):
+            _close(kept["game"], kept["agent_game"])
             kept = None
-        if self.game is not None:
-            self.game.close()
-        if self.agent_game is not None:
-            self.agent_game.close()
+        _close(self.game, self.agent_game)
         if kept is None:
             self.game = HumanGame(session, seed=self.tui.play_seed)
             self.game.recorder = getattr(self.tui, "recording", None)  # records while switched on
@@ -213,7 +194,8 @@ class PlayView(Vertical):
             self._watch_rng = random.Random(self.tui.play_seed)
             self.outcomes = {}
         else:
-            self._restore(kept)
+            for name, value in kept.items():
+                setattr(self, name, value)
         kind = board_class(session.game.board)
         if type(self.board) is not kind:
             old = self.board
@@ -241,20 +223,9 @@ class PlayView(Vertical):
         game = self.game
         if game is None:
             return
-        self._kept[game.game.name] = _KeptPlay(
-            game, _chain(game.session), self.scorecard, dict(self.outcomes), self.agent_game,
-            self.agent_card, self._watch_rng, self._headline, self._tone, self._hint,
-            self._verdict, self._coach, self._coach_tone,
-        )
+        self._kept[game.game.name] = (
+            _chain(game.session), {name: getattr(self, name) for name in _KEPT_ATTRIBUTES})
         self.game = self.agent_game = None
-
-    def _restore(self, kept: _KeptPlay) -> None:
-        self.game, self.scorecard, self.outcomes = kept.game, kept.scorecard, kept.outcomes
-        self.agent_game, self.agent_card, self._watch_rng = (
-            kept.agent_game, kept.agent_card, kept.watch_rng,
-        )
-        self._headline, self._tone, self._hint = kept.headline, kept.tone, kept.hint
-        self._verdict, self._coach, self._coach_tone = kept.verdict, kept.coach, kept.coach_tone
 
     def focus_board(self) -> None:
         if self.board is not None and self.board.is_mounted:
@@ -371,8 +342,9 @@ class PlayView(Vertical):
         self._show_tally()
 
     # --- drawing ---------------------------------------------------------------
-    def _show_board(self) -> None:
-        game, board = self.game, self.board
+    def _show_board(self, game: HumanGame | None = None) -> None:
+        """Draw `game` (the person's when None) on the board."""
+        game, board = self.game if game is None else game, self.board
         if game is None or board is None:
             return
         board.show_scene(game.scene(), reveal=game.done)
@@ -524,8 +496,7 @@ class PlayView(Vertical):
 
     # --- watching the agent ----------------------------------------------------
     def action_watch_agent(self) -> None:
-        if not self.watching:
-            self.start_watching()
+        self.start_watching()
 
     def start_watching(self) -> None:
         """Let the greedy agent play fresh episodes on the board until a key is pressed."""
@@ -637,11 +608,9 @@ class PlayView(Vertical):
             self._show_agent(f"The agent chose {name}: {note.removeprefix('agent: ')}.")
 
     def _show_agent(self, detail: str, tone: str = "-agent") -> None:
-        game, board = self.agent_game, self.board
-        if game is None or board is None:
+        if self.agent_game is None or self.board is None:
             return
-        board.show_scene(game.scene(), reveal=game.done)
-        board.set_episode_over(game.done)
+        self._show_board(self.agent_game)
         self._hint = ""
         self._update_status(Content(WATCHING), detail, "", "", tone)
 
@@ -673,6 +642,12 @@ class PlayView(Vertical):
             mean += f" ± {interval_text(tally)} [$text-muted](95% CI)[/]"
         parts.append(f"[$text-muted]mean return[/] {mean}")
         self.query_one("#play-tally", Static).update(Content.from_markup("   ".join(parts)))
+
+
+def _close(*games: HumanGame | None) -> None:
+    for game in games:
+        if game is not None:
+            game.close()
 
 
 def _verdict(before: Advice | None, step: PlayStep, names: tuple[str, ...]) -> str:

@@ -220,11 +220,6 @@ async def _book(app, pilot, figure: str) -> None:
     await pilot.pause()
 
 
-async def _wrappers(app, pilot) -> None:
-    await pilot.press("w")
-    await pilot.pause()
-
-
 async def _traces(app, pilot) -> None:
     """A few steps into an episode, the heatmap turned to the traces they left."""
     await _step_by_step(app, pilot, steps=6)
@@ -234,8 +229,8 @@ async def _traces(app, pilot) -> None:
     await pilot.pause()
 
 
-async def _help(app, pilot) -> None:
-    await pilot.press("question_mark")
+async def _press(app, pilot, key: str) -> None:
+    await pilot.press(key)
     await pilot.pause()
 
 
@@ -265,7 +260,7 @@ def _scenarios() -> tuple[Scenario, ...]:
         Scenario("traces.svg", "CliffWalking: Sarsa(λ)'s eligibility traces, six steps in",
                  partial(Session, "cliffwalking", seed=0, algorithm="sarsa-lambda"), _traces),
         Scenario("wrappers.svg", "The wrapper panel in use",
-                 partial(Session, shown.env_id, choices=choices, seed=1), _wrappers),
+                 partial(Session, shown.env_id, choices=choices, seed=1), partial(_press, key="w")),
         Scenario("compare.svg", f"{compared.title}: Q-learning against SARSA over 10 seeds",
                  partial(Session, compared.env_id, seed=0), _compare),
         Scenario("plan.svg", "FrozenLake: value iteration, then a hole painted while it plans",
@@ -277,7 +272,8 @@ def _scenarios() -> tuple[Scenario, ...]:
                  partial(Session, "car-rental", seed=0), partial(_plan, keys=("2", "c"))),
         Scenario("book.svg", "Figure 8.2: Dyna-Q's planning steps on the Dyna maze, checked",
                  partial(Session, "dyna-maze", seed=0), partial(_book, figure="8.2")),
-        Scenario("help.svg", "Every key", partial(Session, first.env_id, seed=0), _help),
+        Scenario("help.svg", "Every key", partial(Session, first.env_id, seed=0),
+                 partial(_press, key="question_mark")),
         Scenario("compact-80x24.svg", "The compact layout at 80x24",
                  partial(Session, first.env_id, seed=4), _play, size=(80, 24)),
     ]

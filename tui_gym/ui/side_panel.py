@@ -10,7 +10,6 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.message import Message
-from textual.validation import ValidationResult, Validator
 from textual.widget import AwaitMount
 from textual.widgets import Checkbox, Input, Label, RadioButton, RadioSet, Static
 
@@ -18,6 +17,7 @@ from tui_gym.algorithms import ALGORITHMS
 from tui_gym.core.params import typed_text
 from tui_gym.core.wrappers import CATALOG, Param, WrapperChoice, format_wrapper_spec
 from tui_gym.games import GAMES
+from tui_gym.ui.widgets.hyperparameter_form import FieldValidator
 from tui_gym.ui.widgets.text_field import TextField
 from tui_gym.ui.widgets.tick_box import TickBox
 
@@ -25,21 +25,6 @@ if TYPE_CHECKING:
     from tui_gym.session.session import Session
 
 OTHER = "game-other"  # the picker's button for an env the registry does not list
-
-
-class ParamValidator(Validator):
-    """Checks field text with a `Param`, so the Input marks itself valid or invalid."""
-
-    def __init__(self, param: Param) -> None:
-        super().__init__()
-        self.param = param
-
-    def validate(self, value: str) -> ValidationResult:
-        try:
-            self.param.parse(value)
-        except ValueError as exc:
-            return self.failure(str(exc))
-        return self.success()
 
 
 FIELD_WIDTH, COMPACT_FIELD_WIDTH = 12, 7  # the input beside a parameter's name
@@ -79,7 +64,7 @@ class ParamField(Horizontal):
             yield box
             return
         field = TextField(
-            value=typed_text(self._value), compact=True, validators=[ParamValidator(self.param)],
+            value=typed_text(self._value), compact=True, validators=[FieldValidator(self.param)],
             validate_on=["changed", "submitted"],
         )
         field.tooltip = tooltip
@@ -106,9 +91,11 @@ class ParamField(Horizontal):
             self.input.value = typed_text(value)
 
     def read(self) -> tuple[Any, str | None]:
-        """(value, None) when the text is valid, else (None, the reason)."""
+        """(value, None) when the text is valid, else (None, the reason); the input
+        marks itself valid or invalid."""
         if self.param.kind is bool:
             return self.query_one(Checkbox).value, None
+        self.input.validate(self.input.value)
         try:
             return self.param.parse(self.input.value), None
         except ValueError as exc:
@@ -476,16 +463,11 @@ class SidePanel(VerticalScroll):
         return next((env_id for i, _, env_id in self._picker_games() if i == pressed.id),
                     self.session.env_id)
 
-    def _mark(self, field: ParamField, error: str | None) -> None:
-        if field.param.kind is not bool:
-            field.input.validate(field.input.value)
-
     def _read_env_kwargs(self) -> dict[str, Any] | None:
         values: dict[str, Any] = {}
         first_error = None
         for field in self.query_one("#env-params").query(ParamField):
             value, error = field.read()
-            self._mark(field, error)
             if error:
                 first_error = first_error or error
             else:
@@ -505,7 +487,7 @@ class SidePanel(VerticalScroll):
         first_error = None
         for row in self.query(WrapperRow):
             for field in row.query(ParamField):
-                self._mark(field, field.read()[1])
+                field.read()  # marks every field, of a row ticked or not
             choice, error = row.read()
             row.show_error(error)
             if error:
@@ -549,7 +531,6 @@ class SidePanel(VerticalScroll):
         field = next((a for a in event.input.ancestors if isinstance(a, ParamField)), None)
         if field is not None:
             error = field.read()[1]
-            self._mark(field, error)
             row = next((a for a in field.ancestors if isinstance(a, WrapperRow)), None)
             if row is None:
                 self._show_error("#env-error", error)

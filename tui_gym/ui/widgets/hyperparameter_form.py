@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import ClassVar
+from typing import ClassVar, cast
 
 from textual import on
 from textual.app import ComposeResult
@@ -218,13 +218,9 @@ class HyperparameterForm(Vertical):
         """The Input of one typed hyperparameter, e.g. `input("learning_rate")`."""
         return self.query_one(f"#hp-{name}", Input)
 
-    def select(self, name: str) -> Select:
-        """The Select of one picked hyperparameter, e.g. `select("learning_rate_schedule")`."""
-        return self.query_one(f"#hp-{name}", Select)
-
-    def control(self, name: str) -> Widget:
+    def control(self, name: str) -> Input | Select[str]:
         """The widget that edits one hyperparameter (an Input or a Select)."""
-        return self.query_one(f"#hp-{name}")
+        return cast("Input | Select[str]", self.query_one(f"#hp-{name}"))
 
     def error(self, name: str) -> str:
         """The problem shown under a field ('' when none)."""
@@ -273,9 +269,7 @@ class HyperparameterForm(Vertical):
 
     # --- reading and loading -----------------------------------------------
     def _raw(self, field: Field) -> str:
-        if _typed(field):
-            return self.input(field.name).value
-        value = self.select(field.name).value
+        value = self.control(field.name).value
         return value if isinstance(value, str) else ""
 
     def read(self) -> Settings | None:
@@ -329,14 +323,9 @@ class HyperparameterForm(Vertical):
             return
         for field in self.fields:
             text = _text(field, getattr(hyperparameters, field.name))
-            if _typed(field):
-                box = self.input(field.name)
-                if box.value != text:
-                    box.value = text
-            else:
-                select = self.select(field.name)
-                if select.value != text:
-                    select.value = text
+            box = self.control(field.name)
+            if box.value != text:
+                box.value = text
             self._mark(field.name, None)
 
     @property

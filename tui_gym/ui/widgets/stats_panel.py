@@ -33,22 +33,14 @@ def run_state(running: bool, episodes: int, steps: int, budget: int) -> str:
     return "idle"
 
 
-def format_figure(key: str, value: float) -> str:
-    """A reference figure as text: shares as percentages, values signed."""
-    if key.endswith(("fraction", "rate", "share")):
-        return f"{value:.1%}"
-    if key == "gap" or key.endswith("_gap"):
-        return f"{value:.4f}"
-    return f"{value:+.4f}"
-
-
 def figure_forms(key: str, value: float) -> Forms:
-    """`format_figure`, then shorter forms of the same number (for narrow screens)."""
-    full = format_figure(key, value)
+    """A reference figure as text (shares as percentages, values signed), then shorter
+    forms of the same number (for narrow screens)."""
     if key.endswith(("fraction", "rate", "share")):
-        return (full,)
-    sign = "" if key == "gap" or key.endswith("_gap") else "+"
-    return number_forms(full, value, sign)
+        return (f"{value:.1%}",)
+    if key == "gap" or key.endswith("_gap"):
+        return number_forms(f"{value:.4f}", value, "")
+    return number_forms(f"{value:+.4f}", value, "+")
 
 
 def format_duration(seconds: float) -> str:
@@ -56,12 +48,6 @@ def format_duration(seconds: float) -> str:
     hours, rest = divmod(seconds, 3600)
     minutes, secs = divmod(rest, 60)
     return f"{hours}:{minutes:02d}:{secs:02d}" if hours else f"{minutes}:{secs:02d}"
-
-
-def format_rate(rate: float) -> str:
-    if rate >= 100:
-        return f"{rate:,.0f}"
-    return f"{rate:.1f}"
 
 
 NO_DATA = "–"
@@ -119,7 +105,8 @@ class StatsPanel(StripWidget):
         rows: list[tuple[str, Forms, str]] = [
             ("episodes", count_forms(snapshot.episodes), "bold"),
             ("steps", count_forms(snapshot.steps), ""),
-            ("eps/s", (format_rate(rate), compact_count(rate)) if rate > 0 else none, ""),
+            ("eps/s", (f"{rate:,.0f}" if rate >= 100 else f"{rate:.1f}", compact_count(rate))
+             if rate > 0 else none, ""),
             ("time", (format_duration(snapshot.seconds),) if snapshot.seconds > 0 else none, ""),
             ("epsilon", (f"{snapshot.epsilon:.3f}",), ""),
             ("return", number_forms(f"{snapshot.mean_return:+.4f}", snapshot.mean_return, "+")
