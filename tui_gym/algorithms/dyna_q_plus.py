@@ -13,6 +13,7 @@ from tui_gym.algorithms.dyna_q import DynaQ
 from tui_gym.core.engine.kernel import kernel
 from tui_gym.core.engine.rules import (
     Rule,
+    every,
     max_value,
     offered_range,
     register,
@@ -49,7 +50,9 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
         for b in range(n_actions):
             if model_next[s, b] >= 0:
                 fresh = False
-        lo, hi = offered_range(offered, s)
+        lo, hi = 0, n_actions
+        if not every(offered):
+            lo, hi = offered_range(offered, s)
         for b in range(n_actions):
             if b == a or (fresh and lo <= b < hi):
                 tried[n_tried[0]] = s * n_actions + b

@@ -24,8 +24,8 @@ serves every algorithm that acts on the same number of tables.
 
 **Offered actions.** Each table row offers one run of actions, `lo` to `hi - 1`:
 `offered` is an unsigned array `[rows, 2]` of those bounds (`offered_ranges` makes it
-from a bool mask), or `[1, 2]` when every row offers the same (every action:
-`[[0, n_actions]]`), so every game runs the one compiled form. Acting (`act`,
+from a bool mask), or `[0, 2]` (empty) when every row offers every action, so every
+game runs the one compiled form. Acting (`act`,
 `greedy`), the max (`max_value`) and the ε-greedy expectation (`expected_value`)
 range over the offered actions only; a rule passes `offered` on to them and needs
 nothing else. A uniform draw among them is `lo + uniform(rng, hi - lo)`: the same
@@ -49,6 +49,7 @@ __all__ = [
     "acting",
     "begin",
     "epsilon_at",
+    "every",
     "expected_value",
     "full",
     "greedy",
@@ -144,9 +145,15 @@ def uniform(rng: Any, n: int) -> int:
 
 @kernel(inline=True)
 def offered_range(offered: Any, s: int) -> tuple[Any, Any]:
-    """The actions row `s` offers: `lo` to `hi - 1` (a single row of `offered`: every row's)."""
-    row = s if s < offered.shape[0] else 0
-    return np.int64(offered[row, 0]), np.int64(offered[row, 1])  # unsigned: never below 0
+    """The actions row `s` offers: `lo` to `hi - 1` (`offered` not empty: see `every`)."""
+    return np.int64(offered[s, 0]), np.int64(offered[s, 1])  # unsigned: never below 0
+
+
+@kernel(inline=True)
+def every(offered: Any) -> bool:
+    """Whether every row offers every action (`offered` empty). The same on every call:
+    each caller runs its loop over `0` to `n` apart, as fast as for a game with no mask."""
+    return offered.shape[0] == 0
 
 
 @kernel(inline=True)
@@ -162,7 +169,15 @@ def value(values: Any, s: int, a: int) -> float:
 def greedy(values: Any, rng: Any, offered: Any, s: int) -> int:
     """The best-valued action row `s` offers (`values`: the tables `acting` gives), ties
     broken uniformly (a draw only on a tie)."""
+    if every(offered):
+        return greedy_in(values, rng, s, 0, values[0].shape[1])
     lo, hi = offered_range(offered, s)
+    return greedy_in(values, rng, s, lo, hi)
+
+
+@kernel(inline=True)
+def greedy_in(values: Any, rng: Any, s: int, lo: int, hi: int) -> int:
+    """`greedy` among actions `lo` to `hi - 1`."""
     choice = lo
     best = value(values, s, lo)
     ties = 1
@@ -188,6 +203,8 @@ def act(values: Any, rng: Any, offered: Any, s: int, epsilon: float) -> int:
     """Epsilon-greedy in row `s`: an offered action drawn uniformly with probability
     epsilon, else greedy."""
     if epsilon > 0.0 and rng.random() < epsilon:
+        if every(offered):
+            return uniform(rng, values[0].shape[1])
         lo, hi = offered_range(offered, s)
         return lo + uniform(rng, hi - lo)
     return greedy(values, rng, offered, s)
@@ -197,7 +214,15 @@ def act(values: Any, rng: Any, offered: Any, s: int, epsilon: float) -> int:
 def expected_value(values: Any, offered: Any, s: int, epsilon: float) -> float:
     """Σ_a π(a|s) value(s, a) under epsilon-greedy over the offered actions, ties sharing
     the greedy part: epsilon times their mean value plus (1 - epsilon) times the best."""
+    if every(offered):
+        return expected_in(values, s, 0, values[0].shape[1], epsilon)
     lo, hi = offered_range(offered, s)
+    return expected_in(values, s, lo, hi, epsilon)
+
+
+@kernel(inline=True)
+def expected_in(values: Any, s: int, lo: int, hi: int, epsilon: float) -> float:
+    """`expected_value` over actions `lo` to `hi - 1`."""
     best = value(values, s, lo)
     total = best
     for a in range(lo + 1, hi):
@@ -210,7 +235,15 @@ def expected_value(values: Any, offered: Any, s: int, epsilon: float) -> float:
 @kernel(inline=True)
 def max_value(q: Any, offered: Any, s: int) -> float:
     """The largest value in row `s` of `q` among the actions it offers."""
+    if every(offered):
+        return max_in(q, s, 0, q.shape[1])
     lo, hi = offered_range(offered, s)
+    return max_in(q, s, lo, hi)
+
+
+@kernel(inline=True)
+def max_in(q: Any, s: int, lo: int, hi: int) -> float:
+    """`max_value` over actions `lo` to `hi - 1`."""
     top = q[s, lo]
     for b in range(lo + 1, hi):
         top = max(top, q[s, b])
@@ -243,7 +276,7 @@ def offered_ranges(mask: np.ndarray | None, n_actions: int) -> np.ndarray:
     actions each row offers (None: every row offers every action). ValueError when a row
     offers none, or actions apart (not one run)."""
     if mask is None:
-        return np.array([[0, n_actions]], dtype=np.uint32)
+        return np.zeros((0, 2), dtype=np.uint32)
     lo = np.argmax(mask, axis=1)
     hi = n_actions - np.argmax(mask[:, ::-1], axis=1)
     runs = np.arange(n_actions) >= lo[:, None]
