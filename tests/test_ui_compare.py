@@ -26,6 +26,7 @@ from tui_gym.core.experiments import (
 from tui_gym.core.experiments.schema import MIGRATIONS
 from tui_gym.session.experiments.compare import CompareProgress, CompareSpec
 from tui_gym.session.session import Session
+from tui_gym.ui import compare_job
 from tui_gym.ui.compare_job import CompareJob
 from tui_gym.ui.compare_series import series_of_record
 from tui_gym.ui.compare_view import CompareView, parse_count, read_launch
@@ -37,6 +38,13 @@ from .waiting import press_busy, send_key, wait_busy, wait_for
 
 DEADLINE = 20.0
 SIZE = (100, 40)
+
+
+@pytest.fixture(autouse=True)
+def comparisons_at_the_tests_priority(monkeypatch) -> None:
+    """The comparisons here run on a thread of the test's process: at the lower priority
+    the app gives them, a machine loaded by other tests starves them past any wait."""
+    monkeypatch.setattr(compare_job, "NICENESS", 0)
 
 
 class ViewApp(App[None]):
