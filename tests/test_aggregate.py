@@ -12,9 +12,10 @@ from tui_gym.core.experiments.aggregate import (
     mean_return_last,
     mean_with_ci,
     rolling_mean,
+    t_cdf,
     t_half_width,
+    t_quantile,
 )
-from tui_gym.core.experiments.student_t import t_cdf, t_quantile
 
 # t(0.975, df) from the standard tables.
 T_975 = {1: 12.706, 2: 4.303, 3: 3.182, 5: 2.571, 10: 2.228, 30: 2.042, 100: 1.984}

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tui_gym.core.experiments.downsample import (
+from tui_gym.core.experiments.aggregate import (
     CurveAccumulator,
+    aggregate,
     bucket_means,
-    downsample,
     pick_indices,
 )
 
@@ -24,10 +24,11 @@ def test_pick_indices_are_even_and_keep_both_ends() -> None:
 
 
 def test_downsample_picks_the_same_points_of_every_series() -> None:
-    episodes = np.arange(1, 11)
-    xs, ys = downsample(episodes, episodes * 10.0, max_points=4)
-    assert xs.tolist() == [1, 4, 7, 10]
-    assert ys.tolist() == [10.0, 40.0, 70.0, 100.0]
+    values = np.arange(1, 11) * 10.0
+    curve = aggregate([values, values + 2.0]).downsample(4)
+    assert curve.episodes.tolist() == [1, 4, 7, 10]
+    assert curve.mean.tolist() == [11.0, 41.0, 71.0, 101.0]
+    assert curve.half_width is not None and len(curve.half_width) == 4
 
 
 def test_bucket_means_by_hand() -> None:

@@ -10,7 +10,7 @@ from rich.console import Console
 
 from tui_gym.bench.history import HistoryResult, _size
 from tui_gym.bench.report import MISS, PASS, table, to_json, verdicts
-from tui_gym.bench.results import BenchResults, MachineInfo
+from tui_gym.bench.run import BenchResults, MachineInfo
 from tui_gym.cli.output import _clean
 from tui_gym.core.experiments import Curve, Figure, RunHistory, RunKind, RunSpec, RunStatus
 

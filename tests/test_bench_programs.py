@@ -20,7 +20,7 @@ from tui_gym.bench.programs import (
     measure_separation,
 )
 from tui_gym.bench.report import MISS, PASS, table, to_json, verdicts
-from tui_gym.bench.results import BenchResults
+from tui_gym.bench.run import BenchResults
 
 
 def test_episodes_needed_is_the_two_sample_formula() -> None:

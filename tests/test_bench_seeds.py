@@ -6,9 +6,9 @@ from dataclasses import replace
 
 from rich.console import Console
 
+from tui_gym.bench.compare import SeedsSpeed
 from tui_gym.bench.report import MISS, PASS, table, to_json, verdicts
-from tui_gym.bench.results import BenchResults, MachineInfo
-from tui_gym.bench.seeds import SeedsSpeed
+from tui_gym.bench.run import BenchResults, MachineInfo
 
 
 def _results(compare_s: float) -> BenchResults:

@@ -7,9 +7,9 @@ import json
 
 from rich.console import Console
 
+from tui_gym.bench.compare import TasksResult
 from tui_gym.bench.report import MISS, PASS, table, to_json, verdicts
-from tui_gym.bench.results import BenchResults, MachineInfo
-from tui_gym.bench.tasks import TasksResult
+from tui_gym.bench.run import BenchResults, MachineInfo
 from tui_gym.cli.output import _clean
 
 

@@ -18,7 +18,7 @@ from tui_gym.benchmark.players import (
     ProcessPlayer,
     RandomPlayer,
 )
-from tui_gym.benchmark.run import run_benchmark
+from tui_gym.benchmark.results import run_benchmark
 from tui_gym.cli import main
 from tui_gym.games import GAMES
 

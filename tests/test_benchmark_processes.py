@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from tui_gym.benchmark.players import ProcessPlayer
-from tui_gym.benchmark.run import run_benchmark
+from tui_gym.benchmark.results import run_benchmark
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLE = ROOT / "examples" / "heuristic_player.py"

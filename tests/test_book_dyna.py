@@ -11,7 +11,7 @@ import pytest
 from tui_gym.algorithms import algorithm
 from tui_gym.core.engine import loop
 from tui_gym.core.mdp import solve, with_horizon
-from tui_gym.session.book import changing_mazes, example_8_4, figure_named, figures
+from tui_gym.session.book import dyna, figure_named, figures
 from tui_gym.session.book.figure import BookFigure, FigureOptions, heading
 from tui_gym.session.book.runs import Learner, Played, play_steps
 
@@ -19,13 +19,13 @@ FIGURE = BookFigure("x", "a test figure", "", "blocking-maze", lambda *_: None, 
 
 
 def test_the_world_changes_under_the_learner_at_its_step() -> None:
-    dyna = Learner("Dyna-Q", "dyna-q", changing_mazes.SETTINGS)
-    (played,) = play_steps(FIGURE, "blocking-maze", (dyna,), FigureOptions(seed=3),
+    dyna_q = Learner("Dyna-Q", "dyna-q", dyna.MAZE_SETTINGS)
+    (played,) = play_steps(FIGURE, "blocking-maze", (dyna_q,), FigureOptions(seed=3),
                            lambda *_: None, 1600, game_params={"change_at": 1000})
     assert played.values.shape == (3, 1600)
     assert (np.diff(played.values, axis=1) >= 0).all()
-    every = changing_mazes.episodes_after(played, 0)
-    after = changing_mazes.episodes_after(played, 1000)
+    every = dyna.episodes_after(played, 0)
+    after = dyna.episodes_after(played, 1000)
     # The 10-step way is taken before the wall moves (a run may still be walking at random
     # in the bottom rows); after, no episode is shorter than 16.
     assert sum((lengths[: len(lengths) - len(later)] < 16).any()
@@ -38,9 +38,9 @@ def test_the_measures_read_off_the_cumulative_reward() -> None:
     rewards = np.zeros((2, 15))
     rewards[0, [2, 6, 11]] = 1.0
     played = Played("x", np.cumsum(rewards, axis=1), None, None)
-    assert changing_mazes.reward_between(played, 5, 12).tolist() == [2.0, 0.0]
-    assert [x.tolist() for x in changing_mazes.episodes_after(played, 3)] == [[4, 5], []]
-    assert changing_mazes.found_after(played, 4).tolist() == [8.0, 11.0]
+    assert dyna.reward_between(played, 5, 12).tolist() == [2.0, 0.0]
+    assert [x.tolist() for x in dyna.episodes_after(played, 3)] == [[4, 5], []]
+    assert dyna.found_after(played, 4).tolist() == [8.0, 11.0]
 
 
 # Dyna-Q finds the blocking maze's new way in some runs only: its curve's rise needs more.
@@ -57,9 +57,9 @@ def test_the_books_claims_at_a_few_runs(name: str, runs: int) -> None:
 
 def test_without_its_bonus_dyna_q_plus_misses_the_shortcut(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    plain = {**changing_mazes.SETTINGS, "kappa": 0.0}
-    monkeypatch.setattr(changing_mazes, "LEARNERS",
-                        (changing_mazes.LEARNERS[0], Learner("Dyna-Q+", "dyna-q-plus", plain)))
+    plain = {**dyna.MAZE_SETTINGS, "kappa": 0.0}
+    monkeypatch.setattr(dyna, "MAZE_LEARNERS",
+                        (dyna.MAZE_LEARNERS[0], Learner("Dyna-Q+", "dyna-q-plus", plain)))
     result = figure_named("8.5").run(FigureOptions(runs=8, seed=100), lambda *_: None)
     verdicts = {c.claim.split(":")[0]: c.ok for c in result.checks}
     assert not verdicts["Dyna-Q+ finds it"]
@@ -77,12 +77,12 @@ def test_a_finer_dyna_maze_has_the_same_walls_in_finer_cells(scale: int) -> None
     assert (grid.rows, grid.cols) == (6 * scale, 9 * scale)
     assert len(grid.walls) == 7 * scale**2
     assert grid.terminals == ((0, 9 * scale - 1),) and grid.start == (2 * scale, 0)
-    model, _, _, cells = example_8_4._maze(scale, 1, 0)
+    model, _, _, cells = dyna._maze(scale, 1, 0)
     assert model.n_states == 54 * scale**2 and cells == 47 * scale**2
 
 
 def test_prioritized_sweepings_log_adds_up_its_updates() -> None:
-    model, _, hps, _ = example_8_4._maze(1, 1, 0)
+    model, _, hps, _ = dyna._maze(1, 1, 0)
     arrays = loop.ModelArrays.of(model)
     cls = algorithm("prioritized-sweeping")
 
@@ -102,19 +102,19 @@ def test_prioritized_sweepings_log_adds_up_its_updates() -> None:
 
 
 def test_an_agent_is_optimal_once_every_greedy_move_is_on_a_shortest_way() -> None:
-    model, good, _, _ = example_8_4._maze(1, 1, 0)
+    model, good, _, _ = dyna._maze(1, 1, 0)
     start = int(np.flatnonzero(model.initial)[0])
     steps = model.replace(reward=np.full(model.reward.shape, -1.0), reward_std=None)
     q = solve(with_horizon(steps, None)).q
-    assert example_8_4._optimal(q, model, good, start)
+    assert dyna._optimal(q, model, good, start)
     ties = q.copy()
     ties[start] = ties[start].max()  # every move from the start looks as good
-    assert not example_8_4._optimal(ties, model, good, start)
-    assert not example_8_4._optimal(np.zeros_like(q), model, good, start)
+    assert not dyna._optimal(ties, model, good, start)
+    assert not dyna._optimal(np.zeros_like(q), model, good, start)
 
 
 def test_example_8_4s_claims_at_a_few_runs(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(example_8_4, "SCALES", (1, 2))
+    monkeypatch.setattr(dyna, "SCALES", (1, 2))
     result = figure_named("example 8.4").run(FigureOptions(runs=5, seed=100),
                                              lambda *_: None)
     assert result.runs == 5 and len(result.checks) == 4
@@ -123,11 +123,10 @@ def test_example_8_4s_claims_at_a_few_runs(monkeypatch: pytest.MonkeyPatch) -> N
 
 
 def test_dyna_q_against_itself_shows_no_advantage(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(example_8_4, "SCALES", (1,))
-    dyna = example_8_4.LEARNERS[0]
-    monkeypatch.setattr(example_8_4, "LEARNERS", (dyna, Learner("again", "dyna-q",
-                                                                dyna.settings)))
-    result = example_8_4.FIGURE.run(FigureOptions(runs=5, seed=100), lambda *_: None)
+    monkeypatch.setattr(dyna, "SCALES", (1,))
+    dyna_q = dyna.SWEEPERS[0]
+    monkeypatch.setattr(dyna, "SWEEPERS", (dyna_q, Learner("again", "dyna-q", dyna_q.settings)))
+    result = dyna.EXAMPLE_8_4.run(FigureOptions(runs=5, seed=100), lambda *_: None)
     assert [c.ok for c in result.checks] == [False, False]
 
 
@@ -135,5 +134,5 @@ def test_an_example_is_listed_in_its_chapter_and_called_by_its_name() -> None:
     names = [f.name for f in figures()]
     assert names[names.index("8.2"):names.index("8.2") + 4] == [
         "8.2", "8.4", "8.5", "example 8.4"]
-    assert figure_named("Example 8.4") is figure_named("e8.4") is example_8_4.FIGURE
+    assert figure_named("Example 8.4") is figure_named("e8.4") is dyna.EXAMPLE_8_4
     assert heading("example 8.4") == "Example 8.4" and heading("8.4") == "Figure 8.4"

@@ -10,14 +10,14 @@ import numpy as np
 import pytest
 
 from tui_gym.core.experiments.history import RunHistory
-from tui_gym.session.book import fig_6_6, figure_named, runs
+from tui_gym.session.book import figure_named, runs, td
 from tui_gym.session.book.figure import FigureOptions, FigureTasks
 from tui_gym.session.experiments import compare
 from tui_gym.session.experiments.compare import ResumeError
 
 
 def test_the_books_claims_at_a_few_runs(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(fig_6_6, "ASYMPTOTIC_RUNS", 6)
+    monkeypatch.setattr(td, "ASYMPTOTIC_RUNS", 6)
     result = figure_named("6.6").run(FigureOptions(runs=100, episodes=1500, seed=100),
                                      lambda *_: None)
     assert result.runs == 100 and len(result.checks) == 6
@@ -36,7 +36,7 @@ def test_full_hands_the_executor_the_books_tasks(monkeypatch: pytest.MonkeyPatch
                                prepared=SimpleNamespace(optimum=None), tasks={})
 
     monkeypatch.setattr(runs, "execute", execute)
-    fig_6_6.FIGURE.run(FigureOptions(full=True), lambda *_: None)
+    td.FIG_6_6.run(FigureOptions(full=True), lambda *_: None)
     assert [(s.game, s.seeds, s.episodes) for s, _ in asked] == [
         ("cliffwalking", 50_000, 100), ("cliffwalking", 10, 100_000)]
     for _, arms in asked:
@@ -54,7 +54,7 @@ def test_full_hands_the_executor_the_books_tasks(monkeypatch: pytest.MonkeyPatch
 
 
 def _small(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(fig_6_6, "ASYMPTOTIC_RUNS", 2)
+    monkeypatch.setattr(td, "ASYMPTOTIC_RUNS", 2)
 
 
 def test_a_recorded_figure_resumes_with_only_the_missing_tasks(
@@ -63,13 +63,13 @@ def test_a_recorded_figure_resumes_with_only_the_missing_tasks(
     options = {"runs": 3, "episodes": 40, "seed": 7}
     with RunHistory(tmp_path / "runs.db") as history:
         first = FigureTasks(history)
-        whole = fig_6_6.FIGURE.run(FigureOptions(**options, tasks=first), lambda *_: None)
+        whole = td.FIG_6_6.run(FigureOptions(**options, tasks=first), lambda *_: None)
         ids = history.group_ids(first.group)
         assert first.group == ids[0] and len(ids) == 60 and first.landed == first.tasks
         for run_id in ids[30:]:  # as if stopped before the asymptotic runs began
             history.remove_run(run_id)
         again = FigureTasks(history, resume=first.group)
-        resumed = fig_6_6.FIGURE.run(FigureOptions(**options, tasks=again), lambda *_: None)
+        resumed = td.FIG_6_6.run(FigureOptions(**options, tasks=again), lambda *_: None)
         now = history.group_ids(first.group)
         assert now[:30] == ids[:30] and len(now) == 60 and min(now[30:]) > max(ids)
     for a, b in zip(whole.series, resumed.series, strict=True):
@@ -82,13 +82,13 @@ def test_resuming_with_other_settings_or_from_a_later_run_is_refused(
     _small(monkeypatch)
     with RunHistory(tmp_path / "runs.db") as history:
         first = FigureTasks(history)
-        fig_6_6.FIGURE.run(FigureOptions(runs=2, episodes=20, tasks=first), lambda *_: None)
+        td.FIG_6_6.run(FigureOptions(runs=2, episodes=20, tasks=first), lambda *_: None)
         assert first.group is not None
         with pytest.raises(ResumeError, match="other settings"):
-            fig_6_6.FIGURE.run(FigureOptions(runs=3, episodes=20, tasks=FigureTasks(
+            td.FIG_6_6.run(FigureOptions(runs=3, episodes=20, tasks=FigureTasks(
                 history, resume=first.group)), lambda *_: None)
         with pytest.raises(ResumeError, match=f"resume run {first.group}$"):
-            fig_6_6.FIGURE.run(FigureOptions(runs=2, episodes=20, tasks=FigureTasks(
+            td.FIG_6_6.run(FigureOptions(runs=2, episodes=20, tasks=FigureTasks(
                 history, resume=first.group + 1)), lambda *_: None)
 
 
@@ -97,7 +97,7 @@ def test_the_command_records_full_runs_and_resumes_them(
         capsys: pytest.CaptureFixture[str]) -> None:
     from tui_gym.cli import main
 
-    monkeypatch.setattr(fig_6_6, "FULL_ASYMPTOTIC_RUNS", 2)
+    monkeypatch.setattr(td, "FULL_ASYMPTOTIC_RUNS", 2)
     db = str(tmp_path / "runs.db")
     small = ["book", "6.6", "--full", "--runs", "2", "--episodes", "20", "--db", db]
     main(small)
@@ -120,7 +120,7 @@ def test_ctrl_c_keeps_the_finished_tasks_and_says_how_to_resume(
     from tui_gym.cli import main
     from tui_gym.session.book import runs
 
-    monkeypatch.setattr(fig_6_6, "FULL_ASYMPTOTIC_RUNS", 2)
+    monkeypatch.setattr(td, "FULL_ASYMPTOTIC_RUNS", 2)
     calls: list[int] = []
     execute = runs.execute
 

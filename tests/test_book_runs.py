@@ -12,7 +12,7 @@ from tui_gym.algorithms import algorithm
 from tui_gym.cli import main
 from tui_gym.core.engine.loop import FIRST_ACTION, LENGTH, ModelArrays
 from tui_gym.core.engine.seeds import play_learner
-from tui_gym.core.experiments.student_t import t_quantile
+from tui_gym.core.experiments.aggregate import t_quantile
 from tui_gym.games import game_named
 from tui_gym.session.book import figure_named
 from tui_gym.session.book.figure import FigureOptions
@@ -125,11 +125,11 @@ def test_the_books_claims_at_a_few_runs(name: str, runs: int) -> None:
 
 
 def test_a_claim_the_runs_do_not_bear_out_fails(monkeypatch: pytest.MonkeyPatch) -> None:
-    from tui_gym.session.book import fig_8_2
+    from tui_gym.session.book import dyna
 
     # Without planning the maze is far from learned by episode 3.
-    monkeypatch.setattr(fig_8_2, "SETTLED", {0: 3, 5: 5, 50: 3})
-    result = fig_8_2.FIGURE.run(FigureOptions(runs=10, seed=100), lambda *_: None)
+    monkeypatch.setattr(dyna, "SETTLED", {0: 3, 5: 5, 50: 3})
+    result = dyna.FIG_8_2.run(FigureOptions(runs=10, seed=100), lambda *_: None)
     assert [c.ok for c in result.checks] == [True, True, False, True, True]
 
 

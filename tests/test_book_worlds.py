@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from tui_gym.core.mdp import FiniteMDP, ModelError, NotAvailable, Phases, evaluate
-from tui_gym.core.mdp.transforms import clip_reward, scale_reward
+from tui_gym.core.mdp.model import clip_reward, scale_reward
 from tui_gym.core.wrappers import parse_wrapper_spec
 from tui_gym.envs.dyna_maze import BlockingMazeEnv, ShortcutMazeEnv
 from tui_gym.envs.max_bias import A, B, MaxBiasEnv

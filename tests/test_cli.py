@@ -520,8 +520,9 @@ def test_the_evaluation_is_exact_and_its_sample_stops_at_the_step_budget(
 ) -> None:
     from tui_gym.session.evaluation import EVAL_STEP_BUDGET
 
-    # An agent trained for 50 episodes on a 12x12 grid often loops until the 300-step limit.
-    data = run_json(capsys, "train", "gridworld", "--size", "12", "--episodes", "50", "--json")
+    # An agent trained for 50 episodes on an 8x8 grid often loops until the 300-step limit.
+    data = run_json(capsys, "train", "gridworld", "--size", "8", "--episodes", "50", "--seed",
+                    "0", "--json")
     report = data["eval"]
     assert 0.0 <= report["exact_value"] < report["optimal_value"] == pytest.approx(1.0)
     assert report["gap"] == pytest.approx(report["optimal_value"] - report["exact_value"])

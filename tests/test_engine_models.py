@@ -20,10 +20,14 @@ from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.wrappers import WrapperChoice, build_env
 from tui_gym.core.wrappers.changes import NO_CHANGES
 from tui_gym.envs.gridworld import GridWorldEnv
-from tui_gym.games.blackjack.finite_model import N_BASE, blackjack_model, observation_rows
-from tui_gym.games.blackjack.solver import BlackjackRules, optimal_value
-from tui_gym.games.gridworld.model import gridworld_model
-from tui_gym.games.gridworld.paths import all_pairs
+from tui_gym.games.blackjack.solver import (
+    N_BASE,
+    BlackjackRules,
+    blackjack_model,
+    observation_rows,
+    optimal_value,
+)
+from tui_gym.games.gridworld.paths import all_pairs, gridworld_model
 from tui_gym.session.session import Session
 
 RULES = (BlackjackRules(), BlackjackRules(natural=True), BlackjackRules(sab=True))

@@ -28,7 +28,7 @@ from tui_gym.core.experiments import (
     RunStatus,
     WrapperSetting,
 )
-from tui_gym.core.experiments.curve_codec import pack_curves, unpack_curves
+from tui_gym.core.experiments.codec import pack_curves, unpack_curves
 from tui_gym.ui.compare_series import row_of_record, series_of_record
 from tui_gym.ui.compare_view import describe_run
 

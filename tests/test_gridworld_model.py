@@ -83,8 +83,8 @@ def test_the_shortest_path_optimum_is_the_model_solved(
     size: int, reward_scale: float, step_penalty: float, walls: tuple
 ) -> None:
     from tui_gym.core.wrappers.changes import GameChanges
-    from tui_gym.envs.walls import free_cells
-    from tui_gym.games.gridworld.model import gridworld_optimum, shortest_path_optimum
+    from tui_gym.envs.gridworld import free_cells
+    from tui_gym.games.gridworld.paths import gridworld_optimum, shortest_path_optimum
 
     found = shortest_path_optimum(size, reward_scale, step_penalty, 300, walls)
     assert found is not None

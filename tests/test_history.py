@@ -101,11 +101,11 @@ def test_curves_are_bounded_whatever_the_run_length(db: Path) -> None:
     with RunHistory(db) as history:
         run_id = history.start_run(spec())
         long = np.random.default_rng(0).normal(size=200_000)
-        history.put_curves(run_id, [Curve.per_episode("return", long)])
-        history.put_curves(run_id, [Curve.per_episode("wide", long[:2000])], max_points=500)
+        history.update(run_id, curves=[Curve.per_episode("return", long)])
+        history.update(run_id, curves=[Curve.per_episode("wide", long[:2000])], max_points=500)
         record = history.get_run(run_id)
         with pytest.raises(ValueError):
-            history.put_curves(run_id, [Curve.per_episode("x", long)], max_points=501)
+            history.update(run_id, curves=[Curve.per_episode("x", long)], max_points=501)
     stored = record.curve("return")
     assert stored is not None and len(stored) == STORED_POINTS
     assert stored.episodes[-1] == 200_000
@@ -120,12 +120,10 @@ def test_curves_are_bounded_whatever_the_run_length(db: Path) -> None:
 def test_curves_and_figures_are_added_or_replaced_by_name(db: Path) -> None:
     with RunHistory(db) as history:
         run_id = history.start_run(spec())
-        history.put_curves(run_id, [Curve("a", [1, 2], [1.0, 2.0]), Curve("b", [1], [5.0])])
-        history.put_curves(run_id, [Curve("a", [1, 2, 3], [0.5, 0.25, 0.125])])
-        history.put_figures(run_id, [Figure("first", 1.0), Figure("second", 2.0, "s")])
-        history.put_figures(run_id, [Figure("third", float("nan")), Figure("first", 10.0, "x")])
-        history.set_agent_path(run_id, "a.tgym")
-        history.set_agent_path(run_id, None)
+        history.update(run_id, curves=[Curve("a", [1, 2], [1.0, 2.0]), Curve("b", [1], [5.0])])
+        history.update(run_id, curves=[Curve("a", [1, 2, 3], [0.5, 0.25, 0.125])])
+        history.update(run_id, figures=[Figure("first", 1.0), Figure("second", 2.0, "s")])
+        history.update(run_id, figures=[Figure("third", float("nan")), Figure("first", 10.0, "x")])
         record = history.get_run(run_id)
     assert {c.name: c.values.tolist() for c in record.curves} == {
         "a": [0.5, 0.25, 0.125],
@@ -211,14 +209,14 @@ def test_unknown_run_ids_and_bad_updates(db: Path) -> None:
         for action in (
             lambda: history.get_run(999),
             lambda: history.remove_run(999),
-            lambda: history.finish(999),
-            lambda: history.put_figures(999, [Figure("x", 1.0)]),
-            lambda: history.set_agent_path(999, "x"),
+            lambda: history.update(999, status=RunStatus.FINISHED),
+            lambda: history.update(999, figures=[Figure("x", 1.0)]),
+            lambda: history.update(999, agent_path="x"),
         ):
             with pytest.raises(UnknownRunError, match=f"no run 999 in {db}"):
                 action()
         with pytest.raises(ValueError):
-            history.finish(run_id, RunStatus.RUNNING)
+            history.update(run_id, status=RunStatus.RUNNING)
         with pytest.raises(ValueError, match="hyperparameters cannot be recorded"):
             history.start_run(
                 RunSpec(RunKind.TRAIN, "blackjack", "q", hyperparameters={"x": object()})
@@ -234,7 +232,7 @@ def test_removing_a_run_removes_its_curves_and_unused_settings(db: Path) -> None
     with RunHistory(db) as history:
         keep = history.start_run(spec(seed=1))
         gone = history.start_run(spec(seed=2, algorithm="sarsa"))
-        history.put_curves(gone, [Curve("a", [1], [1.0])])
+        history.update(gone, curves=[Curve("a", [1], [1.0])])
         removed = history.remove_run(gone)
         assert removed.id == gone and removed.algorithm == "sarsa"
         assert [r.id for r in history.list_runs()] == [keep]
@@ -276,9 +274,9 @@ def test_csv_export_round_trip(db: Path, tmp_path: Path) -> None:
     rng = np.random.default_rng(5)
     with RunHistory(db) as history:
         run_id = history.start_run(spec())
-        history.put_curves(
+        history.update(
             run_id,
-            [
+            curves=[
                 Curve.per_episode("return", rng.normal(size=1000)),
                 Curve.per_episode("length", rng.uniform(1, 9, size=1000)),
                 Curve("exact, gap", [250, 500, 1000], [0.3, np.nan, 0.01]),

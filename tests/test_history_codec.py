@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tui_gym.core.experiments.curve_codec import (
+from tui_gym.core.experiments.codec import (
     CurveFormatError,
     decode_curve,
     encode_curve,

@@ -27,7 +27,7 @@ from tui_gym.core.experiments import (
     remove_run,
     show_run,
 )
-from tui_gym.core.experiments.curve_codec import pack_curves
+from tui_gym.core.experiments.codec import pack_curves
 
 
 def record_three(db: Path) -> list[int]:
@@ -209,8 +209,8 @@ def test_adding_curves_to_a_run_whose_curves_do_not_read_names_it(tmp_path: Path
     edit(db, *IN_THE_RECORD["a curve blob as text"])
     with RunHistory(db) as history:
         with pytest.raises(DamagedRunError, match="^run 2 in .*its curves do not decode"):
-            history.put_curves(2, [Curve("more", [1], [0.5])])
-        history.put_curves(3, [Curve("more", [1], [0.5])])  # the others take theirs
+            history.update(2, curves=[Curve("more", [1], [0.5])])
+        history.update(3, curves=[Curve("more", [1], [0.5])])  # the others take theirs
         assert history.get_run(3).curve("more") is not None
 
 

@@ -24,7 +24,7 @@ from tui_gym.core.experiments import (
     RunSpec,
     list_runs,
 )
-from tui_gym.core.experiments.schema import APPLICATION_ID, MIGRATIONS, Migration
+from tui_gym.core.experiments.connection import APPLICATION_ID, MIGRATIONS, Migration
 
 
 def spec(seed: int = 0) -> RunSpec:
@@ -110,7 +110,7 @@ def test_a_damaged_history_of_ours(tmp_path: Path) -> None:
     with RunHistory(path) as history:
         for seed in range(60):
             run_id = history.start_run(spec(seed))
-            history.put_curves(run_id, [Curve.per_episode("return", np.zeros(500))])
+            history.update(run_id, curves=[Curve.per_episode("return", np.zeros(500))])
     data = bytearray(path.read_bytes())
     assert len(data) > 5 * 4096
     data[2 * 4096 : 5 * 4096] = np.random.default_rng(2).bytes(3 * 4096)  # pages 3 to 5
@@ -319,7 +319,7 @@ def test_a_history_in_a_read_only_folder_can_be_listed_and_shown(tmp_path: Path)
     path = folder / "runs.db"
     with RunHistory(path) as history:
         run_id = history.start_run(spec(4))
-        history.put_curves(run_id, [Curve.per_episode("return", np.zeros(10))])
+        history.update(run_id, curves=[Curve.per_episode("return", np.zeros(10))])
     found = json.loads(in_read_only_folder(folder, READ_ONLY_CHECK, str(path)))
     assert found["runs"] == [run_id] and found["curve"]
     assert "cannot be written" in found["write"] and "\n" not in found["write"]
@@ -331,7 +331,7 @@ def test_refusing_a_truncated_history_leaves_nothing_beside_it(tmp_path: Path) -
     with RunHistory(path) as history:
         for seed in range(60):
             run_id = history.start_run(spec(seed))
-            history.put_curves(run_id, [Curve.per_episode("return", np.zeros(300))])
+            history.update(run_id, curves=[Curve.per_episode("return", np.zeros(300))])
     data = path.read_bytes()
     for cut in (4096, 3 * 4096, len(data) // 2):
         path.write_bytes(data[:cut])

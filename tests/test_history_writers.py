@@ -12,7 +12,7 @@ import textwrap
 from pathlib import Path
 
 from tui_gym.core.experiments import RunHistory, RunKind, RunSpec, RunStatus, list_runs
-from tui_gym.core.experiments.writers import WriterCheck, current_writer
+from tui_gym.core.experiments.connection import WriterCheck, current_writer
 from tui_gym.ui.compare_view import describe_run
 
 WRITER = textwrap.dedent("""

@@ -46,9 +46,9 @@ def test_header_round_trips_and_plain_rows_are_a_lake() -> None:
     ("SFFF\nFHF\n", "line 2 (map row 1) has 3 tiles, row 0 has 4"),
     ("SFFF\nFSFG\n", "line 2 (map row 1), column 1: a second start"),
     ("SFRG\n", "line 1 (map row 0), column 2: a reward cell needs its value"),
-    ("reward 0,1: 2\nSFFG\n", "row 0, col 1 is floor"),
+    ("reward 0,1: 2\nSFFG\n", "line 2 (map row 0), column 1 is floor"),
     ("slip 0,0: 1.5\nSFFG\n", "line 1: the slip at row 0, col 0 must be in [0, 1]"),
-    ("reward 5,5: 1\nSFFG\n", "reward 5,5 is off the 1x4 map"),
+    ("reward 5,5: 1\nSFFG\n", "row 5, col 5 is off the 1x4 map"),
     ("# nothing\n", "no rows of tiles"),
 ])
 def test_bad_maps_say_where(text: str, expected: str) -> None:
@@ -156,7 +156,7 @@ def test_cli_sees_the_same_maps(tmp_path: Path, capsys: pytest.CaptureFixture[st
 def test_the_edit_to_optimum_figure_exists() -> None:
     from tui_gym.bench.map_edit import measure
     from tui_gym.bench.report import verdicts
-    from tui_gym.bench.results import BenchResults, MachineInfo
+    from tui_gym.bench.run import BenchResults, MachineInfo
 
     results = measure(edits=4)
     assert {r.game for r in results} == {"FrozenLake", "CliffWalking"}
@@ -172,7 +172,7 @@ def test_the_walled_gridworld_model_moves_round_walls_as_the_env_does() -> None:
     from tui_gym.core.obskey import ObservationKeyer
     from tui_gym.core.wrappers.changes import NO_CHANGES
     from tui_gym.envs.gridworld import GridWorldEnv
-    from tui_gym.games.gridworld.model import gridworld_model
+    from tui_gym.games.gridworld.paths import gridworld_model
 
     walls = ((2, 1), (2, 2), (1, 3))
     model = gridworld_model(5, 1.0, 0.0, NO_CHANGES, walls)

@@ -11,7 +11,7 @@ from gymnasium import spaces
 from gymnasium.wrappers import ClipReward, StickyAction, TimeLimit
 
 from tui_gym.core.mdp import FiniteMDP, NotAvailable, model_from_env
-from tui_gym.core.wrappers.custom import ScaleReward, StepPenalty
+from tui_gym.core.wrappers.catalog import ScaleReward, StepPenalty
 
 GAMES = [
     ("FrozenLake-v1", {"is_slippery": False}, 100),

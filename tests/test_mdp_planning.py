@@ -8,14 +8,8 @@ import pytest
 
 from tests.mdp_support import random_model
 from tui_gym.core.mdp import FiniteMDP, evaluate, optimal_actions, solve
-from tui_gym.core.mdp.planning import (
-    Planner,
-    evaluation_sweep,
-    improve,
-    uniform_policy,
-    value_sweep,
-)
-from tui_gym.core.mdp.policy_arrays import PolicyArrays
+from tui_gym.core.mdp.evaluation import PolicyArrays
+from tui_gym.core.mdp.planning import Planner, uniform_policy, value_sweep
 
 UP, DOWN, LEFT, RIGHT = 0, 1, 2, 3
 
@@ -39,20 +33,23 @@ def two_by_two() -> FiniteMDP:
 
 
 def test_one_synchronous_and_one_in_place_sweep_by_hand() -> None:
-    model, random = two_by_two(), uniform_policy(two_by_two())
+    model = two_by_two()
     v = np.zeros(4)
     # Synchronous: every state from the old zeros, so each pays its -1 and no more.
-    new, delta = evaluation_sweep(model, random, v, 1.0)
-    assert new.tolist() == [0.0, -1.0, -1.0, -1.0] and delta == 1.0
-    assert v.tolist() == [0.0] * 4  # the old values are not touched
+    planner = Planner(model, values=v)  # the random policy
+    delta = planner.evaluation_sweep()
+    assert planner.v.tolist() == [0.0, -1.0, -1.0, -1.0] and delta == 1.0
+    assert v.tolist() == [0.0] * 4  # the values given are not touched
     # In place, in index order: cell 3 reads cells 1 and 2 already at -1:
     # v(3) = -1 + (v(1) + v(3) + v(2) + v(3)) / 4 = -1 + (-1 + 0 - 1 + 0) / 4 = -1.5.
-    new, delta = evaluation_sweep(model, random, v, 1.0, in_place=True)
-    assert new.tolist() == [0.0, -1.0, -1.0, -1.5] and delta == 1.5
+    planner = Planner(model, values=v, in_place=True)
+    delta = planner.evaluation_sweep()
+    assert planner.v.tolist() == [0.0, -1.0, -1.0, -1.5] and delta == 1.5
     # A second synchronous sweep from [0, -1, -1, -1]: cell 1's moves reach 1 (up, right:
     # -1 each), 3 (down: -1) and the terminal 0: -1 + (-1 - 1 - 1 + 0) / 4 = -1.75.
-    second, delta = evaluation_sweep(model, random, np.array([0.0, -1.0, -1.0, -1.0]), 1.0)
-    assert second.tolist() == [0.0, -1.75, -1.75, -2.0] and delta == 1.0
+    planner = Planner(model, values=[0.0, -1.0, -1.0, -1.0])
+    delta = planner.evaluation_sweep()
+    assert planner.v.tolist() == [0.0, -1.75, -1.75, -2.0] and delta == 1.0
 
 
 def test_a_value_sweep_by_hand_and_the_actions_it_took() -> None:
@@ -70,13 +67,13 @@ def test_a_value_sweep_by_hand_and_the_actions_it_took() -> None:
 def test_improvement_shares_ties_and_keeps_actions_still_among_the_best() -> None:
     model = two_by_two()
     v = solve(model).v
-    step = improve(model, uniform_policy(model), v, 1.0)
+    step = Planner(model, values=v).improvement()  # from the random policy
     assert step.policy[3].tolist() == [0.5, 0.0, 0.5, 0.0]  # up and left tie
     assert step.changed.tolist() == [False, True, True, True]
     # Going up from cell 3 alone is still among the best: kept, nothing changes.
     up_only = step.policy.copy()
     up_only[3] = [1.0, 0.0, 0.0, 0.0]
-    again = improve(model, up_only, v, 1.0)
+    again = Planner(model, policy=up_only, values=v).improvement()
     assert again.stable and np.array_equal(again.policy, up_only)
 
 

@@ -17,7 +17,7 @@ from tui_gym.core.mdp import (
     step_penalty,
     with_horizon,
 )
-from tui_gym.core.wrappers.custom import ScaleReward, StepPenalty
+from tui_gym.core.wrappers.catalog import ScaleReward, StepPenalty
 
 
 def lake(**kwargs):

@@ -26,6 +26,7 @@ from tui_gym.games import GAMES
 from tui_gym.games.base import Advice
 from tui_gym.session.play import HumanGame
 from tui_gym.session.recording.recorder import Recorder
+from tui_gym.session.recording.scenes import scene_fits
 from tui_gym.session.recording.switch import RecordingSwitch
 from tui_gym.session.session import Session
 
@@ -86,8 +87,8 @@ def test_every_game_records_and_reads_back(tmp_path: Path, profile: Any) -> None
     with Recorder(path, session, source="benchmark", seed=5) as recorder:
         game.recorder = recorder
         play(game, list(profile.action_names), episodes=3)
-    recording = read_recording(path)
-    assert recording.message is None
+    recording = read_recording(path, scene_fits)  # every scene fits the game's own board
+    assert recording.message is None and recording.unfit_scenes == 0
     assert [e.index for e in recording.episodes] == [1, 2, 3]
     for episode in recording.episodes:
         assert episode.game.board == profile.board

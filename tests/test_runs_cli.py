@@ -11,7 +11,7 @@ import pytest
 
 from tui_gym.cli import main
 from tui_gym.core.experiments import RunHistory, RunSpec
-from tui_gym.core.experiments.schema import APPLICATION_ID
+from tui_gym.core.experiments.connection import APPLICATION_ID
 
 SHORT = ["--episodes", "3000", "--eval-episodes", "200"]
 
@@ -271,7 +271,7 @@ def test_a_damaged_history_says_how_to_recover_and_recover_copies_what_reads(
     with RunHistory(db) as history:
         for seed in range(60):
             run_id = history.start_run(RunSpec("train", "blackjack", "q-learning", seeds=(seed,)))
-            history.put_curves(run_id, [Curve.per_episode("return", np.zeros(300))])
+            history.update(run_id, curves=[Curve.per_episode("return", np.zeros(300))])
     conn = sqlite3.connect(db)
     root = conn.execute("SELECT rootpage FROM sqlite_master WHERE name = 'curves'").fetchone()[0]
     page_size = conn.execute("PRAGMA page_size").fetchone()[0]

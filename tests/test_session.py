@@ -311,19 +311,18 @@ def test_blackjack_heatmap_cells_read_the_q_table() -> None:
         CHART_SUMS,
         DEALER_CARDS,
         BlackjackGame,
-        _row_of,
     )
     from tui_gym.games.blackjack.solver import BlackjackRules, optimal_policy
 
-    rows = len(_row_of())
-    q = np.random.default_rng(3).normal(size=(rows, 2))
     game = BlackjackGame()
+    states = game.states.base_observations({})
+    q = np.random.default_rng(3).normal(size=(len(states), 2))
     panels = game.layout.heatmaps(q, {}, None, game.oracle.optimal_marks({}))
     best = optimal_policy(BlackjackRules())
     for panel, usable in zip(panels, (1, 0), strict=True):
         for r, player in enumerate(CHART_SUMS):
             for c, dealer in enumerate(DEALER_CARDS):
-                qs = q[_row_of()[(player, dealer, usable)]]
+                qs = q[states.index((player, dealer, usable))]
                 action = int(np.argmax(qs))
                 assert panel.labels[r][c] == ACTION_LETTERS[action]
                 assert panel.values[r, c] == qs.max()

@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 from tui_gym.core.experiments import RunHistory, RunKind, RunSpec
-from tui_gym.core.experiments.schema import MIGRATIONS
-from tui_gym.core.experiments.tasks import TaskRecord
+from tui_gym.core.experiments.connection import MIGRATIONS
+from tui_gym.core.experiments.records import TaskRecord
 from tui_gym.session.experiments import compare
 from tui_gym.session.experiments.compare import (
     CompareProgress,

@@ -12,7 +12,6 @@ from rich.segment import Segment
 from textual.app import App
 from textual.drivers.headless_driver import HeadlessDriver
 from textual.strip import Strip
-from textual.widgets import Checkbox
 
 from tui_gym.core.experiments import RunHistory, RunRecorder, RunSpec
 from tui_gym.session.session import Session
@@ -30,8 +29,7 @@ def stock(monkeypatch: pytest.MonkeyPatch) -> None:
 
 def test_every_part_can_be_forced_to_textuals_own_behaviour(stock: None) -> None:
     assert not any(internals.enabled(part) for part in internals.PARTS)
-    screen = internals.main_screen()
-    assert type(screen).focused is internals._STOCK_FOCUSED
+    assert type(internals.main_screen()._compositor).__name__ == "Compositor"
     assert internals.guarded_driver(HeadlessDriver) is HeadlessDriver
     assert not internals.watch_frames(App(), lambda renderable: None)
     line = Strip([Segment("▐"), Segment("X"), Segment("▌ #1")])
@@ -83,26 +81,6 @@ def test_each_part_falls_back_when_textual_changes_shape(
             super().__init__(application, **kwargs)  # type: ignore[arg-type]
 
     assert internals.guarded_driver(Odd) is Odd
-
-
-async def test_a_widget_restyles_as_textual_does_without_the_component_hook(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    calls: list[str] = []
-
-    class Host(App[None]):
-        def compose(self):
-            yield Checkbox("x")
-
-    async with Host().run_test() as pilot:
-        box = pilot.app.query_one(Checkbox)
-        monkeypatch.setattr(type(box), "update_node_styles",
-                            lambda self, animate=True: calls.append("stock"))
-        internals.restyle_alone(box)
-        assert calls == []  # restyled alone
-        monkeypatch.setenv(internals.STOCK_ENV, "restyle")
-        internals.restyle_alone(box)
-        assert calls == ["stock"]
 
 
 def test_a_writer_finding_its_terminal_gone_is_told_from_a_crash(

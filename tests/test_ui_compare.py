@@ -23,7 +23,7 @@ from tui_gym.core.experiments import (
     aggregate,
     mean_return_last,
 )
-from tui_gym.core.experiments.schema import MIGRATIONS
+from tui_gym.core.experiments.connection import MIGRATIONS
 from tui_gym.session.experiments.compare import CompareProgress, CompareSpec
 from tui_gym.session.session import Session
 from tui_gym.ui import compare_job

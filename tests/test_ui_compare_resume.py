@@ -15,7 +15,7 @@ import pytest
 from textual.app import App, ComposeResult
 
 from tui_gym.core.experiments import RunHistory, RunRecorder, RunSpec
-from tui_gym.session.book import fig_6_6
+from tui_gym.session.book import td
 from tui_gym.session.book.figure import FigureOptions, FigureStopped, FigureTasks
 from tui_gym.session.experiments.compare import CompareProgress, CompareSpec, run_compare
 from tui_gym.session.session import Session
@@ -129,7 +129,7 @@ async def test_a_book_figures_runs_are_not_resumed_here(tmp_path: Path) -> None:
                 stop.set()
 
         with pytest.raises(FigureStopped):
-            fig_6_6.FIGURE.run(FigureOptions(runs=2, episodes=20, stop=stop, tasks=tasks), told)
+            td.FIG_6_6.run(FigureOptions(runs=2, episodes=20, stop=stop, tasks=tasks), told)
     app = ViewApp(Session("cliffwalking", seed=0), db)
     async with app.run_test(size=SIZE) as pilot:
         view = app.query_one(CompareView)

@@ -1,21 +1,29 @@
-"""A book figure's result as Rich renderables, for `tui-gym book` and the app's Book view.
+"""A book figure's result as Rich renderables, for `tui-gym book` and the app's Book view,
+and heatmap panels as plain text grids, for `tui-gym plan` and `tui-gym book`.
 
 `figure_parts(result, width)`: its title, each chart as a band chart (the
 charts of `compare`), the table of the book's claims with their verdicts, and
 its notes. Text from the figure is escaped: it is data, never markup.
+
+`panel_text(panel)` writes a panel as its title, the column labels, a row of
+cell labels per row (each right-aligned in a column as wide as the widest),
+and its legend: compact enough for Jack's 21 x 21 grids on an 80-column terminal.
 """
 
 from __future__ import annotations
+
+import textwrap
 
 from rich.console import RenderableType
 from rich.markup import escape
 from rich.table import Table
 from rich.text import Text
 
+from tui_gym.core.heatmap import Heatmap
 from tui_gym.session.book.figure import FigureResult, heading
 from tui_gym.terminal_chart import ChartSeries, band_chart
 
-__all__ = ["CHART_HEIGHT", "claims_table", "figure_parts"]
+__all__ = ["CHART_HEIGHT", "claims_table", "figure_parts", "panel_text"]
 
 CHART_HEIGHT = 10
 
@@ -43,3 +51,18 @@ def claims_table(result: FigureResult) -> list[RenderableType]:
         checks.add_row(escape(check.claim), escape(str(check.book)), escape(str(check.measured)),
                        verdict)
     return [checks, *(Text(note, style="dim") for note in result.notes)]
+
+
+def panel_text(panel: Heatmap, width: int = 80) -> Text:
+    """The panel as lines of text (see the module docstring)."""
+    cells = [label for line in panel.labels for label in line] + [*panel.col_labels]
+    cell = max((len(text) for text in cells), default=1) + 1
+    head = max((len(text) for text in panel.row_labels), default=0)
+    out = Text(panel.title + "\n", style="bold")
+    out.append(" " * head + "".join(c.rjust(cell) for c in panel.col_labels) + "\n", "dim")
+    for row_label, line in zip(panel.row_labels, panel.labels, strict=True):
+        out.append(row_label.rjust(head), "dim")
+        out.append("".join(label.rjust(cell) for label in line) + "\n")
+    for wrapped in textwrap.wrap(panel.legend, max(20, width)):
+        out.append(wrapped + "\n", "dim")
+    return out

@@ -41,12 +41,13 @@ def format_number(value: float) -> str:
 
 
 def _binned(x: np.ndarray, values: np.ndarray, edges: np.ndarray) -> np.ndarray:
-    """The mean of `values` in each x bin (NaN for an empty one)."""
+    """The mean of `values` in each x bin (an empty one: see `_fill_gaps`)."""
+    x, values = np.asarray(x, dtype=np.float64), np.asarray(values, dtype=np.float64)
     index = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, len(edges) - 2)
     sums = np.bincount(index, weights=values, minlength=len(edges) - 1)
     counts = np.bincount(index, minlength=len(edges) - 1)
     with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(counts > 0, sums / counts, np.nan)
+        return _fill_gaps(np.where(counts > 0, sums / counts, np.nan))
 
 
 def _fill_gaps(values: np.ndarray) -> np.ndarray:
@@ -82,13 +83,9 @@ def band_chart(
     edges[-1] = np.nextafter(edges[-1], np.inf)
     binned = []
     for s in shown:
-        x = np.asarray(s.x, dtype=np.float64)
-        mean = _fill_gaps(_binned(x, np.asarray(s.mean, dtype=np.float64), edges))
-        lo = hi = None
-        if s.lo is not None and s.hi is not None:
-            lo = _fill_gaps(_binned(x, np.asarray(s.lo, dtype=np.float64), edges))
-            hi = _fill_gaps(_binned(x, np.asarray(s.hi, dtype=np.float64), edges))
-        binned.append((mean, lo, hi))
+        lo, hi = ((_binned(s.x, s.lo, edges), _binned(s.x, s.hi, edges))
+                  if s.lo is not None and s.hi is not None else (None, None))
+        binned.append((_binned(s.x, s.mean, edges), lo, hi))
     # The y range leaves out the first columns when they alone would stretch it (early
     # learning curves start far below where they end): those points sit on the edge.
     skip = columns // 20 if skip_start else 0
@@ -134,14 +131,9 @@ def band_chart(
     text = Text()
     if y_label:
         text.append(f"{y_label}\n", style="bold")
+    at_row = {0: labels[0], height // 2: labels[1], height - 1: labels[2]}  # height >= 3
     for r in range(height):
-        label = ""
-        if r == 0:
-            label = labels[0]
-        elif r == height // 2:
-            label = labels[1]
-        elif r == height - 1:
-            label = labels[2]
+        label = at_row.get(r, "")
         text.append(f"{label:>{pad}} ┤" if label else f"{'':>{pad}} │", style="dim")
         for c in range(width):
             owner = int(dot_owner[r, c])

@@ -10,8 +10,8 @@ from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
 
+from tui_gym.cli.flags import int_in as _int_in
 from tui_gym.cli.output import CliError
-from tui_gym.cli.types import int_in as _int_in
 
 if TYPE_CHECKING:
     from aiohttp import web
@@ -199,6 +199,3 @@ def _url_host(host: str) -> str:
         return f"[{host}]" if ipaddress.ip_address(host.strip("[]")).version == 6 else host
     except ValueError:
         return host
-
-
-SERVE_COMMANDS = {"serve": cmd_serve}

@@ -14,14 +14,10 @@ from typing import Any
 import numpy as np
 
 from tui_gym.bench.figures import median, percentile
-from tui_gym.bench.live import PAUSE_RANGE, SIZE, _send_key, _until
+from tui_gym.bench.live import PAUSE_RANGE, SIZE, _send_key, _until, on_frames
 
-__all__ = ["DPResult", "measure", "rows", "to_json", "verdicts"]
+__all__ = ["DPResult", "measure"]
 
-TAXI_SWEEP_MS_TARGET = 5.0
-JACK_SECONDS_TARGET = 1.0
-SWEEPS_PER_SECOND_TARGET = 20.0
-KEY_P95_MS_TARGET = 50.0
 GRID_GAMES = ("gridworld", "frozenlake", "cliffwalking")
 SPEED = 5  # the Plan view's 50 sweeps a second
 
@@ -47,6 +43,16 @@ class DPResult:
     jack_seconds: float
     jack_model_seconds: float
     views: tuple[ViewFigures, ...]
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "taxi_value_sweep_ms": self.taxi_sweep_ms,
+            "jack_policy_iteration_s": self.jack_seconds,
+            "jack_model_build_s": self.jack_model_seconds,
+            "plan_view": [{"game": v.game, "sweeps_per_second": v.sweeps_per_second,
+                           "key_p50_ms": median(list(v.keys_ms)), "key_p95_ms": v.key_p95_ms,
+                           "key_presses": len(v.keys_ms)} for v in self.views],
+        }
 
 
 def _taxi_sweep_ms(repeats: int) -> float:
@@ -87,17 +93,7 @@ async def _view_once(game: str, seconds: float, presses: int, seed: int) -> View
     app = TuiGymApp(Session(game, seed=seed), tune_gc=True)
     frames: list[float] = []
     drawn: list[tuple[float, int, bool, bool]] = []  # (time, sweeps, in place, numbers)
-    display = app._display
-
-    def timed_display(screen: Any, renderable: Any) -> None:
-        display(screen, renderable)
-        if renderable is not None:
-            render = getattr(renderable, "render_segments", None)
-            if render is not None:
-                render(app.console)
-            frames.append(time.perf_counter())
-
-    app._display = timed_display  # type: ignore[method-assign]
+    on_frames(app, lambda: frames.append(time.perf_counter()))
     async with app.run_test(size=SIZE) as pilot:
         await pilot.press("P")
         view = app.plan_view
@@ -164,56 +160,3 @@ def measure(seconds: float, presses: int, repeats: int,
         say(f"planning: the Plan view on {game}")
         views.append(asyncio.run(_view_once(game, seconds, presses, 0)))
     return DPResult(taxi, jack, built, tuple(views))
-
-
-def verdicts(result: DPResult | None, missing: str,
-             ok: Callable[[float | None, bool], str]) -> dict[str, str]:
-    """The targets' verdicts, keyed as in the JSON."""
-    if result is None:
-        return {"taxi_sweep_ms": missing, "jack_policy_iteration_s": missing, "plan_view": missing}
-    out = {
-        "taxi_sweep_ms": ok(result.taxi_sweep_ms, result.taxi_sweep_ms <= TAXI_SWEEP_MS_TARGET),
-        "jack_policy_iteration_s": ok(result.jack_seconds,
-                                      result.jack_seconds <= JACK_SECONDS_TARGET),
-    }
-    for view in result.views:
-        out[f"plan_sweeps_per_second[{view.game}]"] = ok(
-            view.sweeps_per_second, view.sweeps_per_second >= SWEEPS_PER_SECOND_TARGET)
-        out[f"plan_key_p95_ms[{view.game}]"] = ok(view.key_p95_ms,
-                                                  view.key_p95_ms <= KEY_P95_MS_TARGET)
-    return out
-
-
-def rows(result: DPResult | None) -> list[tuple[str, str, str, str | None]]:
-    """(figure, measured, target, verdict key) rows of the bench's table."""
-    if result is None:
-        return []
-    out: list[tuple[str, str, str, str | None]] = [
-        ("planning: a value-iteration sweep on Taxi (500 × 6), median",
-         f"{result.taxi_sweep_ms:.2f} ms", f"≤ {TAXI_SWEEP_MS_TARGET:g} ms", "taxi_sweep_ms"),
-        ("  Jack's car rental by policy iteration (Figure 4.2), median",
-         f"{result.jack_seconds:.2f} s (model built once: {result.jack_model_seconds:.2f} s)",
-         f"≤ {JACK_SECONDS_TARGET:g} s", "jack_policy_iteration_s"),
-    ]
-    for view in result.views:
-        out.append((f"  Plan view on {view.game}: sweeps drawn a second (50/s asked)",
-                    f"{view.sweeps_per_second:.1f}", f"≥ {SWEEPS_PER_SECOND_TARGET:g}",
-                    f"plan_sweeps_per_second[{view.game}]"))
-        out.append((f"  Plan view on {view.game}: key → screen p95 while it runs",
-                    f"{view.key_p95_ms:.0f} ms (p50 {median(list(view.keys_ms)):.0f}, "
-                    f"n={len(view.keys_ms)})", f"≤ {KEY_P95_MS_TARGET:g} ms",
-                    f"plan_key_p95_ms[{view.game}]"))
-    return out
-
-
-def to_json(result: DPResult | None) -> dict[str, Any] | None:
-    if result is None:
-        return None
-    return {
-        "taxi_value_sweep_ms": result.taxi_sweep_ms,
-        "jack_policy_iteration_s": result.jack_seconds,
-        "jack_model_build_s": result.jack_model_seconds,
-        "plan_view": [{"game": v.game, "sweeps_per_second": v.sweeps_per_second,
-                       "key_p50_ms": median(list(v.keys_ms)), "key_p95_ms": v.key_p95_ms,
-                       "key_presses": len(v.keys_ms)} for v in result.views],
-    }

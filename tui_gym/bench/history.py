@@ -12,8 +12,6 @@ import numpy as np
 
 from tui_gym.bench.figures import median
 
-OVERHEAD_TARGET = 0.02  # recording's share of a train run
-SIZE_TARGET_BYTES = 1_000_000  # per 1,000 runs
 GAME = "blackjack"
 EVAL_EPISODES = 10_000  # as `train`'s --eval-episodes by default
 
@@ -41,6 +39,14 @@ class HistoryResult:
     @property
     def bytes_per_1000(self) -> float:
         return self.size_bytes * 1000 / self.runs
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "game": self.game, "overhead": self.overhead, "overhead_samples": list(self.shares),
+            "recorded_run_s": list(self.recorded_s), "unrecorded_run_s": list(self.unrecorded_s),
+            "fastest_recorded_over_unrecorded": self.ab_ratio, "runs_written": self.runs,
+            "size_bytes": self.size_bytes, "bytes_per_1000_runs": self.bytes_per_1000,
+        }
 
 
 def _timed_recording(db: Path, spent: list[float]) -> Any:
@@ -123,44 +129,3 @@ def measure(repeats: int, runs: int = 1000) -> HistoryResult:
             unrecorded.append(_train_once(db, record=False)[0])
         size = _size(folder / "size.db", db, runs)
     return HistoryResult(GAME, tuple(shares), tuple(recorded), tuple(unrecorded), runs, size)
-
-
-# --- what the report shows ---------------------------------------------------------
-def verdicts(result: HistoryResult | None, missing: str, ok: Any) -> dict[str, str]:
-    """The verdicts of the two targets (`ok(value, good)` as the report's)."""
-    if result is None:
-        return {"history_overhead": missing, "history_bytes_per_1000_runs": missing}
-    return {
-        "history_overhead": ok(result.overhead, result.overhead <= OVERHEAD_TARGET),
-        "history_bytes_per_1000_runs": ok(
-            result.bytes_per_1000, result.bytes_per_1000 < SIZE_TARGET_BYTES
-        ),
-    }
-
-
-def to_json(result: HistoryResult | None) -> dict[str, Any] | None:
-    if result is None:
-        return None
-    return {
-        "game": result.game, "overhead": result.overhead, "overhead_samples": list(result.shares),
-        "recorded_run_s": list(result.recorded_s), "unrecorded_run_s": list(result.unrecorded_s),
-        "fastest_recorded_over_unrecorded": result.ab_ratio, "runs_written": result.runs,
-        "size_bytes": result.size_bytes, "bytes_per_1000_runs": result.bytes_per_1000,
-    }
-
-
-def rows(result: HistoryResult | None) -> list[tuple[str, str, str, str | None]]:
-    """(figure, measured, target, verdict key) rows for the bench table."""
-    if result is None:
-        return []
-    return [
-        (f"run history: recording's share of a train {result.game} run",
-         f"{result.overhead:.2%} (median of {len(result.shares)})",
-         f"≤ {OVERHEAD_TARGET:.0%}", "history_overhead"),
-        ("  whole run, fastest recorded ÷ fastest --no-record (noisy)",
-         f"{result.ab_ratio:.3f} ({min(result.recorded_s):.2f} s / "
-         f"{min(result.unrecorded_s):.2f} s)", "", None),
-        (f"run history: file size per 1,000 default runs ({result.runs:,} written)",
-         f"{result.bytes_per_1000 / 1e6:.3f} MB", f"< {SIZE_TARGET_BYTES / 1e6:g} MB",
-         "history_bytes_per_1000_runs"),
-    ]

@@ -59,25 +59,14 @@ class LiveResult:
     seconds: float  # the measuring window
     errors: tuple[str, ...] = field(default=())
 
-    @property
-    def live_ratio(self) -> float:
-        return median([r.ratio for r in self.repeats])
+    def _median(self, name: str) -> float:
+        return median([getattr(r, name) for r in self.repeats])
 
-    @property
-    def headless_eps(self) -> float:
-        return median([r.headless_eps for r in self.repeats])
-
-    @property
-    def live_eps(self) -> float:
-        return median([r.live_eps for r in self.repeats])
-
-    @property
-    def refresh_hz(self) -> float:
-        return median([r.refresh_hz for r in self.repeats])
-
-    @property
-    def frames_hz(self) -> float:
-        return median([r.frames_hz for r in self.repeats])
+    live_ratio = property(lambda self: self._median("ratio"))
+    headless_eps = property(lambda self: self._median("headless_eps"))
+    live_eps = property(lambda self: self._median("live_eps"))
+    refresh_hz = property(lambda self: self._median("refresh_hz"))
+    frames_hz = property(lambda self: self._median("frames_hz"))
 
     @property
     def engine(self) -> str:
@@ -92,6 +81,19 @@ class LiveResult:
     @property
     def presses(self) -> int:
         return len(self._latencies())
+
+    def to_json(self) -> dict[str, Any]:
+        if not self.repeats:
+            return {"error": "; ".join(self.errors)}
+        return {
+            "engine": self.engine, "live_ratio": self.live_ratio,
+            "headless_episodes_per_second": self.headless_eps,
+            "live_episodes_per_second": self.live_eps, "ui_refresh_hz": self.refresh_hz,
+            "frames_hz": self.frames_hz, "key_latency_p50_ms": self.key_latency_ms(50),
+            "key_latency_p95_ms": self.key_latency_ms(95), "key_presses": self.presses,
+            "key_latency_by_key_ms": self.breakdown_ms(), "repeats": len(self.repeats),
+            "window_s": self.seconds, "ratios": [r.ratio for r in self.repeats],
+        }
 
     def breakdown_ms(self) -> dict[str, dict[str, float]]:
         """Median queue / action / frame milliseconds per key."""
@@ -129,27 +131,19 @@ class _Instruments:
     """Counters and clocks hooked onto one app instance (never onto its class)."""
 
     def __init__(self, app: Any) -> None:
-        from tui_gym.ui.textual_internals import watch_frames
-
         self.app = app
         self.frames: list[tuple[float, str | None, str | None]] = []  # (time, view, focus's view)
         self.snapshot_calls = 0
         self.action_marks: list[tuple[float, float]] = []  # (start, end) of show_view
         show_view = app.action_show_view
 
-        def on_frame(renderable: Any) -> None:
-            render = getattr(renderable, "render_segments", None)
-            if render is not None:
-                render(app.console)  # what a real terminal's write costs
-            self.frames.append((time.perf_counter(), _current_view(app), _focus_view(app)))
-
         def timed_show_view(view: str) -> None:
             start = time.perf_counter()
             show_view(view)
             self.action_marks.append((start, time.perf_counter()))
 
-        if not watch_frames(app, on_frame):
-            raise RuntimeError("this Textual has no frame step to time keys by")
+        on_frames(app, lambda: self.frames.append(
+            (time.perf_counter(), _current_view(app), _focus_view(app))))
         app.action_show_view = timed_show_view
 
     def count_snapshots(self, view: Any) -> None:
@@ -160,6 +154,21 @@ class _Instruments:
             show(snapshot, runner)
 
         view.show_snapshot = counted
+
+
+def on_frames(app: Any, frame: Callable[[], None]) -> None:
+    """Call `frame()` as each frame of `app` has been written out (rendered as a real
+    terminal's write would render it)."""
+    from tui_gym.ui.textual_internals import watch_frames
+
+    def on_frame(renderable: Any) -> None:
+        render = getattr(renderable, "render_segments", None)
+        if render is not None:
+            render(app.console)  # what a real terminal's write costs
+        frame()
+
+    if not watch_frames(app, on_frame):
+        raise RuntimeError("this Textual has no frame step to time keys by")
 
 
 def _current_view(app: Any) -> str | None:

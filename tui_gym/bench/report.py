@@ -1,176 +1,344 @@
-"""The bench's output: one table (each figure, its target, PASS or MISS) or one JSON object."""
+"""The bench's output: one table (each figure, its target, PASS or MISS) or one JSON object.
+
+`_judged` walks every stage's result once: each row of the table, and the verdict of each
+target, keyed like the JSON's figures, come from the same place.
+"""
 
 from __future__ import annotations
 
 import math
+from dataclasses import asdict, dataclass
 from typing import Any
 
 from rich.table import Table
 
-from tui_gym.bench import dp, history, programs, tasks
+from tui_gym.bench import compare, dp, history, programs
+from tui_gym.bench.figures import median
 from tui_gym.bench.live import RUNNERS
-from tui_gym.bench.results import BenchResults
-
-SPEED_TARGET = 100.0
-GAP_SPEEDUP_TARGET = 50.0
-COLD_COMPILE_S_TARGET = 30.0
-WARM_LOAD_S_TARGET = 1.0
-DEFAULTS_SHARE_TARGET = 0.95
-LIVE_RATIO_TARGET = 0.8
-REFRESH_HZ_TARGET = 10.0
-KEY_P95_MS_TARGET = 50.0
-RSS_GROWTH_MB_TARGET = 20.0
-RSS_EPISODES_TARGET = 2_000_000
-STARTUP_S_TARGET = 1.0
-SEPARATION_RATIO_TARGET = 10.0
-PROTOCOL_STEPS_TARGET = 20_000.0
-MCP_STEPS_TARGET = 1_000.0
-COMPARE_SPEEDUP_TARGET = 100.0
-MAP_EDIT_MS_TARGET = 50.0
+from tui_gym.bench.run import BenchResults
 
 PASS, MISS, UNDECIDED, MISSING, LESSON = "PASS", "MISS", "?", "n/a", "lesson"
 
 
-def _ok(value: float | None, good: bool) -> str:
+@dataclass(frozen=True)
+class Target:
+    """A figure's target: `op` ("≤", "≥" or "<") `limit`, said as `text`."""
+
+    op: str
+    limit: float
+    unit: str = ""
+    shown: str = "g"  # the limit's format in the text
+
+    @property
+    def text(self) -> str:
+        return f"{self.op} {self.limit:{self.shown}}{self.unit}"
+
+    def verdict(self, value: float | None) -> str:
+        """PASS or MISS, or MISSING for a figure not measured (None or NaN)."""
+        if value is None or math.isnan(value):
+            return MISSING
+        good = {"≤": value <= self.limit, "≥": value >= self.limit, "<": value < self.limit}
+        return PASS if good[self.op] else MISS
+
+
+SPEED = Target("≥", 100.0, "×")
+GAP_SPEEDUP = Target("≥", 50.0, "×")
+COLD_COMPILE_S = Target("≤", 30.0, " s")
+WARM_LOAD_S = Target("≤", 1.0, " s")
+DEFAULTS_SHARE = Target("≥", 0.95, shown=".0%")
+LIVE_RATIO = Target("≥", 0.8, shown=".2f")
+REFRESH_HZ = Target("≥", 10.0, " Hz")
+KEY_P95_MS = Target("≤", 50.0, " ms")
+RSS_GROWTH_MB = Target("<", 20.0, " MB")
+RSS_EPISODES = 2_000_000  # the growth counts only over at least this many episodes
+STARTUP_S = Target("≤", 1.0, " s")
+SEPARATION_RATIO = Target("≥", 10.0, "×")
+PROTOCOL_STEPS = Target("≥", 20_000.0, shown=",.0f")
+MCP_STEPS = Target("≥", 1_000.0, shown=",.0f")
+COMPARE_SPEEDUP = Target("≥", 100.0, "×")
+MAP_EDIT_MS = Target("≤", 50.0, " ms")
+HISTORY_OVERHEAD = Target("≤", 0.02, shown=".0%")  # recording's share of a train run
+HISTORY_MB_PER_1000 = Target("<", 1.0, " MB")  # the file's size per 1,000 runs
+TASK_SPLIT = Target("≤", 1.10)  # tasks ÷ one batch
+CLUSTER_SHARE = Target("≥", 0.8)  # the cluster's throughput ÷ the local executor's
+TAXI_SWEEP_MS = Target("≤", 5.0, " ms")
+JACK_SECONDS = Target("≤", 1.0, " s")
+PLAN_SWEEPS = Target("≥", 20.0)
+PLAN_KEY_P95_MS = Target("≤", 50.0, " ms")
+
+_STYLE = {PASS: "[bold green]PASS[/]", MISS: "[bold red]MISS[/]", UNDECIDED: "[yellow]?[/]",
+          MISSING: "[dim]n/a[/]", LESSON: "[dim]lesson[/]"}
+
+Row = tuple[str, str, str, str]  # figure, measured, target, verdict ("" for none)
+
+
+class _Judged:
+    """The table's rows and the targets' verdicts, gathered stage by stage."""
+
+    def __init__(self) -> None:
+        self.rows: list[Row] = []
+        self.verdicts: dict[str, str] = {}
+
+    def row(self, label: str, measured: str, target: Target | str = "", key: str = "",
+            value: float | None = None, verdict: str = "") -> None:
+        """A row; with a `key`, its verdict: `verdict` if given, else `value` against
+        `target` (a key judged already keeps its verdict)."""
+        if key and key not in self.verdicts:
+            assert isinstance(target, Target) or verdict
+            self.verdicts[key] = verdict or target.verdict(value)  # type: ignore[union-attr]
+        text = target.text if isinstance(target, Target) else target
+        self.rows.append((label, measured, text, self.verdicts[key] if key else ""))
+
+    def judge(self, key: str, verdict: str) -> None:
+        """A verdict with no row of its own (yet)."""
+        self.verdicts[key] = verdict
+
+    def missing(self, *keys: str) -> None:
+        """The verdicts of figures not measured."""
+        self.verdicts.update(dict.fromkeys(keys, MISSING))
+
+    def failed(self, label: str, text: str) -> None:
+        self.rows.append((label, f"[red]{text}[/]", "", MISSING))
+
+
+def _num(value: float | None, fmt: str, suffix: str = "") -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
-        return MISSING
-    return PASS if good else MISS
+        return "n/a"
+    return f"{value:{fmt}}{suffix}"
+
+
+def _judged(results: BenchResults) -> _Judged:
+    """Every stage's rows and verdicts, in the table's order."""
+    out = _Judged()
+    found_compile = results.compile
+    if found_compile is None:
+        out.missing("cold_compile_s", "warm_load_s")
+    else:
+        out.row("every learner compiled, empty cache", f"{found_compile.cold_s:.1f} s",
+                COLD_COMPILE_S, "cold_compile_s", found_compile.cold_s)
+        out.row("  loaded from the cache", f"{found_compile.warm_s:.2f} s (importing Numba "
+                f"{found_compile.import_s:.2f} s)", WARM_LOAD_S, "warm_load_s",
+                found_compile.warm_s)
+    for speed in results.speed or ():
+        out.row(f"{speed.game}, {speed.algorithm}: ours ÷ tutorial loop",
+                f"{_num(speed.speedup, ',.0f', '×')} ({_num(speed.episodes, ',.0f')} / "
+                f"{_num(speed.tutorial_episodes, ',.0f')} ep/s)", SPEED,
+                f"speedup[{speed.game}/{speed.algorithm}]", speed.speedup)
+    if "speed" in results.errors:
+        out.missing("speedup")
+    for found in results.defaults or ():  # judged here, shown further down
+        out.judge(f"defaults[{found.game}/{found.algorithm}]",
+                  LESSON if found.lesson else DEFAULTS_SHARE.verdict(found.share))
+    if "defaults" in results.errors:
+        out.missing("defaults")
+    for name, gap in results.gap.items():
+        _gap_rows(out, name, gap)
+    for runner in RUNNERS:
+        _live_rows(out, results, runner)
+    memory = results.memory
+    if memory is None:
+        out.missing("rss_growth_mb")
+    else:
+        good = memory.growth_mb < RSS_GROWTH_MB.limit and memory.episodes >= RSS_EPISODES
+        out.row(f"RSS growth over {memory.episodes:,} ep ({memory.engine})",
+                f"{memory.growth_mb:+.1f} MB", RSS_GROWTH_MB, "rss_growth_mb",
+                verdict=MISSING if math.isnan(memory.growth_mb) else PASS if good else MISS)
+    startup = results.startup
+    if startup is None:
+        out.missing("startup_s")
+    else:
+        samples = ", ".join(f"{s:.2f}" for s in startup.samples)
+        out.row("start to first frame", f"{startup.seconds:.2f} s ({samples})", STARTUP_S,
+                "startup_s", startup.seconds)
+    for edit in results.map_edit or ():
+        out.row(f"{edit.game}: map edit → new optimum, {edit.size} (median, worst of "
+                f"{edit.edits})", f"{edit.median_ms:.0f} ms (worst {edit.worst_ms:.0f})",
+                MAP_EDIT_MS, f"map_edit_ms[{edit.game}]", edit.median_ms)
+    if "map_edit" in results.errors:
+        out.missing("map_edit_ms")
+    _planning_rows(out, results)
+    _programs_rows(out, results.programs)
+    _seeds_rows(out, results)
+    for found in results.defaults or ():
+        out.row(f"{found.game}, {found.algorithm}: defaults at the bound",
+                f"{found.met} of {found.seeds} (worst {found.worst:.4g}; {found.bound})",
+                DEFAULTS_SHARE, f"defaults[{found.game}/{found.algorithm}]")
+    _history_rows(out, results.history)
+    _tasks_rows(out, results.tasks)
+    _dp_rows(out, results.dp)
+    for stage, error in results.errors.items():
+        out.failed(f"{stage} failed", error)
+    return out
+
+
+def _gap_rows(out: _Judged, name: str, gap: Any) -> None:
+    if gap.speedup is None:
+        verdict = MISSING
+    elif not gap.reached:
+        verdict = MISS
+    elif gap.speedup >= GAP_SPEEDUP.limit:
+        verdict = PASS  # a lower bound above the target decides it too
+    else:
+        verdict = MISS if gap.tutorial_reached else UNDECIDED
+    ours_eps = sorted(r.episodes for r in gap.ours)
+    mark = "" if gap.reached else " (not reached)"
+    out.row(f"{gap.title}: time to gap ≤ {gap.target:.4g}, ours",
+            f"{_num(gap.time_to_gap_s, '.2f', ' s')}{mark}, {ours_eps[len(ours_eps) // 2]:,} ep")
+    theirs_eps = sorted(r.episodes for r in gap.tutorial)
+    prefix = "" if gap.tutorial_reached else "≥ "
+    mark = "" if gap.tutorial_reached else " (capped)"
+    out.row("  tutorial loop", f"{prefix}{_num(gap.tutorial_time_to_gap_s, '.1f', ' s')}{mark}, "
+            f"{theirs_eps[len(theirs_eps) // 2]:,} ep" if theirs_eps else "n/a")
+    out.row("  tutorial time / ours", prefix + _num(gap.speedup, ".0f", "×"), GAP_SPEEDUP,
+            f"time_to_gap[{name}]", verdict=verdict)
+
+
+def _live_rows(out: _Judged, results: BenchResults, runner: str) -> None:
+    name = f"{runner} runner" + (" (default)" if runner == results.default_runner else "")
+    live = results.live_for(runner)
+    if live is None:
+        failed = results.live.get(runner)
+        out.missing(*(f"{key}[{runner}]" for key in ("live_ratio", "ui_refresh_hz",
+                                                     "key_latency_p95_ms")))
+        out.failed(f"live, {name}", "; ".join(failed.errors) if failed is not None
+                   else "not measured")
+        return
+    out.row(f"live ep/s ÷ headless, {name}",
+            f"{live.live_ratio:.2f} ({live.live_eps:,.0f} / {live.headless_eps:,.0f})",
+            LIVE_RATIO, f"live_ratio[{runner}]", live.live_ratio)
+    out.row(f"  snapshots drawn, {runner}", f"{live.refresh_hz:.1f} Hz", REFRESH_HZ,
+            f"ui_refresh_hz[{runner}]", live.refresh_hz)
+    p95 = live.key_latency_ms(95)
+    out.row(f"  key → screen p95, {runner}", f"{p95:.0f} ms (p50 "
+            f"{live.key_latency_ms(50):.0f}, n={live.presses})", KEY_P95_MS,
+            f"key_latency_p95_ms[{runner}]", p95)
+
+
+def _planning_rows(out: _Judged, results: BenchResults) -> None:
+    planning = results.planning
+    if planning is None:
+        out.missing("planning")
+        return
+    fewer = planning.dyna_q_episodes < planning.q_learning_episodes
+    verdict = PASS if fewer and all(r.reached for r in planning.dyna_q) else MISS
+
+    def runs(items: tuple) -> str:
+        return _num(median([r.episodes for r in items]), ",.0f") + (
+            "" if all(r.reached for r in items) else " (not all reached)")
+
+    out.row(f"real episodes to ≤ {planning.bound:g} on {planning.game}: Q-learning / Dyna-Q",
+            f"{runs(planning.q_learning)} / {runs(planning.dyna_q)}", "Dyna-Q fewer",
+            "planning", verdict=verdict)
+
+
+def _programs_rows(out: _Judged, found: programs.ProgramsResult | None) -> None:
+    if found is None:
+        out.missing("regret_separation_ratio", "protocol_steps_per_second",
+                    "mcp_steps_per_second")
+        return
+    sep = found.separation
+    out.row("episodes to separate optimal from 5% deviations, by return",
+            f"{_num(sep.by_return, ',.0f')}")
+    out.row("  by exact regret", f"{_num(sep.by_regret, ',.0f')}")
+    out.row("  ratio", _num(sep.ratio, ".0f", "×"), SEPARATION_RATIO, "regret_separation_ratio",
+            sep.ratio)
+    rate = found.protocol.steps_per_second
+    out.row(f"protocol over a pipe, steps/s, {programs.WINDOW} requests in flight",
+            _num(rate, ",.0f"), PROTOCOL_STEPS, "protocol_steps_per_second", rate)
+    trip = found.protocol_round_trip
+    if trip.round_trips:
+        out.row("  one request at a time, round trip p50",
+                f"{_num(trip.p50_us, '.0f', ' µs')} (p95 {_num(trip.p95_us, '.0f')}; "
+                f"{_num(trip.rate.steps_per_second, ',.0f')} steps/s)")
+    rate = found.mcp_together.steps_per_second
+    if found.mcp_together.reason:
+        out.judge("mcp_steps_per_second", MCP_STEPS.verdict(rate))
+        out.rows.append(("MCP, steps/s", f"[dim]{found.mcp_together.reason}[/]", "", MISSING))
+    else:
+        out.row(f"MCP, steps/s, {programs.MCP_GAMES} games at once", _num(rate, ",.0f"),
+                MCP_STEPS, "mcp_steps_per_second", rate)
+        out.row("  one call at a time", _num(found.mcp_one.steps_per_second, ",.0f"))
+
+
+def _seeds_rows(out: _Judged, results: BenchResults) -> None:
+    found = results.seeds
+    if found is None:
+        out.missing("compare_speedup", "example_6_6")
+        return
+    scaled = ("" if found.tutorial_learners == found.learners else
+              f", {found.tutorial_learners} of {found.learners} run, scaled")
+    out.row(f"compare on {found.game}, {found.seeds} seeds × {found.episodes} ep: tutorial "
+            "loop ÷ compare", f"{_num(found.speedup, '.1f', '×')} ({found.tutorial_s:.1f} s"
+            f"{scaled} / {found.compare_s:.2f} s)", COMPARE_SPEEDUP, "compare_speedup",
+            found.speedup)
+    online = found.online_returns
+    if len(online) != 2:
+        out.missing("example_6_6")
+        return
+    out.row("  Example 6.6: mean online return, Q-learning / SARSA",
+            f"{online[0]:+.1f} / {online[1]:+.1f}", "SARSA above", "example_6_6",
+            verdict=MISSING if math.isnan(online[1]) else PASS if online[1] > online[0] else MISS)
+
+
+def _history_rows(out: _Judged, found: history.HistoryResult | None) -> None:
+    if found is None:
+        out.missing("history_overhead", "history_bytes_per_1000_runs")
+        return
+    out.row(f"run history: recording's share of a train {found.game} run",
+            f"{found.overhead:.2%} (median of {len(found.shares)})", HISTORY_OVERHEAD,
+            "history_overhead", found.overhead)
+    out.row("  whole run, fastest recorded ÷ fastest --no-record (noisy)",
+            f"{found.ab_ratio:.3f} ({min(found.recorded_s):.2f} s / "
+            f"{min(found.unrecorded_s):.2f} s)")
+    out.row(f"run history: file size per 1,000 default runs ({found.runs:,} written)",
+            f"{found.bytes_per_1000 / 1e6:.3f} MB", HISTORY_MB_PER_1000,
+            "history_bytes_per_1000_runs", found.bytes_per_1000 / 1e6)
+
+
+def _tasks_rows(out: _Judged, found: compare.TasksResult | None) -> None:
+    if found is None:
+        out.missing("task_split_overhead", "cluster_throughput_share")
+        return
+    split, share = found.split_overhead, found.cluster_share
+    out.row(f"compare on {found.game}, {found.seeds} seeds: {found.tasks} tasks, recorded "
+            "÷ one batch", "n/a" if split is None else
+            f"{split:.3f} ({found.tasks_s:.2f} s / {found.batch_s:.2f} s)", TASK_SPLIT,
+            "task_split_overhead", split)
+    workers = f"LocalCluster({compare.CLUSTER_WORKERS}) ÷ local executor, throughput"
+    if share is None:
+        out.missing("cluster_throughput_share")
+        out.row(workers, found.cluster_note or "n/a", CLUSTER_SHARE)
+    else:
+        out.row(f"{workers}, sweep of {len(compare.SWEEP_RATES)} points",
+                f"{share:.3f} ({found.local_s:.2f} s / {found.cluster_s:.2f} s)", CLUSTER_SHARE,
+                "cluster_throughput_share", share)
+
+
+def _dp_rows(out: _Judged, found: dp.DPResult | None) -> None:
+    if found is None:
+        out.missing("taxi_sweep_ms", "jack_policy_iteration_s", "plan_view")
+        return
+    out.row("planning: a value-iteration sweep on Taxi (500 × 6), median",
+            f"{found.taxi_sweep_ms:.2f} ms", TAXI_SWEEP_MS, "taxi_sweep_ms", found.taxi_sweep_ms)
+    out.row("  Jack's car rental by policy iteration (Figure 4.2), median",
+            f"{found.jack_seconds:.2f} s (model built once: {found.jack_model_seconds:.2f} s)",
+            JACK_SECONDS, "jack_policy_iteration_s", found.jack_seconds)
+    for view in found.views:
+        out.row(f"  Plan view on {view.game}: sweeps drawn a second (50/s asked)",
+                f"{view.sweeps_per_second:.1f}", PLAN_SWEEPS,
+                f"plan_sweeps_per_second[{view.game}]", view.sweeps_per_second)
+        out.row(f"  Plan view on {view.game}: key → screen p95 while it runs",
+                f"{view.key_p95_ms:.0f} ms (p50 {median(list(view.keys_ms)):.0f}, "
+                f"n={len(view.keys_ms)})", PLAN_KEY_P95_MS, f"plan_key_p95_ms[{view.game}]",
+                view.key_p95_ms)
 
 
 def verdicts(results: BenchResults) -> dict[str, str]:
     """Each target's verdict, keyed like the JSON's figures."""
-    out: dict[str, str] = {}
-    found_compile = results.compile
-    cold = found_compile.cold_s if found_compile else None
-    warm = found_compile.warm_s if found_compile else None
-    out["cold_compile_s"] = _ok(cold, (cold or 0) <= COLD_COMPILE_S_TARGET)
-    out["warm_load_s"] = _ok(warm, (warm or 0) <= WARM_LOAD_S_TARGET)
-    for speed in results.speed or ():
-        up = speed.speedup
-        out[f"speedup[{speed.game}/{speed.algorithm}]"] = _ok(up, (up or 0) >= SPEED_TARGET)
-    if "speed" in results.errors:
-        out["speedup"] = MISSING
-    for found_defaults in results.defaults or ():
-        out[f"defaults[{found_defaults.game}/{found_defaults.algorithm}]"] = (
-            LESSON if found_defaults.lesson else
-            _ok(found_defaults.share, found_defaults.share >= DEFAULTS_SHARE_TARGET))
-    if "defaults" in results.errors:
-        out["defaults"] = MISSING
-    for name, gap in results.gap.items():
-        key = f"time_to_gap[{name}]"
-        if gap.speedup is None:
-            out[key] = MISSING
-        elif not gap.reached:
-            out[key] = MISS
-        elif gap.speedup >= GAP_SPEEDUP_TARGET:
-            out[key] = PASS  # a lower bound above the target decides it too
-        else:
-            out[key] = MISS if gap.tutorial_reached else UNDECIDED
-    for runner in RUNNERS:
-        live = results.live_for(runner)
-        if live is None:
-            for name in ("live_ratio", "ui_refresh_hz", "key_latency_p95_ms"):
-                out[f"{name}[{runner}]"] = MISSING
-            continue
-        out[f"live_ratio[{runner}]"] = _ok(live.live_ratio, live.live_ratio >= LIVE_RATIO_TARGET)
-        out[f"ui_refresh_hz[{runner}]"] = _ok(live.refresh_hz, live.refresh_hz >= REFRESH_HZ_TARGET)
-        p95 = live.key_latency_ms(95)
-        out[f"key_latency_p95_ms[{runner}]"] = _ok(p95, p95 <= KEY_P95_MS_TARGET)
-    memory = results.memory
-    if memory is None:
-        out["rss_growth_mb"] = MISSING
-    else:
-        good = memory.growth_mb < RSS_GROWTH_MB_TARGET and memory.episodes >= RSS_EPISODES_TARGET
-        out["rss_growth_mb"] = _ok(memory.growth_mb, good)
-    startup = results.startup
-    seconds = startup.seconds if startup is not None else None
-    out["startup_s"] = _ok(seconds, seconds is not None and seconds <= STARTUP_S_TARGET)
-    for edit in results.map_edit or ():
-        out[f"map_edit_ms[{edit.game}]"] = _ok(edit.median_ms, edit.median_ms <= MAP_EDIT_MS_TARGET)
-    if "map_edit" in results.errors:
-        out["map_edit_ms"] = MISSING
-    planning = results.planning
-    if planning is None:
-        out["planning"] = MISSING
-    else:
-        fewer = planning.dyna_q_episodes < planning.q_learning_episodes
-        out["planning"] = PASS if fewer and all(r.reached for r in planning.dyna_q) else MISS
-    found = results.programs
-    ratio = found.separation.ratio if found else None
-    out["regret_separation_ratio"] = _ok(ratio, ratio is not None and
-                                         ratio >= SEPARATION_RATIO_TARGET)
-    rate = found.protocol.steps_per_second if found else None
-    out["protocol_steps_per_second"] = _ok(rate, rate is not None and rate >= PROTOCOL_STEPS_TARGET)
-    rate = found.mcp_together.steps_per_second if found else None
-    out["mcp_steps_per_second"] = _ok(rate, rate is not None and rate >= MCP_STEPS_TARGET)
-    found_seeds = results.seeds
-    up = found_seeds.speedup if found_seeds else None
-    out["compare_speedup"] = _ok(up, up is not None and up >= COMPARE_SPEEDUP_TARGET)
-    online = found_seeds.online_returns if found_seeds else ()
-    out["example_6_6"] = _ok(online[1] if len(online) == 2 else None,
-                             len(online) == 2 and online[1] > online[0])
-    out.update(history.verdicts(results.history, MISSING, _ok))
-    out.update(tasks.verdicts(results.tasks, MISSING, _ok))
-    out.update(dp.verdicts(results.dp, MISSING, _ok))
-    return out
+    return _judged(results).verdicts
 
 
-def _seeds_dict(results: BenchResults) -> dict[str, Any] | None:
-    found = results.seeds
-    if found is None:
-        return None
-    return {
-        "game": found.game, "algorithms": list(found.algorithms), "seeds": found.seeds,
-        "episodes": found.episodes, "compare_s": found.compare_s, "tutorial_s": found.tutorial_s,
-        "tutorial_learners_run": found.tutorial_learners, "speedup": found.speedup,
-        "online_return": dict(zip(found.algorithms, found.online_returns, strict=False)),
-    }
-
-
-def _programs_dict(results: BenchResults) -> dict[str, Any] | None:
-    found = results.programs
-    if found is None:
-        return None
-    sep = found.separation
-    trip = found.protocol_round_trip
-    return {
-        "separation": {
-            "episodes_each": sep.episodes, "deviation": programs.DEVIATION, "delta": sep.delta,
-            "return_gap_measured": sep.return_gap, "return_sd": list(sep.return_sd),
-            "regret_sd": list(sep.regret_sd), "episodes_needed_by_return": sep.by_return,
-            "episodes_needed_by_regret": sep.by_regret, "ratio": sep.ratio,
-            "formula": "n = 1.96^2 (sd_a^2 + sd_b^2) / delta^2",
-        },
-        "protocol_steps_per_second": found.protocol.steps_per_second,
-        "protocol_samples": list(found.protocol.samples),
-        "protocol_requests_in_flight": programs.WINDOW,
-        "protocol_steps_per_second_one_request_at_a_time": trip.rate.steps_per_second,
-        "protocol_round_trip_p50_us": trip.p50_us,
-        "protocol_round_trip_p95_us": trip.p95_us,
-        "protocol_round_trips": trip.round_trips,
-        "mcp_steps_per_second_one_call_at_a_time": found.mcp_one.steps_per_second,
-        "mcp_steps_per_second": found.mcp_together.steps_per_second,
-        "mcp_games_at_once": programs.MCP_GAMES,
-        "mcp_note": found.mcp_together.reason,
-    }
-
-
-# --- JSON --------------------------------------------------------------------
-def _runner_dict(results: BenchResults, runner: str) -> dict[str, Any]:
-    live = results.live.get(runner)
-    if live is None or not live.repeats:
-        return {"error": "; ".join(live.errors) if live is not None else "not measured"}
-    return {
-        "engine": live.engine, "live_ratio": live.live_ratio,
-        "headless_episodes_per_second": live.headless_eps,
-        "live_episodes_per_second": live.live_eps, "ui_refresh_hz": live.refresh_hz,
-        "frames_hz": live.frames_hz, "key_latency_p50_ms": live.key_latency_ms(50),
-        "key_latency_p95_ms": live.key_latency_ms(95), "key_presses": live.presses,
-        "key_latency_by_key_ms": live.breakdown_ms(), "repeats": len(live.repeats),
-        "window_s": live.seconds, "ratios": [r.ratio for r in live.repeats],
-    }
-
-
+# --- JSON ---------------------------------------------------------------------
 def _game_dict(results: BenchResults, name: str) -> dict[str, Any]:
     gap = results.gap.get(name)
     return {
@@ -198,21 +366,9 @@ def _game_dict(results: BenchResults, name: str) -> dict[str, Any]:
     }
 
 
-def _planning_dict(results: BenchResults) -> dict[str, Any] | None:
-    planning = results.planning
-    if planning is None:
-        return None
-    return {
-        "game": planning.game,
-        "measure": planning.measure,
-        "bound": planning.bound,
-        "q_learning_episodes": planning.q_learning_episodes,
-        "dyna_q_episodes": planning.dyna_q_episodes,
-        "q_learning_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
-                            for r in planning.q_learning],
-        "dyna_q_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
-                        for r in planning.dyna_q],
-    }
+def _json(found: Any) -> Any:
+    """A stage's JSON object, or None for a stage that did not run."""
+    return None if found is None else found.to_json()
 
 
 def to_json(results: BenchResults) -> dict[str, Any]:
@@ -244,186 +400,42 @@ def to_json(results: BenchResults) -> dict[str, Any]:
         "ui_refresh_hz": default.refresh_hz if default else None,
         "key_latency_p50_ms": default.key_latency_ms(50) if default else None,
         "key_latency_p95_ms": default.key_latency_ms(95) if default else None,
-        "runners": {runner: _runner_dict(results, runner) for runner in RUNNERS},
+        "runners": {runner: results.live[runner].to_json() if runner in results.live
+                    else {"error": "not measured"} for runner in RUNNERS},
         "rss_growth_mb": memory.growth_mb if memory else None,
-        "rss": (
-            {
-                "episodes": memory.episodes, "warmup_episodes": memory.warmup,
-                "engine": memory.engine, "start_mb": memory.rss_start_mb,
-                "end_mb": memory.rss_end_mb, "peak_mb": memory.rss_peak_mb,
-            }
-            if memory
-            else None
-        ),
+        "rss": _json(memory),
         "startup_s": startup.seconds if startup else None,
         "startup_samples_s": list(startup.samples) if startup else None,
-        "planning": _planning_dict(results),
-        "programs": _programs_dict(results),
-        "map_edit": [
-            {"game": e.game, "size": e.size, "edits": e.edits, "median_ms": e.median_ms,
-             "worst_ms": e.worst_ms, "kept_agent": e.kept_agent}
-            for e in results.map_edit or ()
-        ],
-        "history": history.to_json(results.history),
-        "tasks": tasks.to_json(results.tasks),
-        "compare": _seeds_dict(results),
-        "planning_dp": dp.to_json(results.dp),
+        "planning": _json(results.planning),
+        "programs": _json(results.programs),
+        "map_edit": [asdict(edit) for edit in results.map_edit or ()],
+        "history": _json(results.history),
+        "tasks": _json(results.tasks),
+        "compare": _json(results.seeds),
+        "planning_dp": _json(results.dp),
         "verdicts": verdicts(results),
         "errors": dict(results.errors),
     }
     return data
 
 
-# --- the table -----------------------------------------------------------------
-def _num(value: float | None, fmt: str, suffix: str = "") -> str:
-    if value is None or (isinstance(value, float) and math.isnan(value)):
-        return "n/a"
-    return f"{value:{fmt}}{suffix}"
-
-
-_STYLE = {PASS: "[bold green]PASS[/]", MISS: "[bold red]MISS[/]", UNDECIDED: "[yellow]?[/]",
-          MISSING: "[dim]n/a[/]", LESSON: "[dim]lesson[/]"}
-
-
 def table(results: BenchResults) -> Table:
     """Every figure beside its target and verdict."""
-    verdict = verdicts(results)
-    mode = "quick" if results.quick else "full"
     machine = results.machine
     load = ""
     if machine.load_before and machine.load_after:
         load = (f"; load average {machine.load_before[0]:.2f} before, "
                 f"{machine.load_after[0]:.2f} after")
-    out = Table(
-        title=f"tui-gym bench ({mode}, {results.seconds:.0f} s, "
-        f"{machine.cpus or '?'} CPUs{load})",
-        title_justify="left",
-    )
+    out = Table(title=f"tui-gym bench ({'quick' if results.quick else 'full'}, "
+                f"{results.seconds:.0f} s, {machine.cpus or '?'} CPUs{load})",
+                title_justify="left")
     out.add_column("figure", style="bold")
     out.add_column("measured", justify="right")
     out.add_column("target", justify="right")
     out.add_column("", justify="center")
-
-    def row(label: str, value: str, target: str = "", key: str | None = None) -> None:
-        out.add_row(label, value, target, _STYLE[verdict[key]] if key else "")
-
-    found_compile = results.compile
-    if found_compile is not None:
-        row("every learner compiled, empty cache", f"{found_compile.cold_s:.1f} s",
-            f"≤ {COLD_COMPILE_S_TARGET:g} s", "cold_compile_s")
-        row("  loaded from the cache", f"{found_compile.warm_s:.2f} s (importing Numba "
-            f"{found_compile.import_s:.2f} s)", f"≤ {WARM_LOAD_S_TARGET:g} s", "warm_load_s")
-    for speed in results.speed or ():
-        row(f"{speed.game}, {speed.algorithm}: ours ÷ tutorial loop",
-            f"{_num(speed.speedup, ',.0f', '×')} ({_num(speed.episodes, ',.0f')} / "
-            f"{_num(speed.tutorial_episodes, ',.0f')} ep/s)", f"≥ {SPEED_TARGET:g}×",
-            f"speedup[{speed.game}/{speed.algorithm}]")
-    for name, gap in results.gap.items():
-        ours_eps = sorted(r.episodes for r in gap.ours)
-        mark = "" if gap.reached else " (not reached)"
-        row(f"{gap.title}: time to gap ≤ {gap.target:.4g}, ours",
-            f"{_num(gap.time_to_gap_s, '.2f', ' s')}{mark}, "
-            f"{ours_eps[len(ours_eps) // 2]:,} ep")
-        theirs_eps = sorted(r.episodes for r in gap.tutorial)
-        prefix = "" if gap.tutorial_reached else "≥ "
-        mark = "" if gap.tutorial_reached else " (capped)"
-        row("  tutorial loop",
-            f"{prefix}{_num(gap.tutorial_time_to_gap_s, '.1f', ' s')}{mark}, "
-            f"{theirs_eps[len(theirs_eps) // 2]:,} ep" if theirs_eps else "n/a")
-        row("  tutorial time / ours", prefix + _num(gap.speedup, ".0f", "×"),
-            f"≥ {GAP_SPEEDUP_TARGET:g}×", f"time_to_gap[{name}]")
-    for runner in RUNNERS:
-        name = f"{runner} runner" + (" (default)" if runner == results.default_runner else "")
-        live = results.live_for(runner)
-        if live is None:
-            failed = results.live.get(runner)
-            text = "; ".join(failed.errors) if failed is not None else "not measured"
-            out.add_row(f"live, {name}", f"[red]{text}[/]", "", _STYLE[MISSING])
-            continue
-        row(f"live ep/s ÷ headless, {name}",
-            f"{live.live_ratio:.2f} ({live.live_eps:,.0f} / {live.headless_eps:,.0f})",
-            f"≥ {LIVE_RATIO_TARGET:.2f}", f"live_ratio[{runner}]")
-        row(f"  snapshots drawn, {runner}", f"{live.refresh_hz:.1f} Hz",
-            f"≥ {REFRESH_HZ_TARGET:g} Hz", f"ui_refresh_hz[{runner}]")
-        row(f"  key → screen p95, {runner}",
-            f"{live.key_latency_ms(95):.0f} ms (p50 {live.key_latency_ms(50):.0f}, "
-            f"n={live.presses})",
-            f"≤ {KEY_P95_MS_TARGET:g} ms", f"key_latency_p95_ms[{runner}]")
-    memory = results.memory
-    if memory is not None:
-        row(f"RSS growth over {memory.episodes:,} ep ({memory.engine})",
-            f"{memory.growth_mb:+.1f} MB", f"< {RSS_GROWTH_MB_TARGET:g} MB", "rss_growth_mb")
-    if results.startup is not None:
-        samples = ", ".join(f"{s:.2f}" for s in results.startup.samples)
-        row("start to first frame", f"{results.startup.seconds:.2f} s ({samples})",
-            f"≤ {STARTUP_S_TARGET:g} s", "startup_s")
-    for edit in results.map_edit or ():
-        row(f"{edit.game}: map edit → new optimum, {edit.size} (median, worst of {edit.edits})",
-            f"{edit.median_ms:.0f} ms (worst {edit.worst_ms:.0f})",
-            f"≤ {MAP_EDIT_MS_TARGET:g} ms", f"map_edit_ms[{edit.game}]")
-    planning = results.planning
-    if planning is not None:
-        def runs(items: tuple) -> str:
-            return _num(median_of(items), ",.0f") + ("" if all(r.reached for r in items)
-                                                       else " (not all reached)")
-        row(f"real episodes to ≤ {planning.bound:g} on {planning.game}: Q-learning / Dyna-Q",
-            f"{runs(planning.q_learning)} / {runs(planning.dyna_q)}",
-            "Dyna-Q fewer", "planning")
-    found = results.programs
-    if found is not None:
-        sep = found.separation
-        row("episodes to separate optimal from 5% deviations, by return",
-            f"{_num(sep.by_return, ',.0f')}")
-        row("  by exact regret", f"{_num(sep.by_regret, ',.0f')}")
-        row("  ratio", _num(sep.ratio, ".0f", "×"), f"≥ {SEPARATION_RATIO_TARGET:g}×",
-            "regret_separation_ratio")
-        row(f"protocol over a pipe, steps/s, {programs.WINDOW} requests in flight",
-            _num(found.protocol.steps_per_second, ",.0f"),
-            f"≥ {PROTOCOL_STEPS_TARGET:,.0f}", "protocol_steps_per_second")
-        trip = found.protocol_round_trip
-        if trip.round_trips:
-            row("  one request at a time, round trip p50",
-                f"{_num(trip.p50_us, '.0f', ' µs')} (p95 {_num(trip.p95_us, '.0f')}; "
-                f"{_num(trip.rate.steps_per_second, ',.0f')} steps/s)")
-        if found.mcp_together.reason:
-            out.add_row("MCP, steps/s", f"[dim]{found.mcp_together.reason}[/]", "", _STYLE[MISSING])
-        else:
-            row(f"MCP, steps/s, {programs.MCP_GAMES} games at once",
-                _num(found.mcp_together.steps_per_second, ",.0f"),
-                f"≥ {MCP_STEPS_TARGET:,.0f}", "mcp_steps_per_second")
-            row("  one call at a time", _num(found.mcp_one.steps_per_second, ",.0f"))
-    found_seeds = results.seeds
-    if found_seeds is not None:
-        scaled = ("" if found_seeds.tutorial_learners == found_seeds.learners else
-                  f", {found_seeds.tutorial_learners} of {found_seeds.learners} run, scaled")
-        row(f"compare on {found_seeds.game}, {found_seeds.seeds} seeds × "
-            f"{found_seeds.episodes} ep: tutorial loop ÷ compare",
-            f"{_num(found_seeds.speedup, '.1f', '×')} ({found_seeds.tutorial_s:.1f} s{scaled} / "
-            f"{found_seeds.compare_s:.2f} s)",
-            f"≥ {COMPARE_SPEEDUP_TARGET:g}×", "compare_speedup")
-        online = found_seeds.online_returns
-        if len(online) == 2:
-            row("  Example 6.6: mean online return, Q-learning / SARSA",
-                f"{online[0]:+.1f} / {online[1]:+.1f}", "SARSA above", "example_6_6")
-    for found_defaults in results.defaults or ():
-        row(f"{found_defaults.game}, {found_defaults.algorithm}: defaults at the bound",
-            f"{found_defaults.met} of {found_defaults.seeds} (worst {found_defaults.worst:.4g};"
-            f" {found_defaults.bound})", f"≥ {DEFAULTS_SHARE_TARGET:.0%}",
-            f"defaults[{found_defaults.game}/{found_defaults.algorithm}]")
-    for label, value, target, verdict_key in (*history.rows(results.history),
-                                              *tasks.rows(results.tasks),
-                                              *dp.rows(results.dp)):
-        row(label, value, target, verdict_key)
-    for stage, error in results.errors.items():
-        out.add_row(f"{stage} failed", f"[red]{error}[/]", "", _STYLE[MISSING])
+    for label, measured, target, verdict in _judged(results).rows:
+        out.add_row(label, measured, target, _STYLE[verdict] if verdict else "")
     return out
-
-
-def median_of(runs: tuple) -> float:
-    """The median episode count of planning runs."""
-    from tui_gym.bench.figures import median
-
-    return median([r.episodes for r in runs])
 
 
 def notes(results: BenchResults) -> list[str]:

@@ -1,34 +1,83 @@
-"""One bench run: every stage in turn, with the sizes of the quick or the full plan."""
+"""One bench run: every stage in turn, with the sizes of the quick or the full plan, and what
+it found (`BenchResults`)."""
 
 from __future__ import annotations
 
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import partial
 from typing import Any
 
 from tui_gym.algorithms import ALGORITHMS, Predictor, algorithm
 from tui_gym.bench import (
+    compare,
     compiling,
     defaults,
     dp,
     gap,
     history,
-    learners,
     live,
     map_edit,
     memory,
     programs,
-    seeds,
     speed,
     startup,
-    tasks,
 )
+from tui_gym.bench.compare import SeedsSpeed, TasksResult
+from tui_gym.bench.compiling import CompileResult
+from tui_gym.bench.defaults import DefaultsResult
+from tui_gym.bench.dp import DPResult
 from tui_gym.bench.figures import load_average
-from tui_gym.bench.results import BenchResults, MachineInfo
+from tui_gym.bench.gap import GapResult, PlanningResult
+from tui_gym.bench.history import HistoryResult
+from tui_gym.bench.live import DEFAULT_RUNNER, LiveResult
+from tui_gym.bench.map_edit import MapEditResult
+from tui_gym.bench.memory import MemoryResult
+from tui_gym.bench.programs import ProgramsResult
+from tui_gym.bench.speed import Speed
+from tui_gym.bench.startup import StartupResult
 from tui_gym.games import GAMES
+
+
+@dataclass(frozen=True)
+class MachineInfo:
+    """The machine the figures were measured on, and how busy it was."""
+
+    cpus: int | None
+    load_before: tuple[float, float, float] | None
+    load_after: tuple[float, float, float] | None
+
+
+@dataclass(frozen=True)
+class BenchResults:
+    """Every stage's result (None when it failed: `errors` says why)."""
+
+    quick: bool
+    seconds: float  # the whole run
+    machine: MachineInfo
+    compile: CompileResult | None = None
+    speed: tuple[Speed, ...] | None = None  # every (game, algorithm) against the tutorial
+    gap: dict[str, GapResult] = field(default_factory=dict)  # by game name
+    live: dict[str, LiveResult] = field(default_factory=dict)  # by runner
+    memory: MemoryResult | None = None
+    startup: StartupResult | None = None
+    planning: PlanningResult | None = None  # Dyna-Q against Q-learning, real episodes
+    programs: ProgramsResult | None = None
+    map_edit: tuple[MapEditResult, ...] | None = None  # edit to new optimum, per grid game
+    history: HistoryResult | None = None  # the run history's overhead and size
+    seeds: SeedsSpeed | None = None  # `compare` against the same learners in a loop
+    defaults: tuple[DefaultsResult, ...] | None = None  # the share of seeds at the bound
+    dp: DPResult | None = None  # planning: sweeps, Jack's car rental, the Plan view
+    tasks: TasksResult | None = None  # the task split's overhead, a Dask cluster's share
+    errors: dict[str, str] = field(default_factory=dict)  # stage -> what went wrong
+    default_runner: str = DEFAULT_RUNNER
+
+    def live_for(self, runner: str) -> LiveResult | None:
+        """A runner's live figures, or None when it has none (not run, or failed)."""
+        result = self.live.get(runner)
+        return result if result is not None and result.repeats else None
 
 
 @dataclass(frozen=True)
@@ -101,7 +150,7 @@ def run_bench(
     stage("speed", f"training speed of {', '.join(names)} on every game: ours, and the "
           "tutorial loop", lambda: speed.measure(games, names, plan.speed_seconds,
                                                  plan.speed_repeats))
-    gaps: dict[str, gap.GapResult] = {}
+    gaps: dict[str, GapResult] = {}
     for game in gap.benched():
         stage(f"gap[{game.name}]", f"time to the target gap on {gap.title_of(game)}: ours, "
               f"then the tutorial loop (capped at {plan.tutorial_cap_s:.0f} s)",
@@ -110,16 +159,17 @@ def run_bench(
         if f"gap[{game.name}]" in found:
             gaps[game.name] = found.pop(f"gap[{game.name}]")
     stage("planning", f"real episodes to the bound: Q-learning, then Dyna-Q "
-          f"(planning_steps = {learners.PLANNING_STEPS}) on {learners.PLANNING_GAME}",
-          lambda: learners.measure_planning(plan.planning_seeds, learners.PLANNING_BOUND))
+          f"(planning_steps = {gap.PLANNING_STEPS}) on {gap.PLANNING_GAME}",
+          lambda: gap.measure_planning(plan.planning_seeds, gap.PLANNING_BOUND))
     stage("seeds", f"compare, {plan.compare_seeds} seeds × {plan.compare_episodes} episodes of "
           "Q-learning and SARSA, against the same learners in a tutorial loop",
-          lambda: seeds.measure(plan.compare_seeds, plan.compare_episodes,
+          lambda: compare.measure_seeds(plan.compare_seeds, plan.compare_episodes,
                                 plan.compare_tutorial_share))
     stage("tasks", f"compare in tasks against one batch, {plan.compare_seeds} seeds; a sweep "
-          f"on LocalCluster({tasks.CLUSTER_WORKERS}) against the local executor",
-          lambda: tasks.measure(plan.compare_seeds, plan.compare_episodes * plan.tasks_scale,
-                                1 if quick else 3))
+          f"on LocalCluster({compare.CLUSTER_WORKERS}) against the local executor",
+          lambda: compare.measure_tasks(plan.compare_seeds,
+                                        plan.compare_episodes * plan.tasks_scale,
+                                        1 if quick else 3))
     control = tuple(n for n in names if not issubclass(algorithm(n), Predictor))  # bounds
     stage("defaults", f"the defaults over {plan.defaults_seeds} seeds: the share that reaches "
           "the bound", lambda: defaults.measure(games, control, plan.defaults_seeds))

@@ -17,8 +17,10 @@ from tui_gym.core.text import visible
 BUILT_IN = ("random", "optimal")
 
 
-def add_parser(sub: Any, int_type: Any, seed_type: Any, float_type: Any) -> None:
+def add_parser(sub: Any) -> None:
     """Add `benchmark` to the sub-command parsers `sub`."""
+    from tui_gym.cli.flags import finite_number, positive_int, seed_number
+
     bench = sub.add_parser(
         "benchmark",
         help="score a player (a program, random, optimal, a saved agent) on fixed seeds",
@@ -38,11 +40,11 @@ def add_parser(sub: Any, int_type: Any, seed_type: Any, float_type: Any) -> None
     bench.add_argument("--name", metavar="NAME",
                        help="the player's name in the results and the leaderboard (default: "
                        "the command, or the built-in's or agent file's name)")
-    bench.add_argument("--episodes", type=int_type, default=1000, metavar="N",
+    bench.add_argument("--episodes", type=positive_int, default=1000, metavar="N",
                        help="episodes to play (default 1,000)")
-    bench.add_argument("--seed", type=seed_type, default=0, dest="bench_seed", metavar="S",
+    bench.add_argument("--seed", type=seed_number, default=0, dest="bench_seed", metavar="S",
                        help="seed of the first episode (default 0)")
-    bench.add_argument("--decision-timeout", type=float_type, default=5.0, metavar="SEC",
+    bench.add_argument("--decision-timeout", type=finite_number, default=5.0, metavar="SEC",
                        help="seconds a program has for each decision (default 5)")
     bench.add_argument("--allow-hints", action="store_true",
                        help="answer the player's hint requests (refused by default)")
@@ -101,8 +103,7 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
     if not args.decision_timeout > 0:
         raise ValueError("--decision-timeout must be a positive number of seconds")
     from tui_gym.benchmark.group import ending_on_signals
-    from tui_gym.benchmark.leaderboard import record
-    from tui_gym.benchmark.run import run_benchmark
+    from tui_gym.benchmark.results import record, run_benchmark
 
     recorder = None
     if args.record is not None:
@@ -147,7 +148,7 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
 
 
 def _show_leaderboard(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.benchmark.leaderboard import leaderboard
+    from tui_gym.benchmark.results import leaderboard
     from tui_gym.session.arena import find_game
 
     game = find_game(args.game).name

@@ -1,14 +1,37 @@
-"""`BenchmarkResult`: what a benchmark measured, with 95% intervals, as rows or JSON."""
+"""What a benchmark finds: `run_benchmark` plays one player through it, `BenchmarkResult`
+holds the figures with 95% intervals (as rows or JSON), `record` keeps them in the run
+history, and `leaderboard` lists a game's recorded runs, best first."""
 
 from __future__ import annotations
 
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from contextlib import AbstractContextManager, ExitStack
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tui_gym.benchmark.referee import Fouls
-from tui_gym.core.experiments import Estimate, mean_with_ci
+from tui_gym.benchmark.referee import Fouls, Referee
+from tui_gym.core.experiments import (
+    Estimate,
+    Figure,
+    RunHistory,
+    RunKind,
+    RunRecorder,
+    RunSpec,
+    RunStatus,
+    RunSummary,
+    WrapperSetting,
+    mean_with_ci,
+    resolve_db_path,
+)
+from tui_gym.session.arena import EpisodeScore
+from tui_gym.session.arena.games import attach_recorder
+
+if TYPE_CHECKING:
+    from tui_gym.benchmark.players import Player
 
 
 @dataclass(frozen=True)
@@ -115,3 +138,125 @@ def _with_ci(estimate: Estimate, signed: bool = True) -> str:
     if estimate.ci95 is None:
         return mean
     return f"{mean} ± {estimate.ci95:.4f} (95% CI)"
+
+
+def run_benchmark(
+    game: str, player: Player, *, episodes: int, seed: int, params: Mapping[str, Any] | None = None,
+    wrappers: Sequence[str] = (), decision_timeout: float = 5.0, allow_hints: bool = False,
+    recorder: Callable[[Any], AbstractContextManager[Any]] | None = None,
+) -> BenchmarkResult:
+    """Play `episodes` episodes of `game` (episode i on seed `seed + i`) with `player`;
+    `recorder`, given the game's session, opens a recorder that writes every episode."""
+    if not decision_timeout > 0:
+        raise ValueError(f"the decision time limit must be positive, got {decision_timeout}")
+    referee = Referee(game, episodes, seed, dict(params or {}), tuple(wrappers), allow_hints)
+    played: list[EpisodeScore] = []
+    referee.seat.score.history = played
+    started = time.perf_counter()
+    try:
+        with ExitStack() as stack:
+            if recorder is not None:
+                handler = referee.seat.handler
+                attach_recorder(handler, stack.enter_context(recorder(handler.session)))
+            outcome = player.play(referee, decision_timeout)
+    finally:
+        referee.close()
+    seconds = time.perf_counter() - started
+    score = referee.seat.score
+    regrets = [e.exact_regret for e in played]
+    exact = all(r is not None for r in regrets)
+    note = ""
+    if not exact:
+        why = "; ".join(sorted(score.notes)) or "the game gives no exact action values"
+        counted = [f"{score.unscored:,} of {score.decisions:,} decisions"] if score.unscored \
+            else []
+        if score.unjudged:
+            counted.append(f"{score.unjudged:,} moves not judged")
+        note = f"{why} ({'; '.join(counted)})"
+    return BenchmarkResult(
+        game=referee.entry.name, env_id=referee.entry.env_id, params=referee.params,
+        wrappers=referee.wrappers, player=player.label, episodes=len(played), seed=seed,
+        decision_timeout=decision_timeout, allow_hints=allow_hints,
+        returns=np.array([e.episode_return for e in played], dtype=np.float64),
+        regrets=np.array(regrets, dtype=np.float64) if exact else None, regret_note=note,
+        decisions=score.decisions, agreed=score.agreed, fouls=referee.fouls,
+        decision_times=np.array(outcome.decision_times, dtype=np.float64), status=outcome.status,
+        stderr_tail=outcome.stderr_tail, seconds=seconds,
+    )
+
+
+def record(result: BenchmarkResult, db: str | None = None) -> int:
+    """Write `result` into the run history (`--db`, else the default); its run id."""
+    from tui_gym.core.wrappers import parse_wrapper_spec
+
+    wrappers = []
+    for text in result.wrappers:
+        choice = parse_wrapper_spec(text)
+        wrappers.append(WrapperSetting(choice.name, choice.values()))
+    spec = RunSpec(
+        kind=RunKind.BENCHMARK,
+        game=result.game,
+        algorithm=result.player,
+        game_params=result.params,
+        wrappers=wrappers,
+        hyperparameters={
+            "episodes": result.episodes, "first_seed": result.seed,
+            "decision_timeout": result.decision_timeout, "allow_hints": result.allow_hints,
+        },
+        seeds=(result.seed,),
+    )
+    ret = result.mean_return
+    figures = [
+        Figure("episodes", result.episodes), ret.figure("mean_return"),
+        Figure("decisions", result.decisions),
+        Figure("invalid_actions", result.fouls.invalid_actions),
+        Figure("timeouts", result.fouls.timeouts), Figure("defaulted", result.fouls.defaulted),
+    ]
+    regret = result.mean_regret
+    if regret is not None:
+        figures.append(regret.figure("regret_per_episode"))
+    if result.agreement is not None:
+        figures.append(Figure("agreement", result.agreement))
+    times = result.decision_ms()
+    if times is not None:
+        figures.append(Figure("decision_ms_median", times[0], "ms"))
+    with RunHistory(resolve_db_path(db)) as history:
+        recorder = RunRecorder(history, spec)
+        recorder.extend("return", result.returns)
+        if result.regrets is not None:
+            recorder.extend("regret", result.regrets)
+        recorder.add_figures(*figures)
+        recorder.finish(RunStatus.FINISHED)
+        return recorder.run_id
+
+
+@dataclass(frozen=True)
+class Standing:
+    """One run on the leaderboard."""
+
+    rank: int
+    run: RunSummary
+
+    def to_json(self) -> dict[str, Any]:
+        return {"rank": self.rank, **self.run.to_json()}
+
+
+def _key(run: RunSummary) -> tuple[bool, float, float]:
+    regret = run.figure("regret_per_episode")
+    ret = run.figure("mean_return")
+    mean_return = ret.value if ret is not None and math.isfinite(ret.value) else -math.inf
+    if regret is not None and math.isfinite(regret.value):
+        return (False, regret.value, -mean_return)
+    return (True, -mean_return, 0.0)
+
+
+def leaderboard(game: str, db: str | None = None) -> tuple[str, list[Standing]]:
+    """The run history's path, and `game`'s finished benchmark runs, best first."""
+    path = resolve_db_path(db)
+    if not path.exists() or path.stat().st_size == 0:
+        return str(path), []
+    with RunHistory(path) as history:
+        runs = history.list_runs(game=game, kind=RunKind.BENCHMARK)
+    runs = [r for r in runs if r.status is RunStatus.FINISHED]
+    runs.sort(key=_key)
+    return str(path), [Standing(i + 1, run) for i, run in enumerate(runs)]

@@ -5,18 +5,16 @@ from __future__ import annotations
 import argparse
 import threading
 import time
-from collections.abc import Callable
 
 from rich.console import Console
 from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from tui_gym.book_text import claims_table, figure_parts
+from tui_gym.book_text import claims_table, figure_parts, panel_text
 from tui_gym.cli.experiments_command import add_task_flags, ctrl_c_stops, run_history, unrecorded
-from tui_gym.cli.grids import panel_text
+from tui_gym.cli.flags import positive_int, seed_number
 from tui_gym.cli.output import CliError, print_json
-from tui_gym.cli.types import positive_int, seed_number
 from tui_gym.session.book import figure_named, figures
 from tui_gym.session.book.figure import (
     BookFigure,
@@ -27,7 +25,7 @@ from tui_gym.session.book.figure import (
     heading,
 )
 
-__all__ = ["BOOK_COMMANDS", "add_book_parser"]
+__all__ = ["add_book_parser", "cmd_book"]
 
 def add_book_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     book = sub.add_parser("book", help="Sutton & Barto's figures: list them, or run one and "
@@ -129,6 +127,3 @@ def _draw(out: Console, result: FigureResult) -> None:
         out.print(panel_text(panel, out.width), soft_wrap=True)
     for part in claims_table(result):
         out.print(part)
-
-
-BOOK_COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {"book": cmd_book}

@@ -1,7 +1,5 @@
-"""The headless sub-commands of `tui-gym`, each a thin call into the core.
-
-`COMMANDS` maps a sub-command name to a function `(args, console) -> exit code`.
-"""
+"""The headless sub-commands of `tui-gym`, each a thin call into the core: `cmd_NAME(args,
+console) -> exit code` runs `tui-gym NAME`."""
 
 from __future__ import annotations
 
@@ -25,14 +23,11 @@ from rich.progress import (
 from rich.table import Table
 
 from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, Field, Learner, algorithm
-from tui_gym.benchmark.command import cmd_benchmark
-from tui_gym.cli.flags import flag, game_kwargs, hyperparameters
-from tui_gym.cli.maps_command import cmd_maps
-from tui_gym.cli.output import CliError, key_value_table, print_json, say_status
+from tui_gym.cli.flags import flag, game_kwargs, hyperparameters, wrapper_choices
+from tui_gym.cli.output import CliError, cli_errors, key_value_table, print_json, say_status
 from tui_gym.cli.runs_command import recorded
 from tui_gym.core.params import Param, typed_text
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
-from tui_gym.mcp_server.command import cmd_mcp
 from tui_gym.session import evaluation
 from tui_gym.session.evaluation import EvalReport
 from tui_gym.session.session import TARGET_GAP_BUDGET_FACTOR, Session, default_settings
@@ -191,20 +186,12 @@ def _check_fit(session: Session, env_id: str) -> None:
         raise CliError(f"wrapper does not fit {env_id}: {reasons}")
 
 
-def _wrappers(args: argparse.Namespace) -> tuple[Any, ...]:
-    from tui_gym.core.wrappers import parse_wrapper_spec
-
-    return tuple(parse_wrapper_spec(text) for text in args.wrapper)
-
-
 def _session_from_args(args: argparse.Namespace) -> Session:
     env_id = resolve_env_id(args.env)
     game = game_for(env_id)
-    choices = _wrappers(args)
-    try:
+    choices = wrapper_choices(args.wrapper)
+    with cli_errors(ValueError, prefix="--algorithm: "):
         cls = algorithm(args.algorithm)
-    except ValueError as exc:
-        raise CliError(f"--algorithm: {exc}") from None
     kwargs = game_kwargs(args, game)
     hp = _base_hyperparameters(args, game, kwargs, cls)
     try:
@@ -326,6 +313,7 @@ def _prediction_dict(session: Session) -> dict[str, Any]:
                            "truth": list(figures.truth)}}
 
 
+@recorded
 def cmd_train(args: argparse.Namespace, out: Console) -> int:
     if args.target_gap is not None and args.target_gap <= 0:
         raise CliError(f"--target-gap must be a positive number, got {args.target_gap:g}")
@@ -333,10 +321,8 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
     session = _session_from_args(args)
     if args.follow is not None:
         epsilon = float(hyperparameters(args, session.learner_class).get("epsilon_final", 0.0))
-        try:
+        with cli_errors(ValueError, prefix="--follow: "):
             session.follow(Session.load(args.follow), epsilon)
-        except ValueError as exc:
-            raise CliError(f"--follow: {exc}") from None
     recording = args.recording  # the run history's record of this run (see `recorded`)
     recording.begin(session)
     hp = session.hp
@@ -477,7 +463,7 @@ def cmd_play(args: argparse.Namespace, out: Console) -> int:
 
     env_id = resolve_env_id(args.env)
     session = Session(env_id=env_id, env_kwargs=game_kwargs(args, game_for(env_id)),
-                      choices=_wrappers(args), seed=args.play_seed or 0)
+                      choices=wrapper_choices(args.wrapper), seed=args.play_seed or 0)
     _check_fit(session, env_id)
     player = JsonlPlayer(session, seed=args.play_seed)
     if args.record is None:
@@ -507,10 +493,8 @@ def cmd_bench(args: argparse.Namespace, out: Console) -> int:
 
     names = None
     if args.algorithm is not None:
-        try:
+        with cli_errors(ValueError, prefix="--algorithm: "):
             names = (algorithm(args.algorithm).name,)
-        except ValueError as exc:
-            raise CliError(f"--algorithm: {exc}") from None
     if args.json:
         print_json("bench", to_json(run_bench(quick=args.quick, algorithms=names)))
         return 0
@@ -527,11 +511,3 @@ def cmd_bench(args: argparse.Namespace, out: Console) -> int:
     for line in notes(results):
         out.print(line)
     return 0
-
-
-COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {
-    "envs": cmd_envs, "wrappers": cmd_wrappers, "algorithms": cmd_algorithms,
-    "train": recorded(cmd_train), "eval": cmd_eval, "optimal": cmd_optimal, "play": cmd_play,
-    "screenshots": cmd_screenshots, "bench": cmd_bench, "maps": cmd_maps, "mcp": cmd_mcp,
-    "benchmark": cmd_benchmark,
-}

@@ -16,10 +16,10 @@ from rich.table import Table
 from rich.text import Text
 
 from tui_gym.algorithms import ALGORITHMS
-from tui_gym.cli.output import CliError, print_json, say_status
-from tui_gym.cli.types import int_in as _int_in
-from tui_gym.cli.types import output_file
-from tui_gym.cli.types import seed_number as _seed
+from tui_gym.cli.flags import int_in as _int_in
+from tui_gym.cli.flags import output_file, wrapper_choices
+from tui_gym.cli.flags import seed_number as _seed
+from tui_gym.cli.output import CliError, cli_errors, print_json, say_status
 
 if TYPE_CHECKING:
     from tui_gym.core.experiments import BestEffortHistory
@@ -126,10 +126,12 @@ def _pairs(items: Sequence[str], flag: str, shape: str = "KEY=VALUE") -> dict[st
     return out
 
 
-def _wrappers(specs: Sequence[str]) -> tuple[Any, ...]:
-    from tui_gym.core.wrappers import parse_wrapper_spec
-
-    return tuple(parse_wrapper_spec(spec) for spec in specs)
+def _shared(args: argparse.Namespace) -> dict[str, Any]:
+    """The fields of a comparison's or a sweep's spec that their common flags give."""
+    return {"seeds": args.seeds, "episodes": args.episodes,
+            "settings": _pairs(args.settings, "--set"),
+            "game_params": _pairs(args.params, "--param"),
+            "wrappers": wrapper_choices(args.wrapper), "first_seed": args.first_seed}
 
 
 @contextmanager
@@ -182,10 +184,11 @@ def ctrl_c_stops(stop: threading.Event, err: Console) -> Iterator[None]:
         signal.signal(signal.SIGINT, previous)
 
 
-def _run_with_progress(
-    out: Console, as_json: bool, label: str,
-    run: Callable[[Callable[[CompareProgress], None] | None, threading.Event], Any],
-) -> Any:
+def _run_recorded(args: argparse.Namespace, out: Console, label: str, run: Callable[..., R],
+                  spec: Any) -> tuple[R, BestEffortHistory | None]:
+    """`run(spec, ...)` (a comparison or a sweep) kept in the run history, with a progress
+    bar on a terminal (not with --json); the first Ctrl+C stops it cleanly; its refusals as
+    one line."""
     from rich.progress import (
         BarColumn,
         Progress,
@@ -195,46 +198,36 @@ def _run_with_progress(
         TimeRemainingColumn,
     )
 
+    from tui_gym.session.experiments.cluster import ClusterError
+    from tui_gym.session.experiments.compare import CompareError
+
     stop = threading.Event()
-    err = Console(stderr=True)
-    with ctrl_c_stops(stop, err):
-        if as_json or not out.is_terminal:
-            return run(None, stop)
-        progress = Progress(
+    with run_history(args) as history, ctrl_c_stops(stop, Console(stderr=True)):
+
+        def running(progress: Callable[[CompareProgress], None] | None) -> R:
+            with cli_errors(CompareError, ClusterError):
+                return run(spec, progress=progress, stop=stop, resume=args.resume,
+                           cluster=args.cluster, history=history, processes=args.processes,
+                           status=say_status)
+
+        if args.json or not out.is_terminal:
+            return running(None), history
+        bar = Progress(
             TextColumn(f"[bold]{label}[/]"), BarColumn(),
             TextColumn("{task.fields[landed]}/{task.fields[tasks]} tasks"),
             TaskProgressColumn(), TimeElapsedColumn(),
             TextColumn("ETA"), TimeRemainingColumn(), console=out, transient=True,
         )
-        task = progress.add_task(label, total=None, landed=0, tasks="?")
+        task = bar.add_task(label, total=None, landed=0, tasks="?")
 
         # The bar and the time left follow the episodes (they move while a task runs);
         # the count is of the tasks finished.
         def update(p: CompareProgress) -> None:
-            progress.update(task, completed=p.done, total=p.total, landed=p.tasks_done,
-                            tasks=p.tasks_total or "?")
+            bar.update(task, completed=p.done, total=p.total, landed=p.tasks_done,
+                       tasks=p.tasks_total or "?")
 
-        with progress:
-            return run(update, stop)
-
-
-def _run_recorded(args: argparse.Namespace, out: Console, label: str, run: Callable[..., R],
-                  spec: Any) -> tuple[R, BestEffortHistory | None]:
-    """`run(spec, ...)` (a comparison or a sweep) with a progress bar, kept in the run history;
-    its refusals as one line."""
-    from tui_gym.session.experiments.cluster import ClusterError
-    from tui_gym.session.experiments.compare import CompareError
-
-    with run_history(args) as history:
-        try:
-            return _run_with_progress(
-                out, args.json, label,
-                lambda progress, stop: run(spec, progress=progress, stop=stop, resume=args.resume,
-                                           cluster=args.cluster, history=history,
-                                           processes=args.processes, status=say_status),
-            ), history
-        except (CompareError, ClusterError) as exc:
-            raise CliError(str(exc)) from None
+        with bar:
+            return running(update), history
 
 
 def _resume_hint(group: int | None) -> str:
@@ -276,12 +269,8 @@ def _algorithm_names(text: str) -> list[str]:
 def cmd_compare(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.session.experiments.compare import CompareSpec, run_compare
 
-    spec = CompareSpec(
-        game=args.game, algorithms=_algorithm_names(args.algorithms), seeds=args.seeds,
-        episodes=args.episodes, settings=_pairs(args.settings, "--set"),
-        game_params=_pairs(args.params, "--param"), wrappers=_wrappers(args.wrapper),
-        first_seed=args.first_seed,
-    )
+    spec = CompareSpec(game=args.game, algorithms=_algorithm_names(args.algorithms),
+                       **_shared(args))
     result, history = _run_recorded(args, out, "comparing", run_compare, spec)
     if args.csv:
         _write_csv(args.csv, result.outcomes)
@@ -413,23 +402,17 @@ def _ranges(items: Sequence[str]) -> dict[str, Any]:
 
     ranges: dict[str, Any] = {}
     for key, text in _pairs(items, "--range").items():
-        try:
+        with cli_errors(ValueError, prefix=f"--range {key}: "):
             ranges[key] = Range.parse(text)
-        except ValueError as exc:
-            raise CliError(f"--range {key}: {exc}") from None
     return ranges
 
 
 def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.session.experiments.sweep import SweepSpec, run_sweep
 
-    spec = SweepSpec(
-        game=args.game, algorithm=args.algorithm, grid=_grid(args.grid), seeds=args.seeds,
-        episodes=args.episodes, settings=_pairs(args.settings, "--set"),
-        game_params=_pairs(args.params, "--param"), wrappers=_wrappers(args.wrapper),
-        first_seed=args.first_seed, ranges=_ranges(args.ranges), samples=args.sample,
-        sample_seed=args.sample_seed,
-    )
+    spec = SweepSpec(game=args.game, algorithm=args.algorithm, grid=_grid(args.grid),
+                     **_shared(args), ranges=_ranges(args.ranges), samples=args.sample,
+                     sample_seed=args.sample_seed)
     result, history = _run_recorded(args, out, "sweeping", run_sweep, spec)
     if args.json:
         print_json("sweep", result.to_json())
@@ -492,6 +475,3 @@ def _sweep_grid(result: Any) -> Table:
             cells.append(Text(text, style=f"bold black on rgb({red},{green},60)"))
         table.add_row(*cells)
     return table
-
-
-EXPERIMENT_COMMANDS = {"compare": cmd_compare, "sweep": cmd_sweep}

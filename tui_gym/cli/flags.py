@@ -1,19 +1,86 @@
-"""Flags generated from `Param` schemas: every game's arguments and the hyperparameters."""
+"""The flags' types and the flags generated from `Param` schemas.
+
+The types read numbers as `Param`s read them (ASCII digits only; a value out of range
+says so) and file names, each failing with one clear line. `output_file` checks a file
+to write (`--save`, `--csv`, `--record`) as the arguments are read, so a path that
+cannot be written is said before any work is done. The generated flags are every
+game's arguments and the hyperparameters.
+"""
 
 from __future__ import annotations
 
 import argparse
-from typing import Any
+import math
+from collections.abc import Callable
+from typing import Any, cast
 
 from tui_gym.algorithms import ALGORITHMS, ALL_PARAMS, Learner
-from tui_gym.cli.output import CliError
-from tui_gym.core.params import Param, ParamError
+from tui_gym.cli.output import CliError, cli_errors
+from tui_gym.core.params import Param, ParamError, digits_note, read_number, shown_value
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 
 __all__ = [
-    "HP_FLAGS", "add_game_flags", "add_hyperparameter_flags", "flag", "game_kwargs",
-    "hyperparameters",
+    "HP_FLAGS", "MAX_SEED", "add_game_flags", "add_hyperparameter_flags", "file_name",
+    "finite_number", "flag", "fresh_seed", "game_kwargs", "hyperparameters", "int_in",
+    "number_in", "output_file", "positive_int", "seed_number", "wrapper_choices",
 ]
+
+MAX_SEED = 2**63 - 2**32  # room for the seeds derived from it (evaluation adds to it)
+FRESH_SEEDS = 1_000_000  # a seed drawn afresh is below this: short enough to type again
+
+
+def fresh_seed() -> int:
+    """A seed drawn from the system's randomness, for a run the user gave none."""
+    import secrets
+
+    return secrets.randbelow(FRESH_SEEDS)
+
+
+def number_in(minimum: float, maximum: float, noun: str,
+              integer: bool = False) -> Callable[[str], float]:
+    """An argparse type: a number (ASCII digits, `_` allowed) in [minimum, maximum], a whole
+    one if `integer`."""
+
+    def parse(text: str) -> float:
+        value = read_number(text)
+        if value is None or math.isnan(value) or (integer and math.isfinite(value) and value % 1):
+            raise argparse.ArgumentTypeError(
+                f"expected {noun}, got {shown_value(text)}{digits_note(text)}")
+        if not (math.isfinite(value) and minimum <= value <= maximum):
+            raise argparse.ArgumentTypeError(
+                f"{shown_value(text)} is out of range: expected {noun}")
+        return int(value) if integer else float(value)
+
+    return parse
+
+
+def int_in(minimum: int, maximum: int, noun: str) -> Callable[[str], int]:
+    """An argparse type: an integer (ASCII digits, `_` allowed) in [minimum, maximum]."""
+    return cast(Callable[[str], int], number_in(minimum, maximum, noun, integer=True))
+
+
+positive_int = int_in(1, 10**9, "a positive integer up to 1,000,000,000")
+seed_number = int_in(0, MAX_SEED, f"an integer in [0, {MAX_SEED}]")
+finite_number = number_in(-math.inf, math.inf, "a finite number")
+
+
+def file_name(text: str) -> str:
+    """An argparse type: a file name, which cannot be empty."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a file name, got an empty one")
+    return text
+
+
+def output_file(text: str) -> str:
+    """An argparse type: a file that can be written (see `tui_gym.core.files`)."""
+    from tui_gym.core.files import OutputPathError, check_output_path
+
+    try:
+        check_output_path(text)
+    except OutputPathError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+    return text
+
 
 HP_FLAGS = tuple(field.name for field in ALL_PARAMS)  # `train --learning-rate X`, ...
 _PREFIX = "game_"
@@ -78,14 +145,10 @@ def map_kwargs(path: str, game: Game, kwargs: dict[str, Any]) -> dict[str, Any]:
     if not game.editable:
         mapped = ", ".join(g.title for g in GAMES if g.editable)
         raise CliError(f"--map-file applies to {mapped}, not {game.title}")
-    try:
+    with cli_errors(ValueError, prefix="--map-file "):  # a MapError names the file, line, ...
         grid_map = read_map_file(path)
-    except ValueError as exc:  # a MapError names the file, line, row and column
-        raise CliError(f"--map-file {exc}") from None
-    try:
+    with cli_errors(ValueError, prefix=f"--map-file {path}: "):
         return game.with_map(kwargs, grid_map)
-    except ValueError as exc:
-        raise CliError(f"--map-file {path}: {exc}") from None
 
 
 def add_hyperparameter_flags(parser: argparse.ArgumentParser) -> None:
@@ -123,6 +186,13 @@ def hyperparameters(args: argparse.Namespace, cls: type[Learner]) -> dict[str, A
         except ValueError as exc:
             raise CliError(str(exc).replace(name, flag(name), 1)) from None
     return changes
+
+
+def wrapper_choices(specs: list[str]) -> tuple[Any, ...]:
+    """The wrappers `--wrapper SPEC` flags name, innermost first."""
+    from tui_gym.core.wrappers import parse_wrapper_spec
+
+    return tuple(parse_wrapper_spec(spec) for spec in specs)
 
 
 def app_env(args: argparse.Namespace) -> tuple[str | None, dict[str, Any] | None]:

@@ -7,6 +7,7 @@ early (`| head -1`) ends the command quietly with status 141, as it would end `c
 from __future__ import annotations
 
 import argparse
+import importlib
 import os
 import re
 import sys
@@ -18,10 +19,18 @@ from rich.console import Console
 
 from tui_gym import __version__
 from tui_gym.algorithms import ALGORITHMS, DEFAULT_ALGORITHM
-from tui_gym.cli.flags import add_game_flags, add_hyperparameter_flags, app_env
+from tui_gym.cli.flags import (
+    add_game_flags,
+    add_hyperparameter_flags,
+    app_env,
+    finite_number,
+    fresh_seed,
+    output_file,
+    positive_int,
+    seed_number,
+)
 from tui_gym.cli.maps_command import add_maps_parser
 from tui_gym.cli.output import JSON_SCHEMAS, CliError, OutConsole, readable
-from tui_gym.cli.types import finite_number, fresh_seed, output_file, positive_int, seed_number
 
 ENV_HELP = "a game (`tui-gym envs` lists them), a Gymnasium id, or MODULE:ID"
 WRAPPER_HELP = "add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable, in order)"
@@ -233,12 +242,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument("--json", action="store_true", help="print one JSON object")
 
-    from tui_gym.mcp_server.command import add_parser as add_mcp_parser
+    from tui_gym.mcp_server import add_parser as add_mcp_parser
 
-    add_mcp_parser(sub, positive_int, finite_number)
+    add_mcp_parser(sub)
     from tui_gym.benchmark.command import add_parser as add_benchmark_parser
 
-    add_benchmark_parser(sub, positive_int, seed_number, finite_number)
+    add_benchmark_parser(sub)
     _document_json(parser)
     return parser
 
@@ -306,17 +315,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             # The user's own `--env module:Id` imports its module on purpose, so a file that
             # names the same env (which alone never imports code) opens with it.
             resolve_env_id(args.env)
-        from tui_gym.cli.book_command import BOOK_COMMANDS
-        from tui_gym.cli.commands import COMMANDS
-        from tui_gym.cli.experiments_command import EXPERIMENT_COMMANDS
-        from tui_gym.cli.plan_command import PLAN_COMMANDS
-        from tui_gym.cli.replay_command import REPLAY_COMMANDS
-        from tui_gym.cli.runs_command import RUNS_COMMANDS
-        from tui_gym.web import SERVE_COMMANDS
-
-        commands = {**COMMANDS, **REPLAY_COMMANDS, **SERVE_COMMANDS, **RUNS_COMMANDS,
-                    **EXPERIMENT_COMMANDS, **PLAN_COMMANDS, **BOOK_COMMANDS}
-        code = commands[args.command](args, out)
+        module = importlib.import_module(_COMMAND_MODULES.get(args.command, "tui_gym.cli.commands"))
+        code = getattr(module, f"cmd_{args.command}")(args, out)
         sys.stdout.flush()  # a closed pipe shows here, not at exit
         return code
     except BrokenPipeError:
@@ -329,6 +329,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stderr.write(f"tui-gym: error: {_one_line(exc)}\n")
         return EXIT_USAGE
 
+
+# The module of each sub-command `NAME` (its `cmd_NAME(args, console) -> exit code`), imported
+# when it runs; the others are in `tui_gym.cli.commands`.
+_COMMAND_MODULES = {
+    "maps": "tui_gym.cli.maps_command", "replay": "tui_gym.cli.replay_command",
+    "serve": "tui_gym.web", "runs": "tui_gym.cli.runs_command", "plan": "tui_gym.cli.plan_command",
+    "compare": "tui_gym.cli.experiments_command", "sweep": "tui_gym.cli.experiments_command",
+    "book": "tui_gym.cli.book_command", "mcp": "tui_gym.mcp_server",
+    "benchmark": "tui_gym.benchmark.command",
+}
 
 # The app options a command opens its apps with; any other command takes an app option
 # as its own flag of the same name (`tui-gym --db F runs` is `runs --db F`).

@@ -10,8 +10,8 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from tui_gym.cli.output import CliError, print_json
-from tui_gym.cli.types import number_in, seed_number
+from tui_gym.cli.flags import number_in, seed_number
+from tui_gym.cli.output import CliError, cli_errors, print_json
 from tui_gym.games.maps import GridMap, format_map
 from tui_gym.games.maps.builtin import BUILTIN_MAPS, builtin_map, fits
 from tui_gym.games.maps.files import read_map_file
@@ -69,11 +69,9 @@ def cmd_maps(args: argparse.Namespace, out: Console) -> int:
         if match is None:
             raise CliError(f"--random takes ROWSxCOLS, e.g. 8x8, not {args.random!r}")
         rows, cols = int(match[1]), int(match[2])
-        try:
+        with cli_errors(ValueError):
             grid_map = random_map(rows, cols, args.density, args.maps_seed, args.obstacle,
                                   walled=args.walled)
-        except ValueError as error:
-            raise CliError(str(error)) from None
         return _print_map(out, grid_map, args, f"random {rows}x{cols}")
     if args.check:
         grid_map = read_map_file(args.check)  # a MapError is one line naming where

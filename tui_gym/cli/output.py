@@ -9,7 +9,8 @@ from __future__ import annotations
 import json
 import re
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from typing import Any
 
 from rich.console import Console
@@ -19,8 +20,8 @@ from rich.table import Table
 from tui_gym.core.text import json_safe as _clean
 from tui_gym.core.text import visible
 
-__all__ = ["JSON_SCHEMAS", "CliError", "OutConsole", "key_value_table", "print_json", "readable",
-           "say_status"]
+__all__ = ["JSON_SCHEMAS", "CliError", "OutConsole", "cli_errors", "key_value_table", "print_json",
+           "readable", "say_status"]
 
 # The version of each command's JSON object (see the module docstring).
 JSON_SCHEMAS: dict[str, int] = {
@@ -36,6 +37,15 @@ _LONG_RUN = re.compile(r"\S{101,}")  # an echoed value with no quotes (argparse'
 
 class CliError(Exception):
     """A user-facing error: printed as one line, exit code 2."""
+
+
+@contextmanager
+def cli_errors(*errors: type[Exception], prefix: str = "") -> Iterator[None]:
+    """One of `errors` raised in the block as a `CliError`: `prefix`, then what it says."""
+    try:
+        yield
+    except errors as exc:
+        raise CliError(f"{prefix}{exc}") from None
 
 
 class OutConsole(Console):

@@ -3,22 +3,20 @@
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable
 from typing import Any
 
 from rich.console import Console
 
-from tui_gym.cli.flags import add_game_flags, game_kwargs
-from tui_gym.cli.grids import panel_text
+from tui_gym.book_text import panel_text
+from tui_gym.cli.flags import add_game_flags, finite_number, game_kwargs
 from tui_gym.cli.output import print_json
-from tui_gym.cli.types import finite_number
 from tui_gym.core.mdp.planning import METHODS
 from tui_gym.games import game_for, resolve_env_id
 from tui_gym.session.plan import PlanResult, plan, plan_json
 from tui_gym.session.plan.panels import numbered, plan_panels
 from tui_gym.session.plan.start import START_POLICIES, saved_agent_q
 
-__all__ = ["PLAN_COMMANDS", "add_plan_parser"]
+__all__ = ["add_plan_parser", "cmd_plan"]
 
 METHOD_WORDS = {"evaluate": "Policy evaluation", "policy-iteration": "Policy iteration",
                 "value-iteration": "Value iteration"}
@@ -80,6 +78,3 @@ def _print(out: Console, result: PlanResult, data: dict[str, Any]) -> None:
         limit = f"{model.horizon}-step episodes" if model.horizon else "no limit"
         out.print(f"The tool's exact value of this policy (undiscounted, {limit}): "
                   f"[bold]{data['limited_value']:+.6g}[/]")
-
-
-PLAN_COMMANDS: dict[str, Callable[[argparse.Namespace, Console], int]] = {"plan": cmd_plan}

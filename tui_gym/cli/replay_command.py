@@ -7,8 +7,8 @@ from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
 
-from tui_gym.cli.output import CliError
-from tui_gym.cli.types import output_file
+from tui_gym.cli.flags import output_file
+from tui_gym.cli.output import CliError, cli_errors
 
 if TYPE_CHECKING:
     from tui_gym.core.recording import Recording
@@ -18,9 +18,9 @@ if TYPE_CHECKING:
 RECORD_HELP = "record every episode to this file, as JSON lines (tui-gym replay PATH plays it back)"
 
 
-def add_record_option(parser: argparse.ArgumentParser, dest: str = "record") -> None:
+def add_record_option(parser: argparse.ArgumentParser) -> None:
     """`--record PATH` on `parser`."""
-    parser.add_argument("--record", type=output_file, metavar="PATH", dest=dest, help=RECORD_HELP)
+    parser.add_argument("--record", type=output_file, metavar="PATH", help=RECORD_HELP)
 
 
 def open_recorder(path: str, session: Session, *, source: str, seed: int | None = None) -> Recorder:
@@ -57,10 +57,8 @@ def cmd_replay(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.core.recording import RecordingError, read_recording
     from tui_gym.session.recording.scenes import scene_fits
 
-    try:
+    with cli_errors(RecordingError):
         recording = read_recording(args.path, scene_fits)
-    except RecordingError as exc:
-        raise CliError(str(exc)) from None
     try:
         from tui_gym.ui.app import run_app
     except ImportError as exc:  # pragma: no cover - only without the UI installed
@@ -90,6 +88,3 @@ def session_for(recording: Recording) -> Session | None:
         )
     except Exception:  # another version's game or wrapper: replay needs none of it
         return None
-
-
-REPLAY_COMMANDS = {"replay": cmd_replay}

@@ -13,9 +13,9 @@ from rich.console import Console
 from rich.markup import escape
 from rich.text import Text
 
-from tui_gym.cli.output import CliError, key_value_table, print_json
-from tui_gym.cli.types import file_name as _path
-from tui_gym.cli.types import int_in, output_file
+from tui_gym.cli.flags import file_name as _path
+from tui_gym.cli.flags import int_in, output_file
+from tui_gym.cli.output import CliError, cli_errors, key_value_table, print_json
 from tui_gym.core.text import visible
 
 Command = Callable[[argparse.Namespace, Console], int]
@@ -58,32 +58,25 @@ def add_runs_parser(sub: Any) -> None:
                       help="copy what can be read of a damaged history into a new file beside "
                       "it (the history itself is left as it is)")
     verbs = runs.add_subparsers(dest="runs_command", metavar="VERB")
-
-    show = verbs.add_parser("show", help="everything about one run")
-    show.add_argument("run_id", type=_run_id, metavar="ID", help=RUN_ID_HELP)
-    _json_option(show, inherit=True)
-    _db_option(show, inherit=True)
-
-    export = verbs.add_parser("export", help="write a run's curves to a CSV file or for "
-                              "TensorBoard")
-    export.add_argument("run_id", type=_run_id, metavar="ID", help=RUN_ID_HELP)
-    where = export.add_mutually_exclusive_group(required=True)
-    where.add_argument("--csv", type=output_file, metavar="PATH",
-                       help="one row per episode, one column per curve")
-    where.add_argument("--tensorboard", type=_path, metavar="DIR",
-                       help="TensorBoard event files under DIR (needs tui-gym[tensorboard])")
-    _json_option(export, inherit=True)
-    _db_option(export, inherit=True)
-
-    rm = verbs.add_parser("rm", help="remove one run (its curves and figures with it)")
-    rm.add_argument("run_id", type=_run_id, metavar="ID", help=RUN_ID_HELP)
-    _json_option(rm, inherit=True)
-    _db_option(rm, inherit=True)
-
-    prune = verbs.add_parser("prune", help="remove the stored tasks of finished runs (their "
-                             "curves and figures stay) and give the space back")
-    _json_option(prune, inherit=True)
-    _db_option(prune, inherit=True)
+    for name, text in (
+        ("show", "everything about one run"),
+        ("export", "write a run's curves to a CSV file or for TensorBoard"),
+        ("rm", "remove one run (its curves and figures with it)"),
+        ("prune", "remove the stored tasks of finished runs (their curves and figures stay) "
+         "and give the space back"),
+    ):
+        verb = verbs.add_parser(name, help=text)
+        if name != "prune":
+            verb.add_argument("run_id", type=_run_id, metavar="ID", help=RUN_ID_HELP)
+        if name == "export":
+            where = verb.add_mutually_exclusive_group(required=True)
+            where.add_argument("--csv", type=output_file, metavar="PATH",
+                               help="one row per episode, one column per curve")
+            where.add_argument("--tensorboard", type=_path, metavar="DIR",
+                               help="TensorBoard event files under DIR (needs "
+                               "tui-gym[tensorboard])")
+        _json_option(verb, inherit=True)
+        _db_option(verb, inherit=True)
 
 
 def add_history_flags(parser: argparse.ArgumentParser, runs: str, *, inherit: bool = False
@@ -129,10 +122,8 @@ def recorded(command: Command) -> Command:
 def _history_call(action: Callable[[], Any]) -> Any:
     from tui_gym.core.experiments import RunHistoryError
 
-    try:
+    with cli_errors(RunHistoryError):
         return action()
-    except RunHistoryError as exc:
-        raise CliError(str(exc)) from None
 
 
 def _when(seconds: float | None, full: bool = False) -> str:
@@ -212,10 +203,13 @@ def cmd_runs(args: argparse.Namespace, out: Console) -> int:
     if args.recover:
         if verb is not None:
             raise CliError(f"--recover works on the whole history, not with `runs {verb}`")
-        return _cmd_recover(args, out)
+        verb = "recover"
     if verb is not None:
-        return {"show": _cmd_show, "export": _cmd_export, "rm": _cmd_rm,
-                "prune": _cmd_prune}[verb](args, out)
+        done = _history_call(lambda: _act(verb, args))
+        if args.json:
+            print_json(f"runs {verb}", done.to_json())
+            return 2 if verb == "recover" and done.target is None else 0
+        return _SAY[verb](done, args, out)
     from tui_gym.core.experiments import list_runs
 
     game = args.game.strip().lower() if args.game else None
@@ -259,13 +253,26 @@ def cmd_runs(args: argparse.Namespace, out: Console) -> int:
     return 0
 
 
-def _cmd_recover(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.core.experiments import recover_history
+def _act(verb: str, args: argparse.Namespace) -> Any:
+    """What `runs VERB` does to the history (RunHistoryError when it cannot)."""
+    from tui_gym.core import experiments as history
 
-    done = _history_call(lambda: recover_history(args.db))
-    if args.json:
-        print_json("runs recover", done.to_json())
-        return 0 if done.target is not None else 2
+    if verb == "recover":
+        return history.recover_history(args.db)
+    if verb == "show":
+        return history.show_run(args.run_id, args.db)
+    if verb == "rm":
+        return history.remove_run(args.run_id, args.db)
+    if verb == "prune":
+        return history.prune_tasks(args.db)
+    if args.csv is not None:
+        return history.export_run_csv(args.run_id, args.csv, args.db)
+    from tui_gym.core.experiments.tensorboard import export_run_tensorboard
+
+    return export_run_tensorboard(args.run_id, args.tensorboard, args.db)
+
+
+def _say_recover(done: Any, args: argparse.Namespace, out: Console) -> int:
     source = visible(done.source, 160)
     if done.target is None:
         _warn(f"no run could be read from {source} ({done.check}); it was left as it was")
@@ -282,13 +289,7 @@ def _cmd_recover(args: argparse.Namespace, out: Console) -> int:
     return 0
 
 
-def _cmd_show(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.core.experiments import show_run
-
-    record = _history_call(lambda: show_run(args.run_id, args.db))
-    if args.json:
-        print_json("runs show", record.to_json())
-        return 0
+def _say_show(record: Any, args: argparse.Namespace, out: Console) -> int:
     run = record.summary
     settings = ", ".join(f"{k}={v}" for k, v in record.hyperparameters.items())
     wrappers = ", ".join(
@@ -321,32 +322,19 @@ def _cmd_show(args: argparse.Namespace, out: Console) -> int:
     return 0
 
 
-def _cmd_export(args: argparse.Namespace, out: Console) -> int:
+def _say_export(done: Any, args: argparse.Namespace, out: Console) -> int:
     if args.csv is not None:
-        from tui_gym.core.experiments import export_run_csv
-
-        done = _history_call(lambda: export_run_csv(args.run_id, args.csv, args.db))
         line = f"wrote {done.rows} rows of {', '.join(done.columns[1:])} to {done.path}"
     else:
-        from tui_gym.core.experiments.tensorboard import export_run_tensorboard
-
-        done = _history_call(lambda: export_run_tensorboard(args.run_id, args.tensorboard, args.db))
         line = (f"wrote {done.scalars} values of {', '.join(done.tags)} to {done.path} "
                 f"(tensorboard --logdir {done.directory})")
-    if args.json:
-        print_json("runs export", done.to_json())
-    else:
-        out.print(Text(visible(line, None)))
+    out.print(Text(visible(line, None)))
     return 0
 
 
-def _cmd_rm(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.core.experiments import DamagedRun, remove_run
+def _say_rm(removed: Any, args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.core.experiments import DamagedRun
 
-    removed = _history_call(lambda: remove_run(args.run_id, args.db))
-    if args.json:
-        print_json("runs rm", removed.to_json())
-        return 0
     run = removed.run
     what = (f"it could not be read: {run.reason}" if isinstance(run, DamagedRun)
             else f"{run.kind} {run.game} {run.algorithm}")
@@ -354,13 +342,7 @@ def _cmd_rm(args: argparse.Namespace, out: Console) -> int:
     return 0
 
 
-def _cmd_prune(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.core.experiments import prune_tasks
-
-    pruned = _history_call(lambda: prune_tasks(args.db))
-    if args.json:
-        print_json("runs prune", pruned.to_json())
-        return 0
+def _say_prune(pruned: Any, args: argparse.Namespace, out: Console) -> int:
     out.print(Text(visible(
         f"removed {pruned.tasks:,} stored tasks of {pruned.runs:,} finished runs from "
         f"{pruned.db} (their curves and figures stay; unfinished runs keep theirs, to "
@@ -368,4 +350,7 @@ def _cmd_prune(args: argparse.Namespace, out: Console) -> int:
     return 0
 
 
-RUNS_COMMANDS: dict[str, Command] = {"runs": cmd_runs}
+_SAY: dict[str, Callable[[Any, argparse.Namespace, Console], int]] = {
+    "recover": _say_recover, "show": _say_show, "export": _say_export, "rm": _say_rm,
+    "prune": _say_prune,
+}

@@ -4,20 +4,20 @@ from __future__ import annotations
 
 import gymnasium as gym
 
-GRIDWORLD_IDS = ("tui_gym/GridWorld-v0", "gymnasium_env/GridWorld-v0")
-GRIDWORLD_ENTRY_POINT = "tui_gym.envs.gridworld:GridWorldEnv"
 GRIDWORLD_MAX_STEPS = 300
 TILE_MAP_ID = "tui_gym/TileMap-v0"
-TILE_MAP_ENTRY_POINT = "tui_gym.envs.tile_map:TileMapEnv"
 # id -> (entry point, episode limit)
-BOOK_WORLDS: dict[str, tuple[str, int]] = {
+ENVS: dict[str, tuple[str, int | None]] = {
+    "tui_gym/GridWorld-v0": ("tui_gym.envs.gridworld:GridWorldEnv", GRIDWORLD_MAX_STEPS),
+    "gymnasium_env/GridWorld-v0": ("tui_gym.envs.gridworld:GridWorldEnv", GRIDWORLD_MAX_STEPS),
+    TILE_MAP_ID: ("tui_gym.envs.tile_map:TileMapEnv", None),
     "tui_gym/ABGrid-v0": ("tui_gym.envs.dp_grid:ABGridEnv", 50),
     "tui_gym/CornerGrid-v0": ("tui_gym.envs.dp_grid:CornerGridEnv", 100),
     "tui_gym/Gambler-v0": ("tui_gym.envs.gambler:GamblerEnv", 1000),
     "tui_gym/CarRental-v0": ("tui_gym.envs.car_rental:CarRentalEnv", 20),
-    "tui_gym/RandomWalk-v0": ("tui_gym.envs.random_walk:RandomWalkEnv", 1000),
-    "tui_gym/WindyGridWorld-v0": ("tui_gym.envs.windy:WindyGridWorldEnv", 2000),
-    "tui_gym/WindyGridWorldKing-v0": ("tui_gym.envs.windy:KingWindyGridWorldEnv", 2000),
+    "tui_gym/RandomWalk-v0": ("tui_gym.envs.dp_grid:RandomWalkEnv", 1000),
+    "tui_gym/WindyGridWorld-v0": ("tui_gym.envs.dp_grid:WindyGridWorldEnv", 2000),
+    "tui_gym/WindyGridWorldKing-v0": ("tui_gym.envs.dp_grid:KingWindyGridWorldEnv", 2000),
     "tui_gym/DynaMaze-v0": ("tui_gym.envs.dyna_maze:DynaMazeEnv", 5000),
     "tui_gym/BlockingMaze-v0": ("tui_gym.envs.dyna_maze:BlockingMazeEnv", 5000),
     "tui_gym/ShortcutMaze-v0": ("tui_gym.envs.dyna_maze:ShortcutMazeEnv", 5000),
@@ -27,13 +27,6 @@ BOOK_WORLDS: dict[str, tuple[str, int]] = {
 
 def register_envs() -> None:
     """Register our environments with Gymnasium (safe to call twice)."""
-    for env_id in GRIDWORLD_IDS:
-        if env_id not in gym.registry:
-            gym.register(
-                id=env_id, entry_point=GRIDWORLD_ENTRY_POINT, max_episode_steps=GRIDWORLD_MAX_STEPS,
-            )
-    if TILE_MAP_ID not in gym.registry:
-        gym.register(id=TILE_MAP_ID, entry_point=TILE_MAP_ENTRY_POINT)
-    for env_id, (entry_point, limit) in BOOK_WORLDS.items():
+    for env_id, (entry_point, limit) in ENVS.items():
         if env_id not in gym.registry:
             gym.register(id=env_id, entry_point=entry_point, max_episode_steps=limit)

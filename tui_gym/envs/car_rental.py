@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from typing import Any
 
 import gymnasium as gym
@@ -10,13 +11,15 @@ import numpy as np
 import numpy.typing as npt
 from gymnasium import spaces
 
-from tui_gym.envs.table_env import TileArrays
+from tui_gym.core.mdp.model import FiniteMDP
 
-__all__ = ["MAX_CARS", "MAX_MOVE", "MOVES", "CarRentalEnv", "car_rental_arrays", "night", "nights"]
+__all__ = ["ACTION_NAMES", "MAX_CARS", "MAX_MOVE", "MOVES", "CarRentalEnv", "car_rental_model",
+           "night", "nights"]
 
 MAX_CARS = 20  # at each site; more are sent back to the company
 MAX_MOVE = 5  # cars moved overnight, either way
 MOVES = tuple(range(-MAX_MOVE, MAX_MOVE + 1))  # action a moves MOVES[a] cars, first to second
+ACTION_NAMES = tuple("0" if move == 0 else f"{move:+d}" for move in MOVES)
 RENT = 10.0  # dollars a car rented
 MOVE_COST = 2.0  # dollars a car moved
 PARKING, PARKED = 4.0, 10  # Exercise 4.7: dollars for a site keeping more than 10 cars
@@ -71,8 +74,9 @@ def _site(request: float, ret: float) -> tuple[FloatArray, FloatArray]:
         return chance, np.where(chance > 0, rented / chance, 0.0)
 
 
-def car_rental_arrays(exercise: bool = False) -> TileArrays:
-    """The exact transitions: states `first * 21 + second`, actions `MOVES`, every next
+@lru_cache(maxsize=2)
+def car_rental_model(exercise: bool = False) -> FiniteMDP:
+    """(Kept.) The exact transitions: states `first * 21 + second`, actions `MOVES`, every next
     state an outcome (its reward: the rentals expected given it, less the night's costs).
     Episodes start uniformly on every state."""
     n = SIDE * SIDE
@@ -85,8 +89,8 @@ def car_rental_arrays(exercise: bool = False) -> TileArrays:
     reward = RENT * rented - cost[..., None, None]
     shape = (n, len(MOVES), n)
     next_state = np.broadcast_to(np.arange(n), shape).copy()
-    return TileArrays(next_state, prob.reshape(shape), reward.reshape(shape),
-                      np.zeros(shape, dtype=bool), np.full(n, 1.0 / n))
+    return FiniteMDP(next_state, prob.reshape(shape), reward.reshape(shape),
+                     np.zeros(shape, dtype=bool), np.full(n, 1.0 / n), action_names=ACTION_NAMES)
 
 
 class CarRentalEnv(gym.Env[Any, Any]):
@@ -118,7 +122,7 @@ class CarRentalEnv(gym.Env[Any, Any]):
     """
 
     metadata: dict[str, Any] = {"render_modes": ["ansi"], "render_fps": 4}
-    action_names = tuple("0" if move == 0 else f"{move:+d}" for move in MOVES)
+    action_names = ACTION_NAMES
 
     def __init__(self, exercise: bool = False, render_mode: str | None = None) -> None:
         if render_mode not in (None, "ansi"):

@@ -1,17 +1,21 @@
-"""The grids of Sutton & Barto's book: `Grid`, its transitions, and the envs on it."""
+"""The grids of Sutton & Barto's book: `Grid`, its transitions, and the envs on it (Examples
+3.5 and 4.1's grids, the random walk, Windy GridWorld)."""
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
-from tui_gym.envs.table_env import TableEnv, TileArrays
+from tui_gym.core.mdp.model import FiniteMDP
+from tui_gym.envs.table_env import TableEnv
 
 __all__ = [
-    "AB_JUMPS", "CORNERS", "GRID_ACTIONS", "KING_ACTIONS", "STEPS", "ABGridEnv",
-    "CornerGridEnv", "Grid", "GridEnv",
+    "AB_JUMPS", "CORNERS", "GRID_ACTIONS", "KING_ACTIONS", "LEFT_END_PAYS", "STEPS", "WIND",
+    "ABGridEnv", "CornerGridEnv", "Grid", "GridEnv", "KingWindyGridWorldEnv", "RandomWalkEnv",
+    "WindyGridWorldEnv", "walk_grid", "windy_grid",
 ]
 
 Cell = tuple[int, int]
@@ -24,6 +28,10 @@ STEPS: dict[str, Cell] = {
 AB_JUMPS: dict[Cell, tuple[Cell, float]] = {(0, 1): ((4, 1), 10.0), (0, 3): ((2, 3), 5.0)}
 CORNERS: tuple[Cell, ...] = ((0, 0), (3, 3))
 GUST = 1.0 / 3.0  # the chance of each of a gusty wind's three strengths
+# The walks of the book: states -> what stepping off the left end pays (the right end pays +1).
+LEFT_END_PAYS = {5: 0.0, 19: -1.0}
+WIND = (0, 0, 0, 1, 1, 1, 2, 2, 1, 0)  # the windy grid: cells a move from each column is pushed up
+WINDY_START, WINDY_GOAL = (3, 0), (3, 7)
 
 
 @dataclass(frozen=True, eq=False)
@@ -84,7 +92,8 @@ class Grid:
             return cell, self.step
         return (row, col), self.pays.get((row, col), self.step)
 
-    def arrays(self) -> TileArrays:
+    @cached_property
+    def model(self) -> FiniteMDP:
         """The grid's transitions, `[S, A, K]` with K the most wind strengths a column has."""
         n, n_moves = self.rows * self.cols, len(self.moves)
         k = max(len(self.winds(c)) for c in range(self.cols))
@@ -114,7 +123,8 @@ class Grid:
         else:
             for s in range(n):
                 initial[s] = divmod(s, self.cols) not in (ends | self.walls)
-        return TileArrays(next_state, prob, reward, terminal, initial / initial.sum())
+        return FiniteMDP(next_state, prob, reward, terminal, initial / initial.sum(),
+                         action_names=self.moves)
 
     def cells(self) -> list[str]:
         """The grid as tile rows: F floor, S the start, W a wall, G a terminal cell, unless
@@ -136,17 +146,14 @@ class GridEnv(TableEnv):
     agent, and the grid's letters; the wind's strengths under the columns."""
 
     def __init__(self, grid: Grid, render_mode: str | None = None) -> None:
-        super().__init__(grid.arrays(), render_mode)
+        super().__init__(grid.model, render_mode)
         self.grid = grid
         self.action_names = grid.moves
 
     def picture(self) -> str:
         grid = self.grid
-        lines = [["."] * grid.cols for _ in range(grid.rows)]
-        for r, c in grid.walls:
-            lines[r][c] = "#"
-        for r, c in grid.terminals:
-            lines[r][c] = "*"
+        drawn = {"W": "#", "G": "*", "H": "*"}  # walls and the ends; the rest a plain cell
+        lines = [[drawn.get(tile, ".") for tile in row] for row in grid.cells()]
         for (r, c), letter in grid.letters.items():
             lines[r][c] = letter[0]
         for (r, c), mark in grid.primes.items():
@@ -219,3 +226,95 @@ class CornerGridEnv(GridEnv):
 
     def __init__(self, render_mode: str | None = None) -> None:
         super().__init__(self.GRID, render_mode)
+
+
+def walk_grid(states: int) -> Grid:
+    """The walk with `states` states (5 or 19) between its two ends, as a one-row grid."""
+    if states not in LEFT_END_PAYS:
+        raise ValueError(f"the random walk has 5 states (Example 6.2) or 19 (Figure 7.2), "
+                         f"not {states!r}")
+    ends = ((0, 0), (0, states + 1))
+    names = "ABCDE" if states == 5 else [str(i) for i in range(1, states + 1)]
+    return Grid(1, states + 2, moves=("left", "right"), terminals=ends,
+                pays={ends[0]: LEFT_END_PAYS[states], ends[1]: 1.0}, start=(0, states // 2 + 1),
+                letters={(0, i + 1): name for i, name in enumerate(names)},
+                tiles={ends[0]: "H"})
+
+
+class RandomWalkEnv(GridEnv):
+    """Sutton & Barto's random walk: a row of states between two ends.
+
+    ## Action Space
+    left (0), right (1).
+
+    ## Observation Space
+    The position, 0 to `states + 1`: 0 and `states + 1` are the two ends, the
+    states between them are A to E (5 states) or 1 to 19 (19 states).
+
+    ## Rewards
+    Stepping off the right end pays +1; off the left end 0 with 5 states
+    (Example 6.2) and -1 with 19 (Figure 7.2); every other step 0.
+
+    ## Starting State
+    The middle state (C of A to E; 10 of 1 to 19).
+
+    ## Episode End
+    Terminated at either end.
+
+    ## Arguments
+    `states`: 5 or 19; `render_mode`: "ansi" draws the row as text.
+    """
+
+    def __init__(self, states: int = 5, render_mode: str | None = None) -> None:
+        super().__init__(walk_grid(states), render_mode)
+        self.states = states
+
+
+def windy_grid(king_moves: bool = False, stochastic_wind: bool = False) -> Grid:
+    """The 7 x 10 windy grid: four moves or the eight king's moves, a steady or gusty wind."""
+    return Grid(7, 10, moves=KING_ACTIONS if king_moves else GRID_ACTIONS, step=-1.0,
+                edge=None, terminals=(WINDY_GOAL,), wind=WIND, gusts=stochastic_wind,
+                start=WINDY_START)
+
+
+class WindyGridWorldEnv(GridEnv):
+    """Sutton & Barto's Example 6.5: a 7 x 10 grid with a wind blowing up through the middle.
+
+    ## Action Space
+    up (0), down (1), left (2), right (3); with `king_moves`, also up-left (4),
+    up-right (5), down-left (6), down-right (7) (Exercise 6.9).
+
+    ## Observation Space
+    The cell, `row * 10 + col`, row 0 at the top.
+
+    ## Rewards
+    -1 for every move, the last one included.
+
+    ## Starting State
+    Row 3, column 0.
+
+    ## Episode End
+    Terminated on reaching row 3, column 7. A move goes one cell its way, and
+    the wind of the column it starts from, 0 0 0 1 1 1 2 2 1 0 by column,
+    pushes it that many cells up; a move that would leave the grid ends on its
+    border. With `stochastic_wind` (Exercise 6.10), where there is wind it
+    blows one cell stronger a third of the time and one weaker a third of the
+    time.
+
+    ## Arguments
+    `king_moves`, `stochastic_wind` (both false by default); `render_mode`:
+    "ansi" draws the grid as text.
+    """
+
+    def __init__(self, king_moves: bool = False, stochastic_wind: bool = False,
+                 render_mode: str | None = None) -> None:
+        super().__init__(windy_grid(king_moves, stochastic_wind), render_mode)
+        self.king_moves = king_moves
+        self.stochastic_wind = stochastic_wind
+
+
+class KingWindyGridWorldEnv(WindyGridWorldEnv):
+    """`WindyGridWorldEnv` with king's moves (Exercise 6.9), its own id's env."""
+
+    def __init__(self, stochastic_wind: bool = False, render_mode: str | None = None) -> None:
+        super().__init__(True, stochastic_wind, render_mode)

@@ -85,16 +85,16 @@ class MazeEnv(GridEnv):
     """
 
     def __init__(self, phases: Sequence[tuple[int, Grid]], render_mode: str | None = None) -> None:
-        self.phases = [(start, grid, grid.arrays()) for start, grid in phases]
+        self.phases = list(phases)
         super().__init__(self.phases[0][1], render_mode)
         self.world_steps = 0
         self.phase = 0
 
     def _enter_phase(self) -> None:
-        phase = max(0, bisect_right([start for start, _, _ in self.phases], self.world_steps) - 1)
+        phase = max(0, bisect_right([start for start, _ in self.phases], self.world_steps) - 1)
         if phase != self.phase:
-            _, self.grid, self.arrays = self.phases[phase]
-            self.phase, self._P = phase, None
+            self.grid = self.phases[phase][1]
+            self.model, self.phase, self._P = self.grid.model, phase, None
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None

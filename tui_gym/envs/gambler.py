@@ -1,18 +1,28 @@
 """`GamblerEnv`: Sutton & Barto's Example 4.3, the gambler's problem.
 
-`gambler_arrays(p_heads, goal)` gives its transitions, for the env and for the
-exact model alike.
+`gambler_model(p_heads, goal)` gives its transitions, for the env and for the
+game's exact model alike.
 """
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
-from tui_gym.envs.table_env import TableEnv, TileArrays
+from tui_gym.core.mdp.model import FiniteMDP
+from tui_gym.envs.table_env import TableEnv
 
-__all__ = ["MAX_STAKE", "GamblerEnv", "gambler_arrays", "stake_of"]
+__all__ = ["ACTION_NAMES", "MAX_STAKE", "GamblerEnv", "gambler_model", "stake_of", "stakes"]
 
 MAX_STAKE = 50  # actions: stakes 1 to 50
+ACTION_NAMES = tuple(f"stake {k}" for k in range(1, MAX_STAKE + 1))
+
+
+def stakes(goal: int) -> np.ndarray:
+    """`[capital, action]`: the stake each action puts down at each capital, 0 to `goal`."""
+    capital = np.arange(goal + 1)[:, None]
+    return np.minimum(np.minimum(np.arange(1, MAX_STAKE + 1)[None, :], capital), goal - capital)
 
 
 def stake_of(capital: int, action: int, goal: int) -> int:
@@ -21,12 +31,13 @@ def stake_of(capital: int, action: int, goal: int) -> int:
     return max(0, min(action + 1, capital, goal - capital))
 
 
-def gambler_arrays(p_heads: float, goal: int) -> TileArrays:
-    """States: capital 0 to `goal`; from 0 and `goal` (where episodes end) nothing happens.
+@lru_cache(maxsize=16)
+def gambler_model(p_heads: float, goal: int) -> FiniteMDP:
+    """(Kept.) States: capital 0 to `goal`; from 0 and `goal` (where episodes end) nothing happens.
     A stake is won on heads (chance `p_heads`), lost on tails; +1 for reaching the goal."""
     n = goal + 1
     capital = np.arange(n)[:, None]
-    stake = np.minimum(np.minimum(np.arange(1, MAX_STAKE + 1)[None, :], capital), goal - capital)
+    stake = stakes(goal)
     live = (capital > 0) & (capital < goal)
     win, lose = capital + stake, capital - stake
     next_state = np.stack([win, lose], axis=-1)
@@ -39,7 +50,8 @@ def gambler_arrays(p_heads: float, goal: int) -> TileArrays:
     reward = np.where(live[..., None], reward, 0.0)
     terminal = np.where(live[..., None], terminal, True)
     initial = live[:, 0] / live[:, 0].sum()
-    return TileArrays(next_state.astype(np.int64), prob, reward, terminal, initial)
+    return FiniteMDP(next_state.astype(np.int64), prob, reward, terminal, initial,
+                     action_names=ACTION_NAMES)
 
 
 class GamblerEnv(TableEnv):
@@ -66,7 +78,7 @@ class GamblerEnv(TableEnv):
     at most 100), `render_mode` "ansi".
     """
 
-    action_names = tuple(f"stake {k}" for k in range(1, MAX_STAKE + 1))
+    action_names = ACTION_NAMES
 
     def __init__(self, p_heads: float = 0.4, goal: int = 100,
                  render_mode: str | None = None) -> None:
@@ -77,7 +89,7 @@ class GamblerEnv(TableEnv):
         self.p_heads, self.goal = float(p_heads), int(goal)
         self.last_flip: str | None = None
         self.last_stake = 0
-        super().__init__(gambler_arrays(self.p_heads, self.goal), render_mode)
+        super().__init__(gambler_model(self.p_heads, self.goal), render_mode)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[int, dict]:
         self.last_flip = None

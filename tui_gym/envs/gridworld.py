@@ -1,26 +1,30 @@
-"""GridWorld: Gymnasium's quick-start custom environment, made correct."""
+"""GridWorld: Gymnasium's quick-start custom environment, made correct; its walls, moves and
+shortest distances."""
 
 from __future__ import annotations
 
 import math
 import numbers
 from collections.abc import Iterable, Sequence
+from functools import lru_cache
 from typing import Any, SupportsInt
 
 import gymnasium as gym
 import numpy as np
+import numpy.typing as npt
 from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 from numpy.typing import NDArray
 
-from tui_gym.envs.walls import Walls, cell_distances, check_walls
-
 __all__ = [
     "ACTION_DELTAS", "ACTION_NAMES", "AGENT_COLOR", "BACKGROUND_COLOR", "CELL_PIXELS",
-    "GRID_LINE_COLOR", "TARGET_COLOR", "WALL_COLOR", "GridWorldEnv", "manhattan",
+    "GRID_LINE_COLOR", "TARGET_COLOR", "WALL_COLOR", "GridWorldEnv", "Walls", "cell_distances",
+    "cell_moves", "check_walls", "free_cells", "manhattan",
 ]
 
 Position = tuple[int, int]
+Walls = tuple[tuple[int, int], ...]
+IntArray = npt.NDArray[np.int64]
 ObsType = dict[str, NDArray[np.int64]]
 
 # The tutorial's mapping: x grows to the right, y grows upwards.
@@ -50,6 +54,72 @@ def _is_int(value: object) -> bool:
 
 def _is_real(value: object) -> bool:
     return isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)
+
+
+def check_walls(size: int, walls: Iterable[Any] | None) -> Walls:
+    """The walls as sorted `(x, y)` pairs without repeats; `ValueError` for a cell off the
+    grid, a pair that is not two integers, or walls that leave fewer than two free cells."""
+    out: set[tuple[int, int]] = set()
+    for wall in walls or ():
+        array = np.asarray(wall)
+        if array.shape != (2,) or not np.issubdtype(array.dtype, np.integer):
+            raise ValueError(f"a GridWorld wall must be two integers (x, y), got {wall!r}")
+        x, y = int(array[0]), int(array[1])
+        if not (0 <= x < size and 0 <= y < size):
+            raise ValueError(f"wall ({x}, {y}) is off the {size}x{size} grid")
+        out.add((x, y))
+    if size * size - len(out) < 2:
+        raise ValueError(f"walls leave {size * size - len(out)} free cell(s); the agent and "
+                         "the target need two")
+    return tuple(sorted(out))
+
+
+def free_cells(size: int, walls: Walls) -> npt.NDArray[np.bool_]:
+    """`[cells]`: whether each cell is free (not a wall)."""
+    free = np.ones(size * size, dtype=bool)
+    for x, y in walls:
+        free[x * size + y] = False
+    return free
+
+
+@lru_cache(maxsize=16)
+def cell_moves(size: int, walls: Walls = ()) -> IntArray:
+    """`[4, cells]`: where each action leads from each cell (blocked moves stay put)."""
+    cells = size * size
+    x, y = np.divmod(np.arange(cells), size)
+    free = free_cells(size, walls)
+    moves = np.empty((4, cells), dtype=np.int64)
+    for a, (dx, dy) in enumerate(ACTION_DELTAS):
+        to = np.clip(x + dx, 0, size - 1) * size + np.clip(y + dy, 0, size - 1)
+        moves[a] = np.where(free[to], to, np.arange(cells))
+    moves.setflags(write=False)
+    return moves
+
+
+@lru_cache(maxsize=16)
+def cell_distances(size: int, walls: Walls = ()) -> IntArray:
+    """`[cells, cells]`: the fewest moves from a cell (row) to a cell (column); -1 where
+    there is no way (either is a wall, or walls part them)."""
+    cells = size * size
+    free = free_cells(size, walls)
+    if not walls:
+        x, y = np.divmod(np.arange(cells), size)
+        distance = np.abs(x[:, None] - x[None, :]) + np.abs(y[:, None] - y[None, :])
+        distance = distance.astype(np.int64)
+        distance.setflags(write=False)
+        return distance
+    moves = cell_moves(size, walls)
+    distance = np.full((cells, cells), -1, dtype=np.int64)
+    frontier = np.diag(free)  # [cell, target]: at the distance of the last round
+    distance[frontier] = 0
+    step = 0
+    while frontier.any():
+        step += 1
+        reached = frontier[moves[0]] | frontier[moves[1]] | frontier[moves[2]] | frontier[moves[3]]
+        frontier = reached & (distance < 0) & free[:, None]
+        distance[frontier] = step
+    distance.setflags(write=False)
+    return distance
 
 
 class GridWorldEnv(gym.Env[ObsType, int]):

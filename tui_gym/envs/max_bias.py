@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
+from functools import cache
 from typing import Any
 
 import numpy as np
 
+from tui_gym.core.mdp.model import FiniteMDP
 from tui_gym.envs.dp_grid import Grid
-from tui_gym.envs.table_env import TableEnv, TileArrays
+from tui_gym.envs.table_env import TableEnv
 
-__all__ = ["A", "ACTIONS", "B", "MAX_B_ACTIONS", "MaxBiasEnv", "max_bias_arrays", "offered"]
+__all__ = ["A", "ACTIONS", "B", "MAX_B_ACTIONS", "MaxBiasEnv", "max_bias_model", "offered"]
 
 MAX_B_ACTIONS = 10  # B's actions at most: one digit key each
 ACTIONS = ("left", "right", *(f"b{i}" for i in range(1, MAX_B_ACTIONS + 1)))
@@ -29,8 +31,9 @@ def offered(actions: int) -> np.ndarray:
     return mask
 
 
-def max_bias_arrays() -> tuple[TileArrays, np.ndarray]:
-    """The transitions (mean rewards) and each outcome's reward deviation."""
+@cache
+def max_bias_model() -> FiniteMDP:
+    """The transitions (mean rewards, and each outcome's reward deviation), kept."""
     shape = (4, len(ACTIONS), 1)
     next_state = np.broadcast_to(np.arange(4)[:, None, None], shape).copy()
     reward, std = np.zeros(shape), np.zeros(shape)
@@ -40,7 +43,8 @@ def max_bias_arrays() -> tuple[TileArrays, np.ndarray]:
     next_state[B, :, 0], reward[B, :, 0], std[B, :, 0] = B_END, B_MEAN, B_STD
     initial = np.zeros(4)
     initial[A] = 1.0
-    return TileArrays(next_state, np.ones(shape), reward, terminal, initial), std
+    return FiniteMDP(next_state, np.ones(shape), reward, terminal, initial, action_names=ACTIONS,
+                     reward_std=std)
 
 
 class MaxBiasEnv(TableEnv):
@@ -75,8 +79,7 @@ class MaxBiasEnv(TableEnv):
     def __init__(self, actions: int = MAX_B_ACTIONS, render_mode: str | None = None) -> None:
         if isinstance(actions, bool) or not 1 <= int(actions) <= MAX_B_ACTIONS:
             raise ValueError(f"B offers 1 to {MAX_B_ACTIONS} actions, not {actions!r}")
-        arrays, std = max_bias_arrays()
-        super().__init__(arrays, render_mode, reward_std=std)
+        super().__init__(max_bias_model(), render_mode)
         self.actions = int(actions)
         self.grid = GRID
         self.offered = offered(self.actions)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -11,15 +11,17 @@ import gymnasium as gym
 import numpy as np
 import numpy.typing as npt
 
-from tui_gym.envs.table_env import TableEnv, TileArrays
+from tui_gym.core.mdp.model import FiniteMDP
+from tui_gym.envs.table_env import TableEnv
 
 __all__ = [
-    "ACTION_ORDERS", "TILES", "TileMapEnv", "TileRules", "cell_key", "read_cell", "tile_arrays",
+    "ACTION_ORDERS", "TILES", "TileMapEnv", "TileRules", "cell_key", "read_cell", "tile_model",
 ]
 
 TILES = "SFHGCWR"
 TILE_NAMES = {"S": "start", "F": "floor", "H": "hole", "G": "goal", "C": "cliff", "W": "wall",
               "R": "reward cell"}
+TILE_LIST = ", ".join(f"{t} {n}" for t, n in TILE_NAMES.items())
 VALUED = "RHGC"  # tiles whose reward a map may set
 STANDING = "SFR"  # tiles an agent stands on, so the only ones whose slip matters
 ENDING = "HG"
@@ -75,44 +77,47 @@ def _where(cell: Cell) -> str:
 
 def check_map(
     cells: Sequence[str], rewards: Mapping[Any, Any] | None, slip: Mapping[Any, Any] | None,
-    need_start: bool = True,
+    need_start: bool = True, where: Callable[[Cell], str] = _where,
 ) -> tuple[tuple[str, ...], dict[Cell, float], dict[Cell, float]]:
-    """The map checked: rows, rewards and slip by cell. `ValueError` names the cell at fault.
-    With `need_start`, exactly one start; without, at most one."""
+    """The map checked: rows, rewards and slip by cell. `ValueError` names the cell at fault
+    (as `where` words it). With `need_start`, exactly one start; without, at most one."""
     rows = tuple(str(row) for row in cells)
     if not rows or not rows[0]:
         raise ValueError("a tile map needs at least one row of tiles")
     width = len(rows[0])
     for r, row in enumerate(rows):
         if len(row) != width:
-            raise ValueError(f"row {r} has {len(row)} tiles, row 0 has {width}: rows must be "
+            row_name = where((r, 0)).rsplit(",", 1)[0]  # the row, without its column
+            raise ValueError(f"{row_name} has {len(row)} tiles, row 0 has {width}: rows must be "
                              "equally long")
         for c, tile in enumerate(row):
             if tile not in TILES:
-                raise ValueError(f"{_where((r, c))}: {tile!r} is not a tile "
-                                 f"({', '.join(f'{t} {n}' for t, n in TILE_NAMES.items())})")
+                raise ValueError(f"{where((r, c))}: {tile!r} is not a tile ({TILE_LIST})")
     starts = [(r, c) for r, row in enumerate(rows) for c, t in enumerate(row) if t == "S"]
-    if len(starts) > 1 or (need_start and not starts):
-        found = "none" if not starts else ", ".join(_where(s) for s in starts)
-        raise ValueError(f"a tile map needs exactly one start S (found {found})")
+    if len(starts) > 1:
+        raise ValueError(f"{where(starts[1])}: a second start (the first is at "
+                         f"{_where(starts[0])}); a map has one")
+    if need_start and not starts:
+        raise ValueError("a tile map needs a start S")
     reward_of: dict[Cell, float] = {}
     for key, value in (rewards or {}).items():
         cell = _on_map(read_cell(key), rows)
         tile = rows[cell[0]][cell[1]]
         if tile not in VALUED:
-            raise ValueError(f"{_where(cell)} is {TILE_NAMES[tile]}: only reward (R), hole (H), "
+            raise ValueError(f"{where(cell)} is {TILE_NAMES[tile]}: only reward (R), hole (H), "
                              "goal (G) and cliff (C) cells take a reward")
         reward_of[cell] = _finite(value, f"the reward at {_where(cell)}")
     for r, row in enumerate(rows):
         for c, tile in enumerate(row):
             if tile == "R" and (r, c) not in reward_of:
-                raise ValueError(f"{_where((r, c))}: a reward cell needs its reward")
+                raise ValueError(f"{where((r, c))}: a reward cell needs its value "
+                                 f"('reward {r},{c}: VALUE' in a map's text)")
     slip_of: dict[Cell, float] = {}
     for key, value in (slip or {}).items():
         cell = _on_map(read_cell(key), rows)
         tile = rows[cell[0]][cell[1]]
         if tile not in STANDING:
-            raise ValueError(f"{_where(cell)} is {TILE_NAMES[tile]}: only cells the agent "
+            raise ValueError(f"{where(cell)} is {TILE_NAMES[tile]}: only cells the agent "
                              "stands on (S, F, R) slip")
         slip_of[cell] = _probability(value, f"the slip at {_where(cell)}")
     return rows, reward_of, slip_of
@@ -141,11 +146,13 @@ def _probability(value: Any, what: str) -> float:
     return number
 
 
-def tile_arrays(
+def tile_model(
     cells: Sequence[str], rewards: Mapping[Cell, float], slip: Mapping[Cell, float],
     actions: Sequence[str], rules: TileRules,
-) -> TileArrays:
-    """The transitions of a checked map (`check_map`), vectorized over cells."""
+) -> FiniteMDP:
+    """The transitions of a checked map (`check_map`), vectorized over cells: K is 3 (as
+    asked, then the two sides) where anything slips, else 1; outcomes that cannot happen
+    stay in place, pay 0 and do not end."""
     n_rows, n_cols = len(cells), len(cells[0])
     n = n_rows * n_cols
     tiles = np.array([list(row) for row in cells]).reshape(-1)
@@ -195,7 +202,7 @@ def tile_arrays(
     terminal[idle, :, 0] = np.isin(tiles[idle], list(ENDING))[:, None]
     initial = np.zeros(n)
     initial[start] = 1.0
-    return TileArrays(next_state, prob, reward, terminal, initial)
+    return FiniteMDP(next_state, prob, reward, terminal, initial, action_names=tuple(actions))
 
 
 def _perpendicular(a: str, b: str) -> bool:
@@ -266,7 +273,7 @@ class TileMapEnv(TableEnv):
         self.action_order = ACTION_ORDERS[actions]
         self.nrow, self.ncol = len(rows), len(rows[0])
         self.desc = np.asarray([list(row) for row in rows], dtype="c")
-        super().__init__(tile_arrays(rows, reward_of, slip_of, self.action_order, self.rules),
+        super().__init__(tile_model(rows, reward_of, slip_of, self.action_order, self.rules),
                          render_mode)
 
     def reset(

@@ -18,6 +18,7 @@ from tui_gym.games.words import (
     agreement_summary,
     format_reward,
     join_parts,
+    plural,
     return_summary,
     signed,
     to_jsonable,
@@ -31,8 +32,8 @@ if TYPE_CHECKING:
 
 __all__ = [
     "EXACT", "Advice", "Bound", "EvalOutcome", "Game", "HeatmapLayout", "Narrator", "NotAvailable",
-    "Oracle", "ReferenceMetrics", "Scope", "StateSpace", "TallyWord", "TrainingModel",
-    "greedy_probabilities",
+    "Oracle", "ReachNarrator", "ReferenceMetrics", "Scope", "StateSpace", "TallyWord",
+    "TrainingModel", "greedy_probabilities",
 ]
 
 BoolArray = npt.NDArray[np.bool_]
@@ -397,6 +398,30 @@ class Narrator(Role):
         n = max(1, len(details))
         ended = sum(1 for d in details if d.get("terminated"))
         return EvalOutcome(figures={"terminated_rate": ended / n})
+
+
+class ReachNarrator(Narrator):
+    """An episode that reaches its end (`reached_words`), or runs out of time."""
+
+    tally_words: tuple[TallyWord, ...] = (
+        TallyWord("reached", "good"), TallyWord("timed out", "even"),
+    )
+    reached_words = "Reached the goal"  # how reaching the end reads: "Passenger delivered"
+    missed_words = ""  # what was not done, after "Out of time after 9 steps"
+
+    def tally_word(self, last: PlayStep) -> str:
+        return self.tally_words[0].label if last.terminated else "timed out"
+
+    def outcome_text(
+        self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]
+    ) -> str:
+        steps, total = plural(last.steps, "step"), format_reward(last.episode_return)
+        if last.terminated:
+            return f"{self.reached_words} in {steps}, return {total}"
+        return f"Out of time after {steps}{self.missed_words}, return {total}"
+
+    def progress_text(self, last: PlayStep, first_info: Mapping[str, Any]) -> str:
+        return f"{plural(last.steps, 'step')} taken" if last.steps else ""
 
 
 class HeatmapLayout(Role):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -10,18 +11,16 @@ import numpy as np
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP
 from tui_gym.envs.dp_grid import GRID_ACTIONS, Cell, Grid
-from tui_gym.games.base import TIED, UNREADABLE, HeatmapLayout, Narrator, TallyWord, greedy_cells
+from tui_gym.games.base import TIED, UNREADABLE, HeatmapLayout, greedy_cells
 from tui_gym.games.model import DiscreteStates, ModelGame, freeze
-from tui_gym.games.words import format_reward, plural
 
-__all__ = ["ARROWS", "DPGridGame", "DPGridLayout", "DPGridStates", "Event", "ReachNarrator"]
+__all__ = ["ARROWS", "DPGridGame", "DPGridLayout", "DPGridStates", "Event"]
 
 ARROWS = {"up": "↑", "down": "↓", "left": "←", "right": "→",
           "up-left": "↖", "up-right": "↗", "down-left": "↙", "down-right": "↘"}
 STRAIGHT = GRID_ACTIONS
 END = "★"  # a terminal cell: the tile board's goal
 WALL = "█"
-KEPT_MODELS = 16  # models kept per game (one per set of arguments)
 
 Event = tuple[str, str]  # what a move did ('{who} ...'), and its tone on the board
 
@@ -116,24 +115,10 @@ class DPGridLayout(HeatmapLayout):
         ]
 
 
-class ReachNarrator(Narrator):
-    """Reached the episode's end (`goal_words`), or ran out of time."""
-
-    tally_words = (TallyWord("reached", "good"), TallyWord("timed out", "even"))
-    goal_words = "the goal"
-
-    def tally_word(self, last: Any) -> str:
-        return "reached" if last.terminated else "timed out"
-
-    def outcome_text(self, last: Any, first_info: Mapping[str, Any],
-                     scene: Mapping[str, Any]) -> str:
-        total = format_reward(last.episode_return)
-        if last.terminated:
-            return f"Reached {self.goal_words} in {plural(last.steps, 'step')}, return {total}"
-        return f"Out of time after {plural(last.steps, 'step')}, return {total}"
-
-    def progress_text(self, last: Any, first_info: Mapping[str, Any]) -> str:
-        return f"{plural(last.steps, 'step')} taken" if last.steps else ""
+@lru_cache(maxsize=64)
+def _grid_model(game: DPGridGame, frozen: Any) -> FiniteMDP:
+    """The model of the grid a game's arguments (frozen) make, kept."""
+    return game.grid(dict(frozen)).model
 
 
 class DPGridGame(ModelGame):
@@ -145,24 +130,12 @@ class DPGridGame(ModelGame):
     states_type = DPGridStates
     layout_type = DPGridLayout
 
-    def __init__(self) -> None:
-        super().__init__()
-        self._models: dict[Any, FiniteMDP] = {}
-
     def grid(self, kwargs: Mapping[str, Any]) -> Grid:
         """The grid these arguments make."""
         raise NotImplementedError
 
     def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP:
-        key = freeze(kwargs)
-        if key not in self._models:
-            if len(self._models) >= KEPT_MODELS:
-                self._models.pop(next(iter(self._models)))
-            arrays = self.grid(kwargs).arrays()
-            self._models[key] = FiniteMDP(arrays.next_state, arrays.prob, arrays.reward,
-                                          arrays.terminal, arrays.initial,
-                                          action_names=self.action_names)
-        return self._models[key]
+        return _grid_model(self, freeze(kwargs))
 
     def event(self, game_env: Any, before: Mapping[str, Any], was: Cell, now: Cell,
               move: str) -> Event | None:

@@ -10,20 +10,11 @@ import numpy as np
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import NotAvailable
 from tui_gym.games.base import TIED, HeatmapLayout, ansi_text
-from tui_gym.games.model import DiscreteStates, ModelGame
+from tui_gym.games.model import DiscreteStates, ModelGame, make_env
 
 __all__ = ["PAGE", "GenericGame", "check_fit"]
 
 PAGE = 25  # states a heatmap page shows
-
-
-def _make(env_id: str, render_mode: str | None = None) -> Any:
-    import gymnasium as gym
-
-    import tui_gym.envs
-
-    tui_gym.envs.register_envs()
-    return gym.make(env_id, render_mode=render_mode)
 
 
 def check_fit(env_id: str) -> NotAvailable | None:
@@ -33,7 +24,7 @@ def check_fit(env_id: str) -> NotAvailable | None:
     from tui_gym.core.mdp import model_from_env
 
     try:
-        env = _make(env_id)
+        env = make_env(env_id)
     except (gym.error.Error, ImportError, TypeError, ValueError, AttributeError) as error:
         return NotAvailable(f"{env_id} could not be built: {' '.join(str(error).split())}")
     try:
@@ -130,7 +121,7 @@ class GenericGame(ModelGame):
         self.name = env_id.lower()
         self.title = env_id.split(":")[-1]
         self.description = f"{self.title}: played from its own transition table"
-        env = _make(env_id)
+        env = make_env(env_id)
         try:
             self.action_names = tuple(str(a) for a in range(int(env.action_space.n)))
             modes = env.metadata.get("render_modes", []) or []

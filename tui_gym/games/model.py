@@ -53,7 +53,7 @@ from tui_gym.games.words import signed, unwrapped_note
 
 __all__ = [
     "PHASE", "TIE_GAMMA", "DiscreteStates", "ModelGame", "ModelOracle", "Ladder", "elapsed_steps",
-    "freeze", "model_under",
+    "freeze", "make_env", "model_under",
 ]
 
 PHASE = "phase"  # the argument naming a changing world's phase, for its exact figures
@@ -74,17 +74,24 @@ def freeze(value: Any) -> Any:
     return value
 
 
-@lru_cache(maxsize=32)
-def _table_model(env_id: str, frozen: Any, names: tuple[str, ...]) -> FiniteMDP | NotAvailable:
+def make_env(env_id: str, **kwargs: Any) -> Any:
+    """`gym.make(env_id, **kwargs)`, our own envs registered first."""
     import gymnasium as gym
 
     import tui_gym.envs
 
     tui_gym.envs.register_envs()
+    return gym.make(env_id, **kwargs)
+
+
+@lru_cache(maxsize=32)
+def _table_model(env_id: str, frozen: Any, names: tuple[str, ...]) -> FiniteMDP | NotAvailable:
+    import gymnasium as gym
+
     kwargs = {k: _thaw(v) for k, v in frozen}
     kwargs.pop("max_episode_steps", None)
     try:
-        env = gym.make(env_id, **kwargs)
+        env = make_env(env_id, **kwargs)
     except (gym.error.Error, TypeError, ValueError, ImportError) as error:
         return NotAvailable(f"{env_id} could not be built: {error}")
     try:
@@ -520,17 +527,8 @@ class ModelGame(Game):
     def training_model(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> TrainingModel | NotAvailable:
-        oracle = self.oracle
-        assert isinstance(oracle, ModelOracle)
-        if len(self.phase_starts(kwargs)) > 1:
-            world = self.world(kwargs, changes)
-            if isinstance(world, NotAvailable):
-                return world
-            return TrainingModel(world.models[0], later=tuple(
-                zip(world.starts[1:], world.models[1:], strict=True)))
-        exact = oracle.exact(kwargs, changes)
-        if isinstance(exact, NotAvailable):
-            return exact
-        if not exact.scope.exact:
-            return NotAvailable(exact.scope.note)
-        return TrainingModel(exact.model)
+        world = self.world(kwargs, changes)
+        if isinstance(world, NotAvailable):
+            return world
+        return TrainingModel(world.models[0], later=tuple(
+            zip(world.starts[1:], world.models[1:], strict=True)))

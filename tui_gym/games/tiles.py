@@ -11,13 +11,13 @@ import numpy as np
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP, NotAvailable
 from tui_gym.envs import TILE_MAP_ID
-from tui_gym.envs.tile_map import STANDING, TileMapEnv, TileRules, cell_key, tile_arrays
+from tui_gym.envs.tile_map import STANDING, TileMapEnv, TileRules, cell_key, tile_model
 from tui_gym.games.base import (
     TIED,
     UNREADABLE,
     EvalOutcome,
     HeatmapLayout,
-    Narrator,
+    ReachNarrator,
     TallyWord,
     greedy_cells,
 )
@@ -44,10 +44,8 @@ NO_DECISION = {"H": "○", "G": "★", "C": "▒", "W": "█"}  # tiles the agen
 
 @lru_cache(maxsize=32)
 def _layout_model(grid_map: GridMap, actions: tuple[str, ...], rules: TileRules) -> FiniteMDP:
-    arrays = tile_arrays(grid_map.cells, grid_map.reward_table(), grid_map.slip_table(),
-                         actions, rules)
-    return FiniteMDP(arrays.next_state, arrays.prob, arrays.reward, arrays.terminal,
-                     arrays.initial, action_names=actions)
+    return tile_model(grid_map.cells, grid_map.reward_table(), grid_map.slip_table(), actions,
+                      rules)
 
 
 class TileGame(ModelGame):
@@ -114,9 +112,16 @@ class TileGame(ModelGame):
         return TILE_MAP_ID if kwargs.get(LAYOUT) else env_id
 
     def make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
-        if kwargs.get(LAYOUT):
-            return self.map_make_kwargs(kwargs)
-        return self.builtin_make_kwargs(kwargs)
+        """`builtin_make_kwargs`, or what `tui_gym/TileMap-v0` takes to play an edited map."""
+        if not kwargs.get(LAYOUT):
+            return self.builtin_make_kwargs(kwargs)
+        rules = self.rules(kwargs)
+        return {
+            **self.grid_map(kwargs).env_kwargs(), "slip_default": rules.slip,
+            "actions": self.action_order, "step_reward": rules.step, "goal_reward": rules.goal,
+            "hole_reward": rules.hole, "cliff_reward": rules.cliff,
+            "max_episode_steps": self.episode_limit(kwargs),
+        }
 
     def builtin_make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         """What `gym.make` takes for the map the parameters choose."""
@@ -125,21 +130,7 @@ class TileGame(ModelGame):
     def episode_limit(self, kwargs: Mapping[str, Any]) -> int | None:
         if kwargs.get(LAYOUT):
             return self.map_limit(self.grid_map(kwargs))
-        return self.builtin_limit(kwargs)
-
-    def builtin_limit(self, kwargs: Mapping[str, Any]) -> int | None:
-        """The episode limit on the map the parameters choose."""
-        return super().episode_limit(kwargs)
-
-    def map_make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
-        """What `gym.make` takes to play an edited map on `tui_gym/TileMap-v0`."""
-        rules = self.rules(kwargs)
-        return {
-            **self.grid_map(kwargs).env_kwargs(), "slip_default": rules.slip,
-            "actions": self.action_order, "step_reward": rules.step, "goal_reward": rules.goal,
-            "hole_reward": rules.hole, "cliff_reward": rules.cliff,
-            "max_episode_steps": self.episode_limit(kwargs),
-        }
+        return super().episode_limit(kwargs)  # the limit `builtin_make_kwargs` or Gymnasium sets
 
     def map_limit(self, grid_map: GridMap) -> int:
         """The episode limit of an edited map: FrozenLake's (100 steps up to four rows, else
@@ -178,7 +169,7 @@ class TileStates(DiscreteStates):
 
     def read_scene(self, game_env: Any, before: Mapping[str, Any]) -> dict[str, Any]:
         game = _game(self)
-        cells = _env_cells(game_env)
+        cells = _env_cells(game_env, game)
         cols = len(cells[0])
         state = game_env.s
         agent = None if state is None else divmod(int(state), cols)
@@ -222,20 +213,14 @@ def tile_text(scene: Mapping[str, Any], game: TileGame) -> str:
     return "\n".join([*lines, legend])
 
 
-def _env_cells(game_env: Any) -> list[str]:
-    """The map of a built env: FrozenLake's `desc`, or a cliff map from its shape."""
+def _env_cells(game_env: Any, game: TileGame) -> list[str]:
+    """The map of a built env: its `desc` (FrozenLake's, a tile map's), else (CliffWalking's
+    env, which has none) the game's own map."""
     desc = getattr(game_env, "desc", None)
-    if desc is not None:
-        return ["".join(c.decode() if isinstance(c, bytes) else str(c) for c in row)
-                for row in np.asarray(desc)]
-    rows, cols = game_env.shape
-    cliff = np.asarray(game_env._cliff)
-    out = []
-    for r in range(rows):
-        line = ["C" if cliff[r, c] else "F" for c in range(cols)]
-        out.append("".join(line))
-    out[rows - 1] = "S" + out[rows - 1][1:-1] + "G"
-    return out
+    if desc is None:
+        return game.builtin_cells({})
+    return ["".join(c.decode() if isinstance(c, bytes) else str(c) for c in row)
+            for row in np.asarray(desc)]
 
 
 def _slip_chance(game_env: Any, cells: Sequence[str]) -> float:
@@ -297,38 +282,30 @@ class TileLayout(HeatmapLayout):
         ]
 
 
-class TileNarrator(Narrator):
+class TileNarrator(ReachNarrator):
     """Reached the goal, fell, or ran out of time."""
 
     tally_words: tuple[TallyWord, ...] = (
         TallyWord("reached", "good"), TallyWord("fell in", "bad", always=False),
         TallyWord("timed out", "even"),
     )
+    missed_words = ": the goal not reached"
+    holes = True  # a terminal tile that is not the goal exists (FrozenLake's holes)
 
     def tally_word(self, last: PlayStep) -> str:
         if not last.terminated:
             return "timed out"
         return "reached" if last.episode_return > 0 or not self.holes else "fell in"
 
-    holes = True  # a terminal tile that is not the goal exists (FrozenLake's holes)
-
     def outcome_text(
         self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]
     ) -> str:
-        steps = plural(last.steps, "step")
-        total = format_reward(last.episode_return)
-        if not last.terminated:
-            return f"Out of time after {steps}: the goal not reached, return {total}"
         agent, cells = scene.get("agent"), scene.get("cells") or []
-        tile = ""
-        if agent is not None and cells:
-            tile = cells[int(agent[0])][int(agent[1])]
-        if tile == "H":
-            return f"Fell into a hole after {steps}, return {total}"
-        return f"Reached the goal in {steps}, return {total}"
-
-    def progress_text(self, last: PlayStep, first_info: Mapping[str, Any]) -> str:
-        return f"{plural(last.steps, 'step')} taken" if last.steps else ""
+        fell = agent is not None and bool(cells) and cells[int(agent[0])][int(agent[1])] == "H"
+        if last.terminated and fell:
+            return (f"Fell into a hole after {plural(last.steps, 'step')}, return "
+                    f"{format_reward(last.episode_return)}")
+        return super().outcome_text(last, first_info, scene)
 
     def eval_outcome(
         self, returns: Sequence[float], details: Sequence[dict[str, Any]]

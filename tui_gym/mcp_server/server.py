@@ -8,6 +8,8 @@ read the optimum off its answers.
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Annotated, Any
 
 import anyio
@@ -43,8 +45,13 @@ def _result(data: dict[str, Any]) -> CallToolResult:
     )
 
 
-def _refused(exc: Exception) -> ToolError:
-    return ToolError(visible(" ".join(str(exc).split()), MESSAGE_CHARS))
+@contextmanager
+def _refusing(*errors: type[Exception]) -> Iterator[None]:
+    """One of `errors` raised in the block, as the tool's refusal in one line."""
+    try:
+        yield
+    except errors as exc:
+        raise ToolError(visible(" ".join(str(exc).split()), MESSAGE_CHARS)) from None
 
 
 class _Server(MCPServer):
@@ -81,10 +88,8 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
     )
 
     def seat_of(game_id: int) -> Seat:
-        try:
+        with _refusing(TableError):
             return table.get(game_id)
-        except TableError as exc:
-            raise _refused(exc) from None
 
     def state(game_id: int, seat: Seat) -> dict[str, Any]:
         data: dict[str, Any] = {"game_id": game_id, "game": seat.entry.name}
@@ -119,10 +124,8 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
         ] = None,
     ) -> CallToolResult:
         """Start a game and deal its first episode; its game id and first observation."""
-        try:
+        with _refusing(TableError, SeatError, ValueError):
             game_id, seat = table.start(game, parameters, seed, wrappers or ())
-        except (TableError, SeatError, ValueError) as exc:
-            raise _refused(exc) from None
         return _result(state(game_id, seat))
 
     @server.tool()
@@ -138,10 +141,8 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
     ) -> CallToolResult:
         """Play one action; returns the new state, the reward and whether the episode is done."""
         seat = seat_of(game_id)
-        try:
+        with _refusing(SeatError):
             answer, verdict = seat.step(action)
-        except SeatError as exc:
-            raise _refused(exc) from None
         data = state(game_id, seat)
         data["reward"] = answer["reward"]
         if hints:
@@ -158,10 +159,8 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
     ) -> CallToolResult:
         """Deal a new episode of the game (an unfinished one is left out of the score)."""
         seat = seat_of(game_id)
-        try:
+        with _refusing(SeatError):
             seat.reset(seed)
-        except SeatError as exc:
-            raise _refused(exc) from None
         return _result(state(game_id, seat))
 
     @server.tool()
@@ -170,10 +169,8 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
         if not hints:
             raise ToolError("hints are off on this server (it was started with --no-hints)")
         seat = seat_of(game_id)
-        try:
+        with _refusing(SeatError):
             return _result({"game_id": game_id, **seat.hint()})
-        except SeatError as exc:
-            raise _refused(exc) from None
 
     @server.tool()
     async def score(game_id: GameId) -> CallToolResult:
@@ -185,10 +182,8 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
     @server.tool()
     async def end_game(game_id: GameId) -> CallToolResult:
         """End a game and free its place; returns its final score."""
-        try:
+        with _refusing(TableError):
             seat = table.end(game_id)
-        except TableError as exc:
-            raise _refused(exc) from None
         return _result({"game_id": game_id, "game": seat.entry.name,
                         **seat.score.to_json(running=hints)})
 

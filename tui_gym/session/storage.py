@@ -39,7 +39,6 @@ MAX_ROWS = 4_000_000  # table rows (the largest dense table has 2,000,000)
 MAX_JSON_DEPTH = 8
 MAX_COUNT = 2**62  # episodes, steps and update counts
 MAX_SEED = 2**63 - 1
-_COUNTERS = ("episodes_trained", "steps_trained", "agent_episode")
 
 
 class StorageError(ValueError):

@@ -64,18 +64,9 @@ from tui_gym.ui.widgets.key_bar import KeyBar
 if TYPE_CHECKING:
     from tui_gym.core.recording import Recording
     from tui_gym.session.experiments.app_recording import SessionRunLog
-    from tui_gym.ui.book_view import BookView
     from tui_gym.ui.compare_view import CompareView
-    from tui_gym.ui.confirm_screen import ConfirmScreen
     from tui_gym.ui.plan_view import PlanView
     from tui_gym.ui.train_view import TrainView
-
-
-def _confirm_screen(title: str, text: str, yes: str) -> ConfirmScreen:
-    """A yes/no question (the dialog's module is imported when first asked)."""
-    from tui_gym.ui.confirm_screen import ConfirmScreen
-
-    return ConfirmScreen(title, text, yes)
 
 
 MIN_WIDTH, MIN_HEIGHT = 80, 24  # below this: a message instead of the layout
@@ -198,9 +189,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self._make_run_log = run_log if callable(run_log) else None
         self.db = db
         self.history_kept = history_kept
-        self._compare: CompareView | None = None
-        self._plan: PlanView | None = None
-        self._book: BookView | None = None
+        self._views: dict[str, Any] = {}  # the Compare, Plan and Book views, once shown
         self._train: TrainView | None = None
         self._train_mounted: AwaitMount | None = None
         self._notices: dict[tuple[str, str, str], Notification] = {}  # the last of each
@@ -327,16 +316,16 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     @property
     def compare_view(self) -> CompareView | None:
         """The Compare view, once it has been shown (it is built the first time)."""
-        return self._compare
+        return self._views.get("compare")
 
     @property
     def plan_view(self) -> PlanView | None:
         """The Plan view, once it has been shown (it is built the first time)."""
-        return self._plan
+        return self._views.get("plan")
 
     def _reload_plan(self) -> None:
-        if self._plan is not None and self._plan.is_mounted:
-            self._plan.reload()
+        if (plan := self.plan_view) is not None and plan.is_mounted:
+            plan.reload()
 
     @property
     def side_panel(self) -> SidePanel:
@@ -390,28 +379,16 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     def action_show_view(self, view: str) -> None:
         if self._switcher is None:
             return
-        compare = self._compare
+        compare = self.compare_view
         if view != "compare" and compare is not None and compare.stop_comparison():
             self.notify("Comparison stopped: what finished is recorded.", timeout=4)
         if view == "train":
             self._ensure_train()
-        if view == "compare" and compare is None:
-            # Built (and imported) the first time it shows: most runs of the app never open it.
-            from tui_gym.ui.compare_view import CompareView
-
-            compare = self._compare = CompareView(id="compare", db=self.db,
-                                                        kept=self.history_kept)
-            self._switcher.mount(compare)  # it reads the history and takes the focus at mount
-        if view == "plan" and self._plan is None:
-            from tui_gym.ui.plan_view import PlanView
-
-            self._plan = PlanView(id="plan")
-            self._switcher.mount(self._plan)
-        if view == "book" and self._book is None:
-            from tui_gym.ui.book_view import BookView
-
-            self._book = BookView(id="book")
-            self._switcher.mount(self._book)
+        elif view != "play" and view not in self._views:
+            # Built (and imported) the first time it shows: most runs of the app never open
+            # them. The Compare view reads the history and takes the focus at mount.
+            self._views[view] = self._new_view(view)
+            self._switcher.mount(self._views[view])
         self._switcher.current = view
         focused = self.focused
         if focused is not None and self._switcher in focused.ancestors \
@@ -423,7 +400,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         if view == "play":
             self.play_view.focus_board()
         elif view == "compare":
-            assert compare is not None
+            compare = self._views[view]
             if compare.is_mounted:
                 compare.reload(fresh=True)
                 compare.focus_default()
@@ -432,6 +409,20 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         else:
             self._train_shown()
         self.refresh_bindings()  # the view's keys, even when the focus stays put
+
+    def _new_view(self, view: str) -> Any:
+        """The Compare, Plan or Book view."""
+        if view == "compare":
+            from tui_gym.ui.compare_view import CompareView
+
+            return CompareView(id="compare", db=self.db, kept=self.history_kept)
+        if view == "plan":
+            from tui_gym.ui.plan_view import PlanView
+
+            return PlanView(id="plan")
+        from tui_gym.ui.book_view import BookView
+
+        return BookView(id="book")
 
     def _train_shown(self) -> None:
         """The Train view takes the keyboard (once it is mounted, when it is shown before).
@@ -463,8 +454,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self.switch_game(game)
 
     async def action_edit_map(self) -> None:
-        if self.current_view == "plan" and self._plan is not None:
-            self._plan.open_editor()  # it plans on beside the editor
+        if self.current_view == "plan" and (plan := self.plan_view) is not None:
+            plan.open_editor()  # it plans on beside the editor
             return
         self.action_show_view("train")
         view = await self._mounted_train()
@@ -496,12 +487,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         """Give the keyboard back to the view shown (its board, or the heatmap)."""
         if self.current_view == "play":
             self.play_view.focus_board()
-        elif self.current_view == "compare" and self._compare is not None:
-            self._compare.focus_default()
-        elif self.current_view == "plan" and self._plan is not None:
-            self._plan.focus_default()
-        elif self.current_view == "book" and self._book is not None:
-            self._book.focus_default()
+        elif self.current_view in self._views:
+            self._views[self.current_view].focus_default()
         elif (view := self._train_ready()) is not None:
             view.focus_default()  # else it takes the keyboard when it mounts
 
@@ -626,8 +613,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self._last_version = -1
         self.play_view.reload()
         self._reload_train()
-        if self._compare is not None:
-            self._compare.reload()
+        if (compare := self.compare_view) is not None:
+            compare.reload()
         self._reload_plan()
         self.side_panel.reload()
         self.refresh_bindings()  # the keys the game offers (`m` for a map)
@@ -640,17 +627,10 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     def action_request_reset(self) -> None:
         """Reset the agent; when it has trained, only once the person confirms."""
         episodes = self._episodes_trained()
-        if not episodes:
-            self.action_reset_agent()
-            return
-        self.push_screen(
-            _confirm_screen(
-                "Reset the agent?",
-                f"It has trained {plural(episodes, 'episode')}. An empty Q-table and fresh "
-                "statistics replace them (ctrl+s saves it first).",
-                "Reset",
-            ),
-            lambda yes: self.action_reset_agent() if yes else None,
+        self._ask_first(
+            episodes > 0, "Reset the agent?",
+            f"It has trained {plural(episodes, 'episode')}. An empty Q-table and fresh "
+            "statistics replace them (ctrl+s saves it first).", "Reset", self.action_reset_agent,
         )
 
     def action_toggle_training(self) -> None:
@@ -826,21 +806,12 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             episodes = self._episodes_trained()
         else:
             episodes = current.trainer.episodes if current is not None else 0
-        if not episodes:
-            self._install_loaded(session, path)
-            return
-        self.push_screen(
-            _confirm_screen(
-                f"Replace the {game.title} agent?",
-                f"The {game.title} agent here has trained {plural(episodes, 'episode')}; "
-                f"{path.name} replaces it, its settings and its wrappers.",
-                "Load",
-            ),
-            lambda yes: self._install_loaded(session, path) if yes else None,
+        self._ask_first(
+            episodes > 0, f"Replace the {game.title} agent?",
+            f"The {game.title} agent here has trained {plural(episodes, 'episode')}; "
+            f"{path.name} replaces it, its settings and its wrappers.", "Load",
+            lambda: self._when_idle(lambda: self._install_now(session, path)),
         )
-
-    def _install_loaded(self, session: Session, path: Path) -> None:
-        self._when_idle(lambda: self._install_now(session, path))
 
     def _install_now(self, session: Session, path: Path) -> None:
         if session.game is not self.session.game:
@@ -943,34 +914,37 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         if cls.name == self.session.algorithm:
             return
         episodes = self._episodes_trained()
-
-        def switch() -> None:
-            self._when_idle(lambda: self._use_algorithm(cls.name), self.side_panel.reload)
-
-        if not episodes:
-            switch()
-            return
-
-        def answer(yes: bool | None) -> None:
-            if yes:
-                switch()
-            else:
-                self.side_panel.reload()
-                self.notify(f"Still {self.session.learner_class.title}: the agent is kept.",
-                            timeout=3)
-
-        self.push_screen(
-            _confirm_screen(
-                f"Train with {cls.title} instead?",
-                "Another algorithm needs a fresh learner: the agent, trained "
-                f"{plural(episodes, 'episode')} with {self.session.learner_class.title}, "
-                "would start over with "
-                f"{cls.title}'s defaults for this game (ctrl+s saves it first). "
-                "ε, the learning rate and the other fields change without this.",
-                "Switch and reset",
-            ),
-            answer,
+        self._ask_first(
+            episodes > 0, f"Train with {cls.title} instead?",
+            "Another algorithm needs a fresh learner: the agent, trained "
+            f"{plural(episodes, 'episode')} with {self.session.learner_class.title}, "
+            f"would start over with {cls.title}'s defaults for this game (ctrl+s saves it "
+            "first). ε, the learning rate and the other fields change without this.",
+            "Switch and reset",
+            lambda: self._when_idle(lambda: self._use_algorithm(cls.name),
+                                    self.side_panel.reload),
+            kept=f"Still {self.session.learner_class.title}: the agent is kept.",
         )
+
+    def _ask_first(
+        self, asks: bool, title: str, text: str, yes: str, then: Callable[[], object],
+        kept: str = "",
+    ) -> None:
+        """Run `then` at once unless it `asks` (it would lose a trained agent): then only
+        once the person confirms. A no with `kept` puts the side panel back and says it."""
+        if not asks:
+            then()
+            return
+        from tui_gym.ui.confirm_screen import ConfirmScreen
+
+        def answer(confirmed: bool | None) -> None:
+            if confirmed:
+                then()
+            elif kept:
+                self.side_panel.reload()
+                self.notify(kept, timeout=3)
+
+        self.push_screen(ConfirmScreen(title, text, yes), answer)
 
     def _use_algorithm(self, name: str) -> None:
         self.session.set_algorithm(name)
@@ -995,25 +969,12 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             keeps = not episodes or self.session.rebuild_keeps_agent(**change)
         except ValueError:
             keeps = True  # it cannot be built: `rebuild` says why and changes nothing
-        if keeps:
-            self.rebuild(**change)
-            return
-
-        def answer(yes: bool | None) -> None:
-            if yes:
-                self.rebuild(**change)
-            else:
-                self.side_panel.reload()
-                self.notify("Not applied: the agent is kept.", timeout=3)
-
-        self.push_screen(
-            _confirm_screen(
-                "Reset the agent for this change?",
-                "It changes what observations mean, so the agent, trained "
-                f"{plural(episodes, 'episode')}, would start over (ctrl+s saves it first).",
-                "Apply and reset",
-            ),
-            answer,
+        self._ask_first(
+            not keeps, "Reset the agent for this change?",
+            "It changes what observations mean, so the agent, trained "
+            f"{plural(episodes, 'episode')}, would start over (ctrl+s saves it first).",
+            "Apply and reset", lambda: self.rebuild(**change),
+            kept="Not applied: the agent is kept.",
         )
 
     # --- help and the command palette ---------------------------------------
@@ -1112,8 +1073,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
 
     async def action_quit(self) -> None:
         self.recording.turn_off()
-        if self._compare is not None:
-            self._compare.stop_comparison()  # it records what finished while the app ends
+        if (compare := self.compare_view) is not None:
+            compare.stop_comparison()  # it records what finished while the app ends
         self.exit(0)  # the runner closes at unmount, without holding the screen up
 
     def on_unmount(self) -> None:

@@ -1,4 +1,5 @@
-"""The map editor's side of a view that shows it (the Train view, the Plan view)."""
+"""The map editor's side of a view that shows it: `MapEditingView` (the Train view, the
+Plan view), `show_optimum`."""
 
 from __future__ import annotations
 
@@ -6,16 +7,16 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from textual import on
+from textual.containers import Vertical
+
 from tui_gym.core.mdp import NotAvailable
 from tui_gym.ui.widgets.map_editor import MapEditor
 
 if TYPE_CHECKING:
-    from textual.app import App
-
-    from tui_gym.games.maps import GridMap
     from tui_gym.session.session import Session
 
-__all__ = ["apply_edit", "save_map", "show_optimum"]
+__all__ = ["MapEditingView", "show_optimum"]
 
 
 def show_optimum(editor: MapEditor, session: Session, focus: Any) -> None:
@@ -38,33 +39,78 @@ def show_optimum(editor: MapEditor, session: Session, focus: Any) -> None:
     editor.show(grid_map, panels, f"exact optimum {figure}, solved in {took:.0f} ms")
 
 
-def apply_edit(app: App[Any], session: Session, event: MapEditor.Changed) -> bool:
-    """Play the edited map (the app rebuilds the game); False, with the edit taken back in
-    the editor, when it cannot be played."""
-    event.editor.pending = max(0, event.editor.pending - 1)
-    try:
-        kwargs = session.game.with_map(session.env_kwargs, event.grid_map)
-    except ValueError as error:
-        app.notify(str(error), severity="warning", timeout=4)
-        event.editor.drop_last(session.game.grid_map(session.env_kwargs))
-        return False
-    rebuild = getattr(app, "rebuild_map", None)
-    if rebuild is None or not rebuild(kwargs, event.resized):
-        event.editor.drop_last(session.game.grid_map(session.env_kwargs))
-        return False
-    return True
+class MapEditingView(Vertical):
+    """A view that shows the map editor (`-mapping`) over the game it plays: each edit
+    rebuilds the game through the app (`rebuild_map`), `s` saves the map, esc closes it."""
 
+    focus_target: Any = None  # what the optimum's heatmap follows
 
-def save_map(app: App[Any], session: Session, grid_map: GridMap) -> None:
-    """Write `grid_map` as `GAME-map.txt` in the current folder, and say where."""
-    from tui_gym.games.maps import MapError
-    from tui_gym.games.maps.files import write_map_file
+    @property
+    def session(self) -> Session:
+        return self.app.session  # type: ignore[attr-defined, no-any-return]
 
-    game = session.game
-    path = Path.cwd() / f"{game.name}-map.txt"
-    try:
-        write_map_file(path, grid_map, f"{game.title} map, saved by tui-gym")
-    except MapError as error:
-        app.notify(str(error), severity="error")
-        return
-    app.notify(f"Map saved to {path} (play it with --map-file)", timeout=6)
+    @property
+    def editor(self) -> MapEditor | None:
+        """The editor, once it is there."""
+        return self.query_one_optional(MapEditor)
+
+    @property
+    def editing_map(self) -> bool:
+        return self.has_class("-mapping")
+
+    def focus_default(self) -> None:
+        """Give the keyboard to the view's own widget."""
+
+    def can_edit_map(self) -> bool:
+        """Whether the game has a map to edit (else a notice says so)."""
+        game = self.session.game
+        if not game.editable:
+            self.app.notify(f"{game.title} has no map to edit; the grid games do.",
+                            severity="warning", timeout=4)
+        return game.editable
+
+    def close_editor(self) -> None:
+        self.remove_class("-mapping")
+        self.focus_default()
+
+    def show_editor(self) -> None:
+        """Draw the session's map and its exact optimum in the editor."""
+        if self.editor is not None:
+            show_optimum(self.editor, self.session, self.focus_target)
+
+    @on(MapEditor.Changed)
+    def _map_changed(self, event: MapEditor.Changed) -> None:
+        """Play the edited map; when it cannot be played, the edit is taken back."""
+        event.stop()
+        editor, session = event.editor, self.session
+        editor.pending = max(0, editor.pending - 1)
+        try:
+            kwargs = session.game.with_map(session.env_kwargs, event.grid_map)
+        except ValueError as error:
+            self.app.notify(str(error), severity="warning", timeout=4)
+            kwargs = None
+        rebuild = getattr(self.app, "rebuild_map", None)
+        if kwargs is None or rebuild is None or not rebuild(kwargs, event.resized):
+            editor.drop_last(session.game.grid_map(session.env_kwargs))
+            self.show_editor()
+
+    @on(MapEditor.SaveAsked)
+    def _map_save(self, event: MapEditor.SaveAsked) -> None:
+        """Write the map as `GAME-map.txt` in the current folder, and say where."""
+        from tui_gym.games.maps import MapError
+        from tui_gym.games.maps.files import write_map_file
+
+        event.stop()
+        game = self.session.game
+        path = Path.cwd() / f"{game.name}-map.txt"
+        try:
+            write_map_file(path, event.grid_map, f"{game.title} map, saved by tui-gym")
+        except MapError as error:
+            self.app.notify(str(error), severity="error")
+            return
+        self.app.notify(f"Map saved to {path} (play it with --map-file)", timeout=6)
+
+    @on(MapEditor.Closed)
+    def _map_closed(self, event: MapEditor.Closed) -> None:
+        event.stop()
+        self.close_editor()

@@ -19,7 +19,7 @@ from tui_gym.games.model import freeze
 from tui_gym.session.plan.panels import plan_panels
 from tui_gym.session.plan.runner import SPEEDS, PlanRunner, PlanSnapshot
 from tui_gym.session.plan.start import START_POLICIES, start_policy
-from tui_gym.ui.map_editing import apply_edit, save_map, show_optimum
+from tui_gym.ui.map_editing import MapEditingView
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.map_editor import MapEditor
 from tui_gym.ui.widgets.plan_status import PlanStatus
@@ -36,7 +36,7 @@ METHOD_WORDS = {"evaluate": "policy evaluation", "policy-iteration": "policy ite
                 "value-iteration": "value iteration"}
 
 
-class PlanView(Vertical):
+class PlanView(MapEditingView):
     """Policy evaluation, improvement, policy iteration and value iteration, watched."""
 
     class Published(Message):
@@ -91,17 +91,12 @@ class PlanView(Vertical):
         super().__init__(id=id)
         self.runner: PlanRunner | None = None
         self.plan: PlanModel | None = None
-        self.focus_target: Any = None
         self.start = "random"
         self.method = "value-iteration"
         self.numbers = False  # cells show values as numbers instead of actions
         self._key: Any = None  # (game, arguments) the runner plans for
         self._shown_version = -1
         self._reason = ""  # why there is nothing to plan on
-
-    @property
-    def session(self) -> Session:
-        return self.app.session  # type: ignore[attr-defined]
 
     # --- layout --------------------------------------------------------------
     def compose(self) -> ComposeResult:
@@ -430,25 +425,16 @@ class PlanView(Vertical):
             action()
 
     # --- the map editor ------------------------------------------------------------
-    @property
-    def editor(self) -> MapEditor:
-        return self.query_one(MapEditor)
-
-    @property
-    def editing_map(self) -> bool:
-        return self.has_class("-mapping")
-
     def open_editor(self) -> bool:
         """Show the map editor above the values; False when the game has no map."""
-        game = self.session.game
-        if not game.editable:
-            self.app.notify(f"{game.title} has no map to edit; the grid games do.",
-                            severity="warning", timeout=4)
+        editor = self.editor
+        if editor is None or not self.can_edit_map():
             return False
-        self.editor.start(game.grid_map(self.session.env_kwargs), game.map_tools)
+        game = self.session.game
+        editor.start(game.grid_map(self.session.env_kwargs), game.map_tools)
         self.add_class("-mapping")
-        show_optimum(self.editor, self.session, self.focus_target)
-        self.call_after_refresh(self.editor.focus_canvas)
+        self.show_editor()
+        self.call_after_refresh(editor.focus_canvas)
         return True
 
     def _sync_editor(self) -> None:
@@ -457,21 +443,4 @@ class PlanView(Vertical):
         if not self.session.game.editable:
             self.remove_class("-mapping")
             return
-        show_optimum(self.editor, self.session, self.focus_target)
-
-    @on(MapEditor.Changed)
-    def _map_changed(self, event: MapEditor.Changed) -> None:
-        event.stop()
-        if not apply_edit(self.app, self.session, event):
-            show_optimum(self.editor, self.session, self.focus_target)
-
-    @on(MapEditor.SaveAsked)
-    def _map_save(self, event: MapEditor.SaveAsked) -> None:
-        event.stop()
-        save_map(self.app, self.session, event.grid_map)
-
-    @on(MapEditor.Closed)
-    def _map_closed(self, event: MapEditor.Closed) -> None:
-        event.stop()
-        self.remove_class("-mapping")
-        self.focus_default()
+        self.show_editor()

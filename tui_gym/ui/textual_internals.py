@@ -11,13 +11,8 @@ one; the tests run the app so), it leaves Textual to do what it does by itself:
   draws of each widget only the lines an update shows and no widget in front of it
   covers (`main_screen`); a widget asks whether it was in sight in the last frame
   (`in_sight`: its visible widgets; stock: never, so the widget repaints whole);
-- `focus`: on the main screen a focus change repaints only the widgets whose
-  `:focus` styles change, not the whole screen (its `focused` reactive, redefined);
 - `resume`: when the main screen first shows, its widgets keep the styles they
   were mounted with (`Screen._on_screen_resume`);
-- `restyle`: a board or heatmap that gains or loses the focus restyles itself
-  alone, keeping its component styles (`restyle_alone`, through
-  `Widget._get_component_classes`);
 - `crash`: an app that owns its terminal keeps an unexpected error's traceback
   off the screen, for a crash log (`CrashHook`: `App._handle_exception`,
   `App._exit_renderables`);
@@ -46,13 +41,12 @@ from textual.driver import Driver
 from textual.events import ScreenResume
 from textual.geometry import Region, Size
 from textual.message import Message
-from textual.reactive import Reactive
 from textual.screen import Screen
 from textual.strip import Strip
 from textual.widget import Widget
 
 STOCK_ENV = "TUI_GYM_STOCK_TEXTUAL"
-PARTS = ("compositor", "focus", "resume", "restyle", "crash", "ticks", "terminal", "frames")
+PARTS = ("compositor", "resume", "crash", "ticks", "terminal", "frames")
 
 __all__ = [
     "PARTS",
@@ -64,7 +58,6 @@ __all__ = [
     "guarded_driver",
     "in_sight",
     "main_screen",
-    "restyle_alone",
     "terminal_write_failed",
     "ticked_line",
     "watch_frames",
@@ -84,7 +77,7 @@ def _parameters(function: Any) -> list[str]:
         return []
 
 
-# --- the main screen: compositor, focus and first show -----------------------------------
+# --- the main screen: compositor and first show -----------------------------------------
 def _compositor_class() -> type | None:
     """`Compositor` subclassed to keep its layout (None when its shape is not the one known)."""
     try:
@@ -204,22 +197,9 @@ class _ResumingScreen(Screen):
                 event.refresh_styles = False
 
 
-_STOCK_FOCUSED = Screen.__dict__.get("focused")
-
-
-class _QuietFocusScreen(_ResumingScreen):
-    """A screen whose focus changes repaint only the widgets whose `:focus` styles
-    change (their style updates do that), not the whole screen: a view switch moves
-    the focus, and a whole-screen repaint doubled its cost."""
-
-    if isinstance(_STOCK_FOCUSED, Reactive):
-        focused: Reactive[Widget | None] = Reactive(None, repaint=False)
-
-
 def main_screen(**kwargs: Any) -> Screen:
     """The app's main screen, with the parts that are enabled and fit this Textual."""
-    quiet = enabled("focus") and isinstance(_STOCK_FOCUSED, Reactive)
-    screen = (_QuietFocusScreen if quiet else _ResumingScreen)(**kwargs)
+    screen = _ResumingScreen(**kwargs)
     if enabled("compositor") and hasattr(screen, "_compositor"):
         compositor = _kept_layout_compositor()
         if compositor is not None:
@@ -236,25 +216,6 @@ def in_sight(widget: Widget) -> bool:
         return widget in widget.screen._compositor.visible_widgets
     except Exception:  # no screen, or a compositor of another shape
         return False
-
-
-# --- a widget restyled alone --------------------------------------------------------------
-def restyle_alone(widget: Widget) -> None:
-    """Restyle `widget` after its focus changed, keeping its component styles (the
-    colours a board draws with), which no `:focus` rule of ours touches; Textual's
-    own answer restyles it and everything below it, component styles too."""
-    stylesheet = getattr(widget.app, "stylesheet", None)
-    if not enabled("restyle") or not hasattr(widget, "_get_component_classes") or not hasattr(
-        stylesheet, "update_nodes"
-    ):
-        widget.update_node_styles()
-        return
-    # The stylesheet asks the node for its component classes; none means "keep them".
-    widget._get_component_classes = frozenset  # type: ignore[method-assign,assignment]
-    try:
-        stylesheet.update_nodes([widget], animate=True)  # type: ignore[union-attr]
-    finally:
-        del widget._get_component_classes
 
 
 # --- an unexpected error --------------------------------------------------------------------

@@ -41,7 +41,7 @@ from tui_gym.algorithms import ALGORITHMS, Settings
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.engine.trainer import continue_run
 from tui_gym.ui.exact_figures import Figures, LatestOnly, Request, compute, key_wait_of
-from tui_gym.ui.map_editing import apply_edit, save_map, show_optimum
+from tui_gym.ui.map_editing import MapEditingView
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
 from tui_gym.ui.widgets.map_editor import MapEditor
@@ -52,14 +52,13 @@ from tui_gym.ui.widgets.step_panel import StepPanel, explain
 from tui_gym.ui.widgets.training_charts import TrainingCharts
 
 if TYPE_CHECKING:
-    from tui_gym.session.session import Session
     from tui_gym.session.speeds import Runner as TrainingRunner
 
 STATE_POLL_SECONDS = 0.25  # how often the view checks for a pause with no new snapshot
 NO_TRACES_SECONDS = 4.0  # how long `E` says a learner has no traces (once, for a burst)
 
 
-class TrainView(Vertical):
+class TrainView(MapEditingView):
     """Controls, live statistics, learning curves and Q-table heatmaps."""
 
     # Not scoped: the `Screen.compact ...` rules must match from the screen down.
@@ -217,11 +216,7 @@ class TrainView(Vertical):
         self._exact: LatestOnly[Request, Figures] = LatestOnly(self, compute)
         self._figures: Figures | None = None  # the ones shown
 
-    # --- the app and its session ---------------------------------------------
-    @property
-    def session(self) -> Session:
-        return self.app.session  # type: ignore[attr-defined]
-
+    # --- the app and its runner ----------------------------------------------
     @property
     def runner(self) -> TrainingRunner:
         return self.app.runner  # type: ignore[attr-defined]
@@ -295,10 +290,6 @@ class TrainView(Vertical):
         return self._editor
 
     @property
-    def editing_map(self) -> bool:
-        return self.has_class("-mapping")
-
-    @property
     def form(self) -> HyperparameterForm:
         return self._form
 
@@ -350,49 +341,23 @@ class TrainView(Vertical):
                 if self._editor.grid_map is None or self._editor_game != game.name:
                     self._editor.start(game.grid_map(session.env_kwargs), game.map_tools)
                     self._editor_game = game.name
-                self._show_editor()
+                self.show_editor()
 
     # --- the map editor ----------------------------------------------------
     async def open_editor(self) -> bool:
         """Show the map editor with the keyboard on it; False when the game has no map."""
-        game = self.session.game
-        if not game.editable:
-            self.app.notify(f"{game.title} has no map to edit; the grid games do.",
-                            severity="warning", timeout=4)
+        if not self.can_edit_map():
             return False
+        game = self.session.game
         if self._editor is None:
             self._editor = MapEditor(id="train-editor")
             await self.mount(self._editor, before=self._heatmap_box)
         self._editor.start(game.grid_map(self.session.env_kwargs), game.map_tools)
         self._editor_game = game.name
         self.add_class("-mapping")
-        self._show_editor()
+        self.show_editor()
         self._editor.focus_canvas()  # at once: the keys typed after `m` go to the map
         return True
-
-    def close_editor(self) -> None:
-        self.remove_class("-mapping")
-        self.focus_default()
-
-    def _show_editor(self) -> None:
-        if self._editor is not None:
-            show_optimum(self._editor, self.session, self.focus_target)
-
-    @on(MapEditor.Changed)
-    def _map_changed(self, event: MapEditor.Changed) -> None:
-        event.stop()
-        if not apply_edit(self.app, self.session, event):
-            self._show_editor()
-
-    @on(MapEditor.SaveAsked)
-    def _map_save(self, event: MapEditor.SaveAsked) -> None:
-        event.stop()
-        save_map(self.app, self.session, event.grid_map)
-
-    @on(MapEditor.Closed)
-    def _map_closed(self, event: MapEditor.Closed) -> None:
-        event.stop()
-        self.close_editor()
 
     @property
     def shown_version(self) -> int:

@@ -25,10 +25,10 @@ from tui_gym.core.experiments.history import (
     BestEffortHistory,
     DamagedRun,
     RunHistory,
+    RunRecorder,
     RunRows,
 )
 from tui_gym.core.experiments.paths import resolve_db_path
-from tui_gym.core.experiments.recorder import RunRecorder
 from tui_gym.core.experiments.records import (
     Curve,
     RunKind,

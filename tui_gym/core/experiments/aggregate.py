@@ -1,17 +1,18 @@
-"""Curves from several seeds, as one: the mean per episode and its 95% confidence band."""
+"""Curves: several seeds' as one (the mean per episode and its 95% Student-t band, with the
+t distribution computed here, without scipy), and a long curve bounded to fewer points."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
+from statistics import NormalDist
 from typing import Any
 
 import numpy as np
 
-from tui_gym.core.experiments.downsample import pick_indices
 from tui_gym.core.experiments.figures import Figure
 from tui_gym.core.experiments.records import Curve
-from tui_gym.core.experiments.student_t import t_quantile
 
 CONFIDENCE = 0.95
 LAST_FRACTION = 0.1
@@ -169,3 +170,230 @@ def mean_return_last(curves: np.ndarray | list[Any], fraction: float = LAST_FRAC
     data = _as_seed_rows(curves)
     last = max(1, math.ceil(data.shape[1] * fraction - 1e-9))
     return mean_with_ci(data[:, -last:].mean(axis=1))
+
+
+_MAX_ITERATIONS = 500
+_EPS = 1e-15
+_TINY = 1e-300
+# Beyond this many degrees of freedom the Cornish-Fisher series (error of order
+# df**-5) is exact to rounding, and the continued fraction converges slowly.
+_SERIES_DF = 1000.0
+
+
+def _beta_continued_fraction(a: float, b: float, x: float) -> float:
+    # Lentz's method for the continued fraction of the incomplete beta function.
+    qab, qap, qam = a + b, a + 1.0, a - 1.0
+    c = 1.0
+    d = 1.0 - qab * x / qap
+    d = 1.0 / (d if abs(d) > _TINY else _TINY)
+    h = d
+    for m in range(1, _MAX_ITERATIONS + 1):
+        m2 = 2 * m
+        aa = m * (b - m) * x / ((qam + m2) * (a + m2))
+        d = 1.0 + aa * d
+        d = 1.0 / (d if abs(d) > _TINY else _TINY)
+        c = 1.0 + aa / c
+        c = c if abs(c) > _TINY else _TINY
+        h *= d * c
+        aa = -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2))
+        d = 1.0 + aa * d
+        d = 1.0 / (d if abs(d) > _TINY else _TINY)
+        c = 1.0 + aa / c
+        c = c if abs(c) > _TINY else _TINY
+        step = d * c
+        h *= step
+        if abs(step - 1.0) < _EPS:
+            break
+    return h
+
+
+def regularized_beta(a: float, b: float, x: float) -> float:
+    """I_x(a, b), the regularized incomplete beta function, for a, b > 0 and 0 <= x <= 1."""
+    if x <= 0.0:
+        return 0.0
+    if x >= 1.0:
+        return 1.0
+    log_front = (
+        math.lgamma(a + b) - math.lgamma(a) - math.lgamma(b) + a * math.log(x) + b * math.log1p(-x)
+    )
+    if x < (a + 1.0) / (a + b + 2.0):
+        return math.exp(log_front) * _beta_continued_fraction(a, b, x) / a
+    return 1.0 - math.exp(log_front) * _beta_continued_fraction(b, a, 1.0 - x) / b
+
+
+def _check_df(df: float) -> None:
+    if not df > 0 or math.isnan(df):
+        raise ValueError(f"degrees of freedom must be > 0, got {df}")
+
+
+def t_cdf(t: float, df: float) -> float:
+    """P(T <= t) for Student's t with `df` degrees of freedom."""
+    _check_df(df)
+    if math.isinf(t):
+        return 1.0 if t > 0 else 0.0
+    tail = 0.5 * regularized_beta(df / 2.0, 0.5, df / (df + t * t))  # P(T > |t|)
+    return 1.0 - tail if t >= 0 else tail
+
+
+def t_pdf(t: float, df: float) -> float:
+    """The density of Student's t with `df` degrees of freedom at `t`."""
+    _check_df(df)
+    log_norm = math.lgamma((df + 1) / 2) - math.lgamma(df / 2) - 0.5 * math.log(df * math.pi)
+    return math.exp(log_norm - (df + 1) / 2 * math.log1p(t * t / df))
+
+
+def _cornish_fisher(z: float, df: float) -> float:
+    # Abramowitz & Stegun 26.7.5: the t quantile as a series in 1/df around z.
+    z2 = z * z
+    g1 = (z2 + 1) * z / 4
+    g2 = ((5 * z2 + 16) * z2 + 3) * z / 96
+    g3 = (((3 * z2 + 19) * z2 + 17) * z2 - 15) * z / 384
+    g4 = ((((79 * z2 + 776) * z2 + 1482) * z2 - 1920) * z2 - 945) * z / 92160
+    return z + g1 / df + g2 / df**2 + g3 / df**3 + g4 / df**4
+
+
+@lru_cache(maxsize=256)  # the same few (p, df) come back for every curve point
+def t_quantile(p: float, df: float) -> float:
+    """The t with P(T <= t) = p, for Student's t with `df` degrees of freedom (0 < p < 1)."""
+    _check_df(df)
+    if not 0.0 < p < 1.0:
+        raise ValueError(f"a quantile needs 0 < p < 1, got {p}")
+    if p < 0.5:
+        return -t_quantile(1.0 - p, df)
+    if p == 0.5:
+        return 0.0
+    if df == 1:
+        return math.tan(math.pi * (p - 0.5))
+    if df == 2:
+        return (2 * p - 1) / math.sqrt(2 * p * (1 - p))
+    guess = _cornish_fisher(NormalDist().inv_cdf(p), df)
+    if df > _SERIES_DF:
+        return guess
+    # Bracket the root in [lo, hi], then Newton steps that fall back to bisection
+    # whenever they would leave the bracket (the series can overshoot for small df).
+    lo, hi = 0.0, max(guess, 1.0)
+    while t_cdf(hi, df) < p:
+        lo, hi = hi, hi * 2.0
+    t = min(max(guess, lo), hi)
+    for _ in range(200):
+        error = t_cdf(t, df) - p
+        if error > 0:
+            hi = t
+        else:
+            lo = t
+        density = t_pdf(t, df)
+        step = error / density if density > 0 else math.inf
+        candidate = t - step
+        if not lo < candidate < hi:
+            candidate = (lo + hi) / 2.0
+        if abs(candidate - t) <= 1e-13 * max(1.0, abs(t)):
+            return candidate
+        t = candidate
+    return t
+
+
+def _check_points(max_points: int) -> None:
+    if max_points < 2:
+        raise ValueError(f"a bounded curve keeps at least 2 points, got max_points={max_points}")
+
+
+def pick_indices(n: int, max_points: int) -> np.ndarray:
+    """At most `max_points` evenly spaced indices into n points, including 0 and n - 1."""
+    _check_points(max_points)
+    if n <= max_points:
+        return np.arange(n)
+    # The spacing is above 1, so the rounded positions are all distinct.
+    return np.rint(np.linspace(0, n - 1, max_points)).astype(np.int64)
+
+
+def bucket_means(
+    episodes: np.ndarray, values: np.ndarray, max_points: int, weights: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Consecutive points averaged into at most `max_points` buckets of near-equal size.
+
+    Each bucket is labelled with its last episode; `weights` (how many episodes
+    each point already stands for) make the means exact for points that are
+    themselves bucket means. NaN values are left out of a bucket's mean.
+    """
+    _check_points(max_points)
+    episodes = np.asarray(episodes, dtype=np.int64)
+    values = np.asarray(values, dtype=np.float64)
+    n = len(values)
+    if n <= max_points:
+        return episodes.copy(), values.copy()
+    w = np.ones(n) if weights is None else np.asarray(weights, dtype=np.float64)
+    starts = (np.arange(max_points) * n) // max_points
+    ends = np.append(starts[1:], n) - 1
+    present = ~np.isnan(values)
+    weighted = np.where(present, values * w, 0.0)
+    totals = np.add.reduceat(weighted, starts)
+    counts = np.add.reduceat(np.where(present, w, 0.0), starts)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        means = np.where(counts > 0, totals / counts, np.nan)
+    return episodes[ends], means
+
+
+class CurveAccumulator:
+    """Per-episode values of a run of any length, as at most `capacity` bucket means."""
+
+    def __init__(self, capacity: int = 512, first_episode: int = 1) -> None:
+        if capacity < 2 or capacity % 2:
+            raise ValueError(f"capacity must be an even number >= 2, got {capacity}")
+        self.capacity = capacity
+        self.first_episode = first_episode
+        self.span = 1  # episodes in each full bucket
+        self.count = 0  # episodes seen
+        self._means: list[float] = []
+        self._tail_sum = 0.0
+        self._tail_n = 0
+
+    def append(self, value: float) -> None:
+        self.extend(np.array([value], dtype=np.float64))
+
+    def extend(self, values: np.ndarray) -> None:
+        """Add the values of the next episodes, in order."""
+        values = np.asarray(values, dtype=np.float64).ravel()
+        i, k = 0, len(values)
+        self.count += k
+        while i < k:
+            need = self.span - self._tail_n
+            take = min(need, k - i)
+            if self._tail_n or take < self.span:
+                self._tail_sum += float(values[i : i + take].sum())
+                self._tail_n += take
+                i += take
+                if self._tail_n < self.span:
+                    return
+                self._close(self._tail_sum / self.span)
+                self._tail_sum, self._tail_n = 0.0, 0
+                continue
+            whole = min((k - i) // self.span, self.capacity - len(self._means))
+            block = values[i : i + whole * self.span].reshape(whole, self.span)
+            self._means.extend(block.mean(axis=1).tolist())
+            i += whole * self.span
+            self._merge_if_full()
+
+    def _close(self, mean: float) -> None:
+        self._means.append(mean)
+        self._merge_if_full()
+
+    def _merge_if_full(self) -> None:
+        if len(self._means) >= self.capacity:
+            pairs = np.asarray(self._means).reshape(-1, 2)
+            self._means = pairs.mean(axis=1).tolist()
+            self.span *= 2
+
+    def curve(self, max_points: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(episodes, values): the bucket means so far, the unfinished bucket last, each
+        labelled with its last episode; re-bucketed to at most `max_points` if given."""
+        full = len(self._means)
+        episodes = self.first_episode - 1 + self.span * np.arange(1, full + 1, dtype=np.int64)
+        values = np.asarray(self._means, dtype=np.float64)
+        weights = np.full(full, float(self.span))
+        if self._tail_n:
+            episodes = np.append(episodes, self.first_episode + self.count - 1)
+            values = np.append(values, self._tail_sum / self._tail_n)
+            weights = np.append(weights, float(self._tail_n))
+        if max_points is not None:
+            return bucket_means(episodes, values, max_points, weights)
+        return episodes, values

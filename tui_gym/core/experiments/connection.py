@@ -1,14 +1,20 @@
-"""The one SQLite connection a process keeps to a run history file: `open_shared`, `Connection`."""
+"""The one SQLite connection a process keeps to a run history file (`open_shared`,
+`Connection`), and the file's schema: migrations applied in order, the version in
+`PRAGMA user_version`; which process records a run, and whether it is still there
+(`current_writer`, `WriterCheck`)."""
 
 from __future__ import annotations
 
 import contextlib
 import os
+import socket
 import sqlite3
 import stat
 import threading
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from functools import cache
 from pathlib import Path
 from typing import TypeVar
 
@@ -19,13 +25,113 @@ from tui_gym.core.experiments.errors import (
     RunHistoryBusyError,
     RunHistoryError,
 )
-from tui_gym.core.experiments.schema import APPLICATION_ID, Migration, migrate
+from tui_gym.core.files import pid_alive
 from tui_gym.core.text import visible
 
 T = TypeVar("T")
 
 SIDE_FILES = ("-wal", "-shm", "-journal")
 _READ_ONLY = frozenset({"SQLITE_READONLY", "SQLITE_CANTOPEN", "SQLITE_PERM", "SQLITE_AUTH"})
+
+APPLICATION_ID = 0x54475944  # "TGYD": marks a tui-gym run history
+
+
+@dataclass(frozen=True)
+class Migration:
+    """The step to schema version `version` (from version - 1)."""
+
+    version: int
+    description: str
+    apply: Callable[[sqlite3.Connection], None]
+
+
+def _statements(*sql: str) -> Callable[[sqlite3.Connection], None]:
+    def apply(conn: sqlite3.Connection) -> None:
+        for statement in sql:
+            conn.execute(statement)
+
+    return apply
+
+
+_V1 = _statements(
+    """CREATE TABLE platforms (
+        id INTEGER PRIMARY KEY,
+        tui_gym TEXT NOT NULL,
+        gymnasium TEXT NOT NULL,
+        numpy TEXT NOT NULL,
+        python TEXT NOT NULL,
+        UNIQUE (tui_gym, gymnasium, numpy, python)
+    )""",
+    """CREATE TABLE settings (
+        id INTEGER PRIMARY KEY,
+        game TEXT NOT NULL,
+        game_params TEXT NOT NULL,
+        wrappers TEXT NOT NULL,
+        algorithm TEXT NOT NULL,
+        hyperparameters TEXT NOT NULL,
+        UNIQUE (game, game_params, wrappers, algorithm, hyperparameters)
+    )""",
+    # AUTOINCREMENT: a removed run's id is never given to a later run.
+    """CREATE TABLE runs (
+        id INTEGER PRIMARY KEY AUTOINCREMENT,
+        kind TEXT NOT NULL,
+        settings_id INTEGER NOT NULL REFERENCES settings(id),
+        platform_id INTEGER NOT NULL REFERENCES platforms(id),
+        seeds TEXT NOT NULL,
+        status TEXT NOT NULL,
+        started_at REAL NOT NULL,
+        ended_at REAL,
+        agent_path TEXT,
+        group_id INTEGER,
+        figures TEXT NOT NULL DEFAULT '[]'
+    )""",
+    """CREATE TABLE curves (
+        run_id INTEGER PRIMARY KEY REFERENCES runs(id) ON DELETE CASCADE,
+        data BLOB NOT NULL
+    )""",
+)
+
+_V2 = _statements(
+    "ALTER TABLE runs ADD COLUMN writer TEXT",
+    "CREATE INDEX runs_by_start ON runs (started_at, id)",
+)
+
+_V3 = _statements(
+    """CREATE TABLE tasks (
+        run_id INTEGER NOT NULL REFERENCES runs(id) ON DELETE CASCADE,
+        first_row INTEGER NOT NULL,
+        inputs TEXT NOT NULL,
+        returns BLOB NOT NULL,
+        exact BLOB,
+        finished_at REAL NOT NULL,
+        PRIMARY KEY (run_id, first_row)
+    )""",
+)
+
+MIGRATIONS: tuple[Migration, ...] = (
+    Migration(1, "runs, their settings and curves", _V1),
+    Migration(2, "the process writing each run; runs indexed by start", _V2),
+    Migration(3, "each finished task of a run, with its inputs", _V3),
+)
+
+
+def check_migrations(migrations: Sequence[Migration]) -> int:
+    """The version `migrations` lead to; ValueError unless they are numbered 1, 2, ... in order."""
+    for expected, migration in enumerate(migrations, start=1):
+        if migration.version != expected:
+            raise ValueError(f"migration {migration.version} is out of order (expected {expected})")
+    return len(migrations)
+
+
+def migrate(conn: sqlite3.Connection, current: int, migrations: Sequence[Migration]) -> int:
+    """Apply the migrations after version `current` (inside the caller's transaction)."""
+    latest = check_migrations(migrations)
+    for migration in migrations[current:]:
+        migration.apply(conn)
+    if current < latest:
+        conn.execute(f"PRAGMA user_version = {latest:d}")
+        conn.execute(f"PRAGMA application_id = {APPLICATION_ID:d}")
+    return latest
 
 
 def shown(path: str | Path) -> str:
@@ -311,3 +417,66 @@ def _tidy(real: Path, before: set[str]) -> None:
     for suffix in made:
         with contextlib.suppress(OSError):
             os.unlink(f"{real}{suffix}")
+
+
+_PROC = "/proc"
+
+
+def _read(path: str) -> str:
+    try:
+        with open(path, encoding="ascii", errors="replace") as fh:
+            return fh.read(4096)
+    except OSError:
+        return ""
+
+
+def _start_ticks(pid: int) -> str:
+    """A process's start time in clock ticks since boot ("" where /proc has none)."""
+    stat = _read(f"{_PROC}/{pid}/stat")
+    # The command name (field 2) may hold spaces and parentheses: count after the last ")".
+    fields = stat.rpartition(")")[2].split()
+    return fields[19] if len(fields) > 19 else ""
+
+
+@cache
+def _boot() -> str:
+    return _read(f"{_PROC}/sys/kernel/random/boot_id").strip()
+
+
+def _host() -> str:
+    return socket.gethostname()
+
+
+def current_writer() -> str:
+    """This process's mark: "host boot pid start" (boot and start empty where unknown)."""
+    pid = os.getpid()
+    return f"{_host()} {_boot()} {pid} {_start_ticks(pid)}"
+
+
+class WriterCheck:
+    """Tells whether the writer of a run is gone; remembers each answer for one listing."""
+
+    def __init__(self) -> None:
+        self._host = _host()
+        self._boot = _boot()
+        self._answers: dict[str, bool] = {}
+
+    def gone(self, mark: object) -> bool:
+        """Whether the process that wrote `mark` has ended (False when it cannot be told)."""
+        if not isinstance(mark, str) or not mark:
+            return False
+        known = self._answers.get(mark)
+        if known is None:
+            known = self._answers[mark] = self._gone(mark)
+        return known
+
+    def _gone(self, mark: str) -> bool:
+        parts = mark.split(" ")
+        if len(parts) != 4 or parts[0] != self._host or not parts[2].isdigit():
+            return False
+        boot, pid, start = parts[1], int(parts[2]), parts[3]
+        if boot and self._boot and boot != self._boot:
+            return True  # written before the machine restarted
+        if not pid_alive(pid):
+            return True
+        return bool(start) and _start_ticks(pid) not in ("", start)

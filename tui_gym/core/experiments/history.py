@@ -1,4 +1,5 @@
-"""The run history: every run recorded in one SQLite file that any number of processes share."""
+"""The run history: every run recorded in one SQLite file that any number of processes share
+(`RunHistory`), and one run being recorded into it (`RunRecorder`)."""
 
 from __future__ import annotations
 
@@ -9,24 +10,36 @@ from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from types import TracebackType
 from typing import Any, TypeVar
 
+import numpy as np
+
 import tui_gym.core.experiments.rows as rows
+from tui_gym.core.experiments.aggregate import CurveAccumulator, bucket_means
+from tui_gym.core.experiments.codec import (
+    BadTask,
+    CurveFormatError,
+    decode,
+    decode_rows,
+    encode,
+    encode_curve,
+    pack_curves,
+    unpack_curves,
+)
 from tui_gym.core.experiments.connection import (
+    MIGRATIONS,
+    Migration,
+    WriterCheck,
     busy_error,
+    check_migrations,
+    current_writer,
     damaged,
     is_damage,
     open_shared,
     release,
     shown,
 )
-from tui_gym.core.experiments.curve_codec import (
-    CurveFormatError,
-    encode_curve,
-    pack_curves,
-    unpack_curves,
-)
-from tui_gym.core.experiments.downsample import bucket_means
 from tui_gym.core.experiments.errors import DamagedRunError, RunHistoryError, UnknownRunError
 from tui_gym.core.experiments.figures import Figure
 from tui_gym.core.experiments.records import (
@@ -36,12 +49,10 @@ from tui_gym.core.experiments.records import (
     RunSpec,
     RunStatus,
     RunSummary,
+    TaskRecord,
     Versions,
     to_json_text,
 )
-from tui_gym.core.experiments.schema import MIGRATIONS, Migration, check_migrations
-from tui_gym.core.experiments.tasks import BadTask, TaskRecord, decode, decode_rows, encode
-from tui_gym.core.experiments.writers import WriterCheck, current_writer
 
 # Points kept per stored curve: about a terminal chart's width, and few enough that a
 # thousand runs with a few curves each stay within the history's size budget.
@@ -112,18 +123,18 @@ class RunHistory:
 
     def _write(self, write: Callable[[sqlite3.Connection], T]) -> T:
         """`write(conn)` in one write transaction, taken as soon as no one else holds it."""
-        if self._closed:
-            raise RunHistoryError(f"{shown(self.path)}: this history was closed")
-        with self._errors():
-            return self._shared.attempt(write, self.timeout, busy_error(self.path, self.timeout),
-                                        begin="BEGIN IMMEDIATE")
+        return self._attempt(write, "BEGIN IMMEDIATE")
 
     def _read(self, read: Callable[[sqlite3.Connection], T]) -> T:
         """`read(conn)` in one read transaction (one state of the file)."""
+        return self._attempt(read, "BEGIN")
+
+    def _attempt(self, action: Callable[[sqlite3.Connection], T], begin: str | None) -> T:
         if self._closed:
             raise RunHistoryError(f"{shown(self.path)}: this history was closed")
         with self._errors():
-            return self._shared.attempt(read, self.timeout, busy_error(self.path, self.timeout))
+            return self._shared.attempt(action, self.timeout, busy_error(self.path, self.timeout),
+                                        begin=begin)
 
     def _require_run(self, conn: sqlite3.Connection, run_id: int) -> None:
         if conn.execute("SELECT 1 FROM runs WHERE id = ?", (run_id,)).fetchone() is None:
@@ -156,14 +167,10 @@ class RunHistory:
         writer = current_writer()
 
         def write(conn: sqlite3.Connection) -> int:
-            cursor = conn.execute(
-                "INSERT INTO runs (kind, settings_id, platform_id, seeds, status, started_at,"
-                " group_id, writer) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
-                (str(spec.kind), _settings_id(conn, settings), _platform_id(conn, platform),
-                 seeds, str(RunStatus.RUNNING), started, spec.group, writer),
-            )
-            assert cursor.lastrowid is not None
-            return cursor.lastrowid
+            return _insert_run(conn, kind=str(spec.kind), settings_id=_settings_id(conn, settings),
+                               platform_id=_platform_id(conn, platform), seeds=seeds,
+                               status=str(RunStatus.RUNNING), started_at=started,
+                               group_id=spec.group, writer=writer)
 
         return self._write(write)
 
@@ -198,6 +205,7 @@ class RunHistory:
                     "INSERT OR REPLACE INTO curves (run_id, data) VALUES (?, ?)",
                     (run_id, pack_curves(dict(sorted(stored.items())))),
                 )
+            sets: dict[str, Any] = {}
             if figure_rows:
                 row = conn.execute("SELECT figures FROM runs WHERE id = ?", (run_id,)).fetchone()
                 try:
@@ -205,53 +213,23 @@ class RunHistory:
                 except rows.BadRow as exc:
                     raise self._damaged_run(run_id, str(exc)) from None
                 merged.update((f.name, f) for f in figure_rows)  # a known name keeps its place
-                conn.execute(
-                    "UPDATE runs SET figures = ? WHERE id = ?",
-                    (_figures_to_json(merged.values()), run_id),
-                )
+                sets["figures"] = _figures_to_json(merged.values())
             if settings is not None:
                 old = conn.execute("SELECT settings_id FROM runs WHERE id = ?", (run_id,))
                 old_id = old.fetchone()[0]
-                conn.execute("UPDATE runs SET settings_id = ? WHERE id = ?",
-                             (_settings_id(conn, settings), run_id))
-                _drop_unused(conn, "settings", "settings_id", old_id)
+                sets["settings_id"] = _settings_id(conn, settings)
             if agent_path is not None:
-                conn.execute(
-                    "UPDATE runs SET agent_path = ? WHERE id = ?", (str(agent_path), run_id)
-                )
+                sets["agent_path"] = str(agent_path)
             if final is not None:
-                conn.execute(
-                    "UPDATE runs SET status = ?, ended_at = ? WHERE id = ?",
-                    (str(final), ended, run_id),
-                )
+                sets.update(status=str(final), ended_at=ended)
+            if sets:
+                assignments = ", ".join(f"{name} = ?" for name in sets)
+                conn.execute(f"UPDATE runs SET {assignments} WHERE id = ?",
+                             (*sets.values(), run_id))
+            if settings is not None:
+                _drop_unused(conn, "settings", "settings_id", old_id)
 
         self._write(write)
-
-    def put_curves(
-        self, run_id: int, curves: Iterable[Curve], max_points: int = STORED_POINTS
-    ) -> None:
-        """Add or replace curves of a run, each kept to at most `max_points` bucket means."""
-        self.update(run_id, curves=curves, max_points=max_points)
-
-    def put_figures(self, run_id: int, figures: Iterable[Figure]) -> None:
-        """Add figures to a run, or replace those with the same name (keeping their place)."""
-        self.update(run_id, figures=figures)
-
-    def set_agent_path(self, run_id: int, path: str | Path | None) -> None:
-        """Where the run's agent was saved (None: it has none)."""
-
-        def write(conn: sqlite3.Connection) -> None:
-            self._require_run(conn, run_id)
-            value = None if path is None else str(path)
-            conn.execute("UPDATE runs SET agent_path = ? WHERE id = ?", (value, run_id))
-
-        self._write(write)
-
-    def finish(
-        self, run_id: int, status: RunStatus = RunStatus.FINISHED, ended_at: float | None = None
-    ) -> None:
-        """Mark a run finished, interrupted or failed, now or at `ended_at`."""
-        self.update(run_id, status=status, ended_at=ended_at)
 
     def put_task(self, run_id: int, task: TaskRecord, finished_at: float | None = None) -> bool:
         """Keep a finished task of a run, in a transaction of its own; False (and nothing
@@ -302,9 +280,7 @@ class RunHistory:
 
         pruned = self._write(write)
         if pruned[1]:
-            with self._errors():
-                self._shared.attempt(lambda conn: conn.execute("VACUUM"), self.timeout,
-                                     busy_error(self.path, self.timeout), begin=None)
+            self._attempt(lambda conn: conn.execute("VACUUM"), begin=None)
         return pruned
 
     def group_ids(self, run_id: int) -> list[int]:
@@ -345,15 +321,13 @@ class RunHistory:
         })
 
         def write(conn: sqlite3.Connection) -> None:
-            conn.execute(
-                "INSERT INTO runs (id, kind, settings_id, platform_id, seeds, status, started_at,"
-                " ended_at, agent_path, group_id, figures, writer)"
-                " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
-                (run.id, str(run.kind), _settings_id(conn, settings),
-                 _platform_id(conn, platform), to_json_text(list(run.seeds), "the seeds"),
-                 str(run.status), run.started_at, run.ended_at, record.agent_path, run.group,
-                 _figures_to_json(run.figures), writer),
-            )
+            _insert_run(conn, id=run.id, kind=str(run.kind),
+                        settings_id=_settings_id(conn, settings),
+                        platform_id=_platform_id(conn, platform),
+                        seeds=to_json_text(list(run.seeds), "the seeds"), status=str(run.status),
+                        started_at=run.started_at, ended_at=run.ended_at,
+                        agent_path=record.agent_path, group_id=run.group,
+                        figures=_figures_to_json(run.figures), writer=writer)
             if record.curves:
                 conn.execute("INSERT INTO curves (run_id, data) VALUES (?, ?)", (run.id, blob))
 
@@ -463,6 +437,14 @@ class BestEffortHistory(RunHistory):
         return None  # type: ignore[return-value]
 
 
+def _insert_run(conn: sqlite3.Connection, **row: Any) -> int:
+    """Insert a run whose fields are `row`; its id."""
+    names, marks = ", ".join(row), ", ".join("?" * len(row))
+    cursor = conn.execute(f"INSERT INTO runs ({names}) VALUES ({marks})", tuple(row.values()))
+    assert cursor.lastrowid is not None
+    return cursor.lastrowid
+
+
 def _where(game: str | None, kind: RunKind | str | None) -> tuple[str, list[Any]]:
     clauses, args = [], []
     if game is not None:
@@ -524,3 +506,79 @@ def _figures_to_json(figures: Iterable[Figure]) -> str:
         [[f.name, f.value if math.isfinite(f.value) else None, f.unit, f.ci95] for f in figures],
         "the figures",
     )
+
+
+
+class RunRecorder:
+    """Records one run into a `RunHistory`; `run_id` is its id there."""
+
+    def __init__(
+        self, history: RunHistory, spec: RunSpec, *, max_points: int = STORED_POINTS,
+        first_episode: int = 1,
+    ) -> None:
+        self.history = history
+        self.max_points = max_points
+        self.first_episode = first_episode
+        self.run_id = history.start_run(spec)
+        self.status = RunStatus.RUNNING
+        self._accumulators: dict[str, CurveAccumulator] = {}
+        self._curves: dict[str, Curve] = {}
+        self._figures: dict[str, Figure] = {}
+        self._agent_path: str | None = None
+
+    def extend(self, name: str, values: np.ndarray | Iterable[float]) -> None:
+        """Append the values of the next episodes to the per-episode curve `name`."""
+        accumulator = self._accumulators.get(name)
+        if accumulator is None:
+            # Twice the stored points, so the stored curve is re-bucketed from finer buckets.
+            accumulator = CurveAccumulator(2 * self.max_points, self.first_episode)
+            self._accumulators[name] = accumulator
+        accumulator.extend(np.asarray(values if isinstance(values, np.ndarray) else list(values)))
+
+    def put_curve(self, curve: Curve) -> None:
+        """A whole curve (say, values at checkpoints), replacing any of the same name."""
+        self._curves[curve.name] = curve
+
+    def add_figures(self, *figures: Figure) -> None:
+        """Final figures, replacing any of the same name."""
+        for figure in figures:
+            self._figures[figure.name] = figure
+
+    def set_agent_path(self, path: str | Path) -> None:
+        """Where the run's agent was saved."""
+        self._agent_path = str(path)
+
+    def _pending_curves(self) -> list[Curve]:
+        curves = dict(self._curves)
+        for name, accumulator in self._accumulators.items():
+            if accumulator.count:
+                curves[name] = Curve(name, *accumulator.curve(self.max_points))
+        return list(curves.values())
+
+    def flush(self, status: RunStatus | None = None) -> None:
+        """Write what the run has so far (and `status`, if given) in one transaction."""
+        self.history.update(
+            self.run_id, curves=self._pending_curves(), figures=list(self._figures.values()),
+            agent_path=self._agent_path, status=status, max_points=self.max_points,
+        )
+
+    def finish(self, status: RunStatus = RunStatus.FINISHED) -> None:
+        """Write everything with the run's final status."""
+        self.flush(status)
+        self.status = RunStatus(status)
+
+    def __enter__(self) -> RunRecorder:
+        return self
+
+    def __exit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        if self.status is not RunStatus.RUNNING:
+            return
+        if exc_type is None:
+            self.finish(RunStatus.FINISHED)
+        elif issubclass(exc_type, KeyboardInterrupt):
+            self.finish(RunStatus.INTERRUPTED)
+        else:
+            self.finish(RunStatus.FAILED)

@@ -239,3 +239,26 @@ class RunRecord:
         else:
             data["curves"] = [c.name for c in self.curves]
         return data
+
+
+@dataclass(frozen=True, eq=False)
+class TaskRecord:
+    """A finished task: seeds `seeds` (rows `rows` of the run's seed list), `episodes`
+    each; `returns[i, e]` seed i's online return in episode e; `exact[i, j]` its greedy
+    policy's exact value at checkpoint j, a prediction learner's RMS error of V (None
+    without a model)."""
+
+    rows: tuple[int, ...]
+    seeds: tuple[int, ...]
+    episodes: int
+    returns: np.ndarray
+    exact: np.ndarray | None = None
+    algorithm: str = ""
+    hyperparameters: Mapping[str, Any] = field(default_factory=dict)
+
+    def inputs(self) -> dict[str, Any]:
+        return {
+            "rows": list(self.rows), "seeds": list(self.seeds), "episodes": self.episodes,
+            "checkpoints": None if self.exact is None else int(self.exact.shape[1]),
+            "algorithm": self.algorithm, "hyperparameters": dict(self.hyperparameters),
+        }

@@ -11,12 +11,11 @@ from pathlib import Path
 from typing import Any
 
 import tui_gym.core.experiments.rows as rows
-from tui_gym.core.experiments.connection import examine, shown
+from tui_gym.core.experiments.codec import BadTask, decode
+from tui_gym.core.experiments.connection import WriterCheck, examine, shown
 from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.history import RunHistory
-from tui_gym.core.experiments.records import RunStatus
-from tui_gym.core.experiments.tasks import BadTask, TaskRecord, decode
-from tui_gym.core.experiments.writers import WriterCheck
+from tui_gym.core.experiments.records import RunStatus, TaskRecord
 from tui_gym.core.text import visible
 
 PROBE_BEYOND = 100_000  # ids asked for one by one past the last one a damaged scan found
@@ -110,66 +109,49 @@ def _run_ids(conn: sqlite3.Connection) -> Iterator[int]:
     yield from sorted(found | set(range(1, last + 1)))
 
 
-def _run_columns(conn: sqlite3.Connection) -> str:
-    """The runs table's fields as `_one` reads them; null for those an older schema lacks."""
+def _run_fields(conn: sqlite3.Connection) -> set[str]:
+    """The runs table's columns (an older schema lacks some)."""
     try:
-        have = {row[1] for row in conn.execute("PRAGMA table_info(runs)")}
+        return {row[1] for row in conn.execute("PRAGMA table_info(runs)")}
     except sqlite3.Error:
-        have = set()
-
-    def field(name: str, read: str) -> str:
-        return read if name in have else "NULL"
-
-    return ", ".join((
-        "id", field("kind", rows.text_column("kind", rows.MAX_NAME)),
-        field("settings_id", "settings_id"), field("platform_id", "platform_id"),
-        field("seeds", rows.text_column("seeds", rows.MAX_SEEDS_JSON)),
-        field("status", rows.text_column("status", rows.MAX_NAME)),
-        field("started_at", rows.number_column("started_at")),
-        field("ended_at", rows.number_column("ended_at")),
-        field("group_id", rows.number_column("group_id")),
-        field("figures", rows.text_column("figures", rows.MAX_JSON)),
-        field("writer", rows.text_column("writer", rows.MAX_NAME)),
-        field("agent_path", rows.text_column("agent_path", rows.MAX_PATH)),
-    ))
+        return set()
 
 
-_SETTINGS = ", ".join(rows.text_column(c, rows.MAX_NAME if c in ("game", "algorithm")
-                                       else rows.MAX_JSON)
-                      for c in ("game", "algorithm", "game_params", "wrappers", "hyperparameters"))
-_PLATFORM = ", ".join(rows.text_column(c, rows.MAX_NAME)
-                      for c in ("tui_gym", "gymnasium", "numpy", "python"))
+def _fetch(conn: sqlite3.Connection, table: str, alias: str, key: object,
+           have: set[str] | None = None) -> dict[str, Any] | None:
+    """The FIELDS of `alias` from `table`'s row `key` (null for a column not in `have`),
+    and, from runs, its settings and platform ids; None when there is no such row,
+    sqlite3.Error where the file is damaged."""
+    fields = [f for f in rows.FIELDS if f.startswith(alias)]
+    columns = ", ".join(rows.column(f, alias=False) if have is None or f[2:] in have else "NULL"
+                        for f in fields)
+    if table == "runs":
+        columns += ", settings_id, platform_id"
+    row = conn.execute(f"SELECT {columns} FROM {table} WHERE id = ?", (key,)).fetchone()
+    return None if row is None else dict(zip([*fields, "settings", "platform"], row, strict=False))
 
 
-def _fetch(conn: sqlite3.Connection, sql: str, key: object) -> tuple[Any, ...] | None:
-    """One row, None when there is none; sqlite3.Error where the file is damaged."""
-    row = conn.execute(sql, (key,)).fetchone()
-    return None if row is None else tuple(row)
-
-
-def _one(conn: sqlite3.Connection, columns: str, run_id: int) -> tuple[tuple[Any, ...], Any] | None:
+def _one(conn: sqlite3.Connection, have: set[str], run_id: int
+         ) -> tuple[tuple[Any, ...], Any] | None:
     """A run's row, as `rows.record` reads it, and its curves; each table read on its own
     so that a damaged one loses only what it holds (a platform: the versions)."""
-    run = _fetch(conn, f"SELECT {columns} FROM runs WHERE id = ?", run_id)
+    run = _fetch(conn, "runs", "r.", run_id, have)
     if run is None:
         return None
-    (run_id, kind, settings_id, platform_id, seeds, status, started, ended, group, figures,
-     writer, agent_path) = run
-    settings = _fetch(conn, f"SELECT {_SETTINGS} FROM settings WHERE id = ?", settings_id)
+    settings = _fetch(conn, "settings", "s.", run["settings"])
     if settings is None:
         raise rows.BadRow("its settings are gone")
-    game, algorithm, game_params, wrappers, hyperparameters = settings
     try:
-        versions = _fetch(conn, f"SELECT {_PLATFORM} FROM platforms WHERE id = ?", platform_id)
+        versions = _fetch(conn, "platforms", "p.", run["platform"])
     except sqlite3.Error:
         versions = None
+    values = {**run, **settings, **(versions or {})}
     try:
-        blob = _fetch(conn, f"SELECT {rows.CURVES_COLUMNS} FROM curves WHERE run_id = ?", run_id)
+        blob = conn.execute(f"SELECT {rows.CURVES_COLUMNS} FROM curves WHERE run_id = ?",
+                            (run_id,)).fetchone()
     except sqlite3.Error:
         blob = ("damaged", 0, None)
-    row = (run_id, kind, game, algorithm, seeds, status, started, ended, group, figures, writer,
-           game_params, wrappers, hyperparameters, *(versions or ("",) * 4), agent_path)
-    return row, blob
+    return (run_id, *(values.get(f, "") for f in rows.FIELDS)), blob
 
 
 def _tasks(conn: sqlite3.Connection, run_id: int) -> list[TaskRecord]:
@@ -200,10 +182,10 @@ def recover(source: str | Path) -> Recovery:
         try:
             with RunHistory(target) as history:
                 writers = WriterCheck()
-                columns = _run_columns(conn)
+                have = _run_fields(conn)
                 for run_id in _run_ids(conn):
                     try:
-                        found = _one(conn, columns, run_id)
+                        found = _one(conn, have, run_id)
                         if found is None:
                             continue  # no run with that id
                         row, blob = found

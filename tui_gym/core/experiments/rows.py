@@ -7,7 +7,8 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from tui_gym.core.experiments.curve_codec import CurveFormatError, decode_curve, unpack_curves
+from tui_gym.core.experiments.codec import CurveFormatError, decode_curve, unpack_curves
+from tui_gym.core.experiments.connection import WriterCheck
 from tui_gym.core.experiments.figures import Figure
 from tui_gym.core.experiments.records import (
     Curve,
@@ -18,8 +19,7 @@ from tui_gym.core.experiments.records import (
     Versions,
     WrapperSetting,
 )
-from tui_gym.core.experiments.writers import WriterCheck
-from tui_gym.core.text import visible
+from tui_gym.core.text import nested_deeper, visible
 
 MAX_NAME = 200  # characters of a game, algorithm, kind, status, figure or version
 MAX_JSON = 256 * 1024  # characters of a settings or figures JSON text
@@ -34,32 +34,32 @@ class BadRow(ValueError):
     """A field of a row that does not read as what tui-gym writes there."""
 
 
-def text_column(expr: str, cap: int) -> str:
-    """`expr` cut inside SQLite, one character past `cap` so that an oversized text shows."""
+# A run's fields as a query reads them, in the order `record` takes them (after the id):
+# a table's alias and column, and the field's bound in characters (None: a number).
+FIELDS: dict[str, int | None] = {
+    "r.kind": MAX_NAME, "s.game": MAX_NAME, "s.algorithm": MAX_NAME, "r.seeds": MAX_SEEDS_JSON,
+    "r.status": MAX_NAME, "r.started_at": None, "r.ended_at": None, "r.group_id": None,
+    "r.figures": MAX_JSON, "r.writer": MAX_NAME, "s.game_params": MAX_JSON,
+    "s.wrappers": MAX_JSON, "s.hyperparameters": MAX_JSON, "p.tui_gym": MAX_NAME,
+    "p.gymnasium": MAX_NAME, "p.numpy": MAX_NAME, "p.python": MAX_NAME, "r.agent_path": MAX_PATH,
+}
+SUMMARY_FIELDS = 10  # the first ten: what a listing shows
+
+
+def column(field: str, alias: bool = True) -> str:
+    """A field of FIELDS as a query reads it (`alias` False: without its table's alias): a
+    text cut inside SQLite one character past its bound, so that an oversized text shows;
+    a number as it is when one (or null), else cut as a short text."""
+    expr, cap = field if alias else field.partition(".")[2], FIELDS[field]
+    if cap is None:
+        return f"CASE WHEN typeof({expr}) IN ('integer', 'real', 'null') THEN {expr} " \
+               f"ELSE substr({expr}, 1, 41) END"
     return f"substr({expr}, 1, {cap + 1})"
 
 
-def number_column(expr: str) -> str:
-    """`expr` as it is when a number (or null), else cut as a short text."""
-    return f"CASE WHEN typeof({expr}) IN ('integer', 'real', 'null') THEN {expr} " \
-           f"ELSE substr({expr}, 1, 41) END"
-
-
-_text, _number = text_column, number_column
-
-
-SUMMARY_COLUMNS = ", ".join((
-    "r.id", _text("r.kind", MAX_NAME), _text("s.game", MAX_NAME), _text("s.algorithm", MAX_NAME),
-    _text("r.seeds", MAX_SEEDS_JSON), _text("r.status", MAX_NAME), _number("r.started_at"),
-    _number("r.ended_at"), _number("r.group_id"), _text("r.figures", MAX_JSON),
-    _text("r.writer", MAX_NAME),
-))
+SUMMARY_COLUMNS = ", ".join(["r.id", *map(column, list(FIELDS)[:SUMMARY_FIELDS])])
 SUMMARY_FROM = "FROM runs r LEFT JOIN settings s ON s.id = r.settings_id"
-RECORD_COLUMNS = ", ".join((
-    SUMMARY_COLUMNS, _text("s.game_params", MAX_JSON), _text("s.wrappers", MAX_JSON),
-    _text("s.hyperparameters", MAX_JSON), *(_text(f"p.{c}", MAX_NAME) for c in (
-        "tui_gym", "gymnasium", "numpy", "python")), _text("r.agent_path", MAX_PATH),
-))
+RECORD_COLUMNS = ", ".join(["r.id", *map(column, FIELDS)])
 RECORD_FROM = SUMMARY_FROM + " LEFT JOIN platforms p ON p.id = r.platform_id"
 CURVES_COLUMNS = (
     f"typeof(data), length(data), CASE WHEN typeof(data) = 'blob' AND length(data) <= "
@@ -103,20 +103,6 @@ def _refuse_constant(name: str) -> Any:
     raise ValueError(f"{name} is not JSON data")
 
 
-def _depth(value: Any) -> int:
-    deepest, stack = 0, [(value, 1)]
-    while stack:
-        item, depth = stack.pop()
-        deepest = max(deepest, depth)
-        if depth > MAX_DEPTH:
-            break
-        if isinstance(item, dict):
-            stack.extend((v, depth + 1) for v in item.values())
-        elif isinstance(item, list):
-            stack.extend((v, depth + 1) for v in item)
-    return deepest
-
-
 def _json(text: object, what: str, limit: int = MAX_JSON) -> Any:
     if not isinstance(text, str):
         raise BadRow(f"its {what} are not JSON text ({_shown(text)})")
@@ -129,7 +115,7 @@ def _json(text: object, what: str, limit: int = MAX_JSON) -> Any:
     except ValueError as exc:  # JSONDecodeError, a number too long for Python
         raise BadRow(f"its {what} are not JSON ({visible(exc, 60)})") from None
     # More brackets than the bound is the only way to nest past it: count them first.
-    if text.count("[") + text.count("{") > MAX_DEPTH and _depth(value) > MAX_DEPTH:
+    if text.count("[") + text.count("{") > MAX_DEPTH and nested_deeper(value, MAX_DEPTH):
         raise BadRow(f"its {what} are nested too deeply")
     return value
 

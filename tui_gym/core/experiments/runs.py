@@ -2,16 +2,20 @@
 
 from __future__ import annotations
 
+import csv
+import io
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from tui_gym.core.experiments.connection import examine, shown
-from tui_gym.core.experiments.csv_export import curves_csv
 from tui_gym.core.experiments.errors import RunHistoryError, UnknownRunError
 from tui_gym.core.experiments.history import DamagedRun, RunHistory
 from tui_gym.core.experiments.paths import resolve_db_path
-from tui_gym.core.experiments.records import RunKind, RunRecord, RunSummary
+from tui_gym.core.experiments.records import Curve, RunKind, RunRecord, RunSummary
 from tui_gym.core.experiments.recover import Recovery, recover
 from tui_gym.core.files import OutputPathError, check_output_path, write_atomically
 
@@ -66,8 +70,12 @@ def _existing(db: str | None) -> tuple[Path, bool]:
     return path, status is not None and status.st_size > 0
 
 
-def _none_yet(run_id: int, path: Path) -> UnknownRunError:
-    return UnknownRunError(f"no run {run_id} in {shown(path)} (no runs are recorded there yet)")
+def _holding(run_id: int, db: str | None) -> Path:
+    """The history's file; UnknownRunError when no run is recorded there yet."""
+    path, exists = _existing(db)
+    if not exists:
+        raise UnknownRunError(f"no run {run_id} in {shown(path)} (no runs are recorded there yet)")
+    return path
 
 
 def list_runs(
@@ -87,10 +95,7 @@ def list_runs(
 
 def show_run(run_id: int, db: str | None = None) -> RunRecord:
     """Everything about one run."""
-    path, exists = _existing(db)
-    if not exists:
-        raise _none_yet(run_id, path)
-    with RunHistory(path, read_only=True) as history:
+    with RunHistory(_holding(run_id, db), read_only=True) as history:
         return history.get_run(run_id)
 
 
@@ -114,9 +119,7 @@ def export_run_csv(run_id: int, csv_path: str | Path, db: str | None = None) -> 
 
 def remove_run(run_id: int, db: str | None = None) -> RemovedRun:
     """Delete one run (its curves and figures with it), whether or not it reads."""
-    path, exists = _existing(db)
-    if not exists:
-        raise _none_yet(run_id, path)
+    path = _holding(run_id, db)
     with RunHistory(path) as history:
         return RemovedRun(db=path, run=history.remove_run(run_id))
 
@@ -145,3 +148,24 @@ def prune_tasks(db: str | None = None) -> PrunedTasks:
 def recover_history(db: str | None = None) -> Recovery:
     """Copy what can be read of the history into a fresh file beside it (see `recover`)."""
     return recover(resolve_db_path(db))
+
+
+def curves_csv(curves: Sequence[Curve]) -> tuple[str, int]:
+    """The CSV text of `curves` and its number of data rows: one row per episode any curve
+    has, one column per curve; floats in full (`repr`: read back, the same numbers), an
+    episode a curve has no value at an empty cell."""
+    none: np.ndarray = np.empty(0, dtype=np.int64)
+    episodes = np.unique(np.concatenate([c.episodes for c in curves])) if curves else none
+    columns: list[list[str]] = []
+    for curve in curves:
+        cells = [""] * len(episodes)
+        at = np.searchsorted(episodes, curve.episodes)
+        for i, value in zip(at.tolist(), curve.values.tolist(), strict=True):
+            cells[i] = "" if value != value else repr(value)  # NaN: no value here
+        columns.append(cells)
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(["episode", *(c.name for c in curves)])
+    for row, episode in enumerate(episodes.tolist()):
+        writer.writerow([episode, *(cells[row] for cells in columns)])
+    return out.getvalue(), len(episodes)

@@ -6,15 +6,28 @@ it is discounted (gamma < 1) or the total of an episode (gamma = 1; minus infini
 policy that may never end one).
 """
 
-from tui_gym.core.mdp.evaluation import PolicyValue, evaluate
+from tui_gym.core.mdp.evaluation import PolicyValue, evaluate, return_range
 from tui_gym.core.mdp.from_env import NotAvailable, model_from_env
-from tui_gym.core.mdp.gap import Gap, exact_gap, gap_of
-from tui_gym.core.mdp.model import FiniteMDP, ModelError
-from tui_gym.core.mdp.optimum import TIE_GAMMA, Ladder, Solution, optimal_actions, solve
-from tui_gym.core.mdp.phases import Phases
+from tui_gym.core.mdp.model import (
+    FiniteMDP,
+    ModelError,
+    Phases,
+    clip_reward,
+    scale_reward,
+    step_penalty,
+    with_horizon,
+)
+from tui_gym.core.mdp.optimum import (
+    TIE_GAMMA,
+    Gap,
+    Ladder,
+    Solution,
+    exact_gap,
+    gap_of,
+    optimal_actions,
+    solve,
+)
 from tui_gym.core.mdp.policy import PolicyError, greedy_policy, policy_matrix
-from tui_gym.core.mdp.returns import return_range
-from tui_gym.core.mdp.transforms import clip_reward, scale_reward, step_penalty, with_horizon
 
 __all__ = [
     "TIE_GAMMA", "FiniteMDP", "Gap", "Ladder", "ModelError", "NotAvailable", "Phases",

@@ -1,23 +1,18 @@
-"""Exact policy evaluation: `evaluate(model, policy)` and the `PolicyValue` it returns."""
+"""Exact policy evaluation: `evaluate(model, policy)` and the `PolicyValue` it returns; which
+episodes end (`policy_ends`, `surely_ending`: the graph facts behind values with no limit and
+no discount); `PolicyArrays`, a policy's one-step Bellman expectation gathered once and swept
+many times; and `return_range`, the lowest and highest return one episode can have."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
 
-from tui_gym.core.mdp.ending import policy_ends
-from tui_gym.core.mdp.model import FiniteMDP
+from tui_gym.core.mdp.model import BoolArray, FiniteMDP, FloatArray, IntArray
 from tui_gym.core.mdp.policy import policy_matrix
-from tui_gym.core.mdp.policy_arrays import PolicyArrays
-
-__all__ = [
-    "DENSE_LIMIT", "PolicyValue", "backup", "check_gamma", "evaluate", "expected_value",
-    "solve_linear",
-]
-
-FloatArray = npt.NDArray[np.float64]
 
 DENSE_LIMIT = 2000
 """Up to this many states a policy's value is one dense linear solve; above, an iteration."""
@@ -159,3 +154,173 @@ def evaluate(model: FiniteMDP, policy: npt.ArrayLike, gamma: float = 1.0) -> Pol
     v[ends] = solve_linear(model, matrix, gamma, ends)
     value = expected_value(model, v)
     return PolicyValue(v, value, gamma, None, never_ends=value == -np.inf)
+
+
+def _backward_reach(
+    targets: BoolArray, edges: BoolArray, next_state: npt.NDArray[np.int64]
+) -> BoolArray:
+    """States that reach `targets` (or start there) along `edges` `[S, A, K]`."""
+    reached = targets.copy()
+    while True:
+        grown = reached | np.any(edges & reached[next_state], axis=(1, 2))
+        if (grown == reached).all():
+            return reached
+        reached = grown
+
+
+def policy_ends(model: FiniteMDP, matrix: npt.NDArray[np.float64]) -> BoolArray:
+    """`[S]`: the states from which the policy `matrix` (`[S, A]`) ends the episode surely.
+
+    A state fails when the policy can reach from it a state from which it can
+    never end: in a finite chain every other path ends with probability 1.
+    """
+    possible = (matrix[:, :, None] > 0) & (model.prob > 0)
+    moves = possible & ~model.terminal
+    ends_now: BoolArray = np.any(possible & model.terminal, axis=(1, 2))
+    can_end = _backward_reach(ends_now, moves, model.next_state)
+    return ~_backward_reach(~can_end, moves, model.next_state)
+
+
+@dataclass(frozen=True)
+class SurelyEnding:
+    """Where the episode can be ended with probability 1, and how.
+
+    `states[s]`: some policy ends the episode surely from `s`. `safe[s, a]`:
+    taking `a` in such a state keeps every continuation inside `states`.
+    `policy[s]`: a safe action that, always taken, ends the episode surely
+    (it moves closer to an end with positive probability); 0 outside `states`.
+    """
+
+    states: BoolArray
+    safe: BoolArray
+    policy: npt.NDArray[np.int64]
+
+
+def surely_ending(model: FiniteMDP) -> SurelyEnding:
+    """The states from which the episode can be ended with probability 1 (almost-sure reach)."""
+    possible = model.prob > 0
+    moves = possible & ~model.terminal
+    ends_now = (possible & model.terminal).any(axis=2)
+    n_states = model.n_states
+    inside = np.ones(n_states, dtype=bool)
+    while True:
+        # Safe actions never leave `inside`; from those, grow the set that reaches an end.
+        safe = inside[:, None] & ~(moves & ~inside[model.next_state]).any(axis=2)
+        policy = np.zeros(n_states, dtype=np.int64)
+        step = safe & ends_now
+        reached: BoolArray = np.any(step, axis=1)
+        policy[reached] = np.argmax(step[reached], axis=1)
+        while True:
+            step = safe & (moves & reached[model.next_state]).any(axis=2) & ~reached[:, None]
+            new: BoolArray = np.any(step, axis=1)
+            if not new.any():
+                break
+            policy[new] = np.argmax(step[new], axis=1)
+            reached |= new
+        if (reached == inside).all():
+            return SurelyEnding(states=inside, safe=safe, policy=policy)
+        inside = reached
+
+
+DENSE_STATES = 1000
+SPARSE_SHARE = 16  # a sweep gathers (no dense product) where a state leads to 1/16 of all or fewer
+
+
+@dataclass(frozen=True)
+class PolicyArrays:
+    """`reward[s]`: the policy's expected reward in `s`; `weight[s, j]` the chance of
+    going on to `target[s, j]` (0 where the episode ends); `dense[s, t]`, when there
+    are few states, the chance of going on from `s` to `t`."""
+
+    reward: FloatArray
+    weight: FloatArray
+    target: IntArray
+    dense: FloatArray | None = None
+
+    @classmethod
+    def of(cls, model: FiniteMDP, matrix: FloatArray) -> PolicyArrays:
+        """The arrays of the policy `matrix` (`[S, A]` action probabilities) on `model`."""
+        n_states = model.n_states
+        reward = (matrix * model.expected_reward).sum(axis=1)
+        # The actions the policy takes first, as many as the most any state takes.
+        taken = matrix > 0
+        actions = np.argsort(~taken, axis=1, kind="stable")[:, : max(1, taken.sum(axis=1).max())]
+        rows = np.arange(n_states)[:, None]
+        chance = np.take_along_axis(matrix, actions, axis=1)
+        weight = (chance[:, :, None] * model.continue_prob[rows, actions]).reshape(n_states, -1)
+        target = model.next_state[rows, actions].reshape(n_states, -1)
+        width = max(1, int((weight > 0).sum(axis=1).max()))
+        if width < weight.shape[1]:
+            keep = np.argsort(weight <= 0, axis=1, kind="stable")[:, :width]
+            weight = np.take_along_axis(weight, keep, axis=1)
+            target = np.take_along_axis(target, keep, axis=1)
+        dense: FloatArray | None = None
+        if n_states <= DENSE_STATES:
+            flat = (np.arange(n_states)[:, None] * n_states + target).reshape(-1)
+            counts = np.bincount(flat, weights=weight.reshape(-1), minlength=n_states**2)
+            dense = np.asarray(counts, dtype=np.float64).reshape(n_states, n_states)
+        return cls(reward, np.ascontiguousarray(weight), np.ascontiguousarray(target), dense)
+
+    def sweep(self, v: FloatArray, gamma: float) -> FloatArray:
+        """One synchronous sweep: every state backed up from `v`."""
+        sparse = self.weight.shape[1] * SPARSE_SHARE <= len(v)  # few outcomes a state
+        if self.dense is not None and not sparse and np.isfinite(v).all():
+            return self.reward + gamma * (self.dense @ v)
+        return self.reward + gamma * (self.weight * v[self.target]).sum(axis=1)
+
+    def over(self, steps: int, gamma: float) -> FloatArray:
+        """The values over `steps` steps, `sum over t < steps of (gamma P)^t r`, from the
+        dense matrix by doubling: two matrix products per binary digit of `steps`."""
+        assert self.dense is not None
+        step = gamma * self.dense
+        total = np.zeros_like(self.reward)  # the sum over the first k steps
+        power = np.eye(len(total))  # (gamma P)^k
+        for digit in bin(steps)[2:]:
+            total = total + power @ total  # k -> 2k
+            power = power @ power
+            if digit == "1":  # k -> k + 1
+                total = self.reward + step @ total
+                power = step @ power
+        return total
+
+    def sweep_in_place(self, v: FloatArray, gamma: float) -> float:
+        """One in-place sweep of `v`, state 0 first; the largest change."""
+        reward, weight, target, dense = self.reward, self.weight, self.target, self.dense
+        delta = 0.0
+        for s in range(len(v)):
+            if dense is not None:
+                new = reward[s] + gamma * float(dense[s] @ v)
+            else:
+                new = reward[s] + gamma * float(weight[s] @ v[target[s]])
+            change = abs(new - v[s])
+            if change > delta:
+                delta = change
+            v[s] = new
+        return float(delta)
+
+
+MAX_SWEEPS = 1_000  # without a limit, sweeps before a side still changing counts as unbounded
+
+
+def _extreme(model: FiniteMDP, best: bool) -> float:
+    possible = model.prob > 0
+    rewards = np.where(possible, model.reward, -np.inf if best else np.inf)
+    pick = np.max if best else np.min
+    value = np.zeros(model.n_states)
+    sweeps = model.horizon if model.horizon is not None else MAX_SWEEPS
+    for _ in range(sweeps):
+        after = np.where(model.terminal, 0.0, value[model.next_state])
+        new = pick(pick(rewards + after, axis=2), axis=1)
+        if np.array_equal(new, value):  # the sweeps left would change nothing either
+            break
+        value = new
+    else:
+        if model.horizon is None:
+            return math.inf if best else -math.inf
+    start = value[model.initial > 0]
+    return float(start.max() if best else start.min())
+
+
+def return_range(model: FiniteMDP) -> tuple[float, float]:
+    """(lowest, highest) return of one episode of `model`; ±inf on a side with no bound."""
+    return _extreme(model, best=False), _extreme(model, best=True)

@@ -17,10 +17,15 @@ from gymnasium.wrappers import (
     RenderCollection,
 )
 
-from tui_gym.core.mdp.model import FiniteMDP, ModelError
-from tui_gym.core.mdp.transforms import clip_reward, scale_reward, step_penalty, with_horizon
-from tui_gym.core.wrappers.chain import layers, time_limit
-from tui_gym.core.wrappers.fits import env_label
+from tui_gym.core.mdp.model import (
+    FiniteMDP,
+    ModelError,
+    clip_reward,
+    scale_reward,
+    step_penalty,
+    with_horizon,
+)
+from tui_gym.core.wrappers.chain import env_label, layers, time_limit
 
 __all__ = ["NotAvailable", "model_from_env"]
 
@@ -37,7 +42,7 @@ class NotAvailable:
 
 def _reward_layer(model: FiniteMDP, layer: gym.Wrapper) -> FiniteMDP | None:
     """The model under one reward wrapper, or None for a wrapper that is not one we model."""
-    from tui_gym.core.wrappers.custom import ScaleReward, StepPenalty
+    from tui_gym.core.wrappers.catalog import ScaleReward, StepPenalty
 
     if type(layer) is ScaleReward:
         return scale_reward(model, layer.factor)

@@ -1,7 +1,9 @@
-"""`FiniteMDP`: a game's exact model as dense transition arrays."""
+"""`FiniteMDP`: a game's exact model as dense transition arrays; the model as a reward or
+time-limit wrapper changes it; `Phases`, a world that changes as it is played."""
 
 from __future__ import annotations
 
+from bisect import bisect_right
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -10,7 +12,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["PROBABILITY_TOLERANCE", "FiniteMDP", "ModelError", "Outcome"]
+from tui_gym.core.params import finite_number
 
 PROBABILITY_TOLERANCE = 1e-9
 """How far a distribution's total may stray from 1 (round-off in tables like 0.8 + 0.1 + 0.1)."""
@@ -278,3 +280,71 @@ def _merged(listed: Iterable[Sequence[Any]], state: int, action: int) -> list[Ou
     if not merged:
         raise ModelError(f"state {state}, action {action} has no possible outcome")
     return [(p, nxt, r, t) for (nxt, r, t), p in merged.items()]
+
+
+def scale_reward(model: FiniteMDP, factor: float) -> FiniteMDP:
+    """The model with every reward multiplied by `factor`."""
+    factor = finite_number("ScaleReward factor", factor)
+    noise = None if model.reward_std is None else abs(factor) * model.reward_std
+    return model.replace(reward=factor * model.reward, reward_std=noise)
+
+
+def step_penalty(model: FiniteMDP, penalty: float) -> FiniteMDP:
+    """The model with `penalty` (>= 0) subtracted from every step's reward."""
+    penalty = finite_number("StepPenalty penalty", penalty, minimum=0.0)
+    return model.replace(reward=model.reward - penalty)
+
+
+def clip_reward(model: FiniteMDP, low: float | None = None, high: float | None = None) -> FiniteMDP:
+    """The model with every reward clipped to `[low, high]` (None: no bound on that side)."""
+    if low is None and high is None:
+        raise ValueError("ClipReward needs min_reward, max_reward or both")
+    if model.reward_std is not None and model.reward_std.any():
+        raise ValueError("ClipReward on rewards drawn with noise: the clipped mean is not "
+                         "modelled")
+    low = None if low is None else finite_number("ClipReward min_reward", low)
+    high = None if high is None else finite_number("ClipReward max_reward", high)
+    if low is not None and high is not None and low > high:
+        raise ValueError(f"ClipReward min_reward ({low:g}) must be <= max_reward ({high:g})")
+    return model.replace(reward=np.clip(model.reward, low, high))
+
+
+def with_horizon(model: FiniteMDP, horizon: int | None) -> FiniteMDP:
+    """The model with the episode cut off after `horizon` steps (None: no limit)."""
+    return model.replace(horizon=horizon)
+
+
+@dataclass(frozen=True, eq=False)
+class Phases:
+    """The model of each phase (`models[i]` from step `starts[i]` on); `ModelError` when the
+    phases do not make one world (a first start other than 0, starts not increasing, or
+    models of different sizes)."""
+
+    models: tuple[FiniteMDP, ...]
+    starts: tuple[int, ...]
+
+    def __post_init__(self) -> None:
+        models, starts = tuple(self.models), tuple(int(s) for s in self.starts)
+        if not models or len(models) != len(starts):
+            raise ModelError(f"{len(models)} models for {len(starts)} phase starts")
+        if starts[0] != 0 or any(b <= a for a, b in zip(starts, starts[1:], strict=False)):
+            raise ModelError(f"phases must start at step 0 and then later each, got {starts}")
+        sizes = {(m.n_states, m.n_actions) for m in models}
+        if len(sizes) > 1:
+            raise ModelError(f"the phases' models differ in size: {sorted(sizes)}")
+        object.__setattr__(self, "models", models)
+        object.__setattr__(self, "starts", starts)
+
+    @classmethod
+    def of(cls, model: FiniteMDP) -> Phases:
+        """A world that never changes."""
+        return cls((model,), (0,))
+
+    @classmethod
+    def listed(cls, phases: Sequence[tuple[int, FiniteMDP]]) -> Phases:
+        """From (start step, model) pairs."""
+        return cls(tuple(m for _, m in phases), tuple(s for s, _ in phases))
+
+    def index_at(self, steps: int) -> int:
+        """The phase in force for the transition after `steps` transitions (steps >= 0)."""
+        return max(0, bisect_right(self.starts, int(steps)) - 1)

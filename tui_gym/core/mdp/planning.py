@@ -8,19 +8,15 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from tui_gym.core.mdp.ending import policy_ends
-from tui_gym.core.mdp.evaluation import backup, check_gamma
-from tui_gym.core.mdp.model import FiniteMDP
+from tui_gym.core.mdp.evaluation import PolicyArrays, backup, check_gamma, policy_ends
+from tui_gym.core.mdp.model import BoolArray, FiniteMDP, FloatArray
 from tui_gym.core.mdp.policy import policy_matrix
-from tui_gym.core.mdp.policy_arrays import PolicyArrays
 
 __all__ = [
-    "METHODS", "Improvement", "Planner", "check_method", "check_theta", "evaluation_sweep",
-    "greedy", "improve", "uniform_policy", "value_sweep",
+    "METHODS", "Improvement", "Planner", "check_method", "check_theta", "greedy",
+    "uniform_policy", "value_sweep",
 ]
 
-FloatArray = npt.NDArray[np.float64]
-BoolArray = npt.NDArray[np.bool_]
 
 METHODS = ("evaluate", "policy-iteration", "value-iteration")
 ROUND_OFF = 1e-9  # ties closer than this share of the values' size are ties whatever theta
@@ -37,26 +33,6 @@ def check_theta(theta: float) -> float:
 def uniform_policy(model: FiniteMDP) -> FloatArray:
     """`[S, A]`: the equiprobable random policy."""
     return np.full((model.n_states, model.n_actions), 1.0 / model.n_actions)
-
-
-def evaluation_sweep(
-    model: FiniteMDP, policy: npt.ArrayLike, v: FloatArray, gamma: float, in_place: bool = False
-) -> tuple[FloatArray, float]:
-    """One sweep of iterative policy evaluation from `v`: the new values and the largest
-    change. Synchronous (a new array, every state from the old values) or in place (a
-    copy updated state by state)."""
-    arrays = PolicyArrays.of(model, policy_matrix(model, policy))
-    return _evaluation_sweep(arrays, v, gamma, in_place)
-
-
-def _evaluation_sweep(
-    arrays: PolicyArrays, v: FloatArray, gamma: float, in_place: bool
-) -> tuple[FloatArray, float]:
-    if in_place:
-        new = np.array(v, dtype=np.float64)
-        return new, arrays.sweep_in_place(new, gamma)
-    new = arrays.sweep(np.asarray(v, dtype=np.float64), gamma)
-    return new, _largest_change(new, v)
 
 
 def _largest_change(new: FloatArray, old: FloatArray) -> float:
@@ -112,20 +88,6 @@ class Improvement:
     @property
     def stable(self) -> bool:
         return not bool(self.changed.any())
-
-
-def improve(
-    model: FiniteMDP, policy: npt.ArrayLike, v: FloatArray, gamma: float, tolerance: float = 0.0
-) -> Improvement:
-    """The greedy policy on `v`, ties shared equally. A state keeps its old actions while
-    every one of them is still within `tolerance` of the best, so that near-ties left
-    by an evaluation stopped at theta cannot flip a policy back and forth."""
-    old = policy_matrix(model, policy)
-    best = greedy(model, v, gamma, tolerance)
-    kept = np.asarray(((old > 0) <= best).all(axis=1), dtype=bool)
-    shared = best / best.sum(axis=1, keepdims=True)
-    new = np.where(kept[:, None], old, shared)
-    return Improvement(new, ~kept)
 
 
 class Planner:
@@ -203,13 +165,25 @@ class Planner:
         """One sweep of policy evaluation; the largest change."""
         if self._arrays is None:
             self._arrays = PolicyArrays.of(self.model, self.policy)
-        self.v, self.delta = _evaluation_sweep(self._arrays, self.v, self.gamma, self.in_place)
+        if self.in_place:  # a copy updated state by state
+            new = np.array(self.v, dtype=np.float64)
+            self.delta = self._arrays.sweep_in_place(new, self.gamma)
+        else:  # a new array, every state from the old values
+            new = self._arrays.sweep(self.v, self.gamma)
+            self.delta = _largest_change(new, self.v)
+        self.v = new
         self.sweeps += 1
         return self.delta
 
     def improvement(self) -> Improvement:
-        """One greedy improvement of the policy on the current values."""
-        step = improve(self.model, self.policy, self.v, self.gamma, self.tolerance)
+        """One greedy improvement of the policy on the current values, ties shared equally.
+        A state keeps its old actions while every one of them is still within `tolerance` of
+        the best, so that near-ties left by an evaluation stopped at theta cannot flip a
+        policy back and forth."""
+        best = greedy(self.model, self.v, self.gamma, self.tolerance)
+        kept = np.asarray(((self.policy > 0) <= best).all(axis=1), dtype=bool)
+        shared = best / best.sum(axis=1, keepdims=True)
+        step = Improvement(np.where(kept[:, None], self.policy, shared), ~kept)
         self.changed = step.changed
         if step.stable:
             self.stable = True

@@ -8,13 +8,10 @@ import numpy as np
 import numpy.typing as npt
 
 from tui_gym.core.mdp.evaluation import evaluate
-from tui_gym.core.mdp.model import FiniteMDP
+from tui_gym.core.mdp.model import BoolArray, FiniteMDP, FloatArray
 from tui_gym.core.mdp.policy import policy_matrix
 
 __all__ = ["Truth", "reached"]
-
-FloatArray = npt.NDArray[np.float64]
-BoolArray = npt.NDArray[np.bool_]
 
 
 def reached(model: FiniteMDP, matrix: FloatArray) -> BoolArray:

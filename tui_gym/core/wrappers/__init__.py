@@ -5,6 +5,9 @@ from tui_gym.core.wrappers.build import UnknownEnvError, build_env, build_env_le
 from tui_gym.core.wrappers.catalog import (
     CATALOG,
     MAX_CHAIN,
+    DistanceShaping,
+    ScaleReward,
+    StepPenalty,
     UnknownWrapperError,
     WrapperChoice,
     WrapperMismatchError,
@@ -14,7 +17,6 @@ from tui_gym.core.wrappers.catalog import (
     get_spec,
     parse_wrapper_spec,
 )
-from tui_gym.core.wrappers.custom import DistanceShaping, ScaleReward, StepPenalty
 
 __all__ = [
     "CATALOG", "MAX_CHAIN", "DistanceShaping", "Param", "ScaleReward", "StepPenalty",

@@ -17,7 +17,7 @@ from tui_gym.core.wrappers.catalog import (
     check_chain_length,
     get_spec,
 )
-from tui_gym.core.wrappers.fits import env_label
+from tui_gym.core.wrappers.chain import env_label
 
 __all__ = ["UnknownEnvError", "build_env", "build_env_lenient", "check_choices"]
 

@@ -1,14 +1,17 @@
-"""The catalog of swappable wrappers: what each one is, takes and needs."""
+"""The catalog of swappable wrappers: what each one is, takes and needs; and our own reward
+wrappers in it, `ScaleReward`, `StepPenalty` and `DistanceShaping`."""
 
 from __future__ import annotations
 
 import numbers
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
+from gymnasium import spaces
+from gymnasium.core import ActType, ObsType
 from gymnasium.wrappers import (
     ClipReward,
     DelayObservation,
@@ -17,21 +20,15 @@ from gymnasium.wrappers import (
     TimeAwareObservation,
     TimeLimit,
 )
+from gymnasium.wrappers.utils import create_zero_array
 
-from tui_gym.core.params import Param, ParamValue, shown_value
-from tui_gym.core.wrappers.custom import DistanceShaping, ScaleReward, StepPenalty
-from tui_gym.core.wrappers.fits import (
-    fits_any,
-    fits_delay,
-    fits_distance,
-    fits_flatten,
-    fits_time_aware,
-    fits_time_limit,
-)
+from tui_gym.core.params import Param, ParamValue, finite_number, shown_value
+from tui_gym.core.wrappers.chain import env_label, layers, time_limit
 
 __all__ = [
-    "CATALOG", "MAX_CHAIN", "UnknownWrapperError", "WrapperChoice", "WrapperMismatchError",
-    "WrapperSpec", "check_chain_length", "format_wrapper_spec", "get_spec", "parse_wrapper_spec",
+    "CATALOG", "MAX_CHAIN", "DistanceShaping", "ScaleReward", "StepPenalty", "UnknownWrapperError",
+    "WrapperChoice", "WrapperMismatchError", "WrapperSpec", "check_chain_length",
+    "format_wrapper_spec", "get_spec", "parse_wrapper_spec",
 ]
 
 MAX_CHAIN = 32  # wrappers in one chain: far more than any lesson needs, far below a stack's depth
@@ -78,17 +75,18 @@ FitCheck = Callable[[gym.Env, Mapping[str, Any] | None], str | None]
 class WrapperSpec:
     """One catalog entry: a wrapper a person can switch on, and what it takes.
 
-    `factory(env, **values)` builds the wrapper; `requirement(env, values)`
-    returns why it cannot wrap `env` (None when it can); `cross_check(values)`
+    `factory(env, **values)` builds the wrapper; `requirement(env, values)` (values
+    None when only the env is known) returns one sentence on why it cannot wrap `env`
+    and what to do about it (None when it can); `cross_check(values)`
     rejects combinations no single param can (ClipReward's min > max).
     """
 
     name: str
     summary: str
     params: tuple[Param, ...]
-    changes_observation: bool
     factory: Callable[..., gym.Env] = field(repr=False, compare=False)
-    requirement: FitCheck = field(default=fits_any, repr=False, compare=False)
+    changes_observation: bool = False
+    requirement: FitCheck | None = field(default=None, repr=False, compare=False)
     cross_check: Callable[[Mapping[str, Any]], None] | None = field(
         default=None, repr=False, compare=False
     )
@@ -142,152 +140,222 @@ class WrapperSpec:
         one already inside cannot lengthen it).
         """
         checked = None if values is None else self.validate(values)
-        return self.requirement(env, checked)
+        return None if self.requirement is None else self.requirement(env, checked)
 
     def build(self, env: gym.Env, values: Mapping[str, Any] | None = None) -> gym.Env:
         """Wrap `env`; raises `WrapperMismatchError` when it does not fit."""
         checked = self.validate(values or {})
-        reason = self.requirement(env, checked)
+        reason = self.fits(env, checked)
         if reason is not None:
             raise WrapperMismatchError(reason, WrapperChoice(self.name, tuple(checked.items())))
         return self.factory(env, **checked)
 
 
-CATALOG: dict[str, WrapperSpec] = {
-    spec.name: spec
-    for spec in (
-        WrapperSpec(
-            name="TimeLimit",
-            summary="Cuts each episode off after N steps (truncated, not terminated): "
-            "the goal must be reached in time.",
-            params=(
-                Param(
-                    "max_episode_steps", int, default=100, minimum=1, maximum=100_000,
-                    help="steps after which the episode is truncated",
-                ),
-            ),
-            changes_observation=False,
-            factory=replace_time_limit,
-            requirement=fits_time_limit,
-        ),
-        WrapperSpec(
-            name="FlattenObservation",
-            summary="Turns the observation into one flat vector (one-hot for discrete parts): "
-            "same information, a different shape to learn from.",
-            params=(),
-            changes_observation=True,
-            factory=FlattenObservation,
-            requirement=fits_flatten,
-        ),
-        WrapperSpec(
-            name="TimeAwareObservation",
-            summary="Adds the step count to the observation, so the same position early and "
-            "near the time limit become different states.",
-            params=(
-                Param(
-                    "flatten", bool, default=True,
-                    help="flatten the result into one vector (discrete parts one-hot)",
-                ),
-                Param(
-                    "normalize_time", bool, default=False,
-                    help="time as a fraction of the limit in [0, 1] instead of a step count",
-                ),
-            ),
-            changes_observation=True,
-            factory=TimeAwareObservation,
-            requirement=fits_time_aware,
-        ),
-        WrapperSpec(
-            name="StickyAction",
-            summary="With probability p the env repeats the previous action instead of yours: "
-            "the world no longer obeys exactly, so plans must be robust.",
-            params=(
-                Param(
-                    "repeat_action_probability", float, default=0.25, minimum=0.0, maximum=0.99,
-                    help="chance that a step repeats the previous action (Machado et al.: 0.25)",
-                ),
-                Param(
-                    "repeat_action_duration", int, default=1, minimum=1, maximum=100,
-                    help="how many steps a repeat lasts once it starts",
-                ),
-            ),
-            changes_observation=False,
-            factory=StickyAction,
-        ),
-        WrapperSpec(
-            name="DelayObservation",
-            summary="Shows each observation `delay` steps late (zeros at first): "
-            "the agent must act on stale information.",
-            params=(
-                Param(
-                    "delay", int, default=1, minimum=1, maximum=100,
-                    help="steps by which observations arrive late",
-                ),
-            ),
-            changes_observation=True,
-            factory=DelayObservation,
-            requirement=fits_delay,
-        ),
-        WrapperSpec(
-            name="ClipReward",
-            summary="Clamps each reward into [min, max]: big wins and losses start to look "
-            "alike, which changes what is worth chasing.",
-            params=(
-                Param(
-                    "min_reward", float, default=-1.0, minimum=-1000.0, maximum=1000.0,
-                    help="lowest reward let through",
-                ),
-                Param(
-                    "max_reward", float, default=1.0, minimum=-1000.0, maximum=1000.0,
-                    help="highest reward let through",
-                ),
-            ),
-            changes_observation=False,
-            factory=ClipReward,
-            cross_check=_check_clip_bounds,
-        ),
-        WrapperSpec(
-            name="ScaleReward",
-            summary="Multiplies every reward by a factor: for factor > 0 the best policy stays "
-            "the same, but the values learned and the pace of learning change.",
-            params=(
-                Param(
-                    "factor", float, default=10.0, minimum=-100.0, maximum=100.0,
-                    help="multiplier applied to every reward",
-                ),
-            ),
-            changes_observation=False,
-            factory=ScaleReward,
-        ),
-        WrapperSpec(
-            name="StepPenalty",
-            summary="Subtracts a small cost from every step's reward: dawdling gets expensive, "
-            "so shorter episodes win.",
-            params=(
-                Param(
-                    "penalty", float, default=0.01, minimum=0.0, maximum=10.0,
-                    help="cost subtracted from each step's reward",
-                ),
-            ),
-            changes_observation=False,
-            factory=StepPenalty,
-        ),
-        WrapperSpec(
-            name="DistanceShaping",
-            summary="Adds -k x distance-to-target to each step's reward (the tutorial's "
-            "Option 2): a dense hint that speeds learning but can mislead if k is large.",
-            params=(
-                Param(
-                    "k", float, default=0.1, minimum=0.0, maximum=10.0,
-                    help="reward lost per cell of distance still to go",
-                ),
-            ),
-            changes_observation=False,
-            factory=DistanceShaping,
-            requirement=fits_distance,
-        ),
-    )
-}
+class ScaleReward(gym.RewardWrapper[ObsType, ActType], gym.utils.RecordConstructorArgs):
+    """Multiplies every reward by a constant `factor`.
+
+    For `factor > 0` the optimal policy is unchanged; what changes is the size
+    of the values the agent learns (and so how its fixed learning rate and its
+    zero-initialised table behave). A negative factor turns goals into things
+    to avoid.
+
+    Args:
+        env: the environment to wrap.
+        factor: the multiplier, any finite number.
+    """
+
+    def __init__(self, env: gym.Env[ObsType, ActType], factor: float) -> None:
+        factor = finite_number("ScaleReward factor", factor)
+        gym.utils.RecordConstructorArgs.__init__(self, factor=factor)
+        gym.RewardWrapper.__init__(self, env)
+        self.factor = factor
+
+    def reward(self, reward: SupportsFloat) -> float:
+        return self.factor * float(reward)
+
+
+class StepPenalty(gym.RewardWrapper[ObsType, ActType], gym.utils.RecordConstructorArgs):
+    """Subtracts a fixed `penalty` from the reward of every step, the last one included.
+
+    It is the tutorial's reward "Option 1" applied from outside the env: a
+    cost for time makes shorter episodes worth more.
+
+    Args:
+        env: the environment to wrap.
+        penalty: the cost of one step, finite and `>= 0`.
+    """
+
+    def __init__(self, env: gym.Env[ObsType, ActType], penalty: float) -> None:
+        penalty = finite_number("StepPenalty penalty", penalty, minimum=0.0)
+        gym.utils.RecordConstructorArgs.__init__(self, penalty=penalty)
+        gym.RewardWrapper.__init__(self, env)
+        self.penalty = penalty
+
+    def reward(self, reward: SupportsFloat) -> float:
+        return float(reward) - self.penalty
+
+
+class DistanceShaping(
+    gym.Wrapper[ObsType, ActType, ObsType, ActType], gym.utils.RecordConstructorArgs
+):
+    """Adds `-k * info["distance"]` (the distance after the move) to each step's reward.
+
+    This is the tutorial's reward "Option 2", distance-based shaping: a dense
+    hint that points the agent at the target. On the step that reaches the
+    target the distance is 0, so the goal reward comes through unchanged. The
+    hint is not potential-based, so a large `k` can change what the agent
+    thinks is best (it learns to stay near, not to arrive).
+
+    The wrapped env must put the distance in `info["distance"]` on every step,
+    as envs with `reports_distance` do.
+
+    Args:
+        env: the environment to wrap.
+        k: the weight of the distance, finite and `>= 0`.
+    """
+
+    def __init__(self, env: gym.Env[ObsType, ActType], k: float) -> None:
+        k = finite_number("DistanceShaping k", k, minimum=0.0)
+        gym.utils.RecordConstructorArgs.__init__(self, k=k)
+        gym.Wrapper.__init__(self, env)
+        self.k = k
+
+    def step(self, action: ActType) -> tuple[ObsType, SupportsFloat, bool, bool, dict[str, Any]]:
+        observation, reward, terminated, truncated, info = self.env.step(action)
+        if "distance" not in info:
+            raise KeyError(
+                "DistanceShaping needs info['distance'] from every step; "
+                f"{self.env} returned info keys {sorted(info)!r}"
+            )
+        shaped = float(reward) - self.k * float(info["distance"])
+        return observation, shaped, terminated, truncated, info
+
+
+def _time_limits(env: gym.Env) -> list[int]:
+    """The limits of every `TimeLimit` in the stack, outermost first."""
+    found = (time_limit(layer) for layer in reversed(layers(env)))
+    return [limit for limit in found if limit is not None]
+
+
+def _fits_time_limit(env: gym.Env, values: Mapping[str, Any] | None) -> str | None:
+    # An outermost TimeLimit is replaced, not stacked on; only the ones below count.
+    limits = _time_limits(getattr(env, "env", env) if time_limit(env) else env)
+    if values is None or not limits or values["max_episode_steps"] <= min(limits):
+        return None
+    steps, inner = values["max_episode_steps"], min(limits)
+    return (f"TimeLimit of {steps} steps cannot lengthen the {inner}-step limit of "
+            f"{env_label(env)} from outside other wrappers: put TimeLimit first, "
+            f"or choose at most {inner}")
+
+
+def _fits_flatten(env: gym.Env, values: Mapping[str, Any] | None) -> str | None:
+    try:
+        spaces.flatten_space(env.observation_space)
+    except (NotImplementedError, TypeError, ValueError):
+        return (f"FlattenObservation cannot flatten the {type(env.observation_space).__name__} "
+                f"observations of {env_label(env)}")
+    return None
+
+
+def _fits_time_aware(env: gym.Env, values: Mapping[str, Any] | None) -> str | None:
+    spec, space = env.spec, env.observation_space
+    if (spec is None or spec.max_episode_steps is None) and not _time_limits(env):
+        return ("TimeAwareObservation needs a time limit: add TimeLimit before it "
+                f"({env_label(env)} has none)")
+    if isinstance(space, spaces.Dict) and "time" in space.spaces:
+        return ("TimeAwareObservation adds a 'time' entry, and the observations of "
+                f"{env_label(env)} already have one")
+    if values is not None and values["flatten"] and _fits_flatten(env, values) is not None:
+        return (f"TimeAwareObservation(flatten=true) cannot flatten the "
+                f"{type(space).__name__} observations of {env_label(env)}")
+    return None
+
+
+def _fits_delay(env: gym.Env, values: Mapping[str, Any] | None) -> str | None:
+    try:
+        create_zero_array(env.observation_space)
+    except (gym.error.CustomSpaceError, TypeError, NotImplementedError):
+        return ("DelayObservation needs an observation space it can fill with zeros; "
+                f"the {type(env.observation_space).__name__} of {env_label(env)} is not one")
+    return None
+
+
+def _fits_distance(env: gym.Env, values: Mapping[str, Any] | None) -> str | None:
+    if getattr(env.unwrapped, "reports_distance", False):  # info["distance"] every step
+        return None
+    return ("DistanceShaping needs an env that reports info['distance'] each step; "
+            f"{env_label(env)} does not")
+
+
+CATALOG: dict[str, WrapperSpec] = {spec.name: spec for spec in (
+    WrapperSpec(
+        "TimeLimit", "Cuts each episode off after N steps (truncated, not terminated): "
+        "the goal must be reached in time.",
+        (Param("max_episode_steps", int, default=100, minimum=1, maximum=100_000,
+               help="steps after which the episode is truncated"),),
+        replace_time_limit, requirement=_fits_time_limit,
+    ),
+    WrapperSpec(
+        "FlattenObservation", "Turns the observation into one flat vector (one-hot for "
+        "discrete parts): same information, a different shape to learn from.",
+        (), FlattenObservation, changes_observation=True, requirement=_fits_flatten,
+    ),
+    WrapperSpec(
+        "TimeAwareObservation", "Adds the step count to the observation, so the same position "
+        "early and near the time limit become different states.",
+        (Param("flatten", bool, default=True,
+               help="flatten the result into one vector (discrete parts one-hot)"),
+         Param("normalize_time", bool, default=False,
+               help="time as a fraction of the limit in [0, 1] instead of a step count")),
+        TimeAwareObservation, changes_observation=True, requirement=_fits_time_aware,
+    ),
+    WrapperSpec(
+        "StickyAction", "With probability p the env repeats the previous action instead of "
+        "yours: the world no longer obeys exactly, so plans must be robust.",
+        (Param("repeat_action_probability", float, default=0.25, minimum=0.0, maximum=0.99,
+               help="chance that a step repeats the previous action (Machado et al.: 0.25)"),
+         Param("repeat_action_duration", int, default=1, minimum=1, maximum=100,
+               help="how many steps a repeat lasts once it starts")),
+        StickyAction,
+    ),
+    WrapperSpec(
+        "DelayObservation", "Shows each observation `delay` steps late (zeros at first): "
+        "the agent must act on stale information.",
+        (Param("delay", int, default=1, minimum=1, maximum=100,
+               help="steps by which observations arrive late"),),
+        DelayObservation, changes_observation=True, requirement=_fits_delay,
+    ),
+    WrapperSpec(
+        "ClipReward", "Clamps each reward into [min, max]: big wins and losses start to look "
+        "alike, which changes what is worth chasing.",
+        (Param("min_reward", float, default=-1.0, minimum=-1000.0, maximum=1000.0,
+               help="lowest reward let through"),
+         Param("max_reward", float, default=1.0, minimum=-1000.0, maximum=1000.0,
+               help="highest reward let through")),
+        ClipReward, cross_check=_check_clip_bounds,
+    ),
+    WrapperSpec(
+        "ScaleReward", "Multiplies every reward by a factor: for factor > 0 the best policy "
+        "stays the same, but the values learned and the pace of learning change.",
+        (Param("factor", float, default=10.0, minimum=-100.0, maximum=100.0,
+               help="multiplier applied to every reward"),),
+        ScaleReward,
+    ),
+    WrapperSpec(
+        "StepPenalty", "Subtracts a small cost from every step's reward: dawdling gets "
+        "expensive, so shorter episodes win.",
+        (Param("penalty", float, default=0.01, minimum=0.0, maximum=10.0,
+               help="cost subtracted from each step's reward"),),
+        StepPenalty,
+    ),
+    WrapperSpec(
+        "DistanceShaping", "Adds -k x distance-to-target to each step's reward (the "
+        "tutorial's Option 2): a dense hint that speeds learning but can mislead if k is large.",
+        (Param("k", float, default=0.1, minimum=0.0, maximum=10.0,
+               help="reward lost per cell of distance still to go"),),
+        DistanceShaping, requirement=_fits_distance,
+    ),
+)}
 
 _BY_FOLDED_NAME = {name.casefold(): spec for name, spec in CATALOG.items()}
 

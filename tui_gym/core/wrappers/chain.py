@@ -1,4 +1,4 @@
-"""The one reader of a built env's wrapper chain."""
+"""The one reader of a built env's wrapper chain, and how an env is named in messages."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from typing import Any
 import gymnasium as gym
 from gymnasium.wrappers import TimeLimit
 
-__all__ = ["elapsed", "layers", "time_limit"]
+__all__ = ["elapsed", "env_label", "layers", "time_limit"]
 
 
 def layers(env: Any) -> list[gym.Wrapper]:
@@ -28,3 +28,9 @@ def time_limit(layer: Any) -> int | None:
 def elapsed(layer: Any) -> int:
     """The steps a `TimeLimit` layer has counted this episode (0 before the first)."""
     return int(getattr(layer, "_elapsed_steps", 0) or 0)
+
+
+def env_label(env: gym.Env) -> str:
+    """How an env is named in messages: its id, else its class name."""
+    spec = env.spec
+    return spec.id if spec is not None else type(env.unwrapped).__name__

@@ -2,21 +2,18 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import gymnasium as gym
 from gymnasium.wrappers import OrderEnforcing, PassiveEnvChecker
 
+from tui_gym.core.wrappers.catalog import DistanceShaping
 from tui_gym.core.wrappers.chain import layers, time_limit
-from tui_gym.core.wrappers.custom import DistanceShaping
 
 __all__ = ["NO_CHANGES", "GameChanges", "registry_limit"]
 
 _TRANSPARENT = (OrderEnforcing, PassiveEnvChecker)
-
-RewardStep = Callable[[float, float], float]
 
 
 @dataclass(frozen=True)
@@ -27,7 +24,7 @@ class GameChanges:
     time_limit: int | None = None  # the tightest TimeLimit in force (a registered one included)
     chosen_time_limit: bool = False  # whether a TimeLimit other than the registered one applies
     others: tuple[str, ...] = ()  # wrappers that change the dynamics, e.g. "StickyAction"
-    _steps: tuple[RewardStep, ...] = field(default=(), repr=False, compare=False)
+    _steps: tuple[gym.Env, ...] = field(default=(), repr=False, compare=False)  # reward layers
 
     @classmethod
     def of(cls, env: gym.Env, made_limit: int | None | str = "registry") -> GameChanges:
@@ -41,7 +38,7 @@ class GameChanges:
         registered = made_limit if not isinstance(made_limit, str) else registry_limit(
             env.unwrapped)
         labels: list[str] = []
-        steps: list[RewardStep] = []
+        steps: list[gym.Env] = []
         others: list[str] = []
         limit: int | None = None
         chosen = False
@@ -55,13 +52,10 @@ class GameChanges:
                 if not (isinstance(below, _TRANSPARENT) and n == registered):
                     chosen = True
                 continue
-            if isinstance(layer, gym.RewardWrapper):
-                steps.append(_reward_step(layer))
-            elif isinstance(layer, DistanceShaping):
-                steps.append(_shaping_step(float(layer.k)))
-            else:
+            if not isinstance(layer, gym.RewardWrapper | DistanceShaping):
                 others.append(type(layer).__name__)
                 continue
+            steps.append(layer)
             labels.append(_label(layer))
         return cls(tuple(labels), limit, chosen, tuple(others), tuple(steps))
 
@@ -72,8 +66,11 @@ class GameChanges:
     def reward(self, base: float, distance: float = 0.0) -> float:
         """The reward of a step whose bare reward is `base`, as the wrapped env gives it."""
         value = float(base)
-        for step in self._steps:
-            value = step(value, float(distance))
+        for layer in self._steps:
+            if isinstance(layer, DistanceShaping):
+                value -= float(layer.k) * float(distance)
+            else:
+                value = float(layer.reward(value))  # type: ignore[attr-defined]
         return value
 
     def reward_names(self) -> str:
@@ -90,20 +87,6 @@ def registry_limit(env: gym.Env) -> int | None:
     if spec is not None and spec.id in gym.registry:
         return gym.registry[spec.id].max_episode_steps
     return None
-
-
-def _reward_step(layer: gym.RewardWrapper) -> RewardStep:
-    def step(reward: float, distance: float) -> float:
-        return float(layer.reward(reward))
-
-    return step
-
-
-def _shaping_step(k: float) -> RewardStep:
-    def step(reward: float, distance: float) -> float:
-        return reward - k * distance
-
-    return step
 
 
 def _label(layer: gym.Env) -> str:

@@ -1,7 +1,7 @@
 """ab-grid: Sutton & Barto's Example 3.5, the 5 x 5 grid with the special cells A and B.
 
 Spaces and rewards: `tui_gym.envs.dp_grid.ABGridEnv`. The book's task never ends; tui-gym
-plays it in episodes of `EPISODE_LIMIT` steps, undiscounted, while the Plan view and
+plays it in episodes of 50 steps, undiscounted, while the Plan view and
 `tui-gym plan` show the book's values, discounted by 0.9 with no end (Figures 3.2, 3.5).
 """
 
@@ -15,9 +15,7 @@ from tui_gym.games.base import Narrator
 from tui_gym.games.dp_grid import DPGridGame
 from tui_gym.games.words import format_reward, plural
 
-__all__ = ["EPISODE_LIMIT", "ABGridGame"]
-
-EPISODE_LIMIT = 50  # steps (the env's registration)
+__all__ = ["ABGridGame"]
 
 
 class ABGridNarrator(Narrator):

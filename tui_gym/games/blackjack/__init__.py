@@ -1,5 +1,4 @@
-"""Blackjack: the game (`game`), its exact dynamic programme (`solver`) and its
-finite model over the observations (`model`)."""
+"""Blackjack: the game (`game`), and its exact dynamic programme and finite model (`solver`)."""
 
 from tui_gym.games.blackjack.game import BlackjackGame
 

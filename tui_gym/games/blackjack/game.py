@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from functools import lru_cache
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -28,12 +27,19 @@ from tui_gym.games.base import (
     Scope,
     StateSpace,
     TrainingModel,
+    greedy_cells,
     greedy_probabilities,
 )
 from tui_gym.games.blackjack.solver import (
+    BASE_STATES,
+    DEALERS,
+    N_BASE,
     POLICY_SHAPE,
     BlackjackRules,
+    base_state,
+    blackjack_model,
     mixed_policy_value,
+    observation_rows,
     optimal_action_values,
     optimal_policy,
     optimal_value,
@@ -56,35 +62,13 @@ LONGEST_HAND = 20  # steps: 19 hits from two aces to 21 aces-as-one, then a stic
 TRAINED_GAP = 0.005  # what the default training reaches (see the README)
 
 
-@lru_cache(maxsize=1)
-def _base_states() -> tuple[tuple[int, int, int], ...]:
-    states = []
-    for usable in (0, 1):
-        low = 12 if usable else 4
-        for player in range(low, 22):
-            for dealer in DEALER_CARDS:
-                states.append((player, dealer, usable))
-    return tuple(states)
-
-
-@lru_cache(maxsize=1)
-def _row_of() -> dict[tuple[int, int, int], int]:
-    return {s: i for i, s in enumerate(_base_states())}
-
-
-@lru_cache(maxsize=2)
 def _chart_rows(usable: int) -> np.ndarray:
     """The Q-table row of each chart cell (player sum x dealer card), for one ace state."""
-    row_of = _row_of()
-    return np.array([[row_of[(player, dealer, usable)] for dealer in DEALER_CARDS]
+    return np.array([[base_state(player, dealer, usable) for dealer in DEALER_CARDS]
                      for player in CHART_SUMS])
 
 
-@lru_cache(maxsize=1)
-def _base_index() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Where each base state sits in a (32, 11, 2) policy table."""
-    states = np.array(_base_states())
-    return states[:, 0], states[:, 1], states[:, 2]
+_BASE_INDEX = tuple(np.array(o) for o in zip(*BASE_STATES, strict=True))  # in a (32, 11, 2) table
 
 
 def hand_value(cards: list[int]) -> tuple[int, bool]:
@@ -99,15 +83,11 @@ def card_label(card: int) -> str:
     return "A" if card == 1 else str(card)
 
 
-def rules_of(kwargs: Mapping[str, Any]) -> BlackjackRules:
-    return BlackjackRules.from_env_kwargs(kwargs)
-
-
 class BlackjackStates(StateSpace):
     """Decision states `(player sum, dealer card, usable ace)`; the hands as the scene."""
 
     def base_observations(self, kwargs: Mapping[str, Any]) -> list[Any]:
-        return list(_base_states())
+        return list(BASE_STATES)
 
     def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
         player, dealer, usable = (int(v) for v in observation)
@@ -142,7 +122,7 @@ class BlackjackOracle(Oracle):
 
     def rules(self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> BlackjackRules:
         """The rules the exact figures use: the wrapped game's where `scope` is exact."""
-        rules = rules_of(kwargs)
+        rules = BlackjackRules.from_env_kwargs(kwargs)
         if changes.changes_rewards and self.scope(kwargs, changes).exact:
             rules = rules.with_rewards(changes.reward)
         return rules
@@ -162,7 +142,7 @@ class BlackjackOracle(Oracle):
         """The greedy policy of `q` (rows = base states) as a (32, 11, 2) table of the
         chance to hit: 0 or 1, or 0.5 where the two actions tie (the agent picks at random)."""
         table = np.zeros(POLICY_SHAPE, dtype=np.float64)
-        table[_base_index()] = greedy_probabilities(q)[:, 1]
+        table[_BASE_INDEX] = greedy_probabilities(q)[:, 1]
         return table
 
     def policy_value(self, q: np.ndarray, rules: BlackjackRules) -> float:
@@ -175,7 +155,7 @@ class BlackjackOracle(Oracle):
     def reference(
         self, q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> ReferenceMetrics | NotAvailable:
-        if np.shape(q) != (len(_base_states()), 2):
+        if np.shape(q) != (N_BASE, 2):
             return NotAvailable(f"a table of shape {np.shape(q)} does not fit Blackjack")
         rules = self.rules(kwargs, changes)
         exact = self.policy_value(q, rules)
@@ -225,14 +205,14 @@ class BlackjackOracle(Oracle):
     def optimal_marks(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> np.ndarray:
-        best = optimal_policy(self.rules(kwargs, changes))[_base_index()]
+        best = optimal_policy(self.rules(kwargs, changes))[_BASE_INDEX]
         marks = np.zeros((len(best), 2), dtype=bool)
         marks[np.arange(len(best)), best] = True
         return marks
 
     def optimum(self, kwargs: Mapping[str, Any]) -> Optimum:
-        rules = rules_of(kwargs)
-        q = optimal_action_values(rules, soft_21="drawn")[_base_index()]
+        rules = BlackjackRules.from_env_kwargs(kwargs)
+        q = optimal_action_values(rules, soft_21="drawn")[_BASE_INDEX]
         return Optimum(
             value=optimal_value(rules),
             summary="the exact expected return per hand of the optimal strategy", q=q,
@@ -312,38 +292,25 @@ class BlackjackLayout(HeatmapLayout):
     def heatmaps(
         self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
-        if np.shape(q) != (len(_base_states()), 2):
+        if np.shape(q) != (N_BASE, 2):
             return []
         has_marks = isinstance(marks, np.ndarray)
-        panels = []
-        for usable, title in ((1, "usable ace"), (0, "no usable ace")):
+
+        def chart(usable: int, title: str) -> Heatmap:
             rows = _chart_rows(usable)
-            qs = q[rows]  # (sums, cards, actions)
-            actions = qs.argmax(axis=-1)
-            values = qs.max(axis=-1).astype(float)
-            tied = qs[..., 0] == qs[..., 1]  # no preference: the agent picks at random
-            if has_marks:
-                optimal = np.take_along_axis(marks[rows], actions[..., None], axis=-1)[..., 0]
-                marked = ~optimal & ~tied
-            else:
-                marked = np.zeros(actions.shape, dtype=bool)
-            labels = tuple(
-                tuple(TIED if t else ACTION_LETTERS[a] for a, t in zip(row, ties, strict=True))
-                for row, ties in zip(actions.tolist(), tied.tolist(), strict=True)
+            values, labels, marked = greedy_cells(
+                len(CHART_SUMS), len(DEALER_CARDS), lambda r, c: None, lambda r, c: q[rows[r, c]],
+                ACTION_LETTERS.__getitem__,
+                lambda r, c, action: has_marks and not marks[rows[r, c], action],
             )
-            panels.append(
-                Heatmap(
-                    title=f"Q-values, {title}",
-                    row_labels=tuple(str(s) for s in CHART_SUMS),
-                    col_labels=DEALER_LABELS,
-                    values=values,
-                    labels=labels,
-                    marked=marked,
-                    legend="rows: player sum  cols: dealer card  H hit  S stick  "
-                    f"{TIED} tie  * not optimal",
-                )
+            return Heatmap(
+                title=f"Q-values, {title}", row_labels=tuple(str(s) for s in CHART_SUMS),
+                col_labels=DEALER_LABELS, values=values, labels=labels, marked=marked,
+                legend=f"rows: player sum  cols: dealer card  H hit  S stick  {TIED} tie  "
+                "* not optimal",
             )
-        return panels
+
+        return [chart(1, "usable ace"), chart(0, "no usable ace")]
 
 
 class BlackjackGame(Game):
@@ -398,22 +365,19 @@ class BlackjackGame(Game):
     layout_type = BlackjackLayout
 
     def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel:
-        """The hands as a finite model (`finite_model`); a natural plays as a soft 21."""
-        from tui_gym.games.blackjack.finite_model import N_BASE, blackjack_model, natural_base_rows
+        """The hands as a finite model (`solver.blackjack_model`); a natural plays as a soft 21."""
         from tui_gym.games.planning import PlanModel
 
-        base_of = np.concatenate([np.arange(N_BASE), natural_base_rows()])
-        return PlanModel(blackjack_model(rules_of(kwargs)), 1.0, None, base_of=base_of,
-                         shown=np.arange(N_BASE))
+        base_of = np.r_[np.arange(N_BASE), base_state(21, 1, 1) + np.arange(DEALERS)]
+        model = blackjack_model(BlackjackRules.from_env_kwargs(kwargs))
+        return PlanModel(model, 1.0, None, base_of=base_of, shown=np.arange(N_BASE))
 
     def training_model(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> TrainingModel | NotAvailable:
-        from tui_gym.games.blackjack.finite_model import blackjack_model, observation_rows
-
         if changes.others:
             return NotAvailable(unwrapped_note(changes.others))
-        rules = rules_of(kwargs)
+        rules = BlackjackRules.from_env_kwargs(kwargs)
         if changes.changes_rewards:
             rules = rules.with_rewards(changes.reward)
         model = blackjack_model(rules)

@@ -1,4 +1,4 @@
-"""Exact dynamic programming for Gymnasium's ``Blackjack-v1``.
+"""Exact dynamic programming for Gymnasium's ``Blackjack-v1``, and the game as a `FiniteMDP`.
 
 A natural is a hidden state of its own (it pays differently under `natural` and `sab`)
 while every policy stays a function of the observation.
@@ -13,10 +13,13 @@ from typing import Any, Literal
 
 import numpy as np
 
+from tui_gym.core.mdp import FiniteMDP
+
 __all__ = [
-    "DEFAULT_RULES", "DECISION_MASK", "HIT", "POLICY_SHAPE", "STICK", "BlackjackRules",
-    "optimal_action_values", "optimal_policy", "mixed_policy_value", "optimal_value",
-    "policy_from_function", "policy_value", "stick_chances", "stick_paid",
+    "BASE_STATES", "DEALERS", "DEFAULT_RULES", "DECISION_MASK", "HIT", "N_BASE", "POLICY_SHAPE",
+    "STICK", "BlackjackRules", "base_state", "blackjack_model", "mixed_policy_value",
+    "observation_rows", "optimal_action_values", "optimal_policy", "optimal_value",
+    "policy_from_function", "policy_value",
 ]
 
 
@@ -140,6 +143,20 @@ assert all(_HIT_MATRIX[s, nxt] == 0.0 for i, s in enumerate(_ORDER) for nxt in _
     "hit transitions must point to states evaluated earlier"
 )
 
+# The model's states: `live * 10 + dealer - 1` per live player state and dealer card, so the
+# game's base states (every observation asking for a decision) come first, the naturals last.
+DEALERS = 10
+N_BASE = _NATURAL * DEALERS
+_OBSERVED = (np.repeat(_STATE_SUM, DEALERS), np.tile(np.arange(1, DEALERS + 1), _N_LIVE),
+             np.repeat(_STATE_USABLE, DEALERS))  # each model state's (sum, dealer, usable ace)
+BASE_STATES = tuple(zip(*(o[:N_BASE].tolist() for o in _OBSERVED), strict=True))
+
+
+def base_state(total: int, dealer: int, usable: int) -> int:
+    """The base state (and model state) of an observation that asks for a decision."""
+    return ((_SOFT if usable else _HARD)[total]) * DEALERS + dealer - 1
+
+
 DECISION_MASK = np.zeros(POLICY_SHAPE, dtype=bool)
 DECISION_MASK[_STATE_SUM[:, None], np.arange(1, 11)[None, :], _STATE_USABLE[:, None]] = True
 DECISION_MASK.setflags(write=False)
@@ -223,19 +240,6 @@ def _stick_rewards(rules: BlackjackRules) -> np.ndarray:
     return rewards
 
 
-def _terminal_values(rules: BlackjackRules) -> np.ndarray:
-    """State values before any policy: only the bust state's reward is known."""
-    values = np.zeros((_N_LIVE + 1, 10))
-    values[_BUST] = rules.payoffs[0]
-    return values
-
-
-def _hit_values(s: int, values: np.ndarray, rules: BlackjackRules) -> np.ndarray:
-    """Expected return of hitting in state ``s`` (per up card), then following ``values``:
-    the reward of a hit that does not bust, or of the bust, plus what follows."""
-    return _HIT_MATRIX[s] @ values + rules.payoffs[1] * _NO_BUST[s]
-
-
 # ---------------------------------------------------------------------------
 # Policy evaluation
 
@@ -256,21 +260,35 @@ def _check_policy(policy: np.ndarray) -> np.ndarray:
     return acts == HIT
 
 
-def _evaluate(hit: np.ndarray, rules: BlackjackRules) -> np.ndarray:
-    """State values (30 incl. bust, 10 up cards) of the policy that hits with
-    probability ``hit`` (a bool mask for a deterministic policy)."""
+def _sweep(
+    rules: BlackjackRules, hit: np.ndarray | None = None, hit_at_21: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Backward induction over `_ORDER`: the hit choice (29, 10), Q (29, 10, 2) and V (30 incl.
+    bust, 10 up cards) of the policy that hits with probability `hit` (a bool mask for a
+    deterministic policy), or with `hit` None of the greedy policy but at the soft-21
+    observation, whose action per up card `hit_at_21` fixes (every other observation is one
+    hidden state, so acting greedily there is optimal given that choice)."""
     stick = _stick_rewards(rules)
-    values = _terminal_values(rules)
-    mixed = hit.dtype != bool
+    values = np.zeros((_N_LIVE + 1, 10))
+    values[_BUST] = rules.payoffs[0]
+    q = np.empty((_N_LIVE, 10, 2))
+    chosen = np.zeros((_N_LIVE, 10), dtype=bool if hit is None else hit.dtype)
     for s in _ORDER:
-        row = hit[s]
-        if not row.any():
-            values[s] = stick[s]
-        elif mixed:
-            values[s] = row * _hit_values(s, values, rules) + (1.0 - row) * stick[s]
+        # A hit pays what a hit that does not bust pays, or the bust, plus what follows.
+        q_hit = _HIT_MATRIX[s] @ values + rules.payoffs[1] * _NO_BUST[s]
+        q[s, :, STICK], q[s, :, HIT] = stick[s], q_hit
+        if hit is not None:
+            chosen[s] = hit[s]
+        elif s in (_SOFT_21, _NATURAL):
+            chosen[s] = hit_at_21
         else:
-            values[s] = np.where(row, _hit_values(s, values, rules), stick[s])
-    return values
+            chosen[s] = q_hit > stick[s] + _TIE_TOLERANCE
+        row = chosen[s]
+        if row.dtype == bool:
+            values[s] = np.where(row, q_hit, stick[s])
+        else:
+            values[s] = row * q_hit + (1.0 - row) * stick[s]
+    return chosen, q, values
 
 
 def _start_value(values: np.ndarray) -> float:
@@ -285,7 +303,7 @@ def policy_value(policy: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> f
     usable_ace]`` with 0 = stick, 1 = hit; only decision states (`DECISION_MASK`)
     are read. The policy's action at ``(21, d, 1)`` applies to a natural too.
     """
-    return _start_value(_evaluate(_check_policy(policy), rules))
+    return _start_value(_sweep(rules, _check_policy(policy))[2])
 
 
 def mixed_policy_value(hit_probability: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> float:
@@ -298,7 +316,7 @@ def mixed_policy_value(hit_probability: np.ndarray, rules: BlackjackRules = DEFA
     p = np.asarray(_decisions(hit_probability), dtype=np.float64)
     if not ((p >= 0.0) & (p <= 1.0)).all():
         raise ValueError("hit probabilities at decision states must be in [0, 1]")
-    return _start_value(_evaluate(p, rules))
+    return _start_value(_sweep(rules, p)[2])
 
 
 # ---------------------------------------------------------------------------
@@ -311,28 +329,6 @@ class _Solution:
     q: np.ndarray  # (29, 10, 2) Q* per hidden state
     values: np.ndarray  # (30, 10) V* per hidden state
     occupancy: np.ndarray  # (29, 10) P(visit state | up card) under the optimal policy
-
-
-def _greedy_solve(rules: BlackjackRules, hit_at_21: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Backward induction with the soft-21 observation's action fixed per up card.
-
-    Every other observation is one hidden state, so acting greedily there is
-    optimal given the fixed choice. Returns (hit mask, Q, V).
-    """
-    stick = _stick_rewards(rules)
-    values = _terminal_values(rules)
-    q = np.empty((_N_LIVE, 10, 2))
-    hit = np.zeros((_N_LIVE, 10), dtype=bool)
-    for s in _ORDER:
-        q_hit = _hit_values(s, values, rules)
-        q[s, :, STICK] = stick[s]
-        q[s, :, HIT] = q_hit
-        if s in (_SOFT_21, _NATURAL):
-            hit[s] = hit_at_21
-        else:
-            hit[s] = q_hit > stick[s] + _TIE_TOLERANCE
-        values[s] = np.where(hit[s], q_hit, stick[s])
-    return hit, q, values
 
 
 def _occupancy(hit: np.ndarray) -> np.ndarray:
@@ -350,9 +346,9 @@ def _solve(rules: BlackjackRules) -> _Solution:
     # better start value; all else is ordinary backward induction.
     never = np.zeros(10, dtype=bool)
     always = np.ones(10, dtype=bool)
-    stick_start = _greedy_solve(rules, never)[2][:_N_LIVE].T @ _INITIAL
-    hit_start = _greedy_solve(rules, always)[2][:_N_LIVE].T @ _INITIAL
-    hit, q, values = _greedy_solve(rules, hit_start > stick_start + _TIE_TOLERANCE)
+    stick_start = _sweep(rules, hit_at_21=never)[2][:_N_LIVE].T @ _INITIAL
+    hit_start = _sweep(rules, hit_at_21=always)[2][:_N_LIVE].T @ _INITIAL
+    hit, q, values = _sweep(rules, hit_at_21=hit_start > stick_start + _TIE_TOLERANCE)
     for arr in (hit, q, values):
         arr.setflags(write=False)
     occupancy = _occupancy(hit)
@@ -431,3 +427,34 @@ def policy_from_function(fn: Callable[[int, int, int], int]) -> np.ndarray:
             )
         policy[player_sum, dealer_card, usable_ace] = int(action)
     return policy
+
+
+def observation_rows() -> np.ndarray:
+    """The row of the learners' table (the observation keyer's: mixed radix 32 x 11 x 2
+    over (player_sum, dealer_card, usable_ace)) of each model state; a natural's is
+    the soft 21's, which it shows as."""
+    total, dealer, usable = _OBSERVED
+    return (total * 11 + dealer) * 2 + usable
+
+
+@cache
+def blackjack_model(rules: BlackjackRules = DEFAULT_RULES) -> FiniteMDP:
+    """The game under `rules` as a `FiniteMDP` (kept), for the engine and for planning sweep
+    by sweep: a stick ends in a loss, a push or a win; a hit leads to a live state or a bust."""
+    lose_pay, push_pay = rules.payoffs[:2]
+    n_states, width = _N_LIVE * DEALERS, _N_LIVE + 1
+    live = np.repeat(np.arange(_N_LIVE), DEALERS)
+    next_state = np.broadcast_to(np.arange(n_states)[:, None, None], (n_states, 2, width)).copy()
+    prob, reward = np.zeros((n_states, 2, width)), np.zeros((n_states, 2, width))
+    terminal = np.zeros((n_states, 2, width), dtype=bool)
+    lose, push, win = stick_chances(rules)
+    for k, (chance, pay) in enumerate(((lose, lose_pay), (push, push_pay), (win, None))):
+        prob[:, 0, k] = chance.reshape(-1)
+        reward[:, 0, k] = stick_paid(rules)[live] if pay is None else pay
+        terminal[:, 0, k] = True
+    prob[:, 1] = _HIT_MATRIX[live]
+    next_state[:, 1, :_N_LIVE] = np.arange(_N_LIVE) * DEALERS + (_OBSERVED[1] - 1)[:, None]
+    reward[:, 1, :_N_LIVE] = push_pay
+    reward[:, 1, _BUST], terminal[:, 1, _BUST] = lose_pay, True
+    initial = (_INITIAL[:, None] * _CARD_PROBS[None, :]).reshape(-1)
+    return FiniteMDP(next_state, prob, reward, terminal, initial, action_names=("stick", "hit"))

@@ -1,14 +1,13 @@
 """car-rental: Sutton & Barto's Example 4.2, Jack's car rental, and Exercise 4.7's variant.
 
 Spaces and rewards: `tui_gym.envs.car_rental.CarRentalEnv`. The book's task never ends;
-tui-gym plays it in episodes of `EPISODE_LIMIT` days, undiscounted, while the Plan view
+tui-gym plays it in episodes of 20 days, undiscounted, while the Plan view
 and `tui-gym plan` show the book's values, discounted by 0.9 with no end (Figure 4.2).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -16,23 +15,15 @@ import numpy as np
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP
 from tui_gym.core.params import Param
-from tui_gym.envs.car_rental import MAX_CARS, MOVES, CarRentalEnv, car_rental_arrays
+from tui_gym.envs.car_rental import MAX_CARS, MOVES, CarRentalEnv, car_rental_model
 from tui_gym.games.base import TIED, UNREADABLE, HeatmapLayout, Narrator
 from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import format_reward, plural
 
-__all__ = ["EPISODE_LIMIT", "CarRentalGame"]
+__all__ = ["CarRentalGame"]
 
-EPISODE_LIMIT = 20  # days (the env's registration)
 SIDE = MAX_CARS + 1
-
-
-@lru_cache(maxsize=2)
-def _model(exercise: bool) -> FiniteMDP:
-    arrays = car_rental_arrays(exercise)
-    return FiniteMDP(arrays.next_state, arrays.prob, arrays.reward, arrays.terminal,
-                     arrays.initial, action_names=CarRentalEnv.action_names)
 
 
 def _grid(values: np.ndarray) -> np.ndarray:
@@ -168,7 +159,7 @@ class CarRentalGame(ModelGame):
     narrator_type = CarRentalNarrator
 
     def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP:
-        return _model(bool(kwargs.get("exercise", False)))
+        return car_rental_model(bool(kwargs.get("exercise", False)))
 
     def gap_tolerance(self, kwargs: Mapping[str, Any]) -> float:
         """A twentieth of the optimum (see `hyperparameters`)."""

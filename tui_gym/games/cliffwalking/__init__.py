@@ -119,9 +119,6 @@ class CliffWalkingGame(TileGame):
         return {"is_slippery": bool(kwargs.get("slippery", False)),
                 "max_episode_steps": EPISODE_LIMIT}
 
-    def builtin_limit(self, kwargs: Mapping[str, Any]) -> int:
-        return EPISODE_LIMIT
-
     def map_limit(self, grid_map: GridMap) -> int:
         return max(EPISODE_LIMIT, 2 * grid_map.rows * grid_map.cols)
 

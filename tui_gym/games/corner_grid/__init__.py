@@ -1,6 +1,6 @@
 """corner-grid: Sutton & Barto's Example 4.1, the 4 x 4 grid with two terminal corners.
 
-Spaces and rewards: `tui_gym.envs.dp_grid.CornerGridEnv`; truncated after `EPISODE_LIMIT`
+Spaces and rewards: `tui_gym.envs.dp_grid.CornerGridEnv`; truncated after 100
 steps.
 """
 
@@ -10,17 +10,16 @@ from collections.abc import Mapping
 from typing import Any
 
 from tui_gym.envs.dp_grid import CornerGridEnv, Grid
-from tui_gym.games.dp_grid import DPGridGame, ReachNarrator
+from tui_gym.games.base import ReachNarrator
+from tui_gym.games.dp_grid import DPGridGame
 
-__all__ = ["EPISODE_LIMIT", "CornerGridGame"]
-
-EPISODE_LIMIT = 100  # steps (the env's registration)
+__all__ = ["CornerGridGame"]
 
 
 class CornerNarrator(ReachNarrator):
     """Reached a corner, or ran out of time."""
 
-    goal_words = "a corner"
+    reached_words = "Reached a corner"
 
 
 class CornerGridGame(DPGridGame):

@@ -1,6 +1,6 @@
 """dyna-maze, blocking-maze, shortcut-maze: Sutton & Barto's mazes of chapter 8.
 
-Spaces and rewards: `tui_gym.envs.dyna_maze.MazeEnv`; truncated after `EPISODE_LIMIT`
+Spaces and rewards: `tui_gym.envs.dyna_maze.MazeEnv`; truncated after 5000
 steps. The blocking and shortcut mazes change after `change_at` steps: each phase has its
 own model (`phase_starts`, `world`), which the exact figures and the coach follow.
 Undiscounted, every way to the goal is worth +1, so the exact figures add the greedy
@@ -14,25 +14,19 @@ from typing import Any
 
 import numpy as np
 
-from tui_gym.core.mdp import FiniteMDP, NotAvailable, evaluate, solve, with_horizon
+from tui_gym.core.mdp import NotAvailable, evaluate, solve, with_horizon
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.envs.dp_grid import Cell, Grid
 from tui_gym.envs.dyna_maze import maze_phases
-from tui_gym.games.base import Advice, Bound, ReferenceMetrics
-from tui_gym.games.dp_grid import DPGridGame, Event, ReachNarrator
+from tui_gym.games.base import Advice, Bound, ReachNarrator, ReferenceMetrics
+from tui_gym.games.dp_grid import DPGridGame, Event
 from tui_gym.games.model import PHASE, ModelOracle, freeze
 from tui_gym.games.words import plural
 
-__all__ = ["EPISODE_LIMIT", "BlockingMazeGame", "DynaMazeGame", "ShortcutMazeGame"]
+__all__ = ["BlockingMazeGame", "DynaMazeGame", "ShortcutMazeGame"]
 
-EPISODE_LIMIT = 5000  # steps (the env's registration)
 DISCOUNT = 0.95  # the book's
-
-
-def _steps_model(model: FiniteMDP) -> FiniteMDP:
-    """The model paying -1 a step: a policy's value is minus its expected steps."""
-    return model.replace(reward=np.full(model.reward.shape, -1.0), reward_std=None)
 
 
 class MazeOracle(ModelOracle):
@@ -45,7 +39,8 @@ class MazeOracle(ModelOracle):
     def policy_reference(self, policy: np.ndarray, exact: Any, kwargs: Mapping[str, Any],
                          changes: GameChanges) -> ReferenceMetrics:
         reference = super().policy_reference(policy, exact, kwargs, changes)
-        steps = _steps_model(exact.model)
+        # The model paying -1 a step: a policy's value is minus its expected steps.
+        steps = exact.model.replace(reward=np.full(exact.model.reward.shape, -1.0), reward_std=None)
         mean = -evaluate(steps, policy).value
         key = (freeze(kwargs), changes)
         if key not in self._fewest:

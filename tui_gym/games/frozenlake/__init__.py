@@ -41,7 +41,7 @@ from tui_gym.games.tiles import CUSTOM, TileGame, TileLayout, TileNarrator, Tile
 __all__ = ["FrozenLakeGame", "lake_map"]
 
 MAPS = ("4x4", "8x8", "random", CUSTOM)
-SMALL_LIMIT, LARGE_LIMIT = 100, 200  # steps: Gymnasium's FrozenLake-v1 and FrozenLake8x8-v1
+LARGE_LIMIT = 200  # steps on a map of more than four rows (Gymnasium's FrozenLake8x8-v1)
 
 
 @lru_cache(maxsize=32)
@@ -109,9 +109,6 @@ class FrozenLakeGame(TileGame):
         if len(cells) > 4:
             out["max_episode_steps"] = LARGE_LIMIT
         return out
-
-    def builtin_limit(self, kwargs: Mapping[str, Any]) -> int:
-        return LARGE_LIMIT if len(lake_map(kwargs)) > 4 else SMALL_LIMIT
 
     def hyperparameter_table(
         self, kwargs: Mapping[str, Any] | None = None

@@ -1,12 +1,11 @@
 """gambler: Sutton & Barto's Example 4.3, the gambler's problem.
 
-Spaces and rewards: `tui_gym.envs.gambler.GamblerEnv`; truncated after `EPISODE_LIMIT` bets.
+Spaces and rewards: `tui_gym.envs.gambler.GamblerEnv`; truncated after 1000 bets.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -14,33 +13,19 @@ import numpy as np
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP
 from tui_gym.core.params import Param
-from tui_gym.envs.gambler import MAX_STAKE, GamblerEnv, gambler_arrays, stake_of
+from tui_gym.envs.gambler import MAX_STAKE, GamblerEnv, gambler_model, stakes
 from tui_gym.games.base import TIED, UNREADABLE, HeatmapLayout, Narrator, TallyWord
 from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.planning import PlanModel, StateLine
 from tui_gym.games.words import plural
 
-__all__ = ["EPISODE_LIMIT", "GamblerGame"]
+__all__ = ["GamblerGame"]
 
-EPISODE_LIMIT = 1000  # bets (the env's registration)
 ROW = 10  # capitals a heatmap row
-
-
-@lru_cache(maxsize=16)
-def _model(p_heads: float, goal: int) -> FiniteMDP:
-    arrays = gambler_arrays(p_heads, goal)
-    return FiniteMDP(arrays.next_state, arrays.prob, arrays.reward, arrays.terminal,
-                     arrays.initial, action_names=GamblerEnv.action_names)
 
 
 def _goal(kwargs: Mapping[str, Any]) -> int:
     return int(kwargs.get("goal", 100))
-
-
-def stakes(goal: int) -> np.ndarray:
-    """`[capital, action]`: the stake each action puts down at each capital."""
-    return np.array([[stake_of(c, a, goal) for a in range(MAX_STAKE)] for c in range(goal + 1)],
-                    dtype=np.float64)
 
 
 class GamblerStates(DiscreteStates):
@@ -164,7 +149,7 @@ class GamblerGame(ModelGame):
     narrator_type = GamblerNarrator
 
     def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP:
-        return _model(float(kwargs.get("p_heads", 0.4)), _goal(kwargs))
+        return gambler_model(float(kwargs.get("p_heads", 0.4)), _goal(kwargs))
 
     def gap_tolerance(self, kwargs: Mapping[str, Any]) -> float:
         """A fifth of the optimum: learners get within it, not much closer (the README)."""
@@ -173,6 +158,7 @@ class GamblerGame(ModelGame):
     def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel:
         goal = _goal(kwargs)
         capital = np.arange(1, goal)
-        line = StateLine("capital", capital, capital.astype(float), stakes(goal), "stake")
+        line = StateLine(
+            "capital", capital, capital.astype(float), stakes(goal).astype(float), "stake")
         return PlanModel(self.base_model(kwargs), self.plan_gamma, self.episode_limit(kwargs),
                          line=line)

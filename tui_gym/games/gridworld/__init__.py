@@ -1,5 +1,5 @@
-"""GridWorld: the game (`game`), its shortest-path figures (`paths`) and its exact
-model (`model`); the env itself is `tui_gym.envs.gridworld`."""
+"""GridWorld: the game (`game`), and its exact model and shortest-path figures (`paths`); the
+env itself is `tui_gym.envs.gridworld`."""
 
 from tui_gym.games.gridworld.game import GridWorldGame
 

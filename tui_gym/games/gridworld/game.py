@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
-from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -14,7 +13,7 @@ from tui_gym.core.mdp import NotAvailable, evaluate, gap_of, return_range
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.envs import GRIDWORLD_MAX_STEPS
-from tui_gym.envs.walls import Walls, cell_distances, cell_moves, check_walls
+from tui_gym.envs.gridworld import Walls, cell_distances, cell_moves, check_walls
 from tui_gym.games.base import (
     EXACT,
     TIED,
@@ -23,9 +22,9 @@ from tui_gym.games.base import (
     EvalOutcome,
     Game,
     HeatmapLayout,
-    Narrator,
     Optimum,
     Oracle,
+    ReachNarrator,
     ReferenceMetrics,
     Scope,
     StateSpace,
@@ -34,8 +33,15 @@ from tui_gym.games.base import (
     greedy_cells,
     greedy_probabilities,
 )
-from tui_gym.games.gridworld.model import gridworld_model, gridworld_optimum, shortest_path_optimum
-from tui_gym.games.gridworld.paths import mean_fewest_steps, path_figures, shortest_marks
+from tui_gym.games.gridworld.paths import (
+    fewest_share,
+    gridworld_model,
+    gridworld_optimum,
+    mean_fewest_steps,
+    path_figures,
+    shortest_marks,
+    shortest_path_optimum,
+)
 from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
 from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import (
@@ -60,13 +66,6 @@ WALL = "█"  # a heatmap cell that is a wall
 TRAINED_SHARE = 0.95  # what the default training reaches (see the README)
 
 
-@lru_cache(maxsize=16)
-def _pairs(size: int) -> np.ndarray:
-    """All (ax, ay, tx, ty) in row-major order: shape (size**4, 4)."""
-    grid = np.indices((size,) * 4).reshape(4, -1).T
-    return grid.astype(np.int64)
-
-
 LAYOUT = "layout"  # the argument that holds the grid's walls, as a map's text
 
 
@@ -80,10 +79,6 @@ def _walls(kwargs: Mapping[str, Any]) -> Walls:
     if not layout:
         return ()
     return read_layout(str(layout)).walls_xy()
-
-
-def _scene_walls(scene: Mapping[str, Any]) -> Walls:
-    return tuple(tuple(int(v) for v in w) for w in scene.get("walls", ()))  # type: ignore[misc]
 
 
 def _steps_between(size: int, walls: Walls, a: Any, b: Any) -> int:
@@ -139,7 +134,8 @@ def _distance(scene: Mapping[str, Any]) -> int:
     agent, target = scene.get("agent"), scene.get("target")
     if agent is None or target is None:
         return 0
-    return _steps_between(int(scene.get("size", 0)), _scene_walls(scene), agent, target)
+    walls = tuple((int(x), int(y)) for x, y in scene.get("walls", ()))
+    return _steps_between(int(scene.get("size", 0)), walls, agent, target)
 
 
 class GridWorldStates(StateSpace):
@@ -147,7 +143,7 @@ class GridWorldStates(StateSpace):
 
     def base_observations(self, kwargs: Mapping[str, Any]) -> list[Any]:
         return [{"agent": row[:2].copy(), "target": row[2:].copy()}
-                for row in _pairs(_size(kwargs))]
+                for row in np.indices((_size(kwargs),) * 4, dtype=np.int64).reshape(4, -1).T]
 
     def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
         ax, ay = (int(v) for v in observation["agent"])
@@ -194,7 +190,7 @@ class GridWorldOracle(Oracle):
         size = _size(kwargs)
         if np.shape(q) != (size**4, 4):
             return NotAvailable(f"a table of shape {np.shape(q)} does not fit a {size}x{size} grid")
-        frac = path_figures(size, _walls(kwargs), greedy_probabilities(q))[0]
+        frac = fewest_share(size, _walls(kwargs), greedy_probabilities(q))
         return ReferenceMetrics(
             figures={"optimal_pair_fraction": frac},
             summary=f"{frac:.1%} of (agent, target) pairs solved in the fewest steps",
@@ -291,14 +287,11 @@ class GridWorldOracle(Oracle):
         )
 
 
-class GridWorldNarrator(Narrator):
+class GridWorldNarrator(ReachNarrator):
     """Steps taken against the fewest; reached or timed out."""
 
     agreement_words = AGREEMENT
     tally_words = (TallyWord("reached", "good"), TallyWord("timed out", "bad"))
-
-    def tally_word(self, last: PlayStep) -> str:
-        return "reached" if last.terminated else "timed out"
 
     def outcome_text(
         self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]

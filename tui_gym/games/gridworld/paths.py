@@ -1,5 +1,5 @@
-"""Exact answers for GridWorld, with walls or without: shortest paths, and how often a
-policy takes one."""
+"""Exact answers for GridWorld, with walls or without: its model and optimum, shortest paths,
+and how often a policy takes one."""
 
 from __future__ import annotations
 
@@ -9,17 +9,75 @@ from functools import lru_cache
 import numpy as np
 import numpy.typing as npt
 
-from tui_gym.envs.walls import Walls, cell_distances, cell_moves
+from tui_gym.core.mdp import FiniteMDP, Solution, solve
+from tui_gym.core.wrappers.changes import GameChanges
+from tui_gym.envs.gridworld import Walls, cell_distances, cell_moves, free_cells
 
 __all__ = [
-    "all_pairs", "mean_fewest_steps", "mixed_pair_fraction", "mixed_steps_over_optimal",
-    "optimal_actions", "optimal_pair_fraction", "path_figures", "placements",
-    "policy_steps_over_optimal", "shortest_marks", "shortest_path_length",
-    "shortest_path_policy",
+    "all_pairs", "fewest_share", "gridworld_model", "gridworld_optimum", "mean_fewest_steps",
+    "mixed_pair_fraction", "mixed_steps_over_optimal", "optimal_actions", "optimal_pair_fraction",
+    "path_figures", "placements", "policy_steps_over_optimal", "shortest_marks",
+    "shortest_path_length", "shortest_path_optimum", "shortest_path_policy",
 ]
 
 _SETTLED = 1e-13  # a change in the chance of arriving smaller than this is no change
 _NO_LIMIT = 1_000_000  # steps: far past where any chance left to arrive still counts
+
+
+@lru_cache(maxsize=8)
+def gridworld_model(
+    size: int, reward_scale: float, step_penalty: float, changes: GameChanges, walls: Walls = (),
+) -> FiniteMDP:
+    """The model of a `size` x `size` GridWorld with `walls` as the wrappers in `changes`
+    make it."""
+    cells = size * size
+    agent, target = np.divmod(np.arange(cells * cells), cells)  # [S]: cell numbers x*size+y
+    moved = cell_moves(size, walls)[:, agent].T  # [S, A]: the agent's cell after each move
+    next_state = moved * cells + target[:, None]
+    distance = cell_distances(size, walls)[moved, target[:, None]]
+    terminal = moved == target[:, None]
+    # Each distinct (bare reward, distance) passes once through the wrappers' own code.
+    miss = 0.0 - float(step_penalty)
+    reward = np.empty(distance.shape)
+    for d in np.unique(distance):
+        base = float(reward_scale) if d == 0 else miss
+        reward[distance == d] = changes.reward(base, float(d))
+    free = free_cells(size, walls)
+    start = free[agent] & free[target] & (agent != target)
+    return FiniteMDP(
+        next_state=next_state[..., None], prob=np.ones(next_state.shape + (1,)),
+        reward=reward[..., None], terminal=terminal[..., None], initial=start / start.sum(),
+        horizon=changes.time_limit,
+    )
+
+
+@lru_cache(maxsize=8)
+def gridworld_optimum(
+    size: int, reward_scale: float, step_penalty: float, changes: GameChanges, walls: Walls = (),
+) -> Solution:
+    """The optimum of `gridworld_model` with the same arguments (kept)."""
+    return solve(gridworld_model(size, reward_scale, step_penalty, changes, walls))
+
+
+def shortest_path_optimum(
+    size: int, reward_scale: float, step_penalty: float, limit: int, walls: Walls = ()
+) -> tuple[np.ndarray, float] | None:
+    """`(q, value)` of `gridworld_optimum` with no wrappers but a time limit of `limit`
+    steps, where a shortest path pays (a positive `reward_scale`, no negative
+    penalty): an episode that walks the fewest steps d returns
+    `reward_scale - step_penalty * (d - 1)`, and one the walls part from its target
+    `-step_penalty * limit`. None where that does not hold."""
+    cells = size * size
+    distance = cell_distances(size, walls)
+    if reward_scale <= 0.0 or step_penalty < 0.0 or distance.max() >= limit:
+        return None
+    agent, target = np.divmod(np.arange(cells * cells), cells)
+    after = distance[cell_moves(size, walls)[:, agent].T, target[:, None]]  # [S, A]
+    parted = -float(step_penalty) * limit
+    q = np.where(after >= 0, float(reward_scale) - float(step_penalty) * after, parted)
+    free = free_cells(size, walls)
+    start = free[agent] & free[target] & (agent != target)
+    return q, float(q.max(axis=1)[start].mean())
 
 
 def _xy(position: Sequence[int] | np.ndarray) -> tuple[int, int]:
@@ -96,41 +154,55 @@ def mean_fewest_steps(size: int, walls: Walls) -> float:
     return float(cell_distances(size, walls)[valid].mean())
 
 
-def path_figures(
-    size: int, walls: Walls, probabilities: np.ndarray, max_steps: int | None = None
-) -> tuple[float, float, float]:
-    """`(share solved in the fewest steps, mean steps over the fewest, share solved)` of a
-    policy given as action probabilities per (agent cell, target cell), exactly.
-
-    The first is filled in by distance: from a cell at distance d, the chance of a
-    shortest walk is the sum over the moves that bring the target one step nearer of
-    the move's probability times the chance from where it leads. The others come from
-    the chance `h_k` of arriving within k steps (within `max_steps`, if given; `h_k =
-    sum_a p(a) h_{k-1}(next)`, 1 at the target): the expected steps of the walks that
-    arrive within L are `L h_L - sum_{k<L} h_k`; the walk stops once `h` no longer
-    moves. The mean counts the steps beyond the fewest over the walks that arrive
-    (NaN when none can).
-    """
+def _walk_arrays(size: int, walls: Walls, probabilities: np.ndarray) -> tuple[
+        np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]]:
+    """The cells' distances, moves and placements, and each move's probability array."""
     cells = size * size
     probs = np.asarray(probabilities, dtype=np.float64).reshape(cells, cells, 4)
-    distance = cell_distances(size, walls)
-    moves = cell_moves(size, walls)
-    valid = placements(size, walls)
-    if not valid.any():
-        return float("nan"), float("nan"), 0.0
-    marks = shortest_marks(size, walls).reshape(cells, cells, 4)
-    weights = [np.ascontiguousarray(probs[..., a]) for a in range(4)]
-    on_target = np.eye(cells, dtype=bool)
+    return (cell_distances(size, walls), cell_moves(size, walls), placements(size, walls),
+            [np.ascontiguousarray(probs[..., a]) for a in range(4)])
 
-    chance = on_target.astype(np.float64)
+
+def fewest_share(size: int, walls: Walls, probabilities: np.ndarray) -> float:
+    """The share of placements a policy (action probabilities per (agent cell, target
+    cell)) solves in the fewest steps, exactly (NaN when there are no placements).
+
+    Filled in by distance: from a cell at distance d, the chance of a shortest walk is
+    the sum over the moves that bring the target one step nearer of the move's
+    probability times the chance from where it leads."""
+    distance, moves, valid, weights = _walk_arrays(size, walls, probabilities)
+    if not valid.any():
+        return float("nan")
+    cells = size * size
+    marks = shortest_marks(size, walls).reshape(cells, cells, 4)
+    chance = np.eye(cells, dtype=np.float64)
     for d in range(1, int(distance.max()) + 1):
         at = distance == d
         step = np.zeros((cells, cells))
         for a in range(4):
             step += weights[a] * marks[..., a] * chance[moves[a]]
         chance[at] = step[at]
-    fewest = float(chance[valid].mean())
+    return float(chance[valid].mean())
 
+
+def path_figures(
+    size: int, walls: Walls, probabilities: np.ndarray, max_steps: int | None = None
+) -> tuple[float, float, float]:
+    """`(share solved in the fewest steps, mean steps over the fewest, share solved)` of a
+    policy given as action probabilities per (agent cell, target cell), exactly.
+
+    The first is `fewest_share`. The others come from the chance `h_k` of arriving
+    within k steps (within `max_steps`, if given; `h_k = sum_a p(a) h_{k-1}(next)`, 1 at
+    the target): the expected steps of the walks that arrive within L are
+    `L h_L - sum_{k<L} h_k`; the walk stops once `h` no longer moves. The mean counts
+    the steps beyond the fewest over the walks that arrive (NaN when none can).
+    """
+    distance, moves, valid, weights = _walk_arrays(size, walls, probabilities)
+    if not valid.any():
+        return float("nan"), float("nan"), 0.0
+    fewest = fewest_share(size, walls, probabilities)
+    cells = size * size
+    on_target = np.eye(cells, dtype=bool)
     reach = on_target.astype(np.float64)
     earlier = np.zeros((cells, cells))
     limit = _NO_LIMIT if max_steps is None else int(max_steps)
@@ -159,7 +231,7 @@ def optimal_pair_fraction(size: int, policy: np.ndarray) -> float:
     """The fraction of start placements (agent != target) of an open grid from which
     following ``policy`` (an action per ``(ax, ay, tx, ty)``) reaches the target in the
     fewest steps."""
-    return path_figures(size, (), _one_hot(size, policy))[0]
+    return fewest_share(size, (), _one_hot(size, policy))
 
 
 def policy_steps_over_optimal(
@@ -173,7 +245,7 @@ def policy_steps_over_optimal(
 def mixed_pair_fraction(size: int, probabilities: np.ndarray) -> float:
     """`optimal_pair_fraction` of a policy given as action probabilities, shape
     ``(size,) * 4 + (4,)``: the chance of a shortest walk, averaged over the placements."""
-    return path_figures(size, (), _check_probabilities(size, probabilities))[0]
+    return fewest_share(size, (), _check_probabilities(size, probabilities))
 
 
 def mixed_steps_over_optimal(

@@ -7,7 +7,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from tui_gym.envs.tile_map import STANDING, TILE_NAMES, VALUED, cell_key, check_map
+from tui_gym.envs.tile_map import STANDING, TILE_NAMES, TILES, VALUED, cell_key, check_map
 
 __all__ = ["MAX_SIDE", "TOOLS", "Cell", "GridMap", "Tool"]
 
@@ -112,29 +112,17 @@ class GridMap:
         ends the walk; the cliff leads back to the start)."""
         if self.start is None:
             return False
-        seen = {self.start}
-        todo = deque(seen)
-        while todo:
-            r, c = todo.popleft()
-            for dr, dc in ((0, 1), (1, 0), (0, -1), (-1, 0)):
-                cell = (r + dr, c + dc)
-                if not self.inside(cell) or cell in seen:
-                    continue
-                tile = self.tile(cell)
-                if tile == "G":
-                    return True
-                if tile in STANDING:
-                    seen.add(cell)
-                    todo.append(cell)
-        return False
+        return any(self.tile(cell) == "G" for cell in self._reached(self.start, STANDING))
 
     def free_connected(self) -> bool:
         """Whether every cell that is not a wall can be reached from every other."""
         free = [(r, c) for r in range(self.rows) for c in range(self.cols)
                 if self.tile((r, c)) != "W"]
-        if not free:
-            return False
-        seen = {free[0]}
+        return bool(free) and len(self._reached(free[0], TILES.replace("W", ""))) == len(free)
+
+    def _reached(self, start: Cell, through: str) -> set[Cell]:
+        """The cells a walk from `start` reaches, going on only from tiles in `through`."""
+        seen = {start}
         todo = deque(seen)
         while todo:
             r, c = todo.popleft()
@@ -142,8 +130,9 @@ class GridMap:
                 cell = (r + dr, c + dc)
                 if self.inside(cell) and cell not in seen and self.tile(cell) != "W":
                     seen.add(cell)
-                    todo.append(cell)
-        return len(seen) == len(free)
+                    if self.tile(cell) in through:
+                        todo.append(cell)
+        return seen
 
     def describe(self, cell: Cell) -> str:
         """What a cell holds, in words: 'hole, reward -5', with its slip."""

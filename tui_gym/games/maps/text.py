@@ -7,7 +7,7 @@ import re
 from functools import lru_cache
 
 from tui_gym.core.params import read_number, shown_value
-from tui_gym.envs.tile_map import STANDING, TILE_NAMES, TILES, VALUED
+from tui_gym.envs.tile_map import TILE_LIST, check_map
 from tui_gym.games.maps.grid_map import MAX_SIDE, Cell, GridMap
 
 __all__ = ["MAX_TEXT", "MapError", "format_map", "parse_map", "read_layout"]
@@ -16,7 +16,6 @@ MAX_TEXT = 64 << 10  # characters of a map's text, at most
 _HEADER = re.compile(r"(reward|slip)\s+([0-9]{1,4})\s*,\s*([0-9]{1,4})\s*[:=]?\s*(\S+)",
                      re.ASCII | re.IGNORECASE)
 _KEYWORD = re.compile(r"(reward|slip)\b", re.IGNORECASE)
-TILE_LIST = ", ".join(f"{t} {n}" for t, n in TILE_NAMES.items())
 
 
 class MapError(ValueError):
@@ -44,26 +43,28 @@ def parse_map(text: str) -> GridMap:
         if _KEYWORD.match(line):
             _header_line(line, number, header)
             continue
-        where = f"line {number} (map row {len(rows)})"
-        for col, tile in enumerate(line):
-            if tile not in TILES:
-                raise MapError(f"{where}, column {col}: {tile!r} is not a tile ({TILE_LIST})")
         if len(rows) >= MAX_SIDE:
             raise MapError(f"line {number}: a map has at most {MAX_SIDE} rows")
         if len(line) > MAX_SIDE:
-            raise MapError(f"{where} has {len(line)} tiles: at most {MAX_SIDE}")
-        if rows and len(line) != len(rows[0]):
-            raise MapError(f"{where} has {len(line)} tiles, row 0 has {len(rows[0])}: rows "
-                           "must be equally long")
+            raise MapError(f"line {number} (map row {len(rows)}) has {len(line)} tiles: at most "
+                           f"{MAX_SIDE}")
         rows.append(line)
         row_lines.append(number)
     if not rows:
         raise MapError(f"no rows of tiles: a map is rows of tiles ({TILE_LIST})")
-    _check_tiles(rows, row_lines, header)
+
+    def where(cell: Cell) -> str:  # a cell by its line of the text
+        r, c = cell
+        if r < len(rows) and c < len(rows[r]):
+            return f"line {row_lines[r]} (map row {r}), column {c}"
+        return f"row {r}, col {c}"
+
+    rewards = {c: v for c, (v, _) in header["reward"].items()}
+    slip = {c: v for c, (v, _) in header["slip"].items()}
     try:
-        return GridMap.of(rows, {c: v for c, (v, _) in header["reward"].items()},
-                          {c: v for c, (v, _) in header["slip"].items()})
-    except ValueError as error:  # everything is checked above; kept as one clear line anyway
+        check_map(rows, rewards, slip, need_start=False, where=where)
+        return GridMap.of(rows, rewards, slip)
+    except ValueError as error:
         raise MapError(str(error)) from None
 
 
@@ -90,35 +91,6 @@ def _header_line(line: str, number: int, header: dict[str, dict[Cell, tuple[floa
         raise MapError(f"line {number}: {key} {row},{col} is given twice (first on line "
                        f"{earlier[1]})")
     header[key][cell] = (amount, number)
-
-
-def _check_tiles(
-    rows: list[str], row_lines: list[int], header: dict[str, dict[Cell, tuple[float, int]]]
-) -> None:
-    start: Cell | None = None
-    for r, row in enumerate(rows):
-        for c, tile in enumerate(row):
-            where = f"line {row_lines[r]} (map row {r}), column {c}"
-            if tile == "S":
-                if start is not None:
-                    raise MapError(f"{where}: a second start (the first is at row {start[0]}, "
-                                   f"col {start[1]}); a map has one")
-                start = (r, c)
-            if tile == "R" and (r, c) not in header["reward"]:
-                raise MapError(f"{where}: a reward cell needs its value: add "
-                               f"'reward {r},{c}: VALUE' above the rows")
-    size = f"{len(rows)}x{len(rows[0])}"
-    for key, allowed, words in (
-        ("reward", VALUED, "only reward (R), hole (H), goal (G) and cliff (C) cells take a "
-                           "reward"),
-        ("slip", STANDING, "only cells the agent stands on (S, F, R) slip"),
-    ):
-        for (r, c), (_, number) in header[key].items():
-            if not (r < len(rows) and c < len(rows[0])):
-                raise MapError(f"line {number}: {key} {r},{c} is off the {size} map")
-            tile = rows[r][c]
-            if tile not in allowed:
-                raise MapError(f"line {number}: row {r}, col {c} is {TILE_NAMES[tile]}: {words}")
 
 
 def _number_text(value: float) -> str:

@@ -1,6 +1,6 @@
 """max-bias: Sutton & Barto's Example 6.7, the MDP that shows maximization bias.
 
-Spaces and rewards: `tui_gym.envs.max_bias.MaxBiasEnv`; truncated after `EPISODE_LIMIT`
+Spaces and rewards: `tui_gym.envs.max_bias.MaxBiasEnv`; truncated after 10
 steps, which no episode reaches. An action a state does not offer counts as one it does,
 so a learner that tries every action everywhere still plays this MDP.
 """
@@ -16,15 +16,14 @@ from tui_gym.core.mdp import FiniteMDP
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.envs.dp_grid import Cell, Grid
-from tui_gym.envs.max_bias import ACTIONS, GRID, MAX_B_ACTIONS, A, B, max_bias_arrays, offered
+from tui_gym.envs.max_bias import ACTIONS, GRID, MAX_B_ACTIONS, A, B, max_bias_model, offered
 from tui_gym.games.base import Advice, Narrator, TallyWord
 from tui_gym.games.dp_grid import DPGridGame, DPGridStates, Event
 from tui_gym.games.model import ModelOracle
 from tui_gym.games.words import format_reward, plural
 
-__all__ = ["EPISODE_LIMIT", "MaxBiasGame"]
+__all__ = ["MaxBiasGame"]
 
-EPISODE_LIMIT = 10  # steps (the env's registration)
 NAMES = {0: "the end after B", B: "B", A: "A", 3: "the end right of A"}
 
 
@@ -125,17 +124,11 @@ class MaxBiasGame(DPGridGame):
     oracle_type = MaxBiasOracle
     narrator_type = MaxBiasNarrator
 
-    def __init__(self) -> None:
-        super().__init__()
-        arrays, std = max_bias_arrays()
-        self._model = FiniteMDP(arrays.next_state, arrays.prob, arrays.reward, arrays.terminal,
-                                arrays.initial, action_names=ACTIONS, reward_std=std)
-
     def grid(self, kwargs: Mapping[str, Any]) -> Grid:
         return GRID
 
     def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP:
-        return self._model
+        return max_bias_model()
 
     def offered_actions(self, kwargs: Mapping[str, Any]) -> np.ndarray:
         return _offered(kwargs)

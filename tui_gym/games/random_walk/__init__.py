@@ -1,7 +1,7 @@
 """random-walk: Sutton & Barto's random walk (Example 6.2; Figure 7.2 with 19 states).
 
-Spaces and rewards: `tui_gym.envs.random_walk.RandomWalkEnv`; truncated after
-`EPISODE_LIMIT` steps. The book's prediction figures evaluate the equiprobable random
+Spaces and rewards: `tui_gym.envs.dp_grid.RandomWalkEnv`; truncated after
+1000 steps. The book's prediction figures evaluate the equiprobable random
 policy; as a control problem the walk is simple (always right).
 """
 
@@ -11,15 +11,12 @@ from collections.abc import Mapping
 from typing import Any
 
 from tui_gym.core.params import Param
-from tui_gym.envs.dp_grid import Cell, Grid
-from tui_gym.envs.random_walk import LEFT_END_PAYS, walk_grid
+from tui_gym.envs.dp_grid import LEFT_END_PAYS, Cell, Grid, walk_grid
 from tui_gym.games.base import Narrator, TallyWord
 from tui_gym.games.dp_grid import DPGridGame, DPGridStates, Event
 from tui_gym.games.words import format_reward, plural
 
-__all__ = ["EPISODE_LIMIT", "RandomWalkGame"]
-
-EPISODE_LIMIT = 1000  # steps (the env's registration)
+__all__ = ["RandomWalkGame"]
 
 
 def _states(kwargs: Mapping[str, Any]) -> int:

@@ -39,9 +39,15 @@ import numpy as np
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP, NotAvailable
 from tui_gym.core.params import Param
-from tui_gym.games.base import TIED, EvalOutcome, HeatmapLayout, Narrator, TallyWord
+from tui_gym.games.base import (
+    TIED,
+    EvalOutcome,
+    HeatmapLayout,
+    ReachNarrator,
+    TallyWord,
+    greedy_cells,
+)
 from tui_gym.games.model import DiscreteStates, ModelGame
-from tui_gym.games.words import format_reward, plural
 
 if TYPE_CHECKING:
     from tui_gym.session.play import PlayStep
@@ -127,28 +133,16 @@ class TaxiStates(DiscreteStates):
         }
 
 
-class TaxiNarrator(Narrator):
+class TaxiNarrator(ReachNarrator):
     """Delivered or out of time; pick-ups and drop-offs that could not be made."""
 
     tally_words = (TallyWord("delivered", "good"), TallyWord("timed out", "bad"))
-
-    def tally_word(self, last: PlayStep) -> str:
-        return "delivered" if last.terminated else "timed out"
-
-    def outcome_text(
-        self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]
-    ) -> str:
-        steps = plural(last.steps, "step")
-        total = format_reward(last.episode_return)
-        if last.terminated:
-            return f"Passenger delivered in {steps}, return {total}"
-        return f"Out of time after {steps}: the passenger not delivered, return {total}"
+    reached_words = "Passenger delivered"
+    missed_words = ": the passenger not delivered"
 
     def progress_text(self, last: PlayStep, first_info: Mapping[str, Any]) -> str:
-        if not last.steps:
-            return ""
-        text = f"{plural(last.steps, 'step')} taken"
-        if last.reward == ILLEGAL:
+        text = super().progress_text(last, first_info)
+        if last.steps and last.reward == ILLEGAL:
             text += "; that action could not be made here (−10)"
         return text
 
@@ -195,24 +189,18 @@ class TaxiLayout(HeatmapLayout):
             values=picker_values, labels=picker_labels, marked=np.zeros((5, 4), dtype=bool),
             legend="picker: mean max Q of a slice, n* its cells not optimal, ✓ delivered",
         )
-        cells = best[:, :, passenger, destination].astype(float)
-        labels = []
-        for r in range(ROWS):
-            line = []
-            for c in range(COLS):
-                if tied[r, c, passenger, destination]:
-                    line.append(TIED)
-                else:
-                    line.append(ACTION_MARKS[int(greedy[r, c, passenger, destination])])
-            labels.append(tuple(line))
+        cells, labels, marked = greedy_cells(
+            ROWS, COLS, lambda r, c: None, lambda r, c: q5[r, c, passenger, destination],
+            ACTION_MARKS.__getitem__, lambda r, c, action: wrong[r, c, passenger, destination],
+        )
         where = "in the taxi" if passenger == IN_TAXI else f"at {STAND_NAMES[passenger]}"
         city = Heatmap(
             title=f"passenger {where}, going to {STAND_NAMES[destination]}",
             row_labels=tuple(str(r) for r in range(ROWS)),
             col_labels=tuple(str(c) for c in range(COLS)),
             values=cells,
-            labels=tuple(labels),
-            marked=wrong[:, :, passenger, destination].copy(),
+            labels=labels,
+            marked=marked,
             legend=f"city: max Q per taxi cell, arrow drive  P pick up  D drop off  {TIED} tie"
             "  * not optimal",
         )

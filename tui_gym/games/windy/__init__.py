@@ -1,7 +1,7 @@
 """windy, windy-king: Sutton & Barto's Windy GridWorld (Example 6.5; king's moves, Exercise 6.9).
 
-Spaces, rewards and wind: `tui_gym.envs.windy.WindyGridWorldEnv`. Episodes are truncated
-after `EPISODE_LIMIT` steps. The moves a game offers are part of what it is (its keys,
+Spaces, rewards and wind: `tui_gym.envs.dp_grid.WindyGridWorldEnv`. Episodes are truncated
+after 2000 steps. The moves a game offers are part of what it is (its keys,
 the protocol's list, recordings), so the king's moves are a game of their own.
 """
 
@@ -11,13 +11,11 @@ from collections.abc import Mapping
 from typing import Any
 
 from tui_gym.core.params import Param
-from tui_gym.envs.dp_grid import GRID_ACTIONS, KING_ACTIONS, STEPS, Cell, Grid
-from tui_gym.envs.windy import windy_grid
-from tui_gym.games.dp_grid import DPGridGame, Event, ReachNarrator
+from tui_gym.envs.dp_grid import GRID_ACTIONS, KING_ACTIONS, Cell, Grid, windy_grid
+from tui_gym.games.base import ReachNarrator
+from tui_gym.games.dp_grid import DPGridGame, Event
 
-__all__ = ["EPISODE_LIMIT", "KingWindyGame", "WindyGame"]
-
-EPISODE_LIMIT = 2000  # steps (the env's registration)
+__all__ = ["KingWindyGame", "WindyGame"]
 
 
 MONTE_CARLO_LESSON = (
@@ -81,9 +79,7 @@ class WindyGame(DPGridGame):
         grid: Grid = game_env.grid
         if now in grid.terminals:
             return None
-        (dr, dc), last_row, last_col = STEPS[move], grid.rows - 1, grid.cols - 1
-        moved = (min(max(was[0] + dr, 0), last_row), min(max(was[1] + dc, 0), last_col))
-        blown = moved[0] - now[0]
+        blown = grid.landing(was, move, 0)[0][0] - now[0]  # rows up from where no wind leads
         if blown <= 0:
             return None
         where = "to the top row" if now[0] == 0 else f"{blown} up"

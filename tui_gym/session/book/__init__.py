@@ -6,19 +6,16 @@ import importlib
 
 from tui_gym.session.book.figure import BookFigure
 
-__all__ = ["FIGURE_MODULES", "BookFigure", "figure_named", "figures"]
+__all__ = ["CHAPTERS", "BookFigure", "figure_named", "figures"]
 
-# One module a figure (in the book's order).
-FIGURE_MODULES = (
-    "fig_3_2", "fig_3_5", "fig_4_1", "fig_4_2", "fig_4_3", "fig_6_2", "fig_6_3", "fig_6_4",
-    "fig_6_5", "fig_6_6", "fig_7_2", "fig_8_2", "fig_8_4", "fig_8_5", "example_8_4", "fig_12_3",
-    "fig_12_6",
-)
+# The modules of figures, each with its `FIGURES` (imported when first asked for).
+CHAPTERS = ("dp", "td", "sweeps", "dyna")
 
 
 def figures() -> list[BookFigure]:
     """Every figure, in the book's order (by chapter, and within one as listed)."""
-    found = [importlib.import_module(f"{__name__}.{module}").FIGURE for module in FIGURE_MODULES]
+    found = [figure for module in CHAPTERS
+             for figure in importlib.import_module(f"{__name__}.{module}").FIGURES]
     return sorted(found, key=lambda f: int(f.name.split()[-1].split(".")[0]))
 
 

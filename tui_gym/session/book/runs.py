@@ -11,7 +11,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from tui_gym.algorithms import algorithm
+from tui_gym.algorithms import Predictor, algorithm
+from tui_gym.algorithms.prediction import rms_curve
 from tui_gym.core.engine import loop
 from tui_gym.core.engine.loop import FIRST_ACTION, LENGTH, RETURN
 from tui_gym.core.experiments.aggregate import aggregate, t_half_width
@@ -19,6 +20,7 @@ from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.records import RunKind
 from tui_gym.core.mdp import NotAvailable, Phases
 from tui_gym.games import game_named
+from tui_gym.games.base import TrainingModel
 from tui_gym.games.model import ModelGame
 from tui_gym.session.book.figure import (
     BookFigure,
@@ -39,13 +41,21 @@ from tui_gym.session.experiments.compare import (
 )
 
 __all__ = [
-    "FIRST_ACTION", "LENGTH", "RETURN", "Learner", "Played", "above", "completed", "counts",
-    "margin", "near", "one_run", "per_episode", "per_step", "per_time_step", "play", "play_steps",
-    "swept", "world_phases",
+    "BANDS", "FIRST_ACTION", "LENGTH", "RETURN", "Learner", "Played", "above", "book_settings",
+    "completed", "counts", "margin", "near", "one_run", "per_episode", "per_step",
+    "per_time_step", "play", "play_prediction", "play_steps", "swept", "world_phases",
 ]
 
 CHECK_CONFIDENCE = 0.99  # the verdicts' intervals
+BANDS = "bands: 95% intervals of the mean over runs; verdicts: 99% intervals"  # a figure's note
 Samples = npt.ArrayLike
+
+
+def book_settings(discount: float, epsilon: float = 0.1, **more: Any) -> dict[str, Any]:
+    """The book's control learners' settings: ε-greedy with `epsilon` throughout, a constant
+    step size, `discount`; `more` adds the rest (`learning_rate`, ...)."""
+    return {"learning_rate_schedule": "constant", "discount": discount,
+            "epsilon_start": epsilon, "epsilon_final": epsilon, **more}
 
 
 @dataclass(frozen=True)
@@ -148,6 +158,36 @@ def play_steps(figure: BookFigure, world: str, learners: Sequence[Learner],
             values[run] = _cumulative_reward(agent, arrays, phases.starts, ends, steps)
         played.append(Played(learner.label, values, None, None))
     progress(len(learners) * runs, len(learners) * runs, about)
+    return played
+
+
+def play_prediction(figure: BookFigure, states: int, learners: Sequence[Learner],
+                    options: FigureOptions, progress: Progress) -> list[Played]:
+    """Every prediction learner over the figure's runs on the random walk of `states`
+    states: `values[run, episode]`, the RMS error of V after each episode."""
+    runs, episodes = counts(figure, options)
+    game = game_named("random-walk")
+    found = game.training_model(game.normalize_kwargs({"states": states}))
+    assert isinstance(found, TrainingModel)
+    model = loop.ModelArrays.of(found.model)
+    about = f"{runs} runs × {episodes} episodes of {len(learners)} learners"
+    played = []
+    for index, learner in enumerate(learners):
+        progress(index, len(learners), about)
+        cls = algorithm(learner.algorithm)
+        assert issubclass(cls, Predictor)
+        values = np.empty((runs, episodes))
+        settings = cls.settings(learner.settings)
+        truth = None
+        for run in range(runs):
+            if options.stop is not None and options.stop.is_set():
+                raise FigureStopped(f"Figure {figure.name} stopped")
+            agent = cls(found.model.n_actions, settings, n_states=found.model.n_states,
+                        seed=options.seed + run)
+            truth = truth or agent.truth(found.model)  # one policy: the random one
+            values[run] = rms_curve(agent, model, truth, episodes)
+        played.append(Played(learner.label, values, None, None))
+    progress(len(learners), len(learners), about)
     return played
 
 
@@ -295,9 +335,11 @@ def per_time_step(played: Played, points: int = 200, until: float | None = None)
 
 
 def swept(label: str, xs: Sequence[float], played: Sequence[Played],
-          summary: Callable[[np.ndarray], np.ndarray]) -> Series:
+          summary: Callable[[np.ndarray], np.ndarray],
+          shown: tuple[float, float] = (-math.inf, math.inf)) -> Series:
     """One point per learner of a sweep: `summary(values)` gives one number a run, and the
-    point is their mean with its band."""
+    point is their mean with its band; only the points with a finite band and a mean
+    within `shown` (the book's axis) are kept."""
     ys, los, his = [], [], []
     for one in played:
         per_run = np.asarray(summary(one.values), dtype=np.float64)
@@ -306,5 +348,6 @@ def swept(label: str, xs: Sequence[float], played: Sequence[Played],
         ys.append(mean)
         los.append(mean - half)
         his.append(mean + half)
-    return Series(label, np.asarray(xs, dtype=np.float64), np.asarray(ys), np.asarray(los),
-                  np.asarray(his))
+    x, y, lo, hi = (np.asarray(v, dtype=np.float64) for v in (xs, ys, los, his))
+    keep = np.isfinite(hi) & (shown[0] <= y) & (y <= shown[1])
+    return Series(label, x[keep], y[keep], lo[keep], hi[keep])

@@ -1,11 +1,11 @@
-"""What the swept prediction figures (7.2, 12.3, 12.6) share: one curve per setting over α,
-each point the mean RMS error of the first episodes, and the best point of each curve;
-`swept_figure` is the whole of such a figure, `lambda_figure` one with a curve per λ
-(12.3, 12.6)."""
+"""The swept prediction figures (7.2, 12.3, 12.6): on the 19-state walk, one curve per
+setting (n, or λ) over α, each point the mean RMS error of the first episodes, and the
+book's claims about the best point of each curve."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -19,10 +19,9 @@ from tui_gym.session.book.figure import (
     Progress,
     Series,
 )
-from tui_gym.session.book.prediction_runs import play_prediction
-from tui_gym.session.book.runs import Learner, Played, below, swept
+from tui_gym.session.book.runs import BANDS, Learner, Played, below, play_prediction, swept
 
-__all__ = ["ALPHAS", "LAMBDAS", "SHOWN", "Sweep", "lambda_figure", "sweep", "swept_figure"]
+__all__ = ["ALPHAS", "FIGURES", "LAMBDAS", "SHOWN", "Sweep", "WalkSweep", "walk_figure"]
 
 ALPHAS = (0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
 SHOWN = 0.55  # the book's axis ends here: points above it are off the chart
@@ -57,60 +56,98 @@ class Sweep:
     def series(self) -> Series:
         """The curve over α, without the points off the book's chart (diverging ones)."""
         with np.errstate(invalid="ignore", over="ignore"):  # diverged runs: inf, NaN
-            full = swept(self.label, ALPHAS, self.played, lambda v: v.mean(axis=1))
-        assert full.lo is not None and full.hi is not None  # a sweep has bands
-        keep = np.isfinite(full.hi) & (full.y <= SHOWN)
-        return Series(full.label, full.x[keep], full.y[keep], full.lo[keep], full.hi[keep])
+            return swept(self.label, ALPHAS, self.played, lambda v: v.mean(axis=1),
+                         shown=(-np.inf, SHOWN))
 
 
-def sweep(figure: BookFigure, algorithm: str, name: str, settings: Sequence[Any],
-          options: FigureOptions, progress: Progress) -> list[Sweep]:
-    """One `Sweep` a value of hyperparameter `name`, each over `ALPHAS`, on the 19-state
-    walk."""
-    learners = [Learner(f"{name}={value}|{alpha}", algorithm, {"learning_rate": alpha, name: value})
-                for value in settings for alpha in ALPHAS]
-    played = play_prediction(figure, 19, learners, options, progress)
-    size = len(ALPHAS)
-    return [Sweep(f"{'λ' if name == 'lambda' else name} = {value:g}",
-                  played[i * size: (i + 1) * size]) for i, value in enumerate(settings)]
+@dataclass(frozen=True)
+class WalkSweep:
+    """What a swept figure measures: `algorithm` with one curve over α per value of its
+    hyperparameter `name` in `settings`, and the book's claims: the best value is an
+    intermediate one (in `middle`), and `chosen` lies below each of `ends` (a value and
+    how the claim names it); `how` opens the notes."""
+
+    algorithm: str
+    name: str
+    settings: Sequence[Any]
+    middle: Sequence[Any]
+    chosen: Any
+    book_best: str
+    ends: Sequence[tuple[Any, str]]
+    how: str = ""
+
+    @property
+    def symbol(self) -> str:
+        return "λ" if self.name == "lambda" else self.name
+
+    def sweeps(self, figure: BookFigure, options: FigureOptions,
+               progress: Progress) -> dict[Any, Sweep]:
+        """One `Sweep` a value of the hyperparameter, each over `ALPHAS`."""
+        learners = [Learner(f"{self.name}={value}|{alpha}", self.algorithm,
+                            {"learning_rate": alpha, self.name: value})
+                    for value in self.settings for alpha in ALPHAS]
+        played = play_prediction(figure, 19, learners, options, progress)
+        size = len(ALPHAS)
+        return {value: Sweep(f"{self.symbol} = {value:g}", played[i * size: (i + 1) * size])
+                for i, value in enumerate(self.settings)}
+
+    def run(self, figure: BookFigure, options: FigureOptions,
+            progress: Progress) -> FigureResult:
+        """The figure measured, its claims checked."""
+        curves, symbol, chosen = self.sweeps(figure, options, progress), self.symbol, self.chosen
+        best = min(self.settings, key=lambda value: curves[value].means.min())
+        picked = curves[chosen]
+        checks = (
+            Check(f"The best {symbol} is an intermediate one (the lowest point of every curve)",
+                  self.book_best, f"{symbol} = {best:g} (α = {curves[best].best_alpha:g}, "
+                  f"{curves[best].means.min():.3f})", best in self.middle),
+            *(below(f"{symbol} = {chosen:g} below {words}, each at its best α", "lower",
+                    picked.best, curves[end].best, digits=3) for end, words in self.ends),
+        )
+        return FigureResult(
+            figure=figure.name, title=figure.title, runs=len(picked.best),
+            charts=(Chart(f"mean RMS error over the first {picked.episodes} episodes "
+                          f"(points above {SHOWN:g} left out)", "α",
+                          tuple(c.series() for c in curves.values())),),
+            checks=checks,
+            notes=(f"{self.how}the random policy's values -0.9 … 0.9, from policy evaluation "
+                   "on the model; V starts at 0, undiscounted", BANDS),
+        )
 
 
-def swept_figure(figure: BookFigure, algorithm: str, name: str, settings: Sequence[Any],
-                 middle: Sequence[Any], chosen: Any, book_best: str,
-                 ends: Sequence[tuple[Any, str]], how: str, options: FigureOptions,
-                 progress: Progress) -> FigureResult:
-    """A figure of `algorithm` with one curve over α per value of `name` on the 19-state
-    walk, and the book's claims: the best value is an intermediate one (in `middle`), and
-    `chosen` lies below each of `ends` (a value and how the claim names it)."""
-    curves = dict(zip(settings, sweep(figure, algorithm, name, settings, options, progress),
-                      strict=True))
-    symbol = "λ" if name == "lambda" else name
-    best = min(settings, key=lambda value: curves[value].means.min())
-    picked = curves[chosen]
-    checks = (
-        Check(f"The best {symbol} is an intermediate one (the lowest point of every curve)",
-              book_best, f"{symbol} = {best:g} (α = {curves[best].best_alpha:g}, "
-              f"{curves[best].means.min():.3f})", best in middle),
-        *(below(f"{symbol} = {chosen:g} below {words}, each at its best α", "lower",
-                picked.best, curves[end].best, digits=3) for end, words in ends),
-    )
-    return FigureResult(
-        figure=figure.name, title=figure.title, runs=len(picked.best),
-        charts=(Chart(f"mean RMS error over the first {picked.episodes} episodes "
-                      f"(points above {SHOWN:g} left out)", "α",
-                      tuple(c.series() for c in curves.values())),),
-        checks=checks,
-        notes=(f"{how}the random policy's values -0.9 … 0.9, from policy evaluation on "
-               "the model; V starts at 0, undiscounted",
-               "bands: 95% intervals of the mean over runs; verdicts: 99% intervals"),
-    )
+def walk_figure(name: str, title: str, about: str, sweep: WalkSweep) -> BookFigure:
+    """A swept figure on the 19-state walk, at the book's 100 runs of 10 episodes."""
+
+    def run(options: FigureOptions, progress: Progress) -> FigureResult:
+        return sweep.run(figure, options, progress)
+
+    figure = BookFigure(name, title, about, "random-walk", run, runs=100, episodes=10)
+    return figure
 
 
-def lambda_figure(figure: BookFigure, algorithm: str, how: str, options: FigureOptions,
-                  progress: Progress) -> FigureResult:
-    """A figure of `algorithm` with one curve per λ over α on the 19-state walk, and the
-    book's claims: an intermediate λ does best, below λ = 0 and λ = 1."""
-    return swept_figure(figure, algorithm, "lambda", LAMBDAS, MIDDLE_LAMBDAS, 0.8,
-                        "λ about 0.8 to 0.9",
-                        ((0.0, "λ = 0 (one-step TD)"), (1.0, "λ = 1 (Monte Carlo)")),
-                        f"{how}; ", options, progress)
+LAMBDA_ENDS = ((0.0, "λ = 0 (one-step TD)"), (1.0, "λ = 1 (Monte Carlo)"))
+FIG_7_2 = walk_figure(
+    "7.2", "n-step TD on the 19-state random walk (Figure 7.2): error against α per n",
+    "Between one-step TD (n = 1) and Monte Carlo (large n), an intermediate n learns the "
+    "random policy's values fastest: the book's best is n = 4. Large n needs a small step.",
+    WalkSweep("n-step-td", "n", (1, 2, 4, 8, 16, 32, 64, 128, 256, 512), (2, 4, 8, 16), 4,
+              "n = 4", ((1, "one-step TD (n = 1)"),
+                        (512, "n = 512 (Monte Carlo on this walk)"))),
+)
+FIG_12_3 = walk_figure(
+    "12.3", "Offline λ-return on the 19-state random walk (Figure 12.3): error against α per λ",
+    "Each state moves toward its λ-return at the episode's end, a blend of every n-step "
+    "return: an intermediate λ does best, much as an intermediate n does for n-step TD "
+    "(Figure 7.2).",
+    WalkSweep("offline-lambda-return", "lambda", LAMBDAS, MIDDLE_LAMBDAS, 0.8,
+              "λ about 0.8 to 0.9", LAMBDA_ENDS, "updates at each episode's end; "),
+)
+FIG_12_6 = walk_figure(
+    "12.6", "TD(λ) on the 19-state random walk (Figure 12.6): error against α per λ",
+    "Traces spread each TD error back over the states just left: an intermediate λ learns "
+    "the random policy's values fastest, between TD(0) (λ = 0) and Monte Carlo (λ = 1). "
+    "With λ near 1 a large step makes the estimates diverge.",
+    WalkSweep("td-lambda", "lambda", LAMBDAS, MIDDLE_LAMBDAS, 0.8, "λ about 0.8 to 0.9",
+              LAMBDA_ENDS, "accumulating traces; "),
+)
+FIGURES = (FIG_7_2, FIG_12_3, FIG_12_6)

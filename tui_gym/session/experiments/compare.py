@@ -30,8 +30,7 @@ from tui_gym.core.experiments.aggregate import (
 from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.figures import Figure
 from tui_gym.core.experiments.history import STORED_POINTS, RunHistory
-from tui_gym.core.experiments.records import RunKind, RunSpec, RunStatus, WrapperSetting
-from tui_gym.core.experiments.tasks import TaskRecord
+from tui_gym.core.experiments.records import RunKind, RunSpec, RunStatus, TaskRecord, WrapperSetting
 from tui_gym.core.mdp import FiniteMDP, solve
 from tui_gym.core.text import visible
 from tui_gym.core.wrappers import WrapperChoice

@@ -1,15 +1,18 @@
-"""Drawing helpers for the map boards (`TileBoard`, `TaxiBoard`)."""
+"""`MapBoard`, the base of the map boards (`TileBoard`, `TaxiBoard`), and their drawing
+helpers."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Hashable, Sequence
-from typing import Any, Generic, TypeVar
+from collections.abc import Hashable, Sequence
+from typing import Any, ClassVar, Protocol
 
 from rich.style import Style
 from rich.text import Text
 
+from tui_gym.ui.widgets.boards import Board
+
 Cell = tuple[int, int]  # (row, col), row 0 at the top
-Shape = TypeVar("Shape")
+CAPTION_LINES = 1  # the line under the map is always kept free: tiles keep their size
 
 
 class CharGrid:
@@ -96,29 +99,106 @@ def legend(items: Sequence[tuple[str, Style, str]], label: Style, width: int) ->
     return None
 
 
-class KeptShape(Generic[Shape]):
-    """The drawing shape a board keeps while it fits (see the module docstring)."""
+class Shape(Protocol):
+    """How big a map is drawn, in characters."""
 
-    def __init__(self) -> None:
-        self._shape: Shape | None = None
-        self._key: Hashable = None
+    @property
+    def width(self) -> int: ...
 
-    def release(self) -> None:
-        """Choose afresh at the next drawing (a new episode may take the best fit)."""
+    @property
+    def height(self) -> int: ...
+
+
+def shape_fits(shape: Shape, width: int, height: int) -> bool:
+    """Whether a map drawn in `shape` fits `width` x `height`, with its caption."""
+    return shape.width <= width and shape.height + CAPTION_LINES <= height
+
+
+class MapBoard(Board):
+    """A map drawn in the largest shape that fits, kept while it fits (no jumps as the
+    space around changes), with a caption under it and a legend when there is room."""
+
+    STYLE: ClassVar[str] = ""  # the prefix of the board's component classes
+    EMPTY: ClassVar[str] = ""  # what the board says before it has a map
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self._event: Any = None  # what the last move did, in words
+        self._fresh = True  # the next scene starts an episode
+        self._shape: Any = None  # the shape kept, and the (map size, width) it is for
+        self._shape_key: Hashable = None
+        self.layout_drawn: Any = None  # where the map was drawn, to map clicks to cells
+
+    def start_episode(self) -> None:
+        """The next scene begins a new episode; tiles may take a new size."""
+        self._fresh = True
         self._shape = None
 
-    def get(
-        self, key: Hashable, width: int, height: int, choose: Callable[[int, int], Shape],
-        fits: Callable[[Shape, int, int], bool],
-    ) -> Shape:
-        """The kept shape if the map (`key`) and width are the same and it still fits,
-        else `choose(width, height)`, kept from now on."""
-        kept = self._shape
-        if kept is not None and self._key == (key, width) and fits(kept, width, height):
-            return kept
-        shape = choose(width, height)
-        self._shape, self._key = shape, (key, width)
-        return shape
+    def _style(self, name: str) -> Style:
+        return self.get_component_rich_style(f"{self.STYLE}--{name}")
+
+    # --- what a map board gives ---------------------------------------------
+    def map_size(self) -> tuple[int, int] | None:
+        """(rows, cols) of the map, or None before there is one."""
+        return None
+
+    def choose_shape(self, rows: int, cols: int, width: int, height: int) -> Any:
+        """The largest drawing of the map that fits `width` x `height`."""
+        raise NotImplementedError
+
+    def draw_map(self, shape: Any, width: int, spare: int) -> list[Text]:
+        """The map's lines in `shape` (`spare`: lines left over once the caption is in)."""
+        raise NotImplementedError
+
+    def caption(self, width: int) -> Text:
+        """What the last move did, in words that fit `width`."""
+        raise NotImplementedError
+
+    def legend(self, width: int) -> Text | None:
+        """The marks the map uses and what they mean (None if too wide)."""
+        return None
+
+    def layout_of(self, shape: Any, left: int, top: int) -> Any:
+        """Where the map sits in the canvas, its drawing's corner at (`left`, `top`)."""
+        raise NotImplementedError
+
+    # --- drawing --------------------------------------------------------------
+    def picture(self, width: int, height: int) -> Text:
+        size = self.map_size()
+        if size is None:
+            self.layout_drawn = None
+            return stack([Text(self.EMPTY, self._style("caption"))], width, height)
+        shape = self._shape
+        if not (self.KEEP_SHAPE and shape is not None and self._shape_key == (size, width)
+                and shape_fits(shape, width, height - self.lines_under())):
+            shape = self.choose_shape(*size, width, height - self.lines_under())
+            self._shape, self._shape_key = shape, (size, width)
+        spare = height - shape.height - CAPTION_LINES
+        lines = self.draw_map(shape, width, spare)
+        spare -= len(lines) - shape.height
+        lines.append(self.caption(width))
+        if spare > 0:
+            legend = self.legend(width)
+            if legend is not None:
+                lines.append(legend)
+        left = max(0, (width - shape.width) // 2)
+        top = max(0, (height - len(lines)) // 2)
+        self.layout_drawn = self.layout_of(shape, left, top)
+        return stack(lines, width, height)
+
+    def lines_under(self) -> int:
+        """Lines kept under the map besides the caption (the wind's, say)."""
+        return 0
+
+    def step_to(self, origin: Cell | None, target: Cell, moves: dict[Cell, str]) -> None:
+        """Move one cell from `origin` towards `target` (nothing when it is there)."""
+        if origin is not None and target != origin:
+            self.action_act(moves[step_toward(origin, target)])
+
+
+def fitting(texts: Sequence[str], width: int) -> str:
+    """The first (longest) of `texts` that fits `width`, else the last (shortest)."""
+    return next((text for text in texts if len(text) <= width), texts[-1])
 
 
 def cell_of(value: Any) -> Cell | None:
@@ -149,6 +229,6 @@ def reward_text(value: float) -> str:
 
 
 __all__ = [
-    "Cell", "CharGrid", "KeptShape", "cell_of", "legend", "on_tile", "reward_text", "stack",
-    "step_toward",
+    "CAPTION_LINES", "Cell", "CharGrid", "MapBoard", "cell_of", "fitting", "legend", "on_tile",
+    "reward_text", "shape_fits", "stack", "step_toward",
 ]

@@ -15,7 +15,6 @@ from textual.message import Message
 from textual.widget import Widget
 from textual.widgets import Button
 
-from tui_gym.ui.textual_internals import restyle_alone
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget, segments_of
 
 
@@ -228,11 +227,6 @@ class Board(Widget):
     def on_mount(self) -> None:
         self._update_buttons()
         self._update_subtitle(focused=self.has_focus)
-
-    def watch_has_focus(self, has_focus: bool) -> None:
-        # Only the board's own border follows its focus, not the canvas and buttons
-        # below it nor the colours it draws with.
-        restyle_alone(self)
 
     def on_focus(self) -> None:
         self._update_subtitle(focused=True)

@@ -13,6 +13,7 @@ from textual import events
 from textual.binding import Binding, BindingType
 from textual.geometry import Offset
 
+from tui_gym.ui.widgets.board_drawing import cell_of, step_toward
 from tui_gym.ui.widgets.boards import Board
 from tui_gym.ui.widgets.strip_widget import component_classes
 
@@ -117,13 +118,6 @@ def place_layout(layout: GridLayout, width: int, height: int) -> GridLayout:
     return dataclasses.replace(layout, left=left, top=top)
 
 
-def _cell(value: Any) -> Cell | None:
-    if value is None:
-        return None
-    x, y = value
-    return int(x), int(y)
-
-
 class GridBoard(Board):
     """GridWorld: walk the agent (●) to the target (◎); +y is up."""
 
@@ -193,7 +187,7 @@ class GridBoard(Board):
         self._grid_fresh = True
 
     def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
-        agent, target = _cell(scene.get("agent")), _cell(scene.get("target"))
+        agent, target = cell_of(scene.get("agent")), cell_of(scene.get("target"))
         size = int(scene.get("size", 0))
         previous = self._grid_agent
         jumped = (
@@ -208,7 +202,7 @@ class GridBoard(Board):
             self.trail[previous] = MOVES[move][1]
         self._grid_fresh = False
         self._grid_agent, self._grid_target, self._grid_size = agent, target, size
-        self._grid_walls = frozenset(c for c in map(_cell, scene.get("walls", ())) if c)
+        self._grid_walls = frozenset(c for c in map(cell_of, scene.get("walls", ())) if c)
         super().show_scene(scene, reveal)
 
     # --- drawing ---------------------------------------------------------------
@@ -297,10 +291,8 @@ class GridBoard(Board):
         """Step one cell towards the clicked cell (the longer way first)."""
         if self.layout_drawn is None or self._grid_agent is None:
             return
-        cell = self.layout_drawn.cell_at(offset)
-        if cell is None or cell == self._grid_agent:
+        cell, (x, y) = self.layout_drawn.cell_at(offset), self._grid_agent
+        if cell is None or cell == (x, y):
             return
-        dx, dy = cell[0] - self._grid_agent[0], cell[1] - self._grid_agent[1]
-        horizontal = abs(dx) >= abs(dy)
-        step = (1 if dx > 0 else -1, 0) if horizontal else (0, 1 if dy > 0 else -1)
-        self.action_act(MOVES[step][0])
+        d_y, d_x = step_toward((y, x), (cell[1], cell[0]))  # as (row, col): (y, x)
+        self.action_act(MOVES[d_x, d_y][0])

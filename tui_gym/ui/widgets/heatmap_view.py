@@ -32,7 +32,6 @@ from textual.message import Message
 from textual.reactive import reactive
 
 from tui_gym.core.heatmap import Heatmap
-from tui_gym.ui.textual_internals import restyle_alone
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget, line_text, segments_of
 
 RGB = tuple[int, int, int]
@@ -181,9 +180,6 @@ class HeatmapView(StripWidget, can_focus=True):
         @property
         def control(self) -> HeatmapView:
             return self.view
-
-    def watch_has_focus(self, has_focus: bool) -> None:
-        restyle_alone(self)  # only its tint follows the focus
 
     focus_cell: reactive[tuple[int, int] | None] = reactive(None, init=False)
     """(row, col) of the focus cell, or None when the game has no focus concept."""

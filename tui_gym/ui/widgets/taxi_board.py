@@ -19,14 +19,13 @@ from textual.geometry import Offset
 from tui_gym.ui.widgets.board_drawing import (
     Cell,
     CharGrid,
-    KeptShape,
+    MapBoard,
     cell_of,
+    fitting,
     legend,
     on_tile,
-    stack,
-    step_toward,
+    shape_fits,
 )
-from tui_gym.ui.widgets.boards import Board
 from tui_gym.ui.widgets.strip_widget import component_classes
 
 MOVES: dict[str, Cell] = {"south": (1, 0), "north": (-1, 0), "east": (0, 1), "west": (0, -1)}
@@ -35,7 +34,6 @@ STAND_NAMES = ("R", "G", "Y", "B")
 STAND_COLOURS = 4  # component classes taxi--stand-0 .. -3, used in turn
 PASSENGER, DESTINATION = "☺", "◎"
 MOVE_GROUP = Binding.Group("Drive")
-CAPTION_LINES = 1  # the line under the city is always kept free: tiles keep their size
 
 # What an action did: its words (longest first), their style, and whether the line goes
 # on to say where the passenger is going.
@@ -76,10 +74,6 @@ TAXI_SIZES = (
     (11, 4), (9, 4), (11, 3), (9, 3), (7, 3), (9, 2), (7, 2), (5, 2), (9, 1), (7, 1), (5, 1),
     (3, 1),
 )
-
-
-def shape_fits(shape: TaxiShape, width: int, height: int) -> bool:
-    return shape.width <= width and shape.height + CAPTION_LINES <= height
 
 
 def choose_shape(rows: int, cols: int, width: int, height: int) -> TaxiShape:
@@ -136,8 +130,11 @@ def _index(value: Any) -> int | None:
         return None
 
 
-class TaxiBoard(Board):
+class TaxiBoard(MapBoard):
     """Taxi: drive to the passenger ☺, pick them up, drop them off at ◎."""
+
+    STYLE = "taxi"
+    EMPTY = "No city yet."
 
     SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
     DEFAULT_CSS = """
@@ -188,10 +185,6 @@ class TaxiBoard(Board):
         self.stand_names: list[str] = []
         self.walls: frozenset[Cell] = frozenset()
         self.rainy = False
-        self._event: Event | None = None
-        self._fresh = True
-        self._kept: KeptShape[TaxiShape] = KeptShape()
-        self.layout_drawn: TaxiLayout | None = None
 
     # --- what the board says ---------------------------------------------------
     def key_help(self) -> list[tuple[str, str]]:
@@ -223,11 +216,6 @@ class TaxiBoard(Board):
         return self._event[0][0] if self._event else ""
 
     # --- the scene -----------------------------------------------------------------
-    def start_episode(self) -> None:
-        """The next scene begins a new episode; tiles may take a new size."""
-        self._fresh = True
-        self._kept.release()
-
     def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
         previous_taxi = None if self._fresh else self.taxi
         previous_destination = None if self._fresh else self.destination
@@ -315,8 +303,16 @@ class TaxiBoard(Board):
         return not (0 <= cell[0] + d_row < self.rows and 0 <= cell[1] + d_col < self.cols)
 
     # --- drawing -----------------------------------------------------------------
-    def _style(self, name: str) -> Style:
-        return self.get_component_rich_style(f"taxi--{name}")
+    def map_size(self) -> tuple[int, int] | None:
+        if self.taxi is None or self.rows <= 0 or self.cols <= 0:
+            return None
+        return self.rows, self.cols
+
+    def choose_shape(self, rows: int, cols: int, width: int, height: int) -> TaxiShape:
+        return choose_shape(rows, cols, width, height)
+
+    def layout_of(self, shape: TaxiShape, left: int, top: int) -> TaxiLayout:
+        return TaxiLayout(shape, left, top)
 
     def _stand_style(self, index: int) -> Style:
         return self._style(f"stand-{index % STAND_COLOURS}")
@@ -375,7 +371,7 @@ class TaxiBoard(Board):
                 grid.pill(chip_x, y0 + mid - 1, chip_w, 3, cab_style, under)
             grid.put(chip_x, y0 + mid, cab_text.center(chip_w), cab_style)
 
-    def _draw_city(self, shape: TaxiShape) -> list[Text]:
+    def draw_map(self, shape: TaxiShape, width: int, spare: int) -> list[Text]:
         grid = CharGrid(shape.width, shape.height, self._style("lane"))
         lane, wall = self._style("lane"), self._style("wall")
         for row in range(shape.rows):
@@ -403,13 +399,12 @@ class TaxiBoard(Board):
                     grid.put(x, last, "┻", wall)
         return grid.lines()
 
-    def _caption(self, width: int) -> Text:
+    def caption(self, width: int) -> Text:
         """What the last action did and, when it fits, where the passenger is going."""
         status = self._status()
         label = self._style("caption")
         if self._event is None:
-            fitting = [text for text in status if len(text) <= width] or list(status[-1:])
-            return Text(fitting[0], label)
+            return Text(fitting(status, width), label)
         texts, style, then_status = self._event
         if then_status:  # the longest words that leave room for where the passenger goes
             for text in texts:
@@ -418,10 +413,9 @@ class TaxiBoard(Board):
                     return Text.assemble(
                         (text, self._style(style)), (" · ", label), (where[0], label)
                     )
-        fitting = [text for text in texts if len(text) <= width] or list(texts[-1:])
-        return Text(fitting[0], self._style(style))
+        return Text(fitting(texts, width), self._style(style))
 
-    def _legend(self, width: int) -> Text | None:
+    def legend(self, width: int) -> Text | None:
         """'T taxi  ☺ passenger  ◎ destination  ┃ wall' (None if too wide)."""
         cab_text, cab_style = self._cab(3)
         road = self._style("road")  # the marks as on the map, so they show on any theme
@@ -432,27 +426,6 @@ class TaxiBoard(Board):
             ("┃", self._style("wall"), "wall"),
         ]
         return legend(items, self._style("caption"), width)
-
-    def picture(self, width: int, height: int) -> Text:
-        if self.taxi is None or self.rows <= 0 or self.cols <= 0:
-            self.layout_drawn = None
-            return stack([Text("No city yet.", self._style("caption"))], width, height)
-        rows, cols = self.rows, self.cols
-        if not self.KEEP_SHAPE:
-            self._kept.release()
-        shape = self._kept.get(
-            (rows, cols), width, height, lambda w, h: choose_shape(rows, cols, w, h), shape_fits
-        )
-        lines = self._draw_city(shape)
-        lines.append(self._caption(width))
-        if shape.height + CAPTION_LINES < height:
-            legend = self._legend(width)
-            if legend is not None:
-                lines.append(legend)
-        left = max(0, (width - shape.width) // 2)
-        top = max(0, (height - len(lines)) // 2)
-        self.layout_drawn = TaxiLayout(shape, left, top)
-        return stack(lines, width, height)
 
     # --- keys and clicks -----------------------------------------------------------
     def canvas_clicked(self, offset: Offset) -> None:
@@ -465,7 +438,7 @@ class TaxiBoard(Board):
         if cell == self.taxi:
             self.action_act("dropoff" if self.aboard else "pickup")
         else:
-            self.action_act(MOVE_OF[step_toward(self.taxi, cell)])
+            self.step_to(self.taxi, cell, MOVE_OF)
 
 
 __all__ = ["MOVES", "TaxiBoard", "TaxiLayout", "TaxiShape", "choose_shape"]

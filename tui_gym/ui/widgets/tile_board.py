@@ -21,15 +21,14 @@ from textual.message import Message
 from tui_gym.ui.widgets.board_drawing import (
     Cell,
     CharGrid,
-    KeptShape,
+    MapBoard,
     cell_of,
+    fitting,
     legend,
     on_tile,
     reward_text,
-    stack,
-    step_toward,
+    shape_fits,
 )
-from tui_gym.ui.widgets.boards import Board
 from tui_gym.ui.widgets.strip_widget import component_classes
 
 START, FLOOR, HOLE, GOAL, CLIFF, WALL, REWARD = "S", "F", "H", "G", "C", "W", "R"
@@ -71,7 +70,6 @@ THEMES = {
 TONES = ("good", "bad", "slipped", "caption")  # the styles a scene's event may take
 Event = tuple[tuple[str, ...], str]  # what a move did: ('{who} ...' longest first), its style
 MOVE_GROUP = Binding.Group("Move")
-CAPTION_LINES = 1  # the line under the map is always kept free: tiles keep their size
 
 
 @dataclass(frozen=True)
@@ -106,10 +104,6 @@ class TileShape:
 
 TILE_SIZES = ((11, 5), (9, 4), (7, 3), (5, 2), (3, 1), (2, 1), (1, 1))
 HALF_WIDTHS = (2, 1)
-
-
-def shape_fits(shape: TileShape, width: int, height: int) -> bool:
-    return shape.width <= width and shape.height + CAPTION_LINES <= height
 
 
 def choose_shape(rows: int, cols: int, width: int, height: int) -> TileShape:
@@ -199,8 +193,11 @@ def _number(value: Any) -> float | None:
         return None
 
 
-class TileBoard(Board):
+class TileBoard(MapBoard):
     """A map of tiles (lake, cliff, plain): walk the agent ● to the goal ★."""
+
+    STYLE = "tile"
+    EMPTY = "No map yet."
 
     SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
     DEFAULT_CSS = """
@@ -274,10 +271,6 @@ class TileBoard(Board):
         self.choices: list[str] = []
         self.king = False  # the map's moves include the diagonals
         self.cursor: Cell | None = None
-        self._event: Event | None = None
-        self._fresh = True
-        self._kept: KeptShape[TileShape] = KeptShape()
-        self.layout_drawn: TileLayout | None = None
 
     def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
         self.border_title = self.theme.title
@@ -333,11 +326,6 @@ class TileBoard(Board):
         return self._event[0][0].format(who=self.player_name) if self._event else ""
 
     # --- the scene ---------------------------------------------------------------
-    def start_episode(self) -> None:
-        """The next scene begins a new episode: forget the trail; tiles may take a new size."""
-        self._fresh = True
-        self._kept.release()
-
     def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
         cells = map_rows(scene)
         agent = cell_of(scene.get("agent"))
@@ -440,9 +428,6 @@ class TileBoard(Board):
         return far and slipped and any(beside)
 
     # --- drawing -----------------------------------------------------------------
-    def _style(self, name: str) -> Style:
-        return self.get_component_rich_style(f"tile--{name}")
-
     def _reward(self, cell: Cell) -> float | None:
         return _number(self.rewards.get(cell))
 
@@ -548,6 +533,24 @@ class TileBoard(Board):
             return self._style("start").color
         return self._ground(cell, kind).bgcolor
 
+    def map_size(self) -> tuple[int, int] | None:
+        return (len(self.cells), len(self.cells[0])) if self.cells else None
+
+    def choose_shape(self, rows: int, cols: int, width: int, height: int) -> TileShape:
+        return choose_shape(rows, cols, width, height)
+
+    def lines_under(self) -> int:
+        return 1 if self.wind else 0  # a line kept for the wind under the columns
+
+    def layout_of(self, shape: TileShape, left: int, top: int) -> TileLayout:
+        return TileLayout(shape, left + shape.label_w, top)
+
+    def draw_map(self, shape: TileShape, width: int, spare: int) -> list[Text]:
+        lines = self._draw_map(shape)
+        if self.wind and spare > 0 and not shape.half:
+            lines.append(self._wind_line(shape))
+        return lines
+
     def _draw_map(self, shape: TileShape) -> list[Text]:
         w, h = shape.cell_w, shape.cell_h
         grid = CharGrid(shape.width, shape.height, Style())
@@ -570,7 +573,7 @@ class TileBoard(Board):
                 grid.put(x_map + col * w, shape.map_h, str(col).center(w), axis)
         return grid.lines()
 
-    def _caption(self, width: int) -> Text:
+    def caption(self, width: int) -> Text:
         """What the last move did, or where the cursor or the agent is, in words that fit."""
         spot = self.cursor or self.agent
         if self._event is not None:
@@ -582,10 +585,11 @@ class TileBoard(Board):
         else:
             return Text("")
         said = [text.format(who=self.player_name) for text in texts]
-        fitting = [text for text in said if len(text) <= width] or said[-1:]
-        return Text(fitting[0], self._style(style))
+        caption = Text(fitting(said, width), self._style(style))
+        caption.truncate(width, overflow="ellipsis")
+        return caption
 
-    def _legend(self, width: int) -> Text | None:
+    def legend(self, width: int) -> Text | None:
         """'⌂ start  · ice  ○ hole  ★ goal  ● you': the tiles this map has (None if too wide)."""
         present = {kind for row in self.cells for kind in row}
         words = {
@@ -614,35 +618,6 @@ class TileBoard(Board):
                         self._style("wind" if strength else "axis"))
         return line
 
-    def picture(self, width: int, height: int) -> Text:
-        if not self.cells:
-            self.layout_drawn = None
-            return stack([Text("No map yet.", self._style("caption"))], width, height)
-        rows, cols = len(self.cells), len(self.cells[0])
-        if not self.KEEP_SHAPE:
-            self._kept.release()
-        wind = 1 if self.wind else 0  # a line kept for the wind under the columns
-        shape = self._kept.get(
-            (rows, cols), width, height - wind,
-            lambda w, h: choose_shape(rows, cols, w, h), shape_fits
-        )
-        lines = self._draw_map(shape)
-        spare = height - shape.height - CAPTION_LINES
-        if wind and spare > 0 and not shape.half:
-            lines.append(self._wind_line(shape))
-            spare -= 1
-        caption = self._caption(width)
-        caption.truncate(width, overflow="ellipsis")
-        lines.append(caption)
-        if spare > 0:
-            names = self._legend(width)
-            if names is not None:
-                lines.append(names)
-        left = max(0, (width - shape.width) // 2)
-        top = max(0, (height - len(lines)) // 2)
-        self.layout_drawn = TileLayout(shape, left + shape.label_w, top)
-        return stack(lines, width, height)
-
     # --- keys and clicks -----------------------------------------------------------
     def canvas_clicked(self, offset: Offset) -> None:
         layout = self.layout_drawn
@@ -659,10 +634,7 @@ class TileBoard(Board):
 
     def cell_clicked(self, row: int, col: int) -> None:
         """A click on cell (row, col): the agent steps one cell towards it."""
-        agent = self.agent
-        if agent is None or (row, col) == agent:
-            return
-        self.action_act(MOVE_OF[step_toward(agent, (row, col))])
+        self.step_to(self.agent, (row, col), MOVE_OF)
 
 
 __all__ = ["MOVES", "THEMES", "TileBoard", "TileLayout", "TileShape", "choose_shape", "map_rows"]
