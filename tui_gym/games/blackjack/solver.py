@@ -18,8 +18,7 @@ from tui_gym.core.mdp import FiniteMDP
 __all__ = [
     "BASE_STATES", "DEALERS", "DEFAULT_RULES", "DECISION_MASK", "HIT", "N_BASE", "POLICY_SHAPE",
     "STICK", "BlackjackRules", "base_state", "blackjack_model", "mixed_policy_value",
-    "observation_rows", "optimal_action_values", "optimal_policy", "optimal_value",
-    "policy_from_function", "policy_value",
+    "observation_rows", "optimal_action_values", "optimal_policy", "optimal_value", "policy_value",
 ]
 
 
@@ -411,22 +410,6 @@ def optimal_policy(rules: BlackjackRules = DEFAULT_RULES) -> np.ndarray:
 def optimal_value(rules: BlackjackRules = DEFAULT_RULES) -> float:
     """The exact expected return of an optimal policy from the initial deal."""
     return _start_value(_solve(rules).values)
-
-
-def policy_from_function(fn: Callable[[int, int, int], int]) -> np.ndarray:
-    """A policy array from ``fn(player_sum, dealer_card, usable_ace) -> 0 | 1``.
-
-    ``fn`` is called once per decision state (`DECISION_MASK`); other entries are 0.
-    """
-    policy = np.zeros(POLICY_SHAPE, dtype=np.int8)
-    for player_sum, dealer_card, usable_ace in zip(*np.nonzero(DECISION_MASK), strict=True):
-        action = fn(int(player_sum), int(dealer_card), int(usable_ace))
-        if action not in (STICK, HIT):
-            raise ValueError(
-                f"fn({player_sum}, {dealer_card}, {usable_ace}) returned {action!r}, not 0 or 1"
-            )
-        policy[player_sum, dealer_card, usable_ace] = int(action)
-    return policy
 
 
 def observation_rows() -> np.ndarray:
