@@ -19,7 +19,6 @@ import pytest
 from gymnasium.envs.toy_text import blackjack as gym_bj
 
 from tui_gym.games.blackjack.solver import (
-    DECISION_MASK,
     HIT,
     POLICY_SHAPE,
     STICK,
@@ -35,6 +34,12 @@ NATURAL = BlackjackRules(natural=True)
 SAB = BlackjackRules(sab=True)
 ALL_RULES = (PLAIN, NATURAL, SAB)
 RULE_IDS = ("plain", "natural", "sab")
+
+# The states where the player decides, written out on their own: hard totals 4..21 and
+# soft totals 12..21, each against a dealer's card 1..10.
+DECISION_MASK = np.zeros(POLICY_SHAPE, dtype=bool)
+DECISION_MASK[4:22, 1:11, 0] = True
+DECISION_MASK[12:22, 1:11, 1] = True
 
 
 def policy_from_function(fn: Callable[[int, int, int], int]) -> np.ndarray:

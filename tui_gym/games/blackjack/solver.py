@@ -16,9 +16,9 @@ import numpy as np
 from tui_gym.core.mdp import FiniteMDP
 
 __all__ = [
-    "BASE_STATES", "DEALERS", "DEFAULT_RULES", "DECISION_MASK", "HIT", "N_BASE", "POLICY_SHAPE",
-    "STICK", "BlackjackRules", "base_state", "blackjack_model", "mixed_policy_value",
-    "observation_rows", "optimal_action_values", "optimal_policy", "optimal_value", "policy_value",
+    "BASE_STATES", "DEALERS", "DEFAULT_RULES", "HIT", "N_BASE", "POLICY_SHAPE", "STICK",
+    "BlackjackRules", "base_state", "blackjack_model", "mixed_policy_value", "observation_rows",
+    "optimal_action_values", "optimal_policy", "optimal_value", "policy_value",
 ]
 
 
@@ -155,11 +155,6 @@ def base_state(total: int, dealer: int, usable: int) -> int:
     """The base state (and model state) of an observation that asks for a decision."""
     return ((_SOFT if usable else _HARD)[total]) * DEALERS + dealer - 1
 
-
-DECISION_MASK = np.zeros(POLICY_SHAPE, dtype=bool)
-DECISION_MASK[_STATE_SUM[:, None], np.arange(1, 11)[None, :], _STATE_USABLE[:, None]] = True
-DECISION_MASK.setflags(write=False)
-"""True at every observation where the player can be asked to act."""
 
 # ---------------------------------------------------------------------------
 # The dealer
@@ -299,8 +294,8 @@ def policy_value(policy: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> f
     """The exact expected return of a deterministic policy from the initial deal.
 
     ``policy`` has shape `POLICY_SHAPE`, indexed ``[player_sum, dealer_card,
-    usable_ace]`` with 0 = stick, 1 = hit; only decision states (`DECISION_MASK`)
-    are read. The policy's action at ``(21, d, 1)`` applies to a natural too.
+    usable_ace]`` with 0 = stick, 1 = hit; only decision states (hard totals 4-21, soft
+    12-21) are read. The policy's action at ``(21, d, 1)`` applies to a natural too.
     """
     return _start_value(_sweep(rules, _check_policy(policy))[2])
 
