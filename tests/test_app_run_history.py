@@ -183,9 +183,9 @@ async def test_the_app_goes_on_without_a_history_it_cannot_examine(tmp_path: Pat
         await pilot.press("t", "space")
         await wait_for(pilot, lambda: app.runner.finished, "training to finish", DEADLINE)
         await pilot.press("v")
-        view = app._compare
-        await wait_for(pilot, lambda: view is not None and view.history_error is not None,
+        await wait_for(pilot, lambda: app.compare_view is not None
+                       and app.compare_view.history_error is not None,
                        "the Compare view's message", DEADLINE)
-        assert "cannot be examined" in view.message
+        assert app.compare_view is not None and "cannot be examined" in app.compare_view.message
         await pilot.press("q")
     assert app.return_code == 0 and app.thread_crash is None

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from gymnasium.envs.toy_text.blackjack import sum_hand, usable_ace
 
+from tests.gridworld_support import all_pairs
 from tui_gym.core.mdp import solve
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.wrappers import WrapperChoice, build_env
@@ -27,7 +28,7 @@ from tui_gym.games.blackjack.solver import (
     observation_rows,
     optimal_value,
 )
-from tui_gym.games.gridworld.paths import all_pairs, gridworld_model
+from tui_gym.games.gridworld.paths import gridworld_model
 from tui_gym.session.session import Session
 
 RULES = (BlackjackRules(), BlackjackRules(natural=True), BlackjackRules(sab=True))

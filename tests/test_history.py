@@ -167,7 +167,7 @@ def test_recorder_finishes_the_run(db: Path) -> None:
             recorder.extend("return", [0.0] * 1000)
             recorder.put_curve(Curve("exact_gap", [1000, 2000], [0.5, 0.1]))
             recorder.add_figures(Figure("exact_gap", 0.1))
-            recorder.set_agent_path("agent.tgym")
+        history.update(recorder.run_id, agent_path="agent.tgym")
         record = history.get_run(recorder.run_id)
     assert record.summary.status is RunStatus.FINISHED
     assert record.summary.ended_at is not None

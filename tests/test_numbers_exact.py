@@ -17,6 +17,7 @@ import math
 import numpy as np
 import pytest
 
+from tests.gridworld_support import mixed_pair_fraction, optimal_pair_fraction
 from tests.mdp_support import sampled_returns
 from tui_gym.algorithms import QLearning
 from tui_gym.core.wrappers import parse_wrapper_spec
@@ -29,9 +30,7 @@ from tui_gym.games.blackjack.solver import (
     policy_value,
 )
 from tui_gym.games.gridworld.paths import (
-    mixed_pair_fraction,
     mixed_steps_over_optimal,
-    optimal_pair_fraction,
     policy_steps_over_optimal,
     shortest_path_policy,
 )

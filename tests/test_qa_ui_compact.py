@@ -12,6 +12,7 @@ from textual.geometry import Region
 from textual.widgets._toast import Toast
 
 from tests.board_support import rows
+from tests.test_ui_map_editor import editing
 from tests.test_ui_replay import ReplayHost, record
 from tests.waiting import wait_for
 from tui_gym.core.recording import read_recording
@@ -95,8 +96,7 @@ async def test_a_burst_of_resize_keys_leaves_one_notice() -> None:
     app = TuiGymApp(session)
     async with app.run_test(size=COMPACT, notifications=True) as pilot:
         await pilot.press("m")
-        await wait_for(pilot, lambda: app.train_view.editor is not None
-                       and app.train_view.editor.canvas.has_focus, "the editor")
+        await wait_for(pilot, lambda: editing(app.train_view), "the editor")
         await pilot.press(*["shift+right"] * 5)
         await wait_for(pilot, lambda: app.session.game.cells(app.session.env_kwargs)[0]
                        == "SFFFFFFF", "the map 8 wide")

@@ -9,7 +9,7 @@ bounds from the sample size.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from functools import cache
 from typing import Any
 
@@ -19,7 +19,6 @@ import pytest
 from gymnasium.envs.toy_text import blackjack as gym_bj
 
 from tui_gym.games.blackjack.solver import (
-    DECISION_MASK,
     HIT,
     POLICY_SHAPE,
     STICK,
@@ -27,7 +26,6 @@ from tui_gym.games.blackjack.solver import (
     optimal_action_values,
     optimal_policy,
     optimal_value,
-    policy_from_function,
     policy_value,
 )
 
@@ -36,6 +34,28 @@ NATURAL = BlackjackRules(natural=True)
 SAB = BlackjackRules(sab=True)
 ALL_RULES = (PLAIN, NATURAL, SAB)
 RULE_IDS = ("plain", "natural", "sab")
+
+# The states where the player decides, written out on their own: hard totals 4..21 and
+# soft totals 12..21, each against a dealer's card 1..10.
+DECISION_MASK = np.zeros(POLICY_SHAPE, dtype=bool)
+DECISION_MASK[4:22, 1:11, 0] = True
+DECISION_MASK[12:22, 1:11, 1] = True
+
+
+def policy_from_function(fn: Callable[[int, int, int], int]) -> np.ndarray:
+    """A policy array from ``fn(player_sum, dealer_card, usable_ace) -> 0 | 1``.
+
+    ``fn`` is called once per decision state (`DECISION_MASK`); other entries are 0.
+    """
+    policy = np.zeros(POLICY_SHAPE, dtype=np.int8)
+    for player_sum, dealer_card, usable_ace in zip(*np.nonzero(DECISION_MASK), strict=True):
+        action = fn(int(player_sum), int(dealer_card), int(usable_ace))
+        if action not in (STICK, HIT):
+            raise ValueError(
+                f"fn({player_sum}, {dealer_card}, {usable_ace}) returned {action!r}, not 0 or 1"
+            )
+        policy[player_sum, dealer_card, usable_ace] = int(action)
+    return policy
 
 CARD_PROBS = {card: (4 if card == 10 else 1) / 13 for card in range(1, 11)}
 

@@ -1,4 +1,5 @@
-"""Tests for `tui_gym.games.gridworld.paths`: shortest paths and policy checks."""
+"""Tests for `tui_gym.games.gridworld.paths`: shortest paths and policy checks against
+open-grid references."""
 
 from __future__ import annotations
 
@@ -7,13 +8,13 @@ import numpy as np
 import pytest
 
 import tui_gym  # noqa: F401  (registers the GridWorld ids)
-from tui_gym.games.gridworld.paths import (
+from tests.gridworld_support import (
     all_pairs,
     optimal_actions,
     optimal_pair_fraction,
     shortest_path_length,
-    shortest_path_policy,
 )
+from tui_gym.games.gridworld.paths import shortest_path_policy
 
 RIGHT, UP, LEFT, DOWN = 0, 1, 2, 3
 # The tutorial's moves, written out independently of the module under test.

@@ -12,7 +12,7 @@ from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.train_view import TrainView
 
-from .waiting import wait_for
+from .waiting import send_key, wait_for
 
 DEADLINE = 20.0
 
@@ -96,7 +96,8 @@ async def test_n_and_dot_say_the_budget_is_used_up_in_the_app() -> None:
     notes: list[str] = []
     app.notify = lambda message, **kw: notes.append(message)  # type: ignore[method-assign]
     async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.press("t", "n", "full_stop")
-        await pilot.pause()
-        assert sum("budget is used up" in note for note in notes) == 2, notes
+        for key in ("t", "n", "full_stop"):  # typed at once: n and . before the view mounts
+            send_key(pilot, key)
+        await wait_for(pilot, lambda: sum("budget is used up" in note for note in notes) == 2,
+                       "the budget notice for n and for .")
         assert app.session.trainer.episodes == 20 and app.runner.latest.episodes == 20

@@ -39,7 +39,6 @@ def reaped(pid: int) -> bool:
 
 
 def test_a_stopped_child_is_replaced_and_the_agent_kept(blackjack_runner, monkeypatch) -> None:
-    monkeypatch.setattr(process_runner, "HANG_SECONDS", 0.5)
     runner = blackjack_runner
     runner.start()
     assert wait_for(lambda: runner.latest.episodes > 1000, DEADLINE)
@@ -47,8 +46,12 @@ def test_a_stopped_child_is_replaced_and_the_agent_kept(blackjack_runner, monkey
     kept = runner.session.trainer.episodes
     runner.start()
     stopped = runner.child_pid
-    os.kill(stopped, signal.SIGSTOP)
-    assert wait_for(lambda: runner.error is not None, DEADLINE)
+    # A short silence ends the stopped child; only while it is stopped: on a busy machine
+    # a child that runs may be silent for longer than that.
+    with monkeypatch.context() as short:
+        short.setattr(process_runner, "HANG_SECONDS", 0.5)
+        os.kill(stopped, signal.SIGSTOP)
+        assert wait_for(lambda: runner.error is not None, DEADLINE)
     assert "stopped answering" in str(runner.error)
     assert not runner.running
     assert reaped(stopped)

@@ -238,12 +238,16 @@ async def test_scoreboard_matches_the_tally_and_the_exact_reference() -> None:
                 advice = game.game.oracle.advice(game.env, session.env_kwargs)
                 action = 0 if hand < 2 else advice.optimal[0]
                 optimal_moves += action in advice.optimal
+                steps = game.last.steps
                 await pilot.press(key_of(view, action))
+                await wait_for(pilot, lambda steps=steps: game.done or game.last.steps > steps,
+                               "the move")
             # The hand's end has the agent's figures computed on a thread: in before the
             # next key, so the pilot's wait for an idle process holds for that key.
             await wait_for(pilot, lambda: view.agent_figures_shown, "the agent's figures")
             if hand < 3:
                 await pilot.press("n")
+                await wait_for(pilot, lambda: not game.done, "the next hand")
         tally = game.tally
         assert tally.episodes == 4
         # Four hands say little about the interval's width: it shows as "–" (from 30 on).

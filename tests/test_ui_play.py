@@ -337,8 +337,9 @@ async def test_compact_layout_at_80x24_and_switching_games_swaps_the_board_keeps
         for env, key in (("blackjack", "h"), ("gridworld", "up")):
             if env == "gridworld":
                 await pilot.press("g")
-                await wait_for(pilot, lambda: view.agent_figures_shown, "the exact figures")
-                assert isinstance(view.board, GridBoard) and len(view.query(GridBoard)) == 1
+                await wait_for(pilot, lambda: isinstance(view.board, GridBoard)
+                               and view.agent_figures_shown, "the grid and its exact figures")
+                assert len(view.query(GridBoard)) == 1
                 assert not view.query(CardsBoard)
                 assert view.game.game.board == "grid"
                 assert app.focused is view.board
@@ -354,28 +355,29 @@ async def test_compact_layout_at_80x24_and_switching_games_swaps_the_board_keeps
             picture = drawing(view)
             assert ("░" in picture) if env == "blackjack" else ("●" in picture)
             await pilot.press(key)
-            assert view.game.last.steps == 1 or view.game.done
+            await wait_for(pilot, lambda: view.game.last.steps == 1 or view.game.done, "the move")
 
         # w (the app's key for the wrappers) and r walk and reset on the grid.
         start, size = view.game.scene()["agent"], view.game.scene()["size"]
         await pilot.press("w")
-        assert view.game.last.steps == 2
+        await wait_for(pilot, lambda: view.game.last.steps == 2, "the move up")
         agent = view.game.scene()["agent"]
         assert (agent[0], agent[1]) == (start[0], min(start[1] + 1, size - 1)), "w is up"
         assert app.focused is view.board, "w moved the agent; it did not leave the board"
         await pilot.press("r")
-        assert view.game.last.steps == 0
+        await wait_for(pilot, lambda: view.game.last.steps == 0, "the reset")
 
         await pilot.press("b")
-        await pilot.pause()
-        assert isinstance(view.board, CardsBoard) and app.focused is view.board
+        await wait_for(pilot, lambda: isinstance(view.board, CardsBoard)
+                       and app.focused is view.board, "the cards board with the keyboard")
         assert view.game is mine and view.game.tally.episodes == 0, "the hand is kept"
 
         # n (the app's key for one training step) deals the next hand here.
         await pilot.press("s")
-        assert view.game.done
+        await wait_for(pilot, lambda: view.game.done, "the hand's end")
         await pilot.press("n")
-        assert not view.game.done and view.game.tally.episodes == 1
+        await wait_for(pilot, lambda: not view.game.done, "the next hand")
+        assert view.game.tally.episodes == 1
         assert app.focused is view.board
 
 

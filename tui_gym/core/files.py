@@ -1,4 +1,5 @@
-"""Writing the files a user names: checked before any work, written atomically."""
+"""The files a user names: read only when regular and small enough, checked before any
+writing, written atomically."""
 
 from __future__ import annotations
 
@@ -10,17 +11,69 @@ import signal
 import stat
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-__all__ = ["OutputPathError", "check_output_path", "remove_stale_temp_files", "write_atomically"]
+__all__ = [
+    "OutputPathError", "check_output_path", "read_regular_file", "remove_stale_temp_files",
+    "write_atomically",
+]
 
 _STALE_AFTER = 60.0  # seconds: a temporary file without a writer's pid this old is left over
 
 
 class OutputPathError(ValueError):
     """A path a file cannot be written to; the message names it and says why."""
+
+
+_FILE_KINDS = (
+    (stat.S_ISFIFO, "a named pipe"), (stat.S_ISCHR, "a device"), (stat.S_ISBLK, "a device"),
+    (stat.S_ISSOCK, "a socket"),
+)
+
+
+def read_regular_file(
+    path: Path, limit: int, noun: str, fail: Callable[[str], Exception],
+    too_big: Callable[[int | None], str],
+) -> bytes:
+    """The bytes of the regular file `path` of at most `limit` bytes; pipes and devices are
+    refused without reading (or waiting on) them. Each refusal raises `fail(why)`, where
+    `why` names what the file is not (`noun`: "a map file"), or `too_big(size)` (None:
+    more than `limit` bytes came while reading)."""
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
+    try:
+        fd = os.open(path, flags)
+    except FileNotFoundError:
+        raise fail("no such file") from None
+    except IsADirectoryError:
+        raise fail(f"is a folder, not {noun}") from None
+    except OSError as exc:
+        raise fail(f"cannot read ({exc.strerror or exc})") from None
+    try:
+        info = os.fstat(fd)
+        if stat.S_ISDIR(info.st_mode):
+            raise fail(f"is a folder, not {noun}")
+        if not stat.S_ISREG(info.st_mode):
+            kind = next((name for test, name in _FILE_KINDS if test(info.st_mode)), "not a file")
+            raise fail(f"is {kind}, not {noun}")
+        if info.st_size > limit:
+            raise fail(too_big(info.st_size))
+        chunks = []
+        total = 0
+        while total <= limit:
+            chunk = os.read(fd, min(1 << 20, limit + 1 - total))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            total += len(chunk)
+        if total > limit:
+            raise fail(too_big(None))
+        return b"".join(chunks)
+    except OSError as exc:
+        raise fail(f"cannot read ({exc.strerror or exc})") from None
+    finally:
+        os.close(fd)
 
 
 def _real_target(path: Path) -> Path:

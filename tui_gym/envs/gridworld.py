@@ -7,7 +7,7 @@ import math
 import numbers
 from collections.abc import Iterable, Sequence
 from functools import lru_cache
-from typing import Any, SupportsInt
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 __all__ = [
     "ACTION_DELTAS", "ACTION_NAMES", "AGENT_COLOR", "BACKGROUND_COLOR", "CELL_PIXELS",
     "GRID_LINE_COLOR", "TARGET_COLOR", "WALL_COLOR", "GridWorldEnv", "Walls", "cell_distances",
-    "cell_moves", "check_walls", "free_cells", "manhattan",
+    "cell_moves", "check_walls", "free_cells",
 ]
 
 Position = tuple[int, int]
@@ -41,11 +41,6 @@ TARGET_COLOR: tuple[int, int, int] = (220, 40, 40)
 WALL_COLOR: tuple[int, int, int] = (70, 72, 80)
 
 _RENDER_MODES: tuple[str | None, ...] = (None, "ansi", "human", "rgb_array")
-
-
-def manhattan(a: Iterable[SupportsInt], b: Iterable[SupportsInt]) -> int:
-    """Manhattan (L1) distance between two grid positions, as a Python int."""
-    return sum(abs(int(p) - int(q)) for p, q in zip(a, b, strict=True))
 
 
 def _is_int(value: object) -> bool:

@@ -33,7 +33,7 @@ if TYPE_CHECKING:
 __all__ = [
     "EXACT", "Advice", "Bound", "EvalOutcome", "Game", "HeatmapLayout", "Narrator", "NotAvailable",
     "Oracle", "ReachNarrator", "ReferenceMetrics", "Scope", "StateSpace", "TallyWord",
-    "TrainingModel", "greedy_probabilities",
+    "TrainingModel",
 ]
 
 BoolArray = npt.NDArray[np.bool_]
@@ -113,14 +113,6 @@ class EvalOutcome:
     """Per-game extras of a greedy evaluation, beside mean and std of return."""
 
     figures: dict[str, float] = field(default_factory=dict)
-
-
-def greedy_probabilities(q: npt.ArrayLike) -> npt.NDArray[np.float64]:
-    """Each action's chance per row under the greedy policy as the agent plays it:
-    ties (e.g. an unvisited state's zeros) broken uniformly at random."""
-    values = np.asarray(q, dtype=np.float64)
-    tied = values == values.max(axis=1, keepdims=True)
-    return tied / tied.sum(axis=1, keepdims=True)
 
 
 # --- the roles ---------------------------------------------------------------------

@@ -26,6 +26,7 @@ from tui_gym.core.mdp import (
     Phases,
     evaluate,
     gap_of,
+    greedy_policy,
     model_from_env,
     return_range,
     solve,
@@ -46,7 +47,6 @@ from tui_gym.games.base import (
     Scope,
     StateSpace,
     TrainingModel,
-    greedy_probabilities,
 )
 from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import signed, unwrapped_note
@@ -258,7 +258,7 @@ class ModelOracle(Oracle):
             values = np.where(offered, values, -np.inf)
         # The figures follow from the greedy policy alone, which training changes less
         # often than the values: kept per policy.
-        policy = greedy_probabilities(values)
+        policy = greedy_policy(values)
         key = (freeze(kwargs), changes, policy.tobytes())
         found = self._references.get(key)
         if found is None:

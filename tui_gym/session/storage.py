@@ -10,8 +10,6 @@ from __future__ import annotations
 import io
 import json
 import math
-import os
-import stat
 import struct
 import zipfile
 import zlib
@@ -24,7 +22,12 @@ from typing import Any
 import numpy as np
 
 from tui_gym.algorithms import Learner, LearnerState, QLearning, Settings, algorithm
-from tui_gym.core.files import OutputPathError, check_output_path, write_atomically
+from tui_gym.core.files import (
+    OutputPathError,
+    check_output_path,
+    read_regular_file,
+    write_atomically,
+)
 from tui_gym.core.params import shown_value
 from tui_gym.core.text import nested_deeper
 from tui_gym.core.wrappers.catalog import WrapperChoice
@@ -113,51 +116,10 @@ class _Reader:
         return StorageError(f"{self.path}: not a valid save file: {name} {problem}")
 
 
-_FILE_KINDS = (
-    (stat.S_ISFIFO, "a named pipe"), (stat.S_ISCHR, "a device"), (stat.S_ISBLK, "a device"),
-    (stat.S_ISSOCK, "a socket"),
-)
-
-
-def _read_regular_file(reader: _Reader) -> bytes:
-    """The bytes of a regular file of at most MAX_FILE_BYTES; pipes and devices are refused
-    without reading (or waiting on) them."""
-    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
-    try:
-        fd = os.open(reader.path, flags)
-    except FileNotFoundError:
-        raise reader.error("no such file") from None
-    except IsADirectoryError:
-        raise reader.error("is a folder, not a save file") from None
-    except OSError as exc:
-        raise reader.error(f"cannot read ({exc.strerror or exc})") from None
-    try:
-        info = os.fstat(fd)
-        if stat.S_ISDIR(info.st_mode):
-            raise reader.error("is a folder, not a save file")
-        if not stat.S_ISREG(info.st_mode):
-            kind = next((name for test, name in _FILE_KINDS if test(info.st_mode)), "not a file")
-            raise reader.error(f"is {kind}, not a save file")
-        if info.st_size > MAX_FILE_BYTES:
-            raise reader.error(
-                f"not a tui-gym save file ({info.st_size:,} bytes; "
-                f"saves are at most {MAX_FILE_BYTES:,})"
-            )
-        chunks = []
-        total = 0
-        while total <= MAX_FILE_BYTES:
-            chunk = os.read(fd, min(1 << 20, MAX_FILE_BYTES + 1 - total))
-            if not chunk:
-                break
-            chunks.append(chunk)
-            total += len(chunk)
-        if total > MAX_FILE_BYTES:
-            raise reader.error(f"not a tui-gym save file (over {MAX_FILE_BYTES:,} bytes)")
-        return b"".join(chunks)
-    except OSError as exc:
-        raise reader.error(f"cannot read ({exc.strerror or exc})") from None
-    finally:
-        os.close(fd)
+def _too_big(size: int | None) -> str:
+    if size is None:
+        return f"not a tui-gym save file (over {MAX_FILE_BYTES:,} bytes)"
+    return f"not a tui-gym save file ({size:,} bytes; saves are at most {MAX_FILE_BYTES:,})"
 
 
 def _member(reader: _Reader, zf: zipfile.ZipFile, name: str, cap: int) -> bytes | None:
@@ -258,7 +220,7 @@ def read_file(path: str | Path) -> SaveContents:
     the meta, and the session the game and the learner's own rules.
     """
     reader = _Reader(Path(path))
-    raw = _read_regular_file(reader)
+    raw = read_regular_file(reader.path, MAX_FILE_BYTES, "a save file", reader.error, _too_big)
     try:
         with zipfile.ZipFile(io.BytesIO(raw)) as zf:
             meta_bytes = _member(reader, zf, "meta.json", MAX_META_BYTES)

@@ -390,6 +390,12 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             self._views[view] = self._new_view(view)
             self._switcher.mount(self._views[view])
         self._switcher.current = view
+        focused = self.focused
+        if focused is not None and self._switcher in focused.ancestors \
+                and self._switcher.visible_content not in focused.ancestors:
+            # Keys typed before the view takes the keyboard (once mounted) are the app's,
+            # not those of the view just hidden.
+            self.set_focus(None)
         self._show_side()
         if view == "play":
             self.play_view.focus_board()

@@ -2,8 +2,6 @@
 history (an SQLite file) that keeps every run with its settings, curves and figures."""
 
 from tui_gym.core.experiments.aggregate import (
-    AggregateCurve,
-    CurvePoint,
     Estimate,
     aggregate,
     mean_return_last,
@@ -15,7 +13,6 @@ from tui_gym.core.experiments.errors import (
     DamagedRunHistoryError,
     NewerRunHistoryError,
     NotARunHistoryError,
-    RunHistoryBusyError,
     RunHistoryError,
     UnknownRunError,
 )
@@ -26,7 +23,6 @@ from tui_gym.core.experiments.history import (
     DamagedRun,
     RunHistory,
     RunRecorder,
-    RunRows,
 )
 from tui_gym.core.experiments.paths import resolve_db_path
 from tui_gym.core.experiments.records import (
@@ -39,12 +35,7 @@ from tui_gym.core.experiments.records import (
     Versions,
     WrapperSetting,
 )
-from tui_gym.core.experiments.recover import Recovery
 from tui_gym.core.experiments.runs import (
-    CsvExport,
-    PrunedTasks,
-    RemovedRun,
-    RunListing,
     export_run_csv,
     list_runs,
     prune_tasks,
@@ -54,12 +45,10 @@ from tui_gym.core.experiments.runs import (
 )
 
 __all__ = [
-    "STORED_POINTS", "AggregateCurve", "BestEffortHistory", "CsvExport", "Curve", "CurvePoint",
-    "DamagedRun", "DamagedRunError", "DamagedRunHistoryError", "Estimate", "Figure",
-    "NewerRunHistoryError", "NotARunHistoryError", "Recovery", "PrunedTasks", "RemovedRun",
-    "RunHistory", "RunHistoryBusyError", "RunHistoryError", "RunKind", "RunListing", "RunRecord",
-    "RunRecorder", "RunRows", "RunSpec", "RunStatus", "RunSummary", "UnknownRunError", "Versions",
-    "WrapperSetting", "aggregate", "export_run_csv", "list_runs", "mean_return_last",
-    "mean_with_ci", "recover_history", "prune_tasks", "remove_run", "resolve_db_path",
-    "rolling_mean", "show_run",
+    "STORED_POINTS", "BestEffortHistory", "Curve", "DamagedRun", "DamagedRunError",
+    "DamagedRunHistoryError", "Estimate", "Figure", "NewerRunHistoryError", "NotARunHistoryError",
+    "RunHistory", "RunHistoryError", "RunKind", "RunRecord", "RunRecorder", "RunSpec", "RunStatus",
+    "RunSummary", "UnknownRunError", "Versions", "WrapperSetting", "aggregate", "export_run_csv",
+    "list_runs", "mean_return_last", "mean_with_ci", "prune_tasks", "recover_history",
+    "remove_run", "resolve_db_path", "rolling_mean", "show_run",
 ]

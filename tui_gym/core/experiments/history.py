@@ -524,7 +524,6 @@ class RunRecorder:
         self._accumulators: dict[str, CurveAccumulator] = {}
         self._curves: dict[str, Curve] = {}
         self._figures: dict[str, Figure] = {}
-        self._agent_path: str | None = None
 
     def extend(self, name: str, values: np.ndarray | Iterable[float]) -> None:
         """Append the values of the next episodes to the per-episode curve `name`."""
@@ -544,10 +543,6 @@ class RunRecorder:
         for figure in figures:
             self._figures[figure.name] = figure
 
-    def set_agent_path(self, path: str | Path) -> None:
-        """Where the run's agent was saved."""
-        self._agent_path = str(path)
-
     def _pending_curves(self) -> list[Curve]:
         curves = dict(self._curves)
         for name, accumulator in self._accumulators.items():
@@ -559,7 +554,7 @@ class RunRecorder:
         """Write what the run has so far (and `status`, if given) in one transaction."""
         self.history.update(
             self.run_id, curves=self._pending_curves(), figures=list(self._figures.values()),
-            agent_path=self._agent_path, status=status, max_points=self.max_points,
+            status=status, max_points=self.max_points,
         )
 
     def finish(self, status: RunStatus = RunStatus.FINISHED) -> None:

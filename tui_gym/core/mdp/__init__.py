@@ -6,7 +6,7 @@ it is discounted (gamma < 1) or the total of an episode (gamma = 1; minus infini
 policy that may never end one).
 """
 
-from tui_gym.core.mdp.evaluation import PolicyValue, evaluate, return_range
+from tui_gym.core.mdp.evaluation import evaluate, return_range
 from tui_gym.core.mdp.from_env import NotAvailable, model_from_env
 from tui_gym.core.mdp.model import (
     FiniteMDP,
@@ -19,7 +19,6 @@ from tui_gym.core.mdp.model import (
 )
 from tui_gym.core.mdp.optimum import (
     TIE_GAMMA,
-    Gap,
     Ladder,
     Solution,
     exact_gap,
@@ -30,8 +29,8 @@ from tui_gym.core.mdp.optimum import (
 from tui_gym.core.mdp.policy import PolicyError, greedy_policy, policy_matrix
 
 __all__ = [
-    "TIE_GAMMA", "FiniteMDP", "Gap", "Ladder", "ModelError", "NotAvailable", "Phases",
-    "PolicyError", "PolicyValue", "Solution", "clip_reward", "evaluate", "exact_gap",
-    "gap_of", "greedy_policy", "model_from_env", "optimal_actions", "policy_matrix", "return_range",
-    "scale_reward", "solve", "step_penalty", "with_horizon",
+    "TIE_GAMMA", "FiniteMDP", "Ladder", "ModelError", "NotAvailable", "Phases", "PolicyError",
+    "Solution", "clip_reward", "evaluate", "exact_gap", "gap_of", "greedy_policy",
+    "model_from_env", "optimal_actions", "policy_matrix", "return_range", "scale_reward", "solve",
+    "step_penalty", "with_horizon",
 ]

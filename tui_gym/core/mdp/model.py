@@ -3,7 +3,6 @@ time-limit wrapper changes it; `Phases`, a world that changes as it is played.""
 
 from __future__ import annotations
 
-from bisect import bisect_right
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -339,12 +338,3 @@ class Phases:
     def of(cls, model: FiniteMDP) -> Phases:
         """A world that never changes."""
         return cls((model,), (0,))
-
-    @classmethod
-    def listed(cls, phases: Sequence[tuple[int, FiniteMDP]]) -> Phases:
-        """From (start step, model) pairs."""
-        return cls(tuple(m for _, m in phases), tuple(s for s, _ in phases))
-
-    def index_at(self, steps: int) -> int:
-        """The phase in force for the transition after `steps` transitions (steps >= 0)."""
-        return max(0, bisect_right(self.starts, int(steps)) - 1)

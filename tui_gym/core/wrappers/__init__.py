@@ -5,13 +5,9 @@ from tui_gym.core.wrappers.build import UnknownEnvError, build_env, build_env_le
 from tui_gym.core.wrappers.catalog import (
     CATALOG,
     MAX_CHAIN,
-    DistanceShaping,
-    ScaleReward,
-    StepPenalty,
     UnknownWrapperError,
     WrapperChoice,
     WrapperMismatchError,
-    WrapperSpec,
     check_chain_length,
     format_wrapper_spec,
     get_spec,
@@ -19,8 +15,7 @@ from tui_gym.core.wrappers.catalog import (
 )
 
 __all__ = [
-    "CATALOG", "MAX_CHAIN", "DistanceShaping", "Param", "ScaleReward", "StepPenalty",
-    "UnknownEnvError", "UnknownWrapperError", "WrapperChoice", "WrapperMismatchError",
-    "WrapperSpec", "build_env", "build_env_lenient", "check_chain_length", "check_choices",
-    "format_wrapper_spec", "get_spec", "parse_wrapper_spec",
+    "CATALOG", "MAX_CHAIN", "Param", "UnknownEnvError", "UnknownWrapperError", "WrapperChoice",
+    "WrapperMismatchError", "build_env", "build_env_lenient", "check_chain_length",
+    "check_choices", "format_wrapper_spec", "get_spec", "parse_wrapper_spec",
 ]

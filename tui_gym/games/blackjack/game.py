@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
-from tui_gym.core.mdp import NotAvailable
+from tui_gym.core.mdp import NotAvailable, greedy_policy
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.games.base import (
@@ -28,7 +28,6 @@ from tui_gym.games.base import (
     StateSpace,
     TrainingModel,
     greedy_cells,
-    greedy_probabilities,
 )
 from tui_gym.games.blackjack.solver import (
     BASE_STATES,
@@ -142,7 +141,7 @@ class BlackjackOracle(Oracle):
         """The greedy policy of `q` (rows = base states) as a (32, 11, 2) table of the
         chance to hit: 0 or 1, or 0.5 where the two actions tie (the agent picks at random)."""
         table = np.zeros(POLICY_SHAPE, dtype=np.float64)
-        table[_BASE_INDEX] = greedy_probabilities(q)[:, 1]
+        table[_BASE_INDEX] = greedy_policy(q)[:, 1]
         return table
 
     def policy_value(self, q: np.ndarray, rules: BlackjackRules) -> float:

@@ -16,10 +16,9 @@ import numpy as np
 from tui_gym.core.mdp import FiniteMDP
 
 __all__ = [
-    "BASE_STATES", "DEALERS", "DEFAULT_RULES", "DECISION_MASK", "HIT", "N_BASE", "POLICY_SHAPE",
-    "STICK", "BlackjackRules", "base_state", "blackjack_model", "mixed_policy_value",
-    "observation_rows", "optimal_action_values", "optimal_policy", "optimal_value",
-    "policy_from_function", "policy_value",
+    "BASE_STATES", "DEALERS", "DEFAULT_RULES", "HIT", "N_BASE", "POLICY_SHAPE", "STICK",
+    "BlackjackRules", "base_state", "blackjack_model", "mixed_policy_value", "observation_rows",
+    "optimal_action_values", "optimal_policy", "optimal_value", "policy_value",
 ]
 
 
@@ -156,11 +155,6 @@ def base_state(total: int, dealer: int, usable: int) -> int:
     """The base state (and model state) of an observation that asks for a decision."""
     return ((_SOFT if usable else _HARD)[total]) * DEALERS + dealer - 1
 
-
-DECISION_MASK = np.zeros(POLICY_SHAPE, dtype=bool)
-DECISION_MASK[_STATE_SUM[:, None], np.arange(1, 11)[None, :], _STATE_USABLE[:, None]] = True
-DECISION_MASK.setflags(write=False)
-"""True at every observation where the player can be asked to act."""
 
 # ---------------------------------------------------------------------------
 # The dealer
@@ -300,8 +294,8 @@ def policy_value(policy: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> f
     """The exact expected return of a deterministic policy from the initial deal.
 
     ``policy`` has shape `POLICY_SHAPE`, indexed ``[player_sum, dealer_card,
-    usable_ace]`` with 0 = stick, 1 = hit; only decision states (`DECISION_MASK`)
-    are read. The policy's action at ``(21, d, 1)`` applies to a natural too.
+    usable_ace]`` with 0 = stick, 1 = hit; only decision states (hard totals 4-21, soft
+    12-21) are read. The policy's action at ``(21, d, 1)`` applies to a natural too.
     """
     return _start_value(_sweep(rules, _check_policy(policy))[2])
 
@@ -411,22 +405,6 @@ def optimal_policy(rules: BlackjackRules = DEFAULT_RULES) -> np.ndarray:
 def optimal_value(rules: BlackjackRules = DEFAULT_RULES) -> float:
     """The exact expected return of an optimal policy from the initial deal."""
     return _start_value(_solve(rules).values)
-
-
-def policy_from_function(fn: Callable[[int, int, int], int]) -> np.ndarray:
-    """A policy array from ``fn(player_sum, dealer_card, usable_ace) -> 0 | 1``.
-
-    ``fn`` is called once per decision state (`DECISION_MASK`); other entries are 0.
-    """
-    policy = np.zeros(POLICY_SHAPE, dtype=np.int8)
-    for player_sum, dealer_card, usable_ace in zip(*np.nonzero(DECISION_MASK), strict=True):
-        action = fn(int(player_sum), int(dealer_card), int(usable_ace))
-        if action not in (STICK, HIT):
-            raise ValueError(
-                f"fn({player_sum}, {dealer_card}, {usable_ace}) returned {action!r}, not 0 or 1"
-            )
-        policy[player_sum, dealer_card, usable_ace] = int(action)
-    return policy
 
 
 def observation_rows() -> np.ndarray:

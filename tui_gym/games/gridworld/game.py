@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
-from tui_gym.core.mdp import NotAvailable, evaluate, gap_of, return_range
+from tui_gym.core.mdp import NotAvailable, evaluate, gap_of, greedy_policy, return_range
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.envs import GRIDWORLD_MAX_STEPS
@@ -31,7 +31,6 @@ from tui_gym.games.base import (
     TallyWord,
     TrainingModel,
     greedy_cells,
-    greedy_probabilities,
 )
 from tui_gym.games.gridworld.paths import (
     fewest_share,
@@ -118,7 +117,7 @@ def _exact_return(
         changes = GameChanges(time_limit=changes.time_limit)
     args = _model_args(kwargs, changes)
     model = gridworld_model(*args)
-    value = evaluate(model, greedy_probabilities(q)).value
+    value = evaluate(model, greedy_policy(q)).value
     best = gridworld_optimum(*args).value
     return {"exact_value": value, "optimal_value": best, "gap": gap_of(best, value)}
 
@@ -190,7 +189,7 @@ class GridWorldOracle(Oracle):
         size = _size(kwargs)
         if np.shape(q) != (size**4, 4):
             return NotAvailable(f"a table of shape {np.shape(q)} does not fit a {size}x{size} grid")
-        frac = fewest_share(size, _walls(kwargs), greedy_probabilities(q))
+        frac = fewest_share(size, _walls(kwargs), greedy_policy(q))
         return ReferenceMetrics(
             figures={"optimal_pair_fraction": frac},
             summary=f"{frac:.1%} of (agent, target) pairs solved in the fewest steps",
@@ -221,7 +220,7 @@ class GridWorldOracle(Oracle):
         size = _size(kwargs)
         if q is None or np.shape(q) != (size**4, 4):
             return {}
-        _, extra, solved = path_figures(size, _walls(kwargs), greedy_probabilities(q),
+        _, extra, solved = path_figures(size, _walls(kwargs), greedy_policy(q),
                                           changes.time_limit)
         return {"steps_over_optimal": extra, "solved_fraction": solved}
 

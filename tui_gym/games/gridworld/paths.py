@@ -3,7 +3,6 @@ and how often a policy takes one."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from functools import lru_cache
 
 import numpy as np
@@ -14,10 +13,9 @@ from tui_gym.core.wrappers.changes import GameChanges
 from tui_gym.envs.gridworld import Walls, cell_distances, cell_moves, free_cells
 
 __all__ = [
-    "all_pairs", "fewest_share", "gridworld_model", "gridworld_optimum", "mean_fewest_steps",
-    "mixed_pair_fraction", "mixed_steps_over_optimal", "optimal_actions", "optimal_pair_fraction",
-    "path_figures", "placements", "policy_steps_over_optimal", "shortest_marks",
-    "shortest_path_length", "shortest_path_optimum", "shortest_path_policy",
+    "fewest_share", "gridworld_model", "gridworld_optimum", "mean_fewest_steps",
+    "mixed_steps_over_optimal", "path_figures", "placements", "policy_steps_over_optimal",
+    "shortest_marks", "shortest_path_optimum", "shortest_path_policy",
 ]
 
 _SETTLED = 1e-13  # a change in the chance of arriving smaller than this is no change
@@ -78,38 +76,6 @@ def shortest_path_optimum(
     free = free_cells(size, walls)
     start = free[agent] & free[target] & (agent != target)
     return q, float(q.max(axis=1)[start].mean())
-
-
-def _xy(position: Sequence[int] | np.ndarray) -> tuple[int, int]:
-    x, y = (int(v) for v in np.asarray(position).reshape(2))
-    return x, y
-
-
-def shortest_path_length(
-    agent: Sequence[int] | np.ndarray, target: Sequence[int] | np.ndarray
-) -> int:
-    """The fewest steps from ``agent`` to ``target`` on an open grid: their Manhattan
-    distance."""
-    (ax, ay), (tx, ty) = _xy(agent), _xy(target)
-    return abs(tx - ax) + abs(ty - ay)
-
-
-def optimal_actions(
-    agent: Sequence[int] | np.ndarray, target: Sequence[int] | np.ndarray
-) -> tuple[int, ...]:
-    """Every action that starts some shortest path on an open grid, ascending; ``()`` at
-    the target."""
-    (ax, ay), (tx, ty) = _xy(agent), _xy(target)
-    return tuple(a for a, toward in enumerate((tx > ax, ty > ay, tx < ax, ty < ay)) if toward)
-
-
-def all_pairs(size: int) -> np.ndarray:
-    """Every start placement: shape ``(size**2 * (size**2 - 1), 4)`` rows of
-    ``[agent_x, agent_y, target_x, target_y]`` with agent != target."""
-    _check_size(size)
-    grid = np.indices((size, size, size, size)).reshape(4, -1).T
-    distinct = (grid[:, 0] != grid[:, 2]) | (grid[:, 1] != grid[:, 3])
-    return grid[distinct]
 
 
 def shortest_path_policy(size: int) -> np.ndarray:
@@ -227,25 +193,12 @@ def path_figures(
     return fewest, extra, float(solved.mean())
 
 
-def optimal_pair_fraction(size: int, policy: np.ndarray) -> float:
-    """The fraction of start placements (agent != target) of an open grid from which
-    following ``policy`` (an action per ``(ax, ay, tx, ty)``) reaches the target in the
-    fewest steps."""
-    return fewest_share(size, (), _one_hot(size, policy))
-
-
 def policy_steps_over_optimal(
     size: int, policy: np.ndarray, max_steps: int | None = None
 ) -> tuple[float, float]:
     """``(mean extra steps, fraction solved)`` of a deterministic ``policy`` over every
     start placement of an open grid (see `path_figures`)."""
     return path_figures(size, (), _one_hot(size, policy), max_steps)[1:]
-
-
-def mixed_pair_fraction(size: int, probabilities: np.ndarray) -> float:
-    """`optimal_pair_fraction` of a policy given as action probabilities, shape
-    ``(size,) * 4 + (4,)``: the chance of a shortest walk, averaged over the placements."""
-    return fewest_share(size, (), _check_probabilities(size, probabilities))
 
 
 def mixed_steps_over_optimal(

@@ -7,9 +7,8 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from tui_gym.core.mdp import optimal_actions, solve
+from tui_gym.core.mdp import greedy_policy, optimal_actions, solve
 from tui_gym.games import Game
-from tui_gym.games.base import greedy_probabilities
 from tui_gym.games.planning import PlanModel
 
 __all__ = ["START_POLICIES", "StartError", "saved_agent_q", "start_policy"]
@@ -40,7 +39,7 @@ def start_policy(
         if q.shape != (plan.n_base, model.n_actions):
             raise StartError(f"the agent's table has shape {q.shape}, the game "
                              f"{(plan.n_base, model.n_actions)}")
-        weights = plan.model_policy(greedy_probabilities(np.where(
+        weights = plan.model_policy(greedy_policy(np.where(
             plan.allowed()[plan.shown], q, -np.inf)))
     else:
         raise StartError(f"the start policy is one of {', '.join(START_POLICIES)}, "
