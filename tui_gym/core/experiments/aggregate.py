@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from tui_gym.core.experiments.figures import Figure
+from tui_gym.core.experiments.figures import FieldsJson, Figure
 from tui_gym.core.experiments.records import Curve
 
 CONFIDENCE = 0.95
@@ -53,16 +53,13 @@ def rolling_mean(values: np.ndarray, window: int) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class CurvePoint:
+class CurvePoint(FieldsJson):
     """One point of an aggregated curve (lo and hi None without a band)."""
 
     episode: int
     mean: float
     lo: float | None
     hi: float | None
-
-    def to_json(self) -> dict[str, Any]:
-        return {"episode": self.episode, "mean": self.mean, "lo": self.lo, "hi": self.hi}
 
 
 @dataclass(frozen=True, eq=False)
@@ -235,13 +232,6 @@ def t_cdf(t: float, df: float) -> float:
     return 1.0 - tail if t >= 0 else tail
 
 
-def t_pdf(t: float, df: float) -> float:
-    """The density of Student's t with `df` degrees of freedom at `t`."""
-    _check_df(df)
-    log_norm = math.lgamma((df + 1) / 2) - math.lgamma(df / 2) - 0.5 * math.log(df * math.pi)
-    return math.exp(log_norm - (df + 1) / 2 * math.log1p(t * t / df))
-
-
 def _cornish_fisher(z: float, df: float) -> float:
     # Abramowitz & Stegun 26.7.5: the t quantile as a series in 1/df around z.
     z2 = z * z
@@ -269,27 +259,15 @@ def t_quantile(p: float, df: float) -> float:
     guess = _cornish_fisher(NormalDist().inv_cdf(p), df)
     if df > _SERIES_DF:
         return guess
-    # Bracket the root in [lo, hi], then Newton steps that fall back to bisection
-    # whenever they would leave the bracket (the series can overshoot for small df).
+    # Bracket the root in [lo, hi], then halve the bracket (the series can overshoot for
+    # small df).
     lo, hi = 0.0, max(guess, 1.0)
     while t_cdf(hi, df) < p:
         lo, hi = hi, hi * 2.0
-    t = min(max(guess, lo), hi)
-    for _ in range(200):
-        error = t_cdf(t, df) - p
-        if error > 0:
-            hi = t
-        else:
-            lo = t
-        density = t_pdf(t, df)
-        step = error / density if density > 0 else math.inf
-        candidate = t - step
-        if not lo < candidate < hi:
-            candidate = (lo + hi) / 2.0
-        if abs(candidate - t) <= 1e-13 * max(1.0, abs(t)):
-            return candidate
-        t = candidate
-    return t
+    while hi - lo > 1e-13 * hi:
+        middle = (lo + hi) / 2.0
+        lo, hi = (middle, hi) if t_cdf(middle, df) < p else (lo, middle)
+    return (lo + hi) / 2.0
 
 
 def _check_points(max_points: int) -> None:

@@ -31,7 +31,6 @@ from tui_gym.core.experiments.connection import (
     MIGRATIONS,
     Migration,
     WriterCheck,
-    busy_error,
     check_migrations,
     current_writer,
     damaged,
@@ -41,7 +40,7 @@ from tui_gym.core.experiments.connection import (
     shown,
 )
 from tui_gym.core.experiments.errors import DamagedRunError, RunHistoryError, UnknownRunError
-from tui_gym.core.experiments.figures import Figure
+from tui_gym.core.experiments.figures import FieldsJson, Figure
 from tui_gym.core.experiments.records import (
     Curve,
     RunKind,
@@ -64,14 +63,11 @@ T = TypeVar("T")
 
 
 @dataclass(frozen=True)
-class DamagedRun:
+class DamagedRun(FieldsJson):
     """A run whose row does not read: its id and why, in a few words."""
 
     id: int
     reason: str
-
-    def to_json(self) -> dict[str, Any]:
-        return {"id": self.id, "reason": self.reason}
 
 
 @dataclass(frozen=True)
@@ -133,8 +129,7 @@ class RunHistory:
         if self._closed:
             raise RunHistoryError(f"{shown(self.path)}: this history was closed")
         with self._errors():
-            return self._shared.attempt(action, self.timeout, busy_error(self.path, self.timeout),
-                                        begin=begin)
+            return self._shared.attempt(action, self.timeout, self.path, begin=begin)
 
     def _require_run(self, conn: sqlite3.Connection, run_id: int) -> None:
         if conn.execute("SELECT 1 FROM runs WHERE id = ?", (run_id,)).fetchone() is None:
