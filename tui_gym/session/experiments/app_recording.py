@@ -14,17 +14,10 @@ from typing import TYPE_CHECKING, Any
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.history import RunHistory
-from tui_gym.core.experiments.records import Curve, RunKind, RunSpec, RunStatus
-from tui_gym.session.experiments.live import (
-    ExactCheckpoints,
-    episodes_figure,
-    return_curve,
-    run_figures,
-    run_spec,
-)
+from tui_gym.core.experiments.records import RunKind, RunSpec, RunStatus
+from tui_gym.session.experiments.live import ExactCheckpoints, run_results, run_spec
 
 if TYPE_CHECKING:
-    from tui_gym.core.experiments.figures import Figure
     from tui_gym.session.session import Session
 
 FLUSH_SECONDS = 2.0  # how often an open run's curves are written
@@ -97,7 +90,7 @@ class SessionRunLog:
         if now >= self._next_flush and run.episodes != run.flushed:
             self._next_flush = now + self.flush_seconds
             run.checkpoints.take(snapshot)
-            self._send("update", run, *self._results(run, snapshot), run.spec)
+            self._send("update", run, *run_results(snapshot, run.checkpoints, run.after), run.spec)
             run.flushed = run.episodes
         self._last_snapshot = snapshot
         return None
@@ -119,17 +112,9 @@ class SessionRunLog:
         run.checkpoints.take(snapshot)  # the exact value near the run's start
         return run
 
-    def _results(
-        self, run: _OpenRun, snapshot: TrainingSnapshot | None
-    ) -> tuple[list[Curve], list[Figure]]:
-        curve = None if snapshot is None else return_curve(snapshot, run.after)
-        curves = [c for c in (curve, run.checkpoints.curve()) if c is not None]
-        episodes = () if snapshot is None else (episodes_figure(snapshot, run.after),)
-        return curves, run_figures(curve, run.checkpoints.last, episodes, after=run.after)
-
     def _end(self, run: _OpenRun) -> None:
         # No checkpoint here: the session may have been rebuilt around another table.
-        curves, figures = self._results(run, self._last_snapshot)
+        curves, figures = run_results(self._last_snapshot, run.checkpoints, run.after)
         self._send("finish", run, curves, figures, run.spec)
         self._run = None
         self._baseline = run.episodes

@@ -28,7 +28,7 @@ from tui_gym.core.experiments.aggregate import (
     mean_with_ci,
 )
 from tui_gym.core.experiments.errors import RunHistoryError
-from tui_gym.core.experiments.figures import Figure
+from tui_gym.core.experiments.figures import Figure, plain
 from tui_gym.core.experiments.history import STORED_POINTS, RunHistory
 from tui_gym.core.experiments.records import RunKind, RunSpec, RunStatus, TaskRecord, WrapperSetting
 from tui_gym.core.mdp import FiniteMDP, solve
@@ -165,21 +165,17 @@ class AlgorithmOutcome:
             "hyperparameters": dict(self.hyperparameters),
             "seeds_done": self.seeds_done,
             "episodes_done": self.episodes,
-            "mean_return_last": _finite(self.mean_return_last.mean),
+            "mean_return_last": plain(self.mean_return_last.mean),
             "ci95": self.mean_return_last.ci95,
-            "exact_value": _finite(self.exact_value),
-            "exact_gap": _finite(self.exact_gap),
-            "rms_error": _finite(self.rms_error),
-            "rms_ci95": _finite(self.rms_ci95),
+            "exact_value": plain(self.exact_value),
+            "exact_gap": plain(self.exact_gap),
+            "rms_error": plain(self.rms_error),
+            "rms_ci95": plain(self.rms_ci95),
             "rms_curve": None if self.rms_curve is None else [
                 p.to_json() for p in self.rms_curve.downsample(max_points).points()],
             "run_id": self.run_id,
             "curve": [p.to_json() for p in self.curve.downsample(max_points).points()],
         }
-
-
-def _finite(value: float | None) -> float | None:
-    return value if value is not None and math.isfinite(value) else None
 
 
 @dataclass(frozen=True)
@@ -218,7 +214,7 @@ class CompareResult:
         return {
             "game": self.game or (spec.game if spec else ""),
             "episodes": spec.episodes if spec else None, "seeds": spec.seeds if spec else None,
-            "first_seed": spec.first_seed if spec else None, "optimum": _finite(self.optimum),
+            "first_seed": spec.first_seed if spec else None, "optimum": plain(self.optimum),
             "interrupted": self.interrupted, "group": self.group, "tasks": dict(self.tasks),
             "results": [o.to_json() for o in self.outcomes],
         }
@@ -658,9 +654,14 @@ class ResumeError(CompareError):
     """A run that cannot be resumed with these settings; the message says why."""
 
 
-def _plain(value: Any) -> Any:
-    """`value` as JSON reads it back (tuples as lists), to compare with what is stored."""
-    return json.loads(json.dumps(value, default=str))
+def _compared(game: str, algorithm: str, params: Mapping[str, Any],
+              wrappers: Sequence[WrapperSetting], seeds: Sequence[int], hp: Mapping[str, Any],
+              episodes: int) -> dict[str, Any]:
+    """A run's settings as resuming compares them: as JSON reads them back (tuples as lists)."""
+    return dict(json.loads(json.dumps({
+        "game": game, "algorithm": algorithm, "game parameters": params,
+        "wrappers": [w.to_json() for w in wrappers], "seeds": seeds, **dict(sorted(hp.items())),
+        "episodes": episodes}, default=str)))
 
 
 def _resume_runs(
@@ -689,29 +690,17 @@ def _resume_runs(
                           f"{kind} of {len(arms)}{advice}")
     for a, record in enumerate(records):
         run = record.summary
-        here: dict[str, Any] = {
-            "game": prepared.game, "algorithm": arms[a].algorithm,
-            "game parameters": _plain(prepared.env_kwargs),
-            "wrappers": _plain([w.to_json() for w in prepared.wrappers]),
-            "seeds": list(setup.seed_list),
-        }
-        there: dict[str, Any] = {
-            "game": run.game, "algorithm": run.algorithm,
-            "game parameters": _plain(dict(record.game_params)),
-            "wrappers": _plain([w.to_json() for w in record.wrappers]), "seeds": list(run.seeds),
-        }
-        stored_hp, hp = _plain(dict(record.hyperparameters)), _plain(prepared.hyperparameters[a])
-        for key in sorted(set(stored_hp) | set(hp)):
-            here[key], there[key] = hp.get(key), stored_hp.get(key)
         tasks = history.read_tasks(run.id)
-        here["episodes"], there["episodes"] = setup.episodes, (
-            tasks[0].episodes if tasks else setup.episodes)
-        for key, value in here.items():
-            if there[key] != value:
+        here = _compared(prepared.game, arms[a].algorithm, prepared.env_kwargs, prepared.wrappers,
+                         setup.seed_list, prepared.hyperparameters[a], setup.episodes)
+        there = _compared(run.game, run.algorithm, record.game_params, record.wrappers, run.seeds,
+                          record.hyperparameters, tasks[0].episodes if tasks else setup.episodes)
+        for key in dict.fromkeys([*here, *there]):
+            if there.get(key) != here.get(key):
                 raise ResumeError(
                     f"run {run.id} was recorded with other settings ({key} "
-                    f"{visible(str(there[key]), 60)} there, {visible(str(value), 60)} here)"
-                    f"{advice}")
+                    f"{visible(str(there.get(key)), 60)} there, "
+                    f"{visible(str(here.get(key)), 60)} here){advice}")
         for task in tasks:
             tally.load(a, task)
     for record in records:
@@ -768,105 +757,91 @@ def execute(
     (a run's id, or the ids of the arms' runs in order) runs only the tasks its runs miss;
     `group` names the run the new runs join (one experiment of several). A task runs for
     about `task_seconds` or more (infinity: one per core)."""
+    from tui_gym.session.experiments.cluster import connect, run_on_cluster
+
     prepared = prepare(setup, arms)
-    with contextlib.ExitStack() as stack:
-        client = None
-        if cluster is not None:  # reached (or started) before any run is recorded
-            from tui_gym.session.experiments.cluster import connect
+    with connect(cluster) as client:  # reached (or started) before any run is recorded
+        cores = _cores() if processes is None else max(1, processes)
+        tally = _Tally(setup, arms, prepared)
+        if resume is not None:
+            if history is None:
+                raise ResumeError(f"run {resume} cannot be resumed without the run history")
+            tally.run_ids = _resume_runs(history, kind, setup, arms, prepared, resume, tally)
+        elif history is not None:
+            tally.run_ids = _start_runs(history, kind, setup, arms, prepared, group)
+        last = [time.monotonic()]
 
-            client = stack.enter_context(connect(cluster))
-        return _execute(setup, arms, kind, prepared, progress, stop, history, processes,
-                        status, resume, client, task_seconds, group)
+        def tell(force: bool = False) -> None:
+            if progress is None:
+                return
+            now = time.monotonic()
+            if force or now - last[0] >= PROGRESS_INTERVAL:
+                last[0] = now
+                progress(CompareProgress(
+                    tally.count(), tally.total(), tally.tasks_done, tally.tasks_total,
+                    lambda: tuple(o for o in tally.outcomes() if o is not None)))
 
+        def landed(job: _Job) -> None:
+            """A task finished: kept at once, and told."""
+            tally.tasks_done += 1
+            run_id = tally.run_ids[job.arm]
+            if history is not None and run_id is not None:
+                history.put_task(run_id, tally.record_of(job))
+            tell(force=True)
 
-def _execute(
-    setup: Setup, arms: Sequence[Arm], kind: RunKind, prepared: Prepared,
-    progress: Callable[[CompareProgress], None] | None, stop: threading.Event | None,
-    history: RunHistory | None, processes: int | None, status: Callable[[str], None] | None,
-    resume: int | Sequence[int] | None, client: Any, task_seconds: float, group: int | None,
-) -> Executed:
-    cores = _cores() if processes is None else max(1, processes)
-    tally = _Tally(setup, arms, prepared)
-    if resume is not None:
-        if history is None:
-            raise ResumeError(f"run {resume} cannot be resumed without the run history")
-        tally.run_ids = _resume_runs(history, kind, setup, arms, prepared, resume, tally)
-    elif history is not None:
-        tally.run_ids = _start_runs(history, kind, setup, arms, prepared, group)
-    last = [time.monotonic()]
-
-    def tell(force: bool = False) -> None:
-        if progress is None:
-            return
-        now = time.monotonic()
-        if force or now - last[0] >= PROGRESS_INTERVAL:
-            last[0] = now
-            progress(CompareProgress(
-                tally.count(), tally.total(), tally.tasks_done, tally.tasks_total,
-                lambda: tuple(o for o in tally.outcomes() if o is not None)))
-
-    def landed(job: _Job) -> None:
-        """A task finished: kept at once, and told."""
-        tally.tasks_done += 1
-        run_id = tally.run_ids[job.arm]
-        if history is not None and run_id is not None:
-            history.put_task(run_id, tally.record_of(job))
-        tell(force=True)
-
-    halt = threading.Event()
-    stopped = halt.is_set if stop is None else (lambda: stop.is_set() or halt.is_set())
-    complete = False
-    failure: BaseException | None = None
-    try:
-        with processes_module.stops_on_signals(halt):
-            missing = tally.missing()
-            seconds = _estimate(prepared, arms, setup, status) if (
-                client is not None or (processes != 0 and cores > 1)) else 0.0
-            if client is None and seconds < SPREAD_SECONDS:
-                jobs = tally.add(_jobs(setup, arms, prepared, missing))
-                tally.tasks_total += len(jobs)
-                complete = _run_here(jobs, tally, stopped, tell, landed)
-            else:
-                per_seed = seconds / (len(arms) * setup.seeds)
-                pieces = max(-(-cores // len(arms)), max(
-                    -(-len(rows) * per_seed // task_seconds) for rows in missing))
-                jobs = tally.add(_jobs(setup, arms, prepared, missing, int(pieces)))
-                tally.tasks_total += len(jobs)
-                if client is None:
-                    complete = _run_children(jobs, tally, stopped, tell, cores, landed)
+        halt = threading.Event()
+        stopped = halt.is_set if stop is None else (lambda: stop.is_set() or halt.is_set())
+        complete = False
+        failure: BaseException | None = None
+        try:
+            with processes_module.stops_on_signals(halt):
+                missing = tally.missing()
+                seconds = _estimate(prepared, arms, setup, status) if (
+                    client is not None or (processes != 0 and cores > 1)) else 0.0
+                if client is None and seconds < SPREAD_SECONDS:
+                    jobs = tally.add(_jobs(setup, arms, prepared, missing))
+                    tally.tasks_total += len(jobs)
+                    complete = _run_here(jobs, tally, stopped, tell, landed)
                 else:
-                    from tui_gym.session.experiments.cluster import run_on_cluster
+                    per_seed = seconds / (len(arms) * setup.seeds)
+                    pieces = max(-(-cores // len(arms)), max(
+                        -(-len(rows) * per_seed // task_seconds) for rows in missing))
+                    jobs = tally.add(_jobs(setup, arms, prepared, missing, int(pieces)))
+                    tally.tasks_total += len(jobs)
+                    if client is None:
+                        complete = _run_children(jobs, tally, stopped, tell, cores, landed)
+                    else:
 
-                    def take(job: _Job, updates: list[SeedsUpdate]) -> None:
-                        for update in updates:
-                            tally.take(job.index, update)
-                        landed(job)
+                        def take(job: _Job, updates: list[SeedsUpdate]) -> None:
+                            for update in updates:
+                                tally.take(job.index, update)
+                            landed(job)
 
-                    complete = run_on_cluster(client, jobs, run_task, take, stopped)
-    except BaseException as exc:
-        failure = exc
-    if complete and history is not None and None not in tally.run_ids and (
-            getattr(history, "failure", None) is None):
-        with contextlib.suppress(RunHistoryError):  # a task that does not read: as run
-            tally = _stored(history, setup, arms, prepared, tally.run_ids) or tally
-    outcomes = tally.outcomes()
-    interrupted = not complete
-    if history is not None:
-        if failure is not None and not isinstance(failure, KeyboardInterrupt):
-            for run_id in tally.run_ids:
-                if run_id is not None:
-                    history.update(run_id, status=RunStatus.FAILED)
-        else:
-            _record(history, tally, outcomes, interrupted)
-    if failure is not None:
-        raise failure
-    tell(force=True)
-    return Executed(
-        outcomes=tuple(outcomes), interrupted=interrupted,
-        group=tally.run_ids[0] if tally.run_ids else None, prepared=prepared,
-        values=tally.returns, exact=tally.exact,
-        tasks={"done": tally.tasks_done, "total": tally.tasks_total},
-    )
+                        complete = run_on_cluster(client, jobs, run_task, take, stopped)
+        except BaseException as exc:
+            failure = exc
+        if complete and history is not None and None not in tally.run_ids and (
+                getattr(history, "failure", None) is None):
+            with contextlib.suppress(RunHistoryError):  # a task that does not read: as run
+                tally = _stored(history, setup, arms, prepared, tally.run_ids) or tally
+        outcomes = tally.outcomes()
+        interrupted = not complete
+        if history is not None:
+            if failure is not None and not isinstance(failure, KeyboardInterrupt):
+                for run_id in tally.run_ids:
+                    if run_id is not None:
+                        history.update(run_id, status=RunStatus.FAILED)
+            else:
+                _record(history, tally, outcomes, interrupted)
+        if failure is not None:
+            raise failure
+        tell(force=True)
+        return Executed(
+            outcomes=tuple(outcomes), interrupted=interrupted,
+            group=tally.run_ids[0] if tally.run_ids else None, prepared=prepared,
+            values=tally.returns, exact=tally.exact,
+            tasks={"done": tally.tasks_done, "total": tally.tasks_total},
+        )
 
 
 def _stored(history: RunHistory, setup: Setup, arms: Sequence[Arm], prepared: Prepared,

@@ -13,14 +13,7 @@ from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.history import RunHistory
 from tui_gym.core.experiments.paths import resolve_db_path
 from tui_gym.core.experiments.records import RunKind, RunSpec, RunStatus
-from tui_gym.session.experiments.live import (
-    ExactCheckpoints,
-    episodes_figure,
-    eval_figures,
-    return_curve,
-    run_figures,
-    run_spec,
-)
+from tui_gym.session.experiments.live import ExactCheckpoints, run_results, run_spec
 
 if TYPE_CHECKING:
     from tui_gym.session.evaluation import EvalReport
@@ -109,16 +102,10 @@ class TrainRecording:
             return None
         snapshot = session.trainer.latest
         checkpoints.take(snapshot, final=True)
-        curve = return_curve(snapshot, self._after)
-        extra = (episodes_figure(snapshot, self._after),
-                 *(eval_figures(report) if report is not None else ()))
-        curves = [c for c in (curve, checkpoints.curve()) if c is not None]
+        curves, figures = run_results(snapshot, checkpoints, self._after, report)
         try:
-            history.update(
-                self.run_id, curves=curves,
-                figures=run_figures(curve, checkpoints.last, extra, self._after),
-                agent_path=None if saved is None else Path(saved).resolve(), status=status,
-            )
+            history.update(self.run_id, curves=curves, figures=figures, status=status,
+                           agent_path=None if saved is None else Path(saved).resolve())
         except (RunHistoryError, ValueError) as exc:
             self._give_up(exc)
             return None
