@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from tui_gym.core.engine.stats import Series
 from tui_gym.core.experiments.figures import FieldsJson, Figure
 from tui_gym.core.experiments.records import Curve
 
@@ -311,19 +312,14 @@ def bucket_means(
     return episodes[ends], means
 
 
-class CurveAccumulator:
-    """Per-episode values of a run of any length, as at most `capacity` bucket means."""
+class CurveAccumulator(Series):
+    """Per-episode values of a run of any length, as at most `capacity` bucket means: a
+    `Series` that numbers its points' episodes."""
 
     def __init__(self, capacity: int = 512, first_episode: int = 1) -> None:
-        if capacity < 2 or capacity % 2:
-            raise ValueError(f"capacity must be an even number >= 2, got {capacity}")
-        self.capacity = capacity
+        super().__init__(capacity)
         self.first_episode = first_episode
-        self.span = 1  # episodes in each full bucket
         self.count = 0  # episodes seen
-        self._means: list[float] = []
-        self._tail_sum = 0.0
-        self._tail_n = 0
 
     def append(self, value: float) -> None:
         self.extend(np.array([value], dtype=np.float64))
@@ -331,47 +327,20 @@ class CurveAccumulator:
     def extend(self, values: np.ndarray) -> None:
         """Add the values of the next episodes, in order."""
         values = np.asarray(values, dtype=np.float64).ravel()
-        i, k = 0, len(values)
-        self.count += k
-        while i < k:
-            need = self.span - self._tail_n
-            take = min(need, k - i)
-            if self._tail_n or take < self.span:
-                self._tail_sum += float(values[i : i + take].sum())
-                self._tail_n += take
-                i += take
-                if self._tail_n < self.span:
-                    return
-                self._close(self._tail_sum / self.span)
-                self._tail_sum, self._tail_n = 0.0, 0
-                continue
-            whole = min((k - i) // self.span, self.capacity - len(self._means))
-            block = values[i : i + whole * self.span].reshape(whole, self.span)
-            self._means.extend(block.mean(axis=1).tolist())
-            i += whole * self.span
-            self._merge_if_full()
-
-    def _close(self, mean: float) -> None:
-        self._means.append(mean)
-        self._merge_if_full()
-
-    def _merge_if_full(self) -> None:
-        if len(self._means) >= self.capacity:
-            pairs = np.asarray(self._means).reshape(-1, 2)
-            self._means = pairs.mean(axis=1).tolist()
-            self.span *= 2
+        self.count += len(values)
+        self.push_many(values)
 
     def curve(self, max_points: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(episodes, values): the bucket means so far, the unfinished bucket last, each
         labelled with its last episode; re-bucketed to at most `max_points` if given."""
-        full = len(self._means)
+        full = len(self._points)
         episodes = self.first_episode - 1 + self.span * np.arange(1, full + 1, dtype=np.int64)
-        values = np.asarray(self._means, dtype=np.float64)
+        values = np.asarray(self._points, dtype=np.float64)
         weights = np.full(full, float(self.span))
-        if self._tail_n:
+        if self._acc_n:
             episodes = np.append(episodes, self.first_episode + self.count - 1)
-            values = np.append(values, self._tail_sum / self._tail_n)
-            weights = np.append(weights, float(self._tail_n))
+            values = np.append(values, self._acc / self._acc_n)
+            weights = np.append(weights, float(self._acc_n))
         if max_points is not None:
             return bucket_means(episodes, values, max_points, weights)
         return episodes, values
