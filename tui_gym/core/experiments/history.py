@@ -8,7 +8,7 @@ import sqlite3
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import astuple, dataclass
 from pathlib import Path
 from types import TracebackType
 from typing import Any, TypeVar
@@ -157,13 +157,12 @@ class RunHistory:
         """Record a new run (status running); its id."""
         started = time.time() if started_at is None else started_at
         settings = _settings(spec)
-        platform = _platform(spec.versions or Versions.current())
+        platform = astuple(spec.versions or Versions.current())
         seeds = to_json_text(list(spec.seeds), "the seeds")
         writer = current_writer()
 
         def write(conn: sqlite3.Connection) -> int:
-            return _insert_run(conn, kind=str(spec.kind), settings_id=_settings_id(conn, settings),
-                               platform_id=_platform_id(conn, platform), seeds=seeds,
+            return _insert_run(conn, settings, platform, kind=str(spec.kind), seeds=seeds,
                                status=str(RunStatus.RUNNING), started_at=started,
                                group_id=spec.group, writer=writer)
 
@@ -212,7 +211,7 @@ class RunHistory:
             if settings is not None:
                 old = conn.execute("SELECT settings_id FROM runs WHERE id = ?", (run_id,))
                 old_id = old.fetchone()[0]
-                sets["settings_id"] = _settings_id(conn, settings)
+                sets["settings_id"] = _row_id(conn, "settings", settings)
             if agent_path is not None:
                 sets["agent_path"] = str(agent_path)
             if final is not None:
@@ -309,16 +308,14 @@ class RunHistory:
             game_params=record.game_params, wrappers=record.wrappers,
             hyperparameters=record.hyperparameters,
         ))
-        platform = _platform(record.versions)
+        platform = astuple(record.versions)
         blob = pack_curves({
             c.name: encode_curve(*bucket_means(c.episodes, c.values, MAX_STORED_POINTS))
             for c in record.curves
         })
 
         def write(conn: sqlite3.Connection) -> None:
-            _insert_run(conn, id=run.id, kind=str(run.kind),
-                        settings_id=_settings_id(conn, settings),
-                        platform_id=_platform_id(conn, platform),
+            _insert_run(conn, settings, platform, id=run.id, kind=str(run.kind),
                         seeds=to_json_text(list(run.seeds), "the seeds"), status=str(run.status),
                         started_at=run.started_at, ended_at=run.ended_at,
                         agent_path=record.agent_path, group_id=run.group,
@@ -432,8 +429,11 @@ class BestEffortHistory(RunHistory):
         return None  # type: ignore[return-value]
 
 
-def _insert_run(conn: sqlite3.Connection, **row: Any) -> int:
-    """Insert a run whose fields are `row`; its id."""
+def _insert_run(conn: sqlite3.Connection, settings: tuple[str, ...], platform: tuple[str, ...],
+                **row: Any) -> int:
+    """Insert a run of those settings and platform whose other fields are `row`; its id."""
+    row.update(settings_id=_row_id(conn, "settings", settings),
+               platform_id=_row_id(conn, "platforms", platform))
     names, marks = ", ".join(row), ", ".join("?" * len(row))
     cursor = conn.execute(f"INSERT INTO runs ({names}) VALUES ({marks})", tuple(row.values()))
     assert cursor.lastrowid is not None
@@ -451,8 +451,10 @@ def _where(game: str | None, kind: RunKind | str | None) -> tuple[str, list[Any]
     return ("" if not clauses else " WHERE " + " AND ".join(clauses)), args
 
 
-_SETTINGS = ("game", "game_params", "wrappers", "algorithm", "hyperparameters")
-_PLATFORM = ("tui_gym", "gymnasium", "numpy", "python")
+_COLUMNS = {  # of the rows runs share
+    "settings": ("game", "game_params", "wrappers", "algorithm", "hyperparameters"),
+    "platforms": ("tui_gym", "gymnasium", "numpy", "python"),
+}
 
 
 def _settings(spec: RunSpec) -> tuple[str, ...]:
@@ -463,22 +465,9 @@ def _settings(spec: RunSpec) -> tuple[str, ...]:
     )
 
 
-def _platform(versions: Versions) -> tuple[str, ...]:
-    return (versions.tui_gym, versions.gymnasium, versions.numpy, versions.python)
-
-
-def _settings_id(conn: sqlite3.Connection, values: tuple[str, ...]) -> int:
-    return _row_id(conn, "settings", _SETTINGS, values)
-
-
-def _platform_id(conn: sqlite3.Connection, values: tuple[str, ...]) -> int:
-    return _row_id(conn, "platforms", _PLATFORM, values)
-
-
-def _row_id(
-    conn: sqlite3.Connection, table: str, columns: tuple[str, ...], values: tuple[str, ...]
-) -> int:
-    """The id of the row holding exactly `values`, inserted if there is none."""
+def _row_id(conn: sqlite3.Connection, table: str, values: tuple[str, ...]) -> int:
+    """The id of the row of `table` holding exactly `values`, inserted if there is none."""
+    columns = _COLUMNS[table]
     names = ", ".join(columns)
     marks = ", ".join("?" * len(columns))
     conn.execute(f"INSERT OR IGNORE INTO {table} ({names}) VALUES ({marks})", values)

@@ -88,19 +88,13 @@ class Versions(FieldsJson):
     python: str
 
     @classmethod
+    @cache
     def current(cls) -> Versions:
         """The versions this process runs on."""
-        return _current_versions()
+        from tui_gym import __version__
 
-
-@cache
-def _current_versions() -> Versions:
-    from tui_gym import __version__
-
-    return Versions(
-        tui_gym=__version__, gymnasium=_package_version("gymnasium"), numpy=np.__version__,
-        python=platform.python_version(),
-    )
+        return cls(tui_gym=__version__, gymnasium=_package_version("gymnasium"),
+                   numpy=np.__version__, python=platform.python_version())
 
 
 @dataclass(frozen=True)

@@ -204,17 +204,16 @@ class CompareResult:
     outcomes: tuple[AlgorithmOutcome, ...]
     interrupted: bool
     group: int | None
-    spec: CompareSpec | None = None
-    game: str = ""
+    spec: CompareSpec
+    game: str
     optimum: float | None = None
     tasks: Mapping[str, int] = field(default_factory=dict)  # "done" and "total"
 
     def to_json(self) -> dict[str, Any]:
         spec = self.spec
         return {
-            "game": self.game or (spec.game if spec else ""),
-            "episodes": spec.episodes if spec else None, "seeds": spec.seeds if spec else None,
-            "first_seed": spec.first_seed if spec else None, "optimum": plain(self.optimum),
+            "game": self.game, "episodes": spec.episodes, "seeds": spec.seeds,
+            "first_seed": spec.first_seed, "optimum": plain(self.optimum),
             "interrupted": self.interrupted, "group": self.group, "tasks": dict(self.tasks),
             "results": [o.to_json() for o in self.outcomes],
         }
@@ -282,20 +281,21 @@ class _Model:
 
 @dataclass(frozen=True)
 class _Job:
-    """An arm's seeds `seeds` (indices `rows` of its seed list)."""
+    """An arm's seeds `seeds` (indices `rows` of its seed list), of the experiment
+    `setup` on the game as `prepared`."""
 
     index: int
     arm: int
     algorithm: str
-    env_id: str
-    env_kwargs: Mapping[str, Any]
-    wrappers: tuple[WrapperChoice, ...]
     hp: Mapping[str, Any]
     seeds: tuple[int, ...]
     rows: tuple[int, ...]
-    episodes: int
-    model: _Model | None = None  # the game's model, when it has one
-    measure: int = RETURN
+    setup: Setup
+    prepared: Prepared
+
+    @property
+    def episodes(self) -> int:
+        return self.setup.episodes
 
 
 @dataclass(frozen=True)
@@ -394,12 +394,9 @@ def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared,
                                     max(1, min(pieces, len(rows)))):
             if block.size:
                 jobs.append(_Job(
-                    index=-1, arm=a, algorithm=arm.algorithm, env_id=prepared.env_id,
-                    env_kwargs=prepared.env_kwargs, wrappers=tuple(setup.wrappers),
-                    hp=prepared.hyperparameters[a], seeds=tuple(seeds[r] for r in block),
-                    rows=tuple(int(r) for r in block), episodes=setup.episodes,
-                    model=prepared.model, measure=setup.measure,
-                ))
+                    index=-1, arm=a, algorithm=arm.algorithm, hp=prepared.hyperparameters[a],
+                    seeds=tuple(seeds[r] for r in block), rows=tuple(int(r) for r in block),
+                    setup=setup, prepared=prepared))
     return jobs
 
 
@@ -415,7 +412,7 @@ def _run_job(
     checkpoints = checkpoint_episodes(episodes)
     done = np.zeros(n, dtype=np.int64)
     returns = np.full((n, episodes), np.nan)
-    model = job.model
+    model = job.prepared.model
     exact = None if model is None else np.full((n, len(checkpoints)), np.nan)
 
     sent = np.zeros(n, dtype=np.int64)
@@ -443,7 +440,7 @@ def _run_job(
         if model is not None:
             learner = model.learner(job.algorithm, job.hp, seed)
             _, tables = play_learner(learner, model.arrays, episodes, checkpoints, stop,
-                                     returns[i], counter(i), job.measure)
+                                     returns[i], counter(i), job.setup.measure)
             if tables and exact is not None:
                 found = np.stack(tables)
                 exact[i, : len(tables)] = (_rms_errors(learner, model, found)
@@ -468,14 +465,16 @@ def _play_env(job: _Job, seed: int, returns: np.ndarray, progress: Callable[[int
               stop: Callable[[], bool]) -> None:
     """One seed through its session's trainer, an episode at a time: on the Gymnasium env
     (games no model follows), or on a world that changes, phase after phase."""
-    session = _session(job.env_id, job.env_kwargs, job.wrappers, job.algorithm, job.hp, seed)
+    measure, prepared = job.setup.measure, job.prepared
+    session = _session(prepared.env_id, prepared.env_kwargs, job.setup.wrappers, job.algorithm,
+                       job.hp, seed)
     try:
         for e in range(job.episodes):
             if stop():
                 return
             stats = session.trainer.run_episode()
-            returns[e] = (stats.length if job.measure == LENGTH else stats.first_action
-                          if job.measure == FIRST_ACTION else stats.episode_return)
+            returns[e] = (stats.length if measure == LENGTH else stats.first_action
+                          if measure == FIRST_ACTION else stats.episode_return)
             progress(e + 1)
     finally:
         session.env.close()
