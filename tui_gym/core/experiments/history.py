@@ -511,12 +511,10 @@ class RunRecorder:
 
     def extend(self, name: str, values: np.ndarray | Iterable[float]) -> None:
         """Append the values of the next episodes to the per-episode curve `name`."""
-        accumulator = self._accumulators.get(name)
-        if accumulator is None:
-            # Twice the stored points, so the stored curve is re-bucketed from finer buckets.
-            accumulator = CurveAccumulator(2 * self.max_points, self.first_episode)
-            self._accumulators[name] = accumulator
-        accumulator.extend(np.asarray(values if isinstance(values, np.ndarray) else list(values)))
+        values = values if isinstance(values, np.ndarray) else list(values)
+        # Twice the stored points, so the stored curve is re-bucketed from finer buckets.
+        self._accumulators.setdefault(name, CurveAccumulator(
+            2 * self.max_points, self.first_episode)).extend(np.asarray(values))
 
     def put_curve(self, curve: Curve) -> None:
         """A whole curve (say, values at checkpoints), replacing any of the same name."""
@@ -527,19 +525,12 @@ class RunRecorder:
         for figure in figures:
             self._figures[figure.name] = figure
 
-    def _pending_curves(self) -> list[Curve]:
-        curves = dict(self._curves)
-        for name, accumulator in self._accumulators.items():
-            if accumulator.count:
-                curves[name] = Curve(name, *accumulator.curve(self.max_points))
-        return list(curves.values())
-
     def flush(self, status: RunStatus | None = None) -> None:
         """Write what the run has so far (and `status`, if given) in one transaction."""
-        self.history.update(
-            self.run_id, curves=self._pending_curves(), figures=list(self._figures.values()),
-            status=status, max_points=self.max_points,
-        )
+        curves = {**self._curves, **{name: Curve(name, *a.curve(self.max_points))
+                                     for name, a in self._accumulators.items() if a.count}}
+        self.history.update(self.run_id, curves=curves.values(), status=status,
+                            figures=self._figures.values(), max_points=self.max_points)
 
     def finish(self, status: RunStatus = RunStatus.FINISHED) -> None:
         """Write everything with the run's final status."""
