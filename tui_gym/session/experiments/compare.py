@@ -5,7 +5,6 @@ from __future__ import annotations
 import contextlib
 import functools
 import json
-import math
 import os
 import queue
 import threading
@@ -34,6 +33,7 @@ from tui_gym.core.experiments.records import RunKind, RunSpec, RunStatus, TaskRe
 from tui_gym.core.mdp import FiniteMDP, solve
 from tui_gym.core.text import visible
 from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.session.experiments.live import run_spec
 
 __all__ = [
     "JSON_CURVE_POINTS", "RESUME_ADVICE", "AlgorithmOutcome", "CompareError", "CompareProgress",
@@ -319,7 +319,7 @@ class Prepared:
     game: str
     env_id: str
     env_kwargs: dict[str, Any]
-    wrappers: tuple[WrapperSetting, ...]
+    wrappers: Sequence[WrapperSetting]
     hyperparameters: list[dict[str, Any]]
     model: _Model | None
     optimum: float | None
@@ -352,11 +352,6 @@ def prepare(setup: Setup, arms: Sequence[Arm]) -> Prepared:
             first = session
         else:
             session.env.close()
-    from tui_gym.core.wrappers import get_spec
-
-    wrappers = tuple(
-        WrapperSetting(c.name, get_spec(c.name).validate(c.values())) for c in first.applied
-    )
     model = optimum = None
     training = first.training
     # A world that changes plays each seed through its session's trainer (`_play_env`),
@@ -365,12 +360,11 @@ def prepare(setup: Setup, arms: Sequence[Arm]) -> Prepared:
         model = _Model(first.trainer.model, training.model, np.asarray(training.rows),
                        int(first.keyer.n_states), int(first.agent.n_actions),
                        first.agent.offered)
-        value = solve(training.model).value
-        optimum = value if math.isfinite(value) else None
+        optimum = plain(solve(training.model).value)
     prepared = Prepared(
         game=first.game.name, env_id=first.env_id, env_kwargs=dict(first.env_kwargs),
-        wrappers=wrappers, hyperparameters=hyperparameters, model=model, optimum=optimum,
-    )
+        wrappers=run_spec(first, RunKind.COMPARE).wrappers, hyperparameters=hyperparameters,
+        model=model, optimum=optimum)
     first.env.close()
     return prepared
 
