@@ -131,9 +131,12 @@ class RunHistory:
         with self._errors():
             return self._shared.attempt(action, self.timeout, self.path, begin=begin)
 
-    def _require_run(self, conn: sqlite3.Connection, run_id: int) -> None:
-        if conn.execute("SELECT 1 FROM runs WHERE id = ?", (run_id,)).fetchone() is None:
+    def _require_run(self, conn: sqlite3.Connection, run_id: int, columns: str = "1") -> Any:
+        """The run's `columns`; UnknownRunError if there is no such run."""
+        row = conn.execute(f"SELECT {columns} FROM runs WHERE id = ?", (run_id,)).fetchone()
+        if row is None:
             raise UnknownRunError(f"no run {run_id} in {shown(self.path)}")
+        return row
 
     def _stored_curves(self, run_id: int, blob: object) -> dict[str, bytes]:
         """A run's stored curves by name, to add to; DamagedRunError if they do not read."""
@@ -190,7 +193,7 @@ class RunHistory:
         ended = None if final is None else (time.time() if ended_at is None else ended_at)
 
         def write(conn: sqlite3.Connection) -> None:
-            self._require_run(conn, run_id)
+            figures_text, old_id = self._require_run(conn, run_id, "figures, settings_id")
             if blobs:
                 row = conn.execute("SELECT data FROM curves WHERE run_id = ?", (run_id,)).fetchone()
                 stored = {} if row is None else self._stored_curves(run_id, row[0])
@@ -201,16 +204,13 @@ class RunHistory:
                 )
             sets: dict[str, Any] = {}
             if figure_rows:
-                row = conn.execute("SELECT figures FROM runs WHERE id = ?", (run_id,)).fetchone()
                 try:
-                    merged = {f.name: f for f in rows.figures(row[0])}
+                    merged = {f.name: f for f in rows.figures(figures_text)}
                 except rows.BadRow as exc:
                     raise self._damaged_run(run_id, str(exc)) from None
                 merged.update((f.name, f) for f in figure_rows)  # a known name keeps its place
                 sets["figures"] = _figures_to_json(merged.values())
             if settings is not None:
-                old = conn.execute("SELECT settings_id FROM runs WHERE id = ?", (run_id,))
-                old_id = old.fetchone()[0]
                 sets["settings_id"] = _row_id(conn, "settings", settings)
             if agent_path is not None:
                 sets["agent_path"] = str(agent_path)
