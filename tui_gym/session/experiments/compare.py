@@ -21,6 +21,7 @@ from tui_gym.core.engine.loop import FIRST_ACTION, LENGTH, RETURN, ModelArrays, 
 from tui_gym.core.engine.seeds import checkpoint_episodes, greedy_values, play_learner
 from tui_gym.core.experiments.aggregate import (
     AggregateCurve,
+    CurvePoint,
     Estimate,
     aggregate,
     mean_return_last,
@@ -160,22 +161,17 @@ class AlgorithmOutcome:
         return tuple(figures)
 
     def to_json(self, max_points: int = JSON_CURVE_POINTS) -> dict[str, Any]:
-        return {
-            "algorithm": self.algorithm,
-            "hyperparameters": dict(self.hyperparameters),
-            "seeds_done": self.seeds_done,
-            "episodes_done": self.episodes,
-            "mean_return_last": plain(self.mean_return_last.mean),
-            "ci95": self.mean_return_last.ci95,
-            "exact_value": plain(self.exact_value),
-            "exact_gap": plain(self.exact_gap),
-            "rms_error": plain(self.rms_error),
-            "rms_ci95": plain(self.rms_ci95),
-            "rms_curve": None if self.rms_curve is None else [
-                p.to_json() for p in self.rms_curve.downsample(max_points).points()],
-            "run_id": self.run_id,
-            "curve": [p.to_json() for p in self.curve.downsample(max_points).points()],
-        }
+        def points(curve: AggregateCurve | None) -> list[CurvePoint] | None:
+            return None if curve is None else curve.downsample(max_points).points()
+
+        return dict(plain({
+            "algorithm": self.algorithm, "hyperparameters": self.hyperparameters,
+            "seeds_done": self.seeds_done, "episodes_done": self.episodes,
+            "mean_return_last": self.mean_return_last.mean, "ci95": self.mean_return_last.ci95,
+            "exact_value": self.exact_value, "exact_gap": self.exact_gap,
+            "rms_error": self.rms_error, "rms_ci95": self.rms_ci95,
+            "rms_curve": points(self.rms_curve), "run_id": self.run_id,
+            "curve": points(self.curve)}))
 
 
 @dataclass(frozen=True)

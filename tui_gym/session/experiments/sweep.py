@@ -188,23 +188,14 @@ class SweepResult:
 
     def to_json(self) -> dict[str, Any]:
         spec = self.spec
-        return {
-            "game": self.game,
-            "algorithm": spec.algorithm,
-            "episodes": spec.episodes,
-            "seeds": spec.seeds,
-            "first_seed": spec.first_seed,
-            "grid": self.grid,
+        return dict(plain({
+            "game": self.game, "algorithm": spec.algorithm, "episodes": spec.episodes,
+            "seeds": spec.seeds, "first_seed": spec.first_seed, "grid": self.grid,
             "sample": None if not spec.ranges else {
-                "n": spec.samples, "seed": spec.sample_seed,
-                "ranges": {k: r.to_json() for k, r in spec.ranges.items()}},
-            "tasks": dict(self.tasks),
-            "hyperparameters": dict(self.hyperparameters),
-            "optimum": plain(self.optimum),
-            "interrupted": self.interrupted,
-            "group": self.group,
-            "points": [p.to_json() for p in self.points],
-        }
+                "n": spec.samples, "seed": spec.sample_seed, "ranges": spec.ranges},
+            "tasks": self.tasks, "hyperparameters": self.hyperparameters,
+            "optimum": self.optimum, "interrupted": self.interrupted, "group": self.group,
+            "points": self.points}))
 
 
 def run_sweep(
