@@ -918,24 +918,26 @@ def run_compare(
     )
 
 
+def _play(job: _Job, tally: _Tally, stop: Callable[[], bool], tell: Callable[[], None],
+          landed: Callable[[_Job], None]) -> bool:
+    """Play a job on this thread, counted in and told as it goes; whether it finished (then
+    it has landed)."""
+
+    def report(update: SeedsUpdate) -> None:
+        tally.take(job.index, update)
+        tell()
+
+    tally.take(job.index, _run_job(job, stop, report))
+    if tally.finished(job):
+        landed(job)
+    return tally.finished(job)
+
+
 def _run_here(
-    jobs: list[_Job], tally: _Tally, stopped: Callable[[], bool], tell: Callable[..., None],
+    jobs: list[_Job], tally: _Tally, stopped: Callable[[], bool], tell: Callable[[], None],
     landed: Callable[[_Job], None],
 ) -> bool:
-    for job in jobs:
-        if stopped():
-            return False
-
-        def report(update: SeedsUpdate, index: int = job.index) -> None:
-            tally.take(index, update)
-            tell()
-
-        tally.take(job.index, _run_job(job, stopped, report))
-        if not tally.finished(job):
-            return False
-        landed(job)
-        tell()
-    return True
+    return all(not stopped() and _play(job, tally, stopped, tell, landed) for job in jobs)
 
 
 def _run_children(
@@ -1019,16 +1021,13 @@ def _run_children(
                     stop_flag.set()
                 return bool(stop_flag.is_set())
 
-            def report(update: SeedsUpdate) -> None:
-                tally.take(own.index, update)
+            def own_tell() -> None:
                 while take(0):
                     pass
                 tell()
 
-            tally.take(own.index, _run_job(own, own_stop, report))
+            _play(own, tally, own_stop, own_tell, landed)
             ended.add(own.index)
-            if tally.finished(own):
-                landed(own)
         while left and not errors:
             took = take(0.05)
             tell()
