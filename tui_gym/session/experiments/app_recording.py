@@ -1,4 +1,5 @@
-"""`SessionRunLog`: every run trained in the app, kept in the run history."""
+"""`SessionRunLog`: every run trained in the app, kept in the run history by a writer
+thread (which a `train` run's recording uses too)."""
 
 from __future__ import annotations
 
