@@ -27,7 +27,6 @@ class TrainRecording:
         self, db: str | None = None, *, enabled: bool = True,
         warn: Callable[[str], None] = lambda line: None,
     ) -> None:
-        self.enabled = enabled
         self.path: Path | None = resolve_db_path(db) if enabled else None
         self.warn = warn
         self.run_id: int | None = None
