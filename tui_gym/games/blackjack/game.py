@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
-from tui_gym.core.mdp import NotAvailable, greedy_policy
+from tui_gym.core.mdp import NotAvailable, greedy_policy, return_range
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.games.base import (
@@ -216,16 +216,10 @@ class BlackjackOracle(Oracle):
     def return_range(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> tuple[float, float] | NotAvailable:
-        """A hand is up to `LONGEST_HAND` - 1 hits, then a loss, a push, a win or (on
-        the first two cards, when the rules pay one) a natural."""
         scope = self.scope(kwargs, changes)
         if not scope.exact:
             return NotAvailable(scope.note)
-        rules = self.rules(kwargs, changes)
-        lose, hit, win, natural = rules.payoffs
-        ends = [lose, hit, win] + ([natural] if rules.natural and not rules.sab else [])
-        hits = LONGEST_HAND - 1
-        return min(ends) + hits * min(0.0, hit), max(ends) + hits * max(0.0, hit)
+        return return_range(blackjack_model(self.rules(kwargs, changes)))
 
     def fixed_policy_bound(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
