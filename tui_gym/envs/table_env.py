@@ -44,12 +44,7 @@ class TableEnv(gym.Env[Any, Any]):
         return self.s, {"prob": float(weights[self.s])}
 
     def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
-        if self.s is None:
-            raise gym.error.ResetNeeded(f"{type(self).__name__}: call reset() before step()")
-        if not self.action_space.contains(action):
-            raise ValueError(f"{type(self).__name__}: action must be an integer in "
-                             f"[0, {self.model.n_actions - 1}], got {action!r}")
-        model, s, a = self.model, self.s, int(action)
+        model, s, a = self.model, self.started(), self.checked(action)
         weights = model.prob[s, a]
         # Outcomes that cannot happen weigh 0, so they are never drawn: the draw is the
         # one over the toy-text table `P`, which leaves them out.
@@ -62,6 +57,19 @@ class TableEnv(gym.Env[Any, Any]):
             reward = float(self.np_random.normal(reward, model.reward_std[s, a, index]))
         return (self.s, reward, bool(model.terminal[s, a, index]), False,
                 {"prob": float(weights[index])})
+
+    def started(self) -> int:
+        """The current state; `ResetNeeded` before the first reset."""
+        if self.s is None:
+            raise gym.error.ResetNeeded(f"{type(self).__name__}: call reset() before step()")
+        return self.s
+
+    def checked(self, action: Any) -> int:
+        """`action` as an int; `ValueError` for one the env does not have."""
+        if not self.action_space.contains(action):
+            raise ValueError(f"{type(self).__name__}: action must be an integer in "
+                             f"[0, {self.model.n_actions - 1}], got {action!r}")
+        return int(action)
 
     @property
     def P(self) -> Table:  # noqa: N802
