@@ -41,7 +41,7 @@ class TableEnv(gym.Env[Any, Any]):
         weights = self.initial_state_distrib
         self.s = int(self.np_random.choice(len(weights), p=weights))
         self.lastaction = None
-        return self.s, {"prob": float(weights[self.s])}
+        return self.s, {"prob": float(weights[self.s]), **self.more_info()}
 
     def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
         model, s, a = self.model, self.started(), self.checked(action)
@@ -56,7 +56,11 @@ class TableEnv(gym.Env[Any, Any]):
         if model.reward_std is not None and model.reward_std[s, a, index] > 0:
             reward = float(self.np_random.normal(reward, model.reward_std[s, a, index]))
         return (self.s, reward, bool(model.terminal[s, a, index]), False,
-                {"prob": float(weights[index])})
+                {"prob": float(weights[index]), **self.more_info()})
+
+    def more_info(self) -> dict[str, Any]:
+        """What `info` tells beside an outcome's `prob`, after every reset and step."""
+        return {}
 
     def started(self) -> int:
         """The current state; `ResetNeeded` before the first reset."""
