@@ -176,10 +176,8 @@ class PlanningResult:
             "game": self.game, "measure": self.measure, "bound": self.bound,
             "q_learning_episodes": self.q_learning_episodes,
             "dyna_q_episodes": self.dyna_q_episodes,
-            "q_learning_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
-                                for r in self.q_learning],
-            "dyna_q_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
-                            for r in self.dyna_q],
+            **{f"{name}_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
+                                for r in getattr(self, name)] for name in ("q_learning", "dyna_q")},
         }
 
 
@@ -219,9 +217,7 @@ def measure_planning(seeds: Sequence[int], bound: float = PLANNING_BOUND,
     probe = Session(game, seed=0)
     measure = _distance(probe)[0]
     probe.env.close()
-    q_runs = tuple(episodes_to_bound(game, "q-learning", bound, s) for s in seeds)
-    dyna_runs = tuple(
-        episodes_to_bound(game, "dyna-q", bound, s, {"planning_steps": PLANNING_STEPS})
-        for s in seeds
-    )
+    q_runs, dyna_runs = (tuple(episodes_to_bound(game, name, bound, s, hp) for s in seeds)
+                         for name, hp in (("q-learning", {}),
+                                          ("dyna-q", {"planning_steps": PLANNING_STEPS})))
     return PlanningResult(game, measure, bound, q_runs, dyna_runs)

@@ -188,12 +188,6 @@ def run_bench(
           lambda: history.measure(3 if quick else 5))
     stage("dp", "planning: sweeps, Jack's car rental, the Plan view",
           lambda: dp.measure(plan.live_seconds, plan.key_presses, plan.live_repeats, say))
-    return BenchResults(
-        quick=quick, seconds=time.perf_counter() - started,
-        machine=MachineInfo(os.cpu_count(), load_before, load_average()),
-        compile=found.get("compile"), speed=found.get("speed"), gap=gaps,
-        live=found.get("live", {}), memory=found.get("memory"), startup=found.get("startup"),
-        planning=found.get("planning"), programs=found.get("programs"),
-        map_edit=found.get("map_edit"), history=found.get("history"), seeds=found.get("seeds"),
-        defaults=found.get("defaults"), dp=found.get("dp"), tasks=found.get("tasks"), errors=errors,
-    )
+    return BenchResults(quick=quick, seconds=time.perf_counter() - started,
+                        machine=MachineInfo(os.cpu_count(), load_before, load_average()),
+                        gap=gaps, errors=errors, **found)

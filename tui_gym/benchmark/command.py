@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from functools import partial
 from typing import Any
 
 from rich import box
@@ -104,16 +105,10 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
         raise ValueError("--decision-timeout must be a positive number of seconds")
     from tui_gym.benchmark.group import ending_on_signals
     from tui_gym.benchmark.results import record, run_benchmark
+    from tui_gym.cli.replay_command import open_recorder
 
-    recorder = None
-    if args.record is not None:
-        from tui_gym.cli.replay_command import open_recorder
-
-        path, seed = args.record, args.bench_seed
-
-        def recorder(session: Any) -> Any:
-            return open_recorder(path, session, source="benchmark", seed=seed)
-
+    recorder = None if args.record is None else partial(
+        open_recorder, args.record, source="benchmark", seed=args.bench_seed)
     player, params, wrappers = _player(args, args.game)
     if args.name is not None:
         if not args.name.strip():

@@ -8,13 +8,12 @@ import time
 
 from rich.console import Console
 from rich.markup import escape
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from tui_gym.book_text import claims_table, figure_parts, panel_text
 from tui_gym.cli.experiments_command import add_task_flags, ctrl_c_stops, run_history, unrecorded
 from tui_gym.cli.flags import positive_int, seed_number
-from tui_gym.cli.output import CliError, print_json
+from tui_gym.cli.output import CliError, print_json, progress_bar
 from tui_gym.session.book import figure_named, figures
 from tui_gym.session.book.figure import (
     BookFigure,
@@ -89,9 +88,8 @@ def _run(figure: BookFigure, options: FigureOptions, args: argparse.Namespace, o
         print_json("book", result.as_json())
         return 0 if result.ok else 1
     err = Console(stderr=True)
-    progress = Progress(TextColumn(f"[bold]{heading(figure.name)}[/]"), BarColumn(),
-                        MofNCompleteColumn(), TextColumn("{task.description}"),
-                        TimeElapsedColumn(), console=err, transient=True)
+    progress = progress_bar(err, f"[bold]{heading(figure.name)}[/]", "bar", "count",
+                            "{task.description}", "elapsed")
     task = progress.add_task("", total=None)
 
     def update(done: int, total: int, what: str) -> None:

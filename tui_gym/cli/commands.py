@@ -5,21 +5,11 @@ from __future__ import annotations
 
 import argparse
 import time
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 from rich.console import Console
 from rich.markup import escape
-from rich.progress import (
-    BarColumn,
-    MofNCompleteColumn,
-    Progress,
-    TaskProgressColumn,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
 from rich.table import Table
 
 from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, Field, Learner, algorithm
@@ -38,16 +28,10 @@ WRAPPER_SYNTAX = "--wrapper NAME or --wrapper NAME:key=value,key=value, repeatab
 
 
 def _param_dict(param: Field) -> dict[str, Any]:
-    if not isinstance(param, Param):  # a Choice: one word out of a few
-        return {
-            "name": param.name, "type": "choice", "default": param.default,
-            "choices": list(param.choices), "range": param.describe_range(), "help": param.help,
-        }
-    data: dict[str, Any] = {
-        "name": param.name, "type": param.kind.__name__, "default": param.default,
-        "minimum": param.minimum, "maximum": param.maximum, "range": param.describe_range(),
-        "help": param.help,
-    }
+    data: dict[str, Any] = {"name": param.name, "type": "choice", "default": param.default}
+    if isinstance(param, Param):  # else a Choice: one word out of a few
+        data.update(type=param.kind.__name__, minimum=param.minimum, maximum=param.maximum)
+    data.update(range=param.describe_range(), help=param.help)
     if param.choices:
         data["choices"] = list(param.choices)
     return data
@@ -272,23 +256,6 @@ def _eval_rows(data: dict[str, Any]) -> list[tuple[str, str]]:
     return rows
 
 
-def _progress_bar(out: Console, budget: int) -> tuple[Progress, Callable[..., None]]:
-    columns = (
-        TextColumn("[bold]training[/]"), BarColumn(), MofNCompleteColumn(), TaskProgressColumn(),
-        TextColumn("{task.fields[rate]:>11,.0f} ep/s"),
-        TextColumn("mean return {task.fields[mean]:+.3f}"), TimeElapsedColumn(),
-        TimeRemainingColumn(),
-    )
-    progress = Progress(*columns, console=out, transient=False)
-    task = progress.add_task("train", total=budget, rate=0.0, mean=0.0)
-
-    def update(snap: Any) -> None:
-        rate = snap.episodes / snap.seconds if snap.seconds else 0.0
-        progress.update(task, completed=snap.episodes, rate=rate, mean=snap.mean_return)
-
-    return progress, update
-
-
 def _wrapper_dicts(session: Session) -> list[dict[str, Any]]:
     """Each applied wrapper with all its parameters (defaults filled in), innermost first."""
     from tui_gym.core.wrappers import format_wrapper_spec, get_spec
@@ -331,8 +298,19 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
     if args.json or not out.is_terminal:
         outcome = session.train(target_gap=args.target_gap, on_chunk=recording.on_chunk)
     else:
-        progress, update = _progress_bar(out, hp.episodes)
-        with progress:
+        from tui_gym.cli.output import progress_bar
+
+        bar = progress_bar(out, "[bold]training[/]", "bar", "count", "percent",
+                           "{task.fields[rate]:>11,.0f} ep/s",
+                           "mean return {task.fields[mean]:+.3f}", "elapsed", "left",
+                           transient=False)
+        task = bar.add_task("train", total=hp.episodes, rate=0.0, mean=0.0)
+
+        def update(snap: Any) -> None:
+            rate = snap.episodes / snap.seconds if snap.seconds else 0.0
+            bar.update(task, completed=snap.episodes, rate=rate, mean=snap.mean_return)
+
+        with bar:
             outcome = session.train(target_gap=args.target_gap, on_chunk=recording.chain(update))
     seconds = time.perf_counter() - started
     trainer = session.trainer

@@ -19,7 +19,7 @@ from tui_gym.algorithms import ALGORITHMS
 from tui_gym.cli.flags import int_in as _int_in
 from tui_gym.cli.flags import output_file, wrapper_choices
 from tui_gym.cli.flags import seed_number as _seed
-from tui_gym.cli.output import CliError, cli_errors, print_json, say_status
+from tui_gym.cli.output import CliError, cli_errors, print_json, progress_bar, say_status
 
 if TYPE_CHECKING:
     from tui_gym.core.experiments import BestEffortHistory
@@ -189,15 +189,6 @@ def _run_recorded(args: argparse.Namespace, out: Console, label: str, run: Calla
     """`run(spec, ...)` (a comparison or a sweep) kept in the run history, with a progress
     bar on a terminal (not with --json); the first Ctrl+C stops it cleanly; its refusals as
     one line."""
-    from rich.progress import (
-        BarColumn,
-        Progress,
-        TaskProgressColumn,
-        TextColumn,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
-
     from tui_gym.session.experiments.cluster import ClusterError
     from tui_gym.session.experiments.compare import CompareError
 
@@ -212,12 +203,9 @@ def _run_recorded(args: argparse.Namespace, out: Console, label: str, run: Calla
 
         if args.json or not out.is_terminal:
             return running(None), history
-        bar = Progress(
-            TextColumn(f"[bold]{label}[/]"), BarColumn(),
-            TextColumn("{task.fields[landed]}/{task.fields[tasks]} tasks"),
-            TaskProgressColumn(), TimeElapsedColumn(),
-            TextColumn("ETA"), TimeRemainingColumn(), console=out, transient=True,
-        )
+        bar = progress_bar(out, f"[bold]{label}[/]", "bar",
+                           "{task.fields[landed]}/{task.fields[tasks]} tasks", "percent",
+                           "elapsed", "ETA", "left")
         task = bar.add_task(label, total=None, landed=0, tasks="?")
 
         # The bar and the time left follow the episodes (they move while a task runs);
