@@ -50,26 +50,22 @@ class HistoryResult:
 
 
 def _timed_recording(db: Path, spent: list[float]) -> Any:
-    """A `TrainRecording` that adds the time of each of its calls to `spent[0]`."""
+    """A `TrainRecording` whose calls (its opening too) add their time to `spent[0]`."""
     from tui_gym.session.experiments.train_recording import TrainRecording
 
-    class Timed(TrainRecording):
-        pass
-
-    for name in ("begin", "on_chunk", "finish", "close"):
-        method = getattr(TrainRecording, name)
-
-        def timed(self: Any, *args: Any, _method: Any = method, **kwargs: Any) -> Any:
+    def timed(call: Any) -> Any:
+        def run(*args: Any, **kwargs: Any) -> Any:
             started = time.perf_counter()
             try:
-                return _method(self, *args, **kwargs)
+                return call(*args, **kwargs)
             finally:
                 spent[0] += time.perf_counter() - started
 
-        setattr(Timed, name, timed)
-    started = time.perf_counter()
-    recording = Timed(str(db))
-    spent[0] += time.perf_counter() - started
+        return run
+
+    recording = timed(TrainRecording)(str(db))
+    for name in ("begin", "on_chunk", "finish", "close"):
+        setattr(recording, name, timed(getattr(recording, name)))
     return recording
 
 

@@ -98,10 +98,6 @@ def _judged(results: BenchResults) -> _Judged:
                 f"{_num(speed.speedup, ',.0f', '×')} ({_num(speed.episodes, ',.0f')} / "
                 f"{_num(speed.tutorial_episodes, ',.0f')} ep/s)", Target("≥", 100.0, "×"),
                 f"speedup[{speed.game}/{speed.algorithm}]", speed.speedup)
-    if "speed" in results.errors:
-        out.missing("speedup")
-    if "defaults" in results.errors:
-        out.missing("defaults")
     for name, gap in results.gap.items():
         _gap_rows(out, name, gap)
     for runner in RUNNERS:
@@ -124,8 +120,6 @@ def _judged(results: BenchResults) -> _Judged:
         out.row(f"{edit.game}: map edit → new optimum, {edit.size} (median, worst of "
                 f"{edit.edits})", f"{edit.median_ms:.0f} ms (worst {edit.worst_ms:.0f})",
                 Target("≤", 50.0, " ms"), f"map_edit_ms[{edit.game}]", edit.median_ms)
-    if "map_edit" in results.errors:
-        out.missing("map_edit_ms")
     _planning_rows(out, results)
     _programs_rows(out, results.programs)
     _seeds_rows(out, results)
@@ -137,6 +131,8 @@ def _judged(results: BenchResults) -> _Judged:
     _history_rows(out, results.history)
     _tasks_rows(out, results.tasks)
     _dp_rows(out, results.dp)
+    out.missing(*(key for stage, key in (("speed", "speedup"), ("defaults", "defaults"),
+                                         ("map_edit", "map_edit_ms")) if stage in results.errors))
     for stage, error in results.errors.items():
         out.failed(f"{stage} failed", error)
     return out

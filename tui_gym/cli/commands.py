@@ -12,12 +12,11 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, Field, Learner, algorithm
+from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, Field, algorithm
 from tui_gym.cli.flags import flag, game_kwargs, hyperparameters, wrapper_choices
 from tui_gym.cli.output import CliError, cli_errors, key_value_table, print_json, say_status
-from tui_gym.cli.runs_command import recorded
 from tui_gym.core.params import Param, typed_text
-from tui_gym.games import GAMES, Game, game_for, resolve_env_id
+from tui_gym.games import GAMES, game_for, resolve_env_id
 from tui_gym.session import evaluation
 from tui_gym.session.evaluation import EvalReport
 from tui_gym.session.session import TARGET_GAP_BUDGET_FACTOR, Session, default_settings
@@ -151,19 +150,6 @@ def cmd_algorithms(args: argparse.Namespace, out: Console) -> int:
     return 0
 
 
-def _base_hyperparameters(
-    args: argparse.Namespace, game: Game, kwargs: dict[str, Any], cls: type[Learner]
-) -> dict[str, Any]:
-    """The hyperparameter flags given; with a target gap and no budget, five times the
-    game's budget (a longer budget decays epsilon more slowly; the run stops at the
-    target anyway)."""
-    hp = hyperparameters(args, cls)
-    if getattr(args, "target_gap", None) is not None and "episodes" not in hp:
-        defaults = default_settings(game, cls.name, game.normalize_kwargs(kwargs))
-        hp["episodes"] = TARGET_GAP_BUDGET_FACTOR * int(defaults.episodes)
-    return hp
-
-
 def _check_fit(session: Session, env_id: str) -> None:
     if session.skipped:
         reasons = "; ".join(reason for _, reason in session.skipped)
@@ -177,7 +163,12 @@ def _session_from_args(args: argparse.Namespace) -> Session:
     with cli_errors(ValueError, prefix="--algorithm: "):
         cls = algorithm(args.algorithm)
     kwargs = game_kwargs(args, game)
-    hp = _base_hyperparameters(args, game, kwargs, cls)
+    hp = hyperparameters(args, cls)
+    if args.target_gap is not None and "episodes" not in hp:
+        # Five times the game's budget: a longer budget decays epsilon more slowly, and the
+        # run stops at the target anyway.
+        defaults = default_settings(game, cls.name, game.normalize_kwargs(kwargs))
+        hp["episodes"] = TARGET_GAP_BUDGET_FACTOR * int(defaults.episodes)
     try:
         session = Session(
             env_id=env_id, env_kwargs=kwargs, choices=choices, hp=hp, seed=args.train_seed,
@@ -218,15 +209,12 @@ _EXACT_ROWS = (("exact_value", "exact value (greedy policy)"), ("optimal_value",
 _PERCENT = ("win_rate", "draw_rate", "loss_rate", "success_rate", "optimal_pair_fraction",
             "timeout_rate", "delivered_rate", "terminated_rate")
 _NOT_ROWS = ("env_id", "episodes", "episodes_requested", "mean_return", "std_return",
-             "step_budget", "exact_reason", "reference_note", "algorithm")
+             "step_budget", "exact_reason", "reference_note", "algorithm", *dict(_EXACT_ROWS))
 
 
 def _eval_rows(data: dict[str, Any]) -> list[tuple[str, str]]:
-    rows: list[tuple[str, str]] = []
-    for key, label in _EXACT_ROWS:
-        value = data.get(key)
-        if isinstance(value, float):
-            rows.append((label, f"{value:.4f}" if key == "gap" else f"{value:+.4f}"))
+    rows = [(label, f"{data[key]:.4f}" if key == "gap" else f"{data[key]:+.4f}")
+            for key, label in _EXACT_ROWS if isinstance(data.get(key), float)]
     if "exact_reason" in data:
         rows.append(("exact value", f"n/a ({data['exact_reason']})"))
     if data.get("reference_note"):
@@ -240,20 +228,16 @@ def _eval_rows(data: dict[str, Any]) -> list[tuple[str, str]]:
         ("sampled episodes", played), ("sampled mean return", f"{data['mean_return']:+.4f}"),
         ("sampled std of return", f"{data['std_return']:.4f}"),
     ]
-    exact_keys = {key for key, _ in _EXACT_ROWS}
-    for key, value in data.items():
-        if key in _NOT_ROWS or key in exact_keys:
-            continue
-        label = key.replace("_", " ")
-        if value is None:
-            rows.append((label, "n/a"))
-        elif key in _PERCENT:
-            rows.append((label, f"{value:.2%}"))
-        elif isinstance(value, float):
-            rows.append((label, f"{value:+.4f}"))
-        else:
-            rows.append((label, str(value)))
-    return rows
+    return rows + [(key.replace("_", " "), _value_text(key, value))
+                   for key, value in data.items() if key not in _NOT_ROWS]
+
+
+def _value_text(key: str, value: Any) -> str:
+    if value is None:
+        return "n/a"
+    if key in _PERCENT:
+        return f"{value:.2%}"
+    return f"{value:+.4f}" if isinstance(value, float) else str(value)
 
 
 def _wrapper_dicts(session: Session) -> list[dict[str, Any]]:
@@ -280,17 +264,24 @@ def _prediction_dict(session: Session) -> dict[str, Any]:
                            "truth": list(figures.truth)}}
 
 
-@recorded
 def cmd_train(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.cli.runs_command import warn
+    from tui_gym.session.experiments.train_recording import TrainRecording
+
+    enabled = not (args.no_record or getattr(args, "no_history", False))
+    with TrainRecording(getattr(args, "db", None), enabled=enabled, warn=warn) as recording:
+        return _train(args, out, recording)
+
+
+def _train(args: argparse.Namespace, out: Console, recording: Any) -> int:
+    """`train`, its run recorded by `recording` (the run history's `TrainRecording`)."""
     if args.target_gap is not None and args.target_gap <= 0:
         raise CliError(f"--target-gap must be a positive number, got {args.target_gap:g}")
-    save_path = args.save  # checked as the arguments were read (`output_file`)
     session = _session_from_args(args)
     if args.follow is not None:
         epsilon = float(hyperparameters(args, session.learner_class).get("epsilon_final", 0.0))
         with cli_errors(ValueError, prefix="--follow: "):
             session.follow(Session.load(args.follow), epsilon)
-    recording = args.recording  # the run history's record of this run (see `recorded`)
     recording.begin(session)
     hp = session.hp
     assert hp is not None  # a built session has its hyperparameters
@@ -316,7 +307,7 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
     trainer = session.trainer
     report = session.evaluate(args.eval_episodes, seed=args.train_seed + 1)
     evaluation = eval_dict(session, report)
-    saved = str(session.save(save_path)) if save_path is not None else None
+    saved = str(session.save(args.save)) if args.save is not None else None  # `output_file`
     run_id = recording.finish(report, saved)
     data = {
         "env_id": session.env_id, "env_kwargs": session.env_kwargs, "algorithm": session.algorithm,

@@ -1,4 +1,4 @@
-"""The run history on the command line: `runs`, and recording `train` runs into it."""
+"""The run history on the command line: `runs`, and the flags that say where runs are kept."""
 
 from __future__ import annotations
 
@@ -17,8 +17,6 @@ from tui_gym.cli.flags import file_name as _path
 from tui_gym.cli.flags import int_in, output_file
 from tui_gym.cli.output import CliError, cli_errors, key_value_table, print_json
 from tui_gym.core.text import visible
-
-Command = Callable[[argparse.Namespace, Console], int]
 
 _run_id = int_in(1, 2**63 - 1, "a run id (a positive integer, see `tui-gym runs`)")
 _limit = int_in(0, 2**31 - 1, "a number of runs (0 for all)")
@@ -95,25 +93,9 @@ def add_app_options(parser: argparse.ArgumentParser) -> None:
                              "recorded, and its comparisons go when it ends")
 
 
-def _warn(line: str) -> None:
+def warn(line: str) -> None:
     sys.stderr.write(f"tui-gym: {line}\n")
     sys.stderr.flush()
-
-
-def recorded(command: Command) -> Command:
-    """`command` (train) with its run recorded in the history; `args.recording` is the
-    `TrainRecording` it reports to."""
-
-    def run(args: argparse.Namespace, out: Console) -> int:
-        from tui_gym.session.experiments.train_recording import TrainRecording
-
-        enabled = not (getattr(args, "no_record", False) or getattr(args, "no_history", False))
-        with TrainRecording(getattr(args, "db", None), enabled=enabled, warn=_warn) as recording:
-            args.recording = recording
-            return command(args, out)
-
-    run.__doc__ = command.__doc__
-    return run
 
 
 # --- the commands ------------------------------------------------------------------
@@ -219,10 +201,10 @@ def cmd_runs(args: argparse.Namespace, out: Console) -> int:
     listing = _history_call(lambda: list_runs(args.db, game=game, kind=args.kind,
                                               limit=limit or None))
     for bad in listing.damaged[:5]:
-        _warn(f"run {bad.id} cannot be read: {bad.reason} (`tui-gym runs rm {bad.id}` "
+        warn(f"run {bad.id} cannot be read: {bad.reason} (`tui-gym runs rm {bad.id}` "
               "removes it)")
     if len(listing.damaged) > 5:
-        _warn(f"and {len(listing.damaged) - 5} more runs cannot be read")
+        warn(f"and {len(listing.damaged) - 5} more runs cannot be read")
     if args.json:
         print_json("runs", listing.to_json())
         return 0
@@ -275,7 +257,7 @@ def _act(verb: str, args: argparse.Namespace) -> Any:
 def _say_recover(done: Any, args: argparse.Namespace, out: Console) -> int:
     source = visible(done.source, 160)
     if done.target is None:
-        _warn(f"no run could be read from {source} ({done.check}); it was left as it was")
+        warn(f"no run could be read from {source} ({done.check}); it was left as it was")
         return 2
     verdict = "SQLite finds it sound" if done.check == "ok" else f"SQLite finds: {done.check}"
     lost = f" ({done.unreadable:,} could not be read)" if done.unreadable else ""
