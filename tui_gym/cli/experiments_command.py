@@ -352,27 +352,22 @@ def _compare_chart(result: Any, width: int) -> Text:
 
 
 def _write_csv(path: str, outcomes: Sequence[AlgorithmOutcome]) -> None:
+    """Each episode's mean and band per algorithm (an episode a seed has not reached, or a
+    band one seed has not, an empty cell)."""
     import numpy as np
 
+    from tui_gym.core.experiments import Curve
+    from tui_gym.core.experiments.runs import curves_csv
     from tui_gym.core.files import write_atomically
 
     if not outcomes:
         return
-    episodes = max((o.curve.episodes for o in outcomes), key=len)
-    header = ["episode"]
-    columns = []
-    for o in outcomes:
-        pad = np.full(len(episodes) - len(o.curve), np.nan)
-        header += [f"{o.algorithm}.mean", f"{o.algorithm}.lo", f"{o.algorithm}.hi"]
-        for values in (o.curve.mean, o.curve.lo, o.curve.hi):
-            columns.append(np.concatenate([values, pad]) if values is not None
-                           else np.full(len(episodes), np.nan))
-    lines = [",".join(header)]
-    for i, episode in enumerate(episodes.tolist()):
-        cells = [str(episode)] + ["" if np.isnan(c[i]) else repr(float(c[i])) for c in columns]
-        lines.append(",".join(cells))
+    curves = [Curve(f"{o.algorithm}.{part}", o.curve.episodes,
+                    np.full(len(o.curve), np.nan) if values is None else values)
+              for o in outcomes
+              for part, values in (("mean", o.curve.mean), ("lo", o.curve.lo), ("hi", o.curve.hi))]
     try:
-        write_atomically(path, "\n".join(lines) + "\n")
+        write_atomically(path, curves_csv(curves)[0])
     except OSError as exc:
         raise CliError(f"--csv {path}: cannot write ({exc.strerror or exc})") from None
 
