@@ -13,7 +13,7 @@ from rich.table import Table
 from tui_gym.book_text import claims_table, figure_parts, panel_text
 from tui_gym.cli.experiments_command import add_task_flags, ctrl_c_stops, run_history, unrecorded
 from tui_gym.cli.flags import positive_int, seed_number
-from tui_gym.cli.output import CliError, print_json, progress_bar
+from tui_gym.cli.output import CliError, cli_errors, print_json, progress_bar
 from tui_gym.session.book import figure_named, figures
 from tui_gym.session.book.figure import (
     BookFigure,
@@ -63,7 +63,7 @@ def cmd_book(args: argparse.Namespace, out: Console) -> int:
                                 stop=stop, tasks=tasks)
         began = time.perf_counter()
         try:
-            with ctrl_c_stops(stop, Console(stderr=True)):
+            with ctrl_c_stops(stop, Console(stderr=True)), cli_errors(CompareError, ClusterError):
                 code = _run(figure, options, args, out)
         except FigureStopped as stopped:  # Ctrl+C: the runs end at their next step
             if tasks.group is not None and not unrecorded(history):
@@ -71,8 +71,6 @@ def cmd_book(args: argparse.Namespace, out: Console) -> int:
                     f"kept {tasks.landed} of {tasks.tasks} tasks as runs {tasks.group}…; the "
                     f"same command with --resume {tasks.group} carries on", style="yellow")
             raise KeyboardInterrupt from stopped
-        except (CompareError, ClusterError) as exc:
-            raise CliError(str(exc)) from None
         if tasks.tasks and not args.json:
             kept = "" if tasks.group is None or unrecorded(history) else (
                 f"; kept in the run history as runs {tasks.group}… (tui-gym runs show "
