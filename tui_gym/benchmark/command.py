@@ -21,6 +21,8 @@ BUILT_IN = ("random", "optimal")
 def add_parser(sub: Any) -> None:
     """Add `benchmark` to the sub-command parsers `sub`."""
     from tui_gym.cli.flags import finite_number, positive_int, seed_number
+    from tui_gym.cli.replay_command import add_record_option
+    from tui_gym.cli.runs_command import add_history_flags
 
     bench = sub.add_parser(
         "benchmark",
@@ -55,12 +57,8 @@ def add_parser(sub: Any) -> None:
                        help="add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable)")
     bench.add_argument("--leaderboard", action="store_true",
                        help="list GAME's recorded benchmarks, best first, instead of running one")
-    from tui_gym.cli.runs_command import add_history_flags
-
     add_history_flags(bench, "the result")
     bench.add_argument("--json", action="store_true", help="print one JSON object")
-    from tui_gym.cli.replay_command import add_record_option
-
     add_record_option(bench)
 
 

@@ -378,28 +378,26 @@ def cmd_optimal(args: argparse.Namespace, out: Console) -> int:
     optimum = game.oracle.optimum(kwargs)
     if isinstance(optimum, NotAvailable):
         raise CliError(optimum.reason)
-    names = game.action_names
-    states = game.states.base_observations(kwargs)
-    listed = optimum.q is not None and optimum.marks is not None
+    names, states = game.action_names, game.states.base_observations(kwargs)
     if args.json:
         data: dict[str, Any] = {"env_id": env_id, "env_kwargs": kwargs,
                                 "optimal_value": optimum.value, "meaning": optimum.summary,
                                 **optimum.figures}
-        if listed and not isinstance(states, NotAvailable):
-            assert optimum.q is not None and optimum.marks is not None
+        q, marks = optimum.q, optimum.marks
+        if q is not None and marks is not None and not isinstance(states, NotAvailable):
             data["policy"] = [
                 {"state": game.states.json_observation(obs),
-                 "actions": [names[a] for a in np.flatnonzero(marks)],
-                 "value": float(np.max(q))}
-                for obs, q, marks in zip(states, optimum.q, optimum.marks, strict=True)
+                 "actions": [names[a] for a in np.flatnonzero(marked)],
+                 "value": float(np.max(values))}
+                for obs, values, marked in zip(states, q, marks, strict=True)
             ]
         print_json("optimal", data)
         return 0
     shown = game.solution(kwargs)  # action values that point the optimal moves
     if not isinstance(shown, NotAvailable) and shown.q is not None:
         layout = game.layout
-        focus = layout.default_focus(kwargs)
-        for panel in layout.heatmaps(np.asarray(shown.q), kwargs, focus, shown.marks):
+        for panel in layout.heatmaps(np.asarray(shown.q), kwargs, layout.default_focus(kwargs),
+                                     shown.marks):
             out.print(_panel_table(panel))
     # An edited map's text is shown as its size; its rows are in the table above.
     rules = ", ".join(f"{k}={v}" if k != "layout" else f"a {game.grid_map(kwargs).size_text} map"

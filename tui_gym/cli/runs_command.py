@@ -32,12 +32,6 @@ def _db_option(parser: argparse.ArgumentParser, *, inherit: bool = False) -> Non
     parser.add_argument("--db", type=_path, metavar="PATH", default=default, help=DB_HELP)
 
 
-def _json_option(parser: argparse.ArgumentParser, *, inherit: bool = False) -> None:
-    default = argparse.SUPPRESS if inherit else False
-    parser.add_argument("--json", action="store_true", default=default,
-                        help="print one JSON object")
-
-
 def add_runs_parser(sub: Any) -> None:
     """The `runs` sub-command and its own sub-commands."""
     runs = sub.add_parser(
@@ -45,7 +39,7 @@ def add_runs_parser(sub: Any) -> None:
         description="The run history: every `train` run, every comparison and every run "
         "trained in the app, with its settings, curves and final figures.",
     )
-    _json_option(runs)
+    runs.add_argument("--json", action="store_true")  # each --json's help: `_document_json`
     _db_option(runs, inherit=True)
     runs.add_argument("--game", metavar="G", help="only this game's runs (e.g. blackjack)")
     runs.add_argument("--kind", choices=KINDS, help="only runs of this kind")
@@ -73,7 +67,7 @@ def add_runs_parser(sub: Any) -> None:
             where.add_argument("--tensorboard", type=_path, metavar="DIR",
                                help="TensorBoard event files under DIR (needs "
                                "tui-gym[tensorboard])")
-        _json_option(verb, inherit=True)
+        verb.add_argument("--json", action="store_true", default=argparse.SUPPRESS)
         _db_option(verb, inherit=True)
 
 
