@@ -93,19 +93,15 @@ def _size(db: Path, template: Path, runs: int) -> int:
 
     with RunHistory(template) as history:
         record = history.get_run(history.list_runs(limit=1)[0].id)
-    spec = RunSpec(
-        kind=record.summary.kind, game=record.summary.game, algorithm=record.summary.algorithm,
-        game_params=record.game_params, wrappers=record.wrappers,
-        hyperparameters=record.hyperparameters, versions=record.versions,
-    )
+    run = record.summary
+    spec = RunSpec(run.kind, run.game, run.algorithm, record.game_params, record.wrappers,
+                   record.hyperparameters, versions=record.versions)
     rng = np.random.default_rng(0)
     with RunHistory(db) as history:
         for seed in range(runs):
             run_id = history.start_run(replace(spec, seeds=(seed,)))
-            curves = [
-                Curve(c.name, c.episodes, c.values + rng.normal(0.0, 0.01, len(c)))
-                for c in record.curves
-            ]
+            curves = [Curve(c.name, c.episodes, c.values + rng.normal(0.0, 0.01, len(c)))
+                      for c in record.curves]
             history.update(run_id, curves=curves, figures=record.summary.figures,
                            status=RunStatus.FINISHED)
     return db.stat().st_size

@@ -99,14 +99,11 @@ class LiveResult:
         """Median queue / action / frame milliseconds per key."""
         out = {}
         for key in sorted({k.key for k in self._latencies()}):
-            samples = self._latencies(key)
-            out[key] = {
-                "p50": median([k.total_ms for k in samples]),
-                "p95": percentile([k.total_ms for k in samples], 95),
-                "queue_p50": median([k.queue_ms for k in samples]),
-                "action_p50": median([k.action_ms for k in samples]),
-                "frame_p50": median([k.frame_ms for k in samples]),
-            }
+            ms = {part: [getattr(k, f"{part}_ms") for k in self._latencies(key)]
+                  for part in ("total", "queue", "action", "frame")}
+            total = ms.pop("total")
+            out[key] = {"p50": median(total), "p95": percentile(total, 95),
+                        **{f"{part}_p50": median(values) for part, values in ms.items()}}
         return out
 
 

@@ -119,12 +119,10 @@ class BenchmarkResult:
             ("invalid actions", f"{fouls.invalid_actions:,}"),
             ("time-outs", f"{fouls.timeouts:,} (limit {self.decision_timeout:g} s a decision)"),
         ]
-        if fouls.defaulted:
-            rows.append(("played for a gone player", f"{fouls.defaulted:,} moves"))
-        if fouls.bad_requests:
-            rows.append(("bad requests", f"{fouls.bad_requests:,}"))
-        if fouls.hints_refused:
-            rows.append(("hints refused", f"{fouls.hints_refused:,}"))
+        rows += [(label, f"{count:,}{unit}") for label, count, unit in (
+            ("played for a gone player", fouls.defaulted, " moves"),
+            ("bad requests", fouls.bad_requests, ""), ("hints refused", fouls.hints_refused, ""),
+        ) if count]
         rows.append(("time per decision",
                      "–" if times is None else f"{times[0]:.3f} ms median, {times[1]:.3f} ms p95"))
         rows.append(("how the player ended", self.status))
