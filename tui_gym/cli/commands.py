@@ -265,7 +265,7 @@ def _prediction_dict(session: Session) -> dict[str, Any]:
 
 
 def cmd_train(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.cli.runs_command import warn
+    from tui_gym.cli.output import warn
     from tui_gym.session.experiments.train_recording import TrainRecording
 
     enabled = not (args.no_record or getattr(args, "no_history", False))

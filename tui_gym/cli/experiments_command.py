@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import os
 import signal
-import sys
 import threading
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -19,7 +18,7 @@ from tui_gym.algorithms import ALGORITHMS
 from tui_gym.cli.flags import int_in as _int_in
 from tui_gym.cli.flags import output_file, wrapper_choices
 from tui_gym.cli.flags import seed_number as _seed
-from tui_gym.cli.output import CliError, cli_errors, print_json, progress_bar, say_status
+from tui_gym.cli.output import CliError, cli_errors, print_json, progress_bar, say_status, warn
 
 if TYPE_CHECKING:
     from tui_gym.core.experiments import BestEffortHistory
@@ -148,7 +147,7 @@ def run_history(args: argparse.Namespace) -> Iterator[BestEffortHistory | None]:
         history = BestEffortHistory(path)  # makes the folder, or says why it cannot
     except (RunHistoryError, OSError) as exc:
         text = str(exc) if isinstance(exc, RunHistoryError) else f"{path}: {exc}"
-        sys.stderr.write(f"tui-gym: not recording these runs: {text}\n")
+        warn(f"not recording these runs: {text}")
         yield None
         return
     with history:
@@ -159,8 +158,7 @@ def unrecorded(history: BestEffortHistory | None) -> bool:
     """Say, after the results, that they were not recorded when a write failed; whether so."""
     if history is None or history.failure is None:
         return False
-    sys.stderr.write(f"tui-gym: these results were not recorded in the run history: "
-                     f"{history.failure}\n")
+    warn(f"these results were not recorded in the run history: {history.failure}")
     return True
 
 

@@ -30,7 +30,7 @@ from tui_gym.core.text import json_safe as _clean
 from tui_gym.core.text import visible
 
 __all__ = ["JSON_SCHEMAS", "CliError", "OutConsole", "cli_errors", "key_value_table", "print_json",
-           "progress_bar", "readable", "say_status"]
+           "progress_bar", "readable", "say_status", "warn"]
 
 # The version of each command's JSON object (see the module docstring).
 JSON_SCHEMAS: dict[str, int] = {
@@ -102,6 +102,12 @@ def progress_bar(console: Console, *columns: str, transient: bool = True) -> Pro
     the others text templates."""
     return Progress(*(_BAR_COLUMNS[c]() if c in _BAR_COLUMNS else TextColumn(c) for c in columns),
                     console=console, transient=transient)
+
+
+def warn(line: str) -> None:
+    """A line for the user on standard error (not an error: the command goes on)."""
+    sys.stderr.write(f"tui-gym: {line}\n")
+    sys.stderr.flush()
 
 
 def say_status(text: str) -> None:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from collections.abc import Callable
 from datetime import datetime
 from typing import Any
@@ -15,7 +14,7 @@ from rich.text import Text
 
 from tui_gym.cli.flags import file_name as _path
 from tui_gym.cli.flags import int_in, output_file
-from tui_gym.cli.output import CliError, cli_errors, key_value_table, print_json
+from tui_gym.cli.output import CliError, cli_errors, key_value_table, print_json, warn
 from tui_gym.core.text import visible
 
 _run_id = int_in(1, 2**63 - 1, "a run id (a positive integer, see `tui-gym runs`)")
@@ -85,11 +84,6 @@ def add_app_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-history", action="store_true",
                         help="keep nothing in the run history: the app's training runs are not "
                              "recorded, and its comparisons go when it ends")
-
-
-def warn(line: str) -> None:
-    sys.stderr.write(f"tui-gym: {line}\n")
-    sys.stderr.flush()
 
 
 # --- the commands ------------------------------------------------------------------
