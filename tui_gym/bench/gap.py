@@ -13,7 +13,7 @@ from tui_gym.algorithms import Settings
 from tui_gym.bench import tutorial
 from tui_gym.bench.figures import median
 from tui_gym.core.mdp import NotAvailable
-from tui_gym.games import GAMES, Game
+from tui_gym.games import Game
 from tui_gym.session.session import (
     TARGET_GAP_BUDGET_FACTOR,
     Session,
@@ -65,11 +65,6 @@ class GapResult:
         if not self.ours or not self.tutorial or ours <= 0:
             return None
         return self.tutorial_time_to_gap_s / ours
-
-
-def benched() -> list[Game]:
-    """The games the bench measures, in the registry's order."""
-    return [game for game in GAMES if game.bench_kwargs is not None]
 
 
 def bench_kwargs(game: Game) -> dict[str, Any]:

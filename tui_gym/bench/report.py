@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rich.table import Table
 
@@ -16,6 +16,9 @@ from tui_gym.bench import compare, dp, history, programs
 from tui_gym.bench.figures import median
 from tui_gym.bench.live import RUNNERS
 from tui_gym.bench.run import BenchResults
+
+if TYPE_CHECKING:
+    from typing_extensions import TypeIs
 
 PASS, MISS, UNDECIDED, MISSING, LESSON = "PASS", "MISS", "?", "n/a", "lesson"
 
@@ -71,6 +74,12 @@ class _Judged:
         """The verdicts of figures not measured."""
         self.verdicts.update(dict.fromkeys(keys, MISSING))
 
+    def absent(self, found: object, *keys: str) -> TypeIs[None]:
+        """Whether a stage's result is missing (its figures' verdicts then say so)."""
+        if found is None:
+            self.missing(*keys)
+        return found is None
+
     def failed(self, label: str, text: str) -> None:
         self.rows.append((label, f"[red]{text}[/]", "", MISSING))
 
@@ -85,9 +94,7 @@ def _judged(results: BenchResults) -> _Judged:
     """Every stage's rows and verdicts, in the table's order."""
     out = _Judged()
     found_compile = results.compile
-    if found_compile is None:
-        out.missing("cold_compile_s", "warm_load_s")
-    else:
+    if not out.absent(found_compile, "cold_compile_s", "warm_load_s"):
         out.row("every learner compiled, empty cache", f"{found_compile.cold_s:.1f} s",
                 Target("≤", 30.0, " s"), "cold_compile_s", found_compile.cold_s)
         out.row("  loaded from the cache", f"{found_compile.warm_s:.2f} s (importing Numba "
@@ -103,16 +110,12 @@ def _judged(results: BenchResults) -> _Judged:
     for runner in RUNNERS:
         _live_rows(out, results, runner)
     memory = results.memory
-    if memory is None:
-        out.missing("rss_growth_mb")
-    else:  # a run shorter than RSS_EPISODES misses
+    if not out.absent(memory, "rss_growth_mb"):  # a run shorter than RSS_EPISODES misses
         out.row(f"RSS growth over {memory.episodes:,} ep ({memory.engine})",
                 f"{memory.growth_mb:+.1f} MB", Target("<", 20.0, " MB"), "rss_growth_mb",
                 memory.growth_mb if memory.episodes >= RSS_EPISODES else math.inf)
     startup = results.startup
-    if startup is None:
-        out.missing("startup_s")
-    else:
+    if not out.absent(startup, "startup_s"):
         samples = ", ".join(f"{s:.2f}" for s in startup.samples)
         out.row("start to first frame", f"{startup.seconds:.2f} s ({samples})",
                 Target("≤", 1.0, " s"), "startup_s", startup.seconds)
@@ -183,8 +186,7 @@ def _live_rows(out: _Judged, results: BenchResults, runner: str) -> None:
 
 def _planning_rows(out: _Judged, results: BenchResults) -> None:
     planning = results.planning
-    if planning is None:
-        out.missing("planning")
+    if out.absent(planning, "planning"):
         return
     fewer = planning.dyna_q_episodes < planning.q_learning_episodes
     verdict = PASS if fewer and all(r.reached for r in planning.dyna_q) else MISS
@@ -199,9 +201,8 @@ def _planning_rows(out: _Judged, results: BenchResults) -> None:
 
 
 def _programs_rows(out: _Judged, found: programs.ProgramsResult | None) -> None:
-    if found is None:
-        out.missing("regret_separation_ratio", "protocol_steps_per_second",
-                    "mcp_steps_per_second")
+    if out.absent(found, "regret_separation_ratio", "protocol_steps_per_second",
+                  "mcp_steps_per_second"):
         return
     sep = found.separation
     out.row("episodes to separate optimal from 5% deviations, by return",
@@ -230,8 +231,7 @@ def _programs_rows(out: _Judged, found: programs.ProgramsResult | None) -> None:
 
 def _seeds_rows(out: _Judged, results: BenchResults) -> None:
     found = results.seeds
-    if found is None:
-        out.missing("compare_speedup", "example_6_6")
+    if out.absent(found, "compare_speedup", "example_6_6"):
         return
     scaled = ("" if found.tutorial_learners == found.learners else
               f", {found.tutorial_learners} of {found.learners} run, scaled")
@@ -249,8 +249,7 @@ def _seeds_rows(out: _Judged, results: BenchResults) -> None:
 
 
 def _history_rows(out: _Judged, found: history.HistoryResult | None) -> None:
-    if found is None:
-        out.missing("history_overhead", "history_bytes_per_1000_runs")
+    if out.absent(found, "history_overhead", "history_bytes_per_1000_runs"):
         return
     out.row(f"run history: recording's share of a train {found.game} run",
             f"{found.overhead:.2%} (median of {len(found.shares)})", Target("≤", 0.02, shown=".0%"),
@@ -264,8 +263,7 @@ def _history_rows(out: _Judged, found: history.HistoryResult | None) -> None:
 
 
 def _tasks_rows(out: _Judged, found: compare.TasksResult | None) -> None:
-    if found is None:
-        out.missing("task_split_overhead", "cluster_throughput_share")
+    if out.absent(found, "task_split_overhead", "cluster_throughput_share"):
         return
     split, share = found.split_overhead, found.cluster_share
     out.row(f"compare on {found.game}, {found.seeds} seeds: {found.tasks} tasks, recorded "
@@ -284,8 +282,7 @@ def _tasks_rows(out: _Judged, found: compare.TasksResult | None) -> None:
 
 
 def _dp_rows(out: _Judged, found: dp.DPResult | None) -> None:
-    if found is None:
-        out.missing("taxi_sweep_ms", "jack_policy_iteration_s", "plan_view")
+    if out.absent(found, "taxi_sweep_ms", "jack_policy_iteration_s", "plan_view"):
         return
     out.row("planning: a value-iteration sweep on Taxi (500 × 6), median",
             f"{found.taxi_sweep_ms:.2f} ms", Target("≤", 5.0, " ms"), "taxi_sweep_ms",

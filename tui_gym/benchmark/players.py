@@ -226,8 +226,7 @@ class ProcessPlayer(Player):
         try:
             gone = self._serve(program, referee, decision_timeout, outcome)
             if gone:
-                episode = referee.started
-                outcome.status = f"{gone} in episode {episode} of {referee.episodes}; " \
+                outcome.status = f"{gone} in episode {referee.started} of {referee.episodes}; " \
                                  "the rest was played with the default action"
                 while not referee.finished:
                     referee.play_default(gone)

@@ -18,7 +18,6 @@ from tui_gym.session.book import figure_named, figures
 from tui_gym.session.book.figure import (
     BookFigure,
     FigureOptions,
-    FigureResult,
     FigureStopped,
     FigureTasks,
     heading,
@@ -95,7 +94,12 @@ def _run(figure: BookFigure, options: FigureOptions, args: argparse.Namespace, o
 
     with progress:
         result = figure.run(options, update)
-    _draw(out, result)
+    for part in figure_parts(result, out.width):
+        out.print(part)
+    for panel in result.panels:
+        out.print(panel_text(panel, out.width), soft_wrap=True)
+    for part in claims_table(result):
+        out.print(part)
     return 0 if result.ok else 1
 
 
@@ -114,12 +118,3 @@ def _list(args: argparse.Namespace, out: Console) -> int:
         table.add_row(f.name, f.world, f"{escape(f.title)}\n[dim]{escape(f.about)}[/]")
     out.print(table)
     return 0
-
-
-def _draw(out: Console, result: FigureResult) -> None:
-    for part in figure_parts(result, out.width):
-        out.print(part)
-    for panel in result.panels:
-        out.print(panel_text(panel, out.width), soft_wrap=True)
-    for part in claims_table(result):
-        out.print(part)

@@ -332,10 +332,8 @@ def _figure_columns(table: Table, outcomes: Sequence[AlgorithmOutcome | None]
 def _compare_chart(result: Any, width: int) -> Text:
     from tui_gym.terminal_chart import ChartSeries, band_chart
 
-    series = []
-    for o in result.outcomes:
-        curve = o.smoothed or o.curve
-        series.append(ChartSeries(o.algorithm, curve.episodes, curve.mean, curve.lo, curve.hi))
+    series = [ChartSeries(o.algorithm, c.episodes, c.mean, c.lo, c.hi)
+              for o in result.outcomes for c in (o.smoothed or o.curve,)]
     window = max(o.smoothing for o in result.outcomes)
     smoothed = f", each seed's averaged over its last {window} episodes" if window > 1 else ""
     chart = band_chart(series, width, 14, y_label=f"online return per episode, mean of "
