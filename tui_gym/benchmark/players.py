@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import queue
 import select
@@ -295,7 +296,7 @@ class ProcessPlayer(Player):
             if moved and cmd == "step" and not late:
                 outcome.decision_times.append(received - pending)
             sending = time.monotonic()
-            if not program.send(_encode(answer), limit):
+            if not program.send((json.dumps(answer) + "\n").encode("ascii"), limit):
                 return "it stopped reading its input"
             if moved:  # a new decision is due: its clock started as the answer went out
                 pending, allowance, strikes = sending, limit, 0
@@ -308,9 +309,3 @@ def _command_of(line: bytes) -> str | None:
     except ValueError:
         return None
     return cmd if isinstance(cmd, str) else None
-
-
-def _encode(answer: dict[str, Any]) -> bytes:
-    import json
-
-    return (json.dumps(answer) + "\n").encode("ascii")
