@@ -134,10 +134,11 @@ def run_bench(
     errors: dict[str, str] = {}
     found: dict[str, Any] = {}
 
-    def stage(name: str, text: str, measure: Callable[[], Any]) -> None:
+    def stage(name: str, text: str, measure: Callable[[], Any], into: dict[str, Any] = found,
+              key: str = "") -> None:
         say(text)
         try:
-            found[name] = measure()
+            into[key or name] = measure()
         except Exception as exc:  # one broken stage must not hide the others' figures
             errors[name] = f"{type(exc).__name__}: {exc}"
 
@@ -151,13 +152,11 @@ def run_bench(
           "tutorial loop", lambda: speed.measure(games, names, plan.speed_seconds,
                                                  plan.speed_repeats))
     gaps: dict[str, GapResult] = {}
-    for game in (game for game in GAMES if game.bench_kwargs is not None):  # in their order
+    for game in [g for g in GAMES if g.bench_kwargs is not None]:  # the games the bench times
         stage(f"gap[{game.name}]", f"time to the target gap on {gap.title_of(game)}: ours, "
               f"then the tutorial loop (capped at {plan.tutorial_cap_s:.0f} s)",
               partial(gap.measure_game, game, plan.gap_seeds, plan.tutorial_gap_seeds,
-                      plan.tutorial_cap_s))
-        if f"gap[{game.name}]" in found:
-            gaps[game.name] = found.pop(f"gap[{game.name}]")
+                      plan.tutorial_cap_s), gaps, game.name)
     stage("planning", f"real episodes to the bound: Q-learning, then Dyna-Q "
           f"(planning_steps = {gap.PLANNING_STEPS}) on {gap.PLANNING_GAME}",
           lambda: gap.measure_planning(plan.planning_seeds, gap.PLANNING_BOUND))

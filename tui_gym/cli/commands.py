@@ -46,11 +46,9 @@ def _default_text(field: Field) -> str:
 def cmd_envs(args: argparse.Namespace, out: Console) -> int:
     if args.json:
         print_json("envs", {"envs": [
-            {
-                "name": g.name, "env_id": g.env_id, "other_ids": list(g.other_ids), "key": g.key,
-                "actions": list(g.action_names), "description": g.description, "teaches": g.teaches,
-                "params": [_param_dict(param) for param in g.params],
-            }
+            {"name": g.name, "env_id": g.env_id, "other_ids": list(g.other_ids), "key": g.key,
+             "actions": list(g.action_names), "description": g.description, "teaches": g.teaches,
+             "params": [_param_dict(param) for param in g.params]}
             for g in GAMES
         ]})
         return 0
@@ -76,17 +74,12 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.core.wrappers import CATALOG
 
     if args.json:
-        print_json("wrappers", {
-            "wrappers": [
-                {
-                    "name": spec.name, "summary": spec.summary,
-                    "changes_observation": spec.changes_observation,
-                    "params": [_param_dict(param) for param in spec.params],
-                }
-                for spec in CATALOG.values()
-            ],
-            "syntax": WRAPPER_SYNTAX,
-        })
+        print_json("wrappers", {"wrappers": [
+            {"name": spec.name, "summary": spec.summary,
+             "changes_observation": spec.changes_observation,
+             "params": [_param_dict(param) for param in spec.params]}
+            for spec in CATALOG.values()
+        ], "syntax": WRAPPER_SYNTAX})
         return 0
     if out.width < 80:  # too narrow for three columns: one block a wrapper
         out.print("[bold]Wrapper catalog[/]")
@@ -96,7 +89,16 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
             for p in spec.params:
                 out.print(f"  {p.name}{escape(_default_text(p))}", overflow="fold")
     else:
-        out.print(_wrapper_table(CATALOG))
+        table = Table(title="Wrapper catalog", title_justify="left", show_lines=True)
+        table.add_column("name", style="bold cyan", no_wrap=True)
+        table.add_column("what it changes and teaches", ratio=1, overflow="fold")
+        # Parameter names are typed after --wrapper: never cut, each on a line of its own.
+        longest = max((len(p.name) for spec in CATALOG.values() for p in spec.params), default=1)
+        table.add_column("parameters (default, range)", min_width=longest, overflow="fold")
+        for spec in CATALOG.values():
+            params = "\n".join(f"{p.name}\n  {_default_text(p)}" for p in spec.params) or "-"
+            table.add_row(spec.name, escape(spec.summary), escape(params))
+        out.print(table)
     out.print(
         "Use with [bold]--wrapper NAME[/] or [bold]--wrapper NAME:key=value,key=value[/], "
         "repeatable; the first is innermost.\n"
@@ -106,26 +108,11 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
     return 0
 
 
-def _wrapper_table(catalog: dict[str, Any]) -> Table:
-    table = Table(title="Wrapper catalog", title_justify="left", show_lines=True)
-    longest = max((len(p.name) for spec in catalog.values() for p in spec.params), default=1)
-    table.add_column("name", style="bold cyan", no_wrap=True)
-    table.add_column("what it changes and teaches", ratio=1, overflow="fold")
-    # Parameter names are typed after --wrapper: never cut, each on a line of its own.
-    table.add_column("parameters (default, range)", min_width=longest, overflow="fold")
-    for spec in catalog.values():
-        params = "\n".join(f"{p.name}\n  {_default_text(p)}" for p in spec.params) or "-"
-        table.add_row(spec.name, escape(spec.summary), escape(params))
-    return table
-
-
 def cmd_algorithms(args: argparse.Namespace, out: Console) -> int:
     if args.json:
         print_json("algorithms", {"algorithms": [
-            {
-                "name": cls.name, "title": cls.title, "summary": cls.summary, "target": cls.formula,
-                "params": [_param_dict(field) for field in cls.params],
-            }
+            {"name": cls.name, "title": cls.title, "summary": cls.summary, "target": cls.formula,
+             "params": [_param_dict(field) for field in cls.params]}
             for cls in ALGORITHMS
         ]})
         return 0
@@ -136,10 +123,8 @@ def cmd_algorithms(args: argparse.Namespace, out: Console) -> int:
     table.add_column("its own parameters (default, range)", overflow="fold")
     common = {field.name for field in COMMON_PARAMS}
     for cls in ALGORITHMS:
-        own = "\n".join(
-            f"{f.name}\n  {_default_text(f)}" for f in cls.params
-            if f.name not in common
-        ) or "-"
+        own = "\n".join(f"{f.name}\n  {_default_text(f)}" for f in cls.params
+                        if f.name not in common) or "-"
         table.add_row(cls.name, escape(f"{cls.title}: {cls.summary}"), escape(cls.formula),
                       escape(own))
     out.print(table)
