@@ -162,10 +162,6 @@ class PlanningResult:
     def dyna_q_episodes(self) -> float:
         return median([r.episodes for r in self.dyna_q])
 
-    @property
-    def reached(self) -> bool:
-        return all(r.reached for r in (*self.q_learning, *self.dyna_q))
-
     def to_json(self) -> dict[str, Any]:
         return {
             "game": self.game, "measure": self.measure, "bound": self.bound,

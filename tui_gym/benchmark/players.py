@@ -277,10 +277,10 @@ class ProcessPlayer(Player):
                 except subprocess.TimeoutExpired:
                     return "it closed its output"
                 return f"it exited with code {code}"
+            late = False
             if item is _TOO_LONG:
                 referee.fouls.bad_requests += 1
                 answer, moved, cmd = {"error": "line too long: not read"}, False, None
-                late = False
             else:
                 cmd = _command_of(item)
                 if owed and cmd in ("step", "reset"):
@@ -292,7 +292,6 @@ class ProcessPlayer(Player):
                     moved = late = True
                 else:
                     answer, moved = referee.handle_line(item)
-                    late = False
             if moved and cmd == "step" and not late:
                 outcome.decision_times.append(received - pending)
             sending = time.monotonic()
