@@ -6,14 +6,12 @@ from __future__ import annotations
 import logging
 import math
 import tempfile
-import time
-from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
 from tui_gym.bench import tutorial
-from tui_gym.bench.figures import median, ratio
+from tui_gym.bench.figures import ratio, timed
 
 GAME = "cliffwalking"
 ALGORITHMS = ("q-learning", "sarsa")
@@ -79,29 +77,12 @@ class TasksResult:
     @property
     def cluster_share(self) -> float | None:
         """The cluster's throughput ÷ the local executor's on the same sweep."""
-        if self.local_s is None or self.cluster_s is None:
-            return None
         return ratio(self.local_s, self.cluster_s)
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "game": self.game, "seeds": self.seeds, "episodes": self.episodes,
-            "tasks_s": self.tasks_s, "batch_s": self.batch_s, "tasks": self.tasks,
-            "split_overhead": self.split_overhead, "local_s": self.local_s,
-            "cluster_s": self.cluster_s, "cluster_tasks": self.cluster_tasks,
-            "cluster_workers": CLUSTER_WORKERS, "cluster_share": self.cluster_share,
-            "cluster_note": self.cluster_note or None,
-        }
-
-
-def _timed(run: Callable[[], Any], repeats: int) -> tuple[float, Any]:
-    """The median seconds of `repeats` runs, and the last run's result."""
-    times, result = [], None
-    for _ in range(repeats):
-        began = time.perf_counter()
-        result = run()
-        times.append(time.perf_counter() - began)
-    return median(times), result
+        return {**asdict(self), "split_overhead": self.split_overhead,
+                "cluster_workers": CLUSTER_WORKERS, "cluster_share": self.cluster_share,
+                "cluster_note": self.cluster_note or None}
 
 
 def measure_seeds(seeds: int, episodes: int, tutorial_share: float = 1.0) -> SeedsSpeed:
@@ -110,7 +91,7 @@ def measure_seeds(seeds: int, episodes: int, tutorial_share: float = 1.0) -> See
 
     spec = CompareSpec(GAME, ALGORITHMS, seeds, episodes, settings=SETTINGS)
     run_compare(CompareSpec(GAME, ALGORITHMS, 1, 1, settings=SETTINGS))  # compiled, once
-    compare_s, result = _timed(lambda: run_compare(spec), COMPARE_REPEATS)
+    compare_s, result = timed(lambda: run_compare(spec), COMPARE_REPEATS)
     online = tuple(float(o.curve.mean.mean()) for o in result.outcomes)
     per_algorithm = max(1, min(seeds, math.ceil(seeds * tutorial_share)))
     (run,) = tutorial.measure([{"kind": "learners", "game": GAME, "algorithms": ALGORITHMS,
@@ -136,8 +117,8 @@ def measure_tasks(seeds: int, episodes: int, repeats: int = 3) -> TasksResult:
     arms = [Arm(name, SETTINGS, name) for name in ALGORITHMS]
     with tempfile.TemporaryDirectory(prefix="tui-gym-bench-") as tmp:
         with RunHistory(Path(tmp) / "runs.db") as history:
-            tasks_s, result = _timed(lambda: run_compare(spec, history=history), repeats)
-        batch_s, _ = _timed(lambda: execute(setup, arms, RunKind.COMPARE,
+            tasks_s, result = timed(lambda: run_compare(spec, history=history), repeats)
+        batch_s, _ = timed(lambda: execute(setup, arms, RunKind.COMPARE,
                                             task_seconds=math.inf), repeats)
     found = TasksResult(GAME, seeds, episodes, tasks_s, batch_s, int(result.tasks["total"]))
     sweep = SweepSpec(GAME, "q-learning", {"learning_rate": SWEEP_RATES}, seeds, episodes,
@@ -146,11 +127,11 @@ def measure_tasks(seeds: int, episodes: int, repeats: int = 3) -> TasksResult:
         from distributed import Client, LocalCluster
     except ImportError:
         return replace(found, cluster_note="Dask is not installed (pip install 'tui-gym[dask]')")
-    local_s, _ = _timed(lambda: run_sweep(sweep, processes=CLUSTER_WORKERS), repeats)
+    local_s, _ = timed(lambda: run_sweep(sweep, processes=CLUSTER_WORKERS), repeats)
     with LocalCluster(n_workers=CLUSTER_WORKERS, threads_per_worker=1, processes=True,
                       dashboard_address=":0", silence_logs=logging.ERROR) as cluster, \
             Client(cluster) as client:
         run_sweep(sweep, cluster=client)  # the workers import and compile, once
-        cluster_s, swept = _timed(lambda: run_sweep(sweep, cluster=client), repeats)
+        cluster_s, swept = timed(lambda: run_sweep(sweep, cluster=client), repeats)
     return replace(found, local_s=local_s, cluster_s=cluster_s,
                    cluster_tasks=int(swept.tasks["total"]))

@@ -5,12 +5,12 @@ from the disk cache in a fresh process."""
 from __future__ import annotations
 
 import json
-import os
-import subprocess
 import sys
 import tempfile
 import time
 from dataclasses import dataclass
+
+from tui_gym.bench.figures import child_json
 
 TIMEOUT_S = 900.0
 
@@ -58,21 +58,12 @@ def _child(kind: str) -> dict[str, float]:
     return {"import": imported - began, "seconds": time.perf_counter() - imported}
 
 
-def _run(kind: str, folder: str) -> dict[str, float]:
-    env = {**os.environ, "NUMBA_CACHE_DIR": folder}
-    done = subprocess.run([sys.executable, "-m", "tui_gym.bench.compiling", kind],
-                          capture_output=True, text=True, env=env, timeout=TIMEOUT_S,
-                          check=False)
-    if done.returncode != 0:
-        raise RuntimeError(f"compiling failed: {done.stderr.strip()[-300:]}")
-    return dict(json.loads(done.stdout.strip().splitlines()[-1]))
-
-
 def measure() -> CompileResult:
     """The cold compile and the warm load (see the module docstring)."""
     with tempfile.TemporaryDirectory(prefix="tui-gym-numba-") as folder:
-        cold = _run("cold", folder)
-        warm = _run("warm", folder)
+        cold, warm = (child_json("tui_gym.bench.compiling", kind, what="compiling",
+                                 timeout=TIMEOUT_S, env={"NUMBA_CACHE_DIR": folder})
+                      for kind in ("cold", "warm"))
     return CompileResult(cold["seconds"], warm["import"], warm["seconds"])
 
 

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from tui_gym.bench.figures import median, percentile
+from tui_gym.bench.figures import median, percentile, timed
 from tui_gym.bench.live import PAUSE_RANGE, SIZE, _send_key, _until, on_frames
 
 __all__ = ["DPResult", "measure"]
@@ -53,37 +53,6 @@ class DPResult:
                            "key_p50_ms": median(list(v.keys_ms)), "key_p95_ms": v.key_p95_ms,
                            "key_presses": len(v.keys_ms)} for v in self.views],
         }
-
-
-def _taxi_sweep_ms(repeats: int) -> float:
-    from tui_gym.core.mdp.planning import value_sweep
-    from tui_gym.games import game_named
-
-    model = game_named("taxi").plan_model({})
-    assert not isinstance(model, type(None))
-    v = np.zeros(500)
-    times = []
-    for _ in range(repeats):
-        started = time.perf_counter()
-        v, _, _ = value_sweep(model.model, v, 1.0)  # type: ignore[union-attr]
-        times.append((time.perf_counter() - started) * 1000)
-    return median(times)
-
-
-def _jack_seconds(repeats: int) -> tuple[float, float]:
-    from tui_gym.games import game_named
-    from tui_gym.session.book import figure_named
-    from tui_gym.session.book.figure import FigureOptions
-
-    started = time.perf_counter()
-    game_named("car-rental").plan_model({})
-    built = time.perf_counter() - started
-    times = []
-    for _ in range(repeats):
-        started = time.perf_counter()
-        figure_named("4.2").run(FigureOptions(), lambda done, total, what: None)
-        times.append(time.perf_counter() - started)
-    return median(times), built
 
 
 async def _view_once(game: str, seconds: float, presses: int, seed: int) -> ViewFigures:
@@ -150,13 +119,20 @@ async def _keys(app: Any, view: Any, frames: list[float],
 def measure(seconds: float, presses: int, repeats: int,
             progress: Callable[[str], None] | None = None) -> DPResult:
     """Every figure of the module docstring."""
+    from tui_gym.core.mdp.planning import value_sweep
+    from tui_gym.games import game_named
+    from tui_gym.session.book import figure_named
+    from tui_gym.session.book.figure import FigureOptions
+
     say = progress or (lambda _text: None)
     say("planning: a value-iteration sweep on Taxi")
-    taxi = _taxi_sweep_ms(50)
+    taxi = game_named("taxi").plan_model({})
+    sweep_s, _ = timed(lambda: value_sweep(taxi.model, np.zeros(500), 1.0), 50)  # type: ignore[union-attr]
     say("planning: Jack's car rental by policy iteration")
-    jack, built = _jack_seconds(repeats)
+    built, _ = timed(lambda: game_named("car-rental").plan_model({}))
+    jack, _ = timed(lambda: figure_named("4.2").run(FigureOptions(), lambda *_: None), repeats)
     views = []
     for game in GRID_GAMES:
         say(f"planning: the Plan view on {game}")
         views.append(asyncio.run(_view_once(game, seconds, presses, 0)))
-    return DPResult(taxi, jack, built, tuple(views))
+    return DPResult(sweep_s * 1000, jack, built, tuple(views))

@@ -1,4 +1,5 @@
-"""Small helpers the benchmarks share: medians, percentiles, the machine's load.
+"""Small helpers the benchmarks share: medians, percentiles, timing, child processes, the
+machine's load.
 
 Every figure `tui-gym bench` prints is a median over repeats, a percentile
 over many samples, or a ratio of two figures measured in the same run.
@@ -6,9 +7,14 @@ over many samples, or a ratio of two figures measured in the same run.
 
 from __future__ import annotations
 
+import json
 import os
 import statistics
-from collections.abc import Sequence
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -28,6 +34,28 @@ def ratio(numerator: float | None, denominator: float | None) -> float | None:
     if numerator is None or denominator is None or denominator == 0:
         return None
     return numerator / denominator
+
+
+def timed(run: Callable[[], Any], repeats: int = 1) -> tuple[float, Any]:
+    """The median seconds of `repeats` runs, and the last run's result."""
+    times, result = [], None
+    for _ in range(repeats):
+        began = time.perf_counter()
+        result = run()
+        times.append(time.perf_counter() - began)
+    return median(times), result
+
+
+def child_json(module: str, *args: str, what: str, timeout: float, stdin: str | None = None,
+               env: dict[str, str] | None = None) -> Any:
+    """Run `python -m module args` in a fresh interpreter; the JSON of its last output line
+    (RuntimeError saying `what` failed, and the end of its stderr, when it fails)."""
+    done = subprocess.run([sys.executable, "-m", module, *args], input=stdin,
+                          capture_output=True, text=True, env={**os.environ, **(env or {})},
+                          timeout=timeout, check=False)
+    if done.returncode != 0:
+        raise RuntimeError(f"{what} failed: {done.stderr.strip()[-300:]}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
 
 
 def load_average() -> tuple[float, float, float] | None:

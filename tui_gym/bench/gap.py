@@ -13,7 +13,7 @@ from tui_gym.algorithms import Settings
 from tui_gym.bench import tutorial
 from tui_gym.bench.figures import median
 from tui_gym.core.mdp import NotAvailable
-from tui_gym.games import GAMES, Game
+from tui_gym.games import Game
 from tui_gym.session.session import (
     TARGET_GAP_BUDGET_FACTOR,
     Session,
@@ -65,11 +65,6 @@ class GapResult:
         if not self.ours or not self.tutorial or ours <= 0:
             return None
         return self.tutorial_time_to_gap_s / ours
-
-
-def benched() -> list[Game]:
-    """The games the bench measures, in the registry's order."""
-    return [game for game in GAMES if game.bench_kwargs is not None]
 
 
 def bench_kwargs(game: Game) -> dict[str, Any]:
@@ -167,19 +162,13 @@ class PlanningResult:
     def dyna_q_episodes(self) -> float:
         return median([r.episodes for r in self.dyna_q])
 
-    @property
-    def reached(self) -> bool:
-        return all(r.reached for r in (*self.q_learning, *self.dyna_q))
-
     def to_json(self) -> dict[str, Any]:
         return {
             "game": self.game, "measure": self.measure, "bound": self.bound,
             "q_learning_episodes": self.q_learning_episodes,
             "dyna_q_episodes": self.dyna_q_episodes,
-            "q_learning_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
-                                for r in self.q_learning],
-            "dyna_q_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
-                            for r in self.dyna_q],
+            **{f"{name}_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
+                                for r in getattr(self, name)] for name in ("q_learning", "dyna_q")},
         }
 
 
@@ -219,9 +208,7 @@ def measure_planning(seeds: Sequence[int], bound: float = PLANNING_BOUND,
     probe = Session(game, seed=0)
     measure = _distance(probe)[0]
     probe.env.close()
-    q_runs = tuple(episodes_to_bound(game, "q-learning", bound, s) for s in seeds)
-    dyna_runs = tuple(
-        episodes_to_bound(game, "dyna-q", bound, s, {"planning_steps": PLANNING_STEPS})
-        for s in seeds
-    )
+    q_runs, dyna_runs = (tuple(episodes_to_bound(game, name, bound, s, hp) for s in seeds)
+                         for name, hp in (("q-learning", {}),
+                                          ("dyna-q", {"planning_steps": PLANNING_STEPS})))
     return PlanningResult(game, measure, bound, q_runs, dyna_runs)

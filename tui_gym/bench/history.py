@@ -50,26 +50,22 @@ class HistoryResult:
 
 
 def _timed_recording(db: Path, spent: list[float]) -> Any:
-    """A `TrainRecording` that adds the time of each of its calls to `spent[0]`."""
+    """A `TrainRecording` whose calls (its opening too) add their time to `spent[0]`."""
     from tui_gym.session.experiments.train_recording import TrainRecording
 
-    class Timed(TrainRecording):
-        pass
-
-    for name in ("begin", "on_chunk", "finish", "close"):
-        method = getattr(TrainRecording, name)
-
-        def timed(self: Any, *args: Any, _method: Any = method, **kwargs: Any) -> Any:
+    def timed(call: Any) -> Any:
+        def run(*args: Any, **kwargs: Any) -> Any:
             started = time.perf_counter()
             try:
-                return _method(self, *args, **kwargs)
+                return call(*args, **kwargs)
             finally:
                 spent[0] += time.perf_counter() - started
 
-        setattr(Timed, name, timed)
-    started = time.perf_counter()
-    recording = Timed(str(db))
-    spent[0] += time.perf_counter() - started
+        return run
+
+    recording = timed(TrainRecording)(str(db))
+    for name in ("begin", "on_chunk", "finish", "close"):
+        setattr(recording, name, timed(getattr(recording, name)))
     return recording
 
 
@@ -97,19 +93,15 @@ def _size(db: Path, template: Path, runs: int) -> int:
 
     with RunHistory(template) as history:
         record = history.get_run(history.list_runs(limit=1)[0].id)
-    spec = RunSpec(
-        kind=record.summary.kind, game=record.summary.game, algorithm=record.summary.algorithm,
-        game_params=record.game_params, wrappers=record.wrappers,
-        hyperparameters=record.hyperparameters, versions=record.versions,
-    )
+    run = record.summary
+    spec = RunSpec(run.kind, run.game, run.algorithm, record.game_params, record.wrappers,
+                   record.hyperparameters, versions=record.versions)
     rng = np.random.default_rng(0)
     with RunHistory(db) as history:
         for seed in range(runs):
             run_id = history.start_run(replace(spec, seeds=(seed,)))
-            curves = [
-                Curve(c.name, c.episodes, c.values + rng.normal(0.0, 0.01, len(c)))
-                for c in record.curves
-            ]
+            curves = [Curve(c.name, c.episodes, c.values + rng.normal(0.0, 0.01, len(c)))
+                      for c in record.curves]
             history.update(run_id, curves=curves, figures=record.summary.figures,
                            status=RunStatus.FINISHED)
     return db.stat().st_size

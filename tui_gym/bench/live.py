@@ -99,14 +99,11 @@ class LiveResult:
         """Median queue / action / frame milliseconds per key."""
         out = {}
         for key in sorted({k.key for k in self._latencies()}):
-            samples = self._latencies(key)
-            out[key] = {
-                "p50": median([k.total_ms for k in samples]),
-                "p95": percentile([k.total_ms for k in samples], 95),
-                "queue_p50": median([k.queue_ms for k in samples]),
-                "action_p50": median([k.action_ms for k in samples]),
-                "frame_p50": median([k.frame_ms for k in samples]),
-            }
+            ms = {part: [getattr(k, f"{part}_ms") for k in self._latencies(key)]
+                  for part in ("total", "queue", "action", "frame")}
+            total = ms.pop("total")
+            out[key] = {"p50": median(total), "p95": percentile(total, 95),
+                        **{f"{part}_p50": median(values) for part, values in ms.items()}}
         return out
 
 
@@ -245,9 +242,8 @@ async def _key_latencies(
     return samples
 
 
-async def _live_once(
-    runner_kind: str, seconds: float, presses: int, seed: int
-) -> tuple[float, float, float, str, list[KeySample]]:
+async def _live_once(runner_kind: str, seconds: float, presses: int, seed: int,
+                     headless: float) -> LiveRepeat:
     from tui_gym.ui.app import TuiGymApp
 
     session = Session(hp=_hyperparameters(), seed=seed)
@@ -266,40 +262,37 @@ async def _live_once(
         await asyncio.sleep(seconds)
         episodes1, t1 = await _fresh_snapshot(runner)
         elapsed = t1 - t0
-        live_eps = (episodes1 - episodes0) / elapsed
-        refresh_hz = (tools.snapshot_calls - calls0) / elapsed
-        frames_hz = (len(tools.frames) - frames0) / elapsed
-        engine = runner.latest.engine
-        keys = await _key_latencies(app, tools, presses, random.Random(seed))
+        done = LiveRepeat(headless, (episodes1 - episodes0) / elapsed,
+                          (tools.snapshot_calls - calls0) / elapsed,
+                          (len(tools.frames) - frames0) / elapsed, runner.latest.engine,
+                          tuple(await _key_latencies(app, tools, presses, random.Random(seed))))
         if not runner.running:
             raise RuntimeError(f"training stopped during the measurement: {runner.error}")
         runner.pause()
-    return live_eps, refresh_hz, frames_hz, engine, keys
+    return done
 
 
-def measure_runner(runner_kind: str, seconds: float, presses: int, repeats: int) -> LiveResult:
-    """`repeats` headless + live pairs for one runner."""
-    done = []
-    for seed in range(repeats):
-        gc.collect()
-        headless = headless_rate(seconds, seed)
-        gc.collect()
-        live, hz, fps, engine, keys = asyncio.run(_live_once(runner_kind, seconds, presses, seed))
-        done.append(LiveRepeat(headless, live, hz, fps, engine, tuple(keys)))
-    return LiveResult(runner_kind, tuple(done), seconds)
+def _repeat(runner_kind: str, seconds: float, presses: int, seed: int) -> LiveRepeat:
+    """One headless + live pair for one runner."""
+    gc.collect()
+    headless = headless_rate(seconds, seed)
+    gc.collect()
+    return asyncio.run(_live_once(runner_kind, seconds, presses, seed, headless))
 
 
 def measure(
     seconds: float, presses: int, repeats: int, runners: Sequence[str] = RUNNERS,
     progress: Callable[[str], None] | None = None,
 ) -> dict[str, LiveResult]:
-    """Every runner in turn; a runner that fails is reported with its error, not raised."""
+    """`repeats` headless + live pairs for every runner in turn; a runner that fails is
+    reported with its error, not raised."""
     results = {}
     for kind in runners:
         if progress is not None:
             progress(f"live training, {kind} runner")
         try:
-            results[kind] = measure_runner(kind, seconds, presses, repeats)
+            done = tuple(_repeat(kind, seconds, presses, seed) for seed in range(repeats))
+            results[kind] = LiveResult(kind, done, seconds)
         except Exception as exc:  # one broken runner must not hide the other's figures
             results[kind] = LiveResult(kind, (), seconds, (f"{type(exc).__name__}: {exc}",))
     return results

@@ -5,9 +5,10 @@ from __future__ import annotations
 import gc
 import json
 import os
-import subprocess
 import sys
 from dataclasses import dataclass
+
+from tui_gym.bench.figures import child_json
 
 MB = 1024 * 1024
 CHUNK_SECONDS = 0.05  # as the app's runner (`core.runner.CHUNK_SECONDS`)
@@ -77,19 +78,12 @@ def train_and_watch(episodes: int, warmup: int, engine: str = "auto") -> dict[st
 
 def measure(episodes: int, warmup: int, engine: str = "auto") -> MemoryResult:
     """Run `train_and_watch` in a fresh interpreter and read its figures."""
-    code = (
-        "import json, sys; from tui_gym.bench.memory import train_and_watch; "
-        f"print(json.dumps(train_and_watch({episodes}, {warmup}, {engine!r})))"
-    )
-    proc = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=False
-    )
-    if proc.returncode != 0:
-        last = (proc.stderr.strip().splitlines() or ["no output"])[-1]
-        raise RuntimeError(f"the memory run failed: {last}")
-    data = json.loads(proc.stdout.strip().splitlines()[-1])
-    return MemoryResult(
-        episodes=int(data["episodes"]), warmup=warmup, engine=str(data["engine"]),
-        rss_start_mb=float(data["rss_start_mb"]), rss_end_mb=float(data["rss_end_mb"]),
-        rss_peak_mb=float(data["rss_peak_mb"]), seconds=float(data["seconds"]),
-    )
+    data = child_json("tui_gym.bench.memory", str(episodes), str(warmup), engine,
+                      what="the memory run", timeout=600)
+    return MemoryResult(int(data["episodes"]), warmup, str(data["engine"]),
+                        *(float(data[key]) for key in ("rss_start_mb", "rss_end_mb",
+                                                        "rss_peak_mb", "seconds")))
+
+
+if __name__ == "__main__":
+    print(json.dumps(train_and_watch(int(sys.argv[1]), int(sys.argv[2]), sys.argv[3])))

@@ -157,56 +157,40 @@ class _ProtocolChild:
         self.child.wait(timeout=30)
 
 
-def measure_protocol(seconds: float, repeats: int) -> RateResult:
-    """Protocol steps per second over a pipe with `WINDOW` requests in flight: `repeats`
-    windows on one child process."""
+def _pipe_windows(seconds: float, repeats: int, window: int) -> tuple[list[float], list[float]]:
+    """Protocol steps per second over a pipe with `window` requests in flight, `repeats`
+    windows on one child process; and each answer's time since the last request went out
+    (with one request in flight: each step's round trip)."""
     pipe = _ProtocolChild()
-    samples = []
+    rates: list[float] = []
+    trips: list[float] = []
     try:
         pipe.reset()
-        pipe.send_steps(WINDOW)
+        pipe.send_steps(window)
         for _ in range(repeats):
-            answered = 0
-            started = time.perf_counter()
-            deadline = started + seconds
-            while True:
+            answered, started = 0, time.perf_counter()
+            sent = now = started
+            while now < started + seconds:
                 got = pipe.read_answers()
-                answered += got
-                pipe.send_steps(got)  # one new request per answer: the window stays full
                 now = time.perf_counter()
-                if now >= deadline:
-                    break
-            samples.append(answered / (now - started))
+                if got:
+                    trips.append(now - sent)
+                    answered, sent = answered + got, now
+                    pipe.send_steps(got)  # one new request per answer: the window stays full
+            rates.append(answered / (now - started))
     finally:
         pipe.close()
-    return RateResult(tuple(samples))
+    return rates, trips
+
+
+def measure_protocol(seconds: float, repeats: int) -> RateResult:
+    """Protocol steps per second over a pipe with `WINDOW` requests in flight."""
+    return RateResult(tuple(_pipe_windows(seconds, repeats, WINDOW)[0]))
 
 
 def measure_round_trip(seconds: float, repeats: int) -> RoundTripResult:
-    """Protocol steps one at a time over a pipe: each step's round trip, `repeats` windows
-    on one child process."""
-    pipe = _ProtocolChild()
-    trips: list[float] = []
-    rates = []
-    clock = time.perf_counter
-    try:
-        pipe.reset()
-        for _ in range(repeats):
-            started = clock()
-            deadline = started + seconds
-            steps = 0
-            now = started
-            while now < deadline:
-                sent = now
-                pipe.send_steps(1)
-                while not pipe.read_answers():
-                    pass
-                now = clock()
-                trips.append(now - sent)
-                steps += 1
-            rates.append(steps / (now - started))
-    finally:
-        pipe.close()
+    """Protocol steps one at a time over a pipe: each step's round trip."""
+    rates, trips = _pipe_windows(seconds, repeats, 1)
     return RoundTripResult(
         p50_us=percentile(trips, 50) * 1e6, p95_us=percentile(trips, 95) * 1e6,
         round_trips=len(trips), rate=RateResult(tuple(rates)),
@@ -230,8 +214,7 @@ async def _mcp_windows(seconds: float, repeats: int) -> tuple[RateResult, RateRe
     from mcp import Client, StdioServerParameters
 
     params = StdioServerParameters(command=sys.executable, args=["-m", "tui_gym", "mcp"])
-    one: list[float] = []
-    together: list[float] = []
+    rates: dict[int, list[float]] = {1: [], MCP_GAMES: []}  # by the games played at once
     async with Client(params) as client:
         games = []
         for k in range(MCP_GAMES):
@@ -240,20 +223,18 @@ async def _mcp_windows(seconds: float, repeats: int) -> tuple[RateResult, RateRe
             )
             games.append(started.structured_content["game_id"])  # type: ignore[index]
         for _ in range(repeats):
-            started_at = time.perf_counter()
-            steps = await _mcp_steps(client, games[0], started_at + seconds)
-            one.append(steps / (time.perf_counter() - started_at))
-            counts = [0] * MCP_GAMES
-            started_at = time.perf_counter()
+            for at_once, samples in rates.items():
+                counts = [0] * at_once
+                began = time.perf_counter()
 
-            async def play(k: int, until: float, into: list[int]) -> None:
-                into[k] = await _mcp_steps(client, games[k], until)
+                async def play(k: int, until: float, into: list[int]) -> None:
+                    into[k] = await _mcp_steps(client, games[k], until)
 
-            async with anyio.create_task_group() as group:
-                for k in range(MCP_GAMES):
-                    group.start_soon(play, k, started_at + seconds, counts)
-            together.append(sum(counts) / (time.perf_counter() - started_at))
-    return RateResult(tuple(one)), RateResult(tuple(together))
+                async with anyio.create_task_group() as group:
+                    for k in range(at_once):
+                        group.start_soon(play, k, began + seconds, counts)
+                samples.append(sum(counts) / (time.perf_counter() - began))
+    return RateResult(tuple(rates[1])), RateResult(tuple(rates[MCP_GAMES]))
 
 
 def measure_mcp(seconds: float, repeats: int) -> tuple[RateResult, RateResult]:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rich.table import Table
 
@@ -16,6 +16,9 @@ from tui_gym.bench import compare, dp, history, programs
 from tui_gym.bench.figures import median
 from tui_gym.bench.live import RUNNERS
 from tui_gym.bench.run import BenchResults
+
+if TYPE_CHECKING:
+    from typing_extensions import TypeIs
 
 PASS, MISS, UNDECIDED, MISSING, LESSON = "PASS", "MISS", "?", "n/a", "lesson"
 
@@ -41,30 +44,8 @@ class Target:
         return PASS if good[self.op] else MISS
 
 
-SPEED = Target("≥", 100.0, "×")
+RSS_EPISODES = 2_000_000  # the RSS growth counts only over at least this many episodes
 GAP_SPEEDUP = Target("≥", 50.0, "×")
-COLD_COMPILE_S = Target("≤", 30.0, " s")
-WARM_LOAD_S = Target("≤", 1.0, " s")
-DEFAULTS_SHARE = Target("≥", 0.95, shown=".0%")
-LIVE_RATIO = Target("≥", 0.8, shown=".2f")
-REFRESH_HZ = Target("≥", 10.0, " Hz")
-KEY_P95_MS = Target("≤", 50.0, " ms")
-RSS_GROWTH_MB = Target("<", 20.0, " MB")
-RSS_EPISODES = 2_000_000  # the growth counts only over at least this many episodes
-STARTUP_S = Target("≤", 1.0, " s")
-SEPARATION_RATIO = Target("≥", 10.0, "×")
-PROTOCOL_STEPS = Target("≥", 20_000.0, shown=",.0f")
-MCP_STEPS = Target("≥", 1_000.0, shown=",.0f")
-COMPARE_SPEEDUP = Target("≥", 100.0, "×")
-MAP_EDIT_MS = Target("≤", 50.0, " ms")
-HISTORY_OVERHEAD = Target("≤", 0.02, shown=".0%")  # recording's share of a train run
-HISTORY_MB_PER_1000 = Target("<", 1.0, " MB")  # the file's size per 1,000 runs
-TASK_SPLIT = Target("≤", 1.10)  # tasks ÷ one batch
-CLUSTER_SHARE = Target("≥", 0.8)  # the cluster's throughput ÷ the local executor's
-TAXI_SWEEP_MS = Target("≤", 5.0, " ms")
-JACK_SECONDS = Target("≤", 1.0, " s")
-PLAN_SWEEPS = Target("≥", 20.0)
-PLAN_KEY_P95_MS = Target("≤", 50.0, " ms")
 
 _STYLE = {PASS: "[bold green]PASS[/]", MISS: "[bold red]MISS[/]", UNDECIDED: "[yellow]?[/]",
           MISSING: "[dim]n/a[/]", LESSON: "[dim]lesson[/]"}
@@ -82,20 +63,22 @@ class _Judged:
     def row(self, label: str, measured: str, target: Target | str = "", key: str = "",
             value: float | None = None, verdict: str = "") -> None:
         """A row; with a `key`, its verdict: `verdict` if given, else `value` against
-        `target` (a key judged already keeps its verdict)."""
-        if key and key not in self.verdicts:
+        `target`."""
+        if key:
             assert isinstance(target, Target) or verdict
             self.verdicts[key] = verdict or target.verdict(value)  # type: ignore[union-attr]
         text = target.text if isinstance(target, Target) else target
         self.rows.append((label, measured, text, self.verdicts[key] if key else ""))
 
-    def judge(self, key: str, verdict: str) -> None:
-        """A verdict with no row of its own (yet)."""
-        self.verdicts[key] = verdict
-
     def missing(self, *keys: str) -> None:
         """The verdicts of figures not measured."""
         self.verdicts.update(dict.fromkeys(keys, MISSING))
+
+    def absent(self, found: object, *keys: str) -> TypeIs[None]:
+        """Whether a stage's result is missing (its figures' verdicts then say so)."""
+        if found is None:
+            self.missing(*keys)
+        return found is None
 
     def failed(self, label: str, text: str) -> None:
         self.rows.append((label, f"[red]{text}[/]", "", MISSING))
@@ -111,61 +94,48 @@ def _judged(results: BenchResults) -> _Judged:
     """Every stage's rows and verdicts, in the table's order."""
     out = _Judged()
     found_compile = results.compile
-    if found_compile is None:
-        out.missing("cold_compile_s", "warm_load_s")
-    else:
+    if not out.absent(found_compile, "cold_compile_s", "warm_load_s"):
         out.row("every learner compiled, empty cache", f"{found_compile.cold_s:.1f} s",
-                COLD_COMPILE_S, "cold_compile_s", found_compile.cold_s)
+                Target("≤", 30.0, " s"), "cold_compile_s", found_compile.cold_s)
         out.row("  loaded from the cache", f"{found_compile.warm_s:.2f} s (importing Numba "
-                f"{found_compile.import_s:.2f} s)", WARM_LOAD_S, "warm_load_s",
+                f"{found_compile.import_s:.2f} s)", Target("≤", 1.0, " s"), "warm_load_s",
                 found_compile.warm_s)
     for speed in results.speed or ():
         out.row(f"{speed.game}, {speed.algorithm}: ours ÷ tutorial loop",
                 f"{_num(speed.speedup, ',.0f', '×')} ({_num(speed.episodes, ',.0f')} / "
-                f"{_num(speed.tutorial_episodes, ',.0f')} ep/s)", SPEED,
+                f"{_num(speed.tutorial_episodes, ',.0f')} ep/s)", Target("≥", 100.0, "×"),
                 f"speedup[{speed.game}/{speed.algorithm}]", speed.speedup)
-    if "speed" in results.errors:
-        out.missing("speedup")
-    for found in results.defaults or ():  # judged here, shown further down
-        out.judge(f"defaults[{found.game}/{found.algorithm}]",
-                  LESSON if found.lesson else DEFAULTS_SHARE.verdict(found.share))
-    if "defaults" in results.errors:
-        out.missing("defaults")
     for name, gap in results.gap.items():
         _gap_rows(out, name, gap)
     for runner in RUNNERS:
         _live_rows(out, results, runner)
     memory = results.memory
-    if memory is None:
-        out.missing("rss_growth_mb")
-    else:
-        good = memory.growth_mb < RSS_GROWTH_MB.limit and memory.episodes >= RSS_EPISODES
+    if not out.absent(memory, "rss_growth_mb"):  # a run shorter than RSS_EPISODES misses
         out.row(f"RSS growth over {memory.episodes:,} ep ({memory.engine})",
-                f"{memory.growth_mb:+.1f} MB", RSS_GROWTH_MB, "rss_growth_mb",
-                verdict=MISSING if math.isnan(memory.growth_mb) else PASS if good else MISS)
+                f"{memory.growth_mb:+.1f} MB", Target("<", 20.0, " MB"), "rss_growth_mb",
+                memory.growth_mb if memory.episodes >= RSS_EPISODES else math.inf)
     startup = results.startup
-    if startup is None:
-        out.missing("startup_s")
-    else:
+    if not out.absent(startup, "startup_s"):
         samples = ", ".join(f"{s:.2f}" for s in startup.samples)
-        out.row("start to first frame", f"{startup.seconds:.2f} s ({samples})", STARTUP_S,
-                "startup_s", startup.seconds)
+        out.row("start to first frame", f"{startup.seconds:.2f} s ({samples})",
+                Target("≤", 1.0, " s"), "startup_s", startup.seconds)
     for edit in results.map_edit or ():
         out.row(f"{edit.game}: map edit → new optimum, {edit.size} (median, worst of "
                 f"{edit.edits})", f"{edit.median_ms:.0f} ms (worst {edit.worst_ms:.0f})",
-                MAP_EDIT_MS, f"map_edit_ms[{edit.game}]", edit.median_ms)
-    if "map_edit" in results.errors:
-        out.missing("map_edit_ms")
+                Target("≤", 50.0, " ms"), f"map_edit_ms[{edit.game}]", edit.median_ms)
     _planning_rows(out, results)
     _programs_rows(out, results.programs)
     _seeds_rows(out, results)
     for found in results.defaults or ():
         out.row(f"{found.game}, {found.algorithm}: defaults at the bound",
                 f"{found.met} of {found.seeds} (worst {found.worst:.4g}; {found.bound})",
-                DEFAULTS_SHARE, f"defaults[{found.game}/{found.algorithm}]")
+                Target("≥", 0.95, shown=".0%"), f"defaults[{found.game}/{found.algorithm}]",
+                found.share, LESSON if found.lesson else "")
     _history_rows(out, results.history)
     _tasks_rows(out, results.tasks)
     _dp_rows(out, results.dp)
+    out.missing(*(key for stage, key in (("speed", "speedup"), ("defaults", "defaults"),
+                                         ("map_edit", "map_edit_ms")) if stage in results.errors))
     for stage, error in results.errors.items():
         out.failed(f"{stage} failed", error)
     return out
@@ -205,19 +175,18 @@ def _live_rows(out: _Judged, results: BenchResults, runner: str) -> None:
         return
     out.row(f"live ep/s ÷ headless, {name}",
             f"{live.live_ratio:.2f} ({live.live_eps:,.0f} / {live.headless_eps:,.0f})",
-            LIVE_RATIO, f"live_ratio[{runner}]", live.live_ratio)
-    out.row(f"  snapshots drawn, {runner}", f"{live.refresh_hz:.1f} Hz", REFRESH_HZ,
+            Target("≥", 0.8, shown=".2f"), f"live_ratio[{runner}]", live.live_ratio)
+    out.row(f"  snapshots drawn, {runner}", f"{live.refresh_hz:.1f} Hz", Target("≥", 10.0, " Hz"),
             f"ui_refresh_hz[{runner}]", live.refresh_hz)
     p95 = live.key_latency_ms(95)
     out.row(f"  key → screen p95, {runner}", f"{p95:.0f} ms (p50 "
-            f"{live.key_latency_ms(50):.0f}, n={live.presses})", KEY_P95_MS,
+            f"{live.key_latency_ms(50):.0f}, n={live.presses})", Target("≤", 50.0, " ms"),
             f"key_latency_p95_ms[{runner}]", p95)
 
 
 def _planning_rows(out: _Judged, results: BenchResults) -> None:
     planning = results.planning
-    if planning is None:
-        out.missing("planning")
+    if out.absent(planning, "planning"):
         return
     fewer = planning.dyna_q_episodes < planning.q_learning_episodes
     verdict = PASS if fewer and all(r.reached for r in planning.dyna_q) else MISS
@@ -232,19 +201,19 @@ def _planning_rows(out: _Judged, results: BenchResults) -> None:
 
 
 def _programs_rows(out: _Judged, found: programs.ProgramsResult | None) -> None:
-    if found is None:
-        out.missing("regret_separation_ratio", "protocol_steps_per_second",
-                    "mcp_steps_per_second")
+    if out.absent(found, "regret_separation_ratio", "protocol_steps_per_second",
+                  "mcp_steps_per_second"):
         return
     sep = found.separation
     out.row("episodes to separate optimal from 5% deviations, by return",
             f"{_num(sep.by_return, ',.0f')}")
     out.row("  by exact regret", f"{_num(sep.by_regret, ',.0f')}")
-    out.row("  ratio", _num(sep.ratio, ".0f", "×"), SEPARATION_RATIO, "regret_separation_ratio",
-            sep.ratio)
+    out.row("  ratio", _num(sep.ratio, ".0f", "×"), Target("≥", 10.0, "×"),
+            "regret_separation_ratio", sep.ratio)
     rate = found.protocol.steps_per_second
     out.row(f"protocol over a pipe, steps/s, {programs.WINDOW} requests in flight",
-            _num(rate, ",.0f"), PROTOCOL_STEPS, "protocol_steps_per_second", rate)
+            _num(rate, ",.0f"), Target("≥", 20_000.0, shown=",.0f"), "protocol_steps_per_second",
+            rate)
     trip = found.protocol_round_trip
     if trip.round_trips:
         out.row("  one request at a time, round trip p50",
@@ -252,24 +221,23 @@ def _programs_rows(out: _Judged, found: programs.ProgramsResult | None) -> None:
                 f"{_num(trip.rate.steps_per_second, ',.0f')} steps/s)")
     rate = found.mcp_together.steps_per_second
     if found.mcp_together.reason:
-        out.judge("mcp_steps_per_second", MCP_STEPS.verdict(rate))
+        out.missing("mcp_steps_per_second")
         out.rows.append(("MCP, steps/s", f"[dim]{found.mcp_together.reason}[/]", "", MISSING))
     else:
         out.row(f"MCP, steps/s, {programs.MCP_GAMES} games at once", _num(rate, ",.0f"),
-                MCP_STEPS, "mcp_steps_per_second", rate)
+                Target("≥", 1_000.0, shown=",.0f"), "mcp_steps_per_second", rate)
         out.row("  one call at a time", _num(found.mcp_one.steps_per_second, ",.0f"))
 
 
 def _seeds_rows(out: _Judged, results: BenchResults) -> None:
     found = results.seeds
-    if found is None:
-        out.missing("compare_speedup", "example_6_6")
+    if out.absent(found, "compare_speedup", "example_6_6"):
         return
     scaled = ("" if found.tutorial_learners == found.learners else
               f", {found.tutorial_learners} of {found.learners} run, scaled")
     out.row(f"compare on {found.game}, {found.seeds} seeds × {found.episodes} ep: tutorial "
             "loop ÷ compare", f"{_num(found.speedup, '.1f', '×')} ({found.tutorial_s:.1f} s"
-            f"{scaled} / {found.compare_s:.2f} s)", COMPARE_SPEEDUP, "compare_speedup",
+            f"{scaled} / {found.compare_s:.2f} s)", Target("≥", 100.0, "×"), "compare_speedup",
             found.speedup)
     online = found.online_returns
     if len(online) != 2:
@@ -281,56 +249,55 @@ def _seeds_rows(out: _Judged, results: BenchResults) -> None:
 
 
 def _history_rows(out: _Judged, found: history.HistoryResult | None) -> None:
-    if found is None:
-        out.missing("history_overhead", "history_bytes_per_1000_runs")
+    if out.absent(found, "history_overhead", "history_bytes_per_1000_runs"):
         return
     out.row(f"run history: recording's share of a train {found.game} run",
-            f"{found.overhead:.2%} (median of {len(found.shares)})", HISTORY_OVERHEAD,
+            f"{found.overhead:.2%} (median of {len(found.shares)})", Target("≤", 0.02, shown=".0%"),
             "history_overhead", found.overhead)
     out.row("  whole run, fastest recorded ÷ fastest --no-record (noisy)",
             f"{found.ab_ratio:.3f} ({min(found.recorded_s):.2f} s / "
             f"{min(found.unrecorded_s):.2f} s)")
     out.row(f"run history: file size per 1,000 default runs ({found.runs:,} written)",
-            f"{found.bytes_per_1000 / 1e6:.3f} MB", HISTORY_MB_PER_1000,
+            f"{found.bytes_per_1000 / 1e6:.3f} MB", Target("<", 1.0, " MB"),
             "history_bytes_per_1000_runs", found.bytes_per_1000 / 1e6)
 
 
 def _tasks_rows(out: _Judged, found: compare.TasksResult | None) -> None:
-    if found is None:
-        out.missing("task_split_overhead", "cluster_throughput_share")
+    if out.absent(found, "task_split_overhead", "cluster_throughput_share"):
         return
     split, share = found.split_overhead, found.cluster_share
     out.row(f"compare on {found.game}, {found.seeds} seeds: {found.tasks} tasks, recorded "
             "÷ one batch", "n/a" if split is None else
-            f"{split:.3f} ({found.tasks_s:.2f} s / {found.batch_s:.2f} s)", TASK_SPLIT,
+            f"{split:.3f} ({found.tasks_s:.2f} s / {found.batch_s:.2f} s)", Target("≤", 1.10),
             "task_split_overhead", split)
+    target = Target("≥", 0.8)  # the cluster's throughput ÷ the local executor's
     workers = f"LocalCluster({compare.CLUSTER_WORKERS}) ÷ local executor, throughput"
     if share is None:
         out.missing("cluster_throughput_share")
-        out.row(workers, found.cluster_note or "n/a", CLUSTER_SHARE)
+        out.row(workers, found.cluster_note or "n/a", target)
     else:
         out.row(f"{workers}, sweep of {len(compare.SWEEP_RATES)} points",
-                f"{share:.3f} ({found.local_s:.2f} s / {found.cluster_s:.2f} s)", CLUSTER_SHARE,
+                f"{share:.3f} ({found.local_s:.2f} s / {found.cluster_s:.2f} s)", target,
                 "cluster_throughput_share", share)
 
 
 def _dp_rows(out: _Judged, found: dp.DPResult | None) -> None:
-    if found is None:
-        out.missing("taxi_sweep_ms", "jack_policy_iteration_s", "plan_view")
+    if out.absent(found, "taxi_sweep_ms", "jack_policy_iteration_s", "plan_view"):
         return
     out.row("planning: a value-iteration sweep on Taxi (500 × 6), median",
-            f"{found.taxi_sweep_ms:.2f} ms", TAXI_SWEEP_MS, "taxi_sweep_ms", found.taxi_sweep_ms)
+            f"{found.taxi_sweep_ms:.2f} ms", Target("≤", 5.0, " ms"), "taxi_sweep_ms",
+            found.taxi_sweep_ms)
     out.row("  Jack's car rental by policy iteration (Figure 4.2), median",
             f"{found.jack_seconds:.2f} s (model built once: {found.jack_model_seconds:.2f} s)",
-            JACK_SECONDS, "jack_policy_iteration_s", found.jack_seconds)
+            Target("≤", 1.0, " s"), "jack_policy_iteration_s", found.jack_seconds)
     for view in found.views:
         out.row(f"  Plan view on {view.game}: sweeps drawn a second (50/s asked)",
-                f"{view.sweeps_per_second:.1f}", PLAN_SWEEPS,
+                f"{view.sweeps_per_second:.1f}", Target("≥", 20.0),
                 f"plan_sweeps_per_second[{view.game}]", view.sweeps_per_second)
         out.row(f"  Plan view on {view.game}: key → screen p95 while it runs",
                 f"{view.key_p95_ms:.0f} ms (p50 {median(list(view.keys_ms)):.0f}, "
-                f"n={len(view.keys_ms)})", PLAN_KEY_P95_MS, f"plan_key_p95_ms[{view.game}]",
-                view.key_p95_ms)
+                f"n={len(view.keys_ms)})", Target("≤", 50.0, " ms"),
+                f"plan_key_p95_ms[{view.game}]", view.key_p95_ms)
 
 
 def verdicts(results: BenchResults) -> dict[str, str]:
@@ -339,30 +306,29 @@ def verdicts(results: BenchResults) -> dict[str, str]:
 
 
 # --- JSON ---------------------------------------------------------------------
+def _of(found: Any, **names: str) -> dict[str, Any]:
+    """`found`'s attributes under the given keys (each None when `found` is None)."""
+    return {key: getattr(found, name, None) for key, name in names.items()}
+
+
 def _game_dict(results: BenchResults, name: str) -> dict[str, Any]:
     gap = results.gap.get(name)
     return {
-        "title": gap.title if gap is not None else name,
-        "target_gap": gap.target if gap else None,
-        "time_to_gap_s": gap.time_to_gap_s if gap else None,
-        "time_to_gap_reached": gap.reached if gap else None,
-        "time_to_gap_episodes": [r.episodes for r in gap.ours] if gap else None,
-        "tutorial_time_to_gap_s": gap.tutorial_time_to_gap_s if gap else None,
-        "tutorial_reached": gap.tutorial_reached if gap else None,
-        "tutorial_time_to_gap_episodes": [r.episodes for r in gap.tutorial] if gap else None,
-        "time_to_gap_speedup": gap.speedup if gap else None,
-        "time_to_gap_speedup_is_lower_bound": (not gap.tutorial_reached) if gap else None,
+        "title": getattr(gap, "title", name),
+        **_of(gap, target_gap="target", time_to_gap_s="time_to_gap_s",
+              time_to_gap_reached="reached", tutorial_time_to_gap_s="tutorial_time_to_gap_s",
+              tutorial_reached="tutorial_reached", time_to_gap_speedup="speedup"),
+        "time_to_gap_episodes": gap and [r.episodes for r in gap.ours],
+        "tutorial_time_to_gap_episodes": gap and [r.episodes for r in gap.tutorial],
+        "time_to_gap_speedup_is_lower_bound": gap and not gap.tutorial_reached,
         "speed": [
             {"algorithm": s.algorithm, "episodes_per_second": s.episodes,
              "tutorial_episodes_per_second": s.tutorial_episodes, "speedup": s.speedup,
              "steps_per_second": s.steps, "tutorial_steps_per_second": s.tutorial_steps}
             for s in results.speed or () if s.game == name
         ],
-        "defaults": [
-            {"algorithm": d.algorithm, "bound": d.bound, "met": d.met, "seeds": d.seeds,
-             "share": d.share, "worst": d.worst, "lesson": d.lesson or None}
-            for d in results.defaults or () if d.game == name
-        ],
+        "defaults": [{**asdict(d), "share": d.share, "lesson": d.lesson or None}
+                     for d in results.defaults or () if d.game == name],
     }
 
 
@@ -378,34 +344,27 @@ def to_json(results: BenchResults) -> dict[str, Any]:
     those of the first game measured."""
     names = list(dict.fromkeys([*(x.game for x in results.speed or ()), *results.gap,
                                 *(d.game for d in results.defaults or ())]))
-    memory, startup, found_compile = results.memory, results.startup, results.compile
-    default = results.live_for(results.default_runner)
-    machine = results.machine
-    data: dict[str, Any] = {
+    default, machine = results.live_for(results.default_runner), results.machine
+    return {
         "quick": results.quick,
         "seconds": results.seconds,
-        "machine": {
-            "cpus": machine.cpus,
-            "load_average_before": list(machine.load_before) if machine.load_before else None,
-            "load_average_after": list(machine.load_after) if machine.load_after else None,
-        },
-        "cold_compile_s": found_compile.cold_s if found_compile else None,
-        "numba_import_s": found_compile.import_s if found_compile else None,
-        "warm_load_s": found_compile.warm_s if found_compile else None,
+        "machine": {"cpus": machine.cpus, "load_average_before": machine.load_before,
+                    "load_average_after": machine.load_after},
+        **_of(results.compile, cold_compile_s="cold_s", numba_import_s="import_s",
+              warm_load_s="warm_s"),
         **{key: value for key, value in _game_dict(results, next(iter(results.gap), "")).items()
            if key not in ("title", "speed", "defaults")},
         "games": {name: _game_dict(results, name) for name in names},
         "default_runner": results.default_runner,
-        "live_ratio": default.live_ratio if default else None,
-        "ui_refresh_hz": default.refresh_hz if default else None,
-        "key_latency_p50_ms": default.key_latency_ms(50) if default else None,
-        "key_latency_p95_ms": default.key_latency_ms(95) if default else None,
+        **_of(default, live_ratio="live_ratio", ui_refresh_hz="refresh_hz"),
+        "key_latency_p50_ms": default and default.key_latency_ms(50),
+        "key_latency_p95_ms": default and default.key_latency_ms(95),
         "runners": {runner: results.live[runner].to_json() if runner in results.live
                     else {"error": "not measured"} for runner in RUNNERS},
-        "rss_growth_mb": memory.growth_mb if memory else None,
-        "rss": _json(memory),
-        "startup_s": startup.seconds if startup else None,
-        "startup_samples_s": list(startup.samples) if startup else None,
+        "rss_growth_mb": getattr(results.memory, "growth_mb", None),
+        "rss": _json(results.memory),
+        "startup_s": getattr(results.startup, "seconds", None),
+        "startup_samples_s": getattr(results.startup, "samples", None),
         "planning": _json(results.planning),
         "programs": _json(results.programs),
         "map_edit": [asdict(edit) for edit in results.map_edit or ()],
@@ -416,7 +375,6 @@ def to_json(results: BenchResults) -> dict[str, Any]:
         "verdicts": verdicts(results),
         "errors": dict(results.errors),
     }
-    return data
 
 
 def table(results: BenchResults) -> Table:
@@ -440,47 +398,32 @@ def table(results: BenchResults) -> Table:
 
 def notes(results: BenchResults) -> list[str]:
     """Lines to print under the table: what the figures are, and any lower bounds."""
-    lines = [
-        "Ratios are taken between figures measured in this run; speeds are medians over "
-        "repeats, key latency percentiles over all presses.",
-    ]
-    verdict = verdicts(results)
-    others = [r for r in RUNNERS if r != results.default_runner]
-    if verdict.get(f"live_ratio[{results.default_runner}]") == PASS and any(
-        verdict.get(f"live_ratio[{r}]") == MISS for r in others
-    ):
-        lines.append(
-            f"The app trains with the {results.default_runner} runner; the others are measured "
-            "for comparison (a thread runner shares one interpreter lock with the UI, so the UI's "
-            "drawing comes out of training time)."
-        )
+    lines = ["Ratios are taken between figures measured in this run; speeds are medians over "
+             "repeats, key latency percentiles over all presses."]
+    verdict, default = verdicts(results), results.default_runner
+    if verdict.get(f"live_ratio[{default}]") == PASS and any(
+            verdict.get(f"live_ratio[{r}]") == MISS for r in RUNNERS if r != default):
+        lines.append(f"The app trains with the {default} runner; the others are measured for "
+                     "comparison (a thread runner shares one interpreter lock with the UI, so "
+                     "the UI's drawing comes out of training time).")
     if results.planning is not None:
-        lines.append(
-            f"Planning: the bound is on the {results.planning.measure}; episodes are real "
-            "ones (Dyna-Q's simulated updates are not counted), medians over seeds."
-        )
+        lines.append(f"Planning: the bound is on the {results.planning.measure}; episodes are "
+                     "real ones (Dyna-Q's simulated updates are not counted), medians over seeds.")
     capped = [gap.title for gap in results.gap.values() if not gap.tutorial_reached]
     if capped:
-        lines.append(
-            f"The tutorial loop was stopped by its time cap before reaching the gap on "
-            f"{', '.join(capped)}: its time and the speed-up are lower bounds (run without "
-            "--quick for longer caps)."
-        )
-    found = results.programs
-    if found is not None:
-        sep = found.separation
-        lines.append(
-            f"Episodes to separate: each player played {sep.episodes:,} Blackjack episodes on "
-            "the same seeds; n = 1.96² (sd_a² + sd_b²) / Δ² episodes each, Δ the deviating "
-            f"player's mean exact regret ({sep.delta:.4f}), sd the measured per-episode "
-            f"standard deviations (return {sep.return_sd[1]:.3f}, regret "
-            f"{sep.regret_sd[1]:.3f})."
-        )
-    load = results.machine.load_before
-    cpus = results.machine.cpus or 1
+        lines.append(f"The tutorial loop was stopped by its time cap before reaching the gap on "
+                     f"{', '.join(capped)}: its time and the speed-up are lower bounds (run "
+                     "without --quick for longer caps).")
+    if results.programs is not None:
+        sep = results.programs.separation
+        lines.append(f"Episodes to separate: each player played {sep.episodes:,} Blackjack "
+                     "episodes on the same seeds; n = 1.96² (sd_a² + sd_b²) / Δ² episodes each, "
+                     f"Δ the deviating player's mean exact regret ({sep.delta:.4f}), sd the "
+                     f"measured per-episode standard deviations (return {sep.return_sd[1]:.3f}, "
+                     f"regret {sep.regret_sd[1]:.3f}).")
+    load, cpus = results.machine.load_before, results.machine.cpus or 1
     if load is not None and load[0] > 0.5 * cpus:
-        lines.append(
-            f"Load average {load[0]:.2f} on {cpus} CPUs when the run started (other work, or "
-            "a run just before): absolute speeds may be low; ratios are less affected."
-        )
+        lines.append(f"Load average {load[0]:.2f} on {cpus} CPUs when the run started (other "
+                     "work, or a run just before): absolute speeds may be low; ratios are less "
+                     "affected.")
     return lines

@@ -134,10 +134,11 @@ def run_bench(
     errors: dict[str, str] = {}
     found: dict[str, Any] = {}
 
-    def stage(name: str, text: str, measure: Callable[[], Any]) -> None:
+    def stage(name: str, text: str, measure: Callable[[], Any], into: dict[str, Any] = found,
+              key: str = "") -> None:
         say(text)
         try:
-            found[name] = measure()
+            into[key or name] = measure()
         except Exception as exc:  # one broken stage must not hide the others' figures
             errors[name] = f"{type(exc).__name__}: {exc}"
 
@@ -151,13 +152,11 @@ def run_bench(
           "tutorial loop", lambda: speed.measure(games, names, plan.speed_seconds,
                                                  plan.speed_repeats))
     gaps: dict[str, GapResult] = {}
-    for game in gap.benched():
+    for game in [g for g in GAMES if g.bench_kwargs is not None]:  # the games the bench times
         stage(f"gap[{game.name}]", f"time to the target gap on {gap.title_of(game)}: ours, "
               f"then the tutorial loop (capped at {plan.tutorial_cap_s:.0f} s)",
               partial(gap.measure_game, game, plan.gap_seeds, plan.tutorial_gap_seeds,
-                      plan.tutorial_cap_s))
-        if f"gap[{game.name}]" in found:
-            gaps[game.name] = found.pop(f"gap[{game.name}]")
+                      plan.tutorial_cap_s), gaps, game.name)
     stage("planning", f"real episodes to the bound: Q-learning, then Dyna-Q "
           f"(planning_steps = {gap.PLANNING_STEPS}) on {gap.PLANNING_GAME}",
           lambda: gap.measure_planning(plan.planning_seeds, gap.PLANNING_BOUND))
@@ -188,12 +187,6 @@ def run_bench(
           lambda: history.measure(3 if quick else 5))
     stage("dp", "planning: sweeps, Jack's car rental, the Plan view",
           lambda: dp.measure(plan.live_seconds, plan.key_presses, plan.live_repeats, say))
-    return BenchResults(
-        quick=quick, seconds=time.perf_counter() - started,
-        machine=MachineInfo(os.cpu_count(), load_before, load_average()),
-        compile=found.get("compile"), speed=found.get("speed"), gap=gaps,
-        live=found.get("live", {}), memory=found.get("memory"), startup=found.get("startup"),
-        planning=found.get("planning"), programs=found.get("programs"),
-        map_edit=found.get("map_edit"), history=found.get("history"), seeds=found.get("seeds"),
-        defaults=found.get("defaults"), dp=found.get("dp"), tasks=found.get("tasks"), errors=errors,
-    )
+    return BenchResults(quick=quick, seconds=time.perf_counter() - started,
+                        machine=MachineInfo(os.cpu_count(), load_before, load_average()),
+                        gap=gaps, errors=errors, **found)

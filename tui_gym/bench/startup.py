@@ -27,14 +27,6 @@ class StartupResult:
         return median(self.samples)
 
 
-def _set_size(fd: int, columns: int, rows: int) -> None:
-    import fcntl
-    import struct
-    import termios
-
-    fcntl.ioctl(fd, termios.TIOCSWINSZ, struct.pack("HHHH", rows, columns, 0, 0))
-
-
 def _drain(fd: int, wait: float) -> bytes | None:
     """What the terminal received within `wait` seconds; None once the app's side closed."""
     ready, _, _ = select.select([fd], [], [], wait)
@@ -48,10 +40,13 @@ def _drain(fd: int, wait: float) -> bytes | None:
 
 def time_to_first_frame() -> float:
     """One launch: seconds to the first frame."""
+    import fcntl
     import pty
+    import struct
+    import termios
 
     master, slave = pty.openpty()
-    _set_size(slave, *SIZE)
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", SIZE[1], SIZE[0], 0, 0))
     env = dict(os.environ, TERM="xterm-256color", COLUMNS=str(SIZE[0]), LINES=str(SIZE[1]))
     start = time.perf_counter()
     proc = subprocess.Popen(

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import json
-import os
 import pickle
-import subprocess
 import sys
 import time
 from collections.abc import Sequence
 from typing import Any
+
+from tui_gym.bench.figures import child_json
 
 __all__ = ["measure", "play"]
 
@@ -85,14 +85,9 @@ def _run(task: dict[str, Any]) -> dict[str, Any]:
 
 def measure(tasks: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Run `tasks` in a process where nothing is compiled; their answers, in order."""
-    env = {**os.environ, "NUMBA_DISABLE_JIT": "1"}
-    done = subprocess.run(
-        [sys.executable, "-m", "tui_gym.bench.tutorial"], input=json.dumps(list(tasks)),
-        capture_output=True, text=True, env=env, timeout=TASK_TIMEOUT_S, check=False,
-    )
-    if done.returncode != 0:
-        raise RuntimeError(f"the tutorial loop failed: {done.stderr.strip()[-300:]}")
-    return list(json.loads(done.stdout))
+    return list(child_json("tui_gym.bench.tutorial", what="the tutorial loop",
+                           timeout=TASK_TIMEOUT_S, stdin=json.dumps(list(tasks)),
+                           env={"NUMBA_DISABLE_JIT": "1"}))
 
 
 if __name__ == "__main__":

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from functools import partial
 from typing import Any
 
 from rich import box
@@ -20,6 +21,8 @@ BUILT_IN = ("random", "optimal")
 def add_parser(sub: Any) -> None:
     """Add `benchmark` to the sub-command parsers `sub`."""
     from tui_gym.cli.flags import finite_number, positive_int, seed_number
+    from tui_gym.cli.replay_command import add_record_option
+    from tui_gym.cli.runs_command import add_history_flags
 
     bench = sub.add_parser(
         "benchmark",
@@ -54,12 +57,8 @@ def add_parser(sub: Any) -> None:
                        help="add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable)")
     bench.add_argument("--leaderboard", action="store_true",
                        help="list GAME's recorded benchmarks, best first, instead of running one")
-    from tui_gym.cli.runs_command import add_history_flags
-
     add_history_flags(bench, "the result")
     bench.add_argument("--json", action="store_true", help="print one JSON object")
-    from tui_gym.cli.replay_command import add_record_option
-
     add_record_option(bench)
 
 
@@ -104,16 +103,10 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
         raise ValueError("--decision-timeout must be a positive number of seconds")
     from tui_gym.benchmark.group import ending_on_signals
     from tui_gym.benchmark.results import record, run_benchmark
+    from tui_gym.cli.replay_command import open_recorder
 
-    recorder = None
-    if args.record is not None:
-        from tui_gym.cli.replay_command import open_recorder
-
-        path, seed = args.record, args.bench_seed
-
-        def recorder(session: Any) -> Any:
-            return open_recorder(path, session, source="benchmark", seed=seed)
-
+    recorder = None if args.record is None else partial(
+        open_recorder, args.record, source="benchmark", seed=args.bench_seed)
     player, params, wrappers = _player(args, args.game)
     if args.name is not None:
         if not args.name.strip():

@@ -73,14 +73,11 @@ class GroupProcess:
             code = process.wait(timeout=grace)
         except subprocess.TimeoutExpired:
             code = None
-        self._kill_group()
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(self.pgid, signal.SIGKILL)  # what is left of its group
         process.wait()
         self._release_watcher()
         return code
-
-    def _kill_group(self) -> None:
-        with contextlib.suppress(ProcessLookupError, PermissionError):
-            os.killpg(self.pgid, signal.SIGKILL)
 
     def _release_watcher(self) -> None:
         watcher, self._watcher = self._watcher, None

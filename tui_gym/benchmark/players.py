@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import queue
 import select
@@ -226,8 +227,7 @@ class ProcessPlayer(Player):
         try:
             gone = self._serve(program, referee, decision_timeout, outcome)
             if gone:
-                episode = referee.started
-                outcome.status = f"{gone} in episode {episode} of {referee.episodes}; " \
+                outcome.status = f"{gone} in episode {referee.started} of {referee.episodes}; " \
                                  "the rest was played with the default action"
                 while not referee.finished:
                     referee.play_default(gone)
@@ -277,10 +277,10 @@ class ProcessPlayer(Player):
                 except subprocess.TimeoutExpired:
                     return "it closed its output"
                 return f"it exited with code {code}"
+            late = False
             if item is _TOO_LONG:
                 referee.fouls.bad_requests += 1
                 answer, moved, cmd = {"error": "line too long: not read"}, False, None
-                late = False
             else:
                 cmd = _command_of(item)
                 if owed and cmd in ("step", "reset"):
@@ -292,11 +292,10 @@ class ProcessPlayer(Player):
                     moved = late = True
                 else:
                     answer, moved = referee.handle_line(item)
-                    late = False
             if moved and cmd == "step" and not late:
                 outcome.decision_times.append(received - pending)
             sending = time.monotonic()
-            if not program.send(_encode(answer), limit):
+            if not program.send((json.dumps(answer) + "\n").encode("ascii"), limit):
                 return "it stopped reading its input"
             if moved:  # a new decision is due: its clock started as the answer went out
                 pending, allowance, strikes = sending, limit, 0
@@ -309,9 +308,3 @@ def _command_of(line: bytes) -> str | None:
     except ValueError:
         return None
     return cmd if isinstance(cmd, str) else None
-
-
-def _encode(answer: dict[str, Any]) -> bytes:
-    import json
-
-    return (json.dumps(answer) + "\n").encode("ascii")

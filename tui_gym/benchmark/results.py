@@ -119,12 +119,10 @@ class BenchmarkResult:
             ("invalid actions", f"{fouls.invalid_actions:,}"),
             ("time-outs", f"{fouls.timeouts:,} (limit {self.decision_timeout:g} s a decision)"),
         ]
-        if fouls.defaulted:
-            rows.append(("played for a gone player", f"{fouls.defaulted:,} moves"))
-        if fouls.bad_requests:
-            rows.append(("bad requests", f"{fouls.bad_requests:,}"))
-        if fouls.hints_refused:
-            rows.append(("hints refused", f"{fouls.hints_refused:,}"))
+        rows += [(label, f"{count:,}{unit}") for label, count, unit in (
+            ("played for a gone player", fouls.defaulted, " moves"),
+            ("bad requests", fouls.bad_requests, ""), ("hints refused", fouls.hints_refused, ""),
+        ) if count]
         rows.append(("time per decision",
                      "–" if times is None else f"{times[0]:.3f} ms median, {times[1]:.3f} ms p95"))
         rows.append(("how the player ended", self.status))
@@ -189,37 +187,21 @@ def record(result: BenchmarkResult, db: str | None = None) -> int:
     """Write `result` into the run history (`--db`, else the default); its run id."""
     from tui_gym.core.wrappers import parse_wrapper_spec
 
-    wrappers = []
-    for text in result.wrappers:
-        choice = parse_wrapper_spec(text)
-        wrappers.append(WrapperSetting(choice.name, choice.values()))
-    spec = RunSpec(
-        kind=RunKind.BENCHMARK,
-        game=result.game,
-        algorithm=result.player,
-        game_params=result.params,
-        wrappers=wrappers,
-        hyperparameters={
-            "episodes": result.episodes, "first_seed": result.seed,
-            "decision_timeout": result.decision_timeout, "allow_hints": result.allow_hints,
-        },
-        seeds=(result.seed,),
-    )
-    ret = result.mean_return
+    wrappers = [WrapperSetting(c.name, c.values())
+                for c in map(parse_wrapper_spec, result.wrappers)]
+    spec = RunSpec(RunKind.BENCHMARK, result.game, result.player, result.params, wrappers, {
+        "episodes": result.episodes, "first_seed": result.seed,
+        "decision_timeout": result.decision_timeout, "allow_hints": result.allow_hints,
+    }, seeds=(result.seed,))
+    fouls, regret, times = result.fouls, result.mean_regret, result.decision_ms()
     figures = [
-        Figure("episodes", result.episodes), ret.figure("mean_return"),
-        Figure("decisions", result.decisions),
-        Figure("invalid_actions", result.fouls.invalid_actions),
-        Figure("timeouts", result.fouls.timeouts), Figure("defaulted", result.fouls.defaulted),
+        Figure("episodes", result.episodes), result.mean_return.figure("mean_return"),
+        Figure("decisions", result.decisions), Figure("invalid_actions", fouls.invalid_actions),
+        Figure("timeouts", fouls.timeouts), Figure("defaulted", fouls.defaulted),
+        *([] if regret is None else [regret.figure("regret_per_episode")]),
+        *([] if result.agreement is None else [Figure("agreement", result.agreement)]),
+        *([] if times is None else [Figure("decision_ms_median", times[0], "ms")]),
     ]
-    regret = result.mean_regret
-    if regret is not None:
-        figures.append(regret.figure("regret_per_episode"))
-    if result.agreement is not None:
-        figures.append(Figure("agreement", result.agreement))
-    times = result.decision_ms()
-    if times is not None:
-        figures.append(Figure("decision_ms_median", times[0], "ms"))
     with RunHistory(resolve_db_path(db)) as history:
         recorder = RunRecorder(history, spec)
         recorder.extend("return", result.returns)

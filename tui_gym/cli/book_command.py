@@ -8,18 +8,16 @@ import time
 
 from rich.console import Console
 from rich.markup import escape
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from tui_gym.book_text import claims_table, figure_parts, panel_text
 from tui_gym.cli.experiments_command import add_task_flags, ctrl_c_stops, run_history, unrecorded
 from tui_gym.cli.flags import positive_int, seed_number
-from tui_gym.cli.output import CliError, print_json
+from tui_gym.cli.output import CliError, cli_errors, print_json, progress_bar
 from tui_gym.session.book import figure_named, figures
 from tui_gym.session.book.figure import (
     BookFigure,
     FigureOptions,
-    FigureResult,
     FigureStopped,
     FigureTasks,
     heading,
@@ -64,7 +62,7 @@ def cmd_book(args: argparse.Namespace, out: Console) -> int:
                                 stop=stop, tasks=tasks)
         began = time.perf_counter()
         try:
-            with ctrl_c_stops(stop, Console(stderr=True)):
+            with ctrl_c_stops(stop, Console(stderr=True)), cli_errors(CompareError, ClusterError):
                 code = _run(figure, options, args, out)
         except FigureStopped as stopped:  # Ctrl+C: the runs end at their next step
             if tasks.group is not None and not unrecorded(history):
@@ -72,8 +70,6 @@ def cmd_book(args: argparse.Namespace, out: Console) -> int:
                     f"kept {tasks.landed} of {tasks.tasks} tasks as runs {tasks.group}…; the "
                     f"same command with --resume {tasks.group} carries on", style="yellow")
             raise KeyboardInterrupt from stopped
-        except (CompareError, ClusterError) as exc:
-            raise CliError(str(exc)) from None
         if tasks.tasks and not args.json:
             kept = "" if tasks.group is None or unrecorded(history) else (
                 f"; kept in the run history as runs {tasks.group}… (tui-gym runs show "
@@ -89,9 +85,8 @@ def _run(figure: BookFigure, options: FigureOptions, args: argparse.Namespace, o
         print_json("book", result.as_json())
         return 0 if result.ok else 1
     err = Console(stderr=True)
-    progress = Progress(TextColumn(f"[bold]{heading(figure.name)}[/]"), BarColumn(),
-                        MofNCompleteColumn(), TextColumn("{task.description}"),
-                        TimeElapsedColumn(), console=err, transient=True)
+    progress = progress_bar(err, f"[bold]{heading(figure.name)}[/]", "bar", "count",
+                            "{task.description}", "elapsed")
     task = progress.add_task("", total=None)
 
     def update(done: int, total: int, what: str) -> None:
@@ -99,7 +94,12 @@ def _run(figure: BookFigure, options: FigureOptions, args: argparse.Namespace, o
 
     with progress:
         result = figure.run(options, update)
-    _draw(out, result)
+    for part in figure_parts(result, out.width):
+        out.print(part)
+    for panel in result.panels:
+        out.print(panel_text(panel, out.width), soft_wrap=True)
+    for part in claims_table(result):
+        out.print(part)
     return 0 if result.ok else 1
 
 
@@ -118,12 +118,3 @@ def _list(args: argparse.Namespace, out: Console) -> int:
         table.add_row(f.name, f.world, f"{escape(f.title)}\n[dim]{escape(f.about)}[/]")
     out.print(table)
     return 0
-
-
-def _draw(out: Console, result: FigureResult) -> None:
-    for part in figure_parts(result, out.width):
-        out.print(part)
-    for panel in result.panels:
-        out.print(panel_text(panel, out.width), soft_wrap=True)
-    for part in claims_table(result):
-        out.print(part)

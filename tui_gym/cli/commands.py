@@ -5,29 +5,18 @@ from __future__ import annotations
 
 import argparse
 import time
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 from rich.console import Console
 from rich.markup import escape
-from rich.progress import (
-    BarColumn,
-    MofNCompleteColumn,
-    Progress,
-    TaskProgressColumn,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
 from rich.table import Table
 
-from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, Field, Learner, algorithm
+from tui_gym.algorithms import ALGORITHMS, COMMON_PARAMS, Field, algorithm
 from tui_gym.cli.flags import flag, game_kwargs, hyperparameters, wrapper_choices
 from tui_gym.cli.output import CliError, cli_errors, key_value_table, print_json, say_status
-from tui_gym.cli.runs_command import recorded
 from tui_gym.core.params import Param, typed_text
-from tui_gym.games import GAMES, Game, game_for, resolve_env_id
+from tui_gym.games import GAMES, game_for, resolve_env_id
 from tui_gym.session import evaluation
 from tui_gym.session.evaluation import EvalReport
 from tui_gym.session.session import TARGET_GAP_BUDGET_FACTOR, Session, default_settings
@@ -38,16 +27,10 @@ WRAPPER_SYNTAX = "--wrapper NAME or --wrapper NAME:key=value,key=value, repeatab
 
 
 def _param_dict(param: Field) -> dict[str, Any]:
-    if not isinstance(param, Param):  # a Choice: one word out of a few
-        return {
-            "name": param.name, "type": "choice", "default": param.default,
-            "choices": list(param.choices), "range": param.describe_range(), "help": param.help,
-        }
-    data: dict[str, Any] = {
-        "name": param.name, "type": param.kind.__name__, "default": param.default,
-        "minimum": param.minimum, "maximum": param.maximum, "range": param.describe_range(),
-        "help": param.help,
-    }
+    data: dict[str, Any] = {"name": param.name, "type": "choice", "default": param.default}
+    if isinstance(param, Param):  # else a Choice: one word out of a few
+        data.update(type=param.kind.__name__, minimum=param.minimum, maximum=param.maximum)
+    data.update(range=param.describe_range(), help=param.help)
     if param.choices:
         data["choices"] = list(param.choices)
     return data
@@ -63,11 +46,9 @@ def _default_text(field: Field) -> str:
 def cmd_envs(args: argparse.Namespace, out: Console) -> int:
     if args.json:
         print_json("envs", {"envs": [
-            {
-                "name": g.name, "env_id": g.env_id, "other_ids": list(g.other_ids), "key": g.key,
-                "actions": list(g.action_names), "description": g.description, "teaches": g.teaches,
-                "params": [_param_dict(param) for param in g.params],
-            }
+            {"name": g.name, "env_id": g.env_id, "other_ids": list(g.other_ids), "key": g.key,
+             "actions": list(g.action_names), "description": g.description, "teaches": g.teaches,
+             "params": [_param_dict(param) for param in g.params]}
             for g in GAMES
         ]})
         return 0
@@ -93,17 +74,12 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.core.wrappers import CATALOG
 
     if args.json:
-        print_json("wrappers", {
-            "wrappers": [
-                {
-                    "name": spec.name, "summary": spec.summary,
-                    "changes_observation": spec.changes_observation,
-                    "params": [_param_dict(param) for param in spec.params],
-                }
-                for spec in CATALOG.values()
-            ],
-            "syntax": WRAPPER_SYNTAX,
-        })
+        print_json("wrappers", {"wrappers": [
+            {"name": spec.name, "summary": spec.summary,
+             "changes_observation": spec.changes_observation,
+             "params": [_param_dict(param) for param in spec.params]}
+            for spec in CATALOG.values()
+        ], "syntax": WRAPPER_SYNTAX})
         return 0
     if out.width < 80:  # too narrow for three columns: one block a wrapper
         out.print("[bold]Wrapper catalog[/]")
@@ -113,7 +89,16 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
             for p in spec.params:
                 out.print(f"  {p.name}{escape(_default_text(p))}", overflow="fold")
     else:
-        out.print(_wrapper_table(CATALOG))
+        table = Table(title="Wrapper catalog", title_justify="left", show_lines=True)
+        table.add_column("name", style="bold cyan", no_wrap=True)
+        table.add_column("what it changes and teaches", ratio=1, overflow="fold")
+        # Parameter names are typed after --wrapper: never cut, each on a line of its own.
+        longest = max((len(p.name) for spec in CATALOG.values() for p in spec.params), default=1)
+        table.add_column("parameters (default, range)", min_width=longest, overflow="fold")
+        for spec in CATALOG.values():
+            params = "\n".join(f"{p.name}\n  {_default_text(p)}" for p in spec.params) or "-"
+            table.add_row(spec.name, escape(spec.summary), escape(params))
+        out.print(table)
     out.print(
         "Use with [bold]--wrapper NAME[/] or [bold]--wrapper NAME:key=value,key=value[/], "
         "repeatable; the first is innermost.\n"
@@ -123,26 +108,11 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
     return 0
 
 
-def _wrapper_table(catalog: dict[str, Any]) -> Table:
-    table = Table(title="Wrapper catalog", title_justify="left", show_lines=True)
-    longest = max((len(p.name) for spec in catalog.values() for p in spec.params), default=1)
-    table.add_column("name", style="bold cyan", no_wrap=True)
-    table.add_column("what it changes and teaches", ratio=1, overflow="fold")
-    # Parameter names are typed after --wrapper: never cut, each on a line of its own.
-    table.add_column("parameters (default, range)", min_width=longest, overflow="fold")
-    for spec in catalog.values():
-        params = "\n".join(f"{p.name}\n  {_default_text(p)}" for p in spec.params) or "-"
-        table.add_row(spec.name, escape(spec.summary), escape(params))
-    return table
-
-
 def cmd_algorithms(args: argparse.Namespace, out: Console) -> int:
     if args.json:
         print_json("algorithms", {"algorithms": [
-            {
-                "name": cls.name, "title": cls.title, "summary": cls.summary, "target": cls.formula,
-                "params": [_param_dict(field) for field in cls.params],
-            }
+            {"name": cls.name, "title": cls.title, "summary": cls.summary, "target": cls.formula,
+             "params": [_param_dict(field) for field in cls.params]}
             for cls in ALGORITHMS
         ]})
         return 0
@@ -153,10 +123,8 @@ def cmd_algorithms(args: argparse.Namespace, out: Console) -> int:
     table.add_column("its own parameters (default, range)", overflow="fold")
     common = {field.name for field in COMMON_PARAMS}
     for cls in ALGORITHMS:
-        own = "\n".join(
-            f"{f.name}\n  {_default_text(f)}" for f in cls.params
-            if f.name not in common
-        ) or "-"
+        own = "\n".join(f"{f.name}\n  {_default_text(f)}" for f in cls.params
+                        if f.name not in common) or "-"
         table.add_row(cls.name, escape(f"{cls.title}: {cls.summary}"), escape(cls.formula),
                       escape(own))
     out.print(table)
@@ -165,19 +133,6 @@ def cmd_algorithms(args: argparse.Namespace, out: Console) -> int:
     out.print("Use with [bold]tui-gym train ENV --algorithm NAME[/]; each game has its own "
               "defaults per algorithm (see the README).")
     return 0
-
-
-def _base_hyperparameters(
-    args: argparse.Namespace, game: Game, kwargs: dict[str, Any], cls: type[Learner]
-) -> dict[str, Any]:
-    """The hyperparameter flags given; with a target gap and no budget, five times the
-    game's budget (a longer budget decays epsilon more slowly; the run stops at the
-    target anyway)."""
-    hp = hyperparameters(args, cls)
-    if getattr(args, "target_gap", None) is not None and "episodes" not in hp:
-        defaults = default_settings(game, cls.name, game.normalize_kwargs(kwargs))
-        hp["episodes"] = TARGET_GAP_BUDGET_FACTOR * int(defaults.episodes)
-    return hp
 
 
 def _check_fit(session: Session, env_id: str) -> None:
@@ -193,7 +148,12 @@ def _session_from_args(args: argparse.Namespace) -> Session:
     with cli_errors(ValueError, prefix="--algorithm: "):
         cls = algorithm(args.algorithm)
     kwargs = game_kwargs(args, game)
-    hp = _base_hyperparameters(args, game, kwargs, cls)
+    hp = hyperparameters(args, cls)
+    if args.target_gap is not None and "episodes" not in hp:
+        # Five times the game's budget: a longer budget decays epsilon more slowly, and the
+        # run stops at the target anyway.
+        defaults = default_settings(game, cls.name, game.normalize_kwargs(kwargs))
+        hp["episodes"] = TARGET_GAP_BUDGET_FACTOR * int(defaults.episodes)
     try:
         session = Session(
             env_id=env_id, env_kwargs=kwargs, choices=choices, hp=hp, seed=args.train_seed,
@@ -234,15 +194,12 @@ _EXACT_ROWS = (("exact_value", "exact value (greedy policy)"), ("optimal_value",
 _PERCENT = ("win_rate", "draw_rate", "loss_rate", "success_rate", "optimal_pair_fraction",
             "timeout_rate", "delivered_rate", "terminated_rate")
 _NOT_ROWS = ("env_id", "episodes", "episodes_requested", "mean_return", "std_return",
-             "step_budget", "exact_reason", "reference_note", "algorithm")
+             "step_budget", "exact_reason", "reference_note", "algorithm", *dict(_EXACT_ROWS))
 
 
 def _eval_rows(data: dict[str, Any]) -> list[tuple[str, str]]:
-    rows: list[tuple[str, str]] = []
-    for key, label in _EXACT_ROWS:
-        value = data.get(key)
-        if isinstance(value, float):
-            rows.append((label, f"{value:.4f}" if key == "gap" else f"{value:+.4f}"))
+    rows = [(label, f"{data[key]:.4f}" if key == "gap" else f"{data[key]:+.4f}")
+            for key, label in _EXACT_ROWS if isinstance(data.get(key), float)]
     if "exact_reason" in data:
         rows.append(("exact value", f"n/a ({data['exact_reason']})"))
     if data.get("reference_note"):
@@ -256,37 +213,16 @@ def _eval_rows(data: dict[str, Any]) -> list[tuple[str, str]]:
         ("sampled episodes", played), ("sampled mean return", f"{data['mean_return']:+.4f}"),
         ("sampled std of return", f"{data['std_return']:.4f}"),
     ]
-    exact_keys = {key for key, _ in _EXACT_ROWS}
-    for key, value in data.items():
-        if key in _NOT_ROWS or key in exact_keys:
-            continue
-        label = key.replace("_", " ")
-        if value is None:
-            rows.append((label, "n/a"))
-        elif key in _PERCENT:
-            rows.append((label, f"{value:.2%}"))
-        elif isinstance(value, float):
-            rows.append((label, f"{value:+.4f}"))
-        else:
-            rows.append((label, str(value)))
-    return rows
+    return rows + [(key.replace("_", " "), _value_text(key, value))
+                   for key, value in data.items() if key not in _NOT_ROWS]
 
 
-def _progress_bar(out: Console, budget: int) -> tuple[Progress, Callable[..., None]]:
-    columns = (
-        TextColumn("[bold]training[/]"), BarColumn(), MofNCompleteColumn(), TaskProgressColumn(),
-        TextColumn("{task.fields[rate]:>11,.0f} ep/s"),
-        TextColumn("mean return {task.fields[mean]:+.3f}"), TimeElapsedColumn(),
-        TimeRemainingColumn(),
-    )
-    progress = Progress(*columns, console=out, transient=False)
-    task = progress.add_task("train", total=budget, rate=0.0, mean=0.0)
-
-    def update(snap: Any) -> None:
-        rate = snap.episodes / snap.seconds if snap.seconds else 0.0
-        progress.update(task, completed=snap.episodes, rate=rate, mean=snap.mean_return)
-
-    return progress, update
+def _value_text(key: str, value: Any) -> str:
+    if value is None:
+        return "n/a"
+    if key in _PERCENT:
+        return f"{value:.2%}"
+    return f"{value:+.4f}" if isinstance(value, float) else str(value)
 
 
 def _wrapper_dicts(session: Session) -> list[dict[str, Any]]:
@@ -313,17 +249,24 @@ def _prediction_dict(session: Session) -> dict[str, Any]:
                            "truth": list(figures.truth)}}
 
 
-@recorded
 def cmd_train(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.cli.output import warn
+    from tui_gym.session.experiments.train_recording import TrainRecording
+
+    enabled = not (args.no_record or getattr(args, "no_history", False))
+    with TrainRecording(getattr(args, "db", None), enabled=enabled, warn=warn) as recording:
+        return _train(args, out, recording)
+
+
+def _train(args: argparse.Namespace, out: Console, recording: Any) -> int:
+    """`train`, its run recorded by `recording` (the run history's `TrainRecording`)."""
     if args.target_gap is not None and args.target_gap <= 0:
         raise CliError(f"--target-gap must be a positive number, got {args.target_gap:g}")
-    save_path = args.save  # checked as the arguments were read (`output_file`)
     session = _session_from_args(args)
     if args.follow is not None:
         epsilon = float(hyperparameters(args, session.learner_class).get("epsilon_final", 0.0))
         with cli_errors(ValueError, prefix="--follow: "):
             session.follow(Session.load(args.follow), epsilon)
-    recording = args.recording  # the run history's record of this run (see `recorded`)
     recording.begin(session)
     hp = session.hp
     assert hp is not None  # a built session has its hyperparameters
@@ -331,14 +274,25 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
     if args.json or not out.is_terminal:
         outcome = session.train(target_gap=args.target_gap, on_chunk=recording.on_chunk)
     else:
-        progress, update = _progress_bar(out, hp.episodes)
-        with progress:
+        from tui_gym.cli.output import progress_bar
+
+        bar = progress_bar(out, "[bold]training[/]", "bar", "count", "percent",
+                           "{task.fields[rate]:>11,.0f} ep/s",
+                           "mean return {task.fields[mean]:+.3f}", "elapsed", "left",
+                           transient=False)
+        task = bar.add_task("train", total=hp.episodes, rate=0.0, mean=0.0)
+
+        def update(snap: Any) -> None:
+            rate = snap.episodes / snap.seconds if snap.seconds else 0.0
+            bar.update(task, completed=snap.episodes, rate=rate, mean=snap.mean_return)
+
+        with bar:
             outcome = session.train(target_gap=args.target_gap, on_chunk=recording.chain(update))
     seconds = time.perf_counter() - started
     trainer = session.trainer
     report = session.evaluate(args.eval_episodes, seed=args.train_seed + 1)
     evaluation = eval_dict(session, report)
-    saved = str(session.save(save_path)) if save_path is not None else None
+    saved = str(session.save(args.save)) if args.save is not None else None  # `output_file`
     run_id = recording.finish(report, saved)
     data = {
         "env_id": session.env_id, "env_kwargs": session.env_kwargs, "algorithm": session.algorithm,
@@ -409,28 +363,26 @@ def cmd_optimal(args: argparse.Namespace, out: Console) -> int:
     optimum = game.oracle.optimum(kwargs)
     if isinstance(optimum, NotAvailable):
         raise CliError(optimum.reason)
-    names = game.action_names
-    states = game.states.base_observations(kwargs)
-    listed = optimum.q is not None and optimum.marks is not None
+    names, states = game.action_names, game.states.base_observations(kwargs)
     if args.json:
         data: dict[str, Any] = {"env_id": env_id, "env_kwargs": kwargs,
                                 "optimal_value": optimum.value, "meaning": optimum.summary,
                                 **optimum.figures}
-        if listed and not isinstance(states, NotAvailable):
-            assert optimum.q is not None and optimum.marks is not None
+        q, marks = optimum.q, optimum.marks
+        if q is not None and marks is not None and not isinstance(states, NotAvailable):
             data["policy"] = [
                 {"state": game.states.json_observation(obs),
-                 "actions": [names[a] for a in np.flatnonzero(marks)],
-                 "value": float(np.max(q))}
-                for obs, q, marks in zip(states, optimum.q, optimum.marks, strict=True)
+                 "actions": [names[a] for a in np.flatnonzero(marked)],
+                 "value": float(np.max(values))}
+                for obs, values, marked in zip(states, q, marks, strict=True)
             ]
         print_json("optimal", data)
         return 0
     shown = game.solution(kwargs)  # action values that point the optimal moves
     if not isinstance(shown, NotAvailable) and shown.q is not None:
         layout = game.layout
-        focus = layout.default_focus(kwargs)
-        for panel in layout.heatmaps(np.asarray(shown.q), kwargs, focus, shown.marks):
+        for panel in layout.heatmaps(np.asarray(shown.q), kwargs, layout.default_focus(kwargs),
+                                     shown.marks):
             out.print(_panel_table(panel))
     # An edited map's text is shown as its size; its rows are in the table above.
     rules = ", ".join(f"{k}={v}" if k != "layout" else f"a {game.grid_map(kwargs).size_text} map"

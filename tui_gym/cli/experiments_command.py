@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import os
 import signal
-import sys
 import threading
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -19,7 +18,7 @@ from tui_gym.algorithms import ALGORITHMS
 from tui_gym.cli.flags import int_in as _int_in
 from tui_gym.cli.flags import output_file, wrapper_choices
 from tui_gym.cli.flags import seed_number as _seed
-from tui_gym.cli.output import CliError, cli_errors, print_json, say_status
+from tui_gym.cli.output import CliError, cli_errors, print_json, progress_bar, say_status, warn
 
 if TYPE_CHECKING:
     from tui_gym.core.experiments import BestEffortHistory
@@ -148,7 +147,7 @@ def run_history(args: argparse.Namespace) -> Iterator[BestEffortHistory | None]:
         history = BestEffortHistory(path)  # makes the folder, or says why it cannot
     except (RunHistoryError, OSError) as exc:
         text = str(exc) if isinstance(exc, RunHistoryError) else f"{path}: {exc}"
-        sys.stderr.write(f"tui-gym: not recording these runs: {text}\n")
+        warn(f"not recording these runs: {text}")
         yield None
         return
     with history:
@@ -159,8 +158,7 @@ def unrecorded(history: BestEffortHistory | None) -> bool:
     """Say, after the results, that they were not recorded when a write failed; whether so."""
     if history is None or history.failure is None:
         return False
-    sys.stderr.write(f"tui-gym: these results were not recorded in the run history: "
-                     f"{history.failure}\n")
+    warn(f"these results were not recorded in the run history: {history.failure}")
     return True
 
 
@@ -189,15 +187,6 @@ def _run_recorded(args: argparse.Namespace, out: Console, label: str, run: Calla
     """`run(spec, ...)` (a comparison or a sweep) kept in the run history, with a progress
     bar on a terminal (not with --json); the first Ctrl+C stops it cleanly; its refusals as
     one line."""
-    from rich.progress import (
-        BarColumn,
-        Progress,
-        TaskProgressColumn,
-        TextColumn,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
-
     from tui_gym.session.experiments.cluster import ClusterError
     from tui_gym.session.experiments.compare import CompareError
 
@@ -212,12 +201,9 @@ def _run_recorded(args: argparse.Namespace, out: Console, label: str, run: Calla
 
         if args.json or not out.is_terminal:
             return running(None), history
-        bar = Progress(
-            TextColumn(f"[bold]{label}[/]"), BarColumn(),
-            TextColumn("{task.fields[landed]}/{task.fields[tasks]} tasks"),
-            TaskProgressColumn(), TimeElapsedColumn(),
-            TextColumn("ETA"), TimeRemainingColumn(), console=out, transient=True,
-        )
+        bar = progress_bar(out, f"[bold]{label}[/]", "bar",
+                           "{task.fields[landed]}/{task.fields[tasks]} tasks", "percent",
+                           "elapsed", "ETA", "left")
         task = bar.add_task(label, total=None, landed=0, tasks="?")
 
         # The bar and the time left follow the episodes (they move while a task runs);
@@ -346,10 +332,8 @@ def _figure_columns(table: Table, outcomes: Sequence[AlgorithmOutcome | None]
 def _compare_chart(result: Any, width: int) -> Text:
     from tui_gym.terminal_chart import ChartSeries, band_chart
 
-    series = []
-    for o in result.outcomes:
-        curve = o.smoothed or o.curve
-        series.append(ChartSeries(o.algorithm, curve.episodes, curve.mean, curve.lo, curve.hi))
+    series = [ChartSeries(o.algorithm, c.episodes, c.mean, c.lo, c.hi)
+              for o in result.outcomes for c in (o.smoothed or o.curve,)]
     window = max(o.smoothing for o in result.outcomes)
     smoothed = f", each seed's averaged over its last {window} episodes" if window > 1 else ""
     chart = band_chart(series, width, 14, y_label=f"online return per episode, mean of "
@@ -364,27 +348,22 @@ def _compare_chart(result: Any, width: int) -> Text:
 
 
 def _write_csv(path: str, outcomes: Sequence[AlgorithmOutcome]) -> None:
+    """Each episode's mean and band per algorithm (an episode a seed has not reached, or a
+    band one seed has not, an empty cell)."""
     import numpy as np
 
+    from tui_gym.core.experiments import Curve
+    from tui_gym.core.experiments.runs import curves_csv
     from tui_gym.core.files import write_atomically
 
     if not outcomes:
         return
-    episodes = max((o.curve.episodes for o in outcomes), key=len)
-    header = ["episode"]
-    columns = []
-    for o in outcomes:
-        pad = np.full(len(episodes) - len(o.curve), np.nan)
-        header += [f"{o.algorithm}.mean", f"{o.algorithm}.lo", f"{o.algorithm}.hi"]
-        for values in (o.curve.mean, o.curve.lo, o.curve.hi):
-            columns.append(np.concatenate([values, pad]) if values is not None
-                           else np.full(len(episodes), np.nan))
-    lines = [",".join(header)]
-    for i, episode in enumerate(episodes.tolist()):
-        cells = [str(episode)] + ["" if np.isnan(c[i]) else repr(float(c[i])) for c in columns]
-        lines.append(",".join(cells))
+    curves = [Curve(f"{o.algorithm}.{part}", o.curve.episodes,
+                    np.full(len(o.curve), np.nan) if values is None else values)
+              for o in outcomes
+              for part, values in (("mean", o.curve.mean), ("lo", o.curve.lo), ("hi", o.curve.hi))]
     try:
-        write_atomically(path, "\n".join(lines) + "\n")
+        write_atomically(path, curves_csv(curves)[0])
     except OSError as exc:
         raise CliError(f"--csv {path}: cannot write ({exc.strerror or exc})") from None
 

@@ -117,25 +117,32 @@ def add_game_flags(parser: argparse.ArgumentParser) -> None:
                        help=f"{mapped}: play a map from a file (see `tui-gym maps`)")
 
 
-def game_kwargs(args: argparse.Namespace, game: Game) -> dict[str, Any]:
-    """The arguments given for `game`, each read by the game's own `Param`."""
-    own = {param.name: param for param in game.params}
-    kwargs: dict[str, Any] = {}
-    for name, owned in _owners().items():
-        text = getattr(args, _PREFIX + name, None)
+def _parsed(args: argparse.Namespace, prefix: str, takers: dict[str, str],
+            own: dict[str, Any], who: str) -> dict[str, Any]:
+    """The flags given (`args.<prefix><name>` for each name in `takers`, who takes it in
+    words), each read by `own[name]`; CliError of one line that names the flag."""
+    values: dict[str, Any] = {}
+    for name, owners in takers.items():
+        text = getattr(args, prefix + name, None)
         if text is None:
             continue
         if name not in own:
-            games = " and ".join(g.title for g, _ in owned)
-            raise CliError(f"{flag(name)} applies to {games}, not {game.title}")
+            raise CliError(f"{flag(name)} applies to {owners}, not {who}")
         try:
-            kwargs[name] = own[name].parse(text)
-        except ParamError as exc:
+            values[name] = own[name].parse(text)
+        except ParamError as exc:  # the flag, not the field, so the user knows what to fix
             raise CliError(f"{flag(name)} {exc.reason}") from None
+        except ValueError as exc:
+            raise CliError(str(exc).replace(name, flag(name), 1)) from None
+    return values
+
+
+def game_kwargs(args: argparse.Namespace, game: Game) -> dict[str, Any]:
+    """The arguments given for `game`, each read by the game's own `Param`."""
+    takers = {name: " and ".join(g.title for g, _ in owned) for name, owned in _owners().items()}
+    kwargs = _parsed(args, _PREFIX, takers, {p.name: p for p in game.params}, game.title)
     path = getattr(args, _PREFIX + "map_file", None)
-    if path is not None:
-        kwargs = map_kwargs(path, game, kwargs)
-    return kwargs
+    return kwargs if path is None else map_kwargs(path, game, kwargs)
 
 
 def map_kwargs(path: str, game: Game, kwargs: dict[str, Any]) -> dict[str, Any]:
@@ -168,24 +175,9 @@ def add_hyperparameter_flags(parser: argparse.ArgumentParser) -> None:
 def hyperparameters(args: argparse.Namespace, cls: type[Learner]) -> dict[str, Any]:
     """The hyperparameter flags given, checked against the algorithm's schema; errors
     name the flag."""
-    changes: dict[str, Any] = {}
-    own = {field.name: field for field in cls.params}
-    for name in HP_FLAGS:
-        value = getattr(args, name, None)
-        if value is None:
-            continue
-        field = own.get(name)
-        if field is None:
-            takers = ", ".join(c.name for c in ALGORITHMS if any(f.name == name for f in c.params))
-            raise CliError(f"{flag(name)} applies to {takers}, not {cls.name}")
-        try:
-            changes[name] = field.parse(value)
-        except ParamError as exc:
-            # Name the flag, not the field, so the user knows what to fix.
-            raise CliError(f"{flag(name)} {exc.reason}") from None
-        except ValueError as exc:
-            raise CliError(str(exc).replace(name, flag(name), 1)) from None
-    return changes
+    takers = {name: ", ".join(c.name for c in ALGORITHMS if any(f.name == name for f in c.params))
+              for name in HP_FLAGS}
+    return _parsed(args, "", takers, {field.name: field for field in cls.params}, cls.name)
 
 
 def wrapper_choices(specs: list[str]) -> tuple[Any, ...]:

@@ -63,13 +63,10 @@ def attach_negative_values(argv: Sequence[str]) -> list[str]:
     args = iter(argv)
     for arg in args:
         if arg == "--":
-            out.append(arg)
-            out.extend(args)
-            break
-        if out and out[-1].startswith("--") and "=" not in out[-1] and _NEGATIVE_VALUE.fullmatch(
-            arg
-        ):
-            out[-1] = f"{out[-1]}={arg}"
+            return [*out, arg, *args]
+        previous = out[-1] if out else ""
+        if previous.startswith("--") and "=" not in previous and _NEGATIVE_VALUE.fullmatch(arg):
+            out[-1] = f"{previous}={arg}"
         else:
             out.append(arg)
     return out
@@ -140,9 +137,16 @@ def _read_app_options(
 
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser (also used to document the CLI)."""
-    parser = _app_parser()
+    from tui_gym.benchmark.command import add_parser as add_benchmark_parser
+    from tui_gym.cli.book_command import add_book_parser
+    from tui_gym.cli.experiments_command import add_experiment_parsers
+    from tui_gym.cli.plan_command import add_plan_parser
+    from tui_gym.cli.replay_command import add_record_option, add_replay_parser
     from tui_gym.cli.runs_command import add_history_flags, add_runs_parser
+    from tui_gym.mcp_server import add_parser as add_mcp_parser
+    from tui_gym.web import add_serve_parser
 
+    parser = _app_parser()
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
     # Each `--json`'s help says its schema (`_document_json`).
@@ -213,19 +217,11 @@ def build_parser() -> argparse.ArgumentParser:
                       help="seed of the first episode (a reset may give its own)")
     add_game_flags(play)
     play.add_argument("--wrapper", action="append", default=[], metavar="SPEC", help=WRAPPER_HELP)
-    from tui_gym.cli.replay_command import add_record_option, add_replay_parser
-    from tui_gym.web import add_serve_parser
-
     add_record_option(play)
     add_replay_parser(sub)
     add_serve_parser(sub)
     add_runs_parser(sub)
-    from tui_gym.cli.experiments_command import add_experiment_parsers
-
     add_experiment_parsers(sub)
-    from tui_gym.cli.book_command import add_book_parser
-    from tui_gym.cli.plan_command import add_plan_parser
-
     add_plan_parser(sub)
     add_book_parser(sub)
 
@@ -242,11 +238,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument("--json", action="store_true", help="print one JSON object")
 
-    from tui_gym.mcp_server import add_parser as add_mcp_parser
-
     add_mcp_parser(sub)
-    from tui_gym.benchmark.command import add_parser as add_benchmark_parser
-
     add_benchmark_parser(sub)
     _document_json(parser)
     return parser

@@ -15,13 +15,22 @@ from typing import Any
 
 from rich.console import Console
 from rich.markup import escape
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TaskProgressColumn,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
 from rich.table import Table
 
 from tui_gym.core.text import json_safe as _clean
 from tui_gym.core.text import visible
 
 __all__ = ["JSON_SCHEMAS", "CliError", "OutConsole", "cli_errors", "key_value_table", "print_json",
-           "readable", "say_status"]
+           "progress_bar", "readable", "say_status", "warn"]
 
 # The version of each command's JSON object (see the module docstring).
 JSON_SCHEMAS: dict[str, int] = {
@@ -82,6 +91,23 @@ def key_value_table(title: str, rows: Sequence[tuple[str, str]]) -> Table:
     for key, value in rows:
         table.add_row(key, value)
     return table
+
+
+_BAR_COLUMNS = {"bar": BarColumn, "count": MofNCompleteColumn, "percent": TaskProgressColumn,
+                "elapsed": TimeElapsedColumn, "left": TimeRemainingColumn}
+
+
+def progress_bar(console: Console, *columns: str, transient: bool = True) -> Progress:
+    """A progress bar of `columns`: rich's by name (bar, count, percent, elapsed, left),
+    the others text templates."""
+    return Progress(*(_BAR_COLUMNS[c]() if c in _BAR_COLUMNS else TextColumn(c) for c in columns),
+                    console=console, transient=transient)
+
+
+def warn(line: str) -> None:
+    """A line for the user on standard error (not an error: the command goes on)."""
+    sys.stderr.write(f"tui-gym: {line}\n")
+    sys.stderr.flush()
 
 
 def say_status(text: str) -> None:

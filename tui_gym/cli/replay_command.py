@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 from rich.console import Console
 
 from tui_gym.cli.flags import output_file
-from tui_gym.cli.output import CliError, cli_errors
+from tui_gym.cli.output import CliError, cli_errors, warn
 
 if TYPE_CHECKING:
     from tui_gym.core.recording import Recording
@@ -29,16 +29,10 @@ def open_recorder(path: str, session: Session, *, source: str, seed: int | None 
     A write that fails later stops the recording with one line on stderr; the
     command goes on.
     """
-    import sys
-
     from tui_gym.session.recording.recorder import Recorder
 
-    def failed(message: str) -> None:
-        sys.stderr.write(f"tui-gym: {message}\n")
-        sys.stderr.flush()
-
     try:
-        return Recorder(path, session, source=source, seed=seed, on_failure=failed)
+        return Recorder(path, session, source=source, seed=seed, on_failure=warn)
     except IsADirectoryError:
         raise CliError(f"--record {path}: is a folder; name a file") from None
     except OSError as exc:

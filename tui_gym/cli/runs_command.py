@@ -1,9 +1,8 @@
-"""The run history on the command line: `runs`, and recording `train` runs into it."""
+"""The run history on the command line: `runs`, and the flags that say where runs are kept."""
 
 from __future__ import annotations
 
 import argparse
-import sys
 from collections.abc import Callable
 from datetime import datetime
 from typing import Any
@@ -15,10 +14,8 @@ from rich.text import Text
 
 from tui_gym.cli.flags import file_name as _path
 from tui_gym.cli.flags import int_in, output_file
-from tui_gym.cli.output import CliError, cli_errors, key_value_table, print_json
+from tui_gym.cli.output import CliError, cli_errors, key_value_table, print_json, warn
 from tui_gym.core.text import visible
-
-Command = Callable[[argparse.Namespace, Console], int]
 
 _run_id = int_in(1, 2**63 - 1, "a run id (a positive integer, see `tui-gym runs`)")
 _limit = int_in(0, 2**31 - 1, "a number of runs (0 for all)")
@@ -34,12 +31,6 @@ def _db_option(parser: argparse.ArgumentParser, *, inherit: bool = False) -> Non
     parser.add_argument("--db", type=_path, metavar="PATH", default=default, help=DB_HELP)
 
 
-def _json_option(parser: argparse.ArgumentParser, *, inherit: bool = False) -> None:
-    default = argparse.SUPPRESS if inherit else False
-    parser.add_argument("--json", action="store_true", default=default,
-                        help="print one JSON object")
-
-
 def add_runs_parser(sub: Any) -> None:
     """The `runs` sub-command and its own sub-commands."""
     runs = sub.add_parser(
@@ -47,7 +38,7 @@ def add_runs_parser(sub: Any) -> None:
         description="The run history: every `train` run, every comparison and every run "
         "trained in the app, with its settings, curves and final figures.",
     )
-    _json_option(runs)
+    runs.add_argument("--json", action="store_true")  # each --json's help: `_document_json`
     _db_option(runs, inherit=True)
     runs.add_argument("--game", metavar="G", help="only this game's runs (e.g. blackjack)")
     runs.add_argument("--kind", choices=KINDS, help="only runs of this kind")
@@ -75,7 +66,7 @@ def add_runs_parser(sub: Any) -> None:
             where.add_argument("--tensorboard", type=_path, metavar="DIR",
                                help="TensorBoard event files under DIR (needs "
                                "tui-gym[tensorboard])")
-        _json_option(verb, inherit=True)
+        verb.add_argument("--json", action="store_true", default=argparse.SUPPRESS)
         _db_option(verb, inherit=True)
 
 
@@ -93,27 +84,6 @@ def add_app_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-history", action="store_true",
                         help="keep nothing in the run history: the app's training runs are not "
                              "recorded, and its comparisons go when it ends")
-
-
-def _warn(line: str) -> None:
-    sys.stderr.write(f"tui-gym: {line}\n")
-    sys.stderr.flush()
-
-
-def recorded(command: Command) -> Command:
-    """`command` (train) with its run recorded in the history; `args.recording` is the
-    `TrainRecording` it reports to."""
-
-    def run(args: argparse.Namespace, out: Console) -> int:
-        from tui_gym.session.experiments.train_recording import TrainRecording
-
-        enabled = not (getattr(args, "no_record", False) or getattr(args, "no_history", False))
-        with TrainRecording(getattr(args, "db", None), enabled=enabled, warn=_warn) as recording:
-            args.recording = recording
-            return command(args, out)
-
-    run.__doc__ = command.__doc__
-    return run
 
 
 # --- the commands ------------------------------------------------------------------
@@ -219,10 +189,10 @@ def cmd_runs(args: argparse.Namespace, out: Console) -> int:
     listing = _history_call(lambda: list_runs(args.db, game=game, kind=args.kind,
                                               limit=limit or None))
     for bad in listing.damaged[:5]:
-        _warn(f"run {bad.id} cannot be read: {bad.reason} (`tui-gym runs rm {bad.id}` "
+        warn(f"run {bad.id} cannot be read: {bad.reason} (`tui-gym runs rm {bad.id}` "
               "removes it)")
     if len(listing.damaged) > 5:
-        _warn(f"and {len(listing.damaged) - 5} more runs cannot be read")
+        warn(f"and {len(listing.damaged) - 5} more runs cannot be read")
     if args.json:
         print_json("runs", listing.to_json())
         return 0
@@ -275,7 +245,7 @@ def _act(verb: str, args: argparse.Namespace) -> Any:
 def _say_recover(done: Any, args: argparse.Namespace, out: Console) -> int:
     source = visible(done.source, 160)
     if done.target is None:
-        _warn(f"no run could be read from {source} ({done.check}); it was left as it was")
+        warn(f"no run could be read from {source} ({done.check}); it was left as it was")
         return 2
     verdict = "SQLite finds it sound" if done.check == "ok" else f"SQLite finds: {done.check}"
     lost = f" ({done.unreadable:,} could not be read)" if done.unreadable else ""

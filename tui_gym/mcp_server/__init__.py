@@ -35,8 +35,7 @@ def add_parser(sub: Any) -> None:
 
 def cmd_mcp(args: argparse.Namespace, out: Any) -> int:
     if not args.idle_timeout > 0:
-        sys.stderr.write("tui-gym: error: --idle-timeout must be a positive number of seconds\n")
-        return EXIT_USAGE
+        raise ValueError("--idle-timeout must be a positive number of seconds")
     try:
         from tui_gym.mcp_server.server import run
     except ImportError as exc:

@@ -92,9 +92,11 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
             return table.get(game_id)
 
     def state(game_id: int, seat: Seat) -> dict[str, Any]:
-        data: dict[str, Any] = {"game_id": game_id, "game": seat.entry.name}
-        data.update(seat.observe())
-        return data
+        return {"game_id": game_id, "game": seat.entry.name, **seat.observe()}
+
+    def final(game_id: int, seat: Seat) -> CallToolResult:
+        return _result({"game_id": game_id, "game": seat.entry.name,
+                        **seat.score.to_json(running=hints)})
 
     @server.tool()
     async def list_games() -> CallToolResult:
@@ -131,8 +133,7 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
     @server.tool()
     async def observe(game_id: GameId) -> CallToolResult:
         """The state: as data and as text, the legal actions, and whether the episode is done."""
-        seat = seat_of(game_id)
-        return _result(state(game_id, seat))
+        return _result(state(game_id, seat_of(game_id)))
 
     @server.tool()
     async def step(
@@ -175,17 +176,14 @@ def build_server(table: GameTable, *, hints: bool = True) -> MCPServer:
     @server.tool()
     async def score(game_id: GameId) -> CallToolResult:
         """Returns per episode, exact decision regret so far, decisions and agreement."""
-        seat = seat_of(game_id)
-        return _result({"game_id": game_id, "game": seat.entry.name,
-                        **seat.score.to_json(running=hints)})
+        return final(game_id, seat_of(game_id))
 
     @server.tool()
     async def end_game(game_id: GameId) -> CallToolResult:
         """End a game and free its place; returns its final score."""
         with _refusing(TableError):
             seat = table.end(game_id)
-        return _result({"game_id": game_id, "game": seat.entry.name,
-                        **seat.score.to_json(running=hints)})
+        return final(game_id, seat)
 
     return server
 
