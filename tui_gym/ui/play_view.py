@@ -277,9 +277,15 @@ class PlayView(Vertical):
             self.act(message.action)
 
     def on_board_new_episode(self, message: Board.NewEpisode) -> None:
+        """Deal or reset; not in the middle of an episode when the board says so."""
         message.stop()
-        if not self.watching:
-            self.new_episode()
+        game, board = self.game, self.board
+        if self.watching or game is None or board is None:
+            return
+        if not game.done and not board.RESTART_ANYTIME:
+            self._say_hint(board.unfinished_hint)
+            return
+        self._start_episode()
 
     def on_board_take_over(self, message: Board.TakeOver) -> None:
         """A click on the board while the agent plays: control comes back, nothing moves."""
@@ -334,16 +340,6 @@ class PlayView(Vertical):
             self.refresh_agent_figures()
         else:
             self._show_scoreboard()
-
-    def new_episode(self) -> None:
-        """Deal or reset; not in the middle of an episode when the board says so."""
-        game, board = self.game, self.board
-        if game is None or board is None:
-            return
-        if not game.done and not board.RESTART_ANYTIME:
-            self._say_hint(board.unfinished_hint)
-            return
-        self._start_episode()
 
     def _start_episode(self) -> None:
         game, board = self.game, self.board
@@ -506,9 +502,6 @@ class PlayView(Vertical):
 
     # --- watching the agent ----------------------------------------------------
     def action_watch_agent(self) -> None:
-        self.start_watching()
-
-    def start_watching(self) -> None:
         """Let the greedy agent play fresh episodes on the board until a key is pressed."""
         board = self.board
         if board is None or self.watching:
