@@ -62,8 +62,7 @@ class StatusLines(Vertical):
 
     def show(self, headline: Content | str, detail: str, coach: str = "",
              coach_tone: str = "", tone: str = "", hint: str = "") -> None:
-        """Say it (a line the view has not got stays unsaid); the bar and the coach's line
-        take their tones (`-good`, `-bad`...)."""
+        """Say what happened; the bar and the coach's line take their tones (`-good`...)."""
         shown = (headline, detail, coach, coach_tone, tone, hint)
         if shown == self._shown:  # an update lays the view out again: none needed
             return
