@@ -323,9 +323,18 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         """The Plan view, once it has been shown (it is built the first time)."""
         return self._views.get("plan")
 
-    def _reload_plan(self) -> None:
+    def _show_session(self) -> None:
+        """Every view, and the keys the game offers (`m` for a map), follow the session."""
+        self._show_title()
+        self._last_version = -1
+        self.play_view.reload()
+        self._reload_train()
+        if (compare := self.compare_view) is not None:
+            compare.reload()
         if (plan := self.plan_view) is not None and plan.is_mounted:
             plan.reload()
+        self.side_panel.reload()
+        self.refresh_bindings()
 
     @property
     def side_panel(self) -> SidePanel:
@@ -609,15 +618,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         with contextlib.suppress(AttributeError):  # read-only where tied to the agent
             # The other game's last move.
             runner.last_event = runner.last_scene = None  # type: ignore[misc]
-        self._show_title()
-        self._last_version = -1
-        self.play_view.reload()
-        self._reload_train()
-        if (compare := self.compare_view) is not None:
-            compare.reload()
-        self._reload_plan()
-        self.side_panel.reload()
-        self.refresh_bindings()  # the keys the game offers (`m` for a map)
+        self._show_session()
 
     def _episodes_trained(self) -> int:
         """Episodes the current agent has trained (the runner's count while it trains)."""
@@ -893,12 +894,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             if was_running:
                 self.runner.start()
             return False
-        self._show_title()
-        self._last_version = -1
-        self.play_view.reload()
-        self._reload_train()
-        self._reload_plan()
-        self.side_panel.reload()
+        self._show_session()
         if not (quiet and report.kept_agent):
             self.notify(report.notice, severity="information" if report.kept_agent else "warning",
                         timeout=6)

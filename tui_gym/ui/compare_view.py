@@ -535,9 +535,6 @@ class CompareView(Vertical):
         """Carry on the highlighted run's comparison: its algorithms, seeds and episodes,
         with the game's settings and the Train view's hyperparameters as they are now (the
         comparison refuses, in one line, if they are not the run's)."""
-        if self.running:
-            self._say("A comparison is running: stop it first (s).", error=True)
-            return
         index = self.run_list.highlighted
         if self.history_error is not None or index is None or index >= len(self.runs):
             self._say("Not resumed: highlight an unfinished comparison in the list of runs.",

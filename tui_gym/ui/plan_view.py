@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -34,6 +35,16 @@ __all__ = ["PlanView"]
 FRAME_SECONDS = 1 / 30  # how often the view looks for a new snapshot
 METHOD_WORDS = {"evaluate": "policy evaluation", "policy-iteration": "policy iteration",
                 "value-iteration": "value iteration"}
+# What the keys and the buttons (`plan-COMMAND`) ask of the planner.
+COMMANDS: dict[str, Callable[[PlanRunner], object]] = {
+    "run": PlanRunner.toggle,
+    "step": PlanRunner.step,
+    "improve": PlanRunner.improve,
+    "converge": lambda runner: runner.run(to_end=True),
+    "in_place": lambda runner: runner.set_in_place(not runner.latest.in_place),
+    "faster": lambda runner: runner.set_speed(runner.latest.speed + 1),
+    "slower": lambda runner: runner.set_speed(runner.latest.speed - 1),
+}
 
 
 class PlanView(MapEditingView):
@@ -70,19 +81,19 @@ class PlanView(MapEditingView):
     """
 
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("space", "run_pause", "Run/Pause", key_display="space"),
-        Binding("n", "step", "1 step", tooltip="One sweep (or, in policy iteration, the "
+        Binding("space", "plan('run')", "Run/Pause", key_display="space"),
+        Binding("n", "plan('step')", "1 step", tooltip="One sweep (or, in policy iteration, the "
                 "improvement once the evaluation has converged)"),
-        Binding("u", "improve", "Improve", tooltip="One greedy improvement, ties shared"),
-        Binding("c", "converge", "Converge", tooltip="Run the method to its end at once"),
+        Binding("u", "plan('improve')", "Improve", tooltip="One greedy improvement, ties shared"),
+        Binding("c", "plan('converge')", "Converge", tooltip="Run the method to its end at once"),
         Binding("1", "method('evaluate')", "Evaluate", show=False),
         Binding("2", "method('policy-iteration')", "Policy iteration", show=False),
         Binding("3", "method('value-iteration')", "Value iteration", show=False),
         Binding("o", "next_start", "Start policy"),
         Binding("r", "restart", "Restart"),
-        Binding("s", "toggle_in_place", "Sync/in place"),
-        Binding("plus,equals_sign", "faster", "Faster", key_display="+"),
-        Binding("minus,underscore", "slower", "Slower", key_display="-"),
+        Binding("s", "plan('in_place')", "Sync/in place"),
+        Binding("plus,equals_sign", "plan('faster')", "Faster", key_display="+"),
+        Binding("minus,underscore", "plan('slower')", "Slower", key_display="-"),
         Binding("e", "edit_knobs", "γ θ", tooltip="Edit the discount γ and the threshold θ"),
         Binding("d", "toggle_numbers", "Numbers", tooltip="Values as numbers / actions"),
     ]
@@ -314,38 +325,15 @@ class PlanView(MapEditingView):
             self.app.notify(self._reason or "The model is still being built.", timeout=3)
         return self.runner
 
-    def action_run_pause(self) -> None:
+    def action_plan(self, command: str) -> None:
+        """Hand the planner one of `COMMANDS`."""
         if (runner := self._command()) is not None:
-            runner.toggle()
-
-    def action_step(self) -> None:
-        if (runner := self._command()) is not None:
-            runner.step()
-
-    def action_improve(self) -> None:
-        if (runner := self._command()) is not None:
-            runner.improve()
-
-    def action_converge(self) -> None:
-        if (runner := self._command()) is not None:
-            runner.run(to_end=True)
+            COMMANDS[command](runner)
 
     def action_method(self, method: str) -> None:
         if (runner := self._command()) is not None:
             self.method = method
             runner.set_method(method)
-
-    def action_toggle_in_place(self) -> None:
-        if (runner := self._command()) is not None:
-            runner.set_in_place(not runner.latest.in_place)
-
-    def action_faster(self) -> None:
-        if (runner := self._command()) is not None:
-            runner.set_speed(runner.latest.speed + 1)
-
-    def action_slower(self) -> None:
-        if (runner := self._command()) is not None:
-            runner.set_speed(runner.latest.speed - 1)
 
     def action_next_start(self) -> None:
         self.start = START_POLICIES[(START_POLICIES.index(self.start) + 1) % len(START_POLICIES)]
@@ -415,14 +403,13 @@ class PlanView(MapEditingView):
 
     @on(Button.Pressed)
     def _button(self, event: Button.Pressed) -> None:
-        actions = {"plan-run": self.action_run_pause, "plan-step": self.action_step,
-                   "plan-improve": self.action_improve, "plan-converge": self.action_converge,
-                   "plan-restart": self.action_restart, "plan-slower": self.action_slower,
-                   "plan-faster": self.action_faster}
-        action = actions.get(event.button.id or "")
-        if action is not None:
+        command = (event.button.id or "").removeprefix("plan-")
+        if command == "restart":
             event.stop()
-            action()
+            self.action_restart()
+        elif command in COMMANDS:
+            event.stop()
+            self.action_plan(command)
 
     # --- the map editor ------------------------------------------------------------
     def open_editor(self) -> bool:

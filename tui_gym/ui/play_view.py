@@ -36,6 +36,49 @@ WATCHING = "Agent playing — press any key to take over"
 TONE_COLOURS = {"good": "$text-success", "even": "$text-warning", "bad": "$text-error"}
 
 
+class StatusLines(Vertical):
+    """What happened, beside a bar in the tone of it: a bold headline, the coach's word on
+    the move, the details, and the hint where the view gives one (`#PREFIX-...`)."""
+
+    DEFAULT_CSS = """
+    StatusLines { height: auto; padding: 0 1; border-left: outer $foreground 30%; }
+    StatusLines.-good { border-left: outer $success; }
+    StatusLines.-bad { border-left: outer $error; }
+    StatusLines > .headline { text-style: bold; }
+    StatusLines > .coach.-good { color: $text-success; }
+    StatusLines > .coach.-bad { color: $text-error; }
+    StatusLines > .detail { color: $text-muted; }
+    """
+
+    def __init__(self, prefix: str, *parts: str) -> None:
+        super().__init__(id=f"{prefix}-status")
+        self.prefix = prefix
+        self.parts = ("headline", "coach", "detail", *parts)
+        self._shown: tuple[Any, ...] = ()  # what the lines say
+
+    def compose(self) -> ComposeResult:
+        for part in self.parts:
+            yield Static(id=f"{self.prefix}-{part}", classes=part)
+
+    def show(self, headline: Content | str, detail: str, coach: str = "",
+             coach_tone: str = "", tone: str = "", hint: str = "") -> None:
+        """Say what happened; the bar and the coach's line take their tones (`-good`...)."""
+        shown = (headline, detail, coach, coach_tone, tone, hint)
+        if shown == self._shown:  # an update lays the view out again: none needed
+            return
+        self._shown = shown
+        lines = dict(zip(self.parts, self.query(Static), strict=True))
+        lines["headline"].update(Content(headline) if isinstance(headline, str) else headline)
+        lines["coach"].update(Content(coach))
+        lines["coach"].set_classes(f"coach {coach_tone}")
+        lines["detail"].update(Content(detail))
+        if "hint" in lines:
+            lines["hint"].update(Content(hint))
+        self.set_classes(tone)
+        self.set_class(bool(hint), "-hint")
+        self.set_class(bool(coach), "-coach")
+
+
 AgentAsked = tuple["Session", TrainingSnapshot | None]  # the session detached, its snapshot
 
 
@@ -68,24 +111,12 @@ class PlayView(Vertical):
     }
     PlayView > Board { height: 1fr; min-height: 7; }
     /* Room kept for the status lines, so the board keeps its size as they come and go. */
-    PlayView #play-status {
-        height: auto;
-        min-height: 6;
-        width: 1fr;
-        padding: 0 1;
-        border-left: outer $foreground 30%;
-    }
-    PlayView #play-headline { text-style: bold; }
-    PlayView #play-detail { color: $text-muted; }
+    PlayView #play-status { min-height: 6; width: 1fr; }
     PlayView #play-coach { display: none; }
     PlayView #play-status.-coach #play-coach { display: block; }
-    PlayView #play-coach.-good { color: $text-success; }
-    PlayView #play-coach.-bad { color: $text-error; }
     PlayView #play-hint { color: $text-warning; text-style: italic; display: none; }
     PlayView #play-status.-hint #play-hint { display: block; }
-    PlayView #play-status.-good { border-left: outer $success; }
     PlayView #play-status.-good #play-headline { color: $text-success; }
-    PlayView #play-status.-bad { border-left: outer $error; }
     PlayView #play-status.-bad #play-headline { color: $text-error; }
     PlayView #play-status.-even { border-left: outer $warning; }
     PlayView #play-status.-even #play-headline { color: $text-warning; }
@@ -117,7 +148,6 @@ class PlayView(Vertical):
         self._headline = Content()
         self._tone = ""
         self._hint = ""
-        self._status_shown: tuple[Any, ...] = ()  # what the status lines say
         self.show_advice = False  # say what the exact optimum and the agent would do
         self._verdict = ""  # advice's short judgement of the last move (coach off)
         self.coach_on = False  # judge each move in words
@@ -146,11 +176,7 @@ class PlayView(Vertical):
         yield Static(id="play-title")
         self.board = board_class(self.tui.session.game.board)()
         yield self.board
-        with Vertical(id="play-status"):
-            yield Static(id="play-headline")
-            yield Static(id="play-coach")
-            yield Static(id="play-detail")
-            yield Static(id="play-hint")
+        yield StatusLines("play", "hint")
         yield Static(id="play-tally")
         yield Scoreboard(id="play-scoreboard")
 
@@ -250,9 +276,15 @@ class PlayView(Vertical):
             self.act(message.action)
 
     def on_board_new_episode(self, message: Board.NewEpisode) -> None:
+        """Deal or reset; not in the middle of an episode when the board says so."""
         message.stop()
-        if not self.watching:
-            self.new_episode()
+        game, board = self.game, self.board
+        if self.watching or game is None or board is None:
+            return
+        if not game.done and not board.RESTART_ANYTIME:
+            self._say_hint(board.unfinished_hint)
+            return
+        self._start_episode()
 
     def on_board_take_over(self, message: Board.TakeOver) -> None:
         """A click on the board while the agent plays: control comes back, nothing moves."""
@@ -307,16 +339,6 @@ class PlayView(Vertical):
             self.refresh_agent_figures()
         else:
             self._show_scoreboard()
-
-    def new_episode(self) -> None:
-        """Deal or reset; not in the middle of an episode when the board says so."""
-        game, board = self.game, self.board
-        if game is None or board is None:
-            return
-        if not game.done and not board.RESTART_ANYTIME:
-            self._say_hint(board.unfinished_hint)
-            return
-        self._start_episode()
 
     def _start_episode(self) -> None:
         game, board = self.game, self.board
@@ -395,25 +417,8 @@ class PlayView(Vertical):
                 parts.append(self.agent_note(last.observation))
             detail = "  ·  ".join(parts)
         coach = self._coach if self.coach_on else ""
-        self._update_status(self._headline, detail, coach, self._coach_tone, self._tone)
-
-    def _update_status(
-        self, headline: Content, detail: str, coach: str, coach_tone: str, tone: str
-    ) -> None:
-        shown = (headline, detail, coach, coach_tone, tone, self._hint)
-        if shown == self._status_shown:  # an update lays the view out again: none needed
-            return
-        self._status_shown = shown
-        status = self.query_one("#play-status")
-        self.query_one("#play-headline", Static).update(headline)
-        coach_line = self.query_one("#play-coach", Static)
-        coach_line.update(Content(coach))
-        coach_line.set_classes(coach_tone)
-        self.query_one("#play-detail", Static).update(Content(detail))
-        self.query_one("#play-hint", Static).update(Content(self._hint))
-        status.set_classes(tone)
-        status.set_class(bool(self._hint), "-hint")
-        status.set_class(bool(coach), "-coach")
+        self.query_one(StatusLines).show(self._headline, detail, coach, self._coach_tone,
+                                         self._tone, hint=self._hint)
 
     def _advice(self, game: HumanGame) -> Advice | None:
         """What the exact optimum would do now in `game` (None when the game cannot say)."""
@@ -496,9 +501,6 @@ class PlayView(Vertical):
 
     # --- watching the agent ----------------------------------------------------
     def action_watch_agent(self) -> None:
-        self.start_watching()
-
-    def start_watching(self) -> None:
         """Let the greedy agent play fresh episodes on the board until a key is pressed."""
         board = self.board
         if board is None or self.watching:
@@ -612,7 +614,7 @@ class PlayView(Vertical):
             return
         self._show_board(self.agent_game)
         self._hint = ""
-        self._update_status(Content(WATCHING), detail, "", "", tone)
+        self.query_one(StatusLines).show(Content(WATCHING), detail, tone=tone)
 
     def _observation_text(self, last: PlayStep) -> str:
         """The observation in the game's words, or raw (cut short) when wrappers reshaped it."""

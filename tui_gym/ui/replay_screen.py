@@ -24,6 +24,7 @@ from tui_gym.session.play import PlayStep
 from tui_gym.session.recording.games import game_named
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.jump_screen import JumpScreen
+from tui_gym.ui.play_view import StatusLines
 from tui_gym.ui.widgets.board_kinds import KINDS, board_class
 from tui_gym.ui.widgets.boards import Board
 from tui_gym.ui.widgets.key_bar import KeyBar
@@ -86,13 +87,6 @@ class ReplayScreen(ModalScreen[None]):
     ReplayScreen #replay-board { height: 1fr; min-height: 7; }
     ReplayScreen #replay-board > Board { height: 1fr; }
     ReplayScreen #replay-words { height: 1fr; padding: 1 2; color: $text-muted; }
-    ReplayScreen #replay-status { height: auto; padding: 0 1; border-left: outer $foreground 30%; }
-    ReplayScreen #replay-status.-good { border-left: outer $success; }
-    ReplayScreen #replay-status.-bad { border-left: outer $error; }
-    ReplayScreen #replay-headline { text-style: bold; }
-    ReplayScreen #replay-coach.-good { color: $text-success; }
-    ReplayScreen #replay-coach.-bad { color: $text-error; }
-    ReplayScreen #replay-detail { color: $text-muted; }
     ReplayScreen #replay-buttons { height: 1; align-horizontal: center; }
     ReplayScreen ReplayButton { margin: 0 1; min-width: 8; }
     ReplayScreen #replay-moves { width: 36; height: 1fr; }
@@ -129,10 +123,7 @@ class ReplayScreen(ModalScreen[None]):
         with Horizontal(id="replay-body"):
             with Vertical(id="replay-main"):
                 yield Vertical(id="replay-board")
-                with Vertical(id="replay-status"):
-                    yield Static(id="replay-headline")
-                    yield Static(id="replay-coach")
-                    yield Static(id="replay-detail")
+                yield StatusLines("replay")
                 with Horizontal(id="replay-buttons"):
                     for label, name, action in BUTTONS:
                         yield ReplayButton(label, id=f"replay-{name}", action=f"screen.{action}",
@@ -307,12 +298,7 @@ class ReplayScreen(ModalScreen[None]):
                 detail.append(move.note)
         if here.frame.scene is None and self.board is not None:
             detail.append("no picture recorded here")
-        self.query_one("#replay-headline", Static).update(Text(headline))
-        coach_line = self.query_one("#replay-coach", Static)
-        coach_line.update(Text(coach))
-        coach_line.set_classes(tone)
-        self.query_one("#replay-detail", Static).update(Text("  ·  ".join(detail)))
-        self.query_one("#replay-status").set_classes(tone)
+        self.query_one(StatusLines).show(headline, "  ·  ".join(detail), coach, tone, tone)
 
     def _coach_line(self, episode: Episode, move: Move) -> tuple[str, str]:
         """The coach's verdict, the move's regret and the episode's so far, and a tone."""

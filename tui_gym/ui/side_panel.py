@@ -49,10 +49,9 @@ class ParamField(Horizontal):
     """
     SCOPED_CSS = False  # the compact rules start at Screen
 
-    def __init__(self, param: Param, value: Any, group: str) -> None:
+    def __init__(self, param: Param, value: Any) -> None:
         super().__init__(classes="param-field")
         self.param = param
-        self.group = group  # "env" or a wrapper name
         self._value = value
 
     def compose(self) -> ComposeResult:
@@ -145,7 +144,7 @@ class WrapperRow(Vertical):
         yield Static(spec.summary, classes="summary", markup=False)
         values = self.choice.values() if self.choice else spec.defaults()
         for param in spec.params:
-            yield ParamField(param, values.get(param.name, param.default), spec.name)
+            yield ParamField(param, values.get(param.name, param.default))
         if self.reason:
             yield Static(self._reason_text(), classes="reason")
 
@@ -364,7 +363,7 @@ class SidePanel(VerticalScroll):
     def _env_fields(self) -> list[ParamField]:
         session = self.session
         return [
-            ParamField(p, session.env_kwargs.get(p.name, p.default), "env")
+            ParamField(p, session.env_kwargs.get(p.name, p.default))
             for p in session.game.params
         ]
 

@@ -34,7 +34,6 @@ from textual import on
 from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical, VerticalScroll
-from textual.widget import Widget
 from textual.widgets import Button, Label
 
 from tui_gym.algorithms import ALGORITHMS, Settings
@@ -42,6 +41,8 @@ from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.engine.trainer import continue_run
 from tui_gym.ui.exact_figures import Figures, LatestOnly, Request, compute, key_wait_of
 from tui_gym.ui.map_editing import MapEditingView
+from tui_gym.ui.widgets.board_kinds import board_class
+from tui_gym.ui.widgets.boards import Board
 from tui_gym.ui.widgets.heatmap_view import HeatmapView
 from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
 from tui_gym.ui.widgets.map_editor import MapEditor
@@ -204,7 +205,7 @@ class TrainView(MapEditingView):
         self._snapshot: TrainingSnapshot | None = None
         self._version = -1
         self._state = ""
-        self._board: Widget | None = None
+        self._board: Board | None = None
         self._board_kind = ""
         self._scene: Any = None
         self._scene_event: Any = None
@@ -227,46 +228,51 @@ class TrainView(MapEditingView):
         # The parts the view updates, kept at hand: a timer tick never has to
         # search the DOM (and cannot miss while the app shuts down).
         self._toggle = Button("▶ Start", id="btn-toggle", variant="success", compact=True,
-                              tooltip="Start or pause training (space)")
+                              tooltip="Start or pause training (space)",
+                              action="app.toggle_training")
         self._episode = Button("1 episode", id="btn-episode", compact=True,
-                               tooltip="Train for exactly one episode (.)")
+                               tooltip="Train for exactly one episode (.)",
+                               action="app.one_episode")
         self._speed = Label("", id="train-speed")
-        self._progress = ProgressLine(id="train-progress")
+        self.progress = ProgressLine(id="train-progress")
         self._engine = Label("", id="train-engine", markup=False)
-        self._stats = StatsPanel(id="train-stats")
-        self._form = HyperparameterForm(session.hp, id="train-form")
-        self._charts = TrainingCharts(id="train-charts")
+        self.stats = StatsPanel(id="train-stats")
+        self.form = HyperparameterForm(session.hp, id="train-form")
+        self.charts = TrainingCharts(id="train-charts")
         self._prediction = PredictionChart(id="train-prediction")
         self._prediction.display = session.predicts
         self._board_box = Vertical(id="train-board-box")
         self._caption = Label("", id="train-board-caption")
         self._heatmap_box = Vertical(id="train-heatmap-box")
-        self._heatmap = HeatmapView(id="train-heatmaps")
+        self.heatmap = HeatmapView(id="train-heatmaps")
         self._editor: MapEditor | None = None  # mounted when first opened
-        self._step = StepPanel(id="train-step")
+        self.step_panel = StepPanel(id="train-step")
 
         with Horizontal(id="train-controls"):
             yield self._toggle
             yield self._episode
             yield Button("Reset", id="btn-reset", variant="error", compact=True,
-                         tooltip="A fresh agent: empty Q-table, fresh statistics (x)")
-            yield Button("−", id="btn-slower", compact=True, tooltip="Slower (-)")
+                         tooltip="A fresh agent: empty Q-table, fresh statistics (x)",
+                         action="app.request_reset")
+            yield Button("−", id="btn-slower", compact=True, tooltip="Slower (-)",
+                         action="app.slower")
             yield self._speed
-            yield Button("+", id="btn-faster", compact=True, tooltip="Faster (+)")
-        yield self._progress
+            yield Button("+", id="btn-faster", compact=True, tooltip="Faster (+)",
+                         action="app.faster")
+        yield self.progress
         yield self._engine
         with VerticalScroll(id="train-body"):
             with Horizontal(id="train-top"):
-                yield self._stats
-                yield self._form
+                yield self.stats
+                yield self.form
             with Horizontal(id="train-middle"):
-                yield self._charts
+                yield self.charts
                 with self._board_box:
                     yield self._caption
             yield self._prediction
-            yield self._step
+            yield self.step_panel
             with self._heatmap_box:
-                yield self._heatmap
+                yield self.heatmap
 
     def on_mount(self) -> None:
         self.set_interval(STATE_POLL_SECONDS, self._poll_state)
@@ -274,28 +280,8 @@ class TrainView(MapEditingView):
 
     # --- parts -------------------------------------------------------------
     @property
-    def stats(self) -> StatsPanel:
-        return self._stats
-
-    @property
-    def charts(self) -> TrainingCharts:
-        return self._charts
-
-    @property
-    def heatmap(self) -> HeatmapView:
-        return self._heatmap
-
-    @property
     def editor(self) -> MapEditor | None:
         return self._editor
-
-    @property
-    def form(self) -> HyperparameterForm:
-        return self._form
-
-    @property
-    def progress(self) -> ProgressLine:
-        return self._progress
 
     @property
     def shows_traces(self) -> bool:
@@ -404,10 +390,6 @@ class TrainView(MapEditingView):
         else:
             self.heatmap.focus(scroll_visible=False)
 
-    @property
-    def step_panel(self) -> StepPanel:
-        return self._step
-
     def key_help(self) -> list[tuple[str, str]]:
         """The keys this view adds to the app's own training keys."""
         keys = [
@@ -505,7 +487,7 @@ class TrainView(MapEditingView):
         if reason != self.engine_note:
             self._engine.update(reason)
             self._engine.tooltip = reason
-            self._stats.tooltip = reason  # the compact layout hides the line
+            self.stats.tooltip = reason  # the compact layout hides the line
 
     def _show_state(self, runner: TrainingRunner) -> None:
         """The badge, from what is shown: running (a run, or one episode, under way),
@@ -531,32 +513,19 @@ class TrainView(MapEditingView):
             self._show_state(self.runner)
 
     # --- the board at animated speeds --------------------------------------
-    def _board_class(self) -> type[Widget] | None:
-        from tui_gym.ui.widgets.board_kinds import board_class
-
-        return board_class(self.session.game.board)
-
     def _drop_board(self) -> None:
         if self._board is not None:
             self._board.remove()
         self._board = None
         self._board_kind = ""
 
-    def _ensure_board(self) -> Widget | None:
-        if self._board is not None:
-            return self._board
-        cls = self._board_class()
-        if cls is None:
-            return None
-        try:
-            board = cls(interactive=False)  # type: ignore[call-arg]
-        except TypeError:
-            board = cls()
-        board.can_focus = False
-        self._board = board
-        self._board_kind = self.session.game.board
-        self._board_box.mount(board, before=0)
-        return board
+    def _ensure_board(self) -> Board:
+        if self._board is None:
+            self._board_kind = self.session.game.board
+            self._board = board_class(self._board_kind)(interactive=False)
+            self._board.can_focus = False
+            self._board_box.mount(self._board, before=0)
+        return self._board
 
     def _show_board(self, runner: TrainingRunner) -> None:
         box = self._board_box
@@ -565,15 +534,15 @@ class TrainView(MapEditingView):
         shown = animated and scene is not None
         box.set_class(shown, "-shown")
         self.set_class(runner.speed.animated, "-animated")
-        if not shown:
+        if not animated or scene is None:
             self._show_step(None)
             return
         board = self._ensure_board()
         event = runner.last_event
-        if board is not None and scene != self._scene:
+        if scene != self._scene:
             self._scene = scene
             try:
-                board.show_scene(scene, reveal=True)  # type: ignore[attr-defined]
+                board.show_scene(scene, reveal=True)
             except Exception as exc:  # a board that cannot draw must not stop the view
                 self.log.error(f"board could not show the scene: {exc!r}")
         if event is not self._scene_event:
@@ -586,14 +555,14 @@ class TrainView(MapEditingView):
         record = getattr(event, "last_update", None)
         self.set_class(record is not None, "-stepping")
         if record is None:
-            if self._step.lines or not self._step.content:
-                self._step.show([])
+            if self.step_panel.lines or not self.step_panel.content:
+                self.step_panel.show([])
             if self.heatmap.step_cell is not None:
                 self.heatmap.step_cell = None
             return
         session = self.session
         game, kwargs = session.game, session.env_kwargs
-        self._step.show(explain(
+        self.step_panel.show(explain(
             event, record, game.action_names,
             lambda observation: game.states.describe(observation, kwargs),
             session.learner_class.title,
@@ -624,20 +593,6 @@ class TrainView(MapEditingView):
         return "\n".join(line for line in (count, step, state) if line)
 
     # --- events ------------------------------------------------------------
-    @on(Button.Pressed)
-    async def _button(self, event: Button.Pressed) -> None:
-        actions = {
-            "btn-toggle": "toggle_training",
-            "btn-episode": "one_episode",
-            "btn-reset": "request_reset",
-            "btn-slower": "slower",
-            "btn-faster": "faster",
-        }
-        action = actions.get(event.button.id or "")
-        if action is not None:
-            event.stop()
-            await self.app.run_action(action)
-
     @on(HeatmapView.FocusChanged)
     def _heatmap_focus(self, event: HeatmapView.FocusChanged) -> None:
         event.stop()
