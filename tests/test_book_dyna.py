@@ -126,7 +126,7 @@ def test_dyna_q_against_itself_shows_no_advantage(monkeypatch: pytest.MonkeyPatc
     monkeypatch.setattr(dyna, "SCALES", (1,))
     dyna_q = dyna.SWEEPERS[0]
     monkeypatch.setattr(dyna, "SWEEPERS", (dyna_q, Learner("again", "dyna-q", dyna_q.settings)))
-    result = dyna.EXAMPLE_8_4.run(FigureOptions(runs=5, seed=100), lambda *_: None)
+    result = dyna.example_8_4.run(FigureOptions(runs=5, seed=100), lambda *_: None)
     assert [c.ok for c in result.checks] == [False, False]
 
 
@@ -134,5 +134,5 @@ def test_an_example_is_listed_in_its_chapter_and_called_by_its_name() -> None:
     names = [f.name for f in figures()]
     assert names[names.index("8.2"):names.index("8.2") + 4] == [
         "8.2", "8.4", "8.5", "example 8.4"]
-    assert figure_named("Example 8.4") is figure_named("e8.4") is dyna.EXAMPLE_8_4
+    assert figure_named("Example 8.4") is figure_named("e8.4") is dyna.example_8_4
     assert heading("example 8.4") == "Example 8.4" and heading("8.4") == "Figure 8.4"

@@ -36,7 +36,7 @@ def test_full_hands_the_executor_the_books_tasks(monkeypatch: pytest.MonkeyPatch
                                prepared=SimpleNamespace(optimum=None), tasks={})
 
     monkeypatch.setattr(runs, "execute", execute)
-    td.FIG_6_6.run(FigureOptions(full=True), lambda *_: None)
+    td.fig_6_6.run(FigureOptions(full=True), lambda *_: None)
     assert [(s.game, s.seeds, s.episodes) for s, _ in asked] == [
         ("cliffwalking", 50_000, 100), ("cliffwalking", 10, 100_000)]
     for _, arms in asked:
@@ -63,13 +63,13 @@ def test_a_recorded_figure_resumes_with_only_the_missing_tasks(
     options = {"runs": 3, "episodes": 40, "seed": 7}
     with RunHistory(tmp_path / "runs.db") as history:
         first = FigureTasks(history)
-        whole = td.FIG_6_6.run(FigureOptions(**options, tasks=first), lambda *_: None)
+        whole = td.fig_6_6.run(FigureOptions(**options, tasks=first), lambda *_: None)
         ids = history.group_ids(first.group)
         assert first.group == ids[0] and len(ids) == 60 and first.landed == first.tasks
         for run_id in ids[30:]:  # as if stopped before the asymptotic runs began
             history.remove_run(run_id)
         again = FigureTasks(history, resume=first.group)
-        resumed = td.FIG_6_6.run(FigureOptions(**options, tasks=again), lambda *_: None)
+        resumed = td.fig_6_6.run(FigureOptions(**options, tasks=again), lambda *_: None)
         now = history.group_ids(first.group)
         assert now[:30] == ids[:30] and len(now) == 60 and min(now[30:]) > max(ids)
     for a, b in zip(whole.series, resumed.series, strict=True):
@@ -82,13 +82,13 @@ def test_resuming_with_other_settings_or_from_a_later_run_is_refused(
     _small(monkeypatch)
     with RunHistory(tmp_path / "runs.db") as history:
         first = FigureTasks(history)
-        td.FIG_6_6.run(FigureOptions(runs=2, episodes=20, tasks=first), lambda *_: None)
+        td.fig_6_6.run(FigureOptions(runs=2, episodes=20, tasks=first), lambda *_: None)
         assert first.group is not None
         with pytest.raises(ResumeError, match="other settings"):
-            td.FIG_6_6.run(FigureOptions(runs=3, episodes=20, tasks=FigureTasks(
+            td.fig_6_6.run(FigureOptions(runs=3, episodes=20, tasks=FigureTasks(
                 history, resume=first.group)), lambda *_: None)
         with pytest.raises(ResumeError, match=f"resume run {first.group}$"):
-            td.FIG_6_6.run(FigureOptions(runs=2, episodes=20, tasks=FigureTasks(
+            td.fig_6_6.run(FigureOptions(runs=2, episodes=20, tasks=FigureTasks(
                 history, resume=first.group + 1)), lambda *_: None)
 
 

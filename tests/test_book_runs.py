@@ -129,7 +129,7 @@ def test_a_claim_the_runs_do_not_bear_out_fails(monkeypatch: pytest.MonkeyPatch)
 
     # Without planning the maze is far from learned by episode 3.
     monkeypatch.setattr(dyna, "SETTLED", {0: 3, 5: 5, 50: 3})
-    result = dyna.FIG_8_2.run(FigureOptions(runs=10, seed=100), lambda *_: None)
+    result = dyna.fig_8_2.run(FigureOptions(runs=10, seed=100), lambda *_: None)
     assert [c.ok for c in result.checks] == [True, True, False, True, True]
 
 

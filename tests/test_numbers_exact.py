@@ -17,7 +17,13 @@ import math
 import numpy as np
 import pytest
 
-from tests.gridworld_support import mixed_pair_fraction, optimal_pair_fraction
+from tests.gridworld_support import (
+    mixed_pair_fraction,
+    mixed_steps_over_optimal,
+    optimal_pair_fraction,
+    policy_steps_over_optimal,
+    shortest_path_policy,
+)
 from tests.mdp_support import sampled_returns
 from tui_gym.algorithms import QLearning
 from tui_gym.core.wrappers import parse_wrapper_spec
@@ -28,11 +34,6 @@ from tui_gym.games.blackjack.solver import (
     optimal_policy,
     optimal_value,
     policy_value,
-)
-from tui_gym.games.gridworld.paths import (
-    mixed_steps_over_optimal,
-    policy_steps_over_optimal,
-    shortest_path_policy,
 )
 from tui_gym.games.words import MIN_CI_EPISODES, return_summary
 from tui_gym.session.play import HumanGame, Tally

@@ -13,8 +13,8 @@ from tests.gridworld_support import (
     optimal_actions,
     optimal_pair_fraction,
     shortest_path_length,
+    shortest_path_policy,
 )
-from tui_gym.games.gridworld.paths import shortest_path_policy
 
 RIGHT, UP, LEFT, DOWN = 0, 1, 2, 3
 # The tutorial's moves, written out independently of the module under test.

@@ -14,12 +14,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.screen import screen_text
-from tui_gym.games.gridworld.paths import (
+from tests.gridworld_support import (
     mixed_steps_over_optimal,
     policy_steps_over_optimal,
     shortest_path_policy,
 )
+from tests.screen import screen_text
 from tui_gym.games.words import plural, signed
 from tui_gym.session.play import HumanGame
 from tui_gym.session.session import Session

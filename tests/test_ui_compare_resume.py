@@ -129,7 +129,7 @@ async def test_a_book_figures_runs_are_not_resumed_here(tmp_path: Path) -> None:
                 stop.set()
 
         with pytest.raises(FigureStopped):
-            td.FIG_6_6.run(FigureOptions(runs=2, episodes=20, stop=stop, tasks=tasks), told)
+            td.fig_6_6.run(FigureOptions(runs=2, episodes=20, stop=stop, tasks=tasks), told)
     app = ViewApp(Session("cliffwalking", seed=0), db)
     async with app.run_test(size=SIZE) as pilot:
         view = app.query_one(CompareView)

@@ -2,28 +2,54 @@
 
 from __future__ import annotations
 
+import keyword
 from abc import ABC, abstractmethod
 from collections.abc import Hashable, Iterable, Mapping
 from dataclasses import dataclass
-from functools import cache
-from typing import Any, ClassVar, get_type_hints
+from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
 from tui_gym.algorithms.settings import COMMON_PARAMS, Field, Settings
 from tui_gym.core.engine import loop, rules
+from tui_gym.core.engine.kernel import kernel
 
-__all__ = ["CellUpdate", "Learner", "LearnerState", "TableSpec", "Transition", "UpdateRecord"]
+__all__ = ["CellUpdate", "Extra", "Learner", "LearnerState", "TableSpec", "Transition",
+           "UpdateRecord", "filled", "note", "restart"]
 
-@cache
-def _field_types(params: type) -> dict[str, Any]:
-    return get_type_hints(params)
+
+@kernel(inline=True)
+def note(log: Any, row: int, c0: float, c1: float, c2: float, c3: float, c4: float,
+         c5: float) -> None:
+    """Row `row` of an update's log, when it has one, gets six numbers from column 0."""
+    if row < log.shape[0]:
+        log[row, 0] = c0
+        log[row, 1] = c1
+        log[row, 2] = c2
+        log[row, 3] = c3
+        log[row, 4] = c4
+        log[row, 5] = c5
 
 
 # Rows a growing (sparse) table starts with; it doubles when full.
 _INITIAL_ROWS = 256
+_FIRST_STEPS = 64  # steps of an episode an "episode" extra holds before it doubles
 # The largest count a saved table may hold (far beyond any run; keeps sums in int64).
 MAX_SAVED_COUNT = 2**62
+
+
+@kernel(inline=True)
+def restart(tables: Any, hp: Any) -> None:
+    """`begin` of a rule that keeps the episode so far: its last array, the episode's
+    length, back to 0."""
+    tables[-1][0] = 0
+
+
+@kernel(inline=True)
+def filled(tables: Any, hp: Any) -> bool:
+    """`full` of a rule that keeps the episode so far in its arrays from the fifth on, the
+    length last: whether the episode fills them."""
+    return tables[-1][0] >= tables[4].shape[0]
 
 
 @dataclass(frozen=True)
@@ -110,6 +136,20 @@ class TableSpec:
 
 
 @dataclass(frozen=True)
+class Extra:
+    """An array a learner's rule takes beyond its tables (after them and `visits`, in the
+    order declared). `size`: "rows" (one a table row), "table" (a row's actions), "cells"
+    (one a (row, action)), which grow with the table; "episode" (the steps of the episode
+    in progress: twice the room at each `make_room`); a hyperparameter's name (its value);
+    or a number. `fill` None: the initial value (`initial_value`)."""
+
+    name: str
+    size: str | int
+    dtype: type = np.float64
+    fill: float | int | None = 0
+
+
+@dataclass(frozen=True)
 class LearnerState:
     """Everything a learner saves: named arrays, JSON-able metadata, and sparse row keys.
 
@@ -143,11 +183,30 @@ class Learner(ABC):
         TableSpec("q", np.float64), TableSpec("counts", np.int64),
     )
     value_tables: ClassVar[tuple[str, ...]] = ("q",)  # start at `initial_value`
+    extras: ClassVar[tuple[Extra, ...]] = ()
     has_traces: ClassVar[bool] = False  # keeps eligibility traces (`eligibility`)
-    Params: ClassVar[Any]  # the compiled hyperparameters' NamedTuple (see the docstring)
+    rule: ClassVar[rules.Rule]  # its compiled parts (see `rules`)
+    Params: ClassVar[Any]  # the NamedTuple of its compiled hyperparameters (`__init_subclass__`)
     # The tables named in `tables` (these two for most learners) are attributes.
     q: np.ndarray
     counts: np.ndarray
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """A learner with a `rule` of its own gets its own `Params`, the rule's key: the step
+        size's fields and the discount, then its own hyperparameters in order (`traces` as
+        `replacing`, `lambda` as `lambda_`)."""
+        super().__init_subclass__(**kwargs)
+        if "rule" not in vars(cls):
+            return
+        common = {f.name for f in COMMON_PARAMS}
+        fields = [("learning_rate", float), ("discount", float), ("by_visits", bool)] + [
+            ("replacing", bool) if f.name == "traces" else
+            (f.name + "_" * keyword.iskeyword(f.name), f.kind)
+            for f in cls.params if f.name not in common]
+        params: Any = NamedTuple("Params", fields)  # type: ignore[misc]
+        params.__module__, params.__qualname__ = cls.__module__, f"{cls.__qualname__}.Params"
+        cls.Params = params
+        rules.register(params, cls.rule)
 
     def __init__(
         self, n_actions: int, hyperparameters: Mapping[str, Any] | None = None, *,
@@ -177,10 +236,12 @@ class Learner(ABC):
                     np.full((capacity, self.n_actions), self._fill(spec), spec.dtype))
         self._make_extra(capacity)
 
-    def _fill(self, spec: TableSpec) -> float | int | bool:
-        """What a new row of a table holds: the initial value (`initial_value`) for the
-        action values, the table's own fill for the others."""
-        return self.hp.initial_value if spec.name in self.value_tables else spec.fill
+    def _fill(self, spec: TableSpec, hp: Settings | None = None) -> float | int | bool:
+        """What a new row of a table holds: the initial value (`initial_value`, of `hp` or
+        the learner's) for the action values, the table's own fill for the others."""
+        if spec.name not in self.value_tables:
+            return spec.fill
+        return (self.hp if hp is None else hp).initial_value
 
     @classmethod
     def settings(cls, values: Mapping[str, Any] | None = None) -> Settings:
@@ -196,8 +257,9 @@ class Learner(ABC):
 
     # --- what a subclass may write -------------------------------------------------------
     def arrays(self) -> tuple[np.ndarray, ...]:
-        """The tables the compiled rule takes, in its order."""
-        return (self.q, self.counts, self.visits)
+        """What the compiled rule takes, in its order: the tables, `visits`, the extras."""
+        return (*(getattr(self, spec.name) for spec in self.tables), self.visits,
+                *(getattr(self, extra.name) for extra in self.extras))
 
     def action_values(self, rows: np.ndarray | slice) -> np.ndarray:
         """The values shown and evaluated, per row (k, n_actions); the policy's best."""
@@ -209,18 +271,42 @@ class Learner(ABC):
         action's place); None for a learner without traces."""
         return None
 
-    def _make_extra(self, capacity: int) -> None:  # noqa: B027 - most learners have none
-        """Arrays beyond the tables, for `capacity` rows."""
+    def _shape(self, extra: Extra, capacity: int) -> tuple[int, ...]:
+        size = extra.size
+        if isinstance(size, int):
+            return (size,)
+        shapes = {"rows": (capacity,), "table": (capacity, self.n_actions),
+                  "cells": (capacity * self.n_actions,), "episode": (_FIRST_STEPS,)}
+        return shapes[size] if size in shapes else (int(self.hp[size]),)
 
-    def _grow_extra(self, capacity: int) -> None:  # noqa: B027 - most learners have none
-        """Make the arrays beyond the tables fit `capacity` rows, keeping what they hold."""
+    def _new(self, extra: Extra, shape: tuple[int, ...]) -> np.ndarray:
+        return np.full(shape, self.hp.initial_value if extra.fill is None else extra.fill,
+                       extra.dtype)
+
+    def _make_extra(self, capacity: int) -> None:
+        """The extras, for `capacity` rows."""
+        for extra in self.extras:
+            setattr(self, extra.name, self._new(extra, self._shape(extra, capacity)))
+
+    def _grow_extra(self, capacity: int) -> None:
+        """Make the extras that grow with the table fit `capacity` rows, keeping what they hold."""
+        for extra in self.extras:
+            if extra.size in ("rows", "table", "cells"):
+                old, shape = getattr(self, extra.name), self._shape(extra, capacity)
+                more = self._new(extra, (shape[0] - len(old), *shape[1:]))
+                setattr(self, extra.name, np.concatenate([old, more]))
 
     def log_rows(self) -> int:
         """Rows of log an explained update of the next transition may write."""
         return 1
 
-    def make_room(self) -> None:  # noqa: B027 - only a learner that keeps episodes asks
-        """Room for what the rule asked for room for (`rules.full`)."""
+    def make_room(self) -> None:
+        """Room for what the rule asked for room for (`rules.full`): twice the room for the
+        episode in progress."""
+        for extra in self.extras:
+            if extra.size == "episode":
+                old = getattr(self, extra.name)
+                setattr(self, extra.name, np.concatenate([old, np.zeros_like(old)]))
 
     def _extra_arrays(self) -> dict[str, np.ndarray]:
         """Arrays to save beyond the tables (copies)."""
@@ -240,7 +326,7 @@ class Learner(ABC):
     def compiled_params(self) -> Any:
         """The compiled hyperparameters (`Params`) of the current settings."""
         if self._params is None:
-            hp, kinds = self.hp, _field_types(self.Params)
+            hp, kinds = self.hp, self.Params.__annotations__
             self._params = self.Params(**{name: self._compiled(name, kinds[name])
                                           for name in self.Params._fields})
             self._exploration = np.array([hp.epsilon_start, hp.epsilon_final,
@@ -473,6 +559,12 @@ class Learner(ABC):
             **extra,
         )
 
+    @staticmethod
+    def _logged(rows: np.ndarray) -> tuple[CellUpdate, ...]:
+        """The updates in rows of a log as `note` writes them: the pair, the target, the step
+        size, Q before and after."""
+        return tuple(CellUpdate(int(w[0]), int(w[1]), *(float(x) for x in w[2:6])) for w in rows)
+
     def _td_record(self, step: Transition, log: np.ndarray, future_term: str,
                    *more: tuple[str, float], formula: str = "", **extra: Any) -> UpdateRecord:
         """The record of a one-step TD update logged by `rules.td_update`: the target is r
@@ -559,10 +651,9 @@ class Learner(ABC):
         self._check_arrays(arrays, rows)
         capacity = rows if dense else max(_INITIAL_ROWS, rows)
         loaded: dict[str, np.ndarray] = {}
-        fills = {spec.name: hp.initial_value if spec.name in self.value_tables else spec.fill
-                 for spec in self.tables}
         for spec in self.tables:
-            filled: np.ndarray = np.full((capacity, self.n_actions), fills[spec.name], spec.dtype)
+            filled: np.ndarray = np.full((capacity, self.n_actions), self._fill(spec, hp),
+                                         spec.dtype)
             filled[:rows] = arrays[spec.name]
             loaded[spec.name] = filled
         visits = np.zeros(capacity, dtype=np.int64)

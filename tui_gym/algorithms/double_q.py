@@ -2,23 +2,17 @@
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
 from tui_gym.algorithms.base import Learner, TableSpec, Transition, UpdateRecord
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, greedy, register, td_update
+from tui_gym.core.engine.rules import Rule, greedy, td_update
 
 __all__ = ["DoubleQLearning"]
 
 _NAMES = ("A", "B")
-
-
-class Params(NamedTuple):
-    learning_rate: float
-    discount: float
-    by_visits: bool
 
 
 @kernel(inline=True)
@@ -40,9 +34,6 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     return td
 
 
-register(Params, Rule(update, acting=acting))
-
-
 class DoubleQLearning(Learner):
     """Tabular Double Q-learning; acts epsilon-greedily on the sum of its two tables."""
 
@@ -50,7 +41,7 @@ class DoubleQLearning(Learner):
     title = "Double Q-learning"
     summary = "two tables, a coin per update: Q-learning without the maximization bias"
     formula = "r + γ·Q_B(s', a*), a* = argmax Q_A(s',·)"
-    Params = Params
+    rule = Rule(update, acting=acting)
     tables = (
         TableSpec("q_a", np.float64), TableSpec("q_b", np.float64), TableSpec("counts_a", np.int64),
         TableSpec("counts_b", np.int64),
@@ -62,9 +53,6 @@ class DoubleQLearning(Learner):
     q_b: np.ndarray
     counts_a: np.ndarray
     counts_b: np.ndarray
-
-    def arrays(self) -> tuple[np.ndarray, ...]:
-        return (self.q_a, self.q_b, self.counts_a, self.counts_b, self.visits)
 
     def action_values(self, rows: np.ndarray | slice) -> np.ndarray:
         return (self.q_a[rows] + self.q_b[rows]) / 2.0

@@ -6,31 +6,39 @@ on stochastic games planning repeats one sampled outcome until the pair is tried
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
-from tui_gym.algorithms.base import Learner, TableSpec, Transition, UpdateRecord
+from tui_gym.algorithms.base import Extra, Learner, TableSpec, Transition, UpdateRecord, note
 from tui_gym.algorithms.qlearning import QLearning
 from tui_gym.algorithms.settings import COMMON_PARAMS
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, max_value, register, step_size, td_update, uniform
+from tui_gym.core.engine.rules import Rule, max_value, step_size, td_update, uniform
 from tui_gym.core.params import Param
 
 __all__ = ["DynaQ"]
 
 
-class Params(NamedTuple):
-    learning_rate: float
-    discount: float
-    by_visits: bool
-    planning_steps: int
+@kernel(inline=True)
+def replay(tables: Any, hp: Any, offered: Any, ps: int, pa: int, reward: float, log: Any,
+           row: int) -> None:
+    """A simulated update: Q(ps, pa) toward `reward` + γ·max Q of the state the model says
+    the pair leads to (0 after a terminal), by the pair's step size; row `row` of `log`
+    gets the pair, the target, the step size and Q before and after."""
+    q, counts, model_next, model_terminated = tables[0], tables[1], tables[3], tables[4]
+    future = 0.0 if model_terminated[ps, pa] else max_value(q, offered, model_next[ps, pa])
+    target = reward + hp.discount * future
+    alpha = step_size(hp.learning_rate, hp.by_visits, max(counts[ps, pa], 1))
+    before = q[ps, pa]
+    q[ps, pa] = before + alpha * (target - before)
+    note(log, row, ps, pa, target, alpha, before, q[ps, pa])
 
 
 @kernel
 def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
-    q, counts, visits, model_reward, model_next, model_terminated, tried, n_tried = tables
+    q, counts, model_reward, model_next, model_terminated, visits, tried, n_tried = tables
     future = 0.0 if terminated else max_value(q, offered, s2)
     td = td_update(q, counts, visits, hp, s, a, r, future, log)
     n_actions = q.shape[1]
@@ -40,19 +48,12 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     model_reward[s, a] = r
     model_next[s, a] = s2
     model_terminated[s, a] = terminated
-    for _ in range(hp.planning_steps):
+    for i in range(hp.planning_steps):
         cell = tried[uniform(rng, n_tried[0])]
         ps, pa = cell // n_actions, cell % n_actions
-        ns = model_next[ps, pa]
-        future = 0.0 if model_terminated[ps, pa] else max_value(q, offered, ns)
-        target = model_reward[ps, pa] + hp.discount * future
-        alpha = step_size(hp.learning_rate, hp.by_visits, max(counts[ps, pa], 1))
-        q[ps, pa] += alpha * (target - q[ps, pa])
+        replay(tables, hp, offered, ps, pa, model_reward[ps, pa], log, i + 1)
     log[0, 6] = hp.planning_steps
     return td
-
-
-register(Params, Rule(update))
 
 
 class DynaQ(Learner):
@@ -62,7 +63,7 @@ class DynaQ(Learner):
     title = "Dyna-Q"
     summary = "planning: replays a learned model between real steps, learning from fewer episodes"
     formula = QLearning.formula
-    Params = Params
+    rule = Rule(update)
     params = (
         *COMMON_PARAMS,
         Param("planning_steps", int, 10, 0, 1000,
@@ -74,23 +75,14 @@ class DynaQ(Learner):
         TableSpec("model_next", np.int64, -1),  # -1: never tried
         TableSpec("model_terminated", bool),
     )
+    extras = (*Learner.extras, Extra("_tried", "cells", np.int64),  # in order first tried
+              Extra("_n_tried", 1, np.int64))
 
     model_reward: np.ndarray
     model_next: np.ndarray
     model_terminated: np.ndarray
-
-    def arrays(self) -> tuple[np.ndarray, ...]:
-        return (self.q, self.counts, self.visits, self.model_reward, self.model_next,
-                self.model_terminated, self._tried, self._n_tried)
-
-    def _make_extra(self, capacity: int) -> None:
-        self._tried = np.zeros(capacity * self.n_actions, dtype=np.int64)  # in order first tried
-        self._n_tried = np.zeros(1, dtype=np.int64)
-
-    def _grow_extra(self, capacity: int) -> None:
-        grown = np.zeros(capacity * self.n_actions, dtype=np.int64)
-        grown[: len(self._tried)] = self._tried
-        self._tried = grown
+    _tried: np.ndarray
+    _n_tried: np.ndarray
 
     def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
         return self._td_record(step, log, "max Q(s',·)", planning_updates=int(log[0, 6]))

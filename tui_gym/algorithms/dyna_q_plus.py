@@ -4,23 +4,14 @@ tried for long.
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
-from tui_gym.algorithms.base import TableSpec, Transition, UpdateRecord
-from tui_gym.algorithms.dyna_q import DynaQ
+from tui_gym.algorithms.base import Extra, TableSpec, Transition, UpdateRecord
+from tui_gym.algorithms.dyna_q import DynaQ, replay
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import (
-    Rule,
-    every,
-    max_value,
-    offered_range,
-    register,
-    step_size,
-    td_update,
-    uniform,
-)
+from tui_gym.core.engine.rules import Rule, every, max_value, offered_range, td_update, uniform
 from tui_gym.core.params import Param
 
 __all__ = ["DynaQPlus"]
@@ -28,19 +19,11 @@ __all__ = ["DynaQPlus"]
 SHOWN = 4  # simulated updates the step panel lists
 
 
-class Params(NamedTuple):
-    learning_rate: float
-    discount: float
-    by_visits: bool
-    planning_steps: int
-    kappa: float
-
-
 @kernel
 def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
-    (q, counts, visits, model_reward, model_next, model_terminated, tried, n_tried,
-     last_tried, clock) = tables
+    (q, counts, model_reward, model_next, model_terminated, last_tried, visits, tried, n_tried,
+     clock) = tables
     clock[0] += 1
     future = 0.0 if terminated else max_value(q, offered, s2)
     td = td_update(q, counts, visits, hp, s, a, r, future, log)
@@ -66,28 +49,14 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     for i in range(hp.planning_steps):
         cell = tried[uniform(rng, n_tried[0])]
         ps, pa = cell // n_actions, cell % n_actions
-        ns = model_next[ps, pa]
         tau = clock[0] - last_tried[ps, pa]
         bonus = hp.kappa * np.sqrt(tau)
-        future = 0.0 if model_terminated[ps, pa] else max_value(q, offered, ns)
-        target = model_reward[ps, pa] + bonus + hp.discount * future
-        alpha = step_size(hp.learning_rate, hp.by_visits, max(counts[ps, pa], 1))
-        before = q[ps, pa]
-        q[ps, pa] += alpha * (target - before)
+        replay(tables, hp, offered, ps, pa, model_reward[ps, pa] + bonus, log, i + 1)
         if i + 1 < log.shape[0]:
-            log[i + 1, 0] = ps
-            log[i + 1, 1] = pa
-            log[i + 1, 2] = target
-            log[i + 1, 3] = alpha
-            log[i + 1, 4] = before
-            log[i + 1, 5] = q[ps, pa]
             log[i + 1, 6] = tau
             log[i + 1, 7] = bonus
     log[0, 6] = hp.planning_steps
     return td
-
-
-register(Params, Rule(update))
 
 
 class DynaQPlus(DynaQ):
@@ -97,7 +66,7 @@ class DynaQPlus(DynaQ):
     title = "Dyna-Q+"
     summary = "Dyna-Q with a bonus κ√τ for what it has not tried for τ steps: finds a changed world"
     formula = "r + κ√τ + γ·max Q(s',·)"
-    Params = Params  # type: ignore[assignment]  # its own, as every learner's
+    rule = Rule(update)
     params = (
         *DynaQ.params,
         Param("kappa", float, 0.0001, 0.0, 10.0,
@@ -105,15 +74,10 @@ class DynaQPlus(DynaQ):
               title="Bonus κ"),
     )
     tables = (*DynaQ.tables, TableSpec("last_tried", np.int64))  # the real step, 0: never
+    extras = (*DynaQ.extras, Extra("_clock", 1, np.int64))  # real steps taken
 
     last_tried: np.ndarray
-
-    def arrays(self) -> tuple[np.ndarray, ...]:
-        return (*super().arrays(), self.last_tried, self._clock)
-
-    def _make_extra(self, capacity: int) -> None:
-        super()._make_extra(capacity)
-        self._clock = np.zeros(1, dtype=np.int64)  # real steps taken
+    _clock: np.ndarray
 
     def log_rows(self) -> int:
         return min(int(self.hp.planning_steps), SHOWN) + 1

@@ -2,21 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
 from tui_gym.algorithms.base import Learner, Transition, UpdateRecord
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, expected_value, register, td_update
+from tui_gym.core.engine.rules import Rule, expected_value, td_update
 
 __all__ = ["ExpectedSarsa"]
-
-
-class Params(NamedTuple):
-    learning_rate: float
-    discount: float
-    by_visits: bool
 
 
 @kernel
@@ -27,9 +21,6 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     return td_update(q, counts, visits, hp, s, a, r, future, log)
 
 
-register(Params, Rule(update))
-
-
 class ExpectedSarsa(Learner):
     """Tabular Expected SARSA under the learner's own epsilon-greedy policy."""
 
@@ -37,7 +28,7 @@ class ExpectedSarsa(Learner):
     title = "Expected SARSA"
     summary = "SARSA with the expectation over the next action: the same values, less noise"
     formula = "r + γ·Σ π(a|s')·Q(s',a)"
-    Params = Params
+    rule = Rule(update)
 
     def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
         return self._td_record(step, log, "Σ π(a|s')·Q(s',a)", ("ε", step.epsilon))

@@ -4,33 +4,16 @@ policy from whole-episode returns.
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
+from tui_gym.algorithms.base import Extra, filled, restart
 from tui_gym.algorithms.prediction import Predictor, v_update
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, register
+from tui_gym.core.engine.rules import Rule
 
 __all__ = ["EpisodePredictor", "MonteCarloPrediction"]
-
-_FIRST_BUFFER = 64  # steps of an episode kept before the buffer doubles
-
-
-class Params(NamedTuple):
-    learning_rate: float
-    discount: float
-    by_visits: bool
-
-
-@kernel(inline=True)
-def begin(tables: Any, hp: Any) -> None:
-    tables[6][0] = 0
-
-
-@kernel(inline=True)
-def full(tables: Any, hp: Any) -> bool:
-    return tables[6][0] >= tables[4].shape[0]
 
 
 @kernel
@@ -53,26 +36,13 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     return total
 
 
-register(Params, Rule(update, begin=begin, full=full))
-
-
 class EpisodePredictor(Predictor):
-    """A predictor that keeps each episode's states and rewards until its end (`begin` and
-    `full` above, tables 4 to 6)."""
+    """A predictor that keeps each episode's states and rewards until its end (`restart`
+    and `filled`, tables 4 to 6)."""
 
-    def arrays(self) -> tuple[np.ndarray, ...]:
-        return (*super().arrays(), self._states, self._rewards, self._length)
-
-    def _make_extra(self, capacity: int) -> None:
-        super()._make_extra(capacity)
-        self._states = np.zeros(_FIRST_BUFFER, dtype=np.int64)  # the episode so far
-        self._rewards = np.zeros(_FIRST_BUFFER, dtype=np.float64)
-        self._length = np.zeros(1, dtype=np.int64)
-
-    def make_room(self) -> None:
-        """Twice the room for the episode in progress."""
-        self._states = np.concatenate([self._states, np.zeros_like(self._states)])
-        self._rewards = np.concatenate([self._rewards, np.zeros_like(self._rewards)])
+    extras = (*Predictor.extras, Extra("_states", "episode", np.int64),
+              Extra("_rewards", "episode"), Extra("_length", 1, np.int64))
+    _length: np.ndarray
 
     def log_rows(self) -> int:
         return int(self._length[0]) + 1
@@ -86,4 +56,4 @@ class MonteCarloPrediction(EpisodePredictor):
     summary = "prediction: V of a fixed policy, toward whole-episode returns at their end"
     formula = "G = r + γ·G'"
     target_text = formula
-    Params = Params
+    rule = Rule(update, begin=restart, full=filled)

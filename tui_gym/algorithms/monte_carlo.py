@@ -6,42 +6,23 @@ since the time limit is not part of the game.
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
-from tui_gym.algorithms.base import CellUpdate, Learner, Transition, UpdateRecord
+from tui_gym.algorithms.base import Extra, Learner, Transition, UpdateRecord, filled, note, restart
 from tui_gym.algorithms.settings import COMMON_PARAMS
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, expected_value, register, step_size
+from tui_gym.core.engine.rules import Rule, expected_value, step_size
 from tui_gym.core.params import Param
 
 __all__ = ["MonteCarlo"]
-
-_FIRST_BUFFER = 64  # steps of an episode kept before the buffer doubles
-
-
-class Params(NamedTuple):
-    learning_rate: float
-    discount: float
-    by_visits: bool
-    first_visit: bool
-
-
-@kernel(inline=True)
-def begin(tables: Any, hp: Any) -> None:
-    tables[5][0] = 0
-
-
-@kernel(inline=True)
-def full(tables: Any, hp: Any) -> bool:
-    return tables[5][0] >= tables[3].shape[0]
 
 
 @kernel
 def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
-    q, counts, visits, cells, rewards, length, first = tables
+    q, counts, visits, first, cells, rewards, length = tables
     n_actions = q.shape[1]
     steps = length[0] + 1
     cells[steps - 1] = s * n_actions + a
@@ -72,13 +53,7 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
         q[ps, pa] = before + alpha * (g - before)
         total += abs(g - before)
         made += 1
-        if made < log.shape[0]:
-            log[made, 0] = ps
-            log[made, 1] = pa
-            log[made, 2] = g
-            log[made, 3] = alpha
-            log[made, 4] = before
-            log[made, 5] = q[ps, pa]
+        note(log, made, ps, pa, g, alpha, before, q[ps, pa])
     if hp.first_visit:
         for t in range(steps):
             first[cells[t]] = -1
@@ -91,9 +66,6 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     return total
 
 
-register(Params, Rule(update, begin=begin, full=full))
-
-
 class MonteCarlo(Learner):
     """On-policy Monte Carlo control; learns from whole episodes."""
 
@@ -101,32 +73,17 @@ class MonteCarlo(Learner):
     title = "Monte Carlo control"
     summary = "no bootstrapping: learns from whole-episode returns, at each episode's end"
     formula = "G = r + γ·G'"
-    Params = Params
+    rule = Rule(update, begin=restart, full=filled)
     params = (
         *COMMON_PARAMS,
         Param("first_visit", bool, True,
               help="update a state-action once per episode, from its first visit",
               title="First visit"),
     )
-
-    def arrays(self) -> tuple[np.ndarray, ...]:
-        return (self.q, self.counts, self.visits, self._cells, self._rewards, self._length,
-                self._first)
-
-    def _make_extra(self, capacity: int) -> None:
-        self._cells = np.zeros(_FIRST_BUFFER, dtype=np.int64)  # the episode so far
-        self._rewards = np.zeros(_FIRST_BUFFER, dtype=np.float64)
-        self._length = np.zeros(1, dtype=np.int64)
-        self._first = np.full(capacity * self.n_actions, -1, dtype=np.int64)  # scratch
-
-    def _grow_extra(self, capacity: int) -> None:
-        self._first = np.concatenate(
-            [self._first, np.full(capacity * self.n_actions - len(self._first), -1)])
-
-    def make_room(self) -> None:
-        """Twice the room for the episode in progress."""
-        self._cells = np.concatenate([self._cells, np.zeros_like(self._cells)])
-        self._rewards = np.concatenate([self._rewards, np.zeros_like(self._rewards)])
+    extras = (Extra("_first", "cells", np.int64, -1),  # scratch
+              Extra("_cells", "episode", np.int64), Extra("_rewards", "episode"),  # the episode
+              Extra("_length", 1, np.int64))
+    _length: np.ndarray
 
     def log_rows(self) -> int:
         return int(self._length[0]) + 2
@@ -137,9 +94,7 @@ class MonteCarlo(Learner):
         if not head[0]:  # the episode goes on: nothing learned yet
             return self._record(step, "G, at the episode's end", (("r", step.reward),), None,
                                 now, now)
-        updates = [CellUpdate(int(row[0]), int(row[1]), float(row[2]), float(row[3]),
-                              float(row[4]), float(row[5]))
-                   for row in log[1 : 1 + int(head[4])]]
+        updates = self._logged(log[1 : 1 + int(head[4])])
         # This transition's own update: the first one of its (state, action) in the
         # book's backward order (its only one with first visits).
         own = next(u for u in updates if (u.state, u.action) == (step.state, step.action))
@@ -151,4 +106,4 @@ class MonteCarlo(Learner):
                      ("Σ π(a|s')·Q(s',a)", float(head[2])))
         return self._record(step, formula, terms, own.target, own.before, now,
                             own.step_size, episode_return=float(head[1]),
-                            episode_updates=tuple(updates))
+                            episode_updates=updates)

@@ -2,31 +2,19 @@
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
-from tui_gym.algorithms.base import CellUpdate, Learner, Transition, UpdateRecord
+from tui_gym.algorithms.base import Extra, Learner, Transition, UpdateRecord, note, restart
 from tui_gym.algorithms.settings import COMMON_PARAMS
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, register, step_size
+from tui_gym.core.engine.rules import Rule, step_size
 from tui_gym.core.params import Param
 
 __all__ = ["NStepSarsa"]
 
 MAX_N = 64
-
-
-class Params(NamedTuple):
-    learning_rate: float
-    discount: float
-    by_visits: bool
-    n: int
-
-
-@kernel(inline=True)
-def begin(tables: Any, hp: Any) -> None:
-    tables[6][0] = 0
 
 
 @kernel
@@ -44,13 +32,10 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     tail = 0.0 if terminated else q[s2, a2]
     oldest = max(0, t - n)  # the window holds steps oldest .. t - 1
     stop = t if ended else t - n + 1  # the pairs updated now: oldest .. stop - 1
-    for k in range(oldest, t):
-        row = k - oldest + 1
-        if row < log.shape[0]:
-            log[row, 0] = states[k % n]
-            log[row, 1] = actions[k % n]
-            log[row, 2] = rewards[k % n]
-            log[row, 3] = 0.0
+    for k in range(oldest, t):  # the window's rewards, and which pairs are updated now
+        if k - oldest + 1 < log.shape[0]:
+            log[k - oldest + 1, 6] = rewards[k % n]
+            log[k - oldest + 1, 7] = 1.0 if k < stop else 0.0
     total = 0.0
     for tau in range(oldest, stop):
         g = tail
@@ -63,13 +48,7 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
         before = q[ps, pa]
         q[ps, pa] = before + alpha * (g - before)
         total += abs(g - before)
-        row = tau - oldest + 1
-        if row < log.shape[0]:
-            log[row, 3] = 1.0
-            log[row, 4] = g
-            log[row, 5] = alpha
-            log[row, 6] = before
-            log[row, 7] = q[ps, pa]
+        note(log, tau - oldest + 1, ps, pa, g, alpha, before, q[ps, pa])
     if ended:
         length[0] = 0
     log[0, 0] = max(0, stop - oldest)
@@ -79,9 +58,6 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     return total
 
 
-register(Params, Rule(update, begin=begin, next_first=True))
-
-
 class NStepSarsa(Learner):
     """n-step SARSA: SARSA whose target waits n rewards."""
 
@@ -89,22 +65,15 @@ class NStepSarsa(Learner):
     title = "n-step SARSA"
     summary = "between SARSA and Monte Carlo: n real rewards, then bootstrap"
     formula = "G = r + γ·r' + … + γⁿ·Q(sₙ,aₙ)"
-    Params = Params
+    rule = Rule(update, begin=restart, next_first=True)
     params = (
         *COMMON_PARAMS,
         Param("n", int, 4, 1, MAX_N, "rewards summed before the target bootstraps",
               title="Steps n"),
     )
 
-    def arrays(self) -> tuple[np.ndarray, ...]:
-        return (self.q, self.counts, self.visits, self._states, self._actions, self._rewards,
-                self._length)
-
-    def _make_extra(self, capacity: int) -> None:
-        self._states = np.zeros(MAX_N, dtype=np.int64)  # the window, a ring of n steps
-        self._actions = np.zeros(MAX_N, dtype=np.int64)
-        self._rewards = np.zeros(MAX_N, dtype=np.float64)
-        self._length = np.zeros(1, dtype=np.int64)
+    extras = (Extra("_states", MAX_N, np.int64), Extra("_actions", MAX_N, np.int64),  # the
+              Extra("_rewards", MAX_N), Extra("_length", 1, np.int64))  # window, a ring of n
 
     def log_rows(self) -> int:
         return int(self.hp.n) + 1
@@ -113,10 +82,8 @@ class NStepSarsa(Learner):
         n, gamma = int(self.hp.n), float(self.hp.discount)
         made, width, tail, now = int(log[0, 0]), int(log[0, 1]), float(log[0, 2]), float(log[0, 3])
         window = log[1 : 1 + width]
-        updates = tuple(CellUpdate(int(w[0]), int(w[1]), float(w[4]), float(w[5]),
-                                   float(w[6]), float(w[7]))
-                        for w in window if w[3])
-        rewards = ", ".join(f"{w[2]:+.4g}" for w in window)
+        updates = self._logged(window[window[:, 7] > 0])
+        rewards = ", ".join(f"{w[6]:+.4g}" for w in window)
         notes: tuple[tuple[str, str], ...] = (("window", f"r = {rewards}  ({width} of n = {n})"),)
         if made:
             back = width - 1 if made == 1 else 0
@@ -127,13 +94,13 @@ class NStepSarsa(Learner):
             () if step.terminated else (("γ", gamma), ("Q(s',a')", tail)))
         own = window[-1]  # this transition's own pair: updated when n = 1 or at the end
         picked = None if step.terminated else step.next_action
-        if not own[3]:
+        if not own[7]:
             more = f"{n - 1} more reward{'s' if n > 2 else ''}"
             return self._record(step, f"G of (s,a), after {more}", bootstrap, None,
                                 now, now, episode_updates=updates, notes=notes,
                                 target_action=picked)
         terms = (("r", step.reward), *bootstrap)
         formula = "G = r" if step.terminated else "G = r + γ·Q(s',a')"
-        return self._record(step, formula, terms, float(own[4]), float(own[6]),
-                            float(own[7]), float(own[5]), episode_updates=updates,
+        return self._record(step, formula, terms, float(own[2]), float(own[4]),
+                            float(own[5]), float(own[3]), episode_updates=updates,
                             notes=notes, target_action=picked)

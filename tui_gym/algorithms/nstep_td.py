@@ -2,46 +2,22 @@
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
+from tui_gym.algorithms.base import Extra, restart
 from tui_gym.algorithms.prediction import PREDICTION_PARAMS, Predictor, v_update
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, register
+from tui_gym.core.engine.rules import Rule
 from tui_gym.core.params import Param
 
 __all__ = ["NStepTD"]
 
 
-class Params(NamedTuple):
-    learning_rate: float
-    discount: float
-    by_visits: bool
-    n: int
-
-
-@kernel(inline=True)
-def begin(tables: Any, hp: Any) -> None:
-    tables[6][0] = 0
-
-
 @kernel(inline=True)
 def full(tables: Any, hp: Any) -> bool:
     return tables[4].shape[0] < hp.n
-
-
-@kernel(inline=True)
-def n_step_return(rewards: Any, first: int, last: int, discount: float) -> float:
-    """r_{first+1} + γ r_{first+2} + ... + γ^{last-first} r_{last+1}: the rewards of steps
-    `first` to `last`, held in the ring `rewards`."""
-    size = rewards.shape[0]
-    g = 0.0
-    weight = 1.0
-    for t in range(first, last + 1):
-        g += weight * rewards[t % size]
-        weight *= discount
-    return g
 
 
 @kernel
@@ -59,7 +35,10 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     made = 0
     tau = t + 1 - n
     if tau >= 0:  # n rewards are in for the state of time τ
-        g = n_step_return(rewards, tau, t, hp.discount)
+        g, weight = 0.0, 1.0
+        for k in range(tau, t + 1):  # r_{τ+1} + γ·r_{τ+2} + … + γ^{n-1}·r_{τ+n}, in the ring
+            g += weight * rewards[k % size]
+            weight *= hp.discount
         if not terminated:
             g += hp.discount ** n * v[s2]
         total += v_update(v, visits, hp, states[tau % size], g, log, made)
@@ -77,9 +56,6 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     return total
 
 
-register(Params, Rule(update, begin=begin, full=full))
-
-
 class NStepTD(Predictor):
     """n-step TD: V of the policy followed, toward n-step returns."""
 
@@ -88,26 +64,21 @@ class NStepTD(Predictor):
     summary = "prediction: V of a fixed policy, toward n rewards and then V (TD(0) to MC)"
     formula = "r + … + γⁿ⁻¹·r' + γⁿ·V(s_{τ+n})"
     target_text = formula
-    Params = Params
+    rule = Rule(update, begin=restart, full=full)
     params = (
         *PREDICTION_PARAMS,
         Param("n", int, 4, 1, 10_000, "rewards in each target before it bootstraps",
               title="n (steps)"),
     )
 
-    def arrays(self) -> tuple[np.ndarray, ...]:
-        return (*super().arrays(), self._states, self._rewards, self._step)
-
-    def _make_extra(self, capacity: int) -> None:
-        super()._make_extra(capacity)
-        self._states = np.zeros(int(self.hp.n), dtype=np.int64)  # the last n, in a ring
-        self._rewards = np.zeros(int(self.hp.n), dtype=np.float64)
-        self._step = np.zeros(1, dtype=np.int64)  # steps of the episode so far
+    extras = (*Predictor.extras, Extra("_states", "n", np.int64), Extra("_rewards", "n"),
+              Extra("_step", 1, np.int64))  # the last n, in a ring; steps of the episode
+    _step: np.ndarray
 
     def make_room(self) -> None:
         """A ring for the larger n; the episode in progress is dropped."""
         self._states = np.zeros(int(self.hp.n), dtype=np.int64)
-        self._rewards = np.zeros(int(self.hp.n), dtype=np.float64)
+        self._rewards = np.zeros(int(self.hp.n))
         self._step[0] = 0
 
     def log_rows(self) -> int:

@@ -4,22 +4,16 @@ policy toward λ-returns, at each episode's end.
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
-from tui_gym.algorithms.mc_prediction import EpisodePredictor, begin, full
+from tui_gym.algorithms.base import filled, restart
+from tui_gym.algorithms.mc_prediction import EpisodePredictor
 from tui_gym.algorithms.prediction import PREDICTION_PARAMS, v_update
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, register
+from tui_gym.core.engine.rules import Rule
 from tui_gym.core.params import Param
 
 __all__ = ["OfflineLambdaReturn"]
-
-
-class Params(NamedTuple):
-    learning_rate: float
-    discount: float
-    by_visits: bool
-    lambda_: float
 
 
 @kernel
@@ -47,9 +41,6 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     return total
 
 
-register(Params, Rule(update, begin=begin, full=full))
-
-
 class OfflineLambdaReturn(EpisodePredictor):
     """Offline λ-return: V of the policy followed, toward λ-returns at each episode's end."""
 
@@ -58,7 +49,7 @@ class OfflineLambdaReturn(EpisodePredictor):
     summary = "prediction: V of a fixed policy, toward λ-returns at each episode's end"
     formula = "G^λ = r + γ·((1-λ)·V(s') + λ·G^λ')"
     target_text = formula
-    Params = Params
+    rule = Rule(update, begin=restart, full=filled)
     params = (
         *PREDICTION_PARAMS,
         Param("lambda", float, 0.8, 0.0, 1.0, "weight of longer returns: 0 is TD(0), "

@@ -8,7 +8,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from tui_gym.algorithms.base import Learner, Transition, UpdateRecord
+from tui_gym.algorithms.base import Extra, Learner, Transition, UpdateRecord, note
 from tui_gym.algorithms.settings import COMMON_PARAMS, Field
 from tui_gym.core.engine import jit, loop
 from tui_gym.core.engine.kernel import kernel
@@ -41,13 +41,7 @@ def v_update(v: Any, visits: Any, hp: Any, s: int, target: float, log: Any, row:
     alpha = step_size(hp.learning_rate, hp.by_visits, visits[s])
     before = v[s]
     v[s] = before + alpha * (target - before)
-    if row < log.shape[0]:
-        log[row, 0] = s
-        log[row, 1] = target
-        log[row, 2] = before
-        log[row, 3] = v[s]
-        log[row, 4] = alpha
-        log[row, 5] = visits[s]
+    note(log, row, s, target, before, v[s], alpha, visits[s])
     return abs(target - before)
 
 
@@ -55,18 +49,8 @@ class Predictor(Learner):
     """A learner of V for the fixed policy it follows (see the module docstring)."""
 
     params: ClassVar[tuple[Field, ...]] = PREDICTION_PARAMS
+    extras: ClassVar[tuple[Extra, ...]] = (Extra("v", "rows", fill=None),)
     v: np.ndarray
-
-    def arrays(self) -> tuple[np.ndarray, ...]:
-        return (self.q, self.counts, self.visits, self.v)
-
-    def _make_extra(self, capacity: int) -> None:
-        self.v = np.full(capacity, float(self.hp.initial_value))
-
-    def _grow_extra(self, capacity: int) -> None:
-        grown = np.full(capacity, float(self.hp.initial_value))
-        grown[: len(self.v)] = self.v
-        self.v = grown
 
     def action_values(self, rows: np.ndarray | slice) -> np.ndarray:
         """V of each row, the same in every action (what the heatmaps show)."""

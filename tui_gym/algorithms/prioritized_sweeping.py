@@ -2,28 +2,20 @@
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
-from tui_gym.algorithms.base import CellUpdate, Learner, Transition, UpdateRecord
-from tui_gym.algorithms.dyna_q import DynaQ
+from tui_gym.algorithms.base import Extra, Learner, Transition, UpdateRecord
+from tui_gym.algorithms.dyna_q import DynaQ, replay
 from tui_gym.algorithms.settings import COMMON_PARAMS
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, max_value, register, step_size
+from tui_gym.core.engine.rules import Rule, max_value
 from tui_gym.core.params import Param
 
 __all__ = ["PrioritizedSweeping"]
 
 SHOWN = 4  # queue entries the step panel lists
-
-
-class Params(NamedTuple):
-    learning_rate: float
-    discount: float
-    by_visits: bool
-    planning_steps: int
-    theta: float
 
 
 @kernel(inline=True)
@@ -78,7 +70,7 @@ def pop(cells: Any, prio: Any, pos: Any, size: Any) -> int:
 @kernel
 def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool, a2: int, epsilon: float, log: Any) -> float:
-    (q, counts, visits, model_reward, model_next, model_terminated, cells, prio, pos, size,
+    (q, counts, model_reward, model_next, model_terminated, visits, cells, prio, pos, size,
      first_into, next_into) = tables
     n_actions = q.shape[1]
     cell = s * n_actions + a
@@ -108,19 +100,9 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
         top_priority = prio[0]
         c = pop(cells, prio, pos, size)
         ps, pa = c // n_actions, c % n_actions
-        future = 0.0 if model_terminated[ps, pa] else max_value(q, offered, model_next[ps, pa])
-        target = model_reward[ps, pa] + hp.discount * future
-        alpha = step_size(hp.learning_rate, hp.by_visits, max(counts[ps, pa], 1))
-        before = q[ps, pa]
-        q[ps, pa] = before + alpha * (target - before)
         done += 1
+        replay(tables, hp, offered, ps, pa, model_reward[ps, pa], log, done)
         if done < log.shape[0]:
-            log[done, 0] = ps
-            log[done, 1] = pa
-            log[done, 2] = target
-            log[done, 3] = alpha
-            log[done, 4] = before
-            log[done, 5] = q[ps, pa]
             log[done, 6] = top_priority
         best = max_value(q, offered, ps)
         into = first_into[ps]
@@ -139,9 +121,6 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     return log[0, 0]
 
 
-register(Params, Rule(update))
-
-
 class PrioritizedSweeping(Learner):
     """Model-based planning in order of priority |TD error|, sweeping back to predecessors."""
 
@@ -149,7 +128,7 @@ class PrioritizedSweeping(Learner):
     title = "Prioritized sweeping"
     summary = "plans where values change: a queue by |TD error| sweeps back from the goal"
     formula = "r + γ·max Q(s',·)"
-    Params = Params
+    rule = Rule(update)
     params = (
         *COMMON_PARAMS,
         DynaQ.params[-1],  # planning steps
@@ -157,35 +136,23 @@ class PrioritizedSweeping(Learner):
               "a pair enters the queue when its |TD error| exceeds this", title="Threshold θ"),
     )
     tables = DynaQ.tables
+    extras = (
+        Extra("_cells", "cells", np.int64), Extra("_prio", "cells"),  # the queue, a max-heap
+        Extra("_pos", "cells", np.int64, -1),  # each cell's place in it, -1: out
+        Extra("_size", 1, np.int64),
+        Extra("_first_into", "rows", np.int64, -1),  # predecessors: lists
+        Extra("_next_into", "cells", np.int64, -1),
+    )
 
     model_reward: np.ndarray
     model_next: np.ndarray
     model_terminated: np.ndarray
-
-    def arrays(self) -> tuple[np.ndarray, ...]:
-        return (self.q, self.counts, self.visits, self.model_reward, self.model_next,
-                self.model_terminated, self._cells, self._prio, self._pos, self._size,
-                self._first_into, self._next_into)
-
-    def _make_extra(self, capacity: int) -> None:
-        cells = capacity * self.n_actions
-        self._cells = np.zeros(cells, dtype=np.int64)  # the queue, a binary max-heap
-        self._prio = np.zeros(cells)
-        self._pos = np.full(cells, -1, dtype=np.int64)  # each cell's place in it, -1: out
-        self._size = np.zeros(1, dtype=np.int64)
-        self._first_into = np.full(capacity, -1, dtype=np.int64)  # predecessors: lists
-        self._next_into = np.full(cells, -1, dtype=np.int64)
-
-    def _grow_extra(self, capacity: int) -> None:
-        def longer(array: np.ndarray, length: int, fill: float) -> np.ndarray:
-            return np.concatenate([array, np.full(length - len(array), fill, array.dtype)])
-
-        cells = capacity * self.n_actions
-        self._cells = longer(self._cells, cells, 0)
-        self._prio = longer(self._prio, cells, 0.0)
-        self._pos = longer(self._pos, cells, -1)
-        self._first_into = longer(self._first_into, capacity, -1)
-        self._next_into = longer(self._next_into, cells, -1)
+    _cells: np.ndarray
+    _prio: np.ndarray
+    _pos: np.ndarray
+    _size: np.ndarray
+    _first_into: np.ndarray
+    _next_into: np.ndarray
 
     def queue(self) -> list[tuple[int, int, float]]:
         """The queue's entries, highest priority first: (row, action, priority)."""
@@ -200,8 +167,7 @@ class PrioritizedSweeping(Learner):
     def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
         p, done, left, top, now = log[0, :5]
         rows = log[1 : 1 + min(int(done), SHOWN)]
-        updates = tuple(CellUpdate(int(w[0]), int(w[1]), float(w[2]), float(w[3]),
-                                   float(w[4]), float(w[5])) for w in rows)
+        updates = self._logged(rows)
         entered = "enters the queue" if p > self.hp.theta else "stays out (P ≤ θ)"
         taken = ", ".join(f"{w[6]:.4g}" for w in rows) + (" …" if done > len(rows) else "")
         notes = (

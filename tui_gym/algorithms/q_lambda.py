@@ -2,24 +2,16 @@
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
 from tui_gym.algorithms.base import Transition, UpdateRecord
 from tui_gym.algorithms.sarsa_lambda import TracedLearner, clear, spread
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, max_value, register
+from tui_gym.core.engine.rules import Rule, max_value
 
 __all__ = ["WatkinsQLambda"]
-
-
-class Params(NamedTuple):
-    learning_rate: float
-    discount: float
-    by_visits: bool
-    lambda_: float
-    replacing: bool
 
 
 @kernel
@@ -36,9 +28,6 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     return td
 
 
-register(Params, Rule(update, begin=clear, next_first=True))
-
-
 class WatkinsQLambda(TracedLearner):
     """Watkins's Q(λ): off-policy control; traces cut after an exploratory action."""
 
@@ -46,7 +35,7 @@ class WatkinsQLambda(TracedLearner):
     title = "Watkins's Q(λ)"
     summary = "Q-learning with traces, cut whenever the agent explores"
     formula = "r + γ·max Q(s',·)"
-    Params = Params
+    rule = Rule(update, begin=clear, next_first=True)
 
     def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
         ended = step.terminated or step.truncated

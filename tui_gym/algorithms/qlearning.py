@@ -2,21 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
 from tui_gym.algorithms.base import Learner, Transition, UpdateRecord
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, max_value, register, td_update
+from tui_gym.core.engine.rules import Rule, max_value, td_update
 
 __all__ = ["QLearning"]
-
-
-class Params(NamedTuple):
-    learning_rate: float
-    discount: float
-    by_visits: bool
 
 
 @kernel
@@ -27,9 +21,6 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     return td_update(q, counts, visits, hp, s, a, r, future, log)
 
 
-register(Params, Rule(update))
-
-
 class QLearning(Learner):
     """Tabular Q-learning with epsilon-greedy exploration."""
 
@@ -37,7 +28,7 @@ class QLearning(Learner):
     title = "Q-learning"
     summary = "off-policy TD: learns the optimal values while it explores"
     formula = "r + γ·max Q(s',·)"
-    Params = Params
+    rule = Rule(update)
 
     def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
         return self._td_record(step, log, "max Q(s',·)")

@@ -2,21 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
 from tui_gym.algorithms.base import Learner, Transition, UpdateRecord
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, register, td_update
+from tui_gym.core.engine.rules import Rule, td_update
 
 __all__ = ["Sarsa"]
-
-
-class Params(NamedTuple):
-    learning_rate: float
-    discount: float
-    by_visits: bool
 
 
 @kernel
@@ -27,9 +21,6 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     return td_update(q, counts, visits, hp, s, a, r, future, log)
 
 
-register(Params, Rule(update, next_first=True))
-
-
 class Sarsa(Learner):
     """Tabular SARSA with epsilon-greedy exploration."""
 
@@ -37,7 +28,7 @@ class Sarsa(Learner):
     title = "SARSA"
     summary = "on-policy TD: learns the values of the exploring policy it follows"
     formula = "r + γ·Q(s',a')"
-    Params = Params
+    rule = Rule(update, next_first=True)
 
     def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
         picked = None if step.terminated else step.next_action

@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
-from tui_gym.algorithms.base import CellUpdate, Learner, Transition, UpdateRecord
+from tui_gym.algorithms.base import CellUpdate, Extra, Learner, Transition, UpdateRecord, note
 from tui_gym.algorithms.settings import COMMON_PARAMS, TRACES
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, register, step_size
+from tui_gym.core.engine.rules import Rule, step_size
 from tui_gym.core.params import Param
 
 __all__ = ["TRACE_PARAMS", "SarsaLambda", "TracedLearner", "spread"]
@@ -22,14 +22,6 @@ TRACE_PARAMS = (
           title="λ"),
     TRACES,
 )
-
-
-class Params(NamedTuple):
-    learning_rate: float
-    discount: float
-    by_visits: bool
-    lambda_: float
-    replacing: bool
 
 
 @kernel(inline=True)
@@ -66,25 +58,15 @@ def spread(tables: Any, hp: Any, s: int, a: int, target: float, future: float, d
         alpha = step_size(hp.learning_rate, hp.by_visits, max(counts[x, b], 1))
         was = q[x, b]
         q[x, b] = was + alpha * delta * trace[x, b]
-        if i + 1 < log.shape[0]:
-            log[i + 1, 0] = x
-            log[i + 1, 1] = b
-            log[i + 1, 2] = trace[x, b]
-            log[i + 1, 3] = alpha
-            log[i + 1, 4] = was
-            log[i + 1, 5] = q[x, b]
+        note(log, i + 1, x, b, trace[x, b], alpha, was, q[x, b])
         trace[x, b] *= decay
         if trace[x, b] >= FADED:
             cells[kept] = cell
             kept += 1
         else:
             trace[x, b] = 0.0
-    log[0, 0] = target
-    log[0, 1] = future
-    log[0, 2] = before
-    log[0, 3] = q[s, a]
-    log[0, 4] = step_size(hp.learning_rate, hp.by_visits, counts[s, a])
-    log[0, 5] = n_cells[0]
+    note(log, 0, target, future, before, q[s, a],
+         step_size(hp.learning_rate, hp.by_visits, counts[s, a]), n_cells[0])
     log[0, 6] = decay
     n_cells[0] = kept
     return abs(delta)
@@ -100,27 +82,16 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     return td
 
 
-register(Params, Rule(update, begin=clear, next_first=True))
-
-
 class TracedLearner(Learner):
     """What the λ learners share: the traces, their list, and the record of a traced
     update."""
 
     params = TRACE_PARAMS
     has_traces = True
-
-    def arrays(self) -> tuple[np.ndarray, ...]:
-        return (self.q, self.counts, self.visits, self._trace, self._cells, self._n_cells)
-
-    def _make_extra(self, capacity: int) -> None:
-        self._trace = np.zeros((capacity, self.n_actions))  # e(s, a) in this episode
-        self._cells = np.zeros(capacity * self.n_actions, dtype=np.int64)  # pairs with e > 0
-        self._n_cells = np.zeros(1, dtype=np.int64)
-
-    def _grow_extra(self, capacity: int) -> None:
-        self._trace = np.concatenate([self._trace, np.zeros_like(self._trace)])
-        self._cells = np.concatenate([self._cells, np.zeros_like(self._cells)])
+    extras = (Extra("_trace", "table"),  # e(s, a) in this episode
+              Extra("_cells", "cells", np.int64), Extra("_n_cells", 1, np.int64))  # e > 0
+    _trace: np.ndarray
+    _n_cells: np.ndarray
 
     def log_rows(self) -> int:
         return int(self._n_cells[0]) + 2
@@ -158,7 +129,7 @@ class SarsaLambda(TracedLearner):
     title = "Sarsa(λ)"
     summary = "SARSA with traces: each TD error reaches back along the path, decaying by γλ"
     formula = "r + γ·Q(s',a')"
-    Params = Params
+    rule = Rule(update, begin=clear, next_first=True)
 
     def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
         picked = None if step.terminated else step.next_action

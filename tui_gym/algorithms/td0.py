@@ -2,19 +2,13 @@
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 from tui_gym.algorithms.prediction import Predictor, v_update
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, register
+from tui_gym.core.engine.rules import Rule
 
 __all__ = ["TD0"]
-
-
-class Params(NamedTuple):
-    learning_rate: float
-    discount: float
-    by_visits: bool
 
 
 @kernel
@@ -25,9 +19,6 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     return v_update(v, visits, hp, s, r + hp.discount * future, log, 0)
 
 
-register(Params, Rule(update))
-
-
 class TD0(Predictor):
     """TD(0): V of the policy followed, bootstrapping from the next state each step."""
 
@@ -36,4 +27,4 @@ class TD0(Predictor):
     summary = "prediction: V of a fixed policy, each step toward r + γ·V(s')"
     formula = "r + γ·V(s')"
     target_text = formula
-    Params = Params
+    rule = Rule(update)

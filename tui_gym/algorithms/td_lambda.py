@@ -5,25 +5,18 @@ eligibility traces.
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
+from tui_gym.algorithms.base import Extra, note
 from tui_gym.algorithms.prediction import PREDICTION_PARAMS, Predictor
 from tui_gym.algorithms.settings import TRACES
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, register, step_size
+from tui_gym.core.engine.rules import Rule, step_size
 from tui_gym.core.params import Param
 
 __all__ = ["TDLambda"]
-
-
-class Params(NamedTuple):
-    learning_rate: float
-    discount: float
-    by_visits: bool
-    lambda_: float
-    replacing: bool
 
 
 @kernel(inline=True)
@@ -48,19 +41,11 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     for i in range(v.shape[0]):
         if trace[i] != 0.0:
             v[i] += alpha * delta * trace[i]
-    log[0, 0] = s
-    log[0, 1] = target
-    log[0, 2] = before
-    log[0, 3] = v[s]
-    log[0, 4] = alpha
-    log[0, 5] = visits[s]
+    note(log, 0, s, target, before, v[s], alpha, visits[s])
     log[0, 6] = trace[s]
     if terminated or truncated:
         begin(tables, hp)
     return abs(delta)
-
-
-register(Params, Rule(update, begin=begin))
 
 
 class TDLambda(Predictor):
@@ -71,7 +56,7 @@ class TDLambda(Predictor):
     summary = "prediction: V of a fixed policy, each TD error spread over the states' traces"
     formula = "δ = r + γ·V(s') - V(s), V += α·δ·e"
     target_text = "r + γ·V(s')"
-    Params = Params
+    rule = Rule(update, begin=begin)
     has_traces = True
     params = (
         *PREDICTION_PARAMS,
@@ -79,19 +64,8 @@ class TDLambda(Predictor):
               title="λ"),
         dataclasses.replace(TRACES, default="accumulating"),
     )
-
-    def arrays(self) -> tuple[np.ndarray, ...]:
-        return (*super().arrays(), self._trace)
+    extras = (*Predictor.extras, Extra("_trace", "rows"))  # per state, this episode
+    _trace: np.ndarray
 
     def eligibility(self) -> np.ndarray:
         return np.repeat(self._trace[: self.rows_used, None], self.n_actions, axis=1)
-
-    def _make_extra(self, capacity: int) -> None:
-        super()._make_extra(capacity)
-        self._trace = np.zeros(capacity)  # per state, this episode
-
-    def _grow_extra(self, capacity: int) -> None:
-        super()._grow_extra(capacity)
-        grown = np.zeros(capacity)
-        grown[: len(self._trace)] = self._trace
-        self._trace = grown

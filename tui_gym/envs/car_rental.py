@@ -9,9 +9,9 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import numpy.typing as npt
-from gymnasium import spaces
 
 from tui_gym.core.mdp.model import FiniteMDP
+from tui_gym.envs.table_env import TableEnv
 
 __all__ = ["ACTION_NAMES", "MAX_CARS", "MAX_MOVE", "MOVES", "CarRentalEnv", "car_rental_model",
            "night", "nights"]
@@ -93,7 +93,7 @@ def car_rental_model(exercise: bool = False) -> FiniteMDP:
                      np.zeros(shape, dtype=bool), np.full(n, 1.0 / n), action_names=ACTION_NAMES)
 
 
-class CarRentalEnv(gym.Env[Any, Any]):
+class CarRentalEnv(TableEnv):
     """Sutton & Barto's Example 4.2: Jack moves cars between his two sites overnight.
 
     ## Action Space
@@ -121,52 +121,38 @@ class CarRentalEnv(gym.Env[Any, Any]):
     `exercise` (False), `render_mode` "ansi".
     """
 
-    metadata: dict[str, Any] = {"render_modes": ["ansi"], "render_fps": 4}
     action_names = ACTION_NAMES
 
     def __init__(self, exercise: bool = False, render_mode: str | None = None) -> None:
-        if render_mode not in (None, "ansi"):
-            raise ValueError(f"CarRental renders 'ansi' only, got {render_mode!r}")
         self.exercise = bool(exercise)
-        self.observation_space = spaces.Discrete(SIDE * SIDE)
-        self.action_space = spaces.Discrete(len(MOVES))
-        self.initial_state_distrib = np.full(SIDE * SIDE, 1.0 / SIDE**2)
-        self.render_mode = render_mode
-        self.s: int | None = None
-        self.lastaction: int | None = None
         self.last_day: dict[str, Any] = {}
+        super().__init__(car_rental_model(self.exercise), render_mode)
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[int, dict[str, Any]]:
-        super().reset(seed=seed)
+        gym.Env.reset(self, seed=seed)  # a uniform start, drawn as an integer
         self.s = int(self.np_random.integers(SIDE * SIDE))
         self.lastaction = None
         self.last_day = {}
         return self.s, {}
 
     def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
-        if self.s is None:
-            raise gym.error.ResetNeeded("CarRental: call reset() before step()")
-        if not self.action_space.contains(action):
-            raise ValueError(f"CarRental: action must be an integer in [0, {len(MOVES) - 1}], "
-                             f"got {action!r}")
-        moved, *morning, cost = night(divmod(self.s, SIDE), MOVES[int(action)], self.exercise)
+        """The night's move, then each site's requests and returns drawn (Poisson)."""
+        state, action = self.started(), self.checked(action)
+        moved, *morning, cost = night(divmod(state, SIDE), MOVES[action], self.exercise)
         rng = self.np_random
         asked = [int(rng.poisson(mean)) for mean in REQUESTS]
         back = [int(rng.poisson(mean)) for mean in RETURNS]
         rented = [min(k, m) for k, m in zip(asked, morning, strict=True)]
         cars = [min(MAX_CARS, m - r + b) for m, r, b in zip(morning, rented, back, strict=True)]
         self.s = cars[0] * SIDE + cars[1]
-        self.lastaction = int(action)
+        self.lastaction = action
         self.last_day = {"moved": moved, "cost": cost, "requested": asked, "rented": rented,
                          "returned": back}
         return self.s, RENT * sum(rented) - cost, False, False, dict(self.last_day)
 
-    def render(self) -> str | None:
-        if self.render_mode is None:
-            gym.logger.warn("CarRental: no render_mode given; pass render_mode='ansi'")
-            return None
+    def picture(self) -> str:
         if self.s is None:
             return ""
         first, second = divmod(self.s, SIDE)

@@ -91,10 +91,6 @@ class GamblerEnv(TableEnv):
         self.last_stake = 0
         super().__init__(gambler_model(self.p_heads, self.goal), render_mode)
 
-    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[int, dict]:
-        self.last_flip = None
-        return super().reset(seed=seed, options=options)
-
     def step(self, action: int) -> tuple[int, float, bool, bool, dict]:
         before = self.s
         out = super().step(action)

@@ -84,16 +84,8 @@ class MaxBiasEnv(TableEnv):
         self.grid = GRID
         self.offered = offered(self.actions)
 
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[int, dict[str, Any]]:
-        obs, info = super().reset(seed=seed, options=options)
-        return obs, {**info, "action_mask": self.offered[obs].astype(np.int8)}
-
-    def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
-        obs, reward, terminated, truncated, info = super().step(action)
-        return obs, reward, terminated, truncated, {
-            **info, "action_mask": self.offered[obs].astype(np.int8)}
+    def more_info(self) -> dict[str, Any]:
+        return {"action_mask": self.offered[self.s].astype(np.int8)}
 
     def picture(self) -> str:
         cells = ["*", "B", "A", "*"]

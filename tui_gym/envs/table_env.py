@@ -41,15 +41,10 @@ class TableEnv(gym.Env[Any, Any]):
         weights = self.initial_state_distrib
         self.s = int(self.np_random.choice(len(weights), p=weights))
         self.lastaction = None
-        return self.s, {"prob": float(weights[self.s])}
+        return self.s, {"prob": float(weights[self.s]), **self.more_info()}
 
     def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
-        if self.s is None:
-            raise gym.error.ResetNeeded(f"{type(self).__name__}: call reset() before step()")
-        if not self.action_space.contains(action):
-            raise ValueError(f"{type(self).__name__}: action must be an integer in "
-                             f"[0, {self.model.n_actions - 1}], got {action!r}")
-        model, s, a = self.model, self.s, int(action)
+        model, s, a = self.model, self.started(), self.checked(action)
         weights = model.prob[s, a]
         # Outcomes that cannot happen weigh 0, so they are never drawn: the draw is the
         # one over the toy-text table `P`, which leaves them out.
@@ -61,7 +56,24 @@ class TableEnv(gym.Env[Any, Any]):
         if model.reward_std is not None and model.reward_std[s, a, index] > 0:
             reward = float(self.np_random.normal(reward, model.reward_std[s, a, index]))
         return (self.s, reward, bool(model.terminal[s, a, index]), False,
-                {"prob": float(weights[index])})
+                {"prob": float(weights[index]), **self.more_info()})
+
+    def more_info(self) -> dict[str, Any]:
+        """What `info` tells beside an outcome's `prob`, after every reset and step."""
+        return {}
+
+    def started(self) -> int:
+        """The current state; `ResetNeeded` before the first reset."""
+        if self.s is None:
+            raise gym.error.ResetNeeded(f"{type(self).__name__}: call reset() before step()")
+        return self.s
+
+    def checked(self, action: Any) -> int:
+        """`action` as an int; `ValueError` for one the env does not have."""
+        if not self.action_space.contains(action):
+            raise ValueError(f"{type(self).__name__}: action must be an integer in "
+                             f"[0, {self.model.n_actions - 1}], got {action!r}")
+        return int(action)
 
     @property
     def P(self) -> Table:  # noqa: N802

@@ -287,7 +287,9 @@ class Narrator(Role):
     )
 
     def tally_word(self, last: PlayStep) -> str:
-        """The `tally_words` label a finished episode counts under."""
+        """The `tally_words` label a finished episode counts under ("episodes" with none)."""
+        if not self.tally_words:
+            return "episodes"
         if last.truncated and not last.terminated:
             return "truncated"
         if last.episode_return > 0:
@@ -386,14 +388,18 @@ class Narrator(Role):
     def eval_outcome(
         self, returns: Sequence[float], details: Sequence[dict[str, Any]]
     ) -> EvalOutcome:
-        """Per-game figures from a greedy evaluation's episodes (the share that ended)."""
+        """Per-game figures from a greedy evaluation's episodes (the share that ended, as
+        `ended_figure`)."""
         n = max(1, len(details))
         ended = sum(1 for d in details if d.get("terminated"))
-        return EvalOutcome(figures={"terminated_rate": ended / n})
+        return EvalOutcome(figures={self.ended_figure: ended / n})
+
+    ended_figure = "terminated_rate"  # what `eval_outcome` calls the share that ended
 
 
 class ReachNarrator(Narrator):
-    """An episode that reaches its end (`reached_words`), or runs out of time."""
+    """An episode that reaches its end (`reached_words`), or runs out of time; with three
+    `tally_words`, an end that pays nothing or less counts under the second."""
 
     tally_words: tuple[TallyWord, ...] = (
         TallyWord("reached", "good"), TallyWord("timed out", "even"),
@@ -402,7 +408,10 @@ class ReachNarrator(Narrator):
     missed_words = ""  # what was not done, after "Out of time after 9 steps"
 
     def tally_word(self, last: PlayStep) -> str:
-        return self.tally_words[0].label if last.terminated else "timed out"
+        words = self.tally_words
+        if not last.terminated:
+            return words[-1].label
+        return words[0].label if last.episode_return > 0 or len(words) < 3 else words[1].label
 
     def outcome_text(
         self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]

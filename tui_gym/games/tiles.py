@@ -292,11 +292,6 @@ class TileNarrator(ReachNarrator):
     missed_words = ": the goal not reached"
     holes = True  # a terminal tile that is not the goal exists (FrozenLake's holes)
 
-    def tally_word(self, last: PlayStep) -> str:
-        if not last.terminated:
-            return "timed out"
-        return "reached" if last.episode_return > 0 or not self.holes else "fell in"
-
     def outcome_text(
         self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]
     ) -> str:

@@ -11,7 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from tui_gym.core.experiments.figures import Figure
+from tui_gym.core.engine.stats import Series
+from tui_gym.core.experiments.figures import FieldsJson, Figure
 from tui_gym.core.experiments.records import Curve
 
 CONFIDENCE = 0.95
@@ -53,16 +54,13 @@ def rolling_mean(values: np.ndarray, window: int) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class CurvePoint:
+class CurvePoint(FieldsJson):
     """One point of an aggregated curve (lo and hi None without a band)."""
 
     episode: int
     mean: float
     lo: float | None
     hi: float | None
-
-    def to_json(self) -> dict[str, Any]:
-        return {"episode": self.episode, "mean": self.mean, "lo": self.lo, "hi": self.hi}
 
 
 @dataclass(frozen=True, eq=False)
@@ -235,13 +233,6 @@ def t_cdf(t: float, df: float) -> float:
     return 1.0 - tail if t >= 0 else tail
 
 
-def t_pdf(t: float, df: float) -> float:
-    """The density of Student's t with `df` degrees of freedom at `t`."""
-    _check_df(df)
-    log_norm = math.lgamma((df + 1) / 2) - math.lgamma(df / 2) - 0.5 * math.log(df * math.pi)
-    return math.exp(log_norm - (df + 1) / 2 * math.log1p(t * t / df))
-
-
 def _cornish_fisher(z: float, df: float) -> float:
     # Abramowitz & Stegun 26.7.5: the t quantile as a series in 1/df around z.
     z2 = z * z
@@ -269,27 +260,15 @@ def t_quantile(p: float, df: float) -> float:
     guess = _cornish_fisher(NormalDist().inv_cdf(p), df)
     if df > _SERIES_DF:
         return guess
-    # Bracket the root in [lo, hi], then Newton steps that fall back to bisection
-    # whenever they would leave the bracket (the series can overshoot for small df).
+    # Bracket the root in [lo, hi], then halve the bracket (the series can overshoot for
+    # small df).
     lo, hi = 0.0, max(guess, 1.0)
     while t_cdf(hi, df) < p:
         lo, hi = hi, hi * 2.0
-    t = min(max(guess, lo), hi)
-    for _ in range(200):
-        error = t_cdf(t, df) - p
-        if error > 0:
-            hi = t
-        else:
-            lo = t
-        density = t_pdf(t, df)
-        step = error / density if density > 0 else math.inf
-        candidate = t - step
-        if not lo < candidate < hi:
-            candidate = (lo + hi) / 2.0
-        if abs(candidate - t) <= 1e-13 * max(1.0, abs(t)):
-            return candidate
-        t = candidate
-    return t
+    while hi - lo > 1e-13 * hi:
+        middle = (lo + hi) / 2.0
+        lo, hi = (middle, hi) if t_cdf(middle, df) < p else (lo, middle)
+    return (lo + hi) / 2.0
 
 
 def _check_points(max_points: int) -> None:
@@ -333,19 +312,14 @@ def bucket_means(
     return episodes[ends], means
 
 
-class CurveAccumulator:
-    """Per-episode values of a run of any length, as at most `capacity` bucket means."""
+class CurveAccumulator(Series):
+    """Per-episode values of a run of any length, as at most `capacity` bucket means: a
+    `Series` that numbers its points' episodes."""
 
     def __init__(self, capacity: int = 512, first_episode: int = 1) -> None:
-        if capacity < 2 or capacity % 2:
-            raise ValueError(f"capacity must be an even number >= 2, got {capacity}")
-        self.capacity = capacity
+        super().__init__(capacity)
         self.first_episode = first_episode
-        self.span = 1  # episodes in each full bucket
         self.count = 0  # episodes seen
-        self._means: list[float] = []
-        self._tail_sum = 0.0
-        self._tail_n = 0
 
     def append(self, value: float) -> None:
         self.extend(np.array([value], dtype=np.float64))
@@ -353,47 +327,20 @@ class CurveAccumulator:
     def extend(self, values: np.ndarray) -> None:
         """Add the values of the next episodes, in order."""
         values = np.asarray(values, dtype=np.float64).ravel()
-        i, k = 0, len(values)
-        self.count += k
-        while i < k:
-            need = self.span - self._tail_n
-            take = min(need, k - i)
-            if self._tail_n or take < self.span:
-                self._tail_sum += float(values[i : i + take].sum())
-                self._tail_n += take
-                i += take
-                if self._tail_n < self.span:
-                    return
-                self._close(self._tail_sum / self.span)
-                self._tail_sum, self._tail_n = 0.0, 0
-                continue
-            whole = min((k - i) // self.span, self.capacity - len(self._means))
-            block = values[i : i + whole * self.span].reshape(whole, self.span)
-            self._means.extend(block.mean(axis=1).tolist())
-            i += whole * self.span
-            self._merge_if_full()
-
-    def _close(self, mean: float) -> None:
-        self._means.append(mean)
-        self._merge_if_full()
-
-    def _merge_if_full(self) -> None:
-        if len(self._means) >= self.capacity:
-            pairs = np.asarray(self._means).reshape(-1, 2)
-            self._means = pairs.mean(axis=1).tolist()
-            self.span *= 2
+        self.count += len(values)
+        self.push_many(values)
 
     def curve(self, max_points: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(episodes, values): the bucket means so far, the unfinished bucket last, each
         labelled with its last episode; re-bucketed to at most `max_points` if given."""
-        full = len(self._means)
+        full = len(self._points)
         episodes = self.first_episode - 1 + self.span * np.arange(1, full + 1, dtype=np.int64)
-        values = np.asarray(self._means, dtype=np.float64)
+        values = np.asarray(self._points, dtype=np.float64)
         weights = np.full(full, float(self.span))
-        if self._tail_n:
+        if self._acc_n:
             episodes = np.append(episodes, self.first_episode + self.count - 1)
-            values = np.append(values, self._tail_sum / self._tail_n)
-            weights = np.append(weights, float(self._tail_n))
+            values = np.append(values, self._acc / self._acc_n)
+            weights = np.append(weights, float(self._acc_n))
         if max_points is not None:
             return bucket_means(episodes, values, max_points, weights)
         return episodes, values

@@ -114,7 +114,9 @@ def decode_curve(data: bytes) -> tuple[np.ndarray, np.ndarray]:
         raise CurveFormatError(f"curve of the wrong length for {n:,} points")
     body = data[pos : pos + length]
     pos += length
-    gaps = _inflate(body, n) if mode == _ZLIB else bytes(body)
+    gaps = _inflate(body, _MAX_VARINT * max(n, 1)) if mode == _ZLIB else bytes(body)
+    if gaps is None:
+        raise CurveFormatError("episodes that do not inflate within the bytes their points take")
     episodes = np.empty(n, dtype=np.int64)
     try:
         if n:
@@ -138,17 +140,14 @@ def decode_curve(data: bytes) -> tuple[np.ndarray, np.ndarray]:
     return episodes, np.ldexp(scaled.astype(np.float64), exponent)
 
 
-def _inflate(body: bytes, n: int) -> bytes:
-    """The episodes' gaps, inflated to at most the bytes n points can take."""
-    limit = _MAX_VARINT * max(n, 1)
+def _inflate(data: bytes, limit: int) -> bytes | None:
+    """`data` decompressed, None if it does not decompress whole within `limit` bytes."""
     inflater = zlib.decompressobj()
     try:
-        gaps = inflater.decompress(body, limit)
-    except zlib.error as exc:
-        raise CurveFormatError(f"damaged episodes ({exc})") from None
-    if inflater.unconsumed_tail or not inflater.eof:
-        raise CurveFormatError(f"episodes that inflate past {limit:,} bytes or stop short")
-    return gaps
+        found = inflater.decompress(data, limit)
+    except zlib.error:
+        return None
+    return None if inflater.unconsumed_tail or not inflater.eof else found
 
 
 def pack_curves(curves: Mapping[str, bytes]) -> bytes:
@@ -209,12 +208,8 @@ def encode(task: TaskRecord) -> tuple[int, str, bytes, bytes | None]:
 def _array(blob: object, shape: tuple[int, int], what: str) -> np.ndarray:
     if not isinstance(blob, bytes):
         raise BadTask(f"its {what} are not a blob")
-    try:
-        inflate = zlib.decompressobj()
-        data = inflate.decompress(blob, MAX_TASK_BYTES + 1)
-    except zlib.error:
-        raise BadTask(f"its {what} do not decompress") from None
-    if len(data) != shape[0] * shape[1] * 8 or inflate.unconsumed_tail:
+    data = _inflate(blob, MAX_TASK_BYTES + 1)
+    if data is None or len(data) != shape[0] * shape[1] * 8:
         raise BadTask(f"its {what} are not {shape[0]} × {shape[1]} numbers")
     return np.frombuffer(data, dtype="<f8").reshape(shape).astype(np.float64)
 

@@ -231,10 +231,10 @@ class Connection:
 
         self.lock = threading.Lock()
 
-    def attempt(self, action: Callable[[sqlite3.Connection], T], timeout: float,
-                busy: Callable[[], Exception], begin: str | None = "BEGIN") -> T:
+    def attempt(self, action: Callable[[sqlite3.Connection], T], timeout: float, path: Path,
+                begin: str | None = "BEGIN") -> T:
         """`action(conn)` inside `begin` ... COMMIT (no transaction when None), tried again
-        while another process holds the file, for up to `timeout` seconds; then `busy()`."""
+        while another process holds the file `path`, for up to `timeout` seconds."""
         deadline = time.monotonic() + timeout
         pause = 0.001
         while True:
@@ -245,7 +245,8 @@ class Connection:
                     if not is_busy(exc):
                         raise
             if time.monotonic() >= deadline:
-                raise busy()
+                raise RunHistoryBusyError(f"{shown(path)} is busy: another process kept it "
+                                          f"locked for over {timeout:.0f} s")
             # The lock is free meanwhile: this process's other threads go on reading.
             time.sleep(pause)
             pause = min(2 * pause, 0.05)
@@ -306,12 +307,6 @@ def release(shared: Connection) -> None:
         shared.conn.close()
 
 
-def busy_error(path: Path, timeout: float) -> Callable[[], RunHistoryBusyError]:
-    return lambda: RunHistoryBusyError(
-        f"{shown(path)} is busy: another process kept it locked for over {timeout:.0f} s"
-    )
-
-
 class _ReadOnly(Exception):
     """The file can at most be read (a read-only file or folder)."""
 
@@ -358,18 +353,15 @@ def _open(path: Path, real: Path, key: tuple[int, str], mode: str,
             raise _ReadOnly(str(exc)) from None
         raise RunHistoryError(f"{shown(path)}: cannot open it ({exc})") from None
     shared = Connection(key, conn, writable=not mode.startswith("ro"))
-    busy = busy_error(path, timeout)
     try:
         try:
-            identity = shared.attempt(inspect, timeout, busy)  # reading only, so far
+            identity = shared.attempt(inspect, timeout, path)  # reading only, so far
             shared.version = check_identity(path, len(migrations), *identity)
             if shared.writable:
                 conn.execute("PRAGMA synchronous = NORMAL")  # WAL stays consistent on a crash
                 conn.execute("PRAGMA foreign_keys = ON")
-                shared.attempt(
-                    lambda c: c.execute("PRAGMA journal_mode = WAL").fetchone(), timeout, busy,
-                    begin=None,
-                )
+                shared.attempt(lambda c: c.execute("PRAGMA journal_mode = WAL").fetchone(),
+                               timeout, path, begin=None)
         except sqlite3.DatabaseError as exc:
             if _code(exc) == "SQLITE_NOTADB":
                 raise untouched(path, "not an SQLite database") from None
@@ -400,8 +392,7 @@ def _upgrade(path: Path, shared: Connection, migrations: Sequence[Migration],
         return migrate(conn, check_identity(path, latest, *inspect(conn)), migrations)
 
     try:
-        shared.version = shared.attempt(upgrade, timeout, busy_error(path, timeout),
-                                        begin="BEGIN IMMEDIATE")
+        shared.version = shared.attempt(upgrade, timeout, path, begin="BEGIN IMMEDIATE")
     except sqlite3.DatabaseError as exc:
         if is_damage(exc):
             raise damaged(path, exc) from None

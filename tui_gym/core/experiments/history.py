@@ -8,7 +8,7 @@ import sqlite3
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import astuple, dataclass
 from pathlib import Path
 from types import TracebackType
 from typing import Any, TypeVar
@@ -31,7 +31,6 @@ from tui_gym.core.experiments.connection import (
     MIGRATIONS,
     Migration,
     WriterCheck,
-    busy_error,
     check_migrations,
     current_writer,
     damaged,
@@ -41,7 +40,7 @@ from tui_gym.core.experiments.connection import (
     shown,
 )
 from tui_gym.core.experiments.errors import DamagedRunError, RunHistoryError, UnknownRunError
-from tui_gym.core.experiments.figures import Figure
+from tui_gym.core.experiments.figures import FieldsJson, Figure
 from tui_gym.core.experiments.records import (
     Curve,
     RunKind,
@@ -64,14 +63,11 @@ T = TypeVar("T")
 
 
 @dataclass(frozen=True)
-class DamagedRun:
+class DamagedRun(FieldsJson):
     """A run whose row does not read: its id and why, in a few words."""
 
     id: int
     reason: str
-
-    def to_json(self) -> dict[str, Any]:
-        return {"id": self.id, "reason": self.reason}
 
 
 @dataclass(frozen=True)
@@ -133,12 +129,14 @@ class RunHistory:
         if self._closed:
             raise RunHistoryError(f"{shown(self.path)}: this history was closed")
         with self._errors():
-            return self._shared.attempt(action, self.timeout, busy_error(self.path, self.timeout),
-                                        begin=begin)
+            return self._shared.attempt(action, self.timeout, self.path, begin=begin)
 
-    def _require_run(self, conn: sqlite3.Connection, run_id: int) -> None:
-        if conn.execute("SELECT 1 FROM runs WHERE id = ?", (run_id,)).fetchone() is None:
+    def _require_run(self, conn: sqlite3.Connection, run_id: int, columns: str = "1") -> Any:
+        """The run's `columns`; UnknownRunError if there is no such run."""
+        row = conn.execute(f"SELECT {columns} FROM runs WHERE id = ?", (run_id,)).fetchone()
+        if row is None:
             raise UnknownRunError(f"no run {run_id} in {shown(self.path)}")
+        return row
 
     def _stored_curves(self, run_id: int, blob: object) -> dict[str, bytes]:
         """A run's stored curves by name, to add to; DamagedRunError if they do not read."""
@@ -162,13 +160,12 @@ class RunHistory:
         """Record a new run (status running); its id."""
         started = time.time() if started_at is None else started_at
         settings = _settings(spec)
-        platform = _platform(spec.versions or Versions.current())
+        platform = astuple(spec.versions or Versions.current())
         seeds = to_json_text(list(spec.seeds), "the seeds")
         writer = current_writer()
 
         def write(conn: sqlite3.Connection) -> int:
-            return _insert_run(conn, kind=str(spec.kind), settings_id=_settings_id(conn, settings),
-                               platform_id=_platform_id(conn, platform), seeds=seeds,
+            return _insert_run(conn, settings, platform, kind=str(spec.kind), seeds=seeds,
                                status=str(RunStatus.RUNNING), started_at=started,
                                group_id=spec.group, writer=writer)
 
@@ -196,7 +193,7 @@ class RunHistory:
         ended = None if final is None else (time.time() if ended_at is None else ended_at)
 
         def write(conn: sqlite3.Connection) -> None:
-            self._require_run(conn, run_id)
+            figures_text, old_id = self._require_run(conn, run_id, "figures, settings_id")
             if blobs:
                 row = conn.execute("SELECT data FROM curves WHERE run_id = ?", (run_id,)).fetchone()
                 stored = {} if row is None else self._stored_curves(run_id, row[0])
@@ -207,17 +204,14 @@ class RunHistory:
                 )
             sets: dict[str, Any] = {}
             if figure_rows:
-                row = conn.execute("SELECT figures FROM runs WHERE id = ?", (run_id,)).fetchone()
                 try:
-                    merged = {f.name: f for f in rows.figures(row[0])}
+                    merged = {f.name: f for f in rows.figures(figures_text)}
                 except rows.BadRow as exc:
                     raise self._damaged_run(run_id, str(exc)) from None
                 merged.update((f.name, f) for f in figure_rows)  # a known name keeps its place
                 sets["figures"] = _figures_to_json(merged.values())
             if settings is not None:
-                old = conn.execute("SELECT settings_id FROM runs WHERE id = ?", (run_id,))
-                old_id = old.fetchone()[0]
-                sets["settings_id"] = _settings_id(conn, settings)
+                sets["settings_id"] = _row_id(conn, "settings", settings)
             if agent_path is not None:
                 sets["agent_path"] = str(agent_path)
             if final is not None:
@@ -314,16 +308,14 @@ class RunHistory:
             game_params=record.game_params, wrappers=record.wrappers,
             hyperparameters=record.hyperparameters,
         ))
-        platform = _platform(record.versions)
+        platform = astuple(record.versions)
         blob = pack_curves({
             c.name: encode_curve(*bucket_means(c.episodes, c.values, MAX_STORED_POINTS))
             for c in record.curves
         })
 
         def write(conn: sqlite3.Connection) -> None:
-            _insert_run(conn, id=run.id, kind=str(run.kind),
-                        settings_id=_settings_id(conn, settings),
-                        platform_id=_platform_id(conn, platform),
+            _insert_run(conn, settings, platform, id=run.id, kind=str(run.kind),
                         seeds=to_json_text(list(run.seeds), "the seeds"), status=str(run.status),
                         started_at=run.started_at, ended_at=run.ended_at,
                         agent_path=record.agent_path, group_id=run.group,
@@ -437,8 +429,11 @@ class BestEffortHistory(RunHistory):
         return None  # type: ignore[return-value]
 
 
-def _insert_run(conn: sqlite3.Connection, **row: Any) -> int:
-    """Insert a run whose fields are `row`; its id."""
+def _insert_run(conn: sqlite3.Connection, settings: tuple[str, ...], platform: tuple[str, ...],
+                **row: Any) -> int:
+    """Insert a run of those settings and platform whose other fields are `row`; its id."""
+    row.update(settings_id=_row_id(conn, "settings", settings),
+               platform_id=_row_id(conn, "platforms", platform))
     names, marks = ", ".join(row), ", ".join("?" * len(row))
     cursor = conn.execute(f"INSERT INTO runs ({names}) VALUES ({marks})", tuple(row.values()))
     assert cursor.lastrowid is not None
@@ -456,8 +451,10 @@ def _where(game: str | None, kind: RunKind | str | None) -> tuple[str, list[Any]
     return ("" if not clauses else " WHERE " + " AND ".join(clauses)), args
 
 
-_SETTINGS = ("game", "game_params", "wrappers", "algorithm", "hyperparameters")
-_PLATFORM = ("tui_gym", "gymnasium", "numpy", "python")
+_COLUMNS = {  # of the rows runs share
+    "settings": ("game", "game_params", "wrappers", "algorithm", "hyperparameters"),
+    "platforms": ("tui_gym", "gymnasium", "numpy", "python"),
+}
 
 
 def _settings(spec: RunSpec) -> tuple[str, ...]:
@@ -468,22 +465,9 @@ def _settings(spec: RunSpec) -> tuple[str, ...]:
     )
 
 
-def _platform(versions: Versions) -> tuple[str, ...]:
-    return (versions.tui_gym, versions.gymnasium, versions.numpy, versions.python)
-
-
-def _settings_id(conn: sqlite3.Connection, values: tuple[str, ...]) -> int:
-    return _row_id(conn, "settings", _SETTINGS, values)
-
-
-def _platform_id(conn: sqlite3.Connection, values: tuple[str, ...]) -> int:
-    return _row_id(conn, "platforms", _PLATFORM, values)
-
-
-def _row_id(
-    conn: sqlite3.Connection, table: str, columns: tuple[str, ...], values: tuple[str, ...]
-) -> int:
-    """The id of the row holding exactly `values`, inserted if there is none."""
+def _row_id(conn: sqlite3.Connection, table: str, values: tuple[str, ...]) -> int:
+    """The id of the row of `table` holding exactly `values`, inserted if there is none."""
+    columns = _COLUMNS[table]
     names = ", ".join(columns)
     marks = ", ".join("?" * len(columns))
     conn.execute(f"INSERT OR IGNORE INTO {table} ({names}) VALUES ({marks})", values)
@@ -527,12 +511,10 @@ class RunRecorder:
 
     def extend(self, name: str, values: np.ndarray | Iterable[float]) -> None:
         """Append the values of the next episodes to the per-episode curve `name`."""
-        accumulator = self._accumulators.get(name)
-        if accumulator is None:
-            # Twice the stored points, so the stored curve is re-bucketed from finer buckets.
-            accumulator = CurveAccumulator(2 * self.max_points, self.first_episode)
-            self._accumulators[name] = accumulator
-        accumulator.extend(np.asarray(values if isinstance(values, np.ndarray) else list(values)))
+        values = values if isinstance(values, np.ndarray) else list(values)
+        # Twice the stored points, so the stored curve is re-bucketed from finer buckets.
+        self._accumulators.setdefault(name, CurveAccumulator(
+            2 * self.max_points, self.first_episode)).extend(np.asarray(values))
 
     def put_curve(self, curve: Curve) -> None:
         """A whole curve (say, values at checkpoints), replacing any of the same name."""
@@ -543,19 +525,12 @@ class RunRecorder:
         for figure in figures:
             self._figures[figure.name] = figure
 
-    def _pending_curves(self) -> list[Curve]:
-        curves = dict(self._curves)
-        for name, accumulator in self._accumulators.items():
-            if accumulator.count:
-                curves[name] = Curve(name, *accumulator.curve(self.max_points))
-        return list(curves.values())
-
     def flush(self, status: RunStatus | None = None) -> None:
         """Write what the run has so far (and `status`, if given) in one transaction."""
-        self.history.update(
-            self.run_id, curves=self._pending_curves(), figures=list(self._figures.values()),
-            status=status, max_points=self.max_points,
-        )
+        curves = {**self._curves, **{name: Curve(name, *a.curve(self.max_points))
+                                     for name, a in self._accumulators.items() if a.count}}
+        self.history.update(self.run_id, curves=curves.values(), status=status,
+                            figures=self._figures.values(), max_points=self.max_points)
 
     def finish(self, status: RunStatus = RunStatus.FINISHED) -> None:
         """Write everything with the run's final status."""

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import platform
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from enum import StrEnum
 from functools import cache
@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from tui_gym.core.experiments.figures import Figure
+from tui_gym.core.experiments.figures import FieldsJson, Figure
 
 
 class RunKind(StrEnum):
@@ -64,14 +64,11 @@ def _timestamp(seconds: float | None) -> str | None:
 
 
 @dataclass(frozen=True)
-class WrapperSetting:
+class WrapperSetting(FieldsJson):
     """One wrapper of a run: its catalog name and parameters."""
 
     name: str
     params: Mapping[str, Any] = field(default_factory=dict)
-
-    def to_json(self) -> dict[str, Any]:
-        return {"name": self.name, "params": dict(self.params)}
 
 
 def _package_version(name: str) -> str:
@@ -82,7 +79,7 @@ def _package_version(name: str) -> str:
 
 
 @dataclass(frozen=True)
-class Versions:
+class Versions(FieldsJson):
     """The versions of the packages a run ran on ("" for one not installed)."""
 
     tui_gym: str
@@ -91,22 +88,13 @@ class Versions:
     python: str
 
     @classmethod
+    @cache
     def current(cls) -> Versions:
         """The versions this process runs on."""
-        return _current_versions()
+        from tui_gym import __version__
 
-    def to_json(self) -> dict[str, str]:
-        return asdict(self)
-
-
-@cache
-def _current_versions() -> Versions:
-    from tui_gym import __version__
-
-    return Versions(
-        tui_gym=__version__, gymnasium=_package_version("gymnasium"), numpy=np.__version__,
-        python=platform.python_version(),
-    )
+        return cls(tui_gym=__version__, gymnasium=_package_version("gymnasium"),
+                   numpy=np.__version__, python=platform.python_version())
 
 
 @dataclass(frozen=True)

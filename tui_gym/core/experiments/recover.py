@@ -14,6 +14,7 @@ import tui_gym.core.experiments.rows as rows
 from tui_gym.core.experiments.codec import BadTask, decode
 from tui_gym.core.experiments.connection import WriterCheck, examine, shown
 from tui_gym.core.experiments.errors import RunHistoryError
+from tui_gym.core.experiments.figures import FieldsJson
 from tui_gym.core.experiments.history import RunHistory
 from tui_gym.core.experiments.records import RunStatus, TaskRecord
 from tui_gym.core.text import visible
@@ -22,7 +23,7 @@ PROBE_BEYOND = 100_000  # ids asked for one by one past the last one a damaged s
 
 
 @dataclass(frozen=True)
-class Recovery:
+class Recovery(FieldsJson):
     """What `recover` did: the runs it copied from `source` into `target`, the runs it
     found but could not read, and SQLite's verdict on the source ("ok" when sound)."""
 
@@ -32,13 +33,6 @@ class Recovery:
     unreadable: int
     curves_dropped: int  # runs copied without curves that did not decode
     check: str
-
-    def to_json(self) -> dict[str, Any]:
-        return {
-            "source": str(self.source), "target": None if self.target is None else str(self.target),
-            "copied": self.copied, "unreadable": self.unreadable,
-            "curves_dropped": self.curves_dropped, "check": self.check,
-        }
 
 
 def _fresh_path(source: Path) -> Path:

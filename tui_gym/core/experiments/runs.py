@@ -13,6 +13,7 @@ import numpy as np
 
 from tui_gym.core.experiments.connection import examine, shown
 from tui_gym.core.experiments.errors import RunHistoryError, UnknownRunError
+from tui_gym.core.experiments.figures import FieldsJson
 from tui_gym.core.experiments.history import DamagedRun, RunHistory
 from tui_gym.core.experiments.paths import resolve_db_path
 from tui_gym.core.experiments.records import Curve, RunKind, RunRecord, RunSummary
@@ -21,7 +22,7 @@ from tui_gym.core.files import OutputPathError, check_output_path, write_atomica
 
 
 @dataclass(frozen=True)
-class RunListing:
+class RunListing(FieldsJson):
     """The runs of one history file, newest first: those that read, those that do not,
     and how many there are in all (`total`; more than listed past a limit)."""
 
@@ -29,12 +30,6 @@ class RunListing:
     runs: tuple[RunSummary, ...]
     damaged: tuple[DamagedRun, ...] = ()
     total: int = 0
-
-    def to_json(self) -> dict[str, Any]:
-        return {
-            "db": str(self.db), "runs": [run.to_json() for run in self.runs],
-            "damaged": [run.to_json() for run in self.damaged], "total": self.total,
-        }
 
 
 @dataclass(frozen=True)
@@ -125,15 +120,12 @@ def remove_run(run_id: int, db: str | None = None) -> RemovedRun:
 
 
 @dataclass(frozen=True)
-class PrunedTasks:
+class PrunedTasks(FieldsJson):
     """The stored tasks `prune_tasks` removed from `db`: `tasks` of `runs` finished runs."""
 
     db: Path
     runs: int
     tasks: int
-
-    def to_json(self) -> dict[str, Any]:
-        return {"db": str(self.db), "runs": self.runs, "tasks": self.tasks}
 
 
 def prune_tasks(db: str | None = None) -> PrunedTasks:

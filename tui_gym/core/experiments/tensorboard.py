@@ -82,15 +82,11 @@ def export_run_tensorboard(
     summary = record.summary
     root = Path(directory).expanduser()
     folder = root / _run_folder(record)
+    tags: list[str] = []
+    scalars = last_episode = 0
     try:
         folder.mkdir(parents=True, exist_ok=True)
         earlier = set(folder.glob(EVENT_PREFIX + "*"))
-    except OSError as exc:
-        raise RunHistoryError(f"cannot write {folder}: {exc.strerror or exc}") from None
-    tags: list[str] = []
-    scalars = 0
-    last_episode = 0
-    try:
         # A suffix of its own: an export within the same second gets a new file name too.
         suffix = f".{secrets.token_hex(4)}"
         writer = SummaryWriter(logdir=str(folder), flush_secs=3600, filename_suffix=suffix)

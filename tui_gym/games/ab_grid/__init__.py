@@ -23,9 +23,6 @@ class ABGridNarrator(Narrator):
 
     tally_words = ()  # every episode runs to the limit: the count says it all
 
-    def tally_word(self, last: Any) -> str:
-        return "episodes"
-
     def outcome_text(self, last: Any, first_info: Mapping[str, Any],
                      scene: Mapping[str, Any]) -> str:
         return (f"{plural(last.steps, 'step')} played, return "

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
-from tui_gym.core.mdp import NotAvailable, greedy_policy
+from tui_gym.core.mdp import NotAvailable, greedy_policy, return_range
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.games.base import (
@@ -32,6 +32,7 @@ from tui_gym.games.base import (
 from tui_gym.games.blackjack.solver import (
     BASE_STATES,
     DEALERS,
+    LONGEST_HAND,
     N_BASE,
     POLICY_SHAPE,
     BlackjackRules,
@@ -42,7 +43,6 @@ from tui_gym.games.blackjack.solver import (
     optimal_action_values,
     optimal_policy,
     optimal_value,
-    policy_value,
 )
 from tui_gym.games.words import format_reward, unwrapped_note
 
@@ -57,7 +57,6 @@ CHART_SUMS = tuple(range(21, 11, -1))  # rows of the chart, top to bottom
 DEALER_CARDS = tuple(range(1, 11))  # columns: A, 2 .. 10
 DEALER_LABELS = ("A", "2", "3", "4", "5", "6", "7", "8", "9", "10")
 ACTION_LETTERS = ("S", "H")
-LONGEST_HAND = 20  # steps: 19 hits from two aces to 21 aces-as-one, then a stick or a bust
 TRAINED_GAP = 0.005  # what the default training reaches (see the README)
 
 
@@ -144,20 +143,13 @@ class BlackjackOracle(Oracle):
         table[_BASE_INDEX] = greedy_policy(q)[:, 1]
         return table
 
-    def policy_value(self, q: np.ndarray, rules: BlackjackRules) -> float:
-        """The exact value of the greedy policy of `q` as the agent plays it."""
-        hit = self.hit_probability(q)
-        if ((hit == 0.0) | (hit == 1.0)).all():
-            return policy_value(hit.astype(np.int8), rules)
-        return mixed_policy_value(hit, rules)
-
     def reference(
         self, q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> ReferenceMetrics | NotAvailable:
         if np.shape(q) != (N_BASE, 2):
             return NotAvailable(f"a table of shape {np.shape(q)} does not fit Blackjack")
         rules = self.rules(kwargs, changes)
-        exact = self.policy_value(q, rules)
+        exact = mixed_policy_value(self.hit_probability(q), rules)  # as the agent plays it
         best = optimal_value(rules)
         return ReferenceMetrics(
             figures={"exact_value": exact, "optimal_value": best, "gap": best - exact},
@@ -224,16 +216,10 @@ class BlackjackOracle(Oracle):
     def return_range(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> tuple[float, float] | NotAvailable:
-        """A hand is up to `LONGEST_HAND` - 1 hits, then a loss, a push, a win or (on
-        the first two cards, when the rules pay one) a natural."""
         scope = self.scope(kwargs, changes)
         if not scope.exact:
             return NotAvailable(scope.note)
-        rules = self.rules(kwargs, changes)
-        lose, hit, win, natural = rules.payoffs
-        ends = [lose, hit, win] + ([natural] if rules.natural and not rules.sab else [])
-        hits = LONGEST_HAND - 1
-        return min(ends) + hits * min(0.0, hit), max(ends) + hits * max(0.0, hit)
+        return return_range(blackjack_model(self.rules(kwargs, changes)))
 
     def fixed_policy_bound(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES

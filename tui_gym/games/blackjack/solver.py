@@ -1,4 +1,4 @@
-"""Exact dynamic programming for Gymnasium's ``Blackjack-v1``, and the game as a `FiniteMDP`.
+"""Gymnasium's ``Blackjack-v1`` as a `FiniteMDP`, and its exact figures from that model.
 
 A natural is a hidden state of its own (it pays differently under `natural` and `sab`)
 while every policy stays a function of the observation.
@@ -13,7 +13,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from tui_gym.core.mdp import FiniteMDP
+from tui_gym.core.mdp import FiniteMDP, evaluate, solve
+from tui_gym.core.mdp.evaluation import backup
 
 __all__ = [
     "BASE_STATES", "DEALERS", "DEFAULT_RULES", "HIT", "N_BASE", "POLICY_SHAPE", "STICK",
@@ -63,6 +64,7 @@ DEFAULT_RULES = BlackjackRules()
 STICK = 0
 HIT = 1
 POLICY_SHAPE = (32, 11, 2)
+LONGEST_HAND = 20  # steps: 19 hits from two aces to 21 aces-as-one, then a stick or a bust
 
 # Infinite deck: index i holds the probability of a card of value i + 1.
 _CARD_PROBS = np.array([1.0] * 9 + [4.0], dtype=np.float64) / 13.0
@@ -87,7 +89,6 @@ _SOFT = {t: i for i, (t, u) in enumerate(_STATE_OBS[:_NATURAL]) if u == 1}
 _SOFT_21 = _SOFT[21]
 _STATE_SUM = np.array([t for t, _ in _STATE_OBS], dtype=np.intp)
 _STATE_USABLE = np.array([u for _, u in _STATE_OBS], dtype=np.intp)
-_STATE_TOTAL = _STATE_SUM  # the score if the player sticks (never bust while deciding)
 
 
 def _add_card(total: int, soft: bool, card: int) -> int:
@@ -124,23 +125,7 @@ def _build_initial() -> np.ndarray:
 
 
 _HIT_MATRIX = _build_hit_matrix()
-_NO_BUST = 1.0 - _HIT_MATRIX[:, _BUST]  # chance that a hit leaves the hand alive
 _INITIAL = _build_initial()
-
-# Every hit leads to a state that comes earlier in this order, so one backward
-# sweep evaluates a policy: hard 21..12 (they stay hard), soft 21..12 (they stay
-# soft or turn hard >= 12), hard 11..4 (they go up, or soft via an ace), and the
-# natural (a hit turns it into a hard 12..21).
-_ORDER: tuple[int, ...] = (
-    tuple(_HARD[t] for t in range(21, 11, -1))
-    + tuple(_SOFT[t] for t in range(21, 11, -1))
-    + tuple(_HARD[t] for t in range(11, 3, -1))
-    + (_NATURAL,)
-)
-assert sorted(_ORDER) == list(range(_N_LIVE))
-assert all(_HIT_MATRIX[s, nxt] == 0.0 for i, s in enumerate(_ORDER) for nxt in _ORDER[i:]), (
-    "hit transitions must point to states evaluated earlier"
-)
 
 # The model's states: `live * 10 + dealer - 1` per live player state and dealer card, so the
 # game's base states (every observation asking for a decision) come first, the naturals last.
@@ -206,7 +191,7 @@ def stick_chances(rules: BlackjackRules) -> tuple[np.ndarray, np.ndarray, np.nda
     win = np.empty((_N_LIVE, 10))
     lose = np.empty((_N_LIVE, 10))
     for s in range(_N_LIVE):
-        total = _STATE_TOTAL[s]
+        total = _STATE_SUM[s]  # the score of a stick (never bust while deciding)
         # cmp(player, dealer): a bust dealer scores 0, below any standing player.
         win[s] = final[:, _DBUST] + made[:, scores < total].sum(axis=1)
         lose[s] = made[:, scores > total].sum(axis=1)
@@ -225,69 +210,23 @@ def stick_paid(rules: BlackjackRules) -> np.ndarray:
     return paid
 
 
-@cache
-def _stick_rewards(rules: BlackjackRules) -> np.ndarray:
-    """Expected reward of sticking, shape (29 states, 10 dealer up cards)."""
-    lose, push, win = stick_chances(rules)
-    rewards = stick_paid(rules)[:, None] * win + rules.payoffs[0] * lose + rules.payoffs[1] * push
-    rewards.setflags(write=False)
-    return rewards
-
-
 # ---------------------------------------------------------------------------
-# Policy evaluation
+# Policies and the optimum, on the model
 
 
-def _decisions(policy: np.ndarray) -> np.ndarray:
-    """A policy array's entries at the decision states, shape (29 states, 10 up cards)."""
+def _observed(policy: np.ndarray) -> np.ndarray:
+    """A policy array's entry at each model state's observation (a natural's is the soft 21's)."""
     pol = np.asarray(policy)
     if pol.shape != POLICY_SHAPE:
         raise ValueError(f"policy must have shape {POLICY_SHAPE}, got {pol.shape}")
-    return pol[_STATE_SUM[:, None], np.arange(1, 11)[None, :], _STATE_USABLE[:, None]]
+    return pol[_OBSERVED]
 
 
-def _check_policy(policy: np.ndarray) -> np.ndarray:
-    """The hit mask (29 states, 10 up cards) of a policy array, after checks."""
-    acts = _decisions(policy)
-    if not np.isin(acts, (STICK, HIT)).all():
-        raise ValueError("policy entries at decision states must be 0 (stick) or 1 (hit)")
-    return acts == HIT
-
-
-def _sweep(
-    rules: BlackjackRules, hit: np.ndarray | None = None, hit_at_21: np.ndarray | None = None
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Backward induction over `_ORDER`: the hit choice (29, 10), Q (29, 10, 2) and V (30 incl.
-    bust, 10 up cards) of the policy that hits with probability `hit` (a bool mask for a
-    deterministic policy), or with `hit` None of the greedy policy but at the soft-21
-    observation, whose action per up card `hit_at_21` fixes (every other observation is one
-    hidden state, so acting greedily there is optimal given that choice)."""
-    stick = _stick_rewards(rules)
-    values = np.zeros((_N_LIVE + 1, 10))
-    values[_BUST] = rules.payoffs[0]
-    q = np.empty((_N_LIVE, 10, 2))
-    chosen = np.zeros((_N_LIVE, 10), dtype=bool if hit is None else hit.dtype)
-    for s in _ORDER:
-        # A hit pays what a hit that does not bust pays, or the bust, plus what follows.
-        q_hit = _HIT_MATRIX[s] @ values + rules.payoffs[1] * _NO_BUST[s]
-        q[s, :, STICK], q[s, :, HIT] = stick[s], q_hit
-        if hit is not None:
-            chosen[s] = hit[s]
-        elif s in (_SOFT_21, _NATURAL):
-            chosen[s] = hit_at_21
-        else:
-            chosen[s] = q_hit > stick[s] + _TIE_TOLERANCE
-        row = chosen[s]
-        if row.dtype == bool:
-            values[s] = np.where(row, q_hit, stick[s])
-        else:
-            values[s] = row * q_hit + (1.0 - row) * stick[s]
-    return chosen, q, values
-
-
-def _start_value(values: np.ndarray) -> float:
-    """Expected return from the deal, given state values per up card."""
-    return float(_INITIAL @ values[:_N_LIVE] @ _CARD_PROBS)
+@cache
+def _hands(rules: BlackjackRules) -> FiniteMDP:
+    """`blackjack_model` cut at `LONGEST_HAND` steps, which no hand outlasts: the same values,
+    found by as many sweeps."""
+    return blackjack_model(rules).replace(horizon=LONGEST_HAND)
 
 
 def policy_value(policy: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> float:
@@ -297,7 +236,10 @@ def policy_value(policy: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> f
     usable_ace]`` with 0 = stick, 1 = hit; only decision states (hard totals 4-21, soft
     12-21) are read. The policy's action at ``(21, d, 1)`` applies to a natural too.
     """
-    return _start_value(_sweep(rules, _check_policy(policy))[2])
+    acts = _observed(policy)
+    if not np.isin(acts, (STICK, HIT)).all():
+        raise ValueError("policy entries at decision states must be 0 (stick) or 1 (hit)")
+    return evaluate(_hands(rules), acts.astype(np.int64)).value
 
 
 def mixed_policy_value(hit_probability: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> float:
@@ -307,47 +249,48 @@ def mixed_policy_value(hit_probability: np.ndarray, rules: BlackjackRules = DEFA
     probability in [0, 1] at every decision state (e.g. 0.5 where an agent's
     two actions tie and it breaks the tie at random).
     """
-    p = np.asarray(_decisions(hit_probability), dtype=np.float64)
+    p = np.asarray(_observed(hit_probability), dtype=np.float64)
     if not ((p >= 0.0) & (p <= 1.0)).all():
         raise ValueError("hit probabilities at decision states must be in [0, 1]")
-    return _start_value(_sweep(rules, p)[2])
+    return evaluate(_hands(rules), np.column_stack([1.0 - p, p])).value
 
 
-# ---------------------------------------------------------------------------
-# Optimal control
-
-
-@dataclass(frozen=True)
-class _Solution:
-    hit: np.ndarray  # (29, 10) the optimal hit mask
-    q: np.ndarray  # (29, 10, 2) Q* per hidden state
-    values: np.ndarray  # (30, 10) V* per hidden state
-    occupancy: np.ndarray  # (29, 10) P(visit state | up card) under the optimal policy
-
-
-def _occupancy(hit: np.ndarray) -> np.ndarray:
-    """P(the hand passes through each state | up card) under the hit mask."""
-    occ = np.repeat(_INITIAL[:, None], 10, axis=1)
-    for s in reversed(_ORDER):  # predecessors first
-        occ += _HIT_MATRIX[s, :_N_LIVE, None] * (occ[s] * hit[s])[None, :]
-    return occ
+# The model states behind the observation (21, d, 1): the drawn soft 21s, then the naturals.
+_ALIASED = np.r_[_SOFT_21 * DEALERS + np.arange(DEALERS), _NATURAL * DEALERS + np.arange(DEALERS)]
 
 
 @cache
-def _solve(rules: BlackjackRules) -> _Solution:
-    # The only aliased observation is (21, d, 1): a natural or a drawn soft 21.
-    # Try both actions there (per up card, as up cards never mix) and keep the
-    # better start value; all else is ordinary backward induction.
-    never = np.zeros(10, dtype=bool)
-    always = np.ones(10, dtype=bool)
-    stick_start = _sweep(rules, hit_at_21=never)[2][:_N_LIVE].T @ _INITIAL
-    hit_start = _sweep(rules, hit_at_21=always)[2][:_N_LIVE].T @ _INITIAL
-    hit, q, values = _sweep(rules, hit_at_21=hit_start > stick_start + _TIE_TOLERANCE)
-    for arr in (hit, q, values):
-        arr.setflags(write=False)
-    occupancy = _occupancy(hit)
-    occupancy.setflags(write=False)
-    return _Solution(hit=hit, q=q, values=values, occupancy=occupancy)
+def _solve(rules: BlackjackRules) -> tuple[np.ndarray, np.ndarray]:
+    """Q* (`[model states, 2]`) and the optimal hits (`[model states]`, ties to a stick).
+
+    The only aliased observation is (21, d, 1): a natural or a drawn soft 21. Each
+    action there (per up card, as up cards never mix) fixes the optimum elsewhere; the
+    better start value per up card wins."""
+    model = _hands(rules)
+    values = []
+    for action in (STICK, HIT):  # the model with both actions at the aliased states this one
+        arrays = {name: getattr(model, name).copy()
+                  for name in ("next_state", "prob", "reward", "terminal")}
+        for array in arrays.values():
+            array[_ALIASED] = array[_ALIASED, action][:, None]
+        values.append(solve(model.replace(**arrays)).v)
+    start = [(model.initial * v).reshape(_N_LIVE, DEALERS).sum(axis=0) for v in values]
+    hit_at_21 = np.tile(start[HIT] > start[STICK] + _TIE_TOLERANCE, _N_LIVE)
+    q = backup(model, np.where(hit_at_21, values[HIT], values[STICK]), 1.0)
+    hit = q[:, HIT] > q[:, STICK] + _TIE_TOLERANCE
+    hit[_ALIASED] = hit_at_21[_ALIASED]
+    for array in (q, hit):
+        array.setflags(write=False)
+    return q, hit
+
+
+def _occupancy(hit: np.ndarray) -> np.ndarray:
+    """P(the hand passes through each live state | up card) under the hit mask, `[29, 10]`."""
+    start = occupancy = np.repeat(_INITIAL[:, None], DEALERS, axis=1)
+    mask = hit.reshape(_N_LIVE, DEALERS)
+    for _ in range(_N_LIVE):  # a hand never comes back to a state: it meets fewer than 29
+        occupancy = start + _HIT_MATRIX[:, :_N_LIVE].T @ (occupancy * mask)
+    return occupancy
 
 
 Soft21 = Literal["observation", "natural", "drawn"]
@@ -372,20 +315,20 @@ def optimal_action_values(
     max over actions); ``"drawn"`` is a soft 21 of three or more cards. Under
     default rules all three coincide.
     """
-    sol = _solve(rules)
+    q_model, hit = _solve(rules)
+    drawn, natural = q_model[_ALIASED[:DEALERS]], q_model[_ALIASED[DEALERS:]]
     if soft_21 == "natural":
-        at_21 = sol.q[_NATURAL]
+        at_21 = natural
     elif soft_21 == "drawn":
-        at_21 = sol.q[_SOFT_21]
+        at_21 = drawn
     elif soft_21 == "observation":
-        w_nat = sol.occupancy[_NATURAL][:, None]
-        w_drawn = sol.occupancy[_SOFT_21][:, None]
-        at_21 = (w_nat * sol.q[_NATURAL] + w_drawn * sol.q[_SOFT_21]) / (w_nat + w_drawn)
+        occupancy = _occupancy(hit)
+        w_nat, w_drawn = occupancy[_NATURAL][:, None], occupancy[_SOFT_21][:, None]
+        at_21 = (w_nat * natural + w_drawn * drawn) / (w_nat + w_drawn)
     else:
         raise ValueError(f"soft_21 must be 'observation', 'natural' or 'drawn', not {soft_21!r}")
     q = np.full((*POLICY_SHAPE, 2), np.nan)
-    live = slice(0, _NATURAL)
-    q[_STATE_SUM[live], 1:, _STATE_USABLE[live]] = sol.q[live]
+    q[tuple(o[:N_BASE] for o in _OBSERVED)] = q_model[:N_BASE]
     q[21, 1:, 1] = at_21
     return q
 
@@ -396,15 +339,15 @@ def optimal_policy(rules: BlackjackRules = DEFAULT_RULES) -> np.ndarray:
     Hit (1) / stick (0) at every decision state, ties broken towards sticking;
     0 at states that never need a decision.
     """
-    sol = _solve(rules)
     policy = np.zeros(POLICY_SHAPE, dtype=np.int8)
-    policy[_STATE_SUM[:, None], np.arange(1, 11)[None, :], _STATE_USABLE[:, None]] = sol.hit
+    policy[_OBSERVED] = _solve(rules)[1]
     return policy
 
 
 def optimal_value(rules: BlackjackRules = DEFAULT_RULES) -> float:
     """The exact expected return of an optimal policy from the initial deal."""
-    return _start_value(_solve(rules).values)
+    q, hit = _solve(rules)
+    return float(_hands(rules).initial @ np.where(hit, q[:, HIT], q[:, STICK]))
 
 
 def observation_rows() -> np.ndarray:

@@ -118,9 +118,6 @@ class CarRentalNarrator(Narrator):
     agreement_words = "moves as the optimum"
     value_places = 1
 
-    def tally_word(self, last: Any) -> str:
-        return "episodes"
-
     def outcome_text(self, last: Any, first_info: Mapping[str, Any],
                      scene: Mapping[str, Any]) -> str:
         return f"{plural(last.steps, 'day')} of business: ${last.episode_return:,.0f}"

@@ -14,7 +14,14 @@ from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP
 from tui_gym.core.params import Param
 from tui_gym.envs.gambler import MAX_STAKE, GamblerEnv, gambler_model, stakes
-from tui_gym.games.base import TIED, UNREADABLE, HeatmapLayout, Narrator, TallyWord
+from tui_gym.games.base import (
+    TIED,
+    UNREADABLE,
+    HeatmapLayout,
+    ReachNarrator,
+    TallyWord,
+    greedy_cells,
+)
 from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.planning import PlanModel, StateLine
 from tui_gym.games.words import plural
@@ -66,29 +73,26 @@ class GamblerLayout(HeatmapLayout):
             return []
         has_marks = isinstance(marks, np.ndarray) and marks.shape == values.shape
         rows = goal // ROW + 1
-        grid = np.full((rows, ROW), np.nan)
-        marked = np.zeros((rows, ROW), dtype=bool)
-        labels = [[""] * ROW for _ in range(rows)]
-        for capital in range(goal + 1):
-            r, c = divmod(capital, ROW)
-            if capital in (0, goal):
-                labels[r][c] = "✗" if capital == 0 else "★"
-                continue
-            legal = values[capital, : min(capital, goal - capital)]
-            grid[r, c] = float(legal.max())
-            if len(legal) > 1 and (legal == legal[0]).all():
-                labels[r][c] = TIED
-                continue
-            action = int(np.argmax(legal))
-            labels[r][c] = str(action + 1)
-            marked[r, c] = has_marks and not marks[capital, action]
+
+        def fixed(r: int, c: int) -> str | None:
+            capital = r * ROW + c
+            return {0: "✗", goal: "★"}.get(capital, "" if capital > goal else None)
+
+        def legal(r: int, c: int) -> np.ndarray:  # the stakes that differ at this capital
+            return values[r * ROW + c, : min(r * ROW + c, goal - r * ROW - c)]
+
+        grid, labels, marked = greedy_cells(
+            rows, ROW, fixed, legal, lambda action: str(action + 1),
+            lambda r, c, action: has_marks and not marks[r * ROW + c, action],
+            lambda r, c: TIED if len(legal(r, c)) > 1 else "1",
+        )
         return [
             Heatmap(
                 title="max Q and the greedy stake",
                 row_labels=tuple(f"{r * ROW}+" for r in range(rows)),
                 col_labels=tuple(str(c) for c in range(ROW)),
                 values=grid,
-                labels=tuple(tuple(line) for line in labels),
+                labels=labels,
                 marked=marked,
                 legend=f"rows: capital by tens  number: greedy stake  {TIED} tie  ✗ ruined  "
                        "★ goal  * not an optimal stake",
@@ -96,17 +100,12 @@ class GamblerLayout(HeatmapLayout):
         ]
 
 
-class GamblerNarrator(Narrator):
+class GamblerNarrator(ReachNarrator):
     """Reached the goal, ruined, or out of bets."""
 
     tally_words = (TallyWord("won", "good"), TallyWord("ruined", "bad"),
                    TallyWord("timed out", always=False))
     agreement_words = "stakes as the optimum"
-
-    def tally_word(self, last: Any) -> str:
-        if not last.terminated:
-            return "timed out"
-        return "won" if last.episode_return > 0 else "ruined"
 
     def outcome_text(self, last: Any, first_info: Mapping[str, Any],
                      scene: Mapping[str, Any]) -> str:

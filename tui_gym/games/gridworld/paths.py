@@ -13,9 +13,8 @@ from tui_gym.core.wrappers.changes import GameChanges
 from tui_gym.envs.gridworld import Walls, cell_distances, cell_moves, free_cells
 
 __all__ = [
-    "fewest_share", "gridworld_model", "gridworld_optimum", "mean_fewest_steps",
-    "mixed_steps_over_optimal", "path_figures", "placements", "policy_steps_over_optimal",
-    "shortest_marks", "shortest_path_optimum", "shortest_path_policy",
+    "fewest_share", "gridworld_model", "gridworld_optimum", "mean_fewest_steps", "path_figures",
+    "placements", "shortest_marks", "shortest_path_optimum",
 ]
 
 _SETTLED = 1e-13  # a change in the chance of arriving smaller than this is no change
@@ -76,20 +75,6 @@ def shortest_path_optimum(
     free = free_cells(size, walls)
     start = free[agent] & free[target] & (agent != target)
     return q, float(q.max(axis=1)[start].mean())
-
-
-def shortest_path_policy(size: int) -> np.ndarray:
-    """An optimal policy array (int8, ``(size,) * 4``) on an open grid: the
-    lowest-numbered optimal action, so horizontal moves first; 0 where agent == target."""
-    _check_size(size)
-    ax, ay, tx, ty = np.indices((size, size, size, size))
-    policy = np.zeros((size,) * 4, dtype=np.int8)
-    # Fill in reverse preference order so the preferred action wins.
-    policy[ty < ay] = 3
-    policy[tx < ax] = 2
-    policy[ty > ay] = 1
-    policy[tx > ax] = 0
-    return policy
 
 
 @lru_cache(maxsize=8)
@@ -191,49 +176,3 @@ def path_figures(
         return fewest, float("nan"), 0.0
     extra = float((steps[valid] - distance[valid] * solved).sum()) / total
     return fewest, extra, float(solved.mean())
-
-
-def policy_steps_over_optimal(
-    size: int, policy: np.ndarray, max_steps: int | None = None
-) -> tuple[float, float]:
-    """``(mean extra steps, fraction solved)`` of a deterministic ``policy`` over every
-    start placement of an open grid (see `path_figures`)."""
-    return path_figures(size, (), _one_hot(size, policy), max_steps)[1:]
-
-
-def mixed_steps_over_optimal(
-    size: int, probabilities: np.ndarray, max_steps: int | None = None
-) -> tuple[float, float]:
-    """`policy_steps_over_optimal` of a policy given as action probabilities, shape
-    ``(size,) * 4 + (4,)``."""
-    return path_figures(size, (), _check_probabilities(size, probabilities), max_steps)[1:]
-
-
-def _one_hot(size: int, policy: np.ndarray) -> np.ndarray:
-    """A deterministic policy as action probabilities, after checks (entries where the
-    agent stands on the target are never read)."""
-    _check_size(size)
-    pol = np.asarray(policy)
-    if pol.shape != (size,) * 4:
-        raise ValueError(f"policy must have shape {(size,) * 4}, got {pol.shape}")
-    cells = size * size
-    actions = np.where(np.eye(cells, dtype=bool), 0, pol.reshape(cells, cells))
-    if not np.issubdtype(pol.dtype, np.integer) or actions.min() < 0 or actions.max() > 3:
-        raise ValueError("policy actions must be integers in 0..3 wherever agent != target")
-    return np.eye(4)[actions]
-
-
-def _check_probabilities(size: int, probabilities: np.ndarray) -> np.ndarray:
-    """The probabilities as (agent cell, target cell, action), after checks."""
-    _check_size(size)
-    probs = np.asarray(probabilities, dtype=np.float64)
-    if probs.shape != (size,) * 4 + (4,):
-        raise ValueError(f"probabilities must have shape {(size,) * 4 + (4,)}, got {probs.shape}")
-    if (probs < 0).any() or not np.allclose(probs.sum(axis=-1), 1.0):
-        raise ValueError("each state's action probabilities must be >= 0 and sum to 1")
-    return probs
-
-
-def _check_size(size: int) -> None:
-    if int(size) != size or size < 2:
-        raise ValueError(f"size must be an integer >= 2, got {size!r}")

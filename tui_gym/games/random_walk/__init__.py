@@ -12,7 +12,7 @@ from typing import Any
 
 from tui_gym.core.params import Param
 from tui_gym.envs.dp_grid import LEFT_END_PAYS, Cell, Grid, walk_grid
-from tui_gym.games.base import Narrator, TallyWord
+from tui_gym.games.base import ReachNarrator, TallyWord
 from tui_gym.games.dp_grid import DPGridGame, DPGridStates, Event
 from tui_gym.games.words import format_reward, plural
 
@@ -40,27 +40,19 @@ class WalkStates(DPGridStates):
         return int(observation)
 
 
-class WalkNarrator(Narrator):
+class WalkNarrator(ReachNarrator):
     """Off the right end or the left one."""
 
     tally_words = (TallyWord("right end", "good"), TallyWord("left end", "bad"),
                    TallyWord("truncated", always=False))
 
-    def tally_word(self, last: Any) -> str:
-        if not last.terminated:
-            return "truncated"
-        return "right end" if last.episode_return > 0 else "left end"
-
     def outcome_text(self, last: Any, first_info: Mapping[str, Any],
                      scene: Mapping[str, Any]) -> str:
-        steps, total = plural(last.steps, "step"), format_reward(last.episode_return)
         if not last.terminated:
-            return f"Out of time after {steps}, return {total}"
+            return super().outcome_text(last, first_info, scene)
         end = "right" if (scene.get("agent") or (0, 0))[1] else "left"
-        return f"Stepped off the {end} end after {steps}, return {total}"
-
-    def progress_text(self, last: Any, first_info: Mapping[str, Any]) -> str:
-        return f"{plural(last.steps, 'step')} taken" if last.steps else ""
+        return (f"Stepped off the {end} end after {plural(last.steps, 'step')}, return "
+                f"{format_reward(last.episode_return)}")
 
 
 class RandomWalkGame(DPGridGame):

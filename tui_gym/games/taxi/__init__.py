@@ -31,7 +31,7 @@ place of the passenger and destination, chosen on a small picker panel.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -41,7 +41,6 @@ from tui_gym.core.mdp import FiniteMDP, NotAvailable
 from tui_gym.core.params import Param
 from tui_gym.games.base import (
     TIED,
-    EvalOutcome,
     HeatmapLayout,
     ReachNarrator,
     TallyWord,
@@ -139,19 +138,13 @@ class TaxiNarrator(ReachNarrator):
     tally_words = (TallyWord("delivered", "good"), TallyWord("timed out", "bad"))
     reached_words = "Passenger delivered"
     missed_words = ": the passenger not delivered"
+    ended_figure = "delivered_rate"
 
     def progress_text(self, last: PlayStep, first_info: Mapping[str, Any]) -> str:
         text = super().progress_text(last, first_info)
         if last.steps and last.reward == ILLEGAL:
             text += "; that action could not be made here (−10)"
         return text
-
-    def eval_outcome(
-        self, returns: Sequence[float], details: Sequence[dict[str, Any]]
-    ) -> EvalOutcome:
-        n = max(1, len(details))
-        delivered = sum(1 for d in details if d["terminated"])
-        return EvalOutcome(figures={"delivered_rate": delivered / n})
 
 
 class TaxiLayout(HeatmapLayout):

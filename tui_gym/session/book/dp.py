@@ -22,6 +22,7 @@ from tui_gym.session.book.figure import (
     FigureResult,
     Progress,
     Series,
+    book_figure,
 )
 from tui_gym.session.plan.panels import number_text, plan_panels
 
@@ -89,7 +90,13 @@ def _ab_grid(method: str, what: str, progress: Progress) -> tuple[PlanModel, Pla
     return plan, planner, planner.v.reshape(5, 5)
 
 
-def _random_grid(options: FigureOptions, progress: Progress) -> FigureResult:
+@book_figure(
+    "3.2", "ab-grid", aliases=("example 3.5",),
+    title="Gridworld (Example 3.5): the equiprobable random policy's state values",
+    about="The grid of Example 3.5 under the random policy, discounted by 0.9: A's value "
+          "is below its reward of 10, because A′ sits by the edge where the random policy "
+          "often bumps, and B's above its 5.")
+def fig_3_2(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
     _, planner, v = _ab_grid("evaluate", "evaluating the random policy", progress)
     checks = (
         value_check("V(A): below its +10, for A′ lies by the edge, where moves cost", 8.8, v[0, 1]),
@@ -99,7 +106,6 @@ def _random_grid(options: FigureOptions, progress: Progress) -> FigureResult:
         grid_check("every value of the figure", RANDOM_VALUES, v),
     )
     return FigureResult(
-        figure=FIG_3_2.name, title=FIG_3_2.title, runs=1,
         charts=(Chart("state values of the random policy", "state (row * 5 + col)",
                       (Series("v_random", np.arange(25.0), planner.v.copy()),)),),
         panels=(number_grid("state values of the random policy (γ = 0.9)", v,
@@ -110,7 +116,12 @@ def _random_grid(options: FigureOptions, progress: Progress) -> FigureResult:
     )
 
 
-def _optimal_grid(options: FigureOptions, progress: Progress) -> FigureResult:
+@book_figure(
+    "3.5", "ab-grid",
+    title="Gridworld (Example 3.5): the optimal state values and policies",
+    about="Solved: every optimal policy runs to A and takes its +10, from B′ too; the "
+          "values fall by a factor 0.9 a move away from A.")
+def fig_3_5(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
     plan, planner, v = _ab_grid("value-iteration", "value iteration", progress)
     # From the bottom row every optimal move goes up, or along the row towards A's column.
     toward = np.zeros((5, 4), dtype=bool)
@@ -128,7 +139,6 @@ def _optimal_grid(options: FigureOptions, progress: Progress) -> FigureResult:
     arrows = plan_panels(game_named("ab-grid"), {}, plan, planner.v, planner.policy,
                          np.zeros(plan.model.n_states, dtype=bool))
     return FigureResult(
-        figure=FIG_3_5.name, title=FIG_3_5.title, runs=1,
         charts=(Chart("optimal state values", "state (row * 5 + col)",
                       (Series("v*", np.arange(25.0), planner.v.copy()),)),),
         panels=(number_grid("v*, the optimal state values (γ = 0.9)", v), *arrows),
@@ -158,7 +168,13 @@ CORNERS = np.zeros((4, 4), dtype=bool)
 CORNERS[0, 0] = CORNERS[3, 3] = True
 
 
-def _sweeps(options: FigureOptions, progress: Progress) -> FigureResult:
+@book_figure(
+    "4.1", "corner-grid", aliases=("example 4.1",),
+    title="Iterative policy evaluation on the small gridworld (Example 4.1)",
+    about="The random policy's values after 1, 2, 3 and 10 sweeps and at convergence, each "
+          "with the greedy policy it suggests (already optimal after three sweeps); in place, "
+          "the evaluation takes fewer sweeps than with two arrays.")
+def fig_4_1(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
     plan, planner = planner_on("corner-grid", 1.0, THETA)
     optimal = optimal_actions(solve(plan.model).q)
     panels, series, checks = [], [], []
@@ -194,7 +210,6 @@ def _sweeps(options: FigureOptions, progress: Progress) -> FigureResult:
                         "fewer", f"{in_place.sweeps} in place, {planner.sweeps} synchronous",
                         in_place.sweeps < planner.sweeps))
     return FigureResult(
-        figure=FIG_4_1.name, title=FIG_4_1.title, runs=1,
         charts=(Chart("the random policy's values, sweep by sweep", "state (row * 4 + col)",
                       tuple(series)),),
         panels=tuple(panels), checks=tuple(checks),
@@ -214,7 +229,12 @@ def _moves(policy: np.ndarray) -> np.ndarray:
                      for row in policy], dtype=np.float64)
 
 
-def _car_rental(options: FigureOptions, progress: Progress) -> FigureResult:
+@book_figure(
+    "4.2", "car-rental", aliases=("example 4.2",),
+    title="Jack's car rental (Example 4.2): the policies found by policy iteration",
+    about="From moving nothing, four improvements reach the optimal policy: move cars to "
+          "the second site, whose requests outrun its returns, unless it is the fuller one.")
+def fig_4_2(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
     plan, planner = planner_on("car-rental", 0.9, THETA)
     start = np.zeros((plan.model.n_states, len(MOVES)))
     start[:, NOTHING] = 1.0
@@ -250,7 +270,6 @@ def _car_rental(options: FigureOptions, progress: Progress) -> FigureResult:
               abs(grid[0, 0] - 420) <= 5 and grid[0, 0] == grid.min()),
     )
     return FigureResult(
-        figure=FIG_4_2.name, title=FIG_4_2.title, runs=1,
         charts=(Chart("cars moved by each policy", "state (first * 21 + second)",
                       tuple(series[:-1])),
                 Chart("v_π4", "state (first * 21 + second)", (series[-1],))),
@@ -269,7 +288,12 @@ TIES = 1e-9  # stakes whose values are this close count as equally good
 GAMBLER_SHOWN = (1, 2, 3)
 
 
-def _gambler(options: FigureOptions, progress: Progress) -> FigureResult:
+@book_figure(
+    "4.3", "gambler", aliases=("example 4.3",),
+    title="The gambler's problem (Example 4.3, p_h = 0.4): value iteration",
+    about="The chance of reaching $100 from each capital, sweep by sweep, and the final "
+          "stakes: bold play at 25, 50 and 75, and one of many optimal policies between.")
+def fig_4_3(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
     plan, planner = planner_on("gambler", 1.0, GAMBLER_THETA)
     line = plan.line
     assert line is not None
@@ -299,7 +323,6 @@ def _gambler(options: FigureOptions, progress: Progress) -> FigureResult:
               "rising" if rising else "not", rising),
     )
     return FigureResult(
-        figure=FIG_4_3.name, title=FIG_4_3.title, runs=1,
         charts=(Chart("value estimates by sweep", "capital", tuple(series)),
                 Chart("final policy (stake)", "capital", (Series("stake", capital, stakes),))),
         checks=checks,
@@ -310,50 +333,4 @@ def _gambler(options: FigureOptions, progress: Progress) -> FigureResult:
     )
 
 
-FIG_3_2 = BookFigure(
-    name="3.2",
-    title="Gridworld (Example 3.5): the equiprobable random policy's state values",
-    about="The grid of Example 3.5 under the random policy, discounted by 0.9: A's value "
-          "is below its reward of 10, because A′ sits by the edge where the random policy "
-          "often bumps, and B's above its 5.",
-    world="ab-grid",
-    run=_random_grid,
-    aliases=("example 3.5",),
-)
-FIG_3_5 = BookFigure(
-    name="3.5",
-    title="Gridworld (Example 3.5): the optimal state values and policies",
-    about="Solved: every optimal policy runs to A and takes its +10, from B′ too; the "
-          "values fall by a factor 0.9 a move away from A.",
-    world="ab-grid",
-    run=_optimal_grid,
-)
-FIG_4_1 = BookFigure(
-    name="4.1",
-    title="Iterative policy evaluation on the small gridworld (Example 4.1)",
-    about="The random policy's values after 1, 2, 3 and 10 sweeps and at convergence, each "
-          "with the greedy policy it suggests (already optimal after three sweeps); in place, "
-          "the evaluation takes fewer sweeps than with two arrays.",
-    world="corner-grid",
-    run=_sweeps,
-    aliases=("example 4.1",),
-)
-FIG_4_2 = BookFigure(
-    name="4.2",
-    title="Jack's car rental (Example 4.2): the policies found by policy iteration",
-    about="From moving nothing, four improvements reach the optimal policy: move cars to "
-          "the second site, whose requests outrun its returns, unless it is the fuller one.",
-    world="car-rental",
-    run=_car_rental,
-    aliases=("example 4.2",),
-)
-FIG_4_3 = BookFigure(
-    name="4.3",
-    title="The gambler's problem (Example 4.3, p_h = 0.4): value iteration",
-    about="The chance of reaching $100 from each capital, sweep by sweep, and the final "
-          "stakes: bold play at 25, 50 and 75, and one of many optimal policies between.",
-    world="gambler",
-    run=_gambler,
-    aliases=("example 4.3",),
-)
-FIGURES = (FIG_3_2, FIG_3_5, FIG_4_1, FIG_4_2, FIG_4_3)
+FIGURES = (fig_3_2, fig_3_5, fig_4_1, fig_4_2, fig_4_3)

@@ -19,6 +19,7 @@ from tui_gym.session.book.figure import (
     FigureResult,
     FigureStopped,
     Progress,
+    book_figure,
     heading,
 )
 from tui_gym.session.book.runs import (
@@ -33,7 +34,6 @@ from tui_gym.session.book.runs import (
     margin,
     near,
     per_episode,
-    per_step,
     play,
     play_steps,
     swept,
@@ -53,8 +53,14 @@ LAST = 10  # episodes that make a run's final level
 EARLY = (2, 10)  # the episodes compared at the start (the book's axis begins at 2)
 
 
-def _planning(options: FigureOptions, progress: Progress) -> FigureResult:
-    played = play(FIG_8_2, "dyna-maze", [
+@book_figure(
+    "8.2", "dyna-maze", runs=30, episodes=50, aliases=("example 8.1",),
+    title="Dyna-Q on the Dyna maze (Figure 8.2): steps per episode",
+    about="The first episode is a long random walk for every agent; after it, an agent that "
+          "plans 50 updates a step has a path back nearly to the start by the second episode, "
+          "one without planning needs about 25 episodes.")
+def fig_8_2(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
+    played = play(figure, "dyna-maze", [
         Learner(f"{n} planning steps", "dyna-q", {**DYNA_SETTINGS, "planning_steps": n})
         for n in PLANNING_STEPS], options, progress, measure=LENGTH)
     episodes = played[0].values.shape[1]
@@ -68,10 +74,9 @@ def _planning(options: FigureOptions, progress: Progress) -> FigureResult:
     checks += [_settled(p, SETTLED[n]) for n, p in zip(PLANNING_STEPS, played, strict=True)
                if SETTLED[n] + LAST <= episodes]
     return FigureResult(
-        figure=FIG_8_2.name, title=FIG_8_2.title, runs=played[0].runs,
         charts=(Chart("steps per episode", "episodes",
                       tuple(per_episode(p) for p in played), skip_start=True),),
-        checks=tuple(checks),
+        runs=played[0].runs, checks=tuple(checks),
         notes=("ε = 0.1, α = 0.1, γ = 0.95; the shortest path takes 14 steps, and exploring "
                "with ε = 0.1 lengthens it",
                f"a run's final level: its mean over the last {LAST} episodes; curves are read "
@@ -169,14 +174,21 @@ def _maze_result(figure: BookFigure, dyna: Played, plus: Played, checks: tuple[C
     last = above(f"Dyna-Q+'s cumulative reward after {steps} steps is above Dyna-Q's",
                  "above", plus.values[:, -1], dyna.values[:, -1])
     return FigureResult(
-        figure=figure.name, title=figure.title, runs=dyna.runs,
-        charts=(Chart("cumulative reward", "time steps", (per_step(dyna), per_step(plus))),),
-        checks=(*checks, last), notes=(MAZE_NOTE, *notes, BANDS),
+        charts=(Chart("cumulative reward", "time steps",
+                      tuple(per_episode(p, points=300) for p in (dyna, plus))),),
+        runs=dyna.runs, checks=(*checks, last), notes=(MAZE_NOTE, *notes, BANDS),
     )
 
 
-def _blocking(options: FigureOptions, progress: Progress) -> FigureResult:
-    dyna, plus, (before, after) = _changing_maze(FIG_8_4, "blocking-maze", BLOCKING, options,
+@book_figure(
+    "8.4", "blocking-maze", runs=30, aliases=("example 8.2",),
+    title="Dyna-Q against Dyna-Q+ on the blocking maze (Figure 8.4): cumulative reward",
+    about="After 1000 steps the short way round the wall closes and a longer one opens at "
+          "its other end. Both agents' curves go flat while they search behind the wall; "
+          "Dyna-Q+, whose planning rewards trying what it has not tried for long, finds "
+          "the new way sooner and ends ahead.")
+def fig_8_4(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
+    dyna, plus, (before, after) = _changing_maze(figure, "blocking-maze", BLOCKING, options,
                                                  progress)
     steps, change = BLOCKING
     flat = [above(f"{p.label}'s curve goes flat at the change: reward in the {GLANCE} steps "
@@ -201,7 +213,7 @@ def _blocking(options: FigureOptions, progress: Progress) -> FigureResult:
     )
     stuck = int((found_dyna >= steps - change).sum())
     return _maze_result(
-        FIG_8_4, dyna, plus, checks,
+        figure, dyna, plus, checks,
         f"the wall moves after {change} steps; the maze pays +1 at the goal only, so the "
         "cumulative reward counts the episodes that reached it",
         f"Dyna-Q had not found the new way by step {steps} in {stuck} of {dyna.runs} runs "
@@ -209,8 +221,15 @@ def _blocking(options: FigureOptions, progress: Progress) -> FigureResult:
         f"{float(np.median(found_plus)):.0f} steps (median)")
 
 
-def _shortcut(options: FigureOptions, progress: Progress) -> FigureResult:
-    dyna, plus, (long_way, shortcut) = _changing_maze(FIG_8_5, "shortcut-maze", SHORTCUT,
+@book_figure(
+    "8.5", "shortcut-maze", runs=30, aliases=("example 8.3",),
+    title="Dyna-Q against Dyna-Q+ on the shortcut maze (Figure 8.5): cumulative reward",
+    about="After 3000 steps a shorter way opens round the wall's right end, the long way "
+          "staying open. Dyna-Q's model says the long way works, so it never tries the "
+          "shortcut; Dyna-Q+'s bonus for what it has not tried for long sends it there, and "
+          "its curve climbs faster.")
+def fig_8_5(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
+    dyna, plus, (long_way, shortcut) = _changing_maze(figure, "shortcut-maze", SHORTCUT,
                                                       options, progress)
     steps, change = SHORTCUT
     late = steps - SHORTCUT_LATE
@@ -230,7 +249,7 @@ def _shortcut(options: FigureOptions, progress: Progress) -> FigureResult:
               reward_between(dyna, late, steps)),
     )
     return _maze_result(
-        FIG_8_5, dyna, plus, checks,
+        figure, dyna, plus, checks,
         f"the shortcut opens after {change} steps; the maze pays +1 at the goal only, so the "
         "cumulative reward counts the episodes that reached it")
 
@@ -252,8 +271,16 @@ FACTOR = 5  # the book: prioritized sweeping finds optimal solutions "often by a
 # 5 to 10" faster
 
 
-def _sweeping(options: FigureOptions, progress: Progress) -> FigureResult:
-    runs, _ = counts(EXAMPLE_8_4, options)
+@book_figure(
+    "example 8.4", "dyna-maze", runs=10, aliases=("e8.4", "example-8.4"),
+    title="Prioritized sweeping against Dyna-Q on finer Dyna mazes (Example 8.4): updates "
+          "until optimal",
+    about="The Dyna maze with each cell made 2 x 2 and 4 x 4 cells: the same structure, "
+          "more states. Dyna-Q plans from pairs drawn at random, most of whose updates "
+          "change nothing; prioritized sweeping plans where values change, backwards from "
+          "the goal, and its greedy policy is optimal after many times fewer updates.")
+def example_8_4(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
+    runs, _ = counts(figure, options)
     scales = FULL_SCALES if options.full else SCALES
     updates = np.zeros((len(SWEEPERS), len(scales), runs))
     sizes: list[int] = []
@@ -266,7 +293,7 @@ def _sweeping(options: FigureOptions, progress: Progress) -> FigureResult:
         for i, (learner, hp) in enumerate(zip(SWEEPERS, hps, strict=True)):
             for r in range(runs):
                 if options.stop is not None and options.stop.is_set():
-                    raise FigureStopped(f"{heading(EXAMPLE_8_4.name)} stopped")
+                    raise FigureStopped(f"{heading(figure.name)} stopped")
                 done = (j * len(SWEEPERS) + i) * runs + r
                 progress(done, total, f"{sizes[-1]} states: {learner.label}, run {r + 1}")
                 cls = algorithm(learner.algorithm)
@@ -291,9 +318,8 @@ def _sweeping(options: FigureOptions, progress: Progress) -> FigureResult:
                      f"{margin(gap[j]):.2f})", gap[j].mean() - margin(gap[j]) > np.log10(FACTOR))
                for j, size in enumerate(sizes)]
     return FigureResult(
-        figure=EXAMPLE_8_4.name, title=EXAMPLE_8_4.title, runs=runs,
         charts=(Chart("log10 updates until the greedy policy is optimal", "states", series),),
-        checks=tuple(checks),
+        runs=runs, checks=tuple(checks),
         notes=(f"ε = 0.1, γ = 0.95, α = 1, at most {SWEEP_PLANNING} updates a step (Dyna-Q: "
                f"its own and {SWEEP_PLANNING} planned; prioritized sweeping: what it takes "
                "from its queue, θ = 0.0001)",
@@ -374,53 +400,4 @@ def _optimal(q: np.ndarray, model: FiniteMDP, good: np.ndarray, start: int) -> b
     return True
 
 
-FIG_8_2 = BookFigure(
-    name="8.2",
-    title="Dyna-Q on the Dyna maze (Figure 8.2): steps per episode",
-    about="The first episode is a long random walk for every agent; after it, an agent that "
-          "plans 50 updates a step has a path back nearly to the start by the second episode, "
-          "one without planning needs about 25 episodes.",
-    world="dyna-maze",
-    run=_planning,
-    runs=30,
-    episodes=50,
-    aliases=("example 8.1",),
-)
-FIG_8_4 = BookFigure(
-    name="8.4",
-    title="Dyna-Q against Dyna-Q+ on the blocking maze (Figure 8.4): cumulative reward",
-    about="After 1000 steps the short way round the wall closes and a longer one opens at "
-          "its other end. Both agents' curves go flat while they search behind the wall; "
-          "Dyna-Q+, whose planning rewards trying what it has not tried for long, finds "
-          "the new way sooner and ends ahead.",
-    world="blocking-maze",
-    run=_blocking,
-    runs=30,
-    aliases=("example 8.2",),
-)
-FIG_8_5 = BookFigure(
-    name="8.5",
-    title="Dyna-Q against Dyna-Q+ on the shortcut maze (Figure 8.5): cumulative reward",
-    about="After 3000 steps a shorter way opens round the wall's right end, the long way "
-          "staying open. Dyna-Q's model says the long way works, so it never tries the "
-          "shortcut; Dyna-Q+'s bonus for what it has not tried for long sends it there, and "
-          "its curve climbs faster.",
-    world="shortcut-maze",
-    run=_shortcut,
-    runs=30,
-    aliases=("example 8.3",),
-)
-EXAMPLE_8_4 = BookFigure(
-    name="example 8.4",
-    title="Prioritized sweeping against Dyna-Q on finer Dyna mazes (Example 8.4): updates "
-          "until optimal",
-    about="The Dyna maze with each cell made 2 x 2 and 4 x 4 cells: the same structure, "
-          "more states. Dyna-Q plans from pairs drawn at random, most of whose updates "
-          "change nothing; prioritized sweeping plans where values change, backwards from "
-          "the goal, and its greedy policy is optimal after many times fewer updates.",
-    world="dyna-maze",
-    run=_sweeping,
-    runs=10,
-    aliases=("e8.4", "example-8.4"),
-)
-FIGURES = (FIG_8_2, FIG_8_4, FIG_8_5, EXAMPLE_8_4)
+FIGURES = (fig_8_2, fig_8_4, fig_8_5, example_8_4)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -16,9 +16,10 @@ if TYPE_CHECKING:
     from tui_gym.core.experiments.history import RunHistory
 
 __all__ = ["BookFigure", "Chart", "Check", "FigureOptions", "FigureResult", "FigureStopped",
-           "FigureTasks", "Progress", "Series", "heading"]
+           "FigureTasks", "Progress", "Series", "book_figure", "heading"]
 
 Progress = Callable[[int, int, str], None]  # (done, total, what is being done)
+Measure = Callable[["BookFigure", "FigureOptions", Progress], "FigureResult"]
 
 
 def heading(name: str) -> str:
@@ -112,11 +113,12 @@ class Check:
 
 @dataclass(frozen=True)
 class FigureResult:
-    """A figure as measured: charts and grids to draw, and the checks."""
+    """A figure as measured: charts and grids to draw, and the checks (the figure's name
+    and title filled in by `book_figure`)."""
 
-    figure: str
-    title: str
-    runs: int
+    figure: str = ""
+    title: str = ""
+    runs: int = 1
     charts: tuple[Chart, ...] = ()
     panels: tuple[Heatmap, ...] = ()
     checks: tuple[Check, ...] = ()
@@ -152,3 +154,18 @@ class BookFigure:
     aliases: Sequence[str] = field(default=())
     full_runs: int | None = None  # the book's counts, where they are more than the defaults
     full_episodes: int | None = None
+
+
+def book_figure(name: str, world: str, *, title: str, about: str,
+                **counts: Any) -> Callable[[Measure], BookFigure]:
+    """Make the function that measures a figure (given the figure, the options and the
+    progress) the `BookFigure` named `name` on `world`; `counts` are its other fields."""
+
+    def make(measure: Measure) -> BookFigure:
+        def run(options: FigureOptions, progress: Progress) -> FigureResult:
+            return replace(measure(figure, options, progress), figure=name, title=title)
+
+        figure = BookFigure(name, title, about, world, run, **counts)
+        return figure
+
+    return make

@@ -42,7 +42,7 @@ from tui_gym.session.experiments.compare import (
 
 __all__ = [
     "BANDS", "FIRST_ACTION", "LENGTH", "RETURN", "Learner", "Played", "above", "book_settings",
-    "completed", "counts", "margin", "near", "one_run", "per_episode", "per_step",
+    "completed", "counts", "margin", "near", "one_run", "per_episode",
     "per_time_step", "play", "play_prediction", "play_steps", "swept", "world_phases",
 ]
 
@@ -154,7 +154,7 @@ def play_steps(figure: BookFigure, world: str, learners: Sequence[Learner],
             progress(at, len(learners) * runs, about)
             agent = cls(n_actions, cls.settings(hp), n_states=n_states, seed=options.seed + run)
             loop.warm([(agent.name, agent.arrays(), agent.compiled_params())],
-                      functools.partial(_told, progress, at, len(learners) * runs))
+                      functools.partial(progress, at, len(learners) * runs))
             values[run] = _cumulative_reward(agent, arrays, phases.starts, ends, steps)
         played.append(Played(learner.label, values, None, None))
     progress(len(learners) * runs, len(learners) * runs, about)
@@ -189,10 +189,6 @@ def play_prediction(figure: BookFigure, states: int, learners: Sequence[Learner]
         played.append(Played(learner.label, values, None, None))
     progress(len(learners), len(learners), about)
     return played
-
-
-def _told(progress: Progress, done: int, total: int, line: str) -> None:
-    progress(done, total, line)
 
 
 def world_phases(world: str, kwargs: Mapping[str, Any]) -> Phases:
@@ -303,17 +299,11 @@ def _apart(claim: str, book: str, higher: Samples, lower: Samples, digits: int, 
     return Check(claim, book, measured, gap > spread)
 
 
-def per_episode(played: Played, window: int = 1) -> Series:
-    """The mean over runs of each episode's measure (each run smoothed over a trailing
-    `window` of episodes first), with its band."""
-    curve = aggregate(played.values, window=window)
-    return Series(played.label, curve.episodes.astype(np.float64), curve.mean, curve.lo, curve.hi)
-
-
-def per_step(played: Played, points: int = 300) -> Series:
-    """The mean over runs at each time step (as `play_steps` records them), with its band,
-    at most `points` of them."""
-    curve = aggregate(played.values, max_points=points)
+def per_episode(played: Played, window: int = 1, points: int | None = None) -> Series:
+    """The mean over runs of each episode's measure, or each time step's (as `play_steps`
+    records them), with its band: each run smoothed over a trailing `window` first, at
+    most `points` of them."""
+    curve = aggregate(played.values, window=window, max_points=points)
     return Series(played.label, curve.episodes.astype(np.float64), curve.mean, curve.lo, curve.hi)
 
 

@@ -18,6 +18,7 @@ from tui_gym.session.book.figure import (
     FigureResult,
     Progress,
     Series,
+    book_figure,
 )
 from tui_gym.session.book.runs import BANDS, Learner, Played, below, play_prediction, swept
 
@@ -105,11 +106,10 @@ class WalkSweep:
                     picked.best, curves[end].best, digits=3) for end, words in self.ends),
         )
         return FigureResult(
-            figure=figure.name, title=figure.title, runs=len(picked.best),
             charts=(Chart(f"mean RMS error over the first {picked.episodes} episodes "
                           f"(points above {SHOWN:g} left out)", "α",
                           tuple(c.series() for c in curves.values())),),
-            checks=checks,
+            runs=len(picked.best), checks=checks,
             notes=(f"{self.how}the random policy's values -0.9 … 0.9, from policy evaluation "
                    "on the model; V starts at 0, undiscounted", BANDS),
         )
@@ -117,16 +117,12 @@ class WalkSweep:
 
 def walk_figure(name: str, title: str, about: str, sweep: WalkSweep) -> BookFigure:
     """A swept figure on the 19-state walk, at the book's 100 runs of 10 episodes."""
-
-    def run(options: FigureOptions, progress: Progress) -> FigureResult:
-        return sweep.run(figure, options, progress)
-
-    figure = BookFigure(name, title, about, "random-walk", run, runs=100, episodes=10)
-    return figure
+    return book_figure(name, "random-walk", title=title, about=about, runs=100,
+                       episodes=10)(sweep.run)
 
 
 LAMBDA_ENDS = ((0.0, "λ = 0 (one-step TD)"), (1.0, "λ = 1 (Monte Carlo)"))
-FIG_7_2 = walk_figure(
+fig_7_2 = walk_figure(
     "7.2", "n-step TD on the 19-state random walk (Figure 7.2): error against α per n",
     "Between one-step TD (n = 1) and Monte Carlo (large n), an intermediate n learns the "
     "random policy's values fastest: the book's best is n = 4. Large n needs a small step.",
@@ -134,7 +130,7 @@ FIG_7_2 = walk_figure(
               "n = 4", ((1, "one-step TD (n = 1)"),
                         (512, "n = 512 (Monte Carlo on this walk)"))),
 )
-FIG_12_3 = walk_figure(
+fig_12_3 = walk_figure(
     "12.3", "Offline λ-return on the 19-state random walk (Figure 12.3): error against α per λ",
     "Each state moves toward its λ-return at the episode's end, a blend of every n-step "
     "return: an intermediate λ does best, much as an intermediate n does for n-step TD "
@@ -142,7 +138,7 @@ FIG_12_3 = walk_figure(
     WalkSweep("offline-lambda-return", "lambda", LAMBDAS, MIDDLE_LAMBDAS, 0.8,
               "λ about 0.8 to 0.9", LAMBDA_ENDS, "updates at each episode's end; "),
 )
-FIG_12_6 = walk_figure(
+fig_12_6 = walk_figure(
     "12.6", "TD(λ) on the 19-state random walk (Figure 12.6): error against α per λ",
     "Traces spread each TD error back over the states just left: an intermediate λ learns "
     "the random policy's values fastest, between TD(0) (λ = 0) and Monte Carlo (λ = 1). "
@@ -150,4 +146,4 @@ FIG_12_6 = walk_figure(
     WalkSweep("td-lambda", "lambda", LAMBDAS, MIDDLE_LAMBDAS, 0.8, "λ about 0.8 to 0.9",
               LAMBDA_ENDS, "accumulating traces; "),
 )
-FIGURES = (FIG_7_2, FIG_12_3, FIG_12_6)
+FIGURES = (fig_7_2, fig_12_3, fig_12_6)

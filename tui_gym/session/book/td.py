@@ -21,6 +21,7 @@ from tui_gym.session.book.figure import (
     FigureResult,
     Progress,
     Series,
+    book_figure,
 )
 from tui_gym.session.book.runs import (
     BANDS,
@@ -60,8 +61,15 @@ WALKERS = (
 LATE = 25  # the last episodes, where the curves have settled
 
 
-def _random_walk(options: FigureOptions, progress: Progress) -> FigureResult:
-    played = play_prediction(FIG_6_2, 5, WALKERS, options, progress)
+@book_figure(
+    "6.2", "random-walk", runs=100, episodes=100, aliases=("example 6.2",),
+    title="TD(0) against constant-α MC on the random walk (Example 6.2): RMS error",
+    about="Both learn the random policy's values on the 5-state walk; TD(0), bootstrapping "
+          "from the next state's estimate, gets closer in fewer episodes than Monte Carlo "
+          "at every step size shown. A larger step learns faster at first and settles "
+          "higher.")
+def fig_6_2(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
+    played = play_prediction(figure, 5, WALKERS, options, progress)
     late = {p.label: p.values[:, -LATE:].mean(axis=1) for p in played}
     td = [late[x.label] for x in WALKERS[: len(TD_ALPHAS)]]
     mc = [late[x.label] for x in WALKERS[len(TD_ALPHAS):]]
@@ -73,10 +81,9 @@ def _random_walk(options: FigureOptions, progress: Progress) -> FigureResult:
               f"{TD_ALPHAS[-1]:g} (last {LATE} episodes)", "higher", td[0], td[-1], digits=3),
     )
     return FigureResult(
-        figure=FIG_6_2.name, title=FIG_6_2.title, runs=played[0].runs,
         charts=(Chart("RMS error of V, averaged over the 5 states", "episodes",
                       tuple(per_episode(p) for p in played)),),
-        checks=checks,
+        runs=played[0].runs, checks=checks,
         notes=("the random policy's values 1/6 … 5/6, from policy evaluation on the model; "
                f"V starts at {START:g}, undiscounted", BANDS),
     )
@@ -89,10 +96,16 @@ STEPS = 8000  # the figure's time steps
 FIRST = 20  # episodes compared at the start and at the end
 
 
-def _windy(options: FigureOptions, progress: Progress) -> FigureResult:
-    (rook,) = play(FIG_6_3, "windy", (Learner("Sarsa", "sarsa", WINDY),), options, progress,
+@book_figure(
+    "6.3", "windy", runs=20, episodes=200, aliases=("example 6.5",),
+    title="Sarsa on Windy GridWorld (Example 6.5): episodes completed against time steps",
+    about="The first episode takes thousands of steps; as Sarsa learns, each takes fewer and "
+          "the curve steepens towards one episode every 17 or so steps: the 15-step path "
+          "plus exploration. With king's moves the path is 7 steps.")
+def fig_6_3(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
+    (rook,) = play(figure, "windy", (Learner("Sarsa", "sarsa", WINDY),), options, progress,
                    measure=LENGTH)
-    (king,) = play(FIG_6_3, "windy-king", (Learner("Sarsa, king's moves", "sarsa", WINDY),),
+    (king,) = play(figure, "windy-king", (Learner("Sarsa, king's moves", "sarsa", WINDY),),
                    options, progress, measure=LENGTH)
     reach = min(STEPS, int(rook.values.sum(axis=1).min()))
     by_then = completed(rook, [reach])[:, 0]
@@ -110,10 +123,9 @@ def _windy(options: FigureOptions, progress: Progress) -> FigureResult:
     )
     optimal = int((rook.final == rook.optimum).sum()) if rook.final is not None else 0
     return FigureResult(
-        figure=FIG_6_3.name, title=FIG_6_3.title, runs=rook.runs,
         charts=(Chart("episodes completed", "time steps",
                       (per_time_step(rook, until=STEPS), per_time_step(king, until=STEPS))),),
-        checks=checks,
+        runs=rook.runs, checks=checks,
         notes=(f"ε = {EPSILON} throughout, α = 0.5, Q starting at 0; the book's figure is one "
                "run, so its count is checked against the spread of one run",
                f"after the last episode the greedy policy takes the shortest path in {optimal} "
@@ -149,8 +161,13 @@ SMOOTHING = 10  # episodes: each run's curve is smoothed over this many, as the 
 SAFE_PATH = -17.0  # the path along the top of the grid, the farthest from the cliff
 
 
-def _cliff(options: FigureOptions, progress: Progress) -> FigureResult:
-    sarsa, q = play(FIG_6_4, "cliffwalking", (Learner("Sarsa", "sarsa", CLIFF),
+@book_figure(
+    "6.4", "cliffwalking", runs=20, episodes=500, full_runs=100, aliases=("example 6.6",),
+    title="Sarsa against Q-learning on CliffWalking (Example 6.6): online return",
+    about="Q-learning learns the optimal path along the cliff's edge but, exploring, falls "
+          "off now and then; Sarsa learns the safer path above it and earns more online.")
+def fig_6_4(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
+    sarsa, q = play(figure, "cliffwalking", (Learner("Sarsa", "sarsa", CLIFF),
                                               Learner("Q-learning", "q-learning", CLIFF)),
                     options, progress)
     half = sarsa.values.shape[1] // 2  # the later half of the episodes: both have settled
@@ -164,11 +181,10 @@ def _cliff(options: FigureOptions, progress: Progress) -> FigureResult:
              0.0, 100.0 * (sarsa.final == q.optimum), unit="%"),
     )
     return FigureResult(
-        figure=FIG_6_4.name, title=FIG_6_4.title, runs=sarsa.runs,
         charts=(Chart(f"online return (each run smoothed over {SMOOTHING} episodes)",
                       "episodes", (per_episode(sarsa, window=SMOOTHING),
                                    per_episode(q, window=SMOOTHING)), skip_start=True),),
-        checks=checks,
+        runs=sarsa.runs, checks=checks,
         notes=("ε = 0.1 throughout, α = 0.5, undiscounted; the optimal path is worth "
                f"{q.optimum:g}, the path along the top {SAFE_PATH:g}", BANDS),
     )
@@ -186,8 +202,14 @@ EARLY = 100  # episodes: the first ones, where the bias shows, and the last ones
 READING = 2.5
 
 
-def _max_bias(options: FigureOptions, progress: Progress) -> FigureResult:
-    q, double = play(FIG_6_5, "max-bias", (Learner("Q-learning", "q-learning", BIASED),
+@book_figure(
+    "6.5", "max-bias", runs=1000, episodes=300, full_runs=10_000, aliases=("example 6.7",),
+    title="Q-learning against Double Q-learning (Example 6.7): % left actions from A",
+    about="Left leads to B, worth -0.1 on average; right ends at 0. Q-learning's max over B's "
+          "noisy estimates makes left look good at first, so it goes left far more often "
+          "than it should; Double Q-learning is hardly fooled.")
+def fig_6_5(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
+    q, double = play(figure, "max-bias", (Learner("Q-learning", "q-learning", BIASED),
                                            Learner("Double Q-learning", "double-q", BIASED)),
                      options, progress, measure=FIRST_ACTION)
     q_left, d_left = 100.0 * (q.values == LEFT), 100.0 * (double.values == LEFT)
@@ -215,11 +237,10 @@ def _max_bias(options: FigureOptions, progress: Progress) -> FigureResult:
               q_left[:, -early:].mean(axis=1), floor, unit="%"),
     )
     return FigureResult(
-        figure=FIG_6_5.name, title=FIG_6_5.title, runs=q.runs,
         charts=(Chart("% left actions from A", "episodes",
                       (per_episode(replace(q, values=q_left)),
                        per_episode(replace(double, values=d_left)))),),
-        checks=checks,
+        runs=q.runs, checks=checks,
         notes=(f"ε = {EPSILON}, α = 0.1; every action from B ends with a reward drawn from "
                "N(-0.1, 1)",
                f"A offers two actions, so the ε-greedy optimum goes left ε/2 = {optimum:g}% of "
@@ -248,12 +269,19 @@ def learners() -> list[Learner]:
             for label, name in KINDS for alpha in ALPHAS]
 
 
-def _against_alpha(options: FigureOptions, progress: Progress) -> FigureResult:
-    runs, episodes = counts(FIG_6_6, options)
+@book_figure(
+    "6.6", "cliffwalking", runs=300, episodes=2000, full_runs=50_000, full_episodes=100_000,
+    title="Sarsa, Expected Sarsa and Q-learning on CliffWalking (Example 6.6): interim and "
+          "asymptotic return against α",
+    about="Expected Sarsa does best across α, early and in the long run, and keeps its "
+          "return at α = 1; Sarsa does well in the long run only at a small α; Q-learning, "
+          "learning the path along the edge while exploring, earns least in the long run.")
+def fig_6_6(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
+    runs, episodes = counts(figure, options)
     asymptotic_runs = FULL_ASYMPTOTIC_RUNS if options.full else ASYMPTOTIC_RUNS
-    interim = play(FIG_6_6, "cliffwalking", learners(), options, progress, runs=runs,
+    interim = play(figure, "cliffwalking", learners(), options, progress, runs=runs,
                    episodes=INTERIM)
-    long = play(FIG_6_6, "cliffwalking", learners(), options, progress, runs=asymptotic_runs,
+    long = play(figure, "cliffwalking", learners(), options, progress, runs=asymptotic_runs,
                 episodes=episodes)
     early, late = _per_run(interim), _per_run(long)
     sarsa = early["Sarsa"]
@@ -272,12 +300,11 @@ def _against_alpha(options: FigureOptions, progress: Progress) -> FigureResult:
               not above("", "", late["Expected Sarsa"][0], late["Expected Sarsa"][-1]).ok),
     )
     return FigureResult(
-        figure=FIG_6_6.name, title=FIG_6_6.title, runs=runs,
         charts=(Chart(f"interim: mean return of the first {INTERIM} episodes, {runs:,} runs",
                       "α", _series(interim)),
                 Chart(f"asymptotic: mean return of {episodes:,} episodes, "
                       f"{asymptotic_runs} runs", "α", _series(long))),
-        checks=checks,
+        runs=runs, checks=checks,
         notes=(f"ε = {EPSILON} throughout, Q starting at 0, undiscounted; points below "
                f"{LOWEST:g} (the book's axis) are left off the charts", BANDS),
     )
@@ -323,68 +350,4 @@ def _lowest(per_run: PerRun, label: str, where: Sequence[int]) -> Check:
                  f"lowest at {len(lowest)} of {len(where)} α", len(lowest) == len(where))
 
 
-FIG_6_2 = BookFigure(
-    name="6.2",
-    title="TD(0) against constant-α MC on the random walk (Example 6.2): RMS error",
-    about="Both learn the random policy's values on the 5-state walk; TD(0), bootstrapping "
-          "from the next state's estimate, gets closer in fewer episodes than Monte Carlo "
-          "at every step size shown. A larger step learns faster at first and settles "
-          "higher.",
-    world="random-walk",
-    run=_random_walk,
-    runs=100,
-    episodes=100,
-    aliases=("example 6.2",),
-)
-FIG_6_3 = BookFigure(
-    name="6.3",
-    title="Sarsa on Windy GridWorld (Example 6.5): episodes completed against time steps",
-    about="The first episode takes thousands of steps; as Sarsa learns, each takes fewer and "
-          "the curve steepens towards one episode every 17 or so steps: the 15-step path "
-          "plus exploration. With king's moves the path is 7 steps.",
-    world="windy",
-    run=_windy,
-    runs=20,
-    episodes=200,
-    aliases=("example 6.5",),
-)
-FIG_6_4 = BookFigure(
-    name="6.4",
-    title="Sarsa against Q-learning on CliffWalking (Example 6.6): online return",
-    about="Q-learning learns the optimal path along the cliff's edge but, exploring, falls "
-          "off now and then; Sarsa learns the safer path above it and earns more online.",
-    world="cliffwalking",
-    run=_cliff,
-    runs=20,
-    episodes=500,
-    full_runs=100,
-    aliases=("example 6.6",),
-)
-FIG_6_5 = BookFigure(
-    name="6.5",
-    title="Q-learning against Double Q-learning (Example 6.7): % left actions from A",
-    about="Left leads to B, worth -0.1 on average; right ends at 0. Q-learning's max over B's "
-          "noisy estimates makes left look good at first, so it goes left far more often "
-          "than it should; Double Q-learning is hardly fooled.",
-    world="max-bias",
-    run=_max_bias,
-    runs=1000,
-    episodes=300,
-    full_runs=10_000,
-    aliases=("example 6.7",),
-)
-FIG_6_6 = BookFigure(
-    name="6.6",
-    title="Sarsa, Expected Sarsa and Q-learning on CliffWalking (Example 6.6): interim and "
-          "asymptotic return against α",
-    about="Expected Sarsa does best across α, early and in the long run, and keeps its "
-          "return at α = 1; Sarsa does well in the long run only at a small α; Q-learning, "
-          "learning the path along the edge while exploring, earns least in the long run.",
-    world="cliffwalking",
-    run=_against_alpha,
-    runs=300,
-    episodes=2000,
-    full_runs=50_000,
-    full_episodes=100_000,
-)
-FIGURES = (FIG_6_2, FIG_6_3, FIG_6_4, FIG_6_5, FIG_6_6)
+FIGURES = (fig_6_2, fig_6_3, fig_6_4, fig_6_5, fig_6_6)

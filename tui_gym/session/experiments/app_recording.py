@@ -1,4 +1,5 @@
-"""`SessionRunLog`: every run trained in the app, kept in the run history."""
+"""`SessionRunLog`: every run trained in the app, kept in the run history by a writer
+thread (which a `train` run's recording uses too)."""
 
 from __future__ import annotations
 
@@ -14,17 +15,10 @@ from typing import TYPE_CHECKING, Any
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.history import RunHistory
-from tui_gym.core.experiments.records import Curve, RunKind, RunSpec, RunStatus
-from tui_gym.session.experiments.live import (
-    ExactCheckpoints,
-    episodes_figure,
-    return_curve,
-    run_figures,
-    run_spec,
-)
+from tui_gym.core.experiments.records import RunKind, RunSpec, RunStatus
+from tui_gym.session.experiments.live import ExactCheckpoints, run_results, run_spec
 
 if TYPE_CHECKING:
-    from tui_gym.core.experiments.figures import Figure
     from tui_gym.session.session import Session
 
 FLUSH_SECONDS = 2.0  # how often an open run's curves are written
@@ -64,7 +58,7 @@ class SessionRunLog:
         self._next_flush = 0.0
         self._jobs: queue.SimpleQueue[tuple[Any, ...] | None] = queue.SimpleQueue()
         self._writer: threading.Thread | None = None
-        self._problem: str | None = None  # set by the writer thread
+        self.problem: str | None = None  # why writing failed (set by the writer thread)
         self._told = False
         self._last_snapshot: TrainingSnapshot | None = None  # the open run's latest
         self.run_ids: dict[object, int] = {}  # token -> id, once the writer has it
@@ -72,12 +66,12 @@ class SessionRunLog:
     # --- on the app's timer ----------------------------------------------------
     def observe(self, session: Session, snapshot: TrainingSnapshot) -> str | None:
         """Follow the session's training; a line to show when the history failed (once)."""
-        if self._problem is not None:
+        if self.problem is not None:
             if self._told:
                 return None
             self._told = True
             self._run = None
-            return self._problem
+            return f"Runs are not recorded in the run history: {self.problem}"
         agent = session.agent
         run = self._run
         if run is not None and (run.agent is not agent or snapshot.episodes < run.episodes):
@@ -97,7 +91,8 @@ class SessionRunLog:
         if now >= self._next_flush and run.episodes != run.flushed:
             self._next_flush = now + self.flush_seconds
             run.checkpoints.take(snapshot)
-            self._send("update", run, *self._results(run, snapshot), run.spec)
+            curves, figures = run_results(snapshot, run.checkpoints, run.after)
+            self.send(run.token, curves=curves, figures=figures, spec=run.spec)
             run.flushed = run.episodes
         self._last_snapshot = snapshot
         return None
@@ -105,8 +100,8 @@ class SessionRunLog:
     def saved(self, session: Session, path: str | Path) -> None:
         """The session's agent was saved to `path`: its run records where."""
         run = self._run
-        if run is not None and run.agent is session.agent and self._problem is None:
-            self._send("agent", run, str(Path(path).resolve()))
+        if run is not None and run.agent is session.agent and self.problem is None:
+            self.send(run.token, agent_path=str(Path(path).resolve()))
 
     def _begin(self, session: Session, snapshot: TrainingSnapshot) -> _OpenRun:
         spec = run_spec(session, RunKind.APP)
@@ -115,70 +110,54 @@ class SessionRunLog:
                        settings=_settings(session))
         self._run = run
         self._next_flush = self.clock() + self.flush_seconds
-        self._send("start", run, spec)
+        self.send(run.token, start=spec)
         run.checkpoints.take(snapshot)  # the exact value near the run's start
         return run
 
-    def _results(
-        self, run: _OpenRun, snapshot: TrainingSnapshot | None
-    ) -> tuple[list[Curve], list[Figure]]:
-        curve = None if snapshot is None else return_curve(snapshot, run.after)
-        curves = [c for c in (curve, run.checkpoints.curve()) if c is not None]
-        episodes = () if snapshot is None else (episodes_figure(snapshot, run.after),)
-        return curves, run_figures(curve, run.checkpoints.last, episodes, after=run.after)
-
     def _end(self, run: _OpenRun) -> None:
         # No checkpoint here: the session may have been rebuilt around another table.
-        curves, figures = self._results(run, self._last_snapshot)
-        self._send("finish", run, curves, figures, run.spec)
+        curves, figures = run_results(self._last_snapshot, run.checkpoints, run.after)
+        self.send(run.token, curves=curves, figures=figures, spec=run.spec,
+                  status=RunStatus.FINISHED)
         self._run = None
         self._baseline = run.episodes
 
-    def close(self) -> None:
-        """End the open run and wait (briefly) for every write to land."""
-        if self._run is not None and self._problem is None:
+    def close(self, wait: float | None = CLOSE_WAIT_SECONDS) -> None:
+        """End the open run and wait (up to `wait` seconds; None: as long as it takes) for
+        every write to land."""
+        if self._run is not None and self.problem is None:
             self._end(self._run)
         writer = self._writer
         if writer is not None:
             self._jobs.put(None)
-            writer.join(CLOSE_WAIT_SECONDS)
+            writer.join(wait)
             self._writer = None
 
     # --- the writer thread ---------------------------------------------------
-    def _send(self, kind: str, run: _OpenRun, *payload: Any) -> None:
+    def send(self, token: object, start: RunSpec | None = None, **changes: Any) -> None:
+        """On the writer thread, in order: start a run of `start` named `token`, or make
+        `changes` to that run (`RunHistory.update`'s arguments)."""
         if self._writer is None:
             self._writer = threading.Thread(target=self._write_all, name="run-history", daemon=True)
             self._writer.start()
-        self._jobs.put((kind, run.token, *payload))
+        self._jobs.put((token, start, changes))
 
     def _write_all(self) -> None:
         history: RunHistory | None = None
         try:
             while (job := self._jobs.get()) is not None:
-                if self._problem is not None:
+                token, start, changes = job
+                if self.problem is not None:
                     continue
                 try:
                     if history is None:
                         history = RunHistory(self.path)
-                    self._write(history, job)
+                    if start is not None:
+                        self.run_ids[token] = history.start_run(start)
+                    elif token in self.run_ids:
+                        history.update(self.run_ids[token], **changes)
                 except (RunHistoryError, ValueError, OSError, sqlite3.Error) as exc:
-                    self._problem = f"Runs are not recorded in the run history: {exc}"
+                    self.problem = str(exc)
         finally:
             if history is not None:
                 history.close()
-
-    def _write(self, history: RunHistory, job: tuple[Any, ...]) -> None:
-        kind, token, *payload = job
-        if kind == "start":
-            spec: RunSpec = payload[0]
-            self.run_ids[token] = history.start_run(spec)
-            return
-        run_id = self.run_ids.get(token)
-        if run_id is None:
-            return
-        if kind == "agent":
-            history.update(run_id, agent_path=payload[0])
-            return
-        curves, figures, spec = payload
-        status = RunStatus.FINISHED if kind == "finish" else None
-        history.update(run_id, curves=curves, figures=figures, status=status, spec=spec)

@@ -5,7 +5,6 @@ from __future__ import annotations
 import contextlib
 import functools
 import json
-import math
 import os
 import queue
 import threading
@@ -22,18 +21,20 @@ from tui_gym.core.engine.loop import FIRST_ACTION, LENGTH, RETURN, ModelArrays, 
 from tui_gym.core.engine.seeds import checkpoint_episodes, greedy_values, play_learner
 from tui_gym.core.experiments.aggregate import (
     AggregateCurve,
+    CurvePoint,
     Estimate,
     aggregate,
     mean_return_last,
     mean_with_ci,
 )
 from tui_gym.core.experiments.errors import RunHistoryError
-from tui_gym.core.experiments.figures import Figure
+from tui_gym.core.experiments.figures import Figure, plain
 from tui_gym.core.experiments.history import STORED_POINTS, RunHistory
 from tui_gym.core.experiments.records import RunKind, RunSpec, RunStatus, TaskRecord, WrapperSetting
 from tui_gym.core.mdp import FiniteMDP, solve
 from tui_gym.core.text import visible
 from tui_gym.core.wrappers import WrapperChoice
+from tui_gym.session.experiments.live import run_spec
 
 __all__ = [
     "JSON_CURVE_POINTS", "RESUME_ADVICE", "AlgorithmOutcome", "CompareError", "CompareProgress",
@@ -160,26 +161,17 @@ class AlgorithmOutcome:
         return tuple(figures)
 
     def to_json(self, max_points: int = JSON_CURVE_POINTS) -> dict[str, Any]:
-        return {
-            "algorithm": self.algorithm,
-            "hyperparameters": dict(self.hyperparameters),
-            "seeds_done": self.seeds_done,
-            "episodes_done": self.episodes,
-            "mean_return_last": _finite(self.mean_return_last.mean),
-            "ci95": self.mean_return_last.ci95,
-            "exact_value": _finite(self.exact_value),
-            "exact_gap": _finite(self.exact_gap),
-            "rms_error": _finite(self.rms_error),
-            "rms_ci95": _finite(self.rms_ci95),
-            "rms_curve": None if self.rms_curve is None else [
-                p.to_json() for p in self.rms_curve.downsample(max_points).points()],
-            "run_id": self.run_id,
-            "curve": [p.to_json() for p in self.curve.downsample(max_points).points()],
-        }
+        def points(curve: AggregateCurve | None) -> list[CurvePoint] | None:
+            return None if curve is None else curve.downsample(max_points).points()
 
-
-def _finite(value: float | None) -> float | None:
-    return value if value is not None and math.isfinite(value) else None
+        return dict(plain({
+            "algorithm": self.algorithm, "hyperparameters": self.hyperparameters,
+            "seeds_done": self.seeds_done, "episodes_done": self.episodes,
+            "mean_return_last": self.mean_return_last.mean, "ci95": self.mean_return_last.ci95,
+            "exact_value": self.exact_value, "exact_gap": self.exact_gap,
+            "rms_error": self.rms_error, "rms_ci95": self.rms_ci95,
+            "rms_curve": points(self.rms_curve), "run_id": self.run_id,
+            "curve": points(self.curve)}))
 
 
 @dataclass(frozen=True)
@@ -208,17 +200,16 @@ class CompareResult:
     outcomes: tuple[AlgorithmOutcome, ...]
     interrupted: bool
     group: int | None
-    spec: CompareSpec | None = None
-    game: str = ""
+    spec: CompareSpec
+    game: str
     optimum: float | None = None
     tasks: Mapping[str, int] = field(default_factory=dict)  # "done" and "total"
 
     def to_json(self) -> dict[str, Any]:
         spec = self.spec
         return {
-            "game": self.game or (spec.game if spec else ""),
-            "episodes": spec.episodes if spec else None, "seeds": spec.seeds if spec else None,
-            "first_seed": spec.first_seed if spec else None, "optimum": _finite(self.optimum),
+            "game": self.game, "episodes": spec.episodes, "seeds": spec.seeds,
+            "first_seed": spec.first_seed, "optimum": plain(self.optimum),
             "interrupted": self.interrupted, "group": self.group, "tasks": dict(self.tasks),
             "results": [o.to_json() for o in self.outcomes],
         }
@@ -286,20 +277,21 @@ class _Model:
 
 @dataclass(frozen=True)
 class _Job:
-    """An arm's seeds `seeds` (indices `rows` of its seed list)."""
+    """An arm's seeds `seeds` (indices `rows` of its seed list), of the experiment
+    `setup` on the game as `prepared`."""
 
     index: int
     arm: int
     algorithm: str
-    env_id: str
-    env_kwargs: Mapping[str, Any]
-    wrappers: tuple[WrapperChoice, ...]
     hp: Mapping[str, Any]
     seeds: tuple[int, ...]
     rows: tuple[int, ...]
-    episodes: int
-    model: _Model | None = None  # the game's model, when it has one
-    measure: int = RETURN
+    setup: Setup
+    prepared: Prepared
+
+    @property
+    def episodes(self) -> int:
+        return self.setup.episodes
 
 
 @dataclass(frozen=True)
@@ -323,7 +315,7 @@ class Prepared:
     game: str
     env_id: str
     env_kwargs: dict[str, Any]
-    wrappers: tuple[WrapperSetting, ...]
+    wrappers: Sequence[WrapperSetting]
     hyperparameters: list[dict[str, Any]]
     model: _Model | None
     optimum: float | None
@@ -356,11 +348,6 @@ def prepare(setup: Setup, arms: Sequence[Arm]) -> Prepared:
             first = session
         else:
             session.env.close()
-    from tui_gym.core.wrappers import get_spec
-
-    wrappers = tuple(
-        WrapperSetting(c.name, get_spec(c.name).validate(c.values())) for c in first.applied
-    )
     model = optimum = None
     training = first.training
     # A world that changes plays each seed through its session's trainer (`_play_env`),
@@ -369,12 +356,11 @@ def prepare(setup: Setup, arms: Sequence[Arm]) -> Prepared:
         model = _Model(first.trainer.model, training.model, np.asarray(training.rows),
                        int(first.keyer.n_states), int(first.agent.n_actions),
                        first.agent.offered)
-        value = solve(training.model).value
-        optimum = value if math.isfinite(value) else None
+        optimum = plain(solve(training.model).value)
     prepared = Prepared(
         game=first.game.name, env_id=first.env_id, env_kwargs=dict(first.env_kwargs),
-        wrappers=wrappers, hyperparameters=hyperparameters, model=model, optimum=optimum,
-    )
+        wrappers=run_spec(first, RunKind.COMPARE).wrappers, hyperparameters=hyperparameters,
+        model=model, optimum=optimum)
     first.env.close()
     return prepared
 
@@ -398,12 +384,9 @@ def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared,
                                     max(1, min(pieces, len(rows)))):
             if block.size:
                 jobs.append(_Job(
-                    index=-1, arm=a, algorithm=arm.algorithm, env_id=prepared.env_id,
-                    env_kwargs=prepared.env_kwargs, wrappers=tuple(setup.wrappers),
-                    hp=prepared.hyperparameters[a], seeds=tuple(seeds[r] for r in block),
-                    rows=tuple(int(r) for r in block), episodes=setup.episodes,
-                    model=prepared.model, measure=setup.measure,
-                ))
+                    index=-1, arm=a, algorithm=arm.algorithm, hp=prepared.hyperparameters[a],
+                    seeds=tuple(seeds[r] for r in block), rows=tuple(int(r) for r in block),
+                    setup=setup, prepared=prepared))
     return jobs
 
 
@@ -419,7 +402,7 @@ def _run_job(
     checkpoints = checkpoint_episodes(episodes)
     done = np.zeros(n, dtype=np.int64)
     returns = np.full((n, episodes), np.nan)
-    model = job.model
+    model = job.prepared.model
     exact = None if model is None else np.full((n, len(checkpoints)), np.nan)
 
     sent = np.zeros(n, dtype=np.int64)
@@ -447,7 +430,7 @@ def _run_job(
         if model is not None:
             learner = model.learner(job.algorithm, job.hp, seed)
             _, tables = play_learner(learner, model.arrays, episodes, checkpoints, stop,
-                                     returns[i], counter(i), job.measure)
+                                     returns[i], counter(i), job.setup.measure)
             if tables and exact is not None:
                 found = np.stack(tables)
                 exact[i, : len(tables)] = (_rms_errors(learner, model, found)
@@ -472,14 +455,16 @@ def _play_env(job: _Job, seed: int, returns: np.ndarray, progress: Callable[[int
               stop: Callable[[], bool]) -> None:
     """One seed through its session's trainer, an episode at a time: on the Gymnasium env
     (games no model follows), or on a world that changes, phase after phase."""
-    session = _session(job.env_id, job.env_kwargs, job.wrappers, job.algorithm, job.hp, seed)
+    measure, prepared = job.setup.measure, job.prepared
+    session = _session(prepared.env_id, prepared.env_kwargs, job.setup.wrappers, job.algorithm,
+                       job.hp, seed)
     try:
         for e in range(job.episodes):
             if stop():
                 return
             stats = session.trainer.run_episode()
-            returns[e] = (stats.length if job.measure == LENGTH else stats.first_action
-                          if job.measure == FIRST_ACTION else stats.episode_return)
+            returns[e] = (stats.length if measure == LENGTH else stats.first_action
+                          if measure == FIRST_ACTION else stats.episode_return)
             progress(e + 1)
     finally:
         session.env.close()
@@ -658,9 +643,14 @@ class ResumeError(CompareError):
     """A run that cannot be resumed with these settings; the message says why."""
 
 
-def _plain(value: Any) -> Any:
-    """`value` as JSON reads it back (tuples as lists), to compare with what is stored."""
-    return json.loads(json.dumps(value, default=str))
+def _compared(game: str, algorithm: str, params: Mapping[str, Any],
+              wrappers: Sequence[WrapperSetting], seeds: Sequence[int], hp: Mapping[str, Any],
+              episodes: int) -> dict[str, Any]:
+    """A run's settings as resuming compares them: as JSON reads them back (tuples as lists)."""
+    return dict(json.loads(json.dumps({
+        "game": game, "algorithm": algorithm, "game parameters": params,
+        "wrappers": [w.to_json() for w in wrappers], "seeds": seeds, **dict(sorted(hp.items())),
+        "episodes": episodes}, default=str)))
 
 
 def _resume_runs(
@@ -689,29 +679,17 @@ def _resume_runs(
                           f"{kind} of {len(arms)}{advice}")
     for a, record in enumerate(records):
         run = record.summary
-        here: dict[str, Any] = {
-            "game": prepared.game, "algorithm": arms[a].algorithm,
-            "game parameters": _plain(prepared.env_kwargs),
-            "wrappers": _plain([w.to_json() for w in prepared.wrappers]),
-            "seeds": list(setup.seed_list),
-        }
-        there: dict[str, Any] = {
-            "game": run.game, "algorithm": run.algorithm,
-            "game parameters": _plain(dict(record.game_params)),
-            "wrappers": _plain([w.to_json() for w in record.wrappers]), "seeds": list(run.seeds),
-        }
-        stored_hp, hp = _plain(dict(record.hyperparameters)), _plain(prepared.hyperparameters[a])
-        for key in sorted(set(stored_hp) | set(hp)):
-            here[key], there[key] = hp.get(key), stored_hp.get(key)
         tasks = history.read_tasks(run.id)
-        here["episodes"], there["episodes"] = setup.episodes, (
-            tasks[0].episodes if tasks else setup.episodes)
-        for key, value in here.items():
-            if there[key] != value:
+        here = _compared(prepared.game, arms[a].algorithm, prepared.env_kwargs, prepared.wrappers,
+                         setup.seed_list, prepared.hyperparameters[a], setup.episodes)
+        there = _compared(run.game, run.algorithm, record.game_params, record.wrappers, run.seeds,
+                          record.hyperparameters, tasks[0].episodes if tasks else setup.episodes)
+        for key in dict.fromkeys([*here, *there]):
+            if there.get(key) != here.get(key):
                 raise ResumeError(
                     f"run {run.id} was recorded with other settings ({key} "
-                    f"{visible(str(there[key]), 60)} there, {visible(str(value), 60)} here)"
-                    f"{advice}")
+                    f"{visible(str(there.get(key)), 60)} there, "
+                    f"{visible(str(here.get(key)), 60)} here){advice}")
         for task in tasks:
             tally.load(a, task)
     for record in records:
@@ -768,105 +746,91 @@ def execute(
     (a run's id, or the ids of the arms' runs in order) runs only the tasks its runs miss;
     `group` names the run the new runs join (one experiment of several). A task runs for
     about `task_seconds` or more (infinity: one per core)."""
+    from tui_gym.session.experiments.cluster import connect, run_on_cluster
+
     prepared = prepare(setup, arms)
-    with contextlib.ExitStack() as stack:
-        client = None
-        if cluster is not None:  # reached (or started) before any run is recorded
-            from tui_gym.session.experiments.cluster import connect
+    with connect(cluster) as client:  # reached (or started) before any run is recorded
+        cores = _cores() if processes is None else max(1, processes)
+        tally = _Tally(setup, arms, prepared)
+        if resume is not None:
+            if history is None:
+                raise ResumeError(f"run {resume} cannot be resumed without the run history")
+            tally.run_ids = _resume_runs(history, kind, setup, arms, prepared, resume, tally)
+        elif history is not None:
+            tally.run_ids = _start_runs(history, kind, setup, arms, prepared, group)
+        last = [time.monotonic()]
 
-            client = stack.enter_context(connect(cluster))
-        return _execute(setup, arms, kind, prepared, progress, stop, history, processes,
-                        status, resume, client, task_seconds, group)
+        def tell(force: bool = False) -> None:
+            if progress is None:
+                return
+            now = time.monotonic()
+            if force or now - last[0] >= PROGRESS_INTERVAL:
+                last[0] = now
+                progress(CompareProgress(
+                    tally.count(), tally.total(), tally.tasks_done, tally.tasks_total,
+                    lambda: tuple(o for o in tally.outcomes() if o is not None)))
 
+        def landed(job: _Job) -> None:
+            """A task finished: kept at once, and told."""
+            tally.tasks_done += 1
+            run_id = tally.run_ids[job.arm]
+            if history is not None and run_id is not None:
+                history.put_task(run_id, tally.record_of(job))
+            tell(force=True)
 
-def _execute(
-    setup: Setup, arms: Sequence[Arm], kind: RunKind, prepared: Prepared,
-    progress: Callable[[CompareProgress], None] | None, stop: threading.Event | None,
-    history: RunHistory | None, processes: int | None, status: Callable[[str], None] | None,
-    resume: int | Sequence[int] | None, client: Any, task_seconds: float, group: int | None,
-) -> Executed:
-    cores = _cores() if processes is None else max(1, processes)
-    tally = _Tally(setup, arms, prepared)
-    if resume is not None:
-        if history is None:
-            raise ResumeError(f"run {resume} cannot be resumed without the run history")
-        tally.run_ids = _resume_runs(history, kind, setup, arms, prepared, resume, tally)
-    elif history is not None:
-        tally.run_ids = _start_runs(history, kind, setup, arms, prepared, group)
-    last = [time.monotonic()]
-
-    def tell(force: bool = False) -> None:
-        if progress is None:
-            return
-        now = time.monotonic()
-        if force or now - last[0] >= PROGRESS_INTERVAL:
-            last[0] = now
-            progress(CompareProgress(
-                tally.count(), tally.total(), tally.tasks_done, tally.tasks_total,
-                lambda: tuple(o for o in tally.outcomes() if o is not None)))
-
-    def landed(job: _Job) -> None:
-        """A task finished: kept at once, and told."""
-        tally.tasks_done += 1
-        run_id = tally.run_ids[job.arm]
-        if history is not None and run_id is not None:
-            history.put_task(run_id, tally.record_of(job))
-        tell(force=True)
-
-    halt = threading.Event()
-    stopped = halt.is_set if stop is None else (lambda: stop.is_set() or halt.is_set())
-    complete = False
-    failure: BaseException | None = None
-    try:
-        with processes_module.stops_on_signals(halt):
-            missing = tally.missing()
-            seconds = _estimate(prepared, arms, setup, status) if (
-                client is not None or (processes != 0 and cores > 1)) else 0.0
-            if client is None and seconds < SPREAD_SECONDS:
-                jobs = tally.add(_jobs(setup, arms, prepared, missing))
-                tally.tasks_total += len(jobs)
-                complete = _run_here(jobs, tally, stopped, tell, landed)
-            else:
-                per_seed = seconds / (len(arms) * setup.seeds)
-                pieces = max(-(-cores // len(arms)), max(
-                    -(-len(rows) * per_seed // task_seconds) for rows in missing))
-                jobs = tally.add(_jobs(setup, arms, prepared, missing, int(pieces)))
-                tally.tasks_total += len(jobs)
-                if client is None:
-                    complete = _run_children(jobs, tally, stopped, tell, cores, landed)
+        halt = threading.Event()
+        stopped = halt.is_set if stop is None else (lambda: stop.is_set() or halt.is_set())
+        complete = False
+        failure: BaseException | None = None
+        try:
+            with processes_module.stops_on_signals(halt):
+                missing = tally.missing()
+                seconds = _estimate(prepared, arms, setup, status) if (
+                    client is not None or (processes != 0 and cores > 1)) else 0.0
+                if client is None and seconds < SPREAD_SECONDS:
+                    jobs = tally.add(_jobs(setup, arms, prepared, missing))
+                    tally.tasks_total += len(jobs)
+                    complete = _run_here(jobs, tally, stopped, tell, landed)
                 else:
-                    from tui_gym.session.experiments.cluster import run_on_cluster
+                    per_seed = seconds / (len(arms) * setup.seeds)
+                    pieces = max(-(-cores // len(arms)), max(
+                        -(-len(rows) * per_seed // task_seconds) for rows in missing))
+                    jobs = tally.add(_jobs(setup, arms, prepared, missing, int(pieces)))
+                    tally.tasks_total += len(jobs)
+                    if client is None:
+                        complete = _run_children(jobs, tally, stopped, tell, cores, landed)
+                    else:
 
-                    def take(job: _Job, updates: list[SeedsUpdate]) -> None:
-                        for update in updates:
-                            tally.take(job.index, update)
-                        landed(job)
+                        def take(job: _Job, updates: list[SeedsUpdate]) -> None:
+                            for update in updates:
+                                tally.take(job.index, update)
+                            landed(job)
 
-                    complete = run_on_cluster(client, jobs, run_task, take, stopped)
-    except BaseException as exc:
-        failure = exc
-    if complete and history is not None and None not in tally.run_ids and (
-            getattr(history, "failure", None) is None):
-        with contextlib.suppress(RunHistoryError):  # a task that does not read: as run
-            tally = _stored(history, setup, arms, prepared, tally.run_ids) or tally
-    outcomes = tally.outcomes()
-    interrupted = not complete
-    if history is not None:
-        if failure is not None and not isinstance(failure, KeyboardInterrupt):
-            for run_id in tally.run_ids:
-                if run_id is not None:
-                    history.update(run_id, status=RunStatus.FAILED)
-        else:
-            _record(history, tally, outcomes, interrupted)
-    if failure is not None:
-        raise failure
-    tell(force=True)
-    return Executed(
-        outcomes=tuple(outcomes), interrupted=interrupted,
-        group=tally.run_ids[0] if tally.run_ids else None, prepared=prepared,
-        values=tally.returns, exact=tally.exact,
-        tasks={"done": tally.tasks_done, "total": tally.tasks_total},
-    )
+                        complete = run_on_cluster(client, jobs, run_task, take, stopped)
+        except BaseException as exc:
+            failure = exc
+        if complete and history is not None and None not in tally.run_ids and (
+                getattr(history, "failure", None) is None):
+            with contextlib.suppress(RunHistoryError):  # a task that does not read: as run
+                tally = _stored(history, setup, arms, prepared, tally.run_ids) or tally
+        outcomes = tally.outcomes()
+        interrupted = not complete
+        if history is not None:
+            if failure is not None and not isinstance(failure, KeyboardInterrupt):
+                for run_id in tally.run_ids:
+                    if run_id is not None:
+                        history.update(run_id, status=RunStatus.FAILED)
+            else:
+                _record(history, tally, outcomes, interrupted)
+        if failure is not None:
+            raise failure
+        tell(force=True)
+        return Executed(
+            outcomes=tuple(outcomes), interrupted=interrupted,
+            group=tally.run_ids[0] if tally.run_ids else None, prepared=prepared,
+            values=tally.returns, exact=tally.exact,
+            tasks={"done": tally.tasks_done, "total": tally.tasks_total},
+        )
 
 
 def _stored(history: RunHistory, setup: Setup, arms: Sequence[Arm], prepared: Prepared,
@@ -954,24 +918,26 @@ def run_compare(
     )
 
 
+def _play(job: _Job, tally: _Tally, stop: Callable[[], bool], tell: Callable[[], None],
+          landed: Callable[[_Job], None]) -> bool:
+    """Play a job on this thread, counted in and told as it goes; whether it finished (then
+    it has landed)."""
+
+    def report(update: SeedsUpdate) -> None:
+        tally.take(job.index, update)
+        tell()
+
+    tally.take(job.index, _run_job(job, stop, report))
+    if tally.finished(job):
+        landed(job)
+    return tally.finished(job)
+
+
 def _run_here(
-    jobs: list[_Job], tally: _Tally, stopped: Callable[[], bool], tell: Callable[..., None],
+    jobs: list[_Job], tally: _Tally, stopped: Callable[[], bool], tell: Callable[[], None],
     landed: Callable[[_Job], None],
 ) -> bool:
-    for job in jobs:
-        if stopped():
-            return False
-
-        def report(update: SeedsUpdate, index: int = job.index) -> None:
-            tally.take(index, update)
-            tell()
-
-        tally.take(job.index, _run_job(job, stopped, report))
-        if not tally.finished(job):
-            return False
-        landed(job)
-        tell()
-    return True
+    return all(not stopped() and _play(job, tally, stopped, tell, landed) for job in jobs)
 
 
 def _run_children(
@@ -1055,16 +1021,13 @@ def _run_children(
                     stop_flag.set()
                 return bool(stop_flag.is_set())
 
-            def report(update: SeedsUpdate) -> None:
-                tally.take(own.index, update)
+            def own_tell() -> None:
                 while take(0):
                     pass
                 tell()
 
-            tally.take(own.index, _run_job(own, own_stop, report))
+            _play(own, tally, own_stop, own_tell, landed)
             ended.add(own.index)
-            if tally.finished(own):
-                landed(own)
         while left and not errors:
             took = take(0.05)
             tell()

@@ -24,11 +24,6 @@ CHECKPOINT_SHARE = 0.01
 MAX_CHECKPOINTS = 1000  # beyond this, every other checkpoint is dropped
 
 
-def game_name(session: Session) -> str:
-    """The short name of the session's game (e.g. "blackjack")."""
-    return session.game.name
-
-
 def run_spec(session: Session, kind: RunKind) -> RunSpec:
     """The session's settings as the run history keeps them."""
     from tui_gym.core.wrappers import get_spec
@@ -36,7 +31,7 @@ def run_spec(session: Session, kind: RunKind) -> RunSpec:
     assert session.hp is not None  # a built session has its hyperparameters
     return RunSpec(
         kind=kind,
-        game=game_name(session),
+        game=session.game.name,
         algorithm=session.algorithm,
         game_params=dict(session.env_kwargs),
         wrappers=tuple(
@@ -125,12 +120,17 @@ class ExactCheckpoints:
         return Curve(self.name, np.asarray(self.episodes), np.asarray(self.values))
 
 
-def run_figures(
-    curve: Curve | None, exact: dict[str, float], extra: tuple[Figure, ...] = (), after: int = 0,
-) -> list[Figure]:
-    """`mean_return_last`, `exact_value` and `exact_gap` (or `rms_error`: those known),
-    then `extra`; the run's episodes are those after `after`."""
-    figures: list[Figure] = []
+def run_results(
+    snapshot: TrainingSnapshot | None, checkpoints: ExactCheckpoints, after: int,
+    report: EvalReport | None = None,
+) -> tuple[list[Curve], list[Figure]]:
+    """What the run history keeps of a run's episodes after `after` as of `snapshot` (None:
+    no episodes): the return per episode and the checkpoints' curve; `mean_return_last`,
+    `exact_value` and `exact_gap` (or `rms_error`: those known), the episodes trained, and
+    the greedy evaluation's mean return with its 95% interval (normal approximation)."""
+    curve = None if snapshot is None else return_curve(snapshot, after)
+    curves = [c for c in (curve, checkpoints.curve()) if c is not None]
+    exact, figures = checkpoints.last, list[Figure]()
     if curve is not None and len(curve):
         last = int(curve.episodes[-1])
         # The buckets that end within the last 10% of the run's episodes.
@@ -145,18 +145,9 @@ def run_figures(
         figures.append(Figure("exact_gap", exact["gap"], "return"))
     if "rms_error" in exact:
         figures.append(Figure("rms_error", exact["rms_error"]))
-    figures.extend(extra)
-    return figures
-
-
-def episodes_figure(snapshot: TrainingSnapshot, after: int = 0) -> Figure:
-    """The episodes the run trained: those of the snapshot after `after`."""
-    return Figure("episodes", max(0, snapshot.episodes - after), "episodes")
-
-
-def eval_figures(report: EvalReport) -> tuple[Figure, ...]:
-    """The greedy evaluation's mean return with its 95% interval (normal approximation)."""
-    if not report.episodes:
-        return ()
-    half = 1.96 * report.standard_error if report.episodes > 1 else None
-    return (Figure("eval_mean_return", report.mean_return, "return", half),)
+    if snapshot is not None:
+        figures.append(Figure("episodes", max(0, snapshot.episodes - after), "episodes"))
+    if report is not None and report.episodes:
+        half = 1.96 * report.standard_error if report.episodes > 1 else None
+        figures.append(Figure("eval_mean_return", report.mean_return, "return", half))
+    return curves, figures

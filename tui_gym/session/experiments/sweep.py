@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from tui_gym.algorithms import Predictor, algorithm
+from tui_gym.core.experiments.figures import FieldsJson, plain
 from tui_gym.core.experiments.history import RunHistory
 from tui_gym.core.experiments.records import RunKind
 from tui_gym.core.wrappers import WrapperChoice
@@ -20,7 +21,6 @@ from tui_gym.session.experiments.compare import (
     Arm,
     CompareProgress,
     Setup,
-    _finite,
     execute,
     settle_runs,
 )
@@ -32,7 +32,7 @@ MAX_POINTS = 400  # grid points in one sweep at most
 
 
 @dataclass(frozen=True)
-class Range:
+class Range(FieldsJson):
     """Where a random search draws a key's values: `low` to `high`, log-uniform when `log`."""
 
     low: float
@@ -59,9 +59,6 @@ class Range:
         if self.log:
             return float(math.exp(rng.uniform(math.log(self.low), math.log(self.high))))
         return float(rng.uniform(self.low, self.high))
-
-    def to_json(self) -> dict[str, Any]:
-        return {"low": self.low, "high": self.high, "log": self.log}
 
 
 @dataclass(frozen=True)
@@ -191,23 +188,14 @@ class SweepResult:
 
     def to_json(self) -> dict[str, Any]:
         spec = self.spec
-        return {
-            "game": self.game,
-            "algorithm": spec.algorithm,
-            "episodes": spec.episodes,
-            "seeds": spec.seeds,
-            "first_seed": spec.first_seed,
-            "grid": self.grid,
+        return dict(plain({
+            "game": self.game, "algorithm": spec.algorithm, "episodes": spec.episodes,
+            "seeds": spec.seeds, "first_seed": spec.first_seed, "grid": self.grid,
             "sample": None if not spec.ranges else {
-                "n": spec.samples, "seed": spec.sample_seed,
-                "ranges": {k: r.to_json() for k, r in spec.ranges.items()}},
-            "tasks": dict(self.tasks),
-            "hyperparameters": dict(self.hyperparameters),
-            "optimum": _finite(self.optimum),
-            "interrupted": self.interrupted,
-            "group": self.group,
-            "points": [p.to_json() for p in self.points],
-        }
+                "n": spec.samples, "seed": spec.sample_seed, "ranges": spec.ranges},
+            "tasks": self.tasks, "hyperparameters": self.hyperparameters,
+            "optimum": self.optimum, "interrupted": self.interrupted, "group": self.group,
+            "points": self.points}))
 
 
 def run_sweep(

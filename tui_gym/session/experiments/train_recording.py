@@ -2,25 +2,16 @@
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Callable
 from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING
 
 from tui_gym.core.engine.stats import TrainingSnapshot
-from tui_gym.core.experiments.errors import RunHistoryError
-from tui_gym.core.experiments.history import RunHistory
 from tui_gym.core.experiments.paths import resolve_db_path
-from tui_gym.core.experiments.records import RunKind, RunSpec, RunStatus
-from tui_gym.session.experiments.live import (
-    ExactCheckpoints,
-    episodes_figure,
-    eval_figures,
-    return_curve,
-    run_figures,
-    run_spec,
-)
+from tui_gym.core.experiments.records import RunKind, RunStatus
+from tui_gym.session.experiments.app_recording import SessionRunLog
+from tui_gym.session.experiments.live import ExactCheckpoints, run_results, run_spec
 
 if TYPE_CHECKING:
     from tui_gym.session.evaluation import EvalReport
@@ -29,56 +20,36 @@ if TYPE_CHECKING:
 
 class TrainRecording:
     """Records one training run into the history at `db` (None: `TUI_GYM_DB` or the data
-    folder's); with `enabled` False it records nothing."""
+    folder's), on a writer thread of its own while the training goes on; with `enabled`
+    False it records nothing."""
 
     def __init__(
         self, db: str | None = None, *, enabled: bool = True,
         warn: Callable[[str], None] = lambda line: None,
     ) -> None:
-        self.enabled = enabled
         self.path: Path | None = resolve_db_path(db) if enabled else None
         self.warn = warn
         self.run_id: int | None = None
-        self._history: RunHistory | None = None
+        self._log = None if self.path is None else SessionRunLog(self.path)
         self._session: Session | None = None
         self._checkpoints: ExactCheckpoints | None = None
         self._after = 0
-        self._opening: threading.Thread | None = None
-        self._problem: Exception | None = None  # why the file could not be opened
 
     def begin(self, session: Session) -> None:
-        """Start recording: the file is opened and the run written (status running) on a
-        thread of its own while the training goes on."""
-        if not self.enabled or self.path is None:
+        """Start recording: the file is opened and the run written (status running) on the
+        writer thread."""
+        if self._log is None:
             return
         try:
             spec = run_spec(session, RunKind.TRAIN)
         except ValueError as exc:
-            self._give_up(exc)
+            self._give_up(str(exc))
             return
         self._session = session
         self._after = session.trainer.episodes
         self._checkpoints = ExactCheckpoints(session)
-        self._opening = threading.Thread(target=self._open, args=(spec,), name="run-history",
-                                         daemon=True)
-        self._opening.start()
+        self._log.send(self, start=spec)
         self._checkpoints.take()
-
-    def _open(self, spec: RunSpec) -> None:
-        try:
-            self._history = RunHistory(self.path)  # type: ignore[arg-type]
-            self.run_id = self._history.start_run(spec)
-        except (RunHistoryError, ValueError, OSError) as exc:
-            self._problem = exc
-
-    def _opened(self) -> bool:
-        """Wait for the file to be open and the run written; False (and one warning) if not."""
-        if self._opening is not None:
-            self._opening.join()
-            self._opening = None
-            if self._problem is not None:
-                self._give_up(self._problem)
-        return self._history is not None and self.run_id is not None
 
     def on_chunk(self, snapshot: TrainingSnapshot) -> None:
         """`Session.train`'s callback: an exact-value checkpoint when they are cheap."""
@@ -100,47 +71,33 @@ class TrainRecording:
         self, report: EvalReport | None = None, saved: str | Path | None = None,
         status: RunStatus = RunStatus.FINISHED,
     ) -> int | None:
-        """Write the curves, figures and saved agent's path with the final status; the
-        run's id (None when it was not recorded)."""
-        if not self._opened():
+        """Write the curves, figures and saved agent's path with the final status, and wait
+        for the writes to land; the run's id (None when it was not recorded)."""
+        log, session, checkpoints = self._log, self._session, self._checkpoints
+        if log is None or session is None or checkpoints is None:
             return None
-        history, session, checkpoints = self._history, self._session, self._checkpoints
-        if history is None or session is None or checkpoints is None or self.run_id is None:
-            return None
+        self._session = None
         snapshot = session.trainer.latest
         checkpoints.take(snapshot, final=True)
-        curve = return_curve(snapshot, self._after)
-        extra = (episodes_figure(snapshot, self._after),
-                 *(eval_figures(report) if report is not None else ()))
-        curves = [c for c in (curve, checkpoints.curve()) if c is not None]
-        try:
-            history.update(
-                self.run_id, curves=curves,
-                figures=run_figures(curve, checkpoints.last, extra, self._after),
-                agent_path=None if saved is None else Path(saved).resolve(), status=status,
-            )
-        except (RunHistoryError, ValueError) as exc:
-            self._give_up(exc)
+        curves, figures = run_results(snapshot, checkpoints, self._after, report)
+        log.send(self, curves=curves, figures=figures, status=status,
+                 agent_path=None if saved is None else Path(saved).resolve())
+        log.close(wait=None)
+        if log.problem is not None:
+            self._give_up(log.problem)
             return None
-        finally:
-            self._session = None
+        self.run_id = log.run_ids.get(self)
         return self.run_id
 
-    def _give_up(self, exc: Exception) -> None:
-        self.warn(f"this run is not recorded in the run history: {exc}")
+    def _give_up(self, problem: str) -> None:
+        self.warn(f"this run is not recorded in the run history: {problem}")
         self.run_id = None
         self._session = None
-        if self._history is not None:
-            self._history.close()
-            self._history = None
+        self._log = None
 
     def close(self) -> None:
-        if self._opening is not None:
-            self._opening.join()
-            self._opening = None
-        if self._history is not None:
-            self._history.close()
-            self._history = None
+        if self._log is not None:
+            self._log.close(wait=None)
 
     def __enter__(self) -> TrainRecording:
         return self
