@@ -99,7 +99,8 @@ def test_every_row_offering_everything_plays_the_very_run_of_no_mask(name: str) 
     model = loop.ModelArrays.of(game_named("max-bias").base_model({}))
     hp = {"epsilon_start": 0.3, "epsilon_final": 0.3, "episodes": 400}
     plain, masked = (algorithm(name)(12, hp, n_states=4, seed=11) for _ in range(2))
-    masked.offered_ranges = np.tile([0, 12], (4, 1))  # a range per row, each every action
+    # A range per row, each every action (unsigned, as the learner's own bounds are).
+    masked.offered_ranges = np.tile(np.array([0, 12], dtype=np.uint32), (4, 1))
     runs = [play_learner(x, model, 400, (400,)) for x in (plain, masked)]
     assert np.array_equal(runs[0][0], runs[1][0])
     assert np.array_equal(runs[0][1][0], runs[1][1][0])

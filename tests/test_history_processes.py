@@ -8,6 +8,7 @@ from __future__ import annotations
 import os
 import sqlite3
 import subprocess
+import time
 from pathlib import Path
 
 from tui_gym.algorithms import QLearning
@@ -26,6 +27,12 @@ WAVES = (
       "--seeds", "2", "--episodes", "400", "--processes", "0"],),
 )
 EXPECTED = {"train": 1, "compare": 2, "sweep": 2}  # runs each kind of command records
+
+
+def written(db: Path) -> tuple[tuple[int, int], ...]:
+    """When and how far the history and its write-ahead log were last written."""
+    stats = [path.stat() for path in (db, db.with_name(db.name + "-wal")) if path.exists()]
+    return tuple((s.st_mtime_ns, s.st_size) for s in stats)
 
 
 def record_beside_the_app(scratch: Path) -> None:
@@ -54,11 +61,17 @@ def record_beside_the_app(scratch: Path) -> None:
                                  stderr=subprocess.PIPE, text=True, env={**os.environ, **env})
                 for argv in wave
             ]
-            # The view reads the history again and again while the commands write to it.
+            # The view reads the history again each time the commands have written to it,
+            # while they go on writing.
             def all_done(commands: list[subprocess.Popen[str]] = commands) -> bool:
                 return all(c.poll() is not None for c in commands)
 
+            read = None
             while not all_done():
+                if written(db) == read:  # nothing new to read yet
+                    time.sleep(0.02)  # polling a condition: the commands run on their own
+                    continue
+                read = written(db)
                 seen = len(term.output)
                 term.type("r")
                 term.wait_for(lambda seen=seen: len(term.output) > seen or all_done(), "a redraw")

@@ -124,10 +124,12 @@ def run_scored(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise:
     RMS error of V (`tables[3]`) at table rows `scored_rows` against `truth`. Returns
     the episodes finished: fewer than asked when the learner needs room first."""
     n = scored_rows.shape[0]
+    # Integers, not constants: constant arguments would compile the loop once more.
+    one, unlimited = np.int64(1), np.int64(1 << 62)
     for e in range(first, curve.shape[0]):
         status = run_model(next_state, cumulative, guide, reward, noise, terminal, pair_rows,
                            outcomes, starts, start_cumulative, rows, horizon, tables, hp, rng,
-                           offered, explore, episode0 + e - first, cursor, acc, 1, 1 << 62,
+                           offered, explore, episode0 + e - first, cursor, acc, one, unlimited,
                            out, log)
         if status != 0:
             return e - first
