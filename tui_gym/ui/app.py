@@ -48,6 +48,7 @@ from tui_gym.session.runners import make_runner
 from tui_gym.session.session import Session
 from tui_gym.session.speeds import SPEEDS
 from tui_gym.session.storage import StorageError
+from tui_gym.ui.exact_figures import KEY_QUIET_SECONDS
 from tui_gym.ui.key_order import KeysInOrder
 from tui_gym.ui.play_view import PlayView
 from tui_gym.ui.side_panel import SidePanel
@@ -1103,8 +1104,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         """Nobody can see the app or type to it any more: end it, as a hang-up would."""
         self.exit(return_code=128 + signal.SIGHUP)
 
-YOUNG_GC_SECONDS = 0.5  # collect the young generations this often
-KEY_QUIET_SECONDS = 0.15  # but not this soon after a key was handed on
+YOUNG_GC_SECONDS = 0.5  # collect the young generations this often (not `KEY_QUIET_SECONDS`
+# after a key was handed on)
 FULL_GC_SECONDS = 20.0  # and everything this often
 GC_SECONDS_ENV = "TUI_GYM_GC_SECONDS"  # "YOUNG,FULL" seconds, to override both
 

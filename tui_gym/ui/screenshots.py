@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import asyncio
 import os
-import sqlite3
 import tempfile
 import time
 from collections.abc import Awaitable, Callable, Iterator
@@ -110,13 +109,10 @@ def _record_comparison(db: Path, spec: Any) -> None:
     with RunHistory(db) as history:
         # One batch per algorithm on this thread: the same curves on any number of cores.
         run_compare(spec, history=history, processes=0)
-    conn = sqlite3.connect(db)
-    with conn:
-        conn.execute(
+        history._write(lambda conn: conn.execute(
             "UPDATE runs SET started_at = ? + 60 * id, ended_at = ? + 60 * id + 30",
             (NOMINAL_START, NOMINAL_START),
-        )
-    conn.close()
+        ))
 
 
 @contextmanager

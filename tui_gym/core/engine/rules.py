@@ -1,7 +1,7 @@
 """The rule registry, and the exploration and step sizes every learner shares, as kernels.
 
-An algorithm registers a `Rule` for its `Params` (a NamedTuple of its compiled
-hyperparameters, `register(Params, Rule(...))`):
+Each algorithm's `Rule` is registered for its `Params` (a NamedTuple of its compiled
+hyperparameters; the learner base class calls `register(Params, rule)`):
 
 - `update(tables, hp, rng, offered, s, a, r, s2, terminated, truncated, a2, epsilon,
   log)`: its update rule for one transition from table row `s` by action `a` to row
