@@ -52,7 +52,7 @@ from tui_gym.games.words import signed, unwrapped_note
 
 __all__ = [
     "PHASE", "TIE_GAMMA", "DiscreteStates", "ModelGame", "ModelOracle", "Ladder", "elapsed_steps",
-    "freeze", "make_env",
+    "freeze", "make_env", "table_model",
 ]
 
 PHASE = "phase"  # the argument naming a changing world's phase, for its exact figures
@@ -84,15 +84,18 @@ def make_env(env_id: str, **kwargs: Any) -> Any:
 
 
 @lru_cache(maxsize=32)
-def _table_model(env_id: str, frozen: Any, names: tuple[str, ...]) -> FiniteMDP | NotAvailable:
+def table_model(env_id: str, frozen: Any = (), names: tuple[str, ...] = ()) -> (
+        FiniteMDP | NotAvailable):
+    """The model of `make_env(env_id, **frozen)`'s table, unwrapped, with no episode limit
+    (kept); `frozen` as `freeze` makes it, `names` the actions' when they fit."""
     import gymnasium as gym
 
     kwargs = {k: _thaw(v) for k, v in frozen}
     kwargs.pop("max_episode_steps", None)
     try:
         env = make_env(env_id, **kwargs)
-    except (gym.error.Error, TypeError, ValueError, ImportError) as error:
-        return NotAvailable(f"{env_id} could not be built: {error}")
+    except (gym.error.Error, TypeError, ValueError, ImportError, AttributeError) as error:
+        return NotAvailable(f"{env_id} could not be built: {' '.join(str(error).split())}")
     try:
         n = getattr(env.action_space, "n", None)
         action_names = names if n is not None and len(names) == int(n) else None
@@ -475,7 +478,7 @@ class ModelGame(Game):
     def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP | NotAvailable:
         """The game's model with no wrappers and no episode limit (kept per arguments)."""
         make = self.make_kwargs(kwargs)
-        return _table_model(self.env_id, freeze(make), tuple(self.action_names))
+        return table_model(self.env_id, freeze(make), tuple(self.action_names))
 
     def gap_tolerance(self, kwargs: Mapping[str, Any]) -> float:
         """The share of the optimum's magnitude a trained greedy policy's gap stays within."""
