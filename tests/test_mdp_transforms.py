@@ -5,7 +5,7 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 import pytest
-from gymnasium.wrappers import ClipReward, TimeLimit
+from gymnasium.wrappers import ClipReward, TimeLimit, TransformReward
 
 from tests.mdp_support import env_returns, within_standard_errors
 from tui_gym.core.mdp import evaluate, model_from_env, solve, with_horizon
@@ -91,3 +91,8 @@ def test_exact_values_of_a_wrapped_env_agree_with_its_returns():
     policy = solve(model).policy
     exact = evaluate(model, policy).value
     assert within_standard_errors(env_returns(env, policy, 800, seed=4), exact)
+
+
+def test_any_reward_wrapper_is_followed_through_its_own_code():
+    squared = model_from_env(TransformReward(gym.make("Taxi-v4"), lambda r: r * r))
+    np.testing.assert_array_equal(squared.reward, model_from_env(gym.make("Taxi-v4")).reward ** 2)
