@@ -9,8 +9,9 @@ import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import NotAvailable
+from tui_gym.core.wrappers import build_env
 from tui_gym.games.base import TIED, HeatmapLayout, ansi_text
-from tui_gym.games.model import DiscreteStates, ModelGame, make_env, table_model
+from tui_gym.games.model import DiscreteStates, ModelGame, table_model
 
 __all__ = ["PAGE", "GenericGame", "check_fit"]
 
@@ -111,7 +112,7 @@ class GenericGame(ModelGame):
         self.name = env_id.lower()
         self.title = env_id.split(":")[-1]
         self.description = f"{self.title}: played from its own transition table"
-        env = make_env(env_id)
+        env: Any = build_env(env_id)
         try:
             self.action_names = tuple(str(a) for a in range(int(env.action_space.n)))
             modes = env.metadata.get("render_modes", []) or []

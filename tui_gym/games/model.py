@@ -32,6 +32,7 @@ from tui_gym.core.mdp import (
     with_horizon,
 )
 from tui_gym.core.mdp.evaluation import expected_value
+from tui_gym.core.wrappers import build_env
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.games.base import (
     EXACT,
@@ -52,7 +53,7 @@ from tui_gym.games.words import signed, unwrapped_note
 
 __all__ = [
     "PHASE", "TIE_GAMMA", "DiscreteStates", "ModelGame", "ModelOracle", "Ladder", "elapsed_steps",
-    "freeze", "make_env", "table_model",
+    "freeze", "table_model",
 ]
 
 PHASE = "phase"  # the argument naming a changing world's phase, for its exact figures
@@ -73,27 +74,17 @@ def freeze(value: Any) -> Any:
     return value
 
 
-def make_env(env_id: str, **kwargs: Any) -> Any:
-    """`gym.make(env_id, **kwargs)`, our own envs registered first."""
-    import gymnasium as gym
-
-    import tui_gym.envs
-
-    tui_gym.envs.register_envs()
-    return gym.make(env_id, **kwargs)
-
-
 @lru_cache(maxsize=32)
 def table_model(env_id: str, frozen: Any = (), names: tuple[str, ...] = ()) -> (
         FiniteMDP | NotAvailable):
-    """The model of `make_env(env_id, **frozen)`'s table, unwrapped, with no episode limit
+    """The model of `build_env(env_id, **frozen)`'s table, unwrapped, with no episode limit
     (kept); `frozen` as `freeze` makes it, `names` the actions' when they fit."""
     import gymnasium as gym
 
     kwargs = {k: _thaw(v) for k, v in frozen}
     kwargs.pop("max_episode_steps", None)
     try:
-        env = make_env(env_id, **kwargs)
+        env = build_env(env_id, kwargs)
     except (gym.error.Error, TypeError, ValueError, ImportError, AttributeError) as error:
         return NotAvailable(f"{env_id} could not be built: {' '.join(str(error).split())}")
     try:
