@@ -11,7 +11,7 @@ from gymnasium import spaces
 from gymnasium.wrappers import ClipReward, StickyAction, TimeLimit
 
 from tui_gym.core.mdp import FiniteMDP, NotAvailable, model_from_env
-from tui_gym.core.wrappers.catalog import ScaleReward, StepPenalty
+from tui_gym.core.wrappers.catalog import DistanceShaping, ScaleReward, StepPenalty
 
 GAMES = [
     ("FrozenLake-v1", {"is_slippery": False}, 100),
@@ -111,6 +111,7 @@ def test_an_env_without_an_initial_distribution_needs_one_passed():
         (lambda: gym.make("Blackjack-v1"), "observation space is Tuple"),
         (lambda: TableOnly(with_table=False), "no transition table P"),
         (lambda: StickyAction(gym.make("FrozenLake-v1"), 0.25), "with StickyAction"),
+        (lambda: DistanceShaping(gym.make("FrozenLake-v1"), 0.1), "with DistanceShaping"),
         (lambda: object(), "not a Gymnasium env"),
         (
             lambda: ClipReward(gym.make("FrozenLake-v1"), np.zeros(2), np.ones(2)),

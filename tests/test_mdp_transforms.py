@@ -5,49 +5,42 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 import pytest
-from gymnasium.wrappers import ClipReward, TimeLimit
+from gymnasium.wrappers import ClipReward, TimeLimit, TransformReward
 
 from tests.mdp_support import env_returns, within_standard_errors
-from tui_gym.core.mdp import (
-    clip_reward,
-    evaluate,
-    model_from_env,
-    scale_reward,
-    solve,
-    step_penalty,
-    with_horizon,
-)
+from tui_gym.core.mdp import evaluate, model_from_env, solve, with_horizon
+from tui_gym.core.wrappers import get_spec
 from tui_gym.core.wrappers.catalog import ScaleReward, StepPenalty
 
 
-def lake(**kwargs):
-    return model_from_env(gym.make("FrozenLake-v1", **kwargs))
+def lake(wrapper=None, *args, **kwargs):
+    env = gym.make("FrozenLake-v1", **kwargs)
+    return model_from_env(env if wrapper is None else wrapper(env, *args))
 
 
 def test_scaling_scales_every_value():
     base = lake()
-    scaled = scale_reward(base, 2.5)
+    scaled = lake(ScaleReward, 2.5)
     np.testing.assert_allclose(solve(scaled).q, 2.5 * solve(base).q)
     # A negative factor makes the goal a thing to avoid: the best is never to reach it.
-    assert solve(scale_reward(base, -1.0)).value == 0.0
+    assert solve(lake(ScaleReward, -1.0)).value == 0.0
 
 
 def test_a_step_penalty_makes_the_shortest_path_worth_most():
-    deterministic = lake(is_slippery=False)
+    penalised = lake(StepPenalty, 0.1, is_slippery=False)
     # Six steps to the goal: 1 - 6 * 0.1.
-    assert solve(step_penalty(deterministic, 0.1)).value == pytest.approx(0.4)
+    assert solve(penalised).value == pytest.approx(0.4)
     # Over a 100-step limit, wandering for ever costs 100 * 0.1.
-    penalised = step_penalty(deterministic, 0.1)
     assert evaluate(penalised, np.zeros(16, dtype=int)).value == pytest.approx(-10.0)
 
 
 def test_clipping_is_per_outcome():
     taxi = model_from_env(gym.make("Taxi-v4"))
-    clipped = clip_reward(taxi, -1.0, 1.0)
+    clipped = model_from_env(ClipReward(gym.make("Taxi-v4"), -1.0, 1.0))
     assert set(np.unique(clipped.reward[clipped.prob > 0])) == {-1.0, 1.0}
     # Every ride: n - 1 steps at -1, then the drop-off at +1 instead of +20.
     assert solve(clipped).value == pytest.approx(solve(taxi).value - 19.0)
-    only_low = clip_reward(model_from_env(gym.make("CliffWalking-v1")), low=-1.0)
+    only_low = model_from_env(ClipReward(gym.make("CliffWalking-v1"), min_reward=-1.0))
     assert only_low.reward.min() == -1.0
 
 
@@ -61,10 +54,12 @@ def test_a_different_limit():
 @pytest.mark.parametrize(
     ("call", "message"),
     [
-        (lambda m: scale_reward(m, float("nan")), "ScaleReward factor must be a finite number"),
-        (lambda m: step_penalty(m, -0.5), "StepPenalty penalty must be a finite number >= 0"),
-        (lambda m: clip_reward(m), "min_reward, max_reward or both"),
-        (lambda m: clip_reward(m, 1.0, 0.0), "min_reward \\(1\\) must be <= max_reward \\(0\\)"),
+        (lambda m: ScaleReward(gym.make("FrozenLake-v1"), float("nan")),
+         "ScaleReward factor must be a finite number"),
+        (lambda m: StepPenalty(gym.make("FrozenLake-v1"), -0.5),
+         "StepPenalty penalty must be a finite number >= 0"),
+        (lambda m: get_spec("ClipReward").validate({"min_reward": 1.0, "max_reward": 0.0}),
+         "min_reward \\(1.0\\) must be <= ClipReward.max_reward \\(0.0\\)"),
         (lambda m: with_horizon(m, 0), "horizon must be >= 1"),
     ],
 )
@@ -73,14 +68,18 @@ def test_bad_arguments_say_which(call, message):
         call(lake())
 
 
+def test_clipping_needs_a_bound():
+    with pytest.raises(gym.error.InvalidBound, match="min_reward"):
+        ClipReward(gym.make("FrozenLake-v1"))
+
+
 def test_the_model_of_a_wrapped_env_is_the_transformed_model():
     env = TimeLimit(
         ClipReward(StepPenalty(ScaleReward(gym.make("FrozenLake-v1"), 2.0), 0.1), -0.15, 5.0), 50
     )
     wrapped = model_from_env(env)
-    expected = with_horizon(
-        clip_reward(step_penalty(scale_reward(lake(), 2.0), 0.1), -0.15, 5.0), 50
-    )
+    base = lake()
+    expected = with_horizon(base.replace(reward=np.clip(2.0 * base.reward - 0.1, -0.15, 5.0)), 50)
     np.testing.assert_array_equal(wrapped.reward, expected.reward)
     assert wrapped.horizon == 50
     assert solve(wrapped).value == solve(expected).value
@@ -92,3 +91,8 @@ def test_exact_values_of_a_wrapped_env_agree_with_its_returns():
     policy = solve(model).policy
     exact = evaluate(model, policy).value
     assert within_standard_errors(env_returns(env, policy, 800, seed=4), exact)
+
+
+def test_any_reward_wrapper_is_followed_through_its_own_code():
+    squared = model_from_env(TransformReward(gym.make("Taxi-v4"), lambda r: r * r))
+    np.testing.assert_array_equal(squared.reward, model_from_env(gym.make("Taxi-v4")).reward ** 2)

@@ -9,8 +9,9 @@ import numpy as np
 
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import NotAvailable
+from tui_gym.core.wrappers import build_env
 from tui_gym.games.base import TIED, HeatmapLayout, ansi_text
-from tui_gym.games.model import DiscreteStates, ModelGame, make_env
+from tui_gym.games.model import DiscreteStates, ModelGame, table_model
 
 __all__ = ["PAGE", "GenericGame", "check_fit"]
 
@@ -19,25 +20,15 @@ PAGE = 25  # states a heatmap page shows
 
 def check_fit(env_id: str) -> NotAvailable | None:
     """None when `env_id` can be played as a generic game, else what it lacks."""
-    import gymnasium as gym
-
-    from tui_gym.core.mdp import model_from_env
-
-    try:
-        env = make_env(env_id)
-    except (gym.error.Error, ImportError, TypeError, ValueError, AttributeError) as error:
-        return NotAvailable(f"{env_id} could not be built: {' '.join(str(error).split())}")
-    try:
-        model = model_from_env(env.unwrapped, horizon=None)
-    finally:
-        env.close()
-    if isinstance(model, NotAvailable):
-        reason = model.reason.split(": ", 1)[-1]
-        return NotAvailable(
-            f"{env_id} does not fit: {reason} (tui-gym plays envs with Discrete observations "
-            "and actions and a transition table P)"
-        )
-    return None
+    model = table_model(env_id)
+    if not isinstance(model, NotAvailable):
+        return None
+    if " could not be built: " in model.reason:
+        return model
+    return NotAvailable(
+        f"{env_id} does not fit: {model.reason.split(': ', 1)[-1]} (tui-gym plays envs with "
+        "Discrete observations and actions and a transition table P)"
+    )
 
 
 class GenericStates(DiscreteStates):
@@ -121,7 +112,7 @@ class GenericGame(ModelGame):
         self.name = env_id.lower()
         self.title = env_id.split(":")[-1]
         self.description = f"{self.title}: played from its own transition table"
-        env = make_env(env_id)
+        env: Any = build_env(env_id)
         try:
             self.action_names = tuple(str(a) for a in range(int(env.action_space.n)))
             modes = env.metadata.get("render_modes", []) or []

@@ -7,7 +7,6 @@ the others are `Advice.equal`.
 
 from __future__ import annotations
 
-import math
 import threading
 from bisect import bisect_right
 from collections.abc import Mapping
@@ -33,6 +32,7 @@ from tui_gym.core.mdp import (
     with_horizon,
 )
 from tui_gym.core.mdp.evaluation import expected_value
+from tui_gym.core.wrappers import build_env
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
 from tui_gym.games.base import (
     EXACT,
@@ -53,7 +53,7 @@ from tui_gym.games.words import signed, unwrapped_note
 
 __all__ = [
     "PHASE", "TIE_GAMMA", "DiscreteStates", "ModelGame", "ModelOracle", "Ladder", "elapsed_steps",
-    "freeze", "make_env", "model_under",
+    "freeze", "table_model",
 ]
 
 PHASE = "phase"  # the argument naming a changing world's phase, for its exact figures
@@ -74,26 +74,19 @@ def freeze(value: Any) -> Any:
     return value
 
 
-def make_env(env_id: str, **kwargs: Any) -> Any:
-    """`gym.make(env_id, **kwargs)`, our own envs registered first."""
-    import gymnasium as gym
-
-    import tui_gym.envs
-
-    tui_gym.envs.register_envs()
-    return gym.make(env_id, **kwargs)
-
-
 @lru_cache(maxsize=32)
-def _table_model(env_id: str, frozen: Any, names: tuple[str, ...]) -> FiniteMDP | NotAvailable:
+def table_model(env_id: str, frozen: Any = (), names: tuple[str, ...] = ()) -> (
+        FiniteMDP | NotAvailable):
+    """The model of `build_env(env_id, **frozen)`'s table, unwrapped, with no episode limit
+    (kept); `frozen` as `freeze` makes it, `names` the actions' when they fit."""
     import gymnasium as gym
 
     kwargs = {k: _thaw(v) for k, v in frozen}
     kwargs.pop("max_episode_steps", None)
     try:
-        env = make_env(env_id, **kwargs)
-    except (gym.error.Error, TypeError, ValueError, ImportError) as error:
-        return NotAvailable(f"{env_id} could not be built: {error}")
+        env = build_env(env_id, kwargs)
+    except (gym.error.Error, TypeError, ValueError, ImportError, AttributeError) as error:
+        return NotAvailable(f"{env_id} could not be built: {' '.join(str(error).split())}")
     try:
         n = getattr(env.action_space, "n", None)
         action_names = names if n is not None and len(names) == int(n) else None
@@ -106,36 +99,6 @@ def _thaw(value: Any) -> Any:
     if isinstance(value, tuple):
         return [_thaw(v) for v in value]
     return value
-
-
-def model_under(model: FiniteMDP, changes: GameChanges) -> FiniteMDP:
-    """`model` as the wrappers read into `changes` make it: their rewards (each distinct
-    reward passed once through the wrappers' own code; a reward drawn with noise through
-    wrappers that scale and shift it, its deviation scaled alike) and the tightest time
-    limit. `ValueError` for wrappers that bend a reward drawn with noise."""
-    if changes.changes_rewards:
-        noise = model.reward_std
-        if noise is not None and noise.any():
-            slope = _slope(changes)
-            if slope is None:
-                raise ValueError(f"{changes.reward_names()} on rewards drawn with noise is "
-                                 "not modelled")
-            noise = abs(slope) * noise
-        unique, inverse = np.unique(model.reward, return_inverse=True)
-        mapped = np.array([changes.reward(float(r)) for r in unique])
-        model = model.replace(reward=mapped[inverse].reshape(model.reward.shape), reward_std=noise)
-    return with_horizon(model, changes.time_limit)
-
-
-def _slope(changes: GameChanges) -> float | None:
-    """The factor of the wrappers' reward change when it is `a * r + b` (None otherwise)."""
-    shift = changes.reward(0.0)
-    slope = changes.reward(1.0) - shift
-    probes = (-100.0, -3.5, -0.25, 0.75, 2.0, 100.0)
-    if all(math.isclose(changes.reward(r), slope * r + shift, rel_tol=1e-9, abs_tol=1e-9)
-           for r in probes):
-        return slope
-    return None
 
 
 def elapsed_steps(env: Any) -> int | None:
@@ -220,7 +183,7 @@ class ModelOracle(Oracle):
             model = with_horizon(base, game.episode_limit(kwargs))
             return _Exact(model, Ladder(model), Scope(False, unwrapped_note(changes.others)))
         try:
-            model = model_under(base, changes)
+            model = changes.model(base)
         except ValueError as error:
             model = with_horizon(base, game.episode_limit(kwargs))
             return _Exact(model, Ladder(model), Scope(False, f"figures of the unwrapped game: "
@@ -506,7 +469,7 @@ class ModelGame(Game):
     def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP | NotAvailable:
         """The game's model with no wrappers and no episode limit (kept per arguments)."""
         make = self.make_kwargs(kwargs)
-        return _table_model(self.env_id, freeze(make), tuple(self.action_names))
+        return table_model(self.env_id, freeze(make), tuple(self.action_names))
 
     def gap_tolerance(self, kwargs: Mapping[str, Any]) -> float:
         """The share of the optimum's magnitude a trained greedy policy's gap stays within."""

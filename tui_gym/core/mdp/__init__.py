@@ -8,15 +8,7 @@ policy that may never end one).
 
 from tui_gym.core.mdp.evaluation import evaluate, return_range
 from tui_gym.core.mdp.from_env import NotAvailable, model_from_env
-from tui_gym.core.mdp.model import (
-    FiniteMDP,
-    ModelError,
-    Phases,
-    clip_reward,
-    scale_reward,
-    step_penalty,
-    with_horizon,
-)
+from tui_gym.core.mdp.model import FiniteMDP, ModelError, Phases, with_horizon
 from tui_gym.core.mdp.optimum import (
     TIE_GAMMA,
     Ladder,
@@ -30,7 +22,6 @@ from tui_gym.core.mdp.policy import PolicyError, greedy_policy, policy_matrix
 
 __all__ = [
     "TIE_GAMMA", "FiniteMDP", "Ladder", "ModelError", "NotAvailable", "Phases", "PolicyError",
-    "Solution", "clip_reward", "evaluate", "exact_gap", "gap_of", "greedy_policy",
-    "model_from_env", "optimal_actions", "policy_matrix", "return_range", "scale_reward", "solve",
-    "step_penalty", "with_horizon",
+    "Solution", "evaluate", "exact_gap", "gap_of", "greedy_policy", "model_from_env",
+    "optimal_actions", "policy_matrix", "return_range", "solve", "with_horizon",
 ]

@@ -9,28 +9,11 @@ from typing import Any, Literal
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
-from gymnasium.wrappers import (
-    ClipReward,
-    OrderEnforcing,
-    PassiveEnvChecker,
-    RecordEpisodeStatistics,
-    RenderCollection,
-)
 
-from tui_gym.core.mdp.model import (
-    FiniteMDP,
-    ModelError,
-    clip_reward,
-    scale_reward,
-    step_penalty,
-    with_horizon,
-)
-from tui_gym.core.wrappers.chain import env_label, layers, time_limit
+from tui_gym.core.mdp.model import FiniteMDP, ModelError, with_horizon
+from tui_gym.core.wrappers.chain import env_label
 
 __all__ = ["NotAvailable", "model_from_env"]
-
-# Wrappers that only check, record or render: the game they wrap is the game.
-_NEUTRAL = (OrderEnforcing, PassiveEnvChecker, RecordEpisodeStatistics, RenderCollection)
 
 
 @dataclass(frozen=True)
@@ -38,20 +21,6 @@ class NotAvailable:
     """There is no exact model; `reason` is one sentence saying what is missing."""
 
     reason: str
-
-
-def _reward_layer(model: FiniteMDP, layer: gym.Wrapper) -> FiniteMDP | None:
-    """The model under one reward wrapper, or None for a wrapper that is not one we model."""
-    from tui_gym.core.wrappers.catalog import ScaleReward, StepPenalty
-
-    if type(layer) is ScaleReward:
-        return scale_reward(model, layer.factor)
-    if type(layer) is StepPenalty:
-        return step_penalty(model, layer.penalty)
-    if type(layer) is ClipReward:
-        saved: dict[str, Any] = getattr(layer, "_saved_kwargs", {})
-        return clip_reward(model, saved.get("min_reward"), saved.get("max_reward"))
-    return None
 
 
 def _discrete_size(name: str, role: str, space: gym.Space[Any]) -> int | NotAvailable:
@@ -101,7 +70,8 @@ def model_from_env(
     env: gym.Env, *, initial: Sequence[float] | np.ndarray | None = None,
     horizon: int | None | Literal["env"] = "env", action_names: Sequence[str] | None = None,
 ) -> FiniteMDP | NotAvailable:
-    """The exact model of `env` and its wrappers, or `NotAvailable` saying why there is none.
+    """The exact model of `env` (its unwrapped states) under its wrappers as
+    `GameChanges` reads them, or `NotAvailable` saying why there is none.
 
     Args:
         env: a Gymnasium env, wrapped or not.
@@ -127,28 +97,18 @@ def model_from_env(
             raise ValueError("initial must be a probability distribution over the states")
     if not isinstance(env, gym.Env):
         return NotAvailable(f"{type(env).__name__} is not a Gymnasium env")
-    stack = layers(env)
+    from tui_gym.core.wrappers.changes import GameChanges
+
     model = _table_model(env.unwrapped, given, action_names)
     if isinstance(model, NotAvailable):
         return model
-    limit: int | None = None
-    for layer in stack:
-        if type(layer) in _NEUTRAL:
-            continue
-        steps = time_limit(layer)
-        if steps is not None:
-            limit = steps if limit is None else min(limit, steps)
-            continue
-        try:
-            transformed = _reward_layer(model, layer)
-        except (TypeError, ValueError) as error:
-            return NotAvailable(
-                f"{env_label(env)} has no exact model with {type(layer).__name__}: {error}"
-            )
-        if transformed is None:
-            return NotAvailable(
-                f"{env_label(env)} has no exact model with {type(layer).__name__}: only TimeLimit, "
-                "ScaleReward, StepPenalty and ClipReward have exact forms"
-            )
-        model = transformed
-    return with_horizon(model, limit if horizon == "env" else horizon)
+    changes = GameChanges.of(env)
+    if changes.others:
+        return NotAvailable(f"{env_label(env)} has no exact model with {changes.others[0]}: "
+                            "it changes the game beyond its table")
+    try:
+        model = changes.model(model)
+    except (TypeError, ValueError) as error:
+        return NotAvailable(f"{env_label(env)} has no exact model with "
+                            f"{changes.reward_names()}: {' '.join(str(error).split())}")
+    return model if horizon == "env" else with_horizon(model, horizon)

@@ -1,5 +1,5 @@
-"""`FiniteMDP`: a game's exact model as dense transition arrays; the model as a reward or
-time-limit wrapper changes it; `Phases`, a world that changes as it is played."""
+"""`FiniteMDP`: a game's exact model as dense transition arrays; the model under a time
+limit; `Phases`, a world that changes as it is played."""
 
 from __future__ import annotations
 
@@ -10,8 +10,6 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-
-from tui_gym.core.params import finite_number
 
 PROBABILITY_TOLERANCE = 1e-9
 """How far a distribution's total may stray from 1 (round-off in tables like 0.8 + 0.1 + 0.1)."""
@@ -279,33 +277,6 @@ def _merged(listed: Iterable[Sequence[Any]], state: int, action: int) -> list[Ou
     if not merged:
         raise ModelError(f"state {state}, action {action} has no possible outcome")
     return [(p, nxt, r, t) for (nxt, r, t), p in merged.items()]
-
-
-def scale_reward(model: FiniteMDP, factor: float) -> FiniteMDP:
-    """The model with every reward multiplied by `factor`."""
-    factor = finite_number("ScaleReward factor", factor)
-    noise = None if model.reward_std is None else abs(factor) * model.reward_std
-    return model.replace(reward=factor * model.reward, reward_std=noise)
-
-
-def step_penalty(model: FiniteMDP, penalty: float) -> FiniteMDP:
-    """The model with `penalty` (>= 0) subtracted from every step's reward."""
-    penalty = finite_number("StepPenalty penalty", penalty, minimum=0.0)
-    return model.replace(reward=model.reward - penalty)
-
-
-def clip_reward(model: FiniteMDP, low: float | None = None, high: float | None = None) -> FiniteMDP:
-    """The model with every reward clipped to `[low, high]` (None: no bound on that side)."""
-    if low is None and high is None:
-        raise ValueError("ClipReward needs min_reward, max_reward or both")
-    if model.reward_std is not None and model.reward_std.any():
-        raise ValueError("ClipReward on rewards drawn with noise: the clipped mean is not "
-                         "modelled")
-    low = None if low is None else finite_number("ClipReward min_reward", low)
-    high = None if high is None else finite_number("ClipReward max_reward", high)
-    if low is not None and high is not None and low > high:
-        raise ValueError(f"ClipReward min_reward ({low:g}) must be <= max_reward ({high:g})")
-    return model.replace(reward=np.clip(model.reward, low, high))
 
 
 def with_horizon(model: FiniteMDP, horizon: int | None) -> FiniteMDP:

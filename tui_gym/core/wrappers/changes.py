@@ -1,19 +1,29 @@
-"""How the wrappers around a game change it, as far as its exact figures care."""
+"""How the wrappers around a game change it, as far as its exact figures care, and the
+model as they make it."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import gymnasium as gym
-from gymnasium.wrappers import OrderEnforcing, PassiveEnvChecker
+import numpy as np
+from gymnasium.wrappers import (
+    OrderEnforcing,
+    PassiveEnvChecker,
+    RecordEpisodeStatistics,
+    RenderCollection,
+)
 
+from tui_gym.core.mdp.model import FiniteMDP, with_horizon
 from tui_gym.core.wrappers.catalog import DistanceShaping
 from tui_gym.core.wrappers.chain import layers, time_limit
 
 __all__ = ["NO_CHANGES", "GameChanges", "registry_limit"]
 
-_TRANSPARENT = (OrderEnforcing, PassiveEnvChecker)
+# Wrappers that only check, record or render: the game they wrap is the game.
+_TRANSPARENT = (OrderEnforcing, PassiveEnvChecker, RecordEpisodeStatistics, RenderCollection)
 
 
 @dataclass(frozen=True)
@@ -72,6 +82,37 @@ class GameChanges:
             else:
                 value = float(layer.reward(value))  # type: ignore[attr-defined]
         return value
+
+    def model(self, model: FiniteMDP) -> FiniteMDP:
+        """`model` as these wrappers make it: their rewards (each distinct reward passed once
+        through the wrappers' own code; a reward drawn with noise through wrappers that scale
+        and shift it, its deviation scaled alike) and the tightest time limit. `ValueError`
+        (or the wrappers' own `TypeError`) for rewards the model cannot follow."""
+        if self.changes_rewards:
+            if any(isinstance(layer, DistanceShaping) for layer in self._steps):
+                raise ValueError("DistanceShaping needs distances the model does not hold")
+            noise = model.reward_std
+            if noise is not None and noise.any():
+                slope = self._slope()
+                if slope is None:
+                    raise ValueError(f"{self.reward_names()} on rewards drawn with noise is "
+                                     "not modelled")
+                noise = abs(slope) * noise
+            unique, inverse = np.unique(model.reward, return_inverse=True)
+            mapped = np.array([self.reward(float(r)) for r in unique])
+            model = model.replace(reward=mapped[inverse].reshape(model.reward.shape),
+                                  reward_std=noise)
+        return with_horizon(model, self.time_limit)
+
+    def _slope(self) -> float | None:
+        """The factor of the wrappers' reward change when it is `a * r + b` (None otherwise)."""
+        shift = self.reward(0.0)
+        slope = self.reward(1.0) - shift
+        probes = (-100.0, -3.5, -0.25, 0.75, 2.0, 100.0)
+        if all(math.isclose(self.reward(r), slope * r + shift, rel_tol=1e-9, abs_tol=1e-9)
+               for r in probes):
+            return slope
+        return None
 
     def reward_names(self) -> str:
         """The reward wrappers for a sentence: 'ScaleReward(factor=-1), StepPenalty(...)'."""

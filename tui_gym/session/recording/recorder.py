@@ -129,7 +129,7 @@ class Recorder:
             record["seed"] = seed
         record.update(self._state(env, observation, info))
         self._write(record)
-        episode.pending = self._assess(env, 0)
+        episode.pending = self._assess(env)
 
     def step(
         self, env: Any, action: int, observation: Any, reward: float, terminated: bool,
@@ -159,7 +159,7 @@ class Recorder:
             record["note"] = note
         self._write(record)
         done = episode.terminated or episode.truncated
-        episode.pending = NOTHING_KNOWN if done else self._assess(env, episode.steps)
+        episode.pending = NOTHING_KNOWN if done else self._assess(env)
         return judgement
 
     def end_episode(self) -> None:
@@ -211,8 +211,8 @@ class Recorder:
         if self._played is None:
             raise ValueError("no game to record: pass a session or call use_session first")
 
-    def _assess(self, env: Any, steps_taken: int) -> Assessment:
-        return self._judge.assess(env, steps_taken) if self._judge is not None else NOTHING_KNOWN
+    def _assess(self, env: Any) -> Assessment:
+        return self._judge.assess(env) if self._judge is not None else NOTHING_KNOWN
 
     def _state(self, env: Any, observation: Any, info: Mapping[str, Any] | None) -> dict[str, Any]:
         """The observation, the board's scene and the state in words."""
