@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Hashable, Mapping
 from typing import Any, ClassVar
 
+from rich.style import Style
 from rich.text import Text
 from textual import events
 from textual.app import ComposeResult
@@ -78,6 +79,8 @@ class Board(Widget):
     Board > .board-buttons > BoardButton { margin: 0 1; min-width: 10; }
     Board > .board-buttons > BoardButton.-suggested { text-style: bold; }
     """
+
+    STYLE: ClassVar[str] = ""  # the prefix of the board's component classes
 
     BUTTONS: ClassVar[tuple[tuple[str, str], ...]] = ()
     """Buttons under the board: (label markup, action string run on the board)."""
@@ -191,6 +194,9 @@ class Board(Widget):
         return "Finish this episode first."
 
     # --- drawing (subclasses) ----------------------------------------------
+    def _style(self, name: str) -> Style:
+        return self.get_component_rich_style(f"{self.STYLE}--{name}")
+
     def picture(self, width: int, height: int) -> Text:
         """The board drawn to fit `width` x `height` cells."""
         return Text("")

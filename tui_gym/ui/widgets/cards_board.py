@@ -10,6 +10,7 @@ from rich.style import Style
 from rich.text import Text
 from textual.binding import Binding, BindingType
 
+from tui_gym.ui.widgets.board_drawing import stack
 from tui_gym.ui.widgets.boards import Board
 from tui_gym.ui.widgets.strip_widget import component_classes
 
@@ -75,6 +76,7 @@ class CardsBoard(Board):
         ("Deal [dim]n[/]", "new_episode"),
     )
     BORDER_TITLE = "Table"
+    STYLE = "cards"
     RESTART_ANYTIME = False
 
     # --- what the board says ---------------------------------------------------
@@ -97,7 +99,7 @@ class CardsBoard(Board):
 
     # --- drawing ---------------------------------------------------------------
     def _style(self, name: str) -> Style:
-        style = self.get_component_rich_style(f"cards--{name}")
+        style = super()._style(name)
         if name in ON_FELT:  # text straight on the table: keep the canvas's background
             return Style.from_color(style.color) + style.without_color
         return style
@@ -106,37 +108,26 @@ class CardsBoard(Board):
         self, hand: int, position: int, card: int, size: CardSize, face_up: bool
     ) -> list[Text]:
         """The lines of one card, each `size.width` cells wide."""
-        if not face_up:
-            back, fill = self._style("back"), self._style("back-fill")
-            if size.height == 1:
-                return [Text("░" * size.width, fill)]
-            inner = size.width - 2
-            lines = [Text("╭" + "─" * inner + "╮", back)]
-            for _ in range(size.height - 2):
-                line = Text("│", back)
-                line.append("░" * inner, fill)
-                line.append("│", back)
-                lines.append(line)
-            lines.append(Text("╰" + "─" * inner + "╯", back))
-            return lines
-        rank = card_label(card)
-        suit = suit_for(hand, position, card)
-        ink = self._style("red" if suit in RED_SUITS else "face")
-        edge = self._style("edge")
-        if size.height == 1:
-            return [Text(f"{rank:>2}{suit} ", ink)]
         inner = size.width - 2
-        if size.height == 3:
-            middle = [f"{rank:<2}{suit}".ljust(inner)]
+        if face_up:
+            rank, suit = card_label(card), suit_for(hand, position, card)
+            frame, ink = self._style("edge"), self._style("red" if suit in RED_SUITS else "face")
+            if size.height == 1:
+                return [Text(f"{rank:>2}{suit} ", ink)]
+            middle = ([f"{rank:<2}{suit}".ljust(inner)] if size.height == 3
+                      else [f"{rank:<{inner}}", f"{suit:^{inner}}", f"{rank:>{inner}}"])
         else:
-            middle = [f"{rank:<{inner}}", f"{suit:^{inner}}", f"{rank:>{inner}}"]
-        lines = [Text("╭" + "─" * inner + "╮", edge)]
+            frame, ink = self._style("back"), self._style("back-fill")
+            if size.height == 1:
+                return [Text("░" * size.width, ink)]
+            middle = ["░" * inner] * (size.height - 2)
+        lines = [Text("╭" + "─" * inner + "╮", frame)]
         for text in middle:
-            line = Text("│", edge)
+            line = Text("│", frame)
             line.append(text, ink)
-            line.append("│", edge)
+            line.append("│", frame)
             lines.append(line)
-        lines.append(Text("╰" + "─" * inner + "╯", edge))
+        lines.append(Text("╰" + "─" * inner + "╯", frame))
         return lines
 
     def _hand(self, hand: int, cards: Sequence[int], size: CardSize, hidden: int) -> list[Text]:
@@ -202,7 +193,7 @@ class CardsBoard(Board):
             hint = "No cards on the table."
             if self.interactive:
                 hint += " Press n to deal."
-            return _centered([Text(hint, self._style("muted"))], width, height)
+            return stack([Text(hint, self._style("muted"))], width, height, block=True)
         hidden = not self.reveal and len(dealer) > 1
         dealer_label = self._dealer_label(dealer, hidden)
         player_label = self._player_label(player)
@@ -215,19 +206,5 @@ class CardsBoard(Board):
             fits_width = max(line.cell_len for line in lines) <= width
             if fits_width and len(lines) <= height:
                 break
-        return _centered(lines, width, height)
+        return stack(lines, width, height, block=True)
 
-
-def _centered(lines: list[Text], width: int, height: int) -> Text:
-    """Lines as one block (left-aligned among themselves) centred in `width` x `height`."""
-    block = max((line.cell_len for line in lines), default=0)
-    left = " " * max(0, (width - block) // 2)
-    top = max(0, (height - len(lines)) // 2)
-    out = Text(no_wrap=True, overflow="crop", end="")
-    out.append("\n" * top)
-    for i, line in enumerate(lines):
-        if i:
-            out.append("\n")
-        out.append(left)
-        out.append_text(line)
-    return out

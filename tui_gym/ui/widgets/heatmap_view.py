@@ -16,7 +16,7 @@ it to the owner to say what that cell means (it asks the game's layout).
 from __future__ import annotations
 
 import textwrap
-from collections.abc import Hashable, Iterable, Sequence
+from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import ClassVar
@@ -244,7 +244,9 @@ class HeatmapView(StripWidget, can_focus=True):
             return
         rows, cols = self._panels[0].shape
         row, col = self.focus_cell
-        cell = (min(rows - 1, max(0, row + d_row)), min(cols - 1, max(0, col + d_col)))
+        self._focus_on((min(rows - 1, max(0, row + d_row)), min(cols - 1, max(0, col + d_col))))
+
+    def _focus_on(self, cell: tuple[int, int]) -> None:
         if cell != self.focus_cell:
             self.focus_cell = cell
             self.post_message(self.FocusChanged(self, cell))
@@ -258,19 +260,20 @@ class HeatmapView(StripWidget, can_focus=True):
                 return place.index, dy // cell_h, dx // cell_w
         return None
 
-    def on_click(self, event: events.Click) -> None:
+    def clicked_cell(self, event: events.Click) -> tuple[int, int] | None:
+        """The first panel's (row, col) a click hit; the view then takes the click and the focus."""
         offset = event.get_content_offset(self)
-        if offset is None or self.focus_cell is None:
-            return
-        hit = self.cell_at(offset.x, offset.y)
+        hit = None if offset is None or not self._panels else self.cell_at(offset.x, offset.y)
         if hit is None or hit[0] != 0:
-            return
-        cell = (hit[1], hit[2])
+            return None
         event.stop()
         self.focus()
-        if cell != self.focus_cell:
-            self.focus_cell = cell
-            self.post_message(self.FocusChanged(self, cell))
+        return hit[1], hit[2]
+
+    def on_click(self, event: events.Click) -> None:
+        cell = None if self.focus_cell is None else self.clicked_cell(event)
+        if cell is not None:
+            self._focus_on(cell)
 
     # --- layout ------------------------------------------------------------
     def _layout(self, width: int) -> _Layout:
@@ -355,7 +358,8 @@ class HeatmapView(StripWidget, can_focus=True):
                     if i:
                         line.add(" " * PANEL_GAP)
                     part = block[y] if y < len(block) else _Line()
-                    line.add_line(part)
+                    for segment in part:
+                        line.add(segment.text, segment.style)
                     line.add(" " * max(0, layout.panel_width - part.width))
                 lines.append(line)
             for i, panel in enumerate(self._panels):
@@ -376,7 +380,7 @@ class HeatmapView(StripWidget, can_focus=True):
             lines.append(_Line().add(" " * indent + legend, DIM))
         self._placements = placements
         self._cell_geometry = (layout.cell_width, layout.cell_height)
-        cropped = [line.cropped(width) for line in lines]
+        cropped = [Segment.adjust_line_length(line, width, pad=False) for line in lines]
         self.plain = "\n".join(line_text(line).rstrip() for line in cropped)
         return cropped
 
@@ -459,21 +463,3 @@ class _Line(list):
             self.append(Segment(text, style))
             self.width += len(text)
         return self
-
-    def add_line(self, other: Iterable[Segment]) -> None:
-        for segment in other:
-            self.add(segment.text, segment.style)
-
-    def cropped(self, width: int) -> Line:
-        """The segments within the first `width` cells."""
-        if self.width <= width:
-            return list(self)
-        out: Line = []
-        room = width
-        for segment in self:
-            if room <= 0:
-                break
-            text = segment.text[:room]
-            out.append(Segment(text, segment.style))
-            room -= len(text)
-        return out

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import ClassVar, cast
+from typing import Any, ClassVar, cast
 
 from textual import on
 from textual.app import ComposeResult
@@ -30,19 +30,13 @@ def _words(field: Field) -> tuple[str, ...]:
     return ("true", "false") if isinstance(field, Param) else field.choices
 
 
-def _text(field: Field, value: object) -> str:
-    if isinstance(field, Param) and field.kind is bool:
+def _text(field: Field, value: Any) -> str:
+    """A field's value as a person would type it."""
+    if not isinstance(field, Param):
+        return str(value)
+    if field.kind is bool:
         return "true" if value else "false"
-    if _typed(field):
-        return format_value(field, value)  # type: ignore[arg-type]
-    return str(value)
-
-
-def format_value(field: Param, value: float) -> str:
-    """A field's value as the text a person would type."""
-    if field.kind is int:
-        return str(int(value))
-    return f"{value:g}"
+    return str(int(value)) if field.kind is int else f"{value:g}"
 
 
 _SUPERSCRIPTS = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")

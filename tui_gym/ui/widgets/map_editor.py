@@ -37,16 +37,10 @@ class MapCanvas(HeatmapView):
             self.cell = cell
 
     def on_click(self, event: events.Click) -> None:
-        offset = event.get_content_offset(self)
-        if offset is None or not self.panels:
-            return
-        hit = self.cell_at(offset.x, offset.y)
-        if hit is None or hit[0] != 0:
-            return
-        event.stop()
-        self.focus()
-        self.focus_cell = (hit[1], hit[2])
-        self.post_message(self.Clicked((hit[1], hit[2])))
+        cell = self.clicked_cell(event)
+        if cell is not None:
+            self.focus_cell = cell
+            self.post_message(self.Clicked(cell))
 
     def cursor_region(self) -> Region | None:
         """Where the focus cell is drawn, in the canvas's content (None before it is)."""
@@ -320,25 +314,20 @@ class MapEditor(Vertical):
         self._apply(new, f"resized to {new.size_text}")
 
     def action_undo(self) -> None:
-        if not self.undo_stack or self.grid_map is None:
-            self._nothing_to("undo")
-            return
-        new = self.undo_stack.pop()
-        self.redo_stack.append(self.grid_map)
-        self._post(new, self.grid_map, "undone")
+        self._travel(self.undo_stack, self.redo_stack, "undo")
 
     def action_redo(self) -> None:
-        if not self.redo_stack or self.grid_map is None:
-            self._nothing_to("redo")
-            return
-        new = self.redo_stack.pop()
-        self.undo_stack.append(self.grid_map)
-        self._post(new, self.grid_map, "redone")
+        self._travel(self.redo_stack, self.undo_stack, "redo")
 
-    def _nothing_to(self, what: str) -> None:
-        self.last_edit = f"nothing to {what}"
-        self._show_status()
-        self.app.notify(f"Nothing to {what}.", timeout=2)
+    def _travel(self, back: list[GridMap], forth: list[GridMap], what: str) -> None:
+        """Undo or redo: the map from `back`, the one shown onto `forth`."""
+        if not back or self.grid_map is None:
+            self.last_edit = f"nothing to {what}"
+            self._show_status()
+            self.app.notify(f"Nothing to {what}.", timeout=2)
+            return
+        forth.append(self.grid_map)
+        self._post(back.pop(), forth[-1], f"{what}ne")  # "undone", "redone"
 
     def action_save(self) -> None:
         if self.grid_map is not None:

@@ -79,42 +79,10 @@ TAXI_SIZES = (
 def choose_shape(rows: int, cols: int, width: int, height: int) -> TaxiShape:
     """The largest drawing of the city that fits with its wall all round, else the largest
     without it (the smallest one if none does): the city's edge is a wall too."""
-    for frame in (True, False):
-        for cell_w, cell_h in TAXI_SIZES:
-            shape = TaxiShape(rows, cols, cell_w, cell_h, frame)
-            if shape_fits(shape, width, height):
-                return shape
-    return TaxiShape(rows, cols, 3, 1, False)
-
-
-@dataclass(frozen=True)
-class TaxiLayout:
-    """Where the drawn city sits in the canvas, to map clicks back to cells."""
-
-    shape: TaxiShape
-    left: int  # canvas column of the drawing's left edge
-    top: int  # canvas line of the drawing's top edge
-
-    def cell_center(self, cell: Cell) -> Offset:
-        shape = self.shape
-        row, col = cell
-        return Offset(
-            self.left + shape.x_of(col) + shape.cell_w // 2,
-            self.top + shape.y_of(row) + shape.cell_h // 2,
-        )
-
-    def cell_at(self, offset: Offset) -> Cell | None:
-        """The cell under a canvas offset (None on a wall, a lane or off the city)."""
-        shape = self.shape
-        x = offset.x - self.left - shape.edge
-        y = offset.y - self.top - shape.edge
-        if x < 0 or y < 0:
-            return None
-        col, within = divmod(x, shape.cell_w + 1)
-        row = y // shape.cell_h
-        if within == shape.cell_w or col >= shape.cols or row >= shape.rows:
-            return None
-        return row, col
+    shapes = (TaxiShape(rows, cols, cell_w, cell_h, frame)
+              for frame in (True, False) for cell_w, cell_h in TAXI_SIZES)
+    return next((shape for shape in shapes if shape_fits(shape, width, height)),
+                TaxiShape(rows, cols, 3, 1, False))
 
 
 def _cells(value: Any) -> list[Cell]:
@@ -177,14 +145,7 @@ class TaxiBoard(MapBoard):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
-        self.rows = self.cols = 0
-        self.taxi: Cell | None = None
-        self.passenger: int | None = None
-        self.destination: int | None = None
-        self.stands: list[Cell] = []
-        self.stand_names: list[str] = []
-        self.walls: frozenset[Cell] = frozenset()
-        self.rainy = False
+        self._read({})
 
     # --- what the board says ---------------------------------------------------
     def key_help(self) -> list[tuple[str, str]]:
@@ -217,27 +178,27 @@ class TaxiBoard(MapBoard):
 
     # --- the scene -----------------------------------------------------------------
     def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
-        previous_taxi = None if self._fresh else self.taxi
-        previous_destination = None if self._fresh else self.destination
-        self.rows = _index(scene.get("rows")) or 5
-        self.cols = _index(scene.get("cols")) or 5
-        self.taxi = cell_of(scene.get("taxi"))
-        self.stands = _cells(scene.get("stands"))
-        names = scene.get("stand_names") or STAND_NAMES
-        self.stand_names = [str(name) for name in names]
-        self.passenger = _index(scene.get("passenger"))
-        self.destination = _index(scene.get("destination"))
-        self.walls = frozenset(_cells(scene.get("walls")))
-        self.rainy = bool(scene.get("rainy"))
+        previous = (None, None) if self._fresh else (self.taxi, self.destination)
+        self._read(scene)
         action = scene.get("last_action")
-        self._event = self._event_of(
-            previous_taxi, previous_destination, str(action) if action is not None else None,
-            bool(scene.get("last_illegal")),
-        )
+        self._event = self._event_of(*previous, None if action is None else str(action),
+                                     bool(scene.get("last_illegal")))
         self._fresh = False
         if self.is_mounted:
             self.border_title = "Taxi · rain" if self.rainy else "Taxi"
         super().show_scene(scene, reveal)
+
+    def _read(self, scene: Mapping[str, Any]) -> None:
+        """The city and who is where, from a scene."""
+        self.rows = _index(scene.get("rows")) or 5
+        self.cols = _index(scene.get("cols")) or 5
+        self.taxi = cell_of(scene.get("taxi"))
+        self.stands = _cells(scene.get("stands"))
+        self.stand_names = [str(name) for name in scene.get("stand_names") or STAND_NAMES]
+        self.passenger = _index(scene.get("passenger"))
+        self.destination = _index(scene.get("destination"))
+        self.walls = frozenset(_cells(scene.get("walls")))
+        self.rainy = bool(scene.get("rainy"))
 
     def stand_name(self, index: int | None) -> str:
         if index is None or not 0 <= index < len(self.stands):
@@ -246,15 +207,9 @@ class TaxiBoard(MapBoard):
 
     def blocked(self, cell: Cell, move: str) -> bool:
         """Whether a wall or the city's edge stops a move from `cell`."""
-        d_row, d_col = MOVES[move]
-        row, col = cell[0] + d_row, cell[1] + d_col
-        if not (0 <= row < self.rows and 0 <= col < self.cols):
-            return True
-        if d_col == 1:
-            return cell in self.walls
-        if d_col == -1:
-            return (row, col) in self.walls
-        return False
+        d_col = MOVES[move][1]  # a wall stands on the east side of its cell
+        wall = cell if d_col == 1 else (cell[0], cell[1] - 1) if d_col == -1 else None
+        return self._off_edge(cell, move) or wall in self.walls
 
     def _event_of(
         self, previous: Cell | None, previous_destination: int | None, action: str | None,
@@ -308,14 +263,7 @@ class TaxiBoard(MapBoard):
             return None
         return self.rows, self.cols
 
-    def choose_shape(self, rows: int, cols: int, width: int, height: int) -> TaxiShape:
-        return choose_shape(rows, cols, width, height)
-
-    def layout_of(self, shape: TaxiShape, left: int, top: int) -> TaxiLayout:
-        return TaxiLayout(shape, left, top)
-
-    def _stand_style(self, index: int) -> Style:
-        return self._style(f"stand-{index % STAND_COLOURS}")
+    choose_shape = staticmethod(choose_shape)
 
     def _cab(self, width: int) -> tuple[str, Style]:
         """The cab's text (at most `width` characters) and style: full or empty."""
@@ -349,7 +297,7 @@ class TaxiBoard(MapBoard):
                         if (x + 3 * line + cell[0] + 3 * cell[1]) % 7 == 0:
                             grid.put(x0 + x, y0 + line, "╱", rain)
         else:
-            tile = self._stand_style(stand)
+            tile = self._style(f"stand-{stand % STAND_COLOURS}")
             grid.fill(x0, y0, w, h, " ", tile)
             grid.put(x0, y0, self.stand_name(stand)[: max(1, w // 3)], tile)
             if stand == self.destination:
@@ -379,16 +327,12 @@ class TaxiBoard(MapBoard):
                 self._paint_tile(grid, (row, col), shape)
             for col in range(shape.cols - 1):
                 x = shape.x_of(col) + shape.cell_w
-                walled = (row, col) in self.walls
-                for line in range(shape.cell_h):
-                    grid.put(
-                        x, shape.y_of(row) + line, "┃" if walled else "┆", wall if walled else lane
-                    )
+                mark = ("┃", wall) if (row, col) in self.walls else ("┆", lane)
+                grid.fill(x, shape.y_of(row), 1, shape.cell_h, *mark)
         if shape.frame:
             last = shape.height - 1
-            for y in range(1, last):
-                grid.put(0, y, "┃", wall)
-                grid.put(shape.width - 1, y, "┃", wall)
+            grid.fill(0, 1, 1, last - 1, "┃", wall)
+            grid.fill(shape.width - 1, 1, 1, last - 1, "┃", wall)
             grid.put(0, 0, "┏" + "━" * (shape.width - 2) + "┓", wall)
             grid.put(0, last, "┗" + "━" * (shape.width - 2) + "┛", wall)
             for col in range(shape.cols - 1):
@@ -441,4 +385,4 @@ class TaxiBoard(MapBoard):
             self.step_to(self.taxi, cell, MOVE_OF)
 
 
-__all__ = ["MOVES", "TaxiBoard", "TaxiLayout", "TaxiShape", "choose_shape"]
+__all__ = ["MOVES", "TaxiBoard", "TaxiShape", "choose_shape"]

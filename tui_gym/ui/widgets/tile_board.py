@@ -101,6 +101,12 @@ class TileShape:
         """Lines of the map and its column numbers (the caption comes on top)."""
         return self.map_h + (1 if self.axes else 0)
 
+    def x_of(self, col: int) -> int:
+        return self.label_w + col * self.cell_w
+
+    def y_of(self, row: int) -> int:
+        return row // 2 if self.half else row * self.cell_h
+
 
 TILE_SIZES = ((11, 5), (9, 4), (7, 3), (5, 2), (3, 1), (2, 1), (1, 1))
 HALF_WIDTHS = (2, 1)
@@ -108,48 +114,13 @@ HALF_WIDTHS = (2, 1)
 
 def choose_shape(rows: int, cols: int, width: int, height: int) -> TileShape:
     """The largest drawing of a rows x cols map that fits (the smallest one if none does)."""
-    for cell_w, cell_h in TILE_SIZES:
-        for axes in (True, False):
-            if axes and cell_w < len(str(cols - 1)):
-                continue
-            shape = TileShape(rows, cols, cell_w, cell_h, axes=axes)
-            if shape_fits(shape, width, height):
-                return shape
-    for cell_w in HALF_WIDTHS:
-        shape = TileShape(rows, cols, cell_w, 1, half=True)
-        if shape_fits(shape, width, height):
-            return shape
-    return TileShape(rows, cols, 1, 1, half=True)
-
-
-@dataclass(frozen=True)
-class TileLayout:
-    """Where the drawn map sits in the canvas, to map clicks back to cells."""
-
-    shape: TileShape
-    left: int  # canvas column of the first tile (after the row numbers)
-    top: int  # canvas line of the first tile
-
-    def cell_center(self, cell: Cell) -> Offset:
-        """The canvas offset of the middle of a cell (in the half drawing: its line)."""
-        shape = self.shape
-        row, col = cell
-        y = row // 2 if shape.half else row * shape.cell_h + shape.cell_h // 2
-        return Offset(self.left + col * shape.cell_w + shape.cell_w // 2, self.top + y)
-
-    def col_at(self, offset: Offset) -> int | None:
-        col = (offset.x - self.left) // self.shape.cell_w
-        return col if offset.x >= self.left and col < self.shape.cols else None
-
-    def rows_at(self, offset: Offset) -> tuple[int, ...]:
-        """The map rows under a canvas line: one, or two in the half drawing."""
-        shape = self.shape
-        line = offset.y - self.top
-        if line < 0 or line >= shape.map_h:
-            return ()
-        if shape.half:
-            return tuple(row for row in (2 * line, 2 * line + 1) if row < shape.rows)
-        return (line // shape.cell_h,)
+    shapes = [
+        *(TileShape(rows, cols, cell_w, cell_h, axes=axes) for cell_w, cell_h in TILE_SIZES
+          for axes in (True, False) if not (axes and cell_w < len(str(cols - 1)))),
+        *(TileShape(rows, cols, cell_w, 1, half=True) for cell_w in HALF_WIDTHS),
+    ]
+    return next((shape for shape in shapes if shape_fits(shape, width, height)),
+                TileShape(rows, cols, 1, 1, half=True))
 
 
 def cell_table(value: Any) -> dict[Cell, Any]:
@@ -258,19 +229,9 @@ class TileBoard(MapBoard):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
-        self.cells: list[str] = []
         self.trail: dict[Cell, str] = {}  # cell the agent left -> arrow of that move
         self.agent: Cell | None = None
-        self.theme = THEMES["lake"]
-        self.rewards: dict[Cell, Any] = {}
-        self.slip: dict[Cell, Any] = {}
-        self.marks: dict[Cell, str] = {}
-        self.wind: list[int] = []
-        self.gusts = False
-        self.offered: list[str] | None = None
-        self.choices: list[str] = []
-        self.king = False  # the map's moves include the diagonals
-        self.cursor: Cell | None = None
+        self._read({})
 
     def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
         self.border_title = self.theme.title
@@ -327,23 +288,12 @@ class TileBoard(MapBoard):
 
     # --- the scene ---------------------------------------------------------------
     def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
-        cells = map_rows(scene)
-        agent = cell_of(scene.get("agent"))
-        theme = THEMES.get(str(scene.get("theme", "lake")), THEMES["plain"])
-        if cells != self.cells or theme is not self.theme:
+        drawn = (self.cells, self.theme)
+        self._read(scene)
+        if (self.cells, self.theme) != drawn:
             self._fresh = True
         previous = None if self._fresh else self.agent
-        self.cells, self.theme = cells, theme
-        self.rewards = cell_table(scene.get("rewards"))
-        self.slip = cell_table(scene.get("slip"))
-        self.marks = {cell: str(text) for cell, text in cell_table(scene.get("marks")).items()}
-        self.wind = [int(w) for w in _listed(scene.get("wind")) if _number(w) is not None]
-        self.gusts = bool(scene.get("gusts"))
-        offered = scene.get("offered")
-        self.offered = None if offered is None else [str(a) for a in _listed(offered)]
-        self.choices = [str(a) for a in _listed(scene.get("choices"))]
-        self.king = "up-left" in _listed(scene.get("moves"))
-        self.cursor = cell_of(scene.get("cursor"))
+        agent = cell_of(scene.get("agent"))
         action = scene.get("last_action")
         action = action if action in MOVES else None
         self._event = self._event_of(previous, agent, action, bool(scene.get("slipped")))
@@ -363,8 +313,23 @@ class TileBoard(MapBoard):
         self.agent = agent
         self._fresh = False
         if self.is_mounted:
-            self.border_title = theme.title
+            self.border_title = self.theme.title
         super().show_scene(scene, reveal)
+
+    def _read(self, scene: Mapping[str, Any]) -> None:
+        """The map and what lies on it, from a scene."""
+        self.cells = map_rows(scene)
+        self.theme = THEMES.get(str(scene.get("theme", "lake")), THEMES["plain"])
+        self.rewards = cell_table(scene.get("rewards"))
+        self.slip = cell_table(scene.get("slip"))
+        self.marks = {cell: str(text) for cell, text in cell_table(scene.get("marks")).items()}
+        self.wind = [int(w) for w in _listed(scene.get("wind")) if _number(w) is not None]
+        self.gusts = bool(scene.get("gusts"))
+        offered = scene.get("offered")
+        self.offered = None if offered is None else [str(a) for a in _listed(offered)]
+        self.choices = [str(a) for a in _listed(scene.get("choices"))]
+        self.king = "up-left" in _listed(scene.get("moves"))  # the diagonals are moves
+        self.cursor = cell_of(scene.get("cursor"))
 
     def kind(self, cell: Cell) -> str:
         """The map character at a cell ('' off the map)."""
@@ -458,8 +423,9 @@ class TileBoard(MapBoard):
             return self._style("agent-lost")
         return self._style("agent")
 
-    def _paint_tile(self, grid: CharGrid, cell: Cell, x0: int, y0: int, shape: TileShape) -> None:
+    def _paint_tile(self, grid: CharGrid, cell: Cell, shape: TileShape) -> None:
         w, h = shape.cell_w, shape.cell_h
+        x0, y0 = shape.x_of(cell[1]), shape.y_of(cell[0])
         kind = self.kind(cell)
         tile = self._ground(cell, kind)
         mid = h // 2
@@ -517,10 +483,8 @@ class TileBoard(MapBoard):
             grid.put(x0, y0, "[", cursor)
             grid.put(x0 + w - 1, y0, "]", cursor)
         else:
-            grid.put(x0, y0, "┌", cursor)
-            grid.put(x0 + w - 1, y0, "┐", cursor)
-            grid.put(x0, y0 + h - 1, "└", cursor)
-            grid.put(x0 + w - 1, y0 + h - 1, "┘", cursor)
+            for x, y, corner in ((0, 0, "┌"), (1, 0, "┐"), (0, 1, "└"), (1, 1, "┘")):
+                grid.put(x0 + x * (w - 1), y0 + y * (h - 1), corner, cursor)
 
     def _swatch(self, cell: Cell) -> Color | None:
         """A cell's colour in the half drawing."""
@@ -536,42 +500,34 @@ class TileBoard(MapBoard):
     def map_size(self) -> tuple[int, int] | None:
         return (len(self.cells), len(self.cells[0])) if self.cells else None
 
-    def choose_shape(self, rows: int, cols: int, width: int, height: int) -> TileShape:
-        return choose_shape(rows, cols, width, height)
+    choose_shape = staticmethod(choose_shape)
 
     def lines_under(self) -> int:
         return 1 if self.wind else 0  # a line kept for the wind under the columns
 
-    def layout_of(self, shape: TileShape, left: int, top: int) -> TileLayout:
-        return TileLayout(shape, left + shape.label_w, top)
-
     def draw_map(self, shape: TileShape, width: int, spare: int) -> list[Text]:
-        lines = self._draw_map(shape)
-        if self.wind and spare > 0 and not shape.half:
-            lines.append(self._wind_line(shape))
-        return lines
-
-    def _draw_map(self, shape: TileShape) -> list[Text]:
         w, h = shape.cell_w, shape.cell_h
         grid = CharGrid(shape.width, shape.height, Style())
-        x_map = shape.label_w
         if shape.half:
             for line in range(shape.map_h):
                 for col in range(shape.cols):
                     top = self._swatch((2 * line, col))
                     below = self._swatch((2 * line + 1, col)) if 2 * line + 1 < shape.rows else None
-                    grid.put(x_map + col * w, line, "▀" * w, Style(color=top, bgcolor=below))
+                    grid.put(shape.x_of(col), line, "▀" * w, Style(color=top, bgcolor=below))
             return grid.lines()
         for row in range(shape.rows):
             for col in range(shape.cols):
-                self._paint_tile(grid, (row, col), x_map + col * w, row * h, shape)
+                self._paint_tile(grid, (row, col), shape)
         if shape.axes:
             axis = self._style("axis")
             for row in range(shape.rows):
                 grid.put(0, row * h + h // 2, f"{row:>{shape.label_w - 1}}", axis)
             for col in range(shape.cols):
-                grid.put(x_map + col * w, shape.map_h, str(col).center(w), axis)
-        return grid.lines()
+                grid.put(shape.x_of(col), shape.map_h, str(col).center(w), axis)
+        lines = grid.lines()
+        if self.wind and spare > 0:
+            lines.append(self._wind_line(shape))
+        return lines
 
     def caption(self, width: int) -> Text:
         """What the last move did, or where the cursor or the agent is, in words that fit."""
@@ -620,21 +576,14 @@ class TileBoard(MapBoard):
 
     # --- keys and clicks -----------------------------------------------------------
     def canvas_clicked(self, offset: Offset) -> None:
-        layout = self.layout_drawn
-        if layout is None:
-            return
-        rows, col = layout.rows_at(offset), layout.col_at(offset)
-        if not rows or col is None:
-            return
-        row = rows[0]
-        if len(rows) == 2 and self.agent is not None and self.agent[0] >= rows[1]:
-            row = rows[1]  # the half drawing: of the two rows, the one nearer the agent
-        self.post_message(self.CellClicked(row, col))
-        self.cell_clicked(row, col)
+        cell = self.layout_drawn.cell_at(offset, self.agent) if self.layout_drawn else None
+        if cell is not None:
+            self.post_message(self.CellClicked(*cell))
+            self.cell_clicked(*cell)
 
     def cell_clicked(self, row: int, col: int) -> None:
         """A click on cell (row, col): the agent steps one cell towards it."""
         self.step_to(self.agent, (row, col), MOVE_OF)
 
 
-__all__ = ["MOVES", "THEMES", "TileBoard", "TileLayout", "TileShape", "choose_shape", "map_rows"]
+__all__ = ["MOVES", "THEMES", "TileBoard", "TileShape", "choose_shape", "map_rows"]
