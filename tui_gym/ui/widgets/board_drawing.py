@@ -52,9 +52,6 @@ class CharGrid:
         self.fill(x, y + 1, width, height - 2, " ", colour)
         self.put(x, y + height - 1, "▝" + "▀" * (width - 2) + "▘", edge)
 
-    def style_at(self, x: int, y: int) -> Style:
-        return self.styles[y][x]
-
     def lines(self) -> list[Text]:
         """The grid as Rich lines, one segment per run of equal style."""
         out = []

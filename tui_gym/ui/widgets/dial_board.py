@@ -28,6 +28,7 @@ class DialBoard(Board):
     COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     STYLE = "dial"
+    BORDER_TITLE = "Game"
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("left,h", "turn(-1)", "−1", key_display="←", group=DIAL_GROUP),
@@ -46,9 +47,6 @@ class DialBoard(Board):
         super().__init__(**kwargs)
         self.pointer = 0
         self._fresh = True
-
-    def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
-        self.border_title = str(self.scene.get("title") or "Game")
 
     # --- the dial ----------------------------------------------------------
     @property
@@ -69,8 +67,7 @@ class DialBoard(Board):
             self.pointer = int(scene["start"])
         self._fresh = False
         self.pointer = max(0, min(self.pointer, self.allowed - 1))
-        if self.is_mounted:
-            self.border_title = str(scene.get("title") or "Game")
+        self.border_title = str(scene.get("title") or "Game")
         super().show_scene(scene, reveal)
 
     def action_turn(self, by: int) -> None:

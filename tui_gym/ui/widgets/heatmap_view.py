@@ -102,10 +102,6 @@ class ColourScale:
             return -m, m
         return self.low, self.high
 
-    def colour_at(self, t: float) -> RGB:
-        stops = DIVERGING if self.diverging else SEQUENTIAL
-        return _interpolate(stops, t)
-
     def steps(self, values: np.ndarray) -> np.ndarray:
         """Each value's step on the scale, 0 .. COLOUR_STEPS - 1 (-1 where not finite)."""
         lo, hi = self.bounds
@@ -298,9 +294,6 @@ class HeatmapView(StripWidget, can_focus=True):
         panel_width = fixed + cols * cell_width
         return _Layout(side_by_side, cell_width, cell_height, row_label_width, panel_width)
 
-    def _panel_height(self, panel: Heatmap, layout: _Layout) -> int:
-        return 2 + panel.shape[0] * layout.cell_height  # title, column labels, cells
-
     def _legend_lines(self, width: int, indent: int) -> list[str]:
         """The panels' legends (each once), wrapped to fit beside the indent."""
         seen: list[str] = []
@@ -321,7 +314,8 @@ class HeatmapView(StripWidget, can_focus=True):
         if not self._panels:
             return max(1, len(self._message) // max(1, width) + 1)
         layout = self._layout(width)
-        heights = [self._panel_height(p, layout) for p in self._panels]
+        # a panel: its title, its column labels and its cells
+        heights = [2 + p.shape[0] * layout.cell_height for p in self._panels]
         body = max(heights) if layout.side_by_side else sum(heights) + len(heights) - 1
         legends = self._legend_lines(width, layout.row_label_width + 1)
         return body + 1 + len(legends)  # the scale, then the legends
@@ -344,10 +338,8 @@ class HeatmapView(StripWidget, can_focus=True):
         scale = ColourScale.over(self._panels)
         several = layout.side_by_side and len(self._panels) > 1
         title_width = layout.panel_width if several else width
-        blocks = [
-            self._panel_lines(i, p, layout, scale, title_width)
-            for i, p in enumerate(self._panels)
-        ]
+        blocks = [self._panel_lines(i, p, layout, scale, title_width)
+                  for i, p in enumerate(self._panels)]
         lines: list[_Line] = []
         placements: list[_Placement] = []
         if layout.side_by_side:
@@ -366,14 +358,12 @@ class HeatmapView(StripWidget, can_focus=True):
                 x = i * (layout.panel_width + PANEL_GAP) + layout.row_label_width + 1
                 placements.append(_Placement(i, x, 2, *panel.shape))
         else:
-            y = 0
             for i, (panel, block) in enumerate(zip(self._panels, blocks, strict=True)):
                 if i:
                     lines.append(_Line())
-                    y += 1
-                placements.append(_Placement(i, layout.row_label_width + 1, y + 2, *panel.shape))
+                x, y = layout.row_label_width + 1, len(lines) + 2  # below the title and labels
+                placements.append(_Placement(i, x, y, *panel.shape))
                 lines.extend(block)
-                y += len(block)
         lines.append(self._scale_line(scale, layout, width))
         indent = layout.row_label_width + 1
         for legend in self._legend_lines(width, indent):
@@ -430,7 +420,7 @@ class HeatmapView(StripWidget, can_focus=True):
         line = _Line().add(" " * indent)
         line.add(f"{lo:+.2f} ", DIM)
         for i in range(bar):
-            rgb = scale.colour_at((i + 0.5) / bar)
+            rgb = _interpolate(DIVERGING if scale.diverging else SEQUENTIAL, (i + 0.5) / bar)
             line.add(" ", Style(bgcolor=_hex(rgb)))
         line.add(f" {hi:+.2f}", DIM)
         return line

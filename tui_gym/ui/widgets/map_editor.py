@@ -174,19 +174,14 @@ class MapEditor(Vertical):
         # A wide map keeps one character a cell (the mark instead of the arrow), so that
         # twelve columns fit beside the side panel at 80 columns.
         wide = grid_map.cols > WIDE_MAP
-        labels = []
-        for r, line in enumerate(panel.labels):
-            row = []
-            for c, label in enumerate(line):
-                tile = grid_map.tile((r, c))
-                mark = TILE_MARKS.get(tile, "")
-                iced = slip.get((r, c), 0.0) > 0
-                if wide:
-                    text = mark or (ICE if iced else label)
-                else:
-                    text = mark + label + (ICE if iced else "")
-                row.append(text)
-            labels.append(tuple(row))
+
+        def dressed(cell: tuple[int, int], label: str) -> str:
+            mark = TILE_MARKS.get(grid_map.tile(cell), "")
+            ice = ICE if slip.get(cell, 0.0) > 0 else ""
+            return (mark or ice or label) if wide else mark + label + ice
+
+        labels = tuple(tuple(dressed((r, c), label) for c, label in enumerate(line))
+                       for r, line in enumerate(panel.labels))
         present = [word for mark, word, here in (
             ("S", "start", grid_map.start is not None),
             ("$", "reward cell", "R" in grid_map.tiles()), (ICE, "ice", bool(slip)),
@@ -195,7 +190,7 @@ class MapEditor(Vertical):
             "* not an optimal move", "").replace("  * off every shortest path", "")
         # Every arrow here is an optimal move: nothing to mark.
         return replace(panel, title="the exact optimum: value and optimal move",
-                       labels=tuple(labels), legend=legend.strip(),
+                       labels=labels, legend=legend.strip(),
                        marked=np.zeros(panel.shape, dtype=bool))
 
     def _show_tools(self) -> None:

@@ -141,7 +141,6 @@ class TaxiBoard(MapBoard):
         ("Pick up [dim]k[/]", "act('pickup')"), ("Drop off [dim]l[/]", "act('dropoff')"),
         ("↺ New [dim]n[/]", "new_episode"),
     )
-    BORDER_TITLE = "Taxi"
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
@@ -184,8 +183,6 @@ class TaxiBoard(MapBoard):
         self._event = self._event_of(*previous, None if action is None else str(action),
                                      bool(scene.get("last_illegal")))
         self._fresh = False
-        if self.is_mounted:
-            self.border_title = "Taxi · rain" if self.rainy else "Taxi"
         super().show_scene(scene, reveal)
 
     def _read(self, scene: Mapping[str, Any]) -> None:
@@ -199,6 +196,7 @@ class TaxiBoard(MapBoard):
         self.destination = _index(scene.get("destination"))
         self.walls = frozenset(_cells(scene.get("walls")))
         self.rainy = bool(scene.get("rainy"))
+        self.border_title = "Taxi · rain" if self.rainy else "Taxi"
 
     def stand_name(self, index: int | None) -> str:
         if index is None or not 0 <= index < len(self.stands):
@@ -267,10 +265,8 @@ class TaxiBoard(MapBoard):
 
     def _cab(self, width: int) -> tuple[str, Style]:
         """The cab's text (at most `width` characters) and style: full or empty."""
-        if self.aboard:
-            text = "TAXI☺" if width >= 9 else "T☺"
-            return text, self._style("cab-full")
-        return ("TAXI" if width >= 9 else "T"), self._style("cab")
+        text = ("TAXI" if width >= 9 else "T") + (PASSENGER if self.aboard else "")
+        return text, self._style("cab-full" if self.aboard else "cab")
 
     def _status(self) -> tuple[str, ...]:
         """Where the passenger is and is going, longest words first."""
@@ -315,7 +311,7 @@ class TaxiBoard(MapBoard):
             grid.put(max(x0, x), y0 + mid, PASSENGER, person)
         if cab_here:
             if w >= 7 and h >= 3:
-                under = grid.style_at(chip_x, y0 + mid - 1)
+                under = grid.styles[y0 + mid - 1][chip_x]
                 grid.pill(chip_x, y0 + mid - 1, chip_w, 3, cab_style, under)
             grid.put(chip_x, y0 + mid, cab_text.center(chip_w), cab_style)
 

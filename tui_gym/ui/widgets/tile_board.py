@@ -37,6 +37,7 @@ FILLED = frozenset({CLIFF, WALL})  # drawn as a texture over the whole tile
 GLYPHS = {START: "⌂", FLOOR: "·", HOLE: "○", GOAL: "★", CLIFF: "▒", WALL: "█"}
 GROUNDS = {HOLE: "hole", GOAL: "goal", CLIFF: "cliff", WALL: "wall"}  # a tile's own style
 AGENT = "●"
+AGENT_STYLES = {GOAL: "agent-home", HOLE: "agent-lost", CLIFF: "agent-lost"}  # else "agent"
 
 STRAIGHT: dict[str, Cell] = {"left": (0, -1), "down": (1, 0), "right": (0, 1), "up": (-1, 0)}
 MOVES: dict[str, Cell] = {**STRAIGHT, "up-left": (-1, -1), "up-right": (-1, 1),
@@ -233,9 +234,6 @@ class TileBoard(MapBoard):
         self.agent: Cell | None = None
         self._read({})
 
-    def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
-        self.border_title = self.theme.title
-
     # --- what the board says ---------------------------------------------------
     def key_help(self) -> list[tuple[str, str]]:
         return [
@@ -312,14 +310,13 @@ class TileBoard(MapBoard):
                 self.trail = {}
         self.agent = agent
         self._fresh = False
-        if self.is_mounted:
-            self.border_title = self.theme.title
         super().show_scene(scene, reveal)
 
     def _read(self, scene: Mapping[str, Any]) -> None:
         """The map and what lies on it, from a scene."""
         self.cells = map_rows(scene)
         self.theme = THEMES.get(str(scene.get("theme", "lake")), THEMES["plain"])
+        self.border_title = self.theme.title
         self.rewards = cell_table(scene.get("rewards"))
         self.slip = cell_table(scene.get("slip"))
         self.marks = {cell: str(text) for cell, text in cell_table(scene.get("marks")).items()}
@@ -416,13 +413,6 @@ class TileBoard(MapBoard):
             return text
         return GLYPHS.get(kind, kind)[:width]
 
-    def _agent_style(self, kind: str) -> Style:
-        if kind == GOAL:
-            return self._style("agent-home")
-        if kind in (HOLE, CLIFF):
-            return self._style("agent-lost")
-        return self._style("agent")
-
     def _paint_tile(self, grid: CharGrid, cell: Cell, shape: TileShape) -> None:
         w, h = shape.cell_w, shape.cell_h
         x0, y0 = shape.x_of(cell[1]), shape.y_of(cell[0])
@@ -462,9 +452,9 @@ class TileBoard(MapBoard):
         if wind > 0 and w >= 5 and kind not in FILLED:
             grid.put(x0, y0, WIND * min(wind, w - 2), on_tile(self._style("wind"), tile))
         if cell == self.agent:
-            agent = self._agent_style(kind)
+            agent = self._style(AGENT_STYLES.get(kind, "agent"))
             if big:
-                under = grid.style_at(x0, y0 + mid)
+                under = grid.styles[y0 + mid][x0]
                 grid.pill(x0 + (w - 5) // 2, y0 + mid - 1, 5, 3, agent, under)
                 grid.put(x0 + w // 2, y0 + mid, AGENT, agent)
             else:
@@ -490,7 +480,7 @@ class TileBoard(MapBoard):
         """A cell's colour in the half drawing."""
         kind = self.kind(cell)
         if cell == self.agent:
-            return self._agent_style(kind).bgcolor
+            return self._style(AGENT_STYLES.get(kind, "agent")).bgcolor
         if cell == self.cursor:
             return self._style("cursor").bgcolor
         if kind == START:
