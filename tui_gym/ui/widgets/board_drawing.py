@@ -3,9 +3,9 @@ helpers."""
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Sequence
+from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar, Protocol
+from typing import Any, ClassVar, Protocol, TypeVar
 
 from rich.style import Style
 from rich.text import Text
@@ -14,6 +14,7 @@ from textual.geometry import Offset
 from tui_gym.ui.widgets.boards import Board
 
 Cell = tuple[int, int]  # (row, col), row 0 at the top
+T = TypeVar("T")
 CAPTION_LINES = 1  # the line under the map is always kept free: tiles keep their size
 
 
@@ -236,6 +237,14 @@ def fitting(texts: Sequence[str], width: int) -> str:
     return next((text for text in texts if len(text) <= width), texts[-1])
 
 
+def read_as(kind: Callable[[Any], T], value: Any) -> T | None:
+    """`kind(value)` (a scene's number as an int or a float), or None where it is not one."""
+    try:
+        return kind(value)
+    except (TypeError, ValueError):
+        return None
+
+
 def cell_of(value: Any) -> Cell | None:
     """(row, col) from a (row, col) pair or a "r,c" string; None for anything else."""
     try:
@@ -265,5 +274,5 @@ def reward_text(value: float) -> str:
 
 __all__ = [
     "CAPTION_LINES", "Cell", "CharGrid", "MapBoard", "MapLayout", "cell_of", "fitting", "legend",
-    "on_tile", "reward_text", "shape_fits", "stack", "step_toward",
+    "on_tile", "read_as", "reward_text", "shape_fits", "stack", "step_toward",
 ]

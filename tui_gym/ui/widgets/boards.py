@@ -19,6 +19,15 @@ from textual.widgets import Button
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget, segments_of
 
 
+def arrow_bindings(up: str, down: str, left: str, right: str, group: str) -> list[Binding]:
+    """The arrows and WASD making a board's four moves (the game's action names), as a group."""
+    keys = (("up", "w", "↑", up), ("down", "s", "↓", down), ("left", "a", "←", left),
+            ("right", "d", "→", right))
+    shown = Binding.Group(group)
+    return [Binding(f"{arrow},{letter}", f"act('{move}')", move, key_display=f"{glyph}/{letter}",
+                    group=shown) for arrow, letter, glyph, move in keys]
+
+
 class BoardCanvas(StripWidget):
     """The drawing area of a board: draws `board.picture(width, height)`, again only
     after `Board.redraw()` or a change of size or colours."""
@@ -266,4 +275,4 @@ class Board(Widget):
         await self.run_action(self.BUTTONS[int(event.button.name or 0)][1])
 
 
-__all__ = ["Board", "BoardButton", "BoardCanvas"]
+__all__ = ["Board", "BoardButton", "BoardCanvas", "arrow_bindings"]

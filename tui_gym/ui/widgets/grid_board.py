@@ -14,7 +14,7 @@ from textual.binding import Binding, BindingType
 from textual.geometry import Offset
 
 from tui_gym.ui.widgets.board_drawing import cell_of, stack, step_toward
-from tui_gym.ui.widgets.boards import Board
+from tui_gym.ui.widgets.boards import Board, arrow_bindings
 from tui_gym.ui.widgets.strip_widget import component_classes
 
 Cell = tuple[int, int]
@@ -28,7 +28,6 @@ MOVES: dict[Cell, tuple[str, str]] = {  # (dx, dy) -> (action name, trail arrow)
 AGENT, TARGET, HOME = "●", "◎", "◉"  # HOME: the agent stands on the target
 WALL = "█"
 
-MOVE_GROUP = Binding.Group("Move")
 
 
 @dataclass(frozen=True)
@@ -120,10 +119,7 @@ class GridBoard(Board):
     COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("up,w", "act('up')", "up", key_display="↑/w", group=MOVE_GROUP),
-        Binding("down,s", "act('down')", "down", key_display="↓/s", group=MOVE_GROUP),
-        Binding("left,a", "act('left')", "left", key_display="←/a", group=MOVE_GROUP),
-        Binding("right,d", "act('right')", "right", key_display="→/d", group=MOVE_GROUP),
+        *arrow_bindings("up", "down", "left", "right", "Move"),
         Binding("r", "new_episode", "Reset", tooltip="Start a new episode"),
     ]
 

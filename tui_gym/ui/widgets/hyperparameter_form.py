@@ -20,16 +20,6 @@ from tui_gym.ui.widgets.numbers import compact_count
 from tui_gym.ui.widgets.text_field import TextField
 
 
-def _typed(field: Field) -> bool:
-    """Whether the field is typed in (a number), not picked from a few words."""
-    return isinstance(field, Param) and field.kind is not bool
-
-
-def _words(field: Field) -> tuple[str, ...]:
-    """The words a picked field offers."""
-    return ("true", "false") if isinstance(field, Param) else field.choices
-
-
 def _text(field: Field, value: Any) -> str:
     """A field's value as a person would type it."""
     if not isinstance(field, Param):
@@ -189,16 +179,16 @@ class HyperparameterForm(Vertical):
     def _field_widgets(self, field: Field, value: object) -> list[Widget]:
         label = Label(field.title or field.name, classes="hp-label")
         box: Widget
-        if _typed(field):
-            assert isinstance(field, Param)
+        if isinstance(field, Param) and field.kind is not bool:  # typed in: a number
             box = TextField(
                 _text(field, value), id=f"hp-{field.name}", compact=True,
                 validators=[FieldValidator(field)], select_on_focus=True,
             )
             hint = Label(range_hint(field), classes="hp-hint")
-        else:
+        else:  # picked from a few words
+            words = ("true", "false") if isinstance(field, Param) else field.choices
             box = Select(
-                [(word, word) for word in _words(field)], value=_text(field, value),
+                [(word, word) for word in words], value=_text(field, value),
                 allow_blank=False, compact=True, id=f"hp-{field.name}",
             )
             hint = Label("", classes="hp-hint")

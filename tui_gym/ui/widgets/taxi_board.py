@@ -24,8 +24,10 @@ from tui_gym.ui.widgets.board_drawing import (
     fitting,
     legend,
     on_tile,
+    read_as,
     shape_fits,
 )
+from tui_gym.ui.widgets.boards import arrow_bindings
 from tui_gym.ui.widgets.strip_widget import component_classes
 
 MOVES: dict[str, Cell] = {"south": (1, 0), "north": (-1, 0), "east": (0, 1), "west": (0, -1)}
@@ -33,7 +35,6 @@ MOVE_OF: dict[Cell, str] = {step: name for name, step in MOVES.items()}
 STAND_NAMES = ("R", "G", "Y", "B")
 STAND_COLOURS = 4  # component classes taxi--stand-0 .. -3, used in turn
 PASSENGER, DESTINATION = "☺", "◎"
-MOVE_GROUP = Binding.Group("Drive")
 
 # What an action did: its words (longest first), their style, and whether the line goes
 # on to say where the passenger is going.
@@ -91,13 +92,6 @@ def _cells(value: Any) -> list[Cell]:
     return [cell for cell in (cell_of(item) for item in value) if cell is not None]
 
 
-def _index(value: Any) -> int | None:
-    try:
-        return int(value)
-    except (TypeError, ValueError):
-        return None
-
-
 class TaxiBoard(MapBoard):
     """Taxi: drive to the passenger ☺, pick them up, drop them off at ◎."""
 
@@ -127,10 +121,7 @@ class TaxiBoard(MapBoard):
     COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("up,w", "act('north')", "north", key_display="↑/w", group=MOVE_GROUP),
-        Binding("down,s", "act('south')", "south", key_display="↓/s", group=MOVE_GROUP),
-        Binding("left,a", "act('west')", "west", key_display="←/a", group=MOVE_GROUP),
-        Binding("right,d", "act('east')", "east", key_display="→/d", group=MOVE_GROUP),
+        *arrow_bindings("north", "south", "west", "east", "Drive"),
         Binding("k", "act('pickup')", "Pick up", tooltip="Pick the passenger up"),
         Binding("l,o", "act('dropoff')", "Drop off", key_display="l", tooltip="Drop them off"),
         Binding("n,r", "new_episode", "New", key_display="n", tooltip="Start a new episode"),
@@ -187,13 +178,13 @@ class TaxiBoard(MapBoard):
 
     def _read(self, scene: Mapping[str, Any]) -> None:
         """The city and who is where, from a scene."""
-        self.rows = _index(scene.get("rows")) or 5
-        self.cols = _index(scene.get("cols")) or 5
+        self.rows = read_as(int, scene.get("rows")) or 5
+        self.cols = read_as(int, scene.get("cols")) or 5
         self.taxi = cell_of(scene.get("taxi"))
         self.stands = _cells(scene.get("stands"))
         self.stand_names = [str(name) for name in scene.get("stand_names") or STAND_NAMES]
-        self.passenger = _index(scene.get("passenger"))
-        self.destination = _index(scene.get("destination"))
+        self.passenger = read_as(int, scene.get("passenger"))
+        self.destination = read_as(int, scene.get("destination"))
         self.walls = frozenset(_cells(scene.get("walls")))
         self.rainy = bool(scene.get("rainy"))
         self.border_title = "Taxi · rain" if self.rainy else "Taxi"

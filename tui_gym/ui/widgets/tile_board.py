@@ -26,9 +26,11 @@ from tui_gym.ui.widgets.board_drawing import (
     fitting,
     legend,
     on_tile,
+    read_as,
     reward_text,
     shape_fits,
 )
+from tui_gym.ui.widgets.boards import arrow_bindings
 from tui_gym.ui.widgets.strip_widget import component_classes
 
 START, FLOOR, HOLE, GOAL, CLIFF, WALL, REWARD = "S", "F", "H", "G", "C", "W", "R"
@@ -70,7 +72,6 @@ THEMES = {
 
 TONES = ("good", "bad", "slipped", "caption")  # the styles a scene's event may take
 Event = tuple[tuple[str, ...], str]  # what a move did: ('{who} ...' longest first), its style
-MOVE_GROUP = Binding.Group("Move")
 
 
 @dataclass(frozen=True)
@@ -128,12 +129,7 @@ def cell_table(value: Any) -> dict[Cell, Any]:
     """A scene's {cell: value} table with its keys read as cells (bad keys dropped)."""
     if not isinstance(value, Mapping):
         return {}
-    table = {}
-    for key, item in value.items():
-        cell = cell_of(key)
-        if cell is not None:
-            table[cell] = item
-    return table
+    return {cell: item for key, item in value.items() if (cell := cell_of(key)) is not None}
 
 
 def map_rows(scene: Mapping[str, Any]) -> list[str]:
@@ -156,13 +152,6 @@ def map_rows(scene: Mapping[str, Any]) -> list[str]:
 def _listed(value: Any) -> list[Any]:
     """A scene's list (anything else: empty)."""
     return list(value) if isinstance(value, list | tuple) else []
-
-
-def _number(value: Any) -> float | None:
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        return None
 
 
 class TileBoard(MapBoard):
@@ -205,10 +194,7 @@ class TileBoard(MapBoard):
     COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("up,w", "act('up')", "up", key_display="↑/w", group=MOVE_GROUP),
-        Binding("down,s", "act('down')", "down", key_display="↓/s", group=MOVE_GROUP),
-        Binding("left,a", "act('left')", "left", key_display="←/a", group=MOVE_GROUP),
-        Binding("right,d", "act('right')", "right", key_display="→/d", group=MOVE_GROUP),
+        *arrow_bindings("up", "down", "left", "right", "Move"),
         Binding("home", "act('up-left')", "up-left", show=False),
         Binding("pageup", "act('up-right')", "up-right", show=False),
         Binding("end", "act('down-left')", "down-left", show=False),
@@ -320,7 +306,7 @@ class TileBoard(MapBoard):
         self.rewards = cell_table(scene.get("rewards"))
         self.slip = cell_table(scene.get("slip"))
         self.marks = {cell: str(text) for cell, text in cell_table(scene.get("marks")).items()}
-        self.wind = [int(w) for w in _listed(scene.get("wind")) if _number(w) is not None]
+        self.wind = [int(w) for w in _listed(scene.get("wind")) if read_as(float, w) is not None]
         self.gusts = bool(scene.get("gusts"))
         offered = scene.get("offered")
         self.offered = None if offered is None else [str(a) for a in _listed(offered)]
@@ -391,7 +377,7 @@ class TileBoard(MapBoard):
 
     # --- drawing -----------------------------------------------------------------
     def _reward(self, cell: Cell) -> float | None:
-        return _number(self.rewards.get(cell))
+        return read_as(float, self.rewards.get(cell))
 
     def _ground(self, cell: Cell, kind: str) -> Style:
         """The style of a tile's background (and of its glyph, unless it has its own)."""
@@ -445,7 +431,7 @@ class TileBoard(MapBoard):
                 line = mid + 1 if below else mid - 1
                 value_ink = on_tile(self._style("value"), tile)
                 grid.put(x0 + (w - len(text)) // 2, y0 + line, text, value_ink)
-        slip = _number(self.slip.get(cell))
+        slip = read_as(float, self.slip.get(cell))
         if slip and w >= 5 and kind not in FILLED:
             grid.put(x0 + w - 1, y0, "≈", on_tile(self._style("slip"), tile))
         wind = self.wind[cell[1]] if cell[1] < len(self.wind) else 0
