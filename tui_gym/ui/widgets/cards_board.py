@@ -152,36 +152,25 @@ class CardsBoard(Board):
             return total, bool(self.scene.get(f"{who}_usable", False))
         return sum(cards), False
 
-    def _dealer_label(self, dealer: Sequence[int], hidden: bool) -> Text:
-        label = Text("Dealer", self._style("label"))
-        if not dealer:
+    def _label(self, who: str, cards: Sequence[int], hidden: bool = False) -> Text:
+        """A hand's owner and total: 'Dealer  showing 10', 'You  21 blackjack!  usable ace '."""
+        player = who == "player"
+        label = Text(self.player_name if player else "Dealer", self._style("label"))
+        if not cards:
             return label
         label.append("  ")
         if hidden:
             label.append("showing ", self._style("muted"))
-            label.append(card_label(dealer[0]), self._style("total"))
+            label.append(card_label(cards[0]), self._style("total"))
             return label
-        total, _ = self._total("dealer", dealer)
+        total, usable = self._total(who, cards)
         if total > 21:
             label.append(f"{total} bust", self._style("bust"))
+        elif total == 21 and player:
+            label.append("21" + (" blackjack!" if len(cards) == 2 else ""), self._style("best"))
         else:
             label.append(str(total), self._style("total"))
-        return label
-
-    def _player_label(self, player: Sequence[int]) -> Text:
-        label = Text(self.player_name, self._style("label"))
-        if not player:
-            return label
-        total, usable = self._total("player", player)
-        label.append("  ")
-        if total > 21:
-            label.append(f"{total} bust", self._style("bust"))
-        elif total == 21:
-            natural = len(player) == 2
-            label.append("21" + (" blackjack!" if natural else ""), self._style("best"))
-        else:
-            label.append(str(total), self._style("total"))
-        if usable:
+        if usable and player:
             label.append("  ")
             label.append(" usable ace ", self._style("tag"))
         return label
@@ -195,8 +184,8 @@ class CardsBoard(Board):
                 hint += " Press n to deal."
             return stack([Text(hint, self._style("muted"))], width, height, block=True)
         hidden = not self.reveal and len(dealer) > 1
-        dealer_label = self._dealer_label(dealer, hidden)
-        player_label = self._player_label(player)
+        dealer_label = self._label("dealer", dealer, hidden)
+        player_label = self._label("player", player)
         for size in SIZES:
             dealer_rows = self._hand(0, dealer, size, hidden=1 if hidden else len(dealer))
             player_rows = self._hand(1, player, size, hidden=len(player))

@@ -80,15 +80,10 @@ class ColourScale:
 
     @classmethod
     def over(cls, panels: Sequence[Heatmap]) -> ColourScale:
-        lows, highs = [], []
-        for panel in panels:
-            lo, hi = panel.value_range()
-            if np.isfinite(panel.values).any():
-                lows.append(lo)
-                highs.append(hi)
-        if not lows:
+        ranges = [panel.value_range() for panel in panels if np.isfinite(panel.values).any()]
+        if not ranges:
             return cls(0.0, 0.0)
-        return cls(min(lows), max(highs))
+        return cls(min(low for low, _ in ranges), max(high for _, high in ranges))
 
     @property
     def diverging(self) -> bool:
@@ -191,32 +186,28 @@ class HeatmapView(StripWidget, can_focus=True):
         classes: str | None = None,
     ) -> None:
         super().__init__(name=name, id=id, classes=classes)
-        self._panels: tuple[Heatmap, ...] = tuple(panels)
+        self.panels: tuple[Heatmap, ...] = tuple(panels)
         self._message = ""
         self._placements: list[_Placement] = []
         self._cell_geometry = (3, 1)
         self.plain = ""  # the text of the last render, for tests and screenshots
 
     # --- data in -----------------------------------------------------------
-    @property
-    def panels(self) -> tuple[Heatmap, ...]:
-        return self._panels
-
     def show(self, panels: Sequence[Heatmap]) -> None:
         """Draw these panels (replacing any message)."""
-        old = self._panels
-        self._panels = tuple(panels)
+        old = self.panels
+        self.panels = tuple(panels)
         self._message = ""
         self.remove_class("-empty")
-        same_shape = len(old) == len(self._panels) and all(
+        same_shape = len(old) == len(self.panels) and all(
             a.shape == b.shape and len(a.legend) == len(b.legend)
-            for a, b in zip(old, self._panels, strict=True)
+            for a, b in zip(old, self.panels, strict=True)
         )
         self.redraw(layout=not same_shape)
 
     def show_message(self, text: str) -> None:
         """Show a line of text instead of panels (e.g. why there is no per-state view)."""
-        self._panels = ()
+        self.panels = ()
         self._message = text
         self.add_class("-empty")
         self.redraw(layout=True)
@@ -232,13 +223,13 @@ class HeatmapView(StripWidget, can_focus=True):
     # --- keys and clicks ---------------------------------------------------
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         if action == "move":
-            return self.focus_cell is not None and bool(self._panels)
+            return self.focus_cell is not None and bool(self.panels)
         return True
 
     def action_move(self, d_row: int, d_col: int) -> None:
-        if self.focus_cell is None or not self._panels:
+        if self.focus_cell is None or not self.panels:
             return
-        rows, cols = self._panels[0].shape
+        rows, cols = self.panels[0].shape
         row, col = self.focus_cell
         self._focus_on((min(rows - 1, max(0, row + d_row)), min(cols - 1, max(0, col + d_col))))
 
@@ -259,7 +250,7 @@ class HeatmapView(StripWidget, can_focus=True):
     def clicked_cell(self, event: events.Click) -> tuple[int, int] | None:
         """The first panel's (row, col) a click hit; the view then takes the click and the focus."""
         offset = event.get_content_offset(self)
-        hit = None if offset is None or not self._panels else self.cell_at(offset.x, offset.y)
+        hit = None if offset is None or not self.panels else self.cell_at(offset.x, offset.y)
         if hit is None or hit[0] != 0:
             return None
         event.stop()
@@ -273,7 +264,7 @@ class HeatmapView(StripWidget, can_focus=True):
 
     # --- layout ------------------------------------------------------------
     def _layout(self, width: int) -> _Layout:
-        panels = self._panels
+        panels = self.panels
         rows = max(p.shape[0] for p in panels)
         cols = max(p.shape[1] for p in panels)
         row_label_width = max((len(label) for p in panels for label in p.row_labels), default=0)
@@ -297,37 +288,37 @@ class HeatmapView(StripWidget, can_focus=True):
     def _legend_lines(self, width: int, indent: int) -> list[str]:
         """The panels' legends (each once), wrapped to fit beside the indent."""
         seen: list[str] = []
-        for panel in self._panels:
+        for panel in self.panels:
             if panel.legend and panel.legend not in seen:
                 seen.append(panel.legend)
         room = max(12, width - indent)
         return [line for legend in seen for line in textwrap.wrap(legend, room)]
 
     def get_content_width(self, container: Size, viewport: Size) -> int:
-        if not self._panels:
+        if not self.panels:
             return len(self._message)
         layout = self._layout(container.width)
-        n = len(self._panels) if layout.side_by_side else 1
+        n = len(self.panels) if layout.side_by_side else 1
         return n * layout.panel_width + PANEL_GAP * (n - 1)
 
     def get_content_height(self, container: Size, viewport: Size, width: int) -> int:
-        if not self._panels:
+        if not self.panels:
             return max(1, len(self._message) // max(1, width) + 1)
         layout = self._layout(width)
         # a panel: its title, its column labels and its cells
-        heights = [2 + p.shape[0] * layout.cell_height for p in self._panels]
+        heights = [2 + p.shape[0] * layout.cell_height for p in self.panels]
         body = max(heights) if layout.side_by_side else sum(heights) + len(heights) - 1
         legends = self._legend_lines(width, layout.row_label_width + 1)
         return body + 1 + len(legends)  # the scale, then the legends
 
     # --- drawing -----------------------------------------------------------
     def picture_key(self) -> Hashable:
-        height = 0 if self._panels else self.content_size.height  # a message is centred
+        height = 0 if self.panels else self.content_size.height  # a message is centred
         return (self._version, self.focus_cell, self.step_cell, self.has_focus, self._compact(),
                 height)
 
     def draw(self, width: int) -> list[Line]:
-        if not self._panels:
+        if not self.panels:
             self.plain = self._message
             self._placements = []
             console = self.app.console
@@ -335,11 +326,11 @@ class HeatmapView(StripWidget, can_focus=True):
             top = max(0, (self.content_size.height - len(wrapped)) // 2)
             return [[] for _ in range(top)] + [segments_of(t, console)[0] for t in wrapped]
         layout = self._layout(width)
-        scale = ColourScale.over(self._panels)
-        several = layout.side_by_side and len(self._panels) > 1
+        scale = ColourScale.over(self.panels)
+        several = layout.side_by_side and len(self.panels) > 1
         title_width = layout.panel_width if several else width
         blocks = [self._panel_lines(i, p, layout, scale, title_width)
-                  for i, p in enumerate(self._panels)]
+                  for i, p in enumerate(self.panels)]
         lines: list[_Line] = []
         placements: list[_Placement] = []
         if layout.side_by_side:
@@ -354,11 +345,11 @@ class HeatmapView(StripWidget, can_focus=True):
                         line.add(segment.text, segment.style)
                     line.add(" " * max(0, layout.panel_width - part.width))
                 lines.append(line)
-            for i, panel in enumerate(self._panels):
+            for i, panel in enumerate(self.panels):
                 x = i * (layout.panel_width + PANEL_GAP) + layout.row_label_width + 1
                 placements.append(_Placement(i, x, 2, *panel.shape))
         else:
-            for i, (panel, block) in enumerate(zip(self._panels, blocks, strict=True)):
+            for i, (panel, block) in enumerate(zip(self.panels, blocks, strict=True)):
                 if i:
                     lines.append(_Line())
                 x, y = layout.row_label_width + 1, len(lines) + 2  # below the title and labels

@@ -215,9 +215,9 @@ class MapEditor(Vertical):
         cursor = self.cursor
         cell = f"{self.where(cursor)}: {grid_map.describe(cursor)}" if grid_map.inside(
             cursor) else ""
-        reachable = grid_map.start is None or grid_map.goal_reachable()
-        if grid_map.start is None and not grid_map.free_connected():
-            reachable = False
+        # A map with no start (a target anywhere): every free cell reaches every other.
+        free = grid_map.start is None
+        reachable = grid_map.free_connected() if free else grid_map.goal_reachable()
         warning = "" if reachable else "  ⚠ no goal can be reached on this map"
         status.set_class(not reachable, "-unreachable")
         done = f"  · {self.last_edit}" if self.last_edit else ""
