@@ -232,11 +232,6 @@ class MapBoard(Board):
             self.action_act(moves[step_toward(origin, target)])
 
 
-def fitting(texts: Sequence[str], width: int) -> str:
-    """The first (longest) of `texts` that fits `width`, else the last (shortest)."""
-    return next((text for text in texts if len(text) <= width), texts[-1])
-
-
 def read_as(kind: Callable[[Any], T], value: Any) -> T | None:
     """`kind(value)` (a scene's number as an int or a float), or None where it is not one."""
     try:
@@ -273,6 +268,6 @@ def reward_text(value: float) -> str:
 
 
 __all__ = [
-    "CAPTION_LINES", "Cell", "CharGrid", "MapBoard", "MapLayout", "cell_of", "fitting", "legend",
+    "CAPTION_LINES", "Cell", "CharGrid", "MapBoard", "MapLayout", "cell_of", "legend",
     "on_tile", "read_as", "reward_text", "shape_fits", "stack", "step_toward",
 ]

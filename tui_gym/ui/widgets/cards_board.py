@@ -135,15 +135,7 @@ class CardsBoard(Board):
         drawn = [
             self._card(hand, i, card, size, face_up=i < hidden) for i, card in enumerate(cards)
         ]
-        rows = []
-        for r in range(size.height):
-            row = Text()
-            for i, card_lines in enumerate(drawn):
-                if i:
-                    row.append(" ")
-                row.append_text(card_lines[r])
-            rows.append(row)
-        return rows
+        return [Text(" ").join(lines[r] for lines in drawn) for r in range(size.height)]
 
     def _total(self, who: str, cards: Sequence[int]) -> tuple[int, bool]:
         """A hand's total and usable ace, as the scene gives them (sums of the cards else)."""

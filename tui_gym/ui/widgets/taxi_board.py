@@ -21,13 +21,13 @@ from tui_gym.ui.widgets.board_drawing import (
     CharGrid,
     MapBoard,
     cell_of,
-    fitting,
     legend,
     on_tile,
     read_as,
     shape_fits,
 )
 from tui_gym.ui.widgets.boards import arrow_bindings
+from tui_gym.ui.widgets.numbers import fit
 from tui_gym.ui.widgets.strip_widget import component_classes
 
 MOVES: dict[str, Cell] = {"south": (1, 0), "north": (-1, 0), "east": (0, 1), "west": (0, -1)}
@@ -335,7 +335,7 @@ class TaxiBoard(MapBoard):
         status = self._status()
         label = self._style("caption")
         if self._event is None:
-            return Text(fitting(status, width), label)
+            return Text(fit(status, width), label)
         texts, style, then_status = self._event
         if then_status:  # the longest words that leave room for where the passenger goes
             for text in texts:
@@ -344,7 +344,7 @@ class TaxiBoard(MapBoard):
                     return Text.assemble(
                         (text, self._style(style)), (" · ", label), (where[0], label)
                     )
-        return Text(fitting(texts, width), self._style(style))
+        return Text(fit(texts, width), self._style(style))
 
     def legend(self, width: int) -> Text | None:
         """'T taxi  ☺ passenger  ◎ destination  ┃ wall' (None if too wide)."""

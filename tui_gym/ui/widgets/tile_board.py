@@ -23,7 +23,6 @@ from tui_gym.ui.widgets.board_drawing import (
     CharGrid,
     MapBoard,
     cell_of,
-    fitting,
     legend,
     on_tile,
     read_as,
@@ -31,6 +30,7 @@ from tui_gym.ui.widgets.board_drawing import (
     shape_fits,
 )
 from tui_gym.ui.widgets.boards import arrow_bindings
+from tui_gym.ui.widgets.numbers import fit
 from tui_gym.ui.widgets.strip_widget import component_classes
 
 START, FLOOR, HOLE, GOAL, CLIFF, WALL, REWARD = "S", "F", "H", "G", "C", "W", "R"
@@ -517,7 +517,7 @@ class TileBoard(MapBoard):
         else:
             return Text("")
         said = [text.format(who=self.player_name) for text in texts]
-        caption = Text(fitting(said, width), self._style(style))
+        caption = Text(fit(said, width), self._style(style))
         caption.truncate(width, overflow="ellipsis")
         return caption
 
