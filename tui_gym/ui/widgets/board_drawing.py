@@ -240,6 +240,11 @@ def read_as(kind: Callable[[Any], T], value: Any) -> T | None:
         return None
 
 
+def listed(value: Any) -> list[Any]:
+    """A scene's list (anything else: empty)."""
+    return list(value) if isinstance(value, list | tuple) else []
+
+
 def cell_of(value: Any) -> Cell | None:
     """(row, col) from a (row, col) pair or a "r,c" string; None for anything else."""
     try:
@@ -268,6 +273,6 @@ def reward_text(value: float) -> str:
 
 
 __all__ = [
-    "CAPTION_LINES", "Cell", "CharGrid", "MapBoard", "MapLayout", "cell_of", "legend",
+    "CAPTION_LINES", "Cell", "CharGrid", "MapBoard", "MapLayout", "cell_of", "legend", "listed",
     "on_tile", "read_as", "reward_text", "shape_fits", "stack", "step_toward",
 ]

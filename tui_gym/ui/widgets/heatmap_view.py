@@ -276,10 +276,8 @@ class HeatmapView(StripWidget, can_focus=True):
         n = len(panels)
         side = (width - n * fixed - PANEL_GAP * (n - 1)) // max(1, n * cols)
         side_by_side = n == 1 or side >= min_cell
-        if side_by_side:
-            cell_width = max(min_cell, min(MAX_CELL_WIDTH, side))
-        else:
-            cell_width = max(min_cell, min(MAX_CELL_WIDTH, (width - fixed) // max(1, cols)))
+        room = side if side_by_side else (width - fixed) // max(1, cols)
+        cell_width = max(min_cell, min(MAX_CELL_WIDTH, room))
         # Tall cells look square when there is room: few rows, wide cells, not compact.
         cell_height = 2 if (rows <= 8 and cell_width >= 5 and not self._compact()) else 1
         panel_width = fixed + cols * cell_width

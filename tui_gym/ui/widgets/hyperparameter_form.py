@@ -252,10 +252,6 @@ class HyperparameterForm(Vertical):
         self._mark((event.select.id or "").removeprefix("hp-"), None)
 
     # --- reading and loading -----------------------------------------------
-    def _raw(self, field: Field) -> str:
-        value = self.control(field.name).value
-        return value if isinstance(value, str) else ""
-
     def read(self) -> Settings | None:
         """The hyperparameters in the fields, or None with every problem marked."""
         if self._rebuilding:
@@ -266,7 +262,8 @@ class HyperparameterForm(Vertical):
         ok = True
         fields = self.fields
         for field in fields:
-            text = self._raw(field)
+            value = self.control(field.name).value
+            text = value if isinstance(value, str) else ""
             problem = field_error(field, text) if isinstance(field, Param) else None
             self._mark(field.name, problem)
             if problem is None:

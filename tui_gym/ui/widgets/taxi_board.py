@@ -22,6 +22,7 @@ from tui_gym.ui.widgets.board_drawing import (
     MapBoard,
     cell_of,
     legend,
+    listed,
     on_tile,
     read_as,
     shape_fits,
@@ -84,12 +85,6 @@ def choose_shape(rows: int, cols: int, width: int, height: int) -> TaxiShape:
               for frame in (True, False) for cell_w, cell_h in TAXI_SIZES)
     return next((shape for shape in shapes if shape_fits(shape, width, height)),
                 TaxiShape(rows, cols, 3, 1, False))
-
-
-def _cells(value: Any) -> list[Cell]:
-    if not isinstance(value, list | tuple):
-        return []
-    return [cell for cell in (cell_of(item) for item in value) if cell is not None]
 
 
 class TaxiBoard(MapBoard):
@@ -181,11 +176,12 @@ class TaxiBoard(MapBoard):
         self.rows = read_as(int, scene.get("rows")) or 5
         self.cols = read_as(int, scene.get("cols")) or 5
         self.taxi = cell_of(scene.get("taxi"))
-        self.stands = _cells(scene.get("stands"))
+        self.stands = [cell for item in listed(scene.get("stands")) if (cell := cell_of(item))]
         self.stand_names = [str(name) for name in scene.get("stand_names") or STAND_NAMES]
         self.passenger = read_as(int, scene.get("passenger"))
         self.destination = read_as(int, scene.get("destination"))
-        self.walls = frozenset(_cells(scene.get("walls")))
+        self.walls = frozenset(cell for item in listed(scene.get("walls"))
+                               if (cell := cell_of(item)))
         self.rainy = bool(scene.get("rainy"))
         self.border_title = "Taxi · rain" if self.rainy else "Taxi"
 

@@ -24,6 +24,7 @@ from tui_gym.ui.widgets.board_drawing import (
     MapBoard,
     cell_of,
     legend,
+    listed,
     on_tile,
     read_as,
     reward_text,
@@ -147,11 +148,6 @@ def map_rows(scene: Mapping[str, Any]) -> list[str]:
         rows_text.append(row)
     cols = max((len(row) for row in rows_text), default=0)
     return [row.ljust(cols, FLOOR) for row in rows_text] if cols else []
-
-
-def _listed(value: Any) -> list[Any]:
-    """A scene's list (anything else: empty)."""
-    return list(value) if isinstance(value, list | tuple) else []
 
 
 class TileBoard(MapBoard):
@@ -306,12 +302,12 @@ class TileBoard(MapBoard):
         self.rewards = cell_table(scene.get("rewards"))
         self.slip = cell_table(scene.get("slip"))
         self.marks = {cell: str(text) for cell, text in cell_table(scene.get("marks")).items()}
-        self.wind = [int(w) for w in _listed(scene.get("wind")) if read_as(float, w) is not None]
+        self.wind = [int(w) for w in listed(scene.get("wind")) if read_as(float, w) is not None]
         self.gusts = bool(scene.get("gusts"))
         offered = scene.get("offered")
-        self.offered = None if offered is None else [str(a) for a in _listed(offered)]
-        self.choices = [str(a) for a in _listed(scene.get("choices"))]
-        self.king = "up-left" in _listed(scene.get("moves"))  # the diagonals are moves
+        self.offered = None if offered is None else [str(a) for a in listed(offered)]
+        self.choices = [str(a) for a in listed(scene.get("choices"))]
+        self.king = "up-left" in listed(scene.get("moves"))  # the diagonals are moves
         self.cursor = cell_of(scene.get("cursor"))
 
     def kind(self, cell: Cell) -> str:
