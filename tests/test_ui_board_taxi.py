@@ -21,7 +21,8 @@ from tests.board_support import (
 )
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.play_view import PlayView
-from tui_gym.ui.widgets.taxi_board import TaxiBoard, TaxiLayout
+from tui_gym.ui.widgets.board_drawing import MapLayout
+from tui_gym.ui.widgets.taxi_board import TaxiBoard
 
 TAXI_MAP = [
     "+---------+",
@@ -72,7 +73,7 @@ def city(**scene):
     return {**base, **scene}
 
 
-def layout(board: TaxiBoard) -> TaxiLayout:
+def layout(board: TaxiBoard) -> MapLayout:
     drawn = board.layout_drawn
     assert drawn is not None
     return drawn

@@ -18,7 +18,8 @@ from tests.board_support import (
     style_at,
     text_of,
 )
-from tui_gym.ui.widgets.tile_board import TileBoard, TileLayout, TileShape, choose_shape
+from tui_gym.ui.widgets.board_drawing import MapLayout
+from tui_gym.ui.widgets.tile_board import TileBoard, TileShape, choose_shape
 
 LAKE4 = ["SFFF", "FHFH", "FFFH", "HFFG"]
 LAKE8 = [
@@ -47,7 +48,7 @@ def lake(cells=LAKE4, **scene):
     return {"cells": cells, "theme": "lake", "agent": (0, 0), "last_action": None, **scene}
 
 
-def layout(board: TileBoard) -> TileLayout:
+def layout(board: TileBoard) -> MapLayout:
     drawn = board.layout_drawn
     assert drawn is not None
     return drawn
@@ -61,7 +62,7 @@ def tile_line(board: TileBoard, cell: tuple[int, int]) -> str:
     """The characters of a tile's middle line."""
     drawn = layout(board)
     middle = drawn.cell_center(cell)
-    x0 = drawn.left + cell[1] * drawn.shape.cell_w
+    x0 = drawn.left + drawn.shape.x_of(cell[1])
     return rows(board)[middle.y][x0 : x0 + drawn.shape.cell_w]
 
 
@@ -119,7 +120,7 @@ async def test_marks_and_slip_overlay_the_tiles() -> None:
         assert centre(board, (0, 1)) == "→"
         assert "0.5" in tile_line(board, (2, 2))
         drawn = layout(board)
-        corner = Offset(drawn.left + 4 * drawn.shape.cell_w - 1, drawn.top)
+        corner = Offset(drawn.left + drawn.shape.x_of(4) - 1, drawn.top)
         assert char_at(board, corner) == "≈"
         assert centre(board, (3, 0)) == "●"  # the agent in a hole: drawn on top ...
         assert "fell through the ice" in text_of(board)  # ... and said
@@ -267,7 +268,7 @@ async def test_the_cursor_is_drawn_at_every_size() -> None:
         await pilot.pause()
         big, middle, small = (board for board, _ in boards)
         drawn = layout(big)
-        x0, y0 = drawn.left + drawn.shape.cell_w, drawn.top + 2 * drawn.shape.cell_h
+        x0, y0 = drawn.left + drawn.shape.x_of(1), drawn.top + 2 * drawn.shape.cell_h
         assert char_at(big, Offset(x0, y0)) == "┌"
         assert char_at(big, Offset(x0 + drawn.shape.cell_w - 1, y0 + drawn.shape.cell_h - 1)) == "┘"
         assert "Cursor at row 2, column 1" in text_of(big)

@@ -3,15 +3,18 @@ helpers."""
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Sequence
-from typing import Any, ClassVar, Protocol
+from collections.abc import Callable, Hashable, Sequence
+from dataclasses import dataclass
+from typing import Any, ClassVar, Protocol, TypeVar
 
 from rich.style import Style
 from rich.text import Text
+from textual.geometry import Offset
 
 from tui_gym.ui.widgets.boards import Board
 
 Cell = tuple[int, int]  # (row, col), row 0 at the top
+T = TypeVar("T")
 CAPTION_LINES = 1  # the line under the map is always kept free: tiles keep their size
 
 
@@ -50,9 +53,6 @@ class CharGrid:
         self.fill(x, y + 1, width, height - 2, " ", colour)
         self.put(x, y + height - 1, "▝" + "▀" * (width - 2) + "▘", edge)
 
-    def style_at(self, x: int, y: int) -> Style:
-        return self.styles[y][x]
-
     def lines(self) -> list[Text]:
         """The grid as Rich lines, one segment per run of equal style."""
         out = []
@@ -72,14 +72,16 @@ def on_tile(ink: Style, tile: Style) -> Style:
     return tile + Style(color=ink.color) + ink.without_color
 
 
-def stack(lines: Sequence[Text], width: int, height: int) -> Text:
-    """Lines as one picture: each line centred across `width`, the block centred in `height`."""
+def stack(lines: Sequence[Text], width: int, height: int, block: bool = False) -> Text:
+    """Lines as one picture, centred in `height`: each line centred across `width`, or
+    with `block` the lines left-aligned among themselves and centred together."""
+    widest = max((line.cell_len for line in lines), default=0)
     out = Text(no_wrap=True, overflow="crop", end="")
     out.append("\n" * max(0, (height - len(lines)) // 2))
     for i, line in enumerate(lines):
         if i:
             out.append("\n")
-        out.append(" " * max(0, (width - line.cell_len) // 2))
+        out.append(" " * max(0, (width - (widest if block else line.cell_len)) // 2))
         out.append_text(line)
     return out
 
@@ -100,7 +102,19 @@ def legend(items: Sequence[tuple[str, Style, str]], label: Style, width: int) ->
 
 
 class Shape(Protocol):
-    """How big a map is drawn, in characters."""
+    """How big a map is drawn, in characters, and where its cells sit in the drawing."""
+
+    @property
+    def rows(self) -> int: ...
+
+    @property
+    def cols(self) -> int: ...
+
+    @property
+    def cell_w(self) -> int: ...
+
+    @property
+    def cell_h(self) -> int: ...
 
     @property
     def width(self) -> int: ...
@@ -108,17 +122,46 @@ class Shape(Protocol):
     @property
     def height(self) -> int: ...
 
+    def x_of(self, col: int) -> int: ...
+
+    def y_of(self, row: int) -> int: ...
+
 
 def shape_fits(shape: Shape, width: int, height: int) -> bool:
     """Whether a map drawn in `shape` fits `width` x `height`, with its caption."""
     return shape.width <= width and shape.height + CAPTION_LINES <= height
 
 
+@dataclass(frozen=True)
+class MapLayout:
+    """Where a drawn map sits in the canvas, to map clicks back to cells."""
+
+    shape: Shape
+    left: int  # canvas column of the drawing's left edge
+    top: int  # canvas line of the drawing's top edge
+
+    def cell_center(self, cell: Cell) -> Offset:
+        """The canvas offset of the middle of a cell."""
+        shape, (row, col) = self.shape, cell
+        return Offset(self.left + shape.x_of(col) + shape.cell_w // 2,
+                      self.top + shape.y_of(row) + shape.cell_h // 2)
+
+    def cell_at(self, offset: Offset, near: Cell | None = None) -> Cell | None:
+        """The cell under a canvas offset (None off the cells); where a line holds two rows
+        (a half drawing), the lower one when `near` (the agent) is on it or below."""
+        shape = self.shape
+        x, y = offset.x - self.left, offset.y - self.top
+        cols = [col for col in range(shape.cols) if 0 <= x - shape.x_of(col) < shape.cell_w]
+        rows = [row for row in range(shape.rows) if 0 <= y - shape.y_of(row) < shape.cell_h]
+        if not cols or not rows:
+            return None
+        return (rows[-1] if near is not None and near[0] >= rows[-1] else rows[0]), cols[0]
+
+
 class MapBoard(Board):
     """A map drawn in the largest shape that fits, kept while it fits (no jumps as the
     space around changes), with a caption under it and a legend when there is room."""
 
-    STYLE: ClassVar[str] = ""  # the prefix of the board's component classes
     EMPTY: ClassVar[str] = ""  # what the board says before it has a map
 
     def __init__(self, **kwargs: Any) -> None:
@@ -127,15 +170,12 @@ class MapBoard(Board):
         self._fresh = True  # the next scene starts an episode
         self._shape: Any = None  # the shape kept, and the (map size, width) it is for
         self._shape_key: Hashable = None
-        self.layout_drawn: Any = None  # where the map was drawn, to map clicks to cells
+        self.layout_drawn: MapLayout | None = None  # where the map was drawn, for clicks
 
     def start_episode(self) -> None:
         """The next scene begins a new episode; tiles may take a new size."""
         self._fresh = True
         self._shape = None
-
-    def _style(self, name: str) -> Style:
-        return self.get_component_rich_style(f"{self.STYLE}--{name}")
 
     # --- what a map board gives ---------------------------------------------
     def map_size(self) -> tuple[int, int] | None:
@@ -158,10 +198,6 @@ class MapBoard(Board):
         """The marks the map uses and what they mean (None if too wide)."""
         return None
 
-    def layout_of(self, shape: Any, left: int, top: int) -> Any:
-        """Where the map sits in the canvas, its drawing's corner at (`left`, `top`)."""
-        raise NotImplementedError
-
     # --- drawing --------------------------------------------------------------
     def picture(self, width: int, height: int) -> Text:
         size = self.map_size()
@@ -183,7 +219,7 @@ class MapBoard(Board):
                 lines.append(legend)
         left = max(0, (width - shape.width) // 2)
         top = max(0, (height - len(lines)) // 2)
-        self.layout_drawn = self.layout_of(shape, left, top)
+        self.layout_drawn = MapLayout(shape, left, top)
         return stack(lines, width, height)
 
     def lines_under(self) -> int:
@@ -196,9 +232,17 @@ class MapBoard(Board):
             self.action_act(moves[step_toward(origin, target)])
 
 
-def fitting(texts: Sequence[str], width: int) -> str:
-    """The first (longest) of `texts` that fits `width`, else the last (shortest)."""
-    return next((text for text in texts if len(text) <= width), texts[-1])
+def read_as(kind: Callable[[Any], T], value: Any) -> T | None:
+    """`kind(value)` (a scene's number as an int or a float), or None where it is not one."""
+    try:
+        return kind(value)
+    except (TypeError, ValueError):
+        return None
+
+
+def listed(value: Any) -> list[Any]:
+    """A scene's list (anything else: empty)."""
+    return list(value) if isinstance(value, list | tuple) else []
 
 
 def cell_of(value: Any) -> Cell | None:
@@ -229,6 +273,6 @@ def reward_text(value: float) -> str:
 
 
 __all__ = [
-    "CAPTION_LINES", "Cell", "CharGrid", "MapBoard", "cell_of", "fitting", "legend", "on_tile",
-    "reward_text", "shape_fits", "stack", "step_toward",
+    "CAPTION_LINES", "Cell", "CharGrid", "MapBoard", "MapLayout", "cell_of", "legend", "listed",
+    "on_tile", "read_as", "reward_text", "shape_fits", "stack", "step_toward",
 ]

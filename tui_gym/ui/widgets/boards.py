@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Hashable, Mapping
 from typing import Any, ClassVar
 
+from rich.style import Style
 from rich.text import Text
 from textual import events
 from textual.app import ComposeResult
@@ -16,6 +17,15 @@ from textual.widget import Widget
 from textual.widgets import Button
 
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget, segments_of
+
+
+def arrow_bindings(up: str, down: str, left: str, right: str, group: str) -> list[Binding]:
+    """The arrows and WASD making a board's four moves (the game's action names), as a group."""
+    keys = (("up", "w", "↑", up), ("down", "s", "↓", down), ("left", "a", "←", left),
+            ("right", "d", "→", right))
+    shown = Binding.Group(group)
+    return [Binding(f"{arrow},{letter}", f"act('{move}')", move, key_display=f"{glyph}/{letter}",
+                    group=shown) for arrow, letter, glyph, move in keys]
 
 
 class BoardCanvas(StripWidget):
@@ -78,6 +88,8 @@ class Board(Widget):
     Board > .board-buttons > BoardButton { margin: 0 1; min-width: 10; }
     Board > .board-buttons > BoardButton.-suggested { text-style: bold; }
     """
+
+    STYLE: ClassVar[str] = ""  # the prefix of the board's component classes
 
     BUTTONS: ClassVar[tuple[tuple[str, str], ...]] = ()
     """Buttons under the board: (label markup, action string run on the board)."""
@@ -191,6 +203,9 @@ class Board(Widget):
         return "Finish this episode first."
 
     # --- drawing (subclasses) ----------------------------------------------
+    def _style(self, name: str) -> Style:
+        return self.get_component_rich_style(f"{self.STYLE}--{name}")
+
     def picture(self, width: int, height: int) -> Text:
         """The board drawn to fit `width` x `height` cells."""
         return Text("")
@@ -260,4 +275,4 @@ class Board(Widget):
         await self.run_action(self.BUTTONS[int(event.button.name or 0)][1])
 
 
-__all__ = ["Board", "BoardButton", "BoardCanvas"]
+__all__ = ["Board", "BoardButton", "BoardCanvas", "arrow_bindings"]

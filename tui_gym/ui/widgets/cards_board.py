@@ -10,6 +10,7 @@ from rich.style import Style
 from rich.text import Text
 from textual.binding import Binding, BindingType
 
+from tui_gym.ui.widgets.board_drawing import stack
 from tui_gym.ui.widgets.boards import Board
 from tui_gym.ui.widgets.strip_widget import component_classes
 
@@ -75,6 +76,7 @@ class CardsBoard(Board):
         ("Deal [dim]n[/]", "new_episode"),
     )
     BORDER_TITLE = "Table"
+    STYLE = "cards"
     RESTART_ANYTIME = False
 
     # --- what the board says ---------------------------------------------------
@@ -97,7 +99,7 @@ class CardsBoard(Board):
 
     # --- drawing ---------------------------------------------------------------
     def _style(self, name: str) -> Style:
-        style = self.get_component_rich_style(f"cards--{name}")
+        style = super()._style(name)
         if name in ON_FELT:  # text straight on the table: keep the canvas's background
             return Style.from_color(style.color) + style.without_color
         return style
@@ -106,37 +108,26 @@ class CardsBoard(Board):
         self, hand: int, position: int, card: int, size: CardSize, face_up: bool
     ) -> list[Text]:
         """The lines of one card, each `size.width` cells wide."""
-        if not face_up:
-            back, fill = self._style("back"), self._style("back-fill")
-            if size.height == 1:
-                return [Text("░" * size.width, fill)]
-            inner = size.width - 2
-            lines = [Text("╭" + "─" * inner + "╮", back)]
-            for _ in range(size.height - 2):
-                line = Text("│", back)
-                line.append("░" * inner, fill)
-                line.append("│", back)
-                lines.append(line)
-            lines.append(Text("╰" + "─" * inner + "╯", back))
-            return lines
-        rank = card_label(card)
-        suit = suit_for(hand, position, card)
-        ink = self._style("red" if suit in RED_SUITS else "face")
-        edge = self._style("edge")
-        if size.height == 1:
-            return [Text(f"{rank:>2}{suit} ", ink)]
         inner = size.width - 2
-        if size.height == 3:
-            middle = [f"{rank:<2}{suit}".ljust(inner)]
+        if face_up:
+            rank, suit = card_label(card), suit_for(hand, position, card)
+            frame, ink = self._style("edge"), self._style("red" if suit in RED_SUITS else "face")
+            if size.height == 1:
+                return [Text(f"{rank:>2}{suit} ", ink)]
+            middle = ([f"{rank:<2}{suit}".ljust(inner)] if size.height == 3
+                      else [f"{rank:<{inner}}", f"{suit:^{inner}}", f"{rank:>{inner}}"])
         else:
-            middle = [f"{rank:<{inner}}", f"{suit:^{inner}}", f"{rank:>{inner}}"]
-        lines = [Text("╭" + "─" * inner + "╮", edge)]
+            frame, ink = self._style("back"), self._style("back-fill")
+            if size.height == 1:
+                return [Text("░" * size.width, ink)]
+            middle = ["░" * inner] * (size.height - 2)
+        lines = [Text("╭" + "─" * inner + "╮", frame)]
         for text in middle:
-            line = Text("│", edge)
+            line = Text("│", frame)
             line.append(text, ink)
-            line.append("│", edge)
+            line.append("│", frame)
             lines.append(line)
-        lines.append(Text("╰" + "─" * inner + "╯", edge))
+        lines.append(Text("╰" + "─" * inner + "╯", frame))
         return lines
 
     def _hand(self, hand: int, cards: Sequence[int], size: CardSize, hidden: int) -> list[Text]:
@@ -144,15 +135,7 @@ class CardsBoard(Board):
         drawn = [
             self._card(hand, i, card, size, face_up=i < hidden) for i, card in enumerate(cards)
         ]
-        rows = []
-        for r in range(size.height):
-            row = Text()
-            for i, card_lines in enumerate(drawn):
-                if i:
-                    row.append(" ")
-                row.append_text(card_lines[r])
-            rows.append(row)
-        return rows
+        return [Text(" ").join(lines[r] for lines in drawn) for r in range(size.height)]
 
     def _total(self, who: str, cards: Sequence[int]) -> tuple[int, bool]:
         """A hand's total and usable ace, as the scene gives them (sums of the cards else)."""
@@ -161,36 +144,25 @@ class CardsBoard(Board):
             return total, bool(self.scene.get(f"{who}_usable", False))
         return sum(cards), False
 
-    def _dealer_label(self, dealer: Sequence[int], hidden: bool) -> Text:
-        label = Text("Dealer", self._style("label"))
-        if not dealer:
+    def _label(self, who: str, cards: Sequence[int], hidden: bool = False) -> Text:
+        """A hand's owner and total: 'Dealer  showing 10', 'You  21 blackjack!  usable ace '."""
+        player = who == "player"
+        label = Text(self.player_name if player else "Dealer", self._style("label"))
+        if not cards:
             return label
         label.append("  ")
         if hidden:
             label.append("showing ", self._style("muted"))
-            label.append(card_label(dealer[0]), self._style("total"))
+            label.append(card_label(cards[0]), self._style("total"))
             return label
-        total, _ = self._total("dealer", dealer)
+        total, usable = self._total(who, cards)
         if total > 21:
             label.append(f"{total} bust", self._style("bust"))
+        elif total == 21 and player:
+            label.append("21" + (" blackjack!" if len(cards) == 2 else ""), self._style("best"))
         else:
             label.append(str(total), self._style("total"))
-        return label
-
-    def _player_label(self, player: Sequence[int]) -> Text:
-        label = Text(self.player_name, self._style("label"))
-        if not player:
-            return label
-        total, usable = self._total("player", player)
-        label.append("  ")
-        if total > 21:
-            label.append(f"{total} bust", self._style("bust"))
-        elif total == 21:
-            natural = len(player) == 2
-            label.append("21" + (" blackjack!" if natural else ""), self._style("best"))
-        else:
-            label.append(str(total), self._style("total"))
-        if usable:
+        if usable and player:
             label.append("  ")
             label.append(" usable ace ", self._style("tag"))
         return label
@@ -202,10 +174,10 @@ class CardsBoard(Board):
             hint = "No cards on the table."
             if self.interactive:
                 hint += " Press n to deal."
-            return _centered([Text(hint, self._style("muted"))], width, height)
+            return stack([Text(hint, self._style("muted"))], width, height, block=True)
         hidden = not self.reveal and len(dealer) > 1
-        dealer_label = self._dealer_label(dealer, hidden)
-        player_label = self._player_label(player)
+        dealer_label = self._label("dealer", dealer, hidden)
+        player_label = self._label("player", player)
         for size in SIZES:
             dealer_rows = self._hand(0, dealer, size, hidden=1 if hidden else len(dealer))
             player_rows = self._hand(1, player, size, hidden=len(player))
@@ -215,19 +187,5 @@ class CardsBoard(Board):
             fits_width = max(line.cell_len for line in lines) <= width
             if fits_width and len(lines) <= height:
                 break
-        return _centered(lines, width, height)
+        return stack(lines, width, height, block=True)
 
-
-def _centered(lines: list[Text], width: int, height: int) -> Text:
-    """Lines as one block (left-aligned among themselves) centred in `width` x `height`."""
-    block = max((line.cell_len for line in lines), default=0)
-    left = " " * max(0, (width - block) // 2)
-    top = max(0, (height - len(lines)) // 2)
-    out = Text(no_wrap=True, overflow="crop", end="")
-    out.append("\n" * top)
-    for i, line in enumerate(lines):
-        if i:
-            out.append("\n")
-        out.append(left)
-        out.append_text(line)
-    return out

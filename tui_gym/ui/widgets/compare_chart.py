@@ -8,13 +8,13 @@ from typing import ClassVar
 
 import numpy as np
 from rich.color import Color as RichColor
-from rich.color import blend_rgb
 from rich.segment import Segment
 from rich.style import Style
 
 from tui_gym.ui.compare_series import Series
 from tui_gym.ui.widgets.numbers import fit, number_forms
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget
+from tui_gym.ui.widgets.training_charts import mix
 
 # Distinct on dark and light themes alike; a curve keeps its colour while it is shown.
 PALETTE: tuple[str, ...] = (
@@ -35,11 +35,6 @@ DOT_BITS = ((0x01, 0x02, 0x04, 0x40), (0x08, 0x10, 0x20, 0x80))
 def colour(index: int) -> RichColor:
     """The palette's colour for a curve's place (it wraps round after eight)."""
     return RichColor.parse(PALETTE[index % len(PALETTE)])
-
-
-def mix(a: RichColor, b: RichColor, t: float) -> RichColor:
-    """`a` moved a share `t` of the way to `b`."""
-    return RichColor.from_triplet(blend_rgb(a.get_truecolor(), b.get_truecolor(), t))
 
 
 def value_range(series: Sequence[Series]) -> tuple[float, float]:

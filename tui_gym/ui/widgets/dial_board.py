@@ -27,6 +27,9 @@ class DialBoard(Board):
     """
     COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
+    STYLE = "dial"
+    BORDER_TITLE = "Game"
+
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("left,h", "turn(-1)", "−1", key_display="←", group=DIAL_GROUP),
         Binding("right,l", "turn(1)", "+1", key_display="→", group=DIAL_GROUP),
@@ -44,9 +47,6 @@ class DialBoard(Board):
         super().__init__(**kwargs)
         self.pointer = 0
         self._fresh = True
-
-    def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
-        self.border_title = str(self.scene.get("title") or "Game")
 
     # --- the dial ----------------------------------------------------------
     @property
@@ -67,8 +67,7 @@ class DialBoard(Board):
             self.pointer = int(scene["start"])
         self._fresh = False
         self.pointer = max(0, min(self.pointer, self.allowed - 1))
-        if self.is_mounted:
-            self.border_title = str(scene.get("title") or "Game")
+        self.border_title = str(scene.get("title") or "Game")
         super().show_scene(scene, reveal)
 
     def action_turn(self, by: int) -> None:
@@ -113,7 +112,7 @@ class DialBoard(Board):
         scene = self.scene
         if not scene:
             return stack([Text("No episode yet.")], width, height)
-        muted = self.get_component_rich_style("dial--muted")
+        muted = self._style("muted")
         lines: list[Text] = []
         bars = [bar for bar in scene.get("bars", []) if len(bar) == 3]
         label_w = max((len(str(bar[0])) for bar in bars), default=0)
@@ -122,8 +121,8 @@ class DialBoard(Board):
             room = max(4, min(BAR, width - label_w - 14))
             filled = round(room * float(value) / max(1.0, float(top)))
             line = Text(f"{str(label):<{label_w}}  ", style=muted)
-            line.append("█" * filled, self.get_component_rich_style("dial--gauge"))
-            line.append("░" * (room - filled), self.get_component_rich_style("dial--empty"))
+            line.append("█" * filled, self._style("gauge"))
+            line.append("░" * (room - filled), self._style("empty"))
             line.append(f"  {unit}{value:g}/{unit}{top:g}")
             lines.append(line)
         for said in scene.get("lines", []):
@@ -142,10 +141,9 @@ class DialBoard(Board):
         fit = max(1, (width - 4) // cell)
         first = max(0, min(self.pointer - fit // 2, len(names) - fit))
         shown = range(first, min(len(names), first + fit))
-        line = Text("◀ " if first > 0 else "  ", style=self.get_component_rich_style("dial--muted"))
+        muted, pointer = self._style("muted"), self._style("pointer")
+        line = Text("◀ " if first > 0 else "  ", style=muted)
         for i in shown:
-            style = "dial--pointer" if i == self.pointer else "dial--muted"
-            line.append(names[i].center(cell), self.get_component_rich_style(style))
-        line.append(" ▶" if shown.stop < len(names) else "  ",
-                    self.get_component_rich_style("dial--muted"))
+            line.append(names[i].center(cell), pointer if i == self.pointer else muted)
+        line.append(" ▶" if shown.stop < len(names) else "  ", muted)
         return line

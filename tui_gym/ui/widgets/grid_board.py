@@ -13,8 +13,8 @@ from textual import events
 from textual.binding import Binding, BindingType
 from textual.geometry import Offset
 
-from tui_gym.ui.widgets.board_drawing import cell_of, step_toward
-from tui_gym.ui.widgets.boards import Board
+from tui_gym.ui.widgets.board_drawing import cell_of, stack, step_toward
+from tui_gym.ui.widgets.boards import Board, arrow_bindings
 from tui_gym.ui.widgets.strip_widget import component_classes
 
 Cell = tuple[int, int]
@@ -28,7 +28,6 @@ MOVES: dict[Cell, tuple[str, str]] = {  # (dx, dy) -> (action name, trail arrow)
 AGENT, TARGET, HOME = "●", "◎", "◉"  # HOME: the agent stands on the target
 WALL = "█"
 
-MOVE_GROUP = Binding.Group("Move")
 
 
 @dataclass(frozen=True)
@@ -48,34 +47,26 @@ class GridLayout:
         return len(str(self.n - 1)) + 1 if self.axes else 0
 
     @property
-    def grid_w(self) -> int:
-        return self.n * (self.cell_w + 1) + 1 if self.lines else self.n * self.cell_w
-
-    @property
-    def grid_h(self) -> int:
-        return self.n * (self.cell_h + 1) + 1 if self.lines else self.n * self.cell_h
+    def gap(self) -> int:
+        return 1 if self.lines else 0
 
     @property
     def width(self) -> int:
-        return self.label_w + self.grid_w
+        return self.label_w + self.n * (self.cell_w + self.gap) + self.gap
 
     @property
     def height(self) -> int:
-        return self.grid_h + (1 if self.axes else 0)
+        return self.n * (self.cell_h + self.gap) + self.gap + (1 if self.axes else 0)
 
     def cell_center(self, cell: Cell) -> Offset:
         """The canvas offset of the middle of grid cell (x, y); the inverse of `cell_at`."""
-        gap = 1 if self.lines else 0
-        x, y = cell
-        row = self.n - 1 - y
-        return Offset(
-            self.left + gap + x * (self.cell_w + gap) + self.cell_w // 2,
-            self.top + gap + row * (self.cell_h + gap) + self.cell_h // 2,
-        )
+        gap, (x, y) = self.gap, cell
+        return Offset(self.left + gap + x * (self.cell_w + gap) + self.cell_w // 2,
+                      self.top + gap + (self.n - 1 - y) * (self.cell_h + gap) + self.cell_h // 2)
 
     def cell_at(self, offset: Offset) -> Cell | None:
         """The grid cell (x, y) under a canvas offset, or None off the grid."""
-        gap = 1 if self.lines else 0
+        gap = self.gap
         col = (offset.x - self.left - gap) // (self.cell_w + gap)
         row = (offset.y - self.top - gap) // (self.cell_h + gap)
         if not (0 <= col < self.n and 0 <= row < self.n):
@@ -91,18 +82,10 @@ CELL_SHAPES = (
 
 def choose_layout(n: int, width: int, height: int) -> GridLayout:
     """The largest drawing of an n x n grid that fits (the smallest one if none does)."""
-    layout = GridLayout(n, 1, 1, False, False)
-    for cell_w, cell_h, lines in CELL_SHAPES:
-        for axes in (True, False):
-            if axes and cell_w < len(str(n - 1)):
-                continue
-            candidate = GridLayout(n, cell_w, cell_h, lines, axes)
-            if candidate.width <= width and candidate.height <= height:
-                layout = candidate
-                break
-        else:
-            continue
-        break
+    layouts = (GridLayout(n, cell_w, cell_h, lines, axes) for cell_w, cell_h, lines in CELL_SHAPES
+               for axes in (True, False) if not (axes and cell_w < len(str(n - 1))))
+    layout = next((layout for layout in layouts if fits(layout, width, height)),
+                  GridLayout(n, 1, 1, False, False))
     return place_layout(layout, width, height)
 
 
@@ -136,15 +119,13 @@ class GridBoard(Board):
     COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("up,w", "act('up')", "up", key_display="↑/w", group=MOVE_GROUP),
-        Binding("down,s", "act('down')", "down", key_display="↓/s", group=MOVE_GROUP),
-        Binding("left,a", "act('left')", "left", key_display="←/a", group=MOVE_GROUP),
-        Binding("right,d", "act('right')", "right", key_display="→/d", group=MOVE_GROUP),
+        *arrow_bindings("up", "down", "left", "right", "Move"),
         Binding("r", "new_episode", "Reset", tooltip="Start a new episode"),
     ]
 
     BUTTONS = (("↺ Reset [dim]r[/]", "new_episode"),)
     BORDER_TITLE = "Grid"
+    STYLE = "grid"
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
@@ -206,9 +187,6 @@ class GridBoard(Board):
         super().show_scene(scene, reveal)
 
     # --- drawing ---------------------------------------------------------------
-    def _style(self, name: str) -> Style:
-        return self.get_component_rich_style(f"grid--{name}")
-
     def _cell_look(self, cell: Cell, lines: bool) -> tuple[str, Style]:
         """The glyph and style of one cell."""
         if cell == self._grid_agent and cell == self._grid_target:
@@ -225,18 +203,13 @@ class GridBoard(Board):
 
     def picture(self, width: int, height: int) -> Text:
         n = self._grid_size
-        out = Text(no_wrap=True, overflow="crop", end="")
         if n <= 0:
             self.layout_drawn = None
-            out.append("No grid yet.", self._style("axis"))
-            return out
-        layout = self._steady_layout(n, width, height)
-        self.layout_drawn = layout
+            return Text("No grid yet.", self._style("axis"), no_wrap=True, overflow="crop", end="")
+        layout = self.layout_drawn = self._steady_layout(n, width, height)
         line, axis = self._style("line"), self._style("axis")
         cw, ch = layout.cell_w, layout.cell_h
-        margin = " " * (layout.left - layout.label_w)
         rows: list[Text] = []
-
         gutter = " " * layout.label_w
 
         def rule(first: str, middle: str, last: str) -> Text:
@@ -269,13 +242,7 @@ class GridBoard(Board):
             for x in range(n):
                 labels.append(str(x).center(cw) + (" " if layout.lines else ""), axis)
             rows.append(labels)
-        out.append("\n" * layout.top)
-        for i, row in enumerate(rows):
-            if i:
-                out.append("\n")
-            out.append(margin)
-            out.append_text(row)
-        return out
+        return stack(rows, width, height)
 
     def _steady_layout(self, n: int, width: int, height: int) -> GridLayout:
         """The cell shape stays while the space around the board changes (status lines

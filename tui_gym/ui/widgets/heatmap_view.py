@@ -16,7 +16,7 @@ it to the owner to say what that cell means (it asks the game's layout).
 from __future__ import annotations
 
 import textwrap
-from collections.abc import Hashable, Iterable, Sequence
+from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import ClassVar
@@ -80,15 +80,10 @@ class ColourScale:
 
     @classmethod
     def over(cls, panels: Sequence[Heatmap]) -> ColourScale:
-        lows, highs = [], []
-        for panel in panels:
-            lo, hi = panel.value_range()
-            if np.isfinite(panel.values).any():
-                lows.append(lo)
-                highs.append(hi)
-        if not lows:
+        ranges = [panel.value_range() for panel in panels if np.isfinite(panel.values).any()]
+        if not ranges:
             return cls(0.0, 0.0)
-        return cls(min(lows), max(highs))
+        return cls(min(low for low, _ in ranges), max(high for _, high in ranges))
 
     @property
     def diverging(self) -> bool:
@@ -101,10 +96,6 @@ class ColourScale:
             m = max(-self.low, self.high)
             return -m, m
         return self.low, self.high
-
-    def colour_at(self, t: float) -> RGB:
-        stops = DIVERGING if self.diverging else SEQUENTIAL
-        return _interpolate(stops, t)
 
     def steps(self, values: np.ndarray) -> np.ndarray:
         """Each value's step on the scale, 0 .. COLOUR_STEPS - 1 (-1 where not finite)."""
@@ -195,32 +186,28 @@ class HeatmapView(StripWidget, can_focus=True):
         classes: str | None = None,
     ) -> None:
         super().__init__(name=name, id=id, classes=classes)
-        self._panels: tuple[Heatmap, ...] = tuple(panels)
+        self.panels: tuple[Heatmap, ...] = tuple(panels)
         self._message = ""
         self._placements: list[_Placement] = []
         self._cell_geometry = (3, 1)
         self.plain = ""  # the text of the last render, for tests and screenshots
 
     # --- data in -----------------------------------------------------------
-    @property
-    def panels(self) -> tuple[Heatmap, ...]:
-        return self._panels
-
     def show(self, panels: Sequence[Heatmap]) -> None:
         """Draw these panels (replacing any message)."""
-        old = self._panels
-        self._panels = tuple(panels)
+        old = self.panels
+        self.panels = tuple(panels)
         self._message = ""
         self.remove_class("-empty")
-        same_shape = len(old) == len(self._panels) and all(
+        same_shape = len(old) == len(self.panels) and all(
             a.shape == b.shape and len(a.legend) == len(b.legend)
-            for a, b in zip(old, self._panels, strict=True)
+            for a, b in zip(old, self.panels, strict=True)
         )
         self.redraw(layout=not same_shape)
 
     def show_message(self, text: str) -> None:
         """Show a line of text instead of panels (e.g. why there is no per-state view)."""
-        self._panels = ()
+        self.panels = ()
         self._message = text
         self.add_class("-empty")
         self.redraw(layout=True)
@@ -236,15 +223,17 @@ class HeatmapView(StripWidget, can_focus=True):
     # --- keys and clicks ---------------------------------------------------
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         if action == "move":
-            return self.focus_cell is not None and bool(self._panels)
+            return self.focus_cell is not None and bool(self.panels)
         return True
 
     def action_move(self, d_row: int, d_col: int) -> None:
-        if self.focus_cell is None or not self._panels:
+        if self.focus_cell is None or not self.panels:
             return
-        rows, cols = self._panels[0].shape
+        rows, cols = self.panels[0].shape
         row, col = self.focus_cell
-        cell = (min(rows - 1, max(0, row + d_row)), min(cols - 1, max(0, col + d_col)))
+        self._focus_on((min(rows - 1, max(0, row + d_row)), min(cols - 1, max(0, col + d_col))))
+
+    def _focus_on(self, cell: tuple[int, int]) -> None:
         if cell != self.focus_cell:
             self.focus_cell = cell
             self.post_message(self.FocusChanged(self, cell))
@@ -258,23 +247,24 @@ class HeatmapView(StripWidget, can_focus=True):
                 return place.index, dy // cell_h, dx // cell_w
         return None
 
-    def on_click(self, event: events.Click) -> None:
+    def clicked_cell(self, event: events.Click) -> tuple[int, int] | None:
+        """The first panel's (row, col) a click hit; the view then takes the click and the focus."""
         offset = event.get_content_offset(self)
-        if offset is None or self.focus_cell is None:
-            return
-        hit = self.cell_at(offset.x, offset.y)
+        hit = None if offset is None or not self.panels else self.cell_at(offset.x, offset.y)
         if hit is None or hit[0] != 0:
-            return
-        cell = (hit[1], hit[2])
+            return None
         event.stop()
         self.focus()
-        if cell != self.focus_cell:
-            self.focus_cell = cell
-            self.post_message(self.FocusChanged(self, cell))
+        return hit[1], hit[2]
+
+    def on_click(self, event: events.Click) -> None:
+        cell = None if self.focus_cell is None else self.clicked_cell(event)
+        if cell is not None:
+            self._focus_on(cell)
 
     # --- layout ------------------------------------------------------------
     def _layout(self, width: int) -> _Layout:
-        panels = self._panels
+        panels = self.panels
         rows = max(p.shape[0] for p in panels)
         cols = max(p.shape[1] for p in panels)
         row_label_width = max((len(label) for p in panels for label in p.row_labels), default=0)
@@ -286,51 +276,47 @@ class HeatmapView(StripWidget, can_focus=True):
         n = len(panels)
         side = (width - n * fixed - PANEL_GAP * (n - 1)) // max(1, n * cols)
         side_by_side = n == 1 or side >= min_cell
-        if side_by_side:
-            cell_width = max(min_cell, min(MAX_CELL_WIDTH, side))
-        else:
-            cell_width = max(min_cell, min(MAX_CELL_WIDTH, (width - fixed) // max(1, cols)))
+        room = side if side_by_side else (width - fixed) // max(1, cols)
+        cell_width = max(min_cell, min(MAX_CELL_WIDTH, room))
         # Tall cells look square when there is room: few rows, wide cells, not compact.
         cell_height = 2 if (rows <= 8 and cell_width >= 5 and not self._compact()) else 1
         panel_width = fixed + cols * cell_width
         return _Layout(side_by_side, cell_width, cell_height, row_label_width, panel_width)
 
-    def _panel_height(self, panel: Heatmap, layout: _Layout) -> int:
-        return 2 + panel.shape[0] * layout.cell_height  # title, column labels, cells
-
     def _legend_lines(self, width: int, indent: int) -> list[str]:
         """The panels' legends (each once), wrapped to fit beside the indent."""
         seen: list[str] = []
-        for panel in self._panels:
+        for panel in self.panels:
             if panel.legend and panel.legend not in seen:
                 seen.append(panel.legend)
         room = max(12, width - indent)
         return [line for legend in seen for line in textwrap.wrap(legend, room)]
 
     def get_content_width(self, container: Size, viewport: Size) -> int:
-        if not self._panels:
+        if not self.panels:
             return len(self._message)
         layout = self._layout(container.width)
-        n = len(self._panels) if layout.side_by_side else 1
+        n = len(self.panels) if layout.side_by_side else 1
         return n * layout.panel_width + PANEL_GAP * (n - 1)
 
     def get_content_height(self, container: Size, viewport: Size, width: int) -> int:
-        if not self._panels:
+        if not self.panels:
             return max(1, len(self._message) // max(1, width) + 1)
         layout = self._layout(width)
-        heights = [self._panel_height(p, layout) for p in self._panels]
+        # a panel: its title, its column labels and its cells
+        heights = [2 + p.shape[0] * layout.cell_height for p in self.panels]
         body = max(heights) if layout.side_by_side else sum(heights) + len(heights) - 1
         legends = self._legend_lines(width, layout.row_label_width + 1)
         return body + 1 + len(legends)  # the scale, then the legends
 
     # --- drawing -----------------------------------------------------------
     def picture_key(self) -> Hashable:
-        height = 0 if self._panels else self.content_size.height  # a message is centred
+        height = 0 if self.panels else self.content_size.height  # a message is centred
         return (self._version, self.focus_cell, self.step_cell, self.has_focus, self._compact(),
                 height)
 
     def draw(self, width: int) -> list[Line]:
-        if not self._panels:
+        if not self.panels:
             self.plain = self._message
             self._placements = []
             console = self.app.console
@@ -338,13 +324,11 @@ class HeatmapView(StripWidget, can_focus=True):
             top = max(0, (self.content_size.height - len(wrapped)) // 2)
             return [[] for _ in range(top)] + [segments_of(t, console)[0] for t in wrapped]
         layout = self._layout(width)
-        scale = ColourScale.over(self._panels)
-        several = layout.side_by_side and len(self._panels) > 1
+        scale = ColourScale.over(self.panels)
+        several = layout.side_by_side and len(self.panels) > 1
         title_width = layout.panel_width if several else width
-        blocks = [
-            self._panel_lines(i, p, layout, scale, title_width)
-            for i, p in enumerate(self._panels)
-        ]
+        blocks = [self._panel_lines(i, p, layout, scale, title_width)
+                  for i, p in enumerate(self.panels)]
         lines: list[_Line] = []
         placements: list[_Placement] = []
         if layout.side_by_side:
@@ -355,28 +339,27 @@ class HeatmapView(StripWidget, can_focus=True):
                     if i:
                         line.add(" " * PANEL_GAP)
                     part = block[y] if y < len(block) else _Line()
-                    line.add_line(part)
+                    for segment in part:
+                        line.add(segment.text, segment.style)
                     line.add(" " * max(0, layout.panel_width - part.width))
                 lines.append(line)
-            for i, panel in enumerate(self._panels):
+            for i, panel in enumerate(self.panels):
                 x = i * (layout.panel_width + PANEL_GAP) + layout.row_label_width + 1
                 placements.append(_Placement(i, x, 2, *panel.shape))
         else:
-            y = 0
-            for i, (panel, block) in enumerate(zip(self._panels, blocks, strict=True)):
+            for i, (panel, block) in enumerate(zip(self.panels, blocks, strict=True)):
                 if i:
                     lines.append(_Line())
-                    y += 1
-                placements.append(_Placement(i, layout.row_label_width + 1, y + 2, *panel.shape))
+                x, y = layout.row_label_width + 1, len(lines) + 2  # below the title and labels
+                placements.append(_Placement(i, x, y, *panel.shape))
                 lines.extend(block)
-                y += len(block)
         lines.append(self._scale_line(scale, layout, width))
         indent = layout.row_label_width + 1
         for legend in self._legend_lines(width, indent):
             lines.append(_Line().add(" " * indent + legend, DIM))
         self._placements = placements
         self._cell_geometry = (layout.cell_width, layout.cell_height)
-        cropped = [line.cropped(width) for line in lines]
+        cropped = [Segment.adjust_line_length(line, width, pad=False) for line in lines]
         self.plain = "\n".join(line_text(line).rstrip() for line in cropped)
         return cropped
 
@@ -426,7 +409,7 @@ class HeatmapView(StripWidget, can_focus=True):
         line = _Line().add(" " * indent)
         line.add(f"{lo:+.2f} ", DIM)
         for i in range(bar):
-            rgb = scale.colour_at((i + 0.5) / bar)
+            rgb = _interpolate(DIVERGING if scale.diverging else SEQUENTIAL, (i + 0.5) / bar)
             line.add(" ", Style(bgcolor=_hex(rgb)))
         line.add(f" {hi:+.2f}", DIM)
         return line
@@ -459,21 +442,3 @@ class _Line(list):
             self.append(Segment(text, style))
             self.width += len(text)
         return self
-
-    def add_line(self, other: Iterable[Segment]) -> None:
-        for segment in other:
-            self.add(segment.text, segment.style)
-
-    def cropped(self, width: int) -> Line:
-        """The segments within the first `width` cells."""
-        if self.width <= width:
-            return list(self)
-        out: Line = []
-        room = width
-        for segment in self:
-            if room <= 0:
-                break
-            text = segment.text[:room]
-            out.append(Segment(text, segment.style))
-            room -= len(text)
-        return out

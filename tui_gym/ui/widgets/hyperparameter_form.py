@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import ClassVar, cast
+from typing import Any, ClassVar, cast
 
 from textual import on
 from textual.app import ComposeResult
@@ -20,29 +20,13 @@ from tui_gym.ui.widgets.numbers import compact_count
 from tui_gym.ui.widgets.text_field import TextField
 
 
-def _typed(field: Field) -> bool:
-    """Whether the field is typed in (a number), not picked from a few words."""
-    return isinstance(field, Param) and field.kind is not bool
-
-
-def _words(field: Field) -> tuple[str, ...]:
-    """The words a picked field offers."""
-    return ("true", "false") if isinstance(field, Param) else field.choices
-
-
-def _text(field: Field, value: object) -> str:
-    if isinstance(field, Param) and field.kind is bool:
+def _text(field: Field, value: Any) -> str:
+    """A field's value as a person would type it."""
+    if not isinstance(field, Param):
+        return str(value)
+    if field.kind is bool:
         return "true" if value else "false"
-    if _typed(field):
-        return format_value(field, value)  # type: ignore[arg-type]
-    return str(value)
-
-
-def format_value(field: Param, value: float) -> str:
-    """A field's value as the text a person would type."""
-    if field.kind is int:
-        return str(int(value))
-    return f"{value:g}"
+    return str(int(value)) if field.kind is int else f"{value:g}"
 
 
 _SUPERSCRIPTS = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
@@ -195,16 +179,16 @@ class HyperparameterForm(Vertical):
     def _field_widgets(self, field: Field, value: object) -> list[Widget]:
         label = Label(field.title or field.name, classes="hp-label")
         box: Widget
-        if _typed(field):
-            assert isinstance(field, Param)
+        if isinstance(field, Param) and field.kind is not bool:  # typed in: a number
             box = TextField(
                 _text(field, value), id=f"hp-{field.name}", compact=True,
                 validators=[FieldValidator(field)], select_on_focus=True,
             )
             hint = Label(range_hint(field), classes="hp-hint")
-        else:
+        else:  # picked from a few words
+            words = ("true", "false") if isinstance(field, Param) else field.choices
             box = Select(
-                [(word, word) for word in _words(field)], value=_text(field, value),
+                [(word, word) for word in words], value=_text(field, value),
                 allow_blank=False, compact=True, id=f"hp-{field.name}",
             )
             hint = Label("", classes="hp-hint")
@@ -268,10 +252,6 @@ class HyperparameterForm(Vertical):
         self._mark((event.select.id or "").removeprefix("hp-"), None)
 
     # --- reading and loading -----------------------------------------------
-    def _raw(self, field: Field) -> str:
-        value = self.control(field.name).value
-        return value if isinstance(value, str) else ""
-
     def read(self) -> Settings | None:
         """The hyperparameters in the fields, or None with every problem marked."""
         if self._rebuilding:
@@ -282,7 +262,8 @@ class HyperparameterForm(Vertical):
         ok = True
         fields = self.fields
         for field in fields:
-            text = self._raw(field)
+            value = self.control(field.name).value
+            text = value if isinstance(value, str) else ""
             problem = field_error(field, text) if isinstance(field, Param) else None
             self._mark(field.name, problem)
             if problem is None:

@@ -37,16 +37,10 @@ class MapCanvas(HeatmapView):
             self.cell = cell
 
     def on_click(self, event: events.Click) -> None:
-        offset = event.get_content_offset(self)
-        if offset is None or not self.panels:
-            return
-        hit = self.cell_at(offset.x, offset.y)
-        if hit is None or hit[0] != 0:
-            return
-        event.stop()
-        self.focus()
-        self.focus_cell = (hit[1], hit[2])
-        self.post_message(self.Clicked((hit[1], hit[2])))
+        cell = self.clicked_cell(event)
+        if cell is not None:
+            self.focus_cell = cell
+            self.post_message(self.Clicked(cell))
 
     def cursor_region(self) -> Region | None:
         """Where the focus cell is drawn, in the canvas's content (None before it is)."""
@@ -180,19 +174,14 @@ class MapEditor(Vertical):
         # A wide map keeps one character a cell (the mark instead of the arrow), so that
         # twelve columns fit beside the side panel at 80 columns.
         wide = grid_map.cols > WIDE_MAP
-        labels = []
-        for r, line in enumerate(panel.labels):
-            row = []
-            for c, label in enumerate(line):
-                tile = grid_map.tile((r, c))
-                mark = TILE_MARKS.get(tile, "")
-                iced = slip.get((r, c), 0.0) > 0
-                if wide:
-                    text = mark or (ICE if iced else label)
-                else:
-                    text = mark + label + (ICE if iced else "")
-                row.append(text)
-            labels.append(tuple(row))
+
+        def dressed(cell: tuple[int, int], label: str) -> str:
+            mark = TILE_MARKS.get(grid_map.tile(cell), "")
+            ice = ICE if slip.get(cell, 0.0) > 0 else ""
+            return (mark or ice or label) if wide else mark + label + ice
+
+        labels = tuple(tuple(dressed((r, c), label) for c, label in enumerate(line))
+                       for r, line in enumerate(panel.labels))
         present = [word for mark, word, here in (
             ("S", "start", grid_map.start is not None),
             ("$", "reward cell", "R" in grid_map.tiles()), (ICE, "ice", bool(slip)),
@@ -201,7 +190,7 @@ class MapEditor(Vertical):
             "* not an optimal move", "").replace("  * off every shortest path", "")
         # Every arrow here is an optimal move: nothing to mark.
         return replace(panel, title="the exact optimum: value and optimal move",
-                       labels=tuple(labels), legend=legend.strip(),
+                       labels=labels, legend=legend.strip(),
                        marked=np.zeros(panel.shape, dtype=bool))
 
     def _show_tools(self) -> None:
@@ -226,9 +215,9 @@ class MapEditor(Vertical):
         cursor = self.cursor
         cell = f"{self.where(cursor)}: {grid_map.describe(cursor)}" if grid_map.inside(
             cursor) else ""
-        reachable = grid_map.start is None or grid_map.goal_reachable()
-        if grid_map.start is None and not grid_map.free_connected():
-            reachable = False
+        # A map with no start (a target anywhere): every free cell reaches every other.
+        free = grid_map.start is None
+        reachable = grid_map.free_connected() if free else grid_map.goal_reachable()
         warning = "" if reachable else "  ⚠ no goal can be reached on this map"
         status.set_class(not reachable, "-unreachable")
         done = f"  · {self.last_edit}" if self.last_edit else ""
@@ -320,25 +309,20 @@ class MapEditor(Vertical):
         self._apply(new, f"resized to {new.size_text}")
 
     def action_undo(self) -> None:
-        if not self.undo_stack or self.grid_map is None:
-            self._nothing_to("undo")
-            return
-        new = self.undo_stack.pop()
-        self.redo_stack.append(self.grid_map)
-        self._post(new, self.grid_map, "undone")
+        self._travel(self.undo_stack, self.redo_stack, "undo")
 
     def action_redo(self) -> None:
-        if not self.redo_stack or self.grid_map is None:
-            self._nothing_to("redo")
-            return
-        new = self.redo_stack.pop()
-        self.undo_stack.append(self.grid_map)
-        self._post(new, self.grid_map, "redone")
+        self._travel(self.redo_stack, self.undo_stack, "redo")
 
-    def _nothing_to(self, what: str) -> None:
-        self.last_edit = f"nothing to {what}"
-        self._show_status()
-        self.app.notify(f"Nothing to {what}.", timeout=2)
+    def _travel(self, back: list[GridMap], forth: list[GridMap], what: str) -> None:
+        """Undo or redo: the map from `back`, the one shown onto `forth`."""
+        if not back or self.grid_map is None:
+            self.last_edit = f"nothing to {what}"
+            self._show_status()
+            self.app.notify(f"Nothing to {what}.", timeout=2)
+            return
+        forth.append(self.grid_map)
+        self._post(back.pop(), forth[-1], f"{what}ne")  # "undone", "redone"
 
     def action_save(self) -> None:
         if self.grid_map is not None:

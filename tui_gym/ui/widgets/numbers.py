@@ -7,6 +7,8 @@ and shows the first that fits (`fit`), so a large number is shortened
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 Forms = tuple[str, ...]  # one figure's texts, fullest first
 
 
@@ -42,7 +44,7 @@ def number_forms(full: str, value: float, sign: str = "") -> Forms:
     return tuple(forms)
 
 
-def fit(forms: Forms, width: int) -> str:
+def fit(forms: Sequence[str], width: int) -> str:
     """The fullest form at most `width` characters long (the shortest when none is)."""
     for text in forms:
         if len(text) <= width:

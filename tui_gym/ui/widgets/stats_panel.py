@@ -210,28 +210,22 @@ def _grid(rows: list[list[Cell]], width: int, per_row: int = 0) -> list[Line]:
     `per_row` > 0 regroups the pairs that many to a row. Values never get cut:
     when the fullest forms do not fit, the widest value column takes shorter
     forms, step by step, then the pairs go fewer to a row."""
-    pairs = [cell for row in rows for cell in zip(row[::2], row[1::2], strict=True)]
+    paired = [list(zip(row[::2], row[1::2], strict=True)) for row in rows]
+    pairs = [pair for row in paired for pair in row]
     if not pairs:
         return []
-    layouts = [per_row, 1] if per_row > 1 else [0]
-    for i, group in enumerate(layouts):
-        lines = _lay_out(_regroup(rows, pairs, group), width, fit_only=i < len(layouts) - 1)
-        if lines is not None:
-            return lines
-    return []
+    if per_row > 1:
+        lines = _lay_out([pairs[i : i + per_row] for i in range(0, len(pairs), per_row)], width,
+                         fit_only=True)
+        return lines if lines is not None else _lay_out([[pair] for pair in pairs], width) or []
+    return _lay_out(paired, width) or []
 
 
 def _as_forms(value: str | Forms) -> Forms:
     return (value,) if isinstance(value, str) else value
 
 
-def _regroup(rows: list[list[Cell]], pairs: list, group: int) -> list[list]:
-    if group <= 0:
-        return [list(zip(row[::2], row[1::2], strict=True)) for row in rows]
-    return [pairs[i : i + group] for i in range(0, len(pairs), group)]
-
-
-def _lay_out(rows: list[list], width: int, fit_only: bool) -> list[Line] | None:
+def _lay_out(rows: list[list], width: int, fit_only: bool = False) -> list[Line] | None:
     """The lines of rows of ((name, style), (value forms, style)) pairs, or None when
     `fit_only` and they do not fit in `width`."""
     columns = max(len(row) for row in rows)

@@ -21,11 +21,14 @@ from tui_gym.ui.widgets.board_drawing import (
     CharGrid,
     MapBoard,
     cell_of,
-    fitting,
     legend,
+    listed,
     on_tile,
+    read_as,
     shape_fits,
 )
+from tui_gym.ui.widgets.boards import arrow_bindings
+from tui_gym.ui.widgets.numbers import fit
 from tui_gym.ui.widgets.strip_widget import component_classes
 
 MOVES: dict[str, Cell] = {"south": (1, 0), "north": (-1, 0), "east": (0, 1), "west": (0, -1)}
@@ -33,7 +36,6 @@ MOVE_OF: dict[Cell, str] = {step: name for name, step in MOVES.items()}
 STAND_NAMES = ("R", "G", "Y", "B")
 STAND_COLOURS = 4  # component classes taxi--stand-0 .. -3, used in turn
 PASSENGER, DESTINATION = "☺", "◎"
-MOVE_GROUP = Binding.Group("Drive")
 
 # What an action did: its words (longest first), their style, and whether the line goes
 # on to say where the passenger is going.
@@ -79,55 +81,10 @@ TAXI_SIZES = (
 def choose_shape(rows: int, cols: int, width: int, height: int) -> TaxiShape:
     """The largest drawing of the city that fits with its wall all round, else the largest
     without it (the smallest one if none does): the city's edge is a wall too."""
-    for frame in (True, False):
-        for cell_w, cell_h in TAXI_SIZES:
-            shape = TaxiShape(rows, cols, cell_w, cell_h, frame)
-            if shape_fits(shape, width, height):
-                return shape
-    return TaxiShape(rows, cols, 3, 1, False)
-
-
-@dataclass(frozen=True)
-class TaxiLayout:
-    """Where the drawn city sits in the canvas, to map clicks back to cells."""
-
-    shape: TaxiShape
-    left: int  # canvas column of the drawing's left edge
-    top: int  # canvas line of the drawing's top edge
-
-    def cell_center(self, cell: Cell) -> Offset:
-        shape = self.shape
-        row, col = cell
-        return Offset(
-            self.left + shape.x_of(col) + shape.cell_w // 2,
-            self.top + shape.y_of(row) + shape.cell_h // 2,
-        )
-
-    def cell_at(self, offset: Offset) -> Cell | None:
-        """The cell under a canvas offset (None on a wall, a lane or off the city)."""
-        shape = self.shape
-        x = offset.x - self.left - shape.edge
-        y = offset.y - self.top - shape.edge
-        if x < 0 or y < 0:
-            return None
-        col, within = divmod(x, shape.cell_w + 1)
-        row = y // shape.cell_h
-        if within == shape.cell_w or col >= shape.cols or row >= shape.rows:
-            return None
-        return row, col
-
-
-def _cells(value: Any) -> list[Cell]:
-    if not isinstance(value, list | tuple):
-        return []
-    return [cell for cell in (cell_of(item) for item in value) if cell is not None]
-
-
-def _index(value: Any) -> int | None:
-    try:
-        return int(value)
-    except (TypeError, ValueError):
-        return None
+    shapes = (TaxiShape(rows, cols, cell_w, cell_h, frame)
+              for frame in (True, False) for cell_w, cell_h in TAXI_SIZES)
+    return next((shape for shape in shapes if shape_fits(shape, width, height)),
+                TaxiShape(rows, cols, 3, 1, False))
 
 
 class TaxiBoard(MapBoard):
@@ -159,10 +116,7 @@ class TaxiBoard(MapBoard):
     COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("up,w", "act('north')", "north", key_display="↑/w", group=MOVE_GROUP),
-        Binding("down,s", "act('south')", "south", key_display="↓/s", group=MOVE_GROUP),
-        Binding("left,a", "act('west')", "west", key_display="←/a", group=MOVE_GROUP),
-        Binding("right,d", "act('east')", "east", key_display="→/d", group=MOVE_GROUP),
+        *arrow_bindings("north", "south", "west", "east", "Drive"),
         Binding("k", "act('pickup')", "Pick up", tooltip="Pick the passenger up"),
         Binding("l,o", "act('dropoff')", "Drop off", key_display="l", tooltip="Drop them off"),
         Binding("n,r", "new_episode", "New", key_display="n", tooltip="Start a new episode"),
@@ -173,18 +127,10 @@ class TaxiBoard(MapBoard):
         ("Pick up [dim]k[/]", "act('pickup')"), ("Drop off [dim]l[/]", "act('dropoff')"),
         ("↺ New [dim]n[/]", "new_episode"),
     )
-    BORDER_TITLE = "Taxi"
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
-        self.rows = self.cols = 0
-        self.taxi: Cell | None = None
-        self.passenger: int | None = None
-        self.destination: int | None = None
-        self.stands: list[Cell] = []
-        self.stand_names: list[str] = []
-        self.walls: frozenset[Cell] = frozenset()
-        self.rainy = False
+        self._read({})
 
     # --- what the board says ---------------------------------------------------
     def key_help(self) -> list[tuple[str, str]]:
@@ -217,27 +163,27 @@ class TaxiBoard(MapBoard):
 
     # --- the scene -----------------------------------------------------------------
     def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
-        previous_taxi = None if self._fresh else self.taxi
-        previous_destination = None if self._fresh else self.destination
-        self.rows = _index(scene.get("rows")) or 5
-        self.cols = _index(scene.get("cols")) or 5
-        self.taxi = cell_of(scene.get("taxi"))
-        self.stands = _cells(scene.get("stands"))
-        names = scene.get("stand_names") or STAND_NAMES
-        self.stand_names = [str(name) for name in names]
-        self.passenger = _index(scene.get("passenger"))
-        self.destination = _index(scene.get("destination"))
-        self.walls = frozenset(_cells(scene.get("walls")))
-        self.rainy = bool(scene.get("rainy"))
+        previous = (None, None) if self._fresh else (self.taxi, self.destination)
+        self._read(scene)
         action = scene.get("last_action")
-        self._event = self._event_of(
-            previous_taxi, previous_destination, str(action) if action is not None else None,
-            bool(scene.get("last_illegal")),
-        )
+        self._event = self._event_of(*previous, None if action is None else str(action),
+                                     bool(scene.get("last_illegal")))
         self._fresh = False
-        if self.is_mounted:
-            self.border_title = "Taxi · rain" if self.rainy else "Taxi"
         super().show_scene(scene, reveal)
+
+    def _read(self, scene: Mapping[str, Any]) -> None:
+        """The city and who is where, from a scene."""
+        self.rows = read_as(int, scene.get("rows")) or 5
+        self.cols = read_as(int, scene.get("cols")) or 5
+        self.taxi = cell_of(scene.get("taxi"))
+        self.stands = [cell for item in listed(scene.get("stands")) if (cell := cell_of(item))]
+        self.stand_names = [str(name) for name in scene.get("stand_names") or STAND_NAMES]
+        self.passenger = read_as(int, scene.get("passenger"))
+        self.destination = read_as(int, scene.get("destination"))
+        self.walls = frozenset(cell for item in listed(scene.get("walls"))
+                               if (cell := cell_of(item)))
+        self.rainy = bool(scene.get("rainy"))
+        self.border_title = "Taxi · rain" if self.rainy else "Taxi"
 
     def stand_name(self, index: int | None) -> str:
         if index is None or not 0 <= index < len(self.stands):
@@ -246,15 +192,9 @@ class TaxiBoard(MapBoard):
 
     def blocked(self, cell: Cell, move: str) -> bool:
         """Whether a wall or the city's edge stops a move from `cell`."""
-        d_row, d_col = MOVES[move]
-        row, col = cell[0] + d_row, cell[1] + d_col
-        if not (0 <= row < self.rows and 0 <= col < self.cols):
-            return True
-        if d_col == 1:
-            return cell in self.walls
-        if d_col == -1:
-            return (row, col) in self.walls
-        return False
+        d_col = MOVES[move][1]  # a wall stands on the east side of its cell
+        wall = cell if d_col == 1 else (cell[0], cell[1] - 1) if d_col == -1 else None
+        return self._off_edge(cell, move) or wall in self.walls
 
     def _event_of(
         self, previous: Cell | None, previous_destination: int | None, action: str | None,
@@ -308,21 +248,12 @@ class TaxiBoard(MapBoard):
             return None
         return self.rows, self.cols
 
-    def choose_shape(self, rows: int, cols: int, width: int, height: int) -> TaxiShape:
-        return choose_shape(rows, cols, width, height)
-
-    def layout_of(self, shape: TaxiShape, left: int, top: int) -> TaxiLayout:
-        return TaxiLayout(shape, left, top)
-
-    def _stand_style(self, index: int) -> Style:
-        return self._style(f"stand-{index % STAND_COLOURS}")
+    choose_shape = staticmethod(choose_shape)
 
     def _cab(self, width: int) -> tuple[str, Style]:
         """The cab's text (at most `width` characters) and style: full or empty."""
-        if self.aboard:
-            text = "TAXI☺" if width >= 9 else "T☺"
-            return text, self._style("cab-full")
-        return ("TAXI" if width >= 9 else "T"), self._style("cab")
+        text = ("TAXI" if width >= 9 else "T") + (PASSENGER if self.aboard else "")
+        return text, self._style("cab-full" if self.aboard else "cab")
 
     def _status(self) -> tuple[str, ...]:
         """Where the passenger is and is going, longest words first."""
@@ -349,7 +280,7 @@ class TaxiBoard(MapBoard):
                         if (x + 3 * line + cell[0] + 3 * cell[1]) % 7 == 0:
                             grid.put(x0 + x, y0 + line, "╱", rain)
         else:
-            tile = self._stand_style(stand)
+            tile = self._style(f"stand-{stand % STAND_COLOURS}")
             grid.fill(x0, y0, w, h, " ", tile)
             grid.put(x0, y0, self.stand_name(stand)[: max(1, w // 3)], tile)
             if stand == self.destination:
@@ -367,7 +298,7 @@ class TaxiBoard(MapBoard):
             grid.put(max(x0, x), y0 + mid, PASSENGER, person)
         if cab_here:
             if w >= 7 and h >= 3:
-                under = grid.style_at(chip_x, y0 + mid - 1)
+                under = grid.styles[y0 + mid - 1][chip_x]
                 grid.pill(chip_x, y0 + mid - 1, chip_w, 3, cab_style, under)
             grid.put(chip_x, y0 + mid, cab_text.center(chip_w), cab_style)
 
@@ -379,16 +310,12 @@ class TaxiBoard(MapBoard):
                 self._paint_tile(grid, (row, col), shape)
             for col in range(shape.cols - 1):
                 x = shape.x_of(col) + shape.cell_w
-                walled = (row, col) in self.walls
-                for line in range(shape.cell_h):
-                    grid.put(
-                        x, shape.y_of(row) + line, "┃" if walled else "┆", wall if walled else lane
-                    )
+                mark = ("┃", wall) if (row, col) in self.walls else ("┆", lane)
+                grid.fill(x, shape.y_of(row), 1, shape.cell_h, *mark)
         if shape.frame:
             last = shape.height - 1
-            for y in range(1, last):
-                grid.put(0, y, "┃", wall)
-                grid.put(shape.width - 1, y, "┃", wall)
+            grid.fill(0, 1, 1, last - 1, "┃", wall)
+            grid.fill(shape.width - 1, 1, 1, last - 1, "┃", wall)
             grid.put(0, 0, "┏" + "━" * (shape.width - 2) + "┓", wall)
             grid.put(0, last, "┗" + "━" * (shape.width - 2) + "┛", wall)
             for col in range(shape.cols - 1):
@@ -404,7 +331,7 @@ class TaxiBoard(MapBoard):
         status = self._status()
         label = self._style("caption")
         if self._event is None:
-            return Text(fitting(status, width), label)
+            return Text(fit(status, width), label)
         texts, style, then_status = self._event
         if then_status:  # the longest words that leave room for where the passenger goes
             for text in texts:
@@ -413,7 +340,7 @@ class TaxiBoard(MapBoard):
                     return Text.assemble(
                         (text, self._style(style)), (" · ", label), (where[0], label)
                     )
-        return Text(fitting(texts, width), self._style(style))
+        return Text(fit(texts, width), self._style(style))
 
     def legend(self, width: int) -> Text | None:
         """'T taxi  ☺ passenger  ◎ destination  ┃ wall' (None if too wide)."""
@@ -441,4 +368,4 @@ class TaxiBoard(MapBoard):
             self.step_to(self.taxi, cell, MOVE_OF)
 
 
-__all__ = ["MOVES", "TaxiBoard", "TaxiLayout", "TaxiShape", "choose_shape"]
+__all__ = ["MOVES", "TaxiBoard", "TaxiShape", "choose_shape"]

@@ -23,12 +23,15 @@ from tui_gym.ui.widgets.board_drawing import (
     CharGrid,
     MapBoard,
     cell_of,
-    fitting,
     legend,
+    listed,
     on_tile,
+    read_as,
     reward_text,
     shape_fits,
 )
+from tui_gym.ui.widgets.boards import arrow_bindings
+from tui_gym.ui.widgets.numbers import fit
 from tui_gym.ui.widgets.strip_widget import component_classes
 
 START, FLOOR, HOLE, GOAL, CLIFF, WALL, REWARD = "S", "F", "H", "G", "C", "W", "R"
@@ -37,6 +40,7 @@ FILLED = frozenset({CLIFF, WALL})  # drawn as a texture over the whole tile
 GLYPHS = {START: "⌂", FLOOR: "·", HOLE: "○", GOAL: "★", CLIFF: "▒", WALL: "█"}
 GROUNDS = {HOLE: "hole", GOAL: "goal", CLIFF: "cliff", WALL: "wall"}  # a tile's own style
 AGENT = "●"
+AGENT_STYLES = {GOAL: "agent-home", HOLE: "agent-lost", CLIFF: "agent-lost"}  # else "agent"
 
 STRAIGHT: dict[str, Cell] = {"left": (0, -1), "down": (1, 0), "right": (0, 1), "up": (-1, 0)}
 MOVES: dict[str, Cell] = {**STRAIGHT, "up-left": (-1, -1), "up-right": (-1, 1),
@@ -69,7 +73,6 @@ THEMES = {
 
 TONES = ("good", "bad", "slipped", "caption")  # the styles a scene's event may take
 Event = tuple[tuple[str, ...], str]  # what a move did: ('{who} ...' longest first), its style
-MOVE_GROUP = Binding.Group("Move")
 
 
 @dataclass(frozen=True)
@@ -101,6 +104,12 @@ class TileShape:
         """Lines of the map and its column numbers (the caption comes on top)."""
         return self.map_h + (1 if self.axes else 0)
 
+    def x_of(self, col: int) -> int:
+        return self.label_w + col * self.cell_w
+
+    def y_of(self, row: int) -> int:
+        return row // 2 if self.half else row * self.cell_h
+
 
 TILE_SIZES = ((11, 5), (9, 4), (7, 3), (5, 2), (3, 1), (2, 1), (1, 1))
 HALF_WIDTHS = (2, 1)
@@ -108,60 +117,20 @@ HALF_WIDTHS = (2, 1)
 
 def choose_shape(rows: int, cols: int, width: int, height: int) -> TileShape:
     """The largest drawing of a rows x cols map that fits (the smallest one if none does)."""
-    for cell_w, cell_h in TILE_SIZES:
-        for axes in (True, False):
-            if axes and cell_w < len(str(cols - 1)):
-                continue
-            shape = TileShape(rows, cols, cell_w, cell_h, axes=axes)
-            if shape_fits(shape, width, height):
-                return shape
-    for cell_w in HALF_WIDTHS:
-        shape = TileShape(rows, cols, cell_w, 1, half=True)
-        if shape_fits(shape, width, height):
-            return shape
-    return TileShape(rows, cols, 1, 1, half=True)
-
-
-@dataclass(frozen=True)
-class TileLayout:
-    """Where the drawn map sits in the canvas, to map clicks back to cells."""
-
-    shape: TileShape
-    left: int  # canvas column of the first tile (after the row numbers)
-    top: int  # canvas line of the first tile
-
-    def cell_center(self, cell: Cell) -> Offset:
-        """The canvas offset of the middle of a cell (in the half drawing: its line)."""
-        shape = self.shape
-        row, col = cell
-        y = row // 2 if shape.half else row * shape.cell_h + shape.cell_h // 2
-        return Offset(self.left + col * shape.cell_w + shape.cell_w // 2, self.top + y)
-
-    def col_at(self, offset: Offset) -> int | None:
-        col = (offset.x - self.left) // self.shape.cell_w
-        return col if offset.x >= self.left and col < self.shape.cols else None
-
-    def rows_at(self, offset: Offset) -> tuple[int, ...]:
-        """The map rows under a canvas line: one, or two in the half drawing."""
-        shape = self.shape
-        line = offset.y - self.top
-        if line < 0 or line >= shape.map_h:
-            return ()
-        if shape.half:
-            return tuple(row for row in (2 * line, 2 * line + 1) if row < shape.rows)
-        return (line // shape.cell_h,)
+    shapes = [
+        *(TileShape(rows, cols, cell_w, cell_h, axes=axes) for cell_w, cell_h in TILE_SIZES
+          for axes in (True, False) if not (axes and cell_w < len(str(cols - 1)))),
+        *(TileShape(rows, cols, cell_w, 1, half=True) for cell_w in HALF_WIDTHS),
+    ]
+    return next((shape for shape in shapes if shape_fits(shape, width, height)),
+                TileShape(rows, cols, 1, 1, half=True))
 
 
 def cell_table(value: Any) -> dict[Cell, Any]:
     """A scene's {cell: value} table with its keys read as cells (bad keys dropped)."""
     if not isinstance(value, Mapping):
         return {}
-    table = {}
-    for key, item in value.items():
-        cell = cell_of(key)
-        if cell is not None:
-            table[cell] = item
-    return table
+    return {cell: item for key, item in value.items() if (cell := cell_of(key)) is not None}
 
 
 def map_rows(scene: Mapping[str, Any]) -> list[str]:
@@ -179,18 +148,6 @@ def map_rows(scene: Mapping[str, Any]) -> list[str]:
         rows_text.append(row)
     cols = max((len(row) for row in rows_text), default=0)
     return [row.ljust(cols, FLOOR) for row in rows_text] if cols else []
-
-
-def _listed(value: Any) -> list[Any]:
-    """A scene's list (anything else: empty)."""
-    return list(value) if isinstance(value, list | tuple) else []
-
-
-def _number(value: Any) -> float | None:
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        return None
 
 
 class TileBoard(MapBoard):
@@ -233,10 +190,7 @@ class TileBoard(MapBoard):
     COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("up,w", "act('up')", "up", key_display="↑/w", group=MOVE_GROUP),
-        Binding("down,s", "act('down')", "down", key_display="↓/s", group=MOVE_GROUP),
-        Binding("left,a", "act('left')", "left", key_display="←/a", group=MOVE_GROUP),
-        Binding("right,d", "act('right')", "right", key_display="→/d", group=MOVE_GROUP),
+        *arrow_bindings("up", "down", "left", "right", "Move"),
         Binding("home", "act('up-left')", "up-left", show=False),
         Binding("pageup", "act('up-right')", "up-right", show=False),
         Binding("end", "act('down-left')", "down-left", show=False),
@@ -258,22 +212,9 @@ class TileBoard(MapBoard):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
-        self.cells: list[str] = []
         self.trail: dict[Cell, str] = {}  # cell the agent left -> arrow of that move
         self.agent: Cell | None = None
-        self.theme = THEMES["lake"]
-        self.rewards: dict[Cell, Any] = {}
-        self.slip: dict[Cell, Any] = {}
-        self.marks: dict[Cell, str] = {}
-        self.wind: list[int] = []
-        self.gusts = False
-        self.offered: list[str] | None = None
-        self.choices: list[str] = []
-        self.king = False  # the map's moves include the diagonals
-        self.cursor: Cell | None = None
-
-    def on_mount(self) -> None:  # Board.on_mount runs too (Textual walks the MRO)
-        self.border_title = self.theme.title
+        self._read({})
 
     # --- what the board says ---------------------------------------------------
     def key_help(self) -> list[tuple[str, str]]:
@@ -327,23 +268,12 @@ class TileBoard(MapBoard):
 
     # --- the scene ---------------------------------------------------------------
     def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
-        cells = map_rows(scene)
-        agent = cell_of(scene.get("agent"))
-        theme = THEMES.get(str(scene.get("theme", "lake")), THEMES["plain"])
-        if cells != self.cells or theme is not self.theme:
+        drawn = (self.cells, self.theme)
+        self._read(scene)
+        if (self.cells, self.theme) != drawn:
             self._fresh = True
         previous = None if self._fresh else self.agent
-        self.cells, self.theme = cells, theme
-        self.rewards = cell_table(scene.get("rewards"))
-        self.slip = cell_table(scene.get("slip"))
-        self.marks = {cell: str(text) for cell, text in cell_table(scene.get("marks")).items()}
-        self.wind = [int(w) for w in _listed(scene.get("wind")) if _number(w) is not None]
-        self.gusts = bool(scene.get("gusts"))
-        offered = scene.get("offered")
-        self.offered = None if offered is None else [str(a) for a in _listed(offered)]
-        self.choices = [str(a) for a in _listed(scene.get("choices"))]
-        self.king = "up-left" in _listed(scene.get("moves"))
-        self.cursor = cell_of(scene.get("cursor"))
+        agent = cell_of(scene.get("agent"))
         action = scene.get("last_action")
         action = action if action in MOVES else None
         self._event = self._event_of(previous, agent, action, bool(scene.get("slipped")))
@@ -362,9 +292,23 @@ class TileBoard(MapBoard):
                 self.trail = {}
         self.agent = agent
         self._fresh = False
-        if self.is_mounted:
-            self.border_title = theme.title
         super().show_scene(scene, reveal)
+
+    def _read(self, scene: Mapping[str, Any]) -> None:
+        """The map and what lies on it, from a scene."""
+        self.cells = map_rows(scene)
+        self.theme = THEMES.get(str(scene.get("theme", "lake")), THEMES["plain"])
+        self.border_title = self.theme.title
+        self.rewards = cell_table(scene.get("rewards"))
+        self.slip = cell_table(scene.get("slip"))
+        self.marks = {cell: str(text) for cell, text in cell_table(scene.get("marks")).items()}
+        self.wind = [int(w) for w in listed(scene.get("wind")) if read_as(float, w) is not None]
+        self.gusts = bool(scene.get("gusts"))
+        offered = scene.get("offered")
+        self.offered = None if offered is None else [str(a) for a in listed(offered)]
+        self.choices = [str(a) for a in listed(scene.get("choices"))]
+        self.king = "up-left" in listed(scene.get("moves"))  # the diagonals are moves
+        self.cursor = cell_of(scene.get("cursor"))
 
     def kind(self, cell: Cell) -> str:
         """The map character at a cell ('' off the map)."""
@@ -429,7 +373,7 @@ class TileBoard(MapBoard):
 
     # --- drawing -----------------------------------------------------------------
     def _reward(self, cell: Cell) -> float | None:
-        return _number(self.rewards.get(cell))
+        return read_as(float, self.rewards.get(cell))
 
     def _ground(self, cell: Cell, kind: str) -> Style:
         """The style of a tile's background (and of its glyph, unless it has its own)."""
@@ -451,15 +395,9 @@ class TileBoard(MapBoard):
             return text
         return GLYPHS.get(kind, kind)[:width]
 
-    def _agent_style(self, kind: str) -> Style:
-        if kind == GOAL:
-            return self._style("agent-home")
-        if kind in (HOLE, CLIFF):
-            return self._style("agent-lost")
-        return self._style("agent")
-
-    def _paint_tile(self, grid: CharGrid, cell: Cell, x0: int, y0: int, shape: TileShape) -> None:
+    def _paint_tile(self, grid: CharGrid, cell: Cell, shape: TileShape) -> None:
         w, h = shape.cell_w, shape.cell_h
+        x0, y0 = shape.x_of(cell[1]), shape.y_of(cell[0])
         kind = self.kind(cell)
         tile = self._ground(cell, kind)
         mid = h // 2
@@ -489,16 +427,16 @@ class TileBoard(MapBoard):
                 line = mid + 1 if below else mid - 1
                 value_ink = on_tile(self._style("value"), tile)
                 grid.put(x0 + (w - len(text)) // 2, y0 + line, text, value_ink)
-        slip = _number(self.slip.get(cell))
+        slip = read_as(float, self.slip.get(cell))
         if slip and w >= 5 and kind not in FILLED:
             grid.put(x0 + w - 1, y0, "≈", on_tile(self._style("slip"), tile))
         wind = self.wind[cell[1]] if cell[1] < len(self.wind) else 0
         if wind > 0 and w >= 5 and kind not in FILLED:
             grid.put(x0, y0, WIND * min(wind, w - 2), on_tile(self._style("wind"), tile))
         if cell == self.agent:
-            agent = self._agent_style(kind)
+            agent = self._style(AGENT_STYLES.get(kind, "agent"))
             if big:
-                under = grid.style_at(x0, y0 + mid)
+                under = grid.styles[y0 + mid][x0]
                 grid.pill(x0 + (w - 5) // 2, y0 + mid - 1, 5, 3, agent, under)
                 grid.put(x0 + w // 2, y0 + mid, AGENT, agent)
             else:
@@ -517,16 +455,14 @@ class TileBoard(MapBoard):
             grid.put(x0, y0, "[", cursor)
             grid.put(x0 + w - 1, y0, "]", cursor)
         else:
-            grid.put(x0, y0, "┌", cursor)
-            grid.put(x0 + w - 1, y0, "┐", cursor)
-            grid.put(x0, y0 + h - 1, "└", cursor)
-            grid.put(x0 + w - 1, y0 + h - 1, "┘", cursor)
+            for x, y, corner in ((0, 0, "┌"), (1, 0, "┐"), (0, 1, "└"), (1, 1, "┘")):
+                grid.put(x0 + x * (w - 1), y0 + y * (h - 1), corner, cursor)
 
     def _swatch(self, cell: Cell) -> Color | None:
         """A cell's colour in the half drawing."""
         kind = self.kind(cell)
         if cell == self.agent:
-            return self._agent_style(kind).bgcolor
+            return self._style(AGENT_STYLES.get(kind, "agent")).bgcolor
         if cell == self.cursor:
             return self._style("cursor").bgcolor
         if kind == START:
@@ -536,42 +472,34 @@ class TileBoard(MapBoard):
     def map_size(self) -> tuple[int, int] | None:
         return (len(self.cells), len(self.cells[0])) if self.cells else None
 
-    def choose_shape(self, rows: int, cols: int, width: int, height: int) -> TileShape:
-        return choose_shape(rows, cols, width, height)
+    choose_shape = staticmethod(choose_shape)
 
     def lines_under(self) -> int:
         return 1 if self.wind else 0  # a line kept for the wind under the columns
 
-    def layout_of(self, shape: TileShape, left: int, top: int) -> TileLayout:
-        return TileLayout(shape, left + shape.label_w, top)
-
     def draw_map(self, shape: TileShape, width: int, spare: int) -> list[Text]:
-        lines = self._draw_map(shape)
-        if self.wind and spare > 0 and not shape.half:
-            lines.append(self._wind_line(shape))
-        return lines
-
-    def _draw_map(self, shape: TileShape) -> list[Text]:
         w, h = shape.cell_w, shape.cell_h
         grid = CharGrid(shape.width, shape.height, Style())
-        x_map = shape.label_w
         if shape.half:
             for line in range(shape.map_h):
                 for col in range(shape.cols):
                     top = self._swatch((2 * line, col))
                     below = self._swatch((2 * line + 1, col)) if 2 * line + 1 < shape.rows else None
-                    grid.put(x_map + col * w, line, "▀" * w, Style(color=top, bgcolor=below))
+                    grid.put(shape.x_of(col), line, "▀" * w, Style(color=top, bgcolor=below))
             return grid.lines()
         for row in range(shape.rows):
             for col in range(shape.cols):
-                self._paint_tile(grid, (row, col), x_map + col * w, row * h, shape)
+                self._paint_tile(grid, (row, col), shape)
         if shape.axes:
             axis = self._style("axis")
             for row in range(shape.rows):
                 grid.put(0, row * h + h // 2, f"{row:>{shape.label_w - 1}}", axis)
             for col in range(shape.cols):
-                grid.put(x_map + col * w, shape.map_h, str(col).center(w), axis)
-        return grid.lines()
+                grid.put(shape.x_of(col), shape.map_h, str(col).center(w), axis)
+        lines = grid.lines()
+        if self.wind and spare > 0:
+            lines.append(self._wind_line(shape))
+        return lines
 
     def caption(self, width: int) -> Text:
         """What the last move did, or where the cursor or the agent is, in words that fit."""
@@ -585,7 +513,7 @@ class TileBoard(MapBoard):
         else:
             return Text("")
         said = [text.format(who=self.player_name) for text in texts]
-        caption = Text(fitting(said, width), self._style(style))
+        caption = Text(fit(said, width), self._style(style))
         caption.truncate(width, overflow="ellipsis")
         return caption
 
@@ -620,21 +548,14 @@ class TileBoard(MapBoard):
 
     # --- keys and clicks -----------------------------------------------------------
     def canvas_clicked(self, offset: Offset) -> None:
-        layout = self.layout_drawn
-        if layout is None:
-            return
-        rows, col = layout.rows_at(offset), layout.col_at(offset)
-        if not rows or col is None:
-            return
-        row = rows[0]
-        if len(rows) == 2 and self.agent is not None and self.agent[0] >= rows[1]:
-            row = rows[1]  # the half drawing: of the two rows, the one nearer the agent
-        self.post_message(self.CellClicked(row, col))
-        self.cell_clicked(row, col)
+        cell = self.layout_drawn.cell_at(offset, self.agent) if self.layout_drawn else None
+        if cell is not None:
+            self.post_message(self.CellClicked(*cell))
+            self.cell_clicked(*cell)
 
     def cell_clicked(self, row: int, col: int) -> None:
         """A click on cell (row, col): the agent steps one cell towards it."""
         self.step_to(self.agent, (row, col), MOVE_OF)
 
 
-__all__ = ["MOVES", "THEMES", "TileBoard", "TileLayout", "TileShape", "choose_shape", "map_rows"]
+__all__ = ["MOVES", "THEMES", "TileBoard", "TileShape", "choose_shape", "map_rows"]

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from rich.color import Color as RichColor
+from rich.color import blend_rgb
 from rich.segment import Segment
 from rich.style import Style
 
@@ -106,7 +107,7 @@ def sparkline_rows(
         step = round(ratio * COLOUR_STEPS)
         style = styles.get(step)
         if style is None:
-            style = Style(color=_blend(low, high, step / COLOUR_STEPS))
+            style = Style(color=mix(low, high, step / COLOUR_STEPS))
             styles[step] = style
         cells.append((int(ratio * levels), style))
     rows: list[Line] = []
@@ -128,10 +129,9 @@ def sparkline_rows(
     return rows
 
 
-def _blend(a: RichColor, b: RichColor, t: float) -> RichColor:
-    ra, ga, ba = a.get_truecolor()
-    rb, gb, bb = b.get_truecolor()
-    return RichColor.from_rgb(ra + (rb - ra) * t, ga + (gb - ga) * t, ba + (bb - ba) * t)
+def mix(a: RichColor, b: RichColor, t: float) -> RichColor:
+    """`a` moved a share `t` of the way to `b`."""
+    return RichColor.from_triplet(blend_rgb(a.get_truecolor(), b.get_truecolor(), t))
 
 
 class TrainingCharts(StripWidget):
