@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Hashable, Iterator
+from collections.abc import Callable, Hashable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -34,17 +34,14 @@ def _is_int_dtype(dtype: Any) -> bool:
     return np.issubdtype(np.dtype(dtype), np.integer) or np.dtype(dtype) == np.bool_
 
 
+def _parts(space: spaces.Tuple | spaces.Dict) -> Iterable[tuple[Any, spaces.Space]]:
+    """A Tuple's (index, space) or a Dict's (name, space) pairs, in order."""
+    return space.spaces.items() if isinstance(space, spaces.Dict) else enumerate(space.spaces)
+
+
 def _leaves(space: spaces.Space, path: str = "observation") -> list[tuple[spaces.Space, str]]:
-    if isinstance(space, spaces.Tuple):
-        out: list[tuple[spaces.Space, str]] = []
-        for i, sub in enumerate(space.spaces):
-            out.extend(_leaves(sub, f"{path}[{i}]"))
-        return out
-    if isinstance(space, spaces.Dict):
-        out = []
-        for name, sub in space.spaces.items():
-            out.extend(_leaves(sub, f"{path}[{name!r}]"))
-        return out
+    if isinstance(space, spaces.Tuple | spaces.Dict):
+        return [leaf for key, sub in _parts(space) for leaf in _leaves(sub, f"{path}[{key!r}]")]
     if isinstance(space, spaces.Discrete | spaces.MultiDiscrete | spaces.MultiBinary | spaces.Box):
         return [(space, path)]
     raise NotTabularError(
@@ -117,26 +114,12 @@ def _shaped(space: spaces.Space, values: Iterator[int]) -> Any:
 
 def _flattener(space: spaces.Space) -> Callable[[Any], list[Hashable]]:
     """A function giving every scalar of an observation, in space order, as Python numbers."""
-    if isinstance(space, spaces.Tuple):
-        parts = [_flattener(sub) for sub in space.spaces]
-        if all(isinstance(sub, spaces.Discrete) for sub in space.spaces):
-            return lambda obs: [int(v) for v in obs]
-
-        def flat_tuple(obs: Any) -> list[Hashable]:
-            out: list[Hashable] = []
-            for part, value in zip(parts, obs, strict=True):
-                out.extend(part(value))
-            return out
-        return flat_tuple
-    if isinstance(space, spaces.Dict):
-        named = [(name, _flattener(sub)) for name, sub in space.spaces.items()]
-
-        def flat_dict(obs: Any) -> list[Hashable]:
-            out: list[Hashable] = []
-            for name, part in named:
-                out.extend(part(obs[name]))
-            return out
-        return flat_dict
+    if isinstance(space, spaces.Tuple) and all(
+            isinstance(sub, spaces.Discrete) for sub in space.spaces):
+        return lambda obs: [int(v) for v in obs]
+    if isinstance(space, spaces.Tuple | spaces.Dict):
+        parts = [(key, _flattener(sub)) for key, sub in _parts(space)]
+        return lambda obs: [v for key, part in parts for v in part(obs[key])]
     return _leaf_flattener(space)
 
 

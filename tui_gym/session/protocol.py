@@ -118,10 +118,6 @@ class JsonlPlayer:
         self.session = session
         self.rules = session.game  # the game's names and roles
         self.game = HumanGame(session, seed=seed)
-        self._handlers: dict[str, Callable[[dict[str, Any]], dict[str, Any]]] = {
-            "spaces": self._spaces, "reset": self._reset, "step": self._step,
-            "render": self._render, "hint": self._hint, "help": self._help,
-        }
 
     def handle(self, line: str | bytes) -> dict[str, Any]:
         """One request line in, one response object out (never raises for bad input)."""
@@ -140,15 +136,14 @@ class JsonlPlayer:
         except ValueError as exc:
             return {"error": str(exc)}
         cmd = request.get("cmd")
-        handler = self._handlers.get(cmd) if isinstance(cmd, str) else None
+        handler: Callable[[dict[str, Any]], dict[str, Any]] | None = (
+            getattr(self, f"_{cmd}") if cmd in COMMANDS else None)
         if handler is None:
             response = {"error": f"unknown cmd {shown_value(cmd)}; commands: {', '.join(COMMANDS)}"}
         else:
             try:
                 response = handler(request)
-            except PlayError as exc:
-                response = {"error": str(exc)}
-            except (ValueError, TypeError) as exc:
+            except (ValueError, TypeError) as exc:  # a PlayError too
                 response = {"error": str(exc)}
         if "id" in request:
             response = {"id": request["id"], **response}

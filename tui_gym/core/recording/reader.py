@@ -368,13 +368,16 @@ class _Reader:
     def _start(self, record: dict[str, Any]) -> None:
         number = _int(record.get("episode"))
         frame = self._frame(record)
-        episode = Episode(
-            index=len(self.recording.episodes) + 1, game=self._current_game(),
-            seed=_int_or_none(record.get("seed")), positions=[Position(frame, None)],
-            recorded_number=number,
-        )
+        self._open(seed=_int_or_none(record.get("seed")), positions=[Position(frame, None)],
+                   recorded_number=number)
+
+    def _open(self, **fields: Any) -> Episode:
+        """A new episode of the current game, the one moves now go to."""
+        episode = Episode(index=len(self.recording.episodes) + 1, game=self._current_game(),
+                          **fields)
         self.recording.episodes.append(episode)
         self.episode = episode
+        return episode
 
     def _step(self, record: dict[str, Any]) -> None:
         number = _int(record.get("episode"))
@@ -396,12 +399,7 @@ class _Reader:
         episode = self.episode
         if episode is None or episode.recorded_number != number or episode.end is not None:
             # Its start line was lost: the episode begins at this move.
-            episode = Episode(
-                index=len(self.recording.episodes) + 1, game=game, started=False,
-                recorded_number=number,
-            )
-            self.recording.episodes.append(episode)
-            self.episode = episode
+            episode = self._open(started=False, recorded_number=number)
         episode.positions.append(Position(frame, move))
 
     def _end(self, record: dict[str, Any]) -> None:
@@ -415,7 +413,6 @@ class _Reader:
         if episode is not None and episode.recorded_number == number and episode.end is None:
             episode.end = end
         # An end whose episode was lost altogether has nothing to replay: it is let go.
-
 
     def _frame(self, record: dict[str, Any]) -> Frame:
         scene = record.get("scene")
