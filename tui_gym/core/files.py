@@ -142,11 +142,6 @@ def write_atomically(path: str | Path, data: bytes | str) -> Path:
     return given
 
 
-def _temp_pattern(name: str) -> re.Pattern[str]:
-    # `.NAME.PID.HEX.tmp` (ours) and `.NAME.XXXXXXXX.tmp` (from tempfile, by earlier versions).
-    return re.compile(rf"\.{re.escape(name)}\.(?:(\d+)\.[0-9a-f]+|[a-z0-9_]{{8}})\.tmp")
-
-
 def pid_alive(pid: int) -> bool:
     """Whether process `pid` may be alive (someone else's process, or no pid at all: yes)."""
     try:
@@ -164,7 +159,8 @@ def remove_stale_temp_files(path: Path) -> list[Path]:
     Only names of our own pattern go: those whose writer's pid is gone, and
     older unnamed ones.
     """
-    pattern = _temp_pattern(path.name)
+    # `.NAME.PID.HEX.tmp` (ours) and `.NAME.XXXXXXXX.tmp` (from tempfile, by earlier versions).
+    pattern = re.compile(rf"\.{re.escape(path.name)}\.(?:(\d+)\.[0-9a-f]+|[a-z0-9_]{{8}})\.tmp")
     folder = path.parent if str(path.parent) else Path(".")
     removed: list[Path] = []
     try:

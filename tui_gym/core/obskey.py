@@ -30,10 +30,6 @@ class _Leaf:
     radix: np.ndarray  # int64, flat: number of values each element takes
 
 
-def _is_int_dtype(dtype: Any) -> bool:
-    return np.issubdtype(np.dtype(dtype), np.integer) or np.dtype(dtype) == np.bool_
-
-
 def _parts(space: spaces.Tuple | spaces.Dict) -> Iterable[tuple[Any, spaces.Space]]:
     """A Tuple's (index, space) or a Dict's (name, space) pairs, in order."""
     return space.spaces.items() if isinstance(space, spaces.Dict) else enumerate(space.spaces)
@@ -60,7 +56,7 @@ def _dense_leaf(space: spaces.Space) -> _Leaf | None:
     if isinstance(space, spaces.MultiBinary):
         n = int(np.prod(space.shape))
         return _Leaf(np.zeros(n, dtype=np.int64), np.full(n, 2, dtype=np.int64))
-    if isinstance(space, spaces.Box) and _is_int_dtype(space.dtype):
+    if isinstance(space, spaces.Box) and space.dtype.kind in "iub":  # integers or bools
         if not (space.is_bounded("both")):
             return None
         # Python ints: `high - low + 1` in int64 overflows for ranges near the dtype's

@@ -131,9 +131,6 @@ class _Child:
                 self.last_heard = time.monotonic()
         self._outbox.put(data)
 
-    def stop_sending(self) -> None:
-        self._outbox.put(None)
-
     def _send_loop(self) -> None:
         while True:
             data = self._outbox.get()
@@ -181,7 +178,7 @@ class _Child:
             self.ending = True
             with contextlib.suppress(Exception):
                 self.send(("quit",))
-            self.stop_sending()
+            self._outbox.put(None)  # the sender stops
         if wait:
             self.reap()
         else:

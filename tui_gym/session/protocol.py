@@ -57,20 +57,6 @@ _DECODER = json.JSONDecoder(
 )
 
 
-def _decode(line: str) -> Any:
-    """`line` as JSON; ValueError (no internals in its message) when it is not a request's."""
-    try:
-        if line.startswith("\ufeff"):  # json.loads names the byte-order mark
-            return json.loads(line, cls=json.JSONDecoder)
-        return _DECODER.decode(line)
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"not JSON: {exc.msg} at column {exc.colno}") from None
-    except _BadNumber as exc:
-        raise ValueError(f"not a usable request: {exc}") from None
-    except RecursionError:
-        raise ValueError(f"not a usable request: nested deeper than {MAX_DEPTH} levels") from None
-
-
 def _clean_text(value: Any) -> str | None:
     """`value` as JSON text when it is JSON-safe as it is (no NaN or infinity, no surrogate
     in any text), else None: one pass of the C encoder, which most responses need alone."""
@@ -102,7 +88,17 @@ def _parse(line: str | bytes) -> dict[str, Any]:
         except UnicodeDecodeError as exc:
             raise ValueError(f"not UTF-8: byte 0x{line[exc.start]:02x} at column "
                              f"{exc.start + 1} cannot be decoded") from None
-    request = _decode(line)
+    try:  # messages with no internals in them
+        if line.startswith("\ufeff"):  # json.loads names the byte-order mark
+            request = json.loads(line, cls=json.JSONDecoder)
+        else:
+            request = _DECODER.decode(line)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"not JSON: {exc.msg} at column {exc.colno}") from None
+    except _BadNumber as exc:
+        raise ValueError(f"not a usable request: {exc}") from None
+    except RecursionError:
+        raise ValueError(f"not a usable request: nested deeper than {MAX_DEPTH} levels") from None
     if not isinstance(request, dict):
         raise ValueError('a request must be a JSON object like {"cmd": "reset"}')
     # Fewer brackets than levels cannot nest too deep: most requests skip the walk.

@@ -51,10 +51,6 @@ class StorageError(ValueError):
 # -- writing --------------------------------------------------------------------------------
 
 
-def _key_to_json(key: Any) -> Any:
-    return list(key) if isinstance(key, tuple) else key
-
-
 def check_save_path(path: str | Path) -> Path:
     """`path` as a `Path` when a save can be written there; else `StorageError` saying why
     (see `tui_gym.core.files.check_output_path`)."""
@@ -62,12 +58,6 @@ def check_save_path(path: str | Path) -> Path:
         return check_output_path(path)
     except OutputPathError as error:
         raise StorageError(str(error)) from None
-
-
-def _npy_bytes(array: np.ndarray) -> bytes:
-    buf = io.BytesIO()
-    np.save(buf, array, allow_pickle=False)
-    return buf.getvalue()
 
 
 def save_agent(path: str | Path, meta: dict[str, Any], state: LearnerState) -> Path:
@@ -78,9 +68,12 @@ def save_agent(path: str | Path, meta: dict[str, Any], state: LearnerState) -> P
     meta = {"format": FORMAT_NAME, "version": FORMAT_VERSION, **meta, "learner": state.meta}
     members = {"meta.json": json.dumps(meta, indent=2).encode()}
     for name, array in state.arrays.items():
-        members[f"{name}.npy"] = _npy_bytes(array)
+        buf = io.BytesIO()
+        np.save(buf, array, allow_pickle=False)
+        members[f"{name}.npy"] = buf.getvalue()
     if state.keys is not None:
-        members["keys.json"] = json.dumps([_key_to_json(k) for k in state.keys]).encode()
+        keys = [list(k) if isinstance(k, tuple) else k for k in state.keys]
+        members["keys.json"] = json.dumps(keys).encode()
     rows = int(state.meta["rows"])
     for name, data in members.items():
         cap = MAX_META_BYTES if name == "meta.json" else MAX_TABLE_BYTES

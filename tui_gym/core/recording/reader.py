@@ -235,36 +235,29 @@ def read_recording(path: str | Path, scene_fits: SceneCheck | None = None) -> Re
         if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):
             raise RecordingError(f"{path} is not a regular file (a pipe or a device), "
                                  "not a recording")
-        recording = read_lines_of(handle, path, scene_fits)
+        recording = Recording(path)
+        reader = _Reader(recording, scene_fits)
+        read = 0
+        for number, line in _lines(handle):
+            read += MAX_LINE_BYTES if line is None else len(line)
+            if read > MAX_READ_BYTES:
+                recording.cut_at_line = number
+                recording.size = _size_of(handle)
+                break
+            recording.lines = number
+            if line is None:
+                recording.skipped.append(number)
+                continue
+            if not line.strip():
+                continue
+            try:
+                reader.take(number, line)
+            except _Bad:
+                recording.skipped.append(number)
     if not recording.episodes:
         if not recording.games and recording.skipped:
             raise RecordingError(f"{path} is not a tui-gym recording (no line of it could be read)")
         raise RecordingError(f"{path} holds no episode to replay")
-    return recording
-
-
-def read_lines_of(handle: IO[bytes], path: Path, scene_fits: SceneCheck | None = None) -> Recording:
-    """Read a recording from an open binary file (see `read_recording`)."""
-    recording = Recording(path)
-    reader = _Reader(recording, scene_fits)
-    read = 0
-    for number, line in _lines(handle):
-        read += MAX_LINE_BYTES if line is None else len(line)
-        if read > MAX_READ_BYTES:
-            recording.cut_at_line = number
-            recording.size = _size_of(handle)
-            break
-        recording.lines = number
-        if line is None:
-            recording.skipped.append(number)
-            continue
-        if not line.strip():
-            continue
-        try:
-            reader.take(number, line)
-        except _Bad:
-            recording.skipped.append(number)
-    reader.finish()
     return recording
 
 
@@ -329,9 +322,6 @@ class _Reader:
             self._end(record)
         else:
             raise _Bad
-
-    def finish(self) -> None:
-        self.episode = None
 
     # --- records ---------------------------------------------------------------
     def _header(self, number: int, record: dict[str, Any]) -> None:

@@ -116,7 +116,8 @@ class Recorder:
         info: Mapping[str, Any] | None = None,
     ) -> None:
         """A new episode has been reset to `observation` (an open one ends, abandoned)."""
-        self._need_session()
+        if self._played is None:
+            raise ValueError("no game to record: pass a session or call use_session first")
         self.end_episode()
         self.episodes += 1
         episode = self._episode = _Episode(self.episodes)
@@ -203,10 +204,6 @@ class Recorder:
             self.end_episode()
 
     # --- helpers ---------------------------------------------------------------
-    def _need_session(self) -> None:
-        if self._played is None:
-            raise ValueError("no game to record: pass a session or call use_session first")
-
     def _assess(self, env: Any, steps_taken: int) -> Assessment:
         return self._judge.assess(env, steps_taken) if self._judge is not None else NOTHING_KNOWN
 
