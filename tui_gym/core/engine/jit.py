@@ -36,7 +36,7 @@ from tui_gym.core.engine import kernel
 
 __all__ = [
     "COMPILING", "cache_folder", "compiled", "compiles", "direct", "entry", "folder", "saving",
-    "start", "started",
+    "start",
 ]
 
 COMPILING = "compiling the learners, once"
@@ -50,10 +50,6 @@ _DIRECT: dict[tuple[Callable[..., Any], object], Any] = {}
 _started = False
 _folder: Path | None = None
 _saves_in_turn = False  # set by `start` (see the module docstring)
-
-
-def started() -> bool:
-    return _started
 
 
 def compiles() -> bool:
