@@ -255,8 +255,6 @@ class ProcessRunner(Runner):
 
     @property
     def busy(self) -> bool:
-        """True while training is on, an episode or step is asked for, or the child holds
-        the agent."""
         self.update()
         return self._wanted() or self._pending is not None
 
@@ -287,32 +285,19 @@ class ProcessRunner(Runner):
 
     # --- controls ---------------------------------------------------------------
     def start(self) -> bool:
-        """Train until paused or the budget is reached; False when the budget is used up
-        (or no training process can run: `error` says why)."""
         return self._ask("start", False)
 
     def pause(self, wait: bool = True, timeout: float = REPLY_TIMEOUT) -> bool:
-        """Stop training now; the child hands the agent back in a moment.
-
-        With `wait`, wait (at most `timeout`) until it has, so the session holds
-        every episode; False on a timeout. A UI passes `wait=False` and lets
-        `update()` take the agent in when it comes.
-        """
-        self.update()
+        self.update()  # the child hands the agent back in a moment, `update()` takes it in
         self._want()
         if self._pending is not None:
             self._ask_back(self._pending)
         return self.wait_idle(timeout) if wait else True
 
     def run_one_episode(self) -> bool:
-        """Play one training episode in the child (ignored while running or busy); False,
-        as `start`, when the budget is used up."""
         return self._ask("one", self._want_run or self._pending is not None)
 
     def run_one_step(self) -> bool:
-        """Take one training step (one transition) in the child, explained in
-        `last_event.last_update` (ignored while running or busy); False, as `start`,
-        when the budget is used up. Steps asked for while one is under way follow it."""
         pending = self._pending
         return self._ask("step", self._want_run or self._want_one
                          or (pending is not None and pending.kind != "step"))
@@ -343,9 +328,7 @@ class ProcessRunner(Runner):
         return True
 
     def set_hyperparameters(self, hp: Any) -> None:
-        """New hyperparameters for the session, taking effect at once: the child training
-        its agent gets them too (ValueError, changing nothing, for bad ones)."""
-        self.update()
+        self.update()  # the child training the session's agent gets them too
         self.session.set_hyperparameters(hp)
         request = self._pending
         if request is not None and self._current(request) and self._child is not None:
@@ -356,7 +339,6 @@ class ProcessRunner(Runner):
             self._child.send(("speed", self.speed_index))
 
     def wait_idle(self, timeout: float = REPLY_TIMEOUT) -> bool:
-        """Wait until the child holds no agent (nothing running, nothing asked for)."""
         deadline = time.monotonic() + timeout
         while True:
             self._heard.clear()
@@ -369,7 +351,6 @@ class ProcessRunner(Runner):
             self._heard.wait(min(left, 0.25))
 
     def close(self, wait: bool = True) -> None:
-        """End the child (with `wait`, return once it has ended; it is killed if it must be)."""
         self._closed = True
         self._want()
         child, self._child = self._child, None

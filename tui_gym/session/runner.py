@@ -53,12 +53,10 @@ class TrainingRunner(Runner):
 
     @property
     def running(self) -> bool:
-        """True while training is switched on (it may be between pieces of work)."""
         return self._want_run
 
     @property
     def busy(self) -> bool:
-        """True while training is on, an episode or step is asked for, or work is under way."""
         return self._want_run or self._want_one or self._want_step > 0 or self._working
 
     def _control(self, step: int = 0, **flags: bool | int) -> None:
@@ -74,29 +72,18 @@ class TrainingRunner(Runner):
         """Nothing to collect: the worker trains the session's own objects."""
 
     def start(self) -> bool:
-        """Train until paused or the budget is reached; False when the budget is used up."""
         return self._ask(False, want_run=True, want_one=False)
 
     def pause(self, wait: bool = True, timeout: float = STOP_TIMEOUT) -> bool:
-        """Stop training, mid-episode included, and return once the worker has stopped.
-
-        The worker finishes the piece of work under way (milliseconds), so this
-        returns at once in practice; `wait` is there for the process runner,
-        whose child may take longer to hand the agent back. False on a timeout.
-        """
+        # The worker finishes the piece of work under way (milliseconds): at once, in practice.
         self._control(want_run=False, want_one=False, want_step=0)
         with self._cond:
             return self._cond.wait_for(lambda: not self._working, timeout)
 
     def run_one_episode(self) -> bool:
-        """Play one training episode on the worker (ignored while running); False, as
-        `start`, when the budget is used up."""
         return self._ask(self._want_run, want_one=True)
 
     def run_one_step(self) -> bool:
-        """Take one training step (one transition) on the env, explained in
-        `last_event.last_update`, after the steps asked for before it (ignored while
-        running or busy with an episode); False, as `start`, when the budget is used up."""
         return self._ask(self._want_run or self._want_one, step=1)
 
     def _ask(self, busy: bool, step: int = 0, **flags: bool) -> bool:
@@ -111,8 +98,6 @@ class TrainingRunner(Runner):
         return True
 
     def set_hyperparameters(self, hp: Any) -> None:
-        """New hyperparameters for the session, taking effect at once, mid-run too
-        (ValueError, changing nothing, for bad ones)."""
         self.session.set_hyperparameters(hp)
 
     def _speed_changed(self) -> None:
@@ -123,12 +108,10 @@ class TrainingRunner(Runner):
         return self.session.trainer.latest
 
     def wait_idle(self, timeout: float = STOP_TIMEOUT) -> bool:
-        """Wait until the worker has nothing to do (the run or the episode is over)."""
         with self._cond:
             return self._cond.wait_for(lambda: not self.busy or self._quit, timeout)
 
     def close(self, wait: bool = True) -> None:
-        """Stop the worker thread for good (with `wait`, return once it has ended)."""
         self._control(quit=True, want_run=False, want_one=False, want_step=0)
         if wait and self._thread is not threading.current_thread():
             self._thread.join(timeout=STOP_TIMEOUT)
