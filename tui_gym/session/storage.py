@@ -205,16 +205,6 @@ def _plain_number(value: Any) -> bool:
     )
 
 
-def _algorithm_of(reader: _Reader, meta: dict[str, Any], version: int) -> type[Learner]:
-    """The learner class a save names (version 1 files are Q-learning's)."""
-    if version < 2:
-        return QLearning
-    name = meta.get("algorithm")
-    if not isinstance(name, str):
-        raise reader.field("algorithm", f"must be an algorithm's name, got {shown_value(name)}")
-    return reader.checked("algorithm", lambda: algorithm(name))
-
-
 # The dtype kinds each kind of learner array may be saved as.
 _KINDS = {"f": "f", "i": "iu", "u": "iu", "b": "b"}
 
@@ -389,7 +379,11 @@ def read_agent(path: str | Path) -> SavedAgent:
             if not isinstance(meta, dict) or meta.get("format") != FORMAT_NAME:
                 raise reader.error(f"not a tui-gym save file (format is not {FORMAT_NAME})")
             version = _check_version(reader, meta.get("version"))
-            cls = _algorithm_of(reader, meta, version)
+            name = meta.get("algorithm") if version >= 2 else QLearning.name  # version 1's
+            if not isinstance(name, str):
+                raise reader.field("algorithm",
+                                   f"must be an algorithm's name, got {shown_value(name)}")
+            cls = reader.checked("algorithm", partial(algorithm, name))
             arrays = _learner_arrays(reader, zf, cls, version)
             rows = len(arrays[cls.tables[0].name])
             keys = None

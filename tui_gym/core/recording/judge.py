@@ -84,9 +84,7 @@ class MoveJudge:
         state = getattr(env.unwrapped, "s", None)
         if isinstance(state, np.integer):
             state = int(state)
-        if not isinstance(state, int) or isinstance(state, bool):
-            return None
-        if not 0 <= state < model.n_states:
+        if not isinstance(state, int) or isinstance(state, bool) or not 0 <= state < model.n_states:
             return None
         steps_left = None if model.horizon is None else model.horizon - steps_taken
         if steps_left is not None and steps_left < 1:
