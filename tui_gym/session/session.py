@@ -363,28 +363,24 @@ class Session:
         """Table keys of the game's base states, or None when wrappers hide them (or
         the game lists none)."""
         if self._base_keys is False:
-            self._base_keys = self._compute_base_keys()
+            keys: list[Hashable] | None = None
+            observations = None if self._history_wrappers() else (
+                self.game.states.base_observations(self.env_kwargs))
+            if observations is not None and not isinstance(observations, NotAvailable):
+                layers = [layer for layer in chain.layers(self.env)
+                          if isinstance(layer, gym.ObservationWrapper)]
+                keys = []
+                for obs in observations:
+                    for layer in layers:
+                        obs = layer.observation(obs)
+                    keys.append(self.keyer.key(obs))
+            self._base_keys = keys
         return self._base_keys  # type: ignore[return-value]
 
     def _history_wrappers(self) -> list[str]:
         """The applied wrappers whose observations depend on more than the bare one."""
         return [c.name for c in self.applied if CATALOG[c.name].changes_observation
                 and c.name not in STATELESS_OBSERVATION_WRAPPERS]
-
-    def _compute_base_keys(self) -> list[Hashable] | None:
-        if self._history_wrappers():
-            return None
-        layers = [layer for layer in chain.layers(self.env)
-                  if isinstance(layer, gym.ObservationWrapper)]
-        observations = self.game.states.base_observations(self.env_kwargs)
-        if isinstance(observations, NotAvailable):
-            return None
-        keys = []
-        for obs in observations:
-            for layer in layers:
-                obs = layer.observation(obs)
-            keys.append(self.keyer.key(obs))
-        return keys
 
     def hidden_reason(self) -> str:
         """Why heatmaps and the exact reference are unavailable (empty when they are)."""
