@@ -73,24 +73,13 @@ def _dense_leaf(space: spaces.Space) -> _Leaf | None:
     return None
 
 
-def _python_scalar(value: Any) -> Hashable:
-    if isinstance(value, float | np.floating):
-        rounded = round(float(value), FLOAT_DECIMALS)
-        return 0.0 if rounded == 0 else rounded  # -0.0 and 0.0 are one key
-    if isinstance(value, bool | np.bool_):
-        return int(value)
-    if isinstance(value, int | np.integer):
-        return int(value)
-    raise NotTabularError(f"cannot use a {type(value).__name__} as part of a table key")
-
-
 def _leaf_flattener(space: spaces.Space) -> Callable[[Any], list[Hashable]]:
     if isinstance(space, spaces.Discrete):
         return lambda x: [int(x)]
     if isinstance(space, spaces.Box) and space.dtype.kind == "f":
         def floats(x: Any) -> list[Hashable]:
             arr = np.round(np.asarray(x, dtype=np.float64).ravel(), FLOAT_DECIMALS)
-            return [_python_scalar(v) for v in arr.tolist()]
+            return [round(v, FLOAT_DECIMALS) + 0.0 for v in arr.tolist()]  # -0.0 is 0.0
         return floats
     return lambda x: [int(v) for v in np.asarray(x).ravel().tolist()]
 
