@@ -9,11 +9,9 @@ import re
 import secrets
 import signal
 import stat
-import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
 
 __all__ = [
     "OutputPathError", "check_output_path", "read_regular_file", "remove_stale_temp_files",
@@ -144,11 +142,6 @@ def write_atomically(path: str | Path, data: bytes | str) -> Path:
     return given
 
 
-def _temp_pattern(name: str) -> re.Pattern[str]:
-    # `.NAME.PID.HEX.tmp` (ours) and `.NAME.XXXXXXXX.tmp` (from tempfile, by earlier versions).
-    return re.compile(rf"\.{re.escape(name)}\.(?:(\d+)\.[0-9a-f]+|[a-z0-9_]{{8}})\.tmp")
-
-
 def pid_alive(pid: int) -> bool:
     """Whether process `pid` may be alive (someone else's process, or no pid at all: yes)."""
     try:
@@ -166,7 +159,8 @@ def remove_stale_temp_files(path: Path) -> list[Path]:
     Only names of our own pattern go: those whose writer's pid is gone, and
     older unnamed ones.
     """
-    pattern = _temp_pattern(path.name)
+    # `.NAME.PID.HEX.tmp` (ours) and `.NAME.XXXXXXXX.tmp` (from tempfile, by earlier versions).
+    pattern = re.compile(rf"\.{re.escape(path.name)}\.(?:(\d+)\.[0-9a-f]+|[a-z0-9_]{{8}})\.tmp")
     folder = path.parent if str(path.parent) else Path(".")
     removed: list[Path] = []
     try:
@@ -201,31 +195,16 @@ def _signals_deferred() -> Iterator[None]:
 
     A write takes milliseconds; finishing it (or removing its temporary file) first
     means a signal never leaves one behind. Only signals that still have their
-    default action are held (a program's own handlers stay as they are), and only
-    the main thread can set handlers; elsewhere the block runs as is.
+    default action are held, and only on the main thread (see `processes.handling`).
     """
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
+    from tui_gym.core.engine.processes import handling  # signals, threads: not for every read
+
     caught: list[int] = []
-    previous: dict[int, Any] = {}
-    for name in ("SIGTERM", "SIGHUP", "SIGINT"):
-        sig = getattr(signal, name, None)
-        if sig is None:
-            continue
-        try:
-            handler = signal.getsignal(sig)
-            if handler not in (signal.SIG_DFL, signal.default_int_handler):
-                continue
-            previous[sig] = handler
-            signal.signal(sig, lambda signum, frame: caught.append(signum))
-        except (ValueError, OSError):
-            continue
     try:
-        yield
+        with handling(("SIGTERM", "SIGHUP", "SIGINT"), lambda signum, frame: caught.append(signum),
+                      untouched=True):
+            yield
     finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
         for sig in dict.fromkeys(caught):
             signal.raise_signal(sig)
 

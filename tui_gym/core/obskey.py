@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Hashable, Iterator
+from collections.abc import Callable, Hashable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -30,21 +30,14 @@ class _Leaf:
     radix: np.ndarray  # int64, flat: number of values each element takes
 
 
-def _is_int_dtype(dtype: Any) -> bool:
-    return np.issubdtype(np.dtype(dtype), np.integer) or np.dtype(dtype) == np.bool_
+def _parts(space: spaces.Tuple | spaces.Dict) -> Iterable[tuple[Any, spaces.Space]]:
+    """A Tuple's (index, space) or a Dict's (name, space) pairs, in order."""
+    return space.spaces.items() if isinstance(space, spaces.Dict) else enumerate(space.spaces)
 
 
 def _leaves(space: spaces.Space, path: str = "observation") -> list[tuple[spaces.Space, str]]:
-    if isinstance(space, spaces.Tuple):
-        out: list[tuple[spaces.Space, str]] = []
-        for i, sub in enumerate(space.spaces):
-            out.extend(_leaves(sub, f"{path}[{i}]"))
-        return out
-    if isinstance(space, spaces.Dict):
-        out = []
-        for name, sub in space.spaces.items():
-            out.extend(_leaves(sub, f"{path}[{name!r}]"))
-        return out
+    if isinstance(space, spaces.Tuple | spaces.Dict):
+        return [leaf for key, sub in _parts(space) for leaf in _leaves(sub, f"{path}[{key!r}]")]
     if isinstance(space, spaces.Discrete | spaces.MultiDiscrete | spaces.MultiBinary | spaces.Box):
         return [(space, path)]
     raise NotTabularError(
@@ -63,7 +56,7 @@ def _dense_leaf(space: spaces.Space) -> _Leaf | None:
     if isinstance(space, spaces.MultiBinary):
         n = int(np.prod(space.shape))
         return _Leaf(np.zeros(n, dtype=np.int64), np.full(n, 2, dtype=np.int64))
-    if isinstance(space, spaces.Box) and _is_int_dtype(space.dtype):
+    if isinstance(space, spaces.Box) and space.dtype.kind in "iub":  # integers or bools
         if not (space.is_bounded("both")):
             return None
         # Python ints: `high - low + 1` in int64 overflows for ranges near the dtype's
@@ -80,24 +73,13 @@ def _dense_leaf(space: spaces.Space) -> _Leaf | None:
     return None
 
 
-def _python_scalar(value: Any) -> Hashable:
-    if isinstance(value, float | np.floating):
-        rounded = round(float(value), FLOAT_DECIMALS)
-        return 0.0 if rounded == 0 else rounded  # -0.0 and 0.0 are one key
-    if isinstance(value, bool | np.bool_):
-        return int(value)
-    if isinstance(value, int | np.integer):
-        return int(value)
-    raise NotTabularError(f"cannot use a {type(value).__name__} as part of a table key")
-
-
 def _leaf_flattener(space: spaces.Space) -> Callable[[Any], list[Hashable]]:
     if isinstance(space, spaces.Discrete):
         return lambda x: [int(x)]
     if isinstance(space, spaces.Box) and space.dtype.kind == "f":
         def floats(x: Any) -> list[Hashable]:
             arr = np.round(np.asarray(x, dtype=np.float64).ravel(), FLOAT_DECIMALS)
-            return [_python_scalar(v) for v in arr.tolist()]
+            return [round(v, FLOAT_DECIMALS) + 0.0 for v in arr.tolist()]  # -0.0 is 0.0
         return floats
     return lambda x: [int(v) for v in np.asarray(x).ravel().tolist()]
 
@@ -117,26 +99,12 @@ def _shaped(space: spaces.Space, values: Iterator[int]) -> Any:
 
 def _flattener(space: spaces.Space) -> Callable[[Any], list[Hashable]]:
     """A function giving every scalar of an observation, in space order, as Python numbers."""
-    if isinstance(space, spaces.Tuple):
-        parts = [_flattener(sub) for sub in space.spaces]
-        if all(isinstance(sub, spaces.Discrete) for sub in space.spaces):
-            return lambda obs: [int(v) for v in obs]
-
-        def flat_tuple(obs: Any) -> list[Hashable]:
-            out: list[Hashable] = []
-            for part, value in zip(parts, obs, strict=True):
-                out.extend(part(value))
-            return out
-        return flat_tuple
-    if isinstance(space, spaces.Dict):
-        named = [(name, _flattener(sub)) for name, sub in space.spaces.items()]
-
-        def flat_dict(obs: Any) -> list[Hashable]:
-            out: list[Hashable] = []
-            for name, part in named:
-                out.extend(part(obs[name]))
-            return out
-        return flat_dict
+    if isinstance(space, spaces.Tuple) and all(
+            isinstance(sub, spaces.Discrete) for sub in space.spaces):
+        return lambda obs: [int(v) for v in obs]
+    if isinstance(space, spaces.Tuple | spaces.Dict):
+        parts = [(key, _flattener(sub)) for key, sub in _parts(space)]
+        return lambda obs: [v for key, part in parts for v in part(obs[key])]
     return _leaf_flattener(space)
 
 

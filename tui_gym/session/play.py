@@ -42,23 +42,20 @@ class Tally:
     def mean(self) -> float:
         return self.total / self.episodes if self.episodes else 0.0
 
-    @property
-    def std(self) -> float:
-        """Sample standard deviation of the returns."""
-        n = self.episodes
-        if n < 2:
-            return float("nan")
-        var = (self.total_sq - n * self.mean**2) / (n - 1)
-        return math.sqrt(max(0.0, var))
-
     def confidence_interval(self, z: float = 1.96, min_episodes: int = 2) -> tuple[float, float]:
         """Normal-approximation interval for the mean return (NaN below `min_episodes`,
         and never below 2)."""
         n = self.episodes
         if n < max(2, min_episodes):
             return (float("nan"), float("nan"))
-        half = z * self.std / math.sqrt(n)
+        half = z * math.sqrt(sample_variance(self.total, self.total_sq, n)) / math.sqrt(n)
         return (self.mean - half, self.mean + half)
+
+
+def sample_variance(total: float, total_sq: float, n: int) -> float:
+    """The sample variance of `n` >= 2 values from their sum and sum of squares."""
+    mean = total / n
+    return max(0.0, (total_sq - n * mean * mean) / (n - 1))
 
 
 @dataclass

@@ -1,27 +1,20 @@
 """Training in a child process: the UI's Python never shares a core with the trainer.
 
-`ProcessRunner` has the same surface as `TrainingRunner` (start, pause,
-toggle, run_one_episode, run_one_step, speeds, set_hyperparameters, latest,
-last_scene, last_event, error, finished, update, close), but the training
-runs in a separate process, so the trainer and the event loop never compete
-for one interpreter lock.
+`ProcessRunner` is a `Runner` whose training runs in a separate process, so the
+trainer and the event loop never compete for one interpreter lock.
 
-Ownership: while paused, the parent's `Session` is the truth. A start (or
-one episode) hands the child the session's spec (game, wrappers, seed, engine, algorithm),
-its hyperparameters, its agent (the learner, pickled) and its trainer's progress; while the child
-trains it streams snapshots back; new hyperparameters follow it there at once;
-a pause asks for the agent back. Every
-request has a number, and what comes back lands in the agent object the
-request was made from: after a reset (a new agent) or a game switch, a late
-handover changes nothing the session shows, and a rebuild that kept the agent
-gets every episode trained.
+While paused, the parent's `Session` is the truth. A start (or one episode, or
+one step) hands the child the session's spec, hyperparameters, agent and
+progress; the child streams snapshots back, new hyperparameters follow it at
+once, and a pause asks for the agent back. Every request has a number, and what
+comes back lands in the agent object the request was made from: after a reset
+or a game switch, a late handover changes nothing the session shows.
 
-Nothing here ever waits on the child in the caller's thread: requests are
-queued to a sender thread, and what the child says is queued by a receiver
-thread and taken in by `update()`, which the owner calls (every property and
-control does). A child that dies is reaped and replaced; one that stops
-answering for `HANG_SECONDS` while it holds the agent is killed and replaced;
-either way the agent is kept as it was last handed over, and `error` says so.
+Nothing here waits on the child in the caller's thread: a sender thread sends,
+a receiver thread queues what the child says, and `update()` (which every
+property and control calls) takes it in. A child that dies is reaped and
+replaced; one silent for `HANG_SECONDS` while it holds the agent is killed and
+replaced; either way the agent is kept as last handed over, and `error` says so.
 """
 
 from __future__ import annotations
@@ -73,14 +66,8 @@ class SessionSpec:
 
     @classmethod
     def of(cls, session: Session) -> SessionSpec:
-        return cls(
-            session.env_id,
-            dict(session.env_kwargs),
-            tuple(session.choices),
-            session.seed,
-            getattr(session, "engine", "auto"),
-            session.algorithm,
-        )
+        return cls(session.env_id, dict(session.env_kwargs), tuple(session.choices),
+                   session.seed, session.engine, session.algorithm)
 
 
 @dataclass(frozen=True)
@@ -144,9 +131,6 @@ class _Child:
                 self.last_heard = time.monotonic()
         self._outbox.put(data)
 
-    def stop_sending(self) -> None:
-        self._outbox.put(None)
-
     def _send_loop(self) -> None:
         while True:
             data = self._outbox.get()
@@ -194,7 +178,7 @@ class _Child:
             self.ending = True
             with contextlib.suppress(Exception):
                 self.send(("quit",))
-            self.stop_sending()
+            self._outbox.put(None)  # the sender stops
         if wait:
             self.reap()
         else:
@@ -226,9 +210,7 @@ class ProcessRunner(Runner):
         self.speed_index = speed
         self._error: BaseException | None = None
         self._finished = False
-        self._want_run = False
-        self._want_one = False
-        self._want_step = 0  # steps asked for and not sent yet (a burst of `n` keeps each)
+        self._want()  # run, one episode, steps asked for and not sent yet (a burst of `n`)
         self._pending: _Request | None = None
         self._numbers = 0
         self._last_sent_agent: Any = None  # to tell the child when the agent is a new one
@@ -273,13 +255,14 @@ class ProcessRunner(Runner):
 
     @property
     def busy(self) -> bool:
-        """True while training is on, an episode or step is asked for, or the child holds
-        the agent."""
         self.update()
         return self._wanted() or self._pending is not None
 
     def _wanted(self) -> bool:
         return self._want_run or self._want_one or self._want_step > 0
+
+    def _want(self, run: bool = False, one: bool = False, step: int = 0) -> None:
+        self._want_run, self._want_one, self._want_step = run, one, step
 
     @property
     def latest(self) -> TrainingSnapshot:
@@ -302,65 +285,42 @@ class ProcessRunner(Runner):
 
     # --- controls ---------------------------------------------------------------
     def start(self) -> bool:
-        """Train until paused or the budget is reached; False when the budget is used up
-        (or no training process can run: `error` says why)."""
-        self.update()
-        if self._broken:
-            self._error = RuntimeError(self._broken)
-            return False
-        if self.session.trainer.remaining == 0 and self._pending is None:
-            self._finished = True
-            return False
-        self._finished = False
-        self._error = None
-        self._want_run = True
-        self._want_one = False
-        self._want_step = 0
-        request = self._pending
-        if request is not None and request.kind in ("one", "step"):
-            self._ask_back(request)  # then start from where the episode got to
-        self._sync()
-        return True
+        return self._ask("start", False)
 
     def pause(self, wait: bool = True, timeout: float = REPLY_TIMEOUT) -> bool:
-        """Stop training now; the child hands the agent back in a moment.
-
-        With `wait`, wait (at most `timeout`) until it has, so the session holds
-        every episode; False on a timeout. A UI passes `wait=False` and lets
-        `update()` take the agent in when it comes.
-        """
-        self.update()
-        self._want_run = self._want_one = False
-        self._want_step = 0
+        self.update()  # the child hands the agent back in a moment, `update()` takes it in
+        self._want()
         if self._pending is not None:
             self._ask_back(self._pending)
         return self.wait_idle(timeout) if wait else True
 
     def run_one_episode(self) -> bool:
-        """Play one training episode in the child (ignored while running or busy); False,
-        as `start`, when the budget is used up."""
-        return self._one("one", self._want_run or self._pending is not None)
+        return self._ask("one", self._want_run or self._pending is not None)
 
     def run_one_step(self) -> bool:
-        """Take one training step (one transition) in the child, explained in
-        `last_event.last_update` (ignored while running or busy); False, as `start`,
-        when the budget is used up. Steps asked for while one is under way follow it."""
         pending = self._pending
-        return self._one("step", self._want_run or self._want_one
+        return self._ask("step", self._want_run or self._want_one
                          or (pending is not None and pending.kind != "step"))
 
-    def _one(self, kind: str, busy: bool) -> bool:
+    def _ask(self, kind: str, busy: bool) -> bool:
+        """Ask for a run ("start"), an episode ("one") or a step unless `busy`."""
         self.update()
         if self._broken:
             self._error = RuntimeError(self._broken)
-            return True
+            return kind != "start"
         if self.session.trainer.remaining == 0 and self._pending is None:
             self._finished = True
             return False
         if busy:
             return True
         self._error = None
-        if kind == "one":
+        if kind == "start":
+            self._finished = False
+            self._want(run=True)
+            request = self._pending
+            if request is not None and request.kind in ("one", "step"):
+                self._ask_back(request)  # then start from where the episode got to
+        elif kind == "one":
             self._want_one = True
         else:
             self._want_step += 1
@@ -368,9 +328,7 @@ class ProcessRunner(Runner):
         return True
 
     def set_hyperparameters(self, hp: Any) -> None:
-        """New hyperparameters for the session, taking effect at once: the child training
-        its agent gets them too (ValueError, changing nothing, for bad ones)."""
-        self.update()
+        self.update()  # the child training the session's agent gets them too
         self.session.set_hyperparameters(hp)
         request = self._pending
         if request is not None and self._current(request) and self._child is not None:
@@ -381,7 +339,6 @@ class ProcessRunner(Runner):
             self._child.send(("speed", self.speed_index))
 
     def wait_idle(self, timeout: float = REPLY_TIMEOUT) -> bool:
-        """Wait until the child holds no agent (nothing running, nothing asked for)."""
         deadline = time.monotonic() + timeout
         while True:
             self._heard.clear()
@@ -394,10 +351,8 @@ class ProcessRunner(Runner):
             self._heard.wait(min(left, 0.25))
 
     def close(self, wait: bool = True) -> None:
-        """End the child (with `wait`, return once it has ended; it is killed if it must be)."""
         self._closed = True
-        self._want_run = self._want_one = False
-        self._want_step = 0
+        self._want()
         child, self._child = self._child, None
         self._ended = child or self._ended
         if self._ended is not None:
@@ -411,29 +366,22 @@ class ProcessRunner(Runner):
             child, message = inbox.popleft()
             if child is not self._child:
                 continue  # a replaced child's last words
-            kind = message[0]
-            if kind == "snapshot":
-                self._take_snapshot(*message[1:])
-            elif kind == "returned":
-                self._take_back(*message[1:])
-            elif kind == "gone":
+            kind, request = message[0], self._pending
+            if kind == "gone":
                 self._replace_child(child, message[1])
+            elif kind not in ("snapshot", "returned") or request is None \
+                    or message[1] != request.number:
+                continue  # alive, or words on a request already answered
+            elif kind == "snapshot":
+                request.latest, scene, event = message[2:]
+                if scene is not None:
+                    self._shown = (request.agent, scene, event)
+            else:
+                self._take_back(request, *message[2:])
         self._sync()
 
-    def _take_snapshot(self, number: int, snapshot: TrainingSnapshot, scene: Any,
-                       event: Any) -> None:
-        request = self._pending
-        if request is None or request.number != number:
-            return
-        request.latest = snapshot
-        if scene is not None:
-            self._shown = (request.agent, scene, event)
-
-    def _take_back(self, number: int, handover: Handover, reason: str,
+    def _take_back(self, request: _Request, handover: Handover, reason: str,
                    error: str | None) -> None:
-        request = self._pending
-        if request is None or request.number != number:
-            return
         self._pending = None
         current = self._current(request)
         try:
@@ -460,8 +408,7 @@ class ProcessRunner(Runner):
     def _replace_child(self, child: _Child, exitcode: int | None) -> None:
         request, self._pending = self._pending, None
         was_training = self._wanted() or request is not None
-        self._want_run = self._want_one = False
-        self._want_step = 0
+        self._want()
         self._last_sent_agent = None
         self._child = None
         if self._closed:
@@ -597,11 +544,8 @@ def child_main(conn: Connection) -> None:
             # episode of the old one carries over.
             if runner is not None:
                 runner.close()
-            s = handover.spec
-            session = Session(env_id=s.env_id, env_kwargs=s.env_kwargs, choices=s.choices,
-                              hp=handover.hp, seed=s.seed, engine=s.engine,
-                              algorithm=s.algorithm)
             spec = handover.spec
+            session = Session(hp=handover.hp, **vars(spec))
             runner = TrainingRunner(session)
         session.hp = handover.hp
         session.agent.assign_from(handover.agent)
@@ -636,15 +580,11 @@ def child_main(conn: Connection) -> None:
             elif time.monotonic() - last_word > ALIVE_SECONDS:  # e.g. the engine compiling
                 conn.send(("alive",))
                 last_word = time.monotonic()
-            if idle:
-                if runner.error is not None:
-                    hand_back("error", f"{runner.error}")
-                elif holding_kind == "one":
-                    hand_back("episode")
-                elif holding_kind == "step":
-                    hand_back("step")
-                else:
-                    hand_back("finished" if runner.finished else "paused")
+            if idle and runner.error is not None:
+                hand_back("error", f"{runner.error}")
+            elif idle:
+                done = "finished" if runner.finished else "paused"
+                hand_back({"one": "episode", "step": "step"}.get(holding_kind, done))
         except (EOFError, OSError):
             break
         except Exception:  # report, hand back what we have, and carry on

@@ -57,20 +57,6 @@ _DECODER = json.JSONDecoder(
 )
 
 
-def _decode(line: str) -> Any:
-    """`line` as JSON; ValueError (no internals in its message) when it is not a request's."""
-    try:
-        if line.startswith("\ufeff"):  # json.loads names the byte-order mark
-            return json.loads(line, cls=json.JSONDecoder)
-        return _DECODER.decode(line)
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"not JSON: {exc.msg} at column {exc.colno}") from None
-    except _BadNumber as exc:
-        raise ValueError(f"not a usable request: {exc}") from None
-    except RecursionError:
-        raise ValueError(f"not a usable request: nested deeper than {MAX_DEPTH} levels") from None
-
-
 def _clean_text(value: Any) -> str | None:
     """`value` as JSON text when it is JSON-safe as it is (no NaN or infinity, no surrogate
     in any text), else None: one pass of the C encoder, which most responses need alone."""
@@ -102,7 +88,17 @@ def _parse(line: str | bytes) -> dict[str, Any]:
         except UnicodeDecodeError as exc:
             raise ValueError(f"not UTF-8: byte 0x{line[exc.start]:02x} at column "
                              f"{exc.start + 1} cannot be decoded") from None
-    request = _decode(line)
+    try:  # messages with no internals in them
+        if line.startswith("\ufeff"):  # json.loads names the byte-order mark
+            request = json.loads(line, cls=json.JSONDecoder)
+        else:
+            request = _DECODER.decode(line)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"not JSON: {exc.msg} at column {exc.colno}") from None
+    except _BadNumber as exc:
+        raise ValueError(f"not a usable request: {exc}") from None
+    except RecursionError:
+        raise ValueError(f"not a usable request: nested deeper than {MAX_DEPTH} levels") from None
     if not isinstance(request, dict):
         raise ValueError('a request must be a JSON object like {"cmd": "reset"}')
     # Fewer brackets than levels cannot nest too deep: most requests skip the walk.
@@ -118,10 +114,6 @@ class JsonlPlayer:
         self.session = session
         self.rules = session.game  # the game's names and roles
         self.game = HumanGame(session, seed=seed)
-        self._handlers: dict[str, Callable[[dict[str, Any]], dict[str, Any]]] = {
-            "spaces": self._spaces, "reset": self._reset, "step": self._step,
-            "render": self._render, "hint": self._hint, "help": self._help,
-        }
 
     def handle(self, line: str | bytes) -> dict[str, Any]:
         """One request line in, one response object out (never raises for bad input)."""
@@ -140,15 +132,14 @@ class JsonlPlayer:
         except ValueError as exc:
             return {"error": str(exc)}
         cmd = request.get("cmd")
-        handler = self._handlers.get(cmd) if isinstance(cmd, str) else None
+        handler: Callable[[dict[str, Any]], dict[str, Any]] | None = (
+            getattr(self, f"_{cmd}") if cmd in COMMANDS else None)
         if handler is None:
             response = {"error": f"unknown cmd {shown_value(cmd)}; commands: {', '.join(COMMANDS)}"}
         else:
             try:
                 response = handler(request)
-            except PlayError as exc:
-                response = {"error": str(exc)}
-            except (ValueError, TypeError) as exc:
+            except (ValueError, TypeError) as exc:  # a PlayError too
                 response = {"error": str(exc)}
         if "id" in request:
             response = {"id": request["id"], **response}

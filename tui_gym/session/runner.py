@@ -1,21 +1,11 @@
-"""Background training: runs a session's trainer on a worker thread.
+"""Background training: `TrainingRunner` runs a session's trainer on a worker thread.
 
-`TrainingRunner` owns one daemon thread. Front ends call `start()`,
-`pause()`, `run_one_episode()`, `run_one_step()` (one transition, explained
-in `last_event.last_update`), `set_speed()` and `set_hyperparameters()`
-(live: the next step uses them); the thread trains in small
-pieces of work and publishes snapshots (the trainer's `latest`), which a UI
-pulls on a timer. Nothing here calls back into a front end, so a slow viewer
-can never slow training down, and a fast trainer never blocks the viewer.
-
-Every control takes effect after the piece of work under way: one call of
-the compiled loop at max speed (`CALL_SECONDS`), one agent step at animated speeds (the
-pause between animated steps is cut short). `pause()` returns once the worker
-has stopped, so the session can be changed right after it.
-
-Speeds (`tui_gym.session.speeds`) run from *animated* (one agent step at a time,
-slow enough to follow, with the last move kept in `last_event` for a board to
-draw) to *max* (whole chunks of episodes, no pauses).
+Front ends drive it through `Runner`; the thread trains in small pieces of work
+and publishes snapshots (the trainer's `latest`), which a UI pulls on a timer.
+Nothing here calls back into a front end, so a slow viewer never slows
+training, and a fast trainer never blocks the viewer. Every control takes effect
+after the piece of work under way: one call of the compiled loop at max speed
+(`CALL_SECONDS`), one agent step at animated speeds (whose pause is cut short).
 """
 
 from __future__ import annotations
@@ -63,18 +53,18 @@ class TrainingRunner(Runner):
 
     @property
     def running(self) -> bool:
-        """True while training is switched on (it may be between pieces of work)."""
         return self._want_run
 
     @property
     def busy(self) -> bool:
-        """True while training is on, an episode or step is asked for, or work is under way."""
         return self._want_run or self._want_one or self._want_step > 0 or self._working
 
-    def _control(self, **flags: bool | int) -> None:
+    def _control(self, step: int = 0, **flags: bool | int) -> None:
+        """Set the flags named (and ask for `step` more steps), waking the worker."""
         with self._cond:
             for name, value in flags.items():
                 setattr(self, f"_{name}", value)
+            self._want_step += step
             self._controls += 1
             self._cond.notify_all()
 
@@ -82,58 +72,32 @@ class TrainingRunner(Runner):
         """Nothing to collect: the worker trains the session's own objects."""
 
     def start(self) -> bool:
-        """Train until paused or the budget is reached; False when the budget is used up."""
-        if self.session.trainer.remaining == 0:
-            self.finished = True
-            return False
-        self.finished = False
-        self.error = None
-        self._control(want_run=True, want_one=False)
-        return True
+        return self._ask(False, want_run=True, want_one=False)
 
     def pause(self, wait: bool = True, timeout: float = STOP_TIMEOUT) -> bool:
-        """Stop training, mid-episode included, and return once the worker has stopped.
-
-        The worker finishes the piece of work under way (milliseconds), so this
-        returns at once in practice; `wait` is there for the process runner,
-        whose child may take longer to hand the agent back. False on a timeout.
-        """
+        # The worker finishes the piece of work under way (milliseconds): at once, in practice.
+        self._control(want_run=False, want_one=False, want_step=0)
         with self._cond:
-            self._want_run = self._want_one = False
-            self._want_step = 0
-            self._controls += 1
-            self._cond.notify_all()
             return self._cond.wait_for(lambda: not self._working, timeout)
 
     def run_one_episode(self) -> bool:
-        """Play one training episode on the worker (ignored while running); False, as
-        `start`, when the budget is used up."""
-        if self.session.trainer.remaining == 0:
-            self.finished = True
-            return False
-        if not self._want_run:
-            self.error = None
-            self._control(want_one=True)
-        return True
+        return self._ask(self._want_run, want_one=True)
 
     def run_one_step(self) -> bool:
-        """Take one training step (one transition) on the env, explained in
-        `last_event.last_update`, after the steps asked for before it (ignored while
-        running or busy with an episode); False, as `start`, when the budget is used up."""
+        return self._ask(self._want_run or self._want_one, step=1)
+
+    def _ask(self, busy: bool, step: int = 0, **flags: bool) -> bool:
+        """Ask the worker for work unless `busy`; False when the budget is used up."""
         if self.session.trainer.remaining == 0:
             self.finished = True
             return False
-        if not (self._want_run or self._want_one):
+        if not busy:
+            self.finished = self.finished and not flags.get("want_run", False)
             self.error = None
-            with self._cond:
-                self._want_step += 1
-                self._controls += 1
-                self._cond.notify_all()
+            self._control(step, **flags)
         return True
 
     def set_hyperparameters(self, hp: Any) -> None:
-        """New hyperparameters for the session, taking effect at once, mid-run too
-        (ValueError, changing nothing, for bad ones)."""
         self.session.set_hyperparameters(hp)
 
     def _speed_changed(self) -> None:
@@ -144,12 +108,10 @@ class TrainingRunner(Runner):
         return self.session.trainer.latest
 
     def wait_idle(self, timeout: float = STOP_TIMEOUT) -> bool:
-        """Wait until the worker has nothing to do (the run or the episode is over)."""
         with self._cond:
             return self._cond.wait_for(lambda: not self.busy or self._quit, timeout)
 
     def close(self, wait: bool = True) -> None:
-        """Stop the worker thread for good (with `wait`, return once it has ended)."""
         self._control(quit=True, want_run=False, want_one=False, want_step=0)
         if wait and self._thread is not threading.current_thread():
             self._thread.join(timeout=STOP_TIMEOUT)
@@ -170,9 +132,7 @@ class TrainingRunner(Runner):
                 delay = self._piece()
             except Exception as exc:  # shown to the user by the front end
                 self.error = exc
-                with self._cond:
-                    self._want_run = self._want_one = False
-                    self._want_step = 0
+                self._control(want_run=False, want_one=False, want_step=0)
             finally:
                 with self._cond:
                     self._working = False

@@ -208,17 +208,16 @@ class Session:
             if model.n_actions != self._built.n_actions or rows.max() >= (self.keyer.n_states or 0):
                 reason = "its model does not fit the env's observations and actions"
             else:
-                names = [label.partition("(")[0] for label in self.changes.reward_wrappers]
-                if self.changes.chosen_time_limit:
-                    names.append("TimeLimit")
-                text = f"model: {self.game.title}" + (f" with {', '.join(names)}" if names else "")
                 self.training = TrainingModel(model, rows, found.later)
-                if self.engine == "env":
-                    return (), "env: chosen"
-                phases = ((0, model), *found.later)
-                return tuple((start, _arrays_of(m, rows)) for start, m in phases), text
         if self.engine == "env":
             return (), "env: chosen"
+        if self.training is not None:
+            names = [label.partition("(")[0] for label in self.changes.reward_wrappers]
+            if self.changes.chosen_time_limit:
+                names.append("TimeLimit")
+            text = f"model: {self.game.title}" + (f" with {', '.join(names)}" if names else "")
+            phases = ((0, self.training.model), *self.training.later)
+            return tuple((start, _arrays_of(m, rows)) for start, m in phases), text
         if self.engine == "model":
             raise ValueError(f"the model loop cannot train this: {reason}")
         return (), f"env: {reason}"
@@ -321,11 +320,8 @@ class Session:
         """New hyperparameters for the rest of the run, taking effect at once (the
         learner and its tables are kept). A mapping may name some values only: the
         others stay as they are. ValueError, changing nothing, for a bad value."""
-        current = self.hp
-        assert current is not None  # set when the session is built
-        settings = hp if isinstance(hp, Settings) and hp.schema == current.schema else (
-            current.replace(**dict(hp))
-        )
+        settings = hp if isinstance(hp, Settings) and hp.schema == self.hp.schema else (
+            self.hp.replace(**dict(hp)))
         self.agent.set_hyperparameters(settings)
         self.hp = settings
 
@@ -367,28 +363,24 @@ class Session:
         """Table keys of the game's base states, or None when wrappers hide them (or
         the game lists none)."""
         if self._base_keys is False:
-            self._base_keys = self._compute_base_keys()
+            keys: list[Hashable] | None = None
+            observations = None if self._history_wrappers() else (
+                self.game.states.base_observations(self.env_kwargs))
+            if observations is not None and not isinstance(observations, NotAvailable):
+                layers = [layer for layer in chain.layers(self.env)
+                          if isinstance(layer, gym.ObservationWrapper)]
+                keys = []
+                for obs in observations:
+                    for layer in layers:
+                        obs = layer.observation(obs)
+                    keys.append(self.keyer.key(obs))
+            self._base_keys = keys
         return self._base_keys  # type: ignore[return-value]
 
     def _history_wrappers(self) -> list[str]:
         """The applied wrappers whose observations depend on more than the bare one."""
         return [c.name for c in self.applied if CATALOG[c.name].changes_observation
                 and c.name not in STATELESS_OBSERVATION_WRAPPERS]
-
-    def _compute_base_keys(self) -> list[Hashable] | None:
-        if self._history_wrappers():
-            return None
-        layers = [layer for layer in chain.layers(self.env)
-                  if isinstance(layer, gym.ObservationWrapper)]
-        observations = self.game.states.base_observations(self.env_kwargs)
-        if isinstance(observations, NotAvailable):
-            return None
-        keys = []
-        for obs in observations:
-            for layer in layers:
-                obs = layer.observation(obs)
-            keys.append(self.keyer.key(obs))
-        return keys
 
     def hidden_reason(self) -> str:
         """Why heatmaps and the exact reference are unavailable (empty when they are)."""
@@ -664,7 +656,6 @@ class Session:
         """Everything a save file keeps besides the table, as JSON data."""
         from tui_gym.core.wrappers import format_wrapper_spec
 
-        assert self.hp is not None  # set when the session is built
         return {
             "env_id": self.env_id, "env_kwargs": self.env_kwargs,
             "wrappers": [format_wrapper_spec(c) for c in self.choices], "algorithm": self.algorithm,
@@ -699,34 +690,34 @@ class Session:
 
     def _restore(self, saved: Any) -> None:
         """Put a saved learner state into this session's agent and its counts into the
-        trainer; `saved.field_error` names what does not fit the game."""
+        trainer; `saved.field` names what does not fit the game."""
         from tui_gym.session.storage import short_reason
 
         agent = self.agent
         if self.skipped:
             choice, reason = self.skipped[0]
             index = list(saved.choices).index(choice)
-            raise saved.field_error(f"wrappers[{index}]", f"does not fit {self.env_id}: {reason}")
+            raise saved.field(f"wrappers[{index}]", f"does not fit {self.env_id}: {reason}")
         n_actions = agent.n_actions if saved.n_actions is None else saved.n_actions
         if n_actions != agent.n_actions:
-            raise saved.field_error(
+            raise saved.field(
                 "n_actions", f"is {n_actions}; {self.env_id} with these wrappers has "
                 f"{agent.n_actions}"
             )
         member = f"{saved.table_name}.npy"
         first = saved.arrays[saved.table_name]
         if first.shape[1] != agent.n_actions:
-            raise saved.field_error(
+            raise saved.field(
                 member, f"has {first.shape[1]} columns; {self.env_id} has "
                 f"{agent.n_actions} actions"
             )
         rows, keys = agent.n_states, saved.keys
         if rows is not None and keys is not None:
-            raise saved.field_error("keys.json", f"is for a sparse table; {self.env_id}'s is dense")
+            raise saved.field("keys.json", f"is for a sparse table; {self.env_id}'s is dense")
         if rows is not None and len(first) != rows:
-            raise saved.field_error(member, f"has {len(first):,} rows; {self.env_id} has {rows:,}")
+            raise saved.field(member, f"has {len(first):,} rows; {self.env_id} has {rows:,}")
         if rows is None and keys is None:
-            raise saved.field_error("keys.json",
+            raise saved.field("keys.json",
                                     "is missing (the states of the sparse table's rows)")
         saved.check_learner_meta()
         try:

@@ -57,36 +57,51 @@ class Runner(ABC):
 
     @property
     @abstractmethod
-    def busy(self) -> bool: ...
+    def busy(self) -> bool:
+        """True while training is on, an episode or step is asked for, or work is under way."""
 
     @property
     @abstractmethod
-    def latest(self) -> TrainingSnapshot: ...
+    def latest(self) -> TrainingSnapshot:
+        """The latest snapshot of the session's training."""
 
     @abstractmethod
     def update(self) -> None:
         """Take in what the trainer has published."""
 
     @abstractmethod
-    def start(self) -> bool: ...
+    def start(self) -> bool:
+        """Train until paused or the budget is reached; False when the budget is used up
+        (or training cannot run: `error` says why)."""
 
     @abstractmethod
-    def pause(self, wait: bool = True, timeout: float = ...) -> bool: ...
+    def pause(self, wait: bool = True, timeout: float = ...) -> bool:
+        """Stop training, mid-episode included; with `wait`, return once the session holds
+        every episode trained (False on a timeout). A UI passes `wait=False`."""
 
     @abstractmethod
-    def run_one_episode(self) -> bool: ...
+    def run_one_episode(self) -> bool:
+        """Play one training episode (ignored while running or busy); False, as `start`,
+        when the budget is used up."""
 
     @abstractmethod
-    def run_one_step(self) -> bool: ...
+    def run_one_step(self) -> bool:
+        """Take one training step (one transition), explained in `last_event.last_update`,
+        after the steps asked for before it (ignored while running or busy with an
+        episode); False, as `start`, when the budget is used up."""
 
     @abstractmethod
-    def set_hyperparameters(self, hp: Any) -> None: ...
+    def set_hyperparameters(self, hp: Any) -> None:
+        """New hyperparameters for the session, taking effect at once, mid-run too
+        (ValueError, changing nothing, for bad ones)."""
 
     @abstractmethod
-    def wait_idle(self, timeout: float = ...) -> bool: ...
+    def wait_idle(self, timeout: float = ...) -> bool:
+        """Wait until training holds nothing (nothing running, nothing asked for)."""
 
     @abstractmethod
-    def close(self, wait: bool = True) -> None: ...
+    def close(self, wait: bool = True) -> None:
+        """Stop training for good (with `wait`, return once it has ended)."""
 
     @abstractmethod
     def _speed_changed(self) -> None: ...

@@ -51,10 +51,6 @@ class StorageError(ValueError):
 # -- writing --------------------------------------------------------------------------------
 
 
-def _key_to_json(key: Any) -> Any:
-    return list(key) if isinstance(key, tuple) else key
-
-
 def check_save_path(path: str | Path) -> Path:
     """`path` as a `Path` when a save can be written there; else `StorageError` saying why
     (see `tui_gym.core.files.check_output_path`)."""
@@ -62,12 +58,6 @@ def check_save_path(path: str | Path) -> Path:
         return check_output_path(path)
     except OutputPathError as error:
         raise StorageError(str(error)) from None
-
-
-def _npy_bytes(array: np.ndarray) -> bytes:
-    buf = io.BytesIO()
-    np.save(buf, array, allow_pickle=False)
-    return buf.getvalue()
 
 
 def save_agent(path: str | Path, meta: dict[str, Any], state: LearnerState) -> Path:
@@ -78,9 +68,12 @@ def save_agent(path: str | Path, meta: dict[str, Any], state: LearnerState) -> P
     meta = {"format": FORMAT_NAME, "version": FORMAT_VERSION, **meta, "learner": state.meta}
     members = {"meta.json": json.dumps(meta, indent=2).encode()}
     for name, array in state.arrays.items():
-        members[f"{name}.npy"] = _npy_bytes(array)
+        buf = io.BytesIO()
+        np.save(buf, array, allow_pickle=False)
+        members[f"{name}.npy"] = buf.getvalue()
     if state.keys is not None:
-        members["keys.json"] = json.dumps([_key_to_json(k) for k in state.keys]).encode()
+        keys = [list(k) if isinstance(k, tuple) else k for k in state.keys]
+        members["keys.json"] = json.dumps(keys).encode()
     rows = int(state.meta["rows"])
     for name, data in members.items():
         cap = MAX_META_BYTES if name == "meta.json" else MAX_TABLE_BYTES
@@ -110,10 +103,21 @@ class _Reader:
     path: Path
 
     def error(self, text: str) -> StorageError:
+        """A `StorageError` naming the file."""
         return StorageError(f"{self.path}: {text}")
 
     def field(self, name: str, problem: str) -> StorageError:
+        """A `StorageError` naming the file and the field at fault."""
         return StorageError(f"{self.path}: not a valid save file: {name} {problem}")
+
+    def checked(self, name: str, build: Callable[[], Any]) -> Any:
+        """`build()`, with a ValueError or TypeError it raises refused under the field's name."""
+        try:
+            return build()
+        except StorageError:
+            raise
+        except (ValueError, TypeError, KeyError) as exc:
+            raise self.field(name, f"is not valid: {short_reason(exc)}") from None
 
 
 def _too_big(size: int | None) -> str:
@@ -185,16 +189,6 @@ def _array(reader: _Reader, name: str, data: bytes, kinds: str, ndim: int = 2) -
     return array.reshape(shape, order="F" if fortran else "C")
 
 
-@dataclass(frozen=True)
-class SaveContents:
-    """What a save file holds: its meta, the learner's arrays by name, and sparse keys."""
-
-    meta: dict[str, Any]
-    algorithm: type[Learner]
-    arrays: dict[str, np.ndarray]
-    keys: list[Hashable] | None
-
-
 def _key_from_json(reader: _Reader, index: int, value: Any) -> Hashable:
     """A saved sparse key: a number, a string, or a flat list of numbers (made a tuple)."""
     if isinstance(value, list):
@@ -209,55 +203,6 @@ def _plain_number(value: Any) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool) and (
         isinstance(value, int) or math.isfinite(value)
     )
-
-
-def read_file(path: str | Path) -> SaveContents:
-    """Meta, learner arrays and sparse keys of a save file; StorageError if not one.
-
-    The meta's format, version and algorithm are checked here, every array's
-    kind of number and dimensions, the keys' form, and values no learner makes
-    (NaN or infinite values, negative counts); `read_agent` checks the rest of
-    the meta, and the session the game and the learner's own rules.
-    """
-    reader = _Reader(Path(path))
-    raw = read_regular_file(reader.path, MAX_FILE_BYTES, "a save file", reader.error, _too_big)
-    try:
-        with zipfile.ZipFile(io.BytesIO(raw)) as zf:
-            meta_bytes = _member(reader, zf, "meta.json", MAX_META_BYTES)
-            if meta_bytes is None:
-                raise reader.error("not a tui-gym save file (no meta.json inside)")
-            meta = _json(reader, "meta.json", meta_bytes)
-            if not isinstance(meta, dict) or meta.get("format") != FORMAT_NAME:
-                raise reader.error(f"not a tui-gym save file (format is not {FORMAT_NAME})")
-            version = _check_version(reader, meta.get("version"))
-            cls = _algorithm_of(reader, meta, version)
-            arrays = _learner_arrays(reader, zf, cls, version)
-            rows = len(arrays[cls.tables[0].name])
-            keys = None
-            keys_bytes = _member(reader, zf, "keys.json", MAX_TABLE_BYTES)
-            if keys_bytes is not None:
-                keys = _keys(reader, _json(reader, "keys.json", keys_bytes), rows)
-    except StorageError:
-        raise
-    except (zipfile.BadZipFile, zlib.error, EOFError, ValueError, struct.error):
-        # ValueError: zipfile's own, on offsets a damaged directory points past the start.
-        raise reader.error("not a tui-gym save file (corrupt or truncated)") from None
-    except (NotImplementedError, RuntimeError, zipfile.LargeZipFile, OSError) as exc:
-        # Unsupported compression, encryption, ZIP64 oddities: not a file we wrote.
-        raise reader.error(f"not a tui-gym save file ({short_reason(exc)})") from None
-    except MemoryError:
-        raise reader.error("not a tui-gym save file (too large to read)") from None
-    return SaveContents(meta, cls, arrays, keys)
-
-
-def _algorithm_of(reader: _Reader, meta: dict[str, Any], version: int) -> type[Learner]:
-    """The learner class a save names (version 1 files are Q-learning's)."""
-    if version < 2:
-        return QLearning
-    name = meta.get("algorithm")
-    if not isinstance(name, str):
-        raise reader.field("algorithm", f"must be an algorithm's name, got {shown_value(name)}")
-    return _checked(reader, "algorithm", lambda: algorithm(name))
 
 
 # The dtype kinds each kind of learner array may be saved as.
@@ -361,40 +306,10 @@ def _int_field(
     return value
 
 
-def _checked(reader: _Reader, name: str, build: Callable[[], Any]) -> Any:
-    """`build()`, with a ValueError or TypeError it raises refused under the field's name."""
-    try:
-        return build()
-    except StorageError:
-        raise
-    except (ValueError, TypeError, KeyError) as exc:
-        raise reader.field(name, f"is not valid: {short_reason(exc)}") from None
-
-
-def _check_learner_meta(
-    reader: _Reader, meta: dict[str, Any], cls: type[Learner], rows: int
-) -> None:
-    """The learner's own metadata (format 2), which must agree with the rest."""
-    if "learner" not in meta and meta.get("version", 1) < 2:
-        return
-    learner = meta.get("learner")
-    if not isinstance(learner, dict):
-        raise reader.field("learner", f"must be an object, got {shown_value(learner)}")
-    if learner.get("algorithm") != cls.name:
-        raise reader.field(
-            "learner.algorithm", f"is {shown_value(learner.get('algorithm'))}, not {cls.name}"
-        )
-    if learner.get("rows") != rows or isinstance(learner.get("rows"), bool):
-        raise reader.field(
-            "learner.rows", f"is {shown_value(learner.get('rows'))}; the tables have {rows:,}"
-        )
-
-
 @dataclass(frozen=True)
-class SavedAgent:
+class SavedAgent(_Reader):
     """What a save file holds, checked as far as it can be without the game it names."""
 
-    path: Path
     env_id: str
     env_kwargs: dict[str, Any]
     choices: tuple[WrapperChoice, ...]
@@ -412,8 +327,20 @@ class SavedAgent:
     def check_learner_meta(self) -> None:
         """The learner's own metadata (format 2), which must agree with the tables;
         checked once the tables are known to fit the game (their fault is named first)."""
-        rows = len(self.arrays[self.table_name])
-        _check_learner_meta(_Reader(self.path), self.meta, self.algorithm, rows)
+        rows, meta, name = len(self.arrays[self.table_name]), self.meta, self.algorithm.name
+        if "learner" not in meta and meta.get("version", 1) < 2:
+            return
+        learner = meta.get("learner")
+        if not isinstance(learner, dict):
+            raise self.field("learner", f"must be an object, got {shown_value(learner)}")
+        if learner.get("algorithm") != name:
+            raise self.field(
+                "learner.algorithm", f"is {shown_value(learner.get('algorithm'))}, not {name}"
+            )
+        if learner.get("rows") != rows or isinstance(learner.get("rows"), bool):
+            raise self.field(
+                "learner.rows", f"is {shown_value(learner.get('rows'))}; the tables have {rows:,}"
+            )
 
     @property
     def table_name(self) -> str:
@@ -430,49 +357,64 @@ class SavedAgent:
             self.keys,
         )
 
-    def error(self, text: str) -> StorageError:
-        """A `StorageError` naming the file."""
-        return _Reader(self.path).error(text)
-
-    def field_error(self, name: str, problem: str) -> StorageError:
-        """A `StorageError` naming the file and the field at fault."""
-        return _Reader(self.path).field(name, problem)
-
-    def checked(self, name: str, build: Callable[[], Any]) -> Any:
-        """`build()`, with a ValueError or TypeError it raises refused under the field's name."""
-        return _checked(_Reader(self.path), name, build)
-
-
-def _data_env_id(reader: _Reader, env_id: str) -> str:
-    """The game id a file names, resolved as data: never by importing a module."""
-    from tui_gym.games import UnknownGameError, resolve_env_id
-
-    try:
-        return resolve_env_id(env_id, from_data=True)
-    except UnknownGameError as error:
-        raise reader.field("env_id", f"is not valid: {error}") from None
-
 
 def read_agent(path: str | Path) -> SavedAgent:
-    """A save file's contents as plain data; `StorageError` when it is not a valid one."""
+    """A save file's contents as plain data; `StorageError` when it is not a valid one.
+
+    Checked here: the meta, every array's kind of number and dimensions, the keys'
+    form, and values no learner makes (NaN or infinite values, negative counts); the
+    session checks the game and the learner's own rules.
+    """
     from tui_gym.core.wrappers import check_chain_length, parse_wrapper_spec
+    from tui_gym.games import UnknownGameError, resolve_env_id
 
     reader = _Reader(Path(path))
-    contents = read_file(path)
-    meta, keys, arrays, cls = contents.meta, contents.keys, contents.arrays, contents.algorithm
-    first = arrays[cls.tables[0].name]
+    raw = read_regular_file(reader.path, MAX_FILE_BYTES, "a save file", reader.error, _too_big)
+    try:
+        with zipfile.ZipFile(io.BytesIO(raw)) as zf:
+            meta_bytes = _member(reader, zf, "meta.json", MAX_META_BYTES)
+            if meta_bytes is None:
+                raise reader.error("not a tui-gym save file (no meta.json inside)")
+            meta = _json(reader, "meta.json", meta_bytes)
+            if not isinstance(meta, dict) or meta.get("format") != FORMAT_NAME:
+                raise reader.error(f"not a tui-gym save file (format is not {FORMAT_NAME})")
+            version = _check_version(reader, meta.get("version"))
+            name = meta.get("algorithm") if version >= 2 else QLearning.name  # version 1's
+            if not isinstance(name, str):
+                raise reader.field("algorithm",
+                                   f"must be an algorithm's name, got {shown_value(name)}")
+            cls = reader.checked("algorithm", partial(algorithm, name))
+            arrays = _learner_arrays(reader, zf, cls, version)
+            rows = len(arrays[cls.tables[0].name])
+            keys = None
+            keys_bytes = _member(reader, zf, "keys.json", MAX_TABLE_BYTES)
+            if keys_bytes is not None:
+                keys = _keys(reader, _json(reader, "keys.json", keys_bytes), rows)
+    except StorageError:
+        raise
+    except (zipfile.BadZipFile, zlib.error, EOFError, ValueError, struct.error):
+        # ValueError: zipfile's own, on offsets a damaged directory points past the start.
+        raise reader.error("not a tui-gym save file (corrupt or truncated)") from None
+    except (NotImplementedError, RuntimeError, zipfile.LargeZipFile, OSError) as exc:
+        # Unsupported compression, encryption, ZIP64 oddities: not a file we wrote.
+        raise reader.error(f"not a tui-gym save file ({short_reason(exc)})") from None
+    except MemoryError:
+        raise reader.error("not a tui-gym save file (too large to read)") from None
 
     env_id = meta.get("env_id")
     if not isinstance(env_id, str):
         raise reader.field("env_id", f"must be a game id, got {shown_value(env_id)}")
-    env_id = _data_env_id(reader, env_id)
+    try:  # resolved as data: never by importing a module
+        env_id = resolve_env_id(env_id, from_data=True)
+    except UnknownGameError as error:
+        raise reader.field("env_id", f"is not valid: {error}") from None
     env_kwargs = meta.get("env_kwargs", {})
     if not isinstance(env_kwargs, dict):
         raise reader.field("env_kwargs", f"must be an object, got {shown_value(env_kwargs)}")
     wrappers = meta.get("wrappers", [])
     if not isinstance(wrappers, list):
         raise reader.field("wrappers", f"must be a list of specs, got {shown_value(wrappers)}")
-    _checked(reader, "wrappers", partial(check_chain_length, len(wrappers)))
+    reader.checked("wrappers", partial(check_chain_length, len(wrappers)))
     choices = []
     for i, spec in enumerate(wrappers):
         if not isinstance(spec, str):
@@ -480,11 +422,11 @@ def read_agent(path: str | Path) -> SavedAgent:
                 f"wrappers[{i}]", f"must be a spec like 'TimeLimit:max_episode_steps=50', "
                 f"got {shown_value(spec)}"
             )
-        choices.append(_checked(reader, f"wrappers[{i}]", partial(parse_wrapper_spec, spec)))
+        choices.append(reader.checked(f"wrappers[{i}]", partial(parse_wrapper_spec, spec)))
     hp_data = meta.get("hyperparameters")
     if not isinstance(hp_data, dict):
         raise reader.field("hyperparameters", f"must be an object, got {shown_value(hp_data)}")
-    hp = _checked(reader, "hyperparameters", lambda: cls.settings(hp_data))
+    hp = reader.checked("hyperparameters", lambda: cls.settings(hp_data))
     seed = _int_field(reader, meta, "seed", 0, 0, MAX_SEED)
     episodes = _int_field(reader, meta, "episodes_trained", 0, 0, MAX_COUNT)
     steps = _int_field(reader, meta, "steps_trained", 0, 0, MAX_COUNT)
@@ -495,9 +437,9 @@ def read_agent(path: str | Path) -> SavedAgent:
     for name in ("observation_space",):
         if name in meta and not isinstance(meta[name], str):
             raise reader.field(name, f"must be text, got {shown_value(meta[name])}")
-    if len(arrays["visits"]) != len(first):
+    if len(arrays["visits"]) != rows:
         raise reader.field(
-            "visits.npy", f"has {len(arrays['visits']):,} entries for {len(first):,} table rows"
+            "visits.npy", f"has {len(arrays['visits']):,} entries for {rows:,} table rows"
         )
     return SavedAgent(
         path=Path(path), env_id=env_id, env_kwargs=dict(env_kwargs), choices=tuple(choices),

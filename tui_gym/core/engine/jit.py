@@ -1,39 +1,23 @@
 """The one module that imports Numba: kernels compiled on first use, cached on disk.
 
-A kernel is a plain Python function marked `@kernel` (`kernel`: the loop, the
-sampler, exploration, every algorithm's update rule): importing it costs
-nothing and it runs as Python until `start()` is called, which
+A kernel is a plain Python function marked `@kernel` (the loop, the sampler,
+exploration, every algorithm's update rule): it runs as Python until `start()`,
+which points Numba's cache at a folder keyed by a hash of the engine's and the
+algorithms' sources (Numba does not see that a function a cached one calls
+changed in another file), registers the rule stubs of `rules` as overloads (so a
+loop compiled for one algorithm's `Params` calls that algorithm's rule), and puts
+every kernel's compiled form in its place in every `tui_gym` module.
 
-- points Numba's cache at a folder keyed by a hash of the engine's and the
-  algorithms' sources (under `NUMBA_CACHE_DIR` when that is set, else the
-  package's `__pycache__`, else the user's cache folder when the package is
-  read-only), because Numba does not see that a function called by a cached
-  one changed in another file;
-- imports Numba, registers the rule stubs of `rules` as overloads (so a loop
-  compiled for one algorithm's `Params` calls that algorithm's rule), and
-  replaces every kernel, in every `tui_gym` module that holds it, by its
-  compiled form (`njit(cache=True)`), so kernels call kernels compiled.
-
-The rule stubs, and the small kernels marked `inline`, are inlined into
-their callers by Numba (`inline="always"`): typing each caller costs more so,
-but LLVM does not inline one Numba function into another here, and a call
-left in the loop's per-action code slows training down markedly.
-
-Kernels allocate nothing, so they run without Numba's reference counting
-(`_nrt=False`: an array passed between compiled functions costs nothing
-then), without the C-callable wrapper Numba otherwise builds for each one
-(`no_cfunc_wrapper`: only a `cfunc` or a function passed as a value calls
-it), at optimisation level 1 (`NUMBA_OPT`, unless set: the loops run as
-fast as at level 3 and compile in two thirds of the time).
+Rule stubs and kernels marked `inline` are inlined into their callers: LLVM does
+not inline one Numba function into another, and a call left in the loop's
+per-action code slows training markedly. Kernels allocate nothing, so they run
+without reference counting (`_nrt=False`) and without a C-callable wrapper, at
+optimisation level 1 (`NUMBA_OPT`, unless set: as fast as 3, compiled sooner).
 
 Python calls a kernel that takes an algorithm's `Params` through `entry`.
-Processes compile at once, and take turns on a lock on the cache folder
-(`saving`) only to file what they compiled: Numba names a function's cache
-entries by counting those in its index (read, numbered, written back), so two
-processes saving two algorithms' forms of the loop at once could each file
-their code under the other's name. Where Numba's cache does not have the
-method this wraps, a whole compile holds the lock instead.
-
+Processes take turns on a lock on the cache folder (`saving`) to file what they
+compiled: Numba numbers a function's cache entries by counting its index, so two
+processes saving at once could file their code under each other's name.
 `NUMBA_DISABLE_JIT=1` leaves every kernel plain Python.
 """
 
@@ -52,7 +36,7 @@ from tui_gym.core.engine import kernel
 
 __all__ = [
     "COMPILING", "cache_folder", "compiled", "compiles", "direct", "entry", "folder", "saving",
-    "start", "started",
+    "start",
 ]
 
 COMPILING = "compiling the learners, once"
@@ -66,10 +50,6 @@ _DIRECT: dict[tuple[Callable[..., Any], object], Any] = {}
 _started = False
 _folder: Path | None = None
 _saves_in_turn = False  # set by `start` (see the module docstring)
-
-
-def started() -> bool:
-    return _started
 
 
 def compiles() -> bool:
@@ -106,7 +86,8 @@ def _writable(place: Path) -> bool:
 
 
 def cache_folder(environ: dict[str, str] | None = None) -> Path:
-    """Where compiled code is kept (see the module docstring)."""
+    """Where compiled code is kept: under `NUMBA_CACHE_DIR` when set, else the package's
+    `__pycache__`, else (a read-only package) the user's cache folder."""
     env = os.environ if environ is None else environ
     name = f"numba-{sources_hash()}"
     given = env.get("NUMBA_CACHE_DIR", "")
@@ -286,57 +267,44 @@ def _register_overloads(rules: Any) -> None:
 
         return impl
 
-    @overload(rules.acting, jit_options=_CACHED, inline="always")
-    def _acting(tables, hp):  # type: ignore[no-untyped-def]
-        own = compiled(rule_of(hp).acting)
-        if own is None:
-            def first(tables, hp):  # type: ignore[no-untyped-def]
-                return (tables[0],)
+    def own_or(name: str, default: Callable[..., Any]) -> Callable[..., Any]:
+        """The typing of stub `name`: the rule's own part, else `default`."""
 
-            return first
+        def typing(tables, hp):  # type: ignore[no-untyped-def]
+            own = compiled(getattr(rule_of(hp), name))
+            if own is None:
+                return default
 
-        def impl(tables, hp):  # type: ignore[no-untyped-def]
-            return own(tables, hp)
+            def impl(tables, hp):  # type: ignore[no-untyped-def]
+                return own(tables, hp)
 
-        return impl
+            return impl
 
-    @overload(rules.begin, jit_options=_CACHED, inline="always")
-    def _begin(tables, hp):  # type: ignore[no-untyped-def]
-        own = compiled(rule_of(hp).begin)
-        if own is None:
-            def nothing(tables, hp):  # type: ignore[no-untyped-def]
-                return None
+        return typing
 
-            return nothing
+    for name, default in (("acting", _first_table), ("begin", _nothing), ("full", _never)):
+        overload(getattr(rules, name), jit_options=_CACHED, inline="always")(own_or(name, default))
 
-        def impl(tables, hp):  # type: ignore[no-untyped-def]
-            own(tables, hp)
+    overload(rules.next_first, jit_options=_CACHED, inline="always")(
+        lambda hp: _yes if rule_of(hp).next_first else _no)
 
-        return impl
 
-    @overload(rules.full, jit_options=_CACHED, inline="always")
-    def _full(tables, hp):  # type: ignore[no-untyped-def]
-        own = compiled(rule_of(hp).full)
-        if own is None:
-            def never(tables, hp):  # type: ignore[no-untyped-def]
-                return False
+# The rules' defaults: Numba wants an implementation's signature to be its typing's own.
+def _first_table(tables, hp):  # type: ignore[no-untyped-def]
+    return (tables[0],)
 
-            return never
 
-        def impl(tables, hp):  # type: ignore[no-untyped-def]
-            return own(tables, hp)
+def _nothing(tables, hp):  # type: ignore[no-untyped-def]
+    return None
 
-        return impl
 
-    @overload(rules.next_first, jit_options=_CACHED, inline="always")
-    def _next_first(hp):  # type: ignore[no-untyped-def]
-        if rule_of(hp).next_first:
-            def yes(hp):  # type: ignore[no-untyped-def]
-                return True
+def _never(tables, hp):  # type: ignore[no-untyped-def]
+    return False
 
-            return yes
 
-        def no(hp):  # type: ignore[no-untyped-def]
-            return False
+def _yes(hp):  # type: ignore[no-untyped-def]
+    return True
 
-        return no
+
+def _no(hp):  # type: ignore[no-untyped-def]
+    return False

@@ -1,21 +1,15 @@
 """The compiled loop over a finite model, the one outcome sampler, and the per-transition entry.
 
-`run_model` plays a learner on a model's arrays (`ModelArrays`), one
-transition at a time: epsilon-greedy acting (the algorithm's acting values),
-an outcome drawn from the model (a reward with noise drawn around its mean),
-the episode limit, the algorithm's update.
-It runs at most `max_episodes` episodes and `max_steps` transitions per call
-and keeps the episode in progress in `cursor` and `acc` between calls, so a
-run cut into calls of any size is the same run: one transition from Python
-(the `n` step), a chunk at max speed, a whole headless run. Every random
+`run_model` plays a learner on a model's arrays (`ModelArrays`): epsilon-greedy
+acting, an outcome drawn from the model (a reward's noise drawn around its mean),
+the episode limit, the algorithm's update. It keeps the episode in progress in
+`cursor` and `acc` between calls, so a run cut into calls of any size (one `n`
+step, a chunk at max speed, a whole headless run) is the same run. Every random
 number comes from the learner's generator, in one order: the start, then per
-transition the action (when not chosen already), the outcome, its reward's
-noise (only where it has any), the next action (SARSA), and what the rule
-draws.
-
-`Entries.transition` is the same update for a transition that happened
-elsewhere (a Gymnasium env played from Python), choosing the next action first
-where the rule needs it. `sample_start` and `sample_outcome` are the one sampler.
+transition the action (when not chosen already), the outcome, its reward's noise
+(only where it has any), the next action (SARSA), and what the rule draws.
+`Entries.transition` is the same update for a transition played elsewhere (a
+Gymnasium env, from Python).
 """
 
 from __future__ import annotations
@@ -153,10 +147,6 @@ class Cursor:
     @property
     def live(self) -> bool:
         return bool(self.ints[0])
-
-    @property
-    def state(self) -> int:
-        return int(self.ints[1])
 
     def drop(self) -> None:
         """Abandon the episode in progress (the next call starts a new one)."""

@@ -1,15 +1,11 @@
 """Child processes that never outlive the process that started them.
 
-`context()` is how children start: fork on Linux (the quickest, and a child
-inherits the learners compiled so far), spawn elsewhere. A child calls
-`watch_parent(pid)` first: it gets a process group of its own (a Ctrl+C in
-the terminal reaches the parent alone, which decides how a run ends), asks
-the kernel to kill it when its parent dies (`PR_SET_PDEATHSIG` on Linux), and
-a watcher thread ends it as soon as its parent is gone (everywhere, and for
-a parent that died before the request). The parent ends its children on
-every way out: `end(process)` kills a child's whole group, and
-`stops_on_signals(stop)` turns SIGTERM and SIGHUP into the run's stop flag
-while it runs on the main thread, so those end a run as cleanly as Ctrl+C.
+`context()` is how children start: fork on Linux (quickest; a child inherits the
+learners compiled so far), spawn elsewhere. A child calls `watch_parent(pid)`
+first: a process group of its own (Ctrl+C reaches the parent alone, which
+decides how a run ends), and its end as soon as its parent is gone. The parent
+ends its children on every way out: `end(process)` kills a child's group, and
+`stops_on_signals(stop)` turns SIGTERM and SIGHUP into the run's stop flag.
 """
 
 from __future__ import annotations
@@ -25,7 +21,7 @@ import time
 from collections.abc import Iterator
 from typing import Any
 
-__all__ = ["context", "end", "stops_on_signals", "watch_parent"]
+__all__ = ["context", "end", "handling", "stops_on_signals", "watch_parent"]
 
 _PR_SET_PDEATHSIG = 1
 WATCH_SECONDS = 0.2  # how often a child looks whether its parent is still there
@@ -71,23 +67,32 @@ def end(process: Any, timeout: float = 5.0) -> None:
     process.join(timeout=timeout)
 
 
-@contextlib.contextmanager
-def stops_on_signals(stop: threading.Event) -> Iterator[None]:
+def stops_on_signals(stop: threading.Event) -> contextlib.AbstractContextManager[None]:
     """While it runs on the main thread: SIGTERM and SIGHUP set `stop` (the caller ends
     its children and records what finished); elsewhere, nothing changes."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    kinds = [getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name)]
-    previous = {kind: signal.getsignal(kind) for kind in kinds}
+    return handling(("SIGTERM", "SIGHUP"), lambda signum, frame: stop.set())
 
-    def handler(signum: int, frame: Any) -> None:
-        stop.set()
 
-    for kind in kinds:
-        signal.signal(kind, handler)
+@contextlib.contextmanager
+def handling(names: tuple[str, ...], handler: Any, untouched: bool = False) -> Iterator[None]:
+    """Signals `names` go to `handler` while the block runs on the main thread (only
+    there can handlers be set; elsewhere nothing changes); with `untouched`, only those
+    that still have their default action (a program's own handlers stay as they are)."""
+    previous: dict[int, Any] = {}
+    for name in names if threading.current_thread() is threading.main_thread() else ():
+        sig = getattr(signal, name, None)
+        if sig is None:
+            continue
+        try:
+            old = signal.getsignal(sig)
+            if untouched and old not in (signal.SIG_DFL, signal.default_int_handler):
+                continue
+            previous[sig] = old
+            signal.signal(sig, handler)
+        except (ValueError, OSError):
+            continue
     try:
         yield
     finally:
-        for kind, old in previous.items():
-            signal.signal(kind, old)
+        for sig, old in previous.items():
+            signal.signal(sig, old)

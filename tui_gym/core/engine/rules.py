@@ -25,11 +25,10 @@ serves every algorithm that acts on the same number of tables.
 **Offered actions.** Each table row offers one run of actions, `lo` to `hi - 1`:
 `offered` is an unsigned array `[rows, 2]` of those bounds (`offered_ranges` makes it
 from a bool mask), or `[0, 2]` (empty) when every row offers every action, so every
-game runs the one compiled form. Acting (`act`,
-`greedy`), the max (`max_value`) and the ε-greedy expectation (`expected_value`)
-range over the offered actions only; a rule passes `offered` on to them and needs
-nothing else. A uniform draw among them is `lo + uniform(rng, hi - lo)`: the same
-numbers as a draw over all actions where all are offered.
+game runs the one compiled form. Acting (`act`, `greedy`), the max (`max_value`) and
+the ε-greedy expectation (`expected_value`) range over the offered actions only; a
+rule passes `offered` on to them. A uniform draw among them is `lo + uniform(rng,
+hi - lo)`: the same numbers as a draw over all actions where all are offered.
 """
 
 from __future__ import annotations

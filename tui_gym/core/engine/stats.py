@@ -110,20 +110,10 @@ class Series:
         self._acc_n = 0
 
     def push(self, value: float) -> None:
-        self._acc += value
-        self._acc_n += 1
-        if self._acc_n < self.span:
-            return
-        self._points.append(self._acc / self._acc_n)
-        self._acc = 0.0
-        self._acc_n = 0
-        if len(self._points) >= self.capacity:
-            pts = self._points
-            self._points = [(pts[i] + pts[i + 1]) / 2 for i in range(0, len(pts), 2)]
-            self.span *= 2
+        self.push_many(np.array([value], dtype=np.float64))
 
     def push_many(self, values: np.ndarray) -> None:
-        """Push `values` in order, merging points as `push` does when full."""
+        """Push `values` in order; when full, merge points pairwise and double the span."""
         values = np.asarray(values, dtype=np.float64)
         i, k = 0, len(values)
         while i < k:

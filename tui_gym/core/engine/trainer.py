@@ -1,30 +1,18 @@
 """The trainer: one learner trained in chunks, with bounded statistics and snapshots.
 
-`Trainer` trains a learner (any `tui_gym.algorithms.Learner`) one of two
-ways, through the same compiled rule:
+`Trainer` trains a learner through its one compiled rule either on the game's
+model (`ModelArrays`, with the compiled loop: max speed and every headless run)
+or on the Gymnasium env, a transition at a time from Python (`step`: the
+animated board and the `n` step, and games or wrappers no model follows). In a
+world that changes as it is played (`later` phases), both loops play the phase
+in force at the steps trained (the env through its `world_steps` reset option).
 
-- on the game's finite model (`ModelArrays`: the model as the wrappers make
-  it), with the compiled loop (`loop.run_model`): max-speed training and
-  every headless run;
-- on the Gymnasium env itself, one transition at a time from Python (`step`):
-  the animated board and the `n` step, which show the env, and games or
-  wrapper chains no model follows.
-
-In a world that changes as it is played (`later` phases, from a step counted
-over every episode), the compiled loop trains on the model in force, its
-calls ending where a phase does, and the env starts each episode with the
-world's clock set to the steps trained (`reset` option `world_steps`), so
-both loops play the same world at the same step.
-
-`run(episodes=…)` / `run(seconds=…)` works in chunks of milliseconds so a
-front end can interleave drawing, pausing and changing settings; an episode
-in progress carries over between calls, so cutting a run into chunks never
-changes it. Per-episode return, length, mean |TD error| and epsilon go into
-`RollingWindow`s and whole-run `Series` (memory is fixed however long it
-runs); `snapshot()` is an immutable `TrainingSnapshot` for viewers on other
-threads, `latest` the most recent one. Its episodes per second are the recent
-rate of the loop training now. `continue_run` decides how new
-hyperparameters apply to a run under way.
+`run` works in chunks of milliseconds, so a front end can interleave drawing,
+pausing and changing settings; an episode in progress carries over between
+calls, so cutting a run into chunks never changes it. Statistics go into
+`RollingWindow`s and `Series` (fixed memory); `latest` is the last immutable
+`TrainingSnapshot`. `continue_run` decides how new hyperparameters apply to a
+run under way.
 """
 
 from __future__ import annotations
@@ -91,20 +79,10 @@ class TrainerProgress:
 
 
 class Trainer:
-    """Trains `agent` on `model` (when given) or on `env` (see the module docstring).
-
-    Args:
-        env: the env as built with its wrappers (the board shows it; with no
-            model it is what training plays).
-        agent: the learner (shared with the session).
-        keyer: the keyer of `env`'s observation space.
-        model: the game's model as the wrappers make it, whose states map to
-            the agent's table rows; None to train on the env.
-        later: in a world that changes, each later phase's start step and model.
-        seed: seeds the env's first reset (the agent's own generator drives
-            everything else).
-        reason: which loop trains and why, for people.
-    """
+    """Trains `agent` on `model` (the game's model as the wrappers make it, its states
+    mapped to the agent's table rows; `later`: each later phase's start step and
+    model) when given, else on `env`; `seed` seeds the env's first reset (the agent's
+    own generator drives everything else); `reason` says which loop trains and why."""
 
     def __init__(
         self,
@@ -252,21 +230,14 @@ class Trainer:
 
     def _record(self, rows: np.ndarray) -> None:
         """Count finished episodes (rows of return, length, mean |TD|, epsilon, first action)
-        into the windows and curves."""
-        if len(rows) == 1:  # one at a time (the env loop): no arrays to build
-            values = rows[0].tolist()
-            for name, value in zip(SERIES_NAMES, values[: len(SERIES_NAMES)], strict=True):
-                window = self.windows[name]
-                window.push(value)
-                self.series[name].push(window.mean)
-            self.series[EPISODE_RETURNS].push(values[0])
-            ret, length, td, eps, first = values
-            self.last = EpisodeStats(ret, int(length), td, eps, int(first))
-            self.episodes += 1
-            return
+        into the windows and curves (one at a time, from the env loop: no arrays built)."""
         for name, values in zip(SERIES_NAMES, rows.T[: len(SERIES_NAMES)], strict=True):
-            means = self.windows[name].push_many(values)
-            self.series[name].push_many(means)
+            window = self.windows[name]
+            if len(rows) == 1:
+                window.push(values.item())
+                self.series[name].push(window.mean)
+            else:
+                self.series[name].push_many(window.push_many(values))
         self.series[EPISODE_RETURNS].push_many(rows[:, 0])
         ret, length, td, eps, first = rows[-1].tolist()
         self.last = EpisodeStats(ret, int(length), td, eps, int(first))

@@ -235,36 +235,29 @@ def read_recording(path: str | Path, scene_fits: SceneCheck | None = None) -> Re
         if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):
             raise RecordingError(f"{path} is not a regular file (a pipe or a device), "
                                  "not a recording")
-        recording = read_lines_of(handle, path, scene_fits)
+        recording = Recording(path)
+        reader = _Reader(recording, scene_fits)
+        read = 0
+        for number, line in _lines(handle):
+            read += MAX_LINE_BYTES if line is None else len(line)
+            if read > MAX_READ_BYTES:
+                recording.cut_at_line = number
+                recording.size = _size_of(handle)
+                break
+            recording.lines = number
+            if line is None:
+                recording.skipped.append(number)
+                continue
+            if not line.strip():
+                continue
+            try:
+                reader.take(number, line)
+            except _Bad:
+                recording.skipped.append(number)
     if not recording.episodes:
         if not recording.games and recording.skipped:
             raise RecordingError(f"{path} is not a tui-gym recording (no line of it could be read)")
         raise RecordingError(f"{path} holds no episode to replay")
-    return recording
-
-
-def read_lines_of(handle: IO[bytes], path: Path, scene_fits: SceneCheck | None = None) -> Recording:
-    """Read a recording from an open binary file (see `read_recording`)."""
-    recording = Recording(path)
-    reader = _Reader(recording, scene_fits)
-    read = 0
-    for number, line in _lines(handle):
-        read += MAX_LINE_BYTES if line is None else len(line)
-        if read > MAX_READ_BYTES:
-            recording.cut_at_line = number
-            recording.size = _size_of(handle)
-            break
-        recording.lines = number
-        if line is None:
-            recording.skipped.append(number)
-            continue
-        if not line.strip():
-            continue
-        try:
-            reader.take(number, line)
-        except _Bad:
-            recording.skipped.append(number)
-    reader.finish()
     return recording
 
 
@@ -330,9 +323,6 @@ class _Reader:
         else:
             raise _Bad
 
-    def finish(self) -> None:
-        self.episode = None
-
     # --- records ---------------------------------------------------------------
     def _header(self, number: int, record: dict[str, Any]) -> None:
         version = record.get("version")
@@ -368,13 +358,16 @@ class _Reader:
     def _start(self, record: dict[str, Any]) -> None:
         number = _int(record.get("episode"))
         frame = self._frame(record)
-        episode = Episode(
-            index=len(self.recording.episodes) + 1, game=self._current_game(),
-            seed=_int_or_none(record.get("seed")), positions=[Position(frame, None)],
-            recorded_number=number,
-        )
+        self._open(seed=_int_or_none(record.get("seed")), positions=[Position(frame, None)],
+                   recorded_number=number)
+
+    def _open(self, **fields: Any) -> Episode:
+        """A new episode of the current game, the one moves now go to."""
+        episode = Episode(index=len(self.recording.episodes) + 1, game=self._current_game(),
+                          **fields)
         self.recording.episodes.append(episode)
         self.episode = episode
+        return episode
 
     def _step(self, record: dict[str, Any]) -> None:
         number = _int(record.get("episode"))
@@ -396,12 +389,7 @@ class _Reader:
         episode = self.episode
         if episode is None or episode.recorded_number != number or episode.end is not None:
             # Its start line was lost: the episode begins at this move.
-            episode = Episode(
-                index=len(self.recording.episodes) + 1, game=game, started=False,
-                recorded_number=number,
-            )
-            self.recording.episodes.append(episode)
-            self.episode = episode
+            episode = self._open(started=False, recorded_number=number)
         episode.positions.append(Position(frame, move))
 
     def _end(self, record: dict[str, Any]) -> None:
@@ -415,7 +403,6 @@ class _Reader:
         if episode is not None and episode.recorded_number == number and episode.end is None:
             episode.end = end
         # An end whose episode was lost altogether has nothing to replay: it is let go.
-
 
     def _frame(self, record: dict[str, Any]) -> Frame:
         scene = record.get("scene")

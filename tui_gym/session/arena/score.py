@@ -7,6 +7,8 @@ from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
+from tui_gym.session.play import sample_variance
+
 RECENT_EPISODES = 100  # episodes listed one by one in a score; older ones only count
 MIN_CI_EPISODES = 2  # a 95% interval needs two episodes
 NO_VALUES = "the game's hint names optimal actions but gives no exact action values"
@@ -92,9 +94,7 @@ def _interval(total: float, total_sq: float, n: int) -> float | None:
     """Half-width of the normal-approximation 95% interval of a mean (None below 2)."""
     if n < MIN_CI_EPISODES:
         return None
-    mean = total / n
-    var = max(0.0, (total_sq - n * mean * mean) / (n - 1))
-    return 1.96 * math.sqrt(var / n)
+    return 1.96 * math.sqrt(sample_variance(total, total_sq, n) / n)
 
 
 @dataclass

@@ -7,6 +7,7 @@ asked for; what the player is shown of it is up to the front end.
 
 from __future__ import annotations
 
+import contextlib
 import json
 from typing import Any
 
@@ -45,14 +46,8 @@ class Seat:
     def action_name(self, action: int | str) -> str:
         """The name of an action given by number or name; SeatError listing them if invalid."""
         names = self.entry.actions
-        if isinstance(action, int) and not isinstance(action, bool) and 0 <= action < len(names):
-            return names[action]
-        if isinstance(action, str):
-            text = action.strip().lower()
-            if text in names:
-                return text
-            if text.isascii() and text.isdigit() and int(text) < len(names):
-                return names[int(text)]
+        with contextlib.suppress(ValueError):
+            return names[self.handler.rules.action_index(action)]
         valid = ", ".join(f"{i}={n}" for i, n in enumerate(names))
         shown = repr(action) if isinstance(action, str) else str(action)
         raise SeatError(f"invalid action {shown[:40]}; valid actions: {valid}")

@@ -18,7 +18,6 @@ from tui_gym.session.plan.start import start_policy
 __all__ = ["PlanResult", "plan", "plan_json"]
 
 
-
 @dataclass(frozen=True)
 class PlanResult:
     """A method run to its end (or to `MAX_SWEEPS`) on a game's model."""

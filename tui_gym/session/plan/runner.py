@@ -225,7 +225,9 @@ class PlanRunner:
                 self._run_step()
                 stepped = True
             if commands or not stepped or self._publish_due():
-                self._publish()
+                self._last_publish = time.monotonic()
+                self._version += 1
+                self.latest = self._snapshot()
             if commands and self._on_command is not None:
                 self._on_command()
 
@@ -250,11 +252,6 @@ class PlanRunner:
         if not (self._hurry or math.isinf(SPEEDS[self._speed][1])):
             return True
         return time.monotonic() - self._last_publish >= 1.0 / MAX_FRAMES
-
-    def _publish(self) -> None:
-        self._last_publish = time.monotonic()
-        self._version += 1
-        self.latest = self._snapshot()
 
     def _snapshot(self) -> PlanSnapshot:
         planner = self._planner

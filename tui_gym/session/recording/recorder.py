@@ -35,21 +35,6 @@ class GameRecorder(Protocol):
     def game_step(self, game: HumanGame) -> None: ...
 
 
-def header_record(session: Session, *, source: str, seed: int | None) -> dict[str, Any]:
-    """The header line for a session's game, parameters and wrappers."""
-    from tui_gym.core.wrappers import format_wrapper_spec
-
-    game = session.game
-    return {
-        "type": HEADER, "format": FORMAT_NAME, "version": FORMAT_VERSION, "tui_gym": __version__,
-        "source": source, "game": game.name, "title": game.title, "env_id": session.env_id,
-        "env_kwargs": dict(session.env_kwargs),
-        "wrappers": [format_wrapper_spec(choice) for choice in session.applied], "seed": seed,
-        "board": game.board, "actions": list(game.action_names), "episode_noun": game.episode_noun,
-        "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-    }
-
-
 @dataclass
 class _Episode:
     """The episode being written."""
@@ -101,6 +86,8 @@ class Recorder:
     # --- the calls -------------------------------------------------------------
     def use_session(self, session: Session, seed: int | None = None) -> None:
         """Record the session's game from here on: a new header when it differs from the last."""
+        from tui_gym.core.wrappers import format_wrapper_spec
+
         if seed is not None:
             self.seed = seed
         key = (
@@ -113,14 +100,24 @@ class Recorder:
         self.end_episode()
         self._header_key = key
         self._judge = MoveJudge(session.game, session.env_kwargs)
-        self._write(header_record(session, source=self.source, seed=self.seed))
+        game = session.game
+        self._write({
+            "type": HEADER, "format": FORMAT_NAME, "version": FORMAT_VERSION,
+            "tui_gym": __version__, "source": self.source, "game": game.name, "title": game.title,
+            "env_id": session.env_id, "env_kwargs": dict(session.env_kwargs),
+            "wrappers": [format_wrapper_spec(choice) for choice in session.applied],
+            "seed": self.seed, "board": game.board, "actions": list(game.action_names),
+            "episode_noun": game.episode_noun,
+            "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        })
 
     def start_episode(
         self, env: Any, observation: Any, *, seed: int | None = None,
         info: Mapping[str, Any] | None = None,
     ) -> None:
         """A new episode has been reset to `observation` (an open one ends, abandoned)."""
-        self._need_session()
+        if self._played is None:
+            raise ValueError("no game to record: pass a session or call use_session first")
         self.end_episode()
         self.episodes += 1
         episode = self._episode = _Episode(self.episodes)
@@ -207,29 +204,24 @@ class Recorder:
             self.end_episode()
 
     # --- helpers ---------------------------------------------------------------
-    def _need_session(self) -> None:
-        if self._played is None:
-            raise ValueError("no game to record: pass a session or call use_session first")
-
     def _assess(self, env: Any) -> Assessment:
         return self._judge.assess(env) if self._judge is not None else NOTHING_KNOWN
 
     def _state(self, env: Any, observation: Any, info: Mapping[str, Any] | None) -> dict[str, Any]:
-        """The observation, the board's scene and the state in words."""
-        game = self._played
-        try:
-            data = game.states.json_observation(observation)
-        except Exception:
-            data = None
-        try:
-            scene: Any = game.states.scene(env)
-        except Exception:  # a recording keeps going without a picture
-            scene = None
-        try:
-            text: str | None = game.states.describe(observation)
-        except Exception:  # a wrapper reshaped the observation
-            text = None
-        return {"observation": data, "scene": scene, "text": text, "info": dict(info or {})}
+        """The observation, the board's scene and the state in words (None for each that
+        fails: a recording goes on without a picture, e.g. where a wrapper reshaped the
+        observation)."""
+        states = self._played.states
+        parts: dict[str, tuple[Callable[[Any], Any], Any]] = {
+            "observation": (states.json_observation, observation),
+            "scene": (states.scene, env), "text": (states.describe, observation)}
+        state: dict[str, Any] = {}
+        for name, (make, given) in parts.items():
+            try:
+                state[name] = make(given)
+            except Exception:
+                state[name] = None
+        return {**state, "info": dict(info or {})}
 
     def _write(self, record: dict[str, Any]) -> None:
         writer = self._writer

@@ -12,14 +12,6 @@ if TYPE_CHECKING:
     from tui_gym.session.recording.recorder import Recorder
 
 
-def default_path(game: str, folder: Path | None = None) -> Path:
-    """`tui-gym-blackjack-20250101-120000.jsonl` in `folder` (the current one by default)."""
-    from tui_gym.core.recording.format import SUFFIX
-
-    stamp = time.strftime("%Y%m%d-%H%M%S")
-    return (folder or Path.cwd()) / f"tui-gym-{game}-{stamp}{SUFFIX}"
-
-
 class RecordingSwitch:
     """Records a person's games while on; `path` is the file it writes (or will)."""
 
@@ -39,12 +31,14 @@ class RecordingSwitch:
 
     def turn_on(self, game: HumanGame) -> Path:
         """Start recording `game` (OSError when the file cannot be opened); the file's path."""
+        from tui_gym.core.recording.format import SUFFIX
         from tui_gym.session.recording.recorder import Recorder  # most runs never record
 
         if self.on:
             assert self.path is not None
             return self.path
-        path = self.path or default_path(game.game.name)
+        stamp = time.strftime("%Y%m%d-%H%M%S")  # tui-gym-blackjack-20250101-120000.jsonl
+        path = self.path or Path.cwd() / f"tui-gym-{game.game.name}-{stamp}{SUFFIX}"
         self.recorder = Recorder(
             path, game.session, source=self.source, seed=game.seed, append=self._used,
             on_failure=self._failed,
