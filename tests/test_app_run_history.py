@@ -46,7 +46,7 @@ def test_a_run_lasts_from_the_first_episode_to_a_reset_or_the_end(tmp_path: Path
     log.observe(session, session.trainer.latest)
     session.trainer.run(episodes=1000)
     log.observe(session, session.trainer.latest)
-    log.close()  # ends the second run
+    log.close(wait=None)  # ends the second run; every write landed
 
     with RunHistory(db) as history:
         second, first = history.list_runs()
@@ -76,7 +76,7 @@ def test_training_again_after_a_switch_back_is_a_new_run_of_the_new_episodes(
     log.observe(blackjack_session, blackjack_session.trainer.latest)  # back: nothing new yet
     blackjack_session.trainer.run(episodes=4096)
     log.observe(blackjack_session, blackjack_session.trainer.latest)
-    log.close()
+    log.close(wait=None)
     with RunHistory(db) as history:
         later, first = history.list_runs()
         assert history.get_run(first.id).curve("return").episodes[-1] == 4096
@@ -108,7 +108,7 @@ def test_a_history_that_cannot_be_opened_is_one_notice(tmp_path: Path) -> None:
     assert "not a tui-gym run history" in notice
     session.trainer.run(episodes=500)
     assert log.observe(session, session.trainer.latest) is None  # said once
-    log.close()
+    log.close(wait=None)
     assert db.read_bytes() == before
 
 
@@ -149,7 +149,7 @@ def test_a_run_records_the_settings_it_trained_with_its_episodes_and_its_save(
     log.saved(session, saved)
     session.trainer.run(episodes=1001)
     log.observe(session, session.trainer.latest)
-    log.close()
+    log.close(wait=None)
     with RunHistory(db) as history:
         [run] = history.list_runs()
         record = history.get_run(run.id)
@@ -172,7 +172,7 @@ def test_a_history_path_that_cannot_be_examined_is_one_notice(tmp_path: Path) ->
     assert log._writer is not None and log._writer.is_alive()  # it waits for work: no crash
     session.trainer.run(episodes=500)
     assert log.observe(session, session.trainer.latest) is None
-    log.close()
+    log.close(wait=None)
 
 
 async def test_the_app_goes_on_without_a_history_it_cannot_examine(tmp_path: Path) -> None:
