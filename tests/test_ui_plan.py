@@ -53,6 +53,19 @@ async def test_the_plan_view_by_its_keys_at_80x24() -> None:
         assert app.current_view == "play"
 
 
+async def test_the_keyboard_asked_for_while_the_plan_view_is_built_reaches_it_once_built() -> None:
+    """A burst such as `P` then a key that hands the keyboard to the view shown: the Plan
+    view, mounted but not yet composed, takes it once it is (no error on the way)."""
+    app = TuiGymApp(Session("corner-grid", seed=0))
+    async with app.run_test(size=(80, 24)) as pilot:
+        app.action_show_view("plan")
+        app.action_focus_view()  # before the view has composed its widgets
+        view = app.plan_view
+        assert view is not None
+        await wait_busy(pilot, lambda: view.is_mounted and view._heatmap.has_focus,
+                        "the heatmap with the keyboard")
+
+
 async def test_an_edit_while_value_iteration_runs_plans_on_from_the_values() -> None:
     session = Session("frozenlake", {"slippery": False}, seed=0)
     app = PlanHost(session)

@@ -498,7 +498,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         if self.current_view == "play":
             self.play_view.focus_board()
         elif self.current_view in self._views:
-            self._views[self.current_view].focus_default()
+            if self._views[self.current_view].is_mounted:  # else it takes it as it mounts
+                self._views[self.current_view].focus_default()
         elif (view := self._train_ready()) is not None:
             view.focus_default()  # else it takes the keyboard when it mounts
 
