@@ -13,6 +13,8 @@ one; the tests run the app so), it leaves Textual to do what it does by itself:
   (`in_sight`: its visible widgets; stock: never, so the widget repaints whole);
 - `resume`: when the main screen first shows, its widgets keep the styles they
   were mounted with (`Screen._on_screen_resume`);
+- `focus`: a focus change on the main screen repaints the widgets it restyles, not
+  the whole screen after the frame that shows it (`Screen.focused`, a `Reactive`);
 - `crash`: an app that owns its terminal keeps an unexpected error's traceback
   off the screen, for a crash log (`CrashHook`: `App._handle_exception`,
   `App._exit_renderables`);
@@ -41,12 +43,13 @@ from textual.driver import Driver
 from textual.events import ScreenResume
 from textual.geometry import Region, Size
 from textual.message import Message
+from textual.reactive import Reactive
 from textual.screen import Screen
 from textual.strip import Strip
 from textual.widget import Widget
 
 STOCK_ENV = "TUI_GYM_STOCK_TEXTUAL"
-PARTS = ("compositor", "resume", "crash", "ticks", "terminal", "frames")
+PARTS = ("compositor", "resume", "focus", "crash", "ticks", "terminal", "frames")
 
 __all__ = [
     "PARTS",
@@ -197,9 +200,17 @@ class _ResumingScreen(Screen):
                 event.refresh_styles = False
 
 
+class _QuietFocusScreen(_ResumingScreen):
+    """A screen whose focus change repaints only what the new focus restyles (Textual
+    repaints the whole screen as well, a second frame after each view switch)."""
+
+    focused: Reactive[Widget | None] = Reactive(None, repaint=False)
+
+
 def main_screen(**kwargs: Any) -> Screen:
     """The app's main screen, with the parts that are enabled and fit this Textual."""
-    screen = _ResumingScreen(**kwargs)
+    quiet = enabled("focus") and isinstance(vars(Screen).get("focused"), Reactive)
+    screen = (_QuietFocusScreen if quiet else _ResumingScreen)(**kwargs)
     if enabled("compositor") and hasattr(screen, "_compositor"):
         compositor = _kept_layout_compositor()
         if compositor is not None:
