@@ -14,7 +14,9 @@ one; the tests run the app so), it leaves Textual to do what it does by itself:
 - `resume`: when the main screen first shows, its widgets keep the styles they
   were mounted with (`Screen._on_screen_resume`);
 - `focus`: a focus change on the main screen repaints the widgets it restyles, not
-  the whole screen after the frame that shows it (`Screen.focused`, a `Reactive`);
+  the whole screen after the frame that shows it (`Screen.focused`, a `Reactive`),
+  and restyles the widget alone, not the widgets inside it, when no rule of the
+  stylesheet can tell them apart by it (`Widget.watch_has_focus`, `Stylesheet.rules`);
 - `crash`: an app that owns its terminal keeps an unexpected error's traceback
   off the screen, for a crash log (`CrashHook`: `App._handle_exception`,
   `App._exit_renderables`);
@@ -200,11 +202,56 @@ class _ResumingScreen(Screen):
                 event.refresh_styles = False
 
 
+_FOCUS_STATES = frozenset({"focus", "blur", "focus-within"})
+_FRAME_STYLES = ("border", "auto_border", "outline")  # a widget's frame: not drawn inside
+
+
+def _focus_styles_its_own(widget: Widget) -> bool:
+    """Whether a focus change of `widget` restyles no widget inside it: no rule reads the
+    focus of a widget around the one it styles, and the rules that read `widget`'s own
+    focus set only its border and outline (the widgets inside draw with neither)."""
+    try:
+        stylesheet = widget.app.stylesheet
+        names = widget._selector_names
+        for rule in stylesheet.rules:
+            for selectors in rule.selector_set:
+                *around, last = selectors.selectors
+                if any(_FOCUS_STATES & selector.pseudo_classes and selector._check(widget)
+                       for selector in around):
+                    return False
+                if (_FOCUS_STATES & last.pseudo_classes and names & rule.selector_names
+                        and not all(key.startswith(_FRAME_STYLES)
+                                    for key in rule.styles.get_rules())):
+                    return False
+    except Exception:  # a stylesheet of another shape: restyle as Textual does
+        return False
+    return True
+
+
+def _own_focus_styler(widget: Widget) -> Callable[[], None]:
+    """`widget`'s watcher of its focus: it restyles the widget alone where it can."""
+
+    def restyle() -> None:
+        if widget.children and not _focus_styles_its_own(widget):
+            widget.update_node_styles()  # Textual's own: the widget and all inside it
+        else:
+            widget.app.stylesheet.update_nodes([widget], animate=True)
+
+    return restyle
+
+
 class _QuietFocusScreen(_ResumingScreen):
     """A screen whose focus change repaints only what the new focus restyles (Textual
-    repaints the whole screen as well, a second frame after each view switch)."""
+    repaints the whole screen as well, a second frame after each view switch), and
+    restyles the focused or blurred widget alone where nothing inside it can change."""
 
     focused: Reactive[Widget | None] = Reactive(None, repaint=False)
+
+    def set_focus(self, widget: Widget | None, *args: Any, **kwargs: Any) -> None:
+        if (widget is not None and "watch_has_focus" not in vars(widget)
+                and type(widget).watch_has_focus is Widget.watch_has_focus):
+            widget.watch_has_focus = _own_focus_styler(widget)  # type: ignore[method-assign, assignment]
+        super().set_focus(widget, *args, **kwargs)
 
 
 def main_screen(**kwargs: Any) -> Screen:
