@@ -151,3 +151,9 @@ async def test_a_focus_change_restyles_inside_a_widget_only_where_a_rule_reads_i
             assert (framed.styles.border.top[1].rgb == (255, 0, 0)) == (red is framed)
             inside = tinted.query_one(Static).styles.color.rgb
             assert (inside == (255, 0, 0)) == (red is tinted)
+        app.set_focus(framed)
+        await pilot.pause()
+        framed.display = False  # its view switched away: restyled after the next frame
+        app.set_focus(None)
+        await wait_for(pilot, lambda: framed.styles.border.top[1].rgb == (255, 255, 255),
+                       "the hidden widget restyled as not focused")

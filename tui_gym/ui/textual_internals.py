@@ -16,7 +16,8 @@ one; the tests run the app so), it leaves Textual to do what it does by itself:
 - `focus`: a focus change on the main screen repaints the widgets it restyles, not
   the whole screen after the frame that shows it (`Screen.focused`, a `Reactive`),
   and restyles the widget alone, not the widgets inside it, when no rule of the
-  stylesheet can tell them apart by it (`Widget.watch_has_focus`, `Stylesheet.rules`);
+  stylesheet can tell them apart by it, and a hidden widget after the next frame
+  (`Widget.watch_has_focus`, `Screen._update_focus_styles`, `Stylesheet.rules`);
 - `crash`: an app that owns its terminal keeps an unexpected error's traceback
   off the screen, for a crash log (`CrashHook`: `App._handle_exception`,
   `App._exit_renderables`);
@@ -228,22 +229,37 @@ def _focus_styles_its_own(widget: Widget) -> bool:
     return True
 
 
+def _hidden(widget: Widget) -> bool:
+    """Whether `widget` is out of the layout (it, or a widget around it, has no display)."""
+    return not all(node.display for node in widget.ancestors_with_self)
+
+
 def _own_focus_styler(widget: Widget) -> Callable[[], None]:
-    """`widget`'s watcher of its focus: it restyles the widget alone where it can."""
+    """`widget`'s watcher of its focus: it restyles the widget alone where it can, and
+    after the next frame when the widget is hidden (the view it sits in was switched away)."""
 
     def restyle() -> None:
+        if not widget.is_attached:
+            return
         if widget.children and not _focus_styles_its_own(widget):
             widget.update_node_styles()  # Textual's own: the widget and all inside it
         else:
             widget.app.stylesheet.update_nodes([widget], animate=True)
 
-    return restyle
+    def watch_has_focus() -> None:
+        if _hidden(widget):
+            widget.call_after_refresh(restyle)
+        else:
+            restyle()
+
+    return watch_has_focus
 
 
 class _QuietFocusScreen(_ResumingScreen):
     """A screen whose focus change repaints only what the new focus restyles (Textual
     repaints the whole screen as well, a second frame after each view switch), and
-    restyles the focused or blurred widget alone where nothing inside it can change."""
+    restyles the focused or blurred widget alone where nothing inside it can change; a
+    hidden widget that loses the focus is restyled after the next frame."""
 
     focused: Reactive[Widget | None] = Reactive(None, repaint=False)
 
@@ -253,10 +269,19 @@ class _QuietFocusScreen(_ResumingScreen):
             widget.watch_has_focus = _own_focus_styler(widget)  # type: ignore[method-assign, assignment]
         super().set_focus(widget, *args, **kwargs)
 
+    def _update_focus_styles(
+        self, focused: Widget | None = None, blurred: Widget | None = None
+    ) -> None:
+        if blurred is not None and _hidden(blurred):
+            self.call_after_refresh(super()._update_focus_styles, None, blurred)
+            blurred = None
+        super()._update_focus_styles(focused, blurred)
+
 
 def main_screen(**kwargs: Any) -> Screen:
     """The app's main screen, with the parts that are enabled and fit this Textual."""
-    quiet = enabled("focus") and isinstance(vars(Screen).get("focused"), Reactive)
+    quiet = (enabled("focus") and isinstance(vars(Screen).get("focused"), Reactive)
+             and _parameters(Screen._update_focus_styles) == ["self", "focused", "blurred"])
     screen = (_QuietFocusScreen if quiet else _ResumingScreen)(**kwargs)
     if enabled("compositor") and hasattr(screen, "_compositor"):
         compositor = _kept_layout_compositor()
