@@ -122,6 +122,10 @@ class Framed(Widget, can_focus=True):
     DEFAULT_CSS = "Framed { border: round white; } Framed:focus { border: round red; }"
 
 
+class Box(Widget):
+    DEFAULT_CSS = "Box { height: auto; border: round white; } Box:focus-within { border: red; }"
+
+
 class Tinted(Widget, can_focus=True):
     DEFAULT_CSS = "Tinted > Static { color: white; } Tinted:focus > Static { color: red; }"
 
@@ -131,7 +135,7 @@ class FocusStyles(App[None]):
         return internals.main_screen(id="_default")
 
     def compose(self) -> ComposeResult:
-        with Framed():
+        with Box(), Framed():
             yield Static("framed")
         with Tinted():
             yield Static("tinted")
@@ -153,7 +157,10 @@ async def test_a_focus_change_restyles_inside_a_widget_only_where_a_rule_reads_i
             assert (inside == (255, 0, 0)) == (red is tinted)
         app.set_focus(framed)
         await pilot.pause()
-        framed.display = False  # its view switched away: restyled after the next frame
+        box = app.query_one(Box)
+        assert box.styles.border.top[1].rgb == (255, 0, 0)  # its focus is inside
+        box.display = False  # its view switched away: restyled after the next frame
         app.set_focus(None)
-        await wait_for(pilot, lambda: framed.styles.border.top[1].rgb == (255, 255, 255),
-                       "the hidden widget restyled as not focused")
+        await wait_for(pilot, lambda: framed.styles.border.top[1].rgb == (255, 255, 255)
+                       and box.styles.border.top[1].rgb == (255, 255, 255),
+                       "the hidden widgets restyled as not focused")

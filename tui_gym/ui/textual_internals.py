@@ -42,6 +42,7 @@ from typing import Any
 
 from rich.segment import Segment
 from textual.app import App
+from textual.dom import DOMNode
 from textual.driver import Driver
 from textual.events import ScreenResume
 from textual.geometry import Region, Size
@@ -229,7 +230,7 @@ def _focus_styles_its_own(widget: Widget) -> bool:
     return True
 
 
-def _hidden(widget: Widget) -> bool:
+def _hidden(widget: DOMNode) -> bool:
     """Whether `widget` is out of the layout (it, or a widget around it, has no display)."""
     return not all(node.display for node in widget.ancestors_with_self)
 
@@ -272,7 +273,9 @@ class _QuietFocusScreen(_ResumingScreen):
     def _update_focus_styles(
         self, focused: Widget | None = None, blurred: Widget | None = None
     ) -> None:
-        if blurred is not None and _hidden(blurred):
+        if blurred is not None and _hidden(blurred) and not any(
+                node._has_focus_within and not _hidden(node) for node in blurred.ancestors):
+            # Nothing it restyles is on the screen: after the frame that hid it.
             self.call_after_refresh(super()._update_focus_styles, None, blurred)
             blurred = None
         super()._update_focus_styles(focused, blurred)
