@@ -9,9 +9,12 @@ from pathlib import Path
 
 import pytest
 from rich.segment import Segment
-from textual.app import App
+from textual.app import App, ComposeResult
 from textual.drivers.headless_driver import HeadlessDriver
+from textual.screen import Screen
 from textual.strip import Strip
+from textual.widget import Widget
+from textual.widgets import Static
 
 from tui_gym.core.experiments import RunHistory, RunRecorder, RunSpec
 from tui_gym.session.session import Session
@@ -30,6 +33,7 @@ def stock(monkeypatch: pytest.MonkeyPatch) -> None:
 def test_every_part_can_be_forced_to_textuals_own_behaviour(stock: None) -> None:
     assert not any(internals.enabled(part) for part in internals.PARTS)
     assert type(internals.main_screen()._compositor).__name__ == "Compositor"
+    assert type(internals.main_screen()).focused is Screen.focused  # a full repaint on focus
     assert internals.guarded_driver(HeadlessDriver) is HeadlessDriver
     assert not internals.watch_frames(App(), lambda renderable: None)
     line = Strip([Segment("▐"), Segment("X"), Segment("▌ #1")])
@@ -112,3 +116,51 @@ async def test_a_strip_widget_repaints_whole_when_it_cannot_tell_it_is_in_sight(
         await pilot.pause()
         assert sorted(widget.asked) == [0, 1, 2]  # Textual's own way: the whole widget
         assert rows_shown(app) == ["one", "TWO", "three"]
+
+
+class Framed(Widget, can_focus=True):
+    DEFAULT_CSS = "Framed { border: round white; } Framed:focus { border: round red; }"
+
+
+class Box(Widget):
+    DEFAULT_CSS = "Box { height: auto; border: round white; } Box:focus-within { border: red; }"
+
+
+class Tinted(Widget, can_focus=True):
+    DEFAULT_CSS = "Tinted > Static { color: white; } Tinted:focus > Static { color: red; }"
+
+
+class FocusStyles(App[None]):
+    def get_default_screen(self) -> Screen:
+        return internals.main_screen(id="_default")
+
+    def compose(self) -> ComposeResult:
+        with Box(), Framed():
+            yield Static("framed")
+        with Tinted():
+            yield Static("tinted")
+
+
+async def test_a_focus_change_restyles_inside_a_widget_only_where_a_rule_reads_it() -> None:
+    app = FocusStyles()
+    async with app.run_test(size=(30, 10)) as pilot:
+        framed, tinted = app.query_one(Framed), app.query_one(Tinted)
+        assert internals._focus_styles_its_own(framed)  # only its own frame changes
+        assert not internals._focus_styles_its_own(tinted)  # what is inside changes too
+        for widget, focused, red in ((framed, framed, framed), (tinted, tinted, tinted),
+                                     (None, None, None)):
+            app.set_focus(widget)
+            await pilot.pause()
+            assert app.focused is focused
+            assert (framed.styles.border.top[1].rgb == (255, 0, 0)) == (red is framed)
+            inside = tinted.query_one(Static).styles.color.rgb
+            assert (inside == (255, 0, 0)) == (red is tinted)
+        app.set_focus(framed)
+        await pilot.pause()
+        box = app.query_one(Box)
+        assert box.styles.border.top[1].rgb == (255, 0, 0)  # its focus is inside
+        box.display = False  # its view switched away: restyled after the next frame
+        app.set_focus(None)
+        await wait_for(pilot, lambda: framed.styles.border.top[1].rgb == (255, 255, 255)
+                       and box.styles.border.top[1].rgb == (255, 255, 255),
+                       "the hidden widgets restyled as not focused")

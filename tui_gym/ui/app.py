@@ -405,7 +405,9 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
                 and self._switcher.visible_content not in focused.ancestors:
             # Keys typed before the view takes the keyboard (once mounted) are the app's,
             # not those of the view just hidden.
-            self.set_focus(None)
+            self.set_focus(None)  # the keys shown follow the focus: the view's, from here
+        else:
+            self.refresh_bindings()  # the view's keys, even when the focus stays put
         self._show_side()
         if view == "play":
             self.play_view.focus_board()
@@ -418,7 +420,6 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             self.call_after_refresh(self._focus_shown, view)
         else:
             self._train_shown()
-        self.refresh_bindings()  # the view's keys, even when the focus stays put
 
     def _new_view(self, view: str) -> Any:
         """The Compare, Plan or Book view."""
@@ -445,7 +446,6 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             self.call_after_refresh(self._train_shown)
             return
         view.focus_default()
-        self.refresh_bindings()
         self._train_appearing = True
         self.call_after_refresh(self._train_appeared)
 

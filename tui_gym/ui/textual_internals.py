@@ -13,6 +13,11 @@ one; the tests run the app so), it leaves Textual to do what it does by itself:
   (`in_sight`: its visible widgets; stock: never, so the widget repaints whole);
 - `resume`: when the main screen first shows, its widgets keep the styles they
   were mounted with (`Screen._on_screen_resume`);
+- `focus`: a focus change on the main screen repaints the widgets it restyles, not
+  the whole screen after the frame that shows it (`Screen.focused`, a `Reactive`),
+  and restyles the widget alone, not the widgets inside it, when no rule of the
+  stylesheet can tell them apart by it, and a hidden widget after the next frame
+  (`Widget.watch_has_focus`, `Screen._update_focus_styles`, `Stylesheet.rules`);
 - `crash`: an app that owns its terminal keeps an unexpected error's traceback
   off the screen, for a crash log (`CrashHook`: `App._handle_exception`,
   `App._exit_renderables`);
@@ -37,16 +42,18 @@ from typing import Any
 
 from rich.segment import Segment
 from textual.app import App
+from textual.dom import DOMNode
 from textual.driver import Driver
 from textual.events import ScreenResume
 from textual.geometry import Region, Size
 from textual.message import Message
+from textual.reactive import Reactive
 from textual.screen import Screen
 from textual.strip import Strip
 from textual.widget import Widget
 
 STOCK_ENV = "TUI_GYM_STOCK_TEXTUAL"
-PARTS = ("compositor", "resume", "crash", "ticks", "terminal", "frames")
+PARTS = ("compositor", "resume", "focus", "crash", "ticks", "terminal", "frames")
 
 __all__ = [
     "PARTS",
@@ -197,9 +204,88 @@ class _ResumingScreen(Screen):
                 event.refresh_styles = False
 
 
+_FOCUS_STATES = frozenset({"focus", "blur", "focus-within"})
+_FRAME_STYLES = ("border", "auto_border", "outline")  # a widget's frame: not drawn inside
+
+
+def _focus_styles_its_own(widget: Widget) -> bool:
+    """Whether a focus change of `widget` restyles no widget inside it: no rule reads the
+    focus of a widget around the one it styles, and the rules that read `widget`'s own
+    focus set only its border and outline (the widgets inside draw with neither)."""
+    try:
+        stylesheet = widget.app.stylesheet
+        names = widget._selector_names
+        for rule in stylesheet.rules:
+            for selectors in rule.selector_set:
+                *around, last = selectors.selectors
+                if any(_FOCUS_STATES & selector.pseudo_classes and selector._check(widget)
+                       for selector in around):
+                    return False
+                if (_FOCUS_STATES & last.pseudo_classes and names & rule.selector_names
+                        and not all(key.startswith(_FRAME_STYLES)
+                                    for key in rule.styles.get_rules())):
+                    return False
+    except Exception:  # a stylesheet of another shape: restyle as Textual does
+        return False
+    return True
+
+
+def _hidden(widget: DOMNode) -> bool:
+    """Whether `widget` is out of the layout (it, or a widget around it, has no display)."""
+    return not all(node.display for node in widget.ancestors_with_self)
+
+
+def _own_focus_styler(widget: Widget) -> Callable[[], None]:
+    """`widget`'s watcher of its focus: it restyles the widget alone where it can, and
+    after the next frame when the widget is hidden (the view it sits in was switched away)."""
+
+    def restyle() -> None:
+        if not widget.is_attached:
+            return
+        if widget.children and not _focus_styles_its_own(widget):
+            widget.update_node_styles()  # Textual's own: the widget and all inside it
+        else:
+            widget.app.stylesheet.update_nodes([widget], animate=True)
+
+    def watch_has_focus() -> None:
+        if _hidden(widget):
+            widget.call_after_refresh(restyle)
+        else:
+            restyle()
+
+    return watch_has_focus
+
+
+class _QuietFocusScreen(_ResumingScreen):
+    """A screen whose focus change repaints only what the new focus restyles (Textual
+    repaints the whole screen as well, a second frame after each view switch), and
+    restyles the focused or blurred widget alone where nothing inside it can change; a
+    hidden widget that loses the focus is restyled after the next frame."""
+
+    focused: Reactive[Widget | None] = Reactive(None, repaint=False)
+
+    def set_focus(self, widget: Widget | None, *args: Any, **kwargs: Any) -> None:
+        if (widget is not None and "watch_has_focus" not in vars(widget)
+                and type(widget).watch_has_focus is Widget.watch_has_focus):
+            widget.watch_has_focus = _own_focus_styler(widget)  # type: ignore[method-assign, assignment]
+        super().set_focus(widget, *args, **kwargs)
+
+    def _update_focus_styles(
+        self, focused: Widget | None = None, blurred: Widget | None = None
+    ) -> None:
+        if blurred is not None and _hidden(blurred) and not any(
+                node._has_focus_within and not _hidden(node) for node in blurred.ancestors):
+            # Nothing it restyles is on the screen: after the frame that hid it.
+            self.call_after_refresh(super()._update_focus_styles, None, blurred)
+            blurred = None
+        super()._update_focus_styles(focused, blurred)
+
+
 def main_screen(**kwargs: Any) -> Screen:
     """The app's main screen, with the parts that are enabled and fit this Textual."""
-    screen = _ResumingScreen(**kwargs)
+    quiet = (enabled("focus") and isinstance(vars(Screen).get("focused"), Reactive)
+             and _parameters(Screen._update_focus_styles) == ["self", "focused", "blurred"])
+    screen = (_QuietFocusScreen if quiet else _ResumingScreen)(**kwargs)
     if enabled("compositor") and hasattr(screen, "_compositor"):
         compositor = _kept_layout_compositor()
         if compositor is not None:
