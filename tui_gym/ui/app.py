@@ -498,8 +498,10 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         if self.current_view == "play":
             self.play_view.focus_board()
         elif self.current_view in self._views:
-            if self._views[self.current_view].is_mounted:  # else it takes it as it mounts
+            if self._views[self.current_view].is_mounted:
                 self._views[self.current_view].focus_default()
+            else:  # still being built: once it is
+                self.call_after_refresh(self._focus_shown, self.current_view)
         elif (view := self._train_ready()) is not None:
             view.focus_default()  # else it takes the keyboard when it mounts
 
