@@ -497,9 +497,9 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         """Give the keyboard back to the view shown (its board, or the heatmap)."""
         if self.current_view == "play":
             self.play_view.focus_board()
-        elif self.current_view in self._views:
-            if self._views[self.current_view].is_mounted:
-                self._views[self.current_view].focus_default()
+        elif (built := self._views.get(self.current_view)) is not None:
+            if built.is_mounted:
+                built.focus_default()
             else:  # still being built: once it is
                 self.call_after_refresh(self._focus_shown, self.current_view)
         elif (view := self._train_ready()) is not None:
@@ -1107,8 +1107,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         """Nobody can see the app or type to it any more: end it, as a hang-up would."""
         self.exit(return_code=128 + signal.SIGHUP)
 
-YOUNG_GC_SECONDS = 0.5  # collect the young generations this often (not `KEY_QUIET_SECONDS`
-# after a key was handed on)
+YOUNG_GC_SECONDS = 0.5  # collect the young generations this often, not right after a key
 FULL_GC_SECONDS = 20.0  # and everything this often
 GC_SECONDS_ENV = "TUI_GYM_GC_SECONDS"  # "YOUNG,FULL" seconds, to override both
 
