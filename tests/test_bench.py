@@ -26,18 +26,8 @@ from tui_gym.cli import build_parser, commands
 from tui_gym.cli.output import _clean
 from tui_gym.session.session import Session
 
-REQUIRED_KEYS = (
-    "cold_compile_s",
-    "warm_load_s",
-    "games",
-    "time_to_gap_s",
-    "tutorial_time_to_gap_s",
-    "live_ratio",
-    "ui_refresh_hz",
-    "key_latency_p95_ms",
-    "rss_growth_mb",
-    "startup_s",
-)
+REQUIRED_KEYS = ("quick", "seconds", "machine", "compile", "speed", "gap", "live", "memory",
+                 "startup", "figures", "verdicts", "errors")
 
 
 # --- the tutorial baseline ------------------------------------------------------
@@ -155,25 +145,26 @@ def test_the_json_has_every_required_figure() -> None:
     data = json.loads(json.dumps(_clean(to_json(fake_results()))))
     for key in REQUIRED_KEYS:
         assert key in data, key
-    assert (data["cold_compile_s"], data["warm_load_s"]) == (24.0, 0.4)
-    speed = data["games"]["blackjack"]["speed"]
-    assert [s["speedup"] for s in speed] == pytest.approx([2_000_000 / 15_000, 80.0])
-    assert speed[0]["episodes_per_second"] == pytest.approx(2_000_000 / 1.5)
-    assert data["games"]["blackjack"]["defaults"][0]["share"] == pytest.approx(39 / 40)
+    figures = data["figures"]
+    assert (figures["cold_compile_s"], figures["warm_load_s"]) == (24.0, 0.4)
+    assert [figures[f"speedup[blackjack/{name}]"] for name in ("sarsa", "dyna-q")] == \
+        pytest.approx([2_000_000 / 15_000, 80.0])
+    assert (data["speed"][0]["steps"], data["speed"][0]["mean_length"]) == (2_000_000, 1.5)
+    assert figures["defaults[blackjack/sarsa]"] == pytest.approx(39 / 40)
     assert data["verdicts"]["speedup[blackjack/sarsa]"] == PASS
     assert data["verdicts"]["speedup[blackjack/dyna-q]"] == MISS
     assert data["verdicts"]["defaults[blackjack/sarsa]"] == PASS
     assert data["verdicts"]["defaults[blackjack/dyna-q]"] == MISS
     assert data["verdicts"]["cold_compile_s"] == PASS == data["verdicts"]["warm_load_s"]
-    assert data["time_to_gap_s"] == pytest.approx(0.11)
-    assert data["tutorial_reached"] is True
-    assert data["time_to_gap_speedup"] == pytest.approx(10.0 / 0.11)
+    assert figures["time_to_gap_s[blackjack]"] == pytest.approx(0.11)
+    assert data["gap"]["blackjack"]["tutorial"][0]["reached"] is True
+    assert figures["time_to_gap[blackjack]"] == pytest.approx(10.0 / 0.11)
     assert data["default_runner"] == "process"
-    assert data["live_ratio"] == pytest.approx(1_550_000 / 1_600_000)  # the default runner's
-    assert set(data["runners"]) == {"thread", "process"}
-    assert data["runners"]["thread"]["live_ratio"] == pytest.approx(500_000 / 1_600_000)
-    assert data["rss_growth_mb"] == pytest.approx(0.6)
-    assert data["startup_s"] == pytest.approx(0.85)
+    assert figures["live_ratio[process]"] == pytest.approx(1_550_000 / 1_600_000)
+    assert set(data["live"]) == {"thread", "process"}
+    assert figures["live_ratio[thread]"] == pytest.approx(500_000 / 1_600_000)
+    assert figures["rss_growth_mb"] == pytest.approx(0.6)
+    assert figures["startup_s"] == pytest.approx(0.85)
     assert data["verdicts"]["time_to_gap[blackjack]"] == PASS
     assert data["verdicts"]["live_ratio[thread]"] == MISS
     assert data["verdicts"]["key_latency_p95_ms[thread]"] == MISS
@@ -198,7 +189,7 @@ def test_a_comparison_runner_that_misses_is_explained() -> None:
 def test_a_capped_tutorial_gives_a_lower_bound() -> None:
     decided = fake_results(tutorial_reached=False, tutorial_seconds=15.0)
     assert verdicts(decided)["time_to_gap[blackjack]"] == PASS  # >= 136x already beats 50x
-    assert to_json(decided)["time_to_gap_speedup_is_lower_bound"] is True
+    assert not any(run["reached"] for run in to_json(decided)["gap"]["blackjack"]["tutorial"])
     text = rendered(decided)
     assert "≥ 15.0 s (capped)" in text and "lower bounds" in text
     undecided = fake_results(tutorial_reached=False, tutorial_seconds=0.5)
@@ -208,16 +199,16 @@ def test_a_capped_tutorial_gives_a_lower_bound() -> None:
 def test_a_failed_stage_is_reported_not_raised() -> None:
     results = fake_results(failed_live=True)
     data = to_json(results)
-    assert data["runners"]["thread"] == {"error": "TimeoutError: timed out waiting for x"}
+    assert data["live"]["thread"]["errors"] == ("TimeoutError: timed out waiting for x",)
     assert data["verdicts"]["live_ratio[thread]"] == "n/a"
-    assert data["live_ratio"] is not None  # the default (process) runner still measured
+    assert data["figures"]["live_ratio[process]"] is not None  # the default runner measured
     assert "timed out waiting" in rendered(results)
     empty = BenchResults(quick=False, seconds=1.0, machine=MachineInfo(None, None, None),
                          errors={"speed": "RuntimeError: boom"})
     data = json.loads(json.dumps(_clean(to_json(empty))))
     for key in REQUIRED_KEYS:
         assert key in data, key
-    assert data["time_to_gap_s"] is None and data["errors"] == {"speed": "RuntimeError: boom"}
+    assert data["gap"] == {} and data["errors"] == {"speed": "RuntimeError: boom"}
     assert "boom" in rendered(empty)
 
 
@@ -245,7 +236,5 @@ def test_the_planning_figure_has_a_target_and_a_verdict() -> None:
     )
     results = replace(fake_results(), planning=planning)
     assert verdicts(results)["planning"] == PASS
-    data = to_json(results)
-    assert (data["planning"]["q_learning_episodes"], data["planning"]["dyna_q_episodes"]) == (
-        3_000, 500)
+    assert to_json(results)["figures"]["planning"] == [3_000, 500]
     assert "3,000 / 500" in rendered(results)

@@ -25,8 +25,8 @@ def test_the_planning_rows_have_targets_and_verdicts() -> None:
     assert found["plan_key_p95_ms[gridworld]"] == PASS
     assert found["plan_sweeps_per_second[frozenlake]"] == MISS
     assert found["plan_key_p95_ms[frozenlake]"] == MISS
-    data = to_json(results_with(dp))["planning_dp"]
-    assert data["taxi_value_sweep_ms"] == 0.4 and data["plan_view"][0]["key_presses"] == 3
+    data = to_json(results_with(dp))
+    assert data["figures"]["taxi_sweep_ms"] == 0.4 and len(data["dp"]["views"][0]["keys_ms"]) == 3
     console = Console(record=True, width=160)
     console.print(table(results_with(dp)))
     text = console.export_text()

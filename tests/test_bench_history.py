@@ -41,10 +41,10 @@ def test_the_report_shows_the_figures_with_targets_and_verdicts() -> None:
     good = HistoryResult("blackjack", (0.004, 0.006, 0.005), (1.2, 1.1, 1.3), (1.1, 1.2, 1.1),
                          1000, 600_000)
     data = json.loads(json.dumps(_clean(to_json(results(good)))))
-    assert data["history"]["overhead"] == 0.005
-    assert data["history"]["bytes_per_1000_runs"] == 600_000
+    assert data["figures"]["history_overhead"] == 0.005
+    assert data["figures"]["history_mb_per_1000_runs"] == 0.6
     assert data["verdicts"]["history_overhead"] == PASS
-    assert data["verdicts"]["history_bytes_per_1000_runs"] == PASS
+    assert data["verdicts"]["history_mb_per_1000_runs"] == PASS
     console = Console(record=True, width=160)
     console.print(table(results(good)))
     text = console.export_text()
@@ -52,5 +52,5 @@ def test_the_report_shows_the_figures_with_targets_and_verdicts() -> None:
 
     heavy = HistoryResult("blackjack", (0.03,), (1.0,), (1.0,), 500, 600_000)
     assert verdicts(results(heavy))["history_overhead"] == MISS
-    assert verdicts(results(heavy))["history_bytes_per_1000_runs"] == MISS  # 1.2 MB per 1,000
+    assert verdicts(results(heavy))["history_mb_per_1000_runs"] == MISS  # 1.2 MB per 1,000
     assert verdicts(results(None))["history_overhead"] == "n/a"

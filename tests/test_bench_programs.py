@@ -54,8 +54,8 @@ def test_the_report_shows_the_rows_and_judges_them() -> None:
     assert verdict["regret_separation_ratio"] == PASS
     assert verdict["protocol_steps_per_second"] == PASS
     assert verdict["mcp_steps_per_second"] == PASS
-    data = json.loads(json.dumps(to_json(results)))["programs"]
-    assert data["separation"]["episodes_needed_by_regret"] == pytest.approx(SEPARATION.by_regret)
+    data = json.loads(json.dumps(to_json(results)))["figures"]
+    assert data["episodes_to_separate_by_regret"] == pytest.approx(SEPARATION.by_regret)
     assert data["protocol_steps_per_second"] == 21_000.0
     assert data["mcp_steps_per_second_one_call_at_a_time"] == 900.0
     console = Console(record=True, width=160)

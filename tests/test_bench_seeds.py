@@ -23,9 +23,9 @@ def test_the_comparison_figure_has_a_target_a_row_and_json() -> None:
     assert verdicts(fast)["compare_speedup"] == PASS
     assert verdicts(slow)["compare_speedup"] == MISS
     assert verdicts(fast)["example_6_6"] == PASS
-    data = to_json(fast)["compare"]
-    assert data["speedup"] == 300.0 and data["tutorial_learners_run"] == 20
-    assert data["online_return"] == {"q-learning": -55.0, "sarsa": -36.5}
+    data = to_json(fast)
+    assert data["figures"]["compare_speedup"] == 300.0 and data["seeds"]["tutorial_learners"] == 20
+    assert data["figures"]["example_6_6"] == [-55.0, -36.5]
     console = Console(record=True, width=160)
     console.print(table(fast))
     text = console.export_text()

@@ -22,8 +22,8 @@ def test_the_report_shows_the_ratios_with_targets_and_verdicts() -> None:
     good = TasksResult("cliffwalking", 50, 500, tasks_s=1.05, batch_s=1.0, tasks=4,
                        local_s=2.0, cluster_s=2.2, cluster_tasks=8)
     data = json.loads(json.dumps(_clean(to_json(results(good)))))
-    assert data["tasks"]["split_overhead"] == 1.05 and data["tasks"]["tasks"] == 4
-    assert abs(data["tasks"]["cluster_share"] - 2.0 / 2.2) < 1e-12
+    assert data["figures"]["task_split_overhead"] == 1.05 and data["tasks"]["tasks"] == 4
+    assert abs(data["figures"]["cluster_throughput_share"] - 2.0 / 2.2) < 1e-12
     assert data["verdicts"]["task_split_overhead"] == PASS
     assert data["verdicts"]["cluster_throughput_share"] == PASS
     console = Console(record=True, width=160)

@@ -6,9 +6,8 @@ from __future__ import annotations
 import logging
 import math
 import tempfile
-from dataclasses import asdict, dataclass, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
 
 from tui_gym.bench import tutorial
 from tui_gym.bench.figures import ratio, timed
@@ -44,14 +43,6 @@ class SeedsSpeed:
     def learners(self) -> int:
         return self.seeds * len(self.algorithms)
 
-    def to_json(self) -> dict[str, Any]:
-        return {
-            "game": self.game, "algorithms": list(self.algorithms), "seeds": self.seeds,
-            "episodes": self.episodes, "compare_s": self.compare_s, "tutorial_s": self.tutorial_s,
-            "tutorial_learners_run": self.tutorial_learners, "speedup": self.speedup,
-            "online_return": dict(zip(self.algorithms, self.online_returns, strict=False)),
-        }
-
 
 @dataclass(frozen=True)
 class TasksResult:
@@ -78,11 +69,6 @@ class TasksResult:
     def cluster_share(self) -> float | None:
         """The cluster's throughput ÷ the local executor's on the same sweep."""
         return ratio(self.local_s, self.cluster_s)
-
-    def to_json(self) -> dict[str, Any]:
-        return {**asdict(self), "split_overhead": self.split_overhead,
-                "cluster_workers": CLUSTER_WORKERS, "cluster_share": self.cluster_share,
-                "cluster_note": self.cluster_note or None}
 
 
 def measure_seeds(seeds: int, episodes: int, tutorial_share: float = 1.0) -> SeedsSpeed:

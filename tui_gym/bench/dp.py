@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from tui_gym.bench.figures import median, percentile, timed
+from tui_gym.bench.figures import percentile, timed
 from tui_gym.bench.live import PAUSE_RANGE, SIZE, _send_key, _until, on_frames
 
 __all__ = ["DPResult", "measure"]
@@ -43,16 +43,6 @@ class DPResult:
     jack_seconds: float
     jack_model_seconds: float
     views: tuple[ViewFigures, ...]
-
-    def to_json(self) -> dict[str, Any]:
-        return {
-            "taxi_value_sweep_ms": self.taxi_sweep_ms,
-            "jack_policy_iteration_s": self.jack_seconds,
-            "jack_model_build_s": self.jack_model_seconds,
-            "plan_view": [{"game": v.game, "sweeps_per_second": v.sweeps_per_second,
-                           "key_p50_ms": median(list(v.keys_ms)), "key_p95_ms": v.key_p95_ms,
-                           "key_presses": len(v.keys_ms)} for v in self.views],
-        }
 
 
 async def _view_once(game: str, seconds: float, presses: int, seed: int) -> ViewFigures:

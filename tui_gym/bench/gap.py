@@ -162,15 +162,6 @@ class PlanningResult:
     def dyna_q_episodes(self) -> float:
         return median([r.episodes for r in self.dyna_q])
 
-    def to_json(self) -> dict[str, Any]:
-        return {
-            "game": self.game, "measure": self.measure, "bound": self.bound,
-            "q_learning_episodes": self.q_learning_episodes,
-            "dyna_q_episodes": self.dyna_q_episodes,
-            **{f"{name}_runs": [{"seed": r.seed, "episodes": r.episodes, "reached": r.reached}
-                                for r in getattr(self, name)] for name in ("q_learning", "dyna_q")},
-        }
-
 
 def _distance(session: Session) -> tuple[str, float]:
     """What the bound is on, and its value now: the exact gap, or for games scored by

@@ -36,18 +36,6 @@ class HistoryResult:
         """Fastest recorded run ÷ fastest unrecorded run."""
         return min(self.recorded_s) / min(self.unrecorded_s)
 
-    @property
-    def bytes_per_1000(self) -> float:
-        return self.size_bytes * 1000 / self.runs
-
-    def to_json(self) -> dict[str, Any]:
-        return {
-            "game": self.game, "overhead": self.overhead, "overhead_samples": list(self.shares),
-            "recorded_run_s": list(self.recorded_s), "unrecorded_run_s": list(self.unrecorded_s),
-            "fastest_recorded_over_unrecorded": self.ab_ratio, "runs_written": self.runs,
-            "size_bytes": self.size_bytes, "bytes_per_1000_runs": self.bytes_per_1000,
-        }
-
 
 def _timed_recording(db: Path, spent: list[float]) -> Any:
     """A `TrainRecording` whose calls (its opening too) add their time to `spent[0]`."""

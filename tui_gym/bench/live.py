@@ -66,45 +66,13 @@ class LiveResult:
     headless_eps = property(lambda self: self._median("headless_eps"))
     live_eps = property(lambda self: self._median("live_eps"))
     refresh_hz = property(lambda self: self._median("refresh_hz"))
-    frames_hz = property(lambda self: self._median("frames_hz"))
 
-    @property
-    def engine(self) -> str:
-        return self.repeats[0].engine if self.repeats else ""
-
-    def _latencies(self, key: str | None = None) -> list[KeySample]:
-        return [k for r in self.repeats for k in r.keys if key is None or k.key == key]
-
-    def key_latency_ms(self, q: float, key: str | None = None) -> float:
-        return percentile([k.total_ms for k in self._latencies(key)], q)
+    def key_latency_ms(self, q: float) -> float:
+        return percentile([k.total_ms for r in self.repeats for k in r.keys], q)
 
     @property
     def presses(self) -> int:
-        return len(self._latencies())
-
-    def to_json(self) -> dict[str, Any]:
-        if not self.repeats:
-            return {"error": "; ".join(self.errors)}
-        return {
-            "engine": self.engine, "live_ratio": self.live_ratio,
-            "headless_episodes_per_second": self.headless_eps,
-            "live_episodes_per_second": self.live_eps, "ui_refresh_hz": self.refresh_hz,
-            "frames_hz": self.frames_hz, "key_latency_p50_ms": self.key_latency_ms(50),
-            "key_latency_p95_ms": self.key_latency_ms(95), "key_presses": self.presses,
-            "key_latency_by_key_ms": self.breakdown_ms(), "repeats": len(self.repeats),
-            "window_s": self.seconds, "ratios": [r.ratio for r in self.repeats],
-        }
-
-    def breakdown_ms(self) -> dict[str, dict[str, float]]:
-        """Median queue / action / frame milliseconds per key."""
-        out = {}
-        for key in sorted({k.key for k in self._latencies()}):
-            ms = {part: [getattr(k, f"{part}_ms") for k in self._latencies(key)]
-                  for part in ("total", "queue", "action", "frame")}
-            total = ms.pop("total")
-            out[key] = {"p50": median(total), "p95": percentile(total, 95),
-                        **{f"{part}_p50": median(values) for part, values in ms.items()}}
-        return out
+        return sum(len(r.keys) for r in self.repeats)
 
 
 def _hyperparameters() -> Settings:

@@ -30,11 +30,6 @@ class MemoryResult:
     def growth_mb(self) -> float:
         return self.rss_end_mb - self.rss_start_mb
 
-    def to_json(self) -> dict[str, float | int | str]:
-        return {"episodes": self.episodes, "warmup_episodes": self.warmup, "engine": self.engine,
-                "start_mb": self.rss_start_mb, "end_mb": self.rss_end_mb,
-                "peak_mb": self.rss_peak_mb}
-
 
 def rss_bytes() -> int:
     """This process's resident set size now (its peak where /proc is missing)."""

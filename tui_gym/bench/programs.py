@@ -260,27 +260,6 @@ class ProgramsResult:
     mcp_together: RateResult  # `MCP_GAMES` games at once
     protocol_round_trip: RoundTripResult = RoundTripResult()  # one request at a time
 
-    def to_json(self) -> dict[str, Any]:
-        sep, trip = self.separation, self.protocol_round_trip
-        return {
-            "separation": {
-                "episodes_each": sep.episodes, "deviation": DEVIATION, "delta": sep.delta,
-                "return_gap_measured": sep.return_gap, "return_sd": list(sep.return_sd),
-                "regret_sd": list(sep.regret_sd), "episodes_needed_by_return": sep.by_return,
-                "episodes_needed_by_regret": sep.by_regret, "ratio": sep.ratio,
-                "formula": "n = 1.96^2 (sd_a^2 + sd_b^2) / delta^2",
-            },
-            "protocol_steps_per_second": self.protocol.steps_per_second,
-            "protocol_samples": list(self.protocol.samples),
-            "protocol_requests_in_flight": WINDOW,
-            "protocol_steps_per_second_one_request_at_a_time": trip.rate.steps_per_second,
-            "protocol_round_trip_p50_us": trip.p50_us, "protocol_round_trip_p95_us": trip.p95_us,
-            "protocol_round_trips": trip.round_trips,
-            "mcp_steps_per_second_one_call_at_a_time": self.mcp_one.steps_per_second,
-            "mcp_steps_per_second": self.mcp_together.steps_per_second,
-            "mcp_games_at_once": MCP_GAMES, "mcp_note": self.mcp_together.reason,
-        }
-
 
 def measure(separation_episodes: int, seconds: float, repeats: int) -> ProgramsResult:
     """Every figure of this module (see its docstring)."""

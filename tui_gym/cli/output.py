@@ -36,7 +36,7 @@ __all__ = ["JSON_SCHEMAS", "CliError", "OutConsole", "cli_errors", "key_value_ta
 JSON_SCHEMAS: dict[str, int] = {
     "envs": 1, "wrappers": 1, "maps": 1, "algorithms": 1, "train": 1, "eval": 1, "optimal": 1,
     "runs": 1, "runs show": 1, "runs export": 1, "runs rm": 1, "runs prune": 1, "runs recover": 1,
-    "plan": 1, "book": 1, "book list": 1, "compare": 1, "sweep": 1, "screenshots": 1, "bench": 2,
+    "plan": 1, "book": 1, "book list": 1, "compare": 1, "sweep": 1, "screenshots": 1, "bench": 3,
     "benchmark": 1,
 }
 
