@@ -1,14 +1,5 @@
-"""A book figure's result as Rich renderables, for `tui-gym book` and the app's Book view,
-and heatmap panels as plain text grids, for `tui-gym plan` and `tui-gym book`.
-
-`figure_parts(result, width)`: its title, each chart as a band chart (the
-charts of `compare`), the table of the book's claims with their verdicts, and
-its notes. Text from the figure is escaped: it is data, never markup.
-
-`panel_text(panel)` writes a panel as its title, the column labels, a row of
-cell labels per row (each right-aligned in a column as wide as the widest),
-and its legend: compact enough for Jack's 21 x 21 grids on an 80-column terminal.
-"""
+"""A book figure's result as Rich renderables (its text escaped: data, never markup), for
+`tui-gym book` and the Book view; heatmap panels as plain text grids, for `plan` and `book`."""
 
 from __future__ import annotations
 
@@ -22,8 +13,6 @@ from rich.text import Text
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.session.book.figure import FigureResult, heading
 from tui_gym.terminal_chart import ChartSeries, band_chart
-
-__all__ = ["CHART_HEIGHT", "claims_table", "figure_parts", "panel_text"]
 
 CHART_HEIGHT = 10
 
@@ -54,7 +43,8 @@ def claims_table(result: FigureResult) -> list[RenderableType]:
 
 
 def panel_text(panel: Heatmap, width: int = 80) -> Text:
-    """The panel as lines of text (see the module docstring)."""
+    """The panel as its title, column labels, a row of right-aligned cell labels per row and
+    its legend: compact enough for Jack's 21 x 21 grids on an 80-column terminal."""
     cells = [label for line in panel.labels for label in line] + [*panel.col_labels]
     cell = max((len(text) for text in cells), default=1) + 1
     head = max((len(text) for text in panel.row_labels), default=0)

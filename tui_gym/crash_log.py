@@ -14,13 +14,12 @@ import time
 import traceback
 from pathlib import Path
 
-LOG_DIR_ENV = "TUI_GYM_LOG_DIR"
 KEEP = 20  # crash logs kept; older ones are removed
 
 
 def log_dir() -> Path:
     """Where crash logs go (see the module docstring)."""
-    override = os.environ.get(LOG_DIR_ENV)
+    override = os.environ.get("TUI_GYM_LOG_DIR")
     if override:
         return Path(override).expanduser()
     state = os.environ.get("XDG_STATE_HOME") or str(Path.home() / ".local" / "state")
@@ -33,44 +32,28 @@ def write_crash_log(error: BaseException) -> Path:
 
     folder = log_dir()
     folder.mkdir(parents=True, exist_ok=True, mode=0o700)
-    stamp = time.strftime("%Y%m%d-%H%M%S")
-    path = folder / f"crash-{stamp}-{os.getpid()}.log"
-    lines = [
-        f"tui-gym {__version__} crashed at {time.strftime('%Y-%m-%d %H:%M:%S %z')}\n",
-        f"python {platform.python_version()} on {platform.platform()}\n",
-        f"command: {' '.join(sys.argv)}\n\n", *traceback.format_exception(error),
-    ]
+    path = folder / f"crash-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}.log"
     fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
     with os.fdopen(fd, "w", encoding="utf-8", errors="replace") as out:
-        out.writelines(lines)
-    _prune(folder)
+        out.writelines([
+            f"tui-gym {__version__} crashed at {time.strftime('%Y-%m-%d %H:%M:%S %z')}\n",
+            f"python {platform.python_version()} on {platform.platform()}\n",
+            f"command: {' '.join(sys.argv)}\n\n", *traceback.format_exception(error),
+        ])
+    for old in sorted(folder.glob("crash-*.log"), reverse=True)[KEEP:]:  # names sort by time
+        with contextlib.suppress(OSError):
+            old.unlink()
     return path
 
 
-def _prune(folder: Path) -> None:
-    logs = sorted(folder.glob("crash-*.log"), reverse=True)  # the names sort by time
-    for old in logs[KEEP:]:
-        with contextlib.suppress(OSError):
-            old.unlink()
-
-
-def crash_line(error: BaseException, path: Path | None, problem: str = "") -> str:
-    """One line for the person: what went wrong, and where the details are."""
+def report_crash(error: BaseException) -> str:
+    """Write the log (when possible) and return the one line to print: what went wrong,
+    and where the details are."""
     what = " ".join(f"{type(error).__name__}: {error}".split())
     if len(what) > 200:
         what = what[:199] + "…"
-    if path is not None:
-        where = f"the full traceback is in {path}"
-    else:
-        where = f"the traceback could not be written to {log_dir()} ({problem})"
-    return f"tui-gym: stopped by an unexpected error ({what}); {where}"
-
-
-def report_crash(error: BaseException) -> str:
-    """Write the log (when possible) and return the one line to print."""
     try:
-        path: Path | None = write_crash_log(error)
-        problem = ""
+        where = f"the full traceback is in {write_crash_log(error)}"
     except OSError as exc:
-        path, problem = None, " ".join(str(exc).split())
-    return crash_line(error, path, problem)
+        where = f"the traceback could not be written to {log_dir()} ({' '.join(str(exc).split())})"
+    return f"tui-gym: stopped by an unexpected error ({what}); {where}"

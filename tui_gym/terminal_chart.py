@@ -9,8 +9,6 @@ from dataclasses import dataclass
 import numpy as np
 from rich.text import Text
 
-__all__ = ["PALETTE", "ChartSeries", "band_chart", "format_number"]
-
 PALETTE = ("cyan", "magenta", "yellow", "green", "red", "blue", "bright_white", "bright_cyan")
 BAND = "░"
 _BRAILLE = 0x2800

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import ipaddress
+import secrets
 import shlex
 import sys
 from typing import TYPE_CHECKING, Any
@@ -56,30 +57,6 @@ def add_serve_parser(sub: Any) -> None:
                        f"{DEFAULT_MAX_APPS})")
 
 
-def check_host(host: str, public: bool) -> None:
-    """CliError for a host other machines may reach, unless `public`."""
-    if not host.strip():
-        raise CliError("--host is empty: give an address such as 127.0.0.1")
-    if not public and not is_local(host):
-        raise CliError(
-            f"--host {host} is not a local address: anyone who can reach it could use the "
-            "app, which reads and writes files here; add --public to serve it there anyway"
-        )
-
-
-def serve_token(token: str | None, public: bool) -> str | None:
-    """The token the page needs: the one given, or with `public` a new one; CliError for
-    a token too short to protect anything."""
-    if token is not None and len(token.strip()) < 8:
-        raise CliError("--token must be at least 8 characters: anyone could guess a shorter "
-                       "one (leave it out and --public makes one up)")
-    if token is None and public:
-        from tui_gym.web_guard import new_token
-
-        return new_token()
-    return token
-
-
 def app_command(args: argparse.Namespace) -> str:
     """The shell command that runs one app for one browser tab."""
     command = [sys.executable, "-m", "tui_gym", "--env", args.env, "--runner", args.runner]
@@ -97,8 +74,19 @@ def app_command(args: argparse.Namespace) -> str:
 def cmd_serve(args: argparse.Namespace, out: Console) -> int:
     if args.record is not None:
         raise CliError("--record records the app in this terminal; it does not go with serve")
-    check_host(args.host, args.public)
-    token = serve_token(args.token, args.public)
+    if not args.host.strip():
+        raise CliError("--host is empty: give an address such as 127.0.0.1")
+    if not args.public and not is_local(args.host):
+        raise CliError(
+            f"--host {args.host} is not a local address: anyone who can reach it could use the "
+            "app, which reads and writes files here; add --public to serve it there anyway"
+        )
+    token = args.token
+    if token is not None and len(token.strip()) < 8:
+        raise CliError("--token must be at least 8 characters: anyone could guess a shorter "
+                       "one (leave it out and --public makes one up)")
+    if token is None and args.public:
+        token = secrets.token_urlsafe(16)  # 128 random bits, URL-safe
     from tui_gym.cli.flags import app_env
 
     app_env(args)  # a file that cannot be opened is said now, not in each tab
@@ -183,7 +171,11 @@ def _public_app(server: Any) -> web.Application:
 
 def say_serving(host: str, port: int, token: str | None = None) -> None:
     """The line that says the server listens: where, and to whom."""
-    url = f"http://{_url_host(host)}:{port}" + (f"/?token={token}" if token else "")
+    try:
+        shown = f"[{host}]" if ipaddress.ip_address(host.strip("[]")).version == 6 else host
+    except ValueError:
+        shown = host
+    url = f"http://{shown}:{port}" + (f"/?token={token}" if token else "")
     who = "on this machine only" if is_local(host) else (
         "to anyone who can reach this machine (--public)"
     )
@@ -192,10 +184,3 @@ def say_serving(host: str, port: int, token: str | None = None) -> None:
     sys.stdout.write(f"Serving tui-gym at {url} {who}. Open it in a browser; "
                      "each tab runs its own app. Ctrl+C stops.\n")
     sys.stdout.flush()
-
-
-def _url_host(host: str) -> str:
-    try:
-        return f"[{host}]" if ipaddress.ip_address(host.strip("[]")).version == 6 else host
-    except ValueError:
-        return host

@@ -1,9 +1,6 @@
-"""Who may drive the apps `tui-gym serve` runs: `ServeGuard`, an aiohttp middleware.
-
-Each websocket starts an app that can touch the user's files, so one gets through only
-from the page's own Origin, to a local address when served locally (DNS rebinding),
-below `max_apps`, and with the token where there is one.
-"""
+"""Who may drive the apps `tui-gym serve` runs: `ServeGuard`, an aiohttp middleware letting a
+websocket (an app that can touch files) through only from the page's own Origin, to a local
+address when served locally (DNS rebinding), below `max_apps`, with the token if there is one."""
 
 from __future__ import annotations
 
@@ -16,8 +13,6 @@ from aiohttp import web
 
 from tui_gym.core.text import visible
 
-__all__ = ["COOKIE", "ServeGuard", "new_token"]
-
 COOKIE = "tui_gym_token"
 SOCKET_PATH = "/ws"
 OPEN_PATHS = ("/static/",)  # the page's scripts, fonts and styles: nothing to guard
@@ -25,20 +20,10 @@ OPEN_PATHS = ("/static/",)  # the page's scripts, fonts and styles: nothing to g
 Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
 
 
-def new_token() -> str:
-    """A token for `--public`: 128 random bits, URL-safe."""
-    return secrets.token_urlsafe(16)
-
-
 def _page(status: int, text: str) -> web.Response:
     body = (f"<!doctype html><meta charset=utf-8><title>tui-gym</title>"
             f"<p style='font:16px monospace;margin:2em'>{html.escape(text)}</p>\n")
     return web.Response(status=status, text=body, content_type="text/html")
-
-
-def _host_name(host: str) -> str:
-    """`example.org` of `example.org:8000`, `::1` of `[::1]:8000`."""
-    return urlsplit(f"//{host}").hostname or ""
 
 
 class ServeGuard:
@@ -48,8 +33,6 @@ class ServeGuard:
         self, *, max_apps: int, token: str | None,
         host_allowed: Callable[[str], bool] | None = None,
     ) -> None:
-        if max_apps < 1:
-            raise ValueError(f"max_apps must be at least 1, got {max_apps}")
         self.max_apps = max_apps
         self.token = token
         self.host_allowed = host_allowed
@@ -86,7 +69,8 @@ class ServeGuard:
             self.live -= 1
 
     def _host_refusal(self, request: web.Request) -> web.Response | None:
-        if self.host_allowed is None or self.host_allowed(_host_name(request.host)):
+        name = urlsplit(f"//{request.host}").hostname or ""  # `::1` of `[::1]:8000`
+        if self.host_allowed is None or self.host_allowed(name):
             return None
         return _page(403, f"tui-gym serves this machine only; open it at a local address "
                           f"such as 127.0.0.1, not {visible(request.host, 60)}")

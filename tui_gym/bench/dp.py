@@ -16,8 +16,6 @@ import numpy as np
 from tui_gym.bench.figures import percentile, timed
 from tui_gym.bench.live import PAUSE_RANGE, SIZE, _send_key, _until, on_frames
 
-__all__ = ["DPResult", "measure"]
-
 GRID_GAMES = ("gridworld", "frozenlake", "cliffwalking")
 SPEED = 5  # the Plan view's 50 sweeps a second
 

@@ -1,9 +1,5 @@
 """Small helpers the benchmarks share: medians, percentiles, timing, child processes, the
-machine's load.
-
-Every figure `tui-gym bench` prints is a median over repeats, a percentile
-over many samples, or a ratio of two figures measured in the same run.
-"""
+machine's load."""
 
 from __future__ import annotations
 

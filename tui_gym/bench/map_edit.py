@@ -13,8 +13,6 @@ from tui_gym.games import GAMES
 from tui_gym.games.maps.random_map import random_map
 from tui_gym.session.session import Session
 
-__all__ = ["MAP_SIDE", "MapEditResult", "measure"]
-
 MAP_SIDE = 12
 TOOLS = (("wall", None), ("hole", -1.0), ("reward", 0.5), ("ice", 0.3))
 

@@ -11,8 +11,6 @@ from typing import Any
 
 from tui_gym.bench.figures import child_json
 
-__all__ = ["measure", "play"]
-
 TASK_TIMEOUT_S = 3600.0  # the whole process, at most
 WARMUP_S = 0.05
 

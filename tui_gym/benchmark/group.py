@@ -10,8 +10,6 @@ import sys
 from collections.abc import Iterator
 from typing import Any
 
-__all__ = ["GroupProcess", "ending_on_signals", "start_group"]
-
 # The watcher: reads the group's id, then waits for its input to close. "done" first
 # means the parent ended the group itself; anything else, that the parent is gone.
 _WATCHER = """

@@ -23,7 +23,6 @@ from tui_gym.session.book.figure import (
     heading,
 )
 
-__all__ = ["add_book_parser", "cmd_book"]
 
 def add_book_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     book = sub.add_parser("book", help="Sutton & Barto's figures: list them, or run one and "

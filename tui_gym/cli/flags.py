@@ -1,11 +1,5 @@
-"""The flags' types and the flags generated from `Param` schemas.
-
-The types read numbers as `Param`s read them (ASCII digits only; a value out of range
-says so) and file names, each failing with one clear line. `output_file` checks a file
-to write (`--save`, `--csv`, `--record`) as the arguments are read, so a path that
-cannot be written is said before any work is done. The generated flags are every
-game's arguments and the hyperparameters.
-"""
+"""The flags' types (numbers read as `Param`s read them, file names; each failing with one
+clear line) and the flags generated from `Param` schemas: game arguments, hyperparameters."""
 
 from __future__ import annotations
 
@@ -18,12 +12,6 @@ from tui_gym.algorithms import ALGORITHMS, ALL_PARAMS, Learner
 from tui_gym.cli.output import CliError, cli_errors
 from tui_gym.core.params import Param, ParamError, digits_note, read_number, shown_value
 from tui_gym.games import GAMES, Game, game_for, resolve_env_id
-
-__all__ = [
-    "HP_FLAGS", "MAX_SEED", "add_game_flags", "add_hyperparameter_flags", "file_name",
-    "finite_number", "flag", "fresh_seed", "game_kwargs", "hyperparameters", "int_in",
-    "number_in", "output_file", "positive_int", "seed_number", "wrapper_choices",
-]
 
 MAX_SEED = 2**63 - 2**32  # room for the seeds derived from it (evaluation adds to it)
 FRESH_SEEDS = 1_000_000  # a seed drawn afresh is below this: short enough to type again
@@ -72,7 +60,8 @@ def file_name(text: str) -> str:
 
 
 def output_file(text: str) -> str:
-    """An argparse type: a file that can be written (see `tui_gym.core.files`)."""
+    """An argparse type: a file that can be written, checked as the arguments are read (so
+    before any work is done)."""
     from tui_gym.core.files import OutputPathError, check_output_path
 
     try:

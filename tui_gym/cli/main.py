@@ -1,8 +1,5 @@
-"""The `tui-gym` command's entry point and parser: the app with no sub-command.
-
-Bad arguments exit with code 2 and one line on stderr; a reader that closes the pipe
-early (`| head -1`) ends the command quietly with status 141, as it would end `cat`.
-"""
+"""The `tui-gym` command's entry point and parser (the app with no sub-command): bad arguments
+exit 2 with one line on stderr; a pipe closed early (`| head -1`) exits 141, as for `cat`."""
 
 from __future__ import annotations
 

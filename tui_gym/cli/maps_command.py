@@ -17,8 +17,6 @@ from tui_gym.games.maps.builtin import BUILTIN_MAPS, builtin_map, fits
 from tui_gym.games.maps.files import read_map_file
 from tui_gym.games.maps.random_map import MAX_DENSITY, random_map
 
-__all__ = ["add_maps_parser", "cmd_maps"]
-
 _SIZE = re.compile(r"([0-9]{1,2})x([0-9]{1,2})", re.ASCII)
 
 

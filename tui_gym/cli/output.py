@@ -29,9 +29,6 @@ from rich.table import Table
 from tui_gym.core.text import json_safe as _clean
 from tui_gym.core.text import visible
 
-__all__ = ["JSON_SCHEMAS", "CliError", "OutConsole", "cli_errors", "key_value_table", "print_json",
-           "progress_bar", "readable", "say_status", "warn"]
-
 # The version of each command's JSON object (see the module docstring).
 JSON_SCHEMAS: dict[str, int] = {
     "envs": 1, "wrappers": 1, "maps": 1, "algorithms": 1, "train": 1, "eval": 1, "optimal": 1,

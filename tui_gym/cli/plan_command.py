@@ -16,8 +16,6 @@ from tui_gym.session.plan import PlanResult, plan, plan_json
 from tui_gym.session.plan.panels import numbered, plan_panels
 from tui_gym.session.plan.start import START_POLICIES, saved_agent_q
 
-__all__ = ["add_plan_parser", "cmd_plan"]
-
 METHOD_WORDS = {"evaluate": "Policy evaluation", "policy-iteration": "Policy iteration",
                 "value-iteration": "Value iteration"}
 

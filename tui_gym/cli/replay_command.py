@@ -24,11 +24,8 @@ def add_record_option(parser: argparse.ArgumentParser) -> None:
 
 
 def open_recorder(path: str, session: Session, *, source: str, seed: int | None = None) -> Recorder:
-    """A `Recorder` writing `session`'s episodes to `path`; CliError when it cannot be opened.
-
-    A write that fails later stops the recording with one line on stderr; the
-    command goes on.
-    """
+    """A `Recorder` writing `session`'s episodes to `path`; CliError when it cannot be opened
+    (a write that fails later stops the recording with one line on stderr)."""
     from tui_gym.session.recording.recorder import Recorder
 
     try:

@@ -1,10 +1,5 @@
-"""`tui-gym mcp`: the games as tools of a Model Context Protocol server over stdio.
-
-This module holds the sub-command (its flags, and starting the server; it runs
-without the MCP SDK installed, to say how to install it); `server` builds the
-server on the SDK's `MCPServer`, with the tools over a `GameTable` of the arena
-(`tui_gym.session.arena`).
-"""
+"""`tui-gym mcp`: the games as tools of a Model Context Protocol server over stdio (the
+sub-command here runs without the MCP SDK, to say how to install it; `server` needs it)."""
 
 from __future__ import annotations
 

@@ -1,9 +1,5 @@
-"""The MCP server: each tool is a thin call into a `GameTable` of the arena.
-
-Tools are coroutines that never wait, so calls run one at a time and the table needs no
-lock. With `hints` off, verdicts stay hidden until an episode ends, so a player cannot
-read the optimum off its answers.
-"""
+"""The MCP server: each tool a thin call into a `GameTable` of the arena (coroutines that
+never wait, so the table needs no lock; with `hints` off, verdicts hide until an episode ends)."""
 
 from __future__ import annotations
 
