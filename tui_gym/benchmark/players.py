@@ -21,7 +21,6 @@ import numpy as np
 
 from tui_gym.benchmark.group import start_group
 from tui_gym.benchmark.referee import Referee
-from tui_gym.session.arena.games import raw_observation, session_entry
 from tui_gym.session.protocol import parse_request, read_batches
 
 MAX_STRIKES = 3  # decisions in a row not made in time before a player counts as gone
@@ -119,12 +118,14 @@ class AgentPlayer(InProcessPlayer):
     def check_game(self, env_id: str) -> None:
         """PlayerError unless the agent plays `env_id`."""
         if self.session.env_id != env_id:
-            title = session_entry(self.session).title
-            raise PlayerError(f"the agent plays {title} ({self.session.env_id}), not {env_id}")
+            raise PlayerError(f"the agent plays {self.session.game.title} "
+                              f"({self.session.env_id}), not {env_id}")
 
     def choose(self, referee: Referee) -> str:
         names = referee.entry.actions
-        greedy = self.session.greedy_actions_for(raw_observation(referee.seat.handler))
+        last = referee.seat.handler.game.last
+        assert last is not None  # a decision is asked for in a running episode
+        greedy = self.session.greedy_actions_for(last.observation)
         options = greedy[0] if greedy else tuple(range(len(names)))
         return names[options[int(self.rng.integers(len(options)))]]
 

@@ -7,7 +7,6 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from tui_gym.session.arena import Seat, SeatError, find_game, open_handler
-from tui_gym.session.arena.games import handler_params
 from tui_gym.session.protocol import parse_request
 
 
@@ -37,11 +36,9 @@ class Referee:
     allow_hints: bool = False
 
     def __post_init__(self) -> None:
-        if self.episodes < 1:
-            raise ValueError(f"a benchmark needs at least one episode, got {self.episodes}")
         self.entry = find_game(self.game)
         handler = open_handler(self.entry.env_id, self.params, self.seed, self.wrappers)
-        self.params = handler_params(handler)
+        self.params = dict(handler.session.env_kwargs)  # defaults filled in
         self.seat = Seat(handler, self.entry, self.seed)
         self.fouls = Fouls()
         self.started = 0  # episodes started so far

@@ -28,7 +28,6 @@ from tui_gym.core.experiments import (
     resolve_db_path,
 )
 from tui_gym.session.arena import EpisodeScore
-from tui_gym.session.arena.games import attach_recorder
 
 if TYPE_CHECKING:
     from tui_gym.benchmark.players import Player
@@ -145,8 +144,6 @@ def run_benchmark(
 ) -> BenchmarkResult:
     """Play `episodes` episodes of `game` (episode i on seed `seed + i`) with `player`;
     `recorder`, given the game's session, opens a recorder that writes every episode."""
-    if not decision_timeout > 0:
-        raise ValueError(f"the decision time limit must be positive, got {decision_timeout}")
     referee = Referee(game, episodes, seed, dict(params or {}), tuple(wrappers), allow_hints)
     played: list[EpisodeScore] = []
     referee.seat.score.history = played
@@ -155,7 +152,7 @@ def run_benchmark(
         with ExitStack() as stack:
             if recorder is not None:
                 handler = referee.seat.handler
-                attach_recorder(handler, stack.enter_context(recorder(handler.session)))
+                handler.game.recorder = stack.enter_context(recorder(handler.session))
             outcome = player.play(referee, decision_timeout)
     finally:
         referee.close()
