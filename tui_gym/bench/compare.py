@@ -10,7 +10,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from tui_gym.bench import tutorial
-from tui_gym.bench.figures import ratio, timed
+from tui_gym.bench.figures import timed
 
 GAME = "cliffwalking"
 ALGORITHMS = ("q-learning", "sarsa")
@@ -35,14 +35,6 @@ class SeedsSpeed:
     tutorial_learners: int  # learners the tutorial loop actually ran
     online_returns: tuple[float, ...] = ()
 
-    @property
-    def speedup(self) -> float | None:
-        return ratio(self.tutorial_s, self.compare_s)
-
-    @property
-    def learners(self) -> int:
-        return self.seeds * len(self.algorithms)
-
 
 @dataclass(frozen=True)
 class TasksResult:
@@ -59,16 +51,6 @@ class TasksResult:
     cluster_s: float | None = None
     cluster_tasks: int = 0
     cluster_note: str = ""
-
-    @property
-    def split_overhead(self) -> float | None:
-        """The comparison's time in tasks, recorded, ÷ in one batch per core."""
-        return ratio(self.tasks_s, self.batch_s)
-
-    @property
-    def cluster_share(self) -> float | None:
-        """The cluster's throughput ÷ the local executor's on the same sweep."""
-        return ratio(self.local_s, self.cluster_s)
 
 
 def measure_seeds(seeds: int, episodes: int, tutorial_share: float = 1.0) -> SeedsSpeed:

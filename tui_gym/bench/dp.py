@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from tui_gym.bench.figures import percentile, timed
+from tui_gym.bench.figures import timed
 from tui_gym.bench.live import PAUSE_RANGE, SIZE, _send_key, _until, on_frames
 
 GRID_GAMES = ("gridworld", "frozenlake", "cliffwalking")
@@ -27,10 +27,6 @@ class ViewFigures:
     game: str
     sweeps_per_second: float
     keys_ms: tuple[float, ...]
-
-    @property
-    def key_p95_ms(self) -> float:
-        return percentile(list(self.keys_ms), 95)
 
 
 @dataclass(frozen=True)

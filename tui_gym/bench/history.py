@@ -10,8 +10,6 @@ from typing import Any
 
 import numpy as np
 
-from tui_gym.bench.figures import median
-
 GAME = "blackjack"
 EVAL_EPISODES = 10_000  # as `train`'s --eval-episodes by default
 
@@ -26,15 +24,6 @@ class HistoryResult:
     unrecorded_s: tuple[float, ...]  # whole runs, --no-record
     runs: int  # written for the size figure
     size_bytes: int
-
-    @property
-    def overhead(self) -> float:
-        return median(self.shares)
-
-    @property
-    def ab_ratio(self) -> float:
-        """Fastest recorded run ÷ fastest unrecorded run."""
-        return min(self.recorded_s) / min(self.unrecorded_s)
 
 
 def _timed_recording(db: Path, spent: list[float]) -> Any:

@@ -26,10 +26,6 @@ class MemoryResult:
     rss_peak_mb: float
     seconds: float
 
-    @property
-    def growth_mb(self) -> float:
-        return self.rss_end_mb - self.rss_start_mb
-
 
 def rss_bytes() -> int:
     """This process's resident set size now (its peak where /proc is missing)."""

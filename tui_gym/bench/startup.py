@@ -9,8 +9,6 @@ import sys
 import time
 from dataclasses import dataclass
 
-from tui_gym.bench.figures import median
-
 SIZE = (120, 40)  # columns, rows
 FIRST_PAINT = b"\x1b[1;1H\x1b["  # cursor home, then the first styled cells
 TIMEOUT = 20.0  # seconds; only reached when something is broken
@@ -21,10 +19,6 @@ class StartupResult:
     """Seconds from launch to the first frame, one per launch."""
 
     samples: tuple[float, ...]
-
-    @property
-    def seconds(self) -> float:
-        return median(self.samples)
 
 
 def _drain(fd: int, wait: float) -> bytes | None:
