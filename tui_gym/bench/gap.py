@@ -154,14 +154,6 @@ class PlanningResult:
     q_learning: tuple[PlanningRun, ...]
     dyna_q: tuple[PlanningRun, ...]
 
-    @property
-    def q_learning_episodes(self) -> float:
-        return median([r.episodes for r in self.q_learning])
-
-    @property
-    def dyna_q_episodes(self) -> float:
-        return median([r.episodes for r in self.dyna_q])
-
 
 def _distance(session: Session) -> tuple[str, float]:
     """What the bound is on, and its value now: the exact gap, or for games scored by

@@ -100,10 +100,11 @@ def _judged(results: BenchResults) -> _Judged:
                 f"(importing Numba {found_compile.import_s:.2f} s)", found_compile.warm_s,
                 Target("≤", 1.0, " s"))
     for speed in results.speed or ():
+        speedup, length = ratio(speed.steps, speed.tutorial_steps), max(speed.mean_length, 1.0)
         out.row(f"speedup[{speed.game}/{speed.algorithm}]",
                 f"{speed.game}, {speed.algorithm}: ours ÷ tutorial loop",
-                f"{_num(speed.speedup, ',.0f', '×')} ({_num(speed.episodes, ',.0f')} / "
-                f"{_num(speed.tutorial_episodes, ',.0f')} ep/s)", speed.speedup,
+                f"{_num(speedup, ',.0f', '×')} ({_num(speed.steps / length, ',.0f')} / "
+                f"{_num(speed.tutorial_steps / length, ',.0f')} ep/s)", speedup,
                 Target("≥", 100.0, "×"))
     for name, gap in results.gap.items():
         _gap_rows(out, name, gap)
@@ -194,16 +195,14 @@ def _planning_rows(out: _Judged, results: BenchResults) -> None:
     planning = results.planning
     if out.absent(planning, "planning"):
         return
-    fewer = planning.dyna_q_episodes < planning.q_learning_episodes
-    verdict = PASS if fewer and all(r.reached for r in planning.dyna_q) else MISS
-
-    def runs(items: tuple) -> str:
-        return _num(median([r.episodes for r in items]), ",.0f") + (
-            "" if all(r.reached for r in items) else " (not all reached)")
-
+    both = (planning.q_learning, planning.dyna_q)
+    episodes = [median([r.episodes for r in runs]) for runs in both]
+    reached = [all(r.reached for r in runs) for runs in both]
+    verdict = PASS if episodes[1] < episodes[0] and reached[1] else MISS
+    measured = [_num(n, ",.0f") + ("" if done else " (not all reached)")
+                for n, done in zip(episodes, reached, strict=True)]
     out.row("planning", f"real episodes to ≤ {planning.bound:g} on {planning.game}: "
-            "Q-learning / Dyna-Q", f"{runs(planning.q_learning)} / {runs(planning.dyna_q)}",
-            [planning.q_learning_episodes, planning.dyna_q_episodes], "Dyna-Q fewer", verdict)
+            "Q-learning / Dyna-Q", " / ".join(measured), episodes, "Dyna-Q fewer", verdict)
 
 
 def _programs_rows(out: _Judged, found: programs.ProgramsResult | None) -> None:

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from tui_gym.bench import tutorial
-from tui_gym.bench.figures import median, ratio
+from tui_gym.bench.figures import median
 from tui_gym.session.session import Session
 
 WINDOW_BUDGET = 1_000_000_000  # episodes: never reached in a window, so epsilon barely moves
@@ -27,18 +27,6 @@ class Speed:
     steps: float
     tutorial_steps: float
     mean_length: float  # of the engine's episodes in the window
-
-    @property
-    def episodes(self) -> float:
-        return self.steps / max(self.mean_length, 1.0)
-
-    @property
-    def tutorial_episodes(self) -> float:
-        return self.tutorial_steps / max(self.mean_length, 1.0)
-
-    @property
-    def speedup(self) -> float | None:
-        return ratio(self.steps, self.tutorial_steps)
 
 
 def engine_rate(game: str, algorithm: str, seconds: float, seed: int,

@@ -11,27 +11,19 @@ from contextlib import asynccontextmanager
 MAX_LINE_BYTES = 16 << 20  # one JSON-RPC message a line; longer lines are dropped
 
 
-class PipeLines:
+async def pipe_lines(reader: asyncio.StreamReader) -> AsyncIterator[str]:
     """The lines of a pipe as text, for `async for` (the SDK reads stdin that way)."""
-
-    def __init__(self, reader: asyncio.StreamReader) -> None:
-        self._reader = reader
-
-    def __aiter__(self) -> PipeLines:
-        return self
-
-    async def __anext__(self) -> str:
-        while True:
-            try:
-                line = await self._reader.readuntil(b"\n")
-            except asyncio.IncompleteReadError as exc:  # the end, maybe with an unended line
-                if not exc.partial:
-                    raise StopAsyncIteration from None
-                line = exc.partial
-            except asyncio.LimitOverrunError as exc:  # too long to be a message: drop it
-                await self._reader.readexactly(exc.consumed)
-                continue
-            return line.decode("utf-8", errors="replace")
+    while True:
+        try:
+            line = await reader.readuntil(b"\n")
+        except asyncio.IncompleteReadError as exc:  # the end, maybe with an unended line
+            if not exc.partial:
+                return
+            line = exc.partial
+        except asyncio.LimitOverrunError as exc:  # too long to be a message: drop it
+            await reader.readexactly(exc.consumed)
+            continue
+        yield line.decode("utf-8", errors="replace")
 
 
 class PipeWriter:
@@ -55,7 +47,7 @@ def _is_pipe(fd: int) -> bool:
 
 
 @asynccontextmanager
-async def open_pipes() -> AsyncIterator[tuple[PipeLines, PipeWriter] | None]:
+async def open_pipes() -> AsyncIterator[tuple[AsyncIterator[str], PipeWriter] | None]:
     """Stdin's lines and a writer on stdout, or None when they are not both pipes."""
     if not (_is_pipe(0) and _is_pipe(1)):
         yield None
@@ -78,7 +70,7 @@ async def open_pipes() -> AsyncIterator[tuple[PipeLines, PipeWriter] | None]:
     )
     writer = asyncio.StreamWriter(write_transport, protocol, None, loop)
     try:
-        yield PipeLines(reader), PipeWriter(writer)
+        yield pipe_lines(reader), PipeWriter(writer)
     finally:
         read_transport.close()
         write_transport.close()
