@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from tui_gym.bench.figures import timed
-from tui_gym.bench.live import PAUSE_RANGE, SIZE, _send_key, _until, on_frames
+from tui_gym.bench.live import SIZE, _until, after_each, on_frames, press
 
 GRID_GAMES = ("gridworld", "frozenlake", "cliffwalking")
 SPEED = 5  # the Plan view's 50 sweeps a second
@@ -52,13 +52,8 @@ async def _view_once(game: str, seconds: float, presses: int, seed: int) -> View
         view = app.plan_view
         assert view is not None
         await _until(lambda: view.runner is not None, "the model")
-        show = view.show_snapshot
-
-        def counted(snapshot: Any) -> None:
-            show(snapshot)
-            drawn.append((time.perf_counter(), snapshot.sweeps, snapshot.in_place, view.numbers))
-
-        view.show_snapshot = counted  # type: ignore[method-assign]
+        after_each(view, "show_snapshot", lambda _, snapshot: drawn.append(
+            (time.perf_counter(), snapshot.sweeps, snapshot.in_place, view.numbers)))
         runner = view.runner
         assert runner is not None
         runner.set_method("evaluate")
@@ -81,21 +76,16 @@ async def _keys(app: Any, view: Any, frames: list[float],
                 rng: random.Random) -> list[float]:
     out = []
     for i in range(presses):
-        await asyncio.sleep(rng.uniform(*PAUSE_RANGE))
         key, column = ("d", 3) if i % 2 else ("s", 2)
         target = not (view.numbers if key == "d" else view.runner.latest.in_place)
         before = len(drawn)
-        sent = time.perf_counter()
-        _send_key(app, key)
 
         def answered(before: int = before, column: int = column, target: bool = target
                      ) -> float | None:
             hit = next((d[0] for d in drawn[before:] if d[column] == target), None)
             return None if hit is None else next((t for t in frames if t >= hit), None)
 
-        await _until(lambda: answered() is not None, f"the answer to {key}")
-        at = answered()
-        assert at is not None
+        sent, at = await press(app, key, rng, answered, f"the answer to {key}")
         out.append((at - sent) * 1000)
     return out
 

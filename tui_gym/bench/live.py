@@ -96,29 +96,25 @@ class _Instruments:
     """Counters and clocks hooked onto one app instance (never onto its class)."""
 
     def __init__(self, app: Any) -> None:
-        self.app = app
         self.frames: list[tuple[float, str | None, str | None]] = []  # (time, view, focus's view)
-        self.snapshot_calls = 0
+        self.snapshots: list[float] = []  # when each snapshot was drawn
         self.action_marks: list[tuple[float, float]] = []  # (start, end) of show_view
-        show_view = app.action_show_view
-
-        def timed_show_view(view: str) -> None:
-            start = time.perf_counter()
-            show_view(view)
-            self.action_marks.append((start, time.perf_counter()))
-
         on_frames(app, lambda: self.frames.append(
             (time.perf_counter(), _current_view(app), _focus_view(app))))
-        app.action_show_view = timed_show_view
+        after_each(app, "action_show_view",
+                   lambda began, *_: self.action_marks.append((began, time.perf_counter())))
 
-    def count_snapshots(self, view: Any) -> None:
-        show = view.show_snapshot
 
-        def counted(snapshot: Any, runner: Any) -> None:
-            self.snapshot_calls += 1
-            show(snapshot, runner)
+def after_each(target: Any, name: str, then: Callable[..., None]) -> None:
+    """Have `target.name(*args)` (on this instance only) call `then(started, *args)` after."""
+    call = getattr(target, name)
 
-        view.show_snapshot = counted
+    def hooked(*args: Any) -> None:
+        started = time.perf_counter()
+        call(*args)
+        then(started, *args)
+
+    setattr(target, name, hooked)
 
 
 def on_frames(app: Any, frame: Callable[[], None]) -> None:
@@ -175,6 +171,17 @@ async def _until(predicate: Callable[[], bool], what: str, timeout: float = WAIT
         await asyncio.sleep(0.002)
 
 
+async def press(app: Any, key: str, rng: random.Random, answered: Callable[[], float | None],
+                what: str) -> tuple[float, float]:
+    """After a person's pause, press `key`; when it was sent, and the time `answered()`
+    gives once the answer is on screen."""
+    await asyncio.sleep(rng.uniform(*PAUSE_RANGE))
+    sent = time.perf_counter()
+    _send_key(app, key)
+    await _until(lambda: answered() is not None, what)
+    return sent, answered()  # type: ignore[return-value]
+
+
 async def _fresh_snapshot(runner: Any) -> tuple[int, float]:
     """Wait for the next snapshot; its episode count and when it showed up."""
     version = runner.latest.version
@@ -187,20 +194,14 @@ async def _key_latencies(
 ) -> list[KeySample]:
     samples = []
     for _ in range(presses):
-        await asyncio.sleep(rng.uniform(*PAUSE_RANGE))
         key, target = ("p", "play") if _current_view(app) == "train" else ("t", "train")
-        frames_before = len(tools.frames)
-        actions_before = len(tools.action_marks)
-        sent = time.perf_counter()
-        _send_key(app, key)
+        frames_before, actions_before = len(tools.frames), len(tools.action_marks)
 
-        def shown(frames_before: int = frames_before, target: str = target) -> bool:
-            return any(view == focus == target for _, view, focus in tools.frames[frames_before:])
+        def shown(frames_before: int = frames_before, target: str = target) -> float | None:
+            return next((t for t, view, focus in tools.frames[frames_before:]
+                         if view == focus == target), None)
 
-        await _until(shown, f"the {target} view on screen, with the focus")
-        frame_at = next(
-            t for t, view, focus in tools.frames[frames_before:] if view == focus == target
-        )
+        sent, frame_at = await press(app, key, rng, shown, f"the {target} view, with the focus")
         marks = tools.action_marks[actions_before:]
         began, ended = marks[0] if marks else (sent, sent)
         samples.append(KeySample(
@@ -220,18 +221,18 @@ async def _live_once(runner_kind: str, seconds: float, presses: int, seed: int,
     async with app.run_test(size=SIZE) as pilot:
         await pilot.press("t")  # idle still, so the pilot's own waits are short
         await _until(lambda: _current_view(app) == "train", "the Train view")
-        tools.count_snapshots(app.train_view)
+        after_each(app.train_view, "show_snapshot", lambda *_: tools.snapshots.append(0.0))
         runner = app.runner
         _send_key(app, "space")
         await _until(lambda: runner.running and runner.latest.episodes > 0, "training to start")
         await asyncio.sleep(WARMUP_SECONDS)
         episodes0, t0 = await _fresh_snapshot(runner)
-        calls0, frames0 = tools.snapshot_calls, len(tools.frames)
+        calls0, frames0 = len(tools.snapshots), len(tools.frames)
         await asyncio.sleep(seconds)
         episodes1, t1 = await _fresh_snapshot(runner)
         elapsed = t1 - t0
         done = LiveRepeat(headless, (episodes1 - episodes0) / elapsed,
-                          (tools.snapshot_calls - calls0) / elapsed,
+                          (len(tools.snapshots) - calls0) / elapsed,
                           (len(tools.frames) - frames0) / elapsed, runner.latest.engine,
                           tuple(await _key_latencies(app, tools, presses, random.Random(seed))))
         if not runner.running:
