@@ -101,9 +101,9 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
         return _show_leaderboard(args, out)
     if not args.decision_timeout > 0:
         raise ValueError("--decision-timeout must be a positive number of seconds")
-    from tui_gym.benchmark.group import ending_on_signals
     from tui_gym.benchmark.results import record, run_benchmark
     from tui_gym.cli.replay_command import open_recorder
+    from tui_gym.core.engine.processes import handling
 
     recorder = None if args.record is None else partial(
         open_recorder, args.record, source="benchmark", seed=args.bench_seed)
@@ -112,7 +112,11 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
         if not args.name.strip():
             raise ValueError("--name cannot be empty")
         player.label = args.name.strip()
-    with ending_on_signals():  # SIGTERM and SIGHUP end the player's program as ctrl+c does
+    def leave(signum: int, frame: Any) -> None:  # an exit, so the `finally` clauses run
+        raise SystemExit(128 + signum)
+
+    # SIGTERM and SIGHUP end the player's program as ctrl+c does.
+    with handling(("SIGTERM", "SIGHUP"), leave):
         result = run_benchmark(
             args.game, player, episodes=args.episodes, seed=args.bench_seed, params=params,
             wrappers=wrappers, decision_timeout=args.decision_timeout,

@@ -7,7 +7,6 @@ import os
 import signal
 import subprocess
 import sys
-from collections.abc import Iterator
 from typing import Any
 
 # The watcher: reads the group's id, then waits for its input to close. "done" first
@@ -48,14 +47,14 @@ if words and words[-1] != b"done":
 class GroupProcess:
     """A started program (`process`, a `subprocess.Popen`) and the group it leads."""
 
-    def __init__(self, process: subprocess.Popen[bytes], watcher: subprocess.Popen[bytes] | None):
+    def __init__(self, process: subprocess.Popen[bytes], watcher: subprocess.Popen[bytes]):
         self.process = process
         self.pgid = process.pid  # a new session's leader leads its process group
-        self._watcher = watcher
-        if watcher is not None and watcher.stdin is not None:
-            with contextlib.suppress(OSError):
-                watcher.stdin.write(f"{self.pgid}\n".encode())
-                watcher.stdin.flush()
+        self._watcher: subprocess.Popen[bytes] | None = watcher
+        assert watcher.stdin is not None
+        with contextlib.suppress(OSError):
+            watcher.stdin.write(f"{self.pgid}\n".encode())
+            watcher.stdin.flush()
 
     def end(self, grace: float) -> int | None:
         """Close the program's input, give it `grace` s to exit, then kill what is left of
@@ -74,22 +73,17 @@ class GroupProcess:
         with contextlib.suppress(ProcessLookupError, PermissionError):
             os.killpg(self.pgid, signal.SIGKILL)  # what is left of its group
         process.wait()
-        self._release_watcher()
-        return code
-
-    def _release_watcher(self) -> None:
         watcher, self._watcher = self._watcher, None
-        if watcher is None:
-            return
-        with contextlib.suppress(OSError):
-            if watcher.stdin is not None:
+        if watcher is not None and watcher.stdin is not None:  # released once
+            with contextlib.suppress(OSError):
                 watcher.stdin.write(b" done\n")
                 watcher.stdin.close()
-        try:
-            watcher.wait(timeout=5)
-        except subprocess.TimeoutExpired:
-            watcher.kill()
-            watcher.wait()
+            try:
+                watcher.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                watcher.kill()
+                watcher.wait()
+        return code
 
 
 def start_group(argv: list[str], **popen: Any) -> GroupProcess:
@@ -108,24 +102,3 @@ def start_group(argv: list[str], **popen: Any) -> GroupProcess:
         watcher.wait()
         raise
     return GroupProcess(process, watcher)
-
-
-@contextlib.contextmanager
-def ending_on_signals() -> Iterator[None]:
-    """SIGTERM and SIGHUP end the block as an exit (`SystemExit(128 + signal)`), so its
-    `finally` clauses run; outside the main thread the block runs as it is."""
-    previous: dict[int, Any] = {}
-
-    def leave(signum: int, frame: Any) -> None:
-        raise SystemExit(128 + signum)
-
-    for signum in (signal.SIGTERM, signal.SIGHUP):
-        try:
-            previous[signum] = signal.signal(signum, leave)
-        except ValueError:  # not the main thread
-            break
-    try:
-        yield
-    finally:
-        for number, handler in previous.items():
-            signal.signal(number, handler)
