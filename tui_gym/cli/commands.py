@@ -225,19 +225,6 @@ def _value_text(key: str, value: Any) -> str:
     return f"{value:+.4f}" if isinstance(value, float) else str(value)
 
 
-def _wrapper_dicts(session: Session) -> list[dict[str, Any]]:
-    """Each applied wrapper with all its parameters (defaults filled in), innermost first."""
-    from tui_gym.core.wrappers import format_wrapper_spec, get_spec
-
-    return [
-        {
-            "name": choice.name, "params": get_spec(choice.name).validate(choice.values()),
-            "spec": format_wrapper_spec(choice),
-        }
-        for choice in session.applied
-    ]
-
-
 def _prediction_dict(session: Session) -> dict[str, Any]:
     """A prediction learner's figures for `train --json`: `rms_error` and `prediction`
     (per reached model state its `estimate` and `truth`), or `rms_error` null and why."""
@@ -260,6 +247,8 @@ def cmd_train(args: argparse.Namespace, out: Console) -> int:
 
 def _train(args: argparse.Namespace, out: Console, recording: Any) -> int:
     """`train`, its run recorded by `recording` (the run history's `TrainRecording`)."""
+    from tui_gym.core.wrappers import format_wrapper_spec, get_spec
+
     if args.target_gap is not None and args.target_gap <= 0:
         raise CliError(f"--target-gap must be a positive number, got {args.target_gap:g}")
     session = _session_from_args(args)
@@ -294,9 +283,12 @@ def _train(args: argparse.Namespace, out: Console, recording: Any) -> int:
     evaluation = eval_dict(session, report)
     saved = str(session.save(args.save)) if args.save is not None else None  # `output_file`
     run_id = recording.finish(report, saved)
+    # Each applied wrapper with all its parameters (defaults filled in), innermost first.
+    wrappers = [{"name": c.name, "params": get_spec(c.name).validate(c.values()),
+                 "spec": format_wrapper_spec(c)} for c in session.applied]
     data = {
         "env_id": session.env_id, "env_kwargs": session.env_kwargs, "algorithm": session.algorithm,
-        "wrappers": _wrapper_dicts(session), "engine": trainer.engine,
+        "wrappers": wrappers, "engine": trainer.engine,
         "engine_reason": session.engine_reason, "episodes": trainer.episodes,
         "steps": trainer.steps, "seconds": seconds,
         "episodes_per_second": trainer.episodes / seconds if seconds else None,

@@ -4,6 +4,7 @@ exit 2 with one line on stderr; a pipe closed early (`| head -1`) exits 141, as 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import os
 import re
@@ -296,7 +297,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             args.seed = fresh_seed() if args.command is None else 0
         out = OutConsole()
         if args.command is None:
-            return _run_app(args)
+            from tui_gym.ui.app import run_app
+
+            env_id, env_kwargs = app_env(args)
+            return run_app(env_id=env_id, seed=args.seed, load=args.load, runner=args.runner,
+                           record=args.record, db=args.db, keep_history=not args.no_history,
+                           env_kwargs=env_kwargs)
         _pass_app_options(parser, argv, args)
         if ":" in args.env:
             from tui_gym.games import resolve_env_id
@@ -309,13 +315,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stdout.flush()  # a closed pipe shows here, not at exit
         return code
     except BrokenPipeError:
-        _quiet_stdout()
+        # Point stdout at /dev/null so the interpreter's own flush at exit finds no pipe
+        # (with no real stdout, as when captured, there is nothing to flush).
+        with contextlib.suppress(OSError, ValueError):
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+            os.close(devnull)
         return EXIT_BROKEN_PIPE
     except KeyboardInterrupt:
         err.print("interrupted", style="yellow")
         return 130
     except (CliError, ValueError, OSError) as exc:
-        sys.stderr.write(f"tui-gym: error: {_one_line(exc)}\n")
+        text = str(exc) or type(exc).__name__
+        if isinstance(exc, OSError) and exc.filename:
+            text = f"{exc.filename}: {exc.strerror or text}"
+        sys.stderr.write(f"tui-gym: error: {readable(text)}\n")
         return EXIT_USAGE
 
 
@@ -360,30 +374,3 @@ def _pass_app_options(
         if getattr(args, own.dest, own.default) == own.default:
             setattr(args, own.dest, value)
 
-
-def _quiet_stdout() -> None:
-    """Point stdout at /dev/null so the interpreter's own flush at exit finds no pipe."""
-    try:
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
-        os.close(devnull)
-    except (OSError, ValueError):  # no real stdout (captured): nothing to flush at exit
-        pass
-
-
-def _one_line(exc: BaseException) -> str:
-    text = str(exc) or type(exc).__name__
-    if isinstance(exc, OSError) and exc.filename:
-        text = f"{exc.filename}: {exc.strerror or text}"
-    return readable(text)
-
-
-def _run_app(args: argparse.Namespace) -> int:
-    env_id, env_kwargs = app_env(args)
-    try:
-        from tui_gym.ui.app import run_app
-    except ImportError as exc:  # pragma: no cover - only without the UI installed
-        raise CliError(f"the app is not available ({exc}); try `tui-gym --help`") from None
-    return run_app(env_id=env_id, seed=args.seed, load=args.load, runner=args.runner,
-                   record=args.record, db=args.db, keep_history=not args.no_history,
-                   env_kwargs=env_kwargs)

@@ -44,25 +44,31 @@ def _summary(grid_map: GridMap) -> dict[str, object]:
     }
 
 
-def _print_map(out: Console, grid_map: GridMap, args: argparse.Namespace, title: str) -> int:
-    if args.json:
-        print_json("maps", {"name": title, **_summary(grid_map)})
-        return 0
-    sys.stdout.write(format_map(grid_map))  # as a file holds it: no colours, no wrapping
-    return 0
-
-
 def cmd_maps(args: argparse.Namespace, out: Console) -> int:
     chosen = [bool(args.name), bool(args.random), bool(args.check)]
     if sum(chosen) > 1:
         raise CliError("give one of NAME, --random and --check")
+    if not any(chosen):
+        if args.json:
+            print_json("maps", {"maps": [{"name": m.name, "description": m.description,
+                                       **_summary(m.grid_map)} for m in BUILTIN_MAPS]})
+            return 0
+        table = Table(title="Built-in maps (tui-gym maps NAME prints one; --map-file PATH "
+                      "plays it)", title_justify="left")
+        for column in ("name", "size", "games", "what it is"):
+            table.add_column(column)
+        for entry in BUILTIN_MAPS:
+            table.add_row(entry.name, entry.grid_map.size_text, ", ".join(fits(entry.grid_map)),
+                          entry.description)
+        out.print(table)
+        return 0
     if args.name:
         try:
             entry = builtin_map(args.name)
         except KeyError as error:
             raise CliError(error.args[0]) from None
-        return _print_map(out, entry.grid_map, args, entry.name)
-    if args.random:
+        head, grid_map = {"name": entry.name}, entry.grid_map
+    elif args.random:
         match = _SIZE.fullmatch(args.random.strip().lower())
         if match is None:
             raise CliError(f"--random takes ROWSxCOLS, e.g. 8x8, not {args.random!r}")
@@ -70,27 +76,17 @@ def cmd_maps(args: argparse.Namespace, out: Console) -> int:
         with cli_errors(ValueError):
             grid_map = random_map(rows, cols, args.density, args.maps_seed, args.obstacle,
                                   walled=args.walled)
-        return _print_map(out, grid_map, args, f"random {rows}x{cols}")
-    if args.check:
+        head = {"name": f"random {rows}x{cols}"}
+    else:
         grid_map = read_map_file(args.check)  # a MapError is one line naming where
-        if args.json:
-            print_json("maps", {"path": args.check, **_summary(grid_map)})
-            return 0
+        head = {"path": args.check}
+    if args.json:
+        print_json("maps", {**head, **_summary(grid_map)})
+    elif args.check:
         games = ", ".join(fits(grid_map)) or "none"
         reach = "a goal can be reached" if grid_map.goal_reachable() else "no goal can be reached"
         out.print(f"{escape(args.check)}: a {grid_map.size_text} map; {reach}; played by: "
                   f"{games}", highlight=False, soft_wrap=True)
-        return 0
-    if args.json:
-        print_json("maps", {"maps": [{"name": m.name, "description": m.description,
-                                   **_summary(m.grid_map)} for m in BUILTIN_MAPS]})
-        return 0
-    table = Table(title="Built-in maps (tui-gym maps NAME prints one; --map-file PATH plays it)",
-                  title_justify="left")
-    for column in ("name", "size", "games", "what it is"):
-        table.add_column(column)
-    for entry in BUILTIN_MAPS:
-        table.add_row(entry.name, entry.grid_map.size_text, ", ".join(fits(entry.grid_map)),
-                      entry.description)
-    out.print(table)
+    else:
+        sys.stdout.write(format_map(grid_map))  # as a file holds it: no colours, no wrapping
     return 0

@@ -50,10 +50,8 @@ def cmd_replay(args: argparse.Namespace, out: Console) -> int:
 
     with cli_errors(RecordingError):
         recording = read_recording(args.path, scene_fits)
-    try:
-        from tui_gym.ui.app import run_app
-    except ImportError as exc:  # pragma: no cover - only without the UI installed
-        raise CliError(f"the app is not available ({exc})") from None
+    from tui_gym.ui.app import run_app
+
     return run_app(session=session_for(recording), replay=recording, runner=args.runner)
 
 
