@@ -152,7 +152,8 @@ def _show_leaderboard(args: argparse.Namespace, out: Console) -> int:
     path, standings = leaderboard(game, args.db)
     if args.json:
         print_json("benchmark", {"game": game, "db": path,
-                                 "runs": [s.to_json() for s in standings]})
+                                 "runs": [{"rank": rank, **run.to_json()}
+                                          for rank, run in enumerate(standings, 1)]})
         return 0
     if not standings:
         out.print(escape(f"no benchmark of {game} is recorded in {path} yet"))
@@ -164,15 +165,13 @@ def _show_leaderboard(args: argparse.Namespace, out: Console) -> int:
     table.add_column("player", overflow="fold", min_width=12)
     for name in ("episodes", "mean return", "regret/ep.", "optimal", "bad/late", "ms"):
         table.add_column(name, justify="right", no_wrap=True)
-    for standing in standings:
-        run = standing.run
-        agreement = run.figure("agreement")
+    for rank, run in enumerate(standings, 1):
         table.add_row(
-            str(standing.rank), escape(visible(run.algorithm, 60)), _count(run, "episodes"),
-            _figure(run, "mean_return", 3, True), _figure(run, "regret_per_episode", 3, False),
-            "–" if agreement is None else f"{agreement.value:.1%}",
-            f"{_count(run, 'invalid_actions')}/{_count(run, 'timeouts')}",
-            _figure(run, "decision_ms_median", 2, False),
+            str(rank), escape(visible(run.algorithm, 60)), _figure(run, "episodes"),
+            _figure(run, "mean_return", "+.3f"), _figure(run, "regret_per_episode", ".3f"),
+            _figure(run, "agreement", ".1%"),
+            f"{_figure(run, 'invalid_actions')}/{_figure(run, 'timeouts')}",
+            _figure(run, "decision_ms_median", ".2f"),
         )
     out.print(table)
     out.print(escape(f"from {path}; bad/late: invalid actions and time-outs; "
@@ -180,15 +179,10 @@ def _show_leaderboard(args: argparse.Namespace, out: Console) -> int:
     return 0
 
 
-def _figure(run: Any, name: str, places: int, signed: bool) -> str:
+def _figure(run: Any, name: str, shown: str = ",.0f") -> str:
     """A recorded figure as '-0.036±0.042' ('–' when the run has none)."""
     figure = run.figure(name)
     if figure is None:
         return "–"
-    text = f"{figure.value:+.{places}f}" if signed else f"{figure.value:.{places}f}"
-    return text + (f"±{figure.ci95:.{places}f}" if figure.ci95 is not None else "")
-
-
-def _count(run: Any, name: str) -> str:
-    figure = run.figure(name)
-    return "–" if figure is None else f"{figure.value:,.0f}"
+    ci95 = "" if figure.ci95 is None else f"±{figure.ci95:{shown.lstrip('+')}}"
+    return f"{figure.value:{shown}}{ci95}"

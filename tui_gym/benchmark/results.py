@@ -209,17 +209,6 @@ def record(result: BenchmarkResult, db: str | None = None) -> int:
         return recorder.run_id
 
 
-@dataclass(frozen=True)
-class Standing:
-    """One run on the leaderboard."""
-
-    rank: int
-    run: RunSummary
-
-    def to_json(self) -> dict[str, Any]:
-        return {"rank": self.rank, **self.run.to_json()}
-
-
 def _key(run: RunSummary) -> tuple[bool, float, float]:
     regret = run.figure("regret_per_episode")
     ret = run.figure("mean_return")
@@ -229,13 +218,11 @@ def _key(run: RunSummary) -> tuple[bool, float, float]:
     return (True, -mean_return, 0.0)
 
 
-def leaderboard(game: str, db: str | None = None) -> tuple[str, list[Standing]]:
+def leaderboard(game: str, db: str | None = None) -> tuple[str, list[RunSummary]]:
     """The run history's path, and `game`'s finished benchmark runs, best first."""
     path = resolve_db_path(db)
     if not path.exists() or path.stat().st_size == 0:
         return str(path), []
     with RunHistory(path) as history:
         runs = history.list_runs(game=game, kind=RunKind.BENCHMARK)
-    runs = [r for r in runs if r.status is RunStatus.FINISHED]
-    runs.sort(key=_key)
-    return str(path), [Standing(i + 1, run) for i, run in enumerate(runs)]
+    return str(path), sorted((r for r in runs if r.status is RunStatus.FINISHED), key=_key)
