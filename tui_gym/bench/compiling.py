@@ -24,32 +24,26 @@ class CompileResult:
     warm_s: float
 
 
-def _every_learner() -> float:
-    """Seconds to make every learner ready on every game (run in the child)."""
-    from tui_gym.algorithms import ALGORITHMS
-    from tui_gym.core.engine import loop
-    from tui_gym.games import GAMES
-    from tui_gym.session.session import Session
-
-    began = time.perf_counter()
-    sessions = [Session(game.name, algorithm=cls.name, seed=0)
-                for game in GAMES for cls in ALGORITHMS]
-    agents = [session.trainer.agent for session in sessions]
-    loop.warm([(x.name, x.arrays(), x.compiled_params()) for x in agents])
-    for session in sessions:
-        session.trainer.run(episodes=1)
-        session.trainer.step()
-        session.env.close()
-    return time.perf_counter() - began
-
-
 def _child(kind: str) -> dict[str, float]:
-    if kind == "cold":
-        return {"seconds": _every_learner()}
+    """The child's seconds: cold, every learner made ready on every game; warm, Numba's
+    import and every learner loaded from the cache."""
     from tui_gym.algorithms import ALGORITHMS
     from tui_gym.core.engine import jit, loop
 
     began = time.perf_counter()
+    if kind == "cold":
+        from tui_gym.games import GAMES
+        from tui_gym.session.session import Session
+
+        sessions = [Session(game.name, algorithm=cls.name, seed=0)
+                    for game in GAMES for cls in ALGORITHMS]
+        agents = [session.trainer.agent for session in sessions]
+        loop.warm([(x.name, x.arrays(), x.compiled_params()) for x in agents])
+        for session in sessions:
+            session.trainer.run(episodes=1)
+            session.trainer.step()
+            session.env.close()
+        return {"seconds": time.perf_counter() - began}
     jit.start()
     imported = time.perf_counter()
     for cls in ALGORITHMS:

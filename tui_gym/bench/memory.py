@@ -62,18 +62,16 @@ def train_and_watch(episodes: int, warmup: int, engine: str = "auto") -> dict[st
     gc.collect()
     end = rss_bytes()
     return {
-        "episodes": trainer.episodes - warmup, "engine": trainer.engine, "rss_start_mb": start / MB,
-        "rss_end_mb": end / MB, "rss_peak_mb": max(peak, end) / MB, "seconds": seconds,
+        "episodes": trainer.episodes - warmup, "warmup": warmup, "engine": trainer.engine,
+        "rss_start_mb": start / MB, "rss_end_mb": end / MB, "rss_peak_mb": max(peak, end) / MB,
+        "seconds": seconds,
     }
 
 
 def measure(episodes: int, warmup: int, engine: str = "auto") -> MemoryResult:
     """Run `train_and_watch` in a fresh interpreter and read its figures."""
-    data = child_json("tui_gym.bench.memory", str(episodes), str(warmup), engine,
-                      what="the memory run", timeout=600)
-    return MemoryResult(int(data["episodes"]), warmup, str(data["engine"]),
-                        *(float(data[key]) for key in ("rss_start_mb", "rss_end_mb",
-                                                        "rss_peak_mb", "seconds")))
+    return MemoryResult(**child_json("tui_gym.bench.memory", str(episodes), str(warmup), engine,
+                                     what="the memory run", timeout=600))
 
 
 if __name__ == "__main__":

@@ -305,8 +305,7 @@ def _dp_rows(out: _Judged, found: dp.DPResult | None) -> None:
         p95 = percentile(view.keys_ms, 95)
         out.row(f"plan_key_p95_ms[{view.game}]", f"  Plan view on {view.game}: key → screen "
                 f"p95 while it runs", f"{p95:.0f} ms (p50 {median(view.keys_ms):.0f}, "
-                f"n={len(view.keys_ms)})", p95,
-                Target("≤", 50.0, " ms"))
+                f"n={len(view.keys_ms)})", p95, Target("≤", 50.0, " ms"))
 
 
 def verdicts(results: BenchResults) -> dict[str, str]:

@@ -49,8 +49,7 @@ def cmd_book(args: argparse.Namespace, out: Console) -> int:
     if args.figure is None:
         return _list(args, out)
     figure = figure_named(args.figure)
-    recorded = args.full or args.resume is not None
-    if not recorded:
+    if not (args.full or args.resume is not None):  # a figure's own small runs go unrecorded
         args.no_record = True
     with run_history(args) as history:
         if args.resume is not None and history is None:
