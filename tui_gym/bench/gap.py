@@ -71,32 +71,10 @@ def bench_kwargs(game: Game) -> dict[str, Any]:
     return game.normalize_kwargs(game.bench_kwargs or {})
 
 
-def target_for(game: Game) -> float:
-    """The gap the bench trains `game` to."""
-    if game.bench_gap is not None:
-        return game.bench_gap
-    bound = game.oracle.bound(bench_kwargs(game), Session(game.env_id, bench_kwargs(game)).changes)
-    if isinstance(bound, NotAvailable) or bound.figure != "gap":
-        raise ValueError(f"{game.title} states no gap to train to")
-    return bound.limit
-
-
 def default_hyperparameters(game: Game) -> Settings:
     """The hyperparameters `tui-gym train GAME --target-gap G` uses (Q-learning's)."""
     hp = default_settings(game, "q-learning", bench_kwargs(game))
     return hp.replace(episodes=TARGET_GAP_BUDGET_FACTOR * hp.episodes)
-
-
-def ours_once(game: Game, seed: int, target: float) -> GapRun:
-    """Our default engine, as the CLI runs it for `--target-gap`."""
-    start = time.perf_counter()
-    session = Session(game.env_id, bench_kwargs(game), hp=default_hyperparameters(game), seed=seed)
-    outcome = session.train(target_gap=target)
-    seconds = time.perf_counter() - start
-    episodes = session.trainer.episodes
-    session.env.close()
-    gap = float(outcome.gap) if outcome.gap is not None else float("nan")
-    return GapRun(seed, seconds, episodes, gap, bool(outcome.reached_target))
 
 
 def tutorial_runs(game: Game, seeds: Sequence[int], cap_seconds: float,
@@ -104,19 +82,32 @@ def tutorial_runs(game: Game, seeds: Sequence[int], cap_seconds: float,
     """The tutorial loop with the same hyperparameters and budget, capped in time."""
     hp = default_hyperparameters(game)
     tasks = [{"kind": "gap", "game": game.name, "kwargs": bench_kwargs(game), "hp": dict(hp),
-              "target": target,
-              "seed": seed, "cap": cap_seconds, "check_every": check_every_for(hp.episodes)}
-             for seed in seeds]
+              "target": target, "seed": seed, "cap": cap_seconds,
+              "check_every": check_every_for(hp.episodes)} for seed in seeds]
     return [GapRun(seed, run["seconds"], run["episodes"], run["gap"], run["reached"])
             for seed, run in zip(seeds, tutorial.measure(tasks), strict=True)]
 
 
 def measure_game(game: Game, seeds: Sequence[int], tutorial_seeds: int,
                  tutorial_cap_s: float) -> GapResult:
-    """Ours on every seed; the tutorial on the first `tutorial_seeds` of them, each run
-    stopped at `tutorial_cap_s` (or at the budget)."""
-    target = target_for(game)
-    ours = [ours_once(game, seed, target) for seed in seeds]
+    """Ours on every seed, as the CLI runs `--target-gap`; the tutorial on the first
+    `tutorial_seeds` of them, each run stopped at `tutorial_cap_s` (or at the budget)."""
+    kwargs, target = bench_kwargs(game), game.bench_gap
+    if target is None:
+        bound = game.oracle.bound(kwargs, Session(game.env_id, kwargs).changes)
+        if isinstance(bound, NotAvailable) or bound.figure != "gap":
+            raise ValueError(f"{game.title} states no gap to train to")
+        target = bound.limit
+    ours = []
+    for seed in seeds:
+        start = time.perf_counter()
+        session = Session(game.env_id, kwargs, hp=default_hyperparameters(game), seed=seed)
+        outcome = session.train(target_gap=target)
+        seconds = time.perf_counter() - start
+        session.env.close()
+        gap = float(outcome.gap) if outcome.gap is not None else float("nan")
+        ours.append(GapRun(seed, seconds, session.trainer.episodes, gap,
+                           bool(outcome.reached_target)))
     theirs = tutorial_runs(game, seeds[: max(1, tutorial_seeds)], tutorial_cap_s, target)
     return GapResult(target, tuple(ours), tuple(theirs), title_of(game))
 

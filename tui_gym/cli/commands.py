@@ -439,18 +439,14 @@ def cmd_bench(args: argparse.Namespace, out: Console) -> int:
     if args.algorithm is not None:
         with cli_errors(ValueError, prefix="--algorithm: "):
             names = (algorithm(args.algorithm).name,)
-    if args.json:
-        print_json("bench", to_json(run_bench(quick=args.quick, algorithms=names)))
-        return 0
     # Plain lines, not a spinner: a spinner's refresh thread would share the GIL
     # with the thread runner being measured.
-    err = Console(stderr=True)
-    started = time.perf_counter()
-    results = run_bench(
-        quick=args.quick,
-        progress=lambda text: err.print(f"[dim]{time.perf_counter() - started:5.1f} s[/] {text}"),
-        algorithms=names,
-    )
+    err, started = Console(stderr=True), time.perf_counter()
+    results = run_bench(quick=args.quick, algorithms=names, progress=None if args.json else (
+        lambda text: err.print(f"[dim]{time.perf_counter() - started:5.1f} s[/] {text}")))
+    if args.json:
+        print_json("bench", to_json(results))
+        return 0
     out.print(table(results))
     for line in notes(results):
         out.print(line)
