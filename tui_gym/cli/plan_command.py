@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-from typing import Any
 
 from rich.console import Console
 
@@ -12,7 +11,7 @@ from tui_gym.cli.flags import add_game_flags, finite_number, game_kwargs
 from tui_gym.cli.output import print_json
 from tui_gym.core.mdp.planning import METHODS
 from tui_gym.games import game_for, resolve_env_id
-from tui_gym.session.plan import PlanResult, plan, plan_json
+from tui_gym.session.plan import plan, plan_json
 from tui_gym.session.plan.panels import numbered, plan_panels
 from tui_gym.session.plan.start import START_POLICIES, saved_agent_q
 
@@ -51,12 +50,7 @@ def cmd_plan(args: argparse.Namespace, out: Console) -> int:
     if args.json:
         print_json("plan", data)
         return 0
-    _print(out, result, data)
-    return 0
-
-
-def _print(out: Console, result: PlanResult, data: dict[str, Any]) -> None:
-    game, model, planner = result.game, result.model, result.planner
+    model, planner = result.model, result.planner
     focus = game.layout.default_focus(result.kwargs)
     for numbers in (True, False):
         for panel in plan_panels(game, result.kwargs, model, planner.v, planner.policy,
@@ -76,3 +70,4 @@ def _print(out: Console, result: PlanResult, data: dict[str, Any]) -> None:
         limit = f"{model.horizon}-step episodes" if model.horizon else "no limit"
         out.print(f"The tool's exact value of this policy (undiscounted, {limit}): "
                   f"[bold]{data['limited_value']:+.6g}[/]")
+    return 0
