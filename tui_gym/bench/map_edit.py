@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tui_gym.core.mdp import NotAvailable
-from tui_gym.games import GAMES
+from tui_gym.games import GAMES, Game
 from tui_gym.games.maps.random_map import random_map
 from tui_gym.session.session import Session
 
@@ -29,8 +29,7 @@ class MapEditResult:
     kept_agent: bool  # every edit kept the agent (the states kept their meaning)
 
 
-def _one_game(name: str, edits: int, seed: int) -> MapEditResult:
-    game = next(g for g in GAMES if g.name == name)
+def _one_game(game: Game, edits: int, seed: int) -> MapEditResult:
     rng = np.random.default_rng(seed)
     grid_map = random_map(MAP_SIDE, MAP_SIDE, 0.15, seed)
     session = Session(game.env_id, env_kwargs=game.with_map({}, grid_map), seed=seed,
@@ -56,5 +55,4 @@ def _one_game(name: str, edits: int, seed: int) -> MapEditResult:
 
 def measure(edits: int = 40, seed: int = 0) -> list[MapEditResult]:
     """Edit-to-optimum times on each grid game with tiles (see the module docstring)."""
-    names = [g.name for g in GAMES if g.editable and "start" in g.map_tools]
-    return [_one_game(name, edits, seed) for name in names]
+    return [_one_game(g, edits, seed) for g in GAMES if g.editable and "start" in g.map_tools]
