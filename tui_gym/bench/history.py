@@ -6,9 +6,10 @@ import tempfile
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
 
 import numpy as np
+
+from tui_gym.bench.live import after_each
 
 GAME = "blackjack"
 EVAL_EPISODES = 10_000  # as `train`'s --eval-episodes by default
@@ -26,42 +27,24 @@ class HistoryResult:
     size_bytes: int
 
 
-def _timed_recording(db: Path, spent: list[float]) -> Any:
-    """A `TrainRecording` whose calls (its opening too) add their time to `spent[0]`."""
-    from tui_gym.session.experiments.train_recording import TrainRecording
-
-    def timed(call: Any) -> Any:
-        def run(*args: Any, **kwargs: Any) -> Any:
-            started = time.perf_counter()
-            try:
-                return call(*args, **kwargs)
-            finally:
-                spent[0] += time.perf_counter() - started
-
-        return run
-
-    recording = timed(TrainRecording)(str(db))
-    for name in ("begin", "on_chunk", "finish", "close"):
-        setattr(recording, name, timed(getattr(recording, name)))
-    return recording
-
-
 def _train_once(db: Path, record: bool) -> tuple[float, float]:
     """One default train run as `tui-gym train blackjack` runs it (the game's defaults,
     seed 0, then the greedy evaluation): (whole seconds, recording seconds)."""
     from tui_gym.session.experiments.train_recording import TrainRecording
     from tui_gym.session.session import Session
 
-    spent = [0.0]
     started = time.perf_counter()
-    recording = _timed_recording(db, spent) if record else TrainRecording(enabled=False)
+    recording = TrainRecording(str(db), enabled=record)
+    spent = [time.perf_counter() - started] if record else [0.0]  # its opening, then its calls
+    for name in ("begin", "on_chunk", "finish", "close") if record else ():
+        after_each(recording, name, lambda began, *_: spent.append(time.perf_counter() - began))
     with recording:
         session = Session(GAME, seed=0)
         recording.begin(session)
         session.train(on_chunk=recording.on_chunk)
         report = session.evaluate(EVAL_EPISODES, seed=1)
         recording.finish(report)
-    return time.perf_counter() - started, spent[0]
+    return time.perf_counter() - started, sum(spent)
 
 
 def _size(db: Path, template: Path, runs: int) -> int:

@@ -109,10 +109,11 @@ def after_each(target: Any, name: str, then: Callable[..., None]) -> None:
     """Have `target.name(*args)` (on this instance only) call `then(started, *args)` after."""
     call = getattr(target, name)
 
-    def hooked(*args: Any) -> None:
+    def hooked(*args: Any, **kwargs: Any) -> Any:
         started = time.perf_counter()
-        call(*args)
+        result = call(*args, **kwargs)
         then(started, *args)
+        return result
 
     setattr(target, name, hooked)
 
