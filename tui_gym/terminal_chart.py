@@ -39,24 +39,19 @@ def format_number(value: float) -> str:
 
 
 def _binned(x: np.ndarray, values: np.ndarray, edges: np.ndarray) -> np.ndarray:
-    """The mean of `values` in each x bin (an empty one: see `_fill_gaps`)."""
+    """The mean of `values` in each x bin; an empty bin takes the value of the bin before
+    it (or after, at the start)."""
     x, values = np.asarray(x, dtype=np.float64), np.asarray(values, dtype=np.float64)
     index = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, len(edges) - 2)
     sums = np.bincount(index, weights=values, minlength=len(edges) - 1)
     counts = np.bincount(index, minlength=len(edges) - 1)
     with np.errstate(invalid="ignore", divide="ignore"):
-        return _fill_gaps(np.where(counts > 0, sums / counts, np.nan))
-
-
-def _fill_gaps(values: np.ndarray) -> np.ndarray:
-    """Empty bins take the value of the bin before them (or after, at the start)."""
-    out = values.copy()
-    present = np.flatnonzero(~np.isnan(out))
-    if not present.size:
-        return out
-    index = np.maximum.accumulate(np.where(~np.isnan(out), np.arange(len(out)), -1))
-    index[index < 0] = present[0]
-    return out[index]
+        means = np.where(counts > 0, sums / counts, np.nan)
+    present = ~np.isnan(means)
+    if not present.any():
+        return means
+    before = np.maximum.accumulate(np.where(present, np.arange(len(means)), -1))
+    return means[np.where(before < 0, np.argmax(present), before)]
 
 
 def band_chart(
@@ -87,11 +82,10 @@ def band_chart(
     # The y range leaves out the first columns when they alone would stretch it (early
     # learning curves start far below where they end): those points sit on the edge.
     skip = columns // 20 if skip_start else 0
-    everything = np.concatenate([a[skip:] for b in binned for a in b if a is not None])
-    everything = everything[np.isfinite(everything)]
-    y_min, y_max = (float(everything.min()), float(everything.max())) if everything.size else (0, 1)
-    whole = np.concatenate([a for b in binned for a in b if a is not None])
-    whole = whole[np.isfinite(whole)]
+    arrays = [a for b in binned for a in b if a is not None]
+    fitted, whole = (np.concatenate(parts) for parts in ([a[skip:] for a in arrays], arrays))
+    fitted, whole = fitted[np.isfinite(fitted)], whole[np.isfinite(whole)]
+    y_min, y_max = (float(fitted.min()), float(fitted.max())) if fitted.size else (0, 1)
     clipped = bool(whole.size) and (whole.min() < y_min or whole.max() > y_max)
     if y_max == y_min:
         y_min, y_max = y_min - 1, y_max + 1
