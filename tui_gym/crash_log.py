@@ -1,8 +1,4 @@
-"""Crash logs: an unexpected error's full traceback goes to a file, the person gets one line.
-
-Logs go to `$TUI_GYM_LOG_DIR`, else `$XDG_STATE_HOME/tui-gym`, else
-`~/.local/state/tui-gym`; the newest `KEEP` are kept.
-"""
+"""Crash logs: an unexpected error's full traceback goes to a file, the person gets one line."""
 
 from __future__ import annotations
 
@@ -18,7 +14,8 @@ KEEP = 20  # crash logs kept; older ones are removed
 
 
 def log_dir() -> Path:
-    """Where crash logs go (see the module docstring)."""
+    """Where crash logs go: `$TUI_GYM_LOG_DIR`, else `$XDG_STATE_HOME/tui-gym`, else
+    `~/.local/state/tui-gym` (the newest `KEEP` are kept)."""
     override = os.environ.get("TUI_GYM_LOG_DIR")
     if override:
         return Path(override).expanduser()

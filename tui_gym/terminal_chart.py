@@ -58,11 +58,9 @@ def band_chart(
     series: Sequence[ChartSeries], width: int = 72, height: int = 16, *, x_label: str = "episode",
     y_label: str = "", skip_start: bool = False,
 ) -> Text:
-    """The chart of `series` in `width` x `height` character cells of plot, plus axes and legend.
-
-    With `skip_start` the y range fits the curves after their first 5%, and points
-    beyond it are drawn on its edge (the legend says so).
-    """
+    """The chart of `series` in `width` x `height` character cells of plot, plus axes and legend
+    (with `skip_start` the y range fits the curves after their first 5%; points beyond it sit
+    on its edge, as the legend says)."""
     shown = [s for s in series if len(s.x)]
     if not shown:
         return Text("(nothing to plot yet)")

@@ -1,6 +1,5 @@
 """Planning's figures: a value-iteration sweep on Taxi, Jack's car rental solved by policy
-iteration, and the Plan view animating sweeps while it answers keys.
-"""
+iteration, and the Plan view animating sweeps while it answers keys."""
 
 from __future__ import annotations
 

@@ -3,15 +3,16 @@
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from typing import Any
 
+from tui_gym.core.experiments.figures import FieldsJson
 from tui_gym.session.arena import Seat, SeatError, find_game, open_handler
 from tui_gym.session.protocol import parse_request
 
 
 @dataclass
-class Fouls:
+class Fouls(FieldsJson):
     """What a player got wrong, counted."""
 
     invalid_actions: int = 0  # steps whose action was not valid (the default was played)
@@ -19,9 +20,6 @@ class Fouls:
     defaulted: int = 0  # decisions made for a player that had exited or stopped answering
     bad_requests: int = 0  # lines that were not a usable request, or a request out of turn
     hints_refused: int = 0
-
-    def to_json(self) -> dict[str, int]:
-        return asdict(self)
 
 
 @dataclass

@@ -1,8 +1,4 @@
-"""What the `tui-gym` command prints: one-line errors, JSON objects and summary tables.
-
-Every `--json` object starts with `"schema"` (`JSON_SCHEMAS`), which goes up by one when
-a key is removed or renamed or changes its type or meaning; a new key leaves it as it is.
-"""
+"""What the `tui-gym` command prints: one-line errors, JSON objects and summary tables."""
 
 from __future__ import annotations
 
@@ -29,7 +25,8 @@ from rich.table import Table
 from tui_gym.core.text import json_safe as _clean
 from tui_gym.core.text import visible
 
-# The version of each command's JSON object (see the module docstring).
+# The version of each command's JSON object (its `"schema"`, first): up by one when a key is
+# removed or renamed or changes its type or meaning; a new key leaves it as it is.
 JSON_SCHEMAS: dict[str, int] = {
     "envs": 1, "wrappers": 1, "maps": 1, "algorithms": 1, "train": 1, "eval": 1, "optimal": 1,
     "runs": 1, "runs show": 1, "runs export": 1, "runs rm": 1, "runs prune": 1, "runs recover": 1,
