@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
 import subprocess
 import sys
 import time
@@ -117,15 +116,14 @@ class _ProtocolChild:
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, bufsize=0,
         )
         assert self.child.stdin is not None and self.child.stdout is not None
-        self.requests = self.child.stdin.fileno()
-        self.answers = self.child.stdout.fileno()
+        self.requests, self.answers = self.child.stdin, self.child.stdout  # raw: no buffers
         self.sent = 0  # step requests written (their parity picks the action)
         self.tail = b""  # the start of an answer whose newline has not come yet
 
     def write(self, data: bytes) -> None:
         view = memoryview(data)
         while view:
-            view = view[os.write(self.requests, view):]
+            view = view[self.requests.write(view):]
 
     def send_steps(self, count: int) -> None:
         first = self.sent
@@ -134,7 +132,7 @@ class _ProtocolChild:
 
     def read_answers(self) -> int:
         """Wait for answers; how many whole ones came. RuntimeError on an error answer."""
-        data = os.read(self.answers, 1 << 16)
+        data = self.answers.read(1 << 16)
         if not data:
             raise RuntimeError("the protocol process exited")
         data = self.tail + data
@@ -151,9 +149,8 @@ class _ProtocolChild:
             pass
 
     def close(self) -> None:
-        assert self.child.stdin is not None and self.child.stdout is not None
-        self.child.stdin.close()  # end of input: the child answers what is left and exits
-        self.child.stdout.read()
+        self.requests.close()  # end of input: the child answers what is left and exits
+        self.answers.read()
         self.child.wait(timeout=30)
 
 
