@@ -25,7 +25,6 @@ WRAPPER_SYNTAX = "--wrapper NAME or --wrapper NAME:key=value,key=value, repeatab
     "the first is innermost"
 
 
-
 def _param_dict(param: Field) -> dict[str, Any]:
     data: dict[str, Any] = {"name": param.name, "type": "choice", "default": param.default}
     if isinstance(param, Param):  # else a Choice: one word out of a few
