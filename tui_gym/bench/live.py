@@ -10,7 +10,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from tui_gym.algorithms import QLearning, Settings
+from tui_gym.algorithms import QLearning
 from tui_gym.bench.figures import median, percentile
 from tui_gym.session.session import Session
 
@@ -75,13 +75,9 @@ class LiveResult:
         return sum(len(r.keys) for r in self.repeats)
 
 
-def _hyperparameters() -> Settings:
-    return QLearning.hyperparameters(episodes=LIVE_BUDGET)
-
-
 def headless_rate(seconds: float, seed: int = 0) -> float:
     """Episodes per second of the default engine ("auto") trained headless in this process."""
-    session = Session(hp=_hyperparameters(), seed=seed)
+    session = Session(hp=QLearning.hyperparameters(episodes=LIVE_BUDGET), seed=seed)
     trainer = session.trainer
     trainer.run(seconds=0.2)
     start = time.perf_counter()
@@ -216,7 +212,7 @@ async def _live_once(runner_kind: str, seconds: float, presses: int, seed: int,
                      headless: float) -> LiveRepeat:
     from tui_gym.ui.app import TuiGymApp
 
-    session = Session(hp=_hyperparameters(), seed=seed)
+    session = Session(hp=QLearning.hyperparameters(episodes=LIVE_BUDGET), seed=seed)
     app = TuiGymApp(session, runner=runner_kind, tune_gc=True)  # as `tui-gym` runs it
     tools = _Instruments(app)
     async with app.run_test(size=SIZE) as pilot:

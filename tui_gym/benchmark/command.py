@@ -15,8 +15,6 @@ from rich.table import Table
 from tui_gym.cli.output import key_value_table, print_json
 from tui_gym.core.text import visible
 
-BUILT_IN = ("random", "optimal")
-
 
 def add_parser(sub: Any) -> None:
     """Add `benchmark` to the sub-command parsers `sub`."""
@@ -84,7 +82,7 @@ def _player(args: argparse.Namespace, game: str) -> tuple[Any, dict[str, Any], t
     if args.agent is None:
         raise ValueError("name a player: --agent-cmd CMD, or --agent random, optimal or a "
                          "saved agent file")
-    if args.agent in BUILT_IN:
+    if args.agent in ("random", "optimal"):
         player = RandomPlayer(args.bench_seed) if args.agent == "random" else OptimalPlayer()
         return player, params, wrappers
     agent = AgentPlayer(args.agent, args.bench_seed)
