@@ -12,20 +12,15 @@ from typing import Any
 # The watcher: reads the group's id, then waits for its input to close. "done" first
 # means the parent ended the group itself; anything else, that the parent is gone.
 _WATCHER = """
-import os, signal, sys, time
+import os, signal, time
 for s in (signal.SIGINT, signal.SIGHUP, signal.SIGTERM):
     signal.signal(s, signal.SIG_IGN)
 said = b""
-while True:
-    try:
-        chunk = os.read(0, 64)
-    except InterruptedError:
-        continue
-    except OSError:
-        chunk = b""
-    if not chunk:
-        break
-    said += chunk
+try:
+    while chunk := os.read(0, 64):
+        said += chunk
+except OSError:
+    pass
 words = said.split()
 if words and words[-1] != b"done":
     pgid = int(words[0])
