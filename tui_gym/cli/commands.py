@@ -224,17 +224,6 @@ def _value_text(key: str, value: Any) -> str:
     return f"{value:+.4f}" if isinstance(value, float) else str(value)
 
 
-def _prediction_dict(session: Session) -> dict[str, Any]:
-    """A prediction learner's figures for `train --json`: `rms_error` and `prediction`
-    (per reached model state its `estimate` and `truth`), or `rms_error` null and why."""
-    figures = session.prediction()
-    if figures is None:
-        return {"rms_error": None, "rms_reason": session.prediction_reason()}
-    return {"rms_error": figures.rms,
-            "prediction": {"states": list(figures.states), "estimate": list(figures.estimate),
-                           "truth": list(figures.truth)}}
-
-
 def cmd_train(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.cli.output import warn
     from tui_gym.session.experiments.train_recording import TrainRecording
@@ -298,7 +287,13 @@ def _train(args: argparse.Namespace, out: Console, recording: Any) -> int:
         data.update(target_gap=args.target_gap, reached_target=outcome.reached_target,
                     checked_gap=outcome.gap)
     if session.predicts:
-        data.update(_prediction_dict(session))
+        figures = session.prediction()  # per reached model state, the estimate and the truth
+        if figures is None:
+            data.update(rms_error=None, rms_reason=session.prediction_reason())
+        else:
+            data.update(rms_error=figures.rms, prediction={
+                "states": list(figures.states), "estimate": list(figures.estimate),
+                "truth": list(figures.truth)})
     if args.json:
         print_json("train", data)
         return 0
