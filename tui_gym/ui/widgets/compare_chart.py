@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Hashable, Sequence
+from collections.abc import Sequence
 from typing import ClassVar
 
 import numpy as np
@@ -171,16 +171,8 @@ class CompareChart(StripWidget):
             self.series, self.colours = series, colours
             self.redraw(layout=True)
 
-    def picture_key(self) -> Hashable:
-        return (self._version, self._compact(), self.rich_style)
-
     def plot_height(self) -> int:
         return self.COMPACT_PLOT_HEIGHT if self._compact() else self.PLOT_HEIGHT
-
-    def get_content_height(self, container: object, viewport: object, width: int) -> int:
-        if not self.series:
-            return 1
-        return self.plot_height() + 1 + len(self.series)
 
     def draw(self, width: int) -> list[Line]:
         styles = self.component_styles()

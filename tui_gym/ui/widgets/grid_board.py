@@ -29,7 +29,6 @@ AGENT, TARGET, HOME = "●", "◎", "◉"  # HOME: the agent stands on the targe
 WALL = "█"
 
 
-
 @dataclass(frozen=True)
 class GridLayout:
     """Where the drawn grid sits in the canvas, to map clicks back to cells."""

@@ -1,17 +1,5 @@
-"""A heatmap of Q-values: panels of coloured cells with labels, marks and a legend.
-
-`HeatmapView` draws a list of `tui_gym.core.heatmap.Heatmap` panels side by
-side (stacked when the widget is too narrow). Every cell's background comes
-from one colour scale shared by all panels (diverging around zero when the
-values have both signs, sequential otherwise; NaN cells stay blank), the
-cell's label is centred in it and marked cells carry a `*`. A legend line
-shows the scale with its range.
-
-When the view has a *focus cell* (e.g. a target, a slice), the arrow keys
-or hjkl move it and a click on a cell sets it; either way the view posts
-`HeatmapView.FocusChanged` with the (row, col) of the new cell and leaves
-it to the owner to say what that cell means (it asks the game's layout).
-"""
+"""`HeatmapView`: Q-table heatmap panels on one colour scale, with a legend and a focus
+cell that the arrow keys or a click move (posting `FocusChanged`)."""
 
 from __future__ import annotations
 
@@ -19,7 +7,7 @@ import textwrap
 from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 from rich.segment import Segment
@@ -160,13 +148,12 @@ class HeatmapView(StripWidget, can_focus=True):
         Binding("right,l", "move(0, 1)", "Target right", show=False),
     ]
 
+    @dataclass
     class FocusChanged(Message):
         """The focus cell was moved (keys) or picked (click)."""
 
-        def __init__(self, view: HeatmapView, cell: tuple[int, int]) -> None:
-            super().__init__()
-            self.view = view
-            self.cell = cell  # (row, col) in the first panel
+        view: HeatmapView
+        cell: tuple[int, int]  # (row, col) in the first panel
 
         @property
         def control(self) -> HeatmapView:
@@ -177,15 +164,8 @@ class HeatmapView(StripWidget, can_focus=True):
     step_cell: reactive[tuple[int, int, int] | None] = reactive(None, init=False)
     """(panel, row, col) of the state the step-by-step panel explains, or None."""
 
-    def __init__(
-        self,
-        panels: Sequence[Heatmap] = (),
-        *,
-        name: str | None = None,
-        id: str | None = None,
-        classes: str | None = None,
-    ) -> None:
-        super().__init__(name=name, id=id, classes=classes)
+    def __init__(self, panels: Sequence[Heatmap] = (), **kwargs: Any) -> None:
+        super().__init__(**kwargs)
         self.panels: tuple[Heatmap, ...] = tuple(panels)
         self._message = ""
         self._placements: list[_Placement] = []
@@ -212,11 +192,7 @@ class HeatmapView(StripWidget, can_focus=True):
         self.add_class("-empty")
         self.redraw(layout=True)
 
-    def watch_step_cell(self, old: object, new: object) -> None:
-        self.refresh()
-
     def watch_focus_cell(self, old: object, new: object) -> None:
-        self.refresh()
         if (old is None) != (new is None):  # the move keys come or go
             self.refresh_bindings()
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any, ClassVar, cast
 
 from textual import on
@@ -134,13 +135,12 @@ class HyperparameterForm(Vertical):
         Binding("escape", "leave", "Leave the fields", show=False),
     ]
 
+    @dataclass
     class Submitted(Message):
         """Enter in a field: `hyperparameters` is None when some field is wrong."""
 
-        def __init__(self, form: HyperparameterForm, hyperparameters: Settings | None):
-            super().__init__()
-            self.form = form
-            self.hyperparameters = hyperparameters
+        form: HyperparameterForm
+        hyperparameters: Settings | None
 
         @property
         def control(self) -> HyperparameterForm:

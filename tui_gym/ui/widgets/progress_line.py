@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Hashable
 from typing import ClassVar
 
 from rich.segment import Segment
@@ -54,9 +53,6 @@ class ProgressLine(StripWidget):
         if (done, total, eta) != (self.done, self.total, self.eta):
             self.done, self.total, self.eta = done, total, eta
             self.redraw()
-
-    def picture_key(self) -> Hashable:
-        return (self._version, self._compact(), self.rich_style)
 
     def draw(self, width: int) -> list[Line]:
         styles = self.component_styles()

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import textwrap
-from collections.abc import Hashable, Mapping
+from collections.abc import Mapping
 from functools import lru_cache
 
 from rich.segment import Segment
@@ -168,12 +168,6 @@ class StatsPanel(StripWidget):
         if self._reference_note:
             lines.append(self._reference_note)
         return "\n".join(lines)
-
-    def picture_key(self) -> Hashable:
-        return (self._version, self._compact())
-
-    def get_content_height(self, container: object, viewport: object, width: int) -> int:
-        return len(self.picture(width))
 
     def draw(self, width: int) -> list[Line]:
         label, style = STATE_STYLES.get(self._state, (self._state, "bold"))

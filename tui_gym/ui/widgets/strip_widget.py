@@ -1,29 +1,19 @@
-"""Widgets that keep their drawing between frames: `StripWidget` and `segments_of`.
-
-A `StripWidget` draws through Textual's line API rather than `render()`, which
-Textual turns into segments again on every refresh (a focus change or a view
-switch refreshes the whole screen). A subclass says what its picture depends on
-(`picture_key()`; by default a counter `redraw()` bumps) and draws it as lines
-of Rich segments (`draw(width)`), kept per key and width (the last `PICTURES`)
-and styled once per style. `redraw()` repaints only the lines that changed,
-unless the height may change; `component_styles()` keeps the component classes'
-Rich styles until a theme switch; a resize asks for a layout pass only when the
-width or the compact layout changed.
-"""
+"""`StripWidget`: a widget that keeps its drawing (lines of segments, per key and width)
+between frames and repaints only the lines that changed; `segments_of` and friends."""
 
 from __future__ import annotations
 
 import re
 from collections import OrderedDict
 from collections.abc import Hashable, Iterable
-from typing import ClassVar
+from typing import Any, ClassVar
 
 from rich.console import Console
 from rich.segment import Segment
 from rich.style import Style
 from rich.text import Text
 from textual import events
-from textual.geometry import Region
+from textual.geometry import Region, Size
 from textual.strip import Strip
 from textual.widget import Widget
 
@@ -56,15 +46,14 @@ def line_text(line: Iterable[Segment]) -> str:
 
 
 class StripWidget(Widget):
-    """A widget drawn as cached lines of segments (see the module docstring)."""
+    """A widget drawn as cached lines of segments: a subclass says what its picture depends
+    on (`picture_key()`) and draws it (`draw(width)`); `redraw()` asks for it again."""
 
     PICTURES: ClassVar[int] = 1
     """How many (key, width) pictures to keep."""
 
-    def __init__(
-        self, *, name: str | None = None, id: str | None = None, classes: str | None = None
-    ) -> None:
-        super().__init__(name=name, id=id, classes=classes)
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
         self._version = 0
         self._pictures: OrderedDict[Hashable, list[Line]] = OrderedDict()
         self._strips: list[Strip] = []
@@ -76,11 +65,14 @@ class StripWidget(Widget):
     # --- what subclasses give ------------------------------------------------
     def picture_key(self) -> Hashable:
         """What the picture depends on, besides its width (`redraw()` changes it)."""
-        return self._version
+        return (self._version, self._compact(), self.rich_style)
 
     def draw(self, width: int) -> list[Line]:
         """The picture, `width` cells wide, as lines of segments."""
         raise NotImplementedError
+
+    def get_content_height(self, container: Size, viewport: Size, width: int) -> int:
+        return len(self.picture(width))
 
     # --- what owners call --------------------------------------------------
     def redraw(self, layout: bool = False) -> None:
@@ -139,10 +131,7 @@ class StripWidget(Widget):
     # --- size ------------------------------------------------------------------
     def _compact(self) -> bool:
         """Whether the app shows its compact layout (a class on the screen)."""
-        try:
-            return self.screen.has_class("compact")
-        except Exception:  # not on a screen (yet)
-            return False
+        return self.is_attached and self.screen.has_class("compact")
 
     def on_resize(self, event: events.Resize) -> None:
         # A new width, or the compact layout coming or going, may change the height

@@ -1,17 +1,9 @@
-"""Learning curves: four labelled text sparklines of a training run.
-
-`TrainingCharts` draws the rolling mean return, episode length, mean |TD error|
-and epsilon over the whole run, each with its name, current value and range, as
-one widget of cached lines (`update_from`). What is drawn and what is written
-agree (`plotted`): the columns are bucket means ending on the current value, and
-the range is theirs. A narrow box drops the ranges before the curves shrink
-below `MIN_SPARK` columns; a mean with no episodes behind it reads "–". Each
-curve's low and high colours are component classes (`charts--return-high`).
-"""
+"""`TrainingCharts`: learning curves (return, length, |TD error|, epsilon) as labelled
+sparklines whose columns and ranges agree with the numbers written beside them."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Hashable, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -217,12 +209,6 @@ class TrainingCharts(StripWidget):
             self.redraw()
 
     # --- drawing -----------------------------------------------------------
-    def picture_key(self) -> Hashable:
-        return (self._version, self._compact(), self.rich_style)
-
-    def get_content_height(self, container: object, viewport: object, width: int) -> int:
-        return len(CURVES) * (1 if self._compact() else 2)
-
     def draw(self, width: int) -> list[Line]:
         compact = self._compact()
         height = 1 if compact else 2
