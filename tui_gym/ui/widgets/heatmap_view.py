@@ -203,8 +203,7 @@ class HeatmapView(StripWidget, can_focus=True):
         return True
 
     def action_move(self, d_row: int, d_col: int) -> None:
-        if self.focus_cell is None or not self.panels:
-            return
+        assert self.focus_cell is not None  # see check_action
         rows, cols = self.panels[0].shape
         row, col = self.focus_cell
         self._focus_on((min(rows - 1, max(0, row + d_row)), min(cols - 1, max(0, col + d_col))))
@@ -259,15 +258,6 @@ class HeatmapView(StripWidget, can_focus=True):
         panel_width = fixed + cols * cell_width
         return _Layout(side_by_side, cell_width, cell_height, row_label_width, panel_width)
 
-    def _legend_lines(self, width: int, indent: int) -> list[str]:
-        """The panels' legends (each once), wrapped to fit beside the indent."""
-        seen: list[str] = []
-        for panel in self.panels:
-            if panel.legend and panel.legend not in seen:
-                seen.append(panel.legend)
-        room = max(12, width - indent)
-        return [line for legend in seen for line in textwrap.wrap(legend, room)]
-
     def get_content_width(self, container: Size, viewport: Size) -> int:
         if not self.panels:
             return len(self._message)
@@ -278,12 +268,7 @@ class HeatmapView(StripWidget, can_focus=True):
     def get_content_height(self, container: Size, viewport: Size, width: int) -> int:
         if not self.panels:
             return max(1, len(self._message) // max(1, width) + 1)
-        layout = self._layout(width)
-        # a panel: its title, its column labels and its cells
-        heights = [2 + p.shape[0] * layout.cell_height for p in self.panels]
-        body = max(heights) if layout.side_by_side else sum(heights) + len(heights) - 1
-        legends = self._legend_lines(width, layout.row_label_width + 1)
-        return body + 1 + len(legends)  # the scale, then the legends
+        return len(self.picture(width))
 
     # --- drawing -----------------------------------------------------------
     def picture_key(self) -> Hashable:
@@ -331,8 +316,9 @@ class HeatmapView(StripWidget, can_focus=True):
                 lines.extend(block)
         lines.append(self._scale_line(scale, layout, width))
         indent = layout.row_label_width + 1
-        for legend in self._legend_lines(width, indent):
-            lines.append(_Line().add(" " * indent + legend, DIM))
+        for legend in dict.fromkeys(panel.legend for panel in self.panels if panel.legend):
+            for text in textwrap.wrap(legend, max(12, width - indent)):  # each legend once
+                lines.append(_Line().add(" " * indent + text, DIM))
         self._placements = placements
         self._cell_geometry = (layout.cell_width, layout.cell_height)
         cropped = [Segment.adjust_line_length(line, width, pad=False) for line in lines]

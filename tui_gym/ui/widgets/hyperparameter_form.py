@@ -149,13 +149,9 @@ class HyperparameterForm(Vertical):
     class Left(Message):
         """Escape in a field: the person wants the keyboard back for the view."""
 
-    def __init__(
-        self, hyperparameters: Settings | None = None, *, id: str | None = None,
-        classes: str | None = None,
-    ) -> None:
-        super().__init__(id=id, classes=classes)
-        self._initial = hyperparameters or QLearning.settings()
-        self._base = self._initial
+    def __init__(self, hyperparameters: Settings | None = None, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self._base = hyperparameters or QLearning.settings()
         self._between: set[str] = set()  # fields marked by a rule between fields
         self._rebuilding = False  # new fields are being built (see `load`)
         self.border_title = "Hyperparameters"

@@ -7,6 +7,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import ClassVar
 
+import numpy as np
 from rich.color import Color as RichColor
 from rich.color import blend_rgb
 from rich.segment import Segment
@@ -50,16 +51,11 @@ def bucket_means(data: Sequence[float], width: int) -> list[float]:
     n = len(data)
     if n == 0 or width <= 0:
         return []
+    edges = np.arange(width + 1) * n // width
     if n < width:
-        return [float(data[i * n // width]) for i in range(width)]
-    sums = [0.0]
-    for value in data:
-        sums.append(sums[-1] + value)
-    out = []
-    for i in range(width):
-        start, end = i * n // width, (i + 1) * n // width
-        out.append((sums[end] - sums[start]) / (end - start))
-    return out
+        return [float(data[i]) for i in edges[:-1]]
+    sums = np.concatenate(([0.0], np.cumsum(data)))
+    return ((sums[edges[1:]] - sums[edges[:-1]]) / np.diff(edges)).tolist()
 
 
 def plotted(data: Sequence[float], width: int, current: float | None = None) -> list[float]:
