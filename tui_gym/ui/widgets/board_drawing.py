@@ -189,6 +189,11 @@ class MapBoard(Board):
         self._shape_key: Hashable = None
         self.layout_drawn: MapLayout | None = None  # where the map was drawn, for clicks
 
+    @property
+    def event_text(self) -> str:
+        """What the last move did, in words ('' when there is nothing to say)."""
+        return self._event[0][0].format(who=self.player_name) if self._event else ""
+
     def start_episode(self) -> None:
         """The next scene begins a new episode; tiles may take a new size."""
         self._fresh = True

@@ -244,9 +244,8 @@ class GridBoard(Board):
         return stack(rows, width, height)
 
     def _steady_layout(self, n: int, width: int, height: int) -> GridLayout:
-        """The cell shape stays while the space around the board changes (status lines
-        wrapping, a scoreboard row coming): it is chosen afresh for a new grid size or
-        terminal size, and otherwise only gives way when it no longer fits."""
+        """The cell shape kept while it fits (lines around the board come and go), chosen
+        afresh for a new grid size or terminal size."""
         kept = self.layout_drawn
         if kept is not None and self._layout_n == n and fits(kept, width, height):
             return place_layout(kept, width, height)

@@ -52,13 +52,6 @@ def _hex(rgb: RGB) -> str:
     return "#{:02x}{:02x}{:02x}".format(*rgb)
 
 
-def _ink(rgb: RGB) -> str:
-    """Black or white, whichever reads better on `rgb`."""
-    r, g, b = rgb
-    luminance = (0.299 * r + 0.587 * g + 0.114 * b) / 255
-    return "#101010" if luminance > 0.55 else "#f0f0f0"
-
-
 @dataclass(frozen=True)
 class ColourScale:
     """Maps values onto colours: diverging around 0 when the range crosses it."""
@@ -391,7 +384,9 @@ def _cell_style(diverging: bool, step: int, marked: bool) -> Style:
     if step < 0:
         return BLANK_CELL
     rgb = _interpolate(DIVERGING if diverging else SEQUENTIAL, step / (COLOUR_STEPS - 1))
-    return Style(bgcolor=_hex(rgb), color=_ink(rgb), bold=marked, underline=marked)
+    r, g, b = rgb  # the ink black or white, whichever reads better on the colour
+    ink = "#101010" if (0.299 * r + 0.587 * g + 0.114 * b) / 255 > 0.55 else "#f0f0f0"
+    return Style(bgcolor=_hex(rgb), color=ink, bold=marked, underline=marked)
 
 
 class _Line(list):

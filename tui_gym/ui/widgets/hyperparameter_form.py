@@ -170,28 +170,22 @@ class HyperparameterForm(Vertical):
 
     def compose(self) -> ComposeResult:
         for field in self.fields:
-            yield from self._field_widgets(field, getattr(self._base, field.name))
-
-    def _field_widgets(self, field: Field, value: object) -> list[Widget]:
-        label = Label(field.title or field.name, classes="hp-label")
-        box: Widget
-        if isinstance(field, Param) and field.kind is not bool:  # typed in: a number
-            box = TextField(
-                _text(field, value), id=f"hp-{field.name}", compact=True,
-                validators=[FieldValidator(field)], select_on_focus=True,
-            )
-            hint = Label(range_hint(field), classes="hp-hint")
-        else:  # picked from a few words
-            words = ("true", "false") if isinstance(field, Param) else field.choices
-            box = Select(
-                [(word, word) for word in words], value=_text(field, value),
-                allow_blank=False, compact=True, id=f"hp-{field.name}",
-            )
-            hint = Label("", classes="hp-hint")
-        box.tooltip = f"{field.help}: {field.expected()}"
-        row = Horizontal(label, box, hint, classes="hp-row", id=f"hp-row-{field.name}")
-        error = Static("", id=f"hp-error-{field.name}", classes="hp-error", markup=False)
-        return [row, error]
+            text = _text(field, getattr(self._base, field.name))
+            box: Widget
+            if isinstance(field, Param) and field.kind is not bool:  # typed in: a number
+                box = TextField(text, id=f"hp-{field.name}", compact=True,
+                                validators=[FieldValidator(field)], select_on_focus=True)
+                hint = range_hint(field)
+            else:  # picked from a few words
+                words = ("true", "false") if isinstance(field, Param) else field.choices
+                box = Select([(word, word) for word in words], value=text, allow_blank=False,
+                             compact=True, id=f"hp-{field.name}")
+                hint = ""
+            box.tooltip = f"{field.help}: {field.expected()}"
+            yield Horizontal(Label(field.title or field.name, classes="hp-label"), box,
+                             Label(hint, classes="hp-hint"), classes="hp-row",
+                             id=f"hp-row-{field.name}")
+            yield Static("", id=f"hp-error-{field.name}", classes="hp-error", markup=False)
 
     # --- the fields --------------------------------------------------------
     def input(self, name: str) -> Input:

@@ -6,7 +6,7 @@ from typing import ClassVar
 
 from rich.segment import Segment
 
-from tui_gym.ui.widgets.numbers import compact_count
+from tui_gym.ui.widgets.numbers import compact_count, fit
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget, component_classes
 
 DONE, HALF = "━", "╸"
@@ -44,9 +44,7 @@ class ProgressLine(StripWidget):
         forms = [f"{full}{eta}", f"{short}{eta}", short]  # the time left goes last
         if not self._compact():
             forms.insert(0, f"{full} episodes{eta}")
-        if width is None:
-            return forms[0]
-        return next((words for words in forms if len(words) <= width), forms[-1])
+        return forms[0] if width is None else fit(forms, width)
 
     def show(self, done: int, total: int, eta: str = "") -> None:
         """`done` of `total` episodes, and the time left while training runs ("" if not)."""

@@ -198,12 +198,8 @@ def _style(name: str) -> Style:
 
 
 def _grid(rows: list[list[Cell]], width: int, per_row: int = 0) -> list[Line]:
-    """Rows of (name, value) pairs: names left-aligned, values right-aligned, the
-    value columns sharing the width left over.
-
-    `per_row` > 0 regroups the pairs that many to a row. Values never get cut:
-    when the fullest forms do not fit, the widest value column takes shorter
-    forms, step by step, then the pairs go fewer to a row."""
+    """Rows of (name, value) pairs (`per_row` > 0: regrouped that many to a row, fewer when
+    they do not fit), names left-aligned, values right-aligned in shorter forms, never cut."""
     paired = [list(zip(row[::2], row[1::2], strict=True)) for row in rows]
     pairs = [pair for row in paired for pair in row]
     if not pairs:

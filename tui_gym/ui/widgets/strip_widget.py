@@ -79,26 +79,20 @@ class StripWidget(Widget):
         """The picture changed: draw it again on the next frame (only its changed lines,
         when the picture shown is there to compare with and `layout` is not asked)."""
         self._version += 1
-        shown = self._strips_lines
-        if layout or shown is None or not self._shown_as_now():
+        shown, width = self._strips_lines, self.content_size.width
+        # Out of sight or shown at another width, it draws when Textual asks it to.
+        if (layout or shown is None or not self.is_mounted
+                or self._strips_of[2] != width or not in_sight(self)):  # type: ignore[index]
             self.refresh(layout=layout)
             return
-        lines = self.picture(self._strips_of[2])  # type: ignore[index]
+        lines = self.picture(width)
         if len(lines) != len(shown):
             self.refresh()
             return
         changed = [y for y, (old, new) in enumerate(zip(shown, lines, strict=True))
                    if old != new]
         if changed:
-            width = self.content_size.width
             self.refresh(*(Region(0, y, width, 1) for y in changed))
-
-    def _shown_as_now(self) -> bool:
-        """Whether the widget is on screen, in sight, showing a picture as wide as it is now
-        (one out of sight draws when it comes into sight, as Textual asks it to)."""
-        shown = self._strips_of
-        return (shown is not None and self.is_mounted and shown[2] == self.content_size.width
-                and in_sight(self))
 
     def picture(self, width: int) -> list[Line]:
         """The lines for `width` (drawn now unless kept from before)."""

@@ -126,11 +126,6 @@ class TaxiBoard(MapBoard):
         """Whether the passenger is in the cab."""
         return self.passenger is not None and self.passenger >= len(self.stands) > 0
 
-    @property
-    def event_text(self) -> str:
-        """What the last action did, in words ('' when there is nothing to say)."""
-        return self._event[0][0] if self._event else ""
-
     # --- the scene -----------------------------------------------------------------
     def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
         previous = (None, None) if self._fresh else (self.taxi, self.destination)

@@ -225,11 +225,6 @@ class TileBoard(MapBoard):
     def button_suggested(self, action: str) -> bool:
         return self.episode_over
 
-    @property
-    def event_text(self) -> str:
-        """What the last move did, in words ('' when there is nothing to say)."""
-        return self._event[0][0].format(who=self.player_name) if self._event else ""
-
     # --- the scene ---------------------------------------------------------------
     def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
         drawn = (self.cells, self.theme)

@@ -77,10 +77,8 @@ def sparkline_rows(
     *,
     flat: bool = False,
 ) -> list[Line]:
-    """A sparkline of `data`, `width` x `height` cells, as lines of segments (top first).
-
-    `data` is drawn as it is when it has `width` values (see `plotted`), else
-    bucketed first; `flat` draws it as a level line (a range too small to show)."""
+    """A sparkline of `data` (bucketed unless it has `width` values) in `width` x `height`
+    cells, as lines of segments, top first; `flat`: a level line (a range too small to show)."""
     if not data:
         blank = [[Segment(" " * width)] for _ in range(height - 1)]
         return [*blank, [Segment("▁" * width, Style(color=low))]]
