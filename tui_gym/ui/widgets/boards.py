@@ -91,20 +91,14 @@ class Board(Widget):
     """
 
     STYLE: ClassVar[str] = ""  # the prefix of the board's component classes
-
+    # Buttons under the board: (label markup, action string run on the board).
     BUTTONS: ClassVar[tuple[tuple[str, str], ...]] = ()
-    """Buttons under the board: (label markup, action string run on the board)."""
-
-    RESTART_ANYTIME: ClassVar[bool] = True
-    """May a new episode start before the current one ends?"""
-
+    RESTART_ANYTIME: ClassVar[bool] = True  # may a new episode start before this one ends?
     over_hint = "The episode is over: start a new one."  # what to do once it is over
     unfinished_hint = "Finish this episode first."  # why not yet (when not RESTART_ANYTIME)
-
+    # A drawing keeps the last one's cell shape while it fits (no jumps as the space around
+    # changes); a replay draws each position afresh, to look the same however it is reached.
     KEEP_SHAPE: ClassVar[bool] = True
-    """Does a drawing keep the cell shape of the last while it fits (no jumps as the
-    space around changes)? A replay draws each position afresh instead, so that it
-    looks the same however it is reached."""
 
     @dataclass
     class Act(Message):

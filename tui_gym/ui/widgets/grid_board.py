@@ -81,10 +81,9 @@ CELL_SHAPES = (
 
 def choose_layout(n: int, width: int, height: int) -> GridLayout:
     """The largest drawing of an n x n grid that fits (the smallest one if none does)."""
-    layouts = (GridLayout(n, cell_w, cell_h, lines, axes) for cell_w, cell_h, lines in CELL_SHAPES
-               for axes in (True, False) if not (axes and cell_w < len(str(n - 1))))
-    layout = next((layout for layout in layouts if fits(layout, width, height)),
-                  GridLayout(n, 1, 1, False, False))
+    layouts = [GridLayout(n, cell_w, cell_h, lines, axes) for cell_w, cell_h, lines in CELL_SHAPES
+               for axes in (True, False) if not (axes and cell_w < len(str(n - 1)))]
+    layout = next((layout for layout in layouts if fits(layout, width, height)), layouts[-1])
     return place_layout(layout, width, height)
 
 

@@ -152,10 +152,10 @@ class HeatmapView(StripWidget, can_focus=True):
         def control(self) -> HeatmapView:
             return self.view
 
+    # (row, col) of the focus cell (None: the game has none); (panel, row, col) of the state
+    # the step-by-step panel explains, or None.
     focus_cell: reactive[tuple[int, int] | None] = reactive(None, init=False)
-    """(row, col) of the focus cell, or None when the game has no focus concept."""
     step_cell: reactive[tuple[int, int, int] | None] = reactive(None, init=False)
-    """(panel, row, col) of the state the step-by-step panel explains, or None."""
 
     def __init__(self, panels: Sequence[Heatmap] = (), **kwargs: Any) -> None:
         super().__init__(**kwargs)

@@ -49,8 +49,7 @@ class StripWidget(Widget):
     """A widget drawn as cached lines of segments: a subclass says what its picture depends
     on (`picture_key()`) and draws it (`draw(width)`); `redraw()` asks for it again."""
 
-    PICTURES: ClassVar[int] = 1
-    """How many (key, width) pictures to keep."""
+    PICTURES: ClassVar[int] = 1  # how many (key, width) pictures to keep
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)

@@ -51,10 +51,9 @@ TAXI_SIZES = (
 def choose_shape(rows: int, cols: int, width: int, height: int) -> MapShape:
     """The largest drawing of the city that fits with its wall all round, else the largest
     without it (the smallest one if none does): the city's edge is a wall too."""
-    shapes = (MapShape(rows, cols, cell_w, cell_h, gap=1, frame=frame)
-              for frame in (True, False) for cell_w, cell_h in TAXI_SIZES)
-    return next((shape for shape in shapes if shape_fits(shape, width, height)),
-                MapShape(rows, cols, 3, 1, gap=1))
+    shapes = [MapShape(rows, cols, cell_w, cell_h, gap=1, frame=frame)
+              for frame in (True, False) for cell_w, cell_h in TAXI_SIZES]
+    return next((shape for shape in shapes if shape_fits(shape, width, height)), shapes[-1])
 
 
 class TaxiBoard(MapBoard):

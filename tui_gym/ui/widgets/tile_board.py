@@ -87,8 +87,7 @@ def choose_shape(rows: int, cols: int, width: int, height: int) -> MapShape:
           for axes in (True, False) if not (axes and cell_w < len(str(cols - 1)))),
         *(MapShape(rows, cols, cell_w, 1, half=True) for cell_w in HALF_WIDTHS),
     ]
-    return next((shape for shape in shapes if shape_fits(shape, width, height)),
-                MapShape(rows, cols, 1, 1, half=True))
+    return next((shape for shape in shapes if shape_fits(shape, width, height)), shapes[-1])
 
 
 def cell_table(value: Any) -> dict[Cell, Any]:
@@ -99,20 +98,9 @@ def cell_table(value: Any) -> dict[Cell, Any]:
 
 
 def map_rows(scene: Mapping[str, Any]) -> list[str]:
-    """The scene's map as equal-length strings (rows of characters, or of bytes, read alike)."""
-    cells = scene.get("cells")
-    if cells is None:
-        rows, cols = int(scene.get("rows", 0)), int(scene.get("cols", 0))
-        return [FLOOR * cols for _ in range(rows)] if rows > 0 and cols > 0 else []
-    rows_text = []
-    for row in cells:
-        if isinstance(row, bytes):
-            row = row.decode()
-        elif not isinstance(row, str):
-            row = "".join(c.decode() if isinstance(c, bytes) else str(c) for c in row)
-        rows_text.append(row)
-    cols = max((len(row) for row in rows_text), default=0)
-    return [row.ljust(cols, FLOOR) for row in rows_text] if cols else []
+    """The scene's map, one string a row (equal rows, as games and recordings give them)."""
+    rows = [str(row) for row in scene.get("cells") or ()]
+    return rows if any(rows) else []
 
 
 class TileBoard(MapBoard):
