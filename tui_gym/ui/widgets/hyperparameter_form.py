@@ -16,19 +16,9 @@ from textual.widget import Widget
 from textual.widgets import Input, Label, Select, Static
 
 from tui_gym.algorithms import Field, QLearning, Settings
-from tui_gym.core.params import Param, ParamError, digits_note, read_number
+from tui_gym.core.params import Param, ParamError, digits_note, read_number, typed_text
 from tui_gym.ui.widgets.numbers import compact_count
 from tui_gym.ui.widgets.text_field import TextField
-
-
-def _text(field: Field, value: Any) -> str:
-    """A field's value as a person would type it."""
-    if not isinstance(field, Param):
-        return str(value)
-    if field.kind is bool:
-        return "true" if value else "false"
-    return str(int(value)) if field.kind is int else f"{value:g}"
-
 
 _SUPERSCRIPTS = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
 
@@ -170,7 +160,7 @@ class HyperparameterForm(Vertical):
 
     def compose(self) -> ComposeResult:
         for field in self.fields:
-            text = _text(field, getattr(self._base, field.name))
+            text = typed_text(getattr(self._base, field.name))
             box: Widget
             if isinstance(field, Param) and field.kind is not bool:  # typed in: a number
                 box = TextField(text, id=f"hp-{field.name}", compact=True,
@@ -293,7 +283,7 @@ class HyperparameterForm(Vertical):
                 self.call_later(self._rebuild)
             return
         for field in self.fields:
-            text = _text(field, getattr(hyperparameters, field.name))
+            text = typed_text(getattr(hyperparameters, field.name))
             box = self.control(field.name)
             if box.value != text:
                 box.value = text

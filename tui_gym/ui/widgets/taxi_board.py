@@ -253,10 +253,7 @@ class TaxiBoard(MapBoard):
         cab_text, cab_style = self._cab(w)
         chip_w = len(cab_text) + (2 if w >= len(cab_text) + 4 else 0)
         chip_x = x0 + (w - chip_w) // 2
-        waiting = (
-            stand is not None and self.passenger == stand and not self.aboard
-        )  # includes a passenger just delivered
-        if waiting:
+        if stand is not None and self.passenger == stand and not self.aboard:  # or just delivered
             person = on_tile(self._style("passenger"), tile)
             x = chip_x - 1 if cab_here else x0 + w // 2
             grid.put(max(x0, x), y0 + mid, PASSENGER, person)

@@ -177,7 +177,6 @@ class TrainingCharts(StripWidget):
         self._data.clear()
         self._values.clear()
         self._current.clear()
-        self.border_title = "Learning curves"
         self.border_subtitle = ""
         self.redraw()
 
