@@ -1,5 +1,6 @@
 """`StripWidget`: a widget that keeps its drawing (lines of segments, per key and width)
-between frames and repaints only the lines that changed; `segments_of` and friends."""
+between frames and repaints only the lines that changed (a `render()` widget is drawn
+afresh on every refresh, e.g. each focus change); `segments_of` and friends."""
 
 from __future__ import annotations
 
