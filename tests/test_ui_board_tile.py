@@ -18,8 +18,8 @@ from tests.board_support import (
     style_at,
     text_of,
 )
-from tui_gym.ui.widgets.board_drawing import MapLayout
-from tui_gym.ui.widgets.tile_board import TileBoard, TileShape, choose_shape
+from tui_gym.ui.widgets.board_drawing import MapLayout, MapShape
+from tui_gym.ui.widgets.tile_board import TileBoard, choose_shape
 
 LAKE4 = ["SFFF", "FHFH", "FFFH", "HFFG"]
 LAKE8 = [
@@ -132,10 +132,10 @@ def test_the_largest_drawing_that_fits_is_chosen() -> None:
             width, height = CANVAS[size]
             shape = choose_shape(len(cells), len(cells[0]), width, height)
             assert shape.width <= width and shape.height + 1 <= height, (len(cells), size)
-            bigger = TileShape(shape.rows, shape.cols, shape.cell_w + 2, shape.cell_h + 1)
+            bigger = MapShape(shape.rows, shape.cols, shape.cell_w + 2, shape.cell_h + 1)
             assert bigger.width > width or bigger.height + 1 > height
-    assert choose_shape(4, 4, *CANVAS[PLAY_BIG]) == TileShape(4, 4, 11, 5, axes=True)
-    assert choose_shape(12, 12, *CANVAS[PLAY_BIG]) == TileShape(12, 12, 3, 1, axes=True)
+    assert choose_shape(4, 4, *CANVAS[PLAY_BIG]) == MapShape(4, 4, 11, 5, axes=True)
+    assert choose_shape(12, 12, *CANVAS[PLAY_BIG]) == MapShape(12, 12, 3, 1, axes=True)
     assert not choose_shape(8, 8, *CANVAS[PLAY_COMPACT]).half  # glyphs at 80x24
     assert choose_shape(12, 12, *CANVAS[PLAY_COMPACT]).half  # only colours fit
 

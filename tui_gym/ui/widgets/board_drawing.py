@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar, Protocol, TypeVar
+from typing import Any, ClassVar, TypeVar
 
 from rich.style import Style
 from rich.text import Text
@@ -101,33 +101,50 @@ def legend(items: Sequence[tuple[str, Style, str]], label: Style, width: int) ->
     return None
 
 
-class Shape(Protocol):
-    """How big a map is drawn, in characters, and where its cells sit in the drawing."""
+@dataclass(frozen=True)
+class MapShape:
+    """How big a map is drawn: `cell_w` x `cell_h` characters a tile; `half`: two map rows
+    share a line (colour only); `axes`: row numbers left, column numbers below; `gap`:
+    columns between tiles (for walls); `frame`: a wall all round."""
+
+    rows: int
+    cols: int
+    cell_w: int
+    cell_h: int
+    half: bool = False
+    axes: bool = False
+    gap: int = 0
+    frame: bool = False
 
     @property
-    def rows(self) -> int: ...
+    def label_w(self) -> int:
+        return len(str(self.rows - 1)) + 1 if self.axes else 0
 
     @property
-    def cols(self) -> int: ...
+    def edge(self) -> int:
+        return 1 if self.frame else 0
 
     @property
-    def cell_w(self) -> int: ...
+    def map_h(self) -> int:
+        return (self.rows + 1) // 2 if self.half else self.rows * self.cell_h
 
     @property
-    def cell_h(self) -> int: ...
+    def width(self) -> int:
+        return self.label_w + self.cols * (self.cell_w + self.gap) - self.gap + 2 * self.edge
 
     @property
-    def width(self) -> int: ...
+    def height(self) -> int:
+        """Lines of the map, its frame and its column numbers (the caption comes under)."""
+        return self.map_h + (1 if self.axes else 0) + 2 * self.edge
 
-    @property
-    def height(self) -> int: ...
+    def x_of(self, col: int) -> int:
+        return self.label_w + self.edge + col * (self.cell_w + self.gap)
 
-    def x_of(self, col: int) -> int: ...
+    def y_of(self, row: int) -> int:
+        return self.edge + (row // 2 if self.half else row * self.cell_h)
 
-    def y_of(self, row: int) -> int: ...
 
-
-def shape_fits(shape: Shape, width: int, height: int) -> bool:
+def shape_fits(shape: MapShape, width: int, height: int) -> bool:
     """Whether a map drawn in `shape` fits `width` x `height`, with its caption."""
     return shape.width <= width and shape.height + CAPTION_LINES <= height
 
@@ -136,7 +153,7 @@ def shape_fits(shape: Shape, width: int, height: int) -> bool:
 class MapLayout:
     """Where a drawn map sits in the canvas, to map clicks back to cells."""
 
-    shape: Shape
+    shape: MapShape
     left: int  # canvas column of the drawing's left edge
     top: int  # canvas line of the drawing's top edge
 
@@ -168,9 +185,14 @@ class MapBoard(Board):
         super().__init__(**kwargs)
         self._event: Any = None  # what the last move did, in words
         self._fresh = True  # the next scene starts an episode
-        self._shape: Any = None  # the shape kept, and the (map size, width) it is for
+        self._shape: MapShape | None = None  # the shape kept, and the (map size, width) it is for
         self._shape_key: Hashable = None
         self.layout_drawn: MapLayout | None = None  # where the map was drawn, for clicks
+
+    @property
+    def event_text(self) -> str:
+        """What the last move did, in words ('' when there is nothing to say)."""
+        return self._event[0][0].format(who=self.player_name) if self._event else ""
 
     def start_episode(self) -> None:
         """The next scene begins a new episode; tiles may take a new size."""
@@ -182,11 +204,11 @@ class MapBoard(Board):
         """(rows, cols) of the map, or None before there is one."""
         return None
 
-    def choose_shape(self, rows: int, cols: int, width: int, height: int) -> Any:
+    def choose_shape(self, rows: int, cols: int, width: int, height: int) -> MapShape:
         """The largest drawing of the map that fits `width` x `height`."""
         raise NotImplementedError
 
-    def draw_map(self, shape: Any, width: int, spare: int) -> list[Text]:
+    def draw_map(self, shape: MapShape, width: int, spare: int) -> list[Text]:
         """The map's lines in `shape` (`spare`: lines left over once the caption is in)."""
         raise NotImplementedError
 
@@ -265,14 +287,7 @@ def step_toward(origin: Cell, target: Cell) -> Cell:
     return (1 if d_row > 0 else -1), 0
 
 
-def reward_text(value: float) -> str:
-    """A reward for people: '+5', '−100' (a true minus sign), '0', '+0.5'."""
-    if value == 0:
-        return "0"
-    return ("+" if value > 0 else "\u2212") + f"{abs(value):.4g}"
-
-
 __all__ = [
-    "CAPTION_LINES", "Cell", "CharGrid", "MapBoard", "MapLayout", "cell_of", "legend", "listed",
-    "on_tile", "read_as", "reward_text", "shape_fits", "stack", "step_toward",
+    "CAPTION_LINES", "Cell", "CharGrid", "MapBoard", "MapLayout", "MapShape", "cell_of", "legend",
+    "listed", "on_tile", "read_as", "shape_fits", "stack", "step_toward",
 ]

@@ -1,8 +1,4 @@
-"""`board_class`: the board class for each kind of board a game asks for (`Game.board`).
-
-Each board's module is imported the first time its kind is asked for: a run of
-the app draws one or two kinds, and the first frame waits for none of the others.
-"""
+"""`board_class`: the board class for each kind of board a game asks for (`Game.board`)."""
 
 from __future__ import annotations
 
@@ -12,7 +8,7 @@ from tui_gym.ui.widgets.boards import Board
 
 __all__ = ["KINDS", "board_class"]
 
-# kind -> (module under tui_gym.ui.widgets, class name)
+# kind -> (module under tui_gym.ui.widgets, class name), imported when first asked for
 KINDS: dict[str, tuple[str, str]] = {
     "cards": ("cards_board", "CardsBoard"), "dial": ("dial_board", "DialBoard"),
     "grid": ("grid_board", "GridBoard"), "tile": ("tile_board", "TileBoard"),

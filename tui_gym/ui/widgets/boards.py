@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Hashable, Mapping
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from rich.style import Style
@@ -90,24 +91,20 @@ class Board(Widget):
     """
 
     STYLE: ClassVar[str] = ""  # the prefix of the board's component classes
-
+    # Buttons under the board: (label markup, action string run on the board).
     BUTTONS: ClassVar[tuple[tuple[str, str], ...]] = ()
-    """Buttons under the board: (label markup, action string run on the board)."""
-
-    RESTART_ANYTIME: ClassVar[bool] = True
-    """May a new episode start before the current one ends?"""
-
+    RESTART_ANYTIME: ClassVar[bool] = True  # may a new episode start before this one ends?
+    over_hint = "The episode is over: start a new one."  # what to do once it is over
+    unfinished_hint = "Finish this episode first."  # why not yet (when not RESTART_ANYTIME)
+    # A drawing keeps the last one's cell shape while it fits (no jumps as the space around
+    # changes); a replay draws each position afresh, to look the same however it is reached.
     KEEP_SHAPE: ClassVar[bool] = True
-    """Does a drawing keep the cell shape of the last while it fits (no jumps as the
-    space around changes)? A replay draws each position afresh instead, so that it
-    looks the same however it is reached."""
 
+    @dataclass
     class Act(Message):
         """A person asked for a move, by the game's action name."""
 
-        def __init__(self, action: str) -> None:
-            super().__init__()
-            self.action = action
+        action: str
 
     class NewEpisode(Message):
         """A person asked for a new episode (deal, reset)."""
@@ -115,15 +112,8 @@ class Board(Widget):
     class TakeOver(Message):
         """A person clicked or pressed a move while the agent plays: hand control back."""
 
-    def __init__(
-        self,
-        *,
-        interactive: bool = True,
-        name: str | None = None,
-        id: str | None = None,  # noqa: A002 - Textual's own name for it
-        classes: str | None = None,
-    ) -> None:
-        super().__init__(name=name, id=id, classes=classes)
+    def __init__(self, *, interactive: bool = True, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
         self.interactive = interactive
         self.scene: dict[str, Any] = {}
         self.reveal = True
@@ -191,16 +181,6 @@ class Board(Widget):
     def prompt(self) -> str:
         """What a person can do now, in a few words."""
         return ""
-
-    @property
-    def over_hint(self) -> str:
-        """What to do once the episode is over."""
-        return "The episode is over: start a new one."
-
-    @property
-    def unfinished_hint(self) -> str:
-        """Why a new episode cannot start yet (only when not RESTART_ANYTIME)."""
-        return "Finish this episode first."
 
     # --- drawing (subclasses) ----------------------------------------------
     def _style(self, name: str) -> Style:

@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import ClassVar
+from typing import ClassVar, NamedTuple
 
 from rich.style import Style
 from rich.text import Text
@@ -24,23 +23,14 @@ def card_label(card: int) -> str:
     return "A" if card == 1 else str(card)
 
 
-def suit_for(hand: int, position: int, card: int) -> str:
-    """A decorative suit, fixed by the hand (0 dealer, 1 player), place and card."""
-    return SUITS[(3 * position + 2 * card + hand) % len(SUITS)]  # neighbours always differ
-
-
-@dataclass(frozen=True)
-class CardSize:
+class CardSize(NamedTuple):
     """How big a card is drawn: `width` x `height` cells (height 1: a chip of text)."""
 
     width: int
     height: int
 
 
-LARGE = CardSize(7, 5)
-MEDIUM = CardSize(5, 3)
-MINI = CardSize(4, 1)
-SIZES = (LARGE, MEDIUM, MINI)
+SIZES = (CardSize(7, 5), CardSize(5, 3), CardSize(4, 1))  # large, medium, mini
 
 
 class CardsBoard(Board):
@@ -110,7 +100,8 @@ class CardsBoard(Board):
         """The lines of one card, each `size.width` cells wide."""
         inner = size.width - 2
         if face_up:
-            rank, suit = card_label(card), suit_for(hand, position, card)
+            # A decorative suit, fixed by the hand, place and card: neighbours always differ.
+            rank, suit = card_label(card), SUITS[(3 * position + 2 * card + hand) % len(SUITS)]
             frame, ink = self._style("edge"), self._style("red" if suit in RED_SUITS else "face")
             if size.height == 1:
                 return [Text(f"{rank:>2}{suit} ", ink)]

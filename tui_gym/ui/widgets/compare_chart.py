@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Hashable, Sequence
+from collections.abc import Sequence
 from typing import ClassVar
 
 import numpy as np
@@ -26,7 +26,8 @@ PALETTE: tuple[str, ...] = (
 EARLY_SHARE = 0.1
 BAND_TINT = 0.28  # how much of a curve's colour its band mixes into the background
 LABEL_WIDTH = 8  # the y labels' column, with a space after it
-MIN_PLOT_HEIGHT = 3
+PLOT_HEIGHT, COMPACT_PLOT_HEIGHT = 12, 7  # lines of the plot
+EMPTY = "Tick runs in the list to draw their return curves here."
 BRAILLE_BASE = 0x2800
 # The bit of each dot of a braille cell, by (column, row) within the cell.
 DOT_BITS = ((0x01, 0x02, 0x04, 0x40), (0x08, 0x10, 0x20, 0x80))
@@ -151,49 +152,32 @@ class CompareChart(StripWidget):
     Screen.compact CompareChart { border: none; padding: 0; }
     """
 
-    PLOT_HEIGHT = 12
-    COMPACT_PLOT_HEIGHT = 7
-
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
         super().__init__(id=id, classes=classes)
         self.series: tuple[Series, ...] = ()
         self.colours: tuple[int, ...] = ()  # each shown curve's place in the palette
-        self.empty_text = "Tick runs in the list to draw their return curves here."
         self.border_title = "Return per episode"
 
     def show(self, series: Sequence[Series], colours: Sequence[int] | None = None) -> None:
         """Draw these curves, each in its palette colour (by default, in order)."""
         series = tuple(series)
         colours = tuple(colours) if colours is not None else tuple(range(len(series)))
-        if len(colours) != len(series):
-            raise ValueError("one colour per curve")
         if series != self.series or colours != self.colours:
             self.series, self.colours = series, colours
             self.redraw(layout=True)
-
-    def picture_key(self) -> Hashable:
-        return (self._version, self._compact(), self.rich_style)
-
-    def plot_height(self) -> int:
-        return self.COMPACT_PLOT_HEIGHT if self._compact() else self.PLOT_HEIGHT
-
-    def get_content_height(self, container: object, viewport: object, width: int) -> int:
-        if not self.series:
-            return 1
-        return self.plot_height() + 1 + len(self.series)
 
     def draw(self, width: int) -> list[Line]:
         styles = self.component_styles()
         axis = styles["chart--axis"]
         if not self.series:
-            return [[Segment(self.empty_text[:width], styles["chart--empty"])]]
-        height = max(MIN_PLOT_HEIGHT, self.plot_height())
+            return [[Segment(EMPTY[:width], styles["chart--empty"])]]
+        height = COMPACT_PLOT_HEIGHT if self._compact() else PLOT_HEIGHT
         plot_width = max(1, width - LABEL_WIDTH)
         bits, ink, band = plot_cells(self.series, plot_width, height)
         low, high = value_range(self.series)
         background = self.rich_style.bgcolor or RichColor.parse("#000000")
-        line_styles = [Style(color=colour(c)) for c in self.colours]
         colours = [colour(c) for c in self.colours]
+        line_styles = [Style(color=c) for c in colours]
         tints: dict[int, RichColor] = {}
 
         def tint(mask: int) -> RichColor:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Sequence
+from collections.abc import Sequence
 from typing import ClassVar
 
 from rich.segment import Segment
@@ -96,12 +96,6 @@ class FiguresTable(StripWidget):
         if rows != self.rows or colours != self._colours:
             self.rows, self._colours = rows, colours
             self.redraw(layout=True)
-
-    def picture_key(self) -> Hashable:
-        return (self._version, self.rich_style)
-
-    def get_content_height(self, container: object, viewport: object, width: int) -> int:
-        return len(self.rows) + 1 if self.rows else 0
 
     def draw(self, width: int) -> list[Line]:
         if not self.rows:

@@ -29,7 +29,6 @@ AGENT, TARGET, HOME = "●", "◎", "◉"  # HOME: the agent stands on the targe
 WALL = "█"
 
 
-
 @dataclass(frozen=True)
 class GridLayout:
     """Where the drawn grid sits in the canvas, to map clicks back to cells."""
@@ -82,10 +81,9 @@ CELL_SHAPES = (
 
 def choose_layout(n: int, width: int, height: int) -> GridLayout:
     """The largest drawing of an n x n grid that fits (the smallest one if none does)."""
-    layouts = (GridLayout(n, cell_w, cell_h, lines, axes) for cell_w, cell_h, lines in CELL_SHAPES
-               for axes in (True, False) if not (axes and cell_w < len(str(n - 1))))
-    layout = next((layout for layout in layouts if fits(layout, width, height)),
-                  GridLayout(n, 1, 1, False, False))
+    layouts = [GridLayout(n, cell_w, cell_h, lines, axes) for cell_w, cell_h, lines in CELL_SHAPES
+               for axes in (True, False) if not (axes and cell_w < len(str(n - 1)))]
+    layout = next((layout for layout in layouts if fits(layout, width, height)), layouts[-1])
     return place_layout(layout, width, height)
 
 
@@ -245,9 +243,8 @@ class GridBoard(Board):
         return stack(rows, width, height)
 
     def _steady_layout(self, n: int, width: int, height: int) -> GridLayout:
-        """The cell shape stays while the space around the board changes (status lines
-        wrapping, a scoreboard row coming): it is chosen afresh for a new grid size or
-        terminal size, and otherwise only gives way when it no longer fits."""
+        """The cell shape kept while it fits (lines around the board come and go), chosen
+        afresh for a new grid size or terminal size."""
         kept = self.layout_drawn
         if kept is not None and self._layout_n == n and fits(kept, width, height):
             return place_layout(kept, width, height)

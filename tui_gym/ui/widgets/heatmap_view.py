@@ -1,17 +1,5 @@
-"""A heatmap of Q-values: panels of coloured cells with labels, marks and a legend.
-
-`HeatmapView` draws a list of `tui_gym.core.heatmap.Heatmap` panels side by
-side (stacked when the widget is too narrow). Every cell's background comes
-from one colour scale shared by all panels (diverging around zero when the
-values have both signs, sequential otherwise; NaN cells stay blank), the
-cell's label is centred in it and marked cells carry a `*`. A legend line
-shows the scale with its range.
-
-When the view has a *focus cell* (e.g. a target, a slice), the arrow keys
-or hjkl move it and a click on a cell sets it; either way the view posts
-`HeatmapView.FocusChanged` with the (row, col) of the new cell and leaves
-it to the owner to say what that cell means (it asks the game's layout).
-"""
+"""`HeatmapView`: Q-table heatmap panels on one colour scale, with a legend and a focus
+cell that the arrow keys or a click move (posting `FocusChanged`)."""
 
 from __future__ import annotations
 
@@ -19,7 +7,7 @@ import textwrap
 from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 from rich.segment import Segment
@@ -62,13 +50,6 @@ def _interpolate(stops: Sequence[RGB], t: float) -> RGB:
 
 def _hex(rgb: RGB) -> str:
     return "#{:02x}{:02x}{:02x}".format(*rgb)
-
-
-def _ink(rgb: RGB) -> str:
-    """Black or white, whichever reads better on `rgb`."""
-    r, g, b = rgb
-    luminance = (0.299 * r + 0.587 * g + 0.114 * b) / 255
-    return "#101010" if luminance > 0.55 else "#f0f0f0"
 
 
 @dataclass(frozen=True)
@@ -160,32 +141,24 @@ class HeatmapView(StripWidget, can_focus=True):
         Binding("right,l", "move(0, 1)", "Target right", show=False),
     ]
 
+    @dataclass
     class FocusChanged(Message):
         """The focus cell was moved (keys) or picked (click)."""
 
-        def __init__(self, view: HeatmapView, cell: tuple[int, int]) -> None:
-            super().__init__()
-            self.view = view
-            self.cell = cell  # (row, col) in the first panel
+        view: HeatmapView
+        cell: tuple[int, int]  # (row, col) in the first panel
 
         @property
         def control(self) -> HeatmapView:
             return self.view
 
+    # (row, col) of the focus cell (None: the game has none); (panel, row, col) of the state
+    # the step-by-step panel explains, or None.
     focus_cell: reactive[tuple[int, int] | None] = reactive(None, init=False)
-    """(row, col) of the focus cell, or None when the game has no focus concept."""
     step_cell: reactive[tuple[int, int, int] | None] = reactive(None, init=False)
-    """(panel, row, col) of the state the step-by-step panel explains, or None."""
 
-    def __init__(
-        self,
-        panels: Sequence[Heatmap] = (),
-        *,
-        name: str | None = None,
-        id: str | None = None,
-        classes: str | None = None,
-    ) -> None:
-        super().__init__(name=name, id=id, classes=classes)
+    def __init__(self, panels: Sequence[Heatmap] = (), **kwargs: Any) -> None:
+        super().__init__(**kwargs)
         self.panels: tuple[Heatmap, ...] = tuple(panels)
         self._message = ""
         self._placements: list[_Placement] = []
@@ -212,11 +185,7 @@ class HeatmapView(StripWidget, can_focus=True):
         self.add_class("-empty")
         self.redraw(layout=True)
 
-    def watch_step_cell(self, old: object, new: object) -> None:
-        self.refresh()
-
     def watch_focus_cell(self, old: object, new: object) -> None:
-        self.refresh()
         if (old is None) != (new is None):  # the move keys come or go
             self.refresh_bindings()
 
@@ -227,8 +196,7 @@ class HeatmapView(StripWidget, can_focus=True):
         return True
 
     def action_move(self, d_row: int, d_col: int) -> None:
-        if self.focus_cell is None or not self.panels:
-            return
+        assert self.focus_cell is not None  # see check_action
         rows, cols = self.panels[0].shape
         row, col = self.focus_cell
         self._focus_on((min(rows - 1, max(0, row + d_row)), min(cols - 1, max(0, col + d_col))))
@@ -283,15 +251,6 @@ class HeatmapView(StripWidget, can_focus=True):
         panel_width = fixed + cols * cell_width
         return _Layout(side_by_side, cell_width, cell_height, row_label_width, panel_width)
 
-    def _legend_lines(self, width: int, indent: int) -> list[str]:
-        """The panels' legends (each once), wrapped to fit beside the indent."""
-        seen: list[str] = []
-        for panel in self.panels:
-            if panel.legend and panel.legend not in seen:
-                seen.append(panel.legend)
-        room = max(12, width - indent)
-        return [line for legend in seen for line in textwrap.wrap(legend, room)]
-
     def get_content_width(self, container: Size, viewport: Size) -> int:
         if not self.panels:
             return len(self._message)
@@ -302,12 +261,7 @@ class HeatmapView(StripWidget, can_focus=True):
     def get_content_height(self, container: Size, viewport: Size, width: int) -> int:
         if not self.panels:
             return max(1, len(self._message) // max(1, width) + 1)
-        layout = self._layout(width)
-        # a panel: its title, its column labels and its cells
-        heights = [2 + p.shape[0] * layout.cell_height for p in self.panels]
-        body = max(heights) if layout.side_by_side else sum(heights) + len(heights) - 1
-        legends = self._legend_lines(width, layout.row_label_width + 1)
-        return body + 1 + len(legends)  # the scale, then the legends
+        return len(self.picture(width))
 
     # --- drawing -----------------------------------------------------------
     def picture_key(self) -> Hashable:
@@ -355,8 +309,9 @@ class HeatmapView(StripWidget, can_focus=True):
                 lines.extend(block)
         lines.append(self._scale_line(scale, layout, width))
         indent = layout.row_label_width + 1
-        for legend in self._legend_lines(width, indent):
-            lines.append(_Line().add(" " * indent + legend, DIM))
+        for legend in dict.fromkeys(panel.legend for panel in self.panels if panel.legend):
+            for text in textwrap.wrap(legend, max(12, width - indent)):  # each legend once
+                lines.append(_Line().add(" " * indent + text, DIM))
         self._placements = placements
         self._cell_geometry = (layout.cell_width, layout.cell_height)
         cropped = [Segment.adjust_line_length(line, width, pad=False) for line in lines]
@@ -429,7 +384,9 @@ def _cell_style(diverging: bool, step: int, marked: bool) -> Style:
     if step < 0:
         return BLANK_CELL
     rgb = _interpolate(DIVERGING if diverging else SEQUENTIAL, step / (COLOUR_STEPS - 1))
-    return Style(bgcolor=_hex(rgb), color=_ink(rgb), bold=marked, underline=marked)
+    r, g, b = rgb  # the ink black or white, whichever reads better on the colour
+    ink = "#101010" if (0.299 * r + 0.587 * g + 0.114 * b) / 255 > 0.55 else "#f0f0f0"
+    return Style(bgcolor=_hex(rgb), color=ink, bold=marked, underline=marked)
 
 
 class _Line(list):

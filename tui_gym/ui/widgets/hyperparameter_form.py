@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any, ClassVar, cast
 
 from textual import on
@@ -15,19 +16,9 @@ from textual.widget import Widget
 from textual.widgets import Input, Label, Select, Static
 
 from tui_gym.algorithms import Field, QLearning, Settings
-from tui_gym.core.params import Param, ParamError, digits_note, read_number
+from tui_gym.core.params import Param, ParamError, digits_note, read_number, typed_text
 from tui_gym.ui.widgets.numbers import compact_count
 from tui_gym.ui.widgets.text_field import TextField
-
-
-def _text(field: Field, value: Any) -> str:
-    """A field's value as a person would type it."""
-    if not isinstance(field, Param):
-        return str(value)
-    if field.kind is bool:
-        return "true" if value else "false"
-    return str(int(value)) if field.kind is int else f"{value:g}"
-
 
 _SUPERSCRIPTS = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
 
@@ -134,13 +125,12 @@ class HyperparameterForm(Vertical):
         Binding("escape", "leave", "Leave the fields", show=False),
     ]
 
+    @dataclass
     class Submitted(Message):
         """Enter in a field: `hyperparameters` is None when some field is wrong."""
 
-        def __init__(self, form: HyperparameterForm, hyperparameters: Settings | None):
-            super().__init__()
-            self.form = form
-            self.hyperparameters = hyperparameters
+        form: HyperparameterForm
+        hyperparameters: Settings | None
 
         @property
         def control(self) -> HyperparameterForm:
@@ -149,13 +139,9 @@ class HyperparameterForm(Vertical):
     class Left(Message):
         """Escape in a field: the person wants the keyboard back for the view."""
 
-    def __init__(
-        self, hyperparameters: Settings | None = None, *, id: str | None = None,
-        classes: str | None = None,
-    ) -> None:
-        super().__init__(id=id, classes=classes)
-        self._initial = hyperparameters or QLearning.settings()
-        self._base = self._initial
+    def __init__(self, hyperparameters: Settings | None = None, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self._base = hyperparameters or QLearning.settings()
         self._between: set[str] = set()  # fields marked by a rule between fields
         self._rebuilding = False  # new fields are being built (see `load`)
         self.border_title = "Hyperparameters"
@@ -174,28 +160,22 @@ class HyperparameterForm(Vertical):
 
     def compose(self) -> ComposeResult:
         for field in self.fields:
-            yield from self._field_widgets(field, getattr(self._base, field.name))
-
-    def _field_widgets(self, field: Field, value: object) -> list[Widget]:
-        label = Label(field.title or field.name, classes="hp-label")
-        box: Widget
-        if isinstance(field, Param) and field.kind is not bool:  # typed in: a number
-            box = TextField(
-                _text(field, value), id=f"hp-{field.name}", compact=True,
-                validators=[FieldValidator(field)], select_on_focus=True,
-            )
-            hint = Label(range_hint(field), classes="hp-hint")
-        else:  # picked from a few words
-            words = ("true", "false") if isinstance(field, Param) else field.choices
-            box = Select(
-                [(word, word) for word in words], value=_text(field, value),
-                allow_blank=False, compact=True, id=f"hp-{field.name}",
-            )
-            hint = Label("", classes="hp-hint")
-        box.tooltip = f"{field.help}: {field.expected()}"
-        row = Horizontal(label, box, hint, classes="hp-row", id=f"hp-row-{field.name}")
-        error = Static("", id=f"hp-error-{field.name}", classes="hp-error", markup=False)
-        return [row, error]
+            text = typed_text(getattr(self._base, field.name))
+            box: Widget
+            if isinstance(field, Param) and field.kind is not bool:  # typed in: a number
+                box = TextField(text, id=f"hp-{field.name}", compact=True,
+                                validators=[FieldValidator(field)], select_on_focus=True)
+                hint = range_hint(field)
+            else:  # picked from a few words
+                words = ("true", "false") if isinstance(field, Param) else field.choices
+                box = Select([(word, word) for word in words], value=text, allow_blank=False,
+                             compact=True, id=f"hp-{field.name}")
+                hint = ""
+            box.tooltip = f"{field.help}: {field.expected()}"
+            yield Horizontal(Label(field.title or field.name, classes="hp-label"), box,
+                             Label(hint, classes="hp-hint"), classes="hp-row",
+                             id=f"hp-row-{field.name}")
+            yield Static("", id=f"hp-error-{field.name}", classes="hp-error", markup=False)
 
     # --- the fields --------------------------------------------------------
     def input(self, name: str) -> Input:
@@ -303,7 +283,7 @@ class HyperparameterForm(Vertical):
                 self.call_later(self._rebuild)
             return
         for field in self.fields:
-            text = _text(field, getattr(hyperparameters, field.name))
+            text = typed_text(getattr(hyperparameters, field.name))
             box = self.control(field.name)
             if box.value != text:
                 box.value = text

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any, ClassVar
 
 import numpy as np
@@ -31,10 +31,11 @@ VALUE_STEP = {"reward": 1.0, "slip": 0.1}
 class MapCanvas(HeatmapView):
     """The editor's heatmap: the focus cell is the cursor, and a click paints."""
 
+    @dataclass
     class Clicked(Message):
-        def __init__(self, cell: tuple[int, int]) -> None:
-            super().__init__()
-            self.cell = cell
+        """A click on a cell: paint it."""
+
+        cell: tuple[int, int]
 
     def on_click(self, event: events.Click) -> None:
         cell = self.clicked_cell(event)
@@ -83,23 +84,23 @@ class MapEditor(Vertical):
         Binding("escape", "close", "Close editor", key_display="esc"),
     ]
 
+    @dataclass
     class Changed(Message):
         """A new map: painted, resized, undone or redone."""
 
-        def __init__(self, editor: MapEditor, grid_map: GridMap, resized: bool, what: str) -> None:
-            super().__init__()
-            self.editor = editor
-            self.grid_map = grid_map
-            self.resized = resized
-            self.what = what  # the edit in words, e.g. "wall at row 1, col 2"
+        editor: MapEditor
+        grid_map: GridMap
+        resized: bool
+        what: str  # the edit in words, e.g. "wall at row 1, col 2"
 
+    @dataclass
     class SaveAsked(Message):
-        def __init__(self, grid_map: GridMap) -> None:
-            super().__init__()
-            self.grid_map = grid_map
+        """The person asked to save the map."""
+
+        grid_map: GridMap
 
     class Closed(Message):
-        pass
+        """The person closed the editor."""
 
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:  # noqa: A002
         super().__init__(id=id, classes=classes)

@@ -1,9 +1,4 @@
-"""Numbers that fit: each figure in its full form and in shorter ones.
-
-A widget with a fixed width for a figure asks for its forms, longest first,
-and shows the first that fits (`fit`), so a large number is shortened
-("5,496,812" to "5.50M", "+1234567.000" to "+1.235e+06") and never cut.
-"""
+"""Numbers that fit: each figure in its full form and shorter ones, never cut (`fit`)."""
 
 from __future__ import annotations
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Sequence
+from collections.abc import Sequence
 from typing import ClassVar
 
 from rich.segment import Segment
@@ -42,9 +42,6 @@ class PlanStatus(StripWidget):
     @property
     def plain(self) -> str:
         return "\n".join(self.lines)
-
-    def picture_key(self) -> Hashable:
-        return (self._version, self._compact(), self.rich_style)
 
     def draw(self, width: int) -> list[Line]:
         styles = self.component_styles()

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-from collections.abc import Hashable
 from typing import ClassVar
 
 from rich.segment import Segment
 
-from tui_gym.ui.widgets.numbers import compact_count
+from tui_gym.ui.widgets.numbers import compact_count, fit
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget, component_classes
 
 DONE, HALF = "━", "╸"
@@ -45,18 +44,13 @@ class ProgressLine(StripWidget):
         forms = [f"{full}{eta}", f"{short}{eta}", short]  # the time left goes last
         if not self._compact():
             forms.insert(0, f"{full} episodes{eta}")
-        if width is None:
-            return forms[0]
-        return next((words for words in forms if len(words) <= width), forms[-1])
+        return forms[0] if width is None else fit(forms, width)
 
     def show(self, done: int, total: int, eta: str = "") -> None:
         """`done` of `total` episodes, and the time left while training runs ("" if not)."""
         if (done, total, eta) != (self.done, self.total, self.eta):
             self.done, self.total, self.eta = done, total, eta
             self.redraw()
-
-    def picture_key(self) -> Hashable:
-        return (self._version, self._compact(), self.rich_style)
 
     def draw(self, width: int) -> list[Line]:
         styles = self.component_styles()

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import textwrap
-from collections.abc import Hashable, Mapping
+from collections.abc import Mapping
 from functools import lru_cache
 
 from rich.segment import Segment
@@ -169,12 +169,6 @@ class StatsPanel(StripWidget):
             lines.append(self._reference_note)
         return "\n".join(lines)
 
-    def picture_key(self) -> Hashable:
-        return (self._version, self._compact())
-
-    def get_content_height(self, container: object, viewport: object, width: int) -> int:
-        return len(self.picture(width))
-
     def draw(self, width: int) -> list[Line]:
         label, style = STATE_STYLES.get(self._state, (self._state, "bold"))
         lines: list[Line] = []
@@ -204,12 +198,8 @@ def _style(name: str) -> Style:
 
 
 def _grid(rows: list[list[Cell]], width: int, per_row: int = 0) -> list[Line]:
-    """Rows of (name, value) pairs: names left-aligned, values right-aligned, the
-    value columns sharing the width left over.
-
-    `per_row` > 0 regroups the pairs that many to a row. Values never get cut:
-    when the fullest forms do not fit, the widest value column takes shorter
-    forms, step by step, then the pairs go fewer to a row."""
+    """Rows of (name, value) pairs (`per_row` > 0: regrouped that many to a row, fewer when
+    they do not fit), names left-aligned, values right-aligned in shorter forms, never cut."""
     paired = [list(zip(row[::2], row[1::2], strict=True)) for row in rows]
     pairs = [pair for row in paired for pair in row]
     if not pairs:

@@ -65,31 +65,26 @@ def explain(
     if len(record.terms) == 1 and record.formula.rpartition("=")[2].strip() == record.terms[0][0]:
         terms = ""  # the target is the one term ('r' at the end): said once, on its line
 
-    def pairs() -> None:
-        count = len(record.episode_updates)
-        for update in record.episode_updates[:EPISODE_UPDATES_SHOWN]:
-            moved = (f"e = {_num(update.trace)}" if update.trace is not None
-                     else f"G = {_num(update.target)}")
-            lines.append(("", f"{row_words(update.state)}, {name(update.action)}: {moved}  "
-                              f"Q {_num(update.before)} → {_num(update.after)}"))
-        if count > EPISODE_UPDATES_SHOWN:
-            lines.append(("", f"... {count - EPISODE_UPDATES_SHOWN} more"))
-
     if record.target is None:
         lines.append(("target", f"{record.formula}: nothing is updated before then"))
-        if terms:
-            lines.append(("", terms))
-        pairs()
-        lines.append(("Q(s,a)", f"{_num(record.before)} (unchanged)"))
-        return lines
-    lines.append(("target", f"{record.formula} = {_num(record.target)}"))
+    else:
+        lines.append(("target", f"{record.formula} = {_num(record.target)}"))
     if terms:
         lines.append(("", terms))
-    if record.episode_return is not None:
-        count = len(record.episode_updates)
+    count = len(record.episode_updates)
+    if record.target is not None and record.episode_return is not None:
         lines.append(("return", f"G = {_num(record.episode_return)} from the episode's start; "
                                 f"{count} update{'s' if count != 1 else ''} at its end"))
-    pairs()
+    for update in record.episode_updates[:EPISODE_UPDATES_SHOWN]:
+        moved = (f"e = {_num(update.trace)}" if update.trace is not None
+                 else f"G = {_num(update.target)}")
+        lines.append(("", f"{row_words(update.state)}, {name(update.action)}: {moved}  "
+                          f"Q {_num(update.before)} → {_num(update.after)}"))
+    if count > EPISODE_UPDATES_SHOWN:
+        lines.append(("", f"... {count - EPISODE_UPDATES_SHOWN} more"))
+    if record.target is None:
+        lines.append(("Q(s,a)", f"{_num(record.before)} (unchanged)"))
+        return lines
     assert record.td_error is not None and record.step_size is not None
     lines.append(("TD error", f"target − Q(s,a) = {_num(record.target)} − {_num(record.before)}"
                               f" = {_num(record.td_error)}"))

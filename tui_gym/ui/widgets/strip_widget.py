@@ -1,29 +1,20 @@
-"""Widgets that keep their drawing between frames: `StripWidget` and `segments_of`.
-
-A `StripWidget` draws through Textual's line API rather than `render()`, which
-Textual turns into segments again on every refresh (a focus change or a view
-switch refreshes the whole screen). A subclass says what its picture depends on
-(`picture_key()`; by default a counter `redraw()` bumps) and draws it as lines
-of Rich segments (`draw(width)`), kept per key and width (the last `PICTURES`)
-and styled once per style. `redraw()` repaints only the lines that changed,
-unless the height may change; `component_styles()` keeps the component classes'
-Rich styles until a theme switch; a resize asks for a layout pass only when the
-width or the compact layout changed.
-"""
+"""`StripWidget`: a widget that keeps its drawing (lines of segments, per key and width)
+between frames and repaints only the lines that changed (a `render()` widget is drawn
+afresh on every refresh, e.g. each focus change); `segments_of` and friends."""
 
 from __future__ import annotations
 
 import re
 from collections import OrderedDict
 from collections.abc import Hashable, Iterable
-from typing import ClassVar
+from typing import Any, ClassVar
 
 from rich.console import Console
 from rich.segment import Segment
 from rich.style import Style
 from rich.text import Text
 from textual import events
-from textual.geometry import Region
+from textual.geometry import Region, Size
 from textual.strip import Strip
 from textual.widget import Widget
 
@@ -56,15 +47,13 @@ def line_text(line: Iterable[Segment]) -> str:
 
 
 class StripWidget(Widget):
-    """A widget drawn as cached lines of segments (see the module docstring)."""
+    """A widget drawn as cached lines of segments: a subclass says what its picture depends
+    on (`picture_key()`) and draws it (`draw(width)`); `redraw()` asks for it again."""
 
-    PICTURES: ClassVar[int] = 1
-    """How many (key, width) pictures to keep."""
+    PICTURES: ClassVar[int] = 1  # how many (key, width) pictures to keep
 
-    def __init__(
-        self, *, name: str | None = None, id: str | None = None, classes: str | None = None
-    ) -> None:
-        super().__init__(name=name, id=id, classes=classes)
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
         self._version = 0
         self._pictures: OrderedDict[Hashable, list[Line]] = OrderedDict()
         self._strips: list[Strip] = []
@@ -76,37 +65,34 @@ class StripWidget(Widget):
     # --- what subclasses give ------------------------------------------------
     def picture_key(self) -> Hashable:
         """What the picture depends on, besides its width (`redraw()` changes it)."""
-        return self._version
+        return (self._version, self._compact(), self.rich_style)
 
     def draw(self, width: int) -> list[Line]:
         """The picture, `width` cells wide, as lines of segments."""
         raise NotImplementedError
+
+    def get_content_height(self, container: Size, viewport: Size, width: int) -> int:
+        return len(self.picture(width))
 
     # --- what owners call --------------------------------------------------
     def redraw(self, layout: bool = False) -> None:
         """The picture changed: draw it again on the next frame (only its changed lines,
         when the picture shown is there to compare with and `layout` is not asked)."""
         self._version += 1
-        shown = self._strips_lines
-        if layout or shown is None or not self._shown_as_now():
+        shown, width = self._strips_lines, self.content_size.width
+        # Out of sight or shown at another width, it draws when Textual asks it to.
+        if (layout or shown is None or not self.is_mounted
+                or self._strips_of[2] != width or not in_sight(self)):  # type: ignore[index]
             self.refresh(layout=layout)
             return
-        lines = self.picture(self._strips_of[2])  # type: ignore[index]
+        lines = self.picture(width)
         if len(lines) != len(shown):
             self.refresh()
             return
         changed = [y for y, (old, new) in enumerate(zip(shown, lines, strict=True))
                    if old != new]
         if changed:
-            width = self.content_size.width
             self.refresh(*(Region(0, y, width, 1) for y in changed))
-
-    def _shown_as_now(self) -> bool:
-        """Whether the widget is on screen, in sight, showing a picture as wide as it is now
-        (one out of sight draws when it comes into sight, as Textual asks it to)."""
-        shown = self._strips_of
-        return (shown is not None and self.is_mounted and shown[2] == self.content_size.width
-                and in_sight(self))
 
     def picture(self, width: int) -> list[Line]:
         """The lines for `width` (drawn now unless kept from before)."""
@@ -139,10 +125,7 @@ class StripWidget(Widget):
     # --- size ------------------------------------------------------------------
     def _compact(self) -> bool:
         """Whether the app shows its compact layout (a class on the screen)."""
-        try:
-            return self.screen.has_class("compact")
-        except Exception:  # not on a screen (yet)
-            return False
+        return self.is_attached and self.screen.has_class("compact")
 
     def on_resize(self, event: events.Resize) -> None:
         # A new width, or the compact layout coming or going, may change the height

@@ -8,7 +8,6 @@ Scene keys: "taxi", "passenger" (a stand, or `len(stands)` aboard), "destination
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from rich.style import Style
@@ -20,6 +19,7 @@ from tui_gym.ui.widgets.board_drawing import (
     Cell,
     CharGrid,
     MapBoard,
+    MapShape,
     cell_of,
     legend,
     listed,
@@ -42,49 +42,18 @@ PASSENGER, DESTINATION = "☺", "◎"
 Event = tuple[tuple[str, ...], str, bool]
 
 
-@dataclass(frozen=True)
-class TaxiShape:
-    """How big the city is drawn: `cell_w` x `cell_h` characters a tile, one column
-    between tiles for walls and lanes, and, with `frame`, a wall all round."""
-
-    rows: int
-    cols: int
-    cell_w: int
-    cell_h: int
-    frame: bool
-
-    @property
-    def edge(self) -> int:
-        return 1 if self.frame else 0
-
-    @property
-    def width(self) -> int:
-        return self.cols * (self.cell_w + 1) - 1 + 2 * self.edge
-
-    @property
-    def height(self) -> int:
-        return self.rows * self.cell_h + 2 * self.edge
-
-    def x_of(self, col: int) -> int:
-        return self.edge + col * (self.cell_w + 1)
-
-    def y_of(self, row: int) -> int:
-        return self.edge + row * self.cell_h
-
-
 TAXI_SIZES = (
     (11, 4), (9, 4), (11, 3), (9, 3), (7, 3), (9, 2), (7, 2), (5, 2), (9, 1), (7, 1), (5, 1),
     (3, 1),
 )
 
 
-def choose_shape(rows: int, cols: int, width: int, height: int) -> TaxiShape:
+def choose_shape(rows: int, cols: int, width: int, height: int) -> MapShape:
     """The largest drawing of the city that fits with its wall all round, else the largest
     without it (the smallest one if none does): the city's edge is a wall too."""
-    shapes = (TaxiShape(rows, cols, cell_w, cell_h, frame)
-              for frame in (True, False) for cell_w, cell_h in TAXI_SIZES)
-    return next((shape for shape in shapes if shape_fits(shape, width, height)),
-                TaxiShape(rows, cols, 3, 1, False))
+    shapes = [MapShape(rows, cols, cell_w, cell_h, gap=1, frame=frame)
+              for frame in (True, False) for cell_w, cell_h in TAXI_SIZES]
+    return next((shape for shape in shapes if shape_fits(shape, width, height)), shapes[-1])
 
 
 class TaxiBoard(MapBoard):
@@ -155,11 +124,6 @@ class TaxiBoard(MapBoard):
     def aboard(self) -> bool:
         """Whether the passenger is in the cab."""
         return self.passenger is not None and self.passenger >= len(self.stands) > 0
-
-    @property
-    def event_text(self) -> str:
-        """What the last action did, in words ('' when there is nothing to say)."""
-        return self._event[0][0] if self._event else ""
 
     # --- the scene -----------------------------------------------------------------
     def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
@@ -265,7 +229,7 @@ class TaxiBoard(MapBoard):
         at = self.stand_name(self.passenger)
         return f"Passenger waiting at {at}, going to {to}", f"{PASSENGER} at {at} → {to}"
 
-    def _paint_tile(self, grid: CharGrid, cell: Cell, shape: TaxiShape) -> None:
+    def _paint_tile(self, grid: CharGrid, cell: Cell, shape: MapShape) -> None:
         w, h = shape.cell_w, shape.cell_h
         x0, y0 = shape.x_of(cell[1]), shape.y_of(cell[0])
         mid = h // 2
@@ -289,10 +253,7 @@ class TaxiBoard(MapBoard):
         cab_text, cab_style = self._cab(w)
         chip_w = len(cab_text) + (2 if w >= len(cab_text) + 4 else 0)
         chip_x = x0 + (w - chip_w) // 2
-        waiting = (
-            stand is not None and self.passenger == stand and not self.aboard
-        )  # includes a passenger just delivered
-        if waiting:
+        if stand is not None and self.passenger == stand and not self.aboard:  # or just delivered
             person = on_tile(self._style("passenger"), tile)
             x = chip_x - 1 if cab_here else x0 + w // 2
             grid.put(max(x0, x), y0 + mid, PASSENGER, person)
@@ -302,7 +263,7 @@ class TaxiBoard(MapBoard):
                 grid.pill(chip_x, y0 + mid - 1, chip_w, 3, cab_style, under)
             grid.put(chip_x, y0 + mid, cab_text.center(chip_w), cab_style)
 
-    def draw_map(self, shape: TaxiShape, width: int, spare: int) -> list[Text]:
+    def draw_map(self, shape: MapShape, width: int, spare: int) -> list[Text]:
         grid = CharGrid(shape.width, shape.height, self._style("lane"))
         lane, wall = self._style("lane"), self._style("wall")
         for row in range(shape.rows):
@@ -368,4 +329,4 @@ class TaxiBoard(MapBoard):
             self.step_to(self.taxi, cell, MOVE_OF)
 
 
-__all__ = ["MOVES", "TaxiBoard", "TaxiShape", "choose_shape"]
+__all__ = ["MOVES", "TaxiBoard", "choose_shape"]

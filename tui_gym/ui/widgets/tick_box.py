@@ -1,8 +1,4 @@
-"""`TickBox`: a checkbox whose mark says its state: ✓ when ticked, blank when not.
-
-Textual's own Checkbox draws the same "X" either way and tells the states
-apart by colour alone, which is easy to misread (and lost in screenshots).
-"""
+"""`TickBox`: a checkbox marked ✓ when ticked and blank when not (not by colour alone)."""
 
 from __future__ import annotations
 

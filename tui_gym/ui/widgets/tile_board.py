@@ -18,16 +18,17 @@ from textual.binding import Binding, BindingType
 from textual.geometry import Offset
 from textual.message import Message
 
+from tui_gym.games.words import format_reward
 from tui_gym.ui.widgets.board_drawing import (
     Cell,
     CharGrid,
     MapBoard,
+    MapShape,
     cell_of,
     legend,
     listed,
     on_tile,
     read_as,
-    reward_text,
     shape_fits,
 )
 from tui_gym.ui.widgets.boards import arrow_bindings
@@ -75,55 +76,18 @@ TONES = ("good", "bad", "slipped", "caption")  # the styles a scene's event may 
 Event = tuple[tuple[str, ...], str]  # what a move did: ('{who} ...' longest first), its style
 
 
-@dataclass(frozen=True)
-class TileShape:
-    """How big a map is drawn: `cell_w` x `cell_h` characters a tile; `half`: two map
-    rows share a line (colour only); `axes`: row numbers left, column numbers below."""
-
-    rows: int
-    cols: int
-    cell_w: int
-    cell_h: int
-    half: bool = False
-    axes: bool = False
-
-    @property
-    def label_w(self) -> int:
-        return len(str(self.rows - 1)) + 1 if self.axes else 0
-
-    @property
-    def map_h(self) -> int:
-        return (self.rows + 1) // 2 if self.half else self.rows * self.cell_h
-
-    @property
-    def width(self) -> int:
-        return self.label_w + self.cols * self.cell_w
-
-    @property
-    def height(self) -> int:
-        """Lines of the map and its column numbers (the caption comes on top)."""
-        return self.map_h + (1 if self.axes else 0)
-
-    def x_of(self, col: int) -> int:
-        return self.label_w + col * self.cell_w
-
-    def y_of(self, row: int) -> int:
-        return row // 2 if self.half else row * self.cell_h
-
-
 TILE_SIZES = ((11, 5), (9, 4), (7, 3), (5, 2), (3, 1), (2, 1), (1, 1))
 HALF_WIDTHS = (2, 1)
 
 
-def choose_shape(rows: int, cols: int, width: int, height: int) -> TileShape:
+def choose_shape(rows: int, cols: int, width: int, height: int) -> MapShape:
     """The largest drawing of a rows x cols map that fits (the smallest one if none does)."""
     shapes = [
-        *(TileShape(rows, cols, cell_w, cell_h, axes=axes) for cell_w, cell_h in TILE_SIZES
+        *(MapShape(rows, cols, cell_w, cell_h, axes=axes) for cell_w, cell_h in TILE_SIZES
           for axes in (True, False) if not (axes and cell_w < len(str(cols - 1)))),
-        *(TileShape(rows, cols, cell_w, 1, half=True) for cell_w in HALF_WIDTHS),
+        *(MapShape(rows, cols, cell_w, 1, half=True) for cell_w in HALF_WIDTHS),
     ]
-    return next((shape for shape in shapes if shape_fits(shape, width, height)),
-                TileShape(rows, cols, 1, 1, half=True))
+    return next((shape for shape in shapes if shape_fits(shape, width, height)), shapes[-1])
 
 
 def cell_table(value: Any) -> dict[Cell, Any]:
@@ -134,20 +98,9 @@ def cell_table(value: Any) -> dict[Cell, Any]:
 
 
 def map_rows(scene: Mapping[str, Any]) -> list[str]:
-    """The scene's map as equal-length strings (rows of characters, or of bytes, read alike)."""
-    cells = scene.get("cells")
-    if cells is None:
-        rows, cols = int(scene.get("rows", 0)), int(scene.get("cols", 0))
-        return [FLOOR * cols for _ in range(rows)] if rows > 0 and cols > 0 else []
-    rows_text = []
-    for row in cells:
-        if isinstance(row, bytes):
-            row = row.decode()
-        elif not isinstance(row, str):
-            row = "".join(c.decode() if isinstance(c, bytes) else str(c) for c in row)
-        rows_text.append(row)
-    cols = max((len(row) for row in rows_text), default=0)
-    return [row.ljust(cols, FLOOR) for row in rows_text] if cols else []
+    """The scene's map, one string a row (equal rows, as games and recordings give them)."""
+    rows = [str(row) for row in scene.get("cells") or ()]
+    return rows if any(rows) else []
 
 
 class TileBoard(MapBoard):
@@ -202,13 +155,12 @@ class TileBoard(MapBoard):
 
     BUTTONS = (("↺ Reset [dim]r[/]", "new_episode"),)
 
+    @dataclass
     class CellClicked(Message):
         """A person clicked map cell (row, col) (an editor paints it; play steps towards it)."""
 
-        def __init__(self, row: int, col: int) -> None:
-            super().__init__()
-            self.row = row
-            self.col = col
+        row: int
+        col: int
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
@@ -260,11 +212,6 @@ class TileBoard(MapBoard):
 
     def button_suggested(self, action: str) -> bool:
         return self.episode_over
-
-    @property
-    def event_text(self) -> str:
-        """What the last move did, in words ('' when there is nothing to say)."""
-        return self._event[0][0].format(who=self.player_name) if self._event else ""
 
     # --- the scene ---------------------------------------------------------------
     def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
@@ -389,13 +336,13 @@ class TileBoard(MapBoard):
         """A tile's glyph, at most `width` characters."""
         if kind == REWARD:
             value = self._reward(cell)
-            text = reward_text(value) if value is not None else "◆"
+            text = format_reward(value) if value is not None else "◆"
             if len(text) > width:
                 text = "−" if value is not None and value < 0 else "+"
             return text
         return GLYPHS.get(kind, kind)[:width]
 
-    def _paint_tile(self, grid: CharGrid, cell: Cell, shape: TileShape) -> None:
+    def _paint_tile(self, grid: CharGrid, cell: Cell, shape: MapShape) -> None:
         w, h = shape.cell_w, shape.cell_h
         x0, y0 = shape.x_of(cell[1]), shape.y_of(cell[0])
         kind = self.kind(cell)
@@ -421,7 +368,7 @@ class TileBoard(MapBoard):
             grid.put(x0 + (w - len(glyph)) // 2, y0 + mid, glyph, ink)
         value = self._reward(cell)
         if h >= 2 and value is not None and kind != REWARD:
-            text = reward_text(value)
+            text = format_reward(value)
             if len(text) <= w:
                 below = mid + 1 < (h - 1 if kind == HOLE and pool else h)
                 line = mid + 1 if below else mid - 1
@@ -477,7 +424,7 @@ class TileBoard(MapBoard):
     def lines_under(self) -> int:
         return 1 if self.wind else 0  # a line kept for the wind under the columns
 
-    def draw_map(self, shape: TileShape, width: int, spare: int) -> list[Text]:
+    def draw_map(self, shape: MapShape, width: int, spare: int) -> list[Text]:
         w, h = shape.cell_w, shape.cell_h
         grid = CharGrid(shape.width, shape.height, Style())
         if shape.half:
@@ -536,7 +483,7 @@ class TileBoard(MapBoard):
             items.append((WIND, self._style("wind"), "wind ±1" if self.gusts else "wind"))
         return legend(items, self._style("caption"), width)
 
-    def _wind_line(self, shape: TileShape) -> Text:
+    def _wind_line(self, shape: MapShape) -> Text:
         """Each column's wind under it, as the book draws it."""
         line = Text(" " * shape.label_w, end="")
         for col in range(shape.cols):
@@ -549,13 +496,9 @@ class TileBoard(MapBoard):
     # --- keys and clicks -----------------------------------------------------------
     def canvas_clicked(self, offset: Offset) -> None:
         cell = self.layout_drawn.cell_at(offset, self.agent) if self.layout_drawn else None
-        if cell is not None:
+        if cell is not None:  # the agent steps one cell towards it
             self.post_message(self.CellClicked(*cell))
-            self.cell_clicked(*cell)
-
-    def cell_clicked(self, row: int, col: int) -> None:
-        """A click on cell (row, col): the agent steps one cell towards it."""
-        self.step_to(self.agent, (row, col), MOVE_OF)
+            self.step_to(self.agent, cell, MOVE_OF)
 
 
-__all__ = ["MOVES", "THEMES", "TileBoard", "TileShape", "choose_shape", "map_rows"]
+__all__ = ["MOVES", "THEMES", "TileBoard", "choose_shape", "map_rows"]

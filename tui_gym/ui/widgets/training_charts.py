@@ -1,20 +1,13 @@
-"""Learning curves: four labelled text sparklines of a training run.
-
-`TrainingCharts` draws the rolling mean return, episode length, mean |TD error|
-and epsilon over the whole run, each with its name, current value and range, as
-one widget of cached lines (`update_from`). What is drawn and what is written
-agree (`plotted`): the columns are bucket means ending on the current value, and
-the range is theirs. A narrow box drops the ranges before the curves shrink
-below `MIN_SPARK` columns; a mean with no episodes behind it reads "–". Each
-curve's low and high colours are component classes (`charts--return-high`).
-"""
+"""`TrainingCharts`: learning curves (return, length, |TD error|, epsilon) as labelled
+sparklines whose columns and ranges agree with the numbers written beside them."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Hashable, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import ClassVar
 
+import numpy as np
 from rich.color import Color as RichColor
 from rich.color import blend_rgb
 from rich.segment import Segment
@@ -58,16 +51,11 @@ def bucket_means(data: Sequence[float], width: int) -> list[float]:
     n = len(data)
     if n == 0 or width <= 0:
         return []
+    edges = np.arange(width + 1) * n // width
     if n < width:
-        return [float(data[i * n // width]) for i in range(width)]
-    sums = [0.0]
-    for value in data:
-        sums.append(sums[-1] + value)
-    out = []
-    for i in range(width):
-        start, end = i * n // width, (i + 1) * n // width
-        out.append((sums[end] - sums[start]) / (end - start))
-    return out
+        return [float(data[i]) for i in edges[:-1]]
+    sums = np.concatenate(([0.0], np.cumsum(data)))
+    return ((sums[edges[1:]] - sums[edges[:-1]]) / np.diff(edges)).tolist()
 
 
 def plotted(data: Sequence[float], width: int, current: float | None = None) -> list[float]:
@@ -89,10 +77,8 @@ def sparkline_rows(
     *,
     flat: bool = False,
 ) -> list[Line]:
-    """A sparkline of `data`, `width` x `height` cells, as lines of segments (top first).
-
-    `data` is drawn as it is when it has `width` values (see `plotted`), else
-    bucketed first; `flat` draws it as a level line (a range too small to show)."""
+    """A sparkline of `data` (bucketed unless it has `width` values) in `width` x `height`
+    cells, as lines of segments, top first; `flat`: a level line (a range too small to show)."""
     if not data:
         blank = [[Segment(" " * width)] for _ in range(height - 1)]
         return [*blank, [Segment("▁" * width, Style(color=low))]]
@@ -191,7 +177,6 @@ class TrainingCharts(StripWidget):
         self._data.clear()
         self._values.clear()
         self._current.clear()
-        self.border_title = "Learning curves"
         self.border_subtitle = ""
         self.redraw()
 
@@ -217,12 +202,6 @@ class TrainingCharts(StripWidget):
             self.redraw()
 
     # --- drawing -----------------------------------------------------------
-    def picture_key(self) -> Hashable:
-        return (self._version, self._compact(), self.rich_style)
-
-    def get_content_height(self, container: object, viewport: object, width: int) -> int:
-        return len(CURVES) * (1 if self._compact() else 2)
-
     def draw(self, width: int) -> list[Line]:
         compact = self._compact()
         height = 1 if compact else 2
