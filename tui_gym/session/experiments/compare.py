@@ -116,26 +116,18 @@ def _known_elsewhere(keys: Sequence[str]) -> str:
 
 @dataclass(frozen=True, eq=False)
 class AlgorithmOutcome:
-    """One algorithm's results over its seeds (so far, while a comparison runs).
-
-    `curve` is the mean online return per episode with its band, over the
-    episodes every seed has finished; `seeds_done` counts the seeds that
-    finished all their episodes. `exact_value` / `exact_gap` (None without a
-    model) are the mean over seeds of the greedy policy's exact value at the
-    last checkpoint every seed reached, and the optimum minus it; `exact_curve`
-    is that value at each checkpoint. A prediction learner has none of those but
-    `rms_error`, the mean RMS error of V against the exact values of the policy it
-    follows there, and `rms_curve`. `run_id` is its run in the history.
-    """
+    """One algorithm's results over its seeds so far: the mean online return per episode
+    every seed finished (`curve`), and at the checkpoints every seed reached the greedy
+    policy's exact value and gap, or a prediction learner's RMS error of V."""
 
     algorithm: str
     hyperparameters: Mapping[str, Any]
     seeds_done: int
     curve: AggregateCurve
     mean_return_last: Estimate
-    exact_value: float | None
-    exact_gap: float | None
     run_id: int | None
+    exact_value: float | None = None
+    exact_gap: float | None = None
     exact_curve: AggregateCurve | None = None
     exact_ci95: float | None = None
     seeds: int = 0
@@ -176,10 +168,8 @@ class AlgorithmOutcome:
 
 @dataclass(frozen=True)
 class CompareProgress:
-    """Episodes finished of the total (over every algorithm and seed), the tasks finished
-    of the run's tasks (those a resumed run found done count in), and `outcomes`: each
-    arm's outcome so far, aggregated over every seed when first read (read it in the
-    callback, on the run's thread; a caller that only counts never pays for it)."""
+    """Episodes and tasks finished of the totals, and each arm's outcome so far
+    (`outcomes`, aggregated when first read: read it in the callback)."""
 
     done: int
     total: int
@@ -230,8 +220,7 @@ class Arm:
 @dataclass(frozen=True)
 class Setup:
     """What every arm of an experiment shares: the game, its seeds and episodes, and the
-    per-episode quantity recorded (`measure`, a column of the engine's loop: the online
-    return, or `loop.LENGTH`, `loop.FIRST_ACTION`)."""
+    per-episode `measure` recorded (`loop.RETURN`, `loop.LENGTH` or `loop.FIRST_ACTION`)."""
 
     game: str
     seeds: int
@@ -248,9 +237,8 @@ class Setup:
 
 @dataclass(frozen=True, eq=False)
 class _Model:
-    """The game's model for the jobs: the loop's arrays, the model itself (for exact
-    values) and the table row of each of its states, the learners' table shape and the
-    actions each row offers (None: all)."""
+    """The game's model for the jobs: the loop's arrays, the MDP and its states' table
+    rows, the learners' table shape and the actions each row offers (None: all)."""
 
     arrays: ModelArrays
     mdp: FiniteMDP
@@ -289,17 +277,12 @@ class _Job:
     setup: Setup
     prepared: Prepared
 
-    @property
-    def episodes(self) -> int:
-        return self.setup.episodes
-
 
 @dataclass(frozen=True)
 class SeedsUpdate:
-    """What a job played since its last update: per seed, its episodes done, and the
-    online returns of episodes `first[i]` to `done[i] - 1`; `exact[i, j]` its greedy
-    policy's exact value at checkpoint j, a prediction learner's RMS error of V (NaN
-    until reached; None without a model)."""
+    """What a job played since its last update: per seed, its episodes done, the returns
+    of episodes `first[i]` to `done[i] - 1`, and `exact` as in `TaskRecord` (NaN until
+    reached)."""
 
     done: np.ndarray
     first: np.ndarray
@@ -398,7 +381,7 @@ def _run_job(
 ) -> SeedsUpdate:
     """Train a job's seeds one after another, `report`ing what they play as they go; the
     last update (complete or stopped)."""
-    n, episodes = len(job.seeds), job.episodes
+    n, episodes = len(job.seeds), job.setup.episodes
     checkpoints = checkpoint_episodes(episodes)
     done = np.zeros(n, dtype=np.int64)
     returns = np.full((n, episodes), np.nan)
@@ -459,7 +442,7 @@ def _play_env(job: _Job, seed: int, returns: np.ndarray, progress: Callable[[int
     session = _session(prepared.env_id, prepared.env_kwargs, job.setup.wrappers, job.algorithm,
                        job.hp, seed)
     try:
-        for e in range(job.episodes):
+        for e in range(job.setup.episodes):
             if stop():
                 return
             stats = session.trainer.run_episode()
@@ -479,9 +462,8 @@ def run_task(job: _Job) -> list[SeedsUpdate]:
 
 def _worker(parent: int, jobs: Mapping[int, _Job], numbers: Any, messages: Any,
             stop_flag: Any) -> None:
-    """A child process's work: the jobs whose numbers it takes from `numbers`, one after
-    another until a None or a stop, each one's start and states sent on `messages`; it
-    ends after `WORKER_SEEDS` seeds (the parent starts another)."""
+    """A child process's work: the jobs numbered on `numbers` until a None, a stop or
+    `WORKER_SEEDS` seeds, each one's start and states sent on `messages`."""
     processes_module.watch_parent(parent)
     played = 0
     while played < WORKER_SEEDS and not stop_flag.is_set():
@@ -542,7 +524,7 @@ class _Tally:
         """A finished job as the run history keeps it."""
         rows = list(job.rows)
         return TaskRecord(
-            rows=job.rows, seeds=job.seeds, episodes=job.episodes,
+            rows=job.rows, seeds=job.seeds, episodes=job.setup.episodes,
             returns=self.returns[job.arm, rows],
             exact=None if self.exact is None else self.exact[job.arm, rows],
             algorithm=job.algorithm, hyperparameters=job.hp)
@@ -557,12 +539,13 @@ class _Tally:
             self.exact[job.arm, list(job.rows)] = update.exact
 
     def finished(self, job: _Job) -> bool:
-        return bool((self.done[job.arm, list(job.rows)] >= job.episodes).all())
+        return bool((self.done[job.arm, list(job.rows)] >= job.setup.episodes).all())
 
     def add(self, jobs: list[_Job]) -> list[_Job]:
         """The jobs, numbered after those there are, and counted in."""
         numbered = [replace(job, index=len(self.jobs) + i) for i, job in enumerate(jobs)]
         self.jobs.extend(numbered)
+        self.tasks_total += len(numbered)
         return numbered
 
     def count(self) -> int:
@@ -598,24 +581,19 @@ class _Tally:
                 curve = aggregate(values[:, keep], episodes=checkpoints[keep])
             if reached and finite[reached - 1]:
                 final = mean_with_ci(values[:, reached - 1])
-        predicts = self.predicts[arm]
-        exact_value = exact_gap = None
-        if final is not None and not predicts:
-            exact_value = final.mean
-            if self.prepared.optimum is not None:
-                exact_gap = self.prepared.optimum - exact_value
-        rms = final if predicts else None
+        mean, ci95 = (None, None) if final is None else (final.mean, final.ci95)
+        optimum = self.prepared.optimum
+        figures: dict[str, Any] = dict(rms_error=mean, rms_ci95=ci95, rms_curve=curve) if (
+            self.predicts[arm]) else dict(exact_value=mean, exact_ci95=ci95, exact_curve=curve,
+                                          exact_gap=None if mean is None or optimum is None
+                                          else optimum - mean)
         window = max(1, common // SMOOTHING_SHARE)
         return AlgorithmOutcome(
             algorithm=self.arms[arm].algorithm, hyperparameters=self.prepared.hyperparameters[arm],
             seeds_done=int(finished.sum()), curve=aggregate(seen),
-            mean_return_last=mean_return_last(seen), exact_value=exact_value, exact_gap=exact_gap,
-            run_id=self.run_ids[arm], exact_curve=None if predicts else curve,
-            exact_ci95=None if predicts or final is None else final.ci95, seeds=self.setup.seeds,
-            smoothed=aggregate(seen, window=window) if window > 1 else None, smoothing=window,
-            rms_error=None if rms is None else rms.mean, rms_ci95=None if rms is None else rms.ci95,
-            rms_curve=curve if predicts else None,
-        )
+            mean_return_last=mean_return_last(seen), run_id=self.run_ids[arm],
+            seeds=self.setup.seeds, smoothing=window,
+            smoothed=aggregate(seen, window=window) if window > 1 else None, **figures)
 
 
 def _start_runs(
@@ -718,10 +696,8 @@ def _record(
 
 @dataclass(frozen=True)
 class Executed:
-    """What `execute` gives back: each arm's outcome (None if it finished no episode), and
-    `values[arm, seed, episode]`, the measure of every episode (NaN where not played), and
-    `exact[arm, seed, checkpoint]`, the greedy policies' exact values, a prediction
-    learner's RMS errors of V (None without a model)."""
+    """What `execute` gives back: each arm's outcome (None if it finished no episode),
+    `values[arm, seed, episode]` (NaN where not played) and `exact[arm, seed, checkpoint]`."""
 
     outcomes: tuple[AlgorithmOutcome | None, ...]
     interrupted: bool
@@ -739,13 +715,12 @@ def execute(
     status: Callable[[str], None] | None = None, resume: int | Sequence[int] | None = None,
     cluster: Any = None, task_seconds: float = TASK_SECONDS, group: int | None = None,
 ) -> Executed:
-    """Train every arm over the setup's seeds (what `run_compare` and `run_sweep` share)
-    as tasks, each kept in the run history as it finishes: here when the whole takes less
-    than `SPREAD_SECONDS` (`_estimate`), else in child processes, one per core, or on a
-    Dask cluster (`cluster`: an address, `local:N`, or a `distributed.Client`). `resume`
-    (a run's id, or the ids of the arms' runs in order) runs only the tasks its runs miss;
-    `group` names the run the new runs join (one experiment of several). A task runs for
-    about `task_seconds` or more (infinity: one per core)."""
+    """Train every arm over the setup's seeds as tasks, each kept in the run history as it
+    finishes: here when the whole takes under `SPREAD_SECONDS`, else in up to `processes`
+    child processes (None: one per core) or on a Dask `cluster` (an address, `local:N`, a
+    `distributed.Client`). `resume` (a run's id, or the arms' run ids) runs only the
+    tasks its runs miss; `group` is the run the new runs join; `status` hears the engine's
+    lines. A task runs for about `task_seconds` or more."""
     from tui_gym.session.experiments.cluster import connect, run_on_cluster
 
     prepared = prepare(setup, arms)
@@ -787,26 +762,23 @@ def execute(
                 missing = tally.missing()
                 seconds = _estimate(prepared, arms, setup, status) if (
                     client is not None or (processes != 0 and cores > 1)) else 0.0
-                if client is None and seconds < SPREAD_SECONDS:
-                    jobs = tally.add(_jobs(setup, arms, prepared, missing))
-                    tally.tasks_total += len(jobs)
+                here = client is None and seconds < SPREAD_SECONDS
+                per_seed = seconds / (len(arms) * setup.seeds)
+                pieces = 1 if here else max(-(-cores // len(arms)), max(
+                    -(-len(rows) * per_seed // task_seconds) for rows in missing))
+                jobs = tally.add(_jobs(setup, arms, prepared, missing, int(pieces)))
+                if here:
                     complete = _run_here(jobs, tally, stopped, tell, landed)
+                elif client is None:
+                    complete = _run_children(jobs, tally, stopped, tell, cores, landed)
                 else:
-                    per_seed = seconds / (len(arms) * setup.seeds)
-                    pieces = max(-(-cores // len(arms)), max(
-                        -(-len(rows) * per_seed // task_seconds) for rows in missing))
-                    jobs = tally.add(_jobs(setup, arms, prepared, missing, int(pieces)))
-                    tally.tasks_total += len(jobs)
-                    if client is None:
-                        complete = _run_children(jobs, tally, stopped, tell, cores, landed)
-                    else:
 
-                        def take(job: _Job, updates: list[SeedsUpdate]) -> None:
-                            for update in updates:
-                                tally.take(job.index, update)
-                            landed(job)
+                    def take(job: _Job, updates: list[SeedsUpdate]) -> None:
+                        for update in updates:
+                            tally.take(job.index, update)
+                        landed(job)
 
-                        complete = run_on_cluster(client, jobs, run_task, take, stopped)
+                    complete = run_on_cluster(client, jobs, run_task, take, stopped)
         except BaseException as exc:
             failure = exc
         if complete and history is not None and None not in tally.run_ids and (
@@ -892,16 +864,8 @@ def run_compare(
     processes: int | None = None, status: Callable[[str], None] | None = None,
     resume: int | None = None, cluster: Any = None,
 ) -> CompareResult:
-    """Run a comparison (see the module docstring).
-
-    `processes`: child processes at once at most (None: one per core); 0 runs
-    everything on the calling thread. `status` hears the engine's lines
-    ("compiling the learners, once"). `resume`: a run's id, to run only the
-    tasks it misses (ResumeError if its settings differ); `cluster`: a Dask
-    scheduler's address, `local:N`, or a `distributed.Client`. ValueError,
-    before anything runs, for an unknown game, algorithm or setting, or a bad
-    value.
-    """
+    """Run a comparison; the arguments as `execute`'s (`processes` 0: all on this thread).
+    ValueError, before anything runs, for an unknown game, algorithm or setting."""
     setup = Setup(spec.game, spec.seeds, spec.episodes, spec.game_params,
                   tuple(spec.wrappers), spec.first_seed)
     arms = [
