@@ -89,13 +89,6 @@ def add_app_options(parser: argparse.ArgumentParser) -> None:
 # --- the commands ------------------------------------------------------------------
 
 
-def _history_call(action: Callable[[], Any]) -> Any:
-    from tui_gym.core.experiments import RunHistoryError
-
-    with cli_errors(RunHistoryError):
-        return action()
-
-
 def _when(seconds: float | None, full: bool = False) -> str:
     if seconds is None:
         return ""
@@ -119,12 +112,6 @@ def _figure_text(figure: Any, interval: bool = True) -> str:
     if interval and figure.ci95 is not None:
         text += f" ± {figure.ci95:.4f}"
     return text
-
-
-def _seeds_text(seeds: tuple[int, ...]) -> str:
-    if len(seeds) <= 3:
-        return ", ".join(str(s) for s in seeds)
-    return f"{len(seeds)} seeds"
 
 
 def _screenful(out: Console) -> int:
@@ -169,25 +156,26 @@ def _runs_table(title: str, rows: list[dict[str, str]], width: int) -> tuple[Tex
 
 
 def cmd_runs(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.core.experiments import RunHistoryError, list_runs
+
     verb = getattr(args, "runs_command", None)
     if args.recover:
         if verb is not None:
             raise CliError(f"--recover works on the whole history, not with `runs {verb}`")
         verb = "recover"
     if verb is not None:
-        done = _history_call(lambda: _act(verb, args))
+        with cli_errors(RunHistoryError):
+            done = _act(verb, args)
         if args.json:
             print_json(f"runs {verb}", done.to_json())
             return 2 if verb == "recover" and done.target is None else 0
         return _SAY[verb](done, args, out)
-    from tui_gym.core.experiments import list_runs
-
     game = args.game.strip().lower() if args.game else None
     limit = args.limit
     if limit is None:
         limit = 0 if args.json else _screenful(out)
-    listing = _history_call(lambda: list_runs(args.db, game=game, kind=args.kind,
-                                              limit=limit or None))
+    with cli_errors(RunHistoryError):
+        listing = list_runs(args.db, game=game, kind=args.kind, limit=limit or None)
     for bad in listing.damaged[:5]:
         warn(f"run {bad.id} cannot be read: {bad.reason} (`tui-gym runs rm {bad.id}` "
               "removes it)")
@@ -204,9 +192,11 @@ def cmd_runs(args: argparse.Namespace, out: Console) -> int:
     rows = []
     for run in listing.runs:
         kind = str(run.kind) if run.status == "finished" else f"{run.kind} ({run.status})"
+        seeds = run.seeds
         rows.append({
             "id": str(run.id), "kind": kind, "game": visible(run.game, 40),
-            "algorithm": visible(run.algorithm, 40), "seeds": _seeds_text(run.seeds),
+            "algorithm": visible(run.algorithm, 40),
+            "seeds": f"{len(seeds)} seeds" if len(seeds) > 3 else ", ".join(map(str, seeds)),
             "started": _when(run.started_at), "took": _duration(run.seconds),
             "return": _figure_text(run.figure("mean_return_last"), interval=False),
             "gap": _figure_text(run.figure("exact_gap"), interval=False),
@@ -297,7 +287,7 @@ def _say_export(done: Any, args: argparse.Namespace, out: Console) -> int:
         line = f"wrote {done.rows} rows of {', '.join(done.columns[1:])} to {done.path}"
     else:
         line = (f"wrote {done.scalars} values of {', '.join(done.tags)} to {done.path} "
-                f"(tensorboard --logdir {done.directory})")
+                f"(tensorboard --logdir {done.logdir})")
     out.print(Text(visible(line, None)))
     return 0
 

@@ -117,12 +117,9 @@ def aggregate(
     curves: np.ndarray | list[Any], *, episodes: np.ndarray | None = None, window: int = 1,
     max_points: int | None = None, confidence: float = CONFIDENCE,
 ) -> AggregateCurve:
-    """Mean and confidence band per episode of `curves` [seeds, episodes].
-
-    `episodes` numbers the columns (1, 2, ... by default); `window` > 1 smooths
-    each seed's curve with a trailing rolling mean first (so the band is that of
-    the smoothed quantity); `max_points` then keeps at most that many points.
-    """
+    """Mean and confidence band per episode of `curves` [seeds, episodes] (columns numbered
+    by `episodes`, else from 1), each seed's smoothed first over a trailing `window`, and
+    then at most `max_points` kept."""
     data = rolling_mean(_as_seed_rows(curves), window)
     n, length = data.shape
     if episodes is None:
@@ -187,20 +184,14 @@ def _beta_continued_fraction(a: float, b: float, x: float) -> float:
     h = d
     for m in range(1, _MAX_ITERATIONS + 1):
         m2 = 2 * m
-        aa = m * (b - m) * x / ((qam + m2) * (a + m2))
-        d = 1.0 + aa * d
-        d = 1.0 / (d if abs(d) > _TINY else _TINY)
-        c = 1.0 + aa / c
-        c = c if abs(c) > _TINY else _TINY
-        h *= d * c
-        aa = -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2))
-        d = 1.0 + aa * d
-        d = 1.0 / (d if abs(d) > _TINY else _TINY)
-        c = 1.0 + aa / c
-        c = c if abs(c) > _TINY else _TINY
-        step = d * c
-        h *= step
-        if abs(step - 1.0) < _EPS:
+        even = m * (b - m) * x / ((qam + m2) * (a + m2))
+        for aa in (even, -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2))):
+            d = 1.0 + aa * d
+            d = 1.0 / (d if abs(d) > _TINY else _TINY)
+            c = 1.0 + aa / c
+            c = c if abs(c) > _TINY else _TINY
+            h *= d * c
+        if abs(d * c - 1.0) < _EPS:
             break
     return h
 
@@ -288,12 +279,9 @@ def pick_indices(n: int, max_points: int) -> np.ndarray:
 def bucket_means(
     episodes: np.ndarray, values: np.ndarray, max_points: int, weights: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Consecutive points averaged into at most `max_points` buckets of near-equal size.
-
-    Each bucket is labelled with its last episode; `weights` (how many episodes
-    each point already stands for) make the means exact for points that are
-    themselves bucket means. NaN values are left out of a bucket's mean.
-    """
+    """Consecutive points averaged (NaN left out) into at most `max_points` buckets of
+    near-equal size, each labelled with its last episode; `weights`: the episodes each
+    point already stands for."""
     _check_points(max_points)
     episodes = np.asarray(episodes, dtype=np.int64)
     values = np.asarray(values, dtype=np.float64)

@@ -96,11 +96,8 @@ def encode_curve(episodes: np.ndarray, values: np.ndarray) -> bytes:
 
 
 def decode_curve(data: bytes) -> tuple[np.ndarray, np.ndarray]:
-    """(episodes, values) from the bytes `encode_curve` made; CurveFormatError otherwise.
-
-    The point count is checked against the bytes there are before anything is
-    allocated, and the episodes inflate to at most the bytes that count needs.
-    """
+    """(episodes, values) from the bytes `encode_curve` made; CurveFormatError otherwise
+    (checked against the bytes there are before anything is allocated or inflated)."""
     if not data or data[0] != FORMAT_FLOAT16:
         raise CurveFormatError("unknown curve format")
     n, pos = _read_uvarint(data, 1)

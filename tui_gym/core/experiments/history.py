@@ -138,6 +138,13 @@ class RunHistory:
             raise UnknownRunError(f"no run {run_id} in {shown(self.path)}")
         return row
 
+    def _damaged_run(self, run_id: int, reason: str) -> DamagedRunError:
+        return DamagedRunError(
+            run_id,
+            f"run {run_id} in {shown(self.path)} cannot be read: {reason} "
+            f"(`tui-gym runs rm {run_id}` removes it)",
+        )
+
     def _stored_curves(self, run_id: int, blob: object) -> dict[str, bytes]:
         """A run's stored curves by name, to add to; DamagedRunError if they do not read."""
         try:
@@ -146,13 +153,6 @@ class RunHistory:
             return unpack_curves(blob)
         except CurveFormatError as exc:
             raise self._damaged_run(run_id, f"its curves do not decode ({exc})") from None
-
-    def _damaged_run(self, run_id: int, reason: str) -> DamagedRunError:
-        return DamagedRunError(
-            run_id,
-            f"run {run_id} in {shown(self.path)} cannot be read: {reason} "
-            f"(`tui-gym runs rm {run_id}` removes it)",
-        )
 
     # -- recording -----------------------------------------------------------
 
@@ -176,10 +176,8 @@ class RunHistory:
         agent_path: str | Path | None = None, status: RunStatus | None = None,
         ended_at: float | None = None, max_points: int = STORED_POINTS, spec: RunSpec | None = None,
     ) -> None:
-        """Add or replace curves (each bounded to `max_points`) and figures (by name), set the
-        saved agent's path (None: leave it), the run's settings to `spec`'s (its game,
-        wrappers, algorithm and hyperparameters; None: leave them), and a final status
-        with the end time, at once."""
+        """Add or replace curves (each bounded to `max_points`) and figures by name, and set
+        what is given of the saved agent's path, the settings of `spec`, a final status."""
         if not 2 <= max_points <= MAX_STORED_POINTS:
             raise ValueError(f"max_points must be in 2..{MAX_STORED_POINTS}, got {max_points}")
         blobs = [
@@ -260,9 +258,8 @@ class RunHistory:
             raise self._damaged_run(run_id, f"a task: {exc}") from None
 
     def prune_tasks(self) -> tuple[int, int]:
-        """Delete the stored tasks of the finished runs (their curves and figures stay: only
-        an unfinished run needs its tasks, to resume) and give their space back to the disk;
-        (runs, tasks) pruned."""
+        """Delete the finished runs' stored tasks (only an unfinished run needs them, to
+        resume) and give the space back; (runs, tasks) pruned."""
         finished = (str(RunStatus.FINISHED),)
         where = "WHERE run_id IN (SELECT id FROM runs WHERE status = ?)"
 
@@ -413,10 +410,8 @@ class RunHistory:
 
 
 class BestEffortHistory(RunHistory):
-    """A run history whose writes never raise: once one fails (a full disk, a damaged
-    file), it and every later write are skipped, and `failure` says why. A run it could
-    not start has the id None. For commands that print their results whatever happens
-    to the history, and then say they were not recorded."""
+    """A run history whose writes never raise: once one fails, it and every later write are
+    skipped (a run it could not start has the id None), and `failure` says why."""
 
     failure: str | None = None
 
@@ -490,7 +485,6 @@ def _figures_to_json(figures: Iterable[Figure]) -> str:
         [[f.name, f.value if math.isfinite(f.value) else None, f.unit, f.ci95] for f in figures],
         "the figures",
     )
-
 
 
 class RunRecorder:

@@ -38,12 +38,8 @@ class RunStatus(StrEnum):
 
 
 def _json_default(value: Any) -> Any:
-    if isinstance(value, np.bool_):
-        return bool(value)
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, np.floating):
-        return float(value)
+    if isinstance(value, np.bool_ | np.integer | np.floating):
+        return value.item()
     if isinstance(value, tuple | np.ndarray):
         return list(value)
     raise TypeError(f"{type(value).__name__} is not JSON data")
@@ -222,10 +218,7 @@ class RunRecord:
             hyperparameters=dict(self.hyperparameters), versions=self.versions.to_json(),
             agent_path=self.agent_path,
         )
-        if curves:
-            data["curves"] = [c.to_json() for c in self.curves]
-        else:
-            data["curves"] = [c.name for c in self.curves]
+        data["curves"] = [c.to_json() if curves else c.name for c in self.curves]
         return data
 
 

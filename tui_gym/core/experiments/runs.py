@@ -33,19 +33,13 @@ class RunListing(FieldsJson):
 
 
 @dataclass(frozen=True)
-class CsvExport:
-    """A run's curves written to `path`: its columns (episode first) and number of rows."""
+class CsvExport(FieldsJson):
+    """Run `run`'s curves written to `path`: its columns (episode first) and number of rows."""
 
-    run_id: int
+    run: int
     path: Path
     columns: tuple[str, ...]
     rows: int
-
-    def to_json(self) -> dict[str, Any]:
-        return {
-            "run": self.run_id, "path": str(self.path), "columns": list(self.columns),
-            "rows": self.rows,
-        }
 
 
 @dataclass(frozen=True)
@@ -109,7 +103,7 @@ def export_run_csv(run_id: int, csv_path: str | Path, db: str | None = None) -> 
     except OSError as exc:
         raise RunHistoryError(f"cannot write {shown(target)}: {exc.strerror or exc}") from None
     columns = ("episode", *(c.name for c in record.curves))
-    return CsvExport(run_id=run_id, path=target, columns=columns, rows=rows)
+    return CsvExport(run=run_id, path=target, columns=columns, rows=rows)
 
 
 def remove_run(run_id: int, db: str | None = None) -> RemovedRun:

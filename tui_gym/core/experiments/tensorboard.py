@@ -8,9 +8,9 @@ import re
 import secrets
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from tui_gym.core.experiments.errors import RunHistoryError
+from tui_gym.core.experiments.figures import FieldsJson
 from tui_gym.core.experiments.records import Curve, RunRecord
 from tui_gym.core.experiments.runs import show_run
 
@@ -24,20 +24,14 @@ class TensorBoardUnavailable(RunHistoryError):
 
 
 @dataclass(frozen=True)
-class TensorBoardExport:
-    """A run written as TensorBoard events: the file, its folder's parent, tags and values."""
+class TensorBoardExport(FieldsJson):
+    """Run `run` written as TensorBoard events: the file, its folder's parent, tags and values."""
 
-    run_id: int
+    run: int
     path: Path
-    directory: Path
+    logdir: Path
     tags: tuple[str, ...]
     scalars: int
-
-    def to_json(self) -> dict[str, Any]:
-        return {
-            "run": self.run_id, "path": str(self.path), "logdir": str(self.directory),
-            "tags": list(self.tags), "scalars": self.scalars,
-        }
 
 
 def scalar_tag(curve_name: str) -> str:
@@ -121,6 +115,5 @@ def export_run_tensorboard(
         raise RunHistoryError(f"cannot write {folder}: {exc.strerror or exc}") from None
     if not written:
         raise RunHistoryError(f"cannot write {folder}: no event file was written")
-    return TensorBoardExport(
-        run_id=summary.id, path=written[-1], directory=root, tags=tuple(tags), scalars=scalars
-    )
+    return TensorBoardExport(run=summary.id, path=written[-1], logdir=root, tags=tuple(tags),
+                             scalars=scalars)

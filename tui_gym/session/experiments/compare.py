@@ -143,14 +143,10 @@ class AlgorithmOutcome:
         return int(self.curve.episodes[-1]) if len(self.curve) else 0
 
     def figures(self) -> tuple[Figure, ...]:
-        figures = [self.mean_return_last.figure("mean_return_last")]
-        if self.exact_value is not None:
-            figures.append(Figure("exact_value", self.exact_value, ci95=self.exact_ci95))
-        if self.exact_gap is not None:
-            figures.append(Figure("exact_gap", self.exact_gap))
-        if self.rms_error is not None:
-            figures.append(Figure("rms_error", self.rms_error, ci95=self.rms_ci95))
-        return tuple(figures)
+        known = (("exact_value", self.exact_value, self.exact_ci95),
+                 ("exact_gap", self.exact_gap, None), ("rms_error", self.rms_error, self.rms_ci95))
+        return (self.mean_return_last.figure("mean_return_last"),
+                *(Figure(name, value, ci95=ci) for name, value, ci in known if value is not None))
 
     def to_json(self, max_points: int = JSON_CURVE_POINTS) -> dict[str, Any]:
         def points(curve: AggregateCurve | None) -> list[CurvePoint] | None:
@@ -934,7 +930,6 @@ def _run_children(
     left = set(given)  # the workers' jobs not ended yet
     begun: set[int] = set()
     dead_since: dict[int, float] = {}  # workers found ended other than by themselves
-    ended: set[int] = set()
     errors: list[str] = []
 
     def fail(message: str) -> None:
@@ -959,7 +954,6 @@ def _run_children(
             tally.take(index, payload)
             if kind == "end":
                 left.discard(index)
-                ended.add(index)
                 if tally.finished(tally.jobs[index]):
                     landed(tally.jobs[index])
         return True
@@ -991,7 +985,6 @@ def _run_children(
                 tell()
 
             _play(own, tally, own_stop, own_tell, landed)
-            ended.add(own.index)
         while left and not errors:
             took = take(0.05)
             tell()
@@ -1021,4 +1014,4 @@ def _run_children(
         numbers.close()
     if errors:
         raise CompareError(errors[0])
-    return all(job.index in ended and tally.finished(job) for job in jobs)
+    return all(job.index not in left and tally.finished(job) for job in jobs)
