@@ -71,7 +71,6 @@ class AggregateCurve:
     mean: np.ndarray
     half_width: np.ndarray | None
     seeds: int
-    confidence: float = CONFIDENCE
 
     @property
     def lo(self) -> np.ndarray | None:
@@ -89,9 +88,7 @@ class AggregateCurve:
         keep = pick_indices(len(self.mean), max_points)
         return AggregateCurve(
             episodes=self.episodes[keep], mean=self.mean[keep],
-            half_width=None if self.half_width is None else self.half_width[keep], seeds=self.seeds,
-            confidence=self.confidence,
-        )
+            half_width=None if self.half_width is None else self.half_width[keep], seeds=self.seeds)
 
     def points(self) -> list[CurvePoint]:
         lo, hi = self.lo, self.hi
@@ -115,7 +112,7 @@ class AggregateCurve:
 
 def aggregate(
     curves: np.ndarray | list[Any], *, episodes: np.ndarray | None = None, window: int = 1,
-    max_points: int | None = None, confidence: float = CONFIDENCE,
+    max_points: int | None = None,
 ) -> AggregateCurve:
     """Mean and confidence band per episode of `curves` [seeds, episodes] (columns numbered
     by `episodes`, else from 1), each seed's smoothed first over a trailing `window`, and
@@ -128,10 +125,8 @@ def aggregate(
         xs = np.asarray(episodes, dtype=np.int64)
         if xs.shape != (length,):
             raise ValueError(f"{length} episodes per curve but {len(xs)} episode numbers")
-    half = t_half_width(data.std(axis=0, ddof=1), n, confidence) if n > 1 else None
-    result = AggregateCurve(
-        episodes=xs, mean=data.mean(axis=0), half_width=half, seeds=n, confidence=confidence
-    )
+    half = t_half_width(data.std(axis=0, ddof=1), n) if n > 1 else None
+    result = AggregateCurve(episodes=xs, mean=data.mean(axis=0), half_width=half, seeds=n)
     return result if max_points is None else result.downsample(max_points)
 
 
@@ -157,13 +152,11 @@ def mean_with_ci(samples: np.ndarray | list[float]) -> Estimate:
     return Estimate(mean=float(values.mean()), ci95=half, seeds=n)
 
 
-def mean_return_last(curves: np.ndarray | list[Any], fraction: float = LAST_FRACTION) -> Estimate:
-    """Each seed's mean over its last `fraction` of episodes (at least one), then the mean
-    over seeds with its interval."""
-    if not 0 < fraction <= 1:
-        raise ValueError(f"fraction must be in (0, 1], got {fraction}")
+def mean_return_last(curves: np.ndarray | list[Any]) -> Estimate:
+    """Each seed's mean over its last 10% of episodes (at least one), then the mean over
+    seeds with its interval."""
     data = _as_seed_rows(curves)
-    last = max(1, math.ceil(data.shape[1] * fraction - 1e-9))
+    last = max(1, math.ceil(data.shape[1] * LAST_FRACTION - 1e-9))
     return mean_with_ci(data[:, -last:].mean(axis=1))
 
 

@@ -223,12 +223,12 @@ class RunHistory:
 
         self._write(write)
 
-    def put_task(self, run_id: int, task: TaskRecord, finished_at: float | None = None) -> bool:
+    def put_task(self, run_id: int, task: TaskRecord) -> bool:
         """Keep a finished task of a run, in a transaction of its own; False (and nothing
         written) when the run already holds one of its seeds, so a task that lands twice
         is kept once."""
         first, inputs, returns, exact = encode(task)
-        when = time.time() if finished_at is None else finished_at
+        when = time.time()
 
         def write(conn: sqlite3.Connection) -> bool:
             self._require_run(conn, run_id)
@@ -490,13 +490,8 @@ def _figures_to_json(figures: Iterable[Figure]) -> str:
 class RunRecorder:
     """Records one run into a `RunHistory`; `run_id` is its id there."""
 
-    def __init__(
-        self, history: RunHistory, spec: RunSpec, *, max_points: int = STORED_POINTS,
-        first_episode: int = 1,
-    ) -> None:
+    def __init__(self, history: RunHistory, spec: RunSpec) -> None:
         self.history = history
-        self.max_points = max_points
-        self.first_episode = first_episode
         self.run_id = history.start_run(spec)
         self.status = RunStatus.RUNNING
         self._accumulators: dict[str, CurveAccumulator] = {}
@@ -507,8 +502,8 @@ class RunRecorder:
         """Append the values of the next episodes to the per-episode curve `name`."""
         values = values if isinstance(values, np.ndarray) else list(values)
         # Twice the stored points, so the stored curve is re-bucketed from finer buckets.
-        self._accumulators.setdefault(name, CurveAccumulator(
-            2 * self.max_points, self.first_episode)).extend(np.asarray(values))
+        self._accumulators.setdefault(name, CurveAccumulator(2 * STORED_POINTS)).extend(
+            np.asarray(values))
 
     def put_curve(self, curve: Curve) -> None:
         """A whole curve (say, values at checkpoints), replacing any of the same name."""
@@ -521,10 +516,10 @@ class RunRecorder:
 
     def flush(self, status: RunStatus | None = None) -> None:
         """Write what the run has so far (and `status`, if given) in one transaction."""
-        curves = {**self._curves, **{name: Curve(name, *a.curve(self.max_points))
+        curves = {**self._curves, **{name: Curve(name, *a.curve(STORED_POINTS))
                                      for name, a in self._accumulators.items() if a.count}}
         self.history.update(self.run_id, curves=curves.values(), status=status,
-                            figures=self._figures.values(), max_points=self.max_points)
+                            figures=self._figures.values())
 
     def finish(self, status: RunStatus = RunStatus.FINISHED) -> None:
         """Write everything with the run's final status."""
