@@ -56,8 +56,7 @@ def _common_options(parser: argparse.ArgumentParser) -> None:
 
 
 def add_task_flags(parser: argparse.ArgumentParser) -> None:
-    """`--resume`, `--cluster`, `--db` and `--no-record`: where an experiment's tasks run and
-    are kept."""
+    """`--resume`, `--cluster`, `--db` and `--no-record`: where tasks run and are kept."""
     parser.add_argument("--resume", type=_int_in(1, 2**62, "a run id"), metavar="RUN",
                         help="carry on run RUN (the first id the command printed): only its "
                         "missing tasks run; the settings must be the same")
@@ -184,9 +183,8 @@ def ctrl_c_stops(stop: threading.Event, err: Console) -> Iterator[None]:
 
 def _run_recorded(args: argparse.Namespace, out: Console, label: str, run: Callable[..., R],
                   spec: Any) -> tuple[R, BestEffortHistory | None]:
-    """`run(spec, ...)` (a comparison or a sweep) kept in the run history, with a progress
-    bar on a terminal (not with --json); the first Ctrl+C stops it cleanly; its refusals as
-    one line."""
+    """`run(spec, ...)` kept in the run history, with a progress bar on a terminal (not with
+    --json); the first Ctrl+C stops it cleanly; its refusals as one line."""
     from tui_gym.session.experiments.cluster import ClusterError
     from tui_gym.session.experiments.compare import CompareError
 
@@ -221,8 +219,7 @@ def _resume_hint(group: int | None) -> str:
 
 
 def _number_text(value: float | None, ci: float | None = None, sign: bool = True) -> str:
-    """A figure with 3 significant digits or so (signed unless `sign` is False), and its
-    95% interval."""
+    """A figure to 3 significant digits or so (signed unless not `sign`), ± its interval."""
     if value is None:
         return "—"
     digits = 3 if abs(value) < 1 else 2 if abs(value) < 10 else 1

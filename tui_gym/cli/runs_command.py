@@ -131,9 +131,8 @@ CAPTION = ("return: the mean online return over the last 10% of episodes; "
 
 
 def _runs_table(title: str, rows: list[dict[str, str]], width: int) -> tuple[Text, str]:
-    """The runs in aligned columns, those that fit `width` (the least needed go first),
-    as the heading and the lines of the runs; a cell is never cut. The lines are plain
-    text, so that thousands of runs print at once."""
+    """The runs in the columns that fit `width` (the least needed go first), cells never cut:
+    the heading, and the lines as plain text so that thousands of runs print at once."""
     widths = {name: max([len(name), *(cell_len(row[name]) for row in rows)])
               for name, _ in _COLUMNS}
     shown = [name for name, _ in _COLUMNS]

@@ -114,9 +114,8 @@ def aggregate(
     curves: np.ndarray | list[Any], *, episodes: np.ndarray | None = None, window: int = 1,
     max_points: int | None = None,
 ) -> AggregateCurve:
-    """Mean and confidence band per episode of `curves` [seeds, episodes] (columns numbered
-    by `episodes`, else from 1), each seed's smoothed first over a trailing `window`, and
-    then at most `max_points` kept."""
+    """Mean and confidence band per episode of `curves` [seeds, episodes] numbered `episodes`,
+    each seed's first smoothed over a trailing `window`; at most `max_points` kept."""
     data = rolling_mean(_as_seed_rows(curves), window)
     n, length = data.shape
     if episodes is None:
@@ -153,8 +152,7 @@ def mean_with_ci(samples: np.ndarray | list[float]) -> Estimate:
 
 
 def mean_return_last(curves: np.ndarray | list[Any]) -> Estimate:
-    """Each seed's mean over its last 10% of episodes (at least one), then the mean over
-    seeds with its interval."""
+    """Each seed's mean over its last 10% of episodes (at least one), then over the seeds."""
     data = _as_seed_rows(curves)
     last = max(1, math.ceil(data.shape[1] * LAST_FRACTION - 1e-9))
     return mean_with_ci(data[:, -last:].mean(axis=1))
@@ -272,9 +270,8 @@ def pick_indices(n: int, max_points: int) -> np.ndarray:
 def bucket_means(
     episodes: np.ndarray, values: np.ndarray, max_points: int, weights: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Consecutive points averaged (NaN left out) into at most `max_points` buckets of
-    near-equal size, each labelled with its last episode; `weights`: the episodes each
-    point already stands for."""
+    """Consecutive points averaged (NaN left out) in at most `max_points` near-equal buckets,
+    each labelled with its last episode; `weights`: the episodes each point stands for."""
     _check_points(max_points)
     episodes = np.asarray(episodes, dtype=np.int64)
     values = np.asarray(values, dtype=np.float64)

@@ -269,9 +269,8 @@ _shared_lock = threading.Lock()
 
 def open_shared(path: Path, migrations: Sequence[Migration], timeout: float, *,
                 read_only: bool = False) -> Connection:
-    """This process's connection to `path`, opened if there is none yet: the file (and its
-    folder) created, made WAL and migrated; with `read_only`, a missing file is not created
-    and one that cannot be written is read. RunHistoryError (one line) for anything else."""
+    """This process's connection to `path` (opened if need be: created, made WAL, migrated;
+    `read_only`: never created, read where it cannot be written); RunHistoryError else."""
     key = (os.getpid(), os.path.realpath(path))
     with _shared_lock:
         shared = _shared.get(key)

@@ -224,9 +224,8 @@ class RunHistory:
         self._write(write)
 
     def put_task(self, run_id: int, task: TaskRecord) -> bool:
-        """Keep a finished task of a run, in a transaction of its own; False (and nothing
-        written) when the run already holds one of its seeds, so a task that lands twice
-        is kept once."""
+        """Keep a finished task in a transaction of its own; False (nothing written) when the run
+        already holds one of its seeds: a task that lands twice is kept once."""
         first, inputs, returns, exact = encode(task)
         when = time.time()
 
@@ -275,8 +274,7 @@ class RunHistory:
         return pruned
 
     def group_ids(self, run_id: int) -> list[int]:
-        """Run `run_id` and the runs that name it as their group, by id; UnknownRunError
-        if there is no such run."""
+        """Run `run_id` and the runs of its group, by id; UnknownRunError if there is none."""
 
         def read(conn: sqlite3.Connection) -> list[int]:
             self._require_run(conn, run_id)

@@ -224,10 +224,8 @@ class RunRecord:
 
 @dataclass(frozen=True, eq=False)
 class TaskRecord:
-    """A finished task: seeds `seeds` (rows `rows` of the run's seed list), `episodes`
-    each; `returns[i, e]` seed i's online return in episode e; `exact[i, j]` its greedy
-    policy's exact value at checkpoint j, a prediction learner's RMS error of V (None
-    without a model)."""
+    """A finished task: seeds `seeds` (rows `rows` of the run's seed list), `episodes` each;
+    `returns[i, e]`; `exact[i, j]` the greedy exact value (or RMS error of V) at checkpoint j."""
 
     rows: tuple[int, ...]
     seeds: tuple[int, ...]

@@ -71,8 +71,7 @@ def list_runs(
     db: str | None = None, *, game: str | None = None, kind: RunKind | str | None = None,
     limit: int | None = None,
 ) -> RunListing:
-    """The recorded runs, newest first (the newest `limit`, only `game`'s and `kind`'s
-    when given)."""
+    """The recorded runs, newest first (at most `limit`, of `game` and `kind` when given)."""
     path, exists = _existing(db)
     if not exists:
         return RunListing(db=path, runs=())
@@ -137,9 +136,8 @@ def recover_history(db: str | None = None) -> Recovery:
 
 
 def curves_csv(curves: Sequence[Curve]) -> tuple[str, int]:
-    """The CSV text of `curves` and its number of data rows: one row per episode any curve
-    has, one column per curve; floats in full (`repr`: read back, the same numbers), an
-    episode a curve has no value at an empty cell."""
+    """The CSV text of `curves` and its number of rows: one an episode, one column a curve,
+    floats in full (`repr`), an empty cell where a curve has no value."""
     none: np.ndarray = np.empty(0, dtype=np.int64)
     episodes = np.unique(np.concatenate([c.episodes for c in curves])) if curves else none
     columns: list[list[str]] = []

@@ -123,8 +123,7 @@ class SessionRunLog:
         self._baseline = run.episodes
 
     def close(self, wait: float | None = CLOSE_WAIT_SECONDS) -> None:
-        """End the open run and wait (up to `wait` seconds; None: as long as it takes) for
-        every write to land."""
+        """End the open run and wait up to `wait` seconds (None: no limit) for every write."""
         if self._run is not None and self.problem is None:
             self._end(self._run)
         writer = self._writer

@@ -1,6 +1,4 @@
-"""Tasks on a Dask cluster: `connect(cluster)`, then `run_on_cluster(client, tasks, work,
-take, stopped)`.
-"""
+"""Tasks on a Dask cluster: `connect(cluster)`, then `run_on_cluster(client, tasks, ...)`."""
 
 from __future__ import annotations
 
@@ -63,9 +61,8 @@ def run_on_cluster(
     client: Any, tasks: Sequence[T], work: Callable[[T], R], take: Callable[[T, R], None],
     stopped: Callable[[], bool],
 ) -> bool:
-    """Run `work(task)` for every task on the cluster of `client`, `take(task, result)` as
-    each lands (here, on the calling thread); True when all landed, False when `stopped`
-    ended it first (the tasks not landed are cancelled). A task that raises raises here."""
+    """Run `work(task)` for every task on the cluster, `take(task, result)` here as each lands;
+    whether all landed (False: `stopped` first, the rest cancelled). A task's error raises here."""
     from distributed import wait
 
     run = uuid.uuid4().hex[:12]

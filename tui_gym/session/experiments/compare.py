@@ -55,9 +55,8 @@ RESUME_ADVICE = "; give the command that started it to resume it"  # ends Resume
 
 @dataclass(frozen=True)
 class CompareSpec:
-    """What to compare: `algorithms` on `game`, `seeds` seeds each (from `first_seed`),
-    `episodes` episodes per seed. `settings` go to every algorithm that has the
-    hyperparameter (the budget `episodes` defaults to the comparison's)."""
+    """What to compare: `algorithms` on `game`, `seeds` seeds from `first_seed`, `episodes` each;
+    `settings` go to every algorithm that has them (the budget `episodes` defaults to these)."""
 
     game: str
     algorithms: Sequence[str]
@@ -91,8 +90,7 @@ class CompareSpec:
 
 
 def settle_runs(spec: Any) -> None:
-    """Check a spec's `seeds` and `episodes`, and keep its settings, game parameters and
-    wrappers as copies of their own."""
+    """Check a spec's `seeds` and `episodes`; copy its settings, game parameters and wrappers."""
     for name, value in (("seeds", spec.seeds), ("episodes", spec.episodes)):
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
@@ -251,8 +249,7 @@ class _Model:
         return learner
 
     def greedy_values(self, tables: np.ndarray) -> np.ndarray:
-        """The exact values of the greedy policies of action-value `tables[m, rows, A]`,
-        each greedy among the actions each state offers."""
+        """Exact values of the greedy policies of `tables[m, rows, A]` (among actions offered)."""
         q = tables[:, self.rows]
         if self.offered is not None:
             q = np.where(self.offered[self.rows], q, -np.inf)
@@ -261,8 +258,7 @@ class _Model:
 
 @dataclass(frozen=True)
 class _Job:
-    """An arm's seeds `seeds` (indices `rows` of its seed list), of the experiment
-    `setup` on the game as `prepared`."""
+    """Seeds `seeds` (rows `rows` of the seed list) of arm `arm`, on the game as `prepared`."""
 
     index: int
     arm: int
@@ -276,9 +272,8 @@ class _Job:
 
 @dataclass(frozen=True)
 class SeedsUpdate:
-    """What a job played since its last update: per seed, its episodes done, the returns
-    of episodes `first[i]` to `done[i] - 1`, and `exact` as in `TaskRecord` (NaN until
-    reached)."""
+    """What a job played since its last update: per seed, its episodes done, the returns of
+    episodes `first[i]` to `done[i] - 1`, and `exact` as in `TaskRecord` (NaN until reached)."""
 
     done: np.ndarray
     first: np.ndarray
@@ -288,8 +283,7 @@ class SeedsUpdate:
 
 @dataclass
 class Prepared:
-    """The game as built once: its name, id and arguments, each arm's hyperparameters,
-    and its model and optimum when it has one."""
+    """The game as built once: its name, id, arguments, arms' hyperparameters, model, optimum."""
 
     game: str
     env_id: str
@@ -375,8 +369,7 @@ def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared,
 def _run_job(
     job: _Job, stop: Callable[[], bool], report: Callable[[SeedsUpdate], None],
 ) -> SeedsUpdate:
-    """Train a job's seeds one after another, `report`ing what they play as they go; the
-    last update (complete or stopped)."""
+    """Train a job's seeds in turn, `report`ing what they play as they go; the last update."""
     n, episodes = len(job.seeds), job.setup.episodes
     checkpoints = checkpoint_episodes(episodes)
     done = np.zeros(n, dtype=np.int64)
@@ -631,9 +624,8 @@ def _resume_runs(
     history: RunHistory, kind: RunKind, setup: Setup, arms: Sequence[Arm], prepared: Prepared,
     resume: int | Sequence[int], tally: _Tally,
 ) -> list[int | None]:
-    """The runs of `resume`'s group (or the runs `resume` lists), checked against these
-    settings, marked running again, their stored tasks counted into `tally`; ResumeError
-    (one line) if they differ."""
+    """The runs of `resume` (a group's first id, or every id), checked against these settings,
+    reopened, their stored tasks counted into `tally`; ResumeError (one line) if they differ."""
     try:
         if isinstance(resume, int):
             first = history.get_run(resume).summary
@@ -815,9 +807,8 @@ def _stored(history: RunHistory, setup: Setup, arms: Sequence[Arm], prepared: Pr
 
 def _estimate(prepared: Prepared, arms: Sequence[Arm], setup: Setup,
               status: Callable[[str], None] | None) -> float:
-    """Seconds the whole would take on this thread, by a throwaway learner of each arm
-    played for `PROBE_SECONDS` (which also compiles the arms' learners, once, saying so
-    through `status`); 0 for a game no model follows (its seeds stay here)."""
+    """Seconds the whole would take here, from a throwaway learner per arm played for
+    `PROBE_SECONDS` (compiling them first, said through `status`); 0 without a model."""
     model = prepared.model
     if model is None:
         return 0.0
@@ -880,8 +871,7 @@ def run_compare(
 
 def _play(job: _Job, tally: _Tally, stop: Callable[[], bool], tell: Callable[[], None],
           landed: Callable[[_Job], None]) -> bool:
-    """Play a job on this thread, counted in and told as it goes; whether it finished (then
-    it has landed)."""
+    """Play a job here, counted in and told as it goes; whether it finished (and landed)."""
 
     def report(update: SeedsUpdate) -> None:
         tally.take(job.index, update)
@@ -959,8 +949,7 @@ def _run_children(
         return True
 
     def lost(grace: float) -> None:
-        """A worker that ended other than by itself (killed, or crashed): an error, once
-        its last words had `grace` seconds to arrive."""
+        """A worker ended other than by itself: an error, once its last words had `grace` s."""
         now = time.monotonic()
         for w in workers:
             if w.exitcode not in (None, 0) and now - dead_since.setdefault(w.pid, now) >= grace:

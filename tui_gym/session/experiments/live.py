@@ -124,10 +124,9 @@ def run_results(
     snapshot: TrainingSnapshot | None, checkpoints: ExactCheckpoints, after: int,
     report: EvalReport | None = None,
 ) -> tuple[list[Curve], list[Figure]]:
-    """What the run history keeps of a run's episodes after `after` as of `snapshot` (None:
-    no episodes): the return per episode and the checkpoints' curve; `mean_return_last`,
-    `exact_value` and `exact_gap` (or `rms_error`: those known), the episodes trained, and
-    the greedy evaluation's mean return with its 95% interval (normal approximation)."""
+    """What the run history keeps of the episodes after `after` as of `snapshot`: the return
+    per episode and the checkpoints' curve; `mean_return_last`, the exact figures known, the
+    episodes trained and the greedy evaluation's mean return with its 95% interval."""
     curve = None if snapshot is None else return_curve(snapshot, after)
     curves = [c for c in (curve, checkpoints.curve()) if c is not None]
     exact, figures = checkpoints.last, list[Figure]()

@@ -63,9 +63,8 @@ class Range(FieldsJson):
 
 @dataclass(frozen=True)
 class SweepSpec:
-    """`algorithm` on `game` at every point of `grid` (key -> values), or at `samples`
-    points drawn from `ranges` (key -> `Range`, seeded by `sample_seed`), `seeds` seeds
-    each. `settings` are fixed values for the other hyperparameters."""
+    """`algorithm` on `game` at every point of `grid` (key -> values), or at `samples` points
+    drawn from `ranges` by `sample_seed`, `seeds` seeds each; `settings` fix the others."""
 
     game: str
     algorithm: str
@@ -121,8 +120,7 @@ class SweepSpec:
         return list(self.ranges or self.grid)
 
     def points(self) -> list[dict[str, Any]]:
-        """Every grid point as {key: value}, the first key's values slowest; or the points
-        drawn, in the order drawn."""
+        """Every grid point as {key: value} (the first key slowest), or the points drawn."""
         if self.ranges:
             rng = np.random.default_rng(self.sample_seed)
             return [{k: r.draw(rng) for k, r in self.ranges.items()} for _ in range(self.samples)]
@@ -141,9 +139,8 @@ class SweepPoint:
 
     @property
     def figure(self) -> float | None:
-        """What points rank by: a prediction learner's RMS error of V (the lower the
-        better); else the greedy policy's exact value where the game has one, else the
-        online return over the last 10% of episodes (the higher the better)."""
+        """What points rank by: a prediction learner's RMS error of V (the lower the better), else
+        the greedy policy's exact value, else the online return over the last 10% of episodes."""
         o = self.outcome
         if o is None or (o.rms_error is None and issubclass(algorithm(o.algorithm), Predictor)):
             return None
