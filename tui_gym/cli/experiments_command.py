@@ -242,18 +242,13 @@ def _settings_text(hp: dict[str, Any]) -> str:
 # --- compare -------------------------------------------------------------------------------
 
 
-def _algorithm_names(text: str) -> list[str]:
-    names = [n.strip() for n in text.split(",") if n.strip()]
-    if not names:
-        raise CliError("--algorithms: name at least one, e.g. --algorithms q-learning,sarsa")
-    return names
-
-
 def cmd_compare(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.session.experiments.compare import CompareSpec, run_compare
 
-    spec = CompareSpec(game=args.game, algorithms=_algorithm_names(args.algorithms),
-                       **_shared(args))
+    names = [n.strip() for n in args.algorithms.split(",") if n.strip()]
+    if not names:
+        raise CliError("--algorithms: name at least one, e.g. --algorithms q-learning,sarsa")
+    spec = CompareSpec(game=args.game, algorithms=names, **_shared(args))
     result, history = _run_recorded(args, out, "comparing", run_compare, spec)
     if args.csv:
         _write_csv(args.csv, result.outcomes)
@@ -368,27 +363,18 @@ def _write_csv(path: str, outcomes: Sequence[AlgorithmOutcome]) -> None:
 # --- sweep ---------------------------------------------------------------------------------
 
 
-def _grid(items: Sequence[str]) -> dict[str, list[str]]:
-    return {key: [v.strip() for v in values.split(",") if v.strip()]
-            for key, values in _pairs(items, "--grid", "KEY=V1,V2,...").items()}
+def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.session.experiments.sweep import Range, SweepSpec, run_sweep
 
-
-def _ranges(items: Sequence[str]) -> dict[str, Any]:
-    from tui_gym.session.experiments.sweep import Range
-
-    ranges: dict[str, Any] = {}
-    for key, text in _pairs(items, "--range").items():
+    grid = {key: [v.strip() for v in values.split(",") if v.strip()]
+            for key, values in _pairs(args.grid, "--grid", "KEY=V1,V2,...").items()}
+    shared = _shared(args)
+    ranges = {}
+    for key, text in _pairs(args.ranges, "--range").items():
         with cli_errors(ValueError, prefix=f"--range {key}: "):
             ranges[key] = Range.parse(text)
-    return ranges
-
-
-def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.session.experiments.sweep import SweepSpec, run_sweep
-
-    spec = SweepSpec(game=args.game, algorithm=args.algorithm, grid=_grid(args.grid),
-                     **_shared(args), ranges=_ranges(args.ranges), samples=args.sample,
-                     sample_seed=args.sample_seed)
+    spec = SweepSpec(game=args.game, algorithm=args.algorithm, grid=grid, **shared,
+                     ranges=ranges, samples=args.sample, sample_seed=args.sample_seed)
     result, history = _run_recorded(args, out, "sweeping", run_sweep, spec)
     if args.json:
         print_json("sweep", result.to_json())

@@ -114,12 +114,6 @@ def _figure_text(figure: Any, interval: bool = True) -> str:
     return text
 
 
-def _screenful(out: Console) -> int:
-    # The title and a blank line, the header and its rule, the line saying there are more,
-    # a blank line and the caption's two, and the shell's prompt after it.
-    return max(5, out.size.height - 9)
-
-
 # The columns, and those that go first to last when the terminal is narrow.
 _COLUMNS = (("id", "right"), ("kind", "left"), ("game", "left"), ("algorithm", "left"),
             ("seeds", "left"), ("started", "left"), ("took", "right"), ("return", "right"),
@@ -171,8 +165,9 @@ def cmd_runs(args: argparse.Namespace, out: Console) -> int:
         return _SAY[verb](done, args, out)
     game = args.game.strip().lower() if args.game else None
     limit = args.limit
-    if limit is None:
-        limit = 0 if args.json else _screenful(out)
+    if limit is None:  # a screenful: all but the title and a blank line, the header and its
+        # rule, the line saying there are more, a blank line, the caption's two, the prompt
+        limit = 0 if args.json else max(5, out.size.height - 9)
     with cli_errors(RunHistoryError):
         listing = list_runs(args.db, game=game, kind=args.kind, limit=limit or None)
     for bad in listing.damaged[:5]:

@@ -142,11 +142,6 @@ def _code(exc: sqlite3.Error) -> str:
     return "_".join((getattr(exc, "sqlite_errorname", "") or "").split("_")[:2])
 
 
-def is_busy(exc: sqlite3.Error) -> bool:
-    text = str(exc).lower()
-    return _code(exc) in ("SQLITE_BUSY", "SQLITE_LOCKED") or "locked" in text or "busy" in text
-
-
 def is_damage(exc: sqlite3.Error) -> bool:
     return _code(exc) in ("SQLITE_CORRUPT", "SQLITE_NOTADB") or "malformed" in str(exc).lower()
 
@@ -239,7 +234,9 @@ class Connection:
                 try:
                     return self._once(action, begin)
                 except sqlite3.OperationalError as exc:
-                    if not is_busy(exc):
+                    text = str(exc).lower()
+                    if not (_code(exc) in ("SQLITE_BUSY", "SQLITE_LOCKED") or "locked" in text
+                            or "busy" in text):
                         raise
             if time.monotonic() >= deadline:
                 raise RunHistoryBusyError(f"{shown(path)} is busy: another process kept it "

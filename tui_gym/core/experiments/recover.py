@@ -102,14 +102,6 @@ def _run_ids(conn: sqlite3.Connection) -> Iterator[int]:
     yield from sorted(found | set(range(1, last + 1)))
 
 
-def _run_fields(conn: sqlite3.Connection) -> set[str]:
-    """The runs table's columns (an older schema lacks some)."""
-    try:
-        return {row[1] for row in conn.execute("PRAGMA table_info(runs)")}
-    except sqlite3.Error:
-        return set()
-
-
 def _fetch(conn: sqlite3.Connection, table: str, alias: str, key: object,
            have: set[str] | None = None) -> dict[str, Any] | None:
     """The FIELDS of `alias` from `table`'s row `key` (null for a column not in `have`), from
@@ -173,7 +165,10 @@ def recover(source: str | Path) -> Recovery:
         try:
             with RunHistory(target) as history:
                 writers = WriterCheck()
-                have = _run_fields(conn)
+                try:  # the runs table's columns (an older schema lacks some)
+                    have = {row[1] for row in conn.execute("PRAGMA table_info(runs)")}
+                except sqlite3.Error:
+                    have = set()
                 for run_id in _run_ids(conn):
                     try:
                         found = _one(conn, have, run_id)

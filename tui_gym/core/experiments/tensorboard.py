@@ -9,6 +9,8 @@ import secrets
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.figures import FieldsJson
 from tui_gym.core.experiments.records import Curve, RunRecord
@@ -55,11 +57,9 @@ def _settings_text(record: RunRecord) -> str:
 
 def _walltimes(curve: Curve, started: float, ended: float | None) -> list[float]:
     """When each point was reached, spread evenly by episode over the run's time."""
-    episodes = curve.episodes.tolist()
-    if ended is None or len(episodes) < 2 or episodes[-1] == episodes[0]:
-        return [started] * len(episodes)
-    first, last = episodes[0], episodes[-1]
-    return [started + (ended - started) * (e - first) / (last - first) for e in episodes]
+    if ended is None or len(curve) < 2:  # (its episodes strictly increase)
+        return [started] * len(curve)
+    return np.interp(curve.episodes, curve.episodes[[0, -1]], [started, ended]).tolist()
 
 
 def export_run_tensorboard(

@@ -585,23 +585,6 @@ class _Tally:
             smoothed=aggregate(seen, window=window) if window > 1 else None, **figures)
 
 
-def _start_runs(
-    history: RunHistory, kind: RunKind, setup: Setup, arms: Sequence[Arm], prepared: Prepared,
-    group: int | None = None,
-) -> list[int | None]:
-    ids: list[int | None] = []
-    for a, arm in enumerate(arms):
-        run_id = history.start_run(RunSpec(
-            kind=kind, game=prepared.game, algorithm=arm.algorithm, game_params=prepared.env_kwargs,
-            wrappers=prepared.wrappers, hyperparameters=prepared.hyperparameters[a],
-            seeds=setup.seed_list, group=group,
-        ))
-        ids.append(run_id)
-        if group is None:
-            group = run_id
-    return ids
-
-
 class CompareError(RuntimeError):
     """A job of a comparison failed; the message says which and why."""
 
@@ -720,7 +703,13 @@ def execute(
                 raise ResumeError(f"run {resume} cannot be resumed without the run history")
             tally.run_ids = _resume_runs(history, kind, setup, arms, prepared, resume, tally)
         elif history is not None:
-            tally.run_ids = _start_runs(history, kind, setup, arms, prepared, group)
+            for a, arm in enumerate(arms):  # the first run is the group of those after it
+                tally.run_ids[a] = history.start_run(RunSpec(
+                    kind=kind, game=prepared.game, algorithm=arm.algorithm,
+                    game_params=prepared.env_kwargs, wrappers=prepared.wrappers,
+                    hyperparameters=prepared.hyperparameters[a], seeds=setup.seed_list,
+                    group=group))
+                group = tally.run_ids[a] if group is None else group
         last = [time.monotonic()]
 
         def tell(force: bool = False) -> None:
