@@ -107,9 +107,6 @@ def add_experiment_parsers(sub: Any) -> None:
     _common_options(sweep)
 
 
-# --- reading the arguments ---------------------------------------------------------------
-
-
 def _pairs(items: Sequence[str], flag: str, shape: str = "KEY=VALUE") -> dict[str, str]:
     out: dict[str, str] = {}
     for item in items:
@@ -239,9 +236,6 @@ def _settings_text(hp: dict[str, Any]) -> str:
     return " ".join(parts)
 
 
-# --- compare -------------------------------------------------------------------------------
-
-
 def cmd_compare(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.session.experiments.compare import CompareSpec, run_compare
 
@@ -358,9 +352,6 @@ def _write_csv(path: str, outcomes: Sequence[AlgorithmOutcome]) -> None:
         write_atomically(path, curves_csv(curves)[0])
     except OSError as exc:
         raise CliError(f"--csv {path}: cannot write ({exc.strerror or exc})") from None
-
-
-# --- sweep ---------------------------------------------------------------------------------
 
 
 def cmd_sweep(args: argparse.Namespace, out: Console) -> int:

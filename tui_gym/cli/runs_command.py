@@ -86,9 +86,6 @@ def add_app_options(parser: argparse.ArgumentParser) -> None:
                              "recorded, and its comparisons go when it ends")
 
 
-# --- the commands ------------------------------------------------------------------
-
-
 def _when(seconds: float | None, full: bool = False) -> str:
     if seconds is None:
         return ""

@@ -103,8 +103,6 @@ class RunHistory:
     def __exit__(self, *exc: object) -> None:
         self.close()
 
-    # -- plumbing ------------------------------------------------------------
-
     @contextmanager
     def _errors(self) -> Iterator[None]:
         """SQLite's errors as one line naming the file."""
@@ -153,8 +151,6 @@ class RunHistory:
             return unpack_curves(blob)
         except CurveFormatError as exc:
             raise self._damaged_run(run_id, f"its curves do not decode ({exc})") from None
-
-    # -- recording -----------------------------------------------------------
 
     def start_run(self, spec: RunSpec, started_at: float | None = None) -> int:
         """Record a new run (status running); its id."""
@@ -319,8 +315,6 @@ class RunHistory:
                 conn.execute("INSERT INTO curves (run_id, data) VALUES (?, ?)", (run.id, blob))
 
         self._write(write)
-
-    # -- queries -------------------------------------------------------------
 
     def read_runs(
         self, *, game: str | None = None, kind: RunKind | str | None = None,

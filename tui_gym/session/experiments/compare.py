@@ -199,9 +199,6 @@ class CompareResult:
         }
 
 
-# --- the plan: what each batch runs ---------------------------------------------------
-
-
 @dataclass(frozen=True)
 class Arm:
     """One learner of an experiment: an algorithm with the settings given for it."""
@@ -363,9 +360,6 @@ def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared,
     return jobs
 
 
-# --- running one job (in a child process or on the calling thread) -------------------------
-
-
 def _run_job(
     job: _Job, stop: Callable[[], bool], report: Callable[[SeedsUpdate], None],
 ) -> SeedsUpdate:
@@ -471,9 +465,6 @@ def _worker(parent: int, jobs: Mapping[int, _Job], numbers: Any, messages: Any,
             return
         messages.put(("end", index, final))
         played += len(jobs[index].seeds)
-
-
-# --- putting it together ----------------------------------------------------------------
 
 
 class _Tally:
