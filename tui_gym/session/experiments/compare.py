@@ -612,11 +612,9 @@ def _resume_runs(
             first = records[0].summary
     except RunHistoryError as exc:
         raise ResumeError(str(exc)) from None
-    run_id = first.id
-    advice = RESUME_ADVICE
     if len(records) != len(arms) or any(r.summary.kind != kind for r in records):
-        raise ResumeError(f"run {run_id} is a {first.kind} of {len(records)} run(s), not this "
-                          f"{kind} of {len(arms)}{advice}")
+        raise ResumeError(f"run {first.id} is a {first.kind} of {len(records)} run(s), not this "
+                          f"{kind} of {len(arms)}{RESUME_ADVICE}")
     for a, record in enumerate(records):
         run = record.summary
         tasks = history.read_tasks(run.id)
@@ -629,7 +627,7 @@ def _resume_runs(
                 raise ResumeError(
                     f"run {run.id} was recorded with other settings ({key} "
                     f"{visible(str(there.get(key)), 60)} there, "
-                    f"{visible(str(here.get(key)), 60)} here){advice}")
+                    f"{visible(str(here.get(key)), 60)} here){RESUME_ADVICE}")
         for task in tasks:
             tally.load(a, task)
     for record in records:

@@ -138,12 +138,10 @@ def run_results(
         if not len(tail):
             tail = curve.values[-1:]
         figures.append(Figure("mean_return_last", float(np.nanmean(tail)), "return"))
-    if "exact_value" in exact:
-        figures.append(Figure("exact_value", exact["exact_value"], "return"))
-    if "gap" in exact:
-        figures.append(Figure("exact_gap", exact["gap"], "return"))
-    if "rms_error" in exact:
-        figures.append(Figure("rms_error", exact["rms_error"]))
+    for key, name, unit in (("exact_value", "exact_value", "return"),
+                            ("gap", "exact_gap", "return"), ("rms_error", "rms_error", "")):
+        if key in exact:
+            figures.append(Figure(name, exact[key], unit))
     if snapshot is not None:
         figures.append(Figure("episodes", max(0, snapshot.episodes - after), "episodes"))
     if report is not None and report.episodes:
