@@ -207,9 +207,10 @@ def cmd_runs(args: argparse.Namespace, out: Console) -> int:
 def _act(verb: str, args: argparse.Namespace) -> Any:
     """What `runs VERB` does to the history (RunHistoryError when it cannot)."""
     from tui_gym.core import experiments as history
+    from tui_gym.core.experiments.recover import recover
 
     if verb == "recover":
-        return history.recover_history(args.db)
+        return recover(history.resolve_db_path(args.db))
     if verb == "show":
         return history.show_run(args.run_id, args.db)
     if verb == "rm":

@@ -17,7 +17,6 @@ from tui_gym.core.experiments.figures import FieldsJson
 from tui_gym.core.experiments.history import DamagedRun, RunHistory
 from tui_gym.core.experiments.paths import resolve_db_path
 from tui_gym.core.experiments.records import Curve, RunKind, RunRecord, RunSummary
-from tui_gym.core.experiments.recover import Recovery, recover
 from tui_gym.core.files import OutputPathError, check_output_path, write_atomically
 
 
@@ -128,11 +127,6 @@ def prune_tasks(db: str | None = None) -> PrunedTasks:
         return PrunedTasks(path, 0, 0)
     with RunHistory(path) as history:
         return PrunedTasks(path, *history.prune_tasks())
-
-
-def recover_history(db: str | None = None) -> Recovery:
-    """Copy what can be read of the history into a fresh file beside it (see `recover`)."""
-    return recover(resolve_db_path(db))
 
 
 def curves_csv(curves: Sequence[Curve]) -> tuple[str, int]:
