@@ -92,13 +92,9 @@ class AggregateCurve:
 
     def points(self) -> list[CurvePoint]:
         lo, hi = self.lo, self.hi
-        return [
-            CurvePoint(
-                episode=int(self.episodes[i]), mean=float(self.mean[i]),
-                lo=None if lo is None else float(lo[i]), hi=None if hi is None else float(hi[i]),
-            )
-            for i in range(len(self.mean))
-        ]
+        return [CurvePoint(int(self.episodes[i]), float(self.mean[i]),
+                           None if lo is None else float(lo[i]),
+                           None if hi is None else float(hi[i])) for i in range(len(self.mean))]
 
     def as_curves(self, name: str) -> tuple[Curve, ...]:
         """The mean as curve `name`, and the band's edges as `name.lo` and `name.hi` if any."""

@@ -77,7 +77,7 @@ def export_run_tensorboard(
     root = Path(directory).expanduser()
     folder = root / _run_folder(record)
     tags: list[str] = []
-    scalars = last_episode = 0
+    scalars = 0
     try:
         folder.mkdir(parents=True, exist_ok=True)
         earlier = set(folder.glob(EVENT_PREFIX + "*"))
@@ -95,9 +95,8 @@ def export_run_tensorboard(
                     if math.isfinite(value):
                         writer.add_scalar(tag, value, global_step=episode, walltime=when)
                         scalars += 1
-                if len(curve):
-                    last_episode = max(last_episode, int(curve.episodes[-1]))
             end = summary.ended_at or summary.started_at
+            last_episode = max((int(c.episodes[-1]) for c in record.curves if len(c)), default=0)
             for figure in summary.figures:
                 if math.isfinite(figure.value):
                     tag = f"figures/{figure.name}"

@@ -114,9 +114,10 @@ def _known_elsewhere(keys: Sequence[str]) -> str:
 
 @dataclass(frozen=True, eq=False)
 class AlgorithmOutcome:
-    """One algorithm's results over its seeds so far: the mean online return per episode
-    every seed finished (`curve`), and at the checkpoints every seed reached the greedy
-    policy's exact value and gap, or a prediction learner's RMS error of V."""
+    """One algorithm's results over its seeds so far (`seeds_done` finished, run `run_id`):
+    the mean online return per episode every seed finished (`curve`), and at the checkpoints
+    every seed reached the greedy policy's exact value and gap, or a prediction learner's
+    RMS error of V."""
 
     algorithm: str
     hyperparameters: Mapping[str, Any]

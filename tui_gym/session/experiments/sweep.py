@@ -212,9 +212,9 @@ def run_sweep(
                    history=history, processes=processes, status=status, resume=resume,
                    cluster=cluster)
     hps = done.prepared.hyperparameters
-    swept = [{k: hp[k] for k in spec.keys} for hp in hps]
     fixed = {k: v for k, v in hps[0].items() if k not in spec.keys}
-    found = [SweepPoint(v, o) for v, o in zip(swept, done.outcomes, strict=True)]
+    found = [SweepPoint({k: hp[k] for k in spec.keys}, o)
+             for hp, o in zip(hps, done.outcomes, strict=True)]
     lowest = issubclass(algorithm(spec.algorithm), Predictor)  # an RMS error
     order = sorted((i for i, p in enumerate(found) if p.figure is not None),
                    key=lambda i: (found[i].figure or 0.0) * (1 if lowest else -1))
