@@ -162,8 +162,9 @@ def cmd_runs(args: argparse.Namespace, out: Console) -> int:
         return _SAY[verb](done, args, out)
     game = args.game.strip().lower() if args.game else None
     limit = args.limit
-    if limit is None:  # a screenful: all but the title and a blank line, the header and its
-        # rule, the line saying there are more, a blank line, the caption's two, the prompt
+    if limit is None:
+        # A screenful: all but the title, a blank line, the header, its rule, the line saying
+        # there are more, a blank line, the caption's two and the shell's prompt.
         limit = 0 if args.json else max(5, out.size.height - 9)
     with cli_errors(RunHistoryError):
         listing = list_runs(args.db, game=game, kind=args.kind, limit=limit or None)

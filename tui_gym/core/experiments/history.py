@@ -136,13 +136,6 @@ class RunHistory:
             raise UnknownRunError(f"no run {run_id} in {shown(self.path)}")
         return row
 
-    def _damaged_run(self, run_id: int, reason: str) -> DamagedRunError:
-        return DamagedRunError(
-            run_id,
-            f"run {run_id} in {shown(self.path)} cannot be read: {reason} "
-            f"(`tui-gym runs rm {run_id}` removes it)",
-        )
-
     def _stored_curves(self, run_id: int, blob: object) -> dict[str, bytes]:
         """A run's stored curves by name, to add to; DamagedRunError if they do not read."""
         try:
@@ -151,6 +144,13 @@ class RunHistory:
             return unpack_curves(blob)
         except CurveFormatError as exc:
             raise self._damaged_run(run_id, f"its curves do not decode ({exc})") from None
+
+    def _damaged_run(self, run_id: int, reason: str) -> DamagedRunError:
+        return DamagedRunError(
+            run_id,
+            f"run {run_id} in {shown(self.path)} cannot be read: {reason} "
+            f"(`tui-gym runs rm {run_id}` removes it)",
+        )
 
     def start_run(self, spec: RunSpec, started_at: float | None = None) -> int:
         """Record a new run (status running); its id."""

@@ -67,13 +67,6 @@ class WrapperSetting(FieldsJson):
     params: Mapping[str, Any] = field(default_factory=dict)
 
 
-def _package_version(name: str) -> str:
-    try:
-        return metadata.version(name)
-    except metadata.PackageNotFoundError:
-        return ""
-
-
 @dataclass(frozen=True)
 class Versions(FieldsJson):
     """The versions of the packages a run ran on ("" for one not installed)."""
@@ -89,8 +82,12 @@ class Versions(FieldsJson):
         """The versions this process runs on."""
         from tui_gym import __version__
 
-        return cls(tui_gym=__version__, gymnasium=_package_version("gymnasium"),
-                   numpy=np.__version__, python=platform.python_version())
+        try:
+            gymnasium = metadata.version("gymnasium")
+        except metadata.PackageNotFoundError:
+            gymnasium = ""
+        return cls(tui_gym=__version__, gymnasium=gymnasium, numpy=np.__version__,
+                   python=platform.python_version())
 
 
 @dataclass(frozen=True)
