@@ -56,8 +56,7 @@ def _common_options(parser: argparse.ArgumentParser) -> None:
 
 
 def add_task_flags(parser: argparse.ArgumentParser) -> None:
-    """`--resume`, `--cluster`, `--db` and `--no-record`: where an experiment's tasks run and
-    are kept."""
+    """`--resume`, `--cluster`, `--db` and `--no-record`: where tasks run and are kept."""
     parser.add_argument("--resume", type=_int_in(1, 2**62, "a run id"), metavar="RUN",
                         help="carry on run RUN (the first id the command printed): only its "
                         "missing tasks run; the settings must be the same")
@@ -106,9 +105,6 @@ def add_experiment_parsers(sub: Any) -> None:
     sweep.add_argument("--sample-seed", type=_seed, default=0, metavar="S",
                        help="the seed of the points --sample draws (default 0)")
     _common_options(sweep)
-
-
-# --- reading the arguments ---------------------------------------------------------------
 
 
 def _pairs(items: Sequence[str], flag: str, shape: str = "KEY=VALUE") -> dict[str, str]:
@@ -184,9 +180,8 @@ def ctrl_c_stops(stop: threading.Event, err: Console) -> Iterator[None]:
 
 def _run_recorded(args: argparse.Namespace, out: Console, label: str, run: Callable[..., R],
                   spec: Any) -> tuple[R, BestEffortHistory | None]:
-    """`run(spec, ...)` (a comparison or a sweep) kept in the run history, with a progress
-    bar on a terminal (not with --json); the first Ctrl+C stops it cleanly; its refusals as
-    one line."""
+    """`run(spec, ...)` kept in the run history, with a progress bar on a terminal (not with
+    --json); the first Ctrl+C stops it cleanly; its refusals as one line."""
     from tui_gym.session.experiments.cluster import ClusterError
     from tui_gym.session.experiments.compare import CompareError
 
@@ -221,8 +216,7 @@ def _resume_hint(group: int | None) -> str:
 
 
 def _number_text(value: float | None, ci: float | None = None, sign: bool = True) -> str:
-    """A figure with 3 significant digits or so (signed unless `sign` is False), and its
-    95% interval."""
+    """A figure to 3 significant digits or so (signed unless not `sign`), ± its interval."""
     if value is None:
         return "—"
     digits = 3 if abs(value) < 1 else 2 if abs(value) < 10 else 1
@@ -242,21 +236,13 @@ def _settings_text(hp: dict[str, Any]) -> str:
     return " ".join(parts)
 
 
-# --- compare -------------------------------------------------------------------------------
-
-
-def _algorithm_names(text: str) -> list[str]:
-    names = [n.strip() for n in text.split(",") if n.strip()]
-    if not names:
-        raise CliError("--algorithms: name at least one, e.g. --algorithms q-learning,sarsa")
-    return names
-
-
 def cmd_compare(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.session.experiments.compare import CompareSpec, run_compare
 
-    spec = CompareSpec(game=args.game, algorithms=_algorithm_names(args.algorithms),
-                       **_shared(args))
+    names = [n.strip() for n in args.algorithms.split(",") if n.strip()]
+    if not names:
+        raise CliError("--algorithms: name at least one, e.g. --algorithms q-learning,sarsa")
+    spec = CompareSpec(game=args.game, algorithms=names, **_shared(args))
     result, history = _run_recorded(args, out, "comparing", run_compare, spec)
     if args.csv:
         _write_csv(args.csv, result.outcomes)
@@ -368,30 +354,18 @@ def _write_csv(path: str, outcomes: Sequence[AlgorithmOutcome]) -> None:
         raise CliError(f"--csv {path}: cannot write ({exc.strerror or exc})") from None
 
 
-# --- sweep ---------------------------------------------------------------------------------
+def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.session.experiments.sweep import Range, SweepSpec, run_sweep
 
-
-def _grid(items: Sequence[str]) -> dict[str, list[str]]:
-    return {key: [v.strip() for v in values.split(",") if v.strip()]
-            for key, values in _pairs(items, "--grid", "KEY=V1,V2,...").items()}
-
-
-def _ranges(items: Sequence[str]) -> dict[str, Any]:
-    from tui_gym.session.experiments.sweep import Range
-
-    ranges: dict[str, Any] = {}
-    for key, text in _pairs(items, "--range").items():
+    grid = {key: [v.strip() for v in values.split(",") if v.strip()]
+            for key, values in _pairs(args.grid, "--grid", "KEY=V1,V2,...").items()}
+    shared = _shared(args)
+    ranges = {}
+    for key, text in _pairs(args.ranges, "--range").items():
         with cli_errors(ValueError, prefix=f"--range {key}: "):
             ranges[key] = Range.parse(text)
-    return ranges
-
-
-def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
-    from tui_gym.session.experiments.sweep import SweepSpec, run_sweep
-
-    spec = SweepSpec(game=args.game, algorithm=args.algorithm, grid=_grid(args.grid),
-                     **_shared(args), ranges=_ranges(args.ranges), samples=args.sample,
-                     sample_seed=args.sample_seed)
+    spec = SweepSpec(game=args.game, algorithm=args.algorithm, grid=grid, **shared,
+                     ranges=ranges, samples=args.sample, sample_seed=args.sample_seed)
     result, history = _run_recorded(args, out, "sweeping", run_sweep, spec)
     if args.json:
         print_json("sweep", result.to_json())

@@ -86,16 +86,6 @@ def add_app_options(parser: argparse.ArgumentParser) -> None:
                              "recorded, and its comparisons go when it ends")
 
 
-# --- the commands ------------------------------------------------------------------
-
-
-def _history_call(action: Callable[[], Any]) -> Any:
-    from tui_gym.core.experiments import RunHistoryError
-
-    with cli_errors(RunHistoryError):
-        return action()
-
-
 def _when(seconds: float | None, full: bool = False) -> str:
     if seconds is None:
         return ""
@@ -121,18 +111,6 @@ def _figure_text(figure: Any, interval: bool = True) -> str:
     return text
 
 
-def _seeds_text(seeds: tuple[int, ...]) -> str:
-    if len(seeds) <= 3:
-        return ", ".join(str(s) for s in seeds)
-    return f"{len(seeds)} seeds"
-
-
-def _screenful(out: Console) -> int:
-    # The title and a blank line, the header and its rule, the line saying there are more,
-    # a blank line and the caption's two, and the shell's prompt after it.
-    return max(5, out.size.height - 9)
-
-
 # The columns, and those that go first to last when the terminal is narrow.
 _COLUMNS = (("id", "right"), ("kind", "left"), ("game", "left"), ("algorithm", "left"),
             ("seeds", "left"), ("started", "left"), ("took", "right"), ("return", "right"),
@@ -144,9 +122,8 @@ CAPTION = ("return: the mean online return over the last 10% of episodes; "
 
 
 def _runs_table(title: str, rows: list[dict[str, str]], width: int) -> tuple[Text, str]:
-    """The runs in aligned columns, those that fit `width` (the least needed go first),
-    as the heading and the lines of the runs; a cell is never cut. The lines are plain
-    text, so that thousands of runs print at once."""
+    """The runs in the columns that fit `width` (the least needed go first), cells never cut:
+    the heading, and the lines as plain text so that thousands of runs print at once."""
     widths = {name: max([len(name), *(cell_len(row[name]) for row in rows)])
               for name, _ in _COLUMNS}
     shown = [name for name, _ in _COLUMNS]
@@ -169,25 +146,28 @@ def _runs_table(title: str, rows: list[dict[str, str]], width: int) -> tuple[Tex
 
 
 def cmd_runs(args: argparse.Namespace, out: Console) -> int:
+    from tui_gym.core.experiments import RunHistoryError, list_runs
+
     verb = getattr(args, "runs_command", None)
     if args.recover:
         if verb is not None:
             raise CliError(f"--recover works on the whole history, not with `runs {verb}`")
         verb = "recover"
     if verb is not None:
-        done = _history_call(lambda: _act(verb, args))
+        with cli_errors(RunHistoryError):
+            done = _act(verb, args)
         if args.json:
             print_json(f"runs {verb}", done.to_json())
             return 2 if verb == "recover" and done.target is None else 0
         return _SAY[verb](done, args, out)
-    from tui_gym.core.experiments import list_runs
-
     game = args.game.strip().lower() if args.game else None
     limit = args.limit
     if limit is None:
-        limit = 0 if args.json else _screenful(out)
-    listing = _history_call(lambda: list_runs(args.db, game=game, kind=args.kind,
-                                              limit=limit or None))
+        # A screenful: all but the title, a blank line, the header, its rule, the line saying
+        # there are more, a blank line, the caption's two and the shell's prompt.
+        limit = 0 if args.json else max(5, out.size.height - 9)
+    with cli_errors(RunHistoryError):
+        listing = list_runs(args.db, game=game, kind=args.kind, limit=limit or None)
     for bad in listing.damaged[:5]:
         warn(f"run {bad.id} cannot be read: {bad.reason} (`tui-gym runs rm {bad.id}` "
               "removes it)")
@@ -204,9 +184,11 @@ def cmd_runs(args: argparse.Namespace, out: Console) -> int:
     rows = []
     for run in listing.runs:
         kind = str(run.kind) if run.status == "finished" else f"{run.kind} ({run.status})"
+        seeds = run.seeds
         rows.append({
             "id": str(run.id), "kind": kind, "game": visible(run.game, 40),
-            "algorithm": visible(run.algorithm, 40), "seeds": _seeds_text(run.seeds),
+            "algorithm": visible(run.algorithm, 40),
+            "seeds": f"{len(seeds)} seeds" if len(seeds) > 3 else ", ".join(map(str, seeds)),
             "started": _when(run.started_at), "took": _duration(run.seconds),
             "return": _figure_text(run.figure("mean_return_last"), interval=False),
             "gap": _figure_text(run.figure("exact_gap"), interval=False),
@@ -226,9 +208,10 @@ def cmd_runs(args: argparse.Namespace, out: Console) -> int:
 def _act(verb: str, args: argparse.Namespace) -> Any:
     """What `runs VERB` does to the history (RunHistoryError when it cannot)."""
     from tui_gym.core import experiments as history
+    from tui_gym.core.experiments.recover import recover
 
     if verb == "recover":
-        return history.recover_history(args.db)
+        return recover(history.resolve_db_path(args.db))
     if verb == "show":
         return history.show_run(args.run_id, args.db)
     if verb == "rm":
@@ -297,7 +280,7 @@ def _say_export(done: Any, args: argparse.Namespace, out: Console) -> int:
         line = f"wrote {done.rows} rows of {', '.join(done.columns[1:])} to {done.path}"
     else:
         line = (f"wrote {done.scalars} values of {', '.join(done.tags)} to {done.path} "
-                f"(tensorboard --logdir {done.directory})")
+                f"(tensorboard --logdir {done.logdir})")
     out.print(Text(visible(line, None)))
     return 0
 

@@ -39,7 +39,6 @@ from tui_gym.core.experiments.runs import (
     export_run_csv,
     list_runs,
     prune_tasks,
-    recover_history,
     remove_run,
     show_run,
 )
@@ -49,6 +48,6 @@ __all__ = [
     "DamagedRunHistoryError", "Estimate", "Figure", "NewerRunHistoryError", "NotARunHistoryError",
     "RunHistory", "RunHistoryError", "RunKind", "RunRecord", "RunRecorder", "RunSpec", "RunStatus",
     "RunSummary", "UnknownRunError", "Versions", "WrapperSetting", "aggregate", "export_run_csv",
-    "list_runs", "mean_return_last", "mean_with_ci", "prune_tasks", "recover_history",
-    "remove_run", "resolve_db_path", "rolling_mean", "show_run",
+    "list_runs", "mean_return_last", "mean_with_ci", "prune_tasks", "remove_run",
+    "resolve_db_path", "rolling_mean", "show_run",
 ]

@@ -71,7 +71,6 @@ class AggregateCurve:
     mean: np.ndarray
     half_width: np.ndarray | None
     seeds: int
-    confidence: float = CONFIDENCE
 
     @property
     def lo(self) -> np.ndarray | None:
@@ -89,19 +88,13 @@ class AggregateCurve:
         keep = pick_indices(len(self.mean), max_points)
         return AggregateCurve(
             episodes=self.episodes[keep], mean=self.mean[keep],
-            half_width=None if self.half_width is None else self.half_width[keep], seeds=self.seeds,
-            confidence=self.confidence,
-        )
+            half_width=None if self.half_width is None else self.half_width[keep], seeds=self.seeds)
 
     def points(self) -> list[CurvePoint]:
         lo, hi = self.lo, self.hi
-        return [
-            CurvePoint(
-                episode=int(self.episodes[i]), mean=float(self.mean[i]),
-                lo=None if lo is None else float(lo[i]), hi=None if hi is None else float(hi[i]),
-            )
-            for i in range(len(self.mean))
-        ]
+        return [CurvePoint(int(self.episodes[i]), float(self.mean[i]),
+                           None if lo is None else float(lo[i]),
+                           None if hi is None else float(hi[i])) for i in range(len(self.mean))]
 
     def as_curves(self, name: str) -> tuple[Curve, ...]:
         """The mean as curve `name`, and the band's edges as `name.lo` and `name.hi` if any."""
@@ -115,14 +108,10 @@ class AggregateCurve:
 
 def aggregate(
     curves: np.ndarray | list[Any], *, episodes: np.ndarray | None = None, window: int = 1,
-    max_points: int | None = None, confidence: float = CONFIDENCE,
+    max_points: int | None = None,
 ) -> AggregateCurve:
-    """Mean and confidence band per episode of `curves` [seeds, episodes].
-
-    `episodes` numbers the columns (1, 2, ... by default); `window` > 1 smooths
-    each seed's curve with a trailing rolling mean first (so the band is that of
-    the smoothed quantity); `max_points` then keeps at most that many points.
-    """
+    """Mean and confidence band per episode of `curves` [seeds, episodes] numbered `episodes`,
+    each seed's first smoothed over a trailing `window`; at most `max_points` kept."""
     data = rolling_mean(_as_seed_rows(curves), window)
     n, length = data.shape
     if episodes is None:
@@ -131,10 +120,8 @@ def aggregate(
         xs = np.asarray(episodes, dtype=np.int64)
         if xs.shape != (length,):
             raise ValueError(f"{length} episodes per curve but {len(xs)} episode numbers")
-    half = t_half_width(data.std(axis=0, ddof=1), n, confidence) if n > 1 else None
-    result = AggregateCurve(
-        episodes=xs, mean=data.mean(axis=0), half_width=half, seeds=n, confidence=confidence
-    )
+    half = t_half_width(data.std(axis=0, ddof=1), n) if n > 1 else None
+    result = AggregateCurve(episodes=xs, mean=data.mean(axis=0), half_width=half, seeds=n)
     return result if max_points is None else result.downsample(max_points)
 
 
@@ -160,13 +147,10 @@ def mean_with_ci(samples: np.ndarray | list[float]) -> Estimate:
     return Estimate(mean=float(values.mean()), ci95=half, seeds=n)
 
 
-def mean_return_last(curves: np.ndarray | list[Any], fraction: float = LAST_FRACTION) -> Estimate:
-    """Each seed's mean over its last `fraction` of episodes (at least one), then the mean
-    over seeds with its interval."""
-    if not 0 < fraction <= 1:
-        raise ValueError(f"fraction must be in (0, 1], got {fraction}")
+def mean_return_last(curves: np.ndarray | list[Any]) -> Estimate:
+    """Each seed's mean over its last 10% of episodes (at least one), then over the seeds."""
     data = _as_seed_rows(curves)
-    last = max(1, math.ceil(data.shape[1] * fraction - 1e-9))
+    last = max(1, math.ceil(data.shape[1] * LAST_FRACTION - 1e-9))
     return mean_with_ci(data[:, -last:].mean(axis=1))
 
 
@@ -187,20 +171,14 @@ def _beta_continued_fraction(a: float, b: float, x: float) -> float:
     h = d
     for m in range(1, _MAX_ITERATIONS + 1):
         m2 = 2 * m
-        aa = m * (b - m) * x / ((qam + m2) * (a + m2))
-        d = 1.0 + aa * d
-        d = 1.0 / (d if abs(d) > _TINY else _TINY)
-        c = 1.0 + aa / c
-        c = c if abs(c) > _TINY else _TINY
-        h *= d * c
-        aa = -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2))
-        d = 1.0 + aa * d
-        d = 1.0 / (d if abs(d) > _TINY else _TINY)
-        c = 1.0 + aa / c
-        c = c if abs(c) > _TINY else _TINY
-        step = d * c
-        h *= step
-        if abs(step - 1.0) < _EPS:
+        even = m * (b - m) * x / ((qam + m2) * (a + m2))
+        for aa in (even, -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2))):
+            d = 1.0 + aa * d
+            d = 1.0 / (d if abs(d) > _TINY else _TINY)
+            c = 1.0 + aa / c
+            c = c if abs(c) > _TINY else _TINY
+            h *= d * c
+        if abs(d * c - 1.0) < _EPS:
             break
     return h
 
@@ -288,12 +266,8 @@ def pick_indices(n: int, max_points: int) -> np.ndarray:
 def bucket_means(
     episodes: np.ndarray, values: np.ndarray, max_points: int, weights: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Consecutive points averaged into at most `max_points` buckets of near-equal size.
-
-    Each bucket is labelled with its last episode; `weights` (how many episodes
-    each point already stands for) make the means exact for points that are
-    themselves bucket means. NaN values are left out of a bucket's mean.
-    """
+    """Consecutive points averaged (NaN left out) in at most `max_points` near-equal buckets,
+    each labelled with its last episode; `weights`: the episodes each point stands for."""
     _check_points(max_points)
     episodes = np.asarray(episodes, dtype=np.int64)
     values = np.asarray(values, dtype=np.float64)

@@ -49,22 +49,6 @@ def _read_uvarint(data: bytes, pos: int) -> tuple[int, int]:
         shift += 7
 
 
-def _zigzag(value: int) -> int:
-    return value * 2 if value >= 0 else -value * 2 - 1
-
-
-def _unzigzag(value: int) -> int:
-    return value // 2 if value % 2 == 0 else -(value + 1) // 2
-
-
-def _scale_exponent(values: np.ndarray) -> int:
-    finite = np.abs(values[~np.isnan(values)])
-    top = float(finite.max()) if len(finite) else 0.0
-    if top == 0.0:
-        return 0
-    return math.frexp(top)[1] - 1 - _TOP_EXPONENT  # top / 2**e lands in [2**14, 2**15)
-
-
 def encode_curve(episodes: np.ndarray, values: np.ndarray) -> bytes:
     """The bytes of a curve (episodes strictly increasing integers, values finite or NaN)."""
     episodes = np.asarray(episodes, dtype=np.int64)
@@ -75,7 +59,8 @@ def encode_curve(episodes: np.ndarray, values: np.ndarray) -> bytes:
     gaps = bytearray()
     steps = np.diff(episodes)
     if n:
-        _uvarint(_zigzag(int(episodes[0])), gaps)
+        first = int(episodes[0])
+        _uvarint(first * 2 if first >= 0 else -first * 2 - 1, gaps)  # zigzag: small either way
     if n > 1 and (steps == steps[0]).all():
         mode = _EVEN
         _uvarint(int(steps[0]), gaps)
@@ -88,7 +73,10 @@ def encode_curve(episodes: np.ndarray, values: np.ndarray) -> bytes:
     out.append(mode)
     _uvarint(len(body), out)
     out += body
-    exponent = _scale_exponent(values)
+    finite = np.abs(values[~np.isnan(values)])
+    top = float(finite.max()) if len(finite) else 0.0
+    # The largest magnitude scaled into [2**14, 2**15): float16 keeps its digits.
+    exponent = 0 if top == 0.0 else math.frexp(top)[1] - 1 - _TOP_EXPONENT
     out += struct.pack("<h", exponent)
     scaled = np.ldexp(values, -exponent)
     out += scaled.astype("<f2").tobytes()
@@ -96,11 +84,8 @@ def encode_curve(episodes: np.ndarray, values: np.ndarray) -> bytes:
 
 
 def decode_curve(data: bytes) -> tuple[np.ndarray, np.ndarray]:
-    """(episodes, values) from the bytes `encode_curve` made; CurveFormatError otherwise.
-
-    The point count is checked against the bytes there are before anything is
-    allocated, and the episodes inflate to at most the bytes that count needs.
-    """
+    """(episodes, values) from the bytes `encode_curve` made; CurveFormatError otherwise
+    (checked against the bytes there are before anything is allocated or inflated)."""
     if not data or data[0] != FORMAT_FLOAT16:
         raise CurveFormatError("unknown curve format")
     n, pos = _read_uvarint(data, 1)
@@ -121,7 +106,7 @@ def decode_curve(data: bytes) -> tuple[np.ndarray, np.ndarray]:
     try:
         if n:
             first, at = _read_uvarint(gaps, 0)
-            episodes[0] = _unzigzag(first)
+            episodes[0] = first // 2 if first % 2 == 0 else -(first + 1) // 2
             if mode == _EVEN and n > 1:
                 step, at = _read_uvarint(gaps, at)
                 if step < 1 or int(episodes[0]) + step * (n - 1) >= 2**63:

@@ -1,7 +1,5 @@
-"""The one SQLite connection a process keeps to a run history file (`open_shared`,
-`Connection`), and the file's schema: migrations applied in order, the version in
-`PRAGMA user_version`; which process records a run, and whether it is still there
-(`current_writer`, `WriterCheck`)."""
+"""The one SQLite connection a process keeps to a run history file (`open_shared`), the
+file's schema migrations, and which process records a run and whether it is still there."""
 
 from __future__ import annotations
 
@@ -144,11 +142,6 @@ def _code(exc: sqlite3.Error) -> str:
     return "_".join((getattr(exc, "sqlite_errorname", "") or "").split("_")[:2])
 
 
-def is_busy(exc: sqlite3.Error) -> bool:
-    text = str(exc).lower()
-    return _code(exc) in ("SQLITE_BUSY", "SQLITE_LOCKED") or "locked" in text or "busy" in text
-
-
 def is_damage(exc: sqlite3.Error) -> bool:
     return _code(exc) in ("SQLITE_CORRUPT", "SQLITE_NOTADB") or "malformed" in str(exc).lower()
 
@@ -168,9 +161,8 @@ def untouched(path: Path, what: str) -> NotARunHistoryError:
 
 
 def examine(path: Path) -> os.stat_result | None:
-    """The file's status (None when there is none yet); RunHistoryError for a folder,
-    a device or anything else that is not a regular file, or a path that cannot be
-    looked at (no permission, a name too long)."""
+    """The file's status (None when there is none yet); RunHistoryError for anything that
+    is not a regular file, or a path that cannot be looked at."""
     try:
         status = os.stat(path)
     except (FileNotFoundError, NotADirectoryError):
@@ -242,7 +234,9 @@ class Connection:
                 try:
                     return self._once(action, begin)
                 except sqlite3.OperationalError as exc:
-                    if not is_busy(exc):
+                    text = str(exc).lower()
+                    if not (_code(exc) in ("SQLITE_BUSY", "SQLITE_LOCKED") or "locked" in text
+                            or "busy" in text):
                         raise
             if time.monotonic() >= deadline:
                 raise RunHistoryBusyError(f"{shown(path)} is busy: another process kept it "
@@ -272,14 +266,8 @@ _shared_lock = threading.Lock()
 
 def open_shared(path: Path, migrations: Sequence[Migration], timeout: float, *,
                 read_only: bool = False) -> Connection:
-    """This process's connection to `path`, opened if there is none yet: the file (and its
-    folder) created, made WAL and brought up to the schema of `migrations`.
-
-    `read_only`: the caller only reads; a missing file is not created, and one that
-    cannot be written is opened for reading. RunHistoryError, one line naming the
-    file, for anything that is not a run history of this version or an older one,
-    or that cannot be opened.
-    """
+    """This process's connection to `path` (opened if need be: created, made WAL, migrated;
+    `read_only`: never created, read where it cannot be written); RunHistoryError else."""
     key = (os.getpid(), os.path.realpath(path))
     with _shared_lock:
         shared = _shared.get(key)
@@ -434,21 +422,17 @@ def _boot() -> str:
     return _read(f"{_PROC}/sys/kernel/random/boot_id").strip()
 
 
-def _host() -> str:
-    return socket.gethostname()
-
-
 def current_writer() -> str:
     """This process's mark: "host boot pid start" (boot and start empty where unknown)."""
     pid = os.getpid()
-    return f"{_host()} {_boot()} {pid} {_start_ticks(pid)}"
+    return f"{socket.gethostname()} {_boot()} {pid} {_start_ticks(pid)}"
 
 
 class WriterCheck:
     """Tells whether the writer of a run is gone; remembers each answer for one listing."""
 
     def __init__(self) -> None:
-        self._host = _host()
+        self._host = socket.gethostname()
         self._boot = _boot()
         self._answers: dict[str, bool] = {}
 

@@ -11,8 +11,7 @@ from typing import Any
 
 
 def plain(value: Any) -> Any:
-    """`value` as JSON data: a result by its `to_json`, paths as text, tuples as lists, NaN
-    (which JSON cannot hold) as null."""
+    """`value` as JSON data: results by `to_json`, paths as text, tuples as lists, NaN as null."""
     if hasattr(value, "to_json"):
         return value.to_json()
     if isinstance(value, Path):

@@ -103,8 +103,6 @@ class RunHistory:
     def __exit__(self, *exc: object) -> None:
         self.close()
 
-    # -- plumbing ------------------------------------------------------------
-
     @contextmanager
     def _errors(self) -> Iterator[None]:
         """SQLite's errors as one line naming the file."""
@@ -154,8 +152,6 @@ class RunHistory:
             f"(`tui-gym runs rm {run_id}` removes it)",
         )
 
-    # -- recording -----------------------------------------------------------
-
     def start_run(self, spec: RunSpec, started_at: float | None = None) -> int:
         """Record a new run (status running); its id."""
         started = time.time() if started_at is None else started_at
@@ -176,10 +172,8 @@ class RunHistory:
         agent_path: str | Path | None = None, status: RunStatus | None = None,
         ended_at: float | None = None, max_points: int = STORED_POINTS, spec: RunSpec | None = None,
     ) -> None:
-        """Add or replace curves (each bounded to `max_points`) and figures (by name), set the
-        saved agent's path (None: leave it), the run's settings to `spec`'s (its game,
-        wrappers, algorithm and hyperparameters; None: leave them), and a final status
-        with the end time, at once."""
+        """Add or replace curves (each bounded to `max_points`) and figures by name, and set
+        what is given of the saved agent's path, the settings of `spec`, a final status."""
         if not 2 <= max_points <= MAX_STORED_POINTS:
             raise ValueError(f"max_points must be in 2..{MAX_STORED_POINTS}, got {max_points}")
         blobs = [
@@ -225,12 +219,11 @@ class RunHistory:
 
         self._write(write)
 
-    def put_task(self, run_id: int, task: TaskRecord, finished_at: float | None = None) -> bool:
-        """Keep a finished task of a run, in a transaction of its own; False (and nothing
-        written) when the run already holds one of its seeds, so a task that lands twice
-        is kept once."""
+    def put_task(self, run_id: int, task: TaskRecord) -> bool:
+        """Keep a finished task in a transaction of its own; False (nothing written) when the run
+        already holds one of its seeds: a task that lands twice is kept once."""
         first, inputs, returns, exact = encode(task)
-        when = time.time() if finished_at is None else finished_at
+        when = time.time()
 
         def write(conn: sqlite3.Connection) -> bool:
             self._require_run(conn, run_id)
@@ -260,9 +253,8 @@ class RunHistory:
             raise self._damaged_run(run_id, f"a task: {exc}") from None
 
     def prune_tasks(self) -> tuple[int, int]:
-        """Delete the stored tasks of the finished runs (their curves and figures stay: only
-        an unfinished run needs its tasks, to resume) and give their space back to the disk;
-        (runs, tasks) pruned."""
+        """Delete the finished runs' stored tasks (only an unfinished run needs them, to
+        resume) and give the space back; (runs, tasks) pruned."""
         finished = (str(RunStatus.FINISHED),)
         where = "WHERE run_id IN (SELECT id FROM runs WHERE status = ?)"
 
@@ -278,8 +270,7 @@ class RunHistory:
         return pruned
 
     def group_ids(self, run_id: int) -> list[int]:
-        """Run `run_id` and the runs that name it as their group, by id; UnknownRunError
-        if there is no such run."""
+        """Run `run_id` and the runs of its group, by id; UnknownRunError if there is none."""
 
         def read(conn: sqlite3.Connection) -> list[int]:
             self._require_run(conn, run_id)
@@ -324,8 +315,6 @@ class RunHistory:
                 conn.execute("INSERT INTO curves (run_id, data) VALUES (?, ?)", (run.id, blob))
 
         self._write(write)
-
-    # -- queries -------------------------------------------------------------
 
     def read_runs(
         self, *, game: str | None = None, kind: RunKind | str | None = None,
@@ -413,10 +402,8 @@ class RunHistory:
 
 
 class BestEffortHistory(RunHistory):
-    """A run history whose writes never raise: once one fails (a full disk, a damaged
-    file), it and every later write are skipped, and `failure` says why. A run it could
-    not start has the id None. For commands that print their results whatever happens
-    to the history, and then say they were not recorded."""
+    """A run history whose writes never raise: once one fails, it and every later write are
+    skipped (a run it could not start has the id None), and `failure` says why."""
 
     failure: str | None = None
 
@@ -492,17 +479,11 @@ def _figures_to_json(figures: Iterable[Figure]) -> str:
     )
 
 
-
 class RunRecorder:
     """Records one run into a `RunHistory`; `run_id` is its id there."""
 
-    def __init__(
-        self, history: RunHistory, spec: RunSpec, *, max_points: int = STORED_POINTS,
-        first_episode: int = 1,
-    ) -> None:
+    def __init__(self, history: RunHistory, spec: RunSpec) -> None:
         self.history = history
-        self.max_points = max_points
-        self.first_episode = first_episode
         self.run_id = history.start_run(spec)
         self.status = RunStatus.RUNNING
         self._accumulators: dict[str, CurveAccumulator] = {}
@@ -513,8 +494,8 @@ class RunRecorder:
         """Append the values of the next episodes to the per-episode curve `name`."""
         values = values if isinstance(values, np.ndarray) else list(values)
         # Twice the stored points, so the stored curve is re-bucketed from finer buckets.
-        self._accumulators.setdefault(name, CurveAccumulator(
-            2 * self.max_points, self.first_episode)).extend(np.asarray(values))
+        self._accumulators.setdefault(name, CurveAccumulator(2 * STORED_POINTS)).extend(
+            np.asarray(values))
 
     def put_curve(self, curve: Curve) -> None:
         """A whole curve (say, values at checkpoints), replacing any of the same name."""
@@ -527,10 +508,10 @@ class RunRecorder:
 
     def flush(self, status: RunStatus | None = None) -> None:
         """Write what the run has so far (and `status`, if given) in one transaction."""
-        curves = {**self._curves, **{name: Curve(name, *a.curve(self.max_points))
+        curves = {**self._curves, **{name: Curve(name, *a.curve(STORED_POINTS))
                                      for name, a in self._accumulators.items() if a.count}}
         self.history.update(self.run_id, curves=curves.values(), status=status,
-                            figures=self._figures.values(), max_points=self.max_points)
+                            figures=self._figures.values())
 
     def finish(self, status: RunStatus = RunStatus.FINISHED) -> None:
         """Write everything with the run's final status."""

@@ -38,12 +38,8 @@ class RunStatus(StrEnum):
 
 
 def _json_default(value: Any) -> Any:
-    if isinstance(value, np.bool_):
-        return bool(value)
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, np.floating):
-        return float(value)
+    if isinstance(value, np.bool_ | np.integer | np.floating):
+        return value.item()
     if isinstance(value, tuple | np.ndarray):
         return list(value)
     raise TypeError(f"{type(value).__name__} is not JSON data")
@@ -71,13 +67,6 @@ class WrapperSetting(FieldsJson):
     params: Mapping[str, Any] = field(default_factory=dict)
 
 
-def _package_version(name: str) -> str:
-    try:
-        return metadata.version(name)
-    except metadata.PackageNotFoundError:
-        return ""
-
-
 @dataclass(frozen=True)
 class Versions(FieldsJson):
     """The versions of the packages a run ran on ("" for one not installed)."""
@@ -93,8 +82,12 @@ class Versions(FieldsJson):
         """The versions this process runs on."""
         from tui_gym import __version__
 
-        return cls(tui_gym=__version__, gymnasium=_package_version("gymnasium"),
-                   numpy=np.__version__, python=platform.python_version())
+        try:
+            gymnasium = metadata.version("gymnasium")
+        except metadata.PackageNotFoundError:
+            gymnasium = ""
+        return cls(tui_gym=__version__, gymnasium=gymnasium, numpy=np.__version__,
+                   python=platform.python_version())
 
 
 @dataclass(frozen=True)
@@ -222,19 +215,14 @@ class RunRecord:
             hyperparameters=dict(self.hyperparameters), versions=self.versions.to_json(),
             agent_path=self.agent_path,
         )
-        if curves:
-            data["curves"] = [c.to_json() for c in self.curves]
-        else:
-            data["curves"] = [c.name for c in self.curves]
+        data["curves"] = [c.to_json() if curves else c.name for c in self.curves]
         return data
 
 
 @dataclass(frozen=True, eq=False)
 class TaskRecord:
-    """A finished task: seeds `seeds` (rows `rows` of the run's seed list), `episodes`
-    each; `returns[i, e]` seed i's online return in episode e; `exact[i, j]` its greedy
-    policy's exact value at checkpoint j, a prediction learner's RMS error of V (None
-    without a model)."""
+    """A finished task: seeds `seeds` (rows `rows` of the run's seed list), `episodes` each;
+    `returns[i, e]`; `exact[i, j]` the greedy exact value (or RMS error of V) at checkpoint j."""
 
     rows: tuple[int, ...]
     seeds: tuple[int, ...]

@@ -52,9 +52,8 @@ def _fresh_path(source: Path) -> Path:
 
 
 def _reader(source: Path) -> sqlite3.Connection:
-    """A connection that only reads `source` and makes no file beside it (as a file that
-    does not change, unless a write-ahead log beside it holds its latest state), told to
-    read past a page count the file no longer has (a truncated file)."""
+    """A connection that only reads `source` and makes no file beside it (immutable without a
+    write-ahead log), told to read past a page count the file no longer has."""
     wal = os.path.lexists(f"{source}-wal")
     uri = f"{source.resolve().as_uri()}?mode=ro{'' if wal else '&immutable=1'}"
     conn = sqlite3.connect(uri, uri=True, isolation_level=None)
@@ -103,19 +102,10 @@ def _run_ids(conn: sqlite3.Connection) -> Iterator[int]:
     yield from sorted(found | set(range(1, last + 1)))
 
 
-def _run_fields(conn: sqlite3.Connection) -> set[str]:
-    """The runs table's columns (an older schema lacks some)."""
-    try:
-        return {row[1] for row in conn.execute("PRAGMA table_info(runs)")}
-    except sqlite3.Error:
-        return set()
-
-
 def _fetch(conn: sqlite3.Connection, table: str, alias: str, key: object,
            have: set[str] | None = None) -> dict[str, Any] | None:
-    """The FIELDS of `alias` from `table`'s row `key` (null for a column not in `have`),
-    and, from runs, its settings and platform ids; None when there is no such row,
-    sqlite3.Error where the file is damaged."""
+    """The FIELDS of `alias` from `table`'s row `key` (null for a column not in `have`), from
+    runs with its settings and platform ids; None without such a row."""
     fields = [f for f in rows.FIELDS if f.startswith(alias)]
     columns = ", ".join(rows.column(f, alias=False) if have is None or f[2:] in have else "NULL"
                         for f in fields)
@@ -149,8 +139,7 @@ def _one(conn: sqlite3.Connection, have: set[str], run_id: int
 
 
 def _tasks(conn: sqlite3.Connection, run_id: int) -> list[TaskRecord]:
-    """A run's finished tasks that read (none from a file without them, or where their
-    table is damaged)."""
+    """A run's finished tasks that read (none where their table is missing or damaged)."""
     try:
         found = conn.execute("SELECT inputs, returns, exact FROM tasks WHERE run_id = ?",
                              (run_id,)).fetchall()
@@ -176,7 +165,10 @@ def recover(source: str | Path) -> Recovery:
         try:
             with RunHistory(target) as history:
                 writers = WriterCheck()
-                have = _run_fields(conn)
+                try:  # the runs table's columns (an older schema lacks some)
+                    have = {row[1] for row in conn.execute("PRAGMA table_info(runs)")}
+                except sqlite3.Error:
+                    have = set()
                 for run_id in _run_ids(conn):
                     try:
                         found = _one(conn, have, run_id)

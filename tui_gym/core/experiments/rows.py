@@ -47,9 +47,8 @@ SUMMARY_FIELDS = 10  # the first ten: what a listing shows
 
 
 def column(field: str, alias: bool = True) -> str:
-    """A field of FIELDS as a query reads it (`alias` False: without its table's alias): a
-    text cut inside SQLite one character past its bound, so that an oversized text shows;
-    a number as it is when one (or null), else cut as a short text."""
+    """A field of FIELDS as a query reads it (`alias` False: bare): a text cut one character past
+    its bound, so an oversized one shows; a number as it is, else cut as a short text."""
     expr, cap = field if alias else field.partition(".")[2], FIELDS[field]
     if cap is None:
         return f"CASE WHEN typeof({expr}) IN ('integer', 'real', 'null') THEN {expr} " \

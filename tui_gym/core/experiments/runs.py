@@ -17,7 +17,6 @@ from tui_gym.core.experiments.figures import FieldsJson
 from tui_gym.core.experiments.history import DamagedRun, RunHistory
 from tui_gym.core.experiments.paths import resolve_db_path
 from tui_gym.core.experiments.records import Curve, RunKind, RunRecord, RunSummary
-from tui_gym.core.experiments.recover import Recovery, recover
 from tui_gym.core.files import OutputPathError, check_output_path, write_atomically
 
 
@@ -33,19 +32,13 @@ class RunListing(FieldsJson):
 
 
 @dataclass(frozen=True)
-class CsvExport:
-    """A run's curves written to `path`: its columns (episode first) and number of rows."""
+class CsvExport(FieldsJson):
+    """Run `run`'s curves written to `path`: its columns (episode first) and number of rows."""
 
-    run_id: int
+    run: int
     path: Path
     columns: tuple[str, ...]
     rows: int
-
-    def to_json(self) -> dict[str, Any]:
-        return {
-            "run": self.run_id, "path": str(self.path), "columns": list(self.columns),
-            "rows": self.rows,
-        }
 
 
 @dataclass(frozen=True)
@@ -77,8 +70,7 @@ def list_runs(
     db: str | None = None, *, game: str | None = None, kind: RunKind | str | None = None,
     limit: int | None = None,
 ) -> RunListing:
-    """The recorded runs, newest first (the newest `limit`, only `game`'s and `kind`'s
-    when given)."""
+    """The recorded runs, newest first (at most `limit`, of `game` and `kind` when given)."""
     path, exists = _existing(db)
     if not exists:
         return RunListing(db=path, runs=())
@@ -109,7 +101,7 @@ def export_run_csv(run_id: int, csv_path: str | Path, db: str | None = None) -> 
     except OSError as exc:
         raise RunHistoryError(f"cannot write {shown(target)}: {exc.strerror or exc}") from None
     columns = ("episode", *(c.name for c in record.curves))
-    return CsvExport(run_id=run_id, path=target, columns=columns, rows=rows)
+    return CsvExport(run=run_id, path=target, columns=columns, rows=rows)
 
 
 def remove_run(run_id: int, db: str | None = None) -> RemovedRun:
@@ -137,15 +129,9 @@ def prune_tasks(db: str | None = None) -> PrunedTasks:
         return PrunedTasks(path, *history.prune_tasks())
 
 
-def recover_history(db: str | None = None) -> Recovery:
-    """Copy what can be read of the history into a fresh file beside it (see `recover`)."""
-    return recover(resolve_db_path(db))
-
-
 def curves_csv(curves: Sequence[Curve]) -> tuple[str, int]:
-    """The CSV text of `curves` and its number of data rows: one row per episode any curve
-    has, one column per curve; floats in full (`repr`: read back, the same numbers), an
-    episode a curve has no value at an empty cell."""
+    """The CSV text of `curves` and its number of rows: one an episode, one column a curve,
+    floats in full (`repr`), an empty cell where a curve has no value."""
     none: np.ndarray = np.empty(0, dtype=np.int64)
     episodes = np.unique(np.concatenate([c.episodes for c in curves])) if curves else none
     columns: list[list[str]] = []

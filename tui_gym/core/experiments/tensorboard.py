@@ -8,9 +8,11 @@ import re
 import secrets
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+
+import numpy as np
 
 from tui_gym.core.experiments.errors import RunHistoryError
+from tui_gym.core.experiments.figures import FieldsJson
 from tui_gym.core.experiments.records import Curve, RunRecord
 from tui_gym.core.experiments.runs import show_run
 
@@ -24,20 +26,14 @@ class TensorBoardUnavailable(RunHistoryError):
 
 
 @dataclass(frozen=True)
-class TensorBoardExport:
-    """A run written as TensorBoard events: the file, its folder's parent, tags and values."""
+class TensorBoardExport(FieldsJson):
+    """Run `run` written as TensorBoard events: the file, its folder's parent, tags and values."""
 
-    run_id: int
+    run: int
     path: Path
-    directory: Path
+    logdir: Path
     tags: tuple[str, ...]
     scalars: int
-
-    def to_json(self) -> dict[str, Any]:
-        return {
-            "run": self.run_id, "path": str(self.path), "logdir": str(self.directory),
-            "tags": list(self.tags), "scalars": self.scalars,
-        }
 
 
 def scalar_tag(curve_name: str) -> str:
@@ -61,11 +57,9 @@ def _settings_text(record: RunRecord) -> str:
 
 def _walltimes(curve: Curve, started: float, ended: float | None) -> list[float]:
     """When each point was reached, spread evenly by episode over the run's time."""
-    episodes = curve.episodes.tolist()
-    if ended is None or len(episodes) < 2 or episodes[-1] == episodes[0]:
-        return [started] * len(episodes)
-    first, last = episodes[0], episodes[-1]
-    return [started + (ended - started) * (e - first) / (last - first) for e in episodes]
+    if ended is None or len(curve) < 2:  # (its episodes strictly increase)
+        return [started] * len(curve)
+    return np.interp(curve.episodes, curve.episodes[[0, -1]], [started, ended]).tolist()
 
 
 def export_run_tensorboard(
@@ -83,7 +77,7 @@ def export_run_tensorboard(
     root = Path(directory).expanduser()
     folder = root / _run_folder(record)
     tags: list[str] = []
-    scalars = last_episode = 0
+    scalars = 0
     try:
         folder.mkdir(parents=True, exist_ok=True)
         earlier = set(folder.glob(EVENT_PREFIX + "*"))
@@ -101,9 +95,8 @@ def export_run_tensorboard(
                     if math.isfinite(value):
                         writer.add_scalar(tag, value, global_step=episode, walltime=when)
                         scalars += 1
-                if len(curve):
-                    last_episode = max(last_episode, int(curve.episodes[-1]))
             end = summary.ended_at or summary.started_at
+            last_episode = max((int(c.episodes[-1]) for c in record.curves if len(c)), default=0)
             for figure in summary.figures:
                 if math.isfinite(figure.value):
                     tag = f"figures/{figure.name}"
@@ -121,6 +114,5 @@ def export_run_tensorboard(
         raise RunHistoryError(f"cannot write {folder}: {exc.strerror or exc}") from None
     if not written:
         raise RunHistoryError(f"cannot write {folder}: no event file was written")
-    return TensorBoardExport(
-        run_id=summary.id, path=written[-1], directory=root, tags=tuple(tags), scalars=scalars
-    )
+    return TensorBoardExport(run=summary.id, path=written[-1], logdir=root, tags=tuple(tags),
+                             scalars=scalars)

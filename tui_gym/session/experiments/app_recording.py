@@ -63,7 +63,6 @@ class SessionRunLog:
         self._last_snapshot: TrainingSnapshot | None = None  # the open run's latest
         self.run_ids: dict[object, int] = {}  # token -> id, once the writer has it
 
-    # --- on the app's timer ----------------------------------------------------
     def observe(self, session: Session, snapshot: TrainingSnapshot) -> str | None:
         """Follow the session's training; a line to show when the history failed (once)."""
         if self.problem is not None:
@@ -123,8 +122,7 @@ class SessionRunLog:
         self._baseline = run.episodes
 
     def close(self, wait: float | None = CLOSE_WAIT_SECONDS) -> None:
-        """End the open run and wait (up to `wait` seconds; None: as long as it takes) for
-        every write to land."""
+        """End the open run and wait up to `wait` seconds (None: no limit) for every write."""
         if self._run is not None and self.problem is None:
             self._end(self._run)
         writer = self._writer
@@ -133,7 +131,6 @@ class SessionRunLog:
             writer.join(wait)
             self._writer = None
 
-    # --- the writer thread ---------------------------------------------------
     def send(self, token: object, start: RunSpec | None = None, **changes: Any) -> None:
         """On the writer thread, in order: start a run of `start` named `token`, or make
         `changes` to that run (`RunHistory.update`'s arguments)."""

@@ -1,6 +1,4 @@
-"""Tasks on a Dask cluster: `connect(cluster)`, then `run_on_cluster(client, tasks, work,
-take, stopped)`.
-"""
+"""Tasks on a Dask cluster: `connect(cluster)`, then `run_on_cluster(client, tasks, ...)`."""
 
 from __future__ import annotations
 
@@ -24,16 +22,6 @@ class ClusterError(RuntimeError):
     """The cluster cannot be used (Dask missing, a scheduler out of reach, a bad address)."""
 
 
-def local_workers(address: str) -> int | None:
-    """N for `local:N`; None for any other address; ClusterError for a bad N."""
-    if not address.startswith("local:"):
-        return None
-    count = address.removeprefix("local:")
-    if not count.isdigit() or not 1 <= int(count) <= 256:
-        raise ClusterError(f"--cluster {address}: expected local:N with N from 1 to 256")
-    return int(count)
-
-
 @contextlib.contextmanager
 def connect(cluster: Any) -> Iterator[Any]:
     """A client of `cluster` while the block runs; ClusterError (one line) if there is none."""
@@ -44,9 +32,11 @@ def connect(cluster: Any) -> Iterator[Any]:
         from distributed import Client, LocalCluster
     except ImportError:
         raise ClusterError(DASK_HINT) from None
-    workers = local_workers(cluster)
-    if workers is not None:
-        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+    if cluster.startswith("local:"):
+        workers = cluster.removeprefix("local:")
+        if not workers.isdigit() or not 1 <= int(workers) <= 256:
+            raise ClusterError(f"--cluster {cluster}: expected local:N with N from 1 to 256")
+        with LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
                           dashboard_address=":0", silence_logs=logging.ERROR) as local, \
                 Client(local) as client:
             yield client
@@ -63,9 +53,8 @@ def run_on_cluster(
     client: Any, tasks: Sequence[T], work: Callable[[T], R], take: Callable[[T, R], None],
     stopped: Callable[[], bool],
 ) -> bool:
-    """Run `work(task)` for every task on the cluster of `client`, `take(task, result)` as
-    each lands (here, on the calling thread); True when all landed, False when `stopped`
-    ended it first (the tasks not landed are cancelled). A task that raises raises here."""
+    """Run `work(task)` for every task on the cluster, `take(task, result)` here as each lands;
+    whether all landed (False: `stopped` first, the rest cancelled). A task's error raises here."""
     from distributed import wait
 
     run = uuid.uuid4().hex[:12]

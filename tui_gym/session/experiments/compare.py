@@ -55,9 +55,8 @@ RESUME_ADVICE = "; give the command that started it to resume it"  # ends Resume
 
 @dataclass(frozen=True)
 class CompareSpec:
-    """What to compare: `algorithms` on `game`, `seeds` seeds each (from `first_seed`),
-    `episodes` episodes per seed. `settings` go to every algorithm that has the
-    hyperparameter (the budget `episodes` defaults to the comparison's)."""
+    """What to compare: `algorithms` on `game`, `seeds` seeds from `first_seed`, `episodes` each;
+    `settings` go to every algorithm that has them (the budget `episodes` defaults to these)."""
 
     game: str
     algorithms: Sequence[str]
@@ -91,8 +90,7 @@ class CompareSpec:
 
 
 def settle_runs(spec: Any) -> None:
-    """Check a spec's `seeds` and `episodes`, and keep its settings, game parameters and
-    wrappers as copies of their own."""
+    """Check a spec's `seeds` and `episodes`; copy its settings, game parameters and wrappers."""
     for name, value in (("seeds", spec.seeds), ("episodes", spec.episodes)):
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
@@ -116,26 +114,19 @@ def _known_elsewhere(keys: Sequence[str]) -> str:
 
 @dataclass(frozen=True, eq=False)
 class AlgorithmOutcome:
-    """One algorithm's results over its seeds (so far, while a comparison runs).
-
-    `curve` is the mean online return per episode with its band, over the
-    episodes every seed has finished; `seeds_done` counts the seeds that
-    finished all their episodes. `exact_value` / `exact_gap` (None without a
-    model) are the mean over seeds of the greedy policy's exact value at the
-    last checkpoint every seed reached, and the optimum minus it; `exact_curve`
-    is that value at each checkpoint. A prediction learner has none of those but
-    `rms_error`, the mean RMS error of V against the exact values of the policy it
-    follows there, and `rms_curve`. `run_id` is its run in the history.
-    """
+    """One algorithm's results over its seeds so far (`seeds_done` finished, run `run_id`):
+    the mean online return per episode every seed finished (`curve`), and at the checkpoints
+    every seed reached the greedy policy's exact value and gap, or a prediction learner's
+    RMS error of V."""
 
     algorithm: str
     hyperparameters: Mapping[str, Any]
     seeds_done: int
     curve: AggregateCurve
     mean_return_last: Estimate
-    exact_value: float | None
-    exact_gap: float | None
     run_id: int | None
+    exact_value: float | None = None
+    exact_gap: float | None = None
     exact_curve: AggregateCurve | None = None
     exact_ci95: float | None = None
     seeds: int = 0
@@ -151,14 +142,10 @@ class AlgorithmOutcome:
         return int(self.curve.episodes[-1]) if len(self.curve) else 0
 
     def figures(self) -> tuple[Figure, ...]:
-        figures = [self.mean_return_last.figure("mean_return_last")]
-        if self.exact_value is not None:
-            figures.append(Figure("exact_value", self.exact_value, ci95=self.exact_ci95))
-        if self.exact_gap is not None:
-            figures.append(Figure("exact_gap", self.exact_gap))
-        if self.rms_error is not None:
-            figures.append(Figure("rms_error", self.rms_error, ci95=self.rms_ci95))
-        return tuple(figures)
+        known = (("exact_value", self.exact_value, self.exact_ci95),
+                 ("exact_gap", self.exact_gap, None), ("rms_error", self.rms_error, self.rms_ci95))
+        return (self.mean_return_last.figure("mean_return_last"),
+                *(Figure(name, value, ci95=ci) for name, value, ci in known if value is not None))
 
     def to_json(self, max_points: int = JSON_CURVE_POINTS) -> dict[str, Any]:
         def points(curve: AggregateCurve | None) -> list[CurvePoint] | None:
@@ -176,10 +163,8 @@ class AlgorithmOutcome:
 
 @dataclass(frozen=True)
 class CompareProgress:
-    """Episodes finished of the total (over every algorithm and seed), the tasks finished
-    of the run's tasks (those a resumed run found done count in), and `outcomes`: each
-    arm's outcome so far, aggregated over every seed when first read (read it in the
-    callback, on the run's thread; a caller that only counts never pays for it)."""
+    """Episodes and tasks finished of the totals, and each arm's outcome so far
+    (`outcomes`, aggregated when first read: read it in the callback)."""
 
     done: int
     total: int
@@ -215,9 +200,6 @@ class CompareResult:
         }
 
 
-# --- the plan: what each batch runs ---------------------------------------------------
-
-
 @dataclass(frozen=True)
 class Arm:
     """One learner of an experiment: an algorithm with the settings given for it."""
@@ -230,8 +212,7 @@ class Arm:
 @dataclass(frozen=True)
 class Setup:
     """What every arm of an experiment shares: the game, its seeds and episodes, and the
-    per-episode quantity recorded (`measure`, a column of the engine's loop: the online
-    return, or `loop.LENGTH`, `loop.FIRST_ACTION`)."""
+    per-episode `measure` recorded (`loop.RETURN`, `loop.LENGTH` or `loop.FIRST_ACTION`)."""
 
     game: str
     seeds: int
@@ -248,9 +229,8 @@ class Setup:
 
 @dataclass(frozen=True, eq=False)
 class _Model:
-    """The game's model for the jobs: the loop's arrays, the model itself (for exact
-    values) and the table row of each of its states, the learners' table shape and the
-    actions each row offers (None: all)."""
+    """The game's model for the jobs: the loop's arrays, the MDP and its states' table
+    rows, the learners' table shape and the actions each row offers (None: all)."""
 
     arrays: ModelArrays
     mdp: FiniteMDP
@@ -267,8 +247,7 @@ class _Model:
         return learner
 
     def greedy_values(self, tables: np.ndarray) -> np.ndarray:
-        """The exact values of the greedy policies of action-value `tables[m, rows, A]`,
-        each greedy among the actions each state offers."""
+        """Exact values of the greedy policies of `tables[m, rows, A]` (among actions offered)."""
         q = tables[:, self.rows]
         if self.offered is not None:
             q = np.where(self.offered[self.rows], q, -np.inf)
@@ -277,8 +256,7 @@ class _Model:
 
 @dataclass(frozen=True)
 class _Job:
-    """An arm's seeds `seeds` (indices `rows` of its seed list), of the experiment
-    `setup` on the game as `prepared`."""
+    """Seeds `seeds` (rows `rows` of the seed list) of arm `arm`, on the game as `prepared`."""
 
     index: int
     arm: int
@@ -289,17 +267,11 @@ class _Job:
     setup: Setup
     prepared: Prepared
 
-    @property
-    def episodes(self) -> int:
-        return self.setup.episodes
-
 
 @dataclass(frozen=True)
 class SeedsUpdate:
-    """What a job played since its last update: per seed, its episodes done, and the
-    online returns of episodes `first[i]` to `done[i] - 1`; `exact[i, j]` its greedy
-    policy's exact value at checkpoint j, a prediction learner's RMS error of V (NaN
-    until reached; None without a model)."""
+    """What a job played since its last update: per seed, its episodes done, the returns of
+    episodes `first[i]` to `done[i] - 1`, and `exact` as in `TaskRecord` (NaN until reached)."""
 
     done: np.ndarray
     first: np.ndarray
@@ -309,8 +281,7 @@ class SeedsUpdate:
 
 @dataclass
 class Prepared:
-    """The game as built once: its name, id and arguments, each arm's hyperparameters,
-    and its model and optimum when it has one."""
+    """The game as built once: its name, id, arguments, arms' hyperparameters, model, optimum."""
 
     game: str
     env_id: str
@@ -390,15 +361,11 @@ def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared,
     return jobs
 
 
-# --- running one job (in a child process or on the calling thread) -------------------------
-
-
 def _run_job(
     job: _Job, stop: Callable[[], bool], report: Callable[[SeedsUpdate], None],
 ) -> SeedsUpdate:
-    """Train a job's seeds one after another, `report`ing what they play as they go; the
-    last update (complete or stopped)."""
-    n, episodes = len(job.seeds), job.episodes
+    """Train a job's seeds in turn, `report`ing what they play as they go; the last update."""
+    n, episodes = len(job.seeds), job.setup.episodes
     checkpoints = checkpoint_episodes(episodes)
     done = np.zeros(n, dtype=np.int64)
     returns = np.full((n, episodes), np.nan)
@@ -459,7 +426,7 @@ def _play_env(job: _Job, seed: int, returns: np.ndarray, progress: Callable[[int
     session = _session(prepared.env_id, prepared.env_kwargs, job.setup.wrappers, job.algorithm,
                        job.hp, seed)
     try:
-        for e in range(job.episodes):
+        for e in range(job.setup.episodes):
             if stop():
                 return
             stats = session.trainer.run_episode()
@@ -479,9 +446,8 @@ def run_task(job: _Job) -> list[SeedsUpdate]:
 
 def _worker(parent: int, jobs: Mapping[int, _Job], numbers: Any, messages: Any,
             stop_flag: Any) -> None:
-    """A child process's work: the jobs whose numbers it takes from `numbers`, one after
-    another until a None or a stop, each one's start and states sent on `messages`; it
-    ends after `WORKER_SEEDS` seeds (the parent starts another)."""
+    """A child process's work: the jobs numbered on `numbers` until a None, a stop or
+    `WORKER_SEEDS` seeds, each one's start and states sent on `messages`."""
     processes_module.watch_parent(parent)
     played = 0
     while played < WORKER_SEEDS and not stop_flag.is_set():
@@ -500,9 +466,6 @@ def _worker(parent: int, jobs: Mapping[int, _Job], numbers: Any, messages: Any,
             return
         messages.put(("end", index, final))
         played += len(jobs[index].seeds)
-
-
-# --- putting it together ----------------------------------------------------------------
 
 
 class _Tally:
@@ -542,7 +505,7 @@ class _Tally:
         """A finished job as the run history keeps it."""
         rows = list(job.rows)
         return TaskRecord(
-            rows=job.rows, seeds=job.seeds, episodes=job.episodes,
+            rows=job.rows, seeds=job.seeds, episodes=job.setup.episodes,
             returns=self.returns[job.arm, rows],
             exact=None if self.exact is None else self.exact[job.arm, rows],
             algorithm=job.algorithm, hyperparameters=job.hp)
@@ -557,12 +520,13 @@ class _Tally:
             self.exact[job.arm, list(job.rows)] = update.exact
 
     def finished(self, job: _Job) -> bool:
-        return bool((self.done[job.arm, list(job.rows)] >= job.episodes).all())
+        return bool((self.done[job.arm, list(job.rows)] >= job.setup.episodes).all())
 
     def add(self, jobs: list[_Job]) -> list[_Job]:
         """The jobs, numbered after those there are, and counted in."""
         numbered = [replace(job, index=len(self.jobs) + i) for i, job in enumerate(jobs)]
         self.jobs.extend(numbered)
+        self.tasks_total += len(numbered)
         return numbered
 
     def count(self) -> int:
@@ -598,41 +562,19 @@ class _Tally:
                 curve = aggregate(values[:, keep], episodes=checkpoints[keep])
             if reached and finite[reached - 1]:
                 final = mean_with_ci(values[:, reached - 1])
-        predicts = self.predicts[arm]
-        exact_value = exact_gap = None
-        if final is not None and not predicts:
-            exact_value = final.mean
-            if self.prepared.optimum is not None:
-                exact_gap = self.prepared.optimum - exact_value
-        rms = final if predicts else None
+        mean, ci95 = (None, None) if final is None else (final.mean, final.ci95)
+        optimum = self.prepared.optimum
+        figures: dict[str, Any] = dict(rms_error=mean, rms_ci95=ci95, rms_curve=curve) if (
+            self.predicts[arm]) else dict(exact_value=mean, exact_ci95=ci95, exact_curve=curve,
+                                          exact_gap=None if mean is None or optimum is None
+                                          else optimum - mean)
         window = max(1, common // SMOOTHING_SHARE)
         return AlgorithmOutcome(
             algorithm=self.arms[arm].algorithm, hyperparameters=self.prepared.hyperparameters[arm],
             seeds_done=int(finished.sum()), curve=aggregate(seen),
-            mean_return_last=mean_return_last(seen), exact_value=exact_value, exact_gap=exact_gap,
-            run_id=self.run_ids[arm], exact_curve=None if predicts else curve,
-            exact_ci95=None if predicts or final is None else final.ci95, seeds=self.setup.seeds,
-            smoothed=aggregate(seen, window=window) if window > 1 else None, smoothing=window,
-            rms_error=None if rms is None else rms.mean, rms_ci95=None if rms is None else rms.ci95,
-            rms_curve=curve if predicts else None,
-        )
-
-
-def _start_runs(
-    history: RunHistory, kind: RunKind, setup: Setup, arms: Sequence[Arm], prepared: Prepared,
-    group: int | None = None,
-) -> list[int | None]:
-    ids: list[int | None] = []
-    for a, arm in enumerate(arms):
-        run_id = history.start_run(RunSpec(
-            kind=kind, game=prepared.game, algorithm=arm.algorithm, game_params=prepared.env_kwargs,
-            wrappers=prepared.wrappers, hyperparameters=prepared.hyperparameters[a],
-            seeds=setup.seed_list, group=group,
-        ))
-        ids.append(run_id)
-        if group is None:
-            group = run_id
-    return ids
+            mean_return_last=mean_return_last(seen), run_id=self.run_ids[arm],
+            seeds=self.setup.seeds, smoothing=window,
+            smoothed=aggregate(seen, window=window) if window > 1 else None, **figures)
 
 
 class CompareError(RuntimeError):
@@ -657,9 +599,8 @@ def _resume_runs(
     history: RunHistory, kind: RunKind, setup: Setup, arms: Sequence[Arm], prepared: Prepared,
     resume: int | Sequence[int], tally: _Tally,
 ) -> list[int | None]:
-    """The runs of `resume`'s group (or the runs `resume` lists), checked against these
-    settings, marked running again, their stored tasks counted into `tally`; ResumeError
-    (one line) if they differ."""
+    """The runs of `resume` (a group's first id, or every id), checked against these settings,
+    reopened, their stored tasks counted into `tally`; ResumeError (one line) if they differ."""
     try:
         if isinstance(resume, int):
             first = history.get_run(resume).summary
@@ -672,11 +613,9 @@ def _resume_runs(
             first = records[0].summary
     except RunHistoryError as exc:
         raise ResumeError(str(exc)) from None
-    run_id = first.id
-    advice = RESUME_ADVICE
     if len(records) != len(arms) or any(r.summary.kind != kind for r in records):
-        raise ResumeError(f"run {run_id} is a {first.kind} of {len(records)} run(s), not this "
-                          f"{kind} of {len(arms)}{advice}")
+        raise ResumeError(f"run {first.id} is a {first.kind} of {len(records)} run(s), not this "
+                          f"{kind} of {len(arms)}{RESUME_ADVICE}")
     for a, record in enumerate(records):
         run = record.summary
         tasks = history.read_tasks(run.id)
@@ -689,7 +628,7 @@ def _resume_runs(
                 raise ResumeError(
                     f"run {run.id} was recorded with other settings ({key} "
                     f"{visible(str(there.get(key)), 60)} there, "
-                    f"{visible(str(here.get(key)), 60)} here){advice}")
+                    f"{visible(str(here.get(key)), 60)} here){RESUME_ADVICE}")
         for task in tasks:
             tally.load(a, task)
     for record in records:
@@ -718,10 +657,8 @@ def _record(
 
 @dataclass(frozen=True)
 class Executed:
-    """What `execute` gives back: each arm's outcome (None if it finished no episode), and
-    `values[arm, seed, episode]`, the measure of every episode (NaN where not played), and
-    `exact[arm, seed, checkpoint]`, the greedy policies' exact values, a prediction
-    learner's RMS errors of V (None without a model)."""
+    """What `execute` gives back: each arm's outcome (None if it finished no episode),
+    `values[arm, seed, episode]` (NaN where not played) and `exact[arm, seed, checkpoint]`."""
 
     outcomes: tuple[AlgorithmOutcome | None, ...]
     interrupted: bool
@@ -739,13 +676,12 @@ def execute(
     status: Callable[[str], None] | None = None, resume: int | Sequence[int] | None = None,
     cluster: Any = None, task_seconds: float = TASK_SECONDS, group: int | None = None,
 ) -> Executed:
-    """Train every arm over the setup's seeds (what `run_compare` and `run_sweep` share)
-    as tasks, each kept in the run history as it finishes: here when the whole takes less
-    than `SPREAD_SECONDS` (`_estimate`), else in child processes, one per core, or on a
-    Dask cluster (`cluster`: an address, `local:N`, or a `distributed.Client`). `resume`
-    (a run's id, or the ids of the arms' runs in order) runs only the tasks its runs miss;
-    `group` names the run the new runs join (one experiment of several). A task runs for
-    about `task_seconds` or more (infinity: one per core)."""
+    """Train every arm over the setup's seeds as tasks, each kept in the run history as it
+    finishes: here when the whole takes under `SPREAD_SECONDS`, else in up to `processes`
+    child processes (None: one per core) or on a Dask `cluster` (an address, `local:N`, a
+    `distributed.Client`). `resume` (a run's id, or the arms' run ids) runs only the
+    tasks its runs miss; `group` is the run the new runs join; `status` hears the engine's
+    lines. A task runs for about `task_seconds` or more."""
     from tui_gym.session.experiments.cluster import connect, run_on_cluster
 
     prepared = prepare(setup, arms)
@@ -757,7 +693,13 @@ def execute(
                 raise ResumeError(f"run {resume} cannot be resumed without the run history")
             tally.run_ids = _resume_runs(history, kind, setup, arms, prepared, resume, tally)
         elif history is not None:
-            tally.run_ids = _start_runs(history, kind, setup, arms, prepared, group)
+            for a, arm in enumerate(arms):  # the first run is the group of those after it
+                tally.run_ids[a] = history.start_run(RunSpec(
+                    kind=kind, game=prepared.game, algorithm=arm.algorithm,
+                    game_params=prepared.env_kwargs, wrappers=prepared.wrappers,
+                    hyperparameters=prepared.hyperparameters[a], seeds=setup.seed_list,
+                    group=group))
+                group = tally.run_ids[a] if group is None else group
         last = [time.monotonic()]
 
         def tell(force: bool = False) -> None:
@@ -787,26 +729,23 @@ def execute(
                 missing = tally.missing()
                 seconds = _estimate(prepared, arms, setup, status) if (
                     client is not None or (processes != 0 and cores > 1)) else 0.0
-                if client is None and seconds < SPREAD_SECONDS:
-                    jobs = tally.add(_jobs(setup, arms, prepared, missing))
-                    tally.tasks_total += len(jobs)
+                here = client is None and seconds < SPREAD_SECONDS
+                per_seed = seconds / (len(arms) * setup.seeds)
+                pieces = 1 if here else max(-(-cores // len(arms)), max(
+                    -(-len(rows) * per_seed // task_seconds) for rows in missing))
+                jobs = tally.add(_jobs(setup, arms, prepared, missing, int(pieces)))
+                if here:
                     complete = _run_here(jobs, tally, stopped, tell, landed)
+                elif client is None:
+                    complete = _run_children(jobs, tally, stopped, tell, cores, landed)
                 else:
-                    per_seed = seconds / (len(arms) * setup.seeds)
-                    pieces = max(-(-cores // len(arms)), max(
-                        -(-len(rows) * per_seed // task_seconds) for rows in missing))
-                    jobs = tally.add(_jobs(setup, arms, prepared, missing, int(pieces)))
-                    tally.tasks_total += len(jobs)
-                    if client is None:
-                        complete = _run_children(jobs, tally, stopped, tell, cores, landed)
-                    else:
 
-                        def take(job: _Job, updates: list[SeedsUpdate]) -> None:
-                            for update in updates:
-                                tally.take(job.index, update)
-                            landed(job)
+                    def take(job: _Job, updates: list[SeedsUpdate]) -> None:
+                        for update in updates:
+                            tally.take(job.index, update)
+                        landed(job)
 
-                        complete = run_on_cluster(client, jobs, run_task, take, stopped)
+                    complete = run_on_cluster(client, jobs, run_task, take, stopped)
         except BaseException as exc:
             failure = exc
         if complete and history is not None and None not in tally.run_ids and (
@@ -847,9 +786,8 @@ def _stored(history: RunHistory, setup: Setup, arms: Sequence[Arm], prepared: Pr
 
 def _estimate(prepared: Prepared, arms: Sequence[Arm], setup: Setup,
               status: Callable[[str], None] | None) -> float:
-    """Seconds the whole would take on this thread, by a throwaway learner of each arm
-    played for `PROBE_SECONDS` (which also compiles the arms' learners, once, saying so
-    through `status`); 0 for a game no model follows (its seeds stay here)."""
+    """Seconds the whole would take here, from a throwaway learner per arm played for
+    `PROBE_SECONDS` (compiling them first, said through `status`); 0 without a model."""
     model = prepared.model
     if model is None:
         return 0.0
@@ -892,16 +830,8 @@ def run_compare(
     processes: int | None = None, status: Callable[[str], None] | None = None,
     resume: int | None = None, cluster: Any = None,
 ) -> CompareResult:
-    """Run a comparison (see the module docstring).
-
-    `processes`: child processes at once at most (None: one per core); 0 runs
-    everything on the calling thread. `status` hears the engine's lines
-    ("compiling the learners, once"). `resume`: a run's id, to run only the
-    tasks it misses (ResumeError if its settings differ); `cluster`: a Dask
-    scheduler's address, `local:N`, or a `distributed.Client`. ValueError,
-    before anything runs, for an unknown game, algorithm or setting, or a bad
-    value.
-    """
+    """Run a comparison; the arguments as `execute`'s (`processes` 0: all on this thread).
+    ValueError, before anything runs, for an unknown game, algorithm or setting."""
     setup = Setup(spec.game, spec.seeds, spec.episodes, spec.game_params,
                   tuple(spec.wrappers), spec.first_seed)
     arms = [
@@ -920,8 +850,7 @@ def run_compare(
 
 def _play(job: _Job, tally: _Tally, stop: Callable[[], bool], tell: Callable[[], None],
           landed: Callable[[_Job], None]) -> bool:
-    """Play a job on this thread, counted in and told as it goes; whether it finished (then
-    it has landed)."""
+    """Play a job here, counted in and told as it goes; whether it finished (and landed)."""
 
     def report(update: SeedsUpdate) -> None:
         tally.take(job.index, update)
@@ -970,7 +899,6 @@ def _run_children(
     left = set(given)  # the workers' jobs not ended yet
     begun: set[int] = set()
     dead_since: dict[int, float] = {}  # workers found ended other than by themselves
-    ended: set[int] = set()
     errors: list[str] = []
 
     def fail(message: str) -> None:
@@ -995,14 +923,12 @@ def _run_children(
             tally.take(index, payload)
             if kind == "end":
                 left.discard(index)
-                ended.add(index)
                 if tally.finished(tally.jobs[index]):
                     landed(tally.jobs[index])
         return True
 
     def lost(grace: float) -> None:
-        """A worker that ended other than by itself (killed, or crashed): an error, once
-        its last words had `grace` seconds to arrive."""
+        """A worker ended other than by itself: an error, once its last words had `grace` s."""
         now = time.monotonic()
         for w in workers:
             if w.exitcode not in (None, 0) and now - dead_since.setdefault(w.pid, now) >= grace:
@@ -1027,7 +953,6 @@ def _run_children(
                 tell()
 
             _play(own, tally, own_stop, own_tell, landed)
-            ended.add(own.index)
         while left and not errors:
             took = take(0.05)
             tell()
@@ -1057,4 +982,4 @@ def _run_children(
         numbers.close()
     if errors:
         raise CompareError(errors[0])
-    return all(job.index in ended and tally.finished(job) for job in jobs)
+    return all(job.index not in left and tally.finished(job) for job in jobs)

@@ -124,10 +124,9 @@ def run_results(
     snapshot: TrainingSnapshot | None, checkpoints: ExactCheckpoints, after: int,
     report: EvalReport | None = None,
 ) -> tuple[list[Curve], list[Figure]]:
-    """What the run history keeps of a run's episodes after `after` as of `snapshot` (None:
-    no episodes): the return per episode and the checkpoints' curve; `mean_return_last`,
-    `exact_value` and `exact_gap` (or `rms_error`: those known), the episodes trained, and
-    the greedy evaluation's mean return with its 95% interval (normal approximation)."""
+    """What the run history keeps of the episodes after `after` as of `snapshot`: the return
+    per episode and the checkpoints' curve; `mean_return_last`, the exact figures known, the
+    episodes trained and the greedy evaluation's mean return with its 95% interval."""
     curve = None if snapshot is None else return_curve(snapshot, after)
     curves = [c for c in (curve, checkpoints.curve()) if c is not None]
     exact, figures = checkpoints.last, list[Figure]()
@@ -139,12 +138,10 @@ def run_results(
         if not len(tail):
             tail = curve.values[-1:]
         figures.append(Figure("mean_return_last", float(np.nanmean(tail)), "return"))
-    if "exact_value" in exact:
-        figures.append(Figure("exact_value", exact["exact_value"], "return"))
-    if "gap" in exact:
-        figures.append(Figure("exact_gap", exact["gap"], "return"))
-    if "rms_error" in exact:
-        figures.append(Figure("rms_error", exact["rms_error"]))
+    for key, name, unit in (("exact_value", "exact_value", "return"),
+                            ("gap", "exact_gap", "return"), ("rms_error", "rms_error", "")):
+        if key in exact:
+            figures.append(Figure(name, exact[key], unit))
     if snapshot is not None:
         figures.append(Figure("episodes", max(0, snapshot.episodes - after), "episodes"))
     if report is not None and report.episodes:

@@ -63,9 +63,8 @@ class Range(FieldsJson):
 
 @dataclass(frozen=True)
 class SweepSpec:
-    """`algorithm` on `game` at every point of `grid` (key -> values), or at `samples`
-    points drawn from `ranges` (key -> `Range`, seeded by `sample_seed`), `seeds` seeds
-    each. `settings` are fixed values for the other hyperparameters."""
+    """`algorithm` on `game` at every point of `grid` (key -> values), or at `samples` points
+    drawn from `ranges` by `sample_seed`, `seeds` seeds each; `settings` fix the others."""
 
     game: str
     algorithm: str
@@ -121,8 +120,7 @@ class SweepSpec:
         return list(self.ranges or self.grid)
 
     def points(self) -> list[dict[str, Any]]:
-        """Every grid point as {key: value}, the first key's values slowest; or the points
-        drawn, in the order drawn."""
+        """Every grid point as {key: value} (the first key slowest), or the points drawn."""
         if self.ranges:
             rng = np.random.default_rng(self.sample_seed)
             return [{k: r.draw(rng) for k, r in self.ranges.items()} for _ in range(self.samples)]
@@ -141,9 +139,8 @@ class SweepPoint:
 
     @property
     def figure(self) -> float | None:
-        """What points rank by: a prediction learner's RMS error of V (the lower the
-        better); else the greedy policy's exact value where the game has one, else the
-        online return over the last 10% of episodes (the higher the better)."""
+        """What points rank by: a prediction learner's RMS error of V (the lower the better), else
+        the greedy policy's exact value, else the online return over the last 10% of episodes."""
         o = self.outcome
         if o is None or (o.rms_error is None and issubclass(algorithm(o.algorithm), Predictor)):
             return None
@@ -215,9 +212,9 @@ def run_sweep(
                    history=history, processes=processes, status=status, resume=resume,
                    cluster=cluster)
     hps = done.prepared.hyperparameters
-    swept = [{k: hp[k] for k in spec.keys} for hp in hps]
     fixed = {k: v for k, v in hps[0].items() if k not in spec.keys}
-    found = [SweepPoint(v, o) for v, o in zip(swept, done.outcomes, strict=True)]
+    found = [SweepPoint({k: hp[k] for k in spec.keys}, o)
+             for hp, o in zip(hps, done.outcomes, strict=True)]
     lowest = issubclass(algorithm(spec.algorithm), Predictor)  # an RMS error
     order = sorted((i for i, p in enumerate(found) if p.figure is not None),
                    key=lambda i: (found[i].figure or 0.0) * (1 if lowest else -1))

@@ -19,9 +19,8 @@ if TYPE_CHECKING:
 
 
 class TrainRecording:
-    """Records one training run into the history at `db` (None: `TUI_GYM_DB` or the data
-    folder's), on a writer thread of its own while the training goes on; with `enabled`
-    False it records nothing."""
+    """Records one training run into the history at `db` (None: the default one) on a writer
+    thread of its own while the training goes on; with `enabled` False it records nothing."""
 
     def __init__(
         self, db: str | None = None, *, enabled: bool = True,
@@ -36,8 +35,7 @@ class TrainRecording:
         self._after = 0
 
     def begin(self, session: Session) -> None:
-        """Start recording: the file is opened and the run written (status running) on the
-        writer thread."""
+        """Start recording: the run is written (status running) on the writer thread."""
         if self._log is None:
             return
         try:
