@@ -6,7 +6,9 @@ from __future__ import annotations
 import json
 import sys
 import textwrap
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -18,9 +20,13 @@ from tui_gym.benchmark.players import (
     ProcessPlayer,
     RandomPlayer,
 )
+from tui_gym.benchmark.referee import Referee
 from tui_gym.benchmark.results import run_benchmark
 from tui_gym.cli import main
+from tui_gym.core.mdp import optimum
+from tui_gym.core.wrappers.changes import NO_CHANGES
 from tui_gym.games import GAMES
+from tui_gym.games.model import ModelOracle, freeze
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLE = ROOT / "examples" / "heuristic_player.py"
@@ -64,6 +70,39 @@ def test_the_optimal_player_plays_a_whole_episode_of_every_game(game: str) -> No
     assert result.episodes == 1 and result.decisions > 0
     if result.regrets is not None:  # games whose exact model gives action values
         assert np.all(result.regrets == 0.0) and result.agreement == 1.0
+
+
+def test_the_referee_solves_the_exact_figures_before_the_first_decision_is_timed(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The optimal player's hints find the exact optimum solved: the solve is the referee's
+    work, not the player's thinking time (a slow solve once cost it a timeout)."""
+    events: list[str] = []
+    exacts: dict[tuple[object, ...], object] = {}
+
+    def exact(self: ModelOracle, kwargs: dict[str, object], changes: object = NO_CHANGES) -> object:
+        key = (id(self), freeze(kwargs), changes)  # a cache of the test's own, empty at first
+        if key not in exacts:
+            exacts[key] = self._build(kwargs, changes)  # type: ignore[arg-type]
+        return exacts[key]
+
+    def solving(solve: Callable[..., Any]) -> Callable[..., Any]:
+        def recorded(*args: Any, **kwargs: Any) -> Any:
+            events.append("solve")
+            return solve(*args, **kwargs)
+        return recorded
+
+    class Watched(OptimalPlayer):
+        def choose(self, referee: Referee) -> str:
+            events.append("choose")
+            return super().choose(referee)
+
+    monkeypatch.setattr(ModelOracle, "exact", exact)
+    for name in ("_induction", "solve"):  # how the optimum's ladder solves its rungs
+        monkeypatch.setattr(optimum, name, solving(getattr(optimum, name)))
+    result = run_benchmark("car-rental", Watched(), episodes=1, seed=0)
+    assert "solve" in events and "solve" not in events[events.index("choose"):]
+    assert result.fouls.timeouts == 0 and np.all(result.regrets == 0.0)
 
 
 def test_the_example_player_through_the_cli_and_the_leaderboard(
