@@ -40,15 +40,13 @@ MAX_SAVED_COUNT = 2**62
 
 @kernel(inline=True)
 def restart(tables: Any, hp: Any) -> None:
-    """`begin` of a rule that keeps the episode so far: its last array, the episode's
-    length, back to 0."""
+    """`begin` of a rule that keeps the episode so far: its length (the last array) to 0."""
     tables[-1][0] = 0
 
 
 @kernel(inline=True)
 def filled(tables: Any, hp: Any) -> bool:
-    """`full` of a rule that keeps the episode so far in its arrays from the fifth on, the
-    length last: whether the episode fills them."""
+    """`full` of a rule that keeps the episode so far (arrays 4 on, its length last)."""
     return tables[-1][0] >= tables[4].shape[0]
 
 
@@ -88,19 +86,11 @@ class Transition:
 class UpdateRecord:
     """How a learner used one transition: what the step-by-step view shows.
 
-    `formula` is the target as the algorithm forms it (`r + γ·max Q(s',·)`),
-    `terms` each symbol of it with its value, in order. `target`, `td_error`
-    and `step_size` are None when the transition updates nothing yet (Monte
-    Carlo before the episode's end). `before`/`after` are Q(s, a) of the
-    table that was updated (`table` names it when there are two).
-    `target_action`: the action in s' whose value the target reads (SARSA's
-    a', Double Q's argmax of the updated table), None for a max or an
-    expectation.
-    `episode_updates`: Monte Carlo's updates at the episode's end, each with
-    its return; `planning_updates`: Dyna-Q's simulated updates after the
-    real one (`after` is Q(s, a) before planning).
-    `notes`: more (label, text) lines of what the learner did this step (the
-    n-step window, the traces, the priority queue).
+    `formula` is the target as written, `terms` its symbols with their values;
+    `target`, `td_error` and `step_size` are None while nothing is updated (Monte
+    Carlo mid-episode). `target_action`: the action in s' the target reads, if one.
+    `episode_updates`: the other pairs moved (Monte Carlo, traces); `notes`: more
+    (label, text) lines (the n-step window, the traces, the queue).
     """
 
     algorithm: str
@@ -137,11 +127,9 @@ class TableSpec:
 
 @dataclass(frozen=True)
 class Extra:
-    """An array a learner's rule takes beyond its tables (after them and `visits`, in the
-    order declared). `size`: "rows" (one a table row), "table" (a row's actions), "cells"
-    (one a (row, action)), which grow with the table; "episode" (the steps of the episode
-    in progress: twice the room at each `make_room`); a hyperparameter's name (its value);
-    or a number. `fill` None: the initial value (`initial_value`)."""
+    """An array a rule takes after the tables and `visits`. `size`: "rows", "table" or
+    "cells" (growing with the table), "episode" (doubled by `make_room`), a
+    hyperparameter's name or a number. `fill` None: `initial_value`."""
 
     name: str
     size: str | int
@@ -151,13 +139,8 @@ class Extra:
 
 @dataclass(frozen=True)
 class LearnerState:
-    """Everything a learner saves: named arrays, JSON-able metadata, and sparse row keys.
-
-    `arrays` hold every table's used rows and any other learner arrays;
-    `meta` has the algorithm name, table shape, episode count and
-    hyperparameters; `keys` is the key of each row for sparse tables, None
-    when rows are dense keys.
-    """
+    """Everything a learner saves: named arrays (the used rows), JSON-able `meta`, and each
+    row's key for a sparse table (None: dense)."""
 
     algorithm: str
     arrays: dict[str, np.ndarray]
@@ -166,13 +149,8 @@ class LearnerState:
 
 
 class Learner(ABC):
-    """A tabular learner over `n_actions` actions (see the module docstring).
-
-    `n_states` fixes a dense table (keys are rows); None grows the table as
-    new keys come. `hyperparameters` is a mapping of values for `params`
-    (missing ones take their defaults) or `Settings`. `seed` seeds the one
-    generator behind acting, the model's outcomes and any draw of the rule.
-    """
+    """A tabular learner over `n_actions` actions: a dense table of `n_states` rows, or
+    (None) one that grows as keys come; `seed` seeds its one generator."""
 
     name: ClassVar[str]  # the registry name: `--algorithm NAME`, save files
     title: ClassVar[str]  # how a person reads it
@@ -192,9 +170,7 @@ class Learner(ABC):
     counts: np.ndarray
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
-        """A learner with a `rule` of its own gets its own `Params`, the rule's key: the step
-        size's fields and the discount, then its own hyperparameters in order (`traces` as
-        `replacing`, `lambda` as `lambda_`)."""
+        """A learner with a `rule` of its own gets its own `Params` (the rule's key)."""
         super().__init_subclass__(**kwargs)
         if "rule" not in vars(cls):
             return
@@ -237,8 +213,7 @@ class Learner(ABC):
         self._make_extra(capacity)
 
     def _fill(self, spec: TableSpec, hp: Settings | None = None) -> float | int | bool:
-        """What a new row of a table holds: the initial value (`initial_value`, of `hp` or
-        the learner's) for the action values, the table's own fill for the others."""
+        """What a new row of a table holds: `initial_value` for the values, else its fill."""
         if spec.name not in self.value_tables:
             return spec.fill
         return (self.hp if hp is None else hp).initial_value
@@ -266,9 +241,7 @@ class Learner(ABC):
         return self.q[rows]
 
     def eligibility(self) -> np.ndarray | None:
-        """The eligibility traces of the episode in progress, as `table()` gives the values
-        (a copy, one row per used row; a learner of V has its state's trace in every
-        action's place); None for a learner without traces."""
+        """The episode's eligibility traces shaped as `table()`'s values (a copy), or None."""
         return None
 
     def _shape(self, extra: Extra, capacity: int) -> tuple[int, ...]:
@@ -289,7 +262,7 @@ class Learner(ABC):
             setattr(self, extra.name, self._new(extra, self._shape(extra, capacity)))
 
     def _grow_extra(self, capacity: int) -> None:
-        """Make the extras that grow with the table fit `capacity` rows, keeping what they hold."""
+        """The extras that grow with the table, made to fit `capacity` rows."""
         for extra in self.extras:
             if extra.size in ("rows", "table", "cells"):
                 old, shape = getattr(self, extra.name), self._shape(extra, capacity)
@@ -301,8 +274,7 @@ class Learner(ABC):
         return 1
 
     def make_room(self) -> None:
-        """Room for what the rule asked for room for (`rules.full`): twice the room for the
-        episode in progress."""
+        """Room the rule asked for (`rules.full`): twice the room for the episode."""
         for extra in self.extras:
             if extra.size == "episode":
                 old = getattr(self, extra.name)
@@ -314,8 +286,7 @@ class Learner(ABC):
 
     def _load_extra_arrays(self, arrays: Mapping[str, np.ndarray], rows: int,
                            capacity: int) -> None:
-        """Check what `_extra_arrays` saved (ValueError before changing anything), then
-        make the arrays beyond the tables for `capacity` rows holding it."""
+        """Check what `_extra_arrays` saved (ValueError first), then make the extras."""
         self._make_extra(capacity)
 
     @abstractmethod
@@ -334,9 +305,7 @@ class Learner(ABC):
         return self._params
 
     def _compiled(self, name: str, kind: type) -> Any:
-        """The value of the `Params` field `name` from the settings: the setting of that
-        name (a trailing `_` dropped: `lambda_` is `lambda`), `by_visits` from the
-        step-size schedule, `replacing` from the traces."""
+        """The `Params` field `name` from the settings (`lambda_` is `lambda`)."""
         if name == "by_visits":
             return self.hp.learning_rate_schedule == "visits"
         if name == "replacing":
@@ -350,8 +319,7 @@ class Learner(ABC):
 
     def offer(self, offered: np.ndarray | None) -> None:
         """The actions each row of a dense table offers (`[n_states, n_actions]` bool, one
-        run of actions a row), or None: every row offers every action. A row that offers
-        none offers all. `offered_ranges` is what the compiled code reads (see `rules`)."""
+        run a row; a row offering none offers all), or None: all."""
         mask = None
         if offered is not None:
             mask = np.array(offered, dtype=np.bool_)
@@ -378,9 +346,8 @@ class Learner(ABC):
         self, state: int, action: int, reward: float, next_state: int, terminated: bool,
         truncated: bool = False, next_action: int = -1, explain: bool = False,
     ) -> tuple[int, float]:
-        """One transition between rows through the compiled rule: (the next action the
-        rule chose first, or `next_action`; |TD error|). With `explain`, `last_update`
-        explains it."""
+        """One transition between rows through the compiled rule: (the next action, |TD
+        error|). With `explain`, `last_update` explains it."""
         if self.needs_room():
             self.make_room()
         log = rules.new_log(self.log_rows() if explain else 1)
@@ -404,8 +371,8 @@ class Learner(ABC):
         self, key: Hashable, action: int, reward: float, next_key: Hashable, terminated: bool,
         truncated: bool = False, next_action: int | None = None,
     ) -> float:
-        """One transition by observation keys, explained in `last_update`; its |TD error|.
-        A rule that needs the next action (SARSA) takes `next_action`."""
+        """One transition by observation keys (SARSA's takes `next_action`), explained in
+        `last_update`; its |TD error|."""
         if self.next_first and next_action is None and not terminated:
             raise ValueError(f"{self.title} needs the next action of a transition (next_action)")
         state, next_state = self.row(key), self.row(next_key)
@@ -481,9 +448,6 @@ class Learner(ABC):
         self.episode += count
         self.epsilon = self.hp.epsilon_at(self.episode)
 
-    def end_episode(self) -> None:
-        self.end_episodes(1)
-
     def set_hyperparameters(self, hyperparameters: Mapping[str, Any]) -> None:
         """New values for the rest of the run, taking effect at once; tables and episodes stay."""
         self.hp = self.settings(hyperparameters)
@@ -492,8 +456,7 @@ class Learner(ABC):
 
     # --- reading the table ----------------------------------------------------------------
     def values(self, keys: Iterable[Hashable]) -> np.ndarray:
-        """Action values for many states: (len(keys), n_actions); unseen states hold the
-        initial value."""
+        """Action values for many states (unseen ones hold the initial value)."""
         keys = list(keys)
         out = np.full((len(keys), self.n_actions), float(self.hp.initial_value))
         if self._index is None:
@@ -561,15 +524,12 @@ class Learner(ABC):
 
     @staticmethod
     def _logged(rows: np.ndarray) -> tuple[CellUpdate, ...]:
-        """The updates in rows of a log as `note` writes them: the pair, the target, the step
-        size, Q before and after."""
+        """The updates logged in `rows` (as `note` writes them)."""
         return tuple(CellUpdate(int(w[0]), int(w[1]), *(float(x) for x in w[2:6])) for w in rows)
 
     def _td_record(self, step: Transition, log: np.ndarray, future_term: str,
                    *more: tuple[str, float], formula: str = "", **extra: Any) -> UpdateRecord:
-        """The record of a one-step TD update logged by `rules.td_update`: the target is r
-        after termination, else r + γ·(the future term), `formula` (default: the
-        algorithm's)."""
+        """The record of a one-step TD update logged by `rules.td_update`."""
         target, future, before, after, alpha = (float(v) for v in log[0, :5])
         terms: tuple[tuple[str, float], ...] = (("r", step.reward),)
         written = "r"
@@ -580,9 +540,8 @@ class Learner(ABC):
 
     # --- saving ------------------------------------------------------------------------------
     def _check_arrays(self, arrays: Mapping[str, np.ndarray], rows: int) -> None:
-        """Raise ValueError, naming the array, for saved values this learner could not
-        have made: another kind of number, NaN or infinite values, counts below the
-        table's fill or beyond `MAX_SAVED_COUNT`. Shapes are checked before."""
+        """ValueError, naming the array, for saved values this learner could not have made
+        (shapes are checked before)."""
         specs = (TableSpec("visits", np.int64), *self.tables)
         for spec in specs:
             array = np.asarray(arrays[spec.name])
@@ -616,11 +575,8 @@ class Learner(ABC):
         return LearnerState(self.name, arrays, meta, self._keys())
 
     def load_state(self, state: LearnerState) -> None:
-        """Become the learner `state` describes (the generator is kept).
-
-        Raises ValueError, changing nothing, when it is another algorithm's or
-        does not fit this learner's shape.
-        """
+        """Become the learner `state` describes (the generator is kept); ValueError,
+        changing nothing, when it is another algorithm's or does not fit."""
         if state.algorithm != self.name:
             raise ValueError(f"this is a {state.algorithm} learner's state, not {self.name}'s")
         meta, arrays = state.meta, state.arrays

@@ -1,13 +1,5 @@
-"""Bounded statistics for runs of any length, and the immutable views of a run.
-
-`RollingWindow` keeps the last `size` values of a quantity in a ring buffer
-with a running sum (moving average in O(1)). `Series` keeps a whole run's
-history as at most `capacity` points: when full it merges neighbouring points
-pairwise and doubles the span each point covers, so memory stays fixed and
-the picture still covers episode 0 to now. `EpisodeStats` bundles the five
-per-episode quantities the trainer tracks; `TrainingSnapshot` is one frame of
-a run for viewers on other threads, `StepEvent` one move of the agent.
-"""
+"""Bounded statistics for runs of any length (`RollingWindow`, `Series`), and the immutable
+views of a run (`EpisodeStats`, `TrainingSnapshot`, `StepEvent`)."""
 
 from __future__ import annotations
 
@@ -23,9 +15,8 @@ from tui_gym.core.engine.kernel import kernel
 @kernel
 def push_all(ring: Any, values: Any, means: Any, at: int, count: int,
              total: float) -> tuple[int, int, float]:
-    """`RollingWindow.push` of each of `values` in turn on the ring buffer `ring` (next
-    slot `at`, `count` pushed so far, running sum `total`), the mean after each into
-    `means`; the next slot, count and sum after them."""
+    """`RollingWindow.push` of each of `values` in turn, the mean after each into `means`;
+    the next slot, count and sum after them."""
     size = ring.shape[0]
     for i in range(values.shape[0]):
         if count >= size:
@@ -177,8 +168,7 @@ class TrainingSnapshot:
     _lookup: dict[Hashable, int] | None = field(default=None, repr=False, compare=False)
 
     def values(self, keys: list[Hashable], traces: bool = False) -> np.ndarray:
-        """Action values for the given keys (zeros for unseen states), like `Learner.values`;
-        with `traces`, the eligibility traces (a snapshot without them has none)."""
+        """Action values (with `traces`, the traces) for the given keys (zeros for unseen)."""
         table = self.traces if traces else self.q
         if table is None:
             raise ValueError("this learner keeps no eligibility traces")
