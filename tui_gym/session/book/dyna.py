@@ -120,22 +120,19 @@ def reward_between(played: Played, first: int, last: int) -> np.ndarray:
 
 
 def _episodes(row: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The time steps (counted from 1) at which a run's episodes that reached the goal
-    began and ended."""
+    """The time steps (from 1) at which a run's episodes that reached the goal began and ended."""
     ends = np.flatnonzero(np.diff(row, prepend=0.0) > 0) + 1
     return np.concatenate(([0], ends))[: len(ends)], ends
 
 
 def episodes_after(played: Played, step: int) -> list[np.ndarray]:
-    """Per run, the lengths of the episodes begun at or after time step `step` that ended
-    within the run."""
+    """Per run, the lengths of the finished episodes begun at or after time step `step`."""
     return [(ends - begins)[begins >= step]
             for begins, ends in map(_episodes, played.values)]
 
 
 def found_after(played: Played, step: int) -> np.ndarray:
-    """Per run, the time steps from `step` until the first episode begun at or after it
-    reached the goal (the rest of the run where none did)."""
+    """Per run, the time steps from `step` until an episode begun then reached the goal."""
     found = []
     for row in played.values:
         begins, ends = _episodes(row)
@@ -158,8 +155,8 @@ def _steps_cost(model: FiniteMDP) -> FiniteMDP:
 def _changing_maze(figure: BookFigure, world: str, timing: tuple[int, int],
                    options: FigureOptions, progress: Progress,
                    ) -> tuple[Played, Played, tuple[int, ...]]:
-    """Dyna-Q's and Dyna-Q+'s runs on `world` (`timing`: their time steps, and those after
-    which the wall moves), and the fewest steps before and after the change."""
+    """Dyna-Q's and Dyna-Q+'s runs on `world` (`timing`: steps, and the change's), and the
+    fewest steps before and after the change."""
     steps, change = timing
     dyna, plus = play_steps(figure, world, MAZE_LEARNERS, options, progress, steps,
                             game_params={"change_at": change})
@@ -168,8 +165,7 @@ def _changing_maze(figure: BookFigure, world: str, timing: tuple[int, int],
 
 def _maze_result(figure: BookFigure, dyna: Played, plus: Played, checks: tuple[Check, ...],
                  *notes: str) -> FigureResult:
-    """A changing maze's figure: both cumulative rewards, the last claim that Dyna-Q+ ends
-    above Dyna-Q."""
+    """A changing maze's figure: both cumulative rewards; Dyna-Q+ ends above Dyna-Q."""
     steps = dyna.values.shape[1]
     last = above(f"Dyna-Q+'s cumulative reward after {steps} steps is above Dyna-Q's",
                  "above", plus.values[:, -1], dyna.values[:, -1])
@@ -336,9 +332,8 @@ def example_8_4(figure: BookFigure, options: FigureOptions, progress: Progress) 
 
 def _maze(scale: int, runs: int,
           seed: int) -> tuple[FiniteMDP, np.ndarray, list[dict[str, Any]], int]:
-    """The Dyna maze made `scale` times finer (the game's model, its episode limit), the
-    optimal moves (`good[state, action]`), each learner's settings, and its open cells
-    (the states the book counts)."""
+    """The Dyna maze made `scale` times finer, its optimal moves (`good[state, action]`),
+    each learner's settings, and its open cells (the states the book counts)."""
     prepared = prepare(Setup("dyna-maze", runs, 1, {"scale": scale}, (), seed),
                        [Arm(x.algorithm, dict(x.settings), x.label) for x in SWEEPERS])
     model = world_phases("dyna-maze", prepared.env_kwargs).models[0]
@@ -357,10 +352,8 @@ def _maze(scale: int, runs: int,
 
 def _updates_until_optimal(agent: Any, arrays: loop.ModelArrays, model: FiniteMDP,
                            good: np.ndarray, most: int) -> tuple[float, bool]:
-    """The Q updates `agent` makes until its greedy policy is optimal from the start,
-    looked at after each episode that changed Q (Dyna-Q: 1 + n a step; prioritized
-    sweeping: what it takes from its queue, which its log adds up), and whether it was
-    still not optimal after `most` steps."""
+    """The Q updates `agent` makes until its greedy policy is optimal from the start (looked
+    at after each episode), and whether it was still not after `most` steps."""
     cursor, out, log = loop.Cursor(), np.zeros((1, loop.COLUMNS)), np.zeros((1, 8))
     start = int(arrays.starts[0])
     queued = hasattr(agent, "queue")

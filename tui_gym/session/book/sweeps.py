@@ -63,10 +63,8 @@ class Sweep:
 
 @dataclass(frozen=True)
 class WalkSweep:
-    """What a swept figure measures: `algorithm` with one curve over α per value of its
-    hyperparameter `name` in `settings`, and the book's claims: the best value is an
-    intermediate one (in `middle`), and `chosen` lies below each of `ends` (a value and
-    how the claim names it); `how` opens the notes."""
+    """A swept figure: `algorithm`, one curve over α per value of `name` in `settings`; the
+    claims: the best value is in `middle`, `chosen` lies below each of `ends`."""
 
     algorithm: str
     name: str
