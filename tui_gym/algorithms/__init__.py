@@ -38,7 +38,7 @@ __all__ = [
     "DoubleQLearning", "DynaQ", "DynaQPlus", "ExpectedSarsa", "Field", "Learner", "LearnerState",
     "MonteCarlo", "NStepSarsa", "PrioritizedSweeping", "MonteCarloPrediction", "NStepTD",
     "OfflineLambdaReturn", "Predictor", "QLearning", "Sarsa", "SarsaLambda", "Settings", "TD0",
-    "TDLambda", "TableSpec", "Transition", "UpdateRecord", "WatkinsQLambda", "algorithm", "owners",
+    "TDLambda", "TableSpec", "Transition", "UpdateRecord", "WatkinsQLambda", "algorithm",
 ]
 
 ALGORITHMS: tuple[type[Learner], ...] = (
@@ -62,11 +62,6 @@ def _union() -> tuple[Field, ...]:
 
 ALL_PARAMS: tuple[Field, ...] = _union()
 """Every hyperparameter of any algorithm, once each (the common ones first)."""
-
-
-def owners(name: str) -> tuple[str, ...]:
-    """The registry names of the algorithms that have the hyperparameter `name`."""
-    return tuple(cls.name for cls in ALGORITHMS if any(f.name == name for f in cls.params))
 
 
 def algorithm(name: str) -> type[Learner]:

@@ -205,7 +205,7 @@ class Learner(ABC):
         self.offered_ranges = rules.offered_ranges(None, self.n_actions)
         self._index: dict[Hashable, int] | None = None if n_states is not None else {}
         capacity = self.n_states if self.n_states is not None else _INITIAL_ROWS
-        self._rows_used = self.n_states if self.n_states is not None else 0
+        self.rows_used = self.n_states if self.n_states is not None else 0
         self.visits = np.zeros(capacity, dtype=np.int64)  # updates per state
         for spec in self.tables:
             setattr(self, spec.name,
@@ -297,20 +297,15 @@ class Learner(ABC):
     def compiled_params(self) -> Any:
         """The compiled hyperparameters (`Params`) of the current settings."""
         if self._params is None:
-            hp, kinds = self.hp, self.Params.__annotations__
-            self._params = self.Params(**{name: self._compiled(name, kinds[name])
-                                          for name in self.Params._fields})
+            hp = self.hp
+            derived = {"by_visits": hp.learning_rate_schedule == "visits",
+                       "replacing": hp.get("traces") == "replacing"}
+            self._params = self.Params(**{  # the others from their settings (`lambda_`: `lambda`)
+                name: derived[name] if name in derived else kind(hp[name.rstrip("_")])
+                for name, kind in self.Params.__annotations__.items()})
             self._exploration = np.array([hp.epsilon_start, hp.epsilon_final,
                                           hp.epsilon_decay_fraction * hp.episodes])
         return self._params
-
-    def _compiled(self, name: str, kind: type) -> Any:
-        """The `Params` field `name` from the settings (`lambda_` is `lambda`)."""
-        if name == "by_visits":
-            return self.hp.learning_rate_schedule == "visits"
-        if name == "replacing":
-            return self.hp.traces == "replacing"
-        return kind(self.hp[name.rstrip("_")])
 
     def exploration(self) -> np.ndarray:
         """(epsilon start, final, episodes of the decay) for the compiled schedule."""
@@ -335,9 +330,6 @@ class Learner(ABC):
         """Whether the rule needs the next action before its update (SARSA)."""
         return rules.next_first(self.compiled_params())
 
-    def needs_room(self) -> bool:
-        return bool(rules.full(self.arrays(), self.compiled_params()))
-
     def begin_episode(self) -> None:
         """An episode starts: whatever was kept of an unfinished one goes."""
         rules.begin(self.arrays(), self.compiled_params())
@@ -348,7 +340,7 @@ class Learner(ABC):
     ) -> tuple[int, float]:
         """One transition between rows through the compiled rule: (the next action, |TD
         error|). With `explain`, `last_update` explains it."""
-        if self.needs_room():
+        if rules.full(self.arrays(), self.compiled_params()):
             self.make_room()
         log = rules.new_log(self.log_rows() if explain else 1)
         hp = self.compiled_params()
@@ -384,10 +376,6 @@ class Learner(ABC):
     def dense(self) -> bool:
         return self._index is None
 
-    @property
-    def rows_used(self) -> int:
-        return self._rows_used
-
     def row(self, key: Hashable) -> int:
         """The table row of a key, adding one for a new sparse key."""
         index = self._index
@@ -395,11 +383,11 @@ class Learner(ABC):
             return key  # type: ignore[return-value]
         row = index.get(key)
         if row is None:
-            row = self._rows_used
+            row = self.rows_used
             if row == len(self.visits):
                 self._grow()
             index[key] = row
-            self._rows_used += 1
+            self.rows_used += 1
         return row
 
     def find(self, key: Hashable) -> int | None:
@@ -414,12 +402,6 @@ class Learner(ABC):
             old = getattr(self, spec.name)
             setattr(self, spec.name, np.concatenate([old, np.full_like(old, self._fill(spec))]))
         self._grow_extra(len(self.visits))
-
-    def _row_values(self, key: Hashable) -> np.ndarray:
-        row = self.find(key)
-        if row is None:  # an unseen state reads as an untouched row does
-            return np.full(self.n_actions, float(self.hp.initial_value))
-        return self.action_values(np.array([row]))[0]
 
     # --- acting ----------------------------------------------------------------------
     def act(self, key: Hashable) -> int:
@@ -436,7 +418,7 @@ class Learner(ABC):
 
     def greedy_actions(self, key: Hashable) -> tuple[int, ...]:
         """Every action tied for the best value among those a state offers."""
-        values = self._row_values(key)
+        values = self.values([key])[0]
         row = self.find(key)
         if self.offered is not None and row is not None:
             values = np.where(self.offered[row], values, -np.inf)
@@ -459,12 +441,7 @@ class Learner(ABC):
         """Action values for many states (unseen ones hold the initial value)."""
         keys = list(keys)
         out = np.full((len(keys), self.n_actions), float(self.hp.initial_value))
-        if self._index is None:
-            if keys:
-                out[:] = self.action_values(np.asarray(keys, dtype=np.int64))
-            return out
-        found = [(i, self._index.get(k)) for i, k in enumerate(keys)]
-        found = [(i, r) for i, r in found if r is not None]
+        found = [(i, row) for i, key in enumerate(keys) if (row := self.find(key)) is not None]
         if found:
             at, rows = zip(*found, strict=True)
             out[list(at)] = self.action_values(np.asarray(rows, dtype=np.int64))
@@ -472,20 +449,20 @@ class Learner(ABC):
 
     def table(self) -> tuple[np.ndarray, list[Hashable] | None]:
         """The action values of the used rows and, for sparse tables, each row's key."""
-        values = self.action_values(slice(0, self._rows_used))
+        values = self.action_values(slice(0, self.rows_used))
         return values.copy(), self._keys()
 
     def _keys(self) -> list[Hashable] | None:
         if self._index is None:
             return None
-        keys: list[Hashable] = [None] * self._rows_used
+        keys: list[Hashable] = [None] * self.rows_used
         for key, row in self._index.items():
             keys[row] = key
         return keys
 
     def update_counts(self) -> np.ndarray:
         """Updates per (state, action) of the used rows."""
-        return self.counts[: self._rows_used].copy()
+        return self.counts[: self.rows_used].copy()
 
     def seen(self, key: Hashable) -> bool:
         """Whether the learner has updated this state at least once."""
@@ -495,7 +472,7 @@ class Learner(ABC):
     @property
     def states_seen(self) -> int:
         """How many states have been updated at least once."""
-        return int(np.count_nonzero(self.visits[: self._rows_used]))
+        return int(np.count_nonzero(self.visits[: self.rows_used]))
 
     # --- the record of one update ---------------------------------------------------------
     @property
@@ -563,7 +540,7 @@ class Learner(ABC):
 
     def state(self) -> LearnerState:
         """Copies of everything that defines this learner, to save or send elsewhere."""
-        used = self._rows_used
+        used = self.rows_used
         arrays = {"visits": self.visits[:used].copy()}
         for spec in self.tables:
             arrays[spec.name] = getattr(self, spec.name)[:used].copy()
@@ -618,7 +595,7 @@ class Learner(ABC):
         for name, table in loaded.items():
             setattr(self, name, table)
         self.visits = visits
-        self._rows_used = rows
+        self.rows_used = rows
         self._index = None if dense else {k: i for i, k in enumerate(state.keys)}  # type: ignore[arg-type]
         self.hp = hp
         self._params = None

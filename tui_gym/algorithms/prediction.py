@@ -59,10 +59,10 @@ class Predictor(Learner):
     def follow(self, action_values: np.ndarray, epsilon: float) -> None:
         """Follow the epsilon-greedy policy on `action_values` (as `table()` gives them)."""
         values = np.asarray(action_values, dtype=np.float64)
-        if values.shape != (self._rows_used, self.n_actions):
+        if values.shape != (self.rows_used, self.n_actions):
             raise ValueError(f"a policy to follow has one row of {self.n_actions} action "
-                             f"values per state ({self._rows_used}), got {values.shape}")
-        self.q[: self._rows_used] = values
+                             f"values per state ({self.rows_used}), got {values.shape}")
+        self.q[: self.rows_used] = values
         self.set_hyperparameters(self.hp.replace(epsilon_start=epsilon, epsilon_final=epsilon))
 
     def policy(self, rows: np.ndarray) -> np.ndarray:
@@ -98,7 +98,7 @@ class Predictor(Learner):
 
     # --- saving ----------------------------------------------------------------------------
     def _extra_arrays(self) -> dict[str, np.ndarray]:
-        return {"v": self.v[: self._rows_used].copy()}
+        return {"v": self.v[: self.rows_used].copy()}
 
     def _load_extra_arrays(self, arrays: Mapping[str, np.ndarray], rows: int,
                            capacity: int) -> None:

@@ -22,8 +22,21 @@ from tui_gym.core.engine.kernel import kernel
 from tui_gym.core.engine.stats import RollingWindow
 from tui_gym.core.mdp.model import FiniteMDP
 
-__all__ = ["COLUMNS", "FIRST_ACTION", "GROW", "LENGTH", "RETURN", "Cursor", "ModelArrays",
-    "entries", "play", "run_model", "sample_outcome", "sample_start", "warm"]
+__all__ = [
+    "COLUMNS",
+    "FIRST_ACTION",
+    "GROW",
+    "LENGTH",
+    "RETURN",
+    "Cursor",
+    "ModelArrays",
+    "entries",
+    "play",
+    "run_model",
+    "sample_outcome",
+    "sample_start",
+    "warm",
+]
 
 GUIDED = 16  # pairs with more outcomes than this are sampled through a guide table
 GROW = 1  # `run_model`'s status when the learner needs room (Monte Carlo's longest episode)
@@ -289,28 +302,22 @@ def entries(hp: Any) -> Entries:
 # --- compiling once ---------------------------------------------------------------------
 
 
-def _tiny_model(n_actions: int) -> ModelArrays:
-    """One state, every action ending the episode: enough to compile the loop's types."""
-    shape = (1, n_actions, 1)
-    return ModelArrays.of(FiniteMDP(np.zeros(shape, dtype=np.int64), np.ones(shape),
-                                    np.zeros(shape), np.ones(shape, dtype=bool), np.ones(1)))
-
-
 def compile_learner(tables: Any, hp: Any) -> None:
-    """Compile (or load) the entry points for one learner's types, on copies of its tables."""
+    """Compile (or load) the entry points for one learner's types, on copies of its tables
+    and a model of one state where every action ends the episode."""
     calls = entries(hp)
     copies = tuple(np.array(t) for t in tables)
     mask = rules.offered_ranges(None, copies[0].shape[1])
     spare = np.random.default_rng(0)
     log = np.zeros((1, 8))
-    model = _tiny_model(copies[0].shape[1])
+    shape = (1, copies[0].shape[1], 1)
+    model = ModelArrays.of(FiniteMDP(np.zeros(shape, dtype=np.int64), np.ones(shape),
+                                     np.zeros(shape), np.ones(shape, dtype=bool), np.ones(1)))
     cursor = Cursor()
-    out = np.zeros((1, COLUMNS))
-    explore = np.zeros(3)
     calls.run_model(model.next_state, model.cumulative, model.guide, model.reward, model.noise,
                     model.terminal, model.pair_rows, model.outcomes, model.starts,
                     model.start_cumulative, model.rows, model.horizon, copies, hp, spare, mask,
-                    explore, 0, cursor.ints, cursor.floats, 1, 1, out, log)
+                    np.zeros(3), 0, cursor.ints, cursor.floats, 1, 1, np.zeros((1, COLUMNS)), log)
     calls.transition(copies, hp, spare, mask, 0, 0, 0.0, 0, True, False, -1, 0.0, log)
     calls.act(copies, hp, spare, mask, 0, 0.0)
     calls.greedy(copies, hp, spare, mask, 0)

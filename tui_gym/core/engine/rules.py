@@ -19,9 +19,28 @@ import numpy as np
 
 from tui_gym.core.engine.kernel import kernel
 
-__all__ = ["RULES", "Rule", "act", "acting", "begin", "epsilon_at", "every", "expected_value",
-    "full", "greedy", "max_value", "next_first", "offered_range", "offered_ranges", "register",
-    "step_size", "td_update", "uniform", "update", "value"]
+__all__ = [
+    "RULES",
+    "Rule",
+    "act",
+    "acting",
+    "begin",
+    "epsilon_at",
+    "every",
+    "expected_value",
+    "full",
+    "greedy",
+    "max_value",
+    "next_first",
+    "offered_range",
+    "offered_ranges",
+    "register",
+    "step_size",
+    "td_update",
+    "uniform",
+    "update",
+    "value",
+]
 
 LOG_WIDTH = 8  # numbers per row of an update's log
 

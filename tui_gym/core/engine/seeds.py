@@ -3,6 +3,7 @@ and the exact values of their greedy policies (`greedy_values`), many at once.""
 
 from __future__ import annotations
 
+import graphlib
 from collections.abc import Callable, Sequence
 from functools import lru_cache
 from typing import Any
@@ -146,20 +147,12 @@ def _valued(model: FiniteMDP, tied: np.ndarray, ties: np.ndarray) -> np.ndarray:
 def _acyclic(model: FiniteMDP) -> bool:
     """Whether no possible move that goes on leads back to a state already passed."""
     moves = (model.prob > 0) & ~model.terminal
-    targets = [np.unique(model.next_state[s][moves[s]]) for s in range(model.n_states)]
-    incoming = np.zeros(model.n_states, dtype=np.int64)
-    for nxt in targets:
-        np.add.at(incoming, nxt, 1)
-    ready = [s for s in range(model.n_states) if incoming[s] == 0]
-    seen = 0
-    while ready:
-        s = ready.pop()
-        seen += 1
-        for t in targets[s].tolist():
-            incoming[t] -= 1
-            if incoming[t] == 0:
-                ready.append(t)
-    return seen == model.n_states
+    after = {s: model.next_state[s][moves[s]].tolist() for s in range(model.n_states)}
+    try:
+        tuple(graphlib.TopologicalSorter(after).static_order())
+    except graphlib.CycleError:
+        return False
+    return True
 
 
 _DENSE_STATES = 256  # up to this many states, policies are valued by matrix powers

@@ -25,7 +25,7 @@ def push_all(ring: Any, values: Any, means: Any, at: int, count: int,
         total += values[i]
         at += 1
         count += 1
-        if at == size:  # re-summed once per lap, as `push` does
+        if at == size:  # re-summed once per lap, so that no drift builds up
             at = 0
             total = 0.0
             for j in range(size):
@@ -47,19 +47,10 @@ class RollingWindow:
         self._sum = 0.0
 
     def push(self, value: float) -> None:
-        slot = self._next
-        if self.count >= self.size:
-            self._sum -= self._values[slot]
-        self._values[slot] = value
-        self._sum += value
-        self._next = (slot + 1) % self.size
-        self.count += 1
-        if self._next == 0:
-            # Re-sum once per lap so floating-point drift cannot build up.
-            self._sum = float(self._values.sum())
+        self.push_many(np.array([value], dtype=np.float64))
 
     def push_many(self, values: np.ndarray) -> np.ndarray:
-        """Push `values` in order (as many `push` calls do, compiled); the mean after each."""
+        """Push `values` in order (compiled); the mean after each."""
         values = np.ascontiguousarray(values, dtype=np.float64)
         means = np.empty(len(values))
         at, count, total = push_all(self._values, values, means, self._next, self.count,

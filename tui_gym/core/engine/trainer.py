@@ -28,8 +28,14 @@ from tui_gym.core.engine.stats import (
 )
 from tui_gym.core.obskey import ObservationKeyer
 
-__all__ = ["EPISODE_RETURNS", "SERIES_NAMES", "StopFlag", "Trainer", "TrainerProgress",
-    "continue_run"]
+__all__ = [
+    "EPISODE_RETURNS",
+    "SERIES_NAMES",
+    "StopFlag",
+    "Trainer",
+    "TrainerProgress",
+    "continue_run",
+]
 
 SERIES_NAMES = ("return", "length", "td_error", "epsilon")
 # The series of each episode's own return (bucket means, not rolling means): what the run
@@ -207,12 +213,7 @@ class Trainer:
     def _record(self, rows: np.ndarray) -> None:
         """Count finished episodes (rows of `loop.COLUMNS`) into the windows and curves."""
         for name, values in zip(SERIES_NAMES, rows.T[: len(SERIES_NAMES)], strict=True):
-            window = self.windows[name]
-            if len(rows) == 1:
-                window.push(values.item())
-                self.series[name].push(window.mean)
-            else:
-                self.series[name].push_many(window.push_many(values))
+            self.series[name].push_many(self.windows[name].push_many(values))
         self.series[EPISODE_RETURNS].push_many(rows[:, 0])
         ret, length, td, eps, first = rows[-1].tolist()
         self.last = EpisodeStats(ret, int(length), td, eps, int(first))
@@ -313,13 +314,25 @@ class Trainer:
         self._version += 1
         w = self.windows
         return TrainingSnapshot(
-            engine=self.engine, episodes=self.episodes, steps=self.steps, seconds=self.seconds,
-            episodes_per_second=self._recent_rate(), epsilon=self.agent.epsilon,
-            mean_return=w["return"].mean, mean_length=w["length"].mean,
-            mean_abs_td=w["td_error"].mean, window=w["return"].size,
-            series={name: s.points() for name, s in self.series.items()}, q=q, keys=keys,
-            budget=self.agent.hp.episodes, last=self.last, version=self._version,
-            recorded=w["return"].count, status=self.status, traces=self.agent.eligibility(),
+            engine=self.engine,
+            episodes=self.episodes,
+            steps=self.steps,
+            seconds=self.seconds,
+            episodes_per_second=self._recent_rate(),
+            epsilon=self.agent.epsilon,
+            mean_return=w["return"].mean,
+            mean_length=w["length"].mean,
+            mean_abs_td=w["td_error"].mean,
+            window=w["return"].size,
+            series={name: s.points() for name, s in self.series.items()},
+            q=q,
+            keys=keys,
+            budget=self.agent.hp.episodes,
+            last=self.last,
+            version=self._version,
+            recorded=w["return"].count,
+            status=self.status,
+            traces=self.agent.eligibility(),
         )
 
     def progress(self) -> TrainerProgress:

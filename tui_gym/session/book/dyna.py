@@ -25,7 +25,6 @@ from tui_gym.session.book.figure import (
 from tui_gym.session.book.runs import (
     BANDS,
     LENGTH,
-    Learner,
     Played,
     above,
     below,
@@ -61,7 +60,7 @@ EARLY = (2, 10)  # the episodes compared at the start (the book's axis begins at
           "one without planning needs about 25 episodes.")
 def fig_8_2(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
     played = play(figure, "dyna-maze", [
-        Learner(f"{n} planning steps", "dyna-q", {**DYNA_SETTINGS, "planning_steps": n})
+        Arm("dyna-q", {**DYNA_SETTINGS, "planning_steps": n}, f"{n} planning steps")
         for n in PLANNING_STEPS], options, progress, measure=LENGTH)
     episodes = played[0].values.shape[1]
     first, last = EARLY[0] - 1, min(EARLY[1], episodes)
@@ -102,8 +101,8 @@ def _settled(played: Played, episode: int) -> Check:
 PLANNING = 50
 KAPPA = 0.001
 MAZE_SETTINGS = book_settings(0.95, learning_rate=1.0, planning_steps=PLANNING)
-MAZE_LEARNERS = (Learner("Dyna-Q", "dyna-q", MAZE_SETTINGS),
-                 Learner("Dyna-Q+", "dyna-q-plus", {**MAZE_SETTINGS, "kappa": KAPPA}))
+MAZE_LEARNERS = (Arm("dyna-q", MAZE_SETTINGS, "Dyna-Q"),
+                 Arm("dyna-q-plus", {**MAZE_SETTINGS, "kappa": KAPPA}, "Dyna-Q+"))
 MAZE_NOTE = (f"ε = 0.1, γ = 0.95, α = 1, {PLANNING} planning steps, κ = {KAPPA:g} (the book "
              "gives no settings for this figure)")
 BLOCKING = (3000, 1000)  # Figure 8.4's time steps, and those after which the wall moves
@@ -257,9 +256,9 @@ def fig_8_5(figure: BookFigure, options: FigureOptions, progress: Progress) -> F
 # takes the model's target whole) and θ = 0.0001.
 SWEEP_PLANNING = 5
 SWEEP_SETTINGS = {**MAZE_SETTINGS, "planning_steps": SWEEP_PLANNING}
-SWEEPERS = (Learner("Dyna-Q", "dyna-q", SWEEP_SETTINGS),
-            Learner("Prioritized sweeping", "prioritized-sweeping",
-                    {**SWEEP_SETTINGS, "theta": 0.0001}))
+SWEEPERS = (Arm("dyna-q", SWEEP_SETTINGS, "Dyna-Q"),
+            Arm("prioritized-sweeping", {**SWEEP_SETTINGS, "theta": 0.0001},
+                "Prioritized sweeping"))
 SCALES = (1, 2, 4)  # each cell of the Dyna maze made scale x scale cells: 47 to 752 states
 FULL_SCALES = (1, 2, 4, 8)  # to 3008 states, the book's axis doubling twice a step
 STEPS_PER_STATE = 10_000  # real steps a run may take to become optimal, per state
@@ -334,8 +333,7 @@ def _maze(scale: int, runs: int,
           seed: int) -> tuple[FiniteMDP, np.ndarray, list[dict[str, Any]], int]:
     """The Dyna maze made `scale` times finer, its optimal moves (`good[state, action]`),
     each learner's settings, and its open cells (the states the book counts)."""
-    prepared = prepare(Setup("dyna-maze", runs, 1, {"scale": scale}, (), seed),
-                       [Arm(x.algorithm, dict(x.settings), x.label) for x in SWEEPERS])
+    prepared = prepare(Setup("dyna-maze", runs, 1, {"scale": scale}, (), seed), list(SWEEPERS))
     model = world_phases("dyna-maze", prepared.env_kwargs).models[0]
     q = solve(with_horizon(_steps_cost(model), None)).q
     good = np.isclose(q, q.max(axis=1, keepdims=True))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -41,7 +41,7 @@ from tui_gym.session.experiments.compare import (
 )
 
 __all__ = [
-    "BANDS", "FIRST_ACTION", "LENGTH", "RETURN", "Learner", "Played", "above", "book_settings",
+    "BANDS", "FIRST_ACTION", "LENGTH", "RETURN", "Played", "above", "book_settings",
     "completed", "counts", "margin", "near", "one_run", "per_episode",
     "per_time_step", "play", "play_prediction", "play_steps", "swept", "world_phases",
 ]
@@ -55,15 +55,6 @@ def book_settings(discount: float, epsilon: float = 0.1, **more: Any) -> dict[st
     """The book's control settings: a constant ε and step size, `discount`, and `more`."""
     return {"learning_rate_schedule": "constant", "discount": discount,
             "epsilon_start": epsilon, "epsilon_final": epsilon, **more}
-
-
-@dataclass(frozen=True)
-class Learner:
-    """One series of a run figure: an algorithm with the book's settings for it."""
-
-    label: str
-    algorithm: str
-    settings: Mapping[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,7 +80,7 @@ def counts(figure: BookFigure, options: FigureOptions) -> tuple[int, int]:
     return runs, episodes
 
 
-def play(figure: BookFigure, world: str, learners: Sequence[Learner], options: FigureOptions,
+def play(figure: BookFigure, world: str, learners: Sequence[Arm], options: FigureOptions,
          progress: Progress, *, measure: int = RETURN,
          game_params: Mapping[str, Any] | None = None, runs: int | None = None,
          episodes: int | None = None) -> list[Played]:
@@ -98,7 +89,6 @@ def play(figure: BookFigure, world: str, learners: Sequence[Learner], options: F
     counted = counts(figure, options)
     runs, episodes = runs or counted[0], episodes or counted[1]
     setup = Setup(world, runs, episodes, dict(game_params or {}), (), options.seed, measure)
-    arms = [Arm(x.algorithm, dict(x.settings), x.label) for x in learners]
     names = ", ".join(x.label for x in learners) if len(learners) <= 4 else (
         f"{len(learners)} learners")
     about = f"{runs:,} runs × {episodes:,} episodes of {names}"
@@ -109,12 +99,12 @@ def play(figure: BookFigure, world: str, learners: Sequence[Learner], options: F
             f" ({tasks.landed + state.tasks_done}/{tasks.tasks + state.tasks_total} tasks)"
             if options.tasks else ""))
 
-    resume = _resumed(tasks, len(arms))  # sets `tasks.group` when resuming
-    done = execute(setup, arms, RunKind.COMPARE, progress=told, stop=options.stop,
+    resume = _resumed(tasks, len(learners))  # sets `tasks.group` when resuming
+    done = execute(setup, learners, RunKind.COMPARE, progress=told, stop=options.stop,
                    status=lambda line: progress(0, 1, line or about), history=tasks.history,
                    resume=resume, cluster=tasks.cluster, group=tasks.group)
     tasks.group = tasks.group or done.group
-    tasks.played += len(arms)
+    tasks.played += len(learners)
     tasks.tasks += done.tasks.get("total", 0)
     tasks.landed += done.tasks.get("done", 0)
     if done.interrupted:
@@ -125,15 +115,14 @@ def play(figure: BookFigure, world: str, learners: Sequence[Learner], options: F
             for index, learner in enumerate(learners)]
 
 
-def play_steps(figure: BookFigure, world: str, learners: Sequence[Learner],
+def play_steps(figure: BookFigure, world: str, learners: Sequence[Arm],
                options: FigureOptions, progress: Progress, steps: int, *,
                game_params: Mapping[str, Any] | None = None) -> list[Played]:
     """Every learner over the figure's runs of `steps` time steps, phase after phase:
     `values[run, t]`, the returns of the episodes finished in the first t + 1 steps."""
     runs, _ = counts(figure, options)
     setup = Setup(world, runs, 1, dict(game_params or {}), (), options.seed)
-    arms = [Arm(x.algorithm, dict(x.settings), x.label) for x in learners]
-    prepared = prepare(setup, arms)
+    prepared = prepare(setup, learners)
     phases = world_phases(world, prepared.env_kwargs)
     arrays = [loop.ModelArrays.of(model) for model in phases.models]
     ends = [*phases.starts[1:], steps]
@@ -157,7 +146,7 @@ def play_steps(figure: BookFigure, world: str, learners: Sequence[Learner],
     return played
 
 
-def play_prediction(figure: BookFigure, states: int, learners: Sequence[Learner],
+def play_prediction(figure: BookFigure, states: int, learners: Sequence[Arm],
                     options: FigureOptions, progress: Progress) -> list[Played]:
     """Every prediction learner over the figure's runs on the random walk of `states`
     states: `values[run, episode]`, the RMS error of V after each episode."""

@@ -20,7 +20,8 @@ from tui_gym.session.book.figure import (
     Series,
     book_figure,
 )
-from tui_gym.session.book.runs import BANDS, Learner, Played, below, play_prediction, swept
+from tui_gym.session.book.runs import BANDS, Played, below, play_prediction, swept
+from tui_gym.session.experiments.compare import Arm
 
 __all__ = ["ALPHAS", "FIGURES", "LAMBDAS", "SHOWN", "Sweep", "WalkSweep", "walk_figure"]
 
@@ -82,8 +83,8 @@ class WalkSweep:
     def sweeps(self, figure: BookFigure, options: FigureOptions,
                progress: Progress) -> dict[Any, Sweep]:
         """One `Sweep` a value of the hyperparameter, each over `ALPHAS`."""
-        learners = [Learner(f"{self.name}={value}|{alpha}", self.algorithm,
-                            {"learning_rate": alpha, self.name: value})
+        learners = [Arm(self.algorithm, {"learning_rate": alpha, self.name: value},
+                        f"{self.name}={value}|{alpha}")
                     for value in self.settings for alpha in ALPHAS]
         played = play_prediction(figure, 19, learners, options, progress)
         size = len(ALPHAS)
