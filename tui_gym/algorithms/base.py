@@ -125,6 +125,9 @@ class TableSpec:
     fill: float | int | bool = 0
 
 
+_VISITS = TableSpec("visits", np.int64)  # updates per state: saved and checked as a table is
+
+
 @dataclass(frozen=True)
 class Extra:
     """An array a rule takes after the tables and `visits`. `size`: "rows", "table" or
@@ -397,8 +400,7 @@ class Learner(ABC):
         return self._index.get(key)
 
     def _grow(self) -> None:
-        self.visits = np.concatenate([self.visits, np.zeros_like(self.visits)])
-        for spec in self.tables:
+        for spec in (_VISITS, *self.tables):
             old = getattr(self, spec.name)
             setattr(self, spec.name, np.concatenate([old, np.full_like(old, self._fill(spec))]))
         self._grow_extra(len(self.visits))
@@ -519,8 +521,7 @@ class Learner(ABC):
     def _check_arrays(self, arrays: Mapping[str, np.ndarray], rows: int) -> None:
         """ValueError, naming the array, for saved values this learner could not have made
         (shapes are checked before)."""
-        specs = (TableSpec("visits", np.int64), *self.tables)
-        for spec in specs:
+        for spec in (_VISITS, *self.tables):
             array = np.asarray(arrays[spec.name])
             kind = array.dtype.kind
             if spec.dtype is bool:
@@ -541,10 +542,8 @@ class Learner(ABC):
     def state(self) -> LearnerState:
         """Copies of everything that defines this learner, to save or send elsewhere."""
         used = self.rows_used
-        arrays = {"visits": self.visits[:used].copy()}
-        for spec in self.tables:
-            arrays[spec.name] = getattr(self, spec.name)[:used].copy()
-        arrays.update(self._extra_arrays())
+        arrays = {spec.name: getattr(self, spec.name)[:used].copy()
+                  for spec in (_VISITS, *self.tables)} | self._extra_arrays()
         meta = {
             "algorithm": self.name, "n_actions": self.n_actions, "n_states": self.n_states,
             "rows": used, "episode": self.episode, "hyperparameters": self.hp.to_dict(),
@@ -584,17 +583,13 @@ class Learner(ABC):
         self._check_arrays(arrays, rows)
         capacity = rows if dense else max(_INITIAL_ROWS, rows)
         loaded: dict[str, np.ndarray] = {}
-        for spec in self.tables:
-            filled: np.ndarray = np.full((capacity, self.n_actions), self._fill(spec, hp),
-                                         spec.dtype)
-            filled[:rows] = arrays[spec.name]
-            loaded[spec.name] = filled
-        visits = np.zeros(capacity, dtype=np.int64)
-        visits[:rows] = arrays["visits"]
+        for spec in (_VISITS, *self.tables):
+            saved = np.asarray(arrays[spec.name])
+            loaded[spec.name] = np.full((capacity, *saved.shape[1:]), self._fill(spec, hp),
+                                        spec.dtype)
+            loaded[spec.name][:rows] = saved
         self._load_extra_arrays(arrays, rows, capacity)
-        for name, table in loaded.items():
-            setattr(self, name, table)
-        self.visits = visits
+        vars(self).update(loaded)
         self.rows_used = rows
         self._index = None if dense else {k: i for i, k in enumerate(state.keys)}  # type: ignore[arg-type]
         self.hp = hp

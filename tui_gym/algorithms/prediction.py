@@ -90,11 +90,9 @@ class Predictor(Learner):
         if not made:
             return self._record(step, self.target_text, (("r", step.reward),), None, now, now)
         state, target, before, after, alpha = (float(x) for x in log[0, :5])
-        record = self._record(step, self.target_text, (("r", step.reward),), target, before,
-                              after, alpha)
-        if int(state) != step.state:  # an earlier state's update (n-step, Monte Carlo)
-            record = dataclasses.replace(record, table=f"V of row {int(state)}")
-        return record
+        earlier = f"V of row {int(state)}" if int(state) != step.state else ""  # n-step, MC
+        return self._record(step, self.target_text, (("r", step.reward),), target, before,
+                            after, alpha, table=earlier)
 
     # --- saving ----------------------------------------------------------------------------
     def _extra_arrays(self) -> dict[str, np.ndarray]:

@@ -93,13 +93,9 @@ class TracedLearner(Learner):
     def log_rows(self) -> int:
         return int(self._n_cells[0]) + 2
 
-    @property
-    def traces(self) -> np.ndarray:
+    def eligibility(self) -> np.ndarray:
         """e(s, a) of the used rows (a copy): the episode's eligibility traces."""
         return self._trace[: self.rows_used].copy()
-
-    def eligibility(self) -> np.ndarray:
-        return self.traces
 
     def _traced_record(self, step: Transition, log: np.ndarray, future_term: str,
                        *notes: tuple[str, str], **extra: Any) -> UpdateRecord:
