@@ -84,12 +84,12 @@ def test_a_td_error_spreads_over_the_traces_and_they_end_with_the_episode(cls) -
     # then e(0,0) = γλ = 0.45.
     learner.update_one(0, 0, 1.0, 1, False, next_action=1)
     assert learner.q[0, 0] == pytest.approx(0.5)
-    assert learner.traces[0, 0] == pytest.approx(0.45)
+    assert learner.eligibility()[0, 0] == pytest.approx(0.45)
     # δ = 0 + 0.9·2 - 0 = 1.8 (a' = 0 is greedy in state 2); Q(0,0) += 0.5·1.8·0.45 = 0.405
     # (0.905), Q(1,1) = 0.9; traces 0.2025 and 0.45.
     learner.update_one(1, 1, 0.0, 2, False, next_action=0)
     assert learner.q[0, 0] == pytest.approx(0.905) and learner.q[1, 1] == pytest.approx(0.9)
-    assert learner.traces[[0, 1], [0, 1]] == pytest.approx([0.2025, 0.45])
+    assert learner.eligibility()[[0, 1], [0, 1]] == pytest.approx([0.2025, 0.45])
     record = learner.last_update
     assert [(u.state, u.trace) for u in record.episode_updates] == [
         (0, pytest.approx(0.45)), (1, 1.0)]
@@ -99,7 +99,7 @@ def test_a_td_error_spreads_over_the_traces_and_they_end_with_the_episode(cls) -
     # (0.675), Q(2,0) = 1.5; every trace ends.
     learner.update_one(2, 0, 1.0, 3, True)
     assert learner.q[[0, 1, 2], [0, 1, 0]] == pytest.approx([0.80375, 0.675, 1.5])
-    assert not learner.traces.any()
+    assert not learner.eligibility().any()
 
 
 def test_replacing_traces_set_a_revisited_pair_to_one() -> None:
@@ -109,7 +109,7 @@ def test_replacing_traces_set_a_revisited_pair_to_one() -> None:
         learner.update_one(0, 0, 0.0, 1, False, next_action=0)
         learner.update_one(1, 0, 0.0, 0, False, next_action=0)
         learner.update_one(0, 0, 0.0, 1, False, next_action=0)
-        assert learner.traces[0, 0] == expected, kind
+        assert learner.eligibility()[0, 0] == expected, kind
 
 
 def test_watkins_q_lambda_cuts_its_traces_after_an_exploratory_action() -> None:
@@ -121,7 +121,7 @@ def test_watkins_q_lambda_cuts_its_traces_after_an_exploratory_action() -> None:
     # the traces (δ = 1.8: Q(0,0) 0.905, Q(1,1) 0.9), then every trace is cut.
     learner.update_one(1, 1, 0.0, 2, False, next_action=1)
     assert learner.q[0, 0] == pytest.approx(0.905) and learner.q[1, 1] == pytest.approx(0.9)
-    assert not learner.traces.any()
+    assert not learner.eligibility().any()
     assert ("a'", "exploratory: the traces are cut") in learner.last_update.notes
     # The next TD error (δ = 1 + 0.9·max Q(3,·) - 0 = 1) reaches (2,1) alone: Q = 0.5.
     learner.update_one(2, 1, 1.0, 3, False, next_action=0)
@@ -131,7 +131,7 @@ def test_watkins_q_lambda_cuts_its_traces_after_an_exploratory_action() -> None:
     sarsa.q[2] = [2.0, 0.0]
     sarsa.update_one(0, 0, 1.0, 1, False, next_action=1)
     sarsa.update_one(1, 1, 0.0, 2, False, next_action=1)
-    assert np.count_nonzero(sarsa.traces) == 2
+    assert np.count_nonzero(sarsa.eligibility()) == 2
 
 
 def test_dyna_q_plus_adds_kappa_sqrt_tau_to_a_long_untried_pair() -> None:

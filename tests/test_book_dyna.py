@@ -13,13 +13,14 @@ from tui_gym.core.engine import loop
 from tui_gym.core.mdp import solve, with_horizon
 from tui_gym.session.book import dyna, figure_named, figures
 from tui_gym.session.book.figure import BookFigure, FigureOptions, heading
-from tui_gym.session.book.runs import Learner, Played, play_steps
+from tui_gym.session.book.runs import Played, play_steps
+from tui_gym.session.experiments.compare import Arm
 
 FIGURE = BookFigure("x", "a test figure", "", "blocking-maze", lambda *_: None, runs=3)
 
 
 def test_the_world_changes_under_the_learner_at_its_step() -> None:
-    dyna_q = Learner("Dyna-Q", "dyna-q", dyna.MAZE_SETTINGS)
+    dyna_q = Arm("dyna-q", dyna.MAZE_SETTINGS, "Dyna-Q")
     (played,) = play_steps(FIGURE, "blocking-maze", (dyna_q,), FigureOptions(seed=3),
                            lambda *_: None, 1600, game_params={"change_at": 1000})
     assert played.values.shape == (3, 1600)
@@ -59,7 +60,7 @@ def test_without_its_bonus_dyna_q_plus_misses_the_shortcut(
         monkeypatch: pytest.MonkeyPatch) -> None:
     plain = {**dyna.MAZE_SETTINGS, "kappa": 0.0}
     monkeypatch.setattr(dyna, "MAZE_LEARNERS",
-                        (dyna.MAZE_LEARNERS[0], Learner("Dyna-Q+", "dyna-q-plus", plain)))
+                        (dyna.MAZE_LEARNERS[0], Arm("dyna-q-plus", plain, "Dyna-Q+")))
     result = figure_named("8.5").run(FigureOptions(runs=8, seed=100), lambda *_: None)
     verdicts = {c.claim.split(":")[0]: c.ok for c in result.checks}
     assert not verdicts["Dyna-Q+ finds it"]
@@ -125,7 +126,7 @@ def test_example_8_4s_claims_at_a_few_runs(monkeypatch: pytest.MonkeyPatch) -> N
 def test_dyna_q_against_itself_shows_no_advantage(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(dyna, "SCALES", (1,))
     dyna_q = dyna.SWEEPERS[0]
-    monkeypatch.setattr(dyna, "SWEEPERS", (dyna_q, Learner("again", "dyna-q", dyna_q.settings)))
+    monkeypatch.setattr(dyna, "SWEEPERS", (dyna_q, Arm("dyna-q", dyna_q.settings, "again")))
     result = dyna.example_8_4.run(FigureOptions(runs=5, seed=100), lambda *_: None)
     assert [c.ok for c in result.checks] == [False, False]
 

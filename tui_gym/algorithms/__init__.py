@@ -6,14 +6,7 @@ of the game.
 
 from __future__ import annotations
 
-from tui_gym.algorithms.base import (
-    CellUpdate,
-    Learner,
-    LearnerState,
-    TableSpec,
-    Transition,
-    UpdateRecord,
-)
+from tui_gym.algorithms.base import CellUpdate, Learner, LearnerState, UpdateRecord
 from tui_gym.algorithms.double_q import DoubleQLearning
 from tui_gym.algorithms.dyna_q import DynaQ
 from tui_gym.algorithms.dyna_q_plus import DynaQPlus
@@ -29,16 +22,16 @@ from tui_gym.algorithms.q_lambda import WatkinsQLambda
 from tui_gym.algorithms.qlearning import QLearning
 from tui_gym.algorithms.sarsa import Sarsa
 from tui_gym.algorithms.sarsa_lambda import SarsaLambda
-from tui_gym.algorithms.settings import COMMON_PARAMS, Choice, Field, Settings
+from tui_gym.algorithms.settings import COMMON_PARAMS, Field, Settings
 from tui_gym.algorithms.td0 import TD0
 from tui_gym.algorithms.td_lambda import TDLambda
 
 __all__ = [
-    "ALGORITHMS", "ALL_PARAMS", "COMMON_PARAMS", "DEFAULT_ALGORITHM", "CellUpdate", "Choice",
+    "ALGORITHMS", "ALL_PARAMS", "COMMON_PARAMS", "DEFAULT_ALGORITHM", "CellUpdate",
     "DoubleQLearning", "DynaQ", "DynaQPlus", "ExpectedSarsa", "Field", "Learner", "LearnerState",
     "MonteCarlo", "NStepSarsa", "PrioritizedSweeping", "MonteCarloPrediction", "NStepTD",
     "OfflineLambdaReturn", "Predictor", "QLearning", "Sarsa", "SarsaLambda", "Settings", "TD0",
-    "TDLambda", "TableSpec", "Transition", "UpdateRecord", "WatkinsQLambda", "algorithm", "owners",
+    "TDLambda", "UpdateRecord", "WatkinsQLambda", "algorithm",
 ]
 
 ALGORITHMS: tuple[type[Learner], ...] = (
@@ -62,11 +55,6 @@ def _union() -> tuple[Field, ...]:
 
 ALL_PARAMS: tuple[Field, ...] = _union()
 """Every hyperparameter of any algorithm, once each (the common ones first)."""
-
-
-def owners(name: str) -> tuple[str, ...]:
-    """The registry names of the algorithms that have the hyperparameter `name`."""
-    return tuple(cls.name for cls in ALGORITHMS if any(f.name == name for f in cls.params))
 
 
 def algorithm(name: str) -> type[Learner]:

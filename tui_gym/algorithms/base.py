@@ -40,15 +40,13 @@ MAX_SAVED_COUNT = 2**62
 
 @kernel(inline=True)
 def restart(tables: Any, hp: Any) -> None:
-    """`begin` of a rule that keeps the episode so far: its last array, the episode's
-    length, back to 0."""
+    """`begin` of a rule that keeps the episode so far: its length (the last array) to 0."""
     tables[-1][0] = 0
 
 
 @kernel(inline=True)
 def filled(tables: Any, hp: Any) -> bool:
-    """`full` of a rule that keeps the episode so far in its arrays from the fifth on, the
-    length last: whether the episode fills them."""
+    """`full` of a rule that keeps the episode so far (arrays 4 on, its length last)."""
     return tables[-1][0] >= tables[4].shape[0]
 
 
@@ -88,19 +86,11 @@ class Transition:
 class UpdateRecord:
     """How a learner used one transition: what the step-by-step view shows.
 
-    `formula` is the target as the algorithm forms it (`r + γ·max Q(s',·)`),
-    `terms` each symbol of it with its value, in order. `target`, `td_error`
-    and `step_size` are None when the transition updates nothing yet (Monte
-    Carlo before the episode's end). `before`/`after` are Q(s, a) of the
-    table that was updated (`table` names it when there are two).
-    `target_action`: the action in s' whose value the target reads (SARSA's
-    a', Double Q's argmax of the updated table), None for a max or an
-    expectation.
-    `episode_updates`: Monte Carlo's updates at the episode's end, each with
-    its return; `planning_updates`: Dyna-Q's simulated updates after the
-    real one (`after` is Q(s, a) before planning).
-    `notes`: more (label, text) lines of what the learner did this step (the
-    n-step window, the traces, the priority queue).
+    `formula` is the target as written, `terms` its symbols with their values;
+    `target`, `td_error` and `step_size` are None while nothing is updated (Monte
+    Carlo mid-episode). `target_action`: the action in s' the target reads, if one.
+    `episode_updates`: the other pairs moved (Monte Carlo, traces); `notes`: more
+    (label, text) lines (the n-step window, the traces, the queue).
     """
 
     algorithm: str
@@ -135,13 +125,14 @@ class TableSpec:
     fill: float | int | bool = 0
 
 
+_VISITS = TableSpec("visits", np.int64)  # updates per state: saved and checked as a table is
+
+
 @dataclass(frozen=True)
 class Extra:
-    """An array a learner's rule takes beyond its tables (after them and `visits`, in the
-    order declared). `size`: "rows" (one a table row), "table" (a row's actions), "cells"
-    (one a (row, action)), which grow with the table; "episode" (the steps of the episode
-    in progress: twice the room at each `make_room`); a hyperparameter's name (its value);
-    or a number. `fill` None: the initial value (`initial_value`)."""
+    """An array a rule takes after the tables and `visits`. `size`: "rows", "table" or
+    "cells" (growing with the table), "episode" (doubled by `make_room`), a
+    hyperparameter's name or a number. `fill` None: `initial_value`."""
 
     name: str
     size: str | int
@@ -151,13 +142,8 @@ class Extra:
 
 @dataclass(frozen=True)
 class LearnerState:
-    """Everything a learner saves: named arrays, JSON-able metadata, and sparse row keys.
-
-    `arrays` hold every table's used rows and any other learner arrays;
-    `meta` has the algorithm name, table shape, episode count and
-    hyperparameters; `keys` is the key of each row for sparse tables, None
-    when rows are dense keys.
-    """
+    """Everything a learner saves: named arrays (the used rows), JSON-able `meta`, and each
+    row's key for a sparse table (None: dense)."""
 
     algorithm: str
     arrays: dict[str, np.ndarray]
@@ -166,13 +152,8 @@ class LearnerState:
 
 
 class Learner(ABC):
-    """A tabular learner over `n_actions` actions (see the module docstring).
-
-    `n_states` fixes a dense table (keys are rows); None grows the table as
-    new keys come. `hyperparameters` is a mapping of values for `params`
-    (missing ones take their defaults) or `Settings`. `seed` seeds the one
-    generator behind acting, the model's outcomes and any draw of the rule.
-    """
+    """A tabular learner over `n_actions` actions: a dense table of `n_states` rows, or
+    (None) one that grows as keys come; `seed` seeds its one generator."""
 
     name: ClassVar[str]  # the registry name: `--algorithm NAME`, save files
     title: ClassVar[str]  # how a person reads it
@@ -192,9 +173,7 @@ class Learner(ABC):
     counts: np.ndarray
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
-        """A learner with a `rule` of its own gets its own `Params`, the rule's key: the step
-        size's fields and the discount, then its own hyperparameters in order (`traces` as
-        `replacing`, `lambda` as `lambda_`)."""
+        """A learner with a `rule` of its own gets its own `Params` (the rule's key)."""
         super().__init_subclass__(**kwargs)
         if "rule" not in vars(cls):
             return
@@ -229,7 +208,7 @@ class Learner(ABC):
         self.offered_ranges = rules.offered_ranges(None, self.n_actions)
         self._index: dict[Hashable, int] | None = None if n_states is not None else {}
         capacity = self.n_states if self.n_states is not None else _INITIAL_ROWS
-        self._rows_used = self.n_states if self.n_states is not None else 0
+        self.rows_used = self.n_states if self.n_states is not None else 0
         self.visits = np.zeros(capacity, dtype=np.int64)  # updates per state
         for spec in self.tables:
             setattr(self, spec.name,
@@ -237,8 +216,7 @@ class Learner(ABC):
         self._make_extra(capacity)
 
     def _fill(self, spec: TableSpec, hp: Settings | None = None) -> float | int | bool:
-        """What a new row of a table holds: the initial value (`initial_value`, of `hp` or
-        the learner's) for the action values, the table's own fill for the others."""
+        """What a new row of a table holds: `initial_value` for the values, else its fill."""
         if spec.name not in self.value_tables:
             return spec.fill
         return (self.hp if hp is None else hp).initial_value
@@ -266,9 +244,7 @@ class Learner(ABC):
         return self.q[rows]
 
     def eligibility(self) -> np.ndarray | None:
-        """The eligibility traces of the episode in progress, as `table()` gives the values
-        (a copy, one row per used row; a learner of V has its state's trace in every
-        action's place); None for a learner without traces."""
+        """The episode's eligibility traces shaped as `table()`'s values (a copy), or None."""
         return None
 
     def _shape(self, extra: Extra, capacity: int) -> tuple[int, ...]:
@@ -289,7 +265,7 @@ class Learner(ABC):
             setattr(self, extra.name, self._new(extra, self._shape(extra, capacity)))
 
     def _grow_extra(self, capacity: int) -> None:
-        """Make the extras that grow with the table fit `capacity` rows, keeping what they hold."""
+        """The extras that grow with the table, made to fit `capacity` rows."""
         for extra in self.extras:
             if extra.size in ("rows", "table", "cells"):
                 old, shape = getattr(self, extra.name), self._shape(extra, capacity)
@@ -301,8 +277,7 @@ class Learner(ABC):
         return 1
 
     def make_room(self) -> None:
-        """Room for what the rule asked for room for (`rules.full`): twice the room for the
-        episode in progress."""
+        """Room the rule asked for (`rules.full`): twice the room for the episode."""
         for extra in self.extras:
             if extra.size == "episode":
                 old = getattr(self, extra.name)
@@ -314,8 +289,7 @@ class Learner(ABC):
 
     def _load_extra_arrays(self, arrays: Mapping[str, np.ndarray], rows: int,
                            capacity: int) -> None:
-        """Check what `_extra_arrays` saved (ValueError before changing anything), then
-        make the arrays beyond the tables for `capacity` rows holding it."""
+        """Check what `_extra_arrays` saved (ValueError first), then make the extras."""
         self._make_extra(capacity)
 
     @abstractmethod
@@ -326,22 +300,15 @@ class Learner(ABC):
     def compiled_params(self) -> Any:
         """The compiled hyperparameters (`Params`) of the current settings."""
         if self._params is None:
-            hp, kinds = self.hp, self.Params.__annotations__
-            self._params = self.Params(**{name: self._compiled(name, kinds[name])
-                                          for name in self.Params._fields})
+            hp = self.hp
+            derived = {"by_visits": hp.learning_rate_schedule == "visits",
+                       "replacing": hp.get("traces") == "replacing"}
+            self._params = self.Params(**{  # the others from their settings (`lambda_`: `lambda`)
+                name: derived[name] if name in derived else kind(hp[name.rstrip("_")])
+                for name, kind in self.Params.__annotations__.items()})
             self._exploration = np.array([hp.epsilon_start, hp.epsilon_final,
                                           hp.epsilon_decay_fraction * hp.episodes])
         return self._params
-
-    def _compiled(self, name: str, kind: type) -> Any:
-        """The value of the `Params` field `name` from the settings: the setting of that
-        name (a trailing `_` dropped: `lambda_` is `lambda`), `by_visits` from the
-        step-size schedule, `replacing` from the traces."""
-        if name == "by_visits":
-            return self.hp.learning_rate_schedule == "visits"
-        if name == "replacing":
-            return self.hp.traces == "replacing"
-        return kind(self.hp[name.rstrip("_")])
 
     def exploration(self) -> np.ndarray:
         """(epsilon start, final, episodes of the decay) for the compiled schedule."""
@@ -350,8 +317,7 @@ class Learner(ABC):
 
     def offer(self, offered: np.ndarray | None) -> None:
         """The actions each row of a dense table offers (`[n_states, n_actions]` bool, one
-        run of actions a row), or None: every row offers every action. A row that offers
-        none offers all. `offered_ranges` is what the compiled code reads (see `rules`)."""
+        run a row; a row offering none offers all), or None: all."""
         mask = None
         if offered is not None:
             mask = np.array(offered, dtype=np.bool_)
@@ -367,9 +333,6 @@ class Learner(ABC):
         """Whether the rule needs the next action before its update (SARSA)."""
         return rules.next_first(self.compiled_params())
 
-    def needs_room(self) -> bool:
-        return bool(rules.full(self.arrays(), self.compiled_params()))
-
     def begin_episode(self) -> None:
         """An episode starts: whatever was kept of an unfinished one goes."""
         rules.begin(self.arrays(), self.compiled_params())
@@ -378,10 +341,9 @@ class Learner(ABC):
         self, state: int, action: int, reward: float, next_state: int, terminated: bool,
         truncated: bool = False, next_action: int = -1, explain: bool = False,
     ) -> tuple[int, float]:
-        """One transition between rows through the compiled rule: (the next action the
-        rule chose first, or `next_action`; |TD error|). With `explain`, `last_update`
-        explains it."""
-        if self.needs_room():
+        """One transition between rows through the compiled rule: (the next action, |TD
+        error|). With `explain`, `last_update` explains it."""
+        if rules.full(self.arrays(), self.compiled_params()):
             self.make_room()
         log = rules.new_log(self.log_rows() if explain else 1)
         hp = self.compiled_params()
@@ -404,8 +366,8 @@ class Learner(ABC):
         self, key: Hashable, action: int, reward: float, next_key: Hashable, terminated: bool,
         truncated: bool = False, next_action: int | None = None,
     ) -> float:
-        """One transition by observation keys, explained in `last_update`; its |TD error|.
-        A rule that needs the next action (SARSA) takes `next_action`."""
+        """One transition by observation keys (SARSA's takes `next_action`), explained in
+        `last_update`; its |TD error|."""
         if self.next_first and next_action is None and not terminated:
             raise ValueError(f"{self.title} needs the next action of a transition (next_action)")
         state, next_state = self.row(key), self.row(next_key)
@@ -417,10 +379,6 @@ class Learner(ABC):
     def dense(self) -> bool:
         return self._index is None
 
-    @property
-    def rows_used(self) -> int:
-        return self._rows_used
-
     def row(self, key: Hashable) -> int:
         """The table row of a key, adding one for a new sparse key."""
         index = self._index
@@ -428,11 +386,11 @@ class Learner(ABC):
             return key  # type: ignore[return-value]
         row = index.get(key)
         if row is None:
-            row = self._rows_used
+            row = self.rows_used
             if row == len(self.visits):
                 self._grow()
             index[key] = row
-            self._rows_used += 1
+            self.rows_used += 1
         return row
 
     def find(self, key: Hashable) -> int | None:
@@ -442,17 +400,10 @@ class Learner(ABC):
         return self._index.get(key)
 
     def _grow(self) -> None:
-        self.visits = np.concatenate([self.visits, np.zeros_like(self.visits)])
-        for spec in self.tables:
+        for spec in (_VISITS, *self.tables):
             old = getattr(self, spec.name)
             setattr(self, spec.name, np.concatenate([old, np.full_like(old, self._fill(spec))]))
         self._grow_extra(len(self.visits))
-
-    def _row_values(self, key: Hashable) -> np.ndarray:
-        row = self.find(key)
-        if row is None:  # an unseen state reads as an untouched row does
-            return np.full(self.n_actions, float(self.hp.initial_value))
-        return self.action_values(np.array([row]))[0]
 
     # --- acting ----------------------------------------------------------------------
     def act(self, key: Hashable) -> int:
@@ -469,7 +420,7 @@ class Learner(ABC):
 
     def greedy_actions(self, key: Hashable) -> tuple[int, ...]:
         """Every action tied for the best value among those a state offers."""
-        values = self._row_values(key)
+        values = self.values([key])[0]
         row = self.find(key)
         if self.offered is not None and row is not None:
             values = np.where(self.offered[row], values, -np.inf)
@@ -481,9 +432,6 @@ class Learner(ABC):
         self.episode += count
         self.epsilon = self.hp.epsilon_at(self.episode)
 
-    def end_episode(self) -> None:
-        self.end_episodes(1)
-
     def set_hyperparameters(self, hyperparameters: Mapping[str, Any]) -> None:
         """New values for the rest of the run, taking effect at once; tables and episodes stay."""
         self.hp = self.settings(hyperparameters)
@@ -492,16 +440,10 @@ class Learner(ABC):
 
     # --- reading the table ----------------------------------------------------------------
     def values(self, keys: Iterable[Hashable]) -> np.ndarray:
-        """Action values for many states: (len(keys), n_actions); unseen states hold the
-        initial value."""
+        """Action values for many states (unseen ones hold the initial value)."""
         keys = list(keys)
         out = np.full((len(keys), self.n_actions), float(self.hp.initial_value))
-        if self._index is None:
-            if keys:
-                out[:] = self.action_values(np.asarray(keys, dtype=np.int64))
-            return out
-        found = [(i, self._index.get(k)) for i, k in enumerate(keys)]
-        found = [(i, r) for i, r in found if r is not None]
+        found = [(i, row) for i, key in enumerate(keys) if (row := self.find(key)) is not None]
         if found:
             at, rows = zip(*found, strict=True)
             out[list(at)] = self.action_values(np.asarray(rows, dtype=np.int64))
@@ -509,20 +451,20 @@ class Learner(ABC):
 
     def table(self) -> tuple[np.ndarray, list[Hashable] | None]:
         """The action values of the used rows and, for sparse tables, each row's key."""
-        values = self.action_values(slice(0, self._rows_used))
+        values = self.action_values(slice(0, self.rows_used))
         return values.copy(), self._keys()
 
     def _keys(self) -> list[Hashable] | None:
         if self._index is None:
             return None
-        keys: list[Hashable] = [None] * self._rows_used
+        keys: list[Hashable] = [None] * self.rows_used
         for key, row in self._index.items():
             keys[row] = key
         return keys
 
     def update_counts(self) -> np.ndarray:
         """Updates per (state, action) of the used rows."""
-        return self.counts[: self._rows_used].copy()
+        return self.counts[: self.rows_used].copy()
 
     def seen(self, key: Hashable) -> bool:
         """Whether the learner has updated this state at least once."""
@@ -532,7 +474,7 @@ class Learner(ABC):
     @property
     def states_seen(self) -> int:
         """How many states have been updated at least once."""
-        return int(np.count_nonzero(self.visits[: self._rows_used]))
+        return int(np.count_nonzero(self.visits[: self.rows_used]))
 
     # --- the record of one update ---------------------------------------------------------
     @property
@@ -561,15 +503,12 @@ class Learner(ABC):
 
     @staticmethod
     def _logged(rows: np.ndarray) -> tuple[CellUpdate, ...]:
-        """The updates in rows of a log as `note` writes them: the pair, the target, the step
-        size, Q before and after."""
+        """The updates logged in `rows` (as `note` writes them)."""
         return tuple(CellUpdate(int(w[0]), int(w[1]), *(float(x) for x in w[2:6])) for w in rows)
 
     def _td_record(self, step: Transition, log: np.ndarray, future_term: str,
                    *more: tuple[str, float], formula: str = "", **extra: Any) -> UpdateRecord:
-        """The record of a one-step TD update logged by `rules.td_update`: the target is r
-        after termination, else r + γ·(the future term), `formula` (default: the
-        algorithm's)."""
+        """The record of a one-step TD update logged by `rules.td_update`."""
         target, future, before, after, alpha = (float(v) for v in log[0, :5])
         terms: tuple[tuple[str, float], ...] = (("r", step.reward),)
         written = "r"
@@ -580,11 +519,9 @@ class Learner(ABC):
 
     # --- saving ------------------------------------------------------------------------------
     def _check_arrays(self, arrays: Mapping[str, np.ndarray], rows: int) -> None:
-        """Raise ValueError, naming the array, for saved values this learner could not
-        have made: another kind of number, NaN or infinite values, counts below the
-        table's fill or beyond `MAX_SAVED_COUNT`. Shapes are checked before."""
-        specs = (TableSpec("visits", np.int64), *self.tables)
-        for spec in specs:
+        """ValueError, naming the array, for saved values this learner could not have made
+        (shapes are checked before)."""
+        for spec in (_VISITS, *self.tables):
             array = np.asarray(arrays[spec.name])
             kind = array.dtype.kind
             if spec.dtype is bool:
@@ -604,11 +541,9 @@ class Learner(ABC):
 
     def state(self) -> LearnerState:
         """Copies of everything that defines this learner, to save or send elsewhere."""
-        used = self._rows_used
-        arrays = {"visits": self.visits[:used].copy()}
-        for spec in self.tables:
-            arrays[spec.name] = getattr(self, spec.name)[:used].copy()
-        arrays.update(self._extra_arrays())
+        used = self.rows_used
+        arrays = {spec.name: getattr(self, spec.name)[:used].copy()
+                  for spec in (_VISITS, *self.tables)} | self._extra_arrays()
         meta = {
             "algorithm": self.name, "n_actions": self.n_actions, "n_states": self.n_states,
             "rows": used, "episode": self.episode, "hyperparameters": self.hp.to_dict(),
@@ -616,11 +551,8 @@ class Learner(ABC):
         return LearnerState(self.name, arrays, meta, self._keys())
 
     def load_state(self, state: LearnerState) -> None:
-        """Become the learner `state` describes (the generator is kept).
-
-        Raises ValueError, changing nothing, when it is another algorithm's or
-        does not fit this learner's shape.
-        """
+        """Become the learner `state` describes (the generator is kept); ValueError,
+        changing nothing, when it is another algorithm's or does not fit."""
         if state.algorithm != self.name:
             raise ValueError(f"this is a {state.algorithm} learner's state, not {self.name}'s")
         meta, arrays = state.meta, state.arrays
@@ -651,18 +583,14 @@ class Learner(ABC):
         self._check_arrays(arrays, rows)
         capacity = rows if dense else max(_INITIAL_ROWS, rows)
         loaded: dict[str, np.ndarray] = {}
-        for spec in self.tables:
-            filled: np.ndarray = np.full((capacity, self.n_actions), self._fill(spec, hp),
-                                         spec.dtype)
-            filled[:rows] = arrays[spec.name]
-            loaded[spec.name] = filled
-        visits = np.zeros(capacity, dtype=np.int64)
-        visits[:rows] = arrays["visits"]
+        for spec in (_VISITS, *self.tables):
+            saved = np.asarray(arrays[spec.name])
+            loaded[spec.name] = np.full((capacity, *saved.shape[1:]), self._fill(spec, hp),
+                                        spec.dtype)
+            loaded[spec.name][:rows] = saved
         self._load_extra_arrays(arrays, rows, capacity)
-        for name, table in loaded.items():
-            setattr(self, name, table)
-        self.visits = visits
-        self._rows_used = rows
+        vars(self).update(loaded)
+        self.rows_used = rows
         self._index = None if dense else {k: i for i, k in enumerate(state.keys)}  # type: ignore[arg-type]
         self.hp = hp
         self._params = None

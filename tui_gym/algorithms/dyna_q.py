@@ -23,9 +23,8 @@ __all__ = ["DynaQ"]
 @kernel(inline=True)
 def replay(tables: Any, hp: Any, offered: Any, ps: int, pa: int, reward: float, log: Any,
            row: int) -> None:
-    """A simulated update: Q(ps, pa) toward `reward` + γ·max Q of the state the model says
-    the pair leads to (0 after a terminal), by the pair's step size; row `row` of `log`
-    gets the pair, the target, the step size and Q before and after."""
+    """A simulated update of Q(ps, pa) toward `reward` + γ·max Q where the model says it
+    leads, logged in row `row`."""
     q, counts, model_next, model_terminated = tables[0], tables[1], tables[3], tables[4]
     future = 0.0 if model_terminated[ps, pa] else max_value(q, offered, model_next[ps, pa])
     target = reward + hp.discount * future

@@ -10,9 +10,9 @@ import numpy as np
 
 from tui_gym.algorithms.base import Extra, Learner, Transition, UpdateRecord, note
 from tui_gym.algorithms.settings import COMMON_PARAMS, Field
-from tui_gym.core.engine import jit, loop
+from tui_gym.core.engine import loop
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.loop import ModelArrays, run_model
+from tui_gym.core.engine.loop import ModelArrays
 from tui_gym.core.engine.rules import step_size
 from tui_gym.core.mdp.model import FiniteMDP
 from tui_gym.core.mdp.policy import greedy_policy
@@ -34,9 +34,8 @@ PREDICTION_PARAMS: tuple[Field, ...] = tuple(
 
 @kernel(inline=True)
 def v_update(v: Any, visits: Any, hp: Any, s: int, target: float, log: Any, row: int) -> float:
-    """Move v[s] toward `target` by the step size of its next update, counting the visit;
-    row `row` of `log` (when there is one) gets the state, target, V before and after, the
-    step size and the state's count. The |error|."""
+    """Move v[s] toward `target`, counting the visit; log row `row` (when there is one):
+    the state, target, V before and after, the step size, the count. The |error|."""
     visits[s] += 1
     alpha = step_size(hp.learning_rate, hp.by_visits, visits[s])
     before = v[s]
@@ -58,13 +57,12 @@ class Predictor(Learner):
 
     # --- the policy followed and the ruler ------------------------------------------------
     def follow(self, action_values: np.ndarray, epsilon: float) -> None:
-        """Follow the epsilon-greedy policy on `action_values` (one row per table row, as
-        another learner's `table()` gives them) from now on."""
+        """Follow the epsilon-greedy policy on `action_values` (as `table()` gives them)."""
         values = np.asarray(action_values, dtype=np.float64)
-        if values.shape != (self._rows_used, self.n_actions):
+        if values.shape != (self.rows_used, self.n_actions):
             raise ValueError(f"a policy to follow has one row of {self.n_actions} action "
-                             f"values per state ({self._rows_used}), got {values.shape}")
-        self.q[: self._rows_used] = values
+                             f"values per state ({self.rows_used}), got {values.shape}")
+        self.q[: self.rows_used] = values
         self.set_hyperparameters(self.hp.replace(epsilon_start=epsilon, epsilon_final=epsilon))
 
     def policy(self, rows: np.ndarray) -> np.ndarray:
@@ -72,8 +70,7 @@ class Predictor(Learner):
         return greedy_policy(self.q[rows], self.epsilon)
 
     def truth(self, model: FiniteMDP, rows: np.ndarray | None = None) -> Truth:
-        """The exact values of the policy followed now on `model`, whose state s is table
-        row `rows[s]` (default: s). ValueError when it has none (see `Truth.of`)."""
+        """The exact values of the policy followed on `model` (state s is row `rows[s]`)."""
         at = np.arange(model.n_states) if rows is None else np.asarray(rows)
         if self.hp.discount <= 0.0:
             raise ValueError("exact values need a discount above 0")
@@ -93,15 +90,13 @@ class Predictor(Learner):
         if not made:
             return self._record(step, self.target_text, (("r", step.reward),), None, now, now)
         state, target, before, after, alpha = (float(x) for x in log[0, :5])
-        record = self._record(step, self.target_text, (("r", step.reward),), target, before,
-                              after, alpha)
-        if int(state) != step.state:  # an earlier state's update (n-step, Monte Carlo)
-            record = dataclasses.replace(record, table=f"V of row {int(state)}")
-        return record
+        earlier = f"V of row {int(state)}" if int(state) != step.state else ""  # n-step, MC
+        return self._record(step, self.target_text, (("r", step.reward),), target, before,
+                            after, alpha, table=earlier)
 
     # --- saving ----------------------------------------------------------------------------
     def _extra_arrays(self) -> dict[str, np.ndarray]:
-        return {"v": self.v[: self._rows_used].copy()}
+        return {"v": self.v[: self.rows_used].copy()}
 
     def _load_extra_arrays(self, arrays: Mapping[str, np.ndarray], rows: int,
                            capacity: int) -> None:
@@ -114,51 +109,18 @@ class Predictor(Learner):
         self.v[:rows] = v
 
 
-@kernel
-def run_scored(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: Any,
-               terminal: Any, pair_rows: Any, outcomes: int, starts: Any,
-               start_cumulative: Any, rows: Any, horizon: int, tables: Any, hp: Any, rng: Any,
-               offered: Any, explore: Any, episode0: int, cursor: Any, acc: Any, out: Any,
-               log: Any, scored_rows: Any, truth: Any, curve: Any, first: int) -> int:
-    """`run_model` one episode at a time from `curve[first]` on, writing after each the
-    RMS error of V (`tables[3]`) at table rows `scored_rows` against `truth`. Returns
-    the episodes finished: fewer than asked when the learner needs room first."""
-    n = scored_rows.shape[0]
-    # Integers, not constants: constant arguments would compile the loop once more.
-    one, unlimited = np.int64(1), np.int64(1 << 62)
-    for e in range(first, curve.shape[0]):
-        status = run_model(next_state, cumulative, guide, reward, noise, terminal, pair_rows,
-                           outcomes, starts, start_cumulative, rows, horizon, tables, hp, rng,
-                           offered, explore, episode0 + e - first, cursor, acc, one, unlimited,
-                           out, log)
-        if status != 0:
-            return e - first
-        v = tables[3]
-        total = 0.0
-        for i in range(n):
-            error = v[scored_rows[i]] - truth[i]
-            total += error * error
-        curve[e] = np.sqrt(total / n)
-    return curve.shape[0] - first
-
-
 def rms_curve(learner: Predictor, model: ModelArrays, truth: Truth, episodes: int) -> np.ndarray:
     """Play `episodes` episodes on `model`: the RMS error of V against `truth` after each."""
-    hp = learner.compiled_params()
-    run = jit.entry(run_scored, type(hp))
     where = np.flatnonzero(truth.reached)
     scored_rows, values = model.rows[where], np.array(truth.v[where])
     cursor, out, log = loop.Cursor(), np.zeros((1, loop.COLUMNS)), np.zeros((1, 8))
     curve = np.zeros(episodes)
     done = 0
     while done < episodes:
-        made = run(model.next_state, model.cumulative, model.guide, model.reward, model.noise,
-                   model.terminal, model.pair_rows, model.outcomes, model.starts,
-                   model.start_cumulative, model.rows, model.horizon, learner.arrays(), hp,
-                   learner.rng, learner.offered_ranges, learner.exploration(), learner.episode,
-                   cursor.ints, cursor.floats, out, log, scored_rows, values, curve, done)
-        learner.end_episodes(int(made))
-        done += int(made)
-        if done < episodes:
-            learner.make_room()
+        if loop.play(learner, model, cursor, 1, 1 << 62, out, log)[0]:
+            total = 0.0
+            for error in (learner.v[scored_rows] - values).tolist():  # in order, as compiled
+                total += error * error
+            curve[done] = np.sqrt(total / len(values))
+            done += 1
     return curve

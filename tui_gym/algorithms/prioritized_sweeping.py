@@ -220,8 +220,8 @@ class PrioritizedSweeping(Learner):
 
 
 def _walk(first: np.ndarray, after: np.ndarray, model_next: np.ndarray) -> list[int]:
-    """Every cell on the lists, each checked to lead into its list's state; stops at a
-    cell seen twice (a loop) or out of range, which the caller's count then refuses."""
+    """Every cell on the lists, each leading into its list's state ([-1] at a loop or a
+    cell out of range)."""
     seen: list[int] = []
     met: set[int] = set()
     for state, cell in enumerate(first.tolist()):

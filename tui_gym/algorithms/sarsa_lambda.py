@@ -37,10 +37,8 @@ def clear(tables: Any, hp: Any) -> None:
 @kernel
 def spread(tables: Any, hp: Any, s: int, a: int, target: float, future: float, decay: float,
            log: Any) -> float:
-    """Mark (s, a) eligible, move every traced pair by α δ e toward `target`'s TD error,
-    then decay the traces by `decay` (0 cuts them). Row 0 of `log` as `td_update` writes
-    it (the target, the future term, Q(s, a) before and after, its step size, its count)
-    with the pairs updated and `decay`; one row per pair (s, a, e, α, Q before, after)."""
+    """Mark (s, a) eligible, move every traced pair by α δ e, then decay the traces by
+    `decay` (0 cuts them). Log row 0 as `td_update` writes it, then a row per pair."""
     q, counts, visits, trace, cells, n_cells = tables[:6]
     n_actions = q.shape[1]
     before = q[s, a]
@@ -83,8 +81,7 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
 
 
 class TracedLearner(Learner):
-    """What the λ learners share: the traces, their list, and the record of a traced
-    update."""
+    """What the λ learners share: the traces, their list, and the record of an update."""
 
     params = TRACE_PARAMS
     has_traces = True
@@ -96,13 +93,9 @@ class TracedLearner(Learner):
     def log_rows(self) -> int:
         return int(self._n_cells[0]) + 2
 
-    @property
-    def traces(self) -> np.ndarray:
+    def eligibility(self) -> np.ndarray:
         """e(s, a) of the used rows (a copy): the episode's eligibility traces."""
         return self._trace[: self.rows_used].copy()
-
-    def eligibility(self) -> np.ndarray:
-        return self.traces
 
     def _traced_record(self, step: Transition, log: np.ndarray, future_term: str,
                        *notes: tuple[str, str], **extra: Any) -> UpdateRecord:

@@ -76,11 +76,8 @@ TRACES = Choice("traces", ("replacing", "accumulating"), "replacing",
 
 
 class Settings(Mapping[str, Any]):
-    """One validated value per field of a schema; unknown names are refused.
-
-    Values are read as attributes or items: `hp.discount`, `hp["discount"]`.
-    Text is parsed as a form or the CLI would send it (`"0.5"`, `"true"`).
-    """
+    """One validated value per field of a schema (`hp.discount`, `hp["discount"]`); text is
+    parsed as a form sends it, unknown names are refused."""
 
     def __init__(self, schema: Sequence[Field], values: Mapping[str, Any] | None = None) -> None:
         by_name = {f.name: f for f in schema}

@@ -1,24 +1,11 @@
 """The one module that imports Numba: kernels compiled on first use, cached on disk.
 
-A kernel is a plain Python function marked `@kernel` (the loop, the sampler,
-exploration, every algorithm's update rule): it runs as Python until `start()`,
-which points Numba's cache at a folder keyed by a hash of the engine's and the
-algorithms' sources (Numba does not see that a function a cached one calls
-changed in another file), registers the rule stubs of `rules` as overloads (so a
-loop compiled for one algorithm's `Params` calls that algorithm's rule), and puts
-every kernel's compiled form in its place in every `tui_gym` module.
-
-Rule stubs and kernels marked `inline` are inlined into their callers: LLVM does
-not inline one Numba function into another, and a call left in the loop's
-per-action code slows training markedly. Kernels allocate nothing, so they run
-without reference counting (`_nrt=False`) and without a C-callable wrapper, at
-optimisation level 1 (`NUMBA_OPT`, unless set: as fast as 3, compiled sooner).
-
-Python calls a kernel that takes an algorithm's `Params` through `entry`.
-Processes take turns on a lock on the cache folder (`saving`) to file what they
-compiled: Numba numbers a function's cache entries by counting its index, so two
-processes saving at once could file their code under each other's name.
-`NUMBA_DISABLE_JIT=1` leaves every kernel plain Python.
+`start()` points Numba's cache at a folder keyed by a hash of the engine's and the
+algorithms' sources (Numba does not see a change in a callee's file), registers the
+rule stubs of `rules` as overloads, and puts every kernel's compiled form in its place.
+Kernels allocate nothing: no reference counting, no C wrapper, `NUMBA_OPT` 1 unless set.
+Processes take turns on a lock to file what they compiled (`saving`): Numba numbers
+cache entries by counting its index.
 """
 
 from __future__ import annotations
@@ -146,8 +133,7 @@ def _compile(fn: Callable[..., Any]) -> Any:
 
 
 class _Entry:
-    """A kernel's compiled form for one algorithm's calls from Python (see `entry`),
-    called directly for the argument types of its last call."""
+    """A kernel's compiled form, called directly for the argument types of its last call."""
 
     def __init__(self, dispatcher: Any) -> None:
         self.dispatcher = dispatcher
@@ -173,9 +159,7 @@ class _Entry:
 
 @contextlib.contextmanager
 def saving() -> Iterator[None]:
-    """Hold the cache folder's lock: processes take turns (the threads of one process
-    take turns on Numba's own lock). A POSIX lock: a process forked meanwhile does not
-    inherit it. Where the folder takes no lock file, nothing is held."""
+    """Hold the cache folder's lock (a POSIX lock; none where the folder takes no file)."""
     try:
         handle = open(folder() / ".compile.lock", "a")  # noqa: SIM115 (held while saving)
     except OSError:
@@ -187,8 +171,8 @@ def saving() -> Iterator[None]:
 
 
 def _save_in_turn() -> bool:
-    """Make Numba file each new cache entry under the folder's lock (`saving`); False
-    where its cache has no `IndexDataCacheFile.save` to wrap (a private API)."""
+    """Make Numba file each new cache entry under `saving`; False where its private
+    `IndexDataCacheFile.save` is missing."""
     from numba.core import caching
 
     index = getattr(caching, "IndexDataCacheFile", None)
@@ -208,13 +192,8 @@ def _save_in_turn() -> bool:
 
 
 def entry(fn: Callable[..., Any], kind: object) -> Any:
-    """Kernel `fn` as called from Python with one algorithm's `Params` (`kind`; for a
-    kernel that takes none, what else sets its argument types apart), compiled apart:
-    Numba types a NamedTuple from Python by its fields alone, so one dispatcher would
-    run the code it has for another algorithm's `Params` of the same field types (or
-    take its slow path on every call), while compiled callers tell them apart. Once
-    compiled, it is called directly (no dispatch). It lets go of the interpreter lock
-    while it runs, so a trainer's thread never holds up the UI."""
+    """Kernel `fn` as called from Python with one algorithm's `Params` (`kind`), compiled
+    apart (Numba types a NamedTuple from Python by its fields alone), without the GIL."""
     start()
     key = (fn, kind)
     found = _ENTRIES.get(key)
@@ -227,10 +206,8 @@ def entry(fn: Callable[..., Any], kind: object) -> Any:
 
 
 def direct(fn: Callable[..., Any], kind: object = None) -> Any:
-    """Kernel `fn` as called from Python through its own compiled form, the one its
-    compiled callers call (so Python's calls compile nothing more): one algorithm's
-    rule, or a kernel that takes no `Params` (see `entry`), called with the argument
-    types `kind` sets apart. Once compiled, it is called directly (no dispatch)."""
+    """Kernel `fn` as called from Python through the compiled form its compiled callers
+    call, per `kind` (see `entry`)."""
     start()
     key = (fn, kind)
     found = _DIRECT.get(key)

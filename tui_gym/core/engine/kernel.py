@@ -1,10 +1,5 @@
-"""`@kernel`: marks a plain Python function as compiled code (see `jit`).
-
-Importing a kernel costs nothing: it runs as Python until `jit.start()`
-compiles every kernel marked here (and, from then on, each one as it is
-marked). `@kernel(inline=True)` marks a small one compiled into each caller:
-a call between compiled functions that pass arrays costs tens of nanoseconds.
-"""
+"""`@kernel`: marks a plain Python function as compiled code, plain Python until `jit.start()`
+(`inline=True`: compiled into each caller, for a small one)."""
 
 from __future__ import annotations
 

@@ -1,15 +1,9 @@
 """The compiled loop over a finite model, the one outcome sampler, and the per-transition entry.
 
-`run_model` plays a learner on a model's arrays (`ModelArrays`): epsilon-greedy
-acting, an outcome drawn from the model (a reward's noise drawn around its mean),
-the episode limit, the algorithm's update. It keeps the episode in progress in
-`cursor` and `acc` between calls, so a run cut into calls of any size (one `n`
-step, a chunk at max speed, a whole headless run) is the same run. Every random
-number comes from the learner's generator, in one order: the start, then per
-transition the action (when not chosen already), the outcome, its reward's noise
-(only where it has any), the next action (SARSA), and what the rule draws.
-`Entries.transition` is the same update for a transition played elsewhere (a
-Gymnasium env, from Python).
+`run_model` keeps the episode in progress between calls, so a run cut into calls of any
+size is the same run. Every random number comes from the learner's generator, in one
+order: the start, then per transition the action, the outcome, its reward's noise, the
+next action (SARSA), and what the rule draws.
 """
 
 from __future__ import annotations
@@ -25,16 +19,6 @@ import numpy as np
 
 from tui_gym.core.engine import jit, processes, rules
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import (
-    act,
-    acting,
-    begin,
-    epsilon_at,
-    full,
-    greedy,
-    next_first,
-    update,
-)
 from tui_gym.core.engine.stats import RollingWindow
 from tui_gym.core.mdp.model import FiniteMDP
 
@@ -64,14 +48,10 @@ COLUMNS = 5
 
 @dataclass(frozen=True, eq=False)
 class ModelArrays:
-    """A model as the loop reads it: flat arrays of K outcomes per row, where the episodes
-    start, the table row of each model state, and the episode limit (0: none).
-
-    Rewards (and their noise) are `[S * A * K]`, one row per (state, action) pair; where
-    to, with what probability and whether it ends are `[R * K]`, row `pair_rows[pair]`:
-    among many outcomes (more than `GUIDED`) pairs with the same ones share a row (Jack's
-    car rental: one per count of cars in the morning, 441 rows for 4,851 pairs), so the
-    loop's draws stay in the cache; else R = S * A, a row per pair."""
+    """A model as the loop reads it: flat arrays of K outcomes per row, the starts, the
+    table row of each model state, and the episode limit (0: none). Rewards are one row
+    per pair; outcomes are row `pair_rows[pair]`, shared by pairs with the same ones
+    among many outcomes (more than `GUIDED`) so that draws stay in the cache."""
 
     next_state: np.ndarray
     cumulative: np.ndarray
@@ -135,9 +115,7 @@ class ModelArrays:
 
 
 class Cursor:
-    """An episode in progress between calls of `run_model`: whether one is running, its
-    model state, the action chosen for it (-1: none yet), its steps, the action it began
-    with, its return and |TD| sum."""
+    """An episode in progress between calls of `run_model`."""
 
     def __init__(self) -> None:
         # live, state, action, steps; this call's episodes and steps; the first action
@@ -155,9 +133,8 @@ class Cursor:
 
 @kernel(inline=True)
 def sample_start(starts: Any, start_cumulative: Any, rng: Any) -> int:
-    """A start state drawn from the initial distribution (no draw when there is one): the
-    first whose cumulative probability exceeds a uniform u, found by bisection as
-    `np.searchsorted(start_cumulative, u, side="right")` finds it (which compiles slowly)."""
+    """A start state drawn from the initial distribution (no draw when there is one), by
+    bisection (`np.searchsorted` compiles slowly)."""
     n = starts.shape[0]
     if n == 1:
         return starts[0]
@@ -174,10 +151,8 @@ def sample_start(starts: Any, start_cumulative: Any, rng: Any) -> int:
 
 @kernel(inline=True)
 def sample_outcome(cumulative: Any, guide: Any, base: int, outcomes: int, rng: Any) -> int:
-    """Outcome k of the row whose outcomes start at `base`: drawn when cumulative[k - 1]
-    <= u < cumulative[k] (no draw when the pair has one outcome). Among many outcomes
-    (a day of Poisson rentals) the search starts where the row's guide table points
-    for u, and moves back if need be: the same k as the scan from 0."""
+    """Outcome k of the row at `base`, where cumulative[k - 1] <= u < cumulative[k] (no draw
+    for one outcome); among many, the search starts where the guide table points."""
     if outcomes == 1:
         return 0
     u = rng.random()
@@ -198,18 +173,15 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: 
               tables: Any, hp: Any, rng: Any, offered: Any, explore: Any, episode0: int,
               cursor: Any, acc: Any, max_episodes: int, max_steps: int,
               out: Any, log: Any) -> int:
-    """Play up to `max_episodes` episodes and `max_steps` transitions (see the module
-    docstring); `offered`: the actions each table row offers (see `rules`);
-    `explore` is (epsilon start, final, decay episodes), `episode0` the
-    learner's episodes so far. Finished episodes go into `out` rows (return, length,
-    mean |TD|, epsilon, the action it began with); `cursor[4]`, `cursor[5]` count the
-    episodes and steps of this call. Returns 0, or `GROW` when the learner needs room first."""
+    """Play up to `max_episodes` episodes and `max_steps` transitions; `explore` is (epsilon
+    start, final, decay episodes). Finished episodes go into `out` rows (`COLUMNS`);
+    `cursor[4]`, `cursor[5]` count this call's episodes and steps. Returns 0, or `GROW`."""
     n_actions = tables[0].shape[1]
-    values = acting(tables, hp)
+    values = rules.acting(tables, hp)
     done = 0
     steps = 0
     status = 0
-    eps = epsilon_at(float(episode0), explore[0], explore[1], explore[2])
+    eps = rules.epsilon_at(float(episode0), explore[0], explore[1], explore[2])
     while done < max_episodes and steps < max_steps:
         if cursor[0] == 0:
             cursor[0] = 1
@@ -218,14 +190,14 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: 
             cursor[3] = 0
             acc[0] = 0.0
             acc[1] = 0.0
-            begin(tables, hp)
-        if full(tables, hp):
+            rules.begin(tables, hp)
+        if rules.full(tables, hp):
             status = GROW
             break
         s = cursor[1]
         a = cursor[2]
         if a < 0:
-            a = act(values, rng, offered, rows[s], eps)
+            a = rules.act(values, rng, offered, rows[s], eps)
         if cursor[3] == 0:
             cursor[6] = a
         pair = s * n_actions + a
@@ -240,10 +212,10 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: 
         cursor[3] += 1
         cut = (not ended) and horizon > 0 and cursor[3] >= horizon
         a2 = -1
-        if next_first(hp) and not ended:
-            a2 = act(values, rng, offered, rows[s2], eps)
-        td = update(tables, hp, rng, offered, rows[s], a, r, rows[s2], ended, cut, a2, eps,
-                    log)
+        if rules.next_first(hp) and not ended:
+            a2 = rules.act(values, rng, offered, rows[s2], eps)
+        td = rules.update(tables, hp, rng, offered, rows[s], a, r, rows[s2], ended, cut, a2,
+                          eps, log)
         acc[0] += r
         acc[1] += td
         steps += 1
@@ -256,7 +228,7 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: 
             out[done, 4] = cursor[6]
             done += 1
             cursor[0] = 0
-            eps = epsilon_at(float(episode0 + done), explore[0], explore[1], explore[2])
+            eps = rules.epsilon_at(float(episode0 + done), explore[0], explore[1], explore[2])
         else:
             cursor[1] = s2
             cursor[2] = a2
@@ -270,8 +242,7 @@ def run_model(next_state: Any, cumulative: Any, guide: Any, reward: Any, noise: 
 
 def play(learner: Any, model: ModelArrays, cursor: Cursor, max_episodes: int,
          max_steps: int, out: np.ndarray, log: np.ndarray) -> tuple[int, int]:
-    """One call of `run_model` for `learner` (giving it room when it asks, and moving its
-    schedule on by the episodes finished): (episodes, steps)."""
+    """One call of `run_model` for `learner`, giving it room when it asks: (episodes, steps)."""
     hp = learner.compiled_params()
     status = entries(hp).run_model(
         model.next_state, model.cumulative, model.guide, model.reward, model.noise,
@@ -289,23 +260,21 @@ def play(learner: Any, model: ModelArrays, cursor: Cursor, max_episodes: int,
 
 
 class Entries:
-    """What Python calls for one algorithm: `run_model` (`jit.entry`), and `transition`,
-    `act` and `greedy` through the compiled forms of the rule, `act` and `greedy` that
-    `run_model` calls (`jit.direct`: nothing more to compile; those of `act` and `greedy`
-    are the same for every algorithm acting on as many tables: see `rules`)."""
+    """What Python calls for one algorithm: `run_model`, and `transition`, `act` and
+    `greedy` through the compiled forms `run_model` calls (nothing more to compile)."""
 
     def __init__(self, kind: type) -> None:
         self.run_model = jit.entry(run_model, kind)
         self._update = jit.direct(rules.RULES[kind].update)
         own = rules.RULES[kind].acting  # None: every such algorithm acts on one table
-        self._act = jit.direct(act, own)
-        self._greedy = jit.direct(greedy, own)
+        self._act = jit.direct(rules.act, own)
+        self._greedy = jit.direct(rules.greedy, own)
 
     def transition(self, tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int,
                    r: float, s2: int, terminated: bool, truncated: bool, a2: int,
                    epsilon: float, log: Any) -> tuple[int, float]:
-        """The update for one transition played elsewhere; the next action is chosen first
-        (when `a2` < 0) for a rule that needs it. Returns (that action or -1, |TD|)."""
+        """The update for one transition played elsewhere, choosing the next action first
+        (when `a2` < 0) for a rule that needs it: (that action or -1, |TD|)."""
         if a2 < 0 and rules.next_first(hp) and not terminated:
             a2 = self.act(tables, hp, rng, offered, s2, epsilon)
         td = self._update(tables, hp, rng, offered, s, a, r, s2, terminated, truncated, a2,
@@ -333,28 +302,22 @@ def entries(hp: Any) -> Entries:
 # --- compiling once ---------------------------------------------------------------------
 
 
-def _tiny_model(n_actions: int) -> ModelArrays:
-    """One state, every action ending the episode: enough to compile the loop's types."""
-    shape = (1, n_actions, 1)
-    return ModelArrays.of(FiniteMDP(np.zeros(shape, dtype=np.int64), np.ones(shape),
-                                    np.zeros(shape), np.ones(shape, dtype=bool), np.ones(1)))
-
-
 def compile_learner(tables: Any, hp: Any) -> None:
-    """Compile (or load) the entry points for one learner's types, on copies of its tables."""
+    """Compile (or load) the entry points for one learner's types, on copies of its tables
+    and a model of one state where every action ends the episode."""
     calls = entries(hp)
     copies = tuple(np.array(t) for t in tables)
     mask = rules.offered_ranges(None, copies[0].shape[1])
     spare = np.random.default_rng(0)
     log = np.zeros((1, 8))
-    model = _tiny_model(copies[0].shape[1])
+    shape = (1, copies[0].shape[1], 1)
+    model = ModelArrays.of(FiniteMDP(np.zeros(shape, dtype=np.int64), np.ones(shape),
+                                     np.zeros(shape), np.ones(shape, dtype=bool), np.ones(1)))
     cursor = Cursor()
-    out = np.zeros((1, COLUMNS))
-    explore = np.zeros(3)
     calls.run_model(model.next_state, model.cumulative, model.guide, model.reward, model.noise,
                     model.terminal, model.pair_rows, model.outcomes, model.starts,
                     model.start_cumulative, model.rows, model.horizon, copies, hp, spare, mask,
-                    explore, 0, cursor.ints, cursor.floats, 1, 1, out, log)
+                    np.zeros(3), 0, cursor.ints, cursor.floats, 1, 1, np.zeros((1, COLUMNS)), log)
     calls.transition(copies, hp, spare, mask, 0, 0, 0.0, 0, True, False, -1, 0.0, log)
     calls.act(copies, hp, spare, mask, 0, 0.0)
     calls.greedy(copies, hp, spare, mask, 0)
@@ -363,10 +326,9 @@ def compile_learner(tables: Any, hp: Any) -> None:
 
 def warm(learners: Sequence[tuple[str, Any, Any]],
          progress: Callable[[str], None] | None = None) -> bool:
-    """Compile (or load) each `(name, tables, hp)` learner's entry points; tells `progress`
-    "compiling the learners, once (i/n: name)" for those not compiled before. The first
-    compiles here; the others at once in worker processes, one per core (`compile_apart`),
-    which load here from the cache then. True when anything had to be compiled."""
+    """Compile (or load) each `(name, tables, hp)` learner's entry points, telling `progress`
+    of those not compiled before: the first here, the others in worker processes
+    (`compile_apart`). True when anything had to be compiled."""
     wanted = {learner[0]: learner for learner in learners}
     if all(key in _WARM for key in wanted):
         return False
@@ -394,11 +356,9 @@ def warm(learners: Sequence[tuple[str, Any, Any]],
 
 def compile_apart(learners: Sequence[tuple[str, Any, Any]],
                   done_with: Callable[[str], None] | None = None) -> list[bool]:
-    """Compile each `(name, tables, hp)` learner's entry points into the cache in
-    worker processes, one per core, all at once (`jit` files what each compiled in turn);
-    tells `done_with` each one's name as it is done. Per learner, whether it was (False for
-    all with fewer than two learners or cores, or where workers cannot start: the caller
-    compiles them)."""
+    """Compile each `(name, tables, hp)` learner's entry points into the cache in worker
+    processes, one per core, telling `done_with` each name as done. Per learner, whether
+    it was (False where workers cannot start: the caller compiles them)."""
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     workers = min(len(learners), cores or 1)
     done = [False] * len(learners)

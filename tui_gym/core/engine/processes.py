@@ -1,12 +1,5 @@
-"""Child processes that never outlive the process that started them.
-
-`context()` is how children start: fork on Linux (quickest; a child inherits the
-learners compiled so far), spawn elsewhere. A child calls `watch_parent(pid)`
-first: a process group of its own (Ctrl+C reaches the parent alone, which
-decides how a run ends), and its end as soon as its parent is gone. The parent
-ends its children on every way out: `end(process)` kills a child's group, and
-`stops_on_signals(stop)` turns SIGTERM and SIGHUP into the run's stop flag.
-"""
+"""Child processes that never outlive the process that started them: a child calls
+`watch_parent(pid)` first; the parent ends its children with `end(process)`."""
 
 from __future__ import annotations
 
@@ -28,9 +21,8 @@ WATCH_SECONDS = 0.2  # how often a child looks whether its parent is still there
 
 
 def context() -> Any:
-    """Fork on Linux, else spawn (see the module docstring). The children only run
-    learners (no terminal, no locks of the parent's threads), so forking from a program
-    with threads (the app) is safe here."""
+    """Fork on Linux (children inherit the compiled learners; they only run learners, so
+    forking from the app's threads is safe), else spawn."""
     if sys.platform.startswith("linux") and "fork" in multiprocessing.get_all_start_methods():
         return multiprocessing.get_context("fork")
     return multiprocessing.get_context("spawn")
@@ -68,16 +60,14 @@ def end(process: Any, timeout: float = 5.0) -> None:
 
 
 def stops_on_signals(stop: threading.Event) -> contextlib.AbstractContextManager[None]:
-    """While it runs on the main thread: SIGTERM and SIGHUP set `stop` (the caller ends
-    its children and records what finished); elsewhere, nothing changes."""
+    """While it runs on the main thread: SIGTERM and SIGHUP set `stop`."""
     return handling(("SIGTERM", "SIGHUP"), lambda signum, frame: stop.set())
 
 
 @contextlib.contextmanager
 def handling(names: tuple[str, ...], handler: Any, untouched: bool = False) -> Iterator[None]:
-    """Signals `names` go to `handler` while the block runs on the main thread (only
-    there can handlers be set; elsewhere nothing changes); with `untouched`, only those
-    that still have their default action (a program's own handlers stay as they are)."""
+    """Signals `names` go to `handler` while the block runs on the main thread (with
+    `untouched`, only those still on their default action)."""
     previous: dict[int, Any] = {}
     for name in names if threading.current_thread() is threading.main_thread() else ():
         sig = getattr(signal, name, None)

@@ -1,34 +1,12 @@
 """The rule registry, and the exploration and step sizes every learner shares, as kernels.
 
-Each algorithm's `Rule` is registered for its `Params` (a NamedTuple of its compiled
-hyperparameters; the learner base class calls `register(Params, rule)`):
+Each algorithm's `Rule` is registered for its `Params` (its compiled hyperparameters).
+The stubs below dispatch on the type of `hp`: in Python by looking the rule up, in
+compiled code at compile time (`jit` registers them as overloads).
 
-- `update(tables, hp, rng, offered, s, a, r, s2, terminated, truncated, a2, epsilon,
-  log)`: its update rule for one transition from table row `s` by action `a` to row
-  `s2` (`a2`: the next action when `next_first`, else -1), returning |TD error|
-  (Monte Carlo: the sum over the episode's updates at its end, else 0); it
-  writes the numbers the step-by-step view explains into `log[0]` (and more
-  rows when there is room: Monte Carlo's updates at an episode's end);
-- `acting(tables, hp)`: the tables whose sum is the action values it acts on
-  (default: `(tables[0],)`);
-- `begin(tables, hp)`: what it does as an episode starts (default: nothing);
-- `full(tables, hp)`: whether it needs room before one more step (default: never);
-- `next_first`: the next action is chosen before the update (SARSA).
-
-The stubs below dispatch on the type of `hp`: in plain Python by looking the
-rule up; in compiled code at compile time (`jit.start` registers them as Numba
-overloads), so each algorithm gets a specialisation of the one loop, cached.
-`act` is epsilon-greedy with a random tie-break, drawing only what it needs;
-it and `greedy` read the action values through `acting`, so one compiled form
-serves every algorithm that acts on the same number of tables.
-
-**Offered actions.** Each table row offers one run of actions, `lo` to `hi - 1`:
-`offered` is an unsigned array `[rows, 2]` of those bounds (`offered_ranges` makes it
-from a bool mask), or `[0, 2]` (empty) when every row offers every action, so every
-game runs the one compiled form. Acting (`act`, `greedy`), the max (`max_value`) and
-the ε-greedy expectation (`expected_value`) range over the offered actions only; a
-rule passes `offered` on to them. A uniform draw among them is `lo + uniform(rng,
-hi - lo)`: the same numbers as a draw over all actions where all are offered.
+`offered`: each table row's one run of actions `lo` to `hi - 1`, an unsigned `[rows, 2]`
+array, or `[0, 2]` (empty) when every row offers every action. Acting, the max and the
+expectation range over the offered actions only.
 """
 
 from __future__ import annotations
@@ -69,7 +47,10 @@ LOG_WIDTH = 8  # numbers per row of an update's log
 
 @dataclass(frozen=True)
 class Rule:
-    """One algorithm's compiled parts (see the module docstring)."""
+    """One algorithm's compiled parts: `update(tables, hp, rng, offered, s, a, r, s2,
+    terminated, truncated, a2, epsilon, log)` returns |TD error| and explains itself in
+    `log`; `acting` (the tables summed to act on, default the first), `begin` (as an
+    episode starts), `full` (whether it needs room first); `next_first`: SARSA's order."""
 
     update: Callable[..., float]
     acting: Callable[..., tuple[Any, ...]] | None = None
@@ -120,8 +101,8 @@ def next_first(hp: Any) -> bool:
 
 @kernel(inline=True)
 def step_size(learning_rate: float, by_visits: bool, n: int) -> float:
-    """The step size of the n-th update (n >= 1) of one (state, action): the learning
-    rate, or with `by_visits` max(learning rate, 1/n), a plain average until 1/n reaches it."""
+    """The step size of the n-th update (n >= 1): the learning rate, or with `by_visits`
+    max(learning rate, 1/n)."""
     if by_visits:
         return max(learning_rate, 1.0 / n)
     return learning_rate
@@ -137,8 +118,8 @@ def epsilon_at(episode: float, start: float, final: float, decay_episodes: float
 
 @kernel(inline=True)
 def uniform(rng: Any, n: int) -> int:
-    """An integer drawn uniformly from 0 to n - 1 (one uniform double; several times
-    quicker in compiled code than `Generator.integers`)."""
+    """An integer drawn uniformly from 0 to n - 1 (one uniform double: quicker compiled
+    than `Generator.integers`)."""
     return min(int(rng.random() * n), n - 1)
 
 
@@ -150,8 +131,7 @@ def offered_range(offered: Any, s: int) -> tuple[Any, Any]:
 
 @kernel(inline=True)
 def every(offered: Any) -> bool:
-    """Whether every row offers every action (`offered` empty). The same on every call:
-    each caller runs its loop over `0` to `n` apart, as fast as for a game with no mask."""
+    """Whether every row offers every action (`offered` empty)."""
     return offered.shape[0] == 0
 
 
@@ -166,8 +146,7 @@ def value(values: Any, s: int, a: int) -> float:
 
 @kernel
 def greedy(values: Any, rng: Any, offered: Any, s: int) -> int:
-    """The best-valued action row `s` offers (`values`: the tables `acting` gives), ties
-    broken uniformly (a draw only on a tie)."""
+    """The best-valued action row `s` offers, ties broken uniformly (a draw only on one)."""
     if every(offered):
         return greedy_in(values, rng, s, 0, values[0].shape[1])
     lo, hi = offered_range(offered, s)
@@ -211,8 +190,7 @@ def act(values: Any, rng: Any, offered: Any, s: int, epsilon: float) -> int:
 
 @kernel
 def expected_value(values: Any, offered: Any, s: int, epsilon: float) -> float:
-    """Σ_a π(a|s) value(s, a) under epsilon-greedy over the offered actions, ties sharing
-    the greedy part: epsilon times their mean value plus (1 - epsilon) times the best."""
+    """Σ_a π(a|s) value(s, a) under epsilon-greedy over the offered actions."""
     if every(offered):
         return expected_in(values, s, 0, values[0].shape[1], epsilon)
     lo, hi = offered_range(offered, s)
@@ -252,9 +230,8 @@ def max_in(q: Any, s: int, lo: int, hi: int) -> float:
 @kernel(inline=True)
 def td_update(q: Any, counts: Any, visits: Any, hp: Any, s: int, a: int, r: float,
               future: float, log: Any) -> float:
-    """Move q[s, a] toward r + γ·future by the step size of its next update, counting the
-    visit; row 0 of `log` gets the target, the future term, Q before and after, the step
-    size and the cell's count. The |TD error|."""
+    """Move q[s, a] toward r + γ·future, counting the visit; log row 0: the target, the
+    future term, Q before and after, the step size, the count. The |TD error|."""
     target = r + hp.discount * future
     counts[s, a] += 1
     visits[s] += 1
@@ -271,9 +248,8 @@ def td_update(q: Any, counts: Any, visits: Any, hp: Any, s: int, a: int, r: floa
 
 
 def offered_ranges(mask: np.ndarray | None, n_actions: int) -> np.ndarray:
-    """`offered` (see the module docstring) from a bool mask `[rows, n_actions]` of the
-    actions each row offers (None: every row offers every action). ValueError when a row
-    offers none, or actions apart (not one run)."""
+    """`offered` from a bool mask `[rows, n_actions]` (None: all); ValueError when a row
+    offers none, or actions apart."""
     if mask is None:
         return np.zeros((0, 2), dtype=np.uint32)
     lo = np.argmax(mask, axis=1)

@@ -1,15 +1,9 @@
-"""Independent learners played to a number of episodes each: what comparisons and sweeps run.
-
-`play_learner(learner, model, episodes, checkpoints)` plays one learner on a
-model's arrays through the compiled loop and gives its online return of every
-episode and copies of its action values at the checkpoints (`checkpoint_episodes`);
-`greedy_values(model, q)` values greedy policies exactly, many at once. A seed's
-run is the same whoever plays it: `train --seed` on the model, a comparison,
-a sweep, in this process or another.
-"""
+"""Independent learners played to a number of episodes each: what comparisons and sweeps run,
+and the exact values of their greedy policies (`greedy_values`), many at once."""
 
 from __future__ import annotations
 
+import graphlib
 from collections.abc import Callable, Sequence
 from functools import lru_cache
 from typing import Any
@@ -36,12 +30,9 @@ def play_learner(
     progress: Callable[[int], None] | None = None,
     column: int = loop.RETURN,
 ) -> tuple[np.ndarray, list[np.ndarray]]:
-    """Play `learner` for `episodes` episodes on `model` (fewer when `stop()` says so,
-    asked between calls of the loop): the return of each episode played (or the loop's
-    other per-episode `column`: `loop.LENGTH`, `loop.FIRST_ACTION`; written into
-    `returns` as they come, when given; `progress` hears how many there are after each
-    call), and its action values (every row) after each checkpoint (episode counts)
-    reached."""
+    """Play `learner` for `episodes` episodes on `model` (fewer once `stop()`): each
+    episode's `column` of the loop's output (into `returns` as they come, when given;
+    `progress` hears the count), and its action values at each checkpoint reached."""
     cursor = loop.Cursor()
     out = np.zeros((min(episodes, 65_536), loop.COLUMNS))
     log = np.zeros((1, 8))
@@ -72,16 +63,9 @@ def checkpoint_episodes(episodes: int, most: int = MAX_CHECKPOINTS) -> np.ndarra
 
 
 def greedy_values(model: FiniteMDP, q: np.ndarray) -> np.ndarray:
-    """The exact value (gamma 1) of the greedy policy of each table `q[m, S, A]`, ties split evenly.
-
-    On a model whose every move has one outcome and with one start state, a
-    policy that meets no tie on its way is valued along its path (all tables
-    at once, in about log2(H) steps). The others, with an episode limit H,
-    are valued at once: for a small model by powers of each policy's
-    transition matrix (the sum of the first H steps' expected rewards in about
-    log2(H) matrix products), else by H backward steps. With no limit, one
-    at a time (minus infinity for a policy that may never end).
-    """
+    """The exact value (gamma 1) of the greedy policy of each table `q[m, S, A]`, ties split
+    evenly: along its path where it can (one outcome a move, one start), else by matrix
+    powers or backward steps over the episode limit, else one at a time."""
     q = np.asarray(q, dtype=np.float64)
     tied = q == q.max(axis=2, keepdims=True)
     ties = tied.sum(axis=2)
@@ -100,12 +84,8 @@ def _path_values(
     model: FiniteMDP, tied: np.ndarray, ties: np.ndarray, start: int, horizon: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """The rewards along each greedy policy's path from `start` over at most `horizon`
-    moves, and which policies met no tie on the way (only their values are right).
-
-    All paths at once by doubling: from every state, where 2**k moves lead, what
-    they earn and whether they meet a tie, for k up to log2(horizon); a move that
-    ends the episode leads to a sink that stays put and earns nothing.
-    """
+    moves, all at once by doubling (an ending move leads to a sink), and which policies
+    met no tie on the way (only their values are right)."""
     m, n = ties.shape
     size = n + 1  # the states and the sink, per policy
     greedy = tied.argmax(axis=2)
@@ -167,20 +147,12 @@ def _valued(model: FiniteMDP, tied: np.ndarray, ties: np.ndarray) -> np.ndarray:
 def _acyclic(model: FiniteMDP) -> bool:
     """Whether no possible move that goes on leads back to a state already passed."""
     moves = (model.prob > 0) & ~model.terminal
-    targets = [np.unique(model.next_state[s][moves[s]]) for s in range(model.n_states)]
-    incoming = np.zeros(model.n_states, dtype=np.int64)
-    for nxt in targets:
-        np.add.at(incoming, nxt, 1)
-    ready = [s for s in range(model.n_states) if incoming[s] == 0]
-    seen = 0
-    while ready:
-        s = ready.pop()
-        seen += 1
-        for t in targets[s].tolist():
-            incoming[t] -= 1
-            if incoming[t] == 0:
-                ready.append(t)
-    return seen == model.n_states
+    after = {s: model.next_state[s][moves[s]].tolist() for s in range(model.n_states)}
+    try:
+        tuple(graphlib.TopologicalSorter(after).static_order())
+    except graphlib.CycleError:
+        return False
+    return True
 
 
 _DENSE_STATES = 256  # up to this many states, policies are valued by matrix powers

@@ -1,13 +1,5 @@
-"""Bounded statistics for runs of any length, and the immutable views of a run.
-
-`RollingWindow` keeps the last `size` values of a quantity in a ring buffer
-with a running sum (moving average in O(1)). `Series` keeps a whole run's
-history as at most `capacity` points: when full it merges neighbouring points
-pairwise and doubles the span each point covers, so memory stays fixed and
-the picture still covers episode 0 to now. `EpisodeStats` bundles the five
-per-episode quantities the trainer tracks; `TrainingSnapshot` is one frame of
-a run for viewers on other threads, `StepEvent` one move of the agent.
-"""
+"""Bounded statistics for runs of any length (`RollingWindow`, `Series`), and the immutable
+views of a run (`EpisodeStats`, `TrainingSnapshot`, `StepEvent`)."""
 
 from __future__ import annotations
 
@@ -23,9 +15,8 @@ from tui_gym.core.engine.kernel import kernel
 @kernel
 def push_all(ring: Any, values: Any, means: Any, at: int, count: int,
              total: float) -> tuple[int, int, float]:
-    """`RollingWindow.push` of each of `values` in turn on the ring buffer `ring` (next
-    slot `at`, `count` pushed so far, running sum `total`), the mean after each into
-    `means`; the next slot, count and sum after them."""
+    """`RollingWindow.push` of each of `values` in turn, the mean after each into `means`;
+    the next slot, count and sum after them."""
     size = ring.shape[0]
     for i in range(values.shape[0]):
         if count >= size:
@@ -34,7 +25,7 @@ def push_all(ring: Any, values: Any, means: Any, at: int, count: int,
         total += values[i]
         at += 1
         count += 1
-        if at == size:  # re-summed once per lap, as `push` does
+        if at == size:  # re-summed once per lap, so that no drift builds up
             at = 0
             total = 0.0
             for j in range(size):
@@ -56,19 +47,10 @@ class RollingWindow:
         self._sum = 0.0
 
     def push(self, value: float) -> None:
-        slot = self._next
-        if self.count >= self.size:
-            self._sum -= self._values[slot]
-        self._values[slot] = value
-        self._sum += value
-        self._next = (slot + 1) % self.size
-        self.count += 1
-        if self._next == 0:
-            # Re-sum once per lap so floating-point drift cannot build up.
-            self._sum = float(self._values.sum())
+        self.push_many(np.array([value], dtype=np.float64))
 
     def push_many(self, values: np.ndarray) -> np.ndarray:
-        """Push `values` in order (as many `push` calls do, compiled); the mean after each."""
+        """Push `values` in order (compiled); the mean after each."""
         values = np.ascontiguousarray(values, dtype=np.float64)
         means = np.empty(len(values))
         at, count, total = push_all(self._values, values, means, self._next, self.count,
@@ -177,8 +159,7 @@ class TrainingSnapshot:
     _lookup: dict[Hashable, int] | None = field(default=None, repr=False, compare=False)
 
     def values(self, keys: list[Hashable], traces: bool = False) -> np.ndarray:
-        """Action values for the given keys (zeros for unseen states), like `Learner.values`;
-        with `traces`, the eligibility traces (a snapshot without them has none)."""
+        """Action values (with `traces`, the traces) for the given keys (zeros for unseen)."""
         table = self.traces if traces else self.q
         if table is None:
             raise ValueError("this learner keeps no eligibility traces")

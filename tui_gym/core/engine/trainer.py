@@ -1,18 +1,8 @@
 """The trainer: one learner trained in chunks, with bounded statistics and snapshots.
 
-`Trainer` trains a learner through its one compiled rule either on the game's
-model (`ModelArrays`, with the compiled loop: max speed and every headless run)
-or on the Gymnasium env, a transition at a time from Python (`step`: the
-animated board and the `n` step, and games or wrappers no model follows). In a
-world that changes as it is played (`later` phases), both loops play the phase
-in force at the steps trained (the env through its `world_steps` reset option).
-
-`run` works in chunks of milliseconds, so a front end can interleave drawing,
-pausing and changing settings; an episode in progress carries over between
-calls, so cutting a run into chunks never changes it. Statistics go into
-`RollingWindow`s and `Series` (fixed memory); `latest` is the last immutable
-`TrainingSnapshot`. `continue_run` decides how new hyperparameters apply to a
-run under way.
+`Trainer` trains on the game's model with the compiled loop, or on the Gymnasium env a
+transition at a time (`step`: the animated board, and what no model follows). `run`
+works in chunks of milliseconds; an episode in progress carries over between calls.
 """
 
 from __future__ import annotations
@@ -79,10 +69,9 @@ class TrainerProgress:
 
 
 class Trainer:
-    """Trains `agent` on `model` (the game's model as the wrappers make it, its states
-    mapped to the agent's table rows; `later`: each later phase's start step and
-    model) when given, else on `env`; `seed` seeds the env's first reset (the agent's
-    own generator drives everything else); `reason` says which loop trains and why."""
+    """Trains `agent` on `model` (`later`: each later phase's start step and model) when
+    given, else on `env`; `seed` seeds the env's first reset; `reason` says which loop
+    trains and why."""
 
     def __init__(
         self,
@@ -134,8 +123,7 @@ class Trainer:
 
     # --- which loop ----------------------------------------------------------------
     def _use(self, engine: str) -> None:
-        """Train with `engine` from now on: the other loop's episode in progress is dropped
-        (the learner forgets what it kept of it), and the rate starts afresh."""
+        """Train with `engine` from now on (the other loop's episode in progress is dropped)."""
         if engine == self.engine:
             return
         self.engine = engine
@@ -170,15 +158,9 @@ class Trainer:
         on_publish: Callable[[TrainingSnapshot], None] | None = None,
         call_seconds: float = CHUNK_SECONDS,
     ) -> int:
-        """Run until `episodes` more episodes, `seconds` elapse, or `stop` is set.
-
-        Exactly `episodes` finish when that limit is what stops the run;
-        `seconds` and `stop` are checked between chunks of milliseconds (each
-        call of the model loop aims at `call_seconds`).
-        Returns the number of episodes finished, and publishes a snapshot to
-        `latest` (and `on_publish`) every `publish_interval` seconds and at the
-        end.
-        """
+        """Run until `episodes` more episodes, `seconds` elapse, or `stop` is set (checked
+        between chunks); the episodes finished. Publishes a snapshot to `latest` (and
+        `on_publish`) every `publish_interval` seconds and at the end."""
         if episodes is None and seconds is None and stop is None:
             raise ValueError("run() needs episodes, seconds or a stop event")
         self._use("model" if self.model is not None else "env")
@@ -229,23 +211,16 @@ class Trainer:
         return done
 
     def _record(self, rows: np.ndarray) -> None:
-        """Count finished episodes (rows of return, length, mean |TD|, epsilon, first action)
-        into the windows and curves (one at a time, from the env loop: no arrays built)."""
+        """Count finished episodes (rows of `loop.COLUMNS`) into the windows and curves."""
         for name, values in zip(SERIES_NAMES, rows.T[: len(SERIES_NAMES)], strict=True):
-            window = self.windows[name]
-            if len(rows) == 1:
-                window.push(values.item())
-                self.series[name].push(window.mean)
-            else:
-                self.series[name].push_many(window.push_many(values))
+            self.series[name].push_many(self.windows[name].push_many(values))
         self.series[EPISODE_RETURNS].push_many(rows[:, 0])
         ret, length, td, eps, first = rows[-1].tolist()
         self.last = EpisodeStats(ret, int(length), td, eps, int(first))
         self.episodes += len(rows)
 
     def _chunk_env(self, quota: int | None) -> int:
-        """A few episodes on the env (at most `quota`), fewer once they add up to
-        `ENV_CHUNK_STEPS` steps, so a stop is seen within milliseconds."""
+        """A few episodes on the env (at most `quota`, fewer after `ENV_CHUNK_STEPS` steps)."""
         count = 16 if quota is None else min(16, quota)
         first_step = self.steps
         done = 0
@@ -258,10 +233,7 @@ class Trainer:
 
     # --- one transition on the env ------------------------------------------------------
     def step(self, explain: bool = False) -> StepEvent:
-        """Take one transition on the env (starting an episode if none is running).
-
-        With `explain` the event carries the learner's record of the update.
-        """
+        """Take one transition on the env (with `explain`, the learner's record of it)."""
         self._use("env")
         self._warm()
         agent = self.agent
@@ -323,8 +295,7 @@ class Trainer:
             callback(snap)
 
     def _recent_rate(self) -> float:
-        """Episodes per second over about the last `RATE_SECONDS` of training by the loop
-        training now (the last rate while nothing new has been trained)."""
+        """Episodes per second over about the last `RATE_SECONDS` of training."""
         samples = self._samples
         now, count = self.seconds, self.episodes
         if not samples or samples[-1] != (now, count):
@@ -338,8 +309,7 @@ class Trainer:
         return self._rate
 
     def snapshot(self) -> TrainingSnapshot:
-        """An immutable copy of the current statistics and the learner's action values (and
-        eligibility traces, for a learner that keeps them)."""
+        """An immutable copy of the statistics, the action values and any traces."""
         q, keys = self.agent.table()
         self._version += 1
         w = self.windows
@@ -372,8 +342,7 @@ class Trainer:
                                self._recent_rate())
 
     def restore(self, progress: TrainerProgress) -> None:
-        """Carry on from `progress` (this trainer's agent is the one that made it, and
-        an episode this trainer has in progress goes on)."""
+        """Carry on from `progress` (made by this trainer's agent)."""
         self.episodes, self.steps = progress.episodes, progress.steps
         self.seconds, self.windows = progress.seconds, progress.windows
         self.series, self.last = progress.series, progress.last
@@ -391,14 +360,9 @@ class Trainer:
 def continue_run(
     current: Any, wanted: Any, episodes_done: int
 ) -> tuple[Any, str | None]:
-    """The hyperparameters to train on with, and what to tell the person, if anything.
-
-    Raising the episode budget of an agent that has trained continues its run:
-    the epsilon decay keeps its length in episodes (the decay fraction is scaled
-    down to match), so epsilon carries on from where it is instead of jumping
-    back up. When the decay fraction or the epsilons are changed too, they are
-    taken as asked; if that sends epsilon back up, the note says so plainly.
-    """
+    """The hyperparameters to train on with, and what to tell the person, if anything:
+    a raised budget keeps the epsilon decay's length in episodes (epsilon carries on);
+    other changes are taken as asked, with a note if epsilon goes back up."""
     if current is None or episodes_done <= 0:
         return wanted, None
     hp, note = wanted, None

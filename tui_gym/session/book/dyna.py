@@ -25,7 +25,6 @@ from tui_gym.session.book.figure import (
 from tui_gym.session.book.runs import (
     BANDS,
     LENGTH,
-    Learner,
     Played,
     above,
     below,
@@ -61,7 +60,7 @@ EARLY = (2, 10)  # the episodes compared at the start (the book's axis begins at
           "one without planning needs about 25 episodes.")
 def fig_8_2(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
     played = play(figure, "dyna-maze", [
-        Learner(f"{n} planning steps", "dyna-q", {**DYNA_SETTINGS, "planning_steps": n})
+        Arm("dyna-q", {**DYNA_SETTINGS, "planning_steps": n}, f"{n} planning steps")
         for n in PLANNING_STEPS], options, progress, measure=LENGTH)
     episodes = played[0].values.shape[1]
     first, last = EARLY[0] - 1, min(EARLY[1], episodes)
@@ -102,8 +101,8 @@ def _settled(played: Played, episode: int) -> Check:
 PLANNING = 50
 KAPPA = 0.001
 MAZE_SETTINGS = book_settings(0.95, learning_rate=1.0, planning_steps=PLANNING)
-MAZE_LEARNERS = (Learner("Dyna-Q", "dyna-q", MAZE_SETTINGS),
-                 Learner("Dyna-Q+", "dyna-q-plus", {**MAZE_SETTINGS, "kappa": KAPPA}))
+MAZE_LEARNERS = (Arm("dyna-q", MAZE_SETTINGS, "Dyna-Q"),
+                 Arm("dyna-q-plus", {**MAZE_SETTINGS, "kappa": KAPPA}, "Dyna-Q+"))
 MAZE_NOTE = (f"ε = 0.1, γ = 0.95, α = 1, {PLANNING} planning steps, κ = {KAPPA:g} (the book "
              "gives no settings for this figure)")
 BLOCKING = (3000, 1000)  # Figure 8.4's time steps, and those after which the wall moves
@@ -120,22 +119,19 @@ def reward_between(played: Played, first: int, last: int) -> np.ndarray:
 
 
 def _episodes(row: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The time steps (counted from 1) at which a run's episodes that reached the goal
-    began and ended."""
+    """The time steps (from 1) at which a run's episodes that reached the goal began and ended."""
     ends = np.flatnonzero(np.diff(row, prepend=0.0) > 0) + 1
     return np.concatenate(([0], ends))[: len(ends)], ends
 
 
 def episodes_after(played: Played, step: int) -> list[np.ndarray]:
-    """Per run, the lengths of the episodes begun at or after time step `step` that ended
-    within the run."""
+    """Per run, the lengths of the finished episodes begun at or after time step `step`."""
     return [(ends - begins)[begins >= step]
             for begins, ends in map(_episodes, played.values)]
 
 
 def found_after(played: Played, step: int) -> np.ndarray:
-    """Per run, the time steps from `step` until the first episode begun at or after it
-    reached the goal (the rest of the run where none did)."""
+    """Per run, the time steps from `step` until an episode begun then reached the goal."""
     found = []
     for row in played.values:
         begins, ends = _episodes(row)
@@ -158,8 +154,8 @@ def _steps_cost(model: FiniteMDP) -> FiniteMDP:
 def _changing_maze(figure: BookFigure, world: str, timing: tuple[int, int],
                    options: FigureOptions, progress: Progress,
                    ) -> tuple[Played, Played, tuple[int, ...]]:
-    """Dyna-Q's and Dyna-Q+'s runs on `world` (`timing`: their time steps, and those after
-    which the wall moves), and the fewest steps before and after the change."""
+    """Dyna-Q's and Dyna-Q+'s runs on `world` (`timing`: steps, and the change's), and the
+    fewest steps before and after the change."""
     steps, change = timing
     dyna, plus = play_steps(figure, world, MAZE_LEARNERS, options, progress, steps,
                             game_params={"change_at": change})
@@ -168,8 +164,7 @@ def _changing_maze(figure: BookFigure, world: str, timing: tuple[int, int],
 
 def _maze_result(figure: BookFigure, dyna: Played, plus: Played, checks: tuple[Check, ...],
                  *notes: str) -> FigureResult:
-    """A changing maze's figure: both cumulative rewards, the last claim that Dyna-Q+ ends
-    above Dyna-Q."""
+    """A changing maze's figure: both cumulative rewards; Dyna-Q+ ends above Dyna-Q."""
     steps = dyna.values.shape[1]
     last = above(f"Dyna-Q+'s cumulative reward after {steps} steps is above Dyna-Q's",
                  "above", plus.values[:, -1], dyna.values[:, -1])
@@ -261,9 +256,9 @@ def fig_8_5(figure: BookFigure, options: FigureOptions, progress: Progress) -> F
 # takes the model's target whole) and θ = 0.0001.
 SWEEP_PLANNING = 5
 SWEEP_SETTINGS = {**MAZE_SETTINGS, "planning_steps": SWEEP_PLANNING}
-SWEEPERS = (Learner("Dyna-Q", "dyna-q", SWEEP_SETTINGS),
-            Learner("Prioritized sweeping", "prioritized-sweeping",
-                    {**SWEEP_SETTINGS, "theta": 0.0001}))
+SWEEPERS = (Arm("dyna-q", SWEEP_SETTINGS, "Dyna-Q"),
+            Arm("prioritized-sweeping", {**SWEEP_SETTINGS, "theta": 0.0001},
+                "Prioritized sweeping"))
 SCALES = (1, 2, 4)  # each cell of the Dyna maze made scale x scale cells: 47 to 752 states
 FULL_SCALES = (1, 2, 4, 8)  # to 3008 states, the book's axis doubling twice a step
 STEPS_PER_STATE = 10_000  # real steps a run may take to become optimal, per state
@@ -336,11 +331,9 @@ def example_8_4(figure: BookFigure, options: FigureOptions, progress: Progress) 
 
 def _maze(scale: int, runs: int,
           seed: int) -> tuple[FiniteMDP, np.ndarray, list[dict[str, Any]], int]:
-    """The Dyna maze made `scale` times finer (the game's model, its episode limit), the
-    optimal moves (`good[state, action]`), each learner's settings, and its open cells
-    (the states the book counts)."""
-    prepared = prepare(Setup("dyna-maze", runs, 1, {"scale": scale}, (), seed),
-                       [Arm(x.algorithm, dict(x.settings), x.label) for x in SWEEPERS])
+    """The Dyna maze made `scale` times finer, its optimal moves (`good[state, action]`),
+    each learner's settings, and its open cells (the states the book counts)."""
+    prepared = prepare(Setup("dyna-maze", runs, 1, {"scale": scale}, (), seed), list(SWEEPERS))
     model = world_phases("dyna-maze", prepared.env_kwargs).models[0]
     q = solve(with_horizon(_steps_cost(model), None)).q
     good = np.isclose(q, q.max(axis=1, keepdims=True))
@@ -357,10 +350,8 @@ def _maze(scale: int, runs: int,
 
 def _updates_until_optimal(agent: Any, arrays: loop.ModelArrays, model: FiniteMDP,
                            good: np.ndarray, most: int) -> tuple[float, bool]:
-    """The Q updates `agent` makes until its greedy policy is optimal from the start,
-    looked at after each episode that changed Q (Dyna-Q: 1 + n a step; prioritized
-    sweeping: what it takes from its queue, which its log adds up), and whether it was
-    still not optimal after `most` steps."""
+    """The Q updates `agent` makes until its greedy policy is optimal from the start (looked
+    at after each episode), and whether it was still not after `most` steps."""
     cursor, out, log = loop.Cursor(), np.zeros((1, loop.COLUMNS)), np.zeros((1, 8))
     start = int(arrays.starts[0])
     queued = hasattr(agent, "queue")

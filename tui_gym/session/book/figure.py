@@ -23,18 +23,15 @@ Measure = Callable[["BookFigure", "FigureOptions", Progress], "FigureResult"]
 
 
 def heading(name: str) -> str:
-    """What a figure is called: "Figure 8.4" for a numbered figure, "Example 8.4" for the
-    one of an example (named "example 8.4")."""
+    """What a figure is called: "Figure 8.4", or "Example 8.4" for "example 8.4"."""
     return name.capitalize() if name[:1].isalpha() else f"Figure {name}"
 
 
 @dataclass
 class FigureTasks:
-    """Where a figure's learners run as tasks (`runs.play`): the run history each finished
-    task is kept in (each `play` a group of runs, all joining the figure's first run,
-    `group`), the run to resume (`resume`: the figure's first run; only the missing tasks
-    run), and the Dask cluster (`cluster`, as `compare --cluster` takes it). `tasks` and
-    `landed` count the figure's tasks and those finished so far."""
+    """Where a figure's learners run as tasks (`runs.play`): the run history (its runs in
+    the figure's first run's `group`), the run to `resume`, the Dask `cluster`; `tasks`
+    and `landed` count the tasks and those finished."""
 
     history: RunHistory | None = None
     resume: int | None = None
@@ -47,10 +44,8 @@ class FigureTasks:
 
 @dataclass(frozen=True)
 class FigureOptions:
-    """How a figure is run: `runs` and `episodes` (None: the figure's defaults, or with
-    `full` the book's own counts) and the first `seed`; setting `stop` ends a figure that
-    runs learners early (`FigureStopped`); `tasks` keeps them in the run history or sends
-    them to a cluster."""
+    """How a figure is run: `runs` and `episodes` (None: the figure's, or with `full` the
+    book's), the first `seed`, `stop` (`FigureStopped`) and where `tasks` go."""
 
     runs: int | None = None
     episodes: int | None = None
@@ -84,8 +79,7 @@ class Series:
 
 @dataclass(frozen=True)
 class Chart:
-    """Series drawn together, over `x_label` (`skip_start`: the y range fits the curves
-    after their first few points, as the book's axes do)."""
+    """Series drawn together (`skip_start`: the y range leaves out the first few points)."""
 
     title: str
     x_label: str
@@ -95,8 +89,7 @@ class Chart:
 
 @dataclass(frozen=True)
 class Check:
-    """One of the book's claims: what the book says, what was measured, and whether the
-    measurement bears the claim out."""
+    """One of the book's claims: the book's value, the measured one, and whether it holds."""
 
     claim: str
     book: float | str
@@ -113,8 +106,7 @@ class Check:
 
 @dataclass(frozen=True)
 class FigureResult:
-    """A figure as measured: charts and grids to draw, and the checks (the figure's name
-    and title filled in by `book_figure`)."""
+    """A figure as measured: charts and grids to draw, and the checks."""
 
     figure: str = ""
     title: str = ""
@@ -158,8 +150,7 @@ class BookFigure:
 
 def book_figure(name: str, world: str, *, title: str, about: str,
                 **counts: Any) -> Callable[[Measure], BookFigure]:
-    """Make the function that measures a figure (given the figure, the options and the
-    progress) the `BookFigure` named `name` on `world`; `counts` are its other fields."""
+    """Make a function that measures a figure the `BookFigure` named `name` on `world`."""
 
     def make(measure: Measure) -> BookFigure:
         def run(options: FigureOptions, progress: Progress) -> FigureResult:

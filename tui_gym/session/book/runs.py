@@ -5,7 +5,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -41,7 +41,7 @@ from tui_gym.session.experiments.compare import (
 )
 
 __all__ = [
-    "BANDS", "FIRST_ACTION", "LENGTH", "RETURN", "Learner", "Played", "above", "book_settings",
+    "BANDS", "FIRST_ACTION", "LENGTH", "RETURN", "Played", "above", "book_settings",
     "completed", "counts", "margin", "near", "one_run", "per_episode",
     "per_time_step", "play", "play_prediction", "play_steps", "swept", "world_phases",
 ]
@@ -52,25 +52,15 @@ Samples = npt.ArrayLike
 
 
 def book_settings(discount: float, epsilon: float = 0.1, **more: Any) -> dict[str, Any]:
-    """The book's control learners' settings: ε-greedy with `epsilon` throughout, a constant
-    step size, `discount`; `more` adds the rest (`learning_rate`, ...)."""
+    """The book's control settings: a constant ε and step size, `discount`, and `more`."""
     return {"learning_rate_schedule": "constant", "discount": discount,
             "epsilon_start": epsilon, "epsilon_final": epsilon, **more}
 
 
-@dataclass(frozen=True)
-class Learner:
-    """One series of a run figure: an algorithm with the book's settings for it."""
-
-    label: str
-    algorithm: str
-    settings: Mapping[str, Any] = field(default_factory=dict)
-
-
 @dataclass(frozen=True, eq=False)
 class Played:
-    """A learner's runs: `values[run, episode]` (the figure's measure), and `final[run]`,
-    its greedy policy's exact value after the last episode (None without a model)."""
+    """A learner's runs: `values[run, episode]`, and `final[run]`, its greedy policy's exact
+    value at the end (None without a model)."""
 
     label: str
     values: np.ndarray
@@ -90,16 +80,15 @@ def counts(figure: BookFigure, options: FigureOptions) -> tuple[int, int]:
     return runs, episodes
 
 
-def play(figure: BookFigure, world: str, learners: Sequence[Learner], options: FigureOptions,
+def play(figure: BookFigure, world: str, learners: Sequence[Arm], options: FigureOptions,
          progress: Progress, *, measure: int = RETURN,
          game_params: Mapping[str, Any] | None = None, runs: int | None = None,
          episodes: int | None = None) -> list[Played]:
-    """Every learner over the figure's runs (see the module docstring); `runs` and
-    `episodes` override `counts(figure, options)` (a figure of two experiments)."""
+    """Every learner over the figure's runs, as a comparison's tasks; `runs` and `episodes`
+    override `counts(figure, options)`."""
     counted = counts(figure, options)
     runs, episodes = runs or counted[0], episodes or counted[1]
     setup = Setup(world, runs, episodes, dict(game_params or {}), (), options.seed, measure)
-    arms = [Arm(x.algorithm, dict(x.settings), x.label) for x in learners]
     names = ", ".join(x.label for x in learners) if len(learners) <= 4 else (
         f"{len(learners)} learners")
     about = f"{runs:,} runs × {episodes:,} episodes of {names}"
@@ -110,12 +99,12 @@ def play(figure: BookFigure, world: str, learners: Sequence[Learner], options: F
             f" ({tasks.landed + state.tasks_done}/{tasks.tasks + state.tasks_total} tasks)"
             if options.tasks else ""))
 
-    resume = _resumed(tasks, len(arms))  # sets `tasks.group` when resuming
-    done = execute(setup, arms, RunKind.COMPARE, progress=told, stop=options.stop,
+    resume = _resumed(tasks, len(learners))  # sets `tasks.group` when resuming
+    done = execute(setup, learners, RunKind.COMPARE, progress=told, stop=options.stop,
                    status=lambda line: progress(0, 1, line or about), history=tasks.history,
                    resume=resume, cluster=tasks.cluster, group=tasks.group)
     tasks.group = tasks.group or done.group
-    tasks.played += len(arms)
+    tasks.played += len(learners)
     tasks.tasks += done.tasks.get("total", 0)
     tasks.landed += done.tasks.get("done", 0)
     if done.interrupted:
@@ -126,18 +115,14 @@ def play(figure: BookFigure, world: str, learners: Sequence[Learner], options: F
             for index, learner in enumerate(learners)]
 
 
-def play_steps(figure: BookFigure, world: str, learners: Sequence[Learner],
+def play_steps(figure: BookFigure, world: str, learners: Sequence[Arm],
                options: FigureOptions, progress: Progress, steps: int, *,
                game_params: Mapping[str, Any] | None = None) -> list[Played]:
-    """Every learner over the figure's runs, each run `steps` time steps of the world's
-    model by the compiled loop, phase after phase (the learner and its episode in progress
-    go on in the next phase's model from the step it starts at): `values[run, t]`, the
-    returns of the episodes finished in the first t + 1 steps (the cumulative reward, where
-    a world pays only as an episode ends, as the book's mazes do)."""
+    """Every learner over the figure's runs of `steps` time steps, phase after phase:
+    `values[run, t]`, the returns of the episodes finished in the first t + 1 steps."""
     runs, _ = counts(figure, options)
     setup = Setup(world, runs, 1, dict(game_params or {}), (), options.seed)
-    arms = [Arm(x.algorithm, dict(x.settings), x.label) for x in learners]
-    prepared = prepare(setup, arms)
+    prepared = prepare(setup, learners)
     phases = world_phases(world, prepared.env_kwargs)
     arrays = [loop.ModelArrays.of(model) for model in phases.models]
     ends = [*phases.starts[1:], steps]
@@ -161,7 +146,7 @@ def play_steps(figure: BookFigure, world: str, learners: Sequence[Learner],
     return played
 
 
-def play_prediction(figure: BookFigure, states: int, learners: Sequence[Learner],
+def play_prediction(figure: BookFigure, states: int, learners: Sequence[Arm],
                     options: FigureOptions, progress: Progress) -> list[Played]:
     """Every prediction learner over the figure's runs on the random walk of `states`
     states: `values[run, episode]`, the RMS error of V after each episode."""
@@ -192,8 +177,7 @@ def play_prediction(figure: BookFigure, states: int, learners: Sequence[Learner]
 
 
 def world_phases(world: str, kwargs: Mapping[str, Any]) -> Phases:
-    """The model of each phase of the game `world` with its arguments `kwargs` and its own
-    episode limit (ValueError for a game without one)."""
+    """The model of each phase of the game `world` (ValueError for a game without one)."""
     game = game_named(world)
     phases = (game.world(kwargs, game.own_changes(kwargs)) if isinstance(game, ModelGame)
               else NotAvailable("it has no exact model"))
@@ -222,8 +206,8 @@ def _cumulative_reward(agent: Any, arrays: Sequence[loop.ModelArrays], starts: S
 
 
 def _resumed(tasks: FigureTasks, arms: int) -> list[int] | None:
-    """The runs of `tasks.resume`'s group the next play carries on (None: it had not begun,
-    or nothing is resumed); ResumeError (one line) if that run does not head a figure."""
+    """The runs of `tasks.resume`'s group the next play carries on (None: none);
+    ResumeError if that run does not head a figure."""
     if tasks.resume is None or tasks.history is None:
         return None
     try:
@@ -239,8 +223,7 @@ def _resumed(tasks: FigureTasks, arms: int) -> list[int] | None:
 
 
 def margin(samples: Samples) -> float:
-    """The half-width of the 99% Student-t interval of the mean of `samples` (NaN for one
-    sample, which no comparison passes)."""
+    """The half-width of the 99% Student-t interval of the mean (NaN for one sample)."""
     values = np.asarray(samples, dtype=np.float64).ravel()
     if len(values) < 2:
         return math.nan
@@ -264,8 +247,7 @@ def near(claim: str, book: float, samples: Samples, slack: float = 0.0, digits: 
 
 def one_run(claim: str, book: float, samples: Samples, slack: float = 0.0,
             digits: int = 1, unit: str = "") -> Check:
-    """`book`, read off a figure of a single run, within `slack` + the 99% prediction interval
-    of one run around the mean of `samples` (one a run)."""
+    """`book`, read off a figure of one run, within `slack` + the 99% prediction interval."""
     values = np.asarray(samples, dtype=np.float64).ravel()
     mean, tolerance = float(values.mean()), slack + margin(values) * np.sqrt(len(values) + 1)
     return Check(claim, f"{book:g}{unit} (one run)", _within(mean, tolerance, digits, unit),
@@ -274,15 +256,13 @@ def one_run(claim: str, book: float, samples: Samples, slack: float = 0.0,
 
 def above(claim: str, book: str, higher: Samples, lower: Samples, digits: int = 1,
           unit: str = "") -> Check:
-    """The mean of `higher` above that of `lower` by more than the margin of the difference
-    (each one number a run); measured: the higher mean first, as the claim names them."""
+    """The mean of `higher` above that of `lower` by more than the margin of the difference."""
     return _apart(claim, book, higher, lower, digits, unit, lower_first=False)
 
 
 def below(claim: str, book: str, lower: Samples, higher: Samples, digits: int = 1,
           unit: str = "") -> Check:
-    """`above` for a claim whose subject is the lower one ("TD ends lower than MC"):
-    measured, the lower mean first."""
+    """`above` for a claim whose subject is the lower one (measured: its mean first)."""
     return _apart(claim, book, higher, lower, digits, unit, lower_first=True)
 
 
@@ -300,23 +280,21 @@ def _apart(claim: str, book: str, higher: Samples, lower: Samples, digits: int, 
 
 
 def per_episode(played: Played, window: int = 1, points: int | None = None) -> Series:
-    """The mean over runs of each episode's measure, or each time step's (as `play_steps`
-    records them), with its band: each run smoothed over a trailing `window` first, at
-    most `points` of them."""
+    """The mean over runs of each episode's (or time step's) measure with its band, each
+    run smoothed over a trailing `window` first, at most `points` of them."""
     curve = aggregate(played.values, window=window, max_points=points)
     return Series(played.label, curve.episodes.astype(np.float64), curve.mean, curve.lo, curve.hi)
 
 
 def completed(played: Played, steps: npt.ArrayLike) -> np.ndarray:
-    """`[run, i]`: the episodes each run completed by time step `steps[i]` (the measure must
-    be `LENGTH`)."""
+    """`[run, i]`: the episodes each run completed by time step `steps[i]` (of `LENGTH`)."""
     ends = np.cumsum(played.values, axis=1)  # the time step each episode ended at, per run
     return np.stack([np.searchsorted(row, steps, side="right") for row in ends]).astype(float)
 
 
 def per_time_step(played: Played, points: int = 200, until: float | None = None) -> Series:
-    """Episodes completed against time steps (the measure must be `LENGTH`), up to `until`
-    or the time step every run reached, whichever comes first."""
+    """Episodes completed against time steps (of `LENGTH`), up to `until` or where every
+    run reached."""
     last = float(played.values.sum(axis=1).min())
     last = last if until is None else min(last, until)
     steps = np.unique(np.linspace(0, last, points).round())
@@ -327,9 +305,8 @@ def per_time_step(played: Played, points: int = 200, until: float | None = None)
 def swept(label: str, xs: Sequence[float], played: Sequence[Played],
           summary: Callable[[np.ndarray], np.ndarray],
           shown: tuple[float, float] = (-math.inf, math.inf)) -> Series:
-    """One point per learner of a sweep: `summary(values)` gives one number a run, and the
-    point is their mean with its band; only the points with a finite band and a mean
-    within `shown` (the book's axis) are kept."""
+    """One point per learner of a sweep, the mean of `summary(values)` over runs with its
+    band; only points with a finite band and a mean within `shown` are kept."""
     ys, los, his = [], [], []
     for one in played:
         per_run = np.asarray(summary(one.values), dtype=np.float64)

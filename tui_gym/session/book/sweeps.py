@@ -20,7 +20,8 @@ from tui_gym.session.book.figure import (
     Series,
     book_figure,
 )
-from tui_gym.session.book.runs import BANDS, Learner, Played, below, play_prediction, swept
+from tui_gym.session.book.runs import BANDS, Played, below, play_prediction, swept
+from tui_gym.session.experiments.compare import Arm
 
 __all__ = ["ALPHAS", "FIGURES", "LAMBDAS", "SHOWN", "Sweep", "WalkSweep", "walk_figure"]
 
@@ -63,10 +64,8 @@ class Sweep:
 
 @dataclass(frozen=True)
 class WalkSweep:
-    """What a swept figure measures: `algorithm` with one curve over α per value of its
-    hyperparameter `name` in `settings`, and the book's claims: the best value is an
-    intermediate one (in `middle`), and `chosen` lies below each of `ends` (a value and
-    how the claim names it); `how` opens the notes."""
+    """A swept figure: `algorithm`, one curve over α per value of `name` in `settings`; the
+    claims: the best value is in `middle`, `chosen` lies below each of `ends`."""
 
     algorithm: str
     name: str
@@ -84,8 +83,8 @@ class WalkSweep:
     def sweeps(self, figure: BookFigure, options: FigureOptions,
                progress: Progress) -> dict[Any, Sweep]:
         """One `Sweep` a value of the hyperparameter, each over `ALPHAS`."""
-        learners = [Learner(f"{self.name}={value}|{alpha}", self.algorithm,
-                            {"learning_rate": alpha, self.name: value})
+        learners = [Arm(self.algorithm, {"learning_rate": alpha, self.name: value},
+                        f"{self.name}={value}|{alpha}")
                     for value in self.settings for alpha in ALPHAS]
         played = play_prediction(figure, 19, learners, options, progress)
         size = len(ALPHAS)

@@ -27,7 +27,6 @@ from tui_gym.session.book.runs import (
     BANDS,
     FIRST_ACTION,
     LENGTH,
-    Learner,
     Played,
     above,
     below,
@@ -42,6 +41,7 @@ from tui_gym.session.book.runs import (
     play_prediction,
     swept,
 )
+from tui_gym.session.experiments.compare import Arm
 
 __all__ = ["FIGURES"]
 
@@ -53,9 +53,9 @@ TD_ALPHAS = (0.15, 0.1, 0.05)
 MC_ALPHAS = (0.01, 0.02, 0.03, 0.04)
 START = 0.5  # every estimate starts half-way, as the book's do
 WALKERS = (
-    *(Learner(f"TD α={a:g}", "td0", {"learning_rate": a, "initial_value": START})
+    *(Arm("td0", {"learning_rate": a, "initial_value": START}, f"TD α={a:g}")
       for a in TD_ALPHAS),
-    *(Learner(f"MC α={a:g}", "mc-prediction", {"learning_rate": a, "initial_value": START})
+    *(Arm("mc-prediction", {"learning_rate": a, "initial_value": START}, f"MC α={a:g}")
       for a in MC_ALPHAS),
 )
 LATE = 25  # the last episodes, where the curves have settled
@@ -103,9 +103,9 @@ FIRST = 20  # episodes compared at the start and at the end
           "the curve steepens towards one episode every 17 or so steps: the 15-step path "
           "plus exploration. With king's moves the path is 7 steps.")
 def fig_6_3(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
-    (rook,) = play(figure, "windy", (Learner("Sarsa", "sarsa", WINDY),), options, progress,
+    (rook,) = play(figure, "windy", (Arm("sarsa", WINDY, "Sarsa"),), options, progress,
                    measure=LENGTH)
-    (king,) = play(figure, "windy-king", (Learner("Sarsa, king's moves", "sarsa", WINDY),),
+    (king,) = play(figure, "windy-king", (Arm("sarsa", WINDY, "Sarsa, king's moves"),),
                    options, progress, measure=LENGTH)
     reach = min(STEPS, int(rook.values.sum(axis=1).min()))
     by_then = completed(rook, [reach])[:, 0]
@@ -167,8 +167,8 @@ SAFE_PATH = -17.0  # the path along the top of the grid, the farthest from the c
     about="Q-learning learns the optimal path along the cliff's edge but, exploring, falls "
           "off now and then; Sarsa learns the safer path above it and earns more online.")
 def fig_6_4(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
-    sarsa, q = play(figure, "cliffwalking", (Learner("Sarsa", "sarsa", CLIFF),
-                                              Learner("Q-learning", "q-learning", CLIFF)),
+    sarsa, q = play(figure, "cliffwalking", (Arm("sarsa", CLIFF, "Sarsa"),
+                                              Arm("q-learning", CLIFF, "Q-learning")),
                     options, progress)
     half = sarsa.values.shape[1] // 2  # the later half of the episodes: both have settled
     sarsa_online, q_online = sarsa.values[:, half:].mean(axis=1), q.values[:, half:].mean(axis=1)
@@ -209,8 +209,8 @@ READING = 2.5
           "noisy estimates makes left look good at first, so it goes left far more often "
           "than it should; Double Q-learning is hardly fooled.")
 def fig_6_5(figure: BookFigure, options: FigureOptions, progress: Progress) -> FigureResult:
-    q, double = play(figure, "max-bias", (Learner("Q-learning", "q-learning", BIASED),
-                                           Learner("Double Q-learning", "double-q", BIASED)),
+    q, double = play(figure, "max-bias", (Arm("q-learning", BIASED, "Q-learning"),
+                                           Arm("double-q", BIASED, "Double Q-learning")),
                      options, progress, measure=FIRST_ACTION)
     q_left, d_left = 100.0 * (q.values == LEFT), 100.0 * (double.values == LEFT)
     early = min(EARLY, q_left.shape[1])
@@ -263,9 +263,9 @@ WIDE = 8  # α at which Expected Sarsa must be above both others ("a wide range 
 PerRun = dict[str, list[np.ndarray]]  # learner -> one number a run, per α
 
 
-def learners() -> list[Learner]:
+def learners() -> list[Arm]:
     """Each learner of Figure 6.6 at each α, a learner's α together."""
-    return [Learner(f"{label} α={alpha:g}", name, book_settings(1.0, EPSILON, learning_rate=alpha))
+    return [Arm(name, book_settings(1.0, EPSILON, learning_rate=alpha), f"{label} α={alpha:g}")
             for label, name in KINDS for alpha in ALPHAS]
 
 
