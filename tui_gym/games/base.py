@@ -455,14 +455,21 @@ class HeatmapLayout(Role):
 TIED = "·"  # a heatmap cell whose actions tie
 
 
-def greedy_cells(
-    rows: int, cols: int, fixed: Callable[[int, int], str | None],
-    q_at: Callable[[int, int], np.ndarray], arrow: Callable[[int], str],
-    wrong: Callable[[int, int, int], bool], tied: Callable[[int, int], str] = lambda r, c: TIED,
-) -> tuple[np.ndarray, tuple[tuple[str, ...], ...], np.ndarray]:
-    """A panel's max Q, labels and marks, cell by cell: the `fixed` label where there is one
+def numbered(count: int) -> tuple[str, ...]:
+    """Row or column labels '0' to 'count - 1'."""
+    return tuple(str(i) for i in range(count))
+
+
+def greedy_panel(
+    title: str, legend: str, row_labels: tuple[str, ...], col_labels: tuple[str, ...],
+    fixed: Callable[[int, int], str | None], q_at: Callable[[int, int], np.ndarray],
+    arrow: Callable[[int], str], wrong: Callable[[int, int, int], bool],
+    tied: Callable[[int, int], str] = lambda r, c: TIED,
+) -> Heatmap:
+    """A panel of max Q and labels, cell by cell: the `fixed` label where there is one
     (and no value), else max Q with the `tied` label where every action ties, or else the
     greedy action's `arrow`, marked where that action is `wrong`."""
+    rows, cols = len(row_labels), len(col_labels)
     values = np.full((rows, cols), np.nan)
     marked = np.zeros((rows, cols), dtype=bool)
     labels = []
@@ -481,7 +488,7 @@ def greedy_cells(
                     marked[r, c] = wrong(r, c, action)
             line.append(label)
         labels.append(tuple(line))
-    return values, tuple(labels), marked
+    return Heatmap(title, row_labels, col_labels, values, tuple(labels), marked, legend)
 
 
 # --- the game ----------------------------------------------------------------------

@@ -127,10 +127,10 @@ class _Exact:
 class DiscreteStates(StateSpace):
     """States that are the env's `Discrete` observations, one per model state."""
 
+    game: ModelGame
+
     def base_observations(self, kwargs: Mapping[str, Any]) -> list[Any] | NotAvailable:
-        game = self.game
-        assert isinstance(game, ModelGame)
-        model = game.base_model(kwargs)
+        model = self.game.base_model(kwargs)
         if isinstance(model, NotAvailable):
             return model
         return list(range(model.n_states))
@@ -142,17 +142,14 @@ class DiscreteStates(StateSpace):
 class ModelOracle(Oracle):
     """Exact figures from the game's model (see the module docstring)."""
 
+    game: ModelGame
+
     def __init__(self, game: ModelGame) -> None:
         super().__init__(game)
         self._kept: dict[Any, _Exact | NotAvailable] = {}
         self._bounds: dict[Any, FixedBound | NotAvailable] = {}
         self._references: dict[Any, ReferenceMetrics] = {}  # per greedy policy
         self._lock = threading.Lock()  # the Train view's worker thread reads them too
-
-    @property
-    def model_game(self) -> ModelGame:
-        assert isinstance(self.game, ModelGame)
-        return self.game
 
     # --- the model as played ---------------------------------------------------
     def exact(
@@ -175,7 +172,7 @@ class ModelOracle(Oracle):
         return value
 
     def _build(self, kwargs: Mapping[str, Any], changes: GameChanges) -> _Exact | NotAvailable:
-        game = self.model_game
+        game = self.game
         base = game.base_model(kwargs)
         if isinstance(base, NotAvailable):
             return base
@@ -216,7 +213,7 @@ class ModelOracle(Oracle):
                 f"a table of shape {values.shape} does not fit {model.n_states} states "
                 f"and {model.n_actions} actions"
             )
-        offered = self.model_game.offered_actions(kwargs)
+        offered = self.game.offered_actions(kwargs)
         if offered is not None and offered.shape == values.shape:  # greedy among those
             values = np.where(offered, values, -np.inf)
         # The figures follow from the greedy policy alone, which training changes less
@@ -236,7 +233,7 @@ class ModelOracle(Oracle):
         value = evaluate(model, policy).value
         best = expected_value(model, exact.ladder.q().max(axis=1))
         gap = gap_of(best, value)
-        places = self.model_game.narrator.value_places
+        places = self.game.narrator.value_places
         return ReferenceMetrics(
             figures={"exact_value": value, "optimal_value": best, "gap": gap},
             summary=f"exact value {signed(value, places)}  optimum {signed(best, places)}  "
@@ -257,11 +254,11 @@ class ModelOracle(Oracle):
 
     # --- what to do here ----------------------------------------------------------
     def advice(self, env: Any, kwargs: Mapping[str, Any]) -> Advice:
-        changes = GameChanges.of(env, self.model_game.episode_limit(kwargs))
+        changes = GameChanges.of(env, self.game.episode_limit(kwargs))
         exact = self.exact(kwargs, changes)
         if isinstance(exact, NotAvailable):
             return Advice((), None, exact.reason)
-        state = self.model_game.state_of(env)
+        state = self.game.state_of(env)
         model = exact.model
         if state is None or not 0 <= state < model.n_states:
             return Advice((), None, "no episode running")
@@ -277,7 +274,7 @@ class ModelOracle(Oracle):
         values = {a: float(v) for a, v in enumerate(q)}
         optimal = tuple(int(a) for a in np.flatnonzero(quickest))
         equal = tuple(int(a) for a in np.flatnonzero(best & ~quickest))
-        places = self.model_game.narrator.value_places
+        places = self.game.narrator.value_places
         listed = ", ".join(f"{names[a]} {signed(v, places)}" for a, v in values.items())
         chosen = " or ".join(names[a] for a in optimal)
         if not exact.scope.exact:
@@ -295,7 +292,7 @@ class ModelOracle(Oracle):
         return exact.ladder.choices()[1]
 
     def optimum(self, kwargs: Mapping[str, Any]) -> Optimum | NotAvailable:
-        game = self.model_game
+        game = self.game
         exact = self.exact(kwargs, game.own_changes(kwargs))
         if isinstance(exact, NotAvailable):
             return exact
@@ -316,7 +313,7 @@ class ModelOracle(Oracle):
         fixed = self.fixed_policy_bound(kwargs, changes)
         if isinstance(fixed, NotAvailable):
             return fixed
-        share = self.model_game.gap_tolerance(kwargs)
+        share = self.game.gap_tolerance(kwargs)
         limit = fixed.shortfall + share * abs(fixed.optimal_value)
         text = f"gap <= {limit:.4g}"
         if share:
@@ -418,6 +415,7 @@ class ModelGame(Game):
 
     states_type: ClassVar[type[StateSpace]] = DiscreteStates
     oracle_type: ClassVar[type[Oracle]] = ModelOracle
+    oracle: ModelOracle
 
     def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel | NotAvailable:
         model = self.base_model(kwargs)
@@ -448,7 +446,7 @@ class ModelGame(Game):
         never changes), or why there is none that follows the game as played."""
         models = []
         for phase in range(len(self.phase_starts(kwargs))):
-            exact = self.model_oracle.exact(self.in_phase(kwargs, phase), changes)
+            exact = self.oracle.exact(self.in_phase(kwargs, phase), changes)
             if isinstance(exact, NotAvailable):
                 return exact
             if not exact.scope.exact:
@@ -460,11 +458,6 @@ class ModelGame(Game):
         """`[states, actions]`: the actions each state offers, for a game whose states do
         not all offer every action (None: every state offers every action)."""
         return None
-
-    @property
-    def model_oracle(self) -> ModelOracle:
-        assert isinstance(self.oracle, ModelOracle)
-        return self.oracle
 
     def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP | NotAvailable:
         """The game's model with no wrappers and no episode limit (kept per arguments)."""

@@ -11,7 +11,15 @@ import numpy as np
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP, NotAvailable
 from tui_gym.envs import TILE_MAP_ID
-from tui_gym.envs.tile_map import STANDING, TileMapEnv, TileRules, cell_key, tile_model
+from tui_gym.envs.tile_map import (
+    STANDING,
+    STEPS,
+    TILE_NAMES,
+    TileMapEnv,
+    TileRules,
+    cell_key,
+    tile_model,
+)
 from tui_gym.games.base import (
     TIED,
     UNREADABLE,
@@ -19,7 +27,8 @@ from tui_gym.games.base import (
     HeatmapLayout,
     ReachNarrator,
     TallyWord,
-    greedy_cells,
+    greedy_panel,
+    numbered,
 )
 from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
 from tui_gym.games.model import DiscreteStates, ModelGame
@@ -28,17 +37,12 @@ from tui_gym.games.words import format_reward, plural
 if TYPE_CHECKING:
     from tui_gym.session.play import PlayStep
 
-__all__ = ["CUSTOM", "LAYOUT", "MOVES", "TileGame", "TileLayout", "TileNarrator", "TileStates"]
+__all__ = ["CUSTOM", "LAYOUT", "TileGame", "TileLayout", "TileNarrator", "TileStates"]
 
 LAYOUT = "layout"  # the argument that holds an edited map, as text
 CUSTOM = "custom"  # the `map` choice of an edited map
 
-MOVES: dict[str, tuple[int, int]] = {
-    "left": (0, -1), "down": (1, 0), "right": (0, 1), "up": (-1, 0)
-}
 ARROWS = {"left": "←", "down": "↓", "right": "→", "up": "↑"}
-TILE_WORDS = {"S": "start", "F": "floor", "H": "hole", "G": "goal", "C": "cliff", "W": "wall",
-              "R": "reward cell"}
 NO_DECISION = {"H": "○", "G": "★", "C": "▒", "W": "█"}  # tiles the agent never acts on
 
 
@@ -147,28 +151,24 @@ class TileGame(ModelGame):
         return _layout_model(grid_map, tuple(self.action_names), self.rules(kwargs))
 
 
-def _game(role: Any) -> TileGame:
-    game = role.game
-    assert isinstance(game, TileGame)
-    return game
-
-
 class TileStates(DiscreteStates):
     """Cells of the map; the tile board's scene; the map as text."""
 
+    game: TileGame
+
     def text(self, env: Any, reveal: bool = True, before: Mapping[str, Any] | None = None) -> str:
         scene = self.scene(env, before)
-        return tile_text(scene, _game(self)) if scene else ""
+        return tile_text(scene, self.game) if scene else ""
 
     def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
-        cells = _game(self).cells(kwargs)
+        cells = self.game.cells(kwargs)
         row, col = divmod(int(observation), len(cells[0]))
         tile = cells[row][col]
-        word = _game(self).floor_word if tile == "F" else TILE_WORDS.get(tile, "floor")
+        word = self.game.floor_word if tile == "F" else TILE_NAMES.get(tile, "floor")
         return f"row {row}, col {col} ({word})"
 
     def read_scene(self, game_env: Any, before: Mapping[str, Any]) -> dict[str, Any]:
-        game = _game(self)
+        game = self.game
         cells = _env_cells(game_env, game)
         cols = len(cells[0])
         state = game_env.s
@@ -207,7 +207,7 @@ def tile_text(scene: Mapping[str, Any], game: TileGame) -> str:
     if action:
         lines.append(f"({action}{', slipped' if scene.get('slipped') else ''})")
     kinds = {tile for line in scene.get("cells", []) for tile in line}
-    words = [f"{tile} {TILE_WORDS[tile] if tile != 'F' else game.floor_word}"
+    words = [f"{tile} {TILE_NAMES[tile] if tile != 'F' else game.floor_word}"
              for tile in "SFHGC" if tile in kinds]
     legend = ", ".join([f"{AGENT_TEXT} you", *words])
     return "\n".join([*lines, legend])
@@ -235,7 +235,7 @@ def _slipped(cells: Sequence[str], before: Any, agent: Any, action: str | None) 
     if before is None or agent is None or action is None:
         return False
     row, col = (int(v) for v in before)
-    dr, dc = MOVES[action]
+    dr, dc = STEPS[action]
     rows, cols = len(cells), len(cells[0])
     intended = (min(max(row + dr, 0), rows - 1), min(max(col + dc, 0), cols - 1))
     if cells[intended[0]][intended[1]] == "C":
@@ -244,19 +244,18 @@ def _slipped(cells: Sequence[str], before: Any, agent: Any, action: str | None) 
 
 
 def _start(cells: Sequence[str]) -> tuple[int, int]:
-    for r, line in enumerate(cells):
-        if "S" in line:
-            return r, line.index("S")
-    return 0, 0
+    return next((r, line.index("S")) for r, line in enumerate(cells) if "S" in line)
 
 
 class TileLayout(HeatmapLayout):
     """One panel shaped like the map: max Q colours each cell, the greedy move's arrow."""
 
+    game: TileGame
+
     def heatmaps(
         self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
-        game = _game(self)
+        game = self.game
         try:
             cells = game.cells(kwargs)
         except UNREADABLE:
@@ -265,21 +264,15 @@ class TileLayout(HeatmapLayout):
         if np.shape(q) != (rows * cols, len(game.action_names)):
             return []
         has_marks = isinstance(marks, np.ndarray) and marks.shape == np.shape(q)
-        values, labels, marked = greedy_cells(
-            rows, cols, lambda r, c: NO_DECISION.get(cells[r][c]), lambda r, c: q[r * cols + c],
-            lambda action: ARROWS[game.action_names[action]],
-            lambda r, c, action: has_marks and not marks[r * cols + c, action],
-        )
         shown = "".join(sorted({t for line in cells for t in line if t in NO_DECISION}))
-        tiles = "  ".join(f"{NO_DECISION[t]} {TILE_WORDS[t]}" for t in "HGCW" if t in shown)
-        return [
-            Heatmap(
-                title="max Q and the greedy move", row_labels=tuple(str(r) for r in range(rows)),
-                col_labels=tuple(str(c) for c in range(cols)), values=values, labels=labels,
-                marked=marked,
-                legend=f"arrow: greedy move  {TIED} tie  {tiles}  * not an optimal move",
-            )
-        ]
+        tiles = "  ".join(f"{NO_DECISION[t]} {TILE_NAMES[t]}" for t in "HGCW" if t in shown)
+        return [greedy_panel(
+            "max Q and the greedy move",
+            f"arrow: greedy move  {TIED} tie  {tiles}  * not an optimal move",
+            numbered(rows), numbered(cols), lambda r, c: NO_DECISION.get(cells[r][c]),
+            lambda r, c: q[r * cols + c], lambda action: ARROWS[game.action_names[action]],
+            lambda r, c, action: has_marks and not marks[r * cols + c, action],
+        )]
 
 
 class TileNarrator(ReachNarrator):

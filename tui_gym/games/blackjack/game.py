@@ -27,7 +27,7 @@ from tui_gym.games.base import (
     Scope,
     StateSpace,
     TrainingModel,
-    greedy_cells,
+    greedy_panel,
 )
 from tui_gym.games.blackjack.solver import (
     BASE_STATES,
@@ -283,16 +283,12 @@ class BlackjackLayout(HeatmapLayout):
 
         def chart(usable: int, title: str) -> Heatmap:
             rows = _chart_rows(usable)
-            values, labels, marked = greedy_cells(
-                len(CHART_SUMS), len(DEALER_CARDS), lambda r, c: None, lambda r, c: q[rows[r, c]],
-                ACTION_LETTERS.__getitem__,
+            return greedy_panel(
+                f"Q-values, {title}",
+                f"rows: player sum  cols: dealer card  H hit  S stick  {TIED} tie  * not optimal",
+                tuple(str(s) for s in CHART_SUMS), DEALER_LABELS, lambda r, c: None,
+                lambda r, c: q[rows[r, c]], ACTION_LETTERS.__getitem__,
                 lambda r, c, action: has_marks and not marks[rows[r, c], action],
-            )
-            return Heatmap(
-                title=f"Q-values, {title}", row_labels=tuple(str(s) for s in CHART_SUMS),
-                col_labels=DEALER_LABELS, values=values, labels=labels, marked=marked,
-                legend=f"rows: player sum  cols: dealer card  H hit  S stick  {TIED} tie  "
-                "* not optimal",
             )
 
         return [chart(1, "usable ace"), chart(0, "no usable ace")]

@@ -1,32 +1,8 @@
 """CliffWalking: Gymnasium's `CliffWalking-v1`, Sutton & Barto's Example 6.6.
 
-## Action Space
-up (0), right (1), down (2), left (3).
-
-## Observation Space
-The cell the agent stands on, `row * 12 + col`, on a 4 x 12 map.
-
-## Rewards
--1 a step; -100 for stepping onto the cliff, which sends the agent back to
-the start (the episode goes on).
-
-## Starting State
-Bottom left; the goal is bottom right, the cliff between them.
-
-## Episode End
-Terminated on the goal. Gymnasium sets no limit; tui-gym plays it with one
-of `EPISODE_LIMIT` steps, so that every way of playing, a policy that walks
-into a wall for ever included, has a finite exact value and every episode of
-an untrained agent ends.
-
-## Arguments
-`slippery`: a move goes where asked with chance 1/3 and to either side
-otherwise (Gymnasium's `is_slippery`), on every cell an edited map gives no
-slip of its own; `map`: "4x12" (Gymnasium's) or "custom", an edited map given
-as `layout` (see `tui_gym.games.tiles`): a step costs 1, the goal ends the
-episode, a hole (a pit) ends it at a cost of 100, the cliff costs 100 and
-sends the agent back; 200 steps, or more on a map so large that a walk
-across may need them.
+Gymnasium sets no limit; tui-gym plays it with one of `EPISODE_LIMIT` steps, so that every
+policy (one walking into a wall for ever included) has a finite exact value. `map` is
+"4x12" or "custom", an edited map given as `layout` (see `tui_gym.games.tiles`).
 """
 
 from __future__ import annotations

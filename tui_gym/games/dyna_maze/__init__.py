@@ -32,6 +32,8 @@ DISCOUNT = 0.95  # the book's
 class MazeOracle(ModelOracle):
     """The exact figures of the phase in force, with the steps to the goal beside them."""
 
+    game: MazeGame
+
     def __init__(self, game: MazeGame) -> None:
         super().__init__(game)
         self._fewest: dict[Any, float] = {}
@@ -53,14 +55,12 @@ class MazeOracle(ModelOracle):
 
     def advice(self, env: Any, kwargs: Mapping[str, Any]) -> Advice:
         phase = int(getattr(env.unwrapped, "phase", 0))
-        return super().advice(env, self.model_game.in_phase(kwargs, phase))
+        return super().advice(env, self.game.in_phase(kwargs, phase))
 
     def bound(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> Bound | NotAvailable:
-        game = self.game
-        assert isinstance(game, MazeGame)
-        limit = game.extra_steps
+        limit = self.game.extra_steps
         return Bound("extra_steps", limit, f"extra_steps <= {limit:g} (steps beyond the fewest)")
 
 

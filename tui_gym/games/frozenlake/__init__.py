@@ -1,31 +1,8 @@
 """FrozenLake: Gymnasium's `FrozenLake-v1`, solved exactly from its own table.
 
-## Action Space
-left (0), down (1), right (2), up (3).
-
-## Observation Space
-The cell the agent stands on, `row * size + col`.
-
-## Rewards
-+1 on reaching the goal, 0 otherwise (Gymnasium's default schedule).
-
-## Starting State
-The start cell, top left.
-
-## Episode End
-Terminated in a hole or on the goal; truncated after 100 steps on maps up to
-4x4 (Gymnasium's `FrozenLake-v1`) and 200 on larger ones (as Gymnasium's
-`FrozenLake8x8-v1`).
-
-## Arguments
-`map`: "4x4" or "8x8" (Gymnasium's maps), "random" (a map of `size` cells a
-side drawn with seed `map_seed` by Gymnasium's `generate_random_map`, which
-only returns maps with a path from start to goal) or "custom" (an edited map,
-given as `layout`: see `tui_gym.games.tiles`; its reward cells, rewards and
-slip as it says, 100 steps on maps of up to four rows, else 200 or more);
-`slippery`: whether a move may go sideways; `success_rate`: the chance a
-slippery move goes where asked (each sideways move takes half of the rest),
-on every cell an edited map gives no slip of its own.
+`map` is Gymnasium's "4x4" or "8x8", "random" (drawn by Gymnasium's `generate_random_map`
+with `size` and `map_seed`) or "custom" (an edited map given as `layout`, see
+`tui_gym.games.tiles`); `success_rate` applies wherever an edited map sets no slip.
 """
 
 from __future__ import annotations

@@ -30,7 +30,8 @@ from tui_gym.games.base import (
     StateSpace,
     TallyWord,
     TrainingModel,
-    greedy_cells,
+    greedy_panel,
+    numbered,
 )
 from tui_gym.games.gridworld.paths import (
     fewest_share,
@@ -417,22 +418,13 @@ class GridWorldLayout(HeatmapLayout):
         def fixed(r: int, x: int) -> str | None:
             return "T" if (x, top - r) == (tx, ty) else WALL if (x, top - r) in wall_set else None
 
-        values, labels, marked = greedy_cells(
-            size, size, fixed, lambda r, x: q4[x, top - r, tx, ty], ARROWS.__getitem__,
+        return [greedy_panel(
+            f"max Q with the target at ({tx}, {ty})",
+            f"arrow: greedy move  {TIED} tie  T target  * off every shortest path"
+            + (f"  {WALL} wall" if walls else ""), numbered(size)[::-1], numbered(size), fixed,
+            lambda r, x: q4[x, top - r, tx, ty], ARROWS.__getitem__,
             lambda r, x, action: action not in _optimal_from(size, walls, (x, top - r), (tx, ty)),
-        )
-        return [
-            Heatmap(
-                title=f"max Q with the target at ({tx}, {ty})",
-                row_labels=tuple(str(size - 1 - r) for r in range(size)),
-                col_labels=tuple(str(x) for x in range(size)),
-                values=values,
-                labels=labels,
-                marked=marked,
-                legend=f"arrow: greedy move  {TIED} tie  T target  * off every shortest path"
-                + (f"  {WALL} wall" if walls else ""),
-            )
-        ]
+        )]
 
     def default_focus(self, kwargs: Mapping[str, Any]) -> Any:
         size = _size(kwargs)

@@ -56,7 +56,7 @@ class MaxBiasOracle(ModelOracle):
 
     def advice(self, env: Any, kwargs: Mapping[str, Any]) -> Advice:
         advice = super().advice(env, kwargs)
-        state = self.model_game.state_of(env)
+        state = self.game.state_of(env)
         if state is None or not advice.values:
             return advice
         mask = _offered(kwargs)[state]
