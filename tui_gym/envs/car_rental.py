@@ -97,25 +97,23 @@ class CarRentalEnv(TableEnv):
     """Sutton & Barto's Example 4.2: Jack moves cars between his two sites overnight.
 
     ## Action Space
-    The cars moved from the first site to the second, -5 to +5 (action `a`
-    moves `a - 5`; negative numbers move cars the other way); at most the cars
-    the site has are moved.
+    The cars moved from the first site to the second, -5 to +5 (action `a` moves
+    `a - 5`), at most those the site has.
 
     ## Observation Space
     The cars at each site at the end of the day, `first * 21 + second`.
 
     ## Rewards
-    $10 for every car rented, less $2 for every car moved. Requests are
-    Poisson with means 3 and 4 at the first and second site, returns Poisson
-    with means 3 and 2, available the next day; a site holds at most 20 cars.
-    With `exercise` (Exercise 4.7) one car moved to the second site is free,
-    and a site keeping more than 10 cars overnight costs $4.
+    $10 a car rented, less $2 a car moved. Requests are Poisson (means 3 and 4),
+    returns too (3 and 2), back the next day; a site holds at most 20 cars. With
+    `exercise` (Exercise 4.7) one move to the second site is free, and a site keeping
+    more than 10 cars overnight costs $4.
 
     ## Starting State
     Any number of cars at each site, uniformly.
 
     ## Episode End
-    Never: the task is continuing. The game puts a limit on an episode.
+    Never: the task is continuing (the game limits an episode).
 
     ## Arguments
     `exercise` (False), `render_mode` "ansi".

@@ -58,8 +58,8 @@ class GamblerEnv(TableEnv):
     """Sutton & Barto's Example 4.3: bet on coin flips until the goal or ruin.
 
     ## Action Space
-    The stake, 1 to 50 (action `a` stakes `a + 1`); a stake larger than the
-    capital, or than what is missing to the goal, stakes that much instead.
+    The stake, 1 to 50 (action `a` stakes `a + 1`), at most the capital and what is
+    missing to the goal.
 
     ## Observation Space
     The capital, 0 to `goal`.
@@ -74,8 +74,7 @@ class GamblerEnv(TableEnv):
     Terminated at the goal (won) or at 0 (ruined).
 
     ## Arguments
-    `p_heads` (0.4: the chance of heads, which wins the stake), `goal` (100,
-    at most 100), `render_mode` "ansi".
+    `p_heads` (0.4: heads wins the stake), `goal` (100, at most 100), `render_mode`.
     """
 
     action_names = ACTION_NAMES

@@ -52,23 +52,21 @@ class MaxBiasEnv(TableEnv):
     actions ends with a reward drawn from a normal distribution of mean -0.1, deviation 1.
 
     ## Action Space
-    left (0), right (1), b1 (2) to b10 (11). A offers left and right; B offers
-    its first `actions` (b1 to b10 with the default 10). An action a state does
-    not offer counts as right in A and as one of B's in B; `info["action_mask"]`
+    left (0), right (1), b1 (2) to b10 (11): A offers left and right, B its first
+    `actions`. Another counts as right in A, as one of B's in B; `info["action_mask"]`
     lists what the new state offers, as Gymnasium's Taxi does.
 
     ## Observation Space
     0 the end after B, 1 B, 2 A, 3 the end right of A.
 
     ## Rewards
-    0 for left and right; N(-0.1, 1) for any action from B, drawn with the
-    env's own generator (seeded by `reset(seed=...)`).
+    0 for left and right; N(-0.1, 1) for any action from B.
 
     ## Starting State
     A.
 
     ## Episode End
-    Terminated at either end: after right from A, or after any action from B.
+    Terminated at either end.
 
     ## Arguments
     `actions`: how many actions B offers, 1 to 10; `render_mode`: "ansi".

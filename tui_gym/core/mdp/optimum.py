@@ -31,20 +31,11 @@ CHOICES_KEPT = 8  # optimal-action masks (and rungs solved past LADDER_LIMIT) ke
 class Solution:
     """The optimum of a model.
 
-    `q[s, a]`: the best value of an episode that takes `a` in `s` and plays
-    optimally after, with `steps_left` steps to go (None: no limit). `v[s]`:
-    the best over actions; `value`: the initial distribution's average of `v`,
-    the optimum. `policy[s]`: an optimal action to take in `s`, chosen so
-    that, always taken, it makes a good fixed policy: with no limit it is an
-    optimal fixed policy (one that ends episodes surely, with gamma = 1); with
-    a limit, of the actions optimal with `steps_left` to go, one that stays
-    optimal for the most step counts below (the one needing the least time to
-    spare; no fixed policy need reach a limited game's optimum).
-
-    With no limit and gamma = 1, `v[s]` is minus infinity where no policy
-    surely ends the episode (and `q` where an action may lead there); plus
-    infinity everywhere when a cycle that gains reward can be repeated at will
-    before ending (the optimum is then unbounded).
+    `q[s, a]`: the best value of taking `a` in `s`, with `steps_left` to go (None: no
+    limit); `v` the best over actions; `value` its average over the start. `policy[s]`:
+    an optimal action making a good fixed policy (with a limit, the one that stays
+    optimal for the most step counts below). With no limit and gamma = 1, `v` is -inf
+    where no policy surely ends, and +inf everywhere when the optimum is unbounded.
     """
 
     q: FloatArray

@@ -93,15 +93,11 @@ class Improvement:
 class Planner:
     """A policy and its value estimates, stepped sweep by sweep.
 
-    `step(method)` takes one step of `method`: a sweep of policy evaluation
-    ("evaluate"; "policy-iteration" until the largest change is below theta,
-    then an improvement), or a sweep of value iteration, after which the
-    policy is the greedy one the sweep's maxima came from. `done(method)` says
-    when the method has finished: the evaluation or value iteration has
-    converged (its last change below theta), policy iteration's last
-    improvement changed nothing. `sweeps` counts sweeps, `iterations` the
-    improvements that changed the policy, `changed` marks the states the last
-    improvement (or value sweep) changed. Ties within theta are shared.
+    `step(method)`: a sweep of policy evaluation ("evaluate"; "policy-iteration" then
+    improves once the largest change is below theta) or of value iteration (the policy
+    then greedy). `done(method)`: converged, or the last improvement changed nothing.
+    `sweeps`, `iterations` (improvements that changed the policy), `changed` (states the
+    last improvement or value sweep changed). Ties within theta are shared.
     """
 
     def __init__(

@@ -29,15 +29,9 @@ BARE_PAYOFFS: tuple[float, float, float, float] = (-1.0, 0.0, 1.0, 1.5)
 
 @dataclass(frozen=True)
 class BlackjackRules:
-    """The reward variant of ``Blackjack-v1`` (the env's keyword arguments).
-
-    ``natural``: a winning two-card 21 pays 1.5 instead of 1.
-    ``sab``: Sutton & Barto's rules: a player natural beats every dealer hand but
-    a dealer natural (+1), two naturals draw; ``natural`` is then ignored.
-    ``payoffs``: the reward handed out for a step whose bare reward is -1 (a
-    loss or a bust), 0 (a push, or a hit that does not bust), +1 (a win) and
-    +1.5 (a natural under ``natural``), in that order: the bare game's rewards
-    unless reward wrappers change them (`with_rewards`).
+    """The reward variant of ``Blackjack-v1``: ``natural`` (a winning two-card 21 pays
+    1.5), ``sab`` (Sutton & Barto's: a natural beats all but a dealer natural, for +1),
+    and ``payoffs``, what steps of bare reward -1, 0, +1 and +1.5 pay (`with_rewards`).
     """
 
     natural: bool = False
@@ -300,20 +294,11 @@ def optimal_action_values(
     rules: BlackjackRules = DEFAULT_RULES, *, soft_21: Soft21 = "observation"
 ) -> np.ndarray:
     """Q*(observation, action), shape ``(32, 11, 2, 2)`` indexed
-    ``[player_sum, dealer_card, usable_ace, action]``.
+    ``[player_sum, dealer_card, usable_ace, action]``; NaN off the decision states.
 
-    The value of taking ``action`` and then playing the optimal policy. Filled
-    for decision states (player sum 4..21 without, 12..21 with a usable ace;
-    dealer card 1..10), NaN elsewhere.
-
-    ``(21, d, 1)`` is either the opening natural or a soft 21 drawn to, and they
-    pay differently under ``natural`` or ``sab`` rules. ``soft_21`` picks which
-    value that entry holds: ``"observation"`` (default) averages the two by how
-    often the optimal policy meets each behind that observation, i.e. the
-    expected value given only what the player sees; ``"natural"`` is the
-    two-card natural (so the deal's value is the initial-distribution-weighted
-    max over actions); ``"drawn"`` is a soft 21 of three or more cards. Under
-    default rules all three coincide.
+    ``(21, d, 1)`` is the opening natural or a drawn soft 21, which pay differently
+    under ``natural`` or ``sab``: ``soft_21`` "observation" averages the two by how
+    often the optimal policy meets each, "natural" and "drawn" pick one.
     """
     q_model, hit = _solve(rules)
     drawn, natural = q_model[_ALIASED[:DEALERS]], q_model[_ALIASED[DEALERS:]]
