@@ -312,14 +312,8 @@ class BlackjackGame(Game):
     episode_noun = "hand"
     bench_kwargs: dict[str, Any] | None = {}
     bench_gap = 0.002
-    # The common defaults (discount 1, the visits step size from 1/n down to 0.001, epsilon
-    # 1 -> 0.05 over half of 200,000 episodes) suit the off-policy learners. The on-policy
-    # ones learn the values of the exploring policy: exploration falls to 0 (so what they
-    # learn becomes the greedy policy's values) and a larger step size forgets the early,
-    # exploratory returns; the multi-step ones, whose targets hold more of the cards'
-    # noise, a smaller step size over more hands (n-step SARSA two steps ahead). Dyna-Q's
-    # (and Dyna-Q+'s) model keeps one outcome per pair, which misleads in a card game; one
-    # planning step with a small step size keeps that noise down.
+    # On-policy learners stop exploring and step larger; multi-step ones step smaller over more
+    # hands; Dyna's one-outcome model misleads here, so one small planning step (see the README).
     hyperparameters = {
         "sarsa": {"learning_rate": 0.01, "epsilon_final": 0.0, "epsilon_decay_fraction": 0.3,
                   "episodes": 500_000},

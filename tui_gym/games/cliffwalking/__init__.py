@@ -104,10 +104,8 @@ class CliffWalkingGame(TileGame):
         if (kwargs or {}).get("slippery"):
             # A fall costs 100 at random: averaging it out needs small steps and many episodes.
             return {"*": {"learning_rate": 0.01, "episodes": 50_000}}
-        # Double Q splits its experience over two tables; Monte Carlo averages whole
-        # returns, which a step size of 0.1 leaves too noisy to settle (see the README).
-        # n-step SARSA stops exploring at the end, or its greedy policy may not reach the
-        # goal.
+        # Double Q splits its experience; Monte Carlo's whole returns need a smaller step; n-step
+        # SARSA stops exploring at the end, or its greedy policy may miss the goal (see the README).
         return {
             "*": {"learning_rate": 0.1, "episodes": 2_000}, "double-q": {"episodes": 8_000},
             "monte-carlo": {"learning_rate": 0.01, "episodes": 4_000},

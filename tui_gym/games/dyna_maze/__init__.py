@@ -83,11 +83,8 @@ class MazeGame(DPGridGame):
     maze = "dyna"
     change_words = ""  # what the change does, for the board
     extra_steps = 0.0  # the bound: steps beyond the fewest a trained greedy policy takes
-    # A changing maze is learned as the book's figures do (epsilon 0.1 throughout), so that
-    # the world changes once the agent knows its way. SARSA's values are those of the
-    # policy it follows, whose exploration can leave two cells' greedy moves pointing at
-    # each other: its exploration falls to 0.01, so that its greedy policy is the one it
-    # learns about.
+    # A changing maze is learned as the book's figures do (epsilon 0.1 throughout); SARSA's
+    # falls to 0.01 so its greedy policy is the one it learns about (see the README).
     CHANGING = {"discount": DISCOUNT, "learning_rate": 0.5, "learning_rate_schedule": "constant",
                 "epsilon_start": 0.1, "epsilon_final": 0.1}
     CHANGING_SARSA = {"epsilon_final": 0.01}

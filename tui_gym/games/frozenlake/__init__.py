@@ -90,15 +90,9 @@ class FrozenLakeGame(TileGame):
     def hyperparameter_table(
         self, kwargs: Mapping[str, Any] | None = None
     ) -> Mapping[str, Mapping[str, Any]]:
-        # A discount just below 1: with 1 the values of a cautious move that stays put
-        # and of one that heads for the goal tie, and the greedy policy may never arrive.
-        # Slippery moves make every target noisy: a small step size averages it out over
-        # a longer budget. Monte Carlo learns only at episodes' ends, from returns of a
-        # slowly improving policy: a smaller step still, exploration kept a little, and
-        # a longer budget. Dyna-Q's model keeps one outcome per pair, which misleads on
-        # slippery ice (its lesson): one planning step with a small step size, which brings
-        # Dyna-Q+ (whose bonus keeps it trying every move) to the optimum. Q(λ)'s traces
-        # reach a little less far back (λ 0.8).
+        # A discount just below 1 breaks the tie between staying put and heading for the goal; slips
+        # want small steps over long budgets, Monte Carlo smaller still; Dyna's one-outcome model
+        # misleads on ice, so one small planning step (see the README); Q(λ) with λ 0.8.
         planning = {"planning_steps": 1, "learning_rate": 0.001}
         small = len(self.cells(kwargs or {})) <= 4
         common = {"learning_rate": 0.01 if small else 0.02, "discount": 0.999,

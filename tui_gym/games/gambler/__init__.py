@@ -129,10 +129,8 @@ class GamblerGame(ModelGame):
     )
     board = "dial"
     episode_noun = "game"
-    # Many stakes are worth almost the same, so sampled returns barely tell them apart and
-    # the max over 50 noisy estimates runs high; discounting keeps that bias from
-    # compounding and favours the bold play that is optimal (see the README). Prioritized
-    # sweeping's queue favours the coin's surprising outcomes: a smaller step evens them out.
+    # Near-equal stakes make the max over noisy estimates run high: discounting keeps that bias
+    # down (see the README); prioritized sweeping's queue favours surprises: a smaller step.
     hyperparameters = {"*": {"discount": 0.9, "learning_rate": 0.05, "episodes": 20_000},
                        "prioritized-sweeping": {"learning_rate": 0.02}}
 

@@ -109,11 +109,8 @@ class MaxBiasGame(DPGridGame):
     action_names = ACTIONS
     params = (Param("actions", int, MAX_B_ACTIONS, 1, MAX_B_ACTIONS,
                     help="how many actions B offers"),)
-    # The book's Figure 6.5 explores with epsilon 0.1 at a constant alpha 0.1, which keeps the
-    # estimate of left noisy (about ±0.2 around -0.1): an agent's greedy move from A is left
-    # on one seed in three at any time. A step size averaging each move's first hundred
-    # rewards settles it; Dyna's model keeps one reward of each of B's moves and replays it,
-    # so one planning step a move and more episodes let the real ones outweigh it.
+    # The book's constant alpha 0.1 keeps left's estimate noisy: a visits step size settles it;
+    # Dyna replays one reward per move, so one planning step and more episodes (see the README).
     hyperparameters = {
         "*": {"learning_rate": 0.01, "learning_rate_schedule": "visits",
               "epsilon_start": 0.1, "epsilon_final": 0.1, "episodes": 2000},

@@ -231,10 +231,8 @@ class TaxiGame(ModelGame):
     ) -> Mapping[str, Mapping[str, Any]]:
         if (kwargs or {}).get("rainy"):
             return {"*": {"learning_rate": 0.05, "episodes": 50_000}}
-        # The on-policy learners learn the values of the exploring policy: exploration
-        # falls to 0 so that those become the greedy policy's (the multi-step ones looking
-        # two steps or half a trace ahead); Double Q splits its experience over two tables.
-        # Each takes a longer budget (see the README).
+        # On-policy learners stop exploring so their values become the greedy policy's; Double Q
+        # splits its experience over two tables. Each takes a longer budget (see the README).
         on_policy = {"epsilon_final": 0.0, "epsilon_decay_fraction": 0.9, "episodes": 40_000}
         return {
             "*": {"learning_rate": 0.1, "episodes": 10_000},

@@ -50,12 +50,8 @@ class WindyGame(DPGridGame):
     king_moves = False
     params = (Param("stochastic_wind", bool, False,
                     help="the wind varies by one a third of the time each way (Exercise 6.10)"),)
-    # Sarsa as the book runs it (Figure 6.3: alpha 0.5, Q starting at 0), exploring a little
-    # more at first and less at the end, so the greedy policy settles. Double Q splits its
-    # experience over two tables; Monte Carlo may never see its greedy policy end an
-    # episode (the book: "termination is not guaranteed for all policies"). The multi-step
-    # learners look two steps or half a trace ahead (further, some seeds keep a detour
-    # within the budget); the on-policy ones learn as Sarsa does, for longer.
+    # Sarsa as the book runs it (Figure 6.3: alpha 0.5), exploring less at the end so the greedy
+    # policy settles; see `lessons` and the README for the others.
     hyperparameters = {
         "*": {"learning_rate": 0.5, "learning_rate_schedule": "constant",
               "epsilon_start": 0.2, "epsilon_final": 0.01, "episodes": 2000},
