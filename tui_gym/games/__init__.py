@@ -59,13 +59,8 @@ MAX_ID_CHARS = 200  # no alias or Gymnasium id is longer
 
 
 def resolve_env_id(name: str, *, from_data: bool = False) -> str:
-    """An alias (`blackjack`, `taxi`, ...) or a Gymnasium id, as the id a session builds.
-
-    An id no registered game plays must be one Gymnasium knows (with `module:`
-    in front, after importing that module) whose env fits a generic game.
-    `from_data`: the text came from a file or a program, so no module is
-    imported for it (`UnknownGameError` saying how to open it on purpose).
-    """
+    """An alias (`blackjack`, `taxi`, ...) or a Gymnasium id (`module:Id` imports the
+    module, unless `from_data`: text from a file or a program) as the id a session builds."""
     if not isinstance(name, str):
         raise UnknownGameError(f"a game id is text, not a {type(name).__name__}")
     text = name.strip()

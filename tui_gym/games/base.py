@@ -47,10 +47,8 @@ UNREADABLE = (TypeError, ValueError, KeyError, IndexError, AttributeError)
 
 @dataclass(frozen=True)
 class Scope:
-    """Whether a game's exact figures describe the game as it is played (with its
-    wrappers), and a note for people when there is something to say: which
-    wrappers they take into account, or that they are figures of the unwrapped
-    game because a wrapper changes it in a way they cannot follow."""
+    """Whether a game's exact figures describe the game as played (wrappers included),
+    and a note for people saying which wrappers they follow, or which they cannot."""
 
     exact: bool = True
     note: str = ""
@@ -70,15 +68,9 @@ class ReferenceMetrics:
 
 @dataclass(frozen=True)
 class Advice:
-    """What the exact optimum would do in the env's current state.
-
-    `optimal` and `values` are for the game as played, wrappers included;
-    when the wrappers change it in a way the exact figures cannot follow,
-    both are empty and `unwrapped_optimal` holds the unwrapped game's optimum
-    (the note says so), so nothing claims an optimum that may not be one.
-    `equal` lists actions worth as much as the optimal ones that the coach
-    does not call optimal (they waste a step while time remains).
-    """
+    """What the exact optimum would do in the env's current state, wrappers included;
+    where they change the game beyond the exact figures, only `unwrapped_optimal`. `equal`:
+    actions worth as much that waste a step while time remains."""
 
     optimal: tuple[int, ...]  # every optimal action (empty when there is no decision)
     values: dict[int, float] | None = None  # exact expected return per action, when known
@@ -98,10 +90,8 @@ class TallyWord(NamedTuple):
 
 @dataclass(frozen=True, eq=False)
 class TrainingModel:
-    """A game's model as the wrappers make it, for the engine: `model`, and `rows`, the
-    agent's table row of each model state (None: state s is row s); in a world that
-    changes as it is played, `model` is its first phase and `later` each later phase's
-    (start step, model)."""
+    """A game's model as the wrappers make it, for the engine: `rows`, the table row of
+    each model state (None: row s); `later`, each later phase's (start step, model)."""
 
     model: FiniteMDP
     rows: np.ndarray | None = None
@@ -614,10 +604,8 @@ class Game:
     def default_hyperparameters(
         self, algorithm: str, kwargs: Mapping[str, Any] | None = None, prediction: bool = False
     ) -> dict[str, Any]:
-        """The values this game sets for an algorithm (by registry name) with these
-        arguments, over the algorithm's own defaults; parameters the algorithm lacks
-        are left to the caller (see the README). Its "*" entry is for the control
-        learners; a prediction learner takes its "prediction" entry instead."""
+        """The values this game sets for an algorithm (by registry name) over its defaults:
+        the "*" entry (a prediction learner's "prediction" entry), then the algorithm's."""
         table = self.hyperparameter_table(kwargs)
         return {**table.get("prediction" if prediction else "*", {}), **table.get(algorithm, {})}
 

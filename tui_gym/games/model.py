@@ -345,13 +345,9 @@ class ModelOracle(Oracle):
 
 
 def best_fixed_policy(model: FiniteMDP, ladder: Ladder) -> FixedBound:
-    """The best fixed policy a local search finds, beside the optimum.
-
-    Candidates: the optimum's own fixed policy and the optima with no episode
-    limit (discounted by 1, 0.999 and 0.99); from the best of them, single-state
-    changes that raise the exact value are taken, the best first, until none
-    does (skipped for models past `SEARCH_LIMIT` state-action pairs).
-    """
+    """The best fixed policy a local search finds, beside the optimum: the best of the
+    optimum's own and the unlimited optima (gamma 1, 0.999, 0.99), then improved by
+    single-state changes (up to `SEARCH_LIMIT` state-action pairs)."""
     optimal = expected_value(model, ladder.q().max(axis=1))
     candidates = [solve(model).policy]
     if model.horizon is not None:
@@ -404,11 +400,7 @@ def _values_of(model: FiniteMDP, policies: np.ndarray) -> FloatArray:
 
 
 class ModelGame(Game):
-    """A game whose exact model is its env's transition table (see the module docstring).
-
-    Subclasses name the game and may override `base_model` (a model of their
-    own), `state_of` (the current state of a built env) and `episode_limit`.
-    """
+    """A game whose exact model is its env's transition table (or its own `base_model`)."""
 
     render_mode: str | None = "ansi"
     plan_gamma = 1.0  # the discount the Plan view starts with

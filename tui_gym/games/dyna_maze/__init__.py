@@ -1,10 +1,8 @@
 """dyna-maze, blocking-maze, shortcut-maze: Sutton & Barto's mazes of chapter 8.
 
-Spaces and rewards: `tui_gym.envs.dyna_maze.MazeEnv`; truncated after 5000
-steps. The blocking and shortcut mazes change after `change_at` steps: each phase has its
-own model (`phase_starts`, `world`), which the exact figures and the coach follow.
-Undiscounted, every way to the goal is worth +1, so the exact figures add the greedy
-policy's steps beside the fewest (`extra_steps`, which the bound is on).
+Spaces and rewards: `tui_gym.envs.dyna_maze.MazeEnv`; truncated after 5000 steps. Each
+phase of a changing maze has its own model; as every way to the goal is worth +1, the
+exact figures add the steps beyond the fewest (`extra_steps`, which the bound is on).
 """
 
 from __future__ import annotations
