@@ -139,8 +139,9 @@ class GridEnv(TableEnv):
     """A `Grid` played, drawn as text: `.` a cell, `#` a wall, `*` a terminal cell, `@` the
     agent, and the grid's letters; the wind's strengths under the columns."""
 
-    def __init__(self, grid: Grid, render_mode: str | None = None) -> None:
-        super().__init__(grid.model, render_mode)
+    def __init__(self, grid: Grid, render_mode: str | None = None,
+                 model: FiniteMDP | None = None) -> None:
+        super().__init__(grid.model if model is None else model, render_mode)
         self.grid = grid
         self.action_names = grid.moves
 

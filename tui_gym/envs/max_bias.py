@@ -8,8 +8,7 @@ from typing import Any
 import numpy as np
 
 from tui_gym.core.mdp.model import FiniteMDP
-from tui_gym.envs.dp_grid import Grid
-from tui_gym.envs.table_env import TableEnv
+from tui_gym.envs.dp_grid import Grid, GridEnv
 
 __all__ = ["A", "ACTIONS", "B", "MAX_B_ACTIONS", "MaxBiasEnv", "max_bias_model", "offered"]
 
@@ -47,7 +46,7 @@ def max_bias_model() -> FiniteMDP:
                      reward_std=std)
 
 
-class MaxBiasEnv(TableEnv):
+class MaxBiasEnv(GridEnv):
     """Sutton & Barto's Example 6.7: from A, left leads to B and right ends at 0; each of B's
     actions ends with a reward drawn from a normal distribution of mean -0.1, deviation 1.
 
@@ -72,24 +71,12 @@ class MaxBiasEnv(TableEnv):
     `actions`: how many actions B offers, 1 to 10; `render_mode`: "ansi".
     """
 
-    action_names = ACTIONS
-
     def __init__(self, actions: int = MAX_B_ACTIONS, render_mode: str | None = None) -> None:
         if isinstance(actions, bool) or not 1 <= int(actions) <= MAX_B_ACTIONS:
             raise ValueError(f"B offers 1 to {MAX_B_ACTIONS} actions, not {actions!r}")
-        super().__init__(max_bias_model(), render_mode)
+        super().__init__(GRID, render_mode, max_bias_model())
         self.actions = int(actions)
-        self.grid = GRID
         self.offered = offered(self.actions)
 
     def more_info(self) -> dict[str, Any]:
         return {"action_mask": self.offered[self.s].astype(np.int8)}
-
-    def picture(self) -> str:
-        cells = ["*", "B", "A", "*"]
-        if self.s is not None:
-            cells[self.s] = "@"
-        text = f"{' '.join(cells)}\n"
-        if self.lastaction is not None:
-            text = f"  ({ACTIONS[self.lastaction]})\n" + text
-        return text

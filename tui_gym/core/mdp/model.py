@@ -288,8 +288,3 @@ class Phases:
             raise ModelError(f"the phases' models differ in size: {sorted(sizes)}")
         object.__setattr__(self, "models", models)
         object.__setattr__(self, "starts", starts)
-
-    @classmethod
-    def of(cls, model: FiniteMDP) -> Phases:
-        """A world that never changes."""
-        return cls((model,), (0,))
