@@ -210,13 +210,9 @@ class GridWorldEnv(gym.Env[ObsType, int]):
         }
 
     def _get_info(self) -> dict[str, Any]:
-        agent, target = self._require_state()
-        return {"distance": self.distance(agent, target)}
-
-    def distance(self, a: Sequence[int], b: Sequence[int]) -> int:
-        """The fewest moves from cell `a` to cell `b` (-1 when walls leave no way)."""
+        (ax, ay), (tx, ty) = self._require_state()
         table = cell_distances(self.size, self.walls)
-        return int(table[int(a[0]) * self.size + int(a[1]), int(b[0]) * self.size + int(b[1])])
+        return {"distance": int(table[ax * self.size + ay, tx * self.size + ty])}
 
     def _random_position(self) -> Position:
         # The tutorial's draw, repeated while it lands on a wall (none without walls, so

@@ -105,14 +105,9 @@ def elapsed_steps(env: Any) -> int | None:
     """Steps taken this episode as the env's tightest `TimeLimit` counts them, or None."""
     from tui_gym.core.wrappers import chain
 
-    best: tuple[int, int] | None = None  # (steps left, elapsed)
-    for layer in chain.layers(env):
-        limit = chain.time_limit(layer)
-        if limit is not None:
-            done = chain.elapsed(layer)
-            if best is None or limit - done < best[0]:
-                best = (limit - done, done)
-    return None if best is None else best[1]
+    limits = [(limit - chain.elapsed(layer), chain.elapsed(layer)) for layer in chain.layers(env)
+              if (limit := chain.time_limit(layer)) is not None]  # (steps left, elapsed)
+    return min(limits, key=lambda pair: pair[0])[1] if limits else None
 
 
 @dataclass(frozen=True)
@@ -176,15 +171,15 @@ class ModelOracle(Oracle):
         base = game.base_model(kwargs)
         if isinstance(base, NotAvailable):
             return base
-        if changes.others:
+        unwrapped = unwrapped_note(changes.others) if changes.others else ""
+        if not unwrapped:
+            try:
+                model = changes.model(base)
+            except ValueError as error:
+                unwrapped = f"figures of the unwrapped game: {error}"
+        if unwrapped:
             model = with_horizon(base, game.episode_limit(kwargs))
-            return _Exact(model, Ladder(model), Scope(False, unwrapped_note(changes.others)))
-        try:
-            model = changes.model(base)
-        except ValueError as error:
-            model = with_horizon(base, game.episode_limit(kwargs))
-            return _Exact(model, Ladder(model), Scope(False, f"figures of the unwrapped game: "
-                                                             f"{error}"))
+            return _Exact(model, Ladder(model), Scope(False, unwrapped))
         notes = []
         if changes.changes_rewards:
             notes.append(changes.reward_names())

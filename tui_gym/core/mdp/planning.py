@@ -151,11 +151,6 @@ class Planner:
         else:
             self.restart()
 
-    @property
-    def tolerance(self) -> float:
-        """How close to the best an action's value must be to count as tied."""
-        return self.theta
-
     # --- steps -------------------------------------------------------------
     def evaluation_sweep(self) -> float:
         """One sweep of policy evaluation; the largest change."""
@@ -173,10 +168,10 @@ class Planner:
 
     def improvement(self) -> Improvement:
         """One greedy improvement of the policy on the current values, ties shared equally.
-        A state keeps its old actions while every one of them is still within `tolerance` of
+        A state keeps its old actions while every one of them is still within theta of
         the best, so that near-ties left by an evaluation stopped at theta cannot flip a
         policy back and forth."""
-        best = greedy(self.model, self.v, self.gamma, self.tolerance)
+        best = greedy(self.model, self.v, self.gamma, self.theta)
         kept = np.asarray(((self.policy > 0) <= best).all(axis=1), dtype=bool)
         shared = best / best.sum(axis=1, keepdims=True)
         step = Improvement(np.where(kept[:, None], self.policy, shared), ~kept)
@@ -193,7 +188,7 @@ class Planner:
     def value_sweep(self) -> float:
         """One sweep of value iteration; the policy becomes the greedy one it used."""
         self.v, self.delta, best = value_sweep(self.model, self.v, self.gamma, self.in_place,
-                                               self.tolerance)
+                                               self.theta)
         shared = best / best.sum(axis=1, keepdims=True)
         self.changed = ~((self.policy > 0) == best).all(axis=1)
         self.policy = shared

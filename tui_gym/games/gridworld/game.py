@@ -109,20 +109,6 @@ def _shortest_pays(kwargs: Mapping[str, Any], changes: GameChanges) -> bool:
     return goal > 0.0 and never_pays and farther_no_better
 
 
-def _exact_return(
-    q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges
-) -> dict[str, float]:
-    """The greedy policy's exact expected return, the optimum's and the gap, over the
-    model as the wrappers make it (the unwrapped game's when they change its dynamics)."""
-    if changes.others:
-        changes = GameChanges(time_limit=changes.time_limit)
-    args = _model_args(kwargs, changes)
-    model = gridworld_model(*args)
-    value = evaluate(model, greedy_policy(q)).value
-    best = gridworld_optimum(*args).value
-    return {"exact_value": value, "optimal_value": best, "gap": gap_of(best, value)}
-
-
 def _model_args(kwargs: Mapping[str, Any], changes: GameChanges) -> tuple[Any, ...]:
     """`gridworld_model`'s arguments for the game's arguments and the wrappers' changes."""
     return (_size(kwargs), float(kwargs.get("reward_scale", 1.0)),
@@ -209,7 +195,13 @@ class GridWorldOracle(Oracle):
         if changes.changes_rewards and not changes.others and not scope.exact:
             scope = Scope(False, f"{scope.note}; the exact value and gap are with "
                           f"{changes.reward_names()}")
-        figures = {**reference.figures, **_exact_return(q, kwargs, changes)}
+        # The model as the wrappers make it; the unwrapped game's when they change its dynamics.
+        args = _model_args(kwargs, GameChanges(time_limit=changes.time_limit)
+                           if changes.others else changes)
+        value = evaluate(gridworld_model(*args), greedy_policy(q)).value
+        best = gridworld_optimum(*args).value
+        figures = {**reference.figures, "exact_value": value, "optimal_value": best,
+                   "gap": gap_of(best, value)}
         return ReferenceMetrics(figures, reference.summary, scope)
 
     def agent_figures(
