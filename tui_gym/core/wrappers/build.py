@@ -86,12 +86,8 @@ def build_env(
     env_id: str, env_kwargs: Mapping[str, Any] | None = None, choices: Sequence[WrapperChoice] = (),
     render_mode: str | None = None,
 ) -> gym.Env:
-    """`gym.make(env_id, render_mode=..., **env_kwargs)` wrapped by `choices`, first innermost.
-
-    Raises `UnknownEnvError` for an unknown id, `UnknownWrapperError` or
-    `ValueError` for a bad choice, and `WrapperMismatchError` when a choice
-    does not fit the env as built so far.
-    """
+    """`gym.make(env_id, render_mode=..., **env_kwargs)` wrapped by `choices`, first innermost
+    (`UnknownEnvError`, `UnknownWrapperError`, `ValueError`, `WrapperMismatchError`)."""
     env, _ = _assemble(env_id, env_kwargs, choices, render_mode, strict=True)
     return env
 
@@ -100,10 +96,8 @@ def build_env_lenient(
     env_id: str, env_kwargs: Mapping[str, Any] | None = None, choices: Sequence[WrapperChoice] = (),
     render_mode: str | None = None,
 ) -> tuple[gym.Env, list[tuple[WrapperChoice, str]]]:
-    """Like `build_env`, but skips the choices that do not fit (or are invalid).
-
-    Returns the env and the skipped choices, each with the reason.
-    """
+    """Like `build_env`, but skips the choices that do not fit (or are invalid): the env
+    and the skipped choices, each with the reason."""
     env, reasons = _assemble(env_id, env_kwargs, choices, render_mode, strict=False)
     skipped = [(c, r) for c, r in zip(choices, reasons, strict=True) if r is not None]
     return env, skipped
@@ -112,11 +106,7 @@ def build_env_lenient(
 def check_choices(
     env_id: str, env_kwargs: Mapping[str, Any] | None = None, choices: Sequence[WrapperChoice] = (),
 ) -> list[tuple[WrapperChoice, str | None]]:
-    """For each choice, None if it would apply, else why not.
-
-    The env is built progressively, leaving out the misfits, as
-    `build_env_lenient` would, then closed.
-    """
+    """For each choice, None if it would apply, else why not (as `build_env_lenient`)."""
     env, reasons = _assemble(env_id, env_kwargs, choices, None, strict=False)
     env.close()
     return list(zip(choices, reasons, strict=True))

@@ -255,11 +255,8 @@ _ALIASED = np.r_[_SOFT_21 * DEALERS + np.arange(DEALERS), _NATURAL * DEALERS + n
 
 @cache
 def _solve(rules: BlackjackRules) -> tuple[np.ndarray, np.ndarray]:
-    """Q* (`[model states, 2]`) and the optimal hits (`[model states]`, ties to a stick).
-
-    The only aliased observation is (21, d, 1): a natural or a drawn soft 21. Each
-    action there (per up card, as up cards never mix) fixes the optimum elsewhere; the
-    better start value per up card wins."""
+    """Q* (`[model states, 2]`) and the optimal hits (ties to a stick); at the one aliased
+    observation, (21, d, 1), the action with the better start value per up card."""
     model = _hands(rules)
     values = []
     for action in (STICK, HIT):  # the model with both actions at the aliased states this one
