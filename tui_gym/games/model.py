@@ -1,8 +1,5 @@
-"""Games with an exact model: the oracle every finite game shares.
-
-With gamma 1 a wasted step costs nothing, so the coach and the heatmaps call optimal
-only the quickest actions of optimal value (best again when discounted by `TIE_GAMMA`);
-the others are `Advice.equal`.
+"""Games with an exact model: the oracle every finite game shares. Optimal are the quickest
+actions of optimal value (best again discounted by `TIE_GAMMA`); the others `Advice.equal`.
 """
 
 from __future__ import annotations

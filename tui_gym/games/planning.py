@@ -1,7 +1,5 @@
-"""`PlanModel`: what a game hands the Plan view, `tui-gym plan` and the book to plan on.
-
-`value_panel` (state values on the heatmap's grid, as for Jack's car rental) and `line`
-(states along one axis, as the gambler's capital) draw values as the book does.
+"""`PlanModel`: what a game hands the Plan view, `tui-gym plan` and the book to plan on;
+`value_panel` (a grid of state values) and `line` (states along one axis) draw values.
 """
 
 from __future__ import annotations

@@ -224,12 +224,8 @@ def _hands(rules: BlackjackRules) -> FiniteMDP:
 
 
 def policy_value(policy: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> float:
-    """The exact expected return of a deterministic policy from the initial deal.
-
-    ``policy`` has shape `POLICY_SHAPE`, indexed ``[player_sum, dealer_card,
-    usable_ace]`` with 0 = stick, 1 = hit; only decision states (hard totals 4-21, soft
-    12-21) are read. The policy's action at ``(21, d, 1)`` applies to a natural too.
-    """
+    """The exact expected return of a deterministic policy (`POLICY_SHAPE`, 0 stick, 1 hit,
+    read at the decision states; ``(21, d, 1)``'s applies to a natural too)."""
     acts = _observed(policy)
     if not np.isin(acts, (STICK, HIT)).all():
         raise ValueError("policy entries at decision states must be 0 (stick) or 1 (hit)")
@@ -237,12 +233,8 @@ def policy_value(policy: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> f
 
 
 def mixed_policy_value(hit_probability: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> float:
-    """The exact expected return of a policy that hits with the given probability.
-
-    ``hit_probability`` has shape `POLICY_SHAPE` like a policy array, with a
-    probability in [0, 1] at every decision state (e.g. 0.5 where an agent's
-    two actions tie and it breaks the tie at random).
-    """
+    """The exact expected return of a policy that hits with the given probability
+    (`POLICY_SHAPE`, in [0, 1] at every decision state)."""
     p = np.asarray(_observed(hit_probability), dtype=np.float64)
     if not ((p >= 0.0) & (p <= 1.0)).all():
         raise ValueError("hit probabilities at decision states must be in [0, 1]")
@@ -316,11 +308,8 @@ def optimal_action_values(
 
 
 def optimal_policy(rules: BlackjackRules = DEFAULT_RULES) -> np.ndarray:
-    """An optimal deterministic policy over observations, `POLICY_SHAPE` int8.
-
-    Hit (1) / stick (0) at every decision state, ties broken towards sticking;
-    0 at states that never need a decision.
-    """
+    """An optimal deterministic policy over observations, `POLICY_SHAPE` int8: hit (1) or
+    stick (0, also for ties and states that need no decision)."""
     policy = np.zeros(POLICY_SHAPE, dtype=np.int8)
     policy[_OBSERVED] = _solve(rules)[1]
     return policy

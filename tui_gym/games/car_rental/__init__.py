@@ -1,8 +1,7 @@
 """car-rental: Sutton & Barto's Example 4.2, Jack's car rental, and Exercise 4.7's variant.
 
-Spaces and rewards: `tui_gym.envs.car_rental.CarRentalEnv`. The book's task never ends;
-tui-gym plays it in episodes of 20 days, undiscounted, while the Plan view
-and `tui-gym plan` show the book's values, discounted by 0.9 with no end (Figure 4.2).
+Spaces and rewards: `tui_gym.envs.car_rental.CarRentalEnv`. Played in undiscounted episodes
+of 20 days; planning shows the book's values, discounted by 0.9 with no end (Figure 4.2).
 """
 
 from __future__ import annotations

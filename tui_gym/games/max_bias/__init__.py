@@ -1,8 +1,7 @@
 """max-bias: Sutton & Barto's Example 6.7, the MDP that shows maximization bias.
 
-Spaces and rewards: `tui_gym.envs.max_bias.MaxBiasEnv`; truncated after 10
-steps, which no episode reaches. An action a state does not offer counts as one it does,
-so a learner that tries every action everywhere still plays this MDP.
+Spaces and rewards: `tui_gym.envs.max_bias.MaxBiasEnv`; truncated after 10 steps. An action
+a state does not offer counts as one it does, so any learner can play it.
 """
 
 from __future__ import annotations

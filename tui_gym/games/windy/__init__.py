@@ -1,8 +1,7 @@
 """windy, windy-king: Sutton & Barto's Windy GridWorld (Example 6.5; king's moves, Exercise 6.9).
 
-Spaces, rewards and wind: `tui_gym.envs.dp_grid.WindyGridWorldEnv`. Episodes are truncated
-after 2000 steps. The moves a game offers are part of what it is (its keys,
-the protocol's list, recordings), so the king's moves are a game of their own.
+Spaces, rewards and wind: `tui_gym.envs.dp_grid.WindyGridWorldEnv`; truncated after 2000
+steps. The moves are part of a game (keys, protocol, recordings): king's moves are another.
 """
 
 from __future__ import annotations
