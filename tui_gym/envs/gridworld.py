@@ -321,21 +321,15 @@ class GridWorldEnv(gym.Env[ObsType, int]):
     def _render_text(self) -> str:
         agent, target = self._require_state()
         border = "+" + "-" * (2 * self.size + 1) + "+"
-        lines = [border]
-        for y in range(self.size - 1, -1, -1):
-            cells = []
-            for x in range(self.size):
-                if (x, y) == agent:
-                    cells.append("*" if agent == target else "A")
-                elif (x, y) == target:
-                    cells.append("T")
-                elif (x, y) in self._wall_set:
-                    cells.append("#")
-                else:
-                    cells.append(".")
-            lines.append("| " + " ".join(cells) + " |")
-        lines.append(border)
-        return "\n".join(lines)
+
+        def mark(cell: Position) -> str:
+            if cell == agent:
+                return "*" if agent == target else "A"
+            return "T" if cell == target else "#" if cell in self._wall_set else "."
+
+        rows = ["| " + " ".join(mark((x, y)) for x in range(self.size)) + " |"
+                for y in range(self.size - 1, -1, -1)]
+        return "\n".join([border, *rows, border])
 
     def _cell_origin(self, position: Sequence[int]) -> tuple[int, int]:
         """Top-left pixel (row, col) inside the cell at `position`; y grows upwards."""

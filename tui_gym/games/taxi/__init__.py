@@ -52,12 +52,8 @@ def decode(state: int) -> tuple[int, int, int, int]:
 def _walls(game_env: Any) -> list[list[int]]:
     """Cells with a wall on their east side, read from the env's map."""
     desc = np.asarray(game_env.desc)
-    walls = []
-    for row in range(ROWS):
-        for col in range(COLS - 1):
-            if desc[1 + row, 2 * col + 2] == b"|":
-                walls.append([row, col])
-    return walls
+    return [[row, col] for row in range(ROWS) for col in range(COLS - 1)
+            if desc[1 + row, 2 * col + 2] == b"|"]
 
 
 class TaxiStates(DiscreteStates):
