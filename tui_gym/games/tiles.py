@@ -52,105 +52,6 @@ def _layout_model(grid_map: GridMap, actions: tuple[str, ...], rules: TileRules)
                       rules)
 
 
-class TileGame(ModelGame):
-    """A `ModelGame` played on a map of tiles (see the module docstring)."""
-
-    board = "tile"
-    action_names = ("left", "down", "right", "up")
-    action_order = "lake"  # `TileMapEnv`'s numbering of the moves: "lake" or "cliff"
-    theme = "plain"  # the tile board's theme: "lake", "cliff" or "plain"
-    floor_word = "floor"  # what a floor tile is called
-    editable = True  # the app's map editor edits its maps
-    map_tools = ("floor", "wall", "hole", "goal", "start", "reward", "ice", "cliff")
-
-    def builtin_cells(self, kwargs: Mapping[str, Any]) -> list[str]:
-        """The map the parameters choose, one string a row (S F H G C tiles)."""
-        raise NotImplementedError
-
-    def rules(self, kwargs: Mapping[str, Any]) -> TileRules:
-        """What tiles pay and how they slip where a map does not say."""
-        return TileRules()
-
-    def grid_map(self, kwargs: Mapping[str, Any]) -> GridMap:
-        """The map played: the edited one (`layout`), else the one the parameters choose."""
-        layout = kwargs.get(LAYOUT)
-        if layout:
-            return read_layout(str(layout))
-        return GridMap.of(self.builtin_cells(kwargs))
-
-    def cells(self, kwargs: Mapping[str, Any]) -> list[str]:
-        """The map played, one string a row: S start, F floor, H hole, G goal, C cliff,
-        W wall, R reward cell."""
-        return list(self.grid_map(kwargs).cells)
-
-    def with_map(self, kwargs: Mapping[str, Any], grid_map: GridMap) -> dict[str, Any]:
-        """The arguments that play `grid_map` (the others kept); `ValueError` when this
-        game cannot play it."""
-        self.check_map(grid_map)
-        return {**kwargs, "map": CUSTOM, LAYOUT: format_map(grid_map)}
-
-    def check_map(self, grid_map: GridMap) -> None:
-        """`ValueError` for a map this game cannot play."""
-        if grid_map.start is None:
-            raise ValueError(f"{self.title} needs a start (S) on the map")
-
-    def normalize_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
-        """As `Game.normalize_kwargs`, with `layout`: an edited map, kept (as its text) when
-        `map` is "custom" or not given; another map choice drops it."""
-        rest = dict(kwargs)
-        layout = rest.pop(LAYOUT, None)
-        out = super().normalize_kwargs(rest)
-        if layout is not None and rest.get("map", CUSTOM) == CUSTOM:
-            try:
-                grid_map = read_layout(str(layout))
-            except MapError as error:
-                raise ValueError(f"{self.title} map: {error}") from None
-            self.check_map(grid_map)
-            return self.with_map(out, grid_map)
-        if out.get("map") == CUSTOM:
-            raise ValueError("map 'custom' is an edited map: give one with --map-file PATH, "
-                             "or edit one in the app (m)")
-        return out
-
-    def make_id(self, env_id: str, kwargs: Mapping[str, Any]) -> str:
-        return TILE_MAP_ID if kwargs.get(LAYOUT) else env_id
-
-    def make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
-        """`builtin_make_kwargs`, or what `tui_gym/TileMap-v0` takes to play an edited map."""
-        if not kwargs.get(LAYOUT):
-            return self.builtin_make_kwargs(kwargs)
-        rules = self.rules(kwargs)
-        return {
-            **self.grid_map(kwargs).env_kwargs(), "slip_default": rules.slip,
-            "actions": self.action_order, "step_reward": rules.step, "goal_reward": rules.goal,
-            "hole_reward": rules.hole, "cliff_reward": rules.cliff,
-            "max_episode_steps": self.episode_limit(kwargs),
-        }
-
-    def builtin_make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
-        """What `gym.make` takes for the map the parameters choose."""
-        return {}
-
-    def episode_limit(self, kwargs: Mapping[str, Any]) -> int | None:
-        if kwargs.get(LAYOUT):
-            return self.map_limit(self.grid_map(kwargs))
-        return super().episode_limit(kwargs)  # the limit `builtin_make_kwargs` or Gymnasium sets
-
-    def map_limit(self, grid_map: GridMap) -> int:
-        """The episode limit of an edited map: FrozenLake's (100 steps up to four rows, else
-        200), more on a map so large that a walk across may need it."""
-        return 100 if grid_map.rows <= 4 else max(200, 2 * grid_map.rows * grid_map.cols)
-
-    def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP | NotAvailable:
-        if not kwargs.get(LAYOUT):
-            return super().base_model(kwargs)
-        try:
-            grid_map = self.grid_map(kwargs)
-        except MapError as error:
-            return NotAvailable(f"the map cannot be read: {error}")
-        return _layout_model(grid_map, tuple(self.action_names), self.rules(kwargs))
-
-
 class TileStates(DiscreteStates):
     """Cells of the map; the tile board's scene; the map as text."""
 
@@ -304,3 +205,106 @@ class TileNarrator(ReachNarrator):
         return EvalOutcome(figures={
             "success_rate": len(reached) / n, "timeout_rate": (len(details) - len(ended)) / n,
         })
+
+
+class TileGame(ModelGame):
+    """A `ModelGame` played on a map of tiles (see the module docstring)."""
+
+    board = "tile"
+    action_names = ("left", "down", "right", "up")
+    action_order = "lake"  # `TileMapEnv`'s numbering of the moves: "lake" or "cliff"
+    theme = "plain"  # the tile board's theme: "lake", "cliff" or "plain"
+    floor_word = "floor"  # what a floor tile is called
+    editable = True  # the app's map editor edits its maps
+    map_tools = ("floor", "wall", "hole", "goal", "start", "reward", "ice", "cliff")
+
+    states_type = TileStates
+    narrator_type = TileNarrator
+    layout_type = TileLayout
+
+    def builtin_cells(self, kwargs: Mapping[str, Any]) -> list[str]:
+        """The map the parameters choose, one string a row (S F H G C tiles)."""
+        raise NotImplementedError
+
+    def rules(self, kwargs: Mapping[str, Any]) -> TileRules:
+        """What tiles pay and how they slip where a map does not say."""
+        return TileRules()
+
+    def grid_map(self, kwargs: Mapping[str, Any]) -> GridMap:
+        """The map played: the edited one (`layout`), else the one the parameters choose."""
+        layout = kwargs.get(LAYOUT)
+        if layout:
+            return read_layout(str(layout))
+        return GridMap.of(self.builtin_cells(kwargs))
+
+    def cells(self, kwargs: Mapping[str, Any]) -> list[str]:
+        """The map played, one string a row: S start, F floor, H hole, G goal, C cliff,
+        W wall, R reward cell."""
+        return list(self.grid_map(kwargs).cells)
+
+    def with_map(self, kwargs: Mapping[str, Any], grid_map: GridMap) -> dict[str, Any]:
+        """The arguments that play `grid_map` (the others kept); `ValueError` when this
+        game cannot play it."""
+        self.check_map(grid_map)
+        return {**kwargs, "map": CUSTOM, LAYOUT: format_map(grid_map)}
+
+    def check_map(self, grid_map: GridMap) -> None:
+        """`ValueError` for a map this game cannot play."""
+        if grid_map.start is None:
+            raise ValueError(f"{self.title} needs a start (S) on the map")
+
+    def normalize_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+        """As `Game.normalize_kwargs`, with `layout`: an edited map, kept (as its text) when
+        `map` is "custom" or not given; another map choice drops it."""
+        rest = dict(kwargs)
+        layout = rest.pop(LAYOUT, None)
+        out = super().normalize_kwargs(rest)
+        if layout is not None and rest.get("map", CUSTOM) == CUSTOM:
+            try:
+                grid_map = read_layout(str(layout))
+            except MapError as error:
+                raise ValueError(f"{self.title} map: {error}") from None
+            self.check_map(grid_map)
+            return self.with_map(out, grid_map)
+        if out.get("map") == CUSTOM:
+            raise ValueError("map 'custom' is an edited map: give one with --map-file PATH, "
+                             "or edit one in the app (m)")
+        return out
+
+    def make_id(self, env_id: str, kwargs: Mapping[str, Any]) -> str:
+        return TILE_MAP_ID if kwargs.get(LAYOUT) else env_id
+
+    def make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+        """`builtin_make_kwargs`, or what `tui_gym/TileMap-v0` takes to play an edited map."""
+        if not kwargs.get(LAYOUT):
+            return self.builtin_make_kwargs(kwargs)
+        rules = self.rules(kwargs)
+        return {
+            **self.grid_map(kwargs).env_kwargs(), "slip_default": rules.slip,
+            "actions": self.action_order, "step_reward": rules.step, "goal_reward": rules.goal,
+            "hole_reward": rules.hole, "cliff_reward": rules.cliff,
+            "max_episode_steps": self.episode_limit(kwargs),
+        }
+
+    def builtin_make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
+        """What `gym.make` takes for the map the parameters choose."""
+        return {}
+
+    def episode_limit(self, kwargs: Mapping[str, Any]) -> int | None:
+        if kwargs.get(LAYOUT):
+            return self.map_limit(self.grid_map(kwargs))
+        return super().episode_limit(kwargs)  # the limit `builtin_make_kwargs` or Gymnasium sets
+
+    def map_limit(self, grid_map: GridMap) -> int:
+        """The episode limit of an edited map: FrozenLake's (100 steps up to four rows, else
+        200), more on a map so large that a walk across may need it."""
+        return 100 if grid_map.rows <= 4 else max(200, 2 * grid_map.rows * grid_map.cols)
+
+    def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP | NotAvailable:
+        if not kwargs.get(LAYOUT):
+            return super().base_model(kwargs)
+        try:
+            grid_map = self.grid_map(kwargs)
+        except MapError as error:
+            return NotAvailable(f"the map cannot be read: {error}")
+        return _layout_model(grid_map, tuple(self.action_names), self.rules(kwargs))

@@ -13,7 +13,7 @@ from typing import Any
 from tui_gym.core.params import Param
 from tui_gym.envs.tile_map import TileRules
 from tui_gym.games.maps import GridMap
-from tui_gym.games.tiles import CUSTOM, TileGame, TileLayout, TileNarrator, TileStates
+from tui_gym.games.tiles import CUSTOM, TileGame, TileNarrator
 
 __all__ = ["EPISODE_LIMIT", "CliffWalkingGame"]
 
@@ -80,9 +80,7 @@ class CliffWalkingGame(TileGame):
         "path (Sutton & Barto, Example 6.6); Q-learning learns the edge",
     )
 
-    states_type = TileStates
     narrator_type = CliffNarrator
-    layout_type = TileLayout
 
     def builtin_cells(self, kwargs: Mapping[str, Any]) -> list[str]:
         return list(CLIFF_MAP)

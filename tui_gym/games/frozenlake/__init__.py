@@ -13,7 +13,7 @@ from typing import Any
 
 from tui_gym.core.params import Param
 from tui_gym.envs.tile_map import TileRules
-from tui_gym.games.tiles import CUSTOM, TileGame, TileLayout, TileNarrator, TileStates
+from tui_gym.games.tiles import CUSTOM, TileGame
 
 __all__ = ["FrozenLakeGame", "lake_map"]
 
@@ -61,10 +61,6 @@ class FrozenLakeGame(TileGame):
     theme = "lake"
     floor_word = "ice"
     bench_kwargs: dict[str, Any] | None = {"map": "8x8"}
-
-    states_type = TileStates
-    narrator_type = TileNarrator
-    layout_type = TileLayout
 
     def builtin_cells(self, kwargs: Mapping[str, Any]) -> list[str]:
         return lake_map(kwargs)
