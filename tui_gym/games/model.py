@@ -8,7 +8,7 @@ import threading
 from bisect import bisect_right
 from collections.abc import Mapping
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from typing import Any, ClassVar
 
 import numpy as np
@@ -115,6 +115,16 @@ class _Exact:
     ladder: Ladder
     scope: Scope
 
+    @cached_property
+    def value(self) -> float:
+        """The optimum's value."""
+        return expected_value(self.model, self.ladder.q().max(axis=1))
+
+    @cached_property
+    def fixed(self) -> FixedBound:
+        """The best fixed policy a local search finds, beside the optimum."""
+        return best_fixed_policy(self.model, self.ladder)
+
 
 class DiscreteStates(StateSpace):
     """States that are the env's `Discrete` observations, one per model state."""
@@ -123,9 +133,7 @@ class DiscreteStates(StateSpace):
 
     def base_observations(self, kwargs: Mapping[str, Any]) -> list[Any] | NotAvailable:
         model = self.game.base_model(kwargs)
-        if isinstance(model, NotAvailable):
-            return model
-        return list(range(model.n_states))
+        return model if isinstance(model, NotAvailable) else list(range(model.n_states))
 
     def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
         return f"state {int(observation)}"
@@ -139,7 +147,6 @@ class ModelOracle(Oracle):
     def __init__(self, game: ModelGame) -> None:
         super().__init__(game)
         self._kept: dict[Any, _Exact | NotAvailable] = {}
-        self._bounds: dict[Any, FixedBound | NotAvailable] = {}
         self._references: dict[Any, ReferenceMetrics] = {}  # per greedy policy
         self._lock = threading.Lock()  # the Train view's worker thread reads them too
 
@@ -187,9 +194,7 @@ class ModelOracle(Oracle):
 
     def scope(self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> Scope:
         exact = self.exact(kwargs, changes)
-        if isinstance(exact, NotAvailable):
-            return Scope(False, exact.reason)
-        return exact.scope
+        return Scope(False, exact.reason) if isinstance(exact, NotAvailable) else exact.scope
 
     # --- the greedy policy beside the optimum ------------------------------------
     def reference(
@@ -223,7 +228,7 @@ class ModelOracle(Oracle):
         """The exact figures of `policy` (`[S, A]`, a greedy policy) beside the optimum."""
         model = exact.model
         value = evaluate(model, policy).value
-        best = expected_value(model, exact.ladder.q().max(axis=1))
+        best = exact.value
         gap = gap_of(best, value)
         places = self.game.narrator.value_places
         return ReferenceMetrics(
@@ -240,7 +245,7 @@ class ModelOracle(Oracle):
         if isinstance(exact, NotAvailable):
             return {}
         if q is None:
-            return {"optimal_value": expected_value(exact.model, exact.ladder.q().max(axis=1))}
+            return {"optimal_value": exact.value}
         reference = self.reference(q, kwargs, changes)
         return {} if isinstance(reference, NotAvailable) else dict(reference.figures)
 
@@ -279,22 +284,19 @@ class ModelOracle(Oracle):
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> BoolArray | NotAvailable:
         exact = self.exact(kwargs, changes)
-        if isinstance(exact, NotAvailable):
-            return exact
-        return exact.ladder.choices()[1]
+        return exact if isinstance(exact, NotAvailable) else exact.ladder.choices()[1]
 
     def optimum(self, kwargs: Mapping[str, Any]) -> Optimum | NotAvailable:
         game = self.game
         exact = self.exact(kwargs, game.own_changes(kwargs))
         if isinstance(exact, NotAvailable):
             return exact
-        model, ladder = exact.model, exact.ladder
-        q = ladder.q()
-        value = expected_value(model, q.max(axis=1))
-        limit = "no episode limit" if model.horizon is None else f"{model.horizon}-step episodes"
+        horizon = exact.model.horizon
+        limit = "no episode limit" if horizon is None else f"{horizon}-step episodes"
         return Optimum(
-            value=value, summary=f"the best expected return of an episode ({limit}, undiscounted)",
-            q=q, marks=ladder.choices()[1],
+            value=exact.value,
+            summary=f"the best expected return of an episode ({limit}, undiscounted)",
+            q=exact.ladder.q(), marks=exact.ladder.choices()[1],
         )
 
     def bound(
@@ -328,12 +330,7 @@ class ModelOracle(Oracle):
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> FixedBound | NotAvailable:
         exact = self.exact(kwargs, changes)
-        if isinstance(exact, NotAvailable):
-            return exact
-        key = (freeze(kwargs), changes)
-        if key not in self._bounds:
-            self._bounds[key] = best_fixed_policy(exact.model, exact.ladder)
-        return self._bounds[key]
+        return exact if isinstance(exact, NotAvailable) else exact.fixed
 
 
 def best_fixed_policy(model: FiniteMDP, ladder: Ladder) -> FixedBound:
