@@ -196,14 +196,6 @@ def stick_chances(rules: BlackjackRules) -> tuple[np.ndarray, np.ndarray, np.nda
     return lose, np.maximum(0.0, 1.0 - win - lose), win
 
 
-def stick_paid(rules: BlackjackRules) -> np.ndarray:
-    """`[29]`: what a stick that wins pays in each state (a natural more, under `natural`)."""
-    paid = np.full(_N_LIVE, rules.payoffs[2])
-    if rules.natural and not rules.sab:
-        paid[_NATURAL] = rules.payoffs[3]
-    return paid
-
-
 # ---------------------------------------------------------------------------
 # Policies and the optimum, on the model
 
@@ -339,10 +331,13 @@ def blackjack_model(rules: BlackjackRules = DEFAULT_RULES) -> FiniteMDP:
     next_state = np.broadcast_to(np.arange(n_states)[:, None, None], (n_states, 2, width)).copy()
     prob, reward = np.zeros((n_states, 2, width)), np.zeros((n_states, 2, width))
     terminal = np.zeros((n_states, 2, width), dtype=bool)
-    lose, push, win = stick_chances(rules)
-    for k, (chance, pay) in enumerate(((lose, lose_pay), (push, push_pay), (win, None))):
+    paid = np.full(_N_LIVE, rules.payoffs[2])  # a stick that wins (a natural more, if paid so)
+    if rules.natural and not rules.sab:
+        paid[_NATURAL] = rules.payoffs[3]
+    pays = (np.full(n_states, lose_pay), np.full(n_states, push_pay), paid[live])
+    for k, (chance, pay) in enumerate(zip(stick_chances(rules), pays, strict=True)):
         prob[:, 0, k] = chance.reshape(-1)
-        reward[:, 0, k] = stick_paid(rules)[live] if pay is None else pay
+        reward[:, 0, k] = pay
         terminal[:, 0, k] = True
     prob[:, 1] = _HIT_MATRIX[live]
     next_state[:, 1, :_N_LIVE] = np.arange(_N_LIVE) * DEALERS + (_OBSERVED[1] - 1)[:, None]
