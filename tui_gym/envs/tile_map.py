@@ -186,7 +186,8 @@ def tile_model(
     terminal = np.zeros(shape, dtype=bool)
     acting = ~np.isin(tiles, list(ENDING + "WC"))  # cells an agent acts from
     for a, name in enumerate(actions):
-        sides = [d for d in STEPS if d != name and _perpendicular(d, name)]
+        sides = [d for d, (dr, dc) in STEPS.items()  # the moves across the one asked
+                 if dr * STEPS[name][0] + dc * STEPS[name][1] == 0]
         chances = [1.0 - slip_at, slip_at / 2, slip_at / 2][:k]
         for j, (direction, chance) in enumerate(zip([name, *sides], chances, strict=False)):
             to = step_to[direction]
@@ -203,11 +204,6 @@ def tile_model(
     initial = np.zeros(n)
     initial[start] = 1.0
     return FiniteMDP(next_state, prob, reward, terminal, initial, action_names=tuple(actions))
-
-
-def _perpendicular(a: str, b: str) -> bool:
-    (ar, ac), (br, bc) = STEPS[a], STEPS[b]
-    return ar * br + ac * bc == 0
 
 
 class TileMapEnv(TableEnv):

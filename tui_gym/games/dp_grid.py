@@ -25,10 +25,6 @@ WALL = "█"
 Event = tuple[str, str]  # what a move did ('{who} ...'), and its tone on the board
 
 
-def _cell(value: Any) -> Cell | None:
-    return None if value is None else (int(value[0]), int(value[1]))
-
-
 class DPGridStates(DiscreteStates):
     """Cells of the grid; the tile board's scene."""
 
@@ -67,9 +63,9 @@ class DPGridStates(DiscreteStates):
             scene["offered"] = list(grid.moves)
         if grid.wind:
             scene["wind"], scene["gusts"] = list(grid.wind), grid.gusts
-        was = _cell(before.get("agent"))
+        was = before.get("agent")
         if was is not None and agent is not None and move is not None:
-            event = game.event(game_env, before, was, agent, move)
+            event = game.event(game_env, before, (int(was[0]), int(was[1])), agent, move)
             if event is not None:
                 scene["event"], scene["event_tone"] = event
         return scene

@@ -87,7 +87,9 @@ class TileStates(DiscreteStates):
                     if tile in STANDING}
             scene["slip"] = {key: p for key, p in slip.items() if p > 0}
             return scene
-        slip_chance = _slip_chance(game_env, cells)
+        row, col = _start(cells)  # the chance a move from the start goes elsewhere than asked
+        outcomes = game_env.P[row * len(cells[0]) + col][0]
+        slip_chance = round(1.0 - max(float(o[0]) for o in outcomes), 6)
         if slip_chance > 0:
             scene["slip"] = {f"{r},{c}": slip_chance for r, line in enumerate(cells)
                              for c, tile in enumerate(line) if tile in "SF"}
@@ -122,13 +124,6 @@ def _env_cells(game_env: Any, game: TileGame) -> list[str]:
         return game.builtin_cells({})
     return ["".join(c.decode() if isinstance(c, bytes) else str(c) for c in row)
             for row in np.asarray(desc)]
-
-
-def _slip_chance(game_env: Any, cells: Sequence[str]) -> float:
-    """The chance a move from the start goes elsewhere than asked, read from the table."""
-    row, col = _start(cells)
-    outcomes = game_env.P[row * len(cells[0]) + col][0]
-    return round(1.0 - max(float(o[0]) for o in outcomes), 6)
 
 
 def _slipped(cells: Sequence[str], before: Any, agent: Any, action: str | None) -> bool:

@@ -40,14 +40,6 @@ class _Planned:
     values: dict[str, Any]
 
 
-def _make(env_id: str, kwargs: Mapping[str, Any], render_mode: str | None) -> gym.Env:
-    tui_gym.envs.register_envs()  # our ids exist even if `tui_gym` was imported oddly
-    try:
-        return gym.make(env_id, render_mode=render_mode, **kwargs)
-    except (gym.error.UnregisteredEnv, gym.error.DeprecatedEnv) as error:  # e.g. Taxi-v3
-        raise UnknownEnvError(env_id) from error
-
-
 def _assemble(
     env_id: str, env_kwargs: Mapping[str, Any] | None, choices: Sequence[WrapperChoice],
     render_mode: str | None, *, strict: bool,
@@ -65,7 +57,11 @@ def _assemble(
                 raise
             reasons[index] = str(error)
 
-    env = _make(env_id, env_kwargs or {}, render_mode)
+    tui_gym.envs.register_envs()  # our ids exist even if `tui_gym` was imported oddly
+    try:
+        env = gym.make(env_id, render_mode=render_mode, **(env_kwargs or {}))
+    except (gym.error.UnregisteredEnv, gym.error.DeprecatedEnv) as error:  # e.g. Taxi-v3
+        raise UnknownEnvError(env_id) from error
 
     for item in planned:
         reason = item.spec.fits(env, item.values)

@@ -60,12 +60,6 @@ ACTION_LETTERS = ("S", "H")
 TRAINED_GAP = 0.005  # what the default training reaches (see the README)
 
 
-def _chart_rows(usable: int) -> np.ndarray:
-    """The Q-table row of each chart cell (player sum x dealer card), for one ace state."""
-    return np.array([[base_state(player, dealer, usable) for dealer in DEALER_CARDS]
-                     for player in CHART_SUMS])
-
-
 _BASE_INDEX = tuple(np.array(o) for o in zip(*BASE_STATES, strict=True))  # in a (32, 11, 2) table
 
 
@@ -282,7 +276,8 @@ class BlackjackLayout(HeatmapLayout):
         has_marks = isinstance(marks, np.ndarray)
 
         def chart(usable: int, title: str) -> Heatmap:
-            rows = _chart_rows(usable)
+            rows = np.array([[base_state(player, dealer, usable) for dealer in DEALER_CARDS]
+                             for player in CHART_SUMS])  # the Q-table row of each chart cell
             return greedy_panel(
                 f"Q-values, {title}",
                 f"rows: player sum  cols: dealer card  H hit  S stick  {TIED} tie  * not optimal",
