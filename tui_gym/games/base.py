@@ -136,9 +136,8 @@ class StateSpace(Role):
         return str(to_jsonable(observation))
 
     def scene(self, env: Any, before: Mapping[str, Any] | None = None) -> dict[str, Any]:
-        """What the game's board draws of the env's current state (plain data, a copy);
-        empty before the first reset. `before` is the scene before the last move, when
-        known: a board says from it what the move did (a slip, an illegal pick-up)."""
+        """What the game's board draws of the env's state (plain data, a copy; empty before the
+        first reset); `before`, the scene before the last move, tells what the move did."""
         try:
             return self.read_scene(env.unwrapped, before or {})
         except UNREADABLE:
@@ -168,9 +167,8 @@ class Oracle(Role):
     def reference(
         self, q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> ReferenceMetrics | NotAvailable:
-        """The greedy policy of `q` (rows: base states; ties broken at random, as the
-        agent breaks them) beside the optimum, in the game as the wrappers make it
-        where `scope` says it can be."""
+        """The greedy policy of `q` (rows: base states; ties at random) beside the optimum,
+        in the game as the wrappers make it where `scope` says it can be."""
         return NotAvailable(f"{self.game.title} has no exact optimum")
 
     def evaluation_reference(
@@ -212,8 +210,7 @@ class Oracle(Role):
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> tuple[float, float] | NotAvailable:
         """The lowest and the highest return one episode can have, in the game as the
-        wrappers make it (±inf on a side with no bound; `core.mdp.return_range` reads
-        them off a model): what a chart of returns never needs to show beyond."""
+        wrappers make it (±inf on a side with no bound): what a chart never shows beyond."""
         return NotAvailable(f"{self.game.title} has no exact model")
 
     def bound(
@@ -331,9 +328,8 @@ class Narrator(Role):
         self, you: Scorecard, figures: Mapping[str, float] | None, watched: Scorecard | None = None,
         agent_note: str = "", scope: Scope = EXACT,
     ) -> list[ScoreRow]:
-        """The rows: the person's mean return and agreement, the agent's and the
-        optimum's exact values (`figures` from `Oracle.agent_figures`), the episodes
-        watched; `scope` says whether the exact figures are of the game as played."""
+        """The rows: the person's mean return and agreement, the agent's and the optimum's
+        exact values (`figures` from `Oracle.agent_figures`, of `scope`), what was watched."""
         figures = figures or {}
         noun = self.game.episode_noun
         words = self.agreement_words

@@ -104,8 +104,6 @@ class TableLayout(HeatmapLayout):
 class GenericGame(ModelGame):
     """An env of the caller's choosing, played from its transition table."""
 
-    board = "text"
-
     def __init__(self, env_id: str) -> None:
         super().__init__()
         self.env_id = env_id

@@ -83,9 +83,8 @@ class BlackjackStates(StateSpace):
 
     def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
         player, dealer, usable = (int(v) for v in observation)
-        card = "A" if dealer == 1 else str(dealer)
         ace = "usable ace" if usable else "no usable ace"
-        return f"sum {player} vs dealer {card}, {ace}"
+        return f"sum {player} vs dealer {card_label(dealer)}, {ace}"
 
     def read_scene(self, game_env: Any, before: Mapping[str, Any]) -> dict[str, Any]:
         """The hands: `player` and `dealer` card lists (1 = ace, 10 = ten or face), and

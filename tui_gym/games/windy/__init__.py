@@ -10,7 +10,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from tui_gym.core.params import Param
-from tui_gym.envs.dp_grid import GRID_ACTIONS, KING_ACTIONS, Cell, Grid, windy_grid
+from tui_gym.envs.dp_grid import KING_ACTIONS, Cell, Grid, windy_grid
 from tui_gym.games.base import ReachNarrator
 from tui_gym.games.dp_grid import DPGridGame, Event
 
@@ -45,7 +45,6 @@ class WindyGame(DPGridGame):
     description = ("Example 6.5's 7x10 grid: a wind blows up through the middle columns; "
                    "-1 a move until the goal.")
     teaches = "TD control where moves are not what they seem: Sarsa learns to use the wind"
-    action_names: tuple[str, ...] = GRID_ACTIONS
     king_moves = False
     params = (Param("stochastic_wind", bool, False,
                     help="the wind varies by one a third of the time each way (Exercise 6.10)"),)
