@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import difflib
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import gymnasium as gym
@@ -32,14 +31,6 @@ class UnknownEnvError(ValueError):
         self.env_id = env_id
 
 
-@dataclass
-class _Planned:
-    index: int
-    choice: WrapperChoice
-    spec: WrapperSpec
-    values: dict[str, Any]
-
-
 def _assemble(
     env_id: str, env_kwargs: Mapping[str, Any] | None, choices: Sequence[WrapperChoice],
     render_mode: str | None, *, strict: bool,
@@ -47,11 +38,11 @@ def _assemble(
     """The env, and per choice None (applied) or the reason it was skipped."""
     check_chain_length(len(choices))
     reasons: list[str | None] = [None] * len(choices)
-    planned: list[_Planned] = []
+    planned: list[tuple[int, WrapperChoice, WrapperSpec, dict[str, Any]]] = []
     for index, choice in enumerate(choices):
         try:
             spec = get_spec(choice.name)
-            planned.append(_Planned(index, choice, spec, spec.validate(choice.values())))
+            planned.append((index, choice, spec, spec.validate(choice.values())))
         except ValueError as error:
             if strict:
                 raise
@@ -63,18 +54,18 @@ def _assemble(
     except (gym.error.UnregisteredEnv, gym.error.DeprecatedEnv) as error:  # e.g. Taxi-v3
         raise UnknownEnvError(env_id) from error
 
-    for item in planned:
-        reason = item.spec.fits(env, item.values)
+    for index, choice, spec, values in planned:
+        reason = spec.fits(env, values)
         if reason is None:
             try:
-                env = item.spec.factory(env, **item.values)
+                env = spec.factory(env, **values)
                 continue
             except (ValueError, TypeError, NotImplementedError, gym.error.Error) as error:
-                reason = f"{item.spec.name} could not wrap {env_label(env)}: {error}"
+                reason = f"{spec.name} could not wrap {env_label(env)}: {error}"
         if strict:
             env.close()
-            raise WrapperMismatchError(reason, item.choice)
-        reasons[item.index] = reason
+            raise WrapperMismatchError(reason, choice)
+        reasons[index] = reason
     return env, reasons
 
 
