@@ -58,6 +58,8 @@ DEALER_CARDS = tuple(range(1, 11))  # columns: A, 2 .. 10
 DEALER_LABELS = ("A", "2", "3", "4", "5", "6", "7", "8", "9", "10")
 ACTION_LETTERS = ("S", "H")
 TRAINED_GAP = 0.005  # what the default training reaches (see the README)
+ON_POLICY = {"epsilon_final": 0.0, "epsilon_decay_fraction": 0.3}  # the on-policy learners'
+MULTI_STEP = {**ON_POLICY, "learning_rate": 0.005, "episodes": 1_000_000}
 
 
 _BASE_INDEX = tuple(np.array(o) for o in zip(*BASE_STATES, strict=True))  # in a (32, 11, 2) table
@@ -309,18 +311,13 @@ class BlackjackGame(Game):
     # On-policy learners stop exploring and step larger; multi-step ones step smaller over more
     # hands; Dyna's one-outcome model misleads here, so one small planning step (see the README).
     hyperparameters = {
-        "sarsa": {"learning_rate": 0.01, "epsilon_final": 0.0, "epsilon_decay_fraction": 0.3,
-                  "episodes": 500_000},
-        "expected-sarsa": {"learning_rate": 0.01, "epsilon_final": 0.0,
-                           "epsilon_decay_fraction": 0.3, "episodes": 500_000},
+        **dict.fromkeys(("sarsa", "expected-sarsa"), {**ON_POLICY, "learning_rate": 0.01,
+                                                      "episodes": 500_000}),
         "monte-carlo": {"learning_rate": 0.003, "epsilon_final": 0.0,
                         "epsilon_decay_fraction": 0.5, "episodes": 1_500_000},
-        "dyna-q": {"planning_steps": 1, "learning_rate": 0.0003, "episodes": 700_000},
-        "n-step-sarsa": {"n": 2, "learning_rate": 0.005, "epsilon_final": 0.0,
-                         "epsilon_decay_fraction": 0.3, "episodes": 1_000_000},
-        "sarsa-lambda": {"learning_rate": 0.005, "epsilon_final": 0.0,
-                         "epsilon_decay_fraction": 0.3, "episodes": 1_000_000},
-        "dyna-q-plus": {"planning_steps": 1, "learning_rate": 0.0003, "episodes": 700_000},
+        **dict.fromkeys(("dyna-q", "dyna-q-plus"), {"planning_steps": 1, "learning_rate": 0.0003,
+                                                    "episodes": 700_000}),
+        "n-step-sarsa": {"n": 2, **MULTI_STEP}, "sarsa-lambda": MULTI_STEP,
     }
     lessons = {
         "prioritized-sweeping": "prioritized sweeping's model keeps the last card each move "
