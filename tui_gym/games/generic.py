@@ -119,8 +119,5 @@ class GenericGame(ModelGame):
             env.close()
         self.states = GenericStates(self)
         self.layout = TableLayout(self)
-        self.layout.has_focus = self._states() > PAGE
-
-    def _states(self) -> int:
         model = self.base_model({})
-        return 0 if isinstance(model, NotAvailable) else model.n_states
+        self.layout.has_focus = not isinstance(model, NotAvailable) and model.n_states > PAGE
