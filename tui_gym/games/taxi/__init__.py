@@ -232,8 +232,7 @@ class TaxiGame(ModelGame):
         on_policy = {"epsilon_final": 0.0, "epsilon_decay_fraction": 0.9, "episodes": 40_000}
         return {
             "*": {"learning_rate": 0.1, "episodes": 10_000},
-            "sarsa": {"epsilon_final": 0.0, "epsilon_decay_fraction": 0.9,
-                      "learning_rate": 0.2, "episodes": 40_000},
+            "sarsa": {**on_policy, "learning_rate": 0.2},
             "expected-sarsa": {"epsilon_final": 0.0},
             "double-q": {"episodes": 20_000},
             "monte-carlo": {"epsilon_final": 0.01, "learning_rate": 0.02, "episodes": 100_000},
