@@ -240,13 +240,9 @@ class TileGame(ModelGame):
     def with_map(self, kwargs: Mapping[str, Any], grid_map: GridMap) -> dict[str, Any]:
         """The arguments that play `grid_map` (the others kept); `ValueError` when this
         game cannot play it."""
-        self.check_map(grid_map)
-        return {**kwargs, "map": CUSTOM, LAYOUT: format_map(grid_map)}
-
-    def check_map(self, grid_map: GridMap) -> None:
-        """`ValueError` for a map this game cannot play."""
         if grid_map.start is None:
             raise ValueError(f"{self.title} needs a start (S) on the map")
+        return {**kwargs, "map": CUSTOM, LAYOUT: format_map(grid_map)}
 
     def normalize_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         """As `Game.normalize_kwargs`, with `layout`: an edited map, kept (as its text) when
@@ -259,7 +255,6 @@ class TileGame(ModelGame):
                 grid_map = read_layout(str(layout))
             except MapError as error:
                 raise ValueError(f"{self.title} map: {error}") from None
-            self.check_map(grid_map)
             return self.with_map(out, grid_map)
         if out.get("map") == CUSTOM:
             raise ValueError("map 'custom' is an edited map: give one with --map-file PATH, "
