@@ -110,14 +110,11 @@ class FiniteMDP:
             names = tuple(str(name) for name in names)
             if len(names) != n_actions:
                 raise ModelError(f"{len(names)} action names for {n_actions} actions")
-        object.__setattr__(self, "prob", _frozen(prob))
-        object.__setattr__(self, "next_state", _frozen(next_state.astype(np.int64)))
-        object.__setattr__(self, "reward", _frozen(arrays["reward"]))
-        object.__setattr__(self, "terminal", _frozen(arrays["terminal"]))
-        object.__setattr__(self, "initial", _frozen(initial))
-        object.__setattr__(self, "horizon", horizon)
-        object.__setattr__(self, "action_names", names)
-        object.__setattr__(self, "reward_std", reward_std)
+        arrays.update(next_state=next_state.astype(np.int64), initial=initial)
+        checked = {**{name: _frozen(array) for name, array in arrays.items()},
+                   "horizon": horizon, "action_names": names, "reward_std": reward_std}
+        for name, value in checked.items():
+            object.__setattr__(self, name, value)
 
     # -- sizes ------------------------------------------------------------------
 
