@@ -90,9 +90,6 @@ class WrapperSpec:
     def __post_init__(self) -> None:
         owned = tuple(replace(param, owner=self.name) for param in self.params)
         object.__setattr__(self, "params", owned)
-        names = [param.name for param in owned]
-        if len(set(names)) != len(names):
-            raise ValueError(f"{self.name}: duplicate parameter names {names}")
 
     @property
     def param_names(self) -> tuple[str, ...]:
