@@ -37,8 +37,8 @@ from tui_gym.games.gridworld.paths import (
     fewest_share,
     gridworld_model,
     gridworld_optimum,
-    mean_fewest_steps,
     path_figures,
+    placements,
     shortest_marks,
     shortest_path_optimum,
 )
@@ -259,7 +259,8 @@ class GridWorldOracle(Oracle):
             )
             found = solution.q, solution.value
         optimal_q, value = found
-        mean_steps = mean_fewest_steps(size, walls)
+        valid = placements(size, walls)  # the mean fewest steps over them (NaN: there are none)
+        mean_steps = float(cell_distances(size, walls)[valid].mean() if valid.any() else np.nan)
         if walls:
             route = f"{size}x{size} with {len(walls)} wall cells: the optimal policy walks a " \
                 "shortest way round the walls"

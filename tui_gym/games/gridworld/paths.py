@@ -13,7 +13,7 @@ from tui_gym.core.wrappers.changes import GameChanges
 from tui_gym.envs.gridworld import Walls, cell_distances, cell_moves, free_cells
 
 __all__ = [
-    "fewest_share", "gridworld_model", "gridworld_optimum", "mean_fewest_steps", "path_figures",
+    "fewest_share", "gridworld_model", "gridworld_optimum", "path_figures",
     "placements", "shortest_marks", "shortest_path_optimum",
 ]
 
@@ -95,14 +95,6 @@ def shortest_marks(size: int, walls: Walls) -> npt.NDArray[np.bool_]:
     marks = marks.reshape(-1, 4)
     marks.setflags(write=False)
     return marks
-
-
-def mean_fewest_steps(size: int, walls: Walls) -> float:
-    """The mean fewest steps over the placements (NaN when there are none)."""
-    valid = placements(size, walls)
-    if not valid.any():
-        return float("nan")
-    return float(cell_distances(size, walls)[valid].mean())
 
 
 def _walk_arrays(size: int, walls: Walls, probabilities: np.ndarray) -> tuple[
