@@ -268,7 +268,7 @@ def test_noise_scales_with_a_scaled_reward_and_a_clipped_one_is_not_followed() -
     model = _game("max-bias").base_model({})
     assert model.reward_std is not None and model.reward_std[B, 0, 0] == 1.0
     scaled = Session("max-bias", {}, (parse_wrapper_spec("ScaleReward:factor=-2"),), seed=0)
-    exact = scaled.game.model_oracle.exact(scaled.env_kwargs, scaled.changes)
+    exact = scaled.game.oracle.exact(scaled.env_kwargs, scaled.changes)
     assert not isinstance(exact, NotAvailable) and exact.scope.exact
     assert exact.model.reward_std is not None and exact.model.reward_std[B, 0, 0] == 2.0
     assert exact.model.reward[B, 0, 0] == pytest.approx(0.2)

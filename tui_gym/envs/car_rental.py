@@ -14,7 +14,7 @@ from tui_gym.core.mdp.model import FiniteMDP
 from tui_gym.envs.table_env import TableEnv
 
 __all__ = ["ACTION_NAMES", "MAX_CARS", "MAX_MOVE", "MOVES", "CarRentalEnv", "car_rental_model",
-           "night", "nights"]
+           "nights"]
 
 MAX_CARS = 20  # at each site; more are sent back to the company
 MAX_MOVE = 5  # cars moved overnight, either way
@@ -29,18 +29,11 @@ SIDE = MAX_CARS + 1
 FloatArray = npt.NDArray[np.float64]
 
 
-def night(cars: tuple[int, int], move: int, exercise: bool) -> tuple[int, int, int, float]:
-    """The cars moved (at most those there), each site's cars in the morning, and the
-    night's cost (moves, and with `exercise` one free move to the second site and
-    parking over 10 cars)."""
-    moved, first, second, cost = nights(np.asarray(cars[0]), np.asarray(cars[1]),
-                                        np.asarray(move), exercise)
-    return int(moved), int(first), int(second), float(cost)
-
-
 def nights(first: np.ndarray, second: np.ndarray, move: np.ndarray,
            exercise: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, FloatArray]:
-    """`night` over arrays of cars and moves, broadcast."""
+    """The cars moved (at most those there), each site's cars in the morning, and the
+    night's cost (moves, and with `exercise` one free move to the second site and
+    parking over 10 cars), broadcast over arrays of cars and moves."""
     moved = np.where(move >= 0, np.minimum(move, first), -np.minimum(-move, second))
     at_first = np.minimum(MAX_CARS, first - moved)
     at_second = np.minimum(MAX_CARS, second + moved)
@@ -97,25 +90,23 @@ class CarRentalEnv(TableEnv):
     """Sutton & Barto's Example 4.2: Jack moves cars between his two sites overnight.
 
     ## Action Space
-    The cars moved from the first site to the second, -5 to +5 (action `a`
-    moves `a - 5`; negative numbers move cars the other way); at most the cars
-    the site has are moved.
+    The cars moved from the first site to the second, -5 to +5 (action `a` moves
+    `a - 5`), at most those the site has.
 
     ## Observation Space
     The cars at each site at the end of the day, `first * 21 + second`.
 
     ## Rewards
-    $10 for every car rented, less $2 for every car moved. Requests are
-    Poisson with means 3 and 4 at the first and second site, returns Poisson
-    with means 3 and 2, available the next day; a site holds at most 20 cars.
-    With `exercise` (Exercise 4.7) one car moved to the second site is free,
-    and a site keeping more than 10 cars overnight costs $4.
+    $10 a car rented, less $2 a car moved. Requests are Poisson (means 3 and 4),
+    returns too (3 and 2), back the next day; a site holds at most 20 cars. With
+    `exercise` (Exercise 4.7) one move to the second site is free, and a site keeping
+    more than 10 cars overnight costs $4.
 
     ## Starting State
     Any number of cars at each site, uniformly.
 
     ## Episode End
-    Never: the task is continuing. The game puts a limit on an episode.
+    Never: the task is continuing (the game limits an episode).
 
     ## Arguments
     `exercise` (False), `render_mode` "ansi".
@@ -140,7 +131,10 @@ class CarRentalEnv(TableEnv):
     def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
         """The night's move, then each site's requests and returns drawn (Poisson)."""
         state, action = self.started(), self.checked(action)
-        moved, *morning, cost = night(divmod(state, SIDE), MOVES[action], self.exercise)
+        first, second = divmod(state, SIDE)
+        night = nights(np.asarray(first), np.asarray(second), np.asarray(MOVES[action]),
+                       self.exercise)
+        moved, morning, cost = int(night[0]), [int(n) for n in night[1:3]], float(night[3])
         rng = self.np_random
         asked = [int(rng.poisson(mean)) for mean in REQUESTS]
         back = [int(rng.poisson(mean)) for mean in RETURNS]

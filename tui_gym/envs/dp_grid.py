@@ -38,20 +38,14 @@ WINDY_START, WINDY_GOAL = (3, 0), (3, 7)
 class Grid:
     """A small grid world.
 
-    A move (one of `moves`, named as in `STEPS`) goes one cell that way, then
-    the wind of the column it started from (`wind[col]`, none when `wind` is
-    empty) pushes it that many cells up; with `gusts`, where there is wind it
-    blows one stronger a third of the time and one weaker a third of the time.
-    Entering a cell pays `pays[cell]`, else `step`. A move that would leave the
-    grid pays `edge` and leaves the agent where it was, or, with `edge` None,
-    ends on the grid's border (each coordinate clipped) paying as any move. A
-    move into a wall leaves the agent where it was and pays `step`; from a
-    `jumps` cell every move pays the jump's reward and lands on its target;
-    entering a `terminals` cell ends the episode. Episodes start at `start`,
-    or uniformly on the cells that are neither terminal nor walls.
-    `letters`, `primes` and `tiles` are for drawing: a cell's letter (A, B),
-    a jump's landing mark (A′), and a tile other than the usual one (an end
-    that loses drawn as a pit, H).
+    A move (one of `moves`, named as in `STEPS`) goes one cell, then the wind of the
+    column it left (`wind[col]`; with `gusts` one stronger or weaker a third of the
+    time each) pushes it up. Entering a cell pays `pays[cell]`, else `step`. Off the
+    grid, a move pays `edge` and stays (with `edge` None it is clipped to the border);
+    into a wall it pays `step` and stays; from a `jumps` cell every move pays the
+    jump's reward and lands on its target; `terminals` end the episode. Episodes start
+    at `start`, else uniformly off terminals and walls. `letters`, `primes` and `tiles`
+    are drawn: a cell's letter (A), a jump's landing (A′), another tile (H, a pit).
     """
 
     rows: int
@@ -145,8 +139,9 @@ class GridEnv(TableEnv):
     """A `Grid` played, drawn as text: `.` a cell, `#` a wall, `*` a terminal cell, `@` the
     agent, and the grid's letters; the wind's strengths under the columns."""
 
-    def __init__(self, grid: Grid, render_mode: str | None = None) -> None:
-        super().__init__(grid.model, render_mode)
+    def __init__(self, grid: Grid, render_mode: str | None = None,
+                 model: FiniteMDP | None = None) -> None:
+        super().__init__(grid.model if model is None else model, render_mode)
         self.grid = grid
         self.action_names = grid.moves
 
@@ -179,18 +174,17 @@ class ABGridEnv(GridEnv):
     The cell, `row * 5 + col`.
 
     ## Rewards
-    From A (row 0, col 1) every action pays +10 and lands on A′ (row 4, col 1);
-    from B (row 0, col 3) +5 and lands on B′ (row 2, col 3). A move off the
-    grid pays -1 and leaves the agent where it was; every other move pays 0.
+    From A (row 0, col 1) every action pays +10 and lands on A′ (row 4, col 1); from
+    B (row 0, col 3) +5 to B′ (row 2, col 3). Off the grid -1 (staying); else 0.
 
     ## Starting State
     Any cell, uniformly.
 
     ## Episode End
-    Never: the task is continuing. The game puts a limit on an episode.
+    Never: the task is continuing (the game limits an episode).
 
     ## Arguments
-    `render_mode`: "ansi" draws the grid as text.
+    `render_mode`: "ansi".
     """
 
     GRID = Grid(5, 5, step=0.0, edge=-1.0, jumps=AB_JUMPS,
@@ -210,7 +204,7 @@ class CornerGridEnv(GridEnv):
     The cell, `row * 4 + col`; cells 0 and 15 are the terminal corners.
 
     ## Rewards
-    -1 for every move, into a corner or off the grid (the agent then stays) too.
+    -1 for every move, off the grid (staying) too.
 
     ## Starting State
     Any of the 14 cells that are not corners, uniformly.
@@ -219,7 +213,7 @@ class CornerGridEnv(GridEnv):
     Terminated on entering either corner.
 
     ## Arguments
-    `render_mode`: "ansi" draws the grid as text.
+    `render_mode`: "ansi".
     """
 
     GRID = Grid(4, 4, step=-1.0, edge=-1.0, terminals=CORNERS)
@@ -248,21 +242,19 @@ class RandomWalkEnv(GridEnv):
     left (0), right (1).
 
     ## Observation Space
-    The position, 0 to `states + 1`: 0 and `states + 1` are the two ends, the
-    states between them are A to E (5 states) or 1 to 19 (19 states).
+    The position, 0 to `states + 1`: the two ends, and A to E (or 1 to 19) between.
 
     ## Rewards
-    Stepping off the right end pays +1; off the left end 0 with 5 states
-    (Example 6.2) and -1 with 19 (Figure 7.2); every other step 0.
+    +1 off the right end; off the left end 0 with 5 states, -1 with 19; else 0.
 
     ## Starting State
-    The middle state (C of A to E; 10 of 1 to 19).
+    The middle state (C; 10).
 
     ## Episode End
     Terminated at either end.
 
     ## Arguments
-    `states`: 5 or 19; `render_mode`: "ansi" draws the row as text.
+    `states`: 5 or 19; `render_mode`: "ansi".
     """
 
     def __init__(self, states: int = 5, render_mode: str | None = None) -> None:
@@ -281,29 +273,25 @@ class WindyGridWorldEnv(GridEnv):
     """Sutton & Barto's Example 6.5: a 7 x 10 grid with a wind blowing up through the middle.
 
     ## Action Space
-    up (0), down (1), left (2), right (3); with `king_moves`, also up-left (4),
+    up (0), down (1), left (2), right (3); with `king_moves` also up-left (4),
     up-right (5), down-left (6), down-right (7) (Exercise 6.9).
 
     ## Observation Space
     The cell, `row * 10 + col`, row 0 at the top.
 
     ## Rewards
-    -1 for every move, the last one included.
+    -1 for every move. The wind of the column a move starts from (0 0 0 1 1 1 2 2 1 0)
+    pushes it up; with `stochastic_wind` (Exercise 6.10) one more or less a third of
+    the time each. A move off the grid ends on its border.
 
     ## Starting State
     Row 3, column 0.
 
     ## Episode End
-    Terminated on reaching row 3, column 7. A move goes one cell its way, and
-    the wind of the column it starts from, 0 0 0 1 1 1 2 2 1 0 by column,
-    pushes it that many cells up; a move that would leave the grid ends on its
-    border. With `stochastic_wind` (Exercise 6.10), where there is wind it
-    blows one cell stronger a third of the time and one weaker a third of the
-    time.
+    Terminated on reaching row 3, column 7.
 
     ## Arguments
-    `king_moves`, `stochastic_wind` (both false by default); `render_mode`:
-    "ansi" draws the grid as text.
+    `king_moves`, `stochastic_wind`; `render_mode`: "ansi".
     """
 
     def __init__(self, king_moves: bool = False, stochastic_wind: bool = False,

@@ -55,30 +55,24 @@ class MazeEnv(GridEnv):
     """A maze of the book's chapter 8, whose wall may move after a number of steps.
 
     ## Action Space
-    up (0), down (1), left (2), right (3).
+    up (0), down (1), left (2), right (3); walls and the edge block.
 
     ## Observation Space
-    The cell, `row * 9 + col`, on a 6 x 9 grid, row 0 at the top (`row * 9 * scale + col`
-    on the Dyna maze made `scale` times finer).
+    The cell, `row * cols + col`, on a 6 x 9 grid (`scale` times finer), row 0 on top.
 
     ## Rewards
-    +1 on reaching the goal (row 0, column 8); every other move 0.
+    +1 on reaching the goal (the top right cell); every other move 0.
 
     ## Starting State
     The maze's start.
 
     ## Episode End
-    Terminated at the goal. A move into a wall or off the grid leaves the agent
-    where it was.
+    Terminated at the goal.
 
     ## A world that changes
-    The env counts its steps over every episode (`world_steps`) and from step
-    `change_at` on plays the maze's second phase, as the book's figures do; a
-    reset with a seed starts the world over, a reset without one carries on.
-    `info` tells `world_steps` and `phase` after every reset and step, and
-    `changes_in`, the steps left before the next change, while one is ahead.
-    `reset(options={"world_steps": n})` sets the count (a learner trained elsewhere
-    for n steps goes on in the phase in force after them).
+    Steps are counted over episodes (`world_steps`; a reset with a seed starts over,
+    `reset(options={"world_steps": n})` sets it); from step `change_at` on the second
+    phase plays. `info` tells `world_steps`, `phase` and `changes_in` (while ahead).
 
     ## Arguments
     `change_at` (the changing mazes); `render_mode`: "ansi" draws the maze.

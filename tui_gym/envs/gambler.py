@@ -13,7 +13,7 @@ import numpy as np
 from tui_gym.core.mdp.model import FiniteMDP
 from tui_gym.envs.table_env import TableEnv
 
-__all__ = ["ACTION_NAMES", "MAX_STAKE", "GamblerEnv", "gambler_model", "stake_of", "stakes"]
+__all__ = ["ACTION_NAMES", "MAX_STAKE", "GamblerEnv", "gambler_model", "stakes"]
 
 MAX_STAKE = 50  # actions: stakes 1 to 50
 ACTION_NAMES = tuple(f"stake {k}" for k in range(1, MAX_STAKE + 1))
@@ -23,12 +23,6 @@ def stakes(goal: int) -> np.ndarray:
     """`[capital, action]`: the stake each action puts down at each capital, 0 to `goal`."""
     capital = np.arange(goal + 1)[:, None]
     return np.minimum(np.minimum(np.arange(1, MAX_STAKE + 1)[None, :], capital), goal - capital)
-
-
-def stake_of(capital: int, action: int, goal: int) -> int:
-    """The stake an action puts on the flip: its own, at most the capital and what is
-    still missing to the goal."""
-    return max(0, min(action + 1, capital, goal - capital))
 
 
 @lru_cache(maxsize=16)
@@ -58,8 +52,8 @@ class GamblerEnv(TableEnv):
     """Sutton & Barto's Example 4.3: bet on coin flips until the goal or ruin.
 
     ## Action Space
-    The stake, 1 to 50 (action `a` stakes `a + 1`); a stake larger than the
-    capital, or than what is missing to the goal, stakes that much instead.
+    The stake, 1 to 50 (action `a` stakes `a + 1`), at most the capital and what is
+    missing to the goal.
 
     ## Observation Space
     The capital, 0 to `goal`.
@@ -74,8 +68,7 @@ class GamblerEnv(TableEnv):
     Terminated at the goal (won) or at 0 (ruined).
 
     ## Arguments
-    `p_heads` (0.4: the chance of heads, which wins the stake), `goal` (100,
-    at most 100), `render_mode` "ansi".
+    `p_heads` (0.4: heads wins the stake), `goal` (100, at most 100), `render_mode`.
     """
 
     action_names = ACTION_NAMES
@@ -95,7 +88,7 @@ class GamblerEnv(TableEnv):
         before = self.s
         out = super().step(action)
         if before is not None:
-            self.last_stake = stake_of(before, int(action), self.goal)
+            self.last_stake = int(stakes(self.goal)[before, int(action)])
             self.last_flip = "heads" if out[0] > before else "tails"
         return out
 

@@ -118,50 +118,30 @@ def cell_distances(size: int, walls: Walls = ()) -> IntArray:
 
 
 class GridWorldEnv(gym.Env[ObsType, int]):
-    """An agent walks a square grid to reach a target.
-
-    Gymnasium's "Create a custom environment" tutorial, with the same spaces and
-    action mapping, but every observation is a new array (keeping or mutating one
-    never affects the environment), and optional walls.
+    """An agent walks a square grid to reach a target: Gymnasium's "Create a custom
+    environment" tutorial, with fresh observation arrays and optional walls.
 
     ## Action Space
-    `Discrete(4)`, the direction to move; `x` grows to the right, `y` upwards:
-    0 right (`x + 1`), 1 up (`y + 1`), 2 left (`x - 1`), 3 down (`y - 1`). A move
-    off the grid or into a wall leaves the agent where it was.
+    `Discrete(4)`: 0 right (`x + 1`), 1 up (`y + 1`), 2 left, 3 down; a move off the
+    grid or into a wall leaves the agent where it was.
 
     ## Observation Space
-    A dict of two `np.int64` arrays of shape `(2,)`, `(x, y)` in `[0, size - 1]`:
-    `"agent"` and `"target"`. `reset()` and `step()` also return
-    `info = {"distance": d}`, the fewest moves from the agent to the target (a
-    Python `int`): the Manhattan distance without walls, -1 when walls leave no way.
+    `{"agent": (x, y), "target": (x, y)}`, `np.int64` arrays; `info["distance"]` is
+    the fewest moves between them (-1 when walls leave no way).
 
     ## Rewards
-    `+reward_scale` (default `+1`) for reaching the target, `-step_penalty`
-    (default `0`) for any other step.
+    `+reward_scale` for reaching the target, `-step_penalty` for any other step.
 
     ## Starting State
-    The agent uniformly at random, then the target uniformly on another cell (drawn
-    again until it differs); with walls both among the free cells, and the target
-    may be walled off (the episode can then only time out). Either or both can be
-    placed with `reset(options={"agent": (x, y), "target": (x, y)})`, on different
-    free cells.
+    The agent, then the target on another free cell, at random; either may be placed
+    with `reset(options={"agent": (x, y), "target": (x, y)})`.
 
     ## Episode End
-    Terminated when the agent stands on the target; truncated after 300 steps
-    (`max_episode_steps` of the registered ids; the environment itself never
-    truncates).
+    Terminated on the target; the registered ids truncate after 300 steps.
 
     ## Arguments
-    `gym.make("tui_gym/GridWorld-v0", ...)` after `import tui_gym`:
-
-    * `render_mode=None`: `None`, `"ansi"` (`render()` returns the grid as text:
-      `y = size - 1` on top, `A` the agent, `T` the target, `*` the agent on the
-      target, `#` a wall, `.` empty), `"human"` (that text printed on every reset
-      and step) or `"rgb_array"` (a `uint8` image of shape `(H, W, 3)`).
-    * `size=5`: cells per side, an integer `>= 2`.
-    * `reward_scale=1.0`: reward for reaching the target; any finite number.
-    * `step_penalty=0.0`: cost of every other step; finite and `>= 0`.
-    * `walls=()`: cells `(x, y)` that cannot be entered; at least two stay free.
+    `render_mode` (None, "ansi", "human" or "rgb_array"), `size=5` (>= 2),
+    `reward_scale=1.0`, `step_penalty=0.0` (>= 0), `walls=()` ((x, y) cells).
     """
 
     metadata: dict[str, Any] = {"render_modes": ["ansi", "human", "rgb_array"], "render_fps": 4}
@@ -230,13 +210,9 @@ class GridWorldEnv(gym.Env[ObsType, int]):
         }
 
     def _get_info(self) -> dict[str, Any]:
-        agent, target = self._require_state()
-        return {"distance": self.distance(agent, target)}
-
-    def distance(self, a: Sequence[int], b: Sequence[int]) -> int:
-        """The fewest moves from cell `a` to cell `b` (-1 when walls leave no way)."""
+        (ax, ay), (tx, ty) = self._require_state()
         table = cell_distances(self.size, self.walls)
-        return int(table[int(a[0]) * self.size + int(a[1]), int(b[0]) * self.size + int(b[1])])
+        return {"distance": int(table[ax * self.size + ay, tx * self.size + ty])}
 
     def _random_position(self) -> Position:
         # The tutorial's draw, repeated while it lands on a wall (none without walls, so
@@ -345,21 +321,15 @@ class GridWorldEnv(gym.Env[ObsType, int]):
     def _render_text(self) -> str:
         agent, target = self._require_state()
         border = "+" + "-" * (2 * self.size + 1) + "+"
-        lines = [border]
-        for y in range(self.size - 1, -1, -1):
-            cells = []
-            for x in range(self.size):
-                if (x, y) == agent:
-                    cells.append("*" if agent == target else "A")
-                elif (x, y) == target:
-                    cells.append("T")
-                elif (x, y) in self._wall_set:
-                    cells.append("#")
-                else:
-                    cells.append(".")
-            lines.append("| " + " ".join(cells) + " |")
-        lines.append(border)
-        return "\n".join(lines)
+
+        def mark(cell: Position) -> str:
+            if cell == agent:
+                return "*" if agent == target else "A"
+            return "T" if cell == target else "#" if cell in self._wall_set else "."
+
+        rows = ["| " + " ".join(mark((x, y)) for x in range(self.size)) + " |"
+                for y in range(self.size - 1, -1, -1)]
+        return "\n".join([border, *rows, border])
 
     def _cell_origin(self, position: Sequence[int]) -> tuple[int, int]:
         """Top-left pixel (row, col) inside the cell at `position`; y grows upwards."""

@@ -8,8 +8,7 @@ from typing import Any
 import numpy as np
 
 from tui_gym.core.mdp.model import FiniteMDP
-from tui_gym.envs.dp_grid import Grid
-from tui_gym.envs.table_env import TableEnv
+from tui_gym.envs.dp_grid import Grid, GridEnv
 
 __all__ = ["A", "ACTIONS", "B", "MAX_B_ACTIONS", "MaxBiasEnv", "max_bias_model", "offered"]
 
@@ -47,51 +46,37 @@ def max_bias_model() -> FiniteMDP:
                      reward_std=std)
 
 
-class MaxBiasEnv(TableEnv):
+class MaxBiasEnv(GridEnv):
     """Sutton & Barto's Example 6.7: from A, left leads to B and right ends at 0; each of B's
     actions ends with a reward drawn from a normal distribution of mean -0.1, deviation 1.
 
     ## Action Space
-    left (0), right (1), b1 (2) to b10 (11). A offers left and right; B offers
-    its first `actions` (b1 to b10 with the default 10). An action a state does
-    not offer counts as right in A and as one of B's in B; `info["action_mask"]`
+    left (0), right (1), b1 (2) to b10 (11): A offers left and right, B its first
+    `actions`. Another counts as right in A, as one of B's in B; `info["action_mask"]`
     lists what the new state offers, as Gymnasium's Taxi does.
 
     ## Observation Space
     0 the end after B, 1 B, 2 A, 3 the end right of A.
 
     ## Rewards
-    0 for left and right; N(-0.1, 1) for any action from B, drawn with the
-    env's own generator (seeded by `reset(seed=...)`).
+    0 for left and right; N(-0.1, 1) for any action from B.
 
     ## Starting State
     A.
 
     ## Episode End
-    Terminated at either end: after right from A, or after any action from B.
+    Terminated at either end.
 
     ## Arguments
     `actions`: how many actions B offers, 1 to 10; `render_mode`: "ansi".
     """
 
-    action_names = ACTIONS
-
     def __init__(self, actions: int = MAX_B_ACTIONS, render_mode: str | None = None) -> None:
         if isinstance(actions, bool) or not 1 <= int(actions) <= MAX_B_ACTIONS:
             raise ValueError(f"B offers 1 to {MAX_B_ACTIONS} actions, not {actions!r}")
-        super().__init__(max_bias_model(), render_mode)
+        super().__init__(GRID, render_mode, max_bias_model())
         self.actions = int(actions)
-        self.grid = GRID
         self.offered = offered(self.actions)
 
     def more_info(self) -> dict[str, Any]:
         return {"action_mask": self.offered[self.s].astype(np.int8)}
-
-    def picture(self) -> str:
-        cells = ["*", "B", "A", "*"]
-        if self.s is not None:
-            cells[self.s] = "@"
-        text = f"{' '.join(cells)}\n"
-        if self.lastaction is not None:
-            text = f"  ({ACTIONS[self.lastaction]})\n" + text
-        return text

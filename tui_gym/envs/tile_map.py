@@ -186,7 +186,8 @@ def tile_model(
     terminal = np.zeros(shape, dtype=bool)
     acting = ~np.isin(tiles, list(ENDING + "WC"))  # cells an agent acts from
     for a, name in enumerate(actions):
-        sides = [d for d in STEPS if d != name and _perpendicular(d, name)]
+        sides = [d for d, (dr, dc) in STEPS.items()  # the moves across the one asked
+                 if dr * STEPS[name][0] + dc * STEPS[name][1] == 0]
         chances = [1.0 - slip_at, slip_at / 2, slip_at / 2][:k]
         for j, (direction, chance) in enumerate(zip([name, *sides], chances, strict=False)):
             to = step_to[direction]
@@ -205,51 +206,31 @@ def tile_model(
     return FiniteMDP(next_state, prob, reward, terminal, initial, action_names=tuple(actions))
 
 
-def _perpendicular(a: str, b: str) -> bool:
-    (ar, ac), (br, bc) = STEPS[a], STEPS[b]
-    return ar * br + ac * bc == 0
-
-
 class TileMapEnv(TableEnv):
-    """
-    Walk a map of tiles from the start to a goal: FrozenLake and CliffWalking on any map.
-
-    ## Description
-    The map is rows of tiles: S start, F floor, H hole, G goal, C cliff, W wall,
-    R reward cell. Moves go one cell up, down, left or right; a move into a
-    wall or off the map leaves the agent where it is. From a cell that slips
-    (probability `p`), a move goes where asked with chance `1 - p` and to
-    either side with `p / 2` each, as on FrozenLake's ice.
+    """Walk a map of tiles (S start, F floor, H hole, G goal, C cliff, W wall, R reward
+    cell) from the start to a goal: FrozenLake and CliffWalking on any map. From a cell
+    that slips with chance `p`, a move goes to either side with `p / 2` each.
 
     ## Action Space
-    `Discrete(4)`, numbered as Gymnasium's game of the `actions` order:
-    "lake" (FrozenLake): 0 left, 1 down, 2 right, 3 up; "cliff"
-    (CliffWalking): 0 up, 1 right, 2 down, 3 left.
+    `Discrete(4)` in Gymnasium's order of `actions`: "lake" 0 left, 1 down, 2 right,
+    3 up; "cliff" 0 up, 1 right, 2 down, 3 left. Walls and the edge block.
 
     ## Observation Space
-    `Discrete(rows * cols)`: the agent's cell, `row * cols + col`.
+    The agent's cell, `row * cols + col`.
 
     ## Rewards
-    Entering a cell pays its tile's reward: a reward cell its own value, a
-    hole, the goal or the cliff the value the map gives it or the rules'
-    (`goal_reward`, `hole_reward`, `cliff_reward`), floor and the start
-    `step_reward`. A move that bumps into a wall or the edge pays `step_reward`.
+    Entering a cell pays its tile's reward (the map's, else the rules'); floor, the
+    start and a blocked move pay `step_reward`.
 
     ## Starting State
     The start cell S.
 
     ## Episode End
-    Terminated on entering a hole or a goal. Stepping onto the cliff sends the
-    agent back to the start and the episode goes on. No limit of its own: the
-    games pass `max_episode_steps` to `gym.make`.
+    Terminated in a hole or on a goal; the cliff sends the agent back to the start.
 
     ## Arguments
-    `cells` (rows of tiles, exactly one S), `rewards` ({"r,c": value} for R, H,
-    G and C cells; every R needs one), `slip` ({"r,c": probability} for S, F
-    and R cells), `slip_default` (every other standing cell), `actions`
-    ("lake" or "cliff"), `step_reward`, `goal_reward`, `hole_reward`,
-    `cliff_reward`; `render_mode` "ansi" draws the map as text with the agent
-    highlighted.
+    `cells`, `rewards` and `slip` ({"r,c": value}), `slip_default`, `actions`,
+    `step_reward`, `goal_reward`, `hole_reward`, `cliff_reward`, `render_mode` "ansi".
     """
 
     def __init__(

@@ -59,13 +59,8 @@ MAX_ID_CHARS = 200  # no alias or Gymnasium id is longer
 
 
 def resolve_env_id(name: str, *, from_data: bool = False) -> str:
-    """An alias (`blackjack`, `taxi`, ...) or a Gymnasium id, as the id a session builds.
-
-    An id no registered game plays must be one Gymnasium knows (with `module:`
-    in front, after importing that module) whose env fits a generic game.
-    `from_data`: the text came from a file or a program, so no module is
-    imported for it (`UnknownGameError` saying how to open it on purpose).
-    """
+    """An alias (`blackjack`, `taxi`, ...) or a Gymnasium id (`module:Id` imports the
+    module, unless `from_data`: text from a file or a program) as the id a session builds."""
     if not isinstance(name, str):
         raise UnknownGameError(f"a game id is text, not a {type(name).__name__}")
     text = name.strip()
@@ -75,23 +70,17 @@ def resolve_env_id(name: str, *, from_data: bool = False) -> str:
     for game in GAMES:
         if game.name == text.lower() or game.matches(text):
             return game.env_id if game.name == text.lower() else text
-    if from_data:
-        _check_no_import(text)
+    module = text.rpartition(":")[0]
+    if from_data and module and module not in sys.modules:
+        raise ImportRefusedError(
+            f"{visible(text, 60)} would import the module {visible(module, 40)}, and ids from "
+            f"files and programs never import code; to play it on purpose, name it yourself: "
+            f"tui-gym --env {visible(text, 60)} ..."
+        )
     if text in _generic:
         return text
     _check_generic(text)
     return text
-
-
-def _check_no_import(env_id: str) -> None:
-    """`UnknownGameError` when building `env_id` would import a module not imported yet."""
-    module = env_id.rpartition(":")[0]
-    if module and module not in sys.modules:
-        raise ImportRefusedError(
-            f"{visible(env_id, 60)} would import the module {visible(module, 40)}, and ids from "
-            f"files and programs never import code; to play it on purpose, name it yourself: "
-            f"tui-gym --env {visible(env_id, 60)} ..."
-        )
 
 
 def game_for(env_id: str, *, from_data: bool = False) -> Game:

@@ -47,10 +47,8 @@ UNREADABLE = (TypeError, ValueError, KeyError, IndexError, AttributeError)
 
 @dataclass(frozen=True)
 class Scope:
-    """Whether a game's exact figures describe the game as it is played (with its
-    wrappers), and a note for people when there is something to say: which
-    wrappers they take into account, or that they are figures of the unwrapped
-    game because a wrapper changes it in a way they cannot follow."""
+    """Whether a game's exact figures describe the game as played (wrappers included),
+    and a note for people saying which wrappers they follow, or which they cannot."""
 
     exact: bool = True
     note: str = ""
@@ -70,15 +68,9 @@ class ReferenceMetrics:
 
 @dataclass(frozen=True)
 class Advice:
-    """What the exact optimum would do in the env's current state.
-
-    `optimal` and `values` are for the game as played, wrappers included;
-    when the wrappers change it in a way the exact figures cannot follow,
-    both are empty and `unwrapped_optimal` holds the unwrapped game's optimum
-    (the note says so), so nothing claims an optimum that may not be one.
-    `equal` lists actions worth as much as the optimal ones that the coach
-    does not call optimal (they waste a step while time remains).
-    """
+    """What the exact optimum would do in the env's current state, wrappers included;
+    where they change the game beyond the exact figures, only `unwrapped_optimal`. `equal`:
+    actions worth as much that waste a step while time remains."""
 
     optimal: tuple[int, ...]  # every optimal action (empty when there is no decision)
     values: dict[int, float] | None = None  # exact expected return per action, when known
@@ -98,10 +90,8 @@ class TallyWord(NamedTuple):
 
 @dataclass(frozen=True, eq=False)
 class TrainingModel:
-    """A game's model as the wrappers make it, for the engine: `model`, and `rows`, the
-    agent's table row of each model state (None: state s is row s); in a world that
-    changes as it is played, `model` is its first phase and `later` each later phase's
-    (start step, model)."""
+    """A game's model as the wrappers make it, for the engine: `rows`, the table row of
+    each model state (None: row s); `later`, each later phase's (start step, model)."""
 
     model: FiniteMDP
     rows: np.ndarray | None = None
@@ -146,9 +136,8 @@ class StateSpace(Role):
         return str(to_jsonable(observation))
 
     def scene(self, env: Any, before: Mapping[str, Any] | None = None) -> dict[str, Any]:
-        """What the game's board draws of the env's current state (plain data, a copy);
-        empty before the first reset. `before` is the scene before the last move, when
-        known: a board says from it what the move did (a slip, an illegal pick-up)."""
+        """What the game's board draws of the env's state (plain data, a copy; empty before the
+        first reset); `before`, the scene before the last move, tells what the move did."""
         try:
             return self.read_scene(env.unwrapped, before or {})
         except UNREADABLE:
@@ -178,9 +167,8 @@ class Oracle(Role):
     def reference(
         self, q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> ReferenceMetrics | NotAvailable:
-        """The greedy policy of `q` (rows: base states; ties broken at random, as the
-        agent breaks them) beside the optimum, in the game as the wrappers make it
-        where `scope` says it can be."""
+        """The greedy policy of `q` (rows: base states; ties at random) beside the optimum,
+        in the game as the wrappers make it where `scope` says it can be."""
         return NotAvailable(f"{self.game.title} has no exact optimum")
 
     def evaluation_reference(
@@ -222,8 +210,7 @@ class Oracle(Role):
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> tuple[float, float] | NotAvailable:
         """The lowest and the highest return one episode can have, in the game as the
-        wrappers make it (±inf on a side with no bound; `core.mdp.return_range` reads
-        them off a model): what a chart of returns never needs to show beyond."""
+        wrappers make it (±inf on a side with no bound): what a chart never shows beyond."""
         return NotAvailable(f"{self.game.title} has no exact model")
 
     def bound(
@@ -341,9 +328,8 @@ class Narrator(Role):
         self, you: Scorecard, figures: Mapping[str, float] | None, watched: Scorecard | None = None,
         agent_note: str = "", scope: Scope = EXACT,
     ) -> list[ScoreRow]:
-        """The rows: the person's mean return and agreement, the agent's and the
-        optimum's exact values (`figures` from `Oracle.agent_figures`), the episodes
-        watched; `scope` says whether the exact figures are of the game as played."""
+        """The rows: the person's mean return and agreement, the agent's and the optimum's
+        exact values (`figures` from `Oracle.agent_figures`, of `scope`), what was watched."""
         figures = figures or {}
         noun = self.game.episode_noun
         words = self.agreement_words
@@ -455,14 +441,21 @@ class HeatmapLayout(Role):
 TIED = "·"  # a heatmap cell whose actions tie
 
 
-def greedy_cells(
-    rows: int, cols: int, fixed: Callable[[int, int], str | None],
-    q_at: Callable[[int, int], np.ndarray], arrow: Callable[[int], str],
-    wrong: Callable[[int, int, int], bool], tied: Callable[[int, int], str] = lambda r, c: TIED,
-) -> tuple[np.ndarray, tuple[tuple[str, ...], ...], np.ndarray]:
-    """A panel's max Q, labels and marks, cell by cell: the `fixed` label where there is one
+def numbered(count: int) -> tuple[str, ...]:
+    """Row or column labels '0' to 'count - 1'."""
+    return tuple(str(i) for i in range(count))
+
+
+def greedy_panel(
+    title: str, legend: str, row_labels: tuple[str, ...], col_labels: tuple[str, ...],
+    fixed: Callable[[int, int], str | None], q_at: Callable[[int, int], np.ndarray],
+    arrow: Callable[[int], str], wrong: Callable[[int, int, int], bool],
+    tied: Callable[[int, int], str] = lambda r, c: TIED,
+) -> Heatmap:
+    """A panel of max Q and labels, cell by cell: the `fixed` label where there is one
     (and no value), else max Q with the `tied` label where every action ties, or else the
     greedy action's `arrow`, marked where that action is `wrong`."""
+    rows, cols = len(row_labels), len(col_labels)
     values = np.full((rows, cols), np.nan)
     marked = np.zeros((rows, cols), dtype=bool)
     labels = []
@@ -481,7 +474,7 @@ def greedy_cells(
                     marked[r, c] = wrong(r, c, action)
             line.append(label)
         labels.append(tuple(line))
-    return values, tuple(labels), marked
+    return Heatmap(title, row_labels, col_labels, values, tuple(labels), marked, legend)
 
 
 # --- the game ----------------------------------------------------------------------
@@ -607,10 +600,8 @@ class Game:
     def default_hyperparameters(
         self, algorithm: str, kwargs: Mapping[str, Any] | None = None, prediction: bool = False
     ) -> dict[str, Any]:
-        """The values this game sets for an algorithm (by registry name) with these
-        arguments, over the algorithm's own defaults; parameters the algorithm lacks
-        are left to the caller (see the README). Its "*" entry is for the control
-        learners; a prediction learner takes its "prediction" entry instead."""
+        """The values this game sets for an algorithm (by registry name) over its defaults:
+        the "*" entry (a prediction learner's "prediction" entry), then the algorithm's."""
         table = self.hyperparameter_table(kwargs)
         return {**table.get("prediction" if prediction else "*", {}), **table.get(algorithm, {})}
 

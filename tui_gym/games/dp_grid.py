@@ -11,7 +11,7 @@ import numpy as np
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP
 from tui_gym.envs.dp_grid import GRID_ACTIONS, Cell, Grid
-from tui_gym.games.base import TIED, UNREADABLE, HeatmapLayout, greedy_cells
+from tui_gym.games.base import TIED, UNREADABLE, HeatmapLayout, greedy_panel, numbered
 from tui_gym.games.model import DiscreteStates, ModelGame, freeze
 
 __all__ = ["ARROWS", "DPGridGame", "DPGridLayout", "DPGridStates", "Event"]
@@ -25,21 +25,13 @@ WALL = "█"
 Event = tuple[str, str]  # what a move did ('{who} ...'), and its tone on the board
 
 
-def _game(role: Any) -> DPGridGame:
-    game = role.game
-    assert isinstance(game, DPGridGame)
-    return game
-
-
-def _cell(value: Any) -> Cell | None:
-    return None if value is None else (int(value[0]), int(value[1]))
-
-
 class DPGridStates(DiscreteStates):
     """Cells of the grid; the tile board's scene."""
 
+    game: DPGridGame
+
     def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
-        grid = _game(self).grid(kwargs)
+        grid = self.game.grid(kwargs)
         cell = divmod(int(observation), grid.cols)
         if not 0 <= cell[0] < grid.rows:
             raise ValueError(f"no cell {observation}")
@@ -50,11 +42,11 @@ class DPGridStates(DiscreteStates):
 
     def json_observation(self, observation: Any) -> Any:
         """A cell as [row, col]."""
-        game = _game(self)
+        game = self.game
         return list(divmod(int(observation), game.grid(game.default_kwargs()).cols))
 
     def read_scene(self, game_env: Any, before: Mapping[str, Any]) -> dict[str, Any]:
-        game = _game(self)
+        game = self.game
         grid: Grid = game_env.grid
         state, last = game_env.s, game_env.lastaction
         agent = None if state is None else divmod(int(state), grid.cols)
@@ -71,9 +63,9 @@ class DPGridStates(DiscreteStates):
             scene["offered"] = list(grid.moves)
         if grid.wind:
             scene["wind"], scene["gusts"] = list(grid.wind), grid.gusts
-        was = _cell(before.get("agent"))
+        was = before.get("agent")
         if was is not None and agent is not None and move is not None:
-            event = game.event(game_env, before, was, agent, move)
+            event = game.event(game_env, before, (int(was[0]), int(was[1])), agent, move)
             if event is not None:
                 scene["event"], scene["event_tone"] = event
         return scene
@@ -82,10 +74,12 @@ class DPGridStates(DiscreteStates):
 class DPGridLayout(HeatmapLayout):
     """One panel shaped like the grid: max Q colours each cell, the greedy move's arrow."""
 
+    game: DPGridGame
+
     def heatmaps(
         self, q: np.ndarray, kwargs: Mapping[str, Any], focus: Any = None, marks: Any = None,
     ) -> list[Heatmap]:
-        game = _game(self)
+        game = self.game
         try:
             grid = game.grid(kwargs)
             rows, cols = grid.rows, grid.cols
@@ -93,26 +87,19 @@ class DPGridLayout(HeatmapLayout):
         except UNREADABLE:
             return []
         has_marks = isinstance(marks, np.ndarray) and marks.shape == values.shape
-        panel, labels, marked = greedy_cells(
-            rows, cols,
+        parts = ["arrow: greedy move", f"{TIED} tie",
+                 *(f"{grid.letters[cell]} jumps" for cell in grid.jumps),
+                 *([f"{END} terminal"] if grid.terminals else []),
+                 *([f"{WALL} wall"] if grid.walls else []), "* not an optimal move"]
+        return [greedy_panel(
+            "max Q and the greedy move", "  ".join(parts), numbered(rows), numbered(cols),
             lambda r, c: END if (r, c) in grid.terminals else WALL if (r, c) in grid.walls
             else None,
             lambda r, c: values[r * cols + c],
             lambda action: ARROWS.get(grid.moves[action], grid.moves[action]),
             lambda r, c, action: has_marks and not marks[r * cols + c, action],
             lambda r, c: grid.letters.get((r, c), TIED),
-        )
-        parts = ["arrow: greedy move", f"{TIED} tie",
-                 *(f"{grid.letters[cell]} jumps" for cell in grid.jumps),
-                 *([f"{END} terminal"] if grid.terminals else []),
-                 *([f"{WALL} wall"] if grid.walls else []), "* not an optimal move"]
-        return [
-            Heatmap(
-                title="max Q and the greedy move", row_labels=tuple(str(r) for r in range(rows)),
-                col_labels=tuple(str(c) for c in range(cols)), values=panel, labels=labels,
-                marked=marked, legend="  ".join(parts),
-            )
-        ]
+        )]
 
 
 @lru_cache(maxsize=64)

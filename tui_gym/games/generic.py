@@ -104,8 +104,6 @@ class TableLayout(HeatmapLayout):
 class GenericGame(ModelGame):
     """An env of the caller's choosing, played from its transition table."""
 
-    board = "text"
-
     def __init__(self, env_id: str) -> None:
         super().__init__()
         self.env_id = env_id
@@ -121,8 +119,5 @@ class GenericGame(ModelGame):
             env.close()
         self.states = GenericStates(self)
         self.layout = TableLayout(self)
-        self.layout.has_focus = self._states() > PAGE
-
-    def _states(self) -> int:
         model = self.base_model({})
-        return 0 if isinstance(model, NotAvailable) else model.n_states
+        self.layout.has_focus = not isinstance(model, NotAvailable) and model.n_states > PAGE

@@ -1,8 +1,5 @@
-"""Games with an exact model: the oracle every finite game shares.
-
-With gamma 1 a wasted step costs nothing, so the coach and the heatmaps call optimal
-only the quickest actions of optimal value (best again when discounted by `TIE_GAMMA`);
-the others are `Advice.equal`.
+"""Games with an exact model: the oracle every finite game shares. Optimal are the quickest
+actions of optimal value (best again discounted by `TIE_GAMMA`); the others `Advice.equal`.
 """
 
 from __future__ import annotations
@@ -11,7 +8,7 @@ import threading
 from bisect import bisect_right
 from collections.abc import Mapping
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from typing import Any, ClassVar
 
 import numpy as np
@@ -105,14 +102,9 @@ def elapsed_steps(env: Any) -> int | None:
     """Steps taken this episode as the env's tightest `TimeLimit` counts them, or None."""
     from tui_gym.core.wrappers import chain
 
-    best: tuple[int, int] | None = None  # (steps left, elapsed)
-    for layer in chain.layers(env):
-        limit = chain.time_limit(layer)
-        if limit is not None:
-            done = chain.elapsed(layer)
-            if best is None or limit - done < best[0]:
-                best = (limit - done, done)
-    return None if best is None else best[1]
+    limits = [(limit - chain.elapsed(layer), chain.elapsed(layer)) for layer in chain.layers(env)
+              if (limit := chain.time_limit(layer)) is not None]  # (steps left, elapsed)
+    return min(limits, key=lambda pair: pair[0])[1] if limits else None
 
 
 @dataclass(frozen=True)
@@ -123,17 +115,25 @@ class _Exact:
     ladder: Ladder
     scope: Scope
 
+    @cached_property
+    def value(self) -> float:
+        """The optimum's value."""
+        return expected_value(self.model, self.ladder.q().max(axis=1))
+
+    @cached_property
+    def fixed(self) -> FixedBound:
+        """The best fixed policy a local search finds, beside the optimum."""
+        return best_fixed_policy(self.model, self.ladder)
+
 
 class DiscreteStates(StateSpace):
     """States that are the env's `Discrete` observations, one per model state."""
 
+    game: ModelGame
+
     def base_observations(self, kwargs: Mapping[str, Any]) -> list[Any] | NotAvailable:
-        game = self.game
-        assert isinstance(game, ModelGame)
-        model = game.base_model(kwargs)
-        if isinstance(model, NotAvailable):
-            return model
-        return list(range(model.n_states))
+        model = self.game.base_model(kwargs)
+        return model if isinstance(model, NotAvailable) else list(range(model.n_states))
 
     def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
         return f"state {int(observation)}"
@@ -142,17 +142,13 @@ class DiscreteStates(StateSpace):
 class ModelOracle(Oracle):
     """Exact figures from the game's model (see the module docstring)."""
 
+    game: ModelGame
+
     def __init__(self, game: ModelGame) -> None:
         super().__init__(game)
         self._kept: dict[Any, _Exact | NotAvailable] = {}
-        self._bounds: dict[Any, FixedBound | NotAvailable] = {}
         self._references: dict[Any, ReferenceMetrics] = {}  # per greedy policy
         self._lock = threading.Lock()  # the Train view's worker thread reads them too
-
-    @property
-    def model_game(self) -> ModelGame:
-        assert isinstance(self.game, ModelGame)
-        return self.game
 
     # --- the model as played ---------------------------------------------------
     def exact(
@@ -175,19 +171,19 @@ class ModelOracle(Oracle):
         return value
 
     def _build(self, kwargs: Mapping[str, Any], changes: GameChanges) -> _Exact | NotAvailable:
-        game = self.model_game
+        game = self.game
         base = game.base_model(kwargs)
         if isinstance(base, NotAvailable):
             return base
-        if changes.others:
+        unwrapped = unwrapped_note(changes.others) if changes.others else ""
+        if not unwrapped:
+            try:
+                model = changes.model(base)
+            except ValueError as error:
+                unwrapped = f"figures of the unwrapped game: {error}"
+        if unwrapped:
             model = with_horizon(base, game.episode_limit(kwargs))
-            return _Exact(model, Ladder(model), Scope(False, unwrapped_note(changes.others)))
-        try:
-            model = changes.model(base)
-        except ValueError as error:
-            model = with_horizon(base, game.episode_limit(kwargs))
-            return _Exact(model, Ladder(model), Scope(False, f"figures of the unwrapped game: "
-                                                             f"{error}"))
+            return _Exact(model, Ladder(model), Scope(False, unwrapped))
         notes = []
         if changes.changes_rewards:
             notes.append(changes.reward_names())
@@ -198,9 +194,7 @@ class ModelOracle(Oracle):
 
     def scope(self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES) -> Scope:
         exact = self.exact(kwargs, changes)
-        if isinstance(exact, NotAvailable):
-            return Scope(False, exact.reason)
-        return exact.scope
+        return Scope(False, exact.reason) if isinstance(exact, NotAvailable) else exact.scope
 
     # --- the greedy policy beside the optimum ------------------------------------
     def reference(
@@ -216,7 +210,7 @@ class ModelOracle(Oracle):
                 f"a table of shape {values.shape} does not fit {model.n_states} states "
                 f"and {model.n_actions} actions"
             )
-        offered = self.model_game.offered_actions(kwargs)
+        offered = self.game.offered_actions(kwargs)
         if offered is not None and offered.shape == values.shape:  # greedy among those
             values = np.where(offered, values, -np.inf)
         # The figures follow from the greedy policy alone, which training changes less
@@ -234,9 +228,9 @@ class ModelOracle(Oracle):
         """The exact figures of `policy` (`[S, A]`, a greedy policy) beside the optimum."""
         model = exact.model
         value = evaluate(model, policy).value
-        best = expected_value(model, exact.ladder.q().max(axis=1))
+        best = exact.value
         gap = gap_of(best, value)
-        places = self.model_game.narrator.value_places
+        places = self.game.narrator.value_places
         return ReferenceMetrics(
             figures={"exact_value": value, "optimal_value": best, "gap": gap},
             summary=f"exact value {signed(value, places)}  optimum {signed(best, places)}  "
@@ -251,17 +245,17 @@ class ModelOracle(Oracle):
         if isinstance(exact, NotAvailable):
             return {}
         if q is None:
-            return {"optimal_value": expected_value(exact.model, exact.ladder.q().max(axis=1))}
+            return {"optimal_value": exact.value}
         reference = self.reference(q, kwargs, changes)
         return {} if isinstance(reference, NotAvailable) else dict(reference.figures)
 
     # --- what to do here ----------------------------------------------------------
     def advice(self, env: Any, kwargs: Mapping[str, Any]) -> Advice:
-        changes = GameChanges.of(env, self.model_game.episode_limit(kwargs))
+        changes = GameChanges.of(env, self.game.episode_limit(kwargs))
         exact = self.exact(kwargs, changes)
         if isinstance(exact, NotAvailable):
             return Advice((), None, exact.reason)
-        state = self.model_game.state_of(env)
+        state = self.game.state_of(env)
         model = exact.model
         if state is None or not 0 <= state < model.n_states:
             return Advice((), None, "no episode running")
@@ -277,7 +271,7 @@ class ModelOracle(Oracle):
         values = {a: float(v) for a, v in enumerate(q)}
         optimal = tuple(int(a) for a in np.flatnonzero(quickest))
         equal = tuple(int(a) for a in np.flatnonzero(best & ~quickest))
-        places = self.model_game.narrator.value_places
+        places = self.game.narrator.value_places
         listed = ", ".join(f"{names[a]} {signed(v, places)}" for a, v in values.items())
         chosen = " or ".join(names[a] for a in optimal)
         if not exact.scope.exact:
@@ -290,22 +284,19 @@ class ModelOracle(Oracle):
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> BoolArray | NotAvailable:
         exact = self.exact(kwargs, changes)
-        if isinstance(exact, NotAvailable):
-            return exact
-        return exact.ladder.choices()[1]
+        return exact if isinstance(exact, NotAvailable) else exact.ladder.choices()[1]
 
     def optimum(self, kwargs: Mapping[str, Any]) -> Optimum | NotAvailable:
-        game = self.model_game
+        game = self.game
         exact = self.exact(kwargs, game.own_changes(kwargs))
         if isinstance(exact, NotAvailable):
             return exact
-        model, ladder = exact.model, exact.ladder
-        q = ladder.q()
-        value = expected_value(model, q.max(axis=1))
-        limit = "no episode limit" if model.horizon is None else f"{model.horizon}-step episodes"
+        horizon = exact.model.horizon
+        limit = "no episode limit" if horizon is None else f"{horizon}-step episodes"
         return Optimum(
-            value=value, summary=f"the best expected return of an episode ({limit}, undiscounted)",
-            q=q, marks=ladder.choices()[1],
+            value=exact.value,
+            summary=f"the best expected return of an episode ({limit}, undiscounted)",
+            q=exact.ladder.q(), marks=exact.ladder.choices()[1],
         )
 
     def bound(
@@ -316,7 +307,7 @@ class ModelOracle(Oracle):
         fixed = self.fixed_policy_bound(kwargs, changes)
         if isinstance(fixed, NotAvailable):
             return fixed
-        share = self.model_game.gap_tolerance(kwargs)
+        share = self.game.gap_tolerance(kwargs)
         limit = fixed.shortfall + share * abs(fixed.optimal_value)
         text = f"gap <= {limit:.4g}"
         if share:
@@ -339,22 +330,13 @@ class ModelOracle(Oracle):
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> FixedBound | NotAvailable:
         exact = self.exact(kwargs, changes)
-        if isinstance(exact, NotAvailable):
-            return exact
-        key = (freeze(kwargs), changes)
-        if key not in self._bounds:
-            self._bounds[key] = best_fixed_policy(exact.model, exact.ladder)
-        return self._bounds[key]
+        return exact if isinstance(exact, NotAvailable) else exact.fixed
 
 
 def best_fixed_policy(model: FiniteMDP, ladder: Ladder) -> FixedBound:
-    """The best fixed policy a local search finds, beside the optimum.
-
-    Candidates: the optimum's own fixed policy and the optima with no episode
-    limit (discounted by 1, 0.999 and 0.99); from the best of them, single-state
-    changes that raise the exact value are taken, the best first, until none
-    does (skipped for models past `SEARCH_LIMIT` state-action pairs).
-    """
+    """The best fixed policy a local search finds, beside the optimum: the best of the
+    optimum's own and the unlimited optima (gamma 1, 0.999, 0.99), then improved by
+    single-state changes (up to `SEARCH_LIMIT` state-action pairs)."""
     optimal = expected_value(model, ladder.q().max(axis=1))
     candidates = [solve(model).policy]
     if model.horizon is not None:
@@ -407,17 +389,14 @@ def _values_of(model: FiniteMDP, policies: np.ndarray) -> FloatArray:
 
 
 class ModelGame(Game):
-    """A game whose exact model is its env's transition table (see the module docstring).
-
-    Subclasses name the game and may override `base_model` (a model of their
-    own), `state_of` (the current state of a built env) and `episode_limit`.
-    """
+    """A game whose exact model is its env's transition table (or its own `base_model`)."""
 
     render_mode: str | None = "ansi"
     plan_gamma = 1.0  # the discount the Plan view starts with
 
     states_type: ClassVar[type[StateSpace]] = DiscreteStates
     oracle_type: ClassVar[type[Oracle]] = ModelOracle
+    oracle: ModelOracle
 
     def plan_model(self, kwargs: Mapping[str, Any]) -> PlanModel | NotAvailable:
         model = self.base_model(kwargs)
@@ -448,7 +427,7 @@ class ModelGame(Game):
         never changes), or why there is none that follows the game as played."""
         models = []
         for phase in range(len(self.phase_starts(kwargs))):
-            exact = self.model_oracle.exact(self.in_phase(kwargs, phase), changes)
+            exact = self.oracle.exact(self.in_phase(kwargs, phase), changes)
             if isinstance(exact, NotAvailable):
                 return exact
             if not exact.scope.exact:
@@ -460,11 +439,6 @@ class ModelGame(Game):
         """`[states, actions]`: the actions each state offers, for a game whose states do
         not all offer every action (None: every state offers every action)."""
         return None
-
-    @property
-    def model_oracle(self) -> ModelOracle:
-        assert isinstance(self.oracle, ModelOracle)
-        return self.oracle
 
     def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP | NotAvailable:
         """The game's model with no wrappers and no episode limit (kept per arguments)."""

@@ -1,7 +1,5 @@
-"""`PlanModel`: what a game hands the Plan view, `tui-gym plan` and the book to plan on.
-
-`value_panel` (state values on the heatmap's grid, as for Jack's car rental) and `line`
-(states along one axis, as the gambler's capital) draw values as the book does.
+"""`PlanModel`: what a game hands the Plan view, `tui-gym plan` and the book to plan on;
+`value_panel` (a grid of state values) and `line` (states along one axis) draw values.
 """
 
 from __future__ import annotations
@@ -43,14 +41,9 @@ class StateLine:
 
 @dataclass(frozen=True, eq=False)
 class PlanModel:
-    """A game's model for planning.
-
-    `base_of[s]`: the base state whose action model state `s` takes; `shown[b]`:
-    the model state whose value base state `b` shows. `gamma`: the discount
-    planning starts with; `horizon`: the episode limit of the tool's exact values;
-    `value_panel` and `line`: see the module docstring. `offered`: `[B, A]`, the actions
-    each base state offers (None: every action everywhere); start policies keep to them.
-    """
+    """A game's model for planning: `base_of[s]`, the base state whose action model state
+    `s` takes; `shown[b]`, the model state base state `b` shows; `gamma` to start with;
+    `horizon` of the exact values; `offered` `[B, A]` (None: every action everywhere)."""
 
     model: FiniteMDP
     gamma: float = 1.0

@@ -1,9 +1,7 @@
 """Finite MDPs, solved exactly: the ruler every agent on a finite game is measured against.
 
-With an episode limit H a value counts at most H steps and the optimum comes from
-backward induction (no fixed policy beats it, so a gap is never negative); with no limit
-it is discounted (gamma < 1) or the total of an episode (gamma = 1; minus infinity for a
-policy that may never end one).
+With an episode limit H a value counts at most H steps (the optimum by backward induction);
+with none it is discounted, or with gamma 1 an episode's total (-inf if it may never end).
 """
 
 from tui_gym.core.mdp.evaluation import evaluate, return_range

@@ -33,13 +33,8 @@ def check_gamma(gamma: float) -> float:
 
 @dataclass(frozen=True)
 class PolicyValue:
-    """The exact value of one policy.
-
-    `v[s]`: the value of an episode started in `s`; `value`: the initial
-    distribution's average of it. `never_ends`: with no limit and gamma = 1,
-    the policy may never end an episode from the initial distribution, and
-    `value` is minus infinity (likewise `v` at every state it may not end from).
-    """
+    """The exact value of one policy: `v[s]` from each state, `value` over the start;
+    `never_ends` (no limit, gamma 1): it may never end an episode, and `value` is -inf."""
 
     v: FloatArray
     value: float
@@ -62,11 +57,8 @@ def expected_value(model: FiniteMDP, v: FloatArray) -> float:
 
 
 def backup(model: FiniteMDP, v: FloatArray, gamma: float) -> FloatArray:
-    """`[S, A]`: one step's expected reward plus the discounted value of where it leads.
-
-    An infinite `v` at a state an action may continue to makes that action's
-    value the same infinity (minus infinity when both signs are possible).
-    """
+    """`[S, A]`: one step's expected reward plus the discounted value of where it leads (an
+    infinite `v` an action may reach makes its value that infinity; -inf for both signs)."""
     finite = np.isfinite(v)
     if finite.all():
         return model.expected_reward + gamma * (model.continue_prob * v[model.next_state]).sum(
@@ -98,12 +90,8 @@ def _transition_matrix(
 def solve_linear(
     model: FiniteMDP, matrix: FloatArray, gamma: float, rows: npt.NDArray[np.bool_]
 ) -> FloatArray:
-    """The values on `rows` of `v = r + gamma P v`, for a policy that ends surely on `rows`.
-
-    Every continuation from `rows` must stay in `rows`. Dense up to
-    `DENSE_LIMIT` states; above it, the Bellman expectation is iterated until
-    it stops changing at round-off.
-    """
+    """The values on `rows` of `v = r + gamma P v`, for a policy that ends surely on `rows`
+    and never leaves them: a dense solve up to `DENSE_LIMIT` states, else iterated."""
     n = int(rows.sum())
     if n == 0:
         return np.zeros(0)
@@ -169,11 +157,8 @@ def _backward_reach(
 
 
 def policy_ends(model: FiniteMDP, matrix: npt.NDArray[np.float64]) -> BoolArray:
-    """`[S]`: the states from which the policy `matrix` (`[S, A]`) ends the episode surely.
-
-    A state fails when the policy can reach from it a state from which it can
-    never end: in a finite chain every other path ends with probability 1.
-    """
+    """`[S]`: the states from which the policy `matrix` (`[S, A]`) ends the episode surely:
+    those that cannot reach a state from which it can never end."""
     possible = (matrix[:, :, None] > 0) & (model.prob > 0)
     moves = possible & ~model.terminal
     ends_now: BoolArray = np.any(possible & model.terminal, axis=(1, 2))
@@ -183,13 +168,8 @@ def policy_ends(model: FiniteMDP, matrix: npt.NDArray[np.float64]) -> BoolArray:
 
 @dataclass(frozen=True)
 class SurelyEnding:
-    """Where the episode can be ended with probability 1, and how.
-
-    `states[s]`: some policy ends the episode surely from `s`. `safe[s, a]`:
-    taking `a` in such a state keeps every continuation inside `states`.
-    `policy[s]`: a safe action that, always taken, ends the episode surely
-    (it moves closer to an end with positive probability); 0 outside `states`.
-    """
+    """Where the episode can be ended with probability 1 (`states`), the actions that stay
+    inside them (`safe`), and a safe `policy` that ends it surely (0 outside `states`)."""
 
     states: BoolArray
     safe: BoolArray

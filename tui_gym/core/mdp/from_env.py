@@ -73,16 +73,9 @@ def model_from_env(
     """The exact model of `env` (its unwrapped states) under its wrappers as
     `GameChanges` reads them, or `NotAvailable` saying why there is none.
 
-    Args:
-        env: a Gymnasium env, wrapped or not.
-        initial: the initial-state distribution, for an env that does not carry one
-            (it replaces the env's own when given).
-        horizon: the episode limit: "env" reads it from the env's `TimeLimit`
-            wrappers (none: no limit); an int or None sets it.
-        action_names: a name per action, kept on the model.
-
-    Raises `ValueError` only for bad arguments (a horizon below 1, an initial
-    distribution of the wrong size or that does not sum to 1).
+    `initial` replaces the env's start distribution; `horizon` "env" reads the limit
+    from its `TimeLimit` wrappers, an int or None sets it. `ValueError` only for bad
+    arguments (a horizon below 1, an initial distribution that does not fit).
     """
     if (
         horizon != "env"

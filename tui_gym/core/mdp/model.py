@@ -33,22 +33,11 @@ def _frozen(array: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class FiniteMDP:
-    """A finite MDP with S states, A actions and at most K outcomes per state-action pair.
-
-    Attributes:
-        next_state: `[S, A, K]` int, the state each outcome leads to.
-        prob: `[S, A, K]` float, each outcome's probability; each `[s, a]` row sums to 1.
-        reward: `[S, A, K]` float, the reward paid on that outcome.
-        terminal: `[S, A, K]` bool, whether that outcome ends the episode (terminated).
-        initial: `[S]` float, the distribution of the state an episode starts in.
-        horizon: the episode limit H (an episode is cut off after H steps), or None.
-        action_names: a name per action, or None.
-        reward_std: `[S, A, K]` float >= 0, the standard deviation of the normal
-            distribution each outcome's reward is drawn from (mean `reward`), or None
-            where every reward is certain.
-
-    Arrays are copied, checked and made read-only; a bad one raises `ModelError`.
-    """
+    """A finite MDP with S states, A actions and at most K outcomes per state-action pair:
+    `[S, A, K]` arrays `next_state`, `prob` (each `[s, a]` summing to 1), `reward`,
+    `terminal` and `reward_std` (a normal deviation around `reward`, or None); `initial`
+    `[S]`; `horizon`, the episode limit or None. Arrays are copied, checked (`ModelError`)
+    and made read-only."""
 
     next_state: IntArray
     prob: FloatArray
@@ -121,14 +110,11 @@ class FiniteMDP:
             names = tuple(str(name) for name in names)
             if len(names) != n_actions:
                 raise ModelError(f"{len(names)} action names for {n_actions} actions")
-        object.__setattr__(self, "prob", _frozen(prob))
-        object.__setattr__(self, "next_state", _frozen(next_state.astype(np.int64)))
-        object.__setattr__(self, "reward", _frozen(arrays["reward"]))
-        object.__setattr__(self, "terminal", _frozen(arrays["terminal"]))
-        object.__setattr__(self, "initial", _frozen(initial))
-        object.__setattr__(self, "horizon", horizon)
-        object.__setattr__(self, "action_names", names)
-        object.__setattr__(self, "reward_std", reward_std)
+        arrays.update(next_state=next_state.astype(np.int64), initial=initial)
+        checked = {**{name: _frozen(array) for name, array in arrays.items()},
+                   "horizon": horizon, "action_names": names, "reward_std": reward_std}
+        for name, value in checked.items():
+            object.__setattr__(self, name, value)
 
     # -- sizes ------------------------------------------------------------------
 
@@ -207,14 +193,9 @@ class FiniteMDP:
         horizon: int | None = None,
         action_names: Sequence[str] | None = None,
     ) -> FiniteMDP:
-        """Build a model from `table[s][a] = [(prob, next_state, reward, terminated), ...]`.
-
-        Outcomes with the same next state, reward and terminated flag are merged
-        (their probabilities added); outcomes of probability 0 are dropped. The
-        numbers of states and actions default to the table's size. Raises
-        `ModelError` for a missing state or action, or an outcome that is not a
-        4-tuple of numbers.
-        """
+        """Build a model from `table[s][a] = [(prob, next_state, reward, terminated), ...]`,
+        merging equal outcomes and dropping those of probability 0 (`ModelError` for a
+        missing state or action, or a malformed outcome)."""
         n_states = len(table) if n_states is None else n_states
         if n_states < 1:
             raise ModelError("the table has no states")
@@ -304,8 +285,3 @@ class Phases:
             raise ModelError(f"the phases' models differ in size: {sorted(sizes)}")
         object.__setattr__(self, "models", models)
         object.__setattr__(self, "starts", starts)
-
-    @classmethod
-    def of(cls, model: FiniteMDP) -> Phases:
-        """A world that never changes."""
-        return cls((model,), (0,))

@@ -31,20 +31,11 @@ CHOICES_KEPT = 8  # optimal-action masks (and rungs solved past LADDER_LIMIT) ke
 class Solution:
     """The optimum of a model.
 
-    `q[s, a]`: the best value of an episode that takes `a` in `s` and plays
-    optimally after, with `steps_left` steps to go (None: no limit). `v[s]`:
-    the best over actions; `value`: the initial distribution's average of `v`,
-    the optimum. `policy[s]`: an optimal action to take in `s`, chosen so
-    that, always taken, it makes a good fixed policy: with no limit it is an
-    optimal fixed policy (one that ends episodes surely, with gamma = 1); with
-    a limit, of the actions optimal with `steps_left` to go, one that stays
-    optimal for the most step counts below (the one needing the least time to
-    spare; no fixed policy need reach a limited game's optimum).
-
-    With no limit and gamma = 1, `v[s]` is minus infinity where no policy
-    surely ends the episode (and `q` where an action may lead there); plus
-    infinity everywhere when a cycle that gains reward can be repeated at will
-    before ending (the optimum is then unbounded).
+    `q[s, a]`: the best value of taking `a` in `s`, with `steps_left` to go (None: no
+    limit); `v` the best over actions; `value` its average over the start. `policy[s]`:
+    an optimal action making a good fixed policy (with a limit, the one that stays
+    optimal for the most step counts below). With no limit and gamma = 1, `v` is -inf
+    where no policy surely ends, and +inf everywhere when the optimum is unbounded.
     """
 
     q: FloatArray
@@ -60,11 +51,8 @@ class Solution:
 
 
 def optimal_actions(q: npt.ArrayLike, atol: float = 1e-9, rtol: float = 1e-9) -> BoolArray:
-    """`[S, A]`: the actions within `atol + rtol * |best|` of each row's best value.
-
-    Where the best is infinite only the actions equal to it count (a row all
-    minus infinity marks every action).
-    """
+    """`[S, A]`: the actions within `atol + rtol * |best|` of each row's best value (equal
+    to it where it is infinite)."""
     values = np.asarray(q, dtype=np.float64)
     best = values.max(axis=1, keepdims=True)
     if np.isfinite(best).all():
@@ -92,13 +80,8 @@ def _solution(
 
 
 def _backward_induction(model: FiniteMDP, gamma: float, steps: int) -> tuple[FloatArray, IntArray]:
-    """Q with `steps` steps left, and the optimal action there that has been optimal longest.
-
-    Ties are common with gamma = 1 (a wasted step costs nothing while time
-    remains), so among the actions optimal with `steps` left the policy takes
-    one that stays optimal for the most step counts below: the one that needs
-    the least time to spare.
-    """
+    """Q with `steps` steps left, and the optimal action there that has been optimal longest
+    (with gamma 1 a wasted step costs nothing: the one needing the least time to spare)."""
     v = np.zeros(model.n_states)
     # last_off[s, a]: the most steps left (so far) at which `a` was not optimal in `s`.
     last_off = np.zeros((model.n_states, model.n_actions), dtype=np.int64)
@@ -120,14 +103,9 @@ def _backward_induction(model: FiniteMDP, gamma: float, steps: int) -> tuple[Flo
 def _policy_iteration(
     model: FiniteMDP, gamma: float, rows: BoolArray, safe: BoolArray, policy: IntArray
 ) -> tuple[FloatArray, IntArray, bool]:
-    """Q and a policy of the best over `rows` using `safe` actions; True when it is unbounded.
-
-    The start `policy` must be safe and, with gamma = 1, end surely from
-    `rows`. An action is changed only for a clear gain, so the iteration
-    cannot cycle; with gamma = 1, if a change makes the policy one that may
-    never end, the cycle it closes gains reward on average, and repeating it
-    makes the optimum unbounded.
-    """
+    """Q and a policy of the best over `rows` using `safe` actions from a safe `policy` that
+    ends surely; True when a change closes a cycle that gains reward (the optimum is
+    unbounded). Changes only for a clear gain, so it cannot cycle."""
     n_actions = model.n_actions
     states = np.arange(model.n_states)
     for _ in range(_MAX_ITERATIONS):
@@ -147,12 +125,8 @@ def _policy_iteration(
 
 
 def solve(model: FiniteMDP, gamma: float = 1.0, *, steps_left: int | None = None) -> Solution:
-    """The optimal action values, values and optimum of `model` (see the package docstring).
-
-    With an episode limit H, `steps_left` (1 to H, default H: the start of an
-    episode) is how many steps remain, for a coach answering mid-episode.
-    With no limit it is ignored: there are always infinitely many left.
-    """
+    """The optimal action values, values and optimum of `model` (see the package docstring),
+    with `steps_left` of an episode limit H to go (1 to H, default H; no limit: ignored)."""
     gamma = check_gamma(gamma)
     horizon = model.horizon
     if horizon is not None:
@@ -180,13 +154,9 @@ def solve(model: FiniteMDP, gamma: float = 1.0, *, steps_left: int | None = None
 
 
 class Ladder:
-    """Optimal action values of a model for every number of steps left, kept.
-
-    `q(k)` is Q* with `k` steps left (k from 1 to the horizon); with no horizon
-    every `k` gives the stationary optimum. Computed once, by backward
-    induction, for gamma 1 and for `TIE_GAMMA`; past `LADDER_LIMIT` values the
-    rungs are solved when asked for instead (the last few kept).
-    """
+    """Optimal action values of a model for every number of steps left, kept: `q(k)` is Q*
+    with `k` steps left (with no horizon, the stationary optimum), by backward induction;
+    past `LADDER_LIMIT` values each rung is solved when asked for (the last few kept)."""
 
     def __init__(self, model: FiniteMDP) -> None:
         self.model = model
@@ -237,12 +207,8 @@ class Ladder:
 
 
 def _induction(model: FiniteMDP, gamma: float, horizon: int) -> FloatArray:
-    """`[H, S, A]`: Q* for 1 to H steps left, each rung the numbers `backup` gives.
-
-    The outcomes are added one by one, in the order `sum` adds them, rather than
-    reduced over their short axis, which numpy does slowly; values stay finite (a
-    limit, finite rewards), so `backup`'s care for infinities is not needed.
-    """
+    """`[H, S, A]`: Q* for 1 to H steps left, the numbers `backup` gives (outcomes added one
+    by one in `sum`'s order, which is quicker than numpy's reduction over a short axis)."""
     reward = model.expected_reward
     going = [np.ascontiguousarray(model.continue_prob[..., k]) for k in range(model.max_outcomes)]
     following = [np.ascontiguousarray(model.next_state[..., k]) for k in range(model.max_outcomes)]
@@ -262,12 +228,8 @@ def _induction(model: FiniteMDP, gamma: float, horizon: int) -> FloatArray:
 
 @dataclass(frozen=True)
 class Gap:
-    """A policy's exact value beside the optimum.
-
-    `gap = optimal_value - exact_value`, at least 0: plus infinity for a
-    policy that never ends against an optimum that does, 0 when both are the
-    same infinity. `never_ends`: see `PolicyValue.never_ends`.
-    """
+    """A policy's exact value beside the optimum: `gap = optimal_value - exact_value`, at
+    least 0 (inf for a policy that never ends against an optimum that does)."""
 
     exact_value: float
     optimal_value: float
@@ -292,11 +254,8 @@ def gap_of(optimum: float, value: float) -> float:
 def exact_gap(
     model: FiniteMDP, policy: npt.ArrayLike, gamma: float = 1.0, optimum: Solution | None = None,
 ) -> Gap:
-    """The exact value of `policy`, the optimum, and the gap between them.
-
-    Pass `optimum` (from `solve(model, gamma)`) to reuse it across calls; it
-    must be for the same gamma and for the start of an episode.
-    """
+    """The exact value of `policy`, the optimum (`optimum`, from `solve(model, gamma)`, to
+    reuse one), and the gap between them."""
     if optimum is None:
         optimum = solve(model, gamma)
     elif optimum.gamma != float(gamma) or optimum.steps_left != model.horizon:

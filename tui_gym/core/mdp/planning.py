@@ -93,15 +93,11 @@ class Improvement:
 class Planner:
     """A policy and its value estimates, stepped sweep by sweep.
 
-    `step(method)` takes one step of `method`: a sweep of policy evaluation
-    ("evaluate"; "policy-iteration" until the largest change is below theta,
-    then an improvement), or a sweep of value iteration, after which the
-    policy is the greedy one the sweep's maxima came from. `done(method)` says
-    when the method has finished: the evaluation or value iteration has
-    converged (its last change below theta), policy iteration's last
-    improvement changed nothing. `sweeps` counts sweeps, `iterations` the
-    improvements that changed the policy, `changed` marks the states the last
-    improvement (or value sweep) changed. Ties within theta are shared.
+    `step(method)`: a sweep of policy evaluation ("evaluate"; "policy-iteration" then
+    improves once the largest change is below theta) or of value iteration (the policy
+    then greedy). `done(method)`: converged, or the last improvement changed nothing.
+    `sweeps`, `iterations` (improvements that changed the policy), `changed` (states the
+    last improvement or value sweep changed). Ties within theta are shared.
     """
 
     def __init__(
@@ -155,11 +151,6 @@ class Planner:
         else:
             self.restart()
 
-    @property
-    def tolerance(self) -> float:
-        """How close to the best an action's value must be to count as tied."""
-        return self.theta
-
     # --- steps -------------------------------------------------------------
     def evaluation_sweep(self) -> float:
         """One sweep of policy evaluation; the largest change."""
@@ -177,10 +168,10 @@ class Planner:
 
     def improvement(self) -> Improvement:
         """One greedy improvement of the policy on the current values, ties shared equally.
-        A state keeps its old actions while every one of them is still within `tolerance` of
+        A state keeps its old actions while every one of them is still within theta of
         the best, so that near-ties left by an evaluation stopped at theta cannot flip a
         policy back and forth."""
-        best = greedy(self.model, self.v, self.gamma, self.tolerance)
+        best = greedy(self.model, self.v, self.gamma, self.theta)
         kept = np.asarray(((self.policy > 0) <= best).all(axis=1), dtype=bool)
         shared = best / best.sum(axis=1, keepdims=True)
         step = Improvement(np.where(kept[:, None], self.policy, shared), ~kept)
@@ -197,7 +188,7 @@ class Planner:
     def value_sweep(self) -> float:
         """One sweep of value iteration; the policy becomes the greedy one it used."""
         self.v, self.delta, best = value_sweep(self.model, self.v, self.gamma, self.in_place,
-                                               self.tolerance)
+                                               self.theta)
         shared = best / best.sum(axis=1, keepdims=True)
         self.changed = ~((self.policy > 0) == best).all(axis=1)
         self.policy = shared

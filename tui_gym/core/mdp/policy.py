@@ -45,12 +45,8 @@ def policy_matrix(model: FiniteMDP, policy: npt.ArrayLike) -> npt.NDArray[np.flo
 
 
 def greedy_policy(q: npt.ArrayLike, epsilon: float = 0.0) -> npt.NDArray[np.float64]:
-    """`[S, A]`: the best-valued actions of each row of `q` shared equally, mixed with epsilon.
-
-    With probability `epsilon` the action is uniform over all actions; otherwise
-    it is uniform over the actions whose value equals the row's maximum exactly
-    (an all-zero row, as in a fresh table, spreads over every action).
-    """
+    """`[S, A]`: the actions equal to each row's maximum of `q` shared equally, mixed with
+    the uniform policy by `epsilon`."""
     values = np.asarray(q, dtype=np.float64)
     if values.ndim != 2 or 0 in values.shape:
         raise PolicyError(f"action values must be an [S, A] array, got shape {values.shape}")

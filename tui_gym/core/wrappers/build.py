@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import difflib
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import gymnasium as gym
@@ -32,22 +31,6 @@ class UnknownEnvError(ValueError):
         self.env_id = env_id
 
 
-@dataclass
-class _Planned:
-    index: int
-    choice: WrapperChoice
-    spec: WrapperSpec
-    values: dict[str, Any]
-
-
-def _make(env_id: str, kwargs: Mapping[str, Any], render_mode: str | None) -> gym.Env:
-    tui_gym.envs.register_envs()  # our ids exist even if `tui_gym` was imported oddly
-    try:
-        return gym.make(env_id, render_mode=render_mode, **kwargs)
-    except (gym.error.UnregisteredEnv, gym.error.DeprecatedEnv) as error:  # e.g. Taxi-v3
-        raise UnknownEnvError(env_id) from error
-
-
 def _assemble(
     env_id: str, env_kwargs: Mapping[str, Any] | None, choices: Sequence[WrapperChoice],
     render_mode: str | None, *, strict: bool,
@@ -55,30 +38,34 @@ def _assemble(
     """The env, and per choice None (applied) or the reason it was skipped."""
     check_chain_length(len(choices))
     reasons: list[str | None] = [None] * len(choices)
-    planned: list[_Planned] = []
+    planned: list[tuple[int, WrapperChoice, WrapperSpec, dict[str, Any]]] = []
     for index, choice in enumerate(choices):
         try:
             spec = get_spec(choice.name)
-            planned.append(_Planned(index, choice, spec, spec.validate(choice.values())))
+            planned.append((index, choice, spec, spec.validate(choice.values())))
         except ValueError as error:
             if strict:
                 raise
             reasons[index] = str(error)
 
-    env = _make(env_id, env_kwargs or {}, render_mode)
+    tui_gym.envs.register_envs()  # our ids exist even if `tui_gym` was imported oddly
+    try:
+        env = gym.make(env_id, render_mode=render_mode, **(env_kwargs or {}))
+    except (gym.error.UnregisteredEnv, gym.error.DeprecatedEnv) as error:  # e.g. Taxi-v3
+        raise UnknownEnvError(env_id) from error
 
-    for item in planned:
-        reason = item.spec.fits(env, item.values)
+    for index, choice, spec, values in planned:
+        reason = spec.fits(env, values)
         if reason is None:
             try:
-                env = item.spec.factory(env, **item.values)
+                env = spec.factory(env, **values)
                 continue
             except (ValueError, TypeError, NotImplementedError, gym.error.Error) as error:
-                reason = f"{item.spec.name} could not wrap {env_label(env)}: {error}"
+                reason = f"{spec.name} could not wrap {env_label(env)}: {error}"
         if strict:
             env.close()
-            raise WrapperMismatchError(reason, item.choice)
-        reasons[item.index] = reason
+            raise WrapperMismatchError(reason, choice)
+        reasons[index] = reason
     return env, reasons
 
 
@@ -86,12 +73,8 @@ def build_env(
     env_id: str, env_kwargs: Mapping[str, Any] | None = None, choices: Sequence[WrapperChoice] = (),
     render_mode: str | None = None,
 ) -> gym.Env:
-    """`gym.make(env_id, render_mode=..., **env_kwargs)` wrapped by `choices`, first innermost.
-
-    Raises `UnknownEnvError` for an unknown id, `UnknownWrapperError` or
-    `ValueError` for a bad choice, and `WrapperMismatchError` when a choice
-    does not fit the env as built so far.
-    """
+    """`gym.make(env_id, render_mode=..., **env_kwargs)` wrapped by `choices`, first innermost
+    (`UnknownEnvError`, `UnknownWrapperError`, `ValueError`, `WrapperMismatchError`)."""
     env, _ = _assemble(env_id, env_kwargs, choices, render_mode, strict=True)
     return env
 
@@ -100,10 +83,8 @@ def build_env_lenient(
     env_id: str, env_kwargs: Mapping[str, Any] | None = None, choices: Sequence[WrapperChoice] = (),
     render_mode: str | None = None,
 ) -> tuple[gym.Env, list[tuple[WrapperChoice, str]]]:
-    """Like `build_env`, but skips the choices that do not fit (or are invalid).
-
-    Returns the env and the skipped choices, each with the reason.
-    """
+    """Like `build_env`, but skips the choices that do not fit (or are invalid): the env
+    and the skipped choices, each with the reason."""
     env, reasons = _assemble(env_id, env_kwargs, choices, render_mode, strict=False)
     skipped = [(c, r) for c, r in zip(choices, reasons, strict=True) if r is not None]
     return env, skipped
@@ -112,11 +93,7 @@ def build_env_lenient(
 def check_choices(
     env_id: str, env_kwargs: Mapping[str, Any] | None = None, choices: Sequence[WrapperChoice] = (),
 ) -> list[tuple[WrapperChoice, str | None]]:
-    """For each choice, None if it would apply, else why not.
-
-    The env is built progressively, leaving out the misfits, as
-    `build_env_lenient` would, then closed.
-    """
+    """For each choice, None if it would apply, else why not (as `build_env_lenient`)."""
     env, reasons = _assemble(env_id, env_kwargs, choices, None, strict=False)
     env.close()
     return list(zip(choices, reasons, strict=True))

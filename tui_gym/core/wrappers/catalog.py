@@ -48,11 +48,8 @@ class WrapperMismatchError(ValueError):
 
 
 def replace_time_limit(env: gym.Env, max_episode_steps: int) -> TimeLimit:
-    """`TimeLimit(env, n)`, except that a `TimeLimit` right below is replaced, not stacked on.
-
-    Stacked limits can only shorten each other, so without this the limit
-    `gym.make` puts on a registered env (say 300) could never be raised.
-    """
+    """`TimeLimit(env, n)`, replacing a `TimeLimit` right below (stacked limits could
+    never raise the one `gym.make` puts on a registered env)."""
     if isinstance(env, TimeLimit):
         env = env.env
     return TimeLimit(env, max_episode_steps)
@@ -75,10 +72,9 @@ FitCheck = Callable[[gym.Env, Mapping[str, Any] | None], str | None]
 class WrapperSpec:
     """One catalog entry: a wrapper a person can switch on, and what it takes.
 
-    `factory(env, **values)` builds the wrapper; `requirement(env, values)` (values
-    None when only the env is known) returns one sentence on why it cannot wrap `env`
-    and what to do about it (None when it can); `cross_check(values)`
-    rejects combinations no single param can (ClipReward's min > max).
+    `factory(env, **values)` builds it; `requirement(env, values)` says in a sentence
+    why it cannot wrap `env` (None when it can); `cross_check(values)` rejects
+    combinations no single param can (ClipReward's min > max).
     """
 
     name: str
@@ -94,9 +90,6 @@ class WrapperSpec:
     def __post_init__(self) -> None:
         owned = tuple(replace(param, owner=self.name) for param in self.params)
         object.__setattr__(self, "params", owned)
-        names = [param.name for param in owned]
-        if len(set(names)) != len(names):
-            raise ValueError(f"{self.name}: duplicate parameter names {names}")
 
     @property
     def param_names(self) -> tuple[str, ...]:
@@ -112,10 +105,8 @@ class WrapperSpec:
         return {param.name: param.default for param in self.params}
 
     def validate(self, values: Mapping[str, Any]) -> dict[str, ParamValue]:
-        """Parse each given value, fill in defaults, reject unknown names.
-
-        The result is in the order of `params`.
-        """
+        """Parse each given value, fill in defaults, reject unknown names (in `params`'
+        order)."""
         unknown = [name for name in values if name not in self.param_names]
         if unknown:
             valid = (
@@ -134,11 +125,8 @@ class WrapperSpec:
         return parsed
 
     def fits(self, env: gym.Env, values: Mapping[str, Any] | None = None) -> str | None:
-        """None when this wrapper can wrap `env`, else a reason a person can act on.
-
-        With `values`, also checks what depends on them (a TimeLimit longer than
-        one already inside cannot lengthen it).
-        """
+        """None when this wrapper (with `values`, if given) can wrap `env`, else a reason
+        a person can act on."""
         checked = None if values is None else self.validate(values)
         return None if self.requirement is None else self.requirement(env, checked)
 
@@ -152,17 +140,8 @@ class WrapperSpec:
 
 
 class ScaleReward(gym.RewardWrapper[ObsType, ActType], gym.utils.RecordConstructorArgs):
-    """Multiplies every reward by a constant `factor`.
-
-    For `factor > 0` the optimal policy is unchanged; what changes is the size
-    of the values the agent learns (and so how its fixed learning rate and its
-    zero-initialised table behave). A negative factor turns goals into things
-    to avoid.
-
-    Args:
-        env: the environment to wrap.
-        factor: the multiplier, any finite number.
-    """
+    """Multiplies every reward by a finite `factor` (> 0: the same optimal policy, values
+    of another size; < 0: goals become things to avoid)."""
 
     def __init__(self, env: gym.Env[ObsType, ActType], factor: float) -> None:
         factor = finite_number("ScaleReward factor", factor)
@@ -175,15 +154,8 @@ class ScaleReward(gym.RewardWrapper[ObsType, ActType], gym.utils.RecordConstruct
 
 
 class StepPenalty(gym.RewardWrapper[ObsType, ActType], gym.utils.RecordConstructorArgs):
-    """Subtracts a fixed `penalty` from the reward of every step, the last one included.
-
-    It is the tutorial's reward "Option 1" applied from outside the env: a
-    cost for time makes shorter episodes worth more.
-
-    Args:
-        env: the environment to wrap.
-        penalty: the cost of one step, finite and `>= 0`.
-    """
+    """Subtracts a finite `penalty` >= 0 from every step's reward, the last one included
+    (the tutorial's reward "Option 1": shorter episodes are worth more)."""
 
     def __init__(self, env: gym.Env[ObsType, ActType], penalty: float) -> None:
         penalty = finite_number("StepPenalty penalty", penalty, minimum=0.0)
@@ -198,21 +170,9 @@ class StepPenalty(gym.RewardWrapper[ObsType, ActType], gym.utils.RecordConstruct
 class DistanceShaping(
     gym.Wrapper[ObsType, ActType, ObsType, ActType], gym.utils.RecordConstructorArgs
 ):
-    """Adds `-k * info["distance"]` (the distance after the move) to each step's reward.
-
-    This is the tutorial's reward "Option 2", distance-based shaping: a dense
-    hint that points the agent at the target. On the step that reaches the
-    target the distance is 0, so the goal reward comes through unchanged. The
-    hint is not potential-based, so a large `k` can change what the agent
-    thinks is best (it learns to stay near, not to arrive).
-
-    The wrapped env must put the distance in `info["distance"]` on every step,
-    as envs with `reports_distance` do.
-
-    Args:
-        env: the environment to wrap.
-        k: the weight of the distance, finite and `>= 0`.
-    """
+    """Adds `-k * info["distance"]` (after the move; `k` >= 0) to each step's reward: the
+    tutorial's reward "Option 2". Not potential-based, so a large `k` can change what is
+    best; the env must report the distance every step (`reports_distance`)."""
 
     def __init__(self, env: gym.Env[ObsType, ActType], k: float) -> None:
         k = finite_number("DistanceShaping k", k, minimum=0.0)
@@ -375,11 +335,8 @@ def get_spec(name: str) -> WrapperSpec:
 
 @dataclass(frozen=True)
 class WrapperChoice:
-    """One wrapper picked by a person, with its values: hashable, params sorted by name.
-
-    Build one with `WrapperChoice.make(name, **params)`, which validates through
-    the catalog and fills in defaults.
-    """
+    """One wrapper picked by a person, with its values: hashable, params sorted by name
+    (`WrapperChoice.make(name, **params)` validates them and fills in defaults)."""
 
     name: str
     params: tuple[tuple[str, Any], ...] = ()

@@ -38,12 +38,8 @@ class GameChanges:
 
     @classmethod
     def of(cls, env: gym.Env, made_limit: int | None | str = "registry") -> GameChanges:
-        """Read the wrappers of a built env (see the module docstring).
-
-        `made_limit` is the limit `gym.make` put on the game (a game that passes its
-        own `max_episode_steps` says which); by default the registry's. A `TimeLimit`
-        other than that one is a chosen one.
-        """
+        """Read the wrappers of a built env; a `TimeLimit` other than `made_limit`, the one
+        `gym.make` put on the game (by default the registry's), is a chosen one."""
         stack = layers(env)
         registered = made_limit if not isinstance(made_limit, str) else registry_limit(
             env.unwrapped)
@@ -84,10 +80,9 @@ class GameChanges:
         return value
 
     def model(self, model: FiniteMDP) -> FiniteMDP:
-        """`model` as these wrappers make it: their rewards (each distinct reward passed once
-        through the wrappers' own code; a reward drawn with noise through wrappers that scale
-        and shift it, its deviation scaled alike) and the tightest time limit. `ValueError`
-        (or the wrappers' own `TypeError`) for rewards the model cannot follow."""
+        """`model` with these wrappers' rewards (each distinct one passed through their code;
+        noise only through `a * r + b`) and the tightest time limit; `ValueError` (or the
+        wrappers' `TypeError`) for rewards the model cannot follow."""
         if self.changes_rewards:
             if any(isinstance(layer, DistanceShaping) for layer in self._steps):
                 raise ValueError("DistanceShaping needs distances the model does not hold")

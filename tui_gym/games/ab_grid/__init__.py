@@ -1,8 +1,7 @@
 """ab-grid: Sutton & Barto's Example 3.5, the 5 x 5 grid with the special cells A and B.
 
-Spaces and rewards: `tui_gym.envs.dp_grid.ABGridEnv`. The book's task never ends; tui-gym
-plays it in episodes of 50 steps, undiscounted, while the Plan view and
-`tui-gym plan` show the book's values, discounted by 0.9 with no end (Figures 3.2, 3.5).
+Spaces and rewards: `tui_gym.envs.dp_grid.ABGridEnv`. Played in undiscounted episodes of 50
+steps; planning shows the book's values, discounted by 0.9 with no end (Figures 3.2, 3.5).
 """
 
 from __future__ import annotations

@@ -27,7 +27,7 @@ from tui_gym.games.base import (
     Scope,
     StateSpace,
     TrainingModel,
-    greedy_cells,
+    greedy_panel,
 )
 from tui_gym.games.blackjack.solver import (
     BASE_STATES,
@@ -58,12 +58,8 @@ DEALER_CARDS = tuple(range(1, 11))  # columns: A, 2 .. 10
 DEALER_LABELS = ("A", "2", "3", "4", "5", "6", "7", "8", "9", "10")
 ACTION_LETTERS = ("S", "H")
 TRAINED_GAP = 0.005  # what the default training reaches (see the README)
-
-
-def _chart_rows(usable: int) -> np.ndarray:
-    """The Q-table row of each chart cell (player sum x dealer card), for one ace state."""
-    return np.array([[base_state(player, dealer, usable) for dealer in DEALER_CARDS]
-                     for player in CHART_SUMS])
+ON_POLICY = {"epsilon_final": 0.0, "epsilon_decay_fraction": 0.3}  # the on-policy learners'
+MULTI_STEP = {**ON_POLICY, "learning_rate": 0.005, "episodes": 1_000_000}
 
 
 _BASE_INDEX = tuple(np.array(o) for o in zip(*BASE_STATES, strict=True))  # in a (32, 11, 2) table
@@ -89,9 +85,8 @@ class BlackjackStates(StateSpace):
 
     def describe_state(self, observation: Any, kwargs: Mapping[str, Any]) -> str:
         player, dealer, usable = (int(v) for v in observation)
-        card = "A" if dealer == 1 else str(dealer)
         ace = "usable ace" if usable else "no usable ace"
-        return f"sum {player} vs dealer {card}, {ace}"
+        return f"sum {player} vs dealer {card_label(dealer)}, {ace}"
 
     def read_scene(self, game_env: Any, before: Mapping[str, Any]) -> dict[str, Any]:
         """The hands: `player` and `dealer` card lists (1 = ace, 10 = ten or face), and
@@ -282,17 +277,14 @@ class BlackjackLayout(HeatmapLayout):
         has_marks = isinstance(marks, np.ndarray)
 
         def chart(usable: int, title: str) -> Heatmap:
-            rows = _chart_rows(usable)
-            values, labels, marked = greedy_cells(
-                len(CHART_SUMS), len(DEALER_CARDS), lambda r, c: None, lambda r, c: q[rows[r, c]],
-                ACTION_LETTERS.__getitem__,
+            rows = np.array([[base_state(player, dealer, usable) for dealer in DEALER_CARDS]
+                             for player in CHART_SUMS])  # the Q-table row of each chart cell
+            return greedy_panel(
+                f"Q-values, {title}",
+                f"rows: player sum  cols: dealer card  H hit  S stick  {TIED} tie  * not optimal",
+                tuple(str(s) for s in CHART_SUMS), DEALER_LABELS, lambda r, c: None,
+                lambda r, c: q[rows[r, c]], ACTION_LETTERS.__getitem__,
                 lambda r, c, action: has_marks and not marks[rows[r, c], action],
-            )
-            return Heatmap(
-                title=f"Q-values, {title}", row_labels=tuple(str(s) for s in CHART_SUMS),
-                col_labels=DEALER_LABELS, values=values, labels=labels, marked=marked,
-                legend=f"rows: player sum  cols: dealer card  H hit  S stick  {TIED} tie  "
-                "* not optimal",
             )
 
         return [chart(1, "usable ace"), chart(0, "no usable ace")]
@@ -316,27 +308,16 @@ class BlackjackGame(Game):
     episode_noun = "hand"
     bench_kwargs: dict[str, Any] | None = {}
     bench_gap = 0.002
-    # The common defaults (discount 1, the visits step size from 1/n down to 0.001, epsilon
-    # 1 -> 0.05 over half of 200,000 episodes) suit the off-policy learners. The on-policy
-    # ones learn the values of the exploring policy: exploration falls to 0 (so what they
-    # learn becomes the greedy policy's values) and a larger step size forgets the early,
-    # exploratory returns; the multi-step ones, whose targets hold more of the cards'
-    # noise, a smaller step size over more hands (n-step SARSA two steps ahead). Dyna-Q's
-    # (and Dyna-Q+'s) model keeps one outcome per pair, which misleads in a card game; one
-    # planning step with a small step size keeps that noise down.
+    # On-policy learners stop exploring and step larger; multi-step ones step smaller over more
+    # hands; Dyna's one-outcome model misleads here, so one small planning step (see the README).
     hyperparameters = {
-        "sarsa": {"learning_rate": 0.01, "epsilon_final": 0.0, "epsilon_decay_fraction": 0.3,
-                  "episodes": 500_000},
-        "expected-sarsa": {"learning_rate": 0.01, "epsilon_final": 0.0,
-                           "epsilon_decay_fraction": 0.3, "episodes": 500_000},
+        **dict.fromkeys(("sarsa", "expected-sarsa"), {**ON_POLICY, "learning_rate": 0.01,
+                                                      "episodes": 500_000}),
         "monte-carlo": {"learning_rate": 0.003, "epsilon_final": 0.0,
                         "epsilon_decay_fraction": 0.5, "episodes": 1_500_000},
-        "dyna-q": {"planning_steps": 1, "learning_rate": 0.0003, "episodes": 700_000},
-        "n-step-sarsa": {"n": 2, "learning_rate": 0.005, "epsilon_final": 0.0,
-                         "epsilon_decay_fraction": 0.3, "episodes": 1_000_000},
-        "sarsa-lambda": {"learning_rate": 0.005, "epsilon_final": 0.0,
-                         "epsilon_decay_fraction": 0.3, "episodes": 1_000_000},
-        "dyna-q-plus": {"planning_steps": 1, "learning_rate": 0.0003, "episodes": 700_000},
+        **dict.fromkeys(("dyna-q", "dyna-q-plus"), {"planning_steps": 1, "learning_rate": 0.0003,
+                                                    "episodes": 700_000}),
+        "n-step-sarsa": {"n": 2, **MULTI_STEP}, "sarsa-lambda": MULTI_STEP,
     }
     lessons = {
         "prioritized-sweeping": "prioritized sweeping's model keeps the last card each move "

@@ -29,15 +29,9 @@ BARE_PAYOFFS: tuple[float, float, float, float] = (-1.0, 0.0, 1.0, 1.5)
 
 @dataclass(frozen=True)
 class BlackjackRules:
-    """The reward variant of ``Blackjack-v1`` (the env's keyword arguments).
-
-    ``natural``: a winning two-card 21 pays 1.5 instead of 1.
-    ``sab``: Sutton & Barto's rules: a player natural beats every dealer hand but
-    a dealer natural (+1), two naturals draw; ``natural`` is then ignored.
-    ``payoffs``: the reward handed out for a step whose bare reward is -1 (a
-    loss or a bust), 0 (a push, or a hit that does not bust), +1 (a win) and
-    +1.5 (a natural under ``natural``), in that order: the bare game's rewards
-    unless reward wrappers change them (`with_rewards`).
+    """The reward variant of ``Blackjack-v1``: ``natural`` (a winning two-card 21 pays
+    1.5), ``sab`` (Sutton & Barto's: a natural beats all but a dealer natural, for +1),
+    and ``payoffs``, what steps of bare reward -1, 0, +1 and +1.5 pay (`with_rewards`).
     """
 
     natural: bool = False
@@ -202,14 +196,6 @@ def stick_chances(rules: BlackjackRules) -> tuple[np.ndarray, np.ndarray, np.nda
     return lose, np.maximum(0.0, 1.0 - win - lose), win
 
 
-def stick_paid(rules: BlackjackRules) -> np.ndarray:
-    """`[29]`: what a stick that wins pays in each state (a natural more, under `natural`)."""
-    paid = np.full(_N_LIVE, rules.payoffs[2])
-    if rules.natural and not rules.sab:
-        paid[_NATURAL] = rules.payoffs[3]
-    return paid
-
-
 # ---------------------------------------------------------------------------
 # Policies and the optimum, on the model
 
@@ -230,12 +216,8 @@ def _hands(rules: BlackjackRules) -> FiniteMDP:
 
 
 def policy_value(policy: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> float:
-    """The exact expected return of a deterministic policy from the initial deal.
-
-    ``policy`` has shape `POLICY_SHAPE`, indexed ``[player_sum, dealer_card,
-    usable_ace]`` with 0 = stick, 1 = hit; only decision states (hard totals 4-21, soft
-    12-21) are read. The policy's action at ``(21, d, 1)`` applies to a natural too.
-    """
+    """The exact expected return of a deterministic policy (`POLICY_SHAPE`, 0 stick, 1 hit,
+    read at the decision states; ``(21, d, 1)``'s applies to a natural too)."""
     acts = _observed(policy)
     if not np.isin(acts, (STICK, HIT)).all():
         raise ValueError("policy entries at decision states must be 0 (stick) or 1 (hit)")
@@ -243,12 +225,8 @@ def policy_value(policy: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> f
 
 
 def mixed_policy_value(hit_probability: np.ndarray, rules: BlackjackRules = DEFAULT_RULES) -> float:
-    """The exact expected return of a policy that hits with the given probability.
-
-    ``hit_probability`` has shape `POLICY_SHAPE` like a policy array, with a
-    probability in [0, 1] at every decision state (e.g. 0.5 where an agent's
-    two actions tie and it breaks the tie at random).
-    """
+    """The exact expected return of a policy that hits with the given probability
+    (`POLICY_SHAPE`, in [0, 1] at every decision state)."""
     p = np.asarray(_observed(hit_probability), dtype=np.float64)
     if not ((p >= 0.0) & (p <= 1.0)).all():
         raise ValueError("hit probabilities at decision states must be in [0, 1]")
@@ -261,11 +239,8 @@ _ALIASED = np.r_[_SOFT_21 * DEALERS + np.arange(DEALERS), _NATURAL * DEALERS + n
 
 @cache
 def _solve(rules: BlackjackRules) -> tuple[np.ndarray, np.ndarray]:
-    """Q* (`[model states, 2]`) and the optimal hits (`[model states]`, ties to a stick).
-
-    The only aliased observation is (21, d, 1): a natural or a drawn soft 21. Each
-    action there (per up card, as up cards never mix) fixes the optimum elsewhere; the
-    better start value per up card wins."""
+    """Q* (`[model states, 2]`) and the optimal hits (ties to a stick); at the one aliased
+    observation, (21, d, 1), the action with the better start value per up card."""
     model = _hands(rules)
     values = []
     for action in (STICK, HIT):  # the model with both actions at the aliased states this one
@@ -300,20 +275,11 @@ def optimal_action_values(
     rules: BlackjackRules = DEFAULT_RULES, *, soft_21: Soft21 = "observation"
 ) -> np.ndarray:
     """Q*(observation, action), shape ``(32, 11, 2, 2)`` indexed
-    ``[player_sum, dealer_card, usable_ace, action]``.
+    ``[player_sum, dealer_card, usable_ace, action]``; NaN off the decision states.
 
-    The value of taking ``action`` and then playing the optimal policy. Filled
-    for decision states (player sum 4..21 without, 12..21 with a usable ace;
-    dealer card 1..10), NaN elsewhere.
-
-    ``(21, d, 1)`` is either the opening natural or a soft 21 drawn to, and they
-    pay differently under ``natural`` or ``sab`` rules. ``soft_21`` picks which
-    value that entry holds: ``"observation"`` (default) averages the two by how
-    often the optimal policy meets each behind that observation, i.e. the
-    expected value given only what the player sees; ``"natural"`` is the
-    two-card natural (so the deal's value is the initial-distribution-weighted
-    max over actions); ``"drawn"`` is a soft 21 of three or more cards. Under
-    default rules all three coincide.
+    ``(21, d, 1)`` is the opening natural or a drawn soft 21, which pay differently
+    under ``natural`` or ``sab``: ``soft_21`` "observation" averages the two by how
+    often the optimal policy meets each, "natural" and "drawn" pick one.
     """
     q_model, hit = _solve(rules)
     drawn, natural = q_model[_ALIASED[:DEALERS]], q_model[_ALIASED[DEALERS:]]
@@ -334,11 +300,8 @@ def optimal_action_values(
 
 
 def optimal_policy(rules: BlackjackRules = DEFAULT_RULES) -> np.ndarray:
-    """An optimal deterministic policy over observations, `POLICY_SHAPE` int8.
-
-    Hit (1) / stick (0) at every decision state, ties broken towards sticking;
-    0 at states that never need a decision.
-    """
+    """An optimal deterministic policy over observations, `POLICY_SHAPE` int8: hit (1) or
+    stick (0, also for ties and states that need no decision)."""
     policy = np.zeros(POLICY_SHAPE, dtype=np.int8)
     policy[_OBSERVED] = _solve(rules)[1]
     return policy
@@ -368,10 +331,13 @@ def blackjack_model(rules: BlackjackRules = DEFAULT_RULES) -> FiniteMDP:
     next_state = np.broadcast_to(np.arange(n_states)[:, None, None], (n_states, 2, width)).copy()
     prob, reward = np.zeros((n_states, 2, width)), np.zeros((n_states, 2, width))
     terminal = np.zeros((n_states, 2, width), dtype=bool)
-    lose, push, win = stick_chances(rules)
-    for k, (chance, pay) in enumerate(((lose, lose_pay), (push, push_pay), (win, None))):
+    paid = np.full(_N_LIVE, rules.payoffs[2])  # a stick that wins (a natural more, if paid so)
+    if rules.natural and not rules.sab:
+        paid[_NATURAL] = rules.payoffs[3]
+    pays = (np.full(n_states, lose_pay), np.full(n_states, push_pay), paid[live])
+    for k, (chance, pay) in enumerate(zip(stick_chances(rules), pays, strict=True)):
         prob[:, 0, k] = chance.reshape(-1)
-        reward[:, 0, k] = stick_paid(rules)[live] if pay is None else pay
+        reward[:, 0, k] = pay
         terminal[:, 0, k] = True
     prob[:, 1] = _HIT_MATRIX[live]
     next_state[:, 1, :_N_LIVE] = np.arange(_N_LIVE) * DEALERS + (_OBSERVED[1] - 1)[:, None]

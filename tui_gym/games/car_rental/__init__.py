@@ -1,8 +1,7 @@
 """car-rental: Sutton & Barto's Example 4.2, Jack's car rental, and Exercise 4.7's variant.
 
-Spaces and rewards: `tui_gym.envs.car_rental.CarRentalEnv`. The book's task never ends;
-tui-gym plays it in episodes of 20 days, undiscounted, while the Plan view
-and `tui-gym plan` show the book's values, discounted by 0.9 with no end (Figure 4.2).
+Spaces and rewards: `tui_gym.envs.car_rental.CarRentalEnv`. Played in undiscounted episodes
+of 20 days; planning shows the book's values, discounted by 0.9 with no end (Figure 4.2).
 """
 
 from __future__ import annotations
@@ -144,10 +143,8 @@ class CarRentalGame(ModelGame):
     board = "dial"
     episode_noun = "episode"
     plan_gamma = 0.9
-    # The day's rentals are noisy and many moves are worth almost the same: learners get
-    # within a few percent of the optimum quickly, and closer only slowly (see the README).
-    # Double Q splits the noise over two tables each updated half as often: a smaller
-    # step size and a longer budget.
+    # Noisy days and near-equal moves: close quickly, closer only slowly (see the README);
+    # Double Q updates each table half as often: a smaller step and a longer budget.
     hyperparameters = {"*": {"discount": 0.9, "learning_rate": 0.2, "episodes": 10_000},
                        "double-q": {"learning_rate": 0.05, "episodes": 60_000}}
 

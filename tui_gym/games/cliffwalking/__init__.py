@@ -1,32 +1,8 @@
 """CliffWalking: Gymnasium's `CliffWalking-v1`, Sutton & Barto's Example 6.6.
 
-## Action Space
-up (0), right (1), down (2), left (3).
-
-## Observation Space
-The cell the agent stands on, `row * 12 + col`, on a 4 x 12 map.
-
-## Rewards
--1 a step; -100 for stepping onto the cliff, which sends the agent back to
-the start (the episode goes on).
-
-## Starting State
-Bottom left; the goal is bottom right, the cliff between them.
-
-## Episode End
-Terminated on the goal. Gymnasium sets no limit; tui-gym plays it with one
-of `EPISODE_LIMIT` steps, so that every way of playing, a policy that walks
-into a wall for ever included, has a finite exact value and every episode of
-an untrained agent ends.
-
-## Arguments
-`slippery`: a move goes where asked with chance 1/3 and to either side
-otherwise (Gymnasium's `is_slippery`), on every cell an edited map gives no
-slip of its own; `map`: "4x12" (Gymnasium's) or "custom", an edited map given
-as `layout` (see `tui_gym.games.tiles`): a step costs 1, the goal ends the
-episode, a hole (a pit) ends it at a cost of 100, the cliff costs 100 and
-sends the agent back; 200 steps, or more on a map so large that a walk
-across may need them.
+Gymnasium sets no limit; tui-gym plays it with one of `EPISODE_LIMIT` steps, so that every
+policy (one walking into a wall for ever included) has a finite exact value. `map` is
+"4x12" or "custom", an edited map given as `layout` (see `tui_gym.games.tiles`).
 """
 
 from __future__ import annotations
@@ -37,7 +13,7 @@ from typing import Any
 from tui_gym.core.params import Param
 from tui_gym.envs.tile_map import TileRules
 from tui_gym.games.maps import GridMap
-from tui_gym.games.tiles import CUSTOM, TileGame, TileLayout, TileNarrator, TileStates
+from tui_gym.games.tiles import CUSTOM, TileGame, TileNarrator
 
 __all__ = ["EPISODE_LIMIT", "CliffWalkingGame"]
 
@@ -104,9 +80,7 @@ class CliffWalkingGame(TileGame):
         "path (Sutton & Barto, Example 6.6); Q-learning learns the edge",
     )
 
-    states_type = TileStates
     narrator_type = CliffNarrator
-    layout_type = TileLayout
 
     def builtin_cells(self, kwargs: Mapping[str, Any]) -> list[str]:
         return list(CLIFF_MAP)
@@ -128,10 +102,8 @@ class CliffWalkingGame(TileGame):
         if (kwargs or {}).get("slippery"):
             # A fall costs 100 at random: averaging it out needs small steps and many episodes.
             return {"*": {"learning_rate": 0.01, "episodes": 50_000}}
-        # Double Q splits its experience over two tables; Monte Carlo averages whole
-        # returns, which a step size of 0.1 leaves too noisy to settle (see the README).
-        # n-step SARSA stops exploring at the end, or its greedy policy may not reach the
-        # goal.
+        # Double Q splits its experience; Monte Carlo's whole returns need a smaller step; n-step
+        # SARSA stops exploring at the end, or its greedy policy may miss the goal (see the README).
         return {
             "*": {"learning_rate": 0.1, "episodes": 2_000}, "double-q": {"episodes": 8_000},
             "monte-carlo": {"learning_rate": 0.01, "episodes": 4_000},

@@ -1,7 +1,6 @@
 """corner-grid: Sutton & Barto's Example 4.1, the 4 x 4 grid with two terminal corners.
 
-Spaces and rewards: `tui_gym.envs.dp_grid.CornerGridEnv`; truncated after 100
-steps.
+Spaces and rewards: `tui_gym.envs.dp_grid.CornerGridEnv`; truncated after 100 steps.
 """
 
 from __future__ import annotations

@@ -1,10 +1,8 @@
 """dyna-maze, blocking-maze, shortcut-maze: Sutton & Barto's mazes of chapter 8.
 
-Spaces and rewards: `tui_gym.envs.dyna_maze.MazeEnv`; truncated after 5000
-steps. The blocking and shortcut mazes change after `change_at` steps: each phase has its
-own model (`phase_starts`, `world`), which the exact figures and the coach follow.
-Undiscounted, every way to the goal is worth +1, so the exact figures add the greedy
-policy's steps beside the fewest (`extra_steps`, which the bound is on).
+Spaces and rewards: `tui_gym.envs.dyna_maze.MazeEnv`; truncated after 5000 steps. Each
+phase of a changing maze has its own model; as every way to the goal is worth +1, the
+exact figures add the steps beyond the fewest (`extra_steps`, which the bound is on).
 """
 
 from __future__ import annotations
@@ -32,6 +30,8 @@ DISCOUNT = 0.95  # the book's
 class MazeOracle(ModelOracle):
     """The exact figures of the phase in force, with the steps to the goal beside them."""
 
+    game: MazeGame
+
     def __init__(self, game: MazeGame) -> None:
         super().__init__(game)
         self._fewest: dict[Any, float] = {}
@@ -53,14 +53,12 @@ class MazeOracle(ModelOracle):
 
     def advice(self, env: Any, kwargs: Mapping[str, Any]) -> Advice:
         phase = int(getattr(env.unwrapped, "phase", 0))
-        return super().advice(env, self.model_game.in_phase(kwargs, phase))
+        return super().advice(env, self.game.in_phase(kwargs, phase))
 
     def bound(
         self, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> Bound | NotAvailable:
-        game = self.game
-        assert isinstance(game, MazeGame)
-        limit = game.extra_steps
+        limit = self.game.extra_steps
         return Bound("extra_steps", limit, f"extra_steps <= {limit:g} (steps beyond the fewest)")
 
 
@@ -83,11 +81,8 @@ class MazeGame(DPGridGame):
     maze = "dyna"
     change_words = ""  # what the change does, for the board
     extra_steps = 0.0  # the bound: steps beyond the fewest a trained greedy policy takes
-    # A changing maze is learned as the book's figures do (epsilon 0.1 throughout), so that
-    # the world changes once the agent knows its way. SARSA's values are those of the
-    # policy it follows, whose exploration can leave two cells' greedy moves pointing at
-    # each other: its exploration falls to 0.01, so that its greedy policy is the one it
-    # learns about.
+    # A changing maze is learned as the book's figures do (epsilon 0.1 throughout); SARSA's
+    # falls to 0.01 so its greedy policy is the one it learns about (see the README).
     CHANGING = {"discount": DISCOUNT, "learning_rate": 0.5, "learning_rate_schedule": "constant",
                 "epsilon_start": 0.1, "epsilon_final": 0.1}
     CHANGING_SARSA = {"epsilon_final": 0.01}

@@ -1,31 +1,8 @@
 """FrozenLake: Gymnasium's `FrozenLake-v1`, solved exactly from its own table.
 
-## Action Space
-left (0), down (1), right (2), up (3).
-
-## Observation Space
-The cell the agent stands on, `row * size + col`.
-
-## Rewards
-+1 on reaching the goal, 0 otherwise (Gymnasium's default schedule).
-
-## Starting State
-The start cell, top left.
-
-## Episode End
-Terminated in a hole or on the goal; truncated after 100 steps on maps up to
-4x4 (Gymnasium's `FrozenLake-v1`) and 200 on larger ones (as Gymnasium's
-`FrozenLake8x8-v1`).
-
-## Arguments
-`map`: "4x4" or "8x8" (Gymnasium's maps), "random" (a map of `size` cells a
-side drawn with seed `map_seed` by Gymnasium's `generate_random_map`, which
-only returns maps with a path from start to goal) or "custom" (an edited map,
-given as `layout`: see `tui_gym.games.tiles`; its reward cells, rewards and
-slip as it says, 100 steps on maps of up to four rows, else 200 or more);
-`slippery`: whether a move may go sideways; `success_rate`: the chance a
-slippery move goes where asked (each sideways move takes half of the rest),
-on every cell an edited map gives no slip of its own.
+`map` is Gymnasium's "4x4" or "8x8", "random" (drawn by Gymnasium's `generate_random_map`
+with `size` and `map_seed`) or "custom" (an edited map given as `layout`, see
+`tui_gym.games.tiles`); `success_rate` applies wherever an edited map sets no slip.
 """
 
 from __future__ import annotations
@@ -36,7 +13,7 @@ from typing import Any
 
 from tui_gym.core.params import Param
 from tui_gym.envs.tile_map import TileRules
-from tui_gym.games.tiles import CUSTOM, TileGame, TileLayout, TileNarrator, TileStates
+from tui_gym.games.tiles import CUSTOM, TileGame
 
 __all__ = ["FrozenLakeGame", "lake_map"]
 
@@ -85,10 +62,6 @@ class FrozenLakeGame(TileGame):
     floor_word = "ice"
     bench_kwargs: dict[str, Any] | None = {"map": "8x8"}
 
-    states_type = TileStates
-    narrator_type = TileNarrator
-    layout_type = TileLayout
-
     def builtin_cells(self, kwargs: Mapping[str, Any]) -> list[str]:
         return lake_map(kwargs)
 
@@ -113,15 +86,9 @@ class FrozenLakeGame(TileGame):
     def hyperparameter_table(
         self, kwargs: Mapping[str, Any] | None = None
     ) -> Mapping[str, Mapping[str, Any]]:
-        # A discount just below 1: with 1 the values of a cautious move that stays put
-        # and of one that heads for the goal tie, and the greedy policy may never arrive.
-        # Slippery moves make every target noisy: a small step size averages it out over
-        # a longer budget. Monte Carlo learns only at episodes' ends, from returns of a
-        # slowly improving policy: a smaller step still, exploration kept a little, and
-        # a longer budget. Dyna-Q's model keeps one outcome per pair, which misleads on
-        # slippery ice (its lesson): one planning step with a small step size, which brings
-        # Dyna-Q+ (whose bonus keeps it trying every move) to the optimum. Q(λ)'s traces
-        # reach a little less far back (λ 0.8).
+        # A discount just below 1 breaks the tie between staying put and heading for the goal; slips
+        # want small steps over long budgets, Monte Carlo smaller still; Dyna's one-outcome model
+        # misleads on ice, so one small planning step (see the README); Q(λ) with λ 0.8.
         planning = {"planning_steps": 1, "learning_rate": 0.001}
         small = len(self.cells(kwargs or {})) <= 4
         common = {"learning_rate": 0.01 if small else 0.02, "discount": 0.999,

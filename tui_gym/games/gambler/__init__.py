@@ -20,7 +20,8 @@ from tui_gym.games.base import (
     HeatmapLayout,
     ReachNarrator,
     TallyWord,
-    greedy_cells,
+    greedy_panel,
+    numbered,
 )
 from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.planning import PlanModel, StateLine
@@ -81,23 +82,15 @@ class GamblerLayout(HeatmapLayout):
         def legal(r: int, c: int) -> np.ndarray:  # the stakes that differ at this capital
             return values[r * ROW + c, : min(r * ROW + c, goal - r * ROW - c)]
 
-        grid, labels, marked = greedy_cells(
-            rows, ROW, fixed, legal, lambda action: str(action + 1),
+        return [greedy_panel(
+            "max Q and the greedy stake",
+            f"rows: capital by tens  number: greedy stake  {TIED} tie  ✗ ruined  ★ goal  "
+            "* not an optimal stake",
+            tuple(f"{r * ROW}+" for r in range(rows)), numbered(ROW), fixed, legal,
+            lambda action: str(action + 1),
             lambda r, c, action: has_marks and not marks[r * ROW + c, action],
             lambda r, c: TIED if len(legal(r, c)) > 1 else "1",
-        )
-        return [
-            Heatmap(
-                title="max Q and the greedy stake",
-                row_labels=tuple(f"{r * ROW}+" for r in range(rows)),
-                col_labels=tuple(str(c) for c in range(ROW)),
-                values=grid,
-                labels=labels,
-                marked=marked,
-                legend=f"rows: capital by tens  number: greedy stake  {TIED} tie  ✗ ruined  "
-                       "★ goal  * not an optimal stake",
-            )
-        ]
+        )]
 
 
 class GamblerNarrator(ReachNarrator):
@@ -136,10 +129,8 @@ class GamblerGame(ModelGame):
     )
     board = "dial"
     episode_noun = "game"
-    # Many stakes are worth almost the same, so sampled returns barely tell them apart and
-    # the max over 50 noisy estimates runs high; discounting keeps that bias from
-    # compounding and favours the bold play that is optimal (see the README). Prioritized
-    # sweeping's queue favours the coin's surprising outcomes: a smaller step evens them out.
+    # Near-equal stakes make the max over noisy estimates run high: discounting keeps that bias
+    # down (see the README); prioritized sweeping's queue favours surprises: a smaller step.
     hyperparameters = {"*": {"discount": 0.9, "learning_rate": 0.05, "episodes": 20_000},
                        "prioritized-sweeping": {"learning_rate": 0.02}}
 

@@ -30,14 +30,15 @@ from tui_gym.games.base import (
     StateSpace,
     TallyWord,
     TrainingModel,
-    greedy_cells,
+    greedy_panel,
+    numbered,
 )
 from tui_gym.games.gridworld.paths import (
     fewest_share,
     gridworld_model,
     gridworld_optimum,
-    mean_fewest_steps,
     path_figures,
+    placements,
     shortest_marks,
     shortest_path_optimum,
 )
@@ -106,20 +107,6 @@ def _shortest_pays(kwargs: Mapping[str, Any], changes: GameChanges) -> bool:
     never_pays = all(r <= 0.0 for r in others)
     farther_no_better = all(b <= a for a, b in zip(others, others[1:], strict=False))
     return goal > 0.0 and never_pays and farther_no_better
-
-
-def _exact_return(
-    q: np.ndarray, kwargs: Mapping[str, Any], changes: GameChanges
-) -> dict[str, float]:
-    """The greedy policy's exact expected return, the optimum's and the gap, over the
-    model as the wrappers make it (the unwrapped game's when they change its dynamics)."""
-    if changes.others:
-        changes = GameChanges(time_limit=changes.time_limit)
-    args = _model_args(kwargs, changes)
-    model = gridworld_model(*args)
-    value = evaluate(model, greedy_policy(q)).value
-    best = gridworld_optimum(*args).value
-    return {"exact_value": value, "optimal_value": best, "gap": gap_of(best, value)}
 
 
 def _model_args(kwargs: Mapping[str, Any], changes: GameChanges) -> tuple[Any, ...]:
@@ -208,7 +195,13 @@ class GridWorldOracle(Oracle):
         if changes.changes_rewards and not changes.others and not scope.exact:
             scope = Scope(False, f"{scope.note}; the exact value and gap are with "
                           f"{changes.reward_names()}")
-        figures = {**reference.figures, **_exact_return(q, kwargs, changes)}
+        # The model as the wrappers make it; the unwrapped game's when they change its dynamics.
+        args = _model_args(kwargs, GameChanges(time_limit=changes.time_limit)
+                           if changes.others else changes)
+        value = evaluate(gridworld_model(*args), greedy_policy(q)).value
+        best = gridworld_optimum(*args).value
+        figures = {**reference.figures, "exact_value": value, "optimal_value": best,
+                   "gap": gap_of(best, value)}
         return ReferenceMetrics(figures, reference.summary, scope)
 
     def agent_figures(
@@ -266,7 +259,8 @@ class GridWorldOracle(Oracle):
             )
             found = solution.q, solution.value
         optimal_q, value = found
-        mean_steps = mean_fewest_steps(size, walls)
+        valid = placements(size, walls)  # the mean fewest steps over them (NaN: there are none)
+        mean_steps = float(cell_distances(size, walls)[valid].mean() if valid.any() else np.nan)
         if walls:
             route = f"{size}x{size} with {len(walls)} wall cells: the optimal policy walks a " \
                 "shortest way round the walls"
@@ -417,22 +411,13 @@ class GridWorldLayout(HeatmapLayout):
         def fixed(r: int, x: int) -> str | None:
             return "T" if (x, top - r) == (tx, ty) else WALL if (x, top - r) in wall_set else None
 
-        values, labels, marked = greedy_cells(
-            size, size, fixed, lambda r, x: q4[x, top - r, tx, ty], ARROWS.__getitem__,
+        return [greedy_panel(
+            f"max Q with the target at ({tx}, {ty})",
+            f"arrow: greedy move  {TIED} tie  T target  * off every shortest path"
+            + (f"  {WALL} wall" if walls else ""), numbered(size)[::-1], numbered(size), fixed,
+            lambda r, x: q4[x, top - r, tx, ty], ARROWS.__getitem__,
             lambda r, x, action: action not in _optimal_from(size, walls, (x, top - r), (tx, ty)),
-        )
-        return [
-            Heatmap(
-                title=f"max Q with the target at ({tx}, {ty})",
-                row_labels=tuple(str(size - 1 - r) for r in range(size)),
-                col_labels=tuple(str(x) for x in range(size)),
-                values=values,
-                labels=labels,
-                marked=marked,
-                legend=f"arrow: greedy move  {TIED} tie  T target  * off every shortest path"
-                + (f"  {WALL} wall" if walls else ""),
-            )
-        ]
+        )]
 
     def default_focus(self, kwargs: Mapping[str, Any]) -> Any:
         size = _size(kwargs)

@@ -13,7 +13,7 @@ from tui_gym.core.wrappers.changes import GameChanges
 from tui_gym.envs.gridworld import Walls, cell_distances, cell_moves, free_cells
 
 __all__ = [
-    "fewest_share", "gridworld_model", "gridworld_optimum", "mean_fewest_steps", "path_figures",
+    "fewest_share", "gridworld_model", "gridworld_optimum", "path_figures",
     "placements", "shortest_marks", "shortest_path_optimum",
 ]
 
@@ -97,14 +97,6 @@ def shortest_marks(size: int, walls: Walls) -> npt.NDArray[np.bool_]:
     return marks
 
 
-def mean_fewest_steps(size: int, walls: Walls) -> float:
-    """The mean fewest steps over the placements (NaN when there are none)."""
-    valid = placements(size, walls)
-    if not valid.any():
-        return float("nan")
-    return float(cell_distances(size, walls)[valid].mean())
-
-
 def _walk_arrays(size: int, walls: Walls, probabilities: np.ndarray) -> tuple[
         np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]]:
     """The cells' distances, moves and placements, and each move's probability array."""
@@ -116,11 +108,7 @@ def _walk_arrays(size: int, walls: Walls, probabilities: np.ndarray) -> tuple[
 
 def fewest_share(size: int, walls: Walls, probabilities: np.ndarray) -> float:
     """The share of placements a policy (action probabilities per (agent cell, target
-    cell)) solves in the fewest steps, exactly (NaN when there are no placements).
-
-    Filled in by distance: from a cell at distance d, the chance of a shortest walk is
-    the sum over the moves that bring the target one step nearer of the move's
-    probability times the chance from where it leads."""
+    cell)) solves in the fewest steps, exactly, filled in by distance (NaN: no placements)."""
     distance, moves, valid, weights = _walk_arrays(size, walls, probabilities)
     if not valid.any():
         return float("nan")
@@ -139,14 +127,9 @@ def fewest_share(size: int, walls: Walls, probabilities: np.ndarray) -> float:
 def path_figures(
     size: int, walls: Walls, probabilities: np.ndarray, max_steps: int | None = None
 ) -> tuple[float, float, float]:
-    """`(share solved in the fewest steps, mean steps over the fewest, share solved)` of a
-    policy given as action probabilities per (agent cell, target cell), exactly.
-
-    The first is `fewest_share`. The others come from the chance `h_k` of arriving
-    within k steps (within `max_steps`, if given; `h_k = sum_a p(a) h_{k-1}(next)`, 1 at
-    the target): the expected steps of the walks that arrive within L are
-    `L h_L - sum_{k<L} h_k`; the walk stops once `h` no longer moves. The mean counts
-    the steps beyond the fewest over the walks that arrive (NaN when none can).
+    """`(fewest_share, mean steps over the fewest of the walks that arrive, share that
+    arrives)` of a policy, exactly: from the chance `h_k` of arriving within k steps (at most
+    `max_steps`), the expected steps of walks arriving within L are `L h_L - sum_{k<L} h_k`.
     """
     distance, moves, valid, weights = _walk_arrays(size, walls, probabilities)
     if not valid.any():

@@ -183,11 +183,8 @@ class GridMap:
                              f"not {rows}x{cols}")
         start = self.start
         kept = None if start is None else (min(start[0], rows - 1), min(start[1], cols - 1))
-        cells = []
-        for r in range(rows):
-            row = self.cells[r] if r < self.rows else ""
-            line = (row[:cols] + "F" * cols)[:cols].replace("S", "F")
-            cells.append(line)
+        cells = [((self.cells[r] if r < self.rows else "")[:cols] + "F" * cols)[:cols]
+                 .replace("S", "F") for r in range(rows)]
         if kept is not None:
             cells[kept[0]] = cells[kept[0]][: kept[1]] + "S" + cells[kept[0]][kept[1] + 1 :]
 

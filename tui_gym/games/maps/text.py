@@ -22,13 +22,6 @@ class MapError(ValueError):
     """A map that cannot be read; the message is one line naming where (line, row, column)."""
 
 
-def _number(text: str, line: int, what: str) -> float:
-    value = read_number(text)
-    if value is None or not math.isfinite(value):
-        raise MapError(f"line {line}: {what} must be a finite number, got {shown_value(text)}")
-    return float(value)
-
-
 def parse_map(text: str) -> GridMap:
     """The map `text` holds (see the module docstring); `MapError` when it holds none."""
     if len(text) > MAX_TEXT:
@@ -82,7 +75,10 @@ def _header_line(line: str, number: int, header: dict[str, dict[Cell, tuple[floa
     key, row, col, value = match.groups()
     key = key.lower()
     cell = (int(row), int(col))
-    amount = _number(value, number, f"the {key} at row {cell[0]}, col {cell[1]}")
+    amount = read_number(value)
+    if amount is None or not math.isfinite(amount):
+        raise MapError(f"line {number}: the {key} at row {cell[0]}, col {cell[1]} must be a "
+                       f"finite number, got {shown_value(value)}")
     if key == "slip" and not 0.0 <= amount <= 1.0:
         raise MapError(f"line {number}: the slip at row {cell[0]}, col {cell[1]} must be in "
                        f"[0, 1], got {shown_value(value)}")

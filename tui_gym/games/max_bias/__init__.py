@@ -1,8 +1,7 @@
 """max-bias: Sutton & Barto's Example 6.7, the MDP that shows maximization bias.
 
-Spaces and rewards: `tui_gym.envs.max_bias.MaxBiasEnv`; truncated after 10
-steps, which no episode reaches. An action a state does not offer counts as one it does,
-so a learner that tries every action everywhere still plays this MDP.
+Spaces and rewards: `tui_gym.envs.max_bias.MaxBiasEnv`; truncated after 10 steps. An action
+a state does not offer counts as one it does, so any learner can play it.
 """
 
 from __future__ import annotations
@@ -56,7 +55,7 @@ class MaxBiasOracle(ModelOracle):
 
     def advice(self, env: Any, kwargs: Mapping[str, Any]) -> Advice:
         advice = super().advice(env, kwargs)
-        state = self.model_game.state_of(env)
+        state = self.game.state_of(env)
         if state is None or not advice.values:
             return advice
         mask = _offered(kwargs)[state]
@@ -109,11 +108,8 @@ class MaxBiasGame(DPGridGame):
     action_names = ACTIONS
     params = (Param("actions", int, MAX_B_ACTIONS, 1, MAX_B_ACTIONS,
                     help="how many actions B offers"),)
-    # The book's Figure 6.5 explores with epsilon 0.1 at a constant alpha 0.1, which keeps the
-    # estimate of left noisy (about ±0.2 around -0.1): an agent's greedy move from A is left
-    # on one seed in three at any time. A step size averaging each move's first hundred
-    # rewards settles it; Dyna's model keeps one reward of each of B's moves and replays it,
-    # so one planning step a move and more episodes let the real ones outweigh it.
+    # The book's constant alpha 0.1 keeps left's estimate noisy: a visits step size settles it;
+    # Dyna replays one reward per move, so one planning step and more episodes (see the README).
     hyperparameters = {
         "*": {"learning_rate": 0.01, "learning_rate_schedule": "visits",
               "epsilon_start": 0.1, "epsilon_final": 0.1, "episodes": 2000},

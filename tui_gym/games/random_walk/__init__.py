@@ -1,8 +1,7 @@
 """random-walk: Sutton & Barto's random walk (Example 6.2; Figure 7.2 with 19 states).
 
-Spaces and rewards: `tui_gym.envs.dp_grid.RandomWalkEnv`; truncated after
-1000 steps. The book's prediction figures evaluate the equiprobable random
-policy; as a control problem the walk is simple (always right).
+Spaces and rewards: `tui_gym.envs.dp_grid.RandomWalkEnv`; truncated after 1000 steps. The
+book's prediction figures evaluate the random policy; as control, always go right.
 """
 
 from __future__ import annotations

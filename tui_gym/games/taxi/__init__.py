@@ -1,32 +1,8 @@
 """Taxi: Gymnasium's `Taxi-v4` (and `Taxi-v3` where the installed Gymnasium has it).
 
-## Action Space
-south (0), north (1), east (2), west (3), pickup (4), dropoff (5).
-
-## Observation Space
-`((taxi_row * 5 + taxi_col) * 5 + passenger) * 4 + destination`: 500 states;
-the passenger waits at stand 0-3 (R, G, Y, B) or rides in the taxi (4).
-
-## Rewards
--1 a step, +20 for delivering the passenger, -10 for a pick-up or drop-off
-that cannot be made.
-
-## Starting State
-The taxi anywhere, the passenger at a stand, the destination another stand.
-
-## Episode End
-Terminated on delivery; truncated after 200 steps.
-
-## Arguments
-`rainy`: a move goes where asked with chance 0.8 and to either side otherwise;
-`fickle`: once the passenger has ridden a step, they may change destination
-(chance 0.3). The change of mind is a draw Gymnasium's table does not list and
-the observation does not show whether it is still to come, so with `fickle`
-on there is no exact model: the game trains and plays, and says so where the
-exact figures would be.
-
-The heatmaps show the 500 states as 25-cell slices of the city, one for each
-place of the passenger and destination, chosen on a small picker panel.
+With `fickle` the passenger's change of mind is a draw Gymnasium's table does not list,
+so there is no exact model: the game trains and plays, and says so. The heatmaps show
+the 500 states as 25-cell slices of the city, one per passenger place and destination.
 """
 
 from __future__ import annotations
@@ -44,7 +20,8 @@ from tui_gym.games.base import (
     HeatmapLayout,
     ReachNarrator,
     TallyWord,
-    greedy_cells,
+    greedy_panel,
+    numbered,
 )
 from tui_gym.games.model import DiscreteStates, ModelGame
 
@@ -75,12 +52,8 @@ def decode(state: int) -> tuple[int, int, int, int]:
 def _walls(game_env: Any) -> list[list[int]]:
     """Cells with a wall on their east side, read from the env's map."""
     desc = np.asarray(game_env.desc)
-    walls = []
-    for row in range(ROWS):
-        for col in range(COLS - 1):
-            if desc[1 + row, 2 * col + 2] == b"|":
-                walls.append([row, col])
-    return walls
+    return [[row, col] for row in range(ROWS) for col in range(COLS - 1)
+            if desc[1 + row, 2 * col + 2] == b"|"]
 
 
 class TaxiStates(DiscreteStates):
@@ -182,20 +155,13 @@ class TaxiLayout(HeatmapLayout):
             values=picker_values, labels=picker_labels, marked=np.zeros((5, 4), dtype=bool),
             legend="picker: mean max Q of a slice, n* its cells not optimal, ✓ delivered",
         )
-        cells, labels, marked = greedy_cells(
-            ROWS, COLS, lambda r, c: None, lambda r, c: q5[r, c, passenger, destination],
-            ACTION_MARKS.__getitem__, lambda r, c, action: wrong[r, c, passenger, destination],
-        )
         where = "in the taxi" if passenger == IN_TAXI else f"at {STAND_NAMES[passenger]}"
-        city = Heatmap(
-            title=f"passenger {where}, going to {STAND_NAMES[destination]}",
-            row_labels=tuple(str(r) for r in range(ROWS)),
-            col_labels=tuple(str(c) for c in range(COLS)),
-            values=cells,
-            labels=labels,
-            marked=marked,
-            legend=f"city: max Q per taxi cell, arrow drive  P pick up  D drop off  {TIED} tie"
-            "  * not optimal",
+        city = greedy_panel(
+            f"passenger {where}, going to {STAND_NAMES[destination]}",
+            f"city: max Q per taxi cell, arrow drive  P pick up  D drop off  {TIED} tie"
+            "  * not optimal", numbered(ROWS), numbered(COLS), lambda r, c: None,
+            lambda r, c: q5[r, c, passenger, destination], ACTION_MARKS.__getitem__,
+            lambda r, c, action: wrong[r, c, passenger, destination],
         )
         return [picker, city]
 
@@ -261,15 +227,12 @@ class TaxiGame(ModelGame):
     ) -> Mapping[str, Mapping[str, Any]]:
         if (kwargs or {}).get("rainy"):
             return {"*": {"learning_rate": 0.05, "episodes": 50_000}}
-        # The on-policy learners learn the values of the exploring policy: exploration
-        # falls to 0 so that those become the greedy policy's (the multi-step ones looking
-        # two steps or half a trace ahead); Double Q splits its experience over two tables.
-        # Each takes a longer budget (see the README).
+        # On-policy learners stop exploring so their values become the greedy policy's; Double Q
+        # splits its experience over two tables. Each takes a longer budget (see the README).
         on_policy = {"epsilon_final": 0.0, "epsilon_decay_fraction": 0.9, "episodes": 40_000}
         return {
             "*": {"learning_rate": 0.1, "episodes": 10_000},
-            "sarsa": {"epsilon_final": 0.0, "epsilon_decay_fraction": 0.9,
-                      "learning_rate": 0.2, "episodes": 40_000},
+            "sarsa": {**on_policy, "learning_rate": 0.2},
             "expected-sarsa": {"epsilon_final": 0.0},
             "double-q": {"episodes": 20_000},
             "monte-carlo": {"epsilon_final": 0.01, "learning_rate": 0.02, "episodes": 100_000},

@@ -1,8 +1,7 @@
 """windy, windy-king: Sutton & Barto's Windy GridWorld (Example 6.5; king's moves, Exercise 6.9).
 
-Spaces, rewards and wind: `tui_gym.envs.dp_grid.WindyGridWorldEnv`. Episodes are truncated
-after 2000 steps. The moves a game offers are part of what it is (its keys,
-the protocol's list, recordings), so the king's moves are a game of their own.
+Spaces, rewards and wind: `tui_gym.envs.dp_grid.WindyGridWorldEnv`; truncated after 2000
+steps. The moves are part of a game (keys, protocol, recordings): king's moves are another.
 """
 
 from __future__ import annotations
@@ -11,7 +10,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from tui_gym.core.params import Param
-from tui_gym.envs.dp_grid import GRID_ACTIONS, KING_ACTIONS, Cell, Grid, windy_grid
+from tui_gym.envs.dp_grid import KING_ACTIONS, Cell, Grid, windy_grid
 from tui_gym.games.base import ReachNarrator
 from tui_gym.games.dp_grid import DPGridGame, Event
 
@@ -46,16 +45,11 @@ class WindyGame(DPGridGame):
     description = ("Example 6.5's 7x10 grid: a wind blows up through the middle columns; "
                    "-1 a move until the goal.")
     teaches = "TD control where moves are not what they seem: Sarsa learns to use the wind"
-    action_names: tuple[str, ...] = GRID_ACTIONS
     king_moves = False
     params = (Param("stochastic_wind", bool, False,
                     help="the wind varies by one a third of the time each way (Exercise 6.10)"),)
-    # Sarsa as the book runs it (Figure 6.3: alpha 0.5, Q starting at 0), exploring a little
-    # more at first and less at the end, so the greedy policy settles. Double Q splits its
-    # experience over two tables; Monte Carlo may never see its greedy policy end an
-    # episode (the book: "termination is not guaranteed for all policies"). The multi-step
-    # learners look two steps or half a trace ahead (further, some seeds keep a detour
-    # within the budget); the on-policy ones learn as Sarsa does, for longer.
+    # Sarsa as the book runs it (Figure 6.3: alpha 0.5), exploring less at the end so the greedy
+    # policy settles; see `lessons` and the README for the others.
     hyperparameters = {
         "*": {"learning_rate": 0.5, "learning_rate_schedule": "constant",
               "epsilon_start": 0.2, "epsilon_final": 0.01, "episodes": 2000},
