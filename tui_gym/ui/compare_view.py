@@ -124,13 +124,6 @@ def edited_settings(session: Session, algorithms: Sequence[str]) -> dict[str, An
     }
 
 
-def game_names(session: Session) -> set[str]:
-    """The names a run of the session's game may be recorded under (case folded)."""
-    game = session.game
-    names = {game.name, game.env_id, *game.other_ids}
-    return {n.casefold() for n in names if n}
-
-
 class RunList(SelectionList[int]):
     """The runs, one a line, each with a tick box that reads ✓ when ticked."""
 
@@ -314,7 +307,8 @@ class CompareView(Vertical):
         again (when the view is shown). The history is only read while the view shows."""
         if fresh:
             self._stale = True
-        key = frozenset(game_names(self.session))
+        game = self.session.game  # the names a run of the game may be recorded under
+        key = frozenset(n.casefold() for n in (game.name, game.env_id, *game.other_ids) if n)
         if key != self._game_key:
             self._game_key = key
             self.stop_comparison()  # a comparison belongs to the game it was launched for
@@ -338,11 +332,6 @@ class CompareView(Vertical):
         job.stop()
         self._say("Stopping: the episodes every seed has finished are kept and recorded.")
         return True
-
-    def close(self) -> None:
-        """Stop a running comparison and wait (bounded) for it to record what finished."""
-        if self.job is not None:
-            self.job.close()
 
     @staticmethod
     def key_help() -> list[tuple[str, str]]:
@@ -489,15 +478,11 @@ class CompareView(Vertical):
         self.table.show([row for _, row, _ in entries], colours)
 
     # --- launching -----------------------------------------------------------------
-    def chosen_algorithms(self) -> tuple[str, ...]:
-        from tui_gym.algorithms import ALGORITHMS
-
-        return tuple(cls.name for cls in ALGORITHMS if self._boxes[cls.name].value)
-
     def read_launch(self) -> Launch | None:
         """The form's values, or None (and the message saying what is wrong)."""
         try:
-            return read_launch(self.chosen_algorithms(), self._seeds.value, self._episodes.value)
+            chosen = [name for name, box in self._boxes.items() if box.value]
+            return read_launch(chosen, self._seeds.value, self._episodes.value)
         except ValueError as exc:
             self._say(f"Not started: {exc}.", error=True)
             return None
@@ -702,7 +687,8 @@ class CompareView(Vertical):
         self.action_launch()
 
     def on_unmount(self) -> None:
-        self.close()
+        if self.job is not None:  # stopped, and waited for (bounded) to record what finished
+            self.job.close()
 
 
 __all__ = ["CompareView", "Launch", "RunList", "parse_count", "read_launch"]

@@ -1,9 +1,5 @@
-"""`KeysInOrder`: an app mixin that handles the keys typed one after the other, in order.
-
-Textual lets a key that a widget takes itself overtake earlier keys still bubbling up
-(characters after a Backspace, keys after one that moves the focus); here each key
-waits until the one before is handled, at most `KEY_PATIENCE`.
-"""
+"""`KeysInOrder`: an app mixin that handles the keys typed one after the other, in order
+(Textual lets a key a widget takes overtake earlier keys still bubbling up)."""
 
 from __future__ import annotations
 

@@ -414,14 +414,9 @@ class PlanView(MapEditingView):
     # --- the map editor ------------------------------------------------------------
     def open_editor(self) -> bool:
         """Show the map editor above the values; False when the game has no map."""
-        editor = self.editor
-        if editor is None or not self.can_edit_map():
+        if self.editor is None or not self.can_edit_map():
             return False
-        game = self.session.game
-        editor.start(game.grid_map(self.session.env_kwargs), game.map_tools)
-        self.add_class("-mapping")
-        self.show_editor()
-        self.call_after_refresh(editor.focus_canvas)
+        self.call_after_refresh(self.start_editor().focus_canvas)
         return True
 
     def _sync_editor(self) -> None:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import random
-from typing import TYPE_CHECKING, Any, ClassVar, cast
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from textual import events, on
 from textual.app import ComposeResult
@@ -25,7 +25,6 @@ from tui_gym.ui.widgets.scoreboard import Scoreboard
 
 if TYPE_CHECKING:
     from tui_gym.session.session import Session
-    from tui_gym.ui.app import TuiGymApp
 
 OBSERVATION_CHARS = 64  # a raw observation longer than this is cut short
 WATCH_INTERVAL = 0.4  # seconds between the watched agent's moves: slow enough to follow
@@ -118,9 +117,8 @@ class PlayView(Vertical):
     PlayView #play-status.-hint #play-hint { display: block; }
     PlayView #play-status.-good #play-headline { color: $text-success; }
     PlayView #play-status.-bad #play-headline { color: $text-error; }
-    PlayView #play-status.-even { border-left: outer $warning; }
-    PlayView #play-status.-even #play-headline { color: $text-warning; }
-    PlayView #play-status.-agent { border-left: outer $warning; }
+    PlayView #play-status.-even, PlayView #play-status.-agent { border-left: outer $warning; }
+    PlayView #play-status.-even #play-headline,
     PlayView #play-status.-agent #play-headline { color: $text-warning; }
     PlayView #play-tally { height: auto; width: 1fr; padding: 0 1; margin-top: 1; }
     Screen.compact PlayView { padding: 0; }
@@ -174,7 +172,7 @@ class PlayView(Vertical):
     # --- layout ------------------------------------------------------------
     def compose(self) -> ComposeResult:
         yield Static(id="play-title")
-        self.board = board_class(self.tui.session.game.board)()
+        self.board = board_class(self.session.game.board)()
         yield self.board
         yield StatusLines("play", "hint")
         yield Static(id="play-tally")
@@ -194,15 +192,18 @@ class PlayView(Vertical):
         self.stop_watching(restore=True)
 
     @property
-    def tui(self) -> TuiGymApp:
-        """The app, with its session and seeds."""
-        return cast("TuiGymApp", self.app)
+    def session(self) -> Session:
+        return self.app.session  # type: ignore[attr-defined, no-any-return]
+
+    @property
+    def play_seed(self) -> int:
+        return self.app.play_seed  # type: ignore[attr-defined, no-any-return]
 
     # --- what the app calls --------------------------------------------------
     def reload(self) -> None:
         """Show the session's game: the person's play put away on it (`put_away`) when
         the game and its wrappers are still the same, else a new game, tally and board."""
-        session = self.tui.session
+        session = self.session
         self.stop_watching(restore=False)
         self._agent_exact.drop()  # the figures of what was played before never show
         self.agent_figures, self._exact_reason = None, COMPUTING
@@ -212,12 +213,12 @@ class PlayView(Vertical):
             kept = None
         _close(self.game, self.agent_game)
         if kept is None:
-            self.game = HumanGame(session, seed=self.tui.play_seed)
-            self.game.recorder = getattr(self.tui, "recording", None)  # records while switched on
+            self.game = HumanGame(session, seed=self.play_seed)
+            self.game.recorder = getattr(self.app, "recording", None)  # records while switched on
             self.scorecard = Scorecard(tally=self.game.tally)
             self.agent_game = None
             self.agent_card = Scorecard()
-            self._watch_rng = random.Random(self.tui.play_seed)
+            self._watch_rng = random.Random(self.play_seed)
             self.outcomes = {}
         else:
             for name, value in kept.items():
@@ -373,7 +374,7 @@ class PlayView(Vertical):
         board.set_episode_over(game.done)
 
     def _show_title(self) -> None:
-        session = self.tui.session
+        session = self.session
         chain = " → ".join(_short(choice.name, choice.params) for choice in session.applied)
         title = f"[b]{escape(session.game.title)}[/]  [$text-muted]wrappers:[/] " + (
             f"[i $text-accent]{escape(chain)}[/]" if chain else "[$text-muted]none[/]"
@@ -424,12 +425,12 @@ class PlayView(Vertical):
         """What the exact optimum would do now in `game` (None when the game cannot say)."""
         if game.done:
             return None
-        return game.game.oracle.advice(game.env, self.tui.session.env_kwargs)
+        return game.game.oracle.advice(game.env, self.session.env_kwargs)
 
     def agent_note(self, observation: Any) -> str:
         """'agent: hit (Q stick −0.310, hit −0.402)': the greedy agent's choice here."""
-        names = self.tui.session.game.action_names
-        choice = self.tui.session.greedy_actions_for(observation, self._training_snapshot())
+        names = self.session.game.action_names
+        choice = self.session.greedy_actions_for(observation, self._training_snapshot())
         if choice is None:
             return "agent: has never seen this state (it would pick at random)"
         ties, q = choice
@@ -465,7 +466,7 @@ class PlayView(Vertical):
         were) and have the agent's exact figures (a policy evaluation) computed afresh off
         the event loop; the scoreboard shows them when they come."""
         self._show_scoreboard()
-        self._agent_exact.ask((self.tui.session.detached(), self._training_snapshot()))
+        self._agent_exact.ask((self.session.detached(), self._training_snapshot()))
 
     @on(LatestOnly.Computed)
     def _agent_figures_computed(self, message: LatestOnly.Computed) -> None:
@@ -488,7 +489,7 @@ class PlayView(Vertical):
 
     def score_rows(self) -> list[ScoreRow]:
         """The scoreboard's rows as the game's narrator words them."""
-        session = self.tui.session
+        session = self.session
         watched = self.agent_card if self.agent_card.tally.episodes else None
         scope = session.game.oracle.scope(session.env_kwargs, session.changes)
         return session.game.narrator.scoreboard(
@@ -505,10 +506,10 @@ class PlayView(Vertical):
         board = self.board
         if board is None or self.watching:
             return
-        session = self.tui.session
+        session = self.session
         if self.agent_game is None:
             try:
-                self.agent_game = HumanGame(session, seed=self.tui.play_seed + WATCH_SEED_OFFSET)
+                self.agent_game = HumanGame(session, seed=self.play_seed + WATCH_SEED_OFFSET)
             except Exception as exc:
                 self._say_hint(f"The agent cannot play here: {exc}")
                 return
@@ -581,7 +582,7 @@ class PlayView(Vertical):
             else:
                 self._agent_new_episode()
             return
-        session = self.tui.session
+        session = self.session
         before = self._advice(game)
         assert game.last is not None
         choice = session.greedy_actions_for(game.last.observation, self._training_snapshot())
@@ -619,7 +620,7 @@ class PlayView(Vertical):
     def _observation_text(self, last: PlayStep) -> str:
         """The observation in the game's words, or raw (cut short) when wrappers reshaped it."""
         assert self.game is not None
-        text = self.game.game.states.describe(last.observation, self.tui.session.env_kwargs)
+        text = self.game.game.states.describe(last.observation, self.session.env_kwargs)
         return text if len(text) <= OBSERVATION_CHARS else text[: OBSERVATION_CHARS - 1] + "…"
 
     def _show_tally(self) -> None:

@@ -1,28 +1,9 @@
-"""The Train view: watch a tabular learner learn the current game, live, or step by step.
+"""The Train view: watch a tabular learner learn the current game, live or step by step.
 
-`TrainView` lays out the controls (start/pause, one episode, reset, slower,
-faster: buttons for the mouse, the same keys live on the app), a progress
-bar toward the episode budget and one line saying which engine trains and
-why (cut to fit; the whole of it in its tooltip and the help), all three
-always in sight; below them, scrolling when the window is short, the run's
-numbers (`StatsPanel`) beside the hyperparameter fields
-(`HyperparameterForm`, the algorithm's own fields), the learning curves
-(`TrainingCharts`) with, at animated speeds, the game's board replaying the
-agent's moves, for a prediction learner its RMS error of V and V against the
-exact values state by state (`PredictionChart`), the step panel (`StepPanel`)
-explaining each update, and the Q-table heatmaps (`HeatmapView`), where the
-explained step's state is marked; for a λ learner `E` turns them to its
-eligibility traces of the episode in progress, live, and back. On a grid game
-`m` opens the map editor (`MapEditor`) above the heatmaps: each edit rebuilds
-the game through the app (the agent kept while its states keep their meaning,
-training going on) and the editor shows the new map solved exactly.
-
-It never trains anything: the app's timer hands it the runner's latest
-snapshot through `show_snapshot()`, which redraws only what changed and has a
-new snapshot's heatmaps and exact figures computed off the event loop
-(`exact_figures`: the latest snapshot wins, a stale result is dropped). It asks
-the game's heatmap layout whether the heatmaps follow a focus (a target, a
-slice) and what a heatmap cell means; it never branches on a game's name.
+It never trains: the app's timer hands it the runner's latest snapshot (`show_snapshot`),
+and the snapshot's heatmaps and exact figures are computed off the event loop
+(`exact_figures`). It never branches on a game's name: the game's heatmap layout says
+what a cell means and whether the heatmaps follow a focus.
 """
 
 from __future__ import annotations
@@ -75,7 +56,6 @@ class TrainView(MapEditingView):
     }
     TrainView #train-controls {
         height: 1;
-        margin-bottom: 0;
     }
     TrainView #train-engine {
         width: 1fr;
@@ -185,9 +165,6 @@ class TrainView(MapEditingView):
     Screen.compact TrainView #train-board-box {
         width: 24;
     }
-    Screen.compact TrainView #train-board-box > Board {
-        height: 7;
-    }
     """
 
     BINDINGS: ClassVar[list[BindingType]] = [
@@ -210,7 +187,6 @@ class TrainView(MapEditingView):
         self._scene: Any = None
         self._scene_event: Any = None
         self._layout_key: Any = None  # (game, env kwargs) the focus belongs to
-        self._editor_game = ""  # the game the editor's undo history belongs to
         self._traces = False  # the heatmap shows the traces (a λ learner's) instead of Q
         self._no_traces_until = 0.0  # while that is said, `E` says it no more
         # The exact figures, computed off the event loop.
@@ -245,7 +221,6 @@ class TrainView(MapEditingView):
         self._caption = Label("", id="train-board-caption")
         self._heatmap_box = Vertical(id="train-heatmap-box")
         self.heatmap = HeatmapView(id="train-heatmaps")
-        self._editor: MapEditor | None = None  # mounted when first opened
         self.step_panel = StepPanel(id="train-step")
 
         with Horizontal(id="train-controls"):
@@ -280,10 +255,6 @@ class TrainView(MapEditingView):
 
     # --- parts -------------------------------------------------------------
     @property
-    def editor(self) -> MapEditor | None:
-        return self._editor
-
-    @property
     def shows_traces(self) -> bool:
         """Whether the heatmap shows the eligibility traces (else Q, or V)."""
         return self._traces
@@ -301,8 +272,9 @@ class TrainView(MapEditingView):
         if layout_key != self._layout_key:
             self._layout_key = layout_key
             self.focus_target = game.layout.default_focus(session.env_kwargs)
-        if game.board != self._board_kind:
-            self._drop_board()
+        if game.board != self._board_kind and self._board is not None:
+            self._board.remove()
+            self._board = None
         self._scene = self._scene_event = None
         if session.hp is not None:
             self.form.load(session.hp)
@@ -320,13 +292,12 @@ class TrainView(MapEditingView):
         self._exact.drop()  # figures of what was shown before never reach the screen
         self.show_speed(runner.speed.name)
         self.show_snapshot(runner.latest, runner)
-        if self.editing_map and self._editor is not None:
+        if self.editing_map and (editor := self.editor) is not None:
             if not game.editable:
                 self.close_editor()
+            elif editor.grid_map is None or self._editor_game != game.name:
+                self.start_editor()
             else:
-                if self._editor.grid_map is None or self._editor_game != game.name:
-                    self._editor.start(game.grid_map(session.env_kwargs), game.map_tools)
-                    self._editor_game = game.name
                 self.show_editor()
 
     # --- the map editor ----------------------------------------------------
@@ -334,15 +305,9 @@ class TrainView(MapEditingView):
         """Show the map editor with the keyboard on it; False when the game has no map."""
         if not self.can_edit_map():
             return False
-        game = self.session.game
-        if self._editor is None:
-            self._editor = MapEditor(id="train-editor")
-            await self.mount(self._editor, before=self._heatmap_box)
-        self._editor.start(game.grid_map(self.session.env_kwargs), game.map_tools)
-        self._editor_game = game.name
-        self.add_class("-mapping")
-        self.show_editor()
-        self._editor.focus_canvas()  # at once: the keys typed after `m` go to the map
+        if self.editor is None:  # mounted when first opened
+            await self.mount(MapEditor(id="train-editor"), before=self._heatmap_box)
+        self.start_editor().focus_canvas()  # at once: the keys typed after `m` go to the map
         return True
 
     @property
@@ -385,8 +350,8 @@ class TrainView(MapEditingView):
         """Give the keyboard to the map while the editor is open, else to the heatmap (its
         keys move the focus where there is one). The view stays where it is: scrolled to
         a heatmap taller than the screen's rest, it would hide the run's state above."""
-        if self.editing_map and self._editor is not None:
-            self._editor.focus_canvas()
+        if self.editing_map and (editor := self.editor) is not None:
+            editor.focus_canvas()
         else:
             self.heatmap.focus(scroll_visible=False)
 
@@ -469,21 +434,18 @@ class TrainView(MapEditingView):
             else:
                 self._prediction.show(request.snapshot.episodes, figures.prediction)
 
-    def _show_engine(self, snapshot: TrainingSnapshot) -> None:
-        reason = self.session.engine_reason
-        if snapshot.status:
-            reason = snapshot.status  # "compiling the learners, once"
-        elif snapshot.engine == "env" and reason.startswith("model"):
-            reason = "env: one step at a time while animating (the model at max speed)"
-        self.show_engine(reason)
-
     @property
     def engine_note(self) -> str:
         """Which engine trains and why, in full (the line shows what fits)."""
         return str(self._engine.content)
 
-    def show_engine(self, reason: str) -> None:
+    def _show_engine(self, snapshot: TrainingSnapshot) -> None:
         """Say which engine trains and why, on one line (the whole in its tooltip)."""
+        reason = self.session.engine_reason
+        if snapshot.status:
+            reason = snapshot.status  # "compiling the learners, once"
+        elif snapshot.engine == "env" and reason.startswith("model"):
+            reason = "env: one step at a time while animating (the model at max speed)"
         if reason != self.engine_note:
             self._engine.update(reason)
             self._engine.tooltip = reason
@@ -513,20 +475,6 @@ class TrainView(MapEditingView):
             self._show_state(self.runner)
 
     # --- the board at animated speeds --------------------------------------
-    def _drop_board(self) -> None:
-        if self._board is not None:
-            self._board.remove()
-        self._board = None
-        self._board_kind = ""
-
-    def _ensure_board(self) -> Board:
-        if self._board is None:
-            self._board_kind = self.session.game.board
-            self._board = board_class(self._board_kind)(interactive=False)
-            self._board.can_focus = False
-            self._board_box.mount(self._board, before=0)
-        return self._board
-
     def _show_board(self, runner: TrainingRunner) -> None:
         box = self._board_box
         scene = runner.last_scene
@@ -537,7 +485,12 @@ class TrainView(MapEditingView):
         if not animated or scene is None:
             self._show_step(None)
             return
-        board = self._ensure_board()
+        board = self._board
+        if board is None:
+            self._board_kind = self.session.game.board
+            board = self._board = board_class(self._board_kind)(interactive=False)
+            board.can_focus = False
+            self._board_box.mount(board, before=0)
         event = runner.last_event
         if scene != self._scene:
             self._scene = scene
