@@ -107,9 +107,8 @@ def read_launch(algorithms: Sequence[str], seeds: str, episodes: str) -> Launch:
 
 
 def edited_settings(session: Session, algorithms: Sequence[str]) -> dict[str, Any]:
-    """The hyperparameters set in the Train view that differ from the algorithm's defaults
-    for the game, those of them at least one of `algorithms` has (the episode budget
-    aside: the launch form sets it)."""
+    """The Train view's hyperparameters that differ from the game's defaults and one of
+    `algorithms` has (the episode budget aside: the launch form sets it)."""
     from tui_gym.algorithms import algorithm
     from tui_gym.session.session import default_settings
 
@@ -141,9 +140,8 @@ class RunList(SelectionList[int]):
 
 
 def describe_run(run: RunSummary) -> Text:
-    """A run's line in the list: label, kind, seeds, final return, status unless
-    finished ("open in the app" for an app's run whose agent is still there, trained
-    or not), and when it started."""
+    """A run's line in the list: label, kind, seeds, final return, status unless finished,
+    and when it started."""
     from datetime import datetime
 
     when = datetime.fromtimestamp(run.started_at).strftime("%m-%d %H:%M")
@@ -213,10 +211,8 @@ class CompareView(Vertical):
         self, *, db: str | Path | None = None, kept: bool = True, processes: int | None = None,
         id: str | None = None, classes: str | None = None,
     ) -> None:
-        """`db` is the run history's file (None: `TUI_GYM_DB`, else the data folder's);
-        `kept` False says it is a scratch file that goes when the app ends
-        (`tui-gym --no-history`); `processes` is `run_compare`'s (None: a child
-        process per core)."""
+        """`db`: the run history (None: the default file; `kept` False: a scratch file);
+        `processes`: `run_compare`'s."""
         super().__init__(id=id, classes=classes)
         self.db = db  # read at each look, so the app can point the view elsewhere
         self.kept = kept
@@ -517,9 +513,8 @@ class CompareView(Vertical):
         )
 
     def action_resume(self) -> None:
-        """Carry on the highlighted run's comparison: its algorithms, seeds and episodes,
-        with the game's settings and the Train view's hyperparameters as they are now (the
-        comparison refuses, in one line, if they are not the run's)."""
+        """Carry on the highlighted run's comparison, with the settings as they are now (the
+        comparison refuses if they are not the run's)."""
         index = self.run_list.highlighted
         if self.history_error is not None or index is None or index >= len(self.runs):
             self._say("Not resumed: highlight an unfinished comparison in the list of runs.",

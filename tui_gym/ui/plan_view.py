@@ -353,12 +353,9 @@ class PlanView(MapEditingView):
         runner.restart(lambda: start_policy(plan, choice, gamma, q))
 
     def _agent_q(self) -> np.ndarray | None:
-        session = self.session
-        snapshot = getattr(self.app, "runner", None)
-        latest = getattr(snapshot, "latest", None)
-        if latest is not None and getattr(latest, "version", 0) > 0:
-            return session.base_q(latest)
-        return session.base_q()
+        runner = getattr(self.app, "runner", None)  # none where the Plan view runs alone
+        latest = runner.latest if runner is not None else None
+        return self.session.base_q(latest if latest is not None and latest.version > 0 else None)
 
     def action_toggle_numbers(self) -> None:
         self.numbers = not self.numbers

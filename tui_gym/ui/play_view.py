@@ -16,7 +16,7 @@ from textual.widgets import Static
 
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.games.base import Advice
-from tui_gym.games.words import ScoreRow, format_reward, interval_text, plural, signed
+from tui_gym.games.words import format_reward, interval_text, plural, signed
 from tui_gym.session.play import HumanGame, PlayError, PlayStep, Scorecard
 from tui_gym.ui.exact_figures import LatestOnly
 from tui_gym.ui.widgets.board_kinds import board_class
@@ -487,18 +487,15 @@ class PlayView(Vertical):
         runner = getattr(self.app, "runner", None)
         return runner.latest if runner is not None and runner.running else None
 
-    def score_rows(self) -> list[ScoreRow]:
+    def _show_scoreboard(self) -> None:
         """The scoreboard's rows as the game's narrator words them."""
+        if not self.is_mounted:
+            return
         session = self.session
         watched = self.agent_card if self.agent_card.tally.episodes else None
         scope = session.game.oracle.scope(session.env_kwargs, session.changes)
-        return session.game.narrator.scoreboard(
-            self.scorecard, self.agent_figures, watched, self._exact_reason, scope
-        )
-
-    def _show_scoreboard(self) -> None:
-        if self.is_mounted:
-            self.query_one(Scoreboard).show_rows(self.score_rows())
+        self.query_one(Scoreboard).show_rows(session.game.narrator.scoreboard(
+            self.scorecard, self.agent_figures, watched, self._exact_reason, scope))
 
     # --- watching the agent ----------------------------------------------------
     def action_watch_agent(self) -> None:

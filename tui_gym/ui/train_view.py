@@ -77,15 +77,12 @@ class TrainView(MapEditingView):
         color: $text-accent;
         text-style: bold;
     }
-    TrainView #train-top {
+    TrainView #train-top, TrainView #train-middle {
         height: auto;
     }
     TrainView #train-top > * {
         height: auto;
         min-height: 9;  /* the two boxes line up for both games */
-    }
-    TrainView #train-middle {
-        height: auto;
     }
     TrainView #train-charts {
         width: 1fr;
@@ -100,9 +97,6 @@ class TrainView(MapEditingView):
         width: 100%;
         height: 7;
     }
-    TrainView #train-board-box.-shown {
-        display: block;
-    }
     TrainView #train-board-caption {
         color: $text-muted;
         width: 100%;
@@ -110,10 +104,11 @@ class TrainView(MapEditingView):
         min-height: 3;
         padding: 0 1;
     }
-    TrainView #train-step {
+    TrainView #train-step, TrainView #train-editor {
         display: none;
     }
-    TrainView.-animated #train-step {
+    TrainView #train-board-box.-shown, TrainView.-animated #train-step,
+    TrainView.-mapping #train-editor {
         display: block;
     }
     TrainView.-stepping #train-board-box {
@@ -128,15 +123,11 @@ class TrainView(MapEditingView):
     TrainView #train-heatmap-box:focus-within {
         border: round $primary;
     }
-    TrainView #train-editor {
-        display: none;
-    }
-    TrainView.-mapping #train-editor {
-        display: block;
-    }
-    /* At 80x24 the editor takes the place of the numbers and the charts. */
-    Screen.compact TrainView.-mapping #train-top,
-    Screen.compact TrainView.-mapping #train-middle {
+    /* At 80x24 the editor takes the place of the numbers and the charts, and the form
+       hides until `e` (or a bad value) asks for it. */
+    Screen.compact TrainView.-mapping #train-top, Screen.compact TrainView.-mapping #train-middle,
+    Screen.compact TrainView #train-speed, Screen.compact TrainView #train-engine,
+    Screen.compact TrainView #train-form {
         display: none;
     }
 
@@ -146,15 +137,8 @@ class TrainView(MapEditingView):
     Screen.compact TrainView #train-top > * {
         min-height: 0;
     }
-    Screen.compact TrainView #train-speed, Screen.compact TrainView #train-engine {
-        display: none;
-    }
     Screen.compact TrainView #train-controls Button {
         margin-right: 0;
-    }
-    /* At 80x24 the form hides until `e` (or a bad value) asks for it. */
-    Screen.compact TrainView #train-form {
-        display: none;
     }
     Screen.compact TrainView.-editing #train-form {
         display: block;
@@ -187,7 +171,7 @@ class TrainView(MapEditingView):
         self._scene: Any = None
         self._scene_event: Any = None
         self._layout_key: Any = None  # (game, env kwargs) the focus belongs to
-        self._traces = False  # the heatmap shows the traces (a λ learner's) instead of Q
+        self.shows_traces = False  # the heatmap shows the traces (a λ learner's), not Q
         self._no_traces_until = 0.0  # while that is said, `E` says it no more
         # The exact figures, computed off the event loop.
         self._exact: LatestOnly[Request, Figures] = LatestOnly(self, compute)
@@ -255,11 +239,6 @@ class TrainView(MapEditingView):
 
     # --- parts -------------------------------------------------------------
     @property
-    def shows_traces(self) -> bool:
-        """Whether the heatmap shows the eligibility traces (else Q, or V)."""
-        return self._traces
-
-    @property
     def speed_name(self) -> str:
         return str(self._speed.content)
 
@@ -281,7 +260,7 @@ class TrainView(MapEditingView):
         self.charts.clear()
         self._prediction.clear()
         self._prediction.display = session.predicts
-        self._traces = self._traces and session.learner_class.has_traces
+        self.shows_traces = self.shows_traces and session.learner_class.has_traces
         self.refresh_bindings()  # `E` toggles, or says there are no traces
         self._show_heatmap_title()
         self._heatmap_box.border_subtitle = (
@@ -316,9 +295,8 @@ class TrainView(MapEditingView):
         return self._version
 
     def show_snapshot(self, snapshot: TrainingSnapshot, runner: TrainingRunner) -> None:
-        """Draw a snapshot; cheap when it is the one already shown. While training runs,
-        a new one waits while a key is answered (the key's frame first; the app's timer
-        offers it again)."""
+        """Draw a snapshot (cheap when it is the one shown); while training runs, a new one
+        waits while a key is answered (the app's timer offers it again)."""
         held = runner.running and self._version >= 0 and key_wait_of(self.app) > 0
         if snapshot.version != self._version and not held:
             self._version = snapshot.version
@@ -347,9 +325,8 @@ class TrainView(MapEditingView):
         return hp
 
     def focus_default(self) -> None:
-        """Give the keyboard to the map while the editor is open, else to the heatmap (its
-        keys move the focus where there is one). The view stays where it is: scrolled to
-        a heatmap taller than the screen's rest, it would hide the run's state above."""
+        """Give the keyboard to the map while the editor is open, else to the heatmap (not
+        scrolled to: it would hide the run's state above)."""
         if self.editing_map and (editor := self.editor) is not None:
             editor.focus_canvas()
         else:
@@ -380,7 +357,7 @@ class TrainView(MapEditingView):
 
     def _show_heatmap_title(self) -> None:
         predicts = self.session.predicts
-        if self._traces:
+        if self.shows_traces:
             title = ("e(s): the traces of this episode, in every action's place" if predicts
                      else "e(s,a): the eligibility traces of this episode")
         else:
@@ -392,7 +369,7 @@ class TrainView(MapEditingView):
         event loop (`_show_figures` draws them)."""
         snapshot = self._snapshot
         if snapshot is not None:
-            traces = self._traces and snapshot.traces is not None
+            traces = self.shows_traces and snapshot.traces is not None
             self._exact.ask(Request(self.session.detached(), snapshot, self.focus_target,
                                     traces))
 
@@ -416,7 +393,7 @@ class TrainView(MapEditingView):
         self._figures = figures
         request = figures.request
         session, view = request.session, self.heatmap
-        traces = self._traces and request.snapshot.traces is not None
+        traces = self.shows_traces and request.snapshot.traces is not None
         if request.focus != self.focus_target or request.traces != traces:
             pass  # keys have moved the heatmaps on: theirs are asked for, the cursor stays
         elif figures.panels is None:
@@ -452,9 +429,7 @@ class TrainView(MapEditingView):
             self.stats.tooltip = reason  # the compact layout hides the line
 
     def _show_state(self, runner: TrainingRunner) -> None:
-        """The badge, from what is shown: running (a run, or one episode, under way),
-        finished (the budget in force used up), paused (training has begun, even
-        mid-way through its first episode) or ready."""
+        """The badge, from what is shown: running, finished, paused or ready."""
         snapshot = self._snapshot
         busy = runner.running or not runner.wait_idle(0)
         episodes = snapshot.episodes if snapshot is not None else 0
@@ -597,7 +572,7 @@ class TrainView(MapEditingView):
 
     def action_toggle_traces(self) -> None:
         """The heatmap: Q (V) or the learner's eligibility traces."""
-        self._traces = not self._traces
+        self.shows_traces = not self.shows_traces
         self._show_heatmap_title()
         self._ask_figures()
 
