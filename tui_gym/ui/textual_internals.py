@@ -17,6 +17,7 @@ when `TUI_GYM_STOCK_TEXTUAL` names it; `all` names every one) leaves Textual to 
 
 from __future__ import annotations
 
+import functools
 import inspect
 import os
 import select
@@ -69,6 +70,7 @@ def _parameters(function: Any) -> list[str]:
 
 
 # --- the main screen: compositor and first show -----------------------------------------
+@functools.cache
 def _compositor_class() -> type | None:
     """`Compositor` subclassed to keep its layout (None when its shape is not the one known)."""
     try:
@@ -154,16 +156,6 @@ def _compositor_class() -> type | None:
     if not hasattr(probe, "_full_map_invalidated") or not hasattr(probe, "_dirty_regions"):
         return None
     return KeptLayoutCompositor
-
-
-_COMPOSITOR: type | None | bool = False  # False: not looked for yet
-
-
-def _kept_layout_compositor() -> Any:
-    global _COMPOSITOR
-    if _COMPOSITOR is False:
-        _COMPOSITOR = _compositor_class()
-    return None if _COMPOSITOR is None or _COMPOSITOR is True else _COMPOSITOR()
 
 
 class _ResumingScreen(Screen):
@@ -261,9 +253,9 @@ def main_screen(**kwargs: Any) -> Screen:
              and _parameters(Screen._update_focus_styles) == ["self", "focused", "blurred"])
     screen = (_QuietFocusScreen if quiet else _ResumingScreen)(**kwargs)
     if enabled("compositor") and hasattr(screen, "_compositor"):
-        compositor = _kept_layout_compositor()
+        compositor = _compositor_class()
         if compositor is not None:
-            screen._compositor = compositor
+            screen._compositor = compositor()
     return screen
 
 
