@@ -35,8 +35,7 @@ class CompareJob:
         processes: int | None = None, resume: int | None = None,
     ) -> None:
         """`run` is `run_compare` (or a function with its signature); `processes` and
-        `resume` are its own (None: one child process per core, 0: all on the job's
-        thread; the recorded comparison to carry on)."""
+        `resume` are its own."""
         if run is None:
             from tui_gym.session.experiments.compare import run_compare
 

@@ -113,10 +113,9 @@ TURNS = _Turns()
 
 
 class LatestOnly(Generic[Asked, Result]):
-    """Runs `work` for a widget on a worker thread, the latest request winning; each result
-    comes back as a `Computed` message. All take turns on one lock, none starts or hands
-    over a result while a key is answered (`key_wait`), and each rests as long as the
-    last took on the CPU."""
+    """Runs `work` for a widget on a worker thread, the latest request winning, as a
+    `Computed` message. All take turns on one lock, none while a key is answered
+    (`key_wait`), each resting as long as the last took on the CPU."""
 
     class Computed(Message):
         """The result of a request (or the error computing it), on the event loop."""

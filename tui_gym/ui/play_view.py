@@ -462,9 +462,8 @@ class PlayView(Vertical):
 
     # --- the scoreboard --------------------------------------------------------
     def refresh_agent_figures(self) -> None:
-        """Redraw the scoreboard (the person's record now, the agent's figures as they
-        were) and have the agent's exact figures (a policy evaluation) computed afresh off
-        the event loop; the scoreboard shows them when they come."""
+        """Redraw the scoreboard and have the agent's exact figures computed afresh off the
+        event loop; the scoreboard shows them when they come."""
         self._show_scoreboard()
         self._agent_exact.ask((self.session.detached(), self._training_snapshot()))
 
