@@ -125,8 +125,6 @@ def series_of_outcome(outcome: AlgorithmOutcome, label: str, smooth: bool = True
                 return Series(("live", outcome.algorithm), label, xs, ys, low, high,
                               seeds=max(1, own.seeds), smoothing=outcome.smoothing,
                               smoothing_episodes=outcome.smoothing)
-    if not len(curve):
-        return None
     lo, hi = curve.lo, curve.hi
     return _curve(("live", outcome.algorithm), label, np.asarray(curve.episodes),
                   np.asarray(curve.mean, dtype=np.float64),

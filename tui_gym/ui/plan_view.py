@@ -297,14 +297,12 @@ class PlanView(MapEditingView):
 
     def _show_lines(self, snapshot: PlanSnapshot | None) -> None:
         plan = self.plan
-        panel = plan.value_panel if plan is not None else None
-        shown = snapshot is not None and panel is not None
-        self._values.set_class(shown, "-shown")
+        panel = plan.value_panel if plan is not None and snapshot is not None else None
+        self._values.set_class(panel is not None, "-shown")
         if snapshot is not None and panel is not None:
             self._values.show([panel(snapshot.v)])
-        line = plan.line if plan is not None else None
-        shown = snapshot is not None and line is not None
-        self._lines.set_class(shown, "-shown")
+        line = plan.line if plan is not None and snapshot is not None else None
+        self._lines.set_class(line is not None, "-shown")
         if snapshot is not None and line is not None:
             curves = [(f"sweep {sweep}", values[line.states]) for sweep, values in snapshot.kept]
             if snapshot.sweeps not in {sweep for sweep, _ in snapshot.kept}:

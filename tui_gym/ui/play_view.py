@@ -659,11 +659,7 @@ def _verdict(before: Advice | None, step: PlayStep, names: tuple[str, ...]) -> s
 
 
 def _tone(reward: float) -> str:
-    if reward > 0:
-        return "-good"
-    if reward < 0:
-        return "-bad"
-    return "-even"
+    return "-good" if reward > 0 else "-bad" if reward < 0 else "-even"
 
 
 def _short(name: str, params: tuple[tuple[str, Any], ...]) -> str:

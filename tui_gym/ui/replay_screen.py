@@ -293,22 +293,19 @@ class ReplayScreen(ModalScreen[None]):
     def _coach_line(self, episode: Episode, move: Move) -> tuple[str, str]:
         """The coach's verdict, the move's regret and the episode's so far, and a tone."""
         running = episode.running_regret(self.position)
-        so_far = "–" if running is None else f"{running:.3f}"
+        so_far = "regret so far " + ("–" if running is None else f"{running:.3f}")
         if move.verdict is None:
-            return f"no verdict: no optimum to judge this move by · regret so far {so_far}", ""
+            return f"no verdict: no optimum to judge this move by · {so_far}", ""
         regret = (
             "regret – (no exact values for this game)"
             if move.regret is None
             else f"regret {move.regret:.3f}"
         )
         if move.verdict == "optimal":
-            return f"✓ {move.action_name} was optimal · {regret} · regret so far {so_far}", "-good"
+            return f"✓ {move.action_name} was optimal · {regret} · {so_far}", "-good"
         best = " or ".join(move.optimal) or "another move"
-        return (
-            f"✗ {move.action_name} was not optimal (the optimum: {best}) · {regret}"
-            f" · regret so far {so_far}",
-            "-bad",
-        )
+        verdict = f"✗ {move.action_name} was not optimal (the optimum: {best})"
+        return f"{verdict} · {regret} · {so_far}", "-bad"
 
     def _outcome(self, episode: Episode, position: int) -> str:
         """How the episode ended, in the game's words where this tui-gym knows the game."""
