@@ -551,9 +551,7 @@ class SidePanel(VerticalScroll):
             where = "innermost" if step < 0 else "outermost"
             self.app.notify(f"{name} is already {where}.", timeout=2)
             return
-        order = list(self._order)
-        order[index], order[target] = order[target], order[index]
-        self._order = order
+        self._order[index], self._order[target] = self._order[target], self._order[index]
         self._request()
 
     def action_leave(self) -> None:
