@@ -66,9 +66,10 @@ def test_each_part_falls_back_when_textual_changes_shape(
     # A compositor without the private method it narrows: the stock compositor stays.
     import textual._compositor
 
-    monkeypatch.setattr(internals, "_COMPOSITOR", False)
+    internals._compositor_class.cache_clear()
     monkeypatch.delattr(textual._compositor.Compositor, "_render_chops")
-    assert internals._kept_layout_compositor() is None
+    assert internals._compositor_class() is None
+    internals._compositor_class.cache_clear()  # the tests after it have the real one again
     # A toggle button without its inner mark: the run list's line as Textual drew it.
     import textual.widgets._toggle_button as toggle
 

@@ -1,16 +1,8 @@
 """The Textual app: Play, Train, Compare, Plan and Book views and a wrapper side panel.
 
-`TuiGymApp` keeps one `Session` per game for the whole run (switching back finds
-its agent, settings, wrappers and curves) and the runner that trains the one
-shown, in a child process as `tui-gym` opens it or on a worker thread. The first
-frame shows the Play view and the side panel; the other views are built after it
-or when first shown. A timer hands the runner's latest snapshot to the Train
-view; the side panel asks for rebuilds by message. What would lose a trained
-agent asks first (`ConfirmScreen`); files are named in `FileScreen`; below the
-minimum size `TooSmallScreen` takes every key. `run_app` runs the app as
-`tui-gym` does: signals and a closed terminal end it cleanly, an unexpected
-error with one line and a crash log. Textual's private names it uses live in
-`tui_gym.ui.textual_internals`.
+`TuiGymApp` keeps one `Session` per game for the whole run and the runner that trains
+the one shown; `run_app` runs it as `tui-gym` does (signals and a closed terminal end it
+cleanly, an unexpected error with one line and a crash log).
 """
 
 from __future__ import annotations
@@ -25,6 +17,8 @@ import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
+from functools import partial
+from itertools import zip_longest
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -90,10 +84,9 @@ def _game_keys() -> list[tuple[str, str]]:
              for i in range(0, len(keys), GAME_KEYS_A_LINE)]
     words = ["switch game, as the picker names them;",
              "each keeps its agent, settings and curves"]
-    words += [""] * (len(lines) - len(words))
     if len(lines) < len(words):
         return [(lines[0], " ".join(words))]
-    return list(zip(lines, words, strict=True))
+    return list(zip_longest(lines, words, fillvalue=""))
 
 
 class TuiGymApp(KeysInOrder, CrashHook, App[int]):
@@ -149,19 +142,12 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         db: str | Path | None = None,
         history_kept: bool = True,
     ) -> None:
-        """`runner` is "thread" (train on a worker thread) or "process" (a child process;
-        what `tui-gym` opens). `tune_gc` applies `tune_gc_for_ui` at mount (for a
-        process that runs this one app, as `tui-gym` does; not for test suites),
-        collecting every `gc_seconds` (young, full; default `YOUNG_GC_SECONDS`,
-        `FULL_GC_SECONDS`). `standalone` is for an app that owns its process and
-        terminal (`run_app`): termination signals end it cleanly, and a crash's
-        traceback is left to `run_app` to log instead of being printed.
-        `record` records the person's games to that file from the start (ctrl+r
-        turns recording on and off); `replay` opens on a recording's replay; `run_log`
-        keeps every run trained here in the run history (given as a function, it is
-        made once the first frame is out). `db` is the run history the
-        Compare view reads and records into (None: `TUI_GYM_DB`, else the user's data
-        folder); `history_kept` False says `db` is a scratch file gone at the end."""
+        """`runner`: "thread" or "process"; `tune_gc`: `tune_gc_for_ui` at mount, every
+        `gc_seconds` (young, full); `standalone`: the app owns its process and terminal
+        (`run_app`); `record`: record the person's games to that file; `replay`: open on a
+        recording; `run_log`: the run history the runs trained here go to (a function: made
+        after the first frame); `db`: the Compare view's history (`history_kept` False: a
+        scratch file)."""
         super().__init__()
         self.tune_gc = tune_gc
         self.gc_seconds = gc_seconds or (YOUNG_GC_SECONDS, FULL_GC_SECONDS)
@@ -246,9 +232,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             self.push_screen(ReplayScreen(self._replay))
 
     def _after_first_frame(self) -> None:
-        """What the first frame need not wait for: the Train view is built (unless a
-        key asked for it already), then the collector is tuned, once what the app
-        keeps alive is there. The run history opens then too."""
+        """What the first frame need not wait for: the Train view, the run history, then
+        the collector tuned."""
         self._ensure_train()
         if self._make_run_log is not None:
             self.run_log, self._make_run_log = self._make_run_log(), None
@@ -436,9 +421,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         return BookView(id="book")
 
     def _train_shown(self) -> None:
-        """The Train view takes the keyboard (once it is mounted, when it is shown before).
-        The frame that shows it shows what it drew last; the latest snapshot is drawn
-        right after that frame, so a view switch waits for one drawing, not two."""
+        """The Train view takes the keyboard (once mounted); the latest snapshot is drawn
+        after the frame that shows it, so a view switch waits for one drawing, not two."""
         if self.current_view != "train":
             return
         view = self._train_ready()
@@ -482,9 +466,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             self.action_focus_view()
 
     def _show_side(self) -> None:
-        """The side panel, but in the compact Compare and Book views, which take the whole
-        width. Its display, not a class of the screen: a class of the screen restyles
-        every widget on it."""
+        """The side panel, but in the compact Compare and Book views (its display: a class
+        of the screen would restyle every widget on it)."""
         if self._switcher is not None:
             wide = self.current_view in ("compare", "book")
             self.side_panel.display = not (wide and self._main_screen.has_class("compact"))
@@ -518,10 +501,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     def switch_game(
         self, game: Game, otherwise: Callable[[], None] | None = None
     ) -> None:
-        """Play `game`: its session from earlier in this run (agent, settings,
-        wrappers, curves) or a new one, built off the event loop (a game's model can take
-        a second). Training pauses first; `otherwise` runs if the runner never hands the
-        agent back or the game cannot be built."""
+        """Play `game`: its session from earlier in this run or a new one, built off the
+        event loop; `otherwise` runs if the agent is not handed back or the game not built."""
         self._wanted_game = game.name
         if game.name in self._sessions:
             was_running = self.runner.running
@@ -590,9 +571,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         otherwise: Callable[[], None] | None = None,
         deadline: float | None = None,
     ) -> None:
-        """Pause training and run `then` once the runner has the agent back: at once
-        when it is idle, else as soon as it hands the agent back, never blocking the
-        UI meanwhile. After `IDLE_TIMEOUT` it gives up, says so and runs `otherwise`."""
+        """Pause training and run `then` once the runner has the agent back, never blocking
+        the UI; after `IDLE_TIMEOUT` it says so and runs `otherwise`."""
         runner = self.runner
         if deadline is None:
             runner.pause(wait=False)
@@ -606,12 +586,6 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
                 otherwise()
         else:
             self.set_timer(IDLE_POLL, lambda: self._when_idle(then, otherwise, deadline))
-
-    def _pause_now(self) -> bool:
-        """Pause training and wait for the agent (to save it); False when the runner
-        has not handed it back."""
-        self.runner.pause()
-        return self.runner.wait_idle(0)
 
     def _use_session(self, session: Session) -> None:
         """Make `session` the one shown and trained (the runner is paused)."""
@@ -772,7 +746,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     def _save_to(self, path: Path) -> str | None:
         """Save to `path` (the dialog asked before replacing a file); an error or None."""
         was_running = self.runner.running
-        if not self._pause_now():
+        self.runner.pause()
+        if not self.runner.wait_idle(0):
             return "Training has not handed the agent back yet; try again in a moment."
         try:
             self.session.save(path)
@@ -984,7 +959,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         from tui_gym.ui.compare_view import CompareView
         from tui_gym.ui.plan_view import PlanView
 
-        sections = [
+        return [
             ("Everywhere", [
                 ("p / t / v", "Play view / Train view / Compare view"),
                 ("P / f", "Plan view (sweep by sweep) / Book view"),
@@ -1027,7 +1002,6 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
                 ("n / esc", "cancel"),
             ]),
         ]
-        return sections
 
     def get_system_commands(self, screen: Screen) -> Iterable[SystemCommand]:
         # Textual's own "Keys" (a second, different key list) and "Screenshot" (saved to
@@ -1063,8 +1037,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             ("Record games", "Record your games to a file, or stop (ctrl+r)",
              self.action_toggle_recording),
         ]
-        for title, help_text, callback in commands:
-            yield SystemCommand(title, help_text, callback)
+        yield from (SystemCommand(*command) for command in commands)
 
     def _palette_toggle(self) -> None:
         if self.current_view != "train":
@@ -1095,13 +1068,10 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         loop = asyncio.get_running_loop()
         for signum in (signal.SIGTERM, signal.SIGHUP, signal.SIGINT):
             try:
-                loop.add_signal_handler(signum, self._end_on_signal, signum)
+                loop.add_signal_handler(signum, partial(self.exit, return_code=128 + signum))
             except (RuntimeError, ValueError, NotImplementedError):  # not the main thread
                 continue
             self._signals.append(signum)
-
-    def _end_on_signal(self, signum: int) -> None:
-        self.exit(return_code=128 + signum)
 
     def on_terminal_gone(self, message: TerminalGone) -> None:
         """Nobody can see the app or type to it any more: end it, as a hang-up would."""
@@ -1113,9 +1083,8 @@ GC_SECONDS_ENV = "TUI_GYM_GC_SECONDS"  # "YOUNG,FULL" seconds, to override both
 
 
 class GcPacer:
-    """The collections `tune_gc_for_ui` runs on the app's timers, counted. A young
-    collection due while a key is being answered (`key_since()`: when the last key was
-    handed on, `time.monotonic()`) waits for the next turn, once."""
+    """The collections `tune_gc_for_ui` runs on the app's timers, counted; a young one due
+    while a key is answered (`key_since()`, monotonic) waits a turn, once."""
 
     def __init__(self, key_since: Callable[[], float] = lambda: -KEY_QUIET_SECONDS) -> None:
         self.young_collections = 0
@@ -1142,13 +1111,8 @@ class GcPacer:
 def tune_gc_for_ui(
     app: App[Any], young_seconds: float = YOUNG_GC_SECONDS, full_seconds: float = FULL_GC_SECONDS
 ) -> GcPacer:
-    """Collect garbage between frames, on the app's own timers, not mid-frame.
-
-    What is alive once the app is up is frozen (`gc.freeze`: one app a process),
-    automatic collection is off, and timers collect the young generations every
-    `young_seconds` (one due just after a key waits a turn) and everything every
-    `full_seconds`.
-    """
+    """Collect garbage on the app's own timers, not mid-frame: what is alive is frozen
+    (one app a process), automatic collection off."""
     pacer = GcPacer(lambda: getattr(app, "_key_since", -KEY_QUIET_SECONDS))
     gc.collect()
     gc.freeze()
@@ -1159,10 +1123,8 @@ def tune_gc_for_ui(
 
 
 def gc_seconds_from_env() -> tuple[float, float] | None:
-    """The collection periods set in `TUI_GYM_GC_SECONDS` ("YOUNG,FULL"), or None.
-
-    Raises ValueError with one clear line when the value is not two positive numbers.
-    """
+    """The collection periods set in `TUI_GYM_GC_SECONDS` ("YOUNG,FULL"), or None;
+    ValueError when the value is not two positive numbers."""
     text = os.environ.get(GC_SECONDS_ENV, "").strip()
     if not text:
         return None
@@ -1188,9 +1150,7 @@ def run_app(
     replay: Recording | None = None, db: str | None = None, keep_history: bool = True,
 ) -> int:
     """Open the app (from a saved agent with `load`, or on `session`); returns the exit code.
-    `record` records the person's games to that file; `replay` opens on a recording; the
-    runs trained are kept in the run history (`db`, else the default file) unless not
-    `keep_history`."""
+    The runs trained are kept in the run history (`db`) unless not `keep_history`."""
     gc_seconds = gc_seconds_from_env()
     if session is None:
         session = Session.load(load) if load else Session(env_id=env_id or "", seed=seed,
@@ -1214,9 +1174,8 @@ def run_app(
 
 @contextlib.contextmanager
 def history_for_app(db: str | None, keep_history: bool) -> Iterator[str | None]:
-    """The run history the app's Compare view reads and records into: `db` (None: the
-    default file) when runs are kept, else a scratch file removed with its folder when
-    the app ends (`tui-gym --no-history` keeps nothing)."""
+    """The Compare view's run history: `db` when runs are kept, else a scratch file gone
+    when the app ends (`--no-history`)."""
     if keep_history:
         yield db
         return
@@ -1225,12 +1184,8 @@ def history_for_app(db: str | None, keep_history: bool) -> Iterator[str | None]:
 
 
 def run_standalone(app: TuiGymApp) -> int:
-    """Run `app` in this terminal until it ends; returns the exit code.
-
-    An unexpected error, in the app or a background thread, ends it with
-    `EXIT_CRASH` and one line on stderr naming the crash log that holds the
-    traceback; a signal ends it with 128 + the signal's number.
-    """
+    """Run `app` in this terminal until it ends; returns the exit code (`EXIT_CRASH`
+    and one line naming the crash log on an unexpected error, in any thread)."""
     from tui_gym.crash_log import report_crash
 
     app.standalone = True

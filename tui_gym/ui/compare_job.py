@@ -24,6 +24,7 @@ if TYPE_CHECKING:
 CLOSE_SECONDS = 5.0  # how long `close()` waits for the thread to end
 OUTCOMES_SECONDS = 0.4  # the live outcomes are aggregated at most this often
 OUTCOMES_SHARE = 10  # and after this many times as long as aggregating them last took
+NICENESS = 10  # the comparison's thread and processes yield the cores to the app's
 
 
 class CompareJob:
@@ -34,8 +35,7 @@ class CompareJob:
         processes: int | None = None, resume: int | None = None,
     ) -> None:
         """`run` is `run_compare` (or a function with its signature); `processes` and
-        `resume` are its own (None: one child process per core, 0: all on the job's
-        thread; the recorded comparison to carry on)."""
+        `resume` are its own."""
         if run is None:
             from tui_gym.session.experiments.compare import run_compare
 
@@ -102,7 +102,11 @@ class CompareJob:
     def _work(self) -> None:
         from tui_gym.session.experiments.compare import RESUME_ADVICE, ResumeError
 
-        _lower_priority()
+        # This thread's priority, and so that of the processes it starts (Linux only:
+        # elsewhere `os.nice` would lower the whole app).
+        if sys.platform.startswith("linux"):
+            with contextlib.suppress(OSError):
+                os.nice(NICENESS)
         try:
             with RunHistory(self.db) as history:
                 self.result = self._run(
@@ -124,32 +128,9 @@ def _one_line(exc: BaseException, limit: int = 300) -> str:
     return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
-NICENESS = 10  # the comparison's thread and processes yield the cores to the app's
-
-
-def _lower_priority() -> None:
-    """Lower this thread's scheduling priority, and so that of the processes it starts.
-
-    On Linux a thread has a priority of its own and the processes it starts
-    inherit it, so the comparison's batches give way to the app's event loop on
-    a busy machine while they still use every idle core. Elsewhere `os.nice`
-    would lower the whole app, so it is left alone.
-    """
-    if sys.platform.startswith("linux"):
-        with contextlib.suppress(OSError):
-            os.nice(NICENESS)
-
-
 def _start_resource_tracker() -> None:
-    """Start multiprocessing's resource tracker now, with the real stderr in place.
-
-    `run_compare` starts child processes, and the first one starts the tracker,
-    handing it `sys.stderr.fileno()`. Inside a Textual app `sys.stderr` is the
-    app's capture, whose file number is -1, and starting a process fails
-    ("bad value(s) in fds_to_keep"). Started here, on the app's thread, with
-    the process's own stderr put back for the moment, the tracker is running
-    when the comparison's thread needs it.
-    """
+    """Start multiprocessing's resource tracker now, with the real stderr in place (inside
+    the app `sys.stderr` has file number -1: "bad value(s) in fds_to_keep")."""
     from multiprocessing import resource_tracker
 
     captured = sys.stderr

@@ -70,23 +70,6 @@ def bounded(series: Series, bounds: tuple[float, float] | None) -> Series:
     return replace(series, lo=lo, hi=hi, bounds=(low, high))
 
 
-def smoothing_window(points: int, smooth: bool = True) -> int:
-    """The trailing mean's window for a curve of `points` points (1: none)."""
-    return max(1, round(points * SMOOTH_FRACTION)) if smooth else 1
-
-
-def _smoothed(
-    key: Hashable, label: str, episodes: np.ndarray, mean: np.ndarray,
-    lo: np.ndarray | None, hi: np.ndarray | None, seeds: int, smooth: bool,
-) -> Series:
-    window = smoothing_window(len(mean), smooth)
-    if lo is not None and hi is not None:
-        lo, hi = rolling_mean(lo, window), rolling_mean(hi, window)
-    spacing = (episodes[-1] - episodes[0]) / (len(episodes) - 1) if len(episodes) > 1 else 1
-    return Series(key, label, episodes, rolling_mean(mean, window), lo, hi, seeds=seeds,
-                  smoothing=window, smoothing_episodes=max(1, round(window * spacing)))
-
-
 def _finite(episodes: np.ndarray, *columns: np.ndarray) -> tuple[np.ndarray, ...]:
     keep = np.isfinite(columns[0])
     for column in columns[1:]:
@@ -98,14 +81,21 @@ def _curve(
     key: Hashable, label: str, episodes: np.ndarray, mean: np.ndarray,
     lo: np.ndarray | None, hi: np.ndarray | None, seeds: int, smooth: bool,
 ) -> Series | None:
-    """The curve over its finite points, with its band where the band has some; None
-    without a point."""
+    """The curve over its finite points, smoothed with `smooth`, with its band where the
+    band has some; None without a point."""
+    xs: np.ndarray = np.empty(0)
     if lo is not None and hi is not None:
-        xs, ys, low, high = _finite(episodes, mean, lo, hi)
-        if len(xs):
-            return _smoothed(key, label, xs, ys, low, high, seeds, smooth)
-    xs, ys = _finite(episodes, mean)
-    return _smoothed(key, label, xs, ys, None, None, seeds, smooth) if len(xs) else None
+        xs, ys, lo, hi = _finite(episodes, mean, lo, hi)
+    if not len(xs):
+        (xs, ys), lo, hi = _finite(episodes, mean), None, None
+    if not len(xs):
+        return None
+    window = max(1, round(len(ys) * SMOOTH_FRACTION)) if smooth else 1
+    if lo is not None and hi is not None:
+        lo, hi = rolling_mean(lo, window), rolling_mean(hi, window)
+    spacing = (xs[-1] - xs[0]) / (len(xs) - 1) if len(xs) > 1 else 1
+    return Series(key, label, xs, rolling_mean(ys, window), lo, hi, seeds=seeds,
+                  smoothing=window, smoothing_episodes=max(1, round(window * spacing)))
 
 
 def series_of_record(record: RunRecord, smooth: bool = True) -> Series | None:
@@ -135,8 +125,6 @@ def series_of_outcome(outcome: AlgorithmOutcome, label: str, smooth: bool = True
                 return Series(("live", outcome.algorithm), label, xs, ys, low, high,
                               seeds=max(1, own.seeds), smoothing=outcome.smoothing,
                               smoothing_episodes=outcome.smoothing)
-    if not len(curve):
-        return None
     lo, hi = curve.lo, curve.hi
     return _curve(("live", outcome.algorithm), label, np.asarray(curve.episodes),
                   np.asarray(curve.mean, dtype=np.float64),

@@ -107,9 +107,8 @@ def read_launch(algorithms: Sequence[str], seeds: str, episodes: str) -> Launch:
 
 
 def edited_settings(session: Session, algorithms: Sequence[str]) -> dict[str, Any]:
-    """The hyperparameters set in the Train view that differ from the algorithm's defaults
-    for the game, those of them at least one of `algorithms` has (the episode budget
-    aside: the launch form sets it)."""
+    """The Train view's hyperparameters that differ from the game's defaults and one of
+    `algorithms` has (the episode budget aside: the launch form sets it)."""
     from tui_gym.algorithms import algorithm
     from tui_gym.session.session import default_settings
 
@@ -122,13 +121,6 @@ def edited_settings(session: Session, algorithms: Sequence[str]) -> dict[str, An
         name: value for name, value in hp.items()
         if name != "episodes" and name in owned and defaults.get(name) != value
     }
-
-
-def game_names(session: Session) -> set[str]:
-    """The names a run of the session's game may be recorded under (case folded)."""
-    game = session.game
-    names = {game.name, game.env_id, *game.other_ids}
-    return {n.casefold() for n in names if n}
 
 
 class RunList(SelectionList[int]):
@@ -148,9 +140,8 @@ class RunList(SelectionList[int]):
 
 
 def describe_run(run: RunSummary) -> Text:
-    """A run's line in the list: label, kind, seeds, final return, status unless
-    finished ("open in the app" for an app's run whose agent is still there, trained
-    or not), and when it started."""
+    """A run's line in the list: label, kind, seeds, final return, status unless finished,
+    and when it started."""
     from datetime import datetime
 
     when = datetime.fromtimestamp(run.started_at).strftime("%m-%d %H:%M")
@@ -220,10 +211,8 @@ class CompareView(Vertical):
         self, *, db: str | Path | None = None, kept: bool = True, processes: int | None = None,
         id: str | None = None, classes: str | None = None,
     ) -> None:
-        """`db` is the run history's file (None: `TUI_GYM_DB`, else the data folder's);
-        `kept` False says it is a scratch file that goes when the app ends
-        (`tui-gym --no-history`); `processes` is `run_compare`'s (None: a child
-        process per core)."""
+        """`db`: the run history (None: the default file; `kept` False: a scratch file);
+        `processes`: `run_compare`'s."""
         super().__init__(id=id, classes=classes)
         self.db = db  # read at each look, so the app can point the view elsewhere
         self.kept = kept
@@ -314,7 +303,8 @@ class CompareView(Vertical):
         again (when the view is shown). The history is only read while the view shows."""
         if fresh:
             self._stale = True
-        key = frozenset(game_names(self.session))
+        game = self.session.game  # the names a run of the game may be recorded under
+        key = frozenset(n.casefold() for n in (game.name, game.env_id, *game.other_ids) if n)
         if key != self._game_key:
             self._game_key = key
             self.stop_comparison()  # a comparison belongs to the game it was launched for
@@ -338,11 +328,6 @@ class CompareView(Vertical):
         job.stop()
         self._say("Stopping: the episodes every seed has finished are kept and recorded.")
         return True
-
-    def close(self) -> None:
-        """Stop a running comparison and wait (bounded) for it to record what finished."""
-        if self.job is not None:
-            self.job.close()
 
     @staticmethod
     def key_help() -> list[tuple[str, str]]:
@@ -489,15 +474,11 @@ class CompareView(Vertical):
         self.table.show([row for _, row, _ in entries], colours)
 
     # --- launching -----------------------------------------------------------------
-    def chosen_algorithms(self) -> tuple[str, ...]:
-        from tui_gym.algorithms import ALGORITHMS
-
-        return tuple(cls.name for cls in ALGORITHMS if self._boxes[cls.name].value)
-
     def read_launch(self) -> Launch | None:
         """The form's values, or None (and the message saying what is wrong)."""
         try:
-            return read_launch(self.chosen_algorithms(), self._seeds.value, self._episodes.value)
+            chosen = [name for name, box in self._boxes.items() if box.value]
+            return read_launch(chosen, self._seeds.value, self._episodes.value)
         except ValueError as exc:
             self._say(f"Not started: {exc}.", error=True)
             return None
@@ -532,9 +513,8 @@ class CompareView(Vertical):
         )
 
     def action_resume(self) -> None:
-        """Carry on the highlighted run's comparison: its algorithms, seeds and episodes,
-        with the game's settings and the Train view's hyperparameters as they are now (the
-        comparison refuses, in one line, if they are not the run's)."""
+        """Carry on the highlighted run's comparison, with the settings as they are now (the
+        comparison refuses if they are not the run's)."""
         index = self.run_list.highlighted
         if self.history_error is not None or index is None or index >= len(self.runs):
             self._say("Not resumed: highlight an unfinished comparison in the list of runs.",
@@ -702,7 +682,8 @@ class CompareView(Vertical):
         self.action_launch()
 
     def on_unmount(self) -> None:
-        self.close()
+        if self.job is not None:  # stopped, and waited for (bounded) to record what finished
+            self.job.close()
 
 
 __all__ = ["CompareView", "Launch", "RunList", "parse_count", "read_launch"]

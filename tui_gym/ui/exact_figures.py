@@ -1,14 +1,7 @@
 """The views' figures from the game's exact model, computed off the event loop.
 
-`compute` gives what the Train view draws for one snapshot from the exact model:
-the heatmap panels (or why there are none), the greedy policy's exact reference
-with its note (or a prediction learner's RMS error), and a prediction learner's V
-against the exact values. `LatestOnly` runs such work on a worker thread, one
-computation at a time across the views, never while a key is being answered: a
-request made while one waits or runs replaces the one waiting (never a queue),
-and a result reaches the view only while the view still shows the generation it
-was asked in (`drop` starts a new one: a reset, a rebuild, another game or
-algorithm).
+`compute` gives what the Train view draws for one snapshot; `LatestOnly` runs such work
+on a worker thread, the latest request winning and a stale result dropped.
 """
 
 from __future__ import annotations
@@ -120,14 +113,9 @@ TURNS = _Turns()
 
 
 class LatestOnly(Generic[Asked, Result]):
-    """Runs `work` for a widget on a worker thread, the latest request winning; each result
-    comes back to the widget as a `Computed` message.
-
-    All of them take turns on one lock, so the views' exact figures never compute side by
-    side. A computation holds the interpreter's lock from the event loop as it goes, so
-    none starts, and no result is handed over, while a key is answered (`key_wait`: the
-    seconds until the app may draw them without a key waiting); and after each, the next
-    rests as long as the last took on the CPU, so they take at most half of the time."""
+    """Runs `work` for a widget on a worker thread, the latest request winning, as a
+    `Computed` message. All take turns on one lock, none while a key is answered
+    (`key_wait`), each resting as long as the last took on the CPU."""
 
     class Computed(Message):
         """The result of a request (or the error computing it), on the event loop."""
@@ -218,10 +206,8 @@ class LatestOnly(Generic[Asked, Result]):
 
 
 def key_wait_of(app: Any) -> float:
-    """Seconds until a key the app handed on (`KeysInOrder` keeps when) has been drawn:
-    `KEY_QUIET_SECONDS` after it, and not before a frame has been drawn since (at most
-    `KEY_FRAME_PATIENCE` after it, where `watch_drawing` watches the app's frames);
-    0 or less: none is being answered."""
+    """Seconds until the key the app handed on last has been drawn (`KEY_QUIET_SECONDS`
+    after it, and a frame drawn since); 0 or less: none is being answered."""
     since = getattr(app, "_key_since", None)
     if not isinstance(since, float) or since <= 0:
         return 0.0

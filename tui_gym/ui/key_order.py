@@ -1,9 +1,5 @@
-"""`KeysInOrder`: an app mixin that handles the keys typed one after the other, in order.
-
-Textual lets a key that a widget takes itself overtake earlier keys still bubbling up
-(characters after a Backspace, keys after one that moves the focus); here each key
-waits until the one before is handled, at most `KEY_PATIENCE`.
-"""
+"""`KeysInOrder`: an app mixin that handles the keys typed one after the other, in order
+(Textual lets a key a widget takes overtake earlier keys still bubbling up)."""
 
 from __future__ import annotations
 
@@ -56,10 +52,8 @@ class KeysInOrder:
         self._follow(key, [node for node in target.ancestors_with_self if node is not app])
 
     def _follow(self, key: events.Key, path: list[MessagePump]) -> None:
-        """Look again once the first of `path` (the widgets the key bubbles up through,
-        the focused one first) has handled it, and so on up: once the last has, the key
-        is done, whether one of them took it or it went on to the app (`on_event`
-        sees it come back, and that is sooner)."""
+        """Look again once the first of `path` (the widgets the key bubbles up through) has
+        handled it, and so on up: once the last has, the key is done."""
         if key is not self._key_under_way:
             return
         if not path:

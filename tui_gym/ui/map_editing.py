@@ -44,6 +44,7 @@ class MapEditingView(Vertical):
     rebuilds the game through the app (`rebuild_map`), `s` saves the map, esc closes it."""
 
     focus_target: Any = None  # what the optimum's heatmap follows
+    _editor_game = ""  # the game the editor's undo history belongs to
 
     @property
     def session(self) -> Session:
@@ -68,6 +69,17 @@ class MapEditingView(Vertical):
             self.app.notify(f"{game.title} has no map to edit; the grid games do.",
                             severity="warning", timeout=4)
         return game.editable
+
+    def start_editor(self) -> MapEditor:
+        """Open the editor (mounted) on the session's map and draw its optimum."""
+        editor = self.editor
+        assert editor is not None
+        game = self.session.game
+        editor.start(game.grid_map(self.session.env_kwargs), game.map_tools)
+        self._editor_game = game.name
+        self.add_class("-mapping")
+        self.show_editor()
+        return editor
 
     def close_editor(self) -> None:
         self.remove_class("-mapping")

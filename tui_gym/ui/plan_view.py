@@ -297,14 +297,12 @@ class PlanView(MapEditingView):
 
     def _show_lines(self, snapshot: PlanSnapshot | None) -> None:
         plan = self.plan
-        panel = plan.value_panel if plan is not None else None
-        shown = snapshot is not None and panel is not None
-        self._values.set_class(shown, "-shown")
+        panel = plan.value_panel if plan is not None and snapshot is not None else None
+        self._values.set_class(panel is not None, "-shown")
         if snapshot is not None and panel is not None:
             self._values.show([panel(snapshot.v)])
-        line = plan.line if plan is not None else None
-        shown = snapshot is not None and line is not None
-        self._lines.set_class(shown, "-shown")
+        line = plan.line if plan is not None and snapshot is not None else None
+        self._lines.set_class(line is not None, "-shown")
         if snapshot is not None and line is not None:
             curves = [(f"sweep {sweep}", values[line.states]) for sweep, values in snapshot.kept]
             if snapshot.sweeps not in {sweep for sweep, _ in snapshot.kept}:
@@ -353,12 +351,9 @@ class PlanView(MapEditingView):
         runner.restart(lambda: start_policy(plan, choice, gamma, q))
 
     def _agent_q(self) -> np.ndarray | None:
-        session = self.session
-        snapshot = getattr(self.app, "runner", None)
-        latest = getattr(snapshot, "latest", None)
-        if latest is not None and getattr(latest, "version", 0) > 0:
-            return session.base_q(latest)
-        return session.base_q()
+        runner = getattr(self.app, "runner", None)  # none where the Plan view runs alone
+        latest = runner.latest if runner is not None else None
+        return self.session.base_q(latest if latest is not None and latest.version > 0 else None)
 
     def action_toggle_numbers(self) -> None:
         self.numbers = not self.numbers
@@ -414,14 +409,9 @@ class PlanView(MapEditingView):
     # --- the map editor ------------------------------------------------------------
     def open_editor(self) -> bool:
         """Show the map editor above the values; False when the game has no map."""
-        editor = self.editor
-        if editor is None or not self.can_edit_map():
+        if self.editor is None or not self.can_edit_map():
             return False
-        game = self.session.game
-        editor.start(game.grid_map(self.session.env_kwargs), game.map_tools)
-        self.add_class("-mapping")
-        self.show_editor()
-        self.call_after_refresh(editor.focus_canvas)
+        self.call_after_refresh(self.start_editor().focus_canvas)
         return True
 
     def _sync_editor(self) -> None:

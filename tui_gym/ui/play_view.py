@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import random
-from typing import TYPE_CHECKING, Any, ClassVar, cast
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from textual import events, on
 from textual.app import ComposeResult
@@ -16,7 +16,7 @@ from textual.widgets import Static
 
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.games.base import Advice
-from tui_gym.games.words import ScoreRow, format_reward, interval_text, plural, signed
+from tui_gym.games.words import format_reward, interval_text, plural, signed
 from tui_gym.session.play import HumanGame, PlayError, PlayStep, Scorecard
 from tui_gym.ui.exact_figures import LatestOnly
 from tui_gym.ui.widgets.board_kinds import board_class
@@ -25,7 +25,6 @@ from tui_gym.ui.widgets.scoreboard import Scoreboard
 
 if TYPE_CHECKING:
     from tui_gym.session.session import Session
-    from tui_gym.ui.app import TuiGymApp
 
 OBSERVATION_CHARS = 64  # a raw observation longer than this is cut short
 WATCH_INTERVAL = 0.4  # seconds between the watched agent's moves: slow enough to follow
@@ -118,9 +117,8 @@ class PlayView(Vertical):
     PlayView #play-status.-hint #play-hint { display: block; }
     PlayView #play-status.-good #play-headline { color: $text-success; }
     PlayView #play-status.-bad #play-headline { color: $text-error; }
-    PlayView #play-status.-even { border-left: outer $warning; }
-    PlayView #play-status.-even #play-headline { color: $text-warning; }
-    PlayView #play-status.-agent { border-left: outer $warning; }
+    PlayView #play-status.-even, PlayView #play-status.-agent { border-left: outer $warning; }
+    PlayView #play-status.-even #play-headline,
     PlayView #play-status.-agent #play-headline { color: $text-warning; }
     PlayView #play-tally { height: auto; width: 1fr; padding: 0 1; margin-top: 1; }
     Screen.compact PlayView { padding: 0; }
@@ -174,7 +172,7 @@ class PlayView(Vertical):
     # --- layout ------------------------------------------------------------
     def compose(self) -> ComposeResult:
         yield Static(id="play-title")
-        self.board = board_class(self.tui.session.game.board)()
+        self.board = board_class(self.session.game.board)()
         yield self.board
         yield StatusLines("play", "hint")
         yield Static(id="play-tally")
@@ -194,15 +192,18 @@ class PlayView(Vertical):
         self.stop_watching(restore=True)
 
     @property
-    def tui(self) -> TuiGymApp:
-        """The app, with its session and seeds."""
-        return cast("TuiGymApp", self.app)
+    def session(self) -> Session:
+        return self.app.session  # type: ignore[attr-defined, no-any-return]
+
+    @property
+    def play_seed(self) -> int:
+        return self.app.play_seed  # type: ignore[attr-defined, no-any-return]
 
     # --- what the app calls --------------------------------------------------
     def reload(self) -> None:
         """Show the session's game: the person's play put away on it (`put_away`) when
         the game and its wrappers are still the same, else a new game, tally and board."""
-        session = self.tui.session
+        session = self.session
         self.stop_watching(restore=False)
         self._agent_exact.drop()  # the figures of what was played before never show
         self.agent_figures, self._exact_reason = None, COMPUTING
@@ -212,12 +213,12 @@ class PlayView(Vertical):
             kept = None
         _close(self.game, self.agent_game)
         if kept is None:
-            self.game = HumanGame(session, seed=self.tui.play_seed)
-            self.game.recorder = getattr(self.tui, "recording", None)  # records while switched on
+            self.game = HumanGame(session, seed=self.play_seed)
+            self.game.recorder = getattr(self.app, "recording", None)  # records while switched on
             self.scorecard = Scorecard(tally=self.game.tally)
             self.agent_game = None
             self.agent_card = Scorecard()
-            self._watch_rng = random.Random(self.tui.play_seed)
+            self._watch_rng = random.Random(self.play_seed)
             self.outcomes = {}
         else:
             for name, value in kept.items():
@@ -373,7 +374,7 @@ class PlayView(Vertical):
         board.set_episode_over(game.done)
 
     def _show_title(self) -> None:
-        session = self.tui.session
+        session = self.session
         chain = " → ".join(_short(choice.name, choice.params) for choice in session.applied)
         title = f"[b]{escape(session.game.title)}[/]  [$text-muted]wrappers:[/] " + (
             f"[i $text-accent]{escape(chain)}[/]" if chain else "[$text-muted]none[/]"
@@ -424,12 +425,12 @@ class PlayView(Vertical):
         """What the exact optimum would do now in `game` (None when the game cannot say)."""
         if game.done:
             return None
-        return game.game.oracle.advice(game.env, self.tui.session.env_kwargs)
+        return game.game.oracle.advice(game.env, self.session.env_kwargs)
 
     def agent_note(self, observation: Any) -> str:
         """'agent: hit (Q stick −0.310, hit −0.402)': the greedy agent's choice here."""
-        names = self.tui.session.game.action_names
-        choice = self.tui.session.greedy_actions_for(observation, self._training_snapshot())
+        names = self.session.game.action_names
+        choice = self.session.greedy_actions_for(observation, self._training_snapshot())
         if choice is None:
             return "agent: has never seen this state (it would pick at random)"
         ties, q = choice
@@ -461,11 +462,10 @@ class PlayView(Vertical):
 
     # --- the scoreboard --------------------------------------------------------
     def refresh_agent_figures(self) -> None:
-        """Redraw the scoreboard (the person's record now, the agent's figures as they
-        were) and have the agent's exact figures (a policy evaluation) computed afresh off
-        the event loop; the scoreboard shows them when they come."""
+        """Redraw the scoreboard and have the agent's exact figures computed afresh off the
+        event loop; the scoreboard shows them when they come."""
         self._show_scoreboard()
-        self._agent_exact.ask((self.tui.session.detached(), self._training_snapshot()))
+        self._agent_exact.ask((self.session.detached(), self._training_snapshot()))
 
     @on(LatestOnly.Computed)
     def _agent_figures_computed(self, message: LatestOnly.Computed) -> None:
@@ -486,18 +486,15 @@ class PlayView(Vertical):
         runner = getattr(self.app, "runner", None)
         return runner.latest if runner is not None and runner.running else None
 
-    def score_rows(self) -> list[ScoreRow]:
+    def _show_scoreboard(self) -> None:
         """The scoreboard's rows as the game's narrator words them."""
-        session = self.tui.session
+        if not self.is_mounted:
+            return
+        session = self.session
         watched = self.agent_card if self.agent_card.tally.episodes else None
         scope = session.game.oracle.scope(session.env_kwargs, session.changes)
-        return session.game.narrator.scoreboard(
-            self.scorecard, self.agent_figures, watched, self._exact_reason, scope
-        )
-
-    def _show_scoreboard(self) -> None:
-        if self.is_mounted:
-            self.query_one(Scoreboard).show_rows(self.score_rows())
+        self.query_one(Scoreboard).show_rows(session.game.narrator.scoreboard(
+            self.scorecard, self.agent_figures, watched, self._exact_reason, scope))
 
     # --- watching the agent ----------------------------------------------------
     def action_watch_agent(self) -> None:
@@ -505,10 +502,10 @@ class PlayView(Vertical):
         board = self.board
         if board is None or self.watching:
             return
-        session = self.tui.session
+        session = self.session
         if self.agent_game is None:
             try:
-                self.agent_game = HumanGame(session, seed=self.tui.play_seed + WATCH_SEED_OFFSET)
+                self.agent_game = HumanGame(session, seed=self.play_seed + WATCH_SEED_OFFSET)
             except Exception as exc:
                 self._say_hint(f"The agent cannot play here: {exc}")
                 return
@@ -581,7 +578,7 @@ class PlayView(Vertical):
             else:
                 self._agent_new_episode()
             return
-        session = self.tui.session
+        session = self.session
         before = self._advice(game)
         assert game.last is not None
         choice = session.greedy_actions_for(game.last.observation, self._training_snapshot())
@@ -619,7 +616,7 @@ class PlayView(Vertical):
     def _observation_text(self, last: PlayStep) -> str:
         """The observation in the game's words, or raw (cut short) when wrappers reshaped it."""
         assert self.game is not None
-        text = self.game.game.states.describe(last.observation, self.tui.session.env_kwargs)
+        text = self.game.game.states.describe(last.observation, self.session.env_kwargs)
         return text if len(text) <= OBSERVATION_CHARS else text[: OBSERVATION_CHARS - 1] + "…"
 
     def _show_tally(self) -> None:
@@ -662,11 +659,7 @@ def _verdict(before: Advice | None, step: PlayStep, names: tuple[str, ...]) -> s
 
 
 def _tone(reward: float) -> str:
-    if reward > 0:
-        return "-good"
-    if reward < 0:
-        return "-bad"
-    return "-even"
+    return "-good" if reward > 0 else "-bad" if reward < 0 else "-even"
 
 
 def _short(name: str, params: tuple[tuple[str, Any], ...]) -> str:

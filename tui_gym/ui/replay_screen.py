@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from typing import ClassVar
 
 from rich.text import Text
@@ -39,31 +40,20 @@ SOURCES = {  # who played, by the recording's `source`
 }
 
 
-_REPLAY_BOARDS: dict[type[Board], type[Board]] = {}
+@functools.cache
+def _replay_class(kind_class: type[Board]) -> type[Board]:
+    return type(f"Replay{kind_class.__name__}", (kind_class,),
+                {"player_name": property(lambda self: self.replay_player), "KEEP_SHAPE": False})
 
 
 def replay_board(kind: str, player: str) -> Board | None:
-    """A passive board of `kind` whose player is called `player` (None: no such board here).
-
-    A passive board calls its player "Agent"; in a replay it is whoever played."""
+    """A passive board of `kind` whose player (a passive board's "Agent") is called `player`;
+    None: no such board here."""
     if kind not in KINDS:
         return None
-    kind_class = board_class(kind)
-    replay_class = _REPLAY_BOARDS.get(kind_class)
-    if replay_class is None:
-        replay_class = type(
-            f"Replay{kind_class.__name__}", (kind_class,),
-            {"player_name": property(lambda self: self.replay_player), "KEEP_SHAPE": False},
-        )
-        _REPLAY_BOARDS[kind_class] = replay_class
-    board = replay_class(interactive=False)
+    board = _replay_class(board_class(kind))(interactive=False)
     board.replay_player = player  # type: ignore[attr-defined]
     return board
-
-
-def player_of(source: str) -> str:
-    """Who played, as a board names them: "You" in the app, else "Player"."""
-    return "You" if source == "app" else "Player"
 
 
 BUTTONS = (  # under the board: (label, id after "replay-", action on the screen)
@@ -160,7 +150,7 @@ class ReplayScreen(ModalScreen[None]):
         episode = episodes[episode_index]
         position = max(0, min(position, len(episode.positions) - 1))
         self.episode_index, self.position = episode_index, position
-        self._use_board(episode.game.board, player_of(episode.game.source))
+        self._use_board(episode.game.board, "You" if episode.game.source == "app" else "Player")
         self._draw_board()
         self._show_title()
         self._show_status()
@@ -303,22 +293,19 @@ class ReplayScreen(ModalScreen[None]):
     def _coach_line(self, episode: Episode, move: Move) -> tuple[str, str]:
         """The coach's verdict, the move's regret and the episode's so far, and a tone."""
         running = episode.running_regret(self.position)
-        so_far = "–" if running is None else f"{running:.3f}"
+        so_far = "regret so far " + ("–" if running is None else f"{running:.3f}")
         if move.verdict is None:
-            return f"no verdict: no optimum to judge this move by · regret so far {so_far}", ""
+            return f"no verdict: no optimum to judge this move by · {so_far}", ""
         regret = (
             "regret – (no exact values for this game)"
             if move.regret is None
             else f"regret {move.regret:.3f}"
         )
         if move.verdict == "optimal":
-            return f"✓ {move.action_name} was optimal · {regret} · regret so far {so_far}", "-good"
+            return f"✓ {move.action_name} was optimal · {regret} · {so_far}", "-good"
         best = " or ".join(move.optimal) or "another move"
-        return (
-            f"✗ {move.action_name} was not optimal (the optimum: {best}) · {regret}"
-            f" · regret so far {so_far}",
-            "-bad",
-        )
+        verdict = f"✗ {move.action_name} was not optimal (the optimum: {best})"
+        return f"{verdict} · {regret} · {so_far}", "-bad"
 
     def _outcome(self, episode: Episode, position: int) -> str:
         """How the episode ended, in the game's words where this tui-gym knows the game."""

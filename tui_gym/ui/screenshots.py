@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import Any
+from unittest import mock
 
 from textual.binding import Binding
 
@@ -118,17 +119,12 @@ def _record_comparison(db: Path, spec: Any) -> None:
 @contextmanager
 def _utc() -> Iterator[None]:
     """Times shown in UTC, whatever the machine's zone."""
-    saved = os.environ.get("TZ")
-    os.environ["TZ"] = "UTC"
-    time.tzset()
     try:
-        yield
+        with mock.patch.dict(os.environ, TZ="UTC"):
+            time.tzset()
+            yield
     finally:
-        if saved is None:
-            os.environ.pop("TZ", None)
-        else:
-            os.environ["TZ"] = saved
-        time.tzset()
+        time.tzset()  # the machine's zone again
 
 
 async def _compare(app, pilot) -> None:

@@ -166,10 +166,6 @@ class WrapperRow(Vertical):
         self.show_error(None)
         self.show_reason(reason)
 
-    @property
-    def ticked(self) -> bool:
-        return self.query_one(Checkbox).value
-
     def show_error(self, error: str | None) -> None:
         """Say why a parameter's text is not valid (or clear the message)."""
         widget = self._line("param-error")
@@ -197,7 +193,7 @@ class WrapperRow(Vertical):
 
     def read(self) -> tuple[WrapperChoice | None, str | None]:
         """The choice this row stands for (None when unticked), or the reason it is invalid."""
-        if not self.ticked:
+        if not self.query_one(Checkbox).value:
             return None, None
         values: dict[str, Any] = {}
         for field in self.query(ParamField):
@@ -555,9 +551,7 @@ class SidePanel(VerticalScroll):
             where = "innermost" if step < 0 else "outermost"
             self.app.notify(f"{name} is already {where}.", timeout=2)
             return
-        order = list(self._order)
-        order[index], order[target] = order[target], order[index]
-        self._order = order
+        self._order[index], self._order[target] = self._order[target], self._order[index]
         self._request()
 
     def action_leave(self) -> None:

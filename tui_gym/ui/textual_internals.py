@@ -1,38 +1,23 @@
 """Every private name of Textual the app uses, each with a fallback to Textual's own behaviour.
 
-Textual's public API leaves a few costs and looks that the app improves on
-through private names. Each part below first checks that the names it needs
-are there and have the shape it expects; where they are not (another Textual
-release), or where `TUI_GYM_STOCK_TEXTUAL` names the part (`all` names every
-one; the tests run the app so), it leaves Textual to do what it does by itself:
+Each part checks that the names it needs are there with the shape it expects, else (or
+when `TUI_GYM_STOCK_TEXTUAL` names it; `all` names every one) leaves Textual to itself:
 
-- `compositor`: the main screen's compositor (`Screen._compositor`, a
-  `textual._compositor.Compositor`) keeps the layout a pass has just made, and
-  draws of each widget only the lines an update shows and no widget in front of it
-  covers (`main_screen`); a widget asks whether it was in sight in the last frame
-  (`in_sight`: its visible widgets; stock: never, so the widget repaints whole);
-- `resume`: when the main screen first shows, its widgets keep the styles they
-  were mounted with (`Screen._on_screen_resume`);
-- `focus`: a focus change on the main screen repaints the widgets it restyles, not
-  the whole screen after the frame that shows it (`Screen.focused`, a `Reactive`),
-  and restyles the widget alone, not the widgets inside it, when no rule of the
-  stylesheet can tell them apart by it, and a hidden widget after the next frame
-  (`Widget.watch_has_focus`, `Screen._update_focus_styles`, `Stylesheet.rules`);
-- `crash`: an app that owns its terminal keeps an unexpected error's traceback
-  off the screen, for a crash log (`CrashHook`: `App._handle_exception`,
-  `App._exit_renderables`);
-- `ticks`: the run list's tick boxes read ✓ when ticked (`ticked_line`:
-  `SelectionList`'s rendering of `ToggleButton.BUTTON_INNER`);
-- `terminal`: the app ends when its terminal or its pipes close, and a write to
-  a closed terminal never blocks (`guarded_driver`: a driver's input thread and
-  output writer; `terminal_write_failed`: the writer thread's name);
-- `frames`: `tui-gym bench` times the frames the app hands to its terminal and
-  delivers keys as the terminal driver does (`watch_frames`, `deliver_key`:
-  `App._display`, `App._driver`).
+- `compositor`: the main screen's compositor keeps the layout a pass made and draws only
+  the lines an update shows (`main_screen`, `in_sight`);
+- `resume`: the main screen's widgets keep their styles when it first shows;
+- `focus`: a focus change restyles and repaints only what it changes;
+- `crash`: an app that owns its terminal keeps a traceback off the screen (`CrashHook`);
+- `ticks`: the run list's tick boxes read ✓ when ticked (`ticked_line`);
+- `terminal`: a closed terminal or pipe ends the app, and writes to it never block
+  (`guarded_driver`, `terminal_write_failed`);
+- `frames`: `tui-gym bench` times the frames and delivers keys as the terminal driver
+  does (`watch_frames`, `deliver_key`).
 """
 
 from __future__ import annotations
 
+import functools
 import inspect
 import os
 import select
@@ -85,6 +70,7 @@ def _parameters(function: Any) -> list[str]:
 
 
 # --- the main screen: compositor and first show -----------------------------------------
+@functools.cache
 def _compositor_class() -> type | None:
     """`Compositor` subclassed to keep its layout (None when its shape is not the one known)."""
     try:
@@ -99,18 +85,10 @@ def _compositor_class() -> type | None:
         return None
 
     class KeptLayoutCompositor(Compositor):  # type: ignore[misc, valid-type]
-        """Textual's compositor, keeping the full map a layout pass has just made, and
-        drawing in an update only the lines of a widget that the update shows.
-
-        Textual marks the map stale before a layout pass and leaves it so after the
-        pass, so the first widget that asks for its region while the frame is drawn
-        (a strip widget does) had the whole screen laid out a second time, for each
-        view switch. And Textual draws every widget that meets the box around the
-        regions to repaint in full, front to back, keeping the first piece of each
-        stretch of a line: a snapshot that changed the Train view's curves, stats and
-        heatmap drew every widget on the screen, and a view switch drew the switcher
-        and the view behind the view's widgets, to be thrown away. Here a widget draws
-        only the lines where a stretch to repaint is still open in front of it."""
+        """Textual's compositor, keeping the full map a layout pass has just made (Textual
+        leaves it stale, so the next region asked for lays the screen out again), and
+        drawing of each widget only the lines where a stretch to repaint is still open
+        in front of it (Textual draws every widget meeting the update's box in full)."""
 
         _spans: list[tuple[int, int, int]] | None = None  # (y, x1, x2) a partial update repaints
 
@@ -180,16 +158,6 @@ def _compositor_class() -> type | None:
     return KeptLayoutCompositor
 
 
-_COMPOSITOR: type | None | bool = False  # False: not looked for yet
-
-
-def _kept_layout_compositor() -> Any:
-    global _COMPOSITOR
-    if _COMPOSITOR is False:
-        _COMPOSITOR = _compositor_class()
-    return None if _COMPOSITOR is None or _COMPOSITOR is True else _COMPOSITOR()
-
-
 class _ResumingScreen(Screen):
     """A screen that, the first time it shows, keeps the styles its widgets were
     mounted with instead of styling them all over again."""
@@ -257,10 +225,8 @@ def _own_focus_styler(widget: Widget) -> Callable[[], None]:
 
 
 class _QuietFocusScreen(_ResumingScreen):
-    """A screen whose focus change repaints only what the new focus restyles (Textual
-    repaints the whole screen as well, a second frame after each view switch), and
-    restyles the focused or blurred widget alone where nothing inside it can change; a
-    hidden widget that loses the focus is restyled after the next frame."""
+    """A screen whose focus change repaints only what it restyles, restyling the widget
+    alone where nothing inside it can change (a hidden one after the next frame)."""
 
     focused: Reactive[Widget | None] = Reactive(None, repaint=False)
 
@@ -287,9 +253,9 @@ def main_screen(**kwargs: Any) -> Screen:
              and _parameters(Screen._update_focus_styles) == ["self", "focused", "blurred"])
     screen = (_QuietFocusScreen if quiet else _ResumingScreen)(**kwargs)
     if enabled("compositor") and hasattr(screen, "_compositor"):
-        compositor = _kept_layout_compositor()
+        compositor = _compositor_class()
         if compositor is not None:
-            screen._compositor = compositor
+            screen._compositor = compositor()
     return screen
 
 
@@ -392,10 +358,9 @@ def _driver_fds(driver: Driver) -> list[int]:
 
 
 def guarded_driver(base: type[Driver]) -> type[Driver]:
-    """`base` (the driver Textual picked) made to notice a closed terminal or closed
-    pipes: it posts `TerminalGone` to the app, drops what it would write from then on
-    (Textual's writer thread dies on the first failed write, and a write queued
-    behind it would wait for good), and stops without waiting on that writer."""
+    """`base` made to notice a closed terminal or pipes: it posts `TerminalGone`, drops
+    what it would write from then on (a write queued behind a dead writer thread would
+    wait for good), and stops without waiting on that writer."""
     if not enabled("terminal") or not hasattr(select, "poll"):
         return base
     needed = ("write", "flush", "close", "start_application_mode", "stop_application_mode")

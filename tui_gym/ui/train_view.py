@@ -1,28 +1,9 @@
-"""The Train view: watch a tabular learner learn the current game, live, or step by step.
+"""The Train view: watch a tabular learner learn the current game, live or step by step.
 
-`TrainView` lays out the controls (start/pause, one episode, reset, slower,
-faster: buttons for the mouse, the same keys live on the app), a progress
-bar toward the episode budget and one line saying which engine trains and
-why (cut to fit; the whole of it in its tooltip and the help), all three
-always in sight; below them, scrolling when the window is short, the run's
-numbers (`StatsPanel`) beside the hyperparameter fields
-(`HyperparameterForm`, the algorithm's own fields), the learning curves
-(`TrainingCharts`) with, at animated speeds, the game's board replaying the
-agent's moves, for a prediction learner its RMS error of V and V against the
-exact values state by state (`PredictionChart`), the step panel (`StepPanel`)
-explaining each update, and the Q-table heatmaps (`HeatmapView`), where the
-explained step's state is marked; for a λ learner `E` turns them to its
-eligibility traces of the episode in progress, live, and back. On a grid game
-`m` opens the map editor (`MapEditor`) above the heatmaps: each edit rebuilds
-the game through the app (the agent kept while its states keep their meaning,
-training going on) and the editor shows the new map solved exactly.
-
-It never trains anything: the app's timer hands it the runner's latest
-snapshot through `show_snapshot()`, which redraws only what changed and has a
-new snapshot's heatmaps and exact figures computed off the event loop
-(`exact_figures`: the latest snapshot wins, a stale result is dropped). It asks
-the game's heatmap layout whether the heatmaps follow a focus (a target, a
-slice) and what a heatmap cell means; it never branches on a game's name.
+It never trains: the app's timer hands it the runner's latest snapshot (`show_snapshot`),
+and the snapshot's heatmaps and exact figures are computed off the event loop
+(`exact_figures`). It never branches on a game's name: the game's heatmap layout says
+what a cell means and whether the heatmaps follow a focus.
 """
 
 from __future__ import annotations
@@ -75,7 +56,6 @@ class TrainView(MapEditingView):
     }
     TrainView #train-controls {
         height: 1;
-        margin-bottom: 0;
     }
     TrainView #train-engine {
         width: 1fr;
@@ -97,15 +77,12 @@ class TrainView(MapEditingView):
         color: $text-accent;
         text-style: bold;
     }
-    TrainView #train-top {
+    TrainView #train-top, TrainView #train-middle {
         height: auto;
     }
     TrainView #train-top > * {
         height: auto;
         min-height: 9;  /* the two boxes line up for both games */
-    }
-    TrainView #train-middle {
-        height: auto;
     }
     TrainView #train-charts {
         width: 1fr;
@@ -120,9 +97,6 @@ class TrainView(MapEditingView):
         width: 100%;
         height: 7;
     }
-    TrainView #train-board-box.-shown {
-        display: block;
-    }
     TrainView #train-board-caption {
         color: $text-muted;
         width: 100%;
@@ -130,10 +104,11 @@ class TrainView(MapEditingView):
         min-height: 3;
         padding: 0 1;
     }
-    TrainView #train-step {
+    TrainView #train-step, TrainView #train-editor {
         display: none;
     }
-    TrainView.-animated #train-step {
+    TrainView #train-board-box.-shown, TrainView.-animated #train-step,
+    TrainView.-mapping #train-editor {
         display: block;
     }
     TrainView.-stepping #train-board-box {
@@ -148,15 +123,11 @@ class TrainView(MapEditingView):
     TrainView #train-heatmap-box:focus-within {
         border: round $primary;
     }
-    TrainView #train-editor {
-        display: none;
-    }
-    TrainView.-mapping #train-editor {
-        display: block;
-    }
-    /* At 80x24 the editor takes the place of the numbers and the charts. */
-    Screen.compact TrainView.-mapping #train-top,
-    Screen.compact TrainView.-mapping #train-middle {
+    /* At 80x24 the editor takes the place of the numbers and the charts, and the form
+       hides until `e` (or a bad value) asks for it. */
+    Screen.compact TrainView.-mapping #train-top, Screen.compact TrainView.-mapping #train-middle,
+    Screen.compact TrainView #train-speed, Screen.compact TrainView #train-engine,
+    Screen.compact TrainView #train-form {
         display: none;
     }
 
@@ -166,15 +137,8 @@ class TrainView(MapEditingView):
     Screen.compact TrainView #train-top > * {
         min-height: 0;
     }
-    Screen.compact TrainView #train-speed, Screen.compact TrainView #train-engine {
-        display: none;
-    }
     Screen.compact TrainView #train-controls Button {
         margin-right: 0;
-    }
-    /* At 80x24 the form hides until `e` (or a bad value) asks for it. */
-    Screen.compact TrainView #train-form {
-        display: none;
     }
     Screen.compact TrainView.-editing #train-form {
         display: block;
@@ -184,9 +148,6 @@ class TrainView(MapEditingView):
     }
     Screen.compact TrainView #train-board-box {
         width: 24;
-    }
-    Screen.compact TrainView #train-board-box > Board {
-        height: 7;
     }
     """
 
@@ -210,8 +171,7 @@ class TrainView(MapEditingView):
         self._scene: Any = None
         self._scene_event: Any = None
         self._layout_key: Any = None  # (game, env kwargs) the focus belongs to
-        self._editor_game = ""  # the game the editor's undo history belongs to
-        self._traces = False  # the heatmap shows the traces (a λ learner's) instead of Q
+        self.shows_traces = False  # the heatmap shows the traces (a λ learner's), not Q
         self._no_traces_until = 0.0  # while that is said, `E` says it no more
         # The exact figures, computed off the event loop.
         self._exact: LatestOnly[Request, Figures] = LatestOnly(self, compute)
@@ -245,7 +205,6 @@ class TrainView(MapEditingView):
         self._caption = Label("", id="train-board-caption")
         self._heatmap_box = Vertical(id="train-heatmap-box")
         self.heatmap = HeatmapView(id="train-heatmaps")
-        self._editor: MapEditor | None = None  # mounted when first opened
         self.step_panel = StepPanel(id="train-step")
 
         with Horizontal(id="train-controls"):
@@ -280,15 +239,6 @@ class TrainView(MapEditingView):
 
     # --- parts -------------------------------------------------------------
     @property
-    def editor(self) -> MapEditor | None:
-        return self._editor
-
-    @property
-    def shows_traces(self) -> bool:
-        """Whether the heatmap shows the eligibility traces (else Q, or V)."""
-        return self._traces
-
-    @property
     def speed_name(self) -> str:
         return str(self._speed.content)
 
@@ -301,15 +251,16 @@ class TrainView(MapEditingView):
         if layout_key != self._layout_key:
             self._layout_key = layout_key
             self.focus_target = game.layout.default_focus(session.env_kwargs)
-        if game.board != self._board_kind:
-            self._drop_board()
+        if game.board != self._board_kind and self._board is not None:
+            self._board.remove()
+            self._board = None
         self._scene = self._scene_event = None
         if session.hp is not None:
             self.form.load(session.hp)
         self.charts.clear()
         self._prediction.clear()
         self._prediction.display = session.predicts
-        self._traces = self._traces and session.learner_class.has_traces
+        self.shows_traces = self.shows_traces and session.learner_class.has_traces
         self.refresh_bindings()  # `E` toggles, or says there are no traces
         self._show_heatmap_title()
         self._heatmap_box.border_subtitle = (
@@ -320,13 +271,12 @@ class TrainView(MapEditingView):
         self._exact.drop()  # figures of what was shown before never reach the screen
         self.show_speed(runner.speed.name)
         self.show_snapshot(runner.latest, runner)
-        if self.editing_map and self._editor is not None:
+        if self.editing_map and (editor := self.editor) is not None:
             if not game.editable:
                 self.close_editor()
+            elif editor.grid_map is None or self._editor_game != game.name:
+                self.start_editor()
             else:
-                if self._editor.grid_map is None or self._editor_game != game.name:
-                    self._editor.start(game.grid_map(session.env_kwargs), game.map_tools)
-                    self._editor_game = game.name
                 self.show_editor()
 
     # --- the map editor ----------------------------------------------------
@@ -334,15 +284,9 @@ class TrainView(MapEditingView):
         """Show the map editor with the keyboard on it; False when the game has no map."""
         if not self.can_edit_map():
             return False
-        game = self.session.game
-        if self._editor is None:
-            self._editor = MapEditor(id="train-editor")
-            await self.mount(self._editor, before=self._heatmap_box)
-        self._editor.start(game.grid_map(self.session.env_kwargs), game.map_tools)
-        self._editor_game = game.name
-        self.add_class("-mapping")
-        self.show_editor()
-        self._editor.focus_canvas()  # at once: the keys typed after `m` go to the map
+        if self.editor is None:  # mounted when first opened
+            await self.mount(MapEditor(id="train-editor"), before=self._heatmap_box)
+        self.start_editor().focus_canvas()  # at once: the keys typed after `m` go to the map
         return True
 
     @property
@@ -351,9 +295,8 @@ class TrainView(MapEditingView):
         return self._version
 
     def show_snapshot(self, snapshot: TrainingSnapshot, runner: TrainingRunner) -> None:
-        """Draw a snapshot; cheap when it is the one already shown. While training runs,
-        a new one waits while a key is answered (the key's frame first; the app's timer
-        offers it again)."""
+        """Draw a snapshot (cheap when it is the one shown); while training runs, a new one
+        waits while a key is answered (the app's timer offers it again)."""
         held = runner.running and self._version >= 0 and key_wait_of(self.app) > 0
         if snapshot.version != self._version and not held:
             self._version = snapshot.version
@@ -382,11 +325,10 @@ class TrainView(MapEditingView):
         return hp
 
     def focus_default(self) -> None:
-        """Give the keyboard to the map while the editor is open, else to the heatmap (its
-        keys move the focus where there is one). The view stays where it is: scrolled to
-        a heatmap taller than the screen's rest, it would hide the run's state above."""
-        if self.editing_map and self._editor is not None:
-            self._editor.focus_canvas()
+        """Give the keyboard to the map while the editor is open, else to the heatmap (not
+        scrolled to: it would hide the run's state above)."""
+        if self.editing_map and (editor := self.editor) is not None:
+            editor.focus_canvas()
         else:
             self.heatmap.focus(scroll_visible=False)
 
@@ -415,7 +357,7 @@ class TrainView(MapEditingView):
 
     def _show_heatmap_title(self) -> None:
         predicts = self.session.predicts
-        if self._traces:
+        if self.shows_traces:
             title = ("e(s): the traces of this episode, in every action's place" if predicts
                      else "e(s,a): the eligibility traces of this episode")
         else:
@@ -427,7 +369,7 @@ class TrainView(MapEditingView):
         event loop (`_show_figures` draws them)."""
         snapshot = self._snapshot
         if snapshot is not None:
-            traces = self._traces and snapshot.traces is not None
+            traces = self.shows_traces and snapshot.traces is not None
             self._exact.ask(Request(self.session.detached(), snapshot, self.focus_target,
                                     traces))
 
@@ -451,7 +393,7 @@ class TrainView(MapEditingView):
         self._figures = figures
         request = figures.request
         session, view = request.session, self.heatmap
-        traces = self._traces and request.snapshot.traces is not None
+        traces = self.shows_traces and request.snapshot.traces is not None
         if request.focus != self.focus_target or request.traces != traces:
             pass  # keys have moved the heatmaps on: theirs are asked for, the cursor stays
         elif figures.panels is None:
@@ -469,30 +411,25 @@ class TrainView(MapEditingView):
             else:
                 self._prediction.show(request.snapshot.episodes, figures.prediction)
 
-    def _show_engine(self, snapshot: TrainingSnapshot) -> None:
-        reason = self.session.engine_reason
-        if snapshot.status:
-            reason = snapshot.status  # "compiling the learners, once"
-        elif snapshot.engine == "env" and reason.startswith("model"):
-            reason = "env: one step at a time while animating (the model at max speed)"
-        self.show_engine(reason)
-
     @property
     def engine_note(self) -> str:
         """Which engine trains and why, in full (the line shows what fits)."""
         return str(self._engine.content)
 
-    def show_engine(self, reason: str) -> None:
+    def _show_engine(self, snapshot: TrainingSnapshot) -> None:
         """Say which engine trains and why, on one line (the whole in its tooltip)."""
+        reason = self.session.engine_reason
+        if snapshot.status:
+            reason = snapshot.status  # "compiling the learners, once"
+        elif snapshot.engine == "env" and reason.startswith("model"):
+            reason = "env: one step at a time while animating (the model at max speed)"
         if reason != self.engine_note:
             self._engine.update(reason)
             self._engine.tooltip = reason
             self.stats.tooltip = reason  # the compact layout hides the line
 
     def _show_state(self, runner: TrainingRunner) -> None:
-        """The badge, from what is shown: running (a run, or one episode, under way),
-        finished (the budget in force used up), paused (training has begun, even
-        mid-way through its first episode) or ready."""
+        """The badge, from what is shown: running, finished, paused or ready."""
         snapshot = self._snapshot
         busy = runner.running or not runner.wait_idle(0)
         episodes = snapshot.episodes if snapshot is not None else 0
@@ -513,20 +450,6 @@ class TrainView(MapEditingView):
             self._show_state(self.runner)
 
     # --- the board at animated speeds --------------------------------------
-    def _drop_board(self) -> None:
-        if self._board is not None:
-            self._board.remove()
-        self._board = None
-        self._board_kind = ""
-
-    def _ensure_board(self) -> Board:
-        if self._board is None:
-            self._board_kind = self.session.game.board
-            self._board = board_class(self._board_kind)(interactive=False)
-            self._board.can_focus = False
-            self._board_box.mount(self._board, before=0)
-        return self._board
-
     def _show_board(self, runner: TrainingRunner) -> None:
         box = self._board_box
         scene = runner.last_scene
@@ -537,7 +460,12 @@ class TrainView(MapEditingView):
         if not animated or scene is None:
             self._show_step(None)
             return
-        board = self._ensure_board()
+        board = self._board
+        if board is None:
+            self._board_kind = self.session.game.board
+            board = self._board = board_class(self._board_kind)(interactive=False)
+            board.can_focus = False
+            self._board_box.mount(board, before=0)
         event = runner.last_event
         if scene != self._scene:
             self._scene = scene
@@ -644,7 +572,7 @@ class TrainView(MapEditingView):
 
     def action_toggle_traces(self) -> None:
         """The heatmap: Q (V) or the learner's eligibility traces."""
-        self._traces = not self._traces
+        self.shows_traces = not self.shows_traces
         self._show_heatmap_title()
         self._ask_figures()
 
