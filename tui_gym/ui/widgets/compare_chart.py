@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import cache
 from typing import ClassVar
 
 import numpy as np
@@ -153,39 +154,33 @@ class CompareChart(StripWidget):
         background = self.rich_style.bgcolor or RichColor.parse("#000000")
         colours = [colour(c) for c in self.colours]
         line_styles = [Style(color=c) for c in colours]
-        tints: dict[int, RichColor] = {}
 
-        def tint(mask: int) -> RichColor:
+        @cache
+        def cell_style(ink: int, band: int) -> Style:
+            fg = colours[ink] if ink >= 0 else None
+            if not band:
+                return Style(color=fg)
             # Where bands overlap, the tint of their colours' mean: each band stays visible.
-            found = tints.get(mask)
-            if found is None:
-                members = [c for i, c in enumerate(colours) if mask >> i & 1]
-                mean = members[0]
-                for n, other in enumerate(members[1:], start=2):
-                    mean = mix(mean, other, 1 / n)
-                found = tints[mask] = mix(background, mean, BAND_TINT)
-            return found
+            members = [c for i, c in enumerate(colours) if band >> i & 1]
+            mean = members[0]
+            for n, other in enumerate(members[1:], start=2):
+                mean = mix(mean, other, 1 / n)
+            return Style(color=fg, bgcolor=mix(background, mean, BAND_TINT))
 
         labels = {0: _label(high, LABEL_WIDTH - 1), height - 1: _label(low, LABEL_WIDTH - 1)}
         if height >= 5:
             labels[height // 2] = _label((high + low) / 2, LABEL_WIDTH - 1)
-        cache: dict[tuple[int, int], Style] = {}
         lines: list[Line] = []
         for row in range(height):
             line: Line = [Segment(labels.get(row, "").rjust(LABEL_WIDTH - 1) + "┤"
                                   if row in labels else " " * (LABEL_WIDTH - 1) + "│", axis)]
             for col in range(plot_width):
-                key = (ink[row][col], band[row][col])
-                style = cache.get(key)
-                if style is None:
-                    fg = line_styles[key[0]].color if key[0] >= 0 else None
-                    bg = tint(key[1]) if key[1] else None
-                    style = cache[key] = Style(color=fg, bgcolor=bg)
+                style = cell_style(ink[row][col], band[row][col])
                 glyph = chr(BRAILLE_BASE + bits[row][col]) if bits[row][col] else " "
                 # A dot is a segment of its own: an SVG viewer whose font draws braille
                 # wider than a cell then still puts each dot in its cell, inside the box.
-                before = line[-1] if line else None
-                if before is not None and before.style is style and glyph == " " == before.text[-1]:
+                before = line[-1]
+                if before.style is style and glyph == " " == before.text[-1]:
                     line[-1] = Segment(before.text + glyph, style)
                 else:
                     line.append(Segment(glyph, style))
