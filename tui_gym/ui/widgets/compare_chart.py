@@ -67,10 +67,6 @@ def episode_range(series: Sequence[Series]) -> tuple[int, int]:
     return first, max(last, first + 1)
 
 
-def _label(value: float, width: int) -> str:
-    return fit(number_forms(f"{value:+.3f}", value, "+"), width)
-
-
 def plot_cells(
     series: Sequence[Series], width: int, height: int
 ) -> tuple[list[list[int]], list[list[int]], list[list[int]]]:
@@ -167,12 +163,11 @@ class CompareChart(StripWidget):
                 mean = mix(mean, other, 1 / n)
             return Style(color=fg, bgcolor=mix(background, mean, BAND_TINT))
 
-        labels = {0: _label(high, LABEL_WIDTH - 1), height - 1: _label(low, LABEL_WIDTH - 1)}
-        if height >= 5:
-            labels[height // 2] = _label((high + low) / 2, LABEL_WIDTH - 1)
+        labels = {row: fit(number_forms(f"{v:+.3f}", v, "+"), LABEL_WIDTH - 1)
+                  for row, v in ((0, high), (height // 2, (high + low) / 2), (height - 1, low))}
         lines: list[Line] = []
         for row in range(height):
-            line: Line = [Segment(labels.get(row, "").rjust(LABEL_WIDTH - 1) + "┤"
+            line: Line = [Segment(labels[row].rjust(LABEL_WIDTH - 1) + "┤"
                                   if row in labels else " " * (LABEL_WIDTH - 1) + "│", axis)]
             for col in range(plot_width):
                 style = cell_style(ink[row][col], band[row][col])
