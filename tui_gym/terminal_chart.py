@@ -11,9 +11,9 @@ from rich.text import Text
 
 PALETTE = ("cyan", "magenta", "yellow", "green", "red", "blue", "bright_white", "bright_cyan")
 BAND = "░"
-_BRAILLE = 0x2800
-# The braille dot bit at (column 0..1, row 0..3 from the top) of a character cell.
-_DOTS = ((0x01, 0x08), (0x02, 0x10), (0x04, 0x20), (0x40, 0x80))
+BRAILLE_BASE = 0x2800
+# The braille dot bit at (row 0..3 from the top, column 0..1) of a character cell.
+DOT_BITS = np.array(((0x01, 0x08), (0x02, 0x10), (0x04, 0x20), (0x40, 0x80)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -36,6 +36,28 @@ def format_number(value: float) -> str:
     if abs(value) >= 100:
         return f"{value:.0f}"
     return f"{value:.3g}"
+
+
+def spans(first: np.ndarray, last: np.ndarray, rows: int) -> np.ndarray:
+    """A (rows, columns) mask: column c holds rows first[c] to last[c] (none if first > last)."""
+    row = np.arange(rows)[:, None]
+    return (row >= first) & (row <= last)
+
+
+def curve_bits(rows: np.ndarray, height: int, inside: np.ndarray | None = None, *,
+               halfway: bool = False) -> np.ndarray:
+    """The braille bits of `height` rows of cells drawing a curve at dot row rows[x] in each
+    dot column x (those `inside`; by default all), each dot joined by a run to the one
+    before it: from just past it, or (`halfway`) over the nearer half of the step."""
+    inside = np.ones(len(rows), dtype=bool) if inside is None else inside
+    row = rows[inside]
+    previous = np.concatenate((row[:1], row[:-1]))
+    middle = (previous + row) // 2
+    top, bottom = np.full(len(rows), 4 * height), np.full(len(rows), -1)
+    top[inside] = np.where(row > previous, middle + 1 if halfway else previous + 1, row)
+    bottom[inside] = np.where(row < previous, middle if halfway else previous - 1, row)
+    inked = spans(top, bottom, 4 * height).reshape(height, 4, len(rows) // 2, 2)
+    return (inked * DOT_BITS[:, None, :]).sum(axis=(1, 3))
 
 
 def _binned(x: np.ndarray, values: np.ndarray, edges: np.ndarray) -> np.ndarray:
@@ -97,25 +119,12 @@ def band_chart(
     band_owner = np.full((height, width), -1, dtype=np.int64)
     for k, (mean, lo, hi) in enumerate(binned):
         if lo is not None and hi is not None:
-            top, bottom = dot_row(hi), dot_row(lo)
-            for c in range(width):
-                first = int(min(top[2 * c], top[2 * c + 1])) // 4
-                last = int(max(bottom[2 * c], bottom[2 * c + 1])) // 4
-                band_owner[first : last + 1, c] = k
-        ys = dot_row(mean)
-        for col in range(columns):
-            # Join each dot to the one before it, so that steep stretches stay one line.
-            prev = ys[col - 1] if col else ys[col]
-            lo_row, hi_row = sorted((int(prev), int(ys[col])))
-            if lo_row < hi_row:
-                mid = (lo_row + hi_row) // 2
-                span = range(mid + 1, hi_row + 1) if ys[col] > prev else range(lo_row, mid + 1)
-            else:
-                span = range(lo_row, hi_row + 1)
-            for r in span:
-                cell_r, cell_c = r // 4, col // 2
-                dots[cell_r, cell_c] |= _DOTS[r % 4][col % 2]
-                dot_owner[cell_r, cell_c] = k
+            top, bottom = dot_row(hi).reshape(width, 2), dot_row(lo).reshape(width, 2)
+            band_owner[spans(top.min(axis=1) // 4, bottom.max(axis=1) // 4, height)] = k
+        # Each dot is joined to the one before it, so that steep stretches stay one line.
+        drawn = curve_bits(dot_row(mean), height, halfway=True)
+        dots |= drawn
+        dot_owner[drawn > 0] = k
     labels = [format_number(y_max), format_number((y_max + y_min) / 2), format_number(y_min)]
     pad = max(len(label) for label in labels)
     text = Text()
@@ -128,7 +137,7 @@ def band_chart(
         for c in range(width):
             owner = int(dot_owner[r, c])
             if owner >= 0:
-                text.append(chr(_BRAILLE + int(dots[r, c])), style=f"bold {_colour(owner)}")
+                text.append(chr(BRAILLE_BASE + int(dots[r, c])), style=f"bold {_colour(owner)}")
             elif band_owner[r, c] >= 0:
                 text.append(BAND, style=_colour(int(band_owner[r, c])))
             else:

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
+from functools import cache
 from typing import ClassVar
 
 import numpy as np
@@ -11,6 +11,7 @@ from rich.color import Color as RichColor
 from rich.segment import Segment
 from rich.style import Style
 
+from tui_gym.terminal_chart import BRAILLE_BASE, curve_bits, spans
 from tui_gym.ui.compare_series import Series
 from tui_gym.ui.widgets.numbers import fit, number_forms
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget
@@ -28,9 +29,6 @@ BAND_TINT = 0.28  # how much of a curve's colour its band mixes into the backgro
 LABEL_WIDTH = 8  # the y labels' column, with a space after it
 PLOT_HEIGHT, COMPACT_PLOT_HEIGHT = 12, 7  # lines of the plot
 EMPTY = "Tick runs in the list to draw their return curves here."
-BRAILLE_BASE = 0x2800
-# The bit of each dot of a braille cell, by (column, row) within the cell.
-DOT_BITS = ((0x01, 0x02, 0x04, 0x40), (0x08, 0x10, 0x20, 0x80))
 
 
 def colour(index: int) -> RichColor:
@@ -54,20 +52,13 @@ def value_range(series: Sequence[Series]) -> tuple[float, float]:
     low, high = min(lows), max(highs)
     if high - low < 1e-12:
         pad = max(0.5, abs(low) * 0.1)
-        floor, ceiling = allowed_range(series)
-        low, high = max(floor, low - pad), min(ceiling, high + pad)
+        low, high = low - pad, high + pad
+        bounds = [s.bounds for s in series if s.bounds is not None]
+        if len(bounds) == len(series):
+            low, high = max(low, min(b[0] for b in bounds)), min(high, max(b[1] for b in bounds))
         if high - low < 1e-12:  # the games allow this one return only
             low, high = low - pad, high + pad
     return low, high
-
-
-def allowed_range(series: Sequence[Series]) -> tuple[float, float]:
-    """The returns every curve's game allows, together (±inf where some curve does not
-    know its own)."""
-    if not series or any(s.bounds is None for s in series):
-        return -math.inf, math.inf
-    return (min(s.bounds[0] for s in series if s.bounds is not None),
-            max(s.bounds[1] for s in series if s.bounds is not None))
 
 
 def episode_range(series: Sequence[Series]) -> tuple[int, int]:
@@ -76,38 +67,31 @@ def episode_range(series: Sequence[Series]) -> tuple[int, int]:
     return first, max(last, first + 1)
 
 
-def _label(value: float, width: int) -> str:
-    return fit(number_forms(f"{value:+.3f}", value, "+"), width)
-
-
 def plot_cells(
     series: Sequence[Series], width: int, height: int
 ) -> tuple[list[list[int]], list[list[int]], list[list[int]]]:
     """The plot as three grids of `height` x `width` cells: braille bits, the index of the
     curve whose dot was drawn last (-1: none) and the bands that shade it (a bit per curve,
     1 << index; 0: none)."""
-    bits = [[0] * width for _ in range(height)]
-    ink = [[-1] * width for _ in range(height)]
-    band = [[0] * width for _ in range(height)]
+    bits = np.zeros((max(0, height), max(0, width)), dtype=np.int64)
+    ink = np.full(bits.shape, -1)
+    band = np.zeros(bits.shape, dtype=object)  # Python ints: a bit for every curve
     if not series or width < 1 or height < 1:
-        return bits, ink, band
+        return bits.tolist(), ink.tolist(), band.tolist()
     low, high = value_range(series)
     first, last = episode_range(series)
     span = high - low
 
-    def cell_row(value: float) -> int:
-        return min(height - 1, max(0, int((high - value) / span * height)))
+    def cell_row(values: np.ndarray) -> np.ndarray:
+        return np.clip(np.trunc((high - values) / span * height), 0, height - 1).astype(int)
 
     centres = first + (np.arange(width) + 0.5) / width * (last - first)
     for index, s in enumerate(series):
         if s.lo is None or s.hi is None:
             continue
         inside = (centres >= s.episodes[0]) & (centres <= s.episodes[-1])
-        los = np.interp(centres, s.episodes, s.lo)
-        his = np.interp(centres, s.episodes, s.hi)
-        for col in np.flatnonzero(inside):
-            for row in range(cell_row(his[col]), cell_row(los[col]) + 1):
-                band[row][col] |= 1 << index
+        tops = np.where(inside, cell_row(np.interp(centres, s.episodes, s.hi)), height)
+        band[spans(tops, cell_row(np.interp(centres, s.episodes, s.lo)), height)] |= 1 << index
     dots_x, dots_y = 2 * width, 4 * height
     xs = first + np.arange(dots_x) / max(1, dots_x - 1) * (last - first)
     for index, s in enumerate(series):
@@ -117,22 +101,10 @@ def plot_cells(
             inside[int(round((s.episodes[0] - first) / (last - first) * (dots_x - 1)))] = True
         values = np.interp(xs, s.episodes, s.mean)
         rows = np.clip(np.rint((high - values) / span * (dots_y - 1)), 0, dots_y - 1).astype(int)
-        previous: int | None = None
-        for x in np.flatnonzero(inside):
-            row = int(rows[x])
-            # Join the dots: fill the column from just past the previous dot to this one.
-            if previous is None or previous == row:
-                top = bottom = row
-            elif row > previous:
-                top, bottom = previous + 1, row
-            else:
-                top, bottom = row, previous - 1
-            for y in range(top, bottom + 1):
-                cell_y, cell_x = y // 4, x // 2
-                bits[cell_y][cell_x] |= DOT_BITS[x % 2][y % 4]
-                ink[cell_y][cell_x] = index
-            previous = row
-    return bits, ink, band
+        drawn = curve_bits(rows, height, inside)
+        bits |= drawn
+        ink[drawn > 0] = index
+    return bits.tolist(), ink.tolist(), band.tolist()
 
 
 class CompareChart(StripWidget):
@@ -178,39 +150,32 @@ class CompareChart(StripWidget):
         background = self.rich_style.bgcolor or RichColor.parse("#000000")
         colours = [colour(c) for c in self.colours]
         line_styles = [Style(color=c) for c in colours]
-        tints: dict[int, RichColor] = {}
 
-        def tint(mask: int) -> RichColor:
+        @cache
+        def cell_style(ink: int, band: int) -> Style:
+            fg = colours[ink] if ink >= 0 else None
+            if not band:
+                return Style(color=fg)
             # Where bands overlap, the tint of their colours' mean: each band stays visible.
-            found = tints.get(mask)
-            if found is None:
-                members = [c for i, c in enumerate(colours) if mask >> i & 1]
-                mean = members[0]
-                for n, other in enumerate(members[1:], start=2):
-                    mean = mix(mean, other, 1 / n)
-                found = tints[mask] = mix(background, mean, BAND_TINT)
-            return found
+            members = [c for i, c in enumerate(colours) if band >> i & 1]
+            mean = members[0]
+            for n, other in enumerate(members[1:], start=2):
+                mean = mix(mean, other, 1 / n)
+            return Style(color=fg, bgcolor=mix(background, mean, BAND_TINT))
 
-        labels = {0: _label(high, LABEL_WIDTH - 1), height - 1: _label(low, LABEL_WIDTH - 1)}
-        if height >= 5:
-            labels[height // 2] = _label((high + low) / 2, LABEL_WIDTH - 1)
-        cache: dict[tuple[int, int], Style] = {}
+        labels = {row: fit(number_forms(f"{v:+.3f}", v, "+"), LABEL_WIDTH - 1)
+                  for row, v in ((0, high), (height // 2, (high + low) / 2), (height - 1, low))}
         lines: list[Line] = []
         for row in range(height):
-            line: Line = [Segment(labels.get(row, "").rjust(LABEL_WIDTH - 1) + "┤"
+            line: Line = [Segment(labels[row].rjust(LABEL_WIDTH - 1) + "┤"
                                   if row in labels else " " * (LABEL_WIDTH - 1) + "│", axis)]
             for col in range(plot_width):
-                key = (ink[row][col], band[row][col])
-                style = cache.get(key)
-                if style is None:
-                    fg = line_styles[key[0]].color if key[0] >= 0 else None
-                    bg = tint(key[1]) if key[1] else None
-                    style = cache[key] = Style(color=fg, bgcolor=bg)
+                style = cell_style(ink[row][col], band[row][col])
                 glyph = chr(BRAILLE_BASE + bits[row][col]) if bits[row][col] else " "
                 # A dot is a segment of its own: an SVG viewer whose font draws braille
                 # wider than a cell then still puts each dot in its cell, inside the box.
-                before = line[-1] if line else None
-                if before is not None and before.style is style and glyph == " " == before.text[-1]:
+                before = line[-1]
+                if before.style is style and glyph == " " == before.text[-1]:
                     line[-1] = Segment(before.text + glyph, style)
                 else:
                     line.append(Segment(glyph, style))
