@@ -42,20 +42,21 @@ class Tally:
     def mean(self) -> float:
         return self.total / self.episodes if self.episodes else 0.0
 
+    def half_width(self, z: float = 1.96) -> float | None:
+        """Half the normal-approximation interval of the mean (None below 2 episodes)."""
+        n = self.episodes
+        if n < 2:
+            return None
+        variance = max(0.0, (self.total_sq - n * self.mean * self.mean) / (n - 1))
+        return z * math.sqrt(variance) / math.sqrt(n)
+
     def confidence_interval(self, z: float = 1.96, min_episodes: int = 2) -> tuple[float, float]:
         """Normal-approximation interval for the mean return (NaN below `min_episodes`,
         and never below 2)."""
-        n = self.episodes
-        if n < max(2, min_episodes):
+        half = self.half_width(z)
+        if half is None or self.episodes < min_episodes:
             return (float("nan"), float("nan"))
-        half = z * math.sqrt(sample_variance(self.total, self.total_sq, n)) / math.sqrt(n)
         return (self.mean - half, self.mean + half)
-
-
-def sample_variance(total: float, total_sq: float, n: int) -> float:
-    """The sample variance of `n` >= 2 values from their sum and sum of squares."""
-    mean = total / n
-    return max(0.0, (total_sq - n * mean * mean) / (n - 1))
 
 
 @dataclass

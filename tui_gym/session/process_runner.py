@@ -1,20 +1,12 @@
-"""Training in a child process: the UI's Python never shares a core with the trainer.
+"""`ProcessRunner`: a `Runner` that trains in a child process (no shared interpreter lock).
 
-`ProcessRunner` is a `Runner` whose training runs in a separate process, so the
-trainer and the event loop never compete for one interpreter lock.
-
-While paused, the parent's `Session` is the truth. A start (or one episode, or
-one step) hands the child the session's spec, hyperparameters, agent and
-progress; the child streams snapshots back, new hyperparameters follow it at
-once, and a pause asks for the agent back. Every request has a number, and what
-comes back lands in the agent object the request was made from: after a reset
-or a game switch, a late handover changes nothing the session shows.
-
-Nothing here waits on the child in the caller's thread: a sender thread sends,
-a receiver thread queues what the child says, and `update()` (which every
-property and control calls) takes it in. A child that dies is reaped and
-replaced; one silent for `HANG_SECONDS` while it holds the agent is killed and
-replaced; either way the agent is kept as last handed over, and `error` says so.
+While paused, the parent's `Session` is the truth. A request (start, one episode, one step)
+hands the child the session's spec, hyperparameters, agent and progress; the child streams
+snapshots back and a pause asks for the agent back. Every request has a number, and what
+comes back lands in the agent it was made from: after a reset or a switch, a late handover
+changes nothing shown. Sender and receiver threads talk to the child; `update()` takes in
+what it said. A child that dies, or is silent for `HANG_SECONDS` while holding the agent, is
+replaced, the agent kept as last handed over, and `error` says so.
 """
 
 from __future__ import annotations
@@ -123,7 +115,7 @@ class _Child:
         threading.Thread(target=self._receive_loop, name="tui-gym-receiver", daemon=True).start()
 
     def send(self, message: tuple, request: bool = False) -> None:
-        """Queue a message (pickled now, in the caller's thread: it may change later)."""
+        """Queue a message, pickled now (it may change later)."""
         data = pickle.dumps(message, protocol=pickle.HIGHEST_PROTOCOL)
         with self._lock:
             if request:
@@ -194,9 +186,9 @@ class _Child:
             self.conn.close()
 
     def _join(self, timeout: float) -> bool:
-        """Wait for the child to end; whether it is still alive. One thread at a time:
-        a join that found the child reaped by another thread's join, not yet marked,
-        would take it for alive (and a kill then could reach a new process with its pid)."""
+        """Wait for the child to end; whether it is still alive. One thread at a time: a join
+        racing another's reaping would take it for alive (and a kill could reach its pid's
+        next owner)."""
         with self._reaping:
             self.process.join(timeout=timeout)
             return self.process.is_alive()
