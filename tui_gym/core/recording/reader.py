@@ -232,7 +232,8 @@ def read_recording(path: str | Path, scene_fits: SceneCheck | None = None) -> Re
     except OSError as exc:
         raise RecordingError(f"{path}: cannot read ({exc.strerror or exc})") from None
     with handle:
-        if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):
+        info = os.fstat(handle.fileno())
+        if not stat.S_ISREG(info.st_mode):
             raise RecordingError(f"{path} is not a regular file (a pipe or a device), "
                                  "not a recording")
         recording = Recording(path)
@@ -242,7 +243,7 @@ def read_recording(path: str | Path, scene_fits: SceneCheck | None = None) -> Re
             read += MAX_LINE_BYTES if line is None else len(line)
             if read > MAX_READ_BYTES:
                 recording.cut_at_line = number
-                recording.size = _size_of(handle)
+                recording.size = info.st_size
                 break
             recording.lines = number
             if line is None:
@@ -259,13 +260,6 @@ def read_recording(path: str | Path, scene_fits: SceneCheck | None = None) -> Re
             raise RecordingError(f"{path} is not a tui-gym recording (no line of it could be read)")
         raise RecordingError(f"{path} holds no episode to replay")
     return recording
-
-
-def _size_of(handle: IO[bytes]) -> int:
-    try:
-        return os.fstat(handle.fileno()).st_size
-    except (OSError, ValueError, AttributeError):
-        return 0
 
 
 class _Bad(Exception):
@@ -309,17 +303,11 @@ class _Reader:
             record = _DECODER.decode(line.decode("utf-8"))
         except (UnicodeDecodeError, ValueError, RecursionError):
             raise _Bad from None
-        if not isinstance(record, dict):
-            raise _Bad
-        kind = record.get("type")
+        kind = record.get("type") if isinstance(record, dict) else None
         if kind == HEADER:
             self._header(number, record)
-        elif kind == START:
-            self._start(record)
-        elif kind == STEP:
-            self._step(record)
-        elif kind == END:
-            self._end(record)
+        elif kind in (START, STEP, END):
+            getattr(self, f"_{kind}")(record)  # _start, _step, _end
         else:
             raise _Bad
 
