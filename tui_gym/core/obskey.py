@@ -59,10 +59,8 @@ def _dense_leaf(space: spaces.Space) -> _Leaf | None:
     if isinstance(space, spaces.Box) and space.dtype.kind in "iub":  # integers or bools
         if not (space.is_bounded("both")):
             return None
-        # Python ints: `high - low + 1` in int64 overflows for ranges near the dtype's
-        # limits. A radix is only used when the whole space is small, so capping it
-        # just past the dense limit keeps such spaces sparse without changing any
-        # dense key.
+        # Python ints (int64 overflows near the dtype's limits); a radix capped just past the
+        # dense limit keeps such spaces sparse without changing any dense key.
         lows = np.asarray(space.low).ravel().tolist()
         highs = np.asarray(space.high).ravel().tolist()
         radix = [
@@ -109,14 +107,8 @@ def _flattener(space: spaces.Space) -> Callable[[Any], list[Hashable]]:
 
 
 class ObservationKeyer:
-    """Turns observations of one space into hashable table keys.
-
-    `key(obs)` is the key; for dense spaces it is an `int` in
-    `range(n_states)`, `decode(index)` gives back the flat tuple of values and
-    `observation(index)` the observation itself.
-    `signature` identifies what keys mean: two keyers with the same signature
-    map the same observation to the same key.
-    """
+    """Turns observations of one space into hashable table keys (an `int` in `range(n_states)`
+    for dense spaces); `signature` is the same for keyers whose keys mean the same."""
 
     def __init__(self, space: spaces.Space) -> None:
         self.space = space

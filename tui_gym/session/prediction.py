@@ -31,25 +31,21 @@ class PredictionRuler:
         self._kept: tuple[Any, Truth] | None = None  # one assignment: safe across threads
 
     def truth(self, agent: Predictor, training: TrainingModel) -> Truth:
-        """The exact values of the policy `agent` follows on `training`'s model."""
-        rows = self.rows(training)
+        """The exact values of the policy `agent` follows on `training`'s model (its `rows`
+        given, as a session's are)."""
+        rows = training.rows
         key = (id(training.model), agent.hp.discount, agent.epsilon, agent.q[rows].tobytes())
         kept = self._kept
         if kept is None or kept[0] != key:
             kept = self._kept = (key, agent.truth(training.model, rows))
         return kept[1]
 
-    @staticmethod
-    def rows(training: TrainingModel) -> np.ndarray:
-        n = training.model.n_states
-        return np.arange(n) if training.rows is None else np.asarray(training.rows)
-
     def figures(self, agent: Predictor, training: TrainingModel,
                 table: np.ndarray | None = None) -> PredictionFigures:
         """The figures of V: the live agent's, or `table`'s (a snapshot's values, V in
         every action). ValueError when the policy has no exact values."""
         truth = self.truth(agent, training)
-        rows = self.rows(training)
+        rows = training.rows
         v = agent.v[rows] if table is None else np.asarray(table)[rows, 0]
         where = np.flatnonzero(truth.reached)
         return PredictionFigures(truth.rms(v), tuple(int(s) for s in where),

@@ -173,7 +173,7 @@ class Session:
         if offered is None or offered.shape != (model.n_states, model.n_actions):
             return None
         mask = np.ones((rows, model.n_actions), dtype=bool)
-        mask[np.arange(model.n_states) if training.rows is None else training.rows] = offered
+        mask[training.rows] = offered
         return mask
 
     def _training_model(self) -> tuple[tuple[tuple[int, ModelArrays], ...], str]:

@@ -372,8 +372,8 @@ def read_agent(path: str | Path) -> SavedAgent:
             if not isinstance(meta, dict) or meta.get("format") != FORMAT_NAME:
                 raise reader.error(f"not a tui-gym save file (format is not {FORMAT_NAME})")
             version = _check_version(reader, meta.get("version"))
-            name = meta.get("algorithm") if version >= 2 else QLearning.name  # version 1's
-            reader.typed(name, "algorithm", str, "an algorithm's name")
+            name = reader.typed(meta.get("algorithm") if version >= 2 else QLearning.name,
+                                "algorithm", str, "an algorithm's name")  # version 1's is fixed
             cls = reader.checked("algorithm", partial(algorithm, name))
             arrays = _learner_arrays(reader, zf, cls, version)
             rows = len(arrays[cls.tables[0].name])
