@@ -112,9 +112,8 @@ def check_output_path(path: str | Path) -> Path:
 
 
 def write_atomically(path: str | Path, data: bytes | str) -> Path:
-    """Write `data` (text as UTF-8) to `path` through a temporary file, fsync and a
-    rename; returns `path` (`OutputPathError` when it cannot be written there, OSError
-    when the write itself fails)."""
+    """Write `data` (text as UTF-8) to `path` through a temporary file, fsync and a rename;
+    `OutputPathError` when it cannot be written there, OSError when the write fails."""
     given = check_output_path(path)
     payload = data.encode("utf-8") if isinstance(data, str) else data
     target = _real_target(given)

@@ -61,14 +61,9 @@ class Tally:
 
 @dataclass
 class Scorecard:
-    """One player's record beside the optimum, in constant memory.
-
-    `tally` counts finished episodes (usually the game's own `Tally`);
-    `decisions` counts moves made where the optimum had a say and `agreed`
-    those among them that the optimum would also make; `figures` holds running
-    sums of per-episode figures (`Narrator.episode_figures`), e.g. steps over
-    optimal, each with the number of episodes it was measured on.
-    """
+    """One player's record beside the optimum, in constant memory: finished episodes, moves
+    where the optimum had a say (`decisions`) and agreed with it, and running sums of
+    per-episode figures (`Narrator.episode_figures`) with their counts."""
 
     tally: Tally = field(default_factory=Tally)
     decisions: int = 0

@@ -1,8 +1,5 @@
-"""The JSON-lines protocol: programs play the same games people do.
-
-A bad line gets `{"error": "..."}` and the session goes on; every response is plain
-ASCII JSON. The requests are listed in the README.
-"""
+"""The JSON-lines protocol (see the README): programs play the same games people do; a bad
+line gets `{"error": "..."}` and the session goes on."""
 
 from __future__ import annotations
 
@@ -220,10 +217,8 @@ class JsonlPlayer:
 
 def read_batches(stdin: IO[bytes], limit: int = MAX_LINE_BYTES,
                  chunk: int = 1 << 16) -> Iterator[list[bytes | None]]:
-    """The lines of `stdin` (without their newlines) in batches: each batch holds every
-    line completed by what had arrived when it was read, so a reader waits for input
-    only when no whole line is left. A line longer than `limit` comes back as None
-    (its bytes are dropped as they come, not held); a last line needs no newline."""
+    """The lines of `stdin` in batches of those complete in what had arrived (a reader waits
+    only when no whole line is left); a line longer than `limit` comes back as None."""
     read = getattr(stdin, "read1", stdin.read)  # read1: what has arrived, without waiting for more
     pending = b""  # the start of a line whose newline has not come yet
     dropping = False  # inside a line that is too long, until its newline
@@ -252,14 +247,8 @@ def read_batches(stdin: IO[bytes], limit: int = MAX_LINE_BYTES,
 
 
 def serve(player: JsonlPlayer, stdin: IO[bytes], stdout: IO[str]) -> int:
-    """Answer every line of `stdin` (bytes) on `stdout`, in order; blank lines are
-    skipped. Returns 0.
-
-    Lines are read as bytes and decoded one by one, so a bad byte is one bad line.
-    The answers to the lines that arrived together are written and flushed together:
-    a program that waits for each answer gets it at once, and one that sends requests
-    ahead is not slowed by a write per answer.
-    """
+    """Answer every non-blank line of `stdin` (bytes, decoded line by line) on `stdout`, in
+    order, the answers to lines that arrived together flushed together; returns 0."""
     too_long = json.dumps({"error": f"line longer than {MAX_LINE_BYTES:,} bytes: not read"})
     for batch in read_batches(stdin):
         answers = [too_long if line is None else player.handle_text(line)

@@ -237,10 +237,8 @@ class Session:
         self, env_id: str | None = None, env_kwargs: Mapping[str, Any] | None = None,
         choices: Sequence[WrapperChoice] | None = None,
     ) -> RebuildReport:
-        """Change game, env arguments or wrappers; keep the agent when keys keep their meaning.
-
-        Raises ValueError (and changes nothing) for an unknown env or bad arguments.
-        """
+        """Change game, env arguments or wrappers; keep the agent when keys keep their meaning
+        (ValueError, changing nothing, for an unknown env or bad arguments)."""
         new_id, kwargs, new_choices, game = self._rebuild_args(env_id, env_kwargs, choices)
         built = _build(game, new_id, kwargs, new_choices)
         keep = self._keeps(built)

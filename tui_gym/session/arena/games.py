@@ -1,9 +1,5 @@
-"""The arena's one seam to the games: the catalog, and a game's protocol handler.
-
-Everything else in the arena talks to a game only through the `JsonlPlayer`
-that `open_handler` returns (reset, step, render, hint, spaces), so a change
-in where games live changes this module alone.
-"""
+"""The arena's one seam to the games: the catalog, and a game's protocol handler (the
+`JsonlPlayer` everything else in the arena talks to a game through)."""
 
 from __future__ import annotations
 
@@ -68,9 +64,8 @@ def open_handler(
     name: str, params: Mapping[str, Any] | None = None, seed: int | None = None,
     wrappers: Sequence[str] = (),
 ) -> JsonlPlayer:
-    """A protocol handler playing game `name` with `params` and `wrappers` (specs as
-    `--wrapper` takes them); ValueError with one clear line for a bad game, parameter
-    or wrapper."""
+    """A protocol handler playing game `name` with `params` and `wrappers` (`--wrapper` specs);
+    ValueError with one clear line for a bad game, parameter or wrapper."""
     from tui_gym.core.wrappers import check_chain_length, parse_wrapper_spec
     from tui_gym.session.session import Session
 

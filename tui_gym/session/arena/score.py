@@ -16,12 +16,8 @@ NOT_EXACT = "the wrappers change the game beyond its exact figures"
 
 @dataclass(frozen=True)
 class Verdict:
-    """One move judged against the exact optimum before it was made.
-
-    `decision` is False where the optimum had no say (no optimal action known
-    here); then `agreed` and `regret` are None. `regret` is None too where the
-    hint gives no exact action values, and `note` says why.
-    """
+    """One move judged against the exact optimum before it was made: `decision` False where
+    the optimum had no say; `regret` None without exact action values (`note` says why)."""
 
     decision: bool
     agreed: bool | None = None
@@ -91,11 +87,8 @@ class EpisodeScore:
 
 @dataclass
 class ArenaScore:
-    """Returns, exact decision regret and agreement of one player on one game.
-
-    The totals count finished episodes; the running one is kept apart
-    (`current`), so a score can be shown without it.
-    """
+    """Returns, exact decision regret and agreement of one player on one game; the totals
+    count finished episodes, the running one is kept apart (`current`)."""
 
     current: EpisodeScore | None = None
     returns: Tally = field(default_factory=Tally)  # of the finished episodes

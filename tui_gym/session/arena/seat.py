@@ -1,9 +1,5 @@
-"""`Seat`: one game played through its protocol handler, each move judged before it is made.
-
-A seat asks the game's handler for the hint before every move, so the move's
-verdict (optimal or not, and its exact regret) is known whatever the player
-asked for; what the player is shown of it is up to the front end.
-"""
+"""`Seat`: one game played through its protocol handler, each move judged (from the game's
+hint) before it is made, whatever the player asked for."""
 
 from __future__ import annotations
 

@@ -1,9 +1,5 @@
-"""`GameTable`: several games at once, bounded in number, idle ones expiring.
-
-Games get increasing integer ids. A game not used for `idle_timeout` seconds
-(by the table's clock, injectable for tests) is closed the next time the table
-is used; asking for it afterwards says it expired rather than that it never was.
-"""
+"""`GameTable`: several games at once by increasing integer ids, bounded in number; one idle
+for `idle_timeout` seconds is closed at the table's next use (and said to have expired)."""
 
 from __future__ import annotations
 

@@ -209,8 +209,7 @@ class Recorder:
 
     def _state(self, env: Any, observation: Any, info: Mapping[str, Any] | None) -> dict[str, Any]:
         """The observation, the board's scene and the state in words (None for each that
-        fails: a recording goes on without a picture, e.g. where a wrapper reshaped the
-        observation)."""
+        fails: the recording goes on)."""
         states = self._played.states
         parts: dict[str, tuple[Callable[[Any], Any], Any]] = {
             "observation": (states.json_observation, observation),
