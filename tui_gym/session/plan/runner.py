@@ -103,18 +103,11 @@ class PlanRunner:
         self._send(start)
 
     def pause(self) -> None:
-        def stop() -> None:
-            self._running = self._rerun = False
-        self._send(stop)
+        self._send(self._stop)
 
     def toggle(self) -> None:
         """Run when paused, pause when running."""
-        def flip() -> None:
-            if self._running:
-                self._running = self._rerun = False
-            else:
-                self._start_run()
-        self._send(flip)
+        self._send(lambda: self._stop() if self._running else self._start_run())
 
     def improve(self) -> None:
         """One policy improvement on the current values."""
@@ -147,7 +140,7 @@ class PlanRunner:
         the runner's thread) with zero values; a run stops."""
         def restart() -> None:
             self._planner.restart(policy() if callable(policy) else policy)
-            self._running = self._rerun = False
+            self._stop()
             self._kept.clear()
             self._step_words = "started over"
         self._send(restart)
@@ -174,6 +167,9 @@ class PlanRunner:
     def _settled(self, setter: Callable[[float], None], value: float) -> None:
         setter(value)
         self._step_words = ""
+
+    def _stop(self) -> None:
+        self._running = self._rerun = False
 
     def _start_run(self) -> None:
         self._hurry = False
@@ -240,7 +236,7 @@ class PlanRunner:
         if planner.done(self._method):
             self._running = False
         elif planner.sweeps >= self._run_limit or not np.isfinite(planner.v).all():
-            self._running = self._rerun = False
+            self._stop()
             self._note = (f"stopped after {planner.sweeps:,} sweeps: the values do not settle "
                           "(with γ = 1 a policy that never ends has no finite value)")
 
