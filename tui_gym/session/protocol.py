@@ -3,6 +3,7 @@ line gets `{"error": "..."}` and the session goes on."""
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 from collections.abc import Callable, Iterator
@@ -23,8 +24,6 @@ MAX_SEED = 2**64 - 1
 _ENCODER = json.JSONEncoder(allow_nan=False)  # once: `json.dumps` with options builds one a call
 _PLAIN = (str, int, float, bool, type(None))
 _CACHED_LINE_BYTES = 256  # a program repeats a handful of short requests: each is parsed once
-_CACHED_LINES = 1024
-_parsed: dict[str | bytes, dict[str, Any]] = {}
 
 
 class _BadNumber(ValueError):
@@ -67,15 +66,8 @@ def _clean_text(value: Any) -> str | None:
 def parse_request(line: str | bytes) -> dict[str, Any]:
     """A request line as the JSON object it holds; ValueError saying why it is not one
     (not UTF-8, not JSON, not an object, nested too deeply, a number too long)."""
-    cached = _parsed.get(line)
-    if cached is not None:
-        return dict(cached)  # a copy: the caller may change its request
-    request = _parse(line)
-    if len(line) <= _CACHED_LINE_BYTES:
-        if len(_parsed) >= _CACHED_LINES:
-            _parsed.clear()
-        _parsed[line] = dict(request)
-    return request
+    short = len(line) <= _CACHED_LINE_BYTES
+    return dict(_parse_cached(line) if short else _parse(line))  # a copy: the caller may change it
 
 
 def _parse(line: str | bytes) -> dict[str, Any]:
@@ -102,6 +94,9 @@ def _parse(line: str | bytes) -> dict[str, Any]:
     if line.count("[") + line.count("{") > MAX_DEPTH and nested_deeper(request, MAX_DEPTH):
         raise ValueError(f"not a usable request: nested deeper than {MAX_DEPTH} levels")
     return request
+
+
+_parse_cached = functools.lru_cache(maxsize=1024)(_parse)
 
 
 class JsonlPlayer:
