@@ -1,5 +1,4 @@
-"""The files a user names: read only when regular and small enough, checked before any
-writing, written atomically."""
+"""Files a user names: read when regular and small, checked before writing, written atomically."""
 
 from __future__ import annotations
 
@@ -152,8 +151,7 @@ def pid_alive(pid: int) -> bool:
 
 
 def remove_stale_temp_files(path: Path) -> None:
-    """Remove temporary files of our pattern a killed writer left beside `path` (its pid gone,
-    or older ones without a pid)."""
+    """Remove our temporary files a killed writer left beside `path` (pid gone, or old)."""
     # `.NAME.PID.HEX.tmp` (ours) and `.NAME.XXXXXXXX.tmp` (from tempfile, by earlier versions).
     pattern = re.compile(rf"\.{re.escape(path.name)}\.(?:(\d+)\.[0-9a-f]+|[a-z0-9_]{{8}})\.tmp")
     folder = path.parent if str(path.parent) else Path(".")

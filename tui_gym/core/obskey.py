@@ -177,8 +177,7 @@ class ObservationKeyer:
         return tuple(out)
 
     def observation(self, index: int) -> Any:
-        """The observation behind a dense key, shaped as its space gives one (an `int`
-        for `Discrete`, a tuple for `Tuple`, arrays for the others)."""
+        """The observation behind a dense key, shaped as its space gives one."""
         return _shaped(self.space, iter(self.decode(index)))
 
     def __repr__(self) -> str:

@@ -97,8 +97,7 @@ def _number_text(value: float) -> str:
 
 
 class ParamError(ValueError):
-    """A value a `Param` refuses, in one line; `out_of_range` tells a number out of range from
-    not a number."""
+    """A value a `Param` refuses; `out_of_range` tells out of range from not a number."""
 
     def __init__(self, param: Param, raw: object, out_of_range: bool) -> None:
         self.param = param
@@ -192,8 +191,7 @@ class Param:
         return self.maximum is None or value <= self.maximum
 
     def _convert(self, raw: object) -> ParamValue | None:
-        """`raw` as `kind` (±inf for numbers too large to hold), or None when it does not
-        read as one."""
+        """`raw` as `kind` (±inf for numbers too large to hold), or None when it is not one."""
         if self.kind is str:
             word = raw.strip().lower() if isinstance(raw, str) else None
             return next((c for c in self.choices if c.lower() == word), None)

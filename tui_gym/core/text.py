@@ -40,8 +40,7 @@ def visible(text: object, limit: int | None = 80) -> str:
 
 
 def nested_deeper(value: Any, limit: int) -> bool:
-    """Whether lists and objects in `value` nest deeper than `limit` (checked without
-    recursion)."""
+    """Whether lists and objects in `value` nest deeper than `limit` (without recursion)."""
     stack = [(value, 1)]
     while stack:
         item, depth = stack.pop()

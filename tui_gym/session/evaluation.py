@@ -46,8 +46,7 @@ def evaluate(
     env: gym.Env, agent: Learner, keyer: ObservationKeyer, narrator: Narrator, episodes: int,
     seed: int | None = 0, progress: Callable[[int], None] | None = None,
 ) -> EvalReport:
-    """Play `episodes` greedy episodes on `env` (fewer once `EVAL_STEP_BUDGET` steps are
-    spent; always at least one) and summarise them."""
+    """Play `episodes` greedy episodes on `env` (at least one, at most `EVAL_STEP_BUDGET` steps)."""
     if episodes < 1:
         raise ValueError(f"episodes must be >= 1, got {episodes}")
     rng = np.random.default_rng(seed)

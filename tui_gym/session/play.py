@@ -51,8 +51,7 @@ class Tally:
         return z * math.sqrt(variance) / math.sqrt(n)
 
     def confidence_interval(self, z: float = 1.96, min_episodes: int = 2) -> tuple[float, float]:
-        """Normal-approximation interval for the mean return (NaN below `min_episodes`,
-        and never below 2)."""
+        """Normal-approximation interval of the mean (NaN below `min_episodes`, or 2)."""
         half = self.half_width(z)
         if half is None or self.episodes < min_episodes:
             return (float("nan"), float("nan"))

@@ -266,8 +266,7 @@ class Session:
         self, env_id: str | None = None, env_kwargs: Mapping[str, Any] | None = None,
         choices: Sequence[WrapperChoice] | None = None,
     ) -> bool:
-        """Whether `rebuild` with these arguments would keep the agent; changes nothing
-        (ValueError as `rebuild`)."""
+        """Whether `rebuild` with these arguments would keep the agent (changes nothing)."""
         new_id, kwargs, new_choices, game = self._rebuild_args(env_id, env_kwargs, choices)
         built = _build(game, new_id, kwargs, new_choices)
         try:
@@ -412,8 +411,7 @@ class Session:
         return self.game.at_step(self.env_kwargs, steps)
 
     def reference(self, snapshot: TrainingSnapshot | None = None) -> ReferenceMetrics | None:
-        """The exact comparison of the greedy policy with the optimum (None when there
-        is none: `exact_reason` says why)."""
+        """The exact comparison of the greedy policy with the optimum (None: see `exact_reason`)."""
         return self._exact(self.game.oracle.reference, snapshot)
 
     def evaluation_reference(self) -> ReferenceMetrics | None:
@@ -574,8 +572,7 @@ class Session:
         return TrainOutcome(gap <= target_gap, gap)
 
     def check_target_gap(self, target_gap: float) -> None:
-        """`ValueError` when no greedy policy can meet `target_gap` here (no exact gap, or no
-        fixed policy comes that close to the optimum)."""
+        """`ValueError` when no greedy policy can meet `target_gap` here."""
         ref = self.reference()
         if ref is None or "gap" not in ref.figures:
             why = self.exact_reason() or f"{self.game.title} has no exact gap"

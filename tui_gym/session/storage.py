@@ -158,8 +158,7 @@ def _json(reader: _Reader, name: str, data: bytes) -> Any:
 
 
 def _array(reader: _Reader, name: str, data: bytes, kinds: str, ndim: int = 2) -> np.ndarray:
-    """A `.npy` array of `ndim` dimensions (1 or 2) whose header agrees with its bytes,
-    of a dtype kind in `kinds`."""
+    """A `.npy` array of `ndim` dimensions whose header agrees with its bytes, of kind `kinds`."""
     buf = io.BytesIO(data)
     try:
         major, _minor = np.lib.format.read_magic(buf)
@@ -212,8 +211,7 @@ _KINDS = {"f": "f", "i": "iu", "u": "iu", "b": "b"}
 def _learner_arrays(
     reader: _Reader, zf: zipfile.ZipFile, cls: type[Learner], version: int
 ) -> dict[str, np.ndarray]:
-    """Every array `cls` saves, read from its `NAME.npy` (version 1: `q.npy` and the
-    optional `counts.npy`), all with one row count."""
+    """Every array `cls` saves, from its `NAME.npy`, all with one row count."""
     if version < 2:
         return _version_1_arrays(reader, zf)
     blank = cls(1, n_states=1).state().arrays  # the names, kinds and dimensions it saves

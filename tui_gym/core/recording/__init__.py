@@ -1,5 +1,4 @@
-"""Recorded episodes: a JSON-lines format, its writer and tolerant reader, and the coach's
-judgement of each move."""
+"""Recorded episodes: the JSON-lines format, its writer and reader, the judge of each move."""
 
 from tui_gym.core.recording.format import FORMAT_VERSION
 from tui_gym.core.recording.judge import MoveJudge

@@ -412,8 +412,7 @@ class _Reader:
         )
 
     def _shared(self, scene: dict[str, Any]) -> dict[str, Any]:
-        """`scene`, its values equal to the last scene's being the last scene's own (a
-        map's cells and slips repeat on every move: kept once, not once a move)."""
+        """`scene`, values equal to the last scene's shared with it (kept once, not per move)."""
         last = self.last_scene
         for key, value in scene.items():
             before = last.get(key)

@@ -158,8 +158,7 @@ class ArenaScore:
         return self.agreed / self.decisions if self.decisions else None
 
     def to_json(self, *, running: bool = True) -> dict[str, Any]:
-        """The score as JSON data: totals over finished episodes, and the running
-        episode's own figures unless `running` is False."""
+        """The score as JSON data, the running episode's own figures too unless not `running`."""
         why = "; ".join(sorted(self.notes))
         regret_note = ""
         if self.unscored:

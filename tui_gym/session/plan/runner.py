@@ -95,8 +95,7 @@ class PlanRunner:
         self._send(self._one_step)
 
     def run(self, to_end: bool = False) -> None:
-        """Step the method until it is done or paused: at the chosen speed, or `to_end` as
-        fast as it goes."""
+        """Step the method until done or paused: at the chosen speed, or `to_end` at full speed."""
         def start() -> None:
             self._start_run()
             self._hurry = to_end
@@ -147,8 +146,7 @@ class PlanRunner:
 
     def set_model(self, model: FiniteMDP,
                   limited: Callable[[FloatArray], float] | None = None) -> None:
-        """Plan on an edited world, from the current values when the states are the same; a
-        run nobody paused starts again."""
+        """Plan on an edited world (same states: from the current values); a run goes on."""
         def change() -> None:
             self._planner.set_model(model)
             self._limited, self._figures_of = limited, None

@@ -56,8 +56,7 @@ class Recorder:
         seed: int | None = None, append: bool = False,
         on_failure: Callable[[str], None] | None = None,
     ) -> None:
-        """Open `path` (emptied unless `append`; OSError when it cannot be opened) and,
-        given a session, write its header."""
+        """Open `path` (emptied unless `append`; OSError if not) and write `session`'s header."""
         self.path = Path(path)
         self.source = source
         self.seed = seed
@@ -135,8 +134,7 @@ class Recorder:
 
     # --- what a HumanGame calls ------------------------------------------------
     def game_reset(self, game: HumanGame, seed: int | None = None) -> None:
-        """`game` has just been reset (with `seed`, when one was given): a new episode (an
-        open one ends, abandoned)."""
+        """`game` was just reset (with `seed`, if given): a new episode, an open one abandoned."""
         last = game.last
         if last is None or not self.active:
             return
@@ -179,8 +177,7 @@ class Recorder:
 
     # --- helpers ---------------------------------------------------------------
     def _state(self, env: Any, observation: Any, info: Mapping[str, Any] | None) -> dict[str, Any]:
-        """The observation, the board's scene and the state in words (None for each that
-        fails: the recording goes on)."""
+        """The observation, the scene and the state in words (None for each that fails)."""
         states = self._played.states
         parts: dict[str, tuple[Callable[[Any], Any], Any]] = {
             "observation": (states.json_observation, observation),

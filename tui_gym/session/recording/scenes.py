@@ -108,7 +108,6 @@ _CHECKS: dict[str, Callable[[Mapping[str, Any]], bool]] = {
 
 
 def scene_fits(board: str, scene: Mapping[str, Any]) -> bool:
-    """Whether the board of kind `board` can draw `scene` (any scene, for a kind of board
-    this tui-gym does not have: nothing draws it)."""
+    """Whether the board of kind `board` can draw `scene` (any, for a kind there is none of)."""
     check = _CHECKS.get(board)
     return check is None or check(scene)
