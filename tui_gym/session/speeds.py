@@ -116,13 +116,6 @@ class Runner(ABC):
         agent, _, event = self._shown
         return event if agent is self.session.agent else None
 
-    def toggle(self) -> bool:
-        """Start when paused, pause when running; returns whether it now runs."""
-        if self.running:
-            self.pause(wait=False)
-            return False
-        return self.start()
-
     def set_speed(self, index: int) -> Speed:
         self.speed_index = max(0, min(len(SPEEDS) - 1, index))
         self._speed_changed()
