@@ -19,6 +19,7 @@ from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.engine.trainer import Trainer
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP, NotAvailable
+from tui_gym.core.mdp.prediction import Truth
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.wrappers import CATALOG, WrapperChoice, build_env, build_env_lenient, chain
 from tui_gym.core.wrappers.changes import GameChanges
@@ -26,7 +27,7 @@ from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 from tui_gym.games.base import FixedBound, ReferenceMetrics, TrainingModel
 from tui_gym.games.model import ModelGame
 from tui_gym.session.evaluation import EvalReport, evaluate
-from tui_gym.session.prediction import PredictionFigures, PredictionRuler
+from tui_gym.session.prediction import PredictionFigures
 
 ENGINES = ("auto", "model", "env")
 # With a target gap and no budget given, the budget is the game's default times this,
@@ -180,7 +181,7 @@ class Session:
         """The (start step, arrays) of each phase the compiled loop trains on, or none, and
         why (`training` keeps the game's model, also when the env loop is chosen)."""
         self.training: TrainingModel | None = None
-        self._ruler = PredictionRuler()
+        self._truth_kept: tuple[Any, Truth] | None = None
         changed = [c.name for c in self.applied if CATALOG[c.name].changes_observation]
         others = self.changes.others
         found: Any = None
@@ -384,13 +385,30 @@ class Session:
     def prediction(self, snapshot: TrainingSnapshot | None = None) -> PredictionFigures | None:
         """A prediction learner's V (live, or a snapshot's) against its policy's exact values;
         None for a control learner or without them (`prediction_reason` says why)."""
-        if not self.predicts or self.training is None:
+        agent, training = self.agent, self.training
+        if not isinstance(agent, Predictor) or training is None:
             return None
         try:
-            return self._ruler.figures(self.agent, self.training,  # type: ignore[arg-type]
-                                       None if snapshot is None else snapshot.q)
+            truth = self._truth()
+            v = agent.v[training.rows] if snapshot is None else snapshot.q[training.rows, 0]
+            where = np.flatnonzero(truth.reached)
+            return PredictionFigures(truth.rms(v), tuple(int(s) for s in where),
+                                     tuple(float(x) for x in v[where]),
+                                     tuple(float(x) for x in truth.v[where]))
         except ValueError:
             return None
+
+    def _truth(self) -> Truth:
+        """The exact values of the policy the prediction learner follows (ValueError when there
+        are none), computed again only when it changes."""
+        agent, training = self.agent, self.training
+        assert isinstance(agent, Predictor) and training is not None
+        key = (id(training.model), agent.hp.discount, agent.epsilon,
+               agent.q[training.rows].tobytes())
+        kept = self._truth_kept  # one assignment: safe across threads
+        if kept is None or kept[0] != key:
+            kept = self._truth_kept = (key, agent.truth(training.model, training.rows))
+        return kept[1]
 
     def prediction_reason(self) -> str:
         """Why a prediction learner has no RMS error here ('' when it has one)."""
@@ -399,7 +417,7 @@ class Session:
         if self.training is None:
             return f"no exact values here ({self.engine_reason})"
         try:
-            self._ruler.truth(self.agent, self.training)  # type: ignore[arg-type]
+            self._truth()
         except ValueError as error:
             return str(error)
         return ""
