@@ -45,9 +45,7 @@ def _range(
         env = build_env(game.make_id(env_id, arguments), game.make_kwargs(arguments), choices)
     except (ValueError, TypeError, gym.error.Error):
         return None
-    try:
+    with env:
         changes = GameChanges.of(env, game.episode_limit(arguments))
-    finally:
-        env.close()
     found = game.oracle.return_range(arguments, changes)
     return None if isinstance(found, NotAvailable) else found
