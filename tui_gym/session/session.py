@@ -270,10 +270,8 @@ class Session:
         """Whether `rebuild` with these arguments would keep the agent (changes nothing)."""
         new_id, kwargs, new_choices, game = self._rebuild_args(env_id, env_kwargs, choices)
         built = _build(game, new_id, kwargs, new_choices)
-        try:
-            return self._keeps(built)
-        finally:
-            built.env.close()
+        built.env.close()  # only its meaning is compared
+        return self._keeps(built)
 
     def _rebuild_args(
         self, env_id: str | None, env_kwargs: Mapping[str, Any] | None,
@@ -610,12 +608,10 @@ class Session:
     ) -> EvalReport:
         """Greedy play on a fresh env; `seed` defaults to one derived from the session's."""
         eval_seed = self.seed + 1_000_003 if seed is None else seed
-        env = self.make_env()
-        try:
-            return evaluate(env, self.agent, self.keyer, self.game.narrator, episodes, eval_seed,
-                            progress)
-        finally:
-            env.close()
+        with self.make_env() as env:
+            report = evaluate(env, self.agent, self.keyer, self.game.narrator, episodes, eval_seed,
+                              progress)
+        return report
 
     def meta(self) -> dict[str, Any]:
         """Everything a save file keeps besides the table, as JSON data."""
