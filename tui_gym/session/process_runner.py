@@ -109,7 +109,6 @@ class _Child:
         self.awaited = 0  # requests sent and not yet answered
         self.last_heard = time.monotonic()
         self.hung = False
-        self.gone = False
         self.ending = False
         threading.Thread(target=self._send_loop, name="tui-gym-sender", daemon=True).start()
         threading.Thread(target=self._receive_loop, name="tui-gym-receiver", daemon=True).start()
@@ -138,8 +137,10 @@ class _Child:
         while True:
             try:
                 if not conn.poll(0.25):
-                    if self._silent_too_long():
-                        self.hung = True
+                    with self._lock:  # silent too long while it holds the agent?
+                        since = time.monotonic() - self.last_heard
+                        self.hung |= self.ready and self.awaited > 0 and since > HANG_SECONDS
+                    if self.hung:
                         with contextlib.suppress(OSError):
                             self.process.kill()
                     continue
@@ -154,15 +155,9 @@ class _Child:
             self._inbox.append((self, message))
             self._wake.set()
         self._join(5.0)  # reap it: no zombie left behind
-        self.gone = True
         self._outbox.put(None)
         self._inbox.append((self, ("gone", self.process.exitcode)))
         self._wake.set()
-
-    def _silent_too_long(self) -> bool:
-        with self._lock:
-            waiting = self.ready and self.awaited > 0
-            return waiting and time.monotonic() - self.last_heard > HANG_SECONDS
 
     def end(self, wait: bool) -> None:
         """Ask the child to quit; with `wait`, make sure it has (killing it if need be)."""
