@@ -184,13 +184,10 @@ class Recording:
     def message(self) -> str | None:
         """One sentence on whatever was wrong with the file (None when nothing was)."""
         parts = []
-        foreign = sorted(v for v in self.versions if v is not None)
+        foreign = ", ".join(str(v) for v in sorted(v for v in self.versions if v is not None))
         if foreign:
-            shown = ", ".join(str(v) for v in foreign)
-            parts.append(
-                f"it was written in recording format version {shown} and this tui-gym reads "
-                f"version {FORMAT_VERSION}"
-            )
+            parts.append(f"it was written in recording format version {foreign} and this tui-gym "
+                         f"reads version {FORMAT_VERSION}")
         elif None in self.versions:
             parts.append(f"its header names no format version this tui-gym reads "
                          f"(version {FORMAT_VERSION})")

@@ -47,13 +47,11 @@ def _cell_table(value: Any, rows: int, cols: int) -> bool:
 
 
 def _cards(scene: Mapping[str, Any]) -> bool:
-    hands_fit = all(
+    return all(
         isinstance(scene.get(who, []), list) and len(scene.get(who, [])) <= MAX_CARDS
         and all(_int(card, 1, 11) for card in scene.get(who, []))
-        for who in ("player", "dealer"))
-    return hands_fit and all(
-        _optional_int(scene.get(f"{who}_total"), 0, 11 * MAX_CARDS) for who in ("player", "dealer")
-    ) and isinstance(scene.get("player_usable", False), bool)
+        and _optional_int(scene.get(f"{who}_total"), 0, 11 * MAX_CARDS)
+        for who in ("player", "dealer")) and isinstance(scene.get("player_usable", False), bool)
 
 
 def _grid(scene: Mapping[str, Any]) -> bool:
