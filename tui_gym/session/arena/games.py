@@ -25,17 +25,10 @@ class GameEntry:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "name": self.name,
-            "title": self.title,
-            "env_id": self.env_id,
+            "name": self.name, "title": self.title, "env_id": self.env_id,
             "actions": list(self.actions),
-            "parameters": [
-                {
-                    "name": p.name, "type": p.kind.__name__, "default": p.default,
-                    "range": p.describe_range(), "help": p.help,
-                }
-                for p in self.params
-            ],
+            "parameters": [{"name": p.name, "type": p.kind.__name__, "default": p.default,
+                            "range": p.describe_range(), "help": p.help} for p in self.params],
             "description": self.description,
         }
 
