@@ -79,10 +79,8 @@ def _build(
     applied = tuple(c for c in choices if id(c) not in skipped_set)
     if not isinstance(env.action_space, gym.spaces.Discrete):
         env.close()
-        raise ValueError(
-            f"{env_id} has a {type(env.action_space).__name__} action space; "
-            "a Q-table needs Discrete actions"
-        )
+        raise ValueError(f"{env_id} has a {type(env.action_space).__name__} action space; "
+                         "a Q-table needs Discrete actions")
     keyer = ObservationKeyer(env.observation_space)
     meaning = (keyer.signature, *(c.name for c in applied if CATALOG[c.name].changes_observation))
     return _Built(env, applied, tuple(skipped), keyer, int(env.action_space.n), meaning)

@@ -180,10 +180,8 @@ def _array(reader: _Reader, name: str, data: bytes, kinds: str, ndim: int = 2) -
         raise reader.field(name, f"declares {rows:,} x {columns:,} entries (too large)")
     needed = rows * columns * dtype.itemsize
     if len(data) - buf.tell() != needed:
-        raise reader.field(
-            name, f"declares {rows:,} x {columns:,} entries but holds "
-            f"{len(data) - buf.tell():,} bytes of data, not {needed:,}"
-        )
+        raise reader.field(name, f"declares {rows:,} x {columns:,} entries but holds "
+                           f"{len(data) - buf.tell():,} bytes of data, not {needed:,}")
     array = np.frombuffer(data, dtype=dtype, count=rows * columns, offset=buf.tell())
     return array.reshape(shape, order="F" if fortran else "C")
 
@@ -277,10 +275,8 @@ def _check_version(reader: _Reader, version: Any) -> int:
     if version < 1:
         raise reader.field("version", f"must be positive, got {shown_value(version)}")
     if version > FORMAT_VERSION:
-        raise reader.error(
-            f"saved by a newer tui-gym (format {shown_value(version)}; "
-            f"this one reads up to {FORMAT_VERSION}); upgrade tui-gym to open it"
-        )
+        raise reader.error(f"saved by a newer tui-gym (format {shown_value(version)}; this one "
+                           f"reads up to {FORMAT_VERSION}); upgrade tui-gym to open it")
     return version
 
 
@@ -329,13 +325,11 @@ class SavedAgent(_Reader):
             return
         learner = self.typed(meta.get("learner"), "learner", dict, "an object")
         if learner.get("algorithm") != name:
-            raise self.field(
-                "learner.algorithm", f"is {shown_value(learner.get('algorithm'))}, not {name}"
-            )
+            raise self.field("learner.algorithm",
+                             f"is {shown_value(learner.get('algorithm'))}, not {name}")
         if learner.get("rows") != rows or isinstance(learner.get("rows"), bool):
-            raise self.field(
-                "learner.rows", f"is {shown_value(learner.get('rows'))}; the tables have {rows:,}"
-            )
+            raise self.field("learner.rows",
+                             f"is {shown_value(learner.get('rows'))}; the tables have {rows:,}")
 
     @property
     def table_name(self) -> str:
@@ -408,14 +402,12 @@ def read_agent(path: str | Path) -> SavedAgent:
     episodes = _int_field(reader, meta, "episodes_trained", 0, 0, MAX_COUNT)
     steps = _int_field(reader, meta, "steps_trained", 0, 0, MAX_COUNT)
     agent_episode = _int_field(reader, meta, "agent_episode", episodes, 0, MAX_COUNT)
-    n_actions = None
-    if "n_actions" in meta:
-        n_actions = _int_field(reader, meta, "n_actions", 1, 1, 1 << 20)
+    n_actions = (_int_field(reader, meta, "n_actions", 1, 1, 1 << 20) if "n_actions" in meta
+                 else None)
     reader.typed(meta.get("observation_space", ""), "observation_space", str, "text")
     if len(arrays["visits"]) != rows:
-        raise reader.field(
-            "visits.npy", f"has {len(arrays['visits']):,} entries for {rows:,} table rows"
-        )
+        raise reader.field("visits.npy",
+                           f"has {len(arrays['visits']):,} entries for {rows:,} table rows")
     return SavedAgent(
         path=Path(path), env_id=env_id, env_kwargs=dict(env_kwargs), choices=tuple(choices),
         algorithm=cls, hp=hp, seed=seed, episodes=episodes, steps=steps,
