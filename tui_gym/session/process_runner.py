@@ -507,14 +507,24 @@ def child_main(conn: Connection) -> None:
         conn.send(("returned", number, _handover(session), reason, error))
 
     def take(message: tuple) -> None:
-        nonlocal holding, holding_kind, last_sent
+        nonlocal session, spec, runner, holding, holding_kind, last_sent
         kind, number, handover, speed, fresh = message
         try:
-            adopt(handover, fresh)
+            if session is None or runner is None or fresh or handover.spec != spec:
+                # A new game, new wrappers or a new agent: a fresh session, so that no
+                # episode of the old one carries over.
+                if runner is not None:
+                    runner.close()
+                spec = handover.spec
+                session = Session(hp=handover.hp, **vars(spec))
+                runner = TrainingRunner(session)
+            session.hp = handover.hp
+            session.agent.assign_from(handover.agent)
+            session.agent.set_hyperparameters(handover.hp)
+            session.trainer.restore(handover.progress)
         except Exception:  # nothing trained: the same agent goes back, with the reason
             conn.send(("returned", number, handover, "error", traceback.format_exc(limit=3)))
             return
-        assert session is not None and runner is not None
         runner.set_speed(speed)
         holding, holding_kind, last_sent = number, kind, -1
         if kind == "one":
@@ -523,21 +533,6 @@ def child_main(conn: Connection) -> None:
             runner.run_one_step()
         elif not runner.start():
             hand_back("finished")
-
-    def adopt(handover: Handover, fresh: bool) -> None:
-        nonlocal session, spec, runner
-        if session is None or runner is None or fresh or handover.spec != spec:
-            # A new game, new wrappers or a new agent: a fresh session, so that no
-            # episode of the old one carries over.
-            if runner is not None:
-                runner.close()
-            spec = handover.spec
-            session = Session(hp=handover.hp, **vars(spec))
-            runner = TrainingRunner(session)
-        session.hp = handover.hp
-        session.agent.assign_from(handover.agent)
-        session.agent.set_hyperparameters(handover.hp)
-        session.trainer.restore(handover.progress)
 
     while True:
         try:
