@@ -63,10 +63,8 @@ def _dense_leaf(space: spaces.Space) -> _Leaf | None:
         # dense limit keeps such spaces sparse without changing any dense key.
         lows = np.asarray(space.low).ravel().tolist()
         highs = np.asarray(space.high).ravel().tolist()
-        radix = [
-            min(int(h) - int(lo) + 1, DENSE_STATE_LIMIT + 1)
-            for lo, h in zip(lows, highs, strict=True)
-        ]
+        radix = [min(int(h) - int(lo) + 1, DENSE_STATE_LIMIT + 1)
+                 for lo, h in zip(lows, highs, strict=True)]
         return _Leaf(np.array(lows, dtype=np.int64), np.array(radix, dtype=np.int64))
     return None
 
@@ -127,19 +125,16 @@ class ObservationKeyer:
                 self.n_states = total
                 self._low = low
                 # Row-major: the last element varies fastest.
-                strides = np.append(np.cumprod(radix[:0:-1])[::-1], 1).astype(np.int64)
-                self._strides = strides
+                self._strides = np.append(np.cumprod(radix[:0:-1])[::-1], 1).astype(np.int64)
                 self._low_list = low.tolist()
-                self._stride_list = strides.tolist()
+                self._stride_list = self._strides.tolist()
                 return
         for (leaf, path), d in zip(leaves, dense, strict=True):
             if d is None and isinstance(leaf, spaces.Box) and leaf.dtype.kind == "f":
                 width = int(np.prod(leaf.shape))
                 if width > MAX_SPARSE_WIDTH:
-                    raise NotTabularError(
-                        f"{path} is a Box of {width} floats; too many for a Q-table "
-                        f"(at most {MAX_SPARSE_WIDTH})"
-                    )
+                    raise NotTabularError(f"{path} is a Box of {width} floats; too many for a "
+                                          f"Q-table (at most {MAX_SPARSE_WIDTH})")
             elif d is None:
                 raise NotTabularError(f"{path} ({leaf}) has no finite range of values")
 
