@@ -169,19 +169,15 @@ class ArenaScore:
         if regret_note and why:
             regret_note += f": {why}"
         data: dict[str, Any] = {
-            "episodes": self.finished,
-            "mean_return": self.mean_return,
+            "episodes": self.finished, "mean_return": self.mean_return,
             "return_ci95": self.returns.half_width(),
             "regret": {
-                "mean_per_episode": self.mean_regret,
-                "ci95": self.regrets.half_width(),
+                "mean_per_episode": self.mean_regret, "ci95": self.regrets.half_width(),
                 "total": self.regrets.total if self.regrets.episodes else None,
                 "episodes": self.regrets.episodes, "unit": "expected return lost to the optimum",
                 "note": regret_note,
             },
-            "decisions": self.decisions,
-            "agreed": self.agreed,
-            "agreement": self.agreement,
+            "decisions": self.decisions, "agreed": self.agreed, "agreement": self.agreement,
             "recent_episodes": [e.to_json() for e in self.recent],
         }
         if running and self.current is not None and not self.current.done:
