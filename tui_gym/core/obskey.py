@@ -40,10 +40,8 @@ def _leaves(space: spaces.Space, path: str = "observation") -> list[tuple[spaces
         return [leaf for key, sub in _parts(space) for leaf in _leaves(sub, f"{path}[{key!r}]")]
     if isinstance(space, spaces.Discrete | spaces.MultiDiscrete | spaces.MultiBinary | spaces.Box):
         return [(space, path)]
-    raise NotTabularError(
-        f"{path} is a {type(space).__name__} space; a Q-table needs Discrete, MultiDiscrete, "
-        "MultiBinary, Box, or Tuple/Dict of those"
-    )
+    raise NotTabularError(f"{path} is a {type(space).__name__} space; a Q-table needs Discrete, "
+                          "MultiDiscrete, MultiBinary, Box, or Tuple/Dict of those")
 
 
 def _dense_leaf(space: spaces.Space) -> _Leaf | None:

@@ -131,9 +131,8 @@ class Param:
 
     def __post_init__(self) -> None:
         if self.kind not in (int, float, bool, str):
-            raise TypeError(
-                f"Param {self.name}: kind must be int, float, bool or str, not {self.kind}"
-            )
+            raise TypeError(f"Param {self.name}: kind must be int, float, bool or str, "
+                            f"not {self.kind}")
         if (self.kind is str) != bool(self.choices):
             raise TypeError(f"Param {self.name}: a str param, and only one, has choices")
         # A catalog entry whose default is out of its own range is a bug: fail at import.

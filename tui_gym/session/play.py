@@ -168,10 +168,8 @@ class HumanGame:
         obs, reward, terminated, truncated, info = self.env.step(index)
         self._before = before
         total = self.last.episode_return + float(reward)
-        self.last = PlayStep(
-            obs, float(reward), bool(terminated), bool(truncated), dict(info), total,
-            self.last.steps + 1, index,
-        )
+        self.last = PlayStep(obs, float(reward), bool(terminated), bool(truncated), dict(info),
+                             total, self.last.steps + 1, index)
         if self.last.done:
             self.tally.add(total)
         if self.recorder is not None:

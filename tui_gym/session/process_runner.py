@@ -428,9 +428,7 @@ class ProcessRunner(Runner):
         if not self._start_child(f"the training process {how}, and a new one",
                                  f"{kept}, but training is off for this session"):
             return
-        self._error = RuntimeError(
-            f"the training process {how}; a new one is ready and {kept}"
-        )
+        self._error = RuntimeError(f"the training process {how}; a new one is ready and {kept}")
 
     # --- sending ----------------------------------------------------------------
     def _ask_back(self, request: _Request) -> None:

@@ -59,9 +59,8 @@ class RecordedGame:
         return self.actions[action] if 0 <= action < len(self.actions) else str(action)
 
 
-UNKNOWN_GAME = RecordedGame(
-    0, None, "", "", "", "unknown game", "", {}, (), None, "", (), "episode"
-)
+UNKNOWN_GAME = RecordedGame(0, None, "", "", "", "unknown game", "", {}, (), None, "", (),
+                            "episode")
 
 
 @dataclass(frozen=True)

@@ -34,10 +34,9 @@ class GameEntry:
 
 
 def _entry(game: Game) -> GameEntry:
-    return GameEntry(
-        name=game.name, title=game.title, env_id=game.env_id, actions=tuple(game.action_names),
-        params=tuple(game.params), description=game.description,
-    )
+    return GameEntry(name=game.name, title=game.title, env_id=game.env_id,
+                     actions=tuple(game.action_names), params=tuple(game.params),
+                     description=game.description)
 
 
 def catalog() -> list[GameEntry]:
@@ -65,9 +64,8 @@ def open_handler(
     entry = find_game(name)
     check_chain_length(len(wrappers))
     choices = tuple(parse_wrapper_spec(spec) for spec in wrappers)
-    session = Session(
-        env_id=entry.env_id, env_kwargs=dict(params or {}), choices=choices, seed=seed or 0
-    )
+    session = Session(env_id=entry.env_id, env_kwargs=dict(params or {}), choices=choices,
+                      seed=seed or 0)
     if session.skipped:
         session.env.close()
         reasons = "; ".join(reason for _, reason in session.skipped)

@@ -87,10 +87,8 @@ class Recorder:
         """Record the session's game from here on: a new header when it differs from the last."""
         from tui_gym.core.wrappers import format_wrapper_spec
 
-        key = (
-            session.env_id, tuple(sorted((k, repr(v)) for k, v in session.env_kwargs.items())),
-            tuple(session.applied),
-        )
+        key = (session.env_id, tuple(sorted((k, repr(v)) for k, v in session.env_kwargs.items())),
+               tuple(session.applied))
         self._played = game = session.game
         if key == self._header_key:
             return
