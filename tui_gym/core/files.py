@@ -169,10 +169,7 @@ def remove_stale_temp_files(path: Path) -> None:
             if not stat.S_ISREG(info.st_mode):
                 continue
             pid = match.group(1)
-            stale = (
-                not pid_alive(int(pid)) if pid is not None
-                else now - info.st_mtime > _STALE_AFTER
-            )
+            stale = not pid_alive(int(pid)) if pid else now - info.st_mtime > _STALE_AFTER
             if stale:
                 os.unlink(entry.path)
         except OSError:
