@@ -48,7 +48,7 @@ class Tally:
         if n < 2:
             return None
         variance = max(0.0, (self.total_sq - n * self.mean * self.mean) / (n - 1))
-        return z * math.sqrt(variance) / math.sqrt(n)
+        return z * math.sqrt(variance / n)
 
     def confidence_interval(self, z: float = 1.96, min_episodes: int = 2) -> tuple[float, float]:
         """Normal-approximation interval of the mean (NaN below `min_episodes`, or 2)."""
