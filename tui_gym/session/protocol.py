@@ -159,9 +159,7 @@ class JsonlPlayer:
 
     def _reset(self, request: dict[str, Any]) -> dict[str, Any]:
         seed = request.get("seed")
-        if seed is not None and (
-            isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED
-        ):
+        if seed is not None and not (type(seed) is int and 0 <= seed <= MAX_SEED):  # not a bool
             raise ValueError(f"seed must be an integer in [0, {MAX_SEED}], got {shown_value(seed)}")
         self.game.reset(seed=seed)
         return self._transition()

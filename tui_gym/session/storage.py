@@ -197,9 +197,7 @@ def _key_from_json(reader: _Reader, index: int, value: Any) -> Hashable:
 
 
 def _plain_number(value: Any) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool) and (
-        isinstance(value, int) or math.isfinite(value)
-    )
+    return type(value) is int or (type(value) is float and math.isfinite(value))  # JSON's types
 
 
 # The dtype kinds each kind of learner array may be saved as.
@@ -258,9 +256,8 @@ def _check_numbers(reader: _Reader, member: str, array: np.ndarray, lowest: int 
         if not np.isfinite(array).all():
             what = "Q-values" if member == "q.npy" else "values"
             raise reader.field(member, f"holds NaN or infinite {what}")
-    elif array.dtype.kind in "iu" and array.size and (
-        array.min() < lowest or array.max() > MAX_COUNT
-    ):
+    elif array.dtype.kind in "iu" and array.size and (array.min() < lowest
+                                                      or array.max() > MAX_COUNT):
         raise reader.field(member, "holds negative or impossible counts")
 
 
