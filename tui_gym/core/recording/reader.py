@@ -263,18 +263,13 @@ class _Bad(Exception):
 
 
 def _lines(handle: IO[bytes]) -> Iterator[tuple[int, bytes | None]]:
-    number = 0
-    while True:
-        line = handle.readline(MAX_LINE_BYTES + 1)
-        if not line:
-            return
-        number += 1
-        if len(line) > MAX_LINE_BYTES:
-            while line and not line.endswith(b"\n"):
-                line = handle.readline(MAX_LINE_BYTES)
-            yield number, None
+    for number, line in enumerate(iter(lambda: handle.readline(MAX_LINE_BYTES + 1), b""), 1):
+        if len(line) <= MAX_LINE_BYTES:
+            yield number, line
             continue
-        yield number, line
+        while line and not line.endswith(b"\n"):  # the rest of a line too long to read
+            line = handle.readline(MAX_LINE_BYTES)
+        yield number, None
 
 
 def _constant(name: str) -> float:
