@@ -1,5 +1,4 @@
-"""The files a user names: read only when regular and small enough, checked before any
-writing, written atomically."""
+"""Files a user names: read when regular and small, checked before writing, written atomically."""
 
 from __future__ import annotations
 
@@ -35,10 +34,9 @@ def read_regular_file(
     path: Path, limit: int, noun: str, fail: Callable[[str], Exception],
     too_big: Callable[[int | None], str],
 ) -> bytes:
-    """The bytes of the regular file `path` of at most `limit` bytes; pipes and devices are
-    refused without reading (or waiting on) them. Each refusal raises `fail(why)`, where
-    `why` names what the file is not (`noun`: "a map file"), or `too_big(size)` (None:
-    more than `limit` bytes came while reading)."""
+    """The bytes of the regular file `path` of at most `limit` bytes, pipes and devices refused
+    unread; a refusal raises `fail(why)`, `why` naming what it is not (`noun`) or
+    `too_big(size)` (None: more than `limit` bytes came while reading)."""
     flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
     try:
         fd = os.open(path, flags)
@@ -113,9 +111,8 @@ def check_output_path(path: str | Path) -> Path:
 
 
 def write_atomically(path: str | Path, data: bytes | str) -> Path:
-    """Write `data` (text as UTF-8) to `path` through a temporary file, fsync and a
-    rename; returns `path` (`OutputPathError` when it cannot be written there, OSError
-    when the write itself fails)."""
+    """Write `data` (text as UTF-8) to `path` through a temporary file, fsync and a rename;
+    `OutputPathError` when it cannot be written there, OSError when the write fails."""
     given = check_output_path(path)
     payload = data.encode("utf-8") if isinstance(data, str) else data
     target = _real_target(given)
@@ -153,20 +150,15 @@ def pid_alive(pid: int) -> bool:
     return True
 
 
-def remove_stale_temp_files(path: Path) -> list[Path]:
-    """Remove temporary files a killed writer left beside `path`; returns what was removed.
-
-    Only names of our own pattern go: those whose writer's pid is gone, and
-    older unnamed ones.
-    """
+def remove_stale_temp_files(path: Path) -> None:
+    """Remove our temporary files a killed writer left beside `path` (pid gone, or old)."""
     # `.NAME.PID.HEX.tmp` (ours) and `.NAME.XXXXXXXX.tmp` (from tempfile, by earlier versions).
     pattern = re.compile(rf"\.{re.escape(path.name)}\.(?:(\d+)\.[0-9a-f]+|[a-z0-9_]{{8}})\.tmp")
     folder = path.parent if str(path.parent) else Path(".")
-    removed: list[Path] = []
     try:
         entries = list(os.scandir(folder))
     except OSError:
-        return removed
+        return
     now = time.time()
     for entry in entries:
         match = pattern.fullmatch(entry.name)
@@ -177,26 +169,17 @@ def remove_stale_temp_files(path: Path) -> list[Path]:
             if not stat.S_ISREG(info.st_mode):
                 continue
             pid = match.group(1)
-            stale = (
-                not pid_alive(int(pid)) if pid is not None
-                else now - info.st_mtime > _STALE_AFTER
-            )
+            stale = not pid_alive(int(pid)) if pid else now - info.st_mtime > _STALE_AFTER
             if stale:
                 os.unlink(entry.path)
-                removed.append(Path(entry.path))
         except OSError:
             continue
-    return removed
 
 
 @contextlib.contextmanager
 def _signals_deferred() -> Iterator[None]:
-    """Hold SIGTERM, SIGHUP and SIGINT until the block is done, then deliver them.
-
-    A write takes milliseconds; finishing it (or removing its temporary file) first
-    means a signal never leaves one behind. Only signals that still have their
-    default action are held, and only on the main thread (see `processes.handling`).
-    """
+    """Hold SIGTERM, SIGHUP and SIGINT (those with their default action, on the main thread)
+    until the block is done, so a signal never leaves a temporary file behind."""
     from tui_gym.core.engine.processes import handling  # signals, threads: not for every read
 
     caught: list[int] = []
@@ -221,13 +204,9 @@ def _create_temp(folder: Path, name: str) -> tuple[Path, int]:
 
 def _fsync_folder(folder: Path) -> None:
     """Make the rename itself durable (where the platform allows it)."""
-    try:
+    with contextlib.suppress(OSError):
         fd = os.open(folder, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)

@@ -1,9 +1,4 @@
-"""Heatmap data: a Q-table projected onto a grid a person can read.
-
-A game's layout turns Q-values into `Heatmap`s (one per panel: a card chart
-has two, a grid one per target). They are plain data; the UI only colours
-cells by `values` and prints `labels`.
-"""
+"""`Heatmap`: one panel of a Q-table projected onto a grid, as plain data the UI colours."""
 
 from __future__ import annotations
 

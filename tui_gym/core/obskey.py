@@ -40,10 +40,8 @@ def _leaves(space: spaces.Space, path: str = "observation") -> list[tuple[spaces
         return [leaf for key, sub in _parts(space) for leaf in _leaves(sub, f"{path}[{key!r}]")]
     if isinstance(space, spaces.Discrete | spaces.MultiDiscrete | spaces.MultiBinary | spaces.Box):
         return [(space, path)]
-    raise NotTabularError(
-        f"{path} is a {type(space).__name__} space; a Q-table needs Discrete, MultiDiscrete, "
-        "MultiBinary, Box, or Tuple/Dict of those"
-    )
+    raise NotTabularError(f"{path} is a {type(space).__name__} space; a Q-table needs Discrete, "
+                          "MultiDiscrete, MultiBinary, Box, or Tuple/Dict of those")
 
 
 def _dense_leaf(space: spaces.Space) -> _Leaf | None:
@@ -59,16 +57,12 @@ def _dense_leaf(space: spaces.Space) -> _Leaf | None:
     if isinstance(space, spaces.Box) and space.dtype.kind in "iub":  # integers or bools
         if not (space.is_bounded("both")):
             return None
-        # Python ints: `high - low + 1` in int64 overflows for ranges near the dtype's
-        # limits. A radix is only used when the whole space is small, so capping it
-        # just past the dense limit keeps such spaces sparse without changing any
-        # dense key.
+        # Python ints (int64 overflows near the dtype's limits); a radix capped just past the
+        # dense limit keeps such spaces sparse without changing any dense key.
         lows = np.asarray(space.low).ravel().tolist()
         highs = np.asarray(space.high).ravel().tolist()
-        radix = [
-            min(int(h) - int(lo) + 1, DENSE_STATE_LIMIT + 1)
-            for lo, h in zip(lows, highs, strict=True)
-        ]
+        radix = [min(int(h) - int(lo) + 1, DENSE_STATE_LIMIT + 1)
+                 for lo, h in zip(lows, highs, strict=True)]
         return _Leaf(np.array(lows, dtype=np.int64), np.array(radix, dtype=np.int64))
     return None
 
@@ -109,14 +103,8 @@ def _flattener(space: spaces.Space) -> Callable[[Any], list[Hashable]]:
 
 
 class ObservationKeyer:
-    """Turns observations of one space into hashable table keys.
-
-    `key(obs)` is the key; for dense spaces it is an `int` in
-    `range(n_states)`, `decode(index)` gives back the flat tuple of values and
-    `observation(index)` the observation itself.
-    `signature` identifies what keys mean: two keyers with the same signature
-    map the same observation to the same key.
-    """
+    """Turns observations of one space into hashable table keys (an `int` in `range(n_states)`
+    for dense spaces); `signature` is the same for keyers whose keys mean the same."""
 
     def __init__(self, space: spaces.Space) -> None:
         self.space = space
@@ -135,19 +123,16 @@ class ObservationKeyer:
                 self.n_states = total
                 self._low = low
                 # Row-major: the last element varies fastest.
-                strides = np.append(np.cumprod(radix[:0:-1])[::-1], 1).astype(np.int64)
-                self._strides = strides
+                self._strides = np.append(np.cumprod(radix[:0:-1])[::-1], 1).astype(np.int64)
                 self._low_list = low.tolist()
-                self._stride_list = strides.tolist()
+                self._stride_list = self._strides.tolist()
                 return
         for (leaf, path), d in zip(leaves, dense, strict=True):
             if d is None and isinstance(leaf, spaces.Box) and leaf.dtype.kind == "f":
                 width = int(np.prod(leaf.shape))
                 if width > MAX_SPARSE_WIDTH:
-                    raise NotTabularError(
-                        f"{path} is a Box of {width} floats; too many for a Q-table "
-                        f"(at most {MAX_SPARSE_WIDTH})"
-                    )
+                    raise NotTabularError(f"{path} is a Box of {width} floats; too many for a "
+                                          f"Q-table (at most {MAX_SPARSE_WIDTH})")
             elif d is None:
                 raise NotTabularError(f"{path} ({leaf}) has no finite range of values")
 
@@ -185,8 +170,7 @@ class ObservationKeyer:
         return tuple(out)
 
     def observation(self, index: int) -> Any:
-        """The observation behind a dense key, shaped as its space gives one (an `int`
-        for `Discrete`, a tuple for `Tuple`, arrays for the others)."""
+        """The observation behind a dense key, shaped as its space gives one."""
         return _shaped(self.space, iter(self.decode(index)))
 
     def __repr__(self) -> str:

@@ -14,8 +14,8 @@ __all__ = ["Param", "ParamError", "ParamValue", "digits_note", "read_number", "s
 
 ParamValue = int | float | bool | str
 
-_TRUE_WORDS = frozenset({"true", "t", "yes", "y", "on", "1"})
-_FALSE_WORDS = frozenset({"false", "f", "no", "n", "off", "0"})
+_BOOL_WORDS = {**dict.fromkeys(("true", "t", "yes", "y", "on", "1"), True),
+               **dict.fromkeys(("false", "f", "no", "n", "off", "0"), False)}
 
 _DIGITS = r"[0-9]+(?:_[0-9]+)*"
 _INTEGER = re.compile(rf"[+-]?{_DIGITS}", re.ASCII)
@@ -38,12 +38,8 @@ def finite_number(name: str, value: float, *, minimum: float | None = None) -> f
 
 
 def read_number(text: str) -> int | float | None:
-    """The number `text` spells, or None when it is not one.
-
-    Integers come back as `int` (±inf when they are beyond every float, so that
-    any result converts to a float), other numbers as `float` (possibly inf or
-    nan). Only ASCII digits count.
-    """
+    """The number `text` (ASCII digits) spells, or None: an `int` (±inf beyond every float) or
+    a `float` (possibly inf or nan)."""
     text = text.strip()
     if _INTEGER.fullmatch(text):
         negative = text.startswith("-")
@@ -101,11 +97,7 @@ def _number_text(value: float) -> str:
 
 
 class ParamError(ValueError):
-    """A value a `Param` refuses; `out_of_range` tells a number out of range from not a number.
-
-    The message is one line: `label must be an integer in [1, 100], got 'abc'`, or
-    `label is out of range: 500 is not in [1, 100]`.
-    """
+    """A value a `Param` refuses; `out_of_range` tells out of range from not a number."""
 
     def __init__(self, param: Param, raw: object, out_of_range: bool) -> None:
         self.param = param
@@ -121,13 +113,9 @@ class ParamError(ValueError):
 
 @dataclass(frozen=True)
 class Param:
-    """One parameter: its type, default, range and help.
-
-    `owner` is e.g. the wrapper's name, filled in by `WrapperSpec`, so that
-    error messages say `TimeLimit.max_episode_steps` rather than a bare field
-    name. `title` is how a form labels it; `min_inclusive=False` makes the
-    lower bound exclusive (a learning rate must be above 0). A `str` param is a
-    choice among `choices` (a map's name), read case-insensitively.
+    """One parameter: its type, default, range and help. `owner` (a wrapper's name) prefixes
+    its name in messages, `title` labels it in a form, `min_inclusive=False` makes the lower
+    bound exclusive; a `str` param is a choice among `choices`, read case-insensitively.
     """
 
     name: str
@@ -143,9 +131,8 @@ class Param:
 
     def __post_init__(self) -> None:
         if self.kind not in (int, float, bool, str):
-            raise TypeError(
-                f"Param {self.name}: kind must be int, float, bool or str, not {self.kind}"
-            )
+            raise TypeError(f"Param {self.name}: kind must be int, float, bool or str, "
+                            f"not {self.kind}")
         if (self.kind is str) != bool(self.choices):
             raise TypeError(f"Param {self.name}: a str param, and only one, has choices")
         # A catalog entry whose default is out of its own range is a bug: fail at import.
@@ -178,12 +165,8 @@ class Param:
         return f"{noun} in {self.describe_range()}"
 
     def parse(self, raw: object) -> ParamValue:
-        """Convert `raw` (text or a number) to this param's type and check its range.
-
-        Raises `ParamError` naming the field and its valid values, e.g.
-        `TimeLimit.max_episode_steps must be an integer in [1, 100000], got 'abc'` or
-        `TimeLimit.max_episode_steps is out of range: 0 is not in [1, 100000]`.
-        """
+        """`raw` (text or a number) as this param's type, in range; else `ParamError`, e.g.
+        `TimeLimit.max_episode_steps must be an integer in [1, 100000], got 'abc'`."""
         value = self._convert(raw)
         if value is None:
             raise ParamError(self, raw, out_of_range=False)
@@ -207,23 +190,15 @@ class Param:
         return self.maximum is None or value <= self.maximum
 
     def _convert(self, raw: object) -> ParamValue | None:
-        """`raw` as `kind` (±inf for numbers too large to hold), or None when it does not
-        read as one."""
+        """`raw` as `kind` (±inf for numbers too large to hold), or None when it is not one."""
         if self.kind is str:
             word = raw.strip().lower() if isinstance(raw, str) else None
             return next((c for c in self.choices if c.lower() == word), None)
         if self.kind is bool:
-            if isinstance(raw, bool | np.bool_):
+            if isinstance(raw, np.bool_) or (isinstance(raw, numbers.Integral)
+                                             and int(raw) in (0, 1)):
                 return bool(raw)
-            if isinstance(raw, numbers.Integral) and int(raw) in (0, 1):
-                return bool(raw)
-            if isinstance(raw, str):
-                word = raw.strip().lower()
-                if word in _TRUE_WORDS:
-                    return True
-                if word in _FALSE_WORDS:
-                    return False
-            return None
+            return _BOOL_WORDS.get(raw.strip().lower()) if isinstance(raw, str) else None
         if isinstance(raw, bool | np.bool_):
             return None  # True is an int to Python, not to a person typing a step count
         number: int | float | None

@@ -30,21 +30,17 @@ def visible(text: object, limit: int | None = 80) -> str:
     raw = text if isinstance(text, str) else str(text)
     if (limit is None or len(raw) <= limit) and raw.isprintable():
         return raw  # the common case, checked at C speed: nothing to escape or cut
-    if limit is not None and len(raw) > 4 * limit:
-        raw_cut: str | None = raw[: 4 * limit]  # enough to fill `limit` after escaping
-    else:
-        raw_cut = None
-    source = raw if raw_cut is None else raw_cut
-    shown = "".join(_escaped(c) if unicodedata.category(c) in _HIDDEN else c for c in source)
-    if limit is None or (raw_cut is None and len(shown) <= limit):
+    most = len(raw) if limit is None else 4 * limit  # enough to fill `limit` after escaping
+    cut = len(raw) > most
+    shown = "".join(_escaped(c) if unicodedata.category(c) in _HIDDEN else c for c in raw[:most])
+    if limit is None or (not cut and len(shown) <= limit):
         return shown
     keep = max(1, limit - 1)
     return f"{shown[:keep]}… ({len(raw):,} characters)"
 
 
 def nested_deeper(value: Any, limit: int) -> bool:
-    """Whether lists and objects in `value` nest deeper than `limit` (checked without
-    recursion)."""
+    """Whether lists and objects in `value` nest deeper than `limit` (without recursion)."""
     stack = [(value, 1)]
     while stack:
         item, depth = stack.pop()

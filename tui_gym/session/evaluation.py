@@ -16,10 +16,8 @@ from tui_gym.core.obskey import ObservationKeyer
 if TYPE_CHECKING:
     from tui_gym.games.base import Narrator
 
-# Steps one evaluation may spend, about a second of stepping the env: 10,000 short
-# card hands fit (about 15,000 steps), while a policy that loops until a 300-step
-# time limit stops after some 70 episodes instead of 3,000,000 steps. Games with an
-# exact model get their policy's value from it; the sample only adds tallies.
+# Steps one evaluation may spend: 10,000 card hands fit, while a policy that loops until a
+# 300-step time limit stops after some 70 episodes (an exact model gives its value anyway).
 EVAL_STEP_BUDGET = 20_000
 
 
@@ -47,20 +45,16 @@ class EvalReport:
 def evaluate(
     env: gym.Env, agent: Learner, keyer: ObservationKeyer, narrator: Narrator, episodes: int,
     seed: int | None = 0, progress: Callable[[int], None] | None = None,
-    max_steps: int | None = None,
 ) -> EvalReport:
-    """Play `episodes` greedy episodes on `env` (fewer once `max_steps` steps are
-    spent, `EVAL_STEP_BUDGET` by default; always at least one) and summarise them."""
+    """Play `episodes` greedy episodes on `env` (at least one, at most `EVAL_STEP_BUDGET` steps)."""
     if episodes < 1:
         raise ValueError(f"episodes must be >= 1, got {episodes}")
-    if max_steps is None:
-        max_steps = EVAL_STEP_BUDGET
     rng = np.random.default_rng(seed)
     returns: list[float] = []
     details: list[dict[str, Any]] = []
     steps = 0
     for i in range(episodes):
-        if steps >= max_steps:
+        if steps >= EVAL_STEP_BUDGET:
             break
         obs, info = env.reset(seed=seed if i == 0 else None)
         first_info = dict(info)

@@ -42,32 +42,27 @@ class Tally:
     def mean(self) -> float:
         return self.total / self.episodes if self.episodes else 0.0
 
-    def confidence_interval(self, z: float = 1.96, min_episodes: int = 2) -> tuple[float, float]:
-        """Normal-approximation interval for the mean return (NaN below `min_episodes`,
-        and never below 2)."""
+    def half_width(self, z: float = 1.96) -> float | None:
+        """Half the normal-approximation interval of the mean (None below 2 episodes)."""
         n = self.episodes
-        if n < max(2, min_episodes):
+        if n < 2:
+            return None
+        variance = max(0.0, (self.total_sq - n * self.mean * self.mean) / (n - 1))
+        return z * math.sqrt(variance / n)
+
+    def confidence_interval(self, z: float = 1.96, min_episodes: int = 2) -> tuple[float, float]:
+        """Normal-approximation interval of the mean (NaN below `min_episodes`, or 2)."""
+        half = self.half_width(z)
+        if half is None or self.episodes < min_episodes:
             return (float("nan"), float("nan"))
-        half = z * math.sqrt(sample_variance(self.total, self.total_sq, n)) / math.sqrt(n)
         return (self.mean - half, self.mean + half)
-
-
-def sample_variance(total: float, total_sq: float, n: int) -> float:
-    """The sample variance of `n` >= 2 values from their sum and sum of squares."""
-    mean = total / n
-    return max(0.0, (total_sq - n * mean * mean) / (n - 1))
 
 
 @dataclass
 class Scorecard:
-    """One player's record beside the optimum, in constant memory.
-
-    `tally` counts finished episodes (usually the game's own `Tally`);
-    `decisions` counts moves made where the optimum had a say and `agreed`
-    those among them that the optimum would also make; `figures` holds running
-    sums of per-episode figures (`Narrator.episode_figures`), e.g. steps over
-    optimal, each with the number of episodes it was measured on.
-    """
+    """One player's record beside the optimum, in constant memory: finished episodes, moves
+    where the optimum had a say (`decisions`) and agreed with it, and running sums of
+    per-episode figures (`Narrator.episode_figures`) with their counts."""
 
     tally: Tally = field(default_factory=Tally)
     decisions: int = 0
@@ -173,10 +168,8 @@ class HumanGame:
         obs, reward, terminated, truncated, info = self.env.step(index)
         self._before = before
         total = self.last.episode_return + float(reward)
-        self.last = PlayStep(
-            obs, float(reward), bool(terminated), bool(truncated), dict(info), total,
-            self.last.steps + 1, index,
-        )
+        self.last = PlayStep(obs, float(reward), bool(terminated), bool(truncated), dict(info),
+                             total, self.last.steps + 1, index)
         if self.last.done:
             self.tally.add(total)
         if self.recorder is not None:

@@ -1,20 +1,12 @@
-"""Training in a child process: the UI's Python never shares a core with the trainer.
+"""`ProcessRunner`: a `Runner` that trains in a child process (no shared interpreter lock).
 
-`ProcessRunner` is a `Runner` whose training runs in a separate process, so the
-trainer and the event loop never compete for one interpreter lock.
-
-While paused, the parent's `Session` is the truth. A start (or one episode, or
-one step) hands the child the session's spec, hyperparameters, agent and
-progress; the child streams snapshots back, new hyperparameters follow it at
-once, and a pause asks for the agent back. Every request has a number, and what
-comes back lands in the agent object the request was made from: after a reset
-or a game switch, a late handover changes nothing the session shows.
-
-Nothing here waits on the child in the caller's thread: a sender thread sends,
-a receiver thread queues what the child says, and `update()` (which every
-property and control calls) takes it in. A child that dies is reaped and
-replaced; one silent for `HANG_SECONDS` while it holds the agent is killed and
-replaced; either way the agent is kept as last handed over, and `error` says so.
+While paused, the parent's `Session` is the truth. A request (start, one episode, one step)
+hands the child the session's spec, hyperparameters, agent and progress; the child streams
+snapshots back and a pause asks for the agent back. Every request has a number, and what
+comes back lands in the agent it was made from: after a reset or a switch, a late handover
+changes nothing shown. Sender and receiver threads talk to the child; `update()` takes in
+what it said. A child that dies, or is silent for `HANG_SECONDS` while holding the agent, is
+replaced, the agent kept as last handed over, and `error` says so.
 """
 
 from __future__ import annotations
@@ -117,13 +109,12 @@ class _Child:
         self.awaited = 0  # requests sent and not yet answered
         self.last_heard = time.monotonic()
         self.hung = False
-        self.gone = False
         self.ending = False
         threading.Thread(target=self._send_loop, name="tui-gym-sender", daemon=True).start()
         threading.Thread(target=self._receive_loop, name="tui-gym-receiver", daemon=True).start()
 
     def send(self, message: tuple, request: bool = False) -> None:
-        """Queue a message (pickled now, in the caller's thread: it may change later)."""
+        """Queue a message, pickled now (it may change later)."""
         data = pickle.dumps(message, protocol=pickle.HIGHEST_PROTOCOL)
         with self._lock:
             if request:
@@ -146,8 +137,10 @@ class _Child:
         while True:
             try:
                 if not conn.poll(0.25):
-                    if self._silent_too_long():
-                        self.hung = True
+                    with self._lock:  # silent too long while it holds the agent?
+                        since = time.monotonic() - self.last_heard
+                        self.hung |= self.ready and self.awaited > 0 and since > HANG_SECONDS
+                    if self.hung:
                         with contextlib.suppress(OSError):
                             self.process.kill()
                     continue
@@ -162,15 +155,9 @@ class _Child:
             self._inbox.append((self, message))
             self._wake.set()
         self._join(5.0)  # reap it: no zombie left behind
-        self.gone = True
         self._outbox.put(None)
         self._inbox.append((self, ("gone", self.process.exitcode)))
         self._wake.set()
-
-    def _silent_too_long(self) -> bool:
-        with self._lock:
-            waiting = self.ready and self.awaited > 0
-            return waiting and time.monotonic() - self.last_heard > HANG_SECONDS
 
     def end(self, wait: bool) -> None:
         """Ask the child to quit; with `wait`, make sure it has (killing it if need be)."""
@@ -194,9 +181,9 @@ class _Child:
             self.conn.close()
 
     def _join(self, timeout: float) -> bool:
-        """Wait for the child to end; whether it is still alive. One thread at a time:
-        a join that found the child reaped by another thread's join, not yet marked,
-        would take it for alive (and a kill then could reach a new process with its pid)."""
+        """Wait for the child to end; whether it is still alive. One thread at a time: a join
+        racing another's reaping would take it for alive (and a kill could reach its pid's
+        next owner)."""
         with self._reaping:
             self.process.join(timeout=timeout)
             return self.process.is_alive()
@@ -441,9 +428,7 @@ class ProcessRunner(Runner):
         if not self._start_child(f"the training process {how}, and a new one",
                                  f"{kept}, but training is off for this session"):
             return
-        self._error = RuntimeError(
-            f"the training process {how}; a new one is ready and {kept}"
-        )
+        self._error = RuntimeError(f"the training process {how}; a new one is ready and {kept}")
 
     # --- sending ----------------------------------------------------------------
     def _ask_back(self, request: _Request) -> None:
@@ -520,14 +505,24 @@ def child_main(conn: Connection) -> None:
         conn.send(("returned", number, _handover(session), reason, error))
 
     def take(message: tuple) -> None:
-        nonlocal holding, holding_kind, last_sent
+        nonlocal session, spec, runner, holding, holding_kind, last_sent
         kind, number, handover, speed, fresh = message
         try:
-            adopt(handover, fresh)
+            if session is None or runner is None or fresh or handover.spec != spec:
+                # A new game, new wrappers or a new agent: a fresh session, so that no
+                # episode of the old one carries over.
+                if runner is not None:
+                    runner.close()
+                spec = handover.spec
+                session = Session(hp=handover.hp, **vars(spec))
+                runner = TrainingRunner(session)
+            session.hp = handover.hp
+            session.agent.assign_from(handover.agent)
+            session.agent.set_hyperparameters(handover.hp)
+            session.trainer.restore(handover.progress)
         except Exception:  # nothing trained: the same agent goes back, with the reason
             conn.send(("returned", number, handover, "error", traceback.format_exc(limit=3)))
             return
-        assert session is not None and runner is not None
         runner.set_speed(speed)
         holding, holding_kind, last_sent = number, kind, -1
         if kind == "one":
@@ -536,21 +531,6 @@ def child_main(conn: Connection) -> None:
             runner.run_one_step()
         elif not runner.start():
             hand_back("finished")
-
-    def adopt(handover: Handover, fresh: bool) -> None:
-        nonlocal session, spec, runner
-        if session is None or runner is None or fresh or handover.spec != spec:
-            # A new game, new wrappers or a new agent: a fresh session, so that no
-            # episode of the old one carries over.
-            if runner is not None:
-                runner.close()
-            spec = handover.spec
-            session = Session(hp=handover.hp, **vars(spec))
-            runner = TrainingRunner(session)
-        session.hp = handover.hp
-        session.agent.assign_from(handover.agent)
-        session.agent.set_hyperparameters(handover.hp)
-        session.trainer.restore(handover.progress)
 
     while True:
         try:

@@ -1,11 +1,9 @@
-"""The JSON-lines protocol: programs play the same games people do.
-
-A bad line gets `{"error": "..."}` and the session goes on; every response is plain
-ASCII JSON. The requests are listed in the README.
-"""
+"""The JSON-lines protocol (see the README): programs play the same games people do; a bad
+line gets `{"error": "..."}` and the session goes on."""
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 from collections.abc import Callable, Iterator
@@ -26,8 +24,6 @@ MAX_SEED = 2**64 - 1
 _ENCODER = json.JSONEncoder(allow_nan=False)  # once: `json.dumps` with options builds one a call
 _PLAIN = (str, int, float, bool, type(None))
 _CACHED_LINE_BYTES = 256  # a program repeats a handful of short requests: each is parsed once
-_CACHED_LINES = 1024
-_parsed: dict[str | bytes, dict[str, Any]] = {}
 
 
 class _BadNumber(ValueError):
@@ -52,9 +48,8 @@ def _parse_constant(name: str) -> float:
     raise _BadNumber(f"{name} is not a JSON number")
 
 
-_DECODER = json.JSONDecoder(
-    parse_int=_parse_int, parse_float=_parse_float, parse_constant=_parse_constant
-)
+_DECODER = json.JSONDecoder(parse_int=_parse_int, parse_float=_parse_float,
+                            parse_constant=_parse_constant)
 
 
 def _clean_text(value: Any) -> str | None:
@@ -70,15 +65,8 @@ def _clean_text(value: Any) -> str | None:
 def parse_request(line: str | bytes) -> dict[str, Any]:
     """A request line as the JSON object it holds; ValueError saying why it is not one
     (not UTF-8, not JSON, not an object, nested too deeply, a number too long)."""
-    cached = _parsed.get(line)
-    if cached is not None:
-        return dict(cached)  # a copy: the caller may change its request
-    request = _parse(line)
-    if len(line) <= _CACHED_LINE_BYTES:
-        if len(_parsed) >= _CACHED_LINES:
-            _parsed.clear()
-        _parsed[line] = dict(request)
-    return request
+    short = len(line) <= _CACHED_LINE_BYTES
+    return dict(_parse_cached(line) if short else _parse(line))  # a copy: the caller may change it
 
 
 def _parse(line: str | bytes) -> dict[str, Any]:
@@ -105,6 +93,9 @@ def _parse(line: str | bytes) -> dict[str, Any]:
     if line.count("[") + line.count("{") > MAX_DEPTH and nested_deeper(request, MAX_DEPTH):
         raise ValueError(f"not a usable request: nested deeper than {MAX_DEPTH} levels")
     return request
+
+
+_parse_cached = functools.lru_cache(maxsize=1024)(_parse)
 
 
 class JsonlPlayer:
@@ -168,9 +159,7 @@ class JsonlPlayer:
 
     def _reset(self, request: dict[str, Any]) -> dict[str, Any]:
         seed = request.get("seed")
-        if seed is not None and (
-            isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED
-        ):
+        if seed is not None and not (type(seed) is int and 0 <= seed <= MAX_SEED):  # not a bool
             raise ValueError(f"seed must be an integer in [0, {MAX_SEED}], got {shown_value(seed)}")
         self.game.reset(seed=seed)
         return self._transition()
@@ -220,10 +209,8 @@ class JsonlPlayer:
 
 def read_batches(stdin: IO[bytes], limit: int = MAX_LINE_BYTES,
                  chunk: int = 1 << 16) -> Iterator[list[bytes | None]]:
-    """The lines of `stdin` (without their newlines) in batches: each batch holds every
-    line completed by what had arrived when it was read, so a reader waits for input
-    only when no whole line is left. A line longer than `limit` comes back as None
-    (its bytes are dropped as they come, not held); a last line needs no newline."""
+    """The lines of `stdin` in batches of those complete in what had arrived (a reader waits
+    only when no whole line is left); a line longer than `limit` comes back as None."""
     read = getattr(stdin, "read1", stdin.read)  # read1: what has arrived, without waiting for more
     pending = b""  # the start of a line whose newline has not come yet
     dropping = False  # inside a line that is too long, until its newline
@@ -252,14 +239,8 @@ def read_batches(stdin: IO[bytes], limit: int = MAX_LINE_BYTES,
 
 
 def serve(player: JsonlPlayer, stdin: IO[bytes], stdout: IO[str]) -> int:
-    """Answer every line of `stdin` (bytes) on `stdout`, in order; blank lines are
-    skipped. Returns 0.
-
-    Lines are read as bytes and decoded one by one, so a bad byte is one bad line.
-    The answers to the lines that arrived together are written and flushed together:
-    a program that waits for each answer gets it at once, and one that sends requests
-    ahead is not slowed by a write per answer.
-    """
+    """Answer every non-blank line of `stdin` (bytes, decoded line by line) on `stdout`, in
+    order, the answers to lines that arrived together flushed together; returns 0."""
     too_long = json.dumps({"error": f"line longer than {MAX_LINE_BYTES:,} bytes: not read"})
     for batch in read_batches(stdin):
         answers = [too_long if line is None else player.handle_text(line)

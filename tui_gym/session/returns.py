@@ -19,10 +19,8 @@ def return_range_of(
     game: Game, env_id: str, kwargs: Mapping[str, Any],
     wrappers: Iterable[tuple[str, Mapping[str, Any]]] = (),
 ) -> Range | None:
-    """(lowest, highest) return of one episode of `game` played as `env_id` with these
-    arguments and wrappers (name, parameters), ±inf on a side with no bound; None when
-    it is not known (no exact model, wrappers a model does not follow, arguments or
-    wrappers that do not build)."""
+    """(lowest, highest) return of one episode of `game` as `env_id` with these arguments and
+    wrappers (name, parameters), ±inf where unbounded; None when not known."""
     try:
         frozen = (tuple(sorted(kwargs.items())),
                   tuple((name, tuple(sorted(params.items()))) for name, params in wrappers))
@@ -47,9 +45,7 @@ def _range(
         env = build_env(game.make_id(env_id, arguments), game.make_kwargs(arguments), choices)
     except (ValueError, TypeError, gym.error.Error):
         return None
-    try:
+    with env:
         changes = GameChanges.of(env, game.episode_limit(arguments))
-    finally:
-        env.close()
     found = game.oracle.return_range(arguments, changes)
     return None if isinstance(found, NotAvailable) else found

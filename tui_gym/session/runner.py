@@ -1,11 +1,7 @@
-"""Background training: `TrainingRunner` runs a session's trainer on a worker thread.
+"""`TrainingRunner`: a session's trainer on a worker thread, publishing snapshots a UI pulls.
 
-Front ends drive it through `Runner`; the thread trains in small pieces of work
-and publishes snapshots (the trainer's `latest`), which a UI pulls on a timer.
-Nothing here calls back into a front end, so a slow viewer never slows
-training, and a fast trainer never blocks the viewer. Every control takes effect
-after the piece of work under way: one call of the compiled loop at max speed
-(`CALL_SECONDS`), one agent step at animated speeds (whose pause is cut short).
+Every control takes effect after the piece of work under way: one call of the compiled
+loop at max speed (`CALL_SECONDS`), one agent step at animated speeds.
 """
 
 from __future__ import annotations
@@ -182,11 +178,8 @@ class TrainingRunner(Runner):
         return None
 
     def _animated_step(self, trainer: Trainer) -> StepEvent:
-        """One agent step, explained and remembered (with the board's scene) for viewers.
-
-        The time between animated steps (the pause that makes them readable)
-        counts as training time, so episodes/s tells the pace being shown.
-        """
+        """One agent step, explained and remembered with the board's scene for viewers (the
+        pause between steps counts as training time: episodes/s tells the pace shown)."""
         now = time.perf_counter()
         if now - self._anim_mark < 2.0:
             trainer.seconds += now - self._anim_mark

@@ -19,6 +19,7 @@ from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.core.engine.trainer import Trainer
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP, NotAvailable
+from tui_gym.core.mdp.prediction import Truth
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.wrappers import CATALOG, WrapperChoice, build_env, build_env_lenient, chain
 from tui_gym.core.wrappers.changes import GameChanges
@@ -26,7 +27,7 @@ from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 from tui_gym.games.base import FixedBound, ReferenceMetrics, TrainingModel
 from tui_gym.games.model import ModelGame
 from tui_gym.session.evaluation import EvalReport, evaluate
-from tui_gym.session.prediction import PredictionFigures, PredictionRuler
+from tui_gym.session.prediction import PredictionFigures
 
 ENGINES = ("auto", "model", "env")
 # With a target gap and no budget given, the budget is the game's default times this,
@@ -78,19 +79,15 @@ def _build(
     applied = tuple(c for c in choices if id(c) not in skipped_set)
     if not isinstance(env.action_space, gym.spaces.Discrete):
         env.close()
-        raise ValueError(
-            f"{env_id} has a {type(env.action_space).__name__} action space; "
-            "a Q-table needs Discrete actions"
-        )
+        raise ValueError(f"{env_id} has a {type(env.action_space).__name__} action space; "
+                         "a Q-table needs Discrete actions")
     keyer = ObservationKeyer(env.observation_space)
     meaning = (keyer.signature, *(c.name for c in applied if CATALOG[c.name].changes_observation))
     return _Built(env, applied, tuple(skipped), keyer, int(env.action_space.n), meaning)
 
 
 def default_settings(game: Game, name: str, kwargs: Mapping[str, Any] | None = None) -> Settings:
-    """The hyperparameters algorithm `name` starts with on a game with arguments `kwargs`:
-    its own defaults with the game's overrides for it (those of its parameters the game
-    sets)."""
+    """Algorithm `name`'s defaults with the game's overrides for it (at arguments `kwargs`)."""
     cls = learner_class_named(name)
     fields = {f.name for f in cls.params}
     overrides = game.default_hyperparameters(cls.name, kwargs,
@@ -102,10 +99,8 @@ def default_settings(game: Game, name: str, kwargs: Mapping[str, Any] | None = N
 class Session:
     """One game with its wrappers, learner and trainer; what every front end drives.
 
-    `hp` is given as a mapping of hyperparameters over the game's defaults for
-    the algorithm (None: those defaults); `Settings` of another algorithm's
-    schema give the values the two schemas share. Once built, `hp` holds the
-    algorithm's `Settings`.
+    `hp` overrides the game's defaults for the algorithm (another schema's `Settings`
+    give the values the two share); once built it holds the algorithm's `Settings`.
     """
 
     env_id: str  # "": the first game of the registry
@@ -133,8 +128,7 @@ class Session:
             raise ValueError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
         self.engine = engine
         self._install(_build(self.game, self.env_id, self.env_kwargs, self.choices))
-        self.agent = self._new_agent()
-        self.trainer = self._new_trainer()
+        self._new_agent()
 
     # --- building ---------------------------------------------------------
     def _install(self, built: _Built) -> None:
@@ -155,22 +149,21 @@ class Session:
             values = {k: v for k, v in values.items() if k in base}
         return base.replace(**values)
 
-    def _new_agent(self) -> Learner:
-        return self.learner_class(
-            self._built.n_actions, self.hp, n_states=self.keyer.n_states, seed=self.seed
-        )
+    def _new_agent(self) -> None:
+        """A fresh agent and its trainer."""
+        self.agent = self.learner_class(self._built.n_actions, self.hp,
+                                        n_states=self.keyer.n_states, seed=self.seed)
+        self.trainer = self._new_trainer()
 
     def _new_trainer(self) -> Trainer:
-        """The trainer, on the game's model where there is one (`engine_reason` says which
-        loop trains and why)."""
+        """The trainer, on the game's model where there is one (`engine_reason` says why)."""
         phases, self.engine_reason = self._training_model()
         self.agent.offer(self._offered())
         return Trainer(self.env, self.agent, self.keyer, model=phases[0][1] if phases else None,
                        later=phases[1:], seed=self.seed, reason=self.engine_reason)
 
     def _offered(self) -> np.ndarray | None:
-        """The actions each table row offers, for a game whose states do not all offer
-        every action and whose model says which state each row is (None otherwise)."""
+        """The actions each table row offers, where the game's model says (else None)."""
         training, rows = self.training, self.keyer.n_states
         if training is None or rows is None or not isinstance(self.game, ModelGame):
             return None
@@ -179,24 +172,21 @@ class Session:
         if offered is None or offered.shape != (model.n_states, model.n_actions):
             return None
         mask = np.ones((rows, model.n_actions), dtype=bool)
-        mask[np.arange(model.n_states) if training.rows is None else training.rows] = offered
+        mask[training.rows] = offered
         return mask
 
     def _training_model(self) -> tuple[tuple[tuple[int, ModelArrays], ...], str]:
-        """The model the compiled loop trains on, as (start step, arrays) of each phase of
-        the world, or none and why not (`training` keeps the game's model itself, also
-        when the env loop is chosen)."""
+        """The (start step, arrays) of each phase the compiled loop trains on, or none, and
+        why (`training` keeps the game's model, also when the env loop is chosen)."""
         self.training: TrainingModel | None = None
-        self._ruler = PredictionRuler()
+        self._truth_kept: tuple[Any, Truth] | None = None
         changed = [c.name for c in self.applied if CATALOG[c.name].changes_observation]
         others = self.changes.others
         found: Any = None
-        if changed:
-            reason = f"{', '.join(changed)} change{'s' if len(changed) == 1 else ''} the " \
-                "observations"
-        elif others:
-            reason = f"{', '.join(others)} change{'s' if len(others) == 1 else ''} the " \
-                "game beyond what its model follows"
+        if changed or others:
+            names, what = (changed, "the observations") if changed else (
+                others, "the game beyond what its model follows")
+            reason = f"{', '.join(names)} change{'s' if len(names) == 1 else ''} {what}"
         elif not self.keyer.dense:
             reason = "its observations are not table rows"
         else:
@@ -246,10 +236,8 @@ class Session:
         self, env_id: str | None = None, env_kwargs: Mapping[str, Any] | None = None,
         choices: Sequence[WrapperChoice] | None = None,
     ) -> RebuildReport:
-        """Change game, env arguments or wrappers; keep the agent when keys keep their meaning.
-
-        Raises ValueError (and changes nothing) for an unknown env or bad arguments.
-        """
+        """Change game, env arguments or wrappers; keep the agent when keys keep their meaning
+        (ValueError, changing nothing, for an unknown env or bad arguments)."""
         new_id, kwargs, new_choices, game = self._rebuild_args(env_id, env_kwargs, choices)
         built = _build(game, new_id, kwargs, new_choices)
         keep = self._keeps(built)
@@ -267,8 +255,7 @@ class Session:
             self.trainer.restore(old_trainer.progress())
             notice = "Env rebuilt; the agent is kept (observations mean the same)."
         else:
-            self.agent = self._new_agent()
-            self.trainer = self._new_trainer()
+            self._new_agent()
             notice = "Observations changed meaning, so the agent was reset."
         if built.skipped:
             notice += " Not applied: " + "; ".join(reason for _, reason in built.skipped)
@@ -278,31 +265,22 @@ class Session:
         self, env_id: str | None = None, env_kwargs: Mapping[str, Any] | None = None,
         choices: Sequence[WrapperChoice] | None = None,
     ) -> bool:
-        """Whether `rebuild` with the same arguments would keep the agent (e.g. to ask
-        before a change that resets it). Builds the env to see; changes nothing.
-
-        Raises ValueError for an unknown env or bad arguments, as `rebuild` does.
-        """
+        """Whether `rebuild` with these arguments would keep the agent (changes nothing)."""
         new_id, kwargs, new_choices, game = self._rebuild_args(env_id, env_kwargs, choices)
         built = _build(game, new_id, kwargs, new_choices)
-        try:
-            return self._keeps(built)
-        finally:
-            built.env.close()
+        built.env.close()  # only its meaning is compared
+        return self._keeps(built)
 
     def _rebuild_args(
         self, env_id: str | None, env_kwargs: Mapping[str, Any] | None,
         choices: Sequence[WrapperChoice] | None,
     ) -> tuple[str, dict[str, Any], tuple[WrapperChoice, ...], Game]:
         """The env id, checked arguments, wrappers and game a rebuild would use."""
-        new_id = resolve_env_id(env_id) if env_id is not None else self.env_id
+        new_id = self.env_id if env_id is None else resolve_env_id(env_id)
         game = game_for(new_id)
-        asked: Mapping[str, Any]
         if env_kwargs is None:
-            asked = self.env_kwargs if new_id == self.env_id else game.default_kwargs()
-        else:
-            asked = env_kwargs
-        kwargs = game.normalize_kwargs(asked)
+            env_kwargs = self.env_kwargs if new_id == self.env_id else game.default_kwargs()
+        kwargs = game.normalize_kwargs(env_kwargs)
         return new_id, kwargs, tuple(self.choices if choices is None else choices), game
 
     def _keeps(self, built: _Built) -> bool:
@@ -313,22 +291,19 @@ class Session:
         """A fresh agent (same seed) and fresh statistics."""
         self.env.close()
         self._install(_build(self.game, self.env_id, self.env_kwargs, self.choices))
-        self.agent = self._new_agent()
-        self.trainer = self._new_trainer()
+        self._new_agent()
 
     def set_hyperparameters(self, hp: Settings | Mapping[str, Any]) -> None:
-        """New hyperparameters for the rest of the run, taking effect at once (the
-        learner and its tables are kept). A mapping may name some values only: the
-        others stay as they are. ValueError, changing nothing, for a bad value."""
+        """New hyperparameters from now on, the tables kept; a mapping may name some only.
+        ValueError, changing nothing, for a bad value."""
         settings = hp if isinstance(hp, Settings) and hp.schema == self.hp.schema else (
             self.hp.replace(**dict(hp)))
         self.agent.set_hyperparameters(settings)
         self.hp = settings
 
     def follow(self, other: Session, epsilon: float = 0.0) -> None:
-        """The prediction learner follows `other`'s agent's epsilon-greedy policy from now
-        on (its table as it is now). ValueError, changing nothing, when this is not a
-        prediction learner or the two do not play the same game with the same states."""
+        """The prediction learner follows `other`'s agent's epsilon-greedy policy (its table
+        now); ValueError, changing nothing, unless both play the same game and states."""
         agent = self.agent
         if not isinstance(agent, Predictor):
             raise ValueError(f"{self.learner_class.title} is not a prediction learner: it "
@@ -343,25 +318,22 @@ class Session:
         self.hp = agent.hp
 
     def set_algorithm(self, name: str) -> None:
-        """Train with another algorithm: a fresh learner with the game's defaults for it,
-        and fresh statistics (nothing of the old learner carries over). ValueError for
-        an unknown name, changing nothing."""
+        """A fresh learner of another algorithm with the game's defaults for it, and fresh
+        statistics; ValueError, changing nothing, for an unknown name."""
         cls = learner_class_named(name)
         self.learner_class, self.algorithm = cls, cls.name
         self.hp = default_settings(self.game, cls.name, self.env_kwargs)
         self.reset_agent()
 
     def detached(self) -> Session:
-        """This session as it is now, for a thread to read exact figures from: the fields
-        a rebuild, a reset or another algorithm rebinds stay as they are in the copy (it
-        shares the game, the agent and the env); its base keys are computed here first."""
+        """A shallow copy for a thread to read exact figures from while this one is rebuilt
+        (it shares the game, agent and env); its base keys are computed first."""
         self.base_keys()
         return copy.copy(self)
 
     # --- seeing the table -------------------------------------------------
     def base_keys(self) -> list[Hashable] | None:
-        """Table keys of the game's base states, or None when wrappers hide them (or
-        the game lists none)."""
+        """Table keys of the game's base states, or None when wrappers hide them (or none)."""
         if self._base_keys is False:
             keys: list[Hashable] | None = None
             observations = None if self._history_wrappers() else (
@@ -407,16 +379,32 @@ class Session:
         return isinstance(self.agent, Predictor)
 
     def prediction(self, snapshot: TrainingSnapshot | None = None) -> PredictionFigures | None:
-        """A prediction learner's V (the live agent's, or a snapshot's) against the exact
-        values of the policy it follows; None for a control learner, or when there are no
-        exact values (`prediction_reason` says why)."""
-        if not self.predicts or self.training is None:
+        """A prediction learner's V (live, or a snapshot's) against its policy's exact values;
+        None for a control learner or without them (`prediction_reason` says why)."""
+        agent, training = self.agent, self.training
+        if not isinstance(agent, Predictor) or training is None:
             return None
         try:
-            return self._ruler.figures(self.agent, self.training,  # type: ignore[arg-type]
-                                       None if snapshot is None else snapshot.q)
+            truth = self._truth()
+            v = agent.v[training.rows] if snapshot is None else snapshot.q[training.rows, 0]
+            where = np.flatnonzero(truth.reached)
+            return PredictionFigures(truth.rms(v), tuple(int(s) for s in where),
+                                     tuple(float(x) for x in v[where]),
+                                     tuple(float(x) for x in truth.v[where]))
         except ValueError:
             return None
+
+    def _truth(self) -> Truth:
+        """The exact values of the policy the prediction learner follows (ValueError when there
+        are none), computed again only when it changes."""
+        agent, training = self.agent, self.training
+        assert isinstance(agent, Predictor) and training is not None
+        key = (id(training.model), agent.hp.discount, agent.epsilon,
+               agent.q[training.rows].tobytes())
+        kept = self._truth_kept  # one assignment: safe across threads
+        if kept is None or kept[0] != key:
+            kept = self._truth_kept = (key, agent.truth(training.model, training.rows))
+        return kept[1]
 
     def prediction_reason(self) -> str:
         """Why a prediction learner has no RMS error here ('' when it has one)."""
@@ -425,52 +413,44 @@ class Session:
         if self.training is None:
             return f"no exact values here ({self.engine_reason})"
         try:
-            self._ruler.truth(self.agent, self.training)  # type: ignore[arg-type]
+            self._truth()
         except ValueError as error:
             return str(error)
         return ""
 
     def exact_kwargs(self, snapshot: TrainingSnapshot | None = None) -> dict[str, Any]:
-        """The game's arguments for the exact figures: in a world that changes as it is
-        played, with the phase in force after the steps trained (the live trainer's, or a
-        snapshot's)."""
+        """The game's arguments for the exact figures: in a world that changes, the phase in
+        force after the steps trained (live, or a snapshot's)."""
         steps = self.trainer.steps if snapshot is None else snapshot.steps
         return self.game.at_step(self.env_kwargs, steps)
 
     def reference(self, snapshot: TrainingSnapshot | None = None) -> ReferenceMetrics | None:
-        """The exact comparison of the greedy policy with the optimum (None when there
-        is none: `exact_reason` says why)."""
-        q = self.base_q(snapshot)
-        if q is None:
-            return None
-        reference = self.game.oracle.reference(q, self.exact_kwargs(snapshot), self.changes)
-        return None if isinstance(reference, NotAvailable) else reference
+        """The exact comparison of the greedy policy with the optimum (None: see `exact_reason`)."""
+        return self._exact(self.game.oracle.reference, snapshot)
 
     def evaluation_reference(self) -> ReferenceMetrics | None:
         """`reference()` with what only an evaluation asks for (see the game's oracle)."""
-        q = self.base_q()
-        if q is None:
-            return None
-        reference = self.game.oracle.evaluation_reference(q, self.exact_kwargs(), self.changes)
-        return None if isinstance(reference, NotAvailable) else reference
+        return self._exact(self.game.oracle.evaluation_reference)
+
+    def _exact(self, figures: Callable[..., Any], snapshot: TrainingSnapshot | None = None,
+               reason: bool = False) -> Any:
+        """`figures(q, kwargs, changes)` of the base states' Q (None when hidden or not
+        available; with `reason`, why not: '' when it is)."""
+        q = self.base_q(snapshot)
+        found = None if q is None else figures(q, self.exact_kwargs(snapshot), self.changes)
+        if reason:
+            return found.reason if isinstance(found, NotAvailable) else ""
+        return None if isinstance(found, NotAvailable) else found
 
     def exact_reason(self) -> str:
         """Why there are no exact figures of the agent here ('' when there are)."""
-        hidden = self.hidden_reason()
-        if hidden:
-            return hidden
-        q = self.base_q()
-        if q is None:
-            return "no per-state view of this table"
-        reference = self.game.oracle.reference(q, self.exact_kwargs(), self.changes)
-        return reference.reason if isinstance(reference, NotAvailable) else ""
+        return self.hidden_reason() or self._exact(self.game.oracle.reference, reason=True)
 
     def heatmaps(
         self, snapshot: TrainingSnapshot | None = None, focus: Any = None, traces: bool = False,
     ) -> list[Heatmap] | None:
-        """The game's heatmap panels of the table (None when wrappers hide the states);
-        with `traces`, of a snapshot's eligibility traces in the table's place, unmarked
-        (ValueError when it has none)."""
+        """The game's heatmap panels of the table (None when wrappers hide the states); with
+        `traces`, of a snapshot's eligibility traces, unmarked (ValueError without one)."""
         kwargs = self.exact_kwargs(snapshot)
         if not traces:
             q = self.base_q(snapshot)
@@ -486,8 +466,7 @@ class Session:
         return self.game.layout.heatmaps(snapshot.values(keys, traces=True), kwargs, focus)
 
     def _among_offered(self, q: np.ndarray, kwargs: Mapping[str, Any]) -> np.ndarray:
-        """`q` of the base states with the actions a state does not offer at -inf, so the
-        heatmaps' max and greedy move are among those it offers (as the agent's are)."""
+        """`q` with the actions a state does not offer at -inf (as the agent sees them)."""
         if self.agent.offered is None or not isinstance(self.game, ModelGame):
             return q
         offered = self.game.offered_actions(kwargs)
@@ -499,10 +478,8 @@ class Session:
     def heatmap_cell(
         self, observation: Any, focus: Any = None
     ) -> tuple[Any, tuple[int, int, int]] | None:
-        """Where an observation's state is drawn on the heatmaps: the focus to show it
-        under (`focus` when it is there, else the first focus that has it, for games
-        whose heatmaps follow one) and its (panel, row, col); None when no heatmap
-        shows it (wrappers hide the base states, or it is not one of them)."""
+        """The focus to show an observation's state under (`focus` when it is there, else
+        the first that has it) and its (panel, row, col); None when no heatmap shows it."""
         keys = self.base_keys()
         if keys is None:
             return None
@@ -530,15 +507,14 @@ class Session:
         return None
 
     def agent_figures(self, snapshot: TrainingSnapshot | None = None) -> dict[str, float]:
-        """Exact scoreboard figures of the agent's greedy policy (the live agent's, or a
-        snapshot's) and of the optimum (`Oracle.agent_figures`); only the optimum's
-        when wrappers hide the base states."""
+        """Exact scoreboard figures of the greedy policy (live, or a snapshot's) and of the
+        optimum (`Oracle.agent_figures`); the optimum's only when wrappers hide the states."""
         return self.game.oracle.agent_figures(self.base_q(snapshot),
                                               self.exact_kwargs(snapshot), self.changes)
 
     def shortfall(self, reference: ReferenceMetrics) -> str:
-        """When the greedy policy `reference` measured ends short of the game's stated
-        bound, a sentence saying so and why ('' when it meets it, or there is none)."""
+        """A sentence saying why the policy `reference` measured ends short of the game's
+        stated bound ('' when it meets it, or there is none)."""
         bound = self.game.oracle.bound(self.env_kwargs, self.changes)
         if isinstance(bound, NotAvailable) or bound.met(reference.figures):
             return ""
@@ -557,16 +533,9 @@ class Session:
     def greedy_actions_for(
         self, observation: Any, snapshot: TrainingSnapshot | None = None
     ) -> tuple[tuple[int, ...], np.ndarray] | None:
-        """What the agent's greedy policy does on an observation of this env (wrappers
-        applied): every action the state offers tied for the best value, and the state's
-        Q-values.
-
-        Reads the live agent, or `snapshot` (e.g. the runner's latest while a child
-        process trains). None when the agent has never updated that state (with a
-        snapshot, which keeps no visit counts: when its values are all still 0), or
-        the observation does not fit the env's space. Only reads the table, so it is
-        safe while the trainer writes it on another thread.
-        """
+        """The offered actions tied for the best value on an observation of this env, and the
+        state's Q-values, of the live agent or `snapshot`; None for a state never updated
+        (a snapshot's: all 0) or an observation that does not fit. Only reads the table."""
         agent = self.agent
         try:
             key = self.keyer.key(observation)
@@ -590,20 +559,15 @@ class Session:
         self, target_gap: float | None = None, check_every: int | None = None,
         chunk_seconds: float = 0.2, on_chunk: Callable[[TrainingSnapshot], None] | None = None,
     ) -> TrainOutcome:
-        """Train to the end of the budget, or until the exact gap is at most `target_gap`.
-
-        The gap is checked every `check_every` episodes (exactly, from the
-        reference: no sampling noise; by default a twentieth of the budget,
-        between 1,000 and 10,000). `on_chunk` sees a snapshot after each
-        chunk of about `chunk_seconds`, e.g. to draw a progress bar.
-        """
+        """Train to the end of the budget, or until the exact gap, checked every `check_every`
+        episodes (`check_every_for`), is at most `target_gap`; `on_chunk` sees a snapshot
+        after each chunk of about `chunk_seconds`."""
         if target_gap is not None:
             self.check_target_gap(target_gap)
         trainer = self.trainer
         if check_every is None:
             check_every = check_every_for(trainer.remaining)
         next_check = trainer.episodes + check_every
-        gap = None
         while trainer.remaining > 0:
             limit = trainer.remaining
             if target_gap is not None:
@@ -616,15 +580,13 @@ class Session:
                 gap = self.reference().figures["gap"]  # type: ignore[union-attr]
                 if gap <= target_gap:
                     return TrainOutcome(True, gap)
-        if target_gap is not None:
-            gap = self.reference().figures["gap"]  # type: ignore[union-attr]
-            return TrainOutcome(gap <= target_gap, gap)
-        return TrainOutcome(None, None)
+        if target_gap is None:
+            return TrainOutcome(None, None)
+        gap = self.reference().figures["gap"]  # type: ignore[union-attr]
+        return TrainOutcome(gap <= target_gap, gap)
 
     def check_target_gap(self, target_gap: float) -> None:
-        """`ValueError` when no greedy policy can meet `target_gap` here: the game has
-        no exact gap, or no fixed policy comes that close to the optimum (with an
-        episode limit the optimum may change course as time runs out)."""
+        """`ValueError` when no greedy policy can meet `target_gap` here."""
         ref = self.reference()
         if ref is None or "gap" not in ref.figures:
             why = self.exact_reason() or f"{self.game.title} has no exact gap"
@@ -643,14 +605,11 @@ class Session:
         self, episodes: int = 10_000, seed: int | None = None, progress=None
     ) -> EvalReport:
         """Greedy play on a fresh env; `seed` defaults to one derived from the session's."""
-        env = self.make_env()
-        try:
-            eval_seed = self.seed + 1_000_003 if seed is None else seed
-            return evaluate(
-                env, self.agent, self.keyer, self.game.narrator, episodes, eval_seed, progress
-            )
-        finally:
-            env.close()
+        eval_seed = self.seed + 1_000_003 if seed is None else seed
+        with self.make_env() as env:
+            report = evaluate(env, self.agent, self.keyer, self.game.narrator, episodes, eval_seed,
+                              progress)
+        return report
 
     def meta(self) -> dict[str, Any]:
         """Everything a save file keeps besides the table, as JSON data."""
@@ -673,8 +632,7 @@ class Session:
 
     @classmethod
     def load(cls, path: str | Path) -> Session:
-        """A session rebuilt from a saved file; StorageError names the file (and the
-        field at fault) when it cannot."""
+        """A session rebuilt from a saved file; StorageError names the file and field when not."""
         from tui_gym.session.storage import read_agent, short_reason
 
         saved = read_agent(path)
@@ -689,8 +647,7 @@ class Session:
         return session
 
     def _restore(self, saved: Any) -> None:
-        """Put a saved learner state into this session's agent and its counts into the
-        trainer; `saved.field` names what does not fit the game."""
+        """A saved learner state into the agent and its counts into the trainer."""
         from tui_gym.session.storage import short_reason
 
         agent = self.agent
@@ -700,25 +657,20 @@ class Session:
             raise saved.field(f"wrappers[{index}]", f"does not fit {self.env_id}: {reason}")
         n_actions = agent.n_actions if saved.n_actions is None else saved.n_actions
         if n_actions != agent.n_actions:
-            raise saved.field(
-                "n_actions", f"is {n_actions}; {self.env_id} with these wrappers has "
-                f"{agent.n_actions}"
-            )
+            raise saved.field("n_actions", f"is {n_actions}; {self.env_id} with these wrappers "
+                              f"has {agent.n_actions}")
         member = f"{saved.table_name}.npy"
         first = saved.arrays[saved.table_name]
         if first.shape[1] != agent.n_actions:
-            raise saved.field(
-                member, f"has {first.shape[1]} columns; {self.env_id} has "
-                f"{agent.n_actions} actions"
-            )
+            raise saved.field(member, f"has {first.shape[1]} columns; {self.env_id} has "
+                              f"{agent.n_actions} actions")
         rows, keys = agent.n_states, saved.keys
         if rows is not None and keys is not None:
             raise saved.field("keys.json", f"is for a sparse table; {self.env_id}'s is dense")
         if rows is not None and len(first) != rows:
             raise saved.field(member, f"has {len(first):,} rows; {self.env_id} has {rows:,}")
         if rows is None and keys is None:
-            raise saved.field("keys.json",
-                                    "is missing (the states of the sparse table's rows)")
+            raise saved.field("keys.json", "is missing (the states of the sparse table's rows)")
         saved.check_learner_meta()
         try:
             agent.load_state(saved.state(n_actions, rows))
@@ -749,6 +701,4 @@ def _arrays_of(model: FiniteMDP, rows: np.ndarray) -> ModelArrays:
     """`ModelArrays.of(model, rows)`, built once per model and rows."""
     built = _ARRAYS.setdefault(model, {})
     key = np.asarray(rows, dtype=np.int64).tobytes()
-    if key not in built:
-        built[key] = ModelArrays.of(model, rows)
-    return built[key]
+    return built[key] if key in built else built.setdefault(key, ModelArrays.of(model, rows))

@@ -1,9 +1,5 @@
-"""Training speeds and `Runner`, the base of every runner (thread, child process).
-
-Speeds run from *animated* (one agent step at a time, slow enough to follow,
-with the last move kept for a board to draw) to *max* (whole chunks of
-episodes, no pauses). A front end drives any runner through `Runner`; which
-one it gets is `tui_gym.session.runners.make_runner`'s business.
+"""Training speeds, from *animated* (one step at a time, the last move kept for a board) to
+*max* (whole chunks of episodes), and `Runner`, the base of every runner (thread, process).
 """
 
 from __future__ import annotations
@@ -41,8 +37,7 @@ DEFAULT_SPEED = len(SPEEDS) - 1
 
 
 class Runner(ABC):
-    """What a front end asks of a runner: controls, the latest snapshot, the last move.
-    The speed, toggling and the last animated step are the same for every runner."""
+    """What a front end asks of a runner: controls, the latest snapshot, the last move."""
 
     session: Session
     error: BaseException | None
@@ -81,19 +76,16 @@ class Runner(ABC):
 
     @abstractmethod
     def run_one_episode(self) -> bool:
-        """Play one training episode (ignored while running or busy); False, as `start`,
-        when the budget is used up."""
+        """Play one training episode (ignored while running or busy); False, as `start`."""
 
     @abstractmethod
     def run_one_step(self) -> bool:
-        """Take one training step (one transition), explained in `last_event.last_update`,
-        after the steps asked for before it (ignored while running or busy with an
-        episode); False, as `start`, when the budget is used up."""
+        """Take one training step, explained in `last_event.last_update`, after those asked
+        for before it (ignored while running or in an episode); False, as `start`."""
 
     @abstractmethod
     def set_hyperparameters(self, hp: Any) -> None:
-        """New hyperparameters for the session, taking effect at once, mid-run too
-        (ValueError, changing nothing, for bad ones)."""
+        """New hyperparameters, taking effect at once (ValueError, changing nothing, if bad)."""
 
     @abstractmethod
     def wait_idle(self, timeout: float = ...) -> bool:
@@ -123,13 +115,6 @@ class Runner(ABC):
         self.update()
         agent, _, event = self._shown
         return event if agent is self.session.agent else None
-
-    def toggle(self) -> bool:
-        """Start when paused, pause when running; returns whether it now runs."""
-        if self.running:
-            self.pause(wait=False)
-            return False
-        return self.start()
 
     def set_speed(self, index: int) -> Speed:
         self.speed_index = max(0, min(len(SPEEDS) - 1, index))

@@ -1,9 +1,6 @@
-"""Saving and loading agents: one versioned file, written atomically, read with care.
-
-Reading trusts nothing: a regular file of bounded size, unpacked sizes capped, numpy
-headers checked, JSON nesting bounded, every field validated; anything else is one
-`StorageError` line. The env id a file names is resolved as data, never imported.
-"""
+"""Saving and loading agents: one versioned file, written atomically, read trusting nothing
+(sizes capped, headers and fields checked, env ids resolved as data); a refusal is one
+`StorageError` line."""
 
 from __future__ import annotations
 
@@ -52,8 +49,7 @@ class StorageError(ValueError):
 
 
 def check_save_path(path: str | Path) -> Path:
-    """`path` as a `Path` when a save can be written there; else `StorageError` saying why
-    (see `tui_gym.core.files.check_output_path`)."""
+    """`path` as a `Path` when a save can be written there; else `StorageError` saying why."""
     try:
         return check_output_path(path)
     except OutputPathError as error:
@@ -61,9 +57,7 @@ def check_save_path(path: str | Path) -> Path:
 
 
 def save_agent(path: str | Path, meta: dict[str, Any], state: LearnerState) -> Path:
-    """Save a learner's state and its settings (`meta`, JSON data: env id and arguments,
-    wrapper specs, algorithm, hyperparameters, seed, counts) to `path` atomically;
-    returns `path`."""
+    """Save a learner's state and the session's `meta` (JSON data) to `path` atomically."""
     path = check_save_path(path)
     meta = {"format": FORMAT_NAME, "version": FORMAT_VERSION, **meta, "learner": state.meta}
     members = {"meta.json": json.dumps(meta, indent=2).encode()}
@@ -109,6 +103,12 @@ class _Reader:
     def field(self, name: str, problem: str) -> StorageError:
         """A `StorageError` naming the file and the field at fault."""
         return StorageError(f"{self.path}: not a valid save file: {name} {problem}")
+
+    def typed(self, value: Any, name: str, kind: type | tuple[type, ...], what: str) -> Any:
+        """`value` when it is a `kind`; else refused as not `what`."""
+        if not isinstance(value, kind):
+            raise self.field(name, f"must be {what}, got {shown_value(value)}")
+        return value
 
     def checked(self, name: str, build: Callable[[], Any]) -> Any:
         """`build()`, with a ValueError or TypeError it raises refused under the field's name."""
@@ -158,8 +158,7 @@ def _json(reader: _Reader, name: str, data: bytes) -> Any:
 
 
 def _array(reader: _Reader, name: str, data: bytes, kinds: str, ndim: int = 2) -> np.ndarray:
-    """A `.npy` array of `ndim` dimensions (1 or 2) whose header agrees with its bytes,
-    of a dtype kind in `kinds`."""
+    """A `.npy` array of `ndim` dimensions whose header agrees with its bytes, of kind `kinds`."""
     buf = io.BytesIO(data)
     try:
         major, _minor = np.lib.format.read_magic(buf)
@@ -181,10 +180,8 @@ def _array(reader: _Reader, name: str, data: bytes, kinds: str, ndim: int = 2) -
         raise reader.field(name, f"declares {rows:,} x {columns:,} entries (too large)")
     needed = rows * columns * dtype.itemsize
     if len(data) - buf.tell() != needed:
-        raise reader.field(
-            name, f"declares {rows:,} x {columns:,} entries but holds "
-            f"{len(data) - buf.tell():,} bytes of data, not {needed:,}"
-        )
+        raise reader.field(name, f"declares {rows:,} x {columns:,} entries but holds "
+                           f"{len(data) - buf.tell():,} bytes of data, not {needed:,}")
     array = np.frombuffer(data, dtype=dtype, count=rows * columns, offset=buf.tell())
     return array.reshape(shape, order="F" if fortran else "C")
 
@@ -200,9 +197,7 @@ def _key_from_json(reader: _Reader, index: int, value: Any) -> Hashable:
 
 
 def _plain_number(value: Any) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool) and (
-        isinstance(value, int) or math.isfinite(value)
-    )
+    return type(value) is int or (type(value) is float and math.isfinite(value))  # JSON's types
 
 
 # The dtype kinds each kind of learner array may be saved as.
@@ -212,8 +207,7 @@ _KINDS = {"f": "f", "i": "iu", "u": "iu", "b": "b"}
 def _learner_arrays(
     reader: _Reader, zf: zipfile.ZipFile, cls: type[Learner], version: int
 ) -> dict[str, np.ndarray]:
-    """Every array `cls` saves, read from its `NAME.npy` (version 1: `q.npy` and the
-    optional `counts.npy`), all with one row count."""
+    """Every array `cls` saves, from its `NAME.npy`, all with one row count."""
     if version < 2:
         return _version_1_arrays(reader, zf)
     blank = cls(1, n_states=1).state().arrays  # the names, kinds and dimensions it saves
@@ -262,9 +256,8 @@ def _check_numbers(reader: _Reader, member: str, array: np.ndarray, lowest: int 
         if not np.isfinite(array).all():
             what = "Q-values" if member == "q.npy" else "values"
             raise reader.field(member, f"holds NaN or infinite {what}")
-    elif array.dtype.kind in "iu" and array.size and (
-        array.min() < lowest or array.max() > MAX_COUNT
-    ):
+    elif array.dtype.kind in "iu" and array.size and (array.min() < lowest
+                                                      or array.max() > MAX_COUNT):
         raise reader.field(member, "holds negative or impossible counts")
 
 
@@ -279,16 +272,13 @@ def _check_version(reader: _Reader, version: Any) -> int:
     if version < 1:
         raise reader.field("version", f"must be positive, got {shown_value(version)}")
     if version > FORMAT_VERSION:
-        raise reader.error(
-            f"saved by a newer tui-gym (format {shown_value(version)}; "
-            f"this one reads up to {FORMAT_VERSION}); upgrade tui-gym to open it"
-        )
+        raise reader.error(f"saved by a newer tui-gym (format {shown_value(version)}; this one "
+                           f"reads up to {FORMAT_VERSION}); upgrade tui-gym to open it")
     return version
 
 
 def _keys(reader: _Reader, value: Any, rows: int) -> list[Hashable]:
-    if not isinstance(value, list):
-        raise reader.field("keys.json", f"must be a list of state keys, got {shown_value(value)}")
+    reader.typed(value, "keys.json", list, "a list of state keys")
     if len(value) != rows:
         raise reader.field("keys.json", f"has {len(value):,} keys for {rows:,} table rows")
     keys = [_key_from_json(reader, i, k) for i, k in enumerate(value)]
@@ -330,17 +320,13 @@ class SavedAgent(_Reader):
         rows, meta, name = len(self.arrays[self.table_name]), self.meta, self.algorithm.name
         if "learner" not in meta and meta.get("version", 1) < 2:
             return
-        learner = meta.get("learner")
-        if not isinstance(learner, dict):
-            raise self.field("learner", f"must be an object, got {shown_value(learner)}")
+        learner = self.typed(meta.get("learner"), "learner", dict, "an object")
         if learner.get("algorithm") != name:
-            raise self.field(
-                "learner.algorithm", f"is {shown_value(learner.get('algorithm'))}, not {name}"
-            )
+            raise self.field("learner.algorithm",
+                             f"is {shown_value(learner.get('algorithm'))}, not {name}")
         if learner.get("rows") != rows or isinstance(learner.get("rows"), bool):
-            raise self.field(
-                "learner.rows", f"is {shown_value(learner.get('rows'))}; the tables have {rows:,}"
-            )
+            raise self.field("learner.rows",
+                             f"is {shown_value(learner.get('rows'))}; the tables have {rows:,}")
 
     @property
     def table_name(self) -> str:
@@ -359,12 +345,8 @@ class SavedAgent(_Reader):
 
 
 def read_agent(path: str | Path) -> SavedAgent:
-    """A save file's contents as plain data; `StorageError` when it is not a valid one.
-
-    Checked here: the meta, every array's kind of number and dimensions, the keys'
-    form, and values no learner makes (NaN or infinite values, negative counts); the
-    session checks the game and the learner's own rules.
-    """
+    """A save file's contents, checked but for the game and the learner's own rules (the
+    session's part); `StorageError` when it is not a valid one."""
     from tui_gym.core.wrappers import check_chain_length, parse_wrapper_spec
     from tui_gym.games import UnknownGameError, resolve_env_id
 
@@ -379,10 +361,8 @@ def read_agent(path: str | Path) -> SavedAgent:
             if not isinstance(meta, dict) or meta.get("format") != FORMAT_NAME:
                 raise reader.error(f"not a tui-gym save file (format is not {FORMAT_NAME})")
             version = _check_version(reader, meta.get("version"))
-            name = meta.get("algorithm") if version >= 2 else QLearning.name  # version 1's
-            if not isinstance(name, str):
-                raise reader.field("algorithm",
-                                   f"must be an algorithm's name, got {shown_value(name)}")
+            name = reader.typed(meta.get("algorithm") if version >= 2 else QLearning.name,
+                                "algorithm", str, "an algorithm's name")  # version 1's is fixed
             cls = reader.checked("algorithm", partial(algorithm, name))
             arrays = _learner_arrays(reader, zf, cls, version)
             rows = len(arrays[cls.tables[0].name])
@@ -401,46 +381,30 @@ def read_agent(path: str | Path) -> SavedAgent:
     except MemoryError:
         raise reader.error("not a tui-gym save file (too large to read)") from None
 
-    env_id = meta.get("env_id")
-    if not isinstance(env_id, str):
-        raise reader.field("env_id", f"must be a game id, got {shown_value(env_id)}")
+    env_id = reader.typed(meta.get("env_id"), "env_id", str, "a game id")
     try:  # resolved as data: never by importing a module
         env_id = resolve_env_id(env_id, from_data=True)
     except UnknownGameError as error:
         raise reader.field("env_id", f"is not valid: {error}") from None
-    env_kwargs = meta.get("env_kwargs", {})
-    if not isinstance(env_kwargs, dict):
-        raise reader.field("env_kwargs", f"must be an object, got {shown_value(env_kwargs)}")
-    wrappers = meta.get("wrappers", [])
-    if not isinstance(wrappers, list):
-        raise reader.field("wrappers", f"must be a list of specs, got {shown_value(wrappers)}")
+    env_kwargs = reader.typed(meta.get("env_kwargs", {}), "env_kwargs", dict, "an object")
+    wrappers = reader.typed(meta.get("wrappers", []), "wrappers", list, "a list of specs")
     reader.checked("wrappers", partial(check_chain_length, len(wrappers)))
     choices = []
     for i, spec in enumerate(wrappers):
-        if not isinstance(spec, str):
-            raise reader.field(
-                f"wrappers[{i}]", f"must be a spec like 'TimeLimit:max_episode_steps=50', "
-                f"got {shown_value(spec)}"
-            )
+        reader.typed(spec, f"wrappers[{i}]", str, "a spec like 'TimeLimit:max_episode_steps=50'")
         choices.append(reader.checked(f"wrappers[{i}]", partial(parse_wrapper_spec, spec)))
-    hp_data = meta.get("hyperparameters")
-    if not isinstance(hp_data, dict):
-        raise reader.field("hyperparameters", f"must be an object, got {shown_value(hp_data)}")
+    hp_data = reader.typed(meta.get("hyperparameters"), "hyperparameters", dict, "an object")
     hp = reader.checked("hyperparameters", lambda: cls.settings(hp_data))
     seed = _int_field(reader, meta, "seed", 0, 0, MAX_SEED)
     episodes = _int_field(reader, meta, "episodes_trained", 0, 0, MAX_COUNT)
     steps = _int_field(reader, meta, "steps_trained", 0, 0, MAX_COUNT)
     agent_episode = _int_field(reader, meta, "agent_episode", episodes, 0, MAX_COUNT)
-    n_actions = None
-    if "n_actions" in meta:
-        n_actions = _int_field(reader, meta, "n_actions", 1, 1, 1 << 20)
-    for name in ("observation_space",):
-        if name in meta and not isinstance(meta[name], str):
-            raise reader.field(name, f"must be text, got {shown_value(meta[name])}")
+    n_actions = (_int_field(reader, meta, "n_actions", 1, 1, 1 << 20) if "n_actions" in meta
+                 else None)
+    reader.typed(meta.get("observation_space", ""), "observation_space", str, "text")
     if len(arrays["visits"]) != rows:
-        raise reader.field(
-            "visits.npy", f"has {len(arrays['visits']):,} entries for {rows:,} table rows"
-        )
+        raise reader.field("visits.npy",
+                           f"has {len(arrays['visits']):,} entries for {rows:,} table rows")
     return SavedAgent(
         path=Path(path), env_id=env_id, env_kwargs=dict(env_kwargs), choices=tuple(choices),
         algorithm=cls, hp=hp, seed=seed, episodes=episodes, steps=steps,

@@ -1,6 +1,4 @@
-"""Recorded episodes: a JSON-lines format, its writer and a tolerant reader, and the coach's
-judgement of each move. What records (`Recorder`) is in `tui_gym.session.recording`.
-"""
+"""Recorded episodes: the JSON-lines format, its writer and reader, the judge of each move."""
 
 from tui_gym.core.recording.format import FORMAT_VERSION
 from tui_gym.core.recording.judge import MoveJudge

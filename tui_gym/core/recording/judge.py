@@ -48,8 +48,7 @@ NOTHING_KNOWN = Assessment()
 
 
 class MoveJudge:
-    """Judges moves in one game (a game and its arguments), on any env of it, by its
-    oracle's advice."""
+    """Judges moves in one game with its arguments, on any env of it, by its oracle's advice."""
 
     def __init__(self, game: Any, env_kwargs: Mapping[str, Any]) -> None:
         self.game = game

@@ -59,9 +59,8 @@ class RecordedGame:
         return self.actions[action] if 0 <= action < len(self.actions) else str(action)
 
 
-UNKNOWN_GAME = RecordedGame(
-    0, None, "", "", "", "unknown game", "", {}, (), None, "", (), "episode"
-)
+UNKNOWN_GAME = RecordedGame(0, None, "", "", "", "unknown game", "", {}, (), None, "", (),
+                            "episode")
 
 
 @dataclass(frozen=True)
@@ -184,13 +183,10 @@ class Recording:
     def message(self) -> str | None:
         """One sentence on whatever was wrong with the file (None when nothing was)."""
         parts = []
-        foreign = sorted(v for v in self.versions if v is not None)
+        foreign = ", ".join(str(v) for v in sorted(v for v in self.versions if v is not None))
         if foreign:
-            shown = ", ".join(str(v) for v in foreign)
-            parts.append(
-                f"it was written in recording format version {shown} and this tui-gym reads "
-                f"version {FORMAT_VERSION}"
-            )
+            parts.append(f"it was written in recording format version {foreign} and this tui-gym "
+                         f"reads version {FORMAT_VERSION}")
         elif None in self.versions:
             parts.append(f"its header names no format version this tui-gym reads "
                          f"(version {FORMAT_VERSION})")
@@ -232,7 +228,8 @@ def read_recording(path: str | Path, scene_fits: SceneCheck | None = None) -> Re
     except OSError as exc:
         raise RecordingError(f"{path}: cannot read ({exc.strerror or exc})") from None
     with handle:
-        if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):
+        info = os.fstat(handle.fileno())
+        if not stat.S_ISREG(info.st_mode):
             raise RecordingError(f"{path} is not a regular file (a pipe or a device), "
                                  "not a recording")
         recording = Recording(path)
@@ -242,7 +239,7 @@ def read_recording(path: str | Path, scene_fits: SceneCheck | None = None) -> Re
             read += MAX_LINE_BYTES if line is None else len(line)
             if read > MAX_READ_BYTES:
                 recording.cut_at_line = number
-                recording.size = _size_of(handle)
+                recording.size = info.st_size
                 break
             recording.lines = number
             if line is None:
@@ -261,30 +258,18 @@ def read_recording(path: str | Path, scene_fits: SceneCheck | None = None) -> Re
     return recording
 
 
-def _size_of(handle: IO[bytes]) -> int:
-    try:
-        return os.fstat(handle.fileno()).st_size
-    except (OSError, ValueError, AttributeError):
-        return 0
-
-
 class _Bad(Exception):
     """A line that does not hold a usable record."""
 
 
 def _lines(handle: IO[bytes]) -> Iterator[tuple[int, bytes | None]]:
-    number = 0
-    while True:
-        line = handle.readline(MAX_LINE_BYTES + 1)
-        if not line:
-            return
-        number += 1
-        if len(line) > MAX_LINE_BYTES:
-            while line and not line.endswith(b"\n"):
-                line = handle.readline(MAX_LINE_BYTES)
-            yield number, None
+    for number, line in enumerate(iter(lambda: handle.readline(MAX_LINE_BYTES + 1), b""), 1):
+        if len(line) <= MAX_LINE_BYTES:
+            yield number, line
             continue
-        yield number, line
+        while line and not line.endswith(b"\n"):  # the rest of a line too long to read
+            line = handle.readline(MAX_LINE_BYTES)
+        yield number, None
 
 
 def _constant(name: str) -> float:
@@ -309,17 +294,11 @@ class _Reader:
             record = _DECODER.decode(line.decode("utf-8"))
         except (UnicodeDecodeError, ValueError, RecursionError):
             raise _Bad from None
-        if not isinstance(record, dict):
-            raise _Bad
-        kind = record.get("type")
+        kind = record.get("type") if isinstance(record, dict) else None
         if kind == HEADER:
             self._header(number, record)
-        elif kind == START:
-            self._start(record)
-        elif kind == STEP:
-            self._step(record)
-        elif kind == END:
-            self._end(record)
+        elif kind in (START, STEP, END):
+            getattr(self, f"_{kind}")(record)  # _start, _step, _end
         else:
             raise _Bad
 
@@ -424,8 +403,7 @@ class _Reader:
         )
 
     def _shared(self, scene: dict[str, Any]) -> dict[str, Any]:
-        """`scene`, its values equal to the last scene's being the last scene's own (a
-        map's cells and slips repeat on every move: kept once, not once a move)."""
+        """`scene`, values equal to the last scene's shared with it (kept once, not per move)."""
         last = self.last_scene
         for key, value in scene.items():
             before = last.get(key)

@@ -49,8 +49,8 @@ class LineWriter:
             raise ValueError("a line must end in its only newline")
         fd = self._fd
         start = os.lseek(fd, 0, os.SEEK_END)
+        written = 0
         try:
-            written = self._raw_write(fd, line)
             while written < len(line):  # a short write: finish it or fail
                 more = self._raw_write(fd, line[written:])
                 if more <= 0:

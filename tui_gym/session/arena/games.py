@@ -1,9 +1,5 @@
-"""The arena's one seam to the games: the catalog, and a game's protocol handler.
-
-Everything else in the arena talks to a game only through the `JsonlPlayer`
-that `open_handler` returns (reset, step, render, hint, spaces), so a change
-in where games live changes this module alone.
-"""
+"""The arena's one seam to the games: the catalog, and a game's protocol handler (the
+`JsonlPlayer` everything else in the arena talks to a game through)."""
 
 from __future__ import annotations
 
@@ -29,26 +25,18 @@ class GameEntry:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "name": self.name,
-            "title": self.title,
-            "env_id": self.env_id,
+            "name": self.name, "title": self.title, "env_id": self.env_id,
             "actions": list(self.actions),
-            "parameters": [
-                {
-                    "name": p.name, "type": p.kind.__name__, "default": p.default,
-                    "range": p.describe_range(), "help": p.help,
-                }
-                for p in self.params
-            ],
+            "parameters": [{"name": p.name, "type": p.kind.__name__, "default": p.default,
+                            "range": p.describe_range(), "help": p.help} for p in self.params],
             "description": self.description,
         }
 
 
 def _entry(game: Game) -> GameEntry:
-    return GameEntry(
-        name=game.name, title=game.title, env_id=game.env_id, actions=tuple(game.action_names),
-        params=tuple(game.params), description=game.description,
-    )
+    return GameEntry(name=game.name, title=game.title, env_id=game.env_id,
+                     actions=tuple(game.action_names), params=tuple(game.params),
+                     description=game.description)
 
 
 def catalog() -> list[GameEntry]:
@@ -68,18 +56,16 @@ def open_handler(
     name: str, params: Mapping[str, Any] | None = None, seed: int | None = None,
     wrappers: Sequence[str] = (),
 ) -> JsonlPlayer:
-    """A protocol handler playing game `name` with `params` and `wrappers` (specs as
-    `--wrapper` takes them); ValueError with one clear line for a bad game, parameter
-    or wrapper."""
+    """A protocol handler playing game `name` with `params` and `wrappers` (`--wrapper` specs);
+    ValueError with one clear line for a bad game, parameter or wrapper."""
     from tui_gym.core.wrappers import check_chain_length, parse_wrapper_spec
     from tui_gym.session.session import Session
 
     entry = find_game(name)
     check_chain_length(len(wrappers))
     choices = tuple(parse_wrapper_spec(spec) for spec in wrappers)
-    session = Session(
-        env_id=entry.env_id, env_kwargs=dict(params or {}), choices=choices, seed=seed or 0
-    )
+    session = Session(env_id=entry.env_id, env_kwargs=dict(params or {}), choices=choices,
+                      seed=seed or 0)
     if session.skipped:
         session.env.close()
         reasons = "; ".join(reason for _, reason in session.skipped)

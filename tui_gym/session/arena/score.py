@@ -7,22 +7,17 @@ from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
-from tui_gym.session.play import sample_variance
+from tui_gym.session.play import Tally
 
 RECENT_EPISODES = 100  # episodes listed one by one in a score; older ones only count
-MIN_CI_EPISODES = 2  # a 95% interval needs two episodes
 NO_VALUES = "the game's hint names optimal actions but gives no exact action values"
 NOT_EXACT = "the wrappers change the game beyond its exact figures"
 
 
 @dataclass(frozen=True)
 class Verdict:
-    """One move judged against the exact optimum before it was made.
-
-    `decision` is False where the optimum had no say (no optimal action known
-    here); then `agreed` and `regret` are None. `regret` is None too where the
-    hint gives no exact action values, and `note` says why.
-    """
+    """One move judged against the exact optimum before it was made: `decision` False where
+    the optimum had no say; `regret` None without exact action values (`note` says why)."""
 
     decision: bool
     agreed: bool | None = None
@@ -90,28 +85,14 @@ class EpisodeScore:
         }
 
 
-def _interval(total: float, total_sq: float, n: int) -> float | None:
-    """Half-width of the normal-approximation 95% interval of a mean (None below 2)."""
-    if n < MIN_CI_EPISODES:
-        return None
-    return 1.96 * math.sqrt(sample_variance(total, total_sq, n) / n)
-
-
 @dataclass
 class ArenaScore:
-    """Returns, exact decision regret and agreement of one player on one game.
-
-    The totals count finished episodes; the running one is kept apart
-    (`current`), so a score can be shown without it.
-    """
+    """Returns, exact decision regret and agreement of one player on one game; the totals
+    count finished episodes, the running one is kept apart (`current`)."""
 
     current: EpisodeScore | None = None
-    finished: int = 0
-    return_sum: float = 0.0
-    return_sq: float = 0.0
-    regret_sum: float = 0.0  # over finished episodes with an exact regret
-    regret_sq: float = 0.0
-    regret_episodes: int = 0
+    returns: Tally = field(default_factory=Tally)  # of the finished episodes
+    regrets: Tally = field(default_factory=Tally)  # of those with an exact regret
     decisions: int = 0
     agreed: int = 0
     unscored: int = 0
@@ -119,6 +100,10 @@ class ArenaScore:
     notes: set[str] = field(default_factory=set)
     recent: deque[EpisodeScore] = field(default_factory=lambda: deque(maxlen=RECENT_EPISODES))
     history: list[EpisodeScore] | None = None  # every finished episode, when a list is given
+
+    @property
+    def finished(self) -> int:
+        return self.returns.episodes
 
     def start_episode(self, seed: int | None) -> None:
         """A new episode begins (one left unfinished is dropped from the totals)."""
@@ -149,59 +134,50 @@ class ArenaScore:
     def _finish(self, episode: EpisodeScore, terminated: bool) -> None:
         episode.done = True
         episode.terminated = terminated
-        self.finished += 1
-        self.return_sum += episode.episode_return
-        self.return_sq += episode.episode_return**2
+        self.returns.add(episode.episode_return)
         self.decisions += episode.decisions
         self.agreed += episode.agreed
         self.unscored += episode.unscored
         self.unjudged += episode.unjudged
         if episode.exact_regret is not None:
-            self.regret_episodes += 1
-            self.regret_sum += episode.regret
-            self.regret_sq += episode.regret**2
+            self.regrets.add(episode.regret)
         self.recent.append(episode)
         if self.history is not None:
             self.history.append(episode)
 
     @property
     def mean_return(self) -> float | None:
-        return self.return_sum / self.finished if self.finished else None
+        return self.returns.mean if self.returns.episodes else None
 
     @property
     def mean_regret(self) -> float | None:
-        return self.regret_sum / self.regret_episodes if self.regret_episodes else None
+        return self.regrets.mean if self.regrets.episodes else None
 
     @property
     def agreement(self) -> float | None:
         return self.agreed / self.decisions if self.decisions else None
 
     def to_json(self, *, running: bool = True) -> dict[str, Any]:
-        """The score as JSON data: totals over finished episodes, and the running
-        episode's own figures unless `running` is False."""
+        """The score as JSON data, the running episode's own figures too unless not `running`."""
         why = "; ".join(sorted(self.notes))
         regret_note = ""
         if self.unscored:
             regret_note = f"regret unavailable for {self.unscored} of {self.decisions} decisions"
-            regret_note += f": {why}" if why else ""
         elif self.unjudged:
             moves = "1 move" if self.unjudged == 1 else f"{self.unjudged} moves"
             regret_note = f"regret unavailable: {moves} could not be judged"
-            regret_note += f": {why}" if why else ""
+        if regret_note and why:
+            regret_note += f": {why}"
         data: dict[str, Any] = {
-            "episodes": self.finished,
-            "mean_return": self.mean_return,
-            "return_ci95": _interval(self.return_sum, self.return_sq, self.finished),
+            "episodes": self.finished, "mean_return": self.mean_return,
+            "return_ci95": self.returns.half_width(),
             "regret": {
-                "mean_per_episode": self.mean_regret,
-                "ci95": _interval(self.regret_sum, self.regret_sq, self.regret_episodes),
-                "total": self.regret_sum if self.regret_episodes else None,
-                "episodes": self.regret_episodes, "unit": "expected return lost to the optimum",
+                "mean_per_episode": self.mean_regret, "ci95": self.regrets.half_width(),
+                "total": self.regrets.total if self.regrets.episodes else None,
+                "episodes": self.regrets.episodes, "unit": "expected return lost to the optimum",
                 "note": regret_note,
             },
-            "decisions": self.decisions,
-            "agreed": self.agreed,
-            "agreement": self.agreement,
+            "decisions": self.decisions, "agreed": self.agreed, "agreement": self.agreement,
             "recent_episodes": [e.to_json() for e in self.recent],
         }
         if running and self.current is not None and not self.current.done:

@@ -1,9 +1,5 @@
-"""`Seat`: one game played through its protocol handler, each move judged before it is made.
-
-A seat asks the game's handler for the hint before every move, so the move's
-verdict (optimal or not, and its exact regret) is known whatever the player
-asked for; what the player is shown of it is up to the front end.
-"""
+"""`Seat`: one game played through its protocol handler, each move judged (from the game's
+hint) before it is made, whatever the player asked for."""
 
 from __future__ import annotations
 
@@ -54,10 +50,7 @@ class Seat:
 
     def reset(self, seed: int | None = None) -> dict[str, Any]:
         """Start an episode (the first uses the seat's seed unless `seed` is given)."""
-        request: dict[str, Any] = {"cmd": "reset"}
-        if seed is not None:
-            request["seed"] = seed
-        answer = self.ask(request)
+        answer = self.ask({"cmd": "reset"} if seed is None else {"cmd": "reset", "seed": seed})
         used = seed if seed is not None else (self.seed if self._episodes == 0 else None)
         self._episodes += 1
         self.score.start_episode(used)
@@ -67,10 +60,9 @@ class Seat:
     def judge(self, name: str) -> Verdict:
         """The verdict on taking action `name` in the current state (from the game's hint)."""
         try:
-            hint = self.ask({"cmd": "hint"})
+            return Verdict.from_hint(self.hint(), name)
         except SeatError as exc:
             return Verdict(False, note=str(exc))
-        return Verdict.from_hint(hint, name)
 
     def step(self, action: int | str) -> tuple[dict[str, Any], Verdict]:
         """Make a move; its answer and its verdict. SeatError if the move is refused."""

@@ -1,12 +1,9 @@
-"""`GameTable`: several games at once, bounded in number, idle ones expiring.
-
-Games get increasing integer ids. A game not used for `idle_timeout` seconds
-(by the table's clock, injectable for tests) is closed the next time the table
-is used; asking for it afterwards says it expired rather than that it never was.
-"""
+"""`GameTable`: several games at once by increasing integer ids, bounded in number; one idle
+for `idle_timeout` seconds is closed at the table's next use (and said to have expired)."""
 
 from __future__ import annotations
 
+import itertools
 import time
 from collections import OrderedDict
 from collections.abc import Callable, Mapping, Sequence
@@ -45,7 +42,7 @@ class GameTable:
         self.clock = clock
         self._games: dict[int, _Entry] = {}
         self._ended: OrderedDict[int, str] = OrderedDict()  # id -> why it ended
-        self._next_id = 1
+        self._ids = itertools.count(1)
 
     def __len__(self) -> int:
         return len(self._games)
@@ -87,8 +84,7 @@ class GameTable:
         except ValueError:
             seat.close()
             raise
-        game_id = self._next_id
-        self._next_id += 1
+        game_id = next(self._ids)
         self._games[game_id] = _Entry(seat, self.clock())
         return game_id, seat
 

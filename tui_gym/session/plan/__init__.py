@@ -61,19 +61,11 @@ def plan_json(result: PlanResult) -> dict[str, Any]:
     policy = model.base_rows(planner.policy)
     states = [game.states.json_observation(obs) for obs in observations]
     return {
-        "game": game.name,
-        "env_kwargs": dict(result.kwargs),
-        "method": result.method,
-        "start": result.start,
-        "gamma": planner.gamma,
-        "theta": planner.theta,
-        "in_place": planner.in_place,
-        "converged": result.converged,
-        "sweeps": planner.sweeps,
-        "iterations": planner.iterations,
-        "start_value": model.start_value(planner.v),
-        "limited_value": model.limited_value(planner.policy),
-        "episode_limit": model.horizon,
+        "game": game.name, "env_kwargs": dict(result.kwargs), "method": result.method,
+        "start": result.start, "gamma": planner.gamma, "theta": planner.theta,
+        "in_place": planner.in_place, "converged": result.converged, "sweeps": planner.sweeps,
+        "iterations": planner.iterations, "start_value": model.start_value(planner.v),
+        "limited_value": model.limited_value(planner.policy), "episode_limit": model.horizon,
         "values": [{"state": s, "value": float(v)} for s, v in zip(states, values, strict=True)],
         "policy": [{"state": s, "actions": [names[a] for a in np.flatnonzero(row > 0)]}
                    for s, row in zip(states, policy, strict=True)],

@@ -14,20 +14,12 @@ from tui_gym.core.heatmap import Heatmap
 from tui_gym.games import Game
 from tui_gym.games.planning import PlanModel
 
-__all__ = ["number_text", "numbered", "plan_panels", "plan_table"]
+__all__ = ["number_text", "numbered", "plan_panels"]
 
 _NOT_OPTIMAL = re.compile(r"not (?:an )?optimal(?: move| stake)?")
 _TITLE = re.compile(r"max Q|Q-value")
 _ABOUT_ACTIONS = re.compile(r"arrow|number|greedy|tie|\*|jumps")
 _GREEDY = re.compile(r"\bthe greedy\b|\bgreedy\b")
-
-
-def plan_table(plan: PlanModel, v: npt.ArrayLike, policy: npt.ArrayLike) -> np.ndarray:
-    """`[B, A]`: the value where the policy acts, something lower elsewhere."""
-    values = plan.base_values(np.asarray(v, dtype=np.float64))[:, None]
-    taken = plan.base_rows(np.asarray(policy)) > 0
-    with np.errstate(invalid="ignore"):
-        return np.where(taken, values, values - np.maximum(1.0, np.abs(values)))
 
 
 def number_text(value: float, largest: float) -> str:
@@ -58,7 +50,11 @@ def plan_panels(
     changed: npt.ArrayLike, focus: Any = None, numbers: bool = False,
 ) -> list[Heatmap]:
     """The game's heatmap panels of the plan, the changed states marked."""
-    q = plan_table(plan, v, policy)
+    # A table the heatmaps draw: the value where the policy acts, something lower elsewhere.
+    values = plan.base_values(np.asarray(v, dtype=np.float64))[:, None]
+    taken = plan.base_rows(np.asarray(policy)) > 0
+    with np.errstate(invalid="ignore"):
+        q = np.where(taken, values, values - np.maximum(1.0, np.abs(values)))
     moved = np.asarray(plan.base_rows(np.asarray(changed)), dtype=bool)
     marks = np.broadcast_to(~moved[:, None], q.shape)
     panels = game.layout.heatmaps(q, kwargs, focus, marks)

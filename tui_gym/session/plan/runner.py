@@ -95,26 +95,18 @@ class PlanRunner:
         self._send(self._one_step)
 
     def run(self, to_end: bool = False) -> None:
-        """Step the method until it is done or paused: at the chosen speed, or `to_end` as
-        fast as it goes."""
+        """Step the method until done or paused: at the chosen speed, or `to_end` at full speed."""
         def start() -> None:
             self._start_run()
             self._hurry = to_end
         self._send(start)
 
     def pause(self) -> None:
-        def stop() -> None:
-            self._running = self._rerun = False
-        self._send(stop)
+        self._send(self._stop)
 
     def toggle(self) -> None:
         """Run when paused, pause when running."""
-        def flip() -> None:
-            if self._running:
-                self._running = self._rerun = False
-            else:
-                self._start_run()
-        self._send(flip)
+        self._send(lambda: self._stop() if self._running else self._start_run())
 
     def improve(self) -> None:
         """One policy improvement on the current values."""
@@ -147,15 +139,14 @@ class PlanRunner:
         the runner's thread) with zero values; a run stops."""
         def restart() -> None:
             self._planner.restart(policy() if callable(policy) else policy)
-            self._running = self._rerun = False
+            self._stop()
             self._kept.clear()
             self._step_words = "started over"
         self._send(restart)
 
     def set_model(self, model: FiniteMDP,
                   limited: Callable[[FloatArray], float] | None = None) -> None:
-        """Plan on an edited world, from the current values when the states are the same; a
-        run nobody paused starts again."""
+        """Plan on an edited world (same states: from the current values); a run goes on."""
         def change() -> None:
             self._planner.set_model(model)
             self._limited, self._figures_of = limited, None
@@ -174,6 +165,9 @@ class PlanRunner:
     def _settled(self, setter: Callable[[float], None], value: float) -> None:
         setter(value)
         self._step_words = ""
+
+    def _stop(self) -> None:
+        self._running = self._rerun = False
 
     def _start_run(self) -> None:
         self._hurry = False
@@ -240,7 +234,7 @@ class PlanRunner:
         if planner.done(self._method):
             self._running = False
         elif planner.sweeps >= self._run_limit or not np.isfinite(planner.v).all():
-            self._running = self._rerun = False
+            self._stop()
             self._note = (f"stopped after {planner.sweeps:,} sweeps: the values do not settle "
                           "(with γ = 1 a policy that never ends has no finite value)")
 

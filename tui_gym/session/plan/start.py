@@ -24,8 +24,7 @@ class StartError(ValueError):
 def start_policy(
     plan: PlanModel, choice: str, gamma: float, agent_q: npt.ArrayLike | None = None
 ) -> FloatArray:
-    """The `[S, A]` policy `choice` names on `plan`'s states, among the actions each state
-    offers."""
+    """The `[S, A]` policy `choice` names on `plan`'s states, among the actions each offers."""
     model, allowed = plan.model, plan.allowed()
     weights: npt.NDArray[np.generic]
     if choice == "random":
@@ -49,8 +48,7 @@ def start_policy(
 
 
 def saved_agent_q(path: str | Path, game: Game, kwargs: dict) -> FloatArray:
-    """The Q-table rows of the base states of the agent saved at `path`, which must be an
-    agent of `game` with these arguments."""
+    """The base states' Q-table rows of the agent of `game` with `kwargs` saved at `path`."""
     from tui_gym.session.session import Session
 
     session = Session.load(path)

@@ -6,8 +6,7 @@ from typing import Any
 
 
 def game_named(env_id: str) -> Any | None:
-    """The game that plays `env_id`, or None for a game this tui-gym does not know (an
-    id that would import a module is one: a recording never imports code)."""
+    """The game that plays `env_id`, or None for one unknown (or that would import code)."""
     if not env_id:
         return None
     from tui_gym.games import game_for

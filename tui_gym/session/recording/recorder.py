@@ -19,7 +19,7 @@ from tui_gym.core.recording.format import (
     STEP,
     encode_line,
 )
-from tui_gym.core.recording.judge import NOTHING_KNOWN, Assessment, Judgement, MoveJudge
+from tui_gym.core.recording.judge import NOTHING_KNOWN, Assessment, MoveJudge
 from tui_gym.core.recording.writer import LineWriter
 
 if TYPE_CHECKING:
@@ -56,8 +56,7 @@ class Recorder:
         seed: int | None = None, append: bool = False,
         on_failure: Callable[[str], None] | None = None,
     ) -> None:
-        """Open `path` (emptied unless `append`; OSError when it cannot be opened) and,
-        given a session, write its header."""
+        """Open `path` (emptied unless `append`; OSError if not) and write `session`'s header."""
         self.path = Path(path)
         self.source = source
         self.seed = seed
@@ -67,7 +66,7 @@ class Recorder:
         self._writer: LineWriter | None = LineWriter(self.path, truncate=not append)
         self._header_key: tuple[Any, ...] | None = None
         self._played: Any = None
-        self._judge: MoveJudge | None = None
+        self._judge: MoveJudge  # set with the header (`use_session`)
         self._episode: _Episode | None = None
         self._game: HumanGame | None = None  # whose episode is open (`game_reset`)
         if session is not None:
@@ -84,23 +83,18 @@ class Recorder:
         return self._episode is not None
 
     # --- the calls -------------------------------------------------------------
-    def use_session(self, session: Session, seed: int | None = None) -> None:
+    def use_session(self, session: Session) -> None:
         """Record the session's game from here on: a new header when it differs from the last."""
         from tui_gym.core.wrappers import format_wrapper_spec
 
-        if seed is not None:
-            self.seed = seed
-        key = (
-            session.env_id, tuple(sorted((k, repr(v)) for k, v in session.env_kwargs.items())),
-            tuple(session.applied),
-        )
-        self._played = session.game
+        key = (session.env_id, tuple(sorted((k, repr(v)) for k, v in session.env_kwargs.items())),
+               tuple(session.applied))
+        self._played = game = session.game
         if key == self._header_key:
             return
         self.end_episode()
         self._header_key = key
-        self._judge = MoveJudge(session.game, session.env_kwargs)
-        game = session.game
+        self._judge = MoveJudge(game, session.env_kwargs)
         self._write({
             "type": HEADER, "format": FORMAT_NAME, "version": FORMAT_VERSION,
             "tui_gym": __version__, "source": self.source, "game": game.name, "title": game.title,
@@ -110,54 +104,6 @@ class Recorder:
             "episode_noun": game.episode_noun,
             "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         })
-
-    def start_episode(
-        self, env: Any, observation: Any, *, seed: int | None = None,
-        info: Mapping[str, Any] | None = None,
-    ) -> None:
-        """A new episode has been reset to `observation` (an open one ends, abandoned)."""
-        if self._played is None:
-            raise ValueError("no game to record: pass a session or call use_session first")
-        self.end_episode()
-        self.episodes += 1
-        episode = self._episode = _Episode(self.episodes)
-        record: dict[str, Any] = {"type": START, "episode": episode.number}
-        if seed is not None:
-            record["seed"] = seed
-        record.update(self._state(env, observation, info))
-        self._write(record)
-        episode.pending = self._assess(env)
-
-    def step(
-        self, env: Any, action: int, observation: Any, reward: float, terminated: bool,
-        truncated: bool, *, info: Mapping[str, Any] | None = None, note: str | None = None,
-    ) -> Judgement:
-        """Record one move (made on `env`, now in its resulting state); its judgement."""
-        episode = self._episode
-        if episode is None:
-            raise ValueError("no episode is being recorded: call start_episode first")
-        action = int(action)
-        judgement = episode.pending.judge(action)
-        episode.steps += 1
-        episode.total += float(reward)
-        if episode.regret is not None:
-            episode.regret = None if judgement.regret is None else episode.regret + judgement.regret
-        episode.terminated, episode.truncated = bool(terminated), bool(truncated)
-        names = self._played.action_names
-        record: dict[str, Any] = {
-            "type": STEP, "episode": episode.number, "step": episode.steps, "action": action,
-            "action_name": names[action] if 0 <= action < len(names) else str(action),
-            "reward": float(reward), "terminated": episode.terminated,
-            "truncated": episode.truncated, **self._state(env, observation, info),
-            "verdict": judgement.verdict, "regret": judgement.regret,
-            "optimal": [names[a] for a in judgement.optimal if 0 <= a < len(names)],
-        }
-        if note:
-            record["note"] = note
-        self._write(record)
-        done = episode.terminated or episode.truncated
-        episode.pending = NOTHING_KNOWN if done else self._assess(env)
-        return judgement
 
     def end_episode(self) -> None:
         """Write the open episode's end line (nothing when none is open)."""
@@ -186,31 +132,50 @@ class Recorder:
 
     # --- what a HumanGame calls ------------------------------------------------
     def game_reset(self, game: HumanGame, seed: int | None = None) -> None:
-        """`game` has just been reset (with `seed`, when one was given)."""
-        if game.last is None or not self.active:
+        """`game` was just reset (with `seed`, if given): a new episode, an open one abandoned."""
+        last = game.last
+        if last is None or not self.active:
             return
         self.use_session(game.session)
-        self.start_episode(game.env, game.last.observation, seed=seed, info=game.last.info)
+        self.end_episode()
+        self.episodes += 1
+        episode = self._episode = _Episode(self.episodes)
+        record: dict[str, Any] = {"type": START, "episode": episode.number}
+        if seed is not None:
+            record["seed"] = seed
+        self._write({**record, **self._state(game.env, last.observation, last.info)})
+        episode.pending = self._judge.assess(game.env)
         self._game = game
 
     def game_step(self, game: HumanGame) -> None:
-        """`game` has just made a move."""
-        last = game.last
-        if last is None or last.action is None or self._episode is None or game is not self._game:
+        """`game` has just made a move: recorded with the coach's judgement."""
+        last, episode = game.last, self._episode
+        if last is None or last.action is None or episode is None or game is not self._game:
             return  # an episode whose start this recording did not see
-        self.step(game.env, last.action, last.observation, last.reward, last.terminated,
-                  last.truncated, info=last.info)
+        action = int(last.action)
+        judgement = episode.pending.judge(action)
+        episode.steps += 1
+        episode.total += last.reward
+        if episode.regret is not None:
+            episode.regret = None if judgement.regret is None else episode.regret + judgement.regret
+        episode.terminated, episode.truncated = last.terminated, last.truncated
+        names = self._played.action_names
+        self._write({
+            "type": STEP, "episode": episode.number, "step": episode.steps, "action": action,
+            "action_name": names[action] if 0 <= action < len(names) else str(action),
+            "reward": last.reward, "terminated": episode.terminated,
+            "truncated": episode.truncated, **self._state(game.env, last.observation, last.info),
+            "verdict": judgement.verdict, "regret": judgement.regret,
+            "optimal": [names[a] for a in judgement.optimal if 0 <= a < len(names)],
+        })
         if last.done:
             self.end_episode()
+        else:
+            episode.pending = self._judge.assess(game.env)
 
     # --- helpers ---------------------------------------------------------------
-    def _assess(self, env: Any) -> Assessment:
-        return self._judge.assess(env) if self._judge is not None else NOTHING_KNOWN
-
     def _state(self, env: Any, observation: Any, info: Mapping[str, Any] | None) -> dict[str, Any]:
-        """The observation, the board's scene and the state in words (None for each that
-        fails: a recording goes on without a picture, e.g. where a wrapper reshaped the
-        observation)."""
+        """The observation, the scene and the state in words (None for each that fails)."""
         states = self._played.states
         parts: dict[str, tuple[Callable[[Any], Any], Any]] = {
             "observation": (states.json_observation, observation),

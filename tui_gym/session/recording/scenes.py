@@ -47,13 +47,11 @@ def _cell_table(value: Any, rows: int, cols: int) -> bool:
 
 
 def _cards(scene: Mapping[str, Any]) -> bool:
-    hands_fit = all(
+    return all(
         isinstance(scene.get(who, []), list) and len(scene.get(who, [])) <= MAX_CARDS
         and all(_int(card, 1, 11) for card in scene.get(who, []))
-        for who in ("player", "dealer"))
-    return hands_fit and all(
-        _optional_int(scene.get(f"{who}_total"), 0, 11 * MAX_CARDS) for who in ("player", "dealer")
-    ) and isinstance(scene.get("player_usable", False), bool)
+        and _optional_int(scene.get(f"{who}_total"), 0, 11 * MAX_CARDS)
+        for who in ("player", "dealer")) and isinstance(scene.get("player_usable", False), bool)
 
 
 def _grid(scene: Mapping[str, Any]) -> bool:
@@ -108,7 +106,6 @@ _CHECKS: dict[str, Callable[[Mapping[str, Any]], bool]] = {
 
 
 def scene_fits(board: str, scene: Mapping[str, Any]) -> bool:
-    """Whether the board of kind `board` can draw `scene` (any scene, for a kind of board
-    this tui-gym does not have: nothing draws it)."""
+    """Whether the board of kind `board` can draw `scene` (any, for a kind there is none of)."""
     check = _CHECKS.get(board)
     return check is None or check(scene)

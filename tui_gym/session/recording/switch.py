@@ -39,10 +39,8 @@ class RecordingSwitch:
             return self.path
         stamp = time.strftime("%Y%m%d-%H%M%S")  # tui-gym-blackjack-20250101-120000.jsonl
         path = self.path or Path.cwd() / f"tui-gym-{game.game.name}-{stamp}{SUFFIX}"
-        self.recorder = Recorder(
-            path, game.session, source=self.source, seed=game.seed, append=self._used,
-            on_failure=self._failed,
-        )
+        self.recorder = Recorder(path, game.session, source=self.source, seed=game.seed,
+                                 append=self._used, on_failure=self._failed)
         self.path, self._used = path, True
         last = game.last
         if last is not None and last.steps == 0 and not last.done:
