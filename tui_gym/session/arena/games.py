@@ -77,24 +77,3 @@ def close_handler(handler: JsonlPlayer) -> None:
     """Close the envs a handler holds (its game's and its session's)."""
     handler.game.close()
     handler.session.env.close()
-
-
-def handler_params(handler: JsonlPlayer) -> dict[str, Any]:
-    """The game's parameters a handler plays with, defaults filled in."""
-    return dict(handler.session.env_kwargs)
-
-
-def session_entry(session: Any) -> GameEntry:
-    """The game a session (say, a saved agent's) plays."""
-    return _entry(session.game)
-
-
-def raw_observation(handler: JsonlPlayer) -> Any:
-    """The current observation as the env gave it (for an in-process agent's table)."""
-    last = handler.game.last
-    return None if last is None else last.observation
-
-
-def attach_recorder(handler: JsonlPlayer, recorder: Any) -> None:
-    """Have a recorder (`tui_gym.core.recording`) write every episode the handler plays."""
-    handler.game.recorder = recorder
