@@ -56,18 +56,15 @@ class ParamField(Horizontal):
 
     def compose(self) -> ComposeResult:
         yield Label(self.param.name)
-        tooltip = f"{self.param.help} ({self.param.describe_range()})".strip()
+        box: Checkbox | Input
         if self.param.kind is bool:
             box = TickBox("", value=bool(self._value), compact=True)
-            box.tooltip = tooltip
-            yield box
-            return
-        field = TextField(
-            value=typed_text(self._value), compact=True, validators=[FieldValidator(self.param)],
-            validate_on=["changed", "submitted"],
-        )
-        field.tooltip = tooltip
-        yield field
+        else:
+            box = TextField(value=typed_text(self._value), compact=True,
+                            validators=[FieldValidator(self.param)],
+                            validate_on=["changed", "submitted"])
+        box.tooltip = f"{self.param.help} ({self.param.describe_range()})".strip()
+        yield box
 
     @property
     def input(self) -> Input:
@@ -90,8 +87,7 @@ class ParamField(Horizontal):
             self.input.value = typed_text(value)
 
     def read(self) -> tuple[Any, str | None]:
-        """(value, None) when the text is valid, else (None, the reason); the input
-        marks itself valid or invalid."""
+        """(value, None) when valid, else (None, the reason); the input marks itself."""
         if self.param.kind is bool:
             return self.query_one(Checkbox).value, None
         self.input.validate(self.input.value)
