@@ -207,9 +207,7 @@ class HyperparameterForm(Vertical):
         event.stop()
         name = (event.input.id or "").removeprefix("hp-")
         result = event.validation_result
-        problem = None
-        if result is not None and not result.is_valid:
-            problem = "; ".join(result.failure_descriptions) or "invalid value"
+        problem = "; ".join(result.failure_descriptions if result else []) or None
         self._mark(name, problem)
         if problem is None and self._between:
             # any fix may settle a rule between fields; read() checks it again
