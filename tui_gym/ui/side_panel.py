@@ -240,10 +240,8 @@ class SidePanel(VerticalScroll):
     Screen.compact SidePanel { width: 34; }
     SidePanel .section { text-style: bold; color: $accent; margin-top: 1; }
     SidePanel #chain { padding: 0 0 1 0; }
-    SidePanel #game-picker { width: 100%; height: auto; }
-    SidePanel #game-picker > RadioButton.-on { text-style: bold; color: $text-accent; }
-    SidePanel #algorithm-picker { width: 100%; height: auto; }
-    SidePanel #algorithm-picker > RadioButton.-on { text-style: bold; color: $text-accent; }
+    SidePanel RadioSet { width: 100%; height: auto; }
+    SidePanel RadioSet > RadioButton.-on { text-style: bold; color: $text-accent; }
     SidePanel #algorithm-summary { color: $text-muted; }
     SidePanel #env-params, SidePanel #wrapper-list { height: auto; }
     SidePanel .field-error { color: $error; display: none; }
