@@ -71,10 +71,8 @@ class ParamField(Horizontal):
         return self.query_one(Input)
 
     def on_resize(self, event: events.Resize) -> None:
-        compact = self.screen.has_class("compact")
-        field = COMPACT_FIELD_WIDTH if compact else FIELD_WIDTH
-        room = self.size.width - field - 1
-        self.set_class(len(self.param.name) > room, "-stacked")
+        field = COMPACT_FIELD_WIDTH if self.screen.has_class("compact") else FIELD_WIDTH
+        self.set_class(len(self.param.name) > self.size.width - field - 1, "-stacked")
 
     def set_value(self, value: Any) -> None:
         """Show a value (without counting as an edit)."""

@@ -273,9 +273,8 @@ class HyperparameterForm(Vertical):
         self._base = hyperparameters
         self._between.clear()
         if rebuild or self._rebuilding:
-            # New fields (the schema is another algorithm's), built once the old ones
-            # are gone: ids repeat between schemas. Values loaded before then are
-            # the ones the new fields start with.
+            # Built once the old fields are gone (ids repeat between schemas), from
+            # the values loaded last.
             if self.is_mounted and not self._rebuilding:
                 self._rebuilding = True
                 self.call_later(self._rebuild)
