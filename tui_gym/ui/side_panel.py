@@ -56,28 +56,23 @@ class ParamField(Horizontal):
 
     def compose(self) -> ComposeResult:
         yield Label(self.param.name)
-        tooltip = f"{self.param.help} ({self.param.describe_range()})".strip()
+        box: Checkbox | Input
         if self.param.kind is bool:
             box = TickBox("", value=bool(self._value), compact=True)
-            box.tooltip = tooltip
-            yield box
-            return
-        field = TextField(
-            value=typed_text(self._value), compact=True, validators=[FieldValidator(self.param)],
-            validate_on=["changed", "submitted"],
-        )
-        field.tooltip = tooltip
-        yield field
+        else:
+            box = TextField(value=typed_text(self._value), compact=True,
+                            validators=[FieldValidator(self.param)],
+                            validate_on=["changed", "submitted"])
+        box.tooltip = f"{self.param.help} ({self.param.describe_range()})".strip()
+        yield box
 
     @property
     def input(self) -> Input:
         return self.query_one(Input)
 
     def on_resize(self, event: events.Resize) -> None:
-        compact = self.screen.has_class("compact")
-        field = COMPACT_FIELD_WIDTH if compact else FIELD_WIDTH
-        room = self.size.width - field - 1
-        self.set_class(len(self.param.name) > room, "-stacked")
+        field = COMPACT_FIELD_WIDTH if self.screen.has_class("compact") else FIELD_WIDTH
+        self.set_class(len(self.param.name) > self.size.width - field - 1, "-stacked")
 
     def set_value(self, value: Any) -> None:
         """Show a value (without counting as an edit)."""
@@ -90,8 +85,7 @@ class ParamField(Horizontal):
             self.input.value = typed_text(value)
 
     def read(self) -> tuple[Any, str | None]:
-        """(value, None) when the text is valid, else (None, the reason); the input
-        marks itself valid or invalid."""
+        """(value, None) when valid, else (None, the reason); the input marks itself."""
         if self.param.kind is bool:
             return self.query_one(Checkbox).value, None
         self.input.validate(self.input.value)
@@ -244,10 +238,8 @@ class SidePanel(VerticalScroll):
     Screen.compact SidePanel { width: 34; }
     SidePanel .section { text-style: bold; color: $accent; margin-top: 1; }
     SidePanel #chain { padding: 0 0 1 0; }
-    SidePanel #game-picker { width: 100%; height: auto; }
-    SidePanel #game-picker > RadioButton.-on { text-style: bold; color: $text-accent; }
-    SidePanel #algorithm-picker { width: 100%; height: auto; }
-    SidePanel #algorithm-picker > RadioButton.-on { text-style: bold; color: $text-accent; }
+    SidePanel RadioSet { width: 100%; height: auto; }
+    SidePanel RadioSet > RadioButton.-on { text-style: bold; color: $text-accent; }
     SidePanel #algorithm-summary { color: $text-muted; }
     SidePanel #env-params, SidePanel #wrapper-list { height: auto; }
     SidePanel .field-error { color: $error; display: none; }

@@ -207,9 +207,7 @@ class HyperparameterForm(Vertical):
         event.stop()
         name = (event.input.id or "").removeprefix("hp-")
         result = event.validation_result
-        problem = None
-        if result is not None and not result.is_valid:
-            problem = "; ".join(result.failure_descriptions) or "invalid value"
+        problem = "; ".join(result.failure_descriptions if result else []) or None
         self._mark(name, problem)
         if problem is None and self._between:
             # any fix may settle a rule between fields; read() checks it again
@@ -275,9 +273,8 @@ class HyperparameterForm(Vertical):
         self._base = hyperparameters
         self._between.clear()
         if rebuild or self._rebuilding:
-            # New fields (the schema is another algorithm's), built once the old ones
-            # are gone: ids repeat between schemas. Values loaded before then are
-            # the ones the new fields start with.
+            # Built once the old fields are gone (ids repeat between schemas), from
+            # the values loaded last.
             if self.is_mounted and not self._rebuilding:
                 self._rebuilding = True
                 self.call_later(self._rebuild)
