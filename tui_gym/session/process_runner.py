@@ -15,6 +15,7 @@ a receiver thread queues what the child says, and `update()` (which every
 property and control calls) takes it in. A child that dies is reaped and
 replaced; one silent for `HANG_SECONDS` while it holds the agent is killed and
 replaced; either way the agent is kept as last handed over, and `error` says so.
+Children fork from a server that imported what they run once (where there is one).
 """
 
 from __future__ import annotations
@@ -85,6 +86,44 @@ def _handover(session: Session) -> Handover:
                     session.trainer.progress())
 
 
+def _context() -> Any:
+    """How children start: forked from a server that imported what every child needs, once,
+    or spawned where there is no fork server."""
+    if "forkserver" not in mp.get_all_start_methods():
+        return mp.get_context("spawn")
+    ctx = mp.get_context("forkserver")
+    ctx.set_forkserver_preload(["tui_gym.session.process_runner", "tui_gym.session.session",
+                                "numba"])
+    return ctx
+
+
+_warming = threading.Lock()
+_warmer: threading.Thread | None = None
+
+
+def _server_ready(wake: threading.Event) -> bool:
+    """Whether a child starts at once. The first call starts the server and waits for it in
+    a thread (its first child does nothing), so no caller waits while it imports; `wake`
+    is set when it is ready."""
+    global _warmer
+    with _warming:
+        if _warmer is None:
+            _warmer = threading.Thread(target=_warm, args=(wake,), name="tui-gym-warm",
+                                       daemon=True)
+            _warmer.start()
+    return not _warmer.is_alive()
+
+
+def _warm(wake: threading.Event) -> None:
+    ctx = _context()
+    if ctx.get_start_method() == "forkserver":
+        with contextlib.suppress(Exception):  # none: the first real child says why
+            process = ctx.Process(target=int, daemon=True)
+            process.start()
+            process.join()
+    wake.set()
+
+
 @dataclass
 class _Request:
     """A start or one-episode request whose agent the child holds."""
@@ -102,7 +141,7 @@ class _Child:
 
     def __init__(self, inbox: collections.deque[tuple[_Child, tuple]],
                  wake: threading.Event) -> None:
-        ctx = mp.get_context("spawn")
+        ctx = _context()
         self.conn, child_conn = ctx.Pipe()
         self.process = ctx.Process(
             target=child_main, args=(child_conn,), name="tui-gym-trainer", daemon=True
@@ -224,6 +263,7 @@ class ProcessRunner(Runner):
         # resource tracker every child registers with starts now: under a running app the
         # standard error it hands on is Textual's capture, which has no file descriptor.
         resource_tracker.ensure_running()
+        _server_ready(self._heard)
         self._child: _Child | None = None
         self._spawn_at = time.monotonic() + SPAWN_DELAY
 
@@ -452,8 +492,10 @@ class ProcessRunner(Runner):
             self._child.send(("pause", request.number))
 
     def _spawn(self) -> None:
-        """The first child, once it is due (see `SPAWN_DELAY`) or asked for."""
-        if self._child is None and self._ended is None and not (self._closed or self._broken):
+        """The first child, once it is due (see `SPAWN_DELAY`) or asked for, and the server
+        it starts from is ready."""
+        if self._child is None and self._ended is None and not (self._closed or self._broken) \
+                and _server_ready(self._heard):
             self._start_child("a training process", "training is off for this session")
 
     def _start_child(self, what: str, then: str) -> bool:
