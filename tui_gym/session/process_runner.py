@@ -101,16 +101,18 @@ _warming = threading.Lock()
 _warmer: threading.Thread | None = None
 
 
-def _server_ready(wake: threading.Event) -> bool:
-    """Whether a child starts at once. The first call starts the server and waits for it in
-    a thread (its first child does nothing), so no caller waits while it imports; `wake`
-    is set when it is ready."""
+def _server_ready(wake: threading.Event, wait: bool = False) -> bool:
+    """Whether a child starts at once (with `wait`, once it does). The first call starts the
+    server and waits for it in a thread (its first child does nothing), so no caller waits
+    while it imports; `wake` is set when it is ready."""
     global _warmer
     with _warming:
         if _warmer is None:
             _warmer = threading.Thread(target=_warm, args=(wake,), name="tui-gym-warm",
                                        daemon=True)
             _warmer.start()
+    if wait:
+        _warmer.join()
     return not _warmer.is_alive()
 
 
@@ -316,7 +318,7 @@ class ProcessRunner(Runner):
     @property
     def child_pid(self) -> int | None:
         """The training process's id (None when there is none)."""
-        self._spawn()
+        self._spawn(wait=True)
         child = self._child
         return None if child is None else child.process.pid
 
@@ -491,11 +493,11 @@ class ProcessRunner(Runner):
             request.pause_sent = True
             self._child.send(("pause", request.number))
 
-    def _spawn(self) -> None:
+    def _spawn(self, wait: bool = False) -> None:
         """The first child, once it is due (see `SPAWN_DELAY`) or asked for, and the server
-        it starts from is ready."""
+        it starts from is ready (with `wait`, once it is)."""
         if self._child is None and self._ended is None and not (self._closed or self._broken) \
-                and _server_ready(self._heard):
+                and _server_ready(self._heard, wait):
             self._start_child("a training process", "training is off for this session")
 
     def _start_child(self, what: str, then: str) -> bool:
