@@ -115,6 +115,24 @@ class Terminal:
                 os.close(self.master)
 
 
+def descendants(pid: int) -> list[int]:
+    """Every process below `pid`: the children of any of its threads, theirs, and so on."""
+    found: list[int] = []
+    for path in Path(f"/proc/{pid}/task").glob("*/children"):
+        with contextlib.suppress(OSError):
+            for child in map(int, path.read_text().split()):
+                found += [child, *descendants(child)]
+    return found
+
+
+def ended(pid: int) -> bool:
+    """Whether a process has ended (gone, or a zombie waiting for whoever adopted it)."""
+    try:
+        return "zombie" in Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return True
+
+
 def console_script() -> str:
     found = shutil.which("tui-gym", path=str(Path(sys.executable).parent))
     if found is None:

@@ -13,20 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from .terminal import DEADLINE, Terminal, console_script
-
-
-def ended(pid: int) -> bool:
-    """Whether a process has ended (gone, or a zombie waiting for whoever adopted it)."""
-    try:
-        return "zombie" in Path(f"/proc/{pid}/status").read_text()
-    except OSError:
-        return True
-
-
-def children(pid: int) -> list[int]:
-    path = Path(f"/proc/{pid}/task/{pid}/children")
-    return [int(p) for p in path.read_text().split()] if path.exists() else []
+from .terminal import DEADLINE, Terminal, console_script, descendants, ended
 
 
 def wait_ended(process: subprocess.Popen[bytes], what: str) -> None:
@@ -50,7 +37,7 @@ def test_the_app_ends_when_its_terminal_closes(tmp_path: Path, hangup_signal: bo
         term.type("-")  # animated: training still runs when the terminal goes
         term.type(" ")
         term.wait_for_text("running")
-        trainers = children(term.process.pid)
+        trainers = descendants(term.process.pid)
         term.hang_up()
         if hangup_signal:  # as a terminal that closes signals its processes
             os.killpg(term.process.pid, signal.SIGHUP)

@@ -29,7 +29,7 @@ from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.train_view import TrainView
 
-from .terminal import Terminal, console_script
+from .terminal import Terminal, console_script, descendants, ended
 from .waiting import press_busy, quit_busy, send_key, wait_for, wait_until
 
 DEADLINE = 20.0  # seconds; generous for a loaded machine, never reached when things work
@@ -335,19 +335,6 @@ def test_an_unexpected_error_ends_the_app_with_one_line_and_a_crash_log(log_dir,
     assert "Traceback" in logged and "the tick went wrong" in logged and "_tick" in logged
 
 
-def child_pids(pid: int) -> list[int]:
-    path = Path(f"/proc/{pid}/task/{pid}/children")
-    return [int(p) for p in path.read_text().split()] if path.exists() else []
-
-
-def ended(pid: int) -> bool:
-    """Whether a process has ended (gone, or a zombie waiting for whoever adopted it)."""
-    try:
-        return "zombie" in Path(f"/proc/{pid}/status").read_text()
-    except OSError:
-        return True
-
-
 def test_sigterm_restores_the_terminal_and_ends_the_training_process(log_dir) -> None:
     term = Terminal([console_script(), "--env", "gridworld"], {"TUI_GYM_LOG_DIR": str(log_dir)})
     try:
@@ -359,7 +346,7 @@ def test_sigterm_restores_the_terminal_and_ends_the_training_process(log_dir) ->
         term.type("-")
         term.type(" ")
         term.wait_for_text("running")
-        children = child_pids(term.process.pid)
+        children = descendants(term.process.pid)
         term.process.send_signal(signal.SIGTERM)
         code = term.exit_code()
     finally:

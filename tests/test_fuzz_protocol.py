@@ -3,6 +3,7 @@ session goes on to the last line; seeded, so every run sends the same lines."""
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import random
@@ -11,7 +12,7 @@ import sys
 
 import pytest
 
-from tui_gym.session.protocol import MAX_LINE_BYTES, JsonlPlayer
+from tui_gym.session.protocol import MAX_LINE_BYTES, JsonlPlayer, serve
 from tui_gym.session.session import Session
 
 from .test_fuzz_params import nasty_text, nasty_value
@@ -81,20 +82,15 @@ def strict_json(line: bytes) -> dict:
     return value
 
 
-@pytest.mark.parametrize("game", ["blackjack", "gridworld"])
-def test_every_line_is_answered_and_the_session_goes_on(game: str) -> None:
-    lines = [b'{"cmd": "reset", "seed": 1}', *nasty_lines(SEED, LINES),
-             b'{"cmd": "help", "id": "end"}']
-    proc = subprocess.run(
-        [sys.executable, "-m", "tui_gym", "play", game, "--jsonl", "--seed", "0"],
-        input=b"".join(line + b"\n" for line in lines),
-        capture_output=True,
-        timeout=120,
-        env={**os.environ, "LC_ALL": "C.UTF-8"},
-    )
-    assert proc.returncode == 0, proc.stderr.decode(errors="replace")[-2000:]
-    assert proc.stderr == b""
-    responses = [strict_json(line) for line in proc.stdout.splitlines()]
+def _lines() -> list[bytes]:
+    return [b'{"cmd": "reset", "seed": 1}', *nasty_lines(SEED, LINES),
+            b'{"cmd": "help", "id": "end"}']
+
+
+def _check_answers(lines: list[bytes], answers: list[bytes]) -> None:
+    """One strict-JSON answer a line that is not blank, errors on one short line, and the
+    session still answering at the last line."""
+    responses = [strict_json(line) for line in answers]
     asked = [line for line in lines if line.strip()]  # blank lines are skipped
     assert len(responses) == len(asked)
     assert responses[-1]["id"] == "end" and responses[-1]["commands"]
@@ -102,6 +98,30 @@ def test_every_line_is_answered_and_the_session_goes_on(game: str) -> None:
         if "error" in response:
             assert "\n" not in response["error"] and len(response["error"]) < 300
             assert "Traceback" not in response["error"]
+
+
+def test_every_line_is_answered_and_the_session_goes_on() -> None:
+    """Through the command's own pipes and encoding; every game's lines in process below."""
+    lines = _lines()
+    proc = subprocess.run(
+        [sys.executable, "-m", "tui_gym", "play", "blackjack", "--jsonl", "--seed", "0"],
+        input=b"".join(line + b"\n" for line in lines),
+        capture_output=True,
+        timeout=120,
+        env={**os.environ, "LC_ALL": "C.UTF-8"},
+    )
+    assert proc.returncode == 0, proc.stderr.decode(errors="replace")[-2000:]
+    assert proc.stderr == b""
+    _check_answers(lines, proc.stdout.splitlines())
+
+
+@pytest.mark.parametrize("game", ["blackjack", "gridworld"])
+def test_every_line_is_answered_by_the_commands_loop_in_process(game: str) -> None:
+    lines = _lines()
+    out = io.StringIO()
+    stdin = io.BytesIO(b"".join(line + b"\n" for line in lines))
+    assert serve(JsonlPlayer(Session(game), seed=0), stdin, out) == 0
+    _check_answers(lines, out.getvalue().encode().splitlines())
 
 
 def test_the_player_answers_every_line_in_process() -> None:

@@ -28,7 +28,7 @@ def test_one_step_is_one_transition_explained(name: str) -> None:
     try:
         for expected in (1, 2):
             runner.run_one_step()
-            assert runner.wait_idle(5.0)
+            assert runner.wait_idle(DEADLINE)  # the first step may compile the rule
             assert runner.session.trainer.steps == expected
         event = runner.last_event
         record = event.last_update

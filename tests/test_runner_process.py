@@ -160,3 +160,17 @@ def test_a_closed_child_ends_by_itself(monkeypatch) -> None:
     assert reaped(child) and child not in killed
     runner.close(wait=True)  # again: nothing left to end
     assert child not in killed
+
+
+@pytest.mark.parametrize("methods", [["forkserver", "spawn"], ["spawn"]],
+                         ids=["fork-server", "no-fork-server"])
+def test_a_child_trains_whether_it_forks_from_the_server_or_is_spawned(monkeypatch,
+                                                                       methods) -> None:
+    monkeypatch.setattr(process_runner.mp, "get_all_start_methods", lambda: methods)
+    runner = ProcessRunner(Session("blackjack", hp=QLearning.hyperparameters(episodes=50), seed=0))
+    try:
+        assert runner.start() and runner.wait_idle(DEADLINE)
+        assert runner.session.trainer.episodes == 50
+        assert runner._child is not None and runner._child.process._start_method == methods[0]
+    finally:
+        runner.close()

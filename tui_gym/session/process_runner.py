@@ -7,6 +7,7 @@ comes back lands in the agent it was made from: after a reset or a switch, a lat
 changes nothing shown. Sender and receiver threads talk to the child; `update()` takes in
 what it said. A child that dies, or is silent for `HANG_SECONDS` while holding the agent, is
 replaced, the agent kept as last handed over, and `error` says so.
+Children fork from a server that imported what they run (where there is one).
 """
 
 from __future__ import annotations
@@ -77,6 +78,46 @@ def _handover(session: Session) -> Handover:
                     session.trainer.progress())
 
 
+def _context() -> Any:
+    """How children start: forked from a server that imported what every child needs, once,
+    or spawned where there is no fork server."""
+    if "forkserver" not in mp.get_all_start_methods():
+        return mp.get_context("spawn")
+    ctx = mp.get_context("forkserver")
+    ctx.set_forkserver_preload(["tui_gym.session.process_runner", "tui_gym.session.session",
+                                "numba"])
+    return ctx
+
+
+_warming = threading.Lock()
+_warmer: threading.Thread | None = None
+
+
+def _server_ready(wake: threading.Event, wait: bool = False) -> bool:
+    """Whether a child starts at once (with `wait`, once it does). The first call starts the
+    server and waits for it in a thread (its first child does nothing), so no caller waits
+    while it imports; `wake` is set when it is ready."""
+    global _warmer
+    with _warming:
+        if _warmer is None:
+            _warmer = threading.Thread(target=_warm, args=(wake,), name="tui-gym-warm",
+                                       daemon=True)
+            _warmer.start()
+    if wait:
+        _warmer.join()
+    return not _warmer.is_alive()
+
+
+def _warm(wake: threading.Event) -> None:
+    ctx = _context()
+    if ctx.get_start_method() == "forkserver":
+        with contextlib.suppress(Exception):  # none: the first real child says why
+            process = ctx.Process(target=int, daemon=True)
+            process.start()
+            process.join()
+    wake.set()
+
+
 @dataclass
 class _Request:
     """A start or one-episode request whose agent the child holds."""
@@ -94,7 +135,7 @@ class _Child:
 
     def __init__(self, inbox: collections.deque[tuple[_Child, tuple]],
                  wake: threading.Event) -> None:
-        ctx = mp.get_context("spawn")
+        ctx = _context()
         self.conn, child_conn = ctx.Pipe()
         self.process = ctx.Process(
             target=child_main, args=(child_conn,), name="tui-gym-trainer", daemon=True
@@ -211,6 +252,7 @@ class ProcessRunner(Runner):
         # resource tracker every child registers with starts now: under a running app the
         # standard error it hands on is Textual's capture, which has no file descriptor.
         resource_tracker.ensure_running()
+        _server_ready(self._heard)
         self._child: _Child | None = None
         self._spawn_at = time.monotonic() + SPAWN_DELAY
 
@@ -263,7 +305,7 @@ class ProcessRunner(Runner):
     @property
     def child_pid(self) -> int | None:
         """The training process's id (None when there is none)."""
-        self._spawn()
+        self._spawn(wait=True)
         child = self._child
         return None if child is None else child.process.pid
 
@@ -436,9 +478,11 @@ class ProcessRunner(Runner):
             request.pause_sent = True
             self._child.send(("pause", request.number))
 
-    def _spawn(self) -> None:
-        """The first child, once it is due (see `SPAWN_DELAY`) or asked for."""
-        if self._child is None and self._ended is None and not (self._closed or self._broken):
+    def _spawn(self, wait: bool = False) -> None:
+        """The first child, once it is due (see `SPAWN_DELAY`) or asked for, and the server
+        it starts from is ready (with `wait`, once it is)."""
+        if self._child is None and self._ended is None and not (self._closed or self._broken) \
+                and _server_ready(self._heard, wait):
             self._start_child("a training process", "training is off for this session")
 
     def _start_child(self, what: str, then: str) -> bool:
