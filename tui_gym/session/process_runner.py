@@ -170,7 +170,7 @@ class _Child:
                 return
             try:
                 self.conn.send_bytes(data)
-            except (OSError, ValueError):  # the child is gone: the receiver tells
+            except (OSError, ValueError, TypeError):  # the child is gone: the receiver tells
                 return
 
     def _receive_loop(self) -> None:
@@ -186,7 +186,8 @@ class _Child:
                             self.process.kill()
                     continue
                 message = conn.recv()
-            except (EOFError, OSError, ValueError, pickle.UnpicklingError):
+            # TypeError: the connection was closed (by `reap`) while this thread read it
+            except (EOFError, OSError, ValueError, TypeError, pickle.UnpicklingError):
                 break
             with self._lock:
                 self.ready = True
