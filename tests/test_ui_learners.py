@@ -122,10 +122,10 @@ async def test_epsilon_changes_live_then_the_form_follows_the_algorithm() -> Non
         send_key(pilot, "enter")
         await wait_until(pilot, lambda: app.session.agent.epsilon == 0.2, "epsilon in force")
         assert app.runner.running and app.session.agent.hp.learning_rate == 0.05
-        seen = app.runner.latest.episodes
-        await wait_until(pilot, lambda: app.runner.latest.episodes > seen + 5_000,
-                         "more episodes")
-        assert app.runner.latest.series["epsilon"][-1] < 0.25  # the curve shows it
+        # The curve shows it once its last point is made of episodes after the change (a
+        # point spans more episodes the longer the run: no fixed count of episodes will do).
+        await wait_until(pilot, lambda: app.runner.latest.series["epsilon"][-1] < 0.25,
+                         "the epsilon curve at the new value")
 
         # The form follows the algorithm, and a trained agent asks before a switch.
         send_key(pilot, "space")  # pause
