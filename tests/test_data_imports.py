@@ -13,8 +13,7 @@ import pytest
 
 from tests.test_storage import _with_meta
 from tui_gym.cli import main
-from tui_gym.games import UnknownGameError, resolve_env_id
-from tui_gym.session.recording.games import game_named
+from tui_gym.games import UnknownGameError, game_for, resolve_env_id
 from tui_gym.session.session import Session
 from tui_gym.session.storage import StorageError
 
@@ -117,7 +116,8 @@ def test_a_recording_naming_a_module_is_refused(
     assert main(["replay", "rec.jsonl"]) == 2
     assert "rec.jsonl" in _one_line_refusal(capsys)
     assert not opened
-    assert game_named(EVIL_ID) is None  # the replay screen's words for another header
+    with pytest.raises(UnknownGameError):  # the replay screen's words for another header
+        game_for(EVIL_ID, from_data=True)
 
 
 def test_a_tool_call_naming_a_module_is_refused(marker: Path) -> None:

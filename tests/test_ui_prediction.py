@@ -8,8 +8,7 @@ import asyncio
 from textual.app import App, ComposeResult
 
 from tests.hosts import TrainHost
-from tui_gym.session.prediction import PredictionFigures
-from tui_gym.session.session import Session
+from tui_gym.session.session import PredictionFigures, Session
 from tui_gym.ui.widgets.prediction_chart import MAX_POINTS, PredictionChart
 
 

@@ -27,7 +27,6 @@ from tui_gym.games import GAMES, Game, game_for, resolve_env_id
 from tui_gym.games.base import FixedBound, ReferenceMetrics, TrainingModel
 from tui_gym.games.model import ModelGame
 from tui_gym.session.evaluation import EvalReport, evaluate
-from tui_gym.session.prediction import PredictionFigures
 
 ENGINES = ("auto", "model", "env")
 # With a target gap and no budget given, the budget is the game's default times this,
@@ -50,6 +49,17 @@ class RebuildReport:
     kept_agent: bool
     notice: str
     skipped: tuple[tuple[WrapperChoice, str], ...] = ()
+
+
+@dataclass(frozen=True)
+class PredictionFigures:
+    """A prediction learner's RMS error of V, and per reached model state its estimate and
+    true value."""
+
+    rms: float
+    states: tuple[int, ...]
+    estimate: tuple[float, ...]
+    truth: tuple[float, ...]
 
 
 @dataclass(frozen=True)

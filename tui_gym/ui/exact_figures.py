@@ -24,8 +24,7 @@ if TYPE_CHECKING:
     from tui_gym.core.engine.stats import TrainingSnapshot
     from tui_gym.core.heatmap import Heatmap
     from tui_gym.games.base import ReferenceMetrics
-    from tui_gym.session.prediction import PredictionFigures
-    from tui_gym.session.session import Session
+    from tui_gym.session.session import PredictionFigures, Session
 
 KEY_QUIET_SECONDS = 0.15  # after a key is handed on, its frame comes before any figures
 KEY_FRAME_PATIENCE = 0.5  # seconds; and the figures wait for its frame at most this long

@@ -20,9 +20,9 @@ from textual.widgets.option_list import Option
 
 from tui_gym.core.recording.reader import Episode, Move, Position, Recording
 from tui_gym.core.text import visible
+from tui_gym.games import game_for
 from tui_gym.games.words import format_reward
 from tui_gym.session.play import PlayStep
-from tui_gym.session.recording.games import game_named
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.jump_screen import JumpScreen
 from tui_gym.ui.play_view import StatusLines
@@ -313,16 +313,15 @@ class ReplayScreen(ModalScreen[None]):
         move = here.move
         assert move is not None
         total = episode.running_return(position)
-        game = game_named(episode.game.env_id)
-        if game is not None:
+        try:
+            game = game_for(episode.game.env_id, from_data=True)  # never imports code
             last = PlayStep(here.frame.observation, move.reward, move.terminated, move.truncated,
                             dict(here.frame.info), total, move.step, move.action)
             first_info = dict(episode.positions[0].frame.info) if episode.started else {}
-            try:
-                said = game.narrator.outcome_text(last, first_info, here.frame.scene or {})
-                return visible(said, 200)  # the words may quote what the file holds
-            except Exception:  # a recording this version's words cannot read
-                pass
+            said = game.narrator.outcome_text(last, first_info, here.frame.scene or {})
+            return visible(said, 200)  # the words may quote what the file holds
+        except Exception:  # a game unknown here, or a recording its words cannot read
+            pass
         how = "Episode over" if move.terminated else "Truncated by the time limit"
         return f"{how} after {move.step} moves, return {format_reward(total)}"
 

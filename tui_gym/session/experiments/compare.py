@@ -104,11 +104,8 @@ def _owners(key: str, names: Sequence[str]) -> list[str]:
 
 
 def _known_elsewhere(keys: Sequence[str]) -> str:
-    notes = []
-    for key in keys:
-        others = [cls.name for cls in ALGORITHMS if any(f.name == key for f in cls.params)]
-        if others:
-            notes.append(f"{key} belongs to {', '.join(others)}")
+    owners = {key: _owners(key, [cls.name for cls in ALGORITHMS]) for key in keys}
+    notes = [f"{key} belongs to {', '.join(names)}" for key, names in owners.items() if names]
     return f" ({'; '.join(notes)})" if notes else ""
 
 
@@ -334,13 +331,6 @@ def prepare(setup: Setup, arms: Sequence[Arm]) -> Prepared:
         model=model, optimum=optimum)
     first.env.close()
     return prepared
-
-
-def _cores() -> int:
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # not on every platform
-        return max(1, os.cpu_count() or 1)
 
 
 def _jobs(setup: Setup, arms: Sequence[Arm], prepared: Prepared,
@@ -686,7 +676,10 @@ def execute(
 
     prepared = prepare(setup, arms)
     with connect(cluster) as client:  # reached (or started) before any run is recorded
-        cores = _cores() if processes is None else max(1, processes)
+        if processes is None:  # the cores this process may run on (where the platform says)
+            processes = (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+                         else os.cpu_count() or 1)
+        cores = max(1, processes)
         tally = _Tally(setup, arms, prepared)
         if resume is not None:
             if history is None:

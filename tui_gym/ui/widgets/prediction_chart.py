@@ -10,7 +10,7 @@ from tui_gym.terminal_chart import ChartSeries
 from tui_gym.ui.widgets.value_lines import BandCharts, Chart
 
 if TYPE_CHECKING:
-    from tui_gym.session.prediction import PredictionFigures
+    from tui_gym.session.session import PredictionFigures
 
 __all__ = ["MAX_POINTS", "PredictionChart"]
 
