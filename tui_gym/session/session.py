@@ -145,6 +145,8 @@ class Session:
         self._built = built
         self.env = built.env
         self.keyer = built.keyer
+        self.applied = built.applied  # the chosen wrappers that fit and are in the env
+        self.skipped = built.skipped  # those that do not fit, each with the reason
         # What the exact figures must take into account.
         self.changes = GameChanges.of(built.env, self.game.episode_limit(self.env_kwargs))
         self._base_keys: list[Hashable] | None | bool = False  # False: not computed yet
@@ -221,16 +223,6 @@ class Session:
         if self.engine == "model":
             raise ValueError(f"the model loop cannot train this: {reason}")
         return (), f"env: {reason}"
-
-    @property
-    def applied(self) -> tuple[WrapperChoice, ...]:
-        """The chosen wrappers that fit and are in the env."""
-        return self._built.applied
-
-    @property
-    def skipped(self) -> tuple[tuple[WrapperChoice, str], ...]:
-        """The chosen wrappers that do not fit, each with the reason."""
-        return self._built.skipped
 
     def chain_repr(self) -> str:
         """The env's wrapper chain as Gymnasium prints it."""

@@ -71,9 +71,3 @@ def open_handler(
         reasons = "; ".join(reason for _, reason in session.skipped)
         raise ValueError(f"wrapper does not fit {entry.title}: {reasons}")
     return JsonlPlayer(session, seed=seed)
-
-
-def close_handler(handler: JsonlPlayer) -> None:
-    """Close the envs a handler holds (its game's and its session's)."""
-    handler.game.close()
-    handler.session.env.close()

@@ -7,7 +7,7 @@ import contextlib
 import json
 from typing import Any
 
-from tui_gym.session.arena.games import GameEntry, close_handler
+from tui_gym.session.arena.games import GameEntry
 from tui_gym.session.arena.score import ArenaScore, Verdict
 from tui_gym.session.protocol import JsonlPlayer
 
@@ -107,4 +107,6 @@ class Seat:
         return self.ask({"cmd": "hint"})
 
     def close(self) -> None:
-        close_handler(self.handler)
+        """Close the envs the handler holds (its game's and its session's)."""
+        self.handler.game.close()
+        self.handler.session.env.close()

@@ -140,12 +140,6 @@ def found_after(played: Played, step: int) -> np.ndarray:
     return np.asarray(found, dtype=np.float64)
 
 
-def fewest_steps(world: str, change_at: int) -> tuple[int, ...]:
-    """The fewest steps from the start to the goal in each phase of the maze (exact)."""
-    return tuple(round(-solve(with_horizon(_steps_cost(model), None)).value)
-                 for model in world_phases(world, {"change_at": change_at}).models)
-
-
 def _steps_cost(model: FiniteMDP) -> FiniteMDP:
     """The maze's model with every step paying -1: its optimum counts the fewest steps."""
     return model.replace(reward=np.full(model.reward.shape, -1.0), reward_std=None)
@@ -155,11 +149,13 @@ def _changing_maze(figure: BookFigure, world: str, timing: tuple[int, int],
                    options: FigureOptions, progress: Progress,
                    ) -> tuple[Played, Played, tuple[int, ...]]:
     """Dyna-Q's and Dyna-Q+'s runs on `world` (`timing`: steps, and the change's), and the
-    fewest steps before and after the change."""
+    fewest steps from the start to the goal before and after the change (exact)."""
     steps, change = timing
     dyna, plus = play_steps(figure, world, MAZE_LEARNERS, options, progress, steps,
                             game_params={"change_at": change})
-    return dyna, plus, fewest_steps(world, change)
+    fewest = tuple(round(-solve(with_horizon(_steps_cost(model), None)).value)
+                   for model in world_phases(world, {"change_at": change}).models)
+    return dyna, plus, fewest
 
 
 def _maze_result(figure: BookFigure, dyna: Played, plus: Played, checks: tuple[Check, ...],

@@ -84,10 +84,6 @@ class CompareSpec:
                 + _known_elsewhere(unknown)
             )
 
-    @property
-    def seed_list(self) -> tuple[int, ...]:
-        return tuple(range(self.first_seed, self.first_seed + self.seeds))
-
 
 def settle_runs(spec: Any) -> None:
     """Check a spec's `seeds` and `episodes`; copy its settings, game parameters and wrappers."""
