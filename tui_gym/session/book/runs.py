@@ -16,7 +16,6 @@ from tui_gym.algorithms.prediction import rms_curve
 from tui_gym.core.engine import loop
 from tui_gym.core.engine.loop import FIRST_ACTION, LENGTH, RETURN
 from tui_gym.core.experiments.aggregate import aggregate, t_half_width
-from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.records import RunKind
 from tui_gym.core.mdp import NotAvailable, Phases
 from tui_gym.games import game_named
@@ -34,10 +33,10 @@ from tui_gym.session.book.figure import (
 from tui_gym.session.experiments.compare import (
     Arm,
     CompareProgress,
-    ResumeError,
     Setup,
     execute,
     prepare,
+    resumed_group,
 )
 
 __all__ = [
@@ -210,14 +209,7 @@ def _resumed(tasks: FigureTasks, arms: int) -> list[int] | None:
     ResumeError if that run does not head a figure."""
     if tasks.resume is None or tasks.history is None:
         return None
-    try:
-        head = tasks.history.get_run(tasks.resume).summary
-        if head.group is not None:
-            raise ResumeError(f"run {head.id} is part of run {head.group}'s figure: "
-                              f"resume run {head.group}")
-        ids = tasks.history.group_ids(tasks.resume)
-    except RunHistoryError as exc:
-        raise ResumeError(str(exc)) from None
+    ids = resumed_group(tasks.history, tasks.resume, "figure")
     tasks.group = tasks.resume
     return ids[tasks.played: tasks.played + arms] or None
 

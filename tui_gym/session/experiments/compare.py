@@ -303,14 +303,11 @@ def prepare(setup: Setup, arms: Sequence[Arm]) -> Prepared:
     hyperparameters: list[dict[str, Any]] = []
     first: Any = None
     for arm in arms:
-        values = dict(arm.settings)
-        values.setdefault("episodes", setup.episodes)
         session = _session(setup.game, setup.game_params, setup.wrappers, arm.algorithm,
-                           values, setup.first_seed)
+                           {"episodes": setup.episodes, **arm.settings}, setup.first_seed)
         hyperparameters.append(dict(session.hp))
-        if first is None:
-            first = session
-        else:
+        first = first or session
+        if session is not first:
             session.env.close()
     model = optimum = None
     training = first.training
@@ -581,24 +578,31 @@ def _compared(game: str, algorithm: str, params: Mapping[str, Any],
         "episodes": episodes}, default=str)))
 
 
+def resumed_group(history: RunHistory, run_id: int, what: str = "") -> list[int]:
+    """The ids of the runs run `run_id` heads, its own first; ResumeError (one line) if it
+    is not the head of its group (`what`: the group's name, its kind by default)."""
+    try:
+        head = history.get_run(run_id).summary
+        if head.group is not None:
+            raise ResumeError(f"run {run_id} is part of run {head.group}'s {what or head.kind}: "
+                              f"resume run {head.group}")
+        return history.group_ids(run_id)
+    except RunHistoryError as exc:
+        raise ResumeError(str(exc)) from None
+
+
 def _resume_runs(
     history: RunHistory, kind: RunKind, setup: Setup, arms: Sequence[Arm], prepared: Prepared,
     resume: int | Sequence[int], tally: _Tally,
 ) -> list[int | None]:
     """The runs of `resume` (a group's first id, or every id), checked against these settings,
     reopened, their stored tasks counted into `tally`; ResumeError (one line) if they differ."""
+    ids = resumed_group(history, resume) if isinstance(resume, int) else resume
     try:
-        if isinstance(resume, int):
-            first = history.get_run(resume).summary
-            if first.group is not None:
-                raise ResumeError(f"run {resume} is part of run {first.group}'s {first.kind}: "
-                                  f"resume run {first.group}")
-            records = [history.get_run(i) for i in history.group_ids(resume)]
-        else:
-            records = [history.get_run(i) for i in resume]
-            first = records[0].summary
+        records = [history.get_run(i) for i in ids]
     except RunHistoryError as exc:
         raise ResumeError(str(exc)) from None
+    first = records[0].summary
     if len(records) != len(arms) or any(r.summary.kind != kind for r in records):
         raise ResumeError(f"run {first.id} is a {first.kind} of {len(records)} run(s), not this "
                           f"{kind} of {len(arms)}{RESUME_ADVICE}")
