@@ -31,7 +31,7 @@ from tui_gym.ui.widgets.board_drawing import (
     read_as,
     shape_fits,
 )
-from tui_gym.ui.widgets.boards import arrow_bindings
+from tui_gym.ui.widgets.boards import NEW_EPISODE_HELP, NEW_EPISODE_KEYS, arrow_bindings
 from tui_gym.ui.widgets.numbers import fit
 from tui_gym.ui.widgets.strip_widget import component_classes
 
@@ -149,8 +149,7 @@ class TileBoard(MapBoard):
         Binding("end", "act('down-left')", "down-left", show=False),
         Binding("pagedown", "act('down-right')", "down-right", show=False),
         *(Binding(str(d), f"digit({d})", str(d), show=False) for d in range(10)),
-        Binding("n,r", "new_episode", "New", key_display="n", tooltip="Start a new episode"),
-        Binding("enter", "next_episode", "Next", show=False),
+        *NEW_EPISODE_KEYS,
     ]
 
     BUTTONS = (("↺ Reset [dim]r[/]", "new_episode"),)
@@ -174,8 +173,7 @@ class TileBoard(MapBoard):
             ("↑ ↓ ← →  or  w a s d", "move up, down, left, right"),
             ("home pgup end pgdn", "king's moves: up-left, up-right, down-left, down-right"),
             ("1-9, 0", "the keypad's way (king's moves), or the choice of that number"),
-            ("n / r", "start a new episode (at any time)"),
-            ("enter", "start a new episode once this one is over"),
+            *NEW_EPISODE_HELP,
             ("click a cell", "step one cell towards it"),
         ]
 
