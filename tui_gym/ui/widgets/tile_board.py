@@ -97,12 +97,6 @@ def cell_table(value: Any) -> dict[Cell, Any]:
     return {cell: item for key, item in value.items() if (cell := cell_of(key)) is not None}
 
 
-def map_rows(scene: Mapping[str, Any]) -> list[str]:
-    """The scene's map, one string a row (equal rows, as games and recordings give them)."""
-    rows = [str(row) for row in scene.get("cells") or ()]
-    return rows if any(rows) else []
-
-
 class TileBoard(MapBoard):
     """A map of tiles (lake, cliff, plain): walk the agent ● to the goal ★."""
 
@@ -241,7 +235,8 @@ class TileBoard(MapBoard):
 
     def _read(self, scene: Mapping[str, Any]) -> None:
         """The map and what lies on it, from a scene."""
-        self.cells = map_rows(scene)
+        rows = [str(row) for row in scene.get("cells") or ()]  # equal rows, as games give them
+        self.cells = rows if any(rows) else []
         self.theme = THEMES.get(str(scene.get("theme", "lake")), THEMES["plain"])
         self.border_title = self.theme.title
         self.rewards = cell_table(scene.get("rewards"))
@@ -499,4 +494,4 @@ class TileBoard(MapBoard):
             self.step_to(self.agent, cell, MOVE_OF)
 
 
-__all__ = ["MOVES", "THEMES", "TileBoard", "choose_shape", "map_rows"]
+__all__ = ["MOVES", "THEMES", "TileBoard", "choose_shape"]
