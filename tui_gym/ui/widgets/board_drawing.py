@@ -181,7 +181,8 @@ class MapLayout:
 
 class MapBoard(Board):
     """A map drawn in the largest shape that fits, kept while it fits (no jumps as the
-    space around changes), with a caption under it and a legend when there is room."""
+    space around changes), with a caption under it (unless `CAPTION_LINES` is 0) and a
+    legend when there is room."""
 
     EMPTY: ClassVar[str] = ""  # what the board says before it has a map
     CAPTION_LINES: ClassVar[int] = CAPTION_LINES  # 0: no caption under the map
