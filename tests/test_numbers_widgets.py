@@ -243,7 +243,7 @@ async def test_the_progress_line_never_cuts_its_counts(width: int) -> None:
 def test_compact_forms_keep_their_value() -> None:
     assert [compact_count(n) for n in (9_999, 12_345, 999_700, 5_496_812, 1_234_567_890)] == [
         "9,999", "12.3k", "1.00M", "5.50M", "1.23B"]
-    forms = number_forms("+1234567.000", 1234567.0, "+")
+    forms = number_forms(1234567.0, "+.3f")
     assert fit(forms, 9) == "+1.23e+06" and fit(forms, 20) == "+1234567.000"
 
 

@@ -17,7 +17,7 @@ from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.side_panel import ParamField
-from tui_gym.ui.widgets.grid_board import choose_layout
+from tui_gym.ui.widgets.grid_board import choose_shape
 
 from .screen import screen_text
 from .waiting import DEADLINE, wait_for
@@ -75,15 +75,15 @@ async def board_keeps_its_cells_and_names_stay_whole(pilot) -> None:
     board = app.play_view.board
 
     def shape() -> tuple:
-        layout = board.layout_drawn
-        return (layout.cell_w, layout.cell_h, layout.lines, layout.axes)
+        drawn = board.layout_drawn.shape
+        return (drawn.cell_w, drawn.cell_h, drawn.frame, drawn.axes)
 
     async def resize(width: int, height: int) -> None:
         await pilot.resize_terminal(width, height)
         await pilot.pause()  # the app takes a new size on a timer
         canvas = board.canvas.content_size
-        best = choose_layout(5, canvas.width, canvas.height)
-        assert shape() == (best.cell_w, best.cell_h, best.lines, best.axes), (width, height)
+        best = choose_shape(5, 5, canvas.width, canvas.height)
+        assert shape() == (best.cell_w, best.cell_h, best.frame, best.axes), (width, height)
 
     kept = {}  # the shape each size drew
     for size in SIZES:

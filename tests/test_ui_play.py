@@ -229,7 +229,8 @@ async def test_gridworld_walk_by_arrows_wasd_and_clicks_and_reset() -> None:
         for _ in range(optimal):
             layout = board.layout_drawn
             assert layout is not None
-            await pilot.click(board.canvas, offset=layout.cell_center(game.scene()["target"]))
+            (x, y), size = game.scene()["target"], game.scene()["size"]
+            await pilot.click(board.canvas, offset=layout.cell_center((size - 1 - y, x)))
         assert game.done and game.last.terminated and game.last.steps == optimal
 
         await pilot.click(board.query_one(BoardButton))  # ↺ Reset

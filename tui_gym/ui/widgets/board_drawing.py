@@ -104,8 +104,9 @@ def legend(items: Sequence[tuple[str, Style, str]], label: Style, width: int) ->
 @dataclass(frozen=True)
 class MapShape:
     """How big a map is drawn: `cell_w` x `cell_h` characters a tile; `half`: two map rows
-    share a line (colour only); `axes`: row numbers left, column numbers below; `gap`:
-    columns between tiles (for walls); `frame`: a wall all round."""
+    share a line (colour only); `axes`: row numbers left, column numbers below; `gap`,
+    `row_gap`: columns and lines between tiles (for walls, grid lines); `frame`: a wall all
+    round."""
 
     rows: int
     cols: int
@@ -114,6 +115,7 @@ class MapShape:
     half: bool = False
     axes: bool = False
     gap: int = 0
+    row_gap: int = 0
     frame: bool = False
 
     @property
@@ -126,7 +128,9 @@ class MapShape:
 
     @property
     def map_h(self) -> int:
-        return (self.rows + 1) // 2 if self.half else self.rows * self.cell_h
+        if self.half:
+            return (self.rows + 1) // 2
+        return self.rows * (self.cell_h + self.row_gap) - self.row_gap
 
     @property
     def width(self) -> int:
@@ -141,12 +145,12 @@ class MapShape:
         return self.label_w + self.edge + col * (self.cell_w + self.gap)
 
     def y_of(self, row: int) -> int:
-        return self.edge + (row // 2 if self.half else row * self.cell_h)
+        return self.edge + (row // 2 if self.half else row * (self.cell_h + self.row_gap))
 
 
-def shape_fits(shape: MapShape, width: int, height: int) -> bool:
-    """Whether a map drawn in `shape` fits `width` x `height`, with its caption."""
-    return shape.width <= width and shape.height + CAPTION_LINES <= height
+def shape_fits(shape: MapShape, width: int, height: int, caption: int = CAPTION_LINES) -> bool:
+    """Whether a map drawn in `shape` fits `width` x `height`, with its caption's lines."""
+    return shape.width <= width and shape.height + caption <= height
 
 
 @dataclass(frozen=True)
@@ -177,9 +181,11 @@ class MapLayout:
 
 class MapBoard(Board):
     """A map drawn in the largest shape that fits, kept while it fits (no jumps as the
-    space around changes), with a caption under it and a legend when there is room."""
+    space around changes), with a caption under it (unless `CAPTION_LINES` is 0) and a
+    legend when there is room."""
 
     EMPTY: ClassVar[str] = ""  # what the board says before it has a map
+    CAPTION_LINES: ClassVar[int] = CAPTION_LINES  # 0: no caption under the map
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
@@ -226,15 +232,16 @@ class MapBoard(Board):
         if size is None:
             self.layout_drawn = None
             return stack([Text(self.EMPTY, self._style("caption"))], width, height)
-        shape = self._shape
+        shape, room = self._shape, height - self.lines_under()
         if not (self.KEEP_SHAPE and shape is not None and self._shape_key == (size, width)
-                and shape_fits(shape, width, height - self.lines_under())):
-            shape = self.choose_shape(*size, width, height - self.lines_under())
+                and shape_fits(shape, width, room, self.CAPTION_LINES)):
+            shape = self.choose_shape(*size, width, room)
             self._shape, self._shape_key = shape, (size, width)
-        spare = height - shape.height - CAPTION_LINES
+        spare = height - shape.height - self.CAPTION_LINES
         lines = self.draw_map(shape, width, spare)
         spare -= len(lines) - shape.height
-        lines.append(self.caption(width))
+        if self.CAPTION_LINES:
+            lines.append(self.caption(width))
         if spare > 0:
             legend = self.legend(width)
             if legend is not None:

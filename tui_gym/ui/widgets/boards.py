@@ -29,6 +29,17 @@ def arrow_bindings(up: str, down: str, left: str, right: str, group: str) -> lis
                     group=shown) for arrow, letter, glyph, move in keys]
 
 
+# A new episode at any time (n, r), or once this one is over (Enter), and what they do.
+NEW_EPISODE_KEYS = [
+    Binding("n,r", "new_episode", "New", key_display="n", tooltip="Start a new episode"),
+    Binding("enter", "next_episode", "Next", show=False),
+]
+NEW_EPISODE_HELP = [
+    ("n / r", "start a new episode (at any time)"),
+    ("enter", "start a new episode once this one is over"),
+]
+
+
 class BoardCanvas(StripWidget):
     """The drawing area of a board: draws `board.picture(width, height)`, again only
     after `Board.redraw()` or a change of size or colours."""
@@ -255,4 +266,6 @@ class Board(Widget):
         await self.run_action(self.BUTTONS[int(event.button.name or 0)][1])
 
 
-__all__ = ["Board", "BoardButton", "BoardCanvas", "arrow_bindings"]
+__all__ = [
+    "NEW_EPISODE_HELP", "NEW_EPISODE_KEYS", "Board", "BoardButton", "BoardCanvas", "arrow_bindings",
+]

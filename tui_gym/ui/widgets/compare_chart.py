@@ -14,7 +14,7 @@ from rich.style import Style
 from tui_gym.terminal_chart import BRAILLE_BASE, curve_bits, spans
 from tui_gym.ui.compare_series import Series
 from tui_gym.ui.widgets.numbers import fit, number_forms
-from tui_gym.ui.widgets.strip_widget import Line, StripWidget
+from tui_gym.ui.widgets.strip_widget import Line, StripWidget, panel_css
 from tui_gym.ui.widgets.training_charts import mix
 
 # Distinct on dark and light themes alike; a curve keeps its colour while it is shown.
@@ -110,18 +110,11 @@ def plot_cells(
 class CompareChart(StripWidget):
     """Curves with bands, y and episode labels, and a legend (`show(series)`)."""
 
-    SCOPED_CSS = False  # the compact rule starts at Screen
+    SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
     COMPONENT_CLASSES: ClassVar[set[str]] = {"chart--axis", "chart--empty"}
-    DEFAULT_CSS = """
-    CompareChart {
-        height: auto;
-        border: round $primary-background-lighten-2;
-        border-title-color: $text-muted;
-        padding: 0 1;
-    }
+    DEFAULT_CSS = panel_css("CompareChart") + """
     CompareChart > .chart--axis { color: $text-muted; }
     CompareChart > .chart--empty { color: $text-muted; text-style: italic; }
-    Screen.compact CompareChart { border: none; padding: 0; }
     """
 
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
@@ -163,7 +156,7 @@ class CompareChart(StripWidget):
                 mean = mix(mean, other, 1 / n)
             return Style(color=fg, bgcolor=mix(background, mean, BAND_TINT))
 
-        labels = {row: fit(number_forms(f"{v:+.3f}", v, "+"), LABEL_WIDTH - 1)
+        labels = {row: fit(number_forms(v, "+.3f"), LABEL_WIDTH - 1)
                   for row, v in ((0, high), (height // 2, (high + low) / 2), (height - 1, low))}
         lines: list[Line] = []
         for row in range(height):

@@ -9,7 +9,7 @@ from rich.text import Text
 from textual.binding import Binding, BindingType
 
 from tui_gym.ui.widgets.board_drawing import stack
-from tui_gym.ui.widgets.boards import Board
+from tui_gym.ui.widgets.boards import NEW_EPISODE_HELP, NEW_EPISODE_KEYS, Board
 from tui_gym.ui.widgets.strip_widget import component_classes
 
 DIAL_GROUP = Binding.Group("Dial")
@@ -38,7 +38,7 @@ class DialBoard(Board):
         Binding("home", "turn(-1000)", "first", show=False),
         Binding("end", "turn(1000)", "last", show=False),
         Binding("enter,space", "take", "Go", key_display="enter"),
-        Binding("n,r", "new_episode", "New", key_display="n", tooltip="Start a new episode"),
+        NEW_EPISODE_KEYS[0],
     ]
     BUTTONS = (("◀", "turn(-1)"), ("Go [dim]enter[/]", "take"), ("▶", "turn(1)"),
                ("↺ New [dim]n[/]", "new_episode"))
@@ -95,7 +95,7 @@ class DialBoard(Board):
             ("← / →", "turn the dial by one"), ("↓ / ↑", "turn the dial by five"),
             ("home / end", "the dial to either end"),
             ("enter / space", "make the move the dial points at (a new episode once over)"),
-            ("n / r", "start a new episode (at any time)"),
+            NEW_EPISODE_HELP[0],
         ]
 
     @property

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from rich.style import Style
@@ -13,11 +11,11 @@ from textual import events
 from textual.binding import Binding, BindingType
 from textual.geometry import Offset
 
-from tui_gym.ui.widgets.board_drawing import cell_of, stack, step_toward
-from tui_gym.ui.widgets.boards import Board, arrow_bindings
+from tui_gym.ui.widgets.board_drawing import CharGrid, MapBoard, MapShape, cell_of, shape_fits
+from tui_gym.ui.widgets.boards import arrow_bindings
 from tui_gym.ui.widgets.strip_widget import component_classes
 
-Cell = tuple[int, int]
+Cell = tuple[int, int]  # (x, y), +y up
 
 MOVES: dict[Cell, tuple[str, str]] = {  # (dx, dy) -> (action name, trail arrow)
     (1, 0): ("right", "→"),
@@ -25,81 +23,28 @@ MOVES: dict[Cell, tuple[str, str]] = {  # (dx, dy) -> (action name, trail arrow)
     (-1, 0): ("left", "←"),
     (0, -1): ("down", "↓"),
 }
+ROW_MOVES = {(-dy, dx): name for (dx, dy), (name, _) in MOVES.items()}  # by (d_row, d_col)
 AGENT, TARGET, HOME = "●", "◎", "◉"  # HOME: the agent stands on the target
 WALL = "█"
 
-
-@dataclass(frozen=True)
-class GridLayout:
-    """Where the drawn grid sits in the canvas, to map clicks back to cells."""
-
-    n: int
-    cell_w: int
-    cell_h: int
-    lines: bool  # box-drawing lines between cells
-    axes: bool  # coordinates to the left and below
-    left: int = 0  # canvas column of the grid's left edge (after the y labels)
-    top: int = 0  # canvas row of the grid's top edge
-
-    @property
-    def label_w(self) -> int:
-        return len(str(self.n - 1)) + 1 if self.axes else 0
-
-    @property
-    def gap(self) -> int:
-        return 1 if self.lines else 0
-
-    @property
-    def width(self) -> int:
-        return self.label_w + self.n * (self.cell_w + self.gap) + self.gap
-
-    @property
-    def height(self) -> int:
-        return self.n * (self.cell_h + self.gap) + self.gap + (1 if self.axes else 0)
-
-    def cell_center(self, cell: Cell) -> Offset:
-        """The canvas offset of the middle of grid cell (x, y); the inverse of `cell_at`."""
-        gap, (x, y) = self.gap, cell
-        return Offset(self.left + gap + x * (self.cell_w + gap) + self.cell_w // 2,
-                      self.top + gap + (self.n - 1 - y) * (self.cell_h + gap) + self.cell_h // 2)
-
-    def cell_at(self, offset: Offset) -> Cell | None:
-        """The grid cell (x, y) under a canvas offset, or None off the grid."""
-        gap = self.gap
-        col = (offset.x - self.left - gap) // (self.cell_w + gap)
-        row = (offset.y - self.top - gap) // (self.cell_h + gap)
-        if not (0 <= col < self.n and 0 <= row < self.n):
-            return None
-        return col, self.n - 1 - row
-
-
+# (cell_w, cell_h, box-drawing lines between cells), largest first
 CELL_SHAPES = (
     (7, 3, True), (5, 2, True), (5, 1, True), (3, 1, True), (3, 1, False), (2, 1, False),
     (1, 1, False),
 )
 
 
-def choose_layout(n: int, width: int, height: int) -> GridLayout:
-    """The largest drawing of an n x n grid that fits (the smallest one if none does)."""
-    layouts = [GridLayout(n, cell_w, cell_h, lines, axes) for cell_w, cell_h, lines in CELL_SHAPES
-               for axes in (True, False) if not (axes and cell_w < len(str(n - 1)))]
-    layout = next((layout for layout in layouts if fits(layout, width, height)), layouts[-1])
-    return place_layout(layout, width, height)
+def choose_shape(rows: int, cols: int, width: int, height: int) -> MapShape:
+    """The largest drawing of a rows x cols grid that fits (the smallest one if none does);
+    lines between the cells are a frame and a gap of one."""
+    shapes = [MapShape(rows, cols, cell_w, cell_h, axes=axes, gap=int(lines), row_gap=int(lines),
+                       frame=lines)
+              for cell_w, cell_h, lines in CELL_SHAPES
+              for axes in (True, False) if not (axes and cell_w < len(str(rows - 1)))]
+    return next((shape for shape in shapes if shape_fits(shape, width, height, 0)), shapes[-1])
 
 
-def fits(layout: GridLayout, width: int, height: int) -> bool:
-    """Whether the drawing fits in `width` x `height` cells."""
-    return layout.width <= width and layout.height <= height
-
-
-def place_layout(layout: GridLayout, width: int, height: int) -> GridLayout:
-    """The same drawing centred in `width` x `height`."""
-    left = max(0, (width - layout.width) // 2) + layout.label_w
-    top = max(0, (height - layout.height) // 2)
-    return dataclasses.replace(layout, left=left, top=top)
-
-
-class GridBoard(Board):
+class GridBoard(MapBoard):
     """GridWorld: walk the agent (●) to the target (◎); +y is up."""
 
     SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
@@ -111,6 +56,7 @@ class GridBoard(Board):
     GridBoard .grid--target { background: $error 75%; color: #ffffff; text-style: bold; }
     GridBoard .grid--home { background: $success; color: #ffffff; text-style: bold; }
     GridBoard .grid--axis { color: $text-muted; }
+    GridBoard .grid--caption { color: $text-muted; }
     GridBoard .grid--wall { color: $foreground 55%; }
     """
 
@@ -124,6 +70,8 @@ class GridBoard(Board):
     BUTTONS = (("↺ Reset [dim]r[/]", "new_episode"),)
     BORDER_TITLE = "Grid"
     STYLE = "grid"
+    EMPTY = "No grid yet."
+    CAPTION_LINES = 0
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
@@ -132,9 +80,6 @@ class GridBoard(Board):
         self._grid_target: Cell | None = None
         self._grid_size = 0
         self._grid_walls: frozenset[Cell] = frozenset()
-        self._grid_fresh = True
-        self.layout_drawn: GridLayout | None = None
-        self._layout_n = 0  # the grid size the kept cell shape is for (0: choose afresh)
         self._laid_out: tuple[Any, int] | None = None  # (terminal size, board width) last seen
 
     def on_resize(self, event: events.Resize) -> None:
@@ -144,7 +89,7 @@ class GridBoard(Board):
         laid_out = (self.app.size, event.size.width)
         if laid_out != self._laid_out:
             self._laid_out = laid_out
-            self._layout_n = 0
+            self._shape = None
             self.redraw()
 
     # --- what the board says ---------------------------------------------------
@@ -162,8 +107,8 @@ class GridBoard(Board):
 
     # --- the scene and the trail -----------------------------------------------
     def start_episode(self) -> None:
-        """The next scene begins a new episode: forget the trail."""
-        self._grid_fresh = True
+        """The next scene begins a new episode: forget the trail (the cells keep their size)."""
+        self._fresh = True
 
     def show_scene(self, scene: Mapping[str, Any], reveal: bool = True) -> None:
         agent, target = cell_of(scene.get("agent")), cell_of(scene.get("target"))
@@ -174,12 +119,12 @@ class GridBoard(Board):
             or agent is None
             or abs(agent[0] - previous[0]) + abs(agent[1] - previous[1]) > 1
         )
-        if self._grid_fresh or jumped or target != self._grid_target or size != self._grid_size:
+        if self._fresh or jumped or target != self._grid_target or size != self._grid_size:
             self.trail = {}
         elif agent != previous and previous is not None and agent is not None:
             move = (agent[0] - previous[0], agent[1] - previous[1])
             self.trail[previous] = MOVES[move][1]
-        self._grid_fresh = False
+        self._fresh = False
         self._grid_agent, self._grid_target, self._grid_size = agent, target, size
         self._grid_walls = frozenset(c for c in map(cell_of, scene.get("walls", ())) if c)
         super().show_scene(scene, reveal)
@@ -199,64 +144,41 @@ class GridBoard(Board):
             return self.trail[cell], self._style("trail")
         return (" " if lines else "·"), self._style("empty")
 
-    def picture(self, width: int, height: int) -> Text:
-        n = self._grid_size
-        if n <= 0:
-            self.layout_drawn = None
-            return Text("No grid yet.", self._style("axis"), no_wrap=True, overflow="crop", end="")
-        layout = self.layout_drawn = self._steady_layout(n, width, height)
+    def map_size(self) -> tuple[int, int] | None:
+        return (self._grid_size, self._grid_size) if self._grid_size > 0 else None
+
+    choose_shape = staticmethod(choose_shape)
+
+    def draw_map(self, shape: MapShape, width: int, spare: int) -> list[Text]:
+        n, cw, ch, lines = shape.rows, shape.cell_w, shape.cell_h, shape.frame
         line, axis = self._style("line"), self._style("axis")
-        cw, ch = layout.cell_w, layout.cell_h
-        rows: list[Text] = []
-        gutter = " " * layout.label_w
-
-        def rule(first: str, middle: str, last: str) -> Text:
-            return Text(gutter + first + middle.join("─" * cw for _ in range(n)) + last, line)
-
-        for r in range(n):
-            y = n - 1 - r
-            if layout.lines:
-                rows.append(rule("┌", "┬", "┐") if r == 0 else rule("├", "┼", "┤"))
-            for k in range(ch):
-                row = Text()
-                if layout.axes:
-                    label = str(y) if k == ch // 2 else ""
-                    row.append(f"{label:>{layout.label_w - 1}} ", axis)
-                if layout.lines:
-                    row.append("│", line)
-                for x in range(n):
-                    glyph, style = self._cell_look((x, y), layout.lines)
-                    if glyph == WALL:  # a wall fills its cell
-                        row.append(WALL * cw, style)
-                    else:
-                        row.append((glyph if k == ch // 2 else " ").center(cw), style)
-                    if layout.lines:
-                        row.append("│", line)
-                rows.append(row)
-        if layout.lines:
-            rows.append(rule("└", "┴", "┘"))
-        if layout.axes:
-            labels = Text(" " * layout.label_w + (" " if layout.lines else ""))
+        grid = CharGrid(shape.width, shape.height, Style())
+        left = shape.label_w
+        if lines:
+            for r in range(n + 1):  # the rules above, between and below the rows
+                first, middle, last = "┌┬┐" if r == 0 else "└┴┘" if r == n else "├┼┤"
+                rule = first + middle.join("─" * cw for _ in range(n)) + last
+                grid.put(left, r * (ch + 1), rule, line)
+        for row in range(n):
+            y, top = n - 1 - row, shape.y_of(row)
+            if shape.axes:
+                grid.put(0, top + ch // 2, f"{y:>{left - 1}}", axis)
             for x in range(n):
-                labels.append(str(x).center(cw) + (" " if layout.lines else ""), axis)
-            rows.append(labels)
-        return stack(rows, width, height)
-
-    def _steady_layout(self, n: int, width: int, height: int) -> GridLayout:
-        """The cell shape kept while it fits (lines around the board come and go), chosen
-        afresh for a new grid size or terminal size."""
-        kept = self.layout_drawn
-        if kept is not None and self._layout_n == n and fits(kept, width, height):
-            return place_layout(kept, width, height)
-        self._layout_n = n
-        return choose_layout(n, width, height)
+                glyph, style = self._cell_look((x, y), lines)
+                fill = WALL if glyph == WALL else " "  # a wall fills its cell
+                grid.fill(shape.x_of(x), top, cw, ch, fill, style)
+                if fill == " ":
+                    grid.put(shape.x_of(x), top + ch // 2, glyph.center(cw), style)
+            for c in range(n + 1 if lines else 0):  # the bars beside the cells
+                grid.fill(left + c * (cw + 1), top, 1, ch, "│", line)
+        if shape.axes:
+            for x in range(n):
+                grid.put(shape.x_of(x), shape.height - 1, str(x).center(cw), axis)
+        return grid.lines()
 
     def canvas_clicked(self, offset: Offset) -> None:
         """Step one cell towards the clicked cell (the longer way first)."""
-        if self.layout_drawn is None or self._grid_agent is None:
-            return
-        cell, (x, y) = self.layout_drawn.cell_at(offset), self._grid_agent
-        if cell is None or cell == (x, y):
-            return
-        d_y, d_x = step_toward((y, x), (cell[1], cell[0]))  # as (row, col): (y, x)
-        self.action_act(MOVES[d_x, d_y][0])
+        cell = self.layout_drawn.cell_at(offset) if self.layout_drawn else None
+        if cell is not None and self._grid_agent is not None:
+            x, y = self._grid_agent
+            self.step_to((self._grid_size - 1 - y, x), cell, ROW_MOVES)

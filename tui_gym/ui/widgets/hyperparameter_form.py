@@ -18,6 +18,7 @@ from textual.widgets import Input, Label, Select, Static
 from tui_gym.algorithms import Field, QLearning, Settings
 from tui_gym.core.params import Param, ParamError, digits_note, read_number, typed_text
 from tui_gym.ui.widgets.numbers import compact_count
+from tui_gym.ui.widgets.strip_widget import panel_css
 from tui_gym.ui.widgets.text_field import TextField
 
 _SUPERSCRIPTS = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
@@ -90,19 +91,9 @@ class FieldValidator(Validator):
 class HyperparameterForm(Vertical):
     """Labelled, range-checked inputs for the agent's hyperparameters."""
 
-    # Not scoped: the `Screen.compact ...` rules must match from the screen down.
-    SCOPED_CSS = False
-    DEFAULT_CSS = """
-    HyperparameterForm {
-        width: 1fr;
-        min-width: 38;
-        max-width: 48;
-        height: auto;
-        border: round $primary-background-lighten-2;
-        border-title-color: $text-muted;
-        border-subtitle-color: $text-disabled;
-        padding: 0 1;
-    }
+    SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
+    DEFAULT_CSS = panel_css("HyperparameterForm") + """
+    HyperparameterForm { width: 1fr; min-width: 38; max-width: 48; }
     HyperparameterForm .hp-row { height: 1; }
     HyperparameterForm .hp-label { width: 15; color: $text-muted; }
     HyperparameterForm Input { width: 1fr; min-width: 8; max-width: 14; }
@@ -111,13 +102,7 @@ class HyperparameterForm(Vertical):
     HyperparameterForm .hp-error { display: none; color: $text-error; padding-left: 2; }
     HyperparameterForm .hp-error.-shown { display: block; }
     HyperparameterForm .hp-row.-invalid .hp-label { color: $text-error; text-style: bold; }
-    Screen.compact HyperparameterForm {
-        width: 1fr;
-        min-width: 0;
-        max-width: 100%;
-        border: none;
-        padding: 0;
-    }
+    Screen.compact HyperparameterForm { min-width: 0; max-width: 100%; }
     Screen.compact HyperparameterForm .hp-hint { display: none; }
     """
 

@@ -101,10 +101,8 @@ class KeyBar(StripWidget):
         key_style = self.get_component_rich_style("keybar--key", partial=True)
         text = Text(no_wrap=True, overflow="crop", end="")
         spans: list[tuple[int, int, str]] = []
-        tail = ""
-        if self._palette is not None and width:
-            keys, description = self._palette
-            tail = f"▏{keys} {description} "
+        palette = self._palette if width else None
+        tail = f"▏{palette[0]} {palette[1]} " if palette else ""
         room = max(0, width - cell_len(tail))
         entries, more = self._fitting(room)
         for keys, description, enabled, key in entries:
@@ -116,8 +114,8 @@ class KeyBar(StripWidget):
             spans.append((start, text.cell_len, key))
         if more:
             text.append("…", style="dim")
-        if tail:
-            keys, description = self._palette or ("", "")
+        if palette:
+            keys, description = palette
             text.append(" " * max(0, room - text.cell_len))
             text.append(tail[0], style="dim")
             text.append(f"{keys} ", style=key_style)

@@ -28,10 +28,11 @@ def count_forms(n: float) -> Forms:
     return (full, short) if short != full else (full,)
 
 
-def number_forms(full: str, value: float, sign: str = "") -> Forms:
-    """`full` (the value as the widget formats it), then the same value with fewer
-    significant digits (4, 3, 2): only the forms that are shorter."""
-    forms = [full]
+def number_forms(value: float, spec: str) -> Forms:
+    """`value` as the format `spec` writes it ('+.4f'), then with fewer significant digits
+    (4, 3, 2), signed alike: only the forms that are shorter."""
+    forms = [format(value, spec)]
+    sign = "+" if spec.startswith("+") else ""
     for digits in (4, 3, 2):
         text = f"{value:{sign}.{digits}g}"
         if len(text) < len(forms[-1]):

@@ -50,23 +50,19 @@ class Scoreboard(Widget):
             self.rows = rows
             self.refresh(layout=True)
 
-    @property
-    def compact(self) -> bool:
-        return self.screen.has_class("compact") if self.is_attached else False
-
-    def text(self, compact: bool | None = None) -> str:
-        """The rows as plain lines ('You  …'), as they read on screen."""
-        short = self.compact if compact is None else compact
+    def text(self, compact: bool = False) -> str:
+        """The rows as plain lines ('You  …'), as they read on screen (in the compact layout
+        with `compact`)."""
         width = max((len(row.who) for row in self.rows), default=0)
         return "\n".join(
-            f"{row.who:<{width}}  {(row.short or row.text) if short else row.text}"
+            f"{row.who:<{width}}  {(row.short or row.text) if compact else row.text}"
             for row in self.rows
         )
 
     def render(self) -> RenderableType:
         if not self.rows:
             return Text("")
-        short = self.compact
+        short = self.is_attached and self.screen.has_class("compact")
         who_style = self.get_component_rich_style("scoreboard--who")
         grid = Table.grid(padding=(0, 2 if not short else 1), expand=True)
         grid.add_column(no_wrap=True)

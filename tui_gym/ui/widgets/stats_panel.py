@@ -13,7 +13,7 @@ from rich.text import Text
 from tui_gym.core.engine.stats import TrainingSnapshot
 from tui_gym.games.base import ReferenceMetrics
 from tui_gym.ui.widgets.numbers import Forms, compact_count, count_forms, fit, number_forms
-from tui_gym.ui.widgets.strip_widget import Line, StripWidget
+from tui_gym.ui.widgets.strip_widget import Line, StripWidget, panel_css
 
 STATE_STYLES = {
     "running": ("● running", "bold green"), "paused": ("‖ paused", "bold yellow"),
@@ -38,9 +38,7 @@ def figure_forms(key: str, value: float) -> Forms:
     forms of the same number (for narrow screens)."""
     if key.endswith(("fraction", "rate", "share")):
         return (f"{value:.1%}",)
-    if key == "gap" or key.endswith("_gap"):
-        return number_forms(f"{value:.4f}", value, "")
-    return number_forms(f"{value:+.4f}", value, "+")
+    return number_forms(value, ".4f" if key == "gap" or key.endswith("_gap") else "+.4f")
 
 
 def format_duration(seconds: float) -> str:
@@ -56,19 +54,10 @@ NO_DATA = "–"
 class StatsPanel(StripWidget):
     """A clean two-column table of the run's numbers."""
 
-    # Not scoped: the `Screen.compact ...` rules must match from the screen down.
-    SCOPED_CSS = False
-    DEFAULT_CSS = """
-    StatsPanel {
-        width: 1fr;
-        max-width: 60;
-        height: auto;
-        border: round $primary-background-lighten-2;
-        border-title-color: $text-muted;
-        border-subtitle-color: $text-disabled;
-        padding: 0 1;
-    }
-    Screen.compact StatsPanel { max-width: 100%; border: none; padding: 0; min-height: 0; }
+    SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
+    DEFAULT_CSS = panel_css("StatsPanel") + """
+    StatsPanel { width: 1fr; max-width: 60; }
+    Screen.compact StatsPanel { max-width: 100%; min-height: 0; }
     """
 
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
@@ -89,14 +78,10 @@ class StatsPanel(StripWidget):
     # --- data in -----------------------------------------------------------
     def show_state(self, state: str) -> None:
         """'running', 'paused', 'finished' or 'idle'."""
-        if state != self._state:
-            self._state = state
-            self._changed()
+        self._show(_state=state)
 
     def show_speed(self, name: str) -> None:
-        if name != self._speed:
-            self._speed = name
-            self._changed()
+        self._show(_speed=name)
 
     def show_snapshot(self, snapshot: TrainingSnapshot) -> None:
         recorded = snapshot.recorded > 0  # episodes in the rolling statistics
@@ -109,19 +94,12 @@ class StatsPanel(StripWidget):
              if rate > 0 else none, ""),
             ("time", (format_duration(snapshot.seconds),) if snapshot.seconds > 0 else none, ""),
             ("epsilon", (f"{snapshot.epsilon:.3f}",), ""),
-            ("return", number_forms(f"{snapshot.mean_return:+.4f}", snapshot.mean_return, "+")
-             if recorded else none, "bold"),
-            ("length", number_forms(f"{snapshot.mean_length:.2f}", snapshot.mean_length)
-             if recorded else none, ""),
-            ("|TD|", number_forms(f"{snapshot.mean_abs_td:.4f}", snapshot.mean_abs_td)
-             if recorded else none, ""),
+            ("return", number_forms(snapshot.mean_return, "+.4f") if recorded else none, "bold"),
+            ("length", number_forms(snapshot.mean_length, ".2f") if recorded else none, ""),
+            ("|TD|", number_forms(snapshot.mean_abs_td, ".4f") if recorded else none, ""),
         ]
-        window = min(snapshot.window, snapshot.recorded)
-        if rows != self._rows or snapshot.engine != self._engine or window != self._window:
-            self._rows = rows
-            self._engine = snapshot.engine
-            self._window = window
-            self._changed()
+        self._show(_rows=rows, _engine=snapshot.engine,
+                   _window=min(snapshot.window, snapshot.recorded))
 
     def show_reference(self, reference: ReferenceMetrics | None, note: str = "") -> None:
         """The exact comparison with the optimum (and a word on what it takes into
@@ -131,13 +109,16 @@ class StatsPanel(StripWidget):
         if reference is not None and not items:
             items = [("reference", (reference.summary,))]
         scope = reference.scope.note if reference is not None else ""
-        if items != self._reference or (note, scope) != (self._reference_note, self._scope_note):
-            self._reference = items
-            self._reference_note = note
-            self._scope_note = scope
-            self._changed()
+        self._show(_reference=items, _reference_note=note, _scope_note=scope)
 
     # --- drawing -----------------------------------------------------------
+    def _show(self, **values: object) -> None:
+        """Take these attributes' new values; the panel changes when one of them does."""
+        if any(getattr(self, name) != value for name, value in values.items()):
+            for name, value in values.items():
+                setattr(self, name, value)
+            self._changed()
+
     def _changed(self) -> None:
         self.plain = self._plain()
         parts = [f"last {self._window:,}"] if self._window else []

@@ -10,6 +10,7 @@ from textual.widgets import Static
 
 from tui_gym.algorithms import UpdateRecord
 from tui_gym.games.words import plural
+from tui_gym.ui.widgets.strip_widget import panel_css
 
 __all__ = ["StepPanel", "explain"]
 
@@ -99,14 +100,7 @@ def explain(
 class StepPanel(Static):
     """The explanation of the last step (see the module docstring)."""
 
-    DEFAULT_CSS = """
-    StepPanel {
-        height: auto;
-        border: round $primary-background-lighten-2;
-        border-title-color: $text-muted;
-        padding: 0 1;
-    }
-    """
+    DEFAULT_CSS = panel_css("StepPanel", compact=False)
 
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
         super().__init__("", id=id, classes=classes)

@@ -1,6 +1,6 @@
 """`StripWidget`: a widget that keeps its drawing (lines of segments, per key and width)
 between frames and repaints only the lines that changed (a `render()` widget is drawn
-afresh on every refresh, e.g. each focus change); `segments_of` and friends."""
+afresh on every refresh, e.g. each focus change); `segments_of`, `panel_css` and friends."""
 
 from __future__ import annotations
 
@@ -39,6 +39,21 @@ def segments_of(text: Text, console: Console) -> list[Line]:
 def component_classes(css: str) -> set[str]:
     """The component classes a widget's CSS styles (its `.name--part` selectors)."""
     return set(re.findall(r"\.(\w+--[\w-]+)", css))
+
+
+def panel_css(name: str, compact: bool = True) -> str:
+    """The CSS of a bordered panel `name`, and (`compact`) none of its border or padding in
+    the compact layout."""
+    css = f"""
+    {name} {{
+        height: auto;
+        border: round $primary-background-lighten-2;
+        border-title-color: $text-muted;
+        border-subtitle-color: $text-disabled;
+        padding: 0 1;
+    }}
+    """
+    return css + (f"Screen.compact {name} {{ border: none; padding: 0; }}\n" if compact else "")
 
 
 def line_text(line: Iterable[Segment]) -> str:
@@ -170,4 +185,4 @@ class StripWidget(Widget):
         return Strip.blank(self.content_size.width, self.rich_style)
 
 
-__all__ = ["Line", "StripWidget", "line_text", "segments_of"]
+__all__ = ["Line", "StripWidget", "line_text", "panel_css", "segments_of"]

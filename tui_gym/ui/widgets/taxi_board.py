@@ -27,7 +27,7 @@ from tui_gym.ui.widgets.board_drawing import (
     read_as,
     shape_fits,
 )
-from tui_gym.ui.widgets.boards import arrow_bindings
+from tui_gym.ui.widgets.boards import NEW_EPISODE_HELP, NEW_EPISODE_KEYS, arrow_bindings
 from tui_gym.ui.widgets.numbers import fit
 from tui_gym.ui.widgets.strip_widget import component_classes
 
@@ -88,8 +88,7 @@ class TaxiBoard(MapBoard):
         *arrow_bindings("north", "south", "west", "east", "Drive"),
         Binding("k", "act('pickup')", "Pick up", tooltip="Pick the passenger up"),
         Binding("l,o", "act('dropoff')", "Drop off", key_display="l", tooltip="Drop them off"),
-        Binding("n,r", "new_episode", "New", key_display="n", tooltip="Start a new episode"),
-        Binding("enter", "next_episode", "Next", show=False),
+        *NEW_EPISODE_KEYS,
     ]
 
     BUTTONS = (
@@ -106,8 +105,7 @@ class TaxiBoard(MapBoard):
         return [
             ("↑ ↓ ← →  or  w a s d", "drive north, south, west, east"),
             ("k", "pick the passenger up"), ("l / o", "drop the passenger off"),
-            ("n / r", "start a new episode (at any time)"),
-            ("enter", "start a new episode once this one is over"),
+            *NEW_EPISODE_HELP,
             ("click a cell", "drive one cell towards it; click the cab to pick up or drop off"),
         ]
 

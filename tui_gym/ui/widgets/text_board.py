@@ -7,7 +7,7 @@ from typing import ClassVar
 from rich.text import Text
 from textual.binding import Binding, BindingType
 
-from tui_gym.ui.widgets.boards import Board
+from tui_gym.ui.widgets.boards import NEW_EPISODE_HELP, NEW_EPISODE_KEYS, Board
 
 ACTION_GROUP = Binding.Group("Act")
 
@@ -23,15 +23,13 @@ class TextBoard(Board):
     BINDINGS: ClassVar[list[BindingType]] = [
         *(Binding(str(d), f"act('{d}')", f"action {d}", show=False, group=ACTION_GROUP)
           for d in range(10)),
-        Binding("n,r", "new_episode", "New", key_display="n", tooltip="Start a new episode"),
-        Binding("enter", "next_episode", "Next", show=False),
+        *NEW_EPISODE_KEYS,
     ]
 
     def key_help(self) -> list[tuple[str, str]]:
         return [
             ("0-9", "take the action of that number"),
-            ("n / r", "start a new episode (at any time)"),
-            ("enter", "start a new episode once this one is over"),
+            *NEW_EPISODE_HELP,
         ]
 
     prompt = "Press an action's number; r starts over."

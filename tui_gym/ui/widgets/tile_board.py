@@ -31,7 +31,7 @@ from tui_gym.ui.widgets.board_drawing import (
     read_as,
     shape_fits,
 )
-from tui_gym.ui.widgets.boards import arrow_bindings
+from tui_gym.ui.widgets.boards import NEW_EPISODE_HELP, NEW_EPISODE_KEYS, arrow_bindings
 from tui_gym.ui.widgets.numbers import fit
 from tui_gym.ui.widgets.strip_widget import component_classes
 
@@ -97,12 +97,6 @@ def cell_table(value: Any) -> dict[Cell, Any]:
     return {cell: item for key, item in value.items() if (cell := cell_of(key)) is not None}
 
 
-def map_rows(scene: Mapping[str, Any]) -> list[str]:
-    """The scene's map, one string a row (equal rows, as games and recordings give them)."""
-    rows = [str(row) for row in scene.get("cells") or ()]
-    return rows if any(rows) else []
-
-
 class TileBoard(MapBoard):
     """A map of tiles (lake, cliff, plain): walk the agent ● to the goal ★."""
 
@@ -149,8 +143,7 @@ class TileBoard(MapBoard):
         Binding("end", "act('down-left')", "down-left", show=False),
         Binding("pagedown", "act('down-right')", "down-right", show=False),
         *(Binding(str(d), f"digit({d})", str(d), show=False) for d in range(10)),
-        Binding("n,r", "new_episode", "New", key_display="n", tooltip="Start a new episode"),
-        Binding("enter", "next_episode", "Next", show=False),
+        *NEW_EPISODE_KEYS,
     ]
 
     BUTTONS = (("↺ Reset [dim]r[/]", "new_episode"),)
@@ -174,8 +167,7 @@ class TileBoard(MapBoard):
             ("↑ ↓ ← →  or  w a s d", "move up, down, left, right"),
             ("home pgup end pgdn", "king's moves: up-left, up-right, down-left, down-right"),
             ("1-9, 0", "the keypad's way (king's moves), or the choice of that number"),
-            ("n / r", "start a new episode (at any time)"),
-            ("enter", "start a new episode once this one is over"),
+            *NEW_EPISODE_HELP,
             ("click a cell", "step one cell towards it"),
         ]
 
@@ -243,7 +235,8 @@ class TileBoard(MapBoard):
 
     def _read(self, scene: Mapping[str, Any]) -> None:
         """The map and what lies on it, from a scene."""
-        self.cells = map_rows(scene)
+        rows = [str(row) for row in scene.get("cells") or ()]  # equal rows, as games give them
+        self.cells = rows if any(rows) else []
         self.theme = THEMES.get(str(scene.get("theme", "lake")), THEMES["plain"])
         self.border_title = self.theme.title
         self.rewards = cell_table(scene.get("rewards"))
@@ -501,4 +494,4 @@ class TileBoard(MapBoard):
             self.step_to(self.agent, cell, MOVE_OF)
 
 
-__all__ = ["MOVES", "THEMES", "TileBoard", "choose_shape", "map_rows"]
+__all__ = ["MOVES", "THEMES", "TileBoard", "choose_shape"]

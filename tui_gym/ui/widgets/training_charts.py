@@ -14,8 +14,8 @@ from rich.segment import Segment
 from rich.style import Style
 
 from tui_gym.core.engine.stats import TrainingSnapshot
-from tui_gym.ui.widgets.numbers import Forms, fit, number_forms
-from tui_gym.ui.widgets.strip_widget import Line, StripWidget, component_classes
+from tui_gym.ui.widgets.numbers import fit, number_forms
+from tui_gym.ui.widgets.strip_widget import Line, StripWidget, component_classes, panel_css
 
 BARS = "▁▂▃▄▅▆▇█"
 NAME_WIDTH, VALUE_WIDTH, RANGE_WIDTH = 12, 9, 13
@@ -30,19 +30,15 @@ class Curve:
     key: str  # key in TrainingSnapshot.series
     name: str
     current: Callable[[TrainingSnapshot], float]
-    fmt: str
+    spec: str  # the format of its numbers
     of_episodes: bool = True  # the current value is a mean over recorded episodes
-
-    def forms(self, value: float) -> Forms:
-        """The value as `fmt` writes it, then shorter forms of it."""
-        return number_forms(self.fmt.format(value), value, "+" if "+" in self.fmt else "")
 
 
 CURVES: tuple[Curve, ...] = (
-    Curve("return", "mean return", lambda s: s.mean_return, "{:+.3f}"),
-    Curve("length", "ep. length", lambda s: s.mean_length, "{:.2f}"),
-    Curve("td_error", "mean |TD|", lambda s: s.mean_abs_td, "{:.4f}"),
-    Curve("epsilon", "epsilon", lambda s: s.epsilon, "{:.3f}", of_episodes=False),
+    Curve("return", "mean return", lambda s: s.mean_return, "+.3f"),
+    Curve("length", "ep. length", lambda s: s.mean_length, ".2f"),
+    Curve("td_error", "mean |TD|", lambda s: s.mean_abs_td, ".4f"),
+    Curve("epsilon", "epsilon", lambda s: s.epsilon, ".3f", of_episodes=False),
 )
 
 
@@ -123,16 +119,8 @@ def mix(a: RichColor, b: RichColor, t: float) -> RichColor:
 class TrainingCharts(StripWidget):
     """Four sparklines with names, current values and ranges."""
 
-    # Not scoped: the `Screen.compact ...` rules must match from the screen down.
-    SCOPED_CSS = False
-    DEFAULT_CSS = """
-    TrainingCharts {
-        height: auto;
-        border: round $primary-background-lighten-2;
-        border-title-color: $text-muted;
-        border-subtitle-color: $text-disabled;
-        padding: 0 1;
-    }
+    SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
+    DEFAULT_CSS = panel_css("TrainingCharts") + """
     TrainingCharts > .charts--name { color: $text-muted; }
     TrainingCharts > .charts--value { text-style: bold; }
     TrainingCharts > .charts--range { color: $text-disabled; }
@@ -144,11 +132,6 @@ class TrainingCharts(StripWidget):
     TrainingCharts > .charts--td_error-low { color: $error 40%; }
     TrainingCharts > .charts--epsilon-high { color: $primary; }
     TrainingCharts > .charts--epsilon-low { color: $primary 40%; }
-
-    Screen.compact TrainingCharts {
-        border: none;
-        padding: 0;
-    }
     """
     COMPONENT_CLASSES: ClassVar[set[str]] = component_classes(DEFAULT_CSS)
 
@@ -193,7 +176,7 @@ class TrainingCharts(StripWidget):
             key = curve.key
             data = tuple(snapshot.series.get(key, ())) if recorded else ()
             current = curve.current(snapshot) if recorded or not curve.of_episodes else None
-            text = curve.fmt.format(current) if current is not None else "–"
+            text = format(current, curve.spec) if current is not None else "–"
             if self._data.get(key) != data or self._values.get(key) != text:
                 self._data[key], self._values[key] = data, text
                 self._current[key] = current
@@ -218,11 +201,11 @@ class TrainingCharts(StripWidget):
             columns = plotted(self._data.get(curve.key, ()), spark_width, current)
             low = styles[f"charts--{curve.key}-low"].color or RichColor.default()
             high = styles[f"charts--{curve.key}-high"].color or RichColor.default()
-            value = "–" if current is None else fit(curve.forms(current), VALUE_WIDTH)
+            value = "–" if current is None else fit(number_forms(current, curve.spec), VALUE_WIDTH)
             ends, flat = ["", ""], False
             if columns:
-                top = fit(curve.forms(max(columns)), RANGE_WIDTH - 4)
-                bottom = fit(curve.forms(min(columns)), RANGE_WIDTH - 4)
+                top = fit(number_forms(max(columns), curve.spec), RANGE_WIDTH - 4)
+                bottom = fit(number_forms(min(columns), curve.spec), RANGE_WIDTH - 4)
                 ends, flat = [f"max {top}", f"min {bottom}"], top == bottom
             spark = sparkline_rows(columns, spark_width, height, low, high, flat=flat)
             for row in range(height):
