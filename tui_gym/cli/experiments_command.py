@@ -349,24 +349,22 @@ def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
 
     grid = {key: [v.strip() for v in values.split(",") if v.strip()]
             for key, values in key_values(args.grid, "--grid", "KEY=V1,V2,...").items()}
-    shared = _shared(args)
     ranges = {}
     for key, text in key_values(args.ranges, "--range").items():
         with cli_errors(ValueError, prefix=f"--range {key}: "):
             ranges[key] = Range.parse(text)
-    spec = SweepSpec(game=args.game, algorithm=args.algorithm, grid=grid, **shared,
+    spec = SweepSpec(game=args.game, algorithm=args.algorithm, grid=grid, **_shared(args),
                      ranges=ranges, samples=args.sample, sample_seed=args.sample_seed)
     result, history = _run_recorded(args, out, "sweeping", run_sweep, spec)
     if args.json:
         print_json("sweep", result.to_json())
-        unrecorded(history)
-        return 130 if result.interrupted else 0
-    out.print(_sweep_table(result))
-    if len(spec.grid) == 2 and not spec.ranges:
-        out.print(_sweep_grid(result))
-    if result.interrupted:
-        out.print("[yellow]interrupted:[/] points show the episodes every seed finished"
-                  + _resume_hint(result.group))
+    else:
+        out.print(_sweep_table(result))
+        if len(spec.grid) == 2 and not spec.ranges:
+            out.print(_sweep_grid(result))
+        if result.interrupted:
+            out.print("[yellow]interrupted:[/] points show the episodes every seed finished"
+                      + _resume_hint(result.group))
     unrecorded(history)
     return 130 if result.interrupted else 0
 
