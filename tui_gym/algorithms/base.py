@@ -264,14 +264,6 @@ class Learner(ABC):
         for extra in self.extras:
             setattr(self, extra.name, self._new(extra, self._shape(extra, capacity)))
 
-    def _grow_extra(self, capacity: int) -> None:
-        """The extras that grow with the table, made to fit `capacity` rows."""
-        for extra in self.extras:
-            if extra.size in ("rows", "table", "cells"):
-                old, shape = getattr(self, extra.name), self._shape(extra, capacity)
-                more = self._new(extra, (shape[0] - len(old), *shape[1:]))
-                setattr(self, extra.name, np.concatenate([old, more]))
-
     def log_rows(self) -> int:
         """Rows of log an explained update of the next transition may write."""
         return 1
@@ -400,10 +392,14 @@ class Learner(ABC):
         return self._index.get(key)
 
     def _grow(self) -> None:
+        """Twice the rows: the tables, `visits` and the extras that grow with them."""
         for spec in (_VISITS, *self.tables):
             old = getattr(self, spec.name)
             setattr(self, spec.name, np.concatenate([old, np.full_like(old, self._fill(spec))]))
-        self._grow_extra(len(self.visits))
+        for extra in self.extras:
+            if extra.size in ("rows", "table", "cells"):
+                old = getattr(self, extra.name)
+                setattr(self, extra.name, np.concatenate([old, self._new(extra, old.shape)]))
 
     # --- acting ----------------------------------------------------------------------
     def act(self, key: Hashable) -> int:
@@ -523,21 +519,15 @@ class Learner(ABC):
         (shapes are checked before)."""
         for spec in (_VISITS, *self.tables):
             array = np.asarray(arrays[spec.name])
-            kind = array.dtype.kind
-            if spec.dtype is bool:
-                if kind != "b":
-                    raise ValueError(f"saved {spec.name!r} holds {array.dtype} values, not bool")
-            elif np.dtype(spec.dtype).kind == "f":
-                if kind not in "fiu":
-                    raise ValueError(f"saved {spec.name!r} holds {array.dtype} values")
-                if not np.isfinite(array).all():
-                    raise ValueError(f"saved {spec.name!r} holds NaN or infinite values")
-            else:
-                if kind not in "iu":
-                    raise ValueError(f"saved {spec.name!r} holds {array.dtype} values")
-                low = min(0, int(spec.fill))
-                if array.size and (array.min() < low or array.max() > MAX_SAVED_COUNT):
-                    raise ValueError(f"saved {spec.name!r} holds negative or impossible counts")
+            want = np.dtype(spec.dtype).kind  # bool, float (read from any number) or integer
+            if array.dtype.kind not in {"b": "b", "f": "fiu"}.get(want, "iu"):
+                raise ValueError(f"saved {spec.name!r} holds {array.dtype} values")
+            if want == "f" and not np.isfinite(array).all():
+                raise ValueError(f"saved {spec.name!r} holds NaN or infinite values")
+            low = min(0, int(spec.fill))
+            if want in "iu" and array.size and (array.min() < low
+                                                or array.max() > MAX_SAVED_COUNT):
+                raise ValueError(f"saved {spec.name!r} holds negative or impossible counts")
 
     def state(self) -> LearnerState:
         """Copies of everything that defines this learner, to save or send elsewhere."""
@@ -558,15 +548,12 @@ class Learner(ABC):
         meta, arrays = state.meta, state.arrays
         rows = int(meta.get("rows", -1))
         if int(meta.get("n_actions", -1)) != self.n_actions:
-            raise ValueError(
-                f"the saved table has {meta.get('n_actions')} actions, this one {self.n_actions}"
-            )
+            raise ValueError(f"the saved table has {meta.get('n_actions')} actions, "
+                             f"this one {self.n_actions}")
         dense = state.keys is None
         if dense != self.dense:
-            raise ValueError(
-                "the saved table is dense, this one sparse" if dense
-                else "the saved table is sparse, this one dense"
-            )
+            kinds = ("sparse", "dense")
+            raise ValueError(f"the saved table is {kinds[dense]}, this one {kinds[self.dense]}")
         if dense and rows != self.n_states:
             raise ValueError(f"the saved table has {rows} states, this one {self.n_states}")
         if not dense and len(state.keys) != rows:  # type: ignore[arg-type]
@@ -577,9 +564,8 @@ class Learner(ABC):
             if name not in arrays:
                 raise ValueError(f"the saved state has no {name!r} array")
             if np.shape(arrays[name]) != shape:
-                raise ValueError(
-                    f"saved {name!r} has shape {np.shape(arrays[name])}, expected {shape}"
-                )
+                raise ValueError(f"saved {name!r} has shape {np.shape(arrays[name])}, "
+                                 f"expected {shape}")
         self._check_arrays(arrays, rows)
         capacity = rows if dense else max(_INITIAL_ROWS, rows)
         loaded: dict[str, np.ndarray] = {}

@@ -24,17 +24,12 @@ class Choice:
     choices: tuple[str, ...]
     default: str
     help: str = ""
-    owner: str = ""
     title: str = ""
     kind: ClassVar[type] = str
 
     def __post_init__(self) -> None:
         if self.default not in self.choices:
             raise ValueError(f"Choice {self.name}: default {self.default!r} is not a choice")
-
-    @property
-    def label(self) -> str:
-        return f"{self.owner}.{self.name}" if self.owner else self.name
 
     def describe_range(self) -> str:
         return " or ".join(self.choices)
@@ -46,7 +41,7 @@ class Choice:
         """The word itself when `raw` is one of the choices (spaces and case ignored)."""
         word = raw.strip().lower() if isinstance(raw, str) else None
         if word not in self.choices:
-            raise ValueError(f"{self.label} must be {self.expected()}, got {raw!r}")
+            raise ValueError(f"{self.name} must be {self.expected()}, got {raw!r}")
         return word
 
 

@@ -18,7 +18,13 @@ from tui_gym.core.text import visible
 
 def add_parser(sub: Any) -> None:
     """Add `benchmark` to the sub-command parsers `sub`."""
-    from tui_gym.cli.flags import finite_number, positive_int, seed_number
+    from tui_gym.cli.flags import (
+        add_param_flag,
+        add_seed_flag,
+        add_wrapper_flag,
+        finite_number,
+        positive_int,
+    )
     from tui_gym.cli.replay_command import add_record_option
     from tui_gym.cli.runs_command import add_history_flags
 
@@ -43,39 +49,27 @@ def add_parser(sub: Any) -> None:
                        "the command, or the built-in's or agent file's name)")
     bench.add_argument("--episodes", type=positive_int, default=1000, metavar="N",
                        help="episodes to play (default 1,000)")
-    bench.add_argument("--seed", type=seed_number, default=0, dest="bench_seed", metavar="S",
-                       help="seed of the first episode (default 0)")
+    add_seed_flag(bench, "bench_seed", "seed of the first episode (default 0)")
     bench.add_argument("--decision-timeout", type=finite_number, default=5.0, metavar="SEC",
                        help="seconds a program has for each decision (default 5)")
     bench.add_argument("--allow-hints", action="store_true",
                        help="answer the player's hint requests (refused by default)")
-    bench.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
-                       help="a game parameter, e.g. --param size=6 (repeatable)")
-    bench.add_argument("--wrapper", action="append", default=[], metavar="SPEC",
-                       help="add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable)")
+    add_param_flag(bench)
+    add_wrapper_flag(bench)
     bench.add_argument("--leaderboard", action="store_true",
                        help="list GAME's recorded benchmarks, best first, instead of running one")
     add_history_flags(bench, "the result")
-    bench.add_argument("--json", action="store_true", help="print one JSON object")
+    bench.add_argument("--json", action="store_true")
     add_record_option(bench)
-
-
-def _params(pairs: list[str]) -> dict[str, str]:
-    params: dict[str, str] = {}
-    for pair in pairs:
-        name, sep, value = pair.partition("=")
-        if not sep or not name.strip():
-            raise ValueError(f"--param takes NAME=VALUE, got {pair!r}")
-        params[name.strip()] = value.strip()
-    return params
 
 
 def _player(args: argparse.Namespace, game: str) -> tuple[Any, dict[str, Any], tuple[str, ...]]:
     """The player, and the game's parameters and wrappers it plays with."""
     from tui_gym.benchmark.players import AgentPlayer, OptimalPlayer, ProcessPlayer, RandomPlayer
+    from tui_gym.cli.flags import key_values
     from tui_gym.session.arena import find_game
 
-    params: dict[str, Any] = _params(args.param)
+    params: dict[str, Any] = key_values(args.params, "--param")
     wrappers = tuple(args.wrapper)
     if args.agent_cmd is not None:
         return ProcessPlayer(args.agent_cmd), params, wrappers

@@ -12,7 +12,7 @@ from rich.table import Table
 
 from tui_gym.book_text import claims_table, figure_parts, panel_text
 from tui_gym.cli.experiments_command import add_task_flags, ctrl_c_stops, run_history, unrecorded
-from tui_gym.cli.flags import positive_int, seed_number
+from tui_gym.cli.flags import add_seed_flag, positive_int
 from tui_gym.cli.output import CliError, cli_errors, print_json, progress_bar
 from tui_gym.session.book import figure_named, figures
 from tui_gym.session.book.figure import (
@@ -33,13 +33,12 @@ def add_book_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[ty
                       help="independent runs (default: the figure's)")
     book.add_argument("--episodes", type=positive_int, metavar="E",
                       help="episodes a run (default: the figure's)")
-    book.add_argument("--seed", type=seed_number, default=0, dest="book_seed", metavar="S",
-                      help="the first run's seed (default 0)")
+    add_seed_flag(book, "book_seed", "the first run's seed (default 0)")
     book.add_argument("--full", action="store_true",
                       help="the book's own run and episode counts (slower); each finished "
                       "task is kept in the run history, so --resume carries it on")
     add_task_flags(book)
-    book.add_argument("--json", action="store_true", help="print one JSON object")
+    book.add_argument("--json", action="store_true")
 
 
 def cmd_book(args: argparse.Namespace, out: Console) -> int:

@@ -21,8 +21,8 @@ from tui_gym.session import evaluation
 from tui_gym.session.evaluation import EvalReport
 from tui_gym.session.session import TARGET_GAP_BUDGET_FACTOR, Session, default_settings
 
-WRAPPER_SYNTAX = "--wrapper NAME or --wrapper NAME:key=value,key=value, repeatable; " \
-    "the first is innermost"
+WRAPPER_SYNTAX = "--wrapper NAME or --wrapper NAME:key=value,key=value, repeatable; the " \
+    "first is innermost"
 
 
 def _param_dict(param: Field) -> dict[str, Any]:
@@ -98,12 +98,8 @@ def cmd_wrappers(args: argparse.Namespace, out: Console) -> int:
             params = "\n".join(f"{p.name}\n  {_default_text(p)}" for p in spec.params) or "-"
             table.add_row(spec.name, escape(spec.summary), escape(params))
         out.print(table)
-    out.print(
-        "Use with [bold]--wrapper NAME[/] or [bold]--wrapper NAME:key=value,key=value[/], "
-        "repeatable; the first is innermost.\n"
-        "Example: tui-gym train GAME --wrapper TimeLimit:max_episode_steps=50 "
-        "--wrapper StepPenalty:penalty=0.01"
-    )
+    out.print(f"Use with {WRAPPER_SYNTAX}.\nExample: tui-gym train GAME --wrapper "
+              "TimeLimit:max_episode_steps=50 --wrapper StepPenalty:penalty=0.01")
     return 0
 
 
@@ -326,16 +322,13 @@ def _train(args: argparse.Namespace, out: Console, recording: Any) -> int:
 
 def cmd_eval(args: argparse.Namespace, out: Console) -> int:
     session = Session.load(args.path)
-    seed = args.eval_seed
-    report = session.evaluate(args.episodes, seed=seed)
-    data = eval_dict(session, report)
+    data = eval_dict(session, session.evaluate(args.episodes, seed=args.eval_seed))
     if args.json:
         print_json("eval", data)
         return 0
-    rows = [("file", args.path), ("env", session.env_id),
-            ("algorithm", session.learner_class.title), ("wrappers", session.chain_repr())]
-    rows += _eval_rows(data)
-    out.print(key_value_table("Evaluation", rows))
+    out.print(key_value_table("Evaluation", [
+        ("file", args.path), ("env", session.env_id), ("algorithm", session.learner_class.title),
+        ("wrappers", session.chain_repr()), *_eval_rows(data)]))
     return 0
 
 

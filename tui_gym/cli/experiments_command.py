@@ -15,8 +15,14 @@ from rich.table import Table
 from rich.text import Text
 
 from tui_gym.algorithms import ALGORITHMS
+from tui_gym.cli.flags import (
+    add_param_flag,
+    add_wrapper_flag,
+    key_values,
+    output_file,
+    wrapper_choices,
+)
 from tui_gym.cli.flags import int_in as _int_in
-from tui_gym.cli.flags import output_file, wrapper_choices
 from tui_gym.cli.flags import seed_number as _seed
 from tui_gym.cli.output import CliError, cli_errors, print_json, progress_bar, say_status, warn
 
@@ -43,16 +49,14 @@ def _common_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         dest="settings", help="a hyperparameter for every algorithm that has it "
                         "(repeatable), e.g. --set epsilon_start=0.1")
-    parser.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
-                        dest="params", help="a game parameter (repeatable), e.g. --param size=6")
-    parser.add_argument("--wrapper", action="append", default=[], metavar="SPEC",
-                        help="add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable)")
+    add_param_flag(parser)
+    add_wrapper_flag(parser)
     parser.add_argument("--processes", type=_int_in(0, 1024, "a number of processes"),
                         default=None, metavar="P",
                         help="batches at once in child processes (default: one per core; "
                         "0: in this process)")
     add_task_flags(parser)
-    parser.add_argument("--json", action="store_true", help="print one JSON object, no bar")
+    parser.add_argument("--json", action="store_true")
 
 
 def add_task_flags(parser: argparse.ArgumentParser) -> None:
@@ -107,25 +111,11 @@ def add_experiment_parsers(sub: Any) -> None:
     _common_options(sweep)
 
 
-def _pairs(items: Sequence[str], flag: str, shape: str = "KEY=VALUE") -> dict[str, str]:
-    out: dict[str, str] = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        key = key.strip().replace("-", "_")
-        filled = value.replace(",", " ") if "," in shape else value  # a list: not commas only
-        if not sep or not key or not filled.strip():
-            raise CliError(f"{flag} {item!r}: expected {shape}")
-        if key in out:
-            raise CliError(f"{flag} {key} is given twice")
-        out[key] = value.strip()
-    return out
-
-
 def _shared(args: argparse.Namespace) -> dict[str, Any]:
     """The fields of a comparison's or a sweep's spec that their common flags give."""
     return {"seeds": args.seeds, "episodes": args.episodes,
-            "settings": _pairs(args.settings, "--set"),
-            "game_params": _pairs(args.params, "--param"),
+            "settings": key_values(args.settings, "--set"),
+            "game_params": key_values(args.params, "--param"),
             "wrappers": wrapper_choices(args.wrapper), "first_seed": args.first_seed}
 
 
@@ -358,25 +348,23 @@ def cmd_sweep(args: argparse.Namespace, out: Console) -> int:
     from tui_gym.session.experiments.sweep import Range, SweepSpec, run_sweep
 
     grid = {key: [v.strip() for v in values.split(",") if v.strip()]
-            for key, values in _pairs(args.grid, "--grid", "KEY=V1,V2,...").items()}
-    shared = _shared(args)
+            for key, values in key_values(args.grid, "--grid", "KEY=V1,V2,...").items()}
     ranges = {}
-    for key, text in _pairs(args.ranges, "--range").items():
+    for key, text in key_values(args.ranges, "--range").items():
         with cli_errors(ValueError, prefix=f"--range {key}: "):
             ranges[key] = Range.parse(text)
-    spec = SweepSpec(game=args.game, algorithm=args.algorithm, grid=grid, **shared,
+    spec = SweepSpec(game=args.game, algorithm=args.algorithm, grid=grid, **_shared(args),
                      ranges=ranges, samples=args.sample, sample_seed=args.sample_seed)
     result, history = _run_recorded(args, out, "sweeping", run_sweep, spec)
     if args.json:
         print_json("sweep", result.to_json())
-        unrecorded(history)
-        return 130 if result.interrupted else 0
-    out.print(_sweep_table(result))
-    if len(spec.grid) == 2 and not spec.ranges:
-        out.print(_sweep_grid(result))
-    if result.interrupted:
-        out.print("[yellow]interrupted:[/] points show the episodes every seed finished"
-                  + _resume_hint(result.group))
+    else:
+        out.print(_sweep_table(result))
+        if len(spec.grid) == 2 and not spec.ranges:
+            out.print(_sweep_grid(result))
+        if result.interrupted:
+            out.print("[yellow]interrupted:[/] points show the episodes every seed finished"
+                      + _resume_hint(result.group))
     unrecorded(history)
     return 130 if result.interrupted else 0
 

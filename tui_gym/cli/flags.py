@@ -52,6 +52,42 @@ seed_number = int_in(0, MAX_SEED, f"an integer in [0, {MAX_SEED}]")
 finite_number = number_in(-math.inf, math.inf, "a finite number")
 
 
+def add_seed_flag(parser: argparse.ArgumentParser, dest: str, help: str,
+                  default: int | None = 0) -> None:
+    """`--seed S`, kept as `args.<dest>`."""
+    parser.add_argument("--seed", type=seed_number, default=default, dest=dest, metavar="S",
+                        help=help)
+
+
+def add_wrapper_flag(parser: argparse.ArgumentParser) -> None:
+    """`--wrapper SPEC`, repeatable, the first innermost."""
+    parser.add_argument("--wrapper", action="append", default=[], metavar="SPEC",
+                        help="add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable, "
+                        "in order)")
+
+
+def add_param_flag(parser: argparse.ArgumentParser) -> None:
+    """`--param KEY=VALUE`, repeatable, kept as `args.params` (read by `key_values`)."""
+    parser.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
+                        dest="params", help="a game parameter (repeatable), e.g. --param size=6")
+
+
+def key_values(items: list[str], flag: str, shape: str = "KEY=VALUE") -> dict[str, str]:
+    """`KEY=VALUE` flags as a dict (`-` in a key read as `_`); CliError for a malformed or
+    repeated one."""
+    out: dict[str, str] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        key = key.strip().replace("-", "_")
+        filled = value.replace(",", " ") if "," in shape else value  # a list: not commas only
+        if not sep or not key or not filled.strip():
+            raise CliError(f"{flag} {item!r}: expected {shape}")
+        if key in out:
+            raise CliError(f"{flag} {key} is given twice")
+        out[key] = value.strip()
+    return out
+
+
 def file_name(text: str) -> str:
     """An argparse type: a file name, which cannot be empty."""
     if not text.strip():

@@ -20,6 +20,8 @@ from tui_gym.algorithms import ALGORITHMS, DEFAULT_ALGORITHM
 from tui_gym.cli.flags import (
     add_game_flags,
     add_hyperparameter_flags,
+    add_seed_flag,
+    add_wrapper_flag,
     app_env,
     finite_number,
     fresh_seed,
@@ -31,7 +33,6 @@ from tui_gym.cli.maps_command import add_maps_parser
 from tui_gym.cli.output import JSON_SCHEMAS, CliError, OutConsole, readable
 
 ENV_HELP = "a game (`tui-gym envs` lists them), a Gymnasium id, or MODULE:ID"
-WRAPPER_HELP = "add a wrapper, e.g. TimeLimit:max_episode_steps=50 (repeatable, in order)"
 EXIT_USAGE = 2
 EXIT_BROKEN_PIPE = 128 + 13  # what a shell reports for a command ended by SIGPIPE
 
@@ -149,11 +150,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     # Each `--json`'s help says its schema (`_document_json`).
     for name, text in (("envs", "list the games"),
-                       ("wrappers", "list the wrapper catalog and the --wrapper syntax")):
+                       ("wrappers", "list the wrapper catalog and the --wrapper syntax"),
+                       ("algorithms", "list the learners and their parameters")):
         sub.add_parser(name, help=text).add_argument("--json", action="store_true")
     add_maps_parser(sub)
-    sub.add_parser("algorithms", help="list the learners and their parameters").add_argument(
-        "--json", action="store_true")
     names = ", ".join(cls.name for cls in ALGORITHMS)
 
     train = sub.add_parser("train", help="train an agent headless")
@@ -164,11 +164,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     # Read as text here and parsed by the fields themselves, so errors say "out of range".
     add_hyperparameter_flags(train)
-    train.add_argument("--seed", type=seed_number, default=0, dest="train_seed", metavar="S",
-                       help="seed of the training run (default 0; the evaluation after it "
-                       "plays on S + 1)")
+    add_seed_flag(train, "train_seed", "seed of the training run (default 0; the evaluation "
+                  "after it plays on S + 1)")
     add_game_flags(train)
-    train.add_argument("--wrapper", action="append", default=[], metavar="SPEC", help=WRAPPER_HELP)
+    add_wrapper_flag(train)
     train.add_argument(
         "--engine", choices=("auto", "model", "env"), default="auto",
         help="auto: the compiled loop on the game's model when the wrappers let it follow "
@@ -189,7 +188,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "(epsilon-greedy with --epsilon-final)")
     train.add_argument("--save", type=output_file, metavar="PATH",
                        help="save the trained agent here (the folder is checked first)")
-    train.add_argument("--json", action="store_true", help="print one JSON object, no bar")
+    train.add_argument("--json", action="store_true")
     add_history_flags(train, "this run", inherit=True)
 
     ev = sub.add_parser("eval", help="evaluate a saved agent (greedy play + exact reference)")
@@ -198,9 +197,8 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--episodes", type=positive_int, default=10_000, metavar="N",
                     help="greedy episodes to sample (default 10,000; a long-looping policy "
                     "stops at the evaluation's step budget)")
-    ev.add_argument("--seed", type=seed_number, default=None, dest="eval_seed", metavar="S",
-                    help="seed of the sampled episodes (default: one derived from the "
-                    "agent's training seed)")
+    add_seed_flag(ev, "eval_seed", "seed of the sampled episodes (default: one derived from "
+                  "the agent's training seed)", default=None)
     ev.add_argument("--json", action="store_true")
 
     opt = sub.add_parser("optimal", help="the exact optimal strategy and its value")
@@ -211,10 +209,10 @@ def build_parser() -> argparse.ArgumentParser:
     play.add_argument("env", metavar="ENV", help=ENV_HELP)
     play.add_argument("--jsonl", action="store_true", required=True,
                       help="read one JSON request a line, write one JSON response a line")
-    play.add_argument("--seed", type=seed_number, default=None, dest="play_seed", metavar="S",
-                      help="seed of the first episode (a reset may give its own)")
+    add_seed_flag(play, "play_seed", "seed of the first episode (a reset may give its own)",
+                  default=None)
     add_game_flags(play)
-    play.add_argument("--wrapper", action="append", default=[], metavar="SPEC", help=WRAPPER_HELP)
+    add_wrapper_flag(play)
     add_record_option(play)
     add_replay_parser(sub)
     add_serve_parser(sub)
@@ -226,7 +224,7 @@ def build_parser() -> argparse.ArgumentParser:
     screenshots = sub.add_parser("screenshots", help="write the app's SVG screenshots")
     screenshots.add_argument("directory", nargs="?", default="screenshots", metavar="DIR",
                              help="the folder to write them to (default screenshots)")
-    screenshots.add_argument("--json", action="store_true", help="print one JSON object")
+    screenshots.add_argument("--json", action="store_true")
 
     bench = sub.add_parser("bench", help="measure speed, live training, memory and start-up")
     bench.add_argument("--quick", action="store_true", help="a shorter run (under a minute)")
@@ -234,7 +232,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--algorithm", metavar="NAME", default=None,
         help=f"measure the per-algorithm figures for this learner only ({names}; default all)",
     )
-    bench.add_argument("--json", action="store_true", help="print one JSON object")
+    bench.add_argument("--json", action="store_true")
 
     add_mcp_parser(sub)
     add_benchmark_parser(sub)

@@ -34,7 +34,7 @@ def add_maps_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[ty
     maps.add_argument("--walled", action="store_true",
                       help="a random map of floor and walls only, all connected (GridWorld)")
     maps.add_argument("--check", metavar="PATH", help="read a map file and say what it holds")
-    maps.add_argument("--json", action="store_true", help="print one JSON object")
+    maps.add_argument("--json", action="store_true")
 
 
 def _summary(grid_map: GridMap) -> dict[str, object]:

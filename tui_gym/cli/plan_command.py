@@ -34,7 +34,7 @@ def add_plan_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[ty
     parser.add_argument("--in-place", action="store_true",
                         help="sweep in place (one array) instead of synchronously")
     add_game_flags(parser)
-    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--json", action="store_true")
 
 
 def cmd_plan(args: argparse.Namespace, out: Console) -> int:

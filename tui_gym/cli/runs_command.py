@@ -159,6 +159,9 @@ def cmd_runs(args: argparse.Namespace, out: Console) -> int:
         if args.json:
             print_json(f"runs {verb}", done.to_json())
             return 2 if verb == "recover" and done.target is None else 0
+        if verb in _SAID:
+            out.print(Text(visible(_SAID[verb](done, args), None)))
+            return 0
         return _SAY[verb](done, args, out)
     game = args.game.strip().lower() if args.game else None
     limit = args.limit
@@ -210,19 +213,15 @@ def _act(verb: str, args: argparse.Namespace) -> Any:
     from tui_gym.core import experiments as history
     from tui_gym.core.experiments.recover import recover
 
-    if verb == "recover":
-        return recover(history.resolve_db_path(args.db))
-    if verb == "show":
-        return history.show_run(args.run_id, args.db)
-    if verb == "rm":
-        return history.remove_run(args.run_id, args.db)
-    if verb == "prune":
-        return history.prune_tasks(args.db)
-    if args.csv is not None:
-        return history.export_run_csv(args.run_id, args.csv, args.db)
-    from tui_gym.core.experiments.tensorboard import export_run_tensorboard
+    if verb == "export" and args.csv is None:
+        from tui_gym.core.experiments.tensorboard import export_run_tensorboard
 
-    return export_run_tensorboard(args.run_id, args.tensorboard, args.db)
+        return export_run_tensorboard(args.run_id, args.tensorboard, args.db)
+    return {"recover": lambda: recover(history.resolve_db_path(args.db)),
+            "show": lambda: history.show_run(args.run_id, args.db),
+            "rm": lambda: history.remove_run(args.run_id, args.db),
+            "prune": lambda: history.prune_tasks(args.db),
+            "export": lambda: history.export_run_csv(args.run_id, args.csv, args.db)}[verb]()
 
 
 def _say_recover(done: Any, args: argparse.Namespace, out: Console) -> int:
@@ -275,35 +274,30 @@ def _say_show(record: Any, args: argparse.Namespace, out: Console) -> int:
     return 0
 
 
-def _say_export(done: Any, args: argparse.Namespace, out: Console) -> int:
+def _said_export(done: Any, args: argparse.Namespace) -> str:
     if args.csv is not None:
-        line = f"wrote {done.rows} rows of {', '.join(done.columns[1:])} to {done.path}"
-    else:
-        line = (f"wrote {done.scalars} values of {', '.join(done.tags)} to {done.path} "
-                f"(tensorboard --logdir {done.logdir})")
-    out.print(Text(visible(line, None)))
-    return 0
+        return f"wrote {done.rows} rows of {', '.join(done.columns[1:])} to {done.path}"
+    return (f"wrote {done.scalars} values of {', '.join(done.tags)} to {done.path} "
+            f"(tensorboard --logdir {done.logdir})")
 
 
-def _say_rm(removed: Any, args: argparse.Namespace, out: Console) -> int:
+def _said_rm(removed: Any, args: argparse.Namespace) -> str:
     from tui_gym.core.experiments import DamagedRun
 
     run = removed.run
     what = (f"it could not be read: {run.reason}" if isinstance(run, DamagedRun)
             else f"{run.kind} {run.game} {run.algorithm}")
-    out.print(Text(visible(f"removed run {run.id} ({what}) from {removed.db}", None)))
-    return 0
+    return f"removed run {run.id} ({what}) from {removed.db}"
 
 
-def _say_prune(pruned: Any, args: argparse.Namespace, out: Console) -> int:
-    out.print(Text(visible(
-        f"removed {pruned.tasks:,} stored tasks of {pruned.runs:,} finished runs from "
-        f"{pruned.db} (their curves and figures stay; unfinished runs keep theirs, to "
-        "resume)", None)))
-    return 0
+def _said_prune(pruned: Any, args: argparse.Namespace) -> str:
+    return (f"removed {pruned.tasks:,} stored tasks of {pruned.runs:,} finished runs from "
+            f"{pruned.db} (their curves and figures stay; unfinished runs keep theirs, to "
+            "resume)")
 
 
+# What `runs VERB` prints: a report of its own, or one line.
 _SAY: dict[str, Callable[[Any, argparse.Namespace, Console], int]] = {
-    "recover": _say_recover, "show": _say_show, "export": _say_export, "rm": _say_rm,
-    "prune": _say_prune,
-}
+    "recover": _say_recover, "show": _say_show}
+_SAID: dict[str, Callable[[Any, argparse.Namespace], str]] = {
+    "export": _said_export, "rm": _said_rm, "prune": _said_prune}
