@@ -13,7 +13,7 @@ from tui_gym.core.mdp.model import FiniteMDP
 from tui_gym.envs.table_env import TableEnv
 
 __all__ = [
-    "AB_JUMPS", "CORNERS", "GRID_ACTIONS", "KING_ACTIONS", "LEFT_END_PAYS", "STEPS", "WIND",
+    "AB_GRID", "CORNER_GRID", "GRID_ACTIONS", "KING_ACTIONS", "LEFT_END_PAYS", "STEPS", "WIND",
     "ABGridEnv", "CornerGridEnv", "Grid", "GridEnv", "KingWindyGridWorldEnv", "RandomWalkEnv",
     "WindyGridWorldEnv", "walk_grid", "windy_grid",
 ]
@@ -25,8 +25,6 @@ STEPS: dict[str, Cell] = {
     "up": (-1, 0), "down": (1, 0), "left": (0, -1), "right": (0, 1),
     "up-left": (-1, -1), "up-right": (-1, 1), "down-left": (1, -1), "down-right": (1, 1),
 }
-AB_JUMPS: dict[Cell, tuple[Cell, float]] = {(0, 1): ((4, 1), 10.0), (0, 3): ((2, 3), 5.0)}
-CORNERS: tuple[Cell, ...] = ((0, 0), (3, 3))
 GUST = 1.0 / 3.0  # the chance of each of a gusty wind's three strengths
 # The walks of the book: states -> what stepping off the left end pays (the right end pays +1).
 LEFT_END_PAYS = {5: 0.0, 19: -1.0}
@@ -135,12 +133,21 @@ class Grid:
         return ["".join(row) for row in rows]
 
 
-class GridEnv(TableEnv):
-    """A `Grid` played, drawn as text: `.` a cell, `#` a wall, `*` a terminal cell, `@` the
-    agent, and the grid's letters; the wind's strengths under the columns."""
+AB_GRID = Grid(5, 5, step=0.0, edge=-1.0, jumps={(0, 1): ((4, 1), 10.0), (0, 3): ((2, 3), 5.0)},
+               letters={(0, 1): "A", (0, 3): "B"}, primes={(4, 1): "A′", (2, 3): "B′"})
+CORNER_GRID = Grid(4, 4, step=-1.0, edge=-1.0, terminals=((0, 0), (3, 3)))
 
-    def __init__(self, grid: Grid, render_mode: str | None = None,
+
+class GridEnv(TableEnv):
+    """A `Grid` (the class's `GRID` unless given) played, drawn as text: `.` a cell, `#` a
+    wall, `*` a terminal cell, `@` the agent, and the grid's letters; the wind's strengths
+    under the columns."""
+
+    GRID: Grid
+
+    def __init__(self, grid: Grid | None = None, render_mode: str | None = None,
                  model: FiniteMDP | None = None) -> None:
+        grid = grid or self.GRID
         super().__init__(grid.model if model is None else model, render_mode)
         self.grid = grid
         self.action_names = grid.moves
@@ -187,11 +194,7 @@ class ABGridEnv(GridEnv):
     `render_mode`: "ansi".
     """
 
-    GRID = Grid(5, 5, step=0.0, edge=-1.0, jumps=AB_JUMPS,
-                letters={(0, 1): "A", (0, 3): "B"}, primes={(4, 1): "A′", (2, 3): "B′"})
-
-    def __init__(self, render_mode: str | None = None) -> None:
-        super().__init__(self.GRID, render_mode)
+    GRID = AB_GRID
 
 
 class CornerGridEnv(GridEnv):
@@ -216,10 +219,7 @@ class CornerGridEnv(GridEnv):
     `render_mode`: "ansi".
     """
 
-    GRID = Grid(4, 4, step=-1.0, edge=-1.0, terminals=CORNERS)
-
-    def __init__(self, render_mode: str | None = None) -> None:
-        super().__init__(self.GRID, render_mode)
+    GRID = CORNER_GRID
 
 
 def walk_grid(states: int) -> Grid:
