@@ -6,6 +6,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
+from itertools import product
 
 import numpy as np
 
@@ -25,6 +26,8 @@ STEPS: dict[str, Cell] = {
     "up": (-1, 0), "down": (1, 0), "left": (0, -1), "right": (0, 1),
     "up-left": (-1, -1), "up-right": (-1, 1), "down-left": (1, -1), "down-right": (1, 1),
 }
+SIDES = {"left": ("down", "up"), "right": ("down", "up"), "up": ("left", "right"),
+         "down": ("left", "right")}  # where a slipping straight move goes instead
 GUST = 1.0 / 3.0  # the chance of each of a gusty wind's three strengths
 # The walks of the book: states -> what stepping off the left end pays (the right end pays +1).
 LEFT_END_PAYS = {5: 0.0, 19: -1.0}
@@ -34,16 +37,18 @@ WINDY_START, WINDY_GOAL = (3, 0), (3, 7)
 
 @dataclass(frozen=True, eq=False)
 class Grid:
-    """A small grid world.
+    """A small grid world: the book's grids, and the tile maps of FrozenLake and CliffWalking.
 
-    A move (one of `moves`, named as in `STEPS`) goes one cell, then the wind of the
-    column it left (`wind[col]`; with `gusts` one stronger or weaker a third of the
-    time each) pushes it up. Entering a cell pays `pays[cell]`, else `step`. Off the
-    grid, a move pays `edge` and stays (with `edge` None it is clipped to the border);
-    into a wall it pays `step` and stays; from a `jumps` cell every move pays the
-    jump's reward and lands on its target; `terminals` end the episode. Episodes start
-    at `start`, else uniformly off terminals and walls. `letters`, `primes` and `tiles`
-    are drawn: a cell's letter (A), a jump's landing (A′), another tile (H, a pit).
+    A move (one of `moves`, named as in `STEPS`) goes one cell, or from a cell that
+    `slip`s with chance p to either side with p / 2 each (the four straight moves); then
+    the wind of the column it left (`wind[col]`; with `gusts` one stronger or weaker a
+    third of the time each) pushes it up. Entering a cell pays `pays[cell]`, else `step`,
+    and puts the agent where `sends` says (a cliff: the start). Off the grid, a move pays
+    `edge` and stays (with `edge` None it is clipped to the border); into a wall it pays
+    `step` and stays; from a `jumps` cell every move pays the jump's reward and lands on
+    its target; `terminals` end the episode; from an `idle` cell nothing happens. Episodes
+    start at `start`, else uniformly off terminals and walls. `letters`, `primes` and
+    `tiles` are drawn: a cell's letter (A), a jump's landing (A′), another tile (H, a pit).
     """
 
     rows: int
@@ -61,6 +66,9 @@ class Grid:
     letters: Mapping[Cell, str] = field(default_factory=dict)
     primes: Mapping[Cell, str] = field(default_factory=dict)
     tiles: Mapping[Cell, str] = field(default_factory=dict)
+    slip: Mapping[Cell, float] = field(default_factory=dict)
+    sends: Mapping[Cell, Cell] = field(default_factory=dict)
+    idle: frozenset[Cell] = frozenset()
 
     def state(self, cell: Cell) -> int:
         return cell[0] * self.cols + cell[1]
@@ -86,9 +94,11 @@ class Grid:
 
     @cached_property
     def model(self) -> FiniteMDP:
-        """The grid's transitions, `[S, A, K]` with K the most wind strengths a column has."""
+        """The grid's transitions, `[S, A, K]` with K the most outcomes a move has: the wind's
+        strengths, three times over where anything slips. Outcomes with no chance stay put."""
         n, n_moves = self.rows * self.cols, len(self.moves)
-        k = max(len(self.winds(c)) for c in range(self.cols))
+        ways = 3 if self.slip else 1
+        k = ways * max(len(self.winds(c)) for c in range(self.cols))
         shape = (n, n_moves, k)
         next_state = np.broadcast_to(np.arange(n)[:, None, None], shape).copy()
         prob, reward = np.zeros(shape), np.zeros(shape)
@@ -97,17 +107,23 @@ class Grid:
         for s in range(n):
             cell = divmod(s, self.cols)
             for a, move in enumerate(self.moves):
-                if cell in ends:
-                    prob[s, a, 0], terminal[s, a, 0] = 1.0, True
+                if cell in ends or cell in self.idle:
+                    prob[s, a, 0], terminal[s, a, 0] = 1.0, cell in ends
                     continue
                 if cell in self.jumps:
                     target, pay = self.jumps[cell]
                     next_state[s, a, 0], prob[s, a, 0], reward[s, a, 0] = (
                         self.state(target), 1.0, pay)
                     continue
-                for j, (push, chance) in enumerate(self.winds(cell[1])):
-                    to, pay = self.landing(cell, move, push)
-                    next_state[s, a, j], prob[s, a, j] = self.state(to), chance
+                p = self.slip.get(cell, 0.0)
+                sides = [(side, p / 2) for side in SIDES[move]] if ways > 1 else []
+                outcomes = product([(move, 1.0 - p), *sides], self.winds(cell[1]))
+                for j, ((way, chance), (push, gust)) in enumerate(outcomes):
+                    if chance == 0:
+                        continue
+                    to, pay = self.landing(cell, way, push)
+                    next_state[s, a, j], prob[s, a, j] = self.state(self.sends.get(to, to)), (
+                        chance * gust)
                     reward[s, a, j], terminal[s, a, j] = pay, to in ends
         initial = np.zeros(n)
         if self.start is not None:

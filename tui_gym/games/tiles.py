@@ -12,13 +12,12 @@ from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP, NotAvailable
 from tui_gym.envs import TILE_MAP_ID
 from tui_gym.envs.tile_map import (
-    STANDING,
     STEPS,
     TILE_NAMES,
     TileMapEnv,
     TileRules,
     cell_key,
-    tile_model,
+    tile_grid,
 )
 from tui_gym.games.base import (
     TIED,
@@ -48,8 +47,8 @@ NO_DECISION = {"H": "○", "G": "★", "C": "▒", "W": "█"}  # tiles the agen
 
 @lru_cache(maxsize=32)
 def _layout_model(grid_map: GridMap, actions: tuple[str, ...], rules: TileRules) -> FiniteMDP:
-    return tile_model(grid_map.cells, grid_map.reward_table(), grid_map.slip_table(), actions,
-                      rules)
+    return tile_grid(grid_map.cells, grid_map.reward_table(), grid_map.slip_table(), actions,
+                     rules).model
 
 
 class TileStates(DiscreteStates):
@@ -82,10 +81,7 @@ class TileStates(DiscreteStates):
         }
         if isinstance(game_env, TileMapEnv):
             scene["rewards"] = {cell_key(c): v for c, v in game_env.rewards.items()}
-            slip = {cell_key((r, c)): game_env.slip.get((r, c), game_env.rules.slip)
-                    for r, line in enumerate(cells) for c, tile in enumerate(line)
-                    if tile in STANDING}
-            scene["slip"] = {key: p for key, p in slip.items() if p > 0}
+            scene["slip"] = {cell_key(c): p for c, p in game_env.grid.slip.items()}
             return scene
         row, col = _start(cells)  # the chance a move from the start goes elsewhere than asked
         outcomes = game_env.P[row * len(cells[0]) + col][0]
