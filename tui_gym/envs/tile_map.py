@@ -11,7 +11,7 @@ import gymnasium as gym
 import numpy as np
 import numpy.typing as npt
 
-from tui_gym.envs.dp_grid import Grid
+from tui_gym.envs.dp_grid import Cell, Grid
 from tui_gym.envs.table_env import TableEnv
 
 __all__ = [
@@ -25,13 +25,11 @@ TILE_LIST = ", ".join(f"{t} {n}" for t, n in TILE_NAMES.items())
 VALUED = "RHGC"  # tiles whose reward a map may set
 STANDING = "SFR"  # tiles an agent stands on, so the only ones whose slip matters
 ENDING = "HG"
-STEPS = {"left": (0, -1), "down": (1, 0), "right": (0, 1), "up": (-1, 0)}
 # The action numbers of Gymnasium's two games: FrozenLake's and CliffWalking's.
 ACTION_ORDERS: dict[str, tuple[str, ...]] = {
     "lake": ("left", "down", "right", "up"), "cliff": ("up", "right", "down", "left"),
 }
 
-Cell = tuple[int, int]
 FloatArray = npt.NDArray[np.float64]
 
 

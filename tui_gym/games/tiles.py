@@ -11,14 +11,8 @@ import numpy as np
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP, NotAvailable
 from tui_gym.envs import TILE_MAP_ID
-from tui_gym.envs.tile_map import (
-    STEPS,
-    TILE_NAMES,
-    TileMapEnv,
-    TileRules,
-    cell_key,
-    tile_grid,
-)
+from tui_gym.envs.dp_grid import STEPS
+from tui_gym.envs.tile_map import TILE_NAMES, TileMapEnv, TileRules, cell_key, tile_grid
 from tui_gym.games.base import (
     TIED,
     UNREADABLE,
@@ -29,6 +23,7 @@ from tui_gym.games.base import (
     greedy_panel,
     numbered,
 )
+from tui_gym.games.dp_grid import ARROWS
 from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
 from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.words import format_reward, plural
@@ -41,7 +36,6 @@ __all__ = ["CUSTOM", "LAYOUT", "TileGame", "TileLayout", "TileNarrator", "TileSt
 LAYOUT = "layout"  # the argument that holds an edited map, as text
 CUSTOM = "custom"  # the `map` choice of an edited map
 
-ARROWS = {"left": "←", "down": "↓", "right": "→", "up": "↑"}
 NO_DECISION = {"H": "○", "G": "★", "C": "▒", "W": "█"}  # tiles the agent never acts on
 
 
