@@ -1,5 +1,5 @@
-"""The grids of Sutton & Barto's book: `Grid`, its transitions, and the envs on it (Examples
-3.5 and 4.1's grids, the random walk, Windy GridWorld)."""
+"""`Grid`, the one grid model (the book's grids and the tile maps), its transitions, and the
+envs of the book's grids (Examples 3.5 and 4.1's grids, the random walk, Windy GridWorld)."""
 
 from __future__ import annotations
 

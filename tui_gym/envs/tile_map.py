@@ -202,18 +202,16 @@ class TileMapEnv(TableEnv):
         if actions not in ACTION_ORDERS:
             raise ValueError(f"actions must be one of {', '.join(ACTION_ORDERS)}, got {actions!r}")
         rows, reward_of, slip_of = check_map(cells, rewards, slip)
-        self.rules = TileRules(
+        rules = TileRules(
             step=_finite(step_reward, "step_reward"), goal=_finite(goal_reward, "goal_reward"),
             hole=_finite(hole_reward, "hole_reward"), cliff=_finite(cliff_reward, "cliff_reward"),
             slip=_probability(slip_default, "slip_default"),
         )
         self.cells = rows
         self.rewards = reward_of
-        self.slip = slip_of
-        self.action_order = ACTION_ORDERS[actions]
         self.nrow, self.ncol = len(rows), len(rows[0])
         self.desc = np.asarray([list(row) for row in rows], dtype="c")
-        self.grid = tile_grid(rows, reward_of, slip_of, self.action_order, self.rules)
+        self.grid = tile_grid(rows, reward_of, slip_of, ACTION_ORDERS[actions], rules)
         super().__init__(self.grid.model, render_mode)
 
     def reset(
@@ -231,6 +229,6 @@ class TileMapEnv(TableEnv):
             lines[r][c] = f"\x1b[41m{lines[r][c]}\x1b[0m"
         text = ""
         if self.lastaction is not None:
-            text = f"  ({self.action_order[self.lastaction].capitalize()})\n"
+            text = f"  ({self.grid.moves[self.lastaction].capitalize()})\n"
         return text + "\n".join("".join(line) for line in lines) + "\n"
 
