@@ -9,7 +9,6 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-import numpy.typing as npt
 
 from tui_gym.envs.dp_grid import Cell, Grid
 from tui_gym.envs.table_env import TableEnv
@@ -29,8 +28,6 @@ ENDING = "HG"
 ACTION_ORDERS: dict[str, tuple[str, ...]] = {
     "lake": ("left", "down", "right", "up"), "cliff": ("up", "right", "down", "left"),
 }
-
-FloatArray = npt.NDArray[np.float64]
 
 
 @dataclass(frozen=True)
