@@ -1,11 +1,12 @@
-"""The grids of Sutton & Barto's book: `Grid`, its transitions, and the envs on it (Examples
-3.5 and 4.1's grids, the random walk, Windy GridWorld)."""
+"""`Grid`, the one grid model (the book's grids and the tile maps), its transitions, and the
+envs of the book's grids (Examples 3.5 and 4.1's grids, the random walk, Windy GridWorld)."""
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
+from itertools import product
 
 import numpy as np
 
@@ -13,7 +14,7 @@ from tui_gym.core.mdp.model import FiniteMDP
 from tui_gym.envs.table_env import TableEnv
 
 __all__ = [
-    "AB_JUMPS", "CORNERS", "GRID_ACTIONS", "KING_ACTIONS", "LEFT_END_PAYS", "STEPS", "WIND",
+    "AB_GRID", "CORNER_GRID", "GRID_ACTIONS", "KING_ACTIONS", "LEFT_END_PAYS", "STEPS", "WIND",
     "ABGridEnv", "CornerGridEnv", "Grid", "GridEnv", "KingWindyGridWorldEnv", "RandomWalkEnv",
     "WindyGridWorldEnv", "walk_grid", "windy_grid",
 ]
@@ -25,8 +26,8 @@ STEPS: dict[str, Cell] = {
     "up": (-1, 0), "down": (1, 0), "left": (0, -1), "right": (0, 1),
     "up-left": (-1, -1), "up-right": (-1, 1), "down-left": (1, -1), "down-right": (1, 1),
 }
-AB_JUMPS: dict[Cell, tuple[Cell, float]] = {(0, 1): ((4, 1), 10.0), (0, 3): ((2, 3), 5.0)}
-CORNERS: tuple[Cell, ...] = ((0, 0), (3, 3))
+SIDES = {"left": ("down", "up"), "right": ("down", "up"), "up": ("left", "right"),
+         "down": ("left", "right")}  # where a slipping straight move goes instead
 GUST = 1.0 / 3.0  # the chance of each of a gusty wind's three strengths
 # The walks of the book: states -> what stepping off the left end pays (the right end pays +1).
 LEFT_END_PAYS = {5: 0.0, 19: -1.0}
@@ -36,16 +37,18 @@ WINDY_START, WINDY_GOAL = (3, 0), (3, 7)
 
 @dataclass(frozen=True, eq=False)
 class Grid:
-    """A small grid world.
+    """A small grid world: the book's grids, and the tile maps of FrozenLake and CliffWalking.
 
-    A move (one of `moves`, named as in `STEPS`) goes one cell, then the wind of the
-    column it left (`wind[col]`; with `gusts` one stronger or weaker a third of the
-    time each) pushes it up. Entering a cell pays `pays[cell]`, else `step`. Off the
-    grid, a move pays `edge` and stays (with `edge` None it is clipped to the border);
-    into a wall it pays `step` and stays; from a `jumps` cell every move pays the
-    jump's reward and lands on its target; `terminals` end the episode. Episodes start
-    at `start`, else uniformly off terminals and walls. `letters`, `primes` and `tiles`
-    are drawn: a cell's letter (A), a jump's landing (A′), another tile (H, a pit).
+    A move (one of `moves`, named as in `STEPS`) goes one cell, or from a cell that
+    `slip`s with chance p to either side with p / 2 each (the four straight moves); then
+    the wind of the column it left (`wind[col]`; with `gusts` one stronger or weaker a
+    third of the time each) pushes it up. Entering a cell pays `pays[cell]`, else `step`,
+    and puts the agent where `sends` says (a cliff: the start). Off the grid, a move pays
+    `edge` and stays (with `edge` None it is clipped to the border); into a wall it pays
+    `step` and stays; from a `jumps` cell every move pays the jump's reward and lands on
+    its target; `terminals` end the episode; from an `idle` cell nothing happens. Episodes
+    start at `start`, else uniformly off terminals and walls. `letters`, `primes` and
+    `tiles` are drawn: a cell's letter (A), a jump's landing (A′), another tile (H, a pit).
     """
 
     rows: int
@@ -63,6 +66,9 @@ class Grid:
     letters: Mapping[Cell, str] = field(default_factory=dict)
     primes: Mapping[Cell, str] = field(default_factory=dict)
     tiles: Mapping[Cell, str] = field(default_factory=dict)
+    slip: Mapping[Cell, float] = field(default_factory=dict)
+    sends: Mapping[Cell, Cell] = field(default_factory=dict)
+    idle: frozenset[Cell] = frozenset()
 
     def state(self, cell: Cell) -> int:
         return cell[0] * self.cols + cell[1]
@@ -88,9 +94,11 @@ class Grid:
 
     @cached_property
     def model(self) -> FiniteMDP:
-        """The grid's transitions, `[S, A, K]` with K the most wind strengths a column has."""
+        """The grid's transitions, `[S, A, K]` with K the most outcomes a move has: the wind's
+        strengths, three times over where anything slips. Outcomes with no chance stay put."""
         n, n_moves = self.rows * self.cols, len(self.moves)
-        k = max(len(self.winds(c)) for c in range(self.cols))
+        ways = 3 if self.slip else 1
+        k = ways * max(len(self.winds(c)) for c in range(self.cols))
         shape = (n, n_moves, k)
         next_state = np.broadcast_to(np.arange(n)[:, None, None], shape).copy()
         prob, reward = np.zeros(shape), np.zeros(shape)
@@ -99,17 +107,23 @@ class Grid:
         for s in range(n):
             cell = divmod(s, self.cols)
             for a, move in enumerate(self.moves):
-                if cell in ends:
-                    prob[s, a, 0], terminal[s, a, 0] = 1.0, True
+                if cell in ends or cell in self.idle:
+                    prob[s, a, 0], terminal[s, a, 0] = 1.0, cell in ends
                     continue
                 if cell in self.jumps:
                     target, pay = self.jumps[cell]
                     next_state[s, a, 0], prob[s, a, 0], reward[s, a, 0] = (
                         self.state(target), 1.0, pay)
                     continue
-                for j, (push, chance) in enumerate(self.winds(cell[1])):
-                    to, pay = self.landing(cell, move, push)
-                    next_state[s, a, j], prob[s, a, j] = self.state(to), chance
+                p = self.slip.get(cell, 0.0)
+                sides = [(side, p / 2) for side in SIDES[move]] if ways > 1 else []
+                outcomes = product([(move, 1.0 - p), *sides], self.winds(cell[1]))
+                for j, ((way, chance), (push, gust)) in enumerate(outcomes):
+                    if chance == 0:
+                        continue
+                    to, pay = self.landing(cell, way, push)
+                    next_state[s, a, j], prob[s, a, j] = self.state(self.sends.get(to, to)), (
+                        chance * gust)
                     reward[s, a, j], terminal[s, a, j] = pay, to in ends
         initial = np.zeros(n)
         if self.start is not None:
@@ -135,12 +149,21 @@ class Grid:
         return ["".join(row) for row in rows]
 
 
-class GridEnv(TableEnv):
-    """A `Grid` played, drawn as text: `.` a cell, `#` a wall, `*` a terminal cell, `@` the
-    agent, and the grid's letters; the wind's strengths under the columns."""
+AB_GRID = Grid(5, 5, step=0.0, edge=-1.0, jumps={(0, 1): ((4, 1), 10.0), (0, 3): ((2, 3), 5.0)},
+               letters={(0, 1): "A", (0, 3): "B"}, primes={(4, 1): "A′", (2, 3): "B′"})
+CORNER_GRID = Grid(4, 4, step=-1.0, edge=-1.0, terminals=((0, 0), (3, 3)))
 
-    def __init__(self, grid: Grid, render_mode: str | None = None,
+
+class GridEnv(TableEnv):
+    """A `Grid` (the class's `GRID` unless given) played, drawn as text: `.` a cell, `#` a
+    wall, `*` a terminal cell, `@` the agent, and the grid's letters; the wind's strengths
+    under the columns."""
+
+    GRID: Grid
+
+    def __init__(self, grid: Grid | None = None, render_mode: str | None = None,
                  model: FiniteMDP | None = None) -> None:
+        grid = grid or self.GRID
         super().__init__(grid.model if model is None else model, render_mode)
         self.grid = grid
         self.action_names = grid.moves
@@ -187,11 +210,7 @@ class ABGridEnv(GridEnv):
     `render_mode`: "ansi".
     """
 
-    GRID = Grid(5, 5, step=0.0, edge=-1.0, jumps=AB_JUMPS,
-                letters={(0, 1): "A", (0, 3): "B"}, primes={(4, 1): "A′", (2, 3): "B′"})
-
-    def __init__(self, render_mode: str | None = None) -> None:
-        super().__init__(self.GRID, render_mode)
+    GRID = AB_GRID
 
 
 class CornerGridEnv(GridEnv):
@@ -216,10 +235,7 @@ class CornerGridEnv(GridEnv):
     `render_mode`: "ansi".
     """
 
-    GRID = Grid(4, 4, step=-1.0, edge=-1.0, terminals=CORNERS)
-
-    def __init__(self, render_mode: str | None = None) -> None:
-        super().__init__(self.GRID, render_mode)
+    GRID = CORNER_GRID
 
 
 def walk_grid(states: int) -> Grid:

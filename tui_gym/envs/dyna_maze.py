@@ -8,11 +8,10 @@ from bisect import bisect_right
 from collections.abc import Sequence
 from typing import Any
 
-from tui_gym.envs.dp_grid import Grid, GridEnv
+from tui_gym.envs.dp_grid import Cell, Grid, GridEnv
 
 __all__ = ["MAZES", "BlockingMazeEnv", "DynaMazeEnv", "MazeEnv", "ShortcutMazeEnv", "maze_phases"]
 
-Cell = tuple[int, int]
 ROWS, COLS = 6, 9
 GOAL = (0, 8)
 

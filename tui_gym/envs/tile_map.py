@@ -9,13 +9,12 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-import numpy.typing as npt
 
-from tui_gym.core.mdp.model import FiniteMDP
+from tui_gym.envs.dp_grid import Cell, Grid
 from tui_gym.envs.table_env import TableEnv
 
 __all__ = [
-    "ACTION_ORDERS", "TILES", "TileMapEnv", "TileRules", "cell_key", "read_cell", "tile_model",
+    "ACTION_ORDERS", "TILES", "TileMapEnv", "TileRules", "cell_key", "read_cell", "tile_grid",
 ]
 
 TILES = "SFHGCWR"
@@ -25,14 +24,10 @@ TILE_LIST = ", ".join(f"{t} {n}" for t, n in TILE_NAMES.items())
 VALUED = "RHGC"  # tiles whose reward a map may set
 STANDING = "SFR"  # tiles an agent stands on, so the only ones whose slip matters
 ENDING = "HG"
-STEPS = {"left": (0, -1), "down": (1, 0), "right": (0, 1), "up": (-1, 0)}
 # The action numbers of Gymnasium's two games: FrozenLake's and CliffWalking's.
 ACTION_ORDERS: dict[str, tuple[str, ...]] = {
     "lake": ("left", "down", "right", "up"), "cliff": ("up", "right", "down", "left"),
 }
-
-Cell = tuple[int, int]
-FloatArray = npt.NDArray[np.float64]
 
 
 @dataclass(frozen=True)
@@ -146,64 +141,25 @@ def _probability(value: Any, what: str) -> float:
     return number
 
 
-def tile_model(
+def tile_grid(
     cells: Sequence[str], rewards: Mapping[Cell, float], slip: Mapping[Cell, float],
     actions: Sequence[str], rules: TileRules,
-) -> FiniteMDP:
-    """The transitions of a checked map (`check_map`), vectorized over cells: K is 3 (as
-    asked, then the two sides) where anything slips, else 1; outcomes that cannot happen
-    stay in place, pay 0 and do not end."""
-    n_rows, n_cols = len(cells), len(cells[0])
-    n = n_rows * n_cols
-    tiles = np.array([list(row) for row in cells]).reshape(-1)
-    states = np.arange(n)
-    rr, cc = np.divmod(states, n_cols)
-    start = int(np.flatnonzero(tiles == "S")[0])
-    # What entering each cell pays, and where the agent then is.
-    pays = np.full(n, rules.step)
-    pays[tiles == "G"], pays[tiles == "H"], pays[tiles == "C"] = rules.goal, rules.hole, rules.cliff
-    for (r, c), value in rewards.items():
-        pays[r * n_cols + c] = value
-    lands = np.where(tiles == "C", start, states)
-    ends = np.isin(tiles, list(ENDING))
-    # A move in each direction from each cell: the cell it reaches (itself when blocked).
-    step_to = {}
-    for name, (dr, dc) in STEPS.items():
-        r2, c2 = rr + dr, cc + dc
-        inside = (r2 >= 0) & (r2 < n_rows) & (c2 >= 0) & (c2 < n_cols)
-        to = np.where(inside, np.clip(r2, 0, n_rows - 1) * n_cols + np.clip(c2, 0, n_cols - 1),
-                      states)
-        step_to[name] = np.where(tiles[to] == "W", states, to)
-    slip_at = np.full(n, rules.slip)
-    slip_at[~np.isin(tiles, list(STANDING))] = 0.0
-    for (r, c), value in slip.items():
-        slip_at[r * n_cols + c] = value
-    k = 3 if slip_at.any() else 1
-    shape = (n, len(actions), k)
-    next_state = np.broadcast_to(states[:, None, None], shape).copy()
-    prob = np.zeros(shape)
-    reward = np.zeros(shape)
-    terminal = np.zeros(shape, dtype=bool)
-    acting = ~np.isin(tiles, list(ENDING + "WC"))  # cells an agent acts from
-    for a, name in enumerate(actions):
-        sides = [d for d, (dr, dc) in STEPS.items()  # the moves across the one asked
-                 if dr * STEPS[name][0] + dc * STEPS[name][1] == 0]
-        chances = [1.0 - slip_at, slip_at / 2, slip_at / 2][:k]
-        for j, (direction, chance) in enumerate(zip([name, *sides], chances, strict=False)):
-            to = step_to[direction]
-            bumped = to == states
-            possible = acting & (chance > 0)
-            next_state[possible, a, j] = lands[to][possible]
-            prob[possible, a, j] = chance[possible]
-            reward[possible, a, j] = np.where(bumped, rules.step, pays[to])[possible]
-            terminal[possible, a, j] = ends[to][possible]
-    # Where the agent never acts (a hole, the goal, a wall, the cliff) the episode is over.
-    idle = ~acting
-    prob[idle, :, 0] = 1.0
-    terminal[idle, :, 0] = np.isin(tiles[idle], list(ENDING))[:, None]
-    initial = np.zeros(n)
-    initial[start] = 1.0
-    return FiniteMDP(next_state, prob, reward, terminal, initial, action_names=tuple(actions))
+) -> Grid:
+    """The `Grid` of a checked map (`check_map`): holes and goals end the episode, the
+    cliff sends the agent back to the start, the agent never acts from a wall or the cliff."""
+    tiles = {(r, c): tile for r, row in enumerate(cells) for c, tile in enumerate(row)}
+    start = next(cell for cell, tile in tiles.items() if tile == "S")
+    by_tile = {"G": rules.goal, "H": rules.hole, "C": rules.cliff}
+    slips = {cell: slip.get(cell, rules.slip) for cell, tile in tiles.items() if tile in STANDING}
+    return Grid(
+        len(cells), len(cells[0]), moves=tuple(actions), step=rules.step, edge=rules.step,
+        terminals=tuple(cell for cell, tile in tiles.items() if tile in ENDING),
+        walls=frozenset(cell for cell, tile in tiles.items() if tile == "W"),
+        pays={**{cell: by_tile[t] for cell, t in tiles.items() if t in by_tile}, **rewards},
+        start=start, slip={cell: p for cell, p in slips.items() if p > 0},
+        sends={cell: start for cell, tile in tiles.items() if tile == "C"},
+        idle=frozenset(cell for cell, tile in tiles.items() if tile in "WC"),
+    )
 
 
 class TileMapEnv(TableEnv):
@@ -243,19 +199,17 @@ class TileMapEnv(TableEnv):
         if actions not in ACTION_ORDERS:
             raise ValueError(f"actions must be one of {', '.join(ACTION_ORDERS)}, got {actions!r}")
         rows, reward_of, slip_of = check_map(cells, rewards, slip)
-        self.rules = TileRules(
+        rules = TileRules(
             step=_finite(step_reward, "step_reward"), goal=_finite(goal_reward, "goal_reward"),
             hole=_finite(hole_reward, "hole_reward"), cliff=_finite(cliff_reward, "cliff_reward"),
             slip=_probability(slip_default, "slip_default"),
         )
         self.cells = rows
         self.rewards = reward_of
-        self.slip = slip_of
-        self.action_order = ACTION_ORDERS[actions]
         self.nrow, self.ncol = len(rows), len(rows[0])
         self.desc = np.asarray([list(row) for row in rows], dtype="c")
-        super().__init__(tile_model(rows, reward_of, slip_of, self.action_order, self.rules),
-                         render_mode)
+        self.grid = tile_grid(rows, reward_of, slip_of, ACTION_ORDERS[actions], rules)
+        super().__init__(self.grid.model, render_mode)
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -272,6 +226,6 @@ class TileMapEnv(TableEnv):
             lines[r][c] = f"\x1b[41m{lines[r][c]}\x1b[0m"
         text = ""
         if self.lastaction is not None:
-            text = f"  ({self.action_order[self.lastaction].capitalize()})\n"
+            text = f"  ({self.grid.moves[self.lastaction].capitalize()})\n"
         return text + "\n".join("".join(line) for line in lines) + "\n"
 

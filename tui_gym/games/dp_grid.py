@@ -117,9 +117,13 @@ class DPGridGame(ModelGame):
     states_type = DPGridStates
     layout_type = DPGridLayout
 
+    fixed_grid: Grid | None = None  # the grid of a game whose arguments change none
+
     def grid(self, kwargs: Mapping[str, Any]) -> Grid:
         """The grid these arguments make."""
-        raise NotImplementedError
+        if self.fixed_grid is None:
+            raise NotImplementedError
+        return self.fixed_grid
 
     def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP:
         return _grid_model(self, freeze(kwargs))

@@ -11,15 +11,8 @@ import numpy as np
 from tui_gym.core.heatmap import Heatmap
 from tui_gym.core.mdp import FiniteMDP, NotAvailable
 from tui_gym.envs import TILE_MAP_ID
-from tui_gym.envs.tile_map import (
-    STANDING,
-    STEPS,
-    TILE_NAMES,
-    TileMapEnv,
-    TileRules,
-    cell_key,
-    tile_model,
-)
+from tui_gym.envs.dp_grid import STEPS
+from tui_gym.envs.tile_map import TILE_NAMES, TileMapEnv, TileRules, cell_key, tile_grid
 from tui_gym.games.base import (
     TIED,
     UNREADABLE,
@@ -30,6 +23,7 @@ from tui_gym.games.base import (
     greedy_panel,
     numbered,
 )
+from tui_gym.games.dp_grid import ARROWS
 from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
 from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.words import format_reward, plural
@@ -42,14 +36,13 @@ __all__ = ["CUSTOM", "LAYOUT", "TileGame", "TileLayout", "TileNarrator", "TileSt
 LAYOUT = "layout"  # the argument that holds an edited map, as text
 CUSTOM = "custom"  # the `map` choice of an edited map
 
-ARROWS = {"left": "←", "down": "↓", "right": "→", "up": "↑"}
 NO_DECISION = {"H": "○", "G": "★", "C": "▒", "W": "█"}  # tiles the agent never acts on
 
 
 @lru_cache(maxsize=32)
 def _layout_model(grid_map: GridMap, actions: tuple[str, ...], rules: TileRules) -> FiniteMDP:
-    return tile_model(grid_map.cells, grid_map.reward_table(), grid_map.slip_table(), actions,
-                      rules)
+    return tile_grid(grid_map.cells, grid_map.reward_table(), grid_map.slip_table(), actions,
+                     rules).model
 
 
 class TileStates(DiscreteStates):
@@ -82,10 +75,7 @@ class TileStates(DiscreteStates):
         }
         if isinstance(game_env, TileMapEnv):
             scene["rewards"] = {cell_key(c): v for c, v in game_env.rewards.items()}
-            slip = {cell_key((r, c)): game_env.slip.get((r, c), game_env.rules.slip)
-                    for r, line in enumerate(cells) for c, tile in enumerate(line)
-                    if tile in STANDING}
-            scene["slip"] = {key: p for key, p in slip.items() if p > 0}
+            scene["slip"] = {cell_key(c): p for c, p in game_env.grid.slip.items()}
             return scene
         row, col = _start(cells)  # the chance a move from the start goes elsewhere than asked
         outcomes = game_env.P[row * len(cells[0]) + col][0]

@@ -9,7 +9,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from tui_gym.envs.dp_grid import ABGridEnv, Grid
+from tui_gym.envs.dp_grid import AB_GRID
 from tui_gym.games.base import Narrator
 from tui_gym.games.dp_grid import DPGridGame
 from tui_gym.games.words import format_reward, plural
@@ -45,7 +45,5 @@ class ABGridGame(DPGridGame):
     plan_gamma = 0.9
     hyperparameters = {"*": {"discount": 0.9, "learning_rate": 0.1, "episodes": 2_000}}
 
+    fixed_grid = AB_GRID
     narrator_type = ABGridNarrator
-
-    def grid(self, kwargs: Mapping[str, Any]) -> Grid:
-        return ABGridEnv.GRID

@@ -5,10 +5,7 @@ Spaces and rewards: `tui_gym.envs.dp_grid.CornerGridEnv`; truncated after 100 st
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import Any
-
-from tui_gym.envs.dp_grid import CornerGridEnv, Grid
+from tui_gym.envs.dp_grid import CORNER_GRID
 from tui_gym.games.base import ReachNarrator
 from tui_gym.games.dp_grid import DPGridGame
 
@@ -32,7 +29,5 @@ class CornerGridGame(DPGridGame):
     teaches = "policy evaluation: the random policy's values, then one greedy step to optimal"
     hyperparameters = {"*": {"learning_rate": 0.1, "episodes": 2_000}}
 
+    fixed_grid = CORNER_GRID
     narrator_type = CornerNarrator
-
-    def grid(self, kwargs: Mapping[str, Any]) -> Grid:
-        return CornerGridEnv.GRID

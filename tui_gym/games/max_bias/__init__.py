@@ -14,7 +14,7 @@ import numpy as np
 from tui_gym.core.mdp import FiniteMDP
 from tui_gym.core.params import Param
 from tui_gym.core.wrappers.changes import NO_CHANGES, GameChanges
-from tui_gym.envs.dp_grid import Cell, Grid
+from tui_gym.envs.dp_grid import Cell
 from tui_gym.envs.max_bias import ACTIONS, GRID, MAX_B_ACTIONS, A, B, max_bias_model, offered
 from tui_gym.games.base import Advice, Narrator, TallyWord
 from tui_gym.games.dp_grid import DPGridGame, DPGridStates, Event
@@ -116,12 +116,10 @@ class MaxBiasGame(DPGridGame):
         **dict.fromkeys(("dyna-q", "dyna-q-plus"), {"planning_steps": 1, "episodes": 5000}),
     }
 
+    fixed_grid = GRID
     states_type = MaxBiasStates
     oracle_type = MaxBiasOracle
     narrator_type = MaxBiasNarrator
-
-    def grid(self, kwargs: Mapping[str, Any]) -> Grid:
-        return GRID
 
     def base_model(self, kwargs: Mapping[str, Any]) -> FiniteMDP:
         return max_bias_model()
