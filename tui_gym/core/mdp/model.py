@@ -3,6 +3,7 @@ limit; `Phases`, a world that changes as it is played."""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -170,16 +171,10 @@ class FiniteMDP:
 
     def replace(self, **changes: Any) -> FiniteMDP:
         """A copy with some fields replaced (checked again)."""
-        fields: dict[str, Any] = {
-            "next_state": self.next_state, "prob": self.prob, "reward": self.reward,
-            "terminal": self.terminal, "initial": self.initial, "horizon": self.horizon,
-            "action_names": self.action_names, "reward_std": self.reward_std,
-        }
-        unknown = set(changes) - set(fields)
+        unknown = set(changes) - {field.name for field in dataclasses.fields(self)}
         if unknown:
             raise TypeError(f"FiniteMDP has no field {', '.join(sorted(unknown))}")
-        fields.update(changes)
-        return FiniteMDP(**fields)
+        return dataclasses.replace(self, **changes)
 
     @classmethod
     def from_table(
