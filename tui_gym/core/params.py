@@ -157,9 +157,7 @@ class Param:
 
     def expected(self) -> str:
         """What a valid value is, in words: `an integer in [1, 100000]`."""
-        if self.kind is bool:
-            return "true or false"
-        if self.kind is str:
+        if self.kind in (bool, str):
             return self.describe_range()
         noun = "an integer" if self.kind is int else "a number"
         return f"{noun} in {self.describe_range()}"

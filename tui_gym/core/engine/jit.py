@@ -16,6 +16,7 @@ import hashlib
 import os
 import sys
 from collections.abc import Callable, Iterator
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -33,7 +34,6 @@ _SOURCES = ("core/engine", "algorithms")  # what compiled code is made of
 _OPTIONS: Any = {"cache": True, "_nrt": False, "no_cfunc_wrapper": True}  # see the docstring
 _COMPILED: dict[Callable[..., Any], Any] = {}
 _ENTRIES: dict[tuple[Callable[..., Any], object], Any] = {}
-_DIRECT: dict[tuple[Callable[..., Any], object], Any] = {}
 _started = False
 _folder: Path | None = None
 _saves_in_turn = False  # set by `start` (see the module docstring)
@@ -196,24 +196,19 @@ def entry(fn: Callable[..., Any], kind: object) -> Any:
     apart (Numba types a NamedTuple from Python by its fields alone), without the GIL."""
     start()
     key = (fn, kind)
-    found = _ENTRIES.get(key)
-    if found is None:
+    if key not in _ENTRIES:
         from numba import njit
 
-        plain = getattr(fn, "py_func", fn)
-        found = _ENTRIES[key] = _Entry(njit(**_OPTIONS, nogil=True)(plain))
-    return found
+        _ENTRIES[key] = _Entry(njit(**_OPTIONS, nogil=True)(getattr(fn, "py_func", fn)))
+    return _ENTRIES[key]
 
 
+@cache
 def direct(fn: Callable[..., Any], kind: object = None) -> Any:
     """Kernel `fn` as called from Python through the compiled form its compiled callers
     call, per `kind` (see `entry`)."""
     start()
-    key = (fn, kind)
-    found = _DIRECT.get(key)
-    if found is None:
-        found = _DIRECT[key] = _Entry(compiled(fn))
-    return found
+    return _Entry(compiled(fn))
 
 
 def compiled(fn: Callable[..., Any] | None) -> Any:

@@ -12,7 +12,7 @@ import contextlib
 import os
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -112,6 +112,10 @@ class ModelArrays:
             horizon=int(model.horizon or 0),
             n_actions=model.n_actions,
         )
+
+    def args(self) -> tuple[Any, ...]:
+        """The fields in `run_model`'s order (all but `n_actions`)."""
+        return tuple(getattr(self, f.name) for f in fields(self)[:-1])
 
 
 class Cursor:
@@ -245,12 +249,9 @@ def play(learner: Any, model: ModelArrays, cursor: Cursor, max_episodes: int,
     """One call of `run_model` for `learner`, giving it room when it asks: (episodes, steps)."""
     hp = learner.compiled_params()
     status = entries(hp).run_model(
-        model.next_state, model.cumulative, model.guide, model.reward, model.noise,
-        model.terminal, model.pair_rows, model.outcomes, model.starts,
-        model.start_cumulative, model.rows, model.horizon,
-        learner.arrays(), hp, learner.rng, learner.offered_ranges, learner.exploration(),
-        learner.episode,
-        cursor.ints, cursor.floats, min(max_episodes, len(out)), max_steps, out, log,
+        *model.args(), learner.arrays(), hp, learner.rng, learner.offered_ranges,
+        learner.exploration(), learner.episode, cursor.ints, cursor.floats,
+        min(max_episodes, len(out)), max_steps, out, log,
     )
     if status == GROW:
         learner.make_room()
@@ -293,10 +294,9 @@ _ENTRIES: dict[type, Entries] = {}
 
 def entries(hp: Any) -> Entries:
     """The entry points for the algorithm whose compiled hyperparameters are `hp`."""
-    found = _ENTRIES.get(type(hp))
-    if found is None:
-        found = _ENTRIES[type(hp)] = Entries(type(hp))
-    return found
+    if type(hp) not in _ENTRIES:
+        _ENTRIES[type(hp)] = Entries(type(hp))
+    return _ENTRIES[type(hp)]
 
 
 # --- compiling once ---------------------------------------------------------------------
@@ -314,10 +314,8 @@ def compile_learner(tables: Any, hp: Any) -> None:
     model = ModelArrays.of(FiniteMDP(np.zeros(shape, dtype=np.int64), np.ones(shape),
                                      np.zeros(shape), np.ones(shape, dtype=bool), np.ones(1)))
     cursor = Cursor()
-    calls.run_model(model.next_state, model.cumulative, model.guide, model.reward, model.noise,
-                    model.terminal, model.pair_rows, model.outcomes, model.starts,
-                    model.start_cumulative, model.rows, model.horizon, copies, hp, spare, mask,
-                    np.zeros(3), 0, cursor.ints, cursor.floats, 1, 1, np.zeros((1, COLUMNS)), log)
+    calls.run_model(*model.args(), copies, hp, spare, mask, np.zeros(3), 0, cursor.ints,
+                    cursor.floats, 1, 1, np.zeros((1, COLUMNS)), log)
     calls.transition(copies, hp, spare, mask, 0, 0, 0.0, 0, True, False, -1, 0.0, log)
     calls.act(copies, hp, spare, mask, 0, 0.0)
     calls.greedy(copies, hp, spare, mask, 0)

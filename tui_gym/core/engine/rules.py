@@ -24,6 +24,7 @@ __all__ = [
     "Rule",
     "act",
     "acting",
+    "actions",
     "begin",
     "epsilon_at",
     "every",
@@ -144,18 +145,18 @@ def value(values: Any, s: int, a: int) -> float:
     return total
 
 
+@kernel(inline=True)
+def actions(offered: Any, s: int, n: int) -> tuple[Any, Any]:
+    """The actions row `s` offers: `lo` to `hi - 1` (all `n` when `offered` is empty)."""
+    if every(offered):
+        return np.int64(0), np.int64(n)
+    return offered_range(offered, s)
+
+
 @kernel
 def greedy(values: Any, rng: Any, offered: Any, s: int) -> int:
     """The best-valued action row `s` offers, ties broken uniformly (a draw only on one)."""
-    if every(offered):
-        return greedy_in(values, rng, s, 0, values[0].shape[1])
-    lo, hi = offered_range(offered, s)
-    return greedy_in(values, rng, s, lo, hi)
-
-
-@kernel(inline=True)
-def greedy_in(values: Any, rng: Any, s: int, lo: int, hi: int) -> int:
-    """`greedy` among actions `lo` to `hi - 1`."""
+    lo, hi = actions(offered, s, values[0].shape[1])
     choice = lo
     best = value(values, s, lo)
     ties = 1
@@ -181,9 +182,7 @@ def act(values: Any, rng: Any, offered: Any, s: int, epsilon: float) -> int:
     """Epsilon-greedy in row `s`: an offered action drawn uniformly with probability
     epsilon, else greedy."""
     if epsilon > 0.0 and rng.random() < epsilon:
-        if every(offered):
-            return uniform(rng, values[0].shape[1])
-        lo, hi = offered_range(offered, s)
+        lo, hi = actions(offered, s, values[0].shape[1])
         return lo + uniform(rng, hi - lo)
     return greedy(values, rng, offered, s)
 
@@ -191,15 +190,7 @@ def act(values: Any, rng: Any, offered: Any, s: int, epsilon: float) -> int:
 @kernel
 def expected_value(values: Any, offered: Any, s: int, epsilon: float) -> float:
     """Σ_a π(a|s) value(s, a) under epsilon-greedy over the offered actions."""
-    if every(offered):
-        return expected_in(values, s, 0, values[0].shape[1], epsilon)
-    lo, hi = offered_range(offered, s)
-    return expected_in(values, s, lo, hi, epsilon)
-
-
-@kernel(inline=True)
-def expected_in(values: Any, s: int, lo: int, hi: int, epsilon: float) -> float:
-    """`expected_value` over actions `lo` to `hi - 1`."""
+    lo, hi = actions(offered, s, values[0].shape[1])
     best = value(values, s, lo)
     total = best
     for a in range(lo + 1, hi):
@@ -212,15 +203,7 @@ def expected_in(values: Any, s: int, lo: int, hi: int, epsilon: float) -> float:
 @kernel(inline=True)
 def max_value(q: Any, offered: Any, s: int) -> float:
     """The largest value in row `s` of `q` among the actions it offers."""
-    if every(offered):
-        return max_in(q, s, 0, q.shape[1])
-    lo, hi = offered_range(offered, s)
-    return max_in(q, s, lo, hi)
-
-
-@kernel(inline=True)
-def max_in(q: Any, s: int, lo: int, hi: int) -> float:
-    """`max_value` over actions `lo` to `hi - 1`."""
+    lo, hi = actions(offered, s, q.shape[1])
     top = q[s, lo]
     for b in range(lo + 1, hi):
         top = max(top, q[s, b])

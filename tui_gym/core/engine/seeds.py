@@ -13,6 +13,7 @@ import numpy as np
 from tui_gym.core.engine import loop
 from tui_gym.core.engine.loop import ModelArrays
 from tui_gym.core.mdp import FiniteMDP, evaluate
+from tui_gym.core.mdp.evaluation import horizon_sum
 
 __all__ = ["MAX_CHECKPOINTS", "checkpoint_episodes", "greedy_values", "play_learner"]
 
@@ -166,19 +167,4 @@ def _horizon_values_dense(model: FiniteMDP, policy: np.ndarray, horizon: int) ->
     step = np.einsum("sak,sakt->sat", model.continue_prob, onto)  # [S, A, S]
     matrix = np.einsum("msa,sat->mst", policy, step)  # [m, S, S]
     reward = (policy * model.expected_reward).sum(axis=2)  # [m, S]
-    # Binary powers: `power` is P^n and `total` the sum of the first n steps for the bits
-    # of H read so far, lowest first; n steps then m more: S_n + P^n S_m.
-    total = np.zeros_like(reward)
-    power_total = reward  # the sum of the first 2^k steps
-    power = matrix  # P^(2^k)
-    done_power = np.broadcast_to(np.eye(n), matrix.shape)  # P^(steps counted in total)
-    remaining = horizon
-    while remaining:
-        if remaining & 1:
-            total = total + np.einsum("mst,mt->ms", done_power, power_total)
-            done_power = done_power @ power
-        remaining >>= 1
-        if remaining:
-            power_total = power_total + np.einsum("mst,mt->ms", power, power_total)
-            power = power @ power
-    return total @ model.initial
+    return horizon_sum(matrix, reward, horizon) @ model.initial

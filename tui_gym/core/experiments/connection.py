@@ -121,17 +121,6 @@ def check_migrations(migrations: Sequence[Migration]) -> int:
     return len(migrations)
 
 
-def migrate(conn: sqlite3.Connection, current: int, migrations: Sequence[Migration]) -> int:
-    """Apply the migrations after version `current` (inside the caller's transaction)."""
-    latest = check_migrations(migrations)
-    for migration in migrations[current:]:
-        migration.apply(conn)
-    if current < latest:
-        conn.execute(f"PRAGMA user_version = {latest:d}")
-        conn.execute(f"PRAGMA application_id = {APPLICATION_ID:d}")
-    return latest
-
-
 def shown(path: str | Path) -> str:
     """A file's name as messages show it (control characters escaped, a long one cut)."""
     return visible(str(path), 160)
@@ -377,7 +366,13 @@ def _upgrade(path: Path, shared: Connection, migrations: Sequence[Migration],
 
     def upgrade(conn: sqlite3.Connection) -> int:
         # Another process may have got there first: look again under the write lock.
-        return migrate(conn, check_identity(path, latest, *inspect(conn)), migrations)
+        current = check_identity(path, latest, *inspect(conn))
+        for migration in migrations[current:]:
+            migration.apply(conn)
+        if current < latest:
+            conn.execute(f"PRAGMA user_version = {latest:d}")
+            conn.execute(f"PRAGMA application_id = {APPLICATION_ID:d}")
+        return latest
 
     try:
         shared.version = shared.attempt(upgrade, timeout, path, begin="BEGIN IMMEDIATE")

@@ -129,9 +129,10 @@ class RunHistory:
         with self._errors():
             return self._shared.attempt(action, self.timeout, self.path, begin=begin)
 
-    def _require_run(self, conn: sqlite3.Connection, run_id: int, columns: str = "1") -> Any:
+    def _require_run(self, conn: sqlite3.Connection, run_id: int, columns: str = "1",
+                     source: str = "FROM runs WHERE id = ?") -> Any:
         """The run's `columns`; UnknownRunError if there is no such run."""
-        row = conn.execute(f"SELECT {columns} FROM runs WHERE id = ?", (run_id,)).fetchone()
+        row = conn.execute(f"SELECT {columns} {source}", (run_id,)).fetchone()
         if row is None:
             raise UnknownRunError(f"no run {run_id} in {shown(self.path)}")
         return row
@@ -158,14 +159,9 @@ class RunHistory:
         settings = _settings(spec)
         platform = astuple(spec.versions or Versions.current())
         seeds = to_json_text(list(spec.seeds), "the seeds")
-        writer = current_writer()
-
-        def write(conn: sqlite3.Connection) -> int:
-            return _insert_run(conn, settings, platform, kind=str(spec.kind), seeds=seeds,
-                               status=str(RunStatus.RUNNING), started_at=started,
-                               group_id=spec.group, writer=writer)
-
-        return self._write(write)
+        row = dict(kind=str(spec.kind), seeds=seeds, status=str(RunStatus.RUNNING),
+                   started_at=started, group_id=spec.group, writer=current_writer())
+        return self._write(lambda conn: _insert_run(conn, settings, platform, **row))
 
     def update(
         self, run_id: int, *, curves: Iterable[Curve] = (), figures: Iterable[Figure] = (),
@@ -357,17 +353,14 @@ class RunHistory:
         DamagedRunError (one line naming it) if its row does not read."""
 
         def read(conn: sqlite3.Connection) -> tuple[Any, Any]:
-            row = conn.execute(
-                f"SELECT {rows.RECORD_COLUMNS} {rows.RECORD_FROM} WHERE r.id = ?", (run_id,)
-            ).fetchone()
+            row = self._require_run(conn, run_id, rows.RECORD_COLUMNS,
+                                    f"{rows.RECORD_FROM} WHERE r.id = ?")
             blob = conn.execute(
                 f"SELECT {rows.CURVES_COLUMNS} FROM curves WHERE run_id = ?", (run_id,)
             ).fetchone()
             return row, blob
 
         row, blob = self._read(read)
-        if row is None:
-            raise UnknownRunError(f"no run {run_id} in {shown(self.path)}")
         try:
             curves = () if blob is None else rows.curves(*blob)
             return rows.record(row, curves, WriterCheck())
@@ -379,12 +372,9 @@ class RunHistory:
         whose row did not read: removing it is how it goes)."""
 
         def write(conn: sqlite3.Connection) -> RunSummary | DamagedRun:
-            row = conn.execute(
-                f"SELECT {rows.SUMMARY_COLUMNS}, r.settings_id, r.platform_id "
-                f"{rows.SUMMARY_FROM} WHERE r.id = ?", (run_id,)
-            ).fetchone()
-            if row is None:
-                raise UnknownRunError(f"no run {run_id} in {shown(self.path)}")
+            row = self._require_run(conn, run_id,
+                                    f"{rows.SUMMARY_COLUMNS}, r.settings_id, r.platform_id",
+                                    f"{rows.SUMMARY_FROM} WHERE r.id = ?")
             was: RunSummary | DamagedRun
             try:
                 was = rows.summary(row, WriterCheck())

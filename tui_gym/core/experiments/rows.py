@@ -119,19 +119,16 @@ def _json(text: object, what: str, limit: int = MAX_JSON) -> Any:
     return value
 
 
-def _object(text: object, what: str) -> dict[str, Any]:
+def _typed(text: object, what: str, kind: type, noun: str) -> Any:
     value = _json(text, what)
-    if not isinstance(value, dict):
-        raise BadRow(f"its {what} are not an object ({_shown(value)})")
+    if not isinstance(value, kind):
+        raise BadRow(f"its {what} are not {noun} ({_shown(value)})")
     return value
 
 
 def figures(text: object) -> tuple[Figure, ...]:
-    value = _json(text, "figures")
-    if not isinstance(value, list):
-        raise BadRow(f"its figures are not a list ({_shown(value)})")
     found = []
-    for item in value:
+    for item in _typed(text, "figures", list, "a list"):
         if not isinstance(item, list) or len(item) != 4:
             raise BadRow(f"a figure is not [name, value, unit, interval] ({_shown(item)})")
         name, number, unit, ci95 = item
@@ -180,11 +177,8 @@ def summary(row: Sequence[Any], writers: WriterCheck) -> RunSummary:
 
 
 def _wrappers(text: object) -> tuple[WrapperSetting, ...]:
-    value = _json(text, "wrappers")
-    if not isinstance(value, list):
-        raise BadRow(f"its wrappers are not a list ({_shown(value)})")
     wrappers = []
-    for item in value:
+    for item in _typed(text, "wrappers", list, "a list"):
         if not isinstance(item, dict) or not isinstance(item.get("params"), dict):
             raise BadRow(f"a wrapper is not {{name, params}} ({_shown(item)})")
         wrappers.append(WrapperSetting(_name(item.get("name"), "wrapper's name"), item["params"]))
@@ -212,7 +206,9 @@ def record(row: Sequence[Any], run_curves: tuple[Curve, ...], writers: WriterChe
     if agent_path is not None and (not isinstance(agent_path, str) or len(agent_path) > MAX_PATH):
         raise BadRow(f"its saved agent's path is not a path ({_shown(agent_path)})")
     return RunRecord(
-        summary=summary(row, writers), game_params=_object(game_params, "game parameters"),
-        wrappers=_wrappers(wrappers), hyperparameters=_object(hyperparameters, "hyperparameters"),
+        summary=summary(row, writers),
+        game_params=_typed(game_params, "game parameters", dict, "an object"),
+        wrappers=_wrappers(wrappers),
+        hyperparameters=_typed(hyperparameters, "hyperparameters", dict, "an object"),
         versions=Versions(*versions), curves=run_curves, agent_path=agent_path,
     )

@@ -249,19 +249,9 @@ class PolicyArrays:
         return self.reward + gamma * (self.weight * v[self.target]).sum(axis=1)
 
     def over(self, steps: int, gamma: float) -> FloatArray:
-        """The values over `steps` steps, `sum over t < steps of (gamma P)^t r`, from the
-        dense matrix by doubling: two matrix products per binary digit of `steps`."""
+        """The values over `steps` steps, from the dense matrix (see `horizon_sum`)."""
         assert self.dense is not None
-        step = gamma * self.dense
-        total = np.zeros_like(self.reward)  # the sum over the first k steps
-        power = np.eye(len(total))  # (gamma P)^k
-        for digit in bin(steps)[2:]:
-            total = total + power @ total  # k -> 2k
-            power = power @ power
-            if digit == "1":  # k -> k + 1
-                total = self.reward + step @ total
-                power = step @ power
-        return total
+        return horizon_sum(gamma * self.dense, self.reward, steps)
 
     def sweep_in_place(self, v: FloatArray, gamma: float) -> float:
         """One in-place sweep of `v`, state 0 first; the largest change."""
@@ -277,6 +267,20 @@ class PolicyArrays:
                 delta = change
             v[s] = new
         return float(delta)
+
+
+def horizon_sum(matrix: FloatArray, reward: FloatArray, steps: int) -> FloatArray:
+    """`sum over t < steps of P^t r` for `P` = `matrix` `[..., S, S]` and `r` = `reward`
+    `[..., S]`, by doubling: two matrix products per binary digit of `steps`."""
+    total = np.zeros_like(reward)  # the sum over the first k steps
+    power = np.broadcast_to(np.eye(reward.shape[-1]), matrix.shape)  # P^k
+    for digit in bin(steps)[2:]:
+        total = total + np.einsum("...st,...t->...s", power, total)  # k -> 2k
+        power = power @ power
+        if digit == "1":  # k -> k + 1
+            total = reward + np.einsum("...st,...t->...s", matrix, total)
+            power = matrix @ power
+    return total
 
 
 MAX_SWEEPS = 1_000  # without a limit, sweeps before a side still changing counts as unbounded

@@ -3,6 +3,7 @@ limit; `Phases`, a world that changes as it is played."""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -24,6 +25,13 @@ BoolArray = npt.NDArray[np.bool_]
 
 class ModelError(ValueError):
     """Arrays or a table that do not make a finite MDP; the message says where and why."""
+
+
+def _refuse(bad: np.ndarray, what: str) -> None:
+    """ModelError naming the first state and action where `bad` (`[S, A, K]`) holds."""
+    if bad.any():
+        s, a, _ = np.argwhere(bad)[0]
+        raise ModelError(f"state {s}, action {a} {what}")
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:
@@ -63,17 +71,12 @@ class FiniteMDP:
         next_state = arrays["next_state"]
         if not np.issubdtype(next_state.dtype, np.integer):
             raise ModelError(f"next_state must hold integers, got dtype {next_state.dtype}")
-        if next_state.min() < 0 or next_state.max() >= n_states:
-            s, a, _ = np.argwhere((next_state < 0) | (next_state >= n_states))[0]
-            raise ModelError(f"state {s}, action {a} leads to a state outside [0, {n_states - 1}]")
+        _refuse((next_state < 0) | (next_state >= n_states),
+                f"leads to a state outside [0, {n_states - 1}]")
         if arrays["terminal"].dtype != np.bool_:
             raise ModelError(f"terminal must hold booleans, got dtype {arrays['terminal'].dtype}")
-        if not np.isfinite(arrays["reward"]).all():
-            s, a, _ = np.argwhere(~np.isfinite(arrays["reward"]))[0]
-            raise ModelError(f"state {s}, action {a} has a reward that is not finite")
-        if not np.isfinite(prob).all() or (prob < 0).any():
-            s, a, _ = np.argwhere(~(prob >= 0) | ~np.isfinite(prob))[0]
-            raise ModelError(f"state {s}, action {a} has a probability that is not in [0, 1]")
+        _refuse(~np.isfinite(arrays["reward"]), "has a reward that is not finite")
+        _refuse(~(prob >= 0) | ~np.isfinite(prob), "has a probability that is not in [0, 1]")
         totals = prob.sum(axis=2)
         bad = np.abs(totals - 1.0) > PROBABILITY_TOLERANCE
         if bad.any():
@@ -100,10 +103,8 @@ class FiniteMDP:
             reward_std = np.array(reward_std, dtype=np.float64)
             if reward_std.shape != shape:
                 raise ModelError(f"reward_std has shape {reward_std.shape}, prob has {shape}")
-            if not np.isfinite(reward_std).all() or (reward_std < 0).any():
-                s, a, _ = np.argwhere(~(reward_std >= 0) | ~np.isfinite(reward_std))[0]
-                raise ModelError(f"state {s}, action {a} has a reward deviation that is not "
-                                 "a finite number >= 0")
+            _refuse(~(reward_std >= 0) | ~np.isfinite(reward_std),
+                    "has a reward deviation that is not a finite number >= 0")
             reward_std = _frozen(reward_std)
         names = self.action_names
         if names is not None:
@@ -170,16 +171,10 @@ class FiniteMDP:
 
     def replace(self, **changes: Any) -> FiniteMDP:
         """A copy with some fields replaced (checked again)."""
-        fields: dict[str, Any] = {
-            "next_state": self.next_state, "prob": self.prob, "reward": self.reward,
-            "terminal": self.terminal, "initial": self.initial, "horizon": self.horizon,
-            "action_names": self.action_names, "reward_std": self.reward_std,
-        }
-        unknown = set(changes) - set(fields)
+        unknown = set(changes) - {field.name for field in dataclasses.fields(self)}
         if unknown:
             raise TypeError(f"FiniteMDP has no field {', '.join(sorted(unknown))}")
-        fields.update(changes)
-        return FiniteMDP(**fields)
+        return dataclasses.replace(self, **changes)
 
     @classmethod
     def from_table(

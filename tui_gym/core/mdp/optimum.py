@@ -20,6 +20,7 @@ from tui_gym.core.mdp.evaluation import (
     surely_ending,
 )
 from tui_gym.core.mdp.model import BoolArray, FiniteMDP, FloatArray, IntArray
+from tui_gym.core.mdp.policy import policy_matrix
 
 _MAX_ITERATIONS = 100_000
 TIE_GAMMA = 0.99  # the discount that breaks ties between moves of equal exact value
@@ -64,12 +65,6 @@ def optimal_actions(q: npt.ArrayLike, atol: float = 1e-9, rtol: float = 1e-9) ->
     return np.where(finite, close, values == best)
 
 
-def _one_hot(policy: IntArray, n_actions: int) -> FloatArray:
-    matrix = np.zeros((len(policy), n_actions))
-    matrix[np.arange(len(policy)), policy] = 1.0
-    return matrix
-
-
 def _solution(
     model: FiniteMDP, q: FloatArray, gamma: float, steps_left: int | None, policy: IntArray
 ) -> Solution:
@@ -106,11 +101,10 @@ def _policy_iteration(
     """Q and a policy of the best over `rows` using `safe` actions from a safe `policy` that
     ends surely; True when a change closes a cycle that gains reward (the optimum is
     unbounded). Changes only for a clear gain, so it cannot cycle."""
-    n_actions = model.n_actions
     states = np.arange(model.n_states)
     for _ in range(_MAX_ITERATIONS):
         v = np.full(model.n_states, -np.inf)
-        v[rows] = solve_linear(model, _one_hot(policy, n_actions), gamma, rows)
+        v[rows] = solve_linear(model, policy_matrix(model, policy), gamma, rows)
         q = backup(model, v, gamma)
         q[~safe] = -np.inf
         best = np.argmax(q, axis=1)
@@ -119,7 +113,7 @@ def _policy_iteration(
         if not improves.any():
             return q, policy, False
         policy = np.where(improves, best, policy)
-        if gamma == 1.0 and not policy_ends(model, _one_hot(policy, n_actions))[rows].all():
+        if gamma == 1.0 and not policy_ends(model, policy_matrix(model, policy))[rows].all():
             return q, policy, True
     raise RuntimeError("policy iteration did not settle")  # finite MDPs always settle
 

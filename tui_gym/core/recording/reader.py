@@ -298,7 +298,7 @@ class _Reader:
         if kind == HEADER:
             self._header(number, record)
         elif kind in (START, STEP, END):
-            getattr(self, f"_{kind}")(record)  # _start, _step, _end
+            getattr(self, f"_{kind}")(_int(record.get("episode")), record)  # _start, _step, _end
         else:
             raise _Bad
 
@@ -320,7 +320,7 @@ class _Reader:
             env_id=_text(record.get("env_id")),
             env_kwargs=record["env_kwargs"] if isinstance(record.get("env_kwargs"), dict) else {},
             wrappers=tuple(visible(w, NAME_CHARS) for w in wrappers),
-            seed=_int_or_none(record.get("seed")), board=_text(record.get("board")),
+            seed=_optional(_int, record.get("seed")), board=_text(record.get("board")),
             actions=tuple(visible(a, NAME_CHARS) for a in _list(record.get("actions"))[:1024]),
             episode_noun=_name(record.get("episode_noun")) or "episode",
         )
@@ -334,10 +334,9 @@ class _Reader:
             self.game = UNKNOWN_GAME
         return self.game
 
-    def _start(self, record: dict[str, Any]) -> None:
-        number = _int(record.get("episode"))
+    def _start(self, number: int, record: dict[str, Any]) -> None:
         frame = self._frame(record)
-        self._open(seed=_int_or_none(record.get("seed")), positions=[Position(frame, None)],
+        self._open(seed=_optional(_int, record.get("seed")), positions=[Position(frame, None)],
                    recorded_number=number)
 
     def _open(self, **fields: Any) -> Episode:
@@ -348,8 +347,7 @@ class _Reader:
         self.episode = episode
         return episode
 
-    def _step(self, record: dict[str, Any]) -> None:
-        number = _int(record.get("episode"))
+    def _step(self, number: int, record: dict[str, Any]) -> None:
         game = self._current_game()
         action = _int(record.get("action"))
         verdict = record.get("verdict")
@@ -360,7 +358,7 @@ class _Reader:
             step=_int(record.get("step")), action=action,
             action_name=name or game.action_name(action), reward=_number(record.get("reward")),
             terminated=_bool(record.get("terminated")), truncated=_bool(record.get("truncated")),
-            verdict=verdict, regret=_number_or_none(record.get("regret")),
+            verdict=verdict, regret=_optional(_number, record.get("regret")),
             optimal=tuple(visible(a, NAME_CHARS) for a in _list(record.get("optimal"))[:64]),
             note=_words(record.get("note")),
         )
@@ -371,12 +369,11 @@ class _Reader:
             episode = self._open(started=False, recorded_number=number)
         episode.positions.append(Position(frame, move))
 
-    def _end(self, record: dict[str, Any]) -> None:
-        number = _int(record.get("episode"))
+    def _end(self, number: int, record: dict[str, Any]) -> None:
         end = EpisodeEnd(
             steps=_int(record.get("steps")), episode_return=_number(record.get("return")),
             terminated=_bool(record.get("terminated")), truncated=_bool(record.get("truncated")),
-            regret=_number_or_none(record.get("regret")),
+            regret=_optional(_number, record.get("regret")),
         )
         episode = self.episode
         if episode is not None and episode.recorded_number == number and episode.end is None:
@@ -420,10 +417,6 @@ def _int(value: Any) -> int:
     return value
 
 
-def _int_or_none(value: Any) -> int | None:
-    return None if value is None else _int(value)
-
-
 def _number(value: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise _Bad
@@ -436,8 +429,8 @@ def _number(value: Any) -> float:
     return number
 
 
-def _number_or_none(value: Any) -> float | None:
-    return None if value is None else _number(value)
+def _optional(read: Callable[[Any], Any], value: Any) -> Any:
+    return None if value is None else read(value)
 
 
 def _bool(value: Any) -> bool:
