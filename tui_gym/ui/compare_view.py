@@ -12,7 +12,7 @@ from rich.text import Text
 from textual import on
 from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
-from textual.containers import Horizontal, Vertical, VerticalScroll
+from textual.containers import Horizontal, VerticalScroll
 from textual.strip import Strip
 from textual.widgets import Button, Input, Label, SelectionList
 from textual.widgets.selection_list import Selection
@@ -41,6 +41,7 @@ from tui_gym.ui.compare_series import (
     series_of_outcome,
     series_of_record,
 )
+from tui_gym.ui.map_editing import SessionView
 from tui_gym.ui.textual_internals import ticked_line
 from tui_gym.ui.widgets.compare_chart import PALETTE, CompareChart
 from tui_gym.ui.widgets.figures_table import FiguresTable, with_interval
@@ -170,12 +171,11 @@ def _unreadable(damaged: Sequence[DamagedRun]) -> str:
             "`tui-gym runs rm ID` removes one; the other runs are listed.")
 
 
-class CompareView(Vertical):
+class CompareView(SessionView):
     """Runs of the current game, their curves and figures, and comparisons to launch."""
 
     SCOPED_CSS = False  # the compact rules start at Screen
     DEFAULT_CSS = """
-    CompareView { height: 1fr; padding: 0 0 0 1; }
     CompareView #compare-algorithms { layout: grid; grid-size: 3; grid-gutter: 0 1; height: auto; }
     CompareView #compare-algorithms TickBox { width: 1fr; }
     CompareView #compare-fields { height: 1; }
@@ -187,7 +187,6 @@ class CompareView(Vertical):
     CompareView.-running #compare-progress { display: block; }
     CompareView #compare-message { width: 1fr; color: $text-muted; text-wrap: wrap; height: auto; }
     CompareView #compare-message.-error { color: $text-error; }
-    CompareView #compare-body { height: 1fr; scrollbar-size-vertical: 1; }
     CompareView #compare-runs-title { color: $text-muted; text-style: bold; margin-top: 1; }
     CompareView #compare-chart { margin-top: 1; }
 
@@ -230,11 +229,6 @@ class CompareView(Vertical):
         self.smooth = True  # curves drawn through a trailing mean (o toggles)
         self.message = ""  # the line under the form: an error, the job's state
         self._stale = True  # the list has not been read for the current game
-
-    # --- the app and its session ---------------------------------------------
-    @property
-    def session(self) -> Session:
-        return self.app.session  # type: ignore[attr-defined, no-any-return]
 
     @property
     def db_path(self) -> Path:
@@ -474,15 +468,6 @@ class CompareView(Vertical):
         self.table.show([row for _, row, _ in entries], colours)
 
     # --- launching -----------------------------------------------------------------
-    def read_launch(self) -> Launch | None:
-        """The form's values, or None (and the message saying what is wrong)."""
-        try:
-            chosen = [name for name, box in self._boxes.items() if box.value]
-            return read_launch(chosen, self._seeds.value, self._episodes.value)
-        except ValueError as exc:
-            self._say(f"Not started: {exc}.", error=True)
-            return None
-
     def action_launch(self) -> None:
         if self.running:
             self._say("A comparison is running: stop it first (s).", error=True)
@@ -491,8 +476,11 @@ class CompareView(Vertical):
             self._say(f"Not started: the run history cannot be read ({self.history_error}).",
                       error=True)
             return
-        launch = self.read_launch()
-        if launch is None:
+        chosen = [name for name, box in self._boxes.items() if box.value]
+        try:
+            launch = read_launch(chosen, self._seeds.value, self._episodes.value)
+        except ValueError as exc:
+            self._say(f"Not started: {exc}.", error=True)
             return
         try:
             spec = self._spec(launch)
@@ -560,7 +548,7 @@ class CompareView(Vertical):
         return head, Launch(algorithms, len(seeds), episodes), seeds[0]
 
     def start_job(self, job: CompareJob) -> None:
-        """Run `job` and follow it (the launch button's end; tests hand in their own)."""
+        """Run `job` and follow it."""
         self.job = job
         self._job_game = self._game_key
         self._seen_progress = -1

@@ -55,7 +55,6 @@ class PlanView(MapEditingView):
 
     SCOPED_CSS = False
     DEFAULT_CSS = """
-    PlanView { height: 1fr; padding: 0 0 0 1; }
     PlanView #plan-controls { height: 1; }
     PlanView #plan-controls Button { min-width: 0; margin-right: 1; padding: 0; }
     PlanView #plan-controls #plan-run { width: 9; }
@@ -69,15 +68,9 @@ class PlanView(MapEditingView):
     PlanView #plan-knobs Label { padding: 0 1; color: $text-muted; }
     PlanView #plan-knobs Input { width: 12; height: 1; border: none; padding: 0 1; }
     PlanView #plan-knobs Input.-invalid { color: $text-error; }
-    PlanView #plan-body { height: 1fr; scrollbar-size-vertical: 1; }
-    PlanView #plan-heatmap-box { height: auto; border: round $primary-background-lighten-2;
-                                 border-title-color: $text-muted;
-                                 border-subtitle-color: $text-disabled; }
     PlanView #plan-heatmap-box:focus-within { border: round $accent; }
     PlanView #plan-values, PlanView #plan-lines { display: none; }
     PlanView #plan-values.-shown, PlanView #plan-lines.-shown { display: block; }
-    PlanView #plan-editor { display: none; }
-    PlanView.-mapping #plan-editor { display: block; }
     """
 
     BINDINGS: ClassVar[list[BindingType]] = [
@@ -139,7 +132,7 @@ class PlanView(MapEditingView):
         yield self._status
         with VerticalScroll(id="plan-body"):
             yield MapEditor(id="plan-editor")
-            with Vertical(id="plan-heatmap-box"):
+            with Vertical(id="plan-heatmap-box", classes="heatmap-box"):
                 yield self._heatmap
             yield self._values
             yield self._lines
@@ -226,8 +219,7 @@ class PlanView(MapEditingView):
 
     # --- drawing -------------------------------------------------------------------
     def _published(self) -> None:
-        """Called on the planner's thread after a command: ask for a drawing (posting a
-        message is safe from any thread)."""
+        """On the planner's thread after a command: ask for a drawing (safe from any thread)."""
         self.post_message(self.Published())
 
     def on_plan_view_published(self, message: Published) -> None:
@@ -361,10 +353,8 @@ class PlanView(MapEditingView):
 
     def _redraw(self) -> None:
         """Draw the latest snapshot now (a change of the view's own, not the planner's)."""
-        if self.runner is not None:
-            snapshot = self.runner.latest
-            self._shown_version = snapshot.version
-            self.show_snapshot(snapshot)
+        self._shown_version = -1
+        self._poll()
 
     def action_edit_knobs(self) -> None:
         self.query_one("#plan-gamma", Input).focus()

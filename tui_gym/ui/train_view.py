@@ -46,14 +46,6 @@ class TrainView(MapEditingView):
     # Not scoped: the `Screen.compact ...` rules must match from the screen down.
     SCOPED_CSS = False
     DEFAULT_CSS = """
-    TrainView {
-        height: 1fr;
-        padding: 0 0 0 1;
-    }
-    TrainView #train-body {
-        height: 1fr;
-        scrollbar-size-vertical: 1;
-    }
     TrainView #train-controls {
         height: 1;
     }
@@ -104,21 +96,14 @@ class TrainView(MapEditingView):
         min-height: 3;
         padding: 0 1;
     }
-    TrainView #train-step, TrainView #train-editor {
+    TrainView #train-step {
         display: none;
     }
-    TrainView #train-board-box.-shown, TrainView.-animated #train-step,
-    TrainView.-mapping #train-editor {
+    TrainView #train-board-box.-shown, TrainView.-animated #train-step {
         display: block;
     }
     TrainView.-stepping #train-board-box {
         border-left: thick $accent;
-    }
-    TrainView #train-heatmap-box {
-        height: auto;
-        border: round $primary-background-lighten-2;
-        border-title-color: $text-muted;
-        border-subtitle-color: $text-disabled;
     }
     TrainView #train-heatmap-box:focus-within {
         border: round $primary;
@@ -203,7 +188,7 @@ class TrainView(MapEditingView):
         self._prediction.display = session.predicts
         self._board_box = Vertical(id="train-board-box")
         self._caption = Label("", id="train-board-caption")
-        self._heatmap_box = Vertical(id="train-heatmap-box")
+        self._heatmap_box = Vertical(id="train-heatmap-box", classes="heatmap-box")
         self.heatmap = HeatmapView(id="train-heatmaps")
         self.step_panel = StepPanel(id="train-step")
 
