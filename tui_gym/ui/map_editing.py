@@ -104,6 +104,19 @@ class MapEditingView(SessionView):
         self.remove_class("-mapping")
         self.focus_default()
 
+    def follow_map(self) -> None:
+        """After the session changed, an open editor closes on a game without a map, starts
+        afresh on another game's, else draws the map as it is now."""
+        editor, game = self.editor, self.session.game
+        if not self.editing_map or editor is None:
+            return
+        if not game.editable:
+            self.close_editor()
+        elif editor.grid_map is None or self._editor_game != game.name:
+            self.start_editor()
+        else:
+            self.show_editor()
+
     def show_editor(self) -> None:
         """Draw the session's map and its exact optimum in the editor."""
         if self.editor is not None:

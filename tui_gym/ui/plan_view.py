@@ -183,7 +183,7 @@ class PlanView(MapEditingView):
             self.focus_target = session.game.layout.default_focus(session.env_kwargs)
             self._heatmap.show_message(f"Building {session.game.title}'s model…")
         self._build_model(session, key)
-        self._sync_editor()
+        self.follow_map()
 
     @work(thread=True, exclusive=True, group="plan-model")
     def _build_model(self, session: Session, key: Any) -> None:
@@ -403,11 +403,3 @@ class PlanView(MapEditingView):
             return False
         self.call_after_refresh(self.start_editor().focus_canvas)
         return True
-
-    def _sync_editor(self) -> None:
-        if not self.editing_map:
-            return
-        if not self.session.game.editable:
-            self.remove_class("-mapping")
-            return
-        self.show_editor()

@@ -256,13 +256,7 @@ class TrainView(MapEditingView):
         self._exact.drop()  # figures of what was shown before never reach the screen
         self.show_speed(runner.speed.name)
         self.show_snapshot(runner.latest, runner)
-        if self.editing_map and (editor := self.editor) is not None:
-            if not game.editable:
-                self.close_editor()
-            elif editor.grid_map is None or self._editor_game != game.name:
-                self.start_editor()
-            else:
-                self.show_editor()
+        self.follow_map()
 
     # --- the map editor ----------------------------------------------------
     async def open_editor(self) -> bool:
