@@ -405,7 +405,10 @@ class PlayView(SessionView):
         detail = ""
         if game is not None and last is not None:
             parts = [self._verdict] if self._verdict else []
-            parts.append(f"observation: {self._observation_text(last)}")
+            # In the game's words, or raw (cut short) when wrappers reshaped it.
+            seen = game.game.states.describe(last.observation, self.session.env_kwargs)
+            cut = len(seen) > OBSERVATION_CHARS
+            parts.append(f"observation: {seen[: OBSERVATION_CHARS - 1] + '…' if cut else seen}")
             progress = game.game.narrator.progress_text(last, game.first_info)
             if progress:
                 parts.append(progress)
@@ -605,12 +608,6 @@ class PlayView(SessionView):
         self._show_board(self.agent_game)
         self._hint = ""
         self.query_one(StatusLines).show(Content(WATCHING), detail, tone=tone)
-
-    def _observation_text(self, last: PlayStep) -> str:
-        """The observation in the game's words, or raw (cut short) when wrappers reshaped it."""
-        assert self.game is not None
-        text = self.game.game.states.describe(last.observation, self.session.env_kwargs)
-        return text if len(text) <= OBSERVATION_CHARS else text[: OBSERVATION_CHARS - 1] + "…"
 
     def _show_tally(self) -> None:
         game = self.game
