@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Hashable, Iterable, Mapping, Sequence
+from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
@@ -52,7 +52,7 @@ from tui_gym.ui.widgets.text_field import TextField
 from tui_gym.ui.widgets.tick_box import TickBox
 
 if TYPE_CHECKING:
-    from tui_gym.session.experiments.compare import AlgorithmOutcome, CompareProgress, CompareSpec
+    from tui_gym.session.experiments.compare import AlgorithmOutcome, CompareSpec
     from tui_gym.session.session import Session
 
 POLL_SECONDS = 0.25  # how often the view looks at a running comparison
@@ -317,7 +317,7 @@ class CompareView(SessionView):
     def stop_comparison(self) -> bool:
         """Ask a running comparison to stop (it records what finished); whether one ran."""
         job = self.job
-        if job is None or not job.running or job.stopping:
+        if job is None or not job.running or job.stop_event.is_set():
             return False
         job.stop()
         self._say("Stopping: the episodes every seed has finished are kept and recorded.")
@@ -434,29 +434,24 @@ class CompareView(SessionView):
         self._colours[key] = place
         return place
 
-    def _allowed(
-        self, kwargs: Mapping[str, Any], wrappers: Iterable[tuple[str, Mapping[str, Any]]]
-    ) -> tuple[float, float] | None:
-        """The returns the current game allows with these arguments and wrappers."""
+    def _redraw(self) -> None:
         from tui_gym.session.returns import return_range_of
 
-        session = self.session
-        return return_range_of(session.game, session.env_id, kwargs, wrappers)
-
-    def _redraw(self) -> None:
+        game, env_id = self.session.game, self.session.env_id  # the returns the game allows
         entries: list[tuple[Series | None, FigureRow, Hashable]] = []
         for run_id in self.run_list.selected:
             record = self._record(run_id)
             if record is not None:
                 series = series_of_record(record, self.smooth)
                 if series is not None:
-                    allowed = self._allowed(record.game_params,
-                                            ((w.name, w.params) for w in record.wrappers))
-                    series = bounded(series, allowed)
+                    series = bounded(series, return_range_of(
+                        game, env_id, record.game_params,
+                        ((w.name, w.params) for w in record.wrappers)))
                 entries.append((series, row_of_record(record), run_id))
         job = self.job
-        live_allowed = None if job is None or not self._live else self._allowed(
-            job.spec.game_params, ((c.name, c.values()) for c in job.spec.wrappers))
+        live_allowed = None if job is None or not self._live else return_range_of(
+            game, env_id, job.spec.game_params,
+            ((c.name, c.values()) for c in job.spec.wrappers))
         for series, row in self._live:
             entries.append((bounded(series, live_allowed), row, series.key))
         shown = {key for _, _, key in entries}
@@ -598,18 +593,15 @@ class CompareView(SessionView):
         progress = job.progress
         if job.progress_count != self._seen_progress and progress is not None:
             self._seen_progress = job.progress_count
-            self._show_progress(job, progress)
+            done, total = int(progress.done), max(1, int(progress.total))
+            elapsed = max(1e-9, time.monotonic() - job.started_at)
+            eta = format_duration(elapsed / done * (total - done)) if 0 < done < total else ""
+            self._progress.show(done, total, eta)
+            self._live_outcomes = job.outcomes
+            self._live = self._live_entries()
+            self._redraw()
         if job.done:
             self._finished(job)
-
-    def _show_progress(self, job: CompareJob, progress: CompareProgress) -> None:
-        done, total = int(progress.done), max(1, int(progress.total))
-        elapsed = max(1e-9, time.monotonic() - job.started_at)
-        eta = format_duration(elapsed / done * (total - done)) if 0 < done < total else ""
-        self._progress.show(done, total, eta)
-        self._live_outcomes = job.outcomes
-        self._live = self._live_entries()
-        self._redraw()
 
     def _live_entries(self) -> tuple[tuple[Series, FigureRow], ...]:
         entries = []
