@@ -41,11 +41,15 @@ def show_optimum(editor: MapEditor, session: Session, focus: Any) -> None:
 
 class SessionView(Vertical):
     """A view of the app's session, filling the screen below the tabs; its body, a
-    `VerticalScroll`, takes the height the rows above it leave."""
+    `VerticalScroll`, takes the height the rows above it leave. A row of `.controls`
+    holds small buttons and a `.speed` label."""
 
     DEFAULT_CSS = """
     SessionView { height: 1fr; padding: 0 0 0 1; }
     SessionView > VerticalScroll { height: 1fr; scrollbar-size-vertical: 1; }
+    SessionView .controls { height: 1; }
+    SessionView .controls Button { min-width: 0; margin-right: 1; padding: 0; }
+    SessionView .speed { width: auto; padding: 0 1; color: $text-accent; text-style: bold; }
     """
 
     @property

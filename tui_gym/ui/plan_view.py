@@ -55,15 +55,12 @@ class PlanView(MapEditingView):
 
     SCOPED_CSS = False
     DEFAULT_CSS = """
-    PlanView #plan-controls { height: 1; }
-    PlanView #plan-controls Button { min-width: 0; margin-right: 1; padding: 0; }
     PlanView #plan-controls #plan-run { width: 9; }
     /* At 80x24 the row drops Improve and Converge (u and c, in the key bar) so that
        Restart and the speed fit. */
     Screen.compact PlanView #plan-improve, Screen.compact PlanView #plan-converge {
         display: none; }
-    PlanView #plan-speed { width: auto; min-width: 5; padding: 0 1; color: $text-accent;
-                           text-style: bold; }
+    PlanView #plan-speed { min-width: 5; }
     PlanView #plan-knobs { height: 1; }
     PlanView #plan-knobs Label { padding: 0 1; color: $text-muted; }
     PlanView #plan-knobs Input { width: 12; height: 1; border: none; padding: 0 1; }
@@ -106,12 +103,12 @@ class PlanView(MapEditingView):
     def compose(self) -> ComposeResult:
         self._run = Button("▶ Run", id="plan-run", variant="success", compact=True,
                            tooltip="Run the method at the chosen speed, or pause (space)")
-        self._speed = Label(SPEEDS[3][0], id="plan-speed")
+        self._speed = Label(SPEEDS[3][0], id="plan-speed", classes="speed")
         self._heatmap = HeatmapView(id="plan-heatmap")
         self._values = HeatmapView(id="plan-values")
         self._lines = ValueLines(id="plan-lines")
         self._status = PlanStatus(id="plan-status")
-        with Horizontal(id="plan-controls"):
+        with Horizontal(id="plan-controls", classes="controls"):
             yield self._run
             yield Button("1 step", id="plan-step", compact=True, tooltip="One sweep (n)")
             yield Button("Improve", id="plan-improve", compact=True,

@@ -46,9 +46,6 @@ class TrainView(MapEditingView):
     # Not scoped: the `Screen.compact ...` rules must match from the screen down.
     SCOPED_CSS = False
     DEFAULT_CSS = """
-    TrainView #train-controls {
-        height: 1;
-    }
     TrainView #train-engine {
         width: 1fr;
         height: 1;
@@ -57,17 +54,8 @@ class TrainView(MapEditingView):
         text-wrap: nowrap;
         text-overflow: ellipsis;
     }
-    TrainView #train-controls Button {
-        min-width: 0;
-        margin-right: 1;
-        padding: 0;
-    }
     TrainView #train-speed {
-        width: auto;
         min-width: 8;
-        padding: 0 1;
-        color: $text-accent;
-        text-style: bold;
     }
     TrainView #train-top, TrainView #train-middle {
         height: auto;
@@ -178,7 +166,7 @@ class TrainView(MapEditingView):
         self._episode = Button("1 episode", id="btn-episode", compact=True,
                                tooltip="Train for exactly one episode (.)",
                                action="app.one_episode")
-        self._speed = Label("", id="train-speed")
+        self._speed = Label("", id="train-speed", classes="speed")
         self.progress = ProgressLine(id="train-progress")
         self._engine = Label("", id="train-engine", markup=False)
         self.stats = StatsPanel(id="train-stats")
@@ -192,7 +180,7 @@ class TrainView(MapEditingView):
         self.heatmap = HeatmapView(id="train-heatmaps")
         self.step_panel = StepPanel(id="train-step")
 
-        with Horizontal(id="train-controls"):
+        with Horizontal(id="train-controls", classes="controls"):
             yield self._toggle
             yield self._episode
             yield Button("Reset", id="btn-reset", variant="error", compact=True,
