@@ -224,7 +224,6 @@ class CompareView(SessionView):
         self.job: CompareJob | None = None
         self._job_game: frozenset[str] = frozenset()
         self._seen_progress = -1
-        self._live: tuple[tuple[Series, FigureRow], ...] = ()
         self._live_outcomes: tuple[AlgorithmOutcome, ...] = ()
         self.smooth = True  # curves drawn through a trailing mean (o toggles)
         self.message = ""  # the line under the form: an error, the job's state
@@ -449,11 +448,15 @@ class CompareView(SessionView):
                         ((w.name, w.params) for w in record.wrappers)))
                 entries.append((series, row_of_record(record), run_id))
         job = self.job
-        live_allowed = None if job is None or not self._live else return_range_of(
+        live_allowed = None if job is None or not self._live_outcomes else return_range_of(
             game, env_id, job.spec.game_params,
             ((c.name, c.values()) for c in job.spec.wrappers))
-        for series, row in self._live:
-            entries.append((bounded(series, live_allowed), row, series.key))
+        for outcome in self._live_outcomes:
+            title = algorithm_title(outcome.algorithm)
+            series = series_of_outcome(outcome, f"{title} (live)", self.smooth)
+            if series is not None:
+                entries.append((bounded(series, live_allowed), row_of_outcome(outcome, title),
+                                series.key))
         shown = {key for _, _, key in entries}
         for key in [k for k in self._colours if k not in shown]:
             del self._colours[key]
@@ -547,7 +550,7 @@ class CompareView(SessionView):
         self.job = job
         self._job_game = self._game_key
         self._seen_progress = -1
-        self._live, self._live_outcomes = (), ()
+        self._live_outcomes = ()
         job.start()
         self.add_class("-running")
         self._stop.disabled = False
@@ -575,7 +578,6 @@ class CompareView(SessionView):
 
     def action_toggle_smoothing(self) -> None:
         self.smooth = not self.smooth
-        self._live = self._live_entries()
         self._redraw()
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
@@ -598,19 +600,9 @@ class CompareView(SessionView):
             eta = format_duration(elapsed / done * (total - done)) if 0 < done < total else ""
             self._progress.show(done, total, eta)
             self._live_outcomes = job.outcomes
-            self._live = self._live_entries()
             self._redraw()
         if job.done:
             self._finished(job)
-
-    def _live_entries(self) -> tuple[tuple[Series, FigureRow], ...]:
-        entries = []
-        for outcome in self._live_outcomes:
-            title = algorithm_title(outcome.algorithm)
-            series = series_of_outcome(outcome, f"{title} (live)", self.smooth)
-            if series is not None:
-                entries.append((series, row_of_outcome(outcome, title)))
-        return tuple(entries)
 
     def _finished(self, job: CompareJob) -> None:
         self.job = None
@@ -619,7 +611,7 @@ class CompareView(SessionView):
         self._launch.disabled = False
         self.refresh_bindings()
         result = job.result
-        self._live, self._live_outcomes = (), ()
+        self._live_outcomes = ()
         if job.error is not None or result is None:
             self._say(job.error or "The comparison ended without a result.", error=True)
             self._redraw()
