@@ -17,18 +17,18 @@ from textual.widgets.option_list import Option
 from tui_gym.book_text import claims_table, figure_parts
 from tui_gym.session.book import BookFigure, figures
 from tui_gym.session.book.figure import FigureOptions, FigureResult, FigureStopped, heading
+from tui_gym.ui.map_editing import SessionView
 
 __all__ = ["BookView"]
 
 FRAME_SECONDS = 0.1  # how often the view looks for news from the worker
 
 
-class BookView(Vertical):
+class BookView(SessionView):
     """The book's run figures: pick one, run it, read its charts and verdicts."""
 
     SCOPED_CSS = False
     DEFAULT_CSS = """
-    BookView { height: 1fr; padding: 0 0 0 1; }
     BookView #book-list { height: auto; max-height: 6;
                           border: round $primary-background-lighten-2; }
     BookView #book-list:focus { border: round $accent; }
@@ -36,7 +36,6 @@ class BookView(Vertical):
     BookView #book-status-row { height: 1; }
     BookView #book-progress { width: 40; }
     BookView #book-status { padding: 0 1; color: $text-muted; }
-    BookView #book-body { height: 1fr; scrollbar-size-vertical: 1; }
     """
 
     BINDINGS: ClassVar[list[BindingType]] = [

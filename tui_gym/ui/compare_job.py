@@ -71,10 +71,6 @@ class CompareJob:
         """Started and ended (with a result or an error)."""
         return self._thread.ident is not None and not self._thread.is_alive()
 
-    @property
-    def stopping(self) -> bool:
-        return self.stop_event.is_set()
-
     def stop(self) -> None:
         """Ask the comparison to end; what finished is kept and recorded."""
         self.stop_event.set()

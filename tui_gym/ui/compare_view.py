@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Hashable, Iterable, Mapping, Sequence
+from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
@@ -12,7 +12,7 @@ from rich.text import Text
 from textual import on
 from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
-from textual.containers import Horizontal, Vertical, VerticalScroll
+from textual.containers import Horizontal, VerticalScroll
 from textual.strip import Strip
 from textual.widgets import Button, Input, Label, SelectionList
 from textual.widgets.selection_list import Selection
@@ -41,6 +41,7 @@ from tui_gym.ui.compare_series import (
     series_of_outcome,
     series_of_record,
 )
+from tui_gym.ui.map_editing import SessionView
 from tui_gym.ui.textual_internals import ticked_line
 from tui_gym.ui.widgets.compare_chart import PALETTE, CompareChart
 from tui_gym.ui.widgets.figures_table import FiguresTable, with_interval
@@ -51,7 +52,7 @@ from tui_gym.ui.widgets.text_field import TextField
 from tui_gym.ui.widgets.tick_box import TickBox
 
 if TYPE_CHECKING:
-    from tui_gym.session.experiments.compare import AlgorithmOutcome, CompareProgress, CompareSpec
+    from tui_gym.session.experiments.compare import AlgorithmOutcome, CompareSpec
     from tui_gym.session.session import Session
 
 POLL_SECONDS = 0.25  # how often the view looks at a running comparison
@@ -170,12 +171,11 @@ def _unreadable(damaged: Sequence[DamagedRun]) -> str:
             "`tui-gym runs rm ID` removes one; the other runs are listed.")
 
 
-class CompareView(Vertical):
+class CompareView(SessionView):
     """Runs of the current game, their curves and figures, and comparisons to launch."""
 
     SCOPED_CSS = False  # the compact rules start at Screen
     DEFAULT_CSS = """
-    CompareView { height: 1fr; padding: 0 0 0 1; }
     CompareView #compare-algorithms { layout: grid; grid-size: 3; grid-gutter: 0 1; height: auto; }
     CompareView #compare-algorithms TickBox { width: 1fr; }
     CompareView #compare-fields { height: 1; }
@@ -187,7 +187,6 @@ class CompareView(Vertical):
     CompareView.-running #compare-progress { display: block; }
     CompareView #compare-message { width: 1fr; color: $text-muted; text-wrap: wrap; height: auto; }
     CompareView #compare-message.-error { color: $text-error; }
-    CompareView #compare-body { height: 1fr; scrollbar-size-vertical: 1; }
     CompareView #compare-runs-title { color: $text-muted; text-style: bold; margin-top: 1; }
     CompareView #compare-chart { margin-top: 1; }
 
@@ -225,16 +224,10 @@ class CompareView(Vertical):
         self.job: CompareJob | None = None
         self._job_game: frozenset[str] = frozenset()
         self._seen_progress = -1
-        self._live: tuple[tuple[Series, FigureRow], ...] = ()
         self._live_outcomes: tuple[AlgorithmOutcome, ...] = ()
         self.smooth = True  # curves drawn through a trailing mean (o toggles)
         self.message = ""  # the line under the form: an error, the job's state
         self._stale = True  # the list has not been read for the current game
-
-    # --- the app and its session ---------------------------------------------
-    @property
-    def session(self) -> Session:
-        return self.app.session  # type: ignore[attr-defined, no-any-return]
 
     @property
     def db_path(self) -> Path:
@@ -323,7 +316,7 @@ class CompareView(Vertical):
     def stop_comparison(self) -> bool:
         """Ask a running comparison to stop (it records what finished); whether one ran."""
         job = self.job
-        if job is None or not job.running or job.stopping:
+        if job is None or not job.running or job.stop_event.is_set():
             return False
         job.stop()
         self._say("Stopping: the episodes every seed has finished are kept and recorded.")
@@ -440,31 +433,30 @@ class CompareView(Vertical):
         self._colours[key] = place
         return place
 
-    def _allowed(
-        self, kwargs: Mapping[str, Any], wrappers: Iterable[tuple[str, Mapping[str, Any]]]
-    ) -> tuple[float, float] | None:
-        """The returns the current game allows with these arguments and wrappers."""
+    def _redraw(self) -> None:
         from tui_gym.session.returns import return_range_of
 
-        session = self.session
-        return return_range_of(session.game, session.env_id, kwargs, wrappers)
-
-    def _redraw(self) -> None:
+        game, env_id = self.session.game, self.session.env_id  # the returns the game allows
         entries: list[tuple[Series | None, FigureRow, Hashable]] = []
         for run_id in self.run_list.selected:
             record = self._record(run_id)
             if record is not None:
                 series = series_of_record(record, self.smooth)
                 if series is not None:
-                    allowed = self._allowed(record.game_params,
-                                            ((w.name, w.params) for w in record.wrappers))
-                    series = bounded(series, allowed)
+                    series = bounded(series, return_range_of(
+                        game, env_id, record.game_params,
+                        ((w.name, w.params) for w in record.wrappers)))
                 entries.append((series, row_of_record(record), run_id))
         job = self.job
-        live_allowed = None if job is None or not self._live else self._allowed(
-            job.spec.game_params, ((c.name, c.values()) for c in job.spec.wrappers))
-        for series, row in self._live:
-            entries.append((bounded(series, live_allowed), row, series.key))
+        live_allowed = None if job is None or not self._live_outcomes else return_range_of(
+            game, env_id, job.spec.game_params,
+            ((c.name, c.values()) for c in job.spec.wrappers))
+        for outcome in self._live_outcomes:
+            title = algorithm_title(outcome.algorithm)
+            series = series_of_outcome(outcome, f"{title} (live)", self.smooth)
+            if series is not None:
+                entries.append((bounded(series, live_allowed), row_of_outcome(outcome, title),
+                                series.key))
         shown = {key for _, _, key in entries}
         for key in [k for k in self._colours if k not in shown]:
             del self._colours[key]
@@ -474,15 +466,6 @@ class CompareView(Vertical):
         self.table.show([row for _, row, _ in entries], colours)
 
     # --- launching -----------------------------------------------------------------
-    def read_launch(self) -> Launch | None:
-        """The form's values, or None (and the message saying what is wrong)."""
-        try:
-            chosen = [name for name, box in self._boxes.items() if box.value]
-            return read_launch(chosen, self._seeds.value, self._episodes.value)
-        except ValueError as exc:
-            self._say(f"Not started: {exc}.", error=True)
-            return None
-
     def action_launch(self) -> None:
         if self.running:
             self._say("A comparison is running: stop it first (s).", error=True)
@@ -491,8 +474,11 @@ class CompareView(Vertical):
             self._say(f"Not started: the run history cannot be read ({self.history_error}).",
                       error=True)
             return
-        launch = self.read_launch()
-        if launch is None:
+        chosen = [name for name, box in self._boxes.items() if box.value]
+        try:
+            launch = read_launch(chosen, self._seeds.value, self._episodes.value)
+        except ValueError as exc:
+            self._say(f"Not started: {exc}.", error=True)
             return
         try:
             spec = self._spec(launch)
@@ -560,11 +546,11 @@ class CompareView(Vertical):
         return head, Launch(algorithms, len(seeds), episodes), seeds[0]
 
     def start_job(self, job: CompareJob) -> None:
-        """Run `job` and follow it (the launch button's end; tests hand in their own)."""
+        """Run `job` and follow it."""
         self.job = job
         self._job_game = self._game_key
         self._seen_progress = -1
-        self._live, self._live_outcomes = (), ()
+        self._live_outcomes = ()
         job.start()
         self.add_class("-running")
         self._stop.disabled = False
@@ -592,7 +578,6 @@ class CompareView(Vertical):
 
     def action_toggle_smoothing(self) -> None:
         self.smooth = not self.smooth
-        self._live = self._live_entries()
         self._redraw()
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
@@ -610,27 +595,14 @@ class CompareView(Vertical):
         progress = job.progress
         if job.progress_count != self._seen_progress and progress is not None:
             self._seen_progress = job.progress_count
-            self._show_progress(job, progress)
+            done, total = int(progress.done), max(1, int(progress.total))
+            elapsed = max(1e-9, time.monotonic() - job.started_at)
+            eta = format_duration(elapsed / done * (total - done)) if 0 < done < total else ""
+            self._progress.show(done, total, eta)
+            self._live_outcomes = job.outcomes
+            self._redraw()
         if job.done:
             self._finished(job)
-
-    def _show_progress(self, job: CompareJob, progress: CompareProgress) -> None:
-        done, total = int(progress.done), max(1, int(progress.total))
-        elapsed = max(1e-9, time.monotonic() - job.started_at)
-        eta = format_duration(elapsed / done * (total - done)) if 0 < done < total else ""
-        self._progress.show(done, total, eta)
-        self._live_outcomes = job.outcomes
-        self._live = self._live_entries()
-        self._redraw()
-
-    def _live_entries(self) -> tuple[tuple[Series, FigureRow], ...]:
-        entries = []
-        for outcome in self._live_outcomes:
-            title = algorithm_title(outcome.algorithm)
-            series = series_of_outcome(outcome, f"{title} (live)", self.smooth)
-            if series is not None:
-                entries.append((series, row_of_outcome(outcome, title)))
-        return tuple(entries)
 
     def _finished(self, job: CompareJob) -> None:
         self.job = None
@@ -639,7 +611,7 @@ class CompareView(Vertical):
         self._launch.disabled = False
         self.refresh_bindings()
         result = job.result
-        self._live, self._live_outcomes = (), ()
+        self._live_outcomes = ()
         if job.error is not None or result is None:
             self._say(job.error or "The comparison ended without a result.", error=True)
             self._redraw()

@@ -13,6 +13,7 @@ import time
 import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from textual.message import Message
@@ -101,14 +102,8 @@ def traced(panel: Heatmap) -> Heatmap:
     return dataclasses.replace(panel, title=say(panel.title), legend=say(panel.legend))
 
 
-class _Turns:
-    """The one lock every `LatestOnly` computes under, and when the next may start."""
-
-    lock = threading.Lock()
-    rest_until = 0.0  # time.monotonic()
-
-
-TURNS = _Turns()
+# The one lock every `LatestOnly` computes under, and when (`time.monotonic()`) the next may start.
+TURNS = SimpleNamespace(lock=threading.Lock(), rest_until=0.0)
 
 
 class LatestOnly(Generic[Asked, Result]):

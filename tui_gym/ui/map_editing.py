@@ -1,5 +1,5 @@
-"""The map editor's side of a view that shows it: `MapEditingView` (the Train view, the
-Plan view), `show_optimum`."""
+"""The views' shared base `SessionView`, and the map editor's side of a view that shows it:
+`MapEditingView` (the Train view, the Plan view), `show_optimum`."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from tui_gym.ui.widgets.map_editor import MapEditor
 if TYPE_CHECKING:
     from tui_gym.session.session import Session
 
-__all__ = ["MapEditingView", "show_optimum"]
+__all__ = ["MapEditingView", "SessionView", "show_optimum"]
 
 
 def show_optimum(editor: MapEditor, session: Session, focus: Any) -> None:
@@ -39,16 +39,42 @@ def show_optimum(editor: MapEditor, session: Session, focus: Any) -> None:
     editor.show(grid_map, panels, f"exact optimum {figure}, solved in {took:.0f} ms")
 
 
-class MapEditingView(Vertical):
-    """A view that shows the map editor (`-mapping`) over the game it plays: each edit
-    rebuilds the game through the app (`rebuild_map`), `s` saves the map, esc closes it."""
+class SessionView(Vertical):
+    """A view of the app's session, filling the screen below the tabs; its body, a
+    `VerticalScroll`, takes the height the rows above it leave. A row of `.controls`
+    holds small buttons and a `.speed` label."""
 
-    focus_target: Any = None  # what the optimum's heatmap follows
-    _editor_game = ""  # the game the editor's undo history belongs to
+    DEFAULT_CSS = """
+    SessionView { height: 1fr; padding: 0 0 0 1; }
+    SessionView > VerticalScroll { height: 1fr; scrollbar-size-vertical: 1; }
+    SessionView .controls { height: 1; }
+    SessionView .controls Button { min-width: 0; margin-right: 1; padding: 0; }
+    SessionView .speed { width: auto; padding: 0 1; color: $text-accent; text-style: bold; }
+    """
 
     @property
     def session(self) -> Session:
         return self.app.session  # type: ignore[attr-defined, no-any-return]
+
+    def focus_default(self) -> None:
+        """Give the keyboard to the view's own widget."""
+
+
+class MapEditingView(SessionView):
+    """A view that shows the map editor (`-mapping`) over the game it plays: each edit
+    rebuilds the game through the app (`rebuild_map`), `s` saves the map, esc closes it.
+    Its heatmaps sit in a `.heatmap-box`."""
+
+    DEFAULT_CSS = """
+    MapEditingView MapEditor { display: none; }
+    MapEditingView.-mapping MapEditor { display: block; }
+    MapEditingView .heatmap-box { height: auto; border: round $primary-background-lighten-2;
+                                  border-title-color: $text-muted;
+                                  border-subtitle-color: $text-disabled; }
+    """
+
+    focus_target: Any = None  # what the optimum's heatmap follows
+    _editor_game = ""  # the game the editor's undo history belongs to
 
     @property
     def editor(self) -> MapEditor | None:
@@ -58,9 +84,6 @@ class MapEditingView(Vertical):
     @property
     def editing_map(self) -> bool:
         return self.has_class("-mapping")
-
-    def focus_default(self) -> None:
-        """Give the keyboard to the view's own widget."""
 
     def can_edit_map(self) -> bool:
         """Whether the game has a map to edit (else a notice says so)."""
@@ -84,6 +107,19 @@ class MapEditingView(Vertical):
     def close_editor(self) -> None:
         self.remove_class("-mapping")
         self.focus_default()
+
+    def follow_map(self) -> None:
+        """After the session changed, an open editor closes on a game without a map, starts
+        afresh on another game's, else draws the map as it is now."""
+        editor, game = self.editor, self.session.game
+        if not self.editing_map or editor is None:
+            return
+        if not game.editable:
+            self.close_editor()
+        elif editor.grid_map is None or self._editor_game != game.name:
+            self.start_editor()
+        else:
+            self.show_editor()
 
     def show_editor(self) -> None:
         """Draw the session's map and its exact optimum in the editor."""

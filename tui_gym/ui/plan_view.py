@@ -55,29 +55,19 @@ class PlanView(MapEditingView):
 
     SCOPED_CSS = False
     DEFAULT_CSS = """
-    PlanView { height: 1fr; padding: 0 0 0 1; }
-    PlanView #plan-controls { height: 1; }
-    PlanView #plan-controls Button { min-width: 0; margin-right: 1; padding: 0; }
     PlanView #plan-controls #plan-run { width: 9; }
     /* At 80x24 the row drops Improve and Converge (u and c, in the key bar) so that
        Restart and the speed fit. */
     Screen.compact PlanView #plan-improve, Screen.compact PlanView #plan-converge {
         display: none; }
-    PlanView #plan-speed { width: auto; min-width: 5; padding: 0 1; color: $text-accent;
-                           text-style: bold; }
+    PlanView #plan-speed { min-width: 5; }
     PlanView #plan-knobs { height: 1; }
     PlanView #plan-knobs Label { padding: 0 1; color: $text-muted; }
     PlanView #plan-knobs Input { width: 12; height: 1; border: none; padding: 0 1; }
     PlanView #plan-knobs Input.-invalid { color: $text-error; }
-    PlanView #plan-body { height: 1fr; scrollbar-size-vertical: 1; }
-    PlanView #plan-heatmap-box { height: auto; border: round $primary-background-lighten-2;
-                                 border-title-color: $text-muted;
-                                 border-subtitle-color: $text-disabled; }
     PlanView #plan-heatmap-box:focus-within { border: round $accent; }
     PlanView #plan-values, PlanView #plan-lines { display: none; }
     PlanView #plan-values.-shown, PlanView #plan-lines.-shown { display: block; }
-    PlanView #plan-editor { display: none; }
-    PlanView.-mapping #plan-editor { display: block; }
     """
 
     BINDINGS: ClassVar[list[BindingType]] = [
@@ -113,12 +103,12 @@ class PlanView(MapEditingView):
     def compose(self) -> ComposeResult:
         self._run = Button("▶ Run", id="plan-run", variant="success", compact=True,
                            tooltip="Run the method at the chosen speed, or pause (space)")
-        self._speed = Label(SPEEDS[3][0], id="plan-speed")
+        self._speed = Label(SPEEDS[3][0], id="plan-speed", classes="speed")
         self._heatmap = HeatmapView(id="plan-heatmap")
         self._values = HeatmapView(id="plan-values")
         self._lines = ValueLines(id="plan-lines")
         self._status = PlanStatus(id="plan-status")
-        with Horizontal(id="plan-controls"):
+        with Horizontal(id="plan-controls", classes="controls"):
             yield self._run
             yield Button("1 step", id="plan-step", compact=True, tooltip="One sweep (n)")
             yield Button("Improve", id="plan-improve", compact=True,
@@ -139,7 +129,7 @@ class PlanView(MapEditingView):
         yield self._status
         with VerticalScroll(id="plan-body"):
             yield MapEditor(id="plan-editor")
-            with Vertical(id="plan-heatmap-box"):
+            with Vertical(id="plan-heatmap-box", classes="heatmap-box"):
                 yield self._heatmap
             yield self._values
             yield self._lines
@@ -190,7 +180,7 @@ class PlanView(MapEditingView):
             self.focus_target = session.game.layout.default_focus(session.env_kwargs)
             self._heatmap.show_message(f"Building {session.game.title}'s model…")
         self._build_model(session, key)
-        self._sync_editor()
+        self.follow_map()
 
     @work(thread=True, exclusive=True, group="plan-model")
     def _build_model(self, session: Session, key: Any) -> None:
@@ -226,8 +216,7 @@ class PlanView(MapEditingView):
 
     # --- drawing -------------------------------------------------------------------
     def _published(self) -> None:
-        """Called on the planner's thread after a command: ask for a drawing (posting a
-        message is safe from any thread)."""
+        """On the planner's thread after a command: ask for a drawing (safe from any thread)."""
         self.post_message(self.Published())
 
     def on_plan_view_published(self, message: Published) -> None:
@@ -361,10 +350,8 @@ class PlanView(MapEditingView):
 
     def _redraw(self) -> None:
         """Draw the latest snapshot now (a change of the view's own, not the planner's)."""
-        if self.runner is not None:
-            snapshot = self.runner.latest
-            self._shown_version = snapshot.version
-            self.show_snapshot(snapshot)
+        self._shown_version = -1
+        self._poll()
 
     def action_edit_knobs(self) -> None:
         self.query_one("#plan-gamma", Input).focus()
@@ -413,11 +400,3 @@ class PlanView(MapEditingView):
             return False
         self.call_after_refresh(self.start_editor().focus_canvas)
         return True
-
-    def _sync_editor(self) -> None:
-        if not self.editing_map:
-            return
-        if not self.session.game.editable:
-            self.remove_class("-mapping")
-            return
-        self.show_editor()

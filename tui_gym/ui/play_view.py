@@ -19,6 +19,7 @@ from tui_gym.games.base import Advice
 from tui_gym.games.words import format_reward, interval_text, plural, signed
 from tui_gym.session.play import HumanGame, PlayError, PlayStep, Scorecard
 from tui_gym.ui.exact_figures import LatestOnly
+from tui_gym.ui.map_editing import SessionView
 from tui_gym.ui.widgets.board_kinds import board_class
 from tui_gym.ui.widgets.boards import Board
 from tui_gym.ui.widgets.scoreboard import Scoreboard
@@ -33,6 +34,11 @@ WATCH_SEED_OFFSET = 1  # the watched agent's game: seeded apart from the person'
 COMPUTING = "its exact figures are being computed"  # until the first of them come
 WATCHING = "Agent playing — press any key to take over"
 TONE_COLOURS = {"good": "$text-success", "even": "$text-warning", "bad": "$text-error"}
+# The modes `c` and `i` switch: the attribute, and what switching it on says.
+MODES = {
+    "coach": ("coach_on", "Coach on: each move is judged against the exact optimum."),
+    "advice": ("show_advice", "Advice on: what the exact optimum and the agent would do here."),
+}
 
 
 class StatusLines(Vertical):
@@ -99,7 +105,7 @@ def _chain(session: Any) -> tuple[Any, ...]:
     return (session.env_id, tuple(sorted(session.env_kwargs.items())), session.applied)
 
 
-class PlayView(Vertical):
+class PlayView(SessionView):
     """Play the game yourself: the board, what happened, and the running tally."""
 
     SCOPED_CSS = False  # unscoped, so that `Screen.compact ...` rules can match
@@ -127,10 +133,9 @@ class PlayView(Vertical):
     """
 
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("c", "toggle_coach", "Coach", tooltip="Judge each move against the optimum"),
-        Binding(
-            "i", "toggle_advice", "Advice", tooltip="What the exact optimum and the agent would do"
-        ),
+        Binding("c", "mode('coach')", "Coach", tooltip="Judge each move against the optimum"),
+        Binding("i", "mode('advice')", "Advice",
+                tooltip="What the exact optimum and the agent would do"),
         # "a" where the board leaves it free (the grid board walks left on it): "A" always.
         Binding("a,A", "watch_agent", "Watch agent", tooltip="Let the greedy agent play"),
     ]
@@ -190,10 +195,6 @@ class PlayView(Vertical):
 
     def on_hide(self) -> None:
         self.stop_watching(restore=True)
-
-    @property
-    def session(self) -> Session:
-        return self.app.session  # type: ignore[attr-defined, no-any-return]
 
     @property
     def play_seed(self) -> int:
@@ -379,9 +380,7 @@ class PlayView(Vertical):
         title = f"[b]{escape(session.game.title)}[/]  [$text-muted]wrappers:[/] " + (
             f"[i $text-accent]{escape(chain)}[/]" if chain else "[$text-muted]none[/]"
         )
-        modes = [
-            name for name, on in (("coach", self.coach_on), ("advice", self.show_advice)) if on
-        ]
+        modes = [mode for mode, (attribute, _) in MODES.items() if getattr(self, attribute)]
         if modes:
             title += "  [$text-success]" + escape(" · ".join(f"{m} on" for m in modes)) + "[/]"
         if self.recording_label:
@@ -406,7 +405,10 @@ class PlayView(Vertical):
         detail = ""
         if game is not None and last is not None:
             parts = [self._verdict] if self._verdict else []
-            parts.append(f"observation: {self._observation_text(last)}")
+            # In the game's words, or raw (cut short) when wrappers reshaped it.
+            seen = game.game.states.describe(last.observation, self.session.env_kwargs)
+            cut = len(seen) > OBSERVATION_CHARS
+            parts.append(f"observation: {seen[: OBSERVATION_CHARS - 1] + '…' if cut else seen}")
             progress = game.game.narrator.progress_text(last, game.first_info)
             if progress:
                 parts.append(progress)
@@ -443,22 +445,16 @@ class PlayView(Vertical):
         values = ", ".join(f"{name(a)} {signed(float(v), 3)}" for a, v in enumerate(q))
         return f"agent: {' or '.join(name(a) for a in ties)} (Q {values})"
 
-    def action_toggle_advice(self) -> None:
-        self.show_advice = not self.show_advice
-        self._toggled("Advice on: what the exact optimum and the agent would do here."
-                      if self.show_advice else "Advice off.")
-
-    def action_toggle_coach(self) -> None:
-        self.coach_on = not self.coach_on
-        self._toggled("Coach on: each move is judged against the exact optimum."
-                      if self.coach_on else "Coach off.")
-
-    def _toggled(self, message: str) -> None:
+    def action_mode(self, mode: str) -> None:
+        """Switch one of the `MODES` on or off."""
+        attribute, said = MODES[mode]
+        on = not getattr(self, attribute)
+        setattr(self, attribute, on)
         self._verdict = ""
         self._show_title()
         if not self.watching:
             self._show_status()
-        self.notify(message, timeout=3)
+        self.notify(said if on else f"{mode.capitalize()} off.", timeout=3)
 
     # --- the scoreboard --------------------------------------------------------
     def refresh_agent_figures(self) -> None:
@@ -612,12 +608,6 @@ class PlayView(Vertical):
         self._show_board(self.agent_game)
         self._hint = ""
         self.query_one(StatusLines).show(Content(WATCHING), detail, tone=tone)
-
-    def _observation_text(self, last: PlayStep) -> str:
-        """The observation in the game's words, or raw (cut short) when wrappers reshaped it."""
-        assert self.game is not None
-        text = self.game.game.states.describe(last.observation, self.session.env_kwargs)
-        return text if len(text) <= OBSERVATION_CHARS else text[: OBSERVATION_CHARS - 1] + "…"
 
     def _show_tally(self) -> None:
         game = self.game

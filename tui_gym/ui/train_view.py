@@ -46,17 +46,6 @@ class TrainView(MapEditingView):
     # Not scoped: the `Screen.compact ...` rules must match from the screen down.
     SCOPED_CSS = False
     DEFAULT_CSS = """
-    TrainView {
-        height: 1fr;
-        padding: 0 0 0 1;
-    }
-    TrainView #train-body {
-        height: 1fr;
-        scrollbar-size-vertical: 1;
-    }
-    TrainView #train-controls {
-        height: 1;
-    }
     TrainView #train-engine {
         width: 1fr;
         height: 1;
@@ -65,17 +54,8 @@ class TrainView(MapEditingView):
         text-wrap: nowrap;
         text-overflow: ellipsis;
     }
-    TrainView #train-controls Button {
-        min-width: 0;
-        margin-right: 1;
-        padding: 0;
-    }
     TrainView #train-speed {
-        width: auto;
         min-width: 8;
-        padding: 0 1;
-        color: $text-accent;
-        text-style: bold;
     }
     TrainView #train-top, TrainView #train-middle {
         height: auto;
@@ -104,21 +84,14 @@ class TrainView(MapEditingView):
         min-height: 3;
         padding: 0 1;
     }
-    TrainView #train-step, TrainView #train-editor {
+    TrainView #train-step {
         display: none;
     }
-    TrainView #train-board-box.-shown, TrainView.-animated #train-step,
-    TrainView.-mapping #train-editor {
+    TrainView #train-board-box.-shown, TrainView.-animated #train-step {
         display: block;
     }
     TrainView.-stepping #train-board-box {
         border-left: thick $accent;
-    }
-    TrainView #train-heatmap-box {
-        height: auto;
-        border: round $primary-background-lighten-2;
-        border-title-color: $text-muted;
-        border-subtitle-color: $text-disabled;
     }
     TrainView #train-heatmap-box:focus-within {
         border: round $primary;
@@ -193,7 +166,7 @@ class TrainView(MapEditingView):
         self._episode = Button("1 episode", id="btn-episode", compact=True,
                                tooltip="Train for exactly one episode (.)",
                                action="app.one_episode")
-        self._speed = Label("", id="train-speed")
+        self._speed = Label("", id="train-speed", classes="speed")
         self.progress = ProgressLine(id="train-progress")
         self._engine = Label("", id="train-engine", markup=False)
         self.stats = StatsPanel(id="train-stats")
@@ -203,11 +176,11 @@ class TrainView(MapEditingView):
         self._prediction.display = session.predicts
         self._board_box = Vertical(id="train-board-box")
         self._caption = Label("", id="train-board-caption")
-        self._heatmap_box = Vertical(id="train-heatmap-box")
+        self._heatmap_box = Vertical(id="train-heatmap-box", classes="heatmap-box")
         self.heatmap = HeatmapView(id="train-heatmaps")
         self.step_panel = StepPanel(id="train-step")
 
-        with Horizontal(id="train-controls"):
+        with Horizontal(id="train-controls", classes="controls"):
             yield self._toggle
             yield self._episode
             yield Button("Reset", id="btn-reset", variant="error", compact=True,
@@ -271,13 +244,7 @@ class TrainView(MapEditingView):
         self._exact.drop()  # figures of what was shown before never reach the screen
         self.show_speed(runner.speed.name)
         self.show_snapshot(runner.latest, runner)
-        if self.editing_map and (editor := self.editor) is not None:
-            if not game.editable:
-                self.close_editor()
-            elif editor.grid_map is None or self._editor_game != game.name:
-                self.start_editor()
-            else:
-                self.show_editor()
+        self.follow_map()
 
     # --- the map editor ----------------------------------------------------
     async def open_editor(self) -> bool:
