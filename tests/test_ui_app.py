@@ -31,14 +31,16 @@ async def test_keys_key_bar_help_wrappers_the_game_picker_and_the_gridworld_pane
     reason, a wrapper that changes the observations resets the agent with a notice, and
     the picker switches game. Then, on the GridWorld the picker switched to: an invalid
     parameter is marked and not applied, ticking a wrapper rebuilds and keeps the agent,
-    the size changes from the panel, and inputs capture typing instead of app keys."""
-    app = TuiGymApp(Session("blackjack", seed=0))
+    the size changes from the panel, and inputs capture typing instead of app keys. The
+    header shows the seed in use throughout."""
+    app = TuiGymApp(Session("blackjack", seed=48_213))
     async with app.run_test(size=(120, 40)) as pilot:
         # Views and games switch by key; the key bar (a kept picture) and the keyboard
         # follow the view.
         switcher = app.query_one("#views", ContentSwitcher)
         assert switcher.current == "play"
         await pilot.pause()
+        assert app.sub_title == "Blackjack · seed 48213"
         play_keys = screen_lines(app)[-1]
         assert "Deal" in play_keys and "Start/Pause" not in play_keys
         await pilot.press("t")
@@ -54,7 +56,7 @@ async def test_keys_key_bar_help_wrappers_the_game_picker_and_the_gridworld_pane
         assert app.focused is app.play_view.board
         await pilot.press("g")  # a new game's session is built off the event loop
         await wait_for(pilot, lambda: app.session.game.name == "gridworld", "GridWorld")
-        assert app.sub_title == "GridWorld · seed 0"
+        assert app.sub_title == "GridWorld · seed 48213"  # another game, the same seed
         await pilot.press("b")
         await wait_for(pilot, lambda: app.session.game.name == "blackjack", "Blackjack")
 

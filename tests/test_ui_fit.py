@@ -34,27 +34,14 @@ def key_bar_entries(app: TuiGymApp) -> list[str]:
     return [part.strip() for part in line.split("  ") if part.strip()]
 
 
-async def test_the_dyna_q_form_and_its_errors_fit_whole() -> None:
+async def test_the_key_bar_the_map_key_the_board_caption_and_the_dyna_q_form_in_blackjack(
+) -> None:
+    """One app for facts about one game: the key bar leaves keys out whole and keeps help;
+    a game without a map offers no `m` (and `m` does nothing); the board's caption takes
+    the lines the state needs; Dyna-Q's form and its errors fit whole."""
     session = Session("blackjack", seed=0)
     session.set_algorithm("dyna-q")
     app = TuiGymApp(session, runner="thread")
-    async with app.run_test(size=SIZE) as pilot:
-        await pilot.press("t")
-        await pilot.pause()
-        form = app.train_view.form
-        form.input("episodes").value = "1234567890"
-        await wait_for(pilot, lambda: bool(form.error("episodes")), "the error")
-        text = screen_text(app)
-        assert "[0, 1000]" in text and "[1, 10⁹]" in text
-        assert form.error("episodes") == "'1234567890' is above 1,000,000,000"
-        assert "'1234567890' is above" in text and "1,000,000,000" in text  # on two lines
-
-
-async def test_the_key_bar_the_map_key_and_the_board_caption_in_blackjack() -> None:
-    """One app for facts about one game: the key bar leaves keys out whole and keeps help;
-    a game without a map offers no `m` (and `m` does nothing); the board's caption takes
-    the lines the state needs."""
-    app = TuiGymApp(Session("blackjack", seed=0), runner="thread")
     async with app.run_test(size=SIZE) as pilot:
         await pilot.pause()
         assert not app.check_action("edit_map", ())
@@ -83,6 +70,14 @@ async def test_the_key_bar_the_map_key_and_the_board_caption_in_blackjack() -> N
         assert len(text.splitlines()[-1]) > width, text
         lines = sum(len(textwrap.wrap(line, width)) for line in text.splitlines())
         assert caption.content_region.height >= lines
+
+        form = app.train_view.form
+        form.input("episodes").value = "1234567890"
+        await wait_for(pilot, lambda: bool(form.error("episodes")), "the error")
+        text = screen_text(app)
+        assert "[0, 1000]" in text and "[1, 10⁹]" in text
+        assert form.error("episodes") == "'1234567890' is above 1,000,000,000"
+        assert "'1234567890' is above" in text and "1,000,000,000" in text  # on two lines
 
         await pilot.press("g")
         await wait_for(pilot, lambda: app.session.game.name == "gridworld", "GridWorld")

@@ -29,8 +29,10 @@ def burst(app: App, *keys: str) -> None:
         deliver_key(app, event)
 
 
-async def test_a_burst_in_the_train_view_edits_the_field_and_applies_on_enter() -> None:
-    app = TuiGymApp(Session("blackjack", seed=0), runner="thread")
+async def test_a_burst_edits_a_train_view_field_then_a_wrapper_field_applying_on_enter(
+) -> None:
+    """One app, in turn: a burst in the Train view's form, then one in a wrapper's field."""
+    app = TuiGymApp(Session("frozenlake", seed=0), runner="thread")
     async with app.run_test(size=(120, 40)) as pilot:
         await pilot.press("t")
         await pilot.pause()
@@ -47,10 +49,7 @@ async def test_a_burst_in_the_train_view_edits_the_field_and_applies_on_enter() 
         assert field.value == "0.25" and not app.train_view.form.error("learning_rate")
         assert app.runner.latest.episodes == episodes, "the '.' was typed, not pressed"
 
-
-async def test_a_burst_in_a_wrapper_field_applies_what_was_typed() -> None:
-    app = TuiGymApp(Session("frozenlake", seed=0), runner="thread")
-    async with app.run_test(size=(120, 40)) as pilot:
+        # A wrapper's field: what was typed applies on enter.
         await wait_until(pilot, lambda: app.side_panel.wrappers_listed, "the wrapper rows")
         row = app.query_one("#wrapper-TimeLimit", WrapperRow)
         row.query_one(Checkbox).value = True

@@ -4,7 +4,6 @@ the app, and at full size beside the map editor, with an edit while value iterat
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from tests.hosts import VIEW_SIZE, PlanHost
 from tests.waiting import press_busy, wait_busy
@@ -54,19 +53,20 @@ async def test_the_plan_view_by_its_keys_at_80x24() -> None:
         assert app.current_view == "play"
 
 
-@pytest.mark.parametrize("view_name", ["plan", "book"])
-async def test_the_keyboard_asked_for_while_a_view_is_built_reaches_it_once_built(
-    view_name: str,
-) -> None:
+async def test_the_keyboard_asked_for_while_a_view_is_built_reaches_it_once_built() -> None:
     """A burst such as `P` then a key that hands the keyboard to the view shown: the Plan
-    or Book view, mounted but not yet composed, takes it once it is (no error on the way)."""
+    view, then the Book view, each mounted but not yet composed, takes it once it is (no
+    error on the way)."""
     app = TuiGymApp(Session("corner-grid", seed=0))
     async with app.run_test(size=(80, 24)) as pilot:
-        app.action_show_view(view_name)
-        app.action_focus_view()  # before the view has composed its widgets
-        view = app._views[view_name]
-        await wait_busy(pilot, lambda: app.focused is not None
-                        and view in app.focused.ancestors, "the view with the keyboard")
+        for view_name in ("plan", "book"):
+            assert view_name not in app._views, f"the {view_name} view is built only when shown"
+            app.action_show_view(view_name)
+            app.action_focus_view()  # before the view has composed its widgets
+            view = app._views[view_name]
+            await wait_busy(pilot, lambda v=view: app.focused is not None
+                            and v in app.focused.ancestors,
+                            f"the {view_name} view with the keyboard")
 
 
 async def test_an_edit_while_value_iteration_runs_plans_on_from_the_values() -> None:
