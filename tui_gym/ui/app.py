@@ -74,6 +74,16 @@ IDLE_TIMEOUT = 10.0  # and how long to look before giving up
 LOADING_NOTICE = 0.3  # seconds a new game's build takes before the app says it is loading
 
 
+# Each view: its name, its key, its label and what it shows (its binding and its palette command).
+VIEWS = (
+    ("play", "p", "Play", "Play the game yourself"),
+    ("train", "t", "Train", "Watch the agent learn"),
+    ("compare", "v", "Compare", "Compare learners across seeds; the runs recorded for this game"),
+    ("plan", "P", "Plan", "Policy evaluation, policy iteration and value iteration on the "
+                          "game's exact model, sweep by sweep"),
+    ("book", "f", "Book", "Sutton & Barto's figures: learners run over seeds, the book's claims "
+                          "checked"),
+)
 GAME_KEYS_A_LINE = 8  # the help's game keys, a line of at most this many
 
 
@@ -101,16 +111,10 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         Binding("full_stop", "one_episode", "1 episode", key_display="."),
         Binding("n", "one_step", "1 step", tooltip="One transition, explained step by step"),
         Binding("x", "request_reset", "Reset agent"),
-        Binding("plus,equals_sign", "faster", "Faster", key_display="+"),
-        Binding("minus,underscore", "slower", "Slower", key_display="-"),
-        Binding("p", "show_view('play')", "Play", tooltip="Play the game yourself"),
-        Binding("t", "show_view('train')", "Train", tooltip="Watch the agent learn"),
-        Binding("v", "show_view('compare')", "Compare",
-                tooltip="Compare learners across seeds; the runs recorded for this game"),
-        Binding("P", "show_view('plan')", "Plan",
-                tooltip="Plan: policy evaluation, policy and value iteration, sweep by sweep"),
-        Binding("f", "show_view('book')", "Book",
-                tooltip="The book's figures: learners run over seeds, the claims checked"),
+        Binding("plus,equals_sign", "speed(1)", "Faster", key_display="+"),
+        Binding("minus,underscore", "speed(-1)", "Slower", key_display="-"),
+        *(Binding(key, f"show_view('{view}')", label, tooltip=what)
+          for view, key, label, what in VIEWS),
         Binding("question_mark,f1", "help", "Help", key_display="?"),
         Binding("q", "quit", "Quit"),
         Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
@@ -123,15 +127,13 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         Binding("ctrl+r", "toggle_recording", "Record", show=False),
     ]
     TRAIN_ACTIONS = frozenset(
-        {"toggle_training", "one_episode", "one_step", "reset_agent", "request_reset", "faster",
-         "slower"}
+        {"toggle_training", "one_episode", "one_step", "reset_agent", "request_reset", "speed"}
     )
 
     def __init__(
         self,
         session: Session | None = None,
         *,
-        play_seed: int | None = None,
         runner: str = "thread",
         tune_gc: bool = False,
         gc_seconds: tuple[float, float] | None = None,
@@ -157,7 +159,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self._signals: list[int] = []
         self.session = session or Session()
         self.runner = make_runner(self.session, runner)
-        self.play_seed = self.session.seed if play_seed is None else play_seed
+        self.play_seed = self.session.seed
         self._sessions: dict[str, Session] = {self.session.game.name: self.session}
         self._building: set[str] = set()  # games whose new session a worker builds
         self._fresh: set[str] = set()  # games whose session is new, not yet shown
@@ -312,7 +314,6 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     def _show_session(self) -> None:
         """Every view, and the keys the game offers (`m` for a map), follow the session."""
         self._show_title()
-        self._last_version = -1
         self.play_view.reload()
         self._reload_train()
         if (compare := self.compare_view) is not None:
@@ -683,15 +684,11 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         # may hand its agent back later, into the old agent: the reset wins.
         self.runner.pause(wait=False)
         self.session.reset_agent()
-        self._last_version = -1
         self._reload_train()
         self.notify("Agent reset: empty Q-table, fresh statistics.")
 
-    def action_faster(self) -> None:
-        self._show_speed(self.runner.faster().name)
-
-    def action_slower(self) -> None:
-        self._show_speed(self.runner.slower().name)
+    def action_speed(self, step: int) -> None:
+        self._show_speed((self.runner.faster() if step > 0 else self.runner.slower()).name)
 
     def _show_speed(self, name: str) -> None:
         if (view := self._train_ready()) is not None:
@@ -700,6 +697,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     def _reload_train(self) -> None:
         """Show the session afresh in the Train view (if it is not mounted yet, it will
         read the session when it is)."""
+        self._last_version = -1
         if (view := self._train_ready()) is not None:
             view.reload()
 
@@ -923,7 +921,6 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
 
     def _use_algorithm(self, name: str) -> None:
         self.session.set_algorithm(name)
-        self._last_version = -1
         self._reload_train()
         self.side_panel.reload()
         cls = self.session.learner_class
@@ -1010,15 +1007,9 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         for command in super().get_system_commands(screen):
             if command.title not in ("Keys", "Screenshot"):
                 yield command
-        commands = [
-            ("Play view", "Play the game yourself", lambda: self.action_show_view("play")),
-            ("Train view", "Watch the agent learn", lambda: self.action_show_view("train")),
-            ("Compare view", "Compare learners across seeds; this game's recorded runs",
-             lambda: self.action_show_view("compare")),
-            ("Plan view", "Policy evaluation, policy iteration and value iteration on the "
-             "game's exact model, sweep by sweep (P)", lambda: self.action_show_view("plan")),
-            ("Book view", "Sutton & Barto's figures: learners run over seeds, the book's claims "
-             "checked (f)", lambda: self.action_show_view("book")),
+        commands: list[tuple[str, str, Callable[[], object]]] = [
+            *((f"{label} view", f"{what} ({key})", partial(self.action_show_view, view))
+              for view, key, label, what in VIEWS),
             *(
                 (f"Game: {g.title}", g.description,
                  lambda name=g.name: self.action_switch_game(name))
@@ -1128,16 +1119,13 @@ def gc_seconds_from_env() -> tuple[float, float] | None:
     text = os.environ.get(GC_SECONDS_ENV, "").strip()
     if not text:
         return None
-    try:
+    with contextlib.suppress(ValueError):
         young, full = (float(part) for part in text.split(","))
-    except ValueError:
-        young = full = -1.0
-    if not (0 < young < 1e6 and 0 < full < 1e6):
-        raise ValueError(
-            f"{GC_SECONDS_ENV} must be two positive numbers of seconds, "
-            f"e.g. 0.5,20; got {text!r}"
-        )
-    return young, full
+        if 0 < young < 1e6 and 0 < full < 1e6:
+            return young, full
+    raise ValueError(
+        f"{GC_SECONDS_ENV} must be two positive numbers of seconds, e.g. 0.5,20; got {text!r}"
+    )
 
 
 EXIT_CRASH = 1

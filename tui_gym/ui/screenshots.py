@@ -11,7 +11,6 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import Any
 from unittest import mock
 
 from textual.binding import Binding
@@ -102,20 +101,6 @@ async def _step_by_step(app, pilot, steps: int = 2) -> None:
     await pilot.pause()
 
 
-def _record_comparison(db: Path, spec: Any) -> None:
-    """Record a comparison into `db`, its runs' times pinned to nominal ones."""
-    from tui_gym.core.experiments import RunHistory
-    from tui_gym.session.experiments.compare import run_compare
-
-    with RunHistory(db) as history:
-        # One batch per algorithm on this thread: the same curves on any number of cores.
-        run_compare(spec, history=history, processes=0)
-        history._write(lambda conn: conn.execute(
-            "UPDATE runs SET started_at = ? + 60 * id, ended_at = ? + 60 * id + 30",
-            (NOMINAL_START, NOMINAL_START),
-        ))
-
-
 @contextmanager
 def _utc() -> Iterator[None]:
     """Times shown in UTC, whatever the machine's zone."""
@@ -128,7 +113,9 @@ def _utc() -> Iterator[None]:
 
 
 async def _compare(app, pilot) -> None:
-    from tui_gym.session.experiments.compare import CompareSpec
+    """Two learners compared into a scratch history, their runs' times pinned to nominal ones."""
+    from tui_gym.core.experiments import RunHistory
+    from tui_gym.session.experiments.compare import CompareSpec, run_compare
 
     session = app.session
     settings, episodes = session.game.demo_compare or ({}, 5_000)
@@ -136,7 +123,13 @@ async def _compare(app, pilot) -> None:
                        episodes=episodes, settings=settings, first_seed=session.seed)
     with tempfile.TemporaryDirectory() as folder, _utc():
         db = Path(folder) / "runs.db"
-        _record_comparison(db, spec)
+        with RunHistory(db) as history:
+            # One batch per algorithm on this thread: the same curves on any number of cores.
+            run_compare(spec, history=history, processes=0)
+            history._write(lambda conn: conn.execute(
+                "UPDATE runs SET started_at = ? + 60 * id, ended_at = ? + 60 * id + 30",
+                (NOMINAL_START, NOMINAL_START),
+            ))
         app.db = db  # the view reads it when it is first shown
         await pilot.press("v")
         await pilot.pause()
