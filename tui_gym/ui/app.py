@@ -519,30 +519,27 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self, game: Game, current: Session, otherwise: Callable[[], None] | None
     ) -> None:
         """A new session for `game` (in a worker thread), handed to the event loop."""
+        built: Session | Exception
         try:
-            session = Session(game.env_id, seed=current.seed, engine=current.engine)
+            built = Session(game.env_id, seed=current.seed, engine=current.engine)
         except Exception as exc:  # noqa: BLE001  (a game that cannot be built is said)
-            self.call_from_thread(self._not_built, game, exc, otherwise)
-        else:
-            self.call_from_thread(self._built, game, session, otherwise)
+            built = exc
+        self.call_from_thread(self._built, game, built, otherwise)
 
     def _built(
-        self, game: Game, session: Session, otherwise: Callable[[], None] | None
+        self, game: Game, built: Session | Exception, otherwise: Callable[[], None] | None
     ) -> None:
         self._building.discard(game.name)
-        if self._sessions.setdefault(game.name, session) is session:  # not loaded meanwhile
+        if isinstance(built, Exception):
+            self.notify(f"{game.title} could not start: {visible(str(built), 200)}",
+                        severity="error")
+            if otherwise is not None:
+                otherwise()
+            return
+        if self._sessions.setdefault(game.name, built) is built:  # not loaded meanwhile
             self._fresh.add(game.name)
         if self._wanted_game == game.name:  # no other game asked for meanwhile
             self.switch_game(game, otherwise)
-
-    def _not_built(
-        self, game: Game, exc: Exception, otherwise: Callable[[], None] | None
-    ) -> None:
-        self._building.discard(game.name)
-        self.notify(f"{game.title} could not start: {visible(str(exc), 200)}",
-                    severity="error")
-        if otherwise is not None:
-            otherwise()
 
     def _say_loading(self, game: Game) -> None:
         if game.name in self._building and self._wanted_game == game.name:
