@@ -111,8 +111,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         Binding("full_stop", "one_episode", "1 episode", key_display="."),
         Binding("n", "one_step", "1 step", tooltip="One transition, explained step by step"),
         Binding("x", "request_reset", "Reset agent"),
-        Binding("plus,equals_sign", "speed(1)", "Faster", key_display="+"),
-        Binding("minus,underscore", "speed(-1)", "Slower", key_display="-"),
+        Binding("plus,equals_sign", "faster", "Faster", key_display="+"),
+        Binding("minus,underscore", "slower", "Slower", key_display="-"),
         *(Binding(key, f"show_view('{view}')", label, tooltip=what)
           for view, key, label, what in VIEWS),
         Binding("question_mark,f1", "help", "Help", key_display="?"),
@@ -127,7 +127,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         Binding("ctrl+r", "toggle_recording", "Record", show=False),
     ]
     TRAIN_ACTIONS = frozenset(
-        {"toggle_training", "one_episode", "one_step", "reset_agent", "request_reset", "speed"}
+        {"toggle_training", "one_episode", "one_step", "reset_agent", "request_reset", "faster",
+         "slower"}
     )
 
     def __init__(
@@ -684,8 +685,11 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self._reload_train()
         self.notify("Agent reset: empty Q-table, fresh statistics.")
 
-    def action_speed(self, step: int) -> None:
-        self._show_speed((self.runner.faster() if step > 0 else self.runner.slower()).name)
+    def action_faster(self) -> None:
+        self._show_speed(self.runner.faster().name)
+
+    def action_slower(self) -> None:
+        self._show_speed(self.runner.slower().name)
 
     def _show_speed(self, name: str) -> None:
         if (view := self._train_ready()) is not None:
