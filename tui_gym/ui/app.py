@@ -74,6 +74,16 @@ IDLE_TIMEOUT = 10.0  # and how long to look before giving up
 LOADING_NOTICE = 0.3  # seconds a new game's build takes before the app says it is loading
 
 
+# Each view: its name, its key, its label and what it shows (its binding and its palette command).
+VIEWS = (
+    ("play", "p", "Play", "Play the game yourself"),
+    ("train", "t", "Train", "Watch the agent learn"),
+    ("compare", "v", "Compare", "Compare learners across seeds; the runs recorded for this game"),
+    ("plan", "P", "Plan", "Policy evaluation, policy iteration and value iteration on the "
+                          "game's exact model, sweep by sweep"),
+    ("book", "f", "Book", "Sutton & Barto's figures: learners run over seeds, the book's claims "
+                          "checked"),
+)
 GAME_KEYS_A_LINE = 8  # the help's game keys, a line of at most this many
 
 
@@ -103,14 +113,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         Binding("x", "request_reset", "Reset agent"),
         Binding("plus,equals_sign", "faster", "Faster", key_display="+"),
         Binding("minus,underscore", "slower", "Slower", key_display="-"),
-        Binding("p", "show_view('play')", "Play", tooltip="Play the game yourself"),
-        Binding("t", "show_view('train')", "Train", tooltip="Watch the agent learn"),
-        Binding("v", "show_view('compare')", "Compare",
-                tooltip="Compare learners across seeds; the runs recorded for this game"),
-        Binding("P", "show_view('plan')", "Plan",
-                tooltip="Plan: policy evaluation, policy and value iteration, sweep by sweep"),
-        Binding("f", "show_view('book')", "Book",
-                tooltip="The book's figures: learners run over seeds, the claims checked"),
+        *(Binding(key, f"show_view('{view}')", label, tooltip=what)
+          for view, key, label, what in VIEWS),
         Binding("question_mark,f1", "help", "Help", key_display="?"),
         Binding("q", "quit", "Quit"),
         Binding("w,W", "focus_wrappers", "Wrappers", tooltip="Focus the wrapper panel"),
@@ -131,7 +135,6 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self,
         session: Session | None = None,
         *,
-        play_seed: int | None = None,
         runner: str = "thread",
         tune_gc: bool = False,
         gc_seconds: tuple[float, float] | None = None,
@@ -157,7 +160,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self._signals: list[int] = []
         self.session = session or Session()
         self.runner = make_runner(self.session, runner)
-        self.play_seed = self.session.seed if play_seed is None else play_seed
+        self.play_seed = self.session.seed
         self._sessions: dict[str, Session] = {self.session.game.name: self.session}
         self._building: set[str] = set()  # games whose new session a worker builds
         self._fresh: set[str] = set()  # games whose session is new, not yet shown
@@ -312,7 +315,6 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     def _show_session(self) -> None:
         """Every view, and the keys the game offers (`m` for a map), follow the session."""
         self._show_title()
-        self._last_version = -1
         self.play_view.reload()
         self._reload_train()
         if (compare := self.compare_view) is not None:
@@ -518,30 +520,27 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         self, game: Game, current: Session, otherwise: Callable[[], None] | None
     ) -> None:
         """A new session for `game` (in a worker thread), handed to the event loop."""
+        built: Session | Exception
         try:
-            session = Session(game.env_id, seed=current.seed, engine=current.engine)
+            built = Session(game.env_id, seed=current.seed, engine=current.engine)
         except Exception as exc:  # noqa: BLE001  (a game that cannot be built is said)
-            self.call_from_thread(self._not_built, game, exc, otherwise)
-        else:
-            self.call_from_thread(self._built, game, session, otherwise)
+            built = exc
+        self.call_from_thread(self._built, game, built, otherwise)
 
     def _built(
-        self, game: Game, session: Session, otherwise: Callable[[], None] | None
+        self, game: Game, built: Session | Exception, otherwise: Callable[[], None] | None
     ) -> None:
         self._building.discard(game.name)
-        if self._sessions.setdefault(game.name, session) is session:  # not loaded meanwhile
+        if isinstance(built, Exception):
+            self.notify(f"{game.title} could not start: {visible(str(built), 200)}",
+                        severity="error")
+            if otherwise is not None:
+                otherwise()
+            return
+        if self._sessions.setdefault(game.name, built) is built:  # not loaded meanwhile
             self._fresh.add(game.name)
         if self._wanted_game == game.name:  # no other game asked for meanwhile
             self.switch_game(game, otherwise)
-
-    def _not_built(
-        self, game: Game, exc: Exception, otherwise: Callable[[], None] | None
-    ) -> None:
-        self._building.discard(game.name)
-        self.notify(f"{game.title} could not start: {visible(str(exc), 200)}",
-                    severity="error")
-        if otherwise is not None:
-            otherwise()
 
     def _say_loading(self, game: Game) -> None:
         if game.name in self._building and self._wanted_game == game.name:
@@ -683,7 +682,6 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         # may hand its agent back later, into the old agent: the reset wins.
         self.runner.pause(wait=False)
         self.session.reset_agent()
-        self._last_version = -1
         self._reload_train()
         self.notify("Agent reset: empty Q-table, fresh statistics.")
 
@@ -700,6 +698,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     def _reload_train(self) -> None:
         """Show the session afresh in the Train view (if it is not mounted yet, it will
         read the session when it is)."""
+        self._last_version = -1
         if (view := self._train_ready()) is not None:
             view.reload()
 
@@ -923,7 +922,6 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
 
     def _use_algorithm(self, name: str) -> None:
         self.session.set_algorithm(name)
-        self._last_version = -1
         self._reload_train()
         self.side_panel.reload()
         cls = self.session.learner_class
@@ -1010,15 +1008,9 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         for command in super().get_system_commands(screen):
             if command.title not in ("Keys", "Screenshot"):
                 yield command
-        commands = [
-            ("Play view", "Play the game yourself", lambda: self.action_show_view("play")),
-            ("Train view", "Watch the agent learn", lambda: self.action_show_view("train")),
-            ("Compare view", "Compare learners across seeds; this game's recorded runs",
-             lambda: self.action_show_view("compare")),
-            ("Plan view", "Policy evaluation, policy iteration and value iteration on the "
-             "game's exact model, sweep by sweep (P)", lambda: self.action_show_view("plan")),
-            ("Book view", "Sutton & Barto's figures: learners run over seeds, the book's claims "
-             "checked (f)", lambda: self.action_show_view("book")),
+        commands: list[tuple[str, str, Callable[[], object]]] = [
+            *((f"{label} view", f"{what} ({key})", partial(self.action_show_view, view))
+              for view, key, label, what in VIEWS),
             *(
                 (f"Game: {g.title}", g.description,
                  lambda name=g.name: self.action_switch_game(name))
@@ -1128,16 +1120,13 @@ def gc_seconds_from_env() -> tuple[float, float] | None:
     text = os.environ.get(GC_SECONDS_ENV, "").strip()
     if not text:
         return None
-    try:
+    with contextlib.suppress(ValueError):
         young, full = (float(part) for part in text.split(","))
-    except ValueError:
-        young = full = -1.0
-    if not (0 < young < 1e6 and 0 < full < 1e6):
-        raise ValueError(
-            f"{GC_SECONDS_ENV} must be two positive numbers of seconds, "
-            f"e.g. 0.5,20; got {text!r}"
-        )
-    return young, full
+        if 0 < young < 1e6 and 0 < full < 1e6:
+            return young, full
+    raise ValueError(
+        f"{GC_SECONDS_ENV} must be two positive numbers of seconds, e.g. 0.5,20; got {text!r}"
+    )
 
 
 EXIT_CRASH = 1

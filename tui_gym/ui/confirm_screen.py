@@ -27,8 +27,8 @@ class ConfirmScreen(ModalScreen[bool]):
     """
 
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("y", "answer(True)", "Yes", show=False),
-        Binding("n,escape", "answer(False)", "No", show=False),
+        Binding("y", "dismiss(True)", "Yes", show=False),
+        Binding("n,escape", "dismiss(False)", "No", show=False),
         Binding("left,up", "app.focus_previous", show=False),
         Binding("right,down", "app.focus_next", show=False),
     ]
@@ -46,12 +46,9 @@ class ConfirmScreen(ModalScreen[bool]):
             yield Static(self.detail, id="confirm-detail", markup=False)
             with Horizontal(id="confirm-buttons"):
                 yield Button(f"{self.confirm_label} (y)", id="confirm-yes", variant="error",
-                             action="screen.answer(True)")
+                             action="screen.dismiss(True)")
                 yield Button("Cancel (esc)", id="confirm-no", variant="primary",
-                             action="screen.answer(False)")
+                             action="screen.dismiss(False)")
 
     def on_mount(self) -> None:
         self.query_one("#confirm-no", Button).focus()
-
-    def action_answer(self, yes: bool) -> None:
-        self.dismiss(yes)

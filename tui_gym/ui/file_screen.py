@@ -54,7 +54,7 @@ class FileScreen(ModalScreen[Path | None]):
     FileScreen Button { margin-left: 2; }
     """
 
-    BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "cancel", "Cancel", show=False)]
+    BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "dismiss", "Cancel", show=False)]
 
     def __init__(
         self, title: str, suggestion: str, perform: Callable[[Path], str | None], *, saving: bool,
@@ -76,7 +76,7 @@ class FileScreen(ModalScreen[Path | None]):
             with Horizontal(id="file-buttons"):
                 yield Button(f"{verb} (enter)", id="file-go", variant="primary",
                              action="screen.go")
-                yield Button("Cancel (esc)", id="file-cancel", action="screen.cancel")
+                yield Button("Cancel (esc)", id="file-cancel", action="screen.dismiss")
 
     def on_mount(self) -> None:
         self._show_target(self.suggestion)
@@ -112,9 +112,6 @@ class FileScreen(ModalScreen[Path | None]):
     def _submitted(self, event: Input.Submitted) -> None:
         event.stop()
         self.action_go()
-
-    def action_cancel(self) -> None:
-        self.dismiss(None)
 
     def action_go(self) -> None:
         text = self.query_one(Input).value

@@ -26,7 +26,7 @@ class HelpScreen(ModalScreen[None]):
     """
 
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("escape,q,question_mark,f1", "dismiss_help", "Close help"),
+        Binding("escape,q,question_mark,f1", "dismiss", "Close help"),
     ]
 
     def __init__(self, sections: list[tuple[str, list[tuple[str, str]]]]) -> None:
@@ -45,6 +45,3 @@ class HelpScreen(ModalScreen[None]):
                     table.add_row(key, text)
                 yield Static(table, classes="help-section")
             yield Static("Press escape (or ?) to close.", id="help-footer")
-
-    def action_dismiss_help(self) -> None:
-        self.dismiss(None)

@@ -28,7 +28,7 @@ class JumpScreen(ModalScreen[int | None]):
     JumpScreen #jump-error { color: $text-error; }
     """
 
-    BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "cancel", "Cancel", show=False)]
+    BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "dismiss", "Cancel", show=False)]
 
     def __init__(self, count: int, current: int, noun: str = "episode") -> None:
         super().__init__()
@@ -63,6 +63,3 @@ class JumpScreen(ModalScreen[int | None]):
             )
             return
         self.dismiss(number)
-
-    def action_cancel(self) -> None:
-        self.dismiss(None)

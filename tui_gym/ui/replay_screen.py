@@ -92,7 +92,7 @@ class ReplayScreen(ModalScreen[None]):
         Binding("N,left_square_bracket", "episode(-1)", "Previous", key_display="N"),
         Binding("j", "ask_episode", "Jump to…"),
         Binding("question_mark,f1", "help", "Help", key_display="?"),
-        Binding("escape", "close", "Close replay", key_display="esc"),
+        Binding("escape", "dismiss", "Close replay", key_display="esc"),
         Binding("q", "app.quit", "Quit"),
     ]
 
@@ -187,9 +187,6 @@ class ReplayScreen(ModalScreen[None]):
 
     def action_help(self) -> None:
         self.app.push_screen(HelpScreen([("Replay", self.key_help())]))
-
-    def action_close(self) -> None:
-        self.dismiss(None)
 
     def key_help(self) -> list[tuple[str, str]]:
         return [

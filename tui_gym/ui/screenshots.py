@@ -11,7 +11,6 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import Any
 from unittest import mock
 
 from textual.binding import Binding
@@ -39,21 +38,31 @@ class Scenario:
     size: tuple[int, int] = SIZE
 
 
-def _pin_timing(session: Session) -> None:
+async def _press(pilot, *keys: str) -> None:
+    """`keys` pressed, and the screen settled."""
+    await pilot.press(*keys)
+    await pilot.pause()
+
+
+def _run(session: Session, episodes: int) -> None:
+    """`episodes` more trained, timed at the nominal rate."""
     trainer = session.trainer
+    trainer.run(episodes=episodes)
     trainer.seconds = trainer.episodes / NOMINAL_EPISODES_PER_SECOND
     trainer._samples.clear()  # the rate over the whole run: the nominal one
     trainer._samples.append((0.0, 0))
     trainer.publish()
 
 
-async def _train_view(app, pilot, episodes: int) -> None:
-    app.session.trainer.run(episodes=episodes)
-    _pin_timing(app.session)
-    await pilot.press("t")
-    await pilot.pause()
+async def _redraw(app, pilot) -> None:
     app.train_view.show_snapshot(app.runner.latest, app.runner)
     await pilot.pause()
+
+
+async def _train_view(app, pilot, episodes: int) -> None:
+    _run(app.session, episodes)
+    await _press(pilot, "t")
+    await _redraw(app, pilot)
 
 
 def _keys_for(board: Board, action: str) -> list[str]:
@@ -80,8 +89,7 @@ async def _play(app, pilot, moves: int = 2) -> None:
         keys = _keys_for(board, action)
         if not keys:
             break
-        await pilot.press(*keys)
-        await pilot.pause()
+        await _press(pilot, *keys)
 
 
 async def _train(app, pilot) -> None:
@@ -92,28 +100,12 @@ async def _train(app, pilot) -> None:
 async def _step_by_step(app, pilot, steps: int = 2) -> None:
     await _train_view(app, pilot, 300)
     for _ in range(steps):  # into the episode, so the board and the panel have history
-        await pilot.press("n")
-        await pilot.pause()
+        await _press(pilot, "n")
         app.runner.wait_idle(10.0)
     await pilot.pause()
-    app.train_view.show_snapshot(app.runner.latest, app.runner)
-    await pilot.pause()
+    await _redraw(app, pilot)
     app.train_view.step_panel.scroll_visible(animate=False)
     await pilot.pause()
-
-
-def _record_comparison(db: Path, spec: Any) -> None:
-    """Record a comparison into `db`, its runs' times pinned to nominal ones."""
-    from tui_gym.core.experiments import RunHistory
-    from tui_gym.session.experiments.compare import run_compare
-
-    with RunHistory(db) as history:
-        # One batch per algorithm on this thread: the same curves on any number of cores.
-        run_compare(spec, history=history, processes=0)
-        history._write(lambda conn: conn.execute(
-            "UPDATE runs SET started_at = ? + 60 * id, ended_at = ? + 60 * id + 30",
-            (NOMINAL_START, NOMINAL_START),
-        ))
 
 
 @contextmanager
@@ -128,7 +120,9 @@ def _utc() -> Iterator[None]:
 
 
 async def _compare(app, pilot) -> None:
-    from tui_gym.session.experiments.compare import CompareSpec
+    """Two learners compared into a scratch history, their runs' times pinned to nominal ones."""
+    from tui_gym.core.experiments import RunHistory
+    from tui_gym.session.experiments.compare import CompareSpec, run_compare
 
     session = app.session
     settings, episodes = session.game.demo_compare or ({}, 5_000)
@@ -136,16 +130,20 @@ async def _compare(app, pilot) -> None:
                        episodes=episodes, settings=settings, first_seed=session.seed)
     with tempfile.TemporaryDirectory() as folder, _utc():
         db = Path(folder) / "runs.db"
-        _record_comparison(db, spec)
+        with RunHistory(db) as history:
+            # One batch per algorithm on this thread: the same curves on any number of cores.
+            run_compare(spec, history=history, processes=0)
+            history._write(lambda conn: conn.execute(
+                "UPDATE runs SET started_at = ? + 60 * id, ended_at = ? + 60 * id + 30",
+                (NOMINAL_START, NOMINAL_START),
+            ))
         app.db = db  # the view reads it when it is first shown
-        await pilot.press("v")
-        await pilot.pause()
+        await _press(pilot, "v")
         view = app.compare_view
         while view is None or len(view.runs) < 2 or app.focused is not view.run_list:
             await pilot.pause()
             view = app.compare_view
-        await pilot.press("space", "down", "space")  # tick both runs
-        await pilot.pause()
+        await _press(pilot, "space", "down", "space")  # tick both runs
         view.run_list.highlighted = None
         await pilot.pause()
 
@@ -153,15 +151,10 @@ async def _compare(app, pilot) -> None:
 async def _map_editor(app, pilot) -> None:
     """Trained a while, then a wall painted on the safe way round, and training on."""
     await _train_view(app, pilot, 4_000)
-    await pilot.press("m")
-    await pilot.pause()
-    for key in ("right", "right", "right", "2"):  # a wall at row 0, col 3
-        await pilot.press(key)
-    await pilot.pause()
-    app.session.trainer.run(episodes=1_000)  # the agent keeps learning on the new map
-    _pin_timing(app.session)
-    app.train_view.show_snapshot(app.runner.latest, app.runner)
-    await pilot.pause()
+    await _press(pilot, "m")
+    await _press(pilot, "right", "right", "right", "2")  # a wall at row 0, col 3
+    _run(app.session, 1_000)  # the agent keeps learning on the new map
+    await _redraw(app, pilot)
     editor = app.train_view.editor
     if editor is not None:
         app.train_view.scroll_to_widget(editor, top=True, animate=False)
@@ -188,8 +181,7 @@ async def _plan(app, pilot, keys: tuple[str, ...], edit: tuple[str, ...] = ()) -
         await pilot.press(key)
         await settled()
     if edit:
-        await pilot.press("m")
-        await pilot.pause()
+        await _press(pilot, "m")
         await pilot.press(*edit)
         await settled()
         view.focus_default()
@@ -215,14 +207,8 @@ async def _book(app, pilot, figure: str) -> None:
 async def _traces(app, pilot) -> None:
     """A few steps into an episode, the heatmap turned to the traces they left."""
     await _step_by_step(app, pilot, steps=6)
-    await pilot.press("E")
-    await pilot.pause()
+    await _press(pilot, "E")
     app.train_view.heatmap.scroll_visible(animate=False)
-    await pilot.pause()
-
-
-async def _press(app, pilot, key: str) -> None:
-    await pilot.press(key)
     await pilot.pause()
 
 
@@ -252,7 +238,8 @@ def _scenarios() -> tuple[Scenario, ...]:
         Scenario("traces.svg", "CliffWalking: Sarsa(λ)'s eligibility traces, six steps in",
                  partial(Session, "cliffwalking", seed=0, algorithm="sarsa-lambda"), _traces),
         Scenario("wrappers.svg", "The wrapper panel in use",
-                 partial(Session, shown.env_id, choices=choices, seed=1), partial(_press, key="w")),
+                 partial(Session, shown.env_id, choices=choices, seed=1),
+                 lambda app, pilot: _press(pilot, "w")),
         Scenario("compare.svg", f"{compared.title}: Q-learning against SARSA over 10 seeds",
                  partial(Session, compared.env_id, seed=0), _compare),
         Scenario("plan.svg", "FrozenLake: value iteration, then a hole painted while it plans",
@@ -265,7 +252,7 @@ def _scenarios() -> tuple[Scenario, ...]:
         Scenario("book.svg", "Figure 8.2: Dyna-Q's planning steps on the Dyna maze, checked",
                  partial(Session, "dyna-maze", seed=0), partial(_book, figure="8.2")),
         Scenario("help.svg", "Every key", partial(Session, first.env_id, seed=0),
-                 partial(_press, key="question_mark")),
+                 lambda app, pilot: _press(pilot, "question_mark")),
         Scenario("compact-80x24.svg", "The compact layout at 80x24",
                  partial(Session, first.env_id, seed=4), _play, size=(80, 24)),
     ]

@@ -104,10 +104,8 @@ class WrapperRow(Vertical):
     DEFAULT_CSS = """
     WrapperRow { height: auto; margin-bottom: 1; }
     WrapperRow .summary { color: $text-muted; padding-left: 4; }
-    WrapperRow .reason { color: $error; padding-left: 4; display: none; }
-    WrapperRow .param-error { color: $error; padding-left: 4; display: none; }
-    WrapperRow .param-error.-shown { display: block; }
-    WrapperRow.-misfit .reason { display: block; }
+    WrapperRow .reason, WrapperRow .param-error { color: $error; padding-left: 4; display: none; }
+    WrapperRow .-shown { display: block; }
     WrapperRow.-misfit Checkbox { color: $text-disabled; }
     Screen.compact WrapperRow .summary { display: none; }
     """
@@ -140,13 +138,10 @@ class WrapperRow(Vertical):
         for param in spec.params:
             yield ParamField(param, values.get(param.name, param.default))
         if self.reason:
-            yield Static(self._reason_text(), classes="reason")
+            yield Static(Text(f"✗ {self.reason}"), classes="reason -shown")
 
     def on_mount(self) -> None:
         self.set_class(bool(self.reason), "-misfit")
-
-    def _reason_text(self) -> Text:
-        return Text(f"✗ {self.reason}" if self.reason else "")
 
     def set_state(self, choice: WrapperChoice | None, reason: str | None) -> None:
         """Show the session's choice for this wrapper and why it does not fit, if so."""
@@ -162,28 +157,25 @@ class WrapperRow(Vertical):
 
     def show_error(self, error: str | None) -> None:
         """Say why a parameter's text is not valid (or clear the message)."""
-        widget = self._line("param-error")
-        if widget is None:
-            if not error:
-                return
-            widget = Static("", classes="param-error")
-            self.mount(widget, before=self._line("reason"))  # above the reason
-        widget.update(Text(error or ""))
-        widget.set_class(bool(error), "-shown")
+        self._say("param-error", error)
 
     def show_reason(self, reason: str | None) -> None:
         self.reason = reason
         self.set_class(bool(reason), "-misfit")
-        widget = self._line("reason")
-        if widget is None:
-            if reason:
-                self.mount(Static(self._reason_text(), classes="reason"))
-        else:
-            widget.update(self._reason_text())
+        self._say("reason", reason and f"✗ {reason}")
 
-    def _line(self, kind: str) -> Static | None:
-        """The row's error or reason line, if it has been made."""
-        return self.query_one_optional(f"WrapperRow > .{kind}", Static)
+    def _say(self, kind: str, text: str | None) -> None:
+        """Show `text` on the row's error or reason line, made the first time it has one."""
+        widget = self.query_one_optional(f"WrapperRow > .{kind}", Static)
+        if widget is None:
+            if not text:
+                return
+            widget = Static(classes=kind)
+            # The error line sits above the reason.
+            before = self.query_one_optional("WrapperRow > .reason") if kind != "reason" else None
+            self.mount(widget, before=before)
+        widget.update(Text(text or ""))
+        widget.set_class(bool(text), "-shown")
 
     def read(self) -> tuple[WrapperChoice | None, str | None]:
         """The choice this row stands for (None when unticked), or the reason it is invalid."""

@@ -40,22 +40,6 @@ from textual.widget import Widget
 STOCK_ENV = "TUI_GYM_STOCK_TEXTUAL"
 PARTS = ("compositor", "resume", "focus", "crash", "ticks", "terminal", "frames")
 
-__all__ = [
-    "PARTS",
-    "STOCK_ENV",
-    "CrashHook",
-    "TerminalGone",
-    "deliver_key",
-    "enabled",
-    "guarded_driver",
-    "in_sight",
-    "main_screen",
-    "terminal_write_failed",
-    "ticked_line",
-    "watch_frames",
-]
-
-
 def enabled(part: str) -> bool:
     """Whether `part` uses Textual's private names (`TUI_GYM_STOCK_TEXTUAL` may turn it off)."""
     stock = {word.strip() for word in os.environ.get(STOCK_ENV, "").lower().split(",")}
@@ -393,21 +377,19 @@ def guarded_driver(base: type[Driver]) -> type[Driver]:
                     self.owner.post_message(TerminalGone())
                     return
 
+        def _unless_gone(self, call: Callable[..., None], *args: Any) -> None:
+            """`call(*args)` while the terminal is there; an OSError says it has gone."""
+            if not self.guard.hung_up():
+                try:
+                    call(*args)
+                except OSError:
+                    self.guard.gone = True
+
         def write(self, data: str) -> None:
-            if self.guard.hung_up():
-                return
-            try:
-                super().write(data)
-            except OSError:
-                self.guard.gone = True
+            self._unless_gone(super().write, data)
 
         def flush(self) -> None:
-            if self.guard.hung_up():
-                return
-            try:
-                super().flush()
-            except OSError:
-                self.guard.gone = True
+            self._unless_gone(super().flush)
 
         def run_input_thread(self) -> None:
             try:
