@@ -186,3 +186,16 @@ async def test_load_says_what_is_wrong_and_asks_before_replacing_a_trained_agent
         await pilot.press("ctrl+o", "enter", "y")
         await pilot.pause()
         assert app.session is not kept and app.session.trainer.episodes == 50
+
+
+async def test_the_last_name_is_suggested_again_for_a_game_whose_name_holds_a_colon():
+    app = TuiGymApp(Session(env_id="tests.tiny_env:TinyChain-v0", seed=0))
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.press("ctrl+s")
+        await pilot.pause()
+        assert app.screen.query_one(Input).value == "tests.tiny_env-tinychain-v0-agent.tgym"
+        await type_name(pilot, "mine")
+        assert (Path.cwd() / "mine.tgym").is_file()
+        await pilot.press("ctrl+s")
+        await pilot.pause()
+        assert app.screen.query_one(Input).value == "mine.tgym"

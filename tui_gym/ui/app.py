@@ -733,8 +733,9 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     def _suggested_file(self, loading: bool = False) -> str:
         """The name last used for this game, else `<game>-agent.tgym` (when loading,
         only if that file is there)."""
-        name = self.session.game.name.replace("/", "-").replace(":", "-")
-        path = self._files.get(name, Path.cwd() / f"{name}-agent.tgym")
+        game = self.session.game.name
+        safe = game.replace("/", "-").replace(":", "-")
+        path = self._files.get(game, Path.cwd() / f"{safe}-agent.tgym")
         if loading and not path.is_file():
             return ""
         try:
