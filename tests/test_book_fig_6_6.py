@@ -3,6 +3,7 @@ few runs, the book's task list under --full, and a recorded figure resumed."""
 
 from __future__ import annotations
 
+import math
 from types import SimpleNamespace
 from typing import Any
 
@@ -18,6 +19,9 @@ from tui_gym.session.experiments.compare import ResumeError
 
 def test_the_books_claims_at_a_few_runs(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(td, "ASYMPTOTIC_RUNS", 6)
+    # Played here, not spread over child processes: a seed's run is the same wherever it
+    # runs (tests/test_compare.py::test_seeds_in_child_processes_match_the_calling_thread).
+    monkeypatch.setattr(compare, "SPREAD_SECONDS", math.inf)
     result = figure_named("6.6").run(FigureOptions(runs=100, episodes=1500, seed=100),
                                      lambda *_: None)
     assert result.runs == 100 and len(result.checks) == 6
