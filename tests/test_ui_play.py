@@ -21,7 +21,7 @@ from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.play_view import PlayView
 from tui_gym.ui.widgets.board_kinds import board_class
-from tui_gym.ui.widgets.boards import BoardButton
+from tui_gym.ui.widgets.boards import Board, BoardButton
 from tui_gym.ui.widgets.cards_board import CardsBoard
 from tui_gym.ui.widgets.grid_board import GridBoard
 
@@ -334,14 +334,13 @@ async def test_compact_layout_at_80x24_and_switching_games_swaps_the_board_keeps
         await pilot.pause()
         view = app.play_view
         assert app.focused is view.board, "the board has the keyboard from the start"
-        mine = view.game
+        mine, cards = view.game, view.board
         for env, key in (("blackjack", "h"), ("gridworld", "up")):
             if env == "gridworld":
                 await pilot.press("g")
                 await wait_for(pilot, lambda: isinstance(view.board, GridBoard)
                                and view.agent_figures_shown, "the grid and its exact figures")
-                assert len(view.query(GridBoard)) == 1
-                assert not view.query(CardsBoard)
+                assert [b for b in view.query(Board) if b.display] == [view.board], "one shown"
                 assert view.game.game.board == "grid"
                 assert app.focused is view.board
                 assert "GridWorld" in shown(view, "#play-title")
@@ -371,6 +370,7 @@ async def test_compact_layout_at_80x24_and_switching_games_swaps_the_board_keeps
         await pilot.press("b")
         await wait_for(pilot, lambda: isinstance(view.board, CardsBoard)
                        and app.focused is view.board, "the cards board with the keyboard")
+        assert view.board is cards, "the cards board is shown again, not built again"
         assert view.game is mine and view.game.tally.episodes == 0, "the hand is kept"
 
         # n (the app's key for one training step) deals the next hand here.

@@ -143,7 +143,8 @@ class PlayView(SessionView):
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self.game: HumanGame | None = None
-        self.board: Board | None = None
+        self.board: Board | None = None  # the one shown
+        self._boards: dict[type[Board], Board] = {}  # one of each kind shown so far
         self.outcomes: dict[str, int] = {}  # finished episodes by the narrator's tally word
         # Each game's play put away by a game switch: what it was built from, and the
         # `_KEPT_ATTRIBUTES` as they were.
@@ -178,6 +179,7 @@ class PlayView(SessionView):
     def compose(self) -> ComposeResult:
         yield Static(id="play-title")
         self.board = board_class(self.session.game.board)()
+        self._boards[type(self.board)] = self.board
         yield self.board
         yield StatusLines("play", "hint")
         yield Static(id="play-tally")
@@ -228,10 +230,13 @@ class PlayView(SessionView):
         if type(self.board) is not kind:
             old = self.board
             had_focus = old is not None and old.has_focus
-            self.board = kind()
-            self.mount(self.board, before=self.query_one("#play-status"))
+            self.board = self._boards.get(kind)
+            if self.board is None:
+                self.board = self._boards[kind] = kind()
+                self.mount(self.board, before=self.query_one("#play-status"))
+            self.board.display = True
             if old is not None:
-                old.remove()
+                old.display = False  # kept for the next game of its kind
             if had_focus:
                 self.call_after_refresh(self.focus_board)
         self._show_title()

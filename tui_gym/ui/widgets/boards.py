@@ -130,7 +130,7 @@ class Board(Widget):
         self.reveal = True
         self.episode_over = False
         self.agent_playing = False  # the agent, not a person, makes the moves drawn
-        self.set_class(interactive, "-interactive")
+        self.set_class(interactive, "-interactive", update=False)  # styled when mounted
 
     # --- structure ---------------------------------------------------------
     def compose(self) -> ComposeResult:
