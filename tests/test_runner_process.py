@@ -38,10 +38,17 @@ def reaped(pid: int) -> bool:
     return not Path(f"/proc/{pid}").exists()
 
 
+def why(runner: ProcessRunner) -> str:
+    """What a runner that trains nothing is doing (its error, child, the server's warmer)."""
+    warmer = process_runner._warmer
+    return (f"error {runner.error!r}; child {runner._child}; pending {runner._pending}; "
+            f"warmer alive {warmer is not None and warmer.is_alive()}")
+
+
 def test_a_stopped_child_is_replaced_and_the_agent_kept(blackjack_runner, monkeypatch) -> None:
     runner = blackjack_runner
     runner.start()
-    assert wait_for(lambda: runner.latest.episodes > 1000, DEADLINE)
+    assert wait_for(lambda: runner.latest.episodes > 1000, DEADLINE), why(runner)
     runner.pause(wait=True)
     kept = runner.session.trainer.episodes
     runner.start()
@@ -57,7 +64,7 @@ def test_a_stopped_child_is_replaced_and_the_agent_kept(blackjack_runner, monkey
     assert reaped(stopped)
     assert runner.session.trainer.episodes == kept
     assert runner.start()
-    assert wait_for(lambda: runner.latest.episodes > kept + 1000, DEADLINE)
+    assert wait_for(lambda: runner.latest.episodes > kept + 1000, DEADLINE), why(runner)
 
 
 def test_a_child_that_keeps_dying_turns_training_off(blackjack_runner, monkeypatch) -> None:
@@ -99,13 +106,13 @@ def test_a_rebuild_that_keeps_the_agent_loses_no_episode() -> None:
     runner = ProcessRunner(session)
     try:
         runner.start()
-        assert wait_for(lambda: runner.latest.episodes > 2000, DEADLINE)
+        assert wait_for(lambda: runner.latest.episodes > 2000, DEADLINE), why(runner)
         seen = runner.latest.episodes
         runner.pause(wait=False)  # as the app does: no waiting on the child
         report = session.rebuild(choices=(WrapperChoice.make("TimeLimit", max_episode_steps=50),))
         assert report.kept_agent
         runner.start()
-        assert wait_for(lambda: runner.latest.episodes > seen + 2000, DEADLINE)
+        assert wait_for(lambda: runner.latest.episodes > seen + 2000, DEADLINE), why(runner)
         runner.pause(wait=True)
         assert session.trainer.episodes > seen + 2000
         assert session.agent.episode == session.trainer.episodes
@@ -152,7 +159,7 @@ def test_a_closed_child_ends_by_itself(monkeypatch) -> None:
     monkeypatch.setattr(process_runner, "EXIT_SECONDS", DEADLINE)
     runner = ProcessRunner(Session("blackjack", seed=0))
     runner.start()
-    assert wait_for(lambda: runner.latest.episodes > 0, DEADLINE)
+    assert wait_for(lambda: runner.latest.episodes > 0, DEADLINE), why(runner)
     child = runner.child_pid
     assert child is not None
     runner.close(wait=True)
