@@ -69,6 +69,21 @@ async def test_the_keyboard_asked_for_while_a_view_is_built_reaches_it_once_buil
                             f"the {view_name} view with the keyboard")
 
 
+async def test_a_view_left_while_it_is_built_keeps_its_hands_off_the_keyboard() -> None:
+    """A burst `P`, `f`, `p`: the Plan and Book views finish building hidden; the keys (and
+    the key bar) stay with the Play view shown."""
+    app = TuiGymApp(Session("corner-grid", seed=0))
+    async with app.run_test(size=(80, 24)) as pilot:
+        for view_name in ("plan", "book", "play"):  # as fast as keys in one read
+            app.action_show_view(view_name)
+        plan = app._views["plan"]
+        await wait_busy(pilot, lambda: plan.runner is not None, "the hidden Plan view built")
+        await pilot.pause()
+        assert app.current_view == "play"
+        assert app.focused is not None and app.play_view in app.focused.ancestors_with_self
+        assert not plan._heatmap.has_focus
+
+
 async def test_an_edit_while_value_iteration_runs_plans_on_from_the_values() -> None:
     session = Session("frozenlake", {"slippery": False}, seed=0)
     app = PlanHost(session)

@@ -138,13 +138,18 @@ class PlanView(MapEditingView):
         self.query_one("#plan-heatmap-box").border_title = "Values and the policy"
         self.set_interval(FRAME_SECONDS, self._poll)
         self.reload()
-        self.call_after_refresh(self.focus_default)
+        self.call_after_refresh(self._focus_if_shown)
 
     def on_unmount(self) -> None:
         self._close_runner()
 
     def focus_default(self) -> None:
         self._heatmap.focus()
+
+    def _focus_if_shown(self) -> None:
+        """The keyboard once built, unless another view is shown by then."""
+        if self.display:
+            self.focus_default()
 
     @staticmethod
     def key_help() -> list[tuple[str, str]]:
