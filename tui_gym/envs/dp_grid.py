@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cache, cached_property
 from itertools import product
 
 import numpy as np
@@ -104,6 +104,9 @@ class Grid:
         prob, reward = np.zeros(shape), np.zeros(shape)
         terminal = np.zeros(shape, dtype=bool)
         ends = set(self.terminals)
+        landings = cache(self.landing)  # a cell's moves recur across the actions
+        at: list[tuple[int, int, int]] = []  # (s, a, j) of each possible outcome, and its
+        to_state, chances, pays, stops = [], [], [], []  # next state, chance, reward, end
         for s in range(n):
             cell = divmod(s, self.cols)
             for a, move in enumerate(self.moves):
@@ -121,10 +124,16 @@ class Grid:
                 for j, ((way, chance), (push, gust)) in enumerate(outcomes):
                     if chance == 0:
                         continue
-                    to, pay = self.landing(cell, way, push)
-                    next_state[s, a, j], prob[s, a, j] = self.state(self.sends.get(to, to)), (
-                        chance * gust)
-                    reward[s, a, j], terminal[s, a, j] = pay, to in ends
+                    to, pay = landings(cell, way, push)
+                    at.append((s, a, j))
+                    to_state.append(self.state(self.sends.get(to, to)))
+                    chances.append(chance * gust)
+                    pays.append(pay)
+                    stops.append(to in ends)
+        if at:
+            where = tuple(np.array(at).T)
+            next_state[where], prob[where], reward[where], terminal[where] = (
+                to_state, chances, pays, stops)
         initial = np.zeros(n)
         if self.start is not None:
             initial[self.state(self.start)] = 1.0

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 import gymnasium as gym
@@ -146,16 +147,28 @@ def tile_grid(
     actions: Sequence[str], rules: TileRules,
 ) -> Grid:
     """The `Grid` of a checked map (`check_map`): holes and goals end the episode, the
-    cliff sends the agent back to the start, the agent never acts from a wall or the cliff."""
+    cliff sends the agent back to the start, the agent never acts from a wall or the cliff.
+    The same map gives the same `Grid`, whose model is then built once (the game's and the
+    env's of an edited map)."""
+    return _grid(tuple(cells), tuple(sorted(rewards.items())), tuple(sorted(slip.items())),
+                 tuple(actions), rules)
+
+
+@lru_cache(maxsize=32)
+def _grid(cells: tuple[str, ...], rewards: tuple[tuple[Cell, float], ...],
+          slip: tuple[tuple[Cell, float], ...], actions: tuple[str, ...],
+          rules: TileRules) -> Grid:
     tiles = {(r, c): tile for r, row in enumerate(cells) for c, tile in enumerate(row)}
     start = next(cell for cell, tile in tiles.items() if tile == "S")
     by_tile = {"G": rules.goal, "H": rules.hole, "C": rules.cliff}
-    slips = {cell: slip.get(cell, rules.slip) for cell, tile in tiles.items() if tile in STANDING}
+    slip_of = dict(slip)
+    slips = {cell: slip_of.get(cell, rules.slip) for cell, tile in tiles.items()
+             if tile in STANDING}
     return Grid(
-        len(cells), len(cells[0]), moves=tuple(actions), step=rules.step, edge=rules.step,
+        len(cells), len(cells[0]), moves=actions, step=rules.step, edge=rules.step,
         terminals=tuple(cell for cell, tile in tiles.items() if tile in ENDING),
         walls=frozenset(cell for cell, tile in tiles.items() if tile == "W"),
-        pays={**{cell: by_tile[t] for cell, t in tiles.items() if t in by_tile}, **rewards},
+        pays={**{cell: by_tile[t] for cell, t in tiles.items() if t in by_tile}, **dict(rewards)},
         start=start, slip={cell: p for cell, p in slips.items() if p > 0},
         sends={cell: start for cell, tile in tiles.items() if tile == "C"},
         idle=frozenset(cell for cell, tile in tiles.items() if tile in "WC"),

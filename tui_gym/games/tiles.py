@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -37,12 +36,6 @@ LAYOUT = "layout"  # the argument that holds an edited map, as text
 CUSTOM = "custom"  # the `map` choice of an edited map
 
 NO_DECISION = {"H": "○", "G": "★", "C": "▒", "W": "█"}  # tiles the agent never acts on
-
-
-@lru_cache(maxsize=32)
-def _layout_model(grid_map: GridMap, actions: tuple[str, ...], rules: TileRules) -> FiniteMDP:
-    return tile_grid(grid_map.cells, grid_map.reward_table(), grid_map.slip_table(), actions,
-                     rules).model
 
 
 class TileStates(DiscreteStates):
@@ -287,4 +280,5 @@ class TileGame(ModelGame):
             grid_map = self.grid_map(kwargs)
         except MapError as error:
             return NotAvailable(f"the map cannot be read: {error}")
-        return _layout_model(grid_map, tuple(self.action_names), self.rules(kwargs))
+        return tile_grid(grid_map.cells, grid_map.reward_table(), grid_map.slip_table(),
+                         self.action_names, self.rules(kwargs)).model
