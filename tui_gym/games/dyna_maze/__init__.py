@@ -90,6 +90,11 @@ class MazeGame(DPGridGame):
     # further, the greedy policy of some seeds loses the goal once the wall moves.
     CHANGING_MULTI_STEP = {"n-step-sarsa": {"n": 2, **CHANGING_SARSA},
                            "sarsa-lambda": {"lambda": 0.5, **CHANGING_SARSA}}
+    # Prioritized sweeping changes Q only through its queue. Once the old way is gone, a
+    # threshold above 0 stops its values falling at theta / (1 - discount), and more than one
+    # sweep a step lowers the old way and all that leads to it together, in the same order:
+    # the greedy policy then walks into the new wall for good instead of drifting elsewhere.
+    CHANGING_SWEEPING = {"prioritized-sweeping": {"theta": 0.0, "planning_steps": 1}}
     plan_gamma = DISCOUNT
     hyperparameters = {"*": {"discount": DISCOUNT, "learning_rate": 0.1, "episodes": 1000}}
 
@@ -159,7 +164,8 @@ class BlockingMazeGame(MazeGame):
     params = (Param("change_at", int, 1000, 1, 100_000_000,
                     help="the step, over all episodes, at which the wall moves"),)
     hyperparameters = {"*": {**MazeGame.CHANGING, "episodes": 300},
-                       "sarsa": MazeGame.CHANGING_SARSA, **MazeGame.CHANGING_MULTI_STEP}
+                       "sarsa": MazeGame.CHANGING_SARSA, **MazeGame.CHANGING_MULTI_STEP,
+                       **MazeGame.CHANGING_SWEEPING}
 
 
 class ShortcutMazeGame(MazeGame):
@@ -178,4 +184,5 @@ class ShortcutMazeGame(MazeGame):
                     help="the step, over all episodes, at which the wall opens"),)
     extra_steps = 6.0  # the long way, which a learner that does not explore keeps to
     hyperparameters = {"*": {**MazeGame.CHANGING, "episodes": 400},
-                       "sarsa": MazeGame.CHANGING_SARSA, **MazeGame.CHANGING_MULTI_STEP}
+                       "sarsa": MazeGame.CHANGING_SARSA, **MazeGame.CHANGING_MULTI_STEP,
+                       **MazeGame.CHANGING_SWEEPING}
