@@ -144,20 +144,21 @@ class DynaMazeGame(MazeGame):
     title = "Dyna maze"
     env_id = "tui_gym/DynaMaze-v0"
     key = "D"
-    lessons = dict.fromkeys(
-        ("sarsa", "monte-carlo"),
-        "every way to the goal is worth +1 undiscounted, so an on-policy learner that explores "
-        "may keep a detour of a step out and back",
-    )
+    lessons = {
+        "sarsa": "every way to the goal is worth +1 undiscounted, so an on-policy learner that "
+                 "explores may keep a detour of a step out and back",
+    }
     description = "Figure 8.2's 6x9 maze: +1 at the goal, 0 elsewhere; 14 steps at best."
     teaches = "planning: Dyna-Q's simulated steps find the way in far fewer episodes"
     params = (Param("scale", int, 1, 1, 8,
                     help="each cell made scale x scale cells (Example 8.4's finer mazes)"),)
     # The multi-step on-policy learners stop exploring at the end, over a longer budget:
-    # what they learn becomes the greedy policy's values, with no detour kept.
+    # what they learn becomes the greedy policy's values, with no detour kept. Monte Carlo,
+    # which looks ahead to the episode's end, explores less only as the run nears its end.
     hyperparameters = {
         **MazeGame.hyperparameters, "n-step-sarsa": {"epsilon_final": 0.0, "episodes": 3000},
         "sarsa-lambda": {"epsilon_final": 0.0, "episodes": 3000},
+        "monte-carlo": MazeGame.SETTLING,
     }
 
 
