@@ -152,13 +152,11 @@ class DynaMazeGame(MazeGame):
     teaches = "planning: Dyna-Q's simulated steps find the way in far fewer episodes"
     params = (Param("scale", int, 1, 1, 8,
                     help="each cell made scale x scale cells (Example 8.4's finer mazes)"),)
-    # The multi-step on-policy learners stop exploring at the end, over a longer budget:
-    # what they learn becomes the greedy policy's values, with no detour kept. Monte Carlo,
-    # which looks ahead to the episode's end, explores less only as the run nears its end.
+    # The on-policy learners that look ahead stop exploring only at the end of a longer
+    # budget (`MazeGame.SETTLING`), so they keep no detour.
     hyperparameters = {
-        **MazeGame.hyperparameters, "n-step-sarsa": {"epsilon_final": 0.0, "episodes": 3000},
-        "sarsa-lambda": {"epsilon_final": 0.0, "episodes": 3000},
-        "monte-carlo": MazeGame.SETTLING,
+        **MazeGame.hyperparameters,
+        **dict.fromkeys(("n-step-sarsa", "sarsa-lambda", "monte-carlo"), MazeGame.SETTLING),
     }
 
 
