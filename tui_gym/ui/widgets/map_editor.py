@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 from textual import events
@@ -360,8 +360,3 @@ class MapEditor(Vertical):
 
     def focus_canvas(self) -> None:
         self.canvas.focus()
-
-    def describe(self) -> dict[str, Any]:
-        """What the editor shows, for tests and screenshots."""
-        return {"map": self.grid_map, "cursor": self.cursor, "tool": self.tool.name,
-                "undo": len(self.undo_stack), "redo": len(self.redo_stack)}
