@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from tui_gym.core.experiments import RunHistory, RunHistoryError
+from tui_gym.ui.widgets.numbers import cut
 
 if TYPE_CHECKING:
     from tui_gym.session.experiments.compare import (
@@ -120,8 +121,7 @@ class CompareJob:
 
 
 def _one_line(exc: BaseException, limit: int = 300) -> str:
-    text = " ".join(str(exc).split())
-    return text if len(text) <= limit else text[: limit - 1] + "…"
+    return cut(" ".join(str(exc).split()), limit)
 
 
 def _start_resource_tracker() -> None:

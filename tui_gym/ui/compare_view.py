@@ -29,6 +29,7 @@ from tui_gym.core.experiments import (
 from tui_gym.core.experiments.connection import examine
 from tui_gym.core.params import digits_note, read_number, shown_value
 from tui_gym.core.text import visible
+from tui_gym.games.words import plural
 from tui_gym.ui.compare_job import CompareJob
 from tui_gym.ui.compare_series import (
     FigureRow,
@@ -308,7 +309,7 @@ class CompareView(SessionView):
             self._episodes.value = str(budget or "")
             self._stale = True
         if self._stale and self.display:  # the history is read when the view is shown
-            self._load_runs()
+            self.action_reload()
 
     def focus_default(self) -> None:
         self.run_list.focus()
@@ -345,7 +346,8 @@ class CompareView(SessionView):
             return None  # reading never creates the file
         return RunHistory(path, timeout=OPEN_TIMEOUT, read_only=True)
 
-    def _load_runs(self, select: Sequence[int] = ()) -> None:
+    def action_reload(self, select: Sequence[int] = ()) -> None:
+        """Read the game's runs from the history again (`select`: runs to tick as well)."""
         self._stale = False
         names = self._game_key
         damaged: dict[int, DamagedRun] = {}
@@ -387,8 +389,7 @@ class CompareView(SessionView):
                 self._say(f"No runs of {title} recorded yet in {self.db_path}: "
                           "choose algorithms, seeds and episodes, then Compare.")
             else:
-                self._say(f"{len(runs):,} run{'s' if len(runs) != 1 else ''} of {title} "
-                          "recorded.")
+                self._say(f"{plural(len(runs), 'run')} of {title} recorded.")
             if damaged:
                 self._say(_unreadable(list(damaged.values())), error=True)
         self._message_label.tooltip = (
@@ -573,9 +574,6 @@ class CompareView(SessionView):
         """Leave a field or a button: the keys go to the list of runs again."""
         self.focus_default()
 
-    def action_reload(self) -> None:
-        self._load_runs()
-
     def action_toggle_smoothing(self) -> None:
         self.smooth = not self.smooth
         self._redraw()
@@ -623,14 +621,11 @@ class CompareView(SessionView):
             if live_colour is not None and outcome.run_id is not None:
                 self._colours[outcome.run_id] = live_colour
         if self._job_game == self._game_key:
-            self._load_runs(select=run_ids)
+            self.action_reload(select=run_ids)
         seconds = format_duration(time.monotonic() - job.started_at)
         how = "stopped" if result.interrupted else "finished"
-        if run_ids:
-            plural = "s" if len(run_ids) != 1 else ""
-            recorded = f"recorded as run{plural} " + ", ".join(f"#{i}" for i in run_ids)
-        else:
-            recorded = "nothing was recorded"
+        recorded = (f"recorded as run{'s' * (len(run_ids) != 1)} "
+                    + ", ".join(f"#{i}" for i in run_ids) if run_ids else "nothing was recorded")
         self._say(f"Comparison {how} in {seconds}: {recorded}.")
         self.app.notify(f"Comparison {how}: {recorded}.", title="Compare", timeout=5)
 

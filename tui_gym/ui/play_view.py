@@ -22,6 +22,7 @@ from tui_gym.ui.exact_figures import LatestOnly
 from tui_gym.ui.map_editing import SessionView
 from tui_gym.ui.widgets.board_kinds import board_class
 from tui_gym.ui.widgets.boards import Board
+from tui_gym.ui.widgets.numbers import cut
 from tui_gym.ui.widgets.scoreboard import Scoreboard
 
 if TYPE_CHECKING:
@@ -412,8 +413,7 @@ class PlayView(SessionView):
             parts = [self._verdict] if self._verdict else []
             # In the game's words, or raw (cut short) when wrappers reshaped it.
             seen = game.game.states.describe(last.observation, self.session.env_kwargs)
-            cut = len(seen) > OBSERVATION_CHARS
-            parts.append(f"observation: {seen[: OBSERVATION_CHARS - 1] + '…' if cut else seen}")
+            parts.append(f"observation: {cut(seen, OBSERVATION_CHARS)}")
             progress = game.game.narrator.progress_text(last, game.first_info)
             if progress:
                 parts.append(progress)

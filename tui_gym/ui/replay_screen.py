@@ -29,6 +29,7 @@ from tui_gym.ui.play_view import StatusLines
 from tui_gym.ui.widgets.board_kinds import KINDS, board_class
 from tui_gym.ui.widgets.boards import Board
 from tui_gym.ui.widgets.key_bar import KeyBar
+from tui_gym.ui.widgets.numbers import cut
 
 TRAIL_POSITIONS = 200  # scenes handed to a board before the one shown (its trail)
 NARROW_WIDTH = 100  # below this the list of moves gives its room to the board
@@ -337,7 +338,7 @@ class ReplayScreen(ModalScreen[None]):
 def _move_option(place: Position) -> Option:
     move = place.move
     if move is None:
-        return Option(Text.assemble(("start", "bold"), "  ", _cut(place.frame.text or "", 22)))
+        return Option(Text.assemble(("start", "bold"), "  ", cut(place.frame.text or "", 22)))
     mark, style = "·", "dim"
     if move.verdict == "optimal":
         mark, style = "✓", "green"
@@ -353,6 +354,3 @@ def _move_option(place: Position) -> Option:
 def _observation_text(observation: object) -> str:
     return visible(observation, OBSERVATION_CHARS)
 
-
-def _cut(text: str, width: int) -> str:
-    return text if len(text) <= width else text[: width - 1] + "…"

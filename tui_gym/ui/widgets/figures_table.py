@@ -11,7 +11,7 @@ from rich.style import Style
 from tui_gym.core.experiments import Figure
 from tui_gym.ui.compare_series import FigureRow
 from tui_gym.ui.widgets.compare_chart import colour
-from tui_gym.ui.widgets.numbers import compact_count
+from tui_gym.ui.widgets.numbers import compact_count, cut
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget
 
 MISSING = "–"
@@ -111,11 +111,9 @@ class FiguresTable(StripWidget):
         lines = [head]
         for row, place in zip(self.rows, self._colours, strict=True):
             texts = cells(row)
-            label = row.label
-            if len(label) > label_width:
-                label = label[: label_width - 1] + "…"
             line: Line = [
-                Segment("▍ ", Style(color=colour(place))), Segment(label.ljust(label_width)),
+                Segment("▍ ", Style(color=colour(place))),
+                Segment(cut(row.label, label_width).ljust(label_width)),
             ]
             for _header, key, w in columns:
                 if key == "note":

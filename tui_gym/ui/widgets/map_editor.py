@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 from textual import events
@@ -78,8 +78,8 @@ class MapEditor(Vertical):
         Binding("shift+left", "resize(0, -1)", "Narrower", show=False),
         Binding("shift+down", "resize(1, 0)", "Taller", show=False),
         Binding("shift+up", "resize(-1, 0)", "Shorter", show=False),
-        Binding("u,ctrl+z", "undo", "Undo", key_display="u"),
-        Binding("y,ctrl+y", "redo", "Redo", key_display="y"),
+        Binding("u,ctrl+z", "travel('undo')", "Undo", key_display="u"),
+        Binding("y,ctrl+y", "travel('redo')", "Redo", key_display="y"),
         Binding("s", "save", "Save map"),
         Binding("escape", "close", "Close editor", key_display="esc"),
     ]
@@ -309,14 +309,10 @@ class MapEditor(Vertical):
             return
         self._apply(new, f"resized to {new.size_text}")
 
-    def action_undo(self) -> None:
-        self._travel(self.undo_stack, self.redo_stack, "undo")
-
-    def action_redo(self) -> None:
-        self._travel(self.redo_stack, self.undo_stack, "redo")
-
-    def _travel(self, back: list[GridMap], forth: list[GridMap], what: str) -> None:
-        """Undo or redo: the map from `back`, the one shown onto `forth`."""
+    def action_travel(self, what: str) -> None:
+        """Undo or redo: the map from one stack, the one shown onto the other."""
+        stacks = (self.undo_stack, self.redo_stack)
+        back, forth = stacks if what == "undo" else stacks[::-1]
         if not back or self.grid_map is None:
             self.last_edit = f"nothing to {what}"
             self._show_status()
@@ -360,8 +356,3 @@ class MapEditor(Vertical):
 
     def focus_canvas(self) -> None:
         self.canvas.focus()
-
-    def describe(self) -> dict[str, Any]:
-        """What the editor shows, for tests and screenshots."""
-        return {"map": self.grid_map, "cursor": self.cursor, "tool": self.tool.name,
-                "undo": len(self.undo_stack), "redo": len(self.redo_stack)}

@@ -1,4 +1,5 @@
-"""Numbers that fit: each figure in its full form and shorter ones, never cut (`fit`)."""
+"""Numbers that fit: each figure in its full form and shorter ones, never cut (`fit`);
+text cut to fit (`cut`)."""
 
 from __future__ import annotations
 
@@ -46,3 +47,8 @@ def fit(forms: Sequence[str], width: int) -> str:
         if len(text) <= width:
             return text
     return forms[-1]
+
+
+def cut(text: str, width: int) -> str:
+    """`text` in at most `width` characters, ending in '…' where it is cut."""
+    return text if len(text) <= width else text[: max(0, width - 1)] + "…"

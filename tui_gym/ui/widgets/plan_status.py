@@ -7,6 +7,7 @@ from typing import ClassVar
 
 from rich.segment import Segment
 
+from tui_gym.ui.widgets.numbers import cut
 from tui_gym.ui.widgets.strip_widget import Line, StripWidget
 
 __all__ = ["PlanStatus"]
@@ -47,8 +48,4 @@ class PlanStatus(StripWidget):
         styles = self.component_styles()
         shown = [(text, style) for text, style in zip(self.lines, STYLES, strict=True)
                  if not (self._compact() and style == "plan-status--meaning")]
-        out: list[Line] = []
-        for text, style in shown:
-            cut = text if len(text) <= width else text[: max(0, width - 1)] + "…"
-            out.append([Segment(cut, styles[style])])
-        return out
+        return [[Segment(cut(text, width), styles[style])] for text, style in shown]
