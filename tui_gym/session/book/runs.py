@@ -29,6 +29,7 @@ from tui_gym.session.book.figure import (
     FigureTasks,
     Progress,
     Series,
+    heading,
 )
 from tui_gym.session.experiments.compare import (
     Arm,
@@ -107,7 +108,7 @@ def play(figure: BookFigure, world: str, learners: Sequence[Arm], options: Figur
     tasks.tasks += done.tasks.get("total", 0)
     tasks.landed += done.tasks.get("done", 0)
     if done.interrupted:
-        raise FigureStopped(f"Figure {figure.name} stopped")
+        raise FigureStopped(f"{heading(figure.name)} stopped")
     return [Played(learner.label, done.values[index],
                    None if done.exact is None else done.exact[index, :, -1].copy(),
                    done.prepared.optimum)
@@ -132,8 +133,7 @@ def play_steps(figure: BookFigure, world: str, learners: Sequence[Arm],
         cls = algorithm(learner.algorithm)
         values = np.zeros((runs, steps))
         for run in range(runs):
-            if options.stop is not None and options.stop.is_set():
-                raise FigureStopped(f"Figure {figure.name} stopped")
+            options.check_stop(figure.name)
             at = index * runs + run
             progress(at, len(learners) * runs, about)
             agent = cls(n_actions, cls.settings(hp), n_states=n_states, seed=options.seed + run)
@@ -164,8 +164,7 @@ def play_prediction(figure: BookFigure, states: int, learners: Sequence[Arm],
         settings = cls.settings(learner.settings)
         truth = None
         for run in range(runs):
-            if options.stop is not None and options.stop.is_set():
-                raise FigureStopped(f"Figure {figure.name} stopped")
+            options.check_stop(figure.name)
             agent = cls(found.model.n_actions, settings, n_states=found.model.n_states,
                         seed=options.seed + run)
             truth = truth or agent.truth(found.model)  # one policy: the random one
