@@ -99,7 +99,11 @@ def play(figure: BookFigure, world: str, learners: Sequence[Arm], options: Figur
             f" ({tasks.landed + state.tasks_done}/{tasks.tasks + state.tasks_total} tasks)"
             if options.tasks else ""))
 
-    resume = _resumed(tasks, len(learners))  # sets `tasks.group` when resuming
+    resume = None  # the runs of `tasks.resume`'s group this play carries on
+    if tasks.resume is not None and tasks.history is not None:
+        ids = resumed_group(tasks.history, tasks.resume, "figure")
+        tasks.group = tasks.resume
+        resume = ids[tasks.played: tasks.played + len(learners)] or None
     done = execute(setup, learners, RunKind.COMPARE, progress=told, stop=options.stop,
                    status=lambda line: progress(0, 1, line or about), history=tasks.history,
                    resume=resume, cluster=tasks.cluster, group=tasks.group)
@@ -203,16 +207,6 @@ def _cumulative_reward(agent: Any, arrays: Sequence[loop.ModelArrays], starts: S
     return np.cumsum(paid)[1:]
 
 
-def _resumed(tasks: FigureTasks, arms: int) -> list[int] | None:
-    """The runs of `tasks.resume`'s group the next play carries on (None: none);
-    ResumeError if that run does not head a figure."""
-    if tasks.resume is None or tasks.history is None:
-        return None
-    ids = resumed_group(tasks.history, tasks.resume, "figure")
-    tasks.group = tasks.resume
-    return ids[tasks.played: tasks.played + arms] or None
-
-
 def margin(samples: Samples) -> float:
     """The half-width of the 99% Student-t interval of the mean (NaN for one sample)."""
     values = np.asarray(samples, dtype=np.float64).ravel()
@@ -245,20 +239,15 @@ def one_run(claim: str, book: float, samples: Samples, slack: float = 0.0,
                  abs(mean - book) <= tolerance)
 
 
-def above(claim: str, book: str, higher: Samples, lower: Samples, digits: int = 1,
-          unit: str = "") -> Check:
-    """The mean of `higher` above that of `lower` by more than the margin of the difference."""
-    return _apart(claim, book, higher, lower, digits, unit, lower_first=False)
-
-
 def below(claim: str, book: str, lower: Samples, higher: Samples, digits: int = 1,
           unit: str = "") -> Check:
     """`above` for a claim whose subject is the lower one (measured: its mean first)."""
-    return _apart(claim, book, higher, lower, digits, unit, lower_first=True)
+    return above(claim, book, higher, lower, digits, unit, lower_first=True)
 
 
-def _apart(claim: str, book: str, higher: Samples, lower: Samples, digits: int, unit: str,
-           lower_first: bool) -> Check:
+def above(claim: str, book: str, higher: Samples, lower: Samples, digits: int = 1,
+          unit: str = "", lower_first: bool = False) -> Check:
+    """The mean of `higher` above that of `lower` by more than the margin of the difference."""
     a = np.asarray(higher, dtype=np.float64).ravel()
     b = np.asarray(lower, dtype=np.float64).ravel()
     gap = float(a.mean() - b.mean())
