@@ -609,8 +609,9 @@ class Session:
         """Greedy play on a fresh env; `seed` defaults to one derived from the session's."""
         eval_seed = self.seed + 1_000_003 if seed is None else seed
         with self.make_env() as env:
-            return evaluate(env, self.agent, self.keyer, self.game.narrator, episodes, eval_seed,
-                            progress)
+            report = evaluate(env, self.agent, self.keyer, self.game.narrator, episodes, eval_seed,
+                              progress)
+        return report
 
     def meta(self) -> dict[str, Any]:
         """Everything a save file keeps besides the table, as JSON data."""

@@ -796,9 +796,8 @@ def _estimate(prepared: Prepared, arms: Sequence[Arm], setup: Setup,
         # first of its kind): paid here, outside the time that is measured.
         play_learner(learner, model.arrays, 1)
         began = time.perf_counter()
-        end = began + PROBE_SECONDS / len(learners)
         played, _ = play_learner(learner, model.arrays, setup.episodes,
-                                 stop=lambda end=end: time.perf_counter() >= end)
+                                 stop=_deadline(began + PROBE_SECONDS / len(learners)))
         rate = len(played) / max(time.perf_counter() - began, 1e-9)
         # Each seed's greedy policy is valued exactly at every checkpoint: on a large
         # model that can cost more than the training.
@@ -811,6 +810,11 @@ def _estimate(prepared: Prepared, arms: Sequence[Arm], setup: Setup,
         valuing = checkpoints * min(times)
         total += setup.seeds * (setup.episodes / max(rate, 1e-9) + valuing)
     return total
+
+
+def _deadline(end: float) -> Callable[[], bool]:
+    """A stop flag that is set once the clock passes `end`."""
+    return lambda: time.perf_counter() >= end
 
 
 def run_compare(
