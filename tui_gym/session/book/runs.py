@@ -41,9 +41,9 @@ from tui_gym.session.experiments.compare import (
 )
 
 __all__ = [
-    "BANDS", "FIRST_ACTION", "LENGTH", "RETURN", "Played", "above", "book_settings",
-    "completed", "counts", "margin", "near", "one_run", "per_episode",
-    "per_time_step", "play", "play_prediction", "play_steps", "swept", "world_phases",
+    "BANDS", "FIRST_ACTION", "LENGTH", "RETURN", "Played", "above", "below", "book_settings",
+    "completed", "counts", "margin", "near", "per_episode", "per_time_step", "play",
+    "play_prediction", "play_steps", "swept", "world_phases",
 ]
 
 CHECK_CONFIDENCE = 0.99  # the verdicts' intervals
@@ -222,21 +222,14 @@ def _within(mean: float, tolerance: float, digits: int, unit: str) -> str:
 
 
 def near(claim: str, book: float, samples: Samples, slack: float = 0.0, digits: int = 1,
-         unit: str = "") -> Check:
-    """The mean of `samples` (one a run) within `slack` + `margin(samples)` of `book`."""
+         unit: str = "", one_run: bool = False) -> Check:
+    """The mean of `samples` (one a run) within `slack` + `margin(samples)` of `book`; with
+    `one_run` (`book` read off a figure of one run), + the 99% prediction interval instead."""
     values = np.asarray(samples, dtype=np.float64).ravel()
-    mean, tolerance = float(values.mean()), slack + margin(values)
-    return Check(claim, f"{book:g}{unit}", _within(mean, tolerance, digits, unit),
-                 abs(mean - book) <= tolerance)
-
-
-def one_run(claim: str, book: float, samples: Samples, slack: float = 0.0,
-            digits: int = 1, unit: str = "") -> Check:
-    """`book`, read off a figure of one run, within `slack` + the 99% prediction interval."""
-    values = np.asarray(samples, dtype=np.float64).ravel()
-    mean, tolerance = float(values.mean()), slack + margin(values) * np.sqrt(len(values) + 1)
-    return Check(claim, f"{book:g}{unit} (one run)", _within(mean, tolerance, digits, unit),
-                 abs(mean - book) <= tolerance)
+    spread = margin(values) * (np.sqrt(len(values) + 1) if one_run else 1.0)
+    mean, tolerance = float(values.mean()), slack + spread
+    return Check(claim, f"{book:g}{unit}" + " (one run)" * one_run,
+                 _within(mean, tolerance, digits, unit), abs(mean - book) <= tolerance)
 
 
 def below(claim: str, book: str, lower: Samples, higher: Samples, digits: int = 1,
