@@ -17,10 +17,8 @@ from tui_gym.session.book.figure import (
     Check,
     FigureOptions,
     FigureResult,
-    FigureStopped,
     Progress,
     book_figure,
-    heading,
 )
 from tui_gym.session.book.runs import (
     BANDS,
@@ -283,8 +281,7 @@ def example_8_4(figure: BookFigure, options: FigureOptions, progress: Progress) 
         arrays = loop.ModelArrays.of(model)
         for i, (learner, hp) in enumerate(zip(SWEEPERS, hps, strict=True)):
             for r in range(runs):
-                if options.stop is not None and options.stop.is_set():
-                    raise FigureStopped(f"{heading(figure.name)} stopped")
+                options.check_stop(figure.name)
                 done = (j * len(SWEEPERS) + i) * runs + r
                 progress(done, total, f"{sizes[-1]} states: {learner.label}, run {r + 1}")
                 cls = algorithm(learner.algorithm)

@@ -27,6 +27,10 @@ def heading(name: str) -> str:
     return name.capitalize() if name[:1].isalpha() else f"Figure {name}"
 
 
+class FigureStopped(Exception):
+    """A figure's run was stopped before it finished (`FigureOptions.stop`)."""
+
+
 @dataclass
 class FigureTasks:
     """Where a figure's learners run as tasks (`runs.play`): the run history (its runs in
@@ -54,9 +58,10 @@ class FigureOptions:
     stop: threading.Event | None = field(default=None, compare=False)
     tasks: FigureTasks | None = field(default=None, compare=False)
 
-
-class FigureStopped(Exception):
-    """A figure's run was stopped before it finished (`FigureOptions.stop`)."""
+    def check_stop(self, figure: str) -> None:
+        """`FigureStopped` once `stop` is set (`figure`: the figure's name)."""
+        if self.stop is not None and self.stop.is_set():
+            raise FigureStopped(f"{heading(figure)} stopped")
 
 
 @dataclass(frozen=True, eq=False)

@@ -29,6 +29,7 @@ from tui_gym.session.book.figure import (
     FigureTasks,
     Progress,
     Series,
+    heading,
 )
 from tui_gym.session.experiments.compare import (
     Arm,
@@ -40,9 +41,9 @@ from tui_gym.session.experiments.compare import (
 )
 
 __all__ = [
-    "BANDS", "FIRST_ACTION", "LENGTH", "RETURN", "Played", "above", "book_settings",
-    "completed", "counts", "margin", "near", "one_run", "per_episode",
-    "per_time_step", "play", "play_prediction", "play_steps", "swept", "world_phases",
+    "BANDS", "FIRST_ACTION", "LENGTH", "RETURN", "Played", "above", "below", "book_settings",
+    "completed", "counts", "margin", "near", "per_episode", "per_time_step", "play",
+    "play_prediction", "play_steps", "swept", "world_phases",
 ]
 
 CHECK_CONFIDENCE = 0.99  # the verdicts' intervals
@@ -98,7 +99,11 @@ def play(figure: BookFigure, world: str, learners: Sequence[Arm], options: Figur
             f" ({tasks.landed + state.tasks_done}/{tasks.tasks + state.tasks_total} tasks)"
             if options.tasks else ""))
 
-    resume = _resumed(tasks, len(learners))  # sets `tasks.group` when resuming
+    resume = None  # the runs of `tasks.resume`'s group this play carries on
+    if tasks.resume is not None and tasks.history is not None:
+        ids = resumed_group(tasks.history, tasks.resume, "figure")
+        tasks.group = tasks.resume
+        resume = ids[tasks.played: tasks.played + len(learners)] or None
     done = execute(setup, learners, RunKind.COMPARE, progress=told, stop=options.stop,
                    status=lambda line: progress(0, 1, line or about), history=tasks.history,
                    resume=resume, cluster=tasks.cluster, group=tasks.group)
@@ -107,7 +112,7 @@ def play(figure: BookFigure, world: str, learners: Sequence[Arm], options: Figur
     tasks.tasks += done.tasks.get("total", 0)
     tasks.landed += done.tasks.get("done", 0)
     if done.interrupted:
-        raise FigureStopped(f"Figure {figure.name} stopped")
+        raise FigureStopped(f"{heading(figure.name)} stopped")
     return [Played(learner.label, done.values[index],
                    None if done.exact is None else done.exact[index, :, -1].copy(),
                    done.prepared.optimum)
@@ -132,8 +137,7 @@ def play_steps(figure: BookFigure, world: str, learners: Sequence[Arm],
         cls = algorithm(learner.algorithm)
         values = np.zeros((runs, steps))
         for run in range(runs):
-            if options.stop is not None and options.stop.is_set():
-                raise FigureStopped(f"Figure {figure.name} stopped")
+            options.check_stop(figure.name)
             at = index * runs + run
             progress(at, len(learners) * runs, about)
             agent = cls(n_actions, cls.settings(hp), n_states=n_states, seed=options.seed + run)
@@ -164,8 +168,7 @@ def play_prediction(figure: BookFigure, states: int, learners: Sequence[Arm],
         settings = cls.settings(learner.settings)
         truth = None
         for run in range(runs):
-            if options.stop is not None and options.stop.is_set():
-                raise FigureStopped(f"Figure {figure.name} stopped")
+            options.check_stop(figure.name)
             agent = cls(found.model.n_actions, settings, n_states=found.model.n_states,
                         seed=options.seed + run)
             truth = truth or agent.truth(found.model)  # one policy: the random one
@@ -204,16 +207,6 @@ def _cumulative_reward(agent: Any, arrays: Sequence[loop.ModelArrays], starts: S
     return np.cumsum(paid)[1:]
 
 
-def _resumed(tasks: FigureTasks, arms: int) -> list[int] | None:
-    """The runs of `tasks.resume`'s group the next play carries on (None: none);
-    ResumeError if that run does not head a figure."""
-    if tasks.resume is None or tasks.history is None:
-        return None
-    ids = resumed_group(tasks.history, tasks.resume, "figure")
-    tasks.group = tasks.resume
-    return ids[tasks.played: tasks.played + arms] or None
-
-
 def margin(samples: Samples) -> float:
     """The half-width of the 99% Student-t interval of the mean (NaN for one sample)."""
     values = np.asarray(samples, dtype=np.float64).ravel()
@@ -229,37 +222,25 @@ def _within(mean: float, tolerance: float, digits: int, unit: str) -> str:
 
 
 def near(claim: str, book: float, samples: Samples, slack: float = 0.0, digits: int = 1,
-         unit: str = "") -> Check:
-    """The mean of `samples` (one a run) within `slack` + `margin(samples)` of `book`."""
+         unit: str = "", one_run: bool = False) -> Check:
+    """The mean of `samples` (one a run) within `slack` + `margin(samples)` of `book`; with
+    `one_run` (`book` read off a figure of one run), + the 99% prediction interval instead."""
     values = np.asarray(samples, dtype=np.float64).ravel()
-    mean, tolerance = float(values.mean()), slack + margin(values)
-    return Check(claim, f"{book:g}{unit}", _within(mean, tolerance, digits, unit),
-                 abs(mean - book) <= tolerance)
-
-
-def one_run(claim: str, book: float, samples: Samples, slack: float = 0.0,
-            digits: int = 1, unit: str = "") -> Check:
-    """`book`, read off a figure of one run, within `slack` + the 99% prediction interval."""
-    values = np.asarray(samples, dtype=np.float64).ravel()
-    mean, tolerance = float(values.mean()), slack + margin(values) * np.sqrt(len(values) + 1)
-    return Check(claim, f"{book:g}{unit} (one run)", _within(mean, tolerance, digits, unit),
-                 abs(mean - book) <= tolerance)
-
-
-def above(claim: str, book: str, higher: Samples, lower: Samples, digits: int = 1,
-          unit: str = "") -> Check:
-    """The mean of `higher` above that of `lower` by more than the margin of the difference."""
-    return _apart(claim, book, higher, lower, digits, unit, lower_first=False)
+    spread = margin(values) * (np.sqrt(len(values) + 1) if one_run else 1.0)
+    mean, tolerance = float(values.mean()), slack + spread
+    return Check(claim, f"{book:g}{unit}" + " (one run)" * one_run,
+                 _within(mean, tolerance, digits, unit), abs(mean - book) <= tolerance)
 
 
 def below(claim: str, book: str, lower: Samples, higher: Samples, digits: int = 1,
           unit: str = "") -> Check:
     """`above` for a claim whose subject is the lower one (measured: its mean first)."""
-    return _apart(claim, book, higher, lower, digits, unit, lower_first=True)
+    return above(claim, book, higher, lower, digits, unit, lower_first=True)
 
 
-def _apart(claim: str, book: str, higher: Samples, lower: Samples, digits: int, unit: str,
-           lower_first: bool) -> Check:
+def above(claim: str, book: str, higher: Samples, lower: Samples, digits: int = 1,
+          unit: str = "", lower_first: bool = False) -> Check:
+    """The mean of `higher` above that of `lower` by more than the margin of the difference."""
     a = np.asarray(higher, dtype=np.float64).ravel()
     b = np.asarray(lower, dtype=np.float64).ravel()
     gap = float(a.mean() - b.mean())
