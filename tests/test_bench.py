@@ -7,17 +7,19 @@ prints figures; it never asserts them).
 from __future__ import annotations
 
 import json
+import os
 
 import numpy as np
 import pytest
 from rich.console import Console
 
-from tui_gym.bench import tutorial
+from tui_gym.bench import parts, tutorial
 from tui_gym.bench.compiling import CompileResult
 from tui_gym.bench.defaults import DefaultsResult
 from tui_gym.bench.gap import GapResult, GapRun
 from tui_gym.bench.live import KeySample, LiveRepeat, LiveResult
 from tui_gym.bench.memory import MemoryResult
+from tui_gym.bench.parts import PartResult
 from tui_gym.bench.report import MISS, PASS, UNDECIDED, notes, table, to_json, verdicts
 from tui_gym.bench.run import BenchResults, MachineInfo
 from tui_gym.bench.speed import Speed
@@ -25,6 +27,7 @@ from tui_gym.bench.startup import StartupResult
 from tui_gym.cli import build_parser, commands
 from tui_gym.cli.output import _clean
 from tui_gym.session.session import Session
+from tui_gym.ui import textual_internals as internals
 
 REQUIRED_KEYS = ("quick", "seconds", "machine", "compile", "speed", "gap", "live", "memory",
                  "startup", "figures", "verdicts", "errors")
@@ -130,6 +133,7 @@ def fake_results(
         live={"thread": thread, "process": process},
         memory=MemoryResult(2_000_000, 100_000, "model", 40.0, 40.6, 40.7, 1.5),
         startup=StartupResult((0.8, 0.9, 0.85)),
+        parts=(PartResult("compositor", 30.0, 61.0, 0.95),),
     )
 
 
@@ -178,6 +182,23 @@ def test_the_table_shows_each_figure_its_target_and_verdict() -> None:
                   "thread runner", "process runner (default)", "≥ 0.80", "Hz", "p95",
                   "RSS growth", "start to first frame", "PASS", "MISS"):
         assert words in text, words
+
+
+def test_each_speed_part_left_to_textual_is_shown_beside_ours() -> None:
+    data = to_json(fake_results())
+    assert data["figures"]["stock_key_p95_ms[compositor]"] == 61.0
+    assert data["figures"]["stock_startup_s[compositor]"] == 0.95
+    ours = data["figures"]["key_latency_p95_ms[process]"]
+    text = rendered(fake_results())
+    assert "Textual's own compositor" in text and f"61 ms (p50 30; ours {ours:.0f} ms)" in text
+    assert "0.95 s (ours 0.85 s)" in text and "TUI_GYM_STOCK_TEXTUAL" in text
+
+
+def test_a_part_is_left_to_textual_only_while_it_is_measured(monkeypatch) -> None:
+    monkeypatch.delenv(internals.STOCK_ENV, raising=False)
+    with parts.stock("compositor"):
+        assert not internals.enabled("compositor") and internals.enabled("focus")
+    assert internals.enabled("compositor") and internals.STOCK_ENV not in os.environ
 
 
 def test_a_comparison_runner_that_misses_is_explained() -> None:

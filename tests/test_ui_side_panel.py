@@ -50,3 +50,27 @@ async def test_wrapper_rows_made_after_mounting_show_the_session_and_take_the_fo
         assert row.query_one(ParamField).input.value == "40"
         assert not app.query_one("#wrapper-StepPenalty").query_one(Checkbox).value
         assert app.focused is box
+
+
+class BarePanel(App[None]):
+    def __init__(self, session: Session) -> None:
+        super().__init__()
+        self.session = session
+
+    def compose(self) -> ComposeResult:
+        yield SidePanel(id="side")
+
+
+async def test_parameters_that_do_not_matter_with_the_others_are_dimmed() -> None:
+    app = BarePanel(Session("frozenlake", seed=0))  # the 4x4 map, slippery
+
+    def dimmed() -> set[str]:
+        return {f.param.name for f in app.query_one("#env-params").query(ParamField)
+                if f.has_class("-unused")}
+
+    async with app.run_test(size=(44, 40)) as pilot:
+        assert dimmed() == {"size", "map_seed"}
+        app.session.rebuild(env_kwargs={"map": "random", "size": 5, "slippery": False})
+        app.query_one(SidePanel).reload()
+        await pilot.pause()
+        assert dimmed() == {"success_rate"}

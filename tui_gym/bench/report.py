@@ -122,6 +122,7 @@ def _judged(results: BenchResults) -> _Judged:
         seconds = median(startup.samples)
         out.row("startup_s", "start to first frame", f"{seconds:.2f} s ({samples})", seconds,
                 Target("≤", 1.0, " s"))
+    _parts_rows(out, results)
     for edit in results.map_edit or ():
         out.row(f"map_edit_ms[{edit.game}]", f"{edit.game}: map edit → new optimum, "
                 f"{edit.size} (median, worst of {edit.edits})",
@@ -189,6 +190,19 @@ def _live_rows(out: _Judged, results: BenchResults, runner: str) -> None:
     out.row(f"key_latency_p95_ms[{runner}]", f"  key → screen p95, {runner}",
             f"{p95:.0f} ms (p50 {live.key_latency_ms(50):.0f}, n={live.presses})", p95,
             Target("≤", 50.0, " ms"))
+
+
+def _parts_rows(out: _Judged, results: BenchResults) -> None:
+    """Each speed part left to Textual, beside the figures with every part in use."""
+    ours, launched = results.live_for(results.default_runner), results.startup
+    p95 = ours.key_latency_ms(95) if ours is not None else None
+    start = median(launched.samples) if launched is not None else None
+    for part in results.parts or ():
+        out.row(f"stock_key_p95_ms[{part.part}]", f"  Textual's own {part.part}: key → screen p95",
+                f"{part.key_p95_ms:.0f} ms (p50 {part.key_p50_ms:.0f}; "
+                f"ours {_num(p95, '.0f', ' ms')})", part.key_p95_ms)
+        out.row(f"stock_startup_s[{part.part}]", "    start to first frame",
+                f"{part.startup_s:.2f} s (ours {_num(start, '.2f', ' s')})", part.startup_s)
 
 
 def _planning_rows(out: _Judged, results: BenchResults) -> None:
@@ -349,6 +363,10 @@ def notes(results: BenchResults) -> list[str]:
         lines.append(f"The app trains with the {default} runner; the others are measured for "
                      "comparison (a thread runner shares one interpreter lock with the UI, so "
                      "the UI's drawing comes out of training time).")
+    if results.parts:
+        lines.append("Textual's own X: the app with that part of ui/textual_internals.py left to "
+                     "Textual (TUI_GYM_STOCK_TEXTUAL=X), measured like the figures with every "
+                     "part in use; a part whose figures are no better than Textual's buys nothing.")
     if results.planning is not None:
         lines.append(f"Planning: the bound is on the {results.planning.measure}; episodes are "
                      "real ones (Dyna-Q's simulated updates are not counted), medians over seeds.")

@@ -21,6 +21,7 @@ from tui_gym.bench import (
     live,
     map_edit,
     memory,
+    parts,
     programs,
     speed,
     startup,
@@ -35,6 +36,7 @@ from tui_gym.bench.history import HistoryResult
 from tui_gym.bench.live import DEFAULT_RUNNER, LiveResult
 from tui_gym.bench.map_edit import MapEditResult
 from tui_gym.bench.memory import MemoryResult
+from tui_gym.bench.parts import PartResult
 from tui_gym.bench.programs import ProgramsResult
 from tui_gym.bench.speed import Speed
 from tui_gym.bench.startup import StartupResult
@@ -63,6 +65,7 @@ class BenchResults:
     live: dict[str, LiveResult] = field(default_factory=dict)  # by runner
     memory: MemoryResult | None = None
     startup: StartupResult | None = None
+    parts: tuple[PartResult, ...] | None = None  # the app with each speed part left to Textual
     planning: PlanningResult | None = None  # Dyna-Q against Q-learning, real episodes
     programs: ProgramsResult | None = None
     map_edit: tuple[MapEditResult, ...] | None = None  # edit to new optimum, per grid game
@@ -178,6 +181,9 @@ def run_bench(
     stage("memory", f"memory over {plan.memory_episodes:,} episodes",
           lambda: memory.measure(plan.memory_episodes, plan.memory_warmup))
     stage("startup", "start-up to the first frame", lambda: startup.measure(plan.startup_repeats))
+    stage("parts", "key latency and start-up with each speed part of Textual's private names "
+          "left to Textual", lambda: parts.measure(plan.live_seconds, plan.key_presses,
+                                                   plan.live_repeats, plan.startup_repeats, say))
     stage("programs", "programs as players: episodes to separate two players, protocol "
           "and MCP steps/s",
           lambda: programs.measure(plan.separation_episodes, plan.pipe_seconds, plan.pipe_repeats))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import numbers
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -115,7 +116,8 @@ class ParamError(ValueError):
 class Param:
     """One parameter: its type, default, range and help. `owner` (a wrapper's name) prefixes
     its name in messages, `title` labels it in a form, `min_inclusive=False` makes the lower
-    bound exclusive; a `str` param is a choice among `choices`, read case-insensitively.
+    bound exclusive; a `str` param is a choice among `choices`, read case-insensitively;
+    `when` (name, value) says it matters only while that other param has that value.
     """
 
     name: str
@@ -128,6 +130,7 @@ class Param:
     title: str = ""
     min_inclusive: bool = True
     choices: tuple[str, ...] = ()
+    when: tuple[str, ParamValue] | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in (int, float, bool, str):
@@ -143,6 +146,10 @@ class Param:
     def label(self) -> str:
         """`Owner.name`, or just `name` outside a spec."""
         return f"{self.owner}.{self.name}" if self.owner else self.name
+
+    def applies(self, values: Mapping[str, Any]) -> bool:
+        """Whether this param matters with these values of the others (see `when`)."""
+        return self.when is None or values.get(self.when[0]) == self.when[1]
 
     def describe_range(self) -> str:
         """The valid values, as shown in help and errors: `[1, 100000]`, `true or false`."""

@@ -41,6 +41,7 @@ class ParamField(Horizontal):
     ParamField Input {{ width: {FIELD_WIDTH}; }}
     ParamField Checkbox {{ width: {FIELD_WIDTH}; }}
     ParamField.-stacked {{ layout: vertical; height: 2; }}
+    ParamField.-unused Label, ParamField.-unused Input {{ color: $text-disabled; }}
     ParamField.-stacked Input, ParamField.-stacked Checkbox {{ margin-left: 2; }}
     Screen.compact ParamField {{ padding-left: 2; }}
     Screen.compact ParamField Input, Screen.compact ParamField Checkbox {{
@@ -63,7 +64,9 @@ class ParamField(Horizontal):
             box = TextField(value=typed_text(self._value), compact=True,
                             validators=[FieldValidator(self.param)],
                             validate_on=["changed", "submitted"])
-        box.tooltip = f"{self.param.help} ({self.param.describe_range()})".strip()
+        when = self.param.when
+        used = f"; used when {when[0]} is {typed_text(when[1])}" if when else ""
+        box.tooltip = f"{self.param.help} ({self.param.describe_range()}{used})".strip()
         yield box
 
     @property
@@ -280,7 +283,7 @@ class SidePanel(VerticalScroll):
         with RadioSet(id="game-picker"):
             for button_id, title, _ in self._picker_games():
                 yield RadioButton(title, id=button_id)
-        yield Vertical(*self._env_fields(), id="env-params")
+        yield Vertical(*self._mark_unused(self._env_fields()), id="env-params")
         yield Static("", id="env-error", classes="field-error")
         yield Static("Algorithm", classes="section")
         with RadioSet(id="algorithm-picker"):
@@ -347,6 +350,14 @@ class SidePanel(VerticalScroll):
             for p in session.game.params
         ]
 
+    def _mark_unused(self, fields: list[ParamField]) -> list[ParamField]:
+        """`fields`, the game's parameters that do not matter with the others' values dimmed."""
+        session = self.session
+        values = {p.name: session.env_kwargs.get(p.name, p.default) for p in session.game.params}
+        for field in fields:
+            field.set_class(not field.param.applies(values), "-unused")
+        return fields
+
     def _picker_games(self) -> list[tuple[str, str, str]]:
         """(button id, label, env id) of every game the picker lists: the registered ones,
         each with its hotkey, and the session's own when it is another env."""
@@ -404,7 +415,9 @@ class SidePanel(VerticalScroll):
                 field.set_value(self.session.env_kwargs.get(field.param.name))
         else:
             env_box.remove_children()
-            env_box.mount_all(self._env_fields())
+            fields = self._env_fields()
+            env_box.mount_all(fields)
+        self._mark_unused(fields)
         self._show_wrappers()
         self._show_error("#env-error", None)
         self.query_one("#chain", Static).update(chain_text(self.session))

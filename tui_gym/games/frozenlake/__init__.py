@@ -52,11 +52,13 @@ class FrozenLakeGame(TileGame):
     params = (
         Param("map", str, "4x4", help="4x4, 8x8, a random map or an edited one (custom)",
               choices=MAPS),
-        Param("size", int, 8, 3, 12, help="cells a side of a random map"),
-        Param("map_seed", int, 0, 0, 1_000_000, help="seed of a random map"),
+        Param("size", int, 8, 3, 12, help="cells a side of a random map",
+              when=("map", "random")),
+        Param("map_seed", int, 0, 0, 1_000_000, help="seed of a random map",
+              when=("map", "random")),
         Param("slippery", bool, True, help="moves may slide sideways"),
         Param("success_rate", float, 1 / 3, 0.0, 1.0, help="chance a slippery move goes as asked",
-              min_inclusive=False),
+              min_inclusive=False, when=("slippery", True)),
     )
     theme = "lake"
     floor_word = "ice"
