@@ -52,7 +52,7 @@ def server() -> Iterator[McpProcess]:
 
 
 # Long enough for a test's calls on one game, short enough to wait for one to expire.
-IDLE_SECONDS = 2
+IDLE_SECONDS = 3
 
 
 @pytest.fixture(scope="module")
