@@ -224,8 +224,9 @@ def test_a_player_that_floods_requests_that_are_not_moves_times_out(tmp_path: Pa
     while True:
         ask({"cmd": "render"})
     """)
+    # A short decision time: the player and the benchmark keep a core each busy until it ends.
     result = run_benchmark("blackjack", ProcessPlayer(cmd), episodes=2, seed=0,
-                           decision_timeout=0.2)
+                           decision_timeout=0.1)
     assert result.fouls.timeouts == 3 and result.episodes == 2
     assert result.status.endswith("the program was ended")
 

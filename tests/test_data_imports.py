@@ -120,6 +120,8 @@ def test_a_recording_naming_a_module_is_refused(
         game_for(EVIL_ID, from_data=True)
 
 
+# On the worker of tests/test_mcp_server.py: the MCP SDK loads in one worker.
+@pytest.mark.xdist_group("mcp_server")
 def test_a_tool_call_naming_a_module_is_refused(marker: Path) -> None:
     pytest.importorskip("mcp")
     from tests.mcp_support import McpInProcess

@@ -1,13 +1,11 @@
 """Prediction learners (TD(0), constant-α MC, n-step TD, TD(λ)): each update by hand, the
-exact values they are scored against, their RMS error falling on the random walk, the
-compiled and the plain Python rule giving the same run, and a session's figures."""
+exact values they are scored against, their RMS error falling on the random walk, and a
+session's figures. The compiled and the plain Python rules give the same runs:
+tests/test_engine_plain.py."""
 
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -26,8 +24,6 @@ from tui_gym.core.engine.loop import ModelArrays
 from tui_gym.games import game_for
 from tui_gym.games.base import TrainingModel
 from tui_gym.session.session import Session
-
-ROOT = Path(__file__).resolve().parent.parent
 
 
 def walk(states: int = 5) -> TrainingModel:
@@ -167,16 +163,10 @@ def test_a_run_cut_into_calls_is_the_same_run() -> None:
                           rms_curve(whole, arrays, truth, 20))
 
 
-_PLAIN = """
-import json
-from tests.test_prediction import curves
-print(json.dumps(curves()))
-"""
-
-
 def curves() -> dict[str, list[float]]:
     """Each learner's RMS curve, seed 3, over 15 episodes of the 19-state walk (MC's
-    episodes outgrow its first buffer)."""
+    episodes outgrow its first buffer): tests/test_engine_plain.py compares the compiled
+    rules' with the plain Python ones'."""
     found = walk(19)
     arrays = ModelArrays.of(found.model)
     out = {}
@@ -184,18 +174,6 @@ def curves() -> dict[str, list[float]]:
         agent = learner(cls, 21, seed=3, **hp)
         out[cls.name] = rms_curve(agent, arrays, agent.truth(found.model), 15).tolist()
     return out
-
-
-def test_the_compiled_rules_and_the_plain_python_ones_give_the_same_runs() -> None:
-    env = {**os.environ, "NUMBA_DISABLE_JIT": "1"}
-    done = subprocess.run([sys.executable, "-c", _PLAIN], cwd=ROOT, env=env, text=True,
-                          capture_output=True, timeout=300, check=False)
-    assert done.returncode == 0, done.stderr[-2000:]
-    plain = json.loads(done.stdout)
-    compiled = curves()
-    assert plain.keys() == compiled.keys()
-    for name, curve in compiled.items():
-        assert plain[name] == pytest.approx(curve, abs=1e-12), name
 
 
 # --- in a session ----------------------------------------------------------------------

@@ -162,13 +162,6 @@ def strict_json(line: bytes) -> dict:
     return value
 
 
-def test_a_bad_byte_costs_one_line_and_earlier_lines_are_answered():
-    data = b'{"cmd":"help","id":1}\n\xff\n{"cmd":"help","id":3}\n'
-    lines, stderr, code = run_protocol_bytes("blackjack", data)
-    assert code == 0, stderr
-    responses = [strict_json(line) for line in lines]
-    assert [r.get("id") for r in responses] == [1, None, 3]
-    assert responses[1] == {"error": "not UTF-8: byte 0xff at column 1 cannot be decoded"}
 
 
 HOSTILE = {
@@ -192,14 +185,37 @@ AFTER_RESET = {
 }
 
 
-def test_hostile_lines_get_errors_and_the_session_goes_on():
-    lines = [*HOSTILE.values(), b'{"cmd": "reset", "seed": 7}', *AFTER_RESET.values(),
-             b'{"cmd": "step", "action": "stick", "id": "last"}']
+BAD_BYTE = [b'{"cmd":"help","id":1}', b"\xff", b'{"cmd":"help","id":3}']
+HOSTILE_LINES = [*HOSTILE.values(), b'{"cmd": "reset", "seed": 7}', *AFTER_RESET.values(),
+                 b'{"cmd": "step", "action": "stick", "id": "last"}']
+
+
+@pytest.fixture(scope="module")
+def hostile_run() -> tuple[list[dict], str, int]:
+    """One strict-locale command fed a bad byte between two lines, then the hostile lines:
+    every response read strictly, stderr, exit code."""
+    lines = [*BAD_BYTE, *HOSTILE_LINES]
     raw, stderr, code = run_protocol_bytes("blackjack", b"".join(line + b"\n" for line in lines))
+    return [strict_json(line) for line in raw], stderr, code
+
+
+# One worker runs both tests of the one command above (xdist groups).
+@pytest.mark.xdist_group("protocol_hostile")
+def test_a_bad_byte_costs_one_line_and_earlier_lines_are_answered(hostile_run):
+    answered, stderr, code = hostile_run
+    assert code == 0, stderr
+    responses = answered[: len(BAD_BYTE)]
+    assert [r.get("id") for r in responses] == [1, None, 3]
+    assert responses[1] == {"error": "not UTF-8: byte 0xff at column 1 cannot be decoded"}
+
+
+@pytest.mark.xdist_group("protocol_hostile")
+def test_hostile_lines_get_errors_and_the_session_goes_on(hostile_run):
+    answered, stderr, code = hostile_run
     assert code == 0, stderr
     assert stderr == ""
-    responses = [strict_json(line) for line in raw]
-    assert len(responses) == len(lines)
+    assert len(answered) == len(BAD_BYTE) + len(HOSTILE_LINES)
+    responses = answered[len(BAD_BYTE):]
     for name, response in zip([*HOSTILE, "reset", *AFTER_RESET], responses, strict=False):
         if name != "reset":
             assert set(response) <= {"error", "id"} and response["error"], (name, response)
