@@ -51,13 +51,9 @@ def server() -> Iterator[McpProcess]:
     assert "Traceback" not in process.stderr_text()
 
 
-# Long enough for a test's calls on one game, short enough to wait for one to expire.
-IDLE_SECONDS = 3
-
-
 @pytest.fixture(scope="module")
 def no_hints() -> Iterator[McpProcess]:
-    process = stdio_server("--no-hints", "--max-games", "2", "--idle-timeout", str(IDLE_SECONDS))
+    process = stdio_server("--no-hints", "--max-games", "2")
     yield process
     process.close()
     assert "Traceback" not in process.stderr_text()
@@ -174,23 +170,21 @@ def test_the_number_of_games_is_bounded(no_hints: McpProcess) -> None:
         no_hints.data("end_game", game_id=game_id)
 
 
-def test_an_idle_game_expires_over_stdio(no_hints: McpProcess) -> None:
-    idle = no_hints.data("start_game", game="blackjack", seed=1)["game_id"]
-    other = no_hints.data("start_game", game="gridworld", seed=1)["game_id"]
-    deadline = time.monotonic() + 30
-    while True:  # the places free once the idle games expire
-        result = no_hints.call("start_game", game="gridworld", seed=1)
-        if not result.is_error:
-            break
-        assert "the most this server plays at once" in result.content[0].text
-        assert time.monotonic() < deadline, "the idle games never expired"
-        time.sleep(0.05)  # polling a condition: the games expire on the server's clock
+def test_an_idle_game_expires_over_stdio() -> None:
+    server = stdio_server("--max-games", "1", "--idle-timeout", "0.3")
     try:
-        for game_id in (idle, other):
-            assert f"expired after {IDLE_SECONDS} s without a call" in no_hints.error(
-                "observe", game_id=game_id)
+        idle = server.data("start_game", game="blackjack", seed=1)["game_id"]
+        deadline = time.monotonic() + 30
+        while True:  # the one place frees once the idle game expires
+            result = server.call("start_game", game="gridworld", seed=1)
+            if not result.is_error:
+                break
+            assert "the most this server plays at once" in result.content[0].text
+            assert time.monotonic() < deadline, "the idle game never expired"
+        assert "expired after 0.3 s without a call" in server.error("observe", game_id=idle)
     finally:
-        no_hints.data("end_game", game_id=result.structured_content["game_id"])
+        server.close()
+    assert "Traceback" not in server.stderr_text()
 
 
 def test_idle_games_expire_on_the_tables_clock() -> None:
