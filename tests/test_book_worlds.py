@@ -176,6 +176,14 @@ def test_a_changing_mazes_defaults_reach_its_bound(name: str, algorithm: str, se
     assert met, (text, value)
 
 
+def test_dyna_q_plus_defaults_find_the_shortcut_and_dyna_qs_keep_the_long_way() -> None:
+    # Figure 8.5 with each learner's defaults: the bonus, not exploration, finds the shortcut,
+    # and the greedy policy of the bonus-laden Q takes it without a detour or a loop.
+    for algorithm, extra_steps in (("dyna-q-plus", 0.0), ("dyna-q", 6.0)):
+        _, value, _, _, _ = one_run("shortcut-maze", algorithm, 0)
+        assert value == extra_steps, algorithm
+
+
 def test_a_session_measures_against_the_phase_in_force_after_its_steps() -> None:
     session = Session("blocking-maze", {"change_at": 50}, seed=0)
     assert session.exact_kwargs() == {"change_at": 50, PHASE: 0}

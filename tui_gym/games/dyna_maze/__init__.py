@@ -193,4 +193,12 @@ class ShortcutMazeGame(MazeGame):
     params = (Param("change_at", int, 3000, 1, 100_000_000,
                     help="the step, over all episodes, at which the wall opens"),)
     extra_steps = 6.0  # the long way, which a learner that does not explore keeps to
-    hyperparameters = {"*": {**MazeGame.CHANGING, "episodes": 400}, **MazeGame.CHANGING_LEARNERS}
+    hyperparameters = {
+        "*": {**MazeGame.CHANGING, "episodes": 400},
+        **MazeGame.CHANGING_LEARNERS,
+        # Dyna-Q+ tries the shortcut's move again once its bonus outweighs what a step costs
+        # in discounting. The bonus lives in Q: a larger one outweighs that cost somewhere most
+        # of the time, and the greedy policy walks into a wall untried for long. A smaller
+        # bonus takes more episodes to grow, and the new way more to settle.
+        "dyna-q-plus": {"kappa": 0.0004, "episodes": 800},
+    }
