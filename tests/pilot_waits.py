@@ -3,11 +3,11 @@
 Textual's pilot, after each key, click and pause, waits until the app and every widget
 of the screen has handled what was queued when it asked: it queues one callback on each
 of them and waits for them all. A widget waiting in an empty queue has nothing queued,
-and its callback only wakes it to run its idle handlers; on a screen of two hundred
-widgets that was most of what a key press cost a test. Here the callback goes to the
-others only (a widget handling a message, with messages queued, or with callbacks to
-run), and the wait ends on the same condition. Where Textual's queues have another
-shape, the pilot's own wait stays.
+and its callback only wakes it to run its idle handlers; on the app's screen that was
+most of what a key press cost a test. Here the callback goes to the others only (a
+widget handling a message, with messages queued, or with callbacks to run), and the wait
+ends on the same condition. Where Textual's queues have another shape, the pilot's own
+wait stays.
 """
 
 from __future__ import annotations
