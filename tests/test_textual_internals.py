@@ -4,6 +4,7 @@ is missing or has changed shape."""
 
 from __future__ import annotations
 
+import asyncio
 import threading
 from pathlib import Path
 
@@ -11,6 +12,7 @@ import pytest
 from rich.segment import Segment
 from textual.app import App, ComposeResult
 from textual.drivers.headless_driver import HeadlessDriver
+from textual.message import Message
 from textual.screen import Screen
 from textual.strip import Strip
 from textual.widget import Widget
@@ -21,6 +23,7 @@ from tui_gym.session.session import Session
 from tui_gym.ui import textual_internals as internals
 from tui_gym.ui.app import TuiGymApp
 
+from .pilot_waits import wait_on_busy_widgets_only
 from .screen import screen_text
 from .waiting import wait_for
 
@@ -165,3 +168,41 @@ async def test_a_focus_change_restyles_inside_a_widget_only_where_a_rule_reads_i
         await wait_for(pilot, lambda: framed.styles.border.top[1].rgb == (255, 255, 255)
                        and box.styles.border.top[1].rgb == (255, 255, 255),
                        "the hidden widgets restyled as not focused")
+
+
+class Busy(Static):
+    """A widget whose message takes a while to handle (it awaits on the way)."""
+
+    class Work(Message):
+        pass
+
+    handled = 0
+
+    async def on_busy_work(self, message: Work) -> None:
+        await asyncio.sleep(0.05)
+        self.handled += 1
+
+
+class BusyHost(App[None]):
+    def compose(self) -> ComposeResult:
+        yield from (Static(f"{n}") for n in range(20))
+        yield Busy()
+
+
+async def test_the_pilots_wait_asks_the_busy_widgets_and_waits_for_them() -> None:
+    assert wait_on_busy_widgets_only()  # as the tests run (tests/conftest.py)
+    app = BusyHost()
+    async with app.run_test() as pilot:
+        busy = app.query_one(Busy)
+        busy.post_message(Busy.Work())  # queued
+        await pilot.pause()
+        assert busy.handled == 1
+        busy.post_message(Busy.Work())
+        await asyncio.sleep(0.01)  # being handled: nothing queued
+        await pilot.pause()
+        assert busy.handled == 2
+        asked = []
+        for node in app.screen.walk_children(Static):
+            node.call_later = lambda callback, node=node: asked.append(node) or False
+        await pilot.pause()
+        assert not asked  # every widget is waiting for its next message

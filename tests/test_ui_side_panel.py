@@ -6,8 +6,9 @@ from __future__ import annotations
 import asyncio
 
 from textual.app import App, ComposeResult
-from textual.widgets import Checkbox
+from textual.widgets import Checkbox, Input, Label
 
+from tui_gym.core.params import typed_text
 from tui_gym.core.wrappers import WrapperChoice
 from tui_gym.session.session import Session
 from tui_gym.ui.side_panel import ParamField, SidePanel, WrapperRow
@@ -52,7 +53,9 @@ async def test_wrapper_rows_made_after_mounting_show_the_session_and_take_the_fo
         assert app.focused is box
 
 
-class BarePanel(App[None]):
+class SwitchHost(App[None]):
+    """A `SidePanel` over whichever session the test hands it."""
+
     def __init__(self, session: Session) -> None:
         super().__init__()
         self.session = session
@@ -61,8 +64,48 @@ class BarePanel(App[None]):
         yield SidePanel(id="side")
 
 
+def env_fields(app: SwitchHost) -> list[ParamField]:
+    return list(app.query_one("#env-params").query_children(ParamField))
+
+
+async def test_a_game_switch_shows_the_new_games_fields_in_the_fields_already_there() -> None:
+    # Frozen Lake (text, text, text, tick, text) to Cliff Walking (tick, text) to the
+    # gambler (text, text) and back: fields change kind both ways, are retitled, removed
+    # and added.
+    frozen = Session("frozenlake", seed=0)
+    app = SwitchHost(frozen)
+    async with app.run_test(size=(44, 40)) as pilot:
+        panel = app.query_one(SidePanel)
+        first = env_fields(app)
+        first[1].input.value = "x"  # an edit not applied, marked invalid
+        assert first[1].input.has_class("-invalid")
+        for session in (Session("cliffwalking", {"slippery": True}, seed=0),
+                        Session("gambler", seed=0), frozen):
+            app.session = session
+            panel.reload()
+            await pilot.pause()
+            fields = env_fields(app)
+            assert fields[:2] == first[:2]  # kept, whatever they show now
+            assert [f.param for f in fields] == list(session.game.params)
+            for field in fields:
+                value = session.env_kwargs[field.param.name]
+                label = str(field.query_one(Label).render())
+                assert label == field.param.name
+                if field.param.kind is bool:
+                    box = field.query_one(Checkbox)
+                    assert box.value is value and not field.query(Input)
+                else:
+                    box = field.input
+                    assert box.value == typed_text(value) and not box.has_class("-invalid")
+                    assert field.read()[1] is None
+                assert str(box.tooltip).startswith(field.param.help)
+        # A kept field checks a value by the parameter it shows now.
+        first[1].input.value = "0"
+        assert first[1].param.name == "size" and first[1].input.has_class("-invalid")
+
+
 async def test_parameters_that_do_not_matter_with_the_others_are_dimmed() -> None:
-    app = BarePanel(Session("frozenlake", seed=0))  # the 4x4 map, slippery
+    app = SwitchHost(Session("frozenlake", seed=0))  # the 4x4 map, slippery
 
     def dimmed() -> set[str]:
         return {f.param.name for f in app.query_one("#env-params").query(ParamField)

@@ -30,6 +30,11 @@ OTHER = "game-other"  # the picker's button for an env the registry does not lis
 FIELD_WIDTH, COMPACT_FIELD_WIDTH = 12, 7  # the input beside a parameter's name
 
 
+def _tip(param: Param) -> str:
+    used = f"; used when {param.when[0]} is {typed_text(param.when[1])}" if param.when else ""
+    return f"{param.help} ({param.describe_range()}{used})".strip()
+
+
 class ParamField(Horizontal):
     """One labelled parameter input. A name too long to sit beside its input goes on
     a line of its own above it (`-stacked`): the name is what a person types
@@ -57,35 +62,59 @@ class ParamField(Horizontal):
 
     def compose(self) -> ComposeResult:
         yield Label(self.param.name)
+        yield self._box(self._value)
+
+    def _box(self, value: Any) -> Checkbox | Input:
+        """The box for the parameter: a tick for a bool, a checked text field otherwise."""
         box: Checkbox | Input
         if self.param.kind is bool:
-            box = TickBox("", value=bool(self._value), compact=True)
+            box = TickBox("", value=bool(value), compact=True)
         else:
-            box = TextField(value=typed_text(self._value), compact=True,
+            box = TextField(value=typed_text(value), compact=True,
                             validators=[FieldValidator(self.param)],
                             validate_on=["changed", "submitted"])
-        when = self.param.when
-        used = f"; used when {when[0]} is {typed_text(when[1])}" if when else ""
-        box.tooltip = f"{self.param.help} ({self.param.describe_range()}{used})".strip()
-        yield box
+        box.tooltip = _tip(self.param)
+        return box
 
     @property
     def input(self) -> Input:
         return self.query_one(Input)
 
     def on_resize(self, event: events.Resize) -> None:
+        self._fit_name()
+
+    def _fit_name(self) -> None:
         field = COMPACT_FIELD_WIDTH if self.screen.has_class("compact") else FIELD_WIDTH
         self.set_class(len(self.param.name) > self.size.width - field - 1, "-stacked")
 
+    def show_param(self, param: Param, value: Any) -> None:
+        """Stand for `param` and show its value: the label and the box are kept, and the
+        box is made anew only when the kind of box differs (a tick or a text field)."""
+        if param != self.param:
+            box = self.query_one(Checkbox if self.param.kind is bool else Input)
+            same_kind = (param.kind is bool) == (self.param.kind is bool)
+            self.param = param
+            self.query_one(Label).update(param.name)
+            if self.size.width:
+                self._fit_name()
+            if not same_kind:
+                box.remove()
+                self.mount(self._box(value))
+                return
+            box.tooltip = _tip(self.param)
+            if isinstance(box, Input):
+                box.validators = [FieldValidator(param)]
+        self.set_value(value)
+        if param.kind is not bool:
+            self.input.validate(self.input.value)
+
     def set_value(self, value: Any) -> None:
         """Show a value (without counting as an edit)."""
-        if self.param.kind is bool:
-            box = self.query_one(Checkbox)
-            with box.prevent(Checkbox.Changed):
-                box.value = bool(value)
-            return
-        with self.input.prevent(Input.Changed):
-            self.input.value = typed_text(value)
+        box: Checkbox | Input = self.query_one(Checkbox) if self.param.kind is bool else self.input
+        shown = bool(value) if isinstance(box, Checkbox) else typed_text(value)
+        if box.value != shown:
+            with box.prevent(Checkbox.Changed, Input.Changed):
+                box.value = shown
 
     def read(self) -> tuple[Any, str | None]:
         """(value, None) when valid, else (None, the reason); the input marks itself."""
@@ -121,6 +150,7 @@ class WrapperRow(Vertical):
         self.choice = choice
         self.reason = reason
         self.place = place  # 1 for the innermost wrapper of the chain; 0 when not in it
+        self._said: dict[str, str | None] = {"reason": reason and f"✗ {reason}"}
 
     def _label(self) -> str:
         return f"{self.spec.name}  #{self.place}" if self.place else self.spec.name
@@ -153,7 +183,7 @@ class WrapperRow(Vertical):
         with box.prevent(Checkbox.Changed):
             box.value = choice is not None
         values = choice.values() if choice else self.spec.defaults()
-        for field in self.query(ParamField):
+        for field in self.query_children(ParamField):
             field.set_value(values.get(field.param.name, field.param.default))
         self.show_error(None)
         self.show_reason(reason)
@@ -169,6 +199,9 @@ class WrapperRow(Vertical):
 
     def _say(self, kind: str, text: str | None) -> None:
         """Show `text` on the row's error or reason line, made the first time it has one."""
+        if self._said.get(kind) == text:
+            return
+        self._said[kind] = text
         widget = self.query_one_optional(f"WrapperRow > .{kind}", Static)
         if widget is None:
             if not text:
@@ -407,20 +440,28 @@ class SidePanel(VerticalScroll):
         self._order = [c.name for c in self.session.choices]
         self._check_game()
         self._check_algorithm()
-        env_box = self.query_one("#env-params", Vertical)
-        fields = list(env_box.query(ParamField))
-        wanted = self.session.game.params
-        if [f.param for f in fields] == list(wanted):
-            for field in fields:
-                field.set_value(self.session.env_kwargs.get(field.param.name))
-        else:
-            env_box.remove_children()
-            fields = self._env_fields()
-            env_box.mount_all(fields)
-        self._mark_unused(fields)
+        self._show_env_fields()
         self._show_wrappers()
         self._show_error("#env-error", None)
         self.query_one("#chain", Static).update(chain_text(self.session))
+
+    def _show_env_fields(self) -> None:
+        """The game's parameters with the session's values, in the fields already there
+        (each retitled as needed); fields are added or removed only as their number differs."""
+        env_box = self.query_one("#env-params", Vertical)
+        fields = list(env_box.query_children(ParamField))
+        kwargs = self.session.env_kwargs
+        params = self.session.game.params
+        for place, param in enumerate(params):
+            value = kwargs.get(param.name, param.default)
+            if place < len(fields):
+                fields[place].show_param(param, value)
+            else:
+                fields.append(ParamField(param, value))
+                env_box.mount(fields[-1])
+        for field in fields[len(params):]:
+            field.remove()
+        self._mark_unused(fields[:len(params)])
 
     def _show_wrappers(self) -> None:
         """Each wrapper row shows the session's choice, its place and why it does not fit."""
@@ -428,7 +469,7 @@ class SidePanel(VerticalScroll):
             self._rows_stale = self._rows is not None  # rows not yet made read it as made
             return
         chosen, reasons = self._wrapper_states()
-        for row in self.query(WrapperRow):
+        for row in self.query_one("#wrapper-list").query_children(WrapperRow):
             row.set_state(chosen.get(row.spec.name), reasons.get(row.spec.name))
             row.show_place(self._place(row.spec.name))
 
