@@ -163,15 +163,17 @@ def test_the_model_of_each_phase_agrees_with_every_move_of_the_env(env_class) ->
                 assert [(nxt, reward, terminated)] == [o[1:] for o in model.outcomes(s, a)]
 
 
-# Seeds whose defaults ended short on the changing mazes: prioritized sweeping walking into
+# Seeds whose defaults ended short on the mazes: prioritized sweeping walking into
 # the new wall, a detour kept or the goal lost by the learners that look ahead on-policy,
-# Double Q and Q(lambda) not settled (`tui-gym bench` counts every seed).
+# Double Q and Q(lambda) not settled, Monte Carlo's averages holding its first, nearly random
+# episodes on the Dyna maze (`tui-gym bench` counts every seed).
 @pytest.mark.parametrize(("name", "algorithm", "seed"), [
     ("blocking-maze", "prioritized-sweeping", 1), ("blocking-maze", "sarsa-lambda", 3),
     ("blocking-maze", "n-step-sarsa", 13), ("blocking-maze", "monte-carlo", 8),
     ("shortcut-maze", "sarsa-lambda", 1), ("shortcut-maze", "monte-carlo", 2),
-    ("shortcut-maze", "double-q", 6), ("shortcut-maze", "q-lambda", 9)])
-def test_a_changing_mazes_defaults_reach_its_bound(name: str, algorithm: str, seed: int) -> None:
+    ("shortcut-maze", "double-q", 6), ("shortcut-maze", "q-lambda", 9),
+    ("dyna-maze", "monte-carlo", 1), ("dyna-maze", "monte-carlo", 213)])
+def test_a_mazes_defaults_reach_its_bound(name: str, algorithm: str, seed: int) -> None:
     met, value, text, _, _ = one_run(name, algorithm, seed)
     assert met, (text, value)
 
