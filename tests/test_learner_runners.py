@@ -48,6 +48,8 @@ def test_hyperparameters_set_while_running_apply_at_once() -> None:
         runner.set_hyperparameters(session.hp.replace(epsilon_start=0.2, epsilon_final=0.2,
                                                       learning_rate=0.05))
         assert session.agent.epsilon == 0.2 and session.agent.hp.learning_rate == 0.05
+        # The compiled call under way ends with the old settings; the next one takes the new.
+        assert wait_for(lambda: session.trainer.last.epsilon == 0.2, DEADLINE)
         seen = session.trainer.episodes
         assert wait_for(lambda: session.trainer.episodes > seen + 20_000, DEADLINE)
         assert runner.running  # nothing restarted
