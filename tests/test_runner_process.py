@@ -176,8 +176,8 @@ def test_a_child_trains_whether_it_forks_from_the_server_or_is_spawned(monkeypat
     monkeypatch.setattr(process_runner.mp, "get_all_start_methods", lambda: methods)
     runner = ProcessRunner(Session("blackjack", hp=QLearning.hyperparameters(episodes=50), seed=0))
     try:
-        assert runner.start() and runner.wait_idle(DEADLINE)
-        assert runner.session.trainer.episodes == 50
+        assert runner.start() and runner.wait_idle(DEADLINE), why(runner)
+        assert runner.session.trainer.episodes == 50, why(runner)
         assert runner._child is not None and runner._child.process._start_method == methods[0]
     finally:
         runner.close()
