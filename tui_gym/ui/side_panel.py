@@ -316,7 +316,7 @@ class SidePanel(VerticalScroll):
         with RadioSet(id="game-picker"):
             for button_id, title, _ in self._picker_games():
                 yield RadioButton(title, id=button_id)
-        yield Vertical(*self._mark_unused(self._env_fields()), id="env-params")
+        yield Vertical(*self._env_fields(), id="env-params")
         yield Static("", id="env-error", classes="field-error")
         yield Static("Algorithm", classes="section")
         with RadioSet(id="algorithm-picker"):
@@ -376,17 +376,19 @@ class SidePanel(VerticalScroll):
     def _place(self, name: str) -> int:
         return self._order.index(name) + 1 if name in self._order else 0
 
-    def _env_fields(self) -> list[ParamField]:
+    def _env_values(self) -> dict[str, Any]:
+        """Each of the game's parameters with the session's value (else its default)."""
         session = self.session
-        return [
-            ParamField(p, session.env_kwargs.get(p.name, p.default))
-            for p in session.game.params
-        ]
+        return {p.name: session.env_kwargs.get(p.name, p.default) for p in session.game.params}
 
-    def _mark_unused(self, fields: list[ParamField]) -> list[ParamField]:
-        """`fields`, the game's parameters that do not matter with the others' values dimmed."""
-        session = self.session
-        values = {p.name: session.env_kwargs.get(p.name, p.default) for p in session.game.params}
+    def _env_fields(self) -> list[ParamField]:
+        values = self._env_values()
+        return self._mark_unused(
+            [ParamField(p, values[p.name]) for p in self.session.game.params], values)
+
+    @staticmethod
+    def _mark_unused(fields: list[ParamField], values: dict[str, Any]) -> list[ParamField]:
+        """`fields`, those that do not matter with the others' `values` dimmed."""
         for field in fields:
             field.set_class(not field.param.applies(values), "-unused")
         return fields
@@ -450,10 +452,10 @@ class SidePanel(VerticalScroll):
         (each retitled as needed); fields are added or removed only as their number differs."""
         env_box = self.query_one("#env-params", Vertical)
         fields = list(env_box.query_children(ParamField))
-        kwargs = self.session.env_kwargs
+        values = self._env_values()
         params = self.session.game.params
         for place, param in enumerate(params):
-            value = kwargs.get(param.name, param.default)
+            value = values[param.name]
             if place < len(fields):
                 fields[place].show_param(param, value)
             else:
@@ -461,7 +463,7 @@ class SidePanel(VerticalScroll):
                 env_box.mount(fields[-1])
         for field in fields[len(params):]:
             field.remove()
-        self._mark_unused(fields[:len(params)])
+        self._mark_unused(fields[:len(params)], values)
 
     def _show_wrappers(self) -> None:
         """Each wrapper row shows the session's choice, its place and why it does not fit."""
