@@ -1,9 +1,7 @@
 """The Train view: watch a tabular learner learn the current game, live or step by step.
 
-It never trains: the app's timer hands it the runner's latest snapshot (`show_snapshot`),
-and the snapshot's heatmaps and exact figures are computed off the event loop
-(`exact_figures`). It never branches on a game's name: the game's heatmap layout says
-what a cell means and whether the heatmaps follow a focus.
+The app's timer hands it the runner's latest snapshot (`show_snapshot`); its heatmaps and
+exact figures are computed off the event loop (`exact_figures`).
 """
 
 from __future__ import annotations
@@ -47,81 +45,33 @@ class TrainView(MapEditingView):
     SCOPED_CSS = False
     DEFAULT_CSS = """
     TrainView #train-engine {
-        width: 1fr;
-        height: 1;
-        color: $text-muted;
-        text-style: italic;
-        text-wrap: nowrap;
-        text-overflow: ellipsis;
+        width: 1fr; height: 1; color: $text-muted; text-style: italic;
+        text-wrap: nowrap; text-overflow: ellipsis;
     }
-    TrainView #train-speed {
-        min-width: 8;
-    }
-    TrainView #train-top, TrainView #train-middle {
-        height: auto;
-    }
-    TrainView #train-top > * {
-        height: auto;
-        min-height: 9;  /* the two boxes line up for both games */
-    }
-    TrainView #train-charts {
-        width: 1fr;
-    }
-    TrainView #train-board-box {
-        display: none;
-        width: 36;
-        height: auto;
-        margin-left: 1;
-    }
-    TrainView #train-board-box > Board {
-        width: 100%;
-        height: 7;
-    }
+    TrainView #train-speed { min-width: 8; }
+    TrainView #train-top, TrainView #train-middle { height: auto; }
+    TrainView #train-top > * { height: auto; min-height: 9; }  /* the two boxes line up */
+    TrainView #train-charts { width: 1fr; }
+    TrainView #train-board-box { display: none; width: 36; height: auto; margin-left: 1; }
+    TrainView #train-board-box > Board { width: 100%; height: 7; }
     TrainView #train-board-caption {
-        color: $text-muted;
-        width: 100%;
-        height: auto;
-        min-height: 3;
-        padding: 0 1;
+        color: $text-muted; width: 100%; height: auto; min-height: 3; padding: 0 1;
     }
-    TrainView #train-step {
-        display: none;
-    }
-    TrainView #train-board-box.-shown, TrainView.-animated #train-step {
-        display: block;
-    }
-    TrainView.-stepping #train-board-box {
-        border-left: thick $accent;
-    }
-    TrainView #train-heatmap-box:focus-within {
-        border: round $primary;
-    }
+    TrainView #train-step { display: none; }
+    TrainView #train-board-box.-shown, TrainView.-animated #train-step { display: block; }
+    TrainView.-stepping #train-board-box { border-left: thick $accent; }
+    TrainView #train-heatmap-box:focus-within { border: round $primary; }
     /* At 80x24 the editor takes the place of the numbers and the charts, and the form
        hides until `e` (or a bad value) asks for it. */
     Screen.compact TrainView.-mapping #train-top, Screen.compact TrainView.-mapping #train-middle,
     Screen.compact TrainView #train-speed, Screen.compact TrainView #train-engine,
-    Screen.compact TrainView #train-form {
-        display: none;
-    }
-
-    Screen.compact TrainView #train-top {
-        layout: vertical;
-    }
-    Screen.compact TrainView #train-top > * {
-        min-height: 0;
-    }
-    Screen.compact TrainView #train-controls Button {
-        margin-right: 0;
-    }
-    Screen.compact TrainView.-editing #train-form {
-        display: block;
-    }
-    Screen.compact TrainView #train-heatmap-box {
-        border: none;
-    }
-    Screen.compact TrainView #train-board-box {
-        width: 24;
-    }
+    Screen.compact TrainView #train-form { display: none; }
+    Screen.compact TrainView #train-top { layout: vertical; }
+    Screen.compact TrainView #train-top > * { min-height: 0; }
+    Screen.compact TrainView #train-controls Button { margin-right: 0; }
+    Screen.compact TrainView.-editing #train-form { display: block; }
+    Screen.compact TrainView #train-heatmap-box { border: none; }
+    Screen.compact TrainView #train-board-box { width: 24; }
     """
 
     BINDINGS: ClassVar[list[BindingType]] = [
