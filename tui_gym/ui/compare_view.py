@@ -553,9 +553,7 @@ class CompareView(SessionView):
         self._seen_progress = -1
         self._live_outcomes = ()
         job.start()
-        self.add_class("-running")
-        self._stop.disabled = False
-        self._launch.disabled = True
+        self._show_running(True)
         spec = job.spec
         names = ", ".join(algorithm_title(a) for a in spec.algorithms)
         settings = ", ".join(f"{k}={v}" for k, v in spec.settings.items())
@@ -564,6 +562,12 @@ class CompareView(SessionView):
                   f"episodes" + (f", with {settings} from the Train view" if settings else "")
                   + "…")
         self._progress.show(0, 1)
+
+    def _show_running(self, running: bool) -> None:
+        """The progress line, the buttons and the keys of a running comparison, or not."""
+        self.set_class(running, "-running")
+        self._stop.disabled = not running
+        self._launch.disabled = running
         self.refresh_bindings()
 
     def action_stop(self) -> None:
@@ -604,10 +608,7 @@ class CompareView(SessionView):
 
     def _finished(self, job: CompareJob) -> None:
         self.job = None
-        self.remove_class("-running")
-        self._stop.disabled = True
-        self._launch.disabled = False
-        self.refresh_bindings()
+        self._show_running(False)
         result = job.result
         self._live_outcomes = ()
         if job.error is not None or result is None:
