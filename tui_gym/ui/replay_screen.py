@@ -256,7 +256,7 @@ class ReplayScreen(ModalScreen[None]):
         if judged:
             parts.append(f"{optimal}/{judged} optimal")
         total = episode.running_regret(len(episode.positions) - 1)
-        parts.append("regret " + ("–" if total is None else f"{total:.3f}"))
+        parts.append(f"regret {_regret(total)}")
         if game.source:
             said = SOURCES.get(game.source, f"recorded by {game.source}")
             parts.append(f"[$text-muted]{escape(said)}[/]")
@@ -290,15 +290,11 @@ class ReplayScreen(ModalScreen[None]):
 
     def _coach_line(self, episode: Episode, move: Move) -> tuple[str, str]:
         """The coach's verdict, the move's regret and the episode's so far, and a tone."""
-        running = episode.running_regret(self.position)
-        so_far = "regret so far " + ("–" if running is None else f"{running:.3f}")
+        so_far = f"regret so far {_regret(episode.running_regret(self.position))}"
         if move.verdict is None:
             return f"no verdict: no optimum to judge this move by · {so_far}", ""
-        regret = (
-            "regret – (no exact values for this game)"
-            if move.regret is None
-            else f"regret {move.regret:.3f}"
-        )
+        regret = f"regret {_regret(move.regret)}" + (
+            " (no exact values for this game)" if move.regret is None else "")
         if move.verdict == "optimal":
             return f"✓ {move.action_name} was optimal · {regret} · {so_far}", "-good"
         best = " or ".join(move.optimal) or "another move"
@@ -349,6 +345,10 @@ def _move_option(place: Position) -> Option:
         Text.assemble(f"{move.step:>3} ", (move.action_name, "bold"), " ", (mark, style),
                       (regret, style), f"  {format_reward(move.reward)}" if move.reward else "")
     )
+
+
+def _regret(value: float | None) -> str:
+    return "–" if value is None else f"{value:.3f}"
 
 
 def _observation_text(observation: object) -> str:
