@@ -10,6 +10,7 @@ import numpy as np
 
 from tui_gym.core.experiments import Figure, RunRecord, RunSummary, rolling_mean
 from tui_gym.core.text import visible
+from tui_gym.games.words import plural
 
 if TYPE_CHECKING:
     from tui_gym.session.experiments.compare import AlgorithmOutcome
@@ -51,7 +52,7 @@ class Series:
 
     def legend(self) -> str:
         """The legend's words: label, seeds, and what the band and the smoothing are."""
-        words = [self.label, f"{self.seeds} seed{'s' if self.seeds != 1 else ''}"]
+        words = [self.label, plural(self.seeds, "seed")]
         if self.has_band:
             words.append("95% band")
         if self.smoothing > 1:

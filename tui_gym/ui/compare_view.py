@@ -147,8 +147,7 @@ def describe_run(run: RunSummary) -> Text:
     from datetime import datetime
 
     when = datetime.fromtimestamp(run.started_at).strftime("%m-%d %H:%M")
-    seeds = len(run.seeds)
-    parts = [run_label(run), str(run.kind), f"{seeds} seed{'s' if seeds != 1 else ''}"]
+    parts = [run_label(run), str(run.kind), plural(len(run.seeds), "seed")]
     figure = run.figure("mean_return_last")
     if figure is not None:
         parts.append(f"return {with_interval(figure)}")

@@ -17,6 +17,7 @@ from textual.widgets import Button, Input, Label
 from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.mdp.planning import check_theta
 from tui_gym.games.model import freeze
+from tui_gym.games.words import plural
 from tui_gym.session.plan.panels import plan_panels
 from tui_gym.session.plan.runner import SPEEDS, PlanRunner, PlanSnapshot
 from tui_gym.session.plan.start import START_POLICIES, start_policy
@@ -58,8 +59,7 @@ class PlanView(MapEditingView):
     PlanView #plan-controls #plan-run { width: 9; }
     /* At 80x24 the row drops Improve and Converge (u and c, in the key bar) so that
        Restart and the speed fit. */
-    Screen.compact PlanView #plan-improve, Screen.compact PlanView #plan-converge {
-        display: none; }
+    Screen.compact PlanView #plan-improve, Screen.compact PlanView #plan-converge { display: none; }
     PlanView #plan-speed { min-width: 5; }
     PlanView #plan-knobs { height: 1; }
     PlanView #plan-knobs Label { padding: 0 1; color: $text-muted; }
@@ -255,8 +255,8 @@ class PlanView(MapEditingView):
         sweep = "in place" if snapshot.in_place else "synchronous"
         state = "running" if snapshot.running else "done" if snapshot.done else "paused"
         delta = "–" if math.isinf(snapshot.delta) else f"{snapshot.delta:.3g}"
-        improvements = (f" · {snapshot.iterations} improvement"
-                        f"{'s' * (snapshot.iterations != 1)}" if snapshot.iterations else "")
+        improvements = (f" · {plural(snapshot.iterations, 'improvement')}"
+                        if snapshot.iterations else "")
         last = f" · {snapshot.step}" if snapshot.step else ""
         self._status.show((
             f"{METHOD_WORDS[snapshot.method]} (1 2 3) · start: {self.start} (o) · {sweep} (s)",
@@ -286,8 +286,8 @@ class PlanView(MapEditingView):
         stuck = snapshot.never_ending
         if not stuck:
             return ""
-        return (f"with γ = 1 this policy can go round for ever from {stuck} state"
-                f"{'s' * (stuck != 1)}: no episode ends, so their values are no episode's")
+        return (f"with γ = 1 this policy can go round for ever from {plural(stuck, 'state')}: "
+                "no episode ends, so their values are no episode's")
 
     def _show_lines(self, snapshot: PlanSnapshot | None) -> None:
         plan = self.plan

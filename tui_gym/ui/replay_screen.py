@@ -21,7 +21,7 @@ from textual.widgets.option_list import Option
 from tui_gym.core.recording.reader import Episode, Move, Position, Recording
 from tui_gym.core.text import visible
 from tui_gym.games import game_for
-from tui_gym.games.words import format_reward
+from tui_gym.games.words import format_reward, plural
 from tui_gym.session.play import PlayStep
 from tui_gym.ui.help_screen import HelpScreen
 from tui_gym.ui.jump_screen import JumpScreen
@@ -244,12 +244,11 @@ class ReplayScreen(ModalScreen[None]):
         noun = game.episode_noun
         chain = " → ".join(game.wrappers)
         wrappers = f" [$text-muted]({escape(chain)})[/]" if chain else ""
-        moves = len(episode.moves)
         optimal, judged = episode.judged
         parts = [
             f"[b]{escape(game.title)}[/]{wrappers}",
             f"{escape(noun)} [b]{self.episode_index + 1}[/] of {len(recording.episodes):,}",
-            f"{moves} move{'' if moves == 1 else 's'}",
+            plural(len(episode.moves), "move"),
             f"return {format_reward(episode.total_return)}"
             + ("" if episode.finished else " [$text-warning](unfinished)[/]"),
         ]
