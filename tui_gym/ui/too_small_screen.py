@@ -16,8 +16,7 @@ class TooSmallScreen(ModalScreen[None]):
     DEFAULT_CSS = """
     TooSmallScreen { align: center middle; background: $background; }
     TooSmallScreen #too-small {
-        width: 100%; height: 100%;
-        content-align: center middle; text-align: center;
+        width: 100%; height: 100%; content-align: center middle; text-align: center;
         text-style: bold; color: $warning;
     }
     """
