@@ -297,8 +297,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         return view
 
     def _train_ready(self) -> TrainView | None:
-        """The Train view once it is mounted, else None (it shows the session as it is
-        when it mounts, so there is nothing to tell it before)."""
+        """The Train view once it is mounted, else None (it reads the session as it mounts)."""
         view = self._train
         return view if view is not None and view.is_mounted else None
 
@@ -696,8 +695,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
             view.show_speed(name)  # else it reads the runner's speed when it mounts
 
     def _reload_train(self) -> None:
-        """Show the session afresh in the Train view (if it is not mounted yet, it will
-        read the session when it is)."""
+        """Show the session afresh in the Train view (one not yet mounted reads it then)."""
         self._last_version = -1
         if (view := self._train_ready()) is not None:
             view.reload()
@@ -838,10 +836,8 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
                         f"{exc.strerror or exc}", severity="error", title="Not recording")
             return
         self.play_view.show_recording(path.name)
-        noun = game.game.episode_noun
-        when = "" if self.recording.recorder and self.recording.recorder.episode_open else (
-            f" from the next {noun}"
-        )
+        noun, recorder = game.game.episode_noun, self.recording.recorder
+        when = "" if recorder and recorder.episode_open else f" from the next {noun}"
         self.notify(f"Recording your {noun}s to {path}{when} (ctrl+r stops).", timeout=5)
 
     def _recording_failed(self, message: str) -> None:
