@@ -260,15 +260,12 @@ def _show_table(record: Any) -> Table:
     ]
     if run.group is not None:
         rows.append(("launched with run", str(run.group)))
-    for figure in run.figures:
-        rows.append((figure.name.replace("_", " "), _figure_text(figure)))
-    for curve in record.curves:
-        if len(curve):
-            span = f"episodes {int(curve.episodes[0]):,}..{int(curve.episodes[-1]):,}"
-            rows.append((f"curve {curve.name}", f"{len(curve)} points, {span}"))
-    rows.append(("saved agent", record.agent_path or "none"))
-    rows.append(("versions", f"tui-gym {versions.tui_gym}, gymnasium {versions.gymnasium}, "
-                 f"numpy {versions.numpy}, Python {versions.python}"))
+    rows += [(figure.name.replace("_", " "), _figure_text(figure)) for figure in run.figures]
+    rows += [(f"curve {c.name}", f"{len(c)} points, episodes {int(c.episodes[0]):,}.."
+              f"{int(c.episodes[-1]):,}") for c in record.curves if len(c)]
+    rows += [("saved agent", record.agent_path or "none"),
+             ("versions", f"tui-gym {versions.tui_gym}, gymnasium {versions.gymnasium}, "
+              f"numpy {versions.numpy}, Python {versions.python}")]
     # Rich reads markup in these cells: what came from the history is escaped for it.
     return key_value_table(f"Run {run.id}", [(escape(visible(k, 40)), escape(visible(v, 400)))
                                              for k, v in rows])
