@@ -62,7 +62,7 @@ class InProcessPlayer(Player):
     def play(self, referee: Referee, decision_timeout: float) -> PlayOutcome:
         outcome = PlayOutcome()
         while not referee.finished:
-            if referee.awaiting_reset:
+            if referee.seat.done:  # the next episode is due
                 referee.handle({"cmd": "reset"})
                 continue
             started = time.perf_counter()

@@ -47,10 +47,6 @@ class Referee:
         """Whether every episode has been played to its end."""
         return self.started >= self.episodes and self.seat.done
 
-    @property
-    def awaiting_reset(self) -> bool:
-        return self.seat.done and not self.finished
-
     def default_action(self) -> str:
         return self.seat.legal_actions()[0]
 
