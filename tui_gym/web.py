@@ -106,22 +106,18 @@ def cmd_serve(args: argparse.Namespace, out: Console) -> int:
     class AppServer(Server):
         """textual-serve's server, saying what it serves and to whom in its own words."""
 
-        def initialize_logging(self) -> None:
-            import logging
-
-            logging.basicConfig(level=logging.WARNING, format="%(message)s")
-
         async def on_startup(self, app: web.Application) -> None:
             """Nothing: what is served is said once the port listens (`serve`)."""
 
         def serve(self, debug: bool = False) -> None:
             import asyncio
+            import logging
             import signal
 
             from aiohttp import web
 
             self.debug = debug
-            self.initialize_logging()
+            logging.basicConfig(level=logging.WARNING, format="%(message)s")
             loop = asyncio.new_event_loop()
             for signal_number in (signal.SIGINT, signal.SIGTERM):
                 loop.add_signal_handler(signal_number, self.request_exit)

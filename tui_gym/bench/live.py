@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import gc
 import random
 import time
@@ -138,13 +139,11 @@ def _current_view(app: Any) -> str | None:
 
 def _focus_view(app: Any) -> str | None:
     """"play" or "train": the view that holds the focused widget (None: neither)."""
-    try:
+    with contextlib.suppress(Exception):  # while the app is being taken apart
         focused = app.focused
         for view in ("play", "train"):
             if focused is not None and app.query_one(f"#{view}") in focused.ancestors_with_self:
                 return view
-    except Exception:  # while the app is being taken apart
-        pass
     return None
 
 

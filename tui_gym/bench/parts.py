@@ -3,10 +3,12 @@ at max speed, and start-up, with that part left to Textual (`TUI_GYM_STOCK_TEXTU
 
 from __future__ import annotations
 
-import contextlib
 import os
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
+from contextlib import AbstractContextManager
 from dataclasses import dataclass
+from typing import Any
+from unittest import mock
 
 from tui_gym.bench import live, startup
 from tui_gym.bench.figures import median
@@ -24,20 +26,11 @@ class PartResult:
     startup_s: float
 
 
-@contextlib.contextmanager
-def stock(part: str) -> Iterator[None]:
+def stock(part: str) -> AbstractContextManager[Any]:
     """While the block runs, apps made here or launched from here leave `part` to Textual."""
     from tui_gym.ui.textual_internals import STOCK_ENV
 
-    before = os.environ.get(STOCK_ENV)
-    os.environ[STOCK_ENV] = part
-    try:
-        yield
-    finally:
-        if before is None:
-            del os.environ[STOCK_ENV]
-        else:
-            os.environ[STOCK_ENV] = before
+    return mock.patch.dict(os.environ, {STOCK_ENV: part})
 
 
 def measure(seconds: float, presses: int, repeats: int, startup_repeats: int,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 from functools import partial
 from typing import Any
 
@@ -123,7 +124,7 @@ def cmd_benchmark(args: argparse.Namespace, out: Console) -> int:
         except RunHistoryError as exc:
             unrecorded = f"tui-gym: this result was not recorded in the run history: {exc}\n"
         else:
-            object.__setattr__(result, "run_id", run_id)
+            result = replace(result, run_id=run_id)
             recorded = f"recorded as run {run_id} in {resolve_db_path(args.db)}"
     if args.json:
         print_json("benchmark", result.to_json())

@@ -58,13 +58,10 @@ class GroupProcess:
         if process.stdin is not None:
             with contextlib.suppress(OSError):
                 process.stdin.close()
-        code: int | None
-        try:
-            if grace <= 0:
-                raise subprocess.TimeoutExpired(process.args, grace)
-            code = process.wait(timeout=grace)
-        except subprocess.TimeoutExpired:
-            code = None
+        code: int | None = None
+        if grace > 0:
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                code = process.wait(timeout=grace)
         with contextlib.suppress(ProcessLookupError, PermissionError):
             os.killpg(self.pgid, signal.SIGKILL)  # what is left of its group
         process.wait()

@@ -62,7 +62,7 @@ class InProcessPlayer(Player):
     def play(self, referee: Referee, decision_timeout: float) -> PlayOutcome:
         outcome = PlayOutcome()
         while not referee.finished:
-            if referee.awaiting_reset:
+            if referee.seat.done:  # the next episode is due
                 referee.handle({"cmd": "reset"})
                 continue
             started = time.perf_counter()
@@ -70,7 +70,7 @@ class InProcessPlayer(Player):
             spent = time.perf_counter() - started
             outcome.decision_times.append(spent)
             if spent > decision_timeout:
-                referee.timeout(decision_timeout)
+                referee.timeout()
             else:
                 referee.handle({"cmd": "step", "action": action})
         return outcome
@@ -231,7 +231,7 @@ class ProcessPlayer(Player):
                 outcome.status = f"{gone} in episode {referee.started} of {referee.episodes}; " \
                                  "the rest was played with the default action"
                 while not referee.finished:
-                    referee.play_default(gone)
+                    referee.play_default()
             played = True
         finally:
             # A program done for but still running, or a benchmark cut short (ctrl+c, a
@@ -265,7 +265,7 @@ class ProcessPlayer(Player):
             got: tuple[float, Any] = program.next_line(left) if left > 0 else (0.0, _TIMEOUT)
             received, item = got
             if item is _TIMEOUT:
-                referee.timeout(limit)
+                referee.timeout()
                 owed += 1
                 strikes += 1
                 pending, allowance = time.monotonic(), limit

@@ -47,10 +47,6 @@ class Referee:
         """Whether every episode has been played to its end."""
         return self.started >= self.episodes and self.seat.done
 
-    @property
-    def awaiting_reset(self) -> bool:
-        return self.seat.done and not self.finished
-
     def default_action(self) -> str:
         return self.seat.legal_actions()[0]
 
@@ -123,25 +119,24 @@ class Referee:
         self.seat.step(name)
         return self._transition(), True
 
-    def timeout(self, limit: float) -> dict[str, Any]:
-        """Play for a player that did not decide within `limit` seconds: the default
-        move, or the next episode's deal; the state it leads to."""
+    def timeout(self) -> None:
+        """Play for a player that did not decide in time."""
         self.fouls.timeouts += 1
-        return self._play_default(f"no decision within {limit:g} s")
+        self._play_default()
 
-    def play_default(self, why: str) -> dict[str, Any]:
+    def play_default(self) -> None:
         """Play for a player that is gone (exited, or stopped answering)."""
         self.fouls.defaulted += 1
-        return self._play_default(why)
+        self._play_default()
 
-    def _play_default(self, why: str) -> dict[str, Any]:
+    def _play_default(self) -> None:
+        """The default move, or the next episode's deal."""
         if self.finished:
             raise SeatError("the benchmark is over")
         if self.seat.done:
-            return {**self._start_episode(), "late": f"{why}: the next episode was dealt"}
-        default = self.default_action()
-        self.seat.step(default)
-        return {**self._transition(), "late": f"{why}: played {default}"}
+            self._start_episode()
+        else:
+            self.seat.step(self.default_action())
 
     def current(self, note: str) -> dict[str, Any]:
         """The state now, with a note (for a request the referee answered for the player)."""

@@ -78,9 +78,7 @@ class BenchmarkResult:
         return float(p50) * 1e3, float(p95) * 1e3
 
     def to_json(self) -> dict[str, Any]:
-        ret = self.mean_return
-        regret = self.mean_regret
-        times = self.decision_ms()
+        ret, regret, times = self.mean_return, self.mean_regret, self.decision_ms()
         return {
             "game": self.game, "env_id": self.env_id, "params": self.params,
             "wrappers": list(self.wrappers), "player": self.player, "episodes": self.episodes,
@@ -97,10 +95,7 @@ class BenchmarkResult:
 
     def rows(self) -> list[tuple[str, str]]:
         """The result as (label, value) rows for people."""
-        ret = self.mean_return
-        regret = self.mean_regret
-        times = self.decision_ms()
-        fouls = self.fouls
+        regret, times, fouls = self.mean_regret, self.decision_ms(), self.fouls
         settings = ", ".join(f"{k}={v}" for k, v in self.params.items()) or "defaults"
         if self.wrappers:
             settings += "; " + " ".join(self.wrappers)
@@ -108,7 +103,7 @@ class BenchmarkResult:
             ("player", self.player),
             ("game", f"{self.game} ({settings})"),
             ("episodes", f"{self.episodes:,} (seeds {self.seed}–{self.seed + self.episodes - 1})"),
-            ("mean return", _with_ci(ret)),
+            ("mean return", _with_ci(self.mean_return)),
             ("exact regret per episode",
              _with_ci(regret, signed=False) if regret is not None
              else f"unavailable: {self.regret_note}"),
@@ -163,10 +158,9 @@ def run_benchmark(
     note = ""
     if not exact:
         why = "; ".join(sorted(score.notes)) or "the game gives no exact action values"
-        counted = [f"{score.unscored:,} of {score.decisions:,} decisions"] if score.unscored \
-            else []
-        if score.unjudged:
-            counted.append(f"{score.unjudged:,} moves not judged")
+        counted = [text for count, text in (
+            (score.unscored, f"{score.unscored:,} of {score.decisions:,} decisions"),
+            (score.unjudged, f"{score.unjudged:,} moves not judged")) if count]
         note = f"{why} ({'; '.join(counted)})"
     return BenchmarkResult(
         game=referee.entry.name, env_id=referee.entry.env_id, params=referee.params,

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import signal
 import threading
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -151,9 +150,7 @@ def unrecorded(history: BestEffortHistory | None) -> bool:
 @contextmanager
 def ctrl_c_stops(stop: threading.Event, err: Console) -> Iterator[None]:
     """The first Ctrl+C sets `stop` (the run ends cleanly); a second one interrupts at once."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
+    from tui_gym.core.engine.processes import handling
 
     def handler(signum: int, frame: Any) -> None:
         if stop.is_set():
@@ -161,11 +158,8 @@ def ctrl_c_stops(stop: threading.Event, err: Console) -> Iterator[None]:
         stop.set()
         err.print("stopping: keeping what finished (Ctrl+C again to quit at once)", style="yellow")
 
-    previous = signal.signal(signal.SIGINT, handler)
-    try:
+    with handling(("SIGINT",), handler):
         yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
 
 
 def _run_recorded(args: argparse.Namespace, out: Console, label: str, run: Callable[..., R],

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable
 from datetime import datetime
 from typing import Any
 
 from rich.cells import cell_len
 from rich.console import Console
 from rich.markup import escape
+from rich.table import Table
 from rich.text import Text
 
 from tui_gym.cli.flags import file_name as _path
@@ -156,13 +156,19 @@ def cmd_runs(args: argparse.Namespace, out: Console) -> int:
     if verb is not None:
         with cli_errors(RunHistoryError):
             done = _act(verb, args)
+        lost = verb == "recover" and done.target is None  # no run could be read
         if args.json:
             print_json(f"runs {verb}", done.to_json())
-            return 2 if verb == "recover" and done.target is None else 0
-        if verb in _SAID:
-            out.print(Text(visible(_SAID[verb](done, args), None)))
-            return 0
-        return _SAY[verb](done, args, out)
+        elif lost:
+            warn(f"no run could be read from {visible(done.source, 160)} ({done.check}); it was "
+                 "left as it was")
+        elif verb == "recover":
+            out.print(_recovered(done))
+        elif verb == "show":
+            out.print(_show_table(done))
+        else:
+            out.print(Text(visible(_said(verb, done, args), None)))
+        return 2 if lost else 0
     game = args.game.strip().lower() if args.game else None
     limit = args.limit
     if limit is None:
@@ -224,24 +230,19 @@ def _act(verb: str, args: argparse.Namespace) -> Any:
             "export": lambda: history.export_run_csv(args.run_id, args.csv, args.db)}[verb]()
 
 
-def _say_recover(done: Any, args: argparse.Namespace, out: Console) -> int:
-    source = visible(done.source, 160)
-    if done.target is None:
-        warn(f"no run could be read from {source} ({done.check}); it was left as it was")
-        return 2
+def _recovered(done: Any) -> Text:
+    source, target = visible(done.source, 160), visible(done.target, 160)
     verdict = "SQLite finds it sound" if done.check == "ok" else f"SQLite finds: {done.check}"
     lost = f" ({done.unreadable:,} could not be read)" if done.unreadable else ""
     dropped = (f"; {done.curves_dropped:,} of them without their curves, which could not be read"
                if done.curves_dropped else "")
-    target = visible(done.target, 160)
-    out.print(Text(f"copied {done.copied:,} runs from {source} into {target}{lost}{dropped}.\n"
-                   f"{source} was left as it was ({verdict}). To use the copy: "
-                   f"`tui-gym runs --db {target}`, or move it in place of the original "
-                   "while no tui-gym runs."))
-    return 0
+    return Text(f"copied {done.copied:,} runs from {source} into {target}{lost}{dropped}.\n"
+                f"{source} was left as it was ({verdict}). To use the copy: "
+                f"`tui-gym runs --db {target}`, or move it in place of the original "
+                "while no tui-gym runs.")
 
 
-def _say_show(record: Any, args: argparse.Namespace, out: Console) -> int:
+def _show_table(record: Any) -> Table:
     run = record.summary
     settings = ", ".join(f"{k}={v}" for k, v in record.hyperparameters.items())
     wrappers = ", ".join(
@@ -259,45 +260,31 @@ def _say_show(record: Any, args: argparse.Namespace, out: Console) -> int:
     ]
     if run.group is not None:
         rows.append(("launched with run", str(run.group)))
-    for figure in run.figures:
-        rows.append((figure.name.replace("_", " "), _figure_text(figure)))
-    for curve in record.curves:
-        if len(curve):
-            span = f"episodes {int(curve.episodes[0]):,}..{int(curve.episodes[-1]):,}"
-            rows.append((f"curve {curve.name}", f"{len(curve)} points, {span}"))
-    rows.append(("saved agent", record.agent_path or "none"))
-    rows.append(("versions", f"tui-gym {versions.tui_gym}, gymnasium {versions.gymnasium}, "
-                 f"numpy {versions.numpy}, Python {versions.python}"))
+    rows += [(figure.name.replace("_", " "), _figure_text(figure)) for figure in run.figures]
+    rows += [(f"curve {c.name}", f"{len(c)} points, episodes {int(c.episodes[0]):,}.."
+              f"{int(c.episodes[-1]):,}") for c in record.curves if len(c)]
+    rows += [("saved agent", record.agent_path or "none"),
+             ("versions", f"tui-gym {versions.tui_gym}, gymnasium {versions.gymnasium}, "
+              f"numpy {versions.numpy}, Python {versions.python}")]
     # Rich reads markup in these cells: what came from the history is escaped for it.
-    out.print(key_value_table(f"Run {run.id}", [(escape(visible(k, 40)), escape(visible(v, 400)))
-                                                for k, v in rows]))
-    return 0
+    return key_value_table(f"Run {run.id}", [(escape(visible(k, 40)), escape(visible(v, 400)))
+                                             for k, v in rows])
 
 
-def _said_export(done: Any, args: argparse.Namespace) -> str:
+def _said(verb: str, done: Any, args: argparse.Namespace) -> str:
+    """What `runs export`, `rm` or `prune` did, in one line."""
+    from tui_gym.core.experiments import DamagedRun
+
+    if verb == "prune":
+        return (f"removed {done.tasks:,} stored tasks of {done.runs:,} finished runs from "
+                f"{done.db} (their curves and figures stay; unfinished runs keep theirs, to "
+                "resume)")
+    if verb == "rm":
+        run = done.run
+        what = (f"it could not be read: {run.reason}" if isinstance(run, DamagedRun)
+                else f"{run.kind} {run.game} {run.algorithm}")
+        return f"removed run {run.id} ({what}) from {done.db}"
     if args.csv is not None:
         return f"wrote {done.rows} rows of {', '.join(done.columns[1:])} to {done.path}"
     return (f"wrote {done.scalars} values of {', '.join(done.tags)} to {done.path} "
             f"(tensorboard --logdir {done.logdir})")
-
-
-def _said_rm(removed: Any, args: argparse.Namespace) -> str:
-    from tui_gym.core.experiments import DamagedRun
-
-    run = removed.run
-    what = (f"it could not be read: {run.reason}" if isinstance(run, DamagedRun)
-            else f"{run.kind} {run.game} {run.algorithm}")
-    return f"removed run {run.id} ({what}) from {removed.db}"
-
-
-def _said_prune(pruned: Any, args: argparse.Namespace) -> str:
-    return (f"removed {pruned.tasks:,} stored tasks of {pruned.runs:,} finished runs from "
-            f"{pruned.db} (their curves and figures stay; unfinished runs keep theirs, to "
-            "resume)")
-
-
-# What `runs VERB` prints: a report of its own, or one line.
-_SAY: dict[str, Callable[[Any, argparse.Namespace, Console], int]] = {
-    "recover": _say_recover, "show": _say_show}
-_SAID: dict[str, Callable[[Any, argparse.Namespace], str]] = {
-    "export": _said_export, "rm": _said_rm, "prune": _said_prune}

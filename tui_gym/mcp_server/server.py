@@ -65,13 +65,13 @@ class _Server(MCPServer):
         """`step: argument action takes an action's name or number, not True`."""
         first = error.errors()[0]
         argument = str(first["loc"][0]) if first["loc"] else "?"
-        listed = [t.input_schema for t in await self.list_tools() if t.name == tool]
-        schema = listed[0] if listed else {}
-        described = schema.get("properties", {}).get(argument, {}).get("description")
+        schema = next((t.input_schema for t in await self.list_tools() if t.name == tool), {})
+        properties = schema.get("properties", {})
+        described = properties.get(argument, {}).get("description")
         if first["type"] == "missing":
             what = f"is missing ({described})" if described else "is missing"
         elif described is None:
-            what = f"is not one this tool takes ({', '.join(schema.get('properties', {}))})"
+            what = f"is not one this tool takes ({', '.join(properties)})"
         else:
             what = f"takes {described}, not {shown_value(first.get('input'))}"
         return f"Error executing tool {tool}: argument {visible(argument, 40)} {what}"
