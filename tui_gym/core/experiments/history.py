@@ -515,11 +515,5 @@ class RunRecorder:
         self, exc_type: type[BaseException] | None, exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
-        if self.status is not RunStatus.RUNNING:
-            return
-        if exc_type is None:
-            self.finish(RunStatus.FINISHED)
-        elif issubclass(exc_type, KeyboardInterrupt):
-            self.finish(RunStatus.INTERRUPTED)
-        else:
-            self.finish(RunStatus.FAILED)
+        if self.status is RunStatus.RUNNING:
+            self.finish(RunStatus.ending(exc_type))

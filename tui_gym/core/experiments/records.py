@@ -36,6 +36,13 @@ class RunStatus(StrEnum):
     INTERRUPTED = "interrupted"
     FAILED = "failed"
 
+    @classmethod
+    def ending(cls, error: type[BaseException] | None) -> RunStatus:
+        """How a run ends on `error`: finished without one, interrupted by Ctrl+C, else failed."""
+        if error is None:
+            return cls.FINISHED
+        return cls.INTERRUPTED if issubclass(error, KeyboardInterrupt) else cls.FAILED
+
 
 def _json_default(value: Any) -> Any:
     if isinstance(value, np.bool_ | np.integer | np.floating):
