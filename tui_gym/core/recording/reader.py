@@ -16,6 +16,7 @@ from tui_gym.core.recording.format import (
     FORMAT_NAME,
     FORMAT_VERSION,
     HEADER,
+    OPTIMAL,
     START,
     STEP,
     VERDICTS,
@@ -161,7 +162,7 @@ class Episode:
     def judged(self) -> tuple[int, int]:
         """(moves judged optimal, moves judged) over the episode."""
         verdicts = [m.verdict for m in self.moves if m.verdict is not None]
-        return sum(v == "optimal" for v in verdicts), len(verdicts)
+        return sum(v == OPTIMAL for v in verdicts), len(verdicts)
 
 
 @dataclass
@@ -304,16 +305,15 @@ class _Reader:
 
     # --- records ---------------------------------------------------------------
     def _header(self, number: int, record: dict[str, Any]) -> None:
-        version = record.get("version")
-        if record.get("format") != FORMAT_NAME:
-            version = None
+        version = record.get("version") if record.get("format") == FORMAT_NAME else None
+        version = version if isinstance(version, int) else None
         if version != FORMAT_VERSION:
-            self.recording.versions.add(version if isinstance(version, int) else None)
+            self.recording.versions.add(version)
         wrappers = _list(record.get("wrappers"))
         if len(wrappers) > MAX_WRAPPERS:
             raise _Bad
         game = RecordedGame(
-            line=number, version=version if isinstance(version, int) else None,
+            line=number, version=version,
             tui_gym=_name(record.get("tui_gym")), source=_name(record.get("source")),
             game=_name(record.get("game")),
             title=_name(record.get("title")) or _name(record.get("game")) or "unknown game",
