@@ -216,14 +216,13 @@ class RunRecord:
         return next((c for c in self.curves if c.name == name), None)
 
     def to_json(self, *, curves: bool = True) -> dict[str, Any]:
-        data = self.summary.to_json()
-        data.update(
-            game_params=dict(self.game_params), wrappers=[w.to_json() for w in self.wrappers],
-            hyperparameters=dict(self.hyperparameters), versions=self.versions.to_json(),
-            agent_path=self.agent_path,
-        )
-        data["curves"] = [c.to_json() if curves else c.name for c in self.curves]
-        return data
+        return {
+            **self.summary.to_json(), "game_params": dict(self.game_params),
+            "wrappers": [w.to_json() for w in self.wrappers],
+            "hyperparameters": dict(self.hyperparameters), "versions": self.versions.to_json(),
+            "agent_path": self.agent_path,
+            "curves": [c.to_json() if curves else c.name for c in self.curves],
+        }
 
 
 @dataclass(frozen=True, eq=False)
