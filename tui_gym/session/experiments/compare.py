@@ -365,29 +365,27 @@ def _run_job(
 
     last = [time.monotonic()]
 
-    def counter(i: int) -> Callable[[int], None]:
-        def counted(played: int) -> None:
-            done[i] = played
-            if time.monotonic() - last[0] >= PROGRESS_INTERVAL / 2:
-                report(state())
-                last[0] = time.monotonic()
-
-        return counted
+    def counted(i: int, played: int) -> None:
+        done[i] = played
+        if time.monotonic() - last[0] >= PROGRESS_INTERVAL / 2:
+            report(state())
+            last[0] = time.monotonic()
 
     for i, seed in enumerate(job.seeds):
         if stop():
             break
+        counter = functools.partial(counted, i)
         if model is not None:
             learner = model.learner(job.algorithm, job.hp, seed)
             _, tables = play_learner(learner, model.arrays, episodes, checkpoints, stop,
-                                     returns[i], counter(i), job.setup.measure)
+                                     returns[i], counter, job.setup.measure)
             if tables and exact is not None:
                 found = np.stack(tables)
                 exact[i, : len(tables)] = (_rms_errors(learner, model, found)
                                            if isinstance(learner, Predictor)
                                            else model.greedy_values(found))
         else:
-            _play_env(job, seed, returns[i], counter(i), stop)
+            _play_env(job, seed, returns[i], counter, stop)
     return state()
 
 
