@@ -198,10 +198,9 @@ class Recording:
                          f"{MAX_READ_BYTES >> 20} MB (up to line {self.cut_at_line - 1:,}) "
                          "are read")
         if self.unfit_scenes:
-            count = self.unfit_scenes
-            parts.append(f"{count:,} scene{'' if count == 1 else 's'} did not fit "
-                         f"{'its' if count == 1 else 'their'} game and "
-                         f"{'is' if count == 1 else 'are'} not drawn")
+            one = self.unfit_scenes == 1
+            parts.append(f"{self.unfit_scenes:,} scene{'' if one else 's'} did not fit "
+                         f"{'its game and is' if one else 'their game and are'} not drawn")
         if self.skipped:
             count = len(self.skipped)
             named = ", ".join(str(n) for n in self.skipped[:LINES_NAMED])
