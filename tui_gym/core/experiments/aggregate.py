@@ -99,10 +99,9 @@ class AggregateCurve:
     def as_curves(self, name: str) -> tuple[Curve, ...]:
         """The mean as curve `name`, and the band's edges as `name.lo` and `name.hi` if any."""
         curves = [Curve(name, self.episodes, self.mean)]
-        lo, hi = self.lo, self.hi
-        if lo is not None and hi is not None:
-            curves.append(Curve(f"{name}.lo", self.episodes, lo))
-            curves.append(Curve(f"{name}.hi", self.episodes, hi))
+        if self.half_width is not None:
+            curves += [Curve(f"{name}.lo", self.episodes, self.mean - self.half_width),
+                       Curve(f"{name}.hi", self.episodes, self.mean + self.half_width)]
         return tuple(curves)
 
 

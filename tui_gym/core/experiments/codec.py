@@ -26,14 +26,10 @@ class CurveFormatError(ValueError):
 
 
 def _uvarint(value: int, out: bytearray) -> None:
-    while True:
-        byte = value & 0x7F
+    while value > 0x7F:
+        out.append(value & 0x7F | 0x80)
         value >>= 7
-        if value:
-            out.append(byte | 0x80)
-        else:
-            out.append(byte)
-            return
+    out.append(value)
 
 
 def _read_uvarint(data: bytes, pos: int) -> tuple[int, int]:

@@ -173,13 +173,8 @@ def inspect(conn: sqlite3.Connection) -> tuple[int, int, list[str]]:
     """(application id, schema version, tables) of the file, inside the caller's transaction."""
     app_id = conn.execute("PRAGMA application_id").fetchone()[0]
     version = conn.execute("PRAGMA user_version").fetchone()[0]
-    tables = [
-        row[0]
-        for row in conn.execute(
-            "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%'"
-        )
-    ]
-    return app_id, version, tables
+    query = "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%'"
+    return app_id, version, [row[0] for row in conn.execute(query)]
 
 
 def check_identity(path: Path, latest: int, app_id: int, version: int, tables: list[str]) -> int:
@@ -209,7 +204,6 @@ class Connection:
         self.writable = writable
         self.version = 0  # the file's schema version
         self.users = 0
-
         self.lock = threading.Lock()
 
     def attempt(self, action: Callable[[sqlite3.Connection], T], timeout: float, path: Path,
@@ -435,10 +429,9 @@ class WriterCheck:
         """Whether the process that wrote `mark` has ended (False when it cannot be told)."""
         if not isinstance(mark, str) or not mark:
             return False
-        known = self._answers.get(mark)
-        if known is None:
-            known = self._answers[mark] = self._gone(mark)
-        return known
+        if mark not in self._answers:
+            self._answers[mark] = self._gone(mark)
+        return self._answers[mark]
 
     def _gone(self, mark: str) -> bool:
         parts = mark.split(" ")

@@ -172,9 +172,7 @@ class RunHistory:
         what is given of the saved agent's path, the settings of `spec`, a final status."""
         if not 2 <= max_points <= MAX_STORED_POINTS:
             raise ValueError(f"max_points must be in 2..{MAX_STORED_POINTS}, got {max_points}")
-        blobs = [
-            (c.name, encode_curve(*bucket_means(c.episodes, c.values, max_points))) for c in curves
-        ]
+        blobs = _encoded(curves, max_points)
         figure_rows = list(figures)
         settings = None if spec is None else _settings(spec)
         final = None if status is None else RunStatus(status)
@@ -296,10 +294,7 @@ class RunHistory:
             hyperparameters=record.hyperparameters,
         ))
         platform = astuple(record.versions)
-        blob = pack_curves({
-            c.name: encode_curve(*bucket_means(c.episodes, c.values, MAX_STORED_POINTS))
-            for c in record.curves
-        })
+        blob = pack_curves(_encoded(record.curves, MAX_STORED_POINTS))
 
         def write(conn: sqlite3.Connection) -> None:
             _insert_run(conn, settings, platform, id=run.id, kind=str(run.kind),
@@ -404,6 +399,11 @@ class BestEffortHistory(RunHistory):
             except RunHistoryError as exc:
                 self.failure = str(exc)
         return None  # type: ignore[return-value]
+
+
+def _encoded(curves: Iterable[Curve], max_points: int) -> dict[str, bytes]:
+    """Each curve's bytes by name, bounded to `max_points` bucket means."""
+    return {c.name: encode_curve(*bucket_means(c.episodes, c.values, max_points)) for c in curves}
 
 
 def _insert_run(conn: sqlite3.Connection, settings: tuple[str, ...], platform: tuple[str, ...],
@@ -515,11 +515,5 @@ class RunRecorder:
         self, exc_type: type[BaseException] | None, exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
-        if self.status is not RunStatus.RUNNING:
-            return
-        if exc_type is None:
-            self.finish(RunStatus.FINISHED)
-        elif issubclass(exc_type, KeyboardInterrupt):
-            self.finish(RunStatus.INTERRUPTED)
-        else:
-            self.finish(RunStatus.FAILED)
+        if self.status is RunStatus.RUNNING:
+            self.finish(RunStatus.ending(exc_type))

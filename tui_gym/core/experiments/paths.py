@@ -37,9 +37,5 @@ def resolve_db_path(
 ) -> Path:
     """The run history's file: `explicit` (from --db), else $TUI_GYM_DB, else the data folder's."""
     env = os.environ if environ is None else environ
-    if explicit:
-        return Path(explicit).expanduser()
-    from_env = env.get(DB_ENV, "")
-    if from_env:
-        return Path(from_env).expanduser()
-    return data_dir(env, platform, home) / DB_FILENAME
+    chosen = explicit or env.get(DB_ENV, "")
+    return Path(chosen).expanduser() if chosen else data_dir(env, platform, home) / DB_FILENAME

@@ -36,6 +36,13 @@ class RunStatus(StrEnum):
     INTERRUPTED = "interrupted"
     FAILED = "failed"
 
+    @classmethod
+    def ending(cls, error: type[BaseException] | None) -> RunStatus:
+        """How a run ends on `error`: finished without one, interrupted by Ctrl+C, else failed."""
+        if error is None:
+            return cls.FINISHED
+        return cls.INTERRUPTED if issubclass(error, KeyboardInterrupt) else cls.FAILED
+
 
 def _json_default(value: Any) -> Any:
     if isinstance(value, np.bool_ | np.integer | np.floating):
@@ -209,14 +216,13 @@ class RunRecord:
         return next((c for c in self.curves if c.name == name), None)
 
     def to_json(self, *, curves: bool = True) -> dict[str, Any]:
-        data = self.summary.to_json()
-        data.update(
-            game_params=dict(self.game_params), wrappers=[w.to_json() for w in self.wrappers],
-            hyperparameters=dict(self.hyperparameters), versions=self.versions.to_json(),
-            agent_path=self.agent_path,
-        )
-        data["curves"] = [c.to_json() if curves else c.name for c in self.curves]
-        return data
+        return {
+            **self.summary.to_json(), "game_params": dict(self.game_params),
+            "wrappers": [w.to_json() for w in self.wrappers],
+            "hyperparameters": dict(self.hyperparameters), "versions": self.versions.to_json(),
+            "agent_path": self.agent_path,
+            "curves": [c.to_json() if curves else c.name for c in self.curves],
+        }
 
 
 @dataclass(frozen=True, eq=False)

@@ -13,7 +13,7 @@ import numpy as np
 
 from tui_gym.core.experiments.errors import RunHistoryError
 from tui_gym.core.experiments.figures import FieldsJson
-from tui_gym.core.experiments.records import Curve, RunRecord
+from tui_gym.core.experiments.records import Curve
 from tui_gym.core.experiments.runs import show_run
 
 INSTALL_HINT = "pip install 'tui-gym[tensorboard]'"
@@ -43,18 +43,6 @@ def scalar_tag(curve_name: str) -> str:
     return f"{tag}_{edge}" if dot else tag
 
 
-def _run_folder(record: RunRecord) -> str:
-    summary = record.summary
-    words = re.sub(r"[^A-Za-z0-9_\-]+", "_", f"{summary.game}-{summary.algorithm}")
-    return f"run-{summary.id}-{words}"
-
-
-def _settings_text(record: RunRecord) -> str:
-    data = record.to_json(curves=False)
-    data.pop("figures", None)
-    return "```\n" + json.dumps(data, indent=2, default=str) + "\n```"
-
-
 def _walltimes(curve: Curve, started: float, ended: float | None) -> list[float]:
     """When each point was reached, spread evenly by episode over the run's time."""
     if ended is None or len(curve) < 2:  # (its episodes strictly increase)
@@ -75,7 +63,8 @@ def export_run_tensorboard(
     record = show_run(run_id, db)
     summary = record.summary
     root = Path(directory).expanduser()
-    folder = root / _run_folder(record)
+    words = re.sub(r"[^A-Za-z0-9_\-]+", "_", f"{summary.game}-{summary.algorithm}")
+    folder = root / f"run-{summary.id}-{words}"
     tags: list[str] = []
     scalars = 0
     try:
@@ -103,7 +92,10 @@ def export_run_tensorboard(
                     tags.append(tag)
                     writer.add_scalar(tag, figure.value, global_step=last_episode, walltime=end)
                     scalars += 1
-            writer.add_text("run/settings", _settings_text(record), global_step=0,
+            settings = record.to_json(curves=False)
+            settings.pop("figures", None)
+            text = json.dumps(settings, indent=2, default=str)
+            writer.add_text("run/settings", f"```\n{text}\n```", global_step=0,
                             walltime=summary.started_at)
         finally:
             writer.close()

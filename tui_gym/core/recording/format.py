@@ -13,7 +13,7 @@ SUFFIX = ".jsonl"
 
 HEADER, START, STEP, END = "header", "start", "step", "end"
 
-VERDICTS = ("optimal", "not optimal")
+OPTIMAL, NOT_OPTIMAL = VERDICTS = ("optimal", "not optimal")
 
 
 def encode_line(record: dict[str, Any]) -> bytes:

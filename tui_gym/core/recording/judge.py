@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-OPTIMAL, NOT_OPTIMAL = "optimal", "not optimal"
+from tui_gym.core.recording.format import NOT_OPTIMAL, OPTIMAL
 
 
 @dataclass(frozen=True)

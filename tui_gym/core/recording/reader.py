@@ -16,6 +16,7 @@ from tui_gym.core.recording.format import (
     FORMAT_NAME,
     FORMAT_VERSION,
     HEADER,
+    OPTIMAL,
     START,
     STEP,
     VERDICTS,
@@ -161,7 +162,7 @@ class Episode:
     def judged(self) -> tuple[int, int]:
         """(moves judged optimal, moves judged) over the episode."""
         verdicts = [m.verdict for m in self.moves if m.verdict is not None]
-        return sum(v == "optimal" for v in verdicts), len(verdicts)
+        return sum(v == OPTIMAL for v in verdicts), len(verdicts)
 
 
 @dataclass
@@ -197,10 +198,9 @@ class Recording:
                          f"{MAX_READ_BYTES >> 20} MB (up to line {self.cut_at_line - 1:,}) "
                          "are read")
         if self.unfit_scenes:
-            count = self.unfit_scenes
-            parts.append(f"{count:,} scene{'' if count == 1 else 's'} did not fit "
-                         f"{'its' if count == 1 else 'their'} game and "
-                         f"{'is' if count == 1 else 'are'} not drawn")
+            one = self.unfit_scenes == 1
+            parts.append(f"{self.unfit_scenes:,} scene{'' if one else 's'} did not fit "
+                         f"{'its game and is' if one else 'their game and are'} not drawn")
         if self.skipped:
             count = len(self.skipped)
             named = ", ".join(str(n) for n in self.skipped[:LINES_NAMED])
@@ -304,16 +304,15 @@ class _Reader:
 
     # --- records ---------------------------------------------------------------
     def _header(self, number: int, record: dict[str, Any]) -> None:
-        version = record.get("version")
-        if record.get("format") != FORMAT_NAME:
-            version = None
+        version = record.get("version") if record.get("format") == FORMAT_NAME else None
+        version = version if isinstance(version, int) else None
         if version != FORMAT_VERSION:
-            self.recording.versions.add(version if isinstance(version, int) else None)
+            self.recording.versions.add(version)
         wrappers = _list(record.get("wrappers"))
         if len(wrappers) > MAX_WRAPPERS:
             raise _Bad
         game = RecordedGame(
-            line=number, version=version if isinstance(version, int) else None,
+            line=number, version=version,
             tui_gym=_name(record.get("tui_gym")), source=_name(record.get("source")),
             game=_name(record.get("game")),
             title=_name(record.get("title")) or _name(record.get("game")) or "unknown game",

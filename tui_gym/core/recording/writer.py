@@ -35,11 +35,6 @@ class LineWriter:
             os.close(fd)
             raise
         self._fd: int | None = fd
-        self.lines = 0
-
-    @property
-    def closed(self) -> bool:
-        return self._fd is None
 
     def write(self, line: bytes) -> None:
         """Write one whole line; OSError (and nothing of the line in the file) when it fails."""
@@ -60,7 +55,6 @@ class LineWriter:
             with contextlib.suppress(OSError):
                 os.ftruncate(fd, start)
             raise
-        self.lines += 1
 
     @staticmethod
     def _raw_write(fd: int, data: bytes) -> int:

@@ -365,29 +365,27 @@ def _run_job(
 
     last = [time.monotonic()]
 
-    def counter(i: int) -> Callable[[int], None]:
-        def counted(played: int) -> None:
-            done[i] = played
-            if time.monotonic() - last[0] >= PROGRESS_INTERVAL / 2:
-                report(state())
-                last[0] = time.monotonic()
-
-        return counted
+    def counted(i: int, played: int) -> None:
+        done[i] = played
+        if time.monotonic() - last[0] >= PROGRESS_INTERVAL / 2:
+            report(state())
+            last[0] = time.monotonic()
 
     for i, seed in enumerate(job.seeds):
         if stop():
             break
+        counter = functools.partial(counted, i)
         if model is not None:
             learner = model.learner(job.algorithm, job.hp, seed)
             _, tables = play_learner(learner, model.arrays, episodes, checkpoints, stop,
-                                     returns[i], counter(i), job.setup.measure)
+                                     returns[i], counter, job.setup.measure)
             if tables and exact is not None:
                 found = np.stack(tables)
                 exact[i, : len(tables)] = (_rms_errors(learner, model, found)
                                            if isinstance(learner, Predictor)
                                            else model.greedy_values(found))
         else:
-            _play_env(job, seed, returns[i], counter(i), stop)
+            _play_env(job, seed, returns[i], counter, stop)
     return state()
 
 
@@ -637,11 +635,9 @@ def _record(
         if outcome is None:
             history.update(run_id, status=status)
             continue
-        curves = list(outcome.curve.downsample(STORED_POINTS).as_curves("return"))
-        if outcome.exact_curve is not None:
-            curves.extend(outcome.exact_curve.as_curves("exact_value"))
-        if outcome.rms_curve is not None:
-            curves.extend(outcome.rms_curve.as_curves("rms_error"))
+        named = (("return", outcome.curve.downsample(STORED_POINTS)),
+                 ("exact_value", outcome.exact_curve), ("rms_error", outcome.rms_curve))
+        curves = [c for name, curve in named if curve is not None for c in curve.as_curves(name)]
         history.update(run_id, curves=curves, figures=outcome.figures(), status=status)
 
 
@@ -869,9 +865,8 @@ def _run_children(
     # When every job runs at once and this is the main thread (a command, not the app's
     # worker thread), the calling thread plays the last job itself instead of waiting:
     # one process fewer to start, and its results need no passing over.
-    own = None
-    if 1 < len(jobs) <= cores and threading.current_thread() is threading.main_thread():
-        own = jobs[-1]
+    alone = 1 < len(jobs) <= cores and threading.current_thread() is threading.main_thread()
+    own = jobs[-1] if alone else None
     ctx = processes_module.context()
     messages = ctx.Queue()
     numbers = ctx.Queue()  # the jobs' numbers, then a None for each worker
@@ -903,9 +898,7 @@ def _run_children(
         if stopped() and not stop_flag.is_set():
             stop_flag.set()
         try:
-            kind, index, payload = messages.get(timeout=timeout) if timeout else (
-                messages.get_nowait()
-            )
+            kind, index, payload = messages.get(timeout > 0, timeout)  # not blocking for 0
         except queue.Empty:
             return False
         if kind == "begin":

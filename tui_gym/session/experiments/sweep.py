@@ -92,7 +92,7 @@ class SweepSpec:
             raise ValueError("a sweep needs at least one --grid KEY=V1,V2 "
                              "(or --sample N --range KEY=LOW:HIGH)")
         fields = {f.name for f in cls.params}
-        for key in [*ranges, *grid]:
+        for key in [*ranges, *grid, *self.settings]:
             if key not in fields:
                 raise ValueError(
                     f"{cls.name} has no hyperparameter {key!r}; it has {', '.join(sorted(fields))}"
@@ -105,8 +105,6 @@ class SweepSpec:
         for key in self.settings:
             if key in grid or key in ranges:
                 raise ValueError(f"{key} is both swept and set")
-            if key not in fields:
-                raise ValueError(f"{cls.name} has no hyperparameter {key!r}")
         count = self.samples if ranges else math.prod(len(v) for v in grid.values())
         if not 1 <= count <= MAX_POINTS:
             raise ValueError(f"the sweep has {count} points; from 1 to {MAX_POINTS} at once")

@@ -106,7 +106,6 @@ class TrainRecording:
     ) -> None:
         try:
             if exc_type is not None and self._session is not None:
-                interrupted = issubclass(exc_type, KeyboardInterrupt)
-                self.finish(status=RunStatus.INTERRUPTED if interrupted else RunStatus.FAILED)
+                self.finish(status=RunStatus.ending(exc_type))
         finally:
             self.close()
