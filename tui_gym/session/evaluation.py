@@ -58,15 +58,13 @@ def evaluate(
             break
         obs, info = env.reset(seed=seed if i == 0 else None)
         first_info = dict(info)
-        total, length = 0.0, 0
-        while True:
+        total, length, terminated, truncated = 0.0, 0, False, False
+        while not (terminated or truncated):
             ties = agent.greedy_actions(keyer.key(obs))
             action = ties[0] if len(ties) == 1 else ties[int(rng.integers(len(ties)))]
             obs, reward, terminated, truncated, info = env.step(action)
             total += float(reward)
             length += 1
-            if terminated or truncated:
-                break
         steps += length
         returns.append(total)
         details.append(narrator.episode_detail(first_info, length, total, bool(terminated)))

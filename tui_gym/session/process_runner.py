@@ -7,7 +7,6 @@ comes back lands in the agent it was made from: after a reset or a switch, a lat
 changes nothing shown. Sender and receiver threads talk to the child; `update()` takes in
 what it said. A child that dies, or is silent for `HANG_SECONDS` while holding the agent, is
 replaced, the agent kept as last handed over, and `error` says so.
-Children fork from a server that imported what they run (where there is one).
 """
 
 from __future__ import annotations
@@ -72,10 +71,9 @@ class Handover:
     agent: Any  # the learner (any tui_gym.algorithms.Learner)
     progress: TrainerProgress
 
-
-def _handover(session: Session) -> Handover:
-    return Handover(SessionSpec.of(session), session.hp, session.agent,
-                    session.trainer.progress())
+    @classmethod
+    def of(cls, session: Session) -> Handover:
+        return cls(SessionSpec.of(session), session.hp, session.agent, session.trainer.progress())
 
 
 def _context() -> Any:
@@ -524,7 +522,7 @@ class ProcessRunner(Runner):
         fresh = session.agent is not self._last_sent_agent
         self._last_sent_agent = session.agent
         self._pending = request
-        child.send((kind, request.number, _handover(session), self.speed_index, fresh),
+        child.send((kind, request.number, Handover.of(session), self.speed_index, fresh),
                    request=True)
 
 
@@ -547,7 +545,7 @@ def child_main(conn: Connection) -> None:
         assert session is not None and runner is not None
         runner.pause()
         number, holding = holding, None
-        conn.send(("returned", number, _handover(session), reason, error))
+        conn.send(("returned", number, Handover.of(session), reason, error))
 
     def take(message: tuple) -> None:
         nonlocal session, spec, runner, holding, holding_kind, last_sent

@@ -196,8 +196,8 @@ class Session:
         others = self.changes.others
         found: Any = None
         if changed or others:
-            names, what = (changed, "the observations") if changed else (
-                others, "the game beyond what its model follows")
+            names = changed or others
+            what = "the observations" if changed else "the game beyond what its model follows"
             reason = f"{', '.join(names)} change{'s' if len(names) == 1 else ''} {what}"
         elif not self.keyer.dense:
             reason = "its observations are not table rows"
@@ -240,8 +240,7 @@ class Session:
     ) -> RebuildReport:
         """Change game, env arguments or wrappers; keep the agent when keys keep their meaning
         (ValueError, changing nothing, for an unknown env or bad arguments)."""
-        new_id, kwargs, new_choices, game = self._rebuild_args(env_id, env_kwargs, choices)
-        built = _build(game, new_id, kwargs, new_choices)
+        new_id, kwargs, new_choices, game, built = self._rebuilt(env_id, env_kwargs, choices)
         keep = self._keeps(built)
         defaults = default_settings(self.game, self.algorithm, self.env_kwargs)
         if game is not self.game or (not keep and self.hp == defaults):
@@ -268,22 +267,23 @@ class Session:
         choices: Sequence[WrapperChoice] | None = None,
     ) -> bool:
         """Whether `rebuild` with these arguments would keep the agent (changes nothing)."""
-        new_id, kwargs, new_choices, game = self._rebuild_args(env_id, env_kwargs, choices)
-        built = _build(game, new_id, kwargs, new_choices)
+        built = self._rebuilt(env_id, env_kwargs, choices)[-1]
         built.env.close()  # only its meaning is compared
         return self._keeps(built)
 
-    def _rebuild_args(
+    def _rebuilt(
         self, env_id: str | None, env_kwargs: Mapping[str, Any] | None,
         choices: Sequence[WrapperChoice] | None,
-    ) -> tuple[str, dict[str, Any], tuple[WrapperChoice, ...], Game]:
-        """The env id, checked arguments, wrappers and game a rebuild would use."""
+    ) -> tuple[str, dict[str, Any], tuple[WrapperChoice, ...], Game, _Built]:
+        """The env id, checked arguments, wrappers and game a rebuild would use, and the env
+        built from them."""
         new_id = self.env_id if env_id is None else resolve_env_id(env_id)
         game = game_for(new_id)
         if env_kwargs is None:
             env_kwargs = self.env_kwargs if new_id == self.env_id else game.default_kwargs()
         kwargs = game.normalize_kwargs(env_kwargs)
-        return new_id, kwargs, tuple(self.choices if choices is None else choices), game
+        new_choices = tuple(self.choices if choices is None else choices)
+        return new_id, kwargs, new_choices, game, _build(game, new_id, kwargs, new_choices)
 
     def _keeps(self, built: _Built) -> bool:
         """Whether the agent can learn on `built`: its keys mean what they meant."""
@@ -298,10 +298,10 @@ class Session:
     def set_hyperparameters(self, hp: Settings | Mapping[str, Any]) -> None:
         """New hyperparameters from now on, the tables kept; a mapping may name some only.
         ValueError, changing nothing, for a bad value."""
-        settings = hp if isinstance(hp, Settings) and hp.schema == self.hp.schema else (
-            self.hp.replace(**dict(hp)))
-        self.agent.set_hyperparameters(settings)
-        self.hp = settings
+        if not (isinstance(hp, Settings) and hp.schema == self.hp.schema):
+            hp = self.hp.replace(**dict(hp))
+        self.agent.set_hyperparameters(hp)
+        self.hp = hp
 
     def follow(self, other: Session, epsilon: float = 0.0) -> None:
         """The prediction learner follows `other`'s agent's epsilon-greedy policy (its table
@@ -338,8 +338,9 @@ class Session:
         """Table keys of the game's base states, or None when wrappers hide them (or none)."""
         if self._base_keys is False:
             keys: list[Hashable] | None = None
-            observations = None if self._history_wrappers() else (
-                self.game.states.base_observations(self.env_kwargs))
+            observations = None
+            if not self._history_wrappers():
+                observations = self.game.states.base_observations(self.env_kwargs)
             if observations is not None and not isinstance(observations, NotAvailable):
                 layers = [layer for layer in chain.layers(self.env)
                           if isinstance(layer, gym.ObservationWrapper)]
@@ -371,9 +372,7 @@ class Session:
         keys = self.base_keys()
         if keys is None:
             return None
-        if snapshot is not None:
-            return snapshot.values(keys)
-        return self.agent.values(keys)
+        return (self.agent if snapshot is None else snapshot).values(keys)
 
     @property
     def predicts(self) -> bool:
@@ -549,9 +548,9 @@ class Session:
                 if not agent.seen(key):
                     return None
                 q = agent.values([key])[0]
-            row = agent.find(key)
-            among = q if agent.offered is None or row is None else np.where(
-                agent.offered[row], q, -np.inf)  # the actions the state offers
+            row, among = agent.find(key), q
+            if agent.offered is not None and row is not None:  # the actions the state offers
+                among = np.where(agent.offered[row], q, -np.inf)
         except (IndexError, KeyError, TypeError, ValueError):  # a mismatched or moving table
             return None
         return tuple(int(a) for a in np.flatnonzero(among == among.max())), q
@@ -604,7 +603,8 @@ class Session:
 
     # --- evaluating, saving -----------------------------------------------
     def evaluate(
-        self, episodes: int = 10_000, seed: int | None = None, progress=None
+        self, episodes: int = 10_000, seed: int | None = None,
+        progress: Callable[[int], None] | None = None,
     ) -> EvalReport:
         """Greedy play on a fresh env; `seed` defaults to one derived from the session's."""
         eval_seed = self.seed + 1_000_003 if seed is None else seed

@@ -105,8 +105,7 @@ class Check:
         object.__setattr__(self, "ok", bool(self.ok))
 
     def as_json(self) -> dict[str, Any]:
-        return {"claim": self.claim, "book": self.book, "measured": self.measured,
-                "ok": bool(self.ok)}
+        return {"claim": self.claim, "book": self.book, "measured": self.measured, "ok": self.ok}
 
 
 @dataclass(frozen=True)
