@@ -290,8 +290,7 @@ class GridWorldNarrator(ReachNarrator):
         self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]
     ) -> str:
         """'Reached the target in 7 steps (optimal 7)' or 'Truncated by the time limit ...'."""
-        steps = f"{last.steps} step{'' if last.steps == 1 else 's'}"
-        total = format_reward(last.episode_return)
+        steps, total = plural(last.steps, "step"), format_reward(last.episode_return)
         if last.terminated:
             optimal = int(first_info.get("distance", 0))
             extra = last.steps - optimal
@@ -301,7 +300,7 @@ class GridWorldNarrator(ReachNarrator):
 
     def progress_text(self, last: PlayStep, first_info: Mapping[str, Any]) -> str:
         optimal = int(first_info.get("distance", 0))
-        return f"{last.steps} step{'' if last.steps == 1 else 's'} taken, optimal {optimal}"
+        return f"{plural(last.steps, 'step')} taken, optimal {optimal}"
 
     def coach_text(
         self, before: Advice, action: int, scene_before: Mapping[str, Any],
