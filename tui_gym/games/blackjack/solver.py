@@ -144,22 +144,20 @@ _D17, _D18, _D19, _D20, _D21, _DNAT, _DBUST = range(7)
 
 
 @cache
-def _dealer_draws_from(raw: int, has_ace: bool) -> tuple[float, ...]:
+def _dealer_draws_from(raw: int, has_ace: bool) -> np.ndarray:
     """Final (17, 18, 19, 20, 21, natural, bust) probabilities from a hand of raw
     (aces as 1) total ``raw`` that is not a natural, the dealer drawing while the
-    hand's best total is below 17."""
+    hand's best total is below 17 (kept: not to be written to)."""
     best = raw + 10 if has_ace and raw + 10 <= 21 else raw
-    out = [0.0] * 7
+    out = np.zeros(7)
     if best > 21:
         out[_DBUST] = 1.0
     elif best >= 17:
         out[best - 17] = 1.0
     else:
         for card, p in zip(_CARDS, _CARD_PROBS, strict=True):
-            sub = _dealer_draws_from(raw + card, has_ace or card == 1)
-            for k in range(7):
-                out[k] += p * sub[k]
-    return tuple(out)
+            out += p * _dealer_draws_from(raw + card, has_ace or card == 1)
+    return out
 
 
 @cache
@@ -172,7 +170,7 @@ def _dealer_final() -> np.ndarray:
             if {up, hole} == {1, 10}:
                 table[up - 1, _DNAT] += p
             else:
-                table[up - 1] += p * np.array(_dealer_draws_from(up + hole, 1 in (up, hole)))
+                table[up - 1] += p * _dealer_draws_from(up + hole, 1 in (up, hole))
     table.setflags(write=False)
     return table
 

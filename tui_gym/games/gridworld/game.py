@@ -42,7 +42,7 @@ from tui_gym.games.gridworld.paths import (
     shortest_marks,
     shortest_path_optimum,
 )
-from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
+from tui_gym.games.maps import LAYOUT, GridMap, MapError, format_map, layout_map, read_layout
 from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import (
     ScoreRow,
@@ -66,19 +66,14 @@ WALL = "█"  # a heatmap cell that is a wall
 TRAINED_SHARE = 0.95  # what the default training reaches (see the README)
 
 
-LAYOUT = "layout"  # the argument that holds the grid's walls, as a map's text
-
-
 def _size(kwargs: Mapping[str, Any]) -> int:
     return int(kwargs.get("size", 5))
 
 
 def _walls(kwargs: Mapping[str, Any]) -> Walls:
     """The walls as (x, y) cells (none without a layout)."""
-    layout = kwargs.get(LAYOUT)
-    if not layout:
-        return ()
-    return read_layout(str(layout)).walls_xy()
+    grid_map = layout_map(kwargs)
+    return () if grid_map is None else grid_map.walls_xy()
 
 
 def _steps_between(size: int, walls: Walls, a: Any, b: Any) -> int:
@@ -529,11 +524,7 @@ class GridWorldGame(Game):
         return out
 
     def grid_map(self, kwargs: Mapping[str, Any]) -> GridMap:
-        layout = kwargs.get(LAYOUT)
-        if layout:
-            return read_layout(str(layout))
-        size = _size(kwargs)
-        return GridMap.of(["F" * size] * size)
+        return layout_map(kwargs) or GridMap.of(["F" * _size(kwargs)] * _size(kwargs))
 
     def make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         out = {k: v for k, v in kwargs.items() if k != LAYOUT}
