@@ -217,8 +217,6 @@ class TileGame(ModelGame):
         return list(self.grid_map(kwargs).cells)
 
     def with_map(self, kwargs: Mapping[str, Any], grid_map: GridMap) -> dict[str, Any]:
-        """The arguments that play `grid_map` (the others kept); `ValueError` when this
-        game cannot play it."""
         if grid_map.start is None:
             raise ValueError(f"{self.title} needs a start (S) on the map")
         return {**kwargs, "map": CUSTOM, LAYOUT: format_map(grid_map)}

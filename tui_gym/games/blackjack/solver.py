@@ -31,8 +31,7 @@ BARE_PAYOFFS: tuple[float, float, float, float] = (-1.0, 0.0, 1.0, 1.5)
 class BlackjackRules:
     """The reward variant of ``Blackjack-v1``: ``natural`` (a winning two-card 21 pays
     1.5), ``sab`` (Sutton & Barto's: a natural beats all but a dealer natural, for +1),
-    and ``payoffs``, what steps of bare reward -1, 0, +1 and +1.5 pay (`with_rewards`).
-    """
+    and ``payoffs``, what steps of bare reward -1, 0, +1 and +1.5 pay (`with_rewards`)."""
 
     natural: bool = False
     sab: bool = False
@@ -272,13 +271,9 @@ Soft21 = Literal["observation", "natural", "drawn"]
 def optimal_action_values(
     rules: BlackjackRules = DEFAULT_RULES, *, soft_21: Soft21 = "observation"
 ) -> np.ndarray:
-    """Q*(observation, action), shape ``(32, 11, 2, 2)`` indexed
-    ``[player_sum, dealer_card, usable_ace, action]``; NaN off the decision states.
-
-    ``(21, d, 1)`` is the opening natural or a drawn soft 21, which pay differently
-    under ``natural`` or ``sab``: ``soft_21`` "observation" averages the two by how
-    often the optimal policy meets each, "natural" and "drawn" pick one.
-    """
+    """Q*(observation, action), ``[player_sum, dealer_card, usable_ace, action]`` (NaN off
+    the decision states). ``(21, d, 1)`` is a natural or a drawn soft 21: ``soft_21`` picks
+    one, or "observation" averages them by how often the optimal policy meets each."""
     q_model, hit = _solve(rules)
     drawn, natural = q_model[_ALIASED[:DEALERS]], q_model[_ALIASED[DEALERS:]]
     if soft_21 == "natural":

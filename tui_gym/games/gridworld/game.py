@@ -202,9 +202,8 @@ class GridWorldOracle(Oracle):
     def agent_figures(
         self, q: np.ndarray | None, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> dict[str, float]:
-        """Exact, over every placement: the greedy policy's mean `steps_over_optimal`
-        where it reaches the target, and the `solved_fraction` of placements it reaches
-        (within the time limit in force; with ties broken at random, a chance)."""
+        """Exact over every placement (ties broken at random, within the time limit): the greedy
+        policy's `solved_fraction` and mean `steps_over_optimal` where it reaches the target."""
         size = _size(kwargs)
         if q is None or np.shape(q) != (size**4, 4):
             return {}
@@ -242,9 +241,8 @@ class GridWorldOracle(Oracle):
                      at_least=True)
 
     def optimum(self, kwargs: Mapping[str, Any]) -> Optimum:
-        """The optimum's exact expected return per episode (as `optimal_value` of an
-        evaluation), its values and shortest-path moves per placement, and its
-        `optimal_mean_steps`: the mean fewest steps over the random starts."""
+        """The optimum's exact return per episode, values and shortest-path moves per placement,
+        and `optimal_mean_steps`: the mean fewest steps over the random starts."""
         size, walls = _size(kwargs), _walls(kwargs)
         rewards = float(kwargs.get("reward_scale", 1.0)), float(kwargs.get("step_penalty", 0.0))
         found = shortest_path_optimum(size, *rewards, GRIDWORLD_MAX_STEPS, walls)
@@ -465,9 +463,8 @@ class GridWorldGame(Game):
     layout_type = GridWorldLayout
 
     def solution(self, kwargs: Mapping[str, Any]) -> Optimum | NotAvailable:
-        """The optimum with action values that point its moves: minus the steps to the
-        target after each move (around the walls; a walled-off target counts as
-        `size**2` steps away), where the returns of most moves tie."""
+        """The optimum with action values that point its moves, where most returns tie: minus
+        the steps to the target after each move (walled off: `size**2` steps)."""
         size, walls = _size(kwargs), _walls(kwargs)
         cells = size * size
         distance = cell_distances(size, walls).astype(np.float64)
