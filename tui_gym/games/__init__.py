@@ -77,9 +77,8 @@ def resolve_env_id(name: str, *, from_data: bool = False) -> str:
             f"files and programs never import code; to play it on purpose, name it yourself: "
             f"tui-gym --env {visible(text, 60)} ..."
         )
-    if text in _generic:
-        return text
-    _check_generic(text)
+    if text not in _generic:
+        _check_generic(text)
     return text
 
 

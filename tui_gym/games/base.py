@@ -287,8 +287,7 @@ class Narrator(Role):
         self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]
     ) -> str:
         """How a finished episode ended, in plain words (truncation told apart)."""
-        steps = f"{last.steps} step{'' if last.steps == 1 else 's'}"
-        total = format_reward(last.episode_return)
+        steps, total = plural(last.steps, "step"), format_reward(last.episode_return)
         if last.terminated:
             return f"Episode over after {steps}, return {total}"
         return f"Truncated by the time limit after {steps}, return {total}"

@@ -18,7 +18,6 @@ __all__ = ["ARROWS", "DPGridGame", "DPGridLayout", "DPGridStates", "Event"]
 
 ARROWS = {"up": "↑", "down": "↓", "left": "←", "right": "→",
           "up-left": "↖", "up-right": "↗", "down-left": "↙", "down-right": "↘"}
-STRAIGHT = GRID_ACTIONS
 END = "★"  # a terminal cell: the tile board's goal
 WALL = "█"
 
@@ -59,7 +58,7 @@ class DPGridStates(DiscreteStates):
             "marks": {f"{r},{c}": text for (r, c), text in {**grid.letters, **grid.primes}.items()},
             "moves": list(grid.moves),
         }
-        if not set(STRAIGHT) <= set(grid.moves):
+        if not set(GRID_ACTIONS) <= set(grid.moves):
             scene["offered"] = list(grid.moves)
         if grid.wind:
             scene["wind"], scene["gusts"] = list(grid.wind), grid.gusts

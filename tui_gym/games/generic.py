@@ -55,9 +55,8 @@ class TableLayout(HeatmapLayout):
         n_states, n_actions = values.shape
         greedy = values.argmax(axis=1)
         tied = (values == values[:, :1]).all(axis=1)
-        has_marks = isinstance(marks, np.ndarray) and marks.shape == values.shape
         wrong = np.zeros(n_states, dtype=bool)
-        if has_marks:
+        if isinstance(marks, np.ndarray) and marks.shape == values.shape:
             wrong = ~marks[np.arange(n_states), greedy] & ~tied
         pages = -(-n_states // PAGE)
         page = 0 if focus is None else min(max(0, int(focus)), pages - 1)
@@ -68,8 +67,7 @@ class TableLayout(HeatmapLayout):
             for s in rows
         )
         marked = np.zeros((len(rows), n_actions), dtype=bool)
-        for i, s in enumerate(rows):
-            marked[i, greedy[s]] = wrong[s]
+        marked[np.arange(len(rows)), greedy[rows.start:rows.stop]] = wrong[rows.start:rows.stop]
         table = Heatmap(
             title=f"Q, states {rows.start}-{rows.stop - 1}", row_labels=tuple(str(s) for s in rows),
             col_labels=tuple(self.game.action_names), values=values[rows.start:rows.stop].copy(),

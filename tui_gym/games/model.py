@@ -123,7 +123,7 @@ class _Exact:
     @cached_property
     def fixed(self) -> FixedBound:
         """The best fixed policy a local search finds, beside the optimum."""
-        return best_fixed_policy(self.model, self.ladder)
+        return best_fixed_policy(self.model, self.value)
 
 
 class DiscreteStates(StateSpace):
@@ -333,11 +333,10 @@ class ModelOracle(Oracle):
         return exact if isinstance(exact, NotAvailable) else exact.fixed
 
 
-def best_fixed_policy(model: FiniteMDP, ladder: Ladder) -> FixedBound:
-    """The best fixed policy a local search finds, beside the optimum: the best of the
-    optimum's own and the unlimited optima (gamma 1, 0.999, 0.99), then improved by
+def best_fixed_policy(model: FiniteMDP, optimal: float) -> FixedBound:
+    """The best fixed policy a local search finds, beside the optimum's value: the best of
+    the optimum's own and the unlimited optima (gamma 1, 0.999, 0.99), then improved by
     single-state changes (up to `SEARCH_LIMIT` state-action pairs)."""
-    optimal = expected_value(model, ladder.q().max(axis=1))
     candidates = [solve(model).policy]
     if model.horizon is not None:
         free = with_horizon(model, None)
@@ -347,17 +346,16 @@ def best_fixed_policy(model: FiniteMDP, ladder: Ladder) -> FixedBound:
             except (RuntimeError, ValueError):  # no policy ends episodes surely
                 continue
     values = [evaluate(model, np.asarray(p, dtype=np.int64)).value for p in candidates]
-    policy = np.asarray(candidates[int(np.argmax(values))], dtype=np.int64).copy()
-    value = max(values)
-    if gap_of(optimal, value) == 0.0 or model.horizon is None:
-        return FixedBound(optimal, value)
-    if model.n_states * model.n_actions <= SEARCH_LIMIT:
-        policy, value = _climb(model, policy, value)
+    best = int(np.argmax(values))
+    value = values[best]
+    searchable = model.horizon is not None and model.n_states * model.n_actions <= SEARCH_LIMIT
+    if searchable and gap_of(optimal, value) != 0.0:
+        value = _climb(model, np.asarray(candidates[best], dtype=np.int64), value)
     return FixedBound(optimal, value)
 
 
-def _climb(model: FiniteMDP, policy: np.ndarray, value: float) -> tuple[np.ndarray, float]:
-    """Hill-climb on single-state changes of a fixed policy, evaluated all at once."""
+def _climb(model: FiniteMDP, policy: np.ndarray, value: float) -> float:
+    """The value a hill-climb on single-state changes of a fixed policy reaches."""
     n_states, n_actions = model.n_states, model.n_actions
     states = np.repeat(np.arange(n_states), n_actions)
     actions = np.tile(np.arange(n_actions), n_states)
@@ -369,12 +367,11 @@ def _climb(model: FiniteMDP, policy: np.ndarray, value: float) -> tuple[np.ndarr
         if not scores[best] > value + 1e-12:
             break
         policy, value = neighbours[best], float(scores[best])
-    return policy, value
+    return value
 
 
 def _values_of(model: FiniteMDP, policies: np.ndarray) -> FloatArray:
     """The exact values (over the model's limit) of many fixed policies `[C, S]` at once."""
-    horizon = model.horizon or 0
     count, n_states = policies.shape
     rows = np.arange(n_states)[None, :]
     reward = model.expected_reward[rows, policies]  # [C, S]
@@ -382,10 +379,9 @@ def _values_of(model: FiniteMDP, policies: np.ndarray) -> FloatArray:
     nxt = model.next_state[rows, policies]  # [C, S, K]
     v = np.zeros((count, n_states))
     which = np.arange(count)[:, None, None]
-    for _ in range(horizon):
+    for _ in range(model.horizon or 0):
         v = reward + (prob * v[which, nxt]).sum(axis=2)
-    weight = model.initial
-    return v @ weight
+    return v @ model.initial
 
 
 class ModelGame(Game):

@@ -23,7 +23,7 @@ from tui_gym.games.base import (
     numbered,
 )
 from tui_gym.games.dp_grid import ARROWS
-from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
+from tui_gym.games.maps import LAYOUT, GridMap, MapError, format_map, layout_map, read_layout
 from tui_gym.games.model import DiscreteStates, ModelGame
 from tui_gym.games.words import format_reward, plural
 
@@ -32,7 +32,6 @@ if TYPE_CHECKING:
 
 __all__ = ["CUSTOM", "LAYOUT", "TileGame", "TileLayout", "TileNarrator", "TileStates"]
 
-LAYOUT = "layout"  # the argument that holds an edited map, as text
 CUSTOM = "custom"  # the `map` choice of an edited map
 
 NO_DECISION = {"H": "○", "G": "★", "C": "▒", "W": "█"}  # tiles the agent never acts on
@@ -210,10 +209,7 @@ class TileGame(ModelGame):
 
     def grid_map(self, kwargs: Mapping[str, Any]) -> GridMap:
         """The map played: the edited one (`layout`), else the one the parameters choose."""
-        layout = kwargs.get(LAYOUT)
-        if layout:
-            return read_layout(str(layout))
-        return GridMap.of(self.builtin_cells(kwargs))
+        return layout_map(kwargs) or GridMap.of(self.builtin_cells(kwargs))
 
     def cells(self, kwargs: Mapping[str, Any]) -> list[str]:
         """The map played, one string a row: S start, F floor, H hole, G goal, C cliff,
@@ -221,8 +217,6 @@ class TileGame(ModelGame):
         return list(self.grid_map(kwargs).cells)
 
     def with_map(self, kwargs: Mapping[str, Any], grid_map: GridMap) -> dict[str, Any]:
-        """The arguments that play `grid_map` (the others kept); `ValueError` when this
-        game cannot play it."""
         if grid_map.start is None:
             raise ValueError(f"{self.title} needs a start (S) on the map")
         return {**kwargs, "map": CUSTOM, LAYOUT: format_map(grid_map)}

@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
-import numpy as np
+from tui_gym.core.text import json_safe
 
 if TYPE_CHECKING:
     from tui_gym.session.play import Scorecard, Tally
@@ -15,6 +14,8 @@ __all__ = [
     "join_parts", "plural", "return_summary", "signed", "to_jsonable", "unwrapped_note",
     "watched_row",
 ]
+
+to_jsonable = json_safe  # numpy values, tuples and dicts as plain JSON data
 
 MIN_CI_EPISODES = 30  # episodes before a mean's 95% interval is shown (normal approximation)
 
@@ -26,19 +27,6 @@ class ScoreRow(NamedTuple):
     who: str
     text: str
     short: str = ""
-
-
-def to_jsonable(value: Any) -> Any:
-    """Numpy arrays, numbers, tuples and dicts as plain JSON data."""
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, Mapping):
-        return {str(k): to_jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [to_jsonable(v) for v in value]
-    return value
 
 
 def format_reward(value: float) -> str:

@@ -44,7 +44,7 @@ from tui_gym.games.blackjack.solver import (
     optimal_policy,
     optimal_value,
 )
-from tui_gym.games.words import format_reward, unwrapped_note
+from tui_gym.games.words import format_reward, plural, unwrapped_note
 
 if TYPE_CHECKING:
     from tui_gym.games.planning import PlanModel
@@ -234,8 +234,7 @@ class BlackjackNarrator(Narrator):
     ) -> str:
         """'You win +1', 'Dealer wins −1 (you bust)', 'Push 0' from the final reward."""
         if not last.terminated:
-            steps = f"{last.steps} move{'' if last.steps == 1 else 's'}"
-            total = format_reward(last.episode_return)
+            steps, total = plural(last.steps, "move"), format_reward(last.episode_return)
             return f"Hand cut short by the time limit after {steps}, return {total}"
         player, _ = hand_value(list(scene.get("player", [])))
         dealer, _ = hand_value(list(scene.get("dealer", [])))
@@ -255,15 +254,10 @@ class BlackjackNarrator(Narrator):
     def eval_outcome(
         self, returns: Sequence[float], details: Sequence[dict[str, Any]]
     ) -> EvalOutcome:
-        n = max(1, len(returns))
         r = np.asarray(returns, dtype=np.float64)
-        return EvalOutcome(
-            figures={
-                "win_rate": float(np.count_nonzero(r > 0)) / n,
-                "draw_rate": float(np.count_nonzero(r == 0)) / n,
-                "loss_rate": float(np.count_nonzero(r < 0)) / n,
-            }
-        )
+        n = max(1, len(r))
+        shares = {"win_rate": r > 0, "draw_rate": r == 0, "loss_rate": r < 0}
+        return EvalOutcome({name: float(np.count_nonzero(hit)) / n for name, hit in shares.items()})
 
 
 class BlackjackLayout(HeatmapLayout):

@@ -31,8 +31,7 @@ BARE_PAYOFFS: tuple[float, float, float, float] = (-1.0, 0.0, 1.0, 1.5)
 class BlackjackRules:
     """The reward variant of ``Blackjack-v1``: ``natural`` (a winning two-card 21 pays
     1.5), ``sab`` (Sutton & Barto's: a natural beats all but a dealer natural, for +1),
-    and ``payoffs``, what steps of bare reward -1, 0, +1 and +1.5 pay (`with_rewards`).
-    """
+    and ``payoffs``, what steps of bare reward -1, 0, +1 and +1.5 pay (`with_rewards`)."""
 
     natural: bool = False
     sab: bool = False
@@ -144,22 +143,20 @@ _D17, _D18, _D19, _D20, _D21, _DNAT, _DBUST = range(7)
 
 
 @cache
-def _dealer_draws_from(raw: int, has_ace: bool) -> tuple[float, ...]:
+def _dealer_draws_from(raw: int, has_ace: bool) -> np.ndarray:
     """Final (17, 18, 19, 20, 21, natural, bust) probabilities from a hand of raw
     (aces as 1) total ``raw`` that is not a natural, the dealer drawing while the
-    hand's best total is below 17."""
+    hand's best total is below 17 (kept: not to be written to)."""
     best = raw + 10 if has_ace and raw + 10 <= 21 else raw
-    out = [0.0] * 7
+    out = np.zeros(7)
     if best > 21:
         out[_DBUST] = 1.0
     elif best >= 17:
         out[best - 17] = 1.0
     else:
         for card, p in zip(_CARDS, _CARD_PROBS, strict=True):
-            sub = _dealer_draws_from(raw + card, has_ace or card == 1)
-            for k in range(7):
-                out[k] += p * sub[k]
-    return tuple(out)
+            out += p * _dealer_draws_from(raw + card, has_ace or card == 1)
+    return out
 
 
 @cache
@@ -172,7 +169,7 @@ def _dealer_final() -> np.ndarray:
             if {up, hole} == {1, 10}:
                 table[up - 1, _DNAT] += p
             else:
-                table[up - 1] += p * np.array(_dealer_draws_from(up + hole, 1 in (up, hole)))
+                table[up - 1] += p * _dealer_draws_from(up + hole, 1 in (up, hole))
     table.setflags(write=False)
     return table
 
@@ -274,13 +271,9 @@ Soft21 = Literal["observation", "natural", "drawn"]
 def optimal_action_values(
     rules: BlackjackRules = DEFAULT_RULES, *, soft_21: Soft21 = "observation"
 ) -> np.ndarray:
-    """Q*(observation, action), shape ``(32, 11, 2, 2)`` indexed
-    ``[player_sum, dealer_card, usable_ace, action]``; NaN off the decision states.
-
-    ``(21, d, 1)`` is the opening natural or a drawn soft 21, which pay differently
-    under ``natural`` or ``sab``: ``soft_21`` "observation" averages the two by how
-    often the optimal policy meets each, "natural" and "drawn" pick one.
-    """
+    """Q*(observation, action), ``[player_sum, dealer_card, usable_ace, action]`` (NaN off
+    the decision states). ``(21, d, 1)`` is a natural or a drawn soft 21: ``soft_21`` picks
+    one, or "observation" averages them by how often the optimal policy meets each."""
     q_model, hit = _solve(rules)
     drawn, natural = q_model[_ALIASED[:DEALERS]], q_model[_ALIASED[DEALERS:]]
     if soft_21 == "natural":

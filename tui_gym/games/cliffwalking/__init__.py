@@ -14,6 +14,7 @@ from tui_gym.core.params import Param
 from tui_gym.envs.tile_map import TileRules
 from tui_gym.games.maps import GridMap
 from tui_gym.games.tiles import CUSTOM, TileGame, TileNarrator
+from tui_gym.games.words import plural
 
 __all__ = ["EPISODE_LIMIT", "CliffWalkingGame"]
 
@@ -32,15 +33,15 @@ class CliffNarrator(TileNarrator):
         if not last.steps:
             return ""
         falls = _falls(last.episode_return, last.steps)
-        fell = f", fell {falls} time{'' if falls == 1 else 's'}" if falls else ""
-        return f"{last.steps} step{'' if last.steps == 1 else 's'} taken{fell}"
+        fell = f", fell {plural(falls, 'time')}" if falls else ""
+        return f"{plural(last.steps, 'step')} taken{fell}"
 
     def outcome_text(self, last: Any, first_info: Mapping[str, Any],
                      scene: Mapping[str, Any]) -> str:
         text = super().outcome_text(last, first_info, scene)
         falls = _falls(last.episode_return, last.steps)
         if falls:
-            text += f" ({falls} fall{'' if falls == 1 else 's'} off the cliff)"
+            text += f" ({plural(falls, 'fall')} off the cliff)"
         return text
 
 

@@ -85,10 +85,8 @@ class MazeGame(DPGridGame):
     # falls to 0.01 so its greedy policy is the one it learns about (see the README).
     CHANGING = {"discount": DISCOUNT, "learning_rate": 0.5, "learning_rate_schedule": "constant",
                 "epsilon_start": 0.1, "epsilon_final": 0.1}
-    # An on-policy learner that looks further than a step ahead charges an exploratory step's
-    # cost to the moves before it. Its exploration falls to 0 over the whole run, so those
-    # moves are tried again while it shrinks and what it learns becomes the greedy policy's
-    # values (stopped sooner, a move so charged is never tried again: a detour kept for good).
+    # An on-policy learner that looks ahead charges an exploratory step's cost to the moves
+    # before it: exploring less over the whole run tries them again, so no detour is kept.
     SETTLING = {"epsilon_final": 0.0, "epsilon_decay_fraction": 1.0, "episodes": 3000}
     CHANGING_LEARNERS: dict[str, dict[str, Any]] = {
         "sarsa": {"epsilon_final": 0.01},
@@ -101,11 +99,8 @@ class MazeGame(DPGridGame):
         "q-lambda": {"lambda": 0.5, "episodes": 3000},
         # Each of its two tables learns from half the steps: more episodes after the change.
         "double-q": {"episodes": 1000},
-        # Prioritized sweeping changes Q only through its queue. Once the old way is gone, a
-        # threshold above 0 stops its values falling at theta / (1 - discount), and more than
-        # one sweep a step lowers the old way and all that leads to it together, keeping their
-        # order: the greedy policy then walks into the new wall for good, where single updates
-        # lower most the moves it keeps making and so send it elsewhere.
+        # Prioritized sweeping changes Q only through its queue: a threshold above 0 stops the
+        # old way's values falling, and several sweeps a step keep their order (see the README).
         "prioritized-sweeping": {"theta": 0.0, "planning_steps": 1},
     }
     plan_gamma = DISCOUNT
@@ -152,10 +147,8 @@ class DynaMazeGame(MazeGame):
     teaches = "planning: Dyna-Q's simulated steps find the way in far fewer episodes"
     params = (Param("scale", int, 1, 1, 8,
                     help="each cell made scale x scale cells (Example 8.4's finer mazes)"),)
-    # The on-policy learners that look ahead stop exploring only at the end of a longer
-    # budget (`MazeGame.SETTLING`), so they keep no detour. Monte Carlo steps by a constant
-    # 0.05 there: averaged over every visit, its values keep the returns of the first, nearly
-    # random episodes, and some seeds' greedy policies keep a detour of a step out and back.
+    # The on-policy learners that look ahead settle as `MazeGame.SETTLING` does; Monte Carlo
+    # steps by a constant 0.05, or its averages keep the first, nearly random episodes' returns.
     hyperparameters = {
         **MazeGame.hyperparameters,
         **dict.fromkeys(("n-step-sarsa", "sarsa-lambda"), MazeGame.SETTLING),
@@ -200,9 +193,7 @@ class ShortcutMazeGame(MazeGame):
     hyperparameters = {
         "*": {**MazeGame.CHANGING, "episodes": 400},
         **MazeGame.CHANGING_LEARNERS,
-        # Dyna-Q+ tries the shortcut's move again once its bonus outweighs what a step costs
-        # in discounting. The bonus lives in Q: a larger one outweighs that cost somewhere most
-        # of the time, and the greedy policy walks into a wall untried for long. A smaller
-        # bonus takes more episodes to grow, and the new way more to settle.
+        # Dyna-Q+'s bonus lives in Q: a larger one sends the greedy policy into walls untried
+        # for long; a smaller one needs more episodes to find and settle the shortcut.
         "dyna-q-plus": {"kappa": 0.0004, "episodes": 800},
     }

@@ -97,8 +97,7 @@ class FrozenLakeGame(TileGame):
                   "episodes": 60_000 if small else 100_000}
         return {
             "*": common,
-            "dyna-q": planning,
-            "dyna-q-plus": planning,
+            **dict.fromkeys(("dyna-q", "dyna-q-plus"), planning),
             "q-lambda": {"lambda": 0.8},
             "monte-carlo": {"learning_rate": 0.003 if small else 0.001,
                             "epsilon_final": 0.01, "episodes": 200_000 if small else 250_000},

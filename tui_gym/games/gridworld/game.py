@@ -42,7 +42,7 @@ from tui_gym.games.gridworld.paths import (
     shortest_marks,
     shortest_path_optimum,
 )
-from tui_gym.games.maps import GridMap, MapError, format_map, read_layout
+from tui_gym.games.maps import LAYOUT, GridMap, MapError, format_map, layout_map, read_layout
 from tui_gym.games.planning import PlanModel
 from tui_gym.games.words import (
     ScoreRow,
@@ -66,19 +66,14 @@ WALL = "█"  # a heatmap cell that is a wall
 TRAINED_SHARE = 0.95  # what the default training reaches (see the README)
 
 
-LAYOUT = "layout"  # the argument that holds the grid's walls, as a map's text
-
-
 def _size(kwargs: Mapping[str, Any]) -> int:
     return int(kwargs.get("size", 5))
 
 
 def _walls(kwargs: Mapping[str, Any]) -> Walls:
     """The walls as (x, y) cells (none without a layout)."""
-    layout = kwargs.get(LAYOUT)
-    if not layout:
-        return ()
-    return read_layout(str(layout)).walls_xy()
+    grid_map = layout_map(kwargs)
+    return () if grid_map is None else grid_map.walls_xy()
 
 
 def _steps_between(size: int, walls: Walls, a: Any, b: Any) -> int:
@@ -207,9 +202,8 @@ class GridWorldOracle(Oracle):
     def agent_figures(
         self, q: np.ndarray | None, kwargs: Mapping[str, Any], changes: GameChanges = NO_CHANGES
     ) -> dict[str, float]:
-        """Exact, over every placement: the greedy policy's mean `steps_over_optimal`
-        where it reaches the target, and the `solved_fraction` of placements it reaches
-        (within the time limit in force; with ties broken at random, a chance)."""
+        """Exact over every placement (ties broken at random, within the time limit): the greedy
+        policy's `solved_fraction` and mean `steps_over_optimal` where it reaches the target."""
         size = _size(kwargs)
         if q is None or np.shape(q) != (size**4, 4):
             return {}
@@ -247,9 +241,8 @@ class GridWorldOracle(Oracle):
                      at_least=True)
 
     def optimum(self, kwargs: Mapping[str, Any]) -> Optimum:
-        """The optimum's exact expected return per episode (as `optimal_value` of an
-        evaluation), its values and shortest-path moves per placement, and its
-        `optimal_mean_steps`: the mean fewest steps over the random starts."""
+        """The optimum's exact return per episode, values and shortest-path moves per placement,
+        and `optimal_mean_steps`: the mean fewest steps over the random starts."""
         size, walls = _size(kwargs), _walls(kwargs)
         rewards = float(kwargs.get("reward_scale", 1.0)), float(kwargs.get("step_penalty", 0.0))
         found = shortest_path_optimum(size, *rewards, GRIDWORLD_MAX_STEPS, walls)
@@ -290,8 +283,7 @@ class GridWorldNarrator(ReachNarrator):
         self, last: PlayStep, first_info: Mapping[str, Any], scene: Mapping[str, Any]
     ) -> str:
         """'Reached the target in 7 steps (optimal 7)' or 'Truncated by the time limit ...'."""
-        steps = f"{last.steps} step{'' if last.steps == 1 else 's'}"
-        total = format_reward(last.episode_return)
+        steps, total = plural(last.steps, "step"), format_reward(last.episode_return)
         if last.terminated:
             optimal = int(first_info.get("distance", 0))
             extra = last.steps - optimal
@@ -301,7 +293,7 @@ class GridWorldNarrator(ReachNarrator):
 
     def progress_text(self, last: PlayStep, first_info: Mapping[str, Any]) -> str:
         optimal = int(first_info.get("distance", 0))
-        return f"{last.steps} step{'' if last.steps == 1 else 's'} taken, optimal {optimal}"
+        return f"{plural(last.steps, 'step')} taken, optimal {optimal}"
 
     def coach_text(
         self, before: Advice, action: int, scene_before: Mapping[str, Any],
@@ -471,9 +463,8 @@ class GridWorldGame(Game):
     layout_type = GridWorldLayout
 
     def solution(self, kwargs: Mapping[str, Any]) -> Optimum | NotAvailable:
-        """The optimum with action values that point its moves: minus the steps to the
-        target after each move (around the walls; a walled-off target counts as
-        `size**2` steps away), where the returns of most moves tie."""
+        """The optimum with action values that point its moves, where most returns tie: minus
+        the steps to the target after each move (walled off: `size**2` steps)."""
         size, walls = _size(kwargs), _walls(kwargs)
         cells = size * size
         distance = cell_distances(size, walls).astype(np.float64)
@@ -530,11 +521,7 @@ class GridWorldGame(Game):
         return out
 
     def grid_map(self, kwargs: Mapping[str, Any]) -> GridMap:
-        layout = kwargs.get(LAYOUT)
-        if layout:
-            return read_layout(str(layout))
-        size = _size(kwargs)
-        return GridMap.of(["F" * size] * size)
+        return layout_map(kwargs) or GridMap.of(["F" * _size(kwargs)] * _size(kwargs))
 
     def make_kwargs(self, kwargs: Mapping[str, Any]) -> dict[str, Any]:
         out = {k: v for k, v in kwargs.items() if k != LAYOUT}

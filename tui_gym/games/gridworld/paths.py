@@ -59,11 +59,9 @@ def gridworld_optimum(
 def shortest_path_optimum(
     size: int, reward_scale: float, step_penalty: float, limit: int, walls: Walls = ()
 ) -> tuple[np.ndarray, float] | None:
-    """`(q, value)` of `gridworld_optimum` with no wrappers but a time limit of `limit`
-    steps, where a shortest path pays (a positive `reward_scale`, no negative
-    penalty): an episode that walks the fewest steps d returns
-    `reward_scale - step_penalty * (d - 1)`, and one the walls part from its target
-    `-step_penalty * limit`. None where that does not hold."""
+    """`(q, value)` of `gridworld_optimum` with no wrappers but a `limit`, where a shortest
+    path pays (`reward_scale` > 0, `step_penalty` >= 0; None elsewhere): a walk of d steps
+    returns `reward_scale - step_penalty * (d - 1)`, one walled off `-step_penalty * limit`."""
     cells = size * size
     distance = cell_distances(size, walls)
     if reward_scale <= 0.0 or step_penalty < 0.0 or distance.max() >= limit:
@@ -128,9 +126,8 @@ def path_figures(
     size: int, walls: Walls, probabilities: np.ndarray, max_steps: int | None = None
 ) -> tuple[float, float, float]:
     """`(fewest_share, mean steps over the fewest of the walks that arrive, share that
-    arrives)` of a policy, exactly: from the chance `h_k` of arriving within k steps (at most
-    `max_steps`), the expected steps of walks arriving within L are `L h_L - sum_{k<L} h_k`.
-    """
+    arrives)` of a policy, exactly: with `h_k` the chance to arrive within k steps (at most
+    `max_steps`), walks arriving within L take `L h_L - sum_{k<L} h_k` steps."""
     distance, moves, valid, weights = _walk_arrays(size, walls, probabilities)
     if not valid.any():
         return float("nan"), float("nan"), 0.0

@@ -4,14 +4,17 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Mapping
 from functools import lru_cache
+from typing import Any
 
 from tui_gym.core.params import read_number, shown_value
 from tui_gym.envs.tile_map import TILE_LIST, check_map
 from tui_gym.games.maps.grid_map import MAX_SIDE, Cell, GridMap
 
-__all__ = ["MAX_TEXT", "MapError", "format_map", "parse_map", "read_layout"]
+__all__ = ["LAYOUT", "MAX_TEXT", "MapError", "format_map", "layout_map", "parse_map", "read_layout"]
 
+LAYOUT = "layout"  # the argument of a grid game that holds an edited map, as text
 MAX_TEXT = 64 << 10  # characters of a map's text, at most
 _HEADER = re.compile(r"(reward|slip)\s+([0-9]{1,4})\s*,\s*([0-9]{1,4})\s*[:=]?\s*(\S+)",
                      re.ASCII | re.IGNORECASE)
@@ -65,6 +68,12 @@ def parse_map(text: str) -> GridMap:
 def read_layout(text: str) -> GridMap:
     """`parse_map`, kept: the same text (a game's `layout` argument) is read once."""
     return parse_map(text)
+
+
+def layout_map(kwargs: Mapping[str, Any]) -> GridMap | None:
+    """The map a game's `LAYOUT` argument holds (None without one)."""
+    layout = kwargs.get(LAYOUT)
+    return read_layout(str(layout)) if layout else None
 
 
 def _header_line(line: str, number: int, header: dict[str, dict[Cell, tuple[float, int]]]) -> None:

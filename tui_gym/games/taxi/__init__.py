@@ -65,11 +65,9 @@ class TaxiStates(DiscreteStates):
         try:
             game_env = env.unwrapped
             row, col, passenger, destination = decode(int(game_env.s))
-            lines = [line.decode() if isinstance(line, bytes) else str(line)
-                     for line in ("".join(c.decode() for c in r) for r in game_env.desc)]
+            grid = [[c.decode() for c in line] for line in game_env.desc]
         except (AttributeError, TypeError, ValueError):
             return ""
-        grid = [list(line) for line in lines]
         if passenger < IN_TAXI:
             r, c = STANDS[passenger]
             grid[1 + r][2 * c + 1] = grid[1 + r][2 * c + 1].lower()
