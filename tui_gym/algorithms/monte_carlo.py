@@ -58,11 +58,7 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
         for t in range(steps):
             first[cells[t]] = -1
     length[0] = 0
-    log[0, 0] = 1.0
-    log[0, 1] = g  # the return from the episode's start
-    log[0, 2] = tail
-    log[0, 3] = q[s, a]
-    log[0, 4] = made
+    note(log, 0, 1.0, g, tail, q[s, a], made, 0.0)  # learned: G from the start, its tail
     return total
 
 

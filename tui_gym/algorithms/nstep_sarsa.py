@@ -51,10 +51,7 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
         note(log, tau - oldest + 1, ps, pa, g, alpha, before, q[ps, pa])
     if ended:
         length[0] = 0
-    log[0, 0] = max(0, stop - oldest)
-    log[0, 1] = t - oldest
-    log[0, 2] = tail
-    log[0, 3] = q[s, a]
+    note(log, 0, max(0, stop - oldest), t - oldest, tail, q[s, a], 0.0, 0.0)
     return total
 
 
