@@ -85,11 +85,10 @@ class GamblerEnv(TableEnv):
         super().__init__(gambler_model(self.p_heads, self.goal), render_mode)
 
     def step(self, action: int) -> tuple[int, float, bool, bool, dict]:
-        before = self.s
+        before = self.started()
         out = super().step(action)
-        if before is not None:
-            self.last_stake = int(stakes(self.goal)[before, int(action)])
-            self.last_flip = "heads" if out[0] > before else "tails"
+        self.last_stake = int(stakes(self.goal)[before, int(action)])
+        self.last_flip = "heads" if out[0] > before else "tails"
         return out
 
     def picture(self) -> str:
