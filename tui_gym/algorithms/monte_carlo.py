@@ -1,8 +1,5 @@
-"""Monte Carlo control with an epsilon-soft policy (Sutton & Barto, 2nd ed., section 5.4).
-
-A truncated episode ends on its last state's expected value under the current policy,
-since the time limit is not part of the game.
-"""
+"""Monte Carlo control with an epsilon-soft policy (Sutton & Barto, 2nd ed., section 5.4);
+a truncated episode ends on its last state's expected value under the current policy."""
 
 from __future__ import annotations
 

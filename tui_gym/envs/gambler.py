@@ -1,8 +1,5 @@
-"""`GamblerEnv`: Sutton & Barto's Example 4.3, the gambler's problem.
-
-`gambler_model(p_heads, goal)` gives its transitions, for the env and for the
-game's exact model alike.
-"""
+"""`GamblerEnv`: Sutton & Barto's Example 4.3, the gambler's problem, and `gambler_model`,
+its transitions (the env's and the game's exact model)."""
 
 from __future__ import annotations
 
