@@ -507,10 +507,9 @@ class Learner(ABC):
         """The record of a one-step TD update logged by `rules.td_update`."""
         target, future, before, after, alpha = (float(v) for v in log[0, :5])
         terms: tuple[tuple[str, float], ...] = (("r", step.reward),)
-        written = "r"
         if not step.terminated:
-            written = formula or self.formula
-            terms = (("r", step.reward), ("γ", self.hp.discount), *more, (future_term, future))
+            terms += (("γ", self.hp.discount), *more, (future_term, future))
+        written = "r" if step.terminated else formula or self.formula
         return self._record(step, written, terms, target, before, after, alpha, **extra)
 
     # --- saving ------------------------------------------------------------------------------

@@ -92,11 +92,9 @@ class MonteCarlo(Learner):
         # book's backward order (its only one with first visits).
         own = next(u for u in updates if (u.state, u.action) == (step.state, step.action))
         terms: tuple[tuple[str, float], ...] = (("r", step.reward),)
-        formula = "G = r"
         if not step.terminated:
-            formula = "G = r + γ·Σ π(a|s')·Q(s',a)"
-            terms = (("r", step.reward), ("γ", self.hp.discount),
-                     ("Σ π(a|s')·Q(s',a)", float(head[2])))
+            terms += (("γ", self.hp.discount), ("Σ π(a|s')·Q(s',a)", float(head[2])))
+        formula = "G = r" if step.terminated else "G = r + γ·Σ π(a|s')·Q(s',a)"
         return self._record(step, formula, terms, own.target, own.before, now,
                             own.step_size, episode_return=float(head[1]),
                             episode_updates=updates)

@@ -90,7 +90,7 @@ class NStepSarsa(Learner):
         bootstrap: tuple[tuple[str, float], ...] = (
             () if step.terminated else (("γ", gamma), ("Q(s',a')", tail)))
         own = window[-1]  # this transition's own pair: updated when n = 1 or at the end
-        shown = {"episode_updates": updates, "notes": notes,
+        shown: dict[str, Any] = {"episode_updates": updates, "notes": notes,
                  "target_action": None if step.terminated else step.next_action}
         if not own[7]:
             more = f"{n - 1} more reward{'s' if n > 2 else ''}"

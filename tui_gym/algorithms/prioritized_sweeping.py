@@ -152,10 +152,9 @@ class PrioritizedSweeping(Learner):
 
     def queue(self) -> list[tuple[int, int, float]]:
         """The queue's entries, highest priority first: (row, action, priority)."""
-        size = int(self._size[0])
-        order = sorted(range(size), key=lambda i: -self._prio[i])
-        return [(int(self._cells[i]) // self.n_actions, int(self._cells[i]) % self.n_actions,
-                 float(self._prio[i])) for i in order]
+        order = sorted(range(int(self._size[0])), key=lambda i: -self._prio[i])
+        return [(*divmod(int(self._cells[i]), self.n_actions), float(self._prio[i]))
+                for i in order]
 
     def log_rows(self) -> int:
         return min(int(self.hp.planning_steps), SHOWN) + 1
