@@ -594,8 +594,6 @@ class Learner(ABC):
 
     def assign_from(self, other: Learner) -> None:
         """Become a copy of `other` (tables, schedule, generator), keeping identity."""
-        if other is self:
-            return
         if type(other) is not type(self):
             raise ValueError(f"cannot take over a {other.name} learner as {self.name}")
         if other.n_actions != self.n_actions or other.n_states != self.n_states:

@@ -221,10 +221,8 @@ class GridWorldEnv(gym.Env[ObsType, int]):
         array = np.asarray(value)
         two_ints = array.shape == (2,) and np.issubdtype(array.dtype, np.integer)
         if not two_ints or np.any(array < 0) or np.any(array >= self.size):
-            raise ValueError(
-                f"GridWorld reset option {key!r} must be two integers (x, y) in "
-                f"[0, {self.size - 1}], got {value!r}"
-            )
+            raise ValueError(f"GridWorld reset option {key!r} must be two integers (x, y) in "
+                             f"[0, {self.size - 1}], got {value!r}")
         position = int(array[0]), int(array[1])
         if position in self._wall_set:
             raise ValueError(f"GridWorld reset option {key!r} puts it on the wall {position}")
@@ -237,18 +235,14 @@ class GridWorldEnv(gym.Env[ObsType, int]):
     ) -> tuple[ObsType, dict[str, Any]]:
         super().reset(seed=seed)
         options = {} if options is None else options
-        unknown = set(options) - {"agent", "target"}
-        if unknown:
-            raise ValueError(
-                f"GridWorld reset options accept 'agent' and 'target', got {sorted(unknown)!r}"
-            )
+        if unknown := sorted(set(options) - {"agent", "target"}):
+            raise ValueError(f"GridWorld reset options accept 'agent' and 'target', "
+                             f"got {unknown!r}")
         agent = self._option_position(options, "agent")
         target = self._option_position(options, "target")
         if agent is not None and agent == target:
-            raise ValueError(
-                f"GridWorld reset options put the agent and the target on the same cell "
-                f"{agent}; they must differ"
-            )
+            raise ValueError(f"GridWorld reset options put the agent and the target on the same "
+                             f"cell {agent}; they must differ")
 
         # The tutorial's order: the agent first, then resample the target until
         # it differs (uniform over the other cells).
@@ -267,10 +261,8 @@ class GridWorldEnv(gym.Env[ObsType, int]):
     def step(self, action: int) -> tuple[ObsType, float, bool, bool, dict[str, Any]]:
         agent, target = self._require_state()
         if not self.action_space.contains(action):
-            raise ValueError(
-                f"GridWorld action must be an integer in [0, {len(ACTION_NAMES) - 1}] "
-                f"{ACTION_NAMES}, got {action!r}"
-            )
+            raise ValueError(f"GridWorld action must be an integer in [0, {len(ACTION_NAMES) - 1}] "
+                             f"{ACTION_NAMES}, got {action!r}")
         self._agent = divmod(self._moves[int(action)][agent[0] * self.size + agent[1]], self.size)
 
         terminated = self._agent == target
