@@ -58,10 +58,8 @@ ALL_PARAMS: tuple[Field, ...] = _union()
 
 
 def algorithm(name: str) -> type[Learner]:
-    """The learner class registered as `name` (case and `_`/`-` ignored).
-
-    Raises ValueError naming the registered ones.
-    """
+    """The learner class registered as `name` (case and `_`/`-` ignored); ValueError naming
+    the registered ones."""
     wanted = str(name).strip().lower().replace("_", "-")
     found = _BY_NAME.get(wanted)
     if found is None:

@@ -507,18 +507,22 @@ class Learner(ABC):
         """The record of a one-step TD update logged by `rules.td_update`."""
         target, future, before, after, alpha = (float(v) for v in log[0, :5])
         terms: tuple[tuple[str, float], ...] = (("r", step.reward),)
-        written = "r"
         if not step.terminated:
-            written = formula or self.formula
-            terms = (("r", step.reward), ("γ", self.hp.discount), *more, (future_term, future))
+            terms += (("γ", self.hp.discount), *more, (future_term, future))
+        written = "r" if step.terminated else formula or self.formula
         return self._record(step, written, terms, target, before, after, alpha, **extra)
 
     # --- saving ------------------------------------------------------------------------------
     def _check_arrays(self, arrays: Mapping[str, np.ndarray], rows: int) -> None:
-        """ValueError, naming the array, for saved values this learner could not have made
-        (shapes are checked before)."""
+        """ValueError, naming the array, for a saved table missing or holding values this
+        learner could not have made."""
         for spec in (_VISITS, *self.tables):
+            if spec.name not in arrays:
+                raise ValueError(f"the saved state has no {spec.name!r} array")
             array = np.asarray(arrays[spec.name])
+            shape = (rows,) if spec is _VISITS else (rows, self.n_actions)
+            if array.shape != shape:
+                raise ValueError(f"saved {spec.name!r} has shape {array.shape}, expected {shape}")
             want = np.dtype(spec.dtype).kind  # bool, float (read from any number) or integer
             if array.dtype.kind not in {"b": "b", "f": "fiu"}.get(want, "iu"):
                 raise ValueError(f"saved {spec.name!r} holds {array.dtype} values")
@@ -559,13 +563,6 @@ class Learner(ABC):
         if not dense and len(state.keys) != rows:  # type: ignore[arg-type]
             raise ValueError("sparse table keys and rows differ in number")
         hp = self.settings(meta.get("hyperparameters"))
-        shapes = {"visits": (rows,)} | {s.name: (rows, self.n_actions) for s in self.tables}
-        for name, shape in shapes.items():
-            if name not in arrays:
-                raise ValueError(f"the saved state has no {name!r} array")
-            if np.shape(arrays[name]) != shape:
-                raise ValueError(f"saved {name!r} has shape {np.shape(arrays[name])}, "
-                                 f"expected {shape}")
         self._check_arrays(arrays, rows)
         capacity = rows if dense else max(_INITIAL_ROWS, rows)
         loaded: dict[str, np.ndarray] = {}
@@ -597,8 +594,6 @@ class Learner(ABC):
 
     def assign_from(self, other: Learner) -> None:
         """Become a copy of `other` (tables, schedule, generator), keeping identity."""
-        if other is self:
-            return
         if type(other) is not type(self):
             raise ValueError(f"cannot take over a {other.name} learner as {self.name}")
         if other.n_actions != self.n_actions or other.n_states != self.n_states:

@@ -12,8 +12,6 @@ from tui_gym.core.engine.rules import Rule, greedy, td_update
 
 __all__ = ["DoubleQLearning"]
 
-_NAMES = ("A", "B")
-
 
 @kernel(inline=True)
 def acting(tables: Any, hp: Any) -> tuple[Any, ...]:
@@ -62,8 +60,7 @@ class DoubleQLearning(Learner):
         return self.counts_a[:used] + self.counts_b[:used]
 
     def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
-        which = int(log[0, 6])
-        mine, other = _NAMES[which], _NAMES[1 - which]
+        mine, other = ("B", "A") if log[0, 6] else ("A", "B")  # the table updated, the other
         picked = None if step.terminated else int(log[0, 7])
         return self._td_record(
             step, log, f"Q_{other}(s',a*)",

@@ -11,7 +11,7 @@ import numpy as np
 from tui_gym.algorithms.base import Extra, TableSpec, Transition, UpdateRecord
 from tui_gym.algorithms.dyna_q import DynaQ, replay
 from tui_gym.core.engine.kernel import kernel
-from tui_gym.core.engine.rules import Rule, every, max_value, offered_range, td_update, uniform
+from tui_gym.core.engine.rules import Rule, actions, max_value, td_update, uniform
 from tui_gym.core.params import Param
 
 __all__ = ["DynaQPlus"]
@@ -33,9 +33,7 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
         for b in range(n_actions):
             if model_next[s, b] >= 0:
                 fresh = False
-        lo, hi = 0, n_actions
-        if not every(offered):
-            lo, hi = offered_range(offered, s)
+        lo, hi = actions(offered, s, n_actions)
         for b in range(n_actions):
             if b == a or (fresh and lo <= b < hi):
                 tried[n_tried[0]] = s * n_actions + b

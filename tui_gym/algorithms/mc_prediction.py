@@ -55,5 +55,4 @@ class MonteCarloPrediction(EpisodePredictor):
     title = "Constant-α MC"
     summary = "prediction: V of a fixed policy, toward whole-episode returns at their end"
     formula = "G = r + γ·G'"
-    target_text = formula
     rule = Rule(update, begin=restart, full=filled)

@@ -1,8 +1,5 @@
-"""Monte Carlo control with an epsilon-soft policy (Sutton & Barto, 2nd ed., section 5.4).
-
-A truncated episode ends on its last state's expected value under the current policy,
-since the time limit is not part of the game.
-"""
+"""Monte Carlo control with an epsilon-soft policy (Sutton & Barto, 2nd ed., section 5.4);
+a truncated episode ends on its last state's expected value under the current policy."""
 
 from __future__ import annotations
 
@@ -58,11 +55,7 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
         for t in range(steps):
             first[cells[t]] = -1
     length[0] = 0
-    log[0, 0] = 1.0
-    log[0, 1] = g  # the return from the episode's start
-    log[0, 2] = tail
-    log[0, 3] = q[s, a]
-    log[0, 4] = made
+    note(log, 0, 1.0, g, tail, q[s, a], made, 0.0)  # learned: G from the start, its tail
     return total
 
 
@@ -99,11 +92,9 @@ class MonteCarlo(Learner):
         # book's backward order (its only one with first visits).
         own = next(u for u in updates if (u.state, u.action) == (step.state, step.action))
         terms: tuple[tuple[str, float], ...] = (("r", step.reward),)
-        formula = "G = r"
         if not step.terminated:
-            formula = "G = r + γ·Σ π(a|s')·Q(s',a)"
-            terms = (("r", step.reward), ("γ", self.hp.discount),
-                     ("Σ π(a|s')·Q(s',a)", float(head[2])))
+            terms += (("γ", self.hp.discount), ("Σ π(a|s')·Q(s',a)", float(head[2])))
+        formula = "G = r" if step.terminated else "G = r + γ·Σ π(a|s')·Q(s',a)"
         return self._record(step, formula, terms, own.target, own.before, now,
                             own.step_size, episode_return=float(head[1]),
                             episode_updates=updates)

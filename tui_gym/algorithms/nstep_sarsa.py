@@ -51,10 +51,7 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
         note(log, tau - oldest + 1, ps, pa, g, alpha, before, q[ps, pa])
     if ended:
         length[0] = 0
-    log[0, 0] = max(0, stop - oldest)
-    log[0, 1] = t - oldest
-    log[0, 2] = tail
-    log[0, 3] = q[s, a]
+    note(log, 0, max(0, stop - oldest), t - oldest, tail, q[s, a], 0.0, 0.0)
     return total
 
 
@@ -93,14 +90,12 @@ class NStepSarsa(Learner):
         bootstrap: tuple[tuple[str, float], ...] = (
             () if step.terminated else (("γ", gamma), ("Q(s',a')", tail)))
         own = window[-1]  # this transition's own pair: updated when n = 1 or at the end
-        picked = None if step.terminated else step.next_action
+        shown: dict[str, Any] = {"episode_updates": updates, "notes": notes,
+                 "target_action": None if step.terminated else step.next_action}
         if not own[7]:
             more = f"{n - 1} more reward{'s' if n > 2 else ''}"
-            return self._record(step, f"G of (s,a), after {more}", bootstrap, None,
-                                now, now, episode_updates=updates, notes=notes,
-                                target_action=picked)
-        terms = (("r", step.reward), *bootstrap)
+            return self._record(step, f"G of (s,a), after {more}", bootstrap, None, now, now,
+                                **shown)
         formula = "G = r" if step.terminated else "G = r + γ·Q(s',a')"
-        return self._record(step, formula, terms, float(own[2]), float(own[4]),
-                            float(own[5]), float(own[3]), episode_updates=updates,
-                            notes=notes, target_action=picked)
+        return self._record(step, formula, (("r", step.reward), *bootstrap), float(own[2]),
+                            float(own[4]), float(own[5]), float(own[3]), **shown)

@@ -63,7 +63,6 @@ class NStepTD(Predictor):
     title = "n-step TD"
     summary = "prediction: V of a fixed policy, toward n rewards and then V (TD(0) to MC)"
     formula = "r + … + γⁿ⁻¹·r' + γⁿ·V(s_{τ+n})"
-    target_text = formula
     rule = Rule(update, begin=restart, full=full)
     params = (
         *PREDICTION_PARAMS,

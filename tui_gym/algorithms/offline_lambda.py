@@ -48,7 +48,6 @@ class OfflineLambdaReturn(EpisodePredictor):
     title = "Offline λ-return"
     summary = "prediction: V of a fixed policy, toward λ-returns at each episode's end"
     formula = "G^λ = r + γ·((1-λ)·V(s') + λ·G^λ')"
-    target_text = formula
     rule = Rule(update, begin=restart, full=filled)
     params = (
         *PREDICTION_PARAMS,

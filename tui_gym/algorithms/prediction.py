@@ -81,18 +81,17 @@ class Predictor(Learner):
         return truth.rms(self.v if rows is None else self.v[np.asarray(rows)])
 
     # --- the step-by-step view -------------------------------------------------------------
-    target_text: ClassVar[str]  # the target, as the step panel writes it
+    target_text: ClassVar[str | None] = None  # the step panel's target, when not `formula`
 
     def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
         """The update of V(s) the rule logged in row 0, when there was one."""
-        made = bool(log[0, 4])  # a step size: V moved
-        now = float(self.v[step.state])
-        if not made:
-            return self._record(step, self.target_text, (("r", step.reward),), None, now, now)
+        written, terms = self.target_text or self.formula, (("r", step.reward),)
+        if not log[0, 4]:  # no step size: V did not move
+            now = float(self.v[step.state])
+            return self._record(step, written, terms, None, now, now)
         state, target, before, after, alpha = (float(x) for x in log[0, :5])
         earlier = f"V of row {int(state)}" if int(state) != step.state else ""  # n-step, MC
-        return self._record(step, self.target_text, (("r", step.reward),), target, before,
-                            after, alpha, table=earlier)
+        return self._record(step, written, terms, target, before, after, alpha, table=earlier)
 
     # --- saving ----------------------------------------------------------------------------
     def _extra_arrays(self) -> dict[str, np.ndarray]:

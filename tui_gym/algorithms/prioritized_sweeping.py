@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from tui_gym.algorithms.base import Extra, Learner, Transition, UpdateRecord
+from tui_gym.algorithms.base import Extra, Learner, Transition, UpdateRecord, note
 from tui_gym.algorithms.dyna_q import DynaQ, replay
 from tui_gym.algorithms.settings import COMMON_PARAMS
 from tui_gym.core.engine.kernel import kernel
@@ -91,10 +91,9 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
     model_terminated[s, a] = terminated
     counts[s, a] += 1
     visits[s] += 1
-    p = abs(r + hp.discount * (0.0 if terminated else max_value(q, offered, s2)) - q[s, a])
-    if p > hp.theta:
-        push(cells, prio, pos, size, cell, p)
-    log[0, 0] = p
+    td = abs(r + hp.discount * (0.0 if terminated else max_value(q, offered, s2)) - q[s, a])
+    if td > hp.theta:
+        push(cells, prio, pos, size, cell, td)
     done = 0
     while done < hp.planning_steps and size[0] > 0:
         top_priority = prio[0]
@@ -113,12 +112,9 @@ def update(tables: Any, hp: Any, rng: Any, offered: Any, s: int, a: int, r: floa
             if p > hp.theta:
                 push(cells, prio, pos, size, into, p)
             into = next_into[into]
-    log[0, 1] = done
+    note(log, 0, td, done, size[0], prio[0] if size[0] > 0 else 0.0, q[s, a], 0.0)
     log[0, 7] += done  # the updates over every call with this log (a caller that counts them)
-    log[0, 2] = size[0]
-    log[0, 3] = prio[0] if size[0] > 0 else 0.0
-    log[0, 4] = q[s, a]
-    return log[0, 0]
+    return td
 
 
 class PrioritizedSweeping(Learner):
@@ -156,10 +152,9 @@ class PrioritizedSweeping(Learner):
 
     def queue(self) -> list[tuple[int, int, float]]:
         """The queue's entries, highest priority first: (row, action, priority)."""
-        size = int(self._size[0])
-        order = sorted(range(size), key=lambda i: -self._prio[i])
-        return [(int(self._cells[i]) // self.n_actions, int(self._cells[i]) % self.n_actions,
-                 float(self._prio[i])) for i in order]
+        order = sorted(range(int(self._size[0])), key=lambda i: -self._prio[i])
+        return [(*divmod(int(self._cells[i]), self.n_actions), float(self._prio[i]))
+                for i in order]
 
     def log_rows(self) -> int:
         return min(int(self.hp.planning_steps), SHOWN) + 1

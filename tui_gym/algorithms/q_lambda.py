@@ -38,9 +38,7 @@ class WatkinsQLambda(TracedLearner):
     rule = Rule(update, begin=clear, next_first=True)
 
     def _describe(self, step: Transition, log: np.ndarray) -> UpdateRecord:
-        ended = step.terminated or step.truncated
-        cut = not ended and not log[0, 7]
-        notes = (("a'", f"{'exploratory' if cut else 'greedy'}: "
-                        f"{'the traces are cut' if cut else 'the traces go on'}"),) if (
-            not ended) else ()
-        return self._traced_record(step, log, "max Q(s',·)", *notes)
+        if step.terminated or step.truncated:
+            return self._traced_record(step, log, "max Q(s',·)")
+        what = "greedy: the traces go on" if log[0, 7] else "exploratory: the traces are cut"
+        return self._traced_record(step, log, "max Q(s',·)", ("a'", what))

@@ -26,5 +26,4 @@ class TD0(Predictor):
     title = "TD(0)"
     summary = "prediction: V of a fixed policy, each step toward r + γ·V(s')"
     formula = "r + γ·V(s')"
-    target_text = formula
     rule = Rule(update)

@@ -7,6 +7,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cache, cached_property
 from itertools import product
+from typing import Any
 
 import numpy as np
 
@@ -105,8 +106,7 @@ class Grid:
         terminal = np.zeros(shape, dtype=bool)
         ends = set(self.terminals)
         landings = cache(self.landing)  # a cell's moves recur across the actions
-        at: list[tuple[int, int, int]] = []  # (s, a, j) of each possible outcome, and its
-        to_state, chances, pays, stops = [], [], [], []  # next state, chance, reward, end
+        found: list[tuple[Any, ...]] = []  # (s, a, j, next state, chance, reward, end)
         for s in range(n):
             cell = divmod(s, self.cols)
             for a, move in enumerate(self.moves):
@@ -125,13 +125,11 @@ class Grid:
                     if chance == 0:
                         continue
                     to, pay = landings(cell, way, push)
-                    at.append((s, a, j))
-                    to_state.append(self.state(self.sends.get(to, to)))
-                    chances.append(chance * gust)
-                    pays.append(pay)
-                    stops.append(to in ends)
-        if at:
-            where = tuple(np.array(at).T)
+                    found.append((s, a, j, self.state(self.sends.get(to, to)), chance * gust,
+                                  pay, to in ends))
+        if found:
+            *at, to_state, chances, pays, stops = zip(*found, strict=True)
+            where = tuple(np.array(at))
             next_state[where], prob[where], reward[where], terminal[where] = (
                 to_state, chances, pays, stops)
         initial = np.zeros(n)

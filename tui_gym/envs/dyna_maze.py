@@ -1,6 +1,4 @@
-"""Sutton & Barto's mazes of chapter 8: the Dyna maze, and the blocking and shortcut mazes
-whose wall moves after a number of steps.
-"""
+"""Sutton & Barto's mazes of chapter 8: the Dyna maze, the blocking and the shortcut maze."""
 
 from __future__ import annotations
 

@@ -1,8 +1,5 @@
-"""`GamblerEnv`: Sutton & Barto's Example 4.3, the gambler's problem.
-
-`gambler_model(p_heads, goal)` gives its transitions, for the env and for the
-game's exact model alike.
-"""
+"""`GamblerEnv`: Sutton & Barto's Example 4.3, the gambler's problem, and `gambler_model`,
+its transitions (the env's and the game's exact model)."""
 
 from __future__ import annotations
 
@@ -85,11 +82,10 @@ class GamblerEnv(TableEnv):
         super().__init__(gambler_model(self.p_heads, self.goal), render_mode)
 
     def step(self, action: int) -> tuple[int, float, bool, bool, dict]:
-        before = self.s
+        before = self.started()
         out = super().step(action)
-        if before is not None:
-            self.last_stake = int(stakes(self.goal)[before, int(action)])
-            self.last_flip = "heads" if out[0] > before else "tails"
+        self.last_stake = int(stakes(self.goal)[before, int(action)])
+        self.last_flip = "heads" if out[0] > before else "tails"
         return out
 
     def picture(self) -> str:

@@ -43,12 +43,17 @@ WALL_COLOR: tuple[int, int, int] = (70, 72, 80)
 _RENDER_MODES: tuple[str | None, ...] = (None, "ansi", "human", "rgb_array")
 
 
-def _is_int(value: object) -> bool:
-    return isinstance(value, numbers.Integral) and not isinstance(value, bool | np.bool_)
+def _is_a(kind: type, value: object) -> bool:
+    return isinstance(value, kind) and not isinstance(value, bool | np.bool_)
 
 
-def _is_real(value: object) -> bool:
-    return isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)
+def _finite(name: str, value: Any, minimum: float | None = None) -> float:
+    """`value` as a float; ValueError naming `name` unless a finite real number >= `minimum`."""
+    if (not _is_a(numbers.Real, value) or not math.isfinite(value)
+            or (minimum is not None and value < minimum)):
+        bound = "" if minimum is None else f" >= {minimum:g}"
+        raise ValueError(f"GridWorld {name} must be a finite number{bound}, got {value!r}")
+    return float(value)
 
 
 def check_walls(size: int, walls: Iterable[Any] | None) -> Walls:
@@ -151,16 +156,10 @@ class GridWorldEnv(gym.Env[ObsType, int]):
         self, render_mode: str | None = None, size: int = 5, reward_scale: float = 1.0,
         step_penalty: float = 0.0, walls: Sequence[Sequence[int]] = (),
     ) -> None:
-        if not _is_int(size) or size < 2:
+        if not _is_a(numbers.Integral, size) or size < 2:
             raise ValueError(f"GridWorld size must be an integer >= 2, got {size!r}")
-        if not _is_real(reward_scale) or not math.isfinite(reward_scale):
-            raise ValueError(
-                f"GridWorld reward_scale must be a finite number, got {reward_scale!r}"
-            )
-        if not _is_real(step_penalty) or not math.isfinite(step_penalty) or step_penalty < 0:
-            raise ValueError(
-                f"GridWorld step_penalty must be a finite number >= 0, got {step_penalty!r}"
-            )
+        self.reward_scale = _finite("reward_scale", reward_scale)
+        self.step_penalty = _finite("step_penalty", step_penalty, minimum=0)
         if render_mode not in _RENDER_MODES:
             valid = ", ".join(repr(mode) for mode in _RENDER_MODES)
             raise ValueError(f"GridWorld render_mode must be one of {valid}, got {render_mode!r}")
@@ -169,16 +168,10 @@ class GridWorldEnv(gym.Env[ObsType, int]):
         self.walls: Walls = check_walls(self.size, walls)
         self._wall_set = frozenset(self.walls)
         self._moves = cell_moves(self.size, self.walls).tolist()  # plain ints: quick to index
-        self.reward_scale = float(reward_scale)
-        self.step_penalty = float(step_penalty)
         self.render_mode = render_mode
-
         self.observation_space = spaces.Dict(  # type: ignore[assignment]
-            {
-                "agent": spaces.Box(0, self.size - 1, shape=(2,), dtype=np.int64),
-                "target": spaces.Box(0, self.size - 1, shape=(2,), dtype=np.int64),
-            }
-        )
+            {key: spaces.Box(0, self.size - 1, shape=(2,), dtype=np.int64)
+             for key in ("agent", "target")})
         self.action_space = spaces.Discrete(len(ACTION_NAMES))  # type: ignore[assignment]
 
         # Positions are kept as tuples of Python ints, so nothing returned to a
@@ -206,9 +199,7 @@ class GridWorldEnv(gym.Env[ObsType, int]):
 
     def _get_obs(self) -> ObsType:
         agent, target = self._require_state()
-        return {
-            "agent": np.array(agent, dtype=np.int64), "target": np.array(target, dtype=np.int64),
-        }
+        return {"agent": np.array(agent, dtype=np.int64), "target": np.array(target, np.int64)}
 
     def _get_info(self) -> dict[str, Any]:
         (ax, ay), (tx, ty) = self._require_state()
@@ -224,20 +215,14 @@ class GridWorldEnv(gym.Env[ObsType, int]):
                 return int(x), int(y)
 
     def _option_position(self, options: dict[str, Any], key: str) -> Position | None:
-        if key not in options or options[key] is None:
+        value = options.get(key)
+        if value is None:
             return None
-        value = options[key]
         array = np.asarray(value)
-        if (
-            array.shape != (2,)
-            or not np.issubdtype(array.dtype, np.integer)
-            or np.any(array < 0)
-            or np.any(array >= self.size)
-        ):
-            raise ValueError(
-                f"GridWorld reset option {key!r} must be two integers (x, y) in "
-                f"[0, {self.size - 1}], got {value!r}"
-            )
+        two_ints = array.shape == (2,) and np.issubdtype(array.dtype, np.integer)
+        if not two_ints or np.any(array < 0) or np.any(array >= self.size):
+            raise ValueError(f"GridWorld reset option {key!r} must be two integers (x, y) in "
+                             f"[0, {self.size - 1}], got {value!r}")
         position = int(array[0]), int(array[1])
         if position in self._wall_set:
             raise ValueError(f"GridWorld reset option {key!r} puts it on the wall {position}")
@@ -250,18 +235,14 @@ class GridWorldEnv(gym.Env[ObsType, int]):
     ) -> tuple[ObsType, dict[str, Any]]:
         super().reset(seed=seed)
         options = {} if options is None else options
-        unknown = set(options) - {"agent", "target"}
-        if unknown:
-            raise ValueError(
-                f"GridWorld reset options accept 'agent' and 'target', got {sorted(unknown)!r}"
-            )
+        if unknown := sorted(set(options) - {"agent", "target"}):
+            raise ValueError(f"GridWorld reset options accept 'agent' and 'target', "
+                             f"got {unknown!r}")
         agent = self._option_position(options, "agent")
         target = self._option_position(options, "target")
         if agent is not None and agent == target:
-            raise ValueError(
-                f"GridWorld reset options put the agent and the target on the same cell "
-                f"{agent}; they must differ"
-            )
+            raise ValueError(f"GridWorld reset options put the agent and the target on the same "
+                             f"cell {agent}; they must differ")
 
         # The tutorial's order: the agent first, then resample the target until
         # it differs (uniform over the other cells).
@@ -280,10 +261,8 @@ class GridWorldEnv(gym.Env[ObsType, int]):
     def step(self, action: int) -> tuple[ObsType, float, bool, bool, dict[str, Any]]:
         agent, target = self._require_state()
         if not self.action_space.contains(action):
-            raise ValueError(
-                f"GridWorld action must be an integer in [0, {len(ACTION_NAMES) - 1}] "
-                f"{ACTION_NAMES}, got {action!r}"
-            )
+            raise ValueError(f"GridWorld action must be an integer in [0, {len(ACTION_NAMES) - 1}] "
+                             f"{ACTION_NAMES}, got {action!r}")
         self._agent = divmod(self._moves[int(action)][agent[0] * self.size + agent[1]], self.size)
 
         terminated = self._agent == target

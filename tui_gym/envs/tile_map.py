@@ -33,13 +33,9 @@ ACTION_ORDERS: dict[str, tuple[str, ...]] = {
 
 @dataclass(frozen=True)
 class TileRules:
-    """What tiles pay and how slippery they are where a map does not say.
-
-    `step`: entering floor or the start, and bumping into a wall or the edge;
-    `goal`, `hole`, `cliff`: entering one (a cliff then sends the agent back to
-    the start); `slip`: the chance that a move goes to one side or the other
-    instead of where asked (half each).
-    """
+    """What tiles pay and how slippery they are where a map does not say. `step`: entering
+    floor or the start, or a blocked move; `goal`, `hole`, `cliff`: entering one (a cliff
+    sends the agent to the start); `slip`: the chance a move goes to either side instead."""
 
     step: float = 0.0
     goal: float = 1.0
@@ -146,10 +142,9 @@ def tile_grid(
     cells: Sequence[str], rewards: Mapping[Cell, float], slip: Mapping[Cell, float],
     actions: Sequence[str], rules: TileRules,
 ) -> Grid:
-    """The `Grid` of a checked map (`check_map`): holes and goals end the episode, the
-    cliff sends the agent back to the start, the agent never acts from a wall or the cliff.
-    The same map gives the same `Grid`, whose model is then built once (the game's and the
-    env's of an edited map)."""
+    """The `Grid` of a checked map (`check_map`): holes and goals end the episode, the cliff
+    sends the agent to the start, nothing acts from a wall or the cliff. The same map gives
+    the same `Grid`, so its model is built once (for the game and the env alike)."""
     return _grid(tuple(cells), tuple(sorted(rewards.items())), tuple(sorted(slip.items())),
                  tuple(actions), rules)
 
