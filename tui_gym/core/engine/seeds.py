@@ -13,7 +13,7 @@ import numpy as np
 from tui_gym.core.engine import loop
 from tui_gym.core.engine.loop import ModelArrays
 from tui_gym.core.mdp import FiniteMDP, evaluate
-from tui_gym.core.mdp.evaluation import horizon_sum
+from tui_gym.core.mdp.evaluation import horizon_sum, transition_matrix
 
 __all__ = ["MAX_CHECKPOINTS", "checkpoint_episodes", "greedy_values", "play_learner"]
 
@@ -161,10 +161,10 @@ _DENSE_STATES = 256  # up to this many states, policies are valued by matrix pow
 
 def _horizon_values_dense(model: FiniteMDP, policy: np.ndarray, horizon: int) -> np.ndarray:
     """Σ_{t<H} P^t r per policy, P its transition matrix over continuing outcomes."""
-    n = model.n_states
-    onto = np.zeros(model.next_state.shape + (n,))
-    np.put_along_axis(onto, model.next_state[..., np.newaxis], 1.0, axis=3)
-    step = np.einsum("sak,sakt->sat", model.continue_prob, onto)  # [S, A, S]
+    n, pairs = model.n_states, model.n_states * model.n_actions
+    step = transition_matrix(
+        model.continue_prob.reshape(pairs, -1), model.next_state.reshape(pairs, -1), n
+    ).reshape(-1, model.n_actions, n)
     matrix = np.einsum("msa,sat->mst", policy, step)  # [m, S, S]
     reward = (policy * model.expected_reward).sum(axis=2)  # [m, S]
     return horizon_sum(matrix, reward, horizon) @ model.initial
