@@ -256,9 +256,7 @@ class PolicyArrays:
                 new = reward[s] + gamma * float(dense[s] @ v)
             else:
                 new = reward[s] + gamma * float(weight[s] @ v[target[s]])
-            change = abs(new - v[s])
-            if change > delta:
-                delta = change
+            delta = max(delta, abs(new - v[s]))
             v[s] = new
         return float(delta)
 
