@@ -119,8 +119,8 @@ class FiniteMDP:
             if len(names) != n_actions:
                 raise ModelError(f"{len(names)} action names for {n_actions} actions")
         arrays["next_state"] = next_state.astype(np.int64)
-        for name, array in arrays.items():
-            object.__setattr__(self, name, None if array is None else _frozen(array))
+        for name, value in arrays.items():
+            object.__setattr__(self, name, None if value is None else _frozen(value))
         object.__setattr__(self, "horizon", horizon)
         object.__setattr__(self, "action_names", names)
 
