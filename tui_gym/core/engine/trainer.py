@@ -265,26 +265,17 @@ class Trainer:
         if totals[3] < 0:
             totals[3] = action
         episode, length = self.episodes + 1, int(totals[1])
-        done_stats = None
+        finished = None
         if terminated or truncated:
             ret, _, total, first = totals
             self._record(np.array([[ret, length, total / length, agent.epsilon, first]]))
             agent.end_episodes(1)
-            done_stats = self.last
+            finished = self.last
             self._obs = None
         else:
             self._obs, self._row, self._pending = next_obs, next_row, next_action
         return StepEvent(
-            obs,
-            action,
-            reward,
-            next_obs,
-            terminated,
-            truncated,
-            done_stats,
-            episode,
-            length,
-            record,
+            obs, action, reward, next_obs, terminated, truncated, finished, episode, length, record
         )
 
     def run_episode(self) -> EpisodeStats:
