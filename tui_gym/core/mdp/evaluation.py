@@ -61,9 +61,8 @@ def backup(model: FiniteMDP, v: FloatArray, gamma: float) -> FloatArray:
     infinite `v` an action may reach makes its value that infinity; -inf for both signs)."""
     finite = np.isfinite(v)
     if finite.all():
-        return model.expected_reward + gamma * (model.continue_prob * v[model.next_state]).sum(
-            axis=2
-        )
+        ahead = (model.continue_prob * v[model.next_state]).sum(axis=2)
+        return model.expected_reward + gamma * ahead
     q = backup(model, np.where(finite, v, 0.0), gamma)
     continues = model.continue_prob > 0
     q[(continues & np.isposinf(v)[model.next_state]).any(axis=2)] = np.inf
@@ -131,11 +130,8 @@ def evaluate(model: FiniteMDP, policy: npt.ArrayLike, gamma: float = 1.0) -> Pol
             if limit < horizon:
                 v = arrays.over(horizon, gamma)
         return PolicyValue(v, expected_value(model, v), gamma, horizon)
-    if gamma < 1.0:
-        every = np.ones(model.n_states, dtype=bool)
-        v = solve_linear(model, matrix, gamma, every)
-        return PolicyValue(v, expected_value(model, v), gamma, None)
-    ends = policy_ends(model, matrix)
+    # Discounted, every state has a value; else only those from which the policy ends surely.
+    ends = np.ones(model.n_states, dtype=bool) if gamma < 1.0 else policy_ends(model, matrix)
     v = np.full(model.n_states, -np.inf)
     v[ends] = solve_linear(model, matrix, gamma, ends)
     value = expected_value(model, v)
