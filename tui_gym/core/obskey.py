@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Hashable, Iterable, Iterator
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -22,12 +21,7 @@ class NotTabularError(ValueError):
     """The observation space cannot be used as the keys of a table."""
 
 
-@dataclass(frozen=True)
-class _Leaf:
-    """One integer leaf of a dense space: its value range and width."""
-
-    low: np.ndarray  # int64, flat
-    radix: np.ndarray  # int64, flat: number of values each element takes
+Range = tuple[np.ndarray, np.ndarray]  # an integer leaf's lowest values and counts, int64 flat
 
 
 def _parts(space: spaces.Tuple | spaces.Dict) -> Iterable[tuple[Any, spaces.Space]]:
@@ -40,30 +34,31 @@ def _leaves(space: spaces.Space, path: str = "observation") -> list[tuple[spaces
         return [leaf for key, sub in _parts(space) for leaf in _leaves(sub, f"{path}[{key!r}]")]
     if isinstance(space, spaces.Discrete | spaces.MultiDiscrete | spaces.MultiBinary | spaces.Box):
         return [(space, path)]
-    raise NotTabularError(f"{path} is a {type(space).__name__} space; a Q-table needs Discrete, "
-                          "MultiDiscrete, MultiBinary, Box, or Tuple/Dict of those")
+    raise NotTabularError(
+        f"{path} is a {type(space).__name__} space; a Q-table needs Discrete, "
+        "MultiDiscrete, MultiBinary, Box, or Tuple/Dict of those"
+    )
 
 
-def _dense_leaf(space: spaces.Space) -> _Leaf | None:
+def _dense_leaf(space: spaces.Space) -> Range | None:
     """The integer range of a leaf, or None when it is not bounded integers."""
     if isinstance(space, spaces.Discrete):
-        return _Leaf(np.array([int(space.start)]), np.array([int(space.n)]))
+        return np.array([int(space.start)]), np.array([int(space.n)])
     if isinstance(space, spaces.MultiDiscrete):
-        nvec = np.asarray(space.nvec, dtype=np.int64).ravel()
-        return _Leaf(np.asarray(space.start, dtype=np.int64).ravel(), nvec)
+        starts = np.asarray(space.start, dtype=np.int64).ravel()
+        return starts, np.asarray(space.nvec, dtype=np.int64).ravel()
     if isinstance(space, spaces.MultiBinary):
         n = int(np.prod(space.shape))
-        return _Leaf(np.zeros(n, dtype=np.int64), np.full(n, 2, dtype=np.int64))
+        return np.zeros(n, dtype=np.int64), np.full(n, 2, dtype=np.int64)
     if isinstance(space, spaces.Box) and space.dtype.kind in "iub":  # integers or bools
-        if not (space.is_bounded("both")):
+        if not space.is_bounded("both"):
             return None
         # Python ints (int64 overflows near the dtype's limits); a radix capped just past the
         # dense limit keeps such spaces sparse without changing any dense key.
         lows = np.asarray(space.low).ravel().tolist()
         highs = np.asarray(space.high).ravel().tolist()
-        radix = [min(int(h) - int(lo) + 1, DENSE_STATE_LIMIT + 1)
-                 for lo, h in zip(lows, highs, strict=True)]
-        return _Leaf(np.array(lows, dtype=np.int64), np.array(radix, dtype=np.int64))
+        radix = [min(h - lo + 1, DENSE_STATE_LIMIT + 1) for lo, h in zip(lows, highs, strict=True)]
+        return np.array(lows, dtype=np.int64), np.array(radix, dtype=np.int64)
     return None
 
 
@@ -71,9 +66,11 @@ def _leaf_flattener(space: spaces.Space) -> Callable[[Any], list[Hashable]]:
     if isinstance(space, spaces.Discrete):
         return lambda x: [int(x)]
     if isinstance(space, spaces.Box) and space.dtype.kind == "f":
+
         def floats(x: Any) -> list[Hashable]:
             arr = np.round(np.asarray(x, dtype=np.float64).ravel(), FLOAT_DECIMALS)
             return [round(v, FLOAT_DECIMALS) + 0.0 for v in arr.tolist()]  # -0.0 is 0.0
+
         return floats
     return lambda x: [int(v) for v in np.asarray(x).ravel().tolist()]
 
@@ -94,7 +91,8 @@ def _shaped(space: spaces.Space, values: Iterator[int]) -> Any:
 def _flattener(space: spaces.Space) -> Callable[[Any], list[Hashable]]:
     """A function giving every scalar of an observation, in space order, as Python numbers."""
     if isinstance(space, spaces.Tuple) and all(
-            isinstance(sub, spaces.Discrete) for sub in space.spaces):
+        isinstance(sub, spaces.Discrete) for sub in space.spaces
+    ):
         return lambda obs: [int(v) for v in obs]
     if isinstance(space, spaces.Tuple | spaces.Dict):
         parts = [(key, _flattener(sub)) for key, sub in _parts(space)]
@@ -116,8 +114,8 @@ class ObservationKeyer:
         self._low = np.zeros(0, dtype=np.int64)
         self._strides = np.zeros(0, dtype=np.int64)
         if all(d is not None for d in dense):
-            low = np.concatenate([d.low for d in dense])  # type: ignore[union-attr]
-            radix = np.concatenate([d.radix for d in dense])  # type: ignore[union-attr]
+            low = np.concatenate([d[0] for d in dense])  # type: ignore[index]
+            radix = np.concatenate([d[1] for d in dense])  # type: ignore[index]
             total = math.prod(int(r) for r in radix.tolist())
             if total <= DENSE_STATE_LIMIT:
                 self.n_states = total
@@ -131,8 +129,10 @@ class ObservationKeyer:
             if d is None and isinstance(leaf, spaces.Box) and leaf.dtype.kind == "f":
                 width = int(np.prod(leaf.shape))
                 if width > MAX_SPARSE_WIDTH:
-                    raise NotTabularError(f"{path} is a Box of {width} floats; too many for a "
-                                          f"Q-table (at most {MAX_SPARSE_WIDTH})")
+                    raise NotTabularError(
+                        f"{path} is a Box of {width} floats; too many for a "
+                        f"Q-table (at most {MAX_SPARSE_WIDTH})"
+                    )
             elif d is None:
                 raise NotTabularError(f"{path} ({leaf}) has no finite range of values")
 

@@ -15,8 +15,8 @@ __all__ = ["Param", "ParamError", "ParamValue", "digits_note", "read_number", "s
 
 ParamValue = int | float | bool | str
 
-_BOOL_WORDS = {**dict.fromkeys(("true", "t", "yes", "y", "on", "1"), True),
-               **dict.fromkeys(("false", "f", "no", "n", "off", "0"), False)}
+_TRUE, _FALSE = ("true", "t", "yes", "y", "on", "1"), ("false", "f", "no", "n", "off", "0")
+_BOOL_WORDS = {**dict.fromkeys(_TRUE, True), **dict.fromkeys(_FALSE, False)}
 
 _DIGITS = r"[0-9]+(?:_[0-9]+)*"
 _INTEGER = re.compile(rf"[+-]?{_DIGITS}", re.ASCII)
@@ -134,8 +134,9 @@ class Param:
 
     def __post_init__(self) -> None:
         if self.kind not in (int, float, bool, str):
-            raise TypeError(f"Param {self.name}: kind must be int, float, bool or str, "
-                            f"not {self.kind}")
+            raise TypeError(
+                f"Param {self.name}: kind must be int, float, bool or str, not {self.kind}"
+            )
         if (self.kind is str) != bool(self.choices):
             raise TypeError(f"Param {self.name}: a str param, and only one, has choices")
         # A catalog entry whose default is out of its own range is a bug: fail at import.
@@ -184,13 +185,10 @@ class Param:
         return value
 
     def _in_range(self, value: int | float) -> bool:
-        if isinstance(value, float) and not math.isfinite(value):
+        if abs(value) > _FLOAT_MAX:  # ±inf, or an int beyond every float: no setting is that large
             return False
-        if abs(value) > _FLOAT_MAX:  # an int beyond every float: no setting is that large
-            return False
-        if self.minimum is not None and (
-            value < self.minimum or (not self.min_inclusive and value == self.minimum)
-        ):
+        low = self.minimum
+        if low is not None and (value < low or (not self.min_inclusive and value == low)):
             return False
         return self.maximum is None or value <= self.maximum
 
@@ -200,8 +198,7 @@ class Param:
             word = raw.strip().lower() if isinstance(raw, str) else None
             return next((c for c in self.choices if c.lower() == word), None)
         if self.kind is bool:
-            if isinstance(raw, np.bool_) or (isinstance(raw, numbers.Integral)
-                                             and int(raw) in (0, 1)):
+            if isinstance(raw, np.bool_ | numbers.Integral) and int(raw) in (0, 1):
                 return bool(raw)
             return _BOOL_WORDS.get(raw.strip().lower()) if isinstance(raw, str) else None
         if isinstance(raw, bool | np.bool_):

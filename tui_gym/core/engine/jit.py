@@ -1,11 +1,9 @@
 """The one module that imports Numba: kernels compiled on first use, cached on disk.
 
-`start()` points Numba's cache at a folder keyed by a hash of the engine's and the
-algorithms' sources (Numba does not see a change in a callee's file), registers the
-rule stubs of `rules` as overloads, and puts every kernel's compiled form in its place.
-Kernels allocate nothing: no reference counting, no C wrapper, `NUMBA_OPT` 1 unless set.
-Processes take turns on a lock to file what they compiled (`saving`): Numba numbers
-cache entries by counting its index.
+The cache folder is keyed by a hash of the engine's and the algorithms' sources (Numba does
+not see a change in a callee's file). Kernels allocate nothing: no reference counting, no C
+wrapper, `NUMBA_OPT` 1 unless set. Processes take turns to file what they compiled
+(`saving`): Numba numbers cache entries by counting its index.
 """
 
 from __future__ import annotations
@@ -23,7 +21,14 @@ from typing import Any
 from tui_gym.core.engine import kernel
 
 __all__ = [
-    "COMPILING", "cache_folder", "compiled", "compiles", "direct", "entry", "folder", "saving",
+    "COMPILING",
+    "cache_folder",
+    "compiled",
+    "compiles",
+    "direct",
+    "entry",
+    "folder",
+    "saving",
     "start",
 ]
 
@@ -228,26 +233,25 @@ def _register_overloads(rules: Any) -> None:
         return rules.RULES[hp.instance_class]
 
     @overload(rules.update, jit_options=_CACHED, inline="always")
-    def _update(tables, hp, rng, offered, s, a, r, s2, terminated, truncated, a2, epsilon,  # type: ignore[no-untyped-def]
-                log):
+    def _update(tables, hp, rng, offered, s, a, r, s2, terminated, truncated, a2, epsilon, log):
         rule = compiled(rule_of(hp).update)
 
-        def impl(tables, hp, rng, offered, s, a, r, s2, terminated, truncated, a2, epsilon,  # type: ignore[no-untyped-def]
-                 log):
-            return rule(tables, hp, rng, offered, s, a, r, s2, terminated, truncated, a2,
-                        epsilon, log)
+        def impl(tables, hp, rng, offered, s, a, r, s2, terminated, truncated, a2, epsilon, log):
+            return rule(
+                tables, hp, rng, offered, s, a, r, s2, terminated, truncated, a2, epsilon, log
+            )
 
         return impl
 
     def own_or(name: str, default: Callable[..., Any]) -> Callable[..., Any]:
         """The typing of stub `name`: the rule's own part, else `default`."""
 
-        def typing(tables, hp):  # type: ignore[no-untyped-def]
+        def typing(tables, hp):
             own = compiled(getattr(rule_of(hp), name))
             if own is None:
                 return default
 
-            def impl(tables, hp):  # type: ignore[no-untyped-def]
+            def impl(tables, hp):
                 return own(tables, hp)
 
             return impl
@@ -258,25 +262,26 @@ def _register_overloads(rules: Any) -> None:
         overload(getattr(rules, name), jit_options=_CACHED, inline="always")(own_or(name, default))
 
     overload(rules.next_first, jit_options=_CACHED, inline="always")(
-        lambda hp: _yes if rule_of(hp).next_first else _no)
+        lambda hp: _yes if rule_of(hp).next_first else _no
+    )
 
 
 # The rules' defaults: Numba wants an implementation's signature to be its typing's own.
-def _first_table(tables, hp):  # type: ignore[no-untyped-def]
+def _first_table(tables, hp):
     return (tables[0],)
 
 
-def _nothing(tables, hp):  # type: ignore[no-untyped-def]
+def _nothing(tables, hp):
     return None
 
 
-def _never(tables, hp):  # type: ignore[no-untyped-def]
+def _never(tables, hp):
     return False
 
 
-def _yes(hp):  # type: ignore[no-untyped-def]
+def _yes(hp):
     return True
 
 
-def _no(hp):  # type: ignore[no-untyped-def]
+def _no(hp):
     return False

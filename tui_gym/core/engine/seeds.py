@@ -10,10 +10,10 @@ from typing import Any
 
 import numpy as np
 
-from tui_gym.core.engine import loop
+from tui_gym.core.engine import loop, rules
 from tui_gym.core.engine.loop import ModelArrays
 from tui_gym.core.mdp import FiniteMDP, evaluate
-from tui_gym.core.mdp.evaluation import horizon_sum
+from tui_gym.core.mdp.evaluation import horizon_sum, transition_matrix
 
 __all__ = ["MAX_CHECKPOINTS", "checkpoint_episodes", "greedy_values", "play_learner"]
 
@@ -36,7 +36,7 @@ def play_learner(
     `progress` hears the count), and its action values at each checkpoint reached."""
     cursor = loop.Cursor()
     out = np.zeros((min(episodes, 65_536), loop.COLUMNS))
-    log = np.zeros((1, 8))
+    log = rules.new_log()
     returns = np.empty(episodes) if returns is None else returns
     tables: list[np.ndarray] = []
     marks = sorted(int(c) for c in checkpoints if 0 < c <= episodes)
@@ -124,11 +124,11 @@ def _valued(model: FiniteMDP, tied: np.ndarray, ties: np.ndarray) -> np.ndarray:
     policy = tied / ties[..., np.newaxis]
     if model.horizon is not None and model.n_states <= _DENSE_STATES:
         return _horizon_values_dense(model, policy, model.horizon)
+    if model.horizon is None and not _acyclic(model):
+        return np.array([evaluate(model, p).value for p in policy])
     v = np.zeros((len(policy), model.n_states))
     reward, cont, nxt = model.expected_reward, model.continue_prob, model.next_state
     moving = np.arange(len(policy))  # tables whose values still change
-    if model.horizon is None and not _acyclic(model):
-        return np.array([evaluate(model, p).value for p in policy])
     # With no limit on a model no episode can loop in (Blackjack's hands), backward steps
     # from 0 reach every policy's exact values within the longest episode, and stop.
     for _ in range(model.n_states if model.horizon is None else model.horizon):
@@ -161,10 +161,10 @@ _DENSE_STATES = 256  # up to this many states, policies are valued by matrix pow
 
 def _horizon_values_dense(model: FiniteMDP, policy: np.ndarray, horizon: int) -> np.ndarray:
     """Σ_{t<H} P^t r per policy, P its transition matrix over continuing outcomes."""
-    n = model.n_states
-    onto = np.zeros(model.next_state.shape + (n,))
-    np.put_along_axis(onto, model.next_state[..., np.newaxis], 1.0, axis=3)
-    step = np.einsum("sak,sakt->sat", model.continue_prob, onto)  # [S, A, S]
+    n, pairs = model.n_states, model.n_states * model.n_actions
+    step = transition_matrix(
+        model.continue_prob.reshape(pairs, -1), model.next_state.reshape(pairs, -1), n
+    ).reshape(-1, model.n_actions, n)
     matrix = np.einsum("msa,sat->mst", policy, step)  # [m, S, S]
     reward = (policy * model.expected_reward).sum(axis=2)  # [m, S]
     return horizon_sum(matrix, reward, horizon) @ model.initial

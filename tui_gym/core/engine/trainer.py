@@ -17,7 +17,7 @@ from typing import Any, Protocol
 import gymnasium as gym
 import numpy as np
 
-from tui_gym.core.engine import loop
+from tui_gym.core.engine import loop, rules
 from tui_gym.core.engine.loop import ModelArrays
 from tui_gym.core.engine.stats import (
     EpisodeStats,
@@ -45,6 +45,8 @@ ENV_CHUNK_STEPS = 256  # env-loop steps after which `run` checks the clock and i
 CHUNK_SECONDS = 0.004  # the model loop's calls aim at this long
 MAX_CALL_EPISODES = 65_536  # episodes one call of the model loop reports at most
 RATE_SECONDS = 1.0  # the episodes per second shown are over about this much training time
+# What `progress` hands over besides the version and the rate, by the trainer's own names.
+_CARRIED = ("episodes", "steps", "seconds", "windows", "series", "last", "engine")
 
 
 class StopFlag(Protocol):
@@ -110,13 +112,13 @@ class Trainer:
         # The model loop's episode in progress and its buffers.
         self._cursor = loop.Cursor()
         self._out = np.zeros((MAX_CALL_EPISODES, loop.COLUMNS))
-        self._log = np.zeros((1, 8))
+        self._log = rules.new_log()
         self._call_steps = 4096
         # The env loop's episode in progress.
         self._obs: Any = None
         self._row = 0
         self._pending = -1  # the next action, chosen before the update (SARSA)
-        self._episode: list[float] = [0.0, 0.0, 0.0]  # return, length, sum of |TD|
+        self._episode: list[float] = []  # return, length, sum of |TD|, first action
         self._warmed = False
         self._env_seeded = False
         self.latest: TrainingSnapshot = self.snapshot()
@@ -135,19 +137,17 @@ class Trainer:
 
     def _warm(self) -> None:
         """Compile the learner's loop, saying so (once: it is cached on disk)."""
+        if not self._warmed:
+            agent = self.agent
+            if loop.warm([(agent.name, agent.arrays(), agent.compiled_params())], self._say):
+                self._say("")
+            self._warmed = True
 
-        def say(text: str) -> None:
-            self.status = text
-            if self.on_status is not None:
-                self.on_status(text)
-            self.publish()
-
-        if self._warmed:
-            return
-        agent = self.agent
-        if loop.warm([(agent.name, agent.arrays(), agent.compiled_params())], say):
-            say("")
-        self._warmed = True
+    def _say(self, text: str) -> None:
+        self.status = text
+        if self.on_status is not None:
+            self.on_status(text)
+        self.publish()
 
     # --- chunks ----------------------------------------------------------
     def run(
@@ -172,8 +172,10 @@ class Trainer:
         done = 0
         while episodes is None or done < episodes:
             quota = None if episodes is None else episodes - done
-            done += (self._chunk_model(quota, call_seconds) if self.model is not None
-                     else self._chunk_env(quota))
+            if self.model is not None:
+                done += self._chunk_model(quota, call_seconds)
+            else:
+                done += self._chunk_env(quota)
             now = time.perf_counter()
             if seconds is not None and now - began >= seconds:
                 break
@@ -199,8 +201,8 @@ class Trainer:
                 break
             self.model = model
         began = time.perf_counter()
-        done, steps = loop.play(self.agent, self.model, self._cursor, limit, max_steps,
-                                self._out, self._log)
+        out, log = self._out, self._log
+        done, steps = loop.play(self.agent, self.model, self._cursor, limit, max_steps, out, log)
         elapsed = time.perf_counter() - began
         if elapsed > 0 and steps:  # aim the next call at call_seconds
             wanted = steps * call_seconds / elapsed
@@ -249,29 +251,32 @@ class Trainer:
         obs, row = self._obs, self._row
         action = self._pending if self._pending >= 0 else agent.act(self.keyer.key(obs))
         next_obs, reward, terminated, truncated, _ = self.env.step(action)
+        reward, terminated, truncated = float(reward), bool(terminated), bool(truncated)
         next_row = agent.row(self.keyer.key(next_obs))
-        next_action, td = agent.learn(row, action, float(reward), next_row, bool(terminated),
-                                      bool(truncated), explain=explain)
+        next_action, td = agent.learn(
+            row, action, reward, next_row, terminated, truncated, explain=explain
+        )
         record = agent.last_update if explain else None
         self.steps += 1
         totals = self._episode
-        totals[0] += float(reward)
+        totals[0] += reward
         totals[1] += 1
         totals[2] += td
         if totals[3] < 0:
             totals[3] = action
         episode, length = self.episodes + 1, int(totals[1])
-        done_stats = None
+        finished = None
         if terminated or truncated:
             ret, _, total, first = totals
             self._record(np.array([[ret, length, total / length, agent.epsilon, first]]))
             agent.end_episodes(1)
-            done_stats = self.last
+            finished = self.last
             self._obs = None
         else:
             self._obs, self._row, self._pending = next_obs, next_row, next_action
-        return StepEvent(obs, action, float(reward), next_obs, bool(terminated),
-                         bool(truncated), done_stats, episode, length, record)
+        return StepEvent(
+            obs, action, reward, next_obs, terminated, truncated, finished, episode, length, record
+        )
 
     def run_episode(self) -> EpisodeStats:
         """Finish one more episode and return its statistics."""
@@ -337,17 +342,14 @@ class Trainer:
 
     def progress(self) -> TrainerProgress:
         """Counts and statistics so far (to carry on elsewhere)."""
-        return TrainerProgress(self.episodes, self.steps, self.seconds, self.windows,
-                               self.series, self.last, self._version, self.engine,
-                               self._recent_rate())
+        carried = {name: getattr(self, name) for name in _CARRIED}
+        return TrainerProgress(**carried, version=self._version, rate=self._recent_rate())
 
     def restore(self, progress: TrainerProgress) -> None:
         """Carry on from `progress` (made by this trainer's agent)."""
-        self.episodes, self.steps = progress.episodes, progress.steps
-        self.seconds, self.windows = progress.seconds, progress.windows
-        self.series, self.last = progress.series, progress.last
+        for name in _CARRIED:
+            setattr(self, name, getattr(progress, name))
         self._version = progress.version
-        self.engine = progress.engine
         self._samples.clear()  # the rate goes on from the one shown
         self._rate = progress.rate
         self.publish()
@@ -357,9 +359,7 @@ class Trainer:
         return max(0, self.agent.hp.episodes - self.episodes)
 
 
-def continue_run(
-    current: Any, wanted: Any, episodes_done: int
-) -> tuple[Any, str | None]:
+def continue_run(current: Any, wanted: Any, episodes_done: int) -> tuple[Any, str | None]:
     """The hyperparameters to train on with, and what to tell the person, if anything:
     a raised budget keeps the epsilon decay's length in episodes (epsilon carries on);
     other changes are taken as asked, with a note if epsilon goes back up."""
@@ -385,4 +385,3 @@ def continue_run(
             f"{before:.3g} to {after:.3g} at episode {episodes_done:,}."
         )
     return hp, note
-

@@ -61,9 +61,8 @@ def backup(model: FiniteMDP, v: FloatArray, gamma: float) -> FloatArray:
     infinite `v` an action may reach makes its value that infinity; -inf for both signs)."""
     finite = np.isfinite(v)
     if finite.all():
-        return model.expected_reward + gamma * (model.continue_prob * v[model.next_state]).sum(
-            axis=2
-        )
+        ahead = (model.continue_prob * v[model.next_state]).sum(axis=2)
+        return model.expected_reward + gamma * ahead
     q = backup(model, np.where(finite, v, 0.0), gamma)
     continues = model.continue_prob > 0
     q[(continues & np.isposinf(v)[model.next_state]).any(axis=2)] = np.inf
@@ -71,20 +70,15 @@ def backup(model: FiniteMDP, v: FloatArray, gamma: float) -> FloatArray:
     return q
 
 
-def _transition_matrix(
-    model: FiniteMDP, matrix: FloatArray, rows: npt.NDArray[np.bool_]
-) -> FloatArray:
-    """The `[n, n]` matrix of continuing from each of `rows` to each of `rows` under a policy."""
-    index = np.full(model.n_states, -1, dtype=np.int64)
-    index[rows] = np.arange(int(rows.sum()))
-    weight = matrix[rows][:, :, None] * model.continue_prob[rows]
-    target = index[model.next_state[rows]]
-    n = int(rows.sum())
-    source = np.broadcast_to(np.arange(n)[:, None, None], weight.shape)
+def transition_matrix(weight: FloatArray, target: IntArray, n: int) -> FloatArray:
+    """`[R, n]`: per row r of `weight` and `target` (`[R, ...]`), the summed weight of going
+    on to each of `n` states."""
+    rows = len(weight)
+    weight, target = weight.reshape(rows, -1), target.reshape(rows, -1)
     keep = weight > 0
-    flat = source[keep] * n + target[keep]
-    counts = np.bincount(flat, weights=weight[keep], minlength=n * n)
-    return np.asarray(counts, dtype=np.float64).reshape(n, n)
+    flat = np.nonzero(keep)[0] * n + target[keep]
+    counts = np.bincount(flat, weights=weight[keep], minlength=rows * n)
+    return np.asarray(counts, dtype=np.float64).reshape(rows, n)
 
 
 def solve_linear(
@@ -97,7 +91,10 @@ def solve_linear(
         return np.zeros(0)
     reward = (matrix[rows] * model.expected_reward[rows]).sum(axis=1)
     if n <= DENSE_LIMIT:
-        system = np.eye(n) - gamma * _transition_matrix(model, matrix, rows)
+        index = np.full(model.n_states, -1, dtype=np.int64)
+        index[rows] = np.arange(n)
+        weight = matrix[rows][:, :, None] * model.continue_prob[rows]
+        system = np.eye(n) - gamma * transition_matrix(weight, index[model.next_state[rows]], n)
         return np.linalg.solve(system, reward)
     v_full = np.zeros(model.n_states)
     for _ in range(_MAX_SWEEPS):
@@ -133,11 +130,8 @@ def evaluate(model: FiniteMDP, policy: npt.ArrayLike, gamma: float = 1.0) -> Pol
             if limit < horizon:
                 v = arrays.over(horizon, gamma)
         return PolicyValue(v, expected_value(model, v), gamma, horizon)
-    if gamma < 1.0:
-        every = np.ones(model.n_states, dtype=bool)
-        v = solve_linear(model, matrix, gamma, every)
-        return PolicyValue(v, expected_value(model, v), gamma, None)
-    ends = policy_ends(model, matrix)
+    # Discounted, every state has a value; else only those from which the policy ends surely.
+    ends = np.ones(model.n_states, dtype=bool) if gamma < 1.0 else policy_ends(model, matrix)
     v = np.full(model.n_states, -np.inf)
     v[ends] = solve_linear(model, matrix, gamma, ends)
     value = expected_value(model, v)
@@ -234,11 +228,7 @@ class PolicyArrays:
             keep = np.argsort(weight <= 0, axis=1, kind="stable")[:, :width]
             weight = np.take_along_axis(weight, keep, axis=1)
             target = np.take_along_axis(target, keep, axis=1)
-        dense: FloatArray | None = None
-        if n_states <= DENSE_STATES:
-            flat = (np.arange(n_states)[:, None] * n_states + target).reshape(-1)
-            counts = np.bincount(flat, weights=weight.reshape(-1), minlength=n_states**2)
-            dense = np.asarray(counts, dtype=np.float64).reshape(n_states, n_states)
+        dense = transition_matrix(weight, target, n_states) if n_states <= DENSE_STATES else None
         return cls(reward, np.ascontiguousarray(weight), np.ascontiguousarray(target), dense)
 
     def sweep(self, v: FloatArray, gamma: float) -> FloatArray:
@@ -262,9 +252,7 @@ class PolicyArrays:
                 new = reward[s] + gamma * float(dense[s] @ v)
             else:
                 new = reward[s] + gamma * float(weight[s] @ v[target[s]])
-            change = abs(new - v[s])
-            if change > delta:
-                delta = change
+            delta = max(delta, abs(new - v[s]))
             v[s] = new
         return float(delta)
 

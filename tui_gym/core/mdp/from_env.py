@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Literal
 
 import gymnasium as gym
 import numpy as np
@@ -23,29 +23,21 @@ class NotAvailable:
     reason: str
 
 
-def _discrete_size(name: str, role: str, space: gym.Space[Any]) -> int | NotAvailable:
-    if not isinstance(space, spaces.Discrete):
-        return NotAvailable(f"{name} has no exact model: its {role} space is {space}, not Discrete")
-    if int(space.start) != 0:
-        return NotAvailable(
-            f"{name} has no exact model: its {role} space starts at {space.start}, not 0"
-        )
-    return int(space.n)
-
-
 def _table_model(
-    env: gym.Env, initial: np.ndarray | None, action_names: Sequence[str] | None,
+    env: gym.Env, initial: np.ndarray | None, action_names: Sequence[str] | None
 ) -> FiniteMDP | NotAvailable:
-    name = env_label(env)
-    n_states = _discrete_size(name, "observation", env.observation_space)
-    if isinstance(n_states, NotAvailable):
-        return n_states
-    n_actions = _discrete_size(name, "action", env.action_space)
-    if isinstance(n_actions, NotAvailable):
-        return n_actions
+    none = f"{env_label(env)} has no exact model"
+    sizes = []
+    for role, space in (("observation", env.observation_space), ("action", env.action_space)):
+        if not isinstance(space, spaces.Discrete):
+            return NotAvailable(f"{none}: its {role} space is {space}, not Discrete")
+        if int(space.start) != 0:
+            return NotAvailable(f"{none}: its {role} space starts at {space.start}, not 0")
+        sizes.append(int(space.n))
+    n_states, n_actions = sizes
     table = getattr(env, "P", None)
     if table is None:
-        return NotAvailable(f"{name} has no exact model: it has no transition table P")
+        return NotAvailable(f"{none}: it has no transition table P")
     if initial is not None:
         if initial.shape != (n_states,):
             raise ValueError(f"initial must have shape ({n_states},), got {initial.shape}")
@@ -53,8 +45,8 @@ def _table_model(
         initial = getattr(env, "initial_state_distrib", getattr(env, "isd", None))
         if initial is None:
             return NotAvailable(
-                f"{name} has no exact model: it has no initial-state distribution "
-                "(initial_state_distrib or isd); pass one"
+                f"{none}: it has no initial-state distribution (initial_state_distrib or isd); "
+                "pass one"
             )
     if action_names is not None and len(action_names) != n_actions:
         raise ValueError(f"{len(action_names)} action names for {n_actions} actions")
@@ -63,12 +55,15 @@ def _table_model(
             table, initial, n_states=n_states, n_actions=n_actions, action_names=action_names
         )
     except ModelError as error:
-        return NotAvailable(f"{name} has no exact model: {error}")
+        return NotAvailable(f"{none}: {error}")
 
 
 def model_from_env(
-    env: gym.Env, *, initial: Sequence[float] | np.ndarray | None = None,
-    horizon: int | None | Literal["env"] = "env", action_names: Sequence[str] | None = None,
+    env: gym.Env,
+    *,
+    initial: Sequence[float] | np.ndarray | None = None,
+    horizon: int | None | Literal["env"] = "env",
+    action_names: Sequence[str] | None = None,
 ) -> FiniteMDP | NotAvailable:
     """The exact model of `env` (its unwrapped states) under its wrappers as
     `GameChanges` reads them, or `NotAvailable` saying why there is none.
@@ -96,12 +91,12 @@ def model_from_env(
     if isinstance(model, NotAvailable):
         return model
     changes = GameChanges.of(env)
+    none = f"{env_label(env)} has no exact model with"
     if changes.others:
-        return NotAvailable(f"{env_label(env)} has no exact model with {changes.others[0]}: "
-                            "it changes the game beyond its table")
+        return NotAvailable(f"{none} {changes.others[0]}: it changes the game beyond its table")
     try:
         model = changes.model(model)
     except (TypeError, ValueError) as error:
-        return NotAvailable(f"{env_label(env)} has no exact model with "
-                            f"{changes.reward_names()}: {' '.join(str(error).split())}")
+        reason = " ".join(str(error).split())
+        return NotAvailable(f"{none} {changes.reward_names()}: {reason}")
     return model if horizon == "env" else with_horizon(model, horizon)

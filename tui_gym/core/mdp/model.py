@@ -60,22 +60,31 @@ class FiniteMDP:
         prob = np.array(self.prob, dtype=np.float64)
         if prob.ndim != 3 or 0 in prob.shape:
             raise ModelError(f"prob must be a non-empty [S, A, K] array, got shape {prob.shape}")
-        shape = prob.shape
-        n_states, n_actions, _ = shape
-        arrays: dict[str, np.ndarray] = {"prob": prob}
-        for name, dtype in (("next_state", None), ("reward", np.float64), ("terminal", None)):
-            array = np.array(getattr(self, name), dtype=dtype)
+        shape = n_states, n_actions, _ = prob.shape
+        arrays: dict[str, np.ndarray | None] = {"prob": prob, "reward_std": None}
+        for name, dtype in (
+            ("next_state", None),
+            ("reward", np.float64),
+            ("terminal", None),
+            ("reward_std", np.float64),
+        ):
+            given = getattr(self, name)
+            if given is None:  # only `reward_std` may be
+                continue
+            array = arrays[name] = np.array(given, dtype=dtype)
             if array.shape != shape:
                 raise ModelError(f"{name} has shape {array.shape}, prob has {shape}")
-            arrays[name] = array
-        next_state = arrays["next_state"]
+        next_state, reward, terminal = arrays["next_state"], arrays["reward"], arrays["terminal"]
+        assert next_state is not None and reward is not None and terminal is not None
         if not np.issubdtype(next_state.dtype, np.integer):
             raise ModelError(f"next_state must hold integers, got dtype {next_state.dtype}")
-        _refuse((next_state < 0) | (next_state >= n_states),
-                f"leads to a state outside [0, {n_states - 1}]")
-        if arrays["terminal"].dtype != np.bool_:
-            raise ModelError(f"terminal must hold booleans, got dtype {arrays['terminal'].dtype}")
-        _refuse(~np.isfinite(arrays["reward"]), "has a reward that is not finite")
+        _refuse(
+            (next_state < 0) | (next_state >= n_states),
+            f"leads to a state outside [0, {n_states - 1}]",
+        )
+        if terminal.dtype != np.bool_:
+            raise ModelError(f"terminal must hold booleans, got dtype {terminal.dtype}")
+        _refuse(~np.isfinite(reward), "has a reward that is not finite")
         _refuse(~(prob >= 0) | ~np.isfinite(prob), "has a probability that is not in [0, 1]")
         totals = prob.sum(axis=2)
         bad = np.abs(totals - 1.0) > PROBABILITY_TOLERANCE
@@ -84,7 +93,13 @@ class FiniteMDP:
             raise ModelError(
                 f"the probabilities of state {s}, action {a} sum to {totals[s, a]:.12g}, not 1"
             )
-        initial = np.array(self.initial, dtype=np.float64)
+        std = arrays["reward_std"]
+        if std is not None:
+            _refuse(
+                ~(std >= 0) | ~np.isfinite(std),
+                "has a reward deviation that is not a finite number >= 0",
+            )
+        initial = arrays["initial"] = np.array(self.initial, dtype=np.float64)
         if initial.shape != (n_states,):
             raise ModelError(f"initial must have shape ({n_states},), got {initial.shape}")
         if not np.isfinite(initial).all() or (initial < 0).any():
@@ -98,24 +113,16 @@ class FiniteMDP:
             if horizon < 1:
                 raise ModelError(f"horizon must be >= 1 step, got {horizon}")
             horizon = int(horizon)
-        reward_std = self.reward_std
-        if reward_std is not None:
-            reward_std = np.array(reward_std, dtype=np.float64)
-            if reward_std.shape != shape:
-                raise ModelError(f"reward_std has shape {reward_std.shape}, prob has {shape}")
-            _refuse(~(reward_std >= 0) | ~np.isfinite(reward_std),
-                    "has a reward deviation that is not a finite number >= 0")
-            reward_std = _frozen(reward_std)
         names = self.action_names
         if names is not None:
             names = tuple(str(name) for name in names)
             if len(names) != n_actions:
                 raise ModelError(f"{len(names)} action names for {n_actions} actions")
-        arrays.update(next_state=next_state.astype(np.int64), initial=initial)
-        checked = {**{name: _frozen(array) for name, array in arrays.items()},
-                   "horizon": horizon, "action_names": names, "reward_std": reward_std}
-        for name, value in checked.items():
-            object.__setattr__(self, name, value)
+        arrays["next_state"] = next_state.astype(np.int64)
+        for name, value in arrays.items():
+            object.__setattr__(self, name, None if value is None else _frozen(value))
+        object.__setattr__(self, "horizon", horizon)
+        object.__setattr__(self, "action_names", names)
 
     # -- sizes ------------------------------------------------------------------
 
@@ -161,13 +168,11 @@ class FiniteMDP:
     def outcomes(self, state: int, action: int) -> list[Outcome]:
         """The possible outcomes of one state-action pair, padding left out."""
         row = self.prob[state, action] > 0
-        return [
-            (float(p), int(s), float(r), bool(t))
-            for p, s, r, t in zip(
-                self.prob[state, action][row], self.next_state[state, action][row],
-                self.reward[state, action][row], self.terminal[state, action][row], strict=True,
-            )
-        ]
+        columns = (
+            array[state, action][row]
+            for array in (self.prob, self.next_state, self.reward, self.terminal)
+        )
+        return [(float(p), int(s), float(r), bool(t)) for p, s, r, t in zip(*columns, strict=True)]
 
     def replace(self, **changes: Any) -> FiniteMDP:
         """A copy with some fields replaced (checked again)."""
@@ -200,10 +205,9 @@ class FiniteMDP:
                 actions = table[s]
             except (KeyError, IndexError):
                 raise ModelError(f"the table has no entry for state {s}") from None
-            count = len(actions) if n_actions is None else n_actions
             if n_actions is None:
-                n_actions = count
-            if count < 1:
+                n_actions = len(actions)
+            if n_actions < 1:
                 raise ModelError(f"state {s} has no actions")
             row: list[list[Outcome]] = []
             for a in range(n_actions):
@@ -223,12 +227,15 @@ class FiniteMDP:
         for s, row in enumerate(rows):
             for a, outcomes in enumerate(row):
                 for k, (p, nxt, r, t) in enumerate(outcomes):
-                    prob[s, a, k], next_state[s, a, k], reward[s, a, k], terminal[s, a, k] = (
-                        p, nxt, r, t,
-                    )
+                    prob[s, a, k], next_state[s, a, k] = p, nxt
+                    reward[s, a, k], terminal[s, a, k] = r, t
         return cls(
-            next_state=next_state, prob=prob, reward=reward, terminal=terminal,
-            initial=np.asarray(initial, dtype=np.float64), horizon=horizon,
+            next_state=next_state,
+            prob=prob,
+            reward=reward,
+            terminal=terminal,
+            initial=np.asarray(initial, dtype=np.float64),
+            horizon=horizon,
             action_names=None if action_names is None else tuple(action_names),
         )
 
@@ -238,17 +245,13 @@ def _merged(listed: Iterable[Sequence[Any]], state: int, action: int) -> list[Ou
     try:
         for outcome in listed:
             if len(outcome) != 4:
-                raise ModelError(
-                    f"state {state}, action {action}: an outcome must be "
-                    f"(prob, next_state, reward, terminated), got {outcome!r}"
+                raise TypeError(
+                    f"an outcome must be (prob, next_state, reward, terminated), got {outcome!r}"
                 )
-            p, nxt, r, t = outcome
-            p, nxt, r, t = float(p), int(nxt), float(r), bool(t)
+            p, nxt, r, t = float(outcome[0]), int(outcome[1]), float(outcome[2]), bool(outcome[3])
             if p != 0.0:
                 merged[nxt, r, t] = merged.get((nxt, r, t), 0.0) + p
     except (TypeError, ValueError) as error:
-        if isinstance(error, ModelError):
-            raise
         raise ModelError(f"state {state}, action {action}: {error}") from None
     if not merged:
         raise ModelError(f"state {state}, action {action} has no possible outcome")

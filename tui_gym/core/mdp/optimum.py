@@ -56,8 +56,6 @@ def optimal_actions(q: npt.ArrayLike, atol: float = 1e-9, rtol: float = 1e-9) ->
     to it where it is infinite)."""
     values = np.asarray(q, dtype=np.float64)
     best = values.max(axis=1, keepdims=True)
-    if np.isfinite(best).all():
-        return values >= best - (atol + rtol * np.abs(best))
     finite = np.isfinite(best)
     slack = np.where(finite, atol + rtol * np.abs(np.where(finite, best, 0.0)), 0.0)
     with np.errstate(invalid="ignore"):
@@ -246,7 +244,7 @@ def gap_of(optimum: float, value: float) -> float:
 
 
 def exact_gap(
-    model: FiniteMDP, policy: npt.ArrayLike, gamma: float = 1.0, optimum: Solution | None = None,
+    model: FiniteMDP, policy: npt.ArrayLike, gamma: float = 1.0, optimum: Solution | None = None
 ) -> Gap:
     """The exact value of `policy`, the optimum (`optimum`, from `solve(model, gamma)`, to
     reuse one), and the gap between them."""
@@ -258,7 +256,4 @@ def exact_gap(
             f"this needs gamma={gamma}, {model.horizon} steps left"
         )
     value = evaluate(model, policy, gamma)
-    return Gap(
-        exact_value=value.value, optimal_value=optimum.value,
-        gap=gap_of(optimum.value, value.value), never_ends=value.never_ends,
-    )
+    return Gap(value.value, optimum.value, gap_of(optimum.value, value.value), value.never_ends)

@@ -20,6 +20,9 @@ from tui_gym.core.wrappers.chain import env_label
 
 __all__ = ["UnknownEnvError", "build_env", "build_env_lenient", "check_choices"]
 
+Kwargs = Mapping[str, Any] | None
+Choices = Sequence[WrapperChoice]
+
 
 class UnknownEnvError(ValueError):
     """An env id Gymnasium does not know (one line, with the nearest known ids)."""
@@ -32,8 +35,7 @@ class UnknownEnvError(ValueError):
 
 
 def _assemble(
-    env_id: str, env_kwargs: Mapping[str, Any] | None, choices: Sequence[WrapperChoice],
-    render_mode: str | None, *, strict: bool,
+    env_id: str, env_kwargs: Kwargs, choices: Choices, render_mode: str | None, *, strict: bool
 ) -> tuple[gym.Env, list[str | None]]:
     """The env, and per choice None (applied) or the reason it was skipped."""
     check_chain_length(len(choices))
@@ -70,8 +72,7 @@ def _assemble(
 
 
 def build_env(
-    env_id: str, env_kwargs: Mapping[str, Any] | None = None, choices: Sequence[WrapperChoice] = (),
-    render_mode: str | None = None,
+    env_id: str, env_kwargs: Kwargs = None, choices: Choices = (), render_mode: str | None = None
 ) -> gym.Env:
     """`gym.make(env_id, render_mode=..., **env_kwargs)` wrapped by `choices`, first innermost
     (`UnknownEnvError`, `UnknownWrapperError`, `ValueError`, `WrapperMismatchError`)."""
@@ -80,18 +81,16 @@ def build_env(
 
 
 def build_env_lenient(
-    env_id: str, env_kwargs: Mapping[str, Any] | None = None, choices: Sequence[WrapperChoice] = (),
-    render_mode: str | None = None,
+    env_id: str, env_kwargs: Kwargs = None, choices: Choices = (), render_mode: str | None = None
 ) -> tuple[gym.Env, list[tuple[WrapperChoice, str]]]:
     """Like `build_env`, but skips the choices that do not fit (or are invalid): the env
     and the skipped choices, each with the reason."""
     env, reasons = _assemble(env_id, env_kwargs, choices, render_mode, strict=False)
-    skipped = [(c, r) for c, r in zip(choices, reasons, strict=True) if r is not None]
-    return env, skipped
+    return env, [(c, r) for c, r in zip(choices, reasons, strict=True) if r is not None]
 
 
 def check_choices(
-    env_id: str, env_kwargs: Mapping[str, Any] | None = None, choices: Sequence[WrapperChoice] = (),
+    env_id: str, env_kwargs: Kwargs = None, choices: Choices = ()
 ) -> list[tuple[WrapperChoice, str | None]]:
     """For each choice, None if it would apply, else why not (as `build_env_lenient`)."""
     env, reasons = _assemble(env_id, env_kwargs, choices, None, strict=False)
