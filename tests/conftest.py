@@ -76,19 +76,49 @@ def _share_compiled_code() -> None:
 _share_compiled_code()
 
 
+COMPILING = "TUI_GYM_TESTS_COMPILED"  # the file the compiling process writes when it ends
+COMPILING_WAIT = 600.0  # seconds a worker waits at most for it
+WARM_ALL = """
+import sys
+try:
+    from tui_gym.algorithms import ALGORITHMS
+    from tui_gym.core.engine import loop
+    learners = [cls(2, n_states=2) for cls in ALGORITHMS]
+    loop.warm([(x.name, x.arrays(), x.compiled_params()) for x in learners])
+finally:
+    open(sys.argv[1], "w").close()
+"""
+
+
 def _compile_once(config: pytest.Config) -> None:
     """With workers, compile every learner first (`loop.warm`: in processes, one per core),
     so no two workers compile the same code at once (a second run finds it all in the
-    cache)."""
+    cache). The compiling runs beside the workers' start and collection; each worker waits
+    for it before its first test (`_wait_for_compiling`)."""
     if os.environ.get("PYTEST_XDIST_WORKER") or not getattr(config.option, "numprocesses", 0):
         return
     if os.environ.get("NUMBA_DISABLE_JIT"):
         return
-    from tui_gym.algorithms import ALGORITHMS
-    from tui_gym.core.engine import loop
+    import subprocess
+    import tempfile
 
-    learners = [cls(2, n_states=2) for cls in ALGORITHMS]
-    loop.warm([(x.name, x.arrays(), x.compiled_params()) for x in learners])
+    done = Path(tempfile.mkdtemp(prefix="tui-gym-compiling-")) / "ended"
+    config._tui_gym_compiling = subprocess.Popen(  # type: ignore[attr-defined]
+        [sys.executable, "-c", WARM_ALL, str(done)], cwd=Path(__file__).resolve().parent.parent)
+    os.environ[COMPILING] = str(done)
+
+
+def _wait_for_compiling() -> None:
+    """On a worker, wait until the controller's compiling process has ended (having filed
+    every learner, or not: the tests then compile what they use)."""
+    done = os.environ.get(COMPILING)
+    if not os.environ.get("PYTEST_XDIST_WORKER") or not done:
+        return
+    import time
+
+    deadline = time.monotonic() + COMPILING_WAIT
+    while not Path(done).exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
 
 
 def _pilot_waits_on_busy_widgets(config: pytest.Config) -> None:
@@ -167,10 +197,21 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
             item.add_marker(skip)
 
 
+def pytest_unconfigure(config: pytest.Config) -> None:
+    """The compiling process is reaped and its folder removed."""
+    compiling = getattr(config, "_tui_gym_compiling", None)
+    if compiling is not None:
+        compiling.wait()
+        import shutil
+
+        shutil.rmtree(Path(os.environ[COMPILING]).parent, ignore_errors=True)
+
+
 def pytest_collection_finish(session: pytest.Session) -> None:
     """What the imports and the collected tests made lives until the run ends: frozen,
     the collector's passes no longer walk it. The collector also runs less often: a
     test process allocates in bursts (an app's frames) and frees nearly all of it."""
+    _wait_for_compiling()
     gc.collect()
     gc.freeze()
     gc.set_threshold(*GC_THRESHOLDS)
