@@ -65,7 +65,7 @@ async def test_paint_undo_and_the_optimum_on_a_small_cliff_and_a_game_without_a_
         # Animated (light on the machine, and a person can follow); training goes on while
         # editing.
         await pilot.press("minus", "minus", "space")
-        await wait_for(pilot, lambda: app.session.trainer.episodes > 0, "some training")
+        await wait_for(pilot, lambda: app.session.trainer.steps > 0, "some training")
         agent = app.session.agent
         # A pit of +1 beside the start: falling in (one step, +1) beats walking (-3).
         await pilot.press("left", "down", "3")  # a hole at row 1, col 0, at the game's own cost
