@@ -12,10 +12,20 @@ from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.train_view import TrainView
 from tui_gym.ui.widgets.map_editor import MapCanvas, MapEditor
 
+from .hosts import VIEW_SIZE, TrainHost
 from .waiting import wait_for
 
 DEADLINE = 20.0
 SIZE = (80, 24)
+
+
+class MapTrainHost(TrainHost):
+    """The Train view alone, playing an edited map as the app does."""
+
+    def rebuild_map(self, env_kwargs: dict, resized: bool) -> bool:
+        self.session.rebuild(env_kwargs=env_kwargs)
+        self.train_view.reload()
+        return True
 
 
 def status(editor: MapEditor) -> str:
@@ -98,10 +108,10 @@ async def test_paint_undo_and_the_optimum_on_a_small_cliff_and_a_game_without_a_
 async def test_the_status_names_cells_as_the_axes_do_and_says_when_nothing_is_left() -> None:
     """GridWorld numbers its rows from the bottom up: the status says what the axes say.
     An undo past the first edit says there is nothing to undo, not "undone" again."""
-    app = TuiGymApp(Session("gridworld", seed=0))
-    async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.press("m")
-        view = app.query_one(TrainView)
+    app = MapTrainHost(Session("gridworld", seed=0))
+    async with app.run_test(size=VIEW_SIZE) as pilot:
+        view = app.train_view
+        assert await view.open_editor()  # what `m` does in the app
         await wait_for(pilot, lambda: editing(view), "the editor")
         editor = view.editor
         assert editor is not None
