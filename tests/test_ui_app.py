@@ -139,7 +139,6 @@ async def test_keys_key_bar_help_wrappers_the_game_picker_and_the_gridworld_pane
         assert "StepPenalty" in str(app.play_view.game.env)
 
         # The size changes from the panel (the wrapper stays on).
-        await pilot.pause()
         size_field = app.query_one("#env-params").query_one(ParamField)
         size_field.input.value = "7"
         size_field.input.focus()
@@ -149,7 +148,6 @@ async def test_keys_key_bar_help_wrappers_the_game_picker_and_the_gridworld_pane
         assert app.play_view.game.scene()["size"] == 7
 
         # Inputs capture typing instead of app keys.
-        await pilot.pause()
         field = row(app, "StepPenalty").query_one(Input)
         field.focus()
         field.value = ""
