@@ -82,12 +82,6 @@ def _optimal_q(session: Session) -> np.ndarray:
     return np.where(np.isfinite(q), q, -1e9)
 
 
-def _policy_rows(session: Session) -> dict[Any, int]:
-    keys = session.base_keys()
-    assert keys is not None
-    return {key: row for row, key in enumerate(keys)}
-
-
 def _within(samples: np.ndarray, exact: float) -> None:
     error = Z * samples.std(ddof=1) / math.sqrt(len(samples)) + 1e-9
     assert abs(samples.mean() - exact) <= error, (samples.mean(), exact, error)
@@ -258,7 +252,10 @@ async def test_a_person_switches_to_every_game_by_its_key_and_plays_in_the_app()
 
 def _play_env(session: Session, q: np.ndarray, episodes: int) -> np.ndarray:
     """Returns of `episodes` episodes of the real env, greedy on `q` (rows: base states)."""
-    rows = _policy_rows(session)
+    keys = session.base_keys()
+    assert keys is not None
+    greedy = dict(zip(keys, np.argmax(q, axis=1).tolist(), strict=True))
+    key = session.keyer.key
     env = session.make_env()
     returns = np.zeros(episodes)
     obs, _ = env.reset(seed=11)
@@ -267,8 +264,7 @@ def _play_env(session: Session, q: np.ndarray, episodes: int) -> np.ndarray:
             obs, _ = env.reset()
         done = False
         while not done:
-            row = rows.get(session.keyer.key(obs))
-            action = int(np.argmax(q[row])) if row is not None else 0
+            action = greedy.get(key(obs), 0)
             obs, reward, terminated, truncated, _ = env.step(action)
             returns[i] += float(reward)
             done = terminated or truncated
