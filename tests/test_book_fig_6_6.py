@@ -3,7 +3,7 @@ few runs, the book's task list under --full, and a recorded figure resumed."""
 
 from __future__ import annotations
 
-import math
+from functools import partial
 from types import SimpleNamespace
 from typing import Any
 
@@ -17,11 +17,16 @@ from tui_gym.session.experiments import compare
 from tui_gym.session.experiments.compare import ResumeError
 
 
+@pytest.fixture(autouse=True)
+def _on_this_thread(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every figure plays on the test's thread (`processes=0`), with no estimate of whether
+    to spread it over child processes: a seed's run is the same wherever it runs
+    (tests/test_compare.py::test_seeds_in_child_processes_match_the_calling_thread)."""
+    monkeypatch.setattr(runs, "execute", partial(runs.execute, processes=0))
+
+
 def test_the_books_claims_at_a_few_runs(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(td, "ASYMPTOTIC_RUNS", 6)
-    # Played here, not spread over child processes: a seed's run is the same wherever it
-    # runs (tests/test_compare.py::test_seeds_in_child_processes_match_the_calling_thread).
-    monkeypatch.setattr(compare, "SPREAD_SECONDS", math.inf)
     result = figure_named("6.6").run(FigureOptions(runs=100, episodes=1500, seed=100),
                                      lambda *_: None)
     assert result.runs == 100 and len(result.checks) == 6
@@ -122,7 +127,6 @@ def test_ctrl_c_keeps_the_finished_tasks_and_says_how_to_resume(
     import signal
 
     from tui_gym.cli import main
-    from tui_gym.session.book import runs
 
     monkeypatch.setattr(td, "FULL_ASYMPTOTIC_RUNS", 2)
     calls: list[int] = []

@@ -16,6 +16,7 @@ import pytest
 from gymnasium.envs.toy_text.blackjack import sum_hand, usable_ace
 
 from tests.gridworld_support import all_pairs
+from tests.test_reference_blackjack import BulkChoice
 from tui_gym.core.mdp import solve
 from tui_gym.core.obskey import ObservationKeyer
 from tui_gym.core.wrappers import WrapperChoice, build_env
@@ -37,11 +38,11 @@ CARD_PROBS = {card: (4 if card == 10 else 1) / 13 for card in range(1, 11)}
 STICK, HIT = 0, 1
 ROWS = observation_rows()  # the table row of each model state
 OBSERVATIONS = 32 * 11 * 2  # the observation keyer's rows
+KEYER = ObservationKeyer(gym.make("Blackjack-v1").observation_space)
 
 
 def observation_row(total: int, dealer: int, usable: int) -> int:
-    return ObservationKeyer(gym.make("Blackjack-v1").observation_space).key(
-        (total, dealer, usable))
+    return KEYER.key((total, dealer, usable))
 
 
 def state_of(total: int, dealer: int, usable: int) -> int:
@@ -109,6 +110,7 @@ def test_sticking_on_21_pays_by_the_rules_as_the_env_does(rules: BlackjackRules)
     model = blackjack_model(rules)
     env = gym.make("Blackjack-v1", natural=rules.natural, sab=rules.sab).unwrapped
     env.reset(seed=1)
+    env.np_random = BulkChoice(1)  # gym's game code, its coin flips drawn in bulk
     n = 1500
     for natural, state in ((True, N_BASE + 9), (False, state_of(21, 10, 1))):
         mean = sum(p * r for p, _, r, _ in model.outcomes(state, STICK))

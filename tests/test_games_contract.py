@@ -26,7 +26,7 @@ from textual.binding import Binding
 
 from tests.mdp_support import sampled_returns
 from tests.test_contract_learners import GAMES as LEARNER_GAMES
-from tests.waiting import wait_for
+from tests.waiting import send_key, settle, wait_busy
 from tui_gym.cli import main
 from tui_gym.core.mdp import NotAvailable
 from tui_gym.core.wrappers import parse_wrapper_spec
@@ -80,12 +80,6 @@ def _optimal_q(session: Session) -> np.ndarray:
     if optimum.marks is not None:  # of the optimal moves, a quickest (a maze's: all worth +1)
         q = q + np.asarray(optimum.marks, dtype=float)
     return np.where(np.isfinite(q), q, -1e9)
-
-
-def _policy_rows(session: Session) -> dict[Any, int]:
-    keys = session.base_keys()
-    assert keys is not None
-    return {key: row for row, key in enumerate(keys)}
 
 
 def _within(samples: np.ndarray, exact: float) -> None:
@@ -217,11 +211,13 @@ async def _play(pilot: Any, game: Game, moves: int) -> None:
             advice = game.oracle.advice(human.env, app.session.env_kwargs)
             action = game.action_names[advice.optimal[0] if advice.optimal else 0]
             steps = human.last.steps if human.last else 0
-            await pilot.press(*_keys_for(view.board, action))  # waits for the screen
+            for key in _keys_for(view.board, action):
+                send_key(pilot, key)
+                await settle(pilot)
             assert human.last is not None and (
                 human.last.steps == steps + 1 or human.done
             ), game.name
-    await pilot.pause()
+    await settle(pilot)
 
 
 async def test_a_person_switches_to_every_game_by_its_key_and_plays_in_the_app() -> None:
@@ -232,16 +228,16 @@ async def test_a_person_switches_to_every_game_by_its_key_and_plays_in_the_app()
     limit = parse_wrapper_spec("TimeLimit:max_episode_steps=15")
     app = TuiGymApp(_session(GAMES[0].name))
     async with app.run_test(size=(80, 24)) as pilot:
-        await pilot.pause()
+        await settle(pilot)
         view = app.play_view
         for game in GAMES:
             if app.session.game is not game:
-                await pilot.press(game.key)  # built off the event loop
-                await wait_for(pilot, lambda g=game: app.session.game is g, game.name)
+                send_key(pilot, game.key)  # built off the event loop
+                await wait_busy(pilot, lambda g=game: app.session.game is g, game.name)
             whole = game.name in WHOLE_EPISODES
             if game.name in LONG_EPISODES:
                 assert app.rebuild(choices=(limit,)), game.name
-            await pilot.pause()
+            await settle(pilot)
             assert app.focused is view.board, f"{game.name}: the board has the keyboard"
             assert view.game is not None and view.game.game is game
             await _play(pilot, game, 200 if whole else 1)
@@ -256,7 +252,10 @@ async def test_a_person_switches_to_every_game_by_its_key_and_plays_in_the_app()
 
 def _play_env(session: Session, q: np.ndarray, episodes: int) -> np.ndarray:
     """Returns of `episodes` episodes of the real env, greedy on `q` (rows: base states)."""
-    rows = _policy_rows(session)
+    keys = session.base_keys()
+    assert keys is not None
+    greedy = dict(zip(keys, np.argmax(q, axis=1).tolist(), strict=True))
+    key = session.keyer.key
     env = session.make_env()
     returns = np.zeros(episodes)
     obs, _ = env.reset(seed=11)
@@ -265,8 +264,7 @@ def _play_env(session: Session, q: np.ndarray, episodes: int) -> np.ndarray:
             obs, _ = env.reset()
         done = False
         while not done:
-            row = rows.get(session.keyer.key(obs))
-            action = int(np.argmax(q[row])) if row is not None else 0
+            action = greedy.get(key(obs), 0)
             obs, reward, terminated, truncated, _ = env.step(action)
             returns[i] += float(reward)
             done = terminated or truncated
