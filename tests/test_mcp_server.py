@@ -25,8 +25,8 @@ if importlib.util.find_spec("mcp") is None:
 pytestmark = pytest.mark.xdist_group("mcp_server")
 
 GAMES = [entry.name for entry in catalog()]
-IDLE_SECONDS = 3.0  # the no-hints server's idle timeout
-POLL_SECONDS = 0.05
+IDLE_SECONDS = 5.0  # the no-hints server's idle timeout
+POLL_SECONDS = 0.1
 
 
 def in_process_client(table: GameTable) -> McpInProcess:
